@@ -1,0 +1,13 @@
+"""impactbar: impact vibration of an elastic bar (Bjorkenstam, Int. J. Mech. Sci. 19, 1977).
+
+The public API; everything else is private.
+"""
+
+from .loads import CosineLoad as CosineLoad
+from .loads import FourierLoad as FourierLoad
+from .loads import Load as Load
+from .loads import PiecewiseConstantLoad as PiecewiseConstantLoad
+from .loads import SquareWaveLoad as SquareWaveLoad
+from .model import BarModel as BarModel
+
+__version__ = "0.1.0"

@@ -1,0 +1,501 @@
+"""Periodic loads of period ``2 pi`` at the driven end (MODEL.md section 3, paper eqs. 7, 33, 34).
+
+A load is ``p(t) = Re sum_{k>=0} p_k exp(i k t)`` in its own time frame; an impact at phase ``phase``
+sees ``p(t + phase)`` (eq. 7). Each load also knows the exact motion of a modal oscillator
+``q'' + d q' + w2 q = p(t)`` that it drives (eq. 8), which is all the rest of the package needs.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+from ._validate import check_complex_array, check_int, check_real
+from .modal import b_integral, c_integral, fundamental, step_constant
+
+__all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad"]
+
+TWO_PI = 2.0 * math.pi
+
+
+class Load(ABC):
+    """A periodic load of period ``2 pi`` (eq. 7). Subclasses give the exact modal response.
+
+    Attributes
+    ----------
+    p0 : float
+        Mean load (dimensionless, eq. 2).
+    """
+
+    p0: float
+
+    # -- evaluation -------------------------------------------------------------------------
+    @abstractmethod
+    def __call__(self, t) -> np.ndarray:
+        """Load ``p(t)`` (right-continuous at jumps).
+
+        Parameters
+        ----------
+        t : array_like, shape (...)
+            Times in the load's frame (dimensionless, period ``2 pi``).
+
+        Returns
+        -------
+        numpy.ndarray, shape (...)
+        """
+
+    def left_limit(self, t) -> np.ndarray:
+        """``p(t-)``; equal to ``p(t)`` for a continuous load."""
+        return self(t)
+
+    @abstractmethod
+    def harmonics(self, n: int | None = None) -> np.ndarray:
+        """Complex harmonics ``p_1..p_K`` (eq. 7), shape ``(K,)``; ``n`` truncates or pads
+        (required for loads with infinitely many harmonics)."""
+
+    # -- bounds used by the certified root searches -------------------------------------------
+    @property
+    @abstractmethod
+    def sup_abs(self) -> float:
+        """An upper bound of ``|p(t)|`` over the period."""
+
+    @property
+    @abstractmethod
+    def sup_oscillation(self) -> float:
+        """An upper bound of ``|p(t) - p0|`` over the period."""
+
+    @abstractmethod
+    def variation(self, mid, half):
+        """Bound the load on intervals ``[mid - half, mid + half]``.
+
+        Returns ``(center, delta)`` arrays with ``|p(t) - center| <= delta`` on each interval.
+        """
+
+    # -- exact modal response -----------------------------------------------------------------
+    @abstractmethod
+    def propagate(self, w2, d: float, t0: float, q0, v0, t):
+        """Exact state of the oscillators ``q'' + d q' + w2 q = p(t)`` at times ``t >= t0``.
+
+        Parameters
+        ----------
+        w2 : array_like, shape (M,)
+            Squared undamped frequencies ``(s n pi)^2`` (0 for the rigid mode).
+        d : float
+            Damping, ``>= 0``.
+        t0 : float
+            Start time (load frame).
+        q0, v0 : array_like, shape (M,)
+            Displacements and velocities at ``t0``.
+        t : array_like, shape (T,)
+            Times, each ``>= t0``.
+
+        Returns
+        -------
+        q, v : numpy.ndarray, shape (M, T)
+
+        Raises
+        ------
+        ValueError
+            At an undamped resonance ``w2 = k^2`` of a harmonic the load contains (eq. 16).
+        """
+
+    @abstractmethod
+    def rigid_velocity(self, d: float, t) -> np.ndarray:
+        """``V(t)``: the periodic, zero-mean solution of ``V' + d V = p(t) - p0``.
+
+        It equals ``Re sum_{k>=1} H_0k p_k (i k) exp(i k t)`` of eq. 14, so the phase equation is
+        ``(1 + R) V(phase) = p0 G(d, R)``.
+        """
+
+    def periodic_state(self, w2, d: float, t):
+        """The ``2 pi``-periodic response ``(q, v)`` of oscillators with ``w2 > 0`` at times ``t``
+        (the particular solution ``sum_k H_nk p_k exp(i k t)`` of eq. 8).
+
+        Parameters
+        ----------
+        w2 : array_like, shape (M,)
+            Squared frequencies, ``> 0``.
+        d : float
+            Damping.
+        t : array_like, shape (T,)
+
+        Returns
+        -------
+        q, v : numpy.ndarray, shape (M, T)
+        """
+        w2 = np.asarray(w2, dtype=float)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        zeros = np.zeros_like(w2)
+        qz = np.empty((w2.size, t.size))
+        vz = np.empty_like(qz)
+        for j, tj in enumerate(t):
+            q1, v1 = self.propagate(w2, d, tj, zeros, zeros, [tj + TWO_PI])
+            qz[:, j], vz[:, j] = q1[:, 0], v1[:, 0]
+        p11, p12, p21, p22 = fundamental(w2[:, None], d, TWO_PI)
+        a11, a12, a21, a22 = 1.0 - p11, -p12, -p21, 1.0 - p22
+        det = a11 * a22 - a12 * a21
+        if np.any(np.abs(det) < 1e-13):
+            raise ValueError("undamped resonance: a mode frequency s*n*pi equals a load harmonic k")
+        q = (a22 * qz - a12 * vz) / det
+        v = (-a21 * qz + a11 * vz) / det
+        return q, v
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self._repr_args()})"
+
+    def _repr_args(self) -> str:  # pragma: no cover - overridden
+        return ""
+
+
+class FourierLoad(Load):
+    r"""A load given by finitely many harmonics (eq. 7).
+
+    .. math:: p(t) = p_0 + \mathrm{Re} \sum_{k=1}^{K} p_k e^{i k t}
+
+    Parameters
+    ----------
+    p0 : float
+        Mean load (dimensionless).
+    coefficients : array_like of complex, shape (K,)
+        ``coefficients[j]`` is the complex harmonic ``p_{j+1}``.
+
+    Raises
+    ------
+    ValueError
+        If ``p0`` or a coefficient is not finite, or there are more than 4096 harmonics.
+    """
+
+    def __init__(self, p0, coefficients):
+        self.p0 = check_real("p0", p0)
+        coefficients = check_complex_array("coefficients", coefficients)
+        if coefficients.size > 4096:
+            raise ValueError(f"coefficients must have at most 4096 entries; got {coefficients.size}")
+        self._set_sparse(np.arange(1, coefficients.size + 1), coefficients)
+
+    def _set_sparse(self, ks, pks):
+        keep = pks != 0
+        self._k = np.asarray(ks, dtype=float)[keep]
+        self._pk = np.asarray(pks, dtype=complex)[keep]
+        self._kmax = int(ks[-1]) if len(ks) else 0
+
+    @property
+    def orders(self) -> np.ndarray:
+        """Orders ``k`` of the non-zero harmonics, shape ``(K',)``."""
+        return self._k.astype(int)
+
+    @property
+    def amplitudes(self) -> np.ndarray:
+        """Complex ``p_k`` of the non-zero harmonics, shape ``(K',)``."""
+        return self._pk.copy()
+
+    def harmonics(self, n: int | None = None) -> np.ndarray:
+        K = self._kmax if n is None else check_int("n", n, lo=0)
+        out = np.zeros(K, dtype=complex)
+        sel = self._k <= K
+        out[self._k[sel].astype(int) - 1] = self._pk[sel]
+        return out
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        e = np.exp(1j * np.multiply.outer(t, self._k))
+        return self.p0 + (e @ self._pk).real
+
+    @property
+    def sup_abs(self) -> float:
+        return abs(self.p0) + float(np.sum(np.abs(self._pk)))
+
+    @property
+    def sup_oscillation(self) -> float:
+        return float(np.sum(np.abs(self._pk)))
+
+    def variation(self, mid, half):
+        lip = float(np.sum(self._k * np.abs(self._pk)))
+        half = np.asarray(half, dtype=float)
+        return self(mid), np.minimum(lip * half, 2.0 * self.sup_oscillation)
+
+    def _transfer(self, w2, d):
+        """``H_nk p_k``, shape (M, K'), raising at an undamped resonance (eq. 16)."""
+        den = w2[:, None] + 1j * self._k[None, :] * d - self._k[None, :] ** 2
+        if np.any(np.abs(den) <= 1e-12 * np.maximum(1.0, self._k[None, :] ** 2)):
+            raise ValueError(
+                "undamped resonance: a mode frequency s*n*pi equals a load harmonic k (eq. 16); "
+                "use d > 0 or move s"
+            )
+        return self._pk[None, :] / den
+
+    def periodic_state(self, w2, d, t):
+        w2 = np.asarray(w2, dtype=float)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        hp = self._transfer(w2, d)
+        e = np.exp(1j * np.outer(self._k, t))  # (K', T)
+        q = (hp @ e).real
+        v = ((hp * (1j * self._k)) @ e).real
+        pos = w2 > 0
+        q[pos] += self.p0 / w2[pos, None]
+        return q, v
+
+    def propagate(self, w2, d, t0, q0, v0, t):
+        w2 = np.asarray(w2, dtype=float)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        q0 = np.asarray(q0, dtype=float)
+        v0 = np.asarray(v0, dtype=float)
+        qp0, vp0 = self.periodic_state(w2, d, [t0])
+        qp, vp = self.periodic_state(w2, d, t)
+        tau = (t - t0)[None, :]
+        p11, p12, p21, p22 = fundamental(w2[:, None], d, tau)
+        dq = q0[:, None] - qp0
+        dv = v0[:, None] - vp0
+        q = p11 * dq + p12 * dv + qp
+        v = p21 * dq + p22 * dv + vp
+        rigid = w2 == 0.0
+        if np.any(rigid):  # the mean load drives the rigid mode off to infinity: add it exactly
+            q[rigid] += self.p0 * c_integral(d, tau[0])
+            v[rigid] += self.p0 * b_integral(d, tau[0])
+        return q, v
+
+    def rigid_velocity(self, d, t):
+        t = np.asarray(t, dtype=float)
+        e = np.exp(1j * np.multiply.outer(t, self._k))
+        return (e @ (self._pk / (d + 1j * self._k))).real
+
+    def _repr_args(self):
+        return f"p0={self.p0!r}, coefficients={self.harmonics().tolist()!r}"
+
+
+class CosineLoad(FourierLoad):
+    r"""Pneumatic-hammer load (eq. 33): one harmonic of order ``k`` on a mean load.
+
+    .. math:: p(t) = p_0 + p_k \cos(k t)
+
+    For ``k > 1`` the load period is ``2 pi / k`` and a one-impact orbit strikes once every ``k``
+    load periods. The load factor is ``k p0 / pk``.
+
+    Parameters
+    ----------
+    p0 : float
+        Mean load (dimensionless).
+    pk : float
+        Amplitude of the harmonic (dimensionless, real).
+    k : int, optional
+        Order of the harmonic, ``1 <= k <= 4096``. Default 1.
+
+    Raises
+    ------
+    ValueError
+        If ``p0`` or ``pk`` is not a finite real, or ``k`` is not an integer in range.
+    """
+
+    def __init__(self, p0, pk, k=1):
+        self.p0 = check_real("p0", p0)
+        self.pk = check_real("pk", pk)
+        self.k = check_int("k", k, lo=1, hi=4096)
+        self._set_sparse(np.arange(1, self.k + 1), np.where(np.arange(1, self.k + 1) == self.k,
+                                                             complex(self.pk), 0j))
+
+    @property
+    def load_factor(self) -> float:
+        """``k p0 / pk`` (eq. 38), ``inf`` for ``pk = 0``."""
+        return self.k * self.p0 / self.pk if self.pk != 0 else math.inf
+
+    def _repr_args(self):
+        return f"p0={self.p0!r}, pk={self.pk!r}, k={self.k!r}"
+
+
+class PiecewiseConstantLoad(Load):
+    """A load constant on each of several pieces of the period; its modal response is integrated
+    exactly piece by piece (no Fourier truncation).
+
+    Parameters
+    ----------
+    breaks : array_like, shape (J,)
+        Start times of the pieces in ``[0, 2 pi)``, strictly increasing, ``breaks[0] == 0``.
+    levels : array_like, shape (J,)
+        Load on each piece (dimensionless).
+
+    Raises
+    ------
+    ValueError
+        If the breaks are not increasing in ``[0, 2 pi)`` starting at 0, or a level is not finite.
+    """
+
+    def __init__(self, breaks, levels):
+        b = np.asarray(breaks, dtype=float).ravel()
+        lv = np.asarray(levels, dtype=float).ravel()
+        if b.size == 0 or b.size != lv.size:
+            raise ValueError("breaks and levels must be non-empty and of equal length")
+        if not (np.all(np.isfinite(b)) and b[0] == 0.0 and np.all(np.diff(b) > 0) and b[-1] < TWO_PI):
+            raise ValueError("breaks must increase strictly in [0, 2 pi) and start at 0")
+        if not np.all(np.isfinite(lv)):
+            raise ValueError("levels must be finite")
+        self._b = b
+        self._lv = lv
+        self._T = np.diff(np.append(b, TWO_PI))
+        self.p0 = float(np.dot(lv, self._T) / TWO_PI)
+        self._setup_rigid()
+
+    @property
+    def breaks(self) -> np.ndarray:
+        """Start times of the pieces, shape ``(J,)``."""
+        return self._b.copy()
+
+    @property
+    def levels(self) -> np.ndarray:
+        """Load on each piece, shape ``(J,)``."""
+        return self._lv.copy()
+
+    def _index(self, t, left=False):
+        tm = np.mod(np.asarray(t, dtype=float), TWO_PI)
+        side = "left" if left else "right"
+        idx = np.searchsorted(self._b, tm, side=side) - 1
+        return np.where(idx < 0, self._b.size - 1, idx)
+
+    def __call__(self, t):
+        return self._lv[self._index(t)]
+
+    def left_limit(self, t):
+        return self._lv[self._index(t, left=True)]
+
+    def harmonics(self, n: int | None = None) -> np.ndarray:
+        if n is None:
+            raise ValueError("n is required: a piecewise-constant load has infinitely many harmonics")
+        n = check_int("n", n, lo=0)
+        k = np.arange(1, n + 1, dtype=float)
+        e0 = np.exp(-1j * np.outer(k, self._b))
+        e1 = np.exp(-1j * np.outer(k, np.append(self._b[1:], TWO_PI)))
+        # p_k = (1/pi) int p(t) exp(-i k t) dt
+        return ((e0 - e1) / (1j * k[:, None]) @ self._lv) / math.pi
+
+    @property
+    def sup_abs(self) -> float:
+        return float(np.max(np.abs(self._lv)))
+
+    @property
+    def sup_oscillation(self) -> float:
+        return float(np.max(np.abs(self._lv - self.p0)))
+
+    def variation(self, mid, half):
+        mid = np.asarray(mid, dtype=float)
+        half = np.asarray(half, dtype=float)
+        center = self(mid)
+        lo = mid - half
+        # a jump inside the interval: the piece index changes, or the interval is a period long
+        jump = (self._index(lo) != self._index(mid + half)) | (2 * half >= TWO_PI) | (
+            self._index(lo) != self._index(mid)
+        )
+        spread = float(np.max(self._lv) - np.min(self._lv))
+        return center, np.where(jump, spread, 0.0)
+
+    def _boundaries(self, t0, t1):
+        """Absolute times of the load jumps in ``(t0, t1)``, sorted."""
+        n0 = math.floor(t0 / TWO_PI)
+        n1 = math.floor(t1 / TWO_PI)
+        per = np.arange(n0, n1 + 1)[:, None] * TWO_PI + self._b[None, :]
+        per = per.ravel()
+        return per[(per > t0) & (per < t1)]
+
+    def propagate(self, w2, d, t0, q0, v0, t):
+        w2 = np.asarray(w2, dtype=float)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        M, T = w2.size, t.size
+        q = np.empty((M, T))
+        v = np.empty((M, T))
+        if T == 0:
+            return q, v
+        if np.any(t < t0 - 1e-12):
+            raise ValueError("propagate needs t >= t0")
+        nodes = np.concatenate(([t0], self._boundaries(t0, float(np.max(t)))))
+        qn = np.empty((M, nodes.size))
+        vn = np.empty((M, nodes.size))
+        qn[:, 0], vn[:, 0] = q0, v0
+        for j in range(1, nodes.size):
+            level = self(nodes[j - 1])
+            qn[:, j], vn[:, j] = step_constant(w2, d, level, qn[:, j - 1], vn[:, j - 1],
+                                               nodes[j] - nodes[j - 1])
+        j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, nodes.size - 1)
+        for jj in np.unique(j):
+            sel = j == jj
+            level = self(nodes[jj])
+            q[:, sel], v[:, sel] = step_constant(w2, d, level, qn[:, jj], vn[:, jj],
+                                                 np.maximum(t[sel] - nodes[jj], 0.0))
+        return q, v
+
+    def _setup_rigid(self):
+        """Start value ``V(0)`` of the periodic zero-mean rigid velocity, per unit damping used."""
+        self._rigid_cache = {}
+
+    def _rigid_start(self, d):
+        if d not in self._rigid_cache:
+            alpha = self._lv - self.p0
+            E = np.exp(-d * self._b)  # V_j = V_0 E_j + D_j
+            D = np.zeros_like(self._b)
+            for j in range(1, self._b.size):
+                D[j] = D[j - 1] * math.exp(-d * self._T[j - 1]) + alpha[j - 1] * float(
+                    b_integral(d, self._T[j - 1]))
+            bT = b_integral(d, self._T)
+            cT = c_integral(d, self._T)
+            # zero mean: sum_j int V = sum_j (V_j b(T_j) + alpha_j c(T_j)) = 0
+            v0 = -float(np.sum(D * bT + alpha * cT)) / float(np.sum(E * bT))
+            self._rigid_cache[d] = (v0 * E + D, alpha)
+            if len(self._rigid_cache) > 64:
+                self._rigid_cache.pop(next(iter(self._rigid_cache)))
+        return self._rigid_cache[d]
+
+    def rigid_velocity(self, d, t):
+        t = np.asarray(t, dtype=float)
+        Vj, alpha = self._rigid_start(d)
+        tm = np.mod(t, TWO_PI)
+        j = self._index(tm)
+        tau = tm - self._b[j]
+        return Vj[j] * np.exp(-d * tau) + alpha[j] * b_integral(d, tau)
+
+    def _repr_args(self):
+        return f"breaks={self._b.tolist()!r}, levels={self._lv.tolist()!r}"
+
+
+class SquareWaveLoad(PiecewiseConstantLoad):
+    r"""Hydraulic-hammer load (eq. 34): a square wave, evaluated exactly.
+
+    .. math:: p(t) = +q \text{ for } t \bmod 2\pi < \kappa\pi, \quad -q \text{ otherwise}
+
+    Its mean is ``p0 = q (kappa - 1)`` and its harmonics
+    ``p_k = (2 q / (pi k)) [sin(k kappa pi) + i (cos(k kappa pi) - 1)]``. The load factor is ``kappa``.
+
+    Parameters
+    ----------
+    q : float
+        Level of the square wave (dimensionless), ``q > 0``.
+    kappa : float
+        Fraction (times ``pi``) of the period at ``+q``, ``1 <= kappa <= 2``.
+
+    Raises
+    ------
+    ValueError
+        If ``q <= 0`` or ``kappa`` is outside ``[1, 2]``.
+    """
+
+    def __init__(self, q, kappa):
+        self.q = check_real("q", q, lo=0.0, lo_open=True)
+        self.kappa = check_real("kappa", kappa, lo=1.0, hi=2.0)
+        if self.kappa == 2.0:
+            super().__init__([0.0], [self.q])
+        else:
+            super().__init__([0.0, self.kappa * math.pi], [self.q, -self.q])
+        self.p0 = self.q * (self.kappa - 1.0)  # exact, not the quadrature of the pieces
+
+    @property
+    def load_factor(self) -> float:
+        """``kappa`` (Section 4 of the paper)."""
+        return self.kappa
+
+    def harmonics(self, n: int | None = None) -> np.ndarray:
+        if n is None:
+            raise ValueError("n is required: a square wave has infinitely many harmonics")
+        n = check_int("n", n, lo=0)
+        k = np.arange(1, n + 1, dtype=float)
+        a = k * self.kappa * math.pi
+        return (2.0 * self.q / (math.pi * k)) * (np.sin(a) + 1j * (np.cos(a) - 1.0))
+
+    def _repr_args(self):
+        return f"q={self.q!r}, kappa={self.kappa!r}"

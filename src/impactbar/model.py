@@ -1,0 +1,111 @@
+"""The dimensionless bar: wave-speed ratio, damping, restitution, modes kept (MODEL.md sections 1-2)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ._validate import check_int, check_real
+
+__all__ = ["BarModel"]
+
+#: Largest number of flexible modes accepted; beyond it the modal sums gain nothing in double precision.
+MAX_MODES = 4096
+
+
+@dataclass(frozen=True)
+class BarModel:
+    r"""An elastic bar driven at ``x = 0`` and striking a rigid stop at ``x = 1``.
+
+    Field equation (paper eq. 3, MODEL.md section 1), dimensionless:
+
+    .. math:: u_{tt} + d\,u_t - s^2 u_{xx} = 0, \quad 0 < x < 1,
+
+    with ``s^2 u_x(0,t) = -p(t)``, ``u_x(1,t) = 0`` between impacts (eq. 4) and the impact law
+    ``u(x,0+) = u(x,2pi-)``, ``u_t(x,0+) = -R u_t(x,2pi-)`` (eqs. 10, 11). The finite cosine
+    transform (eqs. 5, 6) turns it into the modal oscillators
+
+    .. math:: q_n'' + d q_n' + (s n \pi)^2 q_n = p(t), \quad n = 0..N.
+
+    Parameters
+    ----------
+    s : float
+        Wave-speed ratio ``C / (L Omega)`` (dimensionless, eq. 2), ``s > 0``.
+    d : float
+        Damping ``D / (M Omega)`` (dimensionless, eq. 2), ``d >= 0``.
+    R : float
+        Restitution coefficient, ``0 <= R <= 1`` (eq. 10).
+    n_modes : int
+        Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096.
+
+    Raises
+    ------
+    ValueError
+        If a parameter is of the wrong type, not finite, or outside its range; the message names it.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel
+    >>> BarModel(s=10.0, d=0.0, R=0.5, n_modes=8).frequencies[:2]
+    array([ 0.        , 31.41592654])
+    """
+
+    s: float
+    d: float
+    R: float
+    n_modes: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "s", check_real("s", self.s, lo=0.0, lo_open=True))
+        object.__setattr__(self, "d", check_real("d", self.d, lo=0.0))
+        object.__setattr__(self, "R", check_real("R", self.R, lo=0.0, hi=1.0))
+        object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=MAX_MODES))
+
+    @property
+    def frequencies(self) -> np.ndarray:
+        """Undamped modal frequencies ``s n pi`` for ``n = 0..N``, shape ``(N + 1,)`` (eq. 6)."""
+        return self.s * np.pi * np.arange(self.n_modes + 1, dtype=float)
+
+    @property
+    def end_weights(self) -> np.ndarray:
+        """Weights ``c`` with ``u(1, t) = c . q``: ``(1, 2(-1)^1, ..., 2(-1)^N)``, shape ``(N + 1,)``
+        (eq. 15 at ``x = 1``)."""
+        c = 2.0 * (-1.0) ** np.arange(self.n_modes + 1)
+        c[0] = 1.0
+        return c
+
+    def shape_functions(self, x) -> np.ndarray:
+        """Mode shapes at ``x`` for the inverse transform (eq. 15).
+
+        Parameters
+        ----------
+        x : array_like, shape (...)
+            Positions along the bar, ``0 <= x <= 1`` (dimensionless).
+
+        Returns
+        -------
+        numpy.ndarray, shape (..., N + 1)
+            ``1`` for ``n = 0`` and ``2 cos(n pi x)`` for ``n >= 1``.
+
+        Raises
+        ------
+        ValueError
+            If any ``x`` is outside ``[0, 1]`` or not finite.
+        """
+        x = np.asarray(x, dtype=float)
+        if not np.all(np.isfinite(x)) or np.any((x < 0.0) | (x > 1.0)):
+            raise ValueError("x must lie in [0, 1]")
+        n = np.arange(self.n_modes + 1)
+        phi = 2.0 * np.cos(np.pi * x[..., None] * n)
+        phi[..., 0] = 1.0
+        return phi
+
+    def with_(self, **changes) -> BarModel:
+        """A copy with some fields changed (validated again)."""
+        fields = {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes}
+        unknown = set(changes) - set(fields)
+        if unknown:
+            raise ValueError(f"unknown BarModel field(s): {sorted(unknown)}; allowed: {sorted(fields)}")
+        fields.update(changes)
+        return BarModel(**fields)
