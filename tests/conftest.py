@@ -1,0 +1,44 @@
+"""Shared test setup: seeded rng, floating-point errors raise, Agg backend, ``--runslow``."""
+
+import os
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("MPLBACKEND", "Agg")
+
+
+def pytest_addoption(parser):
+    parser.addoption("--runslow", action="store_true", default=False, help="run tests marked slow")
+
+
+def pytest_collection_modifyitems(config, items):
+    if config.getoption("--runslow"):
+        return
+    skip_slow = pytest.mark.skip(reason="slow: use --runslow")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip_slow)
+
+
+@pytest.fixture
+def rng():
+    """A seeded generator, so every random test is repeatable."""
+    return np.random.default_rng(20261121)
+
+
+@pytest.fixture(autouse=True)
+def _raise_on_fp_errors():
+    old = np.seterr(all="raise", under="ignore")
+    yield
+    np.seterr(**old)
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError:  # pragma: no cover
+        return
+    plt.close("all")
