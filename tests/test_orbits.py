@@ -185,7 +185,7 @@ def _integrate_period(orbit):
     nodes = [0.0, *breaks, TWO_PI]
     y = orbit.state_after_impact.copy()
     for a, b in zip(nodes[:-1], nodes[1:], strict=True):
-        def rhs(t, y, a=a):
+        def rhs(t, y, a=a, b=b):
             pt = float(load(orbit.phase + 0.5 * (a + b))) if breaks else float(load(orbit.phase + t))
             return np.concatenate([y[M:], pt - d * y[M:] - w2 * y[:M]])
         sol = solve_ivp(rhs, (a, b), y, method="DOP853", rtol=1e-13, atol=1e-14)
