@@ -40,21 +40,32 @@ def fundamental(w2, d: float, tau):
     tuple of numpy.ndarray
         ``(phi11, phi12, phi21, phi22)``, each of the broadcast shape of ``w2`` and ``tau``.
     """
-    w2, tau = np.broadcast_arrays(np.asarray(w2, dtype=float), np.asarray(tau, dtype=float))
+    w2 = np.asarray(w2, dtype=float)
+    tau = np.asarray(tau, dtype=float)
     lam2 = w2 - 0.25 * d * d
     rigid = w2 == 0.0
     if np.all((lam2 > 0.0) | rigid):  # fast path: flexible modes underdamped (the rule)
         lam = np.sqrt(np.where(rigid, 1.0, lam2))
-        C = np.cos(lam * tau)
-        S = np.sin(lam * tau) / lam
-        e = np.exp(-0.5 * d * tau) if d else 1.0
-        out = [e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)]
+        x = lam * tau
+        eC = np.cos(x)
+        p12 = np.sin(x) / lam
+        if d:
+            e = np.exp(-0.5 * d * tau)
+            eC = e * eC
+            p12 = e * p12
+        hd = 0.5 * d * p12
+        out = [eC + hd, p12, -w2 * p12, eC - hd]
         if np.any(rigid):
+            shape = np.broadcast_shapes(w2.shape, tau.shape)
+            out = [np.broadcast_to(o, shape) for o in out]
             out[0] = np.where(rigid, 1.0, out[0])
             out[1] = np.where(rigid, b_integral(d, tau), out[1])
             out[2] = np.where(rigid, 0.0, out[2])
             out[3] = np.where(rigid, np.exp(-d * tau), out[3])
         return tuple(out)
+    w2, tau = np.broadcast_arrays(w2, tau)
+    rigid = w2 == 0.0
+    lam2 = w2 - 0.25 * d * d
     lam = np.sqrt(np.abs(lam2))
     x = lam * tau
     under = lam2 >= 0.0
@@ -78,7 +89,9 @@ def b_integral(d: float, tau):
     tau = np.asarray(tau, dtype=float)
     if d == 0.0:
         return tau.copy()
-    return -np.expm1(-d * tau) / d
+    y = d * tau
+    # series where d tau is tiny (it may underflow to 0 for denormal d)
+    return np.where(np.abs(y) < 1e-8, tau * (1.0 - 0.5 * y), -np.expm1(-y) / d)
 
 
 def c_integral(d: float, tau):
