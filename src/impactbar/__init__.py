@@ -9,5 +9,9 @@ from .loads import Load as Load
 from .loads import PiecewiseConstantLoad as PiecewiseConstantLoad
 from .loads import SquareWaveLoad as SquareWaveLoad
 from .model import BarModel as BarModel
+from .simulate import EnergyAccount as EnergyAccount
+from .simulate import InitialState as InitialState
+from .simulate import Trajectory as Trajectory
+from .simulate import simulate as simulate
 
 __version__ = "0.1.0"
