@@ -408,6 +408,80 @@ class _Segment:
     frozen: np.ndarray | None = None  # the free state (q, 0) frozen at a chatter jump
 
 
+_ENTRIES = ("start", "impact", "chatter", "touch", "release")
+
+
+class _Segments:
+    """The pieces of closed-form motion of a run, stored as arrays (one row per piece); indexing
+    gives a :class:`_Segment`."""
+
+    def __init__(self, n_modes, t, basis, entry, q, v, frozen):
+        self.n_modes = n_modes
+        self.t = t
+        self.basis = basis
+        self.entry = entry
+        self.q = q
+        self.v = v
+        self.frozen = frozen
+
+    def __len__(self) -> int:
+        return self.t.size
+
+    def __getitem__(self, j) -> _Segment:
+        j = range(len(self))[j]
+        b = int(self.basis[j])
+        m = self.n_modes + 1 if b == _FREE else self.n_modes
+        return _Segment(float(self.t[j]), b, self.q[j, :m], self.v[j, :m],
+                        _ENTRIES[self.entry[j]], self.frozen.get(j))
+
+
+class _SegmentLog:
+    """Builds :class:`_Segments` block by block (a block of impacts comes from one kernel call)."""
+
+    def __init__(self, n_modes):
+        self.M = n_modes + 1
+        self.blocks = []
+        self.frozen = {}
+        self.count = 0
+
+    def add(self, t, basis, q, v, entry, frozen=None):
+        qq = np.zeros((1, self.M))
+        vv = np.zeros((1, self.M))
+        qq[0, :q.size] = q
+        vv[0, :v.size] = v
+        self.blocks.append((np.array([t], dtype=float), np.array([basis], dtype=np.int8),
+                            np.array([_ENTRIES.index(entry)], dtype=np.int8), qq, vv))
+        if frozen is not None:
+            self.frozen[self.count] = frozen
+        self.count += 1
+
+    def add_impacts(self, ts, qs, vs):
+        k = ts.size
+        self.blocks.append((ts.copy(), np.zeros(k, dtype=np.int8), np.ones(k, dtype=np.int8),
+                            qs.copy(), vs.copy()))
+        self.count += k
+
+    def truncate(self, count):
+        """Drop the pieces from index ``count`` on (whole single-piece blocks only)."""
+        while self.count > count:
+            blk = self.blocks.pop()
+            assert self.count - blk[0].size >= count
+            self.count -= blk[0].size
+        for j in [j for j in self.frozen if j >= count]:
+            del self.frozen[j]
+
+    def last(self) -> _Segment:
+        t, b, e, q, v = self.blocks[-1]
+        bb = int(b[-1])
+        m = self.M if bb == _FREE else self.M - 1
+        return _Segment(float(t[-1]), bb, q[-1, :m], v[-1, :m], _ENTRIES[e[-1]],
+                        self.frozen.get(self.count - 1))
+
+    def finish(self) -> _Segments:
+        cols = list(zip(*self.blocks, strict=True))
+        return _Segments(self.M - 1, *(np.concatenate(c) for c in cols), dict(self.frozen))
+
+
 @dataclass(frozen=True, eq=False)
 class Trajectory:
     """The result of :func:`simulate`.
@@ -442,7 +516,7 @@ class Trajectory:
     final_state: InitialState
     status: str
     _core: _Core = field(repr=False)
-    _segments: tuple = field(repr=False)
+    _segments: _Segments = field(repr=False)
     n_release_retries: int = 0
 
     @property
@@ -464,7 +538,7 @@ class Trajectory:
 
     def _modal(self, t):
         """Yield ``(mask, basis, q, v)`` with the modal states at the times ``t``."""
-        starts = np.array([s.t for s in self._segments])
+        starts = self._segments.t
         idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(starts) - 1)
         for j in np.unique(idx):
             sel = idx == j
@@ -690,7 +764,8 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
-    segs: list[_Segment] = [_Segment(t0, _FREE, q.copy(), v.copy(), "start")]
+    segs = _SegmentLog(core.N)
+    segs.add(t0, _FREE, q, v, "start")
     times: list[np.ndarray] = []
     vels: list[np.ndarray] = []
     contacts: list[list[float]] = []
@@ -701,17 +776,16 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     dwell = 0.0
     retries = 0
     last_release = None  # (time, contact segment index, contact state at release) for undoing
-    cap = 256
+    cap = 1024
     while True:
         if mode == _FREE:
-            n, st, tn, ot, ov, oq, ovv = core.run_free(t, q, v, t_end, max_imp - n_imp, cap)
+            left = max_imp - n_imp
+            n, st, tn, ot, ov, oq, ovv = core.run_free(t, q, v, t_end, left, min(cap, left))
             cap = min(cap * 2, 1 << 16)
             if n:
                 times.append(ot.copy())
                 vels.append(ov.copy())
-                for i in range(n):
-                    segs.append(_Segment(float(ot[i]), _FREE, oq[i].copy(), ovv[i].copy(),
-                                         "impact"))
+                segs.add_impacts(ot, oq, ovv)
                 n_imp += n
             if st == K.FAILED:  # pragma: no cover - defensive
                 raise RuntimeError(f"impact search did not converge at t = {tn}")
@@ -730,11 +804,11 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             if n == 0 and same_time:
                 # the free motion would press straight back: undo the release and dwell longer
                 t_rel, seg_index, _ = last_release
-                del segs[seg_index + 1:]
+                segs.truncate(seg_index + 1)
                 contacts[-1][1] = math.nan
                 dwell = max(2.0 * dwell, DWELL_START)
                 retries += 1
-                cseg = segs[-1]
+                cseg = segs.last()
                 t = t_rel
                 mode = _CONTACT
                 r, rv = _contact_at(core, cseg, t_rel + dwell, t_end)
@@ -750,11 +824,11 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                     frozen = q.copy()
                     r, rv = core.contact_state(q, np.zeros_like(v))
                     t = min(tn, t_end)
-                    segs.append(_Segment(t, _CONTACT, r, rv, "chatter", frozen))
+                    segs.add(t, _CONTACT, r, rv, "chatter", frozen)
                 else:
                     r, rv = core.contact_state(q, v)
                     t = tn
-                    segs.append(_Segment(t, _CONTACT, r, rv, "touch"))
+                    segs.add(t, _CONTACT, r, rv, "touch")
                 contacts.append([t, math.nan])
                 mode = _CONTACT
                 if t >= t_end:
@@ -770,12 +844,12 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             break
         contacts[-1][1] = tr
         q, v = core.release_state(rr, rrv)
-        last_release = (tr, len(segs) - 1, None)
-        segs.append(_Segment(tr, _FREE, q.copy(), v.copy(), "release"))
+        last_release = (tr, segs.count - 1, None)
+        segs.add(tr, _FREE, q, v, "release")
         t = tr
         mode = _FREE
     # ---- final state ----
-    last = segs[-1]
+    last = segs.last()
     qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
     qe, ve = qe[:, 0], ve[:, 0]
     if last.basis == _CONTACT:
@@ -783,10 +857,10 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     imp_t = np.concatenate(times) if times else np.zeros(0)
     imp_v = np.concatenate(vels) if vels else np.zeros(0)
     ci = np.array(contacts, dtype=float).reshape(-1, 2)
-    return Trajectory(model=core.model, load=core.load, t0=segs[0].t, t_end=t,
+    return Trajectory(model=core.model, load=core.load, t0=t0, t_end=t,
                       impact_times=imp_t, impact_velocities=imp_v, contact_intervals=ci,
                       final_state=InitialState(qe, ve), status=status, _core=core,
-                      _segments=tuple(segs), n_release_retries=retries)
+                      _segments=segs.finish(), n_release_retries=retries)
 
 
 def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
