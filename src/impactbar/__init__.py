@@ -15,3 +15,5 @@ from .simulate import Trajectory as Trajectory
 from .simulate import simulate as simulate
 
 __version__ = "0.1.0"
+from .orbits import PeriodicOrbit as PeriodicOrbit
+from .orbits import periodic_orbits as periodic_orbits
