@@ -443,3 +443,35 @@ def test_times_outside_the_run_raise():
                   InitialState.rigid(-0.1, 0.0), 5.0)
     with pytest.raises(ValueError, match="t must lie"):
         tr.end_displacement(6.0)
+
+
+# ----------------------------------------------------------------------------------------------
+# periodic_orbits (orbits.py): settle on the stable one, leave the unstable one
+# ----------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("model", "load"),
+    [
+        (BarModel(s=3.3, d=0.05, R=0.5, n_modes=8), CosineLoad(0.8, 1.0)),
+        (BarModel(s=7.3, d=0.02, R=0.6, n_modes=4), CosineLoad(0.9, 1.0)),
+    ],
+)
+def test_settles_on_stable_and_leaves_unstable_periodic_orbit(model, load):
+    from impactbar import periodic_orbits
+
+    orbits = [o for o in periodic_orbits(model, load) if o.admissible]
+    assert {o.stable for o in orbits} == {True, False}
+    rng = np.random.default_rng(7)
+    c = model.end_weights
+    for orbit in orbits:
+        q, v = orbit.modal_state_after_impact
+        dq = 1e-5 * rng.standard_normal(q.size)
+        dq[0] = -1e-6 - c[1:] @ dq[1:]  # a small step back from the stop
+        start = InitialState(q + dq, v + 1e-5 * rng.standard_normal(v.size))
+        tr = simulate(model, load, start, orbit.phase + TWO_PI * 150, t0=orbit.phase)
+        lag = np.mod(tr.impact_times[-3:] - orbit.phase + math.pi, TWO_PI) - math.pi
+        dv = tr.impact_velocities[-3:] - orbit.impact_velocity
+        if orbit.stable:
+            assert np.max(np.abs(lag)) < 1e-8
+            assert np.max(np.abs(dv)) < 1e-8
+        else:
+            assert np.max(np.abs(lag)) > 1e-3 or np.max(np.abs(dv)) > 1e-3
