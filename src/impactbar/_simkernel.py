@@ -245,7 +245,7 @@ def _cubic_step(g, dh, ddh, J, smax):
                     lo = mid
                 else:
                     hi = mid
-                if hi - lo <= 1e-3 * hi:
+                if hi - lo <= 2e-2 * hi:
                     break
             return lo
         lo = hi
@@ -343,10 +343,10 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
                     hi = t
                 step = -h / dh if dh > 0.0 else 0.0
                 tn = t + step
+                if abs(step) <= 1e-15 * (1.0 + abs(t)) or hi - lo <= 4e-16 * (1.0 + abs(t)):
+                    break
                 if not (lo < tn < hi):
                     tn = 0.5 * (lo + hi)
-                if abs(tn - t) <= 1e-15 * (1.0 + abs(t)) or hi - lo <= 4e-16 * (1.0 + abs(t)):
-                    break
                 t = tn
             if h < 0.0:
                 t = tn  # the converged Newton point, a rounding error past the last h < 0
