@@ -98,6 +98,7 @@ def test_run_experiment_fractions_stats_and_plots(tmp_path):
     # a k = 1 run strikes once per load period, exactly, once settled
     assert res.interval_mean == pytest.approx(1.0, abs=1e-6)
     assert res.interval_std < 1e-4
+    assert res.run_spread < 1e-4
     text = res.summary()
     assert "k=1" in text and "impact interval" in text
     files = plot_experiment(res, tmp_path)
