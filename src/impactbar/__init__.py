@@ -15,5 +15,10 @@ from .simulate import EnergyAccount as EnergyAccount
 from .simulate import InitialState as InitialState
 from .simulate import Trajectory as Trajectory
 from .simulate import simulate as simulate
+from .sweep import SweepSpec as SweepSpec
+from .sweep import load_spec as load_spec
+from .sweep import open_sweep as open_sweep
+from .sweep import run_sweep as run_sweep
+from .sweep_plot import plot_sweep as plot_sweep
 
 __version__ = "0.1.0"

@@ -1,0 +1,42 @@
+"""``impactbar plot RESULTS.zarr --out FIG.png``: draw a stored sweep (stability chart, fraction
+maps or bifurcation diagram, by the store's task)."""
+
+from __future__ import annotations
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "plot",
+        help="draw a stored sweep: stability chart, fraction maps or bifurcation diagram",
+        description="Read a store written by 'impactbar sweep' and draw it: a stability chart for "
+        "task orbits, maps of the motion fractions for montecarlo, a bifurcation diagram for "
+        "bifurcation. Chunks not yet computed show as blank.",
+    )
+    p.add_argument("store", help="the zarr store written by 'impactbar sweep'")
+    p.add_argument("--out", required=True, help="the figure file (PNG, PDF, SVG, ...)")
+    p.add_argument("--select", action="append", default=[], metavar="AXIS=VALUE",
+                   help="fix an axis at the grid value nearest VALUE (repeatable); the chart uses "
+                   "at most two remaining axes")
+    p.add_argument("--dpi", type=int, default=150, help="resolution of raster output (default 150)")
+    p.set_defaults(func=run)
+
+
+def _selection(items) -> dict:
+    sel = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise ValueError(f"--select must be AXIS=VALUE; got {item!r}")
+        try:
+            sel[name.strip()] = float(value)
+        except ValueError:
+            raise ValueError(f"--select {name}: VALUE must be a number; got {value!r}") from None
+    return sel
+
+
+def run(args) -> int:
+    from .sweep_plot import plot_sweep
+
+    path = plot_sweep(args.store, args.out, select=_selection(args.select), dpi=args.dpi)
+    print(f"wrote {path}")
+    return 0

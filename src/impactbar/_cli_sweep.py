@@ -1,0 +1,45 @@
+"""``impactbar sweep SPEC.toml --out RESULTS.zarr``: a parameter sweep or Monte Carlo study on
+``dask.distributed``, stored chunk by chunk in zarr; rerunning resumes."""
+
+from __future__ import annotations
+
+import sys
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "sweep",
+        help="parameter sweep / Monte Carlo on dask.distributed into a resumable zarr store",
+        description="Compute the task of SPEC.toml (orbits, montecarlo or bifurcation) at every "
+        "point of its grid on a dask.distributed cluster and store each chunk in RESULTS.zarr as "
+        "it finishes. Rerunning the same command resumes: finished chunks are kept. The spec is "
+        "checked before any work starts (see docs/sweep.md for its keys).",
+    )
+    p.add_argument("spec", help="the sweep spec (TOML)")
+    p.add_argument("--out", required=True, help="the zarr store to create or resume (a folder)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None,
+                       help="size of the local cluster started (processes; default: the cores)")
+    where.add_argument("--scheduler", default=None,
+                       help="address of a running dask scheduler, e.g. tcp://host:8786, instead")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace a store that holds a different sweep")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    from .sweep import load_spec, run_sweep
+
+    spec = load_spec(args.spec)  # refused here, before any cluster starts
+    if args.workers is not None and args.workers < 1:
+        raise ValueError(f"--workers must be >= 1; got {args.workers}")
+    print(f"{spec.task}: {spec.n_points} points in {spec.n_chunks} chunks of up to "
+          f"{spec.chunk_points} -> {args.out}", file=sys.stderr)
+    res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,
+                    overwrite=args.overwrite, progress=not args.no_progress)
+    rate = (f", {res.computed * spec.n_points / spec.n_chunks / res.seconds:.1f} points/s"
+            if res.computed and res.seconds > 0 else "")
+    print(f"{args.out}: {res.already_done + res.computed}/{res.n_chunks} chunks stored "
+          f"({res.already_done} found, {res.computed} computed in {res.seconds:.1f} s{rate})")
+    return 0
