@@ -136,6 +136,8 @@ def step_constant(w2, d: float, level, q0, v0, tau):
     w2 = np.asarray(w2, dtype=float)
     q0 = np.asarray(q0, dtype=float)
     v0 = np.asarray(v0, dtype=float)
+    if q0.ndim == 2:  # one start state per time column
+        return _step_columns(w2, d, level, q0, v0, tau)
     scalar = np.ndim(tau) == 0
     tau = np.atleast_1d(np.asarray(tau, dtype=float))[None, :]
     level = np.atleast_1d(np.asarray(level, dtype=float))[None, :]
@@ -151,4 +153,22 @@ def step_constant(w2, d: float, level, q0, v0, tau):
         v = np.where(rigid, v + level * b_integral(d, tau), v)
     if scalar:
         return q[:, 0], v[:, 0]
+    return q, v
+
+
+def _step_columns(w2, d, level, q0, v0, tau):
+    """:func:`step_constant` with a start state and a level per column: ``q0, v0`` shape (M, T),
+    ``level`` and ``tau`` shape (T,)."""
+    tau = np.asarray(tau, dtype=float)[None, :]
+    level = np.broadcast_to(np.asarray(level, dtype=float), tau.shape[1:])[None, :]
+    w2c = w2[:, None]
+    p11, p12, p21, p22 = fundamental(w2c, d, tau)
+    rigid = w2c == 0.0
+    qs = np.where(rigid, 0.0, level / np.where(rigid, 1.0, w2c))
+    dq = q0 - qs
+    q = p11 * dq + p12 * v0 + qs
+    v = p21 * dq + p22 * v0
+    if np.any(rigid):
+        q = np.where(rigid, q + level * c_integral(d, tau), q)
+        v = np.where(rigid, v + level * b_integral(d, tau), v)
     return q, v

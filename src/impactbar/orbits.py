@@ -59,7 +59,7 @@ def phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     return (1.0 + R) * load.rigid_velocity(model.d, phase) - load.p0 * phase_G(model.d, R)
 
 
-def phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
+def phase_roots(model: BarModel, load: Load, *, closed_form: bool = True) -> list[tuple[float, int]]:
     """Every root of the phase equation in ``[0, 2 pi)``, with its multiplicity (1, or 2 at a fold).
 
     Roots are enclosed with certainty: ``|F'| = (1 + R)|p - p0 - d V| <= 2 (1 + R) sup|p - p0|``
@@ -67,6 +67,14 @@ def phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     times its half-width holds no root (see ``_certified``). Enclosed roots are refined by Brent's
     method; a cluster without a sign change is a double root when the residual's extremum there is
     zero to rounding.
+
+    Parameters
+    ----------
+    model : BarModel
+    load : Load
+    closed_form : bool
+        Use the closed form for a load with a single harmonic (default); ``False`` forces the
+        certified search (used by the tests to check one against the other).
 
     Returns
     -------
@@ -79,7 +87,7 @@ def phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     scale = (1.0 + R) * load.sup_oscillation + abs(load.p0 * phase_G(model.d, R))
     if lip == 0.0:  # constant load: no phase dependence
         return []
-    single = _single_harmonic_roots(model, load)
+    single = _single_harmonic_roots(model, load) if closed_form else None
     if single is not None:
         return single
 
