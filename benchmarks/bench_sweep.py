@@ -1,0 +1,95 @@
+"""Benchmark for issue 4: grid points per second of ``impactbar sweep`` on a local
+``dask.distributed`` cluster of 1 and of 2 worker processes, side by side.
+
+- ``orbits``: the rigid bar (``n_modes = 0``) under ``p0 + cos t``, a 200 x 200 grid over ``R`` and
+  ``p0`` (the Fig. 5 chart as a grid), 400 points per chunk.
+- ``montecarlo``: the rigid pneumatic hammer, 6 x 4 points over ``p0`` and ``R``, 20 random starts of
+  200 load periods each per point, 2 points per chunk.
+
+The time is that of :func:`impactbar.sweep.run_sweep` after the cluster has started: workers
+importing impactbar, computing every chunk, the driver writing each into the zarr store. Each run
+writes a fresh store in a temporary folder.
+
+Run: ``python benchmarks/bench_sweep.py [--grid N] [--quick]`` (``--quick``: a 40 x 40 grid and 8
+starts). Prints a table; nothing is asserted. With ``--workers 1 2 4`` other sizes are timed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import tempfile
+import time
+from pathlib import Path
+
+from distributed import Client, LocalCluster
+
+from impactbar.sweep import parse_spec, run_sweep
+
+
+def orbits_spec(n: int):
+    return parse_spec({
+        "task": "orbits",
+        "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+        "load": {"kind": "cosine", "p0": 0.3, "pk": 1.0, "k": 1},
+        "axes": {"R": {"start": 0.0, "stop": 0.95, "num": n}, "p0": {"start": 0.2, "stop": 0.45, "num": n}},
+        "chunk_points": 400,
+    })
+
+
+def montecarlo_spec(starts: int):
+    return parse_spec({
+        "task": "montecarlo",
+        "model": {"s": 10.0, "d": 0.0047746, "R": 0.8, "n_modes": 0},
+        "load": {"kind": "cosine", "p0": 1.2, "pk": 1.0, "k": 1},
+        "axes": {"p0": {"start": 0.4, "stop": 1.6, "num": 6}, "R": {"values": [0.5, 0.6, 0.7, 0.8]}},
+        "montecarlo": {"starts": starts, "periods": 200.0, "seed": 1},
+        "chunk_points": 2,
+    })
+
+
+def points_per_second(spec, workers: int, folder: Path) -> tuple[float, float]:
+    with (LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                       dashboard_address=None, silence_logs=logging.ERROR) as cluster,
+          Client(cluster) as client):
+        run = run_sweep(spec, folder / f"{spec.task}-{workers}.zarr", client=client, progress=False)
+    assert run.complete
+    return spec.n_points / run.seconds, run.seconds
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--grid", type=int, default=200, help="orbits grid is GRID x GRID (default 200)")
+    ap.add_argument("--starts", type=int, default=20, help="montecarlo starts per point (default 20)")
+    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="cluster sizes (default 1 2)")
+    ap.add_argument("--quick", action="store_true", help="40 x 40 grid, 8 starts")
+    args = ap.parse_args()
+    if args.quick:
+        args.grid, args.starts = 40, 8
+    specs = [(f"orbits, rigid, {args.grid} x {args.grid}", orbits_spec(args.grid)),
+             (f"montecarlo, rigid, 6 x 4 points x {args.starts} starts x 200 periods",
+              montecarlo_spec(args.starts))]
+    print(f"cores: {os.cpu_count()}, load average at start: {os.getloadavg()[0]:.2f}")
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, spec in specs:
+            row = [label, spec.n_points, spec.n_chunks]
+            for w in args.workers:
+                t0 = time.perf_counter()
+                pps, secs = points_per_second(spec, w, Path(tmp))
+                row.append((pps, secs, time.perf_counter() - t0))
+            rows.append(row)
+    head = "| sweep | points | chunks | " + " | ".join(f"{w} worker{'s' if w > 1 else ''}: points/s (s)"
+                                                   for w in args.workers) + " | speed-up |"
+    print(head)
+    print("|" + "---|" * (head.count("|") - 1))
+    for label, n, c, *cells in rows:
+        speed = cells[-1][0] / cells[0][0]
+        print(f"| {label} | {n} | {c} | " + " | ".join(f"{p:.1f} ({s:.1f})" for p, s, _ in cells)
+              + f" | {speed:.2f} |")
+    print(f"load average at end: {os.getloadavg()[0]:.2f}")
+
+
+if __name__ == "__main__":
+    main()
