@@ -49,13 +49,18 @@ def montecarlo_spec(starts: int):
     })
 
 
-def points_per_second(spec, workers: int, folder: Path) -> tuple[float, float]:
+def points_per_second(spec, workers: int, folder: Path) -> tuple[float, float, float]:
+    """Points per second of wall time, the wall time (s) and the CPU time of the workers (s):
+    on a shared machine the CPU time shows whether the workers got their cores."""
     with (LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                        dashboard_address=None, silence_logs=logging.ERROR) as cluster,
           Client(cluster) as client):
+        cpu0 = client.run(time.process_time)
         run = run_sweep(spec, folder / f"{spec.task}-{workers}.zarr", client=client, progress=False)
+        cpu1 = client.run(time.process_time)
     assert run.complete
-    return spec.n_points / run.seconds, run.seconds
+    cpu = sum(cpu1[w] - cpu0[w] for w in cpu0)
+    return spec.n_points / run.seconds, run.seconds, cpu
 
 
 def main() -> None:
@@ -76,17 +81,15 @@ def main() -> None:
         for label, spec in specs:
             row = [label, spec.n_points, spec.n_chunks]
             for w in args.workers:
-                t0 = time.perf_counter()
-                pps, secs = points_per_second(spec, w, Path(tmp))
-                row.append((pps, secs, time.perf_counter() - t0))
+                row.append(points_per_second(spec, w, Path(tmp)))
             rows.append(row)
-    head = "| sweep | points | chunks | " + " | ".join(f"{w} worker{'s' if w > 1 else ''}: points/s (s)"
-                                                   for w in args.workers) + " | speed-up |"
+    cols = [f"{w} worker{'s' if w > 1 else ''}: points/s (wall s, worker CPU s)" for w in args.workers]
+    head = "| sweep | points | chunks | " + " | ".join(cols) + " | speed-up |"
     print(head)
     print("|" + "---|" * (head.count("|") - 1))
     for label, n, c, *cells in rows:
         speed = cells[-1][0] / cells[0][0]
-        print(f"| {label} | {n} | {c} | " + " | ".join(f"{p:.1f} ({s:.1f})" for p, s, _ in cells)
+        print(f"| {label} | {n} | {c} | " + " | ".join(f"{p:.1f} ({s:.1f}, {cpu:.1f})" for p, s, cpu in cells)
               + f" | {speed:.2f} |")
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
 

@@ -700,7 +700,11 @@ def _read_attrs(path: Path) -> dict:
 
 
 def _create_store(spec: SweepSpec, path: Path) -> None:
-    """Create the full store in a temporary folder next to ``path`` and rename it into place."""
+    """Create the full store in a temporary folder next to ``path`` and rename it into place
+    (removing what a run killed during this step left behind)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    for stale in path.parent.glob(f".{path.name}.creating-*"):
+        shutil.rmtree(stale, ignore_errors=True)
     tmp = path.with_name(f".{path.name}.creating-{uuid.uuid4().hex}")
     try:
         with warnings.catch_warnings():
