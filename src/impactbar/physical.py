@@ -1062,7 +1062,7 @@ PRESETS: dict[str, dict] = {
         # A_r = 2 A_f is switched between p and tank, so the net force is +p A_f (forward stroke)
         # and -p A_f (return): the paper's symmetric square wave (eq. 34). p = 20 MPa on
         # A_f = 10 cm^2 gives +-20 kN. A fraction 0.588 of the period forward (kappa = 1.176)
-        # gives a mean of 3.52 kN and v = 3520 / (55 * 5.62 * 1.144) = 10.0 m/s (281 J, 15 kW).
+        # gives a mean of 3.52 kN and v = 3520 / (55 * 5.62 * 1.144) = 9.96 m/s (279 J, 15 kW).
         "force": {"kind": "hydraulic", "high": "20 kN", "low": "-20 kN", "fraction": 0.588},
         # Oil-film damping of the piston guides, unknown in practice: 9 N s/m makes 2 pi d = 0.03,
         # the damped case of the paper's Fig. 8.
