@@ -12,3 +12,5 @@ from .loads import SquareWaveLoad as SquareWaveLoad
 from .model import BarModel as BarModel
 
 __version__ = "0.1.0"
+from .orbits import PeriodicOrbit as PeriodicOrbit
+from .orbits import periodic_orbits as periodic_orbits

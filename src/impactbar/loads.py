@@ -405,18 +405,20 @@ class PiecewiseConstantLoad(Load):
             return q, v
         if np.any(t < t0 - 1e-12):
             raise ValueError("propagate needs t >= t0")
-        nodes = np.concatenate(([t0], self._boundaries(t0, float(np.max(t)))))
-        qn = np.empty((M, nodes.size))
-        vn = np.empty((M, nodes.size))
+        t_max = float(np.max(t))
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [max(t_max, t0) + 1.0]))
+        # the level of each piece is read at its midpoint: a node itself may round to either side
+        levels = self(0.5 * (nodes[:-1] + nodes[1:]))
+        qn = np.empty((M, nodes.size - 1))
+        vn = np.empty((M, nodes.size - 1))
         qn[:, 0], vn[:, 0] = q0, v0
-        for j in range(1, nodes.size):
-            level = self(nodes[j - 1])
-            qn[:, j], vn[:, j] = step_constant(w2, d, level, qn[:, j - 1], vn[:, j - 1],
+        for j in range(1, nodes.size - 1):
+            qn[:, j], vn[:, j] = step_constant(w2, d, levels[j - 1], qn[:, j - 1], vn[:, j - 1],
                                                nodes[j] - nodes[j - 1])
-        j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, nodes.size - 1)
+        j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, nodes.size - 2)
         for jj in np.unique(j):
             sel = j == jj
-            level = self(nodes[jj])
+            level = levels[jj]
             q[:, sel], v[:, sel] = step_constant(w2, d, level, qn[:, jj], vn[:, jj],
                                                  np.maximum(t[sel] - nodes[jj], 0.0))
         return q, v

@@ -78,9 +78,13 @@ def c_integral(d: float, tau):
     y = d * tau
     small = np.abs(y) < 1e-2
     series = tau * tau * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0)
-    ys = np.where(small, 1.0, y)
-    exact = (tau - (-np.expm1(-ys) / d)) / d
-    return np.where(small, series, exact)
+    out = series
+    big = ~small
+    if np.any(big):
+        out = np.array(series, dtype=float)
+        tb = tau[big] if tau.ndim else tau
+        out[big] = (tb - (-np.expm1(-d * tb) / d)) / d
+    return out
 
 
 def step_constant(w2, d: float, level, q0, v0, tau):

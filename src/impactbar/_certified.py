@@ -1,0 +1,104 @@
+"""Certified zero search: every zero of a function with a known local Lipschitz bound is enclosed.
+
+An interval ``[m - h, m + h]`` can hold a zero of ``f`` only if ``|f(m)| <= L h`` with ``L`` a bound
+of ``|f'|`` on it; every other interval is excluded for certain. The survivors are bisected until
+they are narrow, then grouped into clusters; each zero lies in a cluster. Callers refine inside the
+clusters (Brent on a sign change, a bounded minimisation for a double zero at a fold or tangency).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+__all__ = ["enclose_zeros", "zeros_in_clusters"]
+
+
+def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: float = 1e-7,
+                  max_intervals: int = 400_000):
+    """Clusters ``(lo, hi)`` that together contain every zero of ``f`` in ``[a, b]``.
+
+    Parameters
+    ----------
+    f : callable
+        ``f(t)`` for an array ``t``, vectorised.
+    lipschitz : callable
+        ``lipschitz(mid, half)`` -> array, an upper bound of ``|f'|`` on each ``[mid-half, mid+half]``.
+    a, b : float
+        The search interval.
+    n0 : int
+        Initial number of intervals.
+    min_width : float
+        Width at which bisection stops.
+    max_intervals : int
+        Guard against runaway subdivision (raises ``RuntimeError``).
+
+    Returns
+    -------
+    list of tuple
+        Disjoint ``(lo, hi)`` in increasing order.
+    """
+    half = 0.5 * (b - a) / n0
+    mids = a + half * (2.0 * np.arange(n0) + 1.0)
+    while True:
+        fm = f(mids)
+        bound = lipschitz(mids, half) * half
+        keep = np.abs(fm) <= bound * (1.0 + 1e-9) + 1e-300
+        mids = mids[keep]
+        if mids.size == 0 or 2.0 * half <= min_width:
+            break
+        if mids.size > max_intervals:
+            raise RuntimeError("zero search did not converge (Lipschitz bound too loose)")
+        half *= 0.5
+        mids = np.sort(np.concatenate((mids - half, mids + half)))
+    if mids.size == 0:
+        return []
+    lo = np.maximum(mids - half, a)
+    hi = np.minimum(mids + half, b)
+    clusters = []
+    start, end = lo[0], hi[0]
+    for l_, h_ in zip(lo[1:], hi[1:], strict=True):
+        if l_ <= end + 1e-12 * max(1.0, abs(end)):
+            end = h_
+        else:
+            clusters.append((start, end))
+            start, end = l_, h_
+    clusters.append((start, end))
+    return clusters
+
+
+def zeros_in_clusters(f, clusters, *, atol: float):
+    """Zeros of a scalar function inside each cluster from :func:`enclose_zeros`.
+
+    A sign change is refined by Brent's method to full precision; a cluster without one is searched
+    for an extremum of ``f`` that touches zero within ``atol`` (a double zero) or crosses it (two
+    close zeros).
+
+    Returns
+    -------
+    list of tuple
+        ``(t, multiplicity)`` with multiplicity 1 or 2, in increasing ``t``.
+    """
+    out = []
+
+    def f1(t):
+        return float(f(np.array([t]))[0])
+
+    for lo, hi in clusters:
+        flo, fhi = f1(lo), f1(hi)
+        if flo == 0.0:
+            out.append((lo, 1))
+            continue
+        if flo * fhi < 0.0:
+            out.append((brentq(f1, lo, hi, xtol=1e-15, rtol=8.9e-16, maxiter=200), 1))
+            continue
+        sgn = 1.0 if flo > 0 else -1.0
+        res = minimize_scalar(lambda t, s=sgn: s * f1(t), bounds=(lo, hi), method="bounded",
+                              options={"xatol": 1e-13})
+        tm, fm = float(res.x), sgn * float(res.fun)
+        if abs(fm) <= atol:
+            out.append((tm, 2))
+        elif fm * flo < 0.0:
+            out.append((brentq(f1, lo, tm, xtol=1e-15, rtol=8.9e-16), 1))
+            out.append((brentq(f1, tm, hi, xtol=1e-15, rtol=8.9e-16), 1))
+    return out
