@@ -10,7 +10,7 @@ from .loads import Load as Load
 from .loads import PiecewiseConstantLoad as PiecewiseConstantLoad
 from .loads import SquareWaveLoad as SquareWaveLoad
 from .model import BarModel as BarModel
-
-__version__ = "0.1.0"
 from .orbits import PeriodicOrbit as PeriodicOrbit
 from .orbits import periodic_orbits as periodic_orbits
+
+__version__ = "0.1.0"
