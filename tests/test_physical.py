@@ -423,6 +423,15 @@ def test_measured_example():
     fit = h.fourier_fit
     assert fit.relative_error <= fit.tolerance == 0.01
     assert h.mean_force_N == pytest.approx(800.0, rel=1e-6)
+    assert abs(h.load.harmonics()[0]) * h.scales.force_N == pytest.approx(2150.0, rel=1e-3)
+
+
+@needs_orbits
+def test_measured_example_has_the_presets_stable_blow():
+    h = ph.load_config(EXAMPLES / "measured_drill.toml")
+    good = [o for o in ph.orbits(h) if o.stable]
+    assert len(good) == 1
+    assert good[0].impact_velocity_m_s == pytest.approx(h.rigid_impact_velocity_m_s, rel=1e-2)
 
 
 def test_bad_toml(tmp_path):
