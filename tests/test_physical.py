@@ -565,3 +565,19 @@ def test_simulate_pneumatic_preset_settles(tmp_path):
     v = r.impact_velocities_m_s[-5:]
     # it settles into the stable one-impact motion, whose rigid part strikes at about 9.1 m/s
     assert np.all((v > 5.0) & (v < 12.0))
+
+
+def test_simulation_result_takes_scalar_only_trajectories():
+    class Scalar(FakeTrajectory):
+        def end_displacement(self, t):
+            return float(super().end_displacement(float(t)))
+
+    h = ph.preset("pneumatic-drill")
+    r = ph.SimulationResult(h, Scalar(4 * np.pi), 2.0 / 40, np.zeros(0), np.zeros(0), np.zeros(0))
+    ts = np.linspace(0, 1 / 40, 7)
+    u = r.end_displacement_m(ts)
+    expect = -0.01 * np.sin(ts / h.scales.time_s / 2) * h.bar.length_m
+    np.testing.assert_allclose(u, expect, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(r.end_velocity_m_s(ts[1:-1]),
+                               -0.005 * np.cos(ts[1:-1] / h.scales.time_s / 2)
+                               * h.scales.velocity_m_s, rtol=1e-5, atol=1e-9)

@@ -1200,7 +1200,7 @@ class SimulationResult:
         """Displacement of the struck end (m, negative off the stop) at times ``t_s`` (s)."""
         sc = self.hammer.scales
         t = np.asarray(t_s, dtype=float) / sc.time_s
-        return np.asarray(self.trajectory.end_displacement(t), dtype=float) * sc.length_m
+        return _evaluate(self.trajectory.end_displacement, t) * sc.length_m
 
     def end_velocity_m_s(self, t_s) -> np.ndarray:
         """Velocity of the struck end (m/s) at times ``t_s`` (s); from the trajectory's own
@@ -1209,13 +1209,24 @@ class SimulationResult:
         t = np.asarray(t_s, dtype=float) / sc.time_s
         ev = getattr(self.trajectory, "end_velocity", None)
         if callable(ev):
-            return np.asarray(ev(t), dtype=float) * sc.velocity_m_s
+            return _evaluate(ev, t) * sc.velocity_m_s
         h = 1e-6
         tend = self.t_end_s / sc.time_s
         lo = np.clip(t - h, 0.0, tend)
         hi = np.clip(t + h, 0.0, tend)
         u = self.trajectory.end_displacement
-        return (np.asarray(u(hi)) - np.asarray(u(lo))) / (hi - lo) * sc.velocity_m_s
+        return (_evaluate(u, hi) - _evaluate(u, lo)) / (hi - lo) * sc.velocity_m_s
+
+
+def _evaluate(fn, t: np.ndarray) -> np.ndarray:
+    """``fn`` at the times ``t``: in one call when ``fn`` takes arrays, else one time at a time."""
+    try:
+        out = np.asarray(fn(t), dtype=float)
+        if out.shape == t.shape:
+            return out
+    except (TypeError, ValueError):
+        pass
+    return np.array([float(fn(float(x))) for x in t.ravel()]).reshape(t.shape)
 
 
 def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
