@@ -15,7 +15,7 @@ __all__ = ["enclose_zeros", "zeros_in_clusters"]
 
 
 def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: float = 1e-7,
-                  max_intervals: int = 400_000):
+                  max_intervals: int = 400_000, joint=None, intervals=None, merge: bool = True):
     """Clusters ``(lo, hi)`` that together contain every zero of ``f`` in ``[a, b]``.
 
     Parameters
@@ -32,17 +32,33 @@ def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: 
         Width at which bisection stops.
     max_intervals : int
         Guard against runaway subdivision (raises ``RuntimeError``).
+    joint : callable, optional
+        ``joint(mid, half) -> (f(mid), bound)`` in one call, when both share work; replaces ``f``
+        and ``lipschitz`` in the search.
+    intervals : array_like, shape (m, 2), optional
+        Search these intervals (clusters from an earlier call) instead of ``[a, b]``.
+    merge : bool
+        Merge adjacent survivors into clusters (default); if false, return the narrow survivors.
 
     Returns
     -------
     list of tuple
         Disjoint ``(lo, hi)`` in increasing order.
     """
-    half = 0.5 * (b - a) / n0
-    mids = a + half * (2.0 * np.arange(n0) + 1.0)
+    if intervals is not None:  # continue from given clusters, each split into n0 pieces
+        lo_hi = np.asarray(intervals, dtype=float).reshape(-1, 2)
+        width = float(np.max(lo_hi[:, 1] - lo_hi[:, 0]))
+        half = 0.5 * width / n0
+        mids = np.concatenate([np.arange(lo_, hi_, 2 * half) + half for lo_, hi_ in lo_hi])
+    else:
+        half = 0.5 * (b - a) / n0
+        mids = a + half * (2.0 * np.arange(n0) + 1.0)
     while True:
-        fm = f(mids)
-        bound = lipschitz(mids, half) * half
+        if joint is not None:
+            fm, lip = joint(mids, half)
+        else:
+            fm, lip = f(mids), lipschitz(mids, half)
+        bound = lip * half
         keep = np.abs(fm) <= bound * (1.0 + 1e-9) + 1e-300
         mids = mids[keep]
         if mids.size == 0 or 2.0 * half <= min_width:
@@ -55,6 +71,8 @@ def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: 
         return []
     lo = np.maximum(mids - half, a)
     hi = np.minimum(mids + half, b)
+    if not merge:
+        return list(zip(lo.tolist(), hi.tolist(), strict=True))
     clusters = []
     start, end = lo[0], hi[0]
     for l_, h_ in zip(lo[1:], hi[1:], strict=True):

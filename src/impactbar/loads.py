@@ -101,6 +101,17 @@ class Load(ABC):
             At an undamped resonance ``w2 = k^2`` of a harmonic the load contains (eq. 16).
         """
 
+    def flow(self, w2, d: float, t0: float, q0, v0):
+        """The exact flow from one state, as a callable ``flow(t) -> (q, v)`` of shape ``(M, T)``.
+
+        Equivalent to ``propagate(w2, d, t0, q0, v0, t)``; subclasses precompute what does not depend
+        on ``t`` so that repeated evaluations (root searches along one orbit) are cheap.
+        """
+        w2 = np.asarray(w2, dtype=float)
+        q0 = np.asarray(q0, dtype=float)
+        v0 = np.asarray(v0, dtype=float)
+        return lambda t: self.propagate(w2, d, t0, q0, v0, t)
+
     @abstractmethod
     def rigid_velocity(self, d: float, t) -> np.ndarray:
         """``V(t)``: the periodic, zero-mean solution of ``V' + d V = p(t) - p0``.
@@ -237,23 +248,33 @@ class FourierLoad(Load):
         return q, v
 
     def propagate(self, w2, d, t0, q0, v0, t):
+        return self.flow(w2, d, t0, q0, v0)(t)
+
+    def flow(self, w2, d, t0, q0, v0):
         w2 = np.asarray(w2, dtype=float)
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        q0 = np.asarray(q0, dtype=float)
-        v0 = np.asarray(v0, dtype=float)
+        hp = self._transfer(w2, d)  # (M, K')
+        hv = hp * (1j * self._k)
         qp0, vp0 = self.periodic_state(w2, d, [t0])
-        qp, vp = self.periodic_state(w2, d, t)
-        tau = (t - t0)[None, :]
-        p11, p12, p21, p22 = fundamental(w2[:, None], d, tau)
-        dq = q0[:, None] - qp0
-        dv = v0[:, None] - vp0
-        q = p11 * dq + p12 * dv + qp
-        v = p21 * dq + p22 * dv + vp
+        dq = np.asarray(q0, dtype=float)[:, None] - qp0
+        dv = np.asarray(v0, dtype=float)[:, None] - vp0
         rigid = w2 == 0.0
-        if np.any(rigid):  # the mean load drives the rigid mode off to infinity: add it exactly
-            q[rigid] += self.p0 * c_integral(d, tau[0])
-            v[rigid] += self.p0 * b_integral(d, tau[0])
-        return q, v
+        static = np.where(rigid, 0.0, self.p0 / np.where(rigid, 1.0, w2))[:, None]
+        w2c = w2[:, None]
+        k = self._k
+
+        def evaluate(t):
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+            tau = (t - t0)[None, :]
+            p11, p12, p21, p22 = fundamental(w2c, d, tau)
+            e = np.exp(1j * np.outer(k, t))
+            q = p11 * dq + p12 * dv + (hp @ e).real + static
+            v = p21 * dq + p22 * dv + (hv @ e).real
+            if np.any(rigid):  # the mean load drives the rigid mode off to infinity: add it exactly
+                q[rigid] += self.p0 * c_integral(d, tau[0])
+                v[rigid] += self.p0 * b_integral(d, tau[0])
+            return q, v
+
+        return evaluate
 
     def rigid_velocity(self, d, t):
         t = np.asarray(t, dtype=float)

@@ -42,6 +42,19 @@ def fundamental(w2, d: float, tau):
     """
     w2, tau = np.broadcast_arrays(np.asarray(w2, dtype=float), np.asarray(tau, dtype=float))
     lam2 = w2 - 0.25 * d * d
+    rigid = w2 == 0.0
+    if np.all((lam2 > 0.0) | rigid):  # fast path: flexible modes underdamped (the rule)
+        lam = np.sqrt(np.where(rigid, 1.0, lam2))
+        C = np.cos(lam * tau)
+        S = np.sin(lam * tau) / lam
+        e = np.exp(-0.5 * d * tau) if d else 1.0
+        out = [e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)]
+        if np.any(rigid):
+            out[0] = np.where(rigid, 1.0, out[0])
+            out[1] = np.where(rigid, b_integral(d, tau), out[1])
+            out[2] = np.where(rigid, 0.0, out[2])
+            out[3] = np.where(rigid, np.exp(-d * tau), out[3])
+        return tuple(out)
     lam = np.sqrt(np.abs(lam2))
     x = lam * tau
     under = lam2 >= 0.0
@@ -52,7 +65,6 @@ def fundamental(w2, d: float, tau):
     phi12 = e * S
     phi21 = -e * w2 * S
     phi22 = e * (C - 0.5 * d * S)
-    rigid = w2 == 0.0
     if np.any(rigid):  # exact forms for the rigid mode: no cosh/sinh cancellation
         phi11 = np.where(rigid, 1.0, phi11)
         phi12 = np.where(rigid, b_integral(d, tau), phi12)

@@ -364,19 +364,18 @@ def _admissibility(model, load, phase, y_plus, v_imp):
     psup = load.sup_abs
     q0, v0 = y_plus[:M], y_plus[M:]
 
-    def states(t):
-        return load.propagate(w2, d, phase, q0, v0, phase + np.asarray(t, dtype=float))
+    flow = load.flow(w2, d, phase, q0, v0)
 
-    def gprime(t):
-        return c @ states(t)[1]
+    def states(t):
+        return flow(phase + np.asarray(t, dtype=float))
 
     def g(t):
         return c @ states(t)[0]
 
-    def lip(mid, half):
+    def gprime_and_bound(mid, half):
         q, v = states(mid)
         center, delta = load.variation(phase + mid, half)
-        grow = math.exp(d * half)
+        grow = np.exp(d * np.asarray(half))
         bound = np.empty_like(q)
         flex = w2 > 0
         wc = w[flex, None]
@@ -385,21 +384,19 @@ def _admissibility(model, load, phase, y_plus, v_imp):
         bound[flex] = delta + (d + wc) * Eb
         vb = (np.abs(v[~flex]) + psup * half) * grow
         bound[~flex] = psup + d * vb
-        return absc @ bound
+        return c @ v, absc @ bound
 
     scale = max(abs(v_imp), psup, 1e-300)
-    clusters = enclose_zeros(gprime, lip, 0.0, TWO_PI, n0=128, min_width=1e-7)
+    clusters = enclose_zeros(None, None, 0.0, TWO_PI, n0=128, min_width=2e-3,
+                             joint=gprime_and_bound, merge=False)
     # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
     # point of g; the end leaves the stop iff its acceleration there points away from the stop.
     if R == 0.0:
         acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
         clusters = [cl for cl in clusters if cl[0] > 1e-6]
-    values = []
-    err = 0.0
-    for lo, hi in clusters:
-        ts = np.linspace(lo, hi, 5)
-        values.append(float(np.max(g(ts))))
-        err = max(err, float(lip(np.array([0.5 * (lo + hi)]), 0.5 * (hi - lo))[0]) * (hi - lo) ** 2)
+    # the stationary points that can carry the largest value are refined to full precision
+    values = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters)
+    err = 1e-12 * scale * (1.0 + max((abs(v) for v in values), default=0.0))
     clearance = max(values) if values else -math.inf
     tol = max(err, 1e-11 * scale)
     if not v_imp > 1e-12 * scale:
@@ -413,3 +410,65 @@ def _admissibility(model, load, phase, y_plus, v_imp):
     else:
         status = "admissible"
     return status, clearance, err
+
+
+def _newton_stationary(states, load, phase, c, w2, d, lo, hi):
+    """Vectorised Newton for zeros of ``g' = c . q'`` on intervals ``[lo, hi]``, with
+    ``g'' = c . (p - d q' - w2 q)``. Returns the final points and which converged inside."""
+    t = 0.5 * (lo + hi)
+    ok = np.zeros(t.size, dtype=bool)
+    for _ in range(8):
+        q, v = states(t)
+        g1 = c @ v
+        g2 = c @ (load(phase + t)[None, :] - d * v - w2[:, None] * q)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(g2 != 0.0, g1 / g2, np.inf)
+        step = np.nan_to_num(step, nan=np.inf)
+        t_new = t - np.where(np.isfinite(step), step, 0.0)
+        inside = (t_new >= lo) & (t_new <= hi) & np.isfinite(step)
+        t = np.clip(t_new, lo, hi)
+        ok = inside & (np.abs(step) < 1e-12)
+        if np.all(ok | ~inside):
+            break
+    return t, ok
+
+
+def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=6):
+    """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
+
+    All narrow intervals that may hold a zero of ``g'`` get a vectorised Newton step; converged
+    points give stationary values. An interval where Newton fails is kept only if an upper bound of
+    ``g`` on it, ``g(mid) + (|g'(mid)| + L h) h``, can still beat the best value found; those are
+    split by the certified exclusion and tried again.
+    """
+    values: list[float] = []
+    best = -math.inf
+    cur = np.array(intervals, dtype=float).reshape(-1, 2)
+    for _ in range(rounds):
+        if cur.size == 0:
+            break
+        lo, hi = cur[:, 0], cur[:, 1]
+        t, ok = _newton_stationary(states, load, phase, c, w2, d, lo, hi)
+        if np.any(ok):
+            vals = c @ states(t[ok])[0]
+            values.extend(float(x) for x in vals)
+            best = max(best, float(np.max(vals)))
+        rest = cur[~ok]
+        if rest.size == 0:
+            break
+        mid = 0.5 * (rest[:, 0] + rest[:, 1])
+        half = 0.5 * (rest[:, 1] - rest[:, 0])
+        gm = c @ states(mid)[0]
+        g1, L2 = bound(mid, half)
+        upper = gm + (np.abs(g1) + L2 * half) * half
+        rest = rest[upper >= best]
+        if rest.size == 0:
+            break
+        cur = np.array(enclose_zeros(None, None, 0.0, TWO_PI, n0=8, min_width=1e-12, joint=bound,
+                                     intervals=rest, merge=False)).reshape(-1, 2)
+    else:
+        # what is left is a near-double zero of g' (a tangency): bound its value from above
+        if cur.size:
+            mid = 0.5 * (cur[:, 0] + cur[:, 1])
+            values.extend(float(x) for x in c @ states(mid)[0])
+    return values
