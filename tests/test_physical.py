@@ -581,3 +581,21 @@ def test_simulation_result_takes_scalar_only_trajectories():
     np.testing.assert_allclose(r.end_velocity_m_s(ts[1:-1]),
                                -0.005 * np.cos(ts[1:-1] / h.scales.time_s / 2)
                                * h.scales.velocity_m_s, rtol=1e-5, atol=1e-9)
+
+
+def test_orbits_subcommand_takes_presets_and_configs(capsys):
+    """Runs once the lead's ``impactbar orbits`` calls add_physical_arguments/run_physical_orbits."""
+    from impactbar import cli
+
+    pytest.importorskip("impactbar._cli_orbits")
+    try:
+        args = cli.build_parser().parse_args(["orbits", "--preset", "pneumatic-drill", "--json"])
+    except SystemExit:
+        pytest.skip("impactbar orbits does not take --preset yet")
+    assert args.preset == "pneumatic-drill"
+    assert cli.main(["orbits", "--preset", "pneumatic-drill", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["mean_force_N"] == 800.0 and out["frequency_Hz"] == 40.0
+    assert any(o["stable"] for o in out["orbits"])
+    assert cli.main(["orbits", str(EXAMPLES / "hydraulic_drill.toml")]) == 0
+    assert "v/(m/s)" in capsys.readouterr().out
