@@ -9,6 +9,7 @@ from __future__ import annotations
 import functools
 import math
 import numbers
+import re
 
 import numpy as np
 
@@ -30,6 +31,11 @@ def registry():
     return ureg
 
 
+_QUANTITY = re.compile(
+    r"^\s*([+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf))\s*([^,+]*?)\s*$",
+    re.IGNORECASE)
+
+
 def _parse(name: str, value):
     """``value`` as a quantity of our registry; a bare real number becomes a dimensionless one."""
     ureg = registry()
@@ -43,14 +49,19 @@ def _parse(name: str, value):
         except Exception as exc:
             raise ValueError(f"{name}: cannot read the quantity {value!r}: {exc}") from exc
     if isinstance(value, str):
-        try:
-            q = ureg.Quantity(value.strip())
-        except Exception as exc:  # pint raises several kinds (undefined unit, syntax, tokenizer)
+        # one number, then a unit expression: no arithmetic, and no commas (pint would read the
+        # decimal comma of "2,5 kN" as a thousands separator: 25 kN)
+        m = _QUANTITY.match(value)
+        if m is None:
             raise ValueError(
-                f"{name}: cannot read {value!r} as a quantity with a unit: {exc}") from exc
-        if not isinstance(q, ureg.Quantity):  # pragma: no cover - a plain number from pint
-            q = ureg.Quantity(float(q), "")
-        return q, False
+                f"{name}: cannot read {value!r}: write one number (decimal point, no thousands "
+                "separators) followed by a unit, e.g. '2.5 kN'")
+        number, unit = m.groups()
+        try:
+            q = ureg.Quantity(float(number), unit)
+        except Exception as exc:  # pint raises several kinds (undefined unit, syntax)
+            raise ValueError(f"{name}: cannot read the unit {unit!r} of {value!r}: {exc}") from exc
+        return q, unit == ""
     raise ValueError(
         f"{name} must be a number or a string with a unit such as '45 mm'; got {value!r} "
         f"({type(value).__name__})"
