@@ -457,11 +457,11 @@ class MeasuredForce:
             If ``max_harmonics`` harmonics cannot meet the tolerance.
         """
         t, f = self._nodes(period_s)
-        mean = self.mean_over(period_s)
         K = self.max_harmonics
         w = TWO_PI / period_s
         t2 = np.append(t, period_s)
         f2 = np.append(f, f[0])
+        mean = float(np.sum(0.5 * (f2[1:] + f2[:-1]) * np.diff(t2)) / period_s)
         slope = np.diff(f2) / np.diff(t2)  # slope of the piece starting at each node
         dm = slope - np.roll(slope, 1)  # jump of the slope at each node (periodic)
         # P_k = 2 c_k, c_k = (1/T) int F e^{-ikwt} dt = -(1/(T (k w)^2)) sum_j dm_j e^{-ikw t_j}
