@@ -105,12 +105,13 @@ def format_table(hammer: physical.Hammer, found) -> str:
     if not found:
         lines.append("no one-impact periodic motion")
         return "\n".join(lines)
-    head = (f"{'phase/rad':>9} {'v/(m/s)':>8} {'E/J':>8} {'P/W':>9} {'sigma/MPa':>9} "
+    head = (f"{'phase/rad':>9} {'u_t':>9} {'v/(m/s)':>8} {'E/J':>8} {'P/W':>9} {'sigma/MPa':>9} "
             f"{'admissible':>10} {'stable':>6} {'max|mu|':>8}")
     lines += [head, "-" * len(head)]
     for o in found:
         lines.append(
-            f"{o.phase_rad:9.4f} {o.impact_velocity_m_s:8.3f} {o.blow_energy_J:8.2f} "
+            f"{o.phase_rad:9.4f} {o.impact_velocity:9.5f} {o.impact_velocity_m_s:8.3f} "
+            f"{o.blow_energy_J:8.2f} "
             f"{o.power_W:9.1f} {o.peak_stress_Pa / 1e6:9.1f} {str(o.admissible):>10} "
             f"{str(o.stable):>6} {o.max_abs_multiplier:8.4f}")
     return "\n".join(lines)
