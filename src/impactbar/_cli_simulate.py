@@ -13,7 +13,10 @@ import numpy as np
 from . import physical
 from ._cli_physical import add_physical_arguments, hammer_from_args, json_ready
 
-__all__ = ["add_parser", "run", "plot_motion", "plot_blows"]
+__all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows"]
+
+#: impacts slower than this fraction of the rigid-limit impact velocity are chatter, not blows
+BLOW_FRACTION = 0.01
 
 
 def add_parser(subparsers) -> None:
@@ -63,11 +66,14 @@ def run(args) -> int:
     plot_blows(result, ax)
     fig.savefig(out / "blows.png", dpi=120)
     plt.close(fig)
-    n = summary["n_impacts"]
-    print(f"{hammer.name or 'hammer'}: {n} impacts in {result.t_end_s:.4g} s; "
-          + (f"last blow {summary['last_impact_velocity_m_s']:.3f} m/s, "
-             f"{summary['last_blow_energy_J']:.2f} J; " if n else "")
-          + f"wrote {out}/motion.png, blows.png, impacts.csv, summary.json")
+    line = f"{hammer.name or 'hammer'}: {summary['n_impacts']} impacts in {result.t_end_s:.4g} s"
+    if "mean_blow_energy_J" in summary:
+        line += (f"; second half: {summary['mean_impact_velocity_m_s']:.3f} m/s, "
+                 f"{summary['mean_blow_energy_J']:.2f} J per blow, every "
+                 f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
+                 f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
+                 f"{summary['mean_power_W']:.4g} W")
+    print(line + f"; wrote {out}/motion.png, blows.png, impacts.csv, summary.json")
     return 0
 
 
@@ -82,7 +88,11 @@ def write_impacts(result: physical.SimulationResult, path) -> None:
 
 
 def summarize(result: physical.SimulationResult) -> dict:
-    """The hammer's inputs and the impact statistics, JSON-ready."""
+    """The hammer's inputs and the impact statistics, JSON-ready.
+
+    Statistics are over the second half of the run (past the start-up) and over blows: impacts
+    faster than 1 % of the rigid-limit impact velocity; slower ones are counted as chatter.
+    """
     t = result.impact_times_s
     v = result.impact_velocities_m_s
     e = result.blow_energies_J
@@ -90,14 +100,19 @@ def summarize(result: physical.SimulationResult) -> dict:
     out.update({"t_end_s": result.t_end_s, "n_impacts": int(t.size)})
     if t.size:
         out.update({"last_impact_velocity_m_s": float(v[-1]), "last_blow_energy_J": float(e[-1])})
-    if t.size >= 2:
-        dt = np.diff(t)
-        half = dt[dt.size // 2:]  # the second half, past the start-up
+    blow = v >= BLOW_FRACTION * result.hammer.rigid_impact_velocity_m_s
+    late = blow & (t >= 0.5 * result.t_end_s)
+    out["n_blows_second_half"] = int(np.count_nonzero(late))
+    out["n_chatter_impacts"] = int(np.count_nonzero(~blow))
+    if np.count_nonzero(late) >= 2:
+        tl, el = t[late], e[late]
+        dt = np.diff(tl)
         out.update({
-            "mean_impact_interval_s": float(np.mean(half)),
-            "impact_interval_std_s": float(np.std(half)),
-            "mean_blow_energy_J": float(np.mean(e[e.size // 2:])),
-            "mean_power_W": float(np.sum(e[e.size // 2:]) / max(t[-1] - t[t.size // 2], 1e-300)),
+            "mean_blow_interval_s": float(np.mean(dt)),
+            "blow_interval_std_s": float(np.std(dt)),
+            "mean_impact_velocity_m_s": float(np.mean(v[late])),
+            "mean_blow_energy_J": float(np.mean(el)),
+            "mean_power_W": float(np.sum(el[1:]) / (tl[-1] - tl[0])),
         })
     return out
 

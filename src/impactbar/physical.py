@@ -1066,6 +1066,9 @@ PRESETS: dict[str, dict] = {
         # A_f = 10 cm^2 gives +-20 kN. A fraction 0.58 of the period forward (kappa = 1.16) gives
         # a mean of 3.2 kN and a rigid-limit v = 3200 / (55 * 5.62 * 1.215) = 8.5 m/s (204 J,
         # 11 kW); the flexible piston's struck end arrives at 9.3 m/s in the admissible orbit.
+        # That orbit is unstable, as every hydraulic one-impact orbit (paper eq. 41): simulated
+        # from rest the motion does not settle (paper Section 5). A real drifter switches its
+        # valve on the piston's position, which this time-periodic load does not represent.
         "force": {"kind": "hydraulic", "high": "20 kN", "low": "-20 kN", "fraction": 0.58},
         # Oil-film damping of the piston guides, unknown in practice: 9 N s/m makes 2 pi d = 0.03,
         # the damped case of the paper's Fig. 8.
