@@ -83,17 +83,19 @@ def test_rigid_limit_identity_si(k, R):
 
 
 @needs_orbits
-@pytest.mark.parametrize("R", [0.3, 0.6])  # p0/p1 = 0.372 has orbits for R > 0.08 (eq. 38)
-def test_rigid_limit_identity_orbits(R):
-    h = ph.Hammer.from_config(config(stop={"restitution": R}))
+@pytest.mark.parametrize(("k", "R"), [(1, 0.3), (1, 0.6), (2, 0.6)])  # orbits exist (eq. 38)
+def test_rigid_limit_identity_orbits(k, R):
+    force = {"kind": "pneumatic", "mean": "800 N", "amplitude": "2150 N", "k": k}
+    h = ph.Hammer.from_config(config(force=force, stop={"restitution": R}))
     found = ph.orbits(h)
     assert found
-    v = 800.0 / (40.0 * MASS * (1 + R))
+    fb = 40.0 / k  # one blow every k cycles of the force
+    v = 800.0 / (fb * MASS * (1 + R))
     for o in found:
         assert o.impact_velocity_m_s == pytest.approx(v, rel=1e-9)
         assert o.blow_energy_J == pytest.approx(0.5 * MASS * v * v, rel=1e-9)
-        assert o.power_W == pytest.approx(0.5 * MASS * v * v * 40.0, rel=1e-9)
-        assert o.blow_frequency_Hz == 40.0
+        assert o.power_W == pytest.approx(0.5 * MASS * v * v * fb, rel=1e-9)
+        assert o.blow_frequency_Hz == fb
 
 
 # ------------------------------------------------------------------------------------------
