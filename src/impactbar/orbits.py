@@ -24,7 +24,7 @@ from .stability import (
     schur_test,
 )
 
-__all__ = ["PeriodicOrbit", "periodic_orbits", "phase_residual", "phase_roots"]
+__all__ = ["PeriodicOrbit", "periodic_orbits", "phase_residual", "phase_roots", "orbit_multipliers"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -78,6 +78,9 @@ def phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     scale = (1.0 + R) * load.sup_oscillation + abs(load.p0 * phase_G(model.d, R))
     if lip == 0.0:  # constant load: no phase dependence
         return []
+    single = _single_harmonic_roots(model, load)
+    if single is not None:
+        return single
 
     def F(t):
         return phase_residual(model, load, t)
@@ -95,6 +98,34 @@ def phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
         out[0] = (out[0][0], 2)
         out.pop()
     return out
+
+
+def _single_harmonic_roots(model, load):
+    """Closed-form roots for a load with one harmonic ``p_k`` (the pneumatic load, eq. 33).
+
+    ``F = A cos(k phase + theta) - B`` with ``A e^{i theta} = (1 + R) p_k / (d + i k)``; the roots are
+    ``k phase = -theta +- arccos(B / A) (mod 2 pi)``, ``2k`` of them, a double one at ``|B| = A``.
+    """
+    orders = getattr(load, "orders", None)
+    if orders is None or len(orders) != 1:
+        return None
+    k = int(orders[0])
+    z = (1.0 + model.R) * load.amplitudes[0] / (model.d + 1j * k)
+    A, theta = abs(z), math.atan2(z.imag, z.real)
+    B = load.p0 * phase_G(model.d, model.R)
+    ratio = B / A
+    if abs(ratio) > 1.0 + 1e-15:
+        return []
+    if abs(ratio) >= 1.0 - 1e-15:
+        base, mult = [math.acos(max(-1.0, min(1.0, ratio)))], 2
+    else:
+        a = math.acos(ratio)
+        base, mult = [a, -a], 1
+    out = []
+    for b in base:
+        for j in range(k):
+            out.append(((b - theta + TWO_PI * j) / k) % TWO_PI)
+    return [(t, mult) for t in sorted(out)]
 
 
 @dataclass(frozen=True, eq=False)
@@ -305,6 +336,33 @@ def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
     v[0] = -R * TWO_PI * load.p0 / (1.0 + R)
     q[0] = -float(model.end_weights[1:] @ q[1:])
     return np.concatenate((q, v))
+
+
+def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool = False) -> np.ndarray:
+    """Floquet multipliers of the orbit with this phase, without the admissibility check.
+
+    Parameters
+    ----------
+    model : BarModel
+    load : Load
+    phase : float
+        A root of the phase equation (rad).
+    paper : bool
+        Return the roots of the paper's quadratic blocks (eqs. 27-31) instead of the exact
+        multipliers (MODEL.md section 7).
+
+    Returns
+    -------
+    numpy.ndarray of complex, shape (2 N + 2,)
+    """
+    if paper:
+        return quadratic_roots(schur_blocks(model, load, phase))
+    M = model.n_modes + 1
+    y_plus = _start_state(model, load, phase)
+    qm, vm = load.propagate(model.frequencies**2, model.d, phase, y_plus[:M], y_plus[M:],
+                            [phase + TWO_PI])
+    y_minus = np.concatenate((qm[:, 0], vm[:, 0]))
+    return np.linalg.eigvals(impact_map_jacobian(model, load, phase, y_plus, y_minus))
 
 
 def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:

@@ -1,0 +1,326 @@
+"""The paper's Figs. 4-8, recomputed, with what the paper could not show (``impactbar paper``).
+
+Each ``figN_data`` function computes the plotted data (plain arrays, no matplotlib); ``figN_plot``
+draws it; :func:`reproduce` writes every figure as PNG with a CSV of its data and returns a summary.
+
+- Fig. 4: phase against ``k p0/pk``, pneumatic, ``d = 0``, ``R = 0..0.9``: stable solid, unstable
+  dashed (exact multipliers, rigid bar), inadmissible orbits marked.
+- Fig. 5: stable band of ``p0/p1`` against ``R``, ``k = 1``, ``2 pi d = 0`` and ``0.03``; the
+  admissible part of the band marked (at small ``R`` the end sticks, MODEL.md section 5).
+- Fig. 6: the same for ``k = 10`` with ``s pi -> inf``, ``10.1`` and ``10.01``: the paper's criterion
+  (eqs. 37, 39) against the exact multipliers of an 8-mode bar.
+- Fig. 7: phase against ``kappa``, hydraulic, ``R = 0..0.9`` (all unstable, eq. 41).
+- Fig. 8: the ``kappa`` above which no one-impact orbit exists, against ``R``, ``2 pi d = 0`` and
+  ``0.03``, with the closed form ``kappa* = (2 R + sqrt(2 + 2 R^2)) / (1 + R)`` at ``d = 0``.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .charts import (
+    hydraulic_existence_edge,
+    pneumatic_existence_edge,
+    pneumatic_stability_curve,
+)
+from .loads import CosineLoad, SquareWaveLoad
+from .model import BarModel
+from .orbits import periodic_orbits
+
+__all__ = ["reproduce", "fig4_data", "fig5_data", "fig6_data", "fig7_data", "fig8_data",
+           "hydraulic_edge_closed_form"]
+
+TWO_PI = 2.0 * math.pi
+R_CURVES = np.round(np.arange(0.0, 0.95, 0.1), 1)
+RIGID = BarModel(s=50.0, d=0.0, R=0.0, n_modes=0)  # the paper's s -> infinity limit
+
+
+def _orbit_rows(model, load, x, R):
+    rows = []
+    orbits = periodic_orbits(model, load)
+    for i, o in enumerate(orbits):
+        if isinstance(load, CosineLoad):  # branch 0: load falling through its mean at impact
+            branch = 0 if math.cos(load.k * o.phase) * load.pk < 0 else 1
+        else:
+            branch = i
+        rows.append({"R": R, "x": x, "branch": branch, "phase": o.phase, "stable": o.stable,
+                     "schur_stable": o.schur_stable, "admissible": o.admissible,
+                     "admissibility": o.admissibility, "max_abs_multiplier": o.max_abs_multiplier})
+    return rows
+
+
+def fig4_data(n: int = 120) -> list[dict]:
+    """Fig. 4 rows: ``R, x = k p0/pk, phase, stable, schur_stable, admissible, ...`` (rigid bar)."""
+    rows = []
+    for R in R_CURVES:
+        edge = pneumatic_existence_edge(R)
+        for x in np.linspace(edge / n, edge * (1 - 1e-9), n):
+            rows += _orbit_rows(RIGID.with_(R=float(R)), CosineLoad(x, 1.0), x, float(R))
+    return rows
+
+
+def fig7_data(n: int = 100) -> list[dict]:
+    """Fig. 7 rows: ``R, x = kappa, phase, stable, ...`` for the hydraulic load (rigid bar)."""
+    rows = []
+    for R in R_CURVES:
+        model = RIGID.with_(R=float(R))
+        top = hydraulic_existence_edge(model)
+        for x in np.linspace(1.0 + 1e-6, top - 1e-9, n):
+            rows += _orbit_rows(model, SquareWaveLoad(1.0, x), x, float(R))
+    return rows
+
+
+def _inadmissible_segment(model, lo, hi, k=1, n_scan=12):
+    """The part ``(a, b)`` of the stable band ``[lo, hi]`` where the stable-branch orbit is not
+    admissible, with its ends found by bisection on the admissibility flag; ``(nan, nan)`` if none.
+    """
+    from .charts import _stable_branch_phase, admissibility_edges  # noqa: PLC0415
+
+    def make(x):
+        return CosineLoad(x / k, 1.0, k)
+
+    def select(orbits):
+        if not orbits:
+            return None
+        ph = _stable_branch_phase(model, orbits[0].load)
+        if ph is None:
+            return None
+        return next((o for o in orbits if abs(o.phase - ph) < 1e-9), None)
+
+    a, b = lo * (1 + 1e-9), hi * (1 - 1e-7)
+    edges = admissibility_edges(model, make, a, b, select, n_scan=n_scan)
+    pts = [a, *edges, b]
+    bad = []
+    for x0, x1 in zip(pts[:-1], pts[1:], strict=True):
+        o = select(periodic_orbits(model, make(0.5 * (x0 + x1))))
+        if o is not None and not o.admissible:
+            bad.append((x0, x1))
+    if not bad:
+        return math.nan, math.nan
+    return bad[0][0], bad[-1][1]
+
+
+def fig5_data(n: int = 40) -> dict:
+    """Fig. 5 curves for ``k = 1``: ``R``, and for each ``2 pi d`` in ``{0, 0.03}`` the existence edge,
+    the stability edge (exact; the paper's coincides for the rigid bar) and the edge of admissibility
+    on the stable branch."""
+    R = np.linspace(0.0, 0.95, n)
+    out = {"R": R}
+    for tag, d in (("0", 0.0), ("0.03", 0.03 / TWO_PI)):
+        model = RIGID.with_(d=d)
+        upper = pneumatic_existence_edge(R, d)
+        lower = pneumatic_stability_curve(model, R).y
+        paper = pneumatic_stability_curve(model, R, criterion="paper").y
+        seg = np.array([
+            _inadmissible_segment(model.with_(R=float(r)), lo, up) if np.isfinite(lo) else (np.nan,) * 2
+            for r, lo, up in zip(R, lower, upper, strict=True)
+        ]).reshape(-1, 2)
+        out[f"existence_2pid={tag}"] = upper
+        out[f"stability_exact_2pid={tag}"] = lower
+        out[f"stability_paper_2pid={tag}"] = paper
+        out[f"sticks_from_2pid={tag}"] = seg[:, 0]
+        out[f"sticks_to_2pid={tag}"] = seg[:, 1]
+    return out
+
+
+def fig6_data(n: int = 24, n_modes: int = 8) -> dict:
+    """Fig. 6 curves for ``k = 10``: existence edge, and the stability edge by the paper's criterion
+    and by the exact multipliers for ``s pi`` in ``{inf, 10.1, 10.01}``."""
+    k = 10
+    R = np.linspace(0.0, 0.9, n)
+    out = {"R": R, "existence": pneumatic_existence_edge(R, 0.0, k)}
+    for tag, model in (("inf", RIGID), ("10.1", BarModel(10.1 / math.pi, 0.0, 0.0, n_modes)),
+                       ("10.01", BarModel(10.01 / math.pi, 0.0, 0.0, n_modes))):
+        out[f"paper_spi={tag}"] = pneumatic_stability_curve(model, R, k, criterion="paper").y
+        out[f"exact_spi={tag}"] = pneumatic_stability_curve(model, R, k).y
+    return out
+
+
+def hydraulic_edge_closed_form(R):
+    """``kappa*`` at ``d = 0``: the zero-mean triangle ``V`` peaks at ``(2 - kappa) kappa pi / 2``, and
+    ``(1 + R) V_max = (kappa - 1) pi (1 - R)`` gives ``kappa* = (2 R + sqrt(2 + 2 R^2)) / (1 + R)``."""
+    R = np.asarray(R, dtype=float)
+    return (2 * R + np.sqrt(2 + 2 * R * R)) / (1 + R)
+
+
+def fig8_data(n: int = 40) -> dict:
+    """Fig. 8 curves: the existence edge ``kappa*(R)`` for ``2 pi d = 0`` and ``0.03``."""
+    R = np.linspace(0.0, 0.95, n)
+    out = {"R": R, "closed_form_2pid=0": hydraulic_edge_closed_form(R)}
+    for tag, d in (("0", 0.0), ("0.03", 0.03 / TWO_PI)):
+        out[f"existence_2pid={tag}"] = np.array(
+            [hydraulic_existence_edge(RIGID.with_(R=float(r), d=d)) for r in R])
+    return out
+
+
+# ------------------------------------------------------------------ output ------------------------
+def _write_rows(path: Path, rows: list[dict]) -> None:
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
+def _write_columns(path: Path, cols: dict) -> None:
+    keys = list(cols)
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(keys)
+        for i in range(len(cols[keys[0]])):
+            w.writerow([f"{float(cols[k][i]):.12g}" for k in keys])
+
+
+def _phase_plot(ax, rows, xlabel):
+    for R in R_CURVES:
+        sub = [r for r in rows if r["R"] == R]
+        for br in sorted({r["branch"] for r in sub}):
+            pts = sorted((r["x"], r["phase"], r["stable"], r["admissible"]) for r in sub
+                         if r["branch"] == br)
+            x, y, st, ad = (np.array(c) for c in zip(*pts, strict=True))
+            y = np.where(np.abs(np.diff(y, prepend=y[0])) > 1.0, np.nan, y)  # wrap at 2 pi
+            ax.plot(x, np.where(st & ad, y, np.nan), "-", color="k", lw=1.4)
+            ax.plot(x, np.where(~st & ad, y, np.nan), "--", color="0.45", lw=0.8)
+        bad = [(r["x"], r["phase"]) for r in sub if not r["admissible"]]
+        if bad:
+            x, y = np.array(bad).T
+            ax.plot(x, y, "x", color="tab:red", ms=2.5, mew=0.6)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("phase (rad)")
+    ax.set_ylim(0, TWO_PI)
+    from matplotlib.lines import Line2D  # noqa: PLC0415
+
+    ax.legend(handles=[Line2D([], [], color="k", lw=1.4, label="stable (exact multipliers)"),
+                       Line2D([], [], color="0.45", ls="--", label="unstable"),
+                       Line2D([], [], color="tab:red", marker="x", ls="", label="inadmissible")],
+              fontsize=7, loc="upper right")
+
+
+def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
+    """Compute and write Figs. 4-8 as ``figN.png`` and ``figN.csv`` in ``out_dir``.
+
+    Parameters
+    ----------
+    out_dir : str or path-like
+        Created if missing.
+    quick : bool
+        Fewer points per curve (for tests).
+
+    Returns
+    -------
+    list of (str, str, str)
+        Summary rows ``(figure, quantity, value)``.
+    """
+    import matplotlib  # noqa: PLC0415
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    f = 0.3 if quick else 1.0
+    summary: list[tuple[str, str, str]] = []
+
+    # Fig. 4
+    rows4 = fig4_data(max(10, int(120 * f)))
+    _write_rows(out / "fig4.csv", rows4)
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    _phase_plot(ax, rows4, "load factor k p0 / pk")
+    ax.set_xscale("log")
+    ax.set_title("Fig. 4: pneumatic, d = 0, R = 0, 0.1, ..., 0.9 (rigid bar)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "fig4.png", dpi=130)
+    plt.close(fig)
+    r0 = [r for r in rows4 if r["R"] == 0.0 and r["stable"]]
+    summary.append(("4", "R=0: stable orbits that stick (paper counts them)",
+                    f"{sum(not r['admissible'] for r in rows4 if r['R'] == 0.0 and r['schur_stable'])}"
+                    f" of {sum(r['schur_stable'] for r in rows4 if r['R'] == 0.0)} sampled"))
+    summary.append(("4", "R=0: admissible stable orbits sampled", str(len(r0))))
+
+    # Fig. 5
+    d5 = fig5_data(max(8, int(40 * f)))
+    _write_columns(out / "fig5.csv", d5)
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for tag, col in (("0", "k"), ("0.03", "tab:blue")):
+        ax.plot(d5["R"], d5[f"existence_2pid={tag}"], "-", color=col, label=f"existence, 2πd={tag}")
+        ax.plot(d5["R"], d5[f"stability_exact_2pid={tag}"], "--", color=col,
+                label=f"stability (exact = paper), 2πd={tag}")
+        a, b = d5[f"sticks_from_2pid={tag}"], d5[f"sticks_to_2pid={tag}"]
+        m = np.isfinite(a)
+        if np.any(m):
+            ax.vlines(d5["R"][m], a[m], b[m], color="tab:red", lw=4, alpha=0.6,
+                      label=f"stable by the paper, but the end sticks, 2πd={tag}")
+    ax.set_xlabel("R")
+    ax.set_ylabel("p0 / p1")
+    ax.set_yscale("log")
+    ax.set_title("Fig. 5: stable band, pneumatic, k = 1", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "fig5.png", dpi=130)
+    plt.close(fig)
+    summary.append(("5", "R=0, 2pid=0: stable band p0/p1",
+                    f"{d5['stability_exact_2pid=0'][0]:.6f} .. {d5['existence_2pid=0'][0]:.6f}"))
+    summary.append(("5", "R=0, 2pid=0: inadmissible (sticks) for p0/p1 in",
+                    f"{d5['sticks_from_2pid=0'][0]:.6f} .. {d5['sticks_to_2pid=0'][0]:.6f}"))
+    summary.append(("5", "R=0, 2pid=0.03: stable band p0/p1",
+                    f"{d5['stability_exact_2pid=0.03'][0]:.6f} .. {d5['existence_2pid=0.03'][0]:.6f}"))
+
+    # Fig. 6
+    d6 = fig6_data(max(6, int(24 * f)))
+    _write_columns(out / "fig6.csv", d6)
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    ax.plot(d6["R"], d6["existence"], "k-", label="existence (eq. 38)")
+    for tag, col in (("inf", "k"), ("10.1", "tab:blue"), ("10.01", "tab:orange")):
+        ax.plot(d6["R"], d6[f"paper_spi={tag}"], "--", color=col, label=f"paper (eq. 39), sπ={tag}")
+        ax.plot(d6["R"], d6[f"exact_spi={tag}"], ":", marker=".", ms=3, color=col,
+                label=f"exact multipliers, sπ={tag}")
+    ax.set_xlabel("R")
+    ax.set_ylabel("k p0 / pk")
+    ax.set_yscale("log")
+    ax.set_title("Fig. 6: lower stability edge, k = 10 (8-mode bar)", fontsize=9)
+    ax.legend(fontsize=6.5)
+    fig.tight_layout()
+    fig.savefig(out / "fig6.png", dpi=130)
+    plt.close(fig)
+    i5 = int(np.argmin(np.abs(d6["R"] - 0.5)))
+    for tag in ("inf", "10.1", "10.01"):
+        summary.append(("6", f"R={d6['R'][i5]:.2f}, s pi={tag}: edge paper / exact",
+                        f"{d6[f'paper_spi={tag}'][i5]:.5f} / {d6[f'exact_spi={tag}'][i5]:.5f}"))
+
+    # Fig. 7
+    rows7 = fig7_data(max(10, int(100 * f)))
+    _write_rows(out / "fig7.csv", rows7)
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    _phase_plot(ax, rows7, "kappa")
+    ax.set_title("Fig. 7: hydraulic, d = 0, R = 0, 0.1, ..., 0.9 (rigid bar)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "fig7.png", dpi=130)
+    plt.close(fig)
+    summary.append(("7", "stable one-impact orbits found", str(sum(r["stable"] for r in rows7))))
+    summary.append(("7", "orbits sampled / inadmissible",
+                    f"{len(rows7)} / {sum(not r['admissible'] for r in rows7)}"))
+
+    # Fig. 8
+    d8 = fig8_data(max(8, int(40 * f)))
+    _write_columns(out / "fig8.csv", d8)
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    ax.plot(d8["R"], d8["existence_2pid=0"], "k-", label="2πd = 0")
+    ax.plot(d8["R"], d8["closed_form_2pid=0"], "w:", lw=1.0, label="closed form, 2πd = 0")
+    ax.plot(d8["R"], d8["existence_2pid=0.03"], "-", color="tab:blue", label="2πd = 0.03")
+    ax.fill_between(d8["R"], d8["existence_2pid=0"], 2.0, color="0.85", label="no solutions")
+    ax.set_xlabel("R")
+    ax.set_ylabel("kappa")
+    ax.set_ylim(1, 2)
+    ax.set_title("Fig. 8: hydraulic, existence of one-impact orbits (all unstable below)", fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "fig8.png", dpi=130)
+    plt.close(fig)
+    summary.append(("8", "R=0, 2pid=0: kappa* (closed form sqrt 2)",
+                    f"{d8['existence_2pid=0'][0]:.10f}"))
+    summary.append(("8", "max |root-found - closed form|, 2pid=0",
+                    f"{np.max(np.abs(d8['existence_2pid=0'] - d8['closed_form_2pid=0'])):.1e}"))
+    return summary
