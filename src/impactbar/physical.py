@@ -76,6 +76,8 @@ __all__ = [
     "load_config",
     "orbits",
     "simulate",
+    "add_physical_arguments",
+    "run_physical_orbits",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -1274,3 +1276,22 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
         hammer=hammer, trajectory=traj, t_end_s=t_end * sc.time_s,
         impact_times_s=np.asarray(traj.impact_times, dtype=float) * sc.time_s,
         impact_velocities_m_s=v, blow_energies_J=0.5 * hammer.mass_kg * v * v)
+
+
+# --------------------------------------------------------------------------------------------
+# command line (the implementation lives in _cli_physical; imported lazily, no cycle)
+# --------------------------------------------------------------------------------------------
+def add_physical_arguments(parser) -> None:
+    """Add an optional positional ``config`` (a TOML file) and ``--preset NAME`` to an argparse
+    ``parser`` (used by ``impactbar orbits`` and ``impactbar simulate``)."""
+    from ._cli_physical import add_physical_arguments as add
+
+    add(parser)
+
+
+def run_physical_orbits(args) -> int:
+    """``impactbar orbits CONFIG.toml | --preset NAME [--json]``: the SI table or JSON of the
+    hammer's one-impact orbits; returns the exit status. See ``impactbar._cli_physical``."""
+    from ._cli_physical import run_physical_orbits as run
+
+    return run(args)
