@@ -9,7 +9,11 @@ from .loads import Load as Load
 from .loads import PiecewiseConstantLoad as PiecewiseConstantLoad
 from .loads import SquareWaveLoad as SquareWaveLoad
 from .model import BarModel as BarModel
-
-__version__ = "0.1.0"
 from .orbits import PeriodicOrbit as PeriodicOrbit
 from .orbits import periodic_orbits as periodic_orbits
+from .simulate import EnergyAccount as EnergyAccount
+from .simulate import InitialState as InitialState
+from .simulate import Trajectory as Trajectory
+from .simulate import simulate as simulate
+
+__version__ = "0.1.0"
