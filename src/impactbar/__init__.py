@@ -12,5 +12,9 @@ from .loads import SquareWaveLoad as SquareWaveLoad
 from .model import BarModel as BarModel
 from .orbits import PeriodicOrbit as PeriodicOrbit
 from .orbits import periodic_orbits as periodic_orbits
+from .simulate import EnergyAccount as EnergyAccount
+from .simulate import InitialState as InitialState
+from .simulate import Trajectory as Trajectory
+from .simulate import simulate as simulate
 
 __version__ = "0.1.0"

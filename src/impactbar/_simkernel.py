@@ -1,0 +1,507 @@
+"""Compiled core of the event-driven simulator (MODEL.md sections 2, 4, 8). Plain float arrays only.
+
+Between events every mode obeys ``q'' + d q' + w2 q = p(t)`` and is advanced in closed form from an
+*anchor* (the last impact, or for a piecewise-constant load the last load jump):
+
+- harmonic load (``kind = 0``): ``q = Phi(t - ta) (y_a - y_p(ta)) + y_p(t)`` with the periodic
+  particular solution ``y_p = p0/w2 + Re sum_k H_nk p_k exp(i k t)`` (eq. 8); the rigid mode adds
+  the mean-load terms ``p0 c(tau)``, ``p0 b(tau)``;
+- piecewise-constant load (``kind = 1``): the same with the static deflection ``level / w2`` of
+  the current piece; the search stops at every jump and re-anchors there, so nothing is truncated.
+
+The event search looks for the first ``t`` with ``h(t) = alpha p(t) + sum_n w_n q_n(t) >= 0``
+(the end displacement ``c . q`` for an impact; minus the stop reaction for the end of contact).
+It is guaranteed: from the exact ``h(a)``, ``h'(a)``, ``h''(a)`` and bounds ``A >= |h''|`` and
+``J >= |h'''|`` valid on the whole step, the polynomials ``h(a) + h'(a) s + A s^2 / 2`` and
+``h(a) + h'(a) s + h''(a) s^2 / 2 + J s^3 / 6`` bound ``h`` from above, so their first positive
+roots are steps that cannot cross ``h = 0``. ``A`` and ``J`` come from the energy of the free part
+of each mode, ``E_n = (v_n - v_pn)^2 + w2_n (q_n - q_pn)^2``, which never grows
+(``dE/dt = -2 d v^2``). Once ``4 A |h| < h'^2`` the root is bracketed and unique on
+``[a, a + 2|h|/h']`` and Newton (safeguarded by bisection) refines it to rounding.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+TWO_PI = 2.0 * math.pi
+
+# statuses of find_crossing
+NONE = 0  # no crossing up to t_lim
+CROSS = 1  # transversal crossing (or h >= 0 at the start / just after a load jump)
+TOUCH = 2  # h reached 0 tangentially with h'' >= 0 (pressing)
+FAIL = 3  # too many steps
+
+# statuses of run_free
+END = 0
+MAXIMP = 1
+CHATTER = 2
+CONTACT = 3
+FULL = 4
+FAILED = 5
+
+_MAX_STEPS = 2_000_000
+
+
+@numba.njit(cache=True, nogil=True)
+def _bc(d, tau):
+    """``b = (1 - e^{-d tau})/d``, ``c = (tau - b)/d`` with their ``d -> 0`` limits."""
+    if d == 0.0:
+        return tau, 0.5 * tau * tau
+    y = d * tau
+    b = -math.expm1(-y) / d
+    if abs(y) < 1e-2:
+        c = tau * tau * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0)
+    else:
+        c = (tau - b) / d
+    return b, c
+
+
+@numba.njit(cache=True, nogil=True)
+def _fundamental(w2, d, tau):
+    """Fundamental matrix of ``q'' + d q' + w2 q = 0`` for ``w2 > 0``, every damping regime."""
+    lam2 = w2 - 0.25 * d * d
+    lam = math.sqrt(abs(lam2))
+    x = lam * tau
+    if lam2 >= 0.0:
+        C = math.cos(x)
+        S = tau * (math.sin(x) / x if abs(x) > 1e-8 else 1.0 - x * x / 6.0)
+    else:
+        C = math.cosh(x)
+        S = tau * (math.sinh(x) / x if abs(x) > 1e-4 else 1.0 + x * x / 6.0)
+    e = math.exp(-0.5 * d * tau)
+    return e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)
+
+
+@numba.njit(cache=True, nogil=True)
+def load_value(kind, p0, ks, pr, pim, level, t):
+    """``p(t)``, ``p'(t)``, ``p''(t)`` (derivatives 0 inside a piece of a piecewise-constant
+    load)."""
+    if kind == 1:
+        return level, 0.0, 0.0
+    p = p0
+    dp = 0.0
+    ddp = 0.0
+    for j in range(ks.size):
+        k = ks[j]
+        ck = math.cos(k * t)
+        sk = math.sin(k * t)
+        a = pr[j] * ck - pim[j] * sk
+        p += a
+        dp -= k * (pr[j] * sk + pim[j] * ck)
+        ddp -= k * k * a
+    return p, dp, ddp
+
+
+@numba.njit(cache=True, nogil=True)
+def particular(kind, w2, p0, ks, hpr, hpi, level, t, qp, vp):
+    """Fill ``qp, vp`` with the particular state at ``t`` (0 for a rigid mode's mean-load part)."""
+    M = w2.size
+    for n in range(M):
+        if w2[n] > 0.0:
+            qp[n] = (p0 if kind == 0 else level) / w2[n]
+        else:
+            qp[n] = 0.0
+        vp[n] = 0.0
+    if kind == 0:
+        for j in range(ks.size):
+            k = ks[j]
+            ck = math.cos(k * t)
+            sk = math.sin(k * t)
+            for n in range(M):
+                qp[n] += hpr[n, j] * ck - hpi[n, j] * sk
+                vp[n] -= k * (hpr[n, j] * sk + hpi[n, j] * ck)
+
+
+@numba.njit(cache=True, nogil=True)
+def advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp):
+    """State ``q, v`` at ``t`` from the anchor ``(ta, qa, va)`` with particular state ``qpa, vpa``
+    there; ``qp, vp`` receive the particular state at ``t``."""
+    tau = t - ta
+    if kind == 0:
+        particular(kind, w2, p0, ks, hpr, hpi, level, t, qp, vp)
+    else:
+        for n in range(w2.size):
+            qp[n] = qpa[n]
+            vp[n] = vpa[n]
+    L = p0 if kind == 0 else level
+    b, c = _bc(d, tau)
+    ed = math.exp(-d * tau)
+    for n in range(w2.size):
+        dq = qa[n] - qpa[n]
+        dv = va[n] - vpa[n]
+        if w2[n] == 0.0:
+            q[n] = qa[n] + (qp[n] - qpa[n]) + dv * b + L * c
+            v[n] = vp[n] + dv * ed + L * b
+        else:
+            p11, p12, p21, p22 = _fundamental(w2[n], d, tau)
+            q[n] = p11 * dq + p12 * dv + qp[n]
+            v[n] = p21 * dq + p22 * dv + vp[n]
+
+
+@numba.njit(cache=True, nogil=True)
+def functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp):
+    """``h, h', h''`` of ``h = alpha p + sum w_n q_n`` at a state, and the rounding noise of ``h``
+    and ``h'`` (``1e-14`` times the sum of the magnitudes they add and cancel)."""
+    h = alpha * p
+    dh = alpha * dp
+    ddh = alpha * ddp
+    mag = abs(h)
+    dmag = abs(dh)
+    for n in range(w2.size):
+        h += wts[n] * q[n]
+        dh += wts[n] * v[n]
+        ddh += wts[n] * (p - d * v[n] - w2[n] * q[n])
+        mag += abs(wts[n]) * (abs(q[n]) + abs(qp[n]))
+        dmag += abs(wts[n]) * (abs(v[n]) + abs(vp[n]))
+    return h, dh, ddh, 1e-14 * mag, 1e-14 * dmag
+
+
+@numba.njit(cache=True, nogil=True)
+def bounds(kind, w2, d, wts, alpha, psup, p1, p2, p3, L, vpb, apb, jpb, q, v, qp, vp, horizon):
+    """Bounds ``A >= |h''|`` and ``J >= |h'''|`` valid on ``[t, t + horizon]``."""
+    A = abs(alpha) * p2
+    J = abs(alpha) * p3
+    for n in range(w2.size):
+        wn = abs(wts[n])
+        if wn == 0.0:
+            continue
+        if w2[n] == 0.0:
+            vmax = abs(v[n] - vp[n]) + vpb[n] + abs(L) * horizon
+            a0 = psup + d * vmax
+            A += wn * a0
+            J += wn * (p1 + d * a0)
+        else:
+            e = math.sqrt((v[n] - vp[n]) ** 2 + w2[n] * (q[n] - qp[n]) ** 2)
+            w = math.sqrt(w2[n])
+            A += wn * ((d + w) * e + apb[n])
+            J += wn * ((d * (d + w) + w2[n]) * e + jpb[n])
+    return A, J
+
+
+@numba.njit(cache=True, nogil=True)
+def piece_of(breaks, t):
+    """Period index and piece index of time ``t`` for a piecewise-constant load."""
+    m = math.floor(t / TWO_PI)
+    tm = t - m * TWO_PI
+    if tm >= TWO_PI:
+        m += 1
+        tm -= TWO_PI
+    j = 0
+    for i in range(breaks.size):
+        if breaks[i] <= tm:
+            j = i
+    return m, j
+
+
+@numba.njit(cache=True, nogil=True)
+def piece_end(breaks, m, j):
+    if j + 1 < breaks.size:
+        return m * TWO_PI + breaks[j + 1]
+    return (m + 1) * TWO_PI
+
+
+@numba.njit(cache=True, nogil=True)
+def _cubic(g, dh, ddh, J, s):
+    return g + s * (dh + s * (0.5 * ddh + s * J / 6.0))
+
+
+@numba.njit(cache=True, nogil=True)
+def _cubic_step(g, dh, ddh, J, smax):
+    """A step ``s`` with ``f(x) = g + dh x + ddh x^2/2 + J x^3/6 < 0`` on ``[0, s)`` (``g <= 0``,
+    ``J >= 0``): the first root of ``f``, from below, or ``smax`` if there is none before it."""
+    # monotone pieces of f: split at the positive roots of f' = dh + ddh x + J x^2 / 2
+    cuts = np.empty(3)
+    nc = 0
+    if J > 0.0:
+        disc = ddh * ddh - 2.0 * J * dh
+        if disc >= 0.0:
+            r = math.sqrt(disc)
+            for x in ((-ddh - r) / J, (-ddh + r) / J):
+                if 0.0 < x < smax:
+                    cuts[nc] = x
+                    nc += 1
+    elif ddh != 0.0:
+        x = -dh / ddh
+        if 0.0 < x < smax:
+            cuts[nc] = x
+            nc += 1
+    cuts[nc] = smax
+    nc += 1
+    lo = 0.0
+    for i in range(nc):
+        hi = cuts[i]
+        fh = _cubic(g, dh, ddh, J, hi)
+        if fh >= 0.0:
+            # f < 0 at lo, >= 0 at hi, monotone between: bisection keeps lo safe
+            for _ in range(200):
+                mid = 0.5 * (lo + hi)
+                if mid <= lo or mid >= hi:
+                    break
+                if _cubic(g, dh, ddh, J, mid) < 0.0:
+                    lo = mid
+                else:
+                    hi = mid
+                if hi - lo <= 2e-2 * hi:
+                    break
+            return lo
+        lo = hi
+    return smax
+
+
+@numba.njit(cache=True, nogil=True)
+def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, levels,
+                  psup, p1, p2, p3, vpb, apb, jpb,
+                  anchor_t, qa, va, t_lim, htol, q, v, qp, vp, qpa, vpa):
+    """First ``t`` in ``[anchor, t_lim]`` where ``h(t) >= 0`` (see the module docstring).
+
+    A start with ``0 <= h <= htol`` and ``h' <= 0`` (the end just left the stop) counts as
+    ``h = 0``. ``anchor_t[0]`` and ``qa, va`` hold the anchor (the start of the search); for a
+    piecewise-constant load they are moved to each load jump passed. On return ``q, v`` hold
+    the state at the returned time.
+
+    Returns
+    -------
+    status, t : int, float
+    """
+    ta = anchor_t[0]
+    m = 0
+    j = 0
+    level = 0.0
+    if kind == 1:
+        m, j = piece_of(breaks, ta)
+        # the anchor may sit a rounding error before a jump it already belongs after
+        level = levels[j]
+    particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+    a = ta
+    advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, a, q, v, qp, vp)
+    p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, a)
+    h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
+    L = p0 if kind == 0 else level
+    ps = psup if kind == 0 else abs(level)
+    for _ in range(_MAX_STEPS):
+        if h > htol + noise or (h >= 0.0 and dh > dnoise):
+            return CROSS, a
+        t_cap = t_lim
+        if kind == 1:
+            te = piece_end(breaks, m, j)
+            if te < t_cap:
+                t_cap = te
+        hcap = t_cap - a
+        if hcap <= 0.0:
+            if kind == 1 and t_cap < t_lim:
+                # move the anchor to the jump and continue with the next level
+                advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t_cap, q, v,
+                        qp, vp)
+                for n in range(w2.size):
+                    qa[n] = q[n]
+                    va[n] = v[n]
+                ta = t_cap
+                anchor_t[0] = ta
+                j += 1
+                if j == breaks.size:
+                    j = 0
+                    m += 1
+                level = levels[j]
+                L = level
+                ps = abs(level)
+                particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+                for n in range(w2.size):
+                    qp[n] = qpa[n]
+                    vp[n] = vpa[n]
+                a = ta
+                p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, a)
+                h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
+                if h > htol + noise or (h >= 0.0 and dh > dnoise):
+                    return CROSS, a
+                continue
+            return NONE, t_lim
+        horizon = min(hcap, TWO_PI)
+        A, J = bounds(kind, w2, d, wts, alpha, ps, p1, p2, p3, L, vpb, apb, jpb, q, v, qp, vp,
+                      horizon)
+        g = min(h, 0.0)
+        if 0.0 < dh <= dnoise:
+            dh = 0.0  # a slope lost in rounding
+        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= hcap:
+            # bracketed, unique root on [a, a + 2|g|/dh]: safeguarded Newton
+            lo = a
+            hi = a + 2.0 * (-g) / dh
+            t = a - g / dh
+            if t > hi:
+                t = hi
+            for _it in range(100):
+                advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v,
+                        qp, vp)
+                p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, t)
+                h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
+                if h < 0.0:
+                    lo = t
+                else:
+                    hi = t
+                step = -h / dh if dh > 0.0 else 0.0
+                tn = t + step
+                if abs(step) <= 1e-15 * (1.0 + abs(t)) or hi - lo <= 4e-16 * (1.0 + abs(t)):
+                    break
+                if not (lo < tn < hi):
+                    tn = 0.5 * (lo + hi)
+                t = tn
+            if h < 0.0:
+                t = tn  # the converged Newton point, a rounding error past the last h < 0
+            advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp)
+            return CROSS, t
+        A2 = 2.0 * A * (-g)
+        if A == 0.0:
+            tau = -g / dh if dh > 0.0 else math.inf
+        elif dh >= 0.0:
+            den = dh + math.sqrt(dh * dh + A2)
+            tau = 2.0 * (-g) / den if den > 0.0 else 0.0
+        else:
+            tau = (-dh + math.sqrt(dh * dh + A2)) / A
+        # the cubic bound h + h' s + h'' s^2/2 + J s^3/6 is far better where h'' < 0 is small
+        # (leaving the stop): take the larger of the two certified steps
+        tc = _cubic_step(g, dh, ddh, J, hcap)
+        if tc > tau:
+            tau = tc
+        if tau <= 4e-16 * (1.0 + abs(a)):
+            # tangential contact: h = 0, h' = 0 to rounding, and h'' >= 0: pressed on the stop
+            return TOUCH, a
+        if tau >= hcap:
+            a = t_cap
+        else:
+            a = a + tau
+        advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, a, q, v, qp, vp)
+        p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, a)
+        h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
+    return FAIL, a
+
+
+@numba.njit(cache=True, nogil=True)
+def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
+             psup, p1, p2, p3, vpb, apb, jpb,
+             t, q, v, t_end, max_imp, tail_tol, out_t, out_vel, out_q, out_v):
+    """Free flight with impacts from ``(t, q, v)``; ``q, v`` are overwritten with the final state.
+
+    Every impact (``c . q = 0`` reached with ``c . v > 0``) applies ``v -> -R v`` (eqs. 10, 11); its
+    time, the arrival velocity ``c . v`` and the state just after are written to ``out_*``. Stops at
+    ``t_end`` (END), after ``max_imp`` impacts (MAXIMP), when the buffers are full (FULL), when the
+    bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``) or the end
+    arrives tangentially and pressed (CONTACT).
+
+    Returns
+    -------
+    n, status, t : int, int, float
+    """
+    M = w2.size
+    qa = q.copy()
+    va = v.copy()
+    qp = np.empty(M)
+    vp = np.empty(M)
+    qpa = np.empty(M)
+    vpa = np.empty(M)
+    anchor = np.empty(1)
+    anchor[0] = t
+    n = 0
+    cap = out_t.size
+    while True:
+        htol = 0.0
+        for i in range(M):
+            htol += abs(c[i] * qa[i])
+        htol *= 1e-14
+        st, tc = find_crossing(kind, w2, d, c, 0.0, p0, ks, pr, pim, hpr, hpi, breaks, levels,
+                               psup, p1, p2, p3, vpb, apb, jpb,
+                               anchor, qa, va, t_end, htol, q, v, qp, vp, qpa, vpa)
+        if st == NONE:
+            return n, END, t_end
+        if st == FAIL:
+            return n, FAILED, tc
+        vend = 0.0
+        for i in range(M):
+            vend += c[i] * v[i]
+        if st == TOUCH or vend <= 0.0:
+            return n, CONTACT, tc
+        out_t[n] = tc
+        out_vel[n] = vend
+        g = 0.0
+        for i in range(M):
+            v[i] = -R * v[i]
+            g += c[i] * q[i]
+        q[0] -= g  # the end exactly on the stop (a shift of the mean: no energy)
+        for i in range(M):
+            out_q[n, i] = q[i]
+            out_v[n, i] = v[i]
+        n += 1
+        if R < 1.0:
+            if kind == 1:
+                mm, jj = piece_of(breaks, tc)
+                level = levels[jj]
+            else:
+                level = 0.0
+            p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
+            h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
+            if ddh > 0.0:
+                tail = 2.0 * R * vend / ddh / (1.0 - R)
+                # the next bounce is lost in rounding when its height (R v)^2 / (2 h'') is near
+                # the noise of c . q: its time and velocity are then noise, so jump
+                height = 0.5 * (R * vend) ** 2 / ddh
+                if tail < tail_tol or height < 1e3 * noise:
+                    for i in range(M):
+                        v[i] = 0.0
+                    return n, CHATTER, tc + tail
+        if n >= max_imp:
+            return n, MAXIMP, tc
+        if n >= cap:
+            return n, FULL, tc
+        t = tc
+        anchor[0] = tc
+        for i in range(M):
+            qa[i] = q[i]
+            va[i] = v[i]
+
+
+@numba.njit(cache=True, nogil=True)
+def propagate_many(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, ta, qa, va, ts, out_q, out_v):
+    """Exact states at the sorted times ``ts >= ta`` from ``(ta, qa, va)`` into ``out_q, out_v``
+    (shape (M, T)); a piecewise-constant load is followed jump by jump, by piece index (no
+    rounding of a jump time into the wrong piece)."""
+    M = w2.size
+    qa = qa.copy()
+    va = va.copy()
+    q = np.empty(M)
+    v = np.empty(M)
+    qp = np.empty(M)
+    vp = np.empty(M)
+    qpa = np.empty(M)
+    vpa = np.empty(M)
+    m = 0
+    j = 0
+    level = 0.0
+    if kind == 1:
+        m, j = piece_of(breaks, ta)
+        level = levels[j]
+    particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+    for i in range(ts.size):
+        t = ts[i]
+        if kind == 1:
+            while True:
+                te = piece_end(breaks, m, j)
+                if t < te:
+                    break
+                advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, te, q, v,
+                        qp, vp)
+                for n in range(M):
+                    qa[n] = q[n]
+                    va[n] = v[n]
+                ta = te
+                j += 1
+                if j == breaks.size:
+                    j = 0
+                    m += 1
+                level = levels[j]
+                particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+        advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp)
+        for n in range(M):
+            out_q[n, i] = q[n]
+            out_v[n, i] = v[n]

@@ -1,0 +1,871 @@
+"""Event-driven simulation from any start, impact after impact (paper Section 5, MODEL.md s. 8).
+
+Between impacts the bar moves in closed form (MODEL.md section 2, eq. 8), so there is no
+time-stepping error; a piecewise-constant load (the hydraulic square wave, eq. 34) is integrated
+exactly piece by piece. The next impact, the first ``t`` with ``u(1,t) = c . q(t) = 0`` and
+``u_t(1,t) > 0``, is found with a guaranteed search (bounds on ``|u_tt(1,t)|`` and
+``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding.
+At an impact ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11).
+
+With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
+accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field
+has gone to zero, and follows the bar fixed at ``x = 1`` (fixed-free modes
+``r_m = int_0^1 u cos((m - 1/2) pi x) dx``, MODEL.md section 8) until the stop's reaction
+``F_stop = p - q_0'' - d q_0'`` would turn tensile; then the state is projected back on the
+free-free modes and the free motion resumes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from . import _simkernel as K
+from ._validate import check_int, check_real
+from .loads import FourierLoad, Load, PiecewiseConstantLoad
+from .model import BarModel
+
+__all__ = ["InitialState", "Trajectory", "EnergyAccount", "simulate"]
+
+TWO_PI = 2.0 * math.pi
+
+#: Chatter: jump to the accumulation point once the remaining bounces last less than this.
+CHATTER_TAIL = 1e-9
+#: First extra dwell in contact when the free and the fixed-free bases disagree at a release.
+DWELL_START = 1e-10
+
+_FREE, _CONTACT = 0, 1
+
+
+# --------------------------------------------------------------------------------------------------
+# initial state
+# --------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class InitialState:
+    """Modal state of the free-free bar (MODEL.md section 2).
+
+    ``u(x) = q_0 + 2 sum_{n>=1} q_n cos(n pi x)`` and the same for the velocity field.
+
+    Parameters
+    ----------
+    modal_displacement : array_like, shape (N + 1,)
+        ``q_0..q_N`` (dimensionless).
+    modal_velocity : array_like, shape (N + 1,)
+        ``q_0'..q_N'``.
+
+    Raises
+    ------
+    ValueError
+        If the arrays are not 1-d, of different lengths, empty, or not finite.
+    """
+
+    modal_displacement: np.ndarray
+    modal_velocity: np.ndarray
+
+    def __post_init__(self) -> None:
+        q = _real_vector("modal_displacement", self.modal_displacement)
+        v = _real_vector("modal_velocity", self.modal_velocity)
+        if q.size != v.size:
+            raise ValueError(
+                f"modal_velocity must have the length of modal_displacement ({q.size}); "
+                f"got {v.size}"
+            )
+        q.setflags(write=False)
+        v.setflags(write=False)
+        object.__setattr__(self, "modal_displacement", q)
+        object.__setattr__(self, "modal_velocity", v)
+
+    @property
+    def n_modes(self) -> int:
+        """Flexible modes ``N`` the state carries."""
+        return self.modal_displacement.size - 1
+
+    @classmethod
+    def rigid(cls, end_displacement, velocity, n_modes: int = 0) -> InitialState:
+        """An undeformed bar with its struck end at ``end_displacement`` moving at ``velocity``.
+
+        Parameters
+        ----------
+        end_displacement : float
+            ``u(1)``, ``<= 0`` (the stop is at 0).
+        velocity : float
+            Uniform velocity (positive towards the stop).
+        n_modes : int, optional
+            Flexible modes to carry (all zero). A one-mode state is also accepted by
+            :func:`simulate` for any model and padded with zeros.
+
+        Raises
+        ------
+        ValueError
+            If ``end_displacement > 0`` (the start would penetrate the stop).
+        """
+        e = check_real("end_displacement", end_displacement, hi=0.0)
+        vel = check_real("velocity", velocity)
+        n_modes = check_int("n_modes", n_modes, lo=0)
+        q = np.zeros(n_modes + 1)
+        v = np.zeros(n_modes + 1)
+        q[0] = e
+        v[0] = vel
+        return cls(q, v)
+
+    @classmethod
+    def from_fields(cls, u0, v0, model: BarModel) -> InitialState:
+        """Project displacement and velocity fields on the free-free modes (eq. 5).
+
+        Parameters
+        ----------
+        u0, v0 : callable
+            Vectorised functions of ``x`` in ``[0, 1]`` giving ``u(x, t0)`` and ``u_t(x, t0)``.
+        model : BarModel
+            Gives the number of modes ``N``.
+
+        Returns
+        -------
+        InitialState
+            ``q_n = int_0^1 u0(x) cos(n pi x) dx`` (Gauss-Legendre, exact for polynomials of
+            degree below 64 per panel), ``n = 0..N``.
+
+        Raises
+        ------
+        ValueError
+            If a field is not callable or returns non-finite values, or ``u0(1) > 0``.
+        """
+        if not isinstance(model, BarModel):
+            raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
+        for name, f in (("u0", u0), ("v0", v0)):
+            if not callable(f):
+                raise ValueError(f"{name} must be a callable of x; got {type(f).__name__}")
+        panels = max(8, model.n_modes // 4 + 1)
+        xg, wg = np.polynomial.legendre.leggauss(32)
+        edges = np.linspace(0.0, 1.0, panels + 1)
+        half = 0.5 * (edges[1:] - edges[:-1])[:, None]
+        x = (half * (xg[None, :] + 1.0) + edges[:-1, None]).ravel()
+        w = (half * wg[None, :]).ravel()
+        basis = np.cos(np.pi * np.outer(x, np.arange(model.n_modes + 1)))
+        out = []
+        for name, f in (("u0", u0), ("v0", v0)):
+            vals = np.broadcast_to(np.asarray(f(x), dtype=float), x.shape)
+            if not np.all(np.isfinite(vals)):
+                raise ValueError(f"{name} must return finite values on [0, 1]")
+            out.append((w * vals) @ basis)
+        end = float(np.asarray(u0(np.array([1.0])), dtype=float).ravel()[0])
+        if end > 0.0:
+            raise ValueError(f"u0 must keep the struck end off the stop, u0(1) <= 0; got {end}")
+        return cls(out[0], out[1])
+
+
+def _real_vector(name, value) -> np.ndarray:
+    try:
+        arr = np.array(value, dtype=float, copy=True)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be a 1-d array of real numbers; got {value!r}") from exc
+    if arr.ndim != 1 or arr.size == 0:
+        raise ValueError(f"{name} must be a non-empty 1-d array; got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite; got {arr}")
+    return arr
+
+
+# --------------------------------------------------------------------------------------------------
+# energy account
+# --------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class EnergyAccount:
+    """Energy balance of a run (all dimensionless, per ``M L^3 Omega^2``).
+
+    ``work = (final - initial) + damping_loss + impact_loss + chatter_loss - projection``, where
+
+    - ``work = int p(t) u_t(0, t) dt`` is the work of the load at the driven end,
+    - ``initial``, ``final`` are kinetic plus strain energy
+      ``(1/2) int u_t^2 dx + (s^2/2) int u_x^2 dx`` at the start and the end,
+    - ``damping_loss = d int int u_t^2 dx dt``,
+    - ``impact_loss = sum (1 - R^2) T_before`` over the impacts (the whole velocity field is
+      reversed and scaled by ``R``),
+    - ``chatter_loss`` is the kinetic energy left when the simulation jumps to the accumulation
+      point of a chatter sequence (the bounces it skips would have dissipated it),
+    - ``projection`` is what the changes of modal basis at the start and end of permanent contact
+      add (a truncated projection does not conserve energy; MODEL.md section 8).
+    """
+
+    work: float
+    initial: float
+    final: float
+    damping_loss: float
+    impact_loss: float
+    chatter_loss: float
+    projection: float
+
+    @property
+    def residual(self) -> float:
+        """``work - (final - initial) - damping_loss - impact_loss - chatter_loss + projection``."""
+        return (self.work - (self.final - self.initial) - self.damping_loss - self.impact_loss
+                - self.chatter_loss + self.projection)
+
+    @property
+    def scale(self) -> float:
+        """The largest term, for a relative residual."""
+        return max(abs(self.work), self.initial, self.final, self.damping_loss, self.impact_loss,
+                   self.chatter_loss, abs(self.projection), 1e-300)
+
+    @property
+    def relative_residual(self) -> float:
+        """``|residual| / scale``."""
+        return abs(self.residual) / self.scale
+
+
+# --------------------------------------------------------------------------------------------------
+# precomputed model + load data for the kernel
+# --------------------------------------------------------------------------------------------------
+class _Basis:
+    """Frequencies, weights and particular-response data of one modal basis under one load."""
+
+    def __init__(self, w2: np.ndarray, d: float, data: _LoadData):
+        self.w2 = np.ascontiguousarray(w2, dtype=float)
+        M = self.w2.size
+        ks = data.ks
+        if data.kind == 0 and ks.size:
+            den = self.w2[:, None] + 1j * ks[None, :] * d - ks[None, :] ** 2
+            if np.any(np.abs(den) <= 1e-12 * np.maximum(1.0, ks[None, :] ** 2)):
+                raise ValueError(
+                    "load: undamped resonance, a mode frequency equals a load harmonic k "
+                    "(eq. 16); use d > 0 or move s"
+                )
+            hp = (data.pr + 1j * data.pim)[None, :] / den
+        else:
+            hp = np.zeros((M, ks.size), dtype=complex)
+        self.hpr = np.ascontiguousarray(hp.real)
+        self.hpi = np.ascontiguousarray(hp.imag)
+        ah = np.abs(hp)
+        self.vpb = np.ascontiguousarray(ah @ ks) if ks.size else np.zeros(M)
+        self.apb = np.ascontiguousarray(ah @ ks**2) if ks.size else np.zeros(M)
+        self.jpb = np.ascontiguousarray(ah @ ks**3) if ks.size else np.zeros(M)
+
+
+class _LoadData:
+    def __init__(self, load: Load):
+        if isinstance(load, FourierLoad):
+            self.kind = 0
+            self.ks = np.asarray(load.orders, dtype=float)
+            amp = load.amplitudes
+            self.pr = np.ascontiguousarray(amp.real)
+            self.pim = np.ascontiguousarray(amp.imag)
+            self.breaks = np.zeros(1)
+            self.levels = np.zeros(1)
+            a = np.abs(amp)
+            self.psup = float(load.sup_abs)
+            self.p1 = float(np.sum(self.ks * a))
+            self.p2 = float(np.sum(self.ks**2 * a))
+            self.p3 = float(np.sum(self.ks**3 * a))
+        elif isinstance(load, PiecewiseConstantLoad):
+            self.kind = 1
+            self.ks = np.zeros(0)
+            self.pr = np.zeros(0)
+            self.pim = np.zeros(0)
+            self.breaks = np.ascontiguousarray(load.breaks)
+            self.levels = np.ascontiguousarray(load.levels)
+            self.psup = float(np.max(np.abs(self.levels)))
+            self.p1 = self.p2 = self.p3 = 0.0
+        else:
+            raise ValueError(
+                f"load must be a FourierLoad (CosineLoad) or a PiecewiseConstantLoad "
+                f"(SquareWaveLoad); got {type(load).__name__}"
+            )
+        self.p0 = float(load.p0)
+
+
+def _overlap(n: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """``int_0^1 cos(n pi x) cos((m - 1/2) pi x) dx = (S(n - m + 1/2) + S(n + m - 1/2)) / 2`` with
+    ``S(c) = sin(c pi) / (c pi)`` (MODEL.md section 8), shape ``(len(n), len(m))``."""
+    a = n[:, None] - m[None, :] + 0.5
+    b = n[:, None] + m[None, :] - 0.5
+    return 0.5 * (np.sinc(a) + np.sinc(b))
+
+
+class _Core:
+    """Everything the driver needs about one (model, load) pair."""
+
+    def __init__(self, model: BarModel, load: Load):
+        self.model = model
+        self.load = load
+        self.N = model.n_modes
+        self.d = model.d
+        self.R = model.R
+        self.data = _LoadData(load)
+        self.c = np.ascontiguousarray(model.end_weights)
+        self.free = _Basis(model.frequencies**2, model.d, self.data)
+        m = np.arange(1, self.N + 1, dtype=float)
+        self.mu = (m - 0.5) * np.pi
+        self.contact = _Basis((model.s * self.mu) ** 2, model.d, self.data)
+        # stop reaction F = p (1 - sum a) + sum a_m w2_m r_m, a_m = 2 (-1)^(m+1) / mu_m
+        self.a = 2.0 * (-1.0) ** (m + 1) / self.mu if self.N else np.zeros(0)
+        self.f_alpha = 1.0 - float(np.sum(self.a))
+        self.f_wts = np.ascontiguousarray(self.a * self.contact.w2)
+        n = np.arange(self.N + 1, dtype=float)
+        ov = _overlap(n, m)  # (N+1, N)
+        kappa = np.where(n == 0, 1.0, 2.0)
+        self.to_contact = np.ascontiguousarray((kappa[:, None] * ov).T)  # r = P q, (N, N+1)
+        self.to_free = np.ascontiguousarray(2.0 * ov)  # q = P r, (N+1, N)
+        self.kappa = kappa
+
+    # ---- energies ----------------------------------------------------------------------------
+    def energy(self, basis: int, q: np.ndarray, v: np.ndarray) -> float:
+        """Kinetic plus strain energy of a modal state."""
+        if basis == _FREE:
+            k = self.kappa
+            return float(0.5 * np.sum(k * v * v) + 0.5 * np.sum(k * self.free.w2 * q * q))
+        return float(np.sum(v * v) + np.sum(self.contact.w2 * q * q))
+
+    def kinetic(self, v: np.ndarray) -> float:
+        return float(0.5 * np.sum(self.kappa * v * v))
+
+    # ---- kernel calls ------------------------------------------------------------------------
+    def run_free(self, t, q, v, t_end, max_imp, cap):
+        D, B = self.data, self.free
+        out_t = np.empty(cap)
+        out_vel = np.empty(cap)
+        out_q = np.empty((cap, self.N + 1))
+        out_v = np.empty((cap, self.N + 1))
+        n, st, tn = K.run_free(D.kind, B.w2, self.d, self.R, self.c, D.p0, D.ks, D.pr, D.pim,
+                               B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3,
+                               B.vpb, B.apb, B.jpb, float(t), q, v, float(t_end), int(max_imp),
+                               CHATTER_TAIL, out_t, out_vel, out_q, out_v)
+        return n, st, tn, out_t[:n], out_vel[:n], out_q[:n], out_v[:n]
+
+    def find_release(self, t, r, rv, t_end):
+        """First time after ``t`` when the stop reaction turns tensile; state there."""
+        D, B = self.data, self.contact
+        qa = np.array(r, dtype=float)
+        va = np.array(rv, dtype=float)
+        M = self.N
+        q = np.empty(M)
+        v = np.empty(M)
+        scratch = [np.empty(M) for _ in range(4)]
+        anchor = np.array([float(t)])
+        st, tr = K.find_crossing(D.kind, B.w2, self.d, -self.f_wts, -self.f_alpha, D.p0, D.ks,
+                                 D.pr, D.pim, B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1,
+                                 D.p2, D.p3, B.vpb, B.apb, B.jpb, anchor, qa, va, float(t_end),
+                                 0.0, q, v, *scratch)
+        return st, tr, q, v
+
+    def release_state(self, r, rv):
+        """Free-free state from a contact state: projected, end put exactly on the stop at rest."""
+        if self.N == 0:
+            return np.zeros(1), np.zeros(1)
+        q = self.to_free @ r
+        v = self.to_free @ rv
+        q[0] -= float(self.c @ q)  # a shift of the mean displacement: no energy
+        v[0] -= float(self.c @ v)  # the end at rest, as in contact; its energy goes to `projection`
+        for x in (q, v):  # rounding must not leave the end a hair inside the stop or moving in
+            e = float(self.c @ x)
+            if e > 0.0:
+                x[0] -= 2.0 * e
+        return q, v
+
+    def contact_state(self, q, v):
+        return self.to_contact @ q, self.to_contact @ v
+
+    def stop_force(self, t, r):
+        """``F_stop`` at time ``t`` for the contact state ``r`` (MODEL.md section 8)."""
+        return self.f_alpha * float(self.load(t)) + float(self.f_wts @ r)
+
+    def propagate(self, basis, t0, q, v, t):
+        """Exact state at times ``t >= t0`` (shape (T,)) from ``(t0, q, v)`` in a basis, shape
+        (M, T) each. (The compiled kernel's flow; ``Load.propagate`` is the independent reference
+        the tests hold it to.)"""
+        if basis == _CONTACT and self.N == 0:
+            z = np.zeros((0, np.size(t)))
+            return z, z
+        B = self.free if basis == _FREE else self.contact
+        D = self.data
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        order = np.argsort(t, kind="stable")
+        ts = np.ascontiguousarray(t[order])
+        Q = np.empty((B.w2.size, ts.size))
+        V = np.empty_like(Q)
+        K.propagate_many(D.kind, B.w2, self.d, D.p0, D.ks, B.hpr, B.hpi, D.breaks, D.levels,
+                         float(t0), np.ascontiguousarray(q, dtype=float),
+                         np.ascontiguousarray(v, dtype=float), ts, Q, V)
+        out_q = np.empty_like(Q)
+        out_v = np.empty_like(V)
+        out_q[:, order] = Q
+        out_v[:, order] = V
+        return out_q, out_v
+
+
+# --------------------------------------------------------------------------------------------------
+# result
+# --------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _Segment:
+    t: float
+    basis: int
+    q: np.ndarray
+    v: np.ndarray
+    entry: str  # 'start', 'impact', 'chatter', 'touch', 'release'
+    frozen: np.ndarray | None = None  # the free state (q, 0) frozen at a chatter jump
+
+
+_ENTRIES = ("start", "impact", "chatter", "touch", "release")
+
+
+class _Segments:
+    """The pieces of closed-form motion of a run, stored as arrays (one row per piece); indexing
+    gives a :class:`_Segment`."""
+
+    def __init__(self, n_modes, t, basis, entry, q, v, frozen):
+        self.n_modes = n_modes
+        self.t = t
+        self.basis = basis
+        self.entry = entry
+        self.q = q
+        self.v = v
+        self.frozen = frozen
+
+    def __len__(self) -> int:
+        return self.t.size
+
+    def __getitem__(self, j) -> _Segment:
+        j = range(len(self))[j]
+        b = int(self.basis[j])
+        m = self.n_modes + 1 if b == _FREE else self.n_modes
+        return _Segment(float(self.t[j]), b, self.q[j, :m], self.v[j, :m],
+                        _ENTRIES[self.entry[j]], self.frozen.get(j))
+
+
+class _SegmentLog:
+    """Builds :class:`_Segments` block by block (a block of impacts comes from one kernel call)."""
+
+    def __init__(self, n_modes):
+        self.M = n_modes + 1
+        self.blocks = []
+        self.frozen = {}
+        self.count = 0
+
+    def add(self, t, basis, q, v, entry, frozen=None):
+        qq = np.zeros((1, self.M))
+        vv = np.zeros((1, self.M))
+        qq[0, :q.size] = q
+        vv[0, :v.size] = v
+        self.blocks.append((np.array([t], dtype=float), np.array([basis], dtype=np.int8),
+                            np.array([_ENTRIES.index(entry)], dtype=np.int8), qq, vv))
+        if frozen is not None:
+            self.frozen[self.count] = frozen
+        self.count += 1
+
+    def add_impacts(self, ts, qs, vs):
+        k = ts.size
+        self.blocks.append((ts.copy(), np.zeros(k, dtype=np.int8), np.ones(k, dtype=np.int8),
+                            qs.copy(), vs.copy()))
+        self.count += k
+
+    def truncate(self, count):
+        """Drop the pieces from index ``count`` on (whole single-piece blocks only)."""
+        while self.count > count:
+            blk = self.blocks.pop()
+            assert self.count - blk[0].size >= count
+            self.count -= blk[0].size
+        for j in [j for j in self.frozen if j >= count]:
+            del self.frozen[j]
+
+    def last(self) -> _Segment:
+        t, b, e, q, v = self.blocks[-1]
+        bb = int(b[-1])
+        m = self.M if bb == _FREE else self.M - 1
+        return _Segment(float(t[-1]), bb, q[-1, :m], v[-1, :m], _ENTRIES[e[-1]],
+                        self.frozen.get(self.count - 1))
+
+    def finish(self) -> _Segments:
+        cols = list(zip(*self.blocks, strict=True))
+        return _Segments(self.M - 1, *(np.concatenate(c) for c in cols), dict(self.frozen))
+
+
+@dataclass(frozen=True, eq=False)
+class Trajectory:
+    """The result of :func:`simulate`.
+
+    Attributes
+    ----------
+    model : BarModel
+    load : Load
+    t0, t_end : float
+        Start and end of the run (``t_end`` is the time of the last impact when the run stopped at
+        ``max_impacts``).
+    impact_times : numpy.ndarray, shape (I,)
+        Times of the impacts (load frame, dimensionless).
+    impact_velocities : numpy.ndarray, shape (I,)
+        Velocity ``u_t(1, t-)`` of the struck end just before each impact, ``> 0``.
+    contact_intervals : numpy.ndarray, shape (m, 2)
+        Start and end of each interval of permanent contact (the end is ``t_end`` while still in
+        contact).
+    final_state : InitialState
+        Free-free modal state at ``t_end`` (projected from the fixed-free basis when in contact).
+    status : str
+        Why the run stopped: ``"t_end"`` or ``"max_impacts"``.
+    """
+
+    model: BarModel
+    load: Load
+    t0: float
+    t_end: float
+    impact_times: np.ndarray
+    impact_velocities: np.ndarray
+    contact_intervals: np.ndarray
+    final_state: InitialState
+    status: str
+    _core: _Core = field(repr=False)
+    _segments: _Segments = field(repr=False)
+    n_release_retries: int = 0
+
+    @property
+    def n_impacts(self) -> int:
+        return int(self.impact_times.size)
+
+    @property
+    def in_contact_at_end(self) -> bool:
+        return bool(self.contact_intervals.size and self.contact_intervals[-1, 1] == self.t_end
+                    and self._segments[-1].basis == _CONTACT)
+
+    def _check_times(self, t) -> np.ndarray:
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if t.ndim != 1 or not np.all(np.isfinite(t)):
+            raise ValueError("t must be a finite 1-d array of times")
+        if np.any(t < self.t0) or np.any(t > self.t_end):
+            raise ValueError(f"t must lie in [t0, t_end] = [{self.t0}, {self.t_end}]")
+        return t
+
+    def _modal(self, t):
+        """Yield ``(mask, basis, q, v)`` with the modal states at the times ``t``."""
+        starts = self._segments.t
+        idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(starts) - 1)
+        for j in np.unique(idx):
+            sel = idx == j
+            s = self._segments[j]
+            q, v = self._core.propagate(s.basis, s.t, s.q, s.v, t[sel])
+            yield sel, s.basis, q, v
+
+    def end_displacement(self, t) -> np.ndarray:
+        """``u(1, t)``, the struck end (``<= 0`` up to rounding).
+
+        Parameters
+        ----------
+        t : array_like, shape (T,)
+            Times in ``[t0, t_end]``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (T,)
+        """
+        scalar = np.ndim(t) == 0
+        t = self._check_times(t)
+        out = np.zeros(t.size)
+        for sel, basis, q, _ in self._modal(t):
+            out[sel] = self._core.c @ q if basis == _FREE else 0.0
+        return out[0] if scalar else out
+
+    def end_velocity(self, t) -> np.ndarray:
+        """``u_t(1, t)``, shape (T,) (right limit at an impact)."""
+        scalar = np.ndim(t) == 0
+        t = self._check_times(t)
+        out = np.zeros(t.size)
+        for sel, basis, _, v in self._modal(t):
+            out[sel] = self._core.c @ v if basis == _FREE else 0.0
+        return out[0] if scalar else out
+
+    def displacement(self, x, t) -> np.ndarray:
+        """``u(x, t)`` on a grid.
+
+        Parameters
+        ----------
+        x : array_like, shape (X,)
+            Positions in ``[0, 1]``.
+        t : array_like, shape (T,)
+            Times in ``[t0, t_end]``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (T, X)
+        """
+        x = np.atleast_1d(np.asarray(x, dtype=float))
+        phi_free = self.model.shape_functions(x)  # (X, N+1)
+        phi_contact = 2.0 * np.cos(np.outer(x, self._core.mu))  # (X, N)
+        t = self._check_times(t)
+        out = np.zeros((t.size, x.size))
+        for sel, basis, q, _ in self._modal(t):
+            out[sel] = (phi_free @ q).T if basis == _FREE else (phi_contact @ q).T
+        return out
+
+    def modal_state(self, t):
+        """Free-free modal state ``(q, v)`` at times ``t``, shape ``(N + 1, T)`` each (projected
+        from the fixed-free basis while in contact)."""
+        t = self._check_times(t)
+        Q = np.zeros((self.model.n_modes + 1, t.size))
+        V = np.zeros_like(Q)
+        for sel, basis, q, v in self._modal(t):
+            if basis == _FREE:
+                Q[:, sel], V[:, sel] = q, v
+            elif self.model.n_modes:
+                Q[:, sel], V[:, sel] = self._core.to_free @ q, self._core.to_free @ v
+        return Q, V
+
+    @cached_property
+    def energy(self) -> EnergyAccount:
+        """The energy account of the run (:class:`EnergyAccount`), computed on first access by
+        Gauss-Legendre quadrature of the closed-form motion on every segment."""
+        return _energy_account(self)
+
+
+# --------------------------------------------------------------------------------------------------
+# energy account by quadrature
+# --------------------------------------------------------------------------------------------------
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
+
+
+def _segment_integrals(core: _Core, seg: _Segment, tb: float):
+    """Work, damping loss and the end state of one segment ``[seg.t, tb]``."""
+    ta = seg.t
+    if seg.basis == _CONTACT and core.N == 0:
+        return 0.0, 0.0, seg.q, seg.v
+    w2 = core.free.w2 if seg.basis == _FREE else core.contact.w2
+    if tb <= ta:
+        return 0.0, 0.0, seg.q, seg.v
+    edges = [ta, tb]
+    if core.data.kind == 1:
+        m0, m1 = math.floor(ta / TWO_PI), math.floor(tb / TWO_PI)
+        per = (np.arange(m0, m1 + 1)[:, None] * TWO_PI + core.data.breaks[None, :]).ravel()
+        edges = np.concatenate(([ta], per[(per > ta) & (per < tb)], [tb]))
+    wmax = math.sqrt(float(np.max(w2))) if w2.size else 0.0
+    kmax = float(np.max(core.data.ks)) if core.data.ks.size else 0.0
+    hmax = 1.5 / (wmax + kmax + 1.0)
+    nodes, weights = [], []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        n = max(1, math.ceil((b - a) / hmax))
+        e = np.linspace(a, b, n + 1)
+        half = 0.5 * (e[1:] - e[:-1])
+        nodes.append((half[:, None] * (_GL_X[None, :] + 1.0) + e[:-1, None]).ravel())
+        weights.append((half[:, None] * _GL_W[None, :]).ravel())
+    nodes = np.concatenate(nodes)
+    weights = np.concatenate(weights)
+    work = 0.0
+    damp = 0.0
+    chunk = 20000
+    if seg.basis == _FREE:
+        kap = core.kappa
+    else:
+        kap = np.full(core.N, 2.0)
+    for i in range(0, nodes.size, chunk):
+        tt = nodes[i:i + chunk]
+        _, v = core.propagate(seg.basis, ta, seg.q, seg.v, tt)
+        ut0 = kap @ v  # u_t(0, t): v0 + 2 sum v_n, or 2 sum r_m'
+        work += float(np.sum(weights[i:i + chunk] * core.load(tt) * ut0))
+        if core.d:
+            damp += core.d * float(np.sum(weights[i:i + chunk] * (kap @ (v * v))))
+    qe, ve = core.propagate(seg.basis, ta, seg.q, seg.v, [tb])
+    return work, damp, qe[:, 0], ve[:, 0]
+
+
+def _energy_account(tr: Trajectory) -> EnergyAccount:
+    core = tr._core
+    segs = tr._segments
+    work = damp = imp = chat = proj = 0.0
+    first = segs[0]
+    initial = core.energy(first.basis, first.q, first.v)
+    final = initial
+    for j, seg in enumerate(segs):
+        tb = segs[j + 1].t if j + 1 < len(segs) else tr.t_end
+        w, dl, qe, ve = _segment_integrals(core, seg, tb)
+        work += w
+        damp += dl
+        if j + 1 < len(segs):
+            nxt = segs[j + 1]
+            if nxt.entry == "impact":
+                imp += (1.0 - core.R**2) * core.kinetic(ve)
+            elif nxt.entry == "chatter":
+                frozen = nxt.frozen
+                e_frozen = core.energy(_FREE, frozen, np.zeros_like(frozen))
+                chat += core.energy(_FREE, qe, ve) - e_frozen
+                proj += core.energy(_CONTACT, nxt.q, nxt.v) - e_frozen
+            elif nxt.entry in ("touch", "release"):
+                proj += core.energy(nxt.basis, nxt.q, nxt.v) - core.energy(seg.basis, qe, ve)
+        else:
+            final = core.energy(seg.basis, qe, ve)
+    return EnergyAccount(work=work, initial=initial, final=final, damping_loss=damp,
+                         impact_loss=imp, chatter_loss=chat, projection=proj)
+
+
+# --------------------------------------------------------------------------------------------------
+# the driver
+# --------------------------------------------------------------------------------------------------
+def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.0,
+             max_impacts=None) -> Trajectory:
+    r"""Follow the bar from ``initial`` through impact after impact (paper Section 5).
+
+    Between impacts every mode obeys ``q_n'' + d q_n' + (s n pi)^2 q_n = p(t)`` (eq. 6) and is
+    advanced in closed form; at an impact (``u(1,t) = 0``, ``u_t(1,t) > 0``)
+    ``u_t(x, t+) = -R u_t(x, t-)`` (eqs. 10, 11). Chatter is jumped over to its accumulation point,
+    after which the bar stays on the stop (fixed at ``x = 1``, MODEL.md section 8) until the stop's
+    reaction would turn tensile.
+
+    Parameters
+    ----------
+    model : BarModel
+        The bar: ``s``, ``d``, ``R`` and ``N`` flexible modes.
+    load : FourierLoad or PiecewiseConstantLoad
+        The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
+        ``t mod 2 pi``).
+    initial : InitialState
+        Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
+    t_end : float
+        End of the run (dimensionless time), ``> t0``.
+    t0 : float, optional
+        Start time. Default 0.
+    max_impacts : int, optional
+        Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact.
+
+    Returns
+    -------
+    Trajectory
+
+    Raises
+    ------
+    ValueError
+        On a bad parameter (named in the message), a start that penetrates the stop
+        (``u(1, t0) > 0``), or an undamped resonance between a mode and a load harmonic.
+    """
+    if not isinstance(model, BarModel):
+        raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
+    if not isinstance(initial, InitialState):
+        raise ValueError(f"initial must be an InitialState; got {type(initial).__name__}")
+    t0 = check_real("t0", t0)
+    t_end = check_real("t_end", t_end, lo=t0, lo_open=True)
+    if max_impacts is None:
+        max_imp = np.iinfo(np.int64).max
+    else:
+        max_imp = check_int("max_impacts", max_impacts, lo=1)
+    N = model.n_modes
+    q = np.array(initial.modal_displacement, dtype=float)
+    v = np.array(initial.modal_velocity, dtype=float)
+    if q.size == 1 and N > 0:
+        q = np.concatenate((q, np.zeros(N)))
+        v = np.concatenate((v, np.zeros(N)))
+    if q.size != N + 1:
+        raise ValueError(
+            f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
+        )
+    core = _Core(model, load)
+    g = float(core.c @ q)
+    if g > 1e-12 * max(1.0, float(np.sum(np.abs(core.c * q)))):
+        raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
+    if g > 0.0:
+        q[0] -= g
+    return _run(core, q, v, t0, t_end, max_imp)
+
+
+def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
+    segs = _SegmentLog(core.N)
+    segs.add(t0, _FREE, q, v, "start")
+    times: list[np.ndarray] = []
+    vels: list[np.ndarray] = []
+    contacts: list[list[float]] = []
+    n_imp = 0
+    t = t0
+    mode = _FREE
+    status = "t_end"
+    dwell = 0.0
+    retries = 0
+    last_release = None  # (time, contact segment index, contact state at release) for undoing
+    cap = 1024
+    while True:
+        if mode == _FREE:
+            left = max_imp - n_imp
+            n, st, tn, ot, ov, oq, ovv = core.run_free(t, q, v, t_end, left, min(cap, left))
+            cap = min(cap * 2, 1 << 16)
+            if n:
+                times.append(ot.copy())
+                vels.append(ov.copy())
+                segs.add_impacts(ot, oq, ovv)
+                n_imp += n
+            if st == K.FAILED:  # pragma: no cover - defensive
+                raise RuntimeError(f"impact search did not converge at t = {tn}")
+            if st == K.END:
+                t = t_end
+                break
+            if st == K.MAXIMP:
+                t = tn
+                status = "max_impacts"
+                break
+            if st == K.FULL:
+                t = tn
+                continue
+            # CHATTER or CONTACT: the end stays on the stop from tn
+            same_time = last_release is not None and tn <= last_release[0] + 1e-12 * (1 + abs(tn))
+            if n == 0 and same_time:
+                # the free motion would press straight back: undo the release and dwell longer
+                t_rel, seg_index, _ = last_release
+                segs.truncate(seg_index + 1)
+                contacts[-1][1] = math.nan
+                dwell = max(2.0 * dwell, DWELL_START)
+                retries += 1
+                cseg = segs.last()
+                t = t_rel
+                mode = _CONTACT
+                r, rv = _contact_at(core, cseg, t_rel + dwell, t_end)
+                if r is None:
+                    contacts[-1][1] = t_end
+                    t = t_end
+                    break
+                t = t_rel + dwell
+                last_release = None
+            else:
+                dwell = 0.0
+                if st == K.CHATTER:
+                    frozen = q.copy()
+                    r, rv = core.contact_state(q, np.zeros_like(v))
+                    t = min(tn, t_end)
+                    segs.add(t, _CONTACT, r, rv, "chatter", frozen)
+                else:
+                    r, rv = core.contact_state(q, v)
+                    t = tn
+                    segs.add(t, _CONTACT, r, rv, "touch")
+                contacts.append([t, math.nan])
+                mode = _CONTACT
+                if t >= t_end:
+                    contacts[-1][1] = t_end
+                    break
+        # ---- in contact: from (t, r, rv) find the release ----
+        st, tr, rr, rrv = core.find_release(t, r, rv, t_end)
+        if st == K.FAIL:  # pragma: no cover - defensive
+            raise RuntimeError(f"release search did not converge at t = {tr}")
+        if st == K.NONE:
+            contacts[-1][1] = t_end
+            t = t_end
+            break
+        contacts[-1][1] = tr
+        q, v = core.release_state(rr, rrv)
+        last_release = (tr, segs.count - 1, None)
+        segs.add(tr, _FREE, q, v, "release")
+        t = tr
+        mode = _FREE
+    # ---- final state ----
+    last = segs.last()
+    qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
+    qe, ve = qe[:, 0], ve[:, 0]
+    if last.basis == _CONTACT:
+        qe, ve = core.release_state(qe, ve)
+    imp_t = np.concatenate(times) if times else np.zeros(0)
+    imp_v = np.concatenate(vels) if vels else np.zeros(0)
+    ci = np.array(contacts, dtype=float).reshape(-1, 2)
+    return Trajectory(model=core.model, load=core.load, t0=t0, t_end=t,
+                      impact_times=imp_t, impact_velocities=imp_v, contact_intervals=ci,
+                      final_state=InitialState(qe, ve), status=status, _core=core,
+                      _segments=segs.finish(), n_release_retries=retries)
+
+
+def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
+    """Contact state at ``t`` on the contact segment ``seg`` (None when ``t >= t_end``)."""
+    if t >= t_end:
+        return None, None
+    r, rv = core.propagate(_CONTACT, seg.t, seg.q, seg.v, [t])
+    return r[:, 0], rv[:, 0]
