@@ -174,9 +174,12 @@ class ExperimentResult:
     classes : tuple of Classification
         One per start, in start order.
     interval_mean, interval_std : float
-        Mean and standard deviation of the intervals between successive *main* impacts (arrival
-        velocity above 10 % of the 90th percentile of the run's window; chatter bounces are not
-        counted) over the classified windows of all runs pooled, in load periods.
+        Mean and standard deviation of the intervals between successive *main* impacts over the
+        classified windows of all runs pooled, in load periods. A main impact ends a free flight
+        of at least 5 % of the load period (since the last impact or the end of the last
+        contact) and is not a bounce of the previous one (flight under half a period, arrival
+        under ``1.5 R`` times the previous arrival velocity): the bounces of a chatter sequence
+        and the rattling around a contact belong to the main impact that started them.
     run_spread : float
         Median over the runs (with at least 5 main impacts in the window) of the relative
         standard deviation ``std / mean`` of that run's main-impact intervals: the spread "not
@@ -296,7 +299,7 @@ def run_experiment(model: BarModel, load: Load, *, starts: int = 200, periods: f
         if t.size >= 2:
             all_intervals.append(np.diff(t))
         if vel.size:
-            main = vel > 0.1 * np.percentile(vel, 90)
+            main = _main_impacts(tr, sel, T)
             tm, vm = t[main], vel[main]
             if tm.size >= 2:
                 dt = np.diff(tm)
@@ -316,6 +319,27 @@ def run_experiment(model: BarModel, load: Load, *, starts: int = 200, periods: f
         trajectories=tuple(tr for tr, _ in results[:keep]), intervals=iv,
         impact_pairs=np.concatenate(pairs) if pairs else np.zeros((0, 2)),
     )
+
+
+def _main_impacts(tr: Trajectory, sel: np.ndarray, period: float) -> np.ndarray:
+    """Mask over ``tr.impact_times[sel]`` of the main impacts: those that end a free flight of at
+    least 5 % of the load period (since the last impact or the end of the last contact) and are
+    not a bounce of the previous impact (a flight shorter than half a period arriving at less
+    than ``1.5 R`` times the previous arrival velocity)."""
+    t = tr.impact_times
+    v = tr.impact_velocities
+    prev = np.concatenate(([tr.t0], t[:-1]))
+    v_prev = np.concatenate(([np.inf], v[:-1]))
+    after_release = np.zeros(t.size, dtype=bool)
+    ci = tr.contact_intervals
+    if ci.size:
+        j = np.searchsorted(ci[:, 1], t, side="right") - 1
+        last_release = np.where(j >= 0, ci[np.clip(j, 0, None), 1], -np.inf)
+        after_release = last_release > prev
+        prev = np.maximum(prev, last_release)
+    flight = t - prev
+    bounce = ~after_release & (flight < 0.5 * period) & (v < 1.5 * tr.model.R * v_prev)
+    return ((flight >= 0.05 * period) & ~bounce)[sel]
 
 
 def pneumatic_setup(*, p0: float = 1.2, pk: float = 1.0, k: int = 1, s: float = 10.0,
