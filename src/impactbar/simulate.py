@@ -36,6 +36,11 @@ TWO_PI = 2.0 * math.pi
 CHATTER_TAIL = 1e-9
 #: First extra dwell in contact when the free and the fixed-free bases disagree at a release.
 DWELL_START = 1e-10
+#: Largest such dwell (it doubles while the disagreement lasts).
+DWELL_MAX = 1e-3
+#: A flight after a release that ends back on the stop within this time (bounces included) is a
+#: disagreement between the truncated bases, not a motion: the release is undone.
+MICRO_FLIGHT = 1e-6
 
 _FREE, _CONTACT = 0, 1
 
@@ -775,11 +780,14 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     status = "t_end"
     dwell = 0.0
     retries = 0
-    last_release = None  # (time, contact segment index, contact state at release) for undoing
+    last_release = None  # (time, contact segment index, len(times), n_imp) for undoing
     cap = 1024
     while True:
         if mode == _FREE:
             left = max_imp - n_imp
+            if left <= 0:  # pragma: no cover - run_free stops at max_imp itself
+                status = "max_impacts"
+                break
             n, st, tn, ot, ov, oq, ovv = core.run_free(t, q, v, t_end, left, min(cap, left))
             cap = min(cap * 2, 1 << 16)
             if n:
@@ -800,13 +808,18 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                 t = tn
                 continue
             # CHATTER or CONTACT: the end stays on the stop from tn
-            same_time = last_release is not None and tn <= last_release[0] + 1e-12 * (1 + abs(tn))
-            if n == 0 and same_time:
-                # the free motion would press straight back: undo the release and dwell longer
-                t_rel, seg_index, _ = last_release
+            micro = last_release is not None and tn - last_release[0] <= MICRO_FLIGHT
+            if micro:
+                # the free motion presses straight back (at once, or after a few bounces too
+                # small to matter): the bases disagree on the sign of the reaction here. Undo
+                # the release and stay in contact a little longer (doubling) before asking again.
+                t_rel, seg_index, k_times, n_saved = last_release
                 segs.truncate(seg_index + 1)
+                del times[k_times:]
+                del vels[k_times:]
+                n_imp = n_saved
                 contacts[-1][1] = math.nan
-                dwell = max(2.0 * dwell, DWELL_START)
+                dwell = min(max(2.0 * dwell, DWELL_START), DWELL_MAX)
                 retries += 1
                 cseg = segs.last()
                 t = t_rel
@@ -844,7 +857,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             break
         contacts[-1][1] = tr
         q, v = core.release_state(rr, rrv)
-        last_release = (tr, segs.count - 1, None)
+        last_release = (tr, segs.count - 1, len(times), n_imp)
         segs.add(tr, _FREE, q, v, "release")
         t = tr
         mode = _FREE
