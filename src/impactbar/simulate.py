@@ -509,6 +509,16 @@ class Trajectory:
         Free-free modal state at ``t_end`` (projected from the fixed-free basis when in contact).
     status : str
         Why the run stopped: ``"t_end"`` or ``"max_impacts"``.
+    energy : EnergyAccount
+        The energy balance of the run (computed on first access).
+    n_release_retries : int
+        Releases undone because the free motion pressed straight back onto the stop (within
+        ``MICRO_FLIGHT``): the truncated free-free and fixed-free bases disagreed on the sign of
+        the reaction; the contact was then prolonged by a doubling dwell (from ``1e-10``, at most
+        ``1e-3``).
+
+    Methods ``end_displacement(t)``, ``end_velocity(t)``, ``displacement(x, t)`` and
+    ``modal_state(t)`` evaluate the closed-form motion at any times in ``[t0, t_end]``.
     """
 
     model: BarModel
