@@ -3,6 +3,7 @@
 The public API; everything else is private.
 """
 
+from . import physical as physical  # SI units layer; pint is imported only when it is used
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
 from .loads import Load as Load

@@ -258,20 +258,24 @@ class FourierLoad(Load):
         dq = np.asarray(q0, dtype=float)[:, None] - qp0
         dv = np.asarray(v0, dtype=float)[:, None] - vp0
         rigid = w2 == 0.0
+        flex = ~rigid
         static = np.where(rigid, 0.0, self.p0 / np.where(rigid, 1.0, w2))[:, None]
-        w2c = w2[:, None]
+        w2f = w2[flex][:, None]
         k = self._k
 
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
             tau = (t - t0)[None, :]
-            p11, p12, p21, p22 = fundamental(w2c, d, tau)
             e = np.exp(1j * np.outer(k, t))
-            q = p11 * dq + p12 * dv + (hp @ e).real + static
-            v = p21 * dq + p22 * dv + (hv @ e).real
-            if np.any(rigid):  # the mean load drives the rigid mode off to infinity: add it exactly
-                q[rigid] += self.p0 * c_integral(d, tau[0])
-                v[rigid] += self.p0 * b_integral(d, tau[0])
+            q = (hp @ e).real + static
+            v = (hv @ e).real
+            p11, p12, p21, p22 = fundamental(w2f, d, tau)
+            q[flex] += p11 * dq[flex] + p12 * dv[flex]
+            v[flex] += p21 * dq[flex] + p22 * dv[flex]
+            if np.any(rigid):  # rigid mode: closed form, with the mean load added exactly
+                b = b_integral(d, tau[0])
+                q[rigid] += dq[rigid] + b * dv[rigid] + self.p0 * c_integral(d, tau[0])
+                v[rigid] += np.exp(-d * tau[0]) * dv[rigid] + self.p0 * b
             return q, v
 
         return evaluate
@@ -443,6 +447,31 @@ class PiecewiseConstantLoad(Load):
             q[:, sel], v[:, sel] = step_constant(w2, d, level, qn[:, jj], vn[:, jj],
                                                  np.maximum(t[sel] - nodes[jj], 0.0))
         return q, v
+
+    def flow(self, w2, d, t0, q0, v0, horizon=TWO_PI):
+        """Exact flow from one state: the states at the load's jumps in ``[t0, t0 + horizon]`` are
+        computed once; each evaluation is then one vectorised constant-load step per time."""
+        w2 = np.asarray(w2, dtype=float)
+        q0 = np.asarray(q0, dtype=float)
+        v0 = np.asarray(v0, dtype=float)
+        t_end = t0 + horizon
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [t_end + 1.0]))
+        levels = self(0.5 * (nodes[:-1] + nodes[1:]))
+        qn = np.empty((w2.size, nodes.size - 1))
+        vn = np.empty_like(qn)
+        qn[:, 0], vn[:, 0] = q0, v0
+        for j in range(1, nodes.size - 1):
+            qn[:, j], vn[:, j] = step_constant(w2, d, levels[j - 1], qn[:, j - 1], vn[:, j - 1],
+                                               nodes[j] - nodes[j - 1])
+
+        def evaluate(t):
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+            if t.size and float(np.max(t)) > t_end:
+                return self.propagate(w2, d, t0, q0, v0, t)
+            j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, nodes.size - 2)
+            return step_constant(w2, d, levels[j], qn[:, j], vn[:, j], np.maximum(t - nodes[j], 0.0))
+
+        return evaluate
 
     def _setup_rigid(self):
         """Start value ``V(0)`` of the periodic zero-mean rigid velocity, per unit damping used."""

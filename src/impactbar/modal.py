@@ -40,21 +40,32 @@ def fundamental(w2, d: float, tau):
     tuple of numpy.ndarray
         ``(phi11, phi12, phi21, phi22)``, each of the broadcast shape of ``w2`` and ``tau``.
     """
-    w2, tau = np.broadcast_arrays(np.asarray(w2, dtype=float), np.asarray(tau, dtype=float))
+    w2 = np.asarray(w2, dtype=float)
+    tau = np.asarray(tau, dtype=float)
     lam2 = w2 - 0.25 * d * d
     rigid = w2 == 0.0
     if np.all((lam2 > 0.0) | rigid):  # fast path: flexible modes underdamped (the rule)
         lam = np.sqrt(np.where(rigid, 1.0, lam2))
-        C = np.cos(lam * tau)
-        S = np.sin(lam * tau) / lam
-        e = np.exp(-0.5 * d * tau) if d else 1.0
-        out = [e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)]
+        x = lam * tau
+        eC = np.cos(x)
+        p12 = np.sin(x) / lam
+        if d:
+            e = np.exp(-0.5 * d * tau)
+            eC = e * eC
+            p12 = e * p12
+        hd = 0.5 * d * p12
+        out = [eC + hd, p12, -w2 * p12, eC - hd]
         if np.any(rigid):
+            shape = np.broadcast_shapes(w2.shape, tau.shape)
+            out = [np.broadcast_to(o, shape) for o in out]
             out[0] = np.where(rigid, 1.0, out[0])
             out[1] = np.where(rigid, b_integral(d, tau), out[1])
             out[2] = np.where(rigid, 0.0, out[2])
             out[3] = np.where(rigid, np.exp(-d * tau), out[3])
         return tuple(out)
+    w2, tau = np.broadcast_arrays(w2, tau)
+    rigid = w2 == 0.0
+    lam2 = w2 - 0.25 * d * d
     lam = np.sqrt(np.abs(lam2))
     x = lam * tau
     under = lam2 >= 0.0
@@ -78,7 +89,9 @@ def b_integral(d: float, tau):
     tau = np.asarray(tau, dtype=float)
     if d == 0.0:
         return tau.copy()
-    return -np.expm1(-d * tau) / d
+    y = d * tau
+    # series where d tau is tiny (it may underflow to 0 for denormal d)
+    return np.where(np.abs(y) < 1e-8, tau * (1.0 - 0.5 * y), -np.expm1(-y) / d)
 
 
 def c_integral(d: float, tau):
@@ -123,6 +136,8 @@ def step_constant(w2, d: float, level, q0, v0, tau):
     w2 = np.asarray(w2, dtype=float)
     q0 = np.asarray(q0, dtype=float)
     v0 = np.asarray(v0, dtype=float)
+    if q0.ndim == 2:  # one start state per time column
+        return _step_columns(w2, d, level, q0, v0, tau)
     scalar = np.ndim(tau) == 0
     tau = np.atleast_1d(np.asarray(tau, dtype=float))[None, :]
     level = np.atleast_1d(np.asarray(level, dtype=float))[None, :]
@@ -138,4 +153,22 @@ def step_constant(w2, d: float, level, q0, v0, tau):
         v = np.where(rigid, v + level * b_integral(d, tau), v)
     if scalar:
         return q[:, 0], v[:, 0]
+    return q, v
+
+
+def _step_columns(w2, d, level, q0, v0, tau):
+    """:func:`step_constant` with a start state and a level per column: ``q0, v0`` shape (M, T),
+    ``level`` and ``tau`` shape (T,)."""
+    tau = np.asarray(tau, dtype=float)[None, :]
+    level = np.broadcast_to(np.asarray(level, dtype=float), tau.shape[1:])[None, :]
+    w2c = w2[:, None]
+    p11, p12, p21, p22 = fundamental(w2c, d, tau)
+    rigid = w2c == 0.0
+    qs = np.where(rigid, 0.0, level / np.where(rigid, 1.0, w2c))
+    dq = q0 - qs
+    q = p11 * dq + p12 * v0 + qs
+    v = p21 * dq + p22 * v0
+    if np.any(rigid):
+        q = np.where(rigid, q + level * c_integral(d, tau), q)
+        v = np.where(rigid, v + level * b_integral(d, tau), v)
     return q, v

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ._certified import enclose_zeros, zeros_in_clusters
+from ._threads import single_threaded_blas
 from .loads import Load
 from .modal import fundamental
 from .model import BarModel
@@ -58,7 +59,7 @@ def phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     return (1.0 + R) * load.rigid_velocity(model.d, phase) - load.p0 * phase_G(model.d, R)
 
 
-def phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
+def phase_roots(model: BarModel, load: Load, *, closed_form: bool = True) -> list[tuple[float, int]]:
     """Every root of the phase equation in ``[0, 2 pi)``, with its multiplicity (1, or 2 at a fold).
 
     Roots are enclosed with certainty: ``|F'| = (1 + R)|p - p0 - d V| <= 2 (1 + R) sup|p - p0|``
@@ -66,6 +67,14 @@ def phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     times its half-width holds no root (see ``_certified``). Enclosed roots are refined by Brent's
     method; a cluster without a sign change is a double root when the residual's extremum there is
     zero to rounding.
+
+    Parameters
+    ----------
+    model : BarModel
+    load : Load
+    closed_form : bool
+        Use the closed form for a load with a single harmonic (default); ``False`` forces the
+        certified search (used by the tests to check one against the other).
 
     Returns
     -------
@@ -78,7 +87,7 @@ def phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     scale = (1.0 + R) * load.sup_oscillation + abs(load.p0 * phase_G(model.d, R))
     if lip == 0.0:  # constant load: no phase dependence
         return []
-    single = _single_harmonic_roots(model, load)
+    single = _single_harmonic_roots(model, load) if closed_form else None
     if single is not None:
         return single
 
@@ -310,7 +319,8 @@ def periodic_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit]:
     [0.5148, 2.6268]
     """
     _check_inputs(model, load)
-    return [_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load)]
+    with single_threaded_blas():
+        return [_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load)]
 
 
 def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
@@ -362,7 +372,8 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     qm, vm = load.propagate(model.frequencies**2, model.d, phase, y_plus[:M], y_plus[M:],
                             [phase + TWO_PI])
     y_minus = np.concatenate((qm[:, 0], vm[:, 0]))
-    return np.linalg.eigvals(impact_map_jacobian(model, load, phase, y_plus, y_minus))
+    with single_threaded_blas():
+        return np.linalg.eigvals(impact_map_jacobian(model, load, phase, y_plus, y_minus))
 
 
 def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
@@ -445,7 +456,7 @@ def _admissibility(model, load, phase, y_plus, v_imp):
         return c @ v, absc @ bound
 
     scale = max(abs(v_imp), psup, 1e-300)
-    clusters = enclose_zeros(None, None, 0.0, TWO_PI, n0=128, min_width=2e-3,
+    clusters = enclose_zeros(None, None, 0.0, TWO_PI, n0=64, min_width=6e-3,
                              joint=gprime_and_bound, merge=False)
     # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
     # point of g; the end leaves the stop iff its acceleration there points away from the stop.

@@ -1,0 +1,117 @@
+"""Command-line pieces for hammers in SI units, shared by ``impactbar orbits`` and
+``impactbar simulate``: a TOML config or a preset in, an SI table or JSON out."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+import warnings
+
+from . import physical
+
+__all__ = ["add_physical_arguments", "wants_physical", "hammer_from_args", "run_physical_orbits",
+           "json_ready"]
+
+
+def add_physical_arguments(parser) -> None:
+    """Add an optional positional ``config`` (a TOML file) and ``--preset NAME`` to ``parser``."""
+    parser.add_argument(
+        "config", nargs="?", default=None, metavar="CONFIG.toml",
+        help="a hammer in SI units (keys: [bar] E, density, length, diameter|area; [damping] "
+             "coefficient|ratio; [stop] restitution|area; [drive] frequency; [force] kind = "
+             "pneumatic|hydraulic|measured, ...; [model] n_modes); see docs/physical.md")
+    parser.add_argument(
+        "--preset", default=None, metavar="NAME", choices=sorted(physical.PRESETS),
+        help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}")
+
+
+def wants_physical(args) -> bool:
+    """Whether the command line named a config file or a preset (the SI path)."""
+    return getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None
+
+
+def hammer_from_args(args) -> physical.Hammer:
+    """The hammer named by ``args.config`` or ``args.preset`` (exactly one).
+
+    Raises
+    ------
+    ValueError
+        Neither or both given, or an invalid config.
+    """
+    config, name = getattr(args, "config", None), getattr(args, "preset", None)
+    if (config is None) == (name is None):
+        raise ValueError("give exactly one of CONFIG.toml and --preset NAME")
+    return physical.preset(name) if name is not None else physical.load_config(config)
+
+
+def json_ready(obj):
+    """``obj`` with non-finite floats as ``None`` and numpy scalars as Python numbers."""
+    if isinstance(obj, dict):
+        return {k: json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_ready(v) for v in obj]
+    if hasattr(obj, "item") and not isinstance(obj, str):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def run_physical_orbits(args) -> int:
+    """``impactbar orbits CONFIG.toml | --preset NAME [--json]``: the one-impact periodic motions
+    of a hammer with their SI figures, as a table or (with ``--json``) as JSON on stdout.
+
+    The JSON echoes the inputs (``mass_kg``, ``mean_force_N``, ``frequency_Hz``,
+    ``restitution``, ...) at the top level and lists the orbits under ``orbits``, each with
+    ``impact_velocity_m_s``, ``blow_energy_J``, ``power_W``, ``admissible``, ``stable``,
+    ``max_abs_multiplier`` and more. Warnings (long impacts) go to stderr and into ``warnings``.
+    """
+    hammer = hammer_from_args(args)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        found = physical.orbits(hammer)
+    notes = [str(w.message) for w in caught]
+    for note in notes:
+        print(f"warning: {note}", file=sys.stderr)
+    if getattr(args, "json", False):
+        out = hammer.to_dict()
+        out["warnings"] = notes
+        out["orbits"] = [o.to_dict() for o in found]
+        print(json.dumps(json_ready(out), indent=2, allow_nan=False))
+        return 0
+    print(format_table(hammer, found))
+    return 0
+
+
+def format_table(hammer: physical.Hammer, found) -> str:
+    """A plain-text report: the hammer, then one row per orbit."""
+    h = hammer
+    lines = [
+        f"hammer {h.name or '(unnamed)'}: piston {h.mass_kg:.3g} kg, L = {h.bar.length_m:.4g} m, "
+        f"A = {h.bar.area_m2 * 1e4:.4g} cm^2, c = {h.bar.wave_speed_m_s:.0f} m/s",
+        f"  drive {h.frequency_Hz:.4g} Hz, blows {h.blow_frequency_Hz:.4g} Hz, mean force "
+        f"{h.mean_force_N:.4g} N, R = {h.R:.4g}, damping ratio {h.damping_ratio:.3g}",
+        f"  dimensionless: s = {h.s:.5g}, d = {h.d:.5g}, R = {h.R:.5g}, N = {h.n_modes}, "
+        f"p0 = {h.load.p0:.5g}",
+        f"  contact 2L/c = {h.contact_duration_s * 1e6:.4g} us = {h.contact_fraction:.2%} of the "
+        f"period; rigid-limit impact velocity {h.rigid_impact_velocity_m_s:.4g} m/s",
+    ]
+    fit = h.fourier_fit
+    if fit is not None:
+        lines.append(f"  measured force: {fit.n_harmonics} harmonics, max error "
+                     f"{fit.max_error_N:.4g} N = {fit.relative_error:.2%} of the swing "
+                     f"(tolerance {fit.tolerance:.2%})")
+    if not found:
+        lines.append("no one-impact periodic motion")
+        return "\n".join(lines)
+    head = (f"{'phase/rad':>9} {'u_t':>9} {'v/(m/s)':>8} {'E/J':>8} {'P/W':>9} {'sigma/MPa':>9} "
+            f"{'admissible':>10} {'stable':>6} {'max|mu|':>8}")
+    lines += [head, "-" * len(head)]
+    for o in found:
+        lines.append(
+            f"{o.phase_rad:9.4f} {o.impact_velocity:9.5f} {o.impact_velocity_m_s:8.3f} "
+            f"{o.blow_energy_J:8.2f} "
+            f"{o.power_W:9.1f} {o.peak_stress_Pa / 1e6:9.1f} {str(o.admissible):>10} "
+            f"{str(o.stable):>6} {o.max_abs_multiplier:8.4f}")
+    return "\n".join(lines)

@@ -1,0 +1,162 @@
+"""``impactbar simulate CONFIG.toml --out DIR``: simulate a hammer in SI units from rest and write
+plots of the struck end's displacement and velocity, the impact times and the energy per blow."""
+
+from __future__ import annotations
+
+import csv
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from . import physical
+from ._cli_physical import add_physical_arguments, hammer_from_args, json_ready
+
+__all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows"]
+
+#: impacts slower than this fraction of the rigid-limit impact velocity are chatter, not blows
+BLOW_FRACTION = 0.01
+
+
+def add_parser(subparsers) -> None:
+    """Register ``simulate``."""
+    p = subparsers.add_parser(
+        "simulate", help="simulate a hammer in SI units from rest; plots and impact table",
+        description="Simulate a hammer given in SI units (a TOML config or a preset) from rest and "
+                    "write motion.png (end displacement and velocity over time, impacts marked), "
+                    "blows.png (energy per blow), impacts.csv and summary.json to DIR.")
+    add_physical_arguments(p)
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--periods", type=float, default=40.0, metavar="N",
+                   help="length of the run in impact periods (default 40)")
+    p.add_argument("--gap", default="0 mm", metavar="LENGTH",
+                   help="initial distance of the struck end from the stop, with a unit; the "
+                        "piston starts at rest (default '0 mm')")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    """Run the simulation and write the outputs; returns the exit status."""
+    from ._units import to_si
+
+    hammer = hammer_from_args(args)
+    gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")
+    try:
+        result = physical.simulate(hammer, periods=args.periods, gap_m=gap)
+    except RuntimeError as exc:
+        print(f"impactbar simulate: error: {exc}", file=sys.stderr)
+        return 1
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    write_impacts(result, out / "impacts.csv")
+    summary = summarize(result)
+    (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
+    plot_motion(result, axes)
+    fig.savefig(out / "motion.png", dpi=120)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
+    plot_blows(result, ax)
+    fig.savefig(out / "blows.png", dpi=120)
+    plt.close(fig)
+    line = f"{hammer.name or 'hammer'}: {summary['n_impacts']} impacts in {result.t_end_s:.4g} s"
+    if "mean_blow_energy_J" in summary:
+        line += (f"; second half: {summary['mean_impact_velocity_m_s']:.3f} m/s, "
+                 f"{summary['mean_blow_energy_J']:.2f} J per blow, every "
+                 f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
+                 f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
+                 f"{summary['mean_power_W']:.4g} W")
+    print(line + f"; wrote {out}/motion.png, blows.png, impacts.csv, summary.json")
+    return 0
+
+
+def write_impacts(result: physical.SimulationResult, path) -> None:
+    """One row per impact: index, time (s), impact velocity (m/s), energy per blow (J)."""
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["impact", "time_s", "impact_velocity_m_s", "blow_energy_J"])
+        for i, (t, v, e) in enumerate(zip(result.impact_times_s, result.impact_velocities_m_s,
+                                          result.blow_energies_J, strict=True)):
+            w.writerow([i, f"{t:.9g}", f"{v:.9g}", f"{e:.9g}"])
+
+
+def summarize(result: physical.SimulationResult) -> dict:
+    """The hammer's inputs and the impact statistics, JSON-ready.
+
+    Statistics are over the second half of the run (past the start-up) and over blows: impacts
+    faster than 1 % of the rigid-limit impact velocity; slower ones are counted as chatter.
+    """
+    t = result.impact_times_s
+    v = result.impact_velocities_m_s
+    e = result.blow_energies_J
+    out = result.hammer.to_dict()
+    out.update({"t_end_s": result.t_end_s, "n_impacts": int(t.size)})
+    if t.size:
+        out.update({"last_impact_velocity_m_s": float(v[-1]), "last_blow_energy_J": float(e[-1])})
+    blow = v >= BLOW_FRACTION * result.hammer.rigid_impact_velocity_m_s
+    late = blow & (t >= 0.5 * result.t_end_s)
+    out["n_blows_second_half"] = int(np.count_nonzero(late))
+    out["n_chatter_impacts"] = int(np.count_nonzero(~blow))
+    if np.count_nonzero(late) >= 2:
+        tl, el = t[late], e[late]
+        dt = np.diff(tl)
+        out.update({
+            "mean_blow_interval_s": float(np.mean(dt)),
+            "blow_interval_std_s": float(np.std(dt)),
+            "mean_impact_velocity_m_s": float(np.mean(v[late])),
+            "mean_blow_energy_J": float(np.mean(el)),
+            "mean_power_W": float(np.sum(el[1:]) / (tl[-1] - tl[0])),
+        })
+    return out
+
+
+def plot_motion(result: physical.SimulationResult, axes=None):
+    """End displacement (mm) and velocity (m/s) against time (s), impacts marked.
+
+    Parameters
+    ----------
+    result : SimulationResult
+    axes : sequence of two matplotlib Axes, optional
+        Created when not given.
+
+    Returns
+    -------
+    the two Axes
+    """
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        _, axes = plt.subplots(2, 1, sharex=True)
+    ax_u, ax_v = axes
+    n = int(min(200_000, max(2000, 400 * result.t_end_s * result.hammer.blow_frequency_Hz)))
+    ts = np.linspace(0.0, result.t_end_s, n)
+    ax_u.plot(ts, 1e3 * result.end_displacement_m(ts), lw=0.8)
+    ax_u.axhline(0.0, color="k", lw=0.6)
+    ax_u.set_ylabel("end displacement / mm")
+    ax_u.set_title(result.hammer.name or "hammer")
+    ax_v.plot(ts, result.end_velocity_m_s(ts), lw=0.8)
+    ax_v.plot(result.impact_times_s, result.impact_velocities_m_s, "o", ms=3,
+              label="impact velocity")
+    ax_v.set_xlabel("time / s")
+    ax_v.set_ylabel("end velocity / (m/s)")
+    ax_v.legend(loc="best", fontsize="small")
+    return ax_u, ax_v
+
+
+def plot_blows(result: physical.SimulationResult, ax=None):
+    """Energy per blow (J) against impact time (s)."""
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots()
+    ax.plot(result.impact_times_s, result.blow_energies_J, "o-", ms=3, lw=0.6)
+    ax.set_xlabel("impact time / s")
+    ax.set_ylabel("energy per blow / J")
+    return ax

@@ -1,0 +1,132 @@
+"""BarModel and load validation; loads against exact quadrature and scipy integration."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.integrate import quad, solve_ivp
+
+from impactbar import BarModel, CosineLoad, FourierLoad, PiecewiseConstantLoad, SquareWaveLoad
+
+TWO_PI = 2 * math.pi
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"s": 0.0}, "s"),
+        ({"s": -1.0}, "s"),
+        ({"s": float("nan")}, "s"),
+        ({"s": "10"}, "s"),
+        ({"d": -0.1}, "d"),
+        ({"d": float("inf")}, "d"),
+        ({"R": 1.5}, "R"),
+        ({"R": -0.01}, "R"),
+        ({"n_modes": -1}, "n_modes"),
+        ({"n_modes": 2.5}, "n_modes"),
+        ({"n_modes": True}, "n_modes"),
+        ({"n_modes": 10**6}, "n_modes"),
+    ],
+)
+def test_bar_model_rejects_bad_input(kwargs, name):
+    args = {"s": 10.0, "d": 0.0, "R": 0.5, "n_modes": 4} | kwargs
+    with pytest.raises(ValueError, match=rf"^{name} "):
+        BarModel(**args)
+
+
+def test_bar_model_is_frozen_and_exact():
+    m = BarModel(s=2, d=0, R=1, n_modes=3)
+    assert isinstance(m.s, float) and m.n_modes == 3
+    with pytest.raises(AttributeError):
+        m.s = 3.0
+    assert np.allclose(m.frequencies, 2 * math.pi * np.arange(4))
+    assert m.end_weights.tolist() == [1, -2, 2, -2]
+    assert np.allclose(m.shape_functions(1.0), m.end_weights)
+    with pytest.raises(ValueError, match="unknown"):
+        m.with_(k=1)
+
+
+@pytest.mark.parametrize(
+    ("factory", "name"),
+    [
+        (lambda: CosineLoad(float("nan"), 1.0), "p0"),
+        (lambda: CosineLoad(0.1, "a"), "pk"),
+        (lambda: CosineLoad(0.1, 1.0, 0), "k"),
+        (lambda: CosineLoad(0.1, 1.0, 1.5), "k"),
+        (lambda: SquareWaveLoad(0.0, 1.5), "q"),
+        (lambda: SquareWaveLoad(1.0, 2.5), "kappa"),
+        (lambda: SquareWaveLoad(1.0, 0.9), "kappa"),
+        (lambda: FourierLoad(0.1, [1.0, float("inf")]), "coefficients"),
+    ],
+)
+def test_loads_reject_bad_input(factory, name):
+    with pytest.raises(ValueError, match=name):
+        factory()
+
+
+def test_square_wave_values_mean_and_harmonics():
+    sq = SquareWaveLoad(2.0, 1.3)
+    t = np.array([0.0, 1.0, 1.3 * math.pi - 1e-9, 1.3 * math.pi, 6.0, TWO_PI, TWO_PI + 1.0])
+    assert sq(t).tolist() == [2.0, 2.0, 2.0, -2.0, -2.0, 2.0, 2.0]
+    assert sq.p0 == pytest.approx(2.0 * 0.3)
+    pk = sq.harmonics(5)
+    for k in range(1, 6):  # p_k = (1/pi) int p(t) e^{-ikt} dt
+        re = quad(lambda t, k=k: float(sq(t)) * math.cos(k * t), 0, TWO_PI, points=[1.3 * math.pi])[0]
+        im = quad(lambda t, k=k: -float(sq(t)) * math.sin(k * t), 0, TWO_PI, points=[1.3 * math.pi])[0]
+        assert pk[k - 1] == pytest.approx(complex(re, im) / math.pi, abs=1e-10)
+    generic = PiecewiseConstantLoad([0.0, 1.3 * math.pi], [2.0, -2.0])
+    assert np.allclose(generic.harmonics(5), pk)
+
+
+def test_cosine_is_a_one_harmonic_fourier_load():
+    c = CosineLoad(0.2, 0.7, 3)
+    t = np.linspace(0, 7, 50)
+    assert np.allclose(c(t), 0.2 + 0.7 * np.cos(3 * t))
+    assert c.harmonics().tolist() == [0, 0, 0.7]
+    assert c.load_factor == pytest.approx(3 * 0.2 / 0.7)
+
+
+@settings(max_examples=20, deadline=None)
+@given(d=st.floats(0.0, 2.0), t=st.floats(0.0, TWO_PI))
+def test_rigid_velocity_solves_its_equation(d, t):
+    """V' + d V = p - p0 (finite differences), for a smooth and a piecewise load."""
+    for load in (FourierLoad(0.1, [1.0, 0.5j]), SquareWaveLoad(1.0, 1.4)):
+        if isinstance(load, SquareWaveLoad) and min(abs(t - 1.4 * math.pi), t, TWO_PI - t) < 1e-3:
+            continue
+        h = 1e-5
+        dV = (load.rigid_velocity(d, t + h) - load.rigid_velocity(d, t - h)) / (2 * h)
+        resid = dV + d * load.rigid_velocity(d, t) - (load(t) - load.p0)
+        assert abs(resid) < 1e-6
+
+
+@pytest.mark.parametrize("load", [CosineLoad(0.3, 1.0, 2), SquareWaveLoad(1.0, 1.4),
+                                  FourierLoad(0.2, [1.0, 0.3j, -0.2])])
+@pytest.mark.parametrize("d", [0.0, 0.05, 3.0, 50.0])
+def test_flow_against_scipy(load, d):
+    """The closed-form flow in every damping regime (under-, critically, over-damped, rigid)."""
+    w2 = np.array([0.0, 9.87, 400.0, (d / 2) ** 2])
+    q0 = np.array([0.1, -0.2, 0.01, 0.3])
+    v0 = np.array([0.5, 0.1, -1.0, 0.2])
+    ts = np.array([0.7, 1.5, 3.3, 8.0])
+    q, v = load.propagate(w2, d, 0.7, q0, v0, ts)
+    breaks = []
+    if hasattr(load, "breaks"):
+        breaks = sorted(b + TWO_PI * j for b in load.breaks for j in (0, 1, 2) if 0.7 < b + TWO_PI * j < 8)
+    y = np.concatenate([q0, v0])
+    out = {0.7: y}
+    nodes = [0.7, *breaks, 8.0]
+    for a, b in zip(nodes[:-1], nodes[1:], strict=True):
+        lvl = float(load(0.5 * (a + b)))
+        sol = solve_ivp(
+            lambda t, y, lvl=lvl: np.concatenate(
+                [y[4:], (lvl if breaks else float(load(t))) - d * y[4:] - w2 * y[:4]]),
+            (a, b), y, method="DOP853", rtol=1e-12, atol=1e-13, dense_output=True)
+        for t in ts:
+            if a <= t <= b:
+                out[t] = sol.sol(t)
+        y = sol.y[:, -1]
+    ref = np.array([out[t] for t in ts]).T
+    assert np.allclose(q, ref[:4], atol=1e-9)
+    assert np.allclose(v, ref[4:], atol=1e-9)
