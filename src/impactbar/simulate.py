@@ -35,8 +35,8 @@ TWO_PI = 2.0 * math.pi
 #: Chatter: jump to the accumulation point once the remaining bounces last less than this.
 CHATTER_TAIL = 1e-9
 #: First extra dwell in contact when the free and the fixed-free bases disagree at a release.
-DWELL_START = 1e-10
-#: Largest such dwell (it doubles while the disagreement lasts).
+DWELL_START = 1e-9
+#: Largest such dwell (it grows fourfold while the disagreement lasts).
 DWELL_MAX = 1e-3
 #: A flight after a release that ends back on the stop within this time (bounces included) is a
 #: disagreement between the truncated bases, not a motion: the release is undone.
@@ -514,8 +514,8 @@ class Trajectory:
     n_release_retries : int
         Releases undone because the free motion pressed straight back onto the stop (within
         ``MICRO_FLIGHT``): the truncated free-free and fixed-free bases disagreed on the sign of
-        the reaction; the contact was then prolonged by a doubling dwell (from ``1e-10``, at most
-        ``1e-3``).
+        the reaction; the contact was then prolonged by a growing dwell (from ``1e-9``, fourfold
+        each time, at most ``1e-3``).
 
     Methods ``end_displacement(t)``, ``end_velocity(t)``, ``displacement(x, t)`` and
     ``modal_state(t)`` evaluate the closed-form motion at any times in ``[t0, t_end]``.
@@ -822,14 +822,14 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             if micro:
                 # the free motion presses straight back (at once, or after a few bounces too
                 # small to matter): the bases disagree on the sign of the reaction here. Undo
-                # the release and stay in contact a little longer (doubling) before asking again.
+                # the release and stay in contact a little longer (fourfold) before asking again.
                 t_rel, seg_index, k_times, n_saved = last_release
                 segs.truncate(seg_index + 1)
                 del times[k_times:]
                 del vels[k_times:]
                 n_imp = n_saved
                 contacts[-1][1] = math.nan
-                dwell = min(max(2.0 * dwell, DWELL_START), DWELL_MAX)
+                dwell = min(max(4.0 * dwell, DWELL_START), DWELL_MAX)
                 retries += 1
                 cseg = segs.last()
                 t = t_rel
