@@ -353,7 +353,24 @@ class _Core:
                                  D.pr, D.pim, B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1,
                                  D.p2, D.p3, B.vpb, B.apb, B.jpb, anchor, qa, va, float(t_end),
                                  0.0, q, v, *scratch)
+        if st == K.CROSS:
+            tr, q, v = self._clearly_tensile(tr, q, v, t_end)
         return st, tr, q, v
+
+    def _clearly_tensile(self, tr, r, rv, t_end):
+        """Move a release a rounding error on, to where the reaction is negative beyond its
+        rounding noise: exactly at ``F = 0`` the free motion's first sign is noise."""
+        scale = abs(self.f_alpha) * self.data.psup + float(np.sum(np.abs(self.f_wts * r)))
+        target = -1e-12 * scale
+        if self.stop_force(tr, r) <= target:
+            return tr, r, rv
+        step = 1e-15 * (1.0 + abs(tr))
+        while step <= 1e-9 * (1.0 + abs(tr)) and tr + step < t_end:
+            r2, rv2 = self.propagate(_CONTACT, tr, r, rv, [tr + step])
+            if self.stop_force(tr + step, r2[:, 0]) <= target:
+                return tr + step, r2[:, 0], rv2[:, 0]
+            step *= 2.0
+        return tr, r, rv
 
     def release_state(self, r, rv):
         """Free-free state from a contact state: projected, end put exactly on the stop at rest."""
