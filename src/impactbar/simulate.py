@@ -37,7 +37,7 @@ CHATTER_TAIL = 1e-9
 #: First extra dwell in contact when the free and the fixed-free bases disagree at a release.
 DWELL_START = 1e-9
 #: Largest such dwell (it grows fourfold while the disagreement lasts).
-DWELL_MAX = 1e-3
+DWELL_MAX = 1e-2
 #: A flight after a release that ends back on the stop within this time (bounces included) is a
 #: disagreement between the truncated bases, not a motion: the release is undone.
 MICRO_FLIGHT = 1e-6
@@ -532,7 +532,7 @@ class Trajectory:
         Releases undone because the free motion pressed straight back onto the stop (within
         ``MICRO_FLIGHT``): the truncated free-free and fixed-free bases disagreed on the sign of
         the reaction; the contact was then prolonged by a growing dwell (from ``1e-9``, fourfold
-        each time, at most ``1e-3``).
+        each time, at most ``1e-2``).
 
     Methods ``end_displacement(t)``, ``end_velocity(t)``, ``displacement(x, t)`` and
     ``modal_state(t)`` evaluate the closed-form motion at any times in ``[t0, t_end]``.
