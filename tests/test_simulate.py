@@ -475,3 +475,61 @@ def test_settles_on_stable_and_leaves_unstable_periodic_orbit(model, load):
             assert np.max(np.abs(dv)) < 1e-8
         else:
             assert np.max(np.abs(lag)) > 1e-3 or np.max(np.abs(dv)) > 1e-3
+
+
+def test_flexible_grazing_between_samples_is_found():
+    """The end of an 8-mode bar, pulled away by ``p = -0.2``, wobbles with its high modes; shift
+    the mean so that the highest wobble peak of the free flight (found on a 200 001-point grid of
+    the reference flow ``Load.propagate``) pokes ``1e-9`` past the stop: an impact there. Shifted
+    the other way by ``1e-9``: none."""
+    model = BarModel(s=2.0, d=0.0, R=0.5, n_modes=8)
+    load = FourierLoad(-0.2, [])
+    w2 = model.frequencies**2
+    c = model.end_weights
+    q = np.zeros(9)
+    v = np.zeros(9)
+    q[8] = 0.01
+    v[0] = 0.3
+    t = np.linspace(0.0, 3.0, 200001)
+    qq, _ = load.propagate(w2, 0.0, 0.0, q, v, t)
+    g = c @ qq
+    i = int(np.argmax(g))
+    assert 0 < i < t.size - 1
+    for shift, hits in ((1e-9, 1), (-1e-9, 0)):
+        q0 = q.copy()
+        q0[0] += shift - g[i]
+        tr = simulate(model, load, InitialState(q0, v), 3.0, max_impacts=1)
+        assert tr.n_impacts == hits
+        if hits:
+            assert abs(tr.impact_times[0] - t[i]) < 1e-3
+            assert 0 < tr.impact_velocities[0] < 1e-2
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_models_balance_energy_and_never_penetrate(seed):
+    rng = np.random.default_rng(seed)
+    n_modes = int(rng.integers(0, 7))
+    model = BarModel(s=float(rng.uniform(0.7, 6.0)), d=float(rng.uniform(0, 0.3)),
+                     R=float(rng.uniform(0, 0.95)), n_modes=n_modes)
+    if rng.uniform() < 0.5:
+        load = CosineLoad(float(rng.uniform(0.2, 1.5)), float(rng.uniform(0.2, 1.5)),
+                          k=int(rng.integers(1, 3)))
+    else:
+        load = SquareWaveLoad(float(rng.uniform(0.5, 1.5)), float(rng.uniform(1.1, 1.9)))
+    tr = simulate(model, load, flexible_start(model, rng), 40.0)
+    assert tr.energy.relative_residual < 1e-8
+    t = np.linspace(tr.t0, tr.t_end, 40001)
+    assert np.max(tr.end_displacement(t)) < 1e-10
+    assert np.all(tr.impact_velocities > 0)
+
+
+def test_max_impacts_landing_on_a_chatter_jump():
+    """The impact that triggers the jump to the accumulation point can be the last one allowed."""
+    model = BarModel(s=1.0, d=0.0, R=0.5, n_modes=0)
+    load = FourierLoad(1.3, [])
+    full = simulate(model, load, InitialState.rigid(-0.4, 0.0), 20.0)
+    n = full.n_impacts
+    for m in (n, n - 1, 1):
+        tr = simulate(model, load, InitialState.rigid(-0.4, 0.0), 20.0, max_impacts=m)
+        assert tr.n_impacts == m and tr.status == "max_impacts"
+        np.testing.assert_array_equal(tr.impact_times, full.impact_times[:m])

@@ -433,6 +433,8 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
             out_q[n, i] = q[i]
             out_v[n, i] = v[i]
         n += 1
+        if n >= max_imp:
+            return n, MAXIMP, tc
         if R < 1.0:
             if kind == 1:
                 mm, jj = piece_of(breaks, tc)
@@ -450,8 +452,6 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
                     for i in range(M):
                         v[i] = 0.0
                     return n, CHATTER, tc + tail
-        if n >= max_imp:
-            return n, MAXIMP, tc
         if n >= cap:
             return n, FULL, tc
         t = tc

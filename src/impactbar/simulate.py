@@ -35,7 +35,12 @@ TWO_PI = 2.0 * math.pi
 #: Chatter: jump to the accumulation point once the remaining bounces last less than this.
 CHATTER_TAIL = 1e-9
 #: First extra dwell in contact when the free and the fixed-free bases disagree at a release.
-DWELL_START = 1e-10
+DWELL_START = 1e-9
+#: Largest such dwell (it grows fourfold while the disagreement lasts).
+DWELL_MAX = 1e-2
+#: A flight after a release that ends back on the stop within this time (bounces included) is a
+#: disagreement between the truncated bases, not a motion: the release is undone.
+MICRO_FLIGHT = 1e-6
 
 _FREE, _CONTACT = 0, 1
 
@@ -348,7 +353,24 @@ class _Core:
                                  D.pr, D.pim, B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1,
                                  D.p2, D.p3, B.vpb, B.apb, B.jpb, anchor, qa, va, float(t_end),
                                  0.0, q, v, *scratch)
+        if st == K.CROSS:
+            tr, q, v = self._clearly_tensile(tr, q, v, t_end)
         return st, tr, q, v
+
+    def _clearly_tensile(self, tr, r, rv, t_end):
+        """Move a release a rounding error on, to where the reaction is negative beyond its
+        rounding noise: exactly at ``F = 0`` the free motion's first sign is noise."""
+        scale = abs(self.f_alpha) * self.data.psup + float(np.sum(np.abs(self.f_wts * r)))
+        target = -1e-12 * scale
+        if self.stop_force(tr, r) <= target:
+            return tr, r, rv
+        step = 1e-15 * (1.0 + abs(tr))
+        while step <= 1e-9 * (1.0 + abs(tr)) and tr + step < t_end:
+            r2, rv2 = self.propagate(_CONTACT, tr, r, rv, [tr + step])
+            if self.stop_force(tr + step, r2[:, 0]) <= target:
+                return tr + step, r2[:, 0], rv2[:, 0]
+            step *= 2.0
+        return tr, r, rv
 
     def release_state(self, r, rv):
         """Free-free state from a contact state: projected, end put exactly on the stop at rest."""
@@ -504,6 +526,16 @@ class Trajectory:
         Free-free modal state at ``t_end`` (projected from the fixed-free basis when in contact).
     status : str
         Why the run stopped: ``"t_end"`` or ``"max_impacts"``.
+    energy : EnergyAccount
+        The energy balance of the run (computed on first access).
+    n_release_retries : int
+        Releases undone because the free motion pressed straight back onto the stop (within
+        ``MICRO_FLIGHT``): the truncated free-free and fixed-free bases disagreed on the sign of
+        the reaction; the contact was then prolonged by a growing dwell (from ``1e-9``, fourfold
+        each time, at most ``1e-2``).
+
+    Methods ``end_displacement(t)``, ``end_velocity(t)``, ``displacement(x, t)`` and
+    ``modal_state(t)`` evaluate the closed-form motion at any times in ``[t0, t_end]``.
     """
 
     model: BarModel
@@ -775,11 +807,14 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     status = "t_end"
     dwell = 0.0
     retries = 0
-    last_release = None  # (time, contact segment index, contact state at release) for undoing
+    last_release = None  # (time, contact segment index, len(times), n_imp) for undoing
     cap = 1024
     while True:
         if mode == _FREE:
             left = max_imp - n_imp
+            if left <= 0:  # pragma: no cover - run_free stops at max_imp itself
+                status = "max_impacts"
+                break
             n, st, tn, ot, ov, oq, ovv = core.run_free(t, q, v, t_end, left, min(cap, left))
             cap = min(cap * 2, 1 << 16)
             if n:
@@ -800,13 +835,18 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                 t = tn
                 continue
             # CHATTER or CONTACT: the end stays on the stop from tn
-            same_time = last_release is not None and tn <= last_release[0] + 1e-12 * (1 + abs(tn))
-            if n == 0 and same_time:
-                # the free motion would press straight back: undo the release and dwell longer
-                t_rel, seg_index, _ = last_release
+            micro = last_release is not None and tn - last_release[0] <= MICRO_FLIGHT
+            if micro:
+                # the free motion presses straight back (at once, or after a few bounces too
+                # small to matter): the bases disagree on the sign of the reaction here. Undo
+                # the release and stay in contact a little longer (fourfold) before asking again.
+                t_rel, seg_index, k_times, n_saved = last_release
                 segs.truncate(seg_index + 1)
+                del times[k_times:]
+                del vels[k_times:]
+                n_imp = n_saved
                 contacts[-1][1] = math.nan
-                dwell = max(2.0 * dwell, DWELL_START)
+                dwell = min(max(4.0 * dwell, DWELL_START), DWELL_MAX)
                 retries += 1
                 cseg = segs.last()
                 t = t_rel
@@ -844,7 +884,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             break
         contacts[-1][1] = tr
         q, v = core.release_state(rr, rrv)
-        last_release = (tr, segs.count - 1, None)
+        last_release = (tr, segs.count - 1, len(times), n_imp)
         segs.add(tr, _FREE, q, v, "release")
         t = tr
         mode = _FREE
