@@ -387,3 +387,20 @@ def test_certified_search_agrees_with_closed_form(p0, pk, k, d, R):
         return  # at a fold either side may see one double or two close roots
     assert len(a) == len(b)
     assert np.allclose([x for x, _ in a], [x for x, _ in b], atol=1e-10)
+
+
+def test_elastic_undamped_edge_cases():
+    """R = 1, d = 0: the rigid bar's phase-0 orbit has u_t(1, t) with a triple zero at t = pi (an
+    inflection), found despite rounding; with flexible modes the orbits form a continuum."""
+    orbits = periodic_orbits(BarModel(10.0, 0.0, 1.0, 0), CosineLoad(0.5, 0.5, 1))
+    assert [round(o.phase, 12) for o in orbits] == [0.0, round(math.pi, 12)]
+    t = np.linspace(1e-3, TWO_PI - 1e-3, 20001)
+    for o in orbits:
+        assert o.admissible
+        u = o.end_displacement(t)
+        # the largest stationary value: the inflection at t = pi for phase 0, the minimum for phase pi
+        assert abs(o.clearance - float(o.end_displacement(math.pi))) <= o.clearance_error + 1e-9
+        assert o.clearance_error < 1e-5
+        assert u.max() < 0
+    with pytest.raises(ValueError, match="continuum"):
+        periodic_orbits(BarModel(10.0, 0.0, 1.0, 4), CosineLoad(0.5, 0.5, 1))

@@ -15,7 +15,8 @@ __all__ = ["enclose_zeros", "zeros_in_clusters"]
 
 
 def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: float = 1e-7,
-                  max_intervals: int = 400_000, joint=None, intervals=None, merge: bool = True):
+                  max_intervals: int = 400_000, joint=None, intervals=None, merge: bool = True,
+                  atol: float = 0.0):
     """Clusters ``(lo, hi)`` that together contain every zero of ``f`` in ``[a, b]``.
 
     Parameters
@@ -39,6 +40,9 @@ def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: 
         Search these intervals (clusters from an earlier call) instead of ``[a, b]``.
     merge : bool
         Merge adjacent survivors into clusters (default); if false, return the narrow survivors.
+    atol : float
+        Rounding floor: an interval is kept while ``|f(mid)| <= L h + atol``, so that a zero whose
+        computed value is a rounding error away from 0 is not excluded.
 
     Returns
     -------
@@ -47,9 +51,12 @@ def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: 
     """
     if intervals is not None:  # continue from given clusters, each split into n0 pieces
         lo_hi = np.asarray(intervals, dtype=float).reshape(-1, 2)
-        width = float(np.max(lo_hi[:, 1] - lo_hi[:, 0]))
+        width = float(np.max(lo_hi[:, 1] - lo_hi[:, 0])) if lo_hi.size else 0.0
+        if not width > 4.0 * np.spacing(max(abs(a), abs(b), 1.0)) * n0:
+            return [tuple(x) for x in lo_hi.tolist()]  # too narrow to split in floating point
         half = 0.5 * width / n0
-        mids = np.concatenate([np.arange(lo_, hi_, 2 * half) + half for lo_, hi_ in lo_hi])
+        mids = (lo_hi[:, :1] + half * (2.0 * np.arange(n0) + 1.0)).ravel()
+        mids = mids[mids < np.repeat(lo_hi[:, 1], n0) + half]
     else:
         half = 0.5 * (b - a) / n0
         mids = a + half * (2.0 * np.arange(n0) + 1.0)
@@ -59,7 +66,7 @@ def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: 
         else:
             fm, lip = f(mids), lipschitz(mids, half)
         bound = lip * half
-        keep = np.abs(fm) <= bound * (1.0 + 1e-9) + 1e-300
+        keep = np.abs(fm) <= bound * (1.0 + 1e-9) + atol + 1e-300
         mids = mids[keep]
         if mids.size == 0 or 2.0 * half <= min_width:
             break

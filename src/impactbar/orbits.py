@@ -339,6 +339,10 @@ def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
         a11, a12, a21, a22 = 1.0 - p11, -p12, R * p21, 1.0 + R * p22
         det = a11 * a22 - a12 * a21
         if np.any(np.abs(det) < 1e-13):
+            if R == 1.0 and d == 0.0:
+                raise ValueError("R = 1 with d = 0 and flexible modes: a conservative bar with elastic "
+                                 "impacts has a continuum of one-impact orbits, not isolated ones; "
+                                 "use d > 0, R < 1 or n_modes = 0")
             raise ValueError("the periodicity conditions are singular (undamped resonance, eq. 16)")
         r1, r2 = fq, -R * fv
         q[1:] = (a22 * r1 - a12 * r2) / det
@@ -457,15 +461,16 @@ def _admissibility(model, load, phase, y_plus, v_imp):
 
     scale = max(abs(v_imp), psup, 1e-300)
     clusters = enclose_zeros(None, None, 0.0, TWO_PI, n0=64, min_width=6e-3,
-                             joint=gprime_and_bound, merge=False)
+                             joint=gprime_and_bound, merge=False, atol=1e-13 * scale)
     # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
     # point of g; the end leaves the stop iff its acceleration there points away from the stop.
     if R == 0.0:
         acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
         clusters = [cl for cl in clusters if cl[0] > 1e-6]
     # the stationary points that can carry the largest value are refined to full precision
-    values = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters)
-    err = 1e-12 * scale * (1.0 + max((abs(v) for v in values), default=0.0))
+    values, err_b = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters,
+                                       atol=1e-13 * scale)
+    err = err_b + 1e-12 * scale * (1.0 + max((abs(v) for v in values), default=0.0))
     clearance = max(values) if values else -math.inf
     tol = max(err, 1e-11 * scale)
     if not v_imp > 1e-12 * scale:
@@ -502,15 +507,25 @@ def _newton_stationary(states, load, phase, c, w2, d, lo, hi):
     return t, ok
 
 
-def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=6):
+def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8, atol=0.0):
     """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
 
     All narrow intervals that may hold a zero of ``g'`` get a vectorised Newton step; converged
     points give stationary values. An interval where Newton fails is kept only if an upper bound of
     ``g`` on it, ``g(mid) + (|g'(mid)| + L h) h``, can still beat the best value found; those are
-    split by the certified exclusion and tried again.
+    split 64-fold by the certified exclusion and tried again. Where that cannot go on (a zero of
+    ``g'`` of high order, whose enclosure does not shrink), the upper bounds themselves are used.
+
+    Returns
+    -------
+    values : list of float
+    err : float
+        Bound on the error of the largest value (0 up to rounding when every stationary point
+        that matters was located; otherwise the spread of the bounds on the unresolved intervals,
+        whose upper end is reported).
     """
     values: list[float] = []
+    err = 0.0
     best = -math.inf
     cur = np.array(intervals, dtype=float).reshape(-1, 2)
     for _ in range(rounds):
@@ -524,20 +539,36 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=6
             best = max(best, float(np.max(vals)))
         rest = cur[~ok]
         if rest.size == 0:
+            cur = rest
             break
         mid = 0.5 * (rest[:, 0] + rest[:, 1])
         half = 0.5 * (rest[:, 1] - rest[:, 0])
         gm = c @ states(mid)[0]
         g1, L2 = bound(mid, half)
         upper = gm + (np.abs(g1) + L2 * half) * half
-        rest = rest[upper >= best]
+        keep = upper >= best
+        rest, gm, upper = rest[keep], gm[keep], upper[keep]
+        cur = rest
         if rest.size == 0:
             break
-        cur = np.array(enclose_zeros(None, None, 0.0, TWO_PI, n0=8, min_width=1e-12, joint=bound,
-                                     intervals=rest, merge=False)).reshape(-1, 2)
-    else:
-        # what is left is a near-double zero of g' (a tangency): bound its value from above
-        if cur.size:
-            mid = 0.5 * (cur[:, 0] + cur[:, 1])
-            values.extend(float(x) for x in c @ states(mid)[0])
-    return values
+        width = float(np.max(rest[:, 1] - rest[:, 0]))
+        try:
+            cur = np.array(enclose_zeros(None, None, 0.0, TWO_PI, n0=8, min_width=width / 64.0,
+                                         joint=bound, intervals=rest, merge=False,
+                                         max_intervals=20_000, atol=atol)).reshape(-1, 2)
+        except RuntimeError:  # a zero of high order: the enclosure no longer shrinks
+            lower = 2.0 * gm - upper  # gm - slack
+            values.append(float(np.max(upper)))  # conservative: never below the true value
+            err = max(err, float(np.max(upper) - np.min(lower)))
+            cur = np.empty((0, 2))
+            break
+    if cur.size:  # rounds exhausted: bound what is left
+        mid = 0.5 * (cur[:, 0] + cur[:, 1])
+        half = 0.5 * (cur[:, 1] - cur[:, 0])
+        gm = c @ states(mid)[0]
+        g1, L2 = bound(mid, half)
+        upper = gm + (np.abs(g1) + L2 * half) * half
+        if float(np.max(upper)) >= best:
+            values.append(float(np.max(upper)))  # conservative: never below the true value
+            err = max(err, float(np.max(upper) - np.min(2.0 * gm - upper)))
+    return values, err
