@@ -524,6 +524,14 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
         that matters was located; otherwise the spread of the bounds on the unresolved intervals,
         whose upper end is reported).
     """
+    def value_bounds(iv):
+        """``g`` at the midpoints and its upper bound on each interval."""
+        mid = 0.5 * (iv[:, 0] + iv[:, 1])
+        half = 0.5 * (iv[:, 1] - iv[:, 0])
+        gm = c @ states(mid)[0]
+        g1, L2 = bound(mid, half)
+        return gm, gm + (np.abs(g1) + L2 * half) * half
+
     values: list[float] = []
     err = 0.0
     best = -math.inf
@@ -541,11 +549,7 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
         if rest.size == 0:
             cur = rest
             break
-        mid = 0.5 * (rest[:, 0] + rest[:, 1])
-        half = 0.5 * (rest[:, 1] - rest[:, 0])
-        gm = c @ states(mid)[0]
-        g1, L2 = bound(mid, half)
-        upper = gm + (np.abs(g1) + L2 * half) * half
+        gm, upper = value_bounds(rest)
         keep = upper >= best
         rest, gm, upper = rest[keep], gm[keep], upper[keep]
         cur = rest
@@ -563,11 +567,7 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
             cur = np.empty((0, 2))
             break
     if cur.size:  # rounds exhausted: bound what is left
-        mid = 0.5 * (cur[:, 0] + cur[:, 1])
-        half = 0.5 * (cur[:, 1] - cur[:, 0])
-        gm = c @ states(mid)[0]
-        g1, L2 = bound(mid, half)
-        upper = gm + (np.abs(g1) + L2 * half) * half
+        gm, upper = value_bounds(cur)
         if float(np.max(upper)) >= best:
             values.append(float(np.max(upper)))  # conservative: never below the true value
             err = max(err, float(np.max(upper) - np.min(2.0 * gm - upper)))

@@ -199,6 +199,18 @@ def _phase_plot(ax, rows, xlabel):
               fontsize=7, loc="upper right")
 
 
+def _save(fig, ax, path: Path, title: str, *, legend_size: float | None = None) -> None:
+    """Title, legend, layout, PNG, close: the same last steps for every figure."""
+    ax.set_title(title, fontsize=9)
+    if legend_size is not None:
+        ax.legend(fontsize=legend_size)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    import matplotlib.pyplot as plt  # noqa: PLC0415
+
+    plt.close(fig)
+
+
 def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
     """Compute and write Figs. 4-8 as ``figN.png`` and ``figN.csv`` in ``out_dir``.
 
@@ -230,10 +242,7 @@ def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
     fig, ax = plt.subplots(figsize=(6, 4.2))
     _phase_plot(ax, rows4, "load factor k p0 / pk")
     ax.set_xscale("log")
-    ax.set_title("Fig. 4: pneumatic, d = 0, R = 0, 0.1, ..., 0.9 (rigid bar)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(out / "fig4.png", dpi=130)
-    plt.close(fig)
+    _save(fig, ax, out / "fig4.png", "Fig. 4: pneumatic, d = 0, R = 0, 0.1, ..., 0.9 (rigid bar)")
     r0 = [r for r in rows4 if r["R"] == 0.0 and r["stable"]]
     summary.append(("4", "R=0: stable orbits that stick (paper counts them)",
                     f"{sum(not r['admissible'] for r in rows4 if r['R'] == 0.0 and r['schur_stable'])}"
@@ -256,11 +265,7 @@ def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
     ax.set_xlabel("R")
     ax.set_ylabel("p0 / p1")
     ax.set_yscale("log")
-    ax.set_title("Fig. 5: stable band, pneumatic, k = 1", fontsize=9)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "fig5.png", dpi=130)
-    plt.close(fig)
+    _save(fig, ax, out / "fig5.png", "Fig. 5: stable band, pneumatic, k = 1", legend_size=7)
     summary.append(("5", "R=0, 2pid=0: stable band p0/p1",
                     f"{d5['stability_exact_2pid=0'][0]:.6f} .. {d5['existence_2pid=0'][0]:.6f}"))
     summary.append(("5", "R=0, 2pid=0: inadmissible (sticks) for p0/p1 in",
@@ -280,11 +285,7 @@ def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
     ax.set_xlabel("R")
     ax.set_ylabel("k p0 / pk")
     ax.set_yscale("log")
-    ax.set_title("Fig. 6: lower stability edge, k = 10 (8-mode bar)", fontsize=9)
-    ax.legend(fontsize=6.5)
-    fig.tight_layout()
-    fig.savefig(out / "fig6.png", dpi=130)
-    plt.close(fig)
+    _save(fig, ax, out / "fig6.png", "Fig. 6: lower stability edge, k = 10 (8-mode bar)", legend_size=6.5)
     i5 = int(np.argmin(np.abs(d6["R"] - 0.5)))
     for tag in ("inf", "10.1", "10.01"):
         summary.append(("6", f"R={d6['R'][i5]:.2f}, s pi={tag}: edge paper / exact",
@@ -295,10 +296,7 @@ def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
     _write_rows(out / "fig7.csv", rows7)
     fig, ax = plt.subplots(figsize=(6, 4.2))
     _phase_plot(ax, rows7, "kappa")
-    ax.set_title("Fig. 7: hydraulic, d = 0, R = 0, 0.1, ..., 0.9 (rigid bar)", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(out / "fig7.png", dpi=130)
-    plt.close(fig)
+    _save(fig, ax, out / "fig7.png", "Fig. 7: hydraulic, d = 0, R = 0, 0.1, ..., 0.9 (rigid bar)")
     summary.append(("7", "stable one-impact orbits found", str(sum(r["stable"] for r in rows7))))
     summary.append(("7", "orbits sampled / inadmissible",
                     f"{len(rows7)} / {sum(not r['admissible'] for r in rows7)}"))
@@ -314,11 +312,8 @@ def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
     ax.set_xlabel("R")
     ax.set_ylabel("kappa")
     ax.set_ylim(1, 2)
-    ax.set_title("Fig. 8: hydraulic, existence of one-impact orbits (all unstable below)", fontsize=9)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(out / "fig8.png", dpi=130)
-    plt.close(fig)
+    _save(fig, ax, out / "fig8.png", "Fig. 8: hydraulic, existence of one-impact orbits (all unstable below)",
+          legend_size=7)
     summary.append(("8", "R=0, 2pid=0: kappa* (closed form sqrt 2)",
                     f"{d8['existence_2pid=0'][0]:.10f}"))
     summary.append(("8", "max |root-found - closed form|, 2pid=0",
