@@ -371,21 +371,23 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     """
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
-    M = model.n_modes + 1
-    y_plus = _start_state(model, load, phase)
-    qm, vm = load.propagate(model.frequencies**2, model.d, phase, y_plus[:M], y_plus[M:],
-                            [phase + TWO_PI])
-    y_minus = np.concatenate((qm[:, 0], vm[:, 0]))
+    y_plus, y_minus = _impact_states(model, load, phase)
     with single_threaded_blas():
         return np.linalg.eigvals(impact_map_jacobian(model, load, phase, y_plus, y_minus))
 
 
+def _impact_states(model: BarModel, load: Load, phase: float):
+    """Modal states just after (``t = 0+``) and just before (``t = 2 pi-``) the orbit's impact."""
+    M = model.n_modes + 1
+    y_plus = _start_state(model, load, phase)
+    qm, vm = load.propagate(model.frequencies**2, model.d, phase, y_plus[:M], y_plus[M:],
+                            [phase + TWO_PI])
+    return y_plus, np.concatenate((qm[:, 0], vm[:, 0]))
+
+
 def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
     M = model.n_modes + 1
-    w2 = model.frequencies**2
-    y_plus = _start_state(model, load, phase)
-    qm, vm = load.propagate(w2, model.d, phase, y_plus[:M], y_plus[M:], [phase + TWO_PI])
-    y_minus = np.concatenate((qm[:, 0], vm[:, 0]))
+    y_plus, y_minus = _impact_states(model, load, phase)
     c = model.end_weights
     v_imp = float(c @ y_minus[M:])
 

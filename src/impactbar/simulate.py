@@ -590,20 +590,19 @@ class Trajectory:
         -------
         numpy.ndarray, shape (T,)
         """
-        scalar = np.ndim(t) == 0
-        t = self._check_times(t)
-        out = np.zeros(t.size)
-        for sel, basis, q, _ in self._modal(t):
-            out[sel] = self._core.c @ q if basis == _FREE else 0.0
-        return out[0] if scalar else out
+        return self._end(t, velocity=False)
 
     def end_velocity(self, t) -> np.ndarray:
         """``u_t(1, t)``, shape (T,) (right limit at an impact)."""
+        return self._end(t, velocity=True)
+
+    def _end(self, t, velocity):
+        """``u(1, t)`` or ``u_t(1, t)``: ``c . q`` (or ``c . q'``) in flight, 0 in contact."""
         scalar = np.ndim(t) == 0
         t = self._check_times(t)
         out = np.zeros(t.size)
-        for sel, basis, _, v in self._modal(t):
-            out[sel] = self._core.c @ v if basis == _FREE else 0.0
+        for sel, basis, q, v in self._modal(t):
+            out[sel] = self._core.c @ (v if velocity else q) if basis == _FREE else 0.0
         return out[0] if scalar else out
 
     def displacement(self, x, t) -> np.ndarray:
