@@ -15,7 +15,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from impactbar import BarModel, CosineLoad, periodic_orbits
-from impactbar.charts import pneumatic_existence_edge, pneumatic_stability_curve
+from impactbar.orbits.charts import pneumatic_existence_edge, pneumatic_stability_curve
 
 TWO_PI = 2 * math.pi
 

@@ -6,7 +6,7 @@
 - ``montecarlo``: the rigid pneumatic hammer, 6 x 4 points over ``p0`` and ``R``, 20 random starts of
   200 load periods each per point, 2 points per chunk.
 
-The time is that of :func:`impactbar.sweep.run_sweep` after the cluster has started: workers
+The time is that of :func:`impactbar.sweeps.run_sweep` after the cluster has started: workers
 importing impactbar, computing every chunk, the driver writing each into the zarr store. Each run
 writes a fresh store in a temporary folder.
 
@@ -25,7 +25,7 @@ from pathlib import Path
 
 from distributed import Client, LocalCluster
 
-from impactbar.sweep import parse_spec, run_sweep
+from impactbar.sweeps import parse_spec, run_sweep
 
 
 def orbits_spec(n: int):

@@ -7,7 +7,7 @@ multipliers (MODEL.md section 7), k = 10, s pi = 10.1. Prints both edges for a f
 import math
 
 from impactbar import BarModel
-from impactbar.charts import pneumatic_existence_edge, pneumatic_stability_edges
+from impactbar.orbits.charts import pneumatic_existence_edge, pneumatic_stability_edges
 
 k = 10
 for R in (0.0, 0.3, 0.6):

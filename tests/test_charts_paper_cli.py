@@ -7,13 +7,13 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, CosineLoad, periodic_orbits
-from impactbar.charts import (
+from impactbar.cli import main
+from impactbar.orbits.charts import (
     hydraulic_existence_edge,
     pneumatic_existence_edge,
     pneumatic_stability_curve,
     pneumatic_stability_edges,
 )
-from impactbar.cli import main
 from impactbar.paper import hydraulic_edge_closed_form
 
 R = np.array([0.0, 0.2, 0.5, 0.8])

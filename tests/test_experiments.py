@@ -8,10 +8,10 @@ import pytest
 
 from impactbar import BarModel, CosineLoad, FourierLoad, InitialState, SquareWaveLoad, simulate
 from impactbar.cli import main
-from impactbar.experiments import (
+from impactbar.plotting import plot_experiment
+from impactbar.simulation.experiments import (
     classify,
     load_period,
-    plot_experiment,
     pneumatic_setup,
     random_start,
     run_experiment,

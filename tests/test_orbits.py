@@ -7,12 +7,11 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, periodic_orbits
-from impactbar.orbits import phase_residual, phase_roots
-from impactbar.stability import phase_G
+from impactbar.orbits.phase import phase_G, phase_residual, phase_roots
+from modal_reference import solve_modal
 
 TWO_PI = 2 * math.pi
 
@@ -174,22 +173,9 @@ def test_continuity_as_damping_vanishes(load):
 
 # ---------------------------------------------------------------- against time integration -------
 def _integrate_period(orbit):
-    model, load = orbit.model, orbit.load
-    M = model.n_modes + 1
-    w2 = model.frequencies**2
-    d = model.d
-    breaks = []
-    if hasattr(load, "breaks"):
-        b = np.concatenate([load.breaks, load.breaks + TWO_PI])
-        breaks = sorted(x - orbit.phase for x in b if 0 < x - orbit.phase < TWO_PI)
-    nodes = [0.0, *breaks, TWO_PI]
-    y = orbit.state_after_impact.copy()
-    for a, b in zip(nodes[:-1], nodes[1:], strict=True):
-        def rhs(t, y, a=a, b=b):
-            pt = float(load(orbit.phase + 0.5 * (a + b))) if breaks else float(load(orbit.phase + t))
-            return np.concatenate([y[M:], pt - d * y[M:] - w2 * y[:M]])
-        sol = solve_ivp(rhs, (a, b), y, method="DOP853", rtol=1e-13, atol=1e-14)
-        y = sol.y[:, -1]
+    model = orbit.model
+    _, y, _, _ = solve_modal(model.frequencies**2, model.d, orbit.load, orbit.state_after_impact, 0.0,
+                             TWO_PI, shift=orbit.phase, rtol=1e-13)
     return y
 
 
@@ -274,7 +260,7 @@ def _impact_map(orbit, z):
     ],
 )
 def test_multipliers_against_finite_difference_jacobian(model, load):
-    from impactbar.stability import impact_map_jacobian
+    from impactbar.orbits.stability import impact_map_jacobian
 
     for o in periodic_orbits(model, load):
         if o.impact_velocity <= 0:

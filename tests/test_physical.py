@@ -18,7 +18,7 @@ from hypothesis import strategies as st
 import impactbar
 from impactbar import BarModel, CosineLoad, FourierLoad, PiecewiseConstantLoad, SquareWaveLoad
 from impactbar import physical as ph
-from impactbar._cli_physical import add_physical_arguments, run_physical_orbits
+from impactbar.cli.physical import add_physical_arguments, run_physical_orbits
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 HAS_ORBITS = hasattr(impactbar, "periodic_orbits")
@@ -537,8 +537,10 @@ def test_cli_simulate_outputs(tmp_path, monkeypatch):
         calls["t_end"] = t_end
         return FakeTrajectory(t_end)
 
-    monkeypatch.setattr(impactbar, "simulate", fake_simulate, raising=False)
-    monkeypatch.setattr(impactbar, "InitialState", FakeInitialState, raising=False)
+    from impactbar.physical import results
+
+    monkeypatch.setattr(results, "run_simulation", fake_simulate)
+    monkeypatch.setattr(results, "InitialState", FakeInitialState)
     out = tmp_path / "run"
     rc = cli.main(["simulate", "--preset", "pneumatic-drill", "--out", str(out), "--periods", "5",
                    "--gap", "2 mm"])
@@ -601,7 +603,7 @@ def test_orbits_subcommand_takes_presets_and_configs(capsys):
     """Runs once the lead's ``impactbar orbits`` calls add_physical_arguments/run_physical_orbits."""
     from impactbar import cli
 
-    pytest.importorskip("impactbar._cli_orbits")
+    pytest.importorskip("impactbar.cli.orbits")
     try:
         args = cli.build_parser().parse_args(["orbits", "--preset", "pneumatic-drill", "--json"])
     except SystemExit:

@@ -7,18 +7,17 @@ import time
 
 import numpy as np
 import pytest
-from scipy.integrate import solve_ivp
 
 from impactbar import (
     BarModel,
     CosineLoad,
     FourierLoad,
     InitialState,
-    PiecewiseConstantLoad,
     SquareWaveLoad,
     simulate,
 )
-from impactbar.simulate import _Core
+from impactbar.simulation.simulate import _Core
+from modal_reference import solve_modal
 
 TWO_PI = 2.0 * math.pi
 
@@ -30,47 +29,18 @@ def ivp_impacts(model, load, q0, v0, t_end, n_max, t0=0.0):
     """Impact times and arrival velocities from DOP853 (rtol 1e-12), restarted at every event and
     at every jump of a piecewise-constant load."""
     M = model.n_modes + 1
-    w2 = model.frequencies**2
     c = model.end_weights
-    d = model.d
-
-    def rhs(t, y):
-        return np.concatenate((y[M:], load(t) - d * y[M:] - w2 * y[:M]))
-
-    def hit(t, y):
-        return c @ y[:M]
-
-    hit.terminal = True
-    hit.direction = 1
-    jumps = []
-    if isinstance(load, PiecewiseConstantLoad):
-        per = np.arange(math.floor(t0 / TWO_PI), math.ceil(t_end / TWO_PI) + 1)
-        jumps = sorted(
-            (per[:, None] * TWO_PI + load.breaks[None, :]).ravel().tolist()
-        )
     t, y = t0, np.concatenate((q0, v0)).astype(float)
     times, vels = [], []
     while t < t_end and len(times) < n_max:
-        t_stop = min([j for j in jumps if j > t + 1e-12] + [t_end])
-        # the load on this piece, fixed: avoids rounding the jump into the wrong piece
-        if jumps:
-            level = float(load(0.5 * (t + t_stop)))
-            fun = (lambda lv: lambda tt, yy: np.concatenate(
-                (yy[M:], lv - d * yy[M:] - w2 * yy[:M])))(level)
-        else:
-            fun = rhs
         # a short bounce inside one step would be missed: cap the step
-        sol = solve_ivp(fun, (t, t_stop), y, method="DOP853", rtol=1e-12, atol=1e-14,
-                        events=hit, max_step=0.01)
-        if sol.status == 1:
-            te, ye = sol.t_events[0][-1], sol.y_events[0][-1].copy()
-            times.append(te)
-            vels.append(c @ ye[M:])
-            ye[M:] *= -model.R
-            ye[0] -= c @ ye[:M]
-            t, y = te, ye
-        else:
-            t, y = t_stop, sol.y[:, -1]
+        t, y, _, hit = solve_modal(model.frequencies**2, model.d, load, y, t, t_end, end_weights=c,
+                                   max_step=0.01)
+        if hit:
+            times.append(t)
+            vels.append(c @ y[M:])
+            y[M:] *= -model.R
+            y[0] -= c @ y[:M]
     return np.array(times), np.array(vels)
 
 
@@ -111,18 +81,7 @@ def test_compiled_flow_square_wave_matches_solve_ivp(rng):
     v0 = rng.standard_normal(5) * 0.1
     t0, t1 = 17.039120776338564, 27.5
     q, _ = core.propagate(0, t0, q0, v0, [t1])
-    w2 = model.frequencies**2
-    y = np.concatenate((q0, v0))
-    t = t0
-    per = np.arange(2, 5)[:, None] * TWO_PI + load.breaks[None, :]
-    for tb in [x for x in sorted(per.ravel()) if t0 < x < t1] + [t1]:
-        lv = float(load(0.5 * (t + tb)))
-
-        def rhs(tt, yy, lv=lv):
-            return np.concatenate((yy[5:], lv - 0.05 * yy[5:] - w2 * yy[:5]))
-
-        sol = solve_ivp(rhs, (t, tb), y, method="DOP853", rtol=1e-12, atol=1e-14)
-        t, y = tb, sol.y[:, -1]
+    _, y, _, _ = solve_modal(model.frequencies**2, 0.05, load, np.concatenate((q0, v0)), t0, t1)
     assert np.max(np.abs(q[:, 0] - y[:5])) < 1e-9
 
 
@@ -166,20 +125,17 @@ def test_every_flight_checked_by_dense_solve_ivp(name, rng):
     c = model.end_weights
     segs = [s for s in tr._segments if s.entry in ("start", "impact")]
 
-    def fun(tt, yy):
-        return np.concatenate((yy[M:], load(tt) - model.d * yy[M:] - w2 * yy[:M]))
-
     checked = 0
     for seg, t_next in zip(segs, tr.impact_times, strict=False):
         if t_next - seg.t < 1e-6:
             continue
-        sol = solve_ivp(fun, (seg.t, t_next), np.concatenate((seg.q, seg.v)), method="DOP853",
-                        rtol=1e-12, atol=1e-14, dense_output=True, max_step=0.05)
         t = np.linspace(seg.t, t_next, 4001)[1:-1]
-        g = c @ sol.sol(t)[:M]
+        _, y_end, dense, _ = solve_modal(w2, model.d, load, np.concatenate((seg.q, seg.v)), seg.t,
+                                         t_next, ts=t, max_step=0.05)
+        g = c @ dense[:M]
         scale = np.max(np.abs(g))
         assert np.max(g) < 1e-9 * max(scale, 1.0)
-        assert abs(c @ sol.y[:M, -1]) < 1e-8
+        assert abs(c @ y_end[:M]) < 1e-8
         checked += 1
     assert checked >= 6
 
@@ -446,7 +402,7 @@ def test_times_outside_the_run_raise():
 
 
 # ----------------------------------------------------------------------------------------------
-# periodic_orbits (orbits.py): settle on the stable one, leave the unstable one
+# periodic_orbits (orbits/one_impact.py): settle on the stable one, leave the unstable one
 # ----------------------------------------------------------------------------------------------
 @pytest.mark.parametrize(
     ("model", "load"),

@@ -17,7 +17,7 @@ import pytest
 
 import impactbar
 from impactbar import BarModel, CosineLoad, periodic_orbits
-from impactbar.sweep import (
+from impactbar.sweeps import (
     SweepSpec,
     chunk_slices,
     compute_chunk,

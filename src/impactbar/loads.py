@@ -13,7 +13,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ._validate import check_complex_array, check_int, check_real
-from .modal import b_integral, c_integral, fundamental, step_constant
+from .dynamics.modal import b_integral, c_integral, fundamental, step_constant
 
 __all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad"]
 

@@ -22,14 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .charts import (
+from .loads import CosineLoad, SquareWaveLoad
+from .model import BarModel
+from .orbits.charts import (
     hydraulic_existence_edge,
     pneumatic_existence_edge,
     pneumatic_stability_curve,
 )
-from .loads import CosineLoad, SquareWaveLoad
-from .model import BarModel
-from .orbits import periodic_orbits
+from .orbits.one_impact import periodic_orbits
 
 __all__ = ["reproduce", "fig4_data", "fig5_data", "fig6_data", "fig7_data", "fig8_data",
            "hydraulic_edge_closed_form"]
@@ -78,7 +78,7 @@ def _inadmissible_segment(model, lo, hi, k=1, n_scan=12):
     """The part ``(a, b)`` of the stable band ``[lo, hi]`` where the stable-branch orbit is not
     admissible, with its ends found by bisection on the admissibility flag; ``(nan, nan)`` if none.
     """
-    from .charts import _stable_branch_phase, admissibility_edges  # noqa: PLC0415
+    from .orbits.charts import _stable_branch_phase, admissibility_edges  # noqa: PLC0415
 
     def make(x):
         return CosineLoad(x / k, 1.0, k)

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-__all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers"]
+__all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_experiment"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -87,3 +87,68 @@ def plot_multipliers(orbit, ax=None):
     ax.set_ylabel("Im")
     ax.legend(fontsize=8)
     return ax
+
+
+def plot_experiment(result, directory, *, prefix: str = "") -> list:
+    """Write three PNG figures of an :class:`~impactbar.simulation.experiments.ExperimentResult`
+    into ``directory``: end displacement against time (the kept
+    runs), the impact map ``v_{i+1}`` against ``v_i``, and a histogram of impact intervals.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The files written.
+    """
+    from pathlib import Path
+
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    out = Path(directory)
+    out.mkdir(parents=True, exist_ok=True)
+    from .simulation.experiments import load_period
+
+    T = load_period(result.load)
+    files = []
+
+    rows = max(1, len(result.trajectories))
+    fig, axes = plt.subplots(rows, 1, figsize=(9, 2.2 * rows), squeeze=False)
+    for ax, tr in zip(axes[:, 0], result.trajectories, strict=False):
+        t1 = tr.t_end
+        t0 = max(tr.t0, t1 - 20 * T)
+        t = np.linspace(t0, t1, 4000)
+        ax.plot(t / T, tr.end_displacement(t), lw=0.8)
+        ax.set_ylabel("u(1, t)")
+    axes[-1, 0].set_xlabel("t / load period (last 20 periods)")
+    fig.suptitle("end displacement")
+    fig.tight_layout()
+    files.append(out / f"{prefix}end_displacement.png")
+    fig.savefig(files[-1], dpi=120)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(5, 5))
+    if result.impact_pairs.size:
+        ax.plot(result.impact_pairs[:, 0], result.impact_pairs[:, 1], ".", ms=2)
+        lim = float(np.max(result.impact_pairs)) * 1.05
+        ax.plot([0, lim], [0, lim], "k:", lw=0.5)
+    ax.set_xlabel("v_i")
+    ax.set_ylabel("v_{i+1}")
+    ax.set_title("impact map (main impacts, classified windows)")
+    fig.tight_layout()
+    files.append(out / f"{prefix}impact_map.png")
+    fig.savefig(files[-1], dpi=120)
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    if result.intervals.size:
+        ax.hist(result.intervals, bins=80)
+    ax.set_xlabel("impact interval / load period")
+    ax.set_ylabel("count")
+    ax.set_title(f"mean {result.interval_mean:.4f}, std {result.interval_std:.4f}")
+    fig.tight_layout()
+    files.append(out / f"{prefix}interval_histogram.png")
+    fig.savefig(files[-1], dpi=120)
+    plt.close(fig)
+    return files

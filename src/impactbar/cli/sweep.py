@@ -29,7 +29,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .sweep import load_spec, run_sweep
+    from ..sweeps import load_spec, run_sweep
 
     spec = load_spec(args.spec)  # refused here, before any cluster starts
     if args.workers is not None and args.workers < 1:

@@ -253,6 +253,40 @@ def _cubic_step(g, dh, ddh, J, smax):
 
 
 @numba.njit(cache=True, nogil=True)
+def first_piece(kind, w2, p0, ks, hpr, hpi, breaks, levels, ta, qpa, vpa):
+    """Set up the load piece that holds ``ta``: its index ``(m, j)`` (period ``m``, piece ``j``;
+    zeros for a Fourier load), its level, and the particular state at ``ta`` in ``qpa, vpa``.
+    Returns ``m, j, level``."""
+    m = 0
+    j = 0
+    level = 0.0
+    if kind == 1:
+        m, j = piece_of(breaks, ta)
+        level = levels[j]
+    particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+    return m, j, level
+
+
+@numba.njit(cache=True, nogil=True)
+def next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level, ta, te, m, j,
+               qa, va, qpa, vpa, q, v, qp, vp):
+    """Cross the load jump at ``te``: advance the anchor ``(ta, qa, va)`` to it, step the piece
+    index ``(m, j)`` (``j`` wraps to the next period ``m + 1``) and set the new level's particular
+    state ``qpa, vpa``. Returns the new ``ta, m, j, level``; ``q, v`` hold the state at ``te``."""
+    advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, te, q, v, qp, vp)
+    for n in range(w2.size):
+        qa[n] = q[n]
+        va[n] = v[n]
+    j += 1
+    if j == breaks.size:
+        j = 0
+        m += 1
+    level = levels[j]
+    particular(kind, w2, p0, ks, hpr, hpi, level, te, qpa, vpa)
+    return te, m, j, level
+
+
+@numba.njit(cache=True, nogil=True)
 def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, levels,
                   psup, p1, p2, p3, vpb, apb, jpb,
                   anchor_t, qa, va, t_lim, htol, q, v, qp, vp, qpa, vpa):
@@ -268,14 +302,7 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
     status, t : int, float
     """
     ta = anchor_t[0]
-    m = 0
-    j = 0
-    level = 0.0
-    if kind == 1:
-        m, j = piece_of(breaks, ta)
-        # the anchor may sit a rounding error before a jump it already belongs after
-        level = levels[j]
-    particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+    m, j, level = first_piece(kind, w2, p0, ks, hpr, hpi, breaks, levels, ta, qpa, vpa)
     a = ta
     advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, a, q, v, qp, vp)
     p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, a)
@@ -294,21 +321,11 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
         if hcap <= 0.0:
             if kind == 1 and t_cap < t_lim:
                 # move the anchor to the jump and continue with the next level
-                advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t_cap, q, v,
-                        qp, vp)
-                for n in range(w2.size):
-                    qa[n] = q[n]
-                    va[n] = v[n]
-                ta = t_cap
+                ta, m, j, level = next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level,
+                                             ta, t_cap, m, j, qa, va, qpa, vpa, q, v, qp, vp)
                 anchor_t[0] = ta
-                j += 1
-                if j == breaks.size:
-                    j = 0
-                    m += 1
-                level = levels[j]
                 L = level
                 ps = abs(level)
-                particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
                 for n in range(w2.size):
                     qp[n] = qpa[n]
                     vp[n] = vpa[n]
@@ -475,13 +492,7 @@ def propagate_many(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, ta, qa, va, ts
     vp = np.empty(M)
     qpa = np.empty(M)
     vpa = np.empty(M)
-    m = 0
-    j = 0
-    level = 0.0
-    if kind == 1:
-        m, j = piece_of(breaks, ta)
-        level = levels[j]
-    particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+    m, j, level = first_piece(kind, w2, p0, ks, hpr, hpi, breaks, levels, ta, qpa, vpa)
     for i in range(ts.size):
         t = ts[i]
         if kind == 1:
@@ -489,18 +500,8 @@ def propagate_many(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, ta, qa, va, ts
                 te = piece_end(breaks, m, j)
                 if t < te:
                     break
-                advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, te, q, v,
-                        qp, vp)
-                for n in range(M):
-                    qa[n] = q[n]
-                    va[n] = v[n]
-                ta = te
-                j += 1
-                if j == breaks.size:
-                    j = 0
-                    m += 1
-                level = levels[j]
-                particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+                ta, m, j, level = next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level,
+                                             ta, te, m, j, qa, va, qpa, vpa, q, v, qp, vp)
         advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp)
         for n in range(M):
             out_q[n, i] = q[n]

@@ -15,7 +15,7 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .paper import reproduce
+    from ..paper import reproduce
 
     t0 = time.perf_counter()
     summary = reproduce(args.out, quick=args.quick)

@@ -8,7 +8,7 @@ import math
 import sys
 import warnings
 
-from . import physical
+from .. import physical
 
 __all__ = ["add_physical_arguments", "wants_physical", "hammer_from_args", "run_physical_orbits",
            "json_ready"]

@@ -35,7 +35,7 @@ def _selection(items) -> dict:
 
 
 def run(args) -> int:
-    from .sweep_plot import plot_sweep
+    from ..sweeps.plot import plot_sweep
 
     path = plot_sweep(args.store, args.out, select=_selection(args.select), dpi=args.dpi)
     print(f"wrote {path}")

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from . import physical
-from ._cli_physical import add_physical_arguments, hammer_from_args, json_ready
+from .. import physical
+from .physical import add_physical_arguments, hammer_from_args, json_ready
 
 __all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows"]
 
@@ -38,7 +38,7 @@ def add_parser(subparsers) -> None:
 
 def run(args) -> int:
     """Run the simulation and write the outputs; returns the exit status."""
-    from ._units import to_si
+    from ..physical.units import to_si
 
     hammer = hammer_from_args(args)
     gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")

@@ -37,7 +37,7 @@ def add_parser(sub) -> None:
 
 
 def _load(args):
-    from . import CosineLoad, SquareWaveLoad
+    from .. import CosineLoad, SquareWaveLoad
 
     if args.load == "cosine":
         return CosineLoad(args.p0, args.pk, args.k)
@@ -49,7 +49,7 @@ def run(args) -> int:
         from .physical import run_physical_orbits
 
         return run_physical_orbits(args)
-    from . import BarModel, periodic_orbits
+    from .. import BarModel, periodic_orbits
 
     model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes)
     load = _load(args)

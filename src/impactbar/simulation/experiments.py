@@ -16,7 +16,8 @@ compiled core releases the GIL) and :func:`classify` sorts the last part of each
 - ``"periodic, several impacts"``: ``m >= 2`` impacts per cycle of whole load periods;
 - ``"not periodic"``: none of these (or no impact at all).
 
-Plotting (:func:`plot_experiment`) imports matplotlib lazily; nothing here needs it otherwise.
+Figures of a result are drawn by :func:`impactbar.plotting.plot_experiment` (matplotlib is not
+imported here).
 """
 
 from __future__ import annotations
@@ -28,9 +29,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validate import check_int, check_real
-from .loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
-from .model import BarModel
+from .._validate import check_int, check_real
+from ..loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
+from ..model import BarModel
 from .simulate import InitialState, Trajectory, simulate
 
 __all__ = [
@@ -42,7 +43,6 @@ __all__ = [
     "run_experiment",
     "pneumatic_setup",
     "hydraulic_setup",
-    "plot_experiment",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -364,65 +364,3 @@ def hydraulic_setup(*, q: float = 1.0, kappa: float = 1.5, s: float = 10.0,
     BarModel, SquareWaveLoad
     """
     return BarModel(s=s, d=d, R=R, n_modes=n_modes), SquareWaveLoad(q, kappa)
-
-
-def plot_experiment(result: ExperimentResult, directory, *, prefix: str = "") -> list:
-    """Write three PNG figures into ``directory``: end displacement against time (the kept
-    runs), the impact map ``v_{i+1}`` against ``v_i``, and a histogram of impact intervals.
-
-    Returns
-    -------
-    list of pathlib.Path
-        The files written.
-    """
-    from pathlib import Path
-
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
-
-    out = Path(directory)
-    out.mkdir(parents=True, exist_ok=True)
-    T = load_period(result.load)
-    files = []
-
-    rows = max(1, len(result.trajectories))
-    fig, axes = plt.subplots(rows, 1, figsize=(9, 2.2 * rows), squeeze=False)
-    for ax, tr in zip(axes[:, 0], result.trajectories, strict=False):
-        t1 = tr.t_end
-        t0 = max(tr.t0, t1 - 20 * T)
-        t = np.linspace(t0, t1, 4000)
-        ax.plot(t / T, tr.end_displacement(t), lw=0.8)
-        ax.set_ylabel("u(1, t)")
-    axes[-1, 0].set_xlabel("t / load period (last 20 periods)")
-    fig.suptitle("end displacement")
-    fig.tight_layout()
-    files.append(out / f"{prefix}end_displacement.png")
-    fig.savefig(files[-1], dpi=120)
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(5, 5))
-    if result.impact_pairs.size:
-        ax.plot(result.impact_pairs[:, 0], result.impact_pairs[:, 1], ".", ms=2)
-        lim = float(np.max(result.impact_pairs)) * 1.05
-        ax.plot([0, lim], [0, lim], "k:", lw=0.5)
-    ax.set_xlabel("v_i")
-    ax.set_ylabel("v_{i+1}")
-    ax.set_title("impact map (main impacts, classified windows)")
-    fig.tight_layout()
-    files.append(out / f"{prefix}impact_map.png")
-    fig.savefig(files[-1], dpi=120)
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(6, 4))
-    if result.intervals.size:
-        ax.hist(result.intervals, bins=80)
-    ax.set_xlabel("impact interval / load period")
-    ax.set_ylabel("count")
-    ax.set_title(f"mean {result.interval_mean:.4f}, std {result.interval_std:.4f}")
-    fig.tight_layout()
-    files.append(out / f"{prefix}interval_histogram.png")
-    fig.savefig(files[-1], dpi=120)
-    plt.close(fig)
-    return files

@@ -16,10 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from .loads import CosineLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
-from .model import BarModel
-from .orbits import orbit_multipliers, periodic_orbits, phase_residual, phase_roots
-from .stability import phase_G
+from ..loads import CosineLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
+from ..model import BarModel
+from .one_impact import orbit_multipliers, periodic_orbits
+from .phase import phase_G, phase_residual, phase_roots
 
 __all__ = [
     "Boundary",

@@ -1,4 +1,4 @@
-"""Figures drawn from a stored sweep (:mod:`impactbar.sweep`); matplotlib is imported lazily.
+"""Figures drawn from a stored sweep (:mod:`impactbar.sweeps`); matplotlib is imported lazily.
 
 Everything here reads a finished (or partly finished) zarr store; nothing is computed again.
 Points of chunks not yet stored are left blank.
@@ -25,7 +25,7 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
     Parameters
     ----------
     ds : xarray.Dataset
-        A sweep store (:func:`impactbar.sweep.open_sweep`).
+        A sweep store (:func:`impactbar.sweeps.open_sweep`).
     select : dict of str to float, optional
         Axis name -> value.
     max_dims : int
@@ -43,7 +43,7 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
     ValueError
         If ``select`` names something that is not an axis, or more than ``max_dims`` axes remain.
     """
-    from .sweep import point_done, stored_spec
+    from .store import point_done, stored_spec
 
     spec = stored_spec(ds)
     axes = [a.name for a in spec.axes]
@@ -232,7 +232,7 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Pat
     Parameters
     ----------
     store : str or os.PathLike
-        A store written by :func:`impactbar.sweep.run_sweep`.
+        A store written by :func:`impactbar.sweeps.run_sweep`.
     out : str or os.PathLike
         The figure file; its suffix picks the format.
     select : dict of str to float, optional
@@ -249,7 +249,7 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Pat
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    from .sweep import open_sweep
+    from .store import open_sweep
 
     ds = open_sweep(store)
     task = ds.attrs["task"]

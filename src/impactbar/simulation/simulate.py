@@ -23,10 +23,10 @@ from functools import cached_property
 
 import numpy as np
 
-from . import _simkernel as K
-from ._validate import check_int, check_real
-from .loads import FourierLoad, Load, PiecewiseConstantLoad
-from .model import BarModel
+from .._validate import check_int, check_real
+from ..dynamics import _kernel as K
+from ..loads import FourierLoad, Load, PiecewiseConstantLoad
+from ..model import BarModel
 
 __all__ = ["InitialState", "Trajectory", "EnergyAccount", "simulate"]
 

@@ -7,29 +7,15 @@ import math
 
 import numpy as np
 
-from .loads import Load
-from .modal import fundamental
-from .model import BarModel
+from ..dynamics.modal import fundamental
+from ..loads import Load
+from ..model import BarModel
 
-__all__ = ["impact_map_jacobian", "schur_blocks", "schur_test", "quadratic_roots", "phase_G"]
+__all__ = ["impact_map_jacobian", "schur_blocks", "schur_test", "quadratic_roots"]
 
 TWO_PI = 2.0 * math.pi
 
 
-def _beta(y: float) -> float:
-    """``beta(y) = 1/(1 - exp(-y)) - 1/y``, by its series where the difference cancels."""
-    if y < 1e-2:
-        return 0.5 + y / 12.0 - y**3 / 720.0 + y**5 / 30240.0
-    return 1.0 / (-math.expm1(-y)) - 1.0 / y
-
-
-def phase_G(d: float, R: float) -> float:
-    """Right-hand factor ``G(d, R)`` of the phase equation (eq. 14 rewritten, MODEL.md section 4).
-
-    ``G = 2 pi (1 + R e^{-2 pi d}) / (1 - e^{-2 pi d}) - (1 + R)/d = 2 pi [(1 + R) beta(2 pi d) - R]``,
-    evaluated through ``beta`` so that it is accurate as ``d -> 0`` (``G(0, R) = pi (1 - R)``).
-    """
-    return TWO_PI * ((1.0 + R) * _beta(TWO_PI * d) - R)
 
 
 def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_minus) -> np.ndarray:

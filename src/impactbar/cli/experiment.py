@@ -42,7 +42,8 @@ def add_parser(sub) -> None:
 
 
 def run(args) -> int:
-    from .experiments import hydraulic_setup, plot_experiment, pneumatic_setup, run_experiment
+    from ..plotting import plot_experiment
+    from ..simulation.experiments import hydraulic_setup, pneumatic_setup, run_experiment
 
     if args.hammer == "pneumatic":
         R = 0.8 if args.R is None else args.R

@@ -1,6 +1,6 @@
 """Command-line interface: ``impactbar SUBCOMMAND ...``.
 
-Each subcommand lives in its own module ``impactbar._cli_<name>`` exposing
+Each subcommand lives in its own module ``impactbar.cli.<name>`` exposing
 ``add_parser(subparsers)`` (which registers the parser and sets ``func``); this file only
 dispatches, so features can be added without touching each other.
 """
@@ -19,7 +19,7 @@ SUBCOMMANDS = ("paper", "orbits", "experiment", "simulate", "sweep", "plot")
 
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every available subcommand registered."""
-    from . import __version__
+    from .._version import __version__
 
     parser = argparse.ArgumentParser(
         prog="impactbar",
@@ -30,9 +30,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in SUBCOMMANDS:
         try:
-            mod = importlib.import_module(f"impactbar._cli_{name}")
+            mod = importlib.import_module(f"impactbar.cli.{name}")
         except ModuleNotFoundError as exc:
-            if exc.name == f"impactbar._cli_{name}":
+            if exc.name == f"impactbar.cli.{name}":
                 continue  # that feature is not installed in this build
             raise
         mod.add_parser(sub)

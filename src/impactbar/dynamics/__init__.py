@@ -1,0 +1,8 @@
+"""The bar's motion between and at impacts, on plain dimensionless arrays.
+
+Layout: ``modal`` (the closed-form fundamental matrix of each damped mode and the integrals of a
+constant load over a step, paper eqs. 5-9), ``certified`` (certified enclosure of the zeros of a
+function with a Lipschitz or derivative bound), ``_kernel`` (the numba-compiled flight, impact
+search and event loop behind :func:`impactbar.simulate`). The bottom of the core: imports only
+numpy, scipy and numba, never another impactbar subpackage.
+"""

@@ -1,0 +1,83 @@
+r"""Real hammers in SI units: from a piston, a stop and a driving force to the dimensionless model,
+and back to what the designer of a rock drill reads.
+
+Conversion (paper eq. 2, MODEL.md section 1). For a bar of Young's modulus ``E``, density ``rho``,
+length ``L`` and cross-section ``A``, driven at ``f`` Hz:
+
+- mass per unit length ``M = rho A``, piston mass ``m = M L``, wave speed ``c = sqrt(E / rho)``;
+- ``Omega = 2 pi f / k``: the angular frequency of the impact cycle, the first harmonic of the load
+  (``k`` is the order of a pneumatic load, eq. 33; ``k = 1`` for every other force);
+- ``s = c / (L Omega)``, ``d = D / (M Omega)``, ``p = P / (m L Omega^2)``, ``t = Omega T``,
+  ``u = U / L``, so velocities scale with ``L Omega``: ``U_T = L Omega u_t``.
+
+The force scale is ``m L Omega^2 = M L^2 Omega^2``: the boundary condition ``E A U_X(0) = -P`` in
+the variables above reads ``s^2 u_x(0) = -P / (M L^2 Omega^2)``, and the rigid mode
+``m U_TT = P`` reads ``q_0'' = P / (m L Omega^2)``. (MODEL.md writes ``p = P / (M L Omega^2)``,
+which is not dimensionless for ``M`` a mass per unit length; the tests check the scale through
+the momentum identity ``v = F_mean / (f m (1 + R))``.)
+
+Every input that has a dimension must be written with its unit (``"210 GPa"``, ``"45 mm"``) or be a
+pint quantity; the dataclasses themselves hold plain SI floats in fields named with their unit
+(``length_m``). Forces are positive when they push the bar towards the stop.
+
+Outputs (:class:`PhysicalOrbit`): impact velocity (m/s), energy per blow ``m v^2 / 2`` (J), blow
+frequency ``Omega / 2 pi`` (Hz), impact power (W), peak stress at impact (Pa) and, on the hammer,
+the contact duration ``2 L / c`` against the period (the paper assumes impacts are short).
+
+Configuration keys (TOML file or a nested ``dict``, see :meth:`Hammer.from_config`)::
+
+    name = "..."                        # optional label
+    [bar]      E, density, length, diameter | area
+    [damping]  coefficient | ratio      # optional section; no damping if absent
+    [stop]     restitution | area
+    [drive]    frequency
+    [force]    kind = "pneumatic": mean, amplitude, k (optional, default 1)
+               kind = "hydraulic": high, low, fraction
+               kind = "measured":  csv, tolerance (optional, 0.01), max_harmonics (optional, 256)
+    [model]    n_modes                  # optional, default 16
+
+Unknown keys are refused, naming the key.
+
+Layout: ``units`` (pint parsing, lazily imported), ``bar`` (the piston, the short-impact limit),
+``forces`` (pneumatic, hydraulic, measured), ``hammer`` (scales and the dimensionless model),
+``config`` (TOML configs and presets), ``results`` (orbits and simulations in SI). This layer sits on
+the core (``impactbar.model``, ``loads``, ``orbits``, ``simulation``) and may import pint; the core
+never imports it.
+"""
+
+from .bar import SHORT_IMPACT_LIMIT as SHORT_IMPACT_LIMIT
+from .bar import Bar as Bar
+from .bar import ImpactDurationWarning as ImpactDurationWarning
+from .config import PRESETS as PRESETS
+from .config import load_config as load_config
+from .config import preset as preset
+from .forces import FourierFit as FourierFit
+from .forces import HydraulicForce as HydraulicForce
+from .forces import MeasuredForce as MeasuredForce
+from .forces import PneumaticForce as PneumaticForce
+from .hammer import Hammer as Hammer
+from .hammer import Scales as Scales
+from .results import PhysicalOrbit as PhysicalOrbit
+from .results import SimulationResult as SimulationResult
+from .results import orbits as orbits
+from .results import simulate as simulate
+
+__all__ = [
+    "Bar",
+    "PneumaticForce",
+    "HydraulicForce",
+    "MeasuredForce",
+    "FourierFit",
+    "Hammer",
+    "Scales",
+    "PhysicalOrbit",
+    "SimulationResult",
+    "ImpactDurationWarning",
+    "SHORT_IMPACT_LIMIT",
+    "PRESETS",
+    "preset",
+    "load_config",
+    "orbits",
+    "simulate",
+]
+

@@ -1,0 +1,242 @@
+"""Hammers from TOML configuration files or dicts, and the built-in presets."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from pathlib import Path
+
+from .._validate import check_int, check_real
+from .bar import Bar, _positive
+from .forces import Force, HydraulicForce, MeasuredForce, PneumaticForce
+from .hammer import Hammer
+from .units import to_si, to_si_any
+
+# --------------------------------------------------------------------------------------------
+# configuration
+# --------------------------------------------------------------------------------------------
+_SECTIONS = {
+    "bar": {"E", "density", "length", "diameter", "area"},
+    "damping": {"coefficient", "ratio"},
+    "stop": {"restitution", "area"},
+    "drive": {"frequency"},
+    "force": {"kind", "mean", "amplitude", "k", "high", "low", "fraction", "csv", "tolerance",
+              "max_harmonics"},
+    "model": {"n_modes"},
+}
+_FORCE_KEYS = {
+    "pneumatic": {"mean", "amplitude", "k"},
+    "hydraulic": {"high", "low", "fraction"},
+    "measured": {"csv", "tolerance", "max_harmonics"},
+}
+_REQUIRED = {"bar", "stop", "drive", "force"}
+
+
+def _section(config: dict, name: str) -> dict:
+    sec = config.get(name, {})
+    if not isinstance(sec, dict):
+        raise ValueError(f"[{name}] must be a table of keys; got {sec!r}")
+    unknown = sorted(set(sec) - _SECTIONS[name])
+    if unknown:
+        raise ValueError(f"unknown key {name}.{unknown[0]}; allowed in [{name}]: "
+                         f"{', '.join(sorted(_SECTIONS[name]))}")
+    return sec
+
+
+def _need(sec: dict, section: str, key: str):
+    if key not in sec:
+        raise ValueError(f"missing key {section}.{key}")
+    return sec[key]
+
+
+def _dimensionless(name: str, value, **rng) -> float:
+    return check_real(name, to_si(name, value, "", "0.3"), **rng)
+
+
+def _hammer_from_config(config: dict, base_dir) -> Hammer:
+    if not isinstance(config, dict):
+        raise ValueError("a configuration must be a mapping of sections; got "
+                         f"{type(config).__name__}")
+    unknown = sorted(set(config) - set(_SECTIONS) - {"name"})
+    if unknown:
+        raise ValueError(f"unknown key {unknown[0]!r}; allowed at top level: name, "
+                         f"{', '.join(sorted(_SECTIONS))}")
+    missing = sorted(_REQUIRED - set(config))
+    if missing:
+        raise ValueError(f"missing section [{missing[0]}]")
+    b = _section(config, "bar")
+    bar = Bar.from_units(_need(b, "bar", "E"), _need(b, "bar", "density"),
+                         _need(b, "bar", "length"), diameter=b.get("diameter"), area=b.get("area"))
+
+    drive = _section(config, "drive")
+    freq = _positive("drive.frequency", to_si("drive.frequency", _need(drive, "drive", "frequency"),
+                                               "Hz", "'40 Hz' or '2400 bpm'", what="a frequency"))
+
+    stop = _section(config, "stop")
+    if ("restitution" in stop) == ("area" in stop):
+        raise ValueError("give exactly one of stop.restitution and stop.area")
+    if "restitution" in stop:
+        stop_kw = {"restitution": _dimensionless("stop.restitution", stop["restitution"])}
+    else:
+        stop_kw = {"stop_area_m2": to_si("stop.area", stop["area"], "m**2", "'15.9 cm^2'",
+                                         what="an area")}
+
+    force = _force_from_config(_section(config, "force"), base_dir)
+
+    model = _section(config, "model")
+    n_modes = check_int("model.n_modes", model.get("n_modes", 16), lo=0, hi=4096)
+
+    damp = _section(config, "damping")
+    if "coefficient" in damp and "ratio" in damp:
+        raise ValueError("give at most one of damping.coefficient and damping.ratio")
+    name = config.get("name", "")
+    h = Hammer(bar=bar, frequency_Hz=freq, force=force, n_modes=n_modes, name=name, **stop_kw)
+    if "coefficient" in damp:
+        val, unit = to_si_any("damping.coefficient", damp["coefficient"], ("N*s/m", "N*s/m**2"),
+                              "'2.4 N*s/m' (whole piston) or '12 N*s/m^2' (per unit length)",
+                              "a viscous damping coefficient")
+        val = check_real("damping.coefficient", val, lo=0.0)
+        h = dataclasses.replace(h, damping_N_s_m2=val / bar.length_m if unit == "N*s/m" else val)
+    elif "ratio" in damp:
+        zeta = _dimensionless("damping.ratio", damp["ratio"], lo=0.0)
+        d = 2.0 * zeta * h.s * math.pi
+        h = dataclasses.replace(h, damping_N_s_m2=d * h.scales.damping_N_s_m2)
+    return h
+
+
+def _force_from_config(sec: dict, base_dir) -> Force:
+    kind = _need(sec, "force", "kind")
+    if kind not in _FORCE_KEYS:
+        raise ValueError(f"force.kind must be one of {', '.join(sorted(_FORCE_KEYS))}; "
+                         f"got {kind!r}")
+    extra = sorted(set(sec) - _FORCE_KEYS[kind] - {"kind"})
+    if extra:
+        raise ValueError(f"key force.{extra[0]} does not apply to force.kind = {kind!r}; allowed: "
+                         f"{', '.join(sorted(_FORCE_KEYS[kind]))}")
+
+    def force(key):
+        return to_si(f"force.{key}", _need(sec, "force", key), "N", "'2.5 kN'", what="a force")
+
+    if kind == "pneumatic":
+        return PneumaticForce(force("mean"), force("amplitude"), sec.get("k", 1))
+    if kind == "hydraulic":
+        return HydraulicForce(force("high"), force("low"),
+                              _dimensionless("force.fraction", _need(sec, "force", "fraction")))
+    path = _need(sec, "force", "csv")
+    if not isinstance(path, str):
+        raise ValueError(f"force.csv must be a file path; got {path!r}")
+    p = Path(path)
+    if not p.is_absolute() and base_dir is not None:
+        p = Path(base_dir) / p
+    return MeasuredForce.from_csv(p, tolerance=_dimensionless("force.tolerance",
+                                                              sec.get("tolerance", 0.01)),
+                                  max_harmonics=sec.get("max_harmonics", 256))
+
+
+def load_config(path) -> Hammer:
+    """Read a hammer from a TOML file (keys in the module docstring).
+
+    Raises
+    ------
+    ValueError
+        A missing or malformed file, or any invalid key or value (named).
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            config = tomllib.load(fh)
+    except OSError as exc:
+        raise ValueError(f"cannot read the configuration {str(path)!r}: {exc.strerror}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{str(path)!r} is not valid TOML: {exc}") from exc
+    return _hammer_from_config(config, path.parent)
+
+
+# --------------------------------------------------------------------------------------------
+# presets
+# --------------------------------------------------------------------------------------------
+# Both presets use a steel piston: E = 210 GPa and rho = 7850 kg/m^3 are the textbook values of
+# carbon and low-alloy steel (e.g. EN 1993-1-1, section 3.2.6: E = 210 000 N/mm^2). Their rod,
+# the stop, is a long steel bar (the shank adapter / drill steel), so R follows from its area.
+# The forces are chosen from the rigid-limit identity v = F_mean / (f m (1 + R)) (MODEL.md
+# section 4) to give a typical impact velocity, and checked to give an admissible orbit.
+PRESETS: dict[str, dict] = {
+    # A pneumatic top-hammer rock drill (the class of a heavy hand-held drill or a light drifter).
+    "pneumatic-drill": {
+        "name": "pneumatic-drill",
+        "bar": {
+            "E": "210 GPa",  # steel, see above
+            "density": "7850 kg/m^3",  # steel
+            # 200 mm x 40 mm: m = 7850 * pi/4 * 0.04^2 * 0.2 = 1.97 kg, a piston of "a few kg"
+            # (pistons of hand-held and light pneumatic drills weigh about 1-3 kg)
+            "length": "200 mm",
+            "diameter": "40 mm",
+        },
+        # A 45 mm shank against the 40 mm piston: R = (45^2 - 40^2)/(45^2 + 40^2) = 0.117.
+        "stop": {"area": "15.904 cm^2"},  # pi/4 * 4.5^2 cm^2
+        # 40 Hz = 2400 blows per minute, inside the 2000-3000 bpm of pneumatic drills; a jackhammer
+        # strikes about 25 times a second (ritchiewiki.com, "Pneumatic Drill").
+        "drive": {"frequency": "40 Hz"},
+        # Mean force 800 N: about 0.63 MPa (the usual 6-7 bar shop air) on the 12.6 cm^2 piston
+        # face. It gives v = 800 / (40 * 1.97 * 1.117) = 9.1 m/s (energy 81 J, power 3.2 kW),
+        # inside the 5-12 m/s of air hammers. Amplitude 2150 N puts p0/p1 = 0.372 inside the
+        # paper's stable band (MODEL.md section 6: 0.337 < p0/p1 < 0.403 at R = 0.117).
+        "force": {"kind": "pneumatic", "mean": "800 N", "amplitude": "2150 N"},
+        # Viscous friction of the guided piston, unknown in practice: 2.4 N s/m makes
+        # 2 pi d = 0.03, the damped case of the paper's Fig. 5.
+        "damping": {"coefficient": "2.4 N*s/m"},
+        "model": {"n_modes": 16},
+    },
+    # A hydraulic top-hammer rock drill (drifter) with a differential piston.
+    "hydraulic-drill": {
+        "name": "hydraulic-drill",
+        "bar": {
+            "E": "210 GPa",
+            "density": "7850 kg/m^3",
+            # A long slender piston, 450 mm x 45 mm: m = 5.6 kg. Hydraulic drifter pistons are
+            # longer and heavier than pneumatic ones (a few kg up to about 10 kg).
+            "length": "450 mm",
+            "diameter": "45 mm",
+        },
+        # A 56 mm shank: R = (56^2 - 45^2)/(56^2 + 45^2) = 0.215. (With a 52 or 57 mm shank the
+        # struck end's ringing after the jumps of the square wave grazes the stop between impacts
+        # and the one-impact orbits are inadmissible: see MODEL.md section 5.)
+        "stop": {"area": "24.630 cm^2"},  # pi/4 * 5.6^2 cm^2
+        # 55 Hz: hydraulic drills strike at 40-70 Hz; a stress-wave bench study measured up to
+        # 62 Hz and up to 346 J per blow at 18-23 MPa ("Influence of piston mass and working
+        # pressure on the impact performance of a hydraulic rock drill using the stress wave
+        # method"; see also Ma et al., Adv. Mech. Eng. 11(4), 2019, doi:10.1177/1687814019841486).
+        "drive": {"frequency": "55 Hz"},
+        # Differential piston: the front annulus A_f is always at supply pressure p, the rear area
+        # A_r = 2 A_f is switched between p and tank, so the net force is +p A_f (forward stroke)
+        # and -p A_f (return): the paper's symmetric square wave (eq. 34). p = 20 MPa on
+        # A_f = 10 cm^2 gives +-20 kN. A fraction 0.58 of the period forward (kappa = 1.16) gives
+        # a mean of 3.2 kN and a rigid-limit v = 3200 / (55 * 5.62 * 1.215) = 8.5 m/s (204 J,
+        # 11 kW); the flexible piston's struck end arrives at 9.3 m/s in the admissible orbit.
+        # That orbit is unstable, as every hydraulic one-impact orbit (paper eq. 41): simulated
+        # from rest the motion does not settle (paper Section 5). A real drifter switches its
+        # valve on the piston's position, which this time-periodic load does not represent.
+        "force": {"kind": "hydraulic", "high": "20 kN", "low": "-20 kN", "fraction": 0.58},
+        # Oil-film damping of the piston guides, unknown in practice: 9 N s/m makes 2 pi d = 0.03,
+        # the damped case of the paper's Fig. 8.
+        "damping": {"coefficient": "9 N*s/m"},
+        "model": {"n_modes": 16},
+    },
+}
+
+
+def preset(name: str) -> Hammer:
+    """A preset hammer: ``"pneumatic-drill"`` or ``"hydraulic-drill"`` (numbers documented in
+    the source).
+
+    Raises
+    ------
+    ValueError
+        For an unknown name; the message lists the presets.
+    """
+    if name not in PRESETS:
+        raise ValueError(f"unknown preset {name!r}; available: {', '.join(sorted(PRESETS))}")
+    return _hammer_from_config(PRESETS[name], None)
+
+

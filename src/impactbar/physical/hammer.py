@@ -1,0 +1,344 @@
+"""The hammer: bar, stop, damping and force together, their dimensionless scales (paper eq. 2)
+and the dimensionless model they define."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import check_int, check_real
+from ..loads import CosineLoad, FourierLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
+from ..model import BarModel
+from .bar import SHORT_IMPACT_LIMIT, TWO_PI, Bar, ImpactDurationWarning
+from .forces import Force, FourierFit, HydraulicForce, MeasuredForce, PneumaticForce
+
+
+# --------------------------------------------------------------------------------------------
+# the hammer
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Scales:
+    """The units of the dimensionless model (eq. 2) for one hammer, in SI.
+
+    Attributes
+    ----------
+    omega_rad_s : float
+        ``Omega``, the angular frequency of the impact cycle (rad/s); dimensionless time is
+        ``t = Omega T``.
+    time_s : float
+        ``1 / Omega`` (s).
+    length_m : float
+        ``L`` (m): ``U = L u``.
+    velocity_m_s : float
+        ``L Omega`` (m/s): ``U_T = L Omega u_t``.
+    force_N : float
+        ``m L Omega^2 = M L^2 Omega^2`` (N): ``P = m L Omega^2 p``.
+    damping_N_s_m2 : float
+        ``M Omega`` (N s/m^2): ``D = M Omega d``.
+    """
+
+    omega_rad_s: float
+    time_s: float
+    length_m: float
+    velocity_m_s: float
+    force_N: float
+    damping_N_s_m2: float
+
+
+
+@dataclass(frozen=True)
+class Hammer:
+    r"""A percussive machine in SI units: piston, stop, damping and driving force.
+
+    Parameters
+    ----------
+    bar : Bar
+        The piston.
+    frequency_Hz : float
+        Drive frequency ``f`` (Hz), the frequency of the force cycle, ``> 0``.
+    force : PneumaticForce, HydraulicForce or MeasuredForce
+        The force at the driven end.
+    restitution : float, optional
+        Restitution coefficient ``R`` of the stop, ``0 <= R <= 1`` (eq. 10).
+    stop_area_m2 : float, optional
+        Or the stop as a long bar of the same material and area ``A_s >= A`` (m^2):
+        ``R = (A_s - A) / (A_s + A)`` (MODEL.md section 4). Give exactly one of the two.
+    damping_N_s_m2 : float, optional
+        Viscous damping per unit length ``D`` of eq. 2 (N s/m^2), ``>= 0``. Default 0. A total
+        coefficient ``c`` (N s/m) of the whole piston is ``D = c / L``; a damping ratio ``zeta``
+        of the first flexible mode is ``d = 2 zeta s pi`` (see :meth:`from_config`).
+    n_modes : int, optional
+        Flexible modes kept in the model, ``0..4096``; 0 is the rigid piston. Default 16.
+    name : str, optional
+        A label for reports.
+
+    Notes
+    -----
+    ``Omega = 2 pi f / k`` with ``k`` the order of a pneumatic load (1 otherwise), so one impact
+    cycle is ``k`` force cycles and the blow frequency is ``f / k``.
+    """
+
+    bar: Bar
+    frequency_Hz: float
+    force: Force
+    restitution: float | None = None
+    stop_area_m2: float | None = None
+    damping_N_s_m2: float = 0.0
+    n_modes: int = 16
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.bar, Bar):
+            raise ValueError(f"bar must be a Bar; got {type(self.bar).__name__}")
+        if not isinstance(self.force, PneumaticForce | HydraulicForce | MeasuredForce):
+            raise ValueError("force must be a PneumaticForce, HydraulicForce or MeasuredForce; got "
+                             f"{type(self.force).__name__}")
+        object.__setattr__(self, "frequency_Hz", check_real("drive.frequency", self.frequency_Hz,
+                                                            lo=0.0, lo_open=True))
+        if (self.restitution is None) == (self.stop_area_m2 is None):
+            raise ValueError("give exactly one of stop.restitution and stop.area")
+        if self.restitution is not None:
+            object.__setattr__(self, "restitution", check_real("stop.restitution",
+                                                               self.restitution, lo=0.0, hi=1.0))
+        else:
+            a_s = check_real("stop.area", self.stop_area_m2, lo=0.0, lo_open=True)
+            if a_s < self.bar.area_m2:
+                raise ValueError(
+                    f"stop.area must be at least the piston's area A = {self.bar.area_m2:.6g} m^2 "
+                    f"(a thinner stop bar would give R < 0); got {a_s:.6g} m^2")
+            object.__setattr__(self, "stop_area_m2", a_s)
+        object.__setattr__(self, "damping_N_s_m2", check_real("damping.coefficient",
+                                                              self.damping_N_s_m2, lo=0.0))
+        object.__setattr__(self, "n_modes", check_int("model.n_modes", self.n_modes, lo=0,
+                                                      hi=4096))
+        if not isinstance(self.name, str):
+            raise ValueError(f"name must be a string; got {self.name!r}")
+        if isinstance(self.force, MeasuredForce):
+            self._measured  # noqa: B018  (fit the series now: a bad curve fails here, not later)
+
+    # -- scales and dimensionless model ------------------------------------------------------
+    @property
+    def R(self) -> float:
+        """Restitution coefficient (dimensionless): given, or ``(A_s - A)/(A_s + A)``."""
+        if self.restitution is not None:
+            return self.restitution
+        a, a_s = self.bar.area_m2, self.stop_area_m2
+        return (a_s - a) / (a_s + a)
+
+    @property
+    def order(self) -> int:
+        """Force cycles per impact cycle (``k`` of a pneumatic load, else 1)."""
+        return self.force.order
+
+    @property
+    def period_s(self) -> float:
+        """Drive period ``1 / f`` (s)."""
+        return 1.0 / self.frequency_Hz
+
+    @property
+    def blow_frequency_Hz(self) -> float:
+        """Blow frequency ``Omega / 2 pi = f / k`` (Hz) of a one-impact periodic motion."""
+        return self.frequency_Hz / self.order
+
+    @property
+    def scales(self) -> Scales:
+        """The SI units of the dimensionless model (eq. 2)."""
+        om = TWO_PI * self.blow_frequency_Hz
+        L = self.bar.length_m
+        m = self.bar.mass_kg
+        return Scales(omega_rad_s=om, time_s=1.0 / om, length_m=L, velocity_m_s=L * om,
+                      force_N=m * L * om * om, damping_N_s_m2=self.bar.mass_per_length_kg_m * om)
+
+    @property
+    def s(self) -> float:
+        """``s = c / (L Omega)`` (eq. 2)."""
+        return self.bar.wave_speed_m_s / (self.bar.length_m * self.scales.omega_rad_s)
+
+    @property
+    def d(self) -> float:
+        """``d = D / (M Omega)`` (eq. 2)."""
+        return self.damping_N_s_m2 / self.scales.damping_N_s_m2
+
+    @property
+    def damping_ratio(self) -> float:
+        """Damping ratio ``zeta = d / (2 s pi)`` of the first flexible mode (dimensionless)."""
+        return self.d / (2.0 * math.pi * self.s)
+
+    @property
+    def model(self) -> BarModel:
+        """The dimensionless :class:`~impactbar.BarModel`."""
+        return BarModel(s=self.s, d=self.d, R=self.R, n_modes=self.n_modes)
+
+    @functools.cached_property
+    def _measured(self):
+        """``(mean_N, harmonics_N, fit)`` of a measured force, computed once."""
+        return self.force.fourier(self.period_s)
+
+    @property
+    def load(self) -> Load:
+        """The dimensionless load (:class:`~impactbar.CosineLoad`, square wave, piecewise
+        constant or :class:`~impactbar.FourierLoad`), with period ``2 pi``."""
+        fs = self.scales.force_N
+        if isinstance(self.force, MeasuredForce):
+            mean, harm, _ = self._measured
+            return FourierLoad(mean / fs, harm / fs)
+        return self.force.load(fs)
+
+    @property
+    def fourier_fit(self) -> FourierFit | None:
+        """For a measured force, how well its Fourier series meets the tolerance; else None."""
+        return self._measured[2] if isinstance(self.force, MeasuredForce) else None
+
+    # -- derived engineering figures ---------------------------------------------------------
+    @property
+    def mass_kg(self) -> float:
+        """Piston mass ``m`` (kg)."""
+        return self.bar.mass_kg
+
+    @property
+    def mean_force_N(self) -> float:
+        """Mean driving force (N)."""
+        if isinstance(self.force, MeasuredForce):
+            return self._measured[0]
+        return self.force.mean_force_N
+
+    @property
+    def rigid_impact_velocity_m_s(self) -> float:
+        """Impact velocity of the rigid-body mode in any one-impact periodic motion (m/s):
+        ``v = F_mean / (f_b m (1 + R))`` with ``f_b`` the blow frequency (momentum balance over a
+        period, MODEL.md section 4: ``2 pi p0 / (1 + R)`` dimensionless)."""
+        return self.mean_force_N / (self.blow_frequency_Hz * self.mass_kg * (1.0 + self.R))
+
+    @property
+    def contact_duration_s(self) -> float:
+        """Contact duration ``2 L / c`` of an impact (s)."""
+        return self.bar.contact_duration_s
+
+    @property
+    def contact_fraction(self) -> float:
+        """Contact duration over the impact period, ``2 L f_b / c = 1 / (pi s)`` (dimensionless)."""
+        return self.contact_duration_s * self.blow_frequency_Hz
+
+    def check_short_impacts(self, limit: float = SHORT_IMPACT_LIMIT) -> bool:
+        """Whether impacts are short against the period (``contact_fraction <= limit``); issue an
+        :class:`ImpactDurationWarning` when they are not."""
+        if self.contact_fraction <= limit:
+            return True
+        warnings.warn(
+            f"contact duration 2L/c = {self.contact_duration_s:.4g} s is "
+            f"{self.contact_fraction:.1%} of the impact period {1.0 / self.blow_frequency_Hz:.4g}"
+            f" s (limit {limit:.0%}): the paper's instantaneous impact law is a poor "
+            "approximation here",
+            ImpactDurationWarning, stacklevel=2)
+        return False
+
+    def peak_stress_Pa(self, impact_velocity_m_s) -> np.ndarray:
+        """Peak compressive stress in the piston at impact (Pa).
+
+        ``sigma = rho c v Z_s / (Z + Z_s)`` for a stop of impedance ``Z_s`` against the piston's
+        ``Z = rho c A`` (two bars in contact). For a stop bar of the same material
+        ``Z_s / (Z + Z_s) = A_s / (A + A_s) = (1 + R) / 2``; a restitution given directly is read
+        as the same impedance ratio, so a rigid stop (``R = 1``) gives ``rho c v``.
+        """
+        v = np.asarray(impact_velocity_m_s, dtype=float)
+        b = self.bar
+        return b.density_kg_m3 * b.wave_speed_m_s * v * 0.5 * (1.0 + self.R)
+
+    def to_dict(self) -> dict:
+        """The inputs and derived scales, JSON-ready (SI floats, keys named with units)."""
+        out = {
+            "name": self.name,
+            "mass_kg": self.mass_kg,
+            "mean_force_N": self.mean_force_N,
+            "frequency_Hz": self.frequency_Hz,
+            "blow_frequency_Hz": self.blow_frequency_Hz,
+            "restitution": self.R,
+            "stop_area_m2": self.stop_area_m2,
+            "E_Pa": self.bar.E_Pa,
+            "density_kg_m3": self.bar.density_kg_m3,
+            "length_m": self.bar.length_m,
+            "area_m2": self.bar.area_m2,
+            "diameter_m": self.bar.diameter_m,
+            "wave_speed_m_s": self.bar.wave_speed_m_s,
+            "damping_N_s_m2": self.damping_N_s_m2,
+            "damping_ratio": self.damping_ratio,
+            "contact_duration_s": self.contact_duration_s,
+            "contact_fraction": self.contact_fraction,
+            "short_impacts": self.contact_fraction <= SHORT_IMPACT_LIMIT,
+            "force": self.force.to_dict(),
+            "dimensionless": {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes,
+                              "p0": self.load.p0},
+        }
+        fit = self.fourier_fit
+        if fit is not None:
+            out["fourier"] = dataclasses.asdict(fit)
+        return out
+
+    # -- constructors ------------------------------------------------------------------------
+    @classmethod
+    def from_config(cls, config: dict, *, base_dir=None) -> Hammer:
+        """A hammer from a nested mapping with the keys of a TOML config (module docstring).
+
+        Values with a dimension must carry a unit (``"45 mm"``) or be pint quantities;
+        ``restitution``, ``ratio``, ``fraction``, ``k``, ``tolerance``, ``max_harmonics`` and
+        ``n_modes`` are plain numbers. ``damping.coefficient`` is either a total coefficient of the
+        piston (N s/m, e.g. ``"2.4 N*s/m"``) or one per unit length (N s/m^2), told apart by
+        dimension; ``damping.ratio`` is ``zeta`` of the first flexible mode, ``d = 2 zeta s pi``.
+        A relative ``force.csv`` path is taken from ``base_dir`` (default: the working directory).
+
+        Raises
+        ------
+        ValueError
+            An unknown or missing key (named), a value without its unit, of the wrong dimension,
+            or out of range.
+        """
+        from .config import _hammer_from_config
+
+        return _hammer_from_config(config, base_dir)
+
+    @classmethod
+    def from_toml(cls, path) -> Hammer:
+        """A hammer from a TOML file (keys as in :meth:`from_config`); relative CSV paths are
+        taken from the file's folder."""
+        from .config import load_config
+
+        return load_config(path)
+
+    @classmethod
+    def from_dimensionless(cls, model: BarModel, load: Load, bar: Bar, *, stop_area_m2=None,
+                           name: str = "") -> Hammer:
+        """The hammer whose dimensionless form, for the piston ``bar``, is ``(model, load)``:
+        the inverse of :attr:`model` and :attr:`load` (eq. 2 solved for ``f``, ``D`` and forces).
+
+        Supports :class:`~impactbar.CosineLoad`, :class:`~impactbar.SquareWaveLoad` and two-level
+        :class:`~impactbar.PiecewiseConstantLoad`. The restitution is ``model.R`` unless
+        ``stop_area_m2`` is given (then it must give the same ``R``).
+        """
+        omega = bar.wave_speed_m_s / (bar.length_m * model.s)
+        fscale = bar.mass_kg * bar.length_m * omega**2
+        if isinstance(load, CosineLoad):
+            force = PneumaticForce(load.p0 * fscale, load.pk * fscale, load.k)
+            f = omega * load.k / TWO_PI
+        elif isinstance(load, SquareWaveLoad):
+            force = HydraulicForce(load.q * fscale, -load.q * fscale, load.kappa / 2.0)
+            f = omega / TWO_PI
+        elif isinstance(load, PiecewiseConstantLoad) and load.breaks.size == 2:
+            force = HydraulicForce(load.levels[0] * fscale, load.levels[1] * fscale,
+                                   load.breaks[1] / TWO_PI)
+            f = omega / TWO_PI
+        else:
+            raise ValueError(f"load: cannot express {type(load).__name__} as an SI force")
+        kw = {"restitution": model.R} if stop_area_m2 is None else {"stop_area_m2": stop_area_m2}
+        h = cls(bar=bar, frequency_Hz=f, force=force,
+                damping_N_s_m2=model.d * bar.mass_per_length_kg_m * omega, n_modes=model.n_modes,
+                name=name, **kw)
+        if stop_area_m2 is not None and not math.isclose(h.R, model.R, rel_tol=1e-9, abs_tol=1e-12):
+            raise ValueError(f"stop.area gives R = {h.R:.6g}, not the model's R = {model.R:.6g}")
+        return h
+
+

@@ -1,0 +1,191 @@
+"""What a rock-drill designer reads: one-impact orbits and simulations of a hammer, in SI units."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validate import check_real
+from ..orbits import periodic_orbits
+from ..simulation import InitialState
+from ..simulation import simulate as run_simulation
+from .bar import TWO_PI
+from .hammer import Hammer
+
+
+# --------------------------------------------------------------------------------------------
+# results in SI
+# --------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class PhysicalOrbit:
+    """A one-impact periodic motion with its engineering figures in SI.
+
+    Attributes
+    ----------
+    orbit : PeriodicOrbit
+        The dimensionless orbit (``impactbar.periodic_orbits``).
+    phase_rad : float
+        Phase ``phi`` of the load at impact (rad).
+    impact_velocity : float
+        Dimensionless impact velocity ``u_t(1, 2 pi-)``.
+    impact_velocity_m_s : float
+        Impact velocity ``v = L Omega u_t`` (m/s).
+    blow_energy_J : float
+        Energy per blow ``m v^2 / 2`` (J): the kinetic energy of the piston moving as a rigid body
+        at the struck end's velocity. This is the standard figure of merit of rock drills; it
+        ignores the elastic vibration energy of the piston.
+    blow_frequency_Hz : float
+        Blows per second ``Omega / 2 pi`` (Hz).
+    power_W : float
+        Impact power, energy per blow times blow frequency (W).
+    peak_stress_Pa : float
+        Peak compressive stress at impact (Pa), see :meth:`Hammer.peak_stress_Pa`.
+    admissible, stable : bool
+        As in the dimensionless orbit (MODEL.md sections 5, 7).
+    max_abs_multiplier : float
+        Largest modulus of the Floquet multipliers.
+    """
+
+    orbit: object
+    phase_rad: float
+    impact_velocity: float
+    impact_velocity_m_s: float
+    blow_energy_J: float
+    blow_frequency_Hz: float
+    power_W: float
+    peak_stress_Pa: float
+    admissible: bool
+    stable: bool
+    max_abs_multiplier: float
+
+    @classmethod
+    def from_orbit(cls, orbit, hammer: Hammer) -> PhysicalOrbit:
+        """Convert a dimensionless ``PeriodicOrbit`` of ``hammer``'s model."""
+        v = float(orbit.impact_velocity) * hammer.scales.velocity_m_s
+        energy = 0.5 * hammer.mass_kg * v * v
+        fb = hammer.blow_frequency_Hz
+        return cls(
+            orbit=orbit, phase_rad=float(orbit.phase),
+            impact_velocity=float(orbit.impact_velocity), impact_velocity_m_s=v,
+            blow_energy_J=energy, blow_frequency_Hz=fb, power_W=energy * fb,
+            peak_stress_Pa=float(hammer.peak_stress_Pa(v)), admissible=bool(orbit.admissible),
+            stable=bool(orbit.stable), max_abs_multiplier=float(orbit.max_abs_multiplier))
+
+    def to_dict(self) -> dict:
+        """JSON-ready figures (without the dimensionless orbit object)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
+                if f.name != "orbit"}
+
+
+def orbits(hammer: Hammer) -> list[PhysicalOrbit]:
+    """The one-impact periodic motions of ``hammer`` with their SI figures.
+
+    Calls ``periodic_orbits(hammer.model, hammer.load)`` and converts each orbit; warns
+    (:class:`ImpactDurationWarning`) when impacts are not short against the period.
+
+    Returns
+    -------
+    list of PhysicalOrbit
+    """
+    hammer.check_short_impacts()
+    found = periodic_orbits(hammer.model, hammer.load)
+    return [PhysicalOrbit.from_orbit(o, hammer) for o in found]
+
+
+@dataclass(frozen=True, eq=False)
+class SimulationResult:
+    """A simulated motion of a hammer in SI units.
+
+    Attributes
+    ----------
+    hammer : Hammer
+    trajectory : Trajectory
+        The dimensionless trajectory (``impactbar.simulate``).
+    t_end_s : float
+        Simulated time (s), from 0.
+    impact_times_s : numpy.ndarray, shape (n,)
+        Impact times (s).
+    impact_velocities_m_s : numpy.ndarray, shape (n,)
+        Arrival velocities of the struck end (m/s).
+    blow_energies_J : numpy.ndarray, shape (n,)
+        ``m v^2 / 2`` per impact (J).
+    """
+
+    hammer: Hammer
+    trajectory: object
+    t_end_s: float
+    impact_times_s: np.ndarray
+    impact_velocities_m_s: np.ndarray
+    blow_energies_J: np.ndarray
+
+    def end_displacement_m(self, t_s) -> np.ndarray:
+        """Displacement of the struck end (m, negative off the stop) at times ``t_s`` (s)."""
+        sc = self.hammer.scales
+        t = np.asarray(t_s, dtype=float) / sc.time_s
+        return _evaluate(self.trajectory.end_displacement, t) * sc.length_m
+
+    def end_velocity_m_s(self, t_s) -> np.ndarray:
+        """Velocity of the struck end (m/s) at times ``t_s`` (s); from the trajectory's own
+        ``end_velocity`` when it has one, else by a central difference of the displacement."""
+        sc = self.hammer.scales
+        t = np.asarray(t_s, dtype=float) / sc.time_s
+        ev = getattr(self.trajectory, "end_velocity", None)
+        if callable(ev):
+            return _evaluate(ev, t) * sc.velocity_m_s
+        h = 1e-6
+        tend = self.t_end_s / sc.time_s
+        lo = np.clip(t - h, 0.0, tend)
+        hi = np.clip(t + h, 0.0, tend)
+        u = self.trajectory.end_displacement
+        return (_evaluate(u, hi) - _evaluate(u, lo)) / (hi - lo) * sc.velocity_m_s
+
+
+def _evaluate(fn, t: np.ndarray) -> np.ndarray:
+    """``fn`` at the times ``t``: in one call when ``fn`` takes arrays, else one time at a time."""
+    try:
+        out = np.asarray(fn(t), dtype=float)
+        if out.shape == t.shape:
+            return out
+    except (TypeError, ValueError):
+        pass
+    return np.array([float(fn(float(x))) for x in t.ravel()]).reshape(t.shape)
+
+
+def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
+             max_impacts: int | None = None) -> SimulationResult:
+    """Simulate ``hammer`` from rest, ``gap_m`` off the stop, over ``periods`` impact periods.
+
+    Parameters
+    ----------
+    hammer : Hammer
+    periods : float, optional
+        Length of the run in impact periods ``1 / f_b`` (``k`` force cycles each), ``> 0``.
+    gap_m : float, optional
+        Initial distance of the struck end from the stop (m), ``>= 0``; the piston starts at rest.
+    max_impacts : int, optional
+        Passed to ``impactbar.simulate``.
+
+    Returns
+    -------
+    SimulationResult
+
+    Raises
+    ------
+    """
+    periods = check_real("periods", periods, lo=0.0, lo_open=True)
+    gap_m = check_real("gap", gap_m, lo=0.0)
+    hammer.check_short_impacts()
+    sc = hammer.scales
+    t_end = TWO_PI * periods
+    traj = run_simulation(hammer.model, hammer.load,
+                          InitialState.rigid(end_displacement=-gap_m / sc.length_m, velocity=0.0), t_end,
+                          max_impacts=max_impacts)
+    v = np.asarray(traj.impact_velocities, dtype=float) * sc.velocity_m_s
+    return SimulationResult(
+        hammer=hammer, trajectory=traj, t_end_s=t_end * sc.time_s,
+        impact_times_s=np.asarray(traj.impact_times, dtype=float) * sc.time_s,
+        impact_velocities_m_s=v, blow_energies_J=0.5 * hammer.mass_kg * v * v)
+
+

@@ -1,0 +1,79 @@
+"""Parameter sweeps and Monte Carlo on ``dask.distributed``, stored chunk by chunk in zarr (issue 4).
+
+A sweep is described by a :class:`SweepSpec` (usually read from a TOML file with
+:func:`load_spec`): a task, a base bar and load, and axes, each sweeping one scalar field of the
+bar or the load. The grid is the outer product of the axes, cut into blocks of neighbouring points
+("chunks"); :func:`compute_chunk` computes one chunk from plain arguments (no dask, no storage) and
+:func:`run_sweep` farms the chunks out to a ``dask.distributed`` cluster and writes each one into a
+zarr store as soon as it arrives.
+
+Tasks
+-----
+``orbits``
+    :func:`impactbar.periodic_orbits` at every point: ``phase``, ``admissible``, ``stable``,
+    ``schur_stable``, ``max_abs_multiplier``, ``impact_velocity`` along an ``orbit`` dimension
+    (padded with NaN / False) and ``n_orbits``.
+``montecarlo``
+    :func:`impactbar.simulation.experiments.run_experiment` at every point: ``starts`` seeded random starts of
+    ``periods`` load periods each, the long-run motion of each classified
+    (:func:`impactbar.simulation.experiments.classify`); ``fraction`` of each class along a ``motion``
+    dimension and the impact-interval statistics.
+``bifurcation``
+    One long run from a seeded random start at every point; the velocities and load phases of the
+    last ``keep`` impacts along an ``impact`` dimension (a brute-force bifurcation diagram).
+
+Store layout and resumption
+---------------------------
+The whole store (every variable, its fill value, a zarr chunk grid equal to the work chunks, the
+spec and the package version as attributes) is created up front, into a temporary folder that is
+renamed into place, so a store either exists complete or not at all. Each finished chunk is
+written into its own zarr chunks; only then its entry of ``chunk_done`` (one ``int8`` per chunk) is
+set. zarr's local store replaces files atomically, so a run killed at any moment, SIGKILL included,
+loses only the chunks in flight. Rerunning resumes: the stored spec must equal the requested one,
+and only chunks whose flag is unset are computed. Every random start is seeded from the spec's
+``seed`` and the point's flat index in the grid (``numpy.random.SeedSequence([seed, index])``),
+never from the chunk order or the worker, so a resumed sweep equals an uninterrupted one.
+
+Layout: ``spec`` (schema and validation), ``tasks`` (one chunk's work), ``store`` (zarr layout, done
+flags), ``run`` (the dask driver), ``plot`` (figures from a finished store; the only module that
+imports matplotlib). This layer sits on the core and imports dask, xarray and zarr lazily; the core
+never imports it.
+"""
+
+from __future__ import annotations
+
+from .plot import plot_sweep as plot_sweep
+from .run import SweepRun as SweepRun
+from .run import run_sweep as run_sweep
+from .spec import LOAD_KINDS as LOAD_KINDS
+from .spec import TASKS as TASKS
+from .spec import Axis as Axis
+from .spec import SweepSpec as SweepSpec
+from .spec import load_spec as load_spec
+from .spec import motion_classes as motion_classes
+from .spec import parse_spec as parse_spec
+from .store import open_sweep as open_sweep
+from .store import point_done as point_done
+from .store import stored_spec as stored_spec
+from .store import sweep_progress as sweep_progress
+from .tasks import chunk_slices as chunk_slices
+from .tasks import compute_chunk as compute_chunk
+
+__all__ = [
+    "TASKS",
+    "LOAD_KINDS",
+    "Axis",
+    "SweepSpec",
+    "SweepRun",
+    "load_spec",
+    "parse_spec",
+    "motion_classes",
+    "chunk_slices",
+    "compute_chunk",
+    "run_sweep",
+    "open_sweep",
+    "point_done",
+    "stored_spec",
+    "sweep_progress",
+    "plot_sweep",
+]

@@ -1,0 +1,427 @@
+"""Sweep specifications: the TOML schema, its validation, and the bar and load at a grid point."""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .._validate import check_int, check_real
+
+TASKS = ("orbits", "montecarlo", "bifurcation")
+
+#: the fields of each load kind, in constructor order
+LOAD_KINDS = {"cosine": ("p0", "pk", "k"), "square": ("q", "kappa"), "fourier": ("p0", "coefficients")}
+
+MODEL_FIELDS = ("s", "d", "R", "n_modes")
+INT_FIELDS = frozenset({"n_modes", "k"})
+
+#: task options: name -> (default, kind, lower bound, lower bound open, upper bound)
+_OPTIONS = {
+    "orbits": {"max_orbits": (None, int, 1, False, None)},
+    "montecarlo": {
+        "starts": (100, int, 1, False, None),
+        "periods": (200.0, float, 0.0, True, None),
+        "seed": (0, int, 0, False, None),
+        "window": (0.25, float, 0.0, True, 1.0),
+    },
+    "bifurcation": {
+        "periods": (400.0, float, 0.0, True, None),
+        "keep": (64, int, 1, False, None),
+        "seed": (0, int, 0, False, None),
+    },
+}
+
+#: grid points per chunk when the spec does not say
+DEFAULT_CHUNK_POINTS = {"orbits": 400, "montecarlo": 4, "bifurcation": 32}
+
+_TOP_KEYS = ("task", "model", "load", "axes", "chunk_points", *TASKS)
+
+#: names of the extra dimension of each task
+_EXTRA_DIM = {"orbits": "orbit", "montecarlo": "motion", "bifurcation": "impact"}
+
+_DONE = "chunk_done"
+_ATTR_SPEC = "impactbar_sweep_spec"
+_ATTR_VERSION = "impactbar_version"
+
+
+# ------------------------------------------------------------------------------------------------
+# the spec
+# ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Axis:
+    """One axis of the grid: a bar or load field and the values it takes.
+
+    Parameters
+    ----------
+    name : str
+        A field of :class:`impactbar.BarModel` (``s``, ``d``, ``R``, ``n_modes``) or of the spec's
+        load (``p0``, ``pk``, ``k`` for ``cosine``; ``q``, ``kappa`` for ``square``; ``p0`` for
+        ``fourier``).
+    values : tuple of float (tuple of int for ``n_modes`` and ``k``), shape (n,)
+        The values, distinct, ``n >= 1``; dimensionless like the field.
+    """
+
+    name: str
+    values: tuple
+
+    @property
+    def size(self) -> int:
+        return len(self.values)
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep: task, base bar and load, axes, task options and chunk size.
+
+    Build it with :func:`load_spec` (a TOML file) or :func:`parse_spec` (a mapping of the same
+    shape); constructing it directly validates the same way. Every failure is a ``ValueError`` that
+    names the key (``[model] R``, ``[axes] p0``, ``[montecarlo] starts``, ...).
+
+    Parameters
+    ----------
+    task : {"orbits", "montecarlo", "bifurcation"}
+    model : dict
+        ``s``, ``d``, ``R``, ``n_modes`` of :class:`impactbar.BarModel`, all required.
+    load : dict
+        ``kind`` (``"cosine"``, ``"square"`` or ``"fourier"``) and that load's fields, all required:
+        ``p0, pk, k`` (:class:`impactbar.CosineLoad`), ``q, kappa``
+        (:class:`impactbar.SquareWaveLoad`), ``p0, coefficients``
+        (:class:`impactbar.FourierLoad`; ``coefficients`` as ``[[re, im], ...]`` or real numbers).
+    axes : tuple of Axis
+        At least one; each names a field present in ``model`` or ``load`` (its value there is the
+        base, replaced along the axis). The grid is their outer product, first axis slowest.
+    options : dict
+        The task's options, defaults filled in. ``orbits``: ``max_orbits`` (length of the
+        ``orbit`` dimension; default the most one-impact orbits the load can have: ``2 k`` for a
+        cosine, ``2 K`` for ``K`` Fourier harmonics, 2 for the square wave). ``montecarlo``:
+        ``starts`` (100), ``periods`` (200, load periods per run), ``seed`` (0), ``window`` (0.25,
+        fraction of each run classified). ``bifurcation``: ``periods`` (400), ``keep`` (64 last
+        impacts stored), ``seed`` (0).
+    chunk_points : int
+        Grid points per work chunk (about; chunks are blocks of the grid), ``>= 1``. Default 400
+        for ``orbits``, 4 for ``montecarlo``, 32 for ``bifurcation``.
+    """
+
+    task: str
+    model: dict
+    load: dict
+    axes: tuple
+    options: dict = field(default_factory=dict)
+    chunk_points: int | None = None
+
+    def __post_init__(self) -> None:
+        if self.task not in TASKS:
+            raise ValueError(f"task must be one of {list(TASKS)}; got {self.task!r}")
+        object.__setattr__(self, "model", _check_model(self.model))
+        object.__setattr__(self, "load", _check_load(self.load))
+        object.__setattr__(self, "axes", _check_axes(self.axes, self.model, self.load))
+        object.__setattr__(self, "options", _check_options(self.task, self.options, self))
+        cp = DEFAULT_CHUNK_POINTS[self.task] if self.chunk_points is None else self.chunk_points
+        object.__setattr__(self, "chunk_points", check_int("chunk_points", cp, lo=1))
+
+    # -- the grid ----------------------------------------------------------------------------
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Grid shape, one entry per axis."""
+        return tuple(a.size for a in self.axes)
+
+    @property
+    def n_points(self) -> int:
+        return math.prod(self.shape)
+
+    @property
+    def chunk_shape(self) -> tuple[int, ...]:
+        """Shape of a work chunk (and of the zarr chunks along the axes): the last axes are filled
+        first, up to ``chunk_points`` points."""
+        left = self.chunk_points
+        out = []
+        for n in reversed(self.shape):
+            c = max(1, min(n, left))
+            out.append(c)
+            left = max(1, left // c)
+        return tuple(reversed(out))
+
+    @property
+    def chunk_grid(self) -> tuple[int, ...]:
+        """Number of chunks along each axis."""
+        return tuple(-(-n // c) for n, c in zip(self.shape, self.chunk_shape, strict=True))
+
+    @property
+    def n_chunks(self) -> int:
+        return math.prod(self.chunk_grid)
+
+    @property
+    def extra_size(self) -> int:
+        """Length of the task's extra dimension (``orbit``, ``motion`` or ``impact``)."""
+        if self.task == "orbits":
+            return self.options["max_orbits"]
+        if self.task == "bifurcation":
+            return self.options["keep"]
+        return len(motion_classes())
+
+    def point(self, index) -> tuple:
+        """The bar and the load at a grid point.
+
+        Parameters
+        ----------
+        index : tuple of int, shape (n_axes,)
+
+        Returns
+        -------
+        BarModel, Load
+        """
+        changes = {a.name: a.values[i] for a, i in zip(self.axes, index, strict=True)}
+        return _build(self.model, self.load, changes)
+
+    # -- serialisation ------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """The spec as plain JSON-able data of the TOML's shape, defaults filled in."""
+        d = {
+            "task": self.task,
+            "model": dict(self.model),
+            "load": {k: ([list(c) for c in v] if k == "coefficients" else v) for k, v in self.load.items()},
+            "axes": {a.name: {"values": list(a.values)} for a in self.axes},
+            "chunk_points": self.chunk_points,
+        }
+        d[self.task] = dict(self.options)
+        return d
+
+    def to_json(self) -> str:
+        """Canonical JSON of :meth:`to_dict` (what the store keeps and resumption compares)."""
+        return json.dumps(self.to_dict(), sort_keys=False, separators=(",", ":"))
+
+
+def load_spec(path) -> SweepSpec:
+    """Read and validate a sweep spec from a TOML file (see :class:`SweepSpec` for the keys).
+
+    Raises
+    ------
+    ValueError
+        If the file is not valid TOML, or a key is unknown, missing or out of range; the message
+        names the key.
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as f:
+            doc = tomllib.load(f)
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: not valid TOML: {exc}") from exc
+    except OSError as exc:
+        raise ValueError(f"cannot read spec {path}: {exc}") from exc
+    return parse_spec(doc)
+
+
+def parse_spec(doc) -> SweepSpec:
+    """Validate a spec given as a mapping of the TOML's shape (see :class:`SweepSpec`).
+
+    ``axes`` maps each field to ``{start, stop, num}`` (``numpy.linspace``, both ends included) or
+    ``{values = [...]}``.
+
+    Raises
+    ------
+    ValueError
+        Naming the unknown, missing or out-of-range key.
+    """
+    if not isinstance(doc, dict):
+        raise ValueError(f"spec must be a table; got {type(doc).__name__}")
+    unknown = [k for k in doc if k not in _TOP_KEYS]
+    if unknown:
+        raise ValueError(f"unknown top-level key(s) {unknown}; allowed: {list(_TOP_KEYS)}")
+    for key in ("task", "model", "load", "axes"):
+        if key not in doc:
+            raise ValueError(f"missing top-level key {key!r}")
+    task = doc["task"]
+    if task not in TASKS:
+        raise ValueError(f"task must be one of {list(TASKS)}; got {task!r}")
+    for other in TASKS:
+        if other != task and other in doc:
+            raise ValueError(f"[{other}] is given but task = {task!r}; use [{task}] for its options")
+    for key in ("model", "load", "axes", task):
+        if key in doc and not isinstance(doc[key], dict):
+            raise ValueError(f"[{key}] must be a table; got {doc[key]!r}")
+    axes_doc = doc["axes"]
+    axes = tuple(Axis(name, _axis_values(name, table)) for name, table in axes_doc.items())
+    load = dict(doc["load"])
+    if "coefficients" in load and isinstance(load["coefficients"], list):
+        load["coefficients"] = _coefficients(load["coefficients"])
+    return SweepSpec(task=task, model=dict(doc["model"]), load=load, axes=axes,
+                     options=dict(doc.get(task, {})), chunk_points=doc.get("chunk_points"))
+
+
+def _axis_values(name, table) -> tuple:
+    if not isinstance(table, dict):
+        raise ValueError(f"[axes] {name} must be a table {{start, stop, num}} or {{values}}; got {table!r}")
+    keys = set(table)
+    if keys == {"values"}:
+        vals = table["values"]
+        if not isinstance(vals, list) or not vals:
+            raise ValueError(f"[axes] {name}.values must be a non-empty list of numbers; got {vals!r}")
+        return tuple(vals)
+    if keys == {"start", "stop", "num"}:
+        start = check_real(f"[axes] {name}.start", table["start"])
+        stop = check_real(f"[axes] {name}.stop", table["stop"])
+        num = check_int(f"[axes] {name}.num", table["num"], lo=1, hi=10**7)
+        vals = np.linspace(start, stop, num)
+        if name in INT_FIELDS:
+            if not np.all(vals == np.round(vals)):
+                raise ValueError(f"[axes] {name}: start, stop, num must give integers for an integer "
+                                 f"field; got {vals.tolist()}")
+            return tuple(int(v) for v in np.round(vals))
+        return tuple(float(v) for v in vals)
+    raise ValueError(f"[axes] {name} must have keys start, stop, num or just values; got {sorted(keys)}")
+
+
+def _coefficients(seq) -> tuple:
+    out = []
+    for j, c in enumerate(seq):
+        if isinstance(c, list) and len(c) == 2:
+            re_ = check_real(f"[load] coefficients[{j}][0]", c[0])
+            im_ = check_real(f"[load] coefficients[{j}][1]", c[1])
+        else:
+            re_, im_ = check_real(f"[load] coefficients[{j}]", c), 0.0
+        out.append((re_, im_))
+    return tuple(out)
+
+
+def _check_model(model) -> dict:
+    if not isinstance(model, dict):
+        raise ValueError(f"[model] must be a table; got {model!r}")
+    unknown = [k for k in model if k not in MODEL_FIELDS]
+    if unknown:
+        raise ValueError(f"[model] unknown key(s) {unknown}; allowed: {list(MODEL_FIELDS)}")
+    missing = [k for k in MODEL_FIELDS if k not in model]
+    if missing:
+        raise ValueError(f"[model] missing key(s) {missing}")
+    from ..model import BarModel
+
+    try:
+        m = BarModel(**{k: model[k] for k in MODEL_FIELDS})
+    except ValueError as exc:
+        raise ValueError(f"[model] {exc}") from None
+    return {"s": m.s, "d": m.d, "R": m.R, "n_modes": m.n_modes}
+
+
+def _check_load(load) -> dict:
+    if not isinstance(load, dict):
+        raise ValueError(f"[load] must be a table; got {load!r}")
+    if "kind" not in load:
+        raise ValueError(f"[load] missing key 'kind' (one of {list(LOAD_KINDS)})")
+    kind = load["kind"]
+    if kind not in LOAD_KINDS:
+        raise ValueError(f"[load] kind must be one of {list(LOAD_KINDS)}; got {kind!r}")
+    fields = LOAD_KINDS[kind]
+    unknown = [k for k in load if k != "kind" and k not in fields]
+    if unknown:
+        raise ValueError(f"[load] unknown key(s) {unknown} for kind = {kind!r}; allowed: {list(fields)}")
+    missing = [k for k in fields if k not in load]
+    if missing:
+        raise ValueError(f"[load] missing key(s) {missing} for kind = {kind!r}")
+    out = {"kind": kind}
+    for k in fields:
+        v = load[k]
+        if k == "coefficients":
+            v = _coefficients(v) if isinstance(v, list) else tuple(tuple(map(float, c)) for c in v)
+        out[k] = v
+    try:
+        ld = _make_load(out)
+    except ValueError as exc:
+        raise ValueError(f"[load] {exc}") from None
+    for k in fields:  # normalised values (floats, ints)
+        if k != "coefficients":
+            out[k] = getattr(ld, k) if hasattr(ld, k) else out[k]
+    if kind == "fourier":
+        out["p0"] = float(ld.p0)
+    return out
+
+
+def _check_axes(axes, model, load) -> tuple:
+    if not isinstance(axes, tuple | list) or not axes:
+        raise ValueError("[axes] must name at least one field to sweep")
+    sweepable = [*MODEL_FIELDS, *(f for f in LOAD_KINDS[load["kind"]] if f != "coefficients")]
+    seen = set()
+    out = []
+    for ax in axes:
+        if not isinstance(ax, Axis):
+            raise ValueError(f"[axes] entries must be Axis; got {ax!r}")
+        if ax.name not in sweepable:
+            raise ValueError(f"[axes] {ax.name!r} is not a field of [model] or of this [load] "
+                             f"(kind = {load['kind']!r}); sweepable: {sweepable}")
+        if ax.name in seen:
+            raise ValueError(f"[axes] {ax.name!r} is given twice")
+        seen.add(ax.name)
+        values = []
+        for v in ax.values:
+            try:
+                m, ld = _build(model, load, {ax.name: v})
+            except ValueError as exc:
+                raise ValueError(f"[axes] {ax.name} = {v!r}: {exc}") from None
+            values.append(getattr(m, ax.name) if ax.name in MODEL_FIELDS else getattr(ld, ax.name))
+        if len(set(values)) != len(values):
+            raise ValueError(f"[axes] {ax.name}: values must be distinct; got {values}")
+        out.append(Axis(ax.name, tuple(values)))
+    return tuple(out)
+
+
+def _check_options(task, options, spec) -> dict:
+    if not isinstance(options, dict):
+        raise ValueError(f"[{task}] must be a table; got {options!r}")
+    allowed = _OPTIONS[task]
+    unknown = [k for k in options if k not in allowed]
+    if unknown:
+        raise ValueError(f"[{task}] unknown key(s) {unknown}; allowed: {list(allowed)}")
+    out = {}
+    for name, (default, kind, lo, lo_open, hi) in allowed.items():
+        v = options.get(name, default)
+        if v is None and name == "max_orbits":
+            v = _max_orbits_bound(spec)
+        key = f"[{task}] {name}"
+        if kind is int:
+            out[name] = check_int(key, v, lo=lo, hi=hi)
+        else:
+            out[name] = check_real(key, v, lo=lo, lo_open=lo_open, hi=hi)
+    return out
+
+
+def _max_orbits_bound(spec) -> int:
+    """Most one-impact orbits the load admits: the phase equation (eq. 14) is a trigonometric
+    polynomial of degree ``K`` (at most ``2 K`` roots); for the square wave ``V`` is monotone on
+    each of its two pieces."""
+    kind = spec.load["kind"]
+    if kind == "square":
+        return 2
+    if kind == "fourier":
+        return max(2, 2 * len(spec.load["coefficients"]))
+    ks = [spec.load["k"]] + [v for a in spec.axes if a.name == "k" for v in a.values]
+    return 2 * max(ks)
+
+
+def _make_load(load: dict):
+    from ..loads import CosineLoad, FourierLoad, SquareWaveLoad
+
+    kind = load["kind"]
+    if kind == "cosine":
+        return CosineLoad(load["p0"], load["pk"], load["k"])
+    if kind == "square":
+        return SquareWaveLoad(load["q"], load["kappa"])
+    return FourierLoad(load["p0"], [complex(re_, im_) for re_, im_ in load["coefficients"]])
+
+
+def _build(model: dict, load: dict, changes: dict):
+    from ..model import BarModel
+
+    m = {k: changes.get(k, v) for k, v in model.items()}
+    ld = {k: changes.get(k, v) for k, v in load.items()}
+    return BarModel(**m), _make_load(ld)
+
+def motion_classes() -> tuple[str, ...]:
+    """The ``motion`` coordinate of a ``montecarlo`` store: the classes of
+    :func:`impactbar.simulation.experiments.classify` in their report order, and ``"k>8"`` for any longer
+    one-impact cycle."""
+    from ..simulation.experiments import CLASS_ORDER
+
+    return (*CLASS_ORDER, "k>8")

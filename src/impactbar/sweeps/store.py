@@ -1,0 +1,196 @@
+"""The zarr store of a sweep: created whole up front, written chunk by chunk, done flags, reading back."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import uuid
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, SweepSpec, motion_classes, parse_spec
+from .tasks import _variables, chunk_slices
+
+
+# ------------------------------------------------------------------------------------------------
+# the store
+# ------------------------------------------------------------------------------------------------
+def _template(spec: SweepSpec):
+    """The dataset to create the store from: lazy (dask) fill values, coordinates, attributes."""
+    import dask.array as da
+    import xarray as xr
+
+    from .._version import __version__
+
+    dims = tuple(a.name for a in spec.axes)
+    extra_dim = _EXTRA_DIM[spec.task]
+    chunks = spec.chunk_shape
+    data_vars = {}
+    for name, (dtype, fill, extra, desc) in _variables(spec).items():
+        shape = spec.shape + ((spec.extra_size,) if extra else ())
+        ch = chunks + ((spec.extra_size,) if extra else ())
+        arr = da.full(shape, fill, dtype=dtype, chunks=ch)
+        data_vars[name] = xr.Variable(dims + ((extra_dim,) if extra else ()), arr,
+                                      attrs={"description": desc})
+    data_vars[_DONE] = xr.Variable(("chunk",), da.zeros(spec.n_chunks, dtype=np.int8,
+                                                          chunks=spec.n_chunks),
+                                   attrs={"description": "1 once the work chunk is stored"})
+    coords = {a.name: np.asarray(a.values) for a in spec.axes}
+    if spec.task == "montecarlo":
+        coords["motion"] = np.asarray(motion_classes(), dtype=object)  # variable-length strings
+    attrs = {
+        _ATTR_SPEC: spec.to_json(),
+        _ATTR_VERSION: __version__,
+        "task": spec.task,
+        "chunk_shape": list(spec.chunk_shape),
+    }
+    return xr.Dataset(data_vars, coords=coords, attrs=attrs)
+
+
+def _is_sweep_store(path: Path) -> bool:
+    return (path / "zarr.json").is_file() and _ATTR_SPEC in _read_attrs(path)
+
+
+def _read_attrs(path: Path) -> dict:
+    try:
+        doc = json.loads((path / "zarr.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return doc.get("attributes", {}) or {}
+
+
+def _create_store(spec: SweepSpec, path: Path) -> None:
+    """Create the full store in a temporary folder next to ``path`` and rename it into place
+    (removing what a run killed during this step left behind)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    for stale in path.parent.glob(f".{path.name}.creating-*"):
+        shutil.rmtree(stale, ignore_errors=True)
+    tmp = path.with_name(f".{path.name}.creating-{uuid.uuid4().hex}")
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
+            _template(spec).to_zarr(tmp, mode="w-", compute=False, zarr_format=3, consolidated=True)
+        os.rename(tmp, path)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _prepare_store(spec: SweepSpec, path: Path, overwrite: bool) -> np.ndarray:
+    """Create the store or check that it holds this sweep; return the done flags, shape
+    ``(n_chunks,)``."""
+    from .._version import __version__
+
+    if path.exists():
+        if not _is_sweep_store(path):
+            raise ValueError(f"--out {path} exists and is not an impactbar sweep store; "
+                             "choose another path")
+        if overwrite:
+            shutil.rmtree(path)
+        else:
+            attrs = _read_attrs(path)
+            if attrs.get(_ATTR_SPEC) != spec.to_json():
+                stored = json.loads(attrs.get(_ATTR_SPEC, "{}"))
+                new = spec.to_dict()
+                diff = sorted(k for k in set(stored) | set(new) if stored.get(k) != new.get(k))
+                raise ValueError(f"--out {path} holds a different sweep (differs in {diff}); "
+                                 "use --overwrite to replace it, or another --out")
+            if attrs.get(_ATTR_VERSION) != __version__:
+                raise ValueError(f"--out {path} was computed by impactbar {attrs.get(_ATTR_VERSION)}, "
+                                 f"this is {__version__}; use --overwrite to recompute it")
+            return _read_done(path, spec.n_chunks)
+    _create_store(spec, path)
+    return np.zeros(spec.n_chunks, dtype=np.int8)
+
+
+def _read_done(path: Path, n_chunks: int) -> np.ndarray:
+    import zarr
+
+    done = np.asarray(zarr.open_array(store=str(path), path=_DONE, mode="r")[:], dtype=np.int8)
+    if done.shape != (n_chunks,):  # pragma: no cover - the spec check makes this impossible
+        raise ValueError(f"{path}: chunk_done has shape {done.shape}, expected ({n_chunks},)")
+    return done
+
+
+def _write_chunk(spec: SweepSpec, path: Path, chunk: int, result: dict) -> None:
+    import xarray as xr
+
+    slices = chunk_slices(spec, chunk)
+    dims = tuple(a.name for a in spec.axes)
+    extra_dim = _EXTRA_DIM[spec.task]
+    data = {}
+    for name, arr in result.items():
+        d = dims + ((extra_dim,) if arr.ndim > len(dims) else ())
+        data[name] = (d, arr)
+    region = {a.name: s for a, s in zip(spec.axes, slices, strict=True)}
+    xr.Dataset(data).to_zarr(path, region=region, mode="r+", consolidated=False)
+
+
+def _write_done(path: Path, done: np.ndarray) -> None:
+    import xarray as xr
+
+    xr.Dataset({_DONE: (("chunk",), done)}).to_zarr(path, region={"chunk": slice(0, done.size)},
+                                                    mode="r+", consolidated=False)
+
+
+def open_sweep(path):
+    """Open a sweep store as an ``xarray.Dataset`` (lazily; ``xarray.open_zarr`` does the same).
+
+    Raises
+    ------
+    ValueError
+        If ``path`` is not an impactbar sweep store.
+    """
+    import xarray as xr
+
+    path = Path(path)
+    if not _is_sweep_store(path):
+        raise ValueError(f"{path} is not an impactbar sweep store")
+    return xr.open_zarr(path)
+
+
+def stored_spec(ds) -> SweepSpec:
+    """The spec of a sweep store, from the attributes of its dataset (:func:`open_sweep`)."""
+    if _ATTR_SPEC not in ds.attrs:
+        raise ValueError("the dataset is not an impactbar sweep store (no spec attribute)")
+    return parse_spec(json.loads(ds.attrs[_ATTR_SPEC]))
+
+
+def point_done(ds):
+    """Which grid points are stored: ``chunk_done`` spread over the grid.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep store (:func:`open_sweep`).
+
+    Returns
+    -------
+    xarray.DataArray of bool, shape of the grid
+        Dimensions and coordinates of the axes.
+    """
+    import xarray as xr
+
+    spec = stored_spec(ds)
+    flags = np.asarray(ds[_DONE].values, dtype=bool).reshape(spec.chunk_grid)
+    grid = flags
+    for axis, c in enumerate(spec.chunk_shape):
+        grid = np.repeat(grid, c, axis=axis)
+    grid = grid[tuple(slice(0, n) for n in spec.shape)]
+    dims = tuple(a.name for a in spec.axes)
+    return xr.DataArray(grid, dims=dims, coords={d: ds[d].values for d in dims})
+
+
+def sweep_progress(path) -> tuple[int, int]:
+    """``(chunks done, chunks in all)`` of a sweep store, from its done flags."""
+    path = Path(path)
+    if not _is_sweep_store(path):
+        raise ValueError(f"{path} is not an impactbar sweep store")
+    spec = parse_spec(json.loads(_read_attrs(path)[_ATTR_SPEC]))
+    done = _read_done(path, spec.n_chunks)
+    return int(done.sum()), int(done.size)
+
+

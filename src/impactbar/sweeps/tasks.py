@@ -1,0 +1,176 @@
+"""The work of one chunk of a sweep (orbits, montecarlo, bifurcation), from plain arguments:
+no dask, no storage."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validate import check_int
+from .spec import SweepSpec, motion_classes
+
+
+# ------------------------------------------------------------------------------------------------
+# chunks and the task functions (plain numbers, no dask)
+# ------------------------------------------------------------------------------------------------
+def chunk_slices(spec: SweepSpec, chunk: int) -> tuple[slice, ...]:
+    """The block of the grid covered by work chunk ``chunk`` (C order over :attr:`chunk_grid`).
+
+    Returns
+    -------
+    tuple of slice, shape (n_axes,)
+    """
+    chunk = check_int("chunk", chunk, lo=0, hi=spec.n_chunks - 1)
+    idx = np.unravel_index(chunk, spec.chunk_grid)
+    return tuple(slice(int(i) * c, min((int(i) + 1) * c, n))
+                 for i, c, n in zip(idx, spec.chunk_shape, spec.shape, strict=True))
+
+
+
+def point_seed(base_seed: int, flat_index: int) -> int:
+    """Seed of the random start(s) at the grid point with C-order index ``flat_index``: from
+    ``numpy.random.SeedSequence([base_seed, flat_index])``, independent of chunks and workers."""
+    return int(np.random.SeedSequence([base_seed, flat_index]).generate_state(1, np.uint64)[0])
+
+
+def _variables(spec: SweepSpec) -> dict:
+    """Name -> (dtype, fill, has the extra dimension, description) of the task's variables."""
+    f8, b1 = np.dtype("float64"), np.dtype("bool")
+    common = {"failed": (b1, False, False, "the computation raised ValueError at this point "
+                                            "(e.g. an undamped resonance s n pi = k)")}
+    if spec.task == "orbits":
+        return {
+            "phase": (f8, np.nan, True, "phase lag of the one-impact orbit (rad, in [0, 2 pi))"),
+            "impact_velocity": (f8, np.nan, True, "velocity of the struck end before impact"),
+            "admissible": (b1, False, True, "end stays off the stop between impacts"),
+            "stable": (b1, False, True, "admissible and every |Floquet multiplier| < 1"),
+            "schur_stable": (b1, False, True, "the paper's Schur criterion (eqs. 27-31)"),
+            "max_abs_multiplier": (f8, np.nan, True, "largest |Floquet multiplier|"),
+            "n_orbits": (np.dtype("int32"), 0, False, "number of one-impact orbits"),
+            **common,
+        }
+    if spec.task == "montecarlo":
+        return {
+            "fraction": (f8, np.nan, True, "fraction of the random starts in each long-run motion"),
+            "interval_mean": (f8, np.nan, False, "mean interval between main impacts (load periods)"),
+            "interval_std": (f8, np.nan, False, "std of the intervals between main impacts "
+                                                "(load periods)"),
+            "all_interval_mean": (f8, np.nan, False, "mean interval between any impacts (load periods)"),
+            "all_interval_std": (f8, np.nan, False, "std of the intervals between any impacts "
+                                                    "(load periods)"),
+            "run_spread": (f8, np.nan, False, "median over runs of each run's interval std/mean"),
+            **common,
+        }
+    return {
+        "impact_velocity": (f8, np.nan, True, "velocity of the struck end before each of the last "
+                                              "impacts (oldest first)"),
+        "impact_phase": (f8, np.nan, True, "load phase of each of the last impacts (load periods, "
+                                           "in [0, 1))"),
+        "n_impacts": (np.dtype("int64"), 0, False, "impacts in the whole run"),
+        **common,
+    }
+
+
+def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
+    """Compute one work chunk; this is what runs on a worker. No dask, no storage.
+
+    Parameters
+    ----------
+    spec : SweepSpec
+    chunk : int
+        Chunk number, ``0 <= chunk < spec.n_chunks``.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Every variable of the task (see the module docstring), each of shape ``block`` or
+        ``block + (extra,)`` where ``block`` is the chunk's part of the grid.
+
+    Raises
+    ------
+    RuntimeError
+        If an ``orbits`` point has more than ``max_orbits`` orbits (the default cannot be exceeded).
+        A ``ValueError`` from the library at one point (e.g. an undamped resonance) only sets
+        ``failed`` there.
+    """
+    from .._threads import single_threaded_blas
+
+    slices = chunk_slices(spec, chunk)
+    block = tuple(s.stop - s.start for s in slices)
+    out = {}
+    for name, (dtype, fill, extra, _) in _variables(spec).items():
+        shape = block + ((spec.extra_size,) if extra else ())
+        out[name] = np.full(shape, fill, dtype=dtype)
+    one = {"orbits": _orbits_point, "montecarlo": _montecarlo_point, "bifurcation": _bifurcation_point}
+    with single_threaded_blas():
+        for local in np.ndindex(*block):
+            index = tuple(s.start + i for s, i in zip(slices, local, strict=True))
+            flat = int(np.ravel_multi_index(index, spec.shape))
+            try:
+                model, load = spec.point(index)
+                one[spec.task](spec, model, load, flat, out, local)
+            except ValueError:
+                for name, (_, fill, _, _) in _variables(spec).items():
+                    out[name][local] = fill
+                out["failed"][local] = True
+    return out
+
+
+def _orbits_point(spec, model, load, flat, out, local) -> None:
+    from ..orbits import periodic_orbits
+
+    orbits = periodic_orbits(model, load)
+    n = len(orbits)
+    if n > spec.options["max_orbits"]:
+        raise RuntimeError(f"{n} orbits at grid point {flat} ({model}, {load!r}) exceed [orbits] "
+                         f"max_orbits = {spec.options['max_orbits']}; raise it in the spec")
+    out["n_orbits"][local] = n
+    for j, o in enumerate(orbits):
+        at = (*local, j)
+        out["phase"][at] = o.phase
+        out["impact_velocity"][at] = o.impact_velocity
+        out["admissible"][at] = o.admissible
+        out["stable"][at] = o.stable
+        out["schur_stable"][at] = o.schur_stable
+        out["max_abs_multiplier"][at] = o.max_abs_multiplier
+
+
+def _montecarlo_point(spec, model, load, flat, out, local) -> None:
+    from ..simulation.experiments import run_experiment
+
+    opt = spec.options
+    res = run_experiment(model, load, starts=opt["starts"], periods=opt["periods"],
+                         seed=point_seed(opt["seed"], flat), workers=1, keep=0, window=opt["window"])
+    classes = motion_classes()
+    frac = np.zeros(len(classes))
+    for kind, f in res.fractions.items():
+        if kind in classes:
+            frac[classes.index(kind)] += f
+        elif kind.startswith("k="):
+            frac[classes.index("k>8")] += f
+        else:  # pragma: no cover - a class the experiments module added
+            raise RuntimeError(f"unknown motion class {kind!r}; update impactbar.sweeps.spec.motion_classes")
+    out["fraction"][local] = frac
+    out["interval_mean"][local] = res.interval_mean
+    out["interval_std"][local] = res.interval_std
+    out["all_interval_mean"][local] = res.all_interval_mean
+    out["all_interval_std"][local] = res.all_interval_std
+    out["run_spread"][local] = res.run_spread
+
+
+def _bifurcation_point(spec, model, load, flat, out, local) -> None:
+    from ..simulation.experiments import load_period, random_start
+    from ..simulation.simulate import simulate
+
+    opt = spec.options
+    rng = np.random.default_rng(point_seed(opt["seed"], flat))
+    t0, start = random_start(model, load, rng)
+    T = load_period(load)
+    tr = simulate(model, load, start, t0 + opt["periods"] * T, t0=t0)
+    keep = opt["keep"]
+    v = tr.impact_velocities[-keep:]
+    t = tr.impact_times[-keep:]
+    out["impact_velocity"][(*local, slice(0, v.size))] = v
+    out["impact_phase"][(*local, slice(0, t.size))] = np.mod(t / T, 1.0)
+    out["n_impacts"][local] = tr.n_impacts
+
+
