@@ -23,7 +23,9 @@ from .loads import Load as Load
 from .loads import PiecewiseConstantLoad as PiecewiseConstantLoad
 from .loads import SquareWaveLoad as SquareWaveLoad
 from .model import BarModel as BarModel
+from .orbits import MultiImpactOrbit as MultiImpactOrbit
 from .orbits import PeriodicOrbit as PeriodicOrbit
+from .orbits import find_orbit as find_orbit
 from .orbits import periodic_orbits as periodic_orbits
 from .simulation import EnergyAccount as EnergyAccount
 from .simulation import InitialState as InitialState
@@ -44,6 +46,8 @@ __all__ = [
     "PiecewiseConstantLoad",
     "PeriodicOrbit",
     "periodic_orbits",
+    "MultiImpactOrbit",
+    "find_orbit",
     "InitialState",
     "Trajectory",
     "EnergyAccount",
