@@ -597,7 +597,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     >>> from impactbar import BarModel, CosineLoad, find_orbit
     >>> o = find_orbit(BarModel(s=10, d=0, R=0.5, n_modes=4), CosineLoad(0.1, 1.0))
     >>> round(o.phase, 4), o.impacts
-    (2.8276, 1)
+    (3.0367, 1)
     """
     _check_inputs(model, load)
     m = check_int("impacts", impacts, lo=1, hi=4096)
