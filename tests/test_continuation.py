@@ -264,3 +264,30 @@ def test_simulated_diagram_on_the_stable_branch(flexible_branch):
         np.testing.assert_allclose(diag["impact_velocity"][sel], o.impact_velocity, atol=1e-6)
     with pytest.raises(ValueError, match="record"):
         simulated_diagram(model, CosineLoad(0.65, 1.0), "p0", values, record=0)
+
+
+def test_cli_continue(tmp_path, capsys):
+    from impactbar.cli import main
+
+    out = tmp_path / "c"
+    rc = main(["continue", "--s", "3", "--d", "0", "--R", "0.6", "--n-modes", "0", "--p0", "0.9",
+               "--parameter", "p0", "--to", "0.68", "--doublings", "1", "--brute", "4", "--transient", "30",
+               "--record", "4", "--out", str(out)])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "period-doubling at p0 = 0.7568471206" in text and "branch 1: 2 impact(s)" in text
+    for name in ("branch_0_1per1.csv", "branch_1_2per2.csv", "events.csv", "branch_0_1per1.nc",
+                 "diagram.png"):
+        assert (out / name).is_file()
+    import pandas as pd
+
+    ev = pd.read_csv(out / "events.csv")
+    assert list(ev["kind"])[:2] == ["period-doubling", "period-doubling"]
+    rc = main(["continue", "--parameter", "p0", "--to", "0.8", "--brute", "0", "--json", "--out", str(out)])
+    assert rc == 0
+    import json
+
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["branches"][0]["impacts"] == 1
+    assert main(["continue", "--parameter", "kappa", "--to", "1.5", "--out", str(out)]) == 2  # cosine load
+    assert "kappa" in capsys.readouterr().err
