@@ -73,10 +73,13 @@ class _Continuation:
         F, _, _ = self.problem(U[-1]).evaluate(U[:-1], jacobian=False)
         return F
 
-    def FJ(self, U):
-        """Residual and the full Jacobian ``[F_u, F_lam]``, ``F_lam`` by central differences."""
+    def FJ(self, U, F_lam=None):
+        """Residual and the full Jacobian ``[F_u, F_lam]``, ``F_lam`` by central differences unless
+        given (Newton's corrector reuses the one of its first iteration)."""
         u, lam = U[:-1], U[-1]
         F, DF, info = self.problem(lam).evaluate(u)
+        if F_lam is not None:
+            return F, np.column_stack((DF, F_lam)), info
         h = 1e-6 * max(1.0, abs(lam))
         try:
             Fp = self.problem(lam + h).evaluate(u, jacobian=False)[0]
@@ -110,11 +113,13 @@ class _Continuation:
         U = np.array(U_pred, dtype=float)
         self.last_J = None
         normal = self.W * normal
+        F_lam = None
         for it in range(1, max_iter + 1):
             try:
-                F, J, _ = self.FJ(U)
+                F, J, _ = self.FJ(U, F_lam)
             except ValueError:
                 return None, it
+            F_lam = J[:, -1]
             if not (np.all(np.isfinite(F)) and np.all(np.isfinite(J))):
                 return None, it
             G = np.append(F, normal @ (U - anchor))
