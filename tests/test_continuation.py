@@ -19,7 +19,7 @@ from impactbar import (
     periodic_orbits,
     simulate,
 )
-from impactbar.continuation import parameter_value, simulated_diagram, with_parameter
+from impactbar.continuation import continue_bifurcation, parameter_value, simulated_diagram, with_parameter
 from impactbar.orbits.charts import (
     hydraulic_existence_edge,
     pneumatic_existence_edge,
@@ -291,3 +291,82 @@ def test_cli_continue(tmp_path, capsys):
     assert doc["branches"][0]["impacts"] == 1
     assert main(["continue", "--parameter", "kappa", "--to", "1.5", "--out", str(out)]) == 2  # cosine load
     assert "kappa" in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- two-parameter curves ------------
+def test_rigid_fold_and_doubling_curves_follow_the_closed_forms():
+    """Rigid bar, d = 0: the fold p0 = (1+R)/(pi (1-R)) (eq. 38) and the period doubling
+    p0 = (1+R)^2 / sqrt(4 (1+R^2)^2 + pi^2 (1-R^2)^2) (eq. 39), followed in (p0, R)."""
+    model = BarModel(s=3.0, d=0.0, R=0.6, n_modes=0)
+    b = continue_orbit(_stable_side(model, 0.5), "p0", to=1.3)
+    events = {e.kind: e for e in b.events}
+    pd = continue_bifurcation(events["period-doubling"], "R", to=0.75)
+    assert pd.status == "reached" and pd.values[-1, 1] == pytest.approx(0.75, abs=1e-12)
+    R = pd.values[:, 1]
+    ref = (1 + R) ** 2 / np.sqrt(4 * (1 + R * R) ** 2 + np.pi**2 * (1 - R * R) ** 2)
+    np.testing.assert_allclose(pd.values[:, 0], ref, atol=1e-10)
+    assert all(np.min(np.abs(o.multipliers + 1)) < 1e-8 for o in pd.orbits)
+    fold = continue_bifurcation(events["fold"], "R", to=0.5, max_step=0.05)
+    R = fold.values[:, 1]
+    np.testing.assert_allclose(fold.values[:, 0], (1 + R) / (np.pi * (1 - R)), atol=1e-10)
+    assert fold.status == "reached"
+    df = pd.to_dataframe()
+    assert list(df.columns[:2]) == ["p0", "R"] and len(df) == len(pd)
+    ax = pd.plot()
+    assert ax.get_xlabel() == "R"
+
+
+def test_flexible_curves_equal_the_chart_edges(flexible_branch):
+    """Four flexible modes, d > 0: the doubling curve equals the charts' root-finding of the
+    exact multipliers (Fig. 5's lower edge), the fold curve the closed-form existence edge."""
+    model, b = flexible_branch
+    events = {e.kind: e for e in b.events}
+    pd = continue_bifurcation(events["period-doubling"], "R", to=0.65)
+    for i in (len(pd) // 2, len(pd) - 1):
+        p0, R = pd.values[i]
+        edge = pneumatic_stability_edges(model.with_(R=float(R)))
+        assert p0 == pytest.approx(edge[0][0], abs=1e-8)
+    fold = continue_bifurcation(events["fold"], "R", to=0.65)
+    np.testing.assert_allclose(fold.values[:, 0], pneumatic_existence_edge(fold.values[:, 1], model.d),
+                               atol=1e-9)
+
+
+def test_grazing_curve_keeps_zero_clearance(flexible_branch):
+    model, b = flexible_branch
+    graze = next(e for e in b.events if e.kind == "grazing")
+    curve = continue_bifurcation(graze, "R", to=0.6, max_points=12)
+    assert len(curve) >= 3
+    assert all(abs(o.clearance) < 1e-8 for o in curve.orbits)
+    p0, R = curve.values[-1]
+    before = _nearest(periodic_orbits(model.with_(R=float(R)), CosineLoad(p0 - 1e-6, 1.0)),
+                      curve.orbits[-1].phase)
+    after = _nearest(periodic_orbits(model.with_(R=float(R)), CosineLoad(p0 + 1e-6, 1.0)),
+                     curve.orbits[-1].phase)
+    assert before.admissible != after.admissible
+
+
+def test_continue_bifurcation_bad_input(flexible_branch):
+    _, b = flexible_branch
+    pd = next(e for e in b.events if e.kind == "period-doubling")
+    with pytest.raises(ValueError, match="must differ from the branch"):
+        continue_bifurcation(pd, "p0", to=0.5)
+    with pytest.raises(ValueError, match="to must differ"):
+        continue_bifurcation(pd, "R", to=0.5)
+    with pytest.raises(ValueError, match="BranchEvent"):
+        continue_bifurcation(b.orbits[0], "R", to=0.6)
+
+
+def test_subharmonic_doubling_curve():
+    """The period doubling of the rigid 2-per-2 orbit, followed in (p0, R): at every point the
+    2-per-2 orbit found afresh at those parameters has a multiplier -1."""
+    from impactbar import find_orbit
+
+    model = BarModel(s=3.0, d=0.0, R=0.6, n_modes=0)
+    b1 = continue_orbit(_stable_side(model, 0.9), "p0", to=0.66, stop_on=("period-doubling",))
+    b2 = continue_orbit(b1.events[-1], "p0", to=0.66, stop_on=("period-doubling",))
+    curve = continue_bifurcation(b2.events[-1], "R", to=0.55)
+    assert curve.status == "reached" and curve.orbits[0].impacts == 2
+    for (p0, R), o in list(zip(curve.values, curve.orbits, strict=True))[::4]:
+        fresh = find_orbit(model.with_(R=float(R)), CosineLoad(float(p0), 1.0), 2, 2, guess=o)
+        assert np.min(np.abs(fresh.multipliers + 1.0)) < 1e-7
+        assert np.prod(fresh.multipliers).real == pytest.approx(R**4, rel=1e-9)

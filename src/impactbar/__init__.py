@@ -18,8 +18,10 @@ The import contract (``[tool.importlinter]`` in ``pyproject.toml``) keeps it so.
 
 from . import physical as physical  # SI units layer; pint is imported only when it is used
 from ._version import __version__ as __version__
+from .continuation import BifurcationCurve as BifurcationCurve
 from .continuation import Branch as Branch
 from .continuation import BranchEvent as BranchEvent
+from .continuation import continue_bifurcation as continue_bifurcation
 from .continuation import continue_orbit as continue_orbit
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
@@ -55,6 +57,8 @@ __all__ = [
     "Branch",
     "BranchEvent",
     "continue_orbit",
+    "BifurcationCurve",
+    "continue_bifurcation",
     "InitialState",
     "Trajectory",
     "EnergyAccount",

@@ -18,7 +18,6 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .._threads import single_threaded_blas
-from .._validate import check_int, check_real
 from ..loads import PiecewiseConstantLoad
 from ..orbits.multi_impact import (
     MultiImpactOrbit,
@@ -30,7 +29,7 @@ from ..orbits.multi_impact import (
 )
 from ..orbits.one_impact import PeriodicOrbit
 from .branch import Branch, BranchEvent
-from .parameters import _check_parameter, parameter_value, with_parameter
+from .parameters import _check_parameter, _steps, parameter_value, with_parameter
 
 __all__ = ["continue_orbit", "EVENT_KINDS"]
 
@@ -229,16 +228,8 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
     model, load = base.model, base.load
     _check_parameter(model, load, parameter)
     lam0 = parameter_value(model, load, parameter)
-    to = check_real("to", to)
-    if to == lam0:
-        raise ValueError(f"to must differ from the start value {parameter} = {lam0}")
-    span = abs(to - lam0)
-    step = span / 50 if step is None else check_real("step", step, lo=0.0, lo_open=True)
-    max_step = span / 10 if max_step is None else check_real("max_step", max_step, lo=0.0, lo_open=True)
-    min_step = 1e-9 * span if min_step is None else check_real("min_step", min_step, lo=0.0,
-                                                                  lo_open=True)
-    step = min(step, max_step)
-    max_points = check_int("max_points", max_points, lo=2)
+    to, step, max_step, min_step, max_points = _steps(parameter, lam0, to, step, max_step, min_step,
+                                                       max_points, (1 / 50, 1 / 10, 1e-9))
     stop_on = tuple(stop_on)
     for k in stop_on:
         if k not in EVENT_KINDS:

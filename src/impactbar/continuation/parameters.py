@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from .._validate import check_int, check_real
 from ..loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 
@@ -52,3 +53,18 @@ def _check_parameter(model, load, name):
         return
     raise ValueError(f"parameter {name!r} cannot be continued for a {type(load).__name__}; "
                      "use R, d or s (or p0 for a FourierLoad)")
+
+
+def _steps(parameter, start, to, step, max_step, min_step, max_points, fractions):
+    """Checked ``(to, step, max_step, min_step, max_points)``; the step defaults are the
+    ``fractions = (initial, largest, smallest)`` of ``|to - start|``."""
+    to = check_real("to", to)
+    if to == start:
+        raise ValueError(f"to must differ from the start value {parameter} = {start}")
+    span = abs(to - start)
+    step = span * fractions[0] if step is None else check_real("step", step, lo=0.0, lo_open=True)
+    max_step = span * fractions[1] if max_step is None else check_real("max_step", max_step, lo=0.0,
+                                                                       lo_open=True)
+    min_step = span * fractions[2] if min_step is None else check_real("min_step", min_step, lo=0.0,
+                                                                       lo_open=True)
+    return to, min(step, max_step), max_step, min_step, check_int("max_points", max_points, lo=2)
