@@ -272,10 +272,12 @@ def test_cli_continue(tmp_path, capsys):
     out = tmp_path / "c"
     rc = main(["continue", "--s", "3", "--d", "0", "--R", "0.6", "--n-modes", "0", "--p0", "0.9",
                "--parameter", "p0", "--to", "0.68", "--doublings", "1", "--brute", "4", "--transient", "30",
-               "--record", "4", "--out", str(out)])
+               "--record", "4", "--curve", "R", "0.65", "--out", str(out)])
     assert rc == 0
     text = capsys.readouterr().out
     assert "period-doubling at p0 = 0.7568471206" in text and "branch 1: 2 impact(s)" in text
+    assert "period-doubling curve in (p0, R)" in text
+    assert (out / "curve_0_period-doubling.csv").is_file() and (out / "curves.png").is_file()
     for name in ("branch_0_1per1.csv", "branch_1_2per2.csv", "events.csv", "branch_0_1per1.nc",
                  "diagram.png"):
         assert (out / name).is_file()
@@ -283,7 +285,8 @@ def test_cli_continue(tmp_path, capsys):
 
     ev = pd.read_csv(out / "events.csv")
     assert list(ev["kind"])[:2] == ["period-doubling", "period-doubling"]
-    rc = main(["continue", "--parameter", "p0", "--to", "0.8", "--brute", "0", "--json", "--out", str(out)])
+    rc = main(["continue", "--n-modes", "0", "--parameter", "p0", "--to", "0.8", "--brute", "0", "--json",
+               "--out", str(out)])
     assert rc == 0
     import json
 
@@ -370,3 +373,17 @@ def test_subharmonic_doubling_curve():
         fresh = find_orbit(model.with_(R=float(R)), CosineLoad(float(p0), 1.0), 2, 2, guess=o)
         assert np.min(np.abs(fresh.multipliers + 1.0)) < 1e-7
         assert np.prod(fresh.multipliers).real == pytest.approx(R**4, rel=1e-9)
+
+
+def test_sticking_at_R0_is_located_as_an_admissibility_event():
+    """R = 0: the end leaves the stop at rest, and the orbit is inadmissible ('sticks') where the
+    load presses it back (theory §5); the change is located by bisection on the flag."""
+    model = BarModel(s=10.0, d=0.05, R=0.0, n_modes=2)
+    start = next(o for o in periodic_orbits(model, CosineLoad(0.2, 1.0)) if o.admissibility == "sticks")
+    b = continue_orbit(start, "p0", to=0.4)
+    ev = next(e for e in b.events if e.kind == "admissibility")
+    flags = []
+    for dv in (-1e-7, 1e-7):
+        o = _nearest(periodic_orbits(model, CosineLoad(ev.value + dv, 1.0)), ev.orbit.phase)
+        flags.append(o.admissibility)
+    assert sorted(flags) == ["admissible", "sticks"]

@@ -49,6 +49,9 @@ def add_parser(sub) -> None:
                     "the first admissible, else the first) or its index in phase order")
     cg.add_argument("--doublings", type=int, default=0,
                     help="follow this many period doublings onto the doubled branches (default 0)")
+    cg.add_argument("--curve", nargs=2, metavar=("PARAM", "TO"), default=None,
+                    help="also follow every fold, period doubling and grazing point of the branches in "
+                    "(parameter, PARAM) up to PARAM = TO: the chart edges (writes curve_*.csv, curves.png)")
     cg.add_argument("--step", type=float, default=None, help="initial arclength step")
     cg.add_argument("--max-step", type=float, default=None, help="largest arclength step")
     cg.add_argument("--max-points", type=int, default=2000, help="points per branch (default 2000)")
@@ -165,11 +168,15 @@ def run(args) -> int:
         path = None
     if path is not None:
         written.append(path)
+    curves = _curves(branches, args, out, written) if args.curve else []
     if args.json:
         doc = {"parameter": args.parameter, "to": args.to,
                "branches": [{"impacts": b.impacts, "periods": b.periods, "points": len(b),
                              "status": b.status, "start": float(b.values[0]), "end": float(b.values[-1]),
                              "events": [_finite(e.to_dict()) for e in b.events]} for b in branches],
+               "curves": [{"kind": c.kind, "parameters": list(c.parameters), "points": len(c),
+                           "status": c.status, "start": c.values[0].tolist(), "end": c.values[-1].tolist()}
+                          for c in curves],
                "files": [str(p) for p in written]}
         print(json.dumps(doc, indent=2, allow_nan=False))
         return 0
@@ -181,9 +188,50 @@ def run(args) -> int:
             mu = "" if math.isnan(e.multiplier.real) else f"  multiplier {e.multiplier.real:+.6f}" \
                 f"{e.multiplier.imag:+.6f}i"
             print(f"  {e.kind:>16} at {args.parameter} = {e.value:.12g}{mu}")
+    for c in curves:
+        print(f"{c.kind} curve in ({c.parameters[0]}, {c.parameters[1]}): {len(c)} points from "
+              f"{c.values[0].round(10).tolist()} to {c.values[-1].round(10).tolist()} ({c.status})")
     for p in written:
         print(f"wrote {p}")
     return 0
+
+
+def _curves(branches, args, out, written):
+    """Two-parameter curves of every fold, period doubling and grazing point of the branches."""
+    from ..continuation import continue_bifurcation
+
+    name, to = args.curve[0], float(args.curve[1])
+    curves = []
+    for b in branches:
+        for e in b.events:
+            if e.kind in ("fold", "period-doubling", "grazing"):
+                try:
+                    curves.append(continue_bifurcation(e, name, to))
+                except ValueError as exc:
+                    print(f"warning: {e.kind} at {e.value:.10g} not followed: {exc}")
+    for i, c in enumerate(curves):
+        path = out / f"curve_{i}_{c.kind}.csv"
+        c.to_dataframe().to_csv(path)
+        written.append(path)
+    if curves:
+        try:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+        except ImportError:
+            return curves
+        fig, ax = plt.subplots(figsize=(6, 4.5))
+        styles = {"fold": "-", "period-doubling": "--", "grazing": ":"}
+        for c in curves:
+            c.plot(ax, ls=styles[c.kind], label=f"{c.kind} ({c.orbits[0].impacts} per {c.orbits[0].periods})")
+        ax.legend(fontsize=8)
+        path = out / "curves.png"
+        fig.tight_layout()
+        fig.savefig(path, dpi=130)
+        plt.close(fig)
+        written.append(path)
+    return curves
 
 
 def _finite(d):

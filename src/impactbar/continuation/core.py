@@ -436,10 +436,14 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         if hh is not None:
             add("grazing", hh, lambda o: complex(math.nan, math.nan))
             graz = True
-    if A["admissible"] != B["admissible"] and not graz:
+    if A["admissible"] != B["admissible"]:
         hh = _bisect_flag(at, cont, hb, xtol)
         if hh is not None:
-            add("admissibility", hh, lambda o: complex(math.nan, math.nan))
+            U = at(hh)
+            explained = graz and U is not None and any(
+                e.kind == "grazing" and abs(e.value - U[-1]) <= 1e-7 * max(1.0, abs(U[-1])) for e in out)
+            if not explained:  # e.g. sticking at R = 0, or a grazing the clearance did not show
+                add("admissibility", hh, lambda o: complex(math.nan, math.nan))
     out.sort(key=lambda e: cont.dot(ta, e._point - Ua))
     return out
 
