@@ -247,6 +247,10 @@ def test_bad_input():
         continue_orbit(o, "p0", to=0.7, stop_on=("bogus",))
     with pytest.raises(ValueError, match="max_points"):
         continue_orbit(o, "p0", to=0.7, max_points=1)
+    with pytest.raises(ValueError, match="tol"):
+        continue_orbit(o, "p0", to=0.7, tol=-1.0)
+    with pytest.raises(ValueError, match="to must be a finite"):
+        continue_orbit(o, "p0", to=math.nan)
     b = continue_orbit(o, "R", to=1.2, max_points=400)  # R leaves [0, 1]: the branch stops inside
     assert b.values.max() <= 1.0 and b.status in ("parameter range", "step too small")
 
@@ -387,3 +391,16 @@ def test_sticking_at_R0_is_located_as_an_admissibility_event():
         o = _nearest(periodic_orbits(model, CosineLoad(ev.value + dv, 1.0)), ev.orbit.phase)
         flags.append(o.admissibility)
     assert sorted(flags) == ["admissible", "sticks"]
+
+
+def test_start_exactly_at_a_fold():
+    """At the fold (a double root of eq. 14) Newton at fixed parameter is singular; the branch
+    leaves along the null vector and follows one of the two merging orbits."""
+    R = 0.6
+    model = BarModel(s=3.0, d=0.0, R=R, n_modes=0)
+    fold = periodic_orbits(model, CosineLoad((1 + R) / (math.pi * (1 - R)), 1.0))
+    assert fold[0].multiplicity == 2
+    b = continue_orbit(fold[0], "p0", to=1.0)
+    assert b.status == "reached" and b.values[-1] == 1.0
+    ref = _nearest(periodic_orbits(model, CosineLoad(1.0, 1.0)), b.orbits[-1].phase)
+    assert b.orbits[-1].phase == pytest.approx(ref.phase, abs=1e-10)

@@ -18,6 +18,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .._threads import single_threaded_blas
+from .._validate import check_real
 from ..loads import PiecewiseConstantLoad
 from ..orbits.multi_impact import (
     MultiImpactOrbit,
@@ -230,6 +231,8 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
     lam0 = parameter_value(model, load, parameter)
     to, step, max_step, min_step, max_points = _steps(parameter, lam0, to, step, max_step, min_step,
                                                        max_points, (1 / 50, 1 / 10, 1e-9))
+    tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
+    xtol = check_real("xtol", xtol, lo=0.0, lo_open=True, hi=1e-2)
     stop_on = tuple(stop_on)
     for k in stop_on:
         if k not in EVENT_KINDS:
@@ -247,12 +250,18 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
         cont = _Continuation(model, load, parameter, m, n, tol)
         u0 = _unknowns_from(cont.problem(lam0), times, states)
         U0 = np.append(u0, lam0)
-        U0, _ = cont.correct(U0, np.eye(U0.size)[-1], U0)
-        if U0 is None:
-            raise ValueError("orbit: Newton at the start value did not converge; is it a solution?")
-        e_lam = np.zeros(U0.size)
-        e_lam[-1] = direction
-        t0 = cont.tangent(U0, e_lam)
+        F0, J0, _ = cont.FJ(U0)
+        if float(np.max(np.abs(F0))) <= 1e-11 * max(1.0, float(np.max(np.abs(U0)))):
+            cont.last_J = J0  # already a solution (at a fold, Newton at fixed parameter is singular)
+        else:
+            U0, _ = cont.correct(U0, np.eye(U0.size)[-1], U0)
+            if U0 is None:
+                raise ValueError("orbit: Newton at the start value did not converge; is it a solution?")
+        # the tangent: the null vector of [F_u, F_lam] (by SVD: also at a fold), towards `to`
+        t0 = np.linalg.svd(cont.last_J)[2][-1]
+        t0 /= cont.norm(t0)
+        if t0[-1] * direction < 0:
+            t0 = -t0
         return _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points, events,
                     stop_on, xtol)
 

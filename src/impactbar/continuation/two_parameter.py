@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._threads import single_threaded_blas
+from .._validate import check_real
 from ..orbits.multi_impact import _build, _normalise, _Segments, _unknowns_from
 from .branch import BranchEvent
 from .parameters import _check_parameter, _steps, parameter_value, with_parameter
@@ -263,6 +264,7 @@ def continue_bifurcation(event: BranchEvent, parameter: str, to: float, *, step:
     l2 = parameter_value(model, load, parameter)
     to, step, max_step, min_step, max_points = _steps(parameter, l2, to, step, max_step, min_step,
                                                        max_points, (1 / 40, 1 / 8, 1e-8))
+    tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
     direction = 1.0 if to > l2 else -1.0
     curve = _Curve(model, load, (event.parameter, parameter), o.impacts, o.periods, event.kind, tol)
     with single_threaded_blas():
