@@ -205,7 +205,8 @@ class Branch:
         ax : matplotlib.axes.Axes, optional
             Drawn on a new figure's axes if omitted.
         y : {"impact_velocity", "phase", "max_abs_multiplier"}
-            What to plot against the parameter; per-impact quantities give one curve per impact.
+            What to plot against the parameter; per-impact quantities give one curve per impact
+            (phases unwrapped along the branch, so a curve does not jump at ``2 pi``).
         color, label : optional
             Line colour and legend label.
         events : bool
@@ -222,7 +223,7 @@ class Branch:
         if ax is None:
             _, ax = plt.subplots()
         x = self.values
-        Y = {"impact_velocity": self.impact_velocities, "phase": self.phases,
+        Y = {"impact_velocity": self.impact_velocities, "phase": np.unwrap(self.phases, axis=0),
              "max_abs_multiplier": self.max_abs_multiplier[:, None]}[y]
         stable = self.stable
         color = color or ax._get_lines.get_next_color()
