@@ -180,11 +180,13 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
         :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`).
     to : float
         Target value; the branch stops there, or where it leaves the range between the start and
-        ``to`` after a fold.
+        ``to`` after a fold. A branch started at a period doubling may bifurcate to either side:
+        it is followed while the parameter stays within ``|to - start|`` of the doubling.
     step, max_step, min_step : float, optional
-        Initial, largest and smallest arclength steps (in the Euclidean norm of the impact times,
-        reduced modal states and the parameter); defaults ``|to - start| / 50``, ``/ 10`` and
-        ``1e-9`` times that.
+        Initial, largest and smallest arclength steps, in a weighted norm: the squared norm of the
+        unknowns (impact times, reduced modal states) averaged over their number, plus the
+        parameter's square (as AUTO weighs a state against the parameter); defaults
+        ``|to - start| / 50``, ``/ 10`` and ``1e-9`` times that.
     max_points : int
         Largest number of branch points.
     events : bool
@@ -434,25 +436,22 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
             cpx = o.multipliers[np.abs(o.multipliers.imag) > 1e-8]
             if cpx.size and np.min(np.abs(np.abs(cpx) - 1.0)) < 1e-6:
                 add("neimark-sacker", hh, lambda o: _nearest_circle(o))
-    graz = False
+    grazes = []  # chord positions of the located grazing points
     if np.isfinite(A["grazing"]) and np.isfinite(B["grazing"]) and A["grazing"] * B["grazing"] < 0:
         hh = locate(_clear)
         if hh is not None:
             add("grazing", hh, lambda o: complex(math.nan, math.nan))
-            graz = True
+            grazes.append(hh)
     if A["impact"] * B["impact"] < 0:
         hh = locate(_vmin)
         if hh is not None:
             add("grazing", hh, lambda o: complex(math.nan, math.nan))
-            graz = True
-    if A["admissible"] != B["admissible"]:
+            grazes.append(hh)
+    if A["admissible"] != B["admissible"] and not _explained(at, cont, hb, grazes, A["admissible"]):
+        # e.g. sticking at R = 0, or a grazing the clearance did not show
         hh = _bisect_flag(at, cont, hb, xtol)
         if hh is not None:
-            U = at(hh)
-            explained = graz and U is not None and any(
-                e.kind == "grazing" and abs(e.value - U[-1]) <= 1e-7 * max(1.0, abs(U[-1])) for e in out)
-            if not explained:  # e.g. sticking at R = 0, or a grazing the clearance did not show
-                add("admissibility", hh, lambda o: complex(math.nan, math.nan))
+            add("admissibility", hh, lambda o: complex(math.nan, math.nan))
     out.sort(key=lambda e: cont.dot(ta, e._point - Ua))
     return out
 
@@ -552,6 +551,19 @@ def _nearest_circle(o):
     mu = o.multipliers
     cpx = mu[np.abs(mu.imag) > 1e-8]
     return complex(cpx[int(np.argmin(np.abs(np.abs(cpx) - 1.0)))]) if cpx.size else complex(math.nan)
+
+
+def _explained(at, cont, hb, grazes, before):
+    """Whether a located grazing point is where the admissibility flag changes: the flag just
+    before it (along the chord) is the first point's, just after it the other."""
+    for hh in grazes:
+        d = 1e-6 * abs(hb)
+        Ua, Ub = at(hh - d if hb > 0 else hh + d), at(hh + d if hb > 0 else hh - d)
+        if Ua is None or Ub is None:
+            continue
+        if cont.orbit(Ua).admissible == before and cont.orbit(Ub).admissible != before:
+            return True
+    return False
 
 
 def _bisect_flag(at, cont, hb, xtol):

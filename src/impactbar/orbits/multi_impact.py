@@ -128,7 +128,11 @@ class _Segments:
     def phi(self, T):
         """Fundamental matrix of the free flight over ``T``, shape ``(2 M, 2 M)``."""
         p11, p12, p21, p22 = fundamental(self.w2, self.d, T)
-        return np.block([[np.diag(p11), np.diag(p12)], [np.diag(p21), np.diag(p22)]])
+        M = self.M
+        i = np.arange(M)
+        Phi = np.zeros((2 * M, 2 * M))
+        Phi[i, i], Phi[i, i + M], Phi[i + M, i], Phi[i + M, i + M] = p11, p12, p21, p22
+        return Phi
 
     def evaluate(self, u, jacobian=True):
         """Residual (and Jacobian) of the periodicity conditions; also the states at the impacts.
