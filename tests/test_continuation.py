@@ -404,3 +404,14 @@ def test_start_exactly_at_a_fold():
     assert b.status == "reached" and b.values[-1] == 1.0
     ref = _nearest(periodic_orbits(model, CosineLoad(1.0, 1.0)), b.orbits[-1].phase)
     assert b.orbits[-1].phase == pytest.approx(ref.phase, abs=1e-10)
+
+
+def test_cli_continue_si_preset(tmp_path, capsys):
+    """A hammer in SI units (a preset): its dimensionless bar and load are continued in R."""
+    from impactbar.cli import main
+
+    rc = main(["continue", "--preset", "pneumatic-drill", "--parameter", "R", "--to", "0.2", "--brute", "0",
+               "--out", str(tmp_path)])
+    assert rc == 0
+    text = capsys.readouterr().out
+    assert "n_modes=16" in text and "period-doubling at R = 0.17524" in text
