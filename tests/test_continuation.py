@@ -232,6 +232,10 @@ def test_parameters():
         parameter_value(model, load, "n_modes")
     with pytest.raises(ValueError, match="R must be"):
         with_parameter(model, load, "R", 1.5)
+    with pytest.raises(ValueError, match="not a field of CosineLoad"):
+        with_parameter(model, load, "kappa", 1.5)
+    with pytest.raises(ValueError, match="kappa must be"):
+        with_parameter(model, SquareWaveLoad(1.0, 1.5), "kappa", 2.5)
 
 
 def test_bad_input():

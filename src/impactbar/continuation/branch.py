@@ -133,8 +133,19 @@ class Branch:
         return np.array([o.max_abs_multiplier for o in self.orbits])
 
     def to_xarray(self):
-        """The branch as an :class:`xarray.Dataset` (dims ``point``, ``impact``, ``multiplier``,
-        ``event``); requires xarray."""
+        """The branch as an :class:`xarray.Dataset`; requires xarray.
+
+        Returns
+        -------
+        xarray.Dataset
+            Dims ``point`` (P), ``impact`` (m), ``multiplier`` (2 N + 2), ``event``; the parameter
+            is a coordinate along ``point``; ``impact_time``, ``phase``, ``impact_velocity``
+            (point, impact), ``multiplier_real``/``_imag`` (point, multiplier), ``stable``,
+            ``admissible``, ``admissibility``, ``clearance``, ``max_abs_multiplier`` (point), and
+            ``event_kind``, ``event_value``, ``event_index``, ``event_phase``,
+            ``event_multiplier_real``/``_imag`` (event); attributes ``parameter``, ``impacts``,
+            ``periods``, ``status``.
+        """
         import xarray as xr
 
         P, m = len(self), self.impacts
@@ -167,8 +178,16 @@ class Branch:
         return ds
 
     def to_dataframe(self):
-        """One row per branch point: the parameter, per-impact phases, times and velocities,
-        stability, admissibility, clearance and the multipliers' moduli; requires pandas."""
+        """The branch as a table; requires pandas.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per point (index ``point``): the parameter, ``phase_j``, ``impact_time_j``,
+            ``impact_velocity_j`` for each impact ``j``, ``stable``, ``admissible``,
+            ``admissibility``, ``clearance``, ``max_abs_multiplier``, and ``multiplier_k_real``,
+            ``multiplier_k_imag`` for each multiplier ``k`` (by decreasing modulus).
+        """
         import pandas as pd
 
         data = {self.parameter: self.values}
@@ -190,7 +209,14 @@ class Branch:
         return df
 
     def events_dataframe(self):
-        """One row per event (kind, value, index, phase, critical multiplier); requires pandas."""
+        """The events as a table; requires pandas.
+
+        Returns
+        -------
+        pandas.DataFrame
+            One row per event: ``kind``, ``parameter``, ``value``, ``index``, ``multiplier``
+            (``[re, im]``), ``phase``, ``impacts``, ``periods``.
+        """
         import pandas as pd
 
         return pd.DataFrame([e.to_dict() for e in self.events],

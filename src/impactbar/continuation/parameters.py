@@ -11,11 +11,27 @@ __all__ = ["PARAMETERS", "parameter_value", "with_parameter"]
 #: Parameters a branch can be continued in: BarModel fields and load fields.
 PARAMETERS = ("p0", "pk", "R", "d", "s", "q", "kappa")
 
-# ------------------------------------------------------------------------------------------------
-# parameters
-# ------------------------------------------------------------------------------------------------
 def parameter_value(model: BarModel, load: Load, name: str) -> float:
-    """Current value of a continuation parameter (see :data:`PARAMETERS`)."""
+    """Current value of a continuation parameter.
+
+    Parameters
+    ----------
+    model : BarModel
+    load : Load
+    name : str
+        ``"s"``, ``"d"``, ``"R"`` (eqs. 2, 10), ``"p0"``, ``"pk"`` (a :class:`CosineLoad`, eq. 33;
+        ``"p0"`` also of a :class:`FourierLoad`), ``"q"``, ``"kappa"`` (a :class:`SquareWaveLoad`,
+        eq. 34).
+
+    Returns
+    -------
+    float
+
+    Raises
+    ------
+    ValueError
+        For a name outside :data:`PARAMETERS` or one the load does not have.
+    """
     _check_parameter(model, load, name)
     if name in ("R", "d", "s"):
         return float(getattr(model, name))
@@ -23,7 +39,28 @@ def parameter_value(model: BarModel, load: Load, name: str) -> float:
 
 
 def with_parameter(model: BarModel, load: Load, name: str, value: float):
-    """``(model, load)`` with one parameter changed; ``ValueError`` outside its allowed range."""
+    """The model and load with one parameter changed (validated again by their constructors).
+
+    Parameters
+    ----------
+    model : BarModel
+    load : Load
+    name : str
+        As in :func:`parameter_value`.
+    value : float
+        The new value.
+
+    Returns
+    -------
+    (BarModel, Load)
+
+    Raises
+    ------
+    ValueError
+        For a name the model and load do not have, or a value outside its allowed range (for
+        example ``R`` outside ``[0, 1]``, ``kappa`` outside ``[1, 2]``).
+    """
+    _check_parameter(model, load, name)
     if name in ("R", "d", "s"):
         return model.with_(**{name: value}), load
     if isinstance(load, CosineLoad):
