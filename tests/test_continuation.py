@@ -345,7 +345,7 @@ def test_flexible_curves_equal_the_chart_edges(flexible_branch):
 def test_grazing_curve_keeps_zero_clearance(flexible_branch):
     model, b = flexible_branch
     graze = next(e for e in b.events if e.kind == "grazing")
-    curve = continue_bifurcation(graze, "R", to=0.6, max_points=12)
+    curve = continue_bifurcation(graze, "R", to=0.6, max_points=5)
     assert len(curve) >= 3
     assert all(abs(o.clearance) < 1e-8 for o in curve.orbits)
     p0, R = curve.values[-1]
