@@ -113,7 +113,7 @@ class _Continuation:
         U = np.array(U_pred, dtype=float)
         self.last_J = None
         normal = self.W * normal
-        F_lam = None
+        F_lam = prev = None
         for it in range(1, max_iter + 1):
             try:
                 F, J, _ = self.FJ(U, F_lam)
@@ -129,9 +129,14 @@ class _Continuation:
             except np.linalg.LinAlgError:
                 return None, it
             U = U - dU
-            if float(np.max(np.abs(dU))) <= self.tol * max(1.0, float(np.max(np.abs(U)))):
+            step, scale = float(np.max(np.abs(dU))), max(1.0, float(np.max(np.abs(U))))
+            # converged when this step, or the next one predicted from the rate of the last two,
+            # is below the tolerance (saves the evaluation that would only confirm it)
+            if step <= self.tol * scale or (prev is not None and step < 1e-6 * scale
+                                            and step * step / prev <= 0.1 * self.tol * scale):
                 self.last_J = J
                 return U, it
+            prev = step
         return None, max_iter
 
     def orbit(self, U, admissibility=True):
