@@ -8,7 +8,8 @@ Layout, bottom to top (each layer imports only from the layers below it):
   ``dynamics`` (closed-form modal flow, certified zero search, compiled kernel), then ``model``
   (:class:`BarModel`) and ``loads`` (periodic loads with their exact modal response), then
   ``orbits`` (periodic orbits, admissibility, stability, charts) and ``simulation`` (the
-  event-driven simulator and the random-start experiments);
+  event-driven simulator and the random-start experiments), then ``continuation`` (branches of
+  periodic motions and their bifurcations; pandas, xarray, matplotlib only inside its views);
 - the product, on top of the core: ``physical`` (SI units through pint), ``sweeps`` (dask,
   xarray, zarr), ``plotting`` and ``paper`` (matplotlib), ``cli`` (one module per subcommand).
 
@@ -17,13 +18,20 @@ The import contract (``[tool.importlinter]`` in ``pyproject.toml``) keeps it so.
 
 from . import physical as physical  # SI units layer; pint is imported only when it is used
 from ._version import __version__ as __version__
+from .continuation import BifurcationCurve as BifurcationCurve
+from .continuation import Branch as Branch
+from .continuation import BranchEvent as BranchEvent
+from .continuation import continue_bifurcation as continue_bifurcation
+from .continuation import continue_orbit as continue_orbit
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
 from .loads import Load as Load
 from .loads import PiecewiseConstantLoad as PiecewiseConstantLoad
 from .loads import SquareWaveLoad as SquareWaveLoad
 from .model import BarModel as BarModel
+from .orbits import MultiImpactOrbit as MultiImpactOrbit
 from .orbits import PeriodicOrbit as PeriodicOrbit
+from .orbits import find_orbit as find_orbit
 from .orbits import periodic_orbits as periodic_orbits
 from .simulation import EnergyAccount as EnergyAccount
 from .simulation import InitialState as InitialState
@@ -44,6 +52,13 @@ __all__ = [
     "PiecewiseConstantLoad",
     "PeriodicOrbit",
     "periodic_orbits",
+    "MultiImpactOrbit",
+    "find_orbit",
+    "Branch",
+    "BranchEvent",
+    "continue_orbit",
+    "BifurcationCurve",
+    "continue_bifurcation",
     "InitialState",
     "Trajectory",
     "EnergyAccount",

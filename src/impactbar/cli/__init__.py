@@ -14,7 +14,7 @@ import sys
 __all__ = ["main"]
 
 #: subcommand modules, in the order ``--help`` lists them
-SUBCOMMANDS = ("paper", "orbits", "experiment", "simulate", "sweep", "plot")
+SUBCOMMANDS = ("paper", "orbits", "continue_", "experiment", "simulate", "sweep", "plot")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -3,11 +3,16 @@
 Layout: ``phase`` (the phase equation, eq. 14, and its roots), ``admissibility`` (does the struck end
 stay off the stop between impacts), ``stability`` (the exact Jacobian of the impact map with its
 saltation term, and the paper's Schur blocks, eqs. 25-32), ``one_impact`` (:class:`PeriodicOrbit`,
-:func:`periodic_orbits`), ``charts`` (existence, stability and admissibility edges, Figs. 5, 6, 8).
+:func:`periodic_orbits`), ``multi_impact`` (:class:`MultiImpactOrbit`, :func:`find_orbit`: ``m``
+impacts in ``n`` load periods by Newton on the segment problem, one segment per flight),
+``charts`` (existence, stability and admissibility edges, Figs. 5, 6, 8).
 Part of the core: imports only ``impactbar.model``, ``impactbar.loads``, ``impactbar.dynamics``,
 numpy and scipy.
 """
 
+from .multi_impact import MultiImpactOrbit as MultiImpactOrbit
+from .multi_impact import find_orbit as find_orbit
+from .multi_impact import impact_law as impact_law
 from .one_impact import PeriodicOrbit as PeriodicOrbit
 from .one_impact import orbit_multipliers as orbit_multipliers
 from .one_impact import periodic_orbits as periodic_orbits
@@ -24,4 +29,7 @@ __all__ = [
     "phase_residual",
     "phase_roots",
     "impact_map_jacobian",
+    "MultiImpactOrbit",
+    "find_orbit",
+    "impact_law",
 ]

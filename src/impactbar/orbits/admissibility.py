@@ -12,7 +12,7 @@ from ..dynamics.certified import enclose_zeros
 TWO_PI = 2.0 * math.pi
 
 
-def _admissibility(model, load, phase, y_plus, v_imp):
+def _admissibility(model, load, phase, y_plus, v_imp, duration=TWO_PI):
     """Decide admissibility (MODEL.md section 5) with certified bounds.
 
     The stationary points of ``g(t) = u(1, t)`` are the zeros of ``g' = c . q'``; they are enclosed
@@ -20,6 +20,9 @@ def _admissibility(model, load, phase, y_plus, v_imp):
     deflection under the local load: ``sqrt(v^2 + w^2 (q - P/w^2)^2)`` grows at most by the load's
     variation times the time elapsed (and by ``e^{d h}`` going backwards), and
     ``|q''| <= delta + (d + w) sqrt(E)``.
+
+    ``duration`` is the flight time after the impact at load time ``phase`` (``2 pi`` for a
+    one-impact orbit; the flights of a multi-impact motion differ).
     """
     M = model.n_modes + 1
     w2 = model.frequencies**2
@@ -53,7 +56,7 @@ def _admissibility(model, load, phase, y_plus, v_imp):
         return c @ v, absc @ bound
 
     scale = max(abs(v_imp), psup, 1e-300)
-    clusters = enclose_zeros(None, None, 0.0, TWO_PI, n0=64, min_width=6e-3,
+    clusters = enclose_zeros(None, None, 0.0, duration, n0=64, min_width=6e-3,
                              joint=gprime_and_bound, merge=False, atol=1e-13 * scale)
     # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
     # point of g; the end leaves the stop iff its acceleration there points away from the stop.
@@ -62,7 +65,7 @@ def _admissibility(model, load, phase, y_plus, v_imp):
         clusters = [cl for cl in clusters if cl[0] > 1e-6]
     # the stationary points that can carry the largest value are refined to full precision
     values, err_b = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters,
-                                       atol=1e-13 * scale)
+                                       atol=1e-13 * scale, duration=duration)
     err = err_b + 1e-12 * scale * (1.0 + max((abs(v) for v in values), default=0.0))
     clearance = max(values) if values else -math.inf
     tol = max(err, 1e-11 * scale)
@@ -100,7 +103,8 @@ def _newton_stationary(states, load, phase, c, w2, d, lo, hi):
     return t, ok
 
 
-def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8, atol=0.0):
+def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8, atol=0.0,
+                       duration=TWO_PI):
     """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
 
     All narrow intervals that may hold a zero of ``g'`` get a vectorised Newton step; converged
@@ -150,7 +154,7 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
             break
         width = float(np.max(rest[:, 1] - rest[:, 0]))
         try:
-            cur = np.array(enclose_zeros(None, None, 0.0, TWO_PI, n0=8, min_width=width / 64.0,
+            cur = np.array(enclose_zeros(None, None, 0.0, duration, n0=8, min_width=width / 64.0,
                                          joint=bound, intervals=rest, merge=False,
                                          max_intervals=20_000, atol=atol)).reshape(-1, 2)
         except RuntimeError:  # a zero of high order: the enclosure no longer shrinks

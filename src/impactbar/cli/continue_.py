@@ -1,0 +1,277 @@
+"""``impactbar continue``: a branch of periodic motions in one parameter, its bifurcations, the
+branches born at its period doublings, and a bifurcation diagram over a brute-force simulation."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+TWO_PI = 2.0 * math.pi
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser(
+        "continue",
+        help="continue a periodic motion in one parameter: folds, period doublings, grazing",
+        description="Pseudo-arclength continuation of a periodic motion with m impacts in n load "
+        "periods (theory sections 4, 5, 7) in one parameter of the bar or the load, with its folds, "
+        "period doublings (and the doubled branches, --doublings), Neimark-Sacker points, grazing "
+        "and losses of admissibility located on the branch. Writes the branches (CSV, and netCDF "
+        "where xarray is installed) and a bifurcation diagram over a brute-force simulation. "
+        "Dimensionless inputs (eq. 2); a CONFIG.toml or --preset gives the bar and load in SI "
+        "units, the parameter still varies in dimensionless units.",
+    )
+    g = p.add_argument_group("bar (dimensionless, eq. 2)")
+    g.add_argument("--s", type=float, default=10.0, help="wave-speed ratio C/(L Omega) > 0 (default 10)")
+    g.add_argument("--d", type=float, default=0.05, help="damping D/(M Omega) >= 0 (default 0.05)")
+    g.add_argument("--R", type=float, default=0.5, help="restitution coefficient in [0, 1] (default 0.5)")
+    g.add_argument("--n-modes", type=int, default=4, help="flexible modes kept, >= 0 (default 4)")
+    lg = p.add_argument_group("load")
+    lg.add_argument("--load", choices=("cosine", "square"), default="cosine",
+                    help="cosine: pneumatic p0 + pk cos(k t) (eq. 33); square: hydraulic (eq. 34)")
+    lg.add_argument("--p0", type=float, default=0.7, help="cosine: mean load (default 0.7)")
+    lg.add_argument("--pk", type=float, default=1.0, help="cosine: amplitude (default 1)")
+    lg.add_argument("--k", type=int, default=1, help="cosine: order of the harmonic (default 1)")
+    lg.add_argument("--q", type=float, default=1.0, help="square: level q > 0 (default 1)")
+    lg.add_argument("--kappa", type=float, default=1.2, help="square: kappa in [1, 2] (default 1.2)")
+    cg = p.add_argument_group("continuation")
+    cg.add_argument("--parameter", required=True, choices=("p0", "pk", "R", "d", "s", "q", "kappa"),
+                    help="the parameter that varies")
+    cg.add_argument("--to", type=float, required=True, help="its target value")
+    cg.add_argument("--impacts", type=int, default=1, help="impacts m per period of the motion (default 1)")
+    cg.add_argument("--periods", type=int, default=1, help="load periods n per period of the motion "
+                    "(default 1); with m or n > 1 the start is found from a simulation")
+    cg.add_argument("--orbit", default="stable",
+                    help="the one-impact orbit to start from: 'stable' (default: the stable one, else "
+                    "the first admissible, else the first) or its index in phase order")
+    cg.add_argument("--doublings", type=int, default=0,
+                    help="follow this many period doublings onto the doubled branches (default 0)")
+    cg.add_argument("--curve", nargs=2, metavar=("PARAM", "TO"), default=None,
+                    help="also follow every fold, period doubling and grazing point of the branches in "
+                    "(parameter, PARAM) up to PARAM = TO: the chart edges (writes curve_*.csv, curves.png)")
+    cg.add_argument("--step", type=float, default=None, help="initial arclength step")
+    cg.add_argument("--max-step", type=float, default=None, help="largest arclength step")
+    cg.add_argument("--max-points", type=int, default=2000, help="points per branch (default 2000)")
+    og = p.add_argument_group("output")
+    og.add_argument("--out", default="continue-out", help="output folder (default continue-out)")
+    og.add_argument("--brute", type=int, default=40,
+                    help="parameter values of the brute-force simulation diagram (default 40; 0: none)")
+    og.add_argument("--transient", type=float, default=100.0,
+                    help="load periods discarded at each brute-force value (default 100)")
+    og.add_argument("--record", type=float, default=20.0,
+                    help="load periods recorded at each brute-force value (default 20)")
+    og.add_argument("--y", choices=("impact_velocity", "phase"), default="impact_velocity",
+                    help="the diagram's ordinate (default impact_velocity)")
+    og.add_argument("--json", action="store_true", help="print a JSON summary instead of a table")
+    try:
+        from .physical import add_physical_arguments  # the SI layer, where installed
+    except ImportError:
+        pass
+    else:
+        add_physical_arguments(p)
+    p.set_defaults(func=run)
+
+
+def _model_and_load(args):
+    from .. import BarModel, CosineLoad, SquareWaveLoad
+
+    if getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None:
+        from .physical import hammer_from_args
+
+        hammer = hammer_from_args(args)
+        return hammer.model, hammer.load
+    model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes)
+    if args.load == "cosine":
+        return model, CosineLoad(args.p0, args.pk, args.k)
+    return model, SquareWaveLoad(args.q, args.kappa)
+
+
+def _start(model, load, args):
+    """The orbit the first branch starts from."""
+    from .. import InitialState, find_orbit, periodic_orbits, simulate
+
+    if args.impacts < 1 or args.periods < 1:
+        raise ValueError(f"--impacts and --periods must be >= 1; got {args.impacts}, {args.periods}")
+    if args.impacts == 1 and args.periods == 1:
+        orbits = periodic_orbits(model, load)
+        if not orbits:
+            raise ValueError("no one-impact orbit exists at the start values (above the existence edge)")
+        if args.orbit == "stable":
+            return sorted(orbits, key=lambda o: (not o.stable, not o.admissible))[0]
+        try:
+            i = int(args.orbit)
+        except ValueError:
+            raise ValueError(f"--orbit must be 'stable' or an index; got {args.orbit!r}") from None
+        if not 0 <= i < len(orbits):
+            raise ValueError(f"--orbit must be an index in [0, {len(orbits) - 1}]; got {i}")
+        return orbits[i]
+    tr = simulate(model, load, InitialState.rigid(-0.01, 0.0, n_modes=model.n_modes),
+                  TWO_PI * max(300, 20 * args.periods))
+    return find_orbit(model, load, args.impacts, args.periods, guess=tr)
+
+
+def run(args) -> int:
+    from ..continuation import continue_orbit, parameter_value, simulated_diagram
+
+    model, load = _model_and_load(args)
+    if args.doublings < 0:
+        raise ValueError(f"--doublings must be >= 0; got {args.doublings}")
+    if args.brute < 0:
+        raise ValueError(f"--brute must be >= 0; got {args.brute}")
+    start = _start(model, load, args)
+    kw = {"step": args.step, "max_step": args.max_step, "max_points": args.max_points}
+    branches = [continue_orbit(start, args.parameter, args.to, **kw)]
+    for _ in range(args.doublings):
+        pd = [e for e in branches[-1].events if e.kind == "period-doubling"]
+        if not pd:
+            break
+        branches.append(continue_orbit(pd[0], args.parameter, args.to, **kw))
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    written = []
+    for i, b in enumerate(branches):
+        path = out / f"branch_{i}_{b.impacts}per{b.periods}.csv"
+        b.to_dataframe().to_csv(path)
+        written.append(path)
+    events = [dict(e.to_dict(), branch=i) for i, b in enumerate(branches) for e in b.events]
+    ev_path = out / "events.csv"
+    _write_events(ev_path, events)
+    written.append(ev_path)
+    try:
+        import xarray as xr  # noqa: F401
+    except ImportError:
+        pass
+    else:
+        for i, b in enumerate(branches):
+            path = out / f"branch_{i}_{b.impacts}per{b.periods}.nc"
+            b.to_xarray().to_netcdf(path)
+            written.append(path)
+    diagram = None
+    if args.brute:
+        lam0 = parameter_value(model, load, args.parameter)
+        lo, hi = min(b.values.min() for b in branches), max(b.values.max() for b in branches)
+        values = np.linspace(lam0, args.to, args.brute)
+        values = values[(values >= lo) & (values <= hi)] if values.size > 1 else values
+        q, v = start.modal_state_after_impact
+        from .. import InitialState
+
+        diagram = simulated_diagram(model, load, args.parameter, values, transient=args.transient,
+                                    record=args.record, start=InitialState(q, v),
+                                    t0=float(start.impact_times[0]) if hasattr(start, "impact_times")
+                                    else start.phase)
+    try:
+        path = _plot(branches, diagram, args, out)
+    except ImportError:
+        path = None
+    if path is not None:
+        written.append(path)
+    curves = _curves(branches, args, out, written) if args.curve else []
+    if args.json:
+        doc = {"parameter": args.parameter, "to": args.to,
+               "branches": [{"impacts": b.impacts, "periods": b.periods, "points": len(b),
+                             "status": b.status, "start": float(b.values[0]), "end": float(b.values[-1]),
+                             "events": [_finite(e.to_dict()) for e in b.events]} for b in branches],
+               "curves": [{"kind": c.kind, "parameters": list(c.parameters), "points": len(c),
+                           "status": c.status, "start": c.values[0].tolist(), "end": c.values[-1].tolist()}
+                          for c in curves],
+               "files": [str(p) for p in written]}
+        print(json.dumps(doc, indent=2, allow_nan=False))
+        return 0
+    print(f"{model!r}\n{load!r}")
+    for i, b in enumerate(branches):
+        print(f"branch {i}: {b.impacts} impact(s) in {b.periods} period(s), {len(b)} points, "
+              f"{args.parameter} from {b.values[0]:.10g} to {b.values[-1]:.10g} ({b.status})")
+        for e in b.events:
+            mu = "" if math.isnan(e.multiplier.real) else f"  multiplier {e.multiplier.real:+.6f}" \
+                f"{e.multiplier.imag:+.6f}i"
+            print(f"  {e.kind:>16} at {args.parameter} = {e.value:.12g}{mu}")
+    for c in curves:
+        print(f"{c.kind} curve in ({c.parameters[0]}, {c.parameters[1]}): {len(c)} points from "
+              f"{c.values[0].round(10).tolist()} to {c.values[-1].round(10).tolist()} ({c.status})")
+    for p in written:
+        print(f"wrote {p}")
+    return 0
+
+
+def _curves(branches, args, out, written):
+    """Two-parameter curves of every fold, period doubling and grazing point of the branches."""
+    from ..continuation import continue_bifurcation
+
+    name, to = args.curve[0], float(args.curve[1])
+    curves = []
+    for b in branches:
+        for e in b.events:
+            if e.kind in ("fold", "period-doubling", "grazing"):
+                try:
+                    curves.append(continue_bifurcation(e, name, to))
+                except ValueError as exc:
+                    print(f"warning: {e.kind} at {e.value:.10g} not followed: {exc}")
+    for i, c in enumerate(curves):
+        path = out / f"curve_{i}_{c.kind}.csv"
+        c.to_dataframe().to_csv(path)
+        written.append(path)
+    if curves:
+        try:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+        except ImportError:
+            return curves
+        fig, ax = plt.subplots(figsize=(6, 4.5))
+        styles = {"fold": "-", "period-doubling": "--", "grazing": ":"}
+        for c in curves:
+            c.plot(ax, ls=styles[c.kind], label=f"{c.kind} ({c.orbits[0].impacts} per {c.orbits[0].periods})")
+        ax.legend(fontsize=8)
+        path = out / "curves.png"
+        fig.tight_layout()
+        fig.savefig(path, dpi=130)
+        plt.close(fig)
+        written.append(path)
+    return curves
+
+
+def _finite(d):
+    out = {}
+    for k, v in d.items():
+        if isinstance(v, list):
+            v = [None if isinstance(x, float) and not math.isfinite(x) else x for x in v]
+        elif isinstance(v, float) and not math.isfinite(v):
+            v = None
+        out[k] = v
+    return out
+
+
+def _write_events(path, events):
+    cols = ["branch", "kind", "parameter", "value", "index", "phase", "impacts", "periods",
+            "multiplier_real", "multiplier_imag"]
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write(",".join(cols) + "\n")
+        for e in events:
+            row = dict(e, multiplier_real=e["multiplier"][0], multiplier_imag=e["multiplier"][1])
+            fh.write(",".join(repr(row[c]) if isinstance(row[c], float) else str(row[c]) for c in cols)
+                     + "\n")
+
+
+def _plot(branches, diagram, args, out):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    if diagram is not None and diagram["parameter"].size:
+        ax.plot(diagram["parameter"], diagram[args.y], ".", ms=2, color="0.55", ls="none", zorder=0,
+                label="simulation (brute force)")
+    for b in branches:
+        b.plot(ax, y=args.y, label=f"{b.impacts} per {b.periods}")
+    ax.legend(fontsize=8)
+    ax.set_title(f"continuation in {args.parameter}: stable solid, unstable dashed", fontsize=9)
+    path = out / "diagram.png"
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path

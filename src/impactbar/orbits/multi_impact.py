@@ -1,0 +1,635 @@
+"""Periodic motions with ``m`` impacts in ``n`` load periods (paper eqs. 8, 10, 11; theory §4, §5, §7).
+
+A motion is cut into its ``m`` flights, one segment per flight, as in the hybrid multi-segment
+boundary-value problems of continuation toolboxes (COCO's ``hspo``): each segment starts just after
+an impact at load time ``t_j`` with the reduced state ``x_j = (q_1..q_N, q_0'..q_N')`` (``q_0``
+follows from contact ``u(1, t_j) = 0``), flies in closed form (eq. 8) to the next impact time
+``t_{j+1}``, where the end must touch the stop, and is mapped by the impact law (eq. 10) onto the
+next segment's start. The last segment closes onto the first one ``2 pi n`` later. The unknowns are
+the ``m`` impact times and states, ``2 m (N + 1)`` numbers, and the conditions as many: Newton's
+method with the exact Jacobian (fundamental matrix and the vector field at both ends) needs no root
+search. The Floquet multipliers are the eigenvalues of the product of the ``m`` impact-map Jacobians,
+each with its saltation term (theory §7).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._threads import single_threaded_blas
+from .._validate import check_int, check_real
+from ..dynamics.modal import fundamental
+from ..loads import Load
+from ..model import BarModel
+from .admissibility import _admissibility
+from .one_impact import PeriodicOrbit, periodic_orbits
+from .phase import _check_inputs
+
+__all__ = ["MultiImpactOrbit", "find_orbit"]
+
+TWO_PI = 2.0 * math.pi
+
+#: Order in which the reasons for inadmissibility are reported when several flights fail.
+_STATUS_RANK = {"penetrates": 0, "backward impact": 1, "grazing": 2, "sticks": 3, "admissible": 4}
+
+
+# ------------------------------------------------------------------------------------------------
+# the impact law: the one place that knows it
+# ------------------------------------------------------------------------------------------------
+def impact_law(model: BarModel, load: Load, t: float, y_minus: np.ndarray):
+    """State just after an impact from the state just before, with its derivatives.
+
+    The paper's law (eq. 10, theory §4): the displacement is kept and the whole velocity field is
+    reversed and scaled by ``R``: ``(q, q') -> (q, -R q')`` in every mode.
+
+    Parameters
+    ----------
+    model : BarModel
+    load : Load
+        The load (a law with contact of finite duration would need it; eq. 10 does not).
+    t : float
+        Load time of the impact.
+    y_minus : numpy.ndarray, shape (2 N + 2,)
+        Modal state ``(q_0..q_N, q_0'..q_N')`` just before the impact.
+
+    Returns
+    -------
+    y_plus : numpy.ndarray, shape (2 N + 2,)
+        State just after the impact.
+    jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
+        ``d y_plus / d y_minus``.
+    jac_t : numpy.ndarray, shape (2 N + 2,)
+        ``d y_plus / d t`` at fixed ``y_minus`` (zero for eq. 10).
+
+    Raises
+    ------
+    ValueError
+        For an impact law other than the paper's (``model.impact`` other than ``"paper"``).
+    """
+    law = getattr(model, "impact", "paper")
+    if law != "paper":
+        raise ValueError(f"find_orbit and continue_orbit support impact='paper' (eq. 10) only; "
+                         f"got impact={law!r}")
+    M = model.n_modes + 1
+    y_plus = np.array(y_minus, dtype=float)
+    y_plus[M:] *= -model.R
+    diag = np.ones(2 * M)
+    diag[M:] = -model.R
+    return y_plus, np.diag(diag), np.zeros(2 * M)
+
+
+# ------------------------------------------------------------------------------------------------
+# the multi-segment problem
+# ------------------------------------------------------------------------------------------------
+class _Segments:
+    """The ``m``-segment boundary-value problem for one model, load, ``m`` and ``n``.
+
+    Unknowns ``u = (t_1, x_1, ..., t_m, x_m)``, ``x_j`` of size ``2 M - 1`` (``M = N + 1``); residual
+    block ``j``: ``(c . q(t_{j+1}-), reduce(impact(Y_j)) - x_{j+1})``.
+    """
+
+    def __init__(self, model: BarModel, load: Load, m: int, n: int):
+        self.model, self.load, self.m, self.n = model, load, m, n
+        M = model.n_modes + 1
+        self.M = M
+        self.w2 = model.frequencies**2
+        self.d = model.d
+        self.c = model.end_weights
+        E = np.zeros((2 * M, 2 * M - 1))  # full state from reduced: q_0 = -sum_{n>=1} c_n q_n
+        E[0, : M - 1] = -self.c[1:]
+        E[1:M, : M - 1] = np.eye(M - 1)
+        E[M:, M - 1:] = np.eye(M)
+        self.E = E
+        self.size = 2 * M * m
+
+    # -- pieces -----------------------------------------------------------------------------------
+    def split(self, u):
+        z = np.asarray(u, dtype=float).reshape(self.m, 2 * self.M)
+        return z[:, 0], z[:, 1:]
+
+    def full(self, x):
+        return self.E @ x
+
+    def f(self, t, y, left=False):
+        """Vector field ``(q', p(t) - d q' - w2 q)`` (eq. 6); ``left`` takes ``p(t-)``."""
+        M = self.M
+        p = float(self.load.left_limit(t) if left else self.load(t))
+        return np.concatenate((y[M:], p - self.d * y[M:] - self.w2 * y[:M]))
+
+    def flight(self, t0, y0, t1):
+        """State at ``t1`` of the flight that starts at ``t0`` in state ``y0`` (eq. 8)."""
+        M = self.M
+        q, v = self.load.propagate(self.w2, self.d, t0, y0[:M], y0[M:], [t1])
+        return np.concatenate((q[:, 0], v[:, 0]))
+
+    def phi(self, T):
+        """Fundamental matrix of the free flight over ``T``, shape ``(2 M, 2 M)``."""
+        p11, p12, p21, p22 = fundamental(self.w2, self.d, T)
+        M = self.M
+        i = np.arange(M)
+        Phi = np.zeros((2 * M, 2 * M))
+        Phi[i, i], Phi[i, i + M], Phi[i + M, i], Phi[i + M, i + M] = p11, p12, p21, p22
+        return Phi
+
+    def evaluate(self, u, jacobian=True):
+        """Residual (and Jacobian) of the periodicity conditions; also the states at the impacts.
+
+        Returns
+        -------
+        F : numpy.ndarray, shape (size,)
+        DF : numpy.ndarray, shape (size, size) or None
+        info : dict
+            ``y_plus``, ``y_minus`` (m, 2 M) and the per-impact map Jacobians ``maps`` (m, 2 M, 2 M)
+            (only with ``jacobian``).
+        """
+        m, M = self.m, self.M
+        K = 2 * M
+        t, x = self.split(u)
+        F = np.empty(self.size)
+        DF = np.zeros((self.size, self.size)) if jacobian else None
+        y_plus = np.empty((m, K))
+        y_minus = np.empty((m, K))
+        maps = np.empty((m, K, K)) if jacobian else None
+        for j in range(m):
+            jn = (j + 1) % m
+            t1 = t[jn] + (TWO_PI * self.n if jn == 0 else 0.0)
+            y0 = self.full(x[j])
+            Y = self.flight(t[j], y0, t1)
+            yp, Jy, Jt = impact_law(self.model, self.load, t1, Y)
+            y_plus[j], y_minus[j] = y0, Y
+            r = slice(K * j, K * (j + 1))
+            F[K * j] = self.c @ Y[:M]
+            F[K * j + 1: K * (j + 1)] = yp[1:] - x[jn]
+            if not jacobian:
+                continue
+            Phi = self.phi(t1 - t[j])
+            A = np.empty((K, K))  # dY / d(t_j, x_j)
+            A[:, 0] = -Phi @ self.f(t[j], y0)
+            A[:, 1:] = Phi @ self.E
+            f1 = self.f(t1, Y, left=True)  # dY / d t_{j+1}
+            rows = np.vstack((self.c @ A[:M], (Jy @ A)[1:]))
+            tcol = np.concatenate(([self.c @ f1[:M]], (Jy @ f1 + Jt)[1:]))
+            DF[r, K * j: K * (j + 1)] += rows
+            DF[r, K * jn] += tcol
+            DF[K * j + 1: K * (j + 1), K * jn + 1: K * (jn + 1)] -= np.eye(K - 1)
+            # the impact map z_j -> z_{j+1} with the impact time eliminated (saltation, theory §7)
+            v_imp = float(self.c @ Y[M:])
+            with np.errstate(divide="ignore", invalid="ignore"):
+                rt = -(self.c @ A[:M]) / v_imp
+            dy = Jy @ (A + np.outer(f1, rt)) + np.outer(Jt, rt)
+            maps[j, 0] = rt
+            maps[j, 1:] = dy[1:]
+        return F, DF, {"y_plus": y_plus, "y_minus": y_minus, "maps": maps}
+
+    def monodromy(self, maps):
+        """Product of the impact-map Jacobians, first impact first: ``DP_m ... DP_1``."""
+        P = maps[0]
+        for j in range(1, self.m):
+            P = maps[j] @ P
+        return P
+
+    def scale(self, u):
+        return max(1.0, float(np.max(np.abs(u))))
+
+    def newton(self, u, *, tol=1e-12, max_iter=40):
+        """Newton's method on ``F(u) = 0``. Returns the converged ``u`` or ``None``, and the
+        iteration count."""
+        u = np.array(u, dtype=float)
+        for it in range(1, max_iter + 1):
+            F, DF, _ = self.evaluate(u)
+            if not np.all(np.isfinite(F)) or not np.all(np.isfinite(DF)):
+                return None, it
+            try:
+                du = np.linalg.solve(DF, F)
+            except np.linalg.LinAlgError:
+                return None, it
+            u = u - du
+            if float(np.max(np.abs(du))) <= tol * self.scale(u):
+                F, _, _ = self.evaluate(u, jacobian=False)
+                return (u if np.all(np.isfinite(F)) else None), it
+        return None, max_iter
+
+
+# ------------------------------------------------------------------------------------------------
+# the result
+# ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class MultiImpactOrbit:
+    """A periodic motion with ``impacts`` impacts in ``periods`` load periods, with its stability.
+
+    Orbit time ``t`` is counted from the first impact, which happens at load time
+    ``impact_times[0]``; the motion repeats after ``2 pi periods``. A one-impact orbit of
+    :func:`periodic_orbits` is the case ``impacts = periods = 1`` with ``impact_times[0] = phase``.
+
+    Attributes
+    ----------
+    model : BarModel
+    load : Load
+    impacts : int
+        ``m``, impacts per period of the motion.
+    periods : int
+        ``n``, load periods per period of the motion.
+    impact_times : numpy.ndarray, shape (m,)
+        Load times of the impacts, increasing, the first in ``[0, 2 pi)``, all within
+        ``2 pi n`` of it.
+    phases : numpy.ndarray, shape (m,)
+        ``impact_times mod 2 pi`` (rad): the load phase at each impact (eq. 7).
+    impact_velocities : numpy.ndarray, shape (m,)
+        ``u_t(1, t-)`` just before the impact at each of ``impact_times`` (dimensionless); > 0 for
+        a physical motion.
+    admissible : bool
+        Every flight stays off the stop and every impact arrives moving forward (theory §5),
+        decided with certified bounds on each flight.
+    admissibility : str
+        ``"admissible"``, or the worst reason found on a flight: ``"penetrates"``,
+        ``"backward impact"``, ``"grazing"``, ``"sticks"``.
+    clearance : float
+        Largest ``u(1, t)`` at a stationary point between impacts, over all flights.
+    clearance_error : float
+        Bound on the error of ``clearance``.
+    multipliers : numpy.ndarray of complex, shape (2 N + 2,)
+        Exact Floquet multipliers of the ``m``-fold impact map (theory §7), by decreasing modulus.
+    stable : bool
+        ``admissible`` and every ``|multiplier| < 1``.
+    states_after_impact, states_before_impact : numpy.ndarray, shape (m, 2 N + 2)
+        Modal states ``(q_0..q_N, q_0'..q_N')`` just after and just before the impact at each of
+        ``impact_times`` (the state before the first impact is the end of the last flight).
+    """
+
+    model: BarModel
+    load: Load
+    impacts: int
+    periods: int
+    impact_times: np.ndarray = field(repr=False)
+    phases: np.ndarray
+    impact_velocities: np.ndarray
+    admissible: bool
+    admissibility: str
+    clearance: float
+    clearance_error: float
+    multipliers: np.ndarray = field(repr=False)
+    stable: bool
+    states_after_impact: np.ndarray = field(repr=False)
+    states_before_impact: np.ndarray = field(repr=False)
+
+    @property
+    def period(self) -> float:
+        """Duration of one period of the motion, ``2 pi n``."""
+        return TWO_PI * self.periods
+
+    @property
+    def phase(self) -> float:
+        """Load phase of the first impact, ``phases[0]`` (rad)."""
+        return float(self.phases[0])
+
+    @property
+    def impact_velocity(self) -> float:
+        """Velocity before the first impact, ``impact_velocities[0]``."""
+        return float(self.impact_velocities[0])
+
+    @property
+    def max_abs_multiplier(self) -> float:
+        """Largest ``|multiplier|``."""
+        return float(np.max(np.abs(self.multipliers)))
+
+    @property
+    def state_after_impact(self) -> np.ndarray:
+        """Modal state just after the first impact, shape ``(2 N + 2,)``."""
+        return self.states_after_impact[0].copy()
+
+    @property
+    def modal_state_after_impact(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, q')`` just after the first impact, each shape ``(N + 1,)``: start
+        ``simulate(model, load, InitialState(*orbit.modal_state_after_impact), t_end,
+        t0=orbit.impact_times[0])`` on the orbit."""
+        M = self.model.n_modes + 1
+        return self.states_after_impact[0, :M].copy(), self.states_after_impact[0, M:].copy()
+
+    def modal_state(self, t):
+        """Modal displacements and velocities at orbit times ``t`` (from the first impact).
+
+        Parameters
+        ----------
+        t : array_like, shape (T,)
+            Orbit times (dimensionless), taken modulo ``2 pi n``; at an impact time the state just
+            after the impact.
+
+        Returns
+        -------
+        q, v : numpy.ndarray, shape (N + 1, T)
+        """
+        t = np.mod(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), self.period)
+        M = self.model.n_modes + 1
+        rel = self.impact_times - self.impact_times[0]
+        j = np.clip(np.searchsorted(rel, t, side="right") - 1, 0, self.impacts - 1)
+        q = np.empty((M, t.size))
+        v = np.empty((M, t.size))
+        w2 = self.model.frequencies**2
+        for jj in np.unique(j):
+            sel = j == jj
+            y = self.states_after_impact[jj]
+            q[:, sel], v[:, sel] = self.load.propagate(w2, self.model.d, self.impact_times[jj], y[:M],
+                                                       y[M:], self.impact_times[0] + t[sel])
+        return q, v
+
+    def end_displacement(self, t) -> np.ndarray:
+        """Displacement of the struck end ``u(1, t)`` at orbit times ``t``, shape of ``t``."""
+        t = np.asarray(t, dtype=float)
+        q, _ = self.modal_state(t.ravel())
+        return (self.model.end_weights @ q).reshape(t.shape)
+
+    def _field(self, x, t, velocity):
+        xb, tb = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(t, dtype=float))
+        shapes = self.model.shape_functions(xb.ravel())
+        tt, inv = np.unique(tb.ravel(), return_inverse=True)
+        q, v = self.modal_state(tt)
+        modal = (v if velocity else q)[:, inv]
+        return np.einsum("pm,mp->p", shapes, modal).reshape(xb.shape)
+
+    def displacement(self, x, t) -> np.ndarray:
+        """Displacement ``u(x, t)`` (eq. 15); ``x`` in ``[0, 1]`` broadcast against orbit times ``t``."""
+        return self._field(x, t, velocity=False)
+
+    def velocity(self, x, t) -> np.ndarray:
+        """Velocity ``u_t(x, t)``, as :meth:`displacement` (just after an impact at impact times)."""
+        return self._field(x, t, velocity=True)
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary (floats and lists; multipliers as ``[re, im]``)."""
+        return {
+            "impacts": self.impacts,
+            "periods": self.periods,
+            "impact_times": self.impact_times.tolist(),
+            "phases": self.phases.tolist(),
+            "impact_velocities": self.impact_velocities.tolist(),
+            "admissible": self.admissible,
+            "admissibility": self.admissibility,
+            "clearance": self.clearance,
+            "stable": self.stable,
+            "max_abs_multiplier": self.max_abs_multiplier,
+            "multipliers": [[m.real, m.imag] for m in self.multipliers],
+        }
+
+
+def _sorted_multipliers(P):
+    mu = np.linalg.eigvals(P)
+    return mu[np.argsort(-np.abs(mu), kind="stable")]
+
+
+def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactOrbit:
+    """The orbit at a converged solution ``u`` of the segment problem."""
+    model, load = problem.model, problem.load
+    M, m = problem.M, problem.m
+    _, _, info = problem.evaluate(u)
+    t, _ = problem.split(u)
+    c = problem.c
+    v_imp = info["y_minus"][:, M:] @ c
+    mu = _sorted_multipliers(problem.monodromy(info["maps"]))
+    if not np.all(np.isfinite(mu)):
+        mu = np.full(2 * M, np.inf + 0j)
+    statuses, clear, cerr = [], -math.inf, 0.0
+    if admissibility:
+        for j in range(m):
+            T = (t[j + 1] if j + 1 < m else t[0] + TWO_PI * problem.n) - t[j]
+            st, cl, ce = _admissibility(model, load, float(t[j]), info["y_plus"][j], float(v_imp[j]),
+                                        duration=float(T))
+            statuses.append(st)
+            if cl > clear:
+                clear, cerr = cl, ce
+        status = min(statuses, key=_STATUS_RANK.__getitem__)
+    else:
+        status = "unchecked"
+    admissible = status == "admissible"
+    return MultiImpactOrbit(
+        model=model, load=load, impacts=m, periods=problem.n,
+        impact_times=t.copy(), phases=np.mod(t, TWO_PI), impact_velocities=np.roll(v_imp, 1),
+        admissible=admissible, admissibility=status, clearance=float(clear),
+        clearance_error=float(cerr), multipliers=mu,
+        stable=bool(admissible and np.all(np.abs(mu) < 1.0)),
+        states_after_impact=info["y_plus"], states_before_impact=np.roll(info["y_minus"], 1, axis=0),
+    )
+
+
+def _normalise(problem: _Segments, u):
+    """Shift the impact times so that the first lies in ``[0, 2 pi)``; check they increase."""
+    z = np.array(u, dtype=float).reshape(problem.m, 2 * problem.M)
+    z[:, 0] -= TWO_PI * math.floor(z[0, 0] / TWO_PI)
+    t = z[:, 0]
+    if problem.m > 1 and not np.all(np.diff(t) > 0.0):
+        return None
+    if not t[-1] - t[0] < TWO_PI * problem.n:
+        return None
+    return z.ravel()
+
+
+# ------------------------------------------------------------------------------------------------
+# guesses
+# ------------------------------------------------------------------------------------------------
+def _unknowns_from(problem: _Segments, times, states):
+    """Unknown vector from impact times (m,) and full post-impact states (m, 2 M)."""
+    times = np.asarray(times, dtype=float).ravel()
+    states = np.asarray(states, dtype=float).reshape(times.size, -1)
+    if times.size != problem.m or states.shape[1] != 2 * problem.M:
+        raise ValueError(f"guess must give {problem.m} impact times and states of length "
+                         f"{2 * problem.M}; got {times.size} times and states of shape {states.shape}")
+    if not (np.all(np.isfinite(times)) and np.all(np.isfinite(states))):
+        raise ValueError("guess must be finite")
+    z = np.empty((problem.m, 2 * problem.M))
+    z[:, 0] = times
+    z[:, 1:] = states[:, 1:]
+    return z.ravel()
+
+
+def _as_segments(orbit):
+    """(times, post-impact states, m, n) of a PeriodicOrbit or MultiImpactOrbit."""
+    if isinstance(orbit, PeriodicOrbit):
+        return np.array([orbit.phase]), orbit.state_after_impact[None, :], 1, 1
+    return orbit.impact_times, orbit.states_after_impact, orbit.impacts, orbit.periods
+
+
+def _repeat(times, states, n0, reps):
+    t = np.concatenate([times + TWO_PI * n0 * r for r in range(reps)])
+    return t, np.concatenate([states] * reps)
+
+
+def doubling_direction(orbit):
+    """The orbit taken twice round and the direction of the doubled orbit born at its period
+    doubling (theory §7).
+
+    With ``e`` the eigenvector of the monodromy's multiplier nearest ``-1`` and ``P_j`` the impact
+    maps, the perturbation ``(e, P_1 e, ..., -e, -P_1 e, ...)`` of the ``2 m``-impact segment
+    problem is its null vector at the doubling (the second copy is the first, mirrored).
+
+    Parameters
+    ----------
+    orbit : PeriodicOrbit or MultiImpactOrbit
+
+    Returns
+    -------
+    z : numpy.ndarray, shape (2 m * 2 (N + 1),)
+        Unknowns of the doubled segment problem for the orbit twice round.
+    w : numpy.ndarray, same shape
+        The direction, scaled to a largest entry of 1.
+    """
+    times, states, m0, n0 = _as_segments(orbit)
+    base = _Segments(orbit.model, orbit.load, m0, n0)
+    u0 = _unknowns_from(base, times, states)
+    _, _, info = base.evaluate(u0)
+    maps = info["maps"]
+    mu, vec = np.linalg.eig(base.monodromy(maps))
+    e = np.real(vec[:, int(np.argmin(np.abs(mu + 1.0)))])
+    pert = [e / np.max(np.abs(e))]
+    for j in range(m0 - 1):
+        pert.append(maps[j] @ pert[-1])
+    pert = np.array(pert)
+    z = np.concatenate([u0.reshape(m0, -1)] * 2)
+    z[m0:, 0] += TWO_PI * n0
+    w = np.concatenate((pert, -pert)).ravel()
+    return z.ravel(), w / np.max(np.abs(w))
+
+
+def _doubling_guesses(problem: _Segments, orbit,
+                      amplitudes=(1e-2, -1e-2, 0.1, -0.1, 0.3, -0.3, 0.6, -0.6, 1.0, -1.0)):
+    """Starts for the doubled orbit near a period doubling of ``orbit``: the orbit twice, pushed
+    along :func:`doubling_direction` by a range of amplitudes (relative to its velocities)."""
+    z, w = doubling_direction(orbit)
+    _, states, _, _ = _as_segments(orbit)
+    scale = max(1e-12, float(np.max(np.abs(states[:, problem.M:]))))
+    return [z + a * scale * w for a in amplitudes], z
+
+
+def _guesses(problem: _Segments, guess):
+    """Candidate unknown vectors from the user's guess, best first, and a vector to avoid (the
+    undoubled orbit repeated, when starting across a period doubling) or None."""
+    m, n = problem.m, problem.n
+    if guess is None:
+        if m != n:
+            raise ValueError(f"guess is required for impacts={m} != periods={n}")
+        orbits = [o for o in periodic_orbits(problem.model, problem.load) if np.isfinite(o.phase)]
+        if not orbits:
+            raise ValueError("guess is required: there is no one-impact orbit to start from")
+        orbits.sort(key=lambda o: (not o.stable, not o.admissible, o.max_abs_multiplier))
+        return [_unknowns_from(problem, *_repeat(np.array([o.phase]), o.state_after_impact[None, :],
+                                                 1, n)) for o in orbits], None
+    if isinstance(guess, PeriodicOrbit | MultiImpactOrbit):
+        times, states, m0, n0 = _as_segments(guess)
+        if m % m0 or n % n0 or m // m0 != n // n0:
+            raise ValueError(f"guess has {m0} impacts in {n0} periods; it can start an orbit with "
+                             f"impacts={m0}*j, periods={n0}*j, not impacts={m}, periods={n}")
+        reps = m // m0
+        mu = guess.multipliers
+        near_pd = np.any((mu.real < -0.5) & (np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))))
+        if reps == 2 and near_pd:
+            starts, avoid = _doubling_guesses(problem, guess)
+            return starts, avoid
+        return [_unknowns_from(problem, *_repeat(times, states, n0, reps))], None
+    if hasattr(guess, "impact_times") and hasattr(guess, "modal_state"):  # a Trajectory
+        ti = np.asarray(guess.impact_times)
+        if ti.size < m + 1:
+            raise ValueError(f"guess (a Trajectory) has {ti.size} impacts; at least impacts + 1 = "
+                             f"{m + 1} are needed")
+        span = ti[-1] - ti[-1 - m]
+        if abs(span - TWO_PI * n) > 0.25 * TWO_PI:
+            raise ValueError(f"guess: the last {m} impact intervals of the Trajectory span "
+                             f"{span:.6g}, far from 2 pi periods = {TWO_PI * n:.6g}")
+        times = ti[-1 - m:-1]
+        q, v = guess.modal_state(times)
+        states = np.vstack((q, v)).T
+        if states.shape[1] != 2 * problem.M:
+            raise ValueError("guess: the Trajectory's model has another number of modes")
+        return [_unknowns_from(problem, times, states)], None
+    if isinstance(guess, tuple) and len(guess) == 2:
+        return [_unknowns_from(problem, guess[0], guess[1])], None
+    raise ValueError("guess must be a PeriodicOrbit, a MultiImpactOrbit, a Trajectory or a tuple "
+                     f"(impact_times, states_after_impact); got {type(guess).__name__}")
+
+
+def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, guess=None, *,
+               tol: float = 1e-12, max_iter: int = 40) -> MultiImpactOrbit:
+    """A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
+    the exact impact map (eqs. 8, 10, 11; theory §4, §5, §7).
+
+    Each flight is the closed-form motion of the modal oscillators (eq. 8); the unknowns are the
+    impact times and the states just after them, the conditions are contact at each impact and the
+    impact law (eq. 10) between consecutive flights, closing after ``2 pi periods``. The Jacobian is
+    exact (fundamental matrix, vector field at both ends of each flight); the multipliers are the
+    eigenvalues of the product of the ``impacts`` impact-map Jacobians with their saltation terms.
+
+    Parameters
+    ----------
+    model : BarModel
+        Its impact law must be the paper's (eq. 10).
+    load : Load
+        Any load of period ``2 pi``.
+    impacts : int
+        ``m >= 1``, impacts per period of the motion.
+    periods : int
+        ``n >= 1``, load periods per period of the motion.
+    guess : optional
+        Where Newton starts:
+
+        - ``None``: the one-impact orbits of :func:`periodic_orbits`, repeated (``impacts ==
+          periods`` only), stable ones first;
+        - a :class:`PeriodicOrbit` or :class:`MultiImpactOrbit` with ``m0`` impacts in ``n0``
+          periods, repeated ``j`` times for ``impacts = j m0``, ``periods = j n0``; for ``j = 2``
+          and a guess with a real multiplier below ``-1/2`` the copies are pushed apart along its
+          eigenvector, so that an orbit near or past its period doubling gives the doubled orbit
+          (a ``ValueError`` if Newton only finds the guess again);
+        - a :class:`Trajectory`: its last ``impacts`` impacts (they must span about
+          ``2 pi periods``);
+        - a tuple ``(impact_times, states_after_impact)`` of shapes ``(m,)`` and ``(m, 2 N + 2)``.
+    tol : float
+        Relative tolerance of the Newton step.
+    max_iter : int
+        Newton iterations per start.
+
+    Returns
+    -------
+    MultiImpactOrbit
+
+    Raises
+    ------
+    ValueError
+        For bad arguments (named), another impact law, or when Newton does not converge from any
+        start derived from ``guess`` (or only back onto the undoubled orbit).
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, CosineLoad, find_orbit
+    >>> o = find_orbit(BarModel(s=10, d=0, R=0.5, n_modes=4), CosineLoad(0.1, 1.0))
+    >>> round(o.phase, 4), o.impacts
+    (3.0367, 1)
+    """
+    _check_inputs(model, load)
+    m = check_int("impacts", impacts, lo=1, hi=4096)
+    n = check_int("periods", periods, lo=1, hi=4096)
+    tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
+    max_iter = check_int("max_iter", max_iter, lo=1)
+    impact_law(model, load, 0.0, np.zeros(2 * model.n_modes + 2))  # the law is supported
+    problem = _Segments(model, load, m, n)
+    starts, avoid = _guesses(problem, guess)
+    with single_threaded_blas():
+        for u0 in starts:
+            u, _ = problem.newton(u0, tol=tol, max_iter=max_iter)
+            if u is None:
+                continue
+            if avoid is not None and _same_orbit(u, avoid, problem):
+                continue
+            u = _normalise(problem, u)
+            if u is None:
+                continue
+            return _build(problem, u)
+    raise ValueError(f"find_orbit: Newton did not converge to an orbit with {m} impacts in {n} "
+                     "periods from the guess" + (" (only to the undoubled orbit)" if avoid is not None
+                                                  else ""))
+
+
+def _same_orbit(u, v, problem):
+    """Whether ``u`` is the undoubled orbit ``v`` again: its two halves coincide (up to the
+    half-period shift of the times)."""
+    z = np.array(u, dtype=float).reshape(2, -1)
+    z[1, ::2 * problem.M] -= TWO_PI * problem.n / 2
+    return float(np.max(np.abs(z[0] - z[1]))) <= 1e-7 * problem.scale(v)
