@@ -218,3 +218,30 @@ def test_sweep_chunk_closed_form_equals_point_by_point(monkeypatch):
             else:
                 assert np.array_equal(a[name], b[name]), name
     assert sum(int(np.sum(c["n_orbits"])) for c in fast) > 20
+
+
+def test_import_is_light_and_every_public_name_resolves():
+    """``import impactbar`` and building the CLI parser load none of scipy.optimize, numba, pint,
+    dask, xarray, zarr, matplotlib (they come on first use); every name of ``__all__`` (package and
+    ``impactbar.physical``) still resolves."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, impactbar, impactbar.cli\n"
+        "impactbar.cli.build_parser()\n"
+        "heavy = [m for m in ('scipy.optimize', 'numba', 'pint', 'dask', 'distributed', 'xarray', "
+        "'zarr', 'matplotlib') if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+        "for name in impactbar.__all__: getattr(impactbar, name)\n"
+        "for name in impactbar.physical.__all__: getattr(impactbar.physical, name)\n"
+        "from impactbar import simulate, periodic_orbits, PeriodicOrbit, run_sweep, plot_sweep\n"
+        "assert 'numba' in sys.modules\n"
+        "assert 'periodic_orbits' in dir(impactbar) and callable(impactbar.simulate)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    with pytest.raises(AttributeError):
+        import impactbar
+
+        impactbar.no_such_name  # noqa: B018

@@ -9,7 +9,6 @@ clusters (Brent on a sign change, a bounded minimisation for a double zero at a 
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 __all__ = ["enclose_zeros", "zeros_in_clusters"]
 
@@ -104,6 +103,8 @@ def zeros_in_clusters(f, clusters, *, atol: float):
     list of tuple
         ``(t, multiplicity)`` with multiplicity 1 or 2, in increasing ``t``.
     """
+    from scipy.optimize import brentq, minimize_scalar  # here, not at the top: a slow import
+
     out = []
 
     def f1(t):
