@@ -220,14 +220,20 @@ def test_sweep_chunk_closed_form_equals_point_by_point(monkeypatch):
     assert sum(int(np.sum(c["n_orbits"])) for c in fast) > 20
 
 
+def _run_python(code):
+    """Run ``code`` in a fresh interpreter; fail with its stderr if it fails."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+
+
 def test_import_is_light_and_every_public_name_resolves():
     """``import impactbar`` and building the CLI parser load none of scipy.optimize, numba, pint,
     dask, xarray, zarr, matplotlib (they come on first use); every name of ``__all__`` (package and
     ``impactbar.physical``) still resolves."""
-    import subprocess
-    import sys
-
-    code = (
+    _run_python(
         "import sys, impactbar, impactbar.cli\n"
         "impactbar.cli.build_parser()\n"
         "heavy = [m for m in ('scipy.optimize', 'numba', 'pint', 'dask', 'distributed', 'xarray', "
@@ -239,9 +245,46 @@ def test_import_is_light_and_every_public_name_resolves():
         "assert 'numba' in sys.modules\n"
         "assert 'periodic_orbits' in dir(impactbar) and callable(impactbar.simulate)\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
-    assert out.returncode == 0, out.stderr
     with pytest.raises(AttributeError):
         import impactbar
 
         impactbar.no_such_name  # noqa: B018
+
+
+def test_simulation_core_is_built_once_and_runs_are_unchanged():
+    """simulate reuses the kernel data of a (model, load) pair; a run with the cached core equals
+    one with a freshly built core, impact for impact."""
+    import importlib
+
+    from impactbar import InitialState, simulate
+
+    sim_module = importlib.import_module("impactbar.simulation.simulate")
+
+    model, load = BarModel(1.37, 0.02, 0.8, 3), CosineLoad(1.2, 1.0)
+    start = InitialState.rigid(-0.05, 0.0, 3)
+    first = simulate(model, load, start, 60.0)
+    core = sim_module._core_for(model, load)
+    assert sim_module._core_for(BarModel(1.37, 0.02, 0.8, 3), load) is core
+    assert sim_module._core_for(model, CosineLoad(1.2, 1.0)) is not core  # keyed by the load object
+    again = simulate(model, load, start, 60.0)
+    sim_module._CORES.clear()
+    fresh = simulate(model, load, start, 60.0)
+    assert first.n_impacts > 5
+    assert np.array_equal(again.impact_times, first.impact_times)
+    assert np.array_equal(fresh.impact_times, first.impact_times)
+
+
+def test_kernel_compiles_in_memory_without_a_cache_folder():
+    """With no writable cache folder (a read-only install) the kernel still imports and compiles,
+    in memory; normally it caches on disk."""
+    _run_python(
+        "import numba.core.caching as c\n"
+        "(getattr(c, 'CacheImpl', None) or c._CacheImpl)._locator_classes = []\n"
+        "from impactbar.dynamics import _kernel as K\n"
+        "assert K.CACHE is False\n"
+        "b, cc = K._bc(0.0, 2.0)\n"
+        "assert (b, cc) == (2.0, 2.0)\n"
+    )
+    from impactbar.dynamics import _kernel
+
+    assert _kernel.CACHE is True
