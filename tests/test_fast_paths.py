@@ -288,3 +288,31 @@ def test_kernel_compiles_in_memory_without_a_cache_folder():
     from impactbar.dynamics import _kernel
 
     assert _kernel.CACHE is True
+
+
+def test_long_run_holds_its_trajectory_about_once():
+    """Peak memory of a 30,000-impact run is close to what the trajectory stores (the kernel
+    writes into the log's rows, grown in place), not twice it."""
+    import tracemalloc
+
+    from impactbar import InitialState, simulate
+
+    model, load = BarModel(1.37, 0.02, 0.8, 8), CosineLoad(1.2, 1.0)
+    o = next(o for o in periodic_orbits(model, load) if o.stable)
+    q, v = o.modal_state_after_impact
+    q[0] -= 1e-3
+    start = InitialState(q, v)
+    simulate(model, load, start, o.phase + 1e9, t0=o.phase, max_impacts=5)
+    tracemalloc.start()
+    try:
+        tr = simulate(model, load, start, o.phase + 1e9, t0=o.phase, max_impacts=30_000)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    seg = tr._segments
+    stored = sum(a.nbytes for a in (seg.t, seg.basis, seg.entry, seg.q, seg.v, tr.impact_times,
+                                    tr.impact_velocities))
+    assert tr.n_impacts == 30_000 and len(seg) == 30_001
+    assert peak < 1.3 * stored
+    # the stored pieces are the impacts themselves: the end is on the stop after each
+    assert np.allclose(seg.q[1:] @ model.end_weights, 0.0, atol=1e-12)
