@@ -88,12 +88,12 @@ def bench_chunk(quick):
     })
     chunks = range(2 if quick else 6)
     new = cpu_median(lambda: [tasks.compute_chunk(spec, c) for c in chunks], 5)
-    fast = tasks._rigid_cosine_chunk
-    tasks._rigid_cosine_chunk = lambda *a: None
+    fast = tasks._rigid_chunk
+    tasks._rigid_chunk = lambda *a: None
     try:
         base = cpu_median(lambda: tasks.compute_chunk(spec, 0), 1) * len(chunks)
     finally:
-        tasks._rigid_cosine_chunk = fast
+        tasks._rigid_chunk = fast
     n = 400 * len(chunks)
     row("sweep orbits task, rigid: compute_chunk", n / base, n / new, "points/s", ">= 100,000 /s per core",
         higher_is_better=True)

@@ -420,6 +420,12 @@ class PiecewiseConstantLoad(Load):
         per = per.ravel()
         return per[(per > t0) & (per < t1)]
 
+    def _sentinel(self, t):
+        """A time after ``t`` and before the next jump, closing the last piece: its level is read at
+        the piece's midpoint, which must not pass that jump."""
+        nxt = self._boundaries(t, t + 2.0 * TWO_PI)
+        return t + 0.5 * (float(nxt[0]) - t) if nxt.size else t + 1.0
+
     def propagate(self, w2, d, t0, q0, v0, t):
         w2 = np.asarray(w2, dtype=float)
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -431,7 +437,7 @@ class PiecewiseConstantLoad(Load):
         if np.any(t < t0 - 1e-12):
             raise ValueError("propagate needs t >= t0")
         t_max = float(np.max(t))
-        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [max(t_max, t0) + 1.0]))
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [self._sentinel(max(t_max, t0))]))
         # the level of each piece is read at its midpoint: a node itself may round to either side
         levels = self(0.5 * (nodes[:-1] + nodes[1:]))
         qn = np.empty((M, nodes.size - 1))
@@ -455,7 +461,7 @@ class PiecewiseConstantLoad(Load):
         q0 = np.asarray(q0, dtype=float)
         v0 = np.asarray(v0, dtype=float)
         t_end = t0 + horizon
-        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [t_end + 1.0]))
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [self._sentinel(t_end)]))
         levels = self(0.5 * (nodes[:-1] + nodes[1:]))
         qn = np.empty((w2.size, nodes.size - 1))
         vn = np.empty_like(qn)

@@ -13,11 +13,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._threads import single_threaded_blas
-from ..loads import FourierLoad, Load
+from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .admissibility import _admissibility
 from .phase import _check_inputs, phase_roots
-from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers
+from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers, rigid_square_orbits
 from .stability import (
     floquet_multipliers,
     period_fundamental,
@@ -240,15 +240,19 @@ def _cosine_parameters(load: Load):
 
 
 def _rigid_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit] | None:
-    """The rigid bar under one cosine harmonic in closed form (:mod:`impactbar.orbits.rigid`), or
-    ``None`` where that does not apply (flexible modes, another load, a degenerate orbit)."""
+    """The rigid bar under one cosine harmonic or the square wave in closed form
+    (:mod:`impactbar.orbits.rigid`), or ``None`` where that does not apply (flexible modes, another
+    load, a degenerate orbit)."""
     if model.n_modes != 0:
         return None
-    par = _cosine_parameters(load)
-    if par is None:
-        return None
-    p0, pk, k = par
-    res = rigid_cosine_orbits(model.d, model.R, p0, pk, k)
+    if isinstance(load, SquareWaveLoad) and load.kappa < 2.0:
+        res = rigid_square_orbits(model.d, model.R, load.q, load.kappa)
+    else:
+        par = _cosine_parameters(load)
+        if par is None:
+            return None
+        p0, pk, k = par
+        res = rigid_cosine_orbits(model.d, model.R, p0, pk, k)
     if res.fallback[0]:
         return None
     out = []

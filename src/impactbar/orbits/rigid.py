@@ -23,7 +23,8 @@ import numpy as np
 
 from .stability import quadratic_roots
 
-__all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_multipliers", "phase_G_array", "STATUS"]
+__all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_multipliers", "phase_G_array",
+           "STATUS"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -242,11 +243,8 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     d, R, p0, pk = (np.ravel(x) for x in np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (d, R, p0, pk))))
     k = int(k)
-    P, J = d.size, 2 * k
     ph, mult = _cosine_roots(d, R, p0, pk, k)
-    has = ~np.isnan(ph)
-    n_orbits = has.sum(axis=1)
-    pi_, ji = np.nonzero(has)  # one row per orbit
+    pi_, ji = np.nonzero(~np.isnan(ph))  # one row per orbit
     o_d, o_R, o_p0, o_pk, o_ph = d[pi_], R[pi_], p0[pi_], pk[pi_], ph[pi_, ji]
     O = o_d.size
     allo = np.arange(O)
@@ -256,11 +254,7 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     q_minus = fl.displacement(TWO_PI)
     p_plus = o_p0 + o_pk * np.cos(k * o_ph)
     psup = np.abs(o_p0) + np.abs(o_pk)
-    scale = np.maximum(np.maximum(np.abs(v_minus), psup), 1e-300)
-    acc0 = p_plus - o_d * v_plus  # for R = 0 (v+ = 0): the end's acceleration just after impact
     r0 = o_R == 0.0
-    # degenerate orbits are left to the general path: arrival, or departure, at rest to rounding
-    degenerate = ~(np.abs(v_minus) > 1e-9 * scale) | (r0 & ~(np.abs(acc0) > 1e-9 * scale))
 
     # --- stationary points of u(1, t): at most one zero of v per arc of constant load sign, and
     # it exists iff v changes sign over the arc (v' = p - d v, so v' = p at a zero of v)
@@ -277,7 +271,7 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     bounds[:, 1:-1] = np.sort(zs, axis=1)
     vb = fl.take(allo, grid=True).velocity(bounds)
     # the sign just after the impact: that of v+, or for R = 0 (v+ = 0) of the acceleration
-    vb[:, 0] = np.where(r0, acc0, v_plus)
+    vb[:, 0] = np.where(r0, p_plus, v_plus)
     lo_t, hi_t = bounds[:, :-1], bounds[:, 1:]
     sgn = np.sign(vb)
     bracket = (sgn[:, :-1] * sgn[:, 1:] < 0.0) & (hi_t > lo_t)
@@ -285,6 +279,128 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     sub = fl.take(oi)
     t = _bracketed_zero(sub, lo_t[oi, ai], hi_t[oi, ai], sgn[oi, ai])
     g = sub.displacement(t)
+    return _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus, p_plus, p_plus,
+                     fl._V(o_ph), oi, g)
+
+
+def _log1p_ratio(x):
+    """``log1p(x) / x`` elementwise, 1 at 0."""
+    small = np.abs(x) < 1e-8
+    xs = np.where(small, 1.0, x)
+    return np.where(small, 1.0 - 0.5 * x, np.log1p(xs) / xs)
+
+
+def _exp_level_time(v, alpha, d, target):
+    """Time ``tau >= 0`` at which ``v e^{-d tau} + alpha b(tau)`` (the solution of ``y' + d y = alpha``
+    from ``v``, monotone) reaches ``target``; NaN if never. Written without the ``alpha/d``
+    cancellation: ``tau = (target - v)/(alpha - d v) log1p(x)/x``, ``x = d (v - target)/(alpha - d v)``."""
+    den = alpha - d * v
+    ok = den != 0.0
+    dens = np.where(ok, den, 1.0)
+    x = d * (v - target) / dens
+    ok &= x > -1.0
+    tau = (target - v) / dens * _log1p_ratio(np.where(ok, x, 0.0))
+    return np.where(ok & (tau >= 0.0), tau, np.nan)
+
+
+def rigid_square_orbits(d, R, q, kappa) -> RigidOrbits:
+    """Every one-impact orbit of the rigid bar under the square wave of eq. 34 at many points.
+
+    The load is ``+q`` on ``[0, kappa pi)`` and ``-q`` on the rest of the period. On each piece the
+    rigid velocity solves ``y' + d y = const`` in closed form and is monotone, so the phase
+    equation (eq. 14) has at most one root per piece, solved in closed form, and so has the end's
+    velocity between impacts on each arc of constant load (theory §4, §5); the multipliers are the
+    2 x 2 closed form (theory §7). The same orbits, flags and multipliers as
+    :func:`impactbar.periodic_orbits` with ``SquareWaveLoad(q, kappa)`` on ``BarModel(s, d, R, 0)``
+    (tested against it to 1e-10).
+
+    Parameters
+    ----------
+    d, R, q, kappa : array_like
+        Damping (``>= 0``), restitution coefficient (``[0, 1]``), level ``q > 0`` and load factor
+        ``1 <= kappa < 2`` (dimensionless, eqs. 2, 34); broadcast together, flattened to ``P``
+        points. Not validated: the callers pass validated values.
+
+    Returns
+    -------
+    RigidOrbits
+        Two orbit slots per point.
+    """
+    d, R, q, kappa = (np.ravel(x) for x in np.broadcast_arrays(
+        *(np.asarray(x, dtype=float) for x in (d, R, q, kappa))))
+    a = kappa * np.pi  # the jump from +q to -q
+    p0 = q * (kappa - 1.0)
+    starts = np.stack((np.zeros_like(a), a), axis=1)  # (P, 2)
+    lengths = np.stack((a, TWO_PI - a), axis=1)
+    alpha = np.stack((q - p0, -q - p0), axis=1)  # p - p0 on each piece
+    # the periodic zero-mean rigid velocity: V = V_j e^{-d tau} + alpha_j b(tau) on piece j
+    dc = d[:, None]
+    bT, cT = _b(dc, lengths), _c(dc, lengths)
+    E2 = np.exp(-d * a)
+    D2 = alpha[:, 0] * bT[:, 0]
+    v0 = -(D2 * bT[:, 1] + alpha[:, 0] * cT[:, 0] + alpha[:, 1] * cT[:, 1]) / (bT[:, 0] + E2 * bT[:, 1])
+    Vs = np.stack((v0, v0 * E2 + D2), axis=1)
+    # the phase equation (1 + R) V(phase) = p0 G: one root at most on each piece
+    target = (p0 * phase_G_array(d, R) / (1.0 + R))[:, None]
+    tau = _exp_level_time(Vs, alpha, dc, target)
+    ph = np.where(tau < lengths, starts + tau, np.nan)
+    ph = np.where(kappa[:, None] < 2.0, np.mod(ph, TWO_PI), np.nan)
+    ph = np.sort(ph, axis=1)
+    mult = np.where(np.isnan(ph), 0, 1)
+    # two roots within 1e-9 (across a jump, or the period's end) are one double root, as in
+    # phase_roots
+    both = ~np.isnan(ph[:, 1])
+    close = both & ((ph[:, 1] - ph[:, 0] < 1e-9) | (ph[:, 0] + TWO_PI - ph[:, 1] < 1e-9))
+    mult[close, 0] = 2
+    mult[close, 1] = 0
+    ph[close, 1] = np.nan
+
+    pi_, ji = np.nonzero(~np.isnan(ph))
+    o_d, o_R, o_q, o_p0, o_a, o_ph = d[pi_], R[pi_], q[pi_], p0[pi_], a[pi_], ph[pi_, ji]
+    O = o_d.size
+    piece = o_ph >= o_a  # 0 on [0, a), 1 on [a, 2 pi)
+    tau0 = o_ph - np.where(piece, o_a, 0.0)
+    V_phase = Vs[pi_, piece.astype(int)] * np.exp(-o_d * tau0) + alpha[pi_, piece.astype(int)] * _b(o_d, tau0)
+    p_plus = np.where(piece, -o_q, o_q)
+    p_minus = np.where((o_ph == 0.0) | ((o_ph > o_a) & piece), -o_q, o_q)  # the left limit
+    v_plus = -o_R * TWO_PI * o_p0 / (1.0 + o_R)
+    # the flight: three arcs of constant load in orbit time, cut where the load jumps
+    cuts = np.sort(np.stack((np.mod(o_a - o_ph, TWO_PI), np.mod(-o_ph, TWO_PI)), axis=1), axis=1)
+    edges = np.concatenate((np.zeros((O, 1)), cuts, np.full((O, 1), TWO_PI)), axis=1)
+    qs, vs = np.zeros(O), v_plus.copy()
+    zero_at, zero_g = [], []
+    r0 = o_R == 0.0
+    for j in range(3):
+        T = edges[:, j + 1] - edges[:, j]
+        mid = np.mod(o_ph + 0.5 * (edges[:, j] + edges[:, j + 1]), TWO_PI)
+        L = np.where(mid < o_a, o_q, -o_q)
+        tz = _exp_level_time(vs, L, o_d, 0.0)
+        if j == 0:  # the impact itself is no stationary point (R = 0 leaves at rest)
+            tz = np.where(r0, np.nan, tz)
+        hit = tz < T  # NaN compares false
+        hit &= ~((j == 0) & (tz <= 0.0))
+        rows = np.nonzero(hit)[0]
+        t_hit = tz[rows]
+        zero_at.append(rows)
+        zero_g.append(qs[rows] + vs[rows] * _b(o_d[rows], t_hit) + L[rows] * _c(o_d[rows], t_hit))
+        qs = qs + vs * _b(o_d, T) + L * _c(o_d, T)
+        vs = vs * np.exp(-o_d * T) + L * _b(o_d, T)
+    return _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, o_q, v_plus, vs, qs, p_plus, p_minus,
+                     V_phase, np.concatenate(zero_at), np.concatenate(zero_g))
+
+
+def _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus, p_plus, p_minus,
+              V_phase, oi, g) -> RigidOrbits:
+    """Flags, clearance, multipliers and the paper's block of every orbit (one entry per orbit,
+    ``pi_, ji`` its point and slot), from its states and the values ``g`` of ``u(1, .)`` at the
+    zeros of its velocity (orbit ``oi``), with the general path's conventions (admissibility.py)."""
+    P, J = ph.shape
+    O = o_d.size
+    scale = np.maximum(np.maximum(np.abs(v_minus), psup), 1e-300)
+    acc0 = p_plus - o_d * v_plus  # for R = 0 (v+ = 0): the end's acceleration just after impact
+    r0 = o_R == 0.0
+    # degenerate orbits are left to the general path: arrival, or departure, at rest to rounding
+    degenerate = ~(np.abs(v_minus) > 1e-9 * scale) | (r0 & ~(np.abs(acc0) > 1e-9 * scale))
     # the general path's conventions (admissibility.py): the largest stationary value, its error
     clearance = np.full(O, -np.inf)
     np.maximum.at(clearance, oi, g)
@@ -299,10 +415,10 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     late = ~(v_minus > 1e-12 * scale)
     status[late] = np.where(np.abs(v_minus[late]) <= 1e-12 * scale[late], 2, 3)
 
-    mu = rigid_multipliers(o_d, o_R, p_plus, p_plus, v_plus, v_minus)
+    mu = rigid_multipliers(o_d, o_R, p_plus, p_minus, v_plus, v_minus)
     # the paper's rigid block (eqs. 29, 30) with sigma = 0, multiplied through by p0
     e2 = np.exp(-TWO_PI * o_d)
-    S2 = p_plus - o_p0 - o_d * fl._V(o_ph)
+    S2 = p_plus - o_p0 - o_d * V_phase
     dz = o_d == 0.0
     factor = np.where(dz, 1.0, -np.expm1(-TWO_PI * o_d) / np.where(dz, 1.0, TWO_PI * o_d))
     a2 = o_p0
@@ -321,7 +437,7 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     fb = np.zeros(P, dtype=bool)
     np.logical_or.at(fb, pi_, degenerate)
     return RigidOrbits(
-        n_orbits=n_orbits,
+        n_orbits=(~np.isnan(ph)).sum(axis=1),
         phase=ph,
         multiplicity=mult,
         impact_velocity=scatter(v_minus, np.nan),

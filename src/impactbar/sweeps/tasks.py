@@ -3,6 +3,8 @@ no dask, no storage."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._validate import check_int
@@ -103,7 +105,7 @@ def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
     one = {"orbits": _orbits_point, "montecarlo": _montecarlo_point, "bifurcation": _bifurcation_point}
     todo = None
     if spec.task == "orbits":
-        todo = _rigid_cosine_chunk(spec, slices, block, out)
+        todo = _rigid_chunk(spec, slices, block, out)
     with single_threaded_blas():
         for local in np.ndindex(*block) if todo is None else todo:
             index = tuple(s.start + i for s, i in zip(slices, local, strict=True))
@@ -129,32 +131,43 @@ def _chunk_parameters(spec: SweepSpec, slices, block) -> dict:
     return par
 
 
-def _rigid_cosine_chunk(spec: SweepSpec, slices, block, out) -> list | None:
-    """The ``orbits`` task for the rigid bar under a cosine load, the whole chunk at once by the
-    closed forms of :func:`impactbar.orbits.rigid.rigid_cosine_orbits` (the same numbers as
+def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
+    """The ``orbits`` task for the rigid bar under a cosine load or the square wave, the whole
+    chunk at once by the closed forms of :mod:`impactbar.orbits.rigid` (the same numbers as
     :func:`impactbar.periodic_orbits`, tested against it). Returns the local indices left to the
-    point-by-point path (degenerate orbits), or ``None`` if the closed form does not apply."""
-    if spec.load["kind"] != "cosine":
+    point-by-point path (degenerate orbits, ``kappa = 2``), or ``None`` if the closed forms do not
+    apply."""
+    kind = spec.load["kind"]
+    if kind not in ("cosine", "square"):
         return None
     par = _chunk_parameters(spec, slices, block)
     if np.any(par["n_modes"] != 0):
         return None
-    from ..orbits.rigid import rigid_cosine_orbits
+    from ..orbits.rigid import rigid_cosine_orbits, rigid_square_orbits
 
+    def flat(name):
+        return par[name].astype(float).ravel()
+
+    if kind == "cosine":
+        ks = par["k"].astype(int).ravel()
+        groups = [(np.nonzero(ks == k)[0], rigid_cosine_orbits, ("d", "R", "p0", "pk"), (int(k),))
+                  for k in np.unique(ks)]
+    else:
+        sel = np.nonzero(flat("kappa") < 2.0)[0]  # kappa = 2 is a constant load: the general path
+        groups = [(sel, rigid_square_orbits, ("d", "R", "q", "kappa"), ())]
     J = spec.options["max_orbits"]
     todo = []
-    ks = par["k"].astype(int)
-    for k in np.unique(ks):
-        sel = np.nonzero(ks.ravel() == k)[0]
-        res = rigid_cosine_orbits(*(par[n].astype(float).ravel()[sel] for n in ("d", "R", "p0", "pk")),
-                                  int(k))
+    covered = np.zeros(math.prod(block), dtype=bool)
+    for sel, solve, names, extra in groups:
+        covered[sel] = True
+        res = solve(*(flat(n)[sel] for n in names), *extra)
         n = res.n_orbits
         if np.any(n > J):
             i = int(np.argmax(n > J))
             local = np.unravel_index(sel[i], block)
-            flat = int(np.ravel_multi_index(tuple(s.start + j for s, j in zip(slices, local, strict=True)),
-                                            spec.shape))
-            raise RuntimeError(f"{int(n[i])} orbits at grid point {flat} exceed [orbits] "
+            index = tuple(s.start + j for s, j in zip(slices, local, strict=True))
+            at = int(np.ravel_multi_index(index, spec.shape))
+            raise RuntimeError(f"{int(n[i])} orbits at grid point {at} exceed [orbits] "
                                f"max_orbits = {J}; raise it in the spec")
         w = min(J, res.phase.shape[1])
         idx = np.unravel_index(sel, block)
@@ -167,7 +180,9 @@ def _rigid_cosine_chunk(spec: SweepSpec, slices, block, out) -> list | None:
             col = target[idx]  # (points, J)
             col[:, :w] = np.where(res.status[:, :w] >= 0, values[:, :w], col[:, :w])
             target[idx] = col
-        todo.extend(tuple(int(x) for x in np.unravel_index(p, block)) for p in sel[res.fallback])
+        todo.extend(sel[res.fallback].tolist())
+    todo.extend(np.nonzero(~covered)[0].tolist())
+    todo = [tuple(int(x) for x in np.unravel_index(p, block)) for p in sorted(todo)]
     for local in todo:  # reset what the point-by-point path will recompute
         for name, (_, fill, _, _) in _variables(spec).items():
             out[name][local] = fill
