@@ -366,3 +366,17 @@ def test_long_run_holds_its_trajectory_about_once():
     assert peak < 1.3 * stored
     # the stored pieces are the impacts themselves: the end is on the stop after each
     assert np.allclose(seg.q[1:] @ model.end_weights, 0.0, atol=1e-12)
+
+
+def test_certified_phase_roots_see_a_sign_change_below_the_smallest_normal():
+    """Regression (found by the hypothesis test of test_orbits): with p0 = 5e-324 the residual at
+    the bracket's ends is denormal and their product underflows to 0; the sign change must still
+    be seen, so the certified search finds both roots of sin(phase) = p0 G / p1, near 0 and pi."""
+    from impactbar.orbits import phase_roots
+
+    model, load = BarModel(10.0, 0.0, 0.0, 0), CosineLoad(5e-324, 1.0)
+    a = phase_roots(model, load)
+    b = phase_roots(model, load, closed_form=False)
+    assert len(a) == len(b) == 2
+    assert np.allclose([x for x, _ in a], [x for x, _ in b], atol=1e-10)
+    assert np.allclose([x for x, _ in b], [0.0, math.pi], atol=1e-10)

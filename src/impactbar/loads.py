@@ -262,6 +262,18 @@ class FourierLoad(Load):
         static = np.where(rigid, 0.0, self.p0 / np.where(rigid, 1.0, w2))[:, None]
         w2f = w2[flex][:, None]
         k = self._k
+        rows = np.nonzero(flex)[0]
+        lam2 = w2f[:, 0] - 0.25 * d * d
+        folded = rows.size > 0 and bool(np.all(lam2 > 0.0))
+        if folded:
+            # underdamped flexible modes (the rule): Phi(tau) applied to (dq, dv) folded into
+            # e^{-d tau/2} (a cos(lam tau) + b sin(lam tau)), the coefficients computed once
+            lam = np.sqrt(lam2)[:, None]
+            dqf, dvf = dq[rows], dv[rows]
+            cq, sq = dqf, (0.5 * d * dqf + dvf) / lam
+            cv, sv = dvf, -(w2f * dqf + 0.5 * d * dvf) / lam
+            if rows[-1] - rows[0] + 1 == rows.size:  # contiguous rows: update in place
+                rows = slice(int(rows[0]), int(rows[-1]) + 1)
 
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -269,9 +281,23 @@ class FourierLoad(Load):
             e = np.exp(1j * np.outer(k, t))
             q = (hp @ e).real + static
             v = (hv @ e).real
-            p11, p12, p21, p22 = fundamental(w2f, d, tau)
-            q[flex] += p11 * dq[flex] + p12 * dv[flex]
-            v[flex] += p21 * dq[flex] + p22 * dv[flex]
+            if folded:
+                x = lam * tau
+                C, S = np.cos(x), np.sin(x)
+                qf = cq * C
+                qf += sq * S
+                vf = cv * C
+                vf += sv * S
+                if d:
+                    ed = np.exp(-0.5 * d * tau)
+                    qf *= ed
+                    vf *= ed
+                q[rows] += qf
+                v[rows] += vf
+            else:
+                p11, p12, p21, p22 = fundamental(w2f, d, tau)
+                q[flex] += p11 * dq[flex] + p12 * dv[flex]
+                v[flex] += p21 * dq[flex] + p22 * dv[flex]
             if np.any(rigid):  # rigid mode: closed form, with the mean load added exactly
                 b = b_integral(d, tau[0])
                 q[rigid] += dq[rigid] + b * dv[rigid] + self.p0 * c_integral(d, tau[0])
