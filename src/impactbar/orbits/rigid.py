@@ -403,9 +403,13 @@ def _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus,
     degenerate = ~(np.abs(v_minus) > 1e-9 * scale) | (r0 & ~(np.abs(acc0) > 1e-9 * scale))
     # the general path's conventions (admissibility.py): the largest stationary value, its error
     clearance = np.full(O, -np.inf)
-    np.maximum.at(clearance, oi, g)
     gabs = np.zeros(O)
-    np.maximum.at(gabs, oi, np.abs(g))
+    if oi.size:  # per orbit: the largest value and the largest magnitude (oi grouped by orbit)
+        order = np.argsort(oi, kind="stable")
+        oi, g = oi[order], g[order]
+        first = np.flatnonzero(np.diff(oi, prepend=-1))
+        clearance[oi[first]] = np.maximum.reduceat(g, first)
+        gabs[oi[first]] = np.maximum.reduceat(np.abs(g), first)
     err = 1e-12 * scale * (1.0 + gabs)
     tol = np.maximum(err, 1e-11 * scale)
     status = np.zeros(O, dtype=np.int8)
@@ -435,7 +439,7 @@ def _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus,
         return out
 
     fb = np.zeros(P, dtype=bool)
-    np.logical_or.at(fb, pi_, degenerate)
+    fb[pi_[degenerate]] = True
     return RigidOrbits(
         n_orbits=(~np.isnan(ph)).sum(axis=1),
         phase=ph,
