@@ -116,33 +116,64 @@ def rigid_multipliers(d, R, p_plus, p_minus, v_plus, v_minus):
 
 
 class RigidOrbits(NamedTuple):
-    """One-impact orbits of the rigid bar at many parameter points, padded along the last axis.
+    """One-impact orbits of the rigid bar at many parameter points (the fields of
+    :class:`impactbar.PeriodicOrbit`, as arrays).
 
-    Every array has shape ``(P, J)`` (``P`` points, ``J = 2 k`` orbit slots, sorted by phase, NaN
-    or 0 padded) unless stated.
+    Each point has ``J`` orbit slots (``2 k`` for the cosine load, 2 for the square wave), filled in
+    order of phase; unused slots hold NaN, 0, False or -1.
+
+    Attributes
+    ----------
+    n_orbits : numpy.ndarray of int, shape (P,)
+        Number of orbits at each point.
+    phase : numpy.ndarray, shape (P, J)
+        Phase lag in ``[0, 2 pi)`` (rad), a root of eq. 14.
+    multiplicity : numpy.ndarray of int, shape (P, J)
+        1, or 2 for a double root (a fold).
+    impact_velocity : numpy.ndarray, shape (P, J)
+        ``u_t(1, 2 pi-)``, the arrival velocity (``2 pi p0 / (1 + R)``, theory §4).
+    v_plus : numpy.ndarray, shape (P, J)
+        Velocity just after the impact, ``-R`` times the arrival velocity.
+    q_minus : numpy.ndarray, shape (P, J)
+        ``u(1, 2 pi-)``, zero up to rounding.
+    status : numpy.ndarray of int8, shape (P, J)
+        Index into :data:`STATUS` (``PeriodicOrbit.admissibility``); -1 in unused slots.
+    clearance, clearance_error : numpy.ndarray, shape (P, J)
+        As ``PeriodicOrbit.clearance`` and ``clearance_error`` (``-inf`` without a stationary point).
+    multipliers : numpy.ndarray of complex, shape (P, J, 2)
+        Floquet multipliers, by decreasing modulus (``inf`` at grazing).
+    schur_roots : numpy.ndarray of complex, shape (P, J, 2)
+        Roots of the paper's rigid block (eqs. 29, 30).
+    schur_stable, stable : numpy.ndarray of bool, shape (P, J)
+        The paper's criterion (eq. 28); admissible with every ``|multiplier| < 1``.
+    fallback : numpy.ndarray of bool, shape (P,)
+        Points with a degenerate orbit (arrival, or for ``R = 0`` departure, at rest to rounding),
+        which the closed form leaves to the general path; their other fields are not to be used.
     """
 
-    n_orbits: np.ndarray  #: (P,) number of orbits at each point
-    phase: np.ndarray  #: phase lag in [0, 2 pi)
-    multiplicity: np.ndarray  #: 1, or 2 at a fold
-    impact_velocity: np.ndarray  #: u_t(1, 2 pi-)
-    v_plus: np.ndarray  #: rigid velocity just after impact
-    q_minus: np.ndarray  #: u(1, 2 pi-), zero up to rounding
-    status: np.ndarray  #: index into STATUS; -1 in padding
-    clearance: np.ndarray  #: largest u(1, t) at a stationary point, -inf if none
+    n_orbits: np.ndarray
+    phase: np.ndarray
+    multiplicity: np.ndarray
+    impact_velocity: np.ndarray
+    v_plus: np.ndarray
+    q_minus: np.ndarray
+    status: np.ndarray
+    clearance: np.ndarray
     clearance_error: np.ndarray
-    multipliers: np.ndarray  #: (P, J, 2) complex
-    schur_roots: np.ndarray  #: (P, J, 2) complex
+    multipliers: np.ndarray
+    schur_roots: np.ndarray
     schur_stable: np.ndarray
     stable: np.ndarray
-    fallback: np.ndarray  #: (P,) the closed form declines (a degenerate case): use the general path
+    fallback: np.ndarray
 
     @property
     def admissible(self) -> np.ndarray:
+        """``status == "admissible"``, shape (P, J)."""
         return self.status == 0
 
     @property
     def max_abs_multiplier(self) -> np.ndarray:
+        """Largest ``|multiplier|`` of each orbit, shape (P, J) (NaN in unused slots)."""
         return np.abs(self.multipliers[..., 0])
 
 
