@@ -19,6 +19,10 @@ Times are medians of repeated runs of CPU time (``time.process_time``) for the i
 of wall time for the fresh processes, so that other load on a shared machine weighs less.
 
 Run: ``python benchmarks/bench_fast_paths.py [--quick]``. Prints a table; nothing is asserted.
+
+``--against SRC`` instead times the same user-level calls (``periodic_orbits``, ``simulate``) in
+fresh processes on the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x -C /tmp/old``
+then ``--against /tmp/old/src``) and on this one, alternately, and prints both side by side.
 """
 
 from __future__ import annotations
@@ -169,10 +173,79 @@ def bench_simulate(quick):
             "fixed cost <= 50 us")
 
 
+_USER_LEVEL = r"""
+import json, sys, time
+import numpy as np
+from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate
+
+def cpu(fn, rep):
+    fn()
+    ts = []
+    for _ in range(rep):
+        t = time.process_time()
+        fn()
+        ts.append(time.process_time() - t)
+    return float(np.median(ts))
+
+out = {}
+po = periodic_orbits
+out["periodic_orbits, rigid, cosine (ms)"] = cpu(
+    lambda: po(BarModel(5, 0.1, 0.5, 0), CosineLoad(0.6, 1)), 101) * 1e3
+out["periodic_orbits, rigid, square wave (ms)"] = cpu(
+    lambda: po(BarModel(5, 0.1, 0.5, 0), SquareWaveLoad(1, 1.2)), 51) * 1e3
+for n in (8, 64):
+    out[f"periodic_orbits, cosine, {n} modes (ms)"] = cpu(
+        lambda: po(BarModel(5, 0.1, 0.5, n), CosineLoad(0.6, 1)), 11) * 1e3
+out["periodic_orbits, square wave, 64 modes (ms)"] = cpu(
+    lambda: po(BarModel(5, 0.1, 0.5, 64), SquareWaveLoad(1, 1.2)), 3) * 1e3
+out["periodic_orbits, cosine, 256 modes (ms)"] = cpu(
+    lambda: po(BarModel(5, 0.1, 0.5, 256), CosineLoad(0.6, 1)), 3) * 1e3
+for N, n in ((0, 20000), (8, 5000), (64, 1000)):
+    model, load = BarModel(1.37, 0.02, 0.8, N), CosineLoad(1.2, 1.0)
+    o = next(o for o in po(model, load) if o.stable)
+    q, v = o.modal_state_after_impact
+    q = q.copy()
+    q[0] -= 1e-3
+    st = InitialState(q, v)
+    run = lambda k: simulate(model, load, st, o.phase + 1e9, t0=o.phase, max_impacts=k)
+    out[f"simulate, {N} modes (impacts/s)"] = n / cpu(lambda: run(n), 3)
+    out[f"simulate, {N} modes, 1-impact run (us)"] = cpu(lambda: run(1), 101) * 1e6
+    out[f"simulate, {N} modes, 100-impact run (us)"] = cpu(lambda: run(100), 51) * 1e6
+print(json.dumps(out))
+"""
+
+
+def against(src, rounds=2):
+    """The user-level calls on another package tree and on this one, in fresh processes."""
+    import json
+    import os
+    from pathlib import Path
+
+    here = str(Path(__file__).resolve().parents[1] / "src")
+    runs = {"baseline": [], "new": []}
+    for _ in range(rounds):
+        for name, path in (("baseline", src), ("new", here)):
+            env = dict(os.environ, PYTHONPATH=path)
+            out = subprocess.run([sys.executable, "-c", _USER_LEVEL], env=env, check=True,
+                                 capture_output=True, text=True).stdout
+            runs[name].append(json.loads(out.strip().splitlines()[-1]))
+    head = f"call (median CPU time; best of {rounds} processes)"
+    print(f"{head:<52} {'baseline':>12} {'new':>12}")
+    for key in runs["new"][0]:
+        best = max if "/s" in key else min
+        b = best(r[key] for r in runs["baseline"])
+        n = best(r[key] for r in runs["new"])
+        print(f"{key:<52} {b:>12.4g} {n:>12.4g}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer repetitions")
+    ap.add_argument("--against", metavar="SRC", help="compare with the package tree SRC instead")
     a = ap.parse_args(argv)
+    if a.against:
+        against(a.against)
+        return 0
     rep = 5 if a.quick else 21
     print(f"{'task':<52} {'baseline':>12} {'new':>12} {'unit':<9} {'gain':>9}   goal (issue 11)")
     print("-" * 120)
