@@ -164,10 +164,11 @@ def test_structured_multipliers_equal_dense_eigvals(rng, n_modes):
     cases = [(CosineLoad(0.3, 1.0), 0.5), (CosineLoad(0.25, 1.0, 2), 0.8),
              (SquareWaveLoad(1.0, 1.2), 0.5), (FourierLoad(0.3, [1.0, 0.2j]), 0.3),
              (CosineLoad(0.3, 1.0), 0.0), (CosineLoad(0.3, 1.0), 0.02)]
+    heavy = (CosineLoad(0.05, 1.0), 0.6)  # and one with d = 0.95, near the structured method's limit
     checked = 0
-    for load, R in cases:
+    for load, R in [*cases, heavy]:
         s = rng.uniform(1.5, 6.0)
-        d = rng.uniform(0.02, 0.2)
+        d = 0.95 if (load, R) == heavy else rng.uniform(0.0, 0.2)
         model = BarModel(s, d, R, n_modes)
         for ph, _ in _phases(model, load):
             yp, ym = _impact_states(model, load, ph)
@@ -176,7 +177,16 @@ def test_structured_multipliers_equal_dense_eigvals(rng, n_modes):
             assert fast.shape == dense.shape
             assert _set_distance(fast, dense) < 1e-10
             checked += 1
-    assert checked >= 6
+    assert checked >= 8
+
+
+def test_heavy_damping_keeps_the_dense_method():
+    """With d > 1 the automatic choice is the dense method (see floquet_multipliers)."""
+    model, load = BarModel(2.0, 3.0, 0.5, 40), CosineLoad(0.02, 1.0)
+    ph = _phases(model, load)[0][0]
+    yp, ym = _impact_states(model, load, ph)
+    auto = floquet_multipliers(model, load, ph, yp, ym)
+    assert np.array_equal(auto, floquet_multipliers(model, load, ph, yp, ym, method="dense"))
 
 
 def _phases(model, load):
