@@ -141,6 +141,19 @@ def test_rigid_degenerate_orbit_falls_back_to_general_path():
     _assert_same_orbits(periodic_orbits(model, load), _periodic_orbits_general(model, load))
 
 
+@pytest.mark.parametrize("d, R, load", [
+    (1e-6, 1e-9, CosineLoad(1.0568994031282851e-07, -0.1962943504503838, 5)),  # leaves nearly at rest
+    (5.0, 1e-9, SquareWaveLoad(1.287036878130578e-06, 1.000000001)),  # arrives nearly at rest
+    (50.0, 0.5, CosineLoad(3.0, 0.5, 2)),  # heavy damping, the load never pulls
+    (1e-12, 0.999999, SquareWaveLoad(5.0, 1.9)),
+])
+def test_rigid_extreme_parameters_equal_general_path(d, R, load):
+    """Cases found by fuzzing: nearly-at-rest departures and arrivals go to the general path,
+    extreme damping and restitution stay in the closed form, and both agree."""
+    model = BarModel(1.0, d, R, 0)
+    _assert_same_orbits(periodic_orbits(model, load), _periodic_orbits_general(model, load))
+
+
 def test_rigid_multipliers_equal_jacobian_eigenvalues(rng):
     """The 2 x 2 closed form against the eigenvalues of the analytic Jacobian, for a load with
     several harmonics and the square wave (the general path's orbits)."""

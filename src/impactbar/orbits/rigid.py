@@ -147,8 +147,9 @@ class RigidOrbits(NamedTuple):
     schur_stable, stable : numpy.ndarray of bool, shape (P, J)
         The paper's criterion (eq. 28); admissible with every ``|multiplier| < 1``.
     fallback : numpy.ndarray of bool, shape (P,)
-        Points with a degenerate orbit (arrival, or for ``R = 0`` departure, at rest to rounding),
-        which the closed form leaves to the general path; their other fields are not to be used.
+        Points with a degenerate orbit (arrival or departure nearly at rest, within 1e-6 of the
+        load's scale), which the closed form leaves to the general path; their other fields are
+        not to be used.
     """
 
     n_orbits: np.ndarray
@@ -268,8 +269,8 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     Returns
     -------
     RigidOrbits
-        ``fallback`` marks the points with a degenerate orbit (arrival or, for ``R = 0``,
-        departure at rest to rounding) that the closed form leaves to the general path.
+        ``fallback`` marks the points with a degenerate orbit (arrival or departure nearly at
+        rest) that the closed form leaves to the general path.
     """
     d, R, p0, pk = (np.ravel(x) for x in np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (d, R, p0, pk))))
@@ -430,8 +431,10 @@ def _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus,
     scale = np.maximum(np.maximum(np.abs(v_minus), psup), 1e-300)
     acc0 = p_plus - o_d * v_plus  # for R = 0 (v+ = 0): the end's acceleration just after impact
     r0 = o_R == 0.0
-    # degenerate orbits are left to the general path: arrival, or departure, at rest to rounding
-    degenerate = ~(np.abs(v_minus) > 1e-9 * scale) | (r0 & ~(np.abs(acc0) > 1e-9 * scale))
+    # degenerate orbits are left to the general path: arrival or departure nearly at rest (for
+    # R = 0 the departure at rest is exact and its sign is that of the load, unless that is ~0)
+    degenerate = (~(np.abs(v_minus) > 1e-6 * scale) | (r0 & ~(np.abs(acc0) > 1e-6 * scale))
+                  | (~r0 & ~(np.abs(v_plus) > 1e-6 * scale)))
     # the general path's conventions (admissibility.py): the largest stationary value, its error
     clearance = np.full(O, -np.inf)
     gabs = np.zeros(O)
