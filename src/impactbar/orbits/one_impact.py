@@ -239,11 +239,17 @@ def _cosine_parameters(load: Load):
     return load.p0, pk.real, int(orders[0])
 
 
+def _paper_law(model: BarModel) -> bool:
+    """The model impacts by the paper's law (eqs. 10, 11): the closed forms and the structured
+    multipliers assume it (a model without an impact-law field has it)."""
+    return getattr(model, "impact", "paper") == "paper"
+
+
 def _rigid_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit] | None:
     """The rigid bar under one cosine harmonic or the square wave in closed form
     (:mod:`impactbar.orbits.rigid`), or ``None`` where that does not apply (flexible modes, another
     load, a degenerate orbit)."""
-    if model.n_modes != 0:
+    if model.n_modes != 0 or not _paper_law(model):
         return None
     if isinstance(load, SquareWaveLoad) and load.kappa < 2.0:
         res = rigid_square_orbits(model.d, model.R, load.q, load.kappa)
@@ -327,7 +333,7 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
     y_plus, y_minus = _impact_states(model, load, phase)
-    if model.n_modes == 0:  # the 2 x 2 Jacobian in closed form
+    if model.n_modes == 0 and _paper_law(model):  # the 2 x 2 Jacobian in closed form
         mu = rigid_multipliers(model.d, model.R, float(load(phase)), float(load.left_limit(phase)),
                                y_plus[1], y_minus[1])
         if not np.all(np.isfinite(mu)):

@@ -190,8 +190,8 @@ def sort_multipliers(mu: np.ndarray) -> np.ndarray:
 
 def floquet_multipliers(model: BarModel, load: Load, phase: float, y_plus, y_minus, *,
                         method: str = "auto") -> np.ndarray:
-    """Floquet multipliers of a one-impact orbit: the eigenvalues of the impact map's Jacobian
-    (theory §7), sorted by :func:`sort_multipliers`.
+    """Floquet multipliers of a one-impact orbit under the paper's impact law (eqs. 10, 11): the
+    eigenvalues of the impact map's Jacobian (theory §7), sorted by :func:`sort_multipliers`.
 
     ``method="dense"`` takes the eigenvalues of :func:`impact_map_jacobian`, ``O(N^3)``.
     ``method="structured"`` uses the structure of the map: in the state extended by the impact

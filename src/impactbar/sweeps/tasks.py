@@ -138,7 +138,7 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     point-by-point path (degenerate orbits, ``kappa = 2``), or ``None`` if the closed forms do not
     apply."""
     kind = spec.load["kind"]
-    if kind not in ("cosine", "square"):
+    if kind not in ("cosine", "square") or spec.model.get("impact", "paper") != "paper":
         return None
     par = _chunk_parameters(spec, slices, block)
     if np.any(par["n_modes"] != 0):
