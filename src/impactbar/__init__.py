@@ -16,32 +16,58 @@ Layout, bottom to top (each layer imports only from the layers below it):
 The import contract (``[tool.importlinter]`` in ``pyproject.toml``) keeps it so.
 """
 
-from . import physical as physical  # SI units layer; pint is imported only when it is used
+import importlib
+
 from ._version import __version__ as __version__
-from .continuation import BifurcationCurve as BifurcationCurve
-from .continuation import Branch as Branch
-from .continuation import BranchEvent as BranchEvent
-from .continuation import continue_bifurcation as continue_bifurcation
-from .continuation import continue_orbit as continue_orbit
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
 from .loads import Load as Load
 from .loads import PiecewiseConstantLoad as PiecewiseConstantLoad
 from .loads import SquareWaveLoad as SquareWaveLoad
 from .model import BarModel as BarModel
-from .orbits import MultiImpactOrbit as MultiImpactOrbit
-from .orbits import PeriodicOrbit as PeriodicOrbit
-from .orbits import find_orbit as find_orbit
-from .orbits import periodic_orbits as periodic_orbits
-from .simulation import EnergyAccount as EnergyAccount
-from .simulation import InitialState as InitialState
-from .simulation import Trajectory as Trajectory
-from .simulation import simulate as simulate
-from .sweeps import SweepSpec as SweepSpec
-from .sweeps import load_spec as load_spec
-from .sweeps import open_sweep as open_sweep
-from .sweeps import plot_sweep as plot_sweep
-from .sweeps import run_sweep as run_sweep
+
+#: public names imported on first use (PEP 562), so that ``import impactbar`` and the command line
+#: start without scipy.optimize, numba, pint, dask or matplotlib: name -> module that defines it
+_LAZY = {
+    "PeriodicOrbit": ".orbits",
+    "periodic_orbits": ".orbits",
+    "MultiImpactOrbit": ".orbits",
+    "find_orbit": ".orbits",
+    "Branch": ".continuation",
+    "BranchEvent": ".continuation",
+    "continue_orbit": ".continuation",
+    "BifurcationCurve": ".continuation",
+    "continue_bifurcation": ".continuation",
+    "InitialState": ".simulation",
+    "Trajectory": ".simulation",
+    "EnergyAccount": ".simulation",
+    "simulate": ".simulation",
+    "SweepSpec": ".sweeps",
+    "load_spec": ".sweeps",
+    "open_sweep": ".sweeps",
+    "run_sweep": ".sweeps",
+    "plot_sweep": ".sweeps",
+}
+
+#: subpackages reachable as attributes (``impactbar.physical``) without an explicit import
+_SUBPACKAGES = ("physical", "orbits", "simulation", "continuation", "sweeps", "dynamics", "cli", "paper",
+                "plotting")
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name], __name__), name)
+    elif name in _SUBPACKAGES:
+        value = importlib.import_module(f".{name}", __name__)
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__) | set(_SUBPACKAGES))
+
 
 __all__ = [
     "BarModel",

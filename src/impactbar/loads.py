@@ -262,6 +262,18 @@ class FourierLoad(Load):
         static = np.where(rigid, 0.0, self.p0 / np.where(rigid, 1.0, w2))[:, None]
         w2f = w2[flex][:, None]
         k = self._k
+        rows = np.nonzero(flex)[0]
+        lam2 = w2f[:, 0] - 0.25 * d * d
+        folded = rows.size > 0 and bool(np.all(lam2 > 0.0))
+        if folded:
+            # underdamped flexible modes (the rule): Phi(tau) applied to (dq, dv) folded into
+            # e^{-d tau/2} (a cos(lam tau) + b sin(lam tau)), the coefficients computed once
+            lam = np.sqrt(lam2)[:, None]
+            dqf, dvf = dq[rows], dv[rows]
+            cq, sq = dqf, (0.5 * d * dqf + dvf) / lam
+            cv, sv = dvf, -(w2f * dqf + 0.5 * d * dvf) / lam
+            if rows[-1] - rows[0] + 1 == rows.size:  # contiguous rows: update in place
+                rows = slice(int(rows[0]), int(rows[-1]) + 1)
 
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -269,9 +281,23 @@ class FourierLoad(Load):
             e = np.exp(1j * np.outer(k, t))
             q = (hp @ e).real + static
             v = (hv @ e).real
-            p11, p12, p21, p22 = fundamental(w2f, d, tau)
-            q[flex] += p11 * dq[flex] + p12 * dv[flex]
-            v[flex] += p21 * dq[flex] + p22 * dv[flex]
+            if folded:
+                x = lam * tau
+                C, S = np.cos(x), np.sin(x)
+                qf = cq * C
+                qf += sq * S
+                vf = cv * C
+                vf += sv * S
+                if d:
+                    ed = np.exp(-0.5 * d * tau)
+                    qf *= ed
+                    vf *= ed
+                q[rows] += qf
+                v[rows] += vf
+            else:
+                p11, p12, p21, p22 = fundamental(w2f, d, tau)
+                q[flex] += p11 * dq[flex] + p12 * dv[flex]
+                v[flex] += p21 * dq[flex] + p22 * dv[flex]
             if np.any(rigid):  # rigid mode: closed form, with the mean load added exactly
                 b = b_integral(d, tau[0])
                 q[rigid] += dq[rigid] + b * dv[rigid] + self.p0 * c_integral(d, tau[0])
@@ -420,6 +446,12 @@ class PiecewiseConstantLoad(Load):
         per = per.ravel()
         return per[(per > t0) & (per < t1)]
 
+    def _sentinel(self, t):
+        """A time after ``t`` and before the next jump, closing the last piece: its level is read at
+        the piece's midpoint, which must not pass that jump."""
+        nxt = self._boundaries(t, t + 2.0 * TWO_PI)
+        return t + 0.5 * (float(nxt[0]) - t) if nxt.size else t + 1.0
+
     def propagate(self, w2, d, t0, q0, v0, t):
         w2 = np.asarray(w2, dtype=float)
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -431,7 +463,7 @@ class PiecewiseConstantLoad(Load):
         if np.any(t < t0 - 1e-12):
             raise ValueError("propagate needs t >= t0")
         t_max = float(np.max(t))
-        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [max(t_max, t0) + 1.0]))
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [self._sentinel(max(t_max, t0))]))
         # the level of each piece is read at its midpoint: a node itself may round to either side
         levels = self(0.5 * (nodes[:-1] + nodes[1:]))
         qn = np.empty((M, nodes.size - 1))
@@ -455,7 +487,7 @@ class PiecewiseConstantLoad(Load):
         q0 = np.asarray(q0, dtype=float)
         v0 = np.asarray(v0, dtype=float)
         t_end = t0 + horizon
-        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [t_end + 1.0]))
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [self._sentinel(t_end)]))
         levels = self(0.5 * (nodes[:-1] + nodes[1:]))
         qn = np.empty((w2.size, nodes.size - 1))
         vn = np.empty_like(qn)

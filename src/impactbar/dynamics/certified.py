@@ -9,7 +9,6 @@ clusters (Brent on a sign change, a bounded minimisation for a double zero at a 
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq, minimize_scalar
 
 __all__ = ["enclose_zeros", "zeros_in_clusters"]
 
@@ -104,6 +103,8 @@ def zeros_in_clusters(f, clusters, *, atol: float):
     list of tuple
         ``(t, multiplicity)`` with multiplicity 1 or 2, in increasing ``t``.
     """
+    from scipy.optimize import brentq, minimize_scalar  # here, not at the top: a slow import
+
     out = []
 
     def f1(t):
@@ -114,7 +115,7 @@ def zeros_in_clusters(f, clusters, *, atol: float):
         if flo == 0.0:
             out.append((lo, 1))
             continue
-        if flo * fhi < 0.0:
+        if np.sign(flo) * np.sign(fhi) < 0.0:  # signs, not the product: it underflows for denormals
             out.append((brentq(f1, lo, hi, xtol=1e-15, rtol=8.9e-16, maxiter=200), 1))
             continue
         sgn = 1.0 if flo > 0 else -1.0
@@ -123,7 +124,7 @@ def zeros_in_clusters(f, clusters, *, atol: float):
         tm, fm = float(res.x), sgn * float(res.fun)
         if abs(fm) <= atol:
             out.append((tm, 2))
-        elif fm * flo < 0.0:
+        elif np.sign(fm) * np.sign(flo) < 0.0:
             out.append((brentq(f1, lo, tm, xtol=1e-15, rtol=8.9e-16), 1))
             out.append((brentq(f1, tm, hi, xtol=1e-15, rtol=8.9e-16), 1))
     return out

@@ -13,12 +13,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._threads import single_threaded_blas
-from ..dynamics.modal import fundamental
-from ..loads import Load
+from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .admissibility import _admissibility
 from .phase import _check_inputs, phase_roots
-from .stability import impact_map_jacobian, quadratic_roots, schur_blocks, schur_test
+from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers, rigid_square_orbits
+from .stability import (
+    floquet_multipliers,
+    period_fundamental,
+    quadratic_roots,
+    schur_blocks,
+    schur_test,
+)
 
 __all__ = ["PeriodicOrbit", "periodic_orbits", "orbit_multipliers"]
 
@@ -206,8 +212,76 @@ def periodic_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit]:
     [0.5148, 2.6268]
     """
     _check_inputs(model, load)
+    fast = _rigid_orbits(model, load)
+    if fast is not None:
+        return fast
+    return _periodic_orbits_general(model, load)
+
+
+def _periodic_orbits_general(model: BarModel, load: Load) -> list[PeriodicOrbit]:
+    """:func:`periodic_orbits` by the general path (certified searches, any model and load): the
+    reference every fast path is tested against."""
+    _check_inputs(model, load)
     with single_threaded_blas():
         return [_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load)]
+
+
+def _cosine_parameters(load: Load):
+    """``(p0, pk, k)`` if ``load`` is ``p0 + pk cos(k t)`` with real ``pk != 0``, else ``None``."""
+    if not isinstance(load, FourierLoad):
+        return None
+    orders = load.orders
+    if len(orders) != 1:
+        return None
+    pk = complex(load.amplitudes[0])
+    if pk.imag != 0.0:
+        return None
+    return load.p0, pk.real, int(orders[0])
+
+
+def _paper_law(model: BarModel) -> bool:
+    """The model impacts by the paper's law (eqs. 10, 11): the closed forms and the structured
+    multipliers assume it (a model without an impact-law field has it)."""
+    return getattr(model, "impact", "paper") == "paper"
+
+
+def _rigid_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit] | None:
+    """The rigid bar under one cosine harmonic or the square wave in closed form
+    (:mod:`impactbar.orbits.rigid`), or ``None`` where that does not apply (flexible modes, another
+    load, a degenerate orbit)."""
+    if model.n_modes != 0 or not _paper_law(model):
+        return None
+    if isinstance(load, SquareWaveLoad) and load.kappa < 2.0:
+        res = rigid_square_orbits(model.d, model.R, load.q, load.kappa)
+    else:
+        par = _cosine_parameters(load)
+        if par is None:
+            return None
+        p0, pk, k = par
+        res = rigid_cosine_orbits(model.d, model.R, p0, pk, k)
+    if res.fallback[0]:
+        return None
+    out = []
+    for j in range(int(res.n_orbits[0])):
+        status = STATUS[int(res.status[0, j])]
+        out.append(PeriodicOrbit(
+            model=model,
+            load=load,
+            phase=float(res.phase[0, j]),
+            multiplicity=int(res.multiplicity[0, j]),
+            impact_velocity=float(res.impact_velocity[0, j]),
+            admissible=status == "admissible",
+            admissibility=status,
+            clearance=float(res.clearance[0, j]),
+            clearance_error=float(res.clearance_error[0, j]),
+            multipliers=res.multipliers[0, j].copy(),
+            stable=bool(res.stable[0, j]),
+            schur_roots=res.schur_roots[0, j].copy(),
+            schur_stable=bool(res.schur_stable[0, j]),
+            state_after_impact=np.array([-0.0, res.v_plus[0, j]]),
+            state_before_impact=np.array([res.q_minus[0, j], res.impact_velocity[0, j]]),
+        ))
+    return out
 
 
 def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
@@ -221,7 +295,7 @@ def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
         zeros = np.zeros(N)
         fq, fv = load.propagate(w2, d, phase, zeros, zeros, [phase + TWO_PI])
         fq, fv = fq[:, 0], fv[:, 0]
-        p11, p12, p21, p22 = fundamental(w2, d, TWO_PI)
+        p11, p12, p21, p22 = (a[1:] for a in period_fundamental(model))
         # y = J_R (Phi y + f),  J_R = diag(1, -R)
         a11, a12, a21, a22 = 1.0 - p11, -p12, R * p21, 1.0 + R * p22
         det = a11 * a22 - a12 * a21
@@ -259,8 +333,14 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
     y_plus, y_minus = _impact_states(model, load, phase)
+    if model.n_modes == 0 and _paper_law(model):  # the 2 x 2 Jacobian in closed form
+        mu = rigid_multipliers(model.d, model.R, float(load(phase)), float(load.left_limit(phase)),
+                               y_plus[1], y_minus[1])
+        if not np.all(np.isfinite(mu)):
+            raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
+        return mu
     with single_threaded_blas():
-        return np.linalg.eigvals(impact_map_jacobian(model, load, phase, y_plus, y_minus))
+        return floquet_multipliers(model, load, phase, y_plus, y_minus)
 
 
 def _impact_states(model: BarModel, load: Load, phase: float):
@@ -282,12 +362,9 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
     admissible = status == "admissible"
 
     try:
-        DP = impact_map_jacobian(model, load, phase, y_plus, y_minus)
+        mu = floquet_multipliers(model, load, phase, y_plus, y_minus)
     except ValueError:  # exact grazing: a multiplier is infinite
         mu = np.full(2 * M, np.inf + 0j)
-    else:
-        mu = np.linalg.eigvals(DP)
-        mu = mu[np.argsort(-np.abs(mu), kind="stable")]
     blocks = schur_blocks(model, load, phase)
     return PeriodicOrbit(
         model=model,

@@ -57,10 +57,24 @@ from .forces import MeasuredForce as MeasuredForce
 from .forces import PneumaticForce as PneumaticForce
 from .hammer import Hammer as Hammer
 from .hammer import Scales as Scales
-from .results import PhysicalOrbit as PhysicalOrbit
-from .results import SimulationResult as SimulationResult
-from .results import orbits as orbits
-from .results import simulate as simulate
+
+#: names from ``results`` (which needs the orbit solver and the compiled simulator), imported on
+#: first use (PEP 562) so that importing this layer, and the command line, stays fast
+_LAZY = ("PhysicalOrbit", "SimulationResult", "orbits", "simulate")
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        from . import results
+
+        value = getattr(results, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = [
     "Bar",

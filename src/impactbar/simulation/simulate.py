@@ -18,6 +18,7 @@ free-free modes and the free motion resumes.
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass, field
 from functools import cached_property
 
@@ -289,6 +290,28 @@ def _overlap(n: np.ndarray, m: np.ndarray) -> np.ndarray:
     return 0.5 * (np.sinc(a) + np.sinc(b))
 
 
+_CORES: dict = {}  # (model, id(load)) -> (load, core), the most recent _CORES_MAX pairs
+_CORES_MAX = 16
+_CORES_LOCK = threading.Lock()
+
+
+def _core_for(model: BarModel, load: Load) -> _Core:
+    """The kernel's data for this model and load, built once and reused by later runs (a short
+    run's fixed cost; the Monte Carlo experiments run thousands with the same pair). Keyed by the
+    model's value and the load's identity (loads are immutable); a core is never modified."""
+    key = (model, id(load))
+    with _CORES_LOCK:
+        hit = _CORES.get(key)
+    if hit is not None and hit[0] is load:
+        return hit[1]
+    core = _Core(model, load)
+    with _CORES_LOCK:
+        if len(_CORES) >= _CORES_MAX:
+            _CORES.pop(next(iter(_CORES)))
+        _CORES[key] = (load, core)  # holding the load keeps its id from being reused
+    return core
+
+
 class _Core:
     """Everything the driver needs about one (model, load) pair."""
 
@@ -327,17 +350,18 @@ class _Core:
         return float(0.5 * np.sum(self.kappa * v * v))
 
     # ---- kernel calls ------------------------------------------------------------------------
-    def run_free(self, t, q, v, t_end, max_imp, cap):
+    def run_free(self, t, q, v, t_end, max_imp, out_q, out_v):
+        """Free flight with impacts (the kernel's ``run_free``); the states after the impacts go
+        into the rows of ``out_q, out_v`` (shape (cap, N + 1)), at most ``cap`` of them."""
         D, B = self.data, self.free
+        cap = out_q.shape[0]
         out_t = np.empty(cap)
         out_vel = np.empty(cap)
-        out_q = np.empty((cap, self.N + 1))
-        out_v = np.empty((cap, self.N + 1))
         n, st, tn = K.run_free(D.kind, B.w2, self.d, self.R, self.c, D.p0, D.ks, D.pr, D.pim,
                                B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3,
                                B.vpb, B.apb, B.jpb, float(t), q, v, float(t_end), int(max_imp),
                                CHATTER_TAIL, out_t, out_vel, out_q, out_v)
-        return n, st, tn, out_t[:n], out_vel[:n], out_q[:n], out_v[:n]
+        return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
         """First time after ``t`` when the stop reaction turns tensile; state there."""
@@ -458,50 +482,83 @@ class _Segments:
 
 
 class _SegmentLog:
-    """Builds :class:`_Segments` block by block (a block of impacts comes from one kernel call)."""
+    """Builds :class:`_Segments` in arrays grown in place (``realloc``, by an eighth at least): the
+    kernel writes each block of impacts straight into the next rows (:meth:`impact_rows`), so a
+    long run holds its trajectory once, not once per block and again when joined."""
 
     def __init__(self, n_modes):
         self.M = n_modes + 1
-        self.blocks = []
         self.frozen = {}
         self.count = 0
+        self.t = np.empty(0)
+        self.basis = np.empty(0, dtype=np.int8)
+        self.entry = np.empty(0, dtype=np.int8)
+        self.q = np.empty((0, self.M))
+        self.v = np.empty((0, self.M))
+
+    def _reserve(self, k):
+        """Room for ``k`` more rows. The arrays are resized in place: no view of them may be
+        alive across this call (the kernel's views from :meth:`impact_rows` are dropped first)."""
+        need = self.count + k
+        cap = self.t.size
+        if need <= cap:
+            return
+        cap = max(need, cap + cap // 8, 16)
+        for a in (self.t, self.basis, self.entry):
+            a.resize((cap,), refcheck=False)
+        for a in (self.q, self.v):
+            a.resize((cap, self.M), refcheck=False)
 
     def add(self, t, basis, q, v, entry, frozen=None):
-        qq = np.zeros((1, self.M))
-        vv = np.zeros((1, self.M))
-        qq[0, :q.size] = q
-        vv[0, :v.size] = v
-        self.blocks.append((np.array([t], dtype=float), np.array([basis], dtype=np.int8),
-                            np.array([_ENTRIES.index(entry)], dtype=np.int8), qq, vv))
+        self._reserve(1)
+        i = self.count
+        self.t[i] = t
+        self.basis[i] = basis
+        self.entry[i] = _ENTRIES.index(entry)
+        self.q[i] = 0.0
+        self.v[i] = 0.0
+        self.q[i, :q.size] = q
+        self.v[i, :v.size] = v
         if frozen is not None:
             self.frozen[self.count] = frozen
         self.count += 1
 
-    def add_impacts(self, ts, qs, vs):
+    def impact_rows(self, k):
+        """Views of the next ``k`` rows of ``q`` and ``v`` for the kernel to write impacts into;
+        :meth:`add_impacts` then counts the rows written."""
+        self._reserve(k)
+        return self.q[self.count:self.count + k], self.v[self.count:self.count + k]
+
+    def add_impacts(self, ts):
         k = ts.size
-        self.blocks.append((ts.copy(), np.zeros(k, dtype=np.int8), np.ones(k, dtype=np.int8),
-                            qs.copy(), vs.copy()))
+        i = self.count
+        self.t[i:i + k] = ts
+        self.basis[i:i + k] = 0
+        self.entry[i:i + k] = 1
         self.count += k
 
     def truncate(self, count):
-        """Drop the pieces from index ``count`` on (whole single-piece blocks only)."""
-        while self.count > count:
-            blk = self.blocks.pop()
-            assert self.count - blk[0].size >= count
-            self.count -= blk[0].size
+        """Drop the pieces from index ``count`` on."""
+        self.count = min(self.count, count)
         for j in [j for j in self.frozen if j >= count]:
             del self.frozen[j]
 
     def last(self) -> _Segment:
-        t, b, e, q, v = self.blocks[-1]
-        bb = int(b[-1])
+        i = self.count - 1
+        bb = int(self.basis[i])
         m = self.M if bb == _FREE else self.M - 1
-        return _Segment(float(t[-1]), bb, q[-1, :m], v[-1, :m], _ENTRIES[e[-1]],
-                        self.frozen.get(self.count - 1))
+        return _Segment(float(self.t[i]), bb, self.q[i, :m].copy(), self.v[i, :m].copy(),
+                        _ENTRIES[self.entry[i]], self.frozen.get(i))
 
     def finish(self) -> _Segments:
-        cols = list(zip(*self.blocks, strict=True))
-        return _Segments(self.M - 1, *(np.concatenate(c) for c in cols), dict(self.frozen))
+        """The pieces, in arrays shrunk in place to their length."""
+        self._reserve(0)
+        n = self.count
+        for a in (self.t, self.basis, self.entry):
+            a.resize((n,), refcheck=False)
+        for a in (self.q, self.v):
+            a.resize((n, self.M), refcheck=False)
+        return _Segments(self.M - 1, self.t, self.basis, self.entry, self.q, self.v, dict(self.frozen))
 
 
 @dataclass(frozen=True, eq=False)
@@ -785,7 +842,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
-    core = _Core(model, load)
+    core = _core_for(model, load)
     g = float(core.c @ q)
     if g > 1e-12 * max(1.0, float(np.sum(np.abs(core.c * q)))):
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
@@ -814,12 +871,16 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             if left <= 0:  # pragma: no cover - run_free stops at max_imp itself
                 status = "max_impacts"
                 break
-            n, st, tn, ot, ov, oq, ovv = core.run_free(t, q, v, t_end, left, min(cap, left))
+            # the kernel writes into the log's next rows; at most an eighth more than the log
+            # holds, so the run's peak memory stays near its stored trajectory
+            oq, ovv = segs.impact_rows(min(cap, left, max(1024, segs.count // 8)))
+            n, st, tn, ot, ov = core.run_free(t, q, v, t_end, left, oq, ovv)
+            del oq, ovv  # no view of the log may outlive the call (it is resized in place)
             cap = min(cap * 2, 1 << 16)
             if n:
                 times.append(ot.copy())
                 vels.append(ov.copy())
-                segs.add_impacts(ot, oq, ovv)
+                segs.add_impacts(ot)
                 n_imp += n
             if st == K.FAILED:  # pragma: no cover - defensive
                 raise RuntimeError(f"impact search did not converge at t = {tn}")

@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import check_int
 from .spec import SweepSpec
-from .store import _prepare_store, _write_chunk, _write_done
+from .store import _open_group, _prepare_store, _write_chunk, _write_done
 from .tasks import compute_chunk
 
 
@@ -123,6 +123,7 @@ def _drive(spec, path, done, todo, client, progress) -> SweepRun:
     already = spec.n_chunks - len(todo)
     tag = uuid.uuid4().hex[:8]
     t_start = time.perf_counter()
+    group = _open_group(path)
     futures = [client.submit(compute_chunk, spec, i, key=f"impactbar-{spec.task}-{tag}-{i}",
                              pure=False) for i in todo]
     chunk_of = {f.key: i for f, i in zip(futures, todo, strict=True)}
@@ -133,9 +134,9 @@ def _drive(spec, path, done, todo, client, progress) -> SweepRun:
         for fut in as_completed(futures):
             result = fut.result()  # a task error propagates; every finished chunk is stored
             i = chunk_of[fut.key]
-            _write_chunk(spec, path, i, result)
+            _write_chunk(spec, path, i, result, group)
             done[i] = 1
-            _write_done(path, done)  # after the data: a kill in between loses only this chunk
+            _write_done(path, done, group)  # after the data: a kill in between loses only this chunk
             fut.release()
             computed += 1
             bar.update(1)

@@ -3,6 +3,8 @@ no dask, no storage."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .._validate import check_int
@@ -101,8 +103,11 @@ def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
         shape = block + ((spec.extra_size,) if extra else ())
         out[name] = np.full(shape, fill, dtype=dtype)
     one = {"orbits": _orbits_point, "montecarlo": _montecarlo_point, "bifurcation": _bifurcation_point}
+    todo = None
+    if spec.task == "orbits":
+        todo = _rigid_chunk(spec, slices, block, out)
     with single_threaded_blas():
-        for local in np.ndindex(*block):
+        for local in np.ndindex(*block) if todo is None else todo:
             index = tuple(s.start + i for s, i in zip(slices, local, strict=True))
             flat = int(np.ravel_multi_index(index, spec.shape))
             try:
@@ -113,6 +118,75 @@ def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
                     out[name][local] = fill
                 out["failed"][local] = True
     return out
+
+
+def _chunk_parameters(spec: SweepSpec, slices, block) -> dict:
+    """Every model and load field over the chunk's block of the grid, as arrays of shape ``block``."""
+    grids = np.meshgrid(*(np.asarray(a.values[s]) for a, s in zip(spec.axes, slices, strict=True)),
+                        indexing="ij")
+    par = {name: np.full(block, value) for name, value in (*spec.model.items(), *spec.load.items())
+           if name != "kind"}
+    for a, g in zip(spec.axes, grids, strict=True):
+        par[a.name] = g
+    return par
+
+
+def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
+    """The ``orbits`` task for the rigid bar under a cosine load or the square wave, the whole
+    chunk at once by the closed forms of :mod:`impactbar.orbits.rigid` (the same numbers as
+    :func:`impactbar.periodic_orbits`, tested against it). Returns the local indices left to the
+    point-by-point path (degenerate orbits, ``kappa = 2``), or ``None`` if the closed forms do not
+    apply."""
+    kind = spec.load["kind"]
+    if kind not in ("cosine", "square") or spec.model.get("impact", "paper") != "paper":
+        return None
+    par = _chunk_parameters(spec, slices, block)
+    if np.any(par["n_modes"] != 0):
+        return None
+    from ..orbits.rigid import rigid_cosine_orbits, rigid_square_orbits
+
+    def flat(name):
+        return par[name].astype(float).ravel()
+
+    if kind == "cosine":
+        ks = par["k"].astype(int).ravel()
+        groups = [(np.nonzero(ks == k)[0], rigid_cosine_orbits, ("d", "R", "p0", "pk"), (int(k),))
+                  for k in np.unique(ks)]
+    else:
+        sel = np.nonzero(flat("kappa") < 2.0)[0]  # kappa = 2 is a constant load: the general path
+        groups = [(sel, rigid_square_orbits, ("d", "R", "q", "kappa"), ())]
+    J = spec.options["max_orbits"]
+    todo = []
+    covered = np.zeros(math.prod(block), dtype=bool)
+    for sel, solve, names, extra in groups:
+        covered[sel] = True
+        res = solve(*(flat(n)[sel] for n in names), *extra)
+        n = res.n_orbits
+        if np.any(n > J):
+            i = int(np.argmax(n > J))
+            local = np.unravel_index(sel[i], block)
+            index = tuple(s.start + j for s, j in zip(slices, local, strict=True))
+            at = int(np.ravel_multi_index(index, spec.shape))
+            raise RuntimeError(f"{int(n[i])} orbits at grid point {at} exceed [orbits] "
+                               f"max_orbits = {J}; raise it in the spec")
+        w = min(J, res.phase.shape[1])
+        idx = np.unravel_index(sel, block)
+        out["n_orbits"][idx] = n
+        for name, values in (("phase", res.phase), ("impact_velocity", res.impact_velocity),
+                             ("admissible", res.admissible), ("stable", res.stable),
+                             ("schur_stable", res.schur_stable),
+                             ("max_abs_multiplier", res.max_abs_multiplier)):
+            target = out[name]
+            col = target[idx]  # (points, J)
+            col[:, :w] = np.where(res.status[:, :w] >= 0, values[:, :w], col[:, :w])
+            target[idx] = col
+        todo.extend(sel[res.fallback].tolist())
+    todo.extend(np.nonzero(~covered)[0].tolist())
+    todo = [tuple(int(x) for x in np.unravel_index(p, block)) for p in sorted(todo)]
+    for local in todo:  # reset what the point-by-point path will recompute
+        for name, (_, fill, _, _) in _variables(spec).items():
+            out[name][local] = fill
+    return todo
 
 
 def _orbits_point(spec, model, load, flat, out, local) -> None:

@@ -1,0 +1,261 @@
+"""Benchmark for issue 11: each fast path against the path it replaces, in the same run.
+
+Rows (baseline | new | ratio | the issue's goal):
+
+- rigid bar, cosine load, one grid point: ``periodic_orbits`` by the general path (certified
+  searches, dense Jacobian) against the closed forms; and per point of a vectorised call over a
+  40,000-point grid;
+- the sweep ``orbits`` task, rigid bar: ``compute_chunk`` point by point against the vectorised
+  chunk (400 points);
+- ``periodic_orbits`` with 8 and 64 modes (cosine, square wave) and 256 modes (cosine): with the
+  dense eigenvalue problem for the multipliers against the structured method; the multipliers alone
+  at 256 modes;
+- ``import impactbar`` and ``impactbar orbits --help`` (fresh processes, wall time): everything the
+  package used to import eagerly against the lazy imports;
+- ``simulate``: impacts per second, and a 100-impact run, with the kernel data rebuilt on every
+  call (as before) against the cached core.
+
+Times are medians of repeated runs of CPU time (``time.process_time``) for the in-process rows and
+of wall time for the fresh processes, so that other load on a shared machine weighs less.
+
+Run: ``python benchmarks/bench_fast_paths.py [--quick]``. Prints a table; nothing is asserted.
+
+``--against SRC`` instead times the same user-level calls (``periodic_orbits``, ``simulate``) in
+fresh processes on the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x -C /tmp/old``
+then ``--against /tmp/old/src``) and on this one, alternately, and prints both side by side.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate
+from impactbar.orbits import stability
+from impactbar.orbits.one_impact import _periodic_orbits_general
+from impactbar.orbits.rigid import rigid_cosine_orbits
+
+ROWS = []
+
+
+def cpu_median(fn, repeat):
+    fn()
+    ts = []
+    for _ in range(repeat):
+        t = time.process_time()
+        fn()
+        ts.append(time.process_time() - t)
+    return float(np.median(ts))
+
+
+def wall_median(cmd, repeat):
+    ts = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        subprocess.run(cmd, check=True, capture_output=True)
+        ts.append(time.perf_counter() - t)
+    return float(np.median(ts))
+
+
+def row(task, base, new, unit, goal, higher_is_better=False):
+    ratio = new / base if higher_is_better else base / new
+    ROWS.append((task, base, new, unit, ratio, goal))
+    print(f"{task:<52} {base:>12.4g} {new:>12.4g} {unit:<9} {ratio:>8.1f}x   {goal}", flush=True)
+
+
+def bench_rigid(rep):
+    model, load = BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0)
+    base = cpu_median(lambda: _periodic_orbits_general(model, load), rep)
+    new = cpu_median(lambda: periodic_orbits(model, load), rep * 10)
+    row("rigid, cosine, one periodic_orbits call", base * 1e3, new * 1e3, "ms", "<= 0.3 ms")
+    R, p0 = np.meshgrid(np.linspace(0.0, 0.95, 200), np.linspace(0.2, 0.45, 200))
+    vec = cpu_median(lambda: rigid_cosine_orbits(0.1, R.ravel(), p0.ravel(), 1.0, 1), 5) / R.size
+    row("rigid, cosine, per point of a 40,000-point array", base * 1e3, vec * 1e3, "ms", "2.5 us (numpy)")
+
+
+def bench_chunk(quick):
+    from impactbar.sweeps import tasks
+    from impactbar.sweeps.spec import parse_spec
+
+    spec = parse_spec({
+        "task": "orbits",
+        "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+        "load": {"kind": "cosine", "p0": 0.3, "pk": 1.0, "k": 1},
+        "axes": {"R": {"start": 0.0, "stop": 0.95, "num": 200},
+                 "p0": {"start": 0.2, "stop": 0.45, "num": 200}},
+        "chunk_points": 400,
+    })
+    chunks = range(2 if quick else 6)
+    new = cpu_median(lambda: [tasks.compute_chunk(spec, c) for c in chunks], 5)
+    fast = tasks._rigid_chunk
+    tasks._rigid_chunk = lambda *a: None
+    try:
+        base = cpu_median(lambda: tasks.compute_chunk(spec, 0), 1) * len(chunks)
+    finally:
+        tasks._rigid_chunk = fast
+    n = 400 * len(chunks)
+    row("sweep orbits task, rigid: compute_chunk", n / base, n / new, "points/s", ">= 100,000 /s per core",
+        higher_is_better=True)
+
+
+def bench_modes(rep):
+    cases = [("cosine, 8 modes", BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0), rep, "<= 1.5 ms"),
+             ("cosine, 64 modes", BarModel(5.0, 0.1, 0.5, 64), CosineLoad(0.6, 1.0), rep // 2, "<= 10 ms"),
+             ("square wave, 64 modes", BarModel(5.0, 0.1, 0.5, 64), SquareWaveLoad(1.0, 1.2), 3, "<= 40 ms"),
+             ("cosine, 256 modes", BarModel(5.0, 0.1, 0.5, 256), CosineLoad(0.6, 1.0), 3, "<= 30 ms")]
+    for name, model, load, r, goal in cases:
+        keep = stability.STRUCTURED_FROM
+        stability.STRUCTURED_FROM = 10**9  # every multiplier by the dense eigenvalue problem
+        try:
+            base = cpu_median(lambda model=model, load=load: periodic_orbits(model, load), max(r, 3))
+        finally:
+            stability.STRUCTURED_FROM = keep
+        new = cpu_median(lambda model=model, load=load: periodic_orbits(model, load), max(r, 3))
+        row(f"periodic_orbits, {name}", base * 1e3, new * 1e3, "ms", goal)
+    model, load = BarModel(5.0, 0.1, 0.5, 256), CosineLoad(0.6, 1.0)
+    o = periodic_orbits(model, load)[0]
+    args = (model, load, o.phase, o.state_after_impact, o.state_before_impact)
+    base = cpu_median(lambda: stability.floquet_multipliers(*args, method="dense"), 3)
+    new = cpu_median(lambda: stability.floquet_multipliers(*args, method="structured"), 5)
+    row("multipliers alone, 256 modes (one orbit)", base * 1e3, new * 1e3, "ms", "O(N^2)")
+
+
+def bench_startup(rep):
+    py = sys.executable
+    eager = ("import impactbar, impactbar.orbits, impactbar.simulation, impactbar.physical.results, "
+             "impactbar.sweeps, scipy.optimize")
+    base = wall_median([py, "-c", eager], rep)
+    new = wall_median([py, "-c", "import impactbar"], rep)
+    row("import impactbar (fresh process, wall)", base, new, "s", "<= 0.5 s")
+    cli_eager = eager + "; from impactbar.cli import main; main(['orbits', '--help'])"
+    cli_new = "import sys; from impactbar.cli import main; main(['orbits', '--help'])"
+    base = wall_median([py, "-c", cli_eager], rep)
+    new = wall_median([py, "-c", cli_new], rep)
+    row("impactbar orbits --help (fresh process, wall)", base, new, "s", "<= 0.5 s")
+    numpy_only = wall_median([py, "-c", "import numpy"], rep)
+    print(f"{'   (import numpy alone, same machine)':<52} {numpy_only:>12.4g}")
+
+
+def bench_simulate(quick):
+    import importlib
+
+    sim = importlib.import_module("impactbar.simulation.simulate")
+    for n_modes, n in ((0, 20000), (8, 5000), (64, 1000)):
+        if quick:
+            n //= 5
+        model, load = BarModel(1.37, 0.02, 0.8, n_modes), CosineLoad(1.2, 1.0)
+        orbit = next(o for o in periodic_orbits(model, load) if o.stable)
+        q, v = orbit.modal_state_after_impact
+        q = q.copy()
+        q[0] -= 1e-3
+        st, t0 = InitialState(q, v), orbit.phase
+        fresh = sim._core_for
+
+        def run(k, st=st, t0=t0, model=model, load=load):
+            return simulate(model, load, st, t0 + 1e9, t0=t0, max_impacts=k)
+
+        new = cpu_median(lambda n=n: run(n), 3)
+        new100 = cpu_median(lambda: run(100), 50)
+        sim._core_for = lambda m, ld: sim._Core(m, ld)  # the kernel data rebuilt on every call
+        try:
+            base100 = cpu_median(lambda: run(100), 50)
+        finally:
+            sim._core_for = fresh
+        row(f"simulate, {n_modes} modes, one harmonic (kernel unchanged)", math.nan, n / new, "impacts/s",
+            ">= 2 M/s rigid, 2x at 8, 64" if n_modes == 0 else ">= 2x the issue's baseline",
+            higher_is_better=True)
+        row(f"simulate, {n_modes} modes, a 100-impact run", base100 * 1e6, new100 * 1e6, "us",
+            "fixed cost <= 50 us")
+
+
+_USER_LEVEL = r"""
+import json, sys, time
+import numpy as np
+from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate
+
+def cpu(fn, rep):
+    fn()
+    ts = []
+    for _ in range(rep):
+        t = time.process_time()
+        fn()
+        ts.append(time.process_time() - t)
+    return float(np.median(ts))
+
+out = {}
+po = periodic_orbits
+out["periodic_orbits, rigid, cosine (ms)"] = cpu(
+    lambda: po(BarModel(5, 0.1, 0.5, 0), CosineLoad(0.6, 1)), 101) * 1e3
+out["periodic_orbits, rigid, square wave (ms)"] = cpu(
+    lambda: po(BarModel(5, 0.1, 0.5, 0), SquareWaveLoad(1, 1.2)), 51) * 1e3
+for n in (8, 64):
+    out[f"periodic_orbits, cosine, {n} modes (ms)"] = cpu(
+        lambda: po(BarModel(5, 0.1, 0.5, n), CosineLoad(0.6, 1)), 11) * 1e3
+out["periodic_orbits, square wave, 64 modes (ms)"] = cpu(
+    lambda: po(BarModel(5, 0.1, 0.5, 64), SquareWaveLoad(1, 1.2)), 3) * 1e3
+out["periodic_orbits, cosine, 256 modes (ms)"] = cpu(
+    lambda: po(BarModel(5, 0.1, 0.5, 256), CosineLoad(0.6, 1)), 3) * 1e3
+for N, n in ((0, 20000), (8, 5000), (64, 1000)):
+    model, load = BarModel(1.37, 0.02, 0.8, N), CosineLoad(1.2, 1.0)
+    o = next(o for o in po(model, load) if o.stable)
+    q, v = o.modal_state_after_impact
+    q = q.copy()
+    q[0] -= 1e-3
+    st = InitialState(q, v)
+    run = lambda k: simulate(model, load, st, o.phase + 1e9, t0=o.phase, max_impacts=k)
+    out[f"simulate, {N} modes (impacts/s)"] = n / cpu(lambda: run(n), 3)
+    out[f"simulate, {N} modes, 1-impact run (us)"] = cpu(lambda: run(1), 101) * 1e6
+    out[f"simulate, {N} modes, 100-impact run (us)"] = cpu(lambda: run(100), 51) * 1e6
+print(json.dumps(out))
+"""
+
+
+def against(src, rounds=2):
+    """The user-level calls on another package tree and on this one, in fresh processes."""
+    import json
+    import os
+    from pathlib import Path
+
+    here = str(Path(__file__).resolve().parents[1] / "src")
+    runs = {"baseline": [], "new": []}
+    for _ in range(rounds):
+        for name, path in (("baseline", src), ("new", here)):
+            env = dict(os.environ, PYTHONPATH=path)
+            out = subprocess.run([sys.executable, "-c", _USER_LEVEL], env=env, check=True,
+                                 capture_output=True, text=True).stdout
+            runs[name].append(json.loads(out.strip().splitlines()[-1]))
+    head = f"call (median CPU time; best of {rounds} processes)"
+    print(f"{head:<52} {'baseline':>12} {'new':>12}")
+    for key in runs["new"][0]:
+        best = max if "/s" in key else min
+        b = best(r[key] for r in runs["baseline"])
+        n = best(r[key] for r in runs["new"])
+        print(f"{key:<52} {b:>12.4g} {n:>12.4g}")
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--quick", action="store_true", help="fewer repetitions")
+    ap.add_argument("--against", metavar="SRC", help="compare with the package tree SRC instead")
+    a = ap.parse_args(argv)
+    if a.against:
+        against(a.against)
+        return 0
+    rep = 5 if a.quick else 21
+    print(f"{'task':<52} {'baseline':>12} {'new':>12} {'unit':<9} {'gain':>9}   goal (issue 11)")
+    print("-" * 120)
+    bench_rigid(rep)
+    bench_chunk(a.quick)
+    bench_modes(rep)
+    bench_startup(3 if a.quick else 7)
+    bench_simulate(a.quick)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

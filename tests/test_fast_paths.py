@@ -1,0 +1,405 @@
+"""The fast paths of issue 11 against the general paths they replace (same orbits, flags and
+multipliers to 1e-10 on random parameters): the rigid bar's closed forms, the structured eigenvalue
+method for the multipliers, the vectorised sweep chunk."""
+
+import math
+
+import numpy as np
+import pytest
+
+from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, periodic_orbits
+from impactbar.dynamics.modal import fundamental
+from impactbar.orbits import impact_map_jacobian
+from impactbar.orbits.one_impact import _impact_states, _periodic_orbits_general, orbit_multipliers
+from impactbar.orbits.rigid import STATUS, rigid_cosine_orbits, rigid_multipliers
+from impactbar.orbits.stability import floquet_multipliers, period_fundamental, sort_multipliers
+
+TWO_PI = 2.0 * math.pi
+
+
+def _set_distance(a, b):
+    """Largest distance from a multiplier of one set to the nearest of the other, relative."""
+    a, b = np.asarray(a), np.asarray(b)
+    return max(max(np.min(np.abs(x - b)) / max(1.0, abs(x)) for x in a),
+               max(np.min(np.abs(x - a)) / max(1.0, abs(x)) for x in b))
+
+
+def _assert_same_orbits(fast, ref):
+    assert len(fast) == len(ref)
+    for o, g in zip(fast, ref, strict=True):
+        assert o.phase == pytest.approx(g.phase, abs=1e-10)
+        assert o.multiplicity == g.multiplicity
+        assert o.admissibility == g.admissibility
+        assert o.admissible == g.admissible
+        assert o.stable == g.stable
+        assert o.schur_stable == g.schur_stable
+        assert o.impact_velocity == pytest.approx(g.impact_velocity, rel=1e-10, abs=1e-12)
+        if math.isfinite(g.clearance):
+            assert o.clearance == pytest.approx(g.clearance, rel=1e-10, abs=1e-12)
+        else:
+            assert o.clearance == g.clearance
+        if np.all(np.isfinite(g.multipliers)):
+            # to 1e-10 of the spectral radius: a dense eigensolver's error is relative to the norm
+            scale = max(1.0, float(np.max(np.abs(g.multipliers))))
+            assert _set_distance(o.multipliers, g.multipliers) < 1e-10 * scale
+            assert np.allclose(np.abs(o.multipliers), np.abs(g.multipliers), rtol=1e-10, atol=1e-10 * scale)
+        else:
+            assert not np.all(np.isfinite(o.multipliers))
+        fin = np.isfinite(g.schur_roots)
+        assert np.array_equal(fin, np.isfinite(o.schur_roots))
+        assert _set_distance(o.schur_roots[fin], g.schur_roots[fin]) < 1e-10 if fin.any() else True
+        assert np.allclose(o.state_after_impact, g.state_after_impact, rtol=1e-10, atol=1e-12)
+        assert np.allclose(o.state_before_impact, g.state_before_impact, rtol=1e-10, atol=1e-12)
+
+
+def _random_rigid_case(rng, k):
+    d = 0.0 if rng.random() < 0.3 else 0.3 * rng.random()
+    R = 0.0 if rng.random() < 0.15 else (1.0 if rng.random() < 0.05 else rng.random())
+    p0 = k * rng.uniform(-0.1, 0.6)
+    pk = rng.uniform(-1.5, 1.5)
+    return d, R, p0, pk
+
+
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_rigid_closed_form_equals_general_path(rng, k):
+    """periodic_orbits on a rigid bar under one cosine harmonic (closed forms) against the general
+    path (certified searches, dense Jacobian): phases, flags, clearance, multipliers."""
+    seen = set()
+    for _ in range(60):
+        d, R, p0, pk = _random_rigid_case(rng, k)
+        model, load = BarModel(1.0, d, R, 0), CosineLoad(p0, pk, k)
+        fast = periodic_orbits(model, load)
+        _assert_same_orbits(fast, _periodic_orbits_general(model, load))
+        seen.update(o.admissibility for o in fast)
+    assert {"admissible", "penetrates"} <= seen  # the random cases reach both sides
+
+
+def test_rigid_square_wave_closed_form_equals_general_path(rng):
+    """The square wave (eq. 34) on a rigid bar in closed form against the general path."""
+    seen = set()
+    for _ in range(120):
+        d = 0.0 if rng.random() < 0.3 else 0.3 * rng.random()
+        R = 0.0 if rng.random() < 0.15 else rng.random()
+        model, load = BarModel(1.0, d, R, 0), SquareWaveLoad(rng.uniform(0.2, 2.0), rng.uniform(1.0, 1.9))
+        fast = periodic_orbits(model, load)
+        _assert_same_orbits(fast, _periodic_orbits_general(model, load))
+        seen.update(o.admissibility for o in fast)
+    assert {"admissible", "penetrates", "sticks"} <= seen
+
+
+def test_square_wave_flight_keeps_the_rigid_invariant():
+    """Regression: PiecewiseConstantLoad.propagate read the last piece's level past the next jump
+    when that jump fell within 1 of the end time. The rigid mode must arrive at 2 pi p0/(1 + R)
+    (theory §4) from every phase of the orbit equation, including phases after the jump."""
+    d, R, q, kappa = 0.006055935902915799, 0.8705533043101933, 0.8301889996603169, 1.8392315437529074
+    load = SquareWaveLoad(q, kappa)
+    orbits = _periodic_orbits_general(BarModel(1.0, d, R, 0), load)
+    assert any(o.phase > kappa * math.pi for o in orbits)
+    for o in orbits:
+        assert o.impact_velocity == pytest.approx(TWO_PI * load.p0 / (1.0 + R), rel=1e-12)
+
+
+def test_rigid_vectorised_equals_pointwise(rng):
+    """One call over a parameter array gives each point's orbits, padded with NaN / -1."""
+    n = 50
+    d = np.where(rng.random(n) < 0.3, 0.0, 0.2 * rng.random(n))
+    R = rng.random(n)
+    p0 = rng.uniform(0.0, 0.5, n)
+    pk = rng.uniform(0.2, 1.5, n)
+    res = rigid_cosine_orbits(d, R, p0, pk, 2)
+    assert res.phase.shape == (n, 4) and res.multipliers.shape == (n, 4, 2)
+    for i in range(n):
+        orbits = periodic_orbits(BarModel(3.0, d[i], R[i], 0), CosineLoad(p0[i], pk[i], 2))
+        assert res.n_orbits[i] == len(orbits)
+        assert np.all(np.isnan(res.phase[i, len(orbits):]))
+        assert np.all(res.status[i, len(orbits):] == -1)
+        for j, o in enumerate(orbits):
+            assert res.phase[i, j] == pytest.approx(o.phase, abs=1e-12)
+            assert STATUS[res.status[i, j]] == o.admissibility
+            assert res.max_abs_multiplier[i, j] == pytest.approx(o.max_abs_multiplier, rel=1e-12)
+
+
+def test_rigid_closed_form_invariants():
+    """Independent checks: the rigid mode strikes at 2 pi p0 / (1 + R) (theory §4), and at d = 0
+    the rigid block is xi^2 - (-2R + (1+R)^2 kappa_0) xi + R^2 with kappa_0 = p(phase)/p0 (theory §6)."""
+    R, p0 = 0.4, 0.3
+    res = rigid_cosine_orbits(0.0, R, p0, 1.0, 1)
+    assert res.n_orbits[0] == 2
+    for j in range(2):
+        assert res.impact_velocity[0, j] == pytest.approx(TWO_PI * p0 / (1 + R), rel=1e-13)
+        kappa0 = (p0 + math.cos(res.phase[0, j])) / p0
+        expected = np.roots([1.0, -(-2 * R + (1 + R) ** 2 * kappa0), R * R])
+        assert _set_distance(res.multipliers[0, j], expected) < 1e-12
+
+
+def test_rigid_degenerate_orbit_falls_back_to_general_path():
+    """p0 = 0: the end arrives at rest (grazing); the closed form declines and periodic_orbits
+    returns the general path's answer."""
+    res = rigid_cosine_orbits(0.1, 0.5, 0.0, 1.0, 1)
+    assert res.fallback[0]
+    model, load = BarModel(1.0, 0.1, 0.5, 0), CosineLoad(0.0, 1.0)
+    _assert_same_orbits(periodic_orbits(model, load), _periodic_orbits_general(model, load))
+
+
+@pytest.mark.parametrize("d, R, load", [
+    (1e-6, 1e-9, CosineLoad(1.0568994031282851e-07, -0.1962943504503838, 5)),  # leaves nearly at rest
+    (5.0, 1e-9, SquareWaveLoad(1.287036878130578e-06, 1.000000001)),  # arrives nearly at rest
+    (50.0, 0.5, CosineLoad(3.0, 0.5, 2)),  # heavy damping, the load never pulls
+    (1e-12, 0.999999, SquareWaveLoad(5.0, 1.9)),
+])
+def test_rigid_extreme_parameters_equal_general_path(d, R, load):
+    """Cases found by fuzzing: nearly-at-rest departures and arrivals go to the general path,
+    extreme damping and restitution stay in the closed form, and both agree."""
+    model = BarModel(1.0, d, R, 0)
+    _assert_same_orbits(periodic_orbits(model, load), _periodic_orbits_general(model, load))
+
+
+def test_rigid_multipliers_equal_jacobian_eigenvalues(rng):
+    """The 2 x 2 closed form against the eigenvalues of the analytic Jacobian, for a load with
+    several harmonics and the square wave (the general path's orbits)."""
+    loads = [FourierLoad(0.3, [1.0, 0.3 - 0.2j, 0.1]), SquareWaveLoad(1.0, 1.15)]
+    for load in loads:
+        for R in (0.2, 0.7):
+            model = BarModel(1.0, 0.05, R, 0)
+            for o in periodic_orbits(model, load):
+                yp, ym = _impact_states(model, load, o.phase)
+                dense = np.linalg.eigvals(impact_map_jacobian(model, load, o.phase, yp, ym))
+                mu = rigid_multipliers(0.05, R, float(load(o.phase)), float(load.left_limit(o.phase)),
+                                       yp[1], ym[1])
+                assert _set_distance(mu, dense) < 1e-10
+                assert _set_distance(orbit_multipliers(model, load, o.phase), dense) < 1e-10
+
+
+@pytest.mark.parametrize("n_modes", [40, 72])
+def test_structured_multipliers_equal_dense_eigvals(rng, n_modes):
+    """The block-diagonal-plus-rank-2 method (Aberth iteration) against numpy's dense eigvals of
+    the impact map's Jacobian, on random bars and loads."""
+    cases = [(CosineLoad(0.3, 1.0), 0.5), (CosineLoad(0.25, 1.0, 2), 0.8),
+             (SquareWaveLoad(1.0, 1.2), 0.5), (FourierLoad(0.3, [1.0, 0.2j]), 0.3),
+             (CosineLoad(0.3, 1.0), 0.0), (CosineLoad(0.3, 1.0), 0.02)]
+    heavy = (CosineLoad(0.05, 1.0), 0.6)  # and one with d = 0.95, near the structured method's limit
+    checked = 0
+    for load, R in [*cases, heavy]:
+        s = rng.uniform(1.5, 6.0)
+        d = 0.95 if (load, R) == heavy else rng.uniform(0.0, 0.2)
+        model = BarModel(s, d, R, n_modes)
+        for ph, _ in _phases(model, load):
+            yp, ym = _impact_states(model, load, ph)
+            dense = np.linalg.eigvals(impact_map_jacobian(model, load, ph, yp, ym))
+            fast = floquet_multipliers(model, load, ph, yp, ym, method="structured")
+            assert fast.shape == dense.shape
+            assert _set_distance(fast, dense) < 1e-10
+            checked += 1
+    assert checked >= 8
+
+
+def test_heavy_damping_keeps_the_dense_method():
+    """With d > 1 the automatic choice is the dense method (see floquet_multipliers)."""
+    model, load = BarModel(2.0, 3.0, 0.5, 40), CosineLoad(0.02, 1.0)
+    ph = _phases(model, load)[0][0]
+    yp, ym = _impact_states(model, load, ph)
+    auto = floquet_multipliers(model, load, ph, yp, ym)
+    assert np.array_equal(auto, floquet_multipliers(model, load, ph, yp, ym, method="dense"))
+
+
+def _phases(model, load):
+    from impactbar.orbits import phase_roots
+
+    return phase_roots(model, load)
+
+
+def test_floquet_multipliers_method_is_checked():
+    model, load = BarModel(2.0, 0.1, 0.5, 2), CosineLoad(0.3, 1.0)
+    o = periodic_orbits(model, load)[0]
+    with pytest.raises(ValueError, match="method"):
+        floquet_multipliers(model, load, o.phase, o.state_after_impact, o.state_before_impact,
+                            method="qr")
+
+
+def test_periodic_orbits_with_many_modes_equal_dense_reference():
+    """periodic_orbits at 48 modes (structured multipliers) against the dense method."""
+    model, load = BarModel(2.5, 0.08, 0.6, 48), CosineLoad(0.3, 1.0)
+    for o in periodic_orbits(model, load):
+        yp, ym = o.state_after_impact, o.state_before_impact
+        dense = floquet_multipliers(model, load, o.phase, yp, ym, method="dense")
+        assert np.allclose(np.abs(o.multipliers), np.abs(dense), rtol=1e-10, atol=1e-12)
+        assert _set_distance(o.multipliers, dense) < 1e-10
+
+
+def test_sort_multipliers_orders_by_modulus_then_imaginary_part():
+    mu = np.array([0.5 - 0.5j, 2.0, 0.5 + 0.5j, -0.1, np.inf])
+    out = sort_multipliers(mu)
+    assert out[0] == np.inf and out[1] == 2.0
+    assert out[2] == 0.5 + 0.5j and out[3] == 0.5 - 0.5j and out[4] == -0.1
+
+
+def test_period_fundamental_is_cached_and_exact():
+    model = BarModel(3.0, 0.2, 0.5, 5)
+    a = period_fundamental(model)
+    assert period_fundamental(BarModel(3.0, 0.2, 0.5, 5)) is a
+    ref = fundamental(model.frequencies**2, 0.2, TWO_PI)
+    for x, y in zip(a, ref, strict=True):
+        assert np.array_equal(x, y)
+        assert not x.flags.writeable
+
+
+def test_sweep_chunk_closed_form_equals_point_by_point(monkeypatch):
+    """compute_chunk's vectorised rigid path against the point-by-point path, over axes of k, p0,
+    d and R (R = 0 and R = 1 included)."""
+    from impactbar.sweeps.spec import parse_spec
+
+    spec = parse_spec({
+        "task": "orbits",
+        "model": {"s": 10.0, "d": 0.05, "R": 0.5, "n_modes": 0},
+        "load": {"kind": "cosine", "p0": 0.3, "pk": 1.0, "k": 1},
+        "axes": {"k": {"values": [1, 3]}, "p0": {"start": -0.2, "stop": 1.2, "num": 8},
+                 "d": {"values": [0.0, 0.1]}, "R": {"values": [0.0, 0.35, 1.0]}},
+        "chunk_points": 20,
+    })
+    fast = _assert_chunks_equal_point_by_point(spec, monkeypatch)
+    assert sum(int(np.sum(c["n_orbits"])) for c in fast) > 20
+
+
+def _assert_chunks_equal_point_by_point(spec, monkeypatch):
+    """Every chunk by compute_chunk's closed forms and point by point; returns the former."""
+    from impactbar.sweeps import tasks
+
+    fast = [tasks.compute_chunk(spec, c) for c in range(spec.n_chunks)]
+    monkeypatch.setattr(tasks, "_rigid_chunk", lambda *a: None)
+    slow = [tasks.compute_chunk(spec, c) for c in range(spec.n_chunks)]
+    for a, b in zip(fast, slow, strict=True):
+        assert a.keys() == b.keys()
+        for name in a:
+            if a[name].dtype.kind == "f":
+                assert np.allclose(a[name], b[name], rtol=1e-10, atol=1e-12, equal_nan=True), name
+            else:
+                assert np.array_equal(a[name], b[name]), name
+    return fast
+
+
+def test_sweep_chunk_square_wave_closed_form_equals_point_by_point(monkeypatch):
+    """The same for the square wave, kappa = 2 (a constant load, left to the general path) included."""
+    from impactbar.sweeps.spec import parse_spec
+
+    spec = parse_spec({
+        "task": "orbits",
+        "model": {"s": 10.0, "d": 0.05, "R": 0.5, "n_modes": 0},
+        "load": {"kind": "square", "q": 1.0, "kappa": 1.2},
+        "axes": {"kappa": {"values": [1.0, 1.1, 1.3, 1.45, 2.0]}, "R": {"values": [0.0, 0.35, 0.9]},
+                 "d": {"values": [0.0, 0.1]}},
+        "chunk_points": 7,
+    })
+    fast = _assert_chunks_equal_point_by_point(spec, monkeypatch)
+    assert sum(int(np.sum(c["n_orbits"])) for c in fast) > 10
+
+
+def _run_python(code):
+    """Run ``code`` in a fresh interpreter; fail with its stderr if it fails."""
+    import subprocess
+    import sys
+
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+
+
+def test_import_is_light_and_every_public_name_resolves():
+    """``import impactbar`` and building the CLI parser load none of scipy.optimize, numba, pint,
+    dask, xarray, zarr, matplotlib (they come on first use); every name of ``__all__`` (package and
+    ``impactbar.physical``) still resolves."""
+    _run_python(
+        "import sys, impactbar, impactbar.cli\n"
+        "impactbar.cli.build_parser()\n"
+        "heavy = [m for m in ('scipy.optimize', 'numba', 'pint', 'dask', 'distributed', 'xarray', "
+        "'zarr', 'matplotlib') if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+        "for name in impactbar.__all__: getattr(impactbar, name)\n"
+        "for name in impactbar.physical.__all__: getattr(impactbar.physical, name)\n"
+        "from impactbar import simulate, periodic_orbits, PeriodicOrbit, run_sweep, plot_sweep\n"
+        "assert 'numba' in sys.modules\n"
+        "assert 'periodic_orbits' in dir(impactbar) and callable(impactbar.simulate)\n"
+    )
+    with pytest.raises(AttributeError):
+        import impactbar
+
+        impactbar.no_such_name  # noqa: B018
+
+
+def test_simulation_core_is_built_once_and_runs_are_unchanged():
+    """simulate reuses the kernel data of a (model, load) pair; a run with the cached core equals
+    one with a freshly built core, impact for impact."""
+    import importlib
+
+    from impactbar import InitialState, simulate
+
+    sim_module = importlib.import_module("impactbar.simulation.simulate")
+
+    model, load = BarModel(1.37, 0.02, 0.8, 3), CosineLoad(1.2, 1.0)
+    start = InitialState.rigid(-0.05, 0.0, 3)
+    first = simulate(model, load, start, 60.0)
+    core = sim_module._core_for(model, load)
+    assert sim_module._core_for(BarModel(1.37, 0.02, 0.8, 3), load) is core
+    assert sim_module._core_for(model, CosineLoad(1.2, 1.0)) is not core  # keyed by the load object
+    again = simulate(model, load, start, 60.0)
+    sim_module._CORES.clear()
+    fresh = simulate(model, load, start, 60.0)
+    assert first.n_impacts > 5
+    assert np.array_equal(again.impact_times, first.impact_times)
+    assert np.array_equal(fresh.impact_times, first.impact_times)
+
+
+def test_kernel_compiles_in_memory_without_a_cache_folder():
+    """With no writable cache folder (a read-only install) the kernel still imports and compiles,
+    in memory; normally it caches on disk."""
+    _run_python(
+        "import numba.core.caching as c\n"
+        "(getattr(c, 'CacheImpl', None) or c._CacheImpl)._locator_classes = []\n"
+        "from impactbar.dynamics import _kernel as K\n"
+        "assert K.CACHE is False\n"
+        "b, cc = K._bc(0.0, 2.0)\n"
+        "assert (b, cc) == (2.0, 2.0)\n"
+    )
+    from impactbar.dynamics import _kernel
+
+    assert _kernel.CACHE is True
+
+
+def test_long_run_holds_its_trajectory_about_once():
+    """Peak memory of a 30,000-impact run is close to what the trajectory stores (the kernel
+    writes into the log's rows, grown in place), not twice it."""
+    import tracemalloc
+
+    from impactbar import InitialState, simulate
+
+    model, load = BarModel(1.37, 0.02, 0.8, 8), CosineLoad(1.2, 1.0)
+    o = next(o for o in periodic_orbits(model, load) if o.stable)
+    q, v = o.modal_state_after_impact
+    q[0] -= 1e-3
+    start = InitialState(q, v)
+    simulate(model, load, start, o.phase + 1e9, t0=o.phase, max_impacts=5)
+    tracemalloc.start()
+    try:
+        tr = simulate(model, load, start, o.phase + 1e9, t0=o.phase, max_impacts=30_000)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    seg = tr._segments
+    stored = sum(a.nbytes for a in (seg.t, seg.basis, seg.entry, seg.q, seg.v, tr.impact_times,
+                                    tr.impact_velocities))
+    assert tr.n_impacts == 30_000 and len(seg) == 30_001
+    assert peak < 1.3 * stored
+    # the stored pieces are the impacts themselves: the end is on the stop after each
+    assert np.allclose(seg.q[1:] @ model.end_weights, 0.0, atol=1e-12)
+
+
+def test_certified_phase_roots_see_a_sign_change_below_the_smallest_normal():
+    """Regression (found by the hypothesis test of test_orbits): with p0 = 5e-324 the residual at
+    the bracket's ends is denormal and their product underflows to 0; the sign change must still
+    be seen, so the certified search finds both roots of sin(phase) = p0 G / p1, near 0 and pi."""
+    from impactbar.orbits import phase_roots
+
+    model, load = BarModel(10.0, 0.0, 0.0, 0), CosineLoad(5e-324, 1.0)
+    a = phase_roots(model, load)
+    b = phase_roots(model, load, closed_form=False)
+    assert len(a) == len(b) == 2
+    assert np.allclose([x for x, _ in a], [x for x, _ in b], atol=1e-10)
+    assert np.allclose([x for x, _ in b], [0.0, math.pi], atol=1e-10)
