@@ -17,6 +17,8 @@ The import contract (``[tool.importlinter]`` in ``pyproject.toml``) keeps it so.
 
 from . import physical as physical  # SI units layer; pint is imported only when it is used
 from ._version import __version__ as __version__
+from .dynamics import WaveImpact as WaveImpact
+from .dynamics import wave_impact as wave_impact
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
 from .loads import Load as Load
@@ -44,6 +46,8 @@ __all__ = [
     "PiecewiseConstantLoad",
     "PeriodicOrbit",
     "periodic_orbits",
+    "WaveImpact",
+    "wave_impact",
     "InitialState",
     "Trajectory",
     "EnergyAccount",

@@ -2,7 +2,8 @@
 
 Layout: ``phase`` (the phase equation, eq. 14, and its roots), ``admissibility`` (does the struck end
 stay off the stop between impacts), ``stability`` (the exact Jacobian of the impact map with its
-saltation term, and the paper's Schur blocks, eqs. 25-32), ``one_impact`` (:class:`PeriodicOrbit`,
+saltation term, and the paper's Schur blocks, eqs. 25-32), ``wave`` (the phase equation, periodic
+states and impact-map Jacobian under the wave impact law, theory §4b), ``one_impact`` (:class:`PeriodicOrbit`,
 :func:`periodic_orbits`), ``charts`` (existence, stability and admissibility edges, Figs. 5, 6, 8).
 Part of the core: imports only ``impactbar.model``, ``impactbar.loads``, ``impactbar.dynamics``,
 numpy and scipy.
