@@ -204,6 +204,23 @@ def test_energy_balance(rng, amplitude, load):
             assert imp.rod_energy == pytest.approx((1 - R**2) * imp.energy_before, rel=1e-12)
 
 
+def test_energy_balance_inside_the_window(rng):
+    s, R, N = 12.0, 0.5, 6
+    model = BarModel(s=s, d=0.0, R=R, n_modes=N)
+    load = SquareWaveLoad(40.0, 1.5)
+    for amplitude in (0.05, 3.0):
+        q, v = random_state(rng, model, amplitude)
+        imp = wave_impact(model, load, 2 * math.pi - 0.07, q, v)
+        for t in np.linspace(0, 2 / s, 7):
+            work, rod, field = imp.account(t)
+            assert abs(imp.energy_before + work - field - rod) < 1e-10 * imp.energy_before
+            qt, vt = imp.state_at(t)
+            e = 0.5 * vt[0] ** 2 + np.sum(vt[1:] ** 2 + (s * np.pi * np.arange(1, N + 1) * qt[1:]) ** 2)
+            assert e <= field * (1 + 1e-12)  # the projection never adds energy
+        assert imp.account(2 / s) == pytest.approx((imp.drive_work, imp.rod_energy,
+                                                   imp.energy_after_field), rel=1e-13)
+
+
 # ---------------------------------------------------------------- drive part and its derivative ---
 @pytest.mark.parametrize("load", [CosineLoad(0.4, 1.0, k=2), SquareWaveLoad(1.0, 1.5)])
 def test_window_drive_derivative(load):

@@ -24,7 +24,7 @@ tensile (``alpha < 0``) and resumes when the gap closes.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
@@ -187,13 +187,14 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     return g, h, dg, dh
 
 
-@dataclass(frozen=True, eq=False)
 class WaveImpact:
     """One contact of the piston with the long rod, solved by characteristics (theory §4b).
 
-    Times are dimensionless and counted from the start of contact; the window is ``[0, 2/s]``.
-    Forces are dimensionless like the load (paper eq. 2), compressive positive; stresses are forces
-    per piston area (the rod's stress is ``F A / A_s = F (1 - R)/(1 + R)``).
+    Made by :func:`wave_impact`. Times are dimensionless and counted from the start of contact; the
+    window is ``[0, 2/s]``. Forces are dimensionless like the load (paper eq. 2), compressive
+    positive; stresses are forces per piston area (the rod's stress is ``F A / A_s =
+    F (1 - R)/(1 + R)``). The contact intervals and the post-contact state are solved at once; the
+    integrals (energies, impulse, force extremes) on first access.
 
     Attributes
     ----------
@@ -230,27 +231,82 @@ class WaveImpact:
         Largest and smallest interface force over the window.
     """
 
-    s: float
-    R: float
-    t0: float
-    duration: float
-    q_before: np.ndarray = field(repr=False)
-    v_before: np.ndarray = field(repr=False)
-    q_after: np.ndarray = field(repr=False)
-    v_after: np.ndarray = field(repr=False)
-    contact: np.ndarray = field(repr=False)
-    gap: float
-    impulse: float
-    advance: float
-    rod_energy: float
-    drive_work: float
-    energy_before: float
-    energy_after: float
-    energy_after_field: float
-    efficiency: float
-    peak_force: float
-    min_force: float
-    _solver: object = field(repr=False, default=None)
+    def __init__(self, s, R, t0, q_before, v_before, q_after, v_after, solver):
+        self.s, self.R, self.t0 = s, R, t0
+        self.duration = 2.0 / s
+        self.q_before, self.v_before = q_before, v_before
+        self.q_after, self.v_after = q_after, v_after
+        self._solver = solver
+        self.contact = solver.contact / s
+        self.gap = solver.gap_theta / s
+
+    def __repr__(self) -> str:
+        return (f"WaveImpact(t0={self.t0!r}, duration={self.duration!r}, "
+                f"separations={self.separations}, gap={self.gap!r})")
+
+    @cached_property
+    def impulse(self) -> float:
+        return self._solver.impulse()
+
+    @property
+    def advance(self) -> float:
+        return self.impulse * (1.0 - self.R) / ((1.0 + self.R) * self.s)
+
+    @cached_property
+    def rod_energy(self) -> float:
+        return self._solver.rod_energy()
+
+    @cached_property
+    def drive_work(self) -> float:
+        return self._solver.drive_work()
+
+    @cached_property
+    def energy_before(self) -> float:
+        return modal_energy(self.s, self.q_before, self.v_before)
+
+    @cached_property
+    def energy_after(self) -> float:
+        return modal_energy(self.s, self.q_after, self.v_after)
+
+    @cached_property
+    def energy_after_field(self) -> float:
+        return self._solver.field_energy()
+
+    @property
+    def efficiency(self) -> float:
+        e0 = self.energy_before
+        return self.rod_energy / e0 if e0 > 0.0 else math.nan
+
+    @cached_property
+    def _force_extremes(self):
+        return self._solver.force_extremes()
+
+    @property
+    def peak_force(self) -> float:
+        return self._force_extremes[0]
+
+    @property
+    def min_force(self) -> float:
+        return self._force_extremes[1]
+
+    def account(self, t) -> tuple[float, float, float]:
+        """The energy balance of the contact up to time ``t`` in ``[0, 2/s]``.
+
+        Returns
+        -------
+        drive_work, rod_energy, field_energy : float
+            Work of the drive, energy sent into the rod, and energy of the exact piston fields at
+            ``t``: ``energy_before + drive_work = field_energy + rod_energy``.
+        """
+        th = self._window_theta(t)
+        sol = self._solver
+        return sol.drive_work(th), sol.rod_energy(th), sol.field_energy(th)
+
+    def _window_theta(self, t) -> float:
+        t = float(t)
+        if not 0.0 <= t <= self.duration * (1.0 + 1e-14):
+            raise ValueError(f"t must lie in [0, {self.duration}] (the contact window); got {t}")
+        return min(t * self.s, 2.0)
 
     @property
     def peak_rod_stress(self) -> float:
@@ -284,10 +340,7 @@ class WaveImpact:
         -------
         q, v : numpy.ndarray, shape (N + 1,)
         """
-        t = float(t)
-        if not 0.0 <= t <= self.duration:
-            raise ValueError(f"t must lie in [0, {self.duration}] (the contact window); got {t}")
-        return self._solver.state_at(t * self.s)
+        return self._solver.state_at(self._window_theta(t))
 
     def fields(self, x):
         """Exact velocity ``u_t`` and strain ``u_x`` at the end of the window (before projection).
@@ -301,7 +354,7 @@ class WaveImpact:
         -------
         velocity, strain : numpy.ndarray, shape (P,)
         """
-        al, be = self._solver.final_invariants(np.asarray(x, dtype=float))
+        al, be = self._solver.invariants_at(np.asarray(x, dtype=float), 2.0)
         return 0.5 * (al + be), (be - al) / (2.0 * self.s)
 
     def piston_stress_extremes(self, cells: int | None = None) -> tuple[float, float]:
@@ -379,8 +432,8 @@ class _Contact:
     # -- contact and separation --------------------------------------------------------------------
     def solve(self):
         tol = 1e-13 * self.scale
-        if not self.A(0.0) > tol:
-            raise ValueError("the piston must arrive moving towards the rod (impact velocity > 0)")
+        if self.A(0.0) < -tol:  # a touch at zero speed (to rounding) is a contact all the same
+            raise ValueError("the piston must arrive moving towards the rod (impact velocity >= 0)")
         hg = min(1.0 / 16.0, 1.0 / (8.0 * (self.N + 1)),
                  math.pi / (4.0 * self.p.rate) if self.p.rate else 1.0)
         edges = np.concatenate(([0.0], self.breaks, [2.0]))
@@ -472,18 +525,6 @@ class _Contact:
         c = self.contact.ravel()
         return c[(c > 0.0) & (c < 2.0)]
 
-    def final_invariants(self, x):
-        """``alpha(x, 2), beta(x, 2)``."""
-        x = np.asarray(x, dtype=float)
-        al = self.B(1.0 - x) + 2.0 * self.p(2.0 - x, left=True) / self.s
-        be = self.B(1.0 + x)
-        return al, be
-
-    def _field_breaks(self):
-        sw = self.switches()
-        j = self.p.jumps
-        return np.concatenate((1.0 - sw[sw < 1.0], sw[sw > 1.0] - 1.0, 2.0 - j[j > 1.0], j[j < 1.0]))
-
     # -- results -------------------------------------------------------------------------------
     def post_state(self, q, v, drive):
         s, R = self.s, self.R
@@ -527,40 +568,49 @@ class _Contact:
         qa[0] = -self.gap_theta / s - float(cw[1:] @ qa[1:])
         return qa, va
 
-    def contact_quad(self):
+    def contact_quad(self, th_end=2.0):
         xs, ws = [], []
         for a, b in self.contact:
-            x, w = _panels(a, b, self.breaks, self.h_quad)
-            xs.append(x)
-            ws.append(w)
+            b = min(b, th_end)
+            if b > a:
+                x, w = _panels(a, b, self.breaks, self.h_quad)
+                xs.append(x)
+                ws.append(w)
         if not xs:
             return np.empty(0), np.empty(0)
         return np.concatenate(xs), np.concatenate(ws)
 
-    def rod_energy(self):
-        x, w = self.contact_quad()
+    def rod_energy(self, th_end=2.0):
+        """``int F^2 / Z_s dt`` up to ``th_end``: ``(1 - R^2)/4 int_contact A^2 dtheta``."""
+        x, w = self.contact_quad(th_end)
         return 0.25 * (1.0 - self.R**2) * float(w @ self.A(x) ** 2)
 
-    def impulse(self):
-        c = self.contact
+    def impulse(self, th_end=2.0):
+        c = np.minimum(self.contact, th_end)
         if not len(c):
             return 0.0
         return 0.5 * (1.0 + self.R) * float(np.sum(self.Acum(c[:, 1]) - self.Acum(c[:, 0])))
 
-    def drive_work(self):
+    def drive_work(self, th_end=2.0):
+        """``int p u_t(0) dt`` up to ``th_end``, ``u_t(0) = beta(0) + p/s``."""
         sw = self.switches()
         br = np.concatenate(([1.0], self.p.jumps, 1.0 + sw[sw < 1.0]))
-        x, w = _panels(0.0, 2.0, br, self.h_quad)
+        x, w = _panels(0.0, th_end, br, self.h_quad)
         p = self.p(x)
-        first = x < 1.0
-        beta0 = np.empty_like(x)
-        beta0[first] = self.piston.beta(x[first])
-        beta0[~first] = self.B(x[~first] - 1.0)
-        return float(w @ (p * (beta0 + p / self.s))) / self.s
+        return float(w @ (p * (self._beta_line(x) + p / self.s))) / self.s
 
-    def field_energy(self):
-        x, w = _panels(0.0, 1.0, self._field_breaks(), self.h_quad)
-        al, be = self.final_invariants(x)
+    def _x_breaks(self, th):
+        """Positions where the fields at ``th`` may jump: images of the corners, the switches and
+        the load's jumps along the characteristics."""
+        j, sw = self.p.jumps, self.switches()
+        eta = np.concatenate(([1.0, 2.0], 2.0 + j, 1.0 + sw))  # beta line breaks
+        xi = np.concatenate(([0.0], -eta, -j))  # alpha line breaks
+        return np.concatenate((eta - th, xi + th))
+
+    def field_energy(self, th=2.0):
+        """Energy of the exact fields at ``th``: ``(1/4) int (alpha^2 + beta^2) dx``."""
+        x, w = _panels(0.0, 1.0, self._x_breaks(th), self.h_quad)
+        al, be = self.invariants_at(x, th)
         return 0.25 * float(w @ (al * al + be * be))
 
     def force_extremes(self):
@@ -624,11 +674,7 @@ class _Contact:
     def state_at(self, th):
         """Modal state (projected) at ``th``, positions from the rod end's current position."""
         s = self.s
-        sw = self.switches()
-        j = self.p.jumps
-        taus = np.concatenate(([0.0, 1.0], j, 1.0 + sw[sw < 1.0], 1.0 + j))
-        brk = np.concatenate(([th, 1.0 - th], th - taus, sw + 1.0 - th, j + 2.0 - th))
-        x, w = _panels(0.0, 1.0, brk, self.h_quad)
+        x, w = _panels(0.0, 1.0, self._x_breaks(th), self.h_quad)
         al, be = self.invariants_at(x, th)
         npi = self.piston.npi
         arg = np.multiply.outer(npi, x)
@@ -690,8 +736,8 @@ def wave_impact(model, load, t0: float, q, v) -> WaveImpact:
     Raises
     ------
     ValueError
-        If the shapes do not match the model, a value is not finite, or the piston does not arrive
-        moving towards the rod (``u_t(1) <= 0``).
+        If the shapes do not match the model, a value is not finite, or the piston arrives moving
+        away from the rod (``u_t(1) < 0`` beyond rounding).
     """
     s, R = float(model.s), float(model.R)
     M = model.n_modes + 1
@@ -706,14 +752,4 @@ def wave_impact(model, load, t0: float, q, v) -> WaveImpact:
         raise ValueError(f"t0 must be finite; got {t0}")
     sol = _Contact(s, R, q, v, load, t0).solve()
     qa, va = sol.post_state(q, v, window_drive(s, R, model.n_modes, load, t0))
-    e0 = modal_energy(s, q, v)
-    E_rod = sol.rod_energy()
-    imp = sol.impulse()
-    fmax, fmin = sol.force_extremes()
-    return WaveImpact(
-        s=s, R=R, t0=t0, duration=2.0 / s, q_before=q.copy(), v_before=v.copy(), q_after=qa,
-        v_after=va, contact=sol.contact / s, gap=sol.gap_theta / s, impulse=imp,
-        advance=imp * (1.0 - R) / ((1.0 + R) * s), rod_energy=E_rod, drive_work=sol.drive_work(),
-        energy_before=e0, energy_after=modal_energy(s, qa, va), energy_after_field=sol.field_energy(),
-        efficiency=E_rod / e0 if e0 > 0 else math.nan, peak_force=fmax, min_force=fmin, _solver=sol,
-    )
+    return WaveImpact(s, R, t0, q.copy(), v.copy(), qa, va, sol)
