@@ -135,3 +135,29 @@ def test_impact_parameter_is_validated():
     with pytest.raises(ValueError, match="impact"):
         BarModel(s=1.0, d=0.0, R=0.5, n_modes=1, impact="rigid")
     assert BarModel(s=1.0, d=0.0, R=0.5, n_modes=1).impact == "paper"
+
+
+def test_wave_existence_edge_matches_the_orbits():
+    """Just below the edge there are orbits, just above none (pneumatic load, wave law)."""
+    from impactbar.orbits.wave import wave_existence_edge
+
+    for k, s in ((1, 5.0), (3, 12.0)):
+        model = BarModel(s=s, d=0.004, R=0.3, n_modes=3, impact="wave")
+        edge = wave_existence_edge(model, k)
+        assert len(periodic_orbits(model, CosineLoad(edge * (1 - 1e-7) / k, 1.0, k))) == 2 * k
+        assert periodic_orbits(model, CosineLoad(edge * (1 + 1e-7) / k, 1.0, k)) == []
+
+
+def test_stability_edges_under_the_wave_law():
+    """The rigid-limit band of the wave law tends to the paper's ``1/sqrt(4 + pi^2) .. 1/pi`` at
+    ``R = 0`` (MODEL.md section 6); the paper's Schur criterion is refused under the wave law."""
+    from impactbar.orbits.charts import pneumatic_stability_edges
+    from impactbar.orbits.wave import wave_existence_edge
+
+    model = BarModel(s=2e4, d=0.0, R=0.0, n_modes=0, impact="wave")
+    edges = pneumatic_stability_edges(model, 1)
+    assert len(edges) == 1 and edges[0][1] == "period-doubling"
+    assert edges[0][0] == pytest.approx(1 / math.sqrt(4 + math.pi**2), abs=1e-3)
+    assert wave_existence_edge(model, 1) == pytest.approx(1 / math.pi, abs=1e-3)  # the fold
+    with pytest.raises(ValueError, match="criterion"):
+        pneumatic_stability_edges(model, 1, criterion="paper")

@@ -27,7 +27,8 @@ from ..model import BarModel
 from .phase import _cosine_roots
 from .stability import _arrival_derivative
 
-__all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_impact_map_jacobian"]
+__all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_impact_map_jacobian",
+           "wave_existence_edge"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -145,6 +146,36 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
             roots.append(brentq(lambda p: float(resid(np.array([p]))[0]), grid[i], grid[i + 1],
                                 xtol=1e-14, rtol=1e-15))
     return [(t % TWO_PI, 1) for t in sorted(roots)]
+
+
+def wave_existence_edge(model: BarModel, k: int = 1) -> float:
+    """Existence edge of the pneumatic load (eq. 33) under the wave law: the largest ``k p0 / pk``
+    with one-impact orbits.
+
+    The residual is linear in the load: ``r = p0 a + pk |b| cos(k phase + theta)`` with ``a`` the
+    residual of the unit mean load and ``|b|`` the amplitude of the unit harmonic's, so orbits exist
+    iff ``|p0 a| <= pk |b|`` (the analogue of eq. 38; ``inf`` when ``a = 0``, ``nan`` when the
+    window does not fit in the period).
+
+    Parameters
+    ----------
+    model : BarModel
+    k : int
+        Order of the harmonic, ``>= 1``.
+
+    Returns
+    -------
+    float
+    """
+    from ..loads import CosineLoad
+
+    if _window(model)[1] <= 0.0:
+        return math.nan
+    a = abs(float(wave_phase_residual(model, CosineLoad(1.0, 0.0, k), 0.0)))
+    Ms = 2 * k + 1
+    ph = TWO_PI * np.arange(Ms) / Ms
+    b = 2.0 * abs(np.fft.fft(wave_phase_residual(model, CosineLoad(0.0, 1.0, k), ph))[k]) / Ms
+    return math.inf if a == 0.0 else k * b / a
 
 
 def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y_minus,
