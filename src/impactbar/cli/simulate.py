@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import physical
-from .physical import add_physical_arguments, hammer_from_args, json_ready
+from .physical import add_impact_argument, add_physical_arguments, hammer_from_args, json_ready
 
 __all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows"]
 
@@ -27,6 +27,7 @@ def add_parser(subparsers) -> None:
                     "write motion.png (end displacement and velocity over time, impacts marked), "
                     "blows.png (energy per blow), impacts.csv and summary.json to DIR.")
     add_physical_arguments(p)
+    add_impact_argument(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--periods", type=float, default=40.0, metavar="N",
                    help="length of the run in impact periods (default 40)")

@@ -46,6 +46,19 @@ class PhysicalOrbit:
         As in the dimensionless orbit (MODEL.md sections 5, 7).
     max_abs_multiplier : float
         Largest modulus of the Floquet multipliers.
+    rod_energy_J : float
+        Energy carried into the rod by the transmitted stress wave per blow (J), ``int F^2/Z_s dt``.
+        Under the wave law (theory §4b) from the contact solved by characteristics, the drive
+        included; under eq. 10 ``(1 - R^2)`` times the piston's kinetic energy at impact (what
+        eq. 10 removes from it).
+    peak_rod_stress_Pa : float
+        Peak compressive stress of the transmitted wave in the rod (Pa), ``F_max / A_s``; under
+        eq. 10 the plateau of a rigid-body piston at the impact velocity, ``rho c v (1 - R)/2``.
+    efficiency : float
+        ``rod_energy_J`` over the piston's kinetic plus strain energy at impact (Lundberg's
+        transfer efficiency).
+    rod_advance_m : float
+        Advance of the rod end per blow (m), impulse over ``Z_s``.
     """
 
     orbit: object
@@ -59,6 +72,10 @@ class PhysicalOrbit:
     admissible: bool
     stable: bool
     max_abs_multiplier: float
+    rod_energy_J: float
+    peak_rod_stress_Pa: float
+    efficiency: float
+    rod_advance_m: float
 
     @classmethod
     def from_orbit(cls, orbit, hammer: Hammer) -> PhysicalOrbit:
@@ -66,17 +83,42 @@ class PhysicalOrbit:
         v = float(orbit.impact_velocity) * hammer.scales.velocity_m_s
         energy = 0.5 * hammer.mass_kg * v * v
         fb = hammer.blow_frequency_Hz
+        rod = _rod_figures(orbit, hammer, v)
         return cls(
             orbit=orbit, phase_rad=float(orbit.phase),
             impact_velocity=float(orbit.impact_velocity), impact_velocity_m_s=v,
             blow_energy_J=energy, blow_frequency_Hz=fb, power_W=energy * fb,
             peak_stress_Pa=float(hammer.peak_stress_Pa(v)), admissible=bool(orbit.admissible),
-            stable=bool(orbit.stable), max_abs_multiplier=float(orbit.max_abs_multiplier))
+            stable=bool(orbit.stable), max_abs_multiplier=float(orbit.max_abs_multiplier), **rod)
 
     def to_dict(self) -> dict:
         """JSON-ready figures (without the dimensionless orbit object)."""
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                 if f.name != "orbit"}
+
+
+def _rod_figures(orbit, hammer: Hammer, v_m_s: float) -> dict:
+    """The transmitted wave's figures of one orbit in SI (see :class:`PhysicalOrbit`)."""
+    sc = hammer.scales
+    R = hammer.R
+    energy_J = sc.force_N * sc.length_m  # the energy unit m L^2 Omega^2
+    rod_area_ratio = (1.0 - R) / (1.0 + R)  # A / A_s
+    b = hammer.bar
+    w = orbit.impact
+    if w is not None:  # the wave law: the contact solved by characteristics
+        return {"rod_energy_J": float(w.rod_energy * energy_J),
+                "peak_rod_stress_Pa": float(w.peak_force * sc.force_N * rod_area_ratio / b.area_m2),
+                "efficiency": float(w.efficiency), "rod_advance_m": float(w.advance * sc.length_m)}
+    M = hammer.n_modes + 1
+    q, v = orbit.state_before_impact[:M], orbit.state_before_impact[M:]
+    wn = hammer.s * np.pi * np.arange(1, M)
+    kinetic = 0.5 * v[0] ** 2 + float(np.sum(v[1:] ** 2))
+    strain = float(np.sum((wn * q[1:]) ** 2))
+    rod = (1.0 - R * R) * kinetic
+    return {"rod_energy_J": float(rod * energy_J),
+            "peak_rod_stress_Pa": float(b.density_kg_m3 * b.wave_speed_m_s * v_m_s * 0.5 * (1.0 - R)),
+            "efficiency": float(rod / (kinetic + strain)) if kinetic + strain > 0 else float("nan"),
+            "rod_advance_m": float((1.0 - R) * v[0] / hammer.s * sc.length_m)}
 
 
 def orbits(hammer: Hammer) -> list[PhysicalOrbit]:
