@@ -153,6 +153,9 @@ class SimulationResult:
         Arrival velocities of the struck end (m/s).
     blow_energies_J : numpy.ndarray, shape (n,)
         ``m v^2 / 2`` per impact (J).
+    rod_energies_J, peak_rod_stresses_Pa, efficiencies : numpy.ndarray, shape (n,)
+        Under the wave law (theory §4b) the energy and the peak stress of the wave each blow sends
+        into the rod, and the transfer efficiency (see :class:`PhysicalOrbit`); NaN under eq. 10.
     """
 
     hammer: Hammer
@@ -161,6 +164,29 @@ class SimulationResult:
     impact_times_s: np.ndarray
     impact_velocities_m_s: np.ndarray
     blow_energies_J: np.ndarray
+    rod_energies_J: np.ndarray = None
+    peak_rod_stresses_Pa: np.ndarray = None
+    efficiencies: np.ndarray = None
+
+    def force_wave(self, i: int, t_s) -> np.ndarray:
+        """Force (N) of the wave sent into the rod by impact ``i`` (wave law), at times ``t_s`` (s)
+        counted from the start of that contact; 0 outside its window ``2 L / c``.
+
+        Raises
+        ------
+        ValueError
+            Under eq. 10 (an instant impact has no force history), or for a bad index.
+        """
+        impacts = getattr(self.trajectory, "impacts", ())
+        if not impacts:
+            raise ValueError("force waves need the wave impact law (Hammer(impact='wave'))")
+        if not -len(impacts) <= i < len(impacts):
+            raise ValueError(f"i must index one of the {len(impacts)} impacts; got {i}")
+        sc = self.hammer.scales
+        w = impacts[i]
+        t = np.asarray(t_s, dtype=float) / sc.time_s
+        inside = (t >= 0.0) & (t <= w.duration)
+        return np.where(inside, w.force(np.clip(t, 0.0, w.duration)), 0.0) * sc.force_N
 
     def end_displacement_m(self, t_s) -> np.ndarray:
         """Displacement of the struck end (m, negative off the stop) at times ``t_s`` (s)."""
@@ -225,9 +251,18 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
                           InitialState.rigid(end_displacement=-gap_m / sc.length_m, velocity=0.0), t_end,
                           max_impacts=max_impacts)
     v = np.asarray(traj.impact_velocities, dtype=float) * sc.velocity_m_s
+    impacts = getattr(traj, "impacts", ())
+    rod = np.full(v.size, np.nan)
+    stress = np.full(v.size, np.nan)
+    eff = np.full(v.size, np.nan)
+    for j, w in enumerate(impacts):  # the wave law: each contact solved by characteristics
+        rod[j] = w.rod_energy * sc.force_N * sc.length_m
+        stress[j] = w.peak_force * sc.force_N * (1.0 - hammer.R) / ((1.0 + hammer.R) * hammer.bar.area_m2)
+        eff[j] = w.efficiency
     return SimulationResult(
         hammer=hammer, trajectory=traj, t_end_s=t_end * sc.time_s,
         impact_times_s=np.asarray(traj.impact_times, dtype=float) * sc.time_s,
-        impact_velocities_m_s=v, blow_energies_J=0.5 * hammer.mass_kg * v * v)
+        impact_velocities_m_s=v, blow_energies_J=0.5 * hammer.mass_kg * v * v,
+        rod_energies_J=rod, peak_rod_stresses_Pa=stress, efficiencies=eff)
 
 
