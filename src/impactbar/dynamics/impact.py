@@ -434,13 +434,16 @@ class _Contact:
         tol = 1e-13 * self.scale
         if self.A(0.0) < -tol:  # a touch at zero speed (to rounding) is a contact all the same
             raise ValueError("the piston must arrive moving towards the rod (impact velocity >= 0)")
-        hg = min(1.0 / 16.0, 1.0 / (8.0 * (self.N + 1)),
-                 math.pi / (4.0 * self.p.rate) if self.p.rate else 1.0)
+        # A is a trigonometric sum of highest frequency N pi (plus the load's): 6 nodes per period
+        hg = min(1.0 / 16.0, 1.0 / (3.0 * (self.N + 1)),
+                 math.pi / (3.0 * self.p.rate) if self.p.rate else 1.0)
         edges = np.concatenate(([0.0], self.breaks, [2.0]))
         grid = np.unique(np.concatenate([np.linspace(a, b, max(2, math.ceil((b - a) / hg) + 1))
                                          for a, b in zip(edges[:-1], edges[1:], strict=True)]))
         Ag = self.A(grid)
-        Agl = self.A(grid, left=True)  # left limits (differ at the breaks only)
+        Agl = Ag.copy()  # left limits: they differ at the breaks only
+        at = np.searchsorted(grid, self.breaks)
+        Agl[at] = self.A(grid[at], left=True)
         contact = []
         th, on = 0.0, True
         start = 0.0

@@ -959,7 +959,7 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     status = "t_end"
     while True:
         qa, va = q.copy(), v.copy()
-        n, st, tn, ot, _, _, _ = core.run_free(t, q, v, t_end, 1, 1)
+        n, st, tn, ot, _, oq, ov = core.run_free(t, q, v, t_end, 1, 1)
         if st == K.FAILED:  # pragma: no cover - defensive
             raise RuntimeError(f"impact search did not converge at t = {tn}")
         if st == K.END:
@@ -967,7 +967,10 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             break
         # an impact (MAXIMP after one), or a touch at zero speed (CONTACT): a contact window
         ti = float(ot[0]) if n else float(tn)
-        qm, vm = (a[:, 0] for a in core.propagate(_FREE, t, qa, va, [ti]))
+        if n and core.R >= 0.01:  # the kernel's state after eq. 10's reversal, undone
+            qm, vm = oq[0].copy(), ov[0] / -core.R
+        else:
+            qm, vm = (a[:, 0] for a in core.propagate(_FREE, t, qa, va, [ti]))
         qm[0] -= float(c @ qm)  # the end exactly on the rod end
         arrival = float(c @ vm)
         if arrival < 0.0:  # a touch whose speed rounded below zero
