@@ -150,7 +150,7 @@ def test_wave_existence_edge_matches_the_orbits():
 
 def test_stability_edges_under_the_wave_law():
     """The rigid-limit band of the wave law tends to the paper's ``1/sqrt(4 + pi^2) .. 1/pi`` at
-    ``R = 0`` (MODEL.md section 6); the paper's Schur criterion is refused under the wave law."""
+    ``R = 0`` (theory §6); the paper's Schur criterion is refused under the wave law."""
     from impactbar.orbits.charts import pneumatic_stability_edges
     from impactbar.orbits.wave import wave_existence_edge
 

@@ -128,7 +128,8 @@ class _Piston:
 
 
 def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: bool = False):
-    """The drive load's part of the post-contact modal state, contact held for the whole window.
+    """The drive load's part of the post-contact modal state, contact held for the whole window
+    (theory §4b).
 
     With the piston pressed on the rod for the whole window ``[t0, t0 + 2/s]`` the contact map is
     affine: ``(q_n, q_n') -> -R (q_n, q_n') + (g_n, h_n)``. With ``P(theta) = p(t0 + theta/s)`` and

@@ -121,7 +121,8 @@ class PeriodicOrbit:
         ----------
         t : array_like, shape (T,)
             Orbit times (dimensionless); taken modulo ``2 pi``, and a multiple of ``2 pi`` gives the
-            state just after the impact.
+            state just after the impact (under the wave law: at the start of contact; inside the
+            window ``[0, 2/s)`` the characteristics solution projected on the modes).
 
         Returns
         -------

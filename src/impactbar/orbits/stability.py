@@ -58,7 +58,7 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
 def _arrival_derivative(model: BarModel, load: Load, t_start: float, flight: float, y_start, y_minus,
                         t_arrive: float):
     """Derivative of the state at the next impact with respect to ``z = (t_start, q_1..q_N,
-    q_0'..q_N')`` at the start of a flight of length ``flight`` (MODEL.md section 7).
+    q_0'..q_N')`` at the start of a flight of length ``flight`` (theory §7).
 
     ``dY = Psi [dy - f(t_start, y) dt_start] + f(t', Y) dt'`` with the saltation
     ``dt' = -(c . dq)/(c . q')``; ``q_0`` follows from contact at the start. Returns ``(dY, r)``,
