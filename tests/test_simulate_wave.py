@@ -86,3 +86,15 @@ def test_positions_from_the_rod_end():
             np.testing.assert_allclose(u, 0.0, atol=1e-12)
     u = tr.end_displacement(np.linspace(tr.t0, tr.t_end, 2001))
     assert np.all(u <= 1e-10)
+
+
+def test_run_ending_at_a_window_end():
+    """``t_end`` at the end of a contact window, to rounding of the absolute times."""
+    model = BarModel(s=10.0, d=0.005, R=0.5, n_modes=3, impact="wave")
+    load = CosineLoad(0.3, 1.0)
+    o = next(o for o in periodic_orbits(model, load) if o.admissible)
+    init, t0 = orbit_start(o)
+    tr = simulate(model, load, init, t0 + TWO_PI, t0=t0)
+    assert tr.n_impacts == 1
+    np.testing.assert_allclose(tr.final_state.modal_velocity, init.modal_velocity, rtol=1e-8, atol=1e-10)
+    assert abs(tr.energy.relative_residual) < 1e-9

@@ -580,7 +580,7 @@ class Trajectory:
             sel = idx == j
             s = self._segments[j]
             if s.basis == _WAVE:  # inside a contact window: the characteristics solution
-                states = [s.frozen.state_at(tt - s.t) for tt in t[sel]]
+                states = [s.frozen.state_at(min(tt - s.t, s.frozen.duration)) for tt in t[sel]]
                 yield sel, _FREE, np.array([a for a, _ in states]).T, np.array([b for _, b in states]).T
                 continue
             q, v = self._core.propagate(s.basis, s.t, s.q, s.v, t[sel])
@@ -724,11 +724,12 @@ def _energy_account(tr: Trajectory) -> EnergyAccount:
         tb = segs[j + 1].t if j + 1 < len(segs) else tr.t_end
         if seg.basis == _WAVE:  # a contact window: drive work, rod energy, projection
             window = seg.frozen
-            w, rod, field_energy = window.account(tb - seg.t)
-            if tb - seg.t >= window.duration:
+            dt = min(tb - seg.t, window.duration)
+            w, rod, field_energy = window.account(dt)
+            if dt >= window.duration:
                 qe, ve = window.q_after, window.v_after
             else:
-                qe, ve = window.state_at(tb - seg.t)
+                qe, ve = window.state_at(dt)
             work += w
             imp += rod
             proj += core.energy(_FREE, qe, ve) - field_energy
@@ -991,7 +992,7 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             break
     last = segs.last()
     if last.basis == _WAVE:
-        qe, ve = last.frozen.state_at(t - last.t)
+        qe, ve = last.frozen.state_at(min(t - last.t, last.frozen.duration))
     else:
         qe, ve = (a[:, 0] for a in core.propagate(_FREE, last.t, last.q, last.v, [t]))
     return Trajectory(model=model, load=core.load, t0=t0, t_end=t,
