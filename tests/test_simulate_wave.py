@@ -98,3 +98,40 @@ def test_run_ending_at_a_window_end():
     assert tr.n_impacts == 1
     np.testing.assert_allclose(tr.final_state.modal_velocity, init.modal_velocity, rtol=1e-8, atol=1e-10)
     assert abs(tr.energy.relative_residual) < 1e-9
+
+
+def test_compiled_window_matches_the_characteristics_solver(rng):
+    """The kernel's contact window (no separation) against :func:`wave_impact`: the same verdict on
+    separation and the same post-contact state, over random states, loads and wave speeds (windows
+    longer than the load period and jumps of the square wave in both halves included)."""
+    from impactbar import FourierLoad, wave_impact
+    from impactbar.dynamics import _kernel as K
+    from impactbar.simulation.simulate import _GL20_W, _GL20_X, _LoadData
+
+    for trial in range(60):
+        N = int(rng.integers(0, 8))
+        s = float(rng.choice([0.4, 2.0, 10.0, 40.0]))
+        R = float(rng.uniform(0, 0.95))
+        model = BarModel(s=s, d=0.0, R=R, n_modes=N)
+        load = [CosineLoad(rng.uniform(-1, 3), rng.uniform(0, 3), int(rng.integers(1, 4))),
+                SquareWaveLoad(rng.uniform(0.1, 3), rng.uniform(1, 2)),
+                FourierLoad(0.5, [0.3 + 0.2j, -0.4, 0.1j])][trial % 3]
+        amp = [0.02, 1.0][trial % 2]
+        n = np.arange(1, N + 2)
+        q = amp * rng.normal(size=N + 1) / (s * np.pi * n)
+        v = rng.normal(size=N + 1) / n
+        v[1:] *= amp
+        c = model.end_weights
+        q[0] = -(c[1:] @ q[1:])
+        v[0] += 3.0 - c @ v
+        t0 = float(rng.uniform(0, 20))
+        D = _LoadData(load)
+        rate = float(np.max(D.ks)) / s if D.kind == 0 else 0.0
+        qa, va = np.empty(N + 1), np.empty(N + 1)
+        ok = K.wave_window(D.kind, s, R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
+                           D.psup, rate, t0, q, v, _GL20_X, _GL20_W, qa, va)
+        imp = wave_impact(model, load, t0, q, v)
+        assert ok == (imp.separations == 0)
+        if ok:
+            np.testing.assert_allclose(qa, imp.q_after, rtol=1e-12, atol=1e-14 * np.abs(q).max())
+            np.testing.assert_allclose(va, imp.v_after, rtol=1e-12, atol=1e-13)

@@ -241,6 +241,10 @@ class WaveImpact:
         self.contact = solver.contact / s
         self.gap = solver.gap_theta / s
 
+    def resolve(self) -> WaveImpact:
+        """Itself (the simulator's lazily solved windows resolve to a ``WaveImpact``)."""
+        return self
+
     def __repr__(self) -> str:
         return (f"WaveImpact(t0={self.t0!r}, duration={self.duration!r}, "
                 f"separations={self.separations}, gap={self.gap!r})")
@@ -500,7 +504,13 @@ class _Contact:
                         th = float(nodes[0])
                         continue
                     a = x
-                th_re = brentq(G, a, nodes[k], xtol=1e-15, rtol=1e-15)
+                ga, gb = G(a), G(nodes[k])
+                if ga <= 0.0:  # the vectorised and the scalar gap differ by rounding here
+                    th_re = float(a)
+                elif gb > 0.0:
+                    th_re = float(nodes[k])
+                else:
+                    th_re = brentq(G, a, nodes[k], xtol=1e-15, rtol=1e-15)
                 th, on, start = th_re, True, th_re
         self.contact = np.array(contact, dtype=float).reshape(-1, 2)
         self.grid, self.Ag = grid, Ag

@@ -592,7 +592,7 @@ class Trajectory:
         wave, rod energy, peak stresses, efficiency, advance of the rod end), in order; empty under
         the paper's law."""
         segs = self._segments
-        return tuple(segs.frozen[j] for j in np.flatnonzero(segs.basis == _WAVE))
+        return tuple(segs.frozen[j].resolve() for j in np.flatnonzero(segs.basis == _WAVE))
 
     def end_displacement(self, t) -> np.ndarray:
         """``u(1, t)``, the struck end (``<= 0`` up to rounding).
@@ -952,6 +952,9 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     model = core.model
     window = 2.0 / model.s
     c = core.c
+    D = core.data
+    ks = D.ks
+    rate = float(np.max(ks)) / model.s if D.kind == 0 and ks.size else 0.0
     segs = _SegmentLog(core.N)
     segs.add(t0, _FREE, q, v, "start")
     times: list[float] = []
@@ -977,7 +980,13 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         if arrival < 0.0:  # a touch whose speed rounded below zero
             vm[0] -= arrival
             arrival = 0.0
-        imp = wave_impact(model, core.load, ti, qm, vm)
+        q, v = np.empty_like(qm), np.empty_like(vm)
+        if K.wave_window(D.kind, model.s, model.R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
+                         D.psup, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
+            imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
+        else:  # contact lost inside the window: the full characteristics solution
+            imp = wave_impact(model, core.load, ti, qm, vm)
+            q, v = imp.q_after.copy(), imp.v_after.copy()
         times.append(ti)
         vels.append(arrival)
         segs.add(ti, _WAVE, qm, vm, "impact", imp)
@@ -985,7 +994,6 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         if t >= t_end:  # the run ends inside the window
             t = t_end
             break
-        q, v = imp.q_after.copy(), imp.v_after.copy()
         segs.add(t, _FREE, q, v, "release")
         if len(times) >= max_imp:
             status = "max_impacts"
@@ -999,3 +1007,25 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                       impact_times=np.array(times), impact_velocities=np.array(vels),
                       contact_intervals=np.zeros((0, 2)), final_state=InitialState(qe, ve),
                       status=status, _core=core, _segments=segs.finish())
+
+
+_GL20_X, _GL20_W = np.polynomial.legendre.leggauss(20)
+
+
+class _Window:
+    """A contact window the compiled kernel found without separation: its post-contact state is
+    known; the full :class:`~impactbar.WaveImpact` (force wave, energies) is solved on first use."""
+
+    def __init__(self, model, load, t0, q, v, q_after, v_after):
+        self._args = (model, load, t0, q, v)
+        self._impact = None
+        self.duration = 2.0 / model.s
+        self.q_after, self.v_after = q_after, v_after
+
+    def resolve(self):
+        if self._impact is None:
+            self._impact = wave_impact(*self._args)
+        return self._impact
+
+    def __getattr__(self, name):
+        return getattr(self.resolve(), name)
