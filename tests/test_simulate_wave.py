@@ -107,6 +107,7 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
     from impactbar import FourierLoad, wave_impact
     from impactbar.dynamics import _kernel as K
     from impactbar.simulation.simulate import _GL20_W, _GL20_X, _LoadData
+    from test_impact_wave import random_state
 
     for trial in range(60):
         N = int(rng.integers(0, 8))
@@ -116,14 +117,9 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
         load = [CosineLoad(rng.uniform(-1, 3), rng.uniform(0, 3), int(rng.integers(1, 4))),
                 SquareWaveLoad(rng.uniform(0.1, 3), rng.uniform(1, 2)),
                 FourierLoad(0.5, [0.3 + 0.2j, -0.4, 0.1j])][trial % 3]
-        amp = [0.02, 1.0][trial % 2]
-        n = np.arange(1, N + 2)
-        q = amp * rng.normal(size=N + 1) / (s * np.pi * n)
-        v = rng.normal(size=N + 1) / n
-        v[1:] *= amp
+        q, v = random_state(rng, model, [0.02, 1.0][trial % 2])
+        v[0] += 2.0  # arriving at 3
         c = model.end_weights
-        q[0] = -(c[1:] @ q[1:])
-        v[0] += 3.0 - c @ v
         t0 = float(rng.uniform(0, 20))
         D = _LoadData(load)
         rate = float(np.max(D.ks)) / s if D.kind == 0 else 0.0
