@@ -99,7 +99,7 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     For a load with finitely many harmonics (``FourierLoad``, ``CosineLoad``) the residual is a
     trigonometric polynomial of the phase of the load's degree ``K``: it is recovered exactly from
     ``2 K + 1`` samples, in closed form for a single harmonic (the pneumatic load). Other loads (the
-    square wave) are sampled on 192 intervals, those around a sampled minimum of ``|r|`` 16 times
+    square wave) are sampled on 128 intervals, those around a sampled minimum of ``|r|`` 16 times
     finer, and every sign change is refined by Brent's method; a double root without a sign change
     (a fold) is then not reported. (Not a certified search, unlike eq. 14's.)
 
@@ -137,7 +137,7 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
         def resid(p):
             return wave_phase_residual(model, load, p)
 
-        grid = _refined_grid(resid, 193)
+        grid = _refined_grid(resid, 129)
     r = resid(grid)
     roots = []
     for i in range(grid.size - 1):
