@@ -11,6 +11,17 @@ then solved mode by mode, and the phase equation is the return of the struck end
 
 with ``f_0`` the rigid displacement the load drives over the flight. Unlike eq. 14 the flexible modes
 enter: their displacement is not continuous through the contact.
+
+Exact rigid identity (the analogue of eq. 14's ``2 pi p0 / (1 + R)``): integrating
+``q_0'' + d q_0' = p`` over the flight, with the contact's momentum balance
+``q_0'(T) = -R q_0'(0) + int_{T/2}^{T} p - R int_0^{T/2} p`` (the drive's waves that reach the rod
+within the window), and the displacement periodic relative to the rod, the impact velocity of the
+rigid mode is, for every ``d``,
+
+    q_0'(2 pi-) = 2 pi p0 / (1 + R) - int_0^{1/s} p(phase + t) dt:
+
+the contact time shifts it by the drive impulse of the window's first half. As ``s -> inf`` both
+laws give the same rigid orbits.
 """
 
 from __future__ import annotations
