@@ -578,14 +578,15 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
         for k in range(npts):
             th = lo + (hi - lo) * k / (npts - 1)
             A = 0.0
-            if lo < 1.0:
-                x = 1.0 - th
-                for n in range(M):
-                    A += a[n] * math.cos(n * math.pi * x) - b[n] * math.sin(n * math.pi * x)
-            else:
-                u = th - 1.0
-                for n in range(M):
-                    A += a[n] * math.cos(n * math.pi * u) + b[n] * math.sin(n * math.pi * u)
+            x = 1.0 - th if lo < 1.0 else th - 1.0
+            sgn = -1.0 if lo < 1.0 else 1.0  # alpha0(1 - theta), or beta0(theta - 1)
+            c1, s1 = math.cos(math.pi * x), math.sin(math.pi * x)
+            cn, sn = 1.0, 0.0  # cos(n pi x), sin(n pi x) by rotation
+            for n in range(M):
+                A += a[n] * cn + sgn * b[n] * sn
+                cn, sn = cn * c1 - sn * s1, sn * c1 + cn * s1
+            if lo >= 1.0:
+                u = x
                 if kind == 1:
                     A += 2.0 * level / s
                 else:
@@ -615,9 +616,12 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
                         th = mid + half_w * gl_x[g]
                         wp = half_w * gl_w[g] * _window_load(kind, p0, ks, pr, pim, breaks, levels,
                                                              t0 + th / s)
+                        c1, s1 = math.cos(math.pi * th), math.sin(math.pi * th)
+                        cn, sn = 1.0, 0.0
                         for n in range(M):
-                            ic_[half, n] += wp * math.cos(n * math.pi * th)
-                            is_[half, n] += wp * math.sin(n * math.pi * th)
+                            ic_[half, n] += wp * cn
+                            is_[half, n] += wp * sn
+                            cn, sn = cn * c1 - sn * s1, sn * c1 + cn * s1
             lo = hi
             if lo >= half + 1.0:
                 break
