@@ -251,3 +251,15 @@ def test_bad_input():
         wave_impact(model, NO_DRIVE, 0.0, np.zeros(3), np.array([-1.0, 0.0, 0.0]))
     with pytest.raises(ValueError, match="finite"):
         wave_impact(model, NO_DRIVE, 0.0, np.zeros(3), np.array([np.nan, 0.0, 0.0]))
+
+
+@pytest.mark.parametrize("load", [CosineLoad(0.4, 1.3, 3), SquareWaveLoad(1.5, 1.3)])
+def test_window_load_integral_against_the_load_flow(load):
+    """The drive's integral over the window (closed form, piece by piece) against the load's own
+    exact rigid-mode flow ``q'' = p``."""
+    from impactbar.dynamics.impact import _WindowLoad
+
+    for s, t0 in ((0.3, 5.0), (7.0, 2 * math.pi - 0.1), (7.0, 1.0)):
+        th = np.linspace(0, 2, 13)
+        _, v = load.propagate(np.zeros(1), 0.0, t0, np.zeros(1), np.zeros(1), t0 + th / s)
+        np.testing.assert_allclose(_WindowLoad(load, s, t0).integral(th), s * v[0], rtol=0, atol=1e-13)

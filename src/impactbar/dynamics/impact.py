@@ -79,10 +79,23 @@ class _WindowLoad:
         return np.asarray(self.load(t), dtype=float)
 
     def integral(self, theta) -> np.ndarray:
-        """``int_0^theta p dtheta'`` (exact: the load's own rigid-mode integral)."""
+        """``int_0^theta p dtheta'``, exact: in closed form for a load of finitely many harmonics,
+        piece by piece for a piecewise-constant one, else the load's own rigid-mode integral."""
         theta = np.atleast_1d(np.asarray(theta, dtype=float))
-        _, v = self.load.propagate(np.zeros(1), 0.0, self.t0, np.zeros(1), np.zeros(1),
-                                   self.t0 + theta / self.s)
+        tau = theta / self.s
+        orders = getattr(self.load, "orders", None)
+        if orders is not None:  # p0 tau + Re sum p_k (e^{ik(t0 + tau)} - e^{ik t0}) / (ik)
+            k = np.asarray(orders, dtype=float)
+            ck = self.load.amplitudes * np.exp(1j * k * self.t0) / (1j * k)
+            osc = (np.expm1(1j * np.multiply.outer(tau, k)) @ ck).real
+            return self.s * (self.load.p0 * tau + osc)
+        if hasattr(self.load, "levels"):  # constant between the jumps located at set-up
+            edges = self.t_edges - self.t0
+            levels = self(self.s * 0.5 * (edges[:-1] + edges[1:]))
+            cum = np.concatenate(([0.0], np.cumsum(levels * np.diff(edges))))
+            j = np.clip(np.searchsorted(edges, tau, side="right") - 1, 0, levels.size - 1)
+            return self.s * (cum[j] + levels[j] * (tau - edges[j]))
+        _, v = self.load.propagate(np.zeros(1), 0.0, self.t0, np.zeros(1), np.zeros(1), self.t0 + tau)
         return self.s * v[0]
 
 
