@@ -522,6 +522,63 @@ def _window_load(kind, p0, ks, pr, pim, breaks, levels, t):
 
 
 @numba.njit(cache=True, nogil=True)
+def window_jumps(kind, s, breaks, t0, jumps):
+    """Write the jumps of a piecewise-constant load inside ``[t0, t0 + 2/s]`` as sorted
+    ``theta = s (t - t0)`` in ``(0, 2)`` into ``jumps``; returns their number."""
+    nj = 0
+    if kind == 1:
+        T = 2.0 / s
+        m0 = math.floor(t0 / TWO_PI)
+        m1 = math.floor((t0 + T) / TWO_PI)
+        for m in range(m0, m1 + 1):
+            for i in range(breaks.size):
+                tj = m * TWO_PI + breaks[i]
+                if t0 < tj < t0 + T and nj < jumps.size:
+                    jumps[nj] = s * (tj - t0)
+                    nj += 1
+        jumps[:nj] = np.sort(jumps[:nj])
+    return nj
+
+
+@numba.njit(cache=True, nogil=True)
+def window_moments(kind, s, p0, ks, pr, pim, breaks, levels, rate, t0, jumps, gl_x, gl_w, ic_, is_):
+    """Add the moments ``int P(theta) cos(n pi theta)``, ``... sin ...`` of the drive
+    ``P(theta) = p(t0 + theta/s)`` over ``[0, 1]`` (row 0) and ``[1, 2]`` (row 1) to ``ic_, is_``
+    (shape (2, M)): Gauss-Legendre panels split at the load's ``jumps`` (in theta, sorted)."""
+    M = ic_.shape[1]
+    N = M - 1
+    nj = jumps.size
+    hq = 8.0 / (math.pi * N + rate + 1.0)
+    for half in range(2):
+        lo = float(half)
+        for ic in range(nj + 1):
+            hi = float(half + 1)
+            for i in range(ic, nj):  # the next jump inside this half, if any
+                if lo < jumps[i] < hi:
+                    hi = jumps[i]
+                    break
+            width = hi - lo
+            if width > 0.0:
+                npan = max(1, int(math.ceil(width / hq)))
+                half_w = 0.5 * width / npan
+                for pnl in range(npan):
+                    mid = lo + half_w * (2.0 * pnl + 1.0)
+                    for g in range(gl_x.size):
+                        th = mid + half_w * gl_x[g]
+                        wp = half_w * gl_w[g] * _window_load(kind, p0, ks, pr, pim, breaks, levels,
+                                                             t0 + th / s)
+                        c1, s1 = math.cos(math.pi * th), math.sin(math.pi * th)
+                        cn, sn = 1.0, 0.0
+                        for n in range(M):
+                            ic_[half, n] += wp * cn
+                            is_[half, n] += wp * sn
+                            cn, sn = cn * c1 - sn * s1, sn * c1 + cn * s1
+            lo = hi
+            if lo >= half + 1.0:
+                break
+
+
+@numba.njit(cache=True, nogil=True)
 def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q, v,
                 gl_x, gl_w, qa, va):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law held in contact throughout: checks that
@@ -532,7 +589,6 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
     contact separates: the caller solves it in full."""
     M = q.size
     N = M - 1
-    T = 2.0 / s
     a = np.empty(M)
     b = np.empty(M)
     scale = 2.0 * psup / s
@@ -541,19 +597,8 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
         b[n] = -2.0 * s * math.pi * n * q[n]
         scale += abs(a[n]) + abs(b[n])
     tol = 1e-13 * scale
-    # the load's jumps inside the window, as theta in (0, 2)
-    nj = 0
     jumps = np.empty(4 * breaks.size + 8)
-    if kind == 1:
-        m0 = math.floor(t0 / TWO_PI)
-        m1 = math.floor((t0 + T) / TWO_PI)
-        for m in range(m0, m1 + 1):
-            for i in range(breaks.size):
-                tj = m * TWO_PI + breaks[i]
-                if t0 < tj < t0 + T and nj < jumps.size:
-                    jumps[nj] = s * (tj - t0)
-                    nj += 1
-        jumps[:nj] = np.sort(jumps[:nj])
+    nj = window_jumps(kind, s, breaks, t0, jumps)
     # -- the scan of A: [0, 1] from the start state, [1, 2] from beta0 and the drive
     hg = min(1.0 / 16.0, 1.0 / (3.0 * (N + 1)))
     if rate > 0.0:
@@ -594,37 +639,10 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
             if A < -tol:
                 return False
         lo = hi
-    # -- the drive's moments over [0, 1] and [1, 2]
-    hq = 8.0 / (math.pi * N + rate + 1.0)
     ic_ = np.zeros((2, M))
     is_ = np.zeros((2, M))
-    for half in range(2):
-        lo = float(half)
-        for ic in range(nj + 1):
-            hi = float(half + 1)
-            for i in range(ic, nj):  # the next jump inside this half, if any
-                if lo < jumps[i] < hi:
-                    hi = jumps[i]
-                    break
-            width = hi - lo
-            if width > 0.0:
-                npan = max(1, int(math.ceil(width / hq)))
-                half_w = 0.5 * width / npan
-                for pnl in range(npan):
-                    mid = lo + half_w * (2.0 * pnl + 1.0)
-                    for g in range(gl_x.size):
-                        th = mid + half_w * gl_x[g]
-                        wp = half_w * gl_w[g] * _window_load(kind, p0, ks, pr, pim, breaks, levels,
-                                                             t0 + th / s)
-                        c1, s1 = math.cos(math.pi * th), math.sin(math.pi * th)
-                        cn, sn = 1.0, 0.0
-                        for n in range(M):
-                            ic_[half, n] += wp * cn
-                            is_[half, n] += wp * sn
-                            cn, sn = cn * c1 - sn * s1, sn * c1 + cn * s1
-            lo = hi
-            if lo >= half + 1.0:
-                break
+    window_moments(kind, s, p0, ks, pr, pim, breaks, levels, rate, t0, jumps[:nj], gl_x, gl_w,
+                   ic_, is_)
     for n in range(M):
         va[n] = -R * v[n] + (ic_[1, n] - R * ic_[0, n]) / s
         if n == 0:

@@ -29,6 +29,8 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
+from . import _kernel as K
+
 __all__ = ["WaveImpact", "wave_impact", "window_drive"]
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
@@ -140,6 +142,20 @@ class _Piston:
         return self._int(x, -1.0)
 
 
+def _kernel_load(load):
+    """``(kind, p0, ks, pr, pim, breaks, levels)`` for the compiled kernel: a load of finitely many
+    harmonics (kind 0) or a piecewise-constant one (kind 1); None otherwise."""
+    if hasattr(load, "orders") and hasattr(load, "amplitudes"):
+        amp = np.asarray(load.amplitudes, dtype=complex)
+        return (0, float(load.p0), np.asarray(load.orders, dtype=float),
+                np.ascontiguousarray(amp.real), np.ascontiguousarray(amp.imag), np.zeros(1), np.zeros(1))
+    if hasattr(load, "breaks") and hasattr(load, "levels"):
+        return (1, float(load.p0), np.zeros(0), np.zeros(0), np.zeros(0),
+                np.ascontiguousarray(load.breaks, dtype=float),
+                np.ascontiguousarray(load.levels, dtype=float))
+    return None
+
+
 def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: bool = False):
     """The drive load's part of the post-contact modal state, contact held for the whole window
     (theory §4b).
@@ -177,14 +193,22 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     """
     wl = _WindowLoad(load, s, t0)
     npi = math.pi * np.arange(n_modes + 1)
-    h_panel = 8.0 / (npi[-1] + wl.rate + 1.0)
-    out = {}
-    for name, lo, hi in (("a", 0.0, 1.0), ("b", 1.0, 2.0)):
-        th, w = _panels(lo, hi, wl.jumps, h_panel)
-        pw = wl(th) * w
-        arg = np.multiply.outer(npi, th)
-        out[name] = (np.cos(arg) @ pw, np.sin(arg) @ pw)
-    (ca, sa), (cb, sb) = out["a"], out["b"]
+    arrays = _kernel_load(load)
+    if arrays is not None:  # the compiled quadrature (the same panels)
+        mc, ms = np.zeros((2, n_modes + 1)), np.zeros((2, n_modes + 1))
+        kind, p0, ks, pr, pim, breaks, levels = arrays
+        K.window_moments(kind, s, p0, ks, pr, pim, breaks, levels, wl.rate, t0,
+                         np.ascontiguousarray(wl.jumps), _GL_X, _GL_W, mc, ms)
+        (ca, cb), (sa, sb) = mc, ms
+    else:
+        h_panel = 8.0 / (npi[-1] + wl.rate + 1.0)
+        out = {}
+        for name, lo, hi in (("a", 0.0, 1.0), ("b", 1.0, 2.0)):
+            th, w = _panels(lo, hi, wl.jumps, h_panel)
+            pw = wl(th) * w
+            arg = np.multiply.outer(npi, th)
+            out[name] = (np.cos(arg) @ pw, np.sin(arg) @ pw)
+        (ca, sa), (cb, sb) = out["a"], out["b"]
     h = (cb - R * ca) / s
     g = np.zeros(n_modes + 1)
     g[1:] = -(sb[1:] - R * sa[1:]) / (s * s * npi[1:])

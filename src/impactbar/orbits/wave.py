@@ -31,9 +31,10 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from ..dynamics import _kernel as K
 from ..dynamics.impact import window_drive
 from ..dynamics.modal import fundamental
-from ..loads import FourierLoad, Load
+from ..loads import FourierLoad, Load, PiecewiseConstantLoad
 from ..model import BarModel
 from .phase import _cosine_roots
 from .stability import _arrival_derivative
@@ -49,7 +50,24 @@ def _window(model: BarModel) -> tuple[float, float]:
     return T, TWO_PI - T
 
 
-def wave_orbit_states(model: BarModel, load: Load, phase: float):
+def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
+    """State at ``t1`` of every mode driven from rest at ``t0`` (exact): the compiled flow for a
+    piecewise-constant load, the load's own flow otherwise."""
+    w2 = model.frequencies**2
+    M = w2.size
+    zeros = np.zeros(M)
+    if isinstance(load, PiecewiseConstantLoad):
+        q, v = np.empty((M, 1)), np.empty((M, 1))
+        empty = np.zeros((M, 0))
+        K.propagate_many(1, w2, model.d, float(load.p0), np.zeros(0), empty, empty,
+                         np.ascontiguousarray(load.breaks), np.ascontiguousarray(load.levels),
+                         float(t0), zeros, zeros, np.array([float(t1)]), q, v)
+    else:
+        q, v = load.propagate(w2, model.d, t0, zeros, zeros, [t1])
+    return q[:, 0], v[:, 0]
+
+
+def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
     """Periodic modal states of the candidate orbit with this phase under the wave law.
 
     Parameters
@@ -59,6 +77,8 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float):
     load : Load
     phase : float
         Load time at which contact starts (rad).
+    rates : bool
+        Also compute the drive's rates ``d(g, h)/d phase`` (default; the Jacobian needs them).
 
     Returns
     -------
@@ -69,15 +89,16 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float):
     y_minus : numpy.ndarray, shape (2 N + 2,)
         Modal state just before the impact (orbit time ``2 pi-``).
     drive_rate : tuple of numpy.ndarray
-        ``d(g, h)/d phase`` (for the impact map's Jacobian).
+        ``d(g, h)/d phase`` (for the impact map's Jacobian); ``(None, None)`` with ``rates=False``.
     """
     s, d, R, N = model.s, model.d, model.R, model.n_modes
     T, F = _window(model)
     w2 = model.frequencies**2
-    zeros = np.zeros(N + 1)
-    fq, fv = load.propagate(w2, d, phase + T, zeros, zeros, [phase + TWO_PI])
-    fq, fv = fq[:, 0], fv[:, 0]
-    g, h, dg, dh = window_drive(s, R, N, load, phase, derivative=True)
+    fq, fv = _forced_flight(model, load, phase + T, phase + TWO_PI)
+    if rates:
+        g, h, dg, dh = window_drive(s, R, N, load, phase, derivative=True)
+    else:
+        (g, h), dg, dh = window_drive(s, R, N, load, phase), None, None
     p11, p12, p21, p22 = fundamental(w2, d, F)
     # y- = Phi (J y- + (g, h)) + f,  J = -R I
     a11, a12, a21, a22 = 1.0 + R * p11, R * p12, R * p21, 1.0 + R * p22
@@ -100,7 +121,7 @@ def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
     ``phase``."""
     ph = np.asarray(phase, dtype=float)
-    out = np.array([wave_orbit_states(model, load, float(p))[0] for p in ph.ravel()])
+    out = np.array([wave_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
     return out.reshape(ph.shape)
 
 
