@@ -161,3 +161,14 @@ def test_stability_edges_under_the_wave_law():
     assert wave_existence_edge(model, 1) == pytest.approx(1 / math.pi, abs=1e-3)  # the fold
     with pytest.raises(ValueError, match="criterion"):
         pneumatic_stability_edges(model, 1, criterion="paper")
+
+
+@pytest.mark.parametrize("load", [CosineLoad(0.3, 1.0), SquareWaveLoad(1.0, 1.3)])
+def test_blow_impulse_is_the_drive_impulse_per_period(load):
+    """Undamped, the momentum of a periodic motion returns each period: the rod receives per blow
+    the drive's impulse ``2 pi p0``, and advances by ``2 pi p0 / Z_s``, ``Z_s = s (1 + R)/(1 - R)``
+    (flexible piston, any phase of the contact)."""
+    R, s = 0.4, 7.0
+    for o in periodic_orbits(BarModel(s=s, d=0.0, R=R, n_modes=4, impact="wave"), load):
+        assert o.impact.impulse == pytest.approx(TWO_PI * load.p0, rel=1e-12)
+        assert o.impact.advance == pytest.approx(TWO_PI * load.p0 / (s * (1 + R) / (1 - R)), rel=1e-12)
