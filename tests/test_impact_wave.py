@@ -263,3 +263,45 @@ def test_window_load_integral_against_the_load_flow(load):
         th = np.linspace(0, 2, 13)
         _, v = load.propagate(np.zeros(1), 0.0, t0, np.zeros(1), np.zeros(1), t0 + th / s)
         np.testing.assert_allclose(_WindowLoad(load, s, t0).integral(th), s * v[0], rtol=0, atol=1e-13)
+
+
+# ---------------------------------------------------------------- external reference: elwaspatid --
+@pytest.mark.slow
+def test_against_elwaspatid(rng):
+    """elwaspatid (Bacon's method for 1-D rods, an independent characteristics code) on a
+    non-uniform piston: a piston of unit impedance with the velocity and strain fields of a random
+    modal state strikes a rod of area ``(1 + R)/(1 - R)`` with an anechoic far end. Its interface
+    force and its final piston velocity agree with the characteristics solution at its nodes.
+    (Needs ``pip install elwaspatid``; units with ``E = rho = L = A = 1`` and ``s = 1``.)"""
+    E = pytest.importorskip("elwaspatid.elwaspatid")
+    R, N, J = 0.4, 5, 200
+    model = BarModel(s=1.0, d=0.0, R=R, n_modes=N)
+    q, v = random_state(rng, model, 0.05)
+    imp = wave_impact(model, NO_DRIVE, 0.0, q, v)
+    assert imp.separations == 0
+    area_rod = (1 + R) / (1 - R)
+    bar = E.BarSet([1.0, 1.0], [1.0, 1.0], [1.0, 3.0],
+                   [math.sqrt(4 / math.pi), math.sqrt(4 * area_rod / math.pi)], nmin=J,
+                   right="infinite")
+    piston = bar.seg[0]
+    x = piston.x - piston.x[0]
+    n = np.arange(N + 1)
+    vel0 = np.cos(np.pi * np.outer(x, n)) @ (v * np.where(n == 0, 1.0, 2.0))
+    strain0 = -np.sin(np.pi * np.outer(x, n)) @ (2 * np.pi * n * q)
+    original = E.Segment.initCalc
+
+    def init(self, nT, Vo=0):  # the piston's initial fields (elwaspatid's force: E A u_x)
+        original(self, nT, Vo)
+        if self is piston:
+            self.Veloc[0, :] = vel0
+            self.Force[0, :] = strain0
+
+    E.Segment.initCalc = init
+    try:
+        wp = E.WP2(bar, incw=np.zeros(0), nstep=2 * J + 1, left="free", contactLoss=None)
+    finally:
+        E.Segment.initCalc = original
+    F = -piston.Force[:, -1]  # compression positive
+    np.testing.assert_allclose(F[1:], imp.force(np.minimum(wp.time[1:], 2.0)), rtol=0, atol=1e-12)
+    vel, _ = imp.fields(x)
+    np.testing.assert_allclose(piston.Veloc[2 * J, 1:-1], vel[1:-1], rtol=0, atol=1e-12)
