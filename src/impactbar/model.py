@@ -10,6 +10,9 @@ from ._validate import check_int, check_real
 
 __all__ = ["BarModel"]
 
+#: The impact laws: the paper's eq. 10 and the wave-resolved contact with a long rod (theory §4b).
+IMPACT_LAWS = ("paper", "wave")
+
 #: Largest number of flexible modes accepted; beyond it the modal sums gain nothing in double precision.
 MAX_MODES = 4096
 
@@ -38,6 +41,12 @@ class BarModel:
         Restitution coefficient, ``0 <= R <= 1`` (eq. 10).
     n_modes : int
         Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096.
+    impact : {"paper", "wave"}
+        The impact law. ``"paper"`` (default): eq. 10, the velocity field reversed and scaled by
+        ``-R`` at an instant impact, the displacement kept. ``"wave"``: the stop is a long rod of
+        the same material with area ratio ``A_s/A = (1 + R)/(1 - R)`` and the contact, lasting
+        ``2/s``, is solved by characteristics with the drive acting (theory §4b); velocity and strain
+        fields leave multiplied by ``-R`` when the drive is absent.
 
     Raises
     ------
@@ -55,12 +64,15 @@ class BarModel:
     d: float
     R: float
     n_modes: int
+    impact: str = "paper"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "s", check_real("s", self.s, lo=0.0, lo_open=True))
         object.__setattr__(self, "d", check_real("d", self.d, lo=0.0))
         object.__setattr__(self, "R", check_real("R", self.R, lo=0.0, hi=1.0))
         object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=MAX_MODES))
+        if not isinstance(self.impact, str) or self.impact not in IMPACT_LAWS:
+            raise ValueError(f"impact must be one of {list(IMPACT_LAWS)}; got {self.impact!r}")
 
     @property
     def frequencies(self) -> np.ndarray:
@@ -103,7 +115,7 @@ class BarModel:
 
     def with_(self, **changes) -> BarModel:
         """A copy with some fields changed (validated again)."""
-        fields = {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes}
+        fields = {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes, "impact": self.impact}
         unknown = set(changes) - set(fields)
         if unknown:
             raise ValueError(f"unknown BarModel field(s): {sorted(unknown)}; allowed: {sorted(fields)}")

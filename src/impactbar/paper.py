@@ -9,6 +9,8 @@ draws it; :func:`reproduce` writes every figure as PNG with a CSV of its data an
   admissible part of the band marked (at small ``R`` the end sticks, MODEL.md section 5).
 - Fig. 6: the same for ``k = 10`` with ``s pi -> inf``, ``10.1`` and ``10.01``: the paper's criterion
   (eqs. 37, 39) against the exact multipliers of an 8-mode bar.
+- Figs. 5 and 6 also draw the stability edge under the wave impact law (the stop as a long rod,
+  theory §4b), where the contact lasts ``2/s`` (``s pi = 157`` stands for the rigid limit).
 - Fig. 7: phase against ``kappa``, hydraulic, ``R = 0..0.9`` (all unstable, eq. 41).
 - Fig. 8: the ``kappa`` above which no one-impact orbit exists, against ``R``, ``2 pi d = 0`` and
   ``0.03``, with the closed form ``kappa* = (2 R + sqrt(2 + 2 R^2)) / (1 + R)`` at ``d = 0``.
@@ -30,6 +32,7 @@ from .orbits.charts import (
     pneumatic_stability_curve,
 )
 from .orbits.one_impact import periodic_orbits
+from .orbits.wave import wave_existence_edge
 
 __all__ = ["reproduce", "fig4_data", "fig5_data", "fig6_data", "fig7_data", "fig8_data",
            "hydraulic_edge_closed_form"]
@@ -124,6 +127,10 @@ def fig5_data(n: int = 40) -> dict:
         out[f"stability_paper_2pid={tag}"] = paper
         out[f"sticks_from_2pid={tag}"] = seg[:, 0]
         out[f"sticks_to_2pid={tag}"] = seg[:, 1]
+        wave = model.with_(impact="wave")
+        out[f"existence_wave_2pid={tag}"] = np.array([wave_existence_edge(wave.with_(R=float(r)))
+                                                      for r in R])
+        out[f"stability_wave_2pid={tag}"] = pneumatic_stability_curve(wave, R).y
     return out
 
 
@@ -137,6 +144,7 @@ def fig6_data(n: int = 24, n_modes: int = 8) -> dict:
                        ("10.01", BarModel(10.01 / math.pi, 0.0, 0.0, n_modes))):
         out[f"paper_spi={tag}"] = pneumatic_stability_curve(model, R, k, criterion="paper").y
         out[f"exact_spi={tag}"] = pneumatic_stability_curve(model, R, k).y
+        out[f"wave_spi={tag}"] = pneumatic_stability_curve(model.with_(impact="wave"), R, k).y
     return out
 
 
@@ -257,6 +265,8 @@ def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
         ax.plot(d5["R"], d5[f"existence_2pid={tag}"], "-", color=col, label=f"existence, 2πd={tag}")
         ax.plot(d5["R"], d5[f"stability_exact_2pid={tag}"], "--", color=col,
                 label=f"stability (exact = paper), 2πd={tag}")
+        ax.plot(d5["R"], d5[f"stability_wave_2pid={tag}"], "-.", color=col, alpha=0.7,
+                label=f"stability, wave law (sπ=157), 2πd={tag}")
         a, b = d5[f"sticks_from_2pid={tag}"], d5[f"sticks_to_2pid={tag}"]
         m = np.isfinite(a)
         if np.any(m):
@@ -270,6 +280,8 @@ def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
                     f"{d5['stability_exact_2pid=0'][0]:.6f} .. {d5['existence_2pid=0'][0]:.6f}"))
     summary.append(("5", "R=0, 2pid=0: inadmissible (sticks) for p0/p1 in",
                     f"{d5['sticks_from_2pid=0'][0]:.6f} .. {d5['sticks_to_2pid=0'][0]:.6f}"))
+    summary.append(("5", "R=0, 2pid=0: stable band p0/p1, wave law (s pi = 157)",
+                    f"{d5['stability_wave_2pid=0'][0]:.6f} .. {d5['existence_wave_2pid=0'][0]:.6f}"))
     summary.append(("5", "R=0, 2pid=0.03: stable band p0/p1",
                     f"{d5['stability_exact_2pid=0.03'][0]:.6f} .. {d5['existence_2pid=0.03'][0]:.6f}"))
 
@@ -282,14 +294,17 @@ def reproduce(out_dir, *, quick: bool = False) -> list[tuple[str, str, str]]:
         ax.plot(d6["R"], d6[f"paper_spi={tag}"], "--", color=col, label=f"paper (eq. 39), sπ={tag}")
         ax.plot(d6["R"], d6[f"exact_spi={tag}"], ":", marker=".", ms=3, color=col,
                 label=f"exact multipliers, sπ={tag}")
+        ax.plot(d6["R"], d6[f"wave_spi={tag}"], "-.", marker="x", ms=3, color=col, alpha=0.7,
+                label=f"wave law, sπ={'157' if tag == 'inf' else tag}")
     ax.set_xlabel("R")
     ax.set_ylabel("k p0 / pk")
     ax.set_yscale("log")
     _save(fig, ax, out / "fig6.png", "Fig. 6: lower stability edge, k = 10 (8-mode bar)", legend_size=6.5)
     i5 = int(np.argmin(np.abs(d6["R"] - 0.5)))
     for tag in ("inf", "10.1", "10.01"):
-        summary.append(("6", f"R={d6['R'][i5]:.2f}, s pi={tag}: edge paper / exact",
-                        f"{d6[f'paper_spi={tag}'][i5]:.5f} / {d6[f'exact_spi={tag}'][i5]:.5f}"))
+        summary.append(("6", f"R={d6['R'][i5]:.2f}, s pi={tag}: edge paper / exact / wave law",
+                        f"{d6[f'paper_spi={tag}'][i5]:.5f} / {d6[f'exact_spi={tag}'][i5]:.5f}"
+                        f" / {d6[f'wave_spi={tag}'][i5]:.5f}"))
 
     # Fig. 7
     rows7 = fig7_data(max(10, int(100 * f)))

@@ -18,6 +18,9 @@ def add_parser(sub) -> None:
     g.add_argument("--d", type=float, default=0.0, help="damping D/(M Omega) >= 0 (default 0)")
     g.add_argument("--R", type=float, default=0.5, help="restitution coefficient in [0, 1] (default 0.5)")
     g.add_argument("--n-modes", type=int, default=8, help="flexible modes kept, >= 0 (default 8)")
+    g.add_argument("--impact", choices=("paper", "wave"), default=None,
+                   help="impact law: 'paper' (eq. 10, default) or 'wave' (the stop as a long rod, "
+                        "the contact solved by characteristics); overrides a config's [model] impact")
     lg = p.add_argument_group("load")
     lg.add_argument("--load", choices=("cosine", "square"), default="cosine",
                     help="cosine: pneumatic p0 + pk cos(k t) (eq. 33); square: hydraulic (eq. 34)")
@@ -51,12 +54,14 @@ def run(args) -> int:
         return run_physical_orbits(args)
     from .. import BarModel, periodic_orbits
 
-    model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes)
+    model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes,
+                     impact=getattr(args, "impact", None) or "paper")
     load = _load(args)
     orbits = periodic_orbits(model, load)
     if args.json:
         doc = {
-            "model": {"s": model.s, "d": model.d, "R": model.R, "n_modes": model.n_modes},
+            "model": {"s": model.s, "d": model.d, "R": model.R, "n_modes": model.n_modes,
+                      "impact": model.impact},
             "load": repr(load),
             "orbits": [_jsonable(o.to_dict()) for o in orbits],
         }

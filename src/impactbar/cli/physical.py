@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import sys
@@ -10,8 +11,8 @@ import warnings
 
 from .. import physical
 
-__all__ = ["add_physical_arguments", "wants_physical", "hammer_from_args", "run_physical_orbits",
-           "json_ready"]
+__all__ = ["add_physical_arguments", "add_impact_argument", "wants_physical", "hammer_from_args",
+           "run_physical_orbits", "json_ready"]
 
 
 def add_physical_arguments(parser) -> None:
@@ -24,6 +25,15 @@ def add_physical_arguments(parser) -> None:
     parser.add_argument(
         "--preset", default=None, metavar="NAME", choices=sorted(physical.PRESETS),
         help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}")
+
+
+def add_impact_argument(parser) -> None:
+    """Add ``--impact {paper,wave}`` (default: the config's ``[model] impact``, else ``paper``)."""
+    parser.add_argument(
+        "--impact", choices=("paper", "wave"), default=None,
+        help="impact law: 'paper' (eq. 10, an instant velocity reversal) or 'wave' (the stop as a "
+             "long rod, the contact solved by characteristics); default: a config's [model] "
+             "impact, else 'paper'")
 
 
 def wants_physical(args) -> bool:
@@ -42,7 +52,9 @@ def hammer_from_args(args) -> physical.Hammer:
     config, name = getattr(args, "config", None), getattr(args, "preset", None)
     if (config is None) == (name is None):
         raise ValueError("give exactly one of CONFIG.toml and --preset NAME")
-    return physical.preset(name) if name is not None else physical.load_config(config)
+    hammer = physical.preset(name) if name is not None else physical.load_config(config)
+    impact = getattr(args, "impact", None)  # --impact overrides the config's [model] impact
+    return hammer if impact is None else dataclasses.replace(hammer, impact=impact)
 
 
 def json_ready(obj):
@@ -105,13 +117,15 @@ def format_table(hammer: physical.Hammer, found) -> str:
     if not found:
         lines.append("no one-impact periodic motion")
         return "\n".join(lines)
+    lines.append(f"  impact law: {h.impact}")
     head = (f"{'phase/rad':>9} {'u_t':>9} {'v/(m/s)':>8} {'E/J':>8} {'P/W':>9} {'sigma/MPa':>9} "
-            f"{'admissible':>10} {'stable':>6} {'max|mu|':>8}")
+            f"{'E_rod/J':>8} {'rod/MPa':>8} {'eff.':>6} {'admissible':>10} {'stable':>6} {'max|mu|':>8}")
     lines += [head, "-" * len(head)]
     for o in found:
         lines.append(
             f"{o.phase_rad:9.4f} {o.impact_velocity:9.5f} {o.impact_velocity_m_s:8.3f} "
             f"{o.blow_energy_J:8.2f} "
-            f"{o.power_W:9.1f} {o.peak_stress_Pa / 1e6:9.1f} {str(o.admissible):>10} "
+            f"{o.power_W:9.1f} {o.peak_stress_Pa / 1e6:9.1f} {o.rod_energy_J:8.2f} "
+            f"{o.peak_rod_stress_Pa / 1e6:8.1f} {o.efficiency:6.3f} {str(o.admissible):>10} "
             f"{str(o.stable):>6} {o.max_abs_multiplier:8.4f}")
     return "\n".join(lines)

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import physical
-from .physical import add_physical_arguments, hammer_from_args, json_ready
+from .physical import add_impact_argument, add_physical_arguments, hammer_from_args, json_ready
 
-__all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows"]
+__all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows", "plot_force_waves"]
 
 #: impacts slower than this fraction of the rigid-limit impact velocity are chatter, not blows
 BLOW_FRACTION = 0.01
@@ -25,8 +25,10 @@ def add_parser(subparsers) -> None:
         "simulate", help="simulate a hammer in SI units from rest; plots and impact table",
         description="Simulate a hammer given in SI units (a TOML config or a preset) from rest and "
                     "write motion.png (end displacement and velocity over time, impacts marked), "
-                    "blows.png (energy per blow), impacts.csv and summary.json to DIR.")
+                    "blows.png (energy per blow), impacts.csv and summary.json to DIR; with "
+                    "--impact wave also forces.png (the force waves sent into the rod).")
     add_physical_arguments(p)
+    add_impact_argument(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
     p.add_argument("--periods", type=float, default=40.0, metavar="N",
                    help="length of the run in impact periods (default 40)")
@@ -66,6 +68,13 @@ def run(args) -> int:
     plot_blows(result, ax)
     fig.savefig(out / "blows.png", dpi=120)
     plt.close(fig)
+    written = "motion.png, blows.png"
+    if np.any(np.isfinite(result.rod_energies_J)):
+        fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
+        plot_force_waves(result, ax)
+        fig.savefig(out / "forces.png", dpi=120)
+        plt.close(fig)
+        written += ", forces.png"
     line = f"{hammer.name or 'hammer'}: {summary['n_impacts']} impacts in {result.t_end_s:.4g} s"
     if "mean_blow_energy_J" in summary:
         line += (f"; second half: {summary['mean_impact_velocity_m_s']:.3f} m/s, "
@@ -73,18 +82,23 @@ def run(args) -> int:
                  f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
                  f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
                  f"{summary['mean_power_W']:.4g} W")
-    print(line + f"; wrote {out}/motion.png, blows.png, impacts.csv, summary.json")
+    print(line + f"; wrote {out}/{written}, impacts.csv, summary.json")
     return 0
 
 
 def write_impacts(result: physical.SimulationResult, path) -> None:
-    """One row per impact: index, time (s), impact velocity (m/s), energy per blow (J)."""
+    """One row per impact: index, time (s), impact velocity (m/s), energy per blow (J); under the
+    wave law also the rod's energy (J), its peak stress (Pa) and the efficiency."""
+    cols = [result.impact_times_s, result.impact_velocities_m_s, result.blow_energies_J]
+    head = ["impact", "time_s", "impact_velocity_m_s", "blow_energy_J"]
+    if np.any(np.isfinite(result.rod_energies_J)):
+        cols += [result.rod_energies_J, result.peak_rod_stresses_Pa, result.efficiencies]
+        head += ["rod_energy_J", "peak_rod_stress_Pa", "efficiency"]
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["impact", "time_s", "impact_velocity_m_s", "blow_energy_J"])
-        for i, (t, v, e) in enumerate(zip(result.impact_times_s, result.impact_velocities_m_s,
-                                          result.blow_energies_J, strict=True)):
-            w.writerow([i, f"{t:.9g}", f"{v:.9g}", f"{e:.9g}"])
+        w.writerow(head)
+        for i, row in enumerate(zip(*cols, strict=True)):
+            w.writerow([i, *(f"{x:.9g}" if np.isfinite(x) else "" for x in row)])
 
 
 def summarize(result: physical.SimulationResult) -> dict:
@@ -114,6 +128,12 @@ def summarize(result: physical.SimulationResult) -> dict:
             "mean_blow_energy_J": float(np.mean(el)),
             "mean_power_W": float(np.sum(el[1:]) / (tl[-1] - tl[0])),
         })
+        if np.all(np.isfinite(result.rod_energies_J[late])):  # the wave law
+            out.update({
+                "mean_rod_energy_J": float(np.mean(result.rod_energies_J[late])),
+                "mean_peak_rod_stress_Pa": float(np.mean(result.peak_rod_stresses_Pa[late])),
+                "mean_efficiency": float(np.mean(result.efficiencies[late])),
+            })
     return out
 
 
@@ -159,4 +179,22 @@ def plot_blows(result: physical.SimulationResult, ax=None):
     ax.plot(result.impact_times_s, result.blow_energies_J, "o-", ms=3, lw=0.6)
     ax.set_xlabel("impact time / s")
     ax.set_ylabel("energy per blow / J")
+    return ax
+
+
+def plot_force_waves(result: physical.SimulationResult, ax=None, last: int = 8):
+    """The force (kN) of the waves the last ``last`` blows sent into the rod, against the time from
+    the start of each contact (us); wave law only."""
+    if ax is None:
+        import matplotlib.pyplot as plt
+
+        _, ax = plt.subplots()
+    n = result.impact_times_s.size
+    window = 2.0 * result.hammer.bar.length_m / result.hammer.bar.wave_speed_m_s
+    t = np.linspace(0.0, window * (1.0 - 1e-9), 400)
+    for i in range(max(0, n - last), n):
+        ax.plot(1e6 * t, 1e-3 * result.force_wave(i, t), lw=0.9, label=f"blow {i}")
+    ax.set_xlabel("time from contact / us")
+    ax.set_ylabel("force into the rod / kN")
+    ax.legend(loc="best", fontsize="x-small", ncol=2)
     return ax

@@ -4,7 +4,8 @@ Layout: ``phase`` (the phase equation, eq. 14, and its roots), ``admissibility``
 stay off the stop between impacts), ``stability`` (the exact Jacobian of the impact map with its
 saltation term, the Floquet multipliers by a dense or a structured O(N^2) eigenvalue method, and the
 paper's Schur blocks, eqs. 25-32), ``rigid`` (the rigid bar in closed form, vectorised over
-parameter arrays), ``one_impact`` (:class:`PeriodicOrbit`, :func:`periodic_orbits`),
+parameter arrays), ``wave`` (the phase equation, periodic states and impact-map Jacobian under the
+wave impact law, theory §4b), ``one_impact`` (:class:`PeriodicOrbit`, :func:`periodic_orbits`),
 ``multi_impact`` (:class:`MultiImpactOrbit`, :func:`find_orbit`: ``m`` impacts in ``n`` load
 periods by Newton on the segment problem, one segment per flight), ``charts`` (existence, stability
 and admissibility edges, Figs. 5, 6, 8).

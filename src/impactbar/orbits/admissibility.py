@@ -12,8 +12,10 @@ from ..dynamics.certified import enclose_zeros
 TWO_PI = 2.0 * math.pi
 
 
-def _admissibility(model, load, phase, y_plus, v_imp, duration=TWO_PI):
-    """Decide admissibility (MODEL.md section 5) with certified bounds.
+def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=None):
+    """Decide admissibility (MODEL.md section 5) with certified bounds, over the flight
+    ``[phase, phase + horizon]`` from ``y_plus``; ``at_rest`` (default ``R == 0``) says the end
+    leaves the stop at rest, so that its departure is decided by its acceleration.
 
     The stationary points of ``g(t) = u(1, t)`` are the zeros of ``g' = c . q'``; they are enclosed
     with a bound of ``|g''|`` on each interval, built from each mode's energy about the static
@@ -56,22 +58,24 @@ def _admissibility(model, load, phase, y_plus, v_imp, duration=TWO_PI):
         return c @ v, absc @ bound
 
     scale = max(abs(v_imp), psup, 1e-300)
-    clusters = enclose_zeros(None, None, 0.0, duration, n0=64, min_width=6e-3,
+    if at_rest is None:
+        at_rest = R == 0.0
+    clusters = enclose_zeros(None, None, 0.0, horizon, n0=64, min_width=6e-3,
                              joint=gprime_and_bound, merge=False, atol=1e-13 * scale)
     # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
     # point of g; the end leaves the stop iff its acceleration there points away from the stop.
-    if R == 0.0:
+    if at_rest:
         acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
         clusters = [cl for cl in clusters if cl[0] > 1e-6]
     # the stationary points that can carry the largest value are refined to full precision
     values, err_b = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters,
-                                       atol=1e-13 * scale, duration=duration)
+                                       atol=1e-13 * scale, horizon=horizon)
     err = err_b + 1e-12 * scale * (1.0 + max((abs(v) for v in values), default=0.0))
     clearance = max(values) if values else -math.inf
     tol = max(err, 1e-11 * scale)
     if not v_imp > 1e-12 * scale:
         status = "grazing" if abs(v_imp) <= 1e-12 * scale else "backward impact"
-    elif R == 0.0 and not acc0 < 0.0:
+    elif at_rest and not acc0 < 0.0:
         status = "sticks"
     elif clearance > tol:
         status = "penetrates"
@@ -104,7 +108,7 @@ def _newton_stationary(states, load, phase, c, w2, d, lo, hi):
 
 
 def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8, atol=0.0,
-                       duration=TWO_PI):
+                       horizon=TWO_PI):
     """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
 
     All narrow intervals that may hold a zero of ``g'`` get a vectorised Newton step; converged
@@ -154,7 +158,7 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
             break
         width = float(np.max(rest[:, 1] - rest[:, 0]))
         try:
-            cur = np.array(enclose_zeros(None, None, 0.0, duration, n0=8, min_width=width / 64.0,
+            cur = np.array(enclose_zeros(None, None, 0.0, horizon, n0=8, min_width=width / 64.0,
                                          joint=bound, intervals=rest, merge=False,
                                          max_intervals=20_000, atol=atol)).reshape(-1, 2)
         except RuntimeError:  # a zero of high order: the enclosure no longer shrinks

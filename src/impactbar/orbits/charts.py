@@ -20,6 +20,7 @@ from ..loads import CosineLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
 from ..model import BarModel
 from .one_impact import orbit_multipliers, periodic_orbits
 from .phase import phase_G, phase_residual, phase_roots
+from .wave import wave_existence_edge, wave_phase_roots
 
 __all__ = [
     "Boundary",
@@ -150,9 +151,14 @@ def pneumatic_existence_edge(R, d: float = 0.0, k: int = 1):
 
 def _stable_branch_phase(model: BarModel, load: CosineLoad) -> float | None:
     """Phase of the orbit on the paper's stable branch: ``cos(k phase)`` of opposite sign to ``pk``
-    (load decreasing through the mean at impact), the first of its ``k`` copies."""
-    for ph, _ in phase_roots(model, load):
-        if math.cos(load.k * ph) * load.pk < 0.0:
+    (load decreasing through the mean at impact), the first of its ``k`` copies. Under the wave law
+    the impact is taken at the middle of its contact window, ``phase + 1/s``."""
+    if model.impact == "wave":
+        roots, shift = wave_phase_roots(model, load), 1.0 / model.s
+    else:
+        roots, shift = phase_roots(model, load), 0.0
+    for ph, _ in roots:
+        if math.cos(load.k * (ph + shift)) * load.pk < 0.0:
             return ph
     return None
 
@@ -173,10 +179,12 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
     k : int
         Order of the harmonic (``pk = 1``).
     criterion : {"exact", "paper"}
-        Exact multipliers (MODEL.md section 7), or the roots of the paper's rigid block (eqs. 29,
+        Exact multipliers (MODEL.md section 7; under ``model.impact == "wave"`` those of the wave
+        law's impact map, theory §4b), or the roots of the paper's rigid block (eqs. 29,
         30, with the flexible modes in ``sigma``), which is what the paper's bounds (eq. 39) use: its
         flexible blocks (eq. 31) do not depend on the load, and at ``d = 0`` they put a root exactly
-        on the unit circle whenever ``cos(2 pi lambda_n) = +-1``.
+        on the unit circle whenever ``cos(2 pi lambda_n) = +-1``. The paper's criterion belongs to
+        its eq. 10 and is refused under the wave law.
     lf_min : float
         Smallest load factor searched.
     n_scan, xtol
@@ -192,11 +200,19 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
     Raises
     ------
     ValueError
-        For an unknown ``criterion``.
+        For an unknown ``criterion``, or ``criterion="paper"`` under the wave law.
     """
     if criterion not in ("exact", "paper"):
         raise ValueError(f"criterion must be 'exact' or 'paper'; got {criterion!r}")
-    edge = pneumatic_existence_edge(model.R, model.d, k) if model.R < 1 else math.inf
+    if model.impact == "wave":
+        if criterion == "paper":
+            raise ValueError("criterion 'paper' is the paper's Schur test for its impact law (eq. 10); "
+                             "use criterion='exact' with impact='wave'")
+        edge = wave_existence_edge(model, k)
+        if not edge > 0.0:  # the window does not fit in the period: no orbit
+            return []
+    else:
+        edge = pneumatic_existence_edge(model.R, model.d, k) if model.R < 1 else math.inf
     hi = min(edge, 50.0) * (1.0 - 1e-9)
 
     def mu(lf):

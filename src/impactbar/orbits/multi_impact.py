@@ -395,7 +395,7 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactO
         for j in range(m):
             T = (t[j + 1] if j + 1 < m else t[0] + TWO_PI * problem.n) - t[j]
             st, cl, ce = _admissibility(model, load, float(t[j]), info["y_plus"][j], float(v_imp[j]),
-                                        duration=float(T))
+                                        horizon=float(T))
             statuses.append(st)
             if cl > clear:
                 clear, cerr = cl, ce

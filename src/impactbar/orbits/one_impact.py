@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._threads import single_threaded_blas
+from ..dynamics.impact import WaveImpact, wave_impact
 from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .admissibility import _admissibility
@@ -24,7 +25,9 @@ from .stability import (
     quadratic_roots,
     schur_blocks,
     schur_test,
+    sort_multipliers,
 )
+from .wave import wave_impact_map_jacobian, wave_orbit_states, wave_phase_roots
 
 __all__ = ["PeriodicOrbit", "periodic_orbits", "orbit_multipliers"]
 
@@ -54,7 +57,9 @@ class PeriodicOrbit:
         arrives moving forward (MODEL.md section 5). Decided with certified bounds, not sampling.
     admissibility : str
         ``"admissible"``, or why not: ``"penetrates"``, ``"grazing"``, ``"backward impact"``,
-        ``"sticks"`` (R = 0 and the load presses the end on the stop after impact).
+        ``"sticks"`` (R = 0 and the load presses the end on the stop after impact; under the wave
+        law: the end still moves into the rod when the contact window ends), ``"separates"`` (wave
+        law: contact is lost inside the window, so the orbit's contact map does not hold).
     clearance : float
         Largest value of ``u(1, t)`` at its stationary points between impacts (dimensionless): < 0
         for an admissible orbit, > 0 where the end swings through the stop, ~0 at grazing. By Rolle's
@@ -74,6 +79,18 @@ class PeriodicOrbit:
         Modal state ``(q_0..q_N, q_0'..q_N')`` at ``t = 0+``.
     state_before_impact : numpy.ndarray, shape (2 N + 2,)
         Modal state at ``t = 2 pi-``.
+    impact : WaveImpact or None
+        Under the wave law (``model.impact == "wave"``, theory §4b): the orbit's contact with the
+        rod, with its force wave ``F(t)``, rod energy, peak stresses, efficiency and the rod's
+        advance per blow. ``None`` under the paper's law (an instant impact has no force history).
+
+    Notes
+    -----
+    Under the wave law the impact starts at orbit time 0 (load time ``phase``) and lasts ``2/s``;
+    ``state_after_impact`` is the state at the end of that window (orbit time ``2/s``), where the
+    flight starts, and positions are measured from the rod end, which each blow advances by
+    ``impact.advance``. The multipliers are those of the wave law's impact map (theory §7, §4b);
+    ``schur_roots`` and ``schur_stable`` remain the paper's criterion for its eq. 10.
     """
 
     model: BarModel
@@ -91,6 +108,7 @@ class PeriodicOrbit:
     schur_stable: bool
     state_after_impact: np.ndarray = field(repr=False)
     state_before_impact: np.ndarray = field(repr=False)
+    impact: WaveImpact | None = field(default=None, repr=False)
 
     @property
     def max_abs_multiplier(self) -> float:
@@ -110,7 +128,8 @@ class PeriodicOrbit:
         ----------
         t : array_like, shape (T,)
             Orbit times (dimensionless); taken modulo ``2 pi``, and a multiple of ``2 pi`` gives the
-            state just after the impact.
+            state just after the impact (under the wave law: at the start of contact; inside the
+            window ``[0, 2/s)`` the characteristics solution projected on the modes).
 
         Returns
         -------
@@ -122,9 +141,20 @@ class PeriodicOrbit:
     def _state_in_period(self, t):
         """State at orbit times ``0 <= t <= 2 pi`` without wrapping (``2 pi`` is before impact)."""
         M = self.model.n_modes + 1
-        return self.load.propagate(self.model.frequencies**2, self.model.d, self.phase,
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        start = 0.0 if self.impact is None else self.impact.duration
+        if self.impact is not None and np.any(t < start):  # inside the contact window
+            q = np.empty((M, t.size))
+            v = np.empty((M, t.size))
+            inside = t < start
+            for j in np.flatnonzero(inside):
+                q[:, j], v[:, j] = self.impact.state_at(t[j])
+            if np.any(~inside):
+                q[:, ~inside], v[:, ~inside] = self._state_in_period(t[~inside])
+            return q, v
+        return self.load.propagate(self.model.frequencies**2, self.model.d, self.phase + start,
                                    self.state_after_impact[:M], self.state_after_impact[M:],
-                                   self.phase + np.asarray(t, dtype=float))
+                                   self.phase + t)
 
     def _field(self, x, t, velocity):
         x = np.asarray(x, dtype=float)
@@ -177,6 +207,11 @@ class PeriodicOrbit:
             "multipliers": [[m.real, m.imag] for m in self.multipliers],
             "schur_stable": self.schur_stable,
             "schur_roots": [[m.real, m.imag] for m in self.schur_roots],
+            "impact_law": self.model.impact,
+            **({} if self.impact is None else {
+                "rod_energy": self.impact.rod_energy, "peak_force": self.impact.peak_force,
+                "peak_rod_stress": self.impact.peak_rod_stress, "efficiency": self.impact.efficiency,
+                "advance": self.impact.advance}),
         }
 
 
@@ -223,6 +258,8 @@ def _periodic_orbits_general(model: BarModel, load: Load) -> list[PeriodicOrbit]
     reference every fast path is tested against."""
     _check_inputs(model, load)
     with single_threaded_blas():
+        if model.impact == "wave":
+            return [_build_wave_orbit(model, load, ph, mult) for ph, mult in wave_phase_roots(model, load)]
         return [_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load)]
 
 
@@ -332,6 +369,11 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     """
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
+    if model.impact == "wave":
+        _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
+        with single_threaded_blas():
+            return sort_multipliers(np.linalg.eigvals(
+                wave_impact_map_jacobian(model, load, phase, y_end, y_minus, rate)))
     y_plus, y_minus = _impact_states(model, load, phase)
     if model.n_modes == 0 and _paper_law(model):  # the 2 x 2 Jacobian in closed form
         mu = rigid_multipliers(model.d, model.R, float(load(phase)), float(load.left_limit(phase)),
@@ -385,3 +427,48 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
     )
 
 
+
+
+def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
+    """An orbit of the wave law (theory §4b): contact over ``[0, 2/s]``, flight over ``[2/s, 2 pi]``."""
+    M = model.n_modes + 1
+    _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
+    c = model.end_weights
+    v_imp = float(c @ y_minus[M:])
+    T = 2.0 / model.s
+    impact = None
+    if v_imp > 0.0:
+        qm = y_minus[:M].copy()
+        qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
+        impact = wave_impact(model, load, phase, qm, y_minus[M:])
+    # the departure: the end must leave the rod end when the window closes
+    v_dep = float(c @ y_end[M:])
+    scale = max(abs(v_imp), load.sup_abs, 1e-300)
+    at_rest = abs(v_dep) <= 1e-12 * scale
+    status, clearance, cerr = _admissibility(model, load, phase + T, y_end, v_imp,
+                                             horizon=TWO_PI - T, at_rest=at_rest)
+    if status == "admissible":
+        if impact is not None and impact.separations:
+            status = "separates"
+        elif not at_rest and v_dep > 0.0:
+            status = "sticks"
+    admissible = status == "admissible"
+    mu = _sorted_multipliers(wave_impact_map_jacobian, 2 * M, model, load, phase, y_end, y_minus, rate)
+    blocks = schur_blocks(model, load, phase)
+    return PeriodicOrbit(
+        model=model, load=load, phase=float(phase), multiplicity=int(mult), impact_velocity=v_imp,
+        admissible=admissible, admissibility=status, clearance=clearance, clearance_error=cerr,
+        multipliers=mu, stable=bool(admissible and np.all(np.abs(mu) < 1.0)),
+        schur_roots=quadratic_roots(blocks), schur_stable=schur_test(blocks),
+        state_after_impact=y_end, state_before_impact=y_minus, impact=impact,
+    )
+
+
+def _sorted_multipliers(jacobian, size, *args) -> np.ndarray:
+    """Eigenvalues of ``jacobian(*args)`` in the order of :func:`sort_multipliers`; infinite at exact
+    grazing."""
+    try:
+        DP = jacobian(*args)
+    except ValueError:  # exact grazing: a multiplier is infinite
+        return np.full(size, np.inf + 0j)
+    return sort_multipliers(np.linalg.eigvals(DP))

@@ -125,10 +125,17 @@ def _single_harmonic_roots(model, load):
     z = (1.0 + model.R) * load.amplitudes[0] / (model.d + 1j * k)
     A, theta = abs(z), math.atan2(z.imag, z.real)
     B = load.p0 * phase_G(model.d, model.R)
+    return _cosine_roots(A, theta, B, k)
+
+
+def _cosine_roots(A, theta, B, k, tol=1e-15):
+    """Roots in ``[0, 2 pi)`` of ``A cos(k phase + theta) = B`` (``A > 0``) with their multiplicity:
+    ``k phase = -theta +- arccos(B / A) (mod 2 pi)``, ``2k`` of them, ``k`` double ones at
+    ``|B| = A`` (to the relative tolerance ``tol``)."""
     ratio = B / A
-    if abs(ratio) > 1.0 + 1e-15:
+    if abs(ratio) > 1.0 + tol:
         return []
-    if abs(ratio) >= 1.0 - 1e-15:
+    if abs(ratio) >= 1.0 - tol:
         base, mult = [math.acos(max(-1.0, min(1.0, ratio)))], 2
     else:
         a = math.acos(ratio)
@@ -138,5 +145,3 @@ def _single_harmonic_roots(model, load):
         for j in range(k):
             out.append(((b - theta + TWO_PI * j) / k) % TWO_PI)
     return [(t, mult) for t in sorted(out)]
-
-

@@ -93,12 +93,39 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
         arrives moving backwards (inadmissible) still has a well-defined Jacobian.
     """
     M = model.n_modes + 1
-    R = model.R
+    dY, r = _arrival_derivative(model, load, phase, TWO_PI, y_plus, y_minus, phase)
+    dY[M:, :] *= -model.R  # velocity reversal
+    DP = np.empty((2 * M, 2 * M))
+    DP[0, :] = r
+    DP[1:, :] = dY[1:, :]
+    return DP
+
+
+def _arrival_derivative(model: BarModel, load: Load, t_start: float, flight: float, y_start, y_minus,
+                        t_arrive: float):
+    """Derivative of the state at the next impact with respect to ``z = (t_start, q_1..q_N,
+    q_0'..q_N')`` at the start of a flight of length ``flight`` (theory §7).
+
+    ``dY = Psi [dy - f(t_start, y) dt_start] + f(t', Y) dt'`` with the saltation
+    ``dt' = -(c . dq)/(c . q')``; ``q_0`` follows from contact at the start. Returns ``(dY, r)``,
+    ``dY`` of shape ``(2 N + 2, 2 N + 2)`` and ``r = dt'/dz``. Raises ``ValueError`` at grazing.
+    """
+    M = model.n_modes + 1
+    w2 = model.frequencies**2
+    d = model.d
     c = model.end_weights
-    v_imp, f0, f1 = _impact_fields(model, load, phase, y_plus, y_minus)
-    f0, f1 = np.concatenate(f0), np.concatenate(f1)
-    p11, p12, p21, p22 = period_fundamental(model)
+    yp = np.asarray(y_start, dtype=float)
+    ym = np.asarray(y_minus, dtype=float)
+    qp, vp = yp[:M], yp[M:]
+    qm, vm = ym[:M], ym[M:]
+    v_imp = float(c @ vm)
+    if not abs(v_imp) > 1e-14 * max(1.0, float(np.max(np.abs(ym)))):
+        raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
+    # the period's fundamental matrix is cached per model
+    p11, p12, p21, p22 = period_fundamental(model) if flight == TWO_PI else fundamental(w2, d, flight)
     Psi = np.block([[np.diag(p11), np.diag(p12)], [np.diag(p21), np.diag(p22)]])
+    f0 = np.concatenate((vp, float(load(t_start)) - d * vp - w2 * qp))
+    f1 = np.concatenate((vm, float(load.left_limit(t_arrive)) - d * vm - w2 * qm))
     # embedding of x = (q_1..q_N, v_0..v_N) into the full state, q_0 = -sum c_n q_n
     E = np.zeros((2 * M, 2 * M - 1))
     E[0, : M - 1] = -c[1:]
@@ -108,13 +135,7 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
     A[:, 0] = -Psi @ f0
     A[:, 1:] = Psi @ E
     r = -(c @ A[:M, :]) / v_imp  # d tau' / d z
-    dY = A + np.outer(f1, r)
-    dY[M:, :] *= -R  # velocity reversal
-    DP = np.empty((2 * M, 2 * M))
-    DP[0, :] = r
-    DP[1:M, :] = dY[1:M, :]
-    DP[M:, :] = dY[M:, :]
-    return DP
+    return A + np.outer(f1, r), r
 
 
 def schur_blocks(model: BarModel, load: Load, phase: float) -> np.ndarray:

@@ -23,7 +23,7 @@ _SECTIONS = {
     "drive": {"frequency"},
     "force": {"kind", "mean", "amplitude", "k", "high", "low", "fraction", "csv", "tolerance",
               "max_harmonics"},
-    "model": {"n_modes"},
+    "model": {"n_modes", "impact"},
 }
 _FORCE_KEYS = {
     "pneumatic": {"mean", "amplitude", "k"},
@@ -86,12 +86,14 @@ def _hammer_from_config(config: dict, base_dir) -> Hammer:
 
     model = _section(config, "model")
     n_modes = check_int("model.n_modes", model.get("n_modes", 16), lo=0, hi=4096)
+    impact = model.get("impact", "paper")  # checked by Hammer: "paper" or "wave"
 
     damp = _section(config, "damping")
     if "coefficient" in damp and "ratio" in damp:
         raise ValueError("give at most one of damping.coefficient and damping.ratio")
     name = config.get("name", "")
-    h = Hammer(bar=bar, frequency_Hz=freq, force=force, n_modes=n_modes, name=name, **stop_kw)
+    h = Hammer(bar=bar, frequency_Hz=freq, force=force, n_modes=n_modes, name=name, impact=impact,
+               **stop_kw)
     if "coefficient" in damp:
         val, unit = to_si_any("damping.coefficient", damp["coefficient"], ("N*s/m", "N*s/m**2"),
                               "'2.4 N*s/m' (whole piston) or '12 N*s/m^2' (per unit length)",

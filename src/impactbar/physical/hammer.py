@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validate import check_int, check_real
 from ..loads import CosineLoad, FourierLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
-from ..model import BarModel
+from ..model import IMPACT_LAWS, BarModel
 from .bar import SHORT_IMPACT_LIMIT, TWO_PI, Bar, ImpactDurationWarning
 from .forces import Force, FourierFit, HydraulicForce, MeasuredForce, PneumaticForce
 
@@ -76,6 +76,9 @@ class Hammer:
         Flexible modes kept in the model, ``0..4096``; 0 is the rigid piston. Default 16.
     name : str, optional
         A label for reports.
+    impact : {"paper", "wave"}, optional
+        The impact law of :class:`~impactbar.BarModel`: ``"paper"`` (eq. 10, default) or
+        ``"wave"`` (the stop as a long rod, the contact solved by characteristics, theory §4b).
 
     Notes
     -----
@@ -91,6 +94,7 @@ class Hammer:
     damping_N_s_m2: float = 0.0
     n_modes: int = 16
     name: str = ""
+    impact: str = "paper"
 
     def __post_init__(self) -> None:
         if not isinstance(self.bar, Bar):
@@ -118,6 +122,8 @@ class Hammer:
                                                       hi=4096))
         if not isinstance(self.name, str):
             raise ValueError(f"name must be a string; got {self.name!r}")
+        if self.impact not in IMPACT_LAWS:
+            raise ValueError(f"model.impact must be one of {list(IMPACT_LAWS)}; got {self.impact!r}")
         if isinstance(self.force, MeasuredForce):
             self._measured  # noqa: B018  (fit the series now: a bad curve fails here, not later)
 
@@ -172,7 +178,7 @@ class Hammer:
     @property
     def model(self) -> BarModel:
         """The dimensionless :class:`~impactbar.BarModel`."""
-        return BarModel(s=self.s, d=self.d, R=self.R, n_modes=self.n_modes)
+        return BarModel(s=self.s, d=self.d, R=self.R, n_modes=self.n_modes, impact=self.impact)
 
     @functools.cached_property
     def _measured(self):
@@ -272,7 +278,7 @@ class Hammer:
             "short_impacts": self.contact_fraction <= SHORT_IMPACT_LIMIT,
             "force": self.force.to_dict(),
             "dimensionless": {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes,
-                              "p0": self.load.p0},
+                              "p0": self.load.p0, "impact": self.impact},
         }
         fit = self.fourier_fit
         if fit is not None:
@@ -336,7 +342,7 @@ class Hammer:
         kw = {"restitution": model.R} if stop_area_m2 is None else {"stop_area_m2": stop_area_m2}
         h = cls(bar=bar, frequency_Hz=f, force=force,
                 damping_N_s_m2=model.d * bar.mass_per_length_kg_m * omega, n_modes=model.n_modes,
-                name=name, **kw)
+                name=name, impact=model.impact, **kw)
         if stop_area_m2 is not None and not math.isclose(h.R, model.R, rel_tol=1e-9, abs_tol=1e-12):
             raise ValueError(f"stop.area gives R = {h.R:.6g}, not the model's R = {model.R:.6g}")
         return h

@@ -46,6 +46,19 @@ class PhysicalOrbit:
         As in the dimensionless orbit (MODEL.md sections 5, 7).
     max_abs_multiplier : float
         Largest modulus of the Floquet multipliers.
+    rod_energy_J : float
+        Energy carried into the rod by the transmitted stress wave per blow (J), ``int F^2/Z_s dt``.
+        Under the wave law (theory §4b) from the contact solved by characteristics, the drive
+        included; under eq. 10 ``(1 - R^2)`` times the piston's kinetic energy at impact (what
+        eq. 10 removes from it).
+    peak_rod_stress_Pa : float
+        Peak compressive stress of the transmitted wave in the rod (Pa), ``F_max / A_s``; under
+        eq. 10 the plateau of a rigid-body piston at the impact velocity, ``rho c v (1 - R)/2``.
+    efficiency : float
+        ``rod_energy_J`` over the piston's kinetic plus strain energy at impact (Lundberg's
+        transfer efficiency).
+    rod_advance_m : float
+        Advance of the rod end per blow (m), impulse over ``Z_s``.
     """
 
     orbit: object
@@ -59,6 +72,10 @@ class PhysicalOrbit:
     admissible: bool
     stable: bool
     max_abs_multiplier: float
+    rod_energy_J: float
+    peak_rod_stress_Pa: float
+    efficiency: float
+    rod_advance_m: float
 
     @classmethod
     def from_orbit(cls, orbit, hammer: Hammer) -> PhysicalOrbit:
@@ -66,17 +83,42 @@ class PhysicalOrbit:
         v = float(orbit.impact_velocity) * hammer.scales.velocity_m_s
         energy = 0.5 * hammer.mass_kg * v * v
         fb = hammer.blow_frequency_Hz
+        rod = _rod_figures(orbit, hammer, v)
         return cls(
             orbit=orbit, phase_rad=float(orbit.phase),
             impact_velocity=float(orbit.impact_velocity), impact_velocity_m_s=v,
             blow_energy_J=energy, blow_frequency_Hz=fb, power_W=energy * fb,
             peak_stress_Pa=float(hammer.peak_stress_Pa(v)), admissible=bool(orbit.admissible),
-            stable=bool(orbit.stable), max_abs_multiplier=float(orbit.max_abs_multiplier))
+            stable=bool(orbit.stable), max_abs_multiplier=float(orbit.max_abs_multiplier), **rod)
 
     def to_dict(self) -> dict:
         """JSON-ready figures (without the dimensionless orbit object)."""
         return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
                 if f.name != "orbit"}
+
+
+def _rod_figures(orbit, hammer: Hammer, v_m_s: float) -> dict:
+    """The transmitted wave's figures of one orbit in SI (see :class:`PhysicalOrbit`)."""
+    sc = hammer.scales
+    R = hammer.R
+    energy_J = sc.force_N * sc.length_m  # the energy unit m L^2 Omega^2
+    rod_area_ratio = (1.0 - R) / (1.0 + R)  # A / A_s
+    b = hammer.bar
+    w = orbit.impact
+    if w is not None:  # the wave law: the contact solved by characteristics
+        return {"rod_energy_J": float(w.rod_energy * energy_J),
+                "peak_rod_stress_Pa": float(w.peak_force * sc.force_N * rod_area_ratio / b.area_m2),
+                "efficiency": float(w.efficiency), "rod_advance_m": float(w.advance * sc.length_m)}
+    M = hammer.n_modes + 1
+    q, v = orbit.state_before_impact[:M], orbit.state_before_impact[M:]
+    wn = hammer.s * np.pi * np.arange(1, M)
+    kinetic = 0.5 * v[0] ** 2 + float(np.sum(v[1:] ** 2))
+    strain = float(np.sum((wn * q[1:]) ** 2))
+    rod = (1.0 - R * R) * kinetic
+    return {"rod_energy_J": float(rod * energy_J),
+            "peak_rod_stress_Pa": float(b.density_kg_m3 * b.wave_speed_m_s * v_m_s * 0.5 * (1.0 - R)),
+            "efficiency": float(rod / (kinetic + strain)) if kinetic + strain > 0 else float("nan"),
+            "rod_advance_m": float((1.0 - R) * v[0] / hammer.s * sc.length_m)}
 
 
 def orbits(hammer: Hammer) -> list[PhysicalOrbit]:
@@ -111,6 +153,9 @@ class SimulationResult:
         Arrival velocities of the struck end (m/s).
     blow_energies_J : numpy.ndarray, shape (n,)
         ``m v^2 / 2`` per impact (J).
+    rod_energies_J, peak_rod_stresses_Pa, efficiencies : numpy.ndarray, shape (n,)
+        Under the wave law (theory §4b) the energy and the peak stress of the wave each blow sends
+        into the rod, and the transfer efficiency (see :class:`PhysicalOrbit`); NaN under eq. 10.
     """
 
     hammer: Hammer
@@ -119,6 +164,29 @@ class SimulationResult:
     impact_times_s: np.ndarray
     impact_velocities_m_s: np.ndarray
     blow_energies_J: np.ndarray
+    rod_energies_J: np.ndarray = None
+    peak_rod_stresses_Pa: np.ndarray = None
+    efficiencies: np.ndarray = None
+
+    def force_wave(self, i: int, t_s) -> np.ndarray:
+        """Force (N) of the wave sent into the rod by impact ``i`` (wave law), at times ``t_s`` (s)
+        counted from the start of that contact; 0 outside its window ``2 L / c``.
+
+        Raises
+        ------
+        ValueError
+            Under eq. 10 (an instant impact has no force history), or for a bad index.
+        """
+        impacts = getattr(self.trajectory, "impacts", ())
+        if not impacts:
+            raise ValueError("force waves need the wave impact law (Hammer(impact='wave'))")
+        if not -len(impacts) <= i < len(impacts):
+            raise ValueError(f"i must index one of the {len(impacts)} impacts; got {i}")
+        sc = self.hammer.scales
+        w = impacts[i]
+        t = np.asarray(t_s, dtype=float) / sc.time_s
+        inside = (t >= 0.0) & (t <= w.duration)
+        return np.where(inside, w.force(np.clip(t, 0.0, w.duration)), 0.0) * sc.force_N
 
     def end_displacement_m(self, t_s) -> np.ndarray:
         """Displacement of the struck end (m, negative off the stop) at times ``t_s`` (s)."""
@@ -183,9 +251,18 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
                           InitialState.rigid(end_displacement=-gap_m / sc.length_m, velocity=0.0), t_end,
                           max_impacts=max_impacts)
     v = np.asarray(traj.impact_velocities, dtype=float) * sc.velocity_m_s
+    impacts = getattr(traj, "impacts", ())
+    rod = np.full(v.size, np.nan)
+    stress = np.full(v.size, np.nan)
+    eff = np.full(v.size, np.nan)
+    for j, w in enumerate(impacts):  # the wave law: each contact solved by characteristics
+        rod[j] = w.rod_energy * sc.force_N * sc.length_m
+        stress[j] = w.peak_force * sc.force_N * (1.0 - hammer.R) / ((1.0 + hammer.R) * hammer.bar.area_m2)
+        eff[j] = w.efficiency
     return SimulationResult(
         hammer=hammer, trajectory=traj, t_end_s=t_end * sc.time_s,
         impact_times_s=np.asarray(traj.impact_times, dtype=float) * sc.time_s,
-        impact_velocities_m_s=v, blow_energies_J=0.5 * hammer.mass_kg * v * v)
+        impact_velocities_m_s=v, blow_energies_J=0.5 * hammer.mass_kg * v * v,
+        rod_energies_J=rod, peak_rod_stresses_Pa=stress, efficiencies=eff)
 
 

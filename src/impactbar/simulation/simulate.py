@@ -5,7 +5,9 @@ time-stepping error; a piecewise-constant load (the hydraulic square wave, eq. 3
 exactly piece by piece. The next impact, the first ``t`` with ``u(1,t) = c . q(t) = 0`` and
 ``u_t(1,t) > 0``, is found with a guaranteed search (bounds on ``|u_tt(1,t)|`` and
 ``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding.
-At an impact ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11).
+At an impact ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11); under the wave law (``BarModel(impact="wave")``,
+theory §4b) each impact is instead a contact window of length ``2/s`` with the long rod, solved by
+characteristics (:func:`impactbar.dynamics.impact.wave_impact`), after which the flight resumes.
 
 With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
 accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field
@@ -26,6 +28,7 @@ import numpy as np
 
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
+from ..dynamics.impact import wave_impact
 from ..loads import FourierLoad, Load, PiecewiseConstantLoad
 from ..model import BarModel
 
@@ -43,7 +46,7 @@ DWELL_MAX = 1e-2
 #: disagreement between the truncated bases, not a motion: the release is undone.
 MICRO_FLIGHT = 1e-6
 
-_FREE, _CONTACT = 0, 1
+_FREE, _CONTACT, _WAVE = 0, 1, 2  # _WAVE: a contact window of the wave law (free-free modes)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -451,7 +454,7 @@ class _Segment:
     q: np.ndarray
     v: np.ndarray
     entry: str  # 'start', 'impact', 'chatter', 'touch', 'release'
-    frozen: np.ndarray | None = None  # the free state (q, 0) frozen at a chatter jump
+    frozen: object = None  # the free state (q, 0) frozen at a chatter jump; a window's WaveImpact
 
 
 _ENTRIES = ("start", "impact", "chatter", "touch", "release")
@@ -476,7 +479,7 @@ class _Segments:
     def __getitem__(self, j) -> _Segment:
         j = range(len(self))[j]
         b = int(self.basis[j])
-        m = self.n_modes + 1 if b == _FREE else self.n_modes
+        m = self.n_modes if b == _CONTACT else self.n_modes + 1
         return _Segment(float(self.t[j]), b, self.q[j, :m], self.v[j, :m],
                         _ENTRIES[self.entry[j]], self.frozen.get(j))
 
@@ -546,7 +549,7 @@ class _SegmentLog:
     def last(self) -> _Segment:
         i = self.count - 1
         bb = int(self.basis[i])
-        m = self.M if bb == _FREE else self.M - 1
+        m = self.M - 1 if bb == _CONTACT else self.M
         return _Segment(float(self.t[i]), bb, self.q[i, :m].copy(), self.v[i, :m].copy(),
                         _ENTRIES[self.entry[i]], self.frozen.get(i))
 
@@ -573,7 +576,8 @@ class Trajectory:
         Start and end of the run (``t_end`` is the time of the last impact when the run stopped at
         ``max_impacts``).
     impact_times : numpy.ndarray, shape (I,)
-        Times of the impacts (load frame, dimensionless).
+        Times of the impacts (load frame, dimensionless); under the wave law the starts of the
+        contact windows (each lasts ``2/s``; see :attr:`impacts`).
     impact_velocities : numpy.ndarray, shape (I,)
         Velocity ``u_t(1, t-)`` of the struck end just before each impact, ``> 0``.
     contact_intervals : numpy.ndarray, shape (m, 2)
@@ -632,8 +636,20 @@ class Trajectory:
         for j in np.unique(idx):
             sel = idx == j
             s = self._segments[j]
+            if s.basis == _WAVE:  # inside a contact window: the characteristics solution
+                states = [s.frozen.state_at(min(tt - s.t, s.frozen.duration)) for tt in t[sel]]
+                yield sel, _FREE, np.array([a for a, _ in states]).T, np.array([b for _, b in states]).T
+                continue
             q, v = self._core.propagate(s.basis, s.t, s.q, s.v, t[sel])
             yield sel, s.basis, q, v
+
+    @property
+    def impacts(self) -> tuple:
+        """Under the wave law, the contact of each impact (:class:`~impactbar.WaveImpact`: force
+        wave, rod energy, peak stresses, efficiency, advance of the rod end), in order; empty under
+        the paper's law."""
+        segs = self._segments
+        return tuple(segs.frozen[j].resolve() for j in np.flatnonzero(segs.basis == _WAVE))
 
     def end_displacement(self, t) -> np.ndarray:
         """``u(1, t)``, the struck end (``<= 0`` up to rounding).
@@ -763,12 +779,28 @@ def _energy_account(tr: Trajectory) -> EnergyAccount:
     final = initial
     for j, seg in enumerate(segs):
         tb = segs[j + 1].t if j + 1 < len(segs) else tr.t_end
+        if seg.basis == _WAVE:  # a contact window: drive work, rod energy, projection
+            window = seg.frozen
+            dt = min(tb - seg.t, window.duration)
+            w, rod, field_energy = window.account(dt)
+            if dt >= window.duration:
+                qe, ve = window.q_after, window.v_after
+            else:
+                qe, ve = window.state_at(dt)
+            work += w
+            imp += rod
+            proj += core.energy(_FREE, qe, ve) - field_energy
+            if j + 1 == len(segs):
+                final = core.energy(_FREE, qe, ve)
+            continue
         w, dl, qe, ve = _segment_integrals(core, seg, tb)
         work += w
         damp += dl
         if j + 1 < len(segs):
             nxt = segs[j + 1]
-            if nxt.entry == "impact":
+            if nxt.entry == "impact" and nxt.basis == _WAVE:
+                pass  # the window's own account; its start only shifts the mean displacement
+            elif nxt.entry == "impact":
                 imp += (1.0 - core.R**2) * core.kinetic(ve)
             elif nxt.entry == "chatter":
                 frozen = nxt.frozen
@@ -810,7 +842,8 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     t0 : float, optional
         Start time. Default 0.
     max_impacts : int, optional
-        Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact.
+        Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact (under
+        the wave law the end of its contact window).
 
     Returns
     -------
@@ -848,6 +881,8 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
+    if model.impact == "wave":
+        return _run_wave(core, q, v, t0, t_end, max_imp)
     return _run(core, q, v, t0, t_end, max_imp)
 
 
@@ -969,3 +1004,90 @@ def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
         return None, None
     r, rv = core.propagate(_CONTACT, seg.t, seg.q, seg.v, [t])
     return r[:, 0], rv[:, 0]
+
+
+def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
+    """The driver under the wave law (theory §4b): each flight by the compiled kernel up to the next
+    arrival at the rod end, each contact by :func:`wave_impact` over its window ``2/s``; positions
+    stay measured from the rod end, which every blow advances."""
+    model = core.model
+    window = 2.0 / model.s
+    c = core.c
+    D = core.data
+    ks = D.ks
+    rate = float(np.max(ks)) / model.s if D.kind == 0 and ks.size else 0.0
+    segs = _SegmentLog(core.N)
+    segs.add(t0, _FREE, q, v, "start")
+    times: list[float] = []
+    vels: list[float] = []
+    t = t0
+    status = "t_end"
+    while True:
+        qa, va = q.copy(), v.copy()
+        oq, ov = np.empty((1, q.size)), np.empty((1, q.size))
+        n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, oq, ov)
+        if st == K.FAILED:  # pragma: no cover - defensive
+            raise RuntimeError(f"impact search did not converge at t = {tn}")
+        if st == K.END:
+            t = t_end
+            break
+        # an impact (MAXIMP after one), or a touch at zero speed (CONTACT): a contact window
+        ti = float(ot[0]) if n else float(tn)
+        if n and core.R >= 0.01:  # the kernel's state after eq. 10's reversal, undone
+            qm, vm = oq[0].copy(), ov[0] / -core.R
+        else:
+            qm, vm = (a[:, 0] for a in core.propagate(_FREE, t, qa, va, [ti]))
+        qm[0] -= float(c @ qm)  # the end exactly on the rod end
+        arrival = float(c @ vm)
+        if arrival < 0.0:  # a touch whose speed rounded below zero
+            vm[0] -= arrival
+            arrival = 0.0
+        q, v = np.empty_like(qm), np.empty_like(vm)
+        if K.wave_window(D.kind, model.s, model.R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
+                         D.psup, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
+            imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
+        else:  # contact lost inside the window: the full characteristics solution
+            imp = wave_impact(model, core.load, ti, qm, vm)
+            q, v = imp.q_after.copy(), imp.v_after.copy()
+        times.append(ti)
+        vels.append(arrival)
+        segs.add(ti, _WAVE, qm, vm, "impact", imp)
+        t = ti + window
+        if t >= t_end:  # the run ends inside the window
+            t = t_end
+            break
+        segs.add(t, _FREE, q, v, "release")
+        if len(times) >= max_imp:
+            status = "max_impacts"
+            break
+    last = segs.last()
+    if last.basis == _WAVE:
+        qe, ve = last.frozen.state_at(min(t - last.t, last.frozen.duration))
+    else:
+        qe, ve = (a[:, 0] for a in core.propagate(_FREE, last.t, last.q, last.v, [t]))
+    return Trajectory(model=model, load=core.load, t0=t0, t_end=t,
+                      impact_times=np.array(times), impact_velocities=np.array(vels),
+                      contact_intervals=np.zeros((0, 2)), final_state=InitialState(qe, ve),
+                      status=status, _core=core, _segments=segs.finish())
+
+
+_GL20_X, _GL20_W = np.polynomial.legendre.leggauss(20)
+
+
+class _Window:
+    """A contact window the compiled kernel found without separation: its post-contact state is
+    known; the full :class:`~impactbar.WaveImpact` (force wave, energies) is solved on first use."""
+
+    def __init__(self, model, load, t0, q, v, q_after, v_after):
+        self._args = (model, load, t0, q, v)
+        self._impact = None
+        self.duration = 2.0 / model.s
+        self.q_after, self.v_after = q_after, v_after
+
+    def resolve(self):
+        if self._impact is None:
+            self._impact = wave_impact(*self._args)
+        return self._impact
+
+    def __getattr__(self, name):
+        return getattr(self.resolve(), name)

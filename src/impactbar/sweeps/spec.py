@@ -86,7 +86,8 @@ class SweepSpec:
     ----------
     task : {"orbits", "montecarlo", "bifurcation"}
     model : dict
-        ``s``, ``d``, ``R``, ``n_modes`` of :class:`impactbar.BarModel`, all required.
+        ``s``, ``d``, ``R``, ``n_modes`` of :class:`impactbar.BarModel`, all required, and
+        optionally its ``impact`` law (``"paper"`` or ``"wave"``; not an axis).
     load : dict
         ``kind`` (``"cosine"``, ``"square"`` or ``"fourier"``) and that load's fields, all required:
         ``p0, pk, k`` (:class:`impactbar.CosineLoad`), ``q, kappa``
@@ -291,19 +292,22 @@ def _coefficients(seq) -> tuple:
 def _check_model(model) -> dict:
     if not isinstance(model, dict):
         raise ValueError(f"[model] must be a table; got {model!r}")
-    unknown = [k for k in model if k not in MODEL_FIELDS]
+    unknown = [k for k in model if k not in (*MODEL_FIELDS, "impact")]
     if unknown:
-        raise ValueError(f"[model] unknown key(s) {unknown}; allowed: {list(MODEL_FIELDS)}")
+        raise ValueError(f"[model] unknown key(s) {unknown}; allowed: {[*MODEL_FIELDS, 'impact']}")
     missing = [k for k in MODEL_FIELDS if k not in model]
     if missing:
         raise ValueError(f"[model] missing key(s) {missing}")
     from ..model import BarModel
 
     try:
-        m = BarModel(**{k: model[k] for k in MODEL_FIELDS})
+        m = BarModel(**{k: model[k] for k in MODEL_FIELDS}, impact=model.get("impact", "paper"))
     except ValueError as exc:
         raise ValueError(f"[model] {exc}") from None
-    return {"s": m.s, "d": m.d, "R": m.R, "n_modes": m.n_modes}
+    out = {"s": m.s, "d": m.d, "R": m.R, "n_modes": m.n_modes}
+    if "impact" in model:  # optional: the impact law, "paper" (eq. 10, default) or "wave"
+        out["impact"] = m.impact
+    return out
 
 
 def _check_load(load) -> dict:

@@ -1,0 +1,808 @@
+"""Wave-resolved impact on a long rod (theory §4b): the contact solved exactly by characteristics.
+
+The piston ``0 < x < 1`` strikes, at ``x = 1``, the end of a long rod of the same material whose area
+is ``A_s = A (1 + R)/(1 - R)`` (so that ``R = (A_s - A)/(A_s + A)``, paper eq. 10). The rod is at rest
+and unstressed when contact starts and no reflection returns from its far end during the contact.
+The contact window lasts two crossing times of the piston, ``T = 2/s`` (``2 L / C``): within it no wave
+sent back from the interface can return to the interface, so the interface sees only the piston's
+state at impact and the drive load ``p(t)`` at ``x = 0``; every part of the solution is then explicit
+(d'Alembert).
+
+Riemann invariants (dimensionless, ``theta = s t`` so that a wave crosses the piston in ``theta = 1``;
+``v = u_t`` the velocity, ``N = -s^2 u_x`` the compressive force):
+
+    alpha = v + N/s  (carried towards the rod, dx/dtheta = +1),
+    beta  = v - N/s  (carried towards the drive, dx/dtheta = -1).
+
+At ``x = 0`` the drive force sets ``alpha = beta + 2 p/s``. At ``x = 1`` in contact the rod's impedance
+``Z_s = Z (1 + R)/(1 - R)`` (piston impedance ``Z = s``) gives ``beta = -R alpha`` and the interface
+force ``F = s (1 + R) alpha / 2``; separated, ``beta = alpha`` (free end) and the rod end stays where it
+is (a right-going wave only: its velocity is ``F / Z_s = 0``). Contact ends when ``F`` would turn
+tensile (``alpha < 0``) and resumes when the gap closes.
+"""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from . import _kernel as K
+
+__all__ = ["WaveImpact", "wave_impact", "window_drive"]
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
+
+
+def _panels(lo: float, hi: float, breaks, h: float):
+    """Gauss-Legendre nodes and weights on ``[lo, hi]``, split at ``breaks`` and into panels of width
+    at most ``h`` (20 nodes each: exact to rounding for ``e^{i w x}`` with ``w h <= 8``)."""
+    inner = [float(b) for b in np.atleast_1d(breaks) if lo < b < hi]
+    pts = np.unique(np.array([lo, hi] + inner, dtype=float))
+    xs, ws = [], []
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        width = b - a
+        if width <= 0.0:
+            continue
+        m = max(1, math.ceil(width / h))
+        half = 0.5 * width / m
+        mids = a + half * (2.0 * np.arange(m) + 1.0)
+        xs.append((mids[:, None] + half * _GL_X[None, :]).ravel())
+        ws.append(np.tile(half * _GL_W, m))
+    if not xs:
+        return np.empty(0), np.empty(0)
+    return np.concatenate(xs), np.concatenate(ws)
+
+
+class _WindowLoad:
+    """The drive load over the window as a function of ``theta = s (t - t0)``, ``0 <= theta <= 2``,
+    with its jumps located once (so that a value at a jump is never decided by rounding)."""
+
+    def __init__(self, load, s: float, t0: float):
+        self.load, self.s, self.t0 = load, s, t0
+        t1 = t0 + 2.0 / s
+        bounds = getattr(load, "_boundaries", None)
+        tj = np.asarray(bounds(t0, t1), dtype=float) if bounds is not None else np.empty(0)
+        self.t_edges = np.concatenate(([t0], tj, [t1]))
+        self.jumps = s * (tj - t0)  # in theta, inside (0, 2)
+        orders = getattr(load, "orders", None)
+        self.rate = float(np.max(orders)) / s if orders is not None and len(orders) else 0.0
+
+    def __call__(self, theta, left: bool = False) -> np.ndarray:
+        theta = np.asarray(theta, dtype=float)
+        t = self.t0 + theta / self.s
+        if self.jumps.size:
+            j = np.searchsorted(self.jumps, theta, side="left" if left else "right")
+            lo, hi = self.t_edges[j], self.t_edges[j + 1]
+            pad = 1e-9 * (hi - lo)
+            t = np.clip(t, lo + pad, hi - pad)
+        return np.asarray(self.load(t), dtype=float)
+
+    def integral(self, theta) -> np.ndarray:
+        """``int_0^theta p dtheta'``, exact: in closed form for a load of finitely many harmonics,
+        piece by piece for a piecewise-constant one, else the load's own rigid-mode integral."""
+        theta = np.atleast_1d(np.asarray(theta, dtype=float))
+        tau = theta / self.s
+        orders = getattr(self.load, "orders", None)
+        if orders is not None:  # p0 tau + Re sum p_k (e^{ik(t0 + tau)} - e^{ik t0}) / (ik)
+            k = np.asarray(orders, dtype=float)
+            ck = self.load.amplitudes * np.exp(1j * k * self.t0) / (1j * k)
+            osc = (np.expm1(1j * np.multiply.outer(tau, k)) @ ck).real
+            return self.s * (self.load.p0 * tau + osc)
+        if hasattr(self.load, "levels"):  # constant between the jumps located at set-up
+            edges = self.t_edges - self.t0
+            levels = self(self.s * 0.5 * (edges[:-1] + edges[1:]))
+            cum = np.concatenate(([0.0], np.cumsum(levels * np.diff(edges))))
+            j = np.clip(np.searchsorted(edges, tau, side="right") - 1, 0, levels.size - 1)
+            return self.s * (cum[j] + levels[j] * (tau - edges[j]))
+        _, v = self.load.propagate(np.zeros(1), 0.0, self.t0, np.zeros(1), np.zeros(1), self.t0 + tau)
+        return self.s * v[0]
+
+
+class _Piston:
+    """The piston's state at impact as the Riemann invariants ``alpha0(x), beta0(x)`` (trigonometric
+    sums, from ``u = q_0 + 2 sum q_n cos(n pi x)``)."""
+
+    def __init__(self, s: float, q, v):
+        q = np.asarray(q, dtype=float)
+        v = np.asarray(v, dtype=float)
+        self.npi = math.pi * np.arange(q.size)
+        self.a = v.copy()  # velocity = sum a_n cos(n pi x)
+        self.a[1:] *= 2.0
+        self.b = -2.0 * s * self.npi * q  # s * strain = sum b_n sin(n pi x)
+        self.b[0] = 0.0
+
+    def _cs(self, x):
+        arg = np.multiply.outer(np.asarray(x, dtype=float), self.npi)
+        return np.cos(arg), np.sin(arg)
+
+    def alpha(self, x):
+        C, S = self._cs(x)
+        return C @ self.a - S @ self.b
+
+    def beta(self, x):
+        C, S = self._cs(x)
+        return C @ self.a + S @ self.b
+
+    def _int(self, x, sign):
+        x = np.asarray(x, dtype=float)
+        C, S = self._cs(x)
+        k = self.npi[1:]
+        out = self.a[0] * x + S[..., 1:] @ (self.a[1:] / k)
+        return out + sign * ((C[..., 1:] - 1.0) @ (self.b[1:] / k))
+
+    def int_alpha(self, x):
+        """``int_0^x alpha0``."""
+        return self._int(x, 1.0)
+
+    def int_beta(self, x):
+        """``int_0^x beta0``."""
+        return self._int(x, -1.0)
+
+
+def _kernel_load(load):
+    """``(kind, p0, ks, pr, pim, breaks, levels)`` for the compiled kernel: a load of finitely many
+    harmonics (kind 0) or a piecewise-constant one (kind 1); None otherwise."""
+    if hasattr(load, "orders") and hasattr(load, "amplitudes"):
+        amp = np.asarray(load.amplitudes, dtype=complex)
+        return (0, float(load.p0), np.asarray(load.orders, dtype=float),
+                np.ascontiguousarray(amp.real), np.ascontiguousarray(amp.imag), np.zeros(1), np.zeros(1))
+    if hasattr(load, "breaks") and hasattr(load, "levels"):
+        return (1, float(load.p0), np.zeros(0), np.zeros(0), np.zeros(0),
+                np.ascontiguousarray(load.breaks, dtype=float),
+                np.ascontiguousarray(load.levels, dtype=float))
+    return None
+
+
+def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: bool = False):
+    """The drive load's part of the post-contact modal state, contact held for the whole window
+    (theory §4b).
+
+    With the piston pressed on the rod for the whole window ``[t0, t0 + 2/s]`` the contact map is
+    affine: ``(q_n, q_n') -> -R (q_n, q_n') + (g_n, h_n)``. With ``P(theta) = p(t0 + theta/s)`` and
+    ``I^c_n, I^s_n`` its moments against ``cos(n pi theta), sin(n pi theta)`` over ``[0, 1]`` (``a``)
+    and ``[1, 2]`` (``b``):
+
+        h_n = (I^c_n(b) - R I^c_n(a)) / s,            n >= 0,
+        g_n = -(I^s_n(b) - R I^s_n(a)) / (s^2 n pi),  n >= 1.
+
+    Parameters
+    ----------
+    s, R : float
+        Wave-speed ratio and restitution of the bar model.
+    n_modes : int
+        ``N``.
+    load : Load
+    t0 : float
+        Load time at which contact starts.
+    derivative : bool
+        Also return ``d(g, h)/d t0``, by parts so that no derivative of the load is needed (it holds
+        for the square wave too): ``dI^c_n(a)/dt0 = s ([P cos(n pi theta)]_0^1 + n pi I^s_n(a))``,
+        ``dI^s_n/dt0 = -s n pi I^c_n`` (likewise on ``b``), hence ``dg_n/dt0 = h_n``.
+
+    Returns
+    -------
+    g : numpy.ndarray, shape (N + 1,)
+        Displacement part (``g_0 = 0``: the rigid displacement is fixed by contact).
+    h : numpy.ndarray, shape (N + 1,)
+        Velocity part.
+    dg, dh : numpy.ndarray, shape (N + 1,)
+        Only with ``derivative=True``.
+    """
+    wl = _WindowLoad(load, s, t0)
+    npi = math.pi * np.arange(n_modes + 1)
+    arrays = _kernel_load(load)
+    if arrays is not None:  # the compiled quadrature (the same panels)
+        mc, ms = np.zeros((2, n_modes + 1)), np.zeros((2, n_modes + 1))
+        kind, p0, ks, pr, pim, breaks, levels = arrays
+        K.window_moments(kind, s, p0, ks, pr, pim, breaks, levels, wl.rate, t0,
+                         np.ascontiguousarray(wl.jumps), _GL_X, _GL_W, mc, ms)
+        (ca, cb), (sa, sb) = mc, ms
+    else:
+        h_panel = 8.0 / (npi[-1] + wl.rate + 1.0)
+        out = {}
+        for name, lo, hi in (("a", 0.0, 1.0), ("b", 1.0, 2.0)):
+            th, w = _panels(lo, hi, wl.jumps, h_panel)
+            pw = wl(th) * w
+            arg = np.multiply.outer(npi, th)
+            out[name] = (np.cos(arg) @ pw, np.sin(arg) @ pw)
+        (ca, sa), (cb, sb) = out["a"], out["b"]
+    h = (cb - R * ca) / s
+    g = np.zeros(n_modes + 1)
+    g[1:] = -(sb[1:] - R * sa[1:]) / (s * s * npi[1:])
+    if not derivative:
+        return g, h
+    sign = (-1.0) ** np.arange(n_modes + 1)
+    p0p, p1m = float(wl(0.0)), float(wl(1.0, left=True))
+    p1p, p2m = float(wl(1.0)), float(wl(2.0, left=True))
+    dca = s * (sign * p1m - p0p + npi * sa)
+    dcb = s * (p2m - sign * p1p + npi * sb)
+    dh = (dcb - R * dca) / s
+    dg = h.copy()
+    dg[0] = 0.0
+    return g, h, dg, dh
+
+
+class WaveImpact:
+    """One contact of the piston with the long rod, solved by characteristics (theory §4b).
+
+    Made by :func:`wave_impact`. Times are dimensionless and counted from the start of contact; the
+    window is ``[0, 2/s]``. Forces are dimensionless like the load (paper eq. 2), compressive
+    positive; stresses are forces per piston area (the rod's stress is ``F A / A_s =
+    F (1 - R)/(1 + R)``). The contact intervals and the post-contact state are solved at once; the
+    integrals (energies, impulse, force extremes) on first access.
+
+    Attributes
+    ----------
+    s, R : float
+        The model's wave-speed ratio and restitution.
+    t0 : float
+        Load time at the start of contact.
+    duration : float
+        The window ``2/s``.
+    q_before, v_before : numpy.ndarray, shape (N + 1,)
+        Modal state at the start of contact (positions from the rod end).
+    q_after, v_after : numpy.ndarray, shape (N + 1,)
+        Modal state at the end of the window, projected on the ``N + 1`` free-free modes, positions
+        measured from the advanced rod end (``u(1) = -gap``).
+    contact : numpy.ndarray, shape (K, 2)
+        Contact intervals (start, end) within the window.
+    gap : float
+        Distance between piston end and rod end at the end of the window (0 when still touching).
+    impulse : float
+        ``int F dt`` over the window.
+    advance : float
+        Advance of the rod end during the blow, ``impulse / Z_s`` (dimensionless like ``u``).
+    rod_energy : float
+        ``int F^2 / Z_s dt``, energy carried into the rod by the transmitted wave.
+    drive_work : float
+        Work of the drive load on the piston during the window.
+    energy_before, energy_after : float
+        Piston energy (kinetic + strain) before, and after projected on the modes kept.
+    energy_after_field : float
+        Energy of the exact post-window field (``energy_before + drive_work - rod_energy``).
+    efficiency : float
+        ``rod_energy / energy_before`` (Lundberg's transfer efficiency).
+    peak_force, min_force : float
+        Largest and smallest interface force over the window.
+    """
+
+    def __init__(self, s, R, t0, q_before, v_before, q_after, v_after, solver):
+        self.s, self.R, self.t0 = s, R, t0
+        self.duration = 2.0 / s
+        self.q_before, self.v_before = q_before, v_before
+        self.q_after, self.v_after = q_after, v_after
+        self._solver = solver
+        self.contact = solver.contact / s
+        self.gap = solver.gap_theta / s
+
+    def resolve(self) -> WaveImpact:
+        """Itself (the simulator's lazily solved windows resolve to a ``WaveImpact``)."""
+        return self
+
+    def __repr__(self) -> str:
+        return (f"WaveImpact(t0={self.t0!r}, duration={self.duration!r}, "
+                f"separations={self.separations}, gap={self.gap!r})")
+
+    @cached_property
+    def impulse(self) -> float:
+        return self._solver.impulse()
+
+    @property
+    def advance(self) -> float:
+        return self.impulse * (1.0 - self.R) / ((1.0 + self.R) * self.s)
+
+    @cached_property
+    def rod_energy(self) -> float:
+        return self._solver.rod_energy()
+
+    @cached_property
+    def drive_work(self) -> float:
+        return self._solver.drive_work()
+
+    @cached_property
+    def energy_before(self) -> float:
+        return modal_energy(self.s, self.q_before, self.v_before)
+
+    @cached_property
+    def energy_after(self) -> float:
+        return modal_energy(self.s, self.q_after, self.v_after)
+
+    @cached_property
+    def energy_after_field(self) -> float:
+        return self._solver.field_energy()
+
+    @property
+    def efficiency(self) -> float:
+        e0 = self.energy_before
+        return self.rod_energy / e0 if e0 > 0.0 else math.nan
+
+    @cached_property
+    def _force_extremes(self):
+        return self._solver.force_extremes()
+
+    @property
+    def peak_force(self) -> float:
+        return self._force_extremes[0]
+
+    @property
+    def min_force(self) -> float:
+        return self._force_extremes[1]
+
+    def account(self, t) -> tuple[float, float, float]:
+        """The energy balance of the contact up to time ``t`` in ``[0, 2/s]``.
+
+        Returns
+        -------
+        drive_work, rod_energy, field_energy : float
+            Work of the drive, energy sent into the rod, and energy of the exact piston fields at
+            ``t``: ``energy_before + drive_work = field_energy + rod_energy``.
+        """
+        th = self._window_theta(t)
+        sol = self._solver
+        return sol.drive_work(th), sol.rod_energy(th), sol.field_energy(th)
+
+    def _window_theta(self, t) -> float:
+        t = float(t)
+        # a time measured as a difference of absolute times carries their rounding
+        slack = 1e-14 * self.duration + 8.0 * np.finfo(float).eps * max(1.0, abs(self.t0))
+        if not -slack <= t <= self.duration + slack:
+            raise ValueError(f"t must lie in [0, {self.duration}] (the contact window); got {t}")
+        return min(max(t * self.s, 0.0), 2.0)
+
+    @property
+    def peak_rod_stress(self) -> float:
+        """Largest compressive stress in the rod, ``peak_force (1 - R)/(1 + R)`` (per piston area)."""
+        return self.peak_force * (1.0 - self.R) / (1.0 + self.R)
+
+    @property
+    def min_rod_stress(self) -> float:
+        """Smallest stress in the rod (0 when contact is lost inside the window)."""
+        return self.min_force * (1.0 - self.R) / (1.0 + self.R)
+
+    @property
+    def separations(self) -> int:
+        """Number of times contact was lost inside the window."""
+        c = self.contact
+        n = len(c)
+        return n - 1 + int(n > 0 and c[-1, 1] < self.duration * (1 - 1e-14))
+
+    def force(self, t) -> np.ndarray:
+        """Interface force ``F(t)`` (the transmitted wave's force at the rod end), shape of ``t``,
+        for ``0 <= t <= 2/s`` (0 outside the window)."""
+        t = np.asarray(t, dtype=float)
+        return self._solver.force(t * self.s)
+
+    def state_at(self, t):
+        """Modal state ``(q, q')`` at time ``t`` in ``[0, 2/s]`` since contact started: the exact
+        characteristics fields projected on the modes kept, positions measured from the rod end
+        where it is at ``t`` (``u(1, t) = -gap``).
+
+        Returns
+        -------
+        q, v : numpy.ndarray, shape (N + 1,)
+        """
+        return self._solver.state_at(self._window_theta(t))
+
+    def fields(self, x):
+        """Exact velocity ``u_t`` and strain ``u_x`` at the end of the window (before projection).
+
+        Parameters
+        ----------
+        x : array_like, shape (P,)
+            Positions in ``[0, 1]``.
+
+        Returns
+        -------
+        velocity, strain : numpy.ndarray, shape (P,)
+        """
+        al, be = self._solver.invariants_at(np.asarray(x, dtype=float), 2.0)
+        return 0.5 * (al + be), (be - al) / (2.0 * self.s)
+
+    def piston_stress_extremes(self, cells: int | None = None) -> tuple[float, float]:
+        """Largest compressive and largest tensile axial force in the piston over the window.
+
+        Evaluated exactly at the nodes of the characteristics lattice of ``cells`` cells (default
+        ``8 (N + 1)``, at least 64, at most 2048); between nodes the fields are trigonometric sums
+        resolved by that lattice.
+
+        Returns
+        -------
+        (max, min) : tuple of float
+            ``max N`` (compressive, >= 0 when any part is compressed) and ``min N`` (< 0 if tensile).
+        """
+        J = cells or int(min(2048, max(64, 8 * self.q_before.size)))
+        return self._solver.stress_extremes(J)
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary (floats)."""
+        return {
+            "duration": self.duration, "gap": self.gap, "impulse": self.impulse,
+            "advance": self.advance, "rod_energy": self.rod_energy, "drive_work": self.drive_work,
+            "energy_before": self.energy_before, "energy_after": self.energy_after,
+            "efficiency": self.efficiency, "peak_force": self.peak_force,
+            "min_force": self.min_force, "peak_rod_stress": self.peak_rod_stress,
+            "separations": self.separations,
+            "contact": self.contact.tolist(),
+        }
+
+
+def modal_energy(s: float, q, v) -> float:
+    """Kinetic plus strain energy of the piston, ``q_0'^2/2 + sum (q_n'^2 + (s n pi)^2 q_n^2)``."""
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    w = s * math.pi * np.arange(q.size)
+    return float(0.5 * v[0] ** 2 + np.sum(v[1:] ** 2 + (w[1:] * q[1:]) ** 2))
+
+
+class _Contact:
+    """The characteristics solution over the window, in ``theta = s t`` (``0..2``)."""
+
+    def __init__(self, s, R, q, v, load, t0):
+        self.s, self.R = s, R
+        self.N = q.size - 1
+        self.piston = _Piston(s, q, v)
+        self.p = _WindowLoad(load, s, t0)
+        # A(theta): alpha arriving at the rod; smooth between these breaks
+        self.breaks = np.unique(np.concatenate(([1.0], 1.0 + self.p.jumps[self.p.jumps < 1.0])))
+        self.h_quad = 8.0 / (2.0 * math.pi * (self.N + 1) + 2.0 * self.p.rate + 1.0)
+        self.scale = float(np.sum(np.abs(self.piston.a)) + np.sum(np.abs(self.piston.b))
+                           + 2.0 * load.sup_abs / s)
+        self._acum1 = float(self.piston.int_alpha(1.0))
+
+    # -- the incoming invariant at the rod and its integral ------------------------------------
+    def A(self, th, left=False):
+        th0 = np.asarray(th, dtype=float)
+        th = np.atleast_1d(th0)
+        first = th < 1.0 if not left else th <= 1.0
+        out = np.empty(th.shape)
+        out[first] = self.piston.alpha(1.0 - th[first])
+        u = th[~first] - 1.0
+        out[~first] = self.piston.beta(u) + 2.0 * self.p(u, left=left) / self.s
+        return out.reshape(th0.shape)
+
+    def Acum(self, th):
+        th = np.atleast_1d(np.asarray(th, dtype=float))
+        out = np.empty(th.shape)
+        first = th <= 1.0
+        out[first] = self._acum1 - self.piston.int_alpha(1.0 - th[first])
+        u = th[~first] - 1.0
+        if u.size:
+            out[~first] = self._acum1 + self.piston.int_beta(u) + 2.0 * self.p.integral(u) / self.s
+        return out
+
+    # -- contact and separation --------------------------------------------------------------------
+    def solve(self):
+        tol = 1e-13 * self.scale
+        if self.A(0.0) < -tol:  # a touch at zero speed (to rounding) is a contact all the same
+            raise ValueError("the piston must arrive moving towards the rod (impact velocity >= 0)")
+        # A is a trigonometric sum of highest frequency N pi (plus the load's): 6 nodes per period
+        hg = min(1.0 / 16.0, 1.0 / (3.0 * (self.N + 1)),
+                 math.pi / (3.0 * self.p.rate) if self.p.rate else 1.0)
+        edges = np.concatenate(([0.0], self.breaks, [2.0]))
+        grid = np.unique(np.concatenate([np.linspace(a, b, max(2, math.ceil((b - a) / hg) + 1))
+                                         for a, b in zip(edges[:-1], edges[1:], strict=True)]))
+        Ag = self.A(grid)
+        Agl = Ag.copy()  # left limits: they differ at the breaks only
+        at = np.searchsorted(grid, self.breaks)
+        Agl[at] = self.A(grid[at], left=True)
+        contact = []
+        th, on = 0.0, True
+        start = 0.0
+        for _ in range(10_000):
+            if th >= 2.0:
+                break
+            k0 = np.searchsorted(grid, th, side="right")
+            if on:
+                # first grid node after th where A < 0 (left limit first: a jump down is a separation)
+                neg_l = Agl[k0:] < -tol
+                neg_r = Ag[k0:] < -tol
+                hit = np.flatnonzero(neg_l | neg_r)
+                if hit.size == 0:
+                    contact.append((start, 2.0))
+                    th = 2.0
+                    break
+                k = k0 + hit[0]
+                if not neg_l[hit[0]]:  # A jumps below zero at a break
+                    th_sep = grid[k]
+                else:
+                    a = max(th, grid[k - 1])
+                    th_sep = brentq(lambda x: float(self.A(np.array([x]), left=True)[0]), a, grid[k],
+                                    xtol=1e-15, rtol=1e-15) if self.A(np.array([a]))[0] > 0 else a
+                contact.append((start, th_sep))
+                th, on = th_sep, False
+            else:
+                base = float(self.Acum(th)[0])
+
+                def G(x, base=base):
+                    return base - float(self.Acum(x)[0])
+
+                nodes = grid[k0:]
+                Gn = base - self.Acum(nodes)
+                hit = np.flatnonzero(Gn <= 0.0)
+                if hit.size == 0:
+                    th = 2.0
+                    break
+                k = hit[0]
+                a = th if k == 0 else nodes[k - 1]
+                if k == 0:  # find a point where the gap is open, or call it grazing
+                    x = 0.5 * (th + nodes[0])
+                    for _ in range(40):
+                        if G(x) > 0.0:
+                            break
+                        x = 0.5 * (th + x)
+                    else:
+                        x = None
+                    if x is None:  # no gap opened: contact goes on
+                        start_prev = contact.pop()[0] if contact else 0.0
+                        start, on = start_prev, True
+                        th = float(nodes[0])
+                        continue
+                    a = x
+                ga, gb = G(a), G(nodes[k])
+                if ga <= 0.0:  # the vectorised and the scalar gap differ by rounding here
+                    th_re = float(a)
+                elif gb > 0.0:
+                    th_re = float(nodes[k])
+                else:
+                    th_re = brentq(G, a, nodes[k], xtol=1e-15, rtol=1e-15)
+                th, on, start = th_re, True, th_re
+        self.contact = np.array(contact, dtype=float).reshape(-1, 2)
+        self.grid, self.Ag = grid, Ag
+        last_end = self.contact[-1, 1] if len(self.contact) else 0.0
+        self.gap_theta = 0.0 if last_end >= 2.0 else float(self.Acum(last_end)[0] - self.Acum(2.0)[0])
+        return self
+
+    def in_contact(self, th):
+        th = np.asarray(th, dtype=float)
+        m = np.zeros(th.shape, dtype=bool)
+        for a, b in self.contact:
+            m |= (th >= a) & (th <= b)
+        return m
+
+    def B(self, th, left=False):
+        """The invariant sent back into the piston at the rod end."""
+        A = self.A(th, left=left)
+        return np.where(self.in_contact(th), -self.R * A, A)
+
+    def force(self, th):
+        th = np.asarray(th, dtype=float)
+        inside = (th >= 0.0) & (th <= 2.0)
+        thc = np.clip(th, 0.0, 2.0)
+        F = 0.5 * self.s * (1.0 + self.R) * self.A(thc)
+        return np.where(inside & self.in_contact(thc), F, 0.0)
+
+    def switches(self):
+        c = self.contact.ravel()
+        return c[(c > 0.0) & (c < 2.0)]
+
+    # -- results -------------------------------------------------------------------------------
+    def post_state(self, q, v, drive):
+        s, R = self.s, self.R
+        g, h = drive
+        qa = -R * q + g
+        va = -R * v + h
+        free = []
+        c = self.contact
+        ends = np.concatenate(([0.0], c.ravel(), [2.0]))
+        for a, b in zip(ends[0::2], ends[1::2], strict=True):  # the gaps between contact intervals
+            if b > a:
+                free.append((a, b))
+        if free:
+            npi = self.piston.npi
+            xs, dal, dbe, ws = [], [], [], []
+            for a, b in free:
+                for lo, hi in ((a, min(b, 1.0)), (max(a, 1.0), b)):
+                    if hi <= lo:
+                        continue
+                    if hi <= 1.0:  # alpha that left the rod end free: x = 1 - theta
+                        x, w = _panels(1.0 - hi, 1.0 - lo, [], self.h_quad)
+                        xs.append(x)
+                        ws.append(w)
+                        dal.append((1.0 + R) * self.piston.alpha(x))
+                        dbe.append(np.zeros_like(x))
+                    else:  # beta: x = theta - 1
+                        x, w = _panels(lo - 1.0, hi - 1.0, self.p.jumps, self.h_quad)
+                        xs.append(x)
+                        ws.append(w)
+                        dal.append(np.zeros_like(x))
+                        dbe.append((1.0 + R) * (self.piston.beta(x) + 2.0 * self.p(x) / s))
+            x = np.concatenate(xs)
+            w = np.concatenate(ws)
+            dal = np.concatenate(dal)
+            dbe = np.concatenate(dbe)
+            arg = np.multiply.outer(npi, x)
+            va = va + np.cos(arg) @ (0.5 * (dal + dbe) * w)
+            dse = np.sin(arg[1:]) @ (0.5 * (dbe - dal) * w)
+            qa[1:] -= dse / (s * npi[1:])
+        cw = 2.0 * (-1.0) ** np.arange(qa.size)
+        qa[0] = -self.gap_theta / s - float(cw[1:] @ qa[1:])
+        return qa, va
+
+    def contact_quad(self, th_end=2.0):
+        xs, ws = [], []
+        for a, b in self.contact:
+            b = min(b, th_end)
+            if b > a:
+                x, w = _panels(a, b, self.breaks, self.h_quad)
+                xs.append(x)
+                ws.append(w)
+        if not xs:
+            return np.empty(0), np.empty(0)
+        return np.concatenate(xs), np.concatenate(ws)
+
+    def rod_energy(self, th_end=2.0):
+        """``int F^2 / Z_s dt`` up to ``th_end``: ``(1 - R^2)/4 int_contact A^2 dtheta``."""
+        x, w = self.contact_quad(th_end)
+        return 0.25 * (1.0 - self.R**2) * float(w @ self.A(x) ** 2)
+
+    def impulse(self, th_end=2.0):
+        c = np.minimum(self.contact, th_end)
+        if not len(c):
+            return 0.0
+        return 0.5 * (1.0 + self.R) * float(np.sum(self.Acum(c[:, 1]) - self.Acum(c[:, 0])))
+
+    def drive_work(self, th_end=2.0):
+        """``int p u_t(0) dt`` up to ``th_end``, ``u_t(0) = beta(0) + p/s``."""
+        sw = self.switches()
+        br = np.concatenate(([1.0], self.p.jumps, 1.0 + sw[sw < 1.0]))
+        x, w = _panels(0.0, th_end, br, self.h_quad)
+        p = self.p(x)
+        return float(w @ (p * (self._beta_line(x) + p / self.s))) / self.s
+
+    def _x_breaks(self, th):
+        """Positions where the fields at ``th`` may jump: images of the corners, the switches and
+        the load's jumps along the characteristics."""
+        j, sw = self.p.jumps, self.switches()
+        eta = np.concatenate(([1.0, 2.0], 2.0 + j, 1.0 + sw))  # beta line breaks
+        xi = np.concatenate(([0.0], -eta, -j))  # alpha line breaks
+        return np.concatenate((eta - th, xi + th))
+
+    def field_energy(self, th=2.0):
+        """Energy of the exact fields at ``th``: ``(1/4) int (alpha^2 + beta^2) dx``."""
+        x, w = _panels(0.0, 1.0, self._x_breaks(th), self.h_quad)
+        al, be = self.invariants_at(x, th)
+        return 0.25 * float(w @ (al * al + be * be))
+
+    def force_extremes(self):
+        if not len(self.contact):
+            return 0.0, 0.0
+        inside = self.in_contact(self.grid)
+        F = self.force(self.grid)
+        k = int(np.argmax(np.where(inside, F, -np.inf)))
+        fmax = self._refine(k, -1.0)
+        full = len(self.contact) == 1 and self.contact[0, 0] == 0.0 and self.contact[0, 1] >= 2.0
+        if not full:
+            return fmax, 0.0
+        k = int(np.argmin(F))
+        return fmax, self._refine(k, 1.0)
+
+    def _refine(self, k, sign):
+        g = self.grid
+        best = float(self.force(g[k]))
+        lo, hi = g[max(k - 1, 0)], g[min(k + 1, g.size - 1)]
+        for a, b in ((lo, g[k]), (g[k], hi)):
+            if b <= a:
+                continue
+            # a break inside (a, b) is a node of the grid, so the piece is smooth
+            res = minimize_scalar(lambda x: sign * float(self.force(x)), bounds=(a, b), method="bounded",
+                                  options={"xatol": 1e-13})
+            val = float(self.force(res.x))
+            best = max(best, val) if sign < 0 else min(best, val)
+        return best
+
+    def invariants_at(self, x, th):
+        """``alpha(x, th), beta(x, th)`` for ``0 <= th <= 2`` (d'Alembert: each is carried along its
+        characteristic from the start state, the drive end or the rod end)."""
+        x = np.asarray(x, dtype=float)
+        return self._alpha_line(x - th), self._beta_line(x + th)
+
+    def _beta_line(self, eta):
+        """``beta`` on the characteristic ``x + theta = eta`` (``0 <= eta <= 3``): from the start
+        state, or sent back by the rod end at ``theta = eta - 1``."""
+        eta = np.asarray(eta, dtype=float)
+        return np.where(eta <= 1.0, self.piston.beta(np.minimum(eta, 1.0)),
+                        self.B(np.clip(eta - 1.0, 0.0, 2.0)))
+
+    def _alpha_line(self, xi):
+        """``alpha`` on the characteristic ``x - theta = xi`` (``-2 <= xi <= 1``): from the start
+        state, or reflected at the drive end at ``theta = -xi`` with the drive's ``2 p / s``."""
+        xi = np.asarray(xi, dtype=float)
+        tau = np.clip(-xi, 0.0, 2.0)
+        return np.where(xi >= 0.0, self.piston.alpha(np.maximum(xi, 0.0)),
+                        self._beta_line(tau) + 2.0 * self.p(tau) / self.s)
+
+    def gap_at(self, th):
+        """Gap between the piston end and the rod end at ``th`` (in ``theta`` units: divide by s)."""
+        c = self.contact
+        if len(c) == 0 or th <= c[0, 1]:
+            return 0.0
+        k = np.searchsorted(c[:, 0], th, side="right") - 1
+        if th <= c[k, 1]:
+            return 0.0
+        return float(self.Acum(c[k, 1])[0] - self.Acum(th)[0])
+
+    def state_at(self, th):
+        """Modal state (projected) at ``th``, positions from the rod end's current position."""
+        s = self.s
+        x, w = _panels(0.0, 1.0, self._x_breaks(th), self.h_quad)
+        al, be = self.invariants_at(x, th)
+        npi = self.piston.npi
+        arg = np.multiply.outer(npi, x)
+        v = np.cos(arg) @ (0.5 * (al + be) * w)
+        q = np.zeros_like(v)
+        q[1:] = -(np.sin(arg[1:]) @ (0.5 * (be - al) * w)) / (s * npi[1:])
+        cw = 2.0 * (-1.0) ** np.arange(q.size)
+        q[0] = -self.gap_at(th) / s - float(cw[1:] @ q[1:])
+        return q, v
+
+    def stress_extremes(self, J):
+        """Max and min of ``N = s (alpha - beta)/2`` at the nodes of a ``J``-cell lattice."""
+        k = np.arange(-2 * J, J + 1)  # xi = x - theta in cells
+        al = self._alpha_line(k / J)
+        be = self._beta_line(np.arange(0, 3 * J + 1) / J)  # eta = x + theta in cells
+        hi, lo = -np.inf, np.inf
+        i = np.arange(J + 1)
+        for m in range(2 * J + 1):
+            N = 0.5 * self.s * (al[i - m + 2 * J] - be[i + m])
+            hi = max(hi, float(N.max()))
+            lo = min(lo, float(N.min()))
+        return hi, lo
+
+
+def wave_impact(model, load, t0: float, q, v) -> WaveImpact:
+    r"""Contact of the piston with the long rod, solved exactly by characteristics (theory §4b).
+
+    The piston arrives at load time ``t0`` with modal state ``(q, q')`` (positions from the rod end,
+    ``u(1) = c . q = 0``, ``u_t(1) > 0``). Over the window ``[t0, t0 + 2/s]`` the fields are
+    propagated along characteristics with the drive load at ``x = 0`` (any load, jumps included),
+    compressive contact with the rod at ``x = 1``, separation when the interface force would turn
+    tensile, and re-contact when the gap closes. Without drive and without separation the result is
+    exactly ``(q_n, q_n') -> -R (q_n, q_n')`` for ``n >= 1`` and ``q_0' -> -R q_0'`` (theory §4b);
+    the drive adds :func:`window_drive`; a separation adds the waves reflected by the free end.
+    The post-window fields are projected on the ``N + 1`` free-free modes (exact without drive and
+    separation; otherwise the truncation of the exact field, whose energy is
+    ``energy_after_field``).
+
+    Damping is neglected inside the window only. Along a characteristic the invariants then decay at
+    the rate ``d/2`` (``u_tt + d u_t = s^2 u_xx``), so over the window of length ``2/s`` the post-
+    contact fields, the force and the impulse are in error by a relative ``O(d/s)`` (at most about
+    ``d/s``: 5e-4 for ``d = 0.005``, ``s = 10``), the energies by ``O(2 d/s)``.
+
+    Parameters
+    ----------
+    model : BarModel
+        Uses ``s``, ``R`` and ``n_modes``.
+    load : Load
+        The drive load (paper eqs. 7, 33, 34).
+    t0 : float
+        Load time at which contact starts.
+    q, v : array_like, shape (N + 1,)
+        Modal displacements and velocities at the start of contact.
+
+    Returns
+    -------
+    WaveImpact
+
+    Raises
+    ------
+    ValueError
+        If the shapes do not match the model, a value is not finite, or the piston arrives moving
+        away from the rod (``u_t(1) < 0`` beyond rounding).
+    """
+    s, R = float(model.s), float(model.R)
+    M = model.n_modes + 1
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    if q.shape != (M,) or v.shape != (M,):
+        raise ValueError(f"q and v must have shape ({M},) (n_modes + 1); got {q.shape} and {v.shape}")
+    if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        raise ValueError("q and v must be finite")
+    t0 = float(t0)
+    if not math.isfinite(t0):
+        raise ValueError(f"t0 must be finite; got {t0}")
+    sol = _Contact(s, R, q, v, load, t0).solve()
+    qa, va = sol.post_state(q, v, window_drive(s, R, model.n_modes, load, t0))
+    return WaveImpact(s, R, t0, q.copy(), v.copy(), qa, va, sol)

@@ -1,0 +1,262 @@
+"""One-impact periodic orbits under the wave impact law (theory §4b, with §4 and §7).
+
+The impact starts at load time ``phase`` and lasts the window ``T = 2/s``; the flight lasts
+``2 pi - T``. Held in contact for the whole window, the contact map is affine (theory §4b):
+``(q_n, q_n') -> -R (q_n, q_n') + (g_n, h_n)(phase)`` for ``n >= 1``, ``q_0' -> -R q_0' + h_0``, with the
+drive part of :func:`impactbar.dynamics.impact.window_drive`, and the rigid displacement set by
+contact at the window's end (positions from the rod end, which each blow advances). Periodicity is
+then solved mode by mode, and the phase equation is the return of the struck end to the rod end:
+
+    r(phase) = b(2 pi - T) q_0'(T) + f_0(phase) + sum_{n>=1} c_n (q_n(2 pi-) - q_n(T)) = 0,
+
+with ``f_0`` the rigid displacement the load drives over the flight. Unlike eq. 14 the flexible modes
+enter: their displacement is not continuous through the contact.
+
+Exact rigid identity (the analogue of eq. 14's ``2 pi p0 / (1 + R)``): integrating
+``q_0'' + d q_0' = p`` over the flight, with the contact's momentum balance
+``q_0'(T) = -R q_0'(0) + int_{T/2}^{T} p - R int_0^{T/2} p`` (the drive's waves that reach the rod
+within the window), and the displacement periodic relative to the rod, the impact velocity of the
+rigid mode is, for every ``d``,
+
+    q_0'(2 pi-) = 2 pi p0 / (1 + R) - int_0^{1/s} p(phase + t) dt:
+
+the contact time shifts it by the drive impulse of the window's first half. As ``s -> inf`` both
+laws give the same rigid orbits.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..dynamics import _kernel as K
+from ..dynamics.impact import window_drive
+from ..dynamics.modal import fundamental
+from ..loads import FourierLoad, Load, PiecewiseConstantLoad
+from ..model import BarModel
+from .phase import _cosine_roots
+from .stability import _arrival_derivative
+
+__all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_impact_map_jacobian",
+           "wave_existence_edge"]
+
+TWO_PI = 2.0 * math.pi
+
+
+def _window(model: BarModel) -> tuple[float, float]:
+    T = 2.0 / model.s
+    return T, TWO_PI - T
+
+
+def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
+    """State at ``t1`` of every mode driven from rest at ``t0`` (exact): the compiled flow for a
+    piecewise-constant load, the load's own flow otherwise."""
+    w2 = model.frequencies**2
+    M = w2.size
+    zeros = np.zeros(M)
+    if isinstance(load, PiecewiseConstantLoad):
+        q, v = np.empty((M, 1)), np.empty((M, 1))
+        empty = np.zeros((M, 0))
+        K.propagate_many(1, w2, model.d, float(load.p0), np.zeros(0), empty, empty,
+                         np.ascontiguousarray(load.breaks), np.ascontiguousarray(load.levels),
+                         float(t0), zeros, zeros, np.array([float(t1)]), q, v)
+    else:
+        q, v = load.propagate(w2, model.d, t0, zeros, zeros, [t1])
+    return q[:, 0], v[:, 0]
+
+
+def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
+    """Periodic modal states of the candidate orbit with this phase under the wave law.
+
+    Parameters
+    ----------
+    model : BarModel
+        With ``s > 1/pi`` (the window ``2/s`` shorter than the period).
+    load : Load
+    phase : float
+        Load time at which contact starts (rad).
+    rates : bool
+        Also compute the drive's rates ``d(g, h)/d phase`` (default; the Jacobian needs them).
+
+    Returns
+    -------
+    residual : float
+        ``u(1, 2 pi-)``: the phase equation's residual (0 at an orbit).
+    y_end : numpy.ndarray, shape (2 N + 2,)
+        Modal state ``(q, q')`` at the end of the window (orbit time ``2/s``).
+    y_minus : numpy.ndarray, shape (2 N + 2,)
+        Modal state just before the impact (orbit time ``2 pi-``).
+    drive_rate : tuple of numpy.ndarray
+        ``d(g, h)/d phase`` (for the impact map's Jacobian); ``(None, None)`` with ``rates=False``.
+    """
+    s, d, R, N = model.s, model.d, model.R, model.n_modes
+    T, F = _window(model)
+    w2 = model.frequencies**2
+    fq, fv = _forced_flight(model, load, phase + T, phase + TWO_PI)
+    if rates:
+        g, h, dg, dh = window_drive(s, R, N, load, phase, derivative=True)
+    else:
+        (g, h), dg, dh = window_drive(s, R, N, load, phase), None, None
+    p11, p12, p21, p22 = fundamental(w2, d, F)
+    # y- = Phi (J y- + (g, h)) + f,  J = -R I
+    a11, a12, a21, a22 = 1.0 + R * p11, R * p12, R * p21, 1.0 + R * p22
+    det = a11 * a22 - a12 * a21
+    if np.any(np.abs(det) < 1e-13):
+        raise ValueError("the periodicity conditions are singular (R = 1 without damping)")
+    r1 = p11 * g + p12 * h + fq
+    r2 = p21 * g + p22 * h + fv
+    qm = (a22 * r1 - a12 * r2) / det
+    vm = (a11 * r2 - a21 * r1) / det
+    qe = -R * qm + g
+    ve = -R * vm + h
+    c = model.end_weights
+    qe[0] = -float(c[1:] @ qe[1:])  # in contact with the rod end at the end of the window
+    qm[0] = qe[0] + p12[0] * ve[0] + fq[0]
+    return float(c @ qm), np.concatenate((qe, ve)), np.concatenate((qm, vm)), (dg, dh)
+
+
+def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
+    """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
+    ``phase``."""
+    ph = np.asarray(phase, dtype=float)
+    out = np.array([wave_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
+    return out.reshape(ph.shape)
+
+
+def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
+    """Roots of the wave law's phase equation in ``[0, 2 pi)`` with their multiplicity.
+
+    For a load with finitely many harmonics (``FourierLoad``, ``CosineLoad``) the residual is a
+    trigonometric polynomial of the phase of the load's degree ``K``: it is recovered exactly from
+    ``2 K + 1`` samples, in closed form for a single harmonic (the pneumatic load). Other loads (the
+    square wave) are sampled on 128 intervals, those around a sampled minimum of ``|r|`` 16 times
+    finer, and every sign change is refined by Brent's method; a double root without a sign change
+    (a fold) is then not reported. (Not a certified search, unlike eq. 14's.)
+
+    Returns
+    -------
+    list of (float, int)
+        ``(phase, multiplicity)`` sorted by phase; empty when the window ``2/s`` is not shorter than
+        the period.
+    """
+    T, F = _window(model)
+    if F <= 0.0:
+        return []
+    if isinstance(load, FourierLoad):
+        K = int(np.max(load.orders)) if load.orders.size else 0
+        if K == 0:
+            return []
+        Ms = 2 * K + 1
+        ph = TWO_PI * np.arange(Ms) / Ms
+        coef = np.fft.fft(wave_phase_residual(model, load, ph)) / Ms  # r = sum c_k e^{i k phi}
+        c0 = coef[0].real
+        if load.orders.size == 1:
+            k = int(load.orders[0])
+            ck = 2.0 * coef[k]  # r = c0 + |ck| cos(k phase + arg ck)
+            if ck == 0.0:
+                return []
+            return _cosine_roots(abs(ck), math.atan2(ck.imag, ck.real), -c0, k, tol=1e-13)
+        ks = np.arange(1, K + 1)
+
+        def resid(p):
+            p = np.asarray(p, dtype=float)
+            return c0 + 2.0 * (np.exp(1j * np.multiply.outer(p, ks)) @ coef[1:K + 1]).real
+
+        grid = np.linspace(0.0, TWO_PI, 64 * K + 1)
+    else:
+        def resid(p):
+            return wave_phase_residual(model, load, p)
+
+        grid = _refined_grid(resid, 129)
+    r = resid(grid)
+    roots = []
+    for i in range(grid.size - 1):
+        if r[i] == 0.0:
+            roots.append(float(grid[i]))
+        elif r[i] * r[i + 1] < 0.0:
+            roots.append(brentq(lambda p: float(resid(np.array([p]))[0]), grid[i], grid[i + 1],
+                                xtol=1e-14, rtol=1e-15))
+    return [(t % TWO_PI, 1) for t in sorted(roots)]
+
+
+def wave_existence_edge(model: BarModel, k: int = 1) -> float:
+    """Existence edge of the pneumatic load (eq. 33) under the wave law: the largest ``k p0 / pk``
+    with one-impact orbits.
+
+    The residual is linear in the load: ``r = p0 a + pk |b| cos(k phase + theta)`` with ``a`` the
+    residual of the unit mean load and ``|b|`` the amplitude of the unit harmonic's, so orbits exist
+    iff ``|p0 a| <= pk |b|`` (the analogue of eq. 38; ``inf`` when ``a = 0``, ``nan`` when the
+    window does not fit in the period).
+
+    Parameters
+    ----------
+    model : BarModel
+    k : int
+        Order of the harmonic, ``>= 1``.
+
+    Returns
+    -------
+    float
+    """
+    from ..loads import CosineLoad
+
+    if _window(model)[1] <= 0.0:
+        return math.nan
+    a = abs(float(wave_phase_residual(model, CosineLoad(1.0, 0.0, k), 0.0)))
+    Ms = 2 * k + 1
+    ph = TWO_PI * np.arange(Ms) / Ms
+    b = 2.0 * abs(np.fft.fft(wave_phase_residual(model, CosineLoad(0.0, 1.0, k), ph))[k]) / Ms
+    return math.inf if a == 0.0 else k * b / a
+
+
+def _refined_grid(resid, n: int) -> np.ndarray:
+    """``n`` equispaced phases, each interval around a sampled local minimum of ``|r|`` without a
+    sign change split 16-fold (where two roots close to a fold may hide between samples)."""
+    grid = np.linspace(0.0, TWO_PI, n)
+    r = np.abs(resid(grid))
+    extra = []
+    for i in range(1, n - 1):
+        if r[i] <= r[i - 1] and r[i] <= r[i + 1]:
+            extra.append(np.linspace(grid[i - 1], grid[i + 1], 33)[1:-1])
+    return np.unique(np.concatenate([grid, *extra]))
+
+
+def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y_minus,
+                             drive_rate) -> np.ndarray:
+    """Analytic Jacobian of the wave law's impact map at a one-impact fixed point (theory §7, §4b).
+
+    The map takes ``z = (t_e, q_1..q_N, q_0'..q_N')`` at the end of one contact window to the same at
+    the end of the next; ``q_0`` follows from contact. With ``Psi`` the fundamental matrix over the
+    flight ``2 pi - 2/s``, ``f`` the vector field, ``c`` the end weights:
+
+        dY = Psi [dy_e - f(t_e, y_e) dt_e],   dtau' = -(c . dq) / (c . q'(tau')),
+        dz' = -R [dY + f(tau', Y) dtau'] + (dg, dh)/dphase dtau',    dt_e' = dtau'.
+
+    Parameters
+    ----------
+    model, load, phase
+        As for :func:`wave_orbit_states`.
+    y_end, y_minus : array_like, shape (2 N + 2,)
+        States at the end of the window and just before the impact.
+    drive_rate : tuple of numpy.ndarray
+        ``d(g, h)/d phase`` from :func:`wave_orbit_states`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2 N + 2, 2 N + 2)
+
+    Raises
+    ------
+    ValueError
+        At grazing (zero impact velocity).
+    """
+    M = model.n_modes + 1
+    T, F = _window(model)
+    dY, r = _arrival_derivative(model, load, phase + T, F, y_end, y_minus, phase + TWO_PI)
+    dY = -model.R * dY + np.outer(np.concatenate(drive_rate), r)
+    DP = np.empty((2 * M, 2 * M))
+    DP[0, :] = r
+    DP[1:, :] = dY[1:, :]
+    return DP

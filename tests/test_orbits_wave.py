@@ -1,0 +1,174 @@
+"""One-impact orbits under the wave impact law (theory §4b): the exact rigid identity, the rigid
+limit, periodicity against an independent flight + contact, the analytic Jacobian against finite
+differences of that map, and the flexible multipliers."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import quad
+from scipy.optimize import brentq
+
+from impactbar import BarModel, CosineLoad, SquareWaveLoad, periodic_orbits
+from impactbar.dynamics.impact import wave_impact
+
+TWO_PI = 2 * math.pi
+
+
+def wave(model):
+    return model.with_(impact="wave")
+
+
+def flight_and_contact(model, load, z):
+    """The impact map built independently: ``z = (t_e, q_1..q_N, q_0'..q_N')`` at the end of a
+    contact window -> the same at the end of the next, by the load's exact flow, a bracketed root
+    of ``u(1, t)`` and :func:`wave_impact`."""
+    M = model.n_modes + 1
+    c = model.end_weights
+    te = z[0]
+    q = np.concatenate(([-(c[1:] @ z[1:M])], z[1:M]))
+    flow = load.flow(model.frequencies**2, model.d, te, q, z[M:])
+
+    def end(t):
+        return float(c @ flow([t])[0][:, 0])
+
+    guess = te + TWO_PI - 2 / model.s
+    tp = brentq(end, guess - 0.05, guess + 0.05, xtol=1e-15, rtol=4 * np.finfo(float).eps)
+    qm, vm = (a[:, 0] for a in flow([tp]))
+    qm[0] -= c @ qm
+    imp = wave_impact(model, load, tp, qm, vm)
+    return np.concatenate(([tp + 2 / model.s], imp.q_after[1:], imp.v_after))
+
+
+def window_end_state(orbit):
+    M = orbit.model.n_modes + 1
+    y = orbit.state_after_impact
+    return np.concatenate(([orbit.phase + 2 / orbit.model.s], y[1:M], y[M:]))
+
+
+# ---------------------------------------------------------------- rigid bar: exact identity -------
+@pytest.mark.parametrize("load", [CosineLoad(0.3, 1.0), CosineLoad(0.05, 1.0, k=3),
+                                  SquareWaveLoad(1.0, 1.3)])
+@pytest.mark.parametrize("s, d, R", [(10.0, 0.0, 0.5), (3.0, 0.02, 0.2), (40.0, 0.01, 0.0)])
+def test_rigid_identity(load, s, d, R):
+    """Integrating ``q_0'' + d q_0' = p`` over the flight and adding the contact's momentum balance:
+    the impact velocity is ``2 pi p0/(1 + R) - int_0^{1/s} p(phase + t) dt`` (the contact time
+    shifts eq. 14's ``2 pi p0 / (1 + R)`` by the drive impulse of the window's first half)."""
+    model = BarModel(s=s, d=d, R=R, n_modes=0, impact="wave")
+    orbits = periodic_orbits(model, load)
+    assert orbits
+    for o in orbits:
+        brk = [] if isinstance(load, CosineLoad) else [TWO_PI * math.ceil(o.phase / TWO_PI)]
+        half = quad(lambda t, o=o: float(load(o.phase + t)), 0, 1 / s, points=[b - o.phase for b in brk
+                    if 0 < b - o.phase < 1 / s] or None, epsabs=1e-14, epsrel=1e-13)[0]
+        assert o.impact_velocity == pytest.approx(TWO_PI * load.p0 / (1 + R) - half, abs=1e-12)
+
+
+@pytest.mark.parametrize("load", [CosineLoad(0.3, 1.0), CosineLoad(0.05, 1.0, k=2),
+                                  SquareWaveLoad(1.0, 1.3)])
+def test_rigid_limit_same_for_both_laws(load):
+    """As ``s -> inf`` the window vanishes and the wave law's orbits tend to the paper's (O(1/s))."""
+    for s in (1e3, 1e5):
+        paper = periodic_orbits(BarModel(s=s, d=0.01, R=0.4, n_modes=0), load)
+        waves = periodic_orbits(BarModel(s=s, d=0.01, R=0.4, n_modes=0, impact="wave"), load)
+        assert len(paper) == len(waves)
+        for a, b in zip(paper, waves, strict=True):
+            assert b.phase == pytest.approx(a.phase, abs=20 / s)
+            assert b.impact_velocity == pytest.approx(a.impact_velocity, abs=20 / s)
+            np.testing.assert_allclose(np.sort_complex(b.multipliers), np.sort_complex(a.multipliers),
+                                       rtol=50 / s, atol=50 / s)
+
+
+# ---------------------------------------------------------------- flexible bar ---------------------
+@pytest.mark.parametrize("load", [CosineLoad(0.3, 1.0), SquareWaveLoad(1.0, 1.3)])
+def test_orbit_is_a_fixed_point_of_the_independent_map(load):
+    model = BarModel(s=10.0, d=0.005, R=0.5, n_modes=5, impact="wave")
+    orbits = periodic_orbits(model, load)
+    assert orbits
+    for o in orbits:
+        z = window_end_state(o)
+        z1 = flight_and_contact(model, load, z)
+        z1[0] -= TWO_PI
+        np.testing.assert_allclose(z1, z, rtol=0, atol=1e-10 * np.abs(z).max())
+
+
+@pytest.mark.parametrize("load", [CosineLoad(0.3, 1.0), SquareWaveLoad(1.0, 1.3)])
+def test_jacobian_against_finite_differences(load):
+    model = BarModel(s=10.0, d=0.005, R=0.5, n_modes=4, impact="wave")
+    from impactbar.orbits.wave import wave_impact_map_jacobian, wave_orbit_states
+
+    for o in periodic_orbits(model, load):
+        _, ye, ym, rate = wave_orbit_states(model, load, o.phase)
+        DP = wave_impact_map_jacobian(model, load, o.phase, ye, ym, rate)
+        z = window_end_state(o)
+        J = np.empty_like(DP)
+        for j in range(z.size):
+            h = 1e-6 * max(1.0, abs(z[j]))
+            e = np.zeros(z.size)
+            e[j] = h
+            J[:, j] = (flight_and_contact(model, load, z + e)
+                       - flight_and_contact(model, load, z - e)) / (2 * h)
+        np.testing.assert_allclose(DP, J, rtol=0, atol=2e-5 * np.abs(DP).max())
+        np.testing.assert_allclose(np.sort(np.abs(o.multipliers)), np.sort(np.abs(np.linalg.eigvals(J))),
+                                   rtol=0, atol=1e-5 * o.max_abs_multiplier)
+
+
+def test_flexible_multipliers_near_R():
+    """Each flexible mode is multiplied by ``-R`` at the contact and decays over the flight
+    ``2 pi - 2/s``: its multipliers lie near ``R exp(-d (pi - 1/s))`` (paper law: near the unit
+    circle)."""
+    d, R, s = 0.03 / TWO_PI, 0.5, 30.0
+    load = CosineLoad(0.3, 1.0)
+    target = R * math.exp(-d * (math.pi - 1 / s))
+    for o in periodic_orbits(BarModel(s=s, d=d, R=R, n_modes=6, impact="wave"), load):
+        assert np.sum(np.isclose(np.abs(o.multipliers), target, rtol=2e-3)) == 12  # 2 N of 2 N + 2
+    paper = periodic_orbits(BarModel(s=s, d=d, R=R, n_modes=6), load)
+    assert all(np.sort(np.abs(o.multipliers))[-3] > 0.9 for o in paper)
+
+
+def test_window_longer_than_period_has_no_orbit():
+    model = BarModel(s=0.3, d=0.0, R=0.5, n_modes=2, impact="wave")  # 2/s > 2 pi
+    assert periodic_orbits(model, CosineLoad(0.3, 1.0)) == []
+
+
+def test_impact_parameter_is_validated():
+    with pytest.raises(ValueError, match="impact"):
+        BarModel(s=1.0, d=0.0, R=0.5, n_modes=1, impact="rigid")
+    assert BarModel(s=1.0, d=0.0, R=0.5, n_modes=1).impact == "paper"
+
+
+def test_wave_existence_edge_matches_the_orbits():
+    """Just below the edge there are orbits, just above none (pneumatic load, wave law)."""
+    from impactbar.orbits.wave import wave_existence_edge
+
+    for k, s in ((1, 5.0), (3, 12.0)):
+        model = BarModel(s=s, d=0.004, R=0.3, n_modes=3, impact="wave")
+        edge = wave_existence_edge(model, k)
+        assert len(periodic_orbits(model, CosineLoad(edge * (1 - 1e-7) / k, 1.0, k))) == 2 * k
+        assert periodic_orbits(model, CosineLoad(edge * (1 + 1e-7) / k, 1.0, k)) == []
+
+
+def test_stability_edges_under_the_wave_law():
+    """The rigid-limit band of the wave law tends to the paper's ``1/sqrt(4 + pi^2) .. 1/pi`` at
+    ``R = 0`` (theory §6); the paper's Schur criterion is refused under the wave law."""
+    from impactbar.orbits.charts import pneumatic_stability_edges
+    from impactbar.orbits.wave import wave_existence_edge
+
+    model = BarModel(s=2e4, d=0.0, R=0.0, n_modes=0, impact="wave")
+    edges = pneumatic_stability_edges(model, 1)
+    assert len(edges) == 1 and edges[0][1] == "period-doubling"
+    assert edges[0][0] == pytest.approx(1 / math.sqrt(4 + math.pi**2), abs=1e-3)
+    assert wave_existence_edge(model, 1) == pytest.approx(1 / math.pi, abs=1e-3)  # the fold
+    with pytest.raises(ValueError, match="criterion"):
+        pneumatic_stability_edges(model, 1, criterion="paper")
+
+
+@pytest.mark.parametrize("load", [CosineLoad(0.3, 1.0), SquareWaveLoad(1.0, 1.3)])
+def test_blow_impulse_is_the_drive_impulse_per_period(load):
+    """Undamped, the momentum of a periodic motion returns each period: the rod receives per blow
+    the drive's impulse ``2 pi p0``, and advances by ``2 pi p0 / Z_s``, ``Z_s = s (1 + R)/(1 - R)``
+    (flexible piston, any phase of the contact)."""
+    R, s = 0.4, 7.0
+    for o in periodic_orbits(BarModel(s=s, d=0.0, R=R, n_modes=4, impact="wave"), load):
+        assert o.impact.impulse == pytest.approx(TWO_PI * load.p0, rel=1e-12)
+        assert o.impact.advance == pytest.approx(TWO_PI * load.p0 / (s * (1 + R) / (1 - R)), rel=1e-12)
