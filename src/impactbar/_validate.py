@@ -24,7 +24,11 @@ def check_real(
     rng = _range_text(lo, hi, lo_open, hi_open)
     if isinstance(value, bool) or not isinstance(value, numbers.Real | np.floating | np.integer):
         raise ValueError(f"{name} must be a real number {rng}; got {value!r} ({type(value).__name__})")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond the float range
+        raise ValueError(f"{name} must be a finite real number {rng}; got an integer beyond the "
+                         "float range") from None
     if not math.isfinite(v):
         raise ValueError(f"{name} must be a finite real number {rng}; got {v}")
     bad = (

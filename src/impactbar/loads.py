@@ -404,11 +404,15 @@ class PiecewiseConstantLoad(Load):
         mid = np.asarray(mid, dtype=float)
         half = np.asarray(half, dtype=float)
         center = self(mid)
-        lo = mid - half
-        # a jump inside the interval: the piece index changes, or the interval is a period long
-        jump = (self._index(lo) != self._index(mid + half)) | (2 * half >= TWO_PI) | (
-            self._index(lo) != self._index(mid)
-        )
+        lo = (mid - half)[..., None]
+        hi = (mid + half)[..., None]
+        # a jump inside the interval: some break b + 2 pi k in (lo, hi] (counted per break, so a
+        # jump just before the period's end is not hidden by the piece index wrapping around)
+        b = self._b
+        count = np.floor((hi - b) / TWO_PI) - np.floor((lo - b) / TWO_PI)
+        jump = np.any(count > 0, axis=-1) | (2 * half >= TWO_PI)
+        if b.size == 1:  # a constant load (kappa = 2): no jump at all
+            jump = np.zeros_like(jump)
         spread = float(np.max(self._lv) - np.min(self._lv))
         return center, np.where(jump, spread, 0.0)
 
@@ -431,7 +435,9 @@ class PiecewiseConstantLoad(Load):
         if np.any(t < t0 - 1e-12):
             raise ValueError("propagate needs t >= t0")
         t_max = float(np.max(t))
-        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [max(t_max, t0) + 1.0]))
+        # the last node is the last time asked for, not beyond it: a piece ending past the next
+        # jump would read its level at a midpoint on the far side of that jump
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [max(t_max, t0)]))
         # the level of each piece is read at its midpoint: a node itself may round to either side
         levels = self(0.5 * (nodes[:-1] + nodes[1:]))
         qn = np.empty((M, nodes.size - 1))
@@ -455,8 +461,8 @@ class PiecewiseConstantLoad(Load):
         q0 = np.asarray(q0, dtype=float)
         v0 = np.asarray(v0, dtype=float)
         t_end = t0 + horizon
-        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [t_end + 1.0]))
-        levels = self(0.5 * (nodes[:-1] + nodes[1:]))
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [t_end]))
+        levels = self(0.5 * (nodes[:-1] + nodes[1:]))  # the last piece ends at t_end, not beyond
         qn = np.empty((w2.size, nodes.size - 1))
         vn = np.empty_like(qn)
         qn[:, 0], vn[:, 0] = q0, v0

@@ -46,13 +46,34 @@ FAILED = 5
 _MAX_STEPS = 2_000_000
 
 
-@numba.njit(cache=True, nogil=True)
+def _cache_probe(x):  # pragma: no cover - compiled only to probe the cache
+    return x
+
+
+def _cache_available() -> bool:
+    """Whether numba can keep its on-disk cache for this module. In a read-only install with no
+    writable user cache directory, ``cache=True`` fails ("cannot cache function"): the kernels are
+    then compiled in memory, once per process."""
+    try:
+        numba.njit(cache=True)(_cache_probe)
+    except RuntimeError:
+        return False
+    return True
+
+
+_CACHE = _cache_available()
+
+
+@numba.njit(cache=_CACHE, nogil=True)
 def _bc(d, tau):
     """``b = (1 - e^{-d tau})/d``, ``c = (tau - b)/d`` with their ``d -> 0`` limits."""
     if d == 0.0:
         return tau, 0.5 * tau * tau
     y = d * tau
-    b = -math.expm1(-y) / d
+    if abs(y) < 1e-8:  # series: y may underflow to 0 for a denormal d, and expm1(-y)/d with it
+        b = tau * (1.0 - 0.5 * y)
+    else:
+        b = -math.expm1(-y) / d
     if abs(y) < 1e-2:
         c = tau * tau * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0)
     else:
@@ -60,7 +81,7 @@ def _bc(d, tau):
     return b, c
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def _fundamental(w2, d, tau):
     """Fundamental matrix of ``q'' + d q' + w2 q = 0`` for ``w2 > 0``, every damping regime."""
     lam2 = w2 - 0.25 * d * d
@@ -69,14 +90,20 @@ def _fundamental(w2, d, tau):
     if lam2 >= 0.0:
         C = math.cos(x)
         S = tau * (math.sin(x) / x if abs(x) > 1e-8 else 1.0 - x * x / 6.0)
+    elif abs(x) > 1e-4:  # overdamped: e^{-d tau/2} cosh, sinh as two decaying exponentials
+        ep = 0.5 * math.exp((lam - 0.5 * d) * tau)  # (cosh overflows where e underflows)
+        em = 0.5 * math.exp((-lam - 0.5 * d) * tau)
+        eC = ep + em
+        eS = (ep - em) / lam
+        return eC + 0.5 * d * eS, eS, -w2 * eS, eC - 0.5 * d * eS
     else:
         C = math.cosh(x)
-        S = tau * (math.sinh(x) / x if abs(x) > 1e-4 else 1.0 + x * x / 6.0)
+        S = tau * (1.0 + x * x / 6.0)
     e = math.exp(-0.5 * d * tau)
     return e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def load_value(kind, p0, ks, pr, pim, level, t):
     """``p(t)``, ``p'(t)``, ``p''(t)`` (derivatives 0 inside a piece of a piecewise-constant
     load)."""
@@ -96,7 +123,7 @@ def load_value(kind, p0, ks, pr, pim, level, t):
     return p, dp, ddp
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def particular(kind, w2, p0, ks, hpr, hpi, level, t, qp, vp):
     """Fill ``qp, vp`` with the particular state at ``t`` (0 for a rigid mode's mean-load part)."""
     M = w2.size
@@ -116,7 +143,7 @@ def particular(kind, w2, p0, ks, hpr, hpi, level, t, qp, vp):
                 vp[n] -= k * (hpr[n, j] * sk + hpi[n, j] * ck)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp):
     """State ``q, v`` at ``t`` from the anchor ``(ta, qa, va)`` with particular state ``qpa, vpa``
     there; ``qp, vp`` receive the particular state at ``t``."""
@@ -142,7 +169,7 @@ def advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v,
             v[n] = p21 * dq + p22 * dv + vp[n]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp):
     """``h, h', h''`` of ``h = alpha p + sum w_n q_n`` at a state, and the rounding noise of ``h``
     and ``h'`` (``1e-14`` times the sum of the magnitudes they add and cancel)."""
@@ -160,7 +187,7 @@ def functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp):
     return h, dh, ddh, 1e-14 * mag, 1e-14 * dmag
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def bounds(kind, w2, d, wts, alpha, psup, p1, p2, p3, L, vpb, apb, jpb, q, v, qp, vp, horizon):
     """Bounds ``A >= |h''|`` and ``J >= |h'''|`` valid on ``[t, t + horizon]``."""
     A = abs(alpha) * p2
@@ -182,7 +209,7 @@ def bounds(kind, w2, d, wts, alpha, psup, p1, p2, p3, L, vpb, apb, jpb, q, v, qp
     return A, J
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def piece_of(breaks, t):
     """Period index and piece index of time ``t`` for a piecewise-constant load."""
     m = math.floor(t / TWO_PI)
@@ -197,19 +224,19 @@ def piece_of(breaks, t):
     return m, j
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def piece_end(breaks, m, j):
     if j + 1 < breaks.size:
         return m * TWO_PI + breaks[j + 1]
     return (m + 1) * TWO_PI
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def _cubic(g, dh, ddh, J, s):
     return g + s * (dh + s * (0.5 * ddh + s * J / 6.0))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def _cubic_step(g, dh, ddh, J, smax):
     """A step ``s`` with ``f(x) = g + dh x + ddh x^2/2 + J x^3/6 < 0`` on ``[0, s)`` (``g <= 0``,
     ``J >= 0``): the first root of ``f``, from below, or ``smax`` if there is none before it."""
@@ -286,7 +313,7 @@ def next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level, ta, te, m, 
     return te, m, j, level
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, levels,
                   psup, p1, p2, p3, vpb, apb, jpb,
                   anchor_t, qa, va, t_lim, htol, q, v, qp, vp, qpa, vpa):
@@ -395,7 +422,7 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
     return FAIL, a
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
              psup, p1, p2, p3, vpb, apb, jpb,
              t, q, v, t_end, max_imp, tail_tol, out_t, out_vel, out_q, out_v):
@@ -478,7 +505,7 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
             va[i] = v[i]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def propagate_many(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, ta, qa, va, ts, out_q, out_v):
     """Exact states at the sorted times ``ts >= ta`` from ``(ta, qa, va)`` into ``out_q, out_v``
     (shape (M, T)); a piecewise-constant load is followed jump by jump, by piece index (no

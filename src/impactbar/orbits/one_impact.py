@@ -206,8 +206,20 @@ def periodic_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit]:
     [0.5148, 2.6268]
     """
     _check_inputs(model, load)
+    _check_modes(model)
     with single_threaded_blas():
         return [_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load)]
+
+
+#: Largest ``n_modes`` for the orbit functions: the multipliers are the eigenvalues of a dense
+#: ``(2 N + 2)``-square Jacobian, O(N^3); beyond this they do not come in bounded time.
+MAX_ORBIT_MODES = 1024
+
+
+def _check_modes(model: BarModel) -> None:
+    if model.n_modes > MAX_ORBIT_MODES:
+        raise ValueError(f"model.n_modes must be at most {MAX_ORBIT_MODES} for one-impact orbits "
+                         f"(dense Floquet multipliers, O(n_modes^3)); got {model.n_modes}")
 
 
 def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
@@ -256,6 +268,8 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     -------
     numpy.ndarray of complex, shape (2 N + 2,)
     """
+    _check_inputs(model, load)
+    _check_modes(model)
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
     y_plus, y_minus = _impact_states(model, load, phase)

@@ -55,7 +55,7 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
     qp, vp = yp[:M], yp[M:]
     qm, vm = ym[:M], ym[M:]
     v_imp = float(c @ vm)
-    if not abs(v_imp) > 1e-14 * max(1.0, float(np.max(np.abs(ym)))):
+    if not abs(v_imp) > 1e-14 * float(np.max(np.abs(ym))):  # relative: invariant under load -> L load
         raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
     p11, p12, p21, p22 = fundamental(w2, d, TWO_PI)
     Psi = np.block([[np.diag(p11), np.diag(p12)], [np.diag(p21), np.diag(p22)]])
@@ -104,7 +104,8 @@ def schur_blocks(model: BarModel, load: Load, phase: float) -> np.ndarray:
     else:
         sig = 0.0
     S2 = float(load(phase)) - p0 - d * float(load.rigid_velocity(d, phase))
-    bracket = 1.0 if d == 0.0 else -math.expm1(-TWO_PI * d) / (TWO_PI * d)
+    y = TWO_PI * d
+    bracket = 1.0 - 0.5 * y if y < 1e-8 else -math.expm1(-y) / y  # series: no denormal quotient
     blocks = np.empty((N + 1, 3))
     blocks[0, 0] = p0 + (1.0 + R) * sig
     blocks[0, 1] = (-(1.0 + R * R * e2) * p0 - bracket * (1.0 + R) ** 2 * S2
@@ -134,6 +135,6 @@ def quadratic_roots(blocks: np.ndarray) -> np.ndarray:
     sgn = np.where((np.conj(a1) * disc).real >= 0.0, 1.0, -1.0)
     qq = -0.5 * (a1 + sgn * disc)
     with np.errstate(divide="ignore", invalid="ignore"):
-        r1 = np.where(a2 != 0, qq / a2, np.nan)
+        r1 = np.where(a2 != 0, qq / a2, complex(np.inf, 0.0))  # a2 = 0: a root at infinity
         r2 = np.where(qq != 0, a0 / qq, 0.0)
     return np.column_stack((r1, r2)).ravel()
