@@ -55,7 +55,7 @@ def check_complex_array(name: str, value) -> np.ndarray:
     """Return ``value`` as a finite 1-d complex array, or raise ``ValueError``."""
     try:
         arr = np.atleast_1d(np.asarray(value, dtype=complex))
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be a 1-d sequence of complex numbers; got {value!r}") from exc
     if arr.ndim != 1:
         raise ValueError(f"{name} must be 1-d; got shape {arr.shape}")

@@ -346,8 +346,12 @@ class PiecewiseConstantLoad(Load):
     """
 
     def __init__(self, breaks, levels):
-        b = np.asarray(breaks, dtype=float).ravel()
-        lv = np.asarray(levels, dtype=float).ravel()
+        try:
+            b = np.asarray(breaks, dtype=float).ravel()
+            lv = np.asarray(levels, dtype=float).ravel()
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise ValueError(f"breaks and levels must be 1-d sequences of real numbers; got "
+                             f"{breaks!r}, {levels!r}") from exc
         if b.size == 0 or b.size != lv.size:
             raise ValueError("breaks and levels must be non-empty and of equal length")
         if not (np.all(np.isfinite(b)) and b[0] == 0.0 and np.all(np.diff(b) > 0) and b[-1] < TWO_PI):

@@ -12,6 +12,9 @@ __all__ = ["BarModel"]
 
 #: Largest number of flexible modes accepted; beyond it the modal sums gain nothing in double precision.
 MAX_MODES = 4096
+#: Largest ``s * n_modes`` with flexible modes: the highest mode's phase over a period,
+#: ``2 pi^2 s n``, must stay well inside double precision.
+MAX_STIFFNESS = 1e12
 
 
 @dataclass(frozen=True)
@@ -37,7 +40,8 @@ class BarModel:
     R : float
         Restitution coefficient, ``0 <= R <= 1`` (eq. 10).
     n_modes : int
-        Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096.
+        Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096, and with
+        ``s * n_modes <= 1e12`` (beyond, the modes' phases over a period are lost in rounding).
 
     Raises
     ------
@@ -61,6 +65,11 @@ class BarModel:
         object.__setattr__(self, "d", check_real("d", self.d, lo=0.0))
         object.__setattr__(self, "R", check_real("R", self.R, lo=0.0, hi=1.0))
         object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=MAX_MODES))
+        if self.n_modes and self.s * self.n_modes > MAX_STIFFNESS:
+            raise ValueError(
+                f"s * n_modes must be at most {MAX_STIFFNESS:g} (got s = {self.s:g}, n_modes = "
+                f"{self.n_modes}): beyond it a mode's phase over one period, 2 pi s n pi, is lost "
+                "in rounding; a bar that stiff moves as a rigid one (n_modes = 0, any s)")
 
     @property
     def frequencies(self) -> np.ndarray:

@@ -279,7 +279,7 @@ def _cubic_step(g, dh, ddh, J, smax):
     return smax
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def first_piece(kind, w2, p0, ks, hpr, hpi, breaks, levels, ta, qpa, vpa):
     """Set up the load piece that holds ``ta``: its index ``(m, j)`` (period ``m``, piece ``j``;
     zeros for a Fourier load), its level, and the particular state at ``ta`` in ``qpa, vpa``.
@@ -294,7 +294,7 @@ def first_piece(kind, w2, p0, ks, hpr, hpi, breaks, levels, ta, qpa, vpa):
     return m, j, level
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=_CACHE, nogil=True)
 def next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level, ta, te, m, j,
                qa, va, qpa, vpa, q, v, qp, vp):
     """Cross the load jump at ``te``: advance the anchor ``(ta, qa, va)`` to it, step the piece

@@ -604,7 +604,9 @@ class Trajectory:
             yield sel, s.basis, q, v
 
     def end_displacement(self, t) -> np.ndarray:
-        """``u(1, t)``, the struck end (``<= 0`` up to rounding).
+        """``u(1, t)``, the struck end, ``<= 0``: a positive value within the rounding noise of the
+        closed form (``1e-14 sum |c_n| (|q_n| + |q_pn|)``, the event search's own tolerance) is
+        reported as 0, and so is the end during the bounces skipped at a chatter jump.
 
         Parameters
         ----------
@@ -680,7 +682,14 @@ class Trajectory:
     @cached_property
     def energy(self) -> EnergyAccount:
         """The energy account of the run (:class:`EnergyAccount`), computed on first access by
-        Gauss-Legendre quadrature of the closed-form motion on every segment."""
+        Gauss-Legendre quadrature of the closed-form motion on every segment.
+
+        Raises
+        ------
+        ValueError
+            If the quadrature would take more than ``MAX_ENERGY_WORK`` (2e9) node-modes; the work
+            grows as ``s * n_modes^2 * (t_end - t0)``.
+        """
         return _energy_account(self)
 
 
@@ -801,9 +810,11 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
-        End of the run (dimensionless time), ``> t0``.
+        End of the run (dimensionless time), ``t0 < t_end <= t0 + 1e8`` and ``|t_end| <= 1e8``
+        (``MAX_TIME``: beyond, impact times are not resolved in double precision, and the run would
+        not end in bounded time).
     t0 : float, optional
-        Start time. Default 0.
+        Start time, ``|t0| <= 1e8``. Default 0.
     max_impacts : int, optional
         Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact.
 
@@ -815,7 +826,9 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     ------
     ValueError
         On a bad parameter (named in the message), a start that penetrates the stop
-        (``u(1, t0) > 0``), or an undamped resonance between a mode and a load harmonic.
+        (``u(1, t0) > 0``), an undamped resonance between a mode and a load harmonic, or a bar too
+        stiff for the guaranteed event search, ``s * n_modes > 1e5`` (``MAX_STIFFNESS``: the
+        search steps on the scale of the stiffest mode's period).
     """
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
