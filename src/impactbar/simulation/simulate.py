@@ -45,7 +45,7 @@ MICRO_FLIGHT = 1e-6
 #: Largest ``|t0|``, ``|t_end|`` and ``t_end - t0`` accepted by :func:`simulate` (about 1.6e7 periods).
 MAX_TIME = 1e8
 #: Largest quadrature work (nodes times modes) :attr:`Trajectory.energy` may take (time bound).
-MAX_ENERGY_WORK = 2e9
+MAX_ENERGY_WORK = 3e8
 #: Largest ``s * n_modes`` :func:`simulate` accepts: the guaranteed event search steps on the
 #: scale of the stiffest mode's period, so beyond it a run does not finish in bounded time.
 MAX_STIFFNESS = 1e5
@@ -687,7 +687,7 @@ class Trajectory:
         Raises
         ------
         ValueError
-            If the quadrature would take more than ``MAX_ENERGY_WORK`` (2e9) node-modes; the work
+            If the quadrature would take more than ``MAX_ENERGY_WORK`` (3e8) node-modes; the work
             grows as ``s * n_modes^2 * (t_end - t0)``.
         """
         return _energy_account(self)
