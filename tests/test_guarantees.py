@@ -85,6 +85,29 @@ def test_verdicts_do_not_depend_on_the_load_scale(L):
         assert a.impact_velocity == pytest.approx(L * b.impact_velocity, rel=1e-10)
 
 
+@pytest.mark.parametrize("L", [1.0, 1e-12, 1e12])
+def test_phase_roots_on_a_piece_boundary_survive_scaling(L):
+    """kappa = 1: p0 = 0 and V is a zero-mean triangle wave with zeros at pi/2 and 3 pi/2 exactly,
+    where the local slope bound is the exact slope: the rounding floor must keep both."""
+    from impactbar.orbits.phase import phase_roots
+
+    m = ib.BarModel(1.7946310908309995, 0.0, 0.8429779426713747, 2)
+    roots = phase_roots(m, ib.SquareWaveLoad(0.2662219063475738 * L, 1.0))
+    np.testing.assert_allclose([r for r, _ in roots], [0.5 * math.pi, 1.5 * math.pi], atol=1e-9)
+
+
+@pytest.mark.parametrize("L", [1.0, 1e-12, 1e12])
+def test_conservative_orbits_are_marginal_not_stable(L):
+    """R = 1, d = 0, rigid bar: the impact map preserves area (multiplier product 1), so no orbit
+    is asymptotically stable, whatever the rounding of a multiplier of modulus 1."""
+    m = ib.BarModel(0.1892305027009299, 0.0, 1.0, 0)
+    orbits = ib.periodic_orbits(m, ib.CosineLoad(0.8661934516337568 * L, 0.28140018610020245 * L))
+    assert len(orbits) == 2
+    for o in orbits:
+        assert abs(np.prod(o.multipliers)) == pytest.approx(1.0, rel=1e-9)
+        assert not o.stable
+
+
 def test_denormal_damping_equals_no_damping():
     init = ib.InitialState.rigid(-0.1, 0, 2)
     a = ib.simulate(ib.BarModel(5, 0.0, 0.5, 2), ib.CosineLoad(1.2, 1), init, 60)

@@ -59,7 +59,9 @@ class PeriodicOrbit:
         Exact Floquet multipliers (eigenvalues of the impact map's Jacobian, MODEL.md section 7),
         sorted by decreasing modulus.
     stable : bool
-        ``admissible`` and every ``|multiplier| < 1``.
+        ``admissible`` and every ``|multiplier| < 1 - MARGINAL`` (``1e-9``): a multiplier on the
+        unit circle to rounding (e.g. ``R = 1``, ``d = 0``, a conservative map) is marginal, not
+        stable, whatever its last bits.
     schur_roots : numpy.ndarray of complex, shape (2 N + 2,)
         Roots of the paper's quadratic blocks (eqs. 27, 29-31), rigid block first.
     schur_stable : bool
@@ -211,6 +213,9 @@ def periodic_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit]:
         return [_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load)]
 
 
+#: A multiplier within this of the unit circle is marginal: the orbit is not called stable.
+MARGINAL = 1e-9
+
 #: Largest ``n_modes`` for the orbit functions: the multipliers are the eigenvalues of a dense
 #: ``(2 N + 2)``-square Jacobian, O(N^3); beyond this they do not come in bounded time.
 MAX_ORBIT_MODES = 1024
@@ -314,7 +319,7 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
         clearance=clearance,
         clearance_error=cerr,
         multipliers=mu,
-        stable=bool(admissible and np.all(np.abs(mu) < 1.0)),
+        stable=bool(admissible and np.all(np.abs(mu) < 1.0 - MARGINAL)),
         schur_roots=quadratic_roots(blocks),
         schur_stable=schur_test(blocks),
         state_after_impact=y_plus,

@@ -109,7 +109,9 @@ def phase_roots(model: BarModel, load: Load, *, closed_form: bool = True) -> lis
         return np.minimum(local, lip)
 
     try:
-        clusters = enclose_zeros(F, slope_bound, 0.0, TWO_PI, n0=64, min_width=1e-7)
+        # the rounding floor matters: the local bound can be the exact slope
+        clusters = enclose_zeros(F, slope_bound, 0.0, TWO_PI, n0=64, min_width=1e-7,
+                                 atol=1e-12 * scale)
     except RuntimeError as exc:  # pragma: no cover - the local bound keeps the search finite
         raise ValueError(f"phase equation: {exc}; the load {load!r} is too close to a degenerate "
                          "one (a constant load) for a certified search") from exc
