@@ -158,6 +158,19 @@ def test_soft_bar_end_never_passes_the_stop():
         assert tr.energy.relative_residual < 1e-10
 
 
+def test_elastic_bounces_damped_on_the_stop_end_in_bounded_time():
+    """R = 1 with damping and a load pressing the end on the stop: the bounces never accumulate
+    but shrink without end (ever more impacts per unit time). Once below the rounding noise they
+    are contact; the run ends, balances energy and stays behind the stop."""
+    m = ib.BarModel(0.3980369452538852, 1.8010853628144086, 1.0, 8)
+    load = ib.SquareWaveLoad(0.9169614456987487, 1.7477993326541295)
+    t = time.perf_counter()
+    tr = ib.simulate(m, load, ib.InitialState.rigid(-0.18235, -0.65491, 8), 40.0)
+    assert time.perf_counter() - t < 60.0
+    assert tr.contact_intervals.size and tr.energy.relative_residual < 1e-10
+    assert np.max(tr.end_displacement(np.linspace(tr.t0, tr.t_end, 4001))) <= 0.0
+
+
 # ------------------------------------------------------------------------------------------------
 # refusals: a ValueError naming the parameter, never another exception, never unbounded
 # ------------------------------------------------------------------------------------------------

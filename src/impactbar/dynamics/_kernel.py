@@ -479,23 +479,25 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
         n += 1
         if n >= max_imp:
             return n, MAXIMP, tc
-        if R < 1.0:
-            if kind == 1:
-                mm, jj = piece_of(breaks, tc)
-                level = levels[jj]
-            else:
-                level = 0.0
-            p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
-            h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
-            if ddh > 0.0:
-                tail = 2.0 * R * vend / ddh / (1.0 - R)
-                # the next bounce is lost in rounding when its height (R v)^2 / (2 h'') is near
-                # the noise of c . q: its time and velocity are then noise, so jump
-                height = 0.5 * (R * vend) ** 2 / ddh
-                if tail < tail_tol or height < 1e3 * noise:
-                    for i in range(M):
-                        v[i] = 0.0
-                    return n, CHATTER, tc + tail
+        if kind == 1:
+            mm, jj = piece_of(breaks, tc)
+            level = levels[jj]
+        else:
+            level = 0.0
+        p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
+        h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
+        if ddh > 0.0:
+            # R < 1: the bounces accumulate at tc + tail. R = 1: they do not accumulate, but
+            # damping shrinks them without end (ever more impacts per unit time)
+            tail = 2.0 * R * vend / ddh / (1.0 - R) if R < 1.0 else math.inf
+            # the next bounce is lost in rounding when its height (R v)^2 / (2 h'') is near
+            # the noise of c . q: its time and velocity are then noise, so jump (for R = 1 to
+            # contact now: bounces below the rounding noise are contact)
+            height = 0.5 * (R * vend) ** 2 / ddh
+            if tail < tail_tol or height < 1e3 * noise:
+                for i in range(M):
+                    v[i] = 0.0
+                return n, CHATTER, tc + (tail if R < 1.0 else 0.0)
         if n >= cap:
             return n, FULL, tc
         t = tc
