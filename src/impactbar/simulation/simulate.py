@@ -48,7 +48,7 @@ MAX_TIME = 1e8
 MAX_ENERGY_WORK = 3e8
 #: Largest ``s * n_modes`` :func:`simulate` accepts: the guaranteed event search steps on the
 #: scale of the stiffest mode's period, so beyond it a run does not finish in bounded time.
-MAX_STIFFNESS = 1e5
+MAX_SIMULATE_STIFFNESS = 1e5
 
 _FREE, _CONTACT = 0, 1
 
@@ -827,7 +827,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     ValueError
         On a bad parameter (named in the message), a start that penetrates the stop
         (``u(1, t0) > 0``), an undamped resonance between a mode and a load harmonic, or a bar too
-        stiff for the guaranteed event search, ``s * n_modes > 1e5`` (``MAX_STIFFNESS``: the
+        stiff for the guaranteed event search, ``s * n_modes > 1e5`` (``MAX_SIMULATE_STIFFNESS``: the
         search steps on the scale of the stiffest mode's period).
     """
     if not isinstance(model, BarModel):
@@ -845,9 +845,9 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     else:
         max_imp = check_int("max_impacts", max_impacts, lo=1)
     N = model.n_modes
-    if N and model.s * N > MAX_STIFFNESS:
+    if N and model.s * N > MAX_SIMULATE_STIFFNESS:
         raise ValueError(
-            f"model: s * n_modes must be at most {MAX_STIFFNESS:g} for simulate (the event search "
+            f"model: s * n_modes must be at most {MAX_SIMULATE_STIFFNESS:g} for simulate (the event search "
             f"resolves the stiffest mode, frequency s n_modes pi); got s = {model.s:g}, "
             f"n_modes = {N}: use fewer modes (a stiff bar moves as a rigid one, n_modes = 0)"
         )
