@@ -375,10 +375,10 @@ def test_long_run_holds_its_trajectory_about_once():
     q, v = o.modal_state_after_impact
     q[0] -= 1e-3
     start = InitialState(q, v)
-    simulate(model, load, start, o.phase + 1e9, t0=o.phase, max_impacts=5)
+    simulate(model, load, start, o.phase + 1e6, t0=o.phase, max_impacts=5)
     tracemalloc.start()
     try:
-        tr = simulate(model, load, start, o.phase + 1e9, t0=o.phase, max_impacts=30_000)
+        tr = simulate(model, load, start, o.phase + 1e6, t0=o.phase, max_impacts=30_000)
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()

@@ -24,7 +24,11 @@ def check_real(
     rng = _range_text(lo, hi, lo_open, hi_open)
     if isinstance(value, bool) or not isinstance(value, numbers.Real | np.floating | np.integer):
         raise ValueError(f"{name} must be a real number {rng}; got {value!r} ({type(value).__name__})")
-    v = float(value)
+    try:
+        v = float(value)
+    except OverflowError:  # an int beyond the float range
+        raise ValueError(f"{name} must be a finite real number {rng}; got an integer beyond the "
+                         "float range") from None
     if not math.isfinite(v):
         raise ValueError(f"{name} must be a finite real number {rng}; got {v}")
     bad = (
@@ -51,7 +55,7 @@ def check_complex_array(name: str, value) -> np.ndarray:
     """Return ``value`` as a finite 1-d complex array, or raise ``ValueError``."""
     try:
         arr = np.atleast_1d(np.asarray(value, dtype=complex))
-    except (TypeError, ValueError) as exc:
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{name} must be a 1-d sequence of complex numbers; got {value!r}") from exc
     if arr.ndim != 1:
         raise ValueError(f"{name} must be 1-d; got shape {arr.shape}")

@@ -372,8 +372,12 @@ class PiecewiseConstantLoad(Load):
     """
 
     def __init__(self, breaks, levels):
-        b = np.asarray(breaks, dtype=float).ravel()
-        lv = np.asarray(levels, dtype=float).ravel()
+        try:
+            b = np.asarray(breaks, dtype=float).ravel()
+            lv = np.asarray(levels, dtype=float).ravel()
+        except (TypeError, ValueError, OverflowError) as exc:
+            raise ValueError(f"breaks and levels must be 1-d sequences of real numbers; got "
+                             f"{breaks!r}, {levels!r}") from exc
         if b.size == 0 or b.size != lv.size:
             raise ValueError("breaks and levels must be non-empty and of equal length")
         if not (np.all(np.isfinite(b)) and b[0] == 0.0 and np.all(np.diff(b) > 0) and b[-1] < TWO_PI):
@@ -430,11 +434,15 @@ class PiecewiseConstantLoad(Load):
         mid = np.asarray(mid, dtype=float)
         half = np.asarray(half, dtype=float)
         center = self(mid)
-        lo = mid - half
-        # a jump inside the interval: the piece index changes, or the interval is a period long
-        jump = (self._index(lo) != self._index(mid + half)) | (2 * half >= TWO_PI) | (
-            self._index(lo) != self._index(mid)
-        )
+        lo = (mid - half)[..., None]
+        hi = (mid + half)[..., None]
+        # a jump inside the interval: some break b + 2 pi k in (lo, hi] (counted per break, so a
+        # jump just before the period's end is not hidden by the piece index wrapping around)
+        b = self._b
+        count = np.floor((hi - b) / TWO_PI) - np.floor((lo - b) / TWO_PI)
+        jump = np.any(count > 0, axis=-1) | (2 * half >= TWO_PI)
+        if b.size == 1:  # a constant load (kappa = 2): no jump at all
+            jump = np.zeros_like(jump)
         spread = float(np.max(self._lv) - np.min(self._lv))
         return center, np.where(jump, spread, 0.0)
 
@@ -445,12 +453,6 @@ class PiecewiseConstantLoad(Load):
         per = np.arange(n0, n1 + 1)[:, None] * TWO_PI + self._b[None, :]
         per = per.ravel()
         return per[(per > t0) & (per < t1)]
-
-    def _sentinel(self, t):
-        """A time after ``t`` and before the next jump, closing the last piece: its level is read at
-        the piece's midpoint, which must not pass that jump."""
-        nxt = self._boundaries(t, t + 2.0 * TWO_PI)
-        return t + 0.5 * (float(nxt[0]) - t) if nxt.size else t + 1.0
 
     def propagate(self, w2, d, t0, q0, v0, t):
         w2 = np.asarray(w2, dtype=float)
@@ -463,7 +465,9 @@ class PiecewiseConstantLoad(Load):
         if np.any(t < t0 - 1e-12):
             raise ValueError("propagate needs t >= t0")
         t_max = float(np.max(t))
-        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [self._sentinel(max(t_max, t0))]))
+        # the last node is the last time asked for, not beyond it: a piece ending past the next
+        # jump would read its level at a midpoint on the far side of that jump
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_max), [max(t_max, t0)]))
         # the level of each piece is read at its midpoint: a node itself may round to either side
         levels = self(0.5 * (nodes[:-1] + nodes[1:]))
         qn = np.empty((M, nodes.size - 1))
@@ -487,8 +491,8 @@ class PiecewiseConstantLoad(Load):
         q0 = np.asarray(q0, dtype=float)
         v0 = np.asarray(v0, dtype=float)
         t_end = t0 + horizon
-        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [self._sentinel(t_end)]))
-        levels = self(0.5 * (nodes[:-1] + nodes[1:]))
+        nodes = np.concatenate(([t0], self._boundaries(t0, t_end), [t_end]))
+        levels = self(0.5 * (nodes[:-1] + nodes[1:]))  # the last piece ends at t_end, not beyond
         qn = np.empty((w2.size, nodes.size - 1))
         vn = np.empty_like(qn)
         qn[:, 0], vn[:, 0] = q0, v0

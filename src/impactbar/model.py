@@ -15,6 +15,9 @@ IMPACT_LAWS = ("paper", "wave")
 
 #: Largest number of flexible modes accepted; beyond it the modal sums gain nothing in double precision.
 MAX_MODES = 4096
+#: Largest ``s * n_modes`` with flexible modes: the highest mode's phase over a period,
+#: ``2 pi^2 s n``, must stay well inside double precision.
+MAX_STIFFNESS = 1e12
 
 
 @dataclass(frozen=True)
@@ -40,7 +43,8 @@ class BarModel:
     R : float
         Restitution coefficient, ``0 <= R <= 1`` (eq. 10).
     n_modes : int
-        Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096.
+        Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096, and with
+        ``s * n_modes <= 1e12`` (beyond, the modes' phases over a period are lost in rounding).
     impact : {"paper", "wave"}
         The impact law. ``"paper"`` (default): eq. 10, the velocity field reversed and scaled by
         ``-R`` at an instant impact, the displacement kept. ``"wave"``: the stop is a long rod of
@@ -73,6 +77,11 @@ class BarModel:
         object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=MAX_MODES))
         if not isinstance(self.impact, str) or self.impact not in IMPACT_LAWS:
             raise ValueError(f"impact must be one of {list(IMPACT_LAWS)}; got {self.impact!r}")
+        if self.n_modes and self.s * self.n_modes > MAX_STIFFNESS:
+            raise ValueError(
+                f"s * n_modes must be at most {MAX_STIFFNESS:g} (got s = {self.s:g}, n_modes = "
+                f"{self.n_modes}): beyond it a mode's phase over one period, 2 pi s n pi, is lost "
+                "in rounding; a bar that stiff moves as a rigid one (n_modes = 0, any s)")
 
     @property
     def frequencies(self) -> np.ndarray:

@@ -32,8 +32,10 @@ def run(args) -> int:
     from ..sweeps import load_spec, run_sweep
 
     spec = load_spec(args.spec)  # refused here, before any cluster starts
-    if args.workers is not None and args.workers < 1:
-        raise ValueError(f"--workers must be >= 1; got {args.workers}")
+    from ..sweeps.run import max_workers
+
+    if args.workers is not None and not 1 <= args.workers <= max_workers():
+        raise ValueError(f"--workers must be in [1, {max_workers()}] (four per core); got {args.workers}")
     print(f"{spec.task}: {spec.n_points} points in {spec.n_chunks} chunks of up to "
           f"{spec.chunk_points} -> {args.out}", file=sys.stderr)
     res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,

@@ -64,7 +64,10 @@ def _bc(d, tau):
     if d == 0.0:
         return tau, 0.5 * tau * tau
     y = d * tau
-    b = -math.expm1(-y) / d
+    if abs(y) < 1e-8:  # series: y may underflow to 0 for a denormal d, and expm1(-y)/d with it
+        b = tau * (1.0 - 0.5 * y)
+    else:
+        b = -math.expm1(-y) / d
     if abs(y) < 1e-2:
         c = tau * tau * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0)
     else:
@@ -81,9 +84,15 @@ def _fundamental(w2, d, tau):
     if lam2 >= 0.0:
         C = math.cos(x)
         S = tau * (math.sin(x) / x if abs(x) > 1e-8 else 1.0 - x * x / 6.0)
+    elif abs(x) > 1e-4:  # overdamped: e^{-d tau/2} cosh, sinh as two decaying exponentials
+        ep = 0.5 * math.exp((lam - 0.5 * d) * tau)  # (cosh overflows where e underflows)
+        em = 0.5 * math.exp((-lam - 0.5 * d) * tau)
+        eC = ep + em
+        eS = (ep - em) / lam
+        return eC + 0.5 * d * eS, eS, -w2 * eS, eC - 0.5 * d * eS
     else:
         C = math.cosh(x)
-        S = tau * (math.sinh(x) / x if abs(x) > 1e-4 else 1.0 + x * x / 6.0)
+        S = tau * (1.0 + x * x / 6.0)
     e = math.exp(-0.5 * d * tau)
     return e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)
 
@@ -464,23 +473,25 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
         n += 1
         if n >= max_imp:
             return n, MAXIMP, tc
-        if R < 1.0:
-            if kind == 1:
-                mm, jj = piece_of(breaks, tc)
-                level = levels[jj]
-            else:
-                level = 0.0
-            p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
-            h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
-            if ddh > 0.0:
-                tail = 2.0 * R * vend / ddh / (1.0 - R)
-                # the next bounce is lost in rounding when its height (R v)^2 / (2 h'') is near
-                # the noise of c . q: its time and velocity are then noise, so jump
-                height = 0.5 * (R * vend) ** 2 / ddh
-                if tail < tail_tol or height < 1e3 * noise:
-                    for i in range(M):
-                        v[i] = 0.0
-                    return n, CHATTER, tc + tail
+        if kind == 1:
+            mm, jj = piece_of(breaks, tc)
+            level = levels[jj]
+        else:
+            level = 0.0
+        p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
+        h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
+        if ddh > 0.0:
+            # R < 1: the bounces accumulate at tc + tail. R = 1: they do not accumulate, but
+            # damping shrinks them without end (ever more impacts per unit time)
+            tail = 2.0 * R * vend / ddh / (1.0 - R) if R < 1.0 else math.inf
+            # the next bounce is lost in rounding when its height (R v)^2 / (2 h'') is near
+            # the noise of c . q: its time and velocity are then noise, so jump (for R = 1 to
+            # contact now: bounces below the rounding noise are contact)
+            height = 0.5 * (R * vend) ** 2 / ddh
+            if tail < tail_tol or height < 1e3 * noise:
+                for i in range(M):
+                    v[i] = 0.0
+                return n, CHATTER, tc + (tail if R < 1.0 else 0.0)
         if n >= cap:
             return n, FULL, tc
         t = tc

@@ -69,13 +69,23 @@ def fundamental(w2, d: float, tau):
     lam = np.sqrt(np.abs(lam2))
     x = lam * tau
     under = lam2 >= 0.0
-    C = np.where(under, np.cos(x), np.cosh(np.where(under, 0.0, x)))
-    S = tau * np.where(under, np.sinc(x / np.pi), _sinhc(np.where(under, 0.0, x)))
     e = np.exp(-0.5 * d * tau)
-    phi11 = e * (C + 0.5 * d * S)
-    phi12 = e * S
-    phi21 = -e * w2 * S
-    phi22 = e * (C - 0.5 * d * S)
+    eC = e * np.where(under, np.cos(x), 1.0)
+    eS = e * tau * np.where(under, np.sinc(x / np.pi), 1.0)
+    over = ~under
+    if np.any(over):  # overdamped: e^{-d tau/2} cosh, sinh as decaying exponentials (no inf * 0)
+        xo, to, lo = x[over], tau[over], lam[over]
+        ep = 0.5 * np.exp((lo - 0.5 * d) * to)
+        em = 0.5 * np.exp((-lo - 0.5 * d) * to)
+        small = np.abs(xo) < 1e-4
+        lo_safe = np.where(small, 1.0, lo)
+        eC[over] = ep + em
+        eS[over] = np.where(small, np.exp(-0.5 * d * to) * to * _sinhc(np.where(small, xo, 0.0)),
+                            (ep - em) / lo_safe)
+    phi11 = eC + 0.5 * d * eS
+    phi12 = eS
+    phi21 = -w2 * eS
+    phi22 = eC - 0.5 * d * eS
     if np.any(rigid):  # exact forms for the rigid mode: no cosh/sinh cancellation
         phi11 = np.where(rigid, 1.0, phi11)
         phi12 = np.where(rigid, b_integral(d, tau), phi12)

@@ -70,7 +70,9 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     # the stationary points that can carry the largest value are refined to full precision
     values, err_b = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters,
                                        atol=1e-13 * scale, horizon=horizon)
-    err = err_b + 1e-12 * scale * (1.0 + max((abs(v) for v in values), default=0.0))
+    # rounding of the values themselves: relative to the problem's scale (linear in the load), so
+    # that every verdict is invariant under load -> L load
+    err = err_b + 1e-12 * (scale + max((abs(v) for v in values), default=0.0))
     clearance = max(values) if values else -math.inf
     tol = max(err, 1e-11 * scale)
     if not v_imp > 1e-12 * scale:

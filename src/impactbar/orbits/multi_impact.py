@@ -27,6 +27,7 @@ from ..model import BarModel
 from .admissibility import _admissibility
 from .one_impact import PeriodicOrbit, periodic_orbits
 from .phase import _check_inputs
+from .stability import MARGINAL
 
 __all__ = ["MultiImpactOrbit", "find_orbit"]
 
@@ -408,7 +409,7 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactO
         impact_times=t.copy(), phases=np.mod(t, TWO_PI), impact_velocities=np.roll(v_imp, 1),
         admissible=admissible, admissibility=status, clearance=float(clear),
         clearance_error=float(cerr), multipliers=mu,
-        stable=bool(admissible and np.all(np.abs(mu) < 1.0)),
+        stable=bool(admissible and np.all(np.abs(mu) < 1.0 - MARGINAL)),
         states_after_impact=info["y_plus"], states_before_impact=np.roll(info["y_minus"], 1, axis=0),
     )
 

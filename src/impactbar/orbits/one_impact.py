@@ -20,6 +20,7 @@ from .admissibility import _admissibility
 from .phase import _check_inputs, phase_roots
 from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers, rigid_square_orbits
 from .stability import (
+    MARGINAL,
     floquet_multipliers,
     period_fundamental,
     quadratic_roots,
@@ -70,7 +71,9 @@ class PeriodicOrbit:
         Exact Floquet multipliers (eigenvalues of the impact map's Jacobian, MODEL.md section 7),
         sorted by decreasing modulus.
     stable : bool
-        ``admissible`` and every ``|multiplier| < 1``.
+        ``admissible`` and every ``|multiplier| < 1 - MARGINAL`` (``1e-9``): a multiplier on the
+        unit circle to rounding (e.g. ``R = 1``, ``d = 0``, a conservative map) is marginal, not
+        stable, whatever its last bits.
     schur_roots : numpy.ndarray of complex, shape (2 N + 2,)
         Roots of the paper's quadratic blocks (eqs. 27, 29-31), rigid block first.
     schur_stable : bool
@@ -247,6 +250,7 @@ def periodic_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit]:
     [0.5148, 2.6268]
     """
     _check_inputs(model, load)
+    _check_modes(model)
     fast = _rigid_orbits(model, load)
     if fast is not None:
         return fast
@@ -261,6 +265,17 @@ def _periodic_orbits_general(model: BarModel, load: Load) -> list[PeriodicOrbit]
         if model.impact == "wave":
             return [_build_wave_orbit(model, load, ph, mult) for ph, mult in wave_phase_roots(model, load)]
         return [_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load)]
+
+
+#: Largest ``n_modes`` for the orbit functions: the multipliers are the eigenvalues of a dense
+#: ``(2 N + 2)``-square Jacobian, O(N^3); beyond this they do not come in bounded time.
+MAX_ORBIT_MODES = 1024
+
+
+def _check_modes(model: BarModel) -> None:
+    if model.n_modes > MAX_ORBIT_MODES:
+        raise ValueError(f"model.n_modes must be at most {MAX_ORBIT_MODES} for one-impact orbits "
+                         f"(dense Floquet multipliers, O(n_modes^3)); got {model.n_modes}")
 
 
 def _cosine_parameters(load: Load):
@@ -367,6 +382,8 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     -------
     numpy.ndarray of complex, shape (2 N + 2,)
     """
+    _check_inputs(model, load)
+    _check_modes(model)
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
     if model.impact == "wave":
@@ -419,7 +436,7 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
         clearance=clearance,
         clearance_error=cerr,
         multipliers=mu,
-        stable=bool(admissible and np.all(np.abs(mu) < 1.0)),
+        stable=bool(admissible and np.all(np.abs(mu) < 1.0 - MARGINAL)),
         schur_roots=quadratic_roots(blocks),
         schur_stable=schur_test(blocks),
         state_after_impact=y_plus,
@@ -458,7 +475,7 @@ def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> P
     return PeriodicOrbit(
         model=model, load=load, phase=float(phase), multiplicity=int(mult), impact_velocity=v_imp,
         admissible=admissible, admissibility=status, clearance=clearance, clearance_error=cerr,
-        multipliers=mu, stable=bool(admissible and np.all(np.abs(mu) < 1.0)),
+        multipliers=mu, stable=bool(admissible and np.all(np.abs(mu) < 1.0 - MARGINAL)),
         schur_roots=quadratic_roots(blocks), schur_stable=schur_test(blocks),
         state_after_impact=y_end, state_before_impact=y_minus, impact=impact,
     )

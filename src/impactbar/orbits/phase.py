@@ -97,8 +97,24 @@ def phase_roots(model: BarModel, load: Load, *, closed_form: bool = True) -> lis
     def F(t):
         return phase_residual(model, load, t)
 
-    clusters = enclose_zeros(F, lambda m, h: np.full(np.shape(m), lip), 0.0, TWO_PI,
-                             n0=64, min_width=1e-7)
+    osc = load.sup_oscillation
+
+    def slope_bound(mid, half):
+        # |F'| = (1 + R)|p - p0 - d V| on [mid - half, mid + half], with |p - center| <= delta and
+        # |V| <= |V(mid)| + 2 sup|p - p0| half; never above the global bound. (The global bound
+        # alone made the search run out of intervals for a nearly constant load.)
+        center, delta = load.variation(mid, half)
+        vb = np.abs(load.rigid_velocity(model.d, mid)) + 2.0 * osc * half
+        local = (1.0 + R) * (np.abs(center - load.p0) + delta + model.d * vb)
+        return np.minimum(local, lip)
+
+    try:
+        # the rounding floor matters: the local bound can be the exact slope
+        clusters = enclose_zeros(F, slope_bound, 0.0, TWO_PI, n0=64, min_width=1e-7,
+                                 atol=1e-12 * scale)
+    except RuntimeError as exc:  # pragma: no cover - the local bound keeps the search finite
+        raise ValueError(f"phase equation: {exc}; the load {load!r} is too close to a degenerate "
+                         "one (a constant load) for a certified search") from exc
     roots = zeros_in_clusters(F, clusters, atol=1e-12 * scale)
     out: list[tuple[float, int]] = []
     for t, mult in sorted((math.fmod(t, TWO_PI) % TWO_PI, m) for t, m in roots):

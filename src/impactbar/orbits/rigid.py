@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .stability import quadratic_roots
+from .stability import MARGINAL, quadratic_roots
 
 __all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_multipliers", "phase_G_array",
            "STATUS"]
@@ -93,7 +93,7 @@ def rigid_multipliers(d, R, p_plus, p_minus, v_plus, v_minus):
     e = np.exp(-TWO_PI * d)
     a_p = p_plus - d * v_plus
     a_m = p_minus - d * v_minus
-    graze = ~(np.abs(v_minus) > 1e-14 * np.maximum(1.0, np.abs(v_minus)))
+    graze = ~(np.abs(v_minus) > 1e-14 * np.abs(v_minus))  # relative, as the general path: zero only
     vm = np.where(graze, 1.0, v_minus)
     r0 = (v_plus + b * a_p) / vm
     r1 = -b / vm
@@ -444,7 +444,7 @@ def _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus,
         first = np.flatnonzero(np.diff(oi, prepend=-1))
         clearance[oi[first]] = np.maximum.reduceat(g, first)
         gabs[oi[first]] = np.maximum.reduceat(np.abs(g), first)
-    err = 1e-12 * scale * (1.0 + gabs)
+    err = 1e-12 * (scale + gabs)  # relative to the problem's scale, as admissibility.py
     tol = np.maximum(err, 1e-11 * scale)
     status = np.zeros(O, dtype=np.int8)
     status[clearance >= -tol] = 2
@@ -457,15 +457,16 @@ def _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus,
     # the paper's rigid block (eqs. 29, 30) with sigma = 0, multiplied through by p0
     e2 = np.exp(-TWO_PI * o_d)
     S2 = p_plus - o_p0 - o_d * V_phase
-    dz = o_d == 0.0
-    factor = np.where(dz, 1.0, -np.expm1(-TWO_PI * o_d) / np.where(dz, 1.0, TWO_PI * o_d))
+    y = TWO_PI * o_d
+    small = y < 1e-8  # series, as stability.schur_blocks: no denormal quotient
+    factor = np.where(small, 1.0 - 0.5 * y, -np.expm1(-y) / np.where(small, 1.0, y))
     a2 = o_p0
     a1 = -(1.0 + o_R * o_R * e2) * o_p0 - factor * (1.0 + o_R) ** 2 * S2
     a0 = o_R * e2 * (o_R * o_p0)
     schur = quadratic_roots(np.column_stack((a2, a1, a0))).reshape(-1, 2)
     with np.errstate(invalid="ignore"):
         schur_ok = (np.abs(a0) < np.abs(a2)) & (np.abs(a1) < np.abs(a0 + a2))
-    stable = (status == 0) & np.all(np.abs(mu) < 1.0, axis=-1)
+    stable = (status == 0) & np.all(np.abs(mu) < 1.0 - MARGINAL, axis=-1)
 
     def scatter(vals, fill, dtype=float, extra=()):
         out = np.full((P, J, *extra), fill, dtype=dtype)

@@ -17,6 +17,9 @@ __all__ = ["impact_map_jacobian", "floquet_multipliers", "period_fundamental", "
 
 TWO_PI = 2.0 * math.pi
 
+#: A multiplier within this of the unit circle is marginal: the orbit is not called stable.
+MARGINAL = 1e-9
+
 #: from this many flexible modes on, the multipliers come from the structured method (below it the
 #: dense eigenvalue problem is as fast)
 STRUCTURED_FROM = 40
@@ -57,7 +60,7 @@ def _impact_fields(model: BarModel, load: Load, phase: float, y_plus, y_minus):
     qp, vp = yp[:M], yp[M:]
     qm, vm = ym[:M], ym[M:]
     v_imp = float(model.end_weights @ vm)
-    if not abs(v_imp) > 1e-14 * max(1.0, float(np.max(np.abs(ym)))):
+    if not abs(v_imp) > 1e-14 * float(np.max(np.abs(ym))):  # relative: invariant under load -> L load
         raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
     f0 = (vp, float(load(phase)) - d * vp - w2 * qp)
     f1 = (vm, float(load.left_limit(phase)) - d * vm - w2 * qm)
@@ -119,7 +122,7 @@ def _arrival_derivative(model: BarModel, load: Load, t_start: float, flight: flo
     qp, vp = yp[:M], yp[M:]
     qm, vm = ym[:M], ym[M:]
     v_imp = float(c @ vm)
-    if not abs(v_imp) > 1e-14 * max(1.0, float(np.max(np.abs(ym)))):
+    if not abs(v_imp) > 1e-14 * float(np.max(np.abs(ym))):  # relative: invariant under load -> L load
         raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
     # the period's fundamental matrix is cached per model
     p11, p12, p21, p22 = period_fundamental(model) if flight == TWO_PI else fundamental(w2, d, flight)
@@ -163,7 +166,8 @@ def schur_blocks(model: BarModel, load: Load, phase: float) -> np.ndarray:
     else:
         sig = 0.0
     S2 = float(load(phase)) - p0 - d * float(load.rigid_velocity(d, phase))
-    bracket = 1.0 if d == 0.0 else -math.expm1(-TWO_PI * d) / (TWO_PI * d)
+    y = TWO_PI * d
+    bracket = 1.0 - 0.5 * y if y < 1e-8 else -math.expm1(-y) / y  # series: no denormal quotient
     blocks = np.empty((N + 1, 3))
     blocks[0, 0] = p0 + (1.0 + R) * sig
     blocks[0, 1] = (-(1.0 + R * R * e2) * p0 - bracket * (1.0 + R) ** 2 * S2
@@ -193,7 +197,7 @@ def quadratic_roots(blocks: np.ndarray) -> np.ndarray:
     sgn = np.where((np.conj(a1) * disc).real >= 0.0, 1.0, -1.0)
     qq = -0.5 * (a1 + sgn * disc)
     with np.errstate(divide="ignore", invalid="ignore"):
-        r1 = np.where(a2 != 0, qq / a2, np.nan)
+        r1 = np.where(a2 != 0, qq / a2, complex(np.inf, 0.0))  # a2 = 0: a root at infinity
         r2 = np.where(qq != 0, a0 / qq, 0.0)
     return np.column_stack((r1, r2)).ravel()
 

@@ -152,6 +152,9 @@ def load_config(path) -> Hammer:
         raise ValueError(f"cannot read the configuration {str(path)!r}: {exc.strerror}") from exc
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{str(path)!r} is not valid TOML: {exc}") from exc
+    except RecursionError as exc:  # tomllib recurses into nested arrays and inline tables
+        raise ValueError(f"{str(path)!r}: arrays or tables nested too deeply for a configuration"
+                         ) from exc
     return _hammer_from_config(config, path.parent)
 
 

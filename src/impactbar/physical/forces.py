@@ -224,6 +224,8 @@ class MeasuredForce:
                                  f"{header}")
             scale_t = _header_scale("force.csv time column", header[0], "s", "'time [ms]'")
             scale_f = _header_scale("force.csv force column", header[1], "N", "'force [kN]'")
+        if not rows:
+            raise ValueError(f"force.csv: {str(path)!r} holds a header but no samples")
         data = []
         for i, r in enumerate(rows, start=1):
             if len(r) != 2 or not (_is_number(r[0]) and _is_number(r[1])):

@@ -32,7 +32,8 @@ def registry():
 
 
 _QUANTITY = re.compile(
-    r"^\s*([+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf))\s*([^,+]*?)\s*$",
+    # the unit: names, powers, products and quotients only (no "#" comment, ";", "," or "+")
+    r"^\s*([+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf))\s*([\w\s*/^().°%-]*?)\s*$",
     re.IGNORECASE)
 
 

@@ -252,13 +252,13 @@ def run_experiment(model: BarModel, load: Load, *, starts: int = 200, periods: f
     load : Load
         A :class:`FourierLoad` (e.g. :class:`CosineLoad`) or :class:`PiecewiseConstantLoad`.
     starts : int, optional
-        Number of random starts, ``>= 1``. Default 200.
+        Number of random starts, in ``[1, 1e6]`` (each start is held in memory). Default 200.
     periods : float, optional
         Length of each run in load periods, ``> 0``. Default 200.
     seed : int, optional
         Seed of the random starts (:func:`numpy.random.default_rng`). Default 0.
     workers : int, optional
-        Threads, ``>= 1``. Default 2.
+        Threads, in ``[1, 1024]``. Default 2.
     keep : int, optional
         Trajectories kept for plotting. Default 4.
     window : float, optional
@@ -270,10 +270,10 @@ def run_experiment(model: BarModel, load: Load, *, starts: int = 200, periods: f
     -------
     ExperimentResult
     """
-    starts = check_int("starts", starts, lo=1)
+    starts = check_int("starts", starts, lo=1, hi=1_000_000)
     periods = check_real("periods", periods, lo=0.0, lo_open=True)
     seed = check_int("seed", seed, lo=0)
-    workers = check_int("workers", workers, lo=1)
+    workers = check_int("workers", workers, lo=1, hi=1024)
     keep = check_int("keep", keep, lo=0)
     rng = np.random.default_rng(seed)
     T = load_period(load)

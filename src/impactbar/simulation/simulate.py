@@ -30,7 +30,7 @@ from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
 from ..dynamics.impact import wave_impact
 from ..loads import FourierLoad, Load, PiecewiseConstantLoad
-from ..model import BarModel
+from ..model import MAX_MODES, BarModel
 
 __all__ = ["InitialState", "Trajectory", "EnergyAccount", "simulate"]
 
@@ -45,6 +45,14 @@ DWELL_MAX = 1e-2
 #: A flight after a release that ends back on the stop within this time (bounces included) is a
 #: disagreement between the truncated bases, not a motion: the release is undone.
 MICRO_FLIGHT = 1e-6
+
+#: Largest ``|t0|``, ``|t_end|`` and ``t_end - t0`` accepted by :func:`simulate` (about 1.6e7 periods).
+MAX_TIME = 1e8
+#: Largest quadrature work (nodes times modes) :attr:`Trajectory.energy` may take (time bound).
+MAX_ENERGY_WORK = 3e8
+#: Largest ``s * n_modes`` :func:`simulate` accepts: the guaranteed event search steps on the
+#: scale of the stiffest mode's period, so beyond it a run does not finish in bounded time.
+MAX_SIMULATE_STIFFNESS = 1e5
 
 _FREE, _CONTACT, _WAVE = 0, 1, 2  # _WAVE: a contact window of the wave law (free-free modes)
 
@@ -113,7 +121,7 @@ class InitialState:
         """
         e = check_real("end_displacement", end_displacement, hi=0.0)
         vel = check_real("velocity", velocity)
-        n_modes = check_int("n_modes", n_modes, lo=0)
+        n_modes = check_int("n_modes", n_modes, lo=0, hi=MAX_MODES)
         q = np.zeros(n_modes + 1)
         v = np.zeros(n_modes + 1)
         q[0] = e
@@ -251,6 +259,10 @@ class _Basis:
         self.vpb = np.ascontiguousarray(ah @ ks) if ks.size else np.zeros(M)
         self.apb = np.ascontiguousarray(ah @ ks**2) if ks.size else np.zeros(M)
         self.jpb = np.ascontiguousarray(ah @ ks**3) if ks.size else np.zeros(M)
+        # a bound of the particular state |q_p| (static deflection plus harmonic response): the
+        # closed form adds and cancels it, so it sets the rounding noise of a mode's displacement
+        static = np.where(self.w2 > 0.0, data.psup / np.where(self.w2 > 0.0, self.w2, 1.0), 0.0)
+        self.qpb = static + (ah.sum(axis=1) if ks.size else 0.0)
 
 
 class _LoadData:
@@ -543,8 +555,10 @@ class _SegmentLog:
     def truncate(self, count):
         """Drop the pieces from index ``count`` on."""
         self.count = min(self.count, count)
-        for j in [j for j in self.frozen if j >= count]:
-            del self.frozen[j]
+        # the keys were added in increasing order: drop from the end (linear over a run, where a
+        # rescan of every stored chatter state on each undone release made long runs quadratic)
+        while self.frozen and next(reversed(self.frozen)) >= count:
+            self.frozen.popitem()
 
     def last(self) -> _Segment:
         i = self.count - 1
@@ -631,16 +645,27 @@ class Trajectory:
 
     def _modal(self, t):
         """Yield ``(mask, basis, q, v)`` with the modal states at the times ``t``."""
-        starts = self._segments.t
+        segs = self._segments
+        starts = segs.t
         idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(starts) - 1)
+        chatter = _ENTRIES.index("chatter")
         for j in np.unique(idx):
             sel = idx == j
-            s = self._segments[j]
+            s = segs[j]
             if s.basis == _WAVE:  # inside a contact window: the characteristics solution
                 states = [s.frozen.state_at(min(tt - s.t, s.frozen.duration)) for tt in t[sel]]
                 yield sel, _FREE, np.array([a for a, _ in states]).T, np.array([b for _, b in states]).T
                 continue
             q, v = self._core.propagate(s.basis, s.t, s.q, s.v, t[sel])
+            if s.basis == _FREE and j + 1 < len(segs) and segs.entry[j + 1] == chatter:
+                # the bounces up to the chatter's accumulation point were skipped (each lower
+                # than the last, all below the search's resolution): the flight from the last
+                # impact would pass through the stop after its first bounce, so the end is held
+                # at the stop there by a rigid shift (the deformation is unchanged)
+                c = self._core.c
+                over = np.maximum(c @ q, 0.0)
+                q[0] -= over
+                v[0] -= np.where(over > 0.0, c @ v, 0.0)
             yield sel, s.basis, q, v
 
     @property
@@ -652,7 +677,9 @@ class Trajectory:
         return tuple(segs.frozen[j].resolve() for j in np.flatnonzero(segs.basis == _WAVE))
 
     def end_displacement(self, t) -> np.ndarray:
-        """``u(1, t)``, the struck end (``<= 0`` up to rounding).
+        """``u(1, t)``, the struck end, ``<= 0``: a positive value within the rounding noise of the
+        closed form (``1e-14 sum |c_n| (|q_n| + |q_pn|)``, the event search's own tolerance) is
+        reported as 0, and so is the end during the bounces skipped at a chatter jump.
 
         Parameters
         ----------
@@ -674,8 +701,19 @@ class Trajectory:
         scalar = np.ndim(t) == 0
         t = self._check_times(t)
         out = np.zeros(t.size)
+        c = self._core.c
         for sel, basis, q, v in self._modal(t):
-            out[sel] = self._core.c @ (v if velocity else q) if basis == _FREE else 0.0
+            if basis != _FREE:
+                continue
+            if velocity:
+                out[sel] = c @ v
+            else:
+                # a positive value within the rounding noise of the closed form (the event
+                # search's own tolerance, 1e-14 sum |c_n| (|q_n| + |q_pn|)) is no penetration:
+                # reported as 0
+                u = c @ q
+                noise = 1e-14 * (np.abs(c) @ (np.abs(q) + self._core.free.qpb[:, None]))
+                out[sel] = np.where((u > 0.0) & (u <= noise), 0.0, u)
         return out[0] if scalar else out
 
     def displacement(self, x, t) -> np.ndarray:
@@ -717,7 +755,14 @@ class Trajectory:
     @cached_property
     def energy(self) -> EnergyAccount:
         """The energy account of the run (:class:`EnergyAccount`), computed on first access by
-        Gauss-Legendre quadrature of the closed-form motion on every segment."""
+        Gauss-Legendre quadrature of the closed-form motion on every segment.
+
+        Raises
+        ------
+        ValueError
+            If the quadrature would take more than ``MAX_ENERGY_WORK`` (3e8) node-modes; the work
+            grows as ``s * n_modes^2 * (t_end - t0)``.
+        """
         return _energy_account(self)
 
 
@@ -754,7 +799,7 @@ def _segment_integrals(core: _Core, seg: _Segment, tb: float):
     weights = np.concatenate(weights)
     work = 0.0
     damp = 0.0
-    chunk = 20000
+    chunk = max(64, 2_000_000 // (core.N + 1))  # bounded memory: chunk x modes states at a time
     if seg.basis == _FREE:
         kap = core.kappa
     else:
@@ -770,9 +815,25 @@ def _segment_integrals(core: _Core, seg: _Segment, tb: float):
     return work, damp, qe[:, 0], ve[:, 0]
 
 
+def _energy_nodes(core: _Core, span: float, n_segments: int) -> float:
+    """An upper bound of the quadrature nodes :func:`_segment_integrals` uses over a run."""
+    w2 = np.concatenate((core.free.w2, core.contact.w2))
+    wmax = math.sqrt(float(np.max(w2))) if w2.size else 0.0
+    kmax = float(np.max(core.data.ks)) if core.data.ks.size else 0.0
+    jumps = core.data.breaks.size * (span / TWO_PI + 1.0) if core.data.kind == 1 else 0.0
+    return _GL_X.size * (span * (wmax + kmax + 1.0) / 1.5 + n_segments + jumps)
+
+
 def _energy_account(tr: Trajectory) -> EnergyAccount:
     core = tr._core
     segs = tr._segments
+    work = _energy_nodes(core, tr.t_end - tr.t0, len(segs)) * (core.N + 1)
+    if work > MAX_ENERGY_WORK:
+        raise ValueError(
+            f"energy: the quadrature would take about {work:.3g} node-modes (at most "
+            f"{MAX_ENERGY_WORK:.0e}); it grows with s * n_modes^2 * (t_end - t0): use a shorter run, "
+            f"fewer modes or a smaller s (here s = {tr.model.s:g}, n_modes = {tr.model.n_modes})"
+        )
     work = damp = imp = chat = proj = 0.0
     first = segs[0]
     initial = core.energy(first.basis, first.q, first.v)
@@ -838,9 +899,11 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
-        End of the run (dimensionless time), ``> t0``.
+        End of the run (dimensionless time), ``t0 < t_end <= t0 + 1e8`` and ``|t_end| <= 1e8``
+        (``MAX_TIME``: beyond, impact times are not resolved in double precision, and the run would
+        not end in bounded time).
     t0 : float, optional
-        Start time. Default 0.
+        Start time, ``|t0| <= 1e8``. Default 0.
     max_impacts : int, optional
         Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact (under
         the wave law the end of its contact window).
@@ -853,19 +916,31 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     ------
     ValueError
         On a bad parameter (named in the message), a start that penetrates the stop
-        (``u(1, t0) > 0``), or an undamped resonance between a mode and a load harmonic.
+        (``u(1, t0) > 0``), an undamped resonance between a mode and a load harmonic, or a bar too
+        stiff for the guaranteed event search, ``s * n_modes > 1e5`` (``MAX_SIMULATE_STIFFNESS``: the
+        search steps on the scale of the stiffest mode's period).
     """
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
     if not isinstance(initial, InitialState):
         raise ValueError(f"initial must be an InitialState; got {type(initial).__name__}")
-    t0 = check_real("t0", t0)
-    t_end = check_real("t_end", t_end, lo=t0, lo_open=True)
+    # beyond |t| = 1e8 an impact time is resolved to worse than 1e-8 in double precision, and a run
+    # of that many periods does not finish in bounded time: refused
+    t0 = check_real("t0", t0, lo=-MAX_TIME, hi=MAX_TIME)
+    t_end = check_real("t_end", t_end, lo=t0, hi=t0 + MAX_TIME, lo_open=True)
+    if abs(t_end) > MAX_TIME:
+        raise ValueError(f"t_end must be in [-{MAX_TIME:g}, {MAX_TIME:g}]; got {t_end}")
     if max_impacts is None:
         max_imp = np.iinfo(np.int64).max
     else:
         max_imp = check_int("max_impacts", max_impacts, lo=1)
     N = model.n_modes
+    if N and model.s * N > MAX_SIMULATE_STIFFNESS:
+        raise ValueError(
+            f"model: s * n_modes must be at most {MAX_SIMULATE_STIFFNESS:g} for simulate (the event search "
+            f"resolves the stiffest mode, frequency s n_modes pi); got s = {model.s:g}, "
+            f"n_modes = {N}: use fewer modes (a stiff bar moves as a rigid one, n_modes = 0)"
+        )
     q = np.array(initial.modal_displacement, dtype=float)
     v = np.array(initial.modal_velocity, dtype=float)
     if q.size == 1 and N > 0:
@@ -918,7 +993,9 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                 segs.add_impacts(ot)
                 n_imp += n
             if st == K.FAILED:  # pragma: no cover - defensive
-                raise RuntimeError(f"impact search did not converge at t = {tn}")
+                raise ValueError(f"impact search did not converge at t = {tn}: the model is too "
+                                 f"stiff for the event search (s = {core.model.s:g}, n_modes = "
+                                 f"{core.N}); use fewer modes")
             if st == K.END:
                 t = t_end
                 break
@@ -972,7 +1049,9 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         # ---- in contact: from (t, r, rv) find the release ----
         st, tr, rr, rrv = core.find_release(t, r, rv, t_end)
         if st == K.FAIL:  # pragma: no cover - defensive
-            raise RuntimeError(f"release search did not converge at t = {tr}")
+            raise ValueError(f"release search did not converge at t = {tr}: the model is too "
+                             f"stiff for the event search (s = {core.model.s:g}, n_modes = "
+                             f"{core.N}); use fewer modes")
         if st == K.NONE:
             contacts[-1][1] = t_end
             t = t_end

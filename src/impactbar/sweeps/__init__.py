@@ -30,7 +30,9 @@ renamed into place, so a store either exists complete or not at all. Each finish
 written into its own zarr chunks; only then its entry of ``chunk_done`` (one ``int8`` per chunk) is
 set. zarr's local store replaces files atomically, so a run killed at any moment, SIGKILL included,
 loses only the chunks in flight. Rerunning resumes: the stored spec must equal the requested one,
-and only chunks whose flag is unset are computed. Every random start is seeded from the spec's
+and only chunks whose flag is set *and* whose data, read back, match their stored CRC-32
+(``chunk_checksum``) are kept; every other chunk (missing, truncated, corrupted) is recomputed. A
+lock file next to the store keeps a second driver out. Every random start is seeded from the spec's
 ``seed`` and the point's flat index in the grid (``numpy.random.SeedSequence([seed, index])``),
 never from the chunk order or the worker, so a resumed sweep equals an uninterrupted one.
 

@@ -51,6 +51,8 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
     for name, value in (select or {}).items():
         if name not in axes:
             raise ValueError(f"--select {name}: not an axis of this sweep; axes: {axes}")
+        if not isinstance(value, int | float | np.integer | np.floating) or not np.isfinite(value):
+            raise ValueError(f"--select {name}: VALUE must be a finite number; got {value!r}")
         ds = ds.sel({name: value}, method="nearest")
     dims = tuple(a for a in axes if a in ds.dims and ds.sizes[a] > 1)
     ds = ds.squeeze([a for a in axes if a in ds.dims and ds.sizes[a] == 1], drop=False)
@@ -254,15 +256,20 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Pat
     ds = open_sweep(store)
     task = ds.attrs["task"]
     out = Path(out)
+    try:
+        red, dims = reduce_axes(ds, select, 2)
+        red = red.load()
+    except ValueError:
+        raise
+    except Exception as exc:  # a damaged zarr chunk: zarr and its codecs raise many kinds
+        raise ValueError(f"{store}: the stored data cannot be read ({type(exc).__name__}: {exc}); "
+                         "rerun the sweep on this store to recompute the damaged chunks") from None
     if task == "orbits":
-        red, dims = reduce_axes(ds, select, 2)
-        fig = plot_stability_chart(red.load(), dims).figure
+        fig = plot_stability_chart(red, dims).figure
     elif task == "montecarlo":
-        red, dims = reduce_axes(ds, select, 2)
-        fig = plot_fraction_maps(red.load(), dims)
+        fig = plot_fraction_maps(red, dims)
     else:
-        red, dims = reduce_axes(ds, select, 2)
-        fig = plot_bifurcation(red.load(), dims).figure
+        fig = plot_bifurcation(red, dims).figure
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 import time
@@ -13,8 +14,11 @@ import numpy as np
 
 from .._validate import check_int
 from .spec import SweepSpec
-from .store import _open_group, _prepare_store, _write_chunk, _write_done
+from .store import _checksum, _open_group, _prepare_store, _write_chunk, _write_done
 from .tasks import compute_chunk
+
+#: How long :func:`run_sweep` waits for a ``scheduler`` to answer
+CONNECT_TIMEOUT = "10s"
 
 
 # ------------------------------------------------------------------------------------------------
@@ -85,38 +89,137 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
     Raises
     ------
     ValueError
-        If the store holds another sweep and ``overwrite`` is false, or ``store`` is a folder that
-        is not a sweep store; nothing is computed then.
+        If the store holds another sweep and ``overwrite`` is false, ``store`` is a file or a
+        folder that is not a sweep store, its folder cannot be written, another driver holds the
+        store's lock, ``scheduler`` does not answer within ``CONNECT_TIMEOUT``, or ``n_workers``
+        is outside ``[1, max_workers()]``; nothing is computed (or left behind) then.
+
+    Notes
+    -----
+    On resume every chunk flagged done is read back and checked against its stored CRC-32; a
+    missing, truncated or corrupted chunk is recomputed.
     """
     if not isinstance(spec, SweepSpec):
         raise ValueError(f"spec must be a SweepSpec; got {type(spec).__name__}")
     if sum(x is not None for x in (client, scheduler, n_workers)) > 1:
         raise ValueError("give at most one of client, scheduler, n_workers")
     if n_workers is not None:
-        n_workers = check_int("n_workers", n_workers, lo=1)
+        n_workers = check_int("n_workers", n_workers, lo=1, hi=max_workers())
     path = Path(store)
-    done = _prepare_store(spec, path, overwrite)
-    todo = [int(i) for i in np.flatnonzero(done == 0)]
-    already = spec.n_chunks - len(todo)
-    if not todo:
-        return SweepRun(path, spec.n_chunks, already, 0, 0.0)
-    if client is not None:
-        return _drive(spec, path, done, todo, client, progress)
+    _check_out(path)
+    created = _missing_parents(path)
+    try:
+        with _StoreLock(path), contextlib.ExitStack() as stack:
+            # a new store is created only once the cluster answers: a dead scheduler leaves
+            # nothing behind; an existing one is verified first (nothing to do: no cluster)
+            resume = path.exists() and not overwrite
+            if resume:
+                done, sums = _prepare_store(spec, path, overwrite)
+                if not np.any(done == 0):
+                    return SweepRun(path, spec.n_chunks, spec.n_chunks, 0, 0.0)
+            if client is None:
+                client = stack.enter_context(_connect(scheduler, n_workers))
+            if not resume:
+                done, sums = _prepare_store(spec, path, overwrite)
+            todo = [int(i) for i in np.flatnonzero(done == 0)]
+            return _drive(spec, path, done, sums, todo, client, progress)
+    except BaseException:
+        for p in created:  # folders this call made and left empty
+            try:
+                p.rmdir()
+            except OSError:
+                pass
+        raise
+
+
+def max_workers() -> int:
+    """Largest local cluster :func:`run_sweep` starts: four processes per core (at least 4)."""
+    return max(4, 4 * default_workers())
+
+
+def _check_out(path: Path) -> None:
+    """Refuse an ``--out`` that cannot become a store, before anything is created."""
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"--out {path} is an existing file, not a sweep store; choose a folder path")
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise ValueError(f"--out {path}: {parent} is a file, not a folder")
+            if not os.access(parent, os.W_OK | os.X_OK):
+                raise ValueError(f"--out {path}: the folder {parent} is not writable")
+            break
+
+
+def _missing_parents(path: Path) -> list:
+    """The ancestors of ``path`` that do not exist yet, deepest first."""
+    out = []
+    for parent in path.parents:
+        if parent.exists():
+            break
+        out.append(parent)
+    return out
+
+
+class _StoreLock:
+    """An exclusive lock on a store (``fcntl.flock`` on ``.NAME.lock`` next to it), held while a
+    driver writes it; the kernel drops it when the process dies, even by SIGKILL."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.lock = path.with_name(f".{path.name}.lock")
+        self.fd = None
+
+    def __enter__(self):
+        import fcntl
+
+        try:
+            self.lock.parent.mkdir(parents=True, exist_ok=True)
+            self.fd = os.open(self.lock, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as exc:
+            raise ValueError(f"--out {self.path}: cannot create the store there: "
+                             f"{exc.strerror or exc}") from None
+        try:
+            fcntl.flock(self.fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(self.fd)
+            self.fd = None
+            raise ValueError(f"--out {self.path} is being written by another impactbar sweep; wait "
+                             "for it to finish, or choose another --out") from None
+        return self
+
+    def __exit__(self, *exc):
+        try:
+            os.unlink(self.lock)
+        except OSError:
+            pass
+        os.close(self.fd)
+        return False
+
+
+@contextlib.contextmanager
+def _connect(scheduler, n_workers):
+    """A ``distributed.Client``: to ``scheduler``, or to a local cluster of ``n_workers``."""
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
-        with Client(scheduler) as cl:
-            return _drive(spec, path, done, todo, cl, progress)
+        try:
+            cl = Client(scheduler, timeout=CONNECT_TIMEOUT)
+        except (OSError, TimeoutError, ValueError, TypeError) as exc:
+            raise ValueError(f"--scheduler {scheduler!r}: cannot connect within "
+                             f"{CONNECT_TIMEOUT} ({exc})") from None
+        with cl:
+            yield cl
+        return
     import logging
 
     n = default_workers() if n_workers is None else n_workers
     with (LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
                        dashboard_address=None, silence_logs=logging.ERROR) as cluster,
           Client(cluster) as cl):
-        return _drive(spec, path, done, todo, cl, progress)
+        yield cl
 
 
-def _drive(spec, path, done, todo, client, progress) -> SweepRun:
+def _drive(spec, path, done, sums, todo, client, progress) -> SweepRun:
     from distributed import as_completed
     from tqdm import tqdm
 
@@ -136,7 +239,8 @@ def _drive(spec, path, done, todo, client, progress) -> SweepRun:
             i = chunk_of[fut.key]
             _write_chunk(spec, path, i, result, group)
             done[i] = 1
-            _write_done(path, done, group)  # after the data: a kill in between loses only this chunk
+            sums[i] = _checksum(spec, result)
+            _write_done(path, done, sums, group)  # after the data: a kill in between loses this chunk only
             fut.release()
             computed += 1
             bar.update(1)

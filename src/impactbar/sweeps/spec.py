@@ -45,6 +45,8 @@ _TOP_KEYS = ("task", "model", "load", "axes", "chunk_points", *TASKS)
 _EXTRA_DIM = {"orbits": "orbit", "montecarlo": "motion", "bifurcation": "impact"}
 
 _DONE = "chunk_done"
+#: CRC-32 of each stored chunk's data (-1: none); checked on resume, a mismatch is recomputed
+_SUM = "chunk_checksum"
 _ATTR_SPEC = "impactbar_sweep_spec"
 _ATTR_VERSION = "impactbar_version"
 
@@ -212,6 +214,8 @@ def load_spec(path) -> SweepSpec:
             doc = tomllib.load(f)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: not valid TOML: {exc}") from exc
+    except RecursionError as exc:  # tomllib recurses into nested arrays and inline tables
+        raise ValueError(f"{path}: arrays or tables nested too deeply for a sweep spec") from exc
     except OSError as exc:
         raise ValueError(f"cannot read spec {path}: {exc}") from exc
     return parse_spec(doc)

@@ -7,11 +7,12 @@ import os
 import shutil
 import uuid
 import warnings
+import zlib
 from pathlib import Path
 
 import numpy as np
 
-from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, SweepSpec, motion_classes, parse_spec
+from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, _SUM, SweepSpec, motion_classes, parse_spec
 from .tasks import _variables, chunk_slices
 
 
@@ -38,6 +39,10 @@ def _template(spec: SweepSpec):
     data_vars[_DONE] = xr.Variable(("chunk",), da.zeros(spec.n_chunks, dtype=np.int8,
                                                           chunks=spec.n_chunks),
                                    attrs={"description": "1 once the work chunk is stored"})
+    data_vars[_SUM] = xr.Variable(("chunk",), da.full(spec.n_chunks, -1, dtype=np.int64,
+                                                      chunks=spec.n_chunks),
+                                  attrs={"description": "CRC-32 of the work chunk's data "
+                                                        "(-1 before it is stored)"})
     coords = {a.name: np.asarray(a.values) for a in spec.axes}
     if spec.task == "montecarlo":
         coords["motion"] = np.asarray(motion_classes(), dtype=object)  # variable-length strings
@@ -65,7 +70,10 @@ def _read_attrs(path: Path) -> dict:
 def _create_store(spec: SweepSpec, path: Path) -> None:
     """Create the full store in a temporary folder next to ``path`` and rename it into place
     (removing what a run killed during this step left behind)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"--out {path}: cannot create its folder: {exc.strerror or exc}") from None
     for stale in path.parent.glob(f".{path.name}.creating-*"):
         shutil.rmtree(stale, ignore_errors=True)
     tmp = path.with_name(f".{path.name}.creating-{uuid.uuid4().hex}")
@@ -74,14 +82,16 @@ def _create_store(spec: SweepSpec, path: Path) -> None:
             warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
             _template(spec).to_zarr(tmp, mode="w-", compute=False, zarr_format=3, consolidated=True)
         os.rename(tmp, path)
+    except OSError as exc:  # a read-only or full file system, a path that is taken meanwhile
+        raise ValueError(f"--out {path}: cannot create the store: {exc.strerror or exc}") from None
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _prepare_store(spec: SweepSpec, path: Path, overwrite: bool) -> np.ndarray:
-    """Create the store or check that it holds this sweep; return the done flags, shape
-    ``(n_chunks,)``."""
+def _prepare_store(spec: SweepSpec, path: Path, overwrite: bool):
+    """Create the store or check that it holds this sweep; return the verified done flags and the
+    checksums, shape ``(n_chunks,)`` each (see :func:`_verified_done`)."""
     from .._version import __version__
 
     if path.exists():
@@ -101,9 +111,72 @@ def _prepare_store(spec: SweepSpec, path: Path, overwrite: bool) -> np.ndarray:
             if attrs.get(_ATTR_VERSION) != __version__:
                 raise ValueError(f"--out {path} was computed by impactbar {attrs.get(_ATTR_VERSION)}, "
                                  f"this is {__version__}; use --overwrite to recompute it")
-            return _read_done(path, spec.n_chunks)
+            if not (path / _SUM / "zarr.json").is_file():
+                raise ValueError(f"--out {path} was written without chunk checksums (an older "
+                                 "impactbar); use --overwrite to recompute it")
+            done, sums, flags = _verified_done(spec, path)
+            if flags is None or not np.array_equal(done, flags):
+                _write_done(path, done, sums)  # repair the flags before any work starts
+            return done, sums
     _create_store(spec, path)
-    return np.zeros(spec.n_chunks, dtype=np.int8)
+    return np.zeros(spec.n_chunks, dtype=np.int8), np.full(spec.n_chunks, -1, dtype=np.int64)
+
+
+def _checksum(spec: SweepSpec, result: dict) -> int:
+    """CRC-32 of a chunk's data, every variable cast to its stored dtype, in a fixed order."""
+    crc = 0
+    for name, (dtype, _, _, _) in _variables(spec).items():
+        crc = zlib.crc32(np.ascontiguousarray(result[name], dtype=dtype).tobytes(), crc)
+    return crc
+
+
+def _stored_checksum(spec: SweepSpec, group, chunk: int) -> int:
+    """CRC-32 of what the store holds for a chunk (raises if a zarr chunk cannot be read)."""
+    slices = chunk_slices(spec, chunk)
+    data = {}
+    for name, (_, _, extra, _) in _variables(spec).items():
+        data[name] = group[name][slices + ((slice(None),) if extra else ())]
+    return _checksum(spec, data)
+
+
+def _verified_done(spec: SweepSpec, path: Path):
+    """The done flags of a store, each checked against the data.
+
+    A chunk counts as done only if its flag is set (or the flag file cannot be read) and its data,
+    read back, match its stored checksum; a deleted, truncated or corrupted chunk is recomputed,
+    not trusted.
+
+    Returns
+    -------
+    done : numpy.ndarray of int8, shape (n_chunks,)
+    sums : numpy.ndarray of int64, shape (n_chunks,)
+        The checksums of the chunks found done, -1 elsewhere.
+    flags : numpy.ndarray of int8 or None
+        The stored flags as read (None if they cannot be read).
+    """
+    import zarr
+
+    n = spec.n_chunks
+    try:
+        flags = _read_done(path, n)
+    except Exception:  # an empty or damaged flag file (zarr and its codecs raise many kinds)
+        flags = None
+    try:
+        sums = np.asarray(zarr.open_array(store=str(path), path=_SUM, mode="r")[:], dtype=np.int64)
+    except Exception:
+        sums = None
+    done = np.zeros(n, dtype=np.int8)
+    if sums is None or sums.shape != (n,):  # no checksums to trust: recompute everything
+        return done, np.full(n, -1, dtype=np.int64), flags
+    candidates = np.flatnonzero((sums >= 0) & (flags != 0 if flags is not None else True))
+    group = zarr.open_group(store=str(path), mode="r")
+    for i in candidates:
+        try:
+            ok = _stored_checksum(spec, group, int(i)) == int(sums[i])
+        except Exception:  # an unreadable zarr chunk (truncated, corrupted)
+            ok = False
+        done[i] = 1 if ok else 0
+    return done, np.where(done == 1, sums, -1), flags
 
 
 def _read_done(path: Path, n_chunks: int) -> np.ndarray:
@@ -132,8 +205,10 @@ def _write_chunk(spec: SweepSpec, path: Path, chunk: int, result: dict, group=No
         g[name][region + (slice(None),) * (arr.ndim - len(region))] = arr
 
 
-def _write_done(path: Path, done: np.ndarray, group=None) -> None:
+def _write_done(path: Path, done: np.ndarray, sums: np.ndarray, group=None) -> None:
+    """Write the chunks' checksums, then their done flags (a kill in between only recomputes)."""
     g = _open_group(path) if group is None else group
+    g[_SUM][:] = sums
     g[_DONE][:] = done
 
 

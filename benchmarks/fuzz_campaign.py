@@ -1,0 +1,387 @@
+"""Rerun of the fuzzing campaign of issue 13, scaled down: every category, with counts.
+
+Categories: constructor inputs, ``periodic_orbits`` calls (NaN, non-ValueError, the rigid-mode
+impact velocity ``2 pi p0 / (1 + R)``, scale invariance of every verdict under ``load * L``),
+``simulate`` runs (energy balance, penetration, non-ValueError, time), grazing runs against scipy,
+SIGKILL and damage trials of sweeps, physical configurations and unit strings.
+
+Usage: ``python benchmarks/fuzz_campaign.py [--scale 1.0] [--seed 0] [--only CATEGORY ...]``.
+A count of "bad" outcomes per category is printed; ``--scale`` multiplies the number of cases.
+Each case runs in a forked child with a time limit (``--slow`` seconds); a case past it counts as a
+hang and is killed. Outcomes: "ok", "ValueError" (a clear refusal), or "BAD ..." (an exception of
+another type, a hang, NaN, a violated invariant, a verdict that changes with the load's scale).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import multiprocessing as mp
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+import impactbar as ib
+
+TWO_PI = 2.0 * math.pi
+WEIRD = [0, -1, 1, 0.5, 5e-324, 1e-300, 1e308, 10**400, -(10**400), math.nan, math.inf, -math.inf,
+         True, "1", None, 2**63, 4096, 4097, 10**14, 1.999999, 2.0, 1e-12, 1e12, np.float32(0.3),
+         np.int64(3), [1.0], 1 + 1j]
+
+
+def _child(fn, conn):
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            labels = fn() or ["ok"]
+    except ValueError:
+        labels = ["ValueError"]
+    except Exception as exc:  # noqa: BLE001 - what the campaign counts
+        labels = [f"BAD {type(exc).__name__}"]
+    conn.send(labels)
+    conn.close()
+
+
+def case(counter, fn, limit):
+    """Run ``fn`` (returning a list of outcome labels) in a forked child with a time limit; count
+    its labels, or "BAD hang" when it runs past ``limit`` seconds (the child is then killed)."""
+    ctx = mp.get_context("fork")
+    r, w = ctx.Pipe(duplex=False)
+    p = ctx.Process(target=_child, args=(fn, w))
+    p.start()
+    w.close()
+    try:
+        labels = r.recv() if r.poll(limit) else [f"BAD hang (> {limit:g} s)"]
+    except EOFError:
+        labels = ["BAD child died"]
+    p.kill()
+    p.join()
+    for lab in labels:
+        counter[lab] += 1
+    return labels
+
+
+def constructors(rng, n, slow):
+    c = Counter()
+    makers = [
+        lambda a, b, e, f: ib.BarModel(a, b, e, f),
+        lambda a, b, e, f: ib.CosineLoad(a, b, f),
+        lambda a, b, e, f: ib.SquareWaveLoad(a, b),
+        lambda a, b, e, f: ib.FourierLoad(a, [b, e]),
+        lambda a, b, e, f: ib.PiecewiseConstantLoad([0.0, b], [a, e]),
+        lambda a, b, e, f: ib.InitialState.rigid(a, b, f),
+    ]
+    for _ in range(n):
+        mk = makers[rng.integers(len(makers))]
+        args = [WEIRD[rng.integers(len(WEIRD))] if rng.random() < 0.5 else float(rng.uniform(-1, 2))
+                for _ in range(3)]
+        args.append(WEIRD[rng.integers(len(WEIRD))] if rng.random() < 0.5 else int(rng.integers(0, 9)))
+        case(c, lambda mk=mk, args=args: (mk(*args), ["ok"])[1], slow)
+    return c
+
+
+def random_model(rng, modes=(0, 0, 1, 2, 4)):
+    s = float(10 ** rng.uniform(-1, 2))
+    d = [0.0, 5e-324, float(rng.uniform(0, 0.5)), float(rng.uniform(0, 3))][rng.integers(4)]
+    R = float(rng.uniform(0, 1))
+    if rng.random() < 0.3:
+        R = [0.0, 1.0, R][rng.integers(3)]
+    return ib.BarModel(s, d, R, int(modes[rng.integers(len(modes))]))
+
+
+def random_load(rng, L=1.0):
+    kind = rng.integers(3)
+    if kind == 0:
+        return ib.CosineLoad(float(rng.uniform(-0.5, 2.0)), float(rng.uniform(0.1, 2.0)),
+                             int(rng.integers(1, 3)))
+    if kind == 1:
+        kappa = float(rng.uniform(1, 2))
+        if rng.random() < 0.2:
+            kappa = [1.0, 2.0 - 1e-6, kappa][rng.integers(3)]
+        return ib.SquareWaveLoad(float(rng.uniform(0.2, 2.0)), kappa)
+    return ib.FourierLoad(float(rng.uniform(-0.5, 2.0)), rng.normal(size=3) + 1j * rng.normal(size=3))
+
+
+def scaled(load, L):
+    if isinstance(load, ib.SquareWaveLoad):
+        return ib.SquareWaveLoad(load.q * L, load.kappa)
+    if isinstance(load, ib.CosineLoad):
+        return ib.CosineLoad(load.p0 * L, load.pk * L, load.k)
+    if isinstance(load, ib.FourierLoad):
+        return ib.FourierLoad(load.p0 * L, load.harmonics() * L)
+    return ib.PiecewiseConstantLoad(load.breaks, load.levels * L)
+
+
+def verdicts(orbits):
+    return [(o.admissibility, bool(o.stable), bool(o.schur_stable)) for o in orbits]
+
+
+def orbits_calls(rng, n, slow):
+    c = Counter()
+    for _ in range(n):
+        m = random_model(rng)
+        ld = random_load(rng)
+
+        def one(m=m, ld=ld):
+            res = ib.periodic_orbits(m, ld)
+            labels = ["ok"]
+            for o in res:
+                arrays = [o.phase, o.impact_velocity, o.clearance, o.schur_roots, o.multipliers]
+                if any(np.any(np.isnan(np.asarray(a, dtype=complex))) for a in arrays):
+                    labels.append("BAD nan")
+                if m.n_modes == 0 and o.admissible:
+                    ref = TWO_PI * ld.p0 / (1.0 + m.R)
+                    if abs(o.impact_velocity - ref) > 1e-8 * max(1.0, abs(ref)):
+                        labels.append("BAD rigid impact velocity")
+            for L in (1e-12, 1e12):
+                try:
+                    res2 = ib.periodic_orbits(m, scaled(ld, L))
+                except Exception:  # noqa: BLE001
+                    res2 = None
+                if res2 is None or verdicts(res2) != verdicts(res):
+                    labels.append("BAD scale-dependent verdict")
+            return labels
+
+        case(c, one, slow)
+    return c
+
+
+def max_penetration(tr):
+    t = np.linspace(tr.t0, tr.t_end, 4001)
+    return float(np.max(tr.end_displacement(t)))
+
+
+def simulate_runs(rng, n, slow):
+    c = Counter()
+    for _ in range(n):
+        m = random_model(rng, modes=(0, 1, 2, 4, 8))
+        ld = random_load(rng)
+        init = ib.InitialState.rigid(-float(rng.uniform(0, 1)), float(rng.uniform(-1, 1)), m.n_modes)
+        t_end = float(rng.uniform(10, 60))
+
+        def one(m=m, ld=ld, init=init, t_end=t_end):
+            tr = ib.simulate(m, ld, init, t_end)
+            labels = ["ok"]
+            try:
+                if not tr.energy.relative_residual < 1e-8:
+                    labels.append("BAD energy residual")
+            except ValueError:
+                labels.append("energy refused")
+            if max_penetration(tr) > 0.0:
+                labels.append("BAD u(1,t) > 0")
+            return labels
+
+        case(c, one, slow)
+    return c
+
+
+def grazing_vs_scipy(rng, n, slow):
+    """A rigid bar (and one mode) from rest near the stop, against solve_ivp with an event."""
+    from scipy.integrate import solve_ivp
+
+    c = Counter()
+    for _ in range(n):
+        N = int(rng.integers(0, 2))
+        s = float(rng.uniform(2, 10))
+        d = float(rng.uniform(0, 0.3))
+        m = ib.BarModel(s, d, 0.5, N)
+        p0 = float(rng.uniform(0.05, 1))
+        ld = ib.CosineLoad(p0, float(rng.uniform(0.5, 2)))
+        e = -float(10 ** rng.uniform(-6, -1))
+        init = ib.InitialState.rigid(e, 0.0, N)
+        T = 8.0
+        def one(m=m, ld=ld, init=init, N=N, s=s, d=d, e=e, T=T):
+            tr = ib.simulate(m, ld, init, T, max_impacts=1)
+            w2 = (s * np.pi * np.arange(N + 1)) ** 2
+            cw = m.end_weights
+
+            def rhs(t, y):
+                q, v = y[:N + 1], y[N + 1:]
+                return np.concatenate((v, float(ld(t)) - d * v - w2 * q))
+
+            def ev(t, y):
+                return float(cw @ y[:N + 1])
+            ev.terminal = True
+            ev.direction = 1
+            y0 = np.concatenate((init.modal_displacement, init.modal_velocity))
+            sol = solve_ivp(rhs, (0, T), y0, events=ev, rtol=1e-12, atol=1e-15 * max(1.0, abs(e)),
+                            method="DOP853")
+            t_ref = sol.t_events[0][0] if sol.t_events[0].size else None
+            if (t_ref is None) != (tr.n_impacts == 0):
+                return ["BAD missed or extra impact"]
+            if t_ref is not None and abs(tr.impact_times[0] - t_ref) > 1e-6:
+                return ["BAD impact time"]
+            return ["ok"]
+
+        case(c, one, slow)
+    return c
+
+
+SPEC = """task = "orbits"
+chunk_points = 5
+[model]
+s = 100.0
+d = 0.0
+R = 0.5
+n_modes = 0
+[load]
+kind = "cosine"
+p0 = 0.3
+pk = 1.0
+k = 1
+[axes.R]
+start = 0.0
+stop = 0.9
+num = 40
+[axes.p0]
+values = [0.2, 0.3]
+"""
+
+
+def sweeps(rng, n, slow):
+    """SIGKILL trials and damaged stores: the resumed store must equal an uninterrupted one."""
+    import xarray as xr
+
+    c = Counter()
+    tmp = Path(tempfile.mkdtemp(prefix="ib-campaign-"))
+    try:
+        spec = tmp / "spec.toml"
+        spec.write_text(SPEC)
+
+        def cli(out, *extra, timeout=120):
+            return subprocess.run([sys.executable, "-m", "impactbar.cli", "sweep", str(spec), "--out",
+                                   str(out), "--workers", "1", "--no-progress", *extra],
+                                  capture_output=True, text=True, timeout=timeout)
+
+        ref_path = tmp / "ref.zarr"
+        cli(ref_path)
+        ref = xr.open_zarr(ref_path).load()
+        def check(out, label):
+            r = cli(out)
+            if r.returncode != 0:
+                last = r.stderr.strip().splitlines()[-1][:60] if r.stderr.strip() else ""
+                c[f"BAD {label}: resume failed: {last}"] += 1
+                return
+            try:
+                got = xr.open_zarr(out).load()
+                same = all(np.array_equal(got[v].values, ref[v].values, equal_nan=got[v].dtype.kind == "f")
+                           for v in ref.data_vars if v != "chunk_checksum")
+            except Exception as exc:  # noqa: BLE001
+                c[f"BAD {label}: unreadable after resume {type(exc).__name__}"] += 1
+                return
+            c["ok" if same else f"BAD {label}: silent loss"] += 1
+
+        def chunk_files(out, var=None):
+            return sorted(p for p in out.rglob("*") if p.is_file() and "c" in p.relative_to(out).parts
+                          and (var is None or p.relative_to(out).parts[0] == var))
+
+        for trial in range(n):
+            # SIGKILL at a random moment, then resume
+            out = tmp / f"k{trial}.zarr"
+            proc = subprocess.Popen([sys.executable, "-m", "impactbar.cli", "sweep", str(spec), "--out",
+                                     str(out), "--workers", "1", "--no-progress"],
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                    start_new_session=True)
+            time.sleep(float(rng.uniform(3, 8)))
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+            check(out, "SIGKILL")
+            # a finished store damaged afterwards: a deleted chunk, a corrupted one, an empty flag file
+            for label in ("deleted chunk", "corrupted chunk", "empty flag file"):
+                out = tmp / f"d{trial}-{label.replace(' ', '_')}.zarr"
+                shutil.copytree(ref_path, out)
+                data = [p for p in chunk_files(out, "phase")]
+                victim = data[rng.integers(len(data))]
+                if label == "deleted chunk":
+                    victim.unlink()
+                elif label == "corrupted chunk":
+                    victim.write_bytes(b"garbage")
+                else:
+                    chunk_files(out, "chunk_done")[0].write_bytes(b"")
+                check(out, label)
+        # refusals: one line, nothing left behind
+        (tmp / "afile").write_text("x")
+        cases = {"existing file": [tmp / "afile"], "file as parent": [tmp / "afile" / "x.zarr"],
+                 "dead scheduler": [tmp / "dead.zarr", "--scheduler", "tcp://127.0.0.1:1"]}
+        for name, args in cases.items():
+            before = sorted(p.name for p in tmp.iterdir())
+            r = subprocess.run([sys.executable, "-m", "impactbar.cli", "sweep", str(spec), "--out",
+                                *map(str, args), "--no-progress"], capture_output=True, text=True,
+                               timeout=120)
+            after = sorted(p.name for p in tmp.iterdir())
+            err = r.stderr.strip().splitlines()
+            one_line = r.returncode == 2 and err and "Traceback" not in r.stderr
+            c["ok" if one_line and before == after else f"BAD {name}"] += 1
+        r = subprocess.run([sys.executable, "-m", "impactbar.cli", "plot", str(ref_path), "--out",
+                            str(tmp / "p.png"), "--select", "R=nan"], capture_output=True, text=True)
+        c["ok" if r.returncode == 2 and "Traceback" not in r.stderr else "BAD plot --select R=nan"] += 1
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return c
+
+
+def physical(rng, n, slow):
+    from impactbar import physical as ph
+
+    c = Counter()
+    names = list(ph.PRESETS)
+    units = ["200 mm", "200 mm # x", "200 mm;", "0.2 m", "200", "2,5 mm", "1e400 mm", "nan mm",
+             "200 mm + 1 m", "200 mm)", "20 kg", "-5 mm", "200 rad"]
+    for _ in range(n):
+        base = ph.PRESETS[names[rng.integers(len(names))]]
+        cfg = {k: dict(v) if isinstance(v, dict) else v for k, v in base.items()}
+        if rng.random() < 0.7 and "bar" in cfg:
+            cfg["bar"]["length"] = units[rng.integers(len(units))]
+        def one(cfg=cfg):
+            ph.orbits(ph.Hammer.from_config(cfg))
+            if cfg.get("bar", {}).get("length") in ("200 mm # x", "200 mm;"):
+                return ["BAD malformed unit accepted"]
+            return ["ok"]
+
+        case(c, one, slow)
+    return c
+
+
+CATEGORIES = {"constructors": (constructors, 400), "orbits": (orbits_calls, 150),
+              "simulate": (simulate_runs, 60), "grazing": (grazing_vs_scipy, 60),
+              "sweeps": (sweeps, 3), "physical": (physical, 60)}
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scale", type=float, default=1.0)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--slow", type=float, default=60.0, help="seconds after which a case counts as a hang")
+    ap.add_argument("--only", nargs="*", default=list(CATEGORIES), choices=list(CATEGORIES))
+    args = ap.parse_args(argv)
+    print(f"impactbar {ib.__version__} from {Path(ib.__file__).parent}")
+    # compile the kernels once here, so the forked cases do not each compile them
+    ib.simulate(ib.BarModel(5, 0.1, 0.5, 1), ib.CosineLoad(1.2, 1), ib.InitialState.rigid(-0.1, 0, 1), 5)
+    ib.simulate(ib.BarModel(5, 0.1, 0.5, 1), ib.SquareWaveLoad(1, 1.5), ib.InitialState.rigid(-0.1, 0, 1), 5)
+    total_bad = 0
+    for name in args.only:
+        fn, n = CATEGORIES[name]
+        rng = np.random.default_rng([args.seed, list(CATEGORIES).index(name)])
+        n = max(1, round(n * args.scale))
+        t = time.perf_counter()
+        c = fn(rng, n, args.slow)
+        bad = sum(v for k, v in c.items() if k.startswith("BAD"))
+        total_bad += bad
+        detail = ", ".join(f"{k}: {v}" for k, v in sorted(c.items()))
+        print(f"{name:13s} cases {n:5d}  bad {bad:4d}  ({time.perf_counter() - t:6.1f} s)  {detail}",
+              flush=True)
+    print(f"total bad: {total_bad}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
