@@ -3,7 +3,6 @@ plots of the struck end's displacement and velocity, the impact times and the en
 
 from __future__ import annotations
 
-import csv
 import json
 import sys
 from pathlib import Path
@@ -78,13 +77,9 @@ def run(args) -> int:
 
 
 def write_impacts(result: physical.SimulationResult, path) -> None:
-    """One row per impact: index, time (s), impact velocity (m/s), energy per blow (J)."""
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(["impact", "time_s", "impact_velocity_m_s", "blow_energy_J"])
-        for i, (t, v, e) in enumerate(zip(result.impact_times_s, result.impact_velocities_m_s,
-                                          result.blow_energies_J, strict=True)):
-            w.writerow([i, f"{t:.9g}", f"{v:.9g}", f"{e:.9g}"])
+    """One row per impact: index, time (s), impact velocity (m/s), energy per blow (J), written
+    through :meth:`~impactbar.physical.SimulationResult.to_dataframe` with 9 significant digits."""
+    result.to_dataframe().to_csv(path, float_format="%.9g", lineterminator="\r\n")
 
 
 def summarize(result: physical.SimulationResult) -> dict:

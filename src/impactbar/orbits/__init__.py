@@ -8,6 +8,7 @@ Part of the core: imports only ``impactbar.model``, ``impactbar.loads``, ``impac
 numpy and scipy.
 """
 
+from .one_impact import OrbitList as OrbitList
 from .one_impact import PeriodicOrbit as PeriodicOrbit
 from .one_impact import orbit_multipliers as orbit_multipliers
 from .one_impact import periodic_orbits as periodic_orbits
@@ -18,6 +19,7 @@ from .stability import impact_map_jacobian as impact_map_jacobian
 
 __all__ = [
     "PeriodicOrbit",
+    "OrbitList",
     "periodic_orbits",
     "orbit_multipliers",
     "phase_G",

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _tables
 from .._validate import check_real
 from ..orbits import periodic_orbits
 from ..simulation import InitialState
@@ -119,6 +120,35 @@ class SimulationResult:
     impact_times_s: np.ndarray
     impact_velocities_m_s: np.ndarray
     blow_energies_J: np.ndarray
+
+    def to_dataframe(self):
+        """The impacts as a table, in SI units.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``impact`` (0, 1, ...), columns ``time_s`` (s), ``impact_velocity_m_s`` (m/s) and
+            ``blow_energy_J`` (J); ``attrs`` holds the hammer's name, ``t_end_s`` and each column's
+            ``long_name`` and ``units``.
+        """
+        return _tables.frame(
+            {"impact": np.arange(self.impact_times_s.size), "time_s": self.impact_times_s,
+             "impact_velocity_m_s": self.impact_velocities_m_s, "blow_energy_J": self.blow_energies_J},
+            {"impact": ("impact number", "1"), "time_s": ("time of the impact", "s"),
+             "impact_velocity_m_s": ("arrival velocity of the struck end", "m/s"),
+             "blow_energy_J": ("energy per blow m v^2 / 2", "J")},
+            index="impact", attrs={"hammer": self.hammer.name or "", "t_end_s": self.t_end_s})
+
+    def to_xarray(self):
+        """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``impact``, with ``long_name`` and
+        ``units`` on every variable.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        return _tables.to_xarray(self.to_dataframe())
 
     def end_displacement_m(self, t_s) -> np.ndarray:
         """Displacement of the struck end (m, negative off the stop) at times ``t_s`` (s)."""
