@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import sys
 
+from ._common import docs_page
+
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
@@ -13,7 +15,8 @@ def add_parser(sub) -> None:
         description="Compute the task of SPEC.toml (orbits, montecarlo or bifurcation) at every "
         "point of its grid on a dask.distributed cluster and store each chunk in RESULTS.zarr as "
         "it finishes. Rerunning the same command resumes: finished chunks are kept. The spec is "
-        "checked before any work starts (see docs/sweep.md for its keys).",
+        "checked before any work starts (its keys: "
+        + docs_page("Sweeps and Monte Carlo on a cluster") + ").",
     )
     p.add_argument("spec", help="the sweep spec (TOML)")
     p.add_argument("--out", required=True, help="the zarr store to create or resume (a folder)")
