@@ -95,7 +95,7 @@ fig.tight_layout()
 import tempfile
 from pathlib import Path
 
-from impactbar import load_spec, open_sweep, plot_sweep, run_sweep
+from impactbar import load_spec, open_sweep, run_sweep
 
 work = Path(tempfile.mkdtemp())
 (work / "grid.toml").write_text("""
