@@ -134,3 +134,21 @@ def test_si_simulation_table_and_the_csv_written_through_it(tmp_path):
     first = lines[1].split(",")
     assert first[0] == "0" and float(first[1]) == pytest.approx(df["time_s"].iloc[0], rel=1e-8)
     assert res.to_xarray()["time_s"].attrs["units"] == "s"
+
+
+def test_si_orbit_list_is_a_table():
+    from impactbar import physical
+
+    hammer = physical.preset("pneumatic-drill")
+    found = physical.orbits(hammer)
+    assert isinstance(found, list) and isinstance(found, physical.PhysicalOrbitList)
+    df = found.to_dataframe()
+    assert len(df) == len(found) == 2
+    for i, o in enumerate(found):
+        assert df.loc[i, "blow_energy_J"] == o.blow_energy_J and bool(df.loc[i, "stable"]) == o.stable
+    # the rigid mode's identity v = F_mean / (f m (1 + R)) (theory §1, SI scaling); the flexible
+    # modes of this stiff piston add about 2e-5 at the struck end
+    v = hammer.mean_force_N / (hammer.frequency_Hz * hammer.mass_kg * (1 + hammer.R))
+    np.testing.assert_allclose(df["impact_velocity_m_s"], v, rtol=1e-4)
+    assert df.attrs["columns"]["power_W"]["units"] == "W"
+    assert found.to_xarray()["peak_stress_Pa"].attrs["units"] == "Pa"

@@ -58,6 +58,7 @@ from .forces import PneumaticForce as PneumaticForce
 from .hammer import Hammer as Hammer
 from .hammer import Scales as Scales
 from .results import PhysicalOrbit as PhysicalOrbit
+from .results import PhysicalOrbitList as PhysicalOrbitList
 from .results import SimulationResult as SimulationResult
 from .results import orbits as orbits
 from .results import simulate as simulate
@@ -71,6 +72,7 @@ __all__ = [
     "Hammer",
     "Scales",
     "PhysicalOrbit",
+    "PhysicalOrbitList",
     "SimulationResult",
     "ImpactDurationWarning",
     "SHORT_IMPACT_LIMIT",

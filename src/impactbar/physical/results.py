@@ -80,7 +80,56 @@ class PhysicalOrbit:
                 if f.name != "orbit"}
 
 
-def orbits(hammer: Hammer) -> list[PhysicalOrbit]:
+#: the columns of :meth:`PhysicalOrbitList.to_dataframe`: name -> (long_name, units)
+PHYSICAL_ORBIT_COLUMNS = {
+    "orbit": ("orbit number, in order of phase", "1"),
+    "phase_rad": ("phase of the load at impact", "rad"),
+    "impact_velocity": ("dimensionless impact velocity u_t(1, 2 pi-)", "1"),
+    "impact_velocity_m_s": ("impact velocity", "m/s"),
+    "blow_energy_J": ("energy per blow m v^2 / 2", "J"),
+    "blow_frequency_Hz": ("blows per second", "Hz"),
+    "power_W": ("impact power", "W"),
+    "peak_stress_Pa": ("peak compressive stress at impact", "Pa"),
+    "admissible": ("the end stays off the stop between impacts (theory §5)", ""),
+    "stable": ("admissible and every |Floquet multiplier| < 1 (theory §7)", ""),
+    "max_abs_multiplier": ("largest |Floquet multiplier|", "1"),
+}
+
+
+class PhysicalOrbitList(list):
+    """The list of :class:`PhysicalOrbit` that :func:`orbits` returns: a plain ``list`` with
+    ``to_dataframe()`` and ``to_xarray()`` (one row per orbit, SI units in the column names and in
+    each column's ``units``)."""
+
+    __slots__ = ()
+
+    def to_dataframe(self):
+        """One row per orbit, the columns of :data:`PHYSICAL_ORBIT_COLUMNS`.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``orbit``; ``attrs["columns"]`` gives each column's ``long_name`` and ``units``.
+        """
+        cols = {"orbit": np.arange(len(self))}
+        for k in PHYSICAL_ORBIT_COLUMNS:
+            if k != "orbit":
+                cols[k] = np.array([getattr(o, k) for o in self],
+                                   dtype=bool if k in ("admissible", "stable") else float)
+        return _tables.frame(cols, PHYSICAL_ORBIT_COLUMNS, index="orbit")
+
+    def to_xarray(self):
+        """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``orbit``.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        return _tables.to_xarray(self.to_dataframe())
+
+
+def orbits(hammer: Hammer) -> PhysicalOrbitList:
     """The one-impact periodic motions of ``hammer`` with their SI figures.
 
     Calls ``periodic_orbits(hammer.model, hammer.load)`` and converts each orbit; warns
@@ -88,11 +137,13 @@ def orbits(hammer: Hammer) -> list[PhysicalOrbit]:
 
     Returns
     -------
-    list of PhysicalOrbit
+    PhysicalOrbitList
+        A ``list`` of :class:`PhysicalOrbit`, in order of phase; ``.to_dataframe()`` makes it a
+        table.
     """
     hammer.check_short_impacts()
     found = periodic_orbits(hammer.model, hammer.load)
-    return [PhysicalOrbit.from_orbit(o, hammer) for o in found]
+    return PhysicalOrbitList(PhysicalOrbit.from_orbit(o, hammer) for o in found)
 
 
 @dataclass(frozen=True, eq=False)
