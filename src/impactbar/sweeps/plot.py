@@ -172,34 +172,36 @@ def plot_fraction_maps(ds, dims, fig=None):
         ncol = min(3, len(present))
         nrow = -(-len(present) // ncol)
         if fig is None:
-            fig = plt.figure(figsize=(4.2 * ncol, 3.4 * nrow))
+            fig = plt.figure(figsize=(4.2 * ncol, 3.4 * nrow), layout="constrained")
         axs = fig.subplots(nrow, ncol, squeeze=False)
         for ax, m in zip(axs.ravel(), present, strict=False):
             img = frac.sel(motion=m).transpose(y, x).values
             pc = ax.pcolormesh(ds[x].values, ds[y].values, np.ma.masked_invalid(img), vmin=0.0,
                                vmax=1.0, cmap="viridis", shading="nearest")
             ax.set_title(m)
-            ax.set_xlabel(x)
-            ax.set_ylabel(y)
+            ax.set_xlabel(_axis_label(ds, x))
+            ax.set_ylabel(_axis_label(ds, y))
             fig.colorbar(pc, ax=ax, label="fraction")
         for ax in axs.ravel()[len(present):]:
             ax.set_visible(False)
     else:
         if fig is None:
-            fig = plt.figure(figsize=(6.4, 4.8))
+            fig = plt.figure(figsize=(7.2, 4.8), layout="constrained")
         ax = fig.subplots()
         if dims:
             x = dims[0]
             for m in present:
                 ax.plot(ds[x].values, frac.sel(motion=m).values, "o-", ms=3, label=m)
-            ax.set_xlabel(x)
+            ax.set_xlabel(_axis_label(ds, x))
         else:
             ax.bar(present, [float(frac.sel(motion=m)) for m in present])
         ax.set_ylabel("fraction of random starts")
         ax.set_ylim(-0.02, 1.02)
-        ax.legend(loc="best", fontsize="small")
+        if dims:
+            ax.legend(**_LEGEND)
     fig.suptitle(" ".join(filter(None, ["long-run motion", _title(ds, dims)])))
-    fig.tight_layout()
+    if fig.get_layout_engine() is None:  # a figure passed in
+        fig.tight_layout()
     return fig
 
 
