@@ -216,3 +216,11 @@ def test_help_points_at_the_docs_site_not_at_files():
     for name, sub in subs.items():
         text = sub.format_help()
         assert "docs/" not in text and "MODEL.md" not in text, name
+
+
+def test_a_namespace_without_the_record_refuses_nothing():
+    """run() called with a namespace parsed elsewhere cannot tell defaults from given values."""
+    parser = build_parser()
+    args = parser.parse_args(["orbits", "--preset", "pneumatic-drill"])
+    assert not _common.given(args, "R")
+    _common.refuse(args, ["R", "s"], because="never")  # does not raise

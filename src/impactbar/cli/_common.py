@@ -73,13 +73,11 @@ def explicit_options(parser: argparse.ArgumentParser, argv: list[str]) -> frozen
 def given(args: argparse.Namespace, dest: str) -> bool:
     """Whether the option with destination ``dest`` was given on the command line.
 
-    Without the record :func:`impactbar.cli.main` attaches (a namespace built by hand), an option
-    counts as given when its value is not ``None``.
+    Without the record :func:`impactbar.cli.main` attaches (a namespace parsed or built elsewhere),
+    a default cannot be told from a value given, so nothing counts as given and nothing is refused.
     """
     record = getattr(args, _GIVEN, None)
-    if record is None:
-        return getattr(args, dest, None) is not None
-    return dest in record
+    return record is not None and dest in record
 
 
 def _flag(dest: str) -> str:
