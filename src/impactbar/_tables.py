@@ -1,7 +1,8 @@
 """Results as tables (private): what the ``to_dataframe()`` / ``to_xarray()`` methods share.
 
-pandas is a dependency of impactbar; xarray is optional (extra ``data``) and is reached only
-through :meth:`pandas.DataFrame.to_xarray`, so the core never imports it. Every column carries a
+pandas is a dependency of impactbar, imported here only, inside the functions (the result objects'
+table views call them); xarray is optional (extra ``data``) and is reached only through
+:meth:`pandas.DataFrame.to_xarray`, so the core never imports it. Every column carries a
 ``long_name`` and ``units`` (``"1"`` for dimensionless numbers, the CF convention), set on the
 xarray variables and kept in ``DataFrame.attrs["columns"]``.
 """
@@ -16,15 +17,15 @@ __all__ = ["frame", "to_xarray", "XARRAY_HINT"]
 XARRAY_HINT = "to_xarray() needs xarray, which is not installed: pip install 'impactbar[data]'"
 
 
-def frame(columns: Mapping[str, Sequence], meta: Mapping[str, tuple[str, str]], *, index: str,
-          attrs: Mapping | None = None):
+def frame(columns: Mapping[str, Sequence], meta: Mapping[str, tuple[str, str]], *,
+          index: str | list[str], attrs: Mapping | None = None):
     """A :class:`pandas.DataFrame` with the columns ``columns`` and an index named ``index``.
 
     Parameters
     ----------
     columns : mapping of str to sequence
         Column name -> values, all of one length; the column named ``index`` becomes the index
-        (or, when absent, a range index of that name).
+        (or, when absent, a range index of that name); a list of names makes a multi-index.
     meta : mapping of str to (str, str)
         Column name -> ``(long_name, units)``; kept in ``DataFrame.attrs["columns"]``.
     attrs : mapping, optional
@@ -33,7 +34,7 @@ def frame(columns: Mapping[str, Sequence], meta: Mapping[str, tuple[str, str]], 
     import pandas as pd
 
     df = pd.DataFrame(dict(columns))
-    if index in df.columns:
+    if isinstance(index, list) or index in df.columns:
         df = df.set_index(index)
     else:
         df.index.name = index

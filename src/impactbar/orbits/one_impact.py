@@ -226,19 +226,17 @@ class PeriodicOrbit:
         nx, nt = int(nx), int(nt)
         if nx < 2 or nt < 2:
             raise ValueError(f"nx and nt must be integers >= 2; got {nx}, {nt}")
-        import pandas as pd
-
         x = np.linspace(0.0, 1.0, nx)
         t = np.linspace(0.0, TWO_PI, nt)
         q, v = self._state_in_period(t)
         shapes = self.model.shape_functions(x)  # (X, M)
-        idx = pd.MultiIndex.from_product([t, x], names=["t", "x"])
+        tt, xx = np.meshgrid(t, x, indexing="ij")  # rows in (t, x) order, as the fields below
         df = _tables.frame(
-            {"displacement": (q.T @ shapes.T).ravel(), "velocity": (v.T @ shapes.T).ravel()},
+            {"t": tt.ravel(), "x": xx.ravel(), "displacement": (q.T @ shapes.T).ravel(),
+             "velocity": (v.T @ shapes.T).ravel()},
             {"t": ("orbit time since the impact", "1"), "x": ("position along the bar", "1"),
              "displacement": ("displacement u(x, t)", "1"), "velocity": ("velocity u_t(x, t)", "1")},
-            index="row", attrs=self._attrs())
-        df.index = idx
+            index=["t", "x"], attrs=self._attrs())
         return _tables.to_xarray(df)
 
     def _attrs(self) -> dict:
