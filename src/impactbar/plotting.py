@@ -6,7 +6,8 @@ import math
 
 import numpy as np
 
-__all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_experiment"]
+__all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_experiment",
+           "plot_end_displacement", "plot_impact_map", "plot_intervals"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -89,15 +90,121 @@ def plot_multipliers(orbit, ax=None):
     return ax
 
 
+#: impact intervals closer than this (load periods) are one value: the tolerance to which
+#: ``classify`` calls a motion periodic; a periodic motion's intervals differ by less (by about
+#: 1e-12 once settled: the simulator refines impact times to rounding)
+INTERVAL_RESOLUTION = 1e-4
+
+
+def plot_end_displacement(result, axes=None, *, periods: float = 20.0):
+    """The struck end's displacement ``u(1, t)`` over the last ``periods`` load periods of each
+    run an :class:`~impactbar.simulation.experiments.ExperimentResult` kept.
+
+    Parameters
+    ----------
+    result : ExperimentResult
+    axes : sequence of matplotlib.axes.Axes, optional
+        One per kept run; created when not given.
+    periods : float, optional
+        Load periods shown, at the end of each run. Default 20.
+
+    Returns
+    -------
+    sequence of matplotlib.axes.Axes
+    """
+    from .simulation.experiments import load_period
+
+    T = load_period(result.load)
+    if axes is None:
+        import matplotlib.pyplot as plt
+
+        rows = max(1, len(result.trajectories))
+        fig, grid = plt.subplots(rows, 1, figsize=(9, 1.9 * rows + 0.6), squeeze=False, sharex=False,
+                                 layout="constrained")
+        axes = list(grid[:, 0])
+        fig.suptitle("end displacement of the first runs (last load periods)")
+    for i, (ax, tr) in enumerate(zip(axes, result.trajectories, strict=False)):
+        t1 = tr.t_end
+        t0 = max(tr.t0, t1 - periods * T)
+        t = np.linspace(t0, t1, 4000)
+        ax.plot(t / T, tr.end_displacement(t), lw=0.8)
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_ylabel("u(1, t)")
+        ax.text(0.01, 0.05, f"run {i}: {result.classes[i].kind}", transform=ax.transAxes, fontsize=8.5)
+    if len(axes):
+        axes[-1].set_xlabel("t / load period")
+    return axes
+
+
+def plot_impact_map(result, ax=None):
+    """The impact map of an experiment: each main impact's velocity ``v(i+1)`` against the previous
+    one's ``v(i)``, over the classified windows of every run.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    ax = _axes(ax)
+    pairs = result.impact_pairs
+    if pairs.size:
+        ax.plot(pairs[:, 0], pairs[:, 1], ".", ms=3)
+        lim = float(np.max(pairs)) * 1.05
+        ax.plot([0, lim], [0, lim], "k:", lw=0.6, label="v(i+1) = v(i)")
+        ax.legend(loc="upper left", fontsize=8.5)
+    else:
+        ax.text(0.5, 0.5, "no main impacts in the windows", ha="center", transform=ax.transAxes)
+    ax.set_xlabel("impact velocity v(i)")
+    ax.set_ylabel("next impact velocity v(i+1)")
+    ax.set_title("impact map (main impacts, classified windows)", fontsize=9.5)
+    return ax
+
+
+def plot_intervals(result, ax=None):
+    """The distribution of the intervals between main impacts of an experiment, in load periods.
+
+    Intervals equal to within :data:`INTERVAL_RESOLUTION` are one value, so an exactly periodic
+    motion shows as one bar at its period, not as a histogram of rounding noise.
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    ax = _axes(ax)
+    iv = np.asarray(result.intervals, dtype=float)
+    if iv.size == 0:
+        ax.text(0.5, 0.5, "no main impacts in the windows", ha="center", transform=ax.transAxes)
+        ax.set_title("impact intervals", fontsize=9.5)
+        return ax
+    q = np.round(iv / INTERVAL_RESOLUTION) * INTERVAL_RESOLUTION
+    values, counts = np.unique(q, return_counts=True)
+    if values.size <= 12:  # a few distinct intervals: one bar each, no binning
+        width = 0.02 * max(float(np.ptp(values)), 0.5)
+        ax.bar(values, counts, width=width)
+        for v, c in zip(values, counts, strict=True):
+            ax.annotate(f"{v:.6g}", (v, c), ha="center", va="bottom", fontsize=8.5,
+                        xytext=(0, 2), textcoords="offset points")
+        ax.set_xlim(values.min() - 0.5, values.max() + 0.5)
+    else:
+        ax.hist(q, bins=min(80, max(10, int(np.sqrt(q.size)))))
+    ax.ticklabel_format(axis="x", useOffset=False)
+    ax.set_xlabel(f"interval between main impacts / load period (to {INTERVAL_RESOLUTION:g})")
+    ax.set_ylabel("count")
+    spread = 100 * result.interval_std / result.interval_mean if result.interval_mean else np.nan
+    ax.set_title(f"mean {result.interval_mean:.4f}, std {result.interval_std:.4f} ({spread:.1f} %)",
+                 fontsize=9.5)
+    return ax
+
+
 def plot_experiment(result, directory, *, prefix: str = "") -> list:
     """Write three PNG figures of an :class:`~impactbar.simulation.experiments.ExperimentResult`
-    into ``directory``: end displacement against time (the kept
-    runs), the impact map ``v_{i+1}`` against ``v_i``, and a histogram of impact intervals.
+    into ``directory``: :func:`plot_end_displacement` (the kept runs), :func:`plot_impact_map` and
+    :func:`plot_intervals`.
 
     Returns
     -------
     list of pathlib.Path
-        The files written.
+        The files written: ``end_displacement.png``, ``impact_map.png``,
+        ``interval_histogram.png`` (with ``prefix``).
     """
     from pathlib import Path
 
@@ -108,47 +215,15 @@ def plot_experiment(result, directory, *, prefix: str = "") -> list:
 
     out = Path(directory)
     out.mkdir(parents=True, exist_ok=True)
-    from .simulation.experiments import load_period
-
-    T = load_period(result.load)
     files = []
-
-    rows = max(1, len(result.trajectories))
-    fig, axes = plt.subplots(rows, 1, figsize=(9, 2.2 * rows), squeeze=False)
-    for ax, tr in zip(axes[:, 0], result.trajectories, strict=False):
-        t1 = tr.t_end
-        t0 = max(tr.t0, t1 - 20 * T)
-        t = np.linspace(t0, t1, 4000)
-        ax.plot(t / T, tr.end_displacement(t), lw=0.8)
-        ax.set_ylabel("u(1, t)")
-    axes[-1, 0].set_xlabel("t / load period (last 20 periods)")
-    fig.suptitle("end displacement")
-    fig.tight_layout()
+    axes = plot_end_displacement(result)
     files.append(out / f"{prefix}end_displacement.png")
-    fig.savefig(files[-1], dpi=120)
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(5, 5))
-    if result.impact_pairs.size:
-        ax.plot(result.impact_pairs[:, 0], result.impact_pairs[:, 1], ".", ms=2)
-        lim = float(np.max(result.impact_pairs)) * 1.05
-        ax.plot([0, lim], [0, lim], "k:", lw=0.5)
-    ax.set_xlabel("v_i")
-    ax.set_ylabel("v_{i+1}")
-    ax.set_title("impact map (main impacts, classified windows)")
-    fig.tight_layout()
-    files.append(out / f"{prefix}impact_map.png")
-    fig.savefig(files[-1], dpi=120)
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(6, 4))
-    if result.intervals.size:
-        ax.hist(result.intervals, bins=80)
-    ax.set_xlabel("impact interval / load period")
-    ax.set_ylabel("count")
-    ax.set_title(f"mean {result.interval_mean:.4f}, std {result.interval_std:.4f}")
-    fig.tight_layout()
-    files.append(out / f"{prefix}interval_histogram.png")
-    fig.savefig(files[-1], dpi=120)
-    plt.close(fig)
+    axes[0].figure.savefig(files[-1], dpi=120)
+    plt.close(axes[0].figure)
+    for name, draw in (("impact_map", plot_impact_map), ("interval_histogram", plot_intervals)):
+        fig, ax = plt.subplots(figsize=(5.5, 4.5), layout="constrained")
+        draw(result, ax)
+        files.append(out / f"{prefix}{name}.png")
+        fig.savefig(files[-1], dpi=120)
+        plt.close(fig)
     return files

@@ -3,8 +3,15 @@ starts; prints the class fractions and the impact-interval statistics, writes th
 
 from __future__ import annotations
 
+import argparse
 import math
+import sys
 import time
+
+from ._common import add_quiet_argument, given, progress_bar, refuse, refuse_together
+
+#: the options of each hammer's load
+LOAD_OPTIONS = {"pneumatic": ("p0", "pk", "k"), "hydraulic": ("q", "kappa")}
 
 
 def add_parser(sub) -> None:
@@ -29,7 +36,9 @@ def add_parser(sub) -> None:
                    help="damping d (default 0.03 / 2 pi, the paper's 2 pi d = 0.03)")
     p.add_argument("--R", type=float, default=None,
                    help="restitution (default 0.8 pneumatic, 0.5 hydraulic)")
-    p.add_argument("--modes", type=int, default=4, help="flexible modes N (default 4)")
+    p.add_argument("--n-modes", type=int, default=4, help="flexible modes N (default 4)")
+    p.add_argument("--modes", dest="modes", type=int, default=None,
+                   help=argparse.SUPPRESS)  # deprecated alias of --n-modes
     p.add_argument("--p0", type=float, default=1.2, help="pneumatic mean load (default 1.2)")
     p.add_argument("--pk", type=float, default=1.0, help="pneumatic harmonic (default 1)")
     p.add_argument("--k", type=int, default=1, help="pneumatic harmonic order (default 1)")
@@ -38,24 +47,47 @@ def add_parser(sub) -> None:
     p.add_argument("--out", default=None,
                    help="folder for the plots (default out/experiment-<hammer>)")
     p.add_argument("--no-plots", action="store_true", help="skip the plots")
+    add_quiet_argument(p)
     p.set_defaults(func=run)
+
+
+def check_options(args) -> int:
+    """Refuse what the chosen hammer ignores and what conflicts; returns the number of modes.
+
+    Raises
+    ------
+    UsageError
+    """
+    for hammer, options in LOAD_OPTIONS.items():
+        if hammer != args.hammer:
+            refuse(args, options, because=f"for the {args.hammer} hammer (for {hammer} only)")
+    refuse_together(args, "no_plots", "out", because="--out names the folder for the plots")
+    refuse_together(args, "n_modes", "modes", because="--modes is the old name of --n-modes")
+    if given(args, "modes") and args.modes is not None:
+        print("impactbar experiment: warning: --modes is deprecated; use --n-modes", file=sys.stderr)
+        return args.modes
+    return args.n_modes
 
 
 def run(args) -> int:
     from ..plotting import plot_experiment
     from ..simulation.experiments import hydraulic_setup, pneumatic_setup, run_experiment
 
+    n_modes = check_options(args)
     if args.hammer == "pneumatic":
         R = 0.8 if args.R is None else args.R
         model, load = pneumatic_setup(p0=args.p0, pk=args.pk, k=args.k, s=args.s, d=args.d, R=R,
-                                      n_modes=args.modes)
+                                      n_modes=n_modes)
     else:
         R = 0.5 if args.R is None else args.R
         model, load = hydraulic_setup(q=args.q, kappa=args.kappa, s=args.s, d=args.d, R=R,
-                                      n_modes=args.modes)
+                                      n_modes=n_modes)
     t0 = time.perf_counter()
-    result = run_experiment(model, load, starts=args.starts, periods=args.periods,
-                            seed=args.seed, workers=args.workers)
+    starts = max(int(args.starts), 0)
+    with progress_bar(starts, desc=f"{args.hammer} starts", unit="run", quiet=args.quiet) as bar:
+        result = run_experiment(model, load, starts=args.starts, periods=args.periods,
+                                seed=args.seed, workers=args.workers,
+                                progress=lambda n: bar.update(n - bar.n))
     print(result.summary())
     print(f"({time.perf_counter() - t0:.1f} s)")
     if not args.no_plots:

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
-import json
-import math
+from ._common import print_json, refuse
+
+#: the dimensionless inputs, which a hammer in SI (CONFIG.toml or --preset) sets itself
+DIMENSIONLESS = ("s", "d", "R", "n_modes", "load", "p0", "pk", "k", "q", "kappa")
+#: the options of each load kind
+LOAD_OPTIONS = {"cosine": ("p0", "pk", "k"), "square": ("q", "kappa")}
 
 
 def add_parser(sub) -> None:
@@ -29,7 +33,8 @@ def add_parser(sub) -> None:
     lg.add_argument("--k", type=int, default=1, help="cosine: order of the harmonic (default 1)")
     lg.add_argument("--q", type=float, default=1.0, help="square: level q > 0 (default 1)")
     lg.add_argument("--kappa", type=float, default=1.2, help="square: kappa in [1, 2] (default 1.2)")
-    p.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    p.add_argument("--json", action="store_true",
+                   help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
     try:
         from .physical import add_physical_arguments  # the SI layer, where installed
     except ImportError:
@@ -47,7 +52,26 @@ def _load(args):
     return SquareWaveLoad(args.q, args.kappa)
 
 
+def check_options(args) -> None:
+    """Refuse the options the chosen mode ignores: the dimensionless inputs with a hammer in SI,
+    the other load's options with ``--load``.
+
+    Raises
+    ------
+    UsageError
+    """
+    hammer = getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None
+    if hammer:
+        refuse(args, DIMENSIONLESS, because="with a hammer in SI units (CONFIG.toml or --preset), "
+               "which sets the bar, the load and R itself")
+        return
+    for kind, options in LOAD_OPTIONS.items():
+        if kind != args.load:
+            refuse(args, options, because=f"with --load {args.load} (for --load {kind} only)")
+
+
 def run(args) -> int:
+    check_options(args)
     if getattr(args, "config", None) or getattr(args, "preset", None):
         from .physical import run_physical_orbits
 
@@ -63,9 +87,9 @@ def run(args) -> int:
             "model": {"s": model.s, "d": model.d, "R": model.R, "n_modes": model.n_modes,
                       "impact": model.impact},
             "load": repr(load),
-            "orbits": [_jsonable(o.to_dict()) for o in orbits],
+            "orbits": [o.to_dict() for o in orbits],
         }
-        print(json.dumps(doc, indent=2))
+        print_json(doc)
         return 0
     print(f"{model!r}\n{load!r}")
     if not orbits:
@@ -79,13 +103,3 @@ def run(args) -> int:
               f"{o.max_abs_multiplier:9.5f} {str(o.stable):>7} {str(o.schur_stable):>6}")
     return 0
 
-
-def _jsonable(d):
-    """Infinite values as strings (JSON has none)."""
-    out = {}
-    for k, v in d.items():
-        if isinstance(v, float) and not math.isfinite(v):
-            out[k] = str(v)
-        else:
-            out[k] = v
-    return out

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import time
 
+from ._common import add_quiet_argument, progress_bar
+
 
 def add_parser(sub) -> None:
     p = sub.add_parser("paper", help="reproduce the paper's Figs. 4-8 as PNG and CSV files",
@@ -11,6 +13,7 @@ def add_parser(sub) -> None:
                        "and exact multipliers, and write figN.png and figN.csv.")
     p.add_argument("--out", default="paper-figures", help="output folder (default: paper-figures)")
     p.add_argument("--quick", action="store_true", help="fewer points per curve")
+    add_quiet_argument(p)
     p.set_defaults(func=run)
 
 
@@ -18,7 +21,9 @@ def run(args) -> int:
     from ..paper import reproduce
 
     t0 = time.perf_counter()
-    summary = reproduce(args.out, quick=args.quick)
+    with progress_bar(5, desc="Figs. 4-8", unit="figure", quiet=args.quiet) as bar:
+        summary = reproduce(args.out, quick=args.quick,
+                            progress=lambda name: bar.set_postfix_str(name, refresh=False) or bar.update(1))
     w1 = max(len(s[1]) for s in summary)
     print(f"{'fig':<4} {'quantity':<{w1}}  value")
     for fig, what, val in summary:

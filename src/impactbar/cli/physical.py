@@ -4,12 +4,11 @@
 from __future__ import annotations
 
 import dataclasses
-import json
-import math
 import sys
 import warnings
 
 from .. import physical
+from ._common import docs_page, json_ready, print_json
 
 __all__ = ["add_physical_arguments", "add_impact_argument", "wants_physical", "hammer_from_args",
            "run_physical_orbits", "json_ready"]
@@ -21,7 +20,8 @@ def add_physical_arguments(parser) -> None:
         "config", nargs="?", default=None, metavar="CONFIG.toml",
         help="a hammer in SI units (keys: [bar] E, density, length, diameter|area; [damping] "
              "coefficient|ratio; [stop] restitution|area; [drive] frequency; [force] kind = "
-             "pneumatic|hydraulic|measured, ...; [model] n_modes); see docs/physical.md")
+             "pneumatic|hydraulic|measured, ...; [model] n_modes); see "
+             f"{docs_page('Real hammers in SI units')}")
     parser.add_argument(
         "--preset", default=None, metavar="NAME", choices=sorted(physical.PRESETS),
         help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}")
@@ -57,19 +57,6 @@ def hammer_from_args(args) -> physical.Hammer:
     return hammer if impact is None else dataclasses.replace(hammer, impact=impact)
 
 
-def json_ready(obj):
-    """``obj`` with non-finite floats as ``None`` and numpy scalars as Python numbers."""
-    if isinstance(obj, dict):
-        return {k: json_ready(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [json_ready(v) for v in obj]
-    if hasattr(obj, "item") and not isinstance(obj, str):
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
-
-
 def run_physical_orbits(args) -> int:
     """``impactbar orbits CONFIG.toml | --preset NAME [--json]``: the one-impact periodic motions
     of a hammer with their SI figures, as a table or (with ``--json``) as JSON on stdout.
@@ -90,7 +77,7 @@ def run_physical_orbits(args) -> int:
         out = hammer.to_dict()
         out["warnings"] = notes
         out["orbits"] = [o.to_dict() for o in found]
-        print(json.dumps(json_ready(out), indent=2, allow_nan=False))
+        print_json(out)
         return 0
     print(format_table(hammer, found))
     return 0

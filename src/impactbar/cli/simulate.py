@@ -3,7 +3,6 @@ plots of the struck end's displacement and velocity, the impact times and the en
 
 from __future__ import annotations
 
-import csv
 import json
 import sys
 from pathlib import Path
@@ -87,18 +86,9 @@ def run(args) -> int:
 
 
 def write_impacts(result: physical.SimulationResult, path) -> None:
-    """One row per impact: index, time (s), impact velocity (m/s), energy per blow (J); under the
-    wave law also the rod's energy (J), its peak stress (Pa) and the efficiency."""
-    cols = [result.impact_times_s, result.impact_velocities_m_s, result.blow_energies_J]
-    head = ["impact", "time_s", "impact_velocity_m_s", "blow_energy_J"]
-    if np.any(np.isfinite(result.rod_energies_J)):
-        cols += [result.rod_energies_J, result.peak_rod_stresses_Pa, result.efficiencies]
-        head += ["rod_energy_J", "peak_rod_stress_Pa", "efficiency"]
-    with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(head)
-        for i, row in enumerate(zip(*cols, strict=True)):
-            w.writerow([i, *(f"{x:.9g}" if np.isfinite(x) else "" for x in row)])
+    """One row per impact: index, time (s), impact velocity (m/s), energy per blow (J), written
+    through :meth:`~impactbar.physical.SimulationResult.to_dataframe` with 9 significant digits."""
+    result.to_dataframe().to_csv(path, float_format="%.9g", lineterminator="\r\n")
 
 
 def summarize(result: physical.SimulationResult) -> dict:

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import sys
 
+from ._common import add_quiet_argument, docs_page
+
 
 def add_parser(sub) -> None:
     p = sub.add_parser(
@@ -13,7 +15,8 @@ def add_parser(sub) -> None:
         description="Compute the task of SPEC.toml (orbits, montecarlo or bifurcation) at every "
         "point of its grid on a dask.distributed cluster and store each chunk in RESULTS.zarr as "
         "it finishes. Rerunning the same command resumes: finished chunks are kept. The spec is "
-        "checked before any work starts (see docs/sweep.md for its keys).",
+        "checked before any work starts (its keys: "
+        + docs_page("Sweeps and Monte Carlo on a cluster") + ").",
     )
     p.add_argument("spec", help="the sweep spec (TOML)")
     p.add_argument("--out", required=True, help="the zarr store to create or resume (a folder)")
@@ -24,7 +27,9 @@ def add_parser(sub) -> None:
                        help="address of a running dask scheduler, e.g. tcp://host:8786, instead")
     p.add_argument("--overwrite", action="store_true",
                    help="replace a store that holds a different sweep")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--no-progress", action="store_true",
+                   help="no progress bar (it shows only when stderr is a terminal)")
+    add_quiet_argument(p)
     p.set_defaults(func=run)
 
 
@@ -39,7 +44,8 @@ def run(args) -> int:
     print(f"{spec.task}: {spec.n_points} points in {spec.n_chunks} chunks of up to "
           f"{spec.chunk_points} -> {args.out}", file=sys.stderr)
     res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,
-                    overwrite=args.overwrite, progress=not args.no_progress)
+                    overwrite=args.overwrite,
+                    progress=not (args.no_progress or args.quiet) and sys.stderr.isatty())
     rate = (f", {res.computed * spec.n_points / spec.n_chunks / res.seconds:.1f} points/s"
             if res.computed and res.seconds > 0 else "")
     print(f"{args.out}: {res.already_done + res.computed}/{res.n_chunks} chunks stored "

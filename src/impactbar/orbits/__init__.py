@@ -16,6 +16,7 @@ numpy and scipy.
 from .multi_impact import MultiImpactOrbit as MultiImpactOrbit
 from .multi_impact import find_orbit as find_orbit
 from .multi_impact import impact_law as impact_law
+from .one_impact import OrbitList as OrbitList
 from .one_impact import PeriodicOrbit as PeriodicOrbit
 from .one_impact import orbit_multipliers as orbit_multipliers
 from .one_impact import periodic_orbits as periodic_orbits
@@ -30,6 +31,7 @@ from .stability import impact_map_jacobian as impact_map_jacobian
 
 __all__ = [
     "PeriodicOrbit",
+    "OrbitList",
     "periodic_orbits",
     "orbit_multipliers",
     "phase_G",

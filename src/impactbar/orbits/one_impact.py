@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import _tables
 from .._threads import single_threaded_blas
 from ..dynamics.impact import WaveImpact, wave_impact
 from ..loads import FourierLoad, Load, SquareWaveLoad
@@ -217,8 +218,147 @@ class PeriodicOrbit:
                 "advance": self.impact.advance}),
         }
 
+    def to_dataframe(self, n: int = 256):
+        """The struck end's motion over one period as a table.
 
-def periodic_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit]:
+        Parameters
+        ----------
+        n : int, optional
+            Number of orbit times, ``t = 2 pi j / n`` for ``j = 0..n`` (the last one just before the
+            next impact). Default 256.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``t`` (orbit time since the impact), columns ``end_displacement`` ``u(1, t)`` and
+            ``end_velocity`` ``u_t(1, t)``, all dimensionless (eq. 2); ``attrs`` holds the model,
+            the load, the phase and each column's ``long_name`` and ``units``.
+        """
+        n = int(n)
+        if n < 1:
+            raise ValueError(f"n must be an integer >= 1; got {n}")
+        t = np.linspace(0.0, TWO_PI, n + 1)
+        q, v = self._state_in_period(t)
+        c = self.model.end_weights
+        return _tables.frame(
+            {"t": t, "end_displacement": c @ q, "end_velocity": c @ v},
+            {"t": ("orbit time since the impact", "1"),
+             "end_displacement": ("displacement u(1, t) of the struck end", "1"),
+             "end_velocity": ("velocity u_t(1, t) of the struck end", "1")},
+            index="t", attrs=self._attrs())
+
+    def to_xarray(self, nx: int = 51, nt: int = 256):
+        """The displacement and velocity fields over one period as an ``xarray.Dataset``.
+
+        Parameters
+        ----------
+        nx, nt : int, optional
+            Grid points along the bar (``x`` in ``[0, 1]``, driven end 0) and in orbit time
+            (``t`` in ``[0, 2 pi]``). Defaults 51 and 256.
+
+        Returns
+        -------
+        xarray.Dataset
+            ``displacement`` and ``velocity`` with dims ``(t, x)``, dimensionless (eq. 2), each with
+            ``long_name`` and ``units``; the model, load and phase in ``attrs``.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        nx, nt = int(nx), int(nt)
+        if nx < 2 or nt < 2:
+            raise ValueError(f"nx and nt must be integers >= 2; got {nx}, {nt}")
+        x = np.linspace(0.0, 1.0, nx)
+        t = np.linspace(0.0, TWO_PI, nt)
+        q, v = self._state_in_period(t)
+        shapes = self.model.shape_functions(x)  # (X, M)
+        tt, xx = np.meshgrid(t, x, indexing="ij")  # rows in (t, x) order, as the fields below
+        df = _tables.frame(
+            {"t": tt.ravel(), "x": xx.ravel(), "displacement": (q.T @ shapes.T).ravel(),
+             "velocity": (v.T @ shapes.T).ravel()},
+            {"t": ("orbit time since the impact", "1"), "x": ("position along the bar", "1"),
+             "displacement": ("displacement u(x, t)", "1"), "velocity": ("velocity u_t(x, t)", "1")},
+            index=["t", "x"], attrs=self._attrs())
+        return _tables.to_xarray(df)
+
+    def _attrs(self) -> dict:
+        m = self.model
+        return {"model": repr(m), "load": repr(self.load), "phase": self.phase, "s": m.s, "d": m.d,
+                "R": m.R, "n_modes": m.n_modes}
+
+
+#: the columns of :meth:`OrbitList.to_dataframe`: name -> (long_name, units)
+ORBIT_COLUMNS = {
+    "orbit": ("orbit number, in order of phase", "1"),
+    "phase": ("phase lag between load and impact cycle, a root of eq. 14", "rad"),
+    "multiplicity": ("multiplicity of the root (2 at a fold)", "1"),
+    "impact_velocity": ("velocity of the struck end before impact", "1"),
+    "admissible": ("the end stays off the stop between impacts (theory §5)", ""),
+    "admissibility": ("admissible, or why not", ""),
+    "clearance": ("largest u(1, t) at a stationary point between impacts", "1"),
+    "clearance_error": ("bound on the error of clearance", "1"),
+    "stable": ("admissible and every |Floquet multiplier| < 1 (theory §7)", ""),
+    "max_abs_multiplier": ("largest |Floquet multiplier|", "1"),
+    "schur_stable": ("the paper's Schur criterion, eqs. 27-31 (theory §6)", ""),
+}
+
+
+class OrbitList(list):
+    """The list of :class:`PeriodicOrbit` that :func:`periodic_orbits` returns: a plain ``list``
+    (indexing, iteration, ``len``, comparison with lists) with conversions to tables.
+
+    Methods
+    -------
+    to_dataframe()
+        One row per orbit.
+    to_xarray()
+        The same as an ``xarray.Dataset`` along the dimension ``orbit``.
+    """
+
+    __slots__ = ()
+
+    def to_dataframe(self):
+        """One row per orbit: phase, impact velocity, admissibility, clearance, stability.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``orbit`` (0, 1, ... in order of phase), the columns of :data:`ORBIT_COLUMNS`
+            plus the model's ``s``, ``d``, ``R``, ``n_modes`` and the ``load`` (as text), so frames
+            of several models concatenate; ``attrs["columns"]`` gives each column's ``long_name``
+            and ``units`` (dimensionless numbers have units ``"1"``, eq. 2).
+        """
+        keys = [k for k in ORBIT_COLUMNS if k != "orbit"]
+        cols = {"orbit": np.arange(len(self))}
+        for k in keys:
+            cols[k] = [getattr(o, k) for o in self]
+        for k in ("s", "d", "R", "n_modes"):
+            cols[k] = [getattr(o.model, k) for o in self]
+        cols["load"] = [repr(o.load) for o in self]
+        meta = dict(ORBIT_COLUMNS, s=("wave-speed ratio C/(L Omega), eq. 2", "1"),
+                    d=("damping D/(M Omega), eq. 2", "1"), R=("restitution coefficient", "1"),
+                    n_modes=("flexible modes kept", "1"), load=("the load", ""))
+        df = _tables.frame(cols, meta, index="orbit")
+        if len(self) == 0:  # keep the dtypes of a non-empty table
+            df = df.astype({"multiplicity": int, "admissible": bool, "admissibility": object,
+                            "stable": bool, "schur_stable": bool, "n_modes": int, "load": object})
+        return df
+
+    def to_xarray(self):
+        """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``orbit``, every variable with
+        ``long_name`` and ``units``.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        return _tables.to_xarray(self.to_dataframe())
+
+
+def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     """Every one-impact-per-period steady state of the bar under the load (paper Section 2).
 
     Each root ``phase`` of the phase equation (eq. 14) in ``[0, 2 pi)`` gives one orbit: the flexible
@@ -234,8 +374,9 @@ def periodic_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit]:
 
     Returns
     -------
-    list of PeriodicOrbit
-        Sorted by phase; empty when none exists (e.g. above the fold, eq. 38).
+    OrbitList
+        A ``list`` of :class:`PeriodicOrbit` sorted by phase, empty when none exists (e.g. above the
+        fold, eq. 38); ``.to_dataframe()`` and ``.to_xarray()`` make it a table.
 
     Raises
     ------
@@ -257,14 +398,15 @@ def periodic_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit]:
     return _periodic_orbits_general(model, load)
 
 
-def _periodic_orbits_general(model: BarModel, load: Load) -> list[PeriodicOrbit]:
+def _periodic_orbits_general(model: BarModel, load: Load) -> OrbitList:
     """:func:`periodic_orbits` by the general path (certified searches, any model and load): the
     reference every fast path is tested against."""
     _check_inputs(model, load)
     with single_threaded_blas():
         if model.impact == "wave":
-            return [_build_wave_orbit(model, load, ph, mult) for ph, mult in wave_phase_roots(model, load)]
-        return [_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load)]
+            roots = wave_phase_roots(model, load)
+            return OrbitList(_build_wave_orbit(model, load, ph, mult) for ph, mult in roots)
+        return OrbitList(_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load))
 
 
 #: Largest ``n_modes`` for the orbit functions: the multipliers are the eigenvalues of a dense
@@ -297,7 +439,7 @@ def _paper_law(model: BarModel) -> bool:
     return getattr(model, "impact", "paper") == "paper"
 
 
-def _rigid_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit] | None:
+def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     """The rigid bar under one cosine harmonic or the square wave in closed form
     (:mod:`impactbar.orbits.rigid`), or ``None`` where that does not apply (flexible modes, another
     load, a degenerate orbit)."""
@@ -313,7 +455,7 @@ def _rigid_orbits(model: BarModel, load: Load) -> list[PeriodicOrbit] | None:
         res = rigid_cosine_orbits(model.d, model.R, p0, pk, k)
     if res.fallback[0]:
         return None
-    out = []
+    out = OrbitList()
     for j in range(int(res.n_orbits[0])):
         status = STATUS[int(res.status[0, j])]
         out.append(PeriodicOrbit(

@@ -60,7 +60,7 @@ from .hammer import Scales as Scales
 
 #: names from ``results`` (which needs the orbit solver and the compiled simulator), imported on
 #: first use (PEP 562) so that importing this layer, and the command line, stays fast
-_LAZY = ("PhysicalOrbit", "SimulationResult", "orbits", "simulate")
+_LAZY = ("PhysicalOrbit", "PhysicalOrbitList", "SimulationResult", "orbits", "simulate")
 
 
 def __getattr__(name: str):
@@ -85,6 +85,7 @@ __all__ = [
     "Hammer",
     "Scales",
     "PhysicalOrbit",
+    "PhysicalOrbitList",
     "SimulationResult",
     "ImpactDurationWarning",
     "SHORT_IMPACT_LIMIT",

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import _tables
 from .._validate import check_real
 from ..orbits import periodic_orbits
 from ..simulation import InitialState
@@ -121,7 +122,60 @@ def _rod_figures(orbit, hammer: Hammer, v_m_s: float) -> dict:
             "rod_advance_m": float((1.0 - R) * v[0] / hammer.s * sc.length_m)}
 
 
-def orbits(hammer: Hammer) -> list[PhysicalOrbit]:
+#: the columns of :meth:`PhysicalOrbitList.to_dataframe`: name -> (long_name, units)
+PHYSICAL_ORBIT_COLUMNS = {
+    "orbit": ("orbit number, in order of phase", "1"),
+    "phase_rad": ("phase of the load at impact", "rad"),
+    "impact_velocity": ("dimensionless impact velocity u_t(1, 2 pi-)", "1"),
+    "impact_velocity_m_s": ("impact velocity", "m/s"),
+    "blow_energy_J": ("energy per blow m v^2 / 2", "J"),
+    "blow_frequency_Hz": ("blows per second", "Hz"),
+    "power_W": ("impact power", "W"),
+    "peak_stress_Pa": ("peak compressive stress at impact", "Pa"),
+    "admissible": ("the end stays off the stop between impacts (theory §5)", ""),
+    "stable": ("admissible and every |Floquet multiplier| < 1 (theory §7)", ""),
+    "max_abs_multiplier": ("largest |Floquet multiplier|", "1"),
+    "rod_energy_J": ("energy carried into the rod per blow (theory §4b)", "J"),
+    "peak_rod_stress_Pa": ("peak compressive stress of the transmitted wave in the rod", "Pa"),
+    "efficiency": ("rod energy over the piston's energy before impact", "1"),
+    "rod_advance_m": ("advance of the rod end per blow", "m"),
+}
+
+
+class PhysicalOrbitList(list):
+    """The list of :class:`PhysicalOrbit` that :func:`orbits` returns: a plain ``list`` with
+    ``to_dataframe()`` and ``to_xarray()`` (one row per orbit, SI units in the column names and in
+    each column's ``units``)."""
+
+    __slots__ = ()
+
+    def to_dataframe(self):
+        """One row per orbit, the columns of :data:`PHYSICAL_ORBIT_COLUMNS`.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``orbit``; ``attrs["columns"]`` gives each column's ``long_name`` and ``units``.
+        """
+        cols = {"orbit": np.arange(len(self))}
+        for k in PHYSICAL_ORBIT_COLUMNS:
+            if k != "orbit":
+                cols[k] = np.array([getattr(o, k) for o in self],
+                                   dtype=bool if k in ("admissible", "stable") else float)
+        return _tables.frame(cols, PHYSICAL_ORBIT_COLUMNS, index="orbit")
+
+    def to_xarray(self):
+        """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``orbit``.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        return _tables.to_xarray(self.to_dataframe())
+
+
+def orbits(hammer: Hammer) -> PhysicalOrbitList:
     """The one-impact periodic motions of ``hammer`` with their SI figures.
 
     Calls ``periodic_orbits(hammer.model, hammer.load)`` and converts each orbit; warns
@@ -129,11 +183,13 @@ def orbits(hammer: Hammer) -> list[PhysicalOrbit]:
 
     Returns
     -------
-    list of PhysicalOrbit
+    PhysicalOrbitList
+        A ``list`` of :class:`PhysicalOrbit`, in order of phase; ``.to_dataframe()`` makes it a
+        table.
     """
     hammer.check_short_impacts()
     found = periodic_orbits(hammer.model, hammer.load)
-    return [PhysicalOrbit.from_orbit(o, hammer) for o in found]
+    return PhysicalOrbitList(PhysicalOrbit.from_orbit(o, hammer) for o in found)
 
 
 @dataclass(frozen=True, eq=False)
@@ -187,6 +243,42 @@ class SimulationResult:
         t = np.asarray(t_s, dtype=float) / sc.time_s
         inside = (t >= 0.0) & (t <= w.duration)
         return np.where(inside, w.force(np.clip(t, 0.0, w.duration)), 0.0) * sc.force_N
+
+    def to_dataframe(self):
+        """The impacts as a table, in SI units.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``impact`` (0, 1, ...), columns ``time_s`` (s), ``impact_velocity_m_s`` (m/s) and
+            ``blow_energy_J`` (J), and under the wave law ``rod_energy_J`` (J),
+            ``peak_rod_stress_Pa`` (Pa) and ``efficiency``; ``attrs`` holds the hammer's name,
+            ``t_end_s`` and each column's ``long_name`` and ``units``.
+        """
+        cols = {"impact": np.arange(self.impact_times_s.size), "time_s": self.impact_times_s,
+                "impact_velocity_m_s": self.impact_velocities_m_s, "blow_energy_J": self.blow_energies_J}
+        meta = {"impact": ("impact number", "1"), "time_s": ("time of the impact", "s"),
+                "impact_velocity_m_s": ("arrival velocity of the struck end", "m/s"),
+                "blow_energy_J": ("energy per blow m v^2 / 2", "J")}
+        if self.rod_energies_J is not None and np.any(np.isfinite(self.rod_energies_J)):  # wave law
+            cols.update(rod_energy_J=self.rod_energies_J, peak_rod_stress_Pa=self.peak_rod_stresses_Pa,
+                        efficiency=self.efficiencies)
+            meta.update(rod_energy_J=("energy carried into the rod (theory §4b)", "J"),
+                        peak_rod_stress_Pa=("peak compressive stress of the transmitted wave", "Pa"),
+                        efficiency=("rod energy over the piston's energy before impact", "1"))
+        return _tables.frame(cols, meta, index="impact",
+                             attrs={"hammer": self.hammer.name or "", "t_end_s": self.t_end_s})
+
+    def to_xarray(self):
+        """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``impact``, with ``long_name`` and
+        ``units`` on every variable.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        return _tables.to_xarray(self.to_dataframe())
 
     def end_displacement_m(self, t_s) -> np.ndarray:
         """Displacement of the struck end (m, negative off the stop) at times ``t_s`` (s)."""

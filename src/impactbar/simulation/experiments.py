@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import _tables
 from .._validate import check_int, check_real
 from ..loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
@@ -214,6 +215,53 @@ class ExperimentResult:
         n = len(self.classes)
         keys = [k for k in CLASS_ORDER if k in counts] + sorted(set(counts) - set(CLASS_ORDER))
         return {k: counts[k] / n for k in keys}
+
+    def to_dataframe(self):
+        """One row per random start: its long-run motion.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``start`` (in start order), columns ``kind`` (the class, theory §8), ``k``
+            (load periods per impact cycle, NaN when not periodic), ``impacts_per_cycle`` and
+            ``mismatch`` (load periods); ``attrs`` holds the model, the load, the run length and
+            the pooled impact-interval statistics (``interval_mean``, ``interval_std``,
+            ``run_spread``, in load periods).
+        """
+        cl = self.classes
+        return _tables.frame(
+            {"start": np.arange(len(cl)), "kind": [c.kind for c in cl],
+             "k": [math.nan if c.k is None else float(c.k) for c in cl],
+             "impacts_per_cycle": [c.impacts_per_cycle for c in cl],
+             "mismatch": [c.mismatch for c in cl]},
+            {"start": ("random start number", "1"), "kind": ("long-run motion", ""),
+             "k": ("load periods per impact cycle", "1"),
+             "impacts_per_cycle": ("impacts per cycle", "1"),
+             "mismatch": ("distance from the periodic pattern", "load periods")},
+            index="start",
+            attrs={"model": repr(self.model), "load": repr(self.load), "periods": self.periods,
+                   "interval_mean": self.interval_mean, "interval_std": self.interval_std,
+                   "run_spread": self.run_spread})
+
+    def to_xarray(self):
+        """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``start``, with the class fractions
+        (``fraction`` along ``motion``) and the main-impact intervals (``interval`` along
+        ``main_impact``); every variable with ``long_name`` and ``units``.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        ds = _tables.to_xarray(self.to_dataframe())
+        fr = self.fractions
+        ds = ds.assign_coords(motion=list(fr))
+        ds["fraction"] = ("motion", np.array(list(fr.values()), dtype=float),
+                          {"long_name": "fraction of the starts in each long-run motion", "units": "1"})
+        ds["interval"] = ("main_impact", np.asarray(self.intervals, dtype=float),
+                          {"long_name": "interval between successive main impacts",
+                           "units": "load periods"})
+        return ds
 
     def summary(self) -> str:
         """A plain-text report: parameters, class fractions, impact-interval statistics."""

@@ -26,6 +26,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .. import _tables
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
 from ..dynamics.impact import wave_impact
@@ -764,6 +765,65 @@ class Trajectory:
             grows as ``s * n_modes^2 * (t_end - t0)``.
         """
         return _energy_account(self)
+
+    def to_dataframe(self):
+        """The impacts of the run as a table.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``impact`` (0, 1, ...), columns ``time`` (load frame) and ``velocity`` (of the
+            struck end just before the impact), dimensionless (eq. 2); ``attrs`` holds the model,
+            the load, ``t0``, ``t_end``, ``status``, the contact intervals and each column's
+            ``long_name`` and ``units``.
+        """
+        return _tables.frame(
+            {"impact": np.arange(self.n_impacts), "time": self.impact_times,
+             "velocity": self.impact_velocities},
+            {"impact": ("impact number", "1"), "time": ("time of the impact (load frame)", "1"),
+             "velocity": ("velocity u_t(1, t-) of the struck end before the impact", "1")},
+            index="impact",
+            attrs={"model": repr(self.model), "load": repr(self.load), "t0": self.t0,
+                   "t_end": self.t_end, "status": self.status,
+                   "contact_intervals": self.contact_intervals.tolist()})
+
+    def to_xarray(self, n: int = 0):
+        """The run as an ``xarray.Dataset``: the impacts, and the struck end's motion sampled.
+
+        Parameters
+        ----------
+        n : int, optional
+            Also sample ``end_displacement`` and ``end_velocity`` at ``n`` equally spaced times in
+            ``[t0, t_end]`` (dimension ``t``). Default 0: impacts only.
+
+        Returns
+        -------
+        xarray.Dataset
+            ``impact_time`` and ``impact_velocity`` along ``impact``; with ``n``, the sampled end
+            motion along ``t``; every variable with ``long_name`` and ``units``.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        n = int(n)
+        if n < 0:
+            raise ValueError(f"n must be an integer >= 0; got {n}")
+        ds = _tables.to_xarray(self.to_dataframe()).rename(
+            {"time": "impact_time", "velocity": "impact_velocity"})
+        ds.attrs.pop("contact_intervals", None)
+        if n:
+            t = np.linspace(self.t0, self.t_end, n)
+            end = _tables.to_xarray(_tables.frame(
+                {"t": t, "end_displacement": self.end_displacement(t),
+                 "end_velocity": self.end_velocity(t)},
+                {"t": ("time (load frame)", "1"),
+                 "end_displacement": ("displacement u(1, t) of the struck end", "1"),
+                 "end_velocity": ("velocity u_t(1, t) of the struck end", "1")}, index="t"))
+            for name in ("end_displacement", "end_velocity"):
+                ds[name] = end[name]
+        return ds
 
 
 # --------------------------------------------------------------------------------------------------

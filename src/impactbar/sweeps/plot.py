@@ -66,9 +66,19 @@ def _axes(ax, figsize=(6.4, 4.8)):
     import matplotlib.pyplot as plt
 
     if ax is None:
-        fig, ax = plt.subplots(figsize=figsize)
+        fig, ax = plt.subplots(figsize=figsize, layout="constrained")
         return fig, ax
     return ax.figure, ax
+
+
+#: where every legend goes: outside the axes, on the right, off the data
+_LEGEND = {"loc": "upper left", "bbox_to_anchor": (1.02, 1.0), "borderaxespad": 0.0, "fontsize": "small"}
+
+
+def _axis_label(ds, name: str) -> str:
+    """``long_name (name)`` from the store's attributes, or the bare name for older stores."""
+    long = ds[name].attrs.get("long_name") if name in ds.variables else None
+    return f"{long} ({name})" if long and long != name else name
 
 
 def _title(ds, dims) -> str:
@@ -116,11 +126,11 @@ def plot_stability_chart(ds, dims, ax=None):
         norm = BoundaryNorm(np.arange(-0.5, len(_CATEGORY_COLOURS) + 0.5), cmap.N)
         ax.pcolormesh(ds[x].values, ds[y].values, np.ma.masked_invalid(cat), cmap=cmap, norm=norm,
                       shading="nearest")
-        ax.set_xlabel(x)
-        ax.set_ylabel(y)
+        ax.set_xlabel(_axis_label(ds, x))
+        ax.set_ylabel(_axis_label(ds, y))
         present = sorted({int(c) for c in cat[np.isfinite(cat)].ravel()})
         ax.legend(handles=[Patch(facecolor=_CATEGORY_COLOURS[c], edgecolor="k", label=STABILITY_CATEGORIES[c])
-                           for c in present], loc="best", fontsize="small")
+                           for c in present], **_LEGEND)
     else:
         if len(dims) == 1:
             x = dims[0]
@@ -137,9 +147,9 @@ def plot_stability_chart(ds, dims, ax=None):
         ax.plot(xv[sel], v[sel], "o", mfc="none", color="C1", ms=3, label="admissible, unstable")
         sel = ~adm & ok & np.isfinite(v)
         ax.plot(xv[sel], v[sel], "x", color="C3", ms=3, label="not admissible")
-        ax.set_xlabel(x)
+        ax.set_xlabel(_axis_label(ds, x) if x in ds.variables else x)
         ax.set_ylabel("phase (rad)")
-        ax.legend(loc="best", fontsize="small")
+        ax.legend(**_LEGEND)
     ax.set_title(" ".join(filter(None, ["one-impact orbits", _title(ds, dims)])))
     return ax
 
@@ -164,34 +174,36 @@ def plot_fraction_maps(ds, dims, fig=None):
         ncol = min(3, len(present))
         nrow = -(-len(present) // ncol)
         if fig is None:
-            fig = plt.figure(figsize=(4.2 * ncol, 3.4 * nrow))
+            fig = plt.figure(figsize=(4.2 * ncol, 3.4 * nrow), layout="constrained")
         axs = fig.subplots(nrow, ncol, squeeze=False)
         for ax, m in zip(axs.ravel(), present, strict=False):
             img = frac.sel(motion=m).transpose(y, x).values
             pc = ax.pcolormesh(ds[x].values, ds[y].values, np.ma.masked_invalid(img), vmin=0.0,
                                vmax=1.0, cmap="viridis", shading="nearest")
             ax.set_title(m)
-            ax.set_xlabel(x)
-            ax.set_ylabel(y)
+            ax.set_xlabel(_axis_label(ds, x))
+            ax.set_ylabel(_axis_label(ds, y))
             fig.colorbar(pc, ax=ax, label="fraction")
         for ax in axs.ravel()[len(present):]:
             ax.set_visible(False)
     else:
         if fig is None:
-            fig = plt.figure(figsize=(6.4, 4.8))
+            fig = plt.figure(figsize=(7.2, 4.8), layout="constrained")
         ax = fig.subplots()
         if dims:
             x = dims[0]
             for m in present:
                 ax.plot(ds[x].values, frac.sel(motion=m).values, "o-", ms=3, label=m)
-            ax.set_xlabel(x)
+            ax.set_xlabel(_axis_label(ds, x))
         else:
             ax.bar(present, [float(frac.sel(motion=m)) for m in present])
         ax.set_ylabel("fraction of random starts")
         ax.set_ylim(-0.02, 1.02)
-        ax.legend(loc="best", fontsize="small")
+        if dims:
+            ax.legend(**_LEGEND)
     fig.suptitle(" ".join(filter(None, ["long-run motion", _title(ds, dims)])))
-    fig.tight_layout()
+    if fig.get_layout_engine() is None:  # a figure passed in
+        fig.tight_layout()
     return fig
 
 
@@ -221,7 +233,7 @@ def plot_bifurcation(ds, dims, ax=None):
     if dims:
         ax.set_xlabel(dims[0])
     if len(groups) > 1:
-        ax.legend(loc="best", fontsize="small", markerscale=4)
+        ax.legend(markerscale=4, **_LEGEND)
     ax.set_ylabel("impact velocity (last impacts)")
     ax.set_title(" ".join(filter(None, ["bifurcation diagram", _title(ds, dims)])))
     return ax

@@ -19,6 +19,11 @@ from .tasks import compute_chunk
 
 #: How long :func:`run_sweep` waits for a ``scheduler`` to answer
 CONNECT_TIMEOUT = "10s"
+#: the local cluster's HTTP servers: no dashboard, loopback, a free port
+LOCAL_CLUSTER_HTTP = {"dashboard_address": "127.0.0.1:0", "scheduler_kwargs": {"dashboard": False},
+                      "worker_dashboard_address": None}
+#: dask configuration while the local cluster starts: its HTTP servers serve nothing
+LOCAL_HTTP_CONFIG = {"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}
 
 
 # ------------------------------------------------------------------------------------------------
@@ -212,9 +217,14 @@ def _connect(scheduler, n_workers):
         return
     import logging
 
+    import dask
+
     n = default_workers() if n_workers is None else n_workers
-    with (LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                       dashboard_address=None, silence_logs=logging.ERROR) as cluster,
+    # No dashboard: distributed always starts an HTTP server in the scheduler, so it gets no routes,
+    # the loopback interface and a free port (not 8787, which another cluster may hold).
+    with (dask.config.set(LOCAL_HTTP_CONFIG),
+          LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                       **LOCAL_CLUSTER_HTTP, silence_logs=logging.ERROR) as cluster,
           Client(cluster) as cl):
         yield cl
 

@@ -15,10 +15,48 @@ import numpy as np
 from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, _SUM, SweepSpec, motion_classes, parse_spec
 from .tasks import _variables, chunk_slices
 
-
 # ------------------------------------------------------------------------------------------------
 # the store
 # ------------------------------------------------------------------------------------------------
+#: units of the stored variables and axes (CF convention: "1" for dimensionless numbers, eq. 2;
+#: flags, counts and names carry ""); a variable not listed is dimensionless
+UNITS = {
+    "phase": "rad",
+    "impact_phase": "load periods",
+    "interval_mean": "load periods",
+    "interval_std": "load periods",
+    "all_interval_mean": "load periods",
+    "all_interval_std": "load periods",
+    "admissible": "",
+    "stable": "",
+    "schur_stable": "",
+    "failed": "",
+    "n_orbits": "",
+    "n_impacts": "",
+    "motion": "",
+    _DONE: "",
+}
+
+#: long names of the grid axes (model and load parameters, eq. 2 and theory §3)
+AXIS_NAMES = {
+    "s": "wave-speed ratio C/(L Omega)",
+    "d": "damping D/(M Omega)",
+    "R": "restitution coefficient",
+    "n_modes": "flexible modes kept",
+    "p0": "mean load",
+    "pk": "load amplitude (harmonic k)",
+    "k": "order of the load harmonic",
+    "q": "square-wave level",
+    "kappa": "square-wave kappa (fraction of the period at +q, times 2)",
+}
+
+
+def _var_attrs(name: str, description: str) -> dict:
+    """``long_name``, ``units`` and ``description`` of a stored variable."""
+    return {"long_name": description.split(" (")[0], "units": UNITS.get(name, "1"),
+            "description": description}
+
+
 def _template(spec: SweepSpec):
     """The dataset to create the store from: lazy (dask) fill values, coordinates, attributes."""
     import dask.array as da
@@ -35,17 +73,21 @@ def _template(spec: SweepSpec):
         ch = chunks + ((spec.extra_size,) if extra else ())
         arr = da.full(shape, fill, dtype=dtype, chunks=ch)
         data_vars[name] = xr.Variable(dims + ((extra_dim,) if extra else ()), arr,
-                                      attrs={"description": desc})
+                                      attrs=_var_attrs(name, desc))
     data_vars[_DONE] = xr.Variable(("chunk",), da.zeros(spec.n_chunks, dtype=np.int8,
                                                           chunks=spec.n_chunks),
-                                   attrs={"description": "1 once the work chunk is stored"})
+                                   attrs=_var_attrs(_DONE, "1 once the work chunk is stored"))
     data_vars[_SUM] = xr.Variable(("chunk",), da.full(spec.n_chunks, -1, dtype=np.int64,
                                                       chunks=spec.n_chunks),
-                                  attrs={"description": "CRC-32 of the work chunk's data "
-                                                        "(-1 before it is stored)"})
-    coords = {a.name: np.asarray(a.values) for a in spec.axes}
+                                  attrs=_var_attrs(_SUM, "CRC-32 of the work chunk's data "
+                                                         "(-1 before it is stored)"))
+    coords = {a.name: xr.Variable((a.name,), np.asarray(a.values),
+                                  attrs={"long_name": AXIS_NAMES.get(a.name, a.name),
+                                         "units": UNITS.get(a.name, "1")})
+              for a in spec.axes}
     if spec.task == "montecarlo":
-        coords["motion"] = np.asarray(motion_classes(), dtype=object)  # variable-length strings
+        coords["motion"] = xr.Variable(("motion",), np.asarray(motion_classes(), dtype=object),
+                                       attrs={"long_name": "long-run motion", "units": ""})
     attrs = {
         _ATTR_SPEC: spec.to_json(),
         _ATTR_VERSION: __version__,
@@ -257,7 +299,7 @@ def point_done(ds):
         grid = np.repeat(grid, c, axis=axis)
     grid = grid[tuple(slice(0, n) for n in spec.shape)]
     dims = tuple(a.name for a in spec.axes)
-    return xr.DataArray(grid, dims=dims, coords={d: ds[d].values for d in dims})
+    return xr.DataArray(grid, dims=dims, coords={d: ds[d] for d in dims})  # keeps the axes' attrs
 
 
 def sweep_progress(path) -> tuple[int, int]:

@@ -1,0 +1,156 @@
+"""Pieces every subcommand shares: options given on the command line, refusing the ones a mode
+ignores or that conflict, JSON output, progress bars, and hints for missing optional dependencies.
+
+Conventions of the whole command line (documented on the docs site, "Getting started"):
+
+- Bad input is one line on stderr, ``impactbar COMMAND: error: ...``, and exit status 2; that
+  includes an option the chosen mode would ignore (``--R`` with ``--preset``) and options that
+  conflict.
+- JSON output is strict JSON: a non-finite number (an infinite clearance, a NaN statistic) is
+  written as ``null``; numpy scalars become plain numbers.
+- A missing optional dependency is one line naming the extra to install, exit status 1.
+- A reader that closes the pipe early (``impactbar orbits --json | head``) ends the command quietly.
+- Progress bars go to stderr, only when it is a terminal, and never with ``--quiet``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Iterable
+
+__all__ = ["UsageError", "given", "refuse", "refuse_together", "json_ready", "print_json",
+           "progress_bar", "add_quiet_argument", "explicit_options", "OPTIONAL_EXTRAS",
+           "missing_dependency_hint", "docs_page"]
+
+#: optional top-level modules -> the extra that installs them
+OPTIONAL_EXTRAS = {
+    "matplotlib": "plot",
+    "pint": "units",
+    "xarray": "data",
+    "dask": "distributed",
+    "distributed": "distributed",
+    "zarr": "distributed",
+}
+
+#: attribute of the parsed namespace holding the destinations given on the command line
+_GIVEN = "_impactbar_given"
+
+
+class UsageError(ValueError):
+    """An option the chosen mode ignores, or options that conflict (exit status 2)."""
+
+
+def docs_page(title: str) -> str:
+    """How help texts point at a page of the documentation site (an installed package has no
+    ``docs/`` folder): ``"the impactbar documentation, page 'TITLE'"``."""
+    return f"the impactbar documentation, page '{title}'"
+
+
+def explicit_options(parser: argparse.ArgumentParser, argv: list[str]) -> frozenset[str]:
+    """The destinations of the options that ``argv`` gives explicitly to ``parser``.
+
+    Parses ``argv`` again with every default suppressed, so an option given with its default value
+    still counts as given (``--R 0.5``), and abbreviations (``--pres``) are resolved as argparse
+    resolves them.
+    """
+    saved = [(a, a.default) for a in parser._actions]
+    saved_defaults = dict(parser._defaults)
+    try:
+        for a, _ in saved:
+            a.default = argparse.SUPPRESS
+        parser._defaults.clear()
+        ns, _ = parser.parse_known_args(argv, argparse.Namespace())
+    finally:
+        for a, d in saved:
+            a.default = d
+        parser._defaults.update(saved_defaults)
+    return frozenset(vars(ns))
+
+
+def given(args: argparse.Namespace, dest: str) -> bool:
+    """Whether the option with destination ``dest`` was given on the command line.
+
+    Without the record :func:`impactbar.cli.main` attaches (a namespace parsed or built elsewhere),
+    a default cannot be told from a value given, so nothing counts as given and nothing is refused.
+    """
+    record = getattr(args, _GIVEN, None)
+    return record is not None and dest in record
+
+
+def _flag(dest: str) -> str:
+    return dest if dest in ("config",) else "--" + dest.replace("_", "-")
+
+
+def refuse(args: argparse.Namespace, dests: Iterable[str], *, because: str) -> None:
+    """Refuse the options ``dests`` if any was given, saying ``because`` (the mode that ignores it).
+
+    Raises
+    ------
+    UsageError
+        Naming the first offending option, e.g. ``--R cannot be used with --preset: the hammer's
+        stop sets R``.
+    """
+    bad = [d for d in dests if given(args, d)]
+    if bad:
+        names = ", ".join(_flag(d) for d in bad)
+        verb = "is" if len(bad) == 1 else "are"
+        raise UsageError(f"{names} {verb} ignored {because}; drop {'it' if len(bad) == 1 else 'them'}")
+
+
+def refuse_together(args: argparse.Namespace, first: str, second: str, *, because: str = "") -> None:
+    """Refuse two options given together."""
+    if given(args, first) and given(args, second):
+        tail = f": {because}" if because else ""
+        raise UsageError(f"{_flag(first)} and {_flag(second)} cannot be used together{tail}")
+
+
+def json_ready(obj):
+    """``obj`` made strict-JSON ready: non-finite floats become ``None`` (``null``), numpy scalars
+    and arrays become Python numbers and lists, tuples become lists."""
+    if isinstance(obj, dict):
+        return {str(k): json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_ready(v) for v in obj]
+    if hasattr(obj, "tolist") and not isinstance(obj, str):  # numpy arrays and scalars
+        obj = obj.tolist()
+        if isinstance(obj, list):
+            return json_ready(obj)
+    if isinstance(obj, complex):
+        return [json_ready(obj.real), json_ready(obj.imag)]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def print_json(doc, *, file=None) -> None:
+    """Print ``doc`` as indented strict JSON (see :func:`json_ready`)."""
+    print(json.dumps(json_ready(doc), indent=2, allow_nan=False), file=file or sys.stdout)
+
+
+def add_quiet_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--quiet`` (no progress bar)."""
+    parser.add_argument("--quiet", action="store_true", help="no progress bar on stderr")
+
+
+def progress_bar(total: int, *, desc: str, unit: str, quiet: bool = False):
+    """A tqdm progress bar on stderr; disabled with ``quiet`` or when stderr is not a terminal."""
+    from tqdm import tqdm
+
+    enabled = not quiet and hasattr(sys.stderr, "isatty") and sys.stderr.isatty()
+    return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, disable=not enabled,
+                leave=False, dynamic_ncols=True)
+
+
+def missing_dependency_hint(exc: ImportError) -> str | None:
+    """The one-line hint for an optional dependency that is not installed, or ``None``."""
+    name = (getattr(exc, "name", None) or "").split(".")[0]
+    if name in OPTIONAL_EXTRAS:
+        extra = OPTIONAL_EXTRAS[name]
+        return f"this needs {name}, which is not installed: pip install 'impactbar[{extra}]'"
+    msg = str(exc)
+    if "pip install 'impactbar[" in msg:  # the library's own hint
+        return msg.splitlines()[0]
+    return None
