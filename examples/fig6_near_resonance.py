@@ -1,5 +1,5 @@
 """Fig. 6 of the paper near resonance: the paper's stability edge (eqs. 37, 39) against the exact
-multipliers (MODEL.md section 7), k = 10, s pi = 10.1. Prints both edges for a few R.
+multipliers (theory §7), k = 10, s pi = 10.1. Prints both edges for a few R.
 
 ``python examples/fig6_near_resonance.py``; a few seconds.
 """

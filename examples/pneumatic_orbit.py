@@ -1,6 +1,6 @@
 """A pneumatic hammer's one-impact orbits: end displacement, the field, and the multipliers.
 
-Equations: MODEL.md sections 4-7 (paper eqs. 8-14, 27-31). Runs in about a second:
+Equations: theory §4-§7 (paper eqs. 8-14, 27-31). Runs in about a second:
 ``python examples/pneumatic_orbit.py [OUT.png]``.
 """
 

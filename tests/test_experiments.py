@@ -57,7 +57,7 @@ def test_load_period():
 
 def test_classify_real_runs():
     model = BarModel(s=1.0, d=0.0, R=0.5, n_modes=0)
-    # one-impact orbit from near its stable phase (MODEL.md section 6)
+    # one-impact orbit from near its stable phase (theory §6)
     R, p0 = 0.5, 0.8
     phi = math.pi - math.asin(math.pi * p0 * (1 - R) / (1 + R))
     V = TWO_PI * p0 / (1 + R)

@@ -49,8 +49,8 @@ def _rigid_band(R, k=1):
 
 
 def test_eq39_band_R0_numbers_from_model_md():
-    """MODEL.md prints 0.26854 < p0/p1 < 0.31831; the closed form gives 1/sqrt(4 + pi^2) =
-    0.268515 for the lower edge (MODEL.md's fifth digit is off), and the exact multipliers agree."""
+    """The R = 0 stable band: the closed form gives 1/sqrt(4 + pi^2) = 0.268515 for the lower edge
+    (0.26854 was once printed: its fifth digit is off), and the exact multipliers agree."""
     lo, hi = _rigid_band(0.0)
     assert lo == pytest.approx(1 / math.sqrt(4 + math.pi**2), rel=1e-15)
     assert lo == pytest.approx(0.26854, abs=3e-5)
@@ -284,7 +284,7 @@ def test_multipliers_against_finite_difference_jacobian(model, load):
 @pytest.mark.parametrize("R", [0.0, 0.3, 0.9])
 @pytest.mark.parametrize("p0", [0.1, 0.3, 0.45])
 def test_rigid_limit_trace_and_determinant(R, p0):
-    """MODEL.md section 6: rigid bar, d = 0: xi^2 - (-2R + (1+R)^2 kappa_0) xi + R^2."""
+    """theory §6: rigid bar, d = 0: xi^2 - (-2R + (1+R)^2 kappa_0) xi + R^2."""
     for o in periodic_orbits(BarModel(s=5.0, d=0.0, R=R, n_modes=0), CosineLoad(p0, 1.0)):
         kappa0 = float(o.load(o.phase)) / p0
         mu = o.multipliers
@@ -294,7 +294,7 @@ def test_rigid_limit_trace_and_determinant(R, p0):
 
 
 def test_exact_and_paper_agree_for_stiff_bar():
-    """MODEL.md section 7: for s pi >> k the exact rigid multiplier is within about 1 % of eq. 30."""
+    """theory §7: for s pi >> k the exact rigid multiplier is within about 1 % of eq. 30."""
     model = BarModel(s=30.0, d=0.0, R=0.5, n_modes=8)
     for o in periodic_orbits(model, CosineLoad(0.5, 1.0)):
         rigid = o.schur_roots[:2]

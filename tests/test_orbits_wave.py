@@ -172,3 +172,18 @@ def test_blow_impulse_is_the_drive_impulse_per_period(load):
     for o in periodic_orbits(BarModel(s=s, d=0.0, R=R, n_modes=4, impact="wave"), load):
         assert o.impact.impulse == pytest.approx(TWO_PI * load.p0, rel=1e-12)
         assert o.impact.advance == pytest.approx(TWO_PI * load.p0 / (s * (1 + R) / (1 - R)), rel=1e-12)
+
+
+def test_paper_law_charts_refuse_the_wave_law():
+    """eq. 14's edges are not the wave law's: asking for them under impact='wave' is an error,
+    not the paper law's answer in disguise."""
+    from impactbar import SquareWaveLoad
+    from impactbar.orbits.charts import hydraulic_existence_edge, max_phase_residual
+
+    wave = BarModel(s=50.0, d=0.0, R=0.5, n_modes=0, impact="wave")
+    with pytest.raises(ValueError, match="impact"):
+        hydraulic_existence_edge(wave)
+    with pytest.raises(ValueError, match="impact"):
+        max_phase_residual(wave, SquareWaveLoad(1.0, 1.3))
+    paper = BarModel(s=50.0, d=0.0, R=0.5, n_modes=0)
+    assert hydraulic_existence_edge(paper) == pytest.approx((1.0 + math.sqrt(2.5)) / 1.5, abs=1e-9)

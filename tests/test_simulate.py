@@ -1,5 +1,5 @@
 """The event-driven simulator against independent answers: scipy ``solve_ivp`` with events, the
-closed-form rigid orbits (MODEL.md sections 4, 6), the bouncing-ball accumulation point, the static
+closed-form rigid orbits (theory §4, §6), the bouncing-ball accumulation point, the static
 fixed-free bar, and the energy balance."""
 
 import math
@@ -201,7 +201,7 @@ def test_energy_balance_with_contact_flexible_reports_projection(rng):
 
 
 # ----------------------------------------------------------------------------------------------
-# closed-form orbits of the rigid bar (MODEL.md section 6)
+# closed-form orbits of the rigid bar (theory §6)
 # ----------------------------------------------------------------------------------------------
 def rigid_orbits(p0, pk, R):
     """Phases and impact velocity of the one-impact orbits, cosine load, d = 0 (eq. 35)."""
@@ -242,8 +242,8 @@ def test_leaves_unstable_rigid_orbit():
 
 def test_flexible_bar_near_stable_orbit_settles():
     """Not the rigid closed form: a stiff 4-mode bar started near the rigid orbit settles on a
-    2 pi-periodic orbit whose impact velocity is the exact ``2 pi p0 / (1 + R)`` (MODEL.md
-    section 4, any load and any number of modes)."""
+    2 pi-periodic orbit whose impact velocity is the exact ``2 pi p0 / (1 + R)`` (theory §4, any
+    load and any number of modes)."""
     R, p0, pk = 0.5, 0.8, 1.0
     phases, V = rigid_orbits(p0, pk, R)
     model = BarModel(s=7.3, d=0.05, R=R, n_modes=4)

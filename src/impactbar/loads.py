@@ -1,4 +1,4 @@
-"""Periodic loads of period ``2 pi`` at the driven end (MODEL.md section 3, paper eqs. 7, 33, 34).
+"""Periodic loads of period ``2 pi`` at the driven end (theory §3, paper eqs. 7, 33, 34).
 
 A load is ``p(t) = Re sum_{k>=0} p_k exp(i k t)`` in its own time frame; an impact at phase ``phase``
 sees ``p(t + phase)`` (eq. 7). Each load also knows the exact motion of a modal oscillator

@@ -1,4 +1,4 @@
-"""The dimensionless bar: wave-speed ratio, damping, restitution, modes kept (MODEL.md sections 1-2)."""
+"""The dimensionless bar: wave-speed ratio, damping, restitution, modes kept (theory §1-§2)."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ MAX_STIFFNESS = 1e12
 class BarModel:
     r"""An elastic bar driven at ``x = 0`` and striking a rigid stop at ``x = 1``.
 
-    Field equation (paper eq. 3, MODEL.md section 1), dimensionless:
+    Field equation (paper eq. 3, theory §1), dimensionless:
 
     .. math:: u_{tt} + d\,u_t - s^2 u_{xx} = 0, \quad 0 < x < 1,
 

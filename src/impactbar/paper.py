@@ -6,7 +6,7 @@ draws it; :func:`reproduce` writes every figure as PNG with a CSV of its data an
 - Fig. 4: phase against ``k p0/pk``, pneumatic, ``d = 0``, ``R = 0..0.9``: stable solid, unstable
   dashed (exact multipliers, rigid bar), inadmissible orbits marked.
 - Fig. 5: stable band of ``p0/p1`` against ``R``, ``k = 1``, ``2 pi d = 0`` and ``0.03``; the
-  admissible part of the band marked (at small ``R`` the end sticks, MODEL.md section 5).
+  admissible part of the band marked (at small ``R`` the end sticks, theory §5).
 - Fig. 6: the same for ``k = 10`` with ``s pi -> inf``, ``10.1`` and ``10.01``: the paper's criterion
   (eqs. 37, 39) against the exact multipliers of an 8-mode bar.
 - Figs. 5 and 6 also draw the stability edge under the wave impact law (the stop as a long rod,

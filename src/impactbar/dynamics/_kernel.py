@@ -1,4 +1,4 @@
-"""Compiled core of the event-driven simulator (MODEL.md sections 2, 4, 8). Plain float arrays only.
+"""Compiled core of the event-driven simulator (theory §2, §4, §8). Plain float arrays only.
 
 Between events every mode obeys ``q'' + d q' + w2 q = p(t)`` and is advanced in closed form from an
 *anchor* (the last impact, or for a piecewise-constant load the last load jump):

@@ -1,4 +1,4 @@
-"""Closed-form motion of the modal oscillators between impacts (MODEL.md section 2, paper eqs. 6, 8).
+"""Closed-form motion of the modal oscillators between impacts (theory §2, paper eqs. 6, 8).
 
 Every mode obeys ``q'' + d q' + w2 q = p(t)`` with ``w2 = (s n pi)^2`` (``w2 = 0`` for the rigid
 mode). This module holds the load-independent pieces: the fundamental matrix of the homogeneous

@@ -1,4 +1,4 @@
-"""Admissibility of an orbit (MODEL.md section 5): the struck end stays off the stop between impacts
+"""Admissibility of an orbit (theory §5): the struck end stays off the stop between impacts
 and leaves it after the impact, decided with certified bounds, not by sampling."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ TWO_PI = 2.0 * math.pi
 
 
 def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=None):
-    """Decide admissibility (MODEL.md section 5) with certified bounds, over the flight
+    """Decide admissibility (theory §5) with certified bounds, over the flight
     ``[phase, phase + horizon]`` from ``y_plus``; ``at_rest`` (default ``R == 0``) says the end
     leaves the stop at rest, so that its departure is decided by its acceleration.
 

@@ -3,7 +3,7 @@
 Each boundary is a curve found by root-finding in the load factor: the existence edge (a fold of
 the phase equation, a double root), the edge of stability on a branch (a multiplier crossing the
 unit circle: ``-1`` for period doubling, ``+1`` for a fold), and the edge of admissibility
-(MODEL.md section 5). The root is bracketed by a coarse scan and refined by Brent's method to
+(theory §5). The root is bracketed by a coarse scan and refined by Brent's method to
 ``xtol``; nothing is read off a shaded grid.
 """
 
@@ -102,7 +102,17 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
 
     For a piecewise-constant load the rigid velocity ``V`` is monotone on each piece, so the maximum
     is at a jump; otherwise it is found among the zeros of the residual's derivative.
+
+    Raises
+    ------
+    ValueError
+        Under the wave impact law (``model.impact == "wave"``), whose phase equation is another
+        (theory §4b): its existence edges come from :func:`impactbar.orbits.wave.wave_existence_edge`
+        (pneumatic) or from the orbits themselves.
     """
+    if model.impact != "paper":
+        raise ValueError("max_phase_residual is eq. 14's, the paper's impact law; model.impact must "
+                         f"be 'paper' (got {model.impact!r})")
     if isinstance(load, PiecewiseConstantLoad):
         return float(np.max(phase_residual(model, load, load.breaks)))
     orders = getattr(load, "orders", None)
@@ -179,7 +189,7 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
     k : int
         Order of the harmonic (``pk = 1``).
     criterion : {"exact", "paper"}
-        Exact multipliers (MODEL.md section 7; under ``model.impact == "wave"`` those of the wave
+        Exact multipliers (theory §7; under ``model.impact == "wave"`` those of the wave
         law's impact map, theory §4b), or the roots of the paper's rigid block (eqs. 29,
         30, with the flexible modes in ``sigma``), which is what the paper's bounds (eq. 39) use: its
         flexible blocks (eq. 31) do not depend on the load, and at ``d = 0`` they put a root exactly
@@ -256,7 +266,16 @@ def hydraulic_existence_edge(model: BarModel, *, xtol: float = 1e-12) -> float:
     float
         ``kappa`` in ``(1, 2]``; ``2.0`` when orbits exist up to ``kappa = 2``, ``nan`` if none exist
         for any ``kappa > 1``.
+
+    Raises
+    ------
+    ValueError
+        Under the wave impact law (``model.impact == "wave"``): this edge is eq. 14's (theory §4).
     """
+    if model.impact != "paper":
+        raise ValueError("hydraulic_existence_edge is the paper's impact law's (eq. 14); model.impact "
+                         f"must be 'paper' (got {model.impact!r})")
+
     def h(kappa):
         return max_phase_residual(model, SquareWaveLoad(1.0, kappa))
 
@@ -269,7 +288,7 @@ def hydraulic_existence_edge(model: BarModel, *, xtol: float = 1e-12) -> float:
 def admissibility_edges(model: BarModel, make_load: Callable[[float], Load], lo: float, hi: float,
                         select: Callable[[list], object], *, n_scan: int = 24,
                         xtol: float = 1e-10) -> list[float]:
-    """Load factors where the selected orbit changes admissibility (MODEL.md section 5), by a scan
+    """Load factors where the selected orbit changes admissibility (theory §5), by a scan
     and bisection on the admissibility flag.
 
     Parameters

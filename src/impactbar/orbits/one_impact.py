@@ -1,4 +1,4 @@
-"""One-impact periodic orbits (paper Section 2, MODEL.md sections 4, 5, 7).
+"""One-impact periodic orbits (paper Section 2, theory §4, §5, §7).
 
 ``periodic_orbits(model, load)`` finds every root ``phase`` of the phase equation (eq. 14),
 builds the orbit's modal state, decides admissibility rigorously, and computes the exact Floquet
@@ -56,7 +56,7 @@ class PeriodicOrbit:
     admissible : bool
         The end stays off the stop between impacts (``u(1, t) < 0`` for ``0 < t < 2 pi``), leaves it
         (for ``R = 0``: the end's acceleration just after impact points away from the stop) and
-        arrives moving forward (MODEL.md section 5). Decided with certified bounds, not sampling.
+        arrives moving forward (theory §5). Decided with certified bounds, not sampling.
     admissibility : str
         ``"admissible"``, or why not: ``"penetrates"``, ``"grazing"``, ``"backward impact"``,
         ``"sticks"`` (R = 0 and the load presses the end on the stop after impact; under the wave
@@ -69,7 +69,7 @@ class PeriodicOrbit:
     clearance_error : float
         Bound on the error of ``clearance`` from the enclosure of the stationary points.
     multipliers : numpy.ndarray of complex, shape (2 N + 2,)
-        Exact Floquet multipliers (eigenvalues of the impact map's Jacobian, MODEL.md section 7),
+        Exact Floquet multipliers (eigenvalues of the impact map's Jacobian, theory §7),
         sorted by decreasing modulus.
     stable : bool
         ``admissible`` and every ``|multiplier| < 1 - MARGINAL`` (``1e-9``): a multiplier on the
@@ -518,7 +518,7 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
         A root of the phase equation (rad).
     paper : bool
         Return the roots of the paper's quadratic blocks (eqs. 27-31) instead of the exact
-        multipliers (MODEL.md section 7).
+        multipliers (theory §7).
 
     Returns
     -------

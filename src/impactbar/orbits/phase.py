@@ -1,4 +1,4 @@
-"""The phase equation of one-impact orbits (paper eq. 14, MODEL.md section 4): its right-hand
+"""The phase equation of one-impact orbits (paper eq. 14, theory §4): its right-hand
 factor ``G(d, R)``, its residual, and every root ``phase`` in ``[0, 2 pi)``."""
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ def _beta(y: float) -> float:
 
 
 def phase_G(d: float, R: float) -> float:
-    """Right-hand factor ``G(d, R)`` of the phase equation (eq. 14 rewritten, MODEL.md section 4).
+    """Right-hand factor ``G(d, R)`` of the phase equation (eq. 14 rewritten, theory §4).
 
     ``G = 2 pi (1 + R e^{-2 pi d}) / (1 - e^{-2 pi d}) - (1 + R)/d = 2 pi [(1 + R) beta(2 pi d) - R]``,
     evaluated through ``beta`` so that it is accurate as ``d -> 0`` (``G(0, R) = pi (1 - R)``).
@@ -42,7 +42,7 @@ def _check_inputs(model, load):
 
 
 def phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
-    """Left minus right side of the phase equation (eq. 14, MODEL.md section 4).
+    """Left minus right side of the phase equation (eq. 14, theory §4).
 
     ``F(phase) = (1 + R) Re sum_{k>=1} H_0k p_k (i k) e^{i k phase} - p0 G(d, R)``; the sum is the
     periodic zero-mean rigid velocity ``V(phase)`` (exact for every load, no truncation).

@@ -1,5 +1,5 @@
 """Stability of one-impact orbits: the paper's Schur criterion (Section 3, eqs. 25-32) and the exact
-Floquet multipliers of the impact map (MODEL.md section 7)."""
+Floquet multipliers of the impact map (theory §7)."""
 
 from __future__ import annotations
 
@@ -68,7 +68,7 @@ def _impact_fields(model: BarModel, load: Load, phase: float, y_plus, y_minus):
 
 
 def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_minus) -> np.ndarray:
-    """Analytic Jacobian of the impact map at a one-impact fixed point (MODEL.md section 7).
+    """Analytic Jacobian of the impact map at a one-impact fixed point (theory §7).
 
     The map takes ``z = (tau, q_1..q_N, q_0'..q_N')`` just after one impact to the same just after
     the next; ``q_0`` follows from contact ``u(1, tau) = 0``. The Jacobian combines the flow's

@@ -1,7 +1,7 @@
 r"""Real hammers in SI units: from a piston, a stop and a driving force to the dimensionless model,
 and back to what the designer of a rock drill reads.
 
-Conversion (paper eq. 2, MODEL.md section 1). For a bar of Young's modulus ``E``, density ``rho``,
+Conversion (paper eq. 2, theory §1). For a bar of Young's modulus ``E``, density ``rho``,
 length ``L`` and cross-section ``A``, driven at ``f`` Hz:
 
 - mass per unit length ``M = rho A``, piston mass ``m = M L``, wave speed ``c = sqrt(E / rho)``;
@@ -12,9 +12,9 @@ length ``L`` and cross-section ``A``, driven at ``f`` Hz:
 
 The force scale is ``m L Omega^2 = M L^2 Omega^2``: the boundary condition ``E A U_X(0) = -P`` in
 the variables above reads ``s^2 u_x(0) = -P / (M L^2 Omega^2)``, and the rigid mode
-``m U_TT = P`` reads ``q_0'' = P / (m L Omega^2)``. (MODEL.md writes ``p = P / (M L Omega^2)``,
-which is not dimensionless for ``M`` a mass per unit length; the tests check the scale through
-the momentum identity ``v = F_mean / (f m (1 + R))``.)
+``m U_TT = P`` reads ``q_0'' = P / (m L Omega^2)``. (The printed paper's ``p = P / (M L Omega^2)``
+drops a square: it is not dimensionless for ``M`` a mass per unit length; theory §1. The tests
+check the scale through the momentum identity ``v = F_mean / (f m (1 + R))``.)
 
 Every input that has a dimension must be written with its unit (``"210 GPa"``, ``"45 mm"``) or be a
 pint quantity; the dataclasses themselves hold plain SI floats in fields named with their unit

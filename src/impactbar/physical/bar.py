@@ -1,4 +1,4 @@
-"""The piston (bar) in SI units, and the short-impact check (paper eq. 2, MODEL.md section 1)."""
+"""The piston (bar) in SI units, and the short-impact check (paper eq. 2, theory §1)."""
 
 from __future__ import annotations
 

@@ -164,8 +164,8 @@ def load_config(path) -> Hammer:
 # Both presets use a steel piston: E = 210 GPa and rho = 7850 kg/m^3 are the textbook values of
 # carbon and low-alloy steel (e.g. EN 1993-1-1, section 3.2.6: E = 210 000 N/mm^2). Their rod,
 # the stop, is a long steel bar (the shank adapter / drill steel), so R follows from its area.
-# The forces are chosen from the rigid-limit identity v = F_mean / (f m (1 + R)) (MODEL.md
-# section 4) to give a typical impact velocity, and checked to give an admissible orbit.
+# The forces are chosen from the rigid-limit identity v = F_mean / (f m (1 + R)) (theory §4) to
+# give a typical impact velocity, and checked to give an admissible orbit.
 PRESETS: dict[str, dict] = {
     # A pneumatic top-hammer rock drill (the class of a heavy hand-held drill or a light drifter).
     "pneumatic-drill": {
@@ -186,7 +186,7 @@ PRESETS: dict[str, dict] = {
         # Mean force 800 N: about 0.63 MPa (the usual 6-7 bar shop air) on the 12.6 cm^2 piston
         # face. It gives v = 800 / (40 * 1.97 * 1.117) = 9.1 m/s (energy 81 J, power 3.2 kW),
         # inside the 5-12 m/s of air hammers. Amplitude 2150 N puts p0/p1 = 0.372 inside the
-        # paper's stable band (MODEL.md section 6: 0.337 < p0/p1 < 0.403 at R = 0.117).
+        # paper's stable band (theory §6: 0.337 < p0/p1 < 0.403 at R = 0.117).
         "force": {"kind": "pneumatic", "mean": "800 N", "amplitude": "2150 N"},
         # Viscous friction of the guided piston, unknown in practice: 2.4 N s/m makes
         # 2 pi d = 0.03, the damped case of the paper's Fig. 5.
@@ -206,7 +206,7 @@ PRESETS: dict[str, dict] = {
         },
         # A 56 mm shank: R = (56^2 - 45^2)/(56^2 + 45^2) = 0.215. (With a 52 or 57 mm shank the
         # struck end's ringing after the jumps of the square wave grazes the stop between impacts
-        # and the one-impact orbits are inadmissible: see MODEL.md section 5.)
+        # and the one-impact orbits are inadmissible: see theory §5.)
         "stop": {"area": "24.630 cm^2"},  # pi/4 * 5.6^2 cm^2
         # 55 Hz: hydraulic drills strike at 40-70 Hz; a stress-wave bench study measured up to
         # 62 Hz and up to 346 J per blow at 18-23 MPa ("Influence of piston mass and working

@@ -67,7 +67,7 @@ class Hammer:
         Restitution coefficient ``R`` of the stop, ``0 <= R <= 1`` (eq. 10).
     stop_area_m2 : float, optional
         Or the stop as a long bar of the same material and area ``A_s >= A`` (m^2):
-        ``R = (A_s - A) / (A_s + A)`` (MODEL.md section 4). Give exactly one of the two.
+        ``R = (A_s - A) / (A_s + A)`` (theory §4). Give exactly one of the two.
     damping_N_s_m2 : float, optional
         Viscous damping per unit length ``D`` of eq. 2 (N s/m^2), ``>= 0``. Default 0. A total
         coefficient ``c`` (N s/m) of the whole piston is ``D = c / L``; a damping ratio ``zeta``
@@ -217,7 +217,7 @@ class Hammer:
     def rigid_impact_velocity_m_s(self) -> float:
         """Impact velocity of the rigid-body mode in any one-impact periodic motion (m/s):
         ``v = F_mean / (f_b m (1 + R))`` with ``f_b`` the blow frequency (momentum balance over a
-        period, MODEL.md section 4: ``2 pi p0 / (1 + R)`` dimensionless)."""
+        period, theory §4: ``2 pi p0 / (1 + R)`` dimensionless)."""
         return self.mean_force_N / (self.blow_frequency_Hz * self.mass_kg * (1.0 + self.R))
 
     @property

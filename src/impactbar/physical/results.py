@@ -44,7 +44,7 @@ class PhysicalOrbit:
     peak_stress_Pa : float
         Peak compressive stress at impact (Pa), see :meth:`Hammer.peak_stress_Pa`.
     admissible, stable : bool
-        As in the dimensionless orbit (MODEL.md sections 5, 7).
+        As in the dimensionless orbit (theory §5, §7).
     max_abs_multiplier : float
         Largest modulus of the Floquet multipliers.
     rod_energy_J : float

@@ -1,4 +1,4 @@
-"""The paper's numerical experiments (Section 5, MODEL.md section 8): many random starts, the
+"""The paper's numerical experiments (Section 5, theory §8): many random starts, the
 long-run motion of each classified.
 
 The paper follows the bar "from arbitrary initial values" and reports that the pneumatic hammer
@@ -393,7 +393,7 @@ def _main_impacts(tr: Trajectory, sel: np.ndarray, period: float) -> np.ndarray:
 def pneumatic_setup(*, p0: float = 1.2, pk: float = 1.0, k: int = 1, s: float = 10.0,
                     d: float = 0.03 / TWO_PI, R: float = 0.8, n_modes: int = 4):
     """The pneumatic hammer (eq. 33): ``p0 + pk cos(k t)``. The defaults put ``p0/pk`` where the
-    rigid theory (MODEL.md section 6) has both the one-impact-per-period (``k = 1``) and the
+    rigid theory (theory §6) has both the one-impact-per-period (``k = 1``) and the
     one-impact-per-two-periods motion stable, so the 'smallest k' claim is tested.
 
     Returns

@@ -1,6 +1,6 @@
-"""Event-driven simulation from any start, impact after impact (paper Section 5, MODEL.md s. 8).
+"""Event-driven simulation from any start, impact after impact (paper Section 5, theory §8).
 
-Between impacts the bar moves in closed form (MODEL.md section 2, eq. 8), so there is no
+Between impacts the bar moves in closed form (theory §2, eq. 8), so there is no
 time-stepping error; a piecewise-constant load (the hydraulic square wave, eq. 34) is integrated
 exactly piece by piece. The next impact, the first ``t`` with ``u(1,t) = c . q(t) = 0`` and
 ``u_t(1,t) > 0``, is found with a guaranteed search (bounds on ``|u_tt(1,t)|`` and
@@ -12,7 +12,7 @@ characteristics (:func:`impactbar.dynamics.impact.wave_impact`), after which the
 With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
 accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field
 has gone to zero, and follows the bar fixed at ``x = 1`` (fixed-free modes
-``r_m = int_0^1 u cos((m - 1/2) pi x) dx``, MODEL.md section 8) until the stop's reaction
+``r_m = int_0^1 u cos((m - 1/2) pi x) dx``, theory §8) until the stop's reaction
 ``F_stop = p - q_0'' - d q_0'`` would turn tensile; then the state is projected back on the
 free-free modes and the free motion resumes.
 """
@@ -63,7 +63,7 @@ _FREE, _CONTACT, _WAVE = 0, 1, 2  # _WAVE: a contact window of the wave law (fre
 # --------------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class InitialState:
-    """Modal state of the free-free bar (MODEL.md section 2).
+    """Modal state of the free-free bar (theory §2).
 
     ``u(x) = q_0 + 2 sum_{n>=1} q_n cos(n pi x)`` and the same for the velocity field.
 
@@ -205,7 +205,7 @@ class EnergyAccount:
     - ``chatter_loss`` is the kinetic energy left when the simulation jumps to the accumulation
       point of a chatter sequence (the bounces it skips would have dissipated it),
     - ``projection`` is what the changes of modal basis at the start and end of permanent contact
-      add (a truncated projection does not conserve energy; MODEL.md section 8).
+      add (a truncated projection does not conserve energy; theory §8).
     """
 
     work: float
@@ -300,7 +300,7 @@ class _LoadData:
 
 def _overlap(n: np.ndarray, m: np.ndarray) -> np.ndarray:
     """``int_0^1 cos(n pi x) cos((m - 1/2) pi x) dx = (S(n - m + 1/2) + S(n + m - 1/2)) / 2`` with
-    ``S(c) = sin(c pi) / (c pi)`` (MODEL.md section 8), shape ``(len(n), len(m))``."""
+    ``S(c) = sin(c pi) / (c pi)`` (theory §8), shape ``(len(n), len(m))``."""
     a = n[:, None] - m[None, :] + 0.5
     b = n[:, None] + m[None, :] - 0.5
     return 0.5 * (np.sinc(a) + np.sinc(b))
@@ -430,7 +430,7 @@ class _Core:
         return self.to_contact @ q, self.to_contact @ v
 
     def stop_force(self, t, r):
-        """``F_stop`` at time ``t`` for the contact state ``r`` (MODEL.md section 8)."""
+        """``F_stop`` at time ``t`` for the contact state ``r`` (theory §8)."""
         return self.f_alpha * float(self.load(t)) + float(self.f_wts @ r)
 
     def propagate(self, basis, t0, q, v, t):
@@ -946,7 +946,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     Between impacts every mode obeys ``q_n'' + d q_n' + (s n pi)^2 q_n = p(t)`` (eq. 6) and is
     advanced in closed form; at an impact (``u(1,t) = 0``, ``u_t(1,t) > 0``)
     ``u_t(x, t+) = -R u_t(x, t-)`` (eqs. 10, 11). Chatter is jumped over to its accumulation point,
-    after which the bar stays on the stop (fixed at ``x = 1``, MODEL.md section 8) until the stop's
+    after which the bar stays on the stop (fixed at ``x = 1``, theory §8) until the stop's
     reaction would turn tensile.
 
     Parameters
