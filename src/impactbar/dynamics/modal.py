@@ -100,8 +100,15 @@ def b_integral(d: float, tau):
     if d == 0.0:
         return tau.copy()
     y = d * tau
-    # series where d tau is tiny (it may underflow to 0 for denormal d)
-    return np.where(np.abs(y) < 1e-8, tau * (1.0 - 0.5 * y), -np.expm1(-y) / d)
+    # series where d tau is tiny (it may underflow to 0 for denormal d); the quotient is formed only
+    # where it is not tiny, so a denormal d never meets a division that some numpy versions flag
+    out = np.array(tau * (1.0 - 0.5 * y), dtype=float)
+    big = np.abs(y) >= 1e-8
+    if np.any(big):
+        if out.ndim == 0:
+            return np.asarray(-np.expm1(-y) / d)
+        out[big] = -np.expm1(-y[big]) / d
+    return out
 
 
 def c_integral(d: float, tau):
