@@ -115,3 +115,16 @@ def test_flow_against_scipy(load, d):
     _, _, ref, _ = solve_modal(w2, d, load, np.concatenate([q0, v0]), 0.7, 8.0, ts=ts)
     assert np.allclose(q, ref[:4], atol=1e-9)
     assert np.allclose(v, ref[4:], atol=1e-9)
+
+
+@pytest.mark.parametrize("d", [5e-324, 5e-323, 1e-310, 1e-9, 0.3])
+def test_b_integral_at_denormal_damping(d):
+    """``b(tau) = (1 - e^{-d tau})/d`` without a division by a denormal ``d`` (floating-point errors
+    raise in the tests): equal to its integral ``int_0^tau e^{-d t} dt`` by quadrature."""
+    from impactbar.dynamics.modal import b_integral
+
+    tau = np.array([0.0, 0.1, 1.0, 6.0])
+    ref = [quad(lambda t: math.exp(-d * t), 0.0, x, epsabs=1e-15)[0] for x in tau]
+    assert np.allclose(b_integral(d, tau), ref, rtol=1e-12, atol=1e-15)
+    assert float(b_integral(d, 2.0)) == pytest.approx(quad(lambda t: math.exp(-d * t), 0.0, 2.0)[0],
+                                                      rel=1e-12)
