@@ -167,7 +167,7 @@ def test_bad_input():
         find_orbit("m", load)
     with pytest.raises(ValueError, match="did not converge"):
         find_orbit(model, load, guess=([1.0], np.full((1, 4), 50.0)), max_iter=3)
-    wave = BarModel(s=2.0, d=0.03, R=0.6, n_modes=1)
-    object.__setattr__(wave, "impact", "wave")
-    with pytest.raises(ValueError, match="impact='paper'"):
-        find_orbit(wave, load)
+    other = BarModel(s=2.0, d=0.03, R=0.6, n_modes=1)
+    object.__setattr__(other, "impact", "plastic")  # a law neither eq. 10 nor the wave law
+    with pytest.raises(ValueError, match="impact='plastic'"):
+        find_orbit(other, load)

@@ -138,7 +138,9 @@ def test_no_root_missed_against_dense_scan(load, d, R):
     model = BarModel(s=10.0, d=d, R=R, n_modes=0)
     grid = np.linspace(0, TWO_PI, 40001)
     F = phase_residual(model, load, grid)
-    n_sign = int(np.sum(np.sign(F[1:]) != np.sign(F[:-1])))
+    sg = np.sign(F)
+    sg = sg[sg != 0]  # a root exactly on a grid node (the square wave's jumps) is one crossing, not two
+    n_sign = int(np.sum(sg[1:] != sg[:-1]))
     found = phase_roots(model, load)
     assert sum(m if m == 1 else 0 for _, m in found) >= n_sign - 0  # every crossing is found
     assert len([r for r, m in found if m == 1]) == n_sign

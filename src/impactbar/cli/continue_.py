@@ -3,11 +3,13 @@ branches born at its period doublings, and a bifurcation diagram over a brute-fo
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
+
+from ._common import print_json, refuse
+from .orbits import check_options as check_bar_and_load
 
 TWO_PI = 2.0 * math.pi
 
@@ -29,6 +31,9 @@ def add_parser(sub) -> None:
     g.add_argument("--d", type=float, default=0.05, help="damping D/(M Omega) >= 0 (default 0.05)")
     g.add_argument("--R", type=float, default=0.5, help="restitution coefficient in [0, 1] (default 0.5)")
     g.add_argument("--n-modes", type=int, default=4, help="flexible modes kept, >= 0 (default 4)")
+    g.add_argument("--impact", choices=("paper", "wave"), default=None,
+                   help="impact law: 'paper' (eq. 10, default) or 'wave' (the stop as a long rod, "
+                        "the contact solved by characteristics); overrides a config's [model] impact")
     lg = p.add_argument_group("load")
     lg.add_argument("--load", choices=("cosine", "square"), default="cosine",
                     help="cosine: pneumatic p0 + pk cos(k t) (eq. 33); square: hydraulic (eq. 34)")
@@ -83,7 +88,8 @@ def _model_and_load(args):
 
         hammer = hammer_from_args(args)
         return hammer.model, hammer.load
-    model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes)
+    model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes,
+                     impact=getattr(args, "impact", None) or "paper")
     if args.load == "cosine":
         return model, CosineLoad(args.p0, args.pk, args.k)
     return model, SquareWaveLoad(args.q, args.kappa)
@@ -113,9 +119,28 @@ def _start(model, load, args):
     return find_orbit(model, load, args.impacts, args.periods, guess=tr)
 
 
+def check_options(args) -> None:
+    """Refuse the options the chosen mode ignores: the dimensionless inputs with a hammer in SI,
+    the other load's options with ``--load``, ``--orbit`` when the start is found from a simulation
+    (``--impacts`` or ``--periods`` above 1), and the brute-force diagram's options with
+    ``--brute 0``.
+
+    Raises
+    ------
+    UsageError
+    """
+    check_bar_and_load(args)  # the same bar and load options as ``impactbar orbits``
+    if args.impacts != 1 or args.periods != 1:
+        refuse(args, ("orbit",), because="with --impacts or --periods above 1 (the start is then found "
+               "from a simulation; --orbit picks a one-impact orbit)")
+    if args.brute == 0:
+        refuse(args, ("transient", "record"), because="with --brute 0 (no brute-force simulation)")
+
+
 def run(args) -> int:
     from ..continuation import continue_orbit, parameter_value, simulated_diagram
 
+    check_options(args)
     model, load = _model_and_load(args)
     if args.doublings < 0:
         raise ValueError(f"--doublings must be >= 0; got {args.doublings}")
@@ -158,10 +183,11 @@ def run(args) -> int:
         q, v = start.modal_state_after_impact
         from .. import InitialState
 
+        # the flight starts after the impact (under the wave law: at the end of its window 2/s)
+        t0 = float(start.impact_times[0]) if hasattr(start, "impact_times") else start.phase
+        t0 += 2.0 / model.s if model.impact == "wave" else 0.0
         diagram = simulated_diagram(model, load, args.parameter, values, transient=args.transient,
-                                    record=args.record, start=InitialState(q, v),
-                                    t0=float(start.impact_times[0]) if hasattr(start, "impact_times")
-                                    else start.phase)
+                                    record=args.record, start=InitialState(q, v), t0=t0)
     try:
         path = _plot(branches, diagram, args, out)
     except ImportError:
@@ -173,12 +199,12 @@ def run(args) -> int:
         doc = {"parameter": args.parameter, "to": args.to,
                "branches": [{"impacts": b.impacts, "periods": b.periods, "points": len(b),
                              "status": b.status, "start": float(b.values[0]), "end": float(b.values[-1]),
-                             "events": [_finite(e.to_dict()) for e in b.events]} for b in branches],
+                             "events": [e.to_dict() for e in b.events]} for b in branches],
                "curves": [{"kind": c.kind, "parameters": list(c.parameters), "points": len(c),
                            "status": c.status, "start": c.values[0].tolist(), "end": c.values[-1].tolist()}
                           for c in curves],
                "files": [str(p) for p in written]}
-        print(json.dumps(doc, indent=2, allow_nan=False))
+        print_json(doc)
         return 0
     print(f"{model!r}\n{load!r}")
     for i, b in enumerate(branches):
@@ -232,17 +258,6 @@ def _curves(branches, args, out, written):
         plt.close(fig)
         written.append(path)
     return curves
-
-
-def _finite(d):
-    out = {}
-    for k, v in d.items():
-        if isinstance(v, list):
-            v = [None if isinstance(x, float) and not math.isfinite(x) else x for x in v]
-        elif isinstance(v, float) and not math.isfinite(v):
-            v = None
-        out[k] = v
-    return out
 
 
 def _write_events(path, events):

@@ -10,6 +10,13 @@ the ``m`` impact times and states, ``2 m (N + 1)`` numbers, and the conditions a
 method with the exact Jacobian (fundamental matrix and the vector field at both ends) needs no root
 search. The Floquet multipliers are the eigenvalues of the product of the ``m`` impact-map Jacobians,
 each with its saltation term (theory §7).
+
+Under the wave impact law (theory §4b) each impact is a contact of duration ``2/s`` with a long
+rod: the segment's state is taken at the end of the contact window, the flight lasts the interval
+between impacts less ``2/s``, and the map across the window is affine in the arrival state, with the
+drive's part and its rate from :func:`impactbar.dynamics.impact.window_drive` (the analytic
+Jacobian of :func:`impactbar.orbits.wave.wave_impact_map_jacobian`, composed over the impacts).
+Admissibility adds the characteristics solution's verdict on each contact (``"separates"``).
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ import numpy as np
 
 from .._threads import single_threaded_blas
 from .._validate import check_int, check_real
+from ..dynamics.impact import WaveImpact, wave_impact, window_drive
 from ..dynamics.modal import fundamental
 from ..loads import Load
 from ..model import BarModel
@@ -34,32 +42,40 @@ __all__ = ["MultiImpactOrbit", "find_orbit"]
 TWO_PI = 2.0 * math.pi
 
 #: Order in which the reasons for inadmissibility are reported when several flights fail.
-_STATUS_RANK = {"penetrates": 0, "backward impact": 1, "grazing": 2, "sticks": 3, "admissible": 4}
+_STATUS_RANK = {"penetrates": 0, "backward impact": 1, "grazing": 2, "sticks": 3, "separates": 4,
+                "admissible": 5}
 
 
 # ------------------------------------------------------------------------------------------------
 # the impact law: the one place that knows it
 # ------------------------------------------------------------------------------------------------
 def impact_law(model: BarModel, load: Load, t: float, y_minus: np.ndarray):
-    """State just after an impact from the state just before, with its derivatives.
+    """State where the next flight starts from the state at arrival, with its derivatives.
 
-    The paper's law (eq. 10, theory §4): the displacement is kept and the whole velocity field is
-    reversed and scaled by ``R``: ``(q, q') -> (q, -R q')`` in every mode.
+    The paper's law (eq. 10, theory §4): the impact is instantaneous, the displacement is kept and
+    the whole velocity field is reversed and scaled by ``R``: ``(q, q') -> (q, -R q')``.
+
+    The wave law (theory §4b), contact held for the whole window ``2/s``: the state at the window's
+    end is ``(q_n, q_n') -> -R (q_n, q_n') + (g_n, h_n)(t)`` for ``n >= 1``, ``q_0' -> -R q_0' + h_0``,
+    with the drive part of :func:`impactbar.dynamics.impact.window_drive`, and ``q_0`` set by
+    contact with the (advanced) rod end at the window's end; ``d(g, h)/dt`` is the drive's rate.
+    Whether the contact really holds is decided afterwards, on the orbit (``"separates"``).
 
     Parameters
     ----------
     model : BarModel
     load : Load
-        The load (a law with contact of finite duration would need it; eq. 10 does not).
+        The drive load (it acts during the wave law's contact window).
     t : float
-        Load time of the impact.
+        Load time of the arrival (the start of contact).
     y_minus : numpy.ndarray, shape (2 N + 2,)
-        Modal state ``(q_0..q_N, q_0'..q_N')`` just before the impact.
+        Modal state ``(q_0..q_N, q_0'..q_N')`` at arrival.
 
     Returns
     -------
     y_plus : numpy.ndarray, shape (2 N + 2,)
-        State just after the impact.
+        State where the next flight starts: just after the impact (eq. 10), at the end of the
+        window (wave law).
     jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
         ``d y_plus / d y_minus``.
     jac_t : numpy.ndarray, shape (2 N + 2,)
@@ -68,18 +84,34 @@ def impact_law(model: BarModel, load: Load, t: float, y_minus: np.ndarray):
     Raises
     ------
     ValueError
-        For an impact law other than the paper's (``model.impact`` other than ``"paper"``).
+        For an unknown impact law (``model.impact`` other than ``"paper"`` or ``"wave"``).
     """
     law = getattr(model, "impact", "paper")
-    if law != "paper":
-        raise ValueError(f"find_orbit and continue_orbit support impact='paper' (eq. 10) only; "
-                         f"got impact={law!r}")
     M = model.n_modes + 1
+    if law == "wave":
+        g, h, dg, dh = window_drive(model.s, model.R, model.n_modes, load, float(t), derivative=True)
+        y_plus = -model.R * np.asarray(y_minus, dtype=float) + np.concatenate((g, h))
+        c = model.end_weights
+        y_plus[0] = -float(c[1:] @ y_plus[1:M])  # touching the advanced rod end
+        jac = -model.R * np.eye(2 * M)
+        jac[0, :] = 0.0
+        jac[0, 1:M] = model.R * c[1:]
+        jt = np.concatenate((dg, dh))
+        jt[0] = -float(c[1:] @ dg[1:])
+        return y_plus, jac, jt
+    if law != "paper":
+        raise ValueError(f"find_orbit and continue_orbit support impact='paper' (eq. 10) and "
+                         f"impact='wave' (theory §4b); got impact={law!r}")
     y_plus = np.array(y_minus, dtype=float)
     y_plus[M:] *= -model.R
     diag = np.ones(2 * M)
     diag[M:] = -model.R
     return y_plus, np.diag(diag), np.zeros(2 * M)
+
+
+def contact_window(model: BarModel) -> float:
+    """Duration of an impact: ``2/s`` under the wave law (theory §4b), 0 under eq. 10."""
+    return 2.0 / model.s if getattr(model, "impact", "paper") == "wave" else 0.0
 
 
 # ------------------------------------------------------------------------------------------------
@@ -105,6 +137,7 @@ class _Segments:
         E[M:, M - 1:] = np.eye(M)
         self.E = E
         self.size = 2 * M * m
+        self.T = contact_window(model)  # each flight starts T after its impact
 
     # -- pieces -----------------------------------------------------------------------------------
     def split(self, u):
@@ -158,7 +191,8 @@ class _Segments:
             jn = (j + 1) % m
             t1 = t[jn] + (TWO_PI * self.n if jn == 0 else 0.0)
             y0 = self.full(x[j])
-            Y = self.flight(t[j], y0, t1)
+            ts = t[j] + self.T
+            Y = self.flight(ts, y0, t1)
             yp, Jy, Jt = impact_law(self.model, self.load, t1, Y)
             y_plus[j], y_minus[j] = y0, Y
             r = slice(K * j, K * (j + 1))
@@ -166,9 +200,9 @@ class _Segments:
             F[K * j + 1: K * (j + 1)] = yp[1:] - x[jn]
             if not jacobian:
                 continue
-            Phi = self.phi(t1 - t[j])
+            Phi = self.phi(t1 - ts)
             A = np.empty((K, K))  # dY / d(t_j, x_j)
-            A[:, 0] = -Phi @ self.f(t[j], y0)
+            A[:, 0] = -Phi @ self.f(ts, y0)
             A[:, 1:] = Phi @ self.E
             f1 = self.f(t1, Y, left=True)  # dY / d t_{j+1}
             rows = np.vstack((self.c @ A[:M], (Jy @ A)[1:]))
@@ -257,7 +291,19 @@ class MultiImpactOrbit:
         ``admissible`` and every ``|multiplier| < 1``.
     states_after_impact, states_before_impact : numpy.ndarray, shape (m, 2 N + 2)
         Modal states ``(q_0..q_N, q_0'..q_N')`` just after and just before the impact at each of
-        ``impact_times`` (the state before the first impact is the end of the last flight).
+        ``impact_times`` (the state before the first impact is the end of the last flight). Under
+        the wave law, "after" is at the end of the contact window, where the flight starts.
+    contacts : tuple of WaveImpact or None
+        Under the wave law (theory §4b): each impact's contact with the rod solved by
+        characteristics (force wave, rod energy, advance per blow); ``None`` under eq. 10, and when
+        admissibility was not checked or an impact velocity is not positive.
+
+    Notes
+    -----
+    Under the wave law (``model.impact == "wave"``) impact ``j`` starts at ``impact_times[j]`` and
+    lasts :attr:`window` ``= 2/s``; the flight after it lasts the interval to the next impact less
+    ``2/s``. Positions are measured from the rod end, which each blow advances. An orbit whose
+    contact separates inside a window is ``"separates"`` (its contact map does not hold).
     """
 
     model: BarModel
@@ -275,6 +321,12 @@ class MultiImpactOrbit:
     stable: bool
     states_after_impact: np.ndarray = field(repr=False)
     states_before_impact: np.ndarray = field(repr=False)
+    contacts: tuple[WaveImpact, ...] | None = field(default=None, repr=False)
+
+    @property
+    def window(self) -> float:
+        """Duration of each impact: ``2/s`` under the wave law (theory §4b), 0 under eq. 10."""
+        return contact_window(self.model)
 
     @property
     def period(self) -> float:
@@ -316,7 +368,8 @@ class MultiImpactOrbit:
         ----------
         t : array_like, shape (T,)
             Orbit times (dimensionless), taken modulo ``2 pi n``; at an impact time the state just
-            after the impact.
+            after the impact (under the wave law: at the start of contact; inside a window, the
+            characteristics solution projected on the modes).
 
         Returns
         -------
@@ -329,11 +382,20 @@ class MultiImpactOrbit:
         q = np.empty((M, t.size))
         v = np.empty((M, t.size))
         w2 = self.model.frequencies**2
-        for jj in np.unique(j):
-            sel = j == jj
+        Tw = self.window
+        inside = (t - rel[j]) < Tw
+        if np.any(inside):  # within a wave-law contact window: the characteristics solution
+            contacts = self.contacts
+            if contacts is None:
+                contacts = tuple(_wave_contact(self.model, self.load, float(ta), ym) for ta, ym in
+                                 zip(self.impact_times, self.states_before_impact, strict=True))
+            for i in np.flatnonzero(inside):
+                q[:, i], v[:, i] = contacts[j[i]].state_at(t[i] - rel[j[i]])
+        for jj in np.unique(j[~inside]):
+            sel = (j == jj) & ~inside
             y = self.states_after_impact[jj]
-            q[:, sel], v[:, sel] = self.load.propagate(w2, self.model.d, self.impact_times[jj], y[:M],
-                                                       y[M:], self.impact_times[0] + t[sel])
+            q[:, sel], v[:, sel] = self.load.propagate(w2, self.model.d, self.impact_times[jj] + Tw,
+                                                       y[:M], y[M:], self.impact_times[0] + t[sel])
         return q, v
 
     def end_displacement(self, t) -> np.ndarray:
@@ -391,12 +453,28 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactO
     mu = _sorted_multipliers(problem.monodromy(info["maps"]))
     if not np.all(np.isfinite(mu)):
         mu = np.full(2 * M, np.inf + 0j)
+    Tw = problem.T
+    arrivals = np.append(t[1:], t[0] + TWO_PI * problem.n)  # flight j ends at arrivals[j]
+    contacts = None
+    if Tw > 0.0 and np.all(v_imp > 0.0) and admissibility:
+        contacts = tuple(_wave_contact(model, load, float(ta), ym)  # contact j starts flight j
+                         for ta, ym in zip(t, np.roll(info["y_minus"], 1, axis=0), strict=True))
     statuses, clear, cerr = [], -math.inf, 0.0
     if admissibility:
         for j in range(m):
-            T = (t[j + 1] if j + 1 < m else t[0] + TWO_PI * problem.n) - t[j]
-            st, cl, ce = _admissibility(model, load, float(t[j]), info["y_plus"][j], float(v_imp[j]),
-                                        horizon=float(T))
+            T = arrivals[j] - t[j] - Tw
+            y0 = info["y_plus"][j]
+            at_rest = None
+            if Tw > 0.0:  # the wave law: the end leaves the rod end when the window closes
+                v_dep = float(c @ y0[M:])
+                at_rest = abs(v_dep) <= 1e-12 * max(abs(float(v_imp[j - 1])), load.sup_abs, 1e-300)
+            st, cl, ce = _admissibility(model, load, float(t[j] + Tw), y0, float(v_imp[j]),
+                                        horizon=float(T), at_rest=at_rest)
+            if Tw > 0.0 and st == "admissible":
+                if contacts is not None and contacts[j].separations:
+                    st = "separates"
+                elif not at_rest and v_dep > 0.0:
+                    st = "sticks"
             statuses.append(st)
             if cl > clear:
                 clear, cerr = cl, ce
@@ -411,7 +489,17 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactO
         clearance_error=float(cerr), multipliers=mu,
         stable=bool(admissible and np.all(np.abs(mu) < 1.0 - MARGINAL)),
         states_after_impact=info["y_plus"], states_before_impact=np.roll(info["y_minus"], 1, axis=0),
+        contacts=contacts,
     )
+
+
+def _wave_contact(model, load, t0, y_minus) -> WaveImpact:
+    """The contact by characteristics (theory §4b) of an arrival in state ``y_minus`` at ``t0``."""
+    M = model.n_modes + 1
+    c = model.end_weights
+    qm = y_minus[:M].copy()
+    qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
+    return wave_impact(model, load, t0, qm, y_minus[M:])
 
 
 def _normalise(problem: _Segments, u):
@@ -423,6 +511,8 @@ def _normalise(problem: _Segments, u):
         return None
     if not t[-1] - t[0] < TWO_PI * problem.n:
         return None
+    if problem.T > 0.0 and not np.all(np.diff(np.append(t, t[0] + TWO_PI * problem.n)) > problem.T):
+        return None  # a flight shorter than the contact window
     return z.ravel()
 
 
@@ -515,6 +605,8 @@ def _guesses(problem: _Segments, guess):
         orbits.sort(key=lambda o: (not o.stable, not o.admissible, o.max_abs_multiplier))
         return [_unknowns_from(problem, *_repeat(np.array([o.phase]), o.state_after_impact[None, :],
                                                  1, n)) for o in orbits], None
+    if hasattr(guess, "orbit") and hasattr(guess, "kind") and hasattr(guess, "multiplier"):
+        guess = guess.orbit  # a BranchEvent: its orbit (a period doubling's starts the doubled one)
     if isinstance(guess, PeriodicOrbit | MultiImpactOrbit):
         times, states, m0, n0 = _as_segments(guess)
         if m % m0 or n % n0 or m // m0 != n // n0:
@@ -537,7 +629,7 @@ def _guesses(problem: _Segments, guess):
             raise ValueError(f"guess: the last {m} impact intervals of the Trajectory span "
                              f"{span:.6g}, far from 2 pi periods = {TWO_PI * n:.6g}")
         times = ti[-1 - m:-1]
-        q, v = guess.modal_state(times)
+        q, v = guess.modal_state(times + problem.T)  # where each flight starts
         states = np.vstack((q, v)).T
         if states.shape[1] != 2 * problem.M:
             raise ValueError("guess: the Trajectory's model has another number of modes")
@@ -555,14 +647,16 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
 
     Each flight is the closed-form motion of the modal oscillators (eq. 8); the unknowns are the
     impact times and the states just after them, the conditions are contact at each impact and the
-    impact law (eq. 10) between consecutive flights, closing after ``2 pi periods``. The Jacobian is
-    exact (fundamental matrix, vector field at both ends of each flight); the multipliers are the
-    eigenvalues of the product of the ``impacts`` impact-map Jacobians with their saltation terms.
+    impact law (eq. 10, or the wave law of theory §4b) between consecutive flights, closing after
+    ``2 pi periods``. The Jacobian is exact (fundamental matrix, vector field at both ends of each
+    flight, the wave law's drive rate); the multipliers are the eigenvalues of the product of the
+    ``impacts`` impact-map Jacobians with their saltation terms.
 
     Parameters
     ----------
     model : BarModel
-        Its impact law must be the paper's (eq. 10).
+        Either impact law: the paper's (eq. 10) or the wave law (``impact="wave"``, theory §4b),
+        where each impact lasts ``2/s`` and the flights start at the windows' ends.
     load : Load
         Any load of period ``2 pi``.
     impacts : int
@@ -574,6 +668,8 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
 
         - ``None``: the one-impact orbits of :func:`periodic_orbits`, repeated (``impacts ==
           periods`` only), stable ones first;
+        - a :class:`~impactbar.continuation.BranchEvent`: its orbit (a period-doubling event
+          starts the doubled orbit, as below);
         - a :class:`PeriodicOrbit` or :class:`MultiImpactOrbit` with ``m0`` impacts in ``n0``
           periods, repeated ``j`` times for ``impacts = j m0``, ``periods = j n0``; for ``j = 2``
           and a guess with a real multiplier below ``-1/2`` the copies are pushed apart along its
@@ -581,7 +677,8 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
           (a ``ValueError`` if Newton only finds the guess again);
         - a :class:`Trajectory`: its last ``impacts`` impacts (they must span about
           ``2 pi periods``);
-        - a tuple ``(impact_times, states_after_impact)`` of shapes ``(m,)`` and ``(m, 2 N + 2)``.
+        - a tuple ``(impact_times, states_after_impact)`` of shapes ``(m,)`` and ``(m, 2 N + 2)``
+          (under the wave law, the states at the windows' ends).
     tol : float
         Relative tolerance of the Newton step.
     max_iter : int
@@ -594,8 +691,9 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     Raises
     ------
     ValueError
-        For bad arguments (named), another impact law, or when Newton does not converge from any
-        start derived from ``guess`` (or only back onto the undoubled orbit).
+        For bad arguments (named), an unknown impact law, wave-law windows that do not fit
+        (``impacts * 2/s >= 2 pi periods``), or when Newton does not converge from any start
+        derived from ``guess`` (or only back onto the undoubled orbit).
 
     Examples
     --------
@@ -610,6 +708,9 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
     max_iter = check_int("max_iter", max_iter, lo=1)
     impact_law(model, load, 0.0, np.zeros(2 * model.n_modes + 2))  # the law is supported
+    if not m * contact_window(model) < TWO_PI * n:
+        raise ValueError(f"impacts={m} contact windows of 2/s = {contact_window(model):.6g} do not fit "
+                         f"in periods={n} load periods (wave law: s must exceed m/(pi n))")
     problem = _Segments(model, load, m, n)
     starts, avoid = _guesses(problem, guess)
     with single_threaded_blas():
