@@ -305,3 +305,45 @@ def test_against_elwaspatid(rng):
     np.testing.assert_allclose(F[1:], imp.force(np.minimum(wp.time[1:], 2.0)), rtol=0, atol=1e-12)
     vel, _ = imp.fields(x)
     np.testing.assert_allclose(piston.Veloc[2 * J, 1:-1], vel[1:-1], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("load", [SquareWaveLoad(0.2, 1.3), CosineLoad(0.1, 2.0, 2)],
+                         ids=["square", "cosine"])
+def test_scalar_root_search_matches_the_array_forms(load):
+    """The contact solver's scalar evaluations in its root searches (``A1``, ``Acum1``) against its
+    array forms, on random states that separate and re-contact: same contact intervals and
+    post-window states to 1e-12, on the search points and at random points."""
+    from impactbar.dynamics.impact import _Contact
+
+    rng = np.random.default_rng(7)
+    separated = 0
+    for _ in range(40):
+        N = int(rng.integers(0, 10))
+        s, R = float(rng.uniform(2.0, 60.0)), float(rng.uniform(0.0, 0.9))
+        q = rng.normal(size=N + 1) * rng.uniform(0.0, 1.0) / (1.0 + np.arange(N + 1)) ** 2 / s
+        v = rng.normal(size=N + 1) * 0.3 / (1.0 + np.arange(N + 1))
+        c = BarModel(s=s, d=0.0, R=R, n_modes=N).end_weights
+        q[0] -= c @ q
+        if c @ v < 0.0:
+            v[0] -= 2.0 * (c @ v)
+        t0 = float(rng.uniform(0.0, 2.0 * math.pi))
+        out = []
+        for fast in (True, False):
+            sol = _Contact(s, R, q, v, load, t0, fast=fast).solve()
+            qa, va = sol.post_state(q, v, window_drive(s, R, N, load, t0))
+            out.append((sol, qa, va))
+        (f, qf, vf), (g, qg, vg) = out
+        assert f.contact.shape == g.contact.shape
+        np.testing.assert_allclose(f.contact, g.contact, rtol=0, atol=1e-12)
+        assert f.gap_theta == pytest.approx(g.gap_theta, abs=1e-12)
+        scale = 1.0 + np.max(np.abs(np.concatenate((qg, vg))))
+        np.testing.assert_allclose(np.concatenate((qf, vf)), np.concatenate((qg, vg)), rtol=0,
+                                   atol=1e-12 * scale)
+        separated += len(f.contact) != 1 or f.contact[0, 1] < 2.0
+        th = np.concatenate((rng.uniform(0.0, 2.0, 8), [0.0, 1.0, 2.0], 1.0 + f.p.jumps[f.p.jumps < 1.0]))
+        for x in th:
+            for left in (False, True):
+                assert f.A1(x, left) == pytest.approx(float(g.A(np.array([x]), left=left)[0]),
+                                                      rel=1e-12, abs=1e-12 * f.scale)
+            assert f.Acum1(x) == pytest.approx(float(g.Acum(x)[0]), rel=1e-12, abs=1e-12 * f.scale)
+    assert separated >= 10  # the searches were exercised

@@ -187,3 +187,34 @@ def test_paper_law_charts_refuse_the_wave_law():
         max_phase_residual(wave, SquareWaveLoad(1.0, 1.3))
     paper = BarModel(s=50.0, d=0.0, R=0.5, n_modes=0)
     assert hydraulic_existence_edge(paper) == pytest.approx((1.0 + math.sqrt(2.5)) / 1.5, abs=1e-9)
+
+
+def test_phase_scan_reuses_its_samples_and_the_cached_flight_matrix():
+    """The square wave's refined phase grid: the residual values it returns are those of
+    ``wave_phase_residual`` at every returned phase (each phase evaluated once), the grid is the
+    equispaced one plus 31 points around each sampled minimum of ``|r|``, and the cached flight
+    matrix is the fundamental matrix over ``2 pi - 2/s``."""
+    from impactbar.dynamics.modal import fundamental
+    from impactbar.orbits.wave import _flight_fundamental, _refined_grid, wave_phase_residual
+
+    model = wave(BarModel(s=12.0, d=0.01, R=0.3, n_modes=5))
+    load = SquareWaveLoad(0.08, 1.2)
+    calls = []
+
+    def resid(p):
+        calls.append(np.size(p))
+        return wave_phase_residual(model, load, p)
+
+    grid, r = _refined_grid(resid, 129)
+    np.testing.assert_array_equal(r, wave_phase_residual(model, load, grid))
+    assert sum(calls) == grid.size  # no phase evaluated twice
+    base = np.linspace(0.0, TWO_PI, 129)
+    rb = np.abs(wave_phase_residual(model, load, base))
+    minima = [i for i in range(1, 128) if rb[i] <= rb[i - 1] and rb[i] <= rb[i + 1]]
+    assert minima
+    expected = np.unique(np.concatenate([base] + [np.linspace(base[i - 1], base[i + 1], 33)[1:-1]
+                                                  for i in minima]))
+    np.testing.assert_array_equal(grid, expected)
+    for a, b in zip(_flight_fundamental(model), fundamental(model.frequencies**2, model.d,
+                                                             TWO_PI - 2.0 / model.s), strict=True):
+        np.testing.assert_array_equal(a, b)

@@ -23,6 +23,7 @@ tensile (``alpha < 0``) and resumes when the gap closes.
 
 from __future__ import annotations
 
+import bisect
 import math
 from functools import cached_property
 
@@ -80,6 +81,34 @@ class _WindowLoad:
             t = np.clip(t, lo + pad, hi - pad)
         return np.asarray(self.load(t), dtype=float)
 
+    def value(self, theta: float, left: bool = False) -> float:
+        """``P(theta)`` for one ``theta`` (as ``__call__``, without array overhead: the root
+        searches of the contact call it once per iteration)."""
+        if self._pieces is not None:  # constant between the jumps located at set-up
+            j = bisect.bisect_left(self.jumps, theta) if left else bisect.bisect_right(self.jumps, theta)
+            return float(self._pieces[0][j])
+        return float(self(theta, left=left))
+
+    @cached_property
+    def _pieces(self):
+        """``(levels, cum, edges)`` of a piecewise-constant load over the window (None otherwise)."""
+        if not hasattr(self.load, "levels") or getattr(self.load, "orders", None) is not None:
+            return None
+        edges = self.t_edges - self.t0
+        levels = self(self.s * 0.5 * (edges[:-1] + edges[1:]))
+        cum = np.concatenate(([0.0], np.cumsum(levels * np.diff(edges))))
+        return levels, cum, edges
+
+    def integral1(self, theta: float) -> float:
+        """``int_0^theta p dtheta'`` for one ``theta`` (as :meth:`integral`)."""
+        pieces = self._pieces
+        if pieces is None:
+            return float(self.integral(theta)[0])
+        levels, cum, edges = pieces
+        tau = theta / self.s
+        j = min(max(bisect.bisect_right(edges, tau) - 1, 0), levels.size - 1)
+        return self.s * float(cum[j] + levels[j] * (tau - edges[j]))
+
     def integral(self, theta) -> np.ndarray:
         """``int_0^theta p dtheta'``, exact: in closed form for a load of finitely many harmonics,
         piece by piece for a piecewise-constant one, else the load's own rigid-mode integral."""
@@ -92,9 +121,7 @@ class _WindowLoad:
             osc = (np.expm1(1j * np.multiply.outer(tau, k)) @ ck).real
             return self.s * (self.load.p0 * tau + osc)
         if hasattr(self.load, "levels"):  # constant between the jumps located at set-up
-            edges = self.t_edges - self.t0
-            levels = self(self.s * 0.5 * (edges[:-1] + edges[1:]))
-            cum = np.concatenate(([0.0], np.cumsum(levels * np.diff(edges))))
+            levels, cum, edges = self._pieces
             j = np.clip(np.searchsorted(edges, tau, side="right") - 1, 0, levels.size - 1)
             return self.s * (cum[j] + levels[j] * (tau - edges[j]))
         _, v = self.load.propagate(np.zeros(1), 0.0, self.t0, np.zeros(1), np.zeros(1), self.t0 + tau)
@@ -125,6 +152,23 @@ class _Piston:
     def beta(self, x):
         C, S = self._cs(x)
         return C @ self.a + S @ self.b
+
+    def alpha1(self, x: float) -> float:
+        """``alpha0(x)`` for one ``x``."""
+        arg = self.npi * x
+        return float(np.cos(arg) @ self.a) - float(np.sin(arg) @ self.b)
+
+    def beta1(self, x: float) -> float:
+        """``beta0(x)`` for one ``x``."""
+        arg = self.npi * x
+        return float(np.cos(arg) @ self.a) + float(np.sin(arg) @ self.b)
+
+    def int1(self, x: float, sign: float) -> float:
+        """``int_0^x alpha0`` (``sign = 1``) or ``int_0^x beta0`` (``sign = -1``) for one ``x``."""
+        arg = self.npi[1:] * x
+        k = self.npi[1:]
+        out = self.a[0] * x + float(np.sin(arg) @ (self.a[1:] / k))
+        return out + sign * float((np.cos(arg) - 1.0) @ (self.b[1:] / k))
 
     def _int(self, x, sign):
         x = np.asarray(x, dtype=float)
@@ -440,8 +484,9 @@ def modal_energy(s: float, q, v) -> float:
 class _Contact:
     """The characteristics solution over the window, in ``theta = s t`` (``0..2``)."""
 
-    def __init__(self, s, R, q, v, load, t0):
+    def __init__(self, s, R, q, v, load, t0, fast=True):
         self.s, self.R = s, R
+        self.fast = fast  # scalar root-search evaluations (False: through the array forms)
         self.N = q.size - 1
         self.piston = _Piston(s, q, v)
         self.p = _WindowLoad(load, s, t0)
@@ -472,6 +517,24 @@ class _Contact:
         if u.size:
             out[~first] = self._acum1 + self.piston.int_beta(u) + 2.0 * self.p.integral(u) / self.s
         return out
+
+    def A1(self, th: float, left: bool = False) -> float:
+        """:meth:`A` at one ``theta`` (the root searches' scalar form; the same sums)."""
+        if not self.fast:
+            return float(self.A(np.array([th]), left=left)[0])
+        if th < 1.0 or (left and th == 1.0):
+            return self.piston.alpha1(1.0 - th)
+        u = th - 1.0
+        return self.piston.beta1(u) + 2.0 * self.p.value(u, left=left) / self.s
+
+    def Acum1(self, th: float) -> float:
+        """:meth:`Acum` at one ``theta``."""
+        if not self.fast:
+            return float(self.Acum(th)[0])
+        if th <= 1.0:
+            return self._acum1 - self.piston.int1(1.0 - th, 1.0)
+        u = th - 1.0
+        return self._acum1 + self.piston.int1(u, -1.0) + 2.0 * self.p.integral1(u) / self.s
 
     # -- contact and separation --------------------------------------------------------------------
     def solve(self):
@@ -509,15 +572,15 @@ class _Contact:
                     th_sep = grid[k]
                 else:
                     a = max(th, grid[k - 1])
-                    th_sep = brentq(lambda x: float(self.A(np.array([x]), left=True)[0]), a, grid[k],
-                                    xtol=1e-15, rtol=1e-15) if self.A(np.array([a]))[0] > 0 else a
+                    th_sep = brentq(lambda x: self.A1(x, left=True), a, grid[k],
+                                    xtol=1e-15, rtol=1e-15) if self.A1(a) > 0 else a
                 contact.append((start, th_sep))
                 th, on = th_sep, False
             else:
-                base = float(self.Acum(th)[0])
+                base = self.Acum1(th)
 
                 def G(x, base=base):
-                    return base - float(self.Acum(x)[0])
+                    return base - self.Acum1(x)
 
                 nodes = grid[k0:]
                 Gn = base - self.Acum(nodes)

@@ -28,6 +28,7 @@ laws give the same rigid orbits.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -50,6 +51,19 @@ TWO_PI = 2.0 * math.pi
 def _window(model: BarModel) -> tuple[float, float]:
     T = 2.0 / model.s
     return T, TWO_PI - T
+
+
+@functools.lru_cache(maxsize=64)
+def _flight_fundamental(model: BarModel) -> tuple[np.ndarray, ...]:
+    """Fundamental matrix over the flight ``2 pi - 2/s`` of every mode (eq. 8), computed once per
+    model (a model is immutable) and read-only: the phase scan evaluates the residual hundreds of
+    times."""
+    out = []
+    for a in fundamental(model.frequencies**2, model.d, _window(model)[1]):
+        a = np.array(a, dtype=float)
+        a.flags.writeable = False
+        out.append(a)
+    return tuple(out)
 
 
 def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
@@ -93,15 +107,14 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool 
     drive_rate : tuple of numpy.ndarray
         ``d(g, h)/d phase`` (for the impact map's Jacobian); ``(None, None)`` with ``rates=False``.
     """
-    s, d, R, N = model.s, model.d, model.R, model.n_modes
+    s, R, N = model.s, model.R, model.n_modes
     T, F = _window(model)
-    w2 = model.frequencies**2
     fq, fv = _forced_flight(model, load, phase + T, phase + TWO_PI)
     if rates:
         g, h, dg, dh = window_drive(s, R, N, load, phase, derivative=True)
     else:
         (g, h), dg, dh = window_drive(s, R, N, load, phase), None, None
-    p11, p12, p21, p22 = fundamental(w2, d, F)
+    p11, p12, p21, p22 = _flight_fundamental(model)
     # y- = Phi (J y- + (g, h)) + f,  J = -R I
     a11, a12, a21, a22 = 1.0 + R * p11, R * p12, R * p21, 1.0 + R * p22
     det = a11 * a22 - a12 * a21
@@ -137,6 +150,14 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     finer, and every sign change is refined by Brent's method; a double root without a sign change
     (a fold) is then not reported. (Not a certified search, unlike eq. 14's.)
 
+    Warnings
+    --------
+    For loads other than finite Fourier sums the search is **not certified**: two roots closer than
+    about ``2 pi / (128 * 16)`` away from a sampled minimum of ``|r|``, or a double root (a fold of
+    the orbit branch, where ``r`` touches zero without changing sign), may be missed; an even
+    number of roots inside one sampling interval is invisible. Near a fold, check the orbit count
+    by continuation or a finer scan of :func:`wave_phase_residual`.
+
     Returns
     -------
     list of (float, int)
@@ -167,12 +188,12 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
             return c0 + 2.0 * (np.exp(1j * np.multiply.outer(p, ks)) @ coef[1:K + 1]).real
 
         grid = np.linspace(0.0, TWO_PI, 64 * K + 1)
+        r = resid(grid)
     else:
         def resid(p):
             return wave_phase_residual(model, load, p)
 
-        grid = _refined_grid(resid, 129)
-    r = resid(grid)
+        grid, r = _refined_grid(resid, 129)
     roots = []
     for i in range(grid.size - 1):
         if r[i] == 0.0:
@@ -213,16 +234,24 @@ def wave_existence_edge(model: BarModel, k: int = 1) -> float:
     return math.inf if a == 0.0 else k * b / a
 
 
-def _refined_grid(resid, n: int) -> np.ndarray:
+def _refined_grid(resid, n: int) -> tuple[np.ndarray, np.ndarray]:
     """``n`` equispaced phases, each interval around a sampled local minimum of ``|r|`` without a
-    sign change split 16-fold (where two roots close to a fold may hide between samples)."""
+    sign change split 16-fold (where two roots close to a fold may hide between samples). Returns
+    the phases and the residual there (each phase evaluated once)."""
     grid = np.linspace(0.0, TWO_PI, n)
-    r = np.abs(resid(grid))
+    r0 = resid(grid)
+    r = np.abs(r0)
     extra = []
     for i in range(1, n - 1):
         if r[i] <= r[i - 1] and r[i] <= r[i + 1]:
             extra.append(np.linspace(grid[i - 1], grid[i + 1], 33)[1:-1])
-    return np.unique(np.concatenate([grid, *extra]))
+    full = np.unique(np.concatenate([grid, *extra]))
+    known = np.isin(full, grid)
+    out = np.empty(full.size)
+    out[known] = r0[np.searchsorted(grid, full[known])]
+    if not np.all(known):
+        out[~known] = resid(full[~known])
+    return full, out
 
 
 def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y_minus,
