@@ -1,5 +1,5 @@
-"""The compiled evaluation of a Fourier load's modal flow (``FourierLoad.flow``, used by the
-certified admissibility search) against the numpy path it replaces."""
+"""The compiled evaluation of the modal flow (``FourierLoad.flow``, ``PiecewiseConstantLoad.flow``,
+used by the certified admissibility search) against the numpy path it replaces."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import impactbar.loads as loads
-from impactbar import BarModel, CosineLoad, FourierLoad
+from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad
 from impactbar.orbits.one_impact import _periodic_orbits_general
 
 
@@ -44,6 +44,27 @@ def test_compiled_flow_equals_numpy_flow(monkeypatch):
             assert np.max(np.abs(vf - vr)) < 1e-12 * scale
 
 
+def test_compiled_piecewise_flow_equals_numpy_flow(monkeypatch):
+    """Square waves on random models, times on both sides of the jumps and before the start."""
+    rng = np.random.default_rng(12)
+    for _ in range(40):
+        n = int(rng.integers(0, 30))
+        d = 0.0 if rng.random() < 0.3 else float(rng.uniform(0.0, 0.6))
+        model = BarModel(float(rng.uniform(0.3, 8.0)), d, 0.5, n)
+        load = SquareWaveLoad(float(rng.uniform(0.2, 2.0)), float(rng.uniform(1.0, 2.0)))
+        w2 = model.frequencies**2
+        q0, v0 = rng.normal(size=n + 1), rng.normal(size=n + 1)
+        t0 = float(rng.uniform(0.0, 2.0 * math.pi))
+        times = np.concatenate((rng.uniform(t0 - 0.5, t0 + 2.0 * math.pi, size=int(rng.integers(1, 70))),
+                                [t0, t0 + 2.0 * math.pi]))
+        for t in (float(rng.uniform(t0, t0 + 6.0)), times):
+            (qf, vf), (qr, vr) = _both_flows(monkeypatch, load, w2, d, t0, q0, v0, t)
+            assert qf.shape == qr.shape == (n + 1, np.size(t))
+            scale = 1.0 + np.max(np.abs(qr)) + np.max(np.abs(vr))
+            assert np.max(np.abs(qf - qr)) < 1e-12 * scale
+            assert np.max(np.abs(vf - vr)) < 1e-12 * scale
+
+
 def test_overdamped_modes_keep_the_numpy_flow(monkeypatch):
     """A model with an overdamped flexible mode is not folded: the numpy path evaluates it."""
     model, load = BarModel(0.2, 1.5, 0.5, 3), CosineLoad(0.4, 1.0)
@@ -52,17 +73,25 @@ def test_overdamped_modes_keep_the_numpy_flow(monkeypatch):
     (qf, vf), (qr, vr) = _both_flows(monkeypatch, load, w2, model.d, 0.3, np.ones(4), -np.ones(4),
                                      np.linspace(0.3, 6.0, 9))
     assert np.array_equal(qf, qr) and np.array_equal(vf, vr)
+    load = SquareWaveLoad(0.5, 1.3)
+    (qf, vf), (qr, vr) = _both_flows(monkeypatch, load, w2, model.d, 0.3, np.ones(4), -np.ones(4),
+                                     np.linspace(0.3, 6.0, 9))
+    assert np.array_equal(qf, qr) and np.array_equal(vf, vr)
 
 
-@pytest.mark.parametrize("n_modes", [1, 4, 8, 20])
-def test_periodic_orbits_with_compiled_flow_equal_numpy_path(monkeypatch, n_modes):
+@pytest.mark.parametrize("n_modes, square", [(1, False), (4, False), (8, False), (20, False),
+                                             (2, True), (8, True), (16, True)])
+def test_periodic_orbits_with_compiled_flow_equal_numpy_path(monkeypatch, n_modes, square):
     """Same orbits, admissibility verdicts, clearances and multipliers to 1e-10 with either flow."""
     rng = np.random.default_rng(100 + n_modes)
     seen = set()
     for _ in range(6):
         model = BarModel(float(rng.uniform(1.0, 6.0)), float(rng.uniform(0.0, 0.2)),
                          float(rng.uniform(0.0, 0.9)), n_modes)
-        load = CosineLoad(float(rng.uniform(0.2, 0.7)), float(rng.uniform(0.5, 1.5)))
+        if square:
+            load = SquareWaveLoad(float(rng.uniform(0.3, 1.5)), float(rng.uniform(1.0, 1.9)))
+        else:
+            load = CosineLoad(float(rng.uniform(0.2, 0.7)), float(rng.uniform(0.5, 1.5)))
         fast = _periodic_orbits_general(model, load)
         monkeypatch.setattr(loads, "_COMPILED_FLOW", False)
         ref = _periodic_orbits_general(model, load)

@@ -19,7 +19,8 @@ __all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "Square
 
 TWO_PI = 2.0 * math.pi
 
-#: evaluate :meth:`FourierLoad.flow` with the compiled kernel (``False``: the numpy reference path)
+#: evaluate the flows of :meth:`FourierLoad.flow` and :meth:`PiecewiseConstantLoad.flow` with the
+#: compiled kernels (``False``: the numpy reference path)
 _COMPILED_FLOW = True
 
 
@@ -533,11 +534,17 @@ class PiecewiseConstantLoad(Load):
             qn[:, j], vn[:, j] = step_constant(w2, d, levels[j - 1], qn[:, j - 1], vn[:, j - 1],
                                                nodes[j] - nodes[j - 1])
 
+        compiled = _COMPILED_FLOW and bool(np.all((w2 == 0.0) | (w2 - 0.25 * d * d > 0.0)))
+        if compiled:  # flexible modes underdamped (the rule): the compiled step
+            from .dynamics._flowkernel import piecewise_flow
+
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
             if t.size and float(np.max(t)) > t_end:
                 return self.propagate(w2, d, t0, q0, v0, t)
             j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, nodes.size - 2)
+            if compiled and t.ndim == 1:
+                return piecewise_flow(w2, float(d), levels[j], j, np.maximum(t - nodes[j], 0.0), qn, vn)
             return step_constant(w2, d, levels[j], qn[:, j], vn[:, j], np.maximum(t - nodes[j], 0.0))
 
         return evaluate

@@ -61,3 +61,39 @@ def fourier_flow(t, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq,
             q[n, j] = qs
             v[n, j] = vs
     return q, v
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def piecewise_flow(w2, d, level, piece, tau, qn, vn):
+    """States ``(q, v)`` of shape ``(M, T)`` under a piecewise-constant load: column ``j`` is the
+    exact step of length ``tau[j]`` under the constant ``level[j]`` from the state
+    ``(qn[:, piece[j]], vn[:, piece[j]])`` at the start of its piece (theory §3, eq. 34); flexible
+    modes underdamped."""
+    M = w2.size
+    T = tau.size
+    q = np.empty((M, T))
+    v = np.empty((M, T))
+    for j in range(T):
+        tj = tau[j]
+        pj = piece[j]
+        lv = level[j]
+        e = math.exp(-0.5 * d * tj) if d != 0.0 else 1.0
+        b, c = _bc(d, tj)
+        ed = math.exp(-d * tj)
+        for n in range(M):
+            q0 = qn[n, pj]
+            v0 = vn[n, pj]
+            if w2[n] == 0.0:
+                q[n, j] = q0 + b * v0 + lv * c
+                v[n, j] = ed * v0 + lv * b
+            else:
+                lam = math.sqrt(w2[n] - 0.25 * d * d)
+                x = lam * tj
+                eC = e * math.cos(x)
+                p12 = e * math.sin(x) / lam
+                hd = 0.5 * d * p12
+                qs = lv / w2[n]
+                dq = q0 - qs
+                q[n, j] = (eC + hd) * dq + p12 * v0 + qs
+                v[n, j] = -w2[n] * p12 * dq + (eC - hd) * v0
+    return q, v
