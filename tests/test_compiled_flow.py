@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import impactbar.loads as loads
+import impactbar.orbits.admissibility as admissibility
 from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad
 from impactbar.orbits.one_impact import _periodic_orbits_general
 
@@ -82,7 +83,8 @@ def test_overdamped_modes_keep_the_numpy_flow(monkeypatch):
 @pytest.mark.parametrize("n_modes, square", [(1, False), (4, False), (8, False), (20, False),
                                              (2, True), (8, True), (16, True)])
 def test_periodic_orbits_with_compiled_flow_equal_numpy_path(monkeypatch, n_modes, square):
-    """Same orbits, admissibility verdicts, clearances and multipliers to 1e-10 with either flow."""
+    """Same orbits, admissibility verdicts, clearances and multipliers to 1e-10 with the compiled flow
+    and bounds of the certified search as with the numpy path."""
     rng = np.random.default_rng(100 + n_modes)
     seen = set()
     for _ in range(6):
@@ -94,8 +96,10 @@ def test_periodic_orbits_with_compiled_flow_equal_numpy_path(monkeypatch, n_mode
             load = CosineLoad(float(rng.uniform(0.2, 0.7)), float(rng.uniform(0.5, 1.5)))
         fast = _periodic_orbits_general(model, load)
         monkeypatch.setattr(loads, "_COMPILED_FLOW", False)
+        monkeypatch.setattr(admissibility, "_COMPILED_BOUND", False)
         ref = _periodic_orbits_general(model, load)
         monkeypatch.setattr(loads, "_COMPILED_FLOW", True)
+        monkeypatch.setattr(admissibility, "_COMPILED_BOUND", True)
         assert len(fast) == len(ref)
         seen.update(g.admissibility for g in ref)
         for o, g in zip(fast, ref, strict=True):
@@ -106,6 +110,7 @@ def test_periodic_orbits_with_compiled_flow_equal_numpy_path(monkeypatch, n_mode
                 assert o.clearance == pytest.approx(g.clearance, rel=1e-10, abs=1e-12)
             else:
                 assert o.clearance == g.clearance
+            assert o.clearance_error == pytest.approx(g.clearance_error, rel=1e-8, abs=1e-12)
             assert np.allclose(np.sort_complex(o.multipliers), np.sort_complex(g.multipliers),
                                rtol=1e-10, atol=1e-10)
             assert np.allclose(o.state_after_impact, g.state_after_impact, rtol=1e-10, atol=1e-12)

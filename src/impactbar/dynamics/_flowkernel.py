@@ -5,8 +5,9 @@ of a few dozen small numpy operations per call.
 It evaluates the same closed form as the numpy path, term by term: the periodic particular solution
 ``Re sum_k H_nk p_k e^{i k t}`` plus the static deflection, the free part of each underdamped
 flexible mode folded into ``e^{-d tau/2} (a cos(lam tau) + b sin(lam tau))``, and for the rigid mode
-``dq + b(tau) dv + p0 c(tau)``, ``e^{-d tau} dv + p0 b(tau)``. Results agree with the numpy path to
-rounding.
+``dq + b(tau) dv + p0 c(tau)``, ``e^{-d tau} dv + p0 b(tau)``. The same for a
+piecewise-constant load (``piecewise_flow``), and the certified search's bound of the end's
+acceleration (``end_velocity_bound``). Results agree with the numpy paths to rounding.
 """
 
 from __future__ import annotations
@@ -97,3 +98,33 @@ def piecewise_flow(w2, d, level, piece, tau, qn, vn):
                 q[n, j] = (eC + hd) * dq + p12 * v0 + qs
                 v[n, j] = -w2[n] * p12 * dq + (eC - hd) * v0
     return q, v
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def end_velocity_bound(c, absc, w2, d, psup, q, v, center, delta, half):
+    """``g' = c . q'`` at the midpoints and the bound ``sum_n |c_n| B_n >= |g''|`` on the intervals
+    ``[mid - half, mid + half]`` of the admissibility search (theory §5), from each mode's energy
+    about the static deflection under the local load ``center`` (``|p - center| <= delta``);
+    ``q, v`` of shape ``(M, T)`` at the midpoints."""
+    M, T = q.shape
+    g1 = np.empty(T)
+    L = np.empty(T)
+    for j in range(T):
+        h = half[j]
+        grow = math.exp(d * h)
+        gs = 0.0
+        ls = 0.0
+        for n in range(M):
+            vn = v[n, j]
+            gs += c[n] * vn
+            if w2[n] > 0.0:
+                wc = math.sqrt(w2[n])
+                r = wc * q[n, j] - center[j] / wc
+                Eb = (math.sqrt(vn * vn + r * r) + delta[j] * h) * grow
+                b = delta[j] + (d + wc) * Eb
+            else:
+                b = psup + d * ((abs(vn) + psup * h) * grow)
+            ls += absc[n] * b
+        g1[j] = gs
+        L[j] = ls
+    return g1, L
