@@ -53,9 +53,8 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
             from ..dynamics._flowkernel import end_velocity_bound
 
             T = q.shape[1]
-            return end_velocity_bound(c, absc, w2, float(d), float(psup), q, v, *(
-                np.ascontiguousarray(np.broadcast_to(np.asarray(x, dtype=float), (T,)))
-                for x in (center, delta, half)))
+            return end_velocity_bound(c, absc, w2, float(d), float(psup), q, v,
+                                      *(_column(x, T) for x in (center, delta, half)))
         grow = np.exp(d * np.asarray(half))
         bound = np.empty_like(q)
         flex = w2 > 0
@@ -96,6 +95,14 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     else:
         status = "admissible"
     return status, clearance, err
+
+
+def _column(x, T):
+    """``x`` as a contiguous float array of shape ``(T,)`` (broadcast only where it must be)."""
+    x = np.asarray(x, dtype=float)
+    if x.shape == (T,) and x.flags.c_contiguous:
+        return x
+    return np.ascontiguousarray(np.broadcast_to(x, (T,)))
 
 
 def _newton_stationary(states, load, phase, c, w2, d, lo, hi):
