@@ -19,6 +19,10 @@ __all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "Square
 
 TWO_PI = 2.0 * math.pi
 
+#: evaluate the flows of :meth:`FourierLoad.flow` and :meth:`PiecewiseConstantLoad.flow` with the
+#: compiled kernels (``False``: the numpy reference path)
+_COMPILED_FLOW = True
+
 
 class Load(ABC):
     """A periodic load of period ``2 pi`` (eq. 7). Subclasses give the exact modal response.
@@ -274,6 +278,9 @@ class FourierLoad(Load):
             cv, sv = dvf, -(w2f * dqf + 0.5 * d * dvf) / lam
             if rows[-1] - rows[0] + 1 == rows.size:  # contiguous rows: update in place
                 rows = slice(int(rows[0]), int(rows[-1]) + 1)
+        if _COMPILED_FLOW and (folded or rows.size == 0):
+            return self._compiled_flow(w2, d, t0, hp, hv, static, rigid, lam if folded else None,
+                                       (cq, sq, cv, sv) if folded else None, dq, dv)
 
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -303,6 +310,33 @@ class FourierLoad(Load):
                 q[rigid] += dq[rigid] + b * dv[rigid] + self.p0 * c_integral(d, tau[0])
                 v[rigid] += np.exp(-d * tau[0]) * dv[rigid] + self.p0 * b
             return q, v
+
+        return evaluate
+
+    def _compiled_flow(self, w2, d, t0, hp, hv, static, rigid, lam, folded, dq, dv):
+        """:meth:`flow`'s evaluation compiled (:mod:`impactbar.dynamics._flowkernel`): the same
+        closed form, for underdamped flexible modes and the rigid mode."""
+        from .dynamics._flowkernel import fourier_flow
+
+        M = w2.size
+        kind = np.where(rigid, 2, 0).astype(np.int64)
+        zeros = np.zeros(M)
+        lamv, cq, sq, cv, sv = zeros, zeros, zeros, zeros, zeros
+        if folded is not None:
+            flex = ~rigid
+            kind[flex] = 1
+            lamv, cq, sq, cv, sv = (np.zeros(M) for _ in range(5))
+            lamv[flex] = lam[:, 0]
+            for dst, src in zip((cq, sq, cv, sv), folded, strict=True):
+                dst[flex] = src[:, 0]
+        args = (float(t0), float(d), float(self.p0), np.ascontiguousarray(self._k),
+                np.ascontiguousarray(hp.real), np.ascontiguousarray(hp.imag),
+                np.ascontiguousarray(hv.real), np.ascontiguousarray(hv.imag),
+                np.ascontiguousarray(static[:, 0]), kind, lamv, cq, sq, cv, sv,
+                np.ascontiguousarray(dq[:, 0]), np.ascontiguousarray(dv[:, 0]))
+
+        def evaluate(t):
+            return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), *args)
 
         return evaluate
 
@@ -500,11 +534,17 @@ class PiecewiseConstantLoad(Load):
             qn[:, j], vn[:, j] = step_constant(w2, d, levels[j - 1], qn[:, j - 1], vn[:, j - 1],
                                                nodes[j] - nodes[j - 1])
 
+        compiled = _COMPILED_FLOW and bool(np.all((w2 == 0.0) | (w2 - 0.25 * d * d > 0.0)))
+        if compiled:  # flexible modes underdamped (the rule): the compiled step
+            from .dynamics._flowkernel import piecewise_flow
+
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))
             if t.size and float(np.max(t)) > t_end:
                 return self.propagate(w2, d, t0, q0, v0, t)
             j = np.clip(np.searchsorted(nodes, t, side="right") - 1, 0, nodes.size - 2)
+            if compiled and t.ndim == 1:
+                return piecewise_flow(w2, float(d), levels[j], j, np.maximum(t - nodes[j], 0.0), qn, vn)
             return step_constant(w2, d, levels[j], qn[:, j], vn[:, j], np.maximum(t - nodes[j], 0.0))
 
         return evaluate

@@ -11,6 +11,9 @@ from ..dynamics.certified import enclose_zeros
 
 TWO_PI = 2.0 * math.pi
 
+#: the bounds of the certified search by the compiled kernel (``False``: the numpy reference path)
+_COMPILED_BOUND = True
+
 
 def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=None):
     """Decide admissibility (theory §5) with certified bounds, over the flight
@@ -46,6 +49,12 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     def gprime_and_bound(mid, half):
         q, v = states(mid)
         center, delta = load.variation(phase + mid, half)
+        if _COMPILED_BOUND and q.ndim == 2:
+            from ..dynamics._flowkernel import end_velocity_bound
+
+            T = q.shape[1]
+            return end_velocity_bound(c, absc, w2, float(d), float(psup), q, v,
+                                      *(_column(x, T) for x in (center, delta, half)))
         grow = np.exp(d * np.asarray(half))
         bound = np.empty_like(q)
         flex = w2 > 0
@@ -86,6 +95,14 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     else:
         status = "admissible"
     return status, clearance, err
+
+
+def _column(x, T):
+    """``x`` as a contiguous float array of shape ``(T,)`` (broadcast only where it must be)."""
+    x = np.asarray(x, dtype=float)
+    if x.shape == (T,) and x.flags.c_contiguous:
+        return x
+    return np.ascontiguousarray(np.broadcast_to(x, (T,)))
 
 
 def _newton_stationary(states, load, phase, c, w2, d, lo, hi):

@@ -1,0 +1,117 @@
+"""The compiled evaluation of the modal flow (``FourierLoad.flow``, ``PiecewiseConstantLoad.flow``,
+used by the certified admissibility search) against the numpy path it replaces."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import impactbar.loads as loads
+import impactbar.orbits.admissibility as admissibility
+from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad
+from impactbar.orbits.one_impact import _periodic_orbits_general
+
+
+def _both_flows(monkeypatch, load, w2, d, t0, q0, v0, t):
+    monkeypatch.setattr(loads, "_COMPILED_FLOW", True)
+    fast = load.flow(w2, d, t0, q0, v0)(t)
+    monkeypatch.setattr(loads, "_COMPILED_FLOW", False)
+    ref = load.flow(w2, d, t0, q0, v0)(t)
+    monkeypatch.setattr(loads, "_COMPILED_FLOW", True)
+    return fast, ref
+
+
+def test_compiled_flow_equals_numpy_flow(monkeypatch):
+    """Random models (rigid mode, d = 0, several harmonics, complex amplitudes), scalar and array
+    times: the same states to rounding."""
+    rng = np.random.default_rng(11)
+    for _ in range(40):
+        n = int(rng.integers(0, 25))
+        d = 0.0 if rng.random() < 0.3 else float(rng.uniform(0.0, 0.6))
+        model = BarModel(float(rng.uniform(0.3, 8.0)), d, 0.5, n)
+        K = int(rng.integers(1, 5))
+        load = FourierLoad(float(rng.uniform(-0.5, 1.0)), rng.normal(size=K) + 1j * rng.normal(size=K))
+        w2 = model.frequencies**2
+        q0, v0 = rng.normal(size=n + 1), rng.normal(size=n + 1)
+        t0 = float(rng.uniform(0.0, 2.0 * math.pi))
+        times = rng.uniform(t0 - 1.0, t0 + 7.0, size=int(rng.integers(1, 70)))
+        for t in (float(rng.uniform(t0, t0 + 7.0)), times):
+            (qf, vf), (qr, vr) = _both_flows(monkeypatch, load, w2, d, t0, q0, v0, t)
+            assert qf.shape == qr.shape == (n + 1, np.size(t))
+            scale = 1.0 + np.max(np.abs(qr)) + np.max(np.abs(vr))
+            assert np.max(np.abs(qf - qr)) < 1e-12 * scale
+            assert np.max(np.abs(vf - vr)) < 1e-12 * scale
+
+
+def test_compiled_piecewise_flow_equals_numpy_flow(monkeypatch):
+    """Square waves on random models, times on both sides of the jumps and before the start."""
+    rng = np.random.default_rng(12)
+    for _ in range(40):
+        n = int(rng.integers(0, 30))
+        d = 0.0 if rng.random() < 0.3 else float(rng.uniform(0.0, 0.6))
+        model = BarModel(float(rng.uniform(0.3, 8.0)), d, 0.5, n)
+        load = SquareWaveLoad(float(rng.uniform(0.2, 2.0)), float(rng.uniform(1.0, 2.0)))
+        w2 = model.frequencies**2
+        q0, v0 = rng.normal(size=n + 1), rng.normal(size=n + 1)
+        t0 = float(rng.uniform(0.0, 2.0 * math.pi))
+        times = np.concatenate((rng.uniform(t0 - 0.5, t0 + 2.0 * math.pi, size=int(rng.integers(1, 70))),
+                                [t0, t0 + 2.0 * math.pi]))
+        for t in (float(rng.uniform(t0, t0 + 6.0)), times):
+            (qf, vf), (qr, vr) = _both_flows(monkeypatch, load, w2, d, t0, q0, v0, t)
+            assert qf.shape == qr.shape == (n + 1, np.size(t))
+            scale = 1.0 + np.max(np.abs(qr)) + np.max(np.abs(vr))
+            assert np.max(np.abs(qf - qr)) < 1e-12 * scale
+            assert np.max(np.abs(vf - vr)) < 1e-12 * scale
+
+
+def test_overdamped_modes_keep_the_numpy_flow(monkeypatch):
+    """A model with an overdamped flexible mode is not folded: the numpy path evaluates it."""
+    model, load = BarModel(0.2, 1.5, 0.5, 3), CosineLoad(0.4, 1.0)
+    w2 = model.frequencies**2
+    assert np.any((w2 > 0) & (w2 < 0.25 * model.d**2))
+    (qf, vf), (qr, vr) = _both_flows(monkeypatch, load, w2, model.d, 0.3, np.ones(4), -np.ones(4),
+                                     np.linspace(0.3, 6.0, 9))
+    assert np.array_equal(qf, qr) and np.array_equal(vf, vr)
+    load = SquareWaveLoad(0.5, 1.3)
+    (qf, vf), (qr, vr) = _both_flows(monkeypatch, load, w2, model.d, 0.3, np.ones(4), -np.ones(4),
+                                     np.linspace(0.3, 6.0, 9))
+    assert np.array_equal(qf, qr) and np.array_equal(vf, vr)
+
+
+@pytest.mark.parametrize("n_modes, square", [(1, False), (4, False), (8, False), (20, False),
+                                             (2, True), (8, True), (16, True)])
+def test_periodic_orbits_with_compiled_flow_equal_numpy_path(monkeypatch, n_modes, square):
+    """Same orbits, admissibility verdicts, clearances and multipliers to 1e-10 with the compiled flow
+    and bounds of the certified search as with the numpy path."""
+    rng = np.random.default_rng(100 + n_modes)
+    seen = set()
+    for _ in range(6):
+        model = BarModel(float(rng.uniform(1.0, 6.0)), float(rng.uniform(0.0, 0.2)),
+                         float(rng.uniform(0.0, 0.9)), n_modes)
+        if square:
+            load = SquareWaveLoad(float(rng.uniform(0.3, 1.5)), float(rng.uniform(1.0, 1.9)))
+        else:
+            load = CosineLoad(float(rng.uniform(0.2, 0.7)), float(rng.uniform(0.5, 1.5)))
+        fast = _periodic_orbits_general(model, load)
+        monkeypatch.setattr(loads, "_COMPILED_FLOW", False)
+        monkeypatch.setattr(admissibility, "_COMPILED_BOUND", False)
+        ref = _periodic_orbits_general(model, load)
+        monkeypatch.setattr(loads, "_COMPILED_FLOW", True)
+        monkeypatch.setattr(admissibility, "_COMPILED_BOUND", True)
+        assert len(fast) == len(ref)
+        seen.update(g.admissibility for g in ref)
+        for o, g in zip(fast, ref, strict=True):
+            assert o.phase == pytest.approx(g.phase, abs=1e-10)
+            assert o.admissibility == g.admissibility
+            assert o.stable == g.stable
+            if math.isfinite(g.clearance):
+                assert o.clearance == pytest.approx(g.clearance, rel=1e-10, abs=1e-12)
+            else:
+                assert o.clearance == g.clearance
+            assert o.clearance_error == pytest.approx(g.clearance_error, rel=1e-8, abs=1e-12)
+            assert np.allclose(np.sort_complex(o.multipliers), np.sort_complex(g.multipliers),
+                               rtol=1e-10, atol=1e-10)
+            assert np.allclose(o.state_after_impact, g.state_after_impact, rtol=1e-10, atol=1e-12)
+    assert "admissible" in seen  # the comparison covered orbits whose verdict needs the search
