@@ -170,7 +170,7 @@ def test_rigid_multipliers_equal_jacobian_eigenvalues(rng):
                 assert _set_distance(orbit_multipliers(model, load, o.phase), dense) < 1e-10
 
 
-@pytest.mark.parametrize("n_modes", [40, 72])
+@pytest.mark.parametrize("n_modes", [40, 72, 200])
 def test_structured_multipliers_equal_dense_eigvals(rng, n_modes):
     """The block-diagonal-plus-rank-2 method (Aberth iteration) against numpy's dense eigvals of
     the impact map's Jacobian, on random bars and loads."""
