@@ -170,7 +170,7 @@ def test_rigid_multipliers_equal_jacobian_eigenvalues(rng):
                 assert _set_distance(orbit_multipliers(model, load, o.phase), dense) < 1e-10
 
 
-@pytest.mark.parametrize("n_modes", [40, 72])
+@pytest.mark.parametrize("n_modes", [40, 72, 200])
 def test_structured_multipliers_equal_dense_eigvals(rng, n_modes):
     """The block-diagonal-plus-rank-2 method (Aberth iteration) against numpy's dense eigvals of
     the impact map's Jacobian, on random bars and loads."""
@@ -191,6 +191,25 @@ def test_structured_multipliers_equal_dense_eigvals(rng, n_modes):
             assert _set_distance(fast, dense) < 1e-10
             checked += 1
     assert checked >= 8
+
+
+def test_compiled_aberth_gives_up_cleanly():
+    """The compiled Aberth sweeps: the same zeros as dense eigvals when they settle, ``None`` (so the
+    dense method takes over) when the sweeps run out or a start sits on a pole, never an error."""
+    from impactbar.orbits import stability
+    from impactbar.orbits._aberthkernel import aberth_iterate
+
+    model, load = BarModel(5.0, 0.1, 0.5, 48), CosineLoad(0.6, 1.0)
+    ph = _phases(model, load)[0][0]
+    yp, ym = _impact_states(model, load, ph)
+    parts = stability._structured_parts(model, load, ph, yp, ym)
+    dense = np.linalg.eigvals(impact_map_jacobian(model, load, ph, yp, ym))
+    mu = stability._aberth(*parts)
+    assert mu is not None and mu.shape == (2 * 49,)
+    assert _set_distance(mu, dense) < 1e-10
+    assert stability._aberth(*parts, iters=1) is None
+    x = np.full(4, 1.0 + 0.0j)  # on the pole of a block with trace 1, determinant 0
+    assert not aberth_iterate(x, np.ones(2), np.zeros(2), np.zeros((8, 2)), np.zeros(4, complex), 5, 1e-12)
 
 
 def test_heavy_damping_keeps_the_dense_method():

@@ -310,7 +310,8 @@ def _aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
     ``det(B + U V^T - x) = det(B - x) det(S(x))`` with the 2 x 2 secular matrix
     ``S(x) = I + sum_n V_n^T adj(B_n - x) U_n / det(B_n - x) + vt ut^T / (1 - x)``; each
     ``V_n^T adj(B_n - x) U_n`` is linear in ``x``, so ``S`` and ``S'`` for all the current
-    approximations are two matrix products. The Newton quotient is ``1 / (log det)'``.
+    approximations are two sums over the modes. The Newton quotient is ``1 / (log det)'``. The sweeps
+    run compiled (``_aberthkernel.aberth_iterate``), ``O(N^2)`` each.
     """
     M = a.size
     tr = a + e
@@ -320,40 +321,14 @@ def _aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
     N0 = np.einsum("kij,kil,kjm->klm", adj0, V, U).reshape(M, 4)
     N1 = -np.einsum("kil,kim->klm", V, U).reshape(M, 4)
     Nt = np.outer(vt, ut).reshape(4)
-    X = np.concatenate((N0, N1, np.ones((M, 1)), tr[:, None]), axis=1).astype(complex)
-    Y = np.concatenate((N0, N1), axis=1).astype(complex)
     # start: each block's eigenvalues, nudged off the poles (golden-angle directions)
     disc = np.sqrt((0.25 * tr * tr - dt).astype(complex))
     x = np.concatenate((0.5 * tr + disc, 0.5 * tr - disc))
     nudge = np.exp(2j * np.pi * ((np.arange(x.size) * 0.6180339887498949) % 1.0))
     x = x * (1.0 + 1e-6 * nudge) + 1e-9 * nudge
-    idx = np.arange(x.size)
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        for _ in range(iters):
-            xi = x[idx]
-            L = xi[:, None]
-            W = 1.0 / ((L - tr) * L + dt)  # 1 / det(B_n - x)
-            dW = (tr - 2.0 * L) * W
-            dW *= W  # d/dx of W
-            s = W @ X
-            sd = dW @ Y
-            wt = 1.0 / (1.0 - xi)
-            s0 = s[:, 0:4] + xi[:, None] * s[:, 4:8] + wt[:, None] * Nt
-            s1 = s[:, 4:8] + sd[:, 0:4] + xi[:, None] * sd[:, 4:8] + (wt * wt)[:, None] * Nt
-            S00 = 1.0 + s0[:, 0]
-            S11 = 1.0 + s0[:, 3]
-            detS = S00 * S11 - s0[:, 1] * s0[:, 2]
-            trSS = (S11 * s1[:, 0] - s0[:, 1] * s1[:, 2] - s0[:, 2] * s1[:, 1] + S00 * s1[:, 3]) / detS
-            # (log det)' of det(B - x) det(S) / x: sum_n (2x - tr_n) / det_n - 1/(1 - x) + tr(S^-1 S') - 1/x
-            logd = 2.0 * xi * s[:, 8] - s[:, 9] - wt + trSS - 1.0 / xi
-            newton = 1.0 / logd
-            diff = L - x[None, :]
-            diff[np.arange(idx.size), idx] = np.inf
-            corr = newton / (1.0 - newton * (1.0 / diff).sum(axis=1))
-            if not np.all(np.isfinite(corr)):
-                return None
-            x[idx] -= corr
-            idx = idx[~(np.abs(corr) <= tol * np.maximum(1.0, np.abs(x[idx])))]
-            if idx.size == 0:
-                return x
-    return None
+    from ._aberthkernel import aberth_iterate  # lazy: numba loads on the first structured call
+
+    X = np.ascontiguousarray(np.concatenate((N0, N1), axis=1).T, dtype=float)
+    ok = aberth_iterate(x, np.ascontiguousarray(tr, dtype=float), np.ascontiguousarray(dt, dtype=float), X,
+                        Nt.astype(complex), int(iters), float(tol))
+    return x if ok else None
