@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ._common import print_json, refuse
+from .orbits import add_bar_and_load_arguments
 from .orbits import check_options as check_bar_and_load
 
 TWO_PI = 2.0 * math.pi
@@ -26,22 +27,7 @@ def add_parser(sub) -> None:
         "Dimensionless inputs (eq. 2); a CONFIG.toml or --preset gives the bar and load in SI "
         "units, the parameter still varies in dimensionless units.",
     )
-    g = p.add_argument_group("bar (dimensionless, eq. 2)")
-    g.add_argument("--s", type=float, default=10.0, help="wave-speed ratio C/(L Omega) > 0 (default 10)")
-    g.add_argument("--d", type=float, default=0.05, help="damping D/(M Omega) >= 0 (default 0.05)")
-    g.add_argument("--R", type=float, default=0.5, help="restitution coefficient in [0, 1] (default 0.5)")
-    g.add_argument("--n-modes", type=int, default=4, help="flexible modes kept, >= 0 (default 4)")
-    g.add_argument("--impact", choices=("paper", "wave"), default=None,
-                   help="impact law: 'paper' (eq. 10, default) or 'wave' (the stop as a long rod, "
-                        "the contact solved by characteristics); overrides a config's [model] impact")
-    lg = p.add_argument_group("load")
-    lg.add_argument("--load", choices=("cosine", "square"), default="cosine",
-                    help="cosine: pneumatic p0 + pk cos(k t) (eq. 33); square: hydraulic (eq. 34)")
-    lg.add_argument("--p0", type=float, default=0.7, help="cosine: mean load (default 0.7)")
-    lg.add_argument("--pk", type=float, default=1.0, help="cosine: amplitude (default 1)")
-    lg.add_argument("--k", type=int, default=1, help="cosine: order of the harmonic (default 1)")
-    lg.add_argument("--q", type=float, default=1.0, help="square: level q > 0 (default 1)")
-    lg.add_argument("--kappa", type=float, default=1.2, help="square: kappa in [1, 2] (default 1.2)")
+    add_bar_and_load_arguments(p, d=0.05, n_modes=4, p0=0.7)
     cg = p.add_argument_group("continuation")
     cg.add_argument("--parameter", required=True, choices=("p0", "pk", "R", "d", "s", "q", "kappa"),
                     help="the parameter that varies")

@@ -10,6 +10,29 @@ DIMENSIONLESS = ("s", "d", "R", "n_modes", "load", "p0", "pk", "k", "q", "kappa"
 LOAD_OPTIONS = {"cosine": ("p0", "pk", "k"), "square": ("q", "kappa")}
 
 
+def add_bar_and_load_arguments(p, *, d: float, n_modes: int, p0: float) -> None:
+    """The dimensionless bar (``--s --d --R --n-modes --impact``) and load (``--load --p0 --pk --k
+    --q --kappa``) options, with the subcommand's own defaults for ``d``, ``n_modes`` and ``p0``
+    (shared by ``impactbar orbits`` and ``impactbar continue``)."""
+    g = p.add_argument_group("bar (dimensionless, eq. 2)")
+    g.add_argument("--s", type=float, default=10.0, help="wave-speed ratio C/(L Omega) > 0 (default 10)")
+    g.add_argument("--d", type=float, default=d, help=f"damping D/(M Omega) >= 0 (default {d:g})")
+    g.add_argument("--R", type=float, default=0.5, help="restitution coefficient in [0, 1] (default 0.5)")
+    g.add_argument("--n-modes", type=int, default=n_modes,
+                   help=f"flexible modes kept, >= 0 (default {n_modes})")
+    g.add_argument("--impact", choices=("paper", "wave"), default=None,
+                   help="impact law: 'paper' (eq. 10, default) or 'wave' (the stop as a long rod, "
+                        "the contact solved by characteristics); overrides a config's [model] impact")
+    lg = p.add_argument_group("load")
+    lg.add_argument("--load", choices=("cosine", "square"), default="cosine",
+                    help="cosine: pneumatic p0 + pk cos(k t) (eq. 33); square: hydraulic (eq. 34)")
+    lg.add_argument("--p0", type=float, default=p0, help=f"cosine: mean load (default {p0:g})")
+    lg.add_argument("--pk", type=float, default=1.0, help="cosine: amplitude (default 1)")
+    lg.add_argument("--k", type=int, default=1, help="cosine: order of the harmonic (default 1)")
+    lg.add_argument("--q", type=float, default=1.0, help="square: level q > 0 (default 1)")
+    lg.add_argument("--kappa", type=float, default=1.2, help="square: kappa in [1, 2] (default 1.2)")
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser(
         "orbits",
@@ -17,22 +40,7 @@ def add_parser(sub) -> None:
         description="Every one-impact-per-period orbit (paper Section 2) with admissibility, exact "
         "Floquet multipliers and the paper's Schur criterion. Dimensionless inputs (eq. 2).",
     )
-    g = p.add_argument_group("bar (dimensionless, eq. 2)")
-    g.add_argument("--s", type=float, default=10.0, help="wave-speed ratio C/(L Omega) > 0 (default 10)")
-    g.add_argument("--d", type=float, default=0.0, help="damping D/(M Omega) >= 0 (default 0)")
-    g.add_argument("--R", type=float, default=0.5, help="restitution coefficient in [0, 1] (default 0.5)")
-    g.add_argument("--n-modes", type=int, default=8, help="flexible modes kept, >= 0 (default 8)")
-    g.add_argument("--impact", choices=("paper", "wave"), default=None,
-                   help="impact law: 'paper' (eq. 10, default) or 'wave' (the stop as a long rod, "
-                        "the contact solved by characteristics); overrides a config's [model] impact")
-    lg = p.add_argument_group("load")
-    lg.add_argument("--load", choices=("cosine", "square"), default="cosine",
-                    help="cosine: pneumatic p0 + pk cos(k t) (eq. 33); square: hydraulic (eq. 34)")
-    lg.add_argument("--p0", type=float, default=0.3, help="cosine: mean load (default 0.3)")
-    lg.add_argument("--pk", type=float, default=1.0, help="cosine: amplitude (default 1)")
-    lg.add_argument("--k", type=int, default=1, help="cosine: order of the harmonic (default 1)")
-    lg.add_argument("--q", type=float, default=1.0, help="square: level q > 0 (default 1)")
-    lg.add_argument("--kappa", type=float, default=1.2, help="square: kappa in [1, 2] (default 1.2)")
+    add_bar_and_load_arguments(p, d=0.0, n_modes=8, p0=0.3)
     p.add_argument("--json", action="store_true",
                    help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
     try:

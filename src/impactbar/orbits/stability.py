@@ -49,9 +49,11 @@ def period_fundamental(model: BarModel) -> tuple[np.ndarray, ...]:
     return tuple(out)
 
 
-def _impact_fields(model: BarModel, load: Load, phase: float, y_plus, y_minus):
-    """The arrival velocity ``c . q'(2 pi-)`` and the vector field ``(q', q'')`` of the modes just
-    after and just before the impact; raises ``ValueError`` at grazing (zero arrival velocity)."""
+def _impact_fields(model: BarModel, load: Load, phase: float, y_plus, y_minus, t_arrive=None):
+    """The arrival velocity ``c . q'`` and the vector field ``(q', q'')`` of the modes at the start
+    of a flight (load time ``phase``, state ``y_plus``) and at its arrival (load time ``t_arrive``,
+    default ``phase``: one load period later, state ``y_minus``); raises ``ValueError`` at grazing
+    (zero arrival velocity)."""
     M = model.n_modes + 1
     w2 = model.frequencies**2
     d = model.d
@@ -63,7 +65,7 @@ def _impact_fields(model: BarModel, load: Load, phase: float, y_plus, y_minus):
     if not abs(v_imp) > 1e-14 * float(np.max(np.abs(ym))):  # relative: invariant under load -> L load
         raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
     f0 = (vp, float(load(phase)) - d * vp - w2 * qp)
-    f1 = (vm, float(load.left_limit(phase)) - d * vm - w2 * qm)
+    f1 = (vm, float(load.left_limit(phase if t_arrive is None else t_arrive)) - d * vm - w2 * qm)
     return v_imp, f0, f1
 
 
@@ -114,21 +116,13 @@ def _arrival_derivative(model: BarModel, load: Load, t_start: float, flight: flo
     ``dY`` of shape ``(2 N + 2, 2 N + 2)`` and ``r = dt'/dz``. Raises ``ValueError`` at grazing.
     """
     M = model.n_modes + 1
-    w2 = model.frequencies**2
-    d = model.d
     c = model.end_weights
-    yp = np.asarray(y_start, dtype=float)
-    ym = np.asarray(y_minus, dtype=float)
-    qp, vp = yp[:M], yp[M:]
-    qm, vm = ym[:M], ym[M:]
-    v_imp = float(c @ vm)
-    if not abs(v_imp) > 1e-14 * float(np.max(np.abs(ym))):  # relative: invariant under load -> L load
-        raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
+    v_imp, f0, f1 = _impact_fields(model, load, t_start, y_start, y_minus, t_arrive)
+    f0, f1 = np.concatenate(f0), np.concatenate(f1)
     # the period's fundamental matrix is cached per model
-    p11, p12, p21, p22 = period_fundamental(model) if flight == TWO_PI else fundamental(w2, d, flight)
+    p11, p12, p21, p22 = (period_fundamental(model) if flight == TWO_PI
+                          else fundamental(model.frequencies**2, model.d, flight))
     Psi = np.block([[np.diag(p11), np.diag(p12)], [np.diag(p21), np.diag(p22)]])
-    f0 = np.concatenate((vp, float(load(t_start)) - d * vp - w2 * qp))
-    f1 = np.concatenate((vm, float(load.left_limit(t_arrive)) - d * vm - w2 * qm))
     # embedding of x = (q_1..q_N, v_0..v_N) into the full state, q_0 = -sum c_n q_n
     E = np.zeros((2 * M, 2 * M - 1))
     E[0, : M - 1] = -c[1:]
