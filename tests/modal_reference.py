@@ -67,3 +67,17 @@ def solve_modal(w2, d, load, y0, t0, t1, *, shift=0.0, ts=(), end_weights=None, 
             return sol.t_events[0][-1], sol.y_events[0][-1].copy(), out, True
         t, y = b, sol.y[:, -1]
     return t, y, out, False
+
+
+def central_difference_jacobian(f, z, h=1e-6, *, relative=False):
+    """The tests' finite-difference reference for a Jacobian: column ``j`` is
+    ``(f(z + h_j e_j) - f(z - h_j e_j)) / (2 h_j)``, with ``h_j = h`` or, with ``relative``,
+    ``h_j = h max(1, |z_j|)``. ``f`` maps an array of shape ``(n,)`` to one of shape ``(k,)``."""
+    z = np.asarray(z, dtype=float)
+    cols = []
+    for j in range(z.size):
+        hj = h * max(1.0, abs(z[j])) if relative else h
+        e = np.zeros(z.size)
+        e[j] = hj
+        cols.append((np.asarray(f(z + e)) - np.asarray(f(z - e))) / (2 * hj))
+    return np.column_stack(cols)

@@ -25,6 +25,7 @@ from impactbar.orbits.charts import (
     pneumatic_existence_edge,
     pneumatic_stability_edges,
 )
+from modal_reference import central_difference_jacobian
 
 TWO_PI = 2 * math.pi
 FEIGENBAUM = 4.669201609
@@ -181,12 +182,7 @@ def test_flexible_doubled_orbit_reached_by_simulate_and_multipliers_by_finite_di
 
     z0 = np.concatenate(([o.impact_times[0]], o.states_after_impact[0][1:]))
     np.testing.assert_allclose(simulated_map(z0) - z0, np.eye(z0.size)[0] * 2 * TWO_PI, atol=1e-10)
-    h = 1e-6
-    J = np.empty((z0.size, z0.size))
-    for k in range(z0.size):
-        e = np.zeros(z0.size)
-        e[k] = h
-        J[:, k] = (simulated_map(z0 + e) - simulated_map(z0 - e)) / (2 * h)
+    J = central_difference_jacobian(simulated_map, z0)
     mu = np.linalg.eigvals(J)
     np.testing.assert_allclose(np.sort_complex(mu), np.sort_complex(o.multipliers), atol=1e-6)
 

@@ -19,6 +19,7 @@ from impactbar import (
     simulate,
 )
 from impactbar.orbits.multi_impact import _Segments, _unknowns_from
+from modal_reference import central_difference_jacobian
 
 TWO_PI = 2 * math.pi
 
@@ -91,12 +92,7 @@ def test_wave_jacobian_matches_finite_differences(rng):
     times = o.phase + np.array([0.0, TWO_PI + 0.3])
     u = _unknowns_from(p, times, np.stack([o.state_after_impact] * 2)) + 1e-3 * rng.standard_normal(p.size)
     _, DF, _ = p.evaluate(u)
-    fd = np.empty_like(DF)
-    h = 1e-6
-    for i in range(u.size):
-        e = np.zeros(u.size)
-        e[i] = h
-        fd[:, i] = (p.evaluate(u + e, jacobian=False)[0] - p.evaluate(u - e, jacobian=False)[0]) / (2 * h)
+    fd = central_difference_jacobian(lambda x: p.evaluate(x, jacobian=False)[0], u)
     np.testing.assert_allclose(DF, fd, atol=2e-7 * max(1.0, np.max(np.abs(DF))))
 
 
@@ -154,12 +150,7 @@ def test_wave_doubled_orbit_reproduced_by_simulate_and_finite_differences(doubli
 
     z0 = np.concatenate(([o.impact_times[0]], y[1:]))
     np.testing.assert_allclose(simulated_map(z0) - z0, np.eye(z0.size)[0] * 2 * TWO_PI, atol=1e-10)
-    h = 1e-6
-    J = np.empty((z0.size, z0.size))
-    for k in range(z0.size):
-        e = np.zeros(z0.size)
-        e[k] = h
-        J[:, k] = (simulated_map(z0 + e) - simulated_map(z0 - e)) / (2 * h)
+    J = central_difference_jacobian(simulated_map, z0)
     assert _same_multipliers(np.linalg.eigvals(J), o.multipliers) < 1e-6
 
 

@@ -11,6 +11,7 @@ from scipy.optimize import brentq
 
 from impactbar import BarModel, CosineLoad, SquareWaveLoad, periodic_orbits
 from impactbar.dynamics.impact import wave_impact
+from modal_reference import central_difference_jacobian
 
 TWO_PI = 2 * math.pi
 
@@ -101,13 +102,7 @@ def test_jacobian_against_finite_differences(load):
         _, ye, ym, rate = wave_orbit_states(model, load, o.phase)
         DP = wave_impact_map_jacobian(model, load, o.phase, ye, ym, rate)
         z = window_end_state(o)
-        J = np.empty_like(DP)
-        for j in range(z.size):
-            h = 1e-6 * max(1.0, abs(z[j]))
-            e = np.zeros(z.size)
-            e[j] = h
-            J[:, j] = (flight_and_contact(model, load, z + e)
-                       - flight_and_contact(model, load, z - e)) / (2 * h)
+        J = central_difference_jacobian(lambda x: flight_and_contact(model, load, x), z, relative=True)
         np.testing.assert_allclose(DP, J, rtol=0, atol=2e-5 * np.abs(DP).max())
         np.testing.assert_allclose(np.sort(np.abs(o.multipliers)), np.sort(np.abs(np.linalg.eigvals(J))),
                                    rtol=0, atol=1e-5 * o.max_abs_multiplier)
