@@ -35,7 +35,7 @@ from ..model import BarModel
 from .admissibility import _admissibility
 from .one_impact import PeriodicOrbit, periodic_orbits
 from .phase import _check_inputs
-from .stability import MARGINAL
+from .stability import sort_multipliers, stable_verdict
 
 __all__ = ["MultiImpactOrbit", "find_orbit"]
 
@@ -438,8 +438,7 @@ class MultiImpactOrbit:
 
 
 def _sorted_multipliers(P):
-    mu = np.linalg.eigvals(P)
-    return mu[np.argsort(-np.abs(mu), kind="stable")]
+    return sort_multipliers(np.linalg.eigvals(P))
 
 
 def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactOrbit:
@@ -487,7 +486,7 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactO
         impact_times=t.copy(), phases=np.mod(t, TWO_PI), impact_velocities=np.roll(v_imp, 1),
         admissible=admissible, admissibility=status, clearance=float(clear),
         clearance_error=float(cerr), multipliers=mu,
-        stable=bool(admissible and np.all(np.abs(mu) < 1.0 - MARGINAL)),
+        stable=stable_verdict(admissible, mu),
         states_after_impact=info["y_plus"], states_before_impact=np.roll(info["y_minus"], 1, axis=0),
         contacts=contacts,
     )

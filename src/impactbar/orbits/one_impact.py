@@ -21,13 +21,13 @@ from .admissibility import _admissibility
 from .phase import _check_inputs, phase_roots
 from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers, rigid_square_orbits
 from .stability import (
-    MARGINAL,
     floquet_multipliers,
     period_fundamental,
     quadratic_roots,
     schur_blocks,
     schur_test,
     sort_multipliers,
+    stable_verdict,
 )
 from .wave import wave_impact_map_jacobian, wave_orbit_states, wave_phase_roots
 
@@ -578,7 +578,7 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
         clearance=clearance,
         clearance_error=cerr,
         multipliers=mu,
-        stable=bool(admissible and np.all(np.abs(mu) < 1.0 - MARGINAL)),
+        stable=stable_verdict(admissible, mu),
         schur_roots=quadratic_roots(blocks),
         schur_stable=schur_test(blocks),
         state_after_impact=y_plus,
@@ -617,7 +617,7 @@ def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> P
     return PeriodicOrbit(
         model=model, load=load, phase=float(phase), multiplicity=int(mult), impact_velocity=v_imp,
         admissible=admissible, admissibility=status, clearance=clearance, clearance_error=cerr,
-        multipliers=mu, stable=bool(admissible and np.all(np.abs(mu) < 1.0 - MARGINAL)),
+        multipliers=mu, stable=stable_verdict(admissible, mu),
         schur_roots=quadratic_roots(blocks), schur_stable=schur_test(blocks),
         state_after_impact=y_end, state_before_impact=y_minus, impact=impact,
     )

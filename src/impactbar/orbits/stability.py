@@ -20,6 +20,12 @@ TWO_PI = 2.0 * math.pi
 #: A multiplier within this of the unit circle is marginal: the orbit is not called stable.
 MARGINAL = 1e-9
 
+
+def stable_verdict(admissible: bool, multipliers) -> bool:
+    """The stability verdict of a periodic orbit (theory §5, §7): admissible, and every Floquet
+    multiplier inside the unit circle by more than :data:`MARGINAL`."""
+    return bool(admissible and np.all(np.abs(multipliers) < 1.0 - MARGINAL))
+
 #: from this many flexible modes on, the multipliers come from the structured method (below it the
 #: dense eigenvalue problem is as fast)
 STRUCTURED_FROM = 40

@@ -1161,9 +1161,9 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     vels: list[float] = []
     t = t0
     status = "t_end"
+    oq, ov = np.empty((1, q.size)), np.empty((1, q.size))  # the kernel's state after its one impact
     while True:
         qa, va = q.copy(), v.copy()
-        oq, ov = np.empty((1, q.size)), np.empty((1, q.size))
         n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, oq, ov)
         if st == K.FAILED:  # pragma: no cover - defensive
             raise RuntimeError(f"impact search did not converge at t = {tn}")
