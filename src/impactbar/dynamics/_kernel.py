@@ -234,8 +234,10 @@ def _cubic(g, dh, ddh, J, s):
 def _cubic_step(g, dh, ddh, J, smax):
     """A step ``s`` with ``f(x) = g + dh x + ddh x^2/2 + J x^3/6 < 0`` on ``[0, s)`` (``g <= 0``,
     ``J >= 0``): the first root of ``f``, from below, or ``smax`` if there is none before it."""
-    # monotone pieces of f: split at the positive roots of f' = dh + ddh x + J x^2 / 2
-    cuts = np.empty(3)
+    # monotone pieces of f: split at the positive roots of f' = dh + ddh x + J x^2 / 2 (at most
+    # two cuts, in increasing order, then smax; scalars, so that a step allocates nothing)
+    c1 = smax
+    c2 = smax
     nc = 0
     if J > 0.0:
         disc = ddh * ddh - 2.0 * J * dh
@@ -243,18 +245,19 @@ def _cubic_step(g, dh, ddh, J, smax):
             r = math.sqrt(disc)
             for x in ((-ddh - r) / J, (-ddh + r) / J):
                 if 0.0 < x < smax:
-                    cuts[nc] = x
+                    if nc == 0:
+                        c1 = x
+                    else:
+                        c2 = x
                     nc += 1
     elif ddh != 0.0:
         x = -dh / ddh
         if 0.0 < x < smax:
-            cuts[nc] = x
+            c1 = x
             nc += 1
-    cuts[nc] = smax
-    nc += 1
     lo = 0.0
-    for i in range(nc):
-        hi = cuts[i]
+    for i in range(nc + 1):
+        hi = smax if i == nc else (c1 if i == 0 else c2)
         fh = _cubic(g, dh, ddh, J, hi)
         if fh >= 0.0:
             # f < 0 at lo, >= 0 at hi, monotone between: bisection keeps lo safe
@@ -271,6 +274,18 @@ def _cubic_step(g, dh, ddh, J, smax):
             return lo
         lo = hi
     return smax
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _quadratic_step(g, dh, A):
+    """First positive root of ``g + dh s + A s^2 / 2`` (``g <= 0``, ``A >= 0``), ``inf`` if none."""
+    if A == 0.0:
+        return -g / dh if dh > 0.0 else math.inf
+    A2 = 2.0 * A * (-g)
+    if dh >= 0.0:
+        den = dh + math.sqrt(dh * dh + A2)
+        return 2.0 * (-g) / den if den > 0.0 else 0.0
+    return (-dh + math.sqrt(dh * dh + A2)) / A
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -363,7 +378,7 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
         g = min(h, 0.0)
         if 0.0 < dh <= dnoise:
             dh = 0.0  # a slope lost in rounding
-        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= hcap:
+        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= horizon:
             # bracketed, unique root on [a, a + 2|g|/dh]: safeguarded Newton
             lo = a
             hi = a + 2.0 * (-g) / dh
@@ -390,22 +405,18 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
                 t = tn  # the converged Newton point, a rounding error past the last h < 0
             advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp)
             return CROSS, t
-        A2 = 2.0 * A * (-g)
-        if A == 0.0:
-            tau = -g / dh if dh > 0.0 else math.inf
-        elif dh >= 0.0:
-            den = dh + math.sqrt(dh * dh + A2)
-            tau = 2.0 * (-g) / den if den > 0.0 else 0.0
-        else:
-            tau = (-dh + math.sqrt(dh * dh + A2)) / A
+        tau = _quadratic_step(g, dh, A)
         # the cubic bound h + h' s + h'' s^2/2 + J s^3/6 is far better where h'' < 0 is small
-        # (leaving the stop): take the larger of the two certified steps
-        tc = _cubic_step(g, dh, ddh, J, hcap)
+        # (leaving the stop): take the larger of the two certified steps. Both hold only where
+        # A and J do, on [a, a + horizon] (the rigid mode's velocity bound grows with the horizon)
+        tc = _cubic_step(g, dh, ddh, J, horizon)
         if tc > tau:
             tau = tc
         if tau <= 4e-16 * (1.0 + abs(a)):
             # tangential contact: h = 0, h' = 0 to rounding, and h'' >= 0: pressed on the stop
             return TOUCH, a
+        if tau > horizon:
+            tau = horizon
         if tau >= hcap:
             a = t_cap
         else:
@@ -417,9 +428,144 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t):
+    """The rigid bar (one mode, ``w2 = 0``) under ``p0 + Re(p_k e^{ikt})`` at ``t`` from the anchor
+    ``(ta, qa)`` with ``dv = v_a - v_p(ta)``: ``q, v``, the particular ``q_p, v_p`` and the load
+    ``p``. The arithmetic of :func:`advance` and :func:`load_value` for this case, term by term,
+    with each transcendental evaluated once."""
+    tau = t - ta
+    ck = math.cos(k * t)
+    sk = math.sin(k * t)
+    qp = hr * ck - hi * sk
+    vp = -k * (hr * sk + hi * ck)
+    b, c = _bc(d, tau)
+    ed = math.exp(-d * tau)
+    q = qa + (qp - qpa) + dv * b + p0 * c
+    v = vp + dv * ed + p0 * b
+    p = p0 + (pr * ck - pim * sk)
+    return q, v, qp, vp, p
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, ta, qa, va, t_lim, htol):
+    """:func:`find_crossing` for the end of the rigid bar, ``h = c0 q_0`` (``c0 > 0``), under one
+    harmonic ``p = p0 + Re(p_k e^{ikt})`` (``p_k = pr + i pim``, particular amplitude
+    ``H = hr + i hi``), in scalars (theory §2, eq. 8 with ``N = 0``).
+
+    Between impacts ``q = m(tau) + q_p(t)`` with ``m'' = D e^{-d tau}`` for a constant ``D`` (the
+    harmonic particular solution obeys ``q_p'' + d q_p' = p - p0``, so ``p - d v = m'' - k^2 q_p``)
+    and ``q_p(t + s) = q_p cos ks + (q_p'/k) sin ks``. From ``1 - cos x <= x^2/2`` and
+    ``0 <= x - sin x <= x^3/6`` (``x >= 0``), for every ``s >= 0``::
+
+        q(t + s) <= q + q' s + (max(m'', 0) + k^2 max(-q_p, 0)) s^2/2 + k^2 max(-q_p', 0) s^3/6,
+
+    a bound with the signs of the present curvature in it. Its first root (bounded from below by a
+    quadratic) is a step that cannot cross an impact; so is the step of the two-sided bound
+    ``|q''| <= |m''| + k^2 |H|`` (``|m''|`` only decreases), and where ``q'' < 0`` (leaving the
+    stop) that of the cubic bound of :func:`find_crossing`, with ``|q'''| <= d |m''| + k^3 |H|``.
+    Once the root is bracketed (the test of :func:`find_crossing` with the two-sided bound),
+    safeguarded Halley steps refine it to rounding from the root of the local quadratic model.
+
+    Returns
+    -------
+    status, t, q, v, qp, p : int and floats
+        As :func:`find_crossing`, with the state ``q, v``, the particular ``q_p`` and the load at
+        ``t``.
+    """
+    ck = math.cos(k * ta)
+    sk = math.sin(k * ta)
+    qpa = hr * ck - hi * sk
+    vpa = -k * (hr * sk + hi * ck)
+    dv = va - vpa
+    habs = math.hypot(hr, hi)
+    kk = k * k
+    a = ta
+    q = qa + (qpa - qpa) + dv * 0.0 + p0 * 0.0  # advance(.., ta): the anchor as the kernel has it
+    v = vpa + dv * 1.0 + p0 * 0.0
+    qp = qpa
+    vp = vpa
+    p = p0 + (pr * ck - pim * sk)
+    for _ in range(_MAX_STEPS):
+        h = c0 * q
+        dh = c0 * v
+        ddh = c0 * (p - d * v)
+        noise = 1e-14 * c0 * (abs(q) + abs(qp))
+        dnoise = 1e-14 * c0 * (abs(v) + abs(vp))
+        if h > htol + noise or (h >= 0.0 and dh > dnoise):
+            return CROSS, a, q, v, qp, p
+        hcap = t_lim - a
+        if hcap <= 0.0:
+            return NONE, t_lim, q, v, qp, p
+        mpp = p - d * v + kk * qp  # m'' = D e^{-d tau} here, and its rounding
+        err = 1e-15 * (abs(p) + d * abs(v) + kk * abs(qp))
+        A = c0 * (abs(mpp) + err + kk * habs) * (1.0 + 1e-12)
+        g = min(h, 0.0)
+        if 0.0 < dh <= dnoise:
+            dh = 0.0  # a slope lost in rounding
+        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= hcap:
+            # bracketed, unique root on [a, a + 2|g|/dh] where h' > 0: safeguarded Halley from
+            # the root of the local quadratic model
+            lo = a
+            hib = a + 2.0 * (-g) / dh
+            t = a + _quadratic_step(g, dh, max(ddh, 0.0)) if ddh >= 0.0 else a - g / dh
+            if not (lo < t <= hib):
+                t = a - g / dh
+                if t > hib:
+                    t = hib
+            tn = t
+            for _it in range(100):
+                q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t)
+                h = c0 * q
+                dh = c0 * v
+                ddh = c0 * (p - d * v)
+                if h < 0.0:
+                    lo = t
+                else:
+                    hib = t
+                den = 2.0 * dh * dh - h * ddh
+                step = -2.0 * h * dh / den if dh > 0.0 and den > 0.0 else 0.0
+                tn = t + step
+                if abs(step) <= 1e-15 * (1.0 + abs(t)) or hib - lo <= 4e-16 * (1.0 + abs(t)):
+                    break
+                if not (lo < tn < hib):
+                    tn = 0.5 * (lo + hib)
+                t = tn
+            if h < 0.0:
+                t = tn  # the converged point, a rounding error past the last h < 0
+                q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t)
+            return CROSS, t, q, v, qp, p
+        horizon = min(hcap, TWO_PI)
+        tau = _quadratic_step(g, dh, A)
+        # the signed bound: a quadratic, then its cubic term bounded on [0, S] by a quadratic one
+        alpha = c0 * (max(mpp, 0.0) + err + kk * max(-qp, 0.0)) * (1.0 + 1e-12)
+        beta = c0 * kk * max(-vp, 0.0) * (1.0 + 1e-12)
+        S = min(_quadratic_step(g, dh, alpha), horizon)
+        s1 = min(_quadratic_step(g, dh, alpha + beta * S / 3.0), S)
+        if s1 > tau:
+            tau = s1
+        if ddh < 0.0:
+            # the curvature pulls the end away (leaving the stop): the cubic bound with the exact
+            # h'' of find_crossing, |h'''| <= c0 (d |m''| + k^3 |H|)
+            J = c0 * (d * (abs(mpp) + err) + kk * k * habs) * (1.0 + 1e-12)
+            tc = _cubic_step(g, dh, ddh, J, horizon)
+            if tc > tau:
+                tau = tc
+        if tau <= 4e-16 * (1.0 + abs(a)):
+            return TOUCH, a, q, v, qp, p
+        if tau > horizon:
+            tau = horizon
+        if tau >= hcap:
+            a = t_lim
+        else:
+            a = a + tau
+        q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, a)
+    return FAIL, a, q, v, qp, p
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
              psup, p1, p2, p3, vpb, apb, jpb,
-             t, q, v, t_end, max_imp, tail_tol, out_t, out_vel, out_q, out_v):
+             t, q, v, t_end, max_imp, tail_tol, out_t, out_vel, out_q, out_v, fast):
     """Free flight with impacts from ``(t, q, v)``; ``q, v`` are overwritten with the final state.
 
     Every impact (``c . q = 0`` reached with ``c . v > 0``) applies ``v -> -R v`` (eqs. 10, 11); its
@@ -427,6 +573,11 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
     ``t_end`` (END), after ``max_imp`` impacts (MAXIMP), when the buffers are full (FULL), when the
     bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``) or the end
     arrives tangentially and pressed (CONTACT).
+
+    With ``fast`` true the flights of the rigid bar under one harmonic that follow an impact are
+    searched by :func:`rigid1_crossing` (the same impacts, to rounding); the first flight (from the
+    start or a release, where the end may leave the stop at rest and rounding decides whether it
+    leaves), and every other case, by :func:`find_crossing`.
 
     Returns
     -------
@@ -443,14 +594,25 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
     anchor[0] = t
     n = 0
     cap = out_t.size
+    rigid1 = fast and kind == 0 and M == 1 and w2[0] == 0.0 and ks.size <= 1
+    k1 = pr1 = pim1 = hr1 = hi1 = 0.0
+    if rigid1 and ks.size == 1:
+        k1, pr1, pim1, hr1, hi1 = ks[0], pr[0], pim[0], hpr[0, 0], hpi[0, 0]
+    qp1 = p1t = 0.0
     while True:
         htol = 0.0
         for i in range(M):
             htol += abs(c[i] * qa[i])
         htol *= 1e-14
-        st, tc = find_crossing(kind, w2, d, c, 0.0, p0, ks, pr, pim, hpr, hpi, breaks, levels,
-                               psup, p1, p2, p3, vpb, apb, jpb,
-                               anchor, qa, va, t_end, htol, q, v, qp, vp, qpa, vpa)
+        fast1 = rigid1 and n > 0  # a flight after an impact; from the start or a release the
+        # end may leave the stop at rest, where rounding decides: those flights take the reference
+        if fast1:
+            st, tc, q[0], v[0], qp1, p1t = rigid1_crossing(d, c[0], p0, k1, pr1, pim1, hr1, hi1,
+                                                           anchor[0], qa[0], va[0], t_end, htol)
+        else:
+            st, tc = find_crossing(kind, w2, d, c, 0.0, p0, ks, pr, pim, hpr, hpi, breaks, levels,
+                                   psup, p1, p2, p3, vpb, apb, jpb,
+                                   anchor, qa, va, t_end, htol, q, v, qp, vp, qpa, vpa)
         if st == NONE:
             return n, END, t_end
         if st == FAIL:
@@ -473,13 +635,17 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
         n += 1
         if n >= max_imp:
             return n, MAXIMP, tc
-        if kind == 1:
-            mm, jj = piece_of(breaks, tc)
-            level = levels[jj]
+        if fast1:  # functional(...) of the rigid bar, term by term
+            ddh = c[0] * (p1t - d * v[0])
+            noise = 1e-14 * (abs(c[0]) * (abs(q[0]) + abs(qp1)))
         else:
-            level = 0.0
-        p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
-        h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
+            if kind == 1:
+                mm, jj = piece_of(breaks, tc)
+                level = levels[jj]
+            else:
+                level = 0.0
+            p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
+            h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
         if ddh > 0.0:
             # R < 1: the bounces accumulate at tc + tail. R = 1: they do not accumulate, but
             # damping shrinks them without end (ever more impacts per unit time)
