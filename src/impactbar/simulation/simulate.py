@@ -101,6 +101,16 @@ class InitialState:
         object.__setattr__(self, "modal_displacement", q)
         object.__setattr__(self, "modal_velocity", v)
 
+    @classmethod
+    def _trusted(cls, q: np.ndarray, v: np.ndarray) -> InitialState:
+        """A state from arrays the simulator made (finite, 1-d, of one length): no checks, no copy."""
+        self = object.__new__(cls)
+        q.setflags(write=False)
+        v.setflags(write=False)
+        object.__setattr__(self, "modal_displacement", q)
+        object.__setattr__(self, "modal_velocity", v)
+        return self
+
     @property
     def n_modes(self) -> int:
         """Flexible modes ``N`` the state carries."""
@@ -507,15 +517,15 @@ class _SegmentLog:
     kernel writes each block of impacts straight into the next rows (:meth:`impact_rows`), so a
     long run holds its trajectory once, not once per block and again when joined."""
 
-    def __init__(self, n_modes):
+    def __init__(self, n_modes, capacity=0):
         self.M = n_modes + 1
         self.frozen = {}
         self.count = 0
-        self.t = np.empty(0)
-        self.basis = np.empty(0, dtype=np.int8)
-        self.entry = np.empty(0, dtype=np.int8)
-        self.q = np.empty((0, self.M))
-        self.v = np.empty((0, self.M))
+        self.t = np.empty(capacity)
+        self.basis = np.empty(capacity, dtype=np.int8)
+        self.entry = np.empty(capacity, dtype=np.int8)
+        self.q = np.empty((capacity, self.M))
+        self.v = np.empty((capacity, self.M))
 
     def _reserve(self, k):
         """Room for ``k`` more rows. The arrays are resized in place: no view of them may be
@@ -1017,7 +1027,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         )
     core = _core_for(model, load)
     g = float(core.c @ q)
-    if g > 1e-12 * max(1.0, float(np.sum(np.abs(core.c * q)))):
+    if g > 0.0 and g > 1e-12 * max(1.0, float(np.sum(np.abs(core.c * q)))):
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
@@ -1027,7 +1037,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
-    segs = _SegmentLog(core.N)
+    segs = _SegmentLog(core.N, min(max_imp, 1024) + 2)  # a short run's pieces without a resize
     segs.add(t0, _FREE, q, v, "start")
     times: list[np.ndarray] = []
     vels: list[np.ndarray] = []
@@ -1129,8 +1139,11 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         mode = _FREE
     # ---- final state ----
     last = segs.last()
-    qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
-    qe, ve = qe[:, 0], ve[:, 0]
+    if t == last.t and last.basis == _FREE:  # the run ended on a piece's start (max_impacts)
+        qe, ve = last.q, last.v
+    else:
+        qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
+        qe, ve = qe[:, 0], ve[:, 0]
     if last.basis == _CONTACT:
         qe, ve = core.release_state(qe, ve)
     imp_t = np.concatenate(times) if times else np.zeros(0)
@@ -1138,7 +1151,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     ci = np.array(contacts, dtype=float).reshape(-1, 2)
     return Trajectory(model=core.model, load=core.load, t0=t0, t_end=t,
                       impact_times=imp_t, impact_velocities=imp_v, contact_intervals=ci,
-                      final_state=InitialState(qe, ve), status=status, _core=core,
+                      final_state=InitialState._trusted(qe, ve), status=status, _core=core,
                       _segments=segs.finish(), n_release_retries=retries)
 
 
