@@ -436,12 +436,12 @@ def _random_rigid_run(rng):
     model, load = BarModel(2.0, d, R, 0), CosineLoad(p0, pk, k)
     start = InitialState.rigid(-rng.uniform(0.0, 1.0), rng.uniform(-2.0, 2.0))
     t0 = rng.uniform(0.0, TWO_PI)
-    keep = sim_module.FAST_RIGID
-    sim_module.FAST_RIGID = False
+    keep = sim_module.FAST_SEARCH
+    sim_module.FAST_SEARCH = False
     try:
         ref = simulate(model, load, start, t0 + 60.0, t0=t0)
     finally:
-        sim_module.FAST_RIGID = keep
+        sim_module.FAST_SEARCH = keep
     return sim_module._core_for(model, load), ref
 
 
@@ -506,12 +506,12 @@ def test_rigid_one_harmonic_simulate_equals_general_search(case):
     }[case]
     runs = {}
     for fast in (False, True):
-        keep = sim_module.FAST_RIGID
-        sim_module.FAST_RIGID = fast
+        keep = sim_module.FAST_SEARCH
+        sim_module.FAST_SEARCH = fast
         try:
             runs[fast] = simulate(model, load, start, t0 + 400.0, t0=t0)
         finally:
-            sim_module.FAST_RIGID = keep
+            sim_module.FAST_SEARCH = keep
     ref, new = runs[False], runs[True]
     assert ref.n_impacts > 20
     assert new.n_impacts == ref.n_impacts and new.status == ref.status
@@ -566,14 +566,14 @@ def test_modal_impact_search_equals_general_search(rng, n_modes):
         q = np.concatenate(([-rng.uniform(0.05, 0.5)], 0.01 * rng.normal(size=n_modes)))
         v = np.concatenate(([rng.uniform(-1.0, 1.0)], 0.05 * rng.normal(size=n_modes)))
         q[0] -= max(0.0, float(model.end_weights @ q))
-        keep = sim_module.FAST_RIGID
-        sim_module.FAST_RIGID = False
+        keep = sim_module.FAST_SEARCH
+        sim_module.FAST_SEARCH = False
         try:
             ref = simulate(model, load, InitialState(q, v), 40.0, max_impacts=60)
         except ValueError:  # an undamped resonance of a mode with a harmonic
             continue
         finally:
-            sim_module.FAST_RIGID = keep
+            sim_module.FAST_SEARCH = keep
         core = sim_module._core_for(model, load)
         D, B, M = core.data, core.free, n_modes + 1
         consts = _modal_search_constants(core)
@@ -623,12 +623,12 @@ def test_modal_simulate_equals_general_search(n_modes):
     start = InitialState(q - np.eye(n_modes + 1)[0] * 0.01, v)
     runs = {}
     for fast in (False, True):
-        keep = sim_module.FAST_RIGID
-        sim_module.FAST_RIGID = fast
+        keep = sim_module.FAST_SEARCH
+        sim_module.FAST_SEARCH = fast
         try:
             runs[fast] = simulate(model, load, start, orbit.phase + 200.0, t0=orbit.phase)
         finally:
-            sim_module.FAST_RIGID = keep
+            sim_module.FAST_SEARCH = keep
     ref, new = runs[False], runs[True]
     assert ref.n_impacts > 25 and new.n_impacts == ref.n_impacts and new.status == ref.status
     assert np.all(np.abs(new.impact_times - ref.impact_times) <= 1e-12 * (1.0 + np.abs(ref.impact_times)))

@@ -47,10 +47,11 @@ DWELL_MAX = 1e-2
 #: disagreement between the truncated bases, not a motion: the release is undone.
 MICRO_FLIGHT = 1e-6
 
-#: Search the rigid bar's impacts under one harmonic (``n_modes = 0``, e.g. a :class:`CosineLoad`)
-#: by the kernel's scalar closed-form search (``rigid1_crossing``); ``False`` gives the general
-#: certified search, the reference it is tested against (same impact times to rounding).
-FAST_RIGID = True
+#: Search the impacts after an impact by the kernel's specialised certified searches: the rigid bar
+#: under one harmonic in scalars (``rigid1_crossing``), flexible modes under a Fourier load in
+#: folded form (``modal_crossing``). ``False`` gives the general certified search
+#: (``find_crossing``), the reference they are tested against (the same impacts, to rounding).
+FAST_SEARCH = True
 
 #: Largest ``|t0|``, ``|t_end|`` and ``t_end - t0`` accepted by :func:`simulate` (about 1.6e7 periods).
 MAX_TIME = 1e8
@@ -391,7 +392,7 @@ class _Core:
         n, st, tn = K.run_free(D.kind, B.w2, self.d, self.R, self.c, D.p0, D.ks, D.pr, D.pim,
                                B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3,
                                B.vpb, B.apb, B.jpb, float(t), q, v, float(t_end), int(max_imp),
-                               CHATTER_TAIL, out_t, out_vel, out_q, out_v, FAST_RIGID)
+                               CHATTER_TAIL, out_t, out_vel, out_q, out_v, FAST_SEARCH)
         return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
