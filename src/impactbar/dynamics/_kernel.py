@@ -516,7 +516,7 @@ def _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, ta, qa, va, t_lim, htol):
+def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, habs, ta, qa, va, t_lim, htol):
     """:func:`find_crossing` for the end of the rigid bar, ``h = c0 q_0`` (``c0 > 0``), under one
     harmonic ``p = p0 + Re(p_k e^{ikt})`` (``p_k = pr + i pim``, particular amplitude
     ``H = hr + i hi``), in scalars (theory §2, eq. 8 with ``N = 0``).
@@ -546,7 +546,6 @@ def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, ta, qa, va, t_lim, htol):
     qpa = hr * ck - hi * sk
     vpa = -k * (hr * sk + hi * ck)
     dv = va - vpa
-    habs = math.hypot(hr, hi)
     kk = k * k
     a = ta
     q = qa + (qpa - qpa) + dv * 0.0 + p0 * 0.0  # advance(.., ta): the anchor as the kernel has it
@@ -596,14 +595,14 @@ def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, ta, qa, va, t_lim, htol):
                 q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t)
             return CROSS, t, q, v, qp, p
         horizon = min(hcap, TWO_PI)
-        tau = _quadratic_step(g, dh, A)
         # the signed bound: a quadratic, then its cubic term bounded on [0, S] by a quadratic one
         alpha = c0 * (max(mpp, 0.0) + err + kk * max(-qp, 0.0)) * (1.0 + 1e-12)
         beta = c0 * kk * max(-vp, 0.0) * (1.0 + 1e-12)
         S = min(_quadratic_step(g, dh, alpha), horizon)
-        s1 = min(_quadratic_step(g, dh, alpha + beta * S / 3.0), S)
-        if s1 > tau:
-            tau = s1
+        alpha1 = alpha + beta * S / 3.0
+        tau = S if beta == 0.0 else min(_quadratic_step(g, dh, alpha1), S)
+        if alpha1 > A:  # the two-sided bound's step may be the longer one
+            tau = max(tau, _quadratic_step(g, dh, A))
         if ddh < 0.0:
             # the curvature pulls the end away (leaving the stop): the cubic bound with the exact
             # h'' of find_crossing, |h'''| <= c0 (d |m''| + k^3 |H|)
@@ -840,11 +839,11 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
     bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``) or the end
     arrives tangentially and pressed (CONTACT).
 
-    With ``fast`` true the flights that follow an impact are searched by :func:`rigid1_crossing`
-    (the rigid bar under one harmonic) or :func:`modal_crossing` (flexible modes under a Fourier
-    load, all underdamped): the same impacts, to rounding. The first flight (from the start or a
-    release, where the end may leave the stop at rest and rounding decides whether it leaves),
-    and every other case, are searched by :func:`find_crossing`.
+    With ``fast`` true the flights that follow an impact (or start clearly off the stop, or leaving
+    it) are searched by :func:`rigid1_crossing` (the rigid bar under one harmonic) or
+    :func:`modal_crossing` (flexible modes under a Fourier load, all underdamped): the same impacts,
+    to rounding. A flight from rest on the stop (a release), where rounding decides whether the
+    end leaves, and every other case are searched by :func:`find_crossing`.
 
     Returns
     -------
@@ -865,6 +864,7 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
     k1 = pr1 = pim1 = hr1 = hi1 = 0.0
     if rigid1 and ks.size == 1:
         k1, pr1, pim1, hr1, hi1 = ks[0], pr[0], pim[0], hpr[0, 0], hpi[0, 0]
+    habs1 = math.hypot(hr1, hi1)
     qp1 = p1t = 0.0
     # the free-free bar under a Fourier load, every flexible mode underdamped: modal_crossing
     modal = fast and kind == 0 and M > 1 and w2[0] == 0.0
@@ -903,12 +903,24 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
         for i in range(M):
             htol += abs(c[i] * qa[i])
         htol *= 1e-14
-        fast1 = rigid1 and n > 0  # a flight after an impact; from the start or a release the
-        # end may leave the stop at rest, where rounding decides: those flights take the reference
+        # a flight after an impact, or from a start clearly off the stop or leaving it; from a
+        # release (or a start) at rest on the stop rounding decides whether the end leaves: those
+        # flights take the reference search
+        off = n > 0
+        if not off and (rigid1 or modal):
+            hs = vs = hm = vm = 0.0
+            for i in range(M):
+                hs += c[i] * qa[i]
+                vs += c[i] * va[i]
+                hm += abs(c[i] * qa[i])
+                vm += abs(c[i] * va[i])
+            off = hs < -1e-9 * hm or vs < -1e-9 * vm
+        fast1 = rigid1 and off
         if fast1:
             st, tc, q[0], v[0], qp1, p1t = rigid1_crossing(d, c[0], p0, k1, pr1, pim1, hr1, hi1,
-                                                           anchor[0], qa[0], va[0], t_end, htol)
-        elif modal and n > 0:
+                                                           habs1, anchor[0], qa[0], va[0], t_end,
+                                                           htol)
+        elif modal and off:
             st, tc = modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
                                     lam, wsq, hcr, hci, hwr, hwi, nq0, nv0, anchor[0], qa, va,
                                     t_end, htol, qpa, vpa, ca, cb, cva, cvb)

@@ -586,12 +586,12 @@ class _SegmentLog:
 
     def finish(self) -> _Segments:
         """The pieces, in arrays shrunk in place to their length."""
-        self._reserve(0)
         n = self.count
-        for a in (self.t, self.basis, self.entry):
-            a.resize((n,), refcheck=False)
-        for a in (self.q, self.v):
-            a.resize((n, self.M), refcheck=False)
+        if n != self.t.size:
+            for a in (self.t, self.basis, self.entry):
+                a.resize((n,), refcheck=False)
+            for a in (self.q, self.v):
+                a.resize((n, self.M), refcheck=False)
         return _Segments(self.M - 1, self.t, self.basis, self.entry, self.q, self.v, dict(self.frozen))
 
 
@@ -1038,7 +1038,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
-    segs = _SegmentLog(core.N, min(max_imp, 1024) + 2)  # a short run's pieces without a resize
+    segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
     segs.add(t0, _FREE, q, v, "start")
     times: list[np.ndarray] = []
     vels: list[np.ndarray] = []
@@ -1063,9 +1063,9 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             n, st, tn, ot, ov = core.run_free(t, q, v, t_end, left, oq, ovv)
             del oq, ovv  # no view of the log may outlive the call (it is resized in place)
             cap = min(cap * 2, 1 << 16)
-            if n:
-                times.append(ot.copy())
-                vels.append(ov.copy())
+            if n:  # (views of the kernel's fresh output, copied where it is mostly unused)
+                times.append(ot if 2 * n >= ot.base.size else ot.copy())
+                vels.append(ov if 2 * n >= ov.base.size else ov.copy())
                 segs.add_impacts(ot)
                 n_imp += n
             if st == K.FAILED:  # pragma: no cover - defensive
@@ -1147,13 +1147,20 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         qe, ve = qe[:, 0], ve[:, 0]
     if last.basis == _CONTACT:
         qe, ve = core.release_state(qe, ve)
-    imp_t = np.concatenate(times) if times else np.zeros(0)
-    imp_v = np.concatenate(vels) if vels else np.zeros(0)
+    imp_t = _joined(times)
+    imp_v = _joined(vels)
     ci = np.array(contacts, dtype=float).reshape(-1, 2)
     return Trajectory(model=core.model, load=core.load, t0=t0, t_end=t,
                       impact_times=imp_t, impact_velocities=imp_v, contact_intervals=ci,
                       final_state=InitialState._trusted(qe, ve), status=status, _core=core,
                       _segments=segs.finish(), n_release_retries=retries)
+
+
+def _joined(blocks: list) -> np.ndarray:
+    """The blocks of a run's impact data as one array (the block itself when there is one)."""
+    if len(blocks) == 1:
+        return blocks[0]
+    return np.concatenate(blocks) if blocks else np.zeros(0)
 
 
 def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
