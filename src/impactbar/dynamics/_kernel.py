@@ -18,6 +18,12 @@ roots are steps that cannot cross ``h = 0``. ``A`` and ``J`` come from the energ
 of each mode, ``E_n = (v_n - v_pn)^2 + w2_n (q_n - q_pn)^2``, which never grows
 (``dE/dt = -2 d v^2``). Once ``4 A |h| < h'^2`` the root is bracketed and unique on
 ``[a, a + 2|h|/h']`` and Newton (safeguarded by bisection) refines it to rounding.
+
+Two specialised searches, with the same guarantee and the same impacts to rounding, take the
+flights after an impact (``run_free(..., fast=True)``): :func:`rigid1_crossing` for the rigid bar
+under one harmonic, in scalars with bounds that keep the signs of the present curvature, and
+:func:`modal_crossing` for flexible modes under a Fourier load, in folded form (one sine and cosine
+per mode) with coarse steps on a bound that needs no mode at all. Both refine by Halley steps.
 """
 
 from __future__ import annotations

@@ -4,7 +4,9 @@ Between impacts the bar moves in closed form (theory §2, eq. 8), so there is no
 time-stepping error; a piecewise-constant load (the hydraulic square wave, eq. 34) is integrated
 exactly piece by piece. The next impact, the first ``t`` with ``u(1,t) = c . q(t) = 0`` and
 ``u_t(1,t) > 0``, is found with a guaranteed search (bounds on ``|u_tt(1,t)|`` and
-``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding.
+``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding;
+after an impact the rigid bar under one harmonic and flexible bars under a Fourier load take
+specialised searches with the same guarantee (``FAST_SEARCH``).
 At an impact ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11); under the wave law (``BarModel(impact="wave")``,
 theory §4b) each impact is instead a contact window of length ``2/s`` with the long rod, solved by
 characteristics (:func:`impactbar.dynamics.impact.wave_impact`), after which the flight resumes.
@@ -547,8 +549,9 @@ class _SegmentLog:
         self.t[i] = t
         self.basis[i] = basis
         self.entry[i] = _ENTRIES.index(entry)
-        self.q[i] = 0.0
-        self.v[i] = 0.0
+        if q.size < self.M:  # a contact state, one coordinate short
+            self.q[i, q.size:] = 0.0
+            self.v[i, v.size:] = 0.0
         self.q[i, :q.size] = q
         self.v[i, :v.size] = v
         if frozen is not None:
@@ -1139,14 +1142,16 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         t = tr
         mode = _FREE
     # ---- final state ----
-    last = segs.last()
-    if t == last.t and last.basis == _FREE:  # the run ended on a piece's start (max_impacts)
-        qe, ve = last.q, last.v
+    i = segs.count - 1
+    if t == segs.t[i] and segs.basis[i] == _FREE:  # the run ended on a piece's start (max_impacts)
+        qe, ve = segs.q[i].copy(), segs.v[i].copy()
+        last = None
     else:
+        last = segs.last()
         qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
         qe, ve = qe[:, 0], ve[:, 0]
-    if last.basis == _CONTACT:
-        qe, ve = core.release_state(qe, ve)
+        if last.basis == _CONTACT:
+            qe, ve = core.release_state(qe, ve)
     imp_t = _joined(times)
     imp_v = _joined(vels)
     ci = np.array(contacts, dtype=float).reshape(-1, 2)
