@@ -422,3 +422,218 @@ def test_certified_phase_roots_see_a_sign_change_below_the_smallest_normal():
     assert len(a) == len(b) == 2
     assert np.allclose([x for x, _ in a], [x for x, _ in b], atol=1e-10)
     assert np.allclose([x for x, _ in b], [0.0, math.pi], atol=1e-10)
+
+
+def _random_rigid_run(rng):
+    """A random rigid bar under one harmonic and a start, with the general search's run."""
+    import importlib
+
+    from impactbar import InitialState, simulate
+
+    sim_module = importlib.import_module("impactbar.simulation.simulate")
+    k = int(rng.integers(1, 4))
+    d, R, p0, pk = _random_rigid_case(rng, k)
+    model, load = BarModel(2.0, d, R, 0), CosineLoad(p0, pk, k)
+    start = InitialState.rigid(-rng.uniform(0.0, 1.0), rng.uniform(-2.0, 2.0))
+    t0 = rng.uniform(0.0, TWO_PI)
+    keep = sim_module.FAST_SEARCH
+    sim_module.FAST_SEARCH = False
+    try:
+        ref = simulate(model, load, start, t0 + 60.0, t0=t0)
+    finally:
+        sim_module.FAST_SEARCH = keep
+    return sim_module._core_for(model, load), ref
+
+
+def test_rigid_one_harmonic_impact_search_equals_general_search(rng):
+    """The rigid bar's scalar impact search (kernel ``rigid1_crossing``) finds the same next event
+    as the general certified search (``find_crossing``) from the start of every flight between two
+    impacts of random runs (random d, R, p0, pk, k, starts; chatter and sticking included): the
+    same status, the impact time to 1e-12 (relative to 1 + |t|) wherever the arrival is not grazing
+    (``|u_t| >= 1e-3``), and below that to the rounding of the end's displacement (the time of
+    a grazing arrival is only defined to ``noise / |u_t|``)."""
+    from impactbar.dynamics import _kernel as K
+
+    n_flights = n_slow = 0
+    for _ in range(40):
+        core, ref = _random_rigid_run(rng)
+        D, B = core.data, core.free
+        seg = ref._segments
+        for i in np.nonzero((seg.entry[:-1] == 1) & (seg.entry[1:] == 1))[0]:  # the flights taken
+            t, qa, va = float(seg.t[i]), seg.q[i].copy(), seg.v[i].copy()
+            htol = 1e-14 * abs(qa[0])
+            q, v = np.empty(1), np.empty(1)
+            st, tc = K.find_crossing(D.kind, B.w2, core.d, core.c, 0.0, D.p0, D.ks, D.pr, D.pim, B.hpr,
+                                     B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3, B.vpb, B.apb,
+                                     B.jpb, np.array([t]), qa.copy(), va.copy(), ref.t_end, htol, q, v,
+                                     *(np.empty(1) for _ in range(4)))
+            st2, tc2, q2, v2, _, _ = K.rigid1_crossing(core.d, 1.0, D.p0, D.ks[0], D.pr[0], D.pim[0],
+                                                       B.hpr[0, 0], B.hpi[0, 0],
+                                                       math.hypot(B.hpr[0, 0], B.hpi[0, 0]), t, qa[0],
+                                                       va[0], ref.t_end, htol)
+            assert st2 == st
+            n_flights += 1
+            if st != K.CROSS:
+                continue
+            scale = 1.0 + abs(tc)
+            if abs(v[0]) >= 1e-3:
+                assert abs(tc2 - tc) <= 1e-12 * scale
+                assert v2 == pytest.approx(v[0], rel=1e-10, abs=1e-9)
+            else:
+                n_slow += 1
+                assert abs(tc2 - tc) * abs(v[0]) <= 1e-14 * scale
+    assert n_flights > 200 and n_slow > 10
+
+
+@pytest.mark.parametrize("case", ["settles", "chatter", "sticks"])
+def test_rigid_one_harmonic_simulate_equals_general_search(case):
+    """simulate with the rigid bar's scalar search gives the run of the general search: the same
+    impacts (count, times to 1e-12 relative, velocities), contact intervals, status and final
+    state; on a run that settles on a stable orbit, one that chatters into permanent contact,
+    and one that sticks and releases every period (to 1e-9 where chatter's grazing bounces
+    carry rounding from one bounce to the next)."""
+    import importlib
+
+    from impactbar import InitialState, simulate
+
+    sim_module = importlib.import_module("impactbar.simulation.simulate")
+    model, load = BarModel(1.37, 0.02, 0.8, 0), CosineLoad(1.2, 1.0)
+    orbit = next(o for o in periodic_orbits(model, load) if o.stable)
+    q, v = orbit.modal_state_after_impact
+    model, load, start, t0 = {
+        "settles": (model, load, InitialState(q - [0.05], v), orbit.phase),
+        "chatter": (BarModel(1.37, 0.1, 0.5, 0), CosineLoad(0.3, 1.0), InitialState.rigid(-0.1, 0.0), 0.0),
+        "sticks": (BarModel(2.0, 0.05, 0.0, 0), CosineLoad(0.2, 1.0, 2), InitialState.rigid(-0.2, 0.5), 0.0),
+    }[case]
+    runs = {}
+    for fast in (False, True):
+        keep = sim_module.FAST_SEARCH
+        sim_module.FAST_SEARCH = fast
+        try:
+            runs[fast] = simulate(model, load, start, t0 + 400.0, t0=t0)
+        finally:
+            sim_module.FAST_SEARCH = keep
+    ref, new = runs[False], runs[True]
+    assert ref.n_impacts > 20
+    assert new.n_impacts == ref.n_impacts and new.status == ref.status
+    if case != "chatter":
+        assert np.all(np.abs(new.impact_times - ref.impact_times) <= 1e-12 * (1.0 + np.abs(ref.impact_times)))
+    # a chatter sequence ends in bounces of speed ~1e-6, timed to rounding / speed, and the next
+    # bounces start from there: its times agree to that conditioning
+    np.testing.assert_allclose(new.impact_times, ref.impact_times, rtol=1e-9, atol=1e-9)
+    np.testing.assert_allclose(new.impact_velocities, ref.impact_velocities, rtol=1e-6, atol=1e-9)
+    assert new.contact_intervals.shape == ref.contact_intervals.shape
+    np.testing.assert_allclose(new.contact_intervals, ref.contact_intervals, rtol=1e-9, atol=1e-9)
+    if case == "chatter":
+        assert ref.contact_intervals.shape[0] >= 2
+    if case == "sticks":
+        assert ref.contact_intervals.shape[0] >= 5
+
+
+def _modal_search_constants(core):
+    """The per-model inputs of the kernel's ``modal_crossing``, formed as ``run_free`` forms them."""
+    B, D, c, d = core.free, core.data, core.c, core.d
+    lam = np.sqrt(np.abs(B.w2 - 0.25 * d * d))
+    hs = np.hypot(B.hpr, B.hpi).sum(axis=1)
+    static = np.where(B.w2 > 0, abs(D.p0) / np.where(B.w2 > 0, B.w2, 1.0), 0.0)
+    return (lam, np.sqrt(B.w2), c @ B.hpr, c @ B.hpi, (c * B.w2) @ B.hpr, (c * B.w2) @ B.hpi,
+            float(np.sum(2 * np.abs(c) * (hs + static))), float(np.sum(2 * np.abs(c) * B.vpb)))
+
+
+@pytest.mark.parametrize("n_modes", [1, 4, 12, 40])
+def test_modal_impact_search_equals_general_search(rng, n_modes):
+    """The flexible bar's impact search in folded form (kernel ``modal_crossing``: one sine and
+    cosine per mode, coarse steps on a bound free of the modes) finds the same next event as the
+    general certified search (``find_crossing``) from the start of every flight between two impacts
+    of random runs
+    (random s, d, R, Fourier loads with one to three harmonics, random modal starts): the same
+    status, the impact time to 1e-12 relative to 1 + |t| where the arrival is fast (``|u_t| >= 0.1``),
+    and for every arrival to the rounding of the end's displacement (a slow arrival's time is only
+    defined to ``noise / |u_t|``)."""
+    import importlib
+
+    from impactbar import InitialState, simulate
+    from impactbar.dynamics import _kernel as K
+
+    sim_module = importlib.import_module("impactbar.simulation.simulate")
+    n_flights = n_slow = 0
+    for _ in range(12 if n_modes < 40 else 4):
+        s = rng.uniform(0.5, 3.0)
+        d = 0.0 if rng.random() < 0.25 else 0.2 * rng.random()
+        R = rng.uniform(0.0, 0.95)
+        harmonics = rng.normal(size=int(rng.integers(1, 4))) * (rng.random() < 0.5 or 1j)
+        load = FourierLoad(rng.uniform(-0.1, 1.0), harmonics)
+        model = BarModel(s, d, R, n_modes)
+        q = np.concatenate(([-rng.uniform(0.05, 0.5)], 0.01 * rng.normal(size=n_modes)))
+        v = np.concatenate(([rng.uniform(-1.0, 1.0)], 0.05 * rng.normal(size=n_modes)))
+        q[0] -= max(0.0, float(model.end_weights @ q))
+        keep = sim_module.FAST_SEARCH
+        sim_module.FAST_SEARCH = False
+        try:
+            ref = simulate(model, load, InitialState(q, v), 40.0, max_impacts=60)
+        except ValueError:  # an undamped resonance of a mode with a harmonic
+            continue
+        finally:
+            sim_module.FAST_SEARCH = keep
+        core = sim_module._core_for(model, load)
+        D, B, M = core.data, core.free, n_modes + 1
+        consts = _modal_search_constants(core)
+        seg = ref._segments
+        t_lim = ref.t_end + 10.0  # past the run's last impact (max_impacts)
+        # the flights the run took: from an impact to the next (not those a chatter jump skipped,
+        # whose start sits on the stop to rounding)
+        for i in np.nonzero((seg.entry[:-1] == 1) & (seg.entry[1:] == 1))[0]:
+            t, qa, va = float(seg.t[i]), seg.q[i].copy(), seg.v[i].copy()
+            htol = 1e-14 * float(np.sum(np.abs(core.c * qa)))
+            qq, vv = np.empty(M), np.empty(M)
+            st, tc = K.find_crossing(D.kind, B.w2, core.d, core.c, 0.0, D.p0, D.ks, D.pr, D.pim, B.hpr,
+                                     B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3, B.vpb, B.apb,
+                                     B.jpb, np.array([t]), qa.copy(), va.copy(), t_lim, htol, qq, vv,
+                                     *(np.empty(M) for _ in range(4)))
+            st2, tc2 = K.modal_crossing(B.w2, core.d, core.c, D.p0, D.ks, D.pr, D.pim, B.hpr, B.hpi,
+                                        D.psup, D.p1, B.vpb, B.apb, B.jpb, *consts, t, qa, va,
+                                        t_lim, htol, *(np.empty(M) for _ in range(6)))
+            assert st2 == st
+            n_flights += 1
+            if st != K.CROSS:
+                continue
+            speed = abs(float(core.c @ vv))
+            scale = 1.0 + abs(tc)
+            if speed >= 0.1:
+                assert abs(tc2 - tc) <= 1e-12 * scale
+            else:
+                n_slow += 1
+            # the end's displacement at the two times agrees to its rounding
+            assert abs(tc2 - tc) * speed <= 1e-13 * scale * (1.0 + float(np.sum(np.abs(core.c * qq))))
+    assert n_flights > 50
+
+
+@pytest.mark.parametrize("n_modes", [8, 64])
+def test_modal_simulate_equals_general_search(n_modes):
+    """simulate with the folded modal search gives the run of the general search, near a stable
+    orbit (the benchmark's case, 8 and 64 modes): the same impacts to 1e-12, the same final
+    state to 1e-10."""
+    import importlib
+
+    from impactbar import InitialState, simulate
+
+    sim_module = importlib.import_module("impactbar.simulation.simulate")
+    model, load = BarModel(1.37, 0.02, 0.8, n_modes), CosineLoad(1.2, 1.0)
+    orbit = next(o for o in periodic_orbits(model, load) if o.stable)
+    q, v = orbit.modal_state_after_impact
+    start = InitialState(q - np.eye(n_modes + 1)[0] * 0.01, v)
+    runs = {}
+    for fast in (False, True):
+        keep = sim_module.FAST_SEARCH
+        sim_module.FAST_SEARCH = fast
+        try:
+            runs[fast] = simulate(model, load, start, orbit.phase + 200.0, t0=orbit.phase)
+        finally:
+            sim_module.FAST_SEARCH = keep
+    ref, new = runs[False], runs[True]
+    assert ref.n_impacts > 25 and new.n_impacts == ref.n_impacts and new.status == ref.status
+    assert np.all(np.abs(new.impact_times - ref.impact_times) <= 1e-12 * (1.0 + np.abs(ref.impact_times)))
+    np.testing.assert_allclose(new.impact_velocities, ref.impact_velocities, rtol=1e-10)
+    for a, b in ((new.final_state.modal_displacement, ref.final_state.modal_displacement),
+                 (new.final_state.modal_velocity, ref.final_state.modal_velocity)):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10 * float(np.max(np.abs(b))))

@@ -21,33 +21,38 @@ def check_real(
     hi_open: bool = False,
 ) -> float:
     """Return ``value`` as a finite float, or raise ``ValueError`` naming ``name`` and its range."""
-    rng = _range_text(lo, hi, lo_open, hi_open)
+    if type(value) is float and math.isfinite(value) and (lo is None or lo < value) \
+            and (hi is None or value < hi):  # the common case, inside the range
+        return value
     if isinstance(value, bool) or not isinstance(value, numbers.Real | np.floating | np.integer):
+        rng = _range_text(lo, hi, lo_open, hi_open)
         raise ValueError(f"{name} must be a real number {rng}; got {value!r} ({type(value).__name__})")
     try:
         v = float(value)
     except OverflowError:  # an int beyond the float range
+        rng = _range_text(lo, hi, lo_open, hi_open)
         raise ValueError(f"{name} must be a finite real number {rng}; got an integer beyond the "
                          "float range") from None
     if not math.isfinite(v):
-        raise ValueError(f"{name} must be a finite real number {rng}; got {v}")
+        raise ValueError(f"{name} must be a finite real number {_range_text(lo, hi, lo_open, hi_open)}; "
+                         f"got {v}")
     bad = (
         (lo is not None and (v < lo or (lo_open and v == lo)))
         or (hi is not None and (v > hi or (hi_open and v == hi)))
     )
     if bad:
-        raise ValueError(f"{name} must be {rng}; got {v}")
+        raise ValueError(f"{name} must be {_range_text(lo, hi, lo_open, hi_open)}; got {v}")
     return v
 
 
 def check_int(name: str, value, *, lo: int | None = None, hi: int | None = None) -> int:
     """Return ``value`` as an int, or raise ``ValueError`` naming ``name`` and its range."""
-    rng = _range_text(lo, hi, False, False)
     if isinstance(value, bool) or not isinstance(value, numbers.Integral | np.integer):
+        rng = _range_text(lo, hi, False, False)
         raise ValueError(f"{name} must be an integer {rng}; got {value!r} ({type(value).__name__})")
     v = int(value)
     if (lo is not None and v < lo) or (hi is not None and v > hi):
-        raise ValueError(f"{name} must be an integer {rng}; got {v}")
+        raise ValueError(f"{name} must be an integer {_range_text(lo, hi, False, False)}; got {v}")
     return v
 
 

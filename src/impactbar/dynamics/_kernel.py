@@ -18,6 +18,12 @@ roots are steps that cannot cross ``h = 0``. ``A`` and ``J`` come from the energ
 of each mode, ``E_n = (v_n - v_pn)^2 + w2_n (q_n - q_pn)^2``, which never grows
 (``dE/dt = -2 d v^2``). Once ``4 A |h| < h'^2`` the root is bracketed and unique on
 ``[a, a + 2|h|/h']`` and Newton (safeguarded by bisection) refines it to rounding.
+
+Two specialised searches, with the same guarantee and the same impacts to rounding, take the
+flights after an impact (``run_free(..., fast=True)``): :func:`rigid1_crossing` for the rigid bar
+under one harmonic, in scalars with bounds that keep the signs of the present curvature, and
+:func:`modal_crossing` for flexible modes under a Fourier load, in folded form (one sine and cosine
+per mode) with coarse steps on a bound that needs no mode at all. Both refine by Halley steps.
 """
 
 from __future__ import annotations
@@ -231,11 +237,12 @@ def _cubic(g, dh, ddh, J, s):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _cubic_step(g, dh, ddh, J, smax):
-    """A step ``s`` with ``f(x) = g + dh x + ddh x^2/2 + J x^3/6 < 0`` on ``[0, s)`` (``g <= 0``,
-    ``J >= 0``): the first root of ``f``, from below, or ``smax`` if there is none before it."""
-    # monotone pieces of f: split at the positive roots of f' = dh + ddh x + J x^2 / 2
-    cuts = np.empty(3)
+def _cubic_cuts(dh, ddh, J, smax):
+    """The positive roots below ``smax`` of ``f' = dh + ddh x + J x^2 / 2`` (``J >= 0``), where the
+    cubic of :func:`_cubic_step` turns: their number and the two in increasing order (``smax`` for
+    those missing)."""
+    c1 = smax
+    c2 = smax
     nc = 0
     if J > 0.0:
         disc = ddh * ddh - 2.0 * J * dh
@@ -243,18 +250,28 @@ def _cubic_step(g, dh, ddh, J, smax):
             r = math.sqrt(disc)
             for x in ((-ddh - r) / J, (-ddh + r) / J):
                 if 0.0 < x < smax:
-                    cuts[nc] = x
+                    if nc == 0:
+                        c1 = x
+                    else:
+                        c2 = x
                     nc += 1
     elif ddh != 0.0:
         x = -dh / ddh
         if 0.0 < x < smax:
-            cuts[nc] = x
+            c1 = x
             nc += 1
-    cuts[nc] = smax
-    nc += 1
+    return nc, c1, c2
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _cubic_step(g, dh, ddh, J, smax):
+    """A step ``s`` with ``f(x) = g + dh x + ddh x^2/2 + J x^3/6 < 0`` on ``[0, s)`` (``g <= 0``,
+    ``J >= 0``): the first root of ``f``, from below, or ``smax`` if there is none before it."""
+    # monotone pieces of f, split at the cuts (scalars, so that a step allocates nothing)
+    nc, c1, c2 = _cubic_cuts(dh, ddh, J, smax)
     lo = 0.0
-    for i in range(nc):
-        hi = cuts[i]
+    for i in range(nc + 1):
+        hi = smax if i == nc else (c1 if i == 0 else c2)
         fh = _cubic(g, dh, ddh, J, hi)
         if fh >= 0.0:
             # f < 0 at lo, >= 0 at hi, monotone between: bisection keeps lo safe
@@ -270,6 +287,60 @@ def _cubic_step(g, dh, ddh, J, smax):
                     break
             return lo
         lo = hi
+    return smax
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _quadratic_step(g, dh, A):
+    """First positive root of ``g + dh s + A s^2 / 2`` (``g <= 0``, ``A >= 0``), ``inf`` if none."""
+    if A == 0.0:
+        return -g / dh if dh > 0.0 else math.inf
+    A2 = 2.0 * A * (-g)
+    if dh >= 0.0:
+        den = dh + math.sqrt(dh * dh + A2)
+        return 2.0 * (-g) / den if den > 0.0 else 0.0
+    return (-dh + math.sqrt(dh * dh + A2)) / A
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _cubic_step_fast(g, dh, ddh, J, smax):
+    """:func:`_cubic_step` (the same certified step, to 2 %) with the root of each monotone piece
+    found by the Illinois variant of regula falsi instead of bisection: the kept end ``lo`` always
+    has ``f(lo) < 0``, so ``f < 0`` on ``[0, lo]``."""
+    nc, c1, c2 = _cubic_cuts(dh, ddh, J, smax)
+    lo = 0.0
+    flo = g
+    for i in range(nc + 1):
+        hi = smax if i == nc else (c1 if i == 0 else c2)
+        fh = _cubic(g, dh, ddh, J, hi)
+        if fh >= 0.0:
+            if flo >= 0.0:  # g = 0 at a cut: no safe step beyond lo
+                return lo
+            side = 0
+            for _ in range(200):
+                x = lo - flo * (hi - lo) / (fh - flo)
+                if not (lo < x < hi):
+                    x = 0.5 * (lo + hi)
+                    if x <= lo or x >= hi:
+                        break
+                fx = _cubic(g, dh, ddh, J, x)
+                if fx < 0.0:
+                    lo = x
+                    flo = fx
+                    if side == -1:
+                        fh *= 0.5
+                    side = -1
+                else:
+                    hi = x
+                    fh = fx
+                    if side == 1:
+                        flo *= 0.5
+                    side = 1
+                if hi - lo <= 2e-2 * hi:
+                    break
+            return lo
+        lo = hi
+        flo = fh
     return smax
 
 
@@ -363,7 +434,7 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
         g = min(h, 0.0)
         if 0.0 < dh <= dnoise:
             dh = 0.0  # a slope lost in rounding
-        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= hcap:
+        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= horizon:
             # bracketed, unique root on [a, a + 2|g|/dh]: safeguarded Newton
             lo = a
             hi = a + 2.0 * (-g) / dh
@@ -390,22 +461,18 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
                 t = tn  # the converged Newton point, a rounding error past the last h < 0
             advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp)
             return CROSS, t
-        A2 = 2.0 * A * (-g)
-        if A == 0.0:
-            tau = -g / dh if dh > 0.0 else math.inf
-        elif dh >= 0.0:
-            den = dh + math.sqrt(dh * dh + A2)
-            tau = 2.0 * (-g) / den if den > 0.0 else 0.0
-        else:
-            tau = (-dh + math.sqrt(dh * dh + A2)) / A
+        tau = _quadratic_step(g, dh, A)
         # the cubic bound h + h' s + h'' s^2/2 + J s^3/6 is far better where h'' < 0 is small
-        # (leaving the stop): take the larger of the two certified steps
-        tc = _cubic_step(g, dh, ddh, J, hcap)
+        # (leaving the stop): take the larger of the two certified steps. Both hold only where
+        # A and J do, on [a, a + horizon] (the rigid mode's velocity bound grows with the horizon)
+        tc = _cubic_step(g, dh, ddh, J, horizon)
         if tc > tau:
             tau = tc
         if tau <= 4e-16 * (1.0 + abs(a)):
             # tangential contact: h = 0, h' = 0 to rounding, and h'' >= 0: pressed on the stop
             return TOUCH, a
+        if tau > horizon:
+            tau = horizon
         if tau >= hcap:
             a = t_cap
         else:
@@ -417,9 +484,359 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _halley(t, h, dh, ddh, lo, hi):
+    """One safeguarded Halley step for the root of an increasing ``h`` bracketed by ``[lo, hi]``
+    from ``t`` (``h, h', h''`` there): the new bracket, the next point (bisection where the step
+    leaves the bracket) and whether the step or the bracket is down to rounding."""
+    if h < 0.0:
+        lo = t
+    else:
+        hi = t
+    den = 2.0 * dh * dh - h * ddh
+    step = -2.0 * h * dh / den if dh > 0.0 and den > 0.0 else 0.0
+    tn = t + step
+    if abs(step) <= 1e-15 * (1.0 + abs(t)) or hi - lo <= 4e-16 * (1.0 + abs(t)):
+        return lo, hi, tn, True
+    if not (lo < tn < hi):
+        tn = 0.5 * (lo + hi)
+    return lo, hi, tn, False
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t):
+    """The rigid bar (one mode, ``w2 = 0``) under ``p0 + Re(p_k e^{ikt})`` at ``t`` from the anchor
+    ``(ta, qa)`` with ``dv = v_a - v_p(ta)``: ``q, v``, the particular ``q_p, v_p`` and the load
+    ``p``. The arithmetic of :func:`advance` and :func:`load_value` for this case, term by term,
+    with each transcendental evaluated once."""
+    tau = t - ta
+    ck = math.cos(k * t)
+    sk = math.sin(k * t)
+    qp = hr * ck - hi * sk
+    vp = -k * (hr * sk + hi * ck)
+    b, c = _bc(d, tau)
+    ed = math.exp(-d * tau)
+    q = qa + (qp - qpa) + dv * b + p0 * c
+    v = vp + dv * ed + p0 * b
+    p = p0 + (pr * ck - pim * sk)
+    return q, v, qp, vp, p
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, habs, ta, qa, va, t_lim, htol):
+    """:func:`find_crossing` for the end of the rigid bar, ``h = c0 q_0`` (``c0 > 0``), under one
+    harmonic ``p = p0 + Re(p_k e^{ikt})`` (``p_k = pr + i pim``, particular amplitude
+    ``H = hr + i hi``), in scalars (theory §2, eq. 8 with ``N = 0``).
+
+    Between impacts ``q = m(tau) + q_p(t)`` with ``m'' = D e^{-d tau}`` for a constant ``D`` (the
+    harmonic particular solution obeys ``q_p'' + d q_p' = p - p0``, so ``p - d v = m'' - k^2 q_p``)
+    and ``q_p(t + s) = q_p cos ks + (q_p'/k) sin ks``. From ``1 - cos x <= x^2/2`` and
+    ``0 <= x - sin x <= x^3/6`` (``x >= 0``), for every ``s >= 0``::
+
+        q(t + s) <= q + q' s + (max(m'', 0) + k^2 max(-q_p, 0)) s^2/2 + k^2 max(-q_p', 0) s^3/6,
+
+    a bound with the signs of the present curvature in it. Its first root (bounded from below by a
+    quadratic) is a step that cannot cross an impact; so is the step of the two-sided bound
+    ``|q''| <= |m''| + k^2 |H|`` (``|m''|`` only decreases), and where ``q'' < 0`` (leaving the
+    stop) that of the cubic bound of :func:`find_crossing`, with ``|q'''| <= d |m''| + k^3 |H|``.
+    Once the root is bracketed (the test of :func:`find_crossing` with the two-sided bound),
+    safeguarded Halley steps refine it to rounding from the root of the local quadratic model.
+
+    Returns
+    -------
+    status, t, q, v, qp, p : int and floats
+        As :func:`find_crossing`, with the state ``q, v``, the particular ``q_p`` and the load at
+        ``t``.
+    """
+    ck = math.cos(k * ta)
+    sk = math.sin(k * ta)
+    qpa = hr * ck - hi * sk
+    vpa = -k * (hr * sk + hi * ck)
+    dv = va - vpa
+    kk = k * k
+    a = ta
+    q = qa + (qpa - qpa) + dv * 0.0 + p0 * 0.0  # advance(.., ta): the anchor as the kernel has it
+    v = vpa + dv * 1.0 + p0 * 0.0
+    qp = qpa
+    vp = vpa
+    p = p0 + (pr * ck - pim * sk)
+    for _ in range(_MAX_STEPS):
+        h = c0 * q
+        dh = c0 * v
+        ddh = c0 * (p - d * v)
+        noise = 1e-14 * c0 * (abs(q) + abs(qp))
+        dnoise = 1e-14 * c0 * (abs(v) + abs(vp))
+        if h > htol + noise or (h >= 0.0 and dh > dnoise):
+            return CROSS, a, q, v, qp, p
+        hcap = t_lim - a
+        if hcap <= 0.0:
+            return NONE, t_lim, q, v, qp, p
+        mpp = p - d * v + kk * qp  # m'' = D e^{-d tau} here, and its rounding
+        err = 1e-15 * (abs(p) + d * abs(v) + kk * abs(qp))
+        A = c0 * (abs(mpp) + err + kk * habs) * (1.0 + 1e-12)
+        g = min(h, 0.0)
+        if 0.0 < dh <= dnoise:
+            dh = 0.0  # a slope lost in rounding
+        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= hcap:
+            # bracketed, unique root on [a, a + 2|g|/dh] where h' > 0: safeguarded Halley from
+            # the root of the local quadratic model
+            lo = a
+            hib = a + 2.0 * (-g) / dh
+            t = a + _quadratic_step(g, dh, max(ddh, 0.0)) if ddh >= 0.0 else a - g / dh
+            if not (lo < t <= hib):
+                t = a - g / dh
+                if t > hib:
+                    t = hib
+            tn = t
+            for _it in range(100):
+                q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t)
+                h = c0 * q
+                dh = c0 * v
+                ddh = c0 * (p - d * v)
+                lo, hib, tn, done = _halley(t, h, dh, ddh, lo, hib)
+                if done:
+                    break
+                t = tn
+            if h < 0.0:
+                t = tn  # the converged point, a rounding error past the last h < 0
+                q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t)
+            return CROSS, t, q, v, qp, p
+        horizon = min(hcap, TWO_PI)
+        # the signed bound: a quadratic, then its cubic term bounded on [0, S] by a quadratic one
+        alpha = c0 * (max(mpp, 0.0) + err + kk * max(-qp, 0.0)) * (1.0 + 1e-12)
+        beta = c0 * kk * max(-vp, 0.0) * (1.0 + 1e-12)
+        S = min(_quadratic_step(g, dh, alpha), horizon)
+        alpha1 = alpha + beta * S / 3.0
+        tau = S if beta == 0.0 else min(_quadratic_step(g, dh, alpha1), S)
+        if alpha1 > A:  # the two-sided bound's step may be the longer one
+            tau = max(tau, _quadratic_step(g, dh, A))
+        if ddh < 0.0:
+            # the curvature pulls the end away (leaving the stop): the cubic bound with the exact
+            # h'' of find_crossing, |h'''| <= c0 (d |m''| + k^3 |H|)
+            J = c0 * (d * (abs(mpp) + err) + kk * k * habs) * (1.0 + 1e-12)
+            tc = _cubic_step_fast(g, dh, ddh, J, horizon)
+            if tc > tau:
+                tau = tc
+        if tau <= 4e-16 * (1.0 + abs(a)):
+            return TOUCH, a, q, v, qp, p
+        if tau > horizon:
+            tau = horizon
+        if tau >= hcap:
+            a = t_lim
+        else:
+            a = a + tau
+        q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, a)
+    return FAIL, a, q, v, qp, p
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _modal_eval(d, c0, p0, ks, pr, pim, lam, w2, hcr, hci, hwr, hwi, csum, sq0, sw0,
+                ta, r0, dv0, ca, cb, cva, cvb, t):
+    """``h, h', h''`` of the end ``h = c . q`` at ``t`` in the folded form of the flight from
+    ``ta`` (see :func:`modal_crossing`), and the rigid mode's free velocity ``v_0 - v_p0``."""
+    tau = t - ta
+    b, c = _bc(d, tau)
+    ed = math.exp(-d * tau)
+    e = math.exp(-0.5 * d * tau)
+    p = p0
+    hq = sq0
+    hv = 0.0
+    hw = sw0
+    for j in range(ks.size):
+        k = ks[j]
+        ck = math.cos(k * t)
+        sk = math.sin(k * t)
+        p += pr[j] * ck - pim[j] * sk
+        hq += hcr[j] * ck - hci[j] * sk
+        hv -= k * (hcr[j] * sk + hci[j] * ck)
+        hw += hwr[j] * ck - hwi[j] * sk
+    fq = 0.0
+    fv = 0.0
+    fw = 0.0
+    if tau == 0.0:  # at the anchor
+        for n in range(1, w2.size):
+            fq += ca[n]
+            fv += cva[n]
+            fw += w2[n] * ca[n]
+    else:
+        for n in range(1, w2.size):
+            x = lam[n] * tau
+            cs = math.cos(x)
+            sn = math.sin(x)
+            y = ca[n] * cs + cb[n] * sn
+            fq += y
+            fv += cva[n] * cs + cvb[n] * sn
+            fw += w2[n] * y
+    rv = dv0 * ed + p0 * b
+    h = c0 * (r0 + dv0 * b + p0 * c) + hq + e * fq
+    dh = c0 * rv + hv + e * fv
+    ddh = p * csum - d * dh - (hw + e * fw)
+    return h, dh, ddh, rv
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _coarse_eval(d, c0, p0, ks, hcr, hci, sq0, ta, r0, dv0, t):
+    """The end's motion without the flexible modes' free vibration at ``t`` (see
+    :func:`modal_crossing`): ``G, G', G''`` of ``c0 m(tau) + sum_n c_n q_pn(t)`` and the rigid
+    mode's free velocity ``m'``."""
+    tau = t - ta
+    b, c = _bc(d, tau)
+    ed = math.exp(-d * tau)
+    hq = sq0
+    hv = 0.0
+    h2 = 0.0
+    for j in range(ks.size):
+        k = ks[j]
+        ck = math.cos(k * t)
+        sk = math.sin(k * t)
+        x = hcr[j] * ck - hci[j] * sk
+        hq += x
+        hv -= k * (hcr[j] * sk + hci[j] * ck)
+        h2 -= k * k * x
+    rv = dv0 * ed + p0 * b
+    return c0 * (r0 + dv0 * b + p0 * c) + hq, c0 * rv + hv, c0 * (p0 - d * rv) + h2, rv
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
+                   lam, wsq, hcr, hci, hwr, hwi, nq0, nv0, ta, qa, va, t_lim, htol, qpa, vpa,
+                   ca, cb, cva, cvb):
+    """:func:`find_crossing` for an impact (``h = c . q``) of the free-free bar under a Fourier load
+    whose flexible modes are all underdamped, with the flight written once in folded form (theory
+    §2, eq. 8): ``q_n = e^{-d tau/2} (a_n cos lam_n tau + b_n sin lam_n tau) + q_pn(t)``, so that
+    ``h`` and its derivatives cost one sine and cosine per mode and the particular parts are
+    weighted sums (``hcr + i hci = sum_n c_n H_n``, ``hwr + i hwi = sum_n c_n w2_n H_n``) formed
+    once per model. The bounds are those of :func:`bounds` with each flexible mode's free energy
+    taken at the anchor (it never grows), so they are formed once per flight; the steps and the
+    bracket test are those of :func:`find_crossing`, the refinement safeguarded Halley steps.
+    Far from an impact the steps are taken on a bound that needs no mode at all:
+    ``h <= G + sum_n sqrt(a_n^2 + b_n^2)`` (the flexible modes' free vibration, summed over
+    ``n >= 1``, weighted by ``c_n``), with ``G`` the rigid mode's closed form plus the summed
+    particular parts, whose derivatives are bounded as in :func:`rigid1_crossing`.
+    Per model: ``lam_n = sqrt(w2_n - d^2/4)``, ``wsq = sqrt(w2)``, and ``nq0``, ``nv0`` the
+    rounding scales ``2 sum_n |c_n| sup |q_pn|`` and ``2 sum_n |c_n| sup |v_pn|``;
+    ``qpa, vpa, ca, cb, cva, cvb`` are work arrays of length ``M``.
+
+    Returns
+    -------
+    status, t : int, float
+        As :func:`find_crossing`; the caller evaluates the state at ``t``.
+    """
+    M = w2.size
+    particular(0, w2, p0, ks, hpr, hpi, 0.0, ta, qpa, vpa)
+    c0 = c[0]
+    r0 = qa[0] - qpa[0]
+    dv0 = va[0] - vpa[0]
+    csum = c0
+    sq0 = 0.0
+    sw0 = 0.0
+    aflex = 0.0
+    jflex = 0.0
+    fmax = 0.0
+    nq = nq0  # the rounding of h, h': sum |c_n| (|q_n| + |q_pn|) and the same of v, bounded
+    nv = nv0
+    for n in range(1, M):
+        cn = c[n]
+        dq = qa[n] - qpa[n]
+        dv = va[n] - vpa[n]
+        ca[n] = cn * dq
+        cb[n] = cn * (0.5 * d * dq + dv) / lam[n]
+        cva[n] = cn * dv
+        cvb[n] = -cn * (w2[n] * dq + 0.5 * d * dv) / lam[n]
+        csum += cn
+        sq0 += cn * p0 / w2[n]
+        sw0 += cn * p0
+        en = math.sqrt(dv * dv + w2[n] * dq * dq)
+        wn = wsq[n]
+        an = abs(cn)
+        aflex += an * ((d + wn) * en + apb[n])
+        jflex += an * ((d * (d + wn) + w2[n]) * en + jpb[n])
+        nq += abs(ca[n]) + abs(cb[n])
+        nv += abs(cva[n]) + abs(cvb[n])
+        fmax += math.sqrt(ca[n] * ca[n] + cb[n] * cb[n])
+    ac0 = abs(c0)
+    # coarse steps: h <= G + fmax, G = c0 m + sum_n c_n q_pn without the free vibration of the
+    # flexible modes (|sum_n c_n x_n| <= fmax, their amplitudes only decay): certified steps on the
+    # smooth G, at the cost of the rigid bar's, up to where G + fmax may reach 0
+    fm = fmax * (1.0 + 1e-12) + 1e-14 * nq
+    ag2 = 0.0
+    ag3 = 0.0
+    for j in range(ks.size):
+        x = math.hypot(hcr[j], hci[j])
+        ag2 += ks[j] * ks[j] * x
+        ag3 += ks[j] * ks[j] * ks[j] * x
+    a = ta
+    for _ in range(_MAX_STEPS):
+        hcap = t_lim - a
+        if a > ta and hcap > 0.0:  # (at the anchor h = 0: no room for the coarse bound)
+            G, G1, G2, rv = _coarse_eval(d, c0, p0, ks, hcr, hci, sq0, ta, r0, dv0, a)
+            G += fm
+            if G < -1e-3 * abs(G1):  # h <= G < 0 here: a coarse step
+                horizon = min(hcap, TWO_PI)
+                mpp = ac0 * abs(p0 - d * rv)  # |c0 m''|, which only decreases
+                A = (mpp + ag2) * (1.0 + 1e-12) + 1e-15 * abs(G2)
+                J = (d * mpp + ag3) * (1.0 + 1e-12)
+                tau = _quadratic_step(G, G1, A)
+                tc = _cubic_step_fast(G, G1, G2, J, horizon)
+                if tc > tau:
+                    tau = tc
+                if tau > 4e-16 * (1.0 + abs(a)):
+                    a = t_lim if tau >= hcap else a + min(tau, horizon)
+                    continue
+        h, dh, ddh, rv = _modal_eval(d, c0, p0, ks, pr, pim, lam, w2, hcr, hci, hwr, hwi, csum, sq0,
+                                     sw0, ta, r0, dv0, ca, cb, cva, cvb, a)
+        tau = a - ta
+        b, cc = _bc(d, tau)
+        noise = 1e-14 * (nq + ac0 * abs(r0 + dv0 * b + p0 * cc))
+        dnoise = 1e-14 * (nv + ac0 * abs(rv))
+        if h > htol + noise or (h >= 0.0 and dh > dnoise):
+            return CROSS, a
+        if hcap <= 0.0:
+            return NONE, t_lim
+        horizon = min(hcap, TWO_PI)
+        vmax = abs(rv) + vpb[0] + abs(p0) * horizon
+        a0 = psup + d * vmax
+        A = ac0 * a0 + aflex
+        J = ac0 * (p1 + d * a0) + jflex
+        g = min(h, 0.0)
+        if 0.0 < dh <= dnoise:
+            dh = 0.0  # a slope lost in rounding
+        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= horizon:
+            # bracketed, unique root on [a, a + 2|g|/dh] where h' > 0: safeguarded Halley
+            lo = a
+            hib = a + 2.0 * (-g) / dh
+            t = a - g / dh
+            if t > hib:
+                t = hib
+            tn = t
+            for _it in range(100):
+                h, dh, ddh, rv = _modal_eval(d, c0, p0, ks, pr, pim, lam, w2, hcr, hci, hwr, hwi,
+                                             csum, sq0, sw0, ta, r0, dv0, ca, cb, cva, cvb, t)
+                lo, hib, tn, done = _halley(t, h, dh, ddh, lo, hib)
+                if done:
+                    break
+                t = tn
+            if h < 0.0:
+                t = tn  # the converged point, a rounding error past the last h < 0
+            return CROSS, t
+        tau = _quadratic_step(g, dh, A)
+        tc = _cubic_step_fast(g, dh, ddh, J, horizon)
+        if tc > tau:
+            tau = tc
+        if tau <= 4e-16 * (1.0 + abs(a)):
+            return TOUCH, a
+        if tau > horizon:
+            tau = horizon
+        if tau >= hcap:
+            a = t_lim
+        else:
+            a = a + tau
+    return FAIL, a
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
              psup, p1, p2, p3, vpb, apb, jpb,
-             t, q, v, t_end, max_imp, tail_tol, out_t, out_vel, out_q, out_v):
+             t, q, v, t_end, max_imp, tail_tol, out_t, out_vel, out_q, out_v, fast):
     """Free flight with impacts from ``(t, q, v)``; ``q, v`` are overwritten with the final state.
 
     Every impact (``c . q = 0`` reached with ``c . v > 0``) applies ``v -> -R v`` (eqs. 10, 11); its
@@ -427,6 +844,12 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
     ``t_end`` (END), after ``max_imp`` impacts (MAXIMP), when the buffers are full (FULL), when the
     bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``) or the end
     arrives tangentially and pressed (CONTACT).
+
+    With ``fast`` true the flights that follow an impact (or start clearly off the stop, or leaving
+    it) are searched by :func:`rigid1_crossing` (the rigid bar under one harmonic) or
+    :func:`modal_crossing` (flexible modes under a Fourier load, all underdamped): the same impacts,
+    to rounding. A flight from rest on the stop (a release), where rounding decides whether the
+    end leaves, and every other case are searched by :func:`find_crossing`.
 
     Returns
     -------
@@ -443,14 +866,77 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
     anchor[0] = t
     n = 0
     cap = out_t.size
+    rigid1 = fast and kind == 0 and M == 1 and w2[0] == 0.0 and ks.size <= 1
+    k1 = pr1 = pim1 = hr1 = hi1 = 0.0
+    if rigid1 and ks.size == 1:
+        k1, pr1, pim1, hr1, hi1 = ks[0], pr[0], pim[0], hpr[0, 0], hpi[0, 0]
+    habs1 = math.hypot(hr1, hi1)
+    qp1 = p1t = 0.0
+    # the free-free bar under a Fourier load, every flexible mode underdamped: modal_crossing
+    modal = fast and kind == 0 and M > 1 and w2[0] == 0.0
+    lam = np.empty(M)
+    wsq = np.empty(M)
+    nq0 = 0.0
+    nv0 = 0.0
+    for i in range(M):
+        lam2 = w2[i] - 0.25 * d * d
+        if i > 0 and lam2 <= 0.0:
+            modal = False
+        lam[i] = math.sqrt(abs(lam2))
+        wsq[i] = math.sqrt(w2[i])
+        hs = 0.0
+        for j in range(ks.size):
+            hs += math.hypot(hpr[i, j], hpi[i, j])
+        nq0 += 2.0 * abs(c[i]) * (hs + (abs(p0) / w2[i] if i > 0 else 0.0))
+        nv0 += 2.0 * abs(c[i]) * vpb[i]
+    K = ks.size
+    hcr = np.zeros(K)
+    hci = np.zeros(K)
+    hwr = np.zeros(K)
+    hwi = np.zeros(K)
+    for i in range(M):
+        for j in range(K):
+            hcr[j] += c[i] * hpr[i, j]
+            hci[j] += c[i] * hpi[i, j]
+            hwr[j] += c[i] * w2[i] * hpr[i, j]
+            hwi[j] += c[i] * w2[i] * hpi[i, j]
+    ca = np.empty(M)
+    cb = np.empty(M)
+    cva = np.empty(M)
+    cvb = np.empty(M)
     while True:
         htol = 0.0
         for i in range(M):
             htol += abs(c[i] * qa[i])
         htol *= 1e-14
-        st, tc = find_crossing(kind, w2, d, c, 0.0, p0, ks, pr, pim, hpr, hpi, breaks, levels,
-                               psup, p1, p2, p3, vpb, apb, jpb,
-                               anchor, qa, va, t_end, htol, q, v, qp, vp, qpa, vpa)
+        # a flight after an impact, or from a start clearly off the stop or leaving it; from a
+        # release (or a start) at rest on the stop rounding decides whether the end leaves: those
+        # flights take the reference search
+        off = n > 0
+        if not off and (rigid1 or modal):
+            hs = vs = hm = vm = 0.0
+            for i in range(M):
+                hs += c[i] * qa[i]
+                vs += c[i] * va[i]
+                hm += abs(c[i] * qa[i])
+                vm += abs(c[i] * va[i])
+            off = hs < -1e-9 * hm or vs < -1e-9 * vm
+        fast1 = rigid1 and off
+        if fast1:
+            st, tc, q[0], v[0], qp1, p1t = rigid1_crossing(d, c[0], p0, k1, pr1, pim1, hr1, hi1,
+                                                           habs1, anchor[0], qa[0], va[0], t_end,
+                                                           htol)
+        elif modal and off:
+            st, tc = modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
+                                    lam, wsq, hcr, hci, hwr, hwi, nq0, nv0, anchor[0], qa, va,
+                                    t_end, htol, qpa, vpa, ca, cb, cva, cvb)
+            # the state there by the reference flow (qpa, vpa hold the anchor's particular state)
+            advance(kind, w2, d, p0, ks, hpr, hpi, 0.0, anchor[0], qa, va, qpa, vpa, tc, q, v,
+                    qp, vp)
+        else:
+            st, tc = find_crossing(kind, w2, d, c, 0.0, p0, ks, pr, pim, hpr, hpi, breaks, levels,
+                                   psup, p1, p2, p3, vpb, apb, jpb,
+                                   anchor, qa, va, t_end, htol, q, v, qp, vp, qpa, vpa)
         if st == NONE:
             return n, END, t_end
         if st == FAIL:
@@ -473,13 +959,17 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
         n += 1
         if n >= max_imp:
             return n, MAXIMP, tc
-        if kind == 1:
-            mm, jj = piece_of(breaks, tc)
-            level = levels[jj]
+        if fast1:  # functional(...) of the rigid bar, term by term
+            ddh = c[0] * (p1t - d * v[0])
+            noise = 1e-14 * (abs(c[0]) * (abs(q[0]) + abs(qp1)))
         else:
-            level = 0.0
-        p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
-        h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
+            if kind == 1:
+                mm, jj = piece_of(breaks, tc)
+                level = levels[jj]
+            else:
+                level = 0.0
+            p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
+            h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
         if ddh > 0.0:
             # R < 1: the bounces accumulate at tc + tail. R = 1: they do not accumulate, but
             # damping shrinks them without end (ever more impacts per unit time)

@@ -4,7 +4,9 @@ Between impacts the bar moves in closed form (theory §2, eq. 8), so there is no
 time-stepping error; a piecewise-constant load (the hydraulic square wave, eq. 34) is integrated
 exactly piece by piece. The next impact, the first ``t`` with ``u(1,t) = c . q(t) = 0`` and
 ``u_t(1,t) > 0``, is found with a guaranteed search (bounds on ``|u_tt(1,t)|`` and
-``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding.
+``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding;
+after an impact the rigid bar under one harmonic and flexible bars under a Fourier load take
+specialised searches with the same guarantee (``FAST_SEARCH``).
 At an impact ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11); under the wave law (``BarModel(impact="wave")``,
 theory §4b) each impact is instead a contact window of length ``2/s`` with the long rod, solved by
 characteristics (:func:`impactbar.dynamics.impact.wave_impact`), after which the flight resumes.
@@ -46,6 +48,12 @@ DWELL_MAX = 1e-2
 #: A flight after a release that ends back on the stop within this time (bounces included) is a
 #: disagreement between the truncated bases, not a motion: the release is undone.
 MICRO_FLIGHT = 1e-6
+
+#: Search the impacts after an impact by the kernel's specialised certified searches: the rigid bar
+#: under one harmonic in scalars (``rigid1_crossing``), flexible modes under a Fourier load in
+#: folded form (``modal_crossing``). ``False`` gives the general certified search
+#: (``find_crossing``), the reference they are tested against (the same impacts, to rounding).
+FAST_SEARCH = True
 
 #: Largest ``|t0|``, ``|t_end|`` and ``t_end - t0`` accepted by :func:`simulate` (about 1.6e7 periods).
 MAX_TIME = 1e8
@@ -95,6 +103,16 @@ class InitialState:
         v.setflags(write=False)
         object.__setattr__(self, "modal_displacement", q)
         object.__setattr__(self, "modal_velocity", v)
+
+    @classmethod
+    def _trusted(cls, q: np.ndarray, v: np.ndarray) -> InitialState:
+        """A state from arrays the simulator made (finite, 1-d, of one length): no checks, no copy."""
+        self = object.__new__(cls)
+        q.setflags(write=False)
+        v.setflags(write=False)
+        object.__setattr__(self, "modal_displacement", q)
+        object.__setattr__(self, "modal_velocity", v)
+        return self
 
     @property
     def n_modes(self) -> int:
@@ -376,7 +394,7 @@ class _Core:
         n, st, tn = K.run_free(D.kind, B.w2, self.d, self.R, self.c, D.p0, D.ks, D.pr, D.pim,
                                B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3,
                                B.vpb, B.apb, B.jpb, float(t), q, v, float(t_end), int(max_imp),
-                               CHATTER_TAIL, out_t, out_vel, out_q, out_v)
+                               CHATTER_TAIL, out_t, out_vel, out_q, out_v, FAST_SEARCH)
         return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
@@ -502,15 +520,15 @@ class _SegmentLog:
     kernel writes each block of impacts straight into the next rows (:meth:`impact_rows`), so a
     long run holds its trajectory once, not once per block and again when joined."""
 
-    def __init__(self, n_modes):
+    def __init__(self, n_modes, capacity=0):
         self.M = n_modes + 1
         self.frozen = {}
         self.count = 0
-        self.t = np.empty(0)
-        self.basis = np.empty(0, dtype=np.int8)
-        self.entry = np.empty(0, dtype=np.int8)
-        self.q = np.empty((0, self.M))
-        self.v = np.empty((0, self.M))
+        self.t = np.empty(capacity)
+        self.basis = np.empty(capacity, dtype=np.int8)
+        self.entry = np.empty(capacity, dtype=np.int8)
+        self.q = np.empty((capacity, self.M))
+        self.v = np.empty((capacity, self.M))
 
     def _reserve(self, k):
         """Room for ``k`` more rows. The arrays are resized in place: no view of them may be
@@ -531,8 +549,9 @@ class _SegmentLog:
         self.t[i] = t
         self.basis[i] = basis
         self.entry[i] = _ENTRIES.index(entry)
-        self.q[i] = 0.0
-        self.v[i] = 0.0
+        if q.size < self.M:  # a contact state, one coordinate short
+            self.q[i, q.size:] = 0.0
+            self.v[i, v.size:] = 0.0
         self.q[i, :q.size] = q
         self.v[i, :v.size] = v
         if frozen is not None:
@@ -570,12 +589,12 @@ class _SegmentLog:
 
     def finish(self) -> _Segments:
         """The pieces, in arrays shrunk in place to their length."""
-        self._reserve(0)
         n = self.count
-        for a in (self.t, self.basis, self.entry):
-            a.resize((n,), refcheck=False)
-        for a in (self.q, self.v):
-            a.resize((n, self.M), refcheck=False)
+        if n != self.t.size:
+            for a in (self.t, self.basis, self.entry):
+                a.resize((n,), refcheck=False)
+            for a in (self.q, self.v):
+                a.resize((n, self.M), refcheck=False)
         return _Segments(self.M - 1, self.t, self.basis, self.entry, self.q, self.v, dict(self.frozen))
 
 
@@ -1012,7 +1031,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         )
     core = _core_for(model, load)
     g = float(core.c @ q)
-    if g > 1e-12 * max(1.0, float(np.sum(np.abs(core.c * q)))):
+    if g > 0.0 and g > 1e-12 * max(1.0, float(np.sum(np.abs(core.c * q)))):
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
@@ -1022,7 +1041,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
-    segs = _SegmentLog(core.N)
+    segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
     segs.add(t0, _FREE, q, v, "start")
     times: list[np.ndarray] = []
     vels: list[np.ndarray] = []
@@ -1047,9 +1066,9 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             n, st, tn, ot, ov = core.run_free(t, q, v, t_end, left, oq, ovv)
             del oq, ovv  # no view of the log may outlive the call (it is resized in place)
             cap = min(cap * 2, 1 << 16)
-            if n:
-                times.append(ot.copy())
-                vels.append(ov.copy())
+            if n:  # (views of the kernel's fresh output, copied where it is mostly unused)
+                times.append(ot if 2 * n >= ot.base.size else ot.copy())
+                vels.append(ov if 2 * n >= ov.base.size else ov.copy())
                 segs.add_impacts(ot)
                 n_imp += n
             if st == K.FAILED:  # pragma: no cover - defensive
@@ -1123,18 +1142,30 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         t = tr
         mode = _FREE
     # ---- final state ----
-    last = segs.last()
-    qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
-    qe, ve = qe[:, 0], ve[:, 0]
-    if last.basis == _CONTACT:
-        qe, ve = core.release_state(qe, ve)
-    imp_t = np.concatenate(times) if times else np.zeros(0)
-    imp_v = np.concatenate(vels) if vels else np.zeros(0)
+    i = segs.count - 1
+    if t == segs.t[i] and segs.basis[i] == _FREE:  # the run ended on a piece's start (max_impacts)
+        qe, ve = segs.q[i].copy(), segs.v[i].copy()
+        last = None
+    else:
+        last = segs.last()
+        qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
+        qe, ve = qe[:, 0], ve[:, 0]
+        if last.basis == _CONTACT:
+            qe, ve = core.release_state(qe, ve)
+    imp_t = _joined(times)
+    imp_v = _joined(vels)
     ci = np.array(contacts, dtype=float).reshape(-1, 2)
     return Trajectory(model=core.model, load=core.load, t0=t0, t_end=t,
                       impact_times=imp_t, impact_velocities=imp_v, contact_intervals=ci,
-                      final_state=InitialState(qe, ve), status=status, _core=core,
+                      final_state=InitialState._trusted(qe, ve), status=status, _core=core,
                       _segments=segs.finish(), n_release_retries=retries)
+
+
+def _joined(blocks: list) -> np.ndarray:
+    """The blocks of a run's impact data as one array (the block itself when there is one)."""
+    if len(blocks) == 1:
+        return blocks[0]
+    return np.concatenate(blocks) if blocks else np.zeros(0)
 
 
 def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
