@@ -338,6 +338,7 @@ class FourierLoad(Load):
         def evaluate(t):
             return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), *args)
 
+        evaluate.kernel_args = args  # for the compiled admissibility search
         return evaluate
 
     def rigid_velocity(self, d, t):
@@ -547,6 +548,8 @@ class PiecewiseConstantLoad(Load):
                 return piecewise_flow(w2, float(d), levels[j], j, np.maximum(t - nodes[j], 0.0), qn, vn)
             return step_constant(w2, d, levels[j], qn[:, j], vn[:, j], np.maximum(t - nodes[j], 0.0))
 
+        if compiled:  # for the compiled admissibility search
+            evaluate.pieces = (nodes, levels, qn, vn)
         return evaluate
 
     def _setup_rigid(self):
