@@ -109,6 +109,7 @@ def test_two_close_zeros_in_one_interval(monkeypatch, compiled):
         assert o.admissibility == STATUS[int(ref.status[0, j])]
         assert abs(o.clearance - ref.clearance[0, j]) <= o.clearance_error
         assert o.clearance == pytest.approx(ref.clearance[0, j], rel=1e-10, abs=1e-12)
+        assert o.clearance_error == pytest.approx(ref.clearance_error[0, j], rel=1e-9)  # one convention
 
 
 @pytest.mark.parametrize("compiled", [True, False])
