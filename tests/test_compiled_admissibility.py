@@ -134,3 +134,19 @@ def test_general_search_equals_rigid_square_closed_form(monkeypatch, compiled):
                 assert abs(o.clearance - ref.clearance[0, j]) <= o.clearance_error + 1e-13
                 checked += 1
     assert checked > 20
+
+
+def test_transfer_cache_keeps_each_model_apart():
+    """One load used with many models in turn (more than the cache holds, and back again) gives the
+    states a fresh load gives: the cached transfer functions are keyed by the model."""
+    load = FourierLoad(0.4, [0.8, 0.2 - 0.1j])
+    rng = np.random.default_rng(3)
+    models = [BarModel(float(rng.uniform(0.5, 6.0)), float(rng.uniform(0.0, 0.3)), 0.5, int(n))
+              for n in rng.integers(1, 12, size=11)]
+    for model in models + models[:3]:
+        w2 = model.frequencies**2
+        q0 = rng.normal(size=w2.size)
+        args = (w2, model.d, 0.3, q0, -q0, np.linspace(0.3, 6.0, 7))
+        fresh = FourierLoad(0.4, [0.8, 0.2 - 0.1j])
+        for a, b in zip(load.propagate(*args), fresh.propagate(*args), strict=True):
+            assert np.array_equal(a, b)

@@ -231,14 +231,25 @@ class FourierLoad(Load):
         return self(mid), np.minimum(lip * half, 2.0 * self.sup_oscillation)
 
     def _transfer(self, w2, d):
-        """``H_nk p_k``, shape (M, K'), raising at an undamped resonance (eq. 16)."""
+        """``H_nk p_k``, shape (M, K'), raising at an undamped resonance (eq. 16); the last few
+        results are kept (read-only), since an orbit's computations ask for the same ones."""
+        cache = self.__dict__.setdefault("_transfer_cache", {})
+        key = (float(d), w2.tobytes())
+        hp = cache.get(key)
+        if hp is not None:
+            return hp
         den = w2[:, None] + 1j * self._k[None, :] * d - self._k[None, :] ** 2
         if np.any(np.abs(den) <= 1e-12 * np.maximum(1.0, self._k[None, :] ** 2)):
             raise ValueError(
                 "undamped resonance: a mode frequency s*n*pi equals a load harmonic k (eq. 16); "
                 "use d > 0 or move s"
             )
-        return self._pk[None, :] / den
+        hp = self._pk[None, :] / den
+        hp.flags.writeable = False
+        if len(cache) >= 8:
+            cache.pop(next(iter(cache)))
+        cache[key] = hp
+        return hp
 
     def periodic_state(self, w2, d, t):
         w2 = np.asarray(w2, dtype=float)

@@ -25,7 +25,7 @@ TWO_PI = 2.0 * math.pi
 _MAXF = np.finfo(np.float64).max
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def _load(lk, t, F, P):
     """The load ``p(t)`` at the absolute time ``t``."""
     if lk == 0:
@@ -43,7 +43,7 @@ def _load(lk, t, F, P):
     return lv[idx]
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def _variation(lk, mid, half, F, P):
     """``(center, delta)`` with ``|p - center| <= delta`` on ``[mid - half, mid + half]`` (as
     ``Load.variation``)."""
@@ -62,7 +62,7 @@ def _variation(lk, mid, half, F, P):
     return center, spread if jump else 0.0
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def _state(lk, t, q, v, ck, sk, F, P):
     """The modal state at the absolute time ``t`` into column 0 of ``q, v`` (shape ``(M, 1)``)."""
     if lk == 0:
@@ -75,7 +75,7 @@ def _state(lk, t, q, v, ck, sk, F, P):
     piecewise_column(w2, d, levels[j], max(t - nodes[j], 0.0), qn[:, j], vn[:, j], q, v, 0)
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def _dot(c, x):
     s = 0.0
     for n in range(c.size):
@@ -83,14 +83,14 @@ def _dot(c, x):
     return s
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def _g(lk, phase, t, c, q, v, ck, sk, F, P):
     """``g(t) = c . q(phase + t)``."""
     _state(lk, phase + t, q, v, ck, sk, F, P)
     return _dot(c, q)
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P):
     """``(g(mid), g'(mid), L)``: the end's displacement and velocity, and the bound of ``|g''|`` on
     ``[mid - half, mid + half]`` (``gprime_and_bound`` of the numpy path)."""

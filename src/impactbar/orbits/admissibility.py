@@ -23,7 +23,7 @@ SEEDS = 4
 _SAMPLE_FLOOR = 0.05
 
 
-def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=None):
+def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=None, flow=None):
     """Decide admissibility (theory §5) with certified bounds, over the flight
     ``[phase, phase + horizon]`` from ``y_plus``; ``at_rest`` (default ``R == 0``) says the end
     leaves the stop at rest, so that its departure is decided by its acceleration.
@@ -35,7 +35,8 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     ``|q''| <= delta + (d + w) sqrt(E)``.
 
     ``duration`` is the flight time after the impact at load time ``phase`` (``2 pi`` for a
-    one-impact orbit; the flights of a multi-impact motion differ).
+    one-impact orbit; the flights of a multi-impact motion differ). ``flow``, if given, is
+    ``load.flow(w2, d, phase, q0, v0)`` of this flight, already built by the caller.
     """
     M = model.n_modes + 1
     w2 = model.frequencies**2
@@ -51,9 +52,10 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     found = None
     if _COMPILED_SEARCH:
         found = _compiled_search(load, w2, float(d), float(phase), q0, v0, c, absc, float(psup),
-                                 float(horizon), bool(at_rest), 1e-13 * scale)
+                                 float(horizon), bool(at_rest), 1e-13 * scale, flow)
     if found is None:
-        found = _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale)
+        found = _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale,
+                              flow)
     clearance, err_b = found
     # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
     # point of g; the end leaves the stop iff its acceleration there points away from the stop.
@@ -76,7 +78,7 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     return status, clearance, err
 
 
-def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol):
+def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol, flow=None):
     """``(clearance, err)`` of :func:`_numpy_search` by the compiled kernel, or
     ``None`` where it does not apply (a load or flow it does not know: the numpy path then runs)."""
     from ..loads import FourierLoad, PiecewiseConstantLoad
@@ -84,7 +86,9 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
     kind = type(load)
     if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
                                              for f in ("__call__", "variation", "flow")):
-        args = getattr(load.flow(w2, d, phase, q0, v0), "kernel_args", None)
+        if flow is None:
+            flow = load.flow(w2, d, phase, q0, v0)
+        args = getattr(flow, "kernel_args", None)
         if args is None:
             return None
         pk = load._pk
@@ -122,11 +126,12 @@ _NO_FOURIER = (0.0, 0.0, 0.0, _E1, _E2, _E2, _E2, _E2, _E1, np.zeros(0, dtype=np
 _NO_PIECES = (_E1, 0.0, _E1, _E1, _E2, _E1, _E1, 0.0, False, _E2)
 
 
-def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale):
+def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale, flow=None):
     """The certified search by numpy (the reference): ``(clearance, err)``, the largest stationary
     value of ``g = u(1, t)`` over the flight (``-inf`` without one) and the bound on its error (see
     :func:`_stationary_values`)."""
-    flow = load.flow(w2, d, phase, q0, v0)
+    if flow is None:
+        flow = load.flow(w2, d, phase, q0, v0)
 
     def states(t):
         return flow(phase + np.asarray(t, dtype=float))

@@ -544,22 +544,30 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
         return floquet_multipliers(model, load, phase, y_plus, y_minus)
 
 
-def _impact_states(model: BarModel, load: Load, phase: float):
-    """Modal states just after (``t = 0+``) and just before (``t = 2 pi-``) the orbit's impact."""
+def _impact_states(model: BarModel, load: Load, phase: float, return_flow: bool = False):
+    """Modal states just after (``t = 0+``) and just before (``t = 2 pi-``) the orbit's impact;
+    with ``return_flow``, also the flight's flow (``load.flow`` from ``y_plus``) where it is the
+    one that gave ``y_minus`` (a Fourier load; else ``None``), for the admissibility search."""
     M = model.n_modes + 1
     y_plus = _start_state(model, load, phase)
-    qm, vm = load.propagate(model.frequencies**2, model.d, phase, y_plus[:M], y_plus[M:],
-                            [phase + TWO_PI])
-    return y_plus, np.concatenate((qm[:, 0], vm[:, 0]))
+    w2 = model.frequencies**2
+    flow = None
+    if isinstance(load, FourierLoad):  # its propagate is this flow: built once, used twice
+        flow = load.flow(w2, model.d, phase, y_plus[:M], y_plus[M:])
+        qm, vm = flow([phase + TWO_PI])
+    else:
+        qm, vm = load.propagate(w2, model.d, phase, y_plus[:M], y_plus[M:], [phase + TWO_PI])
+    y_minus = np.concatenate((qm[:, 0], vm[:, 0]))
+    return (y_plus, y_minus, flow) if return_flow else (y_plus, y_minus)
 
 
 def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
     M = model.n_modes + 1
-    y_plus, y_minus = _impact_states(model, load, phase)
+    y_plus, y_minus, flow = _impact_states(model, load, phase, return_flow=True)
     c = model.end_weights
     v_imp = float(c @ y_minus[M:])
 
-    status, clearance, cerr = _admissibility(model, load, phase, y_plus, v_imp)
+    status, clearance, cerr = _admissibility(model, load, phase, y_plus, v_imp, flow=flow)
     admissible = status == "admissible"
 
     try:
