@@ -150,3 +150,54 @@ def test_transfer_cache_keeps_each_model_apart():
         fresh = FourierLoad(0.4, [0.8, 0.2 - 0.1j])
         for a, b in zip(load.propagate(*args), fresh.propagate(*args), strict=True):
             assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_clearance_equals_dense_sampling(monkeypatch, compiled):
+    """The pruned search against an independent brute force: ``g'`` sampled on a fine grid, every
+    sign change refined by Brent's method, the largest ``g`` there. Flexible bars, both loads."""
+    from scipy.optimize import brentq
+
+    monkeypatch.setattr(admissibility, "_COMPILED_SEARCH", compiled)
+    cases = [(BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0)),
+             (BarModel(2.0, 0.05, 0.7, 6), CosineLoad(0.3, 1.0)),
+             (BarModel(5.0, 0.1, 0.5, 16), SquareWaveLoad(1.0, 1.2)),
+             (BarModel(1.5, 0.02, 0.3, 5), SquareWaveLoad(0.7, 1.6))]
+    checked = 0
+    for model, load in cases:
+        w2, c = model.frequencies**2, model.end_weights
+        M = model.n_modes + 1
+        for o in _periodic_orbits_general(model, load):
+            def state(t, o=o, model=model, load=load, w2=w2, M=M):
+                y = o.state_after_impact
+                return load.propagate(w2, model.d, o.phase, y[:M], y[M:], o.phase + np.atleast_1d(t))
+
+            t = np.linspace(1e-9, 2.0 * math.pi - 1e-9, 40001)
+            q, v = state(t)
+            g1 = c @ v
+            roots = [brentq(lambda x, c=c, state=state: float(c @ state(x)[1][:, 0]), t[i], t[i + 1],
+                            xtol=1e-15)
+                     for i in np.flatnonzero(np.sign(g1[:-1]) * np.sign(g1[1:]) < 0)]
+            assert roots
+            brute = max(float(c @ state(r)[0][:, 0]) for r in roots)
+            assert o.clearance == pytest.approx(brute, abs=1e-9)
+            checked += 1
+    assert checked >= 6
+
+
+def test_enclose_zeros_prune_keeps_exactly_what_it_is_told():
+    """``enclose_zeros(prune=...)``: without a prune every zero of ``sin(5 t)`` is enclosed; a
+    prune that keeps ``t > 3`` leaves exactly the zeros past 3, each still enclosed."""
+    from impactbar.dynamics.certified import enclose_zeros
+
+    def joint(mid, half):
+        return np.sin(5.0 * mid), np.full(np.shape(mid), 5.0)
+
+    zeros = np.arange(0, 11) * math.pi / 5.0  # 0 and 2 pi included
+    full = enclose_zeros(None, None, 0.0, 2.0 * math.pi, joint=joint, min_width=1e-6)
+    assert len(full) == zeros.size
+    part = enclose_zeros(None, None, 0.0, 2.0 * math.pi, joint=joint, min_width=1e-6,
+                         prune=lambda mids, half, fm, lip: mids > 3.0)
+    inside = zeros[zeros > 3.0 + 1e-3]
+    assert len(part) == inside.size
+    assert all(lo <= z <= hi for z, (lo, hi) in zip(inside, part, strict=True))

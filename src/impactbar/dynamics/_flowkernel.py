@@ -20,7 +20,7 @@ import numpy as np
 from ._kernel import CACHE, _bc
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def fourier_column(tj, q, v, j, ck, sk, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq,
                    cv, sv, dq, dv):
     """Column ``j`` of :func:`fourier_flow`: the states at the time ``tj``, written into ``q, v``
@@ -74,7 +74,7 @@ def fourier_flow(t, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq,
     return q, v
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def piecewise_column(w2, d, lv, tj, q0, v0, q, v, j):
     """Column ``j`` of :func:`piecewise_flow`: the exact step of length ``tj`` under the constant
     ``lv`` from the state ``(q0, v0)`` (shape ``(M,)``), written into ``q, v``."""
@@ -128,7 +128,7 @@ def end_velocity_bound(c, absc, w2, d, psup, q, v, center, delta, half):
     return g1, L
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def bound_column(c, absc, w2, d, psup, q, v, j, center, delta, h):
     """Column ``j`` of :func:`end_velocity_bound`: ``(g', bound of |g''|)``."""
     M = q.shape[0]

@@ -102,23 +102,35 @@ def _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _enclose(lk, phase, a, b, mids, half, min_width, max_intervals, atol, c, absc, w2, d, psup,
-             q, v, ck, sk, F, P):
+def _enclose(lk, phase, a, b, mids, half, min_width, max_intervals, atol, prune, best, floor, c, absc,
+             w2, d, psup, q, v, ck, sk, F, P):
     """The bisection loop of ``certified.enclose_zeros`` (``merge=False``) from the midpoints
-    ``mids`` of intervals of half-width ``half``; returns ``(lo, hi, ok)``, ``ok`` false where the
-    numpy path raises (more than ``max_intervals`` survivors)."""
+    ``mids`` of intervals of half-width ``half``; returns ``(lo, hi, ok, best)``, ``ok`` false where
+    the numpy path raises (more than ``max_intervals`` survivors). With ``prune``, the intervals
+    where ``g`` stays below ``best`` (raised by each level's samples, as ``_sample_bound``) are
+    dropped too (``_numpy_search``'s ``prune``)."""
     while True:
-        keep = np.empty(mids.size, dtype=np.bool_)
+        n = mids.size
+        gs = np.empty(n)
+        fs = np.empty(n)
+        ls = np.empty(n)
+        for i in range(n):
+            gs[i], fs[i], ls[i] = _joint(lk, phase, mids[i], half, c, absc, w2, d, psup, q, v, ck, sk,
+                                         F, P)
+        if prune:
+            best = max(best, _sample_bound(mids, gs, fs, atol, floor))
+        keep = np.empty(n, dtype=np.bool_)
         nk = 0
-        for i in range(mids.size):
-            _, fm, lip = _joint(lk, phase, mids[i], half, c, absc, w2, d, psup, q, v, ck, sk, F, P)
-            bound = lip * half
-            keep[i] = abs(fm) <= bound * (1.0 + 1e-9) + atol + 1e-300
+        for i in range(n):
+            bound = ls[i] * half
+            keep[i] = abs(fs[i]) <= bound * (1.0 + 1e-9) + atol + 1e-300
+            if prune and keep[i]:
+                keep[i] = gs[i] + (abs(fs[i]) + ls[i] * half) * half >= best
             if keep[i]:
                 nk += 1
         kept = np.empty(nk)
         j = 0
-        for i in range(mids.size):
+        for i in range(n):
             if keep[i]:
                 kept[j] = mids[i]
                 j += 1
@@ -126,7 +138,7 @@ def _enclose(lk, phase, a, b, mids, half, min_width, max_intervals, atol, c, abs
         if mids.size == 0 or 2.0 * half <= min_width:
             break
         if mids.size > max_intervals:
-            return np.empty(0), np.empty(0), False
+            return np.empty(0), np.empty(0), False, best
         half *= 0.5
         split = np.empty(2 * mids.size)
         for i in range(mids.size):
@@ -138,7 +150,7 @@ def _enclose(lk, phase, a, b, mids, half, min_width, max_intervals, atol, c, abs
     for i in range(mids.size):
         lo[i] = max(mids[i] - half, a)
         hi[i] = min(mids[i] + half, b)
-    return lo, hi, True
+    return lo, hi, True, best
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -161,8 +173,9 @@ def _enclose_in(lk, phase, a, b, lo, hi, n0, max_intervals, atol, c, absc, w2, d
             if mj < hi[i] + half:
                 mids[m] = mj
                 m += 1
-    return _enclose(lk, phase, a, b, mids[:m], half, width / 64.0, max_intervals, atol, c, absc,
-                    w2, d, psup, q, v, ck, sk, F, P)
+    lo, hi, good, _ = _enclose(lk, phase, a, b, mids[:m], half, width / 64.0, max_intervals, atol,
+                               False, -math.inf, 0.0, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+    return lo, hi, good
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -221,14 +234,13 @@ def _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _sample_bound(lo, hi, gm, g1, atol, floor):
+def _sample_bound(mid, gm, g1, atol, floor):
     """``admissibility._sample_bound``: a lower bound of the largest stationary value from the
-    samples at the midpoints."""
+    samples ``g(mid), g'(mid)`` at the sorted times ``mid``."""
     a = -1
     b = -1
-    for i in range(lo.size):
-        mid = 0.5 * (lo[i] + hi[i])
-        if mid > floor:
+    for i in range(mid.size):
+        if mid[i] > floor:
             if a < 0 and g1[i] > atol:
                 a = i
             if g1[i] < -atol:
@@ -266,8 +278,8 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
     mids = np.empty(n0)
     for i in range(n0):
         mids[i] = half0 * (2.0 * i + 1.0)
-    lo, hi, good = _enclose(lk, phase, 0.0, horizon, mids, half0, 6e-3, 400_000, atol, c, absc,
-                            w2, d, psup, q, v, ck, sk, F, P)
+    lo, hi, good, best = _enclose(lk, phase, 0.0, horizon, mids, half0, 6e-3, 400_000, atol, True,
+                                  -math.inf, floor, c, absc, w2, d, psup, q, v, ck, sk, F, P)
     if not good:
         return 1, -math.inf, 0.0
     if at_rest:
@@ -276,7 +288,11 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
 
     err = 0.0
     gm, upper, g1 = _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P)
-    best = _sample_bound(lo, hi, gm, g1, atol, floor)
+    if lo.size:
+        mid = np.empty(lo.size)
+        for i in range(lo.size):
+            mid[i] = 0.5 * (lo[i] + hi[i])
+        best = max(best, _sample_bound(mid, gm, g1, atol, floor))
     for _ in range(8):
         sel = upper >= best
         lo, hi, gm, upper = lo[sel], hi[sel], gm[sel], upper[sel]

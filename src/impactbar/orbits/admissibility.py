@@ -136,8 +136,11 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
     def states(t):
         return flow(phase + np.asarray(t, dtype=float))
 
+    last = {}  # g at the points of the latest evaluation, and the best lower bound so far
+
     def gprime_and_bound(mid, half):
         q, v = states(mid)
+        last["g"] = c @ q
         center, delta = load.variation(phase + mid, half)
         if _COMPILED_BOUND and q.ndim == 2:
             from ..dynamics._flowkernel import end_velocity_bound
@@ -156,14 +159,24 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
         bound[~flex] = psup + d * vb
         return c @ v, absc @ bound
 
+    atol = 1e-13 * scale
+    floor = _SAMPLE_FLOOR if at_rest else 0.0
+    last["best"] = -math.inf
+
+    def prune(mids, half, g1, L2):
+        """Branch and bound already in the enclosure: drop the intervals where ``g`` stays below a
+        lower bound of the largest stationary value (from this level's samples)."""
+        g = last["g"]
+        last["best"] = max(last["best"], _sample_bound(mids, g, g1, atol, floor))
+        return g + (np.abs(g1) + L2 * half) * half >= last["best"]
+
     clusters = enclose_zeros(None, None, 0.0, horizon, n0=64, min_width=6e-3,
-                             joint=gprime_and_bound, merge=False, atol=1e-13 * scale)
+                             joint=gprime_and_bound, merge=False, atol=atol, prune=prune)
     if at_rest:  # t = 0 is a stationary point, decided by the departure's acceleration
         clusters = [cl for cl in clusters if cl[0] > 1e-6]
     # the stationary points that can carry the largest value are refined to full precision
     values, err_b = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters,
-                                       atol=1e-13 * scale, horizon=horizon,
-                                       floor=_SAMPLE_FLOOR if at_rest else 0.0)
+                                       atol=atol, horizon=horizon, floor=floor, best=last["best"])
     return max(values, default=-math.inf), err_b
 
 
@@ -196,13 +209,12 @@ def _newton_stationary(states, load, phase, c, w2, d, lo, hi):
     return t, ok
 
 
-def _sample_bound(iv, gm, g1, atol, floor):
-    """A lower bound of the largest stationary value of ``g`` from samples at the midpoints of the
-    intervals ``iv`` (sorted): if ``g' > 0`` at ``a`` and ``g' < 0`` at a later ``b``, the largest
-    value of ``g`` on ``[a, b]`` is at neither end, so at a stationary point inside, and it is at
-    least every sample between them. Signs are trusted beyond ``atol``, samples before ``floor``
-    are not used (``-inf`` where no such pair exists)."""
-    mid = 0.5 * (iv[:, 0] + iv[:, 1])
+def _sample_bound(mid, gm, g1, atol, floor):
+    """A lower bound of the largest stationary value of ``g`` from samples ``gm = g(mid)``,
+    ``g1 = g'(mid)`` at sorted times ``mid``: if ``g' > 0`` at ``a`` and ``g' < 0`` at a later
+    ``b``, the largest value of ``g`` on ``[a, b]`` is at neither end, so at a stationary point
+    inside, and it is at least every sample between them. Signs are trusted beyond ``atol``,
+    samples before ``floor`` are not used (``-inf`` where no such pair exists)."""
     pos = np.flatnonzero((g1 > atol) & (mid > floor))
     neg = np.flatnonzero((g1 < -atol) & (mid > floor))
     if pos.size == 0 or neg.size == 0 or neg[-1] <= pos[0]:
@@ -211,7 +223,7 @@ def _sample_bound(iv, gm, g1, atol, floor):
 
 
 def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8, atol=0.0,
-                       horizon=TWO_PI, floor=0.0):
+                       horizon=TWO_PI, floor=0.0, best=-math.inf):
     """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
 
     Every narrow interval that may hold a zero of ``g'`` has an upper bound of ``g`` on it,
@@ -224,6 +236,9 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
     Newton fails: both are split 64-fold by the certified exclusion and tried again. Where that
     cannot go on (a zero of ``g'`` of high order, whose enclosure does not shrink), the upper
     bounds themselves are used.
+
+    ``best``, if given, is a known lower bound of the largest stationary value (from the samples
+    of the enclosure, :func:`_sample_bound`); the midpoint samples of ``intervals`` raise it.
 
     Returns
     -------
@@ -247,7 +262,8 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
     err = 0.0
     cur = np.array(intervals, dtype=float).reshape(-1, 2)
     gm, upper, g1 = value_bounds(cur) if cur.size else (np.empty(0),) * 3
-    best = _sample_bound(cur, gm, g1, atol, floor)
+    if cur.size:
+        best = max(best, _sample_bound(0.5 * (cur[:, 0] + cur[:, 1]), gm, g1, atol, floor))
     for _ in range(rounds):
         keep = upper >= best
         cur, gm, upper = cur[keep], gm[keep], upper[keep]
