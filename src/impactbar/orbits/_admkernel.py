@@ -25,6 +25,15 @@ TWO_PI = 2.0 * math.pi
 _MAXF = np.finfo(np.float64).max
 
 
+@numba.njit(cache=CACHE, nogil=True)
+def _right(a, x):
+    """``np.searchsorted(a, x, side="right")`` for a short sorted ``a``."""
+    n = 0
+    while n < a.size and a[n] <= x:
+        n += 1
+    return n
+
+
 @numba.njit(cache=CACHE, nogil=True, inline="always")
 def _load(lk, t, F, P):
     """The load ``p(t)`` at the absolute time ``t``."""
@@ -37,7 +46,7 @@ def _load(lk, t, F, P):
         return p0 + s
     brk, lv = P[5], P[6]
     tm = t % TWO_PI
-    idx = np.searchsorted(brk, tm, side="right") - 1
+    idx = _right(brk, tm) - 1
     if idx < 0:
         idx = brk.size - 1
     return lv[idx]
@@ -70,12 +79,12 @@ def _state(lk, t, q, v, ck, sk, F, P):
                        F[9], F[10], F[11], F[12], F[13], F[14], F[15], F[16])
         return
     w2, d, nodes, levels, qn, vn = P[0], P[1], P[2], P[3], P[4], P[9]
-    j = np.searchsorted(nodes, t, side="right") - 1
+    j = _right(nodes, t) - 1
     j = min(max(j, 0), nodes.size - 2)
     piecewise_column(w2, d, levels[j], max(t - nodes[j], 0.0), qn[:, j], vn[:, j], q, v, 0)
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def _dot(c, x):
     s = 0.0
     for n in range(c.size):
@@ -140,11 +149,11 @@ def _enclose(lk, phase, a, b, mids, half, min_width, max_intervals, atol, prune,
         if mids.size > max_intervals:
             return np.empty(0), np.empty(0), False, best
         half *= 0.5
-        split = np.empty(2 * mids.size)
+        split = np.empty(2 * mids.size)  # sorted, as the midpoints are and 4 half apart
         for i in range(mids.size):
             split[2 * i] = mids[i] - half
             split[2 * i + 1] = mids[i] + half
-        mids = np.sort(split)
+        mids = split
     lo = np.empty(mids.size)
     hi = np.empty(mids.size)
     for i in range(mids.size):
@@ -173,7 +182,7 @@ def _enclose_in(lk, phase, a, b, lo, hi, n0, max_intervals, atol, c, absc, w2, d
             if mj < hi[i] + half:
                 mids[m] = mj
                 m += 1
-    lo, hi, good, _ = _enclose(lk, phase, a, b, mids[:m], half, width / 64.0, max_intervals, atol,
+    lo, hi, good, _ = _enclose(lk, phase, a, b, mids[:m].copy(), half, width / 64.0, max_intervals, atol,
                                False, -math.inf, 0.0, c, absc, w2, d, psup, q, v, ck, sk, F, P)
     return lo, hi, good
 
@@ -254,6 +263,23 @@ def _sample_bound(mid, gm, g1, atol, floor):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _top(x, k):
+    """Indices of the ``k`` largest ``x``, largest first, the first of equal ones first (as
+    ``np.argsort(-x, kind="mergesort")[:k]``)."""
+    k = min(k, x.size)
+    out = np.empty(k, dtype=np.int64)
+    taken = np.zeros(x.size, dtype=np.bool_)
+    for j in range(k):
+        m = -1
+        for i in range(x.size):
+            if not taken[i] and (m < 0 or x[i] > x[m]):
+                m = i
+        out[j] = m
+        taken[m] = True
+    return out
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, absc, w2, d, psup, F, P):
     """The largest stationary value of ``g = u(1, t)`` over ``[0, horizon]`` after the impact at
     ``phase`` (``admissibility._numpy_search`` and ``_stationary_values``, ``rounds = 8``).
@@ -303,8 +329,7 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
         ok = np.zeros(n, dtype=np.bool_)
         vals = np.full(n, -math.inf)
         tried = np.zeros(n, dtype=np.bool_)
-        order = np.argsort(-upper, kind="mergesort")
-        batch = order[:seeds]
+        batch = _top(upper, seeds)
         for stage in range(2):
             if stage == 1:
                 nb = 0
