@@ -201,3 +201,24 @@ def test_enclose_zeros_prune_keeps_exactly_what_it_is_told():
     inside = zeros[zeros > 3.0 + 1e-3]
     assert len(part) == inside.size
     assert all(lo <= z <= hi for z, (lo, hi) in zip(inside, part, strict=True))
+
+
+def test_start_state_is_periodic_under_fourier_loads():
+    """The flexible modes' start state (from the periodic response, eqs. 10-13) is the fixed point of
+    one period's flow followed by the impact law: ``q+ = q-``, ``v+ = -R v-`` mode by mode, to 1e-12."""
+    from impactbar.orbits.one_impact import _start_state
+
+    rng = np.random.default_rng(5)
+    for _ in range(12):
+        n = int(rng.integers(1, 20))
+        model = BarModel(float(rng.uniform(0.5, 6.0)), float(rng.uniform(0.01, 0.4)),
+                         float(rng.uniform(0.0, 0.95)), n)
+        load = FourierLoad(float(rng.uniform(0.2, 0.8)), rng.normal(size=2) + 1j * rng.normal(size=2))
+        phase = float(rng.uniform(0.0, 2.0 * math.pi))
+        y = _start_state(model, load, phase)
+        M = n + 1
+        q, v = load.propagate(model.frequencies[1:] ** 2, model.d, phase, y[1:M], y[M + 1:],
+                              [phase + 2.0 * math.pi])
+        scale = 1.0 + np.max(np.abs(y))
+        assert np.max(np.abs(y[1:M] - q[:, 0])) < 1e-12 * scale
+        assert np.max(np.abs(y[M + 1:] + model.R * v[:, 0])) < 1e-12 * scale

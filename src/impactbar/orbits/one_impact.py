@@ -486,10 +486,18 @@ def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
     v = np.zeros(N + 1)
     if N > 0:
         w2 = model.frequencies[1:] ** 2
-        zeros = np.zeros(N)
-        fq, fv = load.propagate(w2, d, phase, zeros, zeros, [phase + TWO_PI])
-        fq, fv = fq[:, 0], fv[:, 0]
         p11, p12, p21, p22 = (a[1:] for a in period_fundamental(model))
+        if isinstance(load, FourierLoad):
+            # the response from rest over one period, (I - Phi(2 pi)) y_p(phase) with y_p the
+            # periodic response (what the flow from rest computes, without building it)
+            qp, vp = load.periodic_state(w2, d, [phase])
+            qp, vp = qp[:, 0], vp[:, 0]
+            fq = qp - (p11 * qp + p12 * vp)
+            fv = vp - (p21 * qp + p22 * vp)
+        else:
+            zeros = np.zeros(N)
+            fq, fv = load.propagate(w2, d, phase, zeros, zeros, [phase + TWO_PI])
+            fq, fv = fq[:, 0], fv[:, 0]
         # y = J_R (Phi y + f),  J_R = diag(1, -R)
         a11, a12, a21, a22 = 1.0 - p11, -p12, R * p21, 1.0 + R * p22
         det = a11 * a22 - a12 * a21
