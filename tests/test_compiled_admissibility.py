@@ -222,3 +222,30 @@ def test_start_state_is_periodic_under_fourier_loads():
         scale = 1.0 + np.max(np.abs(y))
         assert np.max(np.abs(y[1:M] - q[:, 0])) < 1e-12 * scale
         assert np.max(np.abs(y[M + 1:] + model.R * v[:, 0])) < 1e-12 * scale
+
+
+def test_third_derivative_bound_holds():
+    """The bound of ``|g'''|`` behind the single-zero certificate is above ``|g'''|`` sampled on its
+    interval (``g''' = c . (p' - d q'' - w2 q')``, exact from the flow), for random flights."""
+    rng = np.random.default_rng(9)
+    for _ in range(20):
+        n = int(rng.integers(0, 12))
+        model = BarModel(float(rng.uniform(0.5, 5.0)), float(rng.uniform(0.0, 0.3)), 0.5, n)
+        k = np.array([1.0, 2.0])
+        pk = rng.normal(size=2) + 1j * rng.normal(size=2)
+        load = FourierLoad(float(rng.uniform(-0.5, 0.8)), pk)
+        w2, c = model.frequencies**2, model.end_weights
+        w, M = np.sqrt(w2), n + 1
+        q0, v0 = rng.normal(size=M), rng.normal(size=M)
+        mid, half = np.array([float(rng.uniform(0.5, 5.0))]), np.array([float(rng.uniform(1e-3, 0.2))])
+        q, v = load.propagate(w2, model.d, 0.0, q0, v0, mid)
+        center, delta = load.variation(mid, half)
+        slope = admissibility._load_slope(load)[0]
+        L3 = admissibility._third_bound(w, w2, model.d, np.abs(c), load.sup_abs, q, v, center, delta,
+                                        half, slope)
+        t = np.linspace(mid[0] - half[0], mid[0] + half[0], 201)
+        qs, vs = load.propagate(w2, model.d, 0.0, q0, v0, t)
+        p1 = (np.exp(1j * np.outer(t, k)) @ (1j * k * pk)).real
+        acc = load(t)[None, :] - model.d * vs - w2[:, None] * qs
+        g3 = c @ (p1[None, :] - model.d * acc - w2[:, None] * vs)
+        assert np.max(np.abs(g3)) <= L3[0] * (1.0 + 1e-12)

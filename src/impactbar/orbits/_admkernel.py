@@ -263,6 +263,43 @@ def _sample_bound(mid, gm, g1, atol, floor):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _single(lk, phase, ts, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P):
+    """``admissibility._numpy_search``'s ``single_zero``: ``|g''(ts)| > L3 r``, so that ``ts`` is
+    the only zero of ``g'`` on ``[lo, hi]``."""
+    mid = 0.5 * (lo + hi)
+    half = 0.5 * (hi - lo)
+    ta = phase + mid
+    _state(lk, ta, q, v, ck, sk, F, P)
+    center, delta = _variation(lk, ta, half, F, P)
+    if lk == 0:
+        slope = F[19]
+    else:
+        if delta != 0.0:  # a jump of the load inside: no certificate
+            return False
+        slope = 0.0
+    M = c.size
+    grow = math.exp(d * half)
+    L3 = 0.0
+    for n in range(M):
+        vn = v[n, 0]
+        if w2[n] > 0.0:
+            wc = math.sqrt(w2[n])
+            r = wc * q[n, 0] - center / wc
+            Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
+            t3 = slope + d * (delta + (d + wc) * Eb) + w2[n] * Eb
+        else:
+            t3 = slope + d * (psup + d * ((abs(vn) + psup * half) * grow))
+        L3 += absc[n] * t3
+    ta = phase + ts
+    _state(lk, ta, q, v, ck, sk, F, P)
+    p = _load(lk, ta, F, P)
+    g2 = 0.0
+    for n in range(M):
+        g2 += c[n] * (p - d * v[n, 0] - w2[n] * q[n, 0])
+    return abs(g2) > L3 * max(ts - lo, hi - ts)
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def _top(x, k):
     """Indices of the ``k`` largest ``x``, largest first, the first of equal ones first (as
     ``np.argsort(-x, kind="mergesort")[:k]``)."""
@@ -368,7 +405,8 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
                 L2 = _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P)[2]
                 r = max(t[i] - lo[i], hi[i] - t[i])
                 taylor = vals[i] + 0.5 * L2 * r * r
-                if taylor > best + atol:
+                if taylor > best + atol and not _single(lk, phase, t[i], lo[i], hi[i], c, absc, w2,
+                                                          d, psup, q, v, ck, sk, F, P):
                     gm[i] = vals[i]
                     upper[i] = taylor
                     retry[i] = upper[i] >= best

@@ -170,14 +170,63 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
         last["best"] = max(last["best"], _sample_bound(mids, g, g1, atol, floor))
         return g + (np.abs(g1) + L2 * half) * half >= last["best"]
 
+    slope = _load_slope(load)
+
+    def single_zero(ts, lo, hi):
+        """Where ``|g''(ts)| > L3 r`` (``L3`` a bound of the third derivative of ``g`` on
+        ``[lo, hi]``, ``r`` the distance from ``ts`` to its far end), ``g''`` keeps its sign on
+        ``[lo, hi]``: ``ts`` is the only zero of ``g'`` there."""
+        if slope is None:
+            return np.zeros(ts.size, dtype=bool)
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        q, v = states(mid)
+        center, delta = load.variation(phase + mid, half)
+        L3 = _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, slope[0])
+        qs, vs = states(ts)
+        g2 = c @ (load(phase + ts)[None, :] - d * vs - w2[:, None] * qs)
+        smooth = np.asarray(delta) == 0.0 if slope[1] else True
+        return smooth & (np.abs(g2) > L3 * np.maximum(ts - lo, hi - ts))
+
     clusters = enclose_zeros(None, None, 0.0, horizon, n0=64, min_width=6e-3,
                              joint=gprime_and_bound, merge=False, atol=atol, prune=prune)
     if at_rest:  # t = 0 is a stationary point, decided by the departure's acceleration
         clusters = [cl for cl in clusters if cl[0] > 1e-6]
     # the stationary points that can carry the largest value are refined to full precision
     values, err_b = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters,
-                                       atol=atol, horizon=horizon, floor=floor, best=last["best"])
+                                       atol=atol, horizon=horizon, floor=floor, best=last["best"],
+                                       single=single_zero)
     return max(values, default=-math.inf), err_b
+
+
+def _load_slope(load):
+    """``(bound of |p'|, only without a jump)`` where the load is smooth between its jumps: a
+    Fourier load's ``sum k |p_k|``; 0 for a piecewise-constant load, on an interval without a jump;
+    ``None`` for another load (no certificate of a single zero)."""
+    from ..loads import FourierLoad, PiecewiseConstantLoad
+
+    kind = type(load)
+    if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
+                                             for f in ("__call__", "variation")):
+        return float(np.sum(load._k * np.abs(load._pk))), False
+    if isinstance(load, PiecewiseConstantLoad) and all(
+            getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation")):
+        return 0.0, True
+    return None
+
+
+def _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, slope):
+    """A bound of the third derivative of ``g`` on ``[mid - half, mid + half]`` from the states at
+    the midpoints: ``q''' = p' - d q'' - w2 q'`` with ``|q'| <= sqrt(E)`` and ``|q''|`` bounded as
+    in the search's bound of ``|g''|`` (``|p'| <= slope``)."""
+    grow = np.exp(d * np.asarray(half))
+    t3 = np.empty_like(q)
+    flex = w2 > 0
+    wc = w[flex, None]
+    Eb = (np.sqrt(v[flex] ** 2 + (wc * q[flex] - center / wc) ** 2) + delta * half) * grow
+    t3[flex] = slope + d * (delta + (d + wc) * Eb) + w2[flex, None] * Eb
+    vb = (np.abs(v[~flex]) + psup * half) * grow
+    t3[~flex] = slope + d * (psup + d * vb)
+    return absc @ t3
 
 
 def _column(x, T):
@@ -223,7 +272,7 @@ def _sample_bound(mid, gm, g1, atol, floor):
 
 
 def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8, atol=0.0,
-                       horizon=TWO_PI, floor=0.0, best=-math.inf):
+                       horizon=TWO_PI, floor=0.0, best=-math.inf, single=None):
     """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
 
     Every narrow interval that may hold a zero of ``g'`` has an upper bound of ``g`` on it,
@@ -239,6 +288,8 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
 
     ``best``, if given, is a known lower bound of the largest stationary value (from the samples
     of the enclosure, :func:`_sample_bound`); the midpoint samples of ``intervals`` raise it.
+    ``single(t, lo, hi)``, if given, says where ``t`` is certainly the only zero of ``g'`` in
+    ``[lo, hi]`` (``g''`` keeps its sign there): such an interval is not searched again.
 
     Returns
     -------
@@ -299,8 +350,11 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
             r = np.maximum(t[ok] - lo[ok], hi[ok] - t[ok])
             taylor = vals[ok] + 0.5 * L2 * r * r
             again[ok] = taylor > best + atol
+            if single is not None and np.any(again):  # unless g'' keeps its sign there
+                idx = np.flatnonzero(again)
+                again[idx[single(t[idx], lo[idx], hi[idx])]] = False
             # the Taylor bounds about the found zeros are the sharper ones
-            gm[again], upper[again] = vals[again], taylor[taylor > best + atol]
+            gm[again], upper[again] = vals[again], taylor[again[ok]]
         retry = tried & (~ok | again) & (upper >= best)
         rest, gm, upper = cur[retry], gm[retry], upper[retry]
         cur = rest
