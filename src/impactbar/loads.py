@@ -246,8 +246,8 @@ class FourierLoad(Load):
             )
         hp = self._pk[None, :] / den
         hp.flags.writeable = False
-        if len(cache) >= 8:
-            cache.pop(next(iter(cache)))
+        if len(cache) >= 8:  # bounded; clear() is atomic, so threads sharing a load are safe
+            cache.clear()
         cache[key] = hp
         return hp
 
