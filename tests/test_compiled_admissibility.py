@@ -249,3 +249,19 @@ def test_third_derivative_bound_holds():
         acc = load(t)[None, :] - model.d * vs - w2[:, None] * qs
         g3 = c @ (p1[None, :] - model.d * acc - w2[:, None] * vs)
         assert np.max(np.abs(g3)) <= L3[0] * (1.0 + 1e-12)
+
+
+def test_no_disk_cache_keeps_the_numpy_search(monkeypatch):
+    """Without a writable numba cache the kernel would be compiled anew in every process: the
+    numpy search (the same algorithm) decides instead, with the same verdicts."""
+    import impactbar.dynamics._kernel as kernel
+
+    model, load = BarModel(4.0, 0.1, 0.5, 6), CosineLoad(0.5, 1.0)
+    fast = _periodic_orbits_general(model, load)
+    calls = []
+    real = admissibility._numpy_search
+    monkeypatch.setattr(admissibility, "_numpy_search", lambda *a: calls.append(1) or real(*a))
+    monkeypatch.setattr(kernel, "CACHE", False)
+    ref = _periodic_orbits_general(model, load)
+    assert len(calls) == len(ref) > 0
+    _assert_same_verdicts(fast, ref)

@@ -81,8 +81,11 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
 def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol, flow=None):
     """``(clearance, err)`` of :func:`_numpy_search` by the compiled kernel, or
     ``None`` where it does not apply (a load or flow it does not know: the numpy path then runs)."""
+    from ..dynamics import _kernel
     from ..loads import FourierLoad, PiecewiseConstantLoad
 
+    if not _kernel.CACHE:  # no disk cache: every process would compile the kernel (about 15 s)
+        return None  # on its first orbit, where the numpy search takes milliseconds
     kind = type(load)
     if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
                                              for f in ("__call__", "variation", "flow")):
