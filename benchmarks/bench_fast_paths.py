@@ -10,6 +10,8 @@ Rows (baseline | new | ratio | the issue's goal):
 - ``periodic_orbits`` with 8 and 64 modes (cosine, square wave) and 256 modes (cosine): with the
   dense eigenvalue problem for the multipliers against the structured method; the multipliers alone
   at 256 modes;
+- ``periodic_orbits`` with 8 modes (cosine) and 64 modes (square wave): the certified admissibility
+  search by numpy (the reference) against the compiled search;
 - ``import impactbar`` and ``impactbar orbits --help`` (fresh processes, wall time): everything the
   package used to import eagerly against the lazy imports;
 - ``simulate``: impacts per second, the general certified impact search (``FAST_SEARCH = False``)
@@ -17,7 +19,8 @@ Rows (baseline | new | ratio | the issue's goal):
   100-impact run, with the kernel data rebuilt on every call (as before) against the cached core.
 
 Times are medians of repeated runs of CPU time (``time.process_time``) for the in-process rows and
-of wall time for the fresh processes, so that other load on a shared machine weighs less.
+of wall time for the fresh processes, so that other load on a shared machine weighs less. BLAS runs
+on one thread (``OMP_NUM_THREADS`` etc. default to 1 here), since CPU time counts every thread.
 
 Run: ``python benchmarks/bench_fast_paths.py [--quick]``. Prints a table; nothing is asserted.
 
@@ -29,16 +32,21 @@ then ``--against /tmp/old/src``) and on this one, alternately, and prints both s
 from __future__ import annotations
 
 import argparse
+import os
 import subprocess
 import sys
 import time
 
-import numpy as np
+# process_time counts every thread of the process: one BLAS thread, so that CPU time is the work
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
 
-from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate
-from impactbar.orbits import stability
-from impactbar.orbits.one_impact import _periodic_orbits_general
-from impactbar.orbits.rigid import rigid_cosine_orbits
+import numpy as np  # noqa: E402
+
+from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate  # noqa: E402
+from impactbar.orbits import admissibility, stability  # noqa: E402
+from impactbar.orbits.one_impact import _periodic_orbits_general  # noqa: E402
+from impactbar.orbits.rigid import rigid_cosine_orbits  # noqa: E402
 
 ROWS = []
 
@@ -123,6 +131,22 @@ def bench_modes(rep):
     base = cpu_median(lambda: stability.floquet_multipliers(*args, method="dense"), 3)
     new = cpu_median(lambda: stability.floquet_multipliers(*args, method="structured"), 5)
     row("multipliers alone, 256 modes (one orbit)", base * 1e3, new * 1e3, "ms", "O(N^2)")
+
+
+def bench_admissibility(rep):
+    """The certified admissibility search by numpy (the reference path) against the compiled
+    search, inside the whole periodic_orbits call (flexible bars)."""
+    cases = [("cosine, 8 modes", BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0), rep, "<= 1.5 ms"),
+             ("square wave, 64 modes", BarModel(5.0, 0.1, 0.5, 64), SquareWaveLoad(1.0, 1.2), 5,
+              "<= 40 ms")]
+    for name, model, load, r, goal in cases:
+        admissibility._COMPILED_SEARCH = False
+        try:
+            base = cpu_median(lambda model=model, load=load: periodic_orbits(model, load), max(r, 3))
+        finally:
+            admissibility._COMPILED_SEARCH = True
+        new = cpu_median(lambda model=model, load=load: periodic_orbits(model, load), max(r, 3))
+        row(f"periodic_orbits, {name}: numpy vs compiled search", base * 1e3, new * 1e3, "ms", goal)
 
 
 def bench_startup(rep):
@@ -223,14 +247,13 @@ print(json.dumps(out))
 def against(src, rounds=2):
     """The user-level calls on another package tree and on this one, in fresh processes."""
     import json
-    import os
     from pathlib import Path
 
     here = str(Path(__file__).resolve().parents[1] / "src")
     runs = {"baseline": [], "new": []}
     for _ in range(rounds):
         for name, path in (("baseline", src), ("new", here)):
-            env = dict(os.environ, PYTHONPATH=path)
+            env = dict(os.environ, PYTHONPATH=path)  # with the one-thread BLAS set above
             out = subprocess.run([sys.executable, "-c", _USER_LEVEL], env=env, check=True,
                                  capture_output=True, text=True).stdout
             runs[name].append(json.loads(out.strip().splitlines()[-1]))
@@ -257,6 +280,7 @@ def main(argv=None):
     bench_rigid(rep)
     bench_chunk(a.quick)
     bench_modes(rep)
+    bench_admissibility(rep)
     bench_startup(3 if a.quick else 7)
     bench_simulate(a.quick)
     return 0

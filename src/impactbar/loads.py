@@ -231,14 +231,25 @@ class FourierLoad(Load):
         return self(mid), np.minimum(lip * half, 2.0 * self.sup_oscillation)
 
     def _transfer(self, w2, d):
-        """``H_nk p_k``, shape (M, K'), raising at an undamped resonance (eq. 16)."""
+        """``H_nk p_k``, shape (M, K'), raising at an undamped resonance (eq. 16); the last few
+        results are kept (read-only), since an orbit's computations ask for the same ones."""
+        cache = self.__dict__.setdefault("_transfer_cache", {})
+        key = (float(d), w2.tobytes())
+        hp = cache.get(key)
+        if hp is not None:
+            return hp
         den = w2[:, None] + 1j * self._k[None, :] * d - self._k[None, :] ** 2
         if np.any(np.abs(den) <= 1e-12 * np.maximum(1.0, self._k[None, :] ** 2)):
             raise ValueError(
                 "undamped resonance: a mode frequency s*n*pi equals a load harmonic k (eq. 16); "
                 "use d > 0 or move s"
             )
-        return self._pk[None, :] / den
+        hp = self._pk[None, :] / den
+        hp.flags.writeable = False
+        if len(cache) >= 8:  # bounded; clear() is atomic, so threads sharing a load are safe
+            cache.clear()
+        cache[key] = hp
+        return hp
 
     def periodic_state(self, w2, d, t):
         w2 = np.asarray(w2, dtype=float)
@@ -338,6 +349,7 @@ class FourierLoad(Load):
         def evaluate(t):
             return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), *args)
 
+        evaluate.kernel_args = args  # for the compiled admissibility search
         return evaluate
 
     def rigid_velocity(self, d, t):
@@ -547,6 +559,8 @@ class PiecewiseConstantLoad(Load):
                 return piecewise_flow(w2, float(d), levels[j], j, np.maximum(t - nodes[j], 0.0), qn, vn)
             return step_constant(w2, d, levels[j], qn[:, j], vn[:, j], np.maximum(t - nodes[j], 0.0))
 
+        if compiled:  # for the compiled admissibility search
+            evaluate.pieces = (nodes, levels, qn, vn)
         return evaluate
 
     def _setup_rigid(self):

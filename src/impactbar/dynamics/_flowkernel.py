@@ -21,6 +21,40 @@ from ._kernel import CACHE, _bc
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def fourier_column(tj, q, v, j, ck, sk, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq,
+                   cv, sv, dq, dv):
+    """Column ``j`` of :func:`fourier_flow`: the states at the time ``tj``, written into ``q, v``
+    (``ck, sk`` are scratch of shape ``(K,)``)."""
+    M = hpr.shape[0]
+    K = k.size
+    tau = tj - t0
+    for m in range(K):
+        x = k[m] * tj
+        ck[m] = math.cos(x)
+        sk[m] = math.sin(x)
+    ed = math.exp(-0.5 * d * tau) if d != 0.0 else 1.0
+    for n in range(M):
+        qs = 0.0
+        vs = 0.0
+        for m in range(K):
+            qs += hpr[n, m] * ck[m] - hpi[n, m] * sk[m]
+            vs += hvr[n, m] * ck[m] - hvi[n, m] * sk[m]
+        qs += static[n]
+        if kind[n] == 1:
+            x = lam[n] * tau
+            C = math.cos(x)
+            S = math.sin(x)
+            qs += (cq[n] * C + sq[n] * S) * ed
+            vs += (cv[n] * C + sv[n] * S) * ed
+        elif kind[n] == 2:
+            b, c = _bc(d, tau)
+            qs += dq[n] + b * dv[n] + p0 * c
+            vs += math.exp(-d * tau) * dv[n] + p0 * b
+        q[n, j] = qs
+        v[n, j] = vs
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def fourier_flow(t, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq, cv, sv, dq, dv):
     """States ``(q, v)`` of shape ``(M, T)`` at the times ``t`` (shape ``(T,)``).
 
@@ -35,33 +69,33 @@ def fourier_flow(t, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq,
     ck = np.empty(K)
     sk = np.empty(K)
     for j in range(T):
-        tj = t[j]
-        tau = tj - t0
-        for m in range(K):
-            x = k[m] * tj
-            ck[m] = math.cos(x)
-            sk[m] = math.sin(x)
-        ed = math.exp(-0.5 * d * tau) if d != 0.0 else 1.0
-        for n in range(M):
-            qs = 0.0
-            vs = 0.0
-            for m in range(K):
-                qs += hpr[n, m] * ck[m] - hpi[n, m] * sk[m]
-                vs += hvr[n, m] * ck[m] - hvi[n, m] * sk[m]
-            qs += static[n]
-            if kind[n] == 1:
-                x = lam[n] * tau
-                C = math.cos(x)
-                S = math.sin(x)
-                qs += (cq[n] * C + sq[n] * S) * ed
-                vs += (cv[n] * C + sv[n] * S) * ed
-            elif kind[n] == 2:
-                b, c = _bc(d, tau)
-                qs += dq[n] + b * dv[n] + p0 * c
-                vs += math.exp(-d * tau) * dv[n] + p0 * b
-            q[n, j] = qs
-            v[n, j] = vs
+        fourier_column(t[j], q, v, j, ck, sk, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam,
+                       cq, sq, cv, sv, dq, dv)
     return q, v
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def piecewise_column(w2, d, lv, tj, q0, v0, q, v, j):
+    """Column ``j`` of :func:`piecewise_flow`: the exact step of length ``tj`` under the constant
+    ``lv`` from the state ``(q0, v0)`` (shape ``(M,)``), written into ``q, v``."""
+    M = w2.size
+    e = math.exp(-0.5 * d * tj) if d != 0.0 else 1.0
+    b, c = _bc(d, tj)
+    ed = math.exp(-d * tj)
+    for n in range(M):
+        if w2[n] == 0.0:
+            q[n, j] = q0[n] + b * v0[n] + lv * c
+            v[n, j] = ed * v0[n] + lv * b
+        else:
+            lam = math.sqrt(w2[n] - 0.25 * d * d)
+            x = lam * tj
+            eC = e * math.cos(x)
+            p12 = e * math.sin(x) / lam
+            hd = 0.5 * d * p12
+            qs = lv / w2[n]
+            dq = q0[n] - qs
+            q[n, j] = (eC + hd) * dq + p12 * v0[n] + qs
+            v[n, j] = -w2[n] * p12 * dq + (eC - hd) * v0[n]
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -75,28 +109,8 @@ def piecewise_flow(w2, d, level, piece, tau, qn, vn):
     q = np.empty((M, T))
     v = np.empty((M, T))
     for j in range(T):
-        tj = tau[j]
         pj = piece[j]
-        lv = level[j]
-        e = math.exp(-0.5 * d * tj) if d != 0.0 else 1.0
-        b, c = _bc(d, tj)
-        ed = math.exp(-d * tj)
-        for n in range(M):
-            q0 = qn[n, pj]
-            v0 = vn[n, pj]
-            if w2[n] == 0.0:
-                q[n, j] = q0 + b * v0 + lv * c
-                v[n, j] = ed * v0 + lv * b
-            else:
-                lam = math.sqrt(w2[n] - 0.25 * d * d)
-                x = lam * tj
-                eC = e * math.cos(x)
-                p12 = e * math.sin(x) / lam
-                hd = 0.5 * d * p12
-                qs = lv / w2[n]
-                dq = q0 - qs
-                q[n, j] = (eC + hd) * dq + p12 * v0 + qs
-                v[n, j] = -w2[n] * p12 * dq + (eC - hd) * v0
+        piecewise_column(w2, d, level[j], tau[j], qn[:, pj], vn[:, pj], q, v, j)
     return q, v
 
 
@@ -110,21 +124,26 @@ def end_velocity_bound(c, absc, w2, d, psup, q, v, center, delta, half):
     g1 = np.empty(T)
     L = np.empty(T)
     for j in range(T):
-        h = half[j]
-        grow = math.exp(d * h)
-        gs = 0.0
-        ls = 0.0
-        for n in range(M):
-            vn = v[n, j]
-            gs += c[n] * vn
-            if w2[n] > 0.0:
-                wc = math.sqrt(w2[n])
-                r = wc * q[n, j] - center[j] / wc
-                Eb = (math.sqrt(vn * vn + r * r) + delta[j] * h) * grow
-                b = delta[j] + (d + wc) * Eb
-            else:
-                b = psup + d * ((abs(vn) + psup * h) * grow)
-            ls += absc[n] * b
-        g1[j] = gs
-        L[j] = ls
+        g1[j], L[j] = bound_column(c, absc, w2, d, psup, q, v, j, center[j], delta[j], half[j])
     return g1, L
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def bound_column(c, absc, w2, d, psup, q, v, j, center, delta, h):
+    """Column ``j`` of :func:`end_velocity_bound`: ``(g', bound of |g''|)``."""
+    M = q.shape[0]
+    grow = math.exp(d * h)
+    gs = 0.0
+    ls = 0.0
+    for n in range(M):
+        vn = v[n, j]
+        gs += c[n] * vn
+        if w2[n] > 0.0:
+            wc = math.sqrt(w2[n])
+            r = wc * q[n, j] - center / wc
+            Eb = (math.sqrt(vn * vn + r * r) + delta * h) * grow
+            b = delta + (d + wc) * Eb
+        else:
+            b = psup + d * ((abs(vn) + psup * h) * grow)
+        ls += absc[n] * b
+    return gs, ls

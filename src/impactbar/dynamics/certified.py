@@ -15,7 +15,7 @@ __all__ = ["enclose_zeros", "zeros_in_clusters"]
 
 def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: float = 1e-7,
                   max_intervals: int = 400_000, joint=None, intervals=None, merge: bool = True,
-                  atol: float = 0.0):
+                  atol: float = 0.0, prune=None):
     """Clusters ``(lo, hi)`` that together contain every zero of ``f`` in ``[a, b]``.
 
     Parameters
@@ -42,6 +42,9 @@ def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: 
     atol : float
         Rounding floor: an interval is kept while ``|f(mid)| <= L h + atol``, so that a zero whose
         computed value is a rounding error away from 0 is not excluded.
+    prune : callable, optional
+        ``prune(mids, half, f(mids), bound) -> mask``: at each level, only the intervals it keeps
+        (and that may hold a zero) go on; for a branch and bound whose zeros are not all wanted.
 
     Returns
     -------
@@ -66,6 +69,8 @@ def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: 
             fm, lip = f(mids), lipschitz(mids, half)
         bound = lip * half
         keep = np.abs(fm) <= bound * (1.0 + 1e-9) + atol + 1e-300
+        if prune is not None:
+            keep &= prune(mids, half, fm, lip)
         mids = mids[keep]
         if mids.size == 0 or 2.0 * half <= min_width:
             break

@@ -13,9 +13,17 @@ TWO_PI = 2.0 * math.pi
 
 #: the bounds of the certified search by the compiled kernel (``False``: the numpy reference path)
 _COMPILED_BOUND = True
+#: the whole certified search (enclosure, Newton steps, branch and bound) by the compiled kernel
+#: :mod:`impactbar.orbits._admkernel` where the load's flow is compiled (``False``: the numpy path)
+_COMPILED_SEARCH = True
+#: intervals tried first by the branch and bound on the stationary values (see _stationary_values)
+SEEDS = 4
+#: with the end leaving the stop at rest, the samples of the search before this time do not bound
+#: the clearance (the stationary point at the departure is not one of its values)
+_SAMPLE_FLOOR = 0.05
 
 
-def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=None):
+def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=None, flow=None):
     """Decide admissibility (theory §5) with certified bounds, over the flight
     ``[phase, phase + horizon]`` from ``y_plus``; ``at_rest`` (default ``R == 0``) says the end
     leaves the stop at rest, so that its departure is decided by its acceleration.
@@ -27,7 +35,8 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     ``|q''| <= delta + (d + w) sqrt(E)``.
 
     ``duration`` is the flight time after the impact at load time ``phase`` (``2 pi`` for a
-    one-impact orbit; the flights of a multi-impact motion differ).
+    one-impact orbit; the flights of a multi-impact motion differ). ``flow``, if given, is
+    ``load.flow(w2, d, phase, q0, v0)`` of this flight, already built by the caller.
     """
     M = model.n_modes + 1
     w2 = model.frequencies**2
@@ -37,17 +46,104 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     absc = np.abs(c)
     psup = load.sup_abs
     q0, v0 = y_plus[:M], y_plus[M:]
+    scale = max(abs(v_imp), psup, 1e-300)
+    if at_rest is None:
+        at_rest = R == 0.0
+    found = None
+    if _COMPILED_SEARCH:
+        found = _compiled_search(load, w2, float(d), float(phase), q0, v0, c, absc, float(psup),
+                                 float(horizon), bool(at_rest), 1e-13 * scale, flow)
+    if found is None:
+        found = _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale,
+                              flow)
+    clearance, err_b = found
+    # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
+    # point of g; the end leaves the stop iff its acceleration there points away from the stop.
+    if at_rest:
+        acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
+    # rounding of the values themselves: relative to the problem's scale (linear in the load), so
+    # that every verdict is invariant under load -> L load
+    err = err_b + 1e-12 * (scale + (abs(clearance) if clearance > -math.inf else 0.0))
+    tol = max(err, 1e-11 * scale)
+    if not v_imp > 1e-12 * scale:
+        status = "grazing" if abs(v_imp) <= 1e-12 * scale else "backward impact"
+    elif at_rest and not acc0 < 0.0:
+        status = "sticks"
+    elif clearance > tol:
+        status = "penetrates"
+    elif clearance >= -tol:
+        status = "grazing"
+    else:
+        status = "admissible"
+    return status, clearance, err
 
-    flow = load.flow(w2, d, phase, q0, v0)
+
+def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol, flow=None):
+    """``(clearance, err)`` of :func:`_numpy_search` by the compiled kernel, or
+    ``None`` where it does not apply (a load or flow it does not know: the numpy path then runs)."""
+    from ..dynamics import _kernel
+    from ..loads import FourierLoad, PiecewiseConstantLoad
+
+    if not _kernel.CACHE:  # no disk cache: every process would compile the kernel (about 15 s)
+        return None  # on its first orbit, where the numpy search takes milliseconds
+    kind = type(load)
+    if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
+                                             for f in ("__call__", "variation", "flow")):
+        if flow is None:
+            flow = load.flow(w2, d, phase, q0, v0)
+        args = getattr(flow, "kernel_args", None)
+        if args is None:
+            return None
+        pk = load._pk
+        F = args + (np.ascontiguousarray(pk.real), np.ascontiguousarray(pk.imag),
+                    float(np.sum(load._k * np.abs(pk))), 2.0 * load.sup_oscillation)
+        P = _NO_PIECES
+        lk = 0
+    elif isinstance(load, PiecewiseConstantLoad) and all(
+            getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation", "flow")):
+        # one period and a margin: a midpoint of the search may fall just past the flight's end
+        pieces = getattr(load.flow(w2, d, phase, q0, v0, horizon=TWO_PI + 1.0), "pieces", None)
+        if pieces is None:
+            return None
+        nodes, levels, qn, vn = pieces
+        lv = load._lv
+        P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, load._b, lv,
+             float(np.max(lv) - np.min(lv)), bool(load._b.size == 1), vn)
+        F = _NO_FOURIER
+        lk = 1
+    else:
+        return None
+    from ._admkernel import admissibility_search
+
+    code, v_max, err = admissibility_search(lk, phase, horizon, at_rest, atol, SEEDS,
+                                            _SAMPLE_FLOOR if at_rest else 0.0, c, absc, w2, d, psup,
+                                            F, P)
+    if code:
+        raise RuntimeError("zero search did not converge (Lipschitz bound too loose)")
+    return float(v_max), float(err)
+
+
+_E1, _E2 = np.zeros(0), np.zeros((1, 0))
+_NO_FOURIER = (0.0, 0.0, 0.0, _E1, _E2, _E2, _E2, _E2, _E1, np.zeros(0, dtype=np.int64), _E1, _E1, _E1,
+               _E1, _E1, _E1, _E1, _E1, _E1, 0.0, 0.0)
+_NO_PIECES = (_E1, 0.0, _E1, _E1, _E2, _E1, _E1, 0.0, False, _E2)
+
+
+def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale, flow=None):
+    """The certified search by numpy (the reference): ``(clearance, err)``, the largest stationary
+    value of ``g = u(1, t)`` over the flight (``-inf`` without one) and the bound on its error (see
+    :func:`_stationary_values`)."""
+    if flow is None:
+        flow = load.flow(w2, d, phase, q0, v0)
 
     def states(t):
         return flow(phase + np.asarray(t, dtype=float))
 
-    def g(t):
-        return c @ states(t)[0]
+    last = {}  # g at the points of the latest evaluation, and the best lower bound so far
 
     def gprime_and_bound(mid, half):
         q, v = states(mid)
+        last["g"] = c @ q
         center, delta = load.variation(phase + mid, half)
         if _COMPILED_BOUND and q.ndim == 2:
             from ..dynamics._flowkernel import end_velocity_bound
@@ -66,35 +162,74 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
         bound[~flex] = psup + d * vb
         return c @ v, absc @ bound
 
-    scale = max(abs(v_imp), psup, 1e-300)
-    if at_rest is None:
-        at_rest = R == 0.0
+    atol = 1e-13 * scale
+    floor = _SAMPLE_FLOOR if at_rest else 0.0
+    last["best"] = -math.inf
+
+    def prune(mids, half, g1, L2):
+        """Branch and bound already in the enclosure: drop the intervals where ``g`` stays below a
+        lower bound of the largest stationary value (from this level's samples)."""
+        g = last["g"]
+        last["best"] = max(last["best"], _sample_bound(mids, g, g1, atol, floor))
+        return g + (np.abs(g1) + L2 * half) * half >= last["best"]
+
+    slope = _load_slope(load)
+
+    def single_zero(ts, lo, hi):
+        """Where ``|g''(ts)| > L3 r`` (``L3`` a bound of the third derivative of ``g`` on
+        ``[lo, hi]``, ``r`` the distance from ``ts`` to its far end), ``g''`` keeps its sign on
+        ``[lo, hi]``: ``ts`` is the only zero of ``g'`` there."""
+        if slope is None:
+            return np.zeros(ts.size, dtype=bool)
+        mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
+        q, v = states(mid)
+        center, delta = load.variation(phase + mid, half)
+        L3 = _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, slope[0])
+        qs, vs = states(ts)
+        g2 = c @ (load(phase + ts)[None, :] - d * vs - w2[:, None] * qs)
+        smooth = np.asarray(delta) == 0.0 if slope[1] else True
+        return smooth & (np.abs(g2) > L3 * np.maximum(ts - lo, hi - ts))
+
     clusters = enclose_zeros(None, None, 0.0, horizon, n0=64, min_width=6e-3,
-                             joint=gprime_and_bound, merge=False, atol=1e-13 * scale)
-    # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
-    # point of g; the end leaves the stop iff its acceleration there points away from the stop.
-    if at_rest:
-        acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
+                             joint=gprime_and_bound, merge=False, atol=atol, prune=prune)
+    if at_rest:  # t = 0 is a stationary point, decided by the departure's acceleration
         clusters = [cl for cl in clusters if cl[0] > 1e-6]
     # the stationary points that can carry the largest value are refined to full precision
     values, err_b = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters,
-                                       atol=1e-13 * scale, horizon=horizon)
-    # rounding of the values themselves: relative to the problem's scale (linear in the load), so
-    # that every verdict is invariant under load -> L load
-    err = err_b + 1e-12 * (scale + max((abs(v) for v in values), default=0.0))
-    clearance = max(values) if values else -math.inf
-    tol = max(err, 1e-11 * scale)
-    if not v_imp > 1e-12 * scale:
-        status = "grazing" if abs(v_imp) <= 1e-12 * scale else "backward impact"
-    elif at_rest and not acc0 < 0.0:
-        status = "sticks"
-    elif clearance > tol:
-        status = "penetrates"
-    elif clearance >= -tol:
-        status = "grazing"
-    else:
-        status = "admissible"
-    return status, clearance, err
+                                       atol=atol, horizon=horizon, floor=floor, best=last["best"],
+                                       single=single_zero)
+    return max(values, default=-math.inf), err_b
+
+
+def _load_slope(load):
+    """``(bound of |p'|, only without a jump)`` where the load is smooth between its jumps: a
+    Fourier load's ``sum k |p_k|``; 0 for a piecewise-constant load, on an interval without a jump;
+    ``None`` for another load (no certificate of a single zero)."""
+    from ..loads import FourierLoad, PiecewiseConstantLoad
+
+    kind = type(load)
+    if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
+                                             for f in ("__call__", "variation")):
+        return float(np.sum(load._k * np.abs(load._pk))), False
+    if isinstance(load, PiecewiseConstantLoad) and all(
+            getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation")):
+        return 0.0, True
+    return None
+
+
+def _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, slope):
+    """A bound of the third derivative of ``g`` on ``[mid - half, mid + half]`` from the states at
+    the midpoints: ``q''' = p' - d q'' - w2 q'`` with ``|q'| <= sqrt(E)`` and ``|q''|`` bounded as
+    in the search's bound of ``|g''|`` (``|p'| <= slope``)."""
+    grow = np.exp(d * np.asarray(half))
+    t3 = np.empty_like(q)
+    flex = w2 > 0
+    wc = w[flex, None]
+    Eb = (np.sqrt(v[flex] ** 2 + (wc * q[flex] - center / wc) ** 2) + delta * half) * grow
+    t3[flex] = slope + d * (delta + (d + wc) * Eb) + w2[flex, None] * Eb
+    vb = (np.abs(v[~flex]) + psup * half) * grow
+    t3[~flex] = slope + d * (psup + d * vb)
+    return absc @ t3
 
 
 def _column(x, T):
@@ -126,19 +261,44 @@ def _newton_stationary(states, load, phase, c, w2, d, lo, hi):
     return t, ok
 
 
+def _sample_bound(mid, gm, g1, atol, floor):
+    """A lower bound of the largest stationary value of ``g`` from samples ``gm = g(mid)``,
+    ``g1 = g'(mid)`` at sorted times ``mid``: if ``g' > 0`` at ``a`` and ``g' < 0`` at a later
+    ``b``, the largest value of ``g`` on ``[a, b]`` is at neither end, so at a stationary point
+    inside, and it is at least every sample between them. Signs are trusted beyond ``atol``,
+    samples before ``floor`` are not used (``-inf`` where no such pair exists)."""
+    pos = np.flatnonzero((g1 > atol) & (mid > floor))
+    neg = np.flatnonzero((g1 < -atol) & (mid > floor))
+    if pos.size == 0 or neg.size == 0 or neg[-1] <= pos[0]:
+        return -math.inf
+    return float(np.max(gm[pos[0]:neg[-1] + 1])) - atol
+
+
 def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8, atol=0.0,
-                       horizon=TWO_PI):
+                       horizon=TWO_PI, floor=0.0, best=-math.inf, single=None):
     """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
 
-    All narrow intervals that may hold a zero of ``g'`` get a vectorised Newton step; converged
-    points give stationary values. An interval where Newton fails is kept only if an upper bound of
-    ``g`` on it, ``g(mid) + (|g'(mid)| + L h) h``, can still beat the best value found; those are
-    split 64-fold by the certified exclusion and tried again. Where that cannot go on (a zero of
-    ``g'`` of high order, whose enclosure does not shrink), the upper bounds themselves are used.
+    Every narrow interval that may hold a zero of ``g'`` has an upper bound of ``g`` on it,
+    ``g(mid) + (|g'(mid)| + L h) h``. Best first: the :data:`SEEDS` intervals with the largest
+    bounds get a Newton iteration; the best value found prunes every interval whose bound cannot
+    beat it, and the others get a vectorised Newton iteration. A converged zero ``t*`` of ``g'``
+    gives a stationary value; as ``g <= g(t*) + L r^2 / 2`` on its interval (``r`` the distance to
+    the far end), an interval where that bound can still beat the best value may hide a second
+    zero (two close zeros in one narrow interval) and is searched again, as is an interval where
+    Newton fails: both are split 64-fold by the certified exclusion and tried again. Where that
+    cannot go on (a zero of ``g'`` of high order, whose enclosure does not shrink), the upper
+    bounds themselves are used.
+
+    ``best``, if given, is a known lower bound of the largest stationary value (from the samples
+    of the enclosure, :func:`_sample_bound`); the midpoint samples of ``intervals`` raise it.
+    ``single(t, lo, hi)``, if given, says where ``t`` is certainly the only zero of ``g'`` in
+    ``[lo, hi]`` (``g''`` keeps its sign there): such an interval is not searched again.
 
     Returns
     -------
     values : list of float
+        Stationary values (not all of them: those that cannot be the largest may be pruned), or
+        upper bounds of them.
     err : float
         Bound on the error of the largest value (0 up to rounding when every stationary point
         that matters was located; otherwise the spread of the bounds on the unresolved intervals,
@@ -150,28 +310,56 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
         half = 0.5 * (iv[:, 1] - iv[:, 0])
         gm = c @ states(mid)[0]
         g1, L2 = bound(mid, half)
-        return gm, gm + (np.abs(g1) + L2 * half) * half
+        return gm, gm + (np.abs(g1) + L2 * half) * half, g1
 
     values: list[float] = []
     err = 0.0
-    best = -math.inf
     cur = np.array(intervals, dtype=float).reshape(-1, 2)
+    gm, upper, g1 = value_bounds(cur) if cur.size else (np.empty(0),) * 3
+    if cur.size:
+        best = max(best, _sample_bound(0.5 * (cur[:, 0] + cur[:, 1]), gm, g1, atol, floor))
     for _ in range(rounds):
+        keep = upper >= best
+        cur, gm, upper = cur[keep], gm[keep], upper[keep]
         if cur.size == 0:
             break
+        n = cur.shape[0]
         lo, hi = cur[:, 0], cur[:, 1]
-        t, ok = _newton_stationary(states, load, phase, c, w2, d, lo, hi)
+        t = np.empty(n)
+        ok = np.zeros(n, dtype=bool)
+        vals = np.full(n, -math.inf)
+        # best first: the most promising intervals, then every one their values do not prune
+        seeds = np.argsort(-upper, kind="mergesort")[:SEEDS]
+        tried = np.zeros(n, dtype=bool)
+        for batch in (seeds, None):
+            if batch is None:
+                batch = np.flatnonzero(~tried & (upper >= best))
+                if batch.size == 0:
+                    break
+            tried[batch] = True
+            tb, okb = _newton_stationary(states, load, phase, c, w2, d, lo[batch], hi[batch])
+            t[batch], ok[batch] = tb, okb
+            if np.any(okb):
+                vb = c @ states(tb[okb])[0]
+                vals[batch[okb]] = vb
+                values.extend(float(x) for x in vb)
+                best = max(best, float(np.max(vb)))
+        again = np.zeros(n, dtype=bool)
         if np.any(ok):
-            vals = c @ states(t[ok])[0]
-            values.extend(float(x) for x in vals)
-            best = max(best, float(np.max(vals)))
-        rest = cur[~ok]
-        if rest.size == 0:
-            cur = rest
-            break
-        gm, upper = value_bounds(rest)
-        keep = upper >= best
-        rest, gm, upper = rest[keep], gm[keep], upper[keep]
+            # a second zero of g' may share the interval with the one found: since g'(t*) = 0,
+            # g <= g(t*) + L r^2 / 2 on the interval, with L the bound of |g''| and r the distance
+            # from t* to its far end
+            L2 = bound(0.5 * (lo[ok] + hi[ok]), 0.5 * (hi[ok] - lo[ok]))[1]
+            r = np.maximum(t[ok] - lo[ok], hi[ok] - t[ok])
+            taylor = vals[ok] + 0.5 * L2 * r * r
+            again[ok] = taylor > best + atol
+            if single is not None and np.any(again):  # unless g'' keeps its sign there
+                idx = np.flatnonzero(again)
+                again[idx[single(t[idx], lo[idx], hi[idx])]] = False
+            # the Taylor bounds about the found zeros are the sharper ones
+            gm[again], upper[again] = vals[again], taylor[again[ok]]
+        retry = tried & (~ok | again) & (upper >= best)
+        rest, gm, upper = cur[retry], gm[retry], upper[retry]
         cur = rest
         if rest.size == 0:
             break
@@ -186,8 +374,8 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
             err = max(err, float(np.max(upper) - np.min(lower)))
             cur = np.empty((0, 2))
             break
+        gm, upper, _ = value_bounds(cur) if cur.size else (np.empty(0),) * 3
     if cur.size:  # rounds exhausted: bound what is left
-        gm, upper = value_bounds(cur)
         if float(np.max(upper)) >= best:
             values.append(float(np.max(upper)))  # conservative: never below the true value
             err = max(err, float(np.max(upper) - np.min(2.0 * gm - upper)))

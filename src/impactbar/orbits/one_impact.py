@@ -486,10 +486,18 @@ def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
     v = np.zeros(N + 1)
     if N > 0:
         w2 = model.frequencies[1:] ** 2
-        zeros = np.zeros(N)
-        fq, fv = load.propagate(w2, d, phase, zeros, zeros, [phase + TWO_PI])
-        fq, fv = fq[:, 0], fv[:, 0]
         p11, p12, p21, p22 = (a[1:] for a in period_fundamental(model))
+        if isinstance(load, FourierLoad):
+            # the response from rest over one period, (I - Phi(2 pi)) y_p(phase) with y_p the
+            # periodic response (what the flow from rest computes, without building it)
+            qp, vp = load.periodic_state(w2, d, [phase])
+            qp, vp = qp[:, 0], vp[:, 0]
+            fq = qp - (p11 * qp + p12 * vp)
+            fv = vp - (p21 * qp + p22 * vp)
+        else:
+            zeros = np.zeros(N)
+            fq, fv = load.propagate(w2, d, phase, zeros, zeros, [phase + TWO_PI])
+            fq, fv = fq[:, 0], fv[:, 0]
         # y = J_R (Phi y + f),  J_R = diag(1, -R)
         a11, a12, a21, a22 = 1.0 - p11, -p12, R * p21, 1.0 + R * p22
         det = a11 * a22 - a12 * a21
@@ -544,22 +552,30 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
         return floquet_multipliers(model, load, phase, y_plus, y_minus)
 
 
-def _impact_states(model: BarModel, load: Load, phase: float):
-    """Modal states just after (``t = 0+``) and just before (``t = 2 pi-``) the orbit's impact."""
+def _impact_states(model: BarModel, load: Load, phase: float, return_flow: bool = False):
+    """Modal states just after (``t = 0+``) and just before (``t = 2 pi-``) the orbit's impact;
+    with ``return_flow``, also the flight's flow (``load.flow`` from ``y_plus``) where it is the
+    one that gave ``y_minus`` (a Fourier load; else ``None``), for the admissibility search."""
     M = model.n_modes + 1
     y_plus = _start_state(model, load, phase)
-    qm, vm = load.propagate(model.frequencies**2, model.d, phase, y_plus[:M], y_plus[M:],
-                            [phase + TWO_PI])
-    return y_plus, np.concatenate((qm[:, 0], vm[:, 0]))
+    w2 = model.frequencies**2
+    flow = None
+    if isinstance(load, FourierLoad):  # its propagate is this flow: built once, used twice
+        flow = load.flow(w2, model.d, phase, y_plus[:M], y_plus[M:])
+        qm, vm = flow([phase + TWO_PI])
+    else:
+        qm, vm = load.propagate(w2, model.d, phase, y_plus[:M], y_plus[M:], [phase + TWO_PI])
+    y_minus = np.concatenate((qm[:, 0], vm[:, 0]))
+    return (y_plus, y_minus, flow) if return_flow else (y_plus, y_minus)
 
 
 def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
     M = model.n_modes + 1
-    y_plus, y_minus = _impact_states(model, load, phase)
+    y_plus, y_minus, flow = _impact_states(model, load, phase, return_flow=True)
     c = model.end_weights
     v_imp = float(c @ y_minus[M:])
 
-    status, clearance, cerr = _admissibility(model, load, phase, y_plus, v_imp)
+    status, clearance, cerr = _admissibility(model, load, phase, y_plus, v_imp, flow=flow)
     admissible = status == "admissible"
 
     try:

@@ -437,14 +437,13 @@ def _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus,
                   | (~r0 & ~(np.abs(v_plus) > 1e-6 * scale)))
     # the general path's conventions (admissibility.py): the largest stationary value, its error
     clearance = np.full(O, -np.inf)
-    gabs = np.zeros(O)
-    if oi.size:  # per orbit: the largest value and the largest magnitude (oi grouped by orbit)
+    if oi.size:  # per orbit: the largest value (oi grouped by orbit)
         order = np.argsort(oi, kind="stable")
         oi, g = oi[order], g[order]
         first = np.flatnonzero(np.diff(oi, prepend=-1))
         clearance[oi[first]] = np.maximum.reduceat(g, first)
-        gabs[oi[first]] = np.maximum.reduceat(np.abs(g), first)
-    err = 1e-12 * (scale + gabs)  # relative to the problem's scale, as admissibility.py
+    gabs = np.where(np.isfinite(clearance), np.abs(clearance), 0.0)
+    err = 1e-12 * (scale + gabs)  # relative to the problem's scale and the value, as admissibility.py
     tol = np.maximum(err, 1e-11 * scale)
     status = np.zeros(O, dtype=np.int8)
     status[clearance >= -tol] = 2

@@ -128,15 +128,19 @@ def _arrival_derivative(model: BarModel, load: Load, t_start: float, flight: flo
     # the period's fundamental matrix is cached per model
     p11, p12, p21, p22 = (period_fundamental(model) if flight == TWO_PI
                           else fundamental(model.frequencies**2, model.d, flight))
-    Psi = np.block([[np.diag(p11), np.diag(p12)], [np.diag(p21), np.diag(p22)]])
-    # embedding of x = (q_1..q_N, v_0..v_N) into the full state, q_0 = -sum c_n q_n
-    E = np.zeros((2 * M, 2 * M - 1))
-    E[0, : M - 1] = -c[1:]
-    E[1:M, : M - 1] = np.eye(M - 1)
-    E[M:, M - 1:] = np.eye(M)
-    A = np.empty((2 * M, 2 * M))
-    A[:, 0] = -Psi @ f0
-    A[:, 1:] = Psi @ E
+    # Psi = [[diag p11, diag p12], [diag p21, diag p22]] applied to f0 and to the embedding of
+    # x = (q_1..q_N, v_0..v_N) into the full state (q_0 = -sum c_n q_n), entry by entry
+    A = np.zeros((2 * M, 2 * M))
+    A[:M, 0] = -(p11 * f0[:M] + p12 * f0[M:])
+    A[M:, 0] = -(p21 * f0[:M] + p22 * f0[M:])
+    n = np.arange(1, M)  # q_n, column n
+    A[0, 1:M] = -p11[0] * c[1:]
+    A[M, 1:M] = -p21[0] * c[1:]
+    A[n, n] = p11[1:]
+    A[M + n, n] = p21[1:]
+    m = np.arange(M)  # v_m, column M + m
+    A[m, M + m] = p12
+    A[M + m, M + m] = p22
     r = -(c @ A[:M, :]) / v_imp  # d tau' / d z
     return A + np.outer(f1, r), r
 

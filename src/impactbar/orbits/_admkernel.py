@@ -1,0 +1,443 @@
+"""Compiled certified admissibility search (theory §5), used by
+:func:`impactbar.orbits.admissibility._admissibility` in place of the numpy search (a few dozen
+small numpy calls per bisection level and per Newton step).
+
+It runs the same algorithm as the numpy path, step by step: the exclusion of intervals where
+``|g'(mid)| > L h`` (``g = u(1, t)``, ``L`` the bound of ``|g''|`` from each mode's energy), the
+vectorised Newton iteration on the zeros of ``g'`` with the same stopping rule, and the branch and
+bound on the stationary values (the bounds of ``g`` from the midpoint, and from a found zero by
+Taylor's theorem). The modal flow is the exact closed form of :mod:`impactbar.dynamics._flowkernel`
+under a Fourier load (``lk = 0``) or a piecewise-constant load (``lk = 1``). Results agree with the
+numpy path to rounding. Imported lazily, so ``import impactbar`` does not load numba.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ..dynamics._flowkernel import bound_column, fourier_column, piecewise_column
+from ..dynamics._kernel import CACHE
+
+TWO_PI = 2.0 * math.pi
+_MAXF = np.finfo(np.float64).max
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _right(a, x):
+    """``np.searchsorted(a, x, side="right")`` for a short sorted ``a``."""
+    n = 0
+    while n < a.size and a[n] <= x:
+        n += 1
+    return n
+
+
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def _load(lk, t, F, P):
+    """The load ``p(t)`` at the absolute time ``t``."""
+    if lk == 0:
+        k, pr, pim, p0 = F[3], F[17], F[18], F[2]
+        s = 0.0
+        for m in range(k.size):
+            x = k[m] * t
+            s += math.cos(x) * pr[m] - math.sin(x) * pim[m]
+        return p0 + s
+    brk, lv = P[5], P[6]
+    tm = t % TWO_PI
+    idx = _right(brk, tm) - 1
+    if idx < 0:
+        idx = brk.size - 1
+    return lv[idx]
+
+
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def _variation(lk, mid, half, F, P):
+    """``(center, delta)`` with ``|p - center| <= delta`` on ``[mid - half, mid + half]`` (as
+    ``Load.variation``)."""
+    center = _load(lk, mid, F, P)
+    if lk == 0:
+        return center, min(F[19] * half, F[20])
+    brk, spread, single = P[5], P[7], P[8]
+    if single:
+        return center, 0.0
+    lo = mid - half
+    hi = mid + half
+    jump = 2.0 * half >= TWO_PI
+    for b in brk:
+        if math.floor((hi - b) / TWO_PI) - math.floor((lo - b) / TWO_PI) > 0.0:
+            jump = True
+    return center, spread if jump else 0.0
+
+
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def _state(lk, t, q, v, ck, sk, F, P):
+    """The modal state at the absolute time ``t`` into column 0 of ``q, v`` (shape ``(M, 1)``)."""
+    if lk == 0:
+        fourier_column(t, q, v, 0, ck, sk, F[0], F[1], F[2], F[3], F[4], F[5], F[6], F[7], F[8],
+                       F[9], F[10], F[11], F[12], F[13], F[14], F[15], F[16])
+        return
+    w2, d, nodes, levels, qn, vn = P[0], P[1], P[2], P[3], P[4], P[9]
+    j = _right(nodes, t) - 1
+    j = min(max(j, 0), nodes.size - 2)
+    piecewise_column(w2, d, levels[j], max(t - nodes[j], 0.0), qn[:, j], vn[:, j], q, v, 0)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _dot(c, x):
+    s = 0.0
+    for n in range(c.size):
+        s += c[n] * x[n, 0]
+    return s
+
+
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def _g(lk, phase, t, c, q, v, ck, sk, F, P):
+    """``g(t) = c . q(phase + t)``."""
+    _state(lk, phase + t, q, v, ck, sk, F, P)
+    return _dot(c, q)
+
+
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P):
+    """``(g(mid), g'(mid), L)``: the end's displacement and velocity, and the bound of ``|g''|`` on
+    ``[mid - half, mid + half]`` (``gprime_and_bound`` of the numpy path)."""
+    ta = phase + mid
+    _state(lk, ta, q, v, ck, sk, F, P)
+    center, delta = _variation(lk, ta, half, F, P)
+    g1, L = bound_column(c, absc, w2, d, psup, q, v, 0, center, delta, half)
+    return _dot(c, q), g1, L
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _enclose(lk, phase, a, b, mids, half, min_width, max_intervals, atol, prune, best, floor, c, absc,
+             w2, d, psup, q, v, ck, sk, F, P):
+    """The bisection loop of ``certified.enclose_zeros`` (``merge=False``) from the midpoints
+    ``mids`` of intervals of half-width ``half``; returns ``(lo, hi, ok, best)``, ``ok`` false where
+    the numpy path raises (more than ``max_intervals`` survivors). With ``prune``, the intervals
+    where ``g`` stays below ``best`` (raised by each level's samples, as ``_sample_bound``) are
+    dropped too (``_numpy_search``'s ``prune``)."""
+    while True:
+        n = mids.size
+        gs = np.empty(n)
+        fs = np.empty(n)
+        ls = np.empty(n)
+        for i in range(n):
+            gs[i], fs[i], ls[i] = _joint(lk, phase, mids[i], half, c, absc, w2, d, psup, q, v, ck, sk,
+                                         F, P)
+        if prune:
+            best = max(best, _sample_bound(mids, gs, fs, atol, floor))
+        keep = np.empty(n, dtype=np.bool_)
+        nk = 0
+        for i in range(n):
+            bound = ls[i] * half
+            keep[i] = abs(fs[i]) <= bound * (1.0 + 1e-9) + atol + 1e-300
+            if prune and keep[i]:
+                keep[i] = gs[i] + (abs(fs[i]) + ls[i] * half) * half >= best
+            if keep[i]:
+                nk += 1
+        kept = np.empty(nk)
+        j = 0
+        for i in range(n):
+            if keep[i]:
+                kept[j] = mids[i]
+                j += 1
+        mids = kept
+        if mids.size == 0 or 2.0 * half <= min_width:
+            break
+        if mids.size > max_intervals:
+            return np.empty(0), np.empty(0), False, best
+        half *= 0.5
+        split = np.empty(2 * mids.size)  # sorted, as the midpoints are and 4 half apart
+        for i in range(mids.size):
+            split[2 * i] = mids[i] - half
+            split[2 * i + 1] = mids[i] + half
+        mids = split
+    lo = np.empty(mids.size)
+    hi = np.empty(mids.size)
+    for i in range(mids.size):
+        lo[i] = max(mids[i] - half, a)
+        hi[i] = min(mids[i] + half, b)
+    return lo, hi, True, best
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _enclose_in(lk, phase, a, b, lo, hi, n0, max_intervals, atol, c, absc, w2, d, psup,
+                q, v, ck, sk, F, P):
+    """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
+    pieces, down to a 64th of the widest."""
+    width = 0.0
+    for i in range(lo.size):
+        width = max(width, hi[i] - lo[i])
+    x = max(abs(a), abs(b), 1.0)
+    if not width > 4.0 * (np.nextafter(x, np.inf) - x) * n0:
+        return lo.copy(), hi.copy(), True
+    half = 0.5 * width / n0
+    mids = np.empty(lo.size * n0)
+    m = 0
+    for i in range(lo.size):
+        for j in range(n0):
+            mj = lo[i] + half * (2.0 * j + 1.0)
+            if mj < hi[i] + half:
+                mids[m] = mj
+                m += 1
+    lo, hi, good, _ = _enclose(lk, phase, a, b, mids[:m].copy(), half, width / 64.0, max_intervals, atol,
+                               False, -math.inf, 0.0, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+    return lo, hi, good
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _newton(lk, phase, lo, hi, c, w2, d, q, v, ck, sk, F, P):
+    """``admissibility._newton_stationary``: the same vectorised iteration, element by element."""
+    n = lo.size
+    t = np.empty(n)
+    ok = np.zeros(n, dtype=np.bool_)
+    inside = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        t[i] = 0.5 * (lo[i] + hi[i])
+    M = c.size
+    for _ in range(8):
+        done = True
+        for i in range(n):
+            ta = phase + t[i]
+            _state(lk, ta, q, v, ck, sk, F, P)
+            p = _load(lk, ta, F, P)
+            g1 = 0.0
+            g2 = 0.0
+            for k in range(M):
+                g1 += c[k] * v[k, 0]
+                g2 += c[k] * (p - d * v[k, 0] - w2[k] * q[k, 0])
+            step = g1 / g2 if g2 != 0.0 else math.inf
+            if step != step:  # as np.nan_to_num(step, nan=inf)
+                step = math.inf
+            elif step == math.inf:
+                step = _MAXF
+            elif step == -math.inf:
+                step = -_MAXF
+            fin = math.isfinite(step)
+            t_new = t[i] - (step if fin else 0.0)
+            inside[i] = (t_new >= lo[i]) and (t_new <= hi[i]) and fin
+            t[i] = min(max(t_new, lo[i]), hi[i])
+            ok[i] = inside[i] and abs(step) < 1e-12
+            if not (ok[i] or not inside[i]):
+                done = False
+        if done:
+            break
+    return t, ok
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P):
+    """``g`` at the midpoints of ``[lo, hi]`` and its upper bound ``g(mid) + (|g'| + L h) h``."""
+    n = lo.size
+    gm = np.empty(n)
+    upper = np.empty(n)
+    g1 = np.empty(n)
+    for i in range(n):
+        mid = 0.5 * (lo[i] + hi[i])
+        half = 0.5 * (hi[i] - lo[i])
+        gm[i], g1[i], L2 = _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+        upper[i] = gm[i] + (abs(g1[i]) + L2 * half) * half
+    return gm, upper, g1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _sample_bound(mid, gm, g1, atol, floor):
+    """``admissibility._sample_bound``: a lower bound of the largest stationary value from the
+    samples ``g(mid), g'(mid)`` at the sorted times ``mid``."""
+    a = -1
+    b = -1
+    for i in range(mid.size):
+        if mid[i] > floor:
+            if a < 0 and g1[i] > atol:
+                a = i
+            if g1[i] < -atol:
+                b = i
+    if a < 0 or b <= a:
+        return -math.inf
+    top = -math.inf
+    for i in range(a, b + 1):
+        top = max(top, gm[i])
+    return top - atol
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _single(lk, phase, ts, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P):
+    """``admissibility._numpy_search``'s ``single_zero``: ``|g''(ts)| > L3 r``, so that ``ts`` is
+    the only zero of ``g'`` on ``[lo, hi]``."""
+    mid = 0.5 * (lo + hi)
+    half = 0.5 * (hi - lo)
+    ta = phase + mid
+    _state(lk, ta, q, v, ck, sk, F, P)
+    center, delta = _variation(lk, ta, half, F, P)
+    if lk == 0:
+        slope = F[19]
+    else:
+        if delta != 0.0:  # a jump of the load inside: no certificate
+            return False
+        slope = 0.0
+    M = c.size
+    grow = math.exp(d * half)
+    L3 = 0.0
+    for n in range(M):
+        vn = v[n, 0]
+        if w2[n] > 0.0:
+            wc = math.sqrt(w2[n])
+            r = wc * q[n, 0] - center / wc
+            Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
+            t3 = slope + d * (delta + (d + wc) * Eb) + w2[n] * Eb
+        else:
+            t3 = slope + d * (psup + d * ((abs(vn) + psup * half) * grow))
+        L3 += absc[n] * t3
+    ta = phase + ts
+    _state(lk, ta, q, v, ck, sk, F, P)
+    p = _load(lk, ta, F, P)
+    g2 = 0.0
+    for n in range(M):
+        g2 += c[n] * (p - d * v[n, 0] - w2[n] * q[n, 0])
+    return abs(g2) > L3 * max(ts - lo, hi - ts)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _top(x, k):
+    """Indices of the ``k`` largest ``x``, largest first, the first of equal ones first (as
+    ``np.argsort(-x, kind="mergesort")[:k]``)."""
+    k = min(k, x.size)
+    out = np.empty(k, dtype=np.int64)
+    taken = np.zeros(x.size, dtype=np.bool_)
+    for j in range(k):
+        m = -1
+        for i in range(x.size):
+            if not taken[i] and (m < 0 or x[i] > x[m]):
+                m = i
+        out[j] = m
+        taken[m] = True
+    return out
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, absc, w2, d, psup, F, P):
+    """The largest stationary value of ``g = u(1, t)`` over ``[0, horizon]`` after the impact at
+    ``phase`` (``admissibility._numpy_search`` and ``_stationary_values``, ``rounds = 8``).
+
+    Returns
+    -------
+    code : int
+        0, or 1 where the numpy path raises (the first enclosure does not converge).
+    v_max : float
+        The largest stationary value (``-inf`` without one), or an upper bound of it.
+    err : float
+        As ``_stationary_values``'s ``err``.
+    """
+    M = c.size
+    K = F[3].size
+    q = np.empty((M, 1))
+    v = np.empty((M, 1))
+    ck = np.empty(K)
+    sk = np.empty(K)
+    n0 = 64
+    half0 = 0.5 * horizon / n0
+    mids = np.empty(n0)
+    for i in range(n0):
+        mids[i] = half0 * (2.0 * i + 1.0)
+    lo, hi, good, best = _enclose(lk, phase, 0.0, horizon, mids, half0, 6e-3, 400_000, atol, True,
+                                  -math.inf, floor, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+    if not good:
+        return 1, -math.inf, 0.0
+    if at_rest:
+        sel = lo > 1e-6
+        lo, hi = lo[sel], hi[sel]
+
+    err = 0.0
+    gm, upper, g1 = _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+    if lo.size:
+        mid = np.empty(lo.size)
+        for i in range(lo.size):
+            mid[i] = 0.5 * (lo[i] + hi[i])
+        best = max(best, _sample_bound(mid, gm, g1, atol, floor))
+    for _ in range(8):
+        sel = upper >= best
+        lo, hi, gm, upper = lo[sel], hi[sel], gm[sel], upper[sel]
+        n = lo.size
+        if n == 0:
+            break
+        t = np.empty(n)
+        ok = np.zeros(n, dtype=np.bool_)
+        vals = np.full(n, -math.inf)
+        tried = np.zeros(n, dtype=np.bool_)
+        batch = _top(upper, seeds)
+        for stage in range(2):
+            if stage == 1:
+                nb = 0
+                for i in range(n):
+                    if not tried[i] and upper[i] >= best:
+                        nb += 1
+                if nb == 0:
+                    break
+                batch = np.empty(nb, dtype=np.int64)
+                nb = 0
+                for i in range(n):
+                    if not tried[i] and upper[i] >= best:
+                        batch[nb] = i
+                        nb += 1
+            tb, okb = _newton(lk, phase, lo[batch], hi[batch], c, w2, d, q, v, ck, sk, F, P)
+            for j in range(batch.size):
+                i = batch[j]
+                tried[i] = True
+                t[i] = tb[j]
+                ok[i] = okb[j]
+                if okb[j]:
+                    vals[i] = _g(lk, phase, tb[j], c, q, v, ck, sk, F, P)
+            for j in range(batch.size):
+                if okb[j]:
+                    best = max(best, vals[batch[j]])
+        # the intervals searched again: a found zero whose Taylor bound can still beat the best
+        # value (bounds about the zero), an interval where Newton failed (bounds from the midpoint)
+        nr = 0
+        retry = np.zeros(n, dtype=np.bool_)
+        for i in range(n):
+            if not tried[i]:
+                continue
+            if ok[i]:
+                mid = 0.5 * (lo[i] + hi[i])
+                half = 0.5 * (hi[i] - lo[i])
+                L2 = _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P)[2]
+                r = max(t[i] - lo[i], hi[i] - t[i])
+                taylor = vals[i] + 0.5 * L2 * r * r
+                if taylor > best + atol and not _single(lk, phase, t[i], lo[i], hi[i], c, absc, w2,
+                                                          d, psup, q, v, ck, sk, F, P):
+                    gm[i] = vals[i]
+                    upper[i] = taylor
+                    retry[i] = upper[i] >= best
+            else:
+                retry[i] = upper[i] >= best
+            if retry[i]:
+                nr += 1
+        if nr == 0:
+            lo = np.empty(0)
+            break
+        rlo = np.empty(nr)
+        rhi = np.empty(nr)
+        rgm = np.empty(nr)
+        rup = np.empty(nr)
+        j = 0
+        for i in range(n):
+            if retry[i]:
+                rlo[j], rhi[j], rgm[j], rup[j] = lo[i], hi[i], gm[i], upper[i]
+                j += 1
+        lo, hi, good = _enclose_in(lk, phase, 0.0, horizon, rlo, rhi, 8, 20_000, atol, c, absc,
+                                   w2, d, psup, q, v, ck, sk, F, P)
+        if not good:  # a zero of high order: the enclosure no longer shrinks
+            top = np.max(rup)
+            best = max(best, top)
+            err = max(err, top - np.min(2.0 * rgm - rup))
+            lo = np.empty(0)
+            break
+        gm, upper, g1 = _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+    if lo.size:  # rounds exhausted: bound what is left
+        top = np.max(upper)
+        if top >= best:
+            best = top
+            err = max(err, top - np.min(2.0 * gm - upper))
+    return 0, best, err
