@@ -401,6 +401,92 @@ def test_sigkill_midway_then_resume_equals_uninterrupted(client, tmp_path):
         np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
 
 
+# -- cheap closed-form sweeps in threads of the driver ---------------------------------------------
+def test_closed_form_task_picks_the_threads_executor():
+    """Only sweeps whose every point takes the rigid closed forms run in threads by default."""
+    from impactbar.sweeps.tasks import closed_form_task
+
+    assert closed_form_task(parse_spec(base_doc()))
+    square = base_doc()
+    square["load"] = {"kind": "square", "q": 1.0, "kappa": 1.2}
+    square["axes"] = {"kappa": {"values": [1.0, 1.5]}}
+    assert closed_form_task(parse_spec(square))
+    assert closed_form_task(parse_spec(_with(base_doc(), ("axes", "n_modes"), {"values": [0]})))
+    assert not closed_form_task(parse_spec(_with(base_doc(), ("axes", "n_modes"), {"values": [0, 2]})))
+    assert not closed_form_task(parse_spec(_with(base_doc(), ("model", "n_modes"), 2)))
+    assert not closed_form_task(parse_spec(_with(base_doc(), ("model", "impact"), "wave")))
+    assert not closed_form_task(parse_spec(mc_doc(starts=2, periods=10.0)))
+    fourier = base_doc()
+    fourier["load"] = {"kind": "fourier", "p0": 0.3, "coefficients": [1.0, 0.2]}
+    fourier["axes"] = {"R": {"values": [0.0, 0.5]}}
+    assert not closed_form_task(parse_spec(fourier))
+
+
+@pytest.mark.parametrize("load", [{"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 2},
+                                  {"kind": "square", "q": 1.0, "kappa": 1.3}])
+def test_threads_executor_store_equals_cluster_store(client, tmp_path, monkeypatch, load):
+    """The same store, byte for byte in its data and checksums, from threads of the driver (the
+    default for a closed-form sweep: no cluster is started) and from the dask cluster."""
+    from impactbar.sweeps import run as run_module
+
+    doc = base_doc(chunk_points=7)
+    doc["load"] = load
+    if load["kind"] == "square":
+        doc["axes"] = {"R": {"start": 0.0, "stop": 0.9, "num": 10}, "kappa": {"values": [1.0, 1.5, 1.9]}}
+    spec = parse_spec(doc)
+
+    def no_cluster(*a):
+        raise AssertionError("a closed-form sweep started a cluster")
+
+    monkeypatch.setattr(run_module, "_connect", no_cluster)
+    a = run_sweep(spec, tmp_path / "threads.zarr", n_workers=2, progress=False)
+    assert a.complete and a.computed == spec.n_chunks
+    b = run_sweep(spec, tmp_path / "dask.zarr", client=client, progress=False)
+    assert b.complete
+    ta, tb = xr.open_zarr(tmp_path / "threads.zarr").load(), xr.open_zarr(tmp_path / "dask.zarr").load()
+    xr.testing.assert_identical(ta, tb)
+    for name in ta.data_vars:
+        np.testing.assert_array_equal(ta[name].values, tb[name].values, err_msg=name)
+    assert (ta["chunk_checksum"].values >= 0).all()
+    with pytest.raises(ValueError, match="executor must be one of"):
+        run_sweep(spec, tmp_path / "x.zarr", executor="processes", progress=False)
+    with pytest.raises(ValueError, match="no client or scheduler"):
+        run_sweep(spec, tmp_path / "x.zarr", client=client, executor="threads", progress=False)
+    assert not (tmp_path / "x.zarr").exists()
+
+
+def test_threads_executor_interrupted_keeps_finished_chunks_and_resumes(tmp_path, monkeypatch):
+    """Ctrl-C in the middle of a sweep run in threads: the chunks stored before it are kept
+    (flagged, checksummed), the lock is released, and rerunning completes the store, identical
+    to an uninterrupted run."""
+    from impactbar.sweeps import run as run_module
+
+    spec = parse_spec(base_doc(chunk_points=3))  # 10 chunks
+    ref = tmp_path / "ref.zarr"
+    run_sweep(spec, ref, executor="threads", n_workers=1, progress=False)
+    real = run_module.compute_chunk
+
+    def interrupted(spec, chunk):
+        if chunk == 6:
+            raise KeyboardInterrupt
+        return real(spec, chunk)
+
+    monkeypatch.setattr(run_module, "compute_chunk", interrupted)
+    out = tmp_path / "out.zarr"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, out, n_workers=1, progress=False)
+    stored, total = sweep_progress(out)
+    assert 1 <= stored <= 6 and total == 10
+    assert not (tmp_path / ".out.zarr.lock").exists()
+    monkeypatch.setattr(run_module, "compute_chunk", real)
+    res = run_sweep(spec, out, n_workers=2, progress=False)
+    assert res.already_done == stored and res.computed == 10 - stored
+    a, b = xr.open_zarr(out).load(), xr.open_zarr(ref).load()
+    xr.testing.assert_identical(a, b)
+    for name in a.data_vars:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
 # -- the command line ----------------------------------------------------------------------------
 def test_cli_refuses_a_bad_spec_before_any_work(tmp_path):
     doc = base_doc()

@@ -237,21 +237,49 @@ def _open_group(path: Path):
     return zarr.open_group(path, mode="r+")
 
 
-def _write_chunk(spec: SweepSpec, path: Path, chunk: int, result: dict, group=None) -> None:
-    """Write one computed chunk into its region of every variable, straight into the zarr arrays
-    (the dtypes and fill values were fixed when the store was made, so nothing is encoded here;
-    xarray's region writes cost some 20 ms a chunk, these about 1 ms)."""
+def _write_chunks(spec: SweepSpec, path: Path, items, group=None) -> None:
+    """Write computed chunks (``(chunk, result)`` pairs) into their regions of every variable,
+    straight into the zarr arrays, all at once: one round trip to zarr's event loop for every
+    array of every chunk (the dtypes and fill values were fixed when the store was made, so
+    nothing is encoded here; xarray's region writes cost some 20 ms a chunk, one write per array
+    about 13 ms, this 5-8 ms)."""
+    import asyncio
+
+    from zarr.core.sync import sync
+
     g = _open_group(path) if group is None else group
-    region = chunk_slices(spec, chunk)
-    for name, arr in result.items():
-        g[name][region + (slice(None),) * (arr.ndim - len(region))] = arr
+    arrays = {}
+    writes = []
+    for chunk, result in items:
+        region = chunk_slices(spec, chunk)
+        for name, arr in result.items():
+            if name not in arrays:
+                arrays[name] = g[name].async_array
+            writes.append(arrays[name].setitem(region + (slice(None),) * (arr.ndim - len(region)), arr))
+
+    async def gather():
+        await asyncio.gather(*writes)
+
+    sync(gather())
+
+
+def _write_chunk(spec: SweepSpec, path: Path, chunk: int, result: dict, group=None) -> None:
+    """Write one computed chunk into its region of every variable (see :func:`_write_chunks`)."""
+    _write_chunks(spec, path, [(chunk, result)], group)
 
 
 def _write_done(path: Path, done: np.ndarray, sums: np.ndarray, group=None) -> None:
     """Write the chunks' checksums, then their done flags (a kill in between only recomputes)."""
+    from zarr.core.sync import sync
+
     g = _open_group(path) if group is None else group
-    g[_SUM][:] = sums
-    g[_DONE][:] = done
+    sum_array, done_array = g[_SUM].async_array, g[_DONE].async_array
+
+    async def write():
+        await sum_array.setitem(slice(None), sums)
+        await done_array.setitem(slice(None), done)
+
+    sync(write())
 
 
 def open_sweep(path):
