@@ -107,7 +107,8 @@ def test_spec_normalises_and_round_trips():
     assert [a.name for a in spec.axes] == ["R", "p0"]
     assert spec.axes[0].values == tuple(np.linspace(0.0, 0.9, 10))
     assert spec.options == {"max_orbits": 2}
-    assert spec.chunk_points == 400
+    assert spec.chunk_points == 4096  # every point in the rigid closed forms (closed_form_task)
+    assert parse_spec(_with(base_doc(), ("model", "n_modes"), 2)).chunk_points == 400
     again = parse_spec(json.loads(spec.to_json()))
     assert again == spec and again.to_json() == spec.to_json()
     model, load = spec.point((3, 1))
@@ -404,7 +405,7 @@ def test_sigkill_midway_then_resume_equals_uninterrupted(client, tmp_path):
 # -- cheap closed-form sweeps in threads of the driver ---------------------------------------------
 def test_closed_form_task_picks_the_threads_executor():
     """Only sweeps whose every point takes the rigid closed forms run in threads by default."""
-    from impactbar.sweeps.tasks import closed_form_task
+    from impactbar.sweeps.spec import closed_form_task
 
     assert closed_form_task(parse_spec(base_doc()))
     square = base_doc()

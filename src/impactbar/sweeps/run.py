@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import check_int
-from .spec import SweepSpec
+from .spec import SweepSpec, closed_form_task
 from .store import _checksum, _open_group, _prepare_store, _write_chunks, _write_done
-from .tasks import closed_form_task, compute_chunk
+from .tasks import compute_chunk
 
 #: where :func:`run_sweep` computes the chunks without a ``client`` or ``scheduler``
 EXECUTORS = ("auto", "threads", "dask")
@@ -97,7 +97,7 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
         ``"dask"``, a local ``dask.distributed`` cluster of ``n_workers`` processes; ``"threads"``,
         ``n_workers`` threads of this process, without dask (for cheap work: the threads share one
         interpreter); ``"auto"`` (default), threads for a sweep whose every point takes the rigid
-        bar's vectorised closed forms (:func:`impactbar.sweeps.tasks.closed_form_task`, where
+        bar's vectorised closed forms (:func:`impactbar.sweeps.spec.closed_form_task`, where
         starting a cluster costs more than the whole work), a local cluster otherwise. The store,
         its checksums, flags and lock, resumption and the progress bar are the same either way.
 

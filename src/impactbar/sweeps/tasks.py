@@ -131,20 +131,6 @@ def _chunk_parameters(spec: SweepSpec, slices, block) -> dict:
     return par
 
 
-def closed_form_task(spec: SweepSpec) -> bool:
-    """Whether every point of the sweep takes the rigid bar's vectorised closed forms: the ``orbits``
-    task with ``n_modes = 0`` everywhere, the paper's impact law and a cosine or square-wave load
-    (:mod:`impactbar.orbits.rigid`, some 200,000 points/s on one core). Such a sweep costs less
-    than starting a cluster, so :func:`impactbar.sweeps.run_sweep` computes it in threads of the
-    driver process by default."""
-    if spec.task != "orbits" or spec.load["kind"] not in ("cosine", "square"):
-        return False
-    if spec.model.get("impact", "paper") != "paper":
-        return False
-    modes = next((a.values for a in spec.axes if a.name == "n_modes"), (spec.model["n_modes"],))
-    return all(int(n) == 0 for n in modes)
-
-
 def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     """The ``orbits`` task for the rigid bar under a cosine load or the square wave, the whole
     chunk at once by the closed forms of :mod:`impactbar.orbits.rigid` (the same numbers as
