@@ -456,6 +456,48 @@ def test_threads_executor_store_equals_cluster_store(client, tmp_path, monkeypat
     assert not (tmp_path / "x.zarr").exists()
 
 
+@pytest.mark.parametrize("doc", [
+    mc_doc(starts=2, periods=10.0),
+    _with(_with(base_doc(chunk_points=3), ("axes", "n_modes"), {"values": [0, 1]}), ("axes", "k"),
+          {"values": [1, 3]}),
+    {"task": "bifurcation", "model": {"s": 10.0, "d": 0.005, "R": 0.8, "n_modes": 0},
+     "load": {"kind": "square", "q": 0.5, "kappa": 1.2},
+     "axes": {"kappa": {"start": 1.0, "stop": 1.5, "num": 7}}},
+], ids=["montecarlo", "orbits", "bifurcation"])
+def test_store_created_with_zarr_alone_equals_xarrays(tmp_path, monkeypatch, doc):
+    """The store written with zarr alone (the default: xarray and dask.array are not imported)
+    equals, file for file and byte for byte, the one xarray's to_zarr writes from the template."""
+    from impactbar.sweeps import store
+    from impactbar.sweeps.tasks import _variables
+
+    spec = parse_spec(doc)
+    files = {}
+    for via in (True, False):
+        monkeypatch.setattr(store, "CREATE_WITH_XARRAY", via)
+        path = tmp_path / f"{via}.zarr"
+        store._create_store(spec, path)
+        files[via] = {f.relative_to(path): f.read_bytes() for f in sorted(path.rglob("*")) if f.is_file()}
+    assert files[True] == files[False]
+    # the root, every variable, the flags and checksums, the axes (and montecarlo's motion classes)
+    n_json = 1 + len(_variables(spec)) + 2 + len(spec.axes) + (spec.task == "montecarlo")
+    assert sum(p.name == "zarr.json" for p in files[False]) == n_json
+
+
+def test_closed_form_sweep_imports_neither_dask_nor_xarray(tmp_path):
+    """A closed-form sweep in a fresh process: no cluster, and neither distributed, dask nor
+    xarray is imported (their start-up is most of a short sweep's time)."""
+    code = ("import sys\nfrom impactbar.sweeps import parse_spec, run_sweep\n"
+            f"spec = parse_spec({base_doc()!r})\n"
+            f"run = run_sweep(spec, {str(tmp_path / 's.zarr')!r}, n_workers=2, progress=False)\n"
+            "assert run.complete\n"
+            "print(sorted(m for m in ('distributed', 'dask', 'xarray') if m in sys.modules))\n")
+    env = dict(os.environ, PYTHONPATH=str(SRC))
+    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "[]"
+    assert bool(open_sweep(tmp_path / "s.zarr")["chunk_done"].all())
+
+
 def test_threads_executor_interrupted_keeps_finished_chunks_and_resumes(tmp_path, monkeypatch):
     """Ctrl-C in the middle of a sweep run in threads: the chunks stored before it are kept
     (flagged, checksummed), the lock is released, and rerunning completes the store, identical
