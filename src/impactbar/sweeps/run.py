@@ -293,8 +293,7 @@ def _dask_results(spec, todo, client):
     chunk_of = {f.key: i for f, i in zip(futures, todo, strict=True)}
     try:
         for finished in as_completed(futures).batches():
-            batch = [(chunk_of[fut.key], fut.result()) for fut in finished]
-            yield batch
+            yield from _finished_batches([(chunk_of[fut.key], fut) for fut in finished])
             for fut in finished:
                 fut.release()
     finally:
@@ -325,9 +324,26 @@ def _thread_results(spec, todo, n_threads):
             fill()
             while pending:
                 finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-                batch = [(pending.pop(fut), fut.result()) for fut in finished]
+                pairs = [(pending.pop(fut), fut) for fut in finished]
                 fill()  # keep the threads busy while these chunks are written
-                yield batch
+                yield from _finished_batches(pairs)
         finally:
             for fut in pending:
                 fut.cancel()
+
+
+def _finished_batches(pairs):
+    """Yield the results of finished futures (``(chunk, future)`` pairs) as one list of
+    ``(chunk, data)``, then raise the first task error among them, if any: the chunks that did
+    finish are stored before the error stops the sweep."""
+    batch, error = [], None
+    for chunk, fut in pairs:
+        try:
+            batch.append((chunk, fut.result()))
+        except BaseException as exc:  # a task's error, even KeyboardInterrupt, after the others
+            if error is None:
+                error = exc
+    if batch:
+        yield batch
+    if error is not None:
+        raise error
