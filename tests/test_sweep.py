@@ -357,6 +357,25 @@ def _done_count(path: Path) -> int:
         return 0
 
 
+def _sigkill_after(n_done: int, out: Path, spec_file: Path, *options) -> int:
+    """Run ``impactbar sweep`` in a new session, SIGKILL it and everything it started once
+    ``n_done`` chunks are stored; return the chunks stored then."""
+    env = dict(os.environ, PYTHONPATH=str(SRC))
+    proc = subprocess.Popen([sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out",
+                             str(out), *options, "--no-progress"], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while _done_count(out) < n_done:
+            assert proc.poll() is None, proc.stderr.read().decode()
+            assert time.monotonic() < deadline, "the sweep made no progress"
+            time.sleep(0.01)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    return _done_count(out)
+
+
 def test_sigkill_midway_then_resume_equals_uninterrupted(client, tmp_path):
     """A sweep killed with SIGKILL (the driver and anything it started) keeps its finished chunks;
     rerunning the same command completes it, identical to an uninterrupted run."""
@@ -368,20 +387,7 @@ def test_sigkill_midway_then_resume_equals_uninterrupted(client, tmp_path):
     assert spec.n_chunks == 40
     addr = client.scheduler.address
     out = tmp_path / "killed.zarr"
-    env = dict(os.environ, PYTHONPATH=str(SRC))
-    proc = subprocess.Popen([sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out",
-                             str(out), "--scheduler", addr, "--no-progress"], env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 120
-        while _done_count(out) < 5:
-            assert proc.poll() is None, proc.stderr.read().decode()
-            assert time.monotonic() < deadline, "the sweep made no progress"
-            time.sleep(0.02)
-    finally:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-    killed_at = _done_count(out)
+    killed_at = _sigkill_after(5, out, spec_file, "--scheduler", addr)
     assert 5 <= killed_at < spec.n_chunks, "killed too late to test resumption; enlarge the grid"
     # the partial store opens and plots (chunks not done are blank)
     part = xr.open_zarr(out)
@@ -528,6 +534,33 @@ def test_threads_executor_interrupted_keeps_finished_chunks_and_resumes(tmp_path
     xr.testing.assert_identical(a, b)
     for name in a.data_vars:
         np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+def test_threads_executor_sigkill_midway_then_resume_equals_uninterrupted(tmp_path):
+    """A closed-form sweep (threads of the driver) killed with SIGKILL keeps its finished chunks;
+    rerunning the same command completes it, identical to an uninterrupted run. Every point has
+    p0 = 0 (the end arrives at rest), which the closed form leaves to the general path, so that
+    the run lasts long enough to be killed midway."""
+    doc = base_doc(chunk_points=10, axes={"R": {"start": 0.05, "stop": 0.95, "num": 40},
+                                          "d": {"start": 0.0, "stop": 0.2, "num": 10}})
+    doc["load"]["p0"] = 0.0
+    spec_file = tmp_path / "spec.toml"
+    spec_file.write_text(toml_text(doc))
+    spec = load_spec(spec_file)
+    assert spec.n_chunks == 40
+    out = tmp_path / "killed.zarr"
+    killed_at = _sigkill_after(3, out, spec_file, "--workers", "1")
+    assert 3 <= killed_at < spec.n_chunks, "killed too late to test resumption; enlarge the grid"
+    res = cli("sweep", spec_file, "--out", out, "--workers", "2", "--no-progress", timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert int(res.stdout.split("(")[1].split(" found")[0]) >= killed_at
+    ref = tmp_path / "ref.zarr"
+    run_sweep(spec, ref, n_workers=2, progress=False)
+    a, b = xr.open_zarr(out).load(), xr.open_zarr(ref).load()
+    xr.testing.assert_identical(a, b)
+    for name in a.data_vars:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+    assert int(a["n_orbits"].sum()) > 0
 
 
 # -- the command line ----------------------------------------------------------------------------
