@@ -376,11 +376,20 @@ def _sigkill_after(n_done: int, out: Path, spec_file: Path, *options) -> int:
     return _done_count(out)
 
 
+def _slow_doc():
+    """A 400-point rigid orbits sweep in 40 chunks whose every point has p0 = 0 (the end arrives
+    at rest): the closed form leaves those to the general path (some ms a point), so that a run
+    lasts long enough to be killed midway."""
+    doc = base_doc(chunk_points=10, axes={"R": {"start": 0.05, "stop": 0.95, "num": 40},
+                                          "d": {"start": 0.0, "stop": 0.2, "num": 10}})
+    doc["load"]["p0"] = 0.0
+    return doc
+
+
 def test_sigkill_midway_then_resume_equals_uninterrupted(client, tmp_path):
     """A sweep killed with SIGKILL (the driver and anything it started) keeps its finished chunks;
     rerunning the same command completes it, identical to an uninterrupted run."""
-    doc = base_doc(chunk_points=10, axes={"R": {"start": 0.0, "stop": 0.95, "num": 40},
-                                          "p0": {"start": 0.2, "stop": 0.45, "num": 10}})
+    doc = _slow_doc()
     spec_file = tmp_path / "spec.toml"
     spec_file.write_text(toml_text(doc))
     spec = load_spec(spec_file)
@@ -538,12 +547,8 @@ def test_threads_executor_interrupted_keeps_finished_chunks_and_resumes(tmp_path
 
 def test_threads_executor_sigkill_midway_then_resume_equals_uninterrupted(tmp_path):
     """A closed-form sweep (threads of the driver) killed with SIGKILL keeps its finished chunks;
-    rerunning the same command completes it, identical to an uninterrupted run. Every point has
-    p0 = 0 (the end arrives at rest), which the closed form leaves to the general path, so that
-    the run lasts long enough to be killed midway."""
-    doc = base_doc(chunk_points=10, axes={"R": {"start": 0.05, "stop": 0.95, "num": 40},
-                                          "d": {"start": 0.0, "stop": 0.2, "num": 10}})
-    doc["load"]["p0"] = 0.0
+    rerunning the same command completes it, identical to an uninterrupted run."""
+    doc = _slow_doc()
     spec_file = tmp_path / "spec.toml"
     spec_file.write_text(toml_text(doc))
     spec = load_spec(spec_file)
