@@ -3,8 +3,9 @@
 Rows (baseline | new | ratio | the issue's goal):
 
 - rigid bar, cosine load, one grid point: ``periodic_orbits`` by the general path (certified
-  searches, dense Jacobian) against the closed forms; and per point of a vectorised call over a
-  40,000-point grid;
+  searches, dense Jacobian) against the closed forms; the closed forms on 1-element numpy arrays
+  against the same formulas in plain floats (cosine and square wave); and per point of a
+  vectorised call over a 40,000-point grid;
 - the sweep ``orbits`` task, rigid bar: ``compute_chunk`` point by point against the vectorised
   chunk (400 points);
 - ``periodic_orbits`` with 8 and 64 modes (cosine, square wave) and 256 modes (cosine): with the
@@ -44,7 +45,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate  # noqa: E402
-from impactbar.orbits import admissibility, stability  # noqa: E402
+from impactbar.orbits import admissibility, one_impact, stability  # noqa: E402
 from impactbar.orbits.one_impact import _periodic_orbits_general  # noqa: E402
 from impactbar.orbits.rigid import rigid_cosine_orbits  # noqa: E402
 
@@ -81,6 +82,15 @@ def bench_rigid(rep):
     base = cpu_median(lambda: _periodic_orbits_general(model, load), rep)
     new = cpu_median(lambda: periodic_orbits(model, load), rep * 10)
     row("rigid, cosine, one periodic_orbits call", base * 1e3, new * 1e3, "ms", "<= 0.3 ms")
+    for name, ld in (("cosine", load), ("square wave", SquareWaveLoad(1.0, 1.2))):
+        one_impact.RIGID_SCALAR = False  # the numpy closed form on 1-element arrays
+        try:
+            vec1 = cpu_median(lambda ld=ld: periodic_orbits(model, ld), rep * 10)
+        finally:
+            one_impact.RIGID_SCALAR = True
+        flt = cpu_median(lambda ld=ld: periodic_orbits(model, ld), rep * 10)
+        row(f"rigid, {name}, one call: numpy closed form vs floats", vec1 * 1e3, flt * 1e3, "ms",
+            "<= 0.3 ms")
     R, p0 = np.meshgrid(np.linspace(0.0, 0.95, 200), np.linspace(0.2, 0.45, 200))
     vec = cpu_median(lambda: rigid_cosine_orbits(0.1, R.ravel(), p0.ravel(), 1.0, 1), 5) / R.size
     row("rigid, cosine, per point of a 40,000-point array", base * 1e3, vec * 1e3, "ms", "2.5 us (numpy)")

@@ -12,6 +12,13 @@ writes a fresh store in a temporary folder.
 
 Run: ``python benchmarks/bench_sweep.py [--grid N] [--quick]`` (``--quick``: a 40 x 40 grid and 8
 starts). Prints a table; nothing is asserted. With ``--workers 1 2 4`` other sizes are timed.
+
+``--process [--against SRC]`` instead times the whole ``impactbar sweep`` command of the rigid
+``orbits`` spec in fresh processes (``--workers 2``, wall time: interpreter start, imports, cluster
+or threads, store creation, every chunk, exit) at the grid sizes of ``--grids`` (default 200 and
+632, about 40,000 and 400,000 points), with the spec's 400-point chunks and with the default
+chunking; with ``--against SRC`` the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x
+-C /tmp/old``) is timed alternately with this one, in the same run.
 """
 
 from __future__ import annotations
@@ -19,6 +26,9 @@ from __future__ import annotations
 import argparse
 import logging
 import os
+import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -63,13 +73,65 @@ def points_per_second(spec, workers: int, folder: Path) -> tuple[float, float, f
     return spec.n_points / run.seconds, run.seconds, cpu
 
 
+def _toml(n: int, chunk_points: int | None) -> str:
+    chunk = "" if chunk_points is None else f"chunk_points = {chunk_points}\n"
+    return (f'task = "orbits"\n{chunk}[model]\ns = 100.0\nd = 0.0\nR = 0.5\nn_modes = 0\n'
+            '[load]\nkind = "cosine"\np0 = 0.3\npk = 1.0\nk = 1\n'
+            f'[axes.R]\nstart = 0.0\nstop = 0.95\nnum = {n}\n'
+            f'[axes.p0]\nstart = 0.2\nstop = 0.45\nnum = {n}\n')
+
+
+def process_seconds(spec_file: Path, out: Path, src: str, workers: int) -> float:
+    """Wall time of one ``impactbar sweep`` command in a fresh process on the package tree ``src``."""
+    env = dict(os.environ, PYTHONPATH=src)
+    t = time.perf_counter()
+    subprocess.run([sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out", str(out),
+                    "--workers", str(workers), "--overwrite", "--no-progress"],
+                   check=True, capture_output=True, env=env)
+    return time.perf_counter() - t
+
+
+def main_process(args) -> None:
+    here = str(Path(__file__).resolve().parents[1] / "src")
+    trees = [("baseline", args.against)] if args.against else []
+    trees.append(("this tree", here))
+    print(f"cores: {os.cpu_count()}, load average at start: {os.getloadavg()[0]:.2f}")
+    print("| points | chunk_points | " + " | ".join(f"{name}: points/s (median wall s)" for name, _ in trees)
+          + (" | ratio |" if len(trees) > 1 else " |"))
+    print("|" + "---|" * (2 + len(trees) + (len(trees) > 1)))
+    with tempfile.TemporaryDirectory() as tmp:
+        for n in args.grids:
+            for chunk in (400, None):
+                spec_file = Path(tmp) / f"orbits-{n}-{chunk}.toml"
+                spec_file.write_text(_toml(n, chunk))
+                times = {name: [] for name, _ in trees}
+                for _ in range(args.repeat):
+                    for name, src in trees:  # alternately, so that both see the same load
+                        times[name].append(process_seconds(spec_file, Path(tmp) / "s.zarr", src,
+                                                           args.workers[-1]))
+                med = [statistics.median(times[name]) for name, _ in trees]
+                cells = " | ".join(f"{n * n / m:,.0f} ({m:.2f} s)" for m in med)
+                ratio = f" | {med[0] / med[-1]:.2f} |" if len(trees) > 1 else " |"
+                print(f"| {n * n:,} | {chunk or 'default'} | {cells}{ratio}", flush=True)
+    print(f"load average at end: {os.getloadavg()[0]:.2f}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--grid", type=int, default=200, help="orbits grid is GRID x GRID (default 200)")
     ap.add_argument("--starts", type=int, default=20, help="montecarlo starts per point (default 20)")
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="cluster sizes (default 1 2)")
     ap.add_argument("--quick", action="store_true", help="40 x 40 grid, 8 starts")
+    ap.add_argument("--process", action="store_true",
+                    help="time the whole `impactbar sweep` command (rigid orbits, fresh processes)")
+    ap.add_argument("--against", metavar="SRC", help="with --process: also time the package tree SRC")
+    ap.add_argument("--grids", type=int, nargs="+", default=[200, 632],
+                    help="with --process: grid sizes N (N x N points; default 200 632)")
+    ap.add_argument("--repeat", type=int, default=3, help="with --process: runs per tree (default 3)")
     args = ap.parse_args()
+    if args.process:
+        main_process(args)
+        return
     if args.quick:
         args.grid, args.starts = 40, 8
     specs = [(f"orbits, rigid, {args.grid} x {args.grid}", orbits_spec(args.grid)),

@@ -203,7 +203,7 @@ def test_local_sweep_serves_no_dashboard(monkeypatch, tmp_path):
     spec = parse_spec({"task": "orbits", "model": {"s": 10.0, "d": 0.0, "R": 0.5, "n_modes": 0},
                        "load": {"kind": "cosine", "p0": 0.3, "pk": 1.0, "k": 1},
                        "axes": {"R": {"start": 0.0, "stop": 0.5, "num": 2}}})
-    run_sweep(spec, tmp_path / "s.zarr", n_workers=1, progress=False)
+    run_sweep(spec, tmp_path / "s.zarr", n_workers=1, progress=False, executor="dask")
     assert len(probed) == 1
     port, codes = probed[0]
     assert port != 8787 and codes == [404, 404, 404, 404]

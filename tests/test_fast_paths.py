@@ -119,6 +119,68 @@ def test_rigid_vectorised_equals_pointwise(rng):
             assert res.max_abs_multiplier[i, j] == pytest.approx(o.max_abs_multiplier, rel=1e-12)
 
 
+def _assert_scalar_equals_vectorised(found, res, i):
+    """The plain-float orbits of one point against row ``i`` of the vectorised closed form."""
+    if found is None:
+        assert res.fallback[i]
+        return
+    assert not res.fallback[i]
+    assert res.n_orbits[i] == len(found)
+    for j, o in enumerate(found):
+        assert o.phase == pytest.approx(res.phase[i, j], abs=1e-12)
+        assert o.multiplicity == res.multiplicity[i, j]
+        assert o.status == res.status[i, j]
+        assert o.stable == res.stable[i, j] and o.schur_stable == res.schur_stable[i, j]
+        for name in ("impact_velocity", "v_plus", "q_minus", "clearance", "clearance_error"):
+            a, b = getattr(o, name), getattr(res, name)[i, j]
+            assert a == b or a == pytest.approx(b, rel=1e-10, abs=1e-12), name
+        scale = max(1.0, abs(res.multipliers[i, j, 0]))
+        assert np.allclose(o.multipliers, res.multipliers[i, j], rtol=1e-10, atol=1e-12 * scale)
+        assert _set_distance(o.schur_roots, res.schur_roots[i, j]) < 1e-10
+
+
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_rigid_scalar_path_equals_vectorised_closed_form(rng, k):
+    """One point in plain floats (orbits/_rigid_scalar.py, what periodic_orbits uses) against the
+    vectorised numpy closed form (what sweeps and charts use), on random parameters with the
+    edge values d = 0, R = 0, R = 1: same orbits, flags, clearance, multipliers, fallbacks."""
+    from impactbar.orbits import _rigid_scalar
+    from impactbar.orbits.rigid import rigid_square_orbits
+
+    cases = [_random_rigid_case(rng, k) for _ in range(400)] + [(0.1, 0.5, 0.0, 1.0)]
+    d, R, p0, pk = (np.array(c) for c in zip(*cases, strict=True))
+    res = rigid_cosine_orbits(d, R, p0, pk, k)
+    for i, c in enumerate(cases):
+        _assert_scalar_equals_vectorised(_rigid_scalar.cosine_orbits(*c, k), res, i)
+    assert res.fallback.any() and (res.n_orbits == 0).any() and (res.status == 1).any()
+    d = np.where(rng.random(400) < 0.3, 0.0, 0.3 * rng.random(400))
+    R = np.where(rng.random(400) < 0.15, 0.0, rng.random(400))
+    q, kappa = rng.uniform(0.2, 2.0, 400), rng.uniform(1.0, 1.95, 400)
+    res = rigid_square_orbits(d, R, q, kappa)
+    for i in range(400):
+        _assert_scalar_equals_vectorised(_rigid_scalar.square_orbits(d[i], R[i], q[i], kappa[i]), res, i)
+    assert (res.status == 4).any() and (res.status == 0).any()
+
+
+def test_periodic_orbits_rigid_scalar_switch(rng, monkeypatch):
+    """periodic_orbits on a rigid bar returns the same orbits with the plain-float path and with the
+    vectorised closed form (module switch one_impact.RIGID_SCALAR), fallbacks included."""
+    from impactbar.orbits import one_impact
+
+    cases = [(BarModel(1.0, *_random_rigid_case(rng, 1)[:2], 0), CosineLoad(*_random_rigid_case(rng, 1)[2:]))
+             for _ in range(30)]
+    cases += [(BarModel(1.0, 0.1 * rng.random(), rng.random(), 0),
+               SquareWaveLoad(rng.uniform(0.2, 2.0), rng.uniform(1.0, 1.9))) for _ in range(30)]
+    cases.append((BarModel(1.0, 0.1, 0.5, 0), CosineLoad(0.0, 1.0)))  # degenerate: the general path
+    for model, load in cases:
+        fast = periodic_orbits(model, load)
+        monkeypatch.setattr(one_impact, "RIGID_SCALAR", False)
+        ref = periodic_orbits(model, load)
+        monkeypatch.setattr(one_impact, "RIGID_SCALAR", True)
+        _assert_same_orbits(fast, ref)
+        assert all(o.multipliers.dtype == complex and o.state_after_impact.shape == (2,) for o in fast)
+
+
 def test_rigid_closed_form_invariants():
     """Independent checks: the rigid mode strikes at 2 pi p0 / (1 + R) (theory §4), and at d = 0
     the rigid block is xi^2 - (-2R + (1+R)^2 kappa_0) xi + R^2 with kappa_0 = p(phase)/p0 (theory §6)."""

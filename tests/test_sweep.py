@@ -107,7 +107,8 @@ def test_spec_normalises_and_round_trips():
     assert [a.name for a in spec.axes] == ["R", "p0"]
     assert spec.axes[0].values == tuple(np.linspace(0.0, 0.9, 10))
     assert spec.options == {"max_orbits": 2}
-    assert spec.chunk_points == 400
+    assert spec.chunk_points == 4096  # every point in the rigid closed forms (closed_form_task)
+    assert parse_spec(_with(base_doc(), ("model", "n_modes"), 2)).chunk_points == 400
     again = parse_spec(json.loads(spec.to_json()))
     assert again == spec and again.to_json() == spec.to_json()
     model, load = spec.point((3, 1))
@@ -356,31 +357,46 @@ def _done_count(path: Path) -> int:
         return 0
 
 
+def _sigkill_after(n_done: int, out: Path, spec_file: Path, *options) -> int:
+    """Run ``impactbar sweep`` in a new session, SIGKILL it and everything it started once
+    ``n_done`` chunks are stored; return the chunks stored then."""
+    env = dict(os.environ, PYTHONPATH=str(SRC))
+    proc = subprocess.Popen([sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out",
+                             str(out), *options, "--no-progress"], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while _done_count(out) < n_done:
+            assert proc.poll() is None, proc.stderr.read().decode()
+            assert time.monotonic() < deadline, "the sweep made no progress"
+            time.sleep(0.01)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+    return _done_count(out)
+
+
+def _slow_doc():
+    """A 400-point rigid orbits sweep in 40 chunks whose every point has p0 = 0 (the end arrives
+    at rest): the closed form leaves those to the general path (some ms a point), so that a run
+    lasts long enough to be killed midway."""
+    doc = base_doc(chunk_points=10, axes={"R": {"start": 0.05, "stop": 0.95, "num": 40},
+                                          "d": {"start": 0.0, "stop": 0.2, "num": 10}})
+    doc["load"]["p0"] = 0.0
+    return doc
+
+
 def test_sigkill_midway_then_resume_equals_uninterrupted(client, tmp_path):
     """A sweep killed with SIGKILL (the driver and anything it started) keeps its finished chunks;
     rerunning the same command completes it, identical to an uninterrupted run."""
-    doc = base_doc(chunk_points=10, axes={"R": {"start": 0.0, "stop": 0.95, "num": 40},
-                                          "p0": {"start": 0.2, "stop": 0.45, "num": 10}})
+    doc = _slow_doc()
     spec_file = tmp_path / "spec.toml"
     spec_file.write_text(toml_text(doc))
     spec = load_spec(spec_file)
     assert spec.n_chunks == 40
     addr = client.scheduler.address
     out = tmp_path / "killed.zarr"
-    env = dict(os.environ, PYTHONPATH=str(SRC))
-    proc = subprocess.Popen([sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out",
-                             str(out), "--scheduler", addr, "--no-progress"], env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, start_new_session=True)
-    try:
-        deadline = time.monotonic() + 120
-        while _done_count(out) < 5:
-            assert proc.poll() is None, proc.stderr.read().decode()
-            assert time.monotonic() < deadline, "the sweep made no progress"
-            time.sleep(0.02)
-    finally:
-        os.killpg(proc.pid, signal.SIGKILL)
-        proc.wait()
-    killed_at = _done_count(out)
+    killed_at = _sigkill_after(5, out, spec_file, "--scheduler", addr)
     assert 5 <= killed_at < spec.n_chunks, "killed too late to test resumption; enlarge the grid"
     # the partial store opens and plots (chunks not done are blank)
     part = xr.open_zarr(out)
@@ -399,6 +415,157 @@ def test_sigkill_midway_then_resume_equals_uninterrupted(client, tmp_path):
     xr.testing.assert_identical(a, b)
     for name in a.data_vars:
         np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+# -- cheap closed-form sweeps in threads of the driver ---------------------------------------------
+def test_closed_form_task_picks_the_threads_executor():
+    """Only sweeps whose every point takes the rigid closed forms run in threads by default."""
+    from impactbar.sweeps.spec import closed_form_task
+
+    assert closed_form_task(parse_spec(base_doc()))
+    square = base_doc()
+    square["load"] = {"kind": "square", "q": 1.0, "kappa": 1.2}
+    square["axes"] = {"kappa": {"values": [1.0, 1.5]}}
+    assert closed_form_task(parse_spec(square))
+    assert closed_form_task(parse_spec(_with(base_doc(), ("axes", "n_modes"), {"values": [0]})))
+    assert not closed_form_task(parse_spec(_with(base_doc(), ("axes", "n_modes"), {"values": [0, 2]})))
+    assert not closed_form_task(parse_spec(_with(base_doc(), ("model", "n_modes"), 2)))
+    assert not closed_form_task(parse_spec(_with(base_doc(), ("model", "impact"), "wave")))
+    assert not closed_form_task(parse_spec(mc_doc(starts=2, periods=10.0)))
+    fourier = base_doc()
+    fourier["load"] = {"kind": "fourier", "p0": 0.3, "coefficients": [1.0, 0.2]}
+    fourier["axes"] = {"R": {"values": [0.0, 0.5]}}
+    assert not closed_form_task(parse_spec(fourier))
+
+
+@pytest.mark.parametrize("load", [{"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 2},
+                                  {"kind": "square", "q": 1.0, "kappa": 1.3}])
+def test_threads_executor_store_equals_cluster_store(client, tmp_path, monkeypatch, load):
+    """The same store, byte for byte in its data and checksums, from threads of the driver (the
+    default for a closed-form sweep: no cluster is started) and from the dask cluster."""
+    from impactbar.sweeps import run as run_module
+
+    doc = base_doc(chunk_points=7)
+    doc["load"] = load
+    if load["kind"] == "square":
+        doc["axes"] = {"R": {"start": 0.0, "stop": 0.9, "num": 10}, "kappa": {"values": [1.0, 1.5, 1.9]}}
+    spec = parse_spec(doc)
+
+    def no_cluster(*a):
+        raise AssertionError("a closed-form sweep started a cluster")
+
+    monkeypatch.setattr(run_module, "_connect", no_cluster)
+    a = run_sweep(spec, tmp_path / "threads.zarr", n_workers=2, progress=False)
+    assert a.complete and a.computed == spec.n_chunks
+    b = run_sweep(spec, tmp_path / "dask.zarr", client=client, progress=False)
+    assert b.complete
+    ta, tb = xr.open_zarr(tmp_path / "threads.zarr").load(), xr.open_zarr(tmp_path / "dask.zarr").load()
+    xr.testing.assert_identical(ta, tb)
+    for name in ta.data_vars:
+        np.testing.assert_array_equal(ta[name].values, tb[name].values, err_msg=name)
+    assert (ta["chunk_checksum"].values >= 0).all()
+    with pytest.raises(ValueError, match="executor must be one of"):
+        run_sweep(spec, tmp_path / "x.zarr", executor="processes", progress=False)
+    with pytest.raises(ValueError, match="no client or scheduler"):
+        run_sweep(spec, tmp_path / "x.zarr", client=client, executor="threads", progress=False)
+    assert not (tmp_path / "x.zarr").exists()
+
+
+@pytest.mark.parametrize("doc", [
+    mc_doc(starts=2, periods=10.0),
+    _with(_with(base_doc(chunk_points=3), ("axes", "n_modes"), {"values": [0, 1]}), ("axes", "k"),
+          {"values": [1, 3]}),
+    {"task": "bifurcation", "model": {"s": 10.0, "d": 0.005, "R": 0.8, "n_modes": 0},
+     "load": {"kind": "square", "q": 0.5, "kappa": 1.2},
+     "axes": {"kappa": {"start": 1.0, "stop": 1.5, "num": 7}}},
+], ids=["montecarlo", "orbits", "bifurcation"])
+def test_store_created_with_zarr_alone_equals_xarrays(tmp_path, monkeypatch, doc):
+    """The store written with zarr alone (the default: xarray and dask.array are not imported)
+    equals, file for file and byte for byte, the one xarray's to_zarr writes from the template."""
+    from impactbar.sweeps import store
+    from impactbar.sweeps.tasks import _variables
+
+    spec = parse_spec(doc)
+    files = {}
+    for via in (True, False):
+        monkeypatch.setattr(store, "CREATE_WITH_XARRAY", via)
+        path = tmp_path / f"{via}.zarr"
+        store._create_store(spec, path)
+        files[via] = {f.relative_to(path): f.read_bytes() for f in sorted(path.rglob("*")) if f.is_file()}
+    assert files[True] == files[False]
+    # the root, every variable, the flags and checksums, the axes (and montecarlo's motion classes)
+    n_json = 1 + len(_variables(spec)) + 2 + len(spec.axes) + (spec.task == "montecarlo")
+    assert sum(p.name == "zarr.json" for p in files[False]) == n_json
+
+
+def test_closed_form_sweep_imports_neither_dask_nor_xarray(tmp_path):
+    """A closed-form sweep in a fresh process: no cluster, and neither distributed, dask nor
+    xarray is imported (their start-up is most of a short sweep's time)."""
+    code = ("import sys\nfrom impactbar.sweeps import parse_spec, run_sweep\n"
+            f"spec = parse_spec({base_doc()!r})\n"
+            f"run = run_sweep(spec, {str(tmp_path / 's.zarr')!r}, n_workers=2, progress=False)\n"
+            "assert run.complete\n"
+            "print(sorted(m for m in ('distributed', 'dask', 'xarray') if m in sys.modules))\n")
+    env = dict(os.environ, PYTHONPATH=str(SRC))
+    res = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "[]"
+    assert bool(open_sweep(tmp_path / "s.zarr")["chunk_done"].all())
+
+
+def test_threads_executor_interrupted_keeps_finished_chunks_and_resumes(tmp_path, monkeypatch):
+    """Ctrl-C in the middle of a sweep run in threads: the chunks stored before it are kept
+    (flagged, checksummed), the lock is released, and rerunning completes the store, identical
+    to an uninterrupted run."""
+    from impactbar.sweeps import run as run_module
+
+    spec = parse_spec(base_doc(chunk_points=3))  # 10 chunks
+    ref = tmp_path / "ref.zarr"
+    run_sweep(spec, ref, executor="threads", n_workers=1, progress=False)
+    real = run_module.compute_chunk
+
+    def interrupted(spec, chunk):
+        if chunk == 6:
+            raise KeyboardInterrupt
+        return real(spec, chunk)
+
+    monkeypatch.setattr(run_module, "compute_chunk", interrupted)
+    out = tmp_path / "out.zarr"
+    with pytest.raises(KeyboardInterrupt):
+        run_sweep(spec, out, n_workers=1, progress=False)
+    stored, total = sweep_progress(out)
+    assert (stored, total) == (6, 10)  # one thread computes in order: chunks 0-5 finished first
+    assert not (tmp_path / ".out.zarr.lock").exists()
+    monkeypatch.setattr(run_module, "compute_chunk", real)
+    res = run_sweep(spec, out, n_workers=2, progress=False)
+    assert res.already_done == stored and res.computed == 10 - stored
+    a, b = xr.open_zarr(out).load(), xr.open_zarr(ref).load()
+    xr.testing.assert_identical(a, b)
+    for name in a.data_vars:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+
+
+def test_threads_executor_sigkill_midway_then_resume_equals_uninterrupted(tmp_path):
+    """A closed-form sweep (threads of the driver) killed with SIGKILL keeps its finished chunks;
+    rerunning the same command completes it, identical to an uninterrupted run."""
+    doc = _slow_doc()
+    spec_file = tmp_path / "spec.toml"
+    spec_file.write_text(toml_text(doc))
+    spec = load_spec(spec_file)
+    assert spec.n_chunks == 40
+    out = tmp_path / "killed.zarr"
+    killed_at = _sigkill_after(3, out, spec_file, "--workers", "1")
+    assert 3 <= killed_at < spec.n_chunks, "killed too late to test resumption; enlarge the grid"
+    res = cli("sweep", spec_file, "--out", out, "--workers", "2", "--no-progress", timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert int(res.stdout.split("(")[1].split(" found")[0]) >= killed_at
+    ref = tmp_path / "ref.zarr"
+    run_sweep(spec, ref, n_workers=2, progress=False)
+    a, b = xr.open_zarr(out).load(), xr.open_zarr(ref).load()
+    xr.testing.assert_identical(a, b)
+    for name in a.data_vars:
+        np.testing.assert_array_equal(a[name].values, b[name].values, err_msg=name)
+    assert int(a["n_orbits"].sum()) > 0
 
 
 # -- the command line ----------------------------------------------------------------------------

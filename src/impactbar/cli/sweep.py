@@ -13,16 +13,18 @@ def add_parser(sub) -> None:
         "sweep",
         help="parameter sweep / Monte Carlo on dask.distributed into a resumable zarr store",
         description="Compute the task of SPEC.toml (orbits, montecarlo or bifurcation) at every "
-        "point of its grid on a dask.distributed cluster and store each chunk in RESULTS.zarr as "
-        "it finishes. Rerunning the same command resumes: finished chunks are kept. The spec is "
-        "checked before any work starts (its keys: "
+        "point of its grid on a dask.distributed cluster (a sweep in the rigid bar's closed forms: "
+        "in threads of this process, which is faster than starting a cluster) and store each chunk "
+        "in RESULTS.zarr as it finishes. Rerunning the same command resumes: finished chunks are "
+        "kept. The spec is checked before any work starts (its keys: "
         + docs_page("Sweeps and Monte Carlo on a cluster") + ").",
     )
     p.add_argument("spec", help="the sweep spec (TOML)")
     p.add_argument("--out", required=True, help="the zarr store to create or resume (a folder)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None,
-                       help="size of the local cluster started (processes; default: the cores)")
+                       help="chunks computed at once: processes of the local dask cluster started, or "
+                       "threads of this process for a sweep in the rigid closed forms (default: the cores)")
     where.add_argument("--scheduler", default=None,
                        help="address of a running dask scheduler, e.g. tcp://host:8786, instead")
     p.add_argument("--overwrite", action="store_true",

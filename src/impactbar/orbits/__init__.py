@@ -13,21 +13,18 @@ Part of the core: imports only ``impactbar.model``, ``impactbar.loads``, ``impac
 numpy and scipy.
 """
 
-from .multi_impact import MultiImpactOrbit as MultiImpactOrbit
-from .multi_impact import find_orbit as find_orbit
-from .multi_impact import impact_law as impact_law
-from .one_impact import OrbitList as OrbitList
-from .one_impact import PeriodicOrbit as PeriodicOrbit
-from .one_impact import orbit_multipliers as orbit_multipliers
-from .one_impact import periodic_orbits as periodic_orbits
-from .phase import phase_G as phase_G
-from .phase import phase_residual as phase_residual
-from .phase import phase_roots as phase_roots
-from .rigid import RigidOrbits as RigidOrbits
-from .rigid import rigid_cosine_orbits as rigid_cosine_orbits
-from .rigid import rigid_square_orbits as rigid_square_orbits
-from .stability import floquet_multipliers as floquet_multipliers
-from .stability import impact_map_jacobian as impact_map_jacobian
+import importlib
+
+#: where each public name lives (PEP 562: a submodule is imported on first use, so the rigid closed
+#: forms, e.g. a sweep's chunks, do not load the wave law's scipy.optimize and numba)
+_HOME = {
+    "MultiImpactOrbit": "multi_impact", "find_orbit": "multi_impact", "impact_law": "multi_impact",
+    "OrbitList": "one_impact", "PeriodicOrbit": "one_impact", "orbit_multipliers": "one_impact",
+    "periodic_orbits": "one_impact",
+    "phase_G": "phase", "phase_residual": "phase", "phase_roots": "phase",
+    "RigidOrbits": "rigid", "rigid_cosine_orbits": "rigid", "rigid_square_orbits": "rigid",
+    "floquet_multipliers": "stability", "impact_map_jacobian": "stability",
+}
 
 __all__ = [
     "PeriodicOrbit",
@@ -46,3 +43,15 @@ __all__ = [
     "find_orbit",
     "impact_law",
 ]
+
+
+def __getattr__(name: str):
+    if name in _HOME:
+        value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))

@@ -439,6 +439,11 @@ def _paper_law(model: BarModel) -> bool:
     return getattr(model, "impact", "paper") == "paper"
 
 
+#: single points of the rigid bar take the closed forms in plain floats (``orbits/_rigid_scalar.py``);
+#: ``False`` sends them through the vectorised numpy closed forms instead (a switch for the tests)
+RIGID_SCALAR = True
+
+
 def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     """The rigid bar under one cosine harmonic or the square wave in closed form
     (:mod:`impactbar.orbits.rigid`), or ``None`` where that does not apply (flexible modes, another
@@ -446,36 +451,46 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     if model.n_modes != 0 or not _paper_law(model):
         return None
     if isinstance(load, SquareWaveLoad) and load.kappa < 2.0:
-        res = rigid_square_orbits(model.d, model.R, load.q, load.kappa)
+        args, solve = (model.d, model.R, load.q, load.kappa), "square"
     else:
         par = _cosine_parameters(load)
         if par is None:
             return None
-        p0, pk, k = par
-        res = rigid_cosine_orbits(model.d, model.R, p0, pk, k)
+        args, solve = (model.d, model.R, *par), "cosine"
+    if RIGID_SCALAR:
+        from . import _rigid_scalar
+
+        found = (_rigid_scalar.square_orbits if solve == "square" else _rigid_scalar.cosine_orbits)(*args)
+        if found is None:
+            return None
+        return OrbitList(_rigid_orbit(model, load, o.phase, o.multiplicity, o.impact_velocity, o.status,
+                                      o.clearance, o.clearance_error, np.array(o.multipliers),
+                                      o.stable, np.array(o.schur_roots), o.schur_stable, o.v_plus,
+                                      o.q_minus) for o in found)
+    res = (rigid_square_orbits if solve == "square" else rigid_cosine_orbits)(*args)
     if res.fallback[0]:
         return None
-    out = OrbitList()
-    for j in range(int(res.n_orbits[0])):
-        status = STATUS[int(res.status[0, j])]
-        out.append(PeriodicOrbit(
-            model=model,
-            load=load,
-            phase=float(res.phase[0, j]),
-            multiplicity=int(res.multiplicity[0, j]),
-            impact_velocity=float(res.impact_velocity[0, j]),
-            admissible=status == "admissible",
-            admissibility=status,
-            clearance=float(res.clearance[0, j]),
-            clearance_error=float(res.clearance_error[0, j]),
-            multipliers=res.multipliers[0, j].copy(),
-            stable=bool(res.stable[0, j]),
-            schur_roots=res.schur_roots[0, j].copy(),
-            schur_stable=bool(res.schur_stable[0, j]),
-            state_after_impact=np.array([-0.0, res.v_plus[0, j]]),
-            state_before_impact=np.array([res.q_minus[0, j], res.impact_velocity[0, j]]),
-        ))
-    return out
+    return OrbitList(_rigid_orbit(
+        model, load, float(res.phase[0, j]), int(res.multiplicity[0, j]),
+        float(res.impact_velocity[0, j]), int(res.status[0, j]), float(res.clearance[0, j]),
+        float(res.clearance_error[0, j]), res.multipliers[0, j].copy(), bool(res.stable[0, j]),
+        res.schur_roots[0, j].copy(), bool(res.schur_stable[0, j]), float(res.v_plus[0, j]),
+        float(res.q_minus[0, j])) for j in range(int(res.n_orbits[0])))
+
+
+def _rigid_orbit(model, load, phase, multiplicity, impact_velocity, status, clearance, clearance_error,
+                 multipliers, stable, schur_roots, schur_stable, v_plus, q_minus) -> PeriodicOrbit:
+    """A rigid bar's :class:`PeriodicOrbit` from the closed forms' numbers (``status`` indexes
+    ``rigid.STATUS``)."""
+    name = STATUS[status]
+    return PeriodicOrbit(
+        model=model, load=load, phase=phase, multiplicity=multiplicity,
+        impact_velocity=impact_velocity, admissible=name == "admissible", admissibility=name,
+        clearance=clearance, clearance_error=clearance_error, multipliers=multipliers,
+        stable=stable, schur_roots=schur_roots, schur_stable=schur_stable,
+        state_after_impact=np.array([-0.0, v_plus]),
+        state_before_impact=np.array([q_minus, impact_velocity]),
+    )
 
 
 def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:

@@ -5,7 +5,9 @@ A sweep is described by a :class:`SweepSpec` (usually read from a TOML file with
 bar or the load. The grid is the outer product of the axes, cut into blocks of neighbouring points
 ("chunks"); :func:`compute_chunk` computes one chunk from plain arguments (no dask, no storage) and
 :func:`run_sweep` farms the chunks out to a ``dask.distributed`` cluster and writes each one into a
-zarr store as soon as it arrives.
+zarr store as soon as it arrives. A sweep whose every point takes the rigid bar's vectorised closed
+forms (:func:`impactbar.sweeps.spec.closed_form_task`) is computed in threads of the driver instead,
+by default: starting a cluster would cost more than the whole work.
 
 Tasks
 -----
@@ -37,7 +39,7 @@ lock file next to the store keeps a second driver out. Every random start is see
 never from the chunk order or the worker, so a resumed sweep equals an uninterrupted one.
 
 Layout: ``spec`` (schema and validation), ``tasks`` (one chunk's work), ``store`` (zarr layout, done
-flags), ``run`` (the dask driver), ``plot`` (figures from a finished store; the only module that
+flags), ``run`` (the driver: dask, or threads), ``plot`` (figures from a finished store; the only module that
 imports matplotlib). This layer sits on the core and imports dask, xarray and zarr lazily; the core
 never imports it.
 """

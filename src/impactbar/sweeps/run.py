@@ -1,4 +1,5 @@
-"""Running a sweep on ``dask.distributed``: farm out chunks, write each as it arrives, resume."""
+"""Running a sweep on ``dask.distributed`` (or, for cheap closed-form work, in threads of the
+driver): farm out chunks, write each as it arrives, resume."""
 
 from __future__ import annotations
 
@@ -13,9 +14,12 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import check_int
-from .spec import SweepSpec
-from .store import _checksum, _open_group, _prepare_store, _write_chunk, _write_done
+from .spec import SweepSpec, closed_form_task
+from .store import _checksum, _open_group, _prepare_store, _write_chunks, _write_done
 from .tasks import compute_chunk
+
+#: where :func:`run_sweep` computes the chunks without a ``client`` or ``scheduler``
+EXECUTORS = ("auto", "threads", "dask")
 
 #: How long :func:`run_sweep` waits for a ``scheduler`` to answer
 CONNECT_TIMEOUT = "10s"
@@ -66,7 +70,8 @@ def default_workers() -> int:
 
 
 def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = None,
-              n_workers: int | None = None, overwrite: bool = False, progress: bool = True) -> SweepRun:
+              n_workers: int | None = None, overwrite: bool = False, progress: bool = True,
+              executor: str = "auto") -> SweepRun:
     """Compute a sweep into a zarr store, resuming whatever an earlier run finished.
 
     Parameters
@@ -80,12 +85,21 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
         Address of a running scheduler (``tcp://host:port``); its workers must be able to import
         impactbar.
     n_workers : int, optional
-        Size of the local cluster started when neither ``client`` nor ``scheduler`` is given
-        (processes of one thread each); default the number of cores.
+        Workers computing chunks at once when neither ``client`` nor ``scheduler`` is given:
+        processes of one thread each in a local cluster, or threads of this process (see
+        ``executor``); default the number of cores.
     overwrite : bool, optional
         Replace a store holding another sweep (or one from another impactbar version).
     progress : bool, optional
         Show a progress bar (chunks done, rate, time left) on stderr.
+    executor : {"auto", "threads", "dask"}, optional
+        Where the chunks are computed when neither ``client`` nor ``scheduler`` is given:
+        ``"dask"``, a local ``dask.distributed`` cluster of ``n_workers`` processes; ``"threads"``,
+        ``n_workers`` threads of this process, without dask (for cheap work: the threads share one
+        interpreter); ``"auto"`` (default), threads for a sweep whose every point takes the rigid
+        bar's vectorised closed forms (:func:`impactbar.sweeps.spec.closed_form_task`, where
+        starting a cluster costs more than the whole work), a local cluster otherwise. The store,
+        its checksums, flags and lock, resumption and the progress bar are the same either way.
 
     Returns
     -------
@@ -96,8 +110,9 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
     ValueError
         If the store holds another sweep and ``overwrite`` is false, ``store`` is a file or a
         folder that is not a sweep store, its folder cannot be written, another driver holds the
-        store's lock, ``scheduler`` does not answer within ``CONNECT_TIMEOUT``, or ``n_workers``
-        is outside ``[1, max_workers()]``; nothing is computed (or left behind) then.
+        store's lock, ``scheduler`` does not answer within ``CONNECT_TIMEOUT``, ``n_workers``
+        is outside ``[1, max_workers()]``, or ``executor`` is unknown or ``"threads"`` with a
+        ``client`` or ``scheduler``; nothing is computed (or left behind) then.
 
     Notes
     -----
@@ -110,6 +125,12 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
         raise ValueError("give at most one of client, scheduler, n_workers")
     if n_workers is not None:
         n_workers = check_int("n_workers", n_workers, lo=1, hi=max_workers())
+    if executor not in EXECUTORS:
+        raise ValueError(f"executor must be one of {EXECUTORS}; got {executor!r}")
+    remote = client is not None or scheduler is not None
+    if executor == "threads" and remote:
+        raise ValueError("executor='threads' computes in this process; it takes no client or scheduler")
+    threads = not remote and (executor == "threads" or (executor == "auto" and closed_form_task(spec)))
     path = Path(store)
     _check_out(path)
     created = _missing_parents(path)
@@ -122,12 +143,16 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
                 done, sums = _prepare_store(spec, path, overwrite)
                 if not np.any(done == 0):
                     return SweepRun(path, spec.n_chunks, spec.n_chunks, 0, 0.0)
-            if client is None:
+            if client is None and not threads:
                 client = stack.enter_context(_connect(scheduler, n_workers))
             if not resume:
                 done, sums = _prepare_store(spec, path, overwrite)
             todo = [int(i) for i in np.flatnonzero(done == 0)]
-            return _drive(spec, path, done, sums, todo, client, progress)
+            if threads:
+                results = _thread_results(spec, todo, default_workers() if n_workers is None else n_workers)
+            else:
+                results = _dask_results(spec, todo, client)
+            return _drive(spec, path, done, sums, todo, results, progress)
     except BaseException:
         for p in created:  # folders this call made and left empty
             try:
@@ -229,34 +254,96 @@ def _connect(scheduler, n_workers):
         yield cl
 
 
-def _drive(spec, path, done, sums, todo, client, progress) -> SweepRun:
-    from distributed import as_completed
+def _drive(spec, path, done, sums, todo, results, progress) -> SweepRun:
+    """Store the chunks as ``results`` (a generator of lists of ``(chunk, data)``: the chunks
+    finished since the last list, in any order) yields them: their data, then their checksums and
+    flags; the generator is closed (its pending work cancelled) however this ends."""
     from tqdm import tqdm
 
     already = spec.n_chunks - len(todo)
-    tag = uuid.uuid4().hex[:8]
     t_start = time.perf_counter()
     group = _open_group(path)
-    futures = [client.submit(compute_chunk, spec, i, key=f"impactbar-{spec.task}-{tag}-{i}",
-                             pure=False) for i in todo]
-    chunk_of = {f.key: i for f, i in zip(futures, todo, strict=True)}
     computed = 0
     bar = tqdm(total=len(todo), unit="chunk", file=sys.stderr, disable=not progress,
                desc=f"{spec.task} ({already}/{spec.n_chunks} stored before)", smoothing=0.1)
     try:
-        for fut in as_completed(futures):
-            result = fut.result()  # a task error propagates; every finished chunk is stored
-            i = chunk_of[fut.key]
-            _write_chunk(spec, path, i, result, group)
-            done[i] = 1
-            sums[i] = _checksum(spec, result)
-            _write_done(path, done, sums, group)  # after the data: a kill in between loses this chunk only
-            fut.release()
-            computed += 1
-            bar.update(1)
+        with contextlib.closing(results):
+            for batch in results:  # a task error propagates; every finished chunk is stored
+                _write_chunks(spec, path, batch, group)
+                for i, result in batch:
+                    done[i] = 1
+                    sums[i] = _checksum(spec, result)
+                # after the data: a kill in between loses these chunks only
+                _write_done(path, done, sums, group)
+                computed += len(batch)
+                bar.update(len(batch))
     finally:
         bar.close()
+    return SweepRun(path, spec.n_chunks, already, computed, time.perf_counter() - t_start)
+
+
+def _dask_results(spec, todo, client):
+    """The chunks ``todo`` computed on a dask cluster: lists of ``(chunk, data)``, each list the
+    chunks that finished since the previous one."""
+    from distributed import as_completed
+
+    tag = uuid.uuid4().hex[:8]
+    futures = [client.submit(compute_chunk, spec, i, key=f"impactbar-{spec.task}-{tag}-{i}",
+                             pure=False) for i in todo]
+    chunk_of = {f.key: i for f, i in zip(futures, todo, strict=True)}
+    try:
+        for finished in as_completed(futures).batches():
+            yield from _finished_batches([(chunk_of[fut.key], fut) for fut in finished])
+            for fut in finished:
+                fut.release()
+    finally:
         for f in futures:
             if not f.done():
                 f.cancel()
-    return SweepRun(path, spec.n_chunks, already, computed, time.perf_counter() - t_start)
+
+
+def _thread_results(spec, todo, n_threads):
+    """The chunks ``todo`` computed by ``n_threads`` threads of this process: lists of
+    ``(chunk, data)``, each list the chunks that finished since the previous one; at most
+    ``2 n_threads`` chunks are queued or held at a time."""
+    from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+
+    from .._threads import single_threaded_blas
+
+    pending = {}
+    left = iter(todo)
+    # one BLAS limit around the whole pool: the threads' own limits (inside the library) then
+    # save and restore the same value
+    with single_threaded_blas(), ThreadPoolExecutor(n_threads, thread_name_prefix="impactbar-sweep") as pool:
+        def fill():
+            for i in left:
+                pending[pool.submit(compute_chunk, spec, i)] = i
+                if len(pending) >= 2 * n_threads:
+                    return
+        try:
+            fill()
+            while pending:
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                pairs = [(pending.pop(fut), fut) for fut in finished]
+                fill()  # keep the threads busy while these chunks are written
+                yield from _finished_batches(pairs)
+        finally:
+            for fut in pending:
+                fut.cancel()
+
+
+def _finished_batches(pairs):
+    """Yield the results of finished futures (``(chunk, future)`` pairs) as one list of
+    ``(chunk, data)``, then raise the first task error among them, if any: the chunks that did
+    finish are stored before the error stops the sweep."""
+    batch, error = [], None
+    for chunk, fut in pairs:
+        try:
+            batch.append((chunk, fut.result()))
+        except BaseException as exc:  # a task's error, even KeyboardInterrupt, after the others
+            if error is None:
+                error = exc
+    if batch:
+        yield batch
+    if error is not None:
+        raise error

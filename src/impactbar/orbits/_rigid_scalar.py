@@ -1,0 +1,318 @@
+"""The rigid bar's closed forms (:mod:`impactbar.orbits.rigid`) at ONE parameter point, in plain
+floats (``math``, ``cmath``): what a single :func:`impactbar.periodic_orbits` call needs.
+
+The vectorised functions of :mod:`impactbar.orbits.rigid` pay numpy's per-call overhead some fifty
+times on 1-element arrays (about 0.5 ms a call); these are the same formulas, line by line, with
+the same tolerances and conventions, on Python floats (some 30 us a call). The tests check them
+against the vectorised closed forms and the general path on random parameters
+(``tests/test_fast_paths.py``). Sources: the phase equation (eq. 14, theory §4), the stationary
+points of the end's displacement arc by arc (theory §5), the 2 x 2 impact-map Jacobian (theory §7),
+the paper's rigid block (eqs. 29, 30, theory §6).
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+from typing import NamedTuple
+
+from .stability import MARGINAL
+
+TWO_PI = 2.0 * math.pi
+INF = math.inf
+NAN = math.nan
+
+
+class RigidOrbit(NamedTuple):
+    """One orbit of the rigid bar at one point (the fields of ``PeriodicOrbit``, as floats)."""
+
+    phase: float
+    multiplicity: int
+    impact_velocity: float
+    v_plus: float
+    q_minus: float
+    status: int  # index into rigid.STATUS
+    clearance: float
+    clearance_error: float
+    multipliers: tuple  # two complex numbers, by decreasing modulus
+    schur_roots: tuple  # two complex numbers
+    schur_stable: bool
+    stable: bool
+
+
+def _beta(y):
+    if y < 1e-2:
+        return 0.5 + y / 12.0 - y**3 / 720.0 + y**5 / 30240.0
+    return 1.0 / (-math.expm1(-y)) - 1.0 / y
+
+
+def _G(d, R):
+    """``G(d, R)`` of the phase equation (eq. 14, theory §4)."""
+    return TWO_PI * ((1.0 + R) * _beta(TWO_PI * d) - R)
+
+
+def _b(d, t):
+    """``b(t) = (1 - exp(-d t)) / d`` (``t`` at ``d = 0``)."""
+    y = d * t
+    if abs(y) < 1e-8:
+        return t * (1.0 - 0.5 * y)
+    return -math.expm1(-y) / d
+
+
+def _c(d, t):
+    """``c(t) = (t - b(t)) / d`` (``t^2/2`` at ``d = 0``), by its series where it cancels."""
+    y = d * t
+    if abs(y) < 1e-2:
+        return t * t * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0)
+    return (t - (-math.expm1(-y) / d)) / d
+
+
+def _sign(x):
+    return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else (0.0 if x == 0.0 else NAN))
+
+
+def multipliers(d, R, p_plus, p_minus, v_plus, v_minus):
+    """The two Floquet multipliers (theory §7 with ``N = 0``), as ``rigid.rigid_multipliers``."""
+    if not abs(v_minus) > 1e-14 * abs(v_minus):  # grazing: the saltation term is infinite
+        return (complex(INF, 0.0), complex(INF, 0.0))
+    b = _b(d, TWO_PI)
+    e = math.exp(-TWO_PI * d)
+    a_p = p_plus - d * v_plus
+    a_m = p_minus - d * v_minus
+    r0 = (v_plus + b * a_p) / v_minus
+    r1 = -b / v_minus
+    j10 = -R * (-e * a_p + a_m * r0)
+    j11 = -R * (e + a_m * r1)
+    half_tr = 0.5 * (r0 + j11)
+    det = r0 * j11 - r1 * j10
+    disc = cmath.sqrt(complex(half_tr * half_tr - det, 0.0))
+    big = half_tr + (1.0 if half_tr >= 0.0 else -1.0) * disc
+    small = det / big if big != 0.0 else 0j
+    m0, m1 = abs(big), abs(small)
+    tie = abs(m1 - m0) <= 1e-12 * max(m0, m1)
+    if (not tie and m1 > m0) or (tie and small.imag > big.imag):
+        return (complex(small), complex(big))
+    return (complex(big), complex(small))
+
+
+def _quadratic_roots(a2, a1, a0):
+    """Both roots of ``a2 x^2 + a1 x + a0`` (real coefficients), as ``stability.quadratic_roots``."""
+    disc = cmath.sqrt(complex(a1 * a1 - 4.0 * a2 * a0, 0.0))
+    sgn = 1.0 if a1 * disc.real >= 0.0 else -1.0
+    qq = -0.5 * (a1 + sgn * disc)
+    r1 = qq / a2 if a2 != 0.0 else complex(INF, 0.0)
+    r2 = a0 / qq if qq != 0.0 else 0j
+    return (complex(r1), complex(r2))
+
+
+def _assemble(phase, mult, d, R, p0, psup, v_plus, v_minus, q_minus, p_plus, p_minus, V_phase, g):
+    """One orbit's flags, clearance, multipliers and the paper's block (as ``rigid._assemble``),
+    from its states and the values ``g`` of ``u(1, .)`` at the zeros of its velocity; ``None`` for a
+    degenerate orbit (arrival or departure nearly at rest), which the general path takes."""
+    scale = max(abs(v_minus), psup, 1e-300)
+    acc0 = p_plus - d * v_plus
+    r0 = R == 0.0
+    if (not abs(v_minus) > 1e-6 * scale or (r0 and not abs(acc0) > 1e-6 * scale)
+            or (not r0 and not abs(v_plus) > 1e-6 * scale)):
+        return None
+    clearance = max(g) if g else -INF
+    gabs = abs(clearance) if g else 0.0  # relative to the value itself, as rigid._assemble
+    err = 1e-12 * (scale + gabs)
+    tol = max(err, 1e-11 * scale)
+    status = 0
+    if clearance >= -tol:
+        status = 2
+    if clearance > tol:
+        status = 1
+    if r0 and not acc0 < 0.0:
+        status = 4
+    if not v_minus > 1e-12 * scale:
+        status = 2 if abs(v_minus) <= 1e-12 * scale else 3
+    mu = multipliers(d, R, p_plus, p_minus, v_plus, v_minus)
+    # the paper's rigid block (eqs. 29, 30) with sigma = 0, multiplied through by p0
+    e2 = math.exp(-TWO_PI * d)
+    S2 = p_plus - p0 - d * V_phase
+    y = TWO_PI * d
+    factor = 1.0 - 0.5 * y if y < 1e-8 else -math.expm1(-y) / y
+    a2 = p0
+    a1 = -(1.0 + R * R * e2) * p0 - factor * (1.0 + R) ** 2 * S2
+    a0 = R * e2 * (R * p0)
+    schur = _quadratic_roots(a2, a1, a0)
+    schur_ok = abs(a0) < abs(a2) and abs(a1) < abs(a0 + a2)
+    stable = status == 0 and abs(mu[0]) < 1.0 - MARGINAL and abs(mu[1]) < 1.0 - MARGINAL
+    return RigidOrbit(phase, mult, v_minus, v_plus, q_minus, status, clearance, err, mu, schur,
+                      schur_ok, stable)
+
+
+# ------------------------------------------------------------------------------------------------
+# the cosine load p0 + pk cos(k t)
+# ------------------------------------------------------------------------------------------------
+def cosine_orbits(d, R, p0, pk, k):
+    """Every one-impact orbit of the rigid bar under ``p0 + pk cos(k t)`` (eq. 33) at one point, as
+    ``rigid.rigid_cosine_orbits`` does for arrays: a list of :class:`RigidOrbit` in order of phase,
+    or ``None`` if an orbit is degenerate (the general path takes the point)."""
+    d, R, p0, pk, k = float(d), float(R), float(p0), float(pk), int(k)
+    den = d * d + k * k
+    zr = (1.0 + R) * pk * d / den
+    zi = -(1.0 + R) * pk * k / den
+    A = math.hypot(zr, zi)
+    theta = math.atan2(zi, zr)
+    B = p0 * _G(d, R)
+    ratio = B / A if A > 0.0 else INF
+    if not (abs(ratio) <= 1.0 + 1e-15 and A > 0.0):
+        return []
+    double = abs(ratio) >= 1.0 - 1e-15
+    a = math.acos(min(max(ratio, -1.0), 1.0))
+    phases = [((base - theta + TWO_PI * j) / k) % TWO_PI
+              for base in ((a,) if double else (a, -a)) for j in range(k)]
+    phases.sort()
+    mult = 2 if double else 1
+
+    # the flight (rigid._CosineFlight): V(t) = ca cos(k t) + cb sin(k t), W its antiderivative
+    ca = pk * d / den
+    cb = pk * k / den
+    v_plus = -R * TWO_PI * p0 / (1.0 + R)  # theory §4: the rigid mode strikes at 2 pi p0/(1+R)
+    psup = abs(p0) + abs(pk)
+    r0 = R == 0.0
+    crossing = -p0 / pk if pk != 0.0 else INF
+    crosses = abs(crossing) < 1.0
+    alpha = math.acos(min(max(crossing, -1.0), 1.0))
+    load_zeros = ([(alpha + TWO_PI * j) / k for j in range(k)] + [(TWO_PI * j - alpha) / k for j in range(k)]
+                  if crosses else [])
+    out = []
+    for ph in phases:
+        x = k * ph
+        free = v_plus - (ca * math.cos(x) + cb * math.sin(x))
+        W0 = (ca * math.sin(x) - cb * math.cos(x)) / k
+
+        def velocity(t, ph=ph, free=free):
+            x = k * (ph + t)
+            return ca * math.cos(x) + cb * math.sin(x) + p0 * _b(d, t) + free * math.exp(-d * t)
+
+        def displacement(t, ph=ph, free=free, W0=W0):
+            x = k * (ph + t)
+            return (ca * math.sin(x) - cb * math.cos(x)) / k - W0 + p0 * _c(d, t) + free * _b(d, t)
+
+        def load(t, ph=ph):
+            return p0 + pk * math.cos(k * (ph + t))
+
+        v_minus = velocity(TWO_PI)
+        q_minus = displacement(TWO_PI)
+        p_plus = p0 + pk * math.cos(k * ph)
+        # the stationary points of u(1, t): at most one zero of v per arc of constant load sign
+        inner = sorted((z - ph) % TWO_PI for z in load_zeros) + [TWO_PI] * (2 * k - len(load_zeros))
+        bounds = [0.0, *inner, TWO_PI]
+        g = []
+        s_lo = _sign(p_plus if r0 else v_plus)  # the sign just after the impact
+        for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+            s_hi = _sign(velocity(hi))
+            if s_lo * s_hi < 0.0 and hi > lo:
+                g.append(displacement(_bracketed_zero(velocity, load, d, lo, hi, s_lo)))
+            s_lo = s_hi
+        orbit = _assemble(ph, mult, d, R, p0, psup, v_plus, v_minus, q_minus, p_plus, p_plus,
+                          ca * math.cos(x) + cb * math.sin(x), g)
+        if orbit is None:
+            return None
+        out.append(orbit)
+    return out
+
+
+def _bracketed_zero(velocity, load, d, a, b, fa, iters=60):
+    """The zero of ``velocity`` in ``[a, b]`` (``sign v(a) = fa``, one zero inside): Newton steps with
+    ``v' = p - d v``, safeguarded by bisection (as ``rigid._bracketed_zero``)."""
+    t = 0.5 * (a + b)
+    for _ in range(iters):
+        v = velocity(t)
+        den = load(t) - d * v
+        if _sign(v) == fa:
+            a = t
+        else:
+            b = t
+        if den == 0.0:
+            t = 0.5 * (a + b)
+            continue
+        newton = v / den
+        tn = t - newton
+        if abs(newton) <= 1e-13 * (1.0 + abs(t)):
+            return tn
+        t = tn if a <= tn <= b else 0.5 * (a + b)
+    return t
+
+
+# ------------------------------------------------------------------------------------------------
+# the square wave of eq. 34
+# ------------------------------------------------------------------------------------------------
+def _log1p_ratio(x):
+    return 1.0 - 0.5 * x if abs(x) < 1e-8 else math.log1p(x) / x
+
+
+def _exp_level_time(v, alpha, d, target):
+    """Time ``tau >= 0`` at which ``v e^{-d tau} + alpha b(tau)`` reaches ``target``; NaN if never
+    (as ``rigid._exp_level_time``)."""
+    den = alpha - d * v
+    if den == 0.0:
+        return NAN
+    x = d * (v - target) / den
+    if not x > -1.0:
+        return NAN
+    tau = (target - v) / den * _log1p_ratio(x)
+    return tau if tau >= 0.0 else NAN
+
+
+def square_orbits(d, R, q, kappa):
+    """Every one-impact orbit of the rigid bar under the square wave (eq. 34, ``1 <= kappa < 2``) at
+    one point, as ``rigid.rigid_square_orbits`` does for arrays: a list of :class:`RigidOrbit` in
+    order of phase, or ``None`` if an orbit is degenerate."""
+    d, R, q, kappa = float(d), float(R), float(q), float(kappa)
+    if not kappa < 2.0:
+        return []
+    a = kappa * math.pi  # the jump from +q to -q
+    p0 = q * (kappa - 1.0)
+    starts = (0.0, a)
+    lengths = (a, TWO_PI - a)
+    alpha = (q - p0, -q - p0)  # p - p0 on each piece
+    bT = (_b(d, lengths[0]), _b(d, lengths[1]))
+    cT = (_c(d, lengths[0]), _c(d, lengths[1]))
+    E2 = math.exp(-d * a)
+    D2 = alpha[0] * bT[0]
+    v0 = -(D2 * bT[1] + alpha[0] * cT[0] + alpha[1] * cT[1]) / (bT[0] + E2 * bT[1])
+    Vs = (v0, v0 * E2 + D2)
+    target = p0 * _G(d, R) / (1.0 + R)
+    phases = []
+    for j in range(2):
+        tau = _exp_level_time(Vs[j], alpha[j], d, target)
+        if tau < lengths[j]:  # NaN compares false
+            phases.append((starts[j] + tau) % TWO_PI)
+    phases.sort()
+    mult = 1
+    if len(phases) == 2 and (phases[1] - phases[0] < 1e-9 or phases[0] + TWO_PI - phases[1] < 1e-9):
+        phases, mult = phases[:1], 2  # one double root, as in phase_roots
+
+    v_plus = -R * TWO_PI * p0 / (1.0 + R)
+    r0 = R == 0.0
+    out = []
+    for ph in phases:
+        piece = 1 if ph >= a else 0
+        tau0 = ph - (a if piece else 0.0)
+        V_phase = Vs[piece] * math.exp(-d * tau0) + alpha[piece] * _b(d, tau0)
+        p_plus = -q if piece else q
+        p_minus = -q if (ph == 0.0 or (ph > a and piece)) else q  # the left limit
+        # the flight: three arcs of constant load in orbit time, cut where the load jumps
+        c1, c2 = sorted(((a - ph) % TWO_PI, (-ph) % TWO_PI))
+        edges = (0.0, c1, c2, TWO_PI)
+        qs, vs = 0.0, v_plus
+        g = []
+        for j in range(3):
+            T = edges[j + 1] - edges[j]
+            mid = (ph + 0.5 * (edges[j] + edges[j + 1])) % TWO_PI
+            L = q if mid < a else -q
+            tz = NAN if (j == 0 and r0) else _exp_level_time(vs, L, d, 0.0)
+            if tz < T and not (j == 0 and tz <= 0.0):  # the impact itself is no stationary point
+                g.append(qs + vs * _b(d, tz) + L * _c(d, tz))
+            qs = qs + vs * _b(d, T) + L * _c(d, T)
+            vs = vs * math.exp(-d * T) + L * _b(d, T)
+        orbit = _assemble(ph, mult, d, R, p0, q, v_plus, vs, qs, p_plus, p_minus, V_phase, g)
+        if orbit is None:
+            return None
+        out.append(orbit)
+    return out
