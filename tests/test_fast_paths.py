@@ -405,6 +405,21 @@ def test_import_is_light_and_every_public_name_resolves():
         impactbar.no_such_name  # noqa: B018
 
 
+def test_rigid_orbits_load_neither_numba_nor_scipy_optimize():
+    """A first rigid-bar ``periodic_orbits`` call in a fresh process takes the closed forms without
+    loading the wave law's or the kernel's heavy imports; a wave-law call then loads them."""
+    _run_python(
+        "import sys\n"
+        "from impactbar import BarModel, CosineLoad, SquareWaveLoad, periodic_orbits\n"
+        "assert periodic_orbits(BarModel(5, 0.1, 0.5, 0), CosineLoad(0.6, 1))\n"
+        "assert periodic_orbits(BarModel(5, 0.1, 0.5, 0), SquareWaveLoad(1, 1.2))\n"
+        "heavy = [m for m in ('scipy.optimize', 'numba') if m in sys.modules]\n"
+        "assert not heavy, heavy\n"
+        "periodic_orbits(BarModel(5, 0.1, 0.5, 0, impact='wave'), CosineLoad(0.6, 1))\n"
+        "assert 'scipy.optimize' in sys.modules\n"
+    )
+
+
 def test_simulation_core_is_built_once_and_runs_are_unchanged():
     """simulate reuses the kernel data of a (model, load) pair; a run with the cached core equals
     one with a freshly built core, impact for impact."""

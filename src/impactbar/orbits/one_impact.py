@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .. import _tables
 from .._threads import single_threaded_blas
-from ..dynamics.impact import WaveImpact, wave_impact
 from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .admissibility import _admissibility
@@ -29,7 +29,9 @@ from .stability import (
     sort_multipliers,
     stable_verdict,
 )
-from .wave import wave_impact_map_jacobian, wave_orbit_states, wave_phase_roots
+
+if TYPE_CHECKING:
+    from ..dynamics.impact import WaveImpact
 
 __all__ = ["PeriodicOrbit", "periodic_orbits", "orbit_multipliers"]
 
@@ -404,6 +406,8 @@ def _periodic_orbits_general(model: BarModel, load: Load) -> OrbitList:
     _check_inputs(model, load)
     with single_threaded_blas():
         if model.impact == "wave":
+            from .wave import wave_phase_roots  # here: the wave law loads scipy.optimize and numba
+
             roots = wave_phase_roots(model, load)
             return OrbitList(_build_wave_orbit(model, load, ph, mult) for ph, mult in roots)
         return OrbitList(_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load))
@@ -552,6 +556,8 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
     if model.impact == "wave":
+        from .wave import wave_impact_map_jacobian, wave_orbit_states
+
         _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
         with single_threaded_blas():
             return sort_multipliers(np.linalg.eigvals(
@@ -621,6 +627,9 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
 
 def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
     """An orbit of the wave law (theory §4b): contact over ``[0, 2/s]``, flight over ``[2/s, 2 pi]``."""
+    from ..dynamics.impact import wave_impact
+    from .wave import wave_impact_map_jacobian, wave_orbit_states
+
     M = model.n_modes + 1
     _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
     c = model.end_weights
