@@ -265,3 +265,22 @@ def test_no_disk_cache_keeps_the_numpy_search(monkeypatch):
     ref = _periodic_orbits_general(model, load)
     assert len(calls) == len(ref) > 0
     _assert_same_verdicts(fast, ref)
+
+
+def test_one_compiled_search_serves_every_load():
+    """The compiled search is compiled once, whatever the load (cosine of any order, several
+    harmonics, square wave, cached transfer functions or fresh ones): its arguments always have
+    the same numba types, so no load makes a user wait for a second compilation."""
+    import impactbar.dynamics._kernel as kernel
+
+    if not kernel.CACHE:
+        pytest.skip("no numba disk cache: the numpy search runs")
+    from impactbar.orbits import _admkernel
+
+    loads = [CosineLoad(0.6, 1.0), CosineLoad(0.4, 1.0, k=2), SquareWaveLoad(1.0, 1.2),
+             FourierLoad(0.5, [1.0, 0.0, 0.2j])]
+    for n_modes in (0, 3, 8):  # the rigid bar by the general path too (a one-row transfer function)
+        model = BarModel(5.0, 0.1, 0.5, n_modes)
+        for load in loads + loads:  # the second time, the loads' cached transfer functions
+            _periodic_orbits_general(model, load)
+    assert len(_admkernel.admissibility_search.signatures) == 1

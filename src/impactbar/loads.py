@@ -340,11 +340,15 @@ class FourierLoad(Load):
             lamv[flex] = lam[:, 0]
             for dst, src in zip((cq, sq, cv, sv), folded, strict=True):
                 dst[flex] = src[:, 0]
-        args = (float(t0), float(d), float(self.p0), np.ascontiguousarray(self._k),
-                np.ascontiguousarray(hp.real), np.ascontiguousarray(hp.imag),
-                np.ascontiguousarray(hv.real), np.ascontiguousarray(hv.imag),
-                np.ascontiguousarray(static[:, 0]), kind, lamv, cq, sq, cv, sv,
-                np.ascontiguousarray(dq[:, 0]), np.ascontiguousarray(dv[:, 0]))
+
+        def own(a, dtype=float):
+            # contiguous and writable: a read-only view (the cached transfer functions) would be
+            # another type to numba, and so another compilation of every kernel that takes it
+            return np.require(a, dtype, ["C", "W"])
+
+        args = (float(t0), float(d), float(self.p0), own(self._k),
+                own(hp.real), own(hp.imag), own(hv.real), own(hv.imag),
+                own(static[:, 0]), kind, lamv, cq, sq, cv, sv, own(dq[:, 0]), own(dv[:, 0]))
 
         def evaluate(t):
             return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), *args)

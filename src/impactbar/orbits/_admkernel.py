@@ -34,7 +34,7 @@ def _right(a, x):
     return n
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def _load(lk, t, F, P):
     """The load ``p(t)`` at the absolute time ``t``."""
     if lk == 0:
@@ -52,7 +52,7 @@ def _load(lk, t, F, P):
     return lv[idx]
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def _variation(lk, mid, half, F, P):
     """``(center, delta)`` with ``|p - center| <= delta`` on ``[mid - half, mid + half]`` (as
     ``Load.variation``)."""
@@ -71,7 +71,7 @@ def _variation(lk, mid, half, F, P):
     return center, spread if jump else 0.0
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def _state(lk, t, q, v, ck, sk, F, P):
     """The modal state at the absolute time ``t`` into column 0 of ``q, v`` (shape ``(M, 1)``)."""
     if lk == 0:
@@ -92,14 +92,14 @@ def _dot(c, x):
     return s
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def _g(lk, phase, t, c, q, v, ck, sk, F, P):
     """``g(t) = c . q(phase + t)``."""
     _state(lk, phase + t, q, v, ck, sk, F, P)
     return _dot(c, q)
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P):
     """``(g(mid), g'(mid), L)``: the end's displacement and velocity, and the bound of ``|g''|`` on
     ``[mid - half, mid + half]`` (``gprime_and_bound`` of the numpy path)."""
