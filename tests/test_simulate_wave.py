@@ -207,3 +207,30 @@ def test_separating_windows_compiled_as_in_python(preset, monkeypatch):
     for i in sep:
         assert tr.impacts[i].peak_rod_stress == pytest.approx(ref.impacts[i].peak_rod_stress, rel=1e-10)
         np.testing.assert_allclose(tr.impacts[i].contact, ref.impacts[i].contact, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("s", [0.03, 0.012])
+def test_compiled_windows_spanning_many_load_periods(s):
+    """A window ``2/s`` covering 10 to 26 periods of a square wave (20 to 52 jumps): both compiled
+    windows take every jump (the one without separation once kept only 16), as :func:`wave_impact`."""
+    from impactbar import wave_impact
+    from impactbar.dynamics import _kernel as K
+    from impactbar.dynamics import _wavekernel as WK
+    from impactbar.simulation.simulate import _GL20_W, _GL20_X, _LoadData
+
+    model = BarModel(s=s, d=0.0, R=0.5, n_modes=2)
+    load = SquareWaveLoad(2.0, 1.5)
+    D = _LoadData(load)
+    for v0 in (1000.0, 5.0):  # held in contact, then separating
+        q, v = np.zeros(3), np.array([v0, 0.0, 0.0])
+        imp = wave_impact(model, load, 0.3, q, v)
+        qa, va = np.empty(3), np.empty(3)
+        ok = K.wave_window(D.kind, s, 0.5, model.end_weights, D.p0, D.ks, D.pr, D.pim, D.breaks,
+                           D.levels, D.psup, 0.0, 0.3, q, v, _GL20_X, _GL20_W, qa, va)
+        assert ok == (imp.separations == 0) == (v0 > 100)
+        if not ok:
+            n = WK.wave_contact(D.kind, s, 0.5, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup,
+                                0.0, 0.3, q, v, _GL20_X, _GL20_W, qa, va, np.empty((WK.MAX_INTERVALS, 2)))
+            assert n == len(imp.contact) > 1
+        np.testing.assert_allclose(qa, imp.q_after, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(va, imp.v_after, rtol=1e-10, atol=1e-10)
