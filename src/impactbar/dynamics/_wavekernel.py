@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-from ._kernel import CACHE, TWO_PI, load_value, window_moments
+from ._kernel import CACHE, TWO_PI, load_value, propagate_many, window_jumps, window_moments
 
 #: contact intervals a window may hold before the kernel gives up (the caller then solves it in Python)
 MAX_INTERVALS = 256
@@ -446,3 +446,61 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
         sign = -sign
     qa[0] = q0
     return nc
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def square_wave_residuals(s, R, p0, breaks, levels, w2, d, c, p11, p12, p21, p22, gl_x, gl_w, phases,
+                          out):
+    """The wave law's phase residual ``u(1, 2 pi-)`` of a one-impact orbit under a piecewise-constant
+    load, for each of ``phases`` into ``out``: the computation of
+    :func:`impactbar.orbits.wave.wave_orbit_states` (drive of the window by the panels of
+    :func:`~impactbar.dynamics._kernel.window_moments`, the flight driven from rest by
+    :func:`~impactbar.dynamics._kernel.propagate_many`, the periodicity conditions solved mode by mode
+    with the flight's fundamental matrix ``p11 .. p22``)."""
+    M = w2.size
+    T = 2.0 / s
+    empty = np.zeros(0)
+    empty2 = np.zeros((M, 0))
+    zeros = np.zeros(M)
+    ic_ = np.empty((2, M))
+    is_ = np.empty((2, M))
+    fq = np.empty((M, 1))
+    fv = np.empty((M, 1))
+    ts = np.empty(1)
+    qm = np.empty(M)
+    qe = np.empty(M)
+    ve = np.empty(M)
+    for i in range(phases.size):
+        ph = phases[i]
+        periods = math.floor((ph + T) / TWO_PI) - math.floor(ph / TWO_PI) + 1
+        jumps = np.empty(periods * breaks.size)
+        nj = window_jumps(1, s, breaks, ph, jumps)
+        ic_[:, :] = 0.0
+        is_[:, :] = 0.0
+        window_moments(1, s, p0, empty, empty, empty, breaks, levels, 0.0, ph, jumps[:nj], gl_x, gl_w,
+                       ic_, is_)
+        ts[0] = ph + TWO_PI
+        propagate_many(1, w2, d, p0, empty, empty2, empty2, breaks, levels, ph + T, zeros, zeros, ts,
+                       fq, fv)
+        for n in range(M):
+            h = (ic_[1, n] - R * ic_[0, n]) / s
+            g = 0.0 if n == 0 else -(is_[1, n] - R * is_[0, n]) / (s * s * math.pi * n)
+            a11 = 1.0 + R * p11[n]
+            a12 = R * p12[n]
+            a21 = R * p21[n]
+            a22 = 1.0 + R * p22[n]
+            det = a11 * a22 - a12 * a21
+            r1 = p11[n] * g + p12[n] * h + fq[n, 0]
+            r2 = p21[n] * g + p22[n] * h + fv[n, 0]
+            qm[n] = (a22 * r1 - a12 * r2) / det
+            vm = (a11 * r2 - a21 * r1) / det
+            qe[n] = -R * qm[n] + g
+            ve[n] = -R * vm + h
+        e0 = 0.0
+        for n in range(1, M):
+            e0 += c[n] * qe[n]
+        qm[0] = -e0 + p12[0] * ve[0] + fq[0, 0]
+        r = 0.0
+        for n in range(M):
+            r += c[n] * qm[n]
+        out[i] = r
