@@ -213,3 +213,33 @@ def test_phase_scan_reuses_its_samples_and_the_cached_flight_matrix():
     for a, b in zip(_flight_fundamental(model), fundamental(model.frequencies**2, model.d,
                                                              TWO_PI - 2.0 / model.s), strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_square_wave_residual_compiled_as_wave_orbit_states(rng, monkeypatch):
+    """The phase residual of a piecewise-constant load in one compiled call against
+    :func:`wave_orbit_states` phase by phase (the reference, ``_COMPILED_RESIDUAL = False``), on
+    random models and loads; and the same orbits from :func:`periodic_orbits` with either."""
+    import importlib
+
+    from impactbar import PiecewiseConstantLoad
+
+    W = importlib.import_module("impactbar.orbits.wave")
+    for trial in range(16):
+        model = BarModel(s=float(rng.choice([0.5, 1.0, 3.0, 10.0, 60.0])), d=float(rng.choice([0.0, 0.02])),
+                         R=float(rng.uniform(0.0, 0.95)), n_modes=int(rng.integers(0, 9)), impact="wave")
+        load = (SquareWaveLoad(rng.uniform(0.1, 3.0), rng.uniform(1.0, 2.0)) if trial % 2 else
+                PiecewiseConstantLoad([0.0, 1.0, 3.0], [rng.uniform(-1.0, 2.0), 2.0, 0.5]))
+        phases = rng.uniform(0.0, 2 * np.pi, 12)
+        ref = np.array([W.wave_orbit_states(model, load, p, rates=False)[0] for p in phases])
+        np.testing.assert_allclose(W.wave_phase_residual(model, load, phases), ref, rtol=1e-12,
+                                   atol=1e-13 * np.abs(ref).max())
+    model = BarModel(s=10.0, d=0.01, R=0.5, n_modes=4, impact="wave")
+    load = SquareWaveLoad(1.0, 1.3)
+    fast = periodic_orbits(model, load)
+    monkeypatch.setattr(W, "_COMPILED_RESIDUAL", False)
+    slow = periodic_orbits(model, load)
+    assert len(fast) == len(slow) > 0
+    for a, b in zip(fast, slow, strict=True):
+        assert a.phase == pytest.approx(b.phase, abs=1e-12)
+        assert a.admissibility == b.admissibility
+        np.testing.assert_allclose(a.multipliers, b.multipliers, rtol=1e-10, atol=1e-12)

@@ -131,3 +131,106 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
         if ok:
             np.testing.assert_allclose(qa, imp.q_after, rtol=1e-12, atol=1e-14 * np.abs(q).max())
             np.testing.assert_allclose(va, imp.v_after, rtol=1e-12, atol=1e-13)
+
+
+def test_compiled_separating_window_matches_the_characteristics_solver(rng):
+    """The kernel's window with separation (``_wavekernel.wave_contact``) against :func:`wave_impact`,
+    the reference: the same contact intervals and the same post-contact state, over random states
+    (arrivals down to grazing speed), loads and wave speeds (windows longer than the load's period,
+    and square-wave jumps in both halves, included)."""
+    from impactbar import FourierLoad, wave_impact
+    from impactbar.dynamics import _wavekernel as WK
+    from impactbar.simulation.simulate import _GL20_W, _GL20_X, _LoadData
+    from test_impact_wave import random_state
+
+    separating = 0
+    for trial in range(90):
+        N = int(rng.integers(0, 9))
+        s = float(rng.choice([0.25, 0.4, 2.0, 10.0, 40.0]))
+        R = float(rng.uniform(0, 0.95))
+        model = BarModel(s=s, d=0.0, R=R, n_modes=N)
+        load = [CosineLoad(rng.uniform(-1, 3), rng.uniform(0, 3), int(rng.integers(1, 4))),
+                SquareWaveLoad(rng.uniform(0.1, 3), rng.uniform(1, 2)),
+                FourierLoad(0.5, [0.3 + 0.2j, -0.4, 0.1j])][trial % 3]
+        q, v = random_state(rng, model, [0.02, 1.0, 0.3][trial % 3])
+        v[0] += rng.uniform(0.0, 3.0) - 1.0  # arriving at 0..3
+        t0 = float(rng.uniform(0, 20))
+        D = _LoadData(load)
+        rate = float(np.max(D.ks)) / s if D.kind == 0 else 0.0
+        qa, va = np.empty(N + 1), np.empty(N + 1)
+        contact = np.empty((WK.MAX_INTERVALS, 2))
+        n = WK.wave_contact(D.kind, s, R, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup, rate,
+                            t0, q, v, _GL20_X, _GL20_W, qa, va, contact)
+        imp = wave_impact(model, load, t0, q, v)
+        assert n == len(imp.contact)
+        separating += imp.separations > 0
+        np.testing.assert_allclose(contact[:n] / s, imp.contact, rtol=0, atol=1e-13 / s)
+        np.testing.assert_allclose(qa, imp.q_after, rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(va, imp.v_after, rtol=1e-10, atol=1e-12)
+    assert separating >= 20  # the case this kernel exists for
+
+
+@pytest.mark.parametrize("preset", ["hydraulic-drill", "pneumatic-drill"])
+def test_separating_windows_compiled_as_in_python(preset, monkeypatch):
+    """A run of a drill preset with the compiled separating windows (no call of the Python solver)
+    against the same run with ``FAST_WAVE_SEPARATION = False``: the same impacts, impact velocities,
+    transmitted stress peaks and final state."""
+    import sys
+
+    from impactbar import physical
+
+    S = sys.modules["impactbar.simulation.simulate"]
+    h = physical.preset(preset)
+    model = h.model.with_(impact="wave")
+    start = InitialState.rigid(-0.05, 0.0, n_modes=model.n_modes)
+    ref_impact = S.wave_impact
+    monkeypatch.setattr(S, "FAST_WAVE_SEPARATION", False)
+    ref = simulate(model, h.load, start, 40 * TWO_PI)
+
+    def refused(*args):
+        raise AssertionError("the Python solver was called")
+
+    monkeypatch.setattr(S, "FAST_WAVE_SEPARATION", True)
+    monkeypatch.setattr(S, "wave_impact", refused)
+    tr = simulate(model, h.load, start, 40 * TWO_PI)
+    monkeypatch.setattr(S, "wave_impact", ref_impact)
+    assert tr.n_impacts == ref.n_impacts > 20
+    np.testing.assert_allclose(tr.impact_times, ref.impact_times, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(tr.impact_velocities, ref.impact_velocities, rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(tr.final_state.modal_velocity, ref.final_state.modal_velocity,
+                               rtol=1e-10, atol=1e-12)
+    np.testing.assert_allclose(tr.final_state.modal_displacement, ref.final_state.modal_displacement,
+                               rtol=1e-10, atol=1e-12)
+    sep = [i for i, imp in enumerate(ref.impacts) if imp.separations > 0]
+    if preset == "hydraulic-drill":
+        assert len(sep) >= 2  # separating windows were taken by the kernel
+    for i in sep:
+        assert tr.impacts[i].peak_rod_stress == pytest.approx(ref.impacts[i].peak_rod_stress, rel=1e-10)
+        np.testing.assert_allclose(tr.impacts[i].contact, ref.impacts[i].contact, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("s", [0.03, 0.012])
+def test_compiled_windows_spanning_many_load_periods(s):
+    """A window ``2/s`` covering 10 to 26 periods of a square wave (20 to 52 jumps): both compiled
+    windows take every jump (the one without separation once kept only 16), as :func:`wave_impact`."""
+    from impactbar import wave_impact
+    from impactbar.dynamics import _kernel as K
+    from impactbar.dynamics import _wavekernel as WK
+    from impactbar.simulation.simulate import _GL20_W, _GL20_X, _LoadData
+
+    model = BarModel(s=s, d=0.0, R=0.5, n_modes=2)
+    load = SquareWaveLoad(2.0, 1.5)
+    D = _LoadData(load)
+    for v0 in (1000.0, 5.0):  # held in contact, then separating
+        q, v = np.zeros(3), np.array([v0, 0.0, 0.0])
+        imp = wave_impact(model, load, 0.3, q, v)
+        qa, va = np.empty(3), np.empty(3)
+        ok = K.wave_window(D.kind, s, 0.5, model.end_weights, D.p0, D.ks, D.pr, D.pim, D.breaks,
+                           D.levels, D.psup, 0.0, 0.3, q, v, _GL20_X, _GL20_W, qa, va)
+        assert ok == (imp.separations == 0) == (v0 > 100)
+        if not ok:
+            n = WK.wave_contact(D.kind, s, 0.5, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup,
+                                0.0, 0.3, q, v, _GL20_X, _GL20_W, qa, va, np.empty((WK.MAX_INTERVALS, 2)))
+            assert n == len(imp.contact) > 1
+        np.testing.assert_allclose(qa, imp.q_after, rtol=1e-10, atol=1e-10)
+        np.testing.assert_allclose(va, imp.v_after, rtol=1e-10, atol=1e-10)

@@ -1110,7 +1110,8 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
         b[n] = -2.0 * s * math.pi * n * q[n]
         scale += abs(a[n]) + abs(b[n])
     tol = 1e-13 * scale
-    jumps = np.empty(4 * breaks.size + 8)
+    periods = math.floor((t0 + 2.0 / s) / TWO_PI) - math.floor(t0 / TWO_PI) + 1
+    jumps = np.empty(periods * breaks.size if kind == 1 else 0)  # room for every jump in the window
     nj = window_jumps(kind, s, breaks, t0, jumps)
     # -- the scan of A: [0, 1] from the start state, [1, 2] from beta0 and the drive
     hg = min(1.0 / 16.0, 1.0 / (3.0 * (N + 1)))

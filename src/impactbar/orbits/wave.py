@@ -48,6 +48,12 @@ __all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave
 TWO_PI = 2.0 * math.pi
 
 
+#: the phase residual of a piecewise-constant load by one compiled call for all phases
+#: (``dynamics._wavekernel.square_wave_residuals``); ``False``: :func:`wave_orbit_states` phase by
+#: phase, the reference it is tested against (the same residuals to rounding)
+_COMPILED_RESIDUAL = True
+
+
 def _window(model: BarModel) -> tuple[float, float]:
     T = 2.0 / model.s
     return T, TWO_PI - T
@@ -136,7 +142,28 @@ def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
     ``phase``."""
     ph = np.asarray(phase, dtype=float)
+    if _COMPILED_RESIDUAL and isinstance(load, PiecewiseConstantLoad) and _window(model)[1] > 0.0:
+        return _square_wave_residuals(model, load, ph)
     out = np.array([wave_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
+    return out.reshape(ph.shape)
+
+
+def _square_wave_residuals(model: BarModel, load: PiecewiseConstantLoad, ph: np.ndarray) -> np.ndarray:
+    """:func:`wave_phase_residual` for a piecewise-constant load, all phases in one compiled call."""
+    from ..dynamics import _wavekernel as WK
+    from ..dynamics.impact import _GL_W, _GL_X
+
+    p11, p12, p21, p22 = _flight_fundamental(model)
+    R = model.R
+    if np.any(np.abs((1.0 + R * p11) * (1.0 + R * p22) - R * R * p12 * p21) < 1e-13):
+        raise ValueError("the periodicity conditions are singular (R = 1 without damping)")
+    phases = np.ascontiguousarray(ph, dtype=float).ravel()
+    out = np.empty(phases.size)
+    WK.square_wave_residuals(float(model.s), float(R), float(load.p0),
+                             np.ascontiguousarray(load.breaks, dtype=float),
+                             np.ascontiguousarray(load.levels, dtype=float), model.frequencies**2,
+                             float(model.d), np.ascontiguousarray(model.end_weights, dtype=float),
+                             p11, p12, p21, p22, _GL_X, _GL_W, phases, out)
     return out.reshape(ph.shape)
 
 

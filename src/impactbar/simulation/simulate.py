@@ -31,6 +31,7 @@ import numpy as np
 from .. import _tables
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
+from ..dynamics import _wavekernel as WK
 from ..dynamics.impact import wave_impact
 from ..loads import FourierLoad, Load, PiecewiseConstantLoad
 from ..model import MAX_MODES, BarModel
@@ -54,6 +55,12 @@ MICRO_FLIGHT = 1e-6
 #: folded form (``modal_crossing``). ``False`` gives the general certified search
 #: (``find_crossing``), the reference they are tested against (the same impacts, to rounding).
 FAST_SEARCH = True
+
+#: Under the wave law, solve the contact windows in which contact is lost by the compiled
+#: characteristics solver (``dynamics._wavekernel.wave_contact``). ``False`` gives the Python solver
+#: (:func:`~impactbar.dynamics.impact.wave_impact`), the reference it is tested against (the same
+#: contact intervals and post-contact states, to rounding).
+FAST_WAVE_SEPARATION = True
 
 #: Largest ``|t0|``, ``|t_end|`` and ``t_end - t0`` accepted by :func:`simulate` (about 1.6e7 periods).
 MAX_TIME = 1e8
@@ -1193,6 +1200,7 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     t = t0
     status = "t_end"
     oq, ov = np.empty((1, q.size)), np.empty((1, q.size))  # the kernel's state after its one impact
+    contact = np.empty((WK.MAX_INTERVALS, 2))  # the contact intervals of a separating window
     while True:
         qa, va = q.copy(), v.copy()
         n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, oq, ov)
@@ -1216,7 +1224,11 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         if K.wave_window(D.kind, model.s, model.R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
                          D.psup, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
             imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
-        else:  # contact lost inside the window: the full characteristics solution
+        elif FAST_WAVE_SEPARATION and WK.wave_contact(
+                D.kind, model.s, model.R, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup, rate, ti,
+                qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:  # contact lost inside the window
+            imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())
+        else:  # the full characteristics solution in Python
             imp = wave_impact(model, core.load, ti, qm, vm)
             q, v = imp.q_after.copy(), imp.v_after.copy()
         times.append(ti)
