@@ -549,7 +549,11 @@ def test_threads_executor_interrupted_keeps_finished_chunks_and_resumes(tmp_path
     with pytest.raises(KeyboardInterrupt):
         run_sweep(spec, out, n_workers=1, progress=False)
     stored, total = sweep_progress(out)
-    assert (stored, total) == (6, 10)  # one thread computes in order: chunks 0-5 finished first
+    # one thread computes in order: chunks 0-5 finished first, chunk 6 failed; chunk 7 (queued
+    # behind it) may have finished in the same batch, and is then stored too
+    done = xr.open_zarr(out)["chunk_done"].values
+    assert total == 10 and stored in (6, 7) and stored == int(done.sum())
+    assert done[:6].all() and not done[6] and not done[8:].any()
     assert not (tmp_path / ".out.zarr.lock").exists()
     monkeypatch.setattr(run_module, "compute_chunk", real)
     res = run_sweep(spec, out, n_workers=2, progress=False)
