@@ -296,12 +296,15 @@ def _open_group(path: Path):
 
 def _zarr_sync():
     """zarr's runner of its async API on its own event loop (``zarr.core.sync.sync``), or ``None``
-    where a zarr version moved it: the writes then go one by one through the public API."""
+    where a zarr version lacks it or ``Array.async_array`` (zarr 3.1.3 has neither in that form):
+    the writes then go one by one through the public API."""
+    import zarr
+
     try:
         from zarr.core.sync import sync
     except ImportError:
         return None
-    return sync
+    return sync if hasattr(zarr.Array, "async_array") else None
 
 
 def _write_chunks(spec: SweepSpec, path: Path, items, group=None) -> None:
