@@ -1035,6 +1035,17 @@ def _window_load(kind, p0, ks, pr, pim, breaks, levels, t):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def scan_step(N, rate):
+    """The grid step of a contact window's scan for the wave law's contact function (window time,
+    ``[0, 2]``): a trigonometric sum of highest frequency ``N pi`` plus the load's, whose ``rate``
+    (rad per unit window time) bounds how fast it turns: 6 nodes per period, at most 1/16."""
+    hg = min(1.0 / 16.0, 1.0 / (3.0 * (N + 1)))
+    if rate > 0.0:
+        hg = min(hg, math.pi / (3.0 * rate))
+    return hg
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def window_jumps(kind, s, breaks, t0, jumps):
     """Write the jumps of a piecewise-constant load inside ``[t0, t0 + 2/s]`` as sorted
     ``theta = s (t - t0)`` in ``(0, 2)`` into ``jumps``; returns their number."""
@@ -1114,9 +1125,7 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
     jumps = np.empty(periods * breaks.size if kind == 1 else 0)  # room for every jump in the window
     nj = window_jumps(kind, s, breaks, t0, jumps)
     # -- the scan of A: [0, 1] from the start state, [1, 2] from beta0 and the drive
-    hg = min(1.0 / 16.0, 1.0 / (3.0 * (N + 1)))
-    if rate > 0.0:
-        hg = min(hg, math.pi / (3.0 * rate))
+    hg = scan_step(N, rate)
     cuts = np.empty(nj + 2)
     ncut = 0
     cuts[ncut] = 1.0

@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-from ._kernel import CACHE, TWO_PI, load_value, propagate_many, window_jumps, window_moments
+from ._kernel import CACHE, TWO_PI, load_value, propagate_many, scan_step, window_jumps, window_moments
 
 #: contact intervals a window may hold before the kernel gives up (the caller then solves it in Python)
 MAX_INTERVALS = 256
@@ -285,9 +285,7 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
     if _A(a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, 0.0, False) < -tol:
         return -1
     # -- the scan grid: breaks at 1 and at 1 + the jumps of the first half
-    hg = min(1.0 / 16.0, 1.0 / (3.0 * (N + 1)))
-    if rate > 0.0:
-        hg = min(hg, math.pi / (3.0 * rate))
+    hg = scan_step(N, rate)
     edges = np.empty(nj + 3)
     ne = 0
     edges[ne] = 0.0

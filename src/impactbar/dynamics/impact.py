@@ -542,8 +542,7 @@ class _Contact:
         if self.A(0.0) < -tol:  # a touch at zero speed (to rounding) is a contact all the same
             raise ValueError("the piston must arrive moving towards the rod (impact velocity >= 0)")
         # A is a trigonometric sum of highest frequency N pi (plus the load's): 6 nodes per period
-        hg = min(1.0 / 16.0, 1.0 / (3.0 * (self.N + 1)),
-                 math.pi / (3.0 * self.p.rate) if self.p.rate else 1.0)
+        hg = K.scan_step(self.N, float(self.p.rate))
         edges = np.concatenate(([0.0], self.breaks, [2.0]))
         grid = np.unique(np.concatenate([np.linspace(a, b, max(2, math.ceil((b - a) / hg) + 1))
                                          for a, b in zip(edges[:-1], edges[1:], strict=True)]))
