@@ -233,11 +233,10 @@ def _curves(branches, args, out, written):
             import matplotlib.pyplot as plt
         except ImportError:
             return curves
+        from ..plotting.continuation import plot_bifurcation_curves
+
         fig, ax = plt.subplots(figsize=(6, 4.5))
-        styles = {"fold": "-", "period-doubling": "--", "grazing": ":"}
-        for c in curves:
-            c.plot(ax, ls=styles[c.kind], label=f"{c.kind} ({c.orbits[0].impacts} per {c.orbits[0].periods})")
-        ax.legend(fontsize=8)
+        plot_bifurcation_curves(curves, ax)
         path = out / "curves.png"
         fig.tight_layout()
         fig.savefig(path, dpi=130)
@@ -263,14 +262,10 @@ def _plot(branches, diagram, args, out):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from ..plotting.continuation import plot_bifurcation_diagram
+
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    if diagram is not None and diagram["parameter"].size:
-        ax.plot(diagram["parameter"], diagram[args.y], ".", ms=2, color="0.55", ls="none", zorder=0,
-                label="simulation (brute force)")
-    for b in branches:
-        b.plot(ax, y=args.y, label=f"{b.impacts} per {b.periods}")
-    ax.legend(fontsize=8)
-    ax.set_title(f"continuation in {args.parameter}: stable solid, unstable dashed", fontsize=9)
+    plot_bifurcation_diagram(branches, diagram, ax, y=args.y)
     path = out / "diagram.png"
     fig.tight_layout()
     fig.savefig(path, dpi=130)

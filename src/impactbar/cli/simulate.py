@@ -10,9 +10,12 @@ from pathlib import Path
 import numpy as np
 
 from .. import physical
+from ..plotting.physical import plot_blows, plot_force_waves, plot_motion
 from .physical import add_impact_argument, add_physical_arguments, hammer_from_args, json_ready
 
 __all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows", "plot_force_waves"]
+
+# the drawing lives in impactbar.plotting; re-exported here for the old import path
 
 #: impacts slower than this fraction of the rigid-limit impact velocity are chatter, not blows
 BLOW_FRACTION = 0.01
@@ -125,66 +128,3 @@ def summarize(result: physical.SimulationResult) -> dict:
                 "mean_efficiency": float(np.mean(result.efficiencies[late])),
             })
     return out
-
-
-def plot_motion(result: physical.SimulationResult, axes=None):
-    """End displacement (mm) and velocity (m/s) against time (s), impacts marked.
-
-    Parameters
-    ----------
-    result : SimulationResult
-    axes : sequence of two matplotlib Axes, optional
-        Created when not given.
-
-    Returns
-    -------
-    the two Axes
-    """
-    if axes is None:
-        import matplotlib.pyplot as plt
-
-        _, axes = plt.subplots(2, 1, sharex=True)
-    ax_u, ax_v = axes
-    n = int(min(200_000, max(2000, 400 * result.t_end_s * result.hammer.blow_frequency_Hz)))
-    ts = np.linspace(0.0, result.t_end_s, n)
-    ax_u.plot(ts, 1e3 * result.end_displacement_m(ts), lw=0.8)
-    ax_u.axhline(0.0, color="k", lw=0.6)
-    ax_u.set_ylabel("end displacement / mm")
-    ax_u.set_title(result.hammer.name or "hammer")
-    ax_v.plot(ts, result.end_velocity_m_s(ts), lw=0.8)
-    ax_v.plot(result.impact_times_s, result.impact_velocities_m_s, "o", ms=3,
-              label="impact velocity")
-    ax_v.set_xlabel("time / s")
-    ax_v.set_ylabel("end velocity / (m/s)")
-    ax_v.legend(loc="best", fontsize="small")
-    return ax_u, ax_v
-
-
-def plot_blows(result: physical.SimulationResult, ax=None):
-    """Energy per blow (J) against impact time (s)."""
-    if ax is None:
-        import matplotlib.pyplot as plt
-
-        _, ax = plt.subplots()
-    ax.plot(result.impact_times_s, result.blow_energies_J, "o-", ms=3, lw=0.6)
-    ax.set_xlabel("impact time / s")
-    ax.set_ylabel("energy per blow / J")
-    return ax
-
-
-def plot_force_waves(result: physical.SimulationResult, ax=None, last: int = 8):
-    """The force (kN) of the waves the last ``last`` blows sent into the rod, against the time from
-    the start of each contact (us); wave law only."""
-    if ax is None:
-        import matplotlib.pyplot as plt
-
-        _, ax = plt.subplots()
-    n = result.impact_times_s.size
-    window = 2.0 * result.hammer.bar.length_m / result.hammer.bar.wave_speed_m_s
-    t = np.linspace(0.0, window * (1.0 - 1e-9), 400)
-    for i in range(max(0, n - last), n):
-        ax.plot(1e6 * t, 1e-3 * result.force_wave(i, t), lw=0.9, label=f"blow {i}")
-    ax.set_xlabel("time from contact / us")
-    ax.set_ylabel("force into the rod / kN")
-    ax.legend(loc="best", fontsize="x-small", ncol=2)
-    return ax

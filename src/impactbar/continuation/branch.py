@@ -242,41 +242,9 @@ class Branch:
         -------
         matplotlib.axes.Axes
         """
-        import matplotlib.pyplot as plt
+        from ..plotting.continuation import plot_branch
 
-        if y not in ("impact_velocity", "phase", "max_abs_multiplier"):
-            raise ValueError(f"y must be 'impact_velocity', 'phase' or 'max_abs_multiplier'; got {y!r}")
-        if ax is None:
-            _, ax = plt.subplots()
-        x = self.values
-        Y = {"impact_velocity": self.impact_velocities, "phase": np.unwrap(self.phases, axis=0),
-             "max_abs_multiplier": self.max_abs_multiplier[:, None]}[y]
-        stable = self.stable
-        color = color or ax._get_lines.get_next_color()
-        first = True
-        for j in range(Y.shape[1]):
-            start = 0
-            for i in range(1, len(x) + 1):
-                if i == len(x) or stable[i] != stable[start]:
-                    sl = slice(start, min(i + 1, len(x)))
-                    ax.plot(x[sl], Y[sl, j], color=color, ls="-" if stable[start] else "--",
-                            label=label if first else None)
-                    first = False
-                    start = i
-        if events:
-            marks = {"fold": "o", "branch-point": "s", "period-doubling": "D", "neimark-sacker": "^",
-                     "grazing": "x", "admissibility": "+"}
-            for e in self.events:
-                yy = {"impact_velocity": e.orbit.impact_velocities, "phase": e.orbit.phases,
-                      "max_abs_multiplier": [e.orbit.max_abs_multiplier]}[y]
-                ax.plot([e.value] * len(yy), yy, ls="none", marker=marks.get(e.kind, "*"), color="k",
-                        mfc="none")
-                ax.annotate(e.kind.replace("period-doubling", "PD").replace("neimark-sacker", "NS"),
-                            (e.value, yy[0]), textcoords="offset points", xytext=(4, 4), fontsize=7)
-        ax.set_xlabel(self.parameter)
-        ax.set_ylabel({"impact_velocity": "impact velocity", "phase": "phase (rad)",
-                       "max_abs_multiplier": "max |multiplier|"}[y])
-        return ax
+        return plot_branch(self, ax, y=y, color=color, label=label, events=events)
 
     def orbit_at(self, value: float) -> MultiImpactOrbit:
         """The orbit where the branch first passes ``value`` (Newton at that parameter value, from

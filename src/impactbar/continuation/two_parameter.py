@@ -79,16 +79,9 @@ class BifurcationCurve:
         -------
         matplotlib.axes.Axes
         """
-        import matplotlib.pyplot as plt
+        from ..plotting.continuation import plot_bifurcation_curve
 
-        if ax is None:
-            _, ax = plt.subplots()
-        i, j = (0, 1) if swap else (1, 0)
-        kwargs.setdefault("label", self.kind)
-        ax.plot(self.values[:, i], self.values[:, j], **kwargs)
-        ax.set_xlabel(self.parameters[i])
-        ax.set_ylabel(self.parameters[j])
-        return ax
+        return plot_bifurcation_curve(self, ax, swap=swap, **kwargs)
 
 
 class _Curve:

@@ -1,93 +1,13 @@
-"""Plots of computed results (matplotlib imported lazily; every function takes an optional ``ax``)."""
+"""Simulations and the random-start experiments: end displacement, impact map, intervals."""
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-__all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_experiment",
-           "plot_end_displacement", "plot_impact_map", "plot_intervals"]
+from ._common import axes as _axes
 
-TWO_PI = 2.0 * math.pi
-
-
-def _axes(ax):
-    if ax is None:
-        import matplotlib.pyplot as plt  # noqa: PLC0415
-
-        _, ax = plt.subplots(figsize=(6, 3.6))
-    return ax
-
-
-def plot_orbit(orbit, ax=None, n: int = 2000):
-    """End displacement ``u(1, t)`` over one period of a one-impact orbit (the stop at ``u = 0``).
-
-    Parameters
-    ----------
-    orbit : PeriodicOrbit
-    ax : matplotlib.axes.Axes, optional
-    n : int
-        Number of time samples (for drawing only; admissibility is decided rigorously elsewhere).
-
-    Returns
-    -------
-    matplotlib.axes.Axes
-    """
-    ax = _axes(ax)
-    t = np.linspace(0.0, TWO_PI, n)
-    q, _ = orbit._state_in_period(t)
-    u = orbit.model.end_weights @ q
-    ax.axhline(0.0, color="k", lw=2, label="stop")
-    ax.plot(t, u, color="tab:blue" if orbit.admissible else "tab:red",
-            label=f"u(1, t), {orbit.admissibility}")
-    ax.fill_between(t, u, 0, where=u > 0, color="tab:red", alpha=0.3)
-    ax.set_xlabel("time since impact t")
-    ax.set_ylabel("end displacement u(1, t)")
-    ax.set_title(f"phase {orbit.phase:.4f}, impact velocity {orbit.impact_velocity:.4f}, "
-                 f"max|mu| {orbit.max_abs_multiplier:.3f}", fontsize=9)
-    ax.legend(fontsize=8)
-    return ax
-
-
-def plot_orbit_field(orbit, ax=None, nx: int = 101, nt: int = 400):
-    """The displacement field ``u(x, t)`` over one period as an image (x along the bar).
-
-    Returns
-    -------
-    matplotlib.image.AxesImage
-    """
-    ax = _axes(ax)
-    x = np.linspace(0.0, 1.0, nx)
-    t = np.linspace(0.0, TWO_PI, nt)
-    q, _ = orbit._state_in_period(t)
-    u = orbit.model.shape_functions(x) @ q  # (nx, nt)
-    im = ax.imshow(u, origin="lower", aspect="auto", extent=(0, TWO_PI, 0, 1), cmap="viridis")
-    ax.set_xlabel("time since impact t")
-    ax.set_ylabel("x (driven end 0, struck end 1)")
-    ax.figure.colorbar(im, ax=ax, label="u(x, t)")
-    return im
-
-
-def plot_multipliers(orbit, ax=None):
-    """Exact Floquet multipliers and the paper's Schur roots in the complex plane, with the unit
-    circle.
-
-    Returns
-    -------
-    matplotlib.axes.Axes
-    """
-    ax = _axes(ax)
-    th = np.linspace(0, TWO_PI, 400)
-    ax.plot(np.cos(th), np.sin(th), "k-", lw=0.8)
-    mu, sr = orbit.multipliers, orbit.schur_roots
-    ax.plot(mu.real, mu.imag, "o", mfc="none", label="exact multipliers")
-    ax.plot(sr.real, sr.imag, "x", label="paper (Schur blocks)")
-    ax.set_aspect("equal")
-    ax.set_xlabel("Re")
-    ax.set_ylabel("Im")
-    ax.legend(fontsize=8)
-    return ax
+__all__ = ["plot_end_displacement", "plot_impact_map", "plot_intervals", "plot_experiment",
+           "INTERVAL_RESOLUTION"]
 
 
 #: impact intervals closer than this (load periods) are one value: the tolerance to which
@@ -112,7 +32,7 @@ def plot_end_displacement(result, axes=None, *, periods: float = 20.0):
     -------
     sequence of matplotlib.axes.Axes
     """
-    from .simulation.experiments import load_period
+    from ..simulation.experiments import load_period
 
     T = load_period(result.load)
     if axes is None:
