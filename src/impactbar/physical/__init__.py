@@ -49,14 +49,14 @@ from .bar import SHORT_IMPACT_LIMIT as SHORT_IMPACT_LIMIT
 from .bar import Bar as Bar
 from .bar import ImpactDurationWarning as ImpactDurationWarning
 from .config import PRESETS as PRESETS
-from .config import load_config as load_config
-from .config import preset as preset
 from .forces import FourierFit as FourierFit
 from .forces import HydraulicForce as HydraulicForce
 from .forces import MeasuredForce as MeasuredForce
 from .forces import PneumaticForce as PneumaticForce
 from .hammer import Hammer as Hammer
 from .hammer import Scales as Scales
+from .hammer import load_config as load_config
+from .hammer import preset as preset
 
 #: names from ``results`` (which needs the orbit solver and the compiled simulator), imported on
 #: first use (PEP 562) so that importing this layer, and the command line, stays fast

@@ -1,17 +1,17 @@
-"""Hammers from TOML configuration files or dicts, and the built-in presets."""
+"""The keys of a hammer configuration (TOML file or nested dict), their checks, and the presets' data.
+
+Nothing here builds a :class:`~impactbar.physical.Hammer`: :meth:`Hammer.from_config`,
+:func:`~impactbar.physical.load_config` and :func:`~impactbar.physical.preset` (in
+:mod:`impactbar.physical.hammer`) do, with these parsers, so the two modules do not import each other.
+"""
 
 from __future__ import annotations
 
-import dataclasses
-import math
-import tomllib
 from pathlib import Path
 
-from .._validate import check_int, check_real
-from .bar import Bar, _positive
+from .._validate import check_real
 from .forces import Force, HydraulicForce, MeasuredForce, PneumaticForce
-from .hammer import Hammer
-from .units import to_si, to_si_any
+from .units import to_si
 
 # --------------------------------------------------------------------------------------------
 # configuration
@@ -54,59 +54,6 @@ def _dimensionless(name: str, value, **rng) -> float:
     return check_real(name, to_si(name, value, "", "0.3"), **rng)
 
 
-def _hammer_from_config(config: dict, base_dir) -> Hammer:
-    if not isinstance(config, dict):
-        raise ValueError("a configuration must be a mapping of sections; got "
-                         f"{type(config).__name__}")
-    unknown = sorted(set(config) - set(_SECTIONS) - {"name"})
-    if unknown:
-        raise ValueError(f"unknown key {unknown[0]!r}; allowed at top level: name, "
-                         f"{', '.join(sorted(_SECTIONS))}")
-    missing = sorted(_REQUIRED - set(config))
-    if missing:
-        raise ValueError(f"missing section [{missing[0]}]")
-    b = _section(config, "bar")
-    bar = Bar.from_units(_need(b, "bar", "E"), _need(b, "bar", "density"),
-                         _need(b, "bar", "length"), diameter=b.get("diameter"), area=b.get("area"))
-
-    drive = _section(config, "drive")
-    freq = _positive("drive.frequency", to_si("drive.frequency", _need(drive, "drive", "frequency"),
-                                               "Hz", "'40 Hz' or '2400 bpm'", what="a frequency"))
-
-    stop = _section(config, "stop")
-    if ("restitution" in stop) == ("area" in stop):
-        raise ValueError("give exactly one of stop.restitution and stop.area")
-    if "restitution" in stop:
-        stop_kw = {"restitution": _dimensionless("stop.restitution", stop["restitution"])}
-    else:
-        stop_kw = {"stop_area_m2": to_si("stop.area", stop["area"], "m**2", "'15.9 cm^2'",
-                                         what="an area")}
-
-    force = _force_from_config(_section(config, "force"), base_dir)
-
-    model = _section(config, "model")
-    n_modes = check_int("model.n_modes", model.get("n_modes", 16), lo=0, hi=4096)
-    impact = model.get("impact", "paper")  # checked by Hammer: "paper" or "wave"
-
-    damp = _section(config, "damping")
-    if "coefficient" in damp and "ratio" in damp:
-        raise ValueError("give at most one of damping.coefficient and damping.ratio")
-    name = config.get("name", "")
-    h = Hammer(bar=bar, frequency_Hz=freq, force=force, n_modes=n_modes, name=name, impact=impact,
-               **stop_kw)
-    if "coefficient" in damp:
-        val, unit = to_si_any("damping.coefficient", damp["coefficient"], ("N*s/m", "N*s/m**2"),
-                              "'2.4 N*s/m' (whole piston) or '12 N*s/m^2' (per unit length)",
-                              "a viscous damping coefficient")
-        val = check_real("damping.coefficient", val, lo=0.0)
-        h = dataclasses.replace(h, damping_N_s_m2=val / bar.length_m if unit == "N*s/m" else val)
-    elif "ratio" in damp:
-        zeta = _dimensionless("damping.ratio", damp["ratio"], lo=0.0)
-        d = 2.0 * zeta * h.s * math.pi
-        h = dataclasses.replace(h, damping_N_s_m2=d * h.scales.damping_N_s_m2)
-    return h
-
-
 def _force_from_config(sec: dict, base_dir) -> Force:
     kind = _need(sec, "force", "kind")
     if kind not in _FORCE_KEYS:
@@ -134,28 +81,6 @@ def _force_from_config(sec: dict, base_dir) -> Force:
     return MeasuredForce.from_csv(p, tolerance=_dimensionless("force.tolerance",
                                                               sec.get("tolerance", 0.01)),
                                   max_harmonics=sec.get("max_harmonics", 256))
-
-
-def load_config(path) -> Hammer:
-    """Read a hammer from a TOML file (keys in the module docstring).
-
-    Raises
-    ------
-    ValueError
-        A missing or malformed file, or any invalid key or value (named).
-    """
-    path = Path(path)
-    try:
-        with path.open("rb") as fh:
-            config = tomllib.load(fh)
-    except OSError as exc:
-        raise ValueError(f"cannot read the configuration {str(path)!r}: {exc.strerror}") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{str(path)!r} is not valid TOML: {exc}") from exc
-    except RecursionError as exc:  # tomllib recurses into nested arrays and inline tables
-        raise ValueError(f"{str(path)!r}: arrays or tables nested too deeply for a configuration"
-                         ) from exc
-    return _hammer_from_config(config, path.parent)
 
 
 # --------------------------------------------------------------------------------------------
@@ -229,19 +154,3 @@ PRESETS: dict[str, dict] = {
         "model": {"n_modes": 16},
     },
 }
-
-
-def preset(name: str) -> Hammer:
-    """A preset hammer: ``"pneumatic-drill"`` or ``"hydraulic-drill"`` (numbers documented in
-    the source).
-
-    Raises
-    ------
-    ValueError
-        For an unknown name; the message lists the presets.
-    """
-    if name not in PRESETS:
-        raise ValueError(f"unknown preset {name!r}; available: {', '.join(sorted(PRESETS))}")
-    return _hammer_from_config(PRESETS[name], None)
-
-

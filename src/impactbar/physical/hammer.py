@@ -6,16 +6,28 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import tomllib
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from .._validate import check_int, check_real
 from ..loads import CosineLoad, FourierLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
 from ..model import IMPACT_LAWS, BarModel
-from .bar import SHORT_IMPACT_LIMIT, TWO_PI, Bar, ImpactDurationWarning
+from .bar import SHORT_IMPACT_LIMIT, TWO_PI, Bar, ImpactDurationWarning, _positive
+from .config import (
+    _REQUIRED,
+    _SECTIONS,
+    PRESETS,
+    _dimensionless,
+    _force_from_config,
+    _need,
+    _section,
+)
 from .forces import Force, FourierFit, HydraulicForce, MeasuredForce, PneumaticForce
+from .units import to_si, to_si_any
 
 
 # --------------------------------------------------------------------------------------------
@@ -303,16 +315,12 @@ class Hammer:
             An unknown or missing key (named), a value without its unit, of the wrong dimension,
             or out of range.
         """
-        from .config import _hammer_from_config
-
         return _hammer_from_config(config, base_dir)
 
     @classmethod
     def from_toml(cls, path) -> Hammer:
         """A hammer from a TOML file (keys as in :meth:`from_config`); relative CSV paths are
         taken from the file's folder."""
-        from .config import load_config
-
         return load_config(path)
 
     @classmethod
@@ -348,3 +356,91 @@ class Hammer:
         return h
 
 
+def _hammer_from_config(config: dict, base_dir) -> Hammer:
+    """The hammer a configuration mapping describes (keys and checks: :mod:`impactbar.physical.config`)."""
+    if not isinstance(config, dict):
+        raise ValueError("a configuration must be a mapping of sections; got "
+                         f"{type(config).__name__}")
+    unknown = sorted(set(config) - set(_SECTIONS) - {"name"})
+    if unknown:
+        raise ValueError(f"unknown key {unknown[0]!r}; allowed at top level: name, "
+                         f"{', '.join(sorted(_SECTIONS))}")
+    missing = sorted(_REQUIRED - set(config))
+    if missing:
+        raise ValueError(f"missing section [{missing[0]}]")
+    b = _section(config, "bar")
+    bar = Bar.from_units(_need(b, "bar", "E"), _need(b, "bar", "density"),
+                         _need(b, "bar", "length"), diameter=b.get("diameter"), area=b.get("area"))
+
+    drive = _section(config, "drive")
+    freq = _positive("drive.frequency", to_si("drive.frequency", _need(drive, "drive", "frequency"),
+                                               "Hz", "'40 Hz' or '2400 bpm'", what="a frequency"))
+
+    stop = _section(config, "stop")
+    if ("restitution" in stop) == ("area" in stop):
+        raise ValueError("give exactly one of stop.restitution and stop.area")
+    if "restitution" in stop:
+        stop_kw = {"restitution": _dimensionless("stop.restitution", stop["restitution"])}
+    else:
+        stop_kw = {"stop_area_m2": to_si("stop.area", stop["area"], "m**2", "'15.9 cm^2'",
+                                         what="an area")}
+
+    force = _force_from_config(_section(config, "force"), base_dir)
+
+    model = _section(config, "model")
+    n_modes = check_int("model.n_modes", model.get("n_modes", 16), lo=0, hi=4096)
+    impact = model.get("impact", "paper")  # checked by Hammer: "paper" or "wave"
+
+    damp = _section(config, "damping")
+    if "coefficient" in damp and "ratio" in damp:
+        raise ValueError("give at most one of damping.coefficient and damping.ratio")
+    name = config.get("name", "")
+    h = Hammer(bar=bar, frequency_Hz=freq, force=force, n_modes=n_modes, name=name, impact=impact,
+               **stop_kw)
+    if "coefficient" in damp:
+        val, unit = to_si_any("damping.coefficient", damp["coefficient"], ("N*s/m", "N*s/m**2"),
+                              "'2.4 N*s/m' (whole piston) or '12 N*s/m^2' (per unit length)",
+                              "a viscous damping coefficient")
+        val = check_real("damping.coefficient", val, lo=0.0)
+        h = dataclasses.replace(h, damping_N_s_m2=val / bar.length_m if unit == "N*s/m" else val)
+    elif "ratio" in damp:
+        zeta = _dimensionless("damping.ratio", damp["ratio"], lo=0.0)
+        d = 2.0 * zeta * h.s * math.pi
+        h = dataclasses.replace(h, damping_N_s_m2=d * h.scales.damping_N_s_m2)
+    return h
+
+
+def load_config(path) -> Hammer:
+    """Read a hammer from a TOML file (keys in the module docstring).
+
+    Raises
+    ------
+    ValueError
+        A missing or malformed file, or any invalid key or value (named).
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            config = tomllib.load(fh)
+    except OSError as exc:
+        raise ValueError(f"cannot read the configuration {str(path)!r}: {exc.strerror}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{str(path)!r} is not valid TOML: {exc}") from exc
+    except RecursionError as exc:  # tomllib recurses into nested arrays and inline tables
+        raise ValueError(f"{str(path)!r}: arrays or tables nested too deeply for a configuration"
+                         ) from exc
+    return _hammer_from_config(config, path.parent)
+
+
+def preset(name: str) -> Hammer:
+    """A preset hammer: ``"pneumatic-drill"`` or ``"hydraulic-drill"`` (numbers documented in
+    the source).
+
+    Raises
+    ------
+    ValueError
+        For an unknown name; the message lists the presets.
+    """
+    if name not in PRESETS:
+        raise ValueError(f"unknown preset {name!r}; available: {', '.join(sorted(PRESETS))}")
+    return _hammer_from_config(PRESETS[name], None)
