@@ -7,9 +7,11 @@ exactly piece by piece. The next impact, the first ``t`` with ``u(1,t) = c . q(t
 ``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding;
 after an impact the rigid bar under one harmonic and flexible bars under a Fourier load take
 specialised searches with the same guarantee (``FAST_SEARCH``).
-At an impact ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11); under the wave law (``BarModel(impact="wave")``,
-theory §4b) each impact is instead a contact window of length ``2/s`` with the long rod, solved by
-characteristics (:func:`impactbar.dynamics.impact.wave_impact`), after which the flight resumes.
+At an impact the model's law acts (:attr:`impactbar.BarModel.law`): the paper's
+``u_t(x) -> -R u_t(x)`` (eqs. 10, 11) is applied inside the compiled flight kernel; a law that is
+not instantaneous (the wave law, ``BarModel(impact="wave")``, theory §4b: a contact window of length
+``2/s`` with the long rod, solved by characteristics) makes the kernel stop at the arrival, and its
+contact step (:meth:`impactbar.laws.ContactLaw.contact`) gives the state where the flight resumes.
 
 With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
 accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field
@@ -31,8 +33,6 @@ import numpy as np
 from .. import _tables
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
-from ..dynamics import _wavekernel as WK
-from ..dynamics.impact import wave_impact
 from ..loads import FourierLoad, Load, PiecewiseConstantLoad
 from ..model import MAX_MODES, BarModel
 
@@ -56,12 +56,6 @@ MICRO_FLIGHT = 1e-6
 #: (``find_crossing``), the reference they are tested against (the same impacts, to rounding).
 FAST_SEARCH = True
 
-#: Under the wave law, solve the contact windows in which contact is lost by the compiled
-#: characteristics solver (``dynamics._wavekernel.wave_contact``). ``False`` gives the Python solver
-#: (:func:`~impactbar.dynamics.impact.wave_impact`), the reference it is tested against (the same
-#: contact intervals and post-contact states, to rounding).
-FAST_WAVE_SEPARATION = True
-
 #: Largest ``|t0|``, ``|t_end|`` and ``t_end - t0`` accepted by :func:`simulate` (about 1.6e7 periods).
 MAX_TIME = 1e8
 #: Largest quadrature work (nodes times modes) :attr:`Trajectory.energy` may take (time bound).
@@ -70,7 +64,7 @@ MAX_ENERGY_WORK = 3e8
 #: scale of the stiffest mode's period, so beyond it a run does not finish in bounded time.
 MAX_SIMULATE_STIFFNESS = 1e5
 
-_FREE, _CONTACT, _WAVE = 0, 1, 2  # _WAVE: a contact window of the wave law (free-free modes)
+_FREE, _CONTACT, _WINDOW = 0, 1, 2  # _WINDOW: a law's contact step (its record holds the motion)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -361,7 +355,7 @@ class _Core:
         self.load = load
         self.N = model.n_modes
         self.d = model.d
-        self.R = model.R
+        self.R = model.law.kernel_restitution(model)  # -1 (v -> v): the law's contact step acts
         self.data = _LoadData(load)
         self.c = np.ascontiguousarray(model.end_weights)
         self.free = _Basis(model.frequencies**2, model.d, self.data)
@@ -617,13 +611,17 @@ class Trajectory:
         Start and end of the run (``t_end`` is the time of the last impact when the run stopped at
         ``max_impacts``).
     impact_times : numpy.ndarray, shape (I,)
-        Times of the impacts (load frame, dimensionless); under the wave law the starts of the
-        contact windows (each lasts ``2/s``; see :attr:`impacts`).
+        Times of the impacts (load frame, dimensionless): the arrivals at the stop, under the wave
+        law the starts of the contact windows (each lasts ``2/s``; see :attr:`impacts`).
     impact_velocities : numpy.ndarray, shape (I,)
         Velocity ``u_t(1, t-)`` of the struck end just before each impact, ``> 0``.
     contact_intervals : numpy.ndarray, shape (m, 2)
-        Start and end of each interval of permanent contact (the end is ``t_end`` while still in
-        contact).
+        Start and end of each interval of sustained contact, the same under every impact law: the
+        bar held on the stop (fixed at ``x = 1``, theory §8) after chatter or a touch, until the
+        stop's reaction turns tensile (the end is ``t_end`` while still in contact). The impacts'
+        own contact is not included: it lasts no time under the paper's law (eq. 10) and is each
+        impact's window under the wave law, ``impacts[j].t0`` to ``impacts[j].t0 +
+        impacts[j].duration``; under the wave law, whose arrivals all open a window, it is empty.
     final_state : InitialState
         Free-free modal state at ``t_end`` (projected from the fixed-free basis when in contact).
     status : str
@@ -679,7 +677,7 @@ class Trajectory:
         for j in np.unique(idx):
             sel = idx == j
             s = segs[j]
-            if s.basis == _WAVE:  # inside a contact window: the characteristics solution
+            if s.basis == _WINDOW:  # inside a contact window: the characteristics solution
                 states = [s.frozen.state_at(min(tt - s.t, s.frozen.duration)) for tt in t[sel]]
                 yield sel, _FREE, np.array([a for a, _ in states]).T, np.array([b for _, b in states]).T
                 continue
@@ -697,11 +695,23 @@ class Trajectory:
 
     @property
     def impacts(self) -> tuple:
-        """Under the wave law, the contact of each impact (:class:`~impactbar.WaveImpact`: force
-        wave, rod energy, peak stresses, efficiency, advance of the rod end), in order; empty under
-        the paper's law."""
+        """The record of each impact, in order, one per :attr:`impact_times`: the law's per-blow
+        output (:meth:`impactbar.laws.ContactLaw.contact`). Under the wave law a
+        :class:`~impactbar.WaveImpact` (force wave, rod energy, peak stresses, efficiency, advance of
+        the rod end); under the paper's law an :class:`~impactbar.laws.InstantImpact` (impact
+        velocity, impulse, energy loss), built on access from the states the run logged."""
         segs = self._segments
-        return tuple(segs.frozen[j].resolve() for j in np.flatnonzero(segs.basis == _WAVE))
+        model, law = self.model, self.model.law
+        entry = _ENTRIES.index("impact")
+        out = []
+        for j in np.flatnonzero(segs.entry == entry):
+            if segs.basis[j] == _WINDOW:
+                out.append(segs.frozen[j].resolve())
+                continue
+            prev = segs[j - 1]  # the flight that arrived: its state just before the impact
+            qm, vm = self._core.propagate(prev.basis, prev.t, prev.q, prev.v, [segs.t[j]])
+            out.append(law.contact(model, self.load, float(segs.t[j]), qm[:, 0], vm[:, 0])[3])
+        return tuple(out)
 
     def end_displacement(self, t) -> np.ndarray:
         """``u(1, t)``, the struck end, ``<= 0``: a positive value within the rounding noise of the
@@ -926,7 +936,7 @@ def _energy_account(tr: Trajectory) -> EnergyAccount:
     final = initial
     for j, seg in enumerate(segs):
         tb = segs[j + 1].t if j + 1 < len(segs) else tr.t_end
-        if seg.basis == _WAVE:  # a contact window: drive work, rod energy, projection
+        if seg.basis == _WINDOW:  # a contact window: drive work, rod energy, projection
             window = seg.frozen
             dt = min(tb - seg.t, window.duration)
             w, rod, field_energy = window.account(dt)
@@ -945,7 +955,7 @@ def _energy_account(tr: Trajectory) -> EnergyAccount:
         damp += dl
         if j + 1 < len(segs):
             nxt = segs[j + 1]
-            if nxt.entry == "impact" and nxt.basis == _WAVE:
+            if nxt.entry == "impact" and nxt.basis == _WINDOW:
                 pass  # the window's own account; its start only shifts the mean displacement
             elif nxt.entry == "impact":
                 imp += (1.0 - core.R**2) * core.kinetic(ve)
@@ -1042,12 +1052,15 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
-    if model.impact == "wave":
-        return _run_wave(core, q, v, t0, t_end, max_imp)
     return _run(core, q, v, t0, t_end, max_imp)
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
+    """The driver, for every law: free flight by the compiled kernel (which applies an
+    instantaneous law itself, with chatter), sustained contact until the stop's reaction turns
+    tensile, and the law's contact step at each arrival the kernel stops at without resolving it."""
+    law = core.model.law
+    instant = law.instantaneous
     segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
     segs.add(t0, _FREE, q, v, "start")
     times: list[np.ndarray] = []
@@ -1061,18 +1074,35 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     retries = 0
     last_release = None  # (time, contact segment index, len(times), n_imp) for undoing
     cap = 1024
+    if not instant:  # the kernel's state at the arrival it stops at
+        aq, av = np.empty((1, q.size)), np.empty((1, q.size))
     while True:
         if mode == _FREE:
             left = max_imp - n_imp
             if left <= 0:  # pragma: no cover - run_free stops at max_imp itself
                 status = "max_impacts"
                 break
-            # the kernel writes into the log's next rows; at most an eighth more than the log
-            # holds, so the run's peak memory stays near its stored trajectory
-            oq, ovv = segs.impact_rows(min(cap, left, max(1024, segs.count // 8)))
-            n, st, tn, ot, ov = core.run_free(t, q, v, t_end, left, oq, ovv)
-            del oq, ovv  # no view of the log may outlive the call (it is resized in place)
-            cap = min(cap * 2, 1 << 16)
+            if not instant:  # the kernel stops at the next arrival, applying nothing
+                qa, va = q.copy(), v.copy()
+                n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, aq, av)
+                if st == K.MAXIMP or st == K.CONTACT:  # an impact, or a touch at zero speed
+                    q, v, t = _contact_step(core, segs, t, qa, va, n, tn, ot, aq, av, times, vels)
+                    n_imp += 1
+                    if t >= t_end:  # the run ends inside the contact
+                        t = t_end
+                        break
+                    segs.add(t, _FREE, q, v, "release")
+                    if n_imp >= max_imp:
+                        status = "max_impacts"
+                        break
+                    continue
+            else:
+                # the kernel writes into the log's next rows; at most an eighth more than the log
+                # holds, so the run's peak memory stays near its stored trajectory
+                oq, ovv = segs.impact_rows(min(cap, left, max(1024, segs.count // 8)))
+                n, st, tn, ot, ov = core.run_free(t, q, v, t_end, left, oq, ovv)
+                del oq, ovv  # no view of the log may outlive the call (it is resized in place)
+                cap = min(cap * 2, 1 << 16)
             if n:  # (views of the kernel's fresh output, copied where it is mostly unused)
                 times.append(ot if 2 * n >= ot.base.size else ot.copy())
                 vels.append(ov if 2 * n >= ov.base.size else ov.copy())
@@ -1153,6 +1183,9 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     if t == segs.t[i] and segs.basis[i] == _FREE:  # the run ended on a piece's start (max_impacts)
         qe, ve = segs.q[i].copy(), segs.v[i].copy()
         last = None
+    elif segs.basis[i] == _WINDOW:  # the run ended inside a law's contact step
+        last = segs.last()
+        qe, ve = last.frozen.state_at(min(t - last.t, last.frozen.duration))
     else:
         last = segs.last()
         qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
@@ -1183,93 +1216,25 @@ def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
     return r[:, 0], rv[:, 0]
 
 
-def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
-    """The driver under the wave law (theory §4b): each flight by the compiled kernel up to the next
-    arrival at the rod end, each contact by :func:`wave_impact` over its window ``2/s``; positions
-    stay measured from the rod end, which every blow advances."""
+def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, times, vels):
+    """The law's contact step at the arrival the kernel stopped at (an impact, ``n = 1``, its state
+    in ``aq, av``; or a touch at zero speed at ``tn``, the state then from the flight's start
+    ``(t, qa, va)``): logs the contact segment and the impact; returns the state and time where the
+    flight resumes (positions from the stop, which the contact may have advanced)."""
     model = core.model
-    window = 2.0 / model.s
     c = core.c
-    D = core.data
-    ks = D.ks
-    rate = float(np.max(ks)) / model.s if D.kind == 0 and ks.size else 0.0
-    segs = _SegmentLog(core.N)
-    segs.add(t0, _FREE, q, v, "start")
-    times: list[float] = []
-    vels: list[float] = []
-    t = t0
-    status = "t_end"
-    oq, ov = np.empty((1, q.size)), np.empty((1, q.size))  # the kernel's state after its one impact
-    contact = np.empty((WK.MAX_INTERVALS, 2))  # the contact intervals of a separating window
-    while True:
-        qa, va = q.copy(), v.copy()
-        n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, oq, ov)
-        if st == K.FAILED:  # pragma: no cover - defensive
-            raise RuntimeError(f"impact search did not converge at t = {tn}")
-        if st == K.END:
-            t = t_end
-            break
-        # an impact (MAXIMP after one), or a touch at zero speed (CONTACT): a contact window
-        ti = float(ot[0]) if n else float(tn)
-        if n and core.R >= 0.01:  # the kernel's state after eq. 10's reversal, undone
-            qm, vm = oq[0].copy(), ov[0] / -core.R
-        else:
-            qm, vm = (a[:, 0] for a in core.propagate(_FREE, t, qa, va, [ti]))
-        qm[0] -= float(c @ qm)  # the end exactly on the rod end
-        arrival = float(c @ vm)
-        if arrival < 0.0:  # a touch whose speed rounded below zero
-            vm[0] -= arrival
-            arrival = 0.0
-        q, v = np.empty_like(qm), np.empty_like(vm)
-        if K.wave_window(D.kind, model.s, model.R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
-                         D.psup, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
-            imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
-        elif FAST_WAVE_SEPARATION and WK.wave_contact(
-                D.kind, model.s, model.R, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup, rate, ti,
-                qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:  # contact lost inside the window
-            imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())
-        else:  # the full characteristics solution in Python
-            imp = wave_impact(model, core.load, ti, qm, vm)
-            q, v = imp.q_after.copy(), imp.v_after.copy()
-        times.append(ti)
-        vels.append(arrival)
-        segs.add(ti, _WAVE, qm, vm, "impact", imp)
-        t = ti + window
-        if t >= t_end:  # the run ends inside the window
-            t = t_end
-            break
-        segs.add(t, _FREE, q, v, "release")
-        if len(times) >= max_imp:
-            status = "max_impacts"
-            break
-    last = segs.last()
-    if last.basis == _WAVE:
-        qe, ve = last.frozen.state_at(min(t - last.t, last.frozen.duration))
+    ti = float(ot[0]) if n else float(tn)
+    if n:
+        qm, vm = aq[0].copy(), av[0].copy()
     else:
-        qe, ve = (a[:, 0] for a in core.propagate(_FREE, last.t, last.q, last.v, [t]))
-    return Trajectory(model=model, load=core.load, t0=t0, t_end=t,
-                      impact_times=np.array(times), impact_velocities=np.array(vels),
-                      contact_intervals=np.zeros((0, 2)), final_state=InitialState(qe, ve),
-                      status=status, _core=core, _segments=segs.finish())
-
-
-_GL20_X, _GL20_W = np.polynomial.legendre.leggauss(20)
-
-
-class _Window:
-    """A contact window the compiled kernel found without separation: its post-contact state is
-    known; the full :class:`~impactbar.WaveImpact` (force wave, energies) is solved on first use."""
-
-    def __init__(self, model, load, t0, q, v, q_after, v_after):
-        self._args = (model, load, t0, q, v)
-        self._impact = None
-        self.duration = 2.0 / model.s
-        self.q_after, self.v_after = q_after, v_after
-
-    def resolve(self):
-        if self._impact is None:
-            self._impact = wave_impact(*self._args)
-        return self._impact
-
-    def __getattr__(self, name):
-        return getattr(self.resolve(), name)
+        qm, vm = (a[:, 0] for a in core.propagate(_FREE, t, qa, va, [ti]))
+    qm[0] -= float(c @ qm)  # the end exactly on the stop
+    arrival = float(c @ vm)
+    if arrival < 0.0:  # a touch whose speed rounded below zero
+        vm[0] -= arrival
+        arrival = 0.0
+    q, v, t_release, record = model.law.contact(model, core.load, ti, qm, vm, kernel=core)
+    times.append(np.array([ti]))
+    vels.append(np.array([arrival]))
+    segs.add(ti, _WINDOW, qm, vm, "impact", record)
+    return q, v, t_release
