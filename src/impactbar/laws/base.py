@@ -18,8 +18,8 @@ class ContactLaw:
     :attr:`name` and implements the methods below; :data:`impactbar.laws.LAWS` maps names to
     classes.
 
-    Class attributes
-    ----------------
+    Attributes
+    ----------
     name : str
         The law's name in :data:`~impactbar.laws.LAWS` and in ``BarModel.impact``.
     instantaneous : bool

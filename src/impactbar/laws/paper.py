@@ -23,7 +23,7 @@ class InstantImpact:
     duration : float
         0: the impact takes no time.
     R : float
-        Restitution coefficient (eq. 10).
+        Restitution coefficient (eq. 10): ``model.R`` unless given.
     q_before, v_before : numpy.ndarray, shape (N + 1,)
         Free-free modal state just before the impact.
     q_after, v_after : numpy.ndarray, shape (N + 1,)
@@ -43,8 +43,8 @@ class InstantImpact:
 
     duration = 0.0
 
-    def __init__(self, model, t0: float, q_before, v_before):
-        self.R, self.t0 = float(model.R), float(t0)
+    def __init__(self, model, t0: float, q_before, v_before, R: float | None = None):
+        self.R, self.t0 = float(model.R if R is None else R), float(t0)
         self._c = model.end_weights
         self._w2 = model.frequencies**2
         self.q_before = np.array(q_before, dtype=float)
