@@ -527,8 +527,8 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     instant = law.instantaneous
     segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
     segs.add(t0, _FREE, q, v, "start")
-    times: list[np.ndarray] = []
-    vels: list[np.ndarray] = []
+    times: list = []  # blocks of the kernel's impacts (arrays), or the law's contact steps (floats)
+    vels: list = []
     contacts: list[list[float]] = []
     n_imp = 0
     t = t0
@@ -656,8 +656,8 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         qe, ve = qe[:, 0], ve[:, 0]
         if last.basis == _CONTACT:
             qe, ve = core.release_state(qe, ve)
-    imp_t = _joined(times)
-    imp_v = _joined(vels)
+    imp_t = _joined(times) if instant else np.array(times, dtype=float)
+    imp_v = _joined(vels) if instant else np.array(vels, dtype=float)
     ci = np.array(contacts, dtype=float).reshape(-1, 2)
     return Trajectory(model=core.model, load=core.load, t0=t0, t_end=t,
                       impact_times=imp_t, impact_velocities=imp_v, contact_intervals=ci,
@@ -698,7 +698,7 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
         vm[0] -= arrival
         arrival = 0.0
     q, v, t_release, record = model.law.contact(model, core.load, ti, qm, vm, kernel=core)
-    times.append(np.array([ti]))
-    vels.append(np.array([arrival]))
+    times.append(ti)  # floats: the run's impacts are all the law's (no kernel blocks)
+    vels.append(arrival)
     segs.add(ti, _WINDOW, qm, vm, "impact", record)
     return q, v, t_release
