@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from impactbar import BarModel, CosineLoad, InitialState, find_orbit, simulate
+from impactbar import BarModel, CosineLoad, InitialState, find_orbit, periodic_orbits, simulate
 from impactbar.laws import LAWS, ContactLaw, InstantImpact
 
 
@@ -85,3 +85,10 @@ def test_periodic_orbit_by_the_multi_impact_solver():
     o = find_orbit(model, load, guess=(guess.impact_times, guess.states_after_impact))
     V = o.impact_velocity
     assert V * (1.0 + law._e(model, V)) == pytest.approx(2.0 * math.pi * 0.3, rel=1e-10)
+
+
+def test_what_the_law_leaves_out_is_refused_by_name():
+    model = BarModel(s=10.0, d=0.0, R=0.7, n_modes=0, impact=VelocityRestitution())
+    with pytest.raises(NotImplementedError, match=r"'velocity' \(VelocityRestitution\) does not provide "
+                                                  r"phase_roots\(\)"):
+        periodic_orbits(model, CosineLoad(0.3, 1.0))

@@ -47,7 +47,7 @@ class ContactLaw:
         float
             ``>= 0``; each flight of a periodic orbit starts this long after its impact.
         """
-        raise NotImplementedError
+        raise NotImplementedError(self._missing("window"))
 
     def impact_map(self, model, load, t: float, y_minus):
         """State where the next flight starts from the state at arrival, with its derivatives
@@ -72,7 +72,7 @@ class ContactLaw:
         jac_t : numpy.ndarray, shape (2 N + 2,)
             ``d y_plus / d t`` at fixed ``y_minus``.
         """
-        raise NotImplementedError
+        raise NotImplementedError(self._missing("impact_map"))
 
     def phase_roots(self, model, load) -> list[tuple[float, int]]:
         """Roots of the law's one-impact phase equation in ``[0, 2 pi)``.
@@ -82,7 +82,7 @@ class ContactLaw:
         list of (float, int)
             ``(phase, multiplicity)`` sorted by phase; ``phase`` is the load time of the arrival.
         """
-        raise NotImplementedError
+        raise NotImplementedError(self._missing("phase_roots"))
 
     def orbit(self, model, load, phase: float, multiplicity: int):
         """The one-impact orbit with this phase, with admissibility and multipliers.
@@ -91,7 +91,7 @@ class ContactLaw:
         -------
         PeriodicOrbit
         """
-        raise NotImplementedError
+        raise NotImplementedError(self._missing("orbit"))
 
     def multipliers(self, model, load, phase: float):
         """Exact Floquet multipliers of the one-impact orbit with this phase (theory §7),
@@ -102,7 +102,7 @@ class ContactLaw:
         numpy.ndarray of complex, shape (2 N + 2,)
             Sorted by decreasing modulus.
         """
-        raise NotImplementedError
+        raise NotImplementedError(self._missing("multipliers"))
 
     def existence_edge(self, model, k: int = 1) -> float:
         """Largest load factor ``k p0 / pk`` of the pneumatic load (eq. 33) with one-impact orbits.
@@ -112,7 +112,7 @@ class ContactLaw:
         float
             ``inf`` when orbits exist at every load factor, ``nan`` when none exist.
         """
-        raise NotImplementedError
+        raise NotImplementedError(self._missing("existence_edge"))
 
     def blow(self, model, load, t: float, y_minus):
         """Per-blow output of a periodic orbit's impact arriving at load time ``t`` in state
@@ -155,7 +155,10 @@ class ContactLaw:
             (the full record, for one solved lazily): :class:`~impactbar.WaveImpact`,
             :class:`~impactbar.laws.InstantImpact`.
         """
-        raise NotImplementedError
+        raise NotImplementedError(self._missing("contact"))
+
+    def _missing(self, method: str) -> str:
+        return f"the impact law {self.name!r} ({type(self).__name__}) does not provide {method}()"
 
     def __str__(self) -> str:
         return self.name
