@@ -50,12 +50,12 @@ class WaveLaw(ContactLaw):
         (advanced) rod end at the window's end; ``d(g, h)/dt`` is the drive's rate. Whether the
         contact really holds is decided on the orbit (``"separates"``)."""
         from ..dynamics.impact import window_drive
+        from ..orbits.wave import window_map
 
         M = model.n_modes + 1
         g, h, dg, dh = window_drive(model.s, model.R, model.n_modes, load, float(t), derivative=True)
-        y_plus = -model.R * np.asarray(y_minus, dtype=float) + np.concatenate((g, h))
+        y_plus = window_map(model, y_minus, g, h)
         c = model.end_weights
-        y_plus[0] = -float(c[1:] @ y_plus[1:M])  # touching the advanced rod end
         jac = -model.R * np.eye(2 * M)
         jac[0, :] = 0.0
         jac[0, 1:M] = model.R * c[1:]
