@@ -106,7 +106,8 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
     longer than the load period and jumps of the square wave in both halves included)."""
     from impactbar import FourierLoad, wave_impact
     from impactbar.dynamics import _kernel as K
-    from impactbar.simulation.simulate import _GL20_W, _GL20_X, _LoadData
+    from impactbar.laws.wave import _GL20_W, _GL20_X
+    from impactbar.simulation.simulate import _LoadData
     from test_impact_wave import random_state
 
     for trial in range(60):
@@ -140,7 +141,8 @@ def test_compiled_separating_window_matches_the_characteristics_solver(rng):
     and square-wave jumps in both halves, included)."""
     from impactbar import FourierLoad, wave_impact
     from impactbar.dynamics import _wavekernel as WK
-    from impactbar.simulation.simulate import _GL20_W, _GL20_X, _LoadData
+    from impactbar.laws.wave import _GL20_W, _GL20_X
+    from impactbar.simulation.simulate import _LoadData
     from test_impact_wave import random_state
 
     separating = 0
@@ -179,11 +181,12 @@ def test_separating_windows_compiled_as_in_python(preset, monkeypatch):
 
     from impactbar import physical
 
-    S = sys.modules["impactbar.simulation.simulate"]
+    S = sys.modules["impactbar.laws.wave"]  # the wave law's contact step
+    D = sys.modules["impactbar.dynamics.impact"]
     h = physical.preset(preset)
     model = h.model.with_(impact="wave")
     start = InitialState.rigid(-0.05, 0.0, n_modes=model.n_modes)
-    ref_impact = S.wave_impact
+    ref_impact = D.wave_impact
     monkeypatch.setattr(S, "FAST_WAVE_SEPARATION", False)
     ref = simulate(model, h.load, start, 40 * TWO_PI)
 
@@ -191,9 +194,9 @@ def test_separating_windows_compiled_as_in_python(preset, monkeypatch):
         raise AssertionError("the Python solver was called")
 
     monkeypatch.setattr(S, "FAST_WAVE_SEPARATION", True)
-    monkeypatch.setattr(S, "wave_impact", refused)
+    monkeypatch.setattr(D, "wave_impact", refused)
     tr = simulate(model, h.load, start, 40 * TWO_PI)
-    monkeypatch.setattr(S, "wave_impact", ref_impact)
+    monkeypatch.setattr(D, "wave_impact", ref_impact)
     assert tr.n_impacts == ref.n_impacts > 20
     np.testing.assert_allclose(tr.impact_times, ref.impact_times, rtol=0, atol=1e-10)
     np.testing.assert_allclose(tr.impact_velocities, ref.impact_velocities, rtol=1e-10, atol=1e-12)
@@ -216,7 +219,8 @@ def test_compiled_windows_spanning_many_load_periods(s):
     from impactbar import wave_impact
     from impactbar.dynamics import _kernel as K
     from impactbar.dynamics import _wavekernel as WK
-    from impactbar.simulation.simulate import _GL20_W, _GL20_X, _LoadData
+    from impactbar.laws.wave import _GL20_W, _GL20_X
+    from impactbar.simulation.simulate import _LoadData
 
     model = BarModel(s=s, d=0.0, R=0.5, n_modes=2)
     load = SquareWaveLoad(2.0, 1.5)

@@ -2,16 +2,17 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ._validate import check_int, check_real
 
-__all__ = ["BarModel"]
+if TYPE_CHECKING:
+    from .laws.base import ContactLaw
 
-#: The impact laws: the paper's eq. 10 and the wave-resolved contact with a long rod (theory §4b).
-IMPACT_LAWS = ("paper", "wave")
+__all__ = ["BarModel"]
 
 #: Largest number of flexible modes accepted; beyond it the modal sums gain nothing in double precision.
 MAX_MODES = 4096
@@ -45,8 +46,10 @@ class BarModel:
     n_modes : int
         Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096, and with
         ``s * n_modes <= 1e12`` (beyond, the modes' phases over a period are lost in rounding).
-    impact : {"paper", "wave"}
-        The impact law. ``"paper"`` (default): eq. 10, the velocity field reversed and scaled by
+    impact : {"paper", "wave"} or ContactLaw
+        The impact law, by its name in :data:`impactbar.laws.LAWS` or as a law object
+        (:class:`impactbar.laws.ContactLaw`; the attribute then holds its name, :attr:`law` the
+        object). ``"paper"`` (default): eq. 10, the velocity field reversed and scaled by
         ``-R`` at an instant impact, the displacement kept. ``"wave"``: the stop is a long rod of
         the same material with area ratio ``A_s/A = (1 + R)/(1 - R)`` and the contact, lasting
         ``2/s``, is solved by characteristics with the drive acting (theory §4b); velocity and strain
@@ -69,19 +72,32 @@ class BarModel:
     R: float
     n_modes: int
     impact: str = "paper"
+    _law: ContactLaw = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "s", check_real("s", self.s, lo=0.0, lo_open=True))
         object.__setattr__(self, "d", check_real("d", self.d, lo=0.0))
         object.__setattr__(self, "R", check_real("R", self.R, lo=0.0, hi=1.0))
         object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=MAX_MODES))
-        if not isinstance(self.impact, str) or self.impact not in IMPACT_LAWS:
-            raise ValueError(f"impact must be one of {list(IMPACT_LAWS)}; got {self.impact!r}")
+        from .laws.base import get_law  # the law objects sit above the solvers they drive
+
+        law = get_law(self.impact)  # ValueError listing the names
+        object.__setattr__(self, "_law", law)
+        object.__setattr__(self, "impact", law.name)
         if self.n_modes and self.s * self.n_modes > MAX_STIFFNESS:
             raise ValueError(
                 f"s * n_modes must be at most {MAX_STIFFNESS:g} (got s = {self.s:g}, n_modes = "
                 f"{self.n_modes}): beyond it a mode's phase over one period, 2 pi s n pi, is lost "
                 "in rounding; a bar that stiff moves as a rigid one (n_modes = 0, any s)")
+
+    @property
+    def law(self) -> ContactLaw:
+        """The impact law as an object (:class:`impactbar.laws.ContactLaw`)."""
+        if self._law.name != self.impact:  # a name set past the validation: looked up again
+            from .laws.base import get_law
+
+            return get_law(self.impact)
+        return self._law
 
     @property
     def frequencies(self) -> np.ndarray:
@@ -124,7 +140,7 @@ class BarModel:
 
     def with_(self, **changes) -> BarModel:
         """A copy with some fields changed (validated again)."""
-        fields = {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes, "impact": self.impact}
+        fields = {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes, "impact": self._law}
         unknown = set(changes) - set(fields)
         if unknown:
             raise ValueError(f"unknown BarModel field(s): {sorted(unknown)}; allowed: {sorted(fields)}")

@@ -171,7 +171,7 @@ def run(args) -> int:
 
         # the flight starts after the impact (under the wave law: at the end of its window 2/s)
         t0 = float(start.impact_times[0]) if hasattr(start, "impact_times") else start.phase
-        t0 += 2.0 / model.s if model.impact == "wave" else 0.0
+        t0 += model.law.window(model)
         diagram = simulated_diagram(model, load, args.parameter, values, transient=args.transient,
                                     record=args.record, start=InitialState(q, v), t0=t0)
     try:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from ..laws import LAWS
 from ._common import print_json, refuse
 
 #: the dimensionless inputs, which a hammer in SI (CONFIG.toml or --preset) sets itself
@@ -20,7 +21,7 @@ def add_bar_and_load_arguments(p, *, d: float, n_modes: int, p0: float) -> None:
     g.add_argument("--R", type=float, default=0.5, help="restitution coefficient in [0, 1] (default 0.5)")
     g.add_argument("--n-modes", type=int, default=n_modes,
                    help=f"flexible modes kept, >= 0 (default {n_modes})")
-    g.add_argument("--impact", choices=("paper", "wave"), default=None,
+    g.add_argument("--impact", choices=tuple(LAWS), default=None,
                    help="impact law: 'paper' (eq. 10, default) or 'wave' (the stop as a long rod, "
                         "the contact solved by characteristics); overrides a config's [model] impact")
     lg = p.add_argument_group("load")

@@ -8,6 +8,7 @@ import sys
 import warnings
 
 from .. import physical
+from ..laws import LAWS
 from ._common import docs_page, json_ready, print_json
 
 __all__ = ["add_physical_arguments", "add_impact_argument", "wants_physical", "hammer_from_args",
@@ -30,7 +31,7 @@ def add_physical_arguments(parser) -> None:
 def add_impact_argument(parser) -> None:
     """Add ``--impact {paper,wave}`` (default: the config's ``[model] impact``, else ``paper``)."""
     parser.add_argument(
-        "--impact", choices=("paper", "wave"), default=None,
+        "--impact", choices=tuple(LAWS), default=None,
         help="impact law: 'paper' (eq. 10, an instant velocity reversal) or 'wave' (the stop as a "
              "long rod, the contact solved by characteristics); default: a config's [model] "
              "impact, else 'paper'")

@@ -19,8 +19,7 @@ from scipy.optimize import brentq
 from ..loads import CosineLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
 from ..model import BarModel
 from .one_impact import orbit_multipliers, periodic_orbits
-from .phase import phase_G, phase_residual, phase_roots
-from .wave import wave_existence_edge, wave_phase_roots
+from .phase import phase_G, phase_residual
 
 __all__ = [
     "Boundary",
@@ -106,11 +105,11 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
     Raises
     ------
     ValueError
-        Under the wave impact law (``model.impact == "wave"``), whose phase equation is another
-        (theory §4b): its existence edges come from :func:`impactbar.orbits.wave.wave_existence_edge`
-        (pneumatic) or from the orbits themselves.
+        Under a law other than the paper's (e.g. the wave impact law), whose phase equation is
+        another (theory §4b): its existence edges come from the law's ``existence_edge``
+        (:func:`impactbar.orbits.wave.wave_existence_edge`, pneumatic) or from the orbits themselves.
     """
-    if model.impact != "paper":
+    if not model.law.supports_schur:
         raise ValueError("max_phase_residual is eq. 14's, the paper's impact law; model.impact must "
                          f"be 'paper' (got {model.impact!r})")
     if isinstance(load, PiecewiseConstantLoad):
@@ -163,10 +162,8 @@ def _stable_branch_phase(model: BarModel, load: CosineLoad) -> float | None:
     """Phase of the orbit on the paper's stable branch: ``cos(k phase)`` of opposite sign to ``pk``
     (load decreasing through the mean at impact), the first of its ``k`` copies. Under the wave law
     the impact is taken at the middle of its contact window, ``phase + 1/s``."""
-    if model.impact == "wave":
-        roots, shift = wave_phase_roots(model, load), 1.0 / model.s
-    else:
-        roots, shift = phase_roots(model, load), 0.0
+    law = model.law
+    roots, shift = law.phase_roots(model, load), 0.5 * law.window(model)
     for ph, _ in roots:
         if math.cos(load.k * (ph + shift)) * load.pk < 0.0:
             return ph
@@ -189,7 +186,7 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
     k : int
         Order of the harmonic (``pk = 1``).
     criterion : {"exact", "paper"}
-        Exact multipliers (theory §7; under ``model.impact == "wave"`` those of the wave
+        Exact multipliers (theory §7; under the wave law those of the wave
         law's impact map, theory §4b), or the roots of the paper's rigid block (eqs. 29,
         30, with the flexible modes in ``sigma``), which is what the paper's bounds (eq. 39) use: its
         flexible blocks (eq. 31) do not depend on the load, and at ``d = 0`` they put a root exactly
@@ -214,15 +211,13 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
     """
     if criterion not in ("exact", "paper"):
         raise ValueError(f"criterion must be 'exact' or 'paper'; got {criterion!r}")
-    if model.impact == "wave":
-        if criterion == "paper":
-            raise ValueError("criterion 'paper' is the paper's Schur test for its impact law (eq. 10); "
-                             "use criterion='exact' with impact='wave'")
-        edge = wave_existence_edge(model, k)
-        if not edge > 0.0:  # the window does not fit in the period: no orbit
-            return []
-    else:
-        edge = pneumatic_existence_edge(model.R, model.d, k) if model.R < 1 else math.inf
+    law = model.law
+    if criterion == "paper" and not law.supports_schur:
+        raise ValueError("criterion 'paper' is the paper's Schur test for its impact law (eq. 10); "
+                         f"use criterion='exact' with impact={model.impact!r}")
+    edge = law.existence_edge(model, k)
+    if not edge > 0.0:  # e.g. the wave law's window does not fit in the period: no orbit
+        return []
     hi = min(edge, 50.0) * (1.0 - 1e-9)
 
     def mu(lf):
@@ -270,9 +265,9 @@ def hydraulic_existence_edge(model: BarModel, *, xtol: float = 1e-12) -> float:
     Raises
     ------
     ValueError
-        Under the wave impact law (``model.impact == "wave"``): this edge is eq. 14's (theory §4).
+        Under a law other than the paper's (e.g. ``impact="wave"``): this edge is eq. 14's (theory §4).
     """
-    if model.impact != "paper":
+    if not model.law.supports_schur:
         raise ValueError("hydraulic_existence_edge is the paper's impact law's (eq. 14); model.impact "
                          f"must be 'paper' (got {model.impact!r})")
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from .._threads import single_threaded_blas
 from .._validate import check_int, check_real
-from ..dynamics.impact import WaveImpact, wave_impact, window_drive
+from ..dynamics.impact import WaveImpact
 from ..dynamics.modal import fundamental
 from ..loads import Load
 from ..model import BarModel
@@ -50,22 +50,15 @@ _STATUS_RANK = {"penetrates": 0, "backward impact": 1, "grazing": 2, "sticks": 3
 # the impact law: the one place that knows it
 # ------------------------------------------------------------------------------------------------
 def impact_law(model: BarModel, load: Load, t: float, y_minus: np.ndarray):
-    """State where the next flight starts from the state at arrival, with its derivatives.
-
-    The paper's law (eq. 10, theory §4): the impact is instantaneous, the displacement is kept and
-    the whole velocity field is reversed and scaled by ``R``: ``(q, q') -> (q, -R q')``.
-
-    The wave law (theory §4b), contact held for the whole window ``2/s``: the state at the window's
-    end is ``(q_n, q_n') -> -R (q_n, q_n') + (g_n, h_n)(t)`` for ``n >= 1``, ``q_0' -> -R q_0' + h_0``,
-    with the drive part of :func:`impactbar.dynamics.impact.window_drive`, and ``q_0`` set by
-    contact with the (advanced) rod end at the window's end; ``d(g, h)/dt`` is the drive's rate.
-    Whether the contact really holds is decided afterwards, on the orbit (``"separates"``).
+    """State where the next flight starts from the state at arrival, with its derivatives: the
+    model's law's :meth:`~impactbar.laws.ContactLaw.impact_map` (eq. 10 under the paper's law,
+    the contact window held for ``2/s`` under the wave law, theory §4b).
 
     Parameters
     ----------
     model : BarModel
     load : Load
-        The drive load (it acts during the wave law's contact window).
+        The drive load (it acts during a contact window).
     t : float
         Load time of the arrival (the start of contact).
     y_minus : numpy.ndarray, shape (2 N + 2,)
@@ -80,38 +73,14 @@ def impact_law(model: BarModel, load: Load, t: float, y_minus: np.ndarray):
         ``d y_plus / d y_minus``.
     jac_t : numpy.ndarray, shape (2 N + 2,)
         ``d y_plus / d t`` at fixed ``y_minus`` (zero for eq. 10).
-
-    Raises
-    ------
-    ValueError
-        For an unknown impact law (``model.impact`` other than ``"paper"`` or ``"wave"``).
     """
-    law = getattr(model, "impact", "paper")
-    M = model.n_modes + 1
-    if law == "wave":
-        g, h, dg, dh = window_drive(model.s, model.R, model.n_modes, load, float(t), derivative=True)
-        y_plus = -model.R * np.asarray(y_minus, dtype=float) + np.concatenate((g, h))
-        c = model.end_weights
-        y_plus[0] = -float(c[1:] @ y_plus[1:M])  # touching the advanced rod end
-        jac = -model.R * np.eye(2 * M)
-        jac[0, :] = 0.0
-        jac[0, 1:M] = model.R * c[1:]
-        jt = np.concatenate((dg, dh))
-        jt[0] = -float(c[1:] @ dg[1:])
-        return y_plus, jac, jt
-    if law != "paper":
-        raise ValueError(f"find_orbit and continue_orbit support impact='paper' (eq. 10) and "
-                         f"impact='wave' (theory §4b); got impact={law!r}")
-    y_plus = np.array(y_minus, dtype=float)
-    y_plus[M:] *= -model.R
-    diag = np.ones(2 * M)
-    diag[M:] = -model.R
-    return y_plus, np.diag(diag), np.zeros(2 * M)
+    return model.law.impact_map(model, load, t, y_minus)
 
 
 def contact_window(model: BarModel) -> float:
-    """Duration of an impact: ``2/s`` under the wave law (theory §4b), 0 under eq. 10."""
-    return 2.0 / model.s if getattr(model, "impact", "paper") == "wave" else 0.0
+    """Duration of an impact (the law's window): ``2/s`` under the wave law (theory §4b), 0 under
+    eq. 10."""
+    return model.law.window(model)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -300,7 +269,7 @@ class MultiImpactOrbit:
 
     Notes
     -----
-    Under the wave law (``model.impact == "wave"``) impact ``j`` starts at ``impact_times[j]`` and
+    Under the wave law (``impact="wave"``) impact ``j`` starts at ``impact_times[j]`` and
     lasts :attr:`window` ``= 2/s``; the flight after it lasts the interval to the next impact less
     ``2/s``. Positions are measured from the rod end, which each blow advances. An orbit whose
     contact separates inside a window is ``"separates"`` (its contact map does not hold).
@@ -387,7 +356,7 @@ class MultiImpactOrbit:
         if np.any(inside):  # within a wave-law contact window: the characteristics solution
             contacts = self.contacts
             if contacts is None:
-                contacts = tuple(_wave_contact(self.model, self.load, float(ta), ym) for ta, ym in
+                contacts = tuple(self.model.law.blow(self.model, self.load, float(ta), ym) for ta, ym in
                                  zip(self.impact_times, self.states_before_impact, strict=True))
             for i in np.flatnonzero(inside):
                 q[:, i], v[:, i] = contacts[j[i]].state_at(t[i] - rel[j[i]])
@@ -456,7 +425,7 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactO
     arrivals = np.append(t[1:], t[0] + TWO_PI * problem.n)  # flight j ends at arrivals[j]
     contacts = None
     if Tw > 0.0 and np.all(v_imp > 0.0) and admissibility:
-        contacts = tuple(_wave_contact(model, load, float(ta), ym)  # contact j starts flight j
+        contacts = tuple(model.law.blow(model, load, float(ta), ym)  # contact j starts flight j
                          for ta, ym in zip(t, np.roll(info["y_minus"], 1, axis=0), strict=True))
     statuses, clear, cerr = [], -math.inf, 0.0
     if admissibility:
@@ -490,15 +459,6 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactO
         states_after_impact=info["y_plus"], states_before_impact=np.roll(info["y_minus"], 1, axis=0),
         contacts=contacts,
     )
-
-
-def _wave_contact(model, load, t0, y_minus) -> WaveImpact:
-    """The contact by characteristics (theory §4b) of an arrival in state ``y_minus`` at ``t0``."""
-    M = model.n_modes + 1
-    c = model.end_weights
-    qm = y_minus[:M].copy()
-    qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
-    return wave_impact(model, load, t0, qm, y_minus[M:])
 
 
 def _normalise(problem: _Segments, u):

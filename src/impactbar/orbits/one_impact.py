@@ -18,7 +18,7 @@ from .._threads import single_threaded_blas
 from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .admissibility import _admissibility
-from .phase import _check_inputs, phase_roots
+from .phase import _check_inputs
 from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers, rigid_square_orbits
 from .stability import (
     floquet_multipliers,
@@ -86,7 +86,7 @@ class PeriodicOrbit:
     state_before_impact : numpy.ndarray, shape (2 N + 2,)
         Modal state at ``t = 2 pi-``.
     impact : WaveImpact or None
-        Under the wave law (``model.impact == "wave"``, theory §4b): the orbit's contact with the
+        Under the wave law (``impact="wave"``, theory §4b): the orbit's contact with the
         rod, with its force wave ``F(t)``, rod energy, peak stresses, efficiency and the rod's
         advance per blow. ``None`` under the paper's law (an instant impact has no force history).
 
@@ -404,13 +404,9 @@ def _periodic_orbits_general(model: BarModel, load: Load) -> OrbitList:
     """:func:`periodic_orbits` by the general path (certified searches, any model and load): the
     reference every fast path is tested against."""
     _check_inputs(model, load)
+    law = model.law
     with single_threaded_blas():
-        if model.impact == "wave":
-            from .wave import wave_phase_roots  # here: the wave law loads scipy.optimize and numba
-
-            roots = wave_phase_roots(model, load)
-            return OrbitList(_build_wave_orbit(model, load, ph, mult) for ph, mult in roots)
-        return OrbitList(_build_orbit(model, load, ph, mult) for ph, mult in phase_roots(model, load))
+        return OrbitList(law.orbit(model, load, ph, mult) for ph, mult in law.phase_roots(model, load))
 
 
 #: Largest ``n_modes`` for the orbit functions: the multipliers are the eigenvalues of a dense
@@ -437,12 +433,6 @@ def _cosine_parameters(load: Load):
     return load.p0, pk.real, int(orders[0])
 
 
-def _paper_law(model: BarModel) -> bool:
-    """The model impacts by the paper's law (eqs. 10, 11): the closed forms and the structured
-    multipliers assume it (a model without an impact-law field has it)."""
-    return getattr(model, "impact", "paper") == "paper"
-
-
 #: single points of the rigid bar take the closed forms in plain floats (``orbits/_rigid_scalar.py``);
 #: ``False`` sends them through the vectorised numpy closed forms instead (a switch for the tests)
 RIGID_SCALAR = True
@@ -452,7 +442,7 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     """The rigid bar under one cosine harmonic or the square wave in closed form
     (:mod:`impactbar.orbits.rigid`), or ``None`` where that does not apply (flexible modes, another
     load, a degenerate orbit)."""
-    if model.n_modes != 0 or not _paper_law(model):
+    if model.n_modes != 0 or not model.law.rigid_closed_forms:
         return None
     if isinstance(load, SquareWaveLoad) and load.kappa < 2.0:
         args, solve = (model.d, model.R, load.q, load.kappa), "square"
@@ -555,15 +545,13 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     _check_modes(model)
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
-    if model.impact == "wave":
-        from .wave import wave_impact_map_jacobian, wave_orbit_states
+    return model.law.multipliers(model, load, phase)
 
-        _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
-        with single_threaded_blas():
-            return sort_multipliers(np.linalg.eigvals(
-                wave_impact_map_jacobian(model, load, phase, y_end, y_minus, rate)))
+
+def _paper_multipliers(model: BarModel, load: Load, phase: float) -> np.ndarray:
+    """:func:`orbit_multipliers` under the paper's law (eq. 10)."""
     y_plus, y_minus = _impact_states(model, load, phase)
-    if model.n_modes == 0 and _paper_law(model):  # the 2 x 2 Jacobian in closed form
+    if model.n_modes == 0:  # the 2 x 2 Jacobian in closed form
         mu = rigid_multipliers(model.d, model.R, float(load(phase)), float(load.left_limit(phase)),
                                y_plus[1], y_minus[1])
         if not np.all(np.isfinite(mu)):

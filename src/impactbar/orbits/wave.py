@@ -43,7 +43,7 @@ from .phase import _cosine_roots
 from .stability import _arrival_derivative
 
 __all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_impact_map_jacobian",
-           "wave_existence_edge"]
+           "wave_existence_edge", "window_map"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -130,12 +130,33 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool 
     r2 = p21 * g + p22 * h + fv
     qm = (a22 * r1 - a12 * r2) / det
     vm = (a11 * r2 - a21 * r1) / det
-    qe = -R * qm + g
-    ve = -R * vm + h
+    y_end = window_map(model, np.concatenate((qm, vm)), g, h)
+    qm[0] = y_end[0] + p12[0] * y_end[N + 1] + fq[0]
+    return float(model.end_weights @ qm), y_end, np.concatenate((qm, vm)), (dg, dh)
+
+
+def window_map(model: BarModel, y_minus, g, h) -> np.ndarray:
+    """The wave law's map across a contact window held for its whole length ``2/s`` (theory §4b).
+
+    Parameters
+    ----------
+    model : BarModel
+    y_minus : array_like, shape (2 N + 2,)
+        Modal state ``(q, q')`` at arrival.
+    g, h : numpy.ndarray, shape (N + 1,)
+        The drive's part (:func:`impactbar.dynamics.impact.window_drive`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (2 N + 2,)
+        ``-R y_minus + (g, h)``, with ``q_0`` set by contact with the (advanced) rod end at the
+        window's end, ``q_0 = -sum_{n>=1} c_n q_n``.
+    """
+    M = model.n_modes + 1
+    y_plus = -model.R * np.asarray(y_minus, dtype=float) + np.concatenate((g, h))
     c = model.end_weights
-    qe[0] = -float(c[1:] @ qe[1:])  # in contact with the rod end at the end of the window
-    qm[0] = qe[0] + p12[0] * ve[0] + fq[0]
-    return float(c @ qm), np.concatenate((qe, ve)), np.concatenate((qm, vm)), (dg, dh)
+    y_plus[0] = -float(c[1:] @ y_plus[1:M])  # in contact with the rod end at the end of the window
+    return y_plus
 
 
 def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:

@@ -14,8 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import check_int, check_real
+from ..laws import LAWS
 from ..loads import CosineLoad, FourierLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
-from ..model import IMPACT_LAWS, BarModel
+from ..model import BarModel
 from .bar import SHORT_IMPACT_LIMIT, TWO_PI, Bar, ImpactDurationWarning, _positive
 from .config import (
     _REQUIRED,
@@ -134,8 +135,8 @@ class Hammer:
                                                       hi=4096))
         if not isinstance(self.name, str):
             raise ValueError(f"name must be a string; got {self.name!r}")
-        if self.impact not in IMPACT_LAWS:
-            raise ValueError(f"model.impact must be one of {list(IMPACT_LAWS)}; got {self.impact!r}")
+        if self.impact not in LAWS:
+            raise ValueError(f"model.impact must be one of {list(LAWS)}; got {self.impact!r}")
         if isinstance(self.force, MeasuredForce):
             self._measured  # noqa: B018  (fit the series now: a bad curve fails here, not later)
 

@@ -233,7 +233,7 @@ class SimulationResult:
         ValueError
             Under eq. 10 (an instant impact has no force history), or for a bad index.
         """
-        impacts = getattr(self.trajectory, "impacts", ())
+        impacts = () if self.hammer.model.law.instantaneous else self.trajectory.impacts
         if not impacts:
             raise ValueError("force waves need the wave impact law (Hammer(impact='wave'))")
         if not -len(impacts) <= i < len(impacts):
@@ -343,7 +343,8 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
                           InitialState.rigid(end_displacement=-gap_m / sc.length_m, velocity=0.0), t_end,
                           max_impacts=max_impacts)
     v = np.asarray(traj.impact_velocities, dtype=float) * sc.velocity_m_s
-    impacts = getattr(traj, "impacts", ())
+    # the records of a law with a contact (the wave law's rod outputs); an instant impact has none
+    impacts = () if hammer.model.law.instantaneous else traj.impacts
     rod = np.full(v.size, np.nan)
     stress = np.full(v.size, np.nan)
     eff = np.full(v.size, np.nan)

@@ -1,8 +1,9 @@
 """Motion from any start (paper Section 5): the exact event-driven simulator and the random-start
 experiments.
 
-Layout: ``simulate`` (:func:`simulate`, :class:`InitialState`, :class:`Trajectory`,
-:class:`EnergyAccount`; chatter, sticking on the fixed-free basis, release), ``experiments``
+Layout: ``simulate`` (:func:`simulate`, :class:`InitialState`; one driver for every impact law:
+chatter, sticking on the fixed-free basis, release, the law's contact step), ``trajectory``
+(:class:`Trajectory`, :class:`EnergyAccount`: the logged pieces of motion), ``experiments``
 (random starts, classification of the long-run motion, the paper's pneumatic and hydraulic
 experiments). Part of the core: imports ``impactbar.model``, ``impactbar.loads``,
 ``impactbar.dynamics``; matplotlib only lazily, inside the plotting helper of ``experiments``.

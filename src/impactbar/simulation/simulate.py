@@ -7,9 +7,11 @@ exactly piece by piece. The next impact, the first ``t`` with ``u(1,t) = c . q(t
 ``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding;
 after an impact the rigid bar under one harmonic and flexible bars under a Fourier load take
 specialised searches with the same guarantee (``FAST_SEARCH``).
-At an impact ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11); under the wave law (``BarModel(impact="wave")``,
-theory §4b) each impact is instead a contact window of length ``2/s`` with the long rod, solved by
-characteristics (:func:`impactbar.dynamics.impact.wave_impact`), after which the flight resumes.
+At an impact the model's law acts (:attr:`impactbar.BarModel.law`): the paper's
+``u_t(x) -> -R u_t(x)`` (eqs. 10, 11) is applied inside the compiled flight kernel; a law that is
+not instantaneous (the wave law, ``BarModel(impact="wave")``, theory §4b: a contact window of length
+``2/s`` with the long rod, solved by characteristics) makes the kernel stop at the arrival, and its
+contact step (:meth:`impactbar.laws.ContactLaw.contact`) gives the state where the flight resumes.
 
 With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
 accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field
@@ -23,18 +25,26 @@ from __future__ import annotations
 
 import math
 import threading
-from dataclasses import dataclass, field
-from functools import cached_property
+from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _tables
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
-from ..dynamics import _wavekernel as WK
-from ..dynamics.impact import wave_impact
 from ..loads import FourierLoad, Load, PiecewiseConstantLoad
 from ..model import MAX_MODES, BarModel
+from .trajectory import _CONTACT as _CONTACT
+from .trajectory import _ENTRIES as _ENTRIES
+from .trajectory import _FREE as _FREE
+from .trajectory import _WINDOW as _WINDOW
+from .trajectory import MAX_ENERGY_WORK as MAX_ENERGY_WORK
+from .trajectory import EnergyAccount as EnergyAccount
+from .trajectory import Trajectory as Trajectory
+from .trajectory import _energy_account as _energy_account
+from .trajectory import _energy_nodes as _energy_nodes
+from .trajectory import _Segment as _Segment
+from .trajectory import _SegmentLog as _SegmentLog
+from .trajectory import _Segments as _Segments
 
 __all__ = ["InitialState", "Trajectory", "EnergyAccount", "simulate"]
 
@@ -56,21 +66,12 @@ MICRO_FLIGHT = 1e-6
 #: (``find_crossing``), the reference they are tested against (the same impacts, to rounding).
 FAST_SEARCH = True
 
-#: Under the wave law, solve the contact windows in which contact is lost by the compiled
-#: characteristics solver (``dynamics._wavekernel.wave_contact``). ``False`` gives the Python solver
-#: (:func:`~impactbar.dynamics.impact.wave_impact`), the reference it is tested against (the same
-#: contact intervals and post-contact states, to rounding).
-FAST_WAVE_SEPARATION = True
-
 #: Largest ``|t0|``, ``|t_end|`` and ``t_end - t0`` accepted by :func:`simulate` (about 1.6e7 periods).
 MAX_TIME = 1e8
-#: Largest quadrature work (nodes times modes) :attr:`Trajectory.energy` may take (time bound).
-MAX_ENERGY_WORK = 3e8
 #: Largest ``s * n_modes`` :func:`simulate` accepts: the guaranteed event search steps on the
 #: scale of the stiffest mode's period, so beyond it a run does not finish in bounded time.
 MAX_SIMULATE_STIFFNESS = 1e5
 
-_FREE, _CONTACT, _WAVE = 0, 1, 2  # _WAVE: a contact window of the wave law (free-free modes)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -213,53 +214,6 @@ def _real_vector(name, value) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------------------------------
-# energy account
-# --------------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class EnergyAccount:
-    """Energy balance of a run (all dimensionless, per ``M L^3 Omega^2``).
-
-    ``work = (final - initial) + damping_loss + impact_loss + chatter_loss - projection``, where
-
-    - ``work = int p(t) u_t(0, t) dt`` is the work of the load at the driven end,
-    - ``initial``, ``final`` are kinetic plus strain energy
-      ``(1/2) int u_t^2 dx + (s^2/2) int u_x^2 dx`` at the start and the end,
-    - ``damping_loss = d int int u_t^2 dx dt``,
-    - ``impact_loss = sum (1 - R^2) T_before`` over the impacts (the whole velocity field is
-      reversed and scaled by ``R``),
-    - ``chatter_loss`` is the kinetic energy left when the simulation jumps to the accumulation
-      point of a chatter sequence (the bounces it skips would have dissipated it),
-    - ``projection`` is what the changes of modal basis at the start and end of permanent contact
-      add (a truncated projection does not conserve energy; theory §8).
-    """
-
-    work: float
-    initial: float
-    final: float
-    damping_loss: float
-    impact_loss: float
-    chatter_loss: float
-    projection: float
-
-    @property
-    def residual(self) -> float:
-        """``work - (final - initial) - damping_loss - impact_loss - chatter_loss + projection``."""
-        return (self.work - (self.final - self.initial) - self.damping_loss - self.impact_loss
-                - self.chatter_loss + self.projection)
-
-    @property
-    def scale(self) -> float:
-        """The largest term, for a relative residual."""
-        return max(abs(self.work), self.initial, self.final, self.damping_loss, self.impact_loss,
-                   self.chatter_loss, abs(self.projection), 1e-300)
-
-    @property
-    def relative_residual(self) -> float:
-        """``|residual| / scale``."""
-        return abs(self.residual) / self.scale
-
-
-# --------------------------------------------------------------------------------------------------
 # precomputed model + load data for the kernel
 # --------------------------------------------------------------------------------------------------
 class _Basis:
@@ -361,7 +315,7 @@ class _Core:
         self.load = load
         self.N = model.n_modes
         self.d = model.d
-        self.R = model.R
+        self.R = model.law.kernel_restitution(model)  # -1 (v -> v): the law's contact step acts
         self.data = _LoadData(load)
         self.c = np.ascontiguousarray(model.end_weights)
         self.free = _Basis(model.frequencies**2, model.d, self.data)
@@ -483,486 +437,6 @@ class _Core:
 
 
 # --------------------------------------------------------------------------------------------------
-# result
-# --------------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _Segment:
-    t: float
-    basis: int
-    q: np.ndarray
-    v: np.ndarray
-    entry: str  # 'start', 'impact', 'chatter', 'touch', 'release'
-    frozen: object = None  # the free state (q, 0) frozen at a chatter jump; a window's WaveImpact
-
-
-_ENTRIES = ("start", "impact", "chatter", "touch", "release")
-
-
-class _Segments:
-    """The pieces of closed-form motion of a run, stored as arrays (one row per piece); indexing
-    gives a :class:`_Segment`."""
-
-    def __init__(self, n_modes, t, basis, entry, q, v, frozen):
-        self.n_modes = n_modes
-        self.t = t
-        self.basis = basis
-        self.entry = entry
-        self.q = q
-        self.v = v
-        self.frozen = frozen
-
-    def __len__(self) -> int:
-        return self.t.size
-
-    def __getitem__(self, j) -> _Segment:
-        j = range(len(self))[j]
-        b = int(self.basis[j])
-        m = self.n_modes if b == _CONTACT else self.n_modes + 1
-        return _Segment(float(self.t[j]), b, self.q[j, :m], self.v[j, :m],
-                        _ENTRIES[self.entry[j]], self.frozen.get(j))
-
-
-class _SegmentLog:
-    """Builds :class:`_Segments` in arrays grown in place (``realloc``, by an eighth at least): the
-    kernel writes each block of impacts straight into the next rows (:meth:`impact_rows`), so a
-    long run holds its trajectory once, not once per block and again when joined."""
-
-    def __init__(self, n_modes, capacity=0):
-        self.M = n_modes + 1
-        self.frozen = {}
-        self.count = 0
-        self.t = np.empty(capacity)
-        self.basis = np.empty(capacity, dtype=np.int8)
-        self.entry = np.empty(capacity, dtype=np.int8)
-        self.q = np.empty((capacity, self.M))
-        self.v = np.empty((capacity, self.M))
-
-    def _reserve(self, k):
-        """Room for ``k`` more rows. The arrays are resized in place: no view of them may be
-        alive across this call (the kernel's views from :meth:`impact_rows` are dropped first)."""
-        need = self.count + k
-        cap = self.t.size
-        if need <= cap:
-            return
-        cap = max(need, cap + cap // 8, 16)
-        for a in (self.t, self.basis, self.entry):
-            a.resize((cap,), refcheck=False)
-        for a in (self.q, self.v):
-            a.resize((cap, self.M), refcheck=False)
-
-    def add(self, t, basis, q, v, entry, frozen=None):
-        self._reserve(1)
-        i = self.count
-        self.t[i] = t
-        self.basis[i] = basis
-        self.entry[i] = _ENTRIES.index(entry)
-        if q.size < self.M:  # a contact state, one coordinate short
-            self.q[i, q.size:] = 0.0
-            self.v[i, v.size:] = 0.0
-        self.q[i, :q.size] = q
-        self.v[i, :v.size] = v
-        if frozen is not None:
-            self.frozen[self.count] = frozen
-        self.count += 1
-
-    def impact_rows(self, k):
-        """Views of the next ``k`` rows of ``q`` and ``v`` for the kernel to write impacts into;
-        :meth:`add_impacts` then counts the rows written."""
-        self._reserve(k)
-        return self.q[self.count:self.count + k], self.v[self.count:self.count + k]
-
-    def add_impacts(self, ts):
-        k = ts.size
-        i = self.count
-        self.t[i:i + k] = ts
-        self.basis[i:i + k] = 0
-        self.entry[i:i + k] = 1
-        self.count += k
-
-    def truncate(self, count):
-        """Drop the pieces from index ``count`` on."""
-        self.count = min(self.count, count)
-        # the keys were added in increasing order: drop from the end (linear over a run, where a
-        # rescan of every stored chatter state on each undone release made long runs quadratic)
-        while self.frozen and next(reversed(self.frozen)) >= count:
-            self.frozen.popitem()
-
-    def last(self) -> _Segment:
-        i = self.count - 1
-        bb = int(self.basis[i])
-        m = self.M - 1 if bb == _CONTACT else self.M
-        return _Segment(float(self.t[i]), bb, self.q[i, :m].copy(), self.v[i, :m].copy(),
-                        _ENTRIES[self.entry[i]], self.frozen.get(i))
-
-    def finish(self) -> _Segments:
-        """The pieces, in arrays shrunk in place to their length."""
-        n = self.count
-        if n != self.t.size:
-            for a in (self.t, self.basis, self.entry):
-                a.resize((n,), refcheck=False)
-            for a in (self.q, self.v):
-                a.resize((n, self.M), refcheck=False)
-        return _Segments(self.M - 1, self.t, self.basis, self.entry, self.q, self.v, dict(self.frozen))
-
-
-@dataclass(frozen=True, eq=False)
-class Trajectory:
-    """The result of :func:`simulate`.
-
-    Attributes
-    ----------
-    model : BarModel
-    load : Load
-    t0, t_end : float
-        Start and end of the run (``t_end`` is the time of the last impact when the run stopped at
-        ``max_impacts``).
-    impact_times : numpy.ndarray, shape (I,)
-        Times of the impacts (load frame, dimensionless); under the wave law the starts of the
-        contact windows (each lasts ``2/s``; see :attr:`impacts`).
-    impact_velocities : numpy.ndarray, shape (I,)
-        Velocity ``u_t(1, t-)`` of the struck end just before each impact, ``> 0``.
-    contact_intervals : numpy.ndarray, shape (m, 2)
-        Start and end of each interval of permanent contact (the end is ``t_end`` while still in
-        contact).
-    final_state : InitialState
-        Free-free modal state at ``t_end`` (projected from the fixed-free basis when in contact).
-    status : str
-        Why the run stopped: ``"t_end"`` or ``"max_impacts"``.
-    energy : EnergyAccount
-        The energy balance of the run (computed on first access).
-    n_release_retries : int
-        Releases undone because the free motion pressed straight back onto the stop (within
-        ``MICRO_FLIGHT``): the truncated free-free and fixed-free bases disagreed on the sign of
-        the reaction; the contact was then prolonged by a growing dwell (from ``1e-9``, fourfold
-        each time, at most ``1e-2``).
-
-    Methods ``end_displacement(t)``, ``end_velocity(t)``, ``displacement(x, t)`` and
-    ``modal_state(t)`` evaluate the closed-form motion at any times in ``[t0, t_end]``.
-    """
-
-    model: BarModel
-    load: Load
-    t0: float
-    t_end: float
-    impact_times: np.ndarray
-    impact_velocities: np.ndarray
-    contact_intervals: np.ndarray
-    final_state: InitialState
-    status: str
-    _core: _Core = field(repr=False)
-    _segments: _Segments = field(repr=False)
-    n_release_retries: int = 0
-
-    @property
-    def n_impacts(self) -> int:
-        return int(self.impact_times.size)
-
-    @property
-    def in_contact_at_end(self) -> bool:
-        return bool(self.contact_intervals.size and self.contact_intervals[-1, 1] == self.t_end
-                    and self._segments[-1].basis == _CONTACT)
-
-    def _check_times(self, t) -> np.ndarray:
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        if t.ndim != 1 or not np.all(np.isfinite(t)):
-            raise ValueError("t must be a finite 1-d array of times")
-        if np.any(t < self.t0) or np.any(t > self.t_end):
-            raise ValueError(f"t must lie in [t0, t_end] = [{self.t0}, {self.t_end}]")
-        return t
-
-    def _modal(self, t):
-        """Yield ``(mask, basis, q, v)`` with the modal states at the times ``t``."""
-        segs = self._segments
-        starts = segs.t
-        idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(starts) - 1)
-        chatter = _ENTRIES.index("chatter")
-        for j in np.unique(idx):
-            sel = idx == j
-            s = segs[j]
-            if s.basis == _WAVE:  # inside a contact window: the characteristics solution
-                states = [s.frozen.state_at(min(tt - s.t, s.frozen.duration)) for tt in t[sel]]
-                yield sel, _FREE, np.array([a for a, _ in states]).T, np.array([b for _, b in states]).T
-                continue
-            q, v = self._core.propagate(s.basis, s.t, s.q, s.v, t[sel])
-            if s.basis == _FREE and j + 1 < len(segs) and segs.entry[j + 1] == chatter:
-                # the bounces up to the chatter's accumulation point were skipped (each lower
-                # than the last, all below the search's resolution): the flight from the last
-                # impact would pass through the stop after its first bounce, so the end is held
-                # at the stop there by a rigid shift (the deformation is unchanged)
-                c = self._core.c
-                over = np.maximum(c @ q, 0.0)
-                q[0] -= over
-                v[0] -= np.where(over > 0.0, c @ v, 0.0)
-            yield sel, s.basis, q, v
-
-    @property
-    def impacts(self) -> tuple:
-        """Under the wave law, the contact of each impact (:class:`~impactbar.WaveImpact`: force
-        wave, rod energy, peak stresses, efficiency, advance of the rod end), in order; empty under
-        the paper's law."""
-        segs = self._segments
-        return tuple(segs.frozen[j].resolve() for j in np.flatnonzero(segs.basis == _WAVE))
-
-    def end_displacement(self, t) -> np.ndarray:
-        """``u(1, t)``, the struck end, ``<= 0``: a positive value within the rounding noise of the
-        closed form (``1e-14 sum |c_n| (|q_n| + |q_pn|)``, the event search's own tolerance) is
-        reported as 0, and so is the end during the bounces skipped at a chatter jump.
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Times in ``[t0, t_end]``.
-
-        Returns
-        -------
-        numpy.ndarray, shape (T,)
-        """
-        return self._end(t, velocity=False)
-
-    def end_velocity(self, t) -> np.ndarray:
-        """``u_t(1, t)``, shape (T,) (right limit at an impact)."""
-        return self._end(t, velocity=True)
-
-    def _end(self, t, velocity):
-        """``u(1, t)`` or ``u_t(1, t)``: ``c . q`` (or ``c . q'``) in flight, 0 in contact."""
-        scalar = np.ndim(t) == 0
-        t = self._check_times(t)
-        out = np.zeros(t.size)
-        c = self._core.c
-        for sel, basis, q, v in self._modal(t):
-            if basis != _FREE:
-                continue
-            if velocity:
-                out[sel] = c @ v
-            else:
-                # a positive value within the rounding noise of the closed form (the event
-                # search's own tolerance, 1e-14 sum |c_n| (|q_n| + |q_pn|)) is no penetration:
-                # reported as 0
-                u = c @ q
-                noise = 1e-14 * (np.abs(c) @ (np.abs(q) + self._core.free.qpb[:, None]))
-                out[sel] = np.where((u > 0.0) & (u <= noise), 0.0, u)
-        return out[0] if scalar else out
-
-    def displacement(self, x, t) -> np.ndarray:
-        """``u(x, t)`` on a grid.
-
-        Parameters
-        ----------
-        x : array_like, shape (X,)
-            Positions in ``[0, 1]``.
-        t : array_like, shape (T,)
-            Times in ``[t0, t_end]``.
-
-        Returns
-        -------
-        numpy.ndarray, shape (T, X)
-        """
-        x = np.atleast_1d(np.asarray(x, dtype=float))
-        phi_free = self.model.shape_functions(x)  # (X, N+1)
-        phi_contact = 2.0 * np.cos(np.outer(x, self._core.mu))  # (X, N)
-        t = self._check_times(t)
-        out = np.zeros((t.size, x.size))
-        for sel, basis, q, _ in self._modal(t):
-            out[sel] = (phi_free @ q).T if basis == _FREE else (phi_contact @ q).T
-        return out
-
-    def modal_state(self, t):
-        """Free-free modal state ``(q, v)`` at times ``t``, shape ``(N + 1, T)`` each (projected
-        from the fixed-free basis while in contact)."""
-        t = self._check_times(t)
-        Q = np.zeros((self.model.n_modes + 1, t.size))
-        V = np.zeros_like(Q)
-        for sel, basis, q, v in self._modal(t):
-            if basis == _FREE:
-                Q[:, sel], V[:, sel] = q, v
-            elif self.model.n_modes:
-                Q[:, sel], V[:, sel] = self._core.to_free @ q, self._core.to_free @ v
-        return Q, V
-
-    @cached_property
-    def energy(self) -> EnergyAccount:
-        """The energy account of the run (:class:`EnergyAccount`), computed on first access by
-        Gauss-Legendre quadrature of the closed-form motion on every segment.
-
-        Raises
-        ------
-        ValueError
-            If the quadrature would take more than ``MAX_ENERGY_WORK`` (3e8) node-modes; the work
-            grows as ``s * n_modes^2 * (t_end - t0)``.
-        """
-        return _energy_account(self)
-
-    def to_dataframe(self):
-        """The impacts of the run as a table.
-
-        Returns
-        -------
-        pandas.DataFrame
-            Index ``impact`` (0, 1, ...), columns ``time`` (load frame) and ``velocity`` (of the
-            struck end just before the impact), dimensionless (eq. 2); ``attrs`` holds the model,
-            the load, ``t0``, ``t_end``, ``status``, the contact intervals and each column's
-            ``long_name`` and ``units``.
-        """
-        return _tables.frame(
-            {"impact": np.arange(self.n_impacts), "time": self.impact_times,
-             "velocity": self.impact_velocities},
-            {"impact": ("impact number", "1"), "time": ("time of the impact (load frame)", "1"),
-             "velocity": ("velocity u_t(1, t-) of the struck end before the impact", "1")},
-            index="impact",
-            attrs={"model": repr(self.model), "load": repr(self.load), "t0": self.t0,
-                   "t_end": self.t_end, "status": self.status,
-                   "contact_intervals": self.contact_intervals.tolist()})
-
-    def to_xarray(self, n: int = 0):
-        """The run as an ``xarray.Dataset``: the impacts, and the struck end's motion sampled.
-
-        Parameters
-        ----------
-        n : int, optional
-            Also sample ``end_displacement`` and ``end_velocity`` at ``n`` equally spaced times in
-            ``[t0, t_end]`` (dimension ``t``). Default 0: impacts only.
-
-        Returns
-        -------
-        xarray.Dataset
-            ``impact_time`` and ``impact_velocity`` along ``impact``; with ``n``, the sampled end
-            motion along ``t``; every variable with ``long_name`` and ``units``.
-
-        Raises
-        ------
-        ModuleNotFoundError
-            xarray is not installed (extra ``data``).
-        """
-        n = int(n)
-        if n < 0:
-            raise ValueError(f"n must be an integer >= 0; got {n}")
-        ds = _tables.to_xarray(self.to_dataframe()).rename(
-            {"time": "impact_time", "velocity": "impact_velocity"})
-        ds.attrs.pop("contact_intervals", None)
-        if n:
-            t = np.linspace(self.t0, self.t_end, n)
-            end = _tables.to_xarray(_tables.frame(
-                {"t": t, "end_displacement": self.end_displacement(t),
-                 "end_velocity": self.end_velocity(t)},
-                {"t": ("time (load frame)", "1"),
-                 "end_displacement": ("displacement u(1, t) of the struck end", "1"),
-                 "end_velocity": ("velocity u_t(1, t) of the struck end", "1")}, index="t"))
-            for name in ("end_displacement", "end_velocity"):
-                ds[name] = end[name]
-        return ds
-
-
-# --------------------------------------------------------------------------------------------------
-# energy account by quadrature
-# --------------------------------------------------------------------------------------------------
-_GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
-
-
-def _segment_integrals(core: _Core, seg: _Segment, tb: float):
-    """Work, damping loss and the end state of one segment ``[seg.t, tb]``."""
-    ta = seg.t
-    if seg.basis == _CONTACT and core.N == 0:
-        return 0.0, 0.0, seg.q, seg.v
-    w2 = core.free.w2 if seg.basis == _FREE else core.contact.w2
-    if tb <= ta:
-        return 0.0, 0.0, seg.q, seg.v
-    edges = [ta, tb]
-    if core.data.kind == 1:
-        m0, m1 = math.floor(ta / TWO_PI), math.floor(tb / TWO_PI)
-        per = (np.arange(m0, m1 + 1)[:, None] * TWO_PI + core.data.breaks[None, :]).ravel()
-        edges = np.concatenate(([ta], per[(per > ta) & (per < tb)], [tb]))
-    wmax = math.sqrt(float(np.max(w2))) if w2.size else 0.0
-    kmax = float(np.max(core.data.ks)) if core.data.ks.size else 0.0
-    hmax = 1.5 / (wmax + kmax + 1.0)
-    nodes, weights = [], []
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
-        n = max(1, math.ceil((b - a) / hmax))
-        e = np.linspace(a, b, n + 1)
-        half = 0.5 * (e[1:] - e[:-1])
-        nodes.append((half[:, None] * (_GL_X[None, :] + 1.0) + e[:-1, None]).ravel())
-        weights.append((half[:, None] * _GL_W[None, :]).ravel())
-    nodes = np.concatenate(nodes)
-    weights = np.concatenate(weights)
-    work = 0.0
-    damp = 0.0
-    chunk = max(64, 2_000_000 // (core.N + 1))  # bounded memory: chunk x modes states at a time
-    if seg.basis == _FREE:
-        kap = core.kappa
-    else:
-        kap = np.full(core.N, 2.0)
-    for i in range(0, nodes.size, chunk):
-        tt = nodes[i:i + chunk]
-        _, v = core.propagate(seg.basis, ta, seg.q, seg.v, tt)
-        ut0 = kap @ v  # u_t(0, t): v0 + 2 sum v_n, or 2 sum r_m'
-        work += float(np.sum(weights[i:i + chunk] * core.load(tt) * ut0))
-        if core.d:
-            damp += core.d * float(np.sum(weights[i:i + chunk] * (kap @ (v * v))))
-    qe, ve = core.propagate(seg.basis, ta, seg.q, seg.v, [tb])
-    return work, damp, qe[:, 0], ve[:, 0]
-
-
-def _energy_nodes(core: _Core, span: float, n_segments: int) -> float:
-    """An upper bound of the quadrature nodes :func:`_segment_integrals` uses over a run."""
-    w2 = np.concatenate((core.free.w2, core.contact.w2))
-    wmax = math.sqrt(float(np.max(w2))) if w2.size else 0.0
-    kmax = float(np.max(core.data.ks)) if core.data.ks.size else 0.0
-    jumps = core.data.breaks.size * (span / TWO_PI + 1.0) if core.data.kind == 1 else 0.0
-    return _GL_X.size * (span * (wmax + kmax + 1.0) / 1.5 + n_segments + jumps)
-
-
-def _energy_account(tr: Trajectory) -> EnergyAccount:
-    core = tr._core
-    segs = tr._segments
-    work = _energy_nodes(core, tr.t_end - tr.t0, len(segs)) * (core.N + 1)
-    if work > MAX_ENERGY_WORK:
-        raise ValueError(
-            f"energy: the quadrature would take about {work:.3g} node-modes (at most "
-            f"{MAX_ENERGY_WORK:.0e}); it grows with s * n_modes^2 * (t_end - t0): use a shorter run, "
-            f"fewer modes or a smaller s (here s = {tr.model.s:g}, n_modes = {tr.model.n_modes})"
-        )
-    work = damp = imp = chat = proj = 0.0
-    first = segs[0]
-    initial = core.energy(first.basis, first.q, first.v)
-    final = initial
-    for j, seg in enumerate(segs):
-        tb = segs[j + 1].t if j + 1 < len(segs) else tr.t_end
-        if seg.basis == _WAVE:  # a contact window: drive work, rod energy, projection
-            window = seg.frozen
-            dt = min(tb - seg.t, window.duration)
-            w, rod, field_energy = window.account(dt)
-            if dt >= window.duration:
-                qe, ve = window.q_after, window.v_after
-            else:
-                qe, ve = window.state_at(dt)
-            work += w
-            imp += rod
-            proj += core.energy(_FREE, qe, ve) - field_energy
-            if j + 1 == len(segs):
-                final = core.energy(_FREE, qe, ve)
-            continue
-        w, dl, qe, ve = _segment_integrals(core, seg, tb)
-        work += w
-        damp += dl
-        if j + 1 < len(segs):
-            nxt = segs[j + 1]
-            if nxt.entry == "impact" and nxt.basis == _WAVE:
-                pass  # the window's own account; its start only shifts the mean displacement
-            elif nxt.entry == "impact":
-                imp += (1.0 - core.R**2) * core.kinetic(ve)
-            elif nxt.entry == "chatter":
-                frozen = nxt.frozen
-                e_frozen = core.energy(_FREE, frozen, np.zeros_like(frozen))
-                chat += core.energy(_FREE, qe, ve) - e_frozen
-                proj += core.energy(_CONTACT, nxt.q, nxt.v) - e_frozen
-            elif nxt.entry in ("touch", "release"):
-                proj += core.energy(nxt.basis, nxt.q, nxt.v) - core.energy(seg.basis, qe, ve)
-        else:
-            final = core.energy(seg.basis, qe, ve)
-    return EnergyAccount(work=work, initial=initial, final=final, damping_loss=damp,
-                         impact_loss=imp, chatter_loss=chat, projection=proj)
-
-
-# --------------------------------------------------------------------------------------------------
 # the driver
 # --------------------------------------------------------------------------------------------------
 def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.0,
@@ -1042,16 +516,19 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
-    if model.impact == "wave":
-        return _run_wave(core, q, v, t0, t_end, max_imp)
     return _run(core, q, v, t0, t_end, max_imp)
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
+    """The driver, for every law: free flight by the compiled kernel (which applies an
+    instantaneous law itself, with chatter), sustained contact until the stop's reaction turns
+    tensile, and the law's contact step at each arrival the kernel stops at without resolving it."""
+    law = core.model.law
+    instant = law.instantaneous
     segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
     segs.add(t0, _FREE, q, v, "start")
-    times: list[np.ndarray] = []
-    vels: list[np.ndarray] = []
+    times: list = []  # blocks of the kernel's impacts (arrays), or the law's contact steps (floats)
+    vels: list = []
     contacts: list[list[float]] = []
     n_imp = 0
     t = t0
@@ -1061,18 +538,35 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     retries = 0
     last_release = None  # (time, contact segment index, len(times), n_imp) for undoing
     cap = 1024
+    if not instant:  # the kernel's state at the arrival it stops at
+        aq, av = np.empty((1, q.size)), np.empty((1, q.size))
     while True:
         if mode == _FREE:
             left = max_imp - n_imp
             if left <= 0:  # pragma: no cover - run_free stops at max_imp itself
                 status = "max_impacts"
                 break
-            # the kernel writes into the log's next rows; at most an eighth more than the log
-            # holds, so the run's peak memory stays near its stored trajectory
-            oq, ovv = segs.impact_rows(min(cap, left, max(1024, segs.count // 8)))
-            n, st, tn, ot, ov = core.run_free(t, q, v, t_end, left, oq, ovv)
-            del oq, ovv  # no view of the log may outlive the call (it is resized in place)
-            cap = min(cap * 2, 1 << 16)
+            if not instant:  # the kernel stops at the next arrival, applying nothing
+                qa, va = q.copy(), v.copy()
+                n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, aq, av)
+                if st == K.MAXIMP or st == K.CONTACT:  # an impact, or a touch at zero speed
+                    q, v, t = _contact_step(core, segs, t, qa, va, n, tn, ot, aq, av, times, vels)
+                    n_imp += 1
+                    if t >= t_end:  # the run ends inside the contact
+                        t = t_end
+                        break
+                    segs.add(t, _FREE, q, v, "release")
+                    if n_imp >= max_imp:
+                        status = "max_impacts"
+                        break
+                    continue
+            else:
+                # the kernel writes into the log's next rows; at most an eighth more than the log
+                # holds, so the run's peak memory stays near its stored trajectory
+                oq, ovv = segs.impact_rows(min(cap, left, max(1024, segs.count // 8)))
+                n, st, tn, ot, ov = core.run_free(t, q, v, t_end, left, oq, ovv)
+                del oq, ovv  # no view of the log may outlive the call (it is resized in place)
+                cap = min(cap * 2, 1 << 16)
             if n:  # (views of the kernel's fresh output, copied where it is mostly unused)
                 times.append(ot if 2 * n >= ot.base.size else ot.copy())
                 vels.append(ov if 2 * n >= ov.base.size else ov.copy())
@@ -1153,14 +647,17 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     if t == segs.t[i] and segs.basis[i] == _FREE:  # the run ended on a piece's start (max_impacts)
         qe, ve = segs.q[i].copy(), segs.v[i].copy()
         last = None
+    elif segs.basis[i] == _WINDOW:  # the run ended inside a law's contact step
+        last = segs.last()
+        qe, ve = last.frozen.state_at(min(t - last.t, last.frozen.duration))
     else:
         last = segs.last()
         qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
         qe, ve = qe[:, 0], ve[:, 0]
         if last.basis == _CONTACT:
             qe, ve = core.release_state(qe, ve)
-    imp_t = _joined(times)
-    imp_v = _joined(vels)
+    imp_t = _joined(times) if instant else np.array(times, dtype=float)
+    imp_v = _joined(vels) if instant else np.array(vels, dtype=float)
     ci = np.array(contacts, dtype=float).reshape(-1, 2)
     return Trajectory(model=core.model, load=core.load, t0=t0, t_end=t,
                       impact_times=imp_t, impact_velocities=imp_v, contact_intervals=ci,
@@ -1183,93 +680,25 @@ def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
     return r[:, 0], rv[:, 0]
 
 
-def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
-    """The driver under the wave law (theory §4b): each flight by the compiled kernel up to the next
-    arrival at the rod end, each contact by :func:`wave_impact` over its window ``2/s``; positions
-    stay measured from the rod end, which every blow advances."""
+def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, times, vels):
+    """The law's contact step at the arrival the kernel stopped at (an impact, ``n = 1``, its state
+    in ``aq, av``; or a touch at zero speed at ``tn``, the state then from the flight's start
+    ``(t, qa, va)``): logs the contact segment and the impact; returns the state and time where the
+    flight resumes (positions from the stop, which the contact may have advanced)."""
     model = core.model
-    window = 2.0 / model.s
     c = core.c
-    D = core.data
-    ks = D.ks
-    rate = float(np.max(ks)) / model.s if D.kind == 0 and ks.size else 0.0
-    segs = _SegmentLog(core.N)
-    segs.add(t0, _FREE, q, v, "start")
-    times: list[float] = []
-    vels: list[float] = []
-    t = t0
-    status = "t_end"
-    oq, ov = np.empty((1, q.size)), np.empty((1, q.size))  # the kernel's state after its one impact
-    contact = np.empty((WK.MAX_INTERVALS, 2))  # the contact intervals of a separating window
-    while True:
-        qa, va = q.copy(), v.copy()
-        n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, oq, ov)
-        if st == K.FAILED:  # pragma: no cover - defensive
-            raise RuntimeError(f"impact search did not converge at t = {tn}")
-        if st == K.END:
-            t = t_end
-            break
-        # an impact (MAXIMP after one), or a touch at zero speed (CONTACT): a contact window
-        ti = float(ot[0]) if n else float(tn)
-        if n and core.R >= 0.01:  # the kernel's state after eq. 10's reversal, undone
-            qm, vm = oq[0].copy(), ov[0] / -core.R
-        else:
-            qm, vm = (a[:, 0] for a in core.propagate(_FREE, t, qa, va, [ti]))
-        qm[0] -= float(c @ qm)  # the end exactly on the rod end
-        arrival = float(c @ vm)
-        if arrival < 0.0:  # a touch whose speed rounded below zero
-            vm[0] -= arrival
-            arrival = 0.0
-        q, v = np.empty_like(qm), np.empty_like(vm)
-        if K.wave_window(D.kind, model.s, model.R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
-                         D.psup, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
-            imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
-        elif FAST_WAVE_SEPARATION and WK.wave_contact(
-                D.kind, model.s, model.R, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup, rate, ti,
-                qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:  # contact lost inside the window
-            imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())
-        else:  # the full characteristics solution in Python
-            imp = wave_impact(model, core.load, ti, qm, vm)
-            q, v = imp.q_after.copy(), imp.v_after.copy()
-        times.append(ti)
-        vels.append(arrival)
-        segs.add(ti, _WAVE, qm, vm, "impact", imp)
-        t = ti + window
-        if t >= t_end:  # the run ends inside the window
-            t = t_end
-            break
-        segs.add(t, _FREE, q, v, "release")
-        if len(times) >= max_imp:
-            status = "max_impacts"
-            break
-    last = segs.last()
-    if last.basis == _WAVE:
-        qe, ve = last.frozen.state_at(min(t - last.t, last.frozen.duration))
+    ti = float(ot[0]) if n else float(tn)
+    if n:
+        qm, vm = aq[0].copy(), av[0].copy()
     else:
-        qe, ve = (a[:, 0] for a in core.propagate(_FREE, last.t, last.q, last.v, [t]))
-    return Trajectory(model=model, load=core.load, t0=t0, t_end=t,
-                      impact_times=np.array(times), impact_velocities=np.array(vels),
-                      contact_intervals=np.zeros((0, 2)), final_state=InitialState(qe, ve),
-                      status=status, _core=core, _segments=segs.finish())
-
-
-_GL20_X, _GL20_W = np.polynomial.legendre.leggauss(20)
-
-
-class _Window:
-    """A contact window the compiled kernel found without separation: its post-contact state is
-    known; the full :class:`~impactbar.WaveImpact` (force wave, energies) is solved on first use."""
-
-    def __init__(self, model, load, t0, q, v, q_after, v_after):
-        self._args = (model, load, t0, q, v)
-        self._impact = None
-        self.duration = 2.0 / model.s
-        self.q_after, self.v_after = q_after, v_after
-
-    def resolve(self):
-        if self._impact is None:
-            self._impact = wave_impact(*self._args)
-        return self._impact
-
-    def __getattr__(self, name):
-        return getattr(self.resolve(), name)
+        qm, vm = (a[:, 0] for a in core.propagate(_FREE, t, qa, va, [ti]))
+    qm[0] -= float(c @ qm)  # the end exactly on the stop
+    arrival = float(c @ vm)
+    if arrival < 0.0:  # a touch whose speed rounded below zero
+        vm[0] -= arrival
+        arrival = 0.0
+    q, v, t_release, record = model.law.contact(model, core.load, ti, qm, vm, kernel=core)
+    times.append(ti)  # floats: the run's impacts are all the law's (no kernel blocks)
+    vels.append(arrival)
+    segs.add(ti, _WINDOW, qm, vm, "impact", record)
+    return q, v, t_release

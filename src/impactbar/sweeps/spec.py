@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validate import check_int, check_real
+from ..laws import get_law
 
 TASKS = ("orbits", "montecarlo", "bifurcation")
 
@@ -451,7 +452,7 @@ def closed_form_task(spec) -> bool:
     the spec gives ``chunk_points``."""
     if spec.task != "orbits" or spec.load["kind"] not in ("cosine", "square"):
         return False
-    if spec.model.get("impact", "paper") != "paper":
+    if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
         return False
     modes = next((a.values for a in spec.axes if a.name == "n_modes"), (spec.model["n_modes"],))
     return all(int(n) == 0 for n in modes)

@@ -8,6 +8,7 @@ import math
 import numpy as np
 
 from .._validate import check_int
+from ..laws import get_law
 from .spec import SweepSpec, motion_classes
 
 
@@ -138,7 +139,8 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     point-by-point path (degenerate orbits, ``kappa = 2``), or ``None`` if the closed forms do not
     apply."""
     kind = spec.load["kind"]
-    if kind not in ("cosine", "square") or spec.model.get("impact", "paper") != "paper":
+    law = get_law(spec.model.get("impact", "paper"))
+    if kind not in ("cosine", "square") or not law.rigid_closed_forms:
         return None
     par = _chunk_parameters(spec, slices, block)
     if np.any(par["n_modes"] != 0):

@@ -1,0 +1,194 @@
+"""The contact-law interface: everything that differs between impact laws (theory §4, §4b).
+
+A law is a frozen, hashable object; :class:`~impactbar.BarModel` holds one (``BarModel(impact=...)``
+takes its name or the object) and every solver asks ``model.law`` instead of comparing names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+__all__ = ["ContactLaw"]
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """Base class of the impact laws, in the style of scipy's ``OdeSolver``: a subclass sets
+    :attr:`name` and implements the methods below; :data:`impactbar.laws.LAWS` maps names to
+    classes.
+
+    Attributes
+    ----------
+    name : str
+        The law's name in :data:`~impactbar.laws.LAWS` and in ``BarModel.impact``.
+    instantaneous : bool
+        The impact takes no time and is applied by :meth:`kernel_restitution` inside the compiled
+        free-flight kernel (with chatter and sustained contact handled by the simulator). Otherwise
+        the kernel stops at each arrival and the simulator calls :meth:`contact`.
+    rigid_closed_forms : bool
+        The rigid bar's closed forms (:mod:`impactbar.orbits.rigid`, eq. 14 with eq. 10) give this
+        law's orbits.
+    supports_schur : bool
+        The paper's Schur criterion (eqs. 27-31) and eq. 14's charts (existence edges) belong to
+        this law.
+    """
+
+    name: ClassVar[str] = ""
+    instantaneous: ClassVar[bool] = True
+    rigid_closed_forms: ClassVar[bool] = False
+    supports_schur: ClassVar[bool] = False
+
+    def window(self, model) -> float:
+        """Duration of one impact (dimensionless time): 0 for an instantaneous law.
+
+        Returns
+        -------
+        float
+            ``>= 0``; each flight of a periodic orbit starts this long after its impact.
+        """
+        raise NotImplementedError(self._missing("window"))
+
+    def impact_map(self, model, load, t: float, y_minus):
+        """State where the next flight starts from the state at arrival, with its derivatives
+        (the seam of the multi-segment orbit solver, theory §7).
+
+        Parameters
+        ----------
+        model : BarModel
+        load : Load
+        t : float
+            Load time of the arrival.
+        y_minus : numpy.ndarray, shape (2 N + 2,)
+            Modal state ``(q_0..q_N, q_0'..q_N')`` at arrival (the end on the stop).
+
+        Returns
+        -------
+        y_plus : numpy.ndarray, shape (2 N + 2,)
+            State at load time ``t + window(model)``, where the next flight starts, with ``q_0`` set
+            so that the end touches the stop.
+        jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
+            ``d y_plus / d y_minus``.
+        jac_t : numpy.ndarray, shape (2 N + 2,)
+            ``d y_plus / d t`` at fixed ``y_minus``.
+        """
+        raise NotImplementedError(self._missing("impact_map"))
+
+    def phase_roots(self, model, load) -> list[tuple[float, int]]:
+        """Roots of the law's one-impact phase equation in ``[0, 2 pi)``.
+
+        Returns
+        -------
+        list of (float, int)
+            ``(phase, multiplicity)`` sorted by phase; ``phase`` is the load time of the arrival.
+        """
+        raise NotImplementedError(self._missing("phase_roots"))
+
+    def orbit(self, model, load, phase: float, multiplicity: int):
+        """The one-impact orbit with this phase, with admissibility and multipliers.
+
+        Returns
+        -------
+        PeriodicOrbit
+        """
+        raise NotImplementedError(self._missing("orbit"))
+
+    def multipliers(self, model, load, phase: float):
+        """Exact Floquet multipliers of the one-impact orbit with this phase (theory §7),
+        without the admissibility check.
+
+        Returns
+        -------
+        numpy.ndarray of complex, shape (2 N + 2,)
+            Sorted by decreasing modulus.
+        """
+        raise NotImplementedError(self._missing("multipliers"))
+
+    def existence_edge(self, model, k: int = 1) -> float:
+        """Largest load factor ``k p0 / pk`` of the pneumatic load (eq. 33) with one-impact orbits.
+
+        Returns
+        -------
+        float
+            ``inf`` when orbits exist at every load factor, ``nan`` when none exist.
+        """
+        raise NotImplementedError(self._missing("existence_edge"))
+
+    def blow(self, model, load, t: float, y_minus):
+        """Per-blow output of a periodic orbit's impact arriving at load time ``t`` in state
+        ``y_minus`` (shape ``(2 N + 2,)``), or ``None`` where the law has none to add (an
+        instantaneous impact on an orbit)."""
+        return None
+
+    def kernel_restitution(self, model) -> float:
+        """Factor ``r`` of the compiled free-flight kernel's velocity map ``v -> -r v`` at an
+        arrival: ``R`` for an instantaneous law that the kernel applies itself (eq. 10); ``-1``
+        (``v -> v``, nothing applied) for a law the simulator resolves by :meth:`contact`."""
+        return model.R if self.instantaneous else -1.0
+
+    def contact(self, model, load, t: float, q_minus, v_minus, *, kernel=None):
+        """The simulator's contact step: from the arrival at the stop to the start of the next flight.
+
+        Parameters
+        ----------
+        model : BarModel
+        load : Load
+        t : float
+            Load time of the arrival.
+        q_minus, v_minus : numpy.ndarray, shape (N + 1,)
+            Free-free modal state at arrival, the end exactly on the stop (``c . q = 0``).
+        kernel : object, optional
+            The simulator's compiled view of the model and load (``impactbar.simulation``'s
+            ``_Core``), for a law with a compiled contact solver; a law may ignore it.
+
+        Returns
+        -------
+        q_after, v_after : numpy.ndarray, shape (N + 1,)
+            Modal state where the flight resumes, positions from the (possibly advanced) stop.
+        t_release : float
+            Load time where the flight resumes, ``>= t``.
+        record
+            The blow's output: an object with ``t0``, ``duration`` (``t_release - t``),
+            ``q_after``, ``v_after``, ``state_at(tau) -> (q, v)`` for ``0 <= tau <= duration``,
+            ``account(tau) -> (drive_work, energy_out, field_energy)`` (the energy balance up to
+            ``tau``: ``energy_before + drive_work = field_energy + energy_out``) and ``resolve()``
+            (the full record, for one solved lazily): :class:`~impactbar.WaveImpact`,
+            :class:`~impactbar.laws.InstantImpact`.
+        """
+        raise NotImplementedError(self._missing("contact"))
+
+    def _missing(self, method: str) -> str:
+        return f"the impact law {self.name!r} ({type(self).__name__}) does not provide {method}()"
+
+    def __str__(self) -> str:
+        return self.name
+
+
+#: The table of laws by name, in the style of scipy's ``METHODS``; its entries are made in
+#: :mod:`impactbar.laws` (one line per law). Kept here, below the laws' implementations, so that
+#: :class:`~impactbar.BarModel` resolves a name without importing the solvers.
+LAWS: dict[str, type[ContactLaw]] = {}
+
+
+def get_law(spec) -> ContactLaw:
+    """The law object for a name in :data:`LAWS` or a :class:`ContactLaw` instance.
+
+    Parameters
+    ----------
+    spec : str or ContactLaw
+        A key of :data:`LAWS` (``"paper"``, ``"wave"``), or a law object (returned as it is).
+
+    Returns
+    -------
+    ContactLaw
+
+    Raises
+    ------
+    ValueError
+        For an unknown name or another type; the message lists the names.
+    """
+    if isinstance(spec, ContactLaw):
+        return spec
+    if isinstance(spec, str) and spec in LAWS:
+        return LAWS[spec]()
+    raise ValueError(f"impact must be one of {list(LAWS)} or a ContactLaw; got impact={spec!r}")

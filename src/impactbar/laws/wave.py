@@ -1,0 +1,159 @@
+"""The wave impact law (theory §4b): the stop is a long rod, the contact lasts ``2/s`` and is
+solved by characteristics with the drive acting.
+
+The orbit machinery is :mod:`impactbar.orbits.wave` (phase equation, states, the impact map's
+Jacobian, the existence edge); the characteristics solver is :mod:`impactbar.dynamics.impact`
+(:class:`~impactbar.WaveImpact`) with its compiled kernels.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .base import ContactLaw
+
+__all__ = ["WaveLaw"]
+
+#: Solve the simulator's contact windows in which contact is lost by the compiled characteristics
+#: solver (``dynamics._wavekernel.wave_contact``). ``False`` gives the Python solver
+#: (:func:`~impactbar.dynamics.impact.wave_impact`), the reference it is tested against (the same
+#: contact intervals and post-contact states, to rounding).
+FAST_WAVE_SEPARATION = True
+
+_GL20_X, _GL20_W = np.polynomial.legendre.leggauss(20)
+
+
+@dataclass(frozen=True)
+class WaveLaw(ContactLaw):
+    """The stop as a long rod of the same material with area ratio ``A_s/A = (1 + R)/(1 - R)``;
+    the contact, lasting ``2/s``, is solved by characteristics with the drive acting (theory §4b).
+    Without drive and separation the velocity and strain fields leave multiplied by ``-R``; each
+    blow advances the rod end, and positions stay measured from it. Per blow:
+    :class:`~impactbar.WaveImpact` (force wave, rod energy, peak stresses, efficiency, advance).
+    """
+
+    name = "wave"
+    instantaneous = False
+    rigid_closed_forms = False
+    supports_schur = False
+
+    def window(self, model) -> float:
+        """``2/s``: the wave's return trip along the bar."""
+        return 2.0 / model.s
+
+    def impact_map(self, model, load, t, y_minus):
+        """Contact held for the whole window: ``(q_n, q_n') -> -R (q_n, q_n') + (g_n, h_n)(t)`` for
+        ``n >= 1``, ``q_0' -> -R q_0' + h_0``, with the drive part of
+        :func:`impactbar.dynamics.impact.window_drive`, and ``q_0`` set by contact with the
+        (advanced) rod end at the window's end; ``d(g, h)/dt`` is the drive's rate. Whether the
+        contact really holds is decided on the orbit (``"separates"``)."""
+        from ..dynamics.impact import window_drive
+        from ..orbits.wave import window_map
+
+        M = model.n_modes + 1
+        g, h, dg, dh = window_drive(model.s, model.R, model.n_modes, load, float(t), derivative=True)
+        y_plus = window_map(model, y_minus, g, h)
+        c = model.end_weights
+        jac = -model.R * np.eye(2 * M)
+        jac[0, :] = 0.0
+        jac[0, 1:M] = model.R * c[1:]
+        jt = np.concatenate((dg, dh))
+        jt[0] = -float(c[1:] @ dg[1:])
+        return y_plus, jac, jt
+
+    def phase_roots(self, model, load):
+        """:func:`impactbar.orbits.wave.wave_phase_roots`."""
+        from ..orbits.wave import wave_phase_roots  # here: it loads scipy.optimize and numba
+
+        return wave_phase_roots(model, load)
+
+    def orbit(self, model, load, phase, multiplicity):
+        """Contact over ``[0, 2/s]``, flight over ``[2/s, 2 pi]``, with the contact's
+        :class:`~impactbar.WaveImpact` (theory §4b)."""
+        from ..orbits.one_impact import _build_wave_orbit
+
+        return _build_wave_orbit(model, load, phase, multiplicity)
+
+    def multipliers(self, model, load, phase):
+        """Eigenvalues of :func:`impactbar.orbits.wave.wave_impact_map_jacobian`."""
+        from .._threads import single_threaded_blas
+        from ..orbits.stability import sort_multipliers
+        from ..orbits.wave import wave_impact_map_jacobian, wave_orbit_states
+
+        _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
+        with single_threaded_blas():
+            return sort_multipliers(np.linalg.eigvals(
+                wave_impact_map_jacobian(model, load, phase, y_end, y_minus, rate)))
+
+    def existence_edge(self, model, k: int = 1) -> float:
+        """:func:`impactbar.orbits.wave.wave_existence_edge`."""
+        from ..orbits.wave import wave_existence_edge
+
+        return wave_existence_edge(model, k)
+
+    def blow(self, model, load, t, y_minus):
+        """The contact by characteristics (:func:`~impactbar.dynamics.impact.wave_impact`) of an
+        arrival in state ``y_minus`` at ``t``."""
+        from ..dynamics.impact import wave_impact
+
+        M = model.n_modes + 1
+        c = model.end_weights
+        qm = y_minus[:M].copy()
+        qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
+        return wave_impact(model, load, t, qm, y_minus[M:])
+
+    def contact(self, model, load, t, q_minus, v_minus, *, kernel=None):
+        """The window ``[t, t + 2/s]``: by the compiled kernels when ``kernel`` is given (the
+        :class:`~impactbar.WaveImpact` then solved on first use), else by
+        :func:`~impactbar.dynamics.impact.wave_impact`."""
+        from ..dynamics.impact import wave_impact
+
+        ti, qm, vm = float(t), q_minus, v_minus
+        t_release = ti + 2.0 / model.s
+        if kernel is None:
+            imp = wave_impact(model, load, ti, qm, vm)
+            return imp.q_after.copy(), imp.v_after.copy(), t_release, imp
+        from ..dynamics import _kernel as K
+        from ..dynamics import _wavekernel as WK
+
+        c = kernel.c
+        D = kernel.data
+        ks = D.ks
+        rate = float(np.max(ks)) / model.s if D.kind == 0 and ks.size else 0.0
+        contact = np.empty((WK.MAX_INTERVALS, 2))  # the contact intervals of a separating window
+        q, v = np.empty_like(qm), np.empty_like(vm)
+        if K.wave_window(D.kind, model.s, model.R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
+                         D.psup, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
+            imp = _Window(model, load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
+        elif FAST_WAVE_SEPARATION and WK.wave_contact(
+                D.kind, model.s, model.R, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup, rate, ti,
+                qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:  # contact lost inside the window
+            imp = _Window(model, load, ti, qm, vm, q.copy(), v.copy())
+        else:  # the full characteristics solution in Python
+            imp = wave_impact(model, load, ti, qm, vm)
+            q, v = imp.q_after.copy(), imp.v_after.copy()
+        return q, v, t_release, imp
+
+
+class _Window:
+    """A contact window the compiled kernel found without separation: its post-contact state is
+    known; the full :class:`~impactbar.WaveImpact` (force wave, energies) is solved on first use."""
+
+    def __init__(self, model, load, t0, q, v, q_after, v_after):
+        self._args = (model, load, t0, q, v)
+        self._impact = None
+        self.t0 = t0
+        self.duration = 2.0 / model.s
+        self.q_after, self.v_after = q_after, v_after
+
+    def resolve(self):
+        from ..dynamics.impact import wave_impact
+
+        if self._impact is None:
+            self._impact = wave_impact(*self._args)
+        return self._impact
+
+    def __getattr__(self, name):
+        return getattr(self.resolve(), name)

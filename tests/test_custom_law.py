@@ -1,0 +1,94 @@
+"""The developer page's worked example (docs/developers.md includes ``VelocityRestitution`` from
+this file): a law added as one class plus one table entry runs through the simulator and the
+multi-impact orbit solver, checked against closed forms of the rigid bar."""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from impactbar import BarModel, CosineLoad, InitialState, find_orbit, periodic_orbits, simulate
+from impactbar.laws import LAWS, ContactLaw, InstantImpact
+
+
+@dataclass(frozen=True)
+class VelocityRestitution(ContactLaw):
+    """Eq. 10 with a restitution that falls with the arrival speed ``w = u_t(1, t-)``:
+    ``(q, q') -> (q, -e(w) q')``, ``e(w) = R / (1 + w / w_ref)``."""
+
+    w_ref: float = 1.0
+    name = "velocity"
+    instantaneous = False  # the compiled kernel applies a constant R only: the driver calls contact
+
+    def window(self, model):
+        return 0.0
+
+    def _e(self, model, w):
+        return model.R / (1.0 + w / self.w_ref)
+
+    def impact_map(self, model, load, t, y_minus):
+        M = model.n_modes + 1
+        c, v = model.end_weights, y_minus[M:]
+        w = float(c @ v)
+        e, de = self._e(model, w), -model.R / self.w_ref / (1.0 + w / self.w_ref) ** 2
+        y_plus = np.concatenate((y_minus[:M], -e * v))
+        jac = np.eye(2 * M)
+        jac[M:, M:] = -e * np.eye(M) - de * np.outer(v, c)  # d(-e(c.v) v)/dv
+        return y_plus, jac, np.zeros(2 * M)
+
+    def contact(self, model, load, t, q_minus, v_minus, *, kernel=None):
+        rec = InstantImpact(model, t, q_minus, v_minus, R=self._e(model, model.end_weights @ v_minus))
+        return rec.q_after, rec.v_after, float(t), rec
+
+
+def test_registered_by_name(monkeypatch):
+    monkeypatch.setitem(LAWS, "velocity", VelocityRestitution)  # the one table entry
+    model = BarModel(s=10.0, d=0.0, R=0.6, n_modes=0, impact="velocity")
+    assert model.impact == "velocity" and model.law == VelocityRestitution()
+    assert model == BarModel(s=10.0, d=0.0, R=0.6, n_modes=0, impact=VelocityRestitution())
+    assert BarModel(s=10.0, d=0.0, R=0.6, n_modes=0, impact=VelocityRestitution(2.0)) != model
+
+
+def test_simulated_bounces_against_the_closed_form():
+    """A rigid bar (``d = 0``) under the constant load ``p0`` falls from rest through the gap ``g``:
+    it arrives at ``w_1 = sqrt(2 p0 g)`` after ``sqrt(2 g / p0)``, leaves at ``e(w_1) w_1`` and is
+    back after ``2 e(w_1) w_1 / p0`` with the same speed, and so on."""
+    law = VelocityRestitution(w_ref=0.5)
+    model = BarModel(s=10.0, d=0.0, R=0.8, n_modes=0, impact=law)
+    p0, g = 0.7, 0.3
+    tr = simulate(model, CosineLoad(p0, 0.0), InitialState.rigid(-g, 0.0), 50.0, max_impacts=4)
+    t, w = math.sqrt(2.0 * g / p0), math.sqrt(2.0 * p0 * g)
+    times, speeds = [], []
+    for _ in range(4):
+        times.append(t)
+        speeds.append(w)
+        w = law._e(model, w) * w
+        t += 2.0 * w / p0
+    np.testing.assert_allclose(tr.impact_times, times, rtol=1e-12)
+    np.testing.assert_allclose(tr.impact_velocities, speeds, rtol=1e-12)
+    assert tr.status == "max_impacts" and tr.contact_intervals.shape == (0, 2)
+    rec = tr.impacts[1]
+    assert rec.impact_velocity == pytest.approx(speeds[1], rel=1e-12)
+    assert rec.energy_loss == pytest.approx(0.5 * speeds[1] ** 2 * (1 - law._e(model, speeds[1]) ** 2),
+                                            rel=1e-12)
+
+
+def test_periodic_orbit_by_the_multi_impact_solver():
+    """One impact per period of the rigid bar at ``d = 0``: the momentum the load gives over a
+    period, ``2 pi p0``, is what the impact takes, ``(1 + e(V)) V`` (eq. 14's identity with
+    ``R -> e(V)``)."""
+    law = VelocityRestitution(w_ref=2.0)
+    model = BarModel(s=10.0, d=0.0, R=0.7, n_modes=0, impact=law)
+    load = CosineLoad(0.3, 1.0)
+    guess = find_orbit(model.with_(impact="paper"), load)
+    o = find_orbit(model, load, guess=(guess.impact_times, guess.states_after_impact))
+    V = o.impact_velocity
+    assert V * (1.0 + law._e(model, V)) == pytest.approx(2.0 * math.pi * 0.3, rel=1e-10)
+
+
+def test_what_the_law_leaves_out_is_refused_by_name():
+    model = BarModel(s=10.0, d=0.0, R=0.7, n_modes=0, impact=VelocityRestitution())
+    with pytest.raises(NotImplementedError, match=r"'velocity' \(VelocityRestitution\) does not provide "
+                                                  r"phase_roots\(\)"):
+        periodic_orbits(model, CosineLoad(0.3, 1.0))
