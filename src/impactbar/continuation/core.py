@@ -17,6 +17,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from .._status import BranchStatus, EventKind
 from .._threads import single_threaded_blas
 from .._validate import check_real
 from ..loads import PiecewiseConstantLoad
@@ -37,8 +38,7 @@ __all__ = ["continue_orbit", "EVENT_KINDS"]
 TWO_PI = 2.0 * math.pi
 
 #: Event kinds, in the order they are reported.
-EVENT_KINDS = ("fold", "branch-point", "period-doubling", "neimark-sacker", "grazing", "admissibility",
-               "load-jump")
+EVENT_KINDS = tuple(EventKind)
 
 # ------------------------------------------------------------------------------------------------
 # the continuation engine
@@ -308,7 +308,7 @@ def _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points
     tests = [_tests(orbits[0])]
     tangents = [t0]
     found: list[BranchEvent] = []
-    status = "max_points"
+    status = BranchStatus.MAX_POINTS
     h = step
     pending_first = first
     stalled = 0
@@ -340,16 +340,16 @@ def _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points
                 Ub = None
                 h *= 0.5
             if Ub is None:
-                status = "step too small"
+                status = BranchStatus.STEP_TOO_SMALL
                 corner = _load_jump(cont, Ua, len(points) - 1)
                 if corner is not None:
                     found.append(corner)
-                    status = "impact at a load jump"
+                    status = BranchStatus.LOAD_JUMP
                 break
         try:
             ob = cont.orbit(Ub)
         except ValueError:
-            status = "parameter range"
+            status = BranchStatus.PARAMETER_RANGE
             break
         points.append(Ub)
         orbits.append(ob)
@@ -360,13 +360,13 @@ def _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points
             found.extend(new)
             hit = [e for e in new if e.kind in stop_on]
             if hit:
-                status = f"stopped at {hit[0].kind}"
+                status = BranchStatus.stopped_at(hit[0].kind)
                 break
         if abs(Ub[-1] - to) <= 1e-14 * max(1.0, abs(to)):
-            status = "reached"
+            status = BranchStatus.REACHED
             break
         if Ub[-1] < lo - 1e-12 * max(1.0, abs(lo)) or Ub[-1] > hi + 1e-12 * max(1.0, abs(hi)):
-            status = "turned back"
+            status = BranchStatus.TURNED_BACK
             break
         if it <= 3:
             h = min(h * 1.6, max_step)
@@ -377,7 +377,7 @@ def _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points
             corner = _load_jump(cont, Ub, len(points) - 1)
             if corner is not None:
                 found.append(corner)
-                status = "impact at a load jump"
+                status = BranchStatus.LOAD_JUMP
                 break
     P = np.array(points)
     return Branch(parameter=cont.name, values=P[:, -1].copy(), orbits=tuple(orbits),
@@ -428,11 +428,11 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         if hh is not None:
             turned = (tangents[-2] is not None and tangents[-1] is not None
                       and tangents[-2][-1] * tangents[-1][-1] < 0)
-            add("fold" if turned else "branch-point", hh, lambda o: _nearest(o, 1.0))
+            add(EventKind.FOLD if turned else EventKind.BRANCH_POINT, hh, lambda o: _nearest(o, 1.0))
     if A["period-doubling"] * B["period-doubling"] < 0:
         hh = locate(_pd)
         if hh is not None:
-            add("period-doubling", hh, lambda o: _nearest(o, -1.0))
+            add(EventKind.PERIOD_DOUBLING, hh, lambda o: _nearest(o, -1.0))
     if A["pairs"] == B["pairs"] and A["pairs"] and A["neimark-sacker"] * B["neimark-sacker"] < 0:
         hh = locate(_ns)
         if hh is not None:
@@ -440,23 +440,23 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
             o = cont.orbit(U, admissibility=False)
             cpx = o.multipliers[np.abs(o.multipliers.imag) > 1e-8]
             if cpx.size and np.min(np.abs(np.abs(cpx) - 1.0)) < 1e-6:
-                add("neimark-sacker", hh, lambda o: _nearest_circle(o))
+                add(EventKind.NEIMARK_SACKER, hh, lambda o: _nearest_circle(o))
     grazes = []  # chord positions of the located grazing points
     if np.isfinite(A["grazing"]) and np.isfinite(B["grazing"]) and A["grazing"] * B["grazing"] < 0:
         hh = locate(_clear)
         if hh is not None:
-            add("grazing", hh, lambda o: complex(math.nan, math.nan))
+            add(EventKind.GRAZING, hh, lambda o: complex(math.nan, math.nan))
             grazes.append(hh)
     if A["impact"] * B["impact"] < 0:
         hh = locate(_vmin)
         if hh is not None:
-            add("grazing", hh, lambda o: complex(math.nan, math.nan))
+            add(EventKind.GRAZING, hh, lambda o: complex(math.nan, math.nan))
             grazes.append(hh)
     if A["admissible"] != B["admissible"] and not _explained(at, cont, hb, grazes, A["admissible"]):
         # e.g. sticking at R = 0, or a grazing the clearance did not show
         hh = _bisect_flag(at, cont, hb, xtol)
         if hh is not None:
-            add("admissibility", hh, lambda o: complex(math.nan, math.nan))
+            add(EventKind.ADMISSIBILITY, hh, lambda o: complex(math.nan, math.nan))
     out.sort(key=lambda e: cont.dot(ta, e._point - Ua))
     return out
 
@@ -512,7 +512,7 @@ def _load_jump(cont, U, index):
                 o = cont.orbit(V)
             except ValueError:
                 return None
-            return BranchEvent(kind="load-jump", parameter=cont.name, value=float(V[-1]), index=index,
+            return BranchEvent(kind=EventKind.LOAD_JUMP, parameter=cont.name, value=float(V[-1]), index=index,
                                orbit=o, multiplier=complex(math.nan, math.nan), _point=V)
     return None
 

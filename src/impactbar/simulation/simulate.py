@@ -29,6 +29,7 @@ from functools import cached_property
 import numpy as np
 
 from .. import _tables
+from .._status import RunStatus
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
 from ..dynamics import _wavekernel as WK
@@ -1056,7 +1057,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     n_imp = 0
     t = t0
     mode = _FREE
-    status = "t_end"
+    status = RunStatus.T_END
     dwell = 0.0
     retries = 0
     last_release = None  # (time, contact segment index, len(times), n_imp) for undoing
@@ -1065,7 +1066,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         if mode == _FREE:
             left = max_imp - n_imp
             if left <= 0:  # pragma: no cover - run_free stops at max_imp itself
-                status = "max_impacts"
+                status = RunStatus.MAX_IMPACTS
                 break
             # the kernel writes into the log's next rows; at most an eighth more than the log
             # holds, so the run's peak memory stays near its stored trajectory
@@ -1087,7 +1088,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                 break
             if st == K.MAXIMP:
                 t = tn
-                status = "max_impacts"
+                status = RunStatus.MAX_IMPACTS
                 break
             if st == K.FULL:
                 t = tn
@@ -1198,7 +1199,7 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     times: list[float] = []
     vels: list[float] = []
     t = t0
-    status = "t_end"
+    status = RunStatus.T_END
     oq, ov = np.empty((1, q.size)), np.empty((1, q.size))  # the kernel's state after its one impact
     contact = np.empty((WK.MAX_INTERVALS, 2))  # the contact intervals of a separating window
     while True:
@@ -1240,7 +1241,7 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             break
         segs.add(t, _FREE, q, v, "release")
         if len(times) >= max_imp:
-            status = "max_impacts"
+            status = RunStatus.MAX_IMPACTS
             break
     last = segs.last()
     if last.basis == _WAVE:
