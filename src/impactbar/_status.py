@@ -5,7 +5,8 @@ two-parameter curves.
 
 Each enum is a :class:`enum.StrEnum`: a member *is* its string (``Admissibility.ADMISSIBLE ==
 "admissible"``, ``str()``, ``format()``, ``json.dumps`` and pandas give the plain value), so
-results compare, print and serialise as the strings they replace; ``member.message`` explains it.
+results compare, print and serialise as the strings they replace (``repr`` too); ``member.message``
+explains it.
 Imports only the standard library (every layer may import it).
 """
 
@@ -24,6 +25,9 @@ class _Explained(enum.StrEnum):
         member._value_ = value
         member.message = message
         return member
+
+    def __repr__(self) -> str:  # as the string it stands for (doctests, printed lists, JSON)
+        return repr(self._value_)
 
 
 class Admissibility(_Explained):

@@ -22,16 +22,16 @@ from .._threads import single_threaded_blas
 from .._validate import check_real
 from ..loads import PiecewiseConstantLoad
 from ..orbits.multi_impact import (
-    MultiImpactOrbit,
     _build,
     _normalise,
     _Segments,
     _unknowns_from,
     doubling_direction,
 )
-from ..orbits.one_impact import PeriodicOrbit
+from ..orbits.orbit import PeriodicOrbit
 from .branch import Branch, BranchEvent
-from .parameters import _check_parameter, _steps, parameter_value, with_parameter
+from .engine import ContinuationSettings, _Engine, _settings
+from .parameters import _check_parameter, _target, parameter_value, with_parameter
 
 __all__ = ["continue_orbit", "EVENT_KINDS"]
 
@@ -41,22 +41,20 @@ TWO_PI = 2.0 * math.pi
 EVENT_KINDS = tuple(EventKind)
 
 # ------------------------------------------------------------------------------------------------
-# the continuation engine
+# the augmented problem of a branch: the segment problem in (u, lambda)
 # ------------------------------------------------------------------------------------------------
-class _Continuation:
-    def __init__(self, model, load, name, m, n, tol):
+class _OrbitProblem:
+    """The segment problem of :func:`find_orbit` in ``U = (u, lambda)``, for the engine
+    (:mod:`impactbar.continuation.engine`), with the branch's event detection."""
+
+    def __init__(self, model, load, name, m, n, tol, *, events=True, stop_on=(), xtol=1e-10):
         self.model0, self.load0, self.name, self.m, self.n, self.tol = model, load, name, m, n, tol
+        self.events, self.stop_on, self.xtol = events, stop_on, xtol
         self._cache = {}
         size = 2 * (model.n_modes + 1) * m
         # weighted arclength: the state's squared norm is averaged over its components (as AUTO
         # does), so the parameter keeps its share however many modes and impacts there are
         self.W = np.append(np.full(size, 1.0 / size), 1.0)
-
-    def dot(self, a, b):
-        return float(a @ (self.W * b))
-
-    def norm(self, a):
-        return math.sqrt(self.dot(a, a))
 
     def problem(self, lam):
         key = float(lam)
@@ -74,12 +72,12 @@ class _Continuation:
         return F
 
     def FJ(self, U, F_lam=None):
-        """Residual and the full Jacobian ``[F_u, F_lam]``, ``F_lam`` by central differences unless
-        given (Newton's corrector reuses the one of its first iteration)."""
+        """Residual, the full Jacobian ``[F_u, F_lam]`` and ``F_lam``, by central differences
+        unless given (Newton's corrector reuses the one of its first iteration)."""
         u, lam = U[:-1], U[-1]
-        F, DF, info = self.problem(lam).evaluate(u)
+        F, DF, _ = self.problem(lam).evaluate(u)
         if F_lam is not None:
-            return F, np.column_stack((DF, F_lam)), info
+            return F, np.column_stack((DF, F_lam)), F_lam
         h = 1e-6 * max(1.0, abs(lam))
         try:
             Fp = self.problem(lam + h).evaluate(u, jacobian=False)[0]
@@ -90,54 +88,7 @@ class _Continuation:
                 Fl = (self.problem(lam + h).evaluate(u, jacobian=False)[0] - F) / h
             except ValueError:
                 Fl = (F - self.problem(lam - h).evaluate(u, jacobian=False)[0]) / h
-        return F, np.column_stack((DF, Fl)), info
-
-    def tangent(self, U, t_prev, J=None):
-        """Unit tangent (weighted norm) at ``U``: the null vector of ``[F_u, F_lam]``, oriented along
-        ``t_prev``; ``J`` is that Jacobian if already at hand."""
-        if J is None:
-            _, J, _ = self.FJ(U)
-        A = np.vstack((J, self.W * t_prev))
-        rhs = np.zeros(A.shape[0])
-        rhs[-1] = 1.0
-        t = np.linalg.solve(A, rhs)
-        t /= self.norm(t)
-        if self.dot(t, t_prev) < 0:
-            t = -t
-        return t
-
-    def correct(self, U_pred, normal, anchor, *, max_iter=10):
-        """Newton on ``F(U) = 0``, ``<normal, U - anchor> = 0`` (weighted). Returns
-        ``(U, iterations)`` or ``(None, iterations)``; the last Jacobian is kept in ``last_J`` (for
-        the tangent at the new point: the last step is below the tolerance)."""
-        U = np.array(U_pred, dtype=float)
-        self.last_J = None
-        normal = self.W * normal
-        F_lam = prev = None
-        for it in range(1, max_iter + 1):
-            try:
-                F, J, _ = self.FJ(U, F_lam)
-            except ValueError:
-                return None, it
-            F_lam = J[:, -1]
-            if not (np.all(np.isfinite(F)) and np.all(np.isfinite(J))):
-                return None, it
-            G = np.append(F, normal @ (U - anchor))
-            A = np.vstack((J, normal))
-            try:
-                dU = np.linalg.solve(A, G)
-            except np.linalg.LinAlgError:
-                return None, it
-            U = U - dU
-            step, scale = float(np.max(np.abs(dU))), max(1.0, float(np.max(np.abs(U))))
-            # converged when this step, or the next one predicted from the rate of the last two,
-            # is below the tolerance (saves the evaluation that would only confirm it)
-            if step <= self.tol * scale or (prev is not None and step < 1e-6 * scale
-                                            and step * step / prev <= 0.1 * self.tol * scale):
-                self.last_J = J
-                return U, it
-            prev = step
-        return None, max_iter
+        return F, np.column_stack((DF, Fl)), Fl
 
     def orbit(self, U, admissibility=True):
         """The orbit at a branch point, its first impact time brought into ``[0, 2 pi)``."""
@@ -145,8 +96,24 @@ class _Continuation:
         u = _normalise(p, U[:-1])
         return _build(p, U[:-1] if u is None else u, admissibility=admissibility)
 
+    def acceptable(self, U):
+        """The impact times stay in order (and apart by the contact windows)."""
+        return _normalise(self.problem(U[-1]), U[:-1]) is not None
 
-def _tests(orbit: MultiImpactOrbit):
+    def after_point(self, engine, points, tangents, orbits):
+        """The events between the last two points, and the status to stop with (``stop_on``)."""
+        if not self.events:
+            return [], None
+        new = _detect(engine, points, tangents, [_tests(o) for o in orbits[-2:]], orbits, self.xtol)
+        hit = [e for e in new if e.kind in self.stop_on]
+        return new, (BranchStatus.stopped_at(hit[0].kind) if hit else None)
+
+    def corner(self, engine, U, index):
+        """A load-jump event where the steps fail or stay tiny (:func:`_load_jump`)."""
+        return _load_jump(self, U, index)
+
+
+def _tests(orbit: PeriodicOrbit):
     """Test functions at a point: ``det(I - P)``, ``det(I + P)``, the Neimark-Sacker function and its
     number of complex pairs, the clearance and the smallest impact velocity."""
     mu = orbit.multipliers
@@ -159,10 +126,10 @@ def _tests(orbit: MultiImpactOrbit):
             "admissible": orbit.admissible}
 
 
-def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = None,
-                   max_step: float | None = None, min_step: float | None = None,
-                   max_points: int = 2000, events: bool = True, stop_on=(), tol: float = 1e-11,
-                   xtol: float = 1e-10) -> Branch:
+def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSettings | None = None,
+                   step: float | None = None, max_step: float | None = None,
+                   min_step: float | None = None, max_points: int | None = None, events: bool = True,
+                   stop_on=(), tol: float | None = None, xtol: float = 1e-10) -> Branch:
     """Follow a periodic motion as one parameter changes, by pseudo-arclength continuation.
 
     Each step predicts along the branch's tangent (the null vector of ``[F_u, F_lambda]`` of the
@@ -187,19 +154,18 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
         Target value; the branch stops there, or where it leaves the range between the start and
         ``to`` after a fold. A branch started at a period doubling may bifurcate to either side:
         it is followed while the parameter stays within ``|to - start|`` of the doubling.
-    step, max_step, min_step : float, optional
-        Initial, largest and smallest arclength steps, in a weighted norm: the squared norm of the
-        unknowns (impact times, reduced modal states) averaged over their number, plus the
-        parameter's square (as AUTO weighs a state against the parameter); defaults
-        ``|to - start| / 50``, ``/ 10`` and ``1e-9`` times that.
-    max_points : int
-        Largest number of branch points.
+    settings : ContinuationSettings, optional
+        Steps, point limit and Newton tolerance (the same object :func:`continue_bifurcation`
+        takes); default ``ContinuationSettings()``.
+    step, max_step, min_step, max_points, tol : optional
+        Override the fields of ``settings`` of the same names (see
+        :class:`ContinuationSettings`: arclength steps in a weighted norm, defaults
+        ``|to - start| / 50``, ``/ 10`` and ``1e-9`` times that; at most 2000 points; relative
+        Newton tolerance ``1e-11``).
     events : bool
         Detect and locate events.
     stop_on : iterable of str
-        Event kinds at which to stop (e.g. ``("grazing",)``).
-    tol : float
-        Relative Newton tolerance at each point.
+        Event kinds at which to stop (e.g. ``("grazing",)``), from :class:`EventKind`.
     xtol : float
         Tolerance of the event location in the chord's arclength (the parameter is then located to
         about the same).
@@ -224,11 +190,11 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
     """
     switch = None
     if isinstance(orbit, BranchEvent):
-        if orbit.kind != "period-doubling":
-            raise ValueError(f"a BranchEvent start must be a period doubling; got {orbit.kind!r}")
+        if orbit.kind != EventKind.PERIOD_DOUBLING:
+            raise ValueError(f"a BranchEvent start must be a period doubling; got {str(orbit.kind)!r}")
         switch = orbit
         base = orbit.orbit
-    elif isinstance(orbit, PeriodicOrbit | MultiImpactOrbit):
+    elif isinstance(orbit, PeriodicOrbit):
         base = orbit
     else:
         raise ValueError(f"orbit must be a PeriodicOrbit, MultiImpactOrbit or BranchEvent; got "
@@ -236,152 +202,74 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
     model, load = base.model, base.load
     _check_parameter(model, load, parameter)
     lam0 = parameter_value(model, load, parameter)
-    to, step, max_step, min_step, max_points = _steps(parameter, lam0, to, step, max_step, min_step,
-                                                       max_points, (1 / 50, 1 / 10, 1e-9))
-    tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
+    to = _target(parameter, lam0, to)
+    settings = _settings(settings, step=step, max_step=max_step, min_step=min_step,
+                         max_points=max_points, tol=tol)
+    steps = settings.steps(abs(to - lam0))
     xtol = check_real("xtol", xtol, lo=0.0, lo_open=True, hi=1e-2)
     stop_on = tuple(stop_on)
     for k in stop_on:
         if k not in EVENT_KINDS:
             raise ValueError(f"stop_on must hold event kinds from {EVENT_KINDS}; got {k!r}")
     direction = 1.0 if to > lam0 else -1.0
-
-    if isinstance(base, PeriodicOrbit):
-        times, states, m, n = np.array([base.phase]), base.state_after_impact[None, :], 1, 1
-    else:
-        times, states, m, n = base.impact_times, base.states_after_impact, base.impacts, base.periods
+    m, n = (2 * base.impacts, 2 * base.periods) if switch is not None else (base.impacts, base.periods)
+    problem = _OrbitProblem(model, load, parameter, m, n, settings.tol, events=events,
+                            stop_on=stop_on, xtol=xtol)
+    engine = _Engine(problem, settings.tol)
+    lo, hi = min(lam0, to), max(lam0, to)
     with single_threaded_blas():
         if switch is not None:
-            return _run_switch(switch, parameter, lam0, to, direction, step, max_step, min_step,
-                               max_points, events, stop_on, tol, xtol)
-        cont = _Continuation(model, load, parameter, m, n, tol)
-        u0 = _unknowns_from(cont.problem(lam0), times, states)
-        U0 = np.append(u0, lam0)
-        F0, J0, _ = cont.FJ(U0)
-        if float(np.max(np.abs(F0))) <= 1e-11 * max(1.0, float(np.max(np.abs(U0)))):
-            cont.last_J = J0  # already a solution (at a fold, Newton at fixed parameter is singular)
+            U0, first = _switch(engine, switch, lam0, steps)
+            t0 = None
+            lo, hi = lam0 - abs(to - lam0), lam0 + abs(to - lam0)  # it may leave on either side
         else:
-            U0, _ = cont.correct(U0, np.eye(U0.size)[-1], U0)
-            if U0 is None:
-                raise ValueError("orbit: Newton at the start value did not converge; is it a solution?")
-        # the tangent: the null vector of [F_u, F_lam] (by SVD: also at a fold), towards `to`
-        t0 = np.linalg.svd(cont.last_J)[2][-1]
-        t0 /= cont.norm(t0)
-        if t0[-1] * direction < 0:
-            t0 = -t0
-        return _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points, events,
-                    stop_on, xtol)
+            U0, t0 = _start(engine, base, lam0, direction)
+            first = None
+        P, orbits, found, status = engine.march(U0, t0, to, direction, lo, hi, steps,
+                                                settings.max_points, first=first)
+    return Branch(parameter=parameter, values=P[:, -1].copy(), orbits=orbits, events=tuple(found),
+                  status=status, impacts=m, periods=n, _points=P)
 
 
-def _run_switch(ev, parameter, lam0, to, direction, step, max_step, min_step, max_points, events,
-                stop_on, tol, xtol):
+def _start(engine, base, lam0, direction):
+    """The start point on the branch and its tangent towards ``to``."""
+    problem = engine.problem
+    u0 = _unknowns_from(problem.problem(lam0), base.impact_times, base.states_after_impact)
+    U0 = np.append(u0, lam0)
+    F0, J0, _ = problem.FJ(U0)
+    if float(np.max(np.abs(F0))) <= 1e-11 * max(1.0, float(np.max(np.abs(U0)))):
+        engine.last_J = J0  # already a solution (at a fold, Newton at fixed parameter is singular)
+    else:
+        U0, _ = engine.correct(U0, np.eye(U0.size)[-1], U0)
+        if U0 is None:
+            raise ValueError("orbit: Newton at the start value did not converge; is it a solution?")
+    # the tangent: the null vector of [F_u, F_lam] (by SVD: also at a fold), towards `to`
+    t0 = np.linalg.svd(engine.last_J)[2][-1]
+    t0 /= engine.norm(t0)
+    if t0[-1] * direction < 0:
+        t0 = -t0
+    return U0, t0
+
+
+def _switch(engine, ev, lam0, steps):
     """Branch switching at a period doubling: the doubled orbit's branch, started along the null
     vector ``(e, P_1 e, ..., -e, -P_1 e, ...)`` built from the eigenvector ``e`` of the multiplier
-    ``-1``."""
-    o = ev.orbit
-    m0, n0 = o.impacts, o.periods
-    cont = _Continuation(o.model, o.load, parameter, 2 * m0, 2 * n0, tol)
-    z, w = doubling_direction(o)
+    ``-1``. Returns the doubling point and ``(U1, t1)``, the first point of the doubled branch and
+    its tangent."""
+    z, w = doubling_direction(ev.orbit)
     U0 = np.append(z, lam0)
     w = np.append(w, 0.0)
-    w /= cont.norm(w)
-    h = step
+    w /= engine.norm(w)
+    h, _, min_step = steps
     while h >= min_step:
-        U1, _ = cont.correct(U0 + h * w, w, U0 + h * w)
+        U1, _ = engine.correct(U0 + h * w, w, U0 + h * w)
         if U1 is not None and float(np.max(np.abs(U1[:-1] - U0[:-1]))) > 1e-3 * h:
             break
         h *= 0.5
     else:
         raise ValueError("branch switching at the period doubling failed: no doubled orbit found")
-    t1 = cont.tangent(U1, (U1 - U0) / cont.norm(U1 - U0))
-    return _run(cont, U0, None, lam0, to, direction, step, max_step, min_step, max_points, events,
-                stop_on, xtol, first=(U1, t1))
-
-
-def _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points, events, stop_on,
-         xtol, first=None):
-    lo, hi = min(lam0, to), max(lam0, to)
-    if first is not None:  # a branch born at a period doubling may leave on either side
-        lo, hi = lam0 - abs(to - lam0), lam0 + abs(to - lam0)
-    points = [U0]
-    orbits = [cont.orbit(U0)]
-    tests = [_tests(orbits[0])]
-    tangents = [t0]
-    found: list[BranchEvent] = []
-    status = BranchStatus.MAX_POINTS
-    h = step
-    pending_first = first
-    stalled = 0
-    while len(points) < max_points:
-        Ua, ta = points[-1], tangents[-1]
-        if pending_first is not None:
-            Ub, tb = pending_first
-            pending_first = None
-            it = 1
-        else:
-            Ub = None
-            while h >= min_step:
-                pred = Ua + h * ta
-                final = (pred[-1] - to) * direction > 0 and (Ua[-1] - to) * direction < 0
-                if final:
-                    Ub, it = cont.correct(Ua + ta * (to - Ua[-1]) / ta[-1], np.eye(Ua.size)[-1],
-                                          np.append(Ua[:-1], to))
-                else:
-                    Ub, it = cont.correct(pred, ta, pred)
-                if Ub is not None:
-                    ok_dir = True
-                    tb = cont.tangent(Ub, ta, cont.last_J) if not final else ta
-                    if not final and cont.dot(tb, ta) < 0.8:
-                        ok_dir = False
-                    dist = cont.norm(Ub - Ua)
-                    if ok_dir and dist < 3 * h + 1e-12 and _normalise(cont.problem(Ub[-1]), Ub[:-1]) \
-                            is not None:
-                        break
-                Ub = None
-                h *= 0.5
-            if Ub is None:
-                status = BranchStatus.STEP_TOO_SMALL
-                corner = _load_jump(cont, Ua, len(points) - 1)
-                if corner is not None:
-                    found.append(corner)
-                    status = BranchStatus.LOAD_JUMP
-                break
-        try:
-            ob = cont.orbit(Ub)
-        except ValueError:
-            status = BranchStatus.PARAMETER_RANGE
-            break
-        points.append(Ub)
-        orbits.append(ob)
-        tests.append(_tests(ob))
-        tangents.append(tb)
-        if events:
-            new = _detect(cont, points, tangents, tests, orbits, xtol)
-            found.extend(new)
-            hit = [e for e in new if e.kind in stop_on]
-            if hit:
-                status = BranchStatus.stopped_at(hit[0].kind)
-                break
-        if abs(Ub[-1] - to) <= 1e-14 * max(1.0, abs(to)):
-            status = BranchStatus.REACHED
-            break
-        if Ub[-1] < lo - 1e-12 * max(1.0, abs(lo)) or Ub[-1] > hi + 1e-12 * max(1.0, abs(hi)):
-            status = BranchStatus.TURNED_BACK
-            break
-        if it <= 3:
-            h = min(h * 1.6, max_step)
-        elif it >= 6:
-            h = max(h * 0.6, min_step)
-        stalled = stalled + 1 if h < 1e-4 * max_step else 0
-        if stalled >= 8:  # steps stay tiny: an impact running into a jump of the load is a corner
-            corner = _load_jump(cont, Ub, len(points) - 1)
-            if corner is not None:
-                found.append(corner)
-                status = BranchStatus.LOAD_JUMP
-                break
-    P = np.array(points)
-    return Branch(parameter=cont.name, values=P[:, -1].copy(), orbits=tuple(orbits),
-                  events=tuple(found), status=status, impacts=cont.m, periods=cont.n, _points=P)
+    t1 = engine.tangent(U1, (U1 - U0) / engine.norm(U1 - U0))
+    return U0, (U1, t1)
 
 
 def _detect(cont, points, tangents, tests, orbits, xtol):
@@ -420,7 +308,7 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         if U is None:
             return
         o = cont.orbit(U)
-        out.append(BranchEvent(kind=kind, parameter=cont.name, value=float(U[-1]), index=idx,
+        out.append(BranchEvent(kind=kind, parameter=cont.problem.name, value=float(U[-1]), index=idx,
                                orbit=o, multiplier=crit_fn(o), _point=U))
 
     if A["fold"] * B["fold"] < 0:
