@@ -5,8 +5,9 @@ A located :class:`BranchEvent` is followed in two parameters at once by the pseu
 of :func:`continue_orbit` (:mod:`impactbar.continuation.engine`) on a minimally augmented system:
 the segment problem of :func:`find_orbit` plus one scalar condition, ``g = 0``. For a fold (period
 doubling) ``g`` is the bordered determinant of ``I - P`` (``I + P``), ``P`` the monodromy matrix:
-the last entry of the solution of ``[[I -+ P, b], [c^T, 0]] (v, g) = (0, 1)`` with ``b``, ``c`` the singular vectors at the start; for
-grazing ``g`` is the clearance (the largest ``u(1, t)`` between impacts, theory §5).
+the last entry of the solution of ``[[I -+ P, b], [c^T, 0]] (v, g) = (0, 1)`` with ``b``, ``c``
+the singular vectors at the start; for grazing ``g`` is the clearance (the largest ``u(1, t)``
+between impacts, theory §5).
 """
 
 from __future__ import annotations
