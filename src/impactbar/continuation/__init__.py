@@ -14,6 +14,8 @@ parameters, an augmented problem on the same engine). Imports the core (``orbits
 
 from .branch import Branch as Branch
 from .branch import BranchEvent as BranchEvent
+from .cascade import DoublingCascade as DoublingCascade
+from .cascade import doubling_cascade as doubling_cascade
 from .core import EVENT_KINDS as EVENT_KINDS
 from .core import continue_orbit as continue_orbit
 from .diagram import simulated_diagram as simulated_diagram
@@ -26,4 +28,4 @@ from .two_parameter import continue_bifurcation as continue_bifurcation
 
 __all__ = ["Branch", "BranchEvent", "EVENT_KINDS", "continue_orbit", "simulated_diagram", "PARAMETERS",
            "parameter_value", "with_parameter", "BifurcationCurve", "continue_bifurcation",
-           "ContinuationSettings"]
+           "ContinuationSettings", "DoublingCascade", "doubling_cascade"]
