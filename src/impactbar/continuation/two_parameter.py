@@ -35,17 +35,17 @@ class BifurcationCurve:
 
     Attributes
     ----------
-    kind : str
-        ``"fold"``, ``"period-doubling"`` or ``"grazing"``.
+    kind : CurveKind
+        A string: ``"fold"``, ``"period-doubling"`` or ``"grazing"``.
     parameters : tuple of str
         ``(first, second)``: the parameter of the branch the event was found on, and the new one.
     values : numpy.ndarray, shape (P, 2)
         The two parameters at each point of the curve.
     orbits : tuple of MultiImpactOrbit, length P
         The critical orbit at each point.
-    status : str
-        Why the continuation stopped: ``"reached"``, ``"max_points"``, ``"step too small"``,
-        ``"parameter range"`` or ``"turned back"``.
+    status : BranchStatus
+        Why the continuation stopped (a string): ``"reached"``, ``"max_points"``,
+        ``"step too small"``, ``"parameter range"`` or ``"turned back"``.
     """
 
     kind: str

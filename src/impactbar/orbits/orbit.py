@@ -301,31 +301,24 @@ multipliers, stable, schur_roots, schur_stable
         efficiency and advance); any other orbit ``impacts``, ``periods`` and the arrays
         ``impact_times``, ``phases``, ``impact_velocities``.
         """
-        if self.schur_roots is None:
-            return {
-                "impacts": self.impacts,
-                "periods": self.periods,
-                "impact_times": self.impact_times.tolist(),
-                "phases": self.phases.tolist(),
-                "impact_velocities": self.impact_velocities.tolist(),
-                "admissible": self.admissible,
-                "admissibility": self.admissibility,
-                "clearance": self.clearance,
-                "stable": self.stable,
-                "max_abs_multiplier": self.max_abs_multiplier,
-                "multipliers": [[m.real, m.imag] for m in self.multipliers],
-            }
-        impact = self.impact
-        return {
-            "phase": self.phase,
-            "multiplicity": self.multiplicity,
-            "impact_velocity": self.impact_velocity,
+        verdict = {  # the same keys, in the same place, in both summaries
             "admissible": self.admissible,
             "admissibility": self.admissibility,
             "clearance": self.clearance,
             "stable": self.stable,
             "max_abs_multiplier": self.max_abs_multiplier,
             "multipliers": [[m.real, m.imag] for m in self.multipliers],
+        }
+        if self.schur_roots is None:
+            return {"impacts": self.impacts, "periods": self.periods,
+                    "impact_times": self.impact_times.tolist(), "phases": self.phases.tolist(),
+                    "impact_velocities": self.impact_velocities.tolist(), **verdict}
+        impact = self.impact
+        return {
+            "phase": self.phase,
+            "multiplicity": self.multiplicity,
+            "impact_velocity": self.impact_velocity,
+            **verdict,
             "schur_stable": self.schur_stable,
             "schur_roots": [[m.real, m.imag] for m in self.schur_roots],
             "impact_law": self.model.impact,
