@@ -56,7 +56,7 @@ class _OrbitProblem:
         # does), so the parameter keeps its share however many modes and impacts there are
         self.W = np.append(np.full(size, 1.0 / size), 1.0)
 
-    def problem(self, lam):
+    def segments(self, lam):
         key = float(lam)
         p = self._cache.get(key)
         if p is None:
@@ -68,37 +68,37 @@ class _OrbitProblem:
         return p
 
     def F(self, U):
-        F, _, _ = self.problem(U[-1]).evaluate(U[:-1], jacobian=False)
+        F, _, _ = self.segments(U[-1]).evaluate(U[:-1], jacobian=False)
         return F
 
     def FJ(self, U, F_lam=None):
         """Residual, the full Jacobian ``[F_u, F_lam]`` and ``F_lam``, by central differences
         unless given (Newton's corrector reuses the one of its first iteration)."""
         u, lam = U[:-1], U[-1]
-        F, DF, _ = self.problem(lam).evaluate(u)
+        F, DF, _ = self.segments(lam).evaluate(u)
         if F_lam is not None:
             return F, np.column_stack((DF, F_lam)), F_lam
         h = 1e-6 * max(1.0, abs(lam))
         try:
-            Fp = self.problem(lam + h).evaluate(u, jacobian=False)[0]
-            Fm = self.problem(lam - h).evaluate(u, jacobian=False)[0]
+            Fp = self.segments(lam + h).evaluate(u, jacobian=False)[0]
+            Fm = self.segments(lam - h).evaluate(u, jacobian=False)[0]
             Fl = (Fp - Fm) / (2 * h)
         except ValueError:  # at the edge of the parameter's range: one-sided
             try:
-                Fl = (self.problem(lam + h).evaluate(u, jacobian=False)[0] - F) / h
+                Fl = (self.segments(lam + h).evaluate(u, jacobian=False)[0] - F) / h
             except ValueError:
-                Fl = (F - self.problem(lam - h).evaluate(u, jacobian=False)[0]) / h
+                Fl = (F - self.segments(lam - h).evaluate(u, jacobian=False)[0]) / h
         return F, np.column_stack((DF, Fl)), Fl
 
     def orbit(self, U, admissibility=True):
         """The orbit at a branch point, its first impact time brought into ``[0, 2 pi)``."""
-        p = self.problem(U[-1])
+        p = self.segments(U[-1])
         u = _normalise(p, U[:-1])
         return _build(p, U[:-1] if u is None else u, admissibility=admissibility)
 
     def acceptable(self, U):
         """The impact times stay in order (and apart by the contact windows)."""
-        return _normalise(self.problem(U[-1]), U[:-1]) is not None
+        return _normalise(self.segments(U[-1]), U[:-1]) is not None
 
     def after_point(self, engine, points, tangents, orbits):
         """The events between the last two points, and the status to stop with (``stop_on``)."""
@@ -234,7 +234,7 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
 def _start(engine, base, lam0, direction):
     """The start point on the branch and its tangent towards ``to``."""
     problem = engine.problem
-    u0 = _unknowns_from(problem.problem(lam0), base.impact_times, base.states_after_impact)
+    u0 = _unknowns_from(problem.segments(lam0), base.impact_times, base.states_after_impact)
     U0 = np.append(u0, lam0)
     F0, J0, _ = problem.FJ(U0)
     if float(np.max(np.abs(F0))) <= 1e-11 * max(1.0, float(np.max(np.abs(U0)))):
@@ -272,12 +272,12 @@ def _switch(engine, ev, lam0, steps):
     return U0, (U1, t1)
 
 
-def _detect(cont, points, tangents, tests, orbits, xtol):
+def _detect(engine, points, tangents, tests, orbits, xtol):
     """Events between the last two points, located in order along the chord."""
     Ua, Ub = points[-2], points[-1]
-    ta = tangents[-2] if tangents[-2] is not None else (Ub - Ua) / cont.norm(Ub - Ua)
+    ta = tangents[-2] if tangents[-2] is not None else (Ub - Ua) / engine.norm(Ub - Ua)
     A, B = tests[-2], tests[-1]
-    hb = cont.dot(ta, Ub - Ua)
+    hb = engine.dot(ta, Ub - Ua)
     idx = len(points) - 1
     out = []
 
@@ -287,7 +287,7 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         if hh == hb:
             return Ub
         pred = Ua + hh * ta
-        U, _ = cont.correct(pred, ta, pred)
+        U, _ = engine.correct(pred, ta, pred)
         return U
 
     def locate(fn):
@@ -295,7 +295,7 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
             U = at(hh)
             if U is None:
                 raise _LocateError
-            return fn(cont.orbit(U, admissibility=fn is _clear or fn is _vmin or fn is _adm))
+            return fn(engine.orbit(U, admissibility=fn is _clear or fn is _vmin or fn is _adm))
 
         try:
             hh = brentq(g, 0.0, hb, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
@@ -307,8 +307,8 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         U = at(hh)
         if U is None:
             return
-        o = cont.orbit(U)
-        out.append(BranchEvent(kind=kind, parameter=cont.problem.name, value=float(U[-1]), index=idx,
+        o = engine.orbit(U)
+        out.append(BranchEvent(kind=kind, parameter=engine.problem.name, value=float(U[-1]), index=idx,
                                orbit=o, multiplier=crit_fn(o), _point=U))
 
     if A["fold"] * B["fold"] < 0:
@@ -325,7 +325,7 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         hh = locate(_ns)
         if hh is not None:
             U = at(hh)
-            o = cont.orbit(U, admissibility=False)
+            o = engine.orbit(U, admissibility=False)
             cpx = o.multipliers[np.abs(o.multipliers.imag) > 1e-8]
             if cpx.size and np.min(np.abs(np.abs(cpx) - 1.0)) < 1e-6:
                 add(EventKind.NEIMARK_SACKER, hh, lambda o: _nearest_circle(o))
@@ -340,25 +340,25 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         if hh is not None:
             add(EventKind.GRAZING, hh, lambda o: complex(math.nan, math.nan))
             grazes.append(hh)
-    if A["admissible"] != B["admissible"] and not _explained(at, cont, hb, grazes, A["admissible"]):
+    if A["admissible"] != B["admissible"] and not _explained(at, engine, hb, grazes, A["admissible"]):
         # e.g. sticking at R = 0, or a grazing the clearance did not show
-        hh = _bisect_flag(at, cont, hb, xtol)
+        hh = _bisect_flag(at, engine, hb, xtol)
         if hh is not None:
             add(EventKind.ADMISSIBILITY, hh, lambda o: complex(math.nan, math.nan))
-    out.sort(key=lambda e: cont.dot(ta, e._point - Ua))
+    out.sort(key=lambda e: engine.dot(ta, e._point - Ua))
     return out
 
 
-def _load_jump(cont, U, index):
+def _load_jump(problem, U, index):
     """Where an impact of the branch reaches a jump of a piecewise-constant load (the flow is not
     differentiable there, and the branch has a corner, e.g. the hydraulic existence edge, Fig. 8):
     Newton on ``F(u, lambda) = 0`` with the impact time nearest a jump pinned to it. Returns a
     ``"load-jump"`` event, or None when no impact is near a jump or Newton fails."""
-    load = cont.problem(U[-1]).load
+    load = problem.segments(U[-1]).load
     if not isinstance(load, PiecewiseConstantLoad):
         return None
-    K = 2 * (cont.model0.n_modes + 1)
-    t = U[:-1].reshape(cont.m, K)[:, 0]
+    K = 2 * (problem.model0.n_modes + 1)
+    t = U[:-1].reshape(problem.m, K)[:, 0]
 
     br = load.breaks
     rel = np.mod(t[:, None] - br[None, :] + math.pi, TWO_PI) - math.pi
@@ -369,7 +369,7 @@ def _load_jump(cont, U, index):
 
     def pinned(V):  # the impact time held on the jump, which moves with the parameter
         V = np.array(V, dtype=float)
-        V[K * j] = cont.problem(V[-1]).load.breaks[b] + shift
+        V[K * j] = problem.segments(V[-1]).load.breaks[b] + shift
         return V
 
     keep = np.ones(U.size, dtype=bool)
@@ -377,13 +377,13 @@ def _load_jump(cont, U, index):
     V = pinned(U)
     for _ in range(30):
         try:
-            F, J, _ = cont.FJ(V)
+            F, J, _ = problem.FJ(V)
             e = np.zeros(V.size)
             e[-1] = 1e-7 * max(1.0, abs(V[-1]))
             try:
-                J[:, -1] = (cont.F(pinned(V + e)) - cont.F(pinned(V - e))) / (2 * e[-1])
+                J[:, -1] = (problem.F(pinned(V + e)) - problem.F(pinned(V - e))) / (2 * e[-1])
             except ValueError:
-                J[:, -1] = (cont.F(pinned(V + e)) - F) / e[-1]
+                J[:, -1] = (problem.F(pinned(V + e)) - F) / e[-1]
         except ValueError:
             return None
         try:
@@ -395,13 +395,13 @@ def _load_jump(cont, U, index):
             V = pinned(V)
         except ValueError:
             return None
-        if float(np.max(np.abs(dV))) <= cont.tol * max(1.0, float(np.max(np.abs(V)))):
+        if float(np.max(np.abs(dV))) <= problem.tol * max(1.0, float(np.max(np.abs(V)))):
             try:
-                o = cont.orbit(V)
+                o = problem.orbit(V)
             except ValueError:
                 return None
-            return BranchEvent(kind=EventKind.LOAD_JUMP, parameter=cont.name, value=float(V[-1]), index=index,
-                               orbit=o, multiplier=complex(math.nan, math.nan), _point=V)
+            return BranchEvent(kind=EventKind.LOAD_JUMP, parameter=problem.name, value=float(V[-1]),
+                               index=index, orbit=o, multiplier=complex(math.nan, math.nan), _point=V)
     return None
 
 
@@ -446,7 +446,7 @@ def _nearest_circle(o):
     return complex(cpx[int(np.argmin(np.abs(np.abs(cpx) - 1.0)))]) if cpx.size else complex(math.nan)
 
 
-def _explained(at, cont, hb, grazes, before):
+def _explained(at, engine, hb, grazes, before):
     """Whether a located grazing point is where the admissibility flag changes: the flag just
     before it (along the chord) is the first point's, just after it the other."""
     for hh in grazes:
@@ -454,20 +454,20 @@ def _explained(at, cont, hb, grazes, before):
         Ua, Ub = at(hh - d if hb > 0 else hh + d), at(hh + d if hb > 0 else hh - d)
         if Ua is None or Ub is None:
             continue
-        if cont.orbit(Ua).admissible == before and cont.orbit(Ub).admissible != before:
+        if engine.orbit(Ua).admissible == before and engine.orbit(Ub).admissible != before:
             return True
     return False
 
 
-def _bisect_flag(at, cont, hb, xtol):
+def _bisect_flag(at, engine, hb, xtol):
     a, b = 0.0, hb
-    fa = cont.orbit(at(a)).admissible
+    fa = engine.orbit(at(a)).admissible
     while abs(b - a) > xtol:
         mid = 0.5 * (a + b)
         U = at(mid)
         if U is None:
             return None
-        if cont.orbit(U).admissible == fa:
+        if engine.orbit(U).admissible == fa:
             a = mid
         else:
             b = mid

@@ -105,7 +105,7 @@ class _BifurcationProblem:
         self.b = self.c = None
         self._cache = {}
 
-    def problem(self, l1, l2):
+    def segments(self, l1, l2):
         key = (float(l1), float(l2))
         p = self._cache.get(key)
         if p is None:
@@ -122,7 +122,7 @@ class _BifurcationProblem:
         return np.eye(P.shape[0]) + (P if self.kind == CurveKind.PERIOD_DOUBLING else -P)
 
     def set_border(self, U):
-        p = self.problem(U[-2], U[-1])
+        p = self.segments(U[-2], U[-1])
         _, _, info = p.evaluate(U[:-2])
         A = self.matrix(p, info)
         uu, _, vt = np.linalg.svd(A)
@@ -131,7 +131,7 @@ class _BifurcationProblem:
     def g(self, U):
         """The test function: minus the clearance (grazing), or the bordered determinant of
         ``I -+ P``: the last entry of the solution of ``[[I -+ P, b], [c^T, 0]] (v, g) = (0, 1)``."""
-        p = self.problem(U[-2], U[-1])
+        p = self.segments(U[-2], U[-1])
         if self.kind == CurveKind.GRAZING:
             u = _normalise(p, U[:-2])
             return -_build(p, U[:-2] if u is None else u).clearance
@@ -146,16 +146,11 @@ class _BifurcationProblem:
         rhs[k] = 1.0
         return float(np.linalg.solve(B, rhs)[k])
 
-    def residual(self, U):
-        """``G(U) = (F, g)``."""
-        F, _, _ = self.problem(U[-2], U[-1]).evaluate(U[:-2], jacobian=False)
-        return np.append(F, self.g(U))
-
     def FJ(self, U, frozen=None):
         """``G``, its Jacobian (``F_u`` exact, the parameter columns and the gradient of ``g`` by
         central differences) and the parameter columns, which Newton's corrector reuses."""
         u, l1, l2 = U[:-2], U[-2], U[-1]
-        F, DF, _ = self.problem(l1, l2).evaluate(u)
+        F, DF, _ = self.segments(l1, l2).evaluate(u)
         g0 = self.g(U)
         if frozen is None:
             cols = []
@@ -164,11 +159,11 @@ class _BifurcationProblem:
                 e = np.zeros(U.size)
                 e[i] = h
                 try:
-                    Fp = self.problem(*(U + e)[-2:]).evaluate(u, jacobian=False)[0]
-                    Fm = self.problem(*(U - e)[-2:]).evaluate(u, jacobian=False)[0]
+                    Fp = self.segments(*(U + e)[-2:]).evaluate(u, jacobian=False)[0]
+                    Fm = self.segments(*(U - e)[-2:]).evaluate(u, jacobian=False)[0]
                     cols.append((Fp - Fm) / (2 * h))
                 except ValueError:  # at the edge of a parameter's range: one-sided
-                    cols.append((self.problem(*(U + e)[-2:]).evaluate(u, jacobian=False)[0] - F) / h)
+                    cols.append((self.segments(*(U + e)[-2:]).evaluate(u, jacobian=False)[0] - F) / h)
             frozen = np.column_stack(cols)
         grad = np.empty(U.size)
         for i in range(U.size):
@@ -183,12 +178,12 @@ class _BifurcationProblem:
         return np.append(F, g0), J, frozen
 
     def orbit(self, U, admissibility=True):
-        p = self.problem(U[-2], U[-1])
+        p = self.segments(U[-2], U[-1])
         u = _normalise(p, U[:-2])
         return _build(p, U[:-2] if u is None else u, admissibility=admissibility)
 
     def acceptable(self, U):
-        return _normalise(self.problem(U[-2], U[-1]), U[:-2]) is not None
+        return _normalise(self.segments(U[-2], U[-1]), U[:-2]) is not None
 
     def after_point(self, engine, points, tangents, orbits):
         """No events on a curve; every 10 points the bordering vectors are renewed (near the
@@ -266,7 +261,7 @@ def continue_bifurcation(event: BranchEvent, parameter: str, to: float, *,
                                   CurveKind(event.kind))
     engine = _Engine(problem, settings.tol)
     with single_threaded_blas():
-        base = problem.problem(l1, l2)
+        base = problem.segments(l1, l2)
         U0 = np.concatenate((_unknowns_from(base, o.impact_times, o.states_after_impact), [l1, l2]))
         if event.kind != CurveKind.GRAZING:
             problem.set_border(U0)
