@@ -18,6 +18,11 @@ The import contract (``[tool.importlinter]`` in ``pyproject.toml``) keeps it so.
 
 import importlib
 
+from ._status import Admissibility as Admissibility
+from ._status import BranchStatus as BranchStatus
+from ._status import CurveKind as CurveKind
+from ._status import EventKind as EventKind
+from ._status import RunStatus as RunStatus
 from ._version import __version__ as __version__
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
@@ -99,4 +104,9 @@ __all__ = [
     "run_sweep",
     "plot_sweep",
     "physical",
+    "Admissibility",
+    "RunStatus",
+    "BranchStatus",
+    "EventKind",
+    "CurveKind",
 ]

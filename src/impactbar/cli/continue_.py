@@ -124,7 +124,7 @@ def check_options(args) -> None:
 
 
 def run(args) -> int:
-    from ..continuation import continue_orbit, parameter_value, simulated_diagram
+    from ..continuation import doubling_cascade, parameter_value, simulated_diagram
 
     check_options(args)
     model, load = _model_and_load(args)
@@ -134,12 +134,8 @@ def run(args) -> int:
         raise ValueError(f"--brute must be >= 0; got {args.brute}")
     start = _start(model, load, args)
     kw = {"step": args.step, "max_step": args.max_step, "max_points": args.max_points}
-    branches = [continue_orbit(start, args.parameter, args.to, **kw)]
-    for _ in range(args.doublings):
-        pd = [e for e in branches[-1].events if e.kind == "period-doubling"]
-        if not pd:
-            break
-        branches.append(continue_orbit(pd[0], args.parameter, args.to, **kw))
+    branches = list(doubling_cascade(start, args.parameter, args.to, doublings=args.doublings,
+                                     **kw).branches)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     written = []

@@ -28,8 +28,8 @@ class BranchEvent:
 
     Attributes
     ----------
-    kind : str
-        ``"fold"`` (a multiplier through ``+1`` where the branch turns back in the parameter),
+    kind : EventKind
+        A string: ``"fold"`` (a multiplier through ``+1`` where the branch turns back in the parameter),
         ``"branch-point"`` (a multiplier through ``+1`` without a turn), ``"period-doubling"``
         (``-1``), ``"neimark-sacker"`` (a complex pair through the unit circle), ``"grazing"`` (the
         end touches the stop between impacts, or an impact velocity goes through 0) or
@@ -76,11 +76,13 @@ class Branch:
         The motion at each point (admissibility and multipliers included).
     events : tuple of BranchEvent
         Located special points, in the order met.
-    status : str
-        Why the continuation stopped: ``"reached"`` (the target value), ``"max_points"``,
-        ``"step too small"`` (Newton failed at the smallest step), ``"parameter range"`` (the
-        parameter left its allowed range), ``"turned back"`` (a fold led out of the range between
-        start and target), or ``"stopped at <event kind>"``.
+    status : BranchStatus
+        Why the continuation stopped (a string; ``status.message`` explains it): ``"reached"``
+        (the target value), ``"max_points"``, ``"step too small"`` (Newton failed at the smallest
+        step), ``"parameter range"`` (the parameter left its allowed range), ``"turned back"`` (a
+        fold led out of the range between start and target), ``"impact at a load jump"`` (the
+        branch has a corner where an impact meets a jump of the load) or
+        ``"stopped at <event kind>"``.
     impacts, periods : int
         ``m`` and ``n``.
     """

@@ -17,48 +17,46 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from .._status import BranchStatus, EventKind
 from .._threads import single_threaded_blas
 from .._validate import check_real
 from ..loads import PiecewiseConstantLoad
 from ..orbits.multi_impact import (
-    MultiImpactOrbit,
     _build,
     _normalise,
     _Segments,
     _unknowns_from,
     doubling_direction,
 )
-from ..orbits.one_impact import PeriodicOrbit
+from ..orbits.orbit import PeriodicOrbit
 from .branch import Branch, BranchEvent
-from .parameters import _check_parameter, _steps, parameter_value, with_parameter
+from .engine import ContinuationSettings, _Engine, _settings
+from .parameters import _check_parameter, _target, parameter_value, with_parameter
 
 __all__ = ["continue_orbit", "EVENT_KINDS"]
 
 TWO_PI = 2.0 * math.pi
 
 #: Event kinds, in the order they are reported.
-EVENT_KINDS = ("fold", "branch-point", "period-doubling", "neimark-sacker", "grazing", "admissibility",
-               "load-jump")
+EVENT_KINDS = tuple(EventKind)
 
 # ------------------------------------------------------------------------------------------------
-# the continuation engine
+# the augmented problem of a branch: the segment problem in (u, lambda)
 # ------------------------------------------------------------------------------------------------
-class _Continuation:
-    def __init__(self, model, load, name, m, n, tol):
+class _OrbitProblem:
+    """The segment problem of :func:`find_orbit` in ``U = (u, lambda)``, for the engine
+    (:mod:`impactbar.continuation.engine`), with the branch's event detection."""
+
+    def __init__(self, model, load, name, m, n, tol, *, events=True, stop_on=(), xtol=1e-10):
         self.model0, self.load0, self.name, self.m, self.n, self.tol = model, load, name, m, n, tol
+        self.events, self.stop_on, self.xtol = events, stop_on, xtol
         self._cache = {}
         size = 2 * (model.n_modes + 1) * m
         # weighted arclength: the state's squared norm is averaged over its components (as AUTO
         # does), so the parameter keeps its share however many modes and impacts there are
         self.W = np.append(np.full(size, 1.0 / size), 1.0)
 
-    def dot(self, a, b):
-        return float(a @ (self.W * b))
-
-    def norm(self, a):
-        return math.sqrt(self.dot(a, a))
-
-    def problem(self, lam):
+    def segments(self, lam):
         key = float(lam)
         p = self._cache.get(key)
         if p is None:
@@ -70,83 +68,52 @@ class _Continuation:
         return p
 
     def F(self, U):
-        F, _, _ = self.problem(U[-1]).evaluate(U[:-1], jacobian=False)
+        F, _, _ = self.segments(U[-1]).evaluate(U[:-1], jacobian=False)
         return F
 
     def FJ(self, U, F_lam=None):
-        """Residual and the full Jacobian ``[F_u, F_lam]``, ``F_lam`` by central differences unless
-        given (Newton's corrector reuses the one of its first iteration)."""
+        """Residual, the full Jacobian ``[F_u, F_lam]`` and ``F_lam``, by central differences
+        unless given (Newton's corrector reuses the one of its first iteration)."""
         u, lam = U[:-1], U[-1]
-        F, DF, info = self.problem(lam).evaluate(u)
+        F, DF, _ = self.segments(lam).evaluate(u)
         if F_lam is not None:
-            return F, np.column_stack((DF, F_lam)), info
+            return F, np.column_stack((DF, F_lam)), F_lam
         h = 1e-6 * max(1.0, abs(lam))
         try:
-            Fp = self.problem(lam + h).evaluate(u, jacobian=False)[0]
-            Fm = self.problem(lam - h).evaluate(u, jacobian=False)[0]
+            Fp = self.segments(lam + h).evaluate(u, jacobian=False)[0]
+            Fm = self.segments(lam - h).evaluate(u, jacobian=False)[0]
             Fl = (Fp - Fm) / (2 * h)
         except ValueError:  # at the edge of the parameter's range: one-sided
             try:
-                Fl = (self.problem(lam + h).evaluate(u, jacobian=False)[0] - F) / h
+                Fl = (self.segments(lam + h).evaluate(u, jacobian=False)[0] - F) / h
             except ValueError:
-                Fl = (F - self.problem(lam - h).evaluate(u, jacobian=False)[0]) / h
-        return F, np.column_stack((DF, Fl)), info
-
-    def tangent(self, U, t_prev, J=None):
-        """Unit tangent (weighted norm) at ``U``: the null vector of ``[F_u, F_lam]``, oriented along
-        ``t_prev``; ``J`` is that Jacobian if already at hand."""
-        if J is None:
-            _, J, _ = self.FJ(U)
-        A = np.vstack((J, self.W * t_prev))
-        rhs = np.zeros(A.shape[0])
-        rhs[-1] = 1.0
-        t = np.linalg.solve(A, rhs)
-        t /= self.norm(t)
-        if self.dot(t, t_prev) < 0:
-            t = -t
-        return t
-
-    def correct(self, U_pred, normal, anchor, *, max_iter=10):
-        """Newton on ``F(U) = 0``, ``<normal, U - anchor> = 0`` (weighted). Returns
-        ``(U, iterations)`` or ``(None, iterations)``; the last Jacobian is kept in ``last_J`` (for
-        the tangent at the new point: the last step is below the tolerance)."""
-        U = np.array(U_pred, dtype=float)
-        self.last_J = None
-        normal = self.W * normal
-        F_lam = prev = None
-        for it in range(1, max_iter + 1):
-            try:
-                F, J, _ = self.FJ(U, F_lam)
-            except ValueError:
-                return None, it
-            F_lam = J[:, -1]
-            if not (np.all(np.isfinite(F)) and np.all(np.isfinite(J))):
-                return None, it
-            G = np.append(F, normal @ (U - anchor))
-            A = np.vstack((J, normal))
-            try:
-                dU = np.linalg.solve(A, G)
-            except np.linalg.LinAlgError:
-                return None, it
-            U = U - dU
-            step, scale = float(np.max(np.abs(dU))), max(1.0, float(np.max(np.abs(U))))
-            # converged when this step, or the next one predicted from the rate of the last two,
-            # is below the tolerance (saves the evaluation that would only confirm it)
-            if step <= self.tol * scale or (prev is not None and step < 1e-6 * scale
-                                            and step * step / prev <= 0.1 * self.tol * scale):
-                self.last_J = J
-                return U, it
-            prev = step
-        return None, max_iter
+                Fl = (F - self.segments(lam - h).evaluate(u, jacobian=False)[0]) / h
+        return F, np.column_stack((DF, Fl)), Fl
 
     def orbit(self, U, admissibility=True):
         """The orbit at a branch point, its first impact time brought into ``[0, 2 pi)``."""
-        p = self.problem(U[-1])
+        p = self.segments(U[-1])
         u = _normalise(p, U[:-1])
         return _build(p, U[:-1] if u is None else u, admissibility=admissibility)
 
+    def acceptable(self, U):
+        """The impact times stay in order (and apart by the contact windows)."""
+        return _normalise(self.segments(U[-1]), U[:-1]) is not None
 
-def _tests(orbit: MultiImpactOrbit):
+    def after_point(self, engine, points, tangents, orbits):
+        """The events between the last two points, and the status to stop with (``stop_on``)."""
+        if not self.events:
+            return [], None
+        new = _detect(engine, points, tangents, [_tests(o) for o in orbits[-2:]], orbits, self.xtol)
+        hit = [e for e in new if e.kind in self.stop_on]
+        return new, (BranchStatus.stopped_at(hit[0].kind) if hit else None)
+
+    def corner(self, engine, U, index):
+        """A load-jump event where the steps fail or stay tiny (:func:`_load_jump`)."""
+        return _load_jump(self, U, index)
+
+
+def _tests(orbit: PeriodicOrbit):
     """Test functions at a point: ``det(I - P)``, ``det(I + P)``, the Neimark-Sacker function and its
     number of complex pairs, the clearance and the smallest impact velocity."""
     mu = orbit.multipliers
@@ -159,10 +126,10 @@ def _tests(orbit: MultiImpactOrbit):
             "admissible": orbit.admissible}
 
 
-def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = None,
-                   max_step: float | None = None, min_step: float | None = None,
-                   max_points: int = 2000, events: bool = True, stop_on=(), tol: float = 1e-11,
-                   xtol: float = 1e-10) -> Branch:
+def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSettings | None = None,
+                   step: float | None = None, max_step: float | None = None,
+                   min_step: float | None = None, max_points: int | None = None, events: bool = True,
+                   stop_on=(), tol: float | None = None, xtol: float = 1e-10) -> Branch:
     """Follow a periodic motion as one parameter changes, by pseudo-arclength continuation.
 
     Each step predicts along the branch's tangent (the null vector of ``[F_u, F_lambda]`` of the
@@ -187,19 +154,18 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
         Target value; the branch stops there, or where it leaves the range between the start and
         ``to`` after a fold. A branch started at a period doubling may bifurcate to either side:
         it is followed while the parameter stays within ``|to - start|`` of the doubling.
-    step, max_step, min_step : float, optional
-        Initial, largest and smallest arclength steps, in a weighted norm: the squared norm of the
-        unknowns (impact times, reduced modal states) averaged over their number, plus the
-        parameter's square (as AUTO weighs a state against the parameter); defaults
-        ``|to - start| / 50``, ``/ 10`` and ``1e-9`` times that.
-    max_points : int
-        Largest number of branch points.
+    settings : ContinuationSettings, optional
+        Steps, point limit and Newton tolerance (the same object :func:`continue_bifurcation`
+        takes); default ``ContinuationSettings()``.
+    step, max_step, min_step, max_points, tol : optional
+        Override the fields of ``settings`` of the same names (see
+        :class:`ContinuationSettings`: arclength steps in a weighted norm, defaults
+        ``|to - start| / 50``, ``/ 10`` and ``1e-9`` times that; at most 2000 points; relative
+        Newton tolerance ``1e-11``).
     events : bool
         Detect and locate events.
     stop_on : iterable of str
-        Event kinds at which to stop (e.g. ``("grazing",)``).
-    tol : float
-        Relative Newton tolerance at each point.
+        Event kinds at which to stop (e.g. ``("grazing",)``), from :class:`EventKind`.
     xtol : float
         Tolerance of the event location in the chord's arclength (the parameter is then located to
         about the same).
@@ -224,11 +190,11 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
     """
     switch = None
     if isinstance(orbit, BranchEvent):
-        if orbit.kind != "period-doubling":
-            raise ValueError(f"a BranchEvent start must be a period doubling; got {orbit.kind!r}")
+        if orbit.kind != EventKind.PERIOD_DOUBLING:
+            raise ValueError(f"a BranchEvent start must be a period doubling; got {str(orbit.kind)!r}")
         switch = orbit
         base = orbit.orbit
-    elif isinstance(orbit, PeriodicOrbit | MultiImpactOrbit):
+    elif isinstance(orbit, PeriodicOrbit):
         base = orbit
     else:
         raise ValueError(f"orbit must be a PeriodicOrbit, MultiImpactOrbit or BranchEvent; got "
@@ -236,160 +202,82 @@ def continue_orbit(orbit, parameter: str, to: float, *, step: float | None = Non
     model, load = base.model, base.load
     _check_parameter(model, load, parameter)
     lam0 = parameter_value(model, load, parameter)
-    to, step, max_step, min_step, max_points = _steps(parameter, lam0, to, step, max_step, min_step,
-                                                       max_points, (1 / 50, 1 / 10, 1e-9))
-    tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
+    to = _target(parameter, lam0, to)
+    settings = _settings(settings, step=step, max_step=max_step, min_step=min_step,
+                         max_points=max_points, tol=tol)
+    steps = settings.steps(abs(to - lam0))
     xtol = check_real("xtol", xtol, lo=0.0, lo_open=True, hi=1e-2)
     stop_on = tuple(stop_on)
     for k in stop_on:
         if k not in EVENT_KINDS:
             raise ValueError(f"stop_on must hold event kinds from {EVENT_KINDS}; got {k!r}")
     direction = 1.0 if to > lam0 else -1.0
-
-    if isinstance(base, PeriodicOrbit):
-        times, states, m, n = np.array([base.phase]), base.state_after_impact[None, :], 1, 1
-    else:
-        times, states, m, n = base.impact_times, base.states_after_impact, base.impacts, base.periods
+    m, n = (2 * base.impacts, 2 * base.periods) if switch is not None else (base.impacts, base.periods)
+    problem = _OrbitProblem(model, load, parameter, m, n, settings.tol, events=events,
+                            stop_on=stop_on, xtol=xtol)
+    engine = _Engine(problem, settings.tol)
+    lo, hi = min(lam0, to), max(lam0, to)
     with single_threaded_blas():
         if switch is not None:
-            return _run_switch(switch, parameter, lam0, to, direction, step, max_step, min_step,
-                               max_points, events, stop_on, tol, xtol)
-        cont = _Continuation(model, load, parameter, m, n, tol)
-        u0 = _unknowns_from(cont.problem(lam0), times, states)
-        U0 = np.append(u0, lam0)
-        F0, J0, _ = cont.FJ(U0)
-        if float(np.max(np.abs(F0))) <= 1e-11 * max(1.0, float(np.max(np.abs(U0)))):
-            cont.last_J = J0  # already a solution (at a fold, Newton at fixed parameter is singular)
+            U0, first = _switch(engine, switch, lam0, steps)
+            t0 = None
+            lo, hi = lam0 - abs(to - lam0), lam0 + abs(to - lam0)  # it may leave on either side
         else:
-            U0, _ = cont.correct(U0, np.eye(U0.size)[-1], U0)
-            if U0 is None:
-                raise ValueError("orbit: Newton at the start value did not converge; is it a solution?")
-        # the tangent: the null vector of [F_u, F_lam] (by SVD: also at a fold), towards `to`
-        t0 = np.linalg.svd(cont.last_J)[2][-1]
-        t0 /= cont.norm(t0)
-        if t0[-1] * direction < 0:
-            t0 = -t0
-        return _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points, events,
-                    stop_on, xtol)
+            U0, t0 = _start(engine, base, lam0, direction)
+            first = None
+        P, orbits, found, status = engine.march(U0, t0, to, direction, lo, hi, steps,
+                                                settings.max_points, first=first)
+    return Branch(parameter=parameter, values=P[:, -1].copy(), orbits=orbits, events=tuple(found),
+                  status=status, impacts=m, periods=n, _points=P)
 
 
-def _run_switch(ev, parameter, lam0, to, direction, step, max_step, min_step, max_points, events,
-                stop_on, tol, xtol):
+def _start(engine, base, lam0, direction):
+    """The start point on the branch and its tangent towards ``to``."""
+    problem = engine.problem
+    u0 = _unknowns_from(problem.segments(lam0), base.impact_times, base.states_after_impact)
+    U0 = np.append(u0, lam0)
+    F0, J0, _ = problem.FJ(U0)
+    if float(np.max(np.abs(F0))) <= 1e-11 * max(1.0, float(np.max(np.abs(U0)))):
+        engine.last_J = J0  # already a solution (at a fold, Newton at fixed parameter is singular)
+    else:
+        U0, _ = engine.correct(U0, np.eye(U0.size)[-1], U0)
+        if U0 is None:
+            raise ValueError("orbit: Newton at the start value did not converge; is it a solution?")
+    # the tangent: the null vector of [F_u, F_lam] (by SVD: also at a fold), towards `to`
+    t0 = np.linalg.svd(engine.last_J)[2][-1]
+    t0 /= engine.norm(t0)
+    if t0[-1] * direction < 0:
+        t0 = -t0
+    return U0, t0
+
+
+def _switch(engine, ev, lam0, steps):
     """Branch switching at a period doubling: the doubled orbit's branch, started along the null
     vector ``(e, P_1 e, ..., -e, -P_1 e, ...)`` built from the eigenvector ``e`` of the multiplier
-    ``-1``."""
-    o = ev.orbit
-    m0, n0 = o.impacts, o.periods
-    cont = _Continuation(o.model, o.load, parameter, 2 * m0, 2 * n0, tol)
-    z, w = doubling_direction(o)
+    ``-1``. Returns the doubling point and ``(U1, t1)``, the first point of the doubled branch and
+    its tangent."""
+    z, w = doubling_direction(ev.orbit)
     U0 = np.append(z, lam0)
     w = np.append(w, 0.0)
-    w /= cont.norm(w)
-    h = step
+    w /= engine.norm(w)
+    h, _, min_step = steps
     while h >= min_step:
-        U1, _ = cont.correct(U0 + h * w, w, U0 + h * w)
+        U1, _ = engine.correct(U0 + h * w, w, U0 + h * w)
         if U1 is not None and float(np.max(np.abs(U1[:-1] - U0[:-1]))) > 1e-3 * h:
             break
         h *= 0.5
     else:
         raise ValueError("branch switching at the period doubling failed: no doubled orbit found")
-    t1 = cont.tangent(U1, (U1 - U0) / cont.norm(U1 - U0))
-    return _run(cont, U0, None, lam0, to, direction, step, max_step, min_step, max_points, events,
-                stop_on, xtol, first=(U1, t1))
+    t1 = engine.tangent(U1, (U1 - U0) / engine.norm(U1 - U0))
+    return U0, (U1, t1)
 
 
-def _run(cont, U0, t0, lam0, to, direction, step, max_step, min_step, max_points, events, stop_on,
-         xtol, first=None):
-    lo, hi = min(lam0, to), max(lam0, to)
-    if first is not None:  # a branch born at a period doubling may leave on either side
-        lo, hi = lam0 - abs(to - lam0), lam0 + abs(to - lam0)
-    points = [U0]
-    orbits = [cont.orbit(U0)]
-    tests = [_tests(orbits[0])]
-    tangents = [t0]
-    found: list[BranchEvent] = []
-    status = "max_points"
-    h = step
-    pending_first = first
-    stalled = 0
-    while len(points) < max_points:
-        Ua, ta = points[-1], tangents[-1]
-        if pending_first is not None:
-            Ub, tb = pending_first
-            pending_first = None
-            it = 1
-        else:
-            Ub = None
-            while h >= min_step:
-                pred = Ua + h * ta
-                final = (pred[-1] - to) * direction > 0 and (Ua[-1] - to) * direction < 0
-                if final:
-                    Ub, it = cont.correct(Ua + ta * (to - Ua[-1]) / ta[-1], np.eye(Ua.size)[-1],
-                                          np.append(Ua[:-1], to))
-                else:
-                    Ub, it = cont.correct(pred, ta, pred)
-                if Ub is not None:
-                    ok_dir = True
-                    tb = cont.tangent(Ub, ta, cont.last_J) if not final else ta
-                    if not final and cont.dot(tb, ta) < 0.8:
-                        ok_dir = False
-                    dist = cont.norm(Ub - Ua)
-                    if ok_dir and dist < 3 * h + 1e-12 and _normalise(cont.problem(Ub[-1]), Ub[:-1]) \
-                            is not None:
-                        break
-                Ub = None
-                h *= 0.5
-            if Ub is None:
-                status = "step too small"
-                corner = _load_jump(cont, Ua, len(points) - 1)
-                if corner is not None:
-                    found.append(corner)
-                    status = "impact at a load jump"
-                break
-        try:
-            ob = cont.orbit(Ub)
-        except ValueError:
-            status = "parameter range"
-            break
-        points.append(Ub)
-        orbits.append(ob)
-        tests.append(_tests(ob))
-        tangents.append(tb)
-        if events:
-            new = _detect(cont, points, tangents, tests, orbits, xtol)
-            found.extend(new)
-            hit = [e for e in new if e.kind in stop_on]
-            if hit:
-                status = f"stopped at {hit[0].kind}"
-                break
-        if abs(Ub[-1] - to) <= 1e-14 * max(1.0, abs(to)):
-            status = "reached"
-            break
-        if Ub[-1] < lo - 1e-12 * max(1.0, abs(lo)) or Ub[-1] > hi + 1e-12 * max(1.0, abs(hi)):
-            status = "turned back"
-            break
-        if it <= 3:
-            h = min(h * 1.6, max_step)
-        elif it >= 6:
-            h = max(h * 0.6, min_step)
-        stalled = stalled + 1 if h < 1e-4 * max_step else 0
-        if stalled >= 8:  # steps stay tiny: an impact running into a jump of the load is a corner
-            corner = _load_jump(cont, Ub, len(points) - 1)
-            if corner is not None:
-                found.append(corner)
-                status = "impact at a load jump"
-                break
-    P = np.array(points)
-    return Branch(parameter=cont.name, values=P[:, -1].copy(), orbits=tuple(orbits),
-                  events=tuple(found), status=status, impacts=cont.m, periods=cont.n, _points=P)
-
-
-def _detect(cont, points, tangents, tests, orbits, xtol):
+def _detect(engine, points, tangents, tests, orbits, xtol):
     """Events between the last two points, located in order along the chord."""
     Ua, Ub = points[-2], points[-1]
-    ta = tangents[-2] if tangents[-2] is not None else (Ub - Ua) / cont.norm(Ub - Ua)
+    ta = tangents[-2] if tangents[-2] is not None else (Ub - Ua) / engine.norm(Ub - Ua)
     A, B = tests[-2], tests[-1]
-    hb = cont.dot(ta, Ub - Ua)
+    hb = engine.dot(ta, Ub - Ua)
     idx = len(points) - 1
     out = []
 
@@ -399,7 +287,7 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         if hh == hb:
             return Ub
         pred = Ua + hh * ta
-        U, _ = cont.correct(pred, ta, pred)
+        U, _ = engine.correct(pred, ta, pred)
         return U
 
     def locate(fn):
@@ -407,7 +295,7 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
             U = at(hh)
             if U is None:
                 raise _LocateError
-            return fn(cont.orbit(U, admissibility=fn is _clear or fn is _vmin or fn is _adm))
+            return fn(engine.orbit(U, admissibility=fn is _clear or fn is _vmin or fn is _adm))
 
         try:
             hh = brentq(g, 0.0, hb, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200)
@@ -419,8 +307,8 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         U = at(hh)
         if U is None:
             return
-        o = cont.orbit(U)
-        out.append(BranchEvent(kind=kind, parameter=cont.name, value=float(U[-1]), index=idx,
+        o = engine.orbit(U)
+        out.append(BranchEvent(kind=kind, parameter=engine.problem.name, value=float(U[-1]), index=idx,
                                orbit=o, multiplier=crit_fn(o), _point=U))
 
     if A["fold"] * B["fold"] < 0:
@@ -428,49 +316,49 @@ def _detect(cont, points, tangents, tests, orbits, xtol):
         if hh is not None:
             turned = (tangents[-2] is not None and tangents[-1] is not None
                       and tangents[-2][-1] * tangents[-1][-1] < 0)
-            add("fold" if turned else "branch-point", hh, lambda o: _nearest(o, 1.0))
+            add(EventKind.FOLD if turned else EventKind.BRANCH_POINT, hh, lambda o: _nearest(o, 1.0))
     if A["period-doubling"] * B["period-doubling"] < 0:
         hh = locate(_pd)
         if hh is not None:
-            add("period-doubling", hh, lambda o: _nearest(o, -1.0))
+            add(EventKind.PERIOD_DOUBLING, hh, lambda o: _nearest(o, -1.0))
     if A["pairs"] == B["pairs"] and A["pairs"] and A["neimark-sacker"] * B["neimark-sacker"] < 0:
         hh = locate(_ns)
         if hh is not None:
             U = at(hh)
-            o = cont.orbit(U, admissibility=False)
+            o = engine.orbit(U, admissibility=False)
             cpx = o.multipliers[np.abs(o.multipliers.imag) > 1e-8]
             if cpx.size and np.min(np.abs(np.abs(cpx) - 1.0)) < 1e-6:
-                add("neimark-sacker", hh, lambda o: _nearest_circle(o))
+                add(EventKind.NEIMARK_SACKER, hh, lambda o: _nearest_circle(o))
     grazes = []  # chord positions of the located grazing points
     if np.isfinite(A["grazing"]) and np.isfinite(B["grazing"]) and A["grazing"] * B["grazing"] < 0:
         hh = locate(_clear)
         if hh is not None:
-            add("grazing", hh, lambda o: complex(math.nan, math.nan))
+            add(EventKind.GRAZING, hh, lambda o: complex(math.nan, math.nan))
             grazes.append(hh)
     if A["impact"] * B["impact"] < 0:
         hh = locate(_vmin)
         if hh is not None:
-            add("grazing", hh, lambda o: complex(math.nan, math.nan))
+            add(EventKind.GRAZING, hh, lambda o: complex(math.nan, math.nan))
             grazes.append(hh)
-    if A["admissible"] != B["admissible"] and not _explained(at, cont, hb, grazes, A["admissible"]):
+    if A["admissible"] != B["admissible"] and not _explained(at, engine, hb, grazes, A["admissible"]):
         # e.g. sticking at R = 0, or a grazing the clearance did not show
-        hh = _bisect_flag(at, cont, hb, xtol)
+        hh = _bisect_flag(at, engine, hb, xtol)
         if hh is not None:
-            add("admissibility", hh, lambda o: complex(math.nan, math.nan))
-    out.sort(key=lambda e: cont.dot(ta, e._point - Ua))
+            add(EventKind.ADMISSIBILITY, hh, lambda o: complex(math.nan, math.nan))
+    out.sort(key=lambda e: engine.dot(ta, e._point - Ua))
     return out
 
 
-def _load_jump(cont, U, index):
+def _load_jump(problem, U, index):
     """Where an impact of the branch reaches a jump of a piecewise-constant load (the flow is not
     differentiable there, and the branch has a corner, e.g. the hydraulic existence edge, Fig. 8):
     Newton on ``F(u, lambda) = 0`` with the impact time nearest a jump pinned to it. Returns a
     ``"load-jump"`` event, or None when no impact is near a jump or Newton fails."""
-    load = cont.problem(U[-1]).load
+    load = problem.segments(U[-1]).load
     if not isinstance(load, PiecewiseConstantLoad):
         return None
-    K = 2 * (cont.model0.n_modes + 1)
-    t = U[:-1].reshape(cont.m, K)[:, 0]
+    K = 2 * (problem.model0.n_modes + 1)
+    t = U[:-1].reshape(problem.m, K)[:, 0]
 
     br = load.breaks
     rel = np.mod(t[:, None] - br[None, :] + math.pi, TWO_PI) - math.pi
@@ -481,7 +369,7 @@ def _load_jump(cont, U, index):
 
     def pinned(V):  # the impact time held on the jump, which moves with the parameter
         V = np.array(V, dtype=float)
-        V[K * j] = cont.problem(V[-1]).load.breaks[b] + shift
+        V[K * j] = problem.segments(V[-1]).load.breaks[b] + shift
         return V
 
     keep = np.ones(U.size, dtype=bool)
@@ -489,13 +377,13 @@ def _load_jump(cont, U, index):
     V = pinned(U)
     for _ in range(30):
         try:
-            F, J, _ = cont.FJ(V)
+            F, J, _ = problem.FJ(V)
             e = np.zeros(V.size)
             e[-1] = 1e-7 * max(1.0, abs(V[-1]))
             try:
-                J[:, -1] = (cont.F(pinned(V + e)) - cont.F(pinned(V - e))) / (2 * e[-1])
+                J[:, -1] = (problem.F(pinned(V + e)) - problem.F(pinned(V - e))) / (2 * e[-1])
             except ValueError:
-                J[:, -1] = (cont.F(pinned(V + e)) - F) / e[-1]
+                J[:, -1] = (problem.F(pinned(V + e)) - F) / e[-1]
         except ValueError:
             return None
         try:
@@ -507,13 +395,13 @@ def _load_jump(cont, U, index):
             V = pinned(V)
         except ValueError:
             return None
-        if float(np.max(np.abs(dV))) <= cont.tol * max(1.0, float(np.max(np.abs(V)))):
+        if float(np.max(np.abs(dV))) <= problem.tol * max(1.0, float(np.max(np.abs(V)))):
             try:
-                o = cont.orbit(V)
+                o = problem.orbit(V)
             except ValueError:
                 return None
-            return BranchEvent(kind="load-jump", parameter=cont.name, value=float(V[-1]), index=index,
-                               orbit=o, multiplier=complex(math.nan, math.nan), _point=V)
+            return BranchEvent(kind=EventKind.LOAD_JUMP, parameter=problem.name, value=float(V[-1]),
+                               index=index, orbit=o, multiplier=complex(math.nan, math.nan), _point=V)
     return None
 
 
@@ -558,7 +446,7 @@ def _nearest_circle(o):
     return complex(cpx[int(np.argmin(np.abs(np.abs(cpx) - 1.0)))]) if cpx.size else complex(math.nan)
 
 
-def _explained(at, cont, hb, grazes, before):
+def _explained(at, engine, hb, grazes, before):
     """Whether a located grazing point is where the admissibility flag changes: the flag just
     before it (along the chord) is the first point's, just after it the other."""
     for hh in grazes:
@@ -566,20 +454,20 @@ def _explained(at, cont, hb, grazes, before):
         Ua, Ub = at(hh - d if hb > 0 else hh + d), at(hh + d if hb > 0 else hh - d)
         if Ua is None or Ub is None:
             continue
-        if cont.orbit(Ua).admissible == before and cont.orbit(Ub).admissible != before:
+        if engine.orbit(Ua).admissible == before and engine.orbit(Ub).admissible != before:
             return True
     return False
 
 
-def _bisect_flag(at, cont, hb, xtol):
+def _bisect_flag(at, engine, hb, xtol):
     a, b = 0.0, hb
-    fa = cont.orbit(at(a)).admissible
+    fa = engine.orbit(at(a)).admissible
     while abs(b - a) > xtol:
         mid = 0.5 * (a + b)
         U = at(mid)
         if U is None:
             return None
-        if cont.orbit(U).admissible == fa:
+        if engine.orbit(U).admissible == fa:
             a = mid
         else:
             b = mid

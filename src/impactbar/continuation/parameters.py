@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .._validate import check_int, check_real
+from .._validate import check_real
 from ..loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 
@@ -92,16 +92,9 @@ def _check_parameter(model, load, name):
                      "use R, d or s (or p0 for a FourierLoad)")
 
 
-def _steps(parameter, start, to, step, max_step, min_step, max_points, fractions):
-    """Checked ``(to, step, max_step, min_step, max_points)``; the step defaults are the
-    ``fractions = (initial, largest, smallest)`` of ``|to - start|``."""
+def _target(parameter, start, to):
+    """The checked target value ``to`` of a continuation in ``parameter`` from ``start``."""
     to = check_real("to", to)
     if to == start:
         raise ValueError(f"to must differ from the start value {parameter} = {start}")
-    span = abs(to - start)
-    step = span * fractions[0] if step is None else check_real("step", step, lo=0.0, lo_open=True)
-    max_step = span * fractions[1] if max_step is None else check_real("max_step", max_step, lo=0.0,
-                                                                       lo_open=True)
-    min_step = span * fractions[2] if min_step is None else check_real("min_step", min_step, lo=0.0,
-                                                                       lo_open=True)
-    return to, min(step, max_step), max_step, min_step, check_int("max_points", max_points, lo=2)
+    return to

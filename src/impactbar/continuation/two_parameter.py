@@ -1,31 +1,32 @@
 """Two-parameter continuation of folds, period doublings and grazing (the chart edges of the paper's
 Figs. 5, 6, 8 and their analogues for motions with several impacts; theory §5-§7).
 
-A located :class:`BranchEvent` is followed in two parameters at once by pseudo-arclength
-continuation of a minimally augmented system: the segment problem of :func:`find_orbit` plus one
-scalar condition, ``g = 0``. For a fold (period doubling) ``g`` is the bordered determinant of
-``I - P`` (``I + P``), ``P`` the monodromy matrix: the last entry of the solution of
-``[[I -+ P, b], [c^T, 0]] (v, g) = (0, 1)`` with ``b``, ``c`` the singular vectors at the start; for
-grazing ``g`` is the clearance (the largest ``u(1, t)`` between impacts, theory §5).
+A located :class:`BranchEvent` is followed in two parameters at once by the pseudo-arclength engine
+of :func:`continue_orbit` (:mod:`impactbar.continuation.engine`) on a minimally augmented system:
+the segment problem of :func:`find_orbit` plus one scalar condition, ``g = 0``. For a fold (period
+doubling) ``g`` is the bordered determinant of ``I - P`` (``I + P``), ``P`` the monodromy matrix:
+the last entry of the solution of ``[[I -+ P, b], [c^T, 0]] (v, g) = (0, 1)`` with ``b``, ``c``
+the singular vectors at the start; for grazing ``g`` is the clearance (the largest ``u(1, t)``
+between impacts, theory §5).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._status import CurveKind
 from .._threads import single_threaded_blas
-from .._validate import check_real
 from ..orbits.multi_impact import _build, _normalise, _Segments, _unknowns_from
 from .branch import BranchEvent
-from .parameters import _check_parameter, _steps, parameter_value, with_parameter
+from .engine import ContinuationSettings, _Engine, _settings
+from .parameters import _check_parameter, _target, parameter_value, with_parameter
 
 __all__ = ["BifurcationCurve", "continue_bifurcation"]
 
 #: Event kinds a two-parameter curve can follow.
-CURVE_KINDS = ("fold", "period-doubling", "grazing")
+CURVE_KINDS = tuple(CurveKind)
 
 
 @dataclass(frozen=True, eq=False)
@@ -34,17 +35,17 @@ class BifurcationCurve:
 
     Attributes
     ----------
-    kind : str
-        ``"fold"``, ``"period-doubling"`` or ``"grazing"``.
+    kind : CurveKind
+        A string: ``"fold"``, ``"period-doubling"`` or ``"grazing"``.
     parameters : tuple of str
         ``(first, second)``: the parameter of the branch the event was found on, and the new one.
     values : numpy.ndarray, shape (P, 2)
         The two parameters at each point of the curve.
     orbits : tuple of MultiImpactOrbit, length P
         The critical orbit at each point.
-    status : str
-        Why the continuation stopped: ``"reached"``, ``"max_points"``, ``"step too small"``,
-        ``"parameter range"`` or ``"turned back"``.
+    status : BranchStatus
+        Why the continuation stopped (a string): ``"reached"``, ``"max_points"``,
+        ``"step too small"``, ``"parameter range"`` or ``"turned back"``.
     """
 
     kind: str
@@ -84,24 +85,20 @@ class BifurcationCurve:
         return plot_bifurcation_curve(self, ax, swap=swap, **kwargs)
 
 
-class _Curve:
-    """The augmented system ``(F, g)`` in ``U = (u, lambda_1, lambda_2)``."""
+class _BifurcationProblem:
+    """The augmented system ``G = (F, g)`` in ``U = (u, lambda_1, lambda_2)`` for the engine
+    (:mod:`impactbar.continuation.engine`): the segment problem ``F`` of :func:`find_orbit` bordered
+    by the test function ``g`` of the curve's kind, ``lambda_2`` (the continued one) last."""
 
-    def __init__(self, model, load, names, m, n, kind, tol):
+    def __init__(self, model, load, names, m, n, kind):
         self.model0, self.load0, self.names, self.m, self.n = model, load, names, m, n
-        self.kind, self.tol = kind, tol
+        self.kind = kind
         size = 2 * (model.n_modes + 1) * m
         self.W = np.concatenate((np.full(size, 1.0 / size), [1.0, 1.0]))
         self.b = self.c = None
         self._cache = {}
 
-    def dot(self, a, b):
-        return float(a @ (self.W * b))
-
-    def norm(self, a):
-        return math.sqrt(self.dot(a, a))
-
-    def problem(self, l1, l2):
+    def segments(self, l1, l2):
         key = (float(l1), float(l2))
         p = self._cache.get(key)
         if p is None:
@@ -115,18 +112,20 @@ class _Curve:
 
     def matrix(self, problem, info):
         P = problem.monodromy(info["maps"])
-        return np.eye(P.shape[0]) + (P if self.kind == "period-doubling" else -P)
+        return np.eye(P.shape[0]) + (P if self.kind == CurveKind.PERIOD_DOUBLING else -P)
 
     def set_border(self, U):
-        p = self.problem(U[-2], U[-1])
+        p = self.segments(U[-2], U[-1])
         _, _, info = p.evaluate(U[:-2])
         A = self.matrix(p, info)
         uu, _, vt = np.linalg.svd(A)
         self.b, self.c = uu[:, -1], vt[-1]
 
     def g(self, U):
-        p = self.problem(U[-2], U[-1])
-        if self.kind == "grazing":
+        """The test function: minus the clearance (grazing), or the bordered determinant of
+        ``I -+ P``: the last entry of the solution of ``[[I -+ P, b], [c^T, 0]] (v, g) = (0, 1)``."""
+        p = self.segments(U[-2], U[-1])
+        if self.kind == CurveKind.GRAZING:
             u = _normalise(p, U[:-2])
             return -_build(p, U[:-2] if u is None else u).clearance
         _, _, info = p.evaluate(U[:-2])
@@ -140,21 +139,25 @@ class _Curve:
         rhs[k] = 1.0
         return float(np.linalg.solve(B, rhs)[k])
 
-    def FJ(self, U):
+    def FJ(self, U, frozen=None):
+        """``G``, its Jacobian (``F_u`` exact, the parameter columns and the gradient of ``g`` by
+        central differences) and the parameter columns, which Newton's corrector reuses."""
         u, l1, l2 = U[:-2], U[-2], U[-1]
-        F, DF, _ = self.problem(l1, l2).evaluate(u)
+        F, DF, _ = self.segments(l1, l2).evaluate(u)
         g0 = self.g(U)
-        cols = []
-        for i, lam in ((-2, l1), (-1, l2)):
-            h = 1e-6 * max(1.0, abs(lam))
-            e = np.zeros(U.size)
-            e[i] = h
-            try:
-                Fp = self.problem(*(U + e)[-2:]).evaluate(u, jacobian=False)[0]
-                Fm = self.problem(*(U - e)[-2:]).evaluate(u, jacobian=False)[0]
-                cols.append((Fp - Fm) / (2 * h))
-            except ValueError:  # at the edge of a parameter's range: one-sided
-                cols.append((self.problem(*(U + e)[-2:]).evaluate(u, jacobian=False)[0] - F) / h)
+        if frozen is None:
+            cols = []
+            for i, lam in ((-2, l1), (-1, l2)):
+                h = 1e-6 * max(1.0, abs(lam))
+                e = np.zeros(U.size)
+                e[i] = h
+                try:
+                    Fp = self.segments(*(U + e)[-2:]).evaluate(u, jacobian=False)[0]
+                    Fm = self.segments(*(U - e)[-2:]).evaluate(u, jacobian=False)[0]
+                    cols.append((Fp - Fm) / (2 * h))
+                except ValueError:  # at the edge of a parameter's range: one-sided
+                    cols.append((self.segments(*(U + e)[-2:]).evaluate(u, jacobian=False)[0] - F) / h)
+            frozen = np.column_stack(cols)
         grad = np.empty(U.size)
         for i in range(U.size):
             h = 1e-7 * max(1.0, abs(U[i]))
@@ -164,42 +167,32 @@ class _Curve:
                 grad[i] = (self.g(U + e) - self.g(U - e)) / (2 * h)
             except ValueError:
                 grad[i] = (self.g(U + e) - g0) / h
-        J = np.vstack((np.column_stack((DF, cols[0], cols[1])), grad))
-        return np.append(F, g0), J
+        J = np.vstack((np.column_stack((DF, frozen)), grad))
+        return np.append(F, g0), J, frozen
 
-    def correct(self, U_pred, normal, anchor, max_iter=10):
-        U = np.array(U_pred, dtype=float)
-        wn = self.W * normal
-        for it in range(1, max_iter + 1):
-            try:
-                G, J = self.FJ(U)
-                dU = np.linalg.solve(np.vstack((J, wn)), np.append(G, wn @ (U - anchor)))
-            except (ValueError, np.linalg.LinAlgError):
-                return None, it, None
-            if not np.all(np.isfinite(dU)):
-                return None, it, None
-            U = U - dU
-            if float(np.max(np.abs(dU))) <= self.tol * max(1.0, float(np.max(np.abs(U)))):
-                return U, it, J
-        return None, max_iter, None
-
-    def tangent(self, J, t_prev):
-        A = np.vstack((J, self.W * t_prev))
-        rhs = np.zeros(A.shape[0])
-        rhs[-1] = 1.0
-        t = np.linalg.solve(A, rhs)
-        t /= self.norm(t)
-        return -t if self.dot(t, t_prev) < 0 else t
-
-    def orbit(self, U):
-        p = self.problem(U[-2], U[-1])
+    def orbit(self, U, admissibility=True):
+        p = self.segments(U[-2], U[-1])
         u = _normalise(p, U[:-2])
-        return _build(p, U[:-2] if u is None else u)
+        return _build(p, U[:-2] if u is None else u, admissibility=admissibility)
+
+    def acceptable(self, U):
+        return _normalise(self.segments(U[-2], U[-1]), U[:-2]) is not None
+
+    def after_point(self, engine, points, tangents, orbits):
+        """No events on a curve; every 10 points the bordering vectors are renewed (near the
+        current singular vectors)."""
+        if self.kind != CurveKind.GRAZING and len(points) % 10 == 0:
+            self.set_border(points[-1])
+        return [], None
+
+    def corner(self, engine, U, index):
+        return None
 
 
-def continue_bifurcation(event: BranchEvent, parameter: str, to: float, *, step: float | None = None,
+def continue_bifurcation(event: BranchEvent, parameter: str, to: float, *,
+                         settings: ContinuationSettings | None = None, step: float | None = None,
                          max_step: float | None = None, min_step: float | None = None,
-                         max_points: int = 500, tol: float = 1e-11) -> BifurcationCurve:
+                         max_points: int | None = None, tol: float | None = None) -> BifurcationCurve:
     """Follow a fold, period doubling or grazing point in two parameters (Figs. 5, 6, 8; theory
     §5-§7).
 
@@ -217,13 +210,11 @@ def continue_bifurcation(event: BranchEvent, parameter: str, to: float, *, step:
     to : float
         Target value of ``parameter``; the curve stops there, or where it leaves the range between
         the start and ``to``.
-    step, max_step, min_step : float, optional
-        Arclength steps (weighted norm, as :func:`continue_orbit`); defaults ``|to - start| / 40``,
-        ``/ 8`` and ``1e-8`` times that.
-    max_points : int
-        Largest number of points.
-    tol : float
-        Relative Newton tolerance.
+    settings : ContinuationSettings, optional
+        Steps, point limit and Newton tolerance, as for :func:`continue_orbit` (the same defaults:
+        ``|to - start| / 50``, ``/ 10`` and ``1e-9`` times that, 2000 points, ``1e-11``).
+    step, max_step, min_step, max_points, tol : optional
+        Override the fields of ``settings`` of the same names.
 
     Returns
     -------
@@ -255,62 +246,25 @@ def continue_bifurcation(event: BranchEvent, parameter: str, to: float, *, step:
         raise ValueError(f"parameter must differ from the branch's parameter {event.parameter!r}")
     l1 = float(event.value)
     l2 = parameter_value(model, load, parameter)
-    to, step, max_step, min_step, max_points = _steps(parameter, l2, to, step, max_step, min_step,
-                                                       max_points, (1 / 40, 1 / 8, 1e-8))
-    tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
+    to = _target(parameter, l2, to)
+    settings = _settings(settings, step=step, max_step=max_step, min_step=min_step,
+                         max_points=max_points, tol=tol)
     direction = 1.0 if to > l2 else -1.0
-    curve = _Curve(model, load, (event.parameter, parameter), o.impacts, o.periods, event.kind, tol)
+    problem = _BifurcationProblem(model, load, (event.parameter, parameter), o.impacts, o.periods,
+                                  CurveKind(event.kind))
+    engine = _Engine(problem, settings.tol)
     with single_threaded_blas():
-        base = curve.problem(l1, l2)
+        base = problem.segments(l1, l2)
         U0 = np.concatenate((_unknowns_from(base, o.impact_times, o.states_after_impact), [l1, l2]))
-        if event.kind != "grazing":
-            curve.set_border(U0)
+        if event.kind != CurveKind.GRAZING:
+            problem.set_border(U0)
         e2 = np.zeros(U0.size)
         e2[-1] = 1.0
-        U0, _, J0 = curve.correct(U0, e2, U0)  # back onto the curve at the start value
+        U0, _ = engine.correct(U0, e2, U0)  # back onto the curve at the start value
         if U0 is None:
             raise ValueError("event: Newton on the augmented system did not converge at the start")
-        t = curve.tangent(J0, direction * e2)
-        points, orbits = [U0], [curve.orbit(U0)]
-        lo, hi = min(l2, to), max(l2, to)
-        status, h = "max_points", step
-        while len(points) < max_points:
-            Ua = points[-1]
-            Ub = None
-            while h >= min_step:
-                pred = Ua + h * t
-                final = (pred[-1] - to) * direction > 0
-                if final:
-                    anchor = Ua + t * (to - Ua[-1]) / t[-1]
-                    Ub, it, J = curve.correct(anchor, e2, anchor)
-                else:
-                    Ub, it, J = curve.correct(pred, t, pred)
-                if Ub is not None:
-                    tb = curve.tangent(J, t)
-                    if final or curve.dot(tb, t) > 0.8:
-                        break
-                Ub = None
-                h *= 0.5
-            if Ub is None:
-                status = "step too small"
-                break
-            try:
-                ob = curve.orbit(Ub)
-            except ValueError:
-                status = "parameter range"
-                break
-            points.append(Ub)
-            orbits.append(ob)
-            if final:
-                status = "reached"
-                break
-            if not lo - 1e-12 <= Ub[-1] <= hi + 1e-12:
-                status = "turned back"
-                break
-            t = tb
-            h = min(h * 1.5, max_step) if it <= 3 else (max(h * 0.6, min_step) if it >= 6 else h)
-            if event.kind != "grazing" and len(points) % 10 == 0:
-                curve.set_border(Ub)  # keep the bordering vectors near the current singular ones
-    P = np.array(points)
-    return BifurcationCurve(kind=event.kind, parameters=(event.parameter, parameter),
-                            values=P[:, -2:].copy(), orbits=tuple(orbits), status=status)
+        t0 = engine.tangent(U0, direction * e2, engine.last_J)
+        P, orbits, _, status = engine.march(U0, t0, to, direction, min(l2, to), max(l2, to),
+                                            settings.steps(abs(to - l2)), settings.max_points)
+    return BifurcationCurve(kind=CurveKind(event.kind), parameters=(event.parameter, parameter),
+                            values=P[:, -2:].copy(), orbits=orbits, status=status)

@@ -5,10 +5,11 @@ stay off the stop between impacts), ``stability`` (the exact Jacobian of the imp
 saltation term, the Floquet multipliers by a dense or a structured O(N^2) eigenvalue method, and the
 paper's Schur blocks, eqs. 25-32), ``rigid`` (the rigid bar in closed form, vectorised over
 parameter arrays), ``wave`` (the phase equation, periodic states and impact-map Jacobian under the
-wave impact law, theory §4b), ``one_impact`` (:class:`PeriodicOrbit`, :func:`periodic_orbits`),
-``multi_impact`` (:class:`MultiImpactOrbit`, :func:`find_orbit`: ``m`` impacts in ``n`` load
-periods by Newton on the segment problem, one segment per flight), ``charts`` (existence, stability
-and admissibility edges, Figs. 5, 6, 8).
+wave impact law, theory §4b), ``orbit`` (:class:`PeriodicOrbit`, the one result type: ``m``
+impacts in ``n`` load periods; ``MultiImpactOrbit`` is another name for it), ``one_impact``
+(:func:`periodic_orbits`: the one-impact orbits), ``multi_impact`` (:func:`find_orbit`: ``m``
+impacts in ``n`` load periods by Newton on the segment problem, one segment per flight),
+``charts`` (existence, stability and admissibility edges, Figs. 5, 6, 8).
 Part of the core: imports only ``impactbar.model``, ``impactbar.loads``, ``impactbar.dynamics``,
 numpy and scipy.
 """
@@ -18,8 +19,8 @@ import importlib
 #: where each public name lives (PEP 562: a submodule is imported on first use, so the rigid closed
 #: forms, e.g. a sweep's chunks, do not load the wave law's scipy.optimize and numba)
 _HOME = {
-    "MultiImpactOrbit": "multi_impact", "find_orbit": "multi_impact", "impact_law": "multi_impact",
-    "OrbitList": "one_impact", "PeriodicOrbit": "one_impact", "orbit_multipliers": "one_impact",
+    "MultiImpactOrbit": "orbit", "find_orbit": "multi_impact", "impact_law": "multi_impact",
+    "OrbitList": "one_impact", "PeriodicOrbit": "orbit", "orbit_multipliers": "one_impact",
     "periodic_orbits": "one_impact",
     "phase_G": "phase", "phase_residual": "phase", "phase_roots": "phase",
     "RigidOrbits": "rigid", "rigid_cosine_orbits": "rigid", "rigid_square_orbits": "rigid",

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .._status import Admissibility
 from ..dynamics.certified import enclose_zeros
 
 TWO_PI = 2.0 * math.pi
@@ -66,15 +67,15 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     err = err_b + 1e-12 * (scale + (abs(clearance) if clearance > -math.inf else 0.0))
     tol = max(err, 1e-11 * scale)
     if not v_imp > 1e-12 * scale:
-        status = "grazing" if abs(v_imp) <= 1e-12 * scale else "backward impact"
+        status = Admissibility.GRAZING if abs(v_imp) <= 1e-12 * scale else Admissibility.BACKWARD_IMPACT
     elif at_rest and not acc0 < 0.0:
-        status = "sticks"
+        status = Admissibility.STICKS
     elif clearance > tol:
-        status = "penetrates"
+        status = Admissibility.PENETRATES
     elif clearance >= -tol:
-        status = "grazing"
+        status = Admissibility.GRAZING
     else:
-        status = "admissible"
+        status = Admissibility.ADMISSIBLE
     return status, clearance, err
 
 

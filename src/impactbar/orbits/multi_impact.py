@@ -22,18 +22,19 @@ Admissibility adds the characteristics solution's verdict on each contact (``"se
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._status import Admissibility
 from .._threads import single_threaded_blas
 from .._validate import check_int, check_real
-from ..dynamics.impact import WaveImpact
 from ..dynamics.modal import fundamental
 from ..loads import Load
 from ..model import BarModel
 from .admissibility import _admissibility
-from .one_impact import PeriodicOrbit, periodic_orbits
+from .one_impact import periodic_orbits
+from .orbit import MultiImpactOrbit as MultiImpactOrbit
+from .orbit import PeriodicOrbit
 from .phase import _check_inputs
 from .stability import sort_multipliers, stable_verdict
 
@@ -41,9 +42,6 @@ __all__ = ["MultiImpactOrbit", "find_orbit"]
 
 TWO_PI = 2.0 * math.pi
 
-#: Order in which the reasons for inadmissibility are reported when several flights fail.
-_STATUS_RANK = {"penetrates": 0, "backward impact": 1, "grazing": 2, "sticks": 3, "separates": 4,
-                "admissible": 5}
 
 
 # ------------------------------------------------------------------------------------------------
@@ -217,200 +215,11 @@ class _Segments:
         return None, max_iter
 
 
-# ------------------------------------------------------------------------------------------------
-# the result
-# ------------------------------------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class MultiImpactOrbit:
-    """A periodic motion with ``impacts`` impacts in ``periods`` load periods, with its stability.
-
-    Orbit time ``t`` is counted from the first impact, which happens at load time
-    ``impact_times[0]``; the motion repeats after ``2 pi periods``. A one-impact orbit of
-    :func:`periodic_orbits` is the case ``impacts = periods = 1`` with ``impact_times[0] = phase``.
-
-    Attributes
-    ----------
-    model : BarModel
-    load : Load
-    impacts : int
-        ``m``, impacts per period of the motion.
-    periods : int
-        ``n``, load periods per period of the motion.
-    impact_times : numpy.ndarray, shape (m,)
-        Load times of the impacts, increasing, the first in ``[0, 2 pi)``, all within
-        ``2 pi n`` of it.
-    phases : numpy.ndarray, shape (m,)
-        ``impact_times mod 2 pi`` (rad): the load phase at each impact (eq. 7).
-    impact_velocities : numpy.ndarray, shape (m,)
-        ``u_t(1, t-)`` just before the impact at each of ``impact_times`` (dimensionless); > 0 for
-        a physical motion.
-    admissible : bool
-        Every flight stays off the stop and every impact arrives moving forward (theory §5),
-        decided with certified bounds on each flight.
-    admissibility : str
-        ``"admissible"``, or the worst reason found on a flight: ``"penetrates"``,
-        ``"backward impact"``, ``"grazing"``, ``"sticks"``.
-    clearance : float
-        Largest ``u(1, t)`` at a stationary point between impacts, over all flights.
-    clearance_error : float
-        Bound on the error of ``clearance``.
-    multipliers : numpy.ndarray of complex, shape (2 N + 2,)
-        Exact Floquet multipliers of the ``m``-fold impact map (theory §7), by decreasing modulus.
-    stable : bool
-        ``admissible`` and every ``|multiplier| < 1``.
-    states_after_impact, states_before_impact : numpy.ndarray, shape (m, 2 N + 2)
-        Modal states ``(q_0..q_N, q_0'..q_N')`` just after and just before the impact at each of
-        ``impact_times`` (the state before the first impact is the end of the last flight). Under
-        the wave law, "after" is at the end of the contact window, where the flight starts.
-    contacts : tuple of WaveImpact or None
-        Under the wave law (theory §4b): each impact's contact with the rod solved by
-        characteristics (force wave, rod energy, advance per blow); ``None`` under eq. 10, and when
-        admissibility was not checked or an impact velocity is not positive.
-
-    Notes
-    -----
-    Under the wave law (``impact="wave"``) impact ``j`` starts at ``impact_times[j]`` and
-    lasts :attr:`window` ``= 2/s``; the flight after it lasts the interval to the next impact less
-    ``2/s``. Positions are measured from the rod end, which each blow advances. An orbit whose
-    contact separates inside a window is ``"separates"`` (its contact map does not hold).
-    """
-
-    model: BarModel
-    load: Load
-    impacts: int
-    periods: int
-    impact_times: np.ndarray = field(repr=False)
-    phases: np.ndarray
-    impact_velocities: np.ndarray
-    admissible: bool
-    admissibility: str
-    clearance: float
-    clearance_error: float
-    multipliers: np.ndarray = field(repr=False)
-    stable: bool
-    states_after_impact: np.ndarray = field(repr=False)
-    states_before_impact: np.ndarray = field(repr=False)
-    contacts: tuple[WaveImpact, ...] | None = field(default=None, repr=False)
-
-    @property
-    def window(self) -> float:
-        """Duration of each impact: ``2/s`` under the wave law (theory §4b), 0 under eq. 10."""
-        return contact_window(self.model)
-
-    @property
-    def period(self) -> float:
-        """Duration of one period of the motion, ``2 pi n``."""
-        return TWO_PI * self.periods
-
-    @property
-    def phase(self) -> float:
-        """Load phase of the first impact, ``phases[0]`` (rad)."""
-        return float(self.phases[0])
-
-    @property
-    def impact_velocity(self) -> float:
-        """Velocity before the first impact, ``impact_velocities[0]``."""
-        return float(self.impact_velocities[0])
-
-    @property
-    def max_abs_multiplier(self) -> float:
-        """Largest ``|multiplier|``."""
-        return float(np.max(np.abs(self.multipliers)))
-
-    @property
-    def state_after_impact(self) -> np.ndarray:
-        """Modal state just after the first impact, shape ``(2 N + 2,)``."""
-        return self.states_after_impact[0].copy()
-
-    @property
-    def modal_state_after_impact(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(q, q')`` just after the first impact, each shape ``(N + 1,)``: start
-        ``simulate(model, load, InitialState(*orbit.modal_state_after_impact), t_end,
-        t0=orbit.impact_times[0])`` on the orbit."""
-        M = self.model.n_modes + 1
-        return self.states_after_impact[0, :M].copy(), self.states_after_impact[0, M:].copy()
-
-    def modal_state(self, t):
-        """Modal displacements and velocities at orbit times ``t`` (from the first impact).
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Orbit times (dimensionless), taken modulo ``2 pi n``; at an impact time the state just
-            after the impact (under the wave law: at the start of contact; inside a window, the
-            characteristics solution projected on the modes).
-
-        Returns
-        -------
-        q, v : numpy.ndarray, shape (N + 1, T)
-        """
-        t = np.mod(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), self.period)
-        M = self.model.n_modes + 1
-        rel = self.impact_times - self.impact_times[0]
-        j = np.clip(np.searchsorted(rel, t, side="right") - 1, 0, self.impacts - 1)
-        q = np.empty((M, t.size))
-        v = np.empty((M, t.size))
-        w2 = self.model.frequencies**2
-        Tw = self.window
-        inside = (t - rel[j]) < Tw
-        if np.any(inside):  # within a wave-law contact window: the characteristics solution
-            contacts = self.contacts
-            if contacts is None:
-                contacts = tuple(self.model.law.blow(self.model, self.load, float(ta), ym) for ta, ym in
-                                 zip(self.impact_times, self.states_before_impact, strict=True))
-            for i in np.flatnonzero(inside):
-                q[:, i], v[:, i] = contacts[j[i]].state_at(t[i] - rel[j[i]])
-        for jj in np.unique(j[~inside]):
-            sel = (j == jj) & ~inside
-            y = self.states_after_impact[jj]
-            q[:, sel], v[:, sel] = self.load.propagate(w2, self.model.d, self.impact_times[jj] + Tw,
-                                                       y[:M], y[M:], self.impact_times[0] + t[sel])
-        return q, v
-
-    def end_displacement(self, t) -> np.ndarray:
-        """Displacement of the struck end ``u(1, t)`` at orbit times ``t``, shape of ``t``."""
-        t = np.asarray(t, dtype=float)
-        q, _ = self.modal_state(t.ravel())
-        return (self.model.end_weights @ q).reshape(t.shape)
-
-    def _field(self, x, t, velocity):
-        xb, tb = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(t, dtype=float))
-        shapes = self.model.shape_functions(xb.ravel())
-        tt, inv = np.unique(tb.ravel(), return_inverse=True)
-        q, v = self.modal_state(tt)
-        modal = (v if velocity else q)[:, inv]
-        return np.einsum("pm,mp->p", shapes, modal).reshape(xb.shape)
-
-    def displacement(self, x, t) -> np.ndarray:
-        """Displacement ``u(x, t)`` (eq. 15); ``x`` in ``[0, 1]`` broadcast against orbit times ``t``."""
-        return self._field(x, t, velocity=False)
-
-    def velocity(self, x, t) -> np.ndarray:
-        """Velocity ``u_t(x, t)``, as :meth:`displacement` (just after an impact at impact times)."""
-        return self._field(x, t, velocity=True)
-
-    def to_dict(self) -> dict:
-        """A JSON-ready summary (floats and lists; multipliers as ``[re, im]``)."""
-        return {
-            "impacts": self.impacts,
-            "periods": self.periods,
-            "impact_times": self.impact_times.tolist(),
-            "phases": self.phases.tolist(),
-            "impact_velocities": self.impact_velocities.tolist(),
-            "admissible": self.admissible,
-            "admissibility": self.admissibility,
-            "clearance": self.clearance,
-            "stable": self.stable,
-            "max_abs_multiplier": self.max_abs_multiplier,
-            "multipliers": [[m.real, m.imag] for m in self.multipliers],
-        }
-
-
 def _sorted_multipliers(P):
     return sort_multipliers(np.linalg.eigvals(P))
 
 
-def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactOrbit:
+def _build(problem: _Segments, u, *, admissibility: bool = True) -> PeriodicOrbit:
     """The orbit at a converged solution ``u`` of the segment problem."""
     model, load = problem.model, problem.load
     M, m = problem.M, problem.m
@@ -438,19 +247,19 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> MultiImpactO
                 at_rest = abs(v_dep) <= 1e-12 * max(abs(float(v_imp[j - 1])), load.sup_abs, 1e-300)
             st, cl, ce = _admissibility(model, load, float(t[j] + Tw), y0, float(v_imp[j]),
                                         horizon=float(T), at_rest=at_rest)
-            if Tw > 0.0 and st == "admissible":
+            if Tw > 0.0 and st == Admissibility.ADMISSIBLE:
                 if contacts is not None and contacts[j].separations:
-                    st = "separates"
+                    st = Admissibility.SEPARATES
                 elif not at_rest and v_dep > 0.0:
-                    st = "sticks"
+                    st = Admissibility.STICKS
             statuses.append(st)
             if cl > clear:
                 clear, cerr = cl, ce
-        status = min(statuses, key=_STATUS_RANK.__getitem__)
+        status = min(statuses, key=lambda a: a.rank)
     else:
-        status = "unchecked"
-    admissible = status == "admissible"
-    return MultiImpactOrbit(
+        status = Admissibility.UNCHECKED
+    admissible = status == Admissibility.ADMISSIBLE
+    return PeriodicOrbit(
         model=model, load=load, impacts=m, periods=problem.n,
         impact_times=t.copy(), phases=np.mod(t, TWO_PI), impact_velocities=np.roll(v_imp, 1),
         admissible=admissible, admissibility=status, clearance=float(clear),
@@ -494,9 +303,7 @@ def _unknowns_from(problem: _Segments, times, states):
 
 
 def _as_segments(orbit):
-    """(times, post-impact states, m, n) of a PeriodicOrbit or MultiImpactOrbit."""
-    if isinstance(orbit, PeriodicOrbit):
-        return np.array([orbit.phase]), orbit.state_after_impact[None, :], 1, 1
+    """(times, post-impact states, m, n) of a PeriodicOrbit."""
     return orbit.impact_times, orbit.states_after_impact, orbit.impacts, orbit.periods
 
 
@@ -515,7 +322,7 @@ def doubling_direction(orbit):
 
     Parameters
     ----------
-    orbit : PeriodicOrbit or MultiImpactOrbit
+    orbit : PeriodicOrbit
 
     Returns
     -------
@@ -566,7 +373,7 @@ def _guesses(problem: _Segments, guess):
                                                  1, n)) for o in orbits], None
     if hasattr(guess, "orbit") and hasattr(guess, "kind") and hasattr(guess, "multiplier"):
         guess = guess.orbit  # a BranchEvent: its orbit (a period doubling's starts the doubled one)
-    if isinstance(guess, PeriodicOrbit | MultiImpactOrbit):
+    if isinstance(guess, PeriodicOrbit):
         times, states, m0, n0 = _as_segments(guess)
         if m % m0 or n % n0 or m // m0 != n // n0:
             raise ValueError(f"guess has {m0} impacts in {n0} periods; it can start an orbit with "
@@ -595,12 +402,12 @@ def _guesses(problem: _Segments, guess):
         return [_unknowns_from(problem, times, states)], None
     if isinstance(guess, tuple) and len(guess) == 2:
         return [_unknowns_from(problem, guess[0], guess[1])], None
-    raise ValueError("guess must be a PeriodicOrbit, a MultiImpactOrbit, a Trajectory or a tuple "
+    raise ValueError("guess must be a PeriodicOrbit (MultiImpactOrbit), a Trajectory or a tuple "
                      f"(impact_times, states_after_impact); got {type(guess).__name__}")
 
 
 def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, guess=None, *,
-               tol: float = 1e-12, max_iter: int = 40) -> MultiImpactOrbit:
+               tol: float = 1e-12, max_iter: int = 40) -> PeriodicOrbit:
     """A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
     the exact impact map (eqs. 8, 10, 11; theory §4, §5, §7).
 
@@ -629,7 +436,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
           periods`` only), stable ones first;
         - a :class:`~impactbar.continuation.BranchEvent`: its orbit (a period-doubling event
           starts the doubled orbit, as below);
-        - a :class:`PeriodicOrbit` or :class:`MultiImpactOrbit` with ``m0`` impacts in ``n0``
+        - a :class:`PeriodicOrbit` with ``m0`` impacts in ``n0``
           periods, repeated ``j`` times for ``impacts = j m0``, ``periods = j n0``; for ``j = 2``
           and a guess with a real multiplier below ``-1/2`` the copies are pushed apart along its
           eigenvector, so that an orbit near or past its period doubling gives the doubled orbit
@@ -645,7 +452,8 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
 
     Returns
     -------
-    MultiImpactOrbit
+    PeriodicOrbit
+        With ``impacts`` and ``periods`` as asked (``MultiImpactOrbit`` is another name for it).
 
     Raises
     ------

@@ -8,16 +8,16 @@ multipliers and the paper's Schur criterion.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from .. import _tables
+from .._status import Admissibility
 from .._threads import single_threaded_blas
 from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .admissibility import _admissibility
+from .orbit import PeriodicOrbit
 from .phase import _check_inputs
 from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers, rigid_square_orbits
 from .stability import (
@@ -30,266 +30,9 @@ from .stability import (
     stable_verdict,
 )
 
-if TYPE_CHECKING:
-    from ..dynamics.impact import WaveImpact
-
 __all__ = ["PeriodicOrbit", "periodic_orbits", "orbit_multipliers"]
 
 TWO_PI = 2.0 * math.pi
-
-@dataclass(frozen=True, eq=False)
-class PeriodicOrbit:
-    """A one-impact-per-period steady state (paper Section 2) with its stability.
-
-    Orbit time ``t`` is counted from an impact: the impacts are at ``t = 0, 2 pi, ...``, and the load
-    acting at orbit time ``t`` is ``p(t + phase)`` (eq. 7).
-
-    Attributes
-    ----------
-    model : BarModel
-    load : Load
-    phase : float
-        Phase lag ``phase`` in ``[0, 2 pi)`` between load and impact cycle (rad), a root of eq. 14.
-    multiplicity : int
-        1, or 2 for a double root of the phase equation (a fold, where two orbits merge).
-    impact_velocity : float
-        ``u_t(1, 2 pi-)``, velocity of the struck end just before impact (dimensionless); > 0 for a
-        physical orbit.
-    admissible : bool
-        The end stays off the stop between impacts (``u(1, t) < 0`` for ``0 < t < 2 pi``), leaves it
-        (for ``R = 0``: the end's acceleration just after impact points away from the stop) and
-        arrives moving forward (theory §5). Decided with certified bounds, not sampling.
-    admissibility : str
-        ``"admissible"``, or why not: ``"penetrates"``, ``"grazing"``, ``"backward impact"``,
-        ``"sticks"`` (R = 0 and the load presses the end on the stop after impact; under the wave
-        law: the end still moves into the rod when the contact window ends), ``"separates"`` (wave
-        law: contact is lost inside the window, so the orbit's contact map does not hold).
-    clearance : float
-        Largest value of ``u(1, t)`` at its stationary points between impacts (dimensionless): < 0
-        for an admissible orbit, > 0 where the end swings through the stop, ~0 at grazing. By Rolle's
-        theorem there is at least one stationary point.
-    clearance_error : float
-        Bound on the error of ``clearance`` from the enclosure of the stationary points.
-    multipliers : numpy.ndarray of complex, shape (2 N + 2,)
-        Exact Floquet multipliers (eigenvalues of the impact map's Jacobian, theory §7),
-        sorted by decreasing modulus.
-    stable : bool
-        ``admissible`` and every ``|multiplier| < 1 - MARGINAL`` (``1e-9``): a multiplier on the
-        unit circle to rounding (e.g. ``R = 1``, ``d = 0``, a conservative map) is marginal, not
-        stable, whatever its last bits.
-    schur_roots : numpy.ndarray of complex, shape (2 N + 2,)
-        Roots of the paper's quadratic blocks (eqs. 27, 29-31), rigid block first.
-    schur_stable : bool
-        The paper's criterion (Schur's conditions, eq. 28) on every block; ignores admissibility.
-    state_after_impact : numpy.ndarray, shape (2 N + 2,)
-        Modal state ``(q_0..q_N, q_0'..q_N')`` at ``t = 0+``.
-    state_before_impact : numpy.ndarray, shape (2 N + 2,)
-        Modal state at ``t = 2 pi-``.
-    impact : WaveImpact or None
-        Under the wave law (``impact="wave"``, theory §4b): the orbit's contact with the
-        rod, with its force wave ``F(t)``, rod energy, peak stresses, efficiency and the rod's
-        advance per blow. ``None`` under the paper's law (an instant impact has no force history).
-
-    Notes
-    -----
-    Under the wave law the impact starts at orbit time 0 (load time ``phase``) and lasts ``2/s``;
-    ``state_after_impact`` is the state at the end of that window (orbit time ``2/s``), where the
-    flight starts, and positions are measured from the rod end, which each blow advances by
-    ``impact.advance``. The multipliers are those of the wave law's impact map (theory §7, §4b);
-    ``schur_roots`` and ``schur_stable`` remain the paper's criterion for its eq. 10.
-    """
-
-    model: BarModel
-    load: Load
-    phase: float
-    multiplicity: int
-    impact_velocity: float
-    admissible: bool
-    admissibility: str
-    clearance: float
-    clearance_error: float
-    multipliers: np.ndarray = field(repr=False)
-    stable: bool
-    schur_roots: np.ndarray = field(repr=False)
-    schur_stable: bool
-    state_after_impact: np.ndarray = field(repr=False)
-    state_before_impact: np.ndarray = field(repr=False)
-    impact: WaveImpact | None = field(default=None, repr=False)
-
-    @property
-    def max_abs_multiplier(self) -> float:
-        """Largest ``|multiplier|`` (spectral radius of the impact map's Jacobian)."""
-        return float(np.max(np.abs(self.multipliers)))
-
-    @property
-    def modal_state_after_impact(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(q, q')`` just after the impact, each shape ``(N + 1,)``."""
-        M = self.model.n_modes + 1
-        return self.state_after_impact[:M].copy(), self.state_after_impact[M:].copy()
-
-    def modal_state(self, t):
-        """Modal displacements and velocities at orbit times ``t``.
-
-        Parameters
-        ----------
-        t : array_like, shape (T,)
-            Orbit times (dimensionless); taken modulo ``2 pi``, and a multiple of ``2 pi`` gives the
-            state just after the impact (under the wave law: at the start of contact; inside the
-            window ``[0, 2/s)`` the characteristics solution projected on the modes).
-
-        Returns
-        -------
-        q, v : numpy.ndarray, shape (N + 1, T)
-        """
-        t = np.atleast_1d(np.asarray(t, dtype=float)).ravel()
-        return self._state_in_period(np.mod(t, TWO_PI))
-
-    def _state_in_period(self, t):
-        """State at orbit times ``0 <= t <= 2 pi`` without wrapping (``2 pi`` is before impact)."""
-        M = self.model.n_modes + 1
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        start = 0.0 if self.impact is None else self.impact.duration
-        if self.impact is not None and np.any(t < start):  # inside the contact window
-            q = np.empty((M, t.size))
-            v = np.empty((M, t.size))
-            inside = t < start
-            for j in np.flatnonzero(inside):
-                q[:, j], v[:, j] = self.impact.state_at(t[j])
-            if np.any(~inside):
-                q[:, ~inside], v[:, ~inside] = self._state_in_period(t[~inside])
-            return q, v
-        return self.load.propagate(self.model.frequencies**2, self.model.d, self.phase + start,
-                                   self.state_after_impact[:M], self.state_after_impact[M:],
-                                   self.phase + t)
-
-    def _field(self, x, t, velocity):
-        x = np.asarray(x, dtype=float)
-        t = np.asarray(t, dtype=float)
-        xb, tb = np.broadcast_arrays(x, t)
-        shapes = self.model.shape_functions(xb.ravel())  # (P, M)
-        tt, inv = np.unique(tb.ravel(), return_inverse=True)
-        q, v = self.modal_state(tt)
-        modal = (v if velocity else q)[:, inv]  # (M, P)
-        return np.einsum("pm,mp->p", shapes, modal).reshape(xb.shape)
-
-    def displacement(self, x, t) -> np.ndarray:
-        """Displacement ``u(x, t)`` (eq. 15), dimensionless.
-
-        Parameters
-        ----------
-        x : array_like
-            Positions in ``[0, 1]``; broadcast against ``t``.
-        t : array_like
-            Orbit times (periodic with period ``2 pi``).
-
-        Returns
-        -------
-        numpy.ndarray, shape ``broadcast(x, t).shape``
-        """
-        return self._field(x, t, velocity=False)
-
-    def velocity(self, x, t) -> np.ndarray:
-        """Velocity ``u_t(x, t)``, same conventions as :meth:`displacement`; at multiples of
-        ``2 pi`` the velocity just after the impact."""
-        return self._field(x, t, velocity=True)
-
-    def end_displacement(self, t) -> np.ndarray:
-        """Displacement of the struck end ``u(1, t)``, shape of ``t``."""
-        t = np.asarray(t, dtype=float)
-        q, _ = self.modal_state(t.ravel())
-        return (self.model.end_weights @ q).reshape(t.shape)
-
-    def to_dict(self) -> dict:
-        """A JSON-ready summary (floats, lists of ``[re, im]``; ``clearance`` may be ``-inf``)."""
-        return {
-            "phase": self.phase,
-            "multiplicity": self.multiplicity,
-            "impact_velocity": self.impact_velocity,
-            "admissible": self.admissible,
-            "admissibility": self.admissibility,
-            "clearance": self.clearance,
-            "stable": self.stable,
-            "max_abs_multiplier": self.max_abs_multiplier,
-            "multipliers": [[m.real, m.imag] for m in self.multipliers],
-            "schur_stable": self.schur_stable,
-            "schur_roots": [[m.real, m.imag] for m in self.schur_roots],
-            "impact_law": self.model.impact,
-            **({} if self.impact is None else {
-                "rod_energy": self.impact.rod_energy, "peak_force": self.impact.peak_force,
-                "peak_rod_stress": self.impact.peak_rod_stress, "efficiency": self.impact.efficiency,
-                "advance": self.impact.advance}),
-        }
-
-    def to_dataframe(self, n: int = 256):
-        """The struck end's motion over one period as a table.
-
-        Parameters
-        ----------
-        n : int, optional
-            Number of orbit times, ``t = 2 pi j / n`` for ``j = 0..n`` (the last one just before the
-            next impact). Default 256.
-
-        Returns
-        -------
-        pandas.DataFrame
-            Index ``t`` (orbit time since the impact), columns ``end_displacement`` ``u(1, t)`` and
-            ``end_velocity`` ``u_t(1, t)``, all dimensionless (eq. 2); ``attrs`` holds the model,
-            the load, the phase and each column's ``long_name`` and ``units``.
-        """
-        n = int(n)
-        if n < 1:
-            raise ValueError(f"n must be an integer >= 1; got {n}")
-        t = np.linspace(0.0, TWO_PI, n + 1)
-        q, v = self._state_in_period(t)
-        c = self.model.end_weights
-        return _tables.frame(
-            {"t": t, "end_displacement": c @ q, "end_velocity": c @ v},
-            {"t": ("orbit time since the impact", "1"),
-             "end_displacement": ("displacement u(1, t) of the struck end", "1"),
-             "end_velocity": ("velocity u_t(1, t) of the struck end", "1")},
-            index="t", attrs=self._attrs())
-
-    def to_xarray(self, nx: int = 51, nt: int = 256):
-        """The displacement and velocity fields over one period as an ``xarray.Dataset``.
-
-        Parameters
-        ----------
-        nx, nt : int, optional
-            Grid points along the bar (``x`` in ``[0, 1]``, driven end 0) and in orbit time
-            (``t`` in ``[0, 2 pi]``). Defaults 51 and 256.
-
-        Returns
-        -------
-        xarray.Dataset
-            ``displacement`` and ``velocity`` with dims ``(t, x)``, dimensionless (eq. 2), each with
-            ``long_name`` and ``units``; the model, load and phase in ``attrs``.
-
-        Raises
-        ------
-        ModuleNotFoundError
-            xarray is not installed (extra ``data``).
-        """
-        nx, nt = int(nx), int(nt)
-        if nx < 2 or nt < 2:
-            raise ValueError(f"nx and nt must be integers >= 2; got {nx}, {nt}")
-        x = np.linspace(0.0, 1.0, nx)
-        t = np.linspace(0.0, TWO_PI, nt)
-        q, v = self._state_in_period(t)
-        shapes = self.model.shape_functions(x)  # (X, M)
-        tt, xx = np.meshgrid(t, x, indexing="ij")  # rows in (t, x) order, as the fields below
-        df = _tables.frame(
-            {"t": tt.ravel(), "x": xx.ravel(), "displacement": (q.T @ shapes.T).ravel(),
-             "velocity": (v.T @ shapes.T).ravel()},
-            {"t": ("orbit time since the impact", "1"), "x": ("position along the bar", "1"),
-             "displacement": ("displacement u(x, t)", "1"), "velocity": ("velocity u_t(x, t)", "1")},
-            index=["t", "x"], attrs=self._attrs())
-        return _tables.to_xarray(df)
-
-    def _attrs(self) -> dict:
-        m = self.model
-        return {"model": repr(m), "load": repr(self.load), "phase": self.phase, "s": m.s, "d": m.d,
-                "R": m.R, "n_modes": m.n_modes}
-
 
 #: the columns of :meth:`OrbitList.to_dataframe`: name -> (long_name, units)
 ORBIT_COLUMNS = {
@@ -477,9 +220,9 @@ def _rigid_orbit(model, load, phase, multiplicity, impact_velocity, status, clea
     """A rigid bar's :class:`PeriodicOrbit` from the closed forms' numbers (``status`` indexes
     ``rigid.STATUS``)."""
     name = STATUS[status]
-    return PeriodicOrbit(
+    return PeriodicOrbit.one_impact(
         model=model, load=load, phase=phase, multiplicity=multiplicity,
-        impact_velocity=impact_velocity, admissible=name == "admissible", admissibility=name,
+        impact_velocity=impact_velocity, admissible=name == Admissibility.ADMISSIBLE, admissibility=name,
         clearance=clearance, clearance_error=clearance_error, multipliers=multipliers,
         stable=stable, schur_roots=schur_roots, schur_stable=schur_stable,
         state_after_impact=np.array([-0.0, v_plus]),
@@ -585,14 +328,14 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
     v_imp = float(c @ y_minus[M:])
 
     status, clearance, cerr = _admissibility(model, load, phase, y_plus, v_imp, flow=flow)
-    admissible = status == "admissible"
+    admissible = status == Admissibility.ADMISSIBLE
 
     try:
         mu = floquet_multipliers(model, load, phase, y_plus, y_minus)
     except ValueError:  # exact grazing: a multiplier is infinite
         mu = np.full(2 * M, np.inf + 0j)
     blocks = schur_blocks(model, load, phase)
-    return PeriodicOrbit(
+    return PeriodicOrbit.one_impact(
         model=model,
         load=load,
         phase=float(phase),
@@ -634,15 +377,15 @@ def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> P
     at_rest = abs(v_dep) <= 1e-12 * scale
     status, clearance, cerr = _admissibility(model, load, phase + T, y_end, v_imp,
                                              horizon=TWO_PI - T, at_rest=at_rest)
-    if status == "admissible":
+    if status == Admissibility.ADMISSIBLE:
         if impact is not None and impact.separations:
-            status = "separates"
+            status = Admissibility.SEPARATES
         elif not at_rest and v_dep > 0.0:
-            status = "sticks"
-    admissible = status == "admissible"
+            status = Admissibility.STICKS
+    admissible = status == Admissibility.ADMISSIBLE
     mu = _sorted_multipliers(wave_impact_map_jacobian, 2 * M, model, load, phase, y_end, y_minus, rate)
     blocks = schur_blocks(model, load, phase)
-    return PeriodicOrbit(
+    return PeriodicOrbit.one_impact(
         model=model, load=load, phase=float(phase), multiplicity=int(mult), impact_velocity=v_imp,
         admissible=admissible, admissibility=status, clearance=clearance, clearance_error=cerr,
         multipliers=mu, stable=stable_verdict(admissible, mu),

@@ -21,6 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from .._status import Admissibility
 from .stability import MARGINAL, quadratic_roots
 
 __all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_multipliers", "phase_G_array",
@@ -29,7 +30,8 @@ __all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_m
 TWO_PI = 2.0 * math.pi
 
 #: admissibility codes used by :class:`RigidOrbits`, in the order of their integer codes
-STATUS = ("admissible", "penetrates", "grazing", "backward impact", "sticks")
+STATUS = (Admissibility.ADMISSIBLE, Admissibility.PENETRATES, Admissibility.GRAZING,
+          Admissibility.BACKWARD_IMPACT, Admissibility.STICKS)
 
 
 def _beta(y):

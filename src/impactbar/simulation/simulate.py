@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._status import RunStatus
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
 from ..loads import FourierLoad, Load, PiecewiseConstantLoad
@@ -533,7 +534,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     n_imp = 0
     t = t0
     mode = _FREE
-    status = "t_end"
+    status = RunStatus.T_END
     dwell = 0.0
     retries = 0
     last_release = None  # (time, contact segment index, len(times), n_imp) for undoing
@@ -544,7 +545,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         if mode == _FREE:
             left = max_imp - n_imp
             if left <= 0:  # pragma: no cover - run_free stops at max_imp itself
-                status = "max_impacts"
+                status = RunStatus.MAX_IMPACTS
                 break
             if not instant:  # the kernel stops at the next arrival, applying nothing
                 qa, va = q.copy(), v.copy()
@@ -557,7 +558,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                         break
                     segs.add(t, _FREE, q, v, "release")
                     if n_imp >= max_imp:
-                        status = "max_impacts"
+                        status = RunStatus.MAX_IMPACTS
                         break
                     continue
             else:
@@ -581,7 +582,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                 break
             if st == K.MAXIMP:
                 t = tn
-                status = "max_impacts"
+                status = RunStatus.MAX_IMPACTS
                 break
             if st == K.FULL:
                 t = tn

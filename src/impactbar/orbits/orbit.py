@@ -1,0 +1,401 @@
+"""The periodic orbit: ``m`` impacts in ``n`` load periods, with its stability (paper Sections 2, 3;
+theory §4, §5, §7).
+
+One type for every periodic motion the library finds: :func:`~impactbar.periodic_orbits` gives the
+one-impact orbits (``m = n = 1``, with the phase equation's multiplicity and the paper's Schur
+criterion), :func:`~impactbar.find_orbit` and the continuation any ``m`` and ``n``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .. import _tables
+
+if TYPE_CHECKING:
+    from .._status import Admissibility
+    from ..dynamics.impact import WaveImpact
+    from ..loads import Load
+    from ..model import BarModel
+
+__all__ = ["PeriodicOrbit", "MultiImpactOrbit"]
+
+TWO_PI = 2.0 * math.pi
+
+
+@dataclass(frozen=True, eq=False)
+class PeriodicOrbit:
+    """A periodic motion with ``impacts`` impacts in ``periods`` load periods, with its stability.
+
+    Orbit time ``t`` is counted from the first impact, which happens at load time
+    ``impact_times[0]``; the motion repeats after ``2 pi periods``, and the load acting at orbit time
+    ``t`` is ``p(t + impact_times[0])`` (eq. 7). The one-impact orbits of :func:`periodic_orbits`
+    (paper Section 2) are the case ``impacts = periods = 1``, ``impact_times[0] = phase``, a root of
+    the phase equation (eq. 14); they also carry the root's ``multiplicity`` and the paper's Schur
+    criterion (``schur_roots``, ``schur_stable``), which are defined for them only.
+
+    Attributes
+    ----------
+    model : BarModel
+    load : Load
+    impacts : int
+        ``m``, impacts per period of the motion.
+    periods : int
+        ``n``, load periods per period of the motion.
+    impact_times : numpy.ndarray, shape (m,)
+        Load times of the impacts, increasing, the first in ``[0, 2 pi)``, all within
+        ``2 pi n`` of it.
+    phases : numpy.ndarray, shape (m,)
+        ``impact_times mod 2 pi`` (rad): the load phase at each impact (eq. 7).
+    impact_velocities : numpy.ndarray, shape (m,)
+        ``u_t(1, t-)`` just before the impact at each of ``impact_times`` (dimensionless); > 0 for
+        a physical motion.
+    admissible : bool
+        Every flight stays off the stop (``u(1, t) < 0`` between impacts), the end leaves the stop
+        after each impact (for ``R = 0``: its acceleration just after impact points away from the
+        stop) and every impact arrives moving forward (theory §5). Decided with certified bounds,
+        not sampling.
+    admissibility : Admissibility
+        ``"admissible"``, or the first reason found on a flight in the order of
+        :class:`~impactbar.Admissibility` (``"penetrates"``, ``"backward impact"``, ``"grazing"``,
+        ``"sticks"``, ``"separates"``; ``"unchecked"`` where it was not decided); a string.
+    clearance : float
+        Largest value of ``u(1, t)`` at its stationary points between impacts, over all flights
+        (dimensionless): < 0 for an admissible orbit, > 0 where the end swings through the stop,
+        ~0 at grazing; may be ``-inf`` where a flight has none.
+    clearance_error : float
+        Bound on the error of ``clearance`` from the enclosure of the stationary points.
+    multipliers : numpy.ndarray of complex, shape (2 N + 2,)
+        Exact Floquet multipliers: eigenvalues of the product of the ``m`` impact-map Jacobians,
+        each with its saltation term (theory §7), sorted by decreasing modulus.
+    stable : bool
+        ``admissible`` and every ``|multiplier| < 1 - MARGINAL`` (``1e-9``): a multiplier on the
+        unit circle to rounding (e.g. ``R = 1``, ``d = 0``, a conservative map) is marginal, not
+        stable, whatever its last bits.
+    states_after_impact, states_before_impact : numpy.ndarray, shape (m, 2 N + 2)
+        Modal states ``(q_0..q_N, q_0'..q_N')`` just after and just before the impact at each of
+        ``impact_times`` (the state before the first impact is the end of the last flight). Under
+        the wave law, "after" is at the end of the contact window, where the flight starts.
+    contacts : tuple of WaveImpact or None
+        Under the wave law (theory §4b): each impact's contact with the rod solved by
+        characteristics (force wave ``F(t)``, rod energy, peak stresses, efficiency, advance per
+        blow); ``None`` under eq. 10 (an instant impact has no force history), and when
+        admissibility was not checked or an impact velocity is not positive.
+    multiplicity : int
+        Of a one-impact orbit's phase: 1, or 2 for a double root of the phase equation (a fold,
+        where two orbits merge); 1 for the orbits of :func:`find_orbit`.
+    schur_roots : numpy.ndarray of complex, shape (2 N + 2,), or None
+        One-impact orbits of :func:`periodic_orbits`: roots of the paper's quadratic blocks
+        (eqs. 27, 29-31), rigid block first; ``None`` otherwise.
+    schur_stable : bool or None
+        The paper's criterion (Schur's conditions, eq. 28) on every block; ignores admissibility.
+        ``None`` where ``schur_roots`` is.
+
+    Notes
+    -----
+    Under the wave law (``model.impact == "wave"``) impact ``j`` starts at ``impact_times[j]`` and
+    lasts :attr:`window` ``= 2/s``; the flight after it lasts the interval to the next impact less
+    ``2/s``. Positions are measured from the rod end, which each blow advances. The multipliers are
+    those of the wave law's impact map (theory §7, §4b); ``schur_roots`` and ``schur_stable`` remain
+    the paper's criterion for its eq. 10.
+    """
+
+    model: BarModel
+    load: Load
+    impacts: int
+    periods: int
+    impact_times: np.ndarray = field(repr=False)
+    phases: np.ndarray
+    impact_velocities: np.ndarray
+    admissible: bool
+    admissibility: Admissibility | str
+    clearance: float
+    clearance_error: float
+    multipliers: np.ndarray = field(repr=False)
+    stable: bool
+    states_after_impact: np.ndarray = field(repr=False)
+    states_before_impact: np.ndarray = field(repr=False)
+    contacts: tuple[WaveImpact, ...] | None = field(default=None, repr=False)
+    multiplicity: int = 1
+    schur_roots: np.ndarray | None = field(default=None, repr=False)
+    schur_stable: bool | None = None
+
+    @classmethod
+    def one_impact(cls, *, model: BarModel, load: Load, phase: float, multiplicity: int,
+                   impact_velocity: float, admissible: bool, admissibility: str, clearance: float,
+                   clearance_error: float, multipliers: np.ndarray, stable: bool,
+                   schur_roots: np.ndarray, schur_stable: bool, state_after_impact: np.ndarray,
+                   state_before_impact: np.ndarray, impact: WaveImpact | None = None) -> PeriodicOrbit:
+        """The one-impact orbit (``m = n = 1``) from its scalar description (paper Section 2).
+
+        Parameters
+        ----------
+        phase : float
+            The root of the phase equation (eq. 14) in ``[0, 2 pi)`` (rad).
+        impact_velocity : float
+            ``u_t(1, 2 pi-)``.
+        state_after_impact, state_before_impact : numpy.ndarray, shape (2 N + 2,)
+            Modal states at ``t = 0+`` (wave law: at the end of the window) and ``t = 2 pi-``.
+        impact : WaveImpact or None
+            The contact under the wave law.
+        model, load, multiplicity, admissible, admissibility, clearance, clearance_error, \
+multipliers, stable, schur_roots, schur_stable
+            As the attributes.
+        """
+        return cls(model=model, load=load, impacts=1, periods=1, impact_times=np.array([phase]),
+                   phases=np.array([phase]), impact_velocities=np.array([impact_velocity]),
+                   admissible=admissible, admissibility=admissibility, clearance=clearance,
+                   clearance_error=clearance_error, multipliers=multipliers, stable=stable,
+                   states_after_impact=np.asarray(state_after_impact)[None, :],
+                   states_before_impact=np.asarray(state_before_impact)[None, :],
+                   contacts=None if impact is None else (impact,), multiplicity=multiplicity,
+                   schur_roots=schur_roots, schur_stable=schur_stable)
+
+    # -- the first impact, and the one-impact conveniences -------------------------------------------
+    @property
+    def phase(self) -> float:
+        """Load phase of the first impact, ``phases[0]`` (rad); for a one-impact orbit the root of
+        the phase equation (eq. 14)."""
+        return float(self.phases[0])
+
+    @property
+    def impact_velocity(self) -> float:
+        """Velocity of the struck end before the first impact, ``impact_velocities[0]``."""
+        return float(self.impact_velocities[0])
+
+    @property
+    def state_after_impact(self) -> np.ndarray:
+        """Modal state just after the first impact, shape ``(2 N + 2,)``."""
+        return self.states_after_impact[0].copy()
+
+    @property
+    def state_before_impact(self) -> np.ndarray:
+        """Modal state just before the first impact (the end of the last flight), shape
+        ``(2 N + 2,)``."""
+        return self.states_before_impact[0].copy()
+
+    @property
+    def impact(self) -> WaveImpact | None:
+        """The first impact's contact with the rod under the wave law (``contacts[0]``), ``None``
+        under eq. 10."""
+        return None if self.contacts is None else self.contacts[0]
+
+    @property
+    def window(self) -> float:
+        """Duration of each impact, the law's window: ``2/s`` under the wave law (theory §4b), 0
+        under eq. 10."""
+        return self.model.law.window(self.model)
+
+    @property
+    def period(self) -> float:
+        """Duration of one period of the motion, ``2 pi n``."""
+        return TWO_PI * self.periods
+
+    @property
+    def max_abs_multiplier(self) -> float:
+        """Largest ``|multiplier|`` (spectral radius of the impact map's Jacobian)."""
+        return float(np.max(np.abs(self.multipliers)))
+
+    @property
+    def modal_state_after_impact(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(q, q')`` just after the first impact, each shape ``(N + 1,)``: start
+        ``simulate(model, load, InitialState(*orbit.modal_state_after_impact), t_end,
+        t0=orbit.impact_times[0])`` on the orbit."""
+        M = self.model.n_modes + 1
+        return self.states_after_impact[0, :M].copy(), self.states_after_impact[0, M:].copy()
+
+    # -- the motion ---------------------------------------------------------------------------------
+    def modal_state(self, t):
+        """Modal displacements and velocities at orbit times ``t`` (from the first impact).
+
+        Parameters
+        ----------
+        t : array_like, shape (T,)
+            Orbit times (dimensionless), taken modulo ``2 pi n``; at an impact time the state just
+            after the impact (under the wave law: at the start of contact; inside a window, the
+            characteristics solution projected on the modes).
+
+        Returns
+        -------
+        q, v : numpy.ndarray, shape (N + 1, T)
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float)).ravel()
+        return self._state_in_period(np.mod(t, self.period))
+
+    def _state_in_period(self, t):
+        """State at orbit times ``0 <= t <= 2 pi n`` without wrapping (``2 pi n`` is just before the
+        first impact again)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        M = self.model.n_modes + 1
+        rel = self.impact_times - self.impact_times[0]
+        j = np.clip(np.searchsorted(rel, t, side="right") - 1, 0, self.impacts - 1)
+        q = np.empty((M, t.size))
+        v = np.empty((M, t.size))
+        w2 = self.model.frequencies**2
+        Tw = self.window
+        inside = (t - rel[j]) < Tw
+        if np.any(inside):  # within a wave-law contact window: the characteristics solution
+            contacts = self.contacts
+            if contacts is None:
+                contacts = tuple(self.model.law.blow(self.model, self.load, float(ta), ym) for ta, ym in
+                                 zip(self.impact_times, self.states_before_impact, strict=True))
+            for i in np.flatnonzero(inside):
+                q[:, i], v[:, i] = contacts[j[i]].state_at(t[i] - rel[j[i]])
+        for jj in np.unique(j[~inside]):
+            sel = (j == jj) & ~inside
+            y = self.states_after_impact[jj]
+            q[:, sel], v[:, sel] = self.load.propagate(w2, self.model.d, self.impact_times[jj] + Tw,
+                                                       y[:M], y[M:], self.impact_times[0] + t[sel])
+        return q, v
+
+    def _field(self, x, t, velocity):
+        xb, tb = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(t, dtype=float))
+        shapes = self.model.shape_functions(xb.ravel())  # (P, M)
+        tt, inv = np.unique(tb.ravel(), return_inverse=True)
+        q, v = self.modal_state(tt)
+        modal = (v if velocity else q)[:, inv]  # (M, P)
+        return np.einsum("pm,mp->p", shapes, modal).reshape(xb.shape)
+
+    def displacement(self, x, t) -> np.ndarray:
+        """Displacement ``u(x, t)`` (eq. 15), dimensionless.
+
+        Parameters
+        ----------
+        x : array_like
+            Positions in ``[0, 1]``; broadcast against ``t``.
+        t : array_like
+            Orbit times (periodic with period ``2 pi n``).
+
+        Returns
+        -------
+        numpy.ndarray, shape ``broadcast(x, t).shape``
+        """
+        return self._field(x, t, velocity=False)
+
+    def velocity(self, x, t) -> np.ndarray:
+        """Velocity ``u_t(x, t)``, same conventions as :meth:`displacement`; at impact times the
+        velocity just after the impact."""
+        return self._field(x, t, velocity=True)
+
+    def end_displacement(self, t) -> np.ndarray:
+        """Displacement of the struck end ``u(1, t)`` at orbit times ``t``, shape of ``t``."""
+        t = np.asarray(t, dtype=float)
+        q, _ = self.modal_state(t.ravel())
+        return (self.model.end_weights @ q).reshape(t.shape)
+
+    # -- conversions --------------------------------------------------------------------------------
+    def to_dict(self) -> dict:
+        """A JSON-ready summary (floats, lists; multipliers as ``[re, im]``; ``clearance`` may be
+        ``-inf``).
+
+        A one-impact orbit of :func:`periodic_orbits` (one with ``schur_roots``) gives its scalar
+        description (``phase``, ``multiplicity``, ``impact_velocity``, the Schur criterion, the
+        impact law and, under the wave law, the contact's rod energy, peak force and stress,
+        efficiency and advance); any other orbit ``impacts``, ``periods`` and the arrays
+        ``impact_times``, ``phases``, ``impact_velocities``.
+        """
+        verdict = {  # the same keys, in the same place, in both summaries
+            "admissible": self.admissible,
+            "admissibility": self.admissibility,
+            "clearance": self.clearance,
+            "stable": self.stable,
+            "max_abs_multiplier": self.max_abs_multiplier,
+            "multipliers": [[m.real, m.imag] for m in self.multipliers],
+        }
+        if self.schur_roots is None:
+            return {"impacts": self.impacts, "periods": self.periods,
+                    "impact_times": self.impact_times.tolist(), "phases": self.phases.tolist(),
+                    "impact_velocities": self.impact_velocities.tolist(), **verdict}
+        impact = self.impact
+        return {
+            "phase": self.phase,
+            "multiplicity": self.multiplicity,
+            "impact_velocity": self.impact_velocity,
+            **verdict,
+            "schur_stable": self.schur_stable,
+            "schur_roots": [[m.real, m.imag] for m in self.schur_roots],
+            "impact_law": self.model.impact,
+            **({} if impact is None else {
+                "rod_energy": impact.rod_energy, "peak_force": impact.peak_force,
+                "peak_rod_stress": impact.peak_rod_stress, "efficiency": impact.efficiency,
+                "advance": impact.advance}),
+        }
+
+    def to_dataframe(self, n: int = 256):
+        """The struck end's motion over one period of the motion as a table.
+
+        Parameters
+        ----------
+        n : int, optional
+            Number of orbit times, ``t = 2 pi periods j / n`` for ``j = 0..n`` (the last one just
+            before the first impact again). Default 256.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Index ``t`` (orbit time since the first impact), columns ``end_displacement``
+            ``u(1, t)`` and ``end_velocity`` ``u_t(1, t)``, all dimensionless (eq. 2); ``attrs``
+            holds the model, the load, the phase and each column's ``long_name`` and ``units``.
+        """
+        n = int(n)
+        if n < 1:
+            raise ValueError(f"n must be an integer >= 1; got {n}")
+        t = np.linspace(0.0, self.period, n + 1)
+        q, v = self._state_in_period(t)
+        c = self.model.end_weights
+        return _tables.frame(
+            {"t": t, "end_displacement": c @ q, "end_velocity": c @ v},
+            {"t": ("orbit time since the impact", "1"),
+             "end_displacement": ("displacement u(1, t) of the struck end", "1"),
+             "end_velocity": ("velocity u_t(1, t) of the struck end", "1")},
+            index="t", attrs=self._attrs())
+
+    def to_xarray(self, nx: int = 51, nt: int = 256):
+        """The displacement and velocity fields over one period of the motion as an
+        ``xarray.Dataset``.
+
+        Parameters
+        ----------
+        nx, nt : int, optional
+            Grid points along the bar (``x`` in ``[0, 1]``, driven end 0) and in orbit time
+            (``t`` in ``[0, 2 pi periods]``). Defaults 51 and 256.
+
+        Returns
+        -------
+        xarray.Dataset
+            ``displacement`` and ``velocity`` with dims ``(t, x)``, dimensionless (eq. 2), each with
+            ``long_name`` and ``units``; the model, load and phase in ``attrs``.
+
+        Raises
+        ------
+        ModuleNotFoundError
+            xarray is not installed (extra ``data``).
+        """
+        nx, nt = int(nx), int(nt)
+        if nx < 2 or nt < 2:
+            raise ValueError(f"nx and nt must be integers >= 2; got {nx}, {nt}")
+        x = np.linspace(0.0, 1.0, nx)
+        t = np.linspace(0.0, self.period, nt)
+        q, v = self._state_in_period(t)
+        shapes = self.model.shape_functions(x)  # (X, M)
+        tt, xx = np.meshgrid(t, x, indexing="ij")  # rows in (t, x) order, as the fields below
+        df = _tables.frame(
+            {"t": tt.ravel(), "x": xx.ravel(), "displacement": (q.T @ shapes.T).ravel(),
+             "velocity": (v.T @ shapes.T).ravel()},
+            {"t": ("orbit time since the impact", "1"), "x": ("position along the bar", "1"),
+             "displacement": ("displacement u(x, t)", "1"), "velocity": ("velocity u_t(x, t)", "1")},
+            index=["t", "x"], attrs=self._attrs())
+        return _tables.to_xarray(df)
+
+    def _attrs(self) -> dict:
+        m = self.model
+        return {"model": repr(m), "load": repr(self.load), "phase": self.phase, "s": m.s, "d": m.d,
+                "R": m.R, "n_modes": m.n_modes}
+
+
+#: The name :func:`find_orbit` results had before the two orbit types were one: the same class.
+MultiImpactOrbit = PeriodicOrbit
