@@ -155,6 +155,13 @@ class _Piston:
         self.b[1:] += 2.0 * p_end / (s * self.npi[1:])
         self.b[0] = -p_end / s
 
+    @property
+    def static_energy(self) -> float:
+        """Strain energy of the static correction (orthogonal to the modes kept):
+        ``(1/2) (p_end/s)^2 int_0^1 ((1 - x) - sum_{n<=N} 2 sin(n pi x)/(n pi))^2 dx``."""
+        n = np.arange(1, self.npi.size)
+        return 0.5 * self.b[0] ** 2 * (1.0 / 3.0 - float(np.sum(2.0 / (math.pi * n) ** 2)))
+
     def _cs(self, x):
         arg = np.multiply.outer(np.asarray(x, dtype=float), self.npi)
         return np.cos(arg), np.sin(arg)
@@ -326,7 +333,8 @@ class WaveImpact:
     drive_work : float
         Work of the drive load on the piston during the window.
     energy_before, energy_after : float
-        Piston energy (kinetic + strain) before, and after projected on the modes kept.
+        Piston energy (kinetic + strain) before (the modes plus the static correction that carries
+        the drive's force at ``x = 0``, theory §4c), and after projected on the modes kept.
     energy_after_field : float
         Energy of the exact post-window field (``energy_before + drive_work - rod_energy``).
     efficiency : float
@@ -370,7 +378,7 @@ class WaveImpact:
 
     @cached_property
     def energy_before(self) -> float:
-        return modal_energy(self.s, self.q_before, self.v_before)
+        return modal_energy(self.s, self.q_before, self.v_before) + self._solver.piston.static_energy
 
     @cached_property
     def energy_after(self) -> float:
