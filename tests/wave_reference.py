@@ -66,6 +66,7 @@ def march(s, R, load, t_start, q, v, periods, J=20000):
     total = int(math.ceil(periods * 2.0 * math.pi * s / 2.0))
     Fs, thetas, switches = [], [], []
     on, gap, a_last = True, 0.0, None
+    B = np.zeros(n_blk)  # B on the previous block (the first block's A is the start state's)
     for k in range(total):
         th0 = 2.0 * k
         if k > 0:
