@@ -35,6 +35,7 @@ def test_uniform_piston_under_constant_drive(N):
     np.testing.assert_allclose(imp.force(th / s), exact, rtol=1e-12)
     assert imp.peak_force == pytest.approx(exact.max(), rel=1e-12)
     assert imp.min_force == pytest.approx(0.5 * s * (1 + R) * v0, rel=1e-12)
+    assert imp.peak_force_error < 1e-12 * imp.peak_force  # nothing left to truncate
     Z, Zs = s, s * (1 + R) / (1 - R)
     assert imp.min_force == pytest.approx(Z * Zs * v0 / (Z + Zs), rel=1e-12)
     # the piston's end force at the drive is the drive's from the start
@@ -87,6 +88,8 @@ def test_peak_and_min_force_against_the_reference(case):
     imp = orbit.impact
     assert orbit.phase == pytest.approx(ref["phase"], abs=1e-4)
     assert imp.peak_force == pytest.approx(ref["peak"], rel=1e-3)
+    # the error indicator covers the error (and is itself small)
+    assert abs(imp.peak_force - ref["peak"]) <= imp.peak_force_error < 1e-3 * ref["peak"]
     assert imp.min_force == pytest.approx(ref["min"], rel=1e-3)
     assert imp.peak_rod_stress == pytest.approx(ref["peak"] * (1 - orbit.model.R) / (1 + orbit.model.R),
                                                 rel=1e-3)
