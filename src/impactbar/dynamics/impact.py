@@ -501,7 +501,8 @@ class WaveImpact:
 
         Evaluated exactly at the nodes of the characteristics lattice of ``cells`` cells (default
         ``8 (N + 1)``, at least 64, at most 2048); between nodes the fields are trigonometric sums
-        resolved by that lattice.
+        resolved by that lattice. The fields at impact carry the drive's force at ``x = 0`` (static
+        correction, theory §4c); their accuracy is that of :attr:`peak_force`.
 
         Returns
         -------
