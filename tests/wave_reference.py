@@ -43,9 +43,11 @@ def _series_fields(s, q, v, p_end, x):
     return vel - se, vel + se
 
 
-def march(s, R, load, t_start, q, v, periods, J=20000):
+def march(s, R, load, t_start, q, v, periods, J=20000, keep=None):
     """March the whole system from contact at ``t_start`` (state ``q, v``, the piston end on the rod
-    end) over ``periods`` load periods.
+    end) over ``periods`` load periods. With ``keep`` (a ``theta``) the invariants ``A``, ``B`` at
+    the rod end from ``keep`` on are returned too (the fields inside the piston follow from them:
+    ``alpha(x, theta) = A(theta + 1 - x)``, ``beta(x, theta) = B(theta - 1 + x)``).
 
     Returns
     -------
@@ -55,8 +57,11 @@ def march(s, R, load, t_start, q, v, periods, J=20000):
         Interface force at the nodes (0 while separated).
     switches : list of (float, bool)
         Switch instants (``theta``) and the state entered (True: contact).
+    A, B : numpy.ndarray
+        Only with ``keep``: the invariants at the nodes ``theta >= keep`` (from the block holding it).
     """
     h = 1.0 / J
+    As, Bs, kept = [], [], None
     n_blk = 2 * J
     jj = np.arange(n_blk)
     x = 1.0 - jj[:J] * h
@@ -115,7 +120,32 @@ def march(s, R, load, t_start, q, v, periods, J=20000):
         a_last = A[-1]
         Fs.append(F)
         thetas.append(th0 + jj * h)
-    return np.concatenate(thetas), np.concatenate(Fs), switches
+        if keep is not None and th0 + 2.0 > keep:
+            As.append(A)
+            Bs.append(B.copy())
+            kept = len(thetas) - 1 if kept is None else kept
+    if keep is None:
+        return np.concatenate(thetas), np.concatenate(Fs), switches
+    return (np.concatenate(thetas), np.concatenate(Fs), switches, np.concatenate(As),
+            np.concatenate(Bs), thetas[kept][0])
+
+
+def piston_stress_extremes(s, R, load, t_start, q, v, periods, J=2000):
+    """Largest and smallest axial force in the piston, ``N = s (alpha - beta)/2``, over the window
+    ``[0, 2]`` of the last blow whose window and the crossing time before it lie in the last two load
+    periods, at the nodes of the ``J``-cell lattice. Returns ``(phase, max, min)``."""
+    theta, F, switches, A, B, th_k = march(s, R, load, t_start, q, v, periods, J,
+                                           keep=2.0 * math.pi * s * (periods - 2))
+    starts = [t for t, c in switches if c and t - 1.0 >= th_k and t + 3.0 <= theta[-1]]
+    tb = starts[-1]
+    kb = int(math.ceil((tb - th_k) * J - 1e-9))  # the first node in contact
+    i = np.arange(J + 1)
+    hi, lo = -np.inf, np.inf
+    for m in range(2 * J + 1):
+        N = 0.5 * s * (A[kb + m + J - i] - B[kb + m - J + i])
+        hi = max(hi, float(N.max()))
+        lo = min(lo, float(N.min()))
+    return (t_start + tb / s) % (2.0 * math.pi), hi, lo
 
 
 def steady_blows(s, R, load, t_start, q, v, periods=60, cycle=1, J=20000):
