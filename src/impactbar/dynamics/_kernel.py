@@ -1115,24 +1115,25 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
     N = M - 1
     a = np.empty(M)
     b = np.empty(M)
-    periods = math.floor((t0 + 2.0 / s) / TWO_PI) - math.floor(t0 / TWO_PI) + 1
-    jumps = np.empty(periods * breaks.size if kind == 1 else 0)  # room for every jump in the window
-    nj = window_jumps(kind, s, breaks, t0, jumps)
-    # the drive's force at x = 0 (the level of the window's first piece): the static correction of
-    # the strain, b_0 (1 - x) + sum 2 p_end sin(n pi x) / (s n pi) (impact._Piston)
-    first = jumps[0] if nj > 0 else 2.0
-    p_end = _window_load(kind, p0, ks, pr, pim, breaks, levels, t0 + 0.5 * first / s)
-    if kind == 0:
-        p_end = _window_load(kind, p0, ks, pr, pim, breaks, levels, t0)
     scale = 2.0 * psup / s
     for n in range(M):
         a[n] = v[n] if n == 0 else 2.0 * v[n]
         b[n] = -2.0 * s * math.pi * n * q[n]
-        if n > 0:
-            b[n] += 2.0 * p_end / (s * math.pi * n)
-    b[0] = -p_end / s
-    for n in range(M):
         scale += abs(a[n]) + abs(b[n])
+    tol = 1e-13 * scale
+    periods = math.floor((t0 + 2.0 / s) / TWO_PI) - math.floor(t0 / TWO_PI) + 1
+    jumps = np.empty(periods * breaks.size if kind == 1 else 0)  # room for every jump in the window
+    nj = window_jumps(kind, s, breaks, t0, jumps)
+    # the static correction (impact._Piston): the strain's b_0 (1 - x) + sum 2 p_end sin(n pi x) /
+    # (s n pi), p_end the drive's force at x = 0 (a square wave's level on the window's first piece)
+    t_p = t0 + 0.5 * (jumps[0] if nj > 0 else 2.0) / s if kind == 1 else t0
+    p_end = _window_load(kind, p0, ks, pr, pim, breaks, levels, t_p)
+    b[0] = -p_end / s
+    scale += abs(b[0])
+    for n in range(1, M):
+        scale -= abs(b[n])
+        b[n] += 2.0 * p_end / (s * math.pi * n)
+        scale += abs(b[n])
     tol = 1e-13 * scale
     # -- the scan of A: [0, 1] from the start state, [1, 2] from beta0 and the drive
     hg = scan_step(N, rate)
