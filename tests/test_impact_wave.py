@@ -18,16 +18,22 @@ def lattice(s, R, q, v, load, t0, J):
     exact at its nodes. Drive at ``x = 0``, rod impedance at ``x = 1``; separated, the end is free
     and the gap is summed by rectangles (first order in ``1/J``).
 
+    The initial strain is the modal sum plus the static correction that carries the drive's force
+    ``p(t0)`` at ``x = 0`` (theory §4c): the strain ``-p (1 - x)/s^2`` less its first ``N`` sine
+    terms.
+
     Returns the nodes, ``v - s u_x`` and ``v + s u_x`` at the end of the window, and the interface
     force at every step."""
+    def p(m):
+        return float(load(t0 + m / (J * s)))
+
     n = np.arange(q.size)
     x = np.arange(J + 1) / J
     vel = np.cos(np.pi * np.outer(x, n)) @ (v * np.where(n == 0, 1.0, 2.0))
     se = -np.sin(np.pi * np.outer(x, n)) @ (2 * s * np.pi * n * q)
+    static = -p(0) / s * (1 - x)  # s u_x of the static strain, less its sine terms n <= N
+    se += static + np.sin(np.pi * np.outer(x, n[1:])) @ (2 * p(0) / (s * np.pi * n[1:]))
     al, be = vel - se, vel + se
-
-    def p(m):
-        return float(load(t0 + m / (J * s)))
 
     al[0] = be[0] + 2 * p(0) / s
     be[J] = -R * al[J]

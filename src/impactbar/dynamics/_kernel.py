@@ -1124,6 +1124,17 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
     periods = math.floor((t0 + 2.0 / s) / TWO_PI) - math.floor(t0 / TWO_PI) + 1
     jumps = np.empty(periods * breaks.size if kind == 1 else 0)  # room for every jump in the window
     nj = window_jumps(kind, s, breaks, t0, jumps)
+    # the static correction (impact._Piston): the strain's b_0 (1 - x) + sum 2 p_end sin(n pi x) /
+    # (s n pi), p_end the drive's force at x = 0 (a square wave's level on the window's first piece)
+    t_p = t0 + 0.5 * (jumps[0] if nj > 0 else 2.0) / s if kind == 1 else t0
+    p_end = _window_load(kind, p0, ks, pr, pim, breaks, levels, t_p)
+    b[0] = -p_end / s
+    scale += abs(b[0])
+    for n in range(1, M):
+        scale -= abs(b[n])
+        b[n] += 2.0 * p_end / (s * math.pi * n)
+        scale += abs(b[n])
+    tol = 1e-13 * scale
     # -- the scan of A: [0, 1] from the start state, [1, 2] from beta0 and the drive
     hg = scan_step(N, rate)
     cuts = np.empty(nj + 2)
@@ -1153,6 +1164,7 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
             for n in range(M):
                 A += a[n] * cn + sgn * b[n] * sn
                 cn, sn = cn * c1 - sn * s1, sn * c1 + cn * s1
+            A += sgn * b[0] * (1.0 - x)  # the static correction's (1 - x) term
             if lo >= 1.0:
                 u = x
                 if kind == 1:

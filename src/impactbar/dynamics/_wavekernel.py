@@ -27,10 +27,12 @@ _MAX_LOOPS = 10_000
 
 @numba.njit(cache=CACHE, nogil=True)
 def _trig(a, b, npi, x, sgn):
-    """``sum a_n cos(n pi x) + sgn b_n sin(n pi x)``: ``beta0(x)`` (``sgn = 1``), ``alpha0(x)`` (-1)."""
-    acc_c = 0.0
-    acc_s = 0.0
-    for n in range(a.size):
+    """``sum a_n cos(n pi x) + sgn (b_0 (1 - x) + sum_{n >= 1} b_n sin(n pi x))``: ``beta0(x)``
+    (``sgn = 1``), ``alpha0(x)`` (-1); ``b_0`` is the static correction's ``(1 - x)`` coefficient
+    (:class:`impactbar.dynamics.impact._Piston`)."""
+    acc_c = a[0]
+    acc_s = b[0] * (1.0 - x)
+    for n in range(1, a.size):
         arg = npi[n] * x
         acc_c += math.cos(arg) * a[n]
         acc_s += math.sin(arg) * b[n]
@@ -41,7 +43,7 @@ def _trig(a, b, npi, x, sgn):
 def _trig_int(a, b, npi, x, sgn):
     """``int_0^x alpha0`` (``sgn = 1``) or ``int_0^x beta0`` (``sgn = -1``)."""
     acc_s = 0.0
-    acc_c = 0.0
+    acc_c = -b[0] * (x - 0.5 * x * x)
     for n in range(1, a.size):
         arg = npi[n] * x
         acc_s += math.sin(arg) * (a[n] / npi[n])
@@ -277,6 +279,10 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
             cw[i + 1] = cw[i] + lw[i] * (ew[i + 1] - ew[i])
     else:
         lw[:] = 0.0
+    p_end = _p(kind, p0, ks, pr, pim, t0, s, jw, nj, lw, 0.0, False)  # the static correction
+    b[0] = -p_end / s
+    for n in range(1, M):
+        b[n] += 2.0 * p_end / (s * npi[n])
     scale = 2.0 * psup / s
     for n in range(M):
         scale += abs(a[n]) + abs(b[n])

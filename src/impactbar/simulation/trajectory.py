@@ -550,7 +550,10 @@ def _energy_account(tr: Trajectory) -> EnergyAccount:
                 qe, ve = window.state_at(dt)
             work += w
             imp += rod
-            proj += core.energy(_FREE, qe, ve) - field_energy
+            # the window starts from the modes plus the static correction (theory §4c): its energy
+            # is a change of basis too
+            proj += core.energy(_FREE, qe, ve) - field_energy + window.energy_before - \
+                core.energy(_FREE, seg.q, seg.v)
             if j + 1 == len(segs):
                 final = core.energy(_FREE, qe, ve)
             continue
