@@ -8,14 +8,14 @@ import math
 import numpy as np
 
 from ..dynamics.certified import enclose_zeros
+from ..dynamics.implementations import use_fast
 
 TWO_PI = 2.0 * math.pi
 
-#: the bounds of the certified search by the compiled kernel (``False``: the numpy reference path)
-_COMPILED_BOUND = True
-#: the whole certified search (enclosure, Newton steps, branch and bound) by the compiled kernel
-#: :mod:`impactbar.orbits._admkernel` where the load's flow is compiled (``False``: the numpy path)
-_COMPILED_SEARCH = True
+# implementations (impactbar.dynamics.implementations): "admissibility.search", the whole certified
+# search (enclosure, Newton steps, branch and bound) by the compiled kernel
+# :mod:`impactbar.orbits._admkernel` where the load's flow is compiled; "admissibility.bound", the
+# bounds of the numpy search by the compiled kernel. Their references are the numpy paths.
 #: intervals tried first by the branch and bound on the stationary values (see _stationary_values)
 SEEDS = 4
 #: with the end leaving the stop at rest, the samples of the search before this time do not bound
@@ -50,7 +50,7 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     if at_rest is None:
         at_rest = R == 0.0
     found = None
-    if _COMPILED_SEARCH:
+    if use_fast("admissibility.search"):
         found = _compiled_search(load, w2, float(d), float(phase), q0, v0, c, absc, float(psup),
                                  float(horizon), bool(at_rest), 1e-13 * scale, flow)
     if found is None:
@@ -81,11 +81,8 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
 def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol, flow=None):
     """``(clearance, err)`` of :func:`_numpy_search` by the compiled kernel, or
     ``None`` where it does not apply (a load or flow it does not know: the numpy path then runs)."""
-    from ..dynamics import _kernel
     from ..loads import FourierLoad, PiecewiseConstantLoad
 
-    if not _kernel.CACHE:  # no disk cache: every process would compile the kernel (about 15 s)
-        return None  # on its first orbit, where the numpy search takes milliseconds
     kind = type(load)
     if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
                                              for f in ("__call__", "variation", "flow")):
@@ -94,9 +91,8 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         args = getattr(flow, "kernel_args", None)
         if args is None:
             return None
-        pk = load._pk
-        F = args + (np.ascontiguousarray(pk.real), np.ascontiguousarray(pk.imag),
-                    float(np.sum(load._k * np.abs(pk))), 2.0 * load.sup_oscillation)
+        view = load.kernel_view
+        F = args + (view.pr, view.pim, view.p1, 2.0 * view.posc)
         P = _NO_PIECES
         lk = 0
     elif isinstance(load, PiecewiseConstantLoad) and all(
@@ -106,9 +102,9 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         if pieces is None:
             return None
         nodes, levels, qn, vn = pieces
-        lv = load._lv
-        P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, load._b, lv,
-             float(np.max(lv) - np.min(lv)), bool(load._b.size == 1), vn)
+        view = load.kernel_view
+        P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, view.breaks, view.levels,
+             view.spread, bool(view.breaks.size == 1), vn)
         F = _NO_FOURIER
         lk = 1
     else:
@@ -145,7 +141,7 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
         q, v = states(mid)
         last["g"] = c @ q
         center, delta = load.variation(phase + mid, half)
-        if _COMPILED_BOUND and q.ndim == 2:
+        if use_fast("admissibility.bound") and q.ndim == 2:
             from ..dynamics._flowkernel import end_velocity_bound
 
             T = q.shape[1]
@@ -210,7 +206,7 @@ def _load_slope(load):
     kind = type(load)
     if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
                                              for f in ("__call__", "variation")):
-        return float(np.sum(load._k * np.abs(load._pk))), False
+        return load.kernel_view.p1, False
     if isinstance(load, PiecewiseConstantLoad) and all(
             getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation")):
         return 0.0, True
