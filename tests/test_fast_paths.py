@@ -433,7 +433,8 @@ def test_simulation_core_is_built_once_and_runs_are_unchanged():
     first = simulate(model, load, start, 60.0)
     core = sim_module._core_for(model, load)
     assert sim_module._core_for(BarModel(1.37, 0.02, 0.8, 3), load) is core
-    assert sim_module._core_for(model, CosineLoad(1.2, 1.0)) is not core  # keyed by the load object
+    assert sim_module._core_for(model, CosineLoad(1.2, 1.0)) is core  # keyed by the load's value
+    assert sim_module._core_for(model, CosineLoad(1.2, 3.0)) is not core
     again = simulate(model, load, start, 60.0)
     sim_module._CORES.clear()
     fresh = simulate(model, load, start, 60.0)
