@@ -421,7 +421,7 @@ class FourierLoad(Load):
                 own(static[:, 0]), kind, lamv, cq, sq, cv, sv, own(dq[:, 0]), own(dv[:, 0]))
 
         def evaluate(t):
-            return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), *args)
+            return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), args)
 
         evaluate.kernel_args = args  # for the compiled admissibility search
         return evaluate

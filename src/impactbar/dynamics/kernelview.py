@@ -69,8 +69,9 @@ class LoadKernelView(NamedTuple):
         ks = np.array(ks, dtype=float)
         pk = np.asarray(pk, dtype=complex)
         a = np.abs(pk)
-        return cls(0, float(p0), ks, np.ascontiguousarray(pk.real, dtype=float),
-                   np.ascontiguousarray(pk.imag, dtype=float), np.zeros(1), np.zeros(1),
+        # private writable copies: a read-only array would be another numba type (and compilation)
+        return cls(0, float(p0), ks, np.array(pk.real, dtype=float), np.array(pk.imag, dtype=float),
+                   np.zeros(1), np.zeros(1),
                    abs(float(p0)) + float(np.sum(a)), float(np.sum(ks * a)), float(np.sum(ks**2 * a)),
                    float(np.sum(ks**3 * a)), float(np.sum(a)), 0.0)
 

@@ -91,10 +91,8 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         args = getattr(flow, "kernel_args", None)
         if args is None:
             return None
-        view = load.kernel_view
-        F = args + (view.pr, view.pim, view.p1, 2.0 * view.posc)
+        F = args
         P = _NO_PIECES
-        lk = 0
     elif isinstance(load, PiecewiseConstantLoad) and all(
             getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation", "flow")):
         # one period and a margin: a midpoint of the search may fall just past the flight's end
@@ -102,18 +100,15 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         if pieces is None:
             return None
         nodes, levels, qn, vn = pieces
-        view = load.kernel_view
-        P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, view.breaks, view.levels,
-             view.spread, bool(view.breaks.size == 1), vn)
+        P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, vn)
         F = _NO_FOURIER
-        lk = 1
     else:
         return None
     from ._admkernel import admissibility_search
 
-    code, v_max, err = admissibility_search(lk, phase, horizon, at_rest, atol, SEEDS,
-                                            _SAMPLE_FLOOR if at_rest else 0.0, c, absc, w2, d, psup,
-                                            F, P)
+    code, v_max, err = admissibility_search(phase, horizon, at_rest, atol, SEEDS,
+                                            _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
+                                            (load.kernel_view, F, P))
     if code:
         raise RuntimeError("zero search did not converge (Lipschitz bound too loose)")
     return float(v_max), float(err)
@@ -121,8 +116,8 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
 
 _E1, _E2 = np.zeros(0), np.zeros((1, 0))
 _NO_FOURIER = (0.0, 0.0, 0.0, _E1, _E2, _E2, _E2, _E2, _E1, np.zeros(0, dtype=np.int64), _E1, _E1, _E1,
-               _E1, _E1, _E1, _E1, _E1, _E1, 0.0, 0.0)
-_NO_PIECES = (_E1, 0.0, _E1, _E1, _E2, _E1, _E1, 0.0, False, _E2)
+               _E1, _E1, _E1, _E1)
+_NO_PIECES = (_E1, 0.0, _E1, _E1, _E2, _E2)
 
 
 def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale, flow=None):
