@@ -33,6 +33,8 @@ import math
 import numba
 import numpy as np
 
+from .kernelview import LoadKernelView, ModalBasisView
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -396,7 +398,7 @@ def next_piece(load, B, level, ta, te, m, j, anchor, state):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
+def _find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
     """First ``t`` in ``[anchor, t_lim]`` where ``h(t) >= 0`` (see the module docstring), in the
     basis ``B`` (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``
     (:class:`~impactbar.dynamics.kernelview.LoadKernelView`); ``work = (q, v, qp, vp, qpa, vpa)``,
@@ -501,6 +503,14 @@ def find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
         p, dp, ddp = load_value(load, level, a)
         h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
     return FAIL, a
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
+    """:func:`_find_crossing` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _find_crossing(LoadKernelView(*load), ModalBasisView(*B), wts, alpha, anchor_t, qa, va,
+                          t_lim, htol, work)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -724,7 +734,7 @@ def _coarse_eval(d, c0, p0, ks, hcr, hci, sq0, ta, r0, dv0, t):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
+def _modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
     """:func:`find_crossing` for an impact (``h = c . q``) of the free-free bar under a Fourier load
     whose flexible modes are all underdamped, with the flight written once in folded form (theory
     §2, eq. 8): ``q_n = e^{-d tau/2} (a_n cos lam_n tau + b_n sin lam_n tau) + q_pn(t)``, so that
@@ -862,7 +872,14 @@ def modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
+def modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
+    """:func:`_modal_crossing` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _modal_crossing(LoadKernelView(*load), ModalBasisView(*B), c, fold, ta, qa, va, t_lim, htol, work)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
     """Free flight with impacts from ``(t, q, v)`` in the free-free basis ``B``
     (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``
     (:class:`~impactbar.dynamics.kernelview.LoadKernelView`); ``q, v`` are overwritten with the
@@ -964,11 +981,11 @@ def run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
             st, tc, q[0], v[0], qp1, p1t = rigid1_crossing(d, c[0], p0, h1, anchor[0], qa[0], va[0],
                                                            t_end, htol)
         elif modal and off:
-            st, tc = modal_crossing(load, B, c, fold, anchor[0], qa, va, t_end, htol, mwork)
+            st, tc = _modal_crossing(load, B, c, fold, anchor[0], qa, va, t_end, htol, mwork)
             # the state there by the reference flow (qpa, vpa hold the anchor's particular state)
             advance(load, B, 0.0, anchor[0], (qa, va, qpa, vpa), tc, (q, v, qp, vp))
         else:
-            st, tc = find_crossing(load, B, c, 0.0, anchor, qa, va, t_end, htol, work)
+            st, tc = _find_crossing(load, B, c, 0.0, anchor, qa, va, t_end, htol, work)
         if st == NONE:
             return n, END, t_end
         if st == FAIL:
@@ -1024,7 +1041,15 @@ def run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
+def run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
+    """:func:`_run_free` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _run_free(LoadKernelView(*load), ModalBasisView(*B), R, c, t, q, v, t_end, max_imp, tail_tol,
+                     out, fast)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
     """Exact states at the sorted times ``ts >= ta`` from ``(ta, qa, va)`` into ``out_q, out_v``
     (shape (M, T)); a piecewise-constant load is followed jump by jump, by piece index (no
     rounding of a jump time into the wrong piece)."""
@@ -1059,6 +1084,15 @@ def propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
 # --------------------------------------------------------------------------------------------------
 # the wave impact law's contact window (theory §4b), the case without separation
 # --------------------------------------------------------------------------------------------------
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
+    """:func:`_propagate_many` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _propagate_many(LoadKernelView(*load), ModalBasisView(*B), ta, qa, va, ts, out_q, out_v)
+
+
 @numba.njit(cache=CACHE, nogil=True)
 def _window_load(load, t):
     """``p(t)``, right-continuous at the jumps of a piecewise-constant load."""
@@ -1101,7 +1135,7 @@ def window_jumps(load, s, t0, jumps):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
+def _window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
     """Add the moments ``int P(theta) cos(n pi theta)``, ``... sin ...`` of the drive
     ``P(theta) = p(t0 + theta/s)`` over ``[0, 1]`` (row 0) and ``[1, 2]`` (row 1) to ``ic_, is_``
     (shape (2, M)): Gauss-Legendre panels split at the load's ``jumps`` (in theta, sorted)."""
@@ -1138,7 +1172,14 @@ def window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
+def window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
+    """:func:`_window_moments` called from Python, with ``load`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _window_moments(LoadKernelView(*load), s, rate, t0, jumps, gl_x, gl_w, ic_, is_)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law held in contact throughout: checks that
     the invariant arriving at the rod, ``A(theta)``, stays ``>= 0`` on the scan grid of
     :class:`impactbar.dynamics.impact` (both limits at every jump) and, if so, writes
@@ -1199,7 +1240,7 @@ def wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
         lo = hi
     ic_ = np.zeros((2, M))
     is_ = np.zeros((2, M))
-    window_moments(load, s, rate, t0, jumps[:nj], gl_x, gl_w, ic_, is_)
+    _window_moments(load, s, rate, t0, jumps[:nj], gl_x, gl_w, ic_, is_)
     for n in range(M):
         va[n] = -R * v[n] + (ic_[1, n] - R * ic_[0, n]) / s
         if n == 0:
@@ -1211,3 +1252,11 @@ def wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
         g0 += c[n] * qa[n]
     qa[0] = -g0
     return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
+    """:func:`_wave_window` called from Python, with ``load`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _wave_window(LoadKernelView(*load), s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va)
+

@@ -18,7 +18,8 @@ import math
 import numba
 import numpy as np
 
-from ._kernel import CACHE, TWO_PI, load_value, propagate_many, scan_step, window_jumps, window_moments
+from ._kernel import CACHE, TWO_PI, _propagate_many, _window_moments, load_value, scan_step, window_jumps
+from .kernelview import LoadKernelView, ModalBasisView
 
 #: contact intervals a window may hold before the kernel gives up (the caller then solves it in Python)
 MAX_INTERVALS = 256
@@ -232,7 +233,7 @@ def _project_free(a, b, npi, win, R, lo, hi, incoming, h, gl, dv, dse):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
+def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law, separations included (theory §4b),
     under the load view ``load`` (:class:`~impactbar.dynamics.kernelview.LoadKernelView`).
 
@@ -417,7 +418,7 @@ def wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
     # -- the post-contact state: the contact map and drive, plus the waves the free end reflected
     ic_ = np.zeros((2, M))
     is_ = np.zeros((2, M))
-    window_moments(load, s, rate, t0, jw, gl_x, gl_w, ic_, is_)
+    _window_moments(load, s, rate, t0, jw, gl_x, gl_w, ic_, is_)
     gl = (gl_x, gl_w)
     for n in range(M):
         va[n] = -R * v[n] + (ic_[1, n] - R * ic_[0, n]) / s
@@ -455,7 +456,14 @@ def wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
+def wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
+    """:func:`_wave_contact` called from Python, with ``load`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _wave_contact(LoadKernelView(*load), s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
     """The wave law's phase residual ``u(1, 2 pi-)`` of a one-impact orbit under a piecewise-constant
     load, for each of ``phases`` into ``out``: the computation of
     :func:`impactbar.orbits.wave.wave_orbit_states` (drive of the window by the panels of
@@ -483,9 +491,9 @@ def square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
         nj = window_jumps(load, s, ph, jumps)
         ic_[:, :] = 0.0
         is_[:, :] = 0.0
-        window_moments(load, s, 0.0, ph, jumps[:nj], gl_x, gl_w, ic_, is_)
+        _window_moments(load, s, 0.0, ph, jumps[:nj], gl_x, gl_w, ic_, is_)
         ts[0] = ph + TWO_PI
-        propagate_many(load, B, ph + T, zeros, zeros, ts, fq, fv)
+        _propagate_many(load, B, ph + T, zeros, zeros, ts, fq, fv)
         for n in range(M):
             h = (ic_[1, n] - R * ic_[0, n]) / s
             g = 0.0 if n == 0 else -(is_[1, n] - R * is_[0, n]) / (s * s * math.pi * n)
@@ -508,3 +516,12 @@ def square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
         for n in range(M):
             r += c[n] * qm[n]
         out[i] = r
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
+    """:func:`_square_wave_residuals` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _square_wave_residuals(LoadKernelView(*load), ModalBasisView(*B), s, R, c, fund, gl_x, gl_w,
+                                  phases, out)
+

@@ -226,7 +226,7 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     view = getattr(load, "kernel_view", None)
     if view is not None:  # the compiled quadrature (the same panels)
         mc, ms = np.zeros((2, n_modes + 1)), np.zeros((2, n_modes + 1))
-        K.window_moments(view, s, wl.rate, t0, np.ascontiguousarray(wl.jumps), _GL_X, _GL_W, mc, ms)
+        K.window_moments(tuple(view), s, wl.rate, t0, np.ascontiguousarray(wl.jumps), _GL_X, _GL_W, mc, ms)
         (ca, cb), (sa, sb) = mc, ms
     else:
         h_panel = 8.0 / (npi[-1] + wl.rate + 1.0)

@@ -108,7 +108,7 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
 
     code, v_max, err = admissibility_search(phase, horizon, at_rest, atol, SEEDS,
                                             _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
-                                            (load.kernel_view, F, P))
+                                            (tuple(load.kernel_view), F, P))
     if code:
         raise RuntimeError("zero search did not converge (Lipschitz bound too loose)")
     return float(v_max), float(err)

@@ -81,8 +81,8 @@ def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
     zeros = np.zeros(M)
     if isinstance(load, PiecewiseConstantLoad):
         q, v = np.empty((M, 1)), np.empty((M, 1))
-        K.propagate_many(load.kernel_view, ModalBasisView.unforced(w2, model.d), float(t0), zeros, zeros,
-                         np.array([float(t1)]), q, v)
+        K.propagate_many(tuple(load.kernel_view), tuple(ModalBasisView.unforced(w2, model.d)), float(t0),
+                         zeros, zeros, np.array([float(t1)]), q, v)
     else:
         q, v = load.propagate(w2, model.d, t0, zeros, zeros, [t1])
     return q[:, 0], v[:, 0]
@@ -158,9 +158,10 @@ def _square_wave_residuals(model: BarModel, load: PiecewiseConstantLoad, ph: np.
         raise ValueError("the periodicity conditions are singular (R = 1 without damping)")
     phases = np.ascontiguousarray(ph, dtype=float).ravel()
     out = np.empty(phases.size)
-    WK.square_wave_residuals(load.kernel_view, ModalBasisView.unforced(model.frequencies**2, model.d),
-                             float(model.s), float(R), np.ascontiguousarray(model.end_weights, dtype=float),
-                             (p11, p12, p21, p22), _GL_X, _GL_W, phases, out)
+    basis = ModalBasisView.unforced(model.frequencies**2, model.d)
+    WK.square_wave_residuals(tuple(load.kernel_view), tuple(basis), float(model.s), float(R),
+                             np.ascontiguousarray(model.end_weights, dtype=float), (p11, p12, p21, p22),
+                             _GL_X, _GL_W, phases, out)
     return out.reshape(ph.shape)
 
 

@@ -379,8 +379,8 @@ class _Core:
         cap = out_q.shape[0]
         out_t = np.empty(cap)
         out_vel = np.empty(cap)
-        n, st, tn = K.run_free(D, B.view, self.R, self.c, float(t), q, v, float(t_end), int(max_imp),
-                               CHATTER_TAIL, (out_t, out_vel, out_q, out_v),
+        n, st, tn = K.run_free(tuple(D), tuple(B.view), self.R, self.c, float(t), q, v, float(t_end),
+                               int(max_imp), CHATTER_TAIL, (out_t, out_vel, out_q, out_v),
                                use_fast("simulate.impact_search"))
         return n, st, tn, out_t[:n], out_vel[:n]
 
@@ -394,8 +394,8 @@ class _Core:
         v = np.empty(M)
         scratch = [np.empty(M) for _ in range(4)]
         anchor = np.array([float(t)])
-        st, tr = K.find_crossing(D, B.view, -self.f_wts, -self.f_alpha, anchor, qa, va, float(t_end),
-                                 0.0, (q, v, *scratch))
+        st, tr = K.find_crossing(tuple(D), tuple(B.view), -self.f_wts, -self.f_alpha, anchor, qa, va,
+                                 float(t_end), 0.0, (q, v, *scratch))
         if st == K.CROSS:
             tr, q, v = self._clearly_tensile(tr, q, v, t_end)
         return st, tr, q, v
@@ -450,7 +450,7 @@ class _Core:
         ts = np.ascontiguousarray(t[order])
         Q = np.empty((B.w2.size, ts.size))
         V = np.empty_like(Q)
-        K.propagate_many(D, B.view, float(t0), np.ascontiguousarray(q, dtype=float),
+        K.propagate_many(tuple(D), tuple(B.view), float(t0), np.ascontiguousarray(q, dtype=float),
                          np.ascontiguousarray(v, dtype=float), ts, Q, V)
         out_q = np.empty_like(Q)
         out_v = np.empty_like(V)
@@ -1198,10 +1198,10 @@ def _run_wave(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
             vm[0] -= arrival
             arrival = 0.0
         q, v = np.empty_like(qm), np.empty_like(vm)
-        if K.wave_window(D, model.s, model.R, c, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
+        if K.wave_window(tuple(D), model.s, model.R, c, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
             imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
         elif use_fast("simulate.wave_separation") and WK.wave_contact(
-                D, model.s, model.R, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:
+                tuple(D), model.s, model.R, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:
             # contact lost inside the window
             imp = _Window(model, core.load, ti, qm, vm, q.copy(), v.copy())
         else:  # the full characteristics solution in Python
