@@ -105,7 +105,7 @@ def _fundamental(w2, d, tau):
     return e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def load_value(load, level, t):
     """``p(t)``, ``p'(t)``, ``p''(t)`` of the load view ``load`` (derivatives 0 inside a piece of a
     piecewise-constant load, whose ``level`` the caller passes)."""
@@ -126,7 +126,7 @@ def load_value(load, level, t):
     return p, dp, ddp
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def particular(load, B, level, t, qp, vp):
     """Fill ``qp, vp`` with the particular state at ``t`` (0 for a rigid mode's mean-load part) of
     the basis ``B`` (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``."""
@@ -149,7 +149,7 @@ def particular(load, B, level, t, qp, vp):
                 vp[n] -= k * (hpr[n, j] * sk + hpi[n, j] * ck)
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def advance(load, B, level, ta, anchor, t, state):
     """State ``q, v`` at ``t`` from the anchor ``(ta, qa, va)`` with particular state ``qpa, vpa``
     there (``anchor = (qa, va, qpa, vpa)``); ``state = (q, v, qp, vp)`` receives the state and the
@@ -198,7 +198,7 @@ def functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp):
     return h, dh, ddh, 1e-14 * mag, 1e-14 * dmag
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def bounds(load, B, wts, alpha, psup, L, state, horizon):
     """Bounds ``A >= |h''|`` and ``J >= |h'''|`` valid on ``[t, t + horizon]`` from the state
     ``(q, v, qp, vp)``, with ``psup >= |p|`` and ``L`` the mean load (or the piece's level)."""
@@ -660,7 +660,7 @@ def rigid1_crossing(d, c0, p0, h1, ta, qa, va, t_lim, htol):
     return FAIL, a, q, v, qp, p
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")
 def _modal_eval(load, B, fold, flight, work, t):
     """``h, h', h''`` of the end ``h = c . q`` at ``t`` in the folded form of the flight from
     ``ta`` (see :func:`modal_crossing`; ``flight = (ta, c0, r0, dv0, csum, sq0, sw0)``), and the
@@ -959,6 +959,8 @@ def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
     work = (q, v, qp, vp, qpa, vpa)
     mwork = (qpa, vpa, ca, cb, cva, cvb)
     h1 = (k1, pr1, pim1, hr1, hi1, habs1)
+    anc = (qa, va, qpa, vpa)  # (the arrays are updated in place: the tuples are built once)
+    stt = (q, v, qp, vp)
     while True:
         htol = 0.0
         for i in range(M):
@@ -983,7 +985,7 @@ def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
         elif modal and off:
             st, tc = _modal_crossing(load, B, c, fold, anchor[0], qa, va, t_end, htol, mwork)
             # the state there by the reference flow (qpa, vpa hold the anchor's particular state)
-            advance(load, B, 0.0, anchor[0], (qa, va, qpa, vpa), tc, (q, v, qp, vp))
+            advance(load, B, 0.0, anchor[0], anc, tc, stt)
         else:
             st, tc = _find_crossing(load, B, c, 0.0, anchor, qa, va, t_end, htol, work)
         if st == NONE:
