@@ -114,6 +114,21 @@ def test_loads_compare_and_hash_by_value():
     assert len({CosineLoad(0.5, 1.0), CosineLoad(0.5, 1.0), SquareWaveLoad(1.0, 1.3)}) == 2
 
 
+def test_a_pickled_load_hashes_as_an_equal_load_in_another_process():
+    """The hash cached on a load is not pickled: hashes of bytes differ between processes."""
+    import pickle
+
+    load = FourierLoad(0.5, [1.0, 0.2j])
+    hash(load)
+    code = ("import pickle, sys; from impactbar import FourierLoad\n"
+            "l = pickle.loads(sys.stdin.buffer.read())\n"
+            "print({l: 1}.get(FourierLoad(0.5, [1.0, 0.2j])), l == FourierLoad(0.5, [1.0, 0.2j]))")
+    env = {**os.environ, "PYTHONHASHSEED": "12345", "PYTHONPATH": os.pathsep.join(sys.path)}
+    out = subprocess.run([sys.executable, "-c", code], input=pickle.dumps(load), capture_output=True,
+                         check=True, env=env)
+    assert out.stdout.decode().split() == ["1", "True"]
+
+
 # -- the kernel view ------------------------------------------------------------------------------
 @pytest.mark.parametrize("cls", list(LOADS))
 def test_kernel_view_holds_the_load(cls):

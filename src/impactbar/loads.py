@@ -91,6 +91,10 @@ class Load(ABC):
             h = self.__dict__["_hash"] = hash((type(self).__qualname__, self._key()))
         return h
 
+    def __getstate__(self):
+        # the cached hash is not carried to another process (hashes of bytes differ between them)
+        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
+
     @property
     def kernel_view(self) -> LoadKernelView | None:
         """The load as compiled code reads it (built once), or ``None`` for a load the kernels do not
