@@ -15,7 +15,8 @@ Rows (baseline | new | ratio | the issue's goal):
   search by numpy (the reference) against the compiled search;
 - ``import impactbar`` and ``impactbar orbits --help`` (fresh processes, wall time): everything the
   package used to import eagerly against the lazy imports;
-- ``simulate``: impacts per second, the general certified impact search (``FAST_SEARCH = False``)
+- ``simulate``: impacts per second, the general certified impact search (the reference of
+  ``"simulate.impact_search"``)
   against the specialised ones (rigid bar in scalars, flexible modes in folded form), and a
   100-impact run, with the kernel data rebuilt on every call (as before) against the cached core.
 
@@ -45,7 +46,8 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate  # noqa: E402
-from impactbar.orbits import admissibility, one_impact, stability  # noqa: E402
+from impactbar.dynamics.implementations import use_reference  # noqa: E402
+from impactbar.orbits import stability  # noqa: E402
 from impactbar.orbits.one_impact import _periodic_orbits_general  # noqa: E402
 from impactbar.orbits.rigid import rigid_cosine_orbits  # noqa: E402
 
@@ -83,11 +85,8 @@ def bench_rigid(rep):
     new = cpu_median(lambda: periodic_orbits(model, load), rep * 10)
     row("rigid, cosine, one periodic_orbits call", base * 1e3, new * 1e3, "ms", "<= 0.3 ms")
     for name, ld in (("cosine", load), ("square wave", SquareWaveLoad(1.0, 1.2))):
-        one_impact.RIGID_SCALAR = False  # the numpy closed form on 1-element arrays
-        try:
+        with use_reference("orbits.rigid_scalar"):  # the numpy closed form on 1-element arrays
             vec1 = cpu_median(lambda ld=ld: periodic_orbits(model, ld), rep * 10)
-        finally:
-            one_impact.RIGID_SCALAR = True
         flt = cpu_median(lambda ld=ld: periodic_orbits(model, ld), rep * 10)
         row(f"rigid, {name}, one call: numpy closed form vs floats", vec1 * 1e3, flt * 1e3, "ms",
             "<= 0.3 ms")
@@ -150,11 +149,8 @@ def bench_admissibility(rep):
              ("square wave, 64 modes", BarModel(5.0, 0.1, 0.5, 64), SquareWaveLoad(1.0, 1.2), 5,
               "<= 40 ms")]
     for name, model, load, r, goal in cases:
-        admissibility._COMPILED_SEARCH = False
-        try:
+        with use_reference("admissibility.search"):
             base = cpu_median(lambda model=model, load=load: periodic_orbits(model, load), max(r, 3))
-        finally:
-            admissibility._COMPILED_SEARCH = True
         new = cpu_median(lambda model=model, load=load: periodic_orbits(model, load), max(r, 3))
         row(f"periodic_orbits, {name}: numpy vs compiled search", base * 1e3, new * 1e3, "ms", goal)
 
@@ -194,11 +190,8 @@ def bench_simulate(quick):
             return simulate(model, load, st, t0 + 1e7, t0=t0, max_impacts=k)
 
         new = cpu_median(lambda n=n: run(n), 3)
-        sim.FAST_SEARCH = False  # the general certified search (the reference)
-        try:
+        with use_reference("simulate.impact_search"):  # the general certified search
             base = n / cpu_median(lambda n=n: run(n), 3)
-        finally:
-            sim.FAST_SEARCH = True
         new100 = cpu_median(lambda: run(100), 50)
         sim._core_for = lambda m, ld: sim._Core(m, ld)  # the kernel data rebuilt on every call
         try:

@@ -3,7 +3,7 @@
 paper's law (eq. 10), the baseline, in the same run. Goal: within 2x.
 
 For ``simulate`` the wave law is also timed with its separating contact windows solved by the
-Python characteristics solver (``FAST_WAVE_SEPARATION = False``, the reference of the compiled
+Python characteristics solver (the reference of ``"simulate.wave_separation"``, the reference of the compiled
 window), the path before the compiled one, in the same run.
 
 Run: ``python benchmarks/bench_wave.py [--quick]``. Prints a table; nothing is asserted.
@@ -12,17 +12,16 @@ Run: ``python benchmarks/bench_wave.py [--quick]``. Prints a table; nothing is a
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 import time
 
 import numpy as np
 
 from impactbar import InitialState, periodic_orbits, physical, simulate
+from impactbar.dynamics.implementations import implementation
 
 TWO_PI = 2 * math.pi
-#: the wave law's module, which holds the simulator's switch for its contact step
-SIM = importlib.import_module("impactbar.laws.wave")
+#: the simulator's module (the package ``impactbar.simulation`` re-exports the function by that name)
 
 
 def median_time(fn, repeat):
@@ -53,7 +52,6 @@ def main(argv=None):
             t, n = {}, {}
             laws = ("paper", "wave") if what == "periodic_orbits" else ("paper", "wave", "wave-py")
             for law in laws:
-                SIM.FAST_WAVE_SEPARATION = law != "wave-py"
                 m = model.with_(impact=law.removesuffix("-py"))
                 if what == "periodic_orbits":
                     def fn(m=m, load=load):
@@ -63,9 +61,9 @@ def main(argv=None):
 
                     def fn(m=m, load=load, start=start):
                         return simulate(m, load, start, periods * TWO_PI)
-                t[law] = median_time(fn, repeat)
-                n[law] = fn().n_impacts if what == "simulate" else None
-            SIM.FAST_WAVE_SEPARATION = True
+                with implementation("simulate.wave_separation", "reference" if law == "wave-py" else "fast"):
+                    t[law] = median_time(fn, repeat)
+                    n[law] = fn().n_impacts if what == "simulate" else None
             rows.append((name, what, t["paper"], t["wave"], n["paper"], n["wave"], t.get("wave-py")))
     print("simulate: from rest 0.05 L off the stop; per impact = time / impacts (the paper law may "
           "end in permanent contact, which costs nothing per period)")

@@ -22,6 +22,18 @@ def pytest_collection_modifyitems(config, items):
 
 
 @pytest.fixture
+def choose():
+    """``choose(name, fast)``: run the rest of the test with the fast (``True``) or the reference
+    (``False``) implementation of ``name`` (:mod:`impactbar.dynamics.implementations`)."""
+    import contextlib
+
+    from impactbar.dynamics.implementations import implementation
+
+    with contextlib.ExitStack() as stack:
+        yield lambda name, fast: stack.enter_context(implementation(name, "fast" if fast else "reference"))
+
+
+@pytest.fixture
 def rng():
     """A seeded generator, so every random test is repeatable."""
     return np.random.default_rng(20261121)

@@ -10,17 +10,16 @@ import pytest
 
 import impactbar.orbits.admissibility as admissibility
 from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, find_orbit
+from impactbar.dynamics.implementations import use_reference
 from impactbar.orbits.one_impact import _periodic_orbits_general
 from impactbar.orbits.rigid import STATUS, rigid_square_orbits
 
 
 def _both(monkeypatch, fn):
     """``fn()`` with the compiled search, then with the numpy search."""
-    monkeypatch.setattr(admissibility, "_COMPILED_SEARCH", True)
     fast = fn()
-    monkeypatch.setattr(admissibility, "_COMPILED_SEARCH", False)
-    ref = fn()
-    monkeypatch.setattr(admissibility, "_COMPILED_SEARCH", True)
+    with use_reference("admissibility.search"):
+        ref = fn()
     return fast, ref
 
 
@@ -95,12 +94,12 @@ def test_unknown_load_takes_the_numpy_search(monkeypatch):
 
 
 @pytest.mark.parametrize("compiled", [True, False])
-def test_two_close_zeros_in_one_interval(monkeypatch, compiled):
+def test_two_close_zeros_in_one_interval(choose, compiled):
     """Regression: two zeros of the end's velocity in one narrow interval of the search. Newton
     found the minimum and missed the maximum next to it, so the clearance was off by 1.2e-6 while
     claiming 8e-12. The general path must match the rigid closed form (theory §5) within its own
     error bound."""
-    monkeypatch.setattr(admissibility, "_COMPILED_SEARCH", compiled)
+    choose("admissibility.search", compiled)
     d, R, q, kappa = 0.0, 0.4285396081429238, 0.9627273973468053, 1.527670318231706
     ref = rigid_square_orbits(d, R, q, kappa)
     orbits = _periodic_orbits_general(BarModel(1.0, d, R, 0), SquareWaveLoad(q, kappa))
@@ -113,10 +112,10 @@ def test_two_close_zeros_in_one_interval(monkeypatch, compiled):
 
 
 @pytest.mark.parametrize("compiled", [True, False])
-def test_general_search_equals_rigid_square_closed_form(monkeypatch, compiled):
+def test_general_search_equals_rigid_square_closed_form(choose, compiled):
     """Rigid bars under random square waves, where the end's velocity has kinks at the jumps: the
     general search's clearance equals the closed form within its error bound, on both paths."""
-    monkeypatch.setattr(admissibility, "_COMPILED_SEARCH", compiled)
+    choose("admissibility.search", compiled)
     rng = np.random.default_rng(7)
     checked = 0
     for _ in range(40):
@@ -153,12 +152,12 @@ def test_transfer_cache_keeps_each_model_apart():
 
 
 @pytest.mark.parametrize("compiled", [True, False])
-def test_clearance_equals_dense_sampling(monkeypatch, compiled):
+def test_clearance_equals_dense_sampling(choose, compiled):
     """The pruned search against an independent brute force: ``g'`` sampled on a fine grid, every
     sign change refined by Brent's method, the largest ``g`` there. Flexible bars, both loads."""
     from scipy.optimize import brentq
 
-    monkeypatch.setattr(admissibility, "_COMPILED_SEARCH", compiled)
+    choose("admissibility.search", compiled)
     cases = [(BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0)),
              (BarModel(2.0, 0.05, 0.7, 6), CosineLoad(0.3, 1.0)),
              (BarModel(5.0, 0.1, 0.5, 16), SquareWaveLoad(1.0, 1.2)),
@@ -251,30 +250,41 @@ def test_third_derivative_bound_holds():
         assert np.max(np.abs(g3)) <= L3[0] * (1.0 + 1e-12)
 
 
-def test_no_disk_cache_keeps_the_numpy_search(monkeypatch):
-    """Without a writable numba cache the kernel would be compiled anew in every process: the
-    numpy search (the same algorithm) decides instead, with the same verdicts."""
+def test_no_disk_cache_keeps_the_compiled_search(monkeypatch):
+    """Whether numba's cache folder is writable chooses no algorithm: without a disk cache (numba
+    then compiles in memory) the compiled search still decides, with the same verdicts as the numpy
+    search; and the package reads ``_kernel.CACHE`` nowhere but as numba's ``cache=`` option."""
+    import ast
+    import pathlib
+
+    import impactbar
     import impactbar.dynamics._kernel as kernel
 
     model, load = BarModel(4.0, 0.1, 0.5, 6), CosineLoad(0.5, 1.0)
-    fast = _periodic_orbits_general(model, load)
+    with use_reference("admissibility.search"):
+        ref = _periodic_orbits_general(model, load)
     calls = []
     real = admissibility._numpy_search
     monkeypatch.setattr(admissibility, "_numpy_search", lambda *a: calls.append(1) or real(*a))
     monkeypatch.setattr(kernel, "CACHE", False)
-    ref = _periodic_orbits_general(model, load)
-    assert len(calls) == len(ref) > 0
+    fast = _periodic_orbits_general(model, load)
+    assert calls == [] and len(fast) > 0
     _assert_same_verdicts(fast, ref)
+    uses = []
+    for path in pathlib.Path(impactbar.__file__).parent.rglob("*.py"):
+        tree = ast.parse(path.read_text())
+        allowed = {id(k.value) for k in ast.walk(tree) if isinstance(k, ast.keyword) and k.arg == "cache"}
+        allowed |= {id(t) for n in ast.walk(tree) if isinstance(n, ast.Assign) for t in n.targets}
+        uses += [f"{path.name}:{n.lineno}" for n in ast.walk(tree)
+                 if (isinstance(n, ast.Name) and n.id == "CACHE" or isinstance(n, ast.Attribute)
+                     and n.attr == "CACHE") and id(n) not in allowed]
+    assert uses == []
 
 
 def test_one_compiled_search_serves_every_load():
     """The compiled search is compiled once, whatever the load (cosine of any order, several
     harmonics, square wave, cached transfer functions or fresh ones): its arguments always have
     the same numba types, so no load makes a user wait for a second compilation."""
-    import impactbar.dynamics._kernel as kernel
-
-    if not kernel.CACHE:
-        pytest.skip("no numba disk cache: the numpy search runs")
     from impactbar.orbits import _admkernel
 
     loads = [CosineLoad(0.6, 1.0), CosineLoad(0.4, 1.0, k=2), SquareWaveLoad(1.0, 1.2),

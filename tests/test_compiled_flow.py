@@ -8,18 +8,15 @@ import math
 import numpy as np
 import pytest
 
-import impactbar.loads as loads
-import impactbar.orbits.admissibility as admissibility
 from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad
+from impactbar.dynamics.implementations import use_reference
 from impactbar.orbits.one_impact import _periodic_orbits_general
 
 
 def _both_flows(monkeypatch, load, w2, d, t0, q0, v0, t):
-    monkeypatch.setattr(loads, "_COMPILED_FLOW", True)
     fast = load.flow(w2, d, t0, q0, v0)(t)
-    monkeypatch.setattr(loads, "_COMPILED_FLOW", False)
-    ref = load.flow(w2, d, t0, q0, v0)(t)
-    monkeypatch.setattr(loads, "_COMPILED_FLOW", True)
+    with use_reference("loads.flow"):
+        ref = load.flow(w2, d, t0, q0, v0)(t)
     return fast, ref
 
 
@@ -95,11 +92,8 @@ def test_periodic_orbits_with_compiled_flow_equal_numpy_path(monkeypatch, n_mode
         else:
             load = CosineLoad(float(rng.uniform(0.2, 0.7)), float(rng.uniform(0.5, 1.5)))
         fast = _periodic_orbits_general(model, load)
-        monkeypatch.setattr(loads, "_COMPILED_FLOW", False)
-        monkeypatch.setattr(admissibility, "_COMPILED_BOUND", False)
-        ref = _periodic_orbits_general(model, load)
-        monkeypatch.setattr(loads, "_COMPILED_FLOW", True)
-        monkeypatch.setattr(admissibility, "_COMPILED_BOUND", True)
+        with use_reference("loads.flow", "admissibility.bound"):
+            ref = _periodic_orbits_general(model, load)
         assert len(fast) == len(ref)
         seen.update(g.admissibility for g in ref)
         for o, g in zip(fast, ref, strict=True):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, periodic_orbits
+from impactbar.dynamics.implementations import implementation, use_reference
 from impactbar.dynamics.modal import fundamental
 from impactbar.orbits import impact_map_jacobian
 from impactbar.orbits.one_impact import _impact_states, _periodic_orbits_general, orbit_multipliers
@@ -164,8 +165,7 @@ def test_rigid_scalar_path_equals_vectorised_closed_form(rng, k):
 
 def test_periodic_orbits_rigid_scalar_switch(rng, monkeypatch):
     """periodic_orbits on a rigid bar returns the same orbits with the plain-float path and with the
-    vectorised closed form (module switch one_impact.RIGID_SCALAR), fallbacks included."""
-    from impactbar.orbits import one_impact
+    vectorised closed form (the reference of "orbits.rigid_scalar"), fallbacks included."""
 
     cases = [(BarModel(1.0, *_random_rigid_case(rng, 1)[:2], 0), CosineLoad(*_random_rigid_case(rng, 1)[2:]))
              for _ in range(30)]
@@ -174,9 +174,8 @@ def test_periodic_orbits_rigid_scalar_switch(rng, monkeypatch):
     cases.append((BarModel(1.0, 0.1, 0.5, 0), CosineLoad(0.0, 1.0)))  # degenerate: the general path
     for model, load in cases:
         fast = periodic_orbits(model, load)
-        monkeypatch.setattr(one_impact, "RIGID_SCALAR", False)
-        ref = periodic_orbits(model, load)
-        monkeypatch.setattr(one_impact, "RIGID_SCALAR", True)
+        with use_reference("orbits.rigid_scalar"):
+            ref = periodic_orbits(model, load)
         _assert_same_orbits(fast, ref)
         assert all(o.multipliers.dtype == complex and o.state_after_impact.shape == (2,) for o in fast)
 
@@ -434,7 +433,8 @@ def test_simulation_core_is_built_once_and_runs_are_unchanged():
     first = simulate(model, load, start, 60.0)
     core = sim_module._core_for(model, load)
     assert sim_module._core_for(BarModel(1.37, 0.02, 0.8, 3), load) is core
-    assert sim_module._core_for(model, CosineLoad(1.2, 1.0)) is not core  # keyed by the load object
+    assert sim_module._core_for(model, CosineLoad(1.2, 1.0)) is core  # keyed by the load's value
+    assert sim_module._core_for(model, CosineLoad(1.2, 3.0)) is not core
     again = simulate(model, load, start, 60.0)
     sim_module._CORES.clear()
     fresh = simulate(model, load, start, 60.0)
@@ -513,12 +513,8 @@ def _random_rigid_run(rng):
     model, load = BarModel(2.0, d, R, 0), CosineLoad(p0, pk, k)
     start = InitialState.rigid(-rng.uniform(0.0, 1.0), rng.uniform(-2.0, 2.0))
     t0 = rng.uniform(0.0, TWO_PI)
-    keep = sim_module.FAST_SEARCH
-    sim_module.FAST_SEARCH = False
-    try:
+    with use_reference("simulate.impact_search"):
         ref = simulate(model, load, start, t0 + 60.0, t0=t0)
-    finally:
-        sim_module.FAST_SEARCH = keep
     return sim_module._core_for(model, load), ref
 
 
@@ -540,14 +536,11 @@ def test_rigid_one_harmonic_impact_search_equals_general_search(rng):
             t, qa, va = float(seg.t[i]), seg.q[i].copy(), seg.v[i].copy()
             htol = 1e-14 * abs(qa[0])
             q, v = np.empty(1), np.empty(1)
-            st, tc = K.find_crossing(D.kind, B.w2, core.d, core.c, 0.0, D.p0, D.ks, D.pr, D.pim, B.hpr,
-                                     B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3, B.vpb, B.apb,
-                                     B.jpb, np.array([t]), qa.copy(), va.copy(), ref.t_end, htol, q, v,
-                                     *(np.empty(1) for _ in range(4)))
-            st2, tc2, q2, v2, _, _ = K.rigid1_crossing(core.d, 1.0, D.p0, D.ks[0], D.pr[0], D.pim[0],
-                                                       B.hpr[0, 0], B.hpi[0, 0],
-                                                       math.hypot(B.hpr[0, 0], B.hpi[0, 0]), t, qa[0],
-                                                       va[0], ref.t_end, htol)
+            st, tc = K.find_crossing(D, B.view, core.c, 0.0, np.array([t]), qa.copy(), va.copy(),
+                                     ref.t_end, htol, (q, v, *(np.empty(1) for _ in range(4))))
+            h1 = (D.ks[0], D.pr[0], D.pim[0], B.hpr[0, 0], B.hpi[0, 0], math.hypot(B.hpr[0, 0], B.hpi[0, 0]))
+            st2, tc2, q2, v2, _, _ = K.rigid1_crossing(core.d, 1.0, D.p0, h1, t, qa[0], va[0], ref.t_end,
+                                                       htol)
             assert st2 == st
             n_flights += 1
             if st != K.CROSS:
@@ -569,11 +562,8 @@ def test_rigid_one_harmonic_simulate_equals_general_search(case):
     state; on a run that settles on a stable orbit, one that chatters into permanent contact,
     and one that sticks and releases every period (to 1e-9 where chatter's grazing bounces
     carry rounding from one bounce to the next)."""
-    import importlib
-
     from impactbar import InitialState, simulate
 
-    sim_module = importlib.import_module("impactbar.simulation.simulate")
     model, load = BarModel(1.37, 0.02, 0.8, 0), CosineLoad(1.2, 1.0)
     orbit = next(o for o in periodic_orbits(model, load) if o.stable)
     q, v = orbit.modal_state_after_impact
@@ -584,12 +574,8 @@ def test_rigid_one_harmonic_simulate_equals_general_search(case):
     }[case]
     runs = {}
     for fast in (False, True):
-        keep = sim_module.FAST_SEARCH
-        sim_module.FAST_SEARCH = fast
-        try:
+        with implementation("simulate.impact_search", "fast" if fast else "reference"):
             runs[fast] = simulate(model, load, start, t0 + 400.0, t0=t0)
-        finally:
-            sim_module.FAST_SEARCH = keep
     ref, new = runs[False], runs[True]
     assert ref.n_impacts > 20
     assert new.n_impacts == ref.n_impacts and new.status == ref.status
@@ -644,14 +630,11 @@ def test_modal_impact_search_equals_general_search(rng, n_modes):
         q = np.concatenate(([-rng.uniform(0.05, 0.5)], 0.01 * rng.normal(size=n_modes)))
         v = np.concatenate(([rng.uniform(-1.0, 1.0)], 0.05 * rng.normal(size=n_modes)))
         q[0] -= max(0.0, float(model.end_weights @ q))
-        keep = sim_module.FAST_SEARCH
-        sim_module.FAST_SEARCH = False
         try:
-            ref = simulate(model, load, InitialState(q, v), 40.0, max_impacts=60)
+            with use_reference("simulate.impact_search"):
+                ref = simulate(model, load, InitialState(q, v), 40.0, max_impacts=60)
         except ValueError:  # an undamped resonance of a mode with a harmonic
             continue
-        finally:
-            sim_module.FAST_SEARCH = keep
         core = sim_module._core_for(model, load)
         D, B, M = core.data, core.free, n_modes + 1
         consts = _modal_search_constants(core)
@@ -663,13 +646,10 @@ def test_modal_impact_search_equals_general_search(rng, n_modes):
             t, qa, va = float(seg.t[i]), seg.q[i].copy(), seg.v[i].copy()
             htol = 1e-14 * float(np.sum(np.abs(core.c * qa)))
             qq, vv = np.empty(M), np.empty(M)
-            st, tc = K.find_crossing(D.kind, B.w2, core.d, core.c, 0.0, D.p0, D.ks, D.pr, D.pim, B.hpr,
-                                     B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3, B.vpb, B.apb,
-                                     B.jpb, np.array([t]), qa.copy(), va.copy(), t_lim, htol, qq, vv,
-                                     *(np.empty(M) for _ in range(4)))
-            st2, tc2 = K.modal_crossing(B.w2, core.d, core.c, D.p0, D.ks, D.pr, D.pim, B.hpr, B.hpi,
-                                        D.psup, D.p1, B.vpb, B.apb, B.jpb, *consts, t, qa, va,
-                                        t_lim, htol, *(np.empty(M) for _ in range(6)))
+            st, tc = K.find_crossing(D, B.view, core.c, 0.0, np.array([t]), qa.copy(), va.copy(), t_lim,
+                                     htol, (qq, vv, *(np.empty(M) for _ in range(4))))
+            st2, tc2 = K.modal_crossing(D, B.view, core.c, consts, t, qa, va, t_lim, htol,
+                                        tuple(np.empty(M) for _ in range(6)))
             assert st2 == st
             n_flights += 1
             if st != K.CROSS:
@@ -690,23 +670,16 @@ def test_modal_simulate_equals_general_search(n_modes):
     """simulate with the folded modal search gives the run of the general search, near a stable
     orbit (the benchmark's case, 8 and 64 modes): the same impacts to 1e-12, the same final
     state to 1e-10."""
-    import importlib
-
     from impactbar import InitialState, simulate
 
-    sim_module = importlib.import_module("impactbar.simulation.simulate")
     model, load = BarModel(1.37, 0.02, 0.8, n_modes), CosineLoad(1.2, 1.0)
     orbit = next(o for o in periodic_orbits(model, load) if o.stable)
     q, v = orbit.modal_state_after_impact
     start = InitialState(q - np.eye(n_modes + 1)[0] * 0.01, v)
     runs = {}
     for fast in (False, True):
-        keep = sim_module.FAST_SEARCH
-        sim_module.FAST_SEARCH = fast
-        try:
+        with implementation("simulate.impact_search", "fast" if fast else "reference"):
             runs[fast] = simulate(model, load, start, orbit.phase + 200.0, t0=orbit.phase)
-        finally:
-            sim_module.FAST_SEARCH = keep
     ref, new = runs[False], runs[True]
     assert ref.n_impacts > 25 and new.n_impacts == ref.n_impacts and new.status == ref.status
     assert np.all(np.abs(new.impact_times - ref.impact_times) <= 1e-12 * (1.0 + np.abs(ref.impact_times)))

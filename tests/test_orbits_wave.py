@@ -11,6 +11,7 @@ from scipy.optimize import brentq
 
 from impactbar import BarModel, CosineLoad, SquareWaveLoad, periodic_orbits
 from impactbar.dynamics.impact import wave_impact
+from impactbar.dynamics.implementations import use_reference
 from modal_reference import central_difference_jacobian
 
 TWO_PI = 2 * math.pi
@@ -215,9 +216,9 @@ def test_phase_scan_reuses_its_samples_and_the_cached_flight_matrix():
         np.testing.assert_array_equal(a, b)
 
 
-def test_square_wave_residual_compiled_as_wave_orbit_states(rng, monkeypatch):
+def test_square_wave_residual_compiled_as_wave_orbit_states(rng):
     """The phase residual of a piecewise-constant load in one compiled call against
-    :func:`wave_orbit_states` phase by phase (the reference, ``_COMPILED_RESIDUAL = False``), on
+    :func:`wave_orbit_states` phase by phase (the reference of ``"wave.residual"``), on
     random models and loads; and the same orbits from :func:`periodic_orbits` with either."""
     import importlib
 
@@ -236,8 +237,8 @@ def test_square_wave_residual_compiled_as_wave_orbit_states(rng, monkeypatch):
     model = BarModel(s=10.0, d=0.01, R=0.5, n_modes=4, impact="wave")
     load = SquareWaveLoad(1.0, 1.3)
     fast = periodic_orbits(model, load)
-    monkeypatch.setattr(W, "_COMPILED_RESIDUAL", False)
-    slow = periodic_orbits(model, load)
+    with use_reference("wave.residual"):
+        slow = periodic_orbits(model, load)
     assert len(fast) == len(slow) > 0
     for a, b in zip(fast, slow, strict=True):
         assert a.phase == pytest.approx(b.phase, abs=1e-12)

@@ -107,7 +107,6 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
     from impactbar import FourierLoad, wave_impact
     from impactbar.dynamics import _kernel as K
     from impactbar.laws.wave import _GL20_W, _GL20_X
-    from impactbar.simulation.simulate import _LoadData
     from test_impact_wave import random_state
 
     for trial in range(60):
@@ -122,11 +121,10 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
         v[0] += 2.0  # arriving at 3
         c = model.end_weights
         t0 = float(rng.uniform(0, 20))
-        D = _LoadData(load)
+        D = load.kernel_view
         rate = float(np.max(D.ks)) / s if D.kind == 0 else 0.0
         qa, va = np.empty(N + 1), np.empty(N + 1)
-        ok = K.wave_window(D.kind, s, R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
-                           D.psup, rate, t0, q, v, _GL20_X, _GL20_W, qa, va)
+        ok = K.wave_window(D, s, R, c, rate, t0, q, v, _GL20_X, _GL20_W, qa, va)
         imp = wave_impact(model, load, t0, q, v)
         assert ok == (imp.separations == 0)
         if ok:
@@ -142,7 +140,6 @@ def test_compiled_separating_window_matches_the_characteristics_solver(rng):
     from impactbar import FourierLoad, wave_impact
     from impactbar.dynamics import _wavekernel as WK
     from impactbar.laws.wave import _GL20_W, _GL20_X
-    from impactbar.simulation.simulate import _LoadData
     from test_impact_wave import random_state
 
     separating = 0
@@ -157,12 +154,11 @@ def test_compiled_separating_window_matches_the_characteristics_solver(rng):
         q, v = random_state(rng, model, [0.02, 1.0, 0.3][trial % 3])
         v[0] += rng.uniform(0.0, 3.0) - 1.0  # arriving at 0..3
         t0 = float(rng.uniform(0, 20))
-        D = _LoadData(load)
+        D = load.kernel_view
         rate = float(np.max(D.ks)) / s if D.kind == 0 else 0.0
         qa, va = np.empty(N + 1), np.empty(N + 1)
         contact = np.empty((WK.MAX_INTERVALS, 2))
-        n = WK.wave_contact(D.kind, s, R, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup, rate,
-                            t0, q, v, _GL20_X, _GL20_W, qa, va, contact)
+        n = WK.wave_contact(D, s, R, rate, t0, q, v, _GL20_X, _GL20_W, qa, va, contact)
         imp = wave_impact(model, load, t0, q, v)
         assert n == len(imp.contact)
         separating += imp.separations > 0
@@ -175,25 +171,24 @@ def test_compiled_separating_window_matches_the_characteristics_solver(rng):
 @pytest.mark.parametrize("preset", ["hydraulic-drill", "pneumatic-drill"])
 def test_separating_windows_compiled_as_in_python(preset, monkeypatch):
     """A run of a drill preset with the compiled separating windows (no call of the Python solver)
-    against the same run with ``FAST_WAVE_SEPARATION = False``: the same impacts, impact velocities,
-    transmitted stress peaks and final state."""
+    against the same run with the reference of ``"simulate.wave_separation"``: the same impacts,
+    impact velocities, transmitted stress peaks and final state."""
     import sys
 
     from impactbar import physical
+    from impactbar.dynamics.implementations import use_reference
 
-    S = sys.modules["impactbar.laws.wave"]  # the wave law's contact step
     D = sys.modules["impactbar.dynamics.impact"]
     h = physical.preset(preset)
     model = h.model.with_(impact="wave")
     start = InitialState.rigid(-0.05, 0.0, n_modes=model.n_modes)
     ref_impact = D.wave_impact
-    monkeypatch.setattr(S, "FAST_WAVE_SEPARATION", False)
-    ref = simulate(model, h.load, start, 40 * TWO_PI)
+    with use_reference("simulate.wave_separation"):
+        ref = simulate(model, h.load, start, 40 * TWO_PI)
 
     def refused(*args):
         raise AssertionError("the Python solver was called")
 
-    monkeypatch.setattr(S, "FAST_WAVE_SEPARATION", True)
     monkeypatch.setattr(D, "wave_impact", refused)
     tr = simulate(model, h.load, start, 40 * TWO_PI)
     monkeypatch.setattr(D, "wave_impact", ref_impact)
@@ -220,21 +215,19 @@ def test_compiled_windows_spanning_many_load_periods(s):
     from impactbar.dynamics import _kernel as K
     from impactbar.dynamics import _wavekernel as WK
     from impactbar.laws.wave import _GL20_W, _GL20_X
-    from impactbar.simulation.simulate import _LoadData
 
     model = BarModel(s=s, d=0.0, R=0.5, n_modes=2)
     load = SquareWaveLoad(2.0, 1.5)
-    D = _LoadData(load)
+    D = load.kernel_view
     for v0 in (1000.0, 5.0):  # held in contact, then separating
         q, v = np.zeros(3), np.array([v0, 0.0, 0.0])
         imp = wave_impact(model, load, 0.3, q, v)
         qa, va = np.empty(3), np.empty(3)
-        ok = K.wave_window(D.kind, s, 0.5, model.end_weights, D.p0, D.ks, D.pr, D.pim, D.breaks,
-                           D.levels, D.psup, 0.0, 0.3, q, v, _GL20_X, _GL20_W, qa, va)
+        ok = K.wave_window(D, s, 0.5, model.end_weights, 0.0, 0.3, q, v, _GL20_X, _GL20_W, qa, va)
         assert ok == (imp.separations == 0) == (v0 > 100)
         if not ok:
-            n = WK.wave_contact(D.kind, s, 0.5, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup,
-                                0.0, 0.3, q, v, _GL20_X, _GL20_W, qa, va, np.empty((WK.MAX_INTERVALS, 2)))
+            n = WK.wave_contact(D, s, 0.5, 0.0, 0.3, q, v, _GL20_X, _GL20_W, qa, va,
+                                np.empty((WK.MAX_INTERVALS, 2)))
             assert n == len(imp.contact) > 1
         np.testing.assert_allclose(qa, imp.q_after, rtol=1e-10, atol=1e-10)
         np.testing.assert_allclose(va, imp.v_after, rtol=1e-10, atol=1e-10)

@@ -498,15 +498,16 @@ def test_plain_zarr_writes_equal_the_batched_ones(tmp_path, monkeypatch):
 def test_store_created_with_zarr_alone_equals_xarrays(tmp_path, monkeypatch, doc):
     """The store written with zarr alone (the default: xarray and dask.array are not imported)
     equals, file for file and byte for byte, the one xarray's to_zarr writes from the template."""
+    from impactbar.dynamics.implementations import implementation
     from impactbar.sweeps import store
     from impactbar.sweeps.tasks import _variables
 
     spec = parse_spec(doc)
     files = {}
     for via in (True, False):
-        monkeypatch.setattr(store, "CREATE_WITH_XARRAY", via)
         path = tmp_path / f"{via}.zarr"
-        store._create_store(spec, path)
+        with implementation("sweeps.create_store", "reference" if via else "fast"):
+            store._create_store(spec, path)
         files[via] = {f.relative_to(path): f.read_bytes() for f in sorted(path.rglob("*")) if f.is_file()}
     # the same layout with any supported xarray: variables, dimensions, dtypes and coordinates
     ta, tb = xr.open_zarr(tmp_path / "True.zarr"), xr.open_zarr(tmp_path / "False.zarr")

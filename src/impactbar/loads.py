@@ -9,23 +9,50 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from dataclasses import FrozenInstanceError
+from functools import cached_property
 
 import numpy as np
 
 from ._validate import check_complex_array, check_int, check_real
+from .dynamics.implementations import use_fast
+from .dynamics.kernelview import LoadKernelView
 from .dynamics.modal import b_integral, c_integral, fundamental, step_constant
 
 __all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad"]
 
 TWO_PI = 2.0 * math.pi
 
-#: evaluate the flows of :meth:`FourierLoad.flow` and :meth:`PiecewiseConstantLoad.flow` with the
-#: compiled kernels (``False``: the numpy reference path)
-_COMPILED_FLOW = True
+
+
+def _readonly(a):
+    """A private copy of ``a`` that cannot be written (a frozen load's arrays)."""
+    a = np.array(a)
+    a.flags.writeable = False
+    return a
 
 
 class Load(ABC):
-    """A periodic load of period ``2 pi`` (eq. 7). Subclasses give the exact modal response.
+    """A periodic load of period ``2 pi`` (eq. 7), frozen. Subclasses give the exact modal response.
+
+    A load is immutable: its parameters are validated once by the constructor, and assigning or
+    deleting any attribute afterwards raises :class:`dataclasses.FrozenInstanceError` (an
+    ``AttributeError``), so that everything computed from a load (the simulator's cached kernel
+    data, the compiled flows) stays valid. Loads compare and hash by value.
+
+    What a drive must provide (a new drive, e.g. a position-switched one, implements these):
+
+    - ``p0`` (the mean load) and :meth:`__call__` (the load at given times), :meth:`left_limit` at
+      jumps, and :meth:`harmonics` (the complex ``p_k`` of eq. 7);
+    - the bounds used by the certified searches: :attr:`sup_abs`, :attr:`sup_oscillation`,
+      :meth:`variation`;
+    - the exact modal response: :meth:`propagate` (and optionally a faster :meth:`flow`),
+      :meth:`rigid_velocity`, :meth:`periodic_state`;
+    - :attr:`kernel_view`: the one :class:`~impactbar.dynamics.kernelview.LoadKernelView` the
+      compiled code reads (the only path from a load into compiled code), or ``None`` for a drive
+      the kernels do not know; the simulator and the compiled searches then need a view, the
+      numpy reference paths only the methods above;
+    - :meth:`_key`: the values that identify it (equality, hashing, caches).
 
     Attributes
     ----------
@@ -34,6 +61,45 @@ class Load(ABC):
     """
 
     p0: float
+
+    # -- frozen, compared by value ------------------------------------------------------------
+    def __setattr__(self, name, value):
+        raise FrozenInstanceError(f"cannot assign to field {name!r}: {type(self).__name__} is frozen")
+
+    def __delattr__(self, name):
+        raise FrozenInstanceError(f"cannot delete field {name!r}: {type(self).__name__} is frozen")
+
+    def _set(self, **fields):
+        """Set attributes in the constructor (the only writes a load accepts)."""
+        for name, value in fields.items():
+            object.__setattr__(self, name, value)
+
+    def _key(self) -> tuple:
+        """The parameters that identify the load (its value)."""
+        return (id(self),)  # pragma: no cover - every concrete load overrides it
+
+    def __eq__(self, other):
+        if other is self:
+            return True
+        if type(other) is not type(self):
+            return NotImplemented
+        return self._key() == other._key()
+
+    def __hash__(self):
+        h = self.__dict__.get("_hash")
+        if h is None:
+            h = self.__dict__["_hash"] = hash((type(self).__qualname__, self._key()))
+        return h
+
+    def __getstate__(self):
+        # the cached hash is not carried to another process (hashes of bytes differ between them)
+        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
+
+    @property
+    def kernel_view(self) -> LoadKernelView | None:
+        """The load as compiled code reads it (built once), or ``None`` for a load the kernels do not
+        know (the numpy reference paths then evaluate it through its methods)."""
+        return None
 
     # -- evaluation -------------------------------------------------------------------------
     @abstractmethod
@@ -183,7 +249,7 @@ class FourierLoad(Load):
     """
 
     def __init__(self, p0, coefficients):
-        self.p0 = check_real("p0", p0)
+        self._set(p0=check_real("p0", p0))
         coefficients = check_complex_array("coefficients", coefficients)
         if coefficients.size > 4096:
             raise ValueError(f"coefficients must have at most 4096 entries; got {coefficients.size}")
@@ -191,9 +257,17 @@ class FourierLoad(Load):
 
     def _set_sparse(self, ks, pks):
         keep = pks != 0
-        self._k = np.asarray(ks, dtype=float)[keep]
-        self._pk = np.asarray(pks, dtype=complex)[keep]
-        self._kmax = int(ks[-1]) if len(ks) else 0
+        self._set(_k=_readonly(np.asarray(ks, dtype=float)[keep]),
+                  _pk=_readonly(np.asarray(pks, dtype=complex)[keep]),
+                  _kmax=int(ks[-1]) if len(ks) else 0)
+
+    def _key(self):
+        return (self.p0, self._kmax, self._k.tobytes(), self._pk.tobytes())
+
+    @cached_property
+    def kernel_view(self) -> LoadKernelView:
+        """The harmonics as the compiled kernels read them (kind 0), built once."""
+        return LoadKernelView.fourier(self.p0, self._k, self._pk)
 
     @property
     def orders(self) -> np.ndarray:
@@ -289,7 +363,7 @@ class FourierLoad(Load):
             cv, sv = dvf, -(w2f * dqf + 0.5 * d * dvf) / lam
             if rows[-1] - rows[0] + 1 == rows.size:  # contiguous rows: update in place
                 rows = slice(int(rows[0]), int(rows[-1]) + 1)
-        if _COMPILED_FLOW and (folded or rows.size == 0):
+        if use_fast("loads.flow") and (folded or rows.size == 0):
             return self._compiled_flow(w2, d, t0, hp, hv, static, rigid, lam if folded else None,
                                        (cq, sq, cv, sv) if folded else None, dq, dv)
 
@@ -346,12 +420,12 @@ class FourierLoad(Load):
             # another type to numba, and so another compilation of every kernel that takes it
             return np.require(a, dtype, ["C", "W"])
 
-        args = (float(t0), float(d), float(self.p0), own(self._k),
+        args = (float(t0), float(d), float(self.p0), self.kernel_view.ks,
                 own(hp.real), own(hp.imag), own(hv.real), own(hv.imag),
                 own(static[:, 0]), kind, lamv, cq, sq, cv, sv, own(dq[:, 0]), own(dv[:, 0]))
 
         def evaluate(t):
-            return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), *args)
+            return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), args)
 
         evaluate.kernel_args = args  # for the compiled admissibility search
         return evaluate
@@ -389,9 +463,7 @@ class CosineLoad(FourierLoad):
     """
 
     def __init__(self, p0, pk, k=1):
-        self.p0 = check_real("p0", p0)
-        self.pk = check_real("pk", pk)
-        self.k = check_int("k", k, lo=1, hi=4096)
+        self._set(p0=check_real("p0", p0), pk=check_real("pk", pk), k=check_int("k", k, lo=1, hi=4096))
         self._set_sparse(np.arange(1, self.k + 1), np.where(np.arange(1, self.k + 1) == self.k,
                                                              complex(self.pk), 0j))
 
@@ -434,11 +506,17 @@ class PiecewiseConstantLoad(Load):
             raise ValueError("breaks must increase strictly in [0, 2 pi) and start at 0")
         if not np.all(np.isfinite(lv)):
             raise ValueError("levels must be finite")
-        self._b = b
-        self._lv = lv
-        self._T = np.diff(np.append(b, TWO_PI))
-        self.p0 = float(np.dot(lv, self._T) / TWO_PI)
+        T = np.diff(np.append(b, TWO_PI))
+        self._set(_b=_readonly(b), _lv=_readonly(lv), _T=_readonly(T), p0=float(np.dot(lv, T) / TWO_PI))
         self._setup_rigid()
+
+    def _key(self):
+        return (self.p0, self._b.tobytes(), self._lv.tobytes())
+
+    @cached_property
+    def kernel_view(self) -> LoadKernelView:
+        """The pieces as the compiled kernels read them (kind 1), built once."""
+        return LoadKernelView.piecewise(self.p0, self._b, self._lv)
 
     @property
     def breaks(self) -> np.ndarray:
@@ -550,7 +628,7 @@ class PiecewiseConstantLoad(Load):
             qn[:, j], vn[:, j] = step_constant(w2, d, levels[j - 1], qn[:, j - 1], vn[:, j - 1],
                                                nodes[j] - nodes[j - 1])
 
-        compiled = _COMPILED_FLOW and bool(np.all((w2 == 0.0) | (w2 - 0.25 * d * d > 0.0)))
+        compiled = use_fast("loads.flow") and bool(np.all((w2 == 0.0) | (w2 - 0.25 * d * d > 0.0)))
         if compiled:  # flexible modes underdamped (the rule): the compiled step
             from .dynamics._flowkernel import piecewise_flow
 
@@ -569,7 +647,7 @@ class PiecewiseConstantLoad(Load):
 
     def _setup_rigid(self):
         """Start value ``V(0)`` of the periodic zero-mean rigid velocity, per unit damping used."""
-        self._rigid_cache = {}
+        self._set(_rigid_cache={})
 
     def _rigid_start(self, d):
         if d not in self._rigid_cache:
@@ -622,13 +700,14 @@ class SquareWaveLoad(PiecewiseConstantLoad):
     """
 
     def __init__(self, q, kappa):
-        self.q = check_real("q", q, lo=0.0, lo_open=True)
-        self.kappa = check_real("kappa", kappa, lo=1.0, hi=2.0)
-        if self.kappa == 2.0:
-            super().__init__([0.0], [self.q])
+        q = check_real("q", q, lo=0.0, lo_open=True)
+        kappa = check_real("kappa", kappa, lo=1.0, hi=2.0)
+        self._set(q=q, kappa=kappa)
+        if kappa == 2.0:
+            super().__init__([0.0], [q])
         else:
-            super().__init__([0.0, self.kappa * math.pi], [self.q, -self.q])
-        self.p0 = self.q * (self.kappa - 1.0)  # exact, not the quadrature of the pieces
+            super().__init__([0.0, kappa * math.pi], [q, -q])
+        self._set(p0=q * (kappa - 1.0))  # exact, not the quadrature of the pieces
 
     @property
     def load_factor(self) -> float:

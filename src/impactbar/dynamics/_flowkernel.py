@@ -21,10 +21,10 @@ from ._kernel import CACHE, _bc
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def fourier_column(tj, q, v, j, ck, sk, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq,
-                   cv, sv, dq, dv):
+def fourier_column(tj, q, v, j, ck, sk, flow):
     """Column ``j`` of :func:`fourier_flow`: the states at the time ``tj``, written into ``q, v``
     (``ck, sk`` are scratch of shape ``(K,)``)."""
+    t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq, cv, sv, dq, dv = flow
     M = hpr.shape[0]
     K = k.size
     tau = tj - t0
@@ -55,22 +55,22 @@ def fourier_column(tj, q, v, j, ck, sk, t0, d, p0, k, hpr, hpi, hvr, hvi, static
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def fourier_flow(t, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq, cv, sv, dq, dv):
-    """States ``(q, v)`` of shape ``(M, T)`` at the times ``t`` (shape ``(T,)``).
-
-    ``kind[n]`` is 1 for a folded underdamped flexible mode (coefficients ``cq, sq, cv, sv`` and
-    frequency ``lam``), 2 for the rigid mode (free part ``dq, dv``), 0 for the particular solution
-    alone."""
-    M = hpr.shape[0]
-    K = k.size
+def fourier_flow(t, flow):
+    """States ``(q, v)`` of shape ``(M, T)`` at the times ``t`` (shape ``(T,)``) of the flow
+    ``flow = (t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq, cv, sv, dq, dv)`` from
+    ``FourierLoad.flow``: start time, damping, mean load, orders, ``H p`` and ``i k H p`` (real and
+    imaginary parts, shape ``(M, K)``), the static deflections, and per mode: ``kind[n]`` is 1 for
+    a folded underdamped flexible mode (coefficients ``cq, sq, cv, sv`` and frequency ``lam``), 2 for
+    the rigid mode (free part ``dq, dv``), 0 for the particular solution alone."""
+    M = flow[4].shape[0]
+    K = flow[3].size
     T = t.size
     q = np.empty((M, T))
     v = np.empty((M, T))
     ck = np.empty(K)
     sk = np.empty(K)
     for j in range(T):
-        fourier_column(t[j], q, v, j, ck, sk, t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam,
-                       cq, sq, cv, sv, dq, dv)
+        fourier_column(t[j], q, v, j, ck, sk, flow)
     return q, v
 
 

@@ -33,6 +33,8 @@ import math
 import numba
 import numpy as np
 
+from .kernelview import LoadKernelView, ModalBasisView
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -103,10 +105,11 @@ def _fundamental(w2, d, tau):
     return e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def load_value(kind, p0, ks, pr, pim, level, t):
-    """``p(t)``, ``p'(t)``, ``p''(t)`` (derivatives 0 inside a piece of a piecewise-constant
-    load)."""
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def load_value(load, level, t):
+    """``p(t)``, ``p'(t)``, ``p''(t)`` of the load view ``load`` (derivatives 0 inside a piece of a
+    piecewise-constant load, whose ``level`` the caller passes)."""
+    kind, p0, ks, pr, pim = load.kind, load.p0, load.ks, load.pr, load.pim
     if kind == 1:
         return level, 0.0, 0.0
     p = p0
@@ -123,9 +126,12 @@ def load_value(kind, p0, ks, pr, pim, level, t):
     return p, dp, ddp
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def particular(kind, w2, p0, ks, hpr, hpi, level, t, qp, vp):
-    """Fill ``qp, vp`` with the particular state at ``t`` (0 for a rigid mode's mean-load part)."""
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def particular(load, B, level, t, qp, vp):
+    """Fill ``qp, vp`` with the particular state at ``t`` (0 for a rigid mode's mean-load part) of
+    the basis ``B`` (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``."""
+    kind, p0, ks = load.kind, load.p0, load.ks
+    w2, hpr, hpi = B.w2, B.hpr, B.hpi
     M = w2.size
     for n in range(M):
         if w2[n] > 0.0:
@@ -143,13 +149,18 @@ def particular(kind, w2, p0, ks, hpr, hpi, level, t, qp, vp):
                 vp[n] -= k * (hpr[n, j] * sk + hpi[n, j] * ck)
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp):
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def advance(load, B, level, ta, anchor, t, state):
     """State ``q, v`` at ``t`` from the anchor ``(ta, qa, va)`` with particular state ``qpa, vpa``
-    there; ``qp, vp`` receive the particular state at ``t``."""
+    there (``anchor = (qa, va, qpa, vpa)``); ``state = (q, v, qp, vp)`` receives the state and the
+    particular state at ``t``."""
+    qa, va, qpa, vpa = anchor
+    q, v, qp, vp = state
+    kind, p0 = load.kind, load.p0
+    w2, d = B.w2, B.d
     tau = t - ta
     if kind == 0:
-        particular(kind, w2, p0, ks, hpr, hpi, level, t, qp, vp)
+        particular(load, B, level, t, qp, vp)
     else:
         for n in range(w2.size):
             qp[n] = qpa[n]
@@ -187,9 +198,13 @@ def functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp):
     return h, dh, ddh, 1e-14 * mag, 1e-14 * dmag
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def bounds(kind, w2, d, wts, alpha, psup, p1, p2, p3, L, vpb, apb, jpb, q, v, qp, vp, horizon):
-    """Bounds ``A >= |h''|`` and ``J >= |h'''|`` valid on ``[t, t + horizon]``."""
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def bounds(load, B, wts, alpha, psup, L, state, horizon):
+    """Bounds ``A >= |h''|`` and ``J >= |h'''|`` valid on ``[t, t + horizon]`` from the state
+    ``(q, v, qp, vp)``, with ``psup >= |p|`` and ``L`` the mean load (or the piece's level)."""
+    q, v, qp, vp = state
+    p1, p2, p3 = load.p1, load.p2, load.p3
+    w2, d, vpb, apb, jpb = B.w2, B.d, B.vpb, B.apb, B.jpb
     A = abs(alpha) * p2
     J = abs(alpha) * p3
     for n in range(w2.size):
@@ -345,27 +360,31 @@ def _cubic_step_fast(g, dh, ddh, J, smax):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def first_piece(kind, w2, p0, ks, hpr, hpi, breaks, levels, ta, qpa, vpa):
+def first_piece(load, B, ta, qpa, vpa):
     """Set up the load piece that holds ``ta``: its index ``(m, j)`` (period ``m``, piece ``j``;
     zeros for a Fourier load), its level, and the particular state at ``ta`` in ``qpa, vpa``.
     Returns ``m, j, level``."""
+    kind, breaks, levels = load.kind, load.breaks, load.levels
     m = 0
     j = 0
     level = 0.0
     if kind == 1:
         m, j = piece_of(breaks, ta)
         level = levels[j]
-    particular(kind, w2, p0, ks, hpr, hpi, level, ta, qpa, vpa)
+    particular(load, B, level, ta, qpa, vpa)
     return m, j, level
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level, ta, te, m, j,
-               qa, va, qpa, vpa, q, v, qp, vp):
+def next_piece(load, B, level, ta, te, m, j, anchor, state):
     """Cross the load jump at ``te``: advance the anchor ``(ta, qa, va)`` to it, step the piece
     index ``(m, j)`` (``j`` wraps to the next period ``m + 1``) and set the new level's particular
-    state ``qpa, vpa``. Returns the new ``ta, m, j, level``; ``q, v`` hold the state at ``te``."""
-    advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, te, q, v, qp, vp)
+    state ``qpa, vpa`` (``anchor = (qa, va, qpa, vpa)``). Returns the new ``ta, m, j, level``;
+    ``state = (q, v, qp, vp)`` holds the state at ``te``."""
+    qa, va, qpa, vpa = anchor
+    q, v = state[0], state[1]
+    breaks, levels, w2 = load.breaks, load.levels, B.w2
+    advance(load, B, level, ta, anchor, te, state)
     for n in range(w2.size):
         qa[n] = q[n]
         va[n] = v[n]
@@ -374,15 +393,16 @@ def next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level, ta, te, m, 
         j = 0
         m += 1
     level = levels[j]
-    particular(kind, w2, p0, ks, hpr, hpi, level, te, qpa, vpa)
+    particular(load, B, level, te, qpa, vpa)
     return te, m, j, level
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, levels,
-                  psup, p1, p2, p3, vpb, apb, jpb,
-                  anchor_t, qa, va, t_lim, htol, q, v, qp, vp, qpa, vpa):
-    """First ``t`` in ``[anchor, t_lim]`` where ``h(t) >= 0`` (see the module docstring).
+def _find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
+    """First ``t`` in ``[anchor, t_lim]`` where ``h(t) >= 0`` (see the module docstring), in the
+    basis ``B`` (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``
+    (:class:`~impactbar.dynamics.kernelview.LoadKernelView`); ``work = (q, v, qp, vp, qpa, vpa)``,
+    arrays of the basis' size.
 
     A start with ``0 <= h <= htol`` and ``h' <= 0`` (the end just left the stop) counts as
     ``h = 0``. ``anchor_t[0]`` and ``qa, va`` hold the anchor (the start of the search); for a
@@ -393,11 +413,16 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
     -------
     status, t : int, float
     """
+    q, v, qp, vp, qpa, vpa = work
+    kind, p0, psup, breaks = load.kind, load.p0, load.psup, load.breaks
+    w2, d = B.w2, B.d
+    anchor = (qa, va, qpa, vpa)
+    state = (q, v, qp, vp)
     ta = anchor_t[0]
-    m, j, level = first_piece(kind, w2, p0, ks, hpr, hpi, breaks, levels, ta, qpa, vpa)
+    m, j, level = first_piece(load, B, ta, qpa, vpa)
     a = ta
-    advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, a, q, v, qp, vp)
-    p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, a)
+    advance(load, B, level, ta, anchor, a, state)
+    p, dp, ddp = load_value(load, level, a)
     h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
     L = p0 if kind == 0 else level
     ps = psup if kind == 0 else abs(level)
@@ -413,8 +438,7 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
         if hcap <= 0.0:
             if kind == 1 and t_cap < t_lim:
                 # move the anchor to the jump and continue with the next level
-                ta, m, j, level = next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level,
-                                             ta, t_cap, m, j, qa, va, qpa, vpa, q, v, qp, vp)
+                ta, m, j, level = next_piece(load, B, level, ta, t_cap, m, j, anchor, state)
                 anchor_t[0] = ta
                 L = level
                 ps = abs(level)
@@ -422,15 +446,14 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
                     qp[n] = qpa[n]
                     vp[n] = vpa[n]
                 a = ta
-                p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, a)
+                p, dp, ddp = load_value(load, level, a)
                 h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
                 if h > htol + noise or (h >= 0.0 and dh > dnoise):
                     return CROSS, a
                 continue
             return NONE, t_lim
         horizon = min(hcap, TWO_PI)
-        A, J = bounds(kind, w2, d, wts, alpha, ps, p1, p2, p3, L, vpb, apb, jpb, q, v, qp, vp,
-                      horizon)
+        A, J = bounds(load, B, wts, alpha, ps, L, state, horizon)
         g = min(h, 0.0)
         if 0.0 < dh <= dnoise:
             dh = 0.0  # a slope lost in rounding
@@ -442,9 +465,8 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
             if t > hi:
                 t = hi
             for _it in range(100):
-                advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v,
-                        qp, vp)
-                p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, t)
+                advance(load, B, level, ta, anchor, t, state)
+                p, dp, ddp = load_value(load, level, t)
                 h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
                 if h < 0.0:
                     lo = t
@@ -459,7 +481,7 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
                 t = tn
             if h < 0.0:
                 t = tn  # the converged Newton point, a rounding error past the last h < 0
-            advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp)
+            advance(load, B, level, ta, anchor, t, state)
             return CROSS, t
         tau = _quadratic_step(g, dh, A)
         # the cubic bound h + h' s + h'' s^2/2 + J s^3/6 is far better where h'' < 0 is small
@@ -477,10 +499,18 @@ def find_crossing(kind, w2, d, wts, alpha, p0, ks, pr, pim, hpr, hpi, breaks, le
             a = t_cap
         else:
             a = a + tau
-        advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, a, q, v, qp, vp)
-        p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, a)
+        advance(load, B, level, ta, anchor, a, state)
+        p, dp, ddp = load_value(load, level, a)
         h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
     return FAIL, a
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
+    """:func:`_find_crossing` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _find_crossing(LoadKernelView(*load), ModalBasisView(*B), wts, alpha, anchor_t, qa, va,
+                          t_lim, htol, work)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -522,10 +552,11 @@ def _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, habs, ta, qa, va, t_lim, htol):
+def rigid1_crossing(d, c0, p0, h1, ta, qa, va, t_lim, htol):
     """:func:`find_crossing` for the end of the rigid bar, ``h = c0 q_0`` (``c0 > 0``), under one
-    harmonic ``p = p0 + Re(p_k e^{ikt})`` (``p_k = pr + i pim``, particular amplitude
-    ``H = hr + i hi``), in scalars (theory §2, eq. 8 with ``N = 0``).
+    harmonic ``p = p0 + Re(p_k e^{ikt})`` (``h1 = (k, pr, pim, hr, hi, habs)``: ``p_k = pr + i pim``,
+    particular amplitude ``H = hr + i hi``, ``habs = |H|``), in scalars (theory §2, eq. 8 with
+    ``N = 0``).
 
     Between impacts ``q = m(tau) + q_p(t)`` with ``m'' = D e^{-d tau}`` for a constant ``D`` (the
     harmonic particular solution obeys ``q_p'' + d q_p' = p - p0``, so ``p - d v = m'' - k^2 q_p``)
@@ -547,6 +578,7 @@ def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, habs, ta, qa, va, t_lim, htol
         As :func:`find_crossing`, with the state ``q, v``, the particular ``q_p`` and the load at
         ``t``.
     """
+    k, pr, pim, hr, hi, habs = h1
     ck = math.cos(k * ta)
     sk = math.sin(k * ta)
     qpa = hr * ck - hi * sk
@@ -628,11 +660,16 @@ def rigid1_crossing(d, c0, p0, k, pr, pim, hr, hi, habs, ta, qa, va, t_lim, htol
     return FAIL, a, q, v, qp, p
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def _modal_eval(d, c0, p0, ks, pr, pim, lam, w2, hcr, hci, hwr, hwi, csum, sq0, sw0,
-                ta, r0, dv0, ca, cb, cva, cvb, t):
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def _modal_eval(load, B, fold, flight, work, t):
     """``h, h', h''`` of the end ``h = c . q`` at ``t`` in the folded form of the flight from
-    ``ta`` (see :func:`modal_crossing`), and the rigid mode's free velocity ``v_0 - v_p0``."""
+    ``ta`` (see :func:`modal_crossing`; ``flight = (ta, c0, r0, dv0, csum, sq0, sw0)``), and the
+    rigid mode's free velocity ``v_0 - v_p0``."""
+    p0, ks, pr, pim = load.p0, load.ks, load.pr, load.pim
+    w2, d = B.w2, B.d
+    lam, hcr, hci, hwr, hwi = fold[0], fold[2], fold[3], fold[4], fold[5]
+    ta, c0, r0, dv0, csum, sq0, sw0 = flight
+    ca, cb, cva, cvb = work[2], work[3], work[4], work[5]
     tau = t - ta
     b, c = _bc(d, tau)
     ed = math.exp(-d * tau)
@@ -697,9 +734,7 @@ def _coarse_eval(d, c0, p0, ks, hcr, hci, sq0, ta, r0, dv0, t):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
-                   lam, wsq, hcr, hci, hwr, hwi, nq0, nv0, ta, qa, va, t_lim, htol, qpa, vpa,
-                   ca, cb, cva, cvb):
+def _modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
     """:func:`find_crossing` for an impact (``h = c . q``) of the free-free bar under a Fourier load
     whose flexible modes are all underdamped, with the flight written once in folded form (theory
     §2, eq. 8): ``q_n = e^{-d tau/2} (a_n cos lam_n tau + b_n sin lam_n tau) + q_pn(t)``, so that
@@ -712,17 +747,21 @@ def modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
     ``h <= G + sum_n sqrt(a_n^2 + b_n^2)`` (the flexible modes' free vibration, summed over
     ``n >= 1``, weighted by ``c_n``), with ``G`` the rigid mode's closed form plus the summed
     particular parts, whose derivatives are bounded as in :func:`rigid1_crossing`.
-    Per model: ``lam_n = sqrt(w2_n - d^2/4)``, ``wsq = sqrt(w2)``, and ``nq0``, ``nv0`` the
-    rounding scales ``2 sum_n |c_n| sup |q_pn|`` and ``2 sum_n |c_n| sup |v_pn|``;
-    ``qpa, vpa, ca, cb, cva, cvb`` are work arrays of length ``M``.
+    Per model, ``fold = (lam, wsq, hcr, hci, hwr, hwi, nq0, nv0)``: ``lam_n = sqrt(w2_n - d^2/4)``,
+    ``wsq = sqrt(w2)``, and ``nq0``, ``nv0`` the rounding scales ``2 sum_n |c_n| sup |q_pn|`` and
+    ``2 sum_n |c_n| sup |v_pn|``; ``work = (qpa, vpa, ca, cb, cva, cvb)``, arrays of length ``M``.
 
     Returns
     -------
     status, t : int, float
         As :func:`find_crossing`; the caller evaluates the state at ``t``.
     """
+    p0, ks, psup, p1 = load.p0, load.ks, load.psup, load.p1
+    w2, d, vpb, apb, jpb = B.w2, B.d, B.vpb, B.apb, B.jpb
+    lam, wsq, hcr, hci, hwr, hwi, nq0, nv0 = fold
+    qpa, vpa, ca, cb, cva, cvb = work
     M = w2.size
-    particular(0, w2, p0, ks, hpr, hpi, 0.0, ta, qpa, vpa)
+    particular(load, B, 0.0, ta, qpa, vpa)
     c0 = c[0]
     r0 = qa[0] - qpa[0]
     dv0 = va[0] - vpa[0]
@@ -764,6 +803,7 @@ def modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
         x = math.hypot(hcr[j], hci[j])
         ag2 += ks[j] * ks[j] * x
         ag3 += ks[j] * ks[j] * ks[j] * x
+    flight = (ta, c0, r0, dv0, csum, sq0, sw0)
     a = ta
     for _ in range(_MAX_STEPS):
         hcap = t_lim - a
@@ -782,8 +822,7 @@ def modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
                 if tau > 4e-16 * (1.0 + abs(a)):
                     a = t_lim if tau >= hcap else a + min(tau, horizon)
                     continue
-        h, dh, ddh, rv = _modal_eval(d, c0, p0, ks, pr, pim, lam, w2, hcr, hci, hwr, hwi, csum, sq0,
-                                     sw0, ta, r0, dv0, ca, cb, cva, cvb, a)
+        h, dh, ddh, rv = _modal_eval(load, B, fold, flight, work, a)
         tau = a - ta
         b, cc = _bc(d, tau)
         noise = 1e-14 * (nq + ac0 * abs(r0 + dv0 * b + p0 * cc))
@@ -809,8 +848,7 @@ def modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
                 t = hib
             tn = t
             for _it in range(100):
-                h, dh, ddh, rv = _modal_eval(d, c0, p0, ks, pr, pim, lam, w2, hcr, hci, hwr, hwi,
-                                             csum, sq0, sw0, ta, r0, dv0, ca, cb, cva, cvb, t)
+                h, dh, ddh, rv = _modal_eval(load, B, fold, flight, work, t)
                 lo, hib, tn, done = _halley(t, h, dh, ddh, lo, hib)
                 if done:
                     break
@@ -834,13 +872,22 @@ def modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
-             psup, p1, p2, p3, vpb, apb, jpb,
-             t, q, v, t_end, max_imp, tail_tol, out_t, out_vel, out_q, out_v, fast):
-    """Free flight with impacts from ``(t, q, v)``; ``q, v`` are overwritten with the final state.
+def modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
+    """:func:`_modal_crossing` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _modal_crossing(LoadKernelView(*load), ModalBasisView(*B), c, fold, ta, qa, va, t_lim, htol, work)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
+    """Free flight with impacts from ``(t, q, v)`` in the free-free basis ``B``
+    (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``
+    (:class:`~impactbar.dynamics.kernelview.LoadKernelView`); ``q, v`` are overwritten with the
+    final state.
 
     Every impact (``c . q = 0`` reached with ``c . v > 0``) applies ``v -> -R v`` (eqs. 10, 11); its
-    time, the arrival velocity ``c . v`` and the state just after are written to ``out_*``. Stops at
+    time, the arrival velocity ``c . v`` and the state just after are written to
+    ``out = (out_t, out_vel, out_q, out_v)``. Stops at
     ``t_end`` (END), after ``max_imp`` impacts (MAXIMP), when the buffers are full (FULL), when the
     bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``) or the end
     arrives tangentially and pressed (CONTACT).
@@ -855,6 +902,10 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
     -------
     n, status, t : int, int, float
     """
+    kind, p0, ks, pr, pim = load.kind, load.p0, load.ks, load.pr, load.pim
+    breaks, levels = load.breaks, load.levels
+    w2, d, hpr, hpi, vpb = B.w2, B.d, B.hpr, B.hpi, B.vpb
+    out_t, out_vel, out_q, out_v = out
     M = w2.size
     qa = q.copy()
     va = v.copy()
@@ -904,6 +955,12 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
     cb = np.empty(M)
     cva = np.empty(M)
     cvb = np.empty(M)
+    fold = (lam, wsq, hcr, hci, hwr, hwi, nq0, nv0)
+    work = (q, v, qp, vp, qpa, vpa)
+    mwork = (qpa, vpa, ca, cb, cva, cvb)
+    h1 = (k1, pr1, pim1, hr1, hi1, habs1)
+    anc = (qa, va, qpa, vpa)  # (the arrays are updated in place: the tuples are built once)
+    stt = (q, v, qp, vp)
     while True:
         htol = 0.0
         for i in range(M):
@@ -923,20 +980,14 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
             off = hs < -1e-9 * hm or vs < -1e-9 * vm
         fast1 = rigid1 and off
         if fast1:
-            st, tc, q[0], v[0], qp1, p1t = rigid1_crossing(d, c[0], p0, k1, pr1, pim1, hr1, hi1,
-                                                           habs1, anchor[0], qa[0], va[0], t_end,
-                                                           htol)
+            st, tc, q[0], v[0], qp1, p1t = rigid1_crossing(d, c[0], p0, h1, anchor[0], qa[0], va[0],
+                                                           t_end, htol)
         elif modal and off:
-            st, tc = modal_crossing(w2, d, c, p0, ks, pr, pim, hpr, hpi, psup, p1, vpb, apb, jpb,
-                                    lam, wsq, hcr, hci, hwr, hwi, nq0, nv0, anchor[0], qa, va,
-                                    t_end, htol, qpa, vpa, ca, cb, cva, cvb)
+            st, tc = _modal_crossing(load, B, c, fold, anchor[0], qa, va, t_end, htol, mwork)
             # the state there by the reference flow (qpa, vpa hold the anchor's particular state)
-            advance(kind, w2, d, p0, ks, hpr, hpi, 0.0, anchor[0], qa, va, qpa, vpa, tc, q, v,
-                    qp, vp)
+            advance(load, B, 0.0, anchor[0], anc, tc, stt)
         else:
-            st, tc = find_crossing(kind, w2, d, c, 0.0, p0, ks, pr, pim, hpr, hpi, breaks, levels,
-                                   psup, p1, p2, p3, vpb, apb, jpb,
-                                   anchor, qa, va, t_end, htol, q, v, qp, vp, qpa, vpa)
+            st, tc = _find_crossing(load, B, c, 0.0, anchor, qa, va, t_end, htol, work)
         if st == NONE:
             return n, END, t_end
         if st == FAIL:
@@ -968,7 +1019,7 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
                 level = levels[jj]
             else:
                 level = 0.0
-            p, dp, ddp = load_value(kind, p0, ks, pr, pim, level, tc)
+            p, dp, ddp = load_value(load, level, tc)
             h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
         if ddh > 0.0:
             # R < 1: the bounces accumulate at tc + tail. R = 1: they do not accumulate, but
@@ -992,10 +1043,20 @@ def run_free(kind, w2, d, R, c, p0, ks, pr, pim, hpr, hpi, breaks, levels,
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def propagate_many(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, ta, qa, va, ts, out_q, out_v):
+def run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
+    """:func:`_run_free` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _run_free(LoadKernelView(*load), ModalBasisView(*B), R, c, t, q, v, t_end, max_imp, tail_tol,
+                     out, fast)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
     """Exact states at the sorted times ``ts >= ta`` from ``(ta, qa, va)`` into ``out_q, out_v``
     (shape (M, T)); a piecewise-constant load is followed jump by jump, by piece index (no
     rounding of a jump time into the wrong piece)."""
+    kind, breaks = load.kind, load.breaks
+    w2 = B.w2
     M = w2.size
     qa = qa.copy()
     va = va.copy()
@@ -1005,7 +1066,9 @@ def propagate_many(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, ta, qa, va, ts
     vp = np.empty(M)
     qpa = np.empty(M)
     vpa = np.empty(M)
-    m, j, level = first_piece(kind, w2, p0, ks, hpr, hpi, breaks, levels, ta, qpa, vpa)
+    anchor = (qa, va, qpa, vpa)
+    state = (q, v, qp, vp)
+    m, j, level = first_piece(load, B, ta, qpa, vpa)
     for i in range(ts.size):
         t = ts[i]
         if kind == 1:
@@ -1013,9 +1076,8 @@ def propagate_many(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, ta, qa, va, ts
                 te = piece_end(breaks, m, j)
                 if t < te:
                     break
-                ta, m, j, level = next_piece(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, level,
-                                             ta, te, m, j, qa, va, qpa, vpa, q, v, qp, vp)
-        advance(kind, w2, d, p0, ks, hpr, hpi, level, ta, qa, va, qpa, vpa, t, q, v, qp, vp)
+                ta, m, j, level = next_piece(load, B, level, ta, te, m, j, anchor, state)
+        advance(load, B, level, ta, anchor, t, state)
         for n in range(M):
             out_q[n, i] = q[n]
             out_v[n, i] = v[n]
@@ -1024,13 +1086,22 @@ def propagate_many(kind, w2, d, p0, ks, hpr, hpi, breaks, levels, ta, qa, va, ts
 # --------------------------------------------------------------------------------------------------
 # the wave impact law's contact window (theory §4b), the case without separation
 # --------------------------------------------------------------------------------------------------
+
+
 @numba.njit(cache=CACHE, nogil=True)
-def _window_load(kind, p0, ks, pr, pim, breaks, levels, t):
+def propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
+    """:func:`_propagate_many` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _propagate_many(LoadKernelView(*load), ModalBasisView(*B), ta, qa, va, ts, out_q, out_v)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _window_load(load, t):
     """``p(t)``, right-continuous at the jumps of a piecewise-constant load."""
-    if kind == 1:
-        m, j = piece_of(breaks, t)
-        return levels[j]
-    p, dp, ddp = load_value(kind, p0, ks, pr, pim, 0.0, t)
+    if load.kind == 1:
+        m, j = piece_of(load.breaks, t)
+        return load.levels[j]
+    p, dp, ddp = load_value(load, 0.0, t)
     return p
 
 
@@ -1046,11 +1117,12 @@ def scan_step(N, rate):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def window_jumps(kind, s, breaks, t0, jumps):
+def window_jumps(load, s, t0, jumps):
     """Write the jumps of a piecewise-constant load inside ``[t0, t0 + 2/s]`` as sorted
     ``theta = s (t - t0)`` in ``(0, 2)`` into ``jumps``; returns their number."""
     nj = 0
-    if kind == 1:
+    breaks = load.breaks
+    if load.kind == 1:
         T = 2.0 / s
         m0 = math.floor(t0 / TWO_PI)
         m1 = math.floor((t0 + T) / TWO_PI)
@@ -1065,7 +1137,7 @@ def window_jumps(kind, s, breaks, t0, jumps):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def window_moments(kind, s, p0, ks, pr, pim, breaks, levels, rate, t0, jumps, gl_x, gl_w, ic_, is_):
+def _window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
     """Add the moments ``int P(theta) cos(n pi theta)``, ``... sin ...`` of the drive
     ``P(theta) = p(t0 + theta/s)`` over ``[0, 1]`` (row 0) and ``[1, 2]`` (row 1) to ``ic_, is_``
     (shape (2, M)): Gauss-Legendre panels split at the load's ``jumps`` (in theta, sorted)."""
@@ -1089,8 +1161,7 @@ def window_moments(kind, s, p0, ks, pr, pim, breaks, levels, rate, t0, jumps, gl
                     mid = lo + half_w * (2.0 * pnl + 1.0)
                     for g in range(gl_x.size):
                         th = mid + half_w * gl_x[g]
-                        wp = half_w * gl_w[g] * _window_load(kind, p0, ks, pr, pim, breaks, levels,
-                                                             t0 + th / s)
+                        wp = half_w * gl_w[g] * _window_load(load, t0 + th / s)
                         c1, s1 = math.cos(math.pi * th), math.sin(math.pi * th)
                         cn, sn = 1.0, 0.0
                         for n in range(M):
@@ -1103,14 +1174,21 @@ def window_moments(kind, s, p0, ks, pr, pim, breaks, levels, rate, t0, jumps, gl
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q, v,
-                gl_x, gl_w, qa, va):
+def window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
+    """:func:`_window_moments` called from Python, with ``load`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _window_moments(LoadKernelView(*load), s, rate, t0, jumps, gl_x, gl_w, ic_, is_)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law held in contact throughout: checks that
     the invariant arriving at the rod, ``A(theta)``, stays ``>= 0`` on the scan grid of
     :class:`impactbar.dynamics.impact` (both limits at every jump) and, if so, writes
     ``(q, v) -> -R (q, v) + drive`` into ``qa, va`` (the drive by Gauss-Legendre panels split at the
     load's jumps; ``qa[0]`` from contact) and returns True. False (nothing written) means the
     contact separates: the caller solves it in full."""
+    kind, psup, breaks = load.kind, load.psup, load.breaks
     M = q.size
     N = M - 1
     a = np.empty(M)
@@ -1120,14 +1198,13 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
         a[n] = v[n] if n == 0 else 2.0 * v[n]
         b[n] = -2.0 * s * math.pi * n * q[n]
         scale += abs(a[n]) + abs(b[n])
-    tol = 1e-13 * scale
     periods = math.floor((t0 + 2.0 / s) / TWO_PI) - math.floor(t0 / TWO_PI) + 1
     jumps = np.empty(periods * breaks.size if kind == 1 else 0)  # room for every jump in the window
-    nj = window_jumps(kind, s, breaks, t0, jumps)
+    nj = window_jumps(load, s, t0, jumps)
     # the static correction (impact._Piston): the strain's b_0 (1 - x) + sum 2 p_end sin(n pi x) /
     # (s n pi), p_end the drive's force at x = 0 (a square wave's level on the window's first piece)
     t_p = t0 + 0.5 * (jumps[0] if nj > 0 else 2.0) / s if kind == 1 else t0
-    p_end = _window_load(kind, p0, ks, pr, pim, breaks, levels, t_p)
+    p_end = _window_load(load, t_p)
     b[0] = -p_end / s
     scale += abs(b[0])
     for n in range(1, M):
@@ -1153,7 +1230,7 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
         npts = max(2, int(math.ceil((hi - lo) / hg)) + 1)
         level = 0.0
         if lo >= 1.0 and kind == 1:  # the drive's level on this piece, read at its middle
-            level = _window_load(kind, p0, ks, pr, pim, breaks, levels, t0 + (0.5 * (lo + hi) - 1.0) / s)
+            level = _window_load(load, t0 + (0.5 * (lo + hi) - 1.0) / s)
         for k in range(npts):
             th = lo + (hi - lo) * k / (npts - 1)
             A = 0.0
@@ -1170,14 +1247,13 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
                 if kind == 1:
                     A += 2.0 * level / s
                 else:
-                    A += 2.0 * _window_load(kind, p0, ks, pr, pim, breaks, levels, t0 + u / s) / s
+                    A += 2.0 * _window_load(load, t0 + u / s) / s
             if A < -tol:
                 return False
         lo = hi
     ic_ = np.zeros((2, M))
     is_ = np.zeros((2, M))
-    window_moments(kind, s, p0, ks, pr, pim, breaks, levels, rate, t0, jumps[:nj], gl_x, gl_w,
-                   ic_, is_)
+    _window_moments(load, s, rate, t0, jumps[:nj], gl_x, gl_w, ic_, is_)
     for n in range(M):
         va[n] = -R * v[n] + (ic_[1, n] - R * ic_[0, n]) / s
         if n == 0:
@@ -1189,3 +1265,11 @@ def wave_window(kind, s, R, c, p0, ks, pr, pim, breaks, levels, psup, rate, t0, 
         g0 += c[n] * qa[n]
     qa[0] = -g0
     return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
+    """:func:`_wave_window` called from Python, with ``load`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _wave_window(LoadKernelView(*load), s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va)
+

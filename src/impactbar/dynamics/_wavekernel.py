@@ -7,8 +7,8 @@ of the invariant ``A(theta)`` arriving at the rod end, the same tolerance, the s
 re-contact searches (Brent's method as :func:`scipy.optimize.brentq`, to ``1e-15``), the same
 Gauss-Legendre panels for the waves reflected by the free end. The simulator calls it for the windows
 in which contact is lost (:func:`impactbar.dynamics._kernel.wave_window` takes the others);
-``impactbar.simulation.simulate.FAST_WAVE_SEPARATION = False`` gives the Python solver instead, the
-reference it is tested against.
+the reference of ``"simulate.wave_separation"`` (:mod:`impactbar.dynamics.implementations`) is the
+Python solver, which it is tested against.
 """
 
 from __future__ import annotations
@@ -18,7 +18,8 @@ import math
 import numba
 import numpy as np
 
-from ._kernel import CACHE, TWO_PI, load_value, propagate_many, scan_step, window_jumps, window_moments
+from ._kernel import CACHE, TWO_PI, _propagate_many, _window_moments, load_value, scan_step, window_jumps
+from .kernelview import LoadKernelView, ModalBasisView
 
 #: contact intervals a window may hold before the kernel gives up (the caller then solves it in Python)
 MAX_INTERVALS = 256
@@ -52,9 +53,14 @@ def _trig_int(a, b, npi, x, sgn):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _p(kind, p0, ks, pr, pim, t0, s, jw, nj, lw, u, left):
+def _p(win, u, left):
     """The drive ``P(u) = p(t0 + u/s)``; for a piecewise-constant load the level of the piece holding
-    ``u`` between the window's jumps ``jw[:nj]`` (the left one at a jump when ``left``)."""
+    ``u`` between the window's jumps ``jw[:nj]`` (the left one at a jump when ``left``). The window
+    ``win = (load, t0, s, jw, nj, lw, ew, cw)``: the load view, the window's start and wave speed,
+    its jumps (theta), their number, the levels of its pieces, their edges (time since ``t0``) and
+    the running integral of the load at them."""
+    load, t0, s, jw, nj, lw = win[0], win[1], win[2], win[3], win[4], win[5]
+    kind = load.kind
     if kind == 1:
         j = 0
         if left:
@@ -64,13 +70,15 @@ def _p(kind, p0, ks, pr, pim, t0, s, jw, nj, lw, u, left):
             while j < nj and jw[j] <= u:
                 j += 1
         return lw[j]
-    p, dp, ddp = load_value(kind, p0, ks, pr, pim, 0.0, t0 + u / s)
+    p, dp, ddp = load_value(load, 0.0, t0 + u / s)
     return p
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _p_int(kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw, u):
-    """``int_0^u P dtheta'``, exact (closed form, or piece by piece)."""
+def _p_int(win, u):
+    """``int_0^u P dtheta'``, exact (closed form, or piece by piece); ``win`` as in :func:`_p`."""
+    load, t0, s, nj, lw, ew, cw = win[0], win[1], win[2], win[4], win[5], win[6], win[7]
+    kind, p0, ks, pr, pim = load.kind, load.p0, load.ks, load.pr, load.pim
     tau = u / s
     if kind == 1:
         j = 0
@@ -90,34 +98,36 @@ def _p_int(kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw, u):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _A(a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, th, left):
+def _A(a, b, npi, win, th, left):
     """The invariant arriving at the rod end at ``th``."""
+    s = win[2]
     if th < 1.0 or (left and th == 1.0):
         return _trig(a, b, npi, 1.0 - th, -1.0)
     u = th - 1.0
-    return _trig(a, b, npi, u, 1.0) + 2.0 * _p(kind, p0, ks, pr, pim, t0, s, jw, nj, lw, u, left) / s
+    return _trig(a, b, npi, u, 1.0) + 2.0 * _p(win, u, left) / s
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _Acum(a, b, npi, kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw, acum1, th):
+def _Acum(a, b, npi, win, acum1, th):
     """``int_0^th A``."""
+    s = win[2]
     if th <= 1.0:
         return acum1 - _trig_int(a, b, npi, 1.0 - th, 1.0)
     u = th - 1.0
     return (acum1 + _trig_int(a, b, npi, u, -1.0)
-            + 2.0 * _p_int(kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw, u) / s)
+            + 2.0 * _p_int(win, u) / s)
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _f(mode, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw, acum1, x):
+def _f(mode, base, a, b, npi, win, acum1, x):
     """The root searches' functions: ``A(x-)`` (mode 0) or the gap ``base - Acum(x)`` (mode 1)."""
     if mode == 0:
-        return _A(a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, x, True)
-    return base - _Acum(a, b, npi, kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw, acum1, x)
+        return _A(a, b, npi, win, x, True)
+    return base - _Acum(a, b, npi, win, acum1, x)
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _brent(mode, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw, acum1, xa, xb):
+def _brent(mode, base, a, b, npi, win, acum1, xa, xb):
     """Brent's root of :func:`_f` in ``[xa, xb]`` with ``xtol = rtol = 1e-15``: the algorithm of
     :func:`scipy.optimize.brentq` (100 iterations). Returns ``(root, ok)``."""
     xtol = 1e-15
@@ -127,8 +137,8 @@ def _brent(mode, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, 
     fblk = 0.0
     spre = 0.0
     scur = 0.0
-    fpre = _f(mode, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw, acum1, xpre)
-    fcur = _f(mode, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw, acum1, xcur)
+    fpre = _f(mode, base, a, b, npi, win, acum1, xpre)
+    fcur = _f(mode, base, a, b, npi, win, acum1, xcur)
     if fpre == 0.0:
         return xpre, True
     if fcur == 0.0:
@@ -173,7 +183,7 @@ def _brent(mode, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, 
             xcur += scur
         else:
             xcur += delta if sbis > 0.0 else -delta
-        fcur = _f(mode, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw, acum1, xcur)
+        fcur = _f(mode, base, a, b, npi, win, acum1, xcur)
     return xcur, False
 
 
@@ -183,11 +193,13 @@ def _panel_count(lo, hi, h):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _project_free(a, b, npi, kind, p0, ks, pr, pim, t0, s, R, jw, nj, lw, lo, hi, incoming, h,
-                  gl_x, gl_w, dv, dse):
+def _project_free(a, b, npi, win, R, lo, hi, incoming, h, gl, dv, dse):
     """Add the projection of the waves the free rod end reflects on ``[lo, hi]`` (in ``x``) to ``dv``
     (``cos``) and ``dse`` (``sin``): the alpha that left the end free (``incoming``, ``x = 1 - theta``,
-    no breaks) or the beta (``x = theta - 1``, panels split at the load's jumps)."""
+    no breaks) or the beta (``x = theta - 1``, panels split at the load's jumps); ``win`` as in
+    :func:`_p`, ``gl = (gl_x, gl_w)`` the Gauss-Legendre nodes and weights."""
+    s, jw, nj = win[2], win[3], win[4]
+    gl_x, gl_w = gl
     M = a.size
     seg_lo = lo
     while seg_lo < hi:
@@ -211,7 +223,7 @@ def _project_free(a, b, npi, kind, p0, ks, pr, pim, t0, s, R, jw, nj, lw, lo, hi
                         dbe = 0.0
                     else:
                         dal = 0.0
-                        pv = _p(kind, p0, ks, pr, pim, t0, s, jw, nj, lw, x, False)
+                        pv = _p(win, x, False)
                         dbe = (1.0 + R) * (_trig(a, b, npi, x, 1.0) + 2.0 * pv / s)
                     wc = 0.5 * (dal + dbe) * w
                     ws = 0.5 * (dbe - dal) * w
@@ -223,15 +235,16 @@ def _project_free(a, b, npi, kind, p0, ks, pr, pim, t0, s, R, jw, nj, lw, lo, hi
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q, v, gl_x, gl_w,
-                 qa, va, contact):
-    """The contact window ``[t0, t0 + 2/s]`` of the wave law, separations included (theory §4b).
+def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
+    """The contact window ``[t0, t0 + 2/s]`` of the wave law, separations included (theory §4b),
+    under the load view ``load`` (:class:`~impactbar.dynamics.kernelview.LoadKernelView`).
 
     Writes the post-contact modal state into ``qa, va`` and the contact intervals (``theta = s (t -
     t0)`` in ``[0, 2]``) into ``contact`` (shape ``(MAX_INTERVALS, 2)``) and returns their number;
     -1 (nothing to trust) when the piston arrives moving away from the rod, a root search fails or
     the intervals overflow: the caller then solves the window in Python.
     """
+    kind, psup, breaks, levels = load.kind, load.psup, load.breaks, load.levels
     M = q.size
     N = M - 1
     npi = np.empty(M)
@@ -279,7 +292,8 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
             cw[i + 1] = cw[i] + lw[i] * (ew[i + 1] - ew[i])
     else:
         lw[:] = 0.0
-    p_end = _p(kind, p0, ks, pr, pim, t0, s, jw, nj, lw, 0.0, False)  # the static correction
+    win = (load, t0, s, jw, nj, lw, ew, cw)
+    p_end = _p(win, 0.0, False)  # the static correction
     b[0] = -p_end / s
     for n in range(1, M):
         b[n] += 2.0 * p_end / (s * npi[n])
@@ -288,7 +302,7 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
         scale += abs(a[n]) + abs(b[n])
     tol = 1e-13 * scale
     acum1 = _trig_int(a, b, npi, 1.0, 1.0)
-    if _A(a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, 0.0, False) < -tol:
+    if _A(a, b, npi, win, 0.0, False) < -tol:
         return -1
     # -- the scan grid: breaks at 1 and at 1 + the jumps of the first half
     hg = scan_step(N, rate)
@@ -326,10 +340,10 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
     Ag = np.empty(ng)
     Agl = np.empty(ng)
     for k in range(ng):
-        Ag[k] = _A(a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, grid[k], False)
+        Ag[k] = _A(a, b, npi, win, grid[k], False)
         Agl[k] = Ag[k]
         if isbreak[k]:
-            Agl[k] = _A(a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, grid[k], True)
+            Agl[k] = _A(a, b, npi, win, grid[k], True)
     # -- contact, separation, re-contact
     nc = 0
     th = 0.0
@@ -358,9 +372,8 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
             else:
                 lo = max(th, grid[k - 1])
                 th_sep = lo
-                if _A(a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, lo, False) > 0.0:
-                    th_sep, ok = _brent(0, 0.0, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw,
-                                        ew, cw, acum1, lo, grid[k])
+                if _A(a, b, npi, win, lo, False) > 0.0:
+                    th_sep, ok = _brent(0, 0.0, a, b, npi, win, acum1, lo, grid[k])
                     if not ok:
                         return -1
             contact[nc, 0] = start
@@ -369,10 +382,9 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
             th = th_sep
             on = False
         else:
-            base = _Acum(a, b, npi, kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw, acum1, th)
+            base = _Acum(a, b, npi, win, acum1, th)
             k = k0
-            while k < ng and base - _Acum(a, b, npi, kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw,
-                                          acum1, grid[k]) > 0.0:
+            while k < ng and base - _Acum(a, b, npi, win, acum1, grid[k]) > 0.0:
                 k += 1
             if k == ng:
                 th = 2.0
@@ -382,8 +394,7 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
                 x = 0.5 * (th + grid[k0])
                 found = False
                 for _i in range(40):
-                    if _f(1, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw, acum1,
-                          x) > 0.0:
+                    if _f(1, base, a, b, npi, win, acum1, x) > 0.0:
                         found = True
                         break
                     x = 0.5 * (th + x)
@@ -397,15 +408,14 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
                     th = grid[k0]
                     continue
                 lo = x
-            ga = _f(1, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw, acum1, lo)
-            gb = _f(1, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw, acum1, grid[k])
+            ga = _f(1, base, a, b, npi, win, acum1, lo)
+            gb = _f(1, base, a, b, npi, win, acum1, grid[k])
             if ga <= 0.0:
                 th_re = lo
             elif gb > 0.0:
                 th_re = grid[k]
             else:
-                th_re, ok = _brent(1, base, a, b, npi, kind, p0, ks, pr, pim, t0, s, jw, nj, lw, ew, cw,
-                                   acum1, lo, grid[k])
+                th_re, ok = _brent(1, base, a, b, npi, win, acum1, lo, grid[k])
                 if not ok:
                     return -1
             th = th_re
@@ -414,7 +424,8 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
     # -- the post-contact state: the contact map and drive, plus the waves the free end reflected
     ic_ = np.zeros((2, M))
     is_ = np.zeros((2, M))
-    window_moments(kind, s, p0, ks, pr, pim, breaks, levels, rate, t0, jw, gl_x, gl_w, ic_, is_)
+    _window_moments(load, s, rate, t0, jw, gl_x, gl_w, ic_, is_)
+    gl = (gl_x, gl_w)
     for n in range(M):
         va[n] = -R * v[n] + (ic_[1, n] - R * ic_[0, n]) / s
         qa[n] = 0.0 if n == 0 else -R * q[n] - (is_[1, n] - R * is_[0, n]) / (s * s * npi[n])
@@ -428,12 +439,10 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
             continue
         lo, hi = ga_, min(gb_, 1.0)
         if hi > lo:
-            _project_free(a, b, npi, kind, p0, ks, pr, pim, t0, s, R, jw, nj, lw, 1.0 - hi, 1.0 - lo,
-                          True, h, gl_x, gl_w, dv, dse)
+            _project_free(a, b, npi, win, R, 1.0 - hi, 1.0 - lo, True, h, gl, dv, dse)
         lo, hi = max(ga_, 1.0), gb_
         if hi > lo:
-            _project_free(a, b, npi, kind, p0, ks, pr, pim, t0, s, R, jw, nj, lw, lo - 1.0, hi - 1.0,
-                          False, h, gl_x, gl_w, dv, dse)
+            _project_free(a, b, npi, win, R, lo - 1.0, hi - 1.0, False, h, gl, dv, dse)
     for n in range(M):
         va[n] += dv[n]
         if n > 0:
@@ -441,8 +450,8 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
     gap = 0.0
     last_end = contact[nc - 1, 1] if nc > 0 else 0.0
     if last_end < 2.0:
-        gap = (_Acum(a, b, npi, kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw, acum1, last_end)
-               - _Acum(a, b, npi, kind, p0, ks, pr, pim, t0, s, nj, lw, ew, cw, acum1, 2.0))
+        gap = (_Acum(a, b, npi, win, acum1, last_end)
+               - _Acum(a, b, npi, win, acum1, 2.0))
     q0 = -gap / s
     sign = -1.0
     for n in range(1, M):
@@ -453,18 +462,25 @@ def wave_contact(kind, s, R, p0, ks, pr, pim, breaks, levels, psup, rate, t0, q,
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def square_wave_residuals(s, R, p0, breaks, levels, w2, d, c, p11, p12, p21, p22, gl_x, gl_w, phases,
-                          out):
+def wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
+    """:func:`_wave_contact` called from Python, with ``load`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _wave_contact(LoadKernelView(*load), s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
     """The wave law's phase residual ``u(1, 2 pi-)`` of a one-impact orbit under a piecewise-constant
     load, for each of ``phases`` into ``out``: the computation of
     :func:`impactbar.orbits.wave.wave_orbit_states` (drive of the window by the panels of
     :func:`~impactbar.dynamics._kernel.window_moments`, the flight driven from rest by
     :func:`~impactbar.dynamics._kernel.propagate_many`, the periodicity conditions solved mode by mode
-    with the flight's fundamental matrix ``p11 .. p22``)."""
-    M = w2.size
+    with the flight's fundamental matrix ``fund = (p11, p12, p21, p22)``) in the basis ``B`` (its
+    ``w2`` and ``d``; a piecewise-constant load has no harmonic response)."""
+    p11, p12, p21, p22 = fund
+    breaks = load.breaks
+    M = B.w2.size
     T = 2.0 / s
-    empty = np.zeros(0)
-    empty2 = np.zeros((M, 0))
     zeros = np.zeros(M)
     ic_ = np.empty((2, M))
     is_ = np.empty((2, M))
@@ -478,14 +494,12 @@ def square_wave_residuals(s, R, p0, breaks, levels, w2, d, c, p11, p12, p21, p22
         ph = phases[i]
         periods = math.floor((ph + T) / TWO_PI) - math.floor(ph / TWO_PI) + 1
         jumps = np.empty(periods * breaks.size)
-        nj = window_jumps(1, s, breaks, ph, jumps)
+        nj = window_jumps(load, s, ph, jumps)
         ic_[:, :] = 0.0
         is_[:, :] = 0.0
-        window_moments(1, s, p0, empty, empty, empty, breaks, levels, 0.0, ph, jumps[:nj], gl_x, gl_w,
-                       ic_, is_)
+        _window_moments(load, s, 0.0, ph, jumps[:nj], gl_x, gl_w, ic_, is_)
         ts[0] = ph + TWO_PI
-        propagate_many(1, w2, d, p0, empty, empty2, empty2, breaks, levels, ph + T, zeros, zeros, ts,
-                       fq, fv)
+        _propagate_many(load, B, ph + T, zeros, zeros, ts, fq, fv)
         for n in range(M):
             h = (ic_[1, n] - R * ic_[0, n]) / s
             g = 0.0 if n == 0 else -(is_[1, n] - R * is_[0, n]) / (s * s * math.pi * n)
@@ -508,3 +522,12 @@ def square_wave_residuals(s, R, p0, breaks, levels, w2, d, c, p11, p12, p21, p22
         for n in range(M):
             r += c[n] * qm[n]
         out[i] = r
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
+    """:func:`_square_wave_residuals` called from Python, with ``load`` and ``B`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _square_wave_residuals(LoadKernelView(*load), ModalBasisView(*B), s, R, c, fund, gl_x, gl_w,
+                                  phases, out)
+

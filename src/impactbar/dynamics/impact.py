@@ -216,20 +216,6 @@ class _Piston:
         return self._int(x, -1.0)
 
 
-def _kernel_load(load):
-    """``(kind, p0, ks, pr, pim, breaks, levels)`` for the compiled kernel: a load of finitely many
-    harmonics (kind 0) or a piecewise-constant one (kind 1); None otherwise."""
-    if hasattr(load, "orders") and hasattr(load, "amplitudes"):
-        amp = np.asarray(load.amplitudes, dtype=complex)
-        return (0, float(load.p0), np.asarray(load.orders, dtype=float),
-                np.ascontiguousarray(amp.real), np.ascontiguousarray(amp.imag), np.zeros(1), np.zeros(1))
-    if hasattr(load, "breaks") and hasattr(load, "levels"):
-        return (1, float(load.p0), np.zeros(0), np.zeros(0), np.zeros(0),
-                np.ascontiguousarray(load.breaks, dtype=float),
-                np.ascontiguousarray(load.levels, dtype=float))
-    return None
-
-
 def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: bool = False):
     """The drive load's part of the post-contact modal state, contact held for the whole window
     (theory §4b).
@@ -267,12 +253,10 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     """
     wl = _WindowLoad(load, s, t0)
     npi = math.pi * np.arange(n_modes + 1)
-    arrays = _kernel_load(load)
-    if arrays is not None:  # the compiled quadrature (the same panels)
+    view = getattr(load, "kernel_view", None)
+    if view is not None:  # the compiled quadrature (the same panels)
         mc, ms = np.zeros((2, n_modes + 1)), np.zeros((2, n_modes + 1))
-        kind, p0, ks, pr, pim, breaks, levels = arrays
-        K.window_moments(kind, s, p0, ks, pr, pim, breaks, levels, wl.rate, t0,
-                         np.ascontiguousarray(wl.jumps), _GL_X, _GL_W, mc, ms)
+        K.window_moments(tuple(view), s, wl.rate, t0, np.ascontiguousarray(wl.jumps), _GL_X, _GL_W, mc, ms)
         (ca, cb), (sa, sb) = mc, ms
     else:
         h_panel = 8.0 / (npi[-1] + wl.rate + 1.0)

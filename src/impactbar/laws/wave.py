@@ -16,12 +16,6 @@ from .base import ContactLaw
 
 __all__ = ["WaveLaw"]
 
-#: Solve the simulator's contact windows in which contact is lost by the compiled characteristics
-#: solver (``dynamics._wavekernel.wave_contact``). ``False`` gives the Python solver
-#: (:func:`~impactbar.dynamics.impact.wave_impact`), the reference it is tested against (the same
-#: contact intervals and post-contact states, to rounding).
-FAST_WAVE_SEPARATION = True
-
 _GL20_X, _GL20_W = np.polynomial.legendre.leggauss(20)
 
 
@@ -117,6 +111,7 @@ class WaveLaw(ContactLaw):
             return imp.q_after.copy(), imp.v_after.copy(), t_release, imp
         from ..dynamics import _kernel as K
         from ..dynamics import _wavekernel as WK
+        from ..dynamics.implementations import use_fast
 
         c = kernel.c
         D = kernel.data
@@ -124,12 +119,12 @@ class WaveLaw(ContactLaw):
         rate = float(np.max(ks)) / model.s if D.kind == 0 and ks.size else 0.0
         contact = np.empty((WK.MAX_INTERVALS, 2))  # the contact intervals of a separating window
         q, v = np.empty_like(qm), np.empty_like(vm)
-        if K.wave_window(D.kind, model.s, model.R, c, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels,
-                         D.psup, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
+        if K.wave_window(tuple(D), model.s, model.R, c, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
             imp = _Window(model, load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
-        elif FAST_WAVE_SEPARATION and WK.wave_contact(
-                D.kind, model.s, model.R, D.p0, D.ks, D.pr, D.pim, D.breaks, D.levels, D.psup, rate, ti,
-                qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:  # contact lost inside the window
+        elif use_fast("simulate.wave_separation") and WK.wave_contact(
+                tuple(D), model.s, model.R, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:
+            # contact lost inside the window (the compiled characteristics solver; its reference,
+            # the Python solver wave_impact, is the branch below)
             imp = _Window(model, load, ti, qm, vm, q.copy(), v.copy())
         else:  # the full characteristics solution in Python
             imp = wave_impact(model, load, ti, qm, vm)

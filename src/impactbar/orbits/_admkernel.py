@@ -7,8 +7,8 @@ It runs the same algorithm as the numpy path, step by step: the exclusion of int
 vectorised Newton iteration on the zeros of ``g'`` with the same stopping rule, and the branch and
 bound on the stationary values (the bounds of ``g`` from the midpoint, and from a found zero by
 Taylor's theorem). The modal flow is the exact closed form of :mod:`impactbar.dynamics._flowkernel`
-under a Fourier load (``lk = 0``) or a piecewise-constant load (``lk = 1``). Results agree with the
-numpy path to rounding. Imported lazily, so ``import impactbar`` does not load numba.
+under a Fourier load (kind 0 of the load's kernel view) or a piecewise-constant load (kind 1).
+Results agree with the numpy path to rounding. Imported lazily, so ``import impactbar`` does not load numba.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ import numpy as np
 
 from ..dynamics._flowkernel import bound_column, fourier_column, piecewise_column
 from ..dynamics._kernel import CACHE
+from ..dynamics.kernelview import LoadKernelView
 
 TWO_PI = 2.0 * math.pi
 _MAXF = np.finfo(np.float64).max
@@ -35,16 +36,18 @@ def _right(a, x):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _load(lk, t, F, P):
-    """The load ``p(t)`` at the absolute time ``t``."""
-    if lk == 0:
-        k, pr, pim, p0 = F[3], F[17], F[18], F[2]
+def _load(t, src):
+    """The load ``p(t)`` at the absolute time ``t`` (``src = (load, F, P)``: the load's kernel view,
+    the Fourier flow's data and the piecewise flow's data, see :func:`admissibility_search`)."""
+    load = src[0]
+    if load.kind == 0:
+        k, pr, pim, p0 = load.ks, load.pr, load.pim, load.p0
         s = 0.0
         for m in range(k.size):
             x = k[m] * t
             s += math.cos(x) * pr[m] - math.sin(x) * pim[m]
         return p0 + s
-    brk, lv = P[5], P[6]
+    brk, lv = load.breaks, load.levels
     tm = t % TWO_PI
     idx = _right(brk, tm) - 1
     if idx < 0:
@@ -53,14 +56,15 @@ def _load(lk, t, F, P):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _variation(lk, mid, half, F, P):
+def _variation(mid, half, src):
     """``(center, delta)`` with ``|p - center| <= delta`` on ``[mid - half, mid + half]`` (as
     ``Load.variation``)."""
-    center = _load(lk, mid, F, P)
-    if lk == 0:
-        return center, min(F[19] * half, F[20])
-    brk, spread, single = P[5], P[7], P[8]
-    if single:
+    center = _load(mid, src)
+    load = src[0]
+    if load.kind == 0:
+        return center, min(load.p1 * half, 2.0 * load.posc)
+    brk, spread = load.breaks, load.spread
+    if brk.size == 1:  # a constant load: no jump at all
         return center, 0.0
     lo = mid - half
     hi = mid + half
@@ -72,13 +76,14 @@ def _variation(lk, mid, half, F, P):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _state(lk, t, q, v, ck, sk, F, P):
+def _state(t, work, src):
     """The modal state at the absolute time ``t`` into column 0 of ``q, v`` (shape ``(M, 1)``)."""
-    if lk == 0:
-        fourier_column(t, q, v, 0, ck, sk, F[0], F[1], F[2], F[3], F[4], F[5], F[6], F[7], F[8],
-                       F[9], F[10], F[11], F[12], F[13], F[14], F[15], F[16])
+    q, v, ck, sk = work
+    load, F, P = src
+    if load.kind == 0:
+        fourier_column(t, q, v, 0, ck, sk, F)
         return
-    w2, d, nodes, levels, qn, vn = P[0], P[1], P[2], P[3], P[4], P[9]
+    w2, d, nodes, levels, qn, vn = P
     j = _right(nodes, t) - 1
     j = min(max(j, 0), nodes.size - 2)
     piecewise_column(w2, d, levels[j], max(t - nodes[j], 0.0), qn[:, j], vn[:, j], q, v, 0)
@@ -93,39 +98,42 @@ def _dot(c, x):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _g(lk, phase, t, c, q, v, ck, sk, F, P):
+def _g(phase, t, c, work, src):
     """``g(t) = c . q(phase + t)``."""
-    _state(lk, phase + t, q, v, ck, sk, F, P)
+    q = work[0]
+    _state(phase + t, work, src)
     return _dot(c, q)
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P):
+def _joint(phase, mid, half, prob, work, src):
     """``(g(mid), g'(mid), L)``: the end's displacement and velocity, and the bound of ``|g''|`` on
     ``[mid - half, mid + half]`` (``gprime_and_bound`` of the numpy path)."""
+    c, absc, w2, d, psup = prob
+    q, v = work[0], work[1]
     ta = phase + mid
-    _state(lk, ta, q, v, ck, sk, F, P)
-    center, delta = _variation(lk, ta, half, F, P)
+    _state(ta, work, src)
+    center, delta = _variation(ta, half, src)
     g1, L = bound_column(c, absc, w2, d, psup, q, v, 0, center, delta, half)
     return _dot(c, q), g1, L
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _enclose(lk, phase, a, b, mids, half, min_width, max_intervals, atol, prune, best, floor, c, absc,
-             w2, d, psup, q, v, ck, sk, F, P):
+def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
     """The bisection loop of ``certified.enclose_zeros`` (``merge=False``) from the midpoints
     ``mids`` of intervals of half-width ``half``; returns ``(lo, hi, ok, best)``, ``ok`` false where
     the numpy path raises (more than ``max_intervals`` survivors). With ``prune``, the intervals
     where ``g`` stays below ``best`` (raised by each level's samples, as ``_sample_bound``) are
-    dropped too (``_numpy_search``'s ``prune``)."""
+    dropped too (``_numpy_search``'s ``prune``). ``limits = (min_width, max_intervals, atol, prune,
+    floor)``."""
+    min_width, max_intervals, atol, prune, floor = limits
     while True:
         n = mids.size
         gs = np.empty(n)
         fs = np.empty(n)
         ls = np.empty(n)
         for i in range(n):
-            gs[i], fs[i], ls[i] = _joint(lk, phase, mids[i], half, c, absc, w2, d, psup, q, v, ck, sk,
-                                         F, P)
+            gs[i], fs[i], ls[i] = _joint(phase, mids[i], half, prob, work, src)
         if prune:
             best = max(best, _sample_bound(mids, gs, fs, atol, floor))
         keep = np.empty(n, dtype=np.bool_)
@@ -163,8 +171,7 @@ def _enclose(lk, phase, a, b, mids, half, min_width, max_intervals, atol, prune,
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _enclose_in(lk, phase, a, b, lo, hi, n0, max_intervals, atol, c, absc, w2, d, psup,
-                q, v, ck, sk, F, P):
+def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
     """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
     pieces, down to a 64th of the widest."""
     width = 0.0
@@ -182,14 +189,16 @@ def _enclose_in(lk, phase, a, b, lo, hi, n0, max_intervals, atol, c, absc, w2, d
             if mj < hi[i] + half:
                 mids[m] = mj
                 m += 1
-    lo, hi, good, _ = _enclose(lk, phase, a, b, mids[:m].copy(), half, width / 64.0, max_intervals, atol,
-                               False, -math.inf, 0.0, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+    limits = (width / 64.0, max_intervals, atol, False, 0.0)
+    lo, hi, good, _ = _enclose(phase, a, b, mids[:m].copy(), half, limits, -math.inf, prob, work, src)
     return lo, hi, good
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _newton(lk, phase, lo, hi, c, w2, d, q, v, ck, sk, F, P):
+def _newton(phase, lo, hi, prob, work, src):
     """``admissibility._newton_stationary``: the same vectorised iteration, element by element."""
+    c, w2, d = prob[0], prob[2], prob[3]
+    q, v = work[0], work[1]
     n = lo.size
     t = np.empty(n)
     ok = np.zeros(n, dtype=np.bool_)
@@ -201,8 +210,8 @@ def _newton(lk, phase, lo, hi, c, w2, d, q, v, ck, sk, F, P):
         done = True
         for i in range(n):
             ta = phase + t[i]
-            _state(lk, ta, q, v, ck, sk, F, P)
-            p = _load(lk, ta, F, P)
+            _state(ta, work, src)
+            p = _load(ta, src)
             g1 = 0.0
             g2 = 0.0
             for k in range(M):
@@ -228,7 +237,7 @@ def _newton(lk, phase, lo, hi, c, w2, d, q, v, ck, sk, F, P):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P):
+def _value_bounds(phase, lo, hi, prob, work, src):
     """``g`` at the midpoints of ``[lo, hi]`` and its upper bound ``g(mid) + (|g'| + L h) h``."""
     n = lo.size
     gm = np.empty(n)
@@ -237,7 +246,7 @@ def _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P):
     for i in range(n):
         mid = 0.5 * (lo[i] + hi[i])
         half = 0.5 * (hi[i] - lo[i])
-        gm[i], g1[i], L2 = _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+        gm[i], g1[i], L2 = _joint(phase, mid, half, prob, work, src)
         upper[i] = gm[i] + (abs(g1[i]) + L2 * half) * half
     return gm, upper, g1
 
@@ -263,16 +272,18 @@ def _sample_bound(mid, gm, g1, atol, floor):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _single(lk, phase, ts, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P):
+def _single(phase, ts, lo, hi, prob, work, src):
     """``admissibility._numpy_search``'s ``single_zero``: ``|g''(ts)| > L3 r``, so that ``ts`` is
     the only zero of ``g'`` on ``[lo, hi]``."""
+    c, absc, w2, d, psup = prob
+    q, v = work[0], work[1]
     mid = 0.5 * (lo + hi)
     half = 0.5 * (hi - lo)
     ta = phase + mid
-    _state(lk, ta, q, v, ck, sk, F, P)
-    center, delta = _variation(lk, ta, half, F, P)
-    if lk == 0:
-        slope = F[19]
+    _state(ta, work, src)
+    center, delta = _variation(ta, half, src)
+    if src[0].kind == 0:
+        slope = src[0].p1
     else:
         if delta != 0.0:  # a jump of the load inside: no certificate
             return False
@@ -291,8 +302,8 @@ def _single(lk, phase, ts, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P):
             t3 = slope + d * (psup + d * ((abs(vn) + psup * half) * grow))
         L3 += absc[n] * t3
     ta = phase + ts
-    _state(lk, ta, q, v, ck, sk, F, P)
-    p = _load(lk, ta, F, P)
+    _state(ta, work, src)
+    p = _load(ta, src)
     g2 = 0.0
     for n in range(M):
         g2 += c[n] * (p - d * v[n, 0] - w2[n] * q[n, 0])
@@ -317,9 +328,17 @@ def _top(x, k):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, absc, w2, d, psup, F, P):
+def _admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src):
     """The largest stationary value of ``g = u(1, t)`` over ``[0, horizon]`` after the impact at
     ``phase`` (``admissibility._numpy_search`` and ``_stationary_values``, ``rounds = 8``).
+
+    ``prob = (c, absc, w2, d, psup)``: the end's weights and their magnitudes, the squared
+    frequencies, the damping and ``sup |p|``. ``src = (load, F, P)``: the load's kernel view
+    (:class:`~impactbar.dynamics.kernelview.LoadKernelView`), the data of the flight's compiled
+    Fourier flow (``FourierLoad.flow``'s ``kernel_args``, the argument of
+    :func:`~impactbar.dynamics._flowkernel.fourier_flow`) and of the piecewise-constant one
+    ``(w2, d, nodes, levels, qn, vn)``; the one the load's kind does not use holds placeholders of
+    the same types, so that one compilation serves every load.
 
     Returns
     -------
@@ -330,19 +349,21 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
     err : float
         As ``_stationary_values``'s ``err``.
     """
+    c = prob[0]
     M = c.size
-    K = F[3].size
+    K = src[0].ks.size
     q = np.empty((M, 1))
     v = np.empty((M, 1))
     ck = np.empty(K)
     sk = np.empty(K)
+    work = (q, v, ck, sk)
     n0 = 64
     half0 = 0.5 * horizon / n0
     mids = np.empty(n0)
     for i in range(n0):
         mids[i] = half0 * (2.0 * i + 1.0)
-    lo, hi, good, best = _enclose(lk, phase, 0.0, horizon, mids, half0, 6e-3, 400_000, atol, True,
-                                  -math.inf, floor, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+    lo, hi, good, best = _enclose(phase, 0.0, horizon, mids, half0, (6e-3, 400_000, atol, True, floor),
+                                  -math.inf, prob, work, src)
     if not good:
         return 1, -math.inf, 0.0
     if at_rest:
@@ -350,7 +371,7 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
         lo, hi = lo[sel], hi[sel]
 
     err = 0.0
-    gm, upper, g1 = _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+    gm, upper, g1 = _value_bounds(phase, lo, hi, prob, work, src)
     if lo.size:
         mid = np.empty(lo.size)
         for i in range(lo.size):
@@ -381,14 +402,14 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
                     if not tried[i] and upper[i] >= best:
                         batch[nb] = i
                         nb += 1
-            tb, okb = _newton(lk, phase, lo[batch], hi[batch], c, w2, d, q, v, ck, sk, F, P)
+            tb, okb = _newton(phase, lo[batch], hi[batch], prob, work, src)
             for j in range(batch.size):
                 i = batch[j]
                 tried[i] = True
                 t[i] = tb[j]
                 ok[i] = okb[j]
                 if okb[j]:
-                    vals[i] = _g(lk, phase, tb[j], c, q, v, ck, sk, F, P)
+                    vals[i] = _g(phase, tb[j], c, work, src)
             for j in range(batch.size):
                 if okb[j]:
                     best = max(best, vals[batch[j]])
@@ -402,11 +423,10 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
             if ok[i]:
                 mid = 0.5 * (lo[i] + hi[i])
                 half = 0.5 * (hi[i] - lo[i])
-                L2 = _joint(lk, phase, mid, half, c, absc, w2, d, psup, q, v, ck, sk, F, P)[2]
+                L2 = _joint(phase, mid, half, prob, work, src)[2]
                 r = max(t[i] - lo[i], hi[i] - t[i])
                 taylor = vals[i] + 0.5 * L2 * r * r
-                if taylor > best + atol and not _single(lk, phase, t[i], lo[i], hi[i], c, absc, w2,
-                                                          d, psup, q, v, ck, sk, F, P):
+                if taylor > best + atol and not _single(phase, t[i], lo[i], hi[i], prob, work, src):
                     gm[i] = vals[i]
                     upper[i] = taylor
                     retry[i] = upper[i] >= best
@@ -426,18 +446,26 @@ def admissibility_search(lk, phase, horizon, at_rest, atol, seeds, floor, c, abs
             if retry[i]:
                 rlo[j], rhi[j], rgm[j], rup[j] = lo[i], hi[i], gm[i], upper[i]
                 j += 1
-        lo, hi, good = _enclose_in(lk, phase, 0.0, horizon, rlo, rhi, 8, 20_000, atol, c, absc,
-                                   w2, d, psup, q, v, ck, sk, F, P)
+        lo, hi, good = _enclose_in(phase, 0.0, horizon, rlo, rhi, 8, 20_000, atol, prob, work, src)
         if not good:  # a zero of high order: the enclosure no longer shrinks
             top = np.max(rup)
             best = max(best, top)
             err = max(err, top - np.min(2.0 * rgm - rup))
             lo = np.empty(0)
             break
-        gm, upper, g1 = _value_bounds(lk, phase, lo, hi, c, absc, w2, d, psup, q, v, ck, sk, F, P)
+        gm, upper, g1 = _value_bounds(phase, lo, hi, prob, work, src)
     if lo.size:  # rounds exhausted: bound what is left
         top = np.max(upper)
         if top >= best:
             best = top
             err = max(err, top - np.min(2.0 * gm - upper))
     return 0, best, err
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src):
+    """:func:`_admissibility_search` called from Python, with the load view in ``src`` as plain tuples
+    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
+    return _admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob,
+                                 (LoadKernelView(*src[0]), src[1], src[2]))
+

@@ -9,14 +9,14 @@ import numpy as np
 
 from .._status import Admissibility
 from ..dynamics.certified import enclose_zeros
+from ..dynamics.implementations import use_fast
 
 TWO_PI = 2.0 * math.pi
 
-#: the bounds of the certified search by the compiled kernel (``False``: the numpy reference path)
-_COMPILED_BOUND = True
-#: the whole certified search (enclosure, Newton steps, branch and bound) by the compiled kernel
-#: :mod:`impactbar.orbits._admkernel` where the load's flow is compiled (``False``: the numpy path)
-_COMPILED_SEARCH = True
+# implementations (impactbar.dynamics.implementations): "admissibility.search", the whole certified
+# search (enclosure, Newton steps, branch and bound) by the compiled kernel
+# :mod:`impactbar.orbits._admkernel` where the load's flow is compiled; "admissibility.bound", the
+# bounds of the numpy search by the compiled kernel. Their references are the numpy paths.
 #: intervals tried first by the branch and bound on the stationary values (see _stationary_values)
 SEEDS = 4
 #: with the end leaving the stop at rest, the samples of the search before this time do not bound
@@ -51,7 +51,7 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     if at_rest is None:
         at_rest = R == 0.0
     found = None
-    if _COMPILED_SEARCH:
+    if use_fast("admissibility.search"):
         found = _compiled_search(load, w2, float(d), float(phase), q0, v0, c, absc, float(psup),
                                  float(horizon), bool(at_rest), 1e-13 * scale, flow)
     if found is None:
@@ -82,11 +82,8 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
 def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol, flow=None):
     """``(clearance, err)`` of :func:`_numpy_search` by the compiled kernel, or
     ``None`` where it does not apply (a load or flow it does not know: the numpy path then runs)."""
-    from ..dynamics import _kernel
     from ..loads import FourierLoad, PiecewiseConstantLoad
 
-    if not _kernel.CACHE:  # no disk cache: every process would compile the kernel (about 15 s)
-        return None  # on its first orbit, where the numpy search takes milliseconds
     kind = type(load)
     if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
                                              for f in ("__call__", "variation", "flow")):
@@ -95,11 +92,8 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         args = getattr(flow, "kernel_args", None)
         if args is None:
             return None
-        pk = load._pk
-        F = args + (np.ascontiguousarray(pk.real), np.ascontiguousarray(pk.imag),
-                    float(np.sum(load._k * np.abs(pk))), 2.0 * load.sup_oscillation)
+        F = args
         P = _NO_PIECES
-        lk = 0
     elif isinstance(load, PiecewiseConstantLoad) and all(
             getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation", "flow")):
         # one period and a margin: a midpoint of the search may fall just past the flight's end
@@ -107,18 +101,15 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         if pieces is None:
             return None
         nodes, levels, qn, vn = pieces
-        lv = load._lv
-        P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, load._b, lv,
-             float(np.max(lv) - np.min(lv)), bool(load._b.size == 1), vn)
+        P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, vn)
         F = _NO_FOURIER
-        lk = 1
     else:
         return None
     from ._admkernel import admissibility_search
 
-    code, v_max, err = admissibility_search(lk, phase, horizon, at_rest, atol, SEEDS,
-                                            _SAMPLE_FLOOR if at_rest else 0.0, c, absc, w2, d, psup,
-                                            F, P)
+    code, v_max, err = admissibility_search(phase, horizon, at_rest, atol, SEEDS,
+                                            _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
+                                            (tuple(load.kernel_view), F, P))
     if code:
         raise RuntimeError("zero search did not converge (Lipschitz bound too loose)")
     return float(v_max), float(err)
@@ -126,8 +117,8 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
 
 _E1, _E2 = np.zeros(0), np.zeros((1, 0))
 _NO_FOURIER = (0.0, 0.0, 0.0, _E1, _E2, _E2, _E2, _E2, _E1, np.zeros(0, dtype=np.int64), _E1, _E1, _E1,
-               _E1, _E1, _E1, _E1, _E1, _E1, 0.0, 0.0)
-_NO_PIECES = (_E1, 0.0, _E1, _E1, _E2, _E1, _E1, 0.0, False, _E2)
+               _E1, _E1, _E1, _E1)
+_NO_PIECES = (_E1, 0.0, _E1, _E1, _E2, _E2)
 
 
 def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale, flow=None):
@@ -146,7 +137,7 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
         q, v = states(mid)
         last["g"] = c @ q
         center, delta = load.variation(phase + mid, half)
-        if _COMPILED_BOUND and q.ndim == 2:
+        if use_fast("admissibility.bound") and q.ndim == 2:
             from ..dynamics._flowkernel import end_velocity_bound
 
             T = q.shape[1]
@@ -211,7 +202,7 @@ def _load_slope(load):
     kind = type(load)
     if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
                                              for f in ("__call__", "variation")):
-        return float(np.sum(load._k * np.abs(load._pk))), False
+        return load.kernel_view.p1, False
     if isinstance(load, PiecewiseConstantLoad) and all(
             getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation")):
         return 0.0, True

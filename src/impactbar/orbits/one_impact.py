@@ -14,6 +14,7 @@ import numpy as np
 from .. import _tables
 from .._status import Admissibility
 from .._threads import single_threaded_blas
+from ..dynamics.implementations import use_fast
 from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .admissibility import _admissibility
@@ -176,9 +177,8 @@ def _cosine_parameters(load: Load):
     return load.p0, pk.real, int(orders[0])
 
 
-#: single points of the rigid bar take the closed forms in plain floats (``orbits/_rigid_scalar.py``);
-#: ``False`` sends them through the vectorised numpy closed forms instead (a switch for the tests)
-RIGID_SCALAR = True
+# single points of the rigid bar take the closed forms in plain floats (``orbits/_rigid_scalar.py``);
+# the reference of "orbits.rigid_scalar" (dynamics.implementations) is the vectorised numpy closed forms
 
 
 def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
@@ -194,7 +194,7 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
         if par is None:
             return None
         args, solve = (model.d, model.R, *par), "cosine"
-    if RIGID_SCALAR:
+    if use_fast("orbits.rigid_scalar"):
         from . import _rigid_scalar
 
         found = (_rigid_scalar.square_orbits if solve == "square" else _rigid_scalar.cosine_orbits)(*args)

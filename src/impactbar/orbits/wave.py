@@ -36,6 +36,8 @@ from scipy.optimize import brentq
 
 from ..dynamics import _kernel as K
 from ..dynamics.impact import window_drive
+from ..dynamics.implementations import use_fast
+from ..dynamics.kernelview import ModalBasisView
 from ..dynamics.modal import fundamental
 from ..loads import FourierLoad, Load, PiecewiseConstantLoad
 from ..model import BarModel
@@ -48,10 +50,9 @@ __all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave
 TWO_PI = 2.0 * math.pi
 
 
-#: the phase residual of a piecewise-constant load by one compiled call for all phases
-#: (``dynamics._wavekernel.square_wave_residuals``); ``False``: :func:`wave_orbit_states` phase by
-#: phase, the reference it is tested against (the same residuals to rounding)
-_COMPILED_RESIDUAL = True
+# "wave.residual" (dynamics.implementations): the phase residual of a piecewise-constant load by one
+# compiled call for all phases (``dynamics._wavekernel.square_wave_residuals``); the reference is
+# :func:`wave_orbit_states` phase by phase (the same residuals to rounding)
 
 
 def _window(model: BarModel) -> tuple[float, float]:
@@ -80,10 +81,8 @@ def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
     zeros = np.zeros(M)
     if isinstance(load, PiecewiseConstantLoad):
         q, v = np.empty((M, 1)), np.empty((M, 1))
-        empty = np.zeros((M, 0))
-        K.propagate_many(1, w2, model.d, float(load.p0), np.zeros(0), empty, empty,
-                         np.ascontiguousarray(load.breaks), np.ascontiguousarray(load.levels),
-                         float(t0), zeros, zeros, np.array([float(t1)]), q, v)
+        K.propagate_many(tuple(load.kernel_view), tuple(ModalBasisView.unforced(w2, model.d)), float(t0),
+                         zeros, zeros, np.array([float(t1)]), q, v)
     else:
         q, v = load.propagate(w2, model.d, t0, zeros, zeros, [t1])
     return q[:, 0], v[:, 0]
@@ -163,7 +162,7 @@ def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
     ``phase``."""
     ph = np.asarray(phase, dtype=float)
-    if _COMPILED_RESIDUAL and isinstance(load, PiecewiseConstantLoad) and _window(model)[1] > 0.0:
+    if use_fast("wave.residual") and isinstance(load, PiecewiseConstantLoad) and _window(model)[1] > 0.0:
         return _square_wave_residuals(model, load, ph)
     out = np.array([wave_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
     return out.reshape(ph.shape)
@@ -180,11 +179,10 @@ def _square_wave_residuals(model: BarModel, load: PiecewiseConstantLoad, ph: np.
         raise ValueError("the periodicity conditions are singular (R = 1 without damping)")
     phases = np.ascontiguousarray(ph, dtype=float).ravel()
     out = np.empty(phases.size)
-    WK.square_wave_residuals(float(model.s), float(R), float(load.p0),
-                             np.ascontiguousarray(load.breaks, dtype=float),
-                             np.ascontiguousarray(load.levels, dtype=float), model.frequencies**2,
-                             float(model.d), np.ascontiguousarray(model.end_weights, dtype=float),
-                             p11, p12, p21, p22, _GL_X, _GL_W, phases, out)
+    basis = ModalBasisView.unforced(model.frequencies**2, model.d)
+    WK.square_wave_residuals(tuple(load.kernel_view), tuple(basis), float(model.s), float(R),
+                             np.ascontiguousarray(model.end_weights, dtype=float), (p11, p12, p21, p22),
+                             _GL_X, _GL_W, phases, out)
     return out.reshape(ph.shape)
 
 

@@ -6,7 +6,8 @@ exactly piece by piece. The next impact, the first ``t`` with ``u(1,t) = c . q(t
 ``u_t(1,t) > 0``, is found with a guaranteed search (bounds on ``|u_tt(1,t)|`` and
 ``|u_ttt(1,t)|`` from the modal energies exclude every step it takes), then refined to rounding;
 after an impact the rigid bar under one harmonic and flexible bars under a Fourier load take
-specialised searches with the same guarantee (``FAST_SEARCH``).
+specialised searches with the same guarantee (switch ``"simulate.impact_search"`` of
+:mod:`impactbar.dynamics.implementations`).
 At an impact the model's law acts (:attr:`impactbar.BarModel.law`): the paper's
 ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11) is applied inside the compiled flight kernel; a law that is
 not instantaneous (the wave law, ``BarModel(impact="wave")``, theory §4b: a contact window of length
@@ -32,7 +33,9 @@ import numpy as np
 from .._status import RunStatus
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
-from ..loads import FourierLoad, Load, PiecewiseConstantLoad
+from ..dynamics.implementations import use_fast
+from ..dynamics.kernelview import LoadKernelView, ModalBasisView
+from ..loads import Load
 from ..model import MAX_MODES, BarModel
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
@@ -61,11 +64,11 @@ DWELL_MAX = 1e-2
 #: disagreement between the truncated bases, not a motion: the release is undone.
 MICRO_FLIGHT = 1e-6
 
-#: Search the impacts after an impact by the kernel's specialised certified searches: the rigid bar
-#: under one harmonic in scalars (``rigid1_crossing``), flexible modes under a Fourier load in
-#: folded form (``modal_crossing``). ``False`` gives the general certified search
-#: (``find_crossing``), the reference they are tested against (the same impacts, to rounding).
-FAST_SEARCH = True
+# Implementations (impactbar.dynamics.implementations): "simulate.impact_search" searches the
+# impacts after an impact by the kernel's specialised certified searches (the rigid bar under one
+# harmonic in scalars, ``rigid1_crossing``; flexible modes under a Fourier load in folded form,
+# ``modal_crossing``), the reference being the general search ``find_crossing`` (the same impacts, to
+# rounding).
 
 #: Largest ``|t0|``, ``|t_end|`` and ``t_end - t0`` accepted by :func:`simulate` (about 1.6e7 periods).
 MAX_TIME = 1e8
@@ -220,7 +223,7 @@ def _real_vector(name, value) -> np.ndarray:
 class _Basis:
     """Frequencies, weights and particular-response data of one modal basis under one load."""
 
-    def __init__(self, w2: np.ndarray, d: float, data: _LoadData):
+    def __init__(self, w2: np.ndarray, d: float, data: LoadKernelView):
         self.w2 = np.ascontiguousarray(w2, dtype=float)
         M = self.w2.size
         ks = data.ks
@@ -244,38 +247,19 @@ class _Basis:
         # closed form adds and cancels it, so it sets the rounding noise of a mode's displacement
         static = np.where(self.w2 > 0.0, data.psup / np.where(self.w2 > 0.0, self.w2, 1.0), 0.0)
         self.qpb = static + (ah.sum(axis=1) if ks.size else 0.0)
+        self.view = ModalBasisView(self.w2, float(d), self.hpr, self.hpi, self.vpb, self.apb, self.jpb)
 
 
-class _LoadData:
-    def __init__(self, load: Load):
-        if isinstance(load, FourierLoad):
-            self.kind = 0
-            self.ks = np.asarray(load.orders, dtype=float)
-            amp = load.amplitudes
-            self.pr = np.ascontiguousarray(amp.real)
-            self.pim = np.ascontiguousarray(amp.imag)
-            self.breaks = np.zeros(1)
-            self.levels = np.zeros(1)
-            a = np.abs(amp)
-            self.psup = float(load.sup_abs)
-            self.p1 = float(np.sum(self.ks * a))
-            self.p2 = float(np.sum(self.ks**2 * a))
-            self.p3 = float(np.sum(self.ks**3 * a))
-        elif isinstance(load, PiecewiseConstantLoad):
-            self.kind = 1
-            self.ks = np.zeros(0)
-            self.pr = np.zeros(0)
-            self.pim = np.zeros(0)
-            self.breaks = np.ascontiguousarray(load.breaks)
-            self.levels = np.ascontiguousarray(load.levels)
-            self.psup = float(np.max(np.abs(self.levels)))
-            self.p1 = self.p2 = self.p3 = 0.0
-        else:
-            raise ValueError(
-                f"load must be a FourierLoad (CosineLoad) or a PiecewiseConstantLoad "
-                f"(SquareWaveLoad); got {type(load).__name__}"
-            )
-        self.p0 = float(load.p0)
+def _load_view(load: Load) -> LoadKernelView:
+    """The load's one kernel view (:attr:`impactbar.Load.kernel_view`); a load the kernels do not
+    know is refused."""
+    view = load.kernel_view if isinstance(load, Load) else None
+    if view is None:
+        raise ValueError(
+            f"load must be a FourierLoad (CosineLoad) or a PiecewiseConstantLoad "
+            f"(SquareWaveLoad); got {type(load).__name__}"
+        )
+    return view
 
 
 def _overlap(n: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -286,7 +270,7 @@ def _overlap(n: np.ndarray, m: np.ndarray) -> np.ndarray:
     return 0.5 * (np.sinc(a) + np.sinc(b))
 
 
-_CORES: dict = {}  # (model, id(load)) -> (load, core), the most recent _CORES_MAX pairs
+_CORES: dict = {}  # (model, load) -> core, the most recent _CORES_MAX pairs
 _CORES_MAX = 16
 _CORES_LOCK = threading.Lock()
 
@@ -294,17 +278,18 @@ _CORES_LOCK = threading.Lock()
 def _core_for(model: BarModel, load: Load) -> _Core:
     """The kernel's data for this model and load, built once and reused by later runs (a short
     run's fixed cost; the Monte Carlo experiments run thousands with the same pair). Keyed by the
-    model's value and the load's identity (loads are immutable); a core is never modified."""
-    key = (model, id(load))
+    model's value and the load's value (both are frozen, so an entry never goes stale); a core is
+    never modified."""
+    key = (model, load)
     with _CORES_LOCK:
         hit = _CORES.get(key)
-    if hit is not None and hit[0] is load:
-        return hit[1]
+    if hit is not None:
+        return hit
     core = _Core(model, load)
     with _CORES_LOCK:
         if len(_CORES) >= _CORES_MAX:
             _CORES.pop(next(iter(_CORES)))
-        _CORES[key] = (load, core)  # holding the load keeps its id from being reused
+        _CORES[key] = core
     return core
 
 
@@ -317,7 +302,7 @@ class _Core:
         self.N = model.n_modes
         self.d = model.d
         self.R = model.law.kernel_restitution(model)  # -1 (v -> v): the law's contact step acts
-        self.data = _LoadData(load)
+        self.data = _load_view(load)
         self.c = np.ascontiguousarray(model.end_weights)
         self.free = _Basis(model.frequencies**2, model.d, self.data)
         m = np.arange(1, self.N + 1, dtype=float)
@@ -353,10 +338,9 @@ class _Core:
         cap = out_q.shape[0]
         out_t = np.empty(cap)
         out_vel = np.empty(cap)
-        n, st, tn = K.run_free(D.kind, B.w2, self.d, self.R, self.c, D.p0, D.ks, D.pr, D.pim,
-                               B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1, D.p2, D.p3,
-                               B.vpb, B.apb, B.jpb, float(t), q, v, float(t_end), int(max_imp),
-                               CHATTER_TAIL, out_t, out_vel, out_q, out_v, FAST_SEARCH)
+        n, st, tn = K.run_free(tuple(D), tuple(B.view), self.R, self.c, float(t), q, v, float(t_end),
+                               int(max_imp), CHATTER_TAIL, (out_t, out_vel, out_q, out_v),
+                               use_fast("simulate.impact_search"))
         return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
@@ -369,10 +353,8 @@ class _Core:
         v = np.empty(M)
         scratch = [np.empty(M) for _ in range(4)]
         anchor = np.array([float(t)])
-        st, tr = K.find_crossing(D.kind, B.w2, self.d, -self.f_wts, -self.f_alpha, D.p0, D.ks,
-                                 D.pr, D.pim, B.hpr, B.hpi, D.breaks, D.levels, D.psup, D.p1,
-                                 D.p2, D.p3, B.vpb, B.apb, B.jpb, anchor, qa, va, float(t_end),
-                                 0.0, q, v, *scratch)
+        st, tr = K.find_crossing(tuple(D), tuple(B.view), -self.f_wts, -self.f_alpha, anchor, qa, va,
+                                 float(t_end), 0.0, (q, v, *scratch))
         if st == K.CROSS:
             tr, q, v = self._clearly_tensile(tr, q, v, t_end)
         return st, tr, q, v
@@ -427,8 +409,7 @@ class _Core:
         ts = np.ascontiguousarray(t[order])
         Q = np.empty((B.w2.size, ts.size))
         V = np.empty_like(Q)
-        K.propagate_many(D.kind, B.w2, self.d, D.p0, D.ks, B.hpr, B.hpi, D.breaks, D.levels,
-                         float(t0), np.ascontiguousarray(q, dtype=float),
+        K.propagate_many(tuple(D), tuple(B.view), float(t0), np.ascontiguousarray(q, dtype=float),
                          np.ascontiguousarray(v, dtype=float), ts, Q, V)
         out_q = np.empty_like(Q)
         out_v = np.empty_like(V)

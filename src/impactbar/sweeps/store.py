@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..dynamics.implementations import use_fast
 from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, _SUM, SweepSpec, motion_classes, parse_spec
 from .tasks import _variables, chunk_slices
 
@@ -97,10 +98,10 @@ def _template(spec: SweepSpec):
     return xr.Dataset(data_vars, coords=coords, attrs=attrs)
 
 
-#: ``True`` creates the store through xarray (``_template(spec).to_zarr``), the reference; ``False``
-#: (default) writes the same metadata and coordinates with zarr alone, without importing xarray and
-#: dask.array (about 0.5 s of a short sweep); a test checks that both give identical stores
-CREATE_WITH_XARRAY = False
+# "sweeps.create_store" (impactbar.dynamics.implementations): the fast implementation (default) writes
+# the store's metadata and coordinates with zarr alone, without importing xarray and dask.array (about
+# 0.5 s of a short sweep); the reference creates it through xarray (``_template(spec).to_zarr``); a
+# test checks that both give identical stores
 
 
 def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
@@ -176,7 +177,7 @@ def _create_store(spec: SweepSpec, path: Path) -> None:
     try:
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
-            if CREATE_WITH_XARRAY:
+            if not use_fast("sweeps.create_store"):
                 _template(spec).to_zarr(tmp, mode="w-", compute=False, zarr_format=3, consolidated=True)
             else:
                 _create_with_zarr(spec, tmp)

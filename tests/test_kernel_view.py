@@ -1,0 +1,253 @@
+"""Frozen loads, the one kernel view through which a load enters compiled code, the compiled
+kernels' argument lists, and the registry of fast and reference implementations."""
+
+from __future__ import annotations
+
+import ast
+import contextvars
+import dataclasses
+import importlib
+import inspect
+import os
+import pathlib
+import subprocess
+import sys
+import threading
+
+import numba
+import numpy as np
+import pytest
+
+import impactbar
+from impactbar import (
+    BarModel,
+    CosineLoad,
+    FourierLoad,
+    InitialState,
+    PiecewiseConstantLoad,
+    SquareWaveLoad,
+    simulate,
+)
+from impactbar.dynamics.implementations import (
+    IMPLEMENTATIONS,
+    choices,
+    implementation,
+    use_fast,
+    use_reference,
+)
+from impactbar.dynamics.kernelview import LoadKernelView
+
+KERNEL_MODULES = ["impactbar.dynamics._kernel", "impactbar.dynamics._flowkernel",
+                  "impactbar.dynamics._wavekernel", "impactbar.orbits._admkernel",
+                  "impactbar.orbits._aberthkernel"]
+
+LOADS = {
+    "FourierLoad": lambda: FourierLoad(0.5, [1.0, 0.2j]),
+    "CosineLoad": lambda: CosineLoad(0.5, 1.0, 2),
+    "PiecewiseConstantLoad": lambda: PiecewiseConstantLoad([0.0, 1.0, 3.0], [1.0, -0.5, 0.2]),
+    "SquareWaveLoad": lambda: SquareWaveLoad(1.0, 1.3),
+}
+ATTRIBUTES = ["p0", "pk", "k", "q", "kappa", "breaks", "levels", "coefficients", "orders", "amplitudes",
+              "_pk", "_k", "_kmax", "_b", "_lv", "_T", "kernel_view", "new_attribute"]
+
+
+def _dispatchers():
+    for name in KERNEL_MODULES:
+        mod = importlib.import_module(name)
+        for attr, obj in vars(mod).items():
+            if isinstance(obj, numba.core.dispatcher.Dispatcher) and obj.__module__ == name:
+                yield f"{name}.{attr}", obj
+
+
+# -- frozen loads ---------------------------------------------------------------------------------
+@pytest.mark.parametrize("cls", list(LOADS))
+@pytest.mark.parametrize("attr", ATTRIBUTES)
+def test_assigning_or_deleting_any_load_attribute_raises(cls, attr):
+    load = LOADS[cls]()
+    before = repr(load), load(np.linspace(0.0, 6.0, 7))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        setattr(load, attr, 3.0)
+    with pytest.raises(AttributeError):
+        delattr(load, attr)
+    assert repr(load) == before[0]
+    np.testing.assert_array_equal(load(np.linspace(0.0, 6.0, 7)), before[1])
+
+
+@pytest.mark.parametrize("cls", list(LOADS))
+def test_load_arrays_are_read_only(cls):
+    load = LOADS[cls]()
+    arrays = [v for v in vars(load).values() if isinstance(v, np.ndarray)]
+    assert arrays and all(not a.flags.writeable for a in arrays)
+    for a in arrays:
+        with pytest.raises(ValueError):
+            a[...] = 0.0
+
+
+def test_issue_reproducer_pk_assignment_refused_and_each_load_simulated_as_itself():
+    """The issue's case: ``l.pk = 3.0`` was accepted while the simulator kept integrating pk = 1 (a
+    cache keyed by ``id(load)``). It is refused now, and a fresh CosineLoad(0.5, 3.0) simulated after
+    CosineLoad(0.5, 1.0) gets its own answer, equal to a run in a clean cache."""
+    S = importlib.import_module("impactbar.simulation.simulate")
+    model = BarModel(1.37, 0.02, 0.8, 2)
+    start = InitialState.rigid(-0.1, 0.0, 2)
+    one = CosineLoad(0.5, 1.0)
+    with pytest.raises(AttributeError):
+        one.pk = 3.0
+    assert one.pk == 1.0 and repr(one) == "CosineLoad(p0=0.5, pk=1.0, k=1)" and float(one(0.0)) == 1.5
+    run_one = simulate(model, one, start, 20.0)
+    run_three = simulate(model, CosineLoad(0.5, 3.0), start, 20.0)
+    S._CORES.clear()
+    clean_three = simulate(model, CosineLoad(0.5, 3.0), start, 20.0)
+    np.testing.assert_array_equal(run_three.impact_times, clean_three.impact_times)
+    np.testing.assert_array_equal(run_three.impact_velocities, clean_three.impact_velocities)
+    assert run_three.n_impacts != run_one.n_impacts or not np.array_equal(run_three.impact_velocities,
+                                                                          run_one.impact_velocities)
+
+
+def test_loads_compare_and_hash_by_value():
+    assert CosineLoad(0.5, 1.0) == CosineLoad(0.5, 1.0)
+    assert hash(CosineLoad(0.5, 1.0)) == hash(CosineLoad(0.5, 1.0))
+    assert CosineLoad(0.5, 1.0) != CosineLoad(0.5, 1.0, 2) != CosineLoad(0.5, 3.0)
+    assert CosineLoad(0.5, 1.0) != FourierLoad(0.5, [1.0])  # another class: not the same drive
+    assert SquareWaveLoad(1.0, 1.3) == SquareWaveLoad(1.0, 1.3) != SquareWaveLoad(1.0, 1.4)
+    assert PiecewiseConstantLoad([0.0, 1.0], [1.0, 2.0]) != PiecewiseConstantLoad([0.0, 1.0], [1.0, 2.5])
+    assert len({CosineLoad(0.5, 1.0), CosineLoad(0.5, 1.0), SquareWaveLoad(1.0, 1.3)}) == 2
+
+
+def test_a_pickled_load_hashes_as_an_equal_load_in_another_process():
+    """The hash cached on a load is not pickled: hashes of bytes differ between processes."""
+    import pickle
+
+    load = FourierLoad(0.5, [1.0, 0.2j])
+    hash(load)
+    code = ("import pickle, sys; from impactbar import FourierLoad\n"
+            "l = pickle.loads(sys.stdin.buffer.read())\n"
+            "print({l: 1}.get(FourierLoad(0.5, [1.0, 0.2j])), l == FourierLoad(0.5, [1.0, 0.2j]))")
+    env = {**os.environ, "PYTHONHASHSEED": "12345", "PYTHONPATH": os.pathsep.join(sys.path)}
+    out = subprocess.run([sys.executable, "-c", code], input=pickle.dumps(load), capture_output=True,
+                         check=True, env=env)
+    assert out.stdout.decode().split() == ["1", "True"]
+
+
+# -- the kernel view ------------------------------------------------------------------------------
+@pytest.mark.parametrize("cls", list(LOADS))
+def test_kernel_view_holds_the_load(cls):
+    """The view against the load's own methods: harmonics, pieces and bounds."""
+    load = LOADS[cls]()
+    view = load.kernel_view
+    assert isinstance(view, LoadKernelView) and load.kernel_view is view  # built once
+    assert view.p0 == load.p0 and view.psup == pytest.approx(load.sup_abs, rel=1e-15)
+    assert view.posc == pytest.approx(load.sup_oscillation, rel=1e-15)
+    t = np.linspace(0.0, 2 * np.pi, 50, endpoint=False)
+    if view.kind == 0:
+        pk = load.harmonics()
+        np.testing.assert_array_equal(view.pr + 1j * view.pim, pk[pk != 0])
+        p = view.p0 + (np.exp(1j * np.outer(t, view.ks)) @ (view.pr + 1j * view.pim)).real
+        assert view.p1 == pytest.approx(float(np.sum(view.ks * np.abs(pk[pk != 0]))), rel=1e-15)
+    else:
+        np.testing.assert_array_equal(view.breaks, load.breaks)
+        np.testing.assert_array_equal(view.levels, load.levels)
+        p = view.levels[np.searchsorted(view.breaks, t, side="right") - 1]
+        assert view.spread == np.ptp(load.levels)
+    np.testing.assert_allclose(p, load(t), rtol=1e-14, atol=1e-14)
+    # writable private copies: one numba type for every load, and the load's own arrays untouched
+    for a in (view.ks, view.pr, view.pim, view.breaks, view.levels):
+        assert a.flags.writeable and a.flags.c_contiguous and a.dtype == float
+
+
+def test_no_compiled_kernel_takes_more_than_12_arguments():
+    counts = {name: len(inspect.signature(d.py_func).parameters) for name, d in _dispatchers()}
+    assert len(counts) > 40
+    assert {name: n for name, n in counts.items() if n > 12} == {}
+
+
+def test_the_kernel_view_is_the_only_path_from_a_load_into_compiled_code():
+    """No module but ``loads.py`` reads a load's private attributes; no kernel that Python code
+    calls takes a load's fields as separate arguments; and after simulations and orbit searches
+    under both kinds of load, each entry kernel has one compiled signature, with the load's view in
+    it (passed as the plain tuple of a LoadKernelView: one specialisation serves every load)."""
+    root = pathlib.Path(impactbar.__file__).parent
+    private = []
+    for path in root.rglob("*.py"):
+        if path.name == "loads.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.Attribute) and node.attr.startswith("_")
+                    and not node.attr.startswith("__") and isinstance(node.value, ast.Name)
+                    and "load" in node.value.id.lower()):
+                private.append(f"{path.relative_to(root)}:{node.lineno} {node.value.id}.{node.attr}")
+    assert private == []
+    fields = {"kind", "p0", "ks", "pr", "pim", "breaks", "levels", "psup", "lk"}
+    entries = ["run_free", "find_crossing", "propagate_many", "wave_window", "window_moments",
+               "wave_contact", "square_wave_residuals", "admissibility_search", "modal_crossing"]
+    kernels = dict(_dispatchers())
+    for name in entries:
+        (full, disp), = [(k, d) for k, d in kernels.items() if k.endswith("." + name)]
+        assert not fields & set(inspect.signature(disp.py_func).parameters), full
+    # in a fresh process, so that no other test's direct kernel calls add signatures
+    code = """
+import numba, impactbar.dynamics._kernel as K, impactbar.orbits._admkernel as A
+from impactbar import *  # noqa: F403
+for impact in ("paper", "wave"):
+    model = BarModel(4.0, 0.05, 0.6, 3, impact=impact)
+    for load in (CosineLoad(0.6, 1.0), SquareWaveLoad(1.0, 1.3), FourierLoad(0.5, [1.0, 0.0, 0.2j])):
+        periodic_orbits(model, load)
+        simulate(model, load, InitialState.rigid(-0.2, 0.0, 3), 30.0)
+view = numba.typeof(tuple(CosineLoad(0.6, 1.0).kernel_view))
+for d in (K.run_free, K.propagate_many, K.wave_window, A.admissibility_search):
+    sig = d.signatures[0]
+    print(len(d.signatures), sig[0] == view or sig[-1].types[0] == view)
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert out.stdout.split() == ["1", "True"] * 4
+
+
+# -- implementations ------------------------------------------------------------------------------
+def test_registry_switches_by_name_only_where_asked():
+    assert all(use_fast(n) for n in IMPLEMENTATIONS)
+    with use_reference("simulate.impact_search"):
+        assert not use_fast("simulate.impact_search") and use_fast("loads.flow")
+        with implementation("simulate.impact_search", "fast"):
+            assert use_fast("simulate.impact_search")
+        assert choices()["simulate.impact_search"] == "reference"
+    with use_reference():
+        assert not any(use_fast(n) for n in IMPLEMENTATIONS)
+    assert set(choices().values()) == {"fast"}
+    with pytest.raises(ValueError, match="unknown"):
+        use_fast("simulate.no_such_switch")
+    with pytest.raises(ValueError, match="unknown"), use_reference("FAST_SEARCH"):
+        pass
+    with pytest.raises(ValueError, match="choice"), implementation("loads.flow", "slow"):
+        pass
+
+
+def test_registry_choice_is_per_thread():
+    seen = {}
+    gate = threading.Event()
+
+    def other():
+        gate.wait(5)
+        seen["other"] = use_fast("admissibility.search")
+
+    th = threading.Thread(target=other)
+    th.start()
+    with use_reference("admissibility.search"):
+        gate.set()
+        th.join(5)
+        seen["here"] = use_fast("admissibility.search")
+        seen["copied"] = contextvars.copy_context().run(use_fast, "admissibility.search")
+    assert seen == {"other": True, "here": False, "copied": False}
+
+
+def test_no_module_global_chooses_an_implementation():
+    """The old switches are gone from the package (the registry replaced them)."""
+    from impactbar.orbits import admissibility, one_impact, wave
+    from impactbar.sweeps import store
+
+    S = importlib.import_module("impactbar.simulation.simulate")
+
+    old = [(impactbar.loads, "_COMPILED_FLOW"), (admissibility, "_COMPILED_BOUND"),
+           (admissibility, "_COMPILED_SEARCH"), (one_impact, "RIGID_SCALAR"), (S, "FAST_SEARCH"),
+           (S, "FAST_WAVE_SEPARATION"), (wave, "_COMPILED_RESIDUAL"), (store, "CREATE_WITH_XARRAY")]
+    assert [name for mod, name in old if hasattr(mod, name)] == []
