@@ -1,11 +1,16 @@
 """Shared test setup: seeded rng, floating-point errors raise, Agg backend, ``--runslow``."""
 
 import os
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
+# the tests mirror the package in subfolders; their shared helpers (modal_reference, wave_reference)
+# stay here and are imported by plain name
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
 def pytest_addoption(parser):

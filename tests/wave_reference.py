@@ -191,3 +191,16 @@ def steady_blows(s, R, load, t_start, q, v, periods=60, cycle=1, J=20000):
     if len(out["last"]) != len(out["prev"]):
         drift = math.inf
     return out["last"], drift
+
+
+def random_state(rng, model, amplitude):
+    """A modal state with ``u(1) = 0`` and ``u_t(1) = 1`` (arriving at unit speed)."""
+    N, s = model.n_modes, model.s
+    n = np.arange(1, N + 2)
+    q = amplitude * rng.normal(size=N + 1) / (s * np.pi * n)
+    v = rng.normal(size=N + 1) / n
+    v[1:] *= amplitude
+    c = model.end_weights
+    q[0] = -(c[1:] @ q[1:])
+    v[0] += 1.0 - c @ v
+    return q, v

@@ -208,6 +208,24 @@ multipliers, stable, schur_roots, schur_stable
         M = self.model.n_modes + 1
         return self.states_after_impact[0, :M].copy(), self.states_after_impact[0, M:].copy()
 
+    def plot(self, ax=None, n: int = 2000):
+        """Draw the end displacement over one period (:func:`impactbar.plotting.plot_orbit`).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Drawn on a new figure's axes if omitted.
+        n : int
+            Time samples drawn.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        from ..plotting.orbits import plot_orbit
+
+        return plot_orbit(self, ax, n)
+
     # -- the motion ---------------------------------------------------------------------------------
     def modal_state(self, t):
         """Modal displacements and velocities at orbit times ``t`` (from the first impact).

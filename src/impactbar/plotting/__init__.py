@@ -2,8 +2,8 @@
 
 One convention throughout: a drawing function takes a finished result first and an optional ``ax``
 (or ``axes``), draws on it (a new figure when it is ``None``) and returns what it drew on. Results
-that plot themselves (``Branch.plot``, ``BifurcationCurve.plot``) call these functions; nothing here
-computes dynamics again.
+that plot themselves (``PeriodicOrbit.plot``, ``Trajectory.plot``, ``Branch.plot``,
+``BifurcationCurve.plot``) call these functions; nothing here computes dynamics again.
 
 - :mod:`~impactbar.plotting.orbits`: a periodic orbit's end motion, field and multipliers;
 - :mod:`~impactbar.plotting.simulation`: simulations and the random-start experiments;
@@ -25,11 +25,12 @@ from .simulation import plot_end_displacement as plot_end_displacement
 from .simulation import plot_experiment as plot_experiment
 from .simulation import plot_impact_map as plot_impact_map
 from .simulation import plot_intervals as plot_intervals
+from .simulation import plot_trajectory as plot_trajectory
 from .sweeps import plot_bifurcation as plot_bifurcation
 from .sweeps import plot_fraction_maps as plot_fraction_maps
 from .sweeps import plot_stability_chart as plot_stability_chart
 
-__all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_end_displacement", "plot_impact_map",
-           "plot_intervals", "plot_experiment", "plot_branch", "plot_bifurcation_curve", "plot_motion",
-           "plot_blows", "plot_force_waves", "plot_stability_chart", "plot_fraction_maps",
+__all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_trajectory", "plot_end_displacement",
+           "plot_impact_map", "plot_intervals", "plot_experiment", "plot_branch", "plot_bifurcation_curve",
+           "plot_motion", "plot_blows", "plot_force_waves", "plot_stability_chart", "plot_fraction_maps",
            "plot_bifurcation"]

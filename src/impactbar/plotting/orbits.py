@@ -14,11 +14,13 @@ TWO_PI = 2.0 * math.pi
 
 
 def plot_orbit(orbit, ax=None, n: int = 2000):
-    """End displacement ``u(1, t)`` over one period of a one-impact orbit (the stop at ``u = 0``).
+    """End displacement ``u(1, t)`` over one period of an orbit (the stop at ``u = 0``), from its
+    first impact; impacts of an orbit with several are marked.
 
     Parameters
     ----------
     orbit : PeriodicOrbit
+        Any orbit of :func:`~impactbar.periodic_orbits` or :func:`~impactbar.find_orbit`.
     ax : matplotlib.axes.Axes, optional
     n : int
         Number of time samples (for drawing only; admissibility is decided rigorously elsewhere).
@@ -28,7 +30,7 @@ def plot_orbit(orbit, ax=None, n: int = 2000):
     matplotlib.axes.Axes
     """
     ax = _axes(ax)
-    t = np.linspace(0.0, TWO_PI, n)
+    t = np.linspace(0.0, getattr(orbit, "period", TWO_PI), n)
     q, _ = orbit._state_in_period(t)
     u = orbit.model.end_weights @ q
     ax.axhline(0.0, color="k", lw=2, label="stop")

@@ -6,8 +6,36 @@ import numpy as np
 
 from ._common import axes as _axes
 
-__all__ = ["plot_end_displacement", "plot_impact_map", "plot_intervals", "plot_experiment",
+__all__ = ["plot_trajectory", "plot_end_displacement", "plot_impact_map", "plot_intervals", "plot_experiment",
            "INTERVAL_RESOLUTION"]
+
+
+def plot_trajectory(trajectory, ax=None, n: int = 4000):
+    """The struck end's displacement ``u(1, t)`` over a :class:`~impactbar.Trajectory` of
+    :func:`~impactbar.simulate`, the stop at ``u = 0`` and every impact marked.
+
+    Parameters
+    ----------
+    trajectory : Trajectory
+    ax : matplotlib.axes.Axes, optional
+    n : int
+        Time samples drawn (for drawing only: the impacts are the simulator's, refined to rounding).
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+    """
+    ax = _axes(ax, figsize=(8, 3.6))
+    t = np.linspace(trajectory.t0, trajectory.t_end, n)
+    ax.plot(t, trajectory.end_displacement(t), lw=0.8, label="u(1, t)")
+    ax.axhline(0.0, color="k", lw=1.5, label="stop")
+    ti = np.asarray(trajectory.impact_times)
+    if ti.size:
+        ax.plot(ti, np.zeros_like(ti), "|", color="tab:red", ms=8, label=f"{ti.size} impacts")
+    ax.set_xlabel("time t")
+    ax.set_ylabel("end displacement u(1, t)")
+    ax.legend(fontsize=8, loc="lower right")
+    return ax
 
 
 #: impact intervals closer than this (load periods) are one value: the tolerance to which
@@ -32,9 +60,7 @@ def plot_end_displacement(result, axes=None, *, periods: float = 20.0):
     -------
     sequence of matplotlib.axes.Axes
     """
-    from ..simulation.experiments import load_period
-
-    T = load_period(result.load)
+    T = result.load_period
     if axes is None:
         import matplotlib.pyplot as plt
 

@@ -209,6 +209,11 @@ class ExperimentResult:
     impact_pairs: np.ndarray = field(repr=False)
 
     @property
+    def load_period(self) -> float:
+        """The load's fundamental period (dimensionless time, :func:`load_period`)."""
+        return load_period(self.load)
+
+    @property
     def fractions(self) -> dict[str, float]:
         """Fraction of the starts in each class, in :data:`CLASS_ORDER` order (present ones)."""
         counts = Counter(c.kind for c in self.classes)

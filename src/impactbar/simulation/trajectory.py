@@ -317,6 +317,25 @@ class Trajectory:
             out.append(law.contact(model, self.load, float(segs.t[j]), qm[:, 0], vm[:, 0])[3])
         return tuple(out)
 
+    def plot(self, ax=None, n: int = 4000):
+        """Draw the end displacement over the run, impacts marked
+        (:func:`impactbar.plotting.plot_trajectory`).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Drawn on a new figure's axes if omitted.
+        n : int
+            Time samples drawn.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        from ..plotting.simulation import plot_trajectory
+
+        return plot_trajectory(self, ax, n)
+
     def end_displacement(self, t) -> np.ndarray:
         """``u(1, t)``, the struck end, ``<= 0``: a positive value within the rounding noise of the
         closed form (``1e-14 sum |c_n| (|q_n| + |q_pn|)``, the event search's own tolerance) is

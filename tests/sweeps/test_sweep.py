@@ -34,7 +34,7 @@ xr = pytest.importorskip("xarray")
 distributed = pytest.importorskip("distributed")
 
 SRC = Path(impactbar.__file__).resolve().parents[1]
-EXAMPLES = sorted((Path(__file__).parents[1] / "examples").glob("sweep_*.toml"))
+EXAMPLES = sorted((Path(__file__).parents[2] / "examples").glob("sweep_*.toml"))
 
 
 def base_doc(task="orbits", **top):

@@ -107,7 +107,7 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
     from impactbar import FourierLoad, wave_impact
     from impactbar.dynamics import _kernel as K
     from impactbar.laws.wave import _GL20_W, _GL20_X
-    from test_impact_wave import random_state
+    from wave_reference import random_state
 
     for trial in range(60):
         N = int(rng.integers(0, 8))
@@ -140,7 +140,7 @@ def test_compiled_separating_window_matches_the_characteristics_solver(rng):
     from impactbar import FourierLoad, wave_impact
     from impactbar.dynamics import _wavekernel as WK
     from impactbar.laws.wave import _GL20_W, _GL20_X
-    from test_impact_wave import random_state
+    from wave_reference import random_state
 
     separating = 0
     for trial in range(90):

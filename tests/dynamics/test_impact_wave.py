@@ -8,6 +8,7 @@ import pytest
 
 from impactbar import BarModel, CosineLoad, SquareWaveLoad
 from impactbar.dynamics.impact import wave_impact, window_drive
+from wave_reference import random_state
 
 NO_DRIVE = CosineLoad(0.0, 0.0)
 
@@ -52,19 +53,6 @@ def lattice(s, R, q, v, load, t0, J):
         be[J] = -R * A if on else A
         F.append(0.5 * s * (1 + R) * A if on else 0.0)
     return x, al, be, np.array(F)
-
-
-def random_state(rng, model, amplitude):
-    """A modal state with ``u(1) = 0`` and ``u_t(1) = 1`` (arriving at unit speed)."""
-    N, s = model.n_modes, model.s
-    n = np.arange(1, N + 2)
-    q = amplitude * rng.normal(size=N + 1) / (s * np.pi * n)
-    v = rng.normal(size=N + 1) / n
-    v[1:] *= amplitude
-    c = model.end_weights
-    q[0] = -(c[1:] @ q[1:])
-    v[0] += 1.0 - c @ v
-    return q, v
 
 
 # ---------------------------------------------------------------- uniform piston, closed forms ----

@@ -12,7 +12,7 @@ import pytest
 from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate
 from impactbar.laws import LAWS, ContactLaw, InstantImpact, PaperLaw, WaveLaw, get_law
 
-SRC = Path(__file__).resolve().parents[1] / "src" / "impactbar"
+SRC = Path(__file__).resolve().parents[2] / "src" / "impactbar"
 
 
 def test_table_and_lookup():

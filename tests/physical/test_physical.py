@@ -20,7 +20,7 @@ from impactbar import BarModel, CosineLoad, FourierLoad, PiecewiseConstantLoad, 
 from impactbar import physical as ph
 from impactbar.cli.physical import add_physical_arguments, run_physical_orbits
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 HAS_ORBITS = hasattr(impactbar, "periodic_orbits")
 HAS_SIM = hasattr(impactbar, "simulate") and hasattr(impactbar, "InitialState")
 needs_orbits = pytest.mark.skipif(not HAS_ORBITS,
