@@ -1,6 +1,8 @@
 """The package's layout contract, beyond what ``lint-imports`` checks: no import cycles at all (imports
 made only for type checkers, under ``if TYPE_CHECKING:``, are not imports at run time and do not count)."""
 
+from pathlib import Path
+
 import grimp
 
 
@@ -52,3 +54,24 @@ def test_no_import_cycles_between_modules():
     # (package -> submodule -> sibling imported via the package) is still a cycle and reported
     graph = {m: set(g.find_modules_directly_imported_by(m)) for m in g.modules}
     assert _strongly_connected(graph) == []
+
+
+def test_at_most_eight_modules_at_the_top_level():
+    import impactbar
+
+    top = Path(impactbar.__file__).parent
+    modules = sorted(p.name for p in top.glob("*.py"))
+    assert len(modules) <= 8, modules
+
+
+def test_tests_mirror_the_package():
+    """Every test folder is named after a subpackage of impactbar (the tests of top-level modules and
+    cross-cutting tests stay in tests/ itself)."""
+    import impactbar
+
+    top = Path(impactbar.__file__).parent
+    subpackages = {p.parent.name for p in top.glob("*/__init__.py")}
+    here = Path(__file__).parent
+    folders = {p.parent.relative_to(here).parts[0] for p in here.rglob("test_*.py") if p.parent != here}
+    assert folders <= subpackages, folders - subpackages
+    assert len(folders) >= 6

@@ -18,11 +18,11 @@ The import contract (``[tool.importlinter]`` in ``pyproject.toml``) keeps it so.
 
 import importlib
 
-from ._status import Admissibility as Admissibility
-from ._status import BranchStatus as BranchStatus
-from ._status import CurveKind as CurveKind
-from ._status import EventKind as EventKind
-from ._status import RunStatus as RunStatus
+from ._shared.status import Admissibility as Admissibility
+from ._shared.status import BranchStatus as BranchStatus
+from ._shared.status import CurveKind as CurveKind
+from ._shared.status import EventKind as EventKind
+from ._shared.status import RunStatus as RunStatus
 from ._version import __version__ as __version__
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad

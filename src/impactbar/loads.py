@@ -14,7 +14,7 @@ from functools import cached_property
 
 import numpy as np
 
-from ._validate import check_complex_array, check_int, check_real
+from ._shared.validate import check_complex_array, check_int, check_real
 from .dynamics.implementations import use_fast
 from .dynamics.kernelview import LoadKernelView
 from .dynamics.modal import b_integral, c_integral, fundamental, step_constant

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ._validate import check_int, check_real
+from ._shared.validate import check_int, check_real
 
 if TYPE_CHECKING:
     from .laws.base import ContactLaw

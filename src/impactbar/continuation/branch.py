@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._validate import check_real
+from .._shared.validate import check_real
 from ..orbits.multi_impact import MultiImpactOrbit, find_orbit
 from .parameters import with_parameter
 

@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._status import EventKind
-from .._validate import check_int
+from .._shared.status import EventKind
+from .._shared.validate import check_int
 from .branch import Branch, BranchEvent
 from .core import continue_orbit
 from .engine import ContinuationSettings

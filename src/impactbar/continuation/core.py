@@ -17,9 +17,9 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .._status import BranchStatus, EventKind
-from .._threads import single_threaded_blas
-from .._validate import check_real
+from .._shared.status import BranchStatus, EventKind
+from .._shared.threads import single_threaded_blas
+from .._shared.validate import check_real
 from ..loads import PiecewiseConstantLoad
 from ..orbits.multi_impact import (
     _build,

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .._validate import check_real
+from .._shared.validate import check_real
 from ..loads import Load
 from ..model import BarModel
 from ..simulation.simulate import InitialState, simulate

@@ -23,8 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._status import BranchStatus
-from .._validate import check_int, check_real
+from .._shared.status import BranchStatus
+from .._shared.validate import check_int, check_real
 
 __all__ = ["ContinuationSettings"]
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from .._validate import check_real
+from .._shared.validate import check_real
 from ..loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 

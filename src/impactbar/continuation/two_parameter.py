@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._status import CurveKind
-from .._threads import single_threaded_blas
+from .._shared.status import CurveKind
+from .._shared.threads import single_threaded_blas
 from ..orbits.multi_impact import _build, _normalise, _Segments, _unknowns_from
 from .branch import BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings

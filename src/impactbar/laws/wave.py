@@ -72,7 +72,7 @@ class WaveLaw(ContactLaw):
 
     def multipliers(self, model, load, phase):
         """Eigenvalues of :func:`impactbar.orbits.wave.wave_impact_map_jacobian`."""
-        from .._threads import single_threaded_blas
+        from .._shared.threads import single_threaded_blas
         from ..orbits.stability import sort_multipliers
         from ..orbits.wave import wave_impact_map_jacobian, wave_orbit_states
 

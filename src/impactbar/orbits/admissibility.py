@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .._status import Admissibility
+from .._shared.status import Admissibility
 from ..dynamics.certified import enclose_zeros
 from ..dynamics.implementations import use_fast
 

@@ -25,9 +25,9 @@ import math
 
 import numpy as np
 
-from .._status import Admissibility
-from .._threads import single_threaded_blas
-from .._validate import check_int, check_real
+from .._shared.status import Admissibility
+from .._shared.threads import single_threaded_blas
+from .._shared.validate import check_int, check_real
 from ..dynamics.modal import fundamental
 from ..loads import Load
 from ..model import BarModel

@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from .. import _tables
-from .._status import Admissibility
-from .._threads import single_threaded_blas
+from .._shared import tables as _tables
+from .._shared.status import Admissibility
+from .._shared.threads import single_threaded_blas
 from ..dynamics.implementations import use_fast
 from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel

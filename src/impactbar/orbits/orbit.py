@@ -14,10 +14,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import _tables
+from .._shared import tables as _tables
 
 if TYPE_CHECKING:
-    from .._status import Admissibility
+    from .._shared.status import Admissibility
     from ..dynamics.impact import WaveImpact
     from ..loads import Load
     from ..model import BarModel

@@ -21,7 +21,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .._status import Admissibility
+from .._shared.status import Admissibility
 from .stability import MARGINAL, quadratic_roots
 
 __all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_multipliers", "phase_G_array",

@@ -5,7 +5,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .._validate import check_real
+from .._shared.validate import check_real
 from .units import to_si
 
 TWO_PI = 2.0 * math.pi

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .._validate import check_real
+from .._shared.validate import check_real
 from .forces import Force, HydraulicForce, MeasuredForce, PneumaticForce
 from .units import to_si
 

@@ -12,7 +12,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from .._validate import check_int, check_real
+from .._shared.validate import check_int, check_real
 from ..loads import CosineLoad, FourierLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
 from .bar import TWO_PI
 from .units import to_si

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import check_int, check_real
+from .._shared.validate import check_int, check_real
 from ..laws import LAWS
 from ..loads import CosineLoad, FourierLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
 from ..model import BarModel

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import _tables
-from .._validate import check_real
+from .._shared import tables as _tables
+from .._shared.validate import check_real
 from ..orbits import periodic_orbits
 from ..simulation import InitialState
 from ..simulation import simulate as run_simulation

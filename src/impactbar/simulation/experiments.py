@@ -29,8 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import _tables
-from .._validate import check_int, check_real
+from .._shared import tables as _tables
+from .._shared.validate import check_int, check_real
 from ..loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .simulate import InitialState, Trajectory, simulate

@@ -30,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._status import RunStatus
-from .._validate import check_int, check_real
+from .._shared.status import RunStatus
+from .._shared.validate import check_int, check_real
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView

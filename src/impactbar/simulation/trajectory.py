@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import _tables
+from .._shared import tables as _tables
 from ..loads import Load
 from ..model import BarModel
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import check_int
+from .._shared.validate import check_int
 from .spec import SweepSpec, closed_form_task
 from .store import _checksum, _open_group, _prepare_store, _write_chunks, _write_done
 from .tasks import compute_chunk
@@ -308,7 +308,7 @@ def _thread_results(spec, todo, n_threads):
     ``2 n_threads`` chunks are queued or held at a time."""
     from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
-    from .._threads import single_threaded_blas
+    from .._shared.threads import single_threaded_blas
 
     pending = {}
     left = iter(todo)

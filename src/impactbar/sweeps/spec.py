@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validate import check_int, check_real
+from .._shared.validate import check_int, check_real
 from ..laws import get_law
 
 TASKS = ("orbits", "montecarlo", "bifurcation")

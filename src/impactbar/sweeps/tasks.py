@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from .._validate import check_int
+from .._shared.validate import check_int
 from ..laws import get_law
 from .spec import SweepSpec, motion_classes
 
@@ -95,7 +95,7 @@ def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
         A ``ValueError`` from the library at one point (e.g. an undamped resonance) only sets
         ``failed`` there.
     """
-    from .._threads import single_threaded_blas
+    from .._shared.threads import single_threaded_blas
 
     slices = chunk_slices(spec, chunk)
     block = tuple(s.stop - s.start for s in slices)
