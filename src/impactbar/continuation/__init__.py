@@ -1,16 +1,16 @@
-"""Continuation of periodic impacting motions: branches in one parameter, their folds, period
-doublings (with branch switching), Neimark-Sacker points, grazing and losses of admissibility.
+"""Continuation of periodic impacting motions: branches in one parameter, their folds, period doublings
+(with branch switching), Neimark-Sacker points, grazing and losses of admissibility.
 
-Layout: ``parameters`` (which model and load fields can vary), ``engine`` (the one
-pseudo-arclength engine and its :class:`ContinuationSettings`), ``core`` (:func:`continue_orbit`:
-the segment problem of :func:`impactbar.find_orbit` on the engine, event detection and location,
-:func:`doubling_cascade`), ``branch`` (:class:`Branch`, :class:`BranchEvent`; their pandas, xarray
-and matplotlib views import those libraries only when called), ``diagram`` (the brute-force
-bifurcation diagram from :func:`impactbar.simulate`, to overlay on branches), ``two_parameter``
+Layout: ``parameters`` (which model and load fields can vary), ``engine`` (the one pseudo-arclength
+engine and its :class:`ContinuationSettings`), ``core`` (:func:`continue_orbit`: the segment problem
+of :func:`impactbar.find_orbit` on the engine, event detection and location), ``cascade``
+(:func:`doubling_cascade`: a branch and its successive doubled branches), ``branch``
+(:class:`Branch`, :class:`BranchEvent`; their pandas, xarray and matplotlib views import those
+libraries only when called), ``diagram`` (the brute-force bifurcation diagram from
+:func:`impactbar.simulate`, to overlay on branches), ``two_parameter``
 (:func:`continue_bifurcation`: folds, period doublings and grazing points followed in two
-parameters, an augmented problem on the same engine). Imports the core (``orbits``,
-``simulation``) and numpy/scipy.
-"""
+parameters, an augmented problem on the same engine). Imports the core (``orbits``, ``simulation``)
+and numpy/scipy."""
 
 from .branch import Branch as Branch
 from .branch import BranchEvent as BranchEvent

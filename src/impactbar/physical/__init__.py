@@ -39,8 +39,9 @@ Configuration keys (TOML file or a nested ``dict``, see :meth:`Hammer.from_confi
 Unknown keys are refused, naming the key.
 
 Layout: ``units`` (pint parsing, lazily imported), ``bar`` (the piston, the short-impact limit),
-``forces`` (pneumatic, hydraulic, measured), ``hammer`` (scales and the dimensionless model),
-``config`` (TOML configs and presets), ``results`` (orbits and simulations in SI). This layer sits on
+``forces`` (pneumatic, hydraulic, measured), ``config`` (the keys of a TOML config, their checks,
+the presets' data), ``hammer`` (scales and the dimensionless model; a hammer from a config, a TOML
+file or a preset), ``results`` (orbits and simulations in SI). This layer sits on
 the core (``impactbar.model``, ``loads``, ``orbits``, ``simulation``) and may import pint; the core
 never imports it.
 """

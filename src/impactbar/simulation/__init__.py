@@ -6,7 +6,8 @@ chatter, sticking on the fixed-free basis, release, the law's contact step), ``t
 (:class:`Trajectory`, :class:`EnergyAccount`: the logged pieces of motion), ``experiments``
 (random starts, classification of the long-run motion, the paper's pneumatic and hydraulic
 experiments). Part of the core: imports ``impactbar.model``, ``impactbar.loads``,
-``impactbar.dynamics``; matplotlib only lazily, inside the plotting helper of ``experiments``.
+``impactbar.dynamics``, ``impactbar.laws`` through ``model.law``; never matplotlib (``Trajectory.plot``
+calls :mod:`impactbar.plotting`, imported on that call).
 """
 
 from .simulate import EnergyAccount as EnergyAccount
