@@ -75,3 +75,12 @@ def test_tests_mirror_the_package():
     folders = {p.parent.relative_to(here).parts[0] for p in here.rglob("test_*.py") if p.parent != here}
     assert folders <= subpackages, folders - subpackages
     assert len(folders) >= 6
+
+
+def test_no_module_over_800_lines():
+    import impactbar
+
+    top = Path(impactbar.__file__).parent
+    long = {str(p.relative_to(top)): n for p in top.rglob("*.py")
+            if (n := len(p.read_text(encoding="utf-8").splitlines())) > 800}
+    assert long == {}

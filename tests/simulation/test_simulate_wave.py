@@ -105,7 +105,7 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
     separation and the same post-contact state, over random states, loads and wave speeds (windows
     longer than the load period and jumps of the square wave in both halves included)."""
     from impactbar import FourierLoad, wave_impact
-    from impactbar.dynamics import _kernel as K
+    from impactbar.dynamics import _windowkernel as K
     from impactbar.laws.wave import _GL20_W, _GL20_X
     from wave_reference import random_state
 
@@ -212,8 +212,8 @@ def test_compiled_windows_spanning_many_load_periods(s):
     """A window ``2/s`` covering 10 to 26 periods of a square wave (20 to 52 jumps): both compiled
     windows take every jump (the one without separation once kept only 16), as :func:`wave_impact`."""
     from impactbar import wave_impact
-    from impactbar.dynamics import _kernel as K
     from impactbar.dynamics import _wavekernel as WK
+    from impactbar.dynamics import _windowkernel as K
     from impactbar.laws.wave import _GL20_W, _GL20_X
 
     model = BarModel(s=s, d=0.0, R=0.5, n_modes=2)

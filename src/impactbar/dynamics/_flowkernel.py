@@ -17,7 +17,7 @@ import math
 import numba
 import numpy as np
 
-from ._kernel import CACHE, _bc
+from ._flightkernel import CACHE, _bc
 
 
 @numba.njit(cache=CACHE, nogil=True)

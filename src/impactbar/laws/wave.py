@@ -109,8 +109,8 @@ class WaveLaw(ContactLaw):
         if kernel is None:
             imp = wave_impact(model, load, ti, qm, vm)
             return imp.q_after.copy(), imp.v_after.copy(), t_release, imp
-        from ..dynamics import _kernel as K
         from ..dynamics import _wavekernel as WK
+        from ..dynamics import _windowkernel as KW
         from ..dynamics.implementations import use_fast
 
         c = kernel.c
@@ -119,7 +119,7 @@ class WaveLaw(ContactLaw):
         rate = float(np.max(ks)) / model.s if D.kind == 0 and ks.size else 0.0
         contact = np.empty((WK.MAX_INTERVALS, 2))  # the contact intervals of a separating window
         q, v = np.empty_like(qm), np.empty_like(vm)
-        if K.wave_window(tuple(D), model.s, model.R, c, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
+        if KW.wave_window(tuple(D), model.s, model.R, c, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v):
             imp = _Window(model, load, ti, qm, vm, q.copy(), v.copy())  # solved when asked
         elif use_fast("simulate.wave_separation") and WK.wave_contact(
                 tuple(D), model.s, model.R, rate, ti, qm, vm, _GL20_X, _GL20_W, q, v, contact) >= 0:

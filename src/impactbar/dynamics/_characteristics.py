@@ -1,0 +1,545 @@
+"""The wave law's contact window on characteristics (theory §4b, §4c): the drive over the window
+(:class:`_WindowLoad`), the piston's fields at impact with the static correction (:class:`_Piston`)
+and the solver of the contact with the long rod, separations included (:class:`_Contact`).
+:mod:`impactbar.dynamics.impact` builds :class:`~impactbar.WaveImpact` from it."""
+
+from __future__ import annotations
+
+import bisect
+import copy
+import math
+from functools import cached_property
+
+import numpy as np
+from scipy.optimize import brentq, minimize_scalar
+
+from . import _windowkernel as KW
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
+
+
+def _panels(lo: float, hi: float, breaks, h: float):
+    """Gauss-Legendre nodes and weights on ``[lo, hi]``, split at ``breaks`` and into panels of width
+    at most ``h`` (20 nodes each: exact to rounding for ``e^{i w x}`` with ``w h <= 8``)."""
+    inner = [float(b) for b in np.atleast_1d(breaks) if lo < b < hi]
+    pts = np.unique(np.array([lo, hi] + inner, dtype=float))
+    xs, ws = [], []
+    for a, b in zip(pts[:-1], pts[1:], strict=True):
+        width = b - a
+        if width <= 0.0:
+            continue
+        m = max(1, math.ceil(width / h))
+        half = 0.5 * width / m
+        mids = a + half * (2.0 * np.arange(m) + 1.0)
+        xs.append((mids[:, None] + half * _GL_X[None, :]).ravel())
+        ws.append(np.tile(half * _GL_W, m))
+    if not xs:
+        return np.empty(0), np.empty(0)
+    return np.concatenate(xs), np.concatenate(ws)
+
+
+class _WindowLoad:
+    """The drive load over the window as a function of ``theta = s (t - t0)``, ``0 <= theta <= 2``,
+    with its jumps located once (so that a value at a jump is never decided by rounding)."""
+
+    def __init__(self, load, s: float, t0: float):
+        self.load, self.s, self.t0 = load, s, t0
+        t1 = t0 + 2.0 / s
+        bounds = getattr(load, "_boundaries", None)
+        tj = np.asarray(bounds(t0, t1), dtype=float) if bounds is not None else np.empty(0)
+        self.t_edges = np.concatenate(([t0], tj, [t1]))
+        self.jumps = s * (tj - t0)  # in theta, inside (0, 2)
+        orders = getattr(load, "orders", None)
+        self.rate = float(np.max(orders)) / s if orders is not None and len(orders) else 0.0
+
+    def __call__(self, theta, left: bool = False) -> np.ndarray:
+        theta = np.asarray(theta, dtype=float)
+        t = self.t0 + theta / self.s
+        if self.jumps.size:
+            j = np.searchsorted(self.jumps, theta, side="left" if left else "right")
+            lo, hi = self.t_edges[j], self.t_edges[j + 1]
+            pad = 1e-9 * (hi - lo)
+            t = np.clip(t, lo + pad, hi - pad)
+        return np.asarray(self.load(t), dtype=float)
+
+    def value(self, theta: float, left: bool = False) -> float:
+        """``P(theta)`` for one ``theta`` (as ``__call__``, without array overhead: the root
+        searches of the contact call it once per iteration)."""
+        if self._pieces is not None:  # constant between the jumps located at set-up
+            j = bisect.bisect_left(self.jumps, theta) if left else bisect.bisect_right(self.jumps, theta)
+            return float(self._pieces[0][j])
+        return float(self(theta, left=left))
+
+    @cached_property
+    def _pieces(self):
+        """``(levels, cum, edges)`` of a piecewise-constant load over the window (None otherwise)."""
+        if not hasattr(self.load, "levels") or getattr(self.load, "orders", None) is not None:
+            return None
+        edges = self.t_edges - self.t0
+        levels = self(self.s * 0.5 * (edges[:-1] + edges[1:]))
+        cum = np.concatenate(([0.0], np.cumsum(levels * np.diff(edges))))
+        return levels, cum, edges
+
+    def integral1(self, theta: float) -> float:
+        """``int_0^theta p dtheta'`` for one ``theta`` (as :meth:`integral`)."""
+        pieces = self._pieces
+        if pieces is None:
+            return float(self.integral(theta)[0])
+        levels, cum, edges = pieces
+        tau = theta / self.s
+        j = min(max(bisect.bisect_right(edges, tau) - 1, 0), levels.size - 1)
+        return self.s * float(cum[j] + levels[j] * (tau - edges[j]))
+
+    def integral(self, theta) -> np.ndarray:
+        """``int_0^theta p dtheta'``, exact: in closed form for a load of finitely many harmonics,
+        piece by piece for a piecewise-constant one, else the load's own rigid-mode integral."""
+        theta = np.atleast_1d(np.asarray(theta, dtype=float))
+        tau = theta / self.s
+        orders = getattr(self.load, "orders", None)
+        if orders is not None:  # p0 tau + Re sum p_k (e^{ik(t0 + tau)} - e^{ik t0}) / (ik)
+            k = np.asarray(orders, dtype=float)
+            ck = self.load.amplitudes * np.exp(1j * k * self.t0) / (1j * k)
+            osc = (np.expm1(1j * np.multiply.outer(tau, k)) @ ck).real
+            return self.s * (self.load.p0 * tau + osc)
+        if hasattr(self.load, "levels"):  # constant between the jumps located at set-up
+            levels, cum, edges = self._pieces
+            j = np.clip(np.searchsorted(edges, tau, side="right") - 1, 0, levels.size - 1)
+            return self.s * (cum[j] + levels[j] * (tau - edges[j]))
+        _, v = self.load.propagate(np.zeros(1), 0.0, self.t0, np.zeros(1), np.zeros(1), self.t0 + tau)
+        return self.s * v[0]
+
+
+class _Piston:
+    """The piston's state at impact as the Riemann invariants ``alpha0(x), beta0(x)``: the modal sums
+    (``u = q_0 + 2 sum q_n cos(n pi x)``) plus the static correction that carries the drive force
+    ``p_end`` at ``x = 0`` (theory §4c).
+
+    The strain of a cosine series vanishes at both ends, while the true strain at ``x = 0`` is
+    ``-p_end / s^2``. The truncated modes ``n > N`` respond quasi-statically to the end force, so
+    their strain is the inertia-relief static strain ``eps_s = -p_end (1 - x)/s^2`` less its first
+    ``N`` sine terms (the mode-acceleration, or static-correction, method):
+
+        s u_x = sum_{n=1}^N (b_n + 2 p_end/(s n pi)) sin(n pi x) - (p_end/s)(1 - x),
+
+    stored as the coefficients ``b_n`` and ``b[0] = -p_end/s``, the coefficient of ``(1 - x)``
+    (``sin(0) = 0`` leaves that slot free). The correction has no projection on the modes kept, so
+    the modal state is unchanged; the force at ``x = 0`` is the drive's, and the invariant arriving
+    at the rod has no spurious spike at ``theta = 1``."""
+
+    def __init__(self, s: float, q, v, p_end: float = 0.0):
+        q = np.asarray(q, dtype=float)
+        v = np.asarray(v, dtype=float)
+        self.npi = math.pi * np.arange(q.size)
+        self.a = v.copy()  # velocity = sum a_n cos(n pi x)
+        self.a[1:] *= 2.0
+        self.b = -2.0 * s * self.npi * q  # s * strain = sum b_n sin(n pi x) + b_0 (1 - x)
+        self.b[1:] += 2.0 * p_end / (s * self.npi[1:])
+        self.b[0] = -p_end / s
+
+    @property
+    def static_energy(self) -> float:
+        """Strain energy of the static correction (orthogonal to the modes kept):
+        ``(1/2) (p_end/s)^2 int_0^1 ((1 - x) - sum_{n<=N} 2 sin(n pi x)/(n pi))^2 dx``."""
+        n = np.arange(1, self.npi.size)
+        return 0.5 * self.b[0] ** 2 * (1.0 / 3.0 - float(np.sum(2.0 / (math.pi * n) ** 2)))
+
+    def _cs(self, x):
+        arg = np.multiply.outer(np.asarray(x, dtype=float), self.npi)
+        return np.cos(arg), np.sin(arg)
+
+    def _strain(self, x, S):
+        """``s u_x`` at ``x`` from the sines ``S`` (the static part's ``(1 - x)`` in slot 0)."""
+        return S[..., 1:] @ self.b[1:] + self.b[0] * (1.0 - np.asarray(x, dtype=float))
+
+    def alpha(self, x):
+        C, S = self._cs(x)
+        return C @ self.a - self._strain(x, S)
+
+    def beta(self, x):
+        C, S = self._cs(x)
+        return C @ self.a + self._strain(x, S)
+
+    def alpha1(self, x: float) -> float:
+        """``alpha0(x)`` for one ``x``."""
+        arg = self.npi * x
+        return (float(np.cos(arg) @ self.a) - float(np.sin(arg[1:]) @ self.b[1:])
+                - self.b[0] * (1.0 - x))
+
+    def beta1(self, x: float) -> float:
+        """``beta0(x)`` for one ``x``."""
+        arg = self.npi * x
+        return (float(np.cos(arg) @ self.a) + float(np.sin(arg[1:]) @ self.b[1:])
+                + self.b[0] * (1.0 - x))
+
+    def int1(self, x: float, sign: float) -> float:
+        """``int_0^x alpha0`` (``sign = 1``) or ``int_0^x beta0`` (``sign = -1``) for one ``x``."""
+        arg = self.npi[1:] * x
+        k = self.npi[1:]
+        out = self.a[0] * x + float(np.sin(arg) @ (self.a[1:] / k))
+        out += sign * float((np.cos(arg) - 1.0) @ (self.b[1:] / k))
+        return out - sign * self.b[0] * (x - 0.5 * x * x)
+
+    def _int(self, x, sign):
+        x = np.asarray(x, dtype=float)
+        C, S = self._cs(x)
+        k = self.npi[1:]
+        out = self.a[0] * x + S[..., 1:] @ (self.a[1:] / k)
+        out = out + sign * ((C[..., 1:] - 1.0) @ (self.b[1:] / k))
+        return out - sign * self.b[0] * (x - 0.5 * x * x)
+
+    def int_alpha(self, x):
+        """``int_0^x alpha0``."""
+        return self._int(x, 1.0)
+
+    def int_beta(self, x):
+        """``int_0^x beta0``."""
+        return self._int(x, -1.0)
+
+
+
+class _Contact:
+    """The characteristics solution over the window, in ``theta = s t`` (``0..2``)."""
+
+    def __init__(self, s, R, q, v, load, t0, fast=True):
+        self.s, self.R = s, R
+        self.fast = fast  # scalar root-search evaluations (False: through the array forms)
+        self.N = q.size - 1
+        self.p = _WindowLoad(load, s, t0)
+        self.piston = _Piston(s, q, v, self.p.value(0.0))  # the drive's force at x = 0
+        # A(theta): alpha arriving at the rod; smooth between these breaks
+        self.breaks = np.unique(np.concatenate(([1.0], 1.0 + self.p.jumps[self.p.jumps < 1.0])))
+        self.h_quad = 8.0 / (2.0 * math.pi * (self.N + 1) + 2.0 * self.p.rate + 1.0)
+        self.scale = float(np.sum(np.abs(self.piston.a)) + np.sum(np.abs(self.piston.b))
+                           + 2.0 * load.sup_abs / s)
+        self._acum1 = float(self.piston.int_alpha(1.0))
+
+    # -- the incoming invariant at the rod and its integral ------------------------------------
+    def A(self, th, left=False):
+        th0 = np.asarray(th, dtype=float)
+        th = np.atleast_1d(th0)
+        first = th < 1.0 if not left else th <= 1.0
+        out = np.empty(th.shape)
+        out[first] = self.piston.alpha(1.0 - th[first])
+        u = th[~first] - 1.0
+        out[~first] = self.piston.beta(u) + 2.0 * self.p(u, left=left) / self.s
+        return out.reshape(th0.shape)
+
+    def Acum(self, th):
+        th = np.atleast_1d(np.asarray(th, dtype=float))
+        out = np.empty(th.shape)
+        first = th <= 1.0
+        out[first] = self._acum1 - self.piston.int_alpha(1.0 - th[first])
+        u = th[~first] - 1.0
+        if u.size:
+            out[~first] = self._acum1 + self.piston.int_beta(u) + 2.0 * self.p.integral(u) / self.s
+        return out
+
+    def A1(self, th: float, left: bool = False) -> float:
+        """:meth:`A` at one ``theta`` (the root searches' scalar form; the same sums)."""
+        if not self.fast:
+            return float(self.A(np.array([th]), left=left)[0])
+        if th < 1.0 or (left and th == 1.0):
+            return self.piston.alpha1(1.0 - th)
+        u = th - 1.0
+        return self.piston.beta1(u) + 2.0 * self.p.value(u, left=left) / self.s
+
+    def Acum1(self, th: float) -> float:
+        """:meth:`Acum` at one ``theta``."""
+        if not self.fast:
+            return float(self.Acum(th)[0])
+        if th <= 1.0:
+            return self._acum1 - self.piston.int1(1.0 - th, 1.0)
+        u = th - 1.0
+        return self._acum1 + self.piston.int1(u, -1.0) + 2.0 * self.p.integral1(u) / self.s
+
+    # -- contact and separation --------------------------------------------------------------------
+    def solve(self):
+        tol = 1e-13 * self.scale
+        if self.A(0.0) < -tol:  # a touch at zero speed (to rounding) is a contact all the same
+            raise ValueError("the piston must arrive moving towards the rod (impact velocity >= 0)")
+        # A is a trigonometric sum of highest frequency N pi (plus the load's): 6 nodes per period
+        hg = KW.scan_step(self.N, float(self.p.rate))
+        edges = np.concatenate(([0.0], self.breaks, [2.0]))
+        grid = np.unique(np.concatenate([np.linspace(a, b, max(2, math.ceil((b - a) / hg) + 1))
+                                         for a, b in zip(edges[:-1], edges[1:], strict=True)]))
+        Ag = self.A(grid)
+        Agl = Ag.copy()  # left limits: they differ at the breaks only
+        at = np.searchsorted(grid, self.breaks)
+        Agl[at] = self.A(grid[at], left=True)
+        contact = []
+        th, on = 0.0, True
+        start = 0.0
+        for _ in range(10_000):
+            if th >= 2.0:
+                break
+            k0 = np.searchsorted(grid, th, side="right")
+            if on:
+                # first grid node after th where A < 0 (left limit first: a jump down is a separation)
+                neg_l = Agl[k0:] < -tol
+                neg_r = Ag[k0:] < -tol
+                hit = np.flatnonzero(neg_l | neg_r)
+                if hit.size == 0:
+                    contact.append((start, 2.0))
+                    th = 2.0
+                    break
+                k = k0 + hit[0]
+                if not neg_l[hit[0]]:  # A jumps below zero at a break
+                    th_sep = grid[k]
+                else:
+                    a = max(th, grid[k - 1])
+                    th_sep = brentq(lambda x: self.A1(x, left=True), a, grid[k],
+                                    xtol=1e-15, rtol=1e-15) if self.A1(a) > 0 else a
+                contact.append((start, th_sep))
+                th, on = th_sep, False
+            else:
+                base = self.Acum1(th)
+
+                def G(x, base=base):
+                    return base - self.Acum1(x)
+
+                nodes = grid[k0:]
+                Gn = base - self.Acum(nodes)
+                hit = np.flatnonzero(Gn <= 0.0)
+                if hit.size == 0:
+                    th = 2.0
+                    break
+                k = hit[0]
+                a = th if k == 0 else nodes[k - 1]
+                if k == 0:  # find a point where the gap is open, or call it grazing
+                    x = 0.5 * (th + nodes[0])
+                    for _ in range(40):
+                        if G(x) > 0.0:
+                            break
+                        x = 0.5 * (th + x)
+                    else:
+                        x = None
+                    if x is None:  # no gap opened: contact goes on
+                        start_prev = contact.pop()[0] if contact else 0.0
+                        start, on = start_prev, True
+                        th = float(nodes[0])
+                        continue
+                    a = x
+                ga, gb = G(a), G(nodes[k])
+                if ga <= 0.0:  # the vectorised and the scalar gap differ by rounding here
+                    th_re = float(a)
+                elif gb > 0.0:
+                    th_re = float(nodes[k])
+                else:
+                    th_re = brentq(G, a, nodes[k], xtol=1e-15, rtol=1e-15)
+                th, on, start = th_re, True, th_re
+        self.contact = np.array(contact, dtype=float).reshape(-1, 2)
+        self.grid, self.Ag = grid, Ag
+        last_end = self.contact[-1, 1] if len(self.contact) else 0.0
+        self.gap_theta = 0.0 if last_end >= 2.0 else float(self.Acum(last_end)[0] - self.Acum(2.0)[0])
+        return self
+
+    def in_contact(self, th):
+        th = np.asarray(th, dtype=float)
+        m = np.zeros(th.shape, dtype=bool)
+        for a, b in self.contact:
+            m |= (th >= a) & (th <= b)
+        return m
+
+    def B(self, th, left=False):
+        """The invariant sent back into the piston at the rod end."""
+        A = self.A(th, left=left)
+        return np.where(self.in_contact(th), -self.R * A, A)
+
+    def force(self, th):
+        th = np.asarray(th, dtype=float)
+        inside = (th >= 0.0) & (th <= 2.0)
+        thc = np.clip(th, 0.0, 2.0)
+        F = 0.5 * self.s * (1.0 + self.R) * self.A(thc)
+        return np.where(inside & self.in_contact(thc), F, 0.0)
+
+    def switches(self):
+        c = self.contact.ravel()
+        return c[(c > 0.0) & (c < 2.0)]
+
+    # -- results -------------------------------------------------------------------------------
+    def post_state(self, q, v, drive):
+        s, R = self.s, self.R
+        g, h = drive
+        qa = -R * q + g
+        va = -R * v + h
+        free = []
+        c = self.contact
+        ends = np.concatenate(([0.0], c.ravel(), [2.0]))
+        for a, b in zip(ends[0::2], ends[1::2], strict=True):  # the gaps between contact intervals
+            if b > a:
+                free.append((a, b))
+        if free:
+            npi = self.piston.npi
+            xs, dal, dbe, ws = [], [], [], []
+            for a, b in free:
+                for lo, hi in ((a, min(b, 1.0)), (max(a, 1.0), b)):
+                    if hi <= lo:
+                        continue
+                    if hi <= 1.0:  # alpha that left the rod end free: x = 1 - theta
+                        x, w = _panels(1.0 - hi, 1.0 - lo, [], self.h_quad)
+                        xs.append(x)
+                        ws.append(w)
+                        dal.append((1.0 + R) * self.piston.alpha(x))
+                        dbe.append(np.zeros_like(x))
+                    else:  # beta: x = theta - 1
+                        x, w = _panels(lo - 1.0, hi - 1.0, self.p.jumps, self.h_quad)
+                        xs.append(x)
+                        ws.append(w)
+                        dal.append(np.zeros_like(x))
+                        dbe.append((1.0 + R) * (self.piston.beta(x) + 2.0 * self.p(x) / s))
+            x = np.concatenate(xs)
+            w = np.concatenate(ws)
+            dal = np.concatenate(dal)
+            dbe = np.concatenate(dbe)
+            arg = np.multiply.outer(npi, x)
+            va = va + np.cos(arg) @ (0.5 * (dal + dbe) * w)
+            dse = np.sin(arg[1:]) @ (0.5 * (dbe - dal) * w)
+            qa[1:] -= dse / (s * npi[1:])
+        cw = 2.0 * (-1.0) ** np.arange(qa.size)
+        qa[0] = -self.gap_theta / s - float(cw[1:] @ qa[1:])
+        return qa, va
+
+    def contact_quad(self, th_end=2.0):
+        xs, ws = [], []
+        for a, b in self.contact:
+            b = min(b, th_end)
+            if b > a:
+                x, w = _panels(a, b, self.breaks, self.h_quad)
+                xs.append(x)
+                ws.append(w)
+        if not xs:
+            return np.empty(0), np.empty(0)
+        return np.concatenate(xs), np.concatenate(ws)
+
+    def rod_energy(self, th_end=2.0):
+        """``int F^2 / Z_s dt`` up to ``th_end``: ``(1 - R^2)/4 int_contact A^2 dtheta``."""
+        x, w = self.contact_quad(th_end)
+        return 0.25 * (1.0 - self.R**2) * float(w @ self.A(x) ** 2)
+
+    def impulse(self, th_end=2.0):
+        c = np.minimum(self.contact, th_end)
+        if not len(c):
+            return 0.0
+        return 0.5 * (1.0 + self.R) * float(np.sum(self.Acum(c[:, 1]) - self.Acum(c[:, 0])))
+
+    def drive_work(self, th_end=2.0):
+        """``int p u_t(0) dt`` up to ``th_end``, ``u_t(0) = beta(0) + p/s``."""
+        sw = self.switches()
+        br = np.concatenate(([1.0], self.p.jumps, 1.0 + sw[sw < 1.0]))
+        x, w = _panels(0.0, th_end, br, self.h_quad)
+        p = self.p(x)
+        return float(w @ (p * (self._beta_line(x) + p / self.s))) / self.s
+
+    def _x_breaks(self, th):
+        """Positions where the fields at ``th`` may jump: images of the corners, the switches and
+        the load's jumps along the characteristics."""
+        j, sw = self.p.jumps, self.switches()
+        eta = np.concatenate(([1.0, 2.0], 2.0 + j, 1.0 + sw))  # beta line breaks
+        xi = np.concatenate(([0.0], -eta, -j))  # alpha line breaks
+        return np.concatenate((eta - th, xi + th))
+
+    def field_energy(self, th=2.0):
+        """Energy of the exact fields at ``th``: ``(1/4) int (alpha^2 + beta^2) dx``."""
+        x, w = _panels(0.0, 1.0, self._x_breaks(th), self.h_quad)
+        al, be = self.invariants_at(x, th)
+        return 0.25 * float(w @ (al * al + be * be))
+
+    def force_extremes(self):
+        if not len(self.contact):
+            return 0.0, 0.0
+        inside = self.in_contact(self.grid)
+        F = self.force(self.grid)
+        k = int(np.argmax(np.where(inside, F, -np.inf)))
+        fmax = self._refine(k, -1.0)
+        full = len(self.contact) == 1 and self.contact[0, 0] == 0.0 and self.contact[0, 1] >= 2.0
+        if not full:
+            return fmax, 0.0
+        k = int(np.argmin(F))
+        return fmax, self._refine(k, 1.0)
+
+    def smoothed(self) -> _Contact:
+        """The same window (contact intervals kept) whose piston fields are smoothed by the Jackson
+        kernel (a positive kernel: no Gibbs overshoot, ``O(1/N^2)`` on smooth fields; Weisse et al.,
+        Rev. Mod. Phys. 78 (2006) 275, eq. 71); the static correction is kept as it is."""
+        M = self.N + 1
+        n = np.arange(M)
+        g = ((M - n) * np.cos(math.pi * n / M) + np.sin(math.pi * n / M) / math.tan(math.pi / M)) / M
+        out = copy.copy(self)
+        out.piston = copy.copy(self.piston)
+        out.piston.a = self.piston.a * g
+        out.piston.b = np.concatenate((self.piston.b[:1], self.piston.b[1:] * g[1:]))
+        return out
+
+    def _refine(self, k, sign):
+        g = self.grid
+        best = float(self.force(g[k]))
+        lo, hi = g[max(k - 1, 0)], g[min(k + 1, g.size - 1)]
+        for a, b in ((lo, g[k]), (g[k], hi)):
+            if b <= a:
+                continue
+            # a break inside (a, b) is a node of the grid, so the piece is smooth
+            res = minimize_scalar(lambda x: sign * float(self.force(x)), bounds=(a, b), method="bounded",
+                                  options={"xatol": 1e-13})
+            val = float(self.force(res.x))
+            best = max(best, val) if sign < 0 else min(best, val)
+        return best
+
+    def invariants_at(self, x, th):
+        """``alpha(x, th), beta(x, th)`` for ``0 <= th <= 2`` (d'Alembert: each is carried along its
+        characteristic from the start state, the drive end or the rod end)."""
+        x = np.asarray(x, dtype=float)
+        return self._alpha_line(x - th), self._beta_line(x + th)
+
+    def _beta_line(self, eta):
+        """``beta`` on the characteristic ``x + theta = eta`` (``0 <= eta <= 3``): from the start
+        state, or sent back by the rod end at ``theta = eta - 1``."""
+        eta = np.asarray(eta, dtype=float)
+        return np.where(eta <= 1.0, self.piston.beta(np.minimum(eta, 1.0)),
+                        self.B(np.clip(eta - 1.0, 0.0, 2.0)))
+
+    def _alpha_line(self, xi):
+        """``alpha`` on the characteristic ``x - theta = xi`` (``-2 <= xi <= 1``): from the start
+        state, or reflected at the drive end at ``theta = -xi`` with the drive's ``2 p / s``."""
+        xi = np.asarray(xi, dtype=float)
+        tau = np.clip(-xi, 0.0, 2.0)
+        return np.where(xi >= 0.0, self.piston.alpha(np.maximum(xi, 0.0)),
+                        self._beta_line(tau) + 2.0 * self.p(tau) / self.s)
+
+    def gap_at(self, th):
+        """Gap between the piston end and the rod end at ``th`` (in ``theta`` units: divide by s)."""
+        c = self.contact
+        if len(c) == 0 or th <= c[0, 1]:
+            return 0.0
+        k = np.searchsorted(c[:, 0], th, side="right") - 1
+        if th <= c[k, 1]:
+            return 0.0
+        return float(self.Acum(c[k, 1])[0] - self.Acum(th)[0])
+
+    def state_at(self, th):
+        """Modal state (projected) at ``th``, positions from the rod end's current position."""
+        s = self.s
+        x, w = _panels(0.0, 1.0, self._x_breaks(th), self.h_quad)
+        al, be = self.invariants_at(x, th)
+        npi = self.piston.npi
+        arg = np.multiply.outer(npi, x)
+        v = np.cos(arg) @ (0.5 * (al + be) * w)
+        q = np.zeros_like(v)
+        q[1:] = -(np.sin(arg[1:]) @ (0.5 * (be - al) * w)) / (s * npi[1:])
+        cw = 2.0 * (-1.0) ** np.arange(q.size)
+        q[0] = -self.gap_at(th) / s - float(cw[1:] @ q[1:])
+        return q, v
+
+    def stress_extremes(self, J):
+        """Max and min of ``N = s (alpha - beta)/2`` at the nodes of a ``J``-cell lattice."""
+        k = np.arange(-2 * J, J + 1)  # xi = x - theta in cells
+        al = self._alpha_line(k / J)
+        be = self._beta_line(np.arange(0, 3 * J + 1) / J)  # eta = x + theta in cells
+        hi, lo = -np.inf, np.inf
+        i = np.arange(J + 1)
+        for m in range(2 * J + 1):
+            N = 0.5 * self.s * (al[i - m + 2 * J] - be[i + m])
+            hi = max(hi, float(N.max()))
+            lo = min(lo, float(N.min()))
+        return hi, lo
+
+
