@@ -231,8 +231,8 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
             for U0, first in _switch(engine, switch, lam0, steps):
                 P, orbits, found, status = engine.march(U0, None, to, direction, lo, hi, steps,
                                                         settings.max_points, first=first)
-                if len(orbits) > 2:  # the doubled branch goes on past its first point
-                    break
+                if len(orbits) > 2 or status != BranchStatus.STEP_TOO_SMALL:
+                    break  # every point past the doubling is doubled (``acceptable``)
             else:
                 raise ValueError("branch switching at the period doubling failed: no doubled "
                                  "branch along any direction of a multiplier near -1")
