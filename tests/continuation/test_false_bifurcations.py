@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, Phase, given, settings
+from hypothesis import strategies as st
 
 from impactbar import BarModel, CosineLoad, continue_orbit, periodic_orbits
 from impactbar.continuation import doubling_cascade
@@ -96,3 +98,29 @@ def test_switching_returns_a_doubled_branch():
     # each point is a 2-per-2 orbit: its halves are not one orbit traversed twice
     last = d.orbits[-1]
     assert abs(last.impact_times[1] - last.impact_times[0] - 2 * math.pi) > 1e-2
+
+
+@settings(max_examples=4, deadline=None, derandomize=True, phases=(Phase.explicit, Phase.generate),
+          suppress_health_check=[HealthCheck.too_slow])
+@given(s=st.floats(2.0, 12.0), R=st.floats(0.3, 0.9), n_modes=st.sampled_from([0, 1, 2]),
+       impact=st.sampled_from(["paper", "wave"]))
+def test_events_are_critical_and_scale_free(s, R, n_modes, impact):
+    """Property (both laws): every located fold, branch point and period doubling has its multiplier
+    at +1 or -1, and the load scaled by 1e3 (parameter and target with it) gives the same events
+    at the scaled values (the model is linear in the load), within the range continued (past
+    ``to`` or the start, where a branch that turned back stops depends on the steps)."""
+    model = BarModel(s, 0.05, R, n_modes, impact=impact)
+    try:
+        start = _cos_negative(model, 0.05)
+    except (StopIteration, ValueError):
+        return
+    b = continue_orbit(start, "p0", to=1.5, max_points=300)
+    _critical_ok(b)
+    L = 1e3
+    big = next(o for o in periodic_orbits(model, CosineLoad(0.05 * L, L)) if math.cos(o.phase) < 0)
+    c = continue_orbit(big, "p0", to=1.5 * L, max_points=300)
+    _critical_ok(c)
+    inside = [(e.kind, e.value) for e in b.events if 0.05 < e.value < 1.5]
+    scaled = [(e.kind, e.value / L) for e in c.events if 0.05 < e.value / L < 1.5]
+    assert [k for k, _ in scaled] == [k for k, _ in inside]
+    np.testing.assert_allclose([v for _, v in scaled], [v for _, v in inside], rtol=1e-6, atol=1e-9)
