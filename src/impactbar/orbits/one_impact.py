@@ -59,8 +59,8 @@ class OrbitList(list):
     ----------
     families : tuple of (float, float)
         Intervals of phases on which the phase equation holds identically (a degenerate family:
-        a continuum of orbits, e.g. under the wave law, :func:`impactbar.orbits.wave_phase_families`);
-        each is stood for in the list by one orbit at the interval's middle, with
+        a continuum of orbits, e.g. under the wave law,
+        :func:`impactbar.orbits.wave.wave_phase_families`); each is stood for in the list by one orbit at the interval's middle, with
         ``multiplicity = 0``. Empty for isolated orbits only.
 
     Methods
@@ -75,6 +75,8 @@ class OrbitList(list):
 
     @property
     def families(self) -> tuple:
+        """``((start, end), ...)``: the degenerate families' phase intervals (rad); empty when the
+        list holds isolated orbits only."""
         return getattr(self, "_families", ())
 
     @property
