@@ -60,8 +60,8 @@ class OrbitList(list):
     families : tuple of (float, float)
         Intervals of phases on which the phase equation holds identically (a degenerate family:
         a continuum of orbits, e.g. under the wave law,
-        :func:`impactbar.orbits.wave.wave_phase_families`); each is stood for in the list by one orbit at the interval's middle, with
-        ``multiplicity = 0``. Empty for isolated orbits only.
+        :func:`impactbar.orbits.wave.wave_phase_families`); each is stood for in the list by one
+        orbit at the interval's middle, with ``multiplicity = 0``. Empty for isolated orbits only.
 
     Methods
     -------
