@@ -23,7 +23,9 @@ from .._shared.validate import check_real
 from ..loads import PiecewiseConstantLoad
 from ..orbits.multi_impact import (
     _build,
+    _halves_gap,
     _normalise,
+    _same_orbit,
     _Segments,
     _unknowns_from,
     doubling_direction,
@@ -47,9 +49,10 @@ class _OrbitProblem:
     """The segment problem of :func:`find_orbit` in ``U = (u, lambda)``, for the engine
     (:mod:`impactbar.continuation.engine`), with the branch's event detection."""
 
-    def __init__(self, model, load, name, m, n, tol, *, events=True, stop_on=(), xtol=1e-10):
+    def __init__(self, model, load, name, m, n, tol, *, events=True, stop_on=(), xtol=1e-10,
+                 doubled=False):
         self.model0, self.load0, self.name, self.m, self.n, self.tol = model, load, name, m, n, tol
-        self.events, self.stop_on, self.xtol = events, stop_on, xtol
+        self.events, self.stop_on, self.xtol, self.doubled = events, stop_on, xtol, doubled
         self._cache = {}
         size = 2 * (model.n_modes + 1) * m
         # weighted arclength: the state's squared norm is averaged over its components (as AUTO
@@ -97,8 +100,13 @@ class _OrbitProblem:
         return _build(p, U[:-1] if u is None else u, admissibility=admissibility)
 
     def acceptable(self, U):
-        """The impact times stay in order (and apart by the contact windows)."""
-        return _normalise(self.segments(U[-1]), U[:-1]) is not None
+        """The impact times stay in order (and apart by the contact windows); on a branch born at
+        a period doubling, the orbit stays doubled (a step onto the undoubled orbit traversed
+        twice, which crosses the branch at the doubling, is refused)."""
+        p = self.segments(U[-1])
+        if self.doubled and _same_orbit(U[:-1], U[:-1], p):
+            return False
+        return _normalise(p, U[:-1]) is not None
 
     def after_point(self, engine, points, tangents, orbits):
         """The events between the last two points, and the status to stop with (``stop_on``)."""
@@ -214,19 +222,24 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
     direction = 1.0 if to > lam0 else -1.0
     m, n = (2 * base.impacts, 2 * base.periods) if switch is not None else (base.impacts, base.periods)
     problem = _OrbitProblem(model, load, parameter, m, n, settings.tol, events=events,
-                            stop_on=stop_on, xtol=xtol)
+                            stop_on=stop_on, xtol=xtol, doubled=switch is not None)
     engine = _Engine(problem, settings.tol)
     lo, hi = min(lam0, to), max(lam0, to)
     with single_threaded_blas():
         if switch is not None:
-            U0, first = _switch(engine, switch, lam0, steps)
-            t0 = None
             lo, hi = lam0 - abs(to - lam0), lam0 + abs(to - lam0)  # it may leave on either side
+            for U0, first in _switch(engine, switch, lam0, steps):
+                P, orbits, found, status = engine.march(U0, None, to, direction, lo, hi, steps,
+                                                        settings.max_points, first=first)
+                if len(orbits) > 2 or status != BranchStatus.STEP_TOO_SMALL:
+                    break  # every point past the doubling is doubled (``acceptable``)
+            else:
+                raise ValueError("branch switching at the period doubling failed: no doubled "
+                                 "branch along any direction of a multiplier near -1")
         else:
             U0, t0 = _start(engine, base, lam0, direction)
-            first = None
-        P, orbits, found, status = engine.march(U0, t0, to, direction, lo, hi, steps,
-                                                settings.max_points, first=first)
+            P, orbits, found, status = engine.march(U0, t0, to, direction, lo, hi, steps,
+                                                    settings.max_points)
     return Branch(parameter=parameter, values=P[:, -1].copy(), orbits=orbits, events=tuple(found),
                   status=status, impacts=m, periods=n, _points=P)
 
@@ -252,24 +265,39 @@ def _start(engine, base, lam0, direction):
 
 
 def _switch(engine, ev, lam0, steps):
-    """Branch switching at a period doubling: the doubled orbit's branch, started along the null
-    vector ``(e, P_1 e, ..., -e, -P_1 e, ...)`` built from the eigenvector ``e`` of the multiplier
-    ``-1``. Returns the doubling point and ``(U1, t1)``, the first point of the doubled branch and
-    its tangent."""
-    z, w = doubling_direction(ev.orbit)
-    U0 = np.append(z, lam0)
-    w = np.append(w, 0.0)
-    w /= engine.norm(w)
-    h, _, min_step = steps
-    while h >= min_step:
-        U1, _ = engine.correct(U0 + h * w, w, U0 + h * w)
-        if U1 is not None and float(np.max(np.abs(U1[:-1] - U0[:-1]))) > 1e-3 * h:
-            break
-        h *= 0.5
-    else:
-        raise ValueError("branch switching at the period doubling failed: no doubled orbit found")
-    t1 = engine.tangent(U1, (U1 - U0) / engine.norm(U1 - U0))
-    return U0, (U1, t1)
+    """Branch switching at a period doubling: starts of the doubled orbit's branch, each along a
+    null vector ``(e, P_1 e, ..., -e, -P_1 e, ...)`` built from the eigenvector ``e`` of a real
+    multiplier near ``-1`` (the nearest first, then the others within 0.1 of it; each both ways).
+
+    Yields ``(U0, (U1, t1))``: the doubling point, and the first point of the doubled branch with
+    its tangent. A first point counts only if it is doubled: its two halves differ by at least a
+    tenth of its distance from the doubling (on the doubled branch the departure is along the
+    antisymmetric null vector; on the undoubled orbit traversed twice the halves coincide)."""
+    mu = ev.orbit.multipliers
+    near = np.abs(mu + 1.0)
+    real = np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))
+    ranks = [r for r, i in enumerate(np.argsort(near, kind="stable")) if r == 0 or
+             (real[i] and near[i] <= 0.1)]
+    h0, _, min_step = steps
+    for rank in ranks:
+        z, w = doubling_direction(ev.orbit, rank)
+        U0 = np.append(z, lam0)
+        w = np.append(w, 0.0)
+        w /= engine.norm(w)
+        for sign in (1.0, -1.0):
+            h = h0
+            while h >= min_step:
+                pred = U0 + sign * h * w
+                U1, _ = engine.correct(pred, w, pred)
+                if U1 is not None:
+                    p = engine.problem.segments(U1[-1])
+                    move = float(np.max(np.abs(U1[:-1] - U0[:-1])))
+                    if move > 1e-3 * h and _halves_gap(U1[:-1], p) >= 0.1 * move \
+                            and engine.problem.acceptable(U1):
+                        t1 = engine.tangent(U1, (U1 - U0) / engine.norm(U1 - U0))
+                        yield U0, (U1, t1)
+                        break
+                h *= 0.5
 
 
 def _detect(engine, points, tangents, tests, orbits, xtol):
@@ -311,15 +339,27 @@ def _detect(engine, points, tangents, tests, orbits, xtol):
         out.append(BranchEvent(kind=kind, parameter=engine.problem.name, value=float(U[-1]), index=idx,
                                orbit=o, multiplier=crit_fn(o), _point=U))
 
+    def confirmed(hh, fn, before, after, target):
+        """A located sign change of ``det(I -+ P)`` is an event only where a real multiplier
+        crosses ``target`` there: not through a pole (the test function's magnitude at the
+        located point above both ends', e.g. the saltation term ``~1/v`` at a grazing impact)."""
+        U = at(hh)
+        if U is None:
+            return False
+        o = engine.orbit(U, admissibility=False)
+        if abs(fn(o)) > max(abs(before), abs(after)):
+            return False  # a pole: the sign changes through infinity
+        return _crosses(o, target, lambda d: _side(at, engine, hb, hh, d, xtol, target))
+
     if A["fold"] * B["fold"] < 0:
         hh = locate(_fold)
-        if hh is not None:
+        if hh is not None and confirmed(hh, _fold, A["fold"], B["fold"], 1.0):
             turned = (tangents[-2] is not None and tangents[-1] is not None
                       and tangents[-2][-1] * tangents[-1][-1] < 0)
             add(EventKind.FOLD if turned else EventKind.BRANCH_POINT, hh, lambda o: _nearest(o, 1.0))
     if A["period-doubling"] * B["period-doubling"] < 0:
         hh = locate(_pd)
-        if hh is not None:
+        if hh is not None and confirmed(hh, _pd, A["period-doubling"], B["period-doubling"], -1.0):
             add(EventKind.PERIOD_DOUBLING, hh, lambda o: _nearest(o, -1.0))
     if A["pairs"] == B["pairs"] and A["pairs"] and A["neimark-sacker"] * B["neimark-sacker"] < 0:
         hh = locate(_ns)
@@ -433,6 +473,44 @@ def _vmin(o):
 
 def _adm(o):
     return 1.0 if o.admissible else -1.0
+
+
+#: A located fold or period doubling has a real multiplier this close to ``+1`` or ``-1``, or one
+#: that crosses it within the location's bracket (:func:`_crosses`).
+CRITICAL_TOL = 1e-6
+
+
+def _real_offset(o, target):
+    """The real multiplier nearest ``target`` minus ``target`` (``inf`` when none is real)."""
+    mu = o.multipliers
+    real = mu[np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))].real
+    if real.size == 0:
+        return math.inf
+    return float(real[int(np.argmin(np.abs(real - target)))] - target)
+
+
+def _crosses(o, target, side):
+    """Whether a real multiplier of the located orbit ``o`` is at ``target``: within
+    :data:`CRITICAL_TOL`, or changing sides of it between the orbits ``side(-1)`` and ``side(+1)``
+    just before and after the located point (a steep multiplier located to a coarse ``xtol``)."""
+    off = _real_offset(o, target)
+    if abs(off) <= CRITICAL_TOL:
+        return True
+    if not abs(off) < 0.1:
+        return False
+    a, b = side(-1.0), side(1.0)
+    if a is None or b is None:
+        return False
+    oa, ob = _real_offset(a, target), _real_offset(b, target)
+    return max(abs(oa), abs(ob)) < 0.1 and oa * ob <= 0.0
+
+
+def _side(at, engine, hb, hh, d, xtol, target):
+    """The orbit at ``2 xtol`` from the located point ``hh`` along the chord, before it (``d < 0``)
+    or after it (``d > 0``)."""
+    step = max(2.0 * xtol, 1e-12 * abs(hb)) * math.copysign(1.0, hb) * d
+    U = at(min(max(hh + step, min(0.0, hb)), max(0.0, hb)))
+    return None if U is None else engine.orbit(U, admissibility=False)
 
 
 def _nearest(o, target):

@@ -84,6 +84,17 @@ class ContactLaw:
         """
         raise NotImplementedError(self._missing("phase_roots"))
 
+    def phase_families(self, model, load) -> list[tuple[float, float]]:
+        """Intervals of phases on which the phase equation holds identically (a continuum of
+        one-impact orbits, which :meth:`phase_roots` leaves out); none by default.
+
+        Returns
+        -------
+        list of (float, float)
+            ``(start, end)`` phases (rad), ``end > start``.
+        """
+        return []
+
     def orbit(self, model, load, phase: float, multiplicity: int):
         """The one-impact orbit with this phase, with admissibility and multipliers.
 

@@ -63,6 +63,12 @@ class WaveLaw(ContactLaw):
 
         return wave_phase_roots(model, load)
 
+    def phase_families(self, model, load):
+        """:func:`impactbar.orbits.wave.wave_phase_families`."""
+        from ..orbits.wave import wave_phase_families
+
+        return wave_phase_families(model, load)
+
     def orbit(self, model, load, phase, multiplicity):
         """Contact over ``[0, 2/s]``, flight over ``[2/s, 2 pi]``, with the contact's
         :class:`~impactbar.WaveImpact` (theory §4b)."""

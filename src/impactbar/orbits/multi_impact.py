@@ -312,7 +312,7 @@ def _repeat(times, states, n0, reps):
     return t, np.concatenate([states] * reps)
 
 
-def doubling_direction(orbit):
+def doubling_direction(orbit, rank: int = 0):
     """The orbit taken twice round and the direction of the doubled orbit born at its period
     doubling (theory §7).
 
@@ -323,6 +323,9 @@ def doubling_direction(orbit):
     Parameters
     ----------
     orbit : PeriodicOrbit
+    rank : int
+        Which multiplier's eigenvector: the nearest ``-1`` (0, default), the next nearest (1), ...
+        (where two multipliers are close to ``-1``, branch switching tries each).
 
     Returns
     -------
@@ -337,7 +340,7 @@ def doubling_direction(orbit):
     _, _, info = base.evaluate(u0)
     maps = info["maps"]
     mu, vec = np.linalg.eig(base.monodromy(maps))
-    e = np.real(vec[:, int(np.argmin(np.abs(mu + 1.0)))])
+    e = np.real(vec[:, int(np.argsort(np.abs(mu + 1.0), kind="stable")[rank])])
     pert = [e / np.max(np.abs(e))]
     for j in range(m0 - 1):
         pert.append(maps[j] @ pert[-1])
@@ -499,6 +502,13 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
 def _same_orbit(u, v, problem):
     """Whether ``u`` is the undoubled orbit ``v`` again: its two halves coincide (up to the
     half-period shift of the times)."""
+    return _halves_gap(u, problem) <= 1e-7 * problem.scale(v)
+
+
+def _halves_gap(u, problem) -> float:
+    """The largest difference between the two halves of the unknowns ``u`` of a doubled problem
+    (``2 m`` impacts in ``2 n`` periods), the second half's times shifted back by ``2 pi n``: zero
+    on an orbit of ``m`` impacts in ``n`` periods traversed twice."""
     z = np.array(u, dtype=float).reshape(2, -1)
     z[1, ::2 * problem.M] -= TWO_PI * problem.n / 2
-    return float(np.max(np.abs(z[0] - z[1]))) <= 1e-7 * problem.scale(v)
+    return float(np.max(np.abs(z[0] - z[1])))

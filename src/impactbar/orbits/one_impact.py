@@ -55,6 +55,14 @@ class OrbitList(list):
     """The list of :class:`PeriodicOrbit` that :func:`periodic_orbits` returns: a plain ``list``
     (indexing, iteration, ``len``, comparison with lists) with conversions to tables.
 
+    Attributes
+    ----------
+    families : tuple of (float, float)
+        Intervals of phases on which the phase equation holds identically (a degenerate family:
+        a continuum of orbits, e.g. under the wave law,
+        :func:`impactbar.orbits.wave.wave_phase_families`); each is stood for in the list by one
+        orbit at the interval's middle, with ``multiplicity = 0``. Empty for isolated orbits only.
+
     Methods
     -------
     to_dataframe()
@@ -63,7 +71,18 @@ class OrbitList(list):
         The same as an ``xarray.Dataset`` along the dimension ``orbit``.
     """
 
-    __slots__ = ()
+    __slots__ = ("_families",)
+
+    @property
+    def families(self) -> tuple:
+        """``((start, end), ...)``: the degenerate families' phase intervals (rad); empty when the
+        list holds isolated orbits only."""
+        return getattr(self, "_families", ())
+
+    @property
+    def degenerate(self) -> bool:
+        """Whether the list holds a degenerate family (:attr:`families` not empty)."""
+        return bool(self.families)
 
     def to_dataframe(self):
         """One row per orbit: phase, impact velocity, admissibility, clearance, stability.
@@ -122,7 +141,9 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     -------
     OrbitList
         A ``list`` of :class:`PeriodicOrbit` sorted by phase, empty when none exists (e.g. above the
-        fold, eq. 38); ``.to_dataframe()`` and ``.to_xarray()`` make it a table.
+        fold, eq. 38); ``.to_dataframe()`` and ``.to_xarray()`` make it a table. Where the phase
+        equation holds on a whole interval (a degenerate family, wave law), ``.families`` holds
+        the interval and one orbit with ``multiplicity = 0`` stands for it, at its middle.
 
     Raises
     ------
@@ -149,8 +170,13 @@ def _periodic_orbits_general(model: BarModel, load: Load) -> OrbitList:
     reference every fast path is tested against."""
     _check_inputs(model, load)
     law = model.law
+    families = tuple(law.phase_families(model, load))
     with single_threaded_blas():
-        return OrbitList(law.orbit(model, load, ph, mult) for ph, mult in law.phase_roots(model, load))
+        roots = list(law.phase_roots(model, load))
+        roots += [((0.5 * (lo + hi)) % TWO_PI, 0) for lo, hi in families]  # one orbit each
+        out = OrbitList(law.orbit(model, load, ph, mult) for ph, mult in sorted(roots))
+    out._families = families
+    return out
 
 
 #: Largest ``n_modes`` for the orbit functions: the multipliers are the eigenvalues of a dense

@@ -87,7 +87,9 @@ class PeriodicOrbit:
         admissibility was not checked or an impact velocity is not positive.
     multiplicity : int
         Of a one-impact orbit's phase: 1, or 2 for a double root of the phase equation (a fold,
-        where two orbits merge); 1 for the orbits of :func:`find_orbit`.
+        where two orbits merge); 0 for the orbit that stands for a degenerate family (the phase
+        equation holds on an interval, :attr:`OrbitList.families`); 1 for the orbits of
+        :func:`find_orbit`.
     schur_roots : numpy.ndarray of complex, shape (2 N + 2,), or None
         One-impact orbits of :func:`periodic_orbits`: roots of the paper's quadratic blocks
         (eqs. 27, 29-31), rigid block first; ``None`` otherwise.

@@ -200,7 +200,7 @@ def quadratic_roots(blocks: np.ndarray) -> np.ndarray:
     # the numerically stable pair
     sgn = np.where((np.conj(a1) * disc).real >= 0.0, 1.0, -1.0)
     qq = -0.5 * (a1 + sgn * disc)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # a2 subnormal: inf
         r1 = np.where(a2 != 0, qq / a2, complex(np.inf, 0.0))  # a2 = 0: a root at infinity
         r2 = np.where(qq != 0, a0 / qq, 0.0)
     return np.column_stack((r1, r2)).ravel()

@@ -44,8 +44,8 @@ from ..model import BarModel
 from .phase import _cosine_roots
 from .stability import _arrival_derivative
 
-__all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_impact_map_jacobian",
-           "wave_existence_edge", "window_map"]
+__all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_phase_families",
+           "wave_impact_map_jacobian", "wave_existence_edge", "window_map"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -196,6 +196,12 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     finer, and every sign change is refined by Brent's method; a double root without a sign change
     (a fold) is then not reported. (Not a certified search, unlike eq. 14's.)
 
+    Where the residual vanishes on a whole interval of phases (a degenerate family of orbits, e.g.
+    the rigid bar under a square wave whose short pulse falls inside the second half of the contact
+    window: the flight is then the same for every phase there), the rounding noise's sign changes
+    are not roots: the interval is reported by :func:`wave_phase_families` instead, and no root
+    is returned inside it.
+
     Warnings
     --------
     For loads other than finite Fourier sums the search is **not certified**: two roots closer than
@@ -210,13 +216,44 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
         ``(phase, multiplicity)`` sorted by phase; empty when the window ``2/s`` is not shorter than
         the period.
     """
+    return list(_phase_scan(model, load)[0])
+
+
+def wave_phase_families(model: BarModel, load: Load) -> list[tuple[float, float]]:
+    """Intervals of phases on which the wave law's phase residual vanishes identically: each a
+    continuum (a degenerate family) of one-impact orbits.
+
+    A sampled run of at least three consecutive phases where ``|r| <= 1e-10 max |r|`` (the
+    residual is linear in the load, so the test is the same at every load scale) marks a family;
+    its ends are refined by bisection on the same test. Loads with finitely many harmonics have
+    none (their residual, a trigonometric polynomial, vanishes on an interval only if it vanishes
+    everywhere).
+
+    Returns
+    -------
+    list of (float, float)
+        ``(start, end)`` phases (rad), ``start`` in ``[0, 2 pi)`` and ``end > start`` (above
+        ``2 pi`` when the interval wraps round); empty when there is no family.
+    """
+    return list(_phase_scan(model, load)[1])
+
+
+#: A residual at most this fraction of its largest sampled magnitude is rounding noise.
+FLAT_RTOL = 1e-10
+
+
+@functools.lru_cache(maxsize=16)
+def _phase_scan(model: BarModel, load: Load) -> tuple[tuple, tuple]:
+    """``(roots, families)`` of :func:`wave_phase_roots` and :func:`wave_phase_families`, computed
+    once per model and load (both immutable)."""
     T, F = _window(model)
     if F <= 0.0:
-        return []
+        return (), ()
+    families = ()
     if isinstance(load, FourierLoad):
         K = int(np.max(load.orders)) if load.orders.size else 0
         if K == 0:
-            return []
+            return (), ()
         Ms = 2 * K + 1
         ph = TWO_PI * np.arange(Ms) / Ms
         coef = np.fft.fft(wave_phase_residual(model, load, ph)) / Ms  # r = sum c_k e^{i k phi}
@@ -225,8 +262,8 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
             k = int(load.orders[0])
             ck = 2.0 * coef[k]  # r = c0 + |ck| cos(k phase + arg ck)
             if ck == 0.0:
-                return []
-            return _cosine_roots(abs(ck), math.atan2(ck.imag, ck.real), -c0, k, tol=1e-13)
+                return (), ()
+            return tuple(_cosine_roots(abs(ck), math.atan2(ck.imag, ck.real), -c0, k, tol=1e-13)), ()
         ks = np.arange(1, K + 1)
 
         def resid(p):
@@ -235,19 +272,75 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
 
         grid = np.linspace(0.0, TWO_PI, 64 * K + 1)
         r = resid(grid)
+        flat = np.zeros(grid.size, dtype=bool)
     else:
         def resid(p):
             return wave_phase_residual(model, load, p)
 
         grid, r = _refined_grid(resid, 129)
+        flat, families = _flat_runs(resid, grid, r)
     roots = []
     for i in range(grid.size - 1):
+        if flat[i] or flat[i + 1]:
+            continue
         if r[i] == 0.0:
             roots.append(float(grid[i]))
         elif r[i] * r[i + 1] < 0.0:
             roots.append(brentq(lambda p: float(resid(np.array([p]))[0]), grid[i], grid[i + 1],
                                 xtol=1e-14, rtol=1e-15))
-    return [(t % TWO_PI, 1) for t in sorted(roots)]
+    return tuple((t % TWO_PI, 1) for t in sorted(roots)), families
+
+
+def _flat_runs(resid, grid, r):
+    """Where the sampled residual ``r`` is rounding noise (``|r| <= FLAT_RTOL max |r|``) on at least
+    three consecutive phases. Returns the mask of the samples in such runs and their neighbours
+    (no root is sought there) and the runs' intervals, their ends refined by bisection."""
+    a = np.abs(r)
+    tol = FLAT_RTOL * float(np.max(a)) if a.size else 0.0
+    small = a <= tol
+    runs, i, n = [], 0, grid.size
+    while i < n:
+        if small[i]:
+            j = i
+            while j + 1 < n and small[j + 1]:
+                j += 1
+            if j - i >= 2:
+                runs.append([i, j])
+            i = j + 1
+        else:
+            i += 1
+    mask = np.zeros(n, dtype=bool)
+    for i, j in runs:
+        mask[max(i - 1, 0):j + 2] = True
+    if not runs:
+        return mask, ()
+
+    def is_flat(p):
+        return abs(float(resid(np.array([p]))[0])) <= tol
+
+    def edge(inside, outside):
+        for _ in range(60):
+            if abs(outside - inside) <= 1e-13:
+                break
+            mid = 0.5 * (inside + outside)
+            if is_flat(mid):
+                inside = mid
+            else:
+                outside = mid
+        return inside
+
+    intervals = []
+    for i, j in runs:
+        lo = grid[i] if i == 0 else edge(grid[i], grid[i - 1])
+        hi = grid[j] if j == n - 1 else edge(grid[j], grid[j + 1])
+        intervals.append([lo, hi])
+    # the grid holds 0 and 2 pi: a run through both ends is one interval round the circle
+    if len(intervals) > 1 and runs[0][0] == 0 and runs[-1][1] == n - 1:
+        first = intervals.pop(0)
+        intervals[-1][1] = first[1] + TWO_PI
+    elif len(intervals) == 1 and runs[0][0] == 0 and runs[0][1] == n - 1:
+        intervals = [[0.0, TWO_PI]]
+    return mask, tuple((float(lo) % TWO_PI, float(lo) % TWO_PI + float(hi - lo)) for lo, hi in intervals)
 
 
 def wave_existence_edge(model: BarModel, k: int = 1) -> float:
