@@ -26,6 +26,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax shipped with the site (_static/mathjax): equations offline
     "sphinx.ext.viewcode",
     "numpydoc",
     "myst_parser",
