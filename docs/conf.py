@@ -36,7 +36,7 @@ source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 templates_path = ["_templates"]
 exclude_patterns = ["_build", "gallery_src", "tutorials_src", "**/*.ipynb", "**/*.py.md5",
-                    "**/*.codeobj.json", "**/sg_execution_times.rst"]
+                    "**/*.codeobj.json", "**/sg_execution_times.rst", "sg_execution_times.rst"]
 html_theme = "furo"
 html_title = f"impactbar {release}"
 html_static_path: list[str] = []
@@ -62,6 +62,8 @@ sphinx_gallery_conf = {
     "download_all_examples": False,
     "remove_config_comments": True,
     "show_memory": False,
+    # no page of execution times: it loads jQuery and DataTables from a CDN (the site works offline)
+    "write_computation_times": False,
     "plot_gallery": "True",
     "abort_on_example_error": True,
     "image_scrapers": ("matplotlib",),
