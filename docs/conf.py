@@ -11,6 +11,8 @@ import inspect
 import os
 from pathlib import Path
 
+from sphinx.ext import autosummary as _autosummary
+
 import impactbar
 
 os.environ.setdefault("MPLBACKEND", "Agg")
@@ -47,6 +49,9 @@ numpydoc_class_members_toctree = False
 numpydoc_validation_checks: set[str] = set()
 numpydoc_xref_param_type = False
 autosummary_generate = True
+# the API tables' summaries end at a sentence's period, not at the one of "(eq. 14)" or "Figs. 5, 6"
+_autosummary.WELL_KNOWN_ABBREVIATIONS = (*_autosummary.WELL_KNOWN_ABBREVIATIONS, "eq.", "eqs.", "Fig.",
+                                         "Figs.")
 autosummary_imported_members = True
 autodoc_default_options = {"members": False}
 autodoc_typehints = "none"

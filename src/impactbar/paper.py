@@ -218,6 +218,17 @@ def reproduce(out_dir, *, quick: bool = False, progress=None, dpi: int = 130,
     ------
     ValueError
         For a ``format`` or ``dpi`` out of range.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from impactbar.paper import reproduce
+    >>> out = tempfile.mkdtemp()
+    >>> rows = reproduce(out, quick=True, format="svg")
+    >>> sorted(os.listdir(out))[:4]
+    ['fig4.csv', 'fig4.svg', 'fig5.csv', 'fig5.svg']
+    >>> rows[1]
+    ('4', 'R=0: admissible stable orbits sampled', '4')
     """
     if format not in ("png", "pdf", "svg"):
         raise ValueError(f"format must be one of 'png', 'pdf', 'svg'; got {format!r}")

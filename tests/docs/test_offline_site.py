@@ -1,5 +1,7 @@
 """The built documentation works without a network (issue 21.9): no page loads a script, a style
-sheet or a font from another host, and the equations are typeset by the MathJax shipped in the site.
+sheet or a font from another host, and the equations are typeset by the MathJax shipped in the site;
+and what the pages show is whole (issue 21.11): API summaries not cut at "(eq.", no stray
+``<Axes ...>`` outputs in the gallery.
 
 Runs on a built site: ``docs/_build/html`` (where .ci/run builds it) or the folder named by the
 environment variable ``IMPACTBAR_DOCS_HTML``; skipped when there is none."""
@@ -47,3 +49,19 @@ def test_the_equations_are_typeset_by_the_mathjax_shipped_with_the_site():
     assert "\\(" in theory or "\\[" in theory  # the equations are there for it to typeset
     fonts = list((SITE / "_static" / "mathjax").rglob("*.woff"))
     assert fonts, "MathJax's fonts are not shipped"
+
+
+def test_api_summaries_are_not_cut_at_an_abbreviation():
+    api = (SITE / "api.html").read_text()
+    cells = re.findall(r"<tr class=\"row-(?:odd|even)\"><td>.*?</td>\s*<td>(.*?)</td>", api, flags=re.S)
+    assert len(cells) > 50
+    cut = [c for c in (re.sub(r"<[^>]+>", "", c).strip() for c in cells)
+           if re.search(r"\b(eqs?|Figs?)\.$", c)]
+    assert not cut, cut
+
+
+def test_gallery_pages_show_no_stray_reprs_of_axes():
+    pages = [*(SITE / "gallery").glob("*.html"), *(SITE / "tutorials").glob("*.html")]
+    assert pages
+    stray = [p.name for p in pages if "&lt;Axes" in p.read_text()]
+    assert not stray, stray

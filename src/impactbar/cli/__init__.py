@@ -53,6 +53,12 @@ def main(argv: list[str] | None = None) -> int:
     install) or a write fails (a full disk); 141 when the reader closed the pipe (``impactbar orbits
     --json | head``) or stdout is closed, as for other Unix tools ended by SIGPIPE, without a trace;
     130 on Ctrl-C, with one line.
+
+    Examples
+    --------
+    >>> from impactbar.cli import main
+    >>> main(["paper", "--dpi", "5000"])  # one line on stderr, before any computing
+    2
     """
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
