@@ -176,7 +176,7 @@ def test_a_full_disk_on_stdout_is_one_line_and_exit_1():
                               stdout=full, stderr=subprocess.PIPE, text=True, timeout=300)
     assert proc.returncode == 1
     lines = proc.stderr.strip().splitlines()
-    assert lines == ["impactbar orbits: error: could not write (No space left on device)"]
+    assert lines == ["impactbar orbits: error: No space left on device"]
 
 
 @pytest.mark.parametrize("kind", ['["cosine"]', '{ a = 1 }'])

@@ -94,8 +94,7 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     except OSError as exc:  # a write that failed: a full disk, a file system gone read-only
         where = f": {exc.filename}" if getattr(exc, "filename", None) else ""
-        print(f"impactbar {args.command}: error: could not write ({exc.strerror or exc}){where}",
-              file=sys.stderr)
+        print(f"impactbar {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
         _silence_stdout()
         return 1
     finally:
