@@ -189,6 +189,14 @@ def test_a_sweep_spec_with_an_unhashable_load_kind_is_one_line(kind, tmp_path, c
     assert "[load] kind must be one of" in _one_line_error(capsys, "sweep")
 
 
+def test_sweep_refuses_a_store_it_cannot_write_before_any_cluster(tmp_path, a_file, monkeypatch, capsys):
+    monkeypatch.setattr("impactbar.sweeps.run_sweep", _never)
+    spec = str(ROOT / "examples" / "sweep_orbits.toml")
+    for out in [str(a_file), str(a_file / "out.zarr")]:
+        assert main(["sweep", spec, "--out", out]) == 2
+        assert f"--out {out}: " in _one_line_error(capsys, "sweep")
+
+
 def test_paper_writes_the_format_and_dpi_asked(tmp_path, monkeypatch, capsys):
     seen = {}
 
