@@ -11,6 +11,8 @@ import inspect
 import os
 from pathlib import Path
 
+from sphinx.ext import autosummary as _autosummary
+
 import impactbar
 
 os.environ.setdefault("MPLBACKEND", "Agg")
@@ -26,6 +28,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax shipped with the site (_static/mathjax): equations offline
     "sphinx.ext.viewcode",
     "numpydoc",
     "myst_parser",
@@ -35,7 +38,7 @@ source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
 templates_path = ["_templates"]
 exclude_patterns = ["_build", "gallery_src", "tutorials_src", "**/*.ipynb", "**/*.py.md5",
-                    "**/*.codeobj.json", "**/sg_execution_times.rst"]
+                    "**/*.codeobj.json", "**/sg_execution_times.rst", "sg_execution_times.rst"]
 html_theme = "furo"
 html_title = f"impactbar {release}"
 html_static_path: list[str] = []
@@ -46,6 +49,9 @@ numpydoc_class_members_toctree = False
 numpydoc_validation_checks: set[str] = set()
 numpydoc_xref_param_type = False
 autosummary_generate = True
+# the API tables' summaries end at a sentence's period, not at the one of "(eq. 14)" or "Figs. 5, 6"
+_autosummary.WELL_KNOWN_ABBREVIATIONS = (*_autosummary.WELL_KNOWN_ABBREVIATIONS, "eq.", "eqs.", "Fig.",
+                                         "Figs.")
 autosummary_imported_members = True
 autodoc_default_options = {"members": False}
 autodoc_typehints = "none"
@@ -61,6 +67,8 @@ sphinx_gallery_conf = {
     "download_all_examples": False,
     "remove_config_comments": True,
     "show_memory": False,
+    # no page of execution times: it loads jQuery and DataTables from a CDN (the site works offline)
+    "write_computation_times": False,
     "plot_gallery": "True",
     "abort_on_example_error": True,
     "image_scrapers": ("matplotlib",),

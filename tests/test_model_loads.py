@@ -128,3 +128,30 @@ def test_b_integral_at_denormal_damping(d):
     assert np.allclose(b_integral(d, tau), ref, rtol=1e-12, atol=1e-15)
     assert float(b_integral(d, 2.0)) == pytest.approx(quad(lambda t: math.exp(-d * t), 0.0, 2.0)[0],
                                                       rel=1e-12)
+
+
+@pytest.mark.parametrize("impact", ["paper", "wave"])
+def test_scales_that_overflow_are_refused_at_the_boundary(impact):
+    """s with s pi (the rigid bar's scale) not finite, or d with d**2 not finite, is refused with a
+    ValueError naming the parameter; the largest accepted values give finite orbits (issue 21.6)."""
+    from impactbar import CosineLoad, periodic_orbits
+
+    top = float(np.finfo(float).max)
+    s_max = top / math.pi
+    while not math.isfinite(s_max * math.pi):  # the largest s whose s pi is finite (Python floats)
+        s_max = math.nextafter(s_max, 0.0)
+    s_over = math.nextafter(s_max, math.inf)
+    assert not math.isfinite(s_over * math.pi)
+    load = CosineLoad(0.5, 1.0)
+    orbits = periodic_orbits(BarModel(s_max, 0.1, 0.5, 0, impact=impact), load)
+    assert len(orbits) == 2 and all(np.isfinite(o.phase) and o.admissible for o in orbits)
+    for s in (s_over, 9e307, top):
+        with pytest.raises(ValueError, match=r"^s must be in \(0, 5\.72223e\+307\]"):
+            BarModel(s, 0.1, 0.5, 0, impact=impact)
+    d_max = math.sqrt(top)
+    while not math.isfinite(d_max * d_max):
+        d_max = math.nextafter(d_max, 0.0)
+    BarModel(1.0, d_max, 0.5, 4, impact=impact)
+    for d in (math.nextafter(d_max, math.inf), 1e300):
+        with pytest.raises(ValueError, match=r"^d must be in \[0, 1\.34078e\+154\]"):
+            BarModel(1.0, d, 0.5, 4, impact=impact)

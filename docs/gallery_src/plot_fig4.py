@@ -12,4 +12,4 @@ with 120 points per curve; here 20.
 from impactbar import paper
 
 rows = paper.fig4_data(n=20)
-paper.fig4_plot(rows)
+ax = paper.fig4_plot(rows)

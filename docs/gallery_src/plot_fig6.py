@@ -11,4 +11,4 @@ lower (a Neimark-Sacker loss, not a period doubling).
 from impactbar import paper
 
 data = paper.fig6_data(n=8)
-paper.fig6_plot(data)
+ax = paper.fig6_plot(data)

@@ -37,4 +37,4 @@ ax2.set_title("hydraulic: " + ax2.get_title(), fontsize=9)
 
 # %%
 # The struck end over the last load periods of two hydraulic runs: impacts, chatter and contact.
-plot_end_displacement(hydraulic)
+axes = plot_end_displacement(hydraulic)

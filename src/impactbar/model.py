@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -19,6 +20,9 @@ MAX_MODES = 4096
 #: Largest ``s * n_modes`` with flexible modes: the highest mode's phase over a period,
 #: ``2 pi^2 s n``, must stay well inside double precision.
 MAX_STIFFNESS = 1e12
+#: Largest finite double: the modal frequencies ``s n pi`` (with ``n = 1`` for the rigid bar's scale
+#: ``s pi``) and the damping's square ``d**2`` (in every mode's decay, eq. 8) must stay below it.
+_FLOAT_MAX = float(np.finfo(float).max)
 
 
 @dataclass(frozen=True)
@@ -45,7 +49,8 @@ class BarModel:
         Restitution coefficient, ``0 <= R <= 1`` (eq. 10).
     n_modes : int
         Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096, and with
-        ``s * n_modes <= 1e12`` (beyond, the modes' phases over a period are lost in rounding).
+        ``s * n_modes <= 1e12`` (beyond, the modes' phases over a period are lost in rounding);
+        for the rigid bar ``s * pi`` must be finite (``s <= 5.7e307``), and ``d**2`` (``d <= 1.3e154``).
     impact : {"paper", "wave"} or ContactLaw
         The impact law, by its name in :data:`impactbar.laws.LAWS` or as a law object
         (:class:`impactbar.laws.ContactLaw`; the attribute then holds its name, :attr:`law` the
@@ -88,7 +93,16 @@ class BarModel:
             raise ValueError(
                 f"s * n_modes must be at most {MAX_STIFFNESS:g} (got s = {self.s:g}, n_modes = "
                 f"{self.n_modes}): beyond it a mode's phase over one period, 2 pi s n pi, is lost "
-                "in rounding; a bar that stiff moves as a rigid one (n_modes = 0, any s)")
+                "in rounding; a bar that stiff moves as a rigid one (n_modes = 0)")
+        if not math.isfinite(float(self.s) * math.pi * max(self.n_modes, 1)):  # no numpy overflow error
+            top = _FLOAT_MAX / (np.pi * max(self.n_modes, 1))
+            raise ValueError(
+                f"s must be in (0, {top:.6g}] with n_modes = {self.n_modes} (got s = {self.s:g}): "
+                "beyond it the modal frequencies s n pi (s pi for the rigid bar) are not finite")
+        if not math.isfinite(float(self.d) * float(self.d)):
+            raise ValueError(
+                f"d must be in [0, {np.sqrt(_FLOAT_MAX):.6g}] (got d = {self.d:g}): beyond it d**2, "
+                "which enters every mode's decay (eq. 8), is not finite")
 
     @property
     def law(self) -> ContactLaw:

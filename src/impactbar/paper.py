@@ -191,8 +191,10 @@ def _write_columns(path: Path, cols: dict) -> None:
             w.writerow([f"{float(cols[k][i]):.12g}" for k in keys])
 
 
-def reproduce(out_dir, *, quick: bool = False, progress=None) -> list[tuple[str, str, str]]:
-    """Compute and write Figs. 4-8 as ``figN.png`` and ``figN.csv`` in ``out_dir``.
+def reproduce(out_dir, *, quick: bool = False, progress=None, dpi: int = 130,
+              format: str = "png") -> list[tuple[str, str, str]]:
+    """Compute and write Figs. 4-8 as ``figN.png`` (or ``.pdf``, ``.svg``) and ``figN.csv`` in
+    ``out_dir``.
 
     Parameters
     ----------
@@ -202,12 +204,36 @@ def reproduce(out_dir, *, quick: bool = False, progress=None) -> list[tuple[str,
         Fewer points per curve (for tests).
     progress : callable, optional
         Called with the figure's name (``"fig4"``, ...) when that figure is done.
+    dpi : int, optional
+        Resolution of the PNG figures, in ``[1, 1200]`` (default 130).
+    format : {"png", "pdf", "svg"}, optional
+        File format of the figures (default ``"png"``).
 
     Returns
     -------
     list of (str, str, str)
         Summary rows ``(figure, quantity, value)``.
+
+    Raises
+    ------
+    ValueError
+        For a ``format`` or ``dpi`` out of range.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from impactbar.paper import reproduce
+    >>> out = tempfile.mkdtemp()
+    >>> rows = reproduce(out, quick=True, format="svg")
+    >>> sorted(os.listdir(out))[:4]
+    ['fig4.csv', 'fig4.svg', 'fig5.csv', 'fig5.svg']
+    >>> rows[1]
+    ('4', 'R=0: admissible stable orbits sampled', '4')
     """
+    if format not in ("png", "pdf", "svg"):
+        raise ValueError(f"format must be one of 'png', 'pdf', 'svg'; got {format!r}")
+    if not 1 <= dpi <= 1200:
+        raise ValueError(f"dpi must be in [1, 1200]; got {dpi}")
     import matplotlib  # noqa: PLC0415
 
     matplotlib.use("Agg")
@@ -225,7 +251,7 @@ def reproduce(out_dir, *, quick: bool = False, progress=None) -> list[tuple[str,
     rows4 = fig4_data(max(10, int(120 * f)))
     _write_rows(out / "fig4.csv", rows4)
     ax = fig4_plot(rows4)
-    _save(ax.figure, out / "fig4.png")
+    _save(ax.figure, out / f"fig4.{format}", dpi=dpi)
     r0 = [r for r in rows4 if r["R"] == 0.0 and r["stable"]]
     summary.append(("4", "R=0: stable orbits that stick (paper counts them)",
                     f"{sum(not r['admissible'] for r in rows4 if r['R'] == 0.0 and r['schur_stable'])}"
@@ -237,7 +263,7 @@ def reproduce(out_dir, *, quick: bool = False, progress=None) -> list[tuple[str,
     d5 = fig5_data(max(8, int(40 * f)))
     _write_columns(out / "fig5.csv", d5)
     ax, _, _ = fig5_plot(d5)
-    _save(ax.figure, out / "fig5.png")
+    _save(ax.figure, out / f"fig5.{format}", dpi=dpi)
     summary.append(("5", "R=0, 2pid=0: stable band p0/p1",
                     f"{d5['stability_exact_2pid=0'][0]:.6f} .. {d5['existence_2pid=0'][0]:.6f}"))
     summary.append(("5", "R=0, 2pid=0: inadmissible (sticks) for p0/p1 in",
@@ -252,7 +278,7 @@ def reproduce(out_dir, *, quick: bool = False, progress=None) -> list[tuple[str,
     d6 = fig6_data(max(6, int(24 * f)))
     _write_columns(out / "fig6.csv", d6)
     ax = fig6_plot(d6)
-    _save(ax.figure, out / "fig6.png")
+    _save(ax.figure, out / f"fig6.{format}", dpi=dpi)
     i5 = int(np.argmin(np.abs(d6["R"] - 0.5)))
     for tag in ("inf", "10.1", "10.01"):
         summary.append(("6", f"R={d6['R'][i5]:.2f}, s pi={tag}: edge paper / exact / wave law",
@@ -264,7 +290,7 @@ def reproduce(out_dir, *, quick: bool = False, progress=None) -> list[tuple[str,
     rows7 = fig7_data(max(10, int(100 * f)))
     _write_rows(out / "fig7.csv", rows7)
     ax = fig7_plot(rows7)
-    _save(ax.figure, out / "fig7.png")
+    _save(ax.figure, out / f"fig7.{format}", dpi=dpi)
     summary.append(("7", "stable one-impact orbits found", str(sum(r["stable"] for r in rows7))))
     summary.append(("7", "orbits sampled / inadmissible",
                     f"{len(rows7)} / {sum(not r['admissible'] for r in rows7)}"))
@@ -274,7 +300,7 @@ def reproduce(out_dir, *, quick: bool = False, progress=None) -> list[tuple[str,
     d8 = fig8_data(max(8, int(40 * f)))
     _write_columns(out / "fig8.csv", d8)
     ax, _ = fig8_plot(d8)
-    _save(ax.figure, out / "fig8.png")
+    _save(ax.figure, out / f"fig8.{format}", dpi=dpi)
     summary.append(("8", "R=0, 2pid=0: kappa* (closed form sqrt 2)",
                     f"{d8['existence_2pid=0'][0]:.10f}"))
     summary.append(("8", "max |root-found - closed form|, 2pid=0",

@@ -146,6 +146,8 @@ _DELETE = object()
         (("model", "n_modes"), 1.5, r"\[model\] n_modes must be an integer"),
         (("load", "q"), 1.0, r"\[load\] unknown key.*'q'.*cosine"),
         (("load", "kind"), "sine", r"\[load\] kind must be one of"),
+        (("load", "kind"), ["cosine"], r"\[load\] kind must be one of"),  # unhashable: not a TypeError
+        (("load", "kind"), {"a": 1}, r"\[load\] kind must be one of"),
         (("load", "pk"), _DELETE, r"\[load\] missing key.*pk"),
         (("load", "k"), 0, r"\[load\] k must be an integer in \[1"),
         (("axes", "kappa"), {"values": [1.2]}, r"\[axes\] 'kappa' is not a field"),

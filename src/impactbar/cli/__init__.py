@@ -9,6 +9,7 @@ dispatches, so features can be added without touching each other. What every sub
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import sys
@@ -47,9 +48,17 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status.
 
     0 on success; 2 for bad input (one line on stderr: a value out of range, an option the chosen
-    mode ignores, options that conflict); 1 when an optional dependency is missing (one line naming
-    the extra to install); 141 when the reader closed the pipe (``impactbar orbits --json | head``),
-    as for other Unix tools ended by SIGPIPE, without a trace.
+    mode ignores, options that conflict, an output location that cannot be written, all checked
+    before any computing); 1 when an optional dependency is missing (one line naming the extra to
+    install) or a write fails (a full disk); 141 when the reader closed the pipe (``impactbar orbits
+    --json | head``) or stdout is closed, as for other Unix tools ended by SIGPIPE, without a trace;
+    130 on Ctrl-C, with one line.
+
+    Examples
+    --------
+    >>> from impactbar.cli import main
+    >>> main(["paper", "--dpi", "5000"])  # one line on stderr, before any computing
+    2
     """
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
@@ -61,14 +70,19 @@ def main(argv: list[str] | None = None) -> int:
     if sub is not None:
         tail = argv[argv.index(args.command) + 1:] if args.command in argv else argv
         setattr(args, _common._GIVEN, _common.explicit_options(sub, tail))
+    closed = sys.stdout is None  # started with stdout closed (``impactbar orbits >&-``)
+    if closed:
+        sys.stdout = _ClosedStdout()
     try:
         status = int(args.func(args) or 0)
-        sys.stdout.flush()  # a closed pipe shows here, not at interpreter exit
+        sys.stdout.flush()  # a closed pipe or a full disk shows here, not at interpreter exit
         return status
     except BrokenPipeError:
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, sys.stdout.fileno())  # Python's own flush at exit would fail again
+        _silence_stdout()  # Python's own flush at exit would fail again
         return 141
+    except KeyboardInterrupt:
+        print(f"impactbar {args.command}: interrupted", file=sys.stderr)
+        return 130
     except ValueError as exc:
         print(f"impactbar {args.command}: error: {exc}", file=sys.stderr)
         return 2
@@ -78,6 +92,35 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"impactbar {args.command}: error: {hint}", file=sys.stderr)
         return 1
+    except OSError as exc:  # a write that failed: a full disk, a file system gone read-only
+        where = f": {exc.filename}" if getattr(exc, "filename", None) else ""
+        print(f"impactbar {args.command}: error: {exc.strerror or exc}{where}", file=sys.stderr)
+        _silence_stdout()
+        return 1
+    finally:
+        if closed:
+            sys.stdout = None
+
+
+class _ClosedStdout:
+    """Stands in for a closed stdout: the first write is a closed pipe (exit status 141)."""
+
+    def write(self, text):
+        raise BrokenPipeError(errno.EPIPE, "stdout is closed")
+
+    def flush(self):
+        pass
+
+
+def _silence_stdout() -> None:
+    """Point stdout at the null device, so that the interpreter's flush at exit cannot fail again."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
 
 
 def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser | None:

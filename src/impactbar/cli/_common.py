@@ -8,22 +8,33 @@ Conventions of the whole command line (documented on the docs site, "Getting sta
   conflict.
 - JSON output is strict JSON: a non-finite number (an infinite clearance, a NaN statistic) is
   written as ``null``; numpy scalars become plain numbers.
-- A missing optional dependency is one line naming the extra to install, exit status 1.
-- A reader that closes the pipe early (``impactbar orbits --json | head``) ends the command quietly.
+- Every output location (``--out``) and every size-like option (``--dpi``) is checked before any
+  computing (:func:`output_folder`, :func:`output_file`, :func:`check_dpi`): a location that cannot
+  be written is bad input, one line and exit status 2.
+- A missing optional dependency is one line naming the extra to install, exit status 1; the extras
+  a subcommand will need are checked before it computes (:func:`require`).
+- A write that fails (a full disk, ``OSError``) is one line and exit status 1.
+- A reader that closes the pipe early (``impactbar orbits --json | head``), or a closed stdout, ends
+  the command quietly with exit status 141; Ctrl-C is one line and exit status 130.
 - Progress bars go to stderr, only when it is a terminal, and never with ``--quiet``.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import math
+import os
 import sys
+import tempfile
 from collections.abc import Iterable
+from pathlib import Path
 
 __all__ = ["UsageError", "given", "refuse", "refuse_together", "json_ready", "print_json",
            "progress_bar", "add_quiet_argument", "explicit_options", "OPTIONAL_EXTRAS",
-           "missing_dependency_hint", "docs_page"]
+           "missing_dependency_hint", "docs_page", "output_folder", "output_file", "check_dpi",
+           "require", "MAX_DPI", "add_figure_arguments"]
 
 #: optional top-level modules -> the extra that installs them
 OPTIONAL_EXTRAS = {
@@ -34,6 +45,10 @@ OPTIONAL_EXTRAS = {
     "distributed": "distributed",
     "zarr": "distributed",
 }
+
+#: Largest ``--dpi``: a figure of about 8 x 6 inches at 1200 dpi is some 70 megapixels, the most a
+#: raster image can usefully hold; beyond, rendering runs out of memory (``MemoryError``).
+MAX_DPI = 1200
 
 #: attribute of the parsed namespace holding the destinations given on the command line
 _GIVEN = "_impactbar_given"
@@ -154,3 +169,114 @@ def missing_dependency_hint(exc: ImportError) -> str | None:
     if "pip install 'impactbar[" in msg:  # the library's own hint
         return msg.splitlines()[0]
     return None
+
+
+def output_folder(path, *, option: str = "--out") -> Path:
+    """Check, before any computing, that the folder ``path`` can be written; create it if missing.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The folder the subcommand will write into.
+    option : str
+        The option that named it, for the message.
+
+    Returns
+    -------
+    pathlib.Path
+
+    Raises
+    ------
+    UsageError
+        ``path`` is a file, lies under a file, or cannot be created or written (a read-only or
+        virtual file system, no permission); the message names the option and the reason.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from impactbar.cli._common import output_folder
+    >>> tmp = pathlib.Path(tempfile.mkdtemp())
+    >>> output_folder(tmp / "figures").is_dir()
+    True
+    >>> _ = (tmp / "notes.txt").write_text("a file")
+    >>> output_folder(tmp / "notes.txt" / "figures")
+    Traceback (most recent call last):
+    ...
+    impactbar.cli._common.UsageError: --out ...: cannot write there (Not a directory)
+    """
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise UsageError(f"{option} {path}: exists and is not a folder")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=p):  # writable: not read-only, not a virtual file system
+            pass
+    except OSError as exc:
+        raise UsageError(f"{option} {path}: cannot write there ({exc.strerror or exc})") from None
+    return p
+
+
+def output_file(path, *, option: str = "--out") -> Path:
+    """Check, before any computing, that the file ``path`` can be written (its folder is created if
+    missing, as by :func:`output_folder`; an existing file is replaced).
+
+    Raises
+    ------
+    UsageError
+        ``path`` is a folder, its folder cannot be written, or it is a file that cannot be replaced.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from impactbar.cli._common import output_file
+    >>> with tempfile.TemporaryDirectory() as tmp:
+    ...     output_file(pathlib.Path(tmp) / "new" / "fig.png").parent.is_dir()
+    True
+    """
+    p = Path(path)
+    if p.is_dir():
+        raise UsageError(f"{option} {path}: is a folder; give a file name")
+    output_folder(p.parent, option=f"{option} {path}: the folder")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise UsageError(f"{option} {path}: the file exists and cannot be replaced (no permission)")
+    return p
+
+
+def check_dpi(dpi, *, option: str = "--dpi") -> int:
+    """Refuse a resolution outside ``[1, MAX_DPI]`` before anything is drawn.
+
+    Raises
+    ------
+    UsageError
+
+    Examples
+    --------
+    >>> from impactbar.cli._common import check_dpi
+    >>> check_dpi(150)
+    150
+    """
+    if not 1 <= dpi <= MAX_DPI:
+        raise UsageError(f"{option} must be in [1, {MAX_DPI}] dots per inch; got {dpi}")
+    return int(dpi)
+
+
+def add_figure_arguments(parser: argparse.ArgumentParser, *, dpi: int) -> None:
+    """Add ``--dpi`` (checked by :func:`check_dpi`) and ``--format png|pdf|svg`` for the figures."""
+    parser.add_argument("--dpi", type=int, default=dpi,
+                        help=f"resolution of raster figures, 1 to {MAX_DPI} (default {dpi})")
+    parser.add_argument("--format", choices=("png", "pdf", "svg"), default="png",
+                        help="file format of the figures (default png)")
+
+
+def require(*modules: str) -> None:
+    """Check, before any computing, that the optional ``modules`` are installed.
+
+    Raises
+    ------
+    ModuleNotFoundError
+        For the first missing one, with its ``name`` (the command line turns it into the one-line
+        hint of :func:`missing_dependency_hint`, exit status 1).
+    """
+    for name in modules:
+        if importlib.util.find_spec(name) is None:
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)

@@ -4,11 +4,10 @@ branches born at its period doublings, and a bifurcation diagram over a brute-fo
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 
-from ._common import print_json, refuse
+from ._common import output_folder, print_json, refuse
 from .orbits import add_bar_and_load_arguments
 from .orbits import check_options as check_bar_and_load
 
@@ -127,6 +126,7 @@ def run(args) -> int:
     from ..continuation import doubling_cascade, parameter_value, simulated_diagram
 
     check_options(args)
+    out = output_folder(args.out)
     model, load = _model_and_load(args)
     if args.doublings < 0:
         raise ValueError(f"--doublings must be >= 0; got {args.doublings}")
@@ -136,8 +136,6 @@ def run(args) -> int:
     kw = {"step": args.step, "max_step": args.max_step, "max_points": args.max_points}
     branches = list(doubling_cascade(start, args.parameter, args.to, doublings=args.doublings,
                                      **kw).branches)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     written = []
     for i, b in enumerate(branches):
         path = out / f"branch_{i}_{b.impacts}per{b.periods}.csv"

@@ -8,7 +8,7 @@ import math
 import sys
 import time
 
-from ._common import add_quiet_argument, given, progress_bar, refuse, refuse_together
+from ._common import add_quiet_argument, given, output_folder, progress_bar, refuse, refuse_together, require
 
 #: the options of each hammer's load
 LOAD_OPTIONS = {"pneumatic": ("p0", "pk", "k"), "hydraulic": ("q", "kappa")}
@@ -74,6 +74,10 @@ def run(args) -> int:
     from ..simulation.experiments import hydraulic_setup, pneumatic_setup, run_experiment
 
     n_modes = check_options(args)
+    out = None
+    if not args.no_plots:  # the plots' extra and folder, before the computing
+        require("matplotlib")
+        out = output_folder(args.out or f"out/experiment-{args.hammer}")
     if args.hammer == "pneumatic":
         R = 0.8 if args.R is None else args.R
         model, load = pneumatic_setup(p0=args.p0, pk=args.pk, k=args.k, s=args.s, d=args.d, R=R,
@@ -90,8 +94,7 @@ def run(args) -> int:
                                 progress=lambda n: bar.update(n - bar.n))
     print(result.summary())
     print(f"({time.perf_counter() - t0:.1f} s)")
-    if not args.no_plots:
-        out = args.out or f"out/experiment-{args.hammer}"
+    if out is not None:
         files = plot_experiment(result, out)
         print("wrote " + ", ".join(str(f) for f in files))
     return 0

@@ -17,7 +17,8 @@ def add_parser(sub) -> None:
     p.add_argument("--select", action="append", default=[], metavar="AXIS=VALUE",
                    help="fix an axis at the grid value nearest VALUE (repeatable); the chart uses "
                    "at most two remaining axes")
-    p.add_argument("--dpi", type=int, default=150, help="resolution of raster output (default 150)")
+    p.add_argument("--dpi", type=int, default=150,
+                   help="resolution of raster output, 1 to 1200 (default 150)")
     p.set_defaults(func=run)
 
 
@@ -35,6 +36,11 @@ def _selection(items) -> dict:
 
 
 def run(args) -> int:
+    from ._common import check_dpi, output_file, require
+
+    check_dpi(args.dpi)
+    require("matplotlib")
+    output_file(args.out)
     from ..sweeps.plot import plot_sweep
 
     path = plot_sweep(args.store, args.out, select=_selection(args.select), dpi=args.dpi)

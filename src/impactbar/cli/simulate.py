@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import json
 import sys
-from pathlib import Path
 
 import numpy as np
 
 from .. import physical
 from ..plotting.physical import plot_blows, plot_force_waves, plot_motion
+from ._common import output_folder, require
 from .physical import add_impact_argument, add_physical_arguments, hammer_from_args, json_ready
 
 __all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows", "plot_force_waves"]
@@ -46,13 +46,13 @@ def run(args) -> int:
 
     hammer = hammer_from_args(args)
     gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")
+    require("matplotlib")
+    out = output_folder(args.out)
     try:
         result = physical.simulate(hammer, periods=args.periods, gap_m=gap)
     except RuntimeError as exc:
         print(f"impactbar simulate: error: {exc}", file=sys.stderr)
         return 1
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     write_impacts(result, out / "impacts.csv")
     summary = summarize(result)
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))

@@ -4,8 +4,9 @@
 from __future__ import annotations
 
 import sys
+from pathlib import Path
 
-from ._common import add_quiet_argument, docs_page
+from ._common import UsageError, add_quiet_argument, docs_page, output_folder
 
 
 def add_parser(sub) -> None:
@@ -43,6 +44,10 @@ def run(args) -> int:
 
     if args.workers is not None and not 1 <= args.workers <= max_workers():
         raise ValueError(f"--workers must be in [1, {max_workers()}] (four per core); got {args.workers}")
+    store = Path(args.out)  # the store itself is made by run_sweep; its folder must be writable
+    if store.exists() and not store.is_dir():
+        raise UsageError(f"--out {args.out}: exists and is not a folder (a zarr store is one)")
+    output_folder(store.resolve().parent, option=f"--out {args.out}: the folder")
     print(f"{spec.task}: {spec.n_points} points in {spec.n_chunks} chunks of up to "
           f"{spec.chunk_points} -> {args.out}", file=sys.stderr)
     res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,

@@ -155,7 +155,7 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     >>> from impactbar import BarModel, CosineLoad, periodic_orbits
     >>> orbits = periodic_orbits(BarModel(s=10, d=0, R=0.5, n_modes=4), CosineLoad(0.5, 1.0))
     >>> [round(o.phase, 4) for o in orbits]
-    [0.5148, 2.6268]
+    [0.5511, 2.5905]
     """
     _check_inputs(model, load)
     _check_modes(model)

@@ -264,9 +264,10 @@ def fig8_plot(data: dict, axes=None):
     return ax, ax2
 
 
-def _save(fig, path: Path) -> None:
-    """Write the PNG and close the figure: the same last steps for every figure."""
-    fig.savefig(path, dpi=130)
+def _save(fig, path: Path, *, dpi: int = 130) -> None:
+    """Write the figure (its format from the suffix) and close it: the same last steps for every
+    figure."""
+    fig.savefig(path, dpi=dpi)
     import matplotlib.pyplot as plt  # noqa: PLC0415
 
     plt.close(fig)

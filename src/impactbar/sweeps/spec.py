@@ -328,7 +328,7 @@ def _check_load(load) -> dict:
     if "kind" not in load:
         raise ValueError(f"[load] missing key 'kind' (one of {list(LOAD_KINDS)})")
     kind = load["kind"]
-    if kind not in LOAD_KINDS:
+    if not isinstance(kind, str) or kind not in LOAD_KINDS:
         raise ValueError(f"[load] kind must be one of {list(LOAD_KINDS)}; got {kind!r}")
     fields = LOAD_KINDS[kind]
     unknown = [k for k in load if k != "kind" and k not in fields]

@@ -1,0 +1,210 @@
+"""One-line errors from every subcommand, checked before any computing (issues 21.7 and 24): output
+locations that cannot be written, sizes too large to draw, missing extras, Ctrl-C, a closed or full
+stdout, unhashable values in a sweep spec. Exit status 2 for bad input, 1 for a failed write or a
+missing extra, 141 for a closed pipe, 130 for Ctrl-C."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+import impactbar.paper
+import impactbar.simulation.experiments
+from impactbar.cli import main
+from impactbar.cli._common import MAX_DPI, UsageError, check_dpi, output_file, output_folder
+
+ROOT = Path(__file__).resolve().parents[2]
+ENV = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "MPLBACKEND": "Agg"}
+
+
+def _never(*args, **kwargs):
+    raise AssertionError("computed before the inputs were checked")
+
+
+@pytest.fixture
+def no_computing(monkeypatch):
+    """Any of the subcommands' computations fails the test: the error must come before them."""
+    monkeypatch.setattr(impactbar.paper, "reproduce", _never)
+    monkeypatch.setattr(impactbar.simulation.experiments, "run_experiment", _never)
+    monkeypatch.setattr("impactbar.physical.simulate", _never)
+    monkeypatch.setattr("impactbar.continuation.doubling_cascade", _never)
+    monkeypatch.setattr("impactbar.sweeps.plot.plot_sweep", _never)
+
+
+def _one_line_error(capsys, command):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert err[0].startswith(f"impactbar {command}: error: ")
+    return err[0]
+
+
+@pytest.fixture
+def a_file(tmp_path):
+    path = tmp_path / "a_file.txt"
+    path.write_text("not a folder")
+    return path
+
+
+def _bad_outs(tmp_path, a_file):
+    """Output locations that cannot be written: a virtual file system, under a file, a file."""
+    bad = [str(a_file / "sub"), str(a_file)]
+    if Path("/proc").is_dir():
+        bad.append("/proc/forbidden")
+    return bad
+
+
+@pytest.mark.parametrize("command", [
+    ["paper", "--quick"],
+    ["simulate", "--preset", "pneumatic-drill"],
+    ["continue", "--parameter", "p0", "--to", "0.8"],
+    ["experiment", "pneumatic", "--starts", "2"],
+])
+def test_an_output_folder_that_cannot_be_written_is_one_line_before_computing(
+        command, tmp_path, a_file, no_computing, capsys):
+    for out in _bad_outs(tmp_path, a_file):
+        assert main([*command, "--out", out]) == 2
+        line = _one_line_error(capsys, command[0])
+        assert f"--out {out}: " in line and ("cannot write there" in line or "is not a folder" in line)
+
+
+def test_plot_refuses_an_output_file_it_cannot_write(tmp_path, a_file, no_computing, capsys):
+    store = str(tmp_path / "missing.zarr")
+    cases = [str(a_file / "fig.png"), str(tmp_path)]  # under a file; a folder
+    if Path("/proc").is_dir():
+        cases.append("/proc/forbidden/fig.png")
+    for out in cases:
+        assert main(["plot", store, "--out", out]) == 2
+        assert f"--out {out}: " in _one_line_error(capsys, "plot")
+
+
+@pytest.mark.skipif(not hasattr(os, "geteuid") or os.geteuid() == 0,
+                    reason="permissions do not stop the superuser")
+def test_a_read_only_folder_is_refused(tmp_path, no_computing, capsys):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        assert main(["plot", "x.zarr", "--out", str(ro / "fig.png")]) == 2
+        assert "cannot write there" in _one_line_error(capsys, "plot")
+        assert main(["paper", "--out", str(ro / "figs")]) == 2
+        _one_line_error(capsys, "paper")
+    finally:
+        ro.chmod(0o755)
+
+
+def test_output_locations_are_created_when_missing(tmp_path):
+    assert output_folder(tmp_path / "a" / "b").is_dir()
+    assert output_file(tmp_path / "c" / "fig.png").parent.is_dir()
+    with pytest.raises(UsageError, match="is a folder"):
+        output_file(tmp_path)
+
+
+@pytest.mark.parametrize("command", [["plot", "x.zarr", "--out", "fig.png"], ["paper", "--quick"]])
+@pytest.mark.parametrize("dpi", [0, -5, MAX_DPI + 1, 100000])
+def test_a_dpi_too_large_to_draw_is_refused_up_front(command, dpi, tmp_path, no_computing, capsys,
+                                                    monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main([*command, "--dpi", str(dpi)]) == 2
+    assert f"--dpi must be in [1, {MAX_DPI}]" in _one_line_error(capsys, command[0])
+    assert check_dpi(MAX_DPI) == MAX_DPI and check_dpi(1) == 1
+
+
+def test_the_library_reproduce_refuses_bad_dpi_and_format(tmp_path):
+    from impactbar.paper import reproduce
+
+    with pytest.raises(ValueError, match=r"dpi must be in \[1, 1200\]"):
+        reproduce(tmp_path, quick=True, dpi=100000)
+    with pytest.raises(ValueError, match="format must be one of"):
+        reproduce(tmp_path, quick=True, format="jpg")
+    assert not any(tmp_path.iterdir())
+
+
+def test_experiment_without_matplotlib_fails_before_computing(monkeypatch, tmp_path, no_computing,
+                                                              capsys):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # find_spec then reports it missing
+    assert main(["experiment", "pneumatic", "--out", str(tmp_path / "x")]) == 1
+    line = _one_line_error(capsys, "experiment")
+    assert "pip install 'impactbar[plot]'" in line
+
+
+def test_ctrl_c_is_one_line_and_exit_130(monkeypatch, tmp_path, capsys):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(impactbar.paper, "reproduce", interrupted)
+    assert main(["paper", "--quick", "--out", str(tmp_path / "figs")]) == 130
+    assert capsys.readouterr().err.strip() == "impactbar paper: interrupted"
+
+
+def test_ctrl_c_during_paper_in_a_real_process(tmp_path):
+    out = tmp_path / "figs"
+    proc = subprocess.Popen([sys.executable, "-m", "impactbar", "paper", "--out", str(out)], env=ENV,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    while not out.exists() and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.05)  # the folder is made by the check before the computing starts
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    assert stderr.strip() == "impactbar paper: interrupted"
+
+
+def test_a_closed_stdout_ends_quietly_with_141():
+    proc = subprocess.run([sys.executable, "-c", "import os, sys; os.close(1); sys.stdout = None;"
+                           "from impactbar.cli import main; sys.exit(main(['orbits', '--n-modes', '0']))"],
+                          env=ENV, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 141, proc.stderr
+    assert proc.stderr == ""
+
+
+def test_a_closed_stdout_from_the_shell(tmp_path):
+    proc = subprocess.run(f"'{sys.executable}' -m impactbar orbits --n-modes 0 >&-", shell=True,
+                          env=ENV, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 141, proc.stderr
+    assert proc.stderr == ""
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+def test_a_full_disk_on_stdout_is_one_line_and_exit_1():
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "impactbar", "orbits", "--n-modes", "0"], env=ENV,
+                              stdout=full, stderr=subprocess.PIPE, text=True, timeout=300)
+    assert proc.returncode == 1
+    lines = proc.stderr.strip().splitlines()
+    assert lines == ["impactbar orbits: error: No space left on device"]
+
+
+@pytest.mark.parametrize("kind", ['["cosine"]', '{ a = 1 }'])
+def test_a_sweep_spec_with_an_unhashable_load_kind_is_one_line(kind, tmp_path, capsys):
+    spec = (ROOT / "examples" / "sweep_orbits.toml").read_text()
+    assert 'kind = "cosine"' in spec
+    path = tmp_path / "spec.toml"
+    path.write_text(spec.replace('kind = "cosine"', f"kind = {kind}"))
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out.zarr")]) == 2
+    assert "[load] kind must be one of" in _one_line_error(capsys, "sweep")
+
+
+def test_sweep_refuses_a_store_it_cannot_write_before_any_cluster(tmp_path, a_file, monkeypatch, capsys):
+    monkeypatch.setattr("impactbar.sweeps.run_sweep", _never)
+    spec = str(ROOT / "examples" / "sweep_orbits.toml")
+    for out in [str(a_file), str(a_file / "out.zarr")]:
+        assert main(["sweep", spec, "--out", out]) == 2
+        assert f"--out {out}: " in _one_line_error(capsys, "sweep")
+
+
+def test_paper_writes_the_format_and_dpi_asked(tmp_path, monkeypatch, capsys):
+    seen = {}
+
+    def fake(out, **kwargs):
+        seen.update(kwargs)
+        return [("4", "x", "1")]
+
+    monkeypatch.setattr(impactbar.paper, "reproduce", fake)
+    assert main(["paper", "--quick", "--out", str(tmp_path), "--dpi", "300", "--format", "svg"]) == 0
+    assert seen["dpi"] == 300 and seen["format"] == "svg"
+    assert "(.svg, .csv)" in capsys.readouterr().out

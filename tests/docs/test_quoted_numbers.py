@@ -1,0 +1,92 @@
+"""The headline numbers README.md and the theory page quote ("What we found", "Findings against the
+paper") are recomputed from the library: each quoted figure must be the computed one to the digits
+quoted (issue 21.3: Fig. 6's edges were once quoted at the grid point R = 0.5087 instead of R = 0.5)."""
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from impactbar import BarModel, CosineLoad
+from impactbar.orbits.charts import (
+    admissibility_edges,
+    hydraulic_existence_edge,
+    pneumatic_existence_edge,
+    pneumatic_stability_curve,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+PAGES = {"README.md": ROOT / "README.md", "theory.md": ROOT / "docs" / "theory.md"}
+NUM = r"\$?`?([0-9]+\.[0-9]+)`?\$?"
+RIGID = BarModel(s=1.0, d=0.0, R=0.0, n_modes=0)
+
+
+def _quoted(page: str, pattern: str) -> list[str]:
+    """The numbers the page quotes where ``pattern`` (with NUM groups) matches, whitespace-tolerant."""
+    text = re.sub(r"\s+", " ", PAGES[page].read_text())
+    m = re.search(pattern, text)
+    assert m is not None, f"{page}: the quote {pattern!r} is gone; update this test with the text"
+    return list(m.groups())
+
+
+def _agrees(quoted: str, value: float) -> bool:
+    """``quoted`` is ``value`` rounded to the digits quoted."""
+    decimals = len(quoted.split(".")[1])
+    return abs(float(quoted) - value) <= 0.5 * 10.0**-decimals * (1 + 1e-9)
+
+
+@pytest.fixture(scope="module")
+def fig6_edges():
+    """The paper's and the exact stability edges at R = 0.5 for k = 10, s pi = 10.1 and 10.01."""
+    out = {}
+    for spi in (10.1, 10.01):
+        model = BarModel(spi / math.pi, 0.0, 0.0, 8)
+        out[spi] = (pneumatic_stability_curve(model, [0.5], 10, criterion="paper").y[0],
+                    pneumatic_stability_curve(model, [0.5], 10).y[0])
+    return out
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_fig6_edges_near_resonance_are_quoted_at_R_one_half(page, fig6_edges):
+    paper, exact = fig6_edges[10.1]
+    q = _quoted(page, r"at [`$]R = 0\.5[`$] is [`$]k p_?0/p_?k = ([0-9.]+)[`$]; the exact multipliers "
+                r"of an 8-mode bar (?:\(\[§7\]\(theory-7\)\) )?put it at " + NUM)
+    assert _agrees(q[0], paper) and _agrees(q[1], exact), (q, paper, exact)
+    paper, exact = fig6_edges[10.01]
+    q = _quoted(page, r"s ?\\?pi = 10\.01`?\$?: " + NUM + " against " + NUM)
+    assert _agrees(q[0], paper) and _agrees(q[1], exact), (q, paper, exact)
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_far_from_resonance_the_criteria_agree_as_quoted(page):
+    q = _quoted(page, r"the two agree to ([0-9]e-[0-9]+)")
+    R = np.array([0.2, 0.5, 0.8])
+    paper = pneumatic_stability_curve(RIGID, R, 10, criterion="paper").y
+    exact = pneumatic_stability_curve(RIGID, R, 10).y
+    assert np.all(np.abs(paper - exact) <= float(q[0]))
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_the_R0_stable_band_is_quoted_as_computed(page):
+    fails, fold = _quoted(page, r"> 1/\\?sqrt[({]1 ?\+ ?\\?pi\^2[)}] = ([0-9.]+)[`$]: between there "
+                          r"and the fold [`$]([0-9.]+)[`$]")
+    lower, upper = _quoted(page, r"The admissible stable band at [`$]R = 0[`$] is [`$]([0-9.]+) < "
+                           r"p_?0/p_?1 < ([0-9.]+)[`$]")
+    assert fails == upper
+    assert _agrees(fold, float(pneumatic_existence_edge(0.0, 0.0, 1)))
+    assert _agrees(lower, pneumatic_stability_curve(RIGID, [0.0], 1).y[0])
+
+    def stable(orbits):  # the stable branch strikes while the load pulls away (cos phase < 0)
+        branch = [o for o in orbits if math.cos(o.phase) < 0]
+        return branch[0] if branch else None
+
+    edges = admissibility_edges(RIGID, lambda f: CosineLoad(f, 1.0), 0.27, 0.318, stable, xtol=1e-10)
+    assert len(edges) == 1 and _agrees(fails, edges[0])
+
+
+@pytest.mark.parametrize("page", PAGES)
+def test_the_hydraulic_edge_at_R0_is_sqrt2(page):
+    assert _quoted(page, r"(sqrt ?2[`$] at [`$]R = 0)")
+    assert hydraulic_existence_edge(RIGID) == pytest.approx(math.sqrt(2), abs=2e-13)
