@@ -55,7 +55,9 @@ def test_orbit_verdicts_are_the_same_at_every_load_scale(model, load, exponent):
     for a, b in zip(orbits, scaled, strict=True):
         assert b.impact_velocity == a.impact_velocity * L or \
             abs(b.impact_velocity - a.impact_velocity * L) <= 1e-8 * L * max(1.0, abs(a.impact_velocity))
-        np.testing.assert_allclose(b.multipliers, a.multipliers, rtol=1e-7, atol=1e-9)
+        if a.admissibility != "grazing":  # at zero impact velocity the saltation term is 1/0: the
+            # multipliers of an exactly grazing orbit are rounding noise at any scale
+            np.testing.assert_allclose(b.multipliers, a.multipliers, rtol=1e-7, atol=1e-9)
 
 
 def _margin(o, load):
