@@ -32,12 +32,16 @@ class ContactLaw:
     supports_schur : bool
         The paper's Schur criterion (eqs. 27-31) and eq. 14's charts (existence edges) belong to
         this law.
+    open_ended : bool
+        The contact step may last until the run's end (a sustained contact): the simulator passes
+        its ``t_end`` to :meth:`contact` as a keyword.
     """
 
     name: ClassVar[str] = ""
     instantaneous: ClassVar[bool] = True
     rigid_closed_forms: ClassVar[bool] = False
     supports_schur: ClassVar[bool] = False
+    open_ended: ClassVar[bool] = False
 
     def window(self, model) -> float:
         """Duration of one impact (dimensionless time): 0 for an instantaneous law.
@@ -140,6 +144,9 @@ class ContactLaw:
         kernel : object, optional
             The simulator's compiled view of the model and load (``impactbar.simulation``'s
             ``_Core``), for a law with a compiled contact solver; a law may ignore it.
+        t_end : float, optional
+            Only for a law with :attr:`open_ended`: the run's end, where a contact that lasts so
+            long stops (``t_release = t_end``).
 
         Returns
         -------

@@ -532,7 +532,8 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                 qa, va = q.copy(), v.copy()
                 n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, aq, av)
                 if st == K.MAXIMP or st == K.CONTACT:  # an impact, or a touch at zero speed
-                    q, v, t = _contact_step(core, segs, t, qa, va, n, tn, ot, aq, av, times, vels)
+                    q, v, t = _contact_step(core, segs, t, qa, va, n, tn, ot, aq, av, times, vels,
+                                            t_end, contacts)
                     n_imp += 1
                     if t >= t_end:  # the run ends inside the contact
                         t = t_end
@@ -662,11 +663,14 @@ def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
     return r[:, 0], rv[:, 0]
 
 
-def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, times, vels):
+def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, times, vels, t_end,
+                  contacts):
     """The law's contact step at the arrival the kernel stopped at (an impact, ``n = 1``, its state
     in ``aq, av``; or a touch at zero speed at ``tn``, the state then from the flight's start
     ``(t, qa, va)``): logs the contact segment and the impact; returns the state and time where the
-    flight resumes (positions from the stop, which the contact may have advanced)."""
+    flight resumes (positions from the stop, which the contact may have advanced). A sustained
+    contact after the law's window (:attr:`~impactbar.laws.ContactLaw.open_ended`) goes into
+    ``contacts``."""
     model = core.model
     c = core.c
     ti = float(ot[0]) if n else float(tn)
@@ -679,7 +683,12 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
     if arrival < 0.0:  # a touch whose speed rounded below zero
         vm[0] -= arrival
         arrival = 0.0
-    q, v, t_release, record = model.law.contact(model, core.load, ti, qm, vm, kernel=core)
+    law = model.law
+    kw = {"t_end": t_end} if law.open_ended else {}
+    q, v, t_release, record = law.contact(model, core.load, ti, qm, vm, kernel=core, **kw)
+    sustained = getattr(record, "sustained", None)
+    if sustained is not None:
+        contacts.append([sustained.t0, min(t_release, t_end)])
     times.append(ti)  # floats: the run's impacts are all the law's (no kernel blocks)
     vels.append(arrival)
     segs.add(ti, _WINDOW, qm, vm, "impact", record)
