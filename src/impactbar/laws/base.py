@@ -158,7 +158,8 @@ class ContactLaw:
             The blow's output: an object with ``t0``, ``duration`` (``t_release - t``),
             ``q_after``, ``v_after``, ``state_at(tau) -> (q, v)`` for ``0 <= tau <= duration``,
             ``account(tau) -> (drive_work, energy_out, field_energy)`` (the energy balance up to
-            ``tau``: ``energy_before + drive_work = field_energy + energy_out``) and ``resolve()``
+            ``tau``: ``energy_before + drive_work = field_energy + energy_out``, plus
+            ``damping(tau)`` where the record has it: a sustained contact) and ``resolve()``
             (the full record, for one solved lazily): :class:`~impactbar.WaveImpact`,
             :class:`~impactbar.laws.InstantImpact`.
         """

@@ -161,18 +161,23 @@ class WaveLaw(ContactLaw):
 
 class PressedContact:
     """A contact window followed by the sustained contact (theory §4b): the record of
-    :meth:`WaveLaw.contact` when the window ends with the end still moving into the rod.
+    :meth:`WaveLaw.contact` when the window ends with the end still moving into the rod. The blow's
+    own outputs (force wave, peak stresses, efficiency) are the window's; the energies and the
+    advance cover the whole contact.
 
     Attributes
     ----------
     t0, duration : float
         Start (load time) and length of the whole contact, window and sustained phase.
     window : WaveImpact
-        The blow: the window of ``2/s`` (:meth:`resolve` returns it).
+        The window of ``2/s``; attributes not listed here are the window's.
     sustained : SustainedContact
         The piston pressed on the rod from the window's end to the release.
     q_after, v_after : numpy.ndarray, shape (N + 1,)
         State at the release.
+    rod_energy, drive_work, advance : float
+        Over the whole contact: the energy sent into the rod, the drive's work, the rod end's
+        advance.
     """
 
     def __init__(self, window, sustained):
@@ -182,8 +187,24 @@ class PressedContact:
         self.q_after, self.v_after = sustained.q_after, sustained.v_after
 
     def resolve(self):
-        """The window's :class:`~impactbar.WaveImpact` (the blow)."""
-        return self.window.resolve()
+        """Itself, with the window solved."""
+        self.window = self.window.resolve()
+        return self
+
+    def __repr__(self) -> str:
+        return f"PressedContact(t0={self.t0!r}, duration={self.duration!r}, window={self.window!r})"
+
+    @property
+    def rod_energy(self) -> float:
+        return self.window.rod_energy + self.sustained.account(self.sustained.duration)[1]
+
+    @property
+    def drive_work(self) -> float:
+        return self.window.drive_work + self.sustained.account(self.sustained.duration)[0]
+
+    @property
+    def advance(self) -> float:
+        return self.window.advance + self.sustained.advance
 
     def state_at(self, tau):
         """Modal state at ``tau`` since the contact started (positions from the rod end)."""
@@ -193,17 +214,16 @@ class PressedContact:
         return self.sustained.state_at(tau - wd)
 
     def account(self, tau):
-        """``(drive_work, energy_out, field_energy)`` up to ``tau``: ``energy_before + drive_work
-        = field_energy + energy_out``; ``energy_out`` is the rod's energy plus, after the window,
-        the damping's loss (:meth:`damping`), and ``field_energy`` carries the window's
+        """``(drive_work, rod_energy, field_energy)`` up to ``tau``: ``energy_before + drive_work
+        = field_energy + rod_energy + damping(tau)``; ``field_energy`` carries the window's
         projection on the modes kept (the sustained phase starts from the projected state)."""
         wd = self.window.duration
         if tau <= wd:
             return self.window.account(tau)
         w1, r1, f1 = self.window.account(wd)
-        w2, r2, d2, f2 = self.sustained.account(tau - wd)
+        w2, r2, _, f2 = self.sustained.account(tau - wd)
         proj = f1 - _energy(self.sustained.model, self.window.q_after, self.window.v_after)
-        return w1 + w2, r1 + r2 + d2, f2 + proj
+        return w1 + w2, r1 + r2, f2 + proj
 
     def damping(self, tau) -> float:
         """Energy lost to the damping ``d`` up to ``tau`` (none inside the window)."""
@@ -211,6 +231,8 @@ class PressedContact:
         return 0.0 if tau <= wd else self.sustained.account(tau - wd)[2]
 
     def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
         return getattr(self.__dict__["window"], name)
 
 
@@ -222,6 +244,8 @@ def _energy(model, q, v) -> float:
 class _Window:
     """A contact window the compiled kernel found without separation: its post-contact state is
     known; the full :class:`~impactbar.WaveImpact` (force wave, energies) is solved on first use."""
+
+    sustained = None  # no sustained contact follows (asking must not solve the window)
 
     def __init__(self, model, load, t0, q, v, q_after, v_after):
         self._args = (model, load, t0, q, v)

@@ -544,9 +544,7 @@ def _energy_account(tr: Trajectory) -> EnergyAccount:
             window = seg.frozen
             dt = min(tb - seg.t, window.duration)
             w, rod, field_energy = window.account(dt)
-            dl = window.damping(dt) if hasattr(window, "damping") else 0.0  # a sustained contact's
-            damp += dl
-            rod -= dl
+            damp += window.damping(dt) if hasattr(window, "damping") else 0.0  # a sustained contact
             if dt >= window.duration:
                 qe, ve = window.q_after, window.v_after
             else:
