@@ -27,6 +27,8 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from .impact import modal_energy
+
 __all__ = ["SustainedContact", "sustained_contact"]
 
 TWO_PI = 2.0 * math.pi
@@ -240,7 +242,7 @@ class SustainedContact:
         """
         work, rod, damp, _ = self._integrals(tau)
         q, v = self.state_at(tau)
-        return work, rod, damp, _modal_energy(self.model, q, v)
+        return work, rod, damp, modal_energy(self.model.s, q, v)
 
     @property
     def advance(self) -> float:
@@ -282,11 +284,6 @@ class SustainedContact:
             damp += self.model.d * float(np.sum(wts * (self.kappa @ (v * v))))
             adv += float(np.sum(wts * ut1))
         return work, rod, damp, adv
-
-
-def _modal_energy(model, q, v) -> float:
-    kappa = np.where(np.arange(q.size) == 0, 1.0, 2.0)
-    return float(0.5 * np.sum(kappa * v * v) + 0.5 * np.sum(kappa * model.frequencies**2 * q * q))
 
 
 def sustained_contact(model, load, t0, q, v, t_end) -> SustainedContact:

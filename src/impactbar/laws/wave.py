@@ -222,7 +222,9 @@ class PressedContact:
             return self.window.account(tau)
         w1, r1, f1 = self.window.account(wd)
         w2, r2, _, f2 = self.sustained.account(tau - wd)
-        proj = f1 - _energy(self.sustained.model, self.window.q_after, self.window.v_after)
+        from ..dynamics.impact import modal_energy
+
+        proj = f1 - modal_energy(self.sustained.model.s, self.window.q_after, self.window.v_after)
         return w1 + w2, r1 + r2, f2 + proj
 
     def damping(self, tau) -> float:
@@ -234,11 +236,6 @@ class PressedContact:
         if name.startswith("__"):
             raise AttributeError(name)
         return getattr(self.__dict__["window"], name)
-
-
-def _energy(model, q, v) -> float:
-    kappa = np.where(np.arange(q.size) == 0, 1.0, 2.0)
-    return float(0.5 * np.sum(kappa * v * v) + 0.5 * np.sum(kappa * model.frequencies**2 * q * q))
 
 
 class _Window:

@@ -12,7 +12,9 @@ At an impact the model's law acts (:attr:`impactbar.BarModel.law`): the paper's
 ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11) is applied inside the compiled flight kernel; a law that is
 not instantaneous (the wave law, ``BarModel(impact="wave")``, theory §4b: a contact window of length
 ``2/s`` with the long rod, solved by characteristics) makes the kernel stop at the arrival, and its
-contact step (:meth:`impactbar.laws.ContactLaw.contact`) gives the state where the flight resumes.
+contact step (:meth:`impactbar.laws.ContactLaw.contact`) gives the state where the flight resumes
+(under the wave law after a sustained contact where the window ends with the end still driven into
+the rod: :mod:`impactbar.dynamics.sustained`).
 
 With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
 accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field
