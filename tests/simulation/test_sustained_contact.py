@@ -32,7 +32,7 @@ def test_solution_against_an_ode_solver(load, n_modes, R):
     """The exact (eigenvector) solution against Radau on the same dashpot-loaded modal system,
     built here from the field equation (the force ``Z u_t(1)`` at ``x = 1`` enters mode ``n`` with
     ``(-1)^n``), and the energy balance of the record."""
-    model = BarModel(50.0, 0.1, R, n_modes, impact="wave")
+    model = BarModel(10.0, 0.1, R, n_modes, impact="wave")
     M = n_modes + 1
     q, v = np.zeros(M), np.zeros(M)
     v[0] = 0.01
@@ -43,12 +43,12 @@ def test_solution_against_an_ode_solver(load, n_modes, R):
     sign = (-1.0) ** np.arange(M)
     w2 = (model.s * np.pi * np.arange(M)) ** 2
 
-    def rhs(t, y):
-        qq, vv = y[:M], y[M:]
-        return np.concatenate((vv, load(t) - model.d * vv - w2 * qq - sign * Z * (c @ vv)))
-
-    sol = solve_ivp(rhs, (0.3, 0.3 + sc.duration), np.concatenate((q, v)), method="Radau",
-                    rtol=1e-11, atol=1e-14, max_step=0.01)
+    jac = np.block([[np.zeros((M, M)), np.eye(M)],
+                    [-np.diag(w2), -model.d * np.eye(M) - Z * np.outer(sign, c)]])
+    ones = np.r_[np.zeros(M), np.ones(M)]
+    sol = solve_ivp(lambda t, y: jac @ y + ones * load(t), (0.3, 0.3 + sc.duration),
+                    np.concatenate((q, v)), method="Radau", jac=jac, rtol=1e-11, atol=1e-14,
+                    max_step=0.05)
     # free-free state with positions from the moving rod end: the ODE's q less the rod's advance
     yq, yv = sol.y[:M, -1], sol.y[M:, -1]
     yq = yq - np.r_[c @ yq, np.zeros(n_modes)]
