@@ -158,7 +158,10 @@ class SustainedContact:
         lam_max = float(np.max(np.abs(self.lam))) if self.lam.size else 1.0
         decay = float(np.min(-self.lam.real)) if self.lam.size else 1.0
         kmax = float(np.max(self._data.ks)) if self._data.kind == 0 and self._data.ks.size else 0.0
-        h_tr = TWO_PI / (_PER_PERIOD * lam_max)  # on the transients
+        # on the transients: a geometric start resolves the fastest decay (the rigid piston's,
+        # -Z), then steps resolve the fastest oscillation
+        osc = float(np.max(np.abs(self.lam.imag))) if self.lam.size else 0.0
+        h_tr = (1.0 / lam_max, TWO_PI / (_PER_PERIOD * osc) if osc > 0.0 else math.inf)
         h_ld = TWO_PI / (_PER_PERIOD * max(kmax, 1.0))  # on the load
         scale = max(self._data.psup / self.impedance, abs(float(self.c @ z[self.N:])), 1e-300)
         ta = self.t0
@@ -179,26 +182,45 @@ class SustainedContact:
             ta = tb
 
     def _search(self, piece, h_tr, h_ld, decay, scale):
-        """First time in ``(ta, tb]`` where ``c . q'`` turns negative, or None."""
+        """First time in ``(ta, tb]`` where ``c . q'`` turns negative, or None. The samples go in
+        chunks (bounded memory); a dip below zero between two samples (shorter than a twelfth of
+        the fastest transient's period, or of the load's highest harmonic) is not seen."""
         ta, tb = piece.ta, piece.tb
         span = tb - ta
         # the transients: sampled finely until their bound is negligible
         big = float(np.sum(np.abs(self.fv * piece.coef)))
         t_tr = math.log(max(big / (_TRANSIENT_TOL * scale), 1.0)) / decay if big > 0 else 0.0
         t_tr = min(t_tr, span)
-        grid = [ta + np.arange(0.0, t_tr, h_tr)] if t_tr > 0 else []
-        grid.append(np.linspace(ta + t_tr, tb, max(2, math.ceil((span - t_tr) / h_ld) + 1)))
-        t = np.concatenate(grid)
-        f = self.fv_at(piece, t)
-        below = np.nonzero(f[1:] <= 0.0)[0]
-        if below.size == 0:
-            return None
-        i = int(below[0]) + 1
-        a, b = t[i - 1], t[i]
-        if f[i - 1] <= 0.0:  # at the piece's start already (a load that turns tensile there)
-            return a
-        return brentq(lambda x: self.fv_at(piece, np.array([x]))[0], a, b, xtol=1e-15 * max(1.0, abs(b)),
-                      rtol=4 * np.finfo(float).eps)
+        h_fast, h_osc = h_tr
+        h_osc = min(h_osc, max(t_tr / 16.0, h_fast))
+        start = h_fast * 2.0 ** np.arange(0, max(1, math.ceil(math.log2(max(h_osc / h_fast, 1.0))) + 1))
+        start = start[start < min(h_osc, t_tr)] if t_tr > 0 else start[:0]
+        n_osc = math.ceil(max(t_tr - (start[-1] if start.size else 0.0), 0.0) / h_osc) if t_tr > 0 else 0
+        n_ld = max(2, math.ceil((span - t_tr) / h_ld) + 1)
+
+        def chunks():
+            yield np.r_[ta, ta + start]
+            base = ta + (start[-1] if start.size else 0.0)
+            for i in range(0, n_osc, 4096):
+                yield base + h_osc * np.arange(i + 1, min(i + 4096, n_osc) + 1)
+            yield np.linspace(ta + t_tr, tb, n_ld)
+
+        t_prev = f_prev = None
+        for t in chunks():
+            t = np.minimum(t, tb)
+            f = self.fv_at(piece, t)
+            if t_prev is not None:
+                t, f = np.r_[t_prev, t], np.r_[f_prev, f]
+            below = np.nonzero(f[1:] <= 0.0)[0]
+            if below.size:
+                i = int(below[0]) + 1
+                a, b = t[i - 1], t[i]
+                if f[i - 1] <= 0.0:  # at the piece's start already (a load turning tensile there)
+                    return a
+                return brentq(lambda x: self.fv_at(piece, np.array([x]))[0], a, b,
+                              xtol=1e-15 * max(1.0, abs(b)), rtol=4 * np.finfo(float).eps)
+            t_prev, f_prev = t[-1], f[-1]
+        return None
 
     def fv_at(self, piece, t) -> np.ndarray:
         """``c . q'`` (the struck end's velocity) at the times ``t``."""
@@ -254,6 +276,8 @@ class SustainedContact:
         work = rod = damp = adv = 0.0
         lam_max = float(np.max(np.abs(self.lam)))
         decay = float(np.min(-self.lam.real))
+        osc = float(np.max(np.abs(self.lam.imag)))
+        h_osc = 1.5 / osc if osc > 0.0 else math.inf
         D = self._data
         kmax = float(np.max(D.ks)) if D.kind == 0 and D.ks.size else 0.0
         N = self.N
@@ -261,28 +285,35 @@ class SustainedContact:
             a, b = p.ta, min(p.tb, t_end)
             if b <= a:
                 break
-            # panels: growing geometrically from the piece's start over the transients, then on
-            # the load's scale
-            edges = [a]
-            x = a
+            # panels: doubling from 1/|lambda|_max at the piece's start (the fastest decay) up to
+            # the fastest oscillation's scale, over the transients; then on the load's scale
             t_tr = min(b, a + 40.0 / decay)
-            while x < t_tr:
-                x = min(x + (1.0 + (x - a) * decay) / lam_max, t_tr)
-                edges.append(x)
-            n_rest = math.ceil((b - x) * (kmax + 1.0) / 1.5) if b > x else 0
+            grow = [a]
+            w = 1.0 / lam_max
+            while grow[-1] < t_tr and w < h_osc:
+                grow.append(min(grow[-1] + w, t_tr))
+                w *= 2.0
+            x = grow[-1]
+            n_osc = math.ceil((t_tr - x) / h_osc) if t_tr > x else 0
+            n_rest = math.ceil((b - t_tr) * (kmax + 1.0) / 1.5) if b > t_tr else 0
+            parts = [np.asarray(grow)]
+            if n_osc:
+                parts.append(np.linspace(x, t_tr, n_osc + 1)[1:])
             if n_rest:
-                edges.extend(np.linspace(x, b, n_rest + 1)[1:])
-            e = np.asarray(edges)
-            half = 0.5 * (e[1:] - e[:-1])
-            nodes = (half[:, None] * (_GL_X[None, :] + 1.0) + e[:-1, None]).ravel()
-            wts = (half[:, None] * _GL_W[None, :]).ravel()
-            v = p.states(nodes)[N:]
-            ut1 = self.c @ v
-            pn = self.load(nodes) if p.level is None else p.level
-            work += float(np.sum(wts * pn * (self.kappa @ v)))
-            rod += self.impedance * float(np.sum(wts * ut1 * ut1))
-            damp += self.model.d * float(np.sum(wts * (self.kappa @ (v * v))))
-            adv += float(np.sum(wts * ut1))
+                parts.append(np.linspace(t_tr, b, n_rest + 1)[1:])
+            e = np.concatenate(parts)
+            for i in range(0, e.size - 1, 1024):  # bounded memory: 1024 panels at a time
+                ee = e[i:i + 1025]
+                half = 0.5 * (ee[1:] - ee[:-1])
+                nodes = (half[:, None] * (_GL_X[None, :] + 1.0) + ee[:-1, None]).ravel()
+                wts = (half[:, None] * _GL_W[None, :]).ravel()
+                v = p.states(nodes)[N:]
+                ut1 = self.c @ v
+                pn = self.load(nodes) if p.level is None else p.level
+                work += float(np.sum(wts * pn * (self.kappa @ v)))
+                rod += self.impedance * float(np.sum(wts * ut1 * ut1))
+                damp += self.model.d * float(np.sum(wts * (self.kappa @ (v * v))))
+                adv += float(np.sum(wts * ut1))
         return work, rod, damp, adv
 
 
