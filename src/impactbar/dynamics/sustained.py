@@ -29,7 +29,7 @@ from scipy.optimize import brentq
 
 from .impact import modal_energy
 
-__all__ = ["SustainedContact", "sustained_contact"]
+__all__ = ["SustainedContact", "rod_impedance", "sustained_contact"]
 
 TWO_PI = 2.0 * math.pi
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
@@ -40,7 +40,18 @@ _PER_PERIOD = 12
 
 
 def rod_impedance(model) -> float:
-    """The rod's impedance ``Z = s (1 + R)/(1 - R)`` (dimensionless; ``inf`` at ``R = 1``)."""
+    """The long rod's impedance in the model's units (theory §4b).
+
+    Parameters
+    ----------
+    model : BarModel
+
+    Returns
+    -------
+    float
+        ``Z = s A_s/A = s (1 + R)/(1 - R)``: the rod end's force per unit velocity,
+        ``F = Z u_t(1)`` with ``F = -s^2 u_x(1)`` (eq. 2's units); ``inf`` at ``R = 1``.
+    """
     R = model.R
     return math.inf if R >= 1.0 else model.s * (1.0 + R) / (1.0 - R)
 
@@ -60,12 +71,6 @@ class _Piece:
         dt = np.asarray(t, dtype=float) - self.ta
         tr = sys.V @ (self.coef[:, None] * np.exp(np.outer(sys.lam, dt)))
         return (tr + sys.particular(np.asarray(t, dtype=float), self.level)).real
-
-    def transient_bound(self, t) -> np.ndarray:
-        """Bound of the transient part of ``c . q'`` at the times ``t``."""
-        sys = self.sys
-        dt = np.asarray(t, dtype=float) - self.ta
-        return np.abs(sys.fv * self.coef) @ np.exp(np.outer(sys.lam.real, dt))
 
 
 class SustainedContact:
