@@ -10,8 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from impactbar import BarModel, CosineLoad, SquareWaveLoad, periodic_orbits
-from impactbar._status import Admissibility
+from impactbar import Admissibility, BarModel, CosineLoad, SquareWaveLoad, periodic_orbits
 
 TWO_PI = 2 * math.pi
 LIMIT = settings(max_examples=20, deadline=None, derandomize=True,
