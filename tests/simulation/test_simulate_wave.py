@@ -183,14 +183,16 @@ def test_separating_windows_compiled_as_in_python(preset, monkeypatch):
     model = h.model.with_(impact="wave")
     start = InitialState.rigid(-0.05, 0.0, n_modes=model.n_modes)
     ref_impact = D.wave_impact
+    # 64 periods: the sustained contact (theory §4b) replaced the chained windows of the presses
+    periods = 64
     with use_reference("simulate.wave_separation"):
-        ref = simulate(model, h.load, start, 40 * TWO_PI)
+        ref = simulate(model, h.load, start, periods * TWO_PI)
 
     def refused(*args):
         raise AssertionError("the Python solver was called")
 
     monkeypatch.setattr(D, "wave_impact", refused)
-    tr = simulate(model, h.load, start, 40 * TWO_PI)
+    tr = simulate(model, h.load, start, periods * TWO_PI)
     monkeypatch.setattr(D, "wave_impact", ref_impact)
     assert tr.n_impacts == ref.n_impacts > 20
     np.testing.assert_allclose(tr.impact_times, ref.impact_times, rtol=0, atol=1e-10)
@@ -201,7 +203,8 @@ def test_separating_windows_compiled_as_in_python(preset, monkeypatch):
                                rtol=1e-10, atol=1e-12)
     sep = [i for i, imp in enumerate(ref.impacts) if imp.separations > 0]
     if preset == "hydraulic-drill":
-        assert len(sep) >= 2  # separating windows were taken by the kernel
+        assert len(sep) >= 1  # a separating window was taken by the kernel (the sustained contact
+        # took the others, which were chained windows of the presses)
     for i in sep:
         assert tr.impacts[i].peak_rod_stress == pytest.approx(ref.impacts[i].peak_rod_stress, rel=1e-10)
         np.testing.assert_allclose(tr.impacts[i].contact, ref.impacts[i].contact, rtol=0, atol=1e-12)

@@ -15,9 +15,10 @@ from .base import ContactLaw as ContactLaw
 from .base import get_law as get_law
 from .paper import InstantImpact as InstantImpact
 from .paper import PaperLaw as PaperLaw
+from .wave import PressedContact as PressedContact
 from .wave import WaveLaw as WaveLaw
 
-__all__ = ["ContactLaw", "PaperLaw", "WaveLaw", "InstantImpact", "LAWS", "get_law"]
+__all__ = ["ContactLaw", "PaperLaw", "WaveLaw", "PressedContact", "InstantImpact", "LAWS", "get_law"]
 
 #: The impact laws by name: ``"paper"`` (eq. 10) and ``"wave"`` (the long rod, theory §4b). The table
 #: itself lives in :mod:`impactbar.laws.base`, below the laws' implementations, so that

@@ -32,12 +32,16 @@ class ContactLaw:
     supports_schur : bool
         The paper's Schur criterion (eqs. 27-31) and eq. 14's charts (existence edges) belong to
         this law.
+    open_ended : bool
+        The contact step may last until the run's end (a sustained contact): the simulator passes
+        its ``t_end`` to :meth:`contact` as a keyword.
     """
 
     name: ClassVar[str] = ""
     instantaneous: ClassVar[bool] = True
     rigid_closed_forms: ClassVar[bool] = False
     supports_schur: ClassVar[bool] = False
+    open_ended: ClassVar[bool] = False
 
     def window(self, model) -> float:
         """Duration of one impact (dimensionless time): 0 for an instantaneous law.
@@ -151,6 +155,9 @@ class ContactLaw:
         kernel : object, optional
             The simulator's compiled view of the model and load (``impactbar.simulation``'s
             ``_Core``), for a law with a compiled contact solver; a law may ignore it.
+        t_end : float, optional
+            Only for a law with :attr:`open_ended`: the run's end, where a contact that lasts so
+            long stops (``t_release = t_end``).
 
         Returns
         -------
@@ -162,7 +169,8 @@ class ContactLaw:
             The blow's output: an object with ``t0``, ``duration`` (``t_release - t``),
             ``q_after``, ``v_after``, ``state_at(tau) -> (q, v)`` for ``0 <= tau <= duration``,
             ``account(tau) -> (drive_work, energy_out, field_energy)`` (the energy balance up to
-            ``tau``: ``energy_before + drive_work = field_energy + energy_out``) and ``resolve()``
+            ``tau``: ``energy_before + drive_work = field_energy + energy_out``, plus
+            ``damping(tau)`` where the record has it: a sustained contact) and ``resolve()``
             (the full record, for one solved lazily): :class:`~impactbar.WaveImpact`,
             :class:`~impactbar.laws.InstantImpact`.
         """

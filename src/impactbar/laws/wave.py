@@ -14,7 +14,7 @@ import numpy as np
 
 from .base import ContactLaw
 
-__all__ = ["WaveLaw"]
+__all__ = ["PressedContact", "WaveLaw"]
 
 _GL20_X, _GL20_W = np.polynomial.legendre.leggauss(20)
 
@@ -32,6 +32,7 @@ class WaveLaw(ContactLaw):
     instantaneous = False
     rigid_closed_forms = False
     supports_schur = False
+    open_ended = True
 
     def window(self, model) -> float:
         """``2/s``: the wave's return trip along the bar."""
@@ -104,10 +105,36 @@ class WaveLaw(ContactLaw):
         qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
         return wave_impact(model, load, t, qm, y_minus[M:])
 
-    def contact(self, model, load, t, q_minus, v_minus, *, kernel=None):
+    def contact(self, model, load, t, q_minus, v_minus, *, kernel=None, t_end=None):
         """The window ``[t, t + 2/s]``: by the compiled kernels when ``kernel`` is given (the
         :class:`~impactbar.WaveImpact` then solved on first use), else by
-        :func:`~impactbar.dynamics.impact.wave_impact`."""
+        :func:`~impactbar.dynamics.impact.wave_impact`. A window that ends with the struck end
+        still moving into the rod goes on as the sustained contact
+        (:class:`~impactbar.dynamics.sustained.SustainedContact`, theory §4b) until the interface
+        force would turn tensile, or until ``t_end`` (default: two load periods after the window,
+        where a contact still pressed resumes as a new arrival); the record then is a
+        :class:`PressedContact`."""
+        q, v, t_release, imp = self._window(model, load, t, q_minus, v_minus, kernel)
+        c = model.end_weights
+        ends = float(c @ v)
+        scale = max(float(np.abs(c) @ np.abs(q)), 1e-300)
+        if model.R < 1.0 and ends > 0.0 and abs(float(c @ q)) <= 1e-12 * scale + 1e-300:
+            from ..dynamics.sustained import sustained_contact
+
+            horizon = t_release + 4.0 * np.pi if t_end is None else max(float(t_end), t_release)
+            if horizon > t_release:
+                q = q.copy()
+                q[0] -= float(c @ q)  # the end exactly on the rod end (rounding)
+                sc = sustained_contact(model, load, t_release, q, v, horizon)
+                q, v = sc.q_after.copy(), sc.v_after.copy()
+                if sc.released:  # the end at rest on the rod end (rounding must not push it in)
+                    q[0] -= float(c @ q)
+                    v[0] -= max(float(c @ v), 0.0)
+                imp = PressedContact(imp, sc)
+                t_release = sc.t0 + sc.duration
+        return q, v, t_release, imp
+
+    def _window(self, model, load, t, q_minus, v_minus, kernel):
         from ..dynamics.impact import wave_impact
 
         ti, qm, vm = float(t), q_minus, v_minus
@@ -138,9 +165,90 @@ class WaveLaw(ContactLaw):
         return q, v, t_release, imp
 
 
+class PressedContact:
+    """A contact window followed by the sustained contact (theory §4b): the record of
+    :meth:`WaveLaw.contact` when the window ends with the end still moving into the rod. The blow's
+    own outputs (force wave, peak stresses, efficiency) are the window's; the energies and the
+    advance cover the whole contact.
+
+    Attributes
+    ----------
+    t0, duration : float
+        Start (load time) and length of the whole contact, window and sustained phase.
+    window : WaveImpact
+        The window of ``2/s``; attributes not listed here are the window's.
+    sustained : SustainedContact
+        The piston pressed on the rod from the window's end to the release.
+    q_after, v_after : numpy.ndarray, shape (N + 1,)
+        State at the release.
+    rod_energy, drive_work, advance : float
+        Over the whole contact: the energy sent into the rod, the drive's work, the rod end's
+        advance.
+    """
+
+    def __init__(self, window, sustained):
+        self.window, self.sustained = window, sustained
+        self.t0 = window.t0
+        self.duration = window.duration + sustained.duration
+        self.q_after, self.v_after = sustained.q_after, sustained.v_after
+
+    def resolve(self):
+        """Itself, with the window solved."""
+        self.window = self.window.resolve()
+        return self
+
+    def __repr__(self) -> str:
+        return f"PressedContact(t0={self.t0!r}, duration={self.duration!r}, window={self.window!r})"
+
+    @property
+    def rod_energy(self) -> float:
+        return self.window.rod_energy + self.sustained.account(self.sustained.duration)[1]
+
+    @property
+    def drive_work(self) -> float:
+        return self.window.drive_work + self.sustained.account(self.sustained.duration)[0]
+
+    @property
+    def advance(self) -> float:
+        return self.window.advance + self.sustained.advance
+
+    def state_at(self, tau):
+        """Modal state at ``tau`` since the contact started (positions from the rod end)."""
+        wd = self.window.duration
+        if tau <= wd:
+            return self.window.state_at(tau)
+        return self.sustained.state_at(tau - wd)
+
+    def account(self, tau):
+        """``(drive_work, rod_energy, field_energy)`` up to ``tau``: ``energy_before + drive_work
+        = field_energy + rod_energy + damping(tau)``; ``field_energy`` carries the window's
+        projection on the modes kept (the sustained phase starts from the projected state)."""
+        wd = self.window.duration
+        if tau <= wd:
+            return self.window.account(tau)
+        w1, r1, f1 = self.window.account(wd)
+        w2, r2, _, f2 = self.sustained.account(tau - wd)
+        from ..dynamics.impact import modal_energy
+
+        proj = f1 - modal_energy(self.sustained.model.s, self.window.q_after, self.window.v_after)
+        return w1 + w2, r1 + r2, f2 + proj
+
+    def damping(self, tau) -> float:
+        """Energy lost to the damping ``d`` up to ``tau`` (none inside the window)."""
+        wd = self.window.duration
+        return 0.0 if tau <= wd else self.sustained.account(tau - wd)[2]
+
+    def __getattr__(self, name):
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self.__dict__["window"], name)
+
+
 class _Window:
     """A contact window the compiled kernel found without separation: its post-contact state is
     known; the full :class:`~impactbar.WaveImpact` (force wave, energies) is solved on first use."""
+
+    sustained = None  # no sustained contact follows (asking must not solve the window)
 
     def __init__(self, model, load, t0, q, v, q_after, v_after):
         self._args = (model, load, t0, q, v)

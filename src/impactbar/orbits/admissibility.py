@@ -24,6 +24,21 @@ SEEDS = 4
 _SAMPLE_FLOOR = 0.05
 
 
+def _window_departure(status, at_rest, v_dep, separates):
+    """The verdict of a flight that starts where a contact window closes (the wave law, theory
+    §4b): contact lost inside the window is ``separates``; an end still moving into the rod when the
+    window closes is ``sticks`` (the rod then goes on absorbing the piston's push as a dashpot of its
+    impedance, the sustained contact of theory §4b), whatever the flight's certified search says of
+    the penetration that this departure starts; a backward arrival keeps its verdict."""
+    if status == Admissibility.BACKWARD_IMPACT:
+        return status
+    if separates and status == Admissibility.ADMISSIBLE:
+        return Admissibility.SEPARATES
+    if not at_rest and v_dep > 0.0:
+        return Admissibility.STICKS
+    return status
+
+
 def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=None, flow=None):
     """Decide admissibility (theory §5) with certified bounds, over the flight
     ``[phase, phase + horizon]`` from ``y_plus``; ``at_rest`` (default ``R == 0``) says the end

@@ -31,7 +31,7 @@ from .._shared.validate import check_int, check_real
 from ..dynamics.modal import fundamental
 from ..loads import Load
 from ..model import BarModel
-from .admissibility import _admissibility
+from .admissibility import _admissibility, _window_departure
 from .one_impact import periodic_orbits
 from .orbit import MultiImpactOrbit as MultiImpactOrbit
 from .orbit import PeriodicOrbit
@@ -247,11 +247,9 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> PeriodicOrbi
                 at_rest = abs(v_dep) <= 1e-12 * max(abs(float(v_imp[j - 1])), load.sup_abs, 1e-300)
             st, cl, ce = _admissibility(model, load, float(t[j] + Tw), y0, float(v_imp[j]),
                                         horizon=float(T), at_rest=at_rest)
-            if Tw > 0.0 and st == Admissibility.ADMISSIBLE:
-                if contacts is not None and contacts[j].separations:
-                    st = Admissibility.SEPARATES
-                elif not at_rest and v_dep > 0.0:
-                    st = Admissibility.STICKS
+            if Tw > 0.0:
+                st = _window_departure(st, at_rest, v_dep,
+                                       contacts is not None and bool(contacts[j].separations))
             statuses.append(st)
             if cl > clear:
                 clear, cerr = cl, ce

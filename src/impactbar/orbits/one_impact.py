@@ -17,7 +17,7 @@ from .._shared.threads import single_threaded_blas
 from ..dynamics.implementations import use_fast
 from ..loads import FourierLoad, Load, SquareWaveLoad
 from ..model import BarModel
-from .admissibility import _admissibility
+from .admissibility import _admissibility, _window_departure
 from .orbit import PeriodicOrbit
 from .phase import _check_inputs
 from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers, rigid_square_orbits
@@ -403,11 +403,7 @@ def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> P
     at_rest = abs(v_dep) <= 1e-12 * scale
     status, clearance, cerr = _admissibility(model, load, phase + T, y_end, v_imp,
                                              horizon=TWO_PI - T, at_rest=at_rest)
-    if status == Admissibility.ADMISSIBLE:
-        if impact is not None and impact.separations:
-            status = Admissibility.SEPARATES
-        elif not at_rest and v_dep > 0.0:
-            status = Admissibility.STICKS
+    status = _window_departure(status, at_rest, v_dep, impact is not None and bool(impact.separations))
     admissible = status == Admissibility.ADMISSIBLE
     mu = _sorted_multipliers(wave_impact_map_jacobian, 2 * M, model, load, phase, y_end, y_minus, rate)
     blocks = schur_blocks(model, load, phase)

@@ -12,7 +12,9 @@ At an impact the model's law acts (:attr:`impactbar.BarModel.law`): the paper's
 ``u_t(x) -> -R u_t(x)`` (eqs. 10, 11) is applied inside the compiled flight kernel; a law that is
 not instantaneous (the wave law, ``BarModel(impact="wave")``, theory §4b: a contact window of length
 ``2/s`` with the long rod, solved by characteristics) makes the kernel stop at the arrival, and its
-contact step (:meth:`impactbar.laws.ContactLaw.contact`) gives the state where the flight resumes.
+contact step (:meth:`impactbar.laws.ContactLaw.contact`) gives the state where the flight resumes
+(under the wave law after a sustained contact where the window ends with the end still driven into
+the rod: :mod:`impactbar.dynamics.sustained`).
 
 With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
 accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field
@@ -532,7 +534,8 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
                 qa, va = q.copy(), v.copy()
                 n, st, tn, ot, _ = core.run_free(t, q, v, t_end, 1, aq, av)
                 if st == K.MAXIMP or st == K.CONTACT:  # an impact, or a touch at zero speed
-                    q, v, t = _contact_step(core, segs, t, qa, va, n, tn, ot, aq, av, times, vels)
+                    q, v, t = _contact_step(core, segs, t, qa, va, n, tn, ot, aq, av, times, vels,
+                                            t_end, contacts)
                     n_imp += 1
                     if t >= t_end:  # the run ends inside the contact
                         t = t_end
@@ -662,11 +665,14 @@ def _contact_at(core: _Core, seg: _Segment, t: float, t_end: float):
     return r[:, 0], rv[:, 0]
 
 
-def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, times, vels):
+def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, times, vels, t_end,
+                  contacts):
     """The law's contact step at the arrival the kernel stopped at (an impact, ``n = 1``, its state
     in ``aq, av``; or a touch at zero speed at ``tn``, the state then from the flight's start
     ``(t, qa, va)``): logs the contact segment and the impact; returns the state and time where the
-    flight resumes (positions from the stop, which the contact may have advanced)."""
+    flight resumes (positions from the stop, which the contact may have advanced). A sustained
+    contact after the law's window (:attr:`~impactbar.laws.ContactLaw.open_ended`) goes into
+    ``contacts``."""
     model = core.model
     c = core.c
     ti = float(ot[0]) if n else float(tn)
@@ -679,7 +685,12 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
     if arrival < 0.0:  # a touch whose speed rounded below zero
         vm[0] -= arrival
         arrival = 0.0
-    q, v, t_release, record = model.law.contact(model, core.load, ti, qm, vm, kernel=core)
+    law = model.law
+    kw = {"t_end": t_end} if law.open_ended else {}
+    q, v, t_release, record = law.contact(model, core.load, ti, qm, vm, kernel=core, **kw)
+    sustained = getattr(record, "sustained", None)
+    if sustained is not None:
+        contacts.append([sustained.t0, min(t_release, t_end)])
     times.append(ti)  # floats: the run's impacts are all the law's (no kernel blocks)
     vels.append(arrival)
     segs.add(ti, _WINDOW, qm, vm, "impact", record)

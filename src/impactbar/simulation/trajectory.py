@@ -563,6 +563,7 @@ def _energy_account(tr: Trajectory) -> EnergyAccount:
             window = seg.frozen
             dt = min(tb - seg.t, window.duration)
             w, rod, field_energy = window.account(dt)
+            damp += window.damping(dt) if hasattr(window, "damping") else 0.0  # a sustained contact
             if dt >= window.duration:
                 qe, ve = window.q_after, window.v_after
             else:

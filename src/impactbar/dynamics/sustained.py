@@ -1,0 +1,345 @@
+"""The wave law's sustained contact (theory §4b): the piston pressed on the long rod.
+
+When a contact window of the wave law ends with the struck end still moving into the rod, the
+contact goes on. The rod is semi-infinite, so nothing returns from it: its end force and velocity
+are tied by its impedance, ``F = Z u_t(1, t)``, ``Z = s (1 + R)/(1 - R)`` in the model's units
+(``-s^2 u_x(1, t) = F``; the rod's area ratio ``A_s/A = (1 + R)/(1 - R)``). The struck end is a
+dashpot. In the free-free modes (theory §2) the force at ``x = 1`` enters every mode:
+
+    q_n'' + d q_n' + (s n pi)^2 q_n = p(t) - (-1)^n Z (c . q')
+
+(a non-proportionally damped linear system, solved exactly through the eigenvectors of its
+first-order matrix). Positions stay measured from the rod end, which moves with the struck end
+(``c . q = 0``: ``q_0`` follows from the flexible modes), so the state is ``(q_1..q_N, q_0'..q_N')``.
+The contact ends when the interface force ``F = Z c . q'`` would turn tensile (``c . q'`` crosses
+zero downwards): the rod end then stops and the piston leaves it at rest.
+
+The cost does not grow with ``s``: every eigenvalue decays at a rate of order ``s`` (at least
+``s ln(1/R)/2`` for the flexible ones, the rate at which each round trip of a wave multiplies it
+by ``R``; ``Z`` for the rigid piston), so the release is searched on a grid that is fine only over
+the transients, and on the load's scale afterwards.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .impact import modal_energy
+
+__all__ = ["SustainedContact", "rod_impedance", "sustained_contact"]
+
+TWO_PI = 2.0 * math.pi
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
+#: a transient is dropped from the release search once its bound is below this (relative)
+_TRANSIENT_TOL = 1e-15
+#: samples of the release search per period of the fastest transient, and per load harmonic
+_PER_PERIOD = 12
+
+
+def rod_impedance(model) -> float:
+    """The long rod's impedance in the model's units (theory §4b).
+
+    Parameters
+    ----------
+    model : BarModel
+
+    Returns
+    -------
+    float
+        ``Z = s A_s/A = s (1 + R)/(1 - R)``: the rod end's force per unit velocity,
+        ``F = Z u_t(1)`` with ``F = -s^2 u_x(1)`` (eq. 2's units); ``inf`` at ``R = 1``.
+    """
+    R = model.R
+    return math.inf if R >= 1.0 else model.s * (1.0 + R) / (1.0 - R)
+
+
+class _Piece:
+    """The exact solution on a time interval where the load is one smooth expression."""
+
+    def __init__(self, sys, ta, za, tb):
+        self.sys, self.ta, self.tb = sys, ta, tb
+        # a piecewise-constant load's level on this piece (its value at the ends may be the next)
+        self.level = float(sys.load(0.5 * (ta + tb))) if sys._data.kind == 1 else None
+        self.coef = sys.Vinv @ (za.astype(complex) - sys.particular(np.array([ta]), self.level)[:, 0])
+
+    def states(self, t):
+        """Reduced states at the times ``t`` (shape (T,)), shape (2N + 1, T)."""
+        sys = self.sys
+        dt = np.asarray(t, dtype=float) - self.ta
+        tr = sys.V @ (self.coef[:, None] * np.exp(np.outer(sys.lam, dt)))
+        return (tr + sys.particular(np.asarray(t, dtype=float), self.level)).real
+
+
+class SustainedContact:
+    """The piston pressed on the long rod from ``t0`` until the release (theory §4b).
+
+    Made by :func:`sustained_contact`. Times are counted from ``t0`` (load time).
+
+    Attributes
+    ----------
+    t0 : float
+        Load time where the sustained contact starts (a contact window's end).
+    duration : float
+        Time to the release (or to the run's end, when the contact lasts beyond it).
+    released : bool
+        Whether the interface force turns tensile before the run's end.
+    q_before, v_before : numpy.ndarray, shape (N + 1,)
+        Free-free modal state at the start (positions from the rod end).
+    q_after, v_after : numpy.ndarray, shape (N + 1,)
+        State at the release (the end on the rod end at rest) or at the run's end.
+    impedance : float
+        ``Z = s (1 + R)/(1 - R)``.
+    """
+
+    def __init__(self, model, load, t0, q, v, t_end):
+        self.model, self.load = model, load
+        self.t0 = float(t0)
+        self.q_before, self.v_before = np.array(q, dtype=float), np.array(v, dtype=float)
+        N = model.n_modes
+        self.N = N
+        self.c = np.asarray(model.end_weights, dtype=float)
+        self.impedance = Z = rod_impedance(model)
+        w2 = model.frequencies**2
+        M = N + 1
+        e = np.where(np.arange(M) % 2 == 0, 1.0, -1.0)  # (-1)^n
+        n2 = 2 * N + 1
+        A = np.zeros((n2, n2))
+        A[:N, N + 1:] = np.eye(N)  # q_n' = v_n, n >= 1
+        A[N:, :N] = -np.diag(w2)[:, 1:]
+        A[N:, N:] = -model.d * np.eye(M) - Z * np.outer(e, self.c)
+        self.b = np.concatenate((np.zeros(N), np.ones(M)))
+        self.A = A
+        self.lam, self.V = np.linalg.eig(A)
+        self.Vinv = np.linalg.inv(self.V)
+        self.fv = (np.concatenate((np.zeros(N), self.c)) @ self.V)  # c . q' of each eigenvector
+        self.kappa = np.where(np.arange(M) == 0, 1.0, 2.0)
+        data = load.kernel_view
+        self._data = data
+        if data.kind == 0:
+            ks = np.concatenate(([0.0], data.ks))
+            pk = np.concatenate(([data.p0], data.pr + 1j * data.pim))
+            self._ks = ks
+            self._resp = np.stack([np.linalg.solve(1j * k * np.eye(n2) - A, self.b) * p
+                                   for k, p in zip(ks, pk, strict=True)], axis=1)
+        else:
+            self._a_inv_b = -np.linalg.solve(A, self.b)
+        self._pieces: list[_Piece] = []
+        self._solve(self._reduced(self.q_before, self.v_before), float(t_end))
+        self.q_after, self.v_after = self.state_at(self.duration)
+
+    # ---- the linear system ---------------------------------------------------------------------
+    def _reduced(self, q, v):
+        return np.concatenate((q[1:], v))
+
+    def _full(self, z):
+        """Free-free states from reduced ones (shape (2N + 1, T)): ``q_0`` puts the end on the rod."""
+        N = self.N
+        qf = z[:N]
+        q0 = -(self.c[1:] @ qf)
+        return np.vstack((q0[None, :], qf)), z[N:]
+
+    def particular(self, t, level=None):
+        """The particular response at load times ``t`` (complex, real part meaningful); for a
+        piecewise-constant load, to the constant ``level``."""
+        t = np.asarray(t, dtype=float)
+        if self._data.kind == 0:
+            return self._resp @ np.exp(1j * np.outer(self._ks, t))
+        return np.outer(self._a_inv_b, np.full(t.size, level)).astype(complex)
+
+    def _edges(self, ta, tb):
+        """Times in ``(ta, tb)`` where the load changes its expression."""
+        D = self._data
+        if D.kind == 0:
+            return []
+        m0, m1 = math.floor(ta / TWO_PI), math.floor(tb / TWO_PI)
+        per = (np.arange(m0, m1 + 1)[:, None] * TWO_PI + D.breaks[None, :]).ravel()
+        return sorted(float(x) for x in per[(per > ta) & (per < tb)])
+
+    # ---- the release -----------------------------------------------------------------------------
+    def _solve(self, z, t_end):
+        lam_max = float(np.max(np.abs(self.lam))) if self.lam.size else 1.0
+        decay = float(np.min(-self.lam.real)) if self.lam.size else 1.0
+        kmax = float(np.max(self._data.ks)) if self._data.kind == 0 and self._data.ks.size else 0.0
+        # on the transients: a geometric start resolves the fastest decay (the rigid piston's,
+        # -Z), then steps resolve the fastest oscillation
+        osc = float(np.max(np.abs(self.lam.imag))) if self.lam.size else 0.0
+        h_tr = (1.0 / lam_max, TWO_PI / (_PER_PERIOD * osc) if osc > 0.0 else math.inf)
+        h_ld = TWO_PI / (_PER_PERIOD * max(kmax, 1.0))  # on the load
+        scale = max(self._data.psup / self.impedance, abs(float(self.c @ z[self.N:])), 1e-300)
+        ta = self.t0
+        while True:
+            nxt = self._edges(ta, ta + TWO_PI + 1.0)
+            tb = min(nxt[0] if nxt else ta + TWO_PI, t_end)
+            piece = _Piece(self, ta, z, tb)
+            self._pieces.append(piece)
+            t_rel = self._search(piece, h_tr, h_ld, decay, scale)
+            if t_rel is not None:
+                self.released, self.duration = True, t_rel - self.t0
+                piece.tb = t_rel
+                return
+            if tb >= t_end:
+                self.released, self.duration = False, t_end - self.t0
+                return
+            z = piece.states(np.array([tb]))[:, 0]
+            ta = tb
+
+    def _search(self, piece, h_tr, h_ld, decay, scale):
+        """First time in ``(ta, tb]`` where ``c . q'`` turns negative, or None. The samples go in
+        chunks (bounded memory); a dip below zero between two samples (shorter than a twelfth of
+        the fastest transient's period, or of the load's highest harmonic) is not seen."""
+        ta, tb = piece.ta, piece.tb
+        span = tb - ta
+        # the transients: sampled finely until their bound is negligible
+        big = float(np.sum(np.abs(self.fv * piece.coef)))
+        t_tr = math.log(max(big / (_TRANSIENT_TOL * scale), 1.0)) / decay if big > 0 else 0.0
+        t_tr = min(t_tr, span)
+        h_fast, h_osc = h_tr
+        h_osc = min(h_osc, max(t_tr / 16.0, h_fast))
+        start = h_fast * 2.0 ** np.arange(0, max(1, math.ceil(math.log2(max(h_osc / h_fast, 1.0))) + 1))
+        start = start[start < min(h_osc, t_tr)] if t_tr > 0 else start[:0]
+        n_osc = math.ceil(max(t_tr - (start[-1] if start.size else 0.0), 0.0) / h_osc) if t_tr > 0 else 0
+        n_ld = max(2, math.ceil((span - t_tr) / h_ld) + 1)
+
+        def chunks():
+            yield np.r_[ta, ta + start]
+            base = ta + (start[-1] if start.size else 0.0)
+            for i in range(0, n_osc, 4096):
+                yield base + h_osc * np.arange(i + 1, min(i + 4096, n_osc) + 1)
+            yield np.linspace(ta + t_tr, tb, n_ld)
+
+        t_prev = f_prev = None
+        for t in chunks():
+            t = np.minimum(t, tb)
+            f = self.fv_at(piece, t)
+            if t_prev is not None:
+                t, f = np.r_[t_prev, t], np.r_[f_prev, f]
+            below = np.nonzero(f[1:] <= 0.0)[0]
+            if below.size:
+                i = int(below[0]) + 1
+                a, b = t[i - 1], t[i]
+                if f[i - 1] <= 0.0:  # at the piece's start already (a load turning tensile there)
+                    return a
+                return brentq(lambda x: self.fv_at(piece, np.array([x]))[0], a, b,
+                              xtol=1e-15 * max(1.0, abs(b)), rtol=4 * np.finfo(float).eps)
+            t_prev, f_prev = t[-1], f[-1]
+        return None
+
+    def fv_at(self, piece, t) -> np.ndarray:
+        """``c . q'`` (the struck end's velocity) at the times ``t``."""
+        return self.c @ piece.states(t)[self.N:]
+
+    # ---- outputs ---------------------------------------------------------------------------------
+    def _piece_at(self, t_abs):
+        for p in self._pieces:
+            if t_abs <= p.tb:
+                return p
+        return self._pieces[-1]
+
+    def state_at(self, tau):
+        """Free-free modal state ``(q, q')`` at time ``tau`` after ``t0`` (positions from the rod end).
+
+        Returns
+        -------
+        q, v : numpy.ndarray, shape (N + 1,)
+        """
+        t_abs = self.t0 + float(tau)
+        z = self._piece_at(t_abs).states(np.array([t_abs]))
+        q, v = self._full(z)
+        return q[:, 0], v[:, 0]
+
+    def force(self, tau) -> np.ndarray:
+        """Interface force ``F = Z u_t(1)`` at times ``tau`` after ``t0`` (shape of ``tau``)."""
+        tau = np.atleast_1d(np.asarray(tau, dtype=float))
+        out = np.array([self.fv_at(self._piece_at(self.t0 + x), np.array([self.t0 + x]))[0]
+                        for x in tau])
+        return self.impedance * out
+
+    def account(self, tau):
+        """The energy balance up to time ``tau``.
+
+        Returns
+        -------
+        drive_work, rod_energy, damping_loss, field_energy : float
+            ``energy(t0) + drive_work = field_energy + rod_energy + damping_loss``, the integrals
+            by Gauss-Legendre quadrature on panels fine over the transients (the integrands are
+            sums of exponentials and of the load's harmonics: errors near rounding).
+        """
+        work, rod, damp, _ = self._integrals(tau)
+        q, v = self.state_at(tau)
+        return work, rod, damp, modal_energy(self.model.s, q, v)
+
+    @property
+    def advance(self) -> float:
+        """Advance of the rod end over the whole sustained contact, ``int u_t(1) dt``."""
+        return self._integrals(self.duration)[3]
+
+    def _integrals(self, tau):
+        t_end = self.t0 + float(tau)
+        work = rod = damp = adv = 0.0
+        lam_max = float(np.max(np.abs(self.lam)))
+        decay = float(np.min(-self.lam.real))
+        osc = float(np.max(np.abs(self.lam.imag)))
+        h_osc = 1.5 / osc if osc > 0.0 else math.inf
+        D = self._data
+        kmax = float(np.max(D.ks)) if D.kind == 0 and D.ks.size else 0.0
+        N = self.N
+        for p in self._pieces:
+            a, b = p.ta, min(p.tb, t_end)
+            if b <= a:
+                break
+            # panels: doubling from 1/|lambda|_max at the piece's start (the fastest decay) up to
+            # the fastest oscillation's scale, over the transients; then on the load's scale
+            t_tr = min(b, a + 40.0 / decay)
+            grow = [a]
+            w = 1.0 / lam_max
+            while grow[-1] < t_tr and w < h_osc:
+                grow.append(min(grow[-1] + w, t_tr))
+                w *= 2.0
+            x = grow[-1]
+            n_osc = math.ceil((t_tr - x) / h_osc) if t_tr > x else 0
+            n_rest = math.ceil((b - t_tr) * (kmax + 1.0) / 1.5) if b > t_tr else 0
+            parts = [np.asarray(grow)]
+            if n_osc:
+                parts.append(np.linspace(x, t_tr, n_osc + 1)[1:])
+            if n_rest:
+                parts.append(np.linspace(t_tr, b, n_rest + 1)[1:])
+            e = np.concatenate(parts)
+            for i in range(0, e.size - 1, 1024):  # bounded memory: 1024 panels at a time
+                ee = e[i:i + 1025]
+                half = 0.5 * (ee[1:] - ee[:-1])
+                nodes = (half[:, None] * (_GL_X[None, :] + 1.0) + ee[:-1, None]).ravel()
+                wts = (half[:, None] * _GL_W[None, :]).ravel()
+                v = p.states(nodes)[N:]
+                ut1 = self.c @ v
+                pn = self.load(nodes) if p.level is None else p.level
+                work += float(np.sum(wts * pn * (self.kappa @ v)))
+                rod += self.impedance * float(np.sum(wts * ut1 * ut1))
+                damp += self.model.d * float(np.sum(wts * (self.kappa @ (v * v))))
+                adv += float(np.sum(wts * ut1))
+        return work, rod, damp, adv
+
+
+def sustained_contact(model, load, t0, q, v, t_end) -> SustainedContact:
+    """The sustained contact of the wave law from ``(t0, q, v)`` (theory §4b).
+
+    Parameters
+    ----------
+    model : BarModel
+        ``R < 1`` (a finite rod impedance).
+    load : FourierLoad or PiecewiseConstantLoad
+    t0 : float
+        Load time of the start (a contact window's end, the end still moving into the rod).
+    q, v : numpy.ndarray, shape (N + 1,)
+        Free-free modal state at ``t0``, the end on the rod end (``c . q = 0``).
+    t_end : float
+        Stop here if the contact lasts so long (finite: a load that presses for ever keeps the
+        contact for ever; the search costs a few samples per load period).
+
+    Returns
+    -------
+    SustainedContact
+    """
+    return SustainedContact(model, load, t0, q, v, t_end)
