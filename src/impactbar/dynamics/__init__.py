@@ -4,12 +4,12 @@ Layout: ``modal`` (the closed-form fundamental matrix of each damped mode and th
 constant load over a step, paper eqs. 5-9), ``certified`` (certified enclosure of the zeros of a
 function with a Lipschitz or derivative bound), ``impact`` (the wave-resolved contact with a long
 rod, solved by characteristics, theory §4b), ``_kernel`` (the numba-compiled flight, impact search
-and event loop behind :func:`impactbar.simulate`), ``sustained`` (the wave law's sustained contact: the struck end against the rod's impedance, theory
-§4b), ``_wavekernel`` and ``_flowkernel`` (compiled
-contact windows of the wave law, compiled flows of the loads), ``kernelview`` (the one view of a
-load, and of a modal basis, that compiled code reads), ``implementations`` (the registry that
-chooses between fast and reference implementations). The bottom of the core: imports only numpy,
-scipy and numba, never another impactbar subpackage."""
+and event loop behind :func:`impactbar.simulate`), ``sustained`` (the wave law's sustained contact:
+the struck end against the rod's impedance, theory §4b), ``_wavekernel`` and ``_flowkernel``
+(compiled contact windows of the wave law, compiled flows of the loads), ``kernelview`` (the one
+view of a load, and of a modal basis, that compiled code reads), ``implementations`` (the registry
+that chooses between fast and reference implementations). The bottom of the core: imports only
+numpy, scipy and numba, never another impactbar subpackage."""
 
 import importlib
 
