@@ -34,8 +34,9 @@ from .._status import RunStatus
 from .._validate import check_int, check_real
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
+from ..drives.switched import PositionSwitchedDrive
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
-from ..loads import Load
+from ..loads import Load, PiecewiseConstantLoad
 from ..model import MAX_MODES, BarModel
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
@@ -49,6 +50,7 @@ from .trajectory import _energy_nodes as _energy_nodes
 from .trajectory import _Segment as _Segment
 from .trajectory import _SegmentLog as _SegmentLog
 from .trajectory import _Segments as _Segments
+from .switched import SwitchedTrajectory, run_switched
 
 __all__ = ["InitialState", "Trajectory", "EnergyAccount", "simulate"]
 
@@ -435,9 +437,12 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     ----------
     model : BarModel
         The bar: ``s``, ``d``, ``R`` and ``N`` flexible modes.
-    load : FourierLoad or PiecewiseConstantLoad
+    load : FourierLoad or PiecewiseConstantLoad or PositionSwitchedDrive
         The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
-        ``t mod 2 pi``).
+        ``t mod 2 pi``); or a drive switched by the piston's position (theory §9), whose valve
+        starts in return when the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it: the
+        result is then a :class:`~impactbar.simulation.switched.SwitchedTrajectory` with the
+        switches logged.
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
@@ -452,7 +457,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
 
     Returns
     -------
-    Trajectory
+    Trajectory or SwitchedTrajectory
 
     Raises
     ------
@@ -492,13 +497,35 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
+    if isinstance(load, PositionSwitchedDrive):
+        _push_off(model.end_weights, q)
+        return _run_switched(model, load, q, v, t0, t_end, max_imp)
     core = _core_for(model, load)
-    g = float(core.c @ q)
-    if g > 0.0 and g > 1e-12 * max(1.0, float(np.sum(np.abs(core.c * q)))):
+    _push_off(core.c, q)
+    return _run(core, q, v, t0, t_end, max_imp)
+
+
+def _push_off(c, q) -> None:
+    """Refuse a start through the stop; a penetration within rounding is shifted off (in place)."""
+    g = float(c @ q)
+    if g > 0.0 and g > 1e-12 * max(1.0, float(np.sum(np.abs(c * q)))):
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
-    return _run(core, q, v, t0, t_end, max_imp)
+
+
+def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
+    """The valve's loop (theory §9) over pieces of the ordinary driver under constant forces."""
+    cores = {lv: _core_for(model, PiecewiseConstantLoad([0.0], [lv])) for lv in (drive.stroke, -drive.ret)}
+
+    def piece(level, q, v, t, t_stop):
+        q = np.array(q, dtype=float)
+        v = np.array(v, dtype=float)
+        core = cores[level]
+        _push_off(core.c, q)
+        return _run(core, q, v, t, t_stop, 1)
+
+    return run_switched(model, drive, q, v, t0, t_end, max_imp, piece)
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
