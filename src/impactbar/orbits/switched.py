@@ -73,8 +73,8 @@ class SwitchedOrbit:
 
     @property
     def blow_frequency(self) -> float:
-        """Blows per unit of the model's time, ``1 / T`` (multiply by ``Omega / (2 pi)``... no: by
-        the time scale's inverse, ``Omega``, to get Hz, since ``t = Omega T_phys``, eq. 2)."""
+        """Blows per unit of the model's time, ``1 / T``; with the time scale ``t = Omega t_SI``
+        (eq. 2) the blow frequency in Hz is ``Omega / T``."""
         return 1.0 / self.period
 
     @property
@@ -269,11 +269,9 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     z0 = X[:2 * M]
     durations = np.array([drive.delay, X[2 * M], drive.delay, X[2 * M + 1]])
     Phi = _monodromy(model, drive, z0, durations)
-    ps = drive.level(STROKE) if drive.delay else drive.level(RETURN)
     za = _legs(model, drive, z0, durations)[0]
     f = _field(_w2(model), model.d, drive.level(RETURN), za)
     trivial, nontrivial = _split_multipliers(Phi, f)
-    del ps
     zd = _legs(model, drive, z0, durations)[3]
     c = model.end_weights
     return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)), durations=durations,

@@ -32,12 +32,13 @@ import numpy as np
 
 from .._status import RunStatus
 from .._validate import check_int, check_real
+from ..drives.switched import PositionSwitchedDrive
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
-from ..drives.switched import PositionSwitchedDrive
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
 from ..loads import Load, PiecewiseConstantLoad
 from ..model import MAX_MODES, BarModel
+from .switched import SwitchedTrajectory, run_switched
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
 from .trajectory import _FREE as _FREE
@@ -50,7 +51,6 @@ from .trajectory import _energy_nodes as _energy_nodes
 from .trajectory import _Segment as _Segment
 from .trajectory import _SegmentLog as _SegmentLog
 from .trajectory import _Segments as _Segments
-from .switched import SwitchedTrajectory, run_switched
 
 __all__ = ["InitialState", "Trajectory", "EnergyAccount", "simulate"]
 
