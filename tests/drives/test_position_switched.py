@@ -1,4 +1,4 @@
-"""The position-switched drive (theory §9): a hydraulic drifter's valve switching on the piston's
+"""The position-switched drive (theory §10): a hydraulic drifter's valve switching on the piston's
 position, an autonomous system whose period is an output.
 
 Independent checks: the rigid piston's orbit in closed form (stroke and return accelerations, switch
@@ -193,3 +193,16 @@ def test_square_wave_recovered_when_the_switch_instants_are_forced():
     # the impact at the switch from +q to -q: phase kappa pi from the start of the stroke
     assert any(abs(p.phase - (kappa * math.pi) % (2 * math.pi)) < 1e-8 for p in match)
     assert not any(p.stable for p in match) and o.stable
+
+
+def test_simulate_under_the_wave_law_settles_on_a_periodic_motion():
+    """The wave law's contact window (2/s) under the stroke force, the switch to return counted from
+    the window's end: the blows settle to a period close to the paper law's plus about the window."""
+    drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
+    model = BarModel(s=10.0, d=0.5, R=0.215, n_modes=0, impact="wave")
+    tr = simulate(model, drive, InitialState.rigid(-0.5, 0.2), 100.0)
+    dt = np.diff(tr.impact_times)[-3:]
+    assert np.ptp(dt) < 1e-9
+    paper = find_orbit(model.with_(impact="paper"), drive).period
+    assert paper < dt[-1] < paper + 2 * (2 / model.s)
+    assert tr.switch_kinds[-2:] in (("return", "stroke"), ("stroke", "return"))

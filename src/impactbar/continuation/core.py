@@ -199,7 +199,7 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         base = orbit
     elif isinstance(orbit, SwitchedOrbit):
         raise ValueError("continuation of an orbit under a PositionSwitchedDrive (unknown period, "
-                         "theory §9) is not implemented yet: solve find_orbit(model, drive, guess=orbit) "
+                         "theory §10) is not implemented yet: solve find_orbit(model, drive, guess=orbit) "
                          "along the parameter's values instead")
     else:
         raise ValueError(f"orbit must be a PeriodicOrbit, MultiImpactOrbit or BranchEvent; got "

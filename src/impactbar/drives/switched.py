@@ -1,4 +1,4 @@
-"""A drive switched by the piston's position: the hydraulic drifter's valve (theory §9).
+"""A drive switched by the piston's position: the hydraulic drifter's valve (theory §10).
 
 The force at the driven end is piecewise constant, ``+stroke`` (toward the stop) or ``-ret`` (away
 from it), and the valve changes it when the piston's rigid coordinate crosses a given position, or at
@@ -8,7 +8,7 @@ an output, not an input as for the time-periodic loads of :mod:`impactbar.loads`
 Positions are measured from the stop along the rigid coordinate: the gap ``y = -q_0`` (``q_0`` the
 mean displacement of eq. 15; ``y = 0`` where the undeformed bar touches the stop). Between switches and
 impacts every mode moves in closed form under a constant force (eq. 8 with ``p`` constant), and the
-rigid coordinate obeys ``y'' + d y' = -p`` alone, so its crossings are found in closed form (theory §9).
+rigid coordinate obeys ``y'' + d y' = -p`` alone, so its crossings are found in closed form (theory §10).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ RETURN = 1
 
 @dataclass(frozen=True)
 class PositionSwitchedDrive:
-    r"""A drive whose force switches on the piston's position (a hydraulic drifter's valve, theory §9).
+    r"""A drive whose force switches on the piston's position (a hydraulic drifter's valve, theory §10).
 
     The force at ``x = 0`` (eq. 4) is ``p = +stroke`` in the stroke state and ``p = -ret`` in the
     return state. The valve goes
@@ -42,7 +42,7 @@ class PositionSwitchedDrive:
     of a load in :func:`impactbar.simulate` and :func:`impactbar.find_orbit`; the time-periodic
     machinery (harmonics, :func:`impactbar.periodic_orbits`, sweeps) refuses it.
 
-    Rigid piston, no damping, no delay (the check of theory §9): with accelerations ``a_s = stroke``,
+    Rigid piston, no damping, no delay (the check of theory §10): with accelerations ``a_s = stroke``,
     ``a_r = ret`` the period-1 orbit has the impact velocity
     ``v = sqrt(2 x_1 (a_s + a_r) / (1 - R^2))``, the period
     ``T = (u_1 - R v)/a_r + (u_1 + v)/a_s`` with ``u_1 = sqrt(R^2 v^2 + 2 a_r x_1)``, and the
@@ -101,12 +101,12 @@ class PositionSwitchedDrive:
         return self.stroke if state == STROKE else -self.ret
 
     def harmonics(self, n=None):
-        """Refused: the drive is not a function of time (theory §9)."""
+        """Refused: the drive is not a function of time (theory §10)."""
         raise ValueError("a PositionSwitchedDrive is not periodic in time: it has no harmonics "
-                         "(use simulate or find_orbit with it, theory §9)")
+                         "(use simulate or find_orbit with it, theory §10)")
 
     def rigid_orbit(self, R: float) -> dict:
-        """The rigid, undamped, undelayed period-1 orbit in closed form (theory §9).
+        """The rigid, undamped, undelayed period-1 orbit in closed form (theory §10).
 
         Parameters
         ----------
@@ -145,7 +145,7 @@ def first_rising_crossing(d: float, y0: float, w0: float, a: float, level: float
     The rate ``y' = w0 e^{-d t} + a b(t)`` is monotone in ``t`` (its derivative ``(a - d w0)
     e^{-d t}`` keeps its sign), so ``y`` has at most one turning point and at most one rising
     crossing of any level: no crossing can be missed. It is bracketed on the rising piece and
-    refined by bisection to rounding (theory §9).
+    refined by bisection to rounding (theory §10).
 
     Parameters
     ----------

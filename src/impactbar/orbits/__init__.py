@@ -10,7 +10,7 @@ impacts in ``n`` load periods; ``MultiImpactOrbit`` is another name for it), ``o
 (:func:`periodic_orbits`: the one-impact orbits), ``multi_impact`` (:func:`find_orbit`: ``m``
 impacts in ``n`` load periods by Newton on the segment problem, one segment per flight),
 ``charts`` (existence, stability and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits
-with an unknown period under a position-switched drive, theory §9).
+with an unknown period under a position-switched drive, theory §10).
 Part of the core: imports only ``impactbar.model``, ``impactbar.loads``, ``impactbar.dynamics``,
 numpy and scipy.
 """

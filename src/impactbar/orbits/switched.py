@@ -1,4 +1,4 @@
-"""Periodic motions under a position-switched drive: autonomous, with an unknown period (theory §9).
+"""Periodic motions under a position-switched drive: autonomous, with an unknown period (theory §10).
 
 One period of a one-impact orbit, counted from an impact (the valve's rules of
 :class:`~impactbar.drives.PositionSwitchedDrive`, delay ``tau``):
@@ -36,7 +36,7 @@ __all__ = ["SwitchedOrbit", "find_switched_orbit"]
 
 @dataclass(frozen=True)
 class SwitchedOrbit:
-    """A periodic motion with one impact per period under a position-switched drive (theory §9).
+    """A periodic motion with one impact per period under a position-switched drive (theory §10).
 
     Attributes
     ----------
@@ -57,7 +57,7 @@ class SwitchedOrbit:
         The multiplier along the flow, ``1`` in exact arithmetic (its distance from 1 measures the
         rounding of the monodromy matrix).
     admissibility : Admissibility
-        Whether the motion is physical (sampled check, theory §5 and §9).
+        Whether the motion is physical (sampled check, theory §5 and §10).
     """
 
     model: BarModel
@@ -182,7 +182,7 @@ def _residual(model, drive, X):
 
 
 def _rigid_guess(model, drive):
-    """Start of Newton: the rigid undamped undelayed orbit in closed form (theory §9)."""
+    """Start of Newton: the rigid undamped undelayed orbit in closed form (theory §10)."""
     M = model.n_modes + 1
     R = min(model.R, 0.999)
     o = drive.rigid_orbit(R)
@@ -193,7 +193,7 @@ def _rigid_guess(model, drive):
 
 def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: int = 1, guess=None,
                         *, tol: float = 1e-13, max_iter: int = 50) -> SwitchedOrbit:
-    """The one-impact periodic motion under a position-switched drive (theory §9).
+    """The one-impact periodic motion under a position-switched drive (theory §10).
 
     Called by :func:`impactbar.find_orbit` when its load is a
     :class:`~impactbar.drives.PositionSwitchedDrive`.
@@ -293,7 +293,7 @@ def _padded(state, M):
 
 
 def _monodromy(model, drive, z0, durations):
-    """Monodromy matrix based just after the switch to return takes effect (theory §9): flows'
+    """Monodromy matrix based just after the switch to return takes effect (theory §10): flows'
     fundamental matrices and the saltation matrices of the delayed switch and of the impact."""
     M = model.n_modes + 1
     w2, d = _w2(model), model.d
@@ -345,7 +345,7 @@ def _split_multipliers(Phi, f):
 
 
 def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibility:
-    """Sampled check (theory §5, §9): the end off the stop inside every flight, the return crossing
+    """Sampled check (theory §5, §10): the end off the stop inside every flight, the return crossing
     the first one, and a forward impact."""
     M = model.n_modes + 1
     w2, d = _w2(model), model.d

@@ -5,7 +5,7 @@ Layout: ``simulate`` (:func:`simulate`, :class:`InitialState`; one driver for ev
 chatter, sticking on the fixed-free basis, release, the law's contact step), ``trajectory``
 (:class:`Trajectory`, :class:`EnergyAccount`: the logged pieces of motion), ``experiments``
 (random starts, classification of the long-run motion, the paper's pneumatic and hydraulic
-experiments), ``switched`` (the valve's event loop under a position-switched drive, theory §9).
+experiments), ``switched`` (the valve's event loop under a position-switched drive, theory §10).
 Part of the core: imports ``impactbar.model``, ``impactbar.loads``,
 ``impactbar.dynamics``; matplotlib only lazily, inside the plotting helper of ``experiments``.
 """

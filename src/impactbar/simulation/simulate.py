@@ -439,7 +439,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         The bar: ``s``, ``d``, ``R`` and ``N`` flexible modes.
     load : FourierLoad or PiecewiseConstantLoad or PositionSwitchedDrive
         The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
-        ``t mod 2 pi``); or a drive switched by the piston's position (theory §9), whose valve
+        ``t mod 2 pi``); or a drive switched by the piston's position (theory §10), whose valve
         starts in return when the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it: the
         result is then a :class:`~impactbar.simulation.switched.SwitchedTrajectory` with the
         switches logged.
@@ -515,7 +515,7 @@ def _push_off(c, q) -> None:
 
 
 def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
-    """The valve's loop (theory §9) over pieces of the ordinary driver under constant forces."""
+    """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces."""
     cores = {lv: _core_for(model, PiecewiseConstantLoad([0.0], [lv])) for lv in (drive.stroke, -drive.ret)}
 
     def piece(level, q, v, t, t_stop):

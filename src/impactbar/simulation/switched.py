@@ -1,4 +1,4 @@
-"""Simulation under a position-switched drive: the valve's event loop (theory §9).
+"""Simulation under a position-switched drive: the valve's event loop (theory §10).
 
 Between events the force is constant, so every mode moves in closed form (eq. 8) and the
 existing driver of :mod:`impactbar.simulation.simulate` (certified impact search, chatter,
@@ -28,7 +28,7 @@ _KIND = {STROKE: "stroke", RETURN: "return"}
 @dataclass(frozen=True, eq=False)
 class SwitchedTrajectory:
     """The result of :func:`impactbar.simulate` under a
-    :class:`~impactbar.drives.PositionSwitchedDrive` (theory §9).
+    :class:`~impactbar.drives.PositionSwitchedDrive` (theory §10).
 
     Attributes
     ----------
@@ -103,7 +103,7 @@ def initial_valve(drive: PositionSwitchedDrive, q0: float) -> int:
 
 def run_switched(model: BarModel, drive: PositionSwitchedDrive, q, v, t0: float, t_end: float,
                  max_imp: int, piece) -> SwitchedTrajectory:
-    """The valve's event loop (theory §9).
+    """The valve's event loop (theory §10).
 
     ``piece(level, q, v, t, t_stop)`` runs the ordinary driver under the constant force ``level``
     from ``(q, v)`` at ``t`` until ``t_stop`` or its first impact, and returns its
