@@ -206,3 +206,22 @@ def test_simulate_under_the_wave_law_settles_on_a_periodic_motion():
     paper = find_orbit(model.with_(impact="paper"), drive).period
     assert paper < dt[-1] < paper + 2 * (2 / model.s)
     assert tr.switch_kinds[-2:] in (("return", "stroke"), ("stroke", "return"))
+
+
+@pytest.mark.parametrize("d, delay, R", [(0.0, 0.0, 0.215), (0.3, 0.4, 0.5), (0.1, 0.2, 0.0)])
+def test_rigid_closed_forms_agree_with_the_general_driver(d, delay, R, choose):
+    """The rigid bar's scalar closed forms (fast) against the general driver piece by piece
+    (reference): the same impacts and switches to rounding, resting on the stop (R = 0) included."""
+    model = BarModel(s=10.0, d=d, R=R, n_modes=0)
+    drive = PositionSwitchedDrive(stroke=1.3, ret=0.7, switch_out=0.8, delay=delay)
+    start = InitialState.rigid(-1.2, 0.4)
+    fast = simulate(model, drive, start, 60.0)
+    choose("simulate.switched_rigid", False)
+    ref = simulate(model, drive, start, 60.0)
+    assert fast.n_impacts == ref.n_impacts > 5
+    assert np.allclose(fast.impact_times, ref.impact_times, rtol=0, atol=1e-9)
+    assert np.allclose(fast.impact_velocities, ref.impact_velocities, rtol=1e-8, atol=1e-10)
+    assert fast.switch_kinds == ref.switch_kinds
+    assert np.allclose(fast.switch_times, ref.switch_times, rtol=0, atol=1e-9)
+    t = np.linspace(0.0, 60.0, 301)
+    assert np.allclose(fast.end_displacement(t), ref.end_displacement(t), atol=1e-9)

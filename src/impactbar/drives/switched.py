@@ -145,7 +145,8 @@ def first_rising_crossing(d: float, y0: float, w0: float, a: float, level: float
     The rate ``y' = w0 e^{-d t} + a b(t)`` is monotone in ``t`` (its derivative ``(a - d w0)
     e^{-d t}`` keeps its sign), so ``y`` has at most one turning point and at most one rising
     crossing of any level: no crossing can be missed. It is bracketed on the rising piece and
-    refined by bisection to rounding (theory §10).
+    refined to rounding by Newton's method, which converges monotonically there (``y`` is convex
+    or concave throughout) (theory §10).
 
     Parameters
     ----------
@@ -198,16 +199,24 @@ def first_rising_crossing(d: float, y0: float, w0: float, a: float, level: float
     if d == 0.0:  # the rising root of a t^2/2 + w0 t + y0 - level = 0, in its stable form
         r = math.sqrt(max(w0 * w0 + 2.0 * a * (level - y0), 0.0))  # the rate at the crossing
         return 2.0 * (level - y0) / (w0 + r) if w0 >= 0.0 else (r - w0) / a
-    lo, hi = t_lo, t_hi  # bisection to rounding on the monotone piece
-    for _ in range(2000):
-        mid = 0.5 * (lo + hi)
-        if mid <= lo or mid >= hi:
+    # y'' = (a - d w0) e^{-d t} keeps its sign: y is convex or concave. Newton from the end of the
+    # bracket on the level's far side converges monotonically to the one root (no overshoot): from
+    # the upper end where y is convex, from the lower end where it is concave.
+    t = t_hi if slope > 0.0 else t_lo
+    sign = 0.0
+    for _ in range(200):
+        y, w = _gap(d, y0, w0, a, t)
+        if w <= 0.0:
             break
-        if _gap(d, y0, w0, a, mid)[0] < level:
-            lo = mid
-        else:
-            hi = mid
-    return hi
+        step = (y - level) / w
+        if step == 0.0 or step * sign < 0.0:  # an overshoot can only be rounding: done
+            break
+        sign = step
+        t_new = min(max(t - step, t_lo), t_hi)
+        if t_new == t:
+            break
+        t = t_new
+    return t
 
 
 def _rate_zero(d: float, w0: float, a: float) -> float:

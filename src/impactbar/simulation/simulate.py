@@ -38,7 +38,7 @@ from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
 from ..loads import Load, PiecewiseConstantLoad
 from ..model import MAX_MODES, BarModel
-from .switched import SwitchedTrajectory, run_switched
+from .switched import SwitchedTrajectory, rigid_piece, run_switched
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
 from .trajectory import _FREE as _FREE
@@ -516,6 +516,8 @@ def _push_off(c, q) -> None:
 
 def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
     """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces."""
+    if model.n_modes == 0 and model.impact == "paper" and use_fast("simulate.switched_rigid"):
+        return run_switched(model, drive, q, v, t0, t_end, max_imp, rigid_piece(model), InitialState)
     cores = {lv: _core_for(model, PiecewiseConstantLoad([0.0], [lv])) for lv in (drive.stroke, -drive.ret)}
 
     def piece(level, q, v, t, t_stop):
@@ -525,7 +527,7 @@ def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
         _push_off(core.c, q)
         return _run(core, q, v, t, t_stop, 1)
 
-    return run_switched(model, drive, q, v, t0, t_end, max_imp, piece)
+    return run_switched(model, drive, q, v, t0, t_end, max_imp, piece, InitialState)
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:

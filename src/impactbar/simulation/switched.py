@@ -95,6 +95,83 @@ class SwitchedTrajectory:
         return out
 
 
+class _State:
+    """A modal state as the pieces hand it on (the driver's ``InitialState`` has the same fields)."""
+
+    __slots__ = ("modal_displacement", "modal_velocity")
+
+    def __init__(self, q, v):
+        self.modal_displacement = q
+        self.modal_velocity = v
+
+
+class _RigidFlight:
+    """One constant-force piece of the rigid bar under the paper's law, in closed form (theory §10):
+    the same fields and evaluations as a :class:`~impactbar.Trajectory` piece."""
+
+    __slots__ = ("t0", "t_end", "q", "v", "level", "d", "impact_times", "impact_velocities",
+                 "final_state", "status", "stuck")
+
+    @property
+    def n_impacts(self) -> int:
+        return int(self.impact_times.size)
+
+    def _at(self, t):
+        if self.stuck:
+            return np.zeros_like(t), np.zeros_like(t)
+        e = -np.expm1(-self.d * (t - self.t0)) / self.d if self.d else t - self.t0
+        h = t - self.t0
+        c = (h - e) / self.d if self.d else 0.5 * h * h
+        return self.q + self.v * e + self.level * c, self.v * (1.0 - self.d * e) + self.level * e
+
+    def end_displacement(self, t):
+        return np.minimum(self._at(np.asarray(t, dtype=float))[0], 0.0)
+
+    def end_velocity(self, t):
+        return self._at(np.asarray(t, dtype=float))[1]
+
+
+def rigid_piece(model: BarModel):
+    """The piece function of :func:`run_switched` for the rigid bar under the paper's law, in closed
+    form: the impact is the first rising crossing of ``q_0`` through 0 (the same monotonicity
+    argument as the switch's, theory §10), then ``v -> -R v`` (eq. 10); with the force pressing and
+    a rebound too small to resolve (or ``R = 0``), the piston rests on the stop until ``t_stop``."""
+    d, R = model.d, model.R
+
+    def piece(level, q, v, t, t_stop):
+        f = object.__new__(_RigidFlight)
+        q0, v0 = float(q[0]), float(v[0])
+        f.t0, f.level, f.d = t, level, d
+        resting = q0 >= 0.0 and abs(v0) <= 1e-13 * (1.0 + abs(level)) and level > 0.0
+        f.stuck = resting
+        f.q, f.v = (0.0, 0.0) if resting else (q0, v0)
+        t_imp = math.inf if resting else t + first_rising_crossing(d, q0, v0, level, 0.0)
+        if t_imp < t_stop:
+            f.t_end = t_imp
+            vm = float(f._at(np.array(t_imp))[1])
+            f.impact_times = np.array([t_imp])
+            f.impact_velocities = np.array([vm])
+            f.status = RunStatus.MAX_IMPACTS
+            vp = -R * vm
+            if level > 0.0 and abs(vp) * vp_scale(d, level) <= 1e-13 * (1.0 + t_imp):
+                vp = 0.0  # the rebound lasts less than rounding: the piston rests on the stop
+            f.final_state = _State(np.zeros(1), np.array([vp]))
+        else:
+            f.t_end = t_stop
+            f.impact_times = f.impact_velocities = np.zeros(0)
+            f.status = RunStatus.T_END
+            qe, ve = f._at(np.array(t_stop))
+            f.final_state = _State(np.array([min(float(qe), 0.0)]), np.array([float(ve)]))
+        return f
+
+    return piece
+
+
+def vp_scale(d: float, level: float) -> float:
+    """Duration of a rebound per unit rebound speed under a pressing force (``2 / level``)."""
+    return 2.0 / level
+
+
 def initial_valve(drive: PositionSwitchedDrive, q0: float) -> int:
     """The valve's state at the start of a run: return while the gap is below ``switch_out``,
     stroke beyond it."""
@@ -102,12 +179,13 @@ def initial_valve(drive: PositionSwitchedDrive, q0: float) -> int:
 
 
 def run_switched(model: BarModel, drive: PositionSwitchedDrive, q, v, t0: float, t_end: float,
-                 max_imp: int, piece) -> SwitchedTrajectory:
+                 max_imp: int, piece, make_state) -> SwitchedTrajectory:
     """The valve's event loop (theory §10).
 
     ``piece(level, q, v, t, t_stop)`` runs the ordinary driver under the constant force ``level``
     from ``(q, v)`` at ``t`` until ``t_stop`` or its first impact, and returns its
-    :class:`~impactbar.Trajectory`.
+    :class:`~impactbar.Trajectory` (or a :func:`rigid_piece` flight); ``make_state(q, v)`` makes
+    the final :class:`~impactbar.InitialState`.
     """
     d = model.d
     tau = drive.delay
@@ -133,8 +211,8 @@ def run_switched(model: BarModel, drive: PositionSwitchedDrive, q, v, t0: float,
         traj = piece(drive.level(valve), q, v, t, t_next)
         pieces.append(traj)
         state = traj.final_state
-        q = np.array(state.modal_displacement)
-        v = np.array(state.modal_velocity)
+        q = state.modal_displacement
+        v = state.modal_velocity
         t = traj.t_end
         if traj.n_impacts and (t < t_next or traj.status == RunStatus.MAX_IMPACTS):
             imp_t.extend(traj.impact_times.tolist())
@@ -160,5 +238,6 @@ def run_switched(model: BarModel, drive: PositionSwitchedDrive, q, v, t0: float,
     return SwitchedTrajectory(
         model=model, drive=drive, t0=t0, t_end=t, impact_times=np.array(imp_t),
         impact_velocities=np.array(imp_v), switch_times=np.array(sw_t),
-        switch_positions=np.array(sw_y), switch_kinds=tuple(sw_k), final_state=state,
+        switch_positions=np.array(sw_y), switch_kinds=tuple(sw_k),
+        final_state=make_state(np.array(q, dtype=float), np.array(v, dtype=float)),
         final_valve=_KIND[valve], status=status, pieces=tuple(pieces))
