@@ -105,12 +105,6 @@ def _w2(model: BarModel) -> np.ndarray:
     return (model.s * np.pi * np.arange(model.n_modes + 1)) ** 2
 
 
-def _flow(w2, d, p, z, h):
-    M = w2.size
-    q, v = step_constant(w2, d, p, z[:M], z[M:], h)
-    return np.concatenate((q, v))
-
-
 def _field(w2, d, p, z):
     M = w2.size
     q, v = z[:M], z[M:]
@@ -119,8 +113,7 @@ def _field(w2, d, p, z):
 
 def _fund(w2, d, h):
     """The flow's Jacobian ``E(h)``, shape ``(2M, 2M)`` (block-diagonal per mode)."""
-    p11, p12, p21, p22 = fundamental(w2, d, np.full(w2.shape, float(h)))
-    return np.block([[np.diag(p11), np.diag(p12)], [np.diag(p21), np.diag(p22)]])
+    return _matrix(_blocks(w2, d, h))
 
 
 def _jump(model: BarModel) -> np.ndarray:
@@ -134,11 +127,14 @@ def _legs(model, drive, z0, durations):
     w2, d = _w2(model), model.d
     ps, pr = drive.level(STROKE), drive.level(RETURN)
     tau, h1, _, h3 = durations
-    za = _flow(w2, d, ps, z0, tau) if tau else z0.copy()
-    zb = _flow(w2, d, pr, za, h1)
-    zc = _flow(w2, d, pr, zb, tau) if tau else zb.copy()
-    zd = _flow(w2, d, ps, zc, h3)
-    return za, zb, zc, zd
+    out = []
+    z = z0
+    for p, h in ((ps, tau), (pr, h1), (pr, tau), (ps, h3)):
+        if h:
+            E = _blocks(w2, d, h)
+            z = _apply(E, _affine(w2, d, p, h, E), z)
+        out.append(z)
+    return tuple(out)
 
 
 def _before_impact(model, drive, z0, durations):
@@ -148,34 +144,108 @@ def _before_impact(model, drive, z0, durations):
 # --------------------------------------------------------------------------------------------------
 # Newton on the segment problem
 # --------------------------------------------------------------------------------------------------
+def _blocks(w2, d, h):
+    """The flow's Jacobian over ``h`` as its per-mode 2x2 blocks ``(a, b, c, e)``, each ``(M,)``
+    (:func:`~impactbar.dynamics.modal.fundamental`, with the rigid mode and underdamped flexible
+    modes in direct closed form)."""
+    h = float(h)
+    lam2 = w2[1:] - 0.25 * d * d
+    if lam2.size and not np.all(lam2 > 0.0):  # an overdamped mode: the general forms
+        return fundamental(w2, d, np.full(w2.shape, h))
+    b0 = -math.expm1(-d * h) / d if d else h
+    a = np.empty(w2.size)
+    b = np.empty(w2.size)
+    c = np.empty(w2.size)
+    e = np.empty(w2.size)
+    a[0], b[0], c[0], e[0] = 1.0, b0, 0.0, math.exp(-d * h)
+    if lam2.size:
+        lam = np.sqrt(lam2)
+        damp = math.exp(-0.5 * d * h)
+        cs = damp * np.cos(lam * h)
+        sn = damp * np.sin(lam * h) / lam
+        a[1:] = cs + 0.5 * d * sn
+        b[1:] = sn
+        c[1:] = -w2[1:] * sn
+        e[1:] = cs - 0.5 * d * sn
+    return a, b, c, e
+
+
+def _affine(w2, d, p, h, E):
+    """The constant part ``g`` of the flow ``z(h) = E z0 + g`` under the force ``p`` (eq. 8)."""
+    a, _, c, _ = E
+    gq = np.empty(w2.size)
+    gv = np.empty(w2.size)
+    y = d * h
+    if d == 0.0:
+        b0, c0 = h, 0.5 * h * h
+    else:
+        b0 = -math.expm1(-y) / d
+        c0 = h * h * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0) if abs(y) < 1e-2 \
+            else (h - b0) / d
+    gq[0], gv[0] = p * c0, p * b0
+    if w2.size > 1:
+        qs = p / w2[1:]  # static deflection of the flexible modes
+        gq[1:] = qs * (1.0 - a[1:])
+        gv[1:] = -c[1:] * qs
+    return gq, gv
+
+
+def _compose(E2, E1):
+    a2, b2, c2, e2 = E2
+    a1, b1, c1, e1 = E1
+    return a2 * a1 + b2 * c1, a2 * b1 + b2 * e1, c2 * a1 + e2 * c1, c2 * b1 + e2 * e1
+
+
+def _apply(E, g, z):
+    M = g[0].size
+    a, b, c, e = E
+    q, v = z[:M], z[M:]
+    return np.concatenate((a * q + b * v + g[0], c * q + e * v + g[1]))
+
+
+def _matrix(E):
+    a, b, c, e = E
+    return np.block([[np.diag(a), np.diag(b)], [np.diag(c), np.diag(e)]])
+
+
 def _residual(model, drive, X):
+    """Residual and exact Jacobian of the segment problem (unknowns: state after the impact,
+    ``h1``, ``h3``), with the flows as per-mode 2x2 blocks."""
     M = model.n_modes + 1
     c = model.end_weights
-    z0, h1, h3 = X[:2 * M], X[2 * M], X[2 * M + 1]
-    tau = drive.delay
-    za, zb, zc, zd = _legs(model, drive, z0, (tau, h1, tau, h3))
-    J = _jump(model)
-    r = np.empty(2 * M + 2)
-    r[:2 * M] = z0 - J @ zd
-    r[2 * M] = -zb[0] - drive.switch_out
-    r[2 * M + 1] = c @ zd[:M]
-    # exact Jacobian
     w2, d = _w2(model), model.d
     ps, pr = drive.level(STROKE), drive.level(RETURN)
-    Es_tau, Er_tau = (_fund(w2, d, tau), _fund(w2, d, tau)) if tau else (np.eye(2 * M),) * 2
-    Er1, Es3 = _fund(w2, d, h1), _fund(w2, d, h3)
-    dzb_dz0 = Er1 @ Es_tau
-    dzd_dz0 = Es3 @ Er_tau @ dzb_dz0
+    z0, h1, h3 = X[:2 * M], X[2 * M], X[2 * M + 1]
+    tau = drive.delay
+    E1, E3 = _blocks(w2, d, h1), _blocks(w2, d, h3)
+    if tau:
+        Et = _blocks(w2, d, tau)
+        za = _apply(Et, _affine(w2, d, ps, tau, Et), z0)
+    else:
+        Et, za = None, z0
+    zb = _apply(E1, _affine(w2, d, pr, h1, E1), za)
+    zc = _apply(Et, _affine(w2, d, pr, tau, Et), zb) if tau else zb
+    zd = _apply(E3, _affine(w2, d, ps, h3, E3), zc)
+    Jv = np.concatenate((np.ones(M), np.full(M, -model.R)))  # the impact law's diagonal
+    r = np.empty(2 * M + 2)
+    r[:2 * M] = z0 - Jv * zd
+    r[2 * M] = -zb[0] - drive.switch_out
+    r[2 * M + 1] = c @ zd[:M]
+    Eb = _compose(E1, Et) if tau else E1  # z0 -> zb
+    Ebd = _compose(E3, Et) if tau else E3  # zb -> zd
+    Ed = _compose(Ebd, Eb)
     dzb_dh1 = _field(w2, d, pr, zb)
-    dzd_dh1 = Es3 @ Er_tau @ dzb_dh1
+    dzd_dh1 = _apply(Ebd, (np.zeros(M), np.zeros(M)), dzb_dh1)
     dzd_dh3 = _field(w2, d, ps, zd)
     Jac = np.zeros((2 * M + 2, 2 * M + 2))
-    Jac[:2 * M, :2 * M] = np.eye(2 * M) - J @ dzd_dz0
-    Jac[:2 * M, 2 * M] = -J @ dzd_dh1
-    Jac[:2 * M, 2 * M + 1] = -J @ dzd_dh3
-    Jac[2 * M, :2 * M] = -dzb_dz0[0]
+    Jac[:2 * M, :2 * M] = np.eye(2 * M) - Jv[:, None] * _matrix(Ed)
+    Jac[:2 * M, 2 * M] = -Jv * dzd_dh1
+    Jac[:2 * M, 2 * M + 1] = -Jv * dzd_dh3
+    Jac[2 * M, 0] = -Eb[0][0]
+    Jac[2 * M, M] = -Eb[1][0]
     Jac[2 * M, 2 * M] = -dzb_dh1[0]
-    Jac[2 * M + 1, :2 * M] = c @ dzd_dz0[:M]
+    Jac[2 * M + 1, :M] = c * Ed[0]
+    Jac[2 * M + 1, M:2 * M] = c * Ed[1]
     Jac[2 * M + 1, 2 * M] = c @ dzd_dh1[:M]
     Jac[2 * M + 1, 2 * M + 1] = c @ dzd_dh3[:M]
     return r, Jac
@@ -269,10 +339,9 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     z0 = X[:2 * M]
     durations = np.array([drive.delay, X[2 * M], drive.delay, X[2 * M + 1]])
     Phi = _monodromy(model, drive, z0, durations)
-    za = _legs(model, drive, z0, durations)[0]
+    za, _, _, zd = _legs(model, drive, z0, durations)
     f = _field(_w2(model), model.d, drive.level(RETURN), za)
     trivial, nontrivial = _split_multipliers(Phi, f)
-    zd = _legs(model, drive, z0, durations)[3]
     c = model.end_weights
     return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)), durations=durations,
                          state=z0, impact_velocity=float(c @ zd[M:]), multipliers=nontrivial,
@@ -352,10 +421,9 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
     c = model.end_weights
     ps, pr = drive.level(STROKE), drive.level(RETURN)
     tau, h1, _, h3 = durations
-    zd = _legs(model, drive, z0, durations)[3]
+    za, zb, zc, zd = _legs(model, drive, z0, durations)
     if c @ zd[M:] <= 0.0:
         return Admissibility.BACKWARD_IMPACT
-    za, zb, zc, _ = _legs(model, drive, z0, durations)
     # the crossing must be the first rising one of the gap in the return flight
     t_first = first_rising_crossing(d, -za[0], -za[M], -pr, drive.switch_out)
     if not math.isclose(t_first, h1, rel_tol=1e-8, abs_tol=1e-12):
