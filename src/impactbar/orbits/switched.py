@@ -27,7 +27,7 @@ import numpy as np
 
 from .._status import Admissibility
 from .._validate import check_int, check_real
-from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive, first_rising_crossing
+from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive, _rate_zero, first_rising_crossing
 from ..dynamics.modal import fundamental, step_constant
 from ..model import BarModel
 
@@ -205,7 +205,11 @@ def _apply(E, g, z):
 
 def _matrix(E):
     a, b, c, e = E
-    return np.block([[np.diag(a), np.diag(b)], [np.diag(c), np.diag(e)]])
+    M = a.size
+    out = np.zeros((2 * M, 2 * M))
+    i = np.arange(M)
+    out[i, i], out[i, M + i], out[M + i, i], out[M + i, M + i] = a, b, c, e
+    return out
 
 
 def _residual(model, drive, X):
@@ -414,8 +418,9 @@ def _split_multipliers(Phi, f):
 
 
 def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibility:
-    """Sampled check (theory §5, §10): the end off the stop inside every flight, the return crossing
-    the first one, and a forward impact."""
+    """The end off the stop inside every flight, the return crossing the first one, and a forward
+    impact (theory §5, §10): exact for the rigid bar (one turning point per flight), sampled on a
+    grid finer than the stiffest mode's period for a flexible one."""
     M = model.n_modes + 1
     w2, d = _w2(model), model.d
     c = model.end_weights
@@ -428,10 +433,25 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
     t_first = first_rising_crossing(d, -za[0], -za[M], -pr, drive.switch_out)
     if not math.isclose(t_first, h1, rel_tol=1e-8, abs_tol=1e-12):
         return Admissibility.PENETRATES
+    flights = ((ps, z0, tau), (pr, za, h1), (pr, zb, tau), (ps, zc, h3))
+    if M == 1:  # the rigid bar: q_0 has at most one turning point per flight (theory §10), exact
+        for p, z, h in flights:
+            if h <= 0.0:
+                continue
+            t_turn = _rate_zero(d, float(z[1]), p)
+            inner = [float(z[0])] if z is not z0 else []
+            if 0.0 < t_turn < h:
+                inner.append(float(_apply(_blocks(w2, d, t_turn), _affine(w2, d, p, t_turn,
+                                                                          _blocks(w2, d, t_turn)), z)[0]))
+            if inner and max(inner) > 1e-12 * max(1.0, drive.switch_out):
+                return Admissibility.PENETRATES
+        if c @ z0[M:] >= 0.0 and model.R > 0.0:
+            return Admissibility.STICKS
+        return Admissibility.ADMISSIBLE
     n = max(samples, int(8 * model.s * model.n_modes * sum(durations)))
     worst = -math.inf
     scale = max(1.0, float(np.max(np.abs(z0[:M]))))
-    for p, z, h in ((ps, z0, tau), (pr, za, h1), (pr, zb, tau), (ps, zc, h3)):
+    for p, z, h in flights:
         if h <= 0.0:
             continue
         t = np.linspace(0.0, h, n)[1:-1]
