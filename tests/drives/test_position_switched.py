@@ -225,3 +225,19 @@ def test_rigid_closed_forms_agree_with_the_general_driver(d, delay, R, choose):
     assert np.allclose(fast.switch_times, ref.switch_times, rtol=0, atol=1e-9)
     t = np.linspace(0.0, 60.0, 301)
     assert np.allclose(fast.end_displacement(t), ref.end_displacement(t), atol=1e-9)
+
+
+def test_a_delay_longer_than_the_rebound_makes_the_one_impact_orbit_inadmissible():
+    """Rigid, d = 0: after an impact at v the piston leaves at R v under the stroke force for the
+    delay; it is back on the stop after 2 R v / a_s. With a longer delay the one-impact solution
+    passes through the stop (and simulate sees the extra impact)."""
+    model = BarModel(s=10.0, d=0.0, R=0.215, n_modes=0)
+    short = find_orbit(model, PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0, delay=0.2))
+    assert short.admissibility == "admissible"
+    assert 2 * model.R * short.impact_velocity > 0.2
+    drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0, delay=5.0)
+    o = find_orbit(model, drive)
+    assert 2 * model.R * o.impact_velocity < 5.0
+    assert o.admissibility == "penetrates" and not o.stable
+    tr = simulate(model, drive, InitialState(o.state[:1], o.state[1:]), 5.0)
+    assert tr.n_impacts >= 1
