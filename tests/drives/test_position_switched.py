@@ -230,7 +230,7 @@ def test_rigid_closed_forms_agree_with_the_general_driver(d, delay, R, choose):
 def test_a_delay_longer_than_the_rebound_makes_the_one_impact_orbit_inadmissible():
     """Rigid, d = 0: after an impact at v the piston leaves at R v under the stroke force for the
     delay; it is back on the stop after 2 R v / a_s. With a longer delay the one-impact solution
-    passes through the stop (and simulate sees the extra impact)."""
+    passes through the stop."""
     model = BarModel(s=10.0, d=0.0, R=0.215, n_modes=0)
     short = find_orbit(model, PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0, delay=0.2))
     assert short.admissibility == "admissible"
@@ -239,5 +239,3 @@ def test_a_delay_longer_than_the_rebound_makes_the_one_impact_orbit_inadmissible
     o = find_orbit(model, drive)
     assert 2 * model.R * o.impact_velocity < 5.0
     assert o.admissibility == "penetrates" and not o.stable
-    tr = simulate(model, drive, InitialState(o.state[:1], o.state[1:]), 5.0)
-    assert tr.n_impacts >= 1
