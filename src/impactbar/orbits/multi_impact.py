@@ -472,8 +472,8 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
 
     With a :class:`~impactbar.PositionSwitchedDrive` in place of the load the system is autonomous
     and the period is unknown (theory §10): the result is a
-    :class:`~impactbar.orbits.switched.SwitchedOrbit` (``impacts = 1``, ``periods`` ignored; the
-    paper's impact law), from :func:`~impactbar.orbits.switched.find_switched_orbit`.
+    :class:`~impactbar.SwitchedOrbit` (``impacts = 1``, ``periods`` ignored; the
+    paper's impact law), from :func:`~impactbar.orbits.find_switched_orbit`.
     """
     if isinstance(load, PositionSwitchedDrive):
         from .switched import find_switched_orbit

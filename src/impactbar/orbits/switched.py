@@ -1,7 +1,7 @@
 """Periodic motions under a position-switched drive: autonomous, with an unknown period (theory §10).
 
 One period of a one-impact orbit, counted from an impact (the valve's rules of
-:class:`~impactbar.drives.PositionSwitchedDrive`, delay ``tau``):
+:class:`~impactbar.PositionSwitchedDrive`, delay ``tau``):
 
 1. stroke force for ``tau`` (the switch to return triggered by the impact takes effect);
 2. return force for ``h1``, until the gap ``y = -q_0`` rises through ``switch_out``;
@@ -270,7 +270,7 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     """The one-impact periodic motion under a position-switched drive (theory §10).
 
     Called by :func:`impactbar.find_orbit` when its load is a
-    :class:`~impactbar.drives.PositionSwitchedDrive`.
+    :class:`~impactbar.PositionSwitchedDrive`.
 
     Parameters
     ----------

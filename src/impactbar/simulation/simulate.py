@@ -441,7 +441,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
         ``t mod 2 pi``); or a drive switched by the piston's position (theory §10), whose valve
         starts in return when the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it: the
-        result is then a :class:`~impactbar.simulation.switched.SwitchedTrajectory` with the
+        result is then a :class:`~impactbar.SwitchedTrajectory` with the
         switches logged.
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).

@@ -4,7 +4,7 @@ Between events the force is constant, so every mode moves in closed form (eq. 8)
 existing driver of :mod:`impactbar.simulation.simulate` (certified impact search, chatter,
 sustained contact, every impact law) follows the bar under that constant force. Around it this
 module runs the valve: the rising crossing of the switch position by the gap ``y = -q_0`` is found in
-closed form (:func:`impactbar.drives.switched.first_rising_crossing`: ``y' `` is monotone under a
+closed form (``impactbar.drives.switched.first_rising_crossing``: the gap's rate is monotone under a
 constant force, so no crossing is missed, and it is refined to rounding), each switch takes effect
 ``delay`` after its trigger, and each impact triggers the switch to return.
 """
@@ -28,7 +28,7 @@ _KIND = {STROKE: "stroke", RETURN: "return"}
 @dataclass(frozen=True, eq=False)
 class SwitchedTrajectory:
     """The result of :func:`impactbar.simulate` under a
-    :class:`~impactbar.drives.PositionSwitchedDrive` (theory §10).
+    :class:`~impactbar.PositionSwitchedDrive` (theory §10).
 
     Attributes
     ----------
