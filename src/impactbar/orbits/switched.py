@@ -296,6 +296,16 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     ------
     ValueError
         On a bad argument, an impact law other than the paper's, or when Newton does not converge.
+
+    Examples
+    --------
+    The rigid piston of theory §10 (``v = sqrt(2 x1 (a_s + a_r) / (1 - R^2))``, multiplier ``R^2``):
+
+    >>> from impactbar import BarModel, PositionSwitchedDrive, find_orbit
+    >>> o = find_orbit(BarModel(s=10, d=0, R=0.215, n_modes=0),
+    ...                PositionSwitchedDrive(stroke=1, ret=1, switch_out=1))
+    >>> round(o.period, 6), round(o.impact_velocity, 6), round(float(o.multipliers[0]), 6)
+    (4.569933, 2.047892, 0.046225)
     """
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
