@@ -119,7 +119,7 @@ def _fund(w2, d, h):
 def _jump(model: BarModel) -> np.ndarray:
     """The paper's impact law (eq. 10) as a matrix: ``q`` kept, ``v -> -R v``."""
     M = model.n_modes + 1
-    return np.diag(np.concatenate((np.ones(M), np.full(M, -model.R))))
+    return np.diag(np.concatenate((np.ones(M), np.full(M, -model.law.kernel_restitution(model)))))
 
 
 def _legs(model, drive, z0, durations):
@@ -230,7 +230,7 @@ def _residual(model, drive, X):
     zb = _apply(E1, _affine(w2, d, pr, h1, E1), za)
     zc = _apply(Et, _affine(w2, d, pr, tau, Et), zb) if tau else zb
     zd = _apply(E3, _affine(w2, d, ps, h3, E3), zc)
-    Jv = np.concatenate((np.ones(M), np.full(M, -model.R)))  # the impact law's diagonal
+    Jv = np.concatenate((np.ones(M), np.full(M, -model.law.kernel_restitution(model))))  # eq. 10
     r = np.empty(2 * M + 2)
     r[:2 * M] = z0 - Jv * zd
     r[2 * M] = -zb[0] - drive.switch_out
@@ -314,9 +314,9 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     check_int("impacts", impacts, lo=1, hi=1)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
-    if model.impact != "paper":
-        raise ValueError(f"find_orbit with a PositionSwitchedDrive supports the paper's impact law "
-                         f"only (model.impact = 'paper'); got {model.impact!r}")
+    if not model.law.instantaneous:
+        raise ValueError(f"find_orbit with a PositionSwitchedDrive supports the paper's instantaneous "
+                         f"impact law only (model.impact = 'paper'); got {model.impact!r}")
     if model.R >= 1.0:
         raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
                          "(with R = 1 no energy leaves and the blows grow without bound)")

@@ -516,7 +516,8 @@ def _push_off(c, q) -> None:
 
 def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
     """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces."""
-    if model.n_modes == 0 and model.impact == "paper" and use_fast("simulate.switched_rigid"):
+    law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
+    if model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid"):
         return run_switched(model, drive, q, v, t0, t_end, max_imp, rigid_piece(model), InitialState)
     cores = {lv: _core_for(model, PiecewiseConstantLoad([0.0], [lv])) for lv in (drive.stroke, -drive.ret)}
 

@@ -136,7 +136,7 @@ def rigid_piece(model: BarModel):
     form: the impact is the first rising crossing of ``q_0`` through 0 (the same monotonicity
     argument as the switch's, theory §10), then ``v -> -R v`` (eq. 10); with the force pressing and
     a rebound too small to resolve (or ``R = 0``), the piston rests on the stop until ``t_stop``."""
-    d, R = model.d, model.R
+    d, R = model.d, model.law.kernel_restitution(model)
 
     def piece(level, q, v, t, t_stop):
         f = object.__new__(_RigidFlight)
