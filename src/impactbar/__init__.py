@@ -24,6 +24,7 @@ from ._shared.status import CurveKind as CurveKind
 from ._shared.status import EventKind as EventKind
 from ._shared.status import RunStatus as RunStatus
 from ._version import __version__ as __version__
+from .drives import PositionSwitchedDrive as PositionSwitchedDrive
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
 from .loads import Load as Load
@@ -38,6 +39,7 @@ _LAZY = {
     "periodic_orbits": ".orbits",
     "MultiImpactOrbit": ".orbits",
     "find_orbit": ".orbits",
+    "SwitchedOrbit": ".orbits",
     "Branch": ".continuation",
     "BranchEvent": ".continuation",
     "continue_orbit": ".continuation",
@@ -49,6 +51,7 @@ _LAZY = {
     "Trajectory": ".simulation",
     "EnergyAccount": ".simulation",
     "simulate": ".simulation",
+    "SwitchedTrajectory": ".simulation",
     "SweepSpec": ".sweeps",
     "load_spec": ".sweeps",
     "open_sweep": ".sweeps",
@@ -57,8 +60,8 @@ _LAZY = {
 }
 
 #: subpackages reachable as attributes (``impactbar.physical``) without an explicit import
-_SUBPACKAGES = ("physical", "orbits", "simulation", "continuation", "sweeps", "dynamics", "cli", "paper",
-                "plotting")
+_SUBPACKAGES = ("drives", "physical", "orbits", "simulation", "continuation", "sweeps", "dynamics", "cli",
+                "paper", "plotting")
 
 
 def __getattr__(name: str):
@@ -83,10 +86,12 @@ __all__ = [
     "SquareWaveLoad",
     "FourierLoad",
     "PiecewiseConstantLoad",
+    "PositionSwitchedDrive",
     "PeriodicOrbit",
     "periodic_orbits",
     "MultiImpactOrbit",
     "find_orbit",
+    "SwitchedOrbit",
     "Branch",
     "BranchEvent",
     "continue_orbit",
@@ -98,6 +103,7 @@ __all__ = [
     "Trajectory",
     "EnergyAccount",
     "simulate",
+    "SwitchedTrajectory",
     "SweepSpec",
     "load_spec",
     "open_sweep",

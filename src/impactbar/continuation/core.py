@@ -31,6 +31,7 @@ from ..orbits.multi_impact import (
     doubling_direction,
 )
 from ..orbits.orbit import PeriodicOrbit
+from ..orbits.switched import SwitchedOrbit
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
@@ -204,6 +205,10 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         base = orbit.orbit
     elif isinstance(orbit, PeriodicOrbit):
         base = orbit
+    elif isinstance(orbit, SwitchedOrbit):
+        raise ValueError("continuation of an orbit under a PositionSwitchedDrive (unknown period, "
+                         "theory §10) is not implemented yet: solve find_orbit(model, drive, guess=orbit) "
+                         "along the parameter's values instead")
     else:
         raise ValueError(f"orbit must be a PeriodicOrbit, MultiImpactOrbit or BranchEvent; got "
                          f"{type(orbit).__name__}")

@@ -22,6 +22,9 @@ name                          fast (default)                       reference
                               after an impact                      (``find_crossing``)
 ``simulate.wave_separation``  compiled characteristics solver      Python solver (``wave_impact``)
                               where contact is lost
+``simulate.switched_rigid``   rigid bar under a position-          the general driver, piece by
+                              switched drive in scalar closed      piece (theory §10)
+                              forms
 ``wave.residual``             compiled wave-law phase residual     ``wave_orbit_states`` phase by
                               of a piecewise-constant load         phase
 ``sweeps.create_store``       sweep store written by zarr alone    store written by xarray's
@@ -59,6 +62,7 @@ IMPLEMENTATIONS: dict[str, str] = {
     "orbits.rigid_scalar": "rigid-bar closed forms in plain floats for one point",
     "simulate.impact_search": "specialised certified searches after an impact",
     "simulate.wave_separation": "compiled characteristics solver for contact windows that lose contact",
+    "simulate.switched_rigid": "rigid bar under a position-switched drive in scalar closed forms",
     "wave.residual": "compiled wave-law phase residual of a piecewise-constant load",
     "sweeps.create_store": "sweep store written by zarr alone (without xarray)",
 }

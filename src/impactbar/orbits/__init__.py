@@ -9,7 +9,8 @@ wave impact law, theory §4b), ``orbit`` (:class:`PeriodicOrbit`, the one result
 impacts in ``n`` load periods; ``MultiImpactOrbit`` is another name for it), ``one_impact``
 (:func:`periodic_orbits`: the one-impact orbits), ``multi_impact`` (:func:`find_orbit`: ``m``
 impacts in ``n`` load periods by Newton on the segment problem, one segment per flight),
-``charts`` (existence, stability and admissibility edges, Figs. 5, 6, 8).
+``charts`` (existence, stability and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits
+with an unknown period under a position-switched drive, theory §10).
 Part of the core: imports only ``impactbar.model``, ``impactbar.loads``, ``impactbar.dynamics``,
 numpy and scipy.
 """
@@ -25,6 +26,7 @@ _HOME = {
     "phase_G": "phase", "phase_residual": "phase", "phase_roots": "phase",
     "RigidOrbits": "rigid", "rigid_cosine_orbits": "rigid", "rigid_square_orbits": "rigid",
     "floquet_multipliers": "stability", "impact_map_jacobian": "stability",
+    "SwitchedOrbit": "switched", "find_switched_orbit": "switched",
 }
 
 __all__ = [
@@ -43,6 +45,8 @@ __all__ = [
     "MultiImpactOrbit",
     "find_orbit",
     "impact_law",
+    "SwitchedOrbit",
+    "find_switched_orbit",
 ]
 
 

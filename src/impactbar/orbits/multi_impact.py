@@ -28,6 +28,7 @@ import numpy as np
 from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
+from ..drives.switched import PositionSwitchedDrive
 from ..dynamics.modal import fundamental
 from ..loads import Load
 from ..model import BarModel
@@ -469,7 +470,17 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     >>> o = find_orbit(BarModel(s=10, d=0, R=0.5, n_modes=4), CosineLoad(0.1, 1.0))
     >>> round(o.phase, 4), o.impacts
     (3.0367, 1)
+
+    With a :class:`~impactbar.PositionSwitchedDrive` in place of the load the system is autonomous
+    and the period is unknown (theory §10): the result is a
+    :class:`~impactbar.SwitchedOrbit` (``impacts = 1``, ``periods`` ignored; the
+    paper's impact law), from :func:`~impactbar.orbits.find_switched_orbit`.
     """
+    if isinstance(load, PositionSwitchedDrive):
+        from .switched import find_switched_orbit
+
+        return find_switched_orbit(model, load, impacts, guess, tol=min(tol, 1e-13),
+                                   max_iter=max(max_iter, 50))
     _check_inputs(model, load)
     m = check_int("impacts", impacts, lo=1, hi=4096)
     n = check_int("periods", periods, lo=1, hi=4096)

@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from ..drives.switched import PositionSwitchedDrive
 from ..dynamics.certified import enclose_zeros, zeros_in_clusters
 from ..loads import Load
 from ..model import BarModel
@@ -36,6 +37,10 @@ def phase_G(d: float, R: float) -> float:
 def _check_inputs(model, load):
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
+    if isinstance(load, PositionSwitchedDrive):  # not a function of time (theory §10)
+        raise ValueError("a PositionSwitchedDrive is not periodic in time: the phase equation and "
+                         "the one-impact orbits of a periodic load do not apply; use find_orbit(model, "
+                         "drive) (unknown period, theory §10) or simulate")
     if not isinstance(load, Load):
         raise ValueError(f"load must be a Load (CosineLoad, SquareWaveLoad, ...); got "
                          f"{type(load).__name__}")

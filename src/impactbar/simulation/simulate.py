@@ -34,11 +34,13 @@ import numpy as np
 
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
+from ..drives.switched import PositionSwitchedDrive
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
-from ..loads import Load
+from ..loads import Load, PiecewiseConstantLoad
 from ..model import MAX_MODES, BarModel
+from .switched import SwitchedTrajectory, rigid_piece, run_switched
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
 from .trajectory import _FREE as _FREE
@@ -437,9 +439,12 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     ----------
     model : BarModel
         The bar: ``s``, ``d``, ``R`` and ``N`` flexible modes.
-    load : FourierLoad or PiecewiseConstantLoad
+    load : FourierLoad or PiecewiseConstantLoad or PositionSwitchedDrive
         The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
-        ``t mod 2 pi``).
+        ``t mod 2 pi``); or a drive switched by the piston's position (theory §10), whose valve
+        starts in return when the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it: the
+        result is then a :class:`~impactbar.SwitchedTrajectory` with the
+        switches logged.
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
@@ -454,7 +459,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
 
     Returns
     -------
-    Trajectory
+    Trajectory or SwitchedTrajectory
 
     Raises
     ------
@@ -494,13 +499,38 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
+    if isinstance(load, PositionSwitchedDrive):
+        _push_off(model.end_weights, q)
+        return _run_switched(model, load, q, v, t0, t_end, max_imp)
     core = _core_for(model, load)
-    g = float(core.c @ q)
-    if g > 0.0 and g > 1e-12 * max(1.0, float(np.sum(np.abs(core.c * q)))):
+    _push_off(core.c, q)
+    return _run(core, q, v, t0, t_end, max_imp)
+
+
+def _push_off(c, q) -> None:
+    """Refuse a start through the stop; a penetration within rounding is shifted off (in place)."""
+    g = float(c @ q)
+    if g > 0.0 and g > 1e-12 * max(1.0, float(np.sum(np.abs(c * q)))):
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
-    return _run(core, q, v, t0, t_end, max_imp)
+
+
+def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
+    """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces."""
+    law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
+    if model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid"):
+        return run_switched(model, drive, q, v, t0, t_end, max_imp, rigid_piece(model), InitialState)
+    cores = {lv: _core_for(model, PiecewiseConstantLoad([0.0], [lv])) for lv in (drive.stroke, -drive.ret)}
+
+    def piece(level, q, v, t, t_stop):
+        q = np.array(q, dtype=float)
+        v = np.array(v, dtype=float)
+        core = cores[level]
+        _push_off(core.c, q)
+        return _run(core, q, v, t, t_stop, 1)
+
+    return run_switched(model, drive, q, v, t0, t_end, max_imp, piece, InitialState)
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
