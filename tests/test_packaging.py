@@ -26,7 +26,9 @@ def test_one_version_source():
 
 
 def test_licence_file_is_shipped_and_matches_the_declared_licence():
-    dist = md.distribution("impactbar")
+    # the installed distribution (the one pip wrote, with INSTALLER), not the build's egg-info that a
+    # source tree on sys.path (the doctests put src/ there) may show first
+    dist = next(d for d in md.distributions(name="impactbar") if d.read_text("INSTALLER") is not None)
     assert dist.metadata["License-Expression"] == "BSD-3-Clause"
     text = dist.read_text("licenses/LICENSE")
     assert text is not None and text.startswith("BSD 3-Clause License")
