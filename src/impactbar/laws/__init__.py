@@ -15,11 +15,18 @@ from .base import ContactLaw as ContactLaw
 from .base import get_law as get_law
 from .paper import InstantImpact as InstantImpact
 from .paper import PaperLaw as PaperLaw
+from .rodrock import BilinearRock as BilinearRock
+from .rodrock import RodRock as RodRock
+from .rodrock import RodSegment as RodSegment
+from .rodrock import single_blow as single_blow
 from .wave import WaveLaw as WaveLaw
 
-__all__ = ["ContactLaw", "PaperLaw", "WaveLaw", "InstantImpact", "LAWS", "get_law"]
+__all__ = ["ContactLaw", "PaperLaw", "WaveLaw", "InstantImpact", "LAWS", "get_law", "RodRock", "RodSegment",
+           "BilinearRock", "single_blow"]
 
-#: The impact laws by name: ``"paper"`` (eq. 10) and ``"wave"`` (the long rod, theory §4b). The table
+#: The impact laws by name: ``"paper"`` (eq. 10), ``"wave"`` (the long rod, theory §4b) and
+#: ``"rodrock"`` (a finite rod on rock, theory §4d: it has required parameters, so only a
+#: ``RodRock(...)`` object builds it; ``get_law("rodrock")`` says so). The table
 #: itself lives in :mod:`impactbar.laws.base`, below the laws' implementations, so that
 #: :class:`~impactbar.BarModel` can resolve a name without importing the solvers the laws drive.
-LAWS.update({"paper": PaperLaw, "wave": WaveLaw})
+LAWS.update({"paper": PaperLaw, "wave": WaveLaw, "rodrock": RodRock})
