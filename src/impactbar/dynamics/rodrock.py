@@ -68,16 +68,17 @@ class _Bit:
         return 0.0
 
     def _coeffs(self):
-        """``R = a + b p`` on the current branch."""
+        """``R = b (p - p_ref)`` on the current branch: ``(b, p_ref)``."""
         if self.branch == _LOAD:
-            return 0.0, self.k
+            return self.k, 0.0
         if self.branch == _ELASTIC:
-            return -self.k_u * self.p_perm, self.k_u
+            return self.k_u, self.p_perm
         return 0.0, 0.0
 
     def _work(self, p0, p1) -> float:
-        a, b = self._coeffs()
-        return a * (p1 - p0) + 0.5 * b * (p1 * p1 - p0 * p0)
+        """``int R dp`` from ``p0`` to ``p1`` on the current branch (no cancellation for a stiff one)."""
+        b, ref = self._coeffs()
+        return b * (p1 - p0) * (0.5 * (p0 + p1) - ref)
 
     def _unload(self):
         self.p_max, self.R_max = self.p, self.k * self.p
@@ -95,7 +96,7 @@ class _Bit:
     # -- massless bit: p' = (E - a - b p)/Z ---------------------------------------------------------
     def _substep_massless(self, E, T):
         Z = self.Z
-        a, b = self._coeffs()
+        b, ref = self._coeffs()
         p0 = self.p
         if self.branch == _LOAD and E - b * p0 < 0.0:
             self._unload()
@@ -110,7 +111,7 @@ class _Bit:
                 self.branch = _ELASTIC
             self.w = rate
             return tau
-        p_inf = (E - a) / b
+        p_inf = E / b + ref
         lam = b / Z
         tau, nxt = T, None
         if self.branch == _ELASTIC:
@@ -128,7 +129,7 @@ class _Bit:
             p1 = nxt[1]
         self.work += self._work(p0, p1)
         self.p = p1
-        self.w = (E - a - b * p1) / Z
+        self.w = (E - b * (p1 - ref)) / Z
         if nxt is not None:
             self.branch = nxt[0]
         return tau
@@ -138,9 +139,9 @@ class _Bit:
         """``(p, w)`` after ``tau`` on the current branch (exact: the matrix exponential)."""
         from scipy.linalg import expm
 
-        a, b = self._coeffs()
+        b, ref = self._coeffs()
         m = self.m
-        A = np.array([[0.0, 1.0, 0.0], [-b / m, -self.Z / m, (E - a) / m], [0.0, 0.0, 0.0]])
+        A = np.array([[0.0, 1.0, 0.0], [-b / m, -self.Z / m, (E + b * ref) / m], [0.0, 0.0, 0.0]])
         y = expm(A * tau) @ np.array([self.p, self.w, 1.0])
         return float(y[0]), float(y[1])
 
