@@ -18,8 +18,9 @@ conserved step by step (``F_a^2/Z_a + G_b^2/Z_b = G_a^2/Z_a + F_b^2/Z_b``).
   solved exactly per cell on each branch of Lundberg's bilinear law ``R(p)``: loading ``R = k p`` at
   the largest penetration so far, unloading and reloading ``R = k_u (p - p_perm)`` with
   ``p_perm = p_max - R_max/k_u``, lift-off ``R = 0`` for ``p < p_perm``. Branch changes inside a cell are
-  located exactly (massless bit: closed form; bit with mass: bisection of the exact solution sampled
-  at 4 points per cell, or 4 per half period of an oscillating bit). The reflected wave is stored as its cell average ``F - Z (p_end - p_start)/dt``; the
+  located exactly (massless bit: closed form; bit with mass: bisection of the exact solution
+  sampled at 4 points per cell, or 4 per half period of an oscillating bit). The reflected wave is
+  stored as its cell average ``F - Z (p_end - p_start)/dt``; the
   energy this averaging removes (``int G^2 dt/Z - G_avg^2 dt/Z >= 0``, zero for a wave constant on
   cells) is reported as ``grid_loss`` so that the energy account closes to rounding.
 - The feed force ``f`` acts on the shank throughout; before the blow the rod is statically compressed
@@ -103,7 +104,7 @@ class _Bit:
             return 0.0
         if b == 0.0:  # lift-off: p' = E/Z
             rate = E / Z
-            t_hit = (self.p_perm - p0) / rate if rate > 0.0 else math.inf
+            t_hit = (self.p_perm - p0) / rate if rate > 0.0 and p0 + rate * T >= self.p_perm else math.inf
             tau = min(T, t_hit)
             p1 = self.p_perm if tau == t_hit else p0 + rate * tau
             self.p = p1
@@ -243,9 +244,12 @@ class Blow:
     feed_work : float
         Work of the feed force on the shank during the blow.
     available_energy : float
-        ``energy_at_impact + feed_work`` plus the rod's static strain energy under the feed.
+        ``energy_at_impact + feed_work`` plus the energy stored under the feed at the start: the
+        rod's static strain energy and the rock's recoverable elastic energy ``f^2/(2 k_u)``.
     work_on_rock : float
-        ``int R dp`` over the blow (the rock's elastic energy left at the end included).
+        ``int R dp`` over the blow plus ``f^2/(2 k_u)`` (the rock's elastic energy under the feed
+        at the start, which the blow may take back): ``>= 0``; the rock's elastic energy left at
+        the end is included.
     piston_energy : float
         Energy returned to the piston (its wave energy at the end).
     rebound_velocity : float
@@ -335,7 +339,8 @@ class Blow:
         """:func:`impactbar.plotting.rock.plot_force_penetration` (the bit's loop)."""
         import importlib
 
-        return importlib.import_module("impactbar.plotting.rock").plot_force_penetration(self, ax=ax, **kwargs)
+        rock = importlib.import_module("impactbar.plotting.rock")
+        return rock.plot_force_penetration(self, ax=ax, **kwargs)
 
 
 def commensurate_cells(times, max_cells: int = 1000, rtol: float = 1e-9):
@@ -386,7 +391,8 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     n_p = int(cells_per_piston)
     dt = Tp / n_p
     seg_cells = [max(1, round(T / dt)) for T in travel]
-    Z = np.concatenate([np.full(n_p, s)] + [np.full(n, s * z) for n, z in zip(seg_cells, impedances, strict=True)])
+    pieces = list(zip(seg_cells, impedances, strict=True))
+    Z = np.concatenate([np.full(n_p, s)] + [np.full(n, s * z) for n, z in pieces])
     n_cells = Z.size
     bounds = np.cumsum([n_p] + seg_cells)[:-1]  # cell index right of each segment boundary
     Za, Zb = Z[:-1], Z[1:]
@@ -401,7 +407,7 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     n_max = max(1, math.ceil(t_max / dt))
     bit = _Bit(float(Z[-1]), k, k_u, bit_mass, feed)
     p_start = bit.p
-    static = float(sum(feed * feed * n * dt / (2.0 * s * z) for n, z in zip(seg_cells, impedances, strict=True)))
+    static = float(sum(feed * feed * n * dt / (2.0 * s * z) for n, z in pieces))
     contact, gap = True, 0.0
     u_shank, grid_loss = 0.0, 0.0
     jc = n_p - 1  # the contact is between cells jc and jc + 1
@@ -451,13 +457,14 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     piston_e = float(np.sum(e[:n_p]))
     rod_waves = float(np.sum(e[n_p:]))
     feed_work = feed * u_shank
+    rock0 = feed * feed / (2.0 * k_u)  # the rock's recoverable elastic energy under the feed
     rod_energy = rod_waves + feed * (u_shank - (bit.p - p_start)) + static + 0.5 * bit_mass * bit.w * bit.w
     return Blow(
         times=dt * np.arange(n + 1), shank_forces=np.array(shank), junction_forces=np.array(junc),
         bit_forces=np.array(bitf), penetrations=np.array(pen),
         field=np.array(fld) if record_field else None,
-        energy_at_impact=E0, feed_work=feed_work, available_energy=E0 + feed_work + static,
-        work_on_rock=bit.work,
+        energy_at_impact=E0, feed_work=feed_work, available_energy=E0 + feed_work + static + rock0,
+        work_on_rock=bit.work + rock0,
         piston_energy=piston_e, rebound_velocity=float(np.mean((F[:n_p] - G[:n_p]) / s)),
         rod_energy=rod_energy, grid_loss=grid_loss, max_penetration=bit.p_max,
         permanent_penetration=bit.p_perm, advance=bit.p - p_start, ended_by=ended, cell_time=dt,
