@@ -204,3 +204,24 @@ def test_rock_and_law_validation():
     assert law == ib.RodRock(segments=tuple(seg), rock=rock) and hash(law)
     with pytest.raises(ValueError, match="RodRock"):
         ib.single_blow(ib.BarModel(s=1.0, d=0.0, R=0.0, n_modes=0), 1.0)
+
+
+def test_plots_of_a_blow():
+    """The Lagrange diagram shows the recorded field (one mesh value per cell and step) and the loop
+    the recorded rock force against the penetration."""
+    import matplotlib.pyplot as plt
+
+    model = _model([(1.0, 1.5), (2.0, 1.0)], 2.0, 8.0, s=1.0)
+    blow = ib.single_blow(model, 1.0, record_field=True, t_max=6.0)
+    ax = blow.plot_lagrange()
+    mesh = ax.collections[0]
+    assert mesh.get_array().size == blow.field.size == len(blow.shank_forces) * blow.cell_edges.size - \
+        len(blow.shank_forces)
+    assert blow.cell_edges[0] == -1.0 and blow.cell_edges[blow.piston_cells] == pytest.approx(0.0, abs=1e-15)
+    assert blow.cell_edges[-1] == pytest.approx(3.0, rel=1e-12)
+    ax2 = blow.plot_loop()
+    x, y = ax2.lines[0].get_data()
+    np.testing.assert_array_equal(y, blow.bit_forces)
+    plt.close("all")
+    with pytest.raises(ValueError, match="record_field"):
+        ib.single_blow(model, 1.0, t_max=1.0).plot_lagrange()

@@ -264,6 +264,10 @@ class Blow:
     max_penetration, permanent_penetration, advance : float
         Largest penetration; the penetration where the rock force vanishes on the last unloading
         line (``p_max - R_max/k_u``); the bit's displacement over the blow.
+    cell_time, piston_cells, segment_cells : float, int, tuple of int
+        The grid: ``dt``, the piston's cells, each segment's cells.
+    cell_edges : numpy.ndarray, shape (cells + 1,)
+        Cell boundaries in piston lengths, the shank at 0 (the piston in ``[-1, 0]``).
     ended_by : str
         ``"energy"`` (the piston separated and the rod's wave energy below the fraction) or
         ``"t_max"``.
@@ -290,6 +294,7 @@ class Blow:
     cell_time: float
     piston_cells: int
     segment_cells: tuple = field(default=())
+    cell_edges: np.ndarray | None = None
 
     @property
     def energy_error(self) -> float:
@@ -392,6 +397,9 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     dt = Tp / n_p
     seg_cells = [max(1, round(T / dt)) for T in travel]
     pieces = list(zip(seg_cells, impedances, strict=True))
+    dx = np.concatenate([np.full(n_p, 1.0 / n_p)]
+                        + [np.full(n, c / n_p) for n, c in zip(seg_cells, speeds, strict=True)])
+    edges = np.concatenate(([0.0], np.cumsum(dx))) - 1.0
     Z = np.concatenate([np.full(n_p, s)] + [np.full(n, s * z) for n, z in pieces])
     n_cells = Z.size
     bounds = np.cumsum([n_p] + seg_cells)[:-1]  # cell index right of each segment boundary
@@ -468,4 +476,4 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
         piston_energy=piston_e, rebound_velocity=float(np.mean((F[:n_p] - G[:n_p]) / s)),
         rod_energy=rod_energy, grid_loss=grid_loss, max_penetration=bit.p_max,
         permanent_penetration=bit.p_perm, advance=bit.p - p_start, ended_by=ended, cell_time=dt,
-        piston_cells=n_p, segment_cells=tuple(seg_cells))
+        piston_cells=n_p, segment_cells=tuple(seg_cells), cell_edges=edges)
