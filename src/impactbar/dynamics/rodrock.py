@@ -403,8 +403,6 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     Z = np.concatenate([np.full(n_p, s)] + [np.full(n, s * z) for n, z in pieces])
     n_cells = Z.size
     bounds = np.cumsum([n_p] + seg_cells)[:-1]  # cell index right of each segment boundary
-    Za, Zb = Z[:-1], Z[1:]
-    wa, wb = 2.0 * Zb / (Za + Zb), 2.0 * Za / (Za + Zb)
     F = np.zeros(n_cells)
     G = np.zeros(n_cells)
     F[:n_p] = 0.5 * s * V
@@ -416,10 +414,42 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     bit = _Bit(float(Z[-1]), k, k_u, bit_mass, feed)
     p_start = bit.p
     static = float(sum(feed * feed * n * dt / (2.0 * s * z) for n, z in pieces))
+    from .implementations import use_fast
+
+    if use_fast("rock.blow"):
+        F, G, junc, bitf, pen, fld, u_shank, grid_loss, ended = _compiled_loop(
+            F, G, Z, bounds, bit, dt, n_max, energy_fraction * E0, record_field)
+    else:
+        F, G, junc, bitf, pen, fld, u_shank, grid_loss, ended = _python_loop(
+            F, G, Z, bounds, bit, dt, n_max, energy_fraction * E0, record_field)
+    shank = junc[:, 0]
+    n = shank.size
+    e = (F * F + G * G) / Z * dt
+    piston_e = float(np.sum(e[:n_p]))
+    rod_waves = float(np.sum(e[n_p:]))
+    feed_work = feed * u_shank
+    rock0 = feed * feed / (2.0 * k_u)  # the rock's recoverable elastic energy under the feed
+    rod_energy = rod_waves + feed * (u_shank - (bit.p - p_start)) + static + 0.5 * bit_mass * bit.w * bit.w
+    return Blow(
+        times=dt * np.arange(n + 1), shank_forces=shank, junction_forces=junc,
+        bit_forces=bitf, penetrations=pen, field=fld if record_field else None,
+        energy_at_impact=E0, feed_work=feed_work, available_energy=E0 + feed_work + static + rock0,
+        work_on_rock=bit.work + rock0,
+        piston_energy=piston_e, rebound_velocity=float(np.mean((F[:n_p] - G[:n_p]) / s)),
+        rod_energy=rod_energy, grid_loss=grid_loss, max_penetration=bit.p_max,
+        permanent_penetration=bit.p_perm, advance=bit.p - p_start, ended_by=ended, cell_time=dt,
+        piston_cells=n_p, segment_cells=tuple(seg_cells), cell_edges=edges)
+
+
+def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
+    """The blow's loop in numpy (the reference of ``"rock.blow"``)."""
+    Za, Zb = Z[:-1], Z[1:]
+    wa, wb = 2.0 * Zb / (Za + Zb), 2.0 * Za / (Za + Zb)
+    n_p, bit_mass, feed = int(bounds[0]), bit.m, bit.f
     contact, gap = True, 0.0
     u_shank, grid_loss = 0.0, 0.0
     jc = n_p - 1  # the contact is between cells jc and jc + 1
-    shank, junc, bitf, pen, fld = [], [], [bit.force()], [bit.p], []
+    junc, bitf, pen, fld = [], [bit.force()], [bit.p], []
     ended = "t_max"
     for step in range(n_max):
         N = wa * F[:-1] + wb * G[1:]  # welded junctions at every interior boundary
@@ -448,7 +478,6 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
         e_in = (bit.work - w_work0) - feed * (bit.p - p0) + 0.5 * bit_mass * bit.w * bit.w - ke0
         grid_loss += (Fi * Fi - g_avg * g_avg) * dt / Z[-1] - e_in
         u_shank += (Fn[jc + 1] - G[jc + 1]) / Zb[jc] * dt
-        shank.append(N[jc])
         junc.append(N[bounds - 1])
         bitf.append(bit.force())
         pen.append(bit.p)
@@ -457,23 +486,27 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
         F, G = Fn, Gn
         if not contact and step % 8 == 0:
             rod_e = float(np.sum((F[n_p:] ** 2 + G[n_p:] ** 2) / Z[n_p:])) * dt
-            if rod_e + 0.5 * bit_mass * bit.w * bit.w < energy_fraction * E0:
+            if rod_e + 0.5 * bit_mass * bit.w * bit.w < stop:
                 ended = "energy"
                 break
-    n = len(shank)
-    e = (F * F + G * G) / Z * dt
-    piston_e = float(np.sum(e[:n_p]))
-    rod_waves = float(np.sum(e[n_p:]))
-    feed_work = feed * u_shank
-    rock0 = feed * feed / (2.0 * k_u)  # the rock's recoverable elastic energy under the feed
-    rod_energy = rod_waves + feed * (u_shank - (bit.p - p_start)) + static + 0.5 * bit_mass * bit.w * bit.w
-    return Blow(
-        times=dt * np.arange(n + 1), shank_forces=np.array(shank), junction_forces=np.array(junc),
-        bit_forces=np.array(bitf), penetrations=np.array(pen),
-        field=np.array(fld) if record_field else None,
-        energy_at_impact=E0, feed_work=feed_work, available_energy=E0 + feed_work + static + rock0,
-        work_on_rock=bit.work + rock0,
-        piston_energy=piston_e, rebound_velocity=float(np.mean((F[:n_p] - G[:n_p]) / s)),
-        rod_energy=rod_energy, grid_loss=grid_loss, max_penetration=bit.p_max,
-        permanent_penetration=bit.p_perm, advance=bit.p - p_start, ended_by=ended, cell_time=dt,
-        piston_cells=n_p, segment_cells=tuple(seg_cells), cell_edges=edges)
+    return (F, G, np.array(junc), np.array(bitf), np.array(pen), np.array(fld), u_shank, grid_loss,
+            ended)
+
+
+def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
+    """The blow's loop compiled (:func:`impactbar.dynamics._rockkernel.blow_loop`)."""
+    from ._rockkernel import blow_loop
+
+    F, G = F.copy(), G.copy()
+    bs = np.array([bit.p, bit.w, float(bit.branch), bit.p_max, bit.R_max, bit.p_perm, bit.work])
+    bp = np.array([bit.Z, bit.k, bit.k_u, bit.m, bit.f])
+    junc = np.zeros((n_max, bounds.size))
+    bitrec = np.zeros((n_max + 1, 2))
+    field = np.zeros((n_max if record_field else 0, F.size))
+    acc = np.zeros(4)
+    blow_loop(F, G, Z, bounds.astype(np.int64), bs, bp, np.array([dt, stop]), junc, bitrec, field, acc)
+    bit.p, bit.w, bit.branch, bit.p_max, bit.R_max, bit.p_perm, bit.work = \
+        bs[0], bs[1], int(bs[2]), bs[3], bs[4], bs[5], bs[6]
+    n = int(acc[2])
+    return (F, G, junc[:n], bitrec[:n + 1, 0], bitrec[:n + 1, 1], field[:n], float(acc[0]),
+            float(acc[1]), "energy" if acc[3] else "t_max")
