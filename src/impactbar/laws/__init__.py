@@ -11,6 +11,7 @@ Adding a law is one module with a :class:`ContactLaw` subclass and one entry in 
 from __future__ import annotations
 
 from .base import LAWS as LAWS
+from .base import PARAMETERISED as PARAMETERISED
 from .base import ContactLaw as ContactLaw
 from .base import get_law as get_law
 from .paper import InstantImpact as InstantImpact
@@ -24,9 +25,11 @@ from .wave import WaveLaw as WaveLaw
 __all__ = ["ContactLaw", "PaperLaw", "WaveLaw", "InstantImpact", "LAWS", "get_law", "RodRock", "RodSegment",
            "BilinearRock", "single_blow"]
 
-#: The impact laws by name: ``"paper"`` (eq. 10), ``"wave"`` (the long rod, theory §4b) and
-#: ``"rodrock"`` (a finite rod on rock, theory §4d: it has required parameters, so only a
-#: ``RodRock(...)`` object builds it; ``get_law("rodrock")`` says so). The table
-#: itself lives in :mod:`impactbar.laws.base`, below the laws' implementations, so that
+#: The impact laws by name: ``"paper"`` (eq. 10) and ``"wave"`` (the long rod, theory §4b). The rod
+#: and the rock (``"rodrock"``, theory §4d) has required parameters: only a ``RodRock(...)`` object
+#: builds it, so its name is in ``PARAMETERISED`` (``get_law("rodrock")`` says how), not in ``LAWS``.
+#: The table itself lives in :mod:`impactbar.laws.base`, below the laws' implementations, so that
 #: :class:`~impactbar.BarModel` can resolve a name without importing the solvers the laws drive.
-LAWS.update({"paper": PaperLaw, "wave": WaveLaw, "rodrock": RodRock})
+LAWS.update({"paper": PaperLaw, "wave": WaveLaw})
+PARAMETERISED.update({"rodrock": "RodRock(segments=[RodSegment(length=..., impedance=...), ...], "
+                                 "rock=BilinearRock(k=..., k_u=...))"})

@@ -114,10 +114,6 @@ class RodRock(ContactLaw):
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
-        if not segs and self.rock is None:
-            raise ValueError("the rodrock law has required parameters: pass impact=RodRock(segments="
-                             "[RodSegment(length=..., impedance=...), ...], rock=BilinearRock(k=..., "
-                             "k_u=...)), not its name")
         if not segs or not all(isinstance(g, RodSegment) for g in segs):
             raise ValueError("segments must be a non-empty sequence of RodSegment; "
                              f"got segments={self.segments!r}")
