@@ -246,3 +246,12 @@ def test_compiled_blow_matches_the_numpy_loop(segments, bit_mass, feed):
         np.testing.assert_allclose(getattr(fast, name), getattr(ref, name), rtol=0, atol=1e-12)
     for name in ("work_on_rock", "piston_energy", "rod_energy", "grid_loss", "rebound_velocity"):
         assert getattr(fast, name) == pytest.approx(getattr(ref, name), rel=1e-10, abs=1e-13)
+
+
+def test_readme_example():
+    """The README's and RodRock's example: alpha = 1.25, gamma = 10, efficiency 0.733069."""
+    law = ib.RodRock(segments=[ib.RodSegment(length=40.0, impedance=1.0)],
+                     rock=ib.BilinearRock(k=2.5, k_u=25.0))
+    model = ib.BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
+    assert law.alpha(model) == 1.25
+    assert round(ib.single_blow(model, 1.0, t_max=39.0).efficiency, 6) == 0.733069

@@ -97,9 +97,12 @@ class RodRock(ContactLaw):
     --------
     >>> from impactbar import BarModel, RodRock, RodSegment, BilinearRock, single_blow
     >>> law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)],
-    ...               rock=BilinearRock(k=2.5, k_u=1e9))
-    >>> round(single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0).efficiency, 6)
-    0.780542
+    ...               rock=BilinearRock(k=2.5, k_u=25.0))
+    >>> model = BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
+    >>> law.alpha(model)
+    1.25
+    >>> round(single_blow(model, 1.0, t_max=39.0).efficiency, 6)  # Lundberg's (2/a)(1-e^-a)^2(1-1/g)
+    0.733069
     """
 
     segments: tuple = ()
