@@ -255,3 +255,20 @@ def test_readme_example():
     model = ib.BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
     assert law.alpha(model) == 1.25
     assert round(ib.single_blow(model, 1.0, t_max=39.0).efficiency, 6) == 0.733069
+
+
+def test_incommensurate_segments_converge_with_the_grid():
+    """A segment of length sqrt(2) is rounded to whole cells (``length_error`` says by how much): the
+    blow is then exact for the rounded rod (the same as a rod given the rounded length), and the
+    efficiency converges as ``O(dt)``: within ``0.02 dt`` of a 2048-cell solution here."""
+    segs = [(math.sqrt(2), 2.0), (1.0, 0.7)]
+    model = _model(segs, 2.0, 8.0, s=1.0)
+    ref = ib.single_blow(model, 1.0, cells_per_piston=2048, t_max=10.0)
+    for n in (16, 32, 64, 128):
+        blow = ib.single_blow(model, 1.0, cells_per_piston=n, t_max=10.0)
+        assert 0.0 < blow.length_error <= 0.5 / (n * math.sqrt(2))
+        assert abs(blow.efficiency - ref.efficiency) < 0.02 / n
+        rounded = _model([(blow.segment_cells[0] / n, 2.0), (1.0, 0.7)], 2.0, 8.0, s=1.0)
+        same = ib.single_blow(rounded, 1.0, cells_per_piston=n, t_max=10.0)
+        assert same.length_error < 1e-12
+        assert same.efficiency == pytest.approx(blow.efficiency, rel=1e-13)

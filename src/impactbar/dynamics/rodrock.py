@@ -266,6 +266,10 @@ class Blow:
         line (``p_max - R_max/k_u``); the bit's displacement over the blow.
     cell_time, piston_cells, segment_cells : float, int, tuple of int
         The grid: ``dt``, the piston's cells, each segment's cells.
+    length_error : float
+        Largest relative change of a segment's travel time by rounding it to whole cells (0 on a
+        commensurate grid): the blow is exact for the rod so changed; the error this makes in the
+        results is ``O(dt)``.
     cell_edges : numpy.ndarray, shape (cells + 1,)
         Cell boundaries in piston lengths, the shank at 0 (the piston in ``[-1, 0]``).
     ended_by : str
@@ -295,6 +299,7 @@ class Blow:
     piston_cells: int
     segment_cells: tuple = field(default=())
     cell_edges: np.ndarray | None = None
+    length_error: float = 0.0
 
     @property
     def energy_error(self) -> float:
@@ -438,7 +443,8 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
         piston_energy=piston_e, rebound_velocity=float(np.mean((F[:n_p] - G[:n_p]) / s)),
         rod_energy=rod_energy, grid_loss=grid_loss, max_penetration=bit.p_max,
         permanent_penetration=bit.p_perm, advance=bit.p - p_start, ended_by=ended, cell_time=dt,
-        piston_cells=n_p, segment_cells=tuple(seg_cells), cell_edges=edges)
+        piston_cells=n_p, segment_cells=tuple(seg_cells), cell_edges=edges,
+        length_error=float(np.max(np.abs(np.array(seg_cells) * dt - travel) / travel)))
 
 
 def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
