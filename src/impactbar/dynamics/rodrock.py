@@ -303,8 +303,15 @@ class Blow:
 
     @property
     def energy_error(self) -> float:
+        """Relative mismatch of the energy account (rounding only)."""
         total = self.work_on_rock + self.piston_energy + self.rod_energy + self.grid_loss
         return abs(self.available_energy - total) / self.available_energy
+
+    @property
+    def energy_into_rod(self) -> float:
+        """Energy the piston gave the rod: ``energy_at_impact - piston_energy`` (no drive acts on
+        the piston during the blow)."""
+        return self.energy_at_impact - self.piston_energy
 
     @property
     def efficiency(self) -> float:
@@ -319,6 +326,7 @@ class Blow:
 
     @property
     def duration(self) -> float:
+        """Length of the blow (model time)."""
         return float(self.times[-1])
 
     def shank_force(self, t) -> np.ndarray:
