@@ -149,8 +149,11 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     Assumed: the piston (the model's bar: length 1, impedance ``s``, mass 1) moves rigidly and
     unstressed at ``impact_velocity`` when it touches the shank; no drive acts during the blow (the
     feed force acts on the shank); the rod is at rest, compressed by the feed, the bit resting on
-    fresh rock loaded to the feed force. Solved by characteristics on a common cell grid, exact for
-    commensurate segments (:mod:`impactbar.dynamics.rodrock`).
+    fresh rock loaded to the feed force. The model's ``R`` and ``d`` play no part (the rod replaces
+    the restitution; the blow is undamped), nor its flexible modes (the piston is unstressed at
+    impact). Solved by characteristics on a common cell grid, exact for commensurate segments
+    (:mod:`impactbar.dynamics.rodrock`; a compiled loop, ``"rock.blow"`` in
+    :mod:`impactbar.dynamics.implementations`).
 
     Parameters
     ----------
