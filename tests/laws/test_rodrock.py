@@ -272,3 +272,19 @@ def test_incommensurate_segments_converge_with_the_grid():
         same = ib.single_blow(rounded, 1.0, cells_per_piston=n, t_max=10.0)
         assert same.length_error < 1e-12
         assert same.efficiency == pytest.approx(blow.efficiency, rel=1e-13)
+
+
+def test_the_reflection_from_a_stiff_elastic_rock_throws_the_piston_back():
+    """Equal impedances, an elastic (gamma = 1) and stiff rock: the piston stops after ``2/s``, still
+    touching; the wave reflected whole at the bit returns at ``2 l/s`` and throws it back with
+    ``-V`` (all the energy returned, no work on rock), the shank force a second pulse ``s V/2``."""
+    s, V, ell = 2.0, 1.0, 3.0
+    k = 1e6
+    model = _model([(ell, 1.0)], k, k, s=s)
+    blow = ib.single_blow(model, V, t_max=12.0 / s)
+    assert blow.rebound_velocity == pytest.approx(-V, rel=1e-4)
+    assert blow.piston_energy == pytest.approx(blow.energy_at_impact, rel=1e-4)
+    assert abs(blow.work_on_rock) < 1e-12
+    t = np.array([1.0, 3.0, 7.0, 9.0]) / s
+    np.testing.assert_allclose(blow.shank_force(t), [s * V / 2, 0.0, s * V / 2, 0.0], atol=1e-3)
+    assert blow.energy_error < 1e-12

@@ -203,15 +203,13 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, junc, bitrec, field, acc):
         for j in range(n_cells - 1):
             za, zb = Z[j], Z[j + 1]
             N[j] = (2.0 * zb * F[j] + 2.0 * za * G[j + 1]) / (za + zb)
-        if not contact:
-            vp, vs = 2.0 * F[jc] / Z[jc], -2.0 * G[jc + 1] / Z[jc + 1]
-            gap += (vs - vp) * dt
-            if gap <= 0.0:
-                gap, contact = 0.0, True
-        if contact and N[jc] < 0.0:
-            contact = False
+        if contact:
+            contact = N[jc] >= 0.0
+        else:
+            contact = gap <= 0.0 and N[jc] >= 0.0
         if not contact:
             N[jc] = 0.0
+            gap = max(gap + (-2.0 * G[jc + 1] / Z[jc + 1] - 2.0 * F[jc] / Z[jc]) * dt, 0.0)
         for j in range(n_cells - 1):
             Fn[j + 1] = N[j] - G[j + 1]
             Gn[j] = N[j] - F[j]

@@ -11,8 +11,9 @@ conserved step by step (``F_a^2/Z_a + G_b^2/Z_b = G_a^2/Z_a + F_b^2/Z_b``).
 
 - Piston's far end: free, ``F = -G``. No drive acts during a :func:`rod_rock_blow`.
 - Piston-shank contact: unilateral; the welded junction while its force is compressive, free ends
-  (``N = 0``) otherwise, with the gap ``g' = v_shank - v_piston`` summed per cell; contact resumes in
-  the first cell whose end has the gap closed (timing error below one cell).
+  (``N = 0``) otherwise, with the gap ``g' = v_shank - v_piston`` summed per step (and floored at
+  0); contact resumes at the first step that starts with the gap closed and the welded force
+  compressive (timing error below one step).
 - Bit and rock: with the incident wave ``F`` constant over the cell, the bit (mass ``m >= 0``,
   displacement into the rock ``p``) obeys ``m p'' + Z p' + R(p) = 2 F + f`` (``f`` the feed force),
   solved exactly per cell on each branch of Lundberg's bilinear law ``R(p)``: loading ``R = k p`` at
@@ -469,15 +470,13 @@ def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
         N = wa * F[:-1] + wb * G[1:]  # welded junctions at every interior boundary
         # the piston-shank contact
         Fa, Gb = F[jc], G[jc + 1]
-        if not contact:
-            vp, vs = 2.0 * Fa / Za[jc], -2.0 * Gb / Zb[jc]
-            gap += (vs - vp) * dt
-            if gap <= 0.0:
-                gap, contact = 0.0, True
-        if contact and N[jc] < 0.0:
-            contact = False
-        if not contact:
+        if contact:
+            contact = N[jc] >= 0.0
+        else:  # touching again (the gap closed in an earlier step) and pressing
+            contact = gap <= 0.0 and N[jc] >= 0.0
+        if not contact:  # free ends; the gap follows their velocities over the step
             N[jc] = 0.0
+            gap = max(gap + (-2.0 * Gb / Zb[jc] - 2.0 * Fa / Za[jc]) * dt, 0.0)
         Fn = np.empty_like(F)
         Gn = np.empty_like(G)
         Fn[1:] = N - G[1:]
