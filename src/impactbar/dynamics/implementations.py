@@ -27,6 +27,8 @@ name                          fast (default)                       reference
                               forms
 ``wave.residual``             compiled wave-law phase residual     ``wave_orbit_states`` phase by
                               of a piecewise-constant load         phase
+``rock.blow``                 compiled loop of a blow on the rod   the numpy loop
+                              and the rock (theory §4d)
 ``sweeps.create_store``       sweep store written by zarr alone    store written by xarray's
                                                                    ``to_zarr``
 ============================  ===================================  ==================================
@@ -65,6 +67,7 @@ IMPLEMENTATIONS: dict[str, str] = {
     "simulate.switched_rigid": "rigid bar under a position-switched drive in scalar closed forms",
     "wave.residual": "compiled wave-law phase residual of a piecewise-constant load",
     "sweeps.create_store": "sweep store written by zarr alone (without xarray)",
+    "rock.blow": "compiled loop of a blow on the rod and the rock",
 }
 
 _REFERENCE: contextvars.ContextVar[frozenset] = contextvars.ContextVar("impactbar_reference",

@@ -188,6 +188,10 @@ class ContactLaw:
 #: :class:`~impactbar.BarModel` resolves a name without importing the solvers.
 LAWS: dict[str, type[ContactLaw]] = {}
 
+#: Laws with required parameters, by name: not in :data:`LAWS` (a name alone cannot build them);
+#: :func:`get_law` answers their name with how to build the object.
+PARAMETERISED: dict[str, str] = {}
+
 
 def get_law(spec) -> ContactLaw:
     """The law object for a name in :data:`LAWS` or a :class:`ContactLaw` instance.
@@ -204,10 +208,14 @@ def get_law(spec) -> ContactLaw:
     Raises
     ------
     ValueError
-        For an unknown name or another type; the message lists the names.
+        For an unknown name or another type (the message lists the names), or the name of a law
+        with required parameters (:data:`PARAMETERISED`; the message says how to build it).
     """
     if isinstance(spec, ContactLaw):
         return spec
     if isinstance(spec, str) and spec in LAWS:
         return LAWS[spec]()
+    if isinstance(spec, str) and spec in PARAMETERISED:
+        raise ValueError(f"the impact law {spec!r} has required parameters: "
+                         f"pass impact={PARAMETERISED[spec]}")
     raise ValueError(f"impact must be one of {list(LAWS)} or a ContactLaw; got impact={spec!r}")

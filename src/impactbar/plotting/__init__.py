@@ -10,7 +10,8 @@ that plot themselves (``PeriodicOrbit.plot``, ``Trajectory.plot``, ``Branch.plot
 - :mod:`~impactbar.plotting.continuation`: branches and two-parameter bifurcation curves;
 - :mod:`~impactbar.plotting.physical`: results in SI units (motion, energy per blow, force waves);
 - :mod:`~impactbar.plotting.paper`: the paper's Figs. 4-8;
-- :mod:`~impactbar.plotting.sweeps`: stored sweeps (stability charts, fraction maps, diagrams).
+- :mod:`~impactbar.plotting.sweeps`: stored sweeps (stability charts, fraction maps, diagrams);
+- :mod:`~impactbar.plotting.rock`: a blow on the rod and rock (Lagrange diagram, force-penetration loop).
 """
 
 from .continuation import plot_bifurcation_curve as plot_bifurcation_curve
@@ -21,6 +22,8 @@ from .orbits import plot_orbit_field as plot_orbit_field
 from .physical import plot_blows as plot_blows
 from .physical import plot_force_waves as plot_force_waves
 from .physical import plot_motion as plot_motion
+from .rock import plot_force_penetration as plot_force_penetration
+from .rock import plot_lagrange as plot_lagrange
 from .simulation import plot_end_displacement as plot_end_displacement
 from .simulation import plot_experiment as plot_experiment
 from .simulation import plot_impact_map as plot_impact_map
@@ -33,4 +36,4 @@ from .sweeps import plot_stability_chart as plot_stability_chart
 __all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_trajectory", "plot_end_displacement",
            "plot_impact_map", "plot_intervals", "plot_experiment", "plot_branch", "plot_bifurcation_curve",
            "plot_motion", "plot_blows", "plot_force_waves", "plot_stability_chart", "plot_fraction_maps",
-           "plot_bifurcation"]
+           "plot_bifurcation", "plot_lagrange", "plot_force_penetration"]

@@ -1,0 +1,75 @@
+"""Benchmark for issue 18: one blow on a 3-segment rod with 400 cells (:func:`impactbar.single_blow`,
+the rod-and-rock law), against elwaspatid's Bacon-method characteristics on the same rod, grid and
+number of steps (its far end anechoic, no rock), the baseline, in the same run, and against the
+numpy loop (the reference of ``"rock.blow"``).
+Goal: <= 1 ms.
+
+Run: ``python benchmarks/bench_rock.py [--quick]``. Prints a table; nothing is asserted.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import math
+import time
+
+import numpy as np
+
+import impactbar as ib
+from impactbar.dynamics.implementations import use_reference
+
+
+def median_time(fn, repeat):
+    fn()
+    ts = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return float(np.median(ts))
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--quick", action="store_true")
+    args = parser.parse_args(argv)
+    repeat = 3 if args.quick else 11
+    # the piston (40 cells) and three segments (40 + 20 + 300 cells): 400 cells
+    lengths, impedances = [1.0, 0.5, 7.5], [2.25, 1.6, 1.0]
+    segments = [ib.RodSegment(length=x, impedance=z) for x, z in zip(lengths, impedances, strict=True)]
+    law = ib.RodRock(segments=segments, rock=ib.BilinearRock(k=1.0, k_u=4.0), bit_mass=0.0)
+    model = ib.BarModel(s=1.0, d=0.0, R=0.0, n_modes=0, impact=law)
+    steps = 800  # twice the rod's and the piston's travel: the reflection from the bit back to the piston
+    dt = 1.0 / 40
+    blow = ib.single_blow(model, 1.0, cells_per_piston=40, t_max=steps * dt * (1 - 1e-12))
+    assert blow.piston_cells + sum(blow.segment_cells) == 400
+    t_rock = median_time(lambda: ib.single_blow(model, 1.0, cells_per_piston=40,
+                                                t_max=steps * dt * (1 - 1e-12)), repeat)
+    rows = [("single_blow (rod and rock)", t_rock, len(blow.shank_forces))]
+    with use_reference("rock.blow"):
+        t_ref = median_time(lambda: ib.single_blow(model, 1.0, cells_per_piston=40,
+                                                   t_max=steps * dt * (1 - 1e-12)), repeat)
+    rows.append(("single_blow, numpy loop (reference)", t_ref, len(blow.shank_forces)))
+    try:
+        import elwaspatid.elwaspatid as E
+    except ImportError:
+        E = None
+    if E is not None:
+        d = [math.sqrt(4 * z / math.pi) for z in [1.0] + impedances]
+
+        def elw():
+            with contextlib.redirect_stdout(io.StringIO()):
+                bar = E.BarSet([1.0] * 4, [1.0] * 4, [1.0] + lengths, d, nmin=20, right="infinite")
+                E.WP2(bar, incw=None, nstep=steps, left="free", right="infinite", Vinit=1.0, contactLoss=None)
+
+        rows.append(("elwaspatid WP2 (same grid, no rock)", median_time(elw, repeat), steps))
+    print(f"{'solver':40s} {'time (ms)':>10s} {'steps':>6s}")
+    for name, t, n in rows:
+        print(f"{name:40s} {1e3 * t:10.3f} {n:6d}")
+    print(f"energy error {blow.energy_error:.2e}, efficiency {blow.efficiency:.4f}")
+
+
+if __name__ == "__main__":
+    main()

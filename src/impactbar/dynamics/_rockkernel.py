@@ -1,0 +1,243 @@
+"""Compiled blow on the rod and the rock (theory §4d): the loop of
+:func:`impactbar.dynamics.rodrock.rod_rock_blow` with its bit (``_Bit``), step for step the same
+arithmetic (the reference is the Python loop, ``use_reference("rock.blow")``).
+
+Bit state ``bs`` (float64, 7): ``p, w, branch, p_max, R_max, p_perm, work``; parameters ``bp`` (5):
+``Z, k, k_u, m, feed``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ._kernel import CACHE
+
+_LOAD, _ELASTIC, _FREE = 0.0, 1.0, 2.0
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _coeffs(bs, bp):
+    if bs[2] == _LOAD:
+        return bp[1], 0.0
+    if bs[2] == _ELASTIC:
+        return bp[2], bs[5]
+    return 0.0, 0.0
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _work(bs, bp, p0, p1):
+    b, ref = _coeffs(bs, bp)
+    return b * (p1 - p0) * (0.5 * (p0 + p1) - ref)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _unload(bs, bp):
+    bs[3] = bs[0]
+    bs[4] = bp[1] * bs[0]
+    bs[5] = bs[3] - bs[4] / bp[2]
+    bs[2] = _ELASTIC
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _massless(bs, bp, E, T):
+    Z = bp[0]
+    b, ref = _coeffs(bs, bp)
+    p0 = bs[0]
+    if bs[2] == _LOAD and E - b * p0 < 0.0:
+        _unload(bs, bp)
+        return 0.0
+    if b == 0.0:
+        rate = E / Z
+        t_hit = (bs[5] - p0) / rate if rate > 0.0 and p0 + rate * T >= bs[5] else math.inf
+        tau = min(T, t_hit)
+        p1 = bs[5] if tau == t_hit else p0 + rate * tau
+        bs[0] = p1
+        if tau == t_hit:
+            bs[2] = _ELASTIC
+        bs[1] = rate
+        return tau
+    p_inf = E / b + ref
+    lam = b / Z
+    tau = T
+    nxt, p_nxt = -1.0, 0.0
+    if bs[2] == _ELASTIC:
+        if p_inf > bs[3] >= p0:
+            tau_h = -math.log((p_inf - bs[3]) / (p_inf - p0)) / lam
+            if tau_h < T:
+                tau, nxt, p_nxt = tau_h, _LOAD, bs[3]
+        elif p_inf < bs[5] <= p0:
+            tau_h = -math.log((p_inf - bs[5]) / (p_inf - p0)) / lam
+            if tau_h < T:
+                tau, nxt, p_nxt = tau_h, _FREE, bs[5]
+    if nxt < 0.0:
+        p1 = p_inf + (p0 - p_inf) * math.exp(-lam * tau)
+    else:
+        p1 = p_nxt
+    bs[6] += _work(bs, bp, p0, p1)
+    bs[0] = p1
+    bs[1] = (E - b * (p1 - ref)) / Z
+    if nxt >= 0.0:
+        bs[2] = nxt
+    return tau
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _flow(bs, bp, E, tau):
+    b, ref = _coeffs(bs, bp)
+    Z, m = bp[0], bp[3]
+    if b == 0.0:
+        w_inf = E / Z
+        decay = math.exp(-Z * tau / m)
+        p = bs[0] + w_inf * tau + (bs[1] - w_inf) * (m / Z) * (-math.expm1(-Z * tau / m))
+        return p, w_inf + (bs[1] - w_inf) * decay
+    p_eq = ref + E / b
+    x0, w0 = bs[0] - p_eq, bs[1]
+    half = -Z / (2.0 * m)
+    disc = half * half - b / m
+    if disc >= 0.0:
+        delta = math.sqrt(disc)
+        e2 = math.exp((half - delta) * tau)
+        S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
+        C = e2 + delta * S
+    else:
+        om = math.sqrt(-disc)
+        e = math.exp(half * tau)
+        C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
+    x = C * x0 + S * (-half * x0 + w0)
+    w = C * w0 + S * (-b / m * x0 + half * w0)
+    return p_eq + x, w
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _event(bs, p, w):
+    if bs[2] == _LOAD:
+        return w
+    if bs[2] == _ELASTIC:
+        return min(bs[3] - p, p - bs[5])
+    return bs[5] - p
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _with_mass(bs, bp, E, T):
+    if bs[2] == _LOAD and bs[1] < 0.0:
+        _unload(bs, bp)
+        return 0.0
+    if bs[2] == _ELASTIC and bs[0] >= bs[3] and bs[1] > 0.0:
+        bs[2] = _LOAD
+        return 0.0
+    p0 = bs[0]
+    b, _ = _coeffs(bs, bp)
+    half = bp[0] / (2.0 * bp[3])
+    disc = half * half - b / bp[3]
+    n = 4 if disc >= 0.0 else 4 + math.ceil(4.0 * math.sqrt(-disc) * T / math.pi)
+    taus = np.linspace(0.0, T, n + 1)
+    tau, hit, prev = T, False, 0.0
+    for i in range(1, n + 1):
+        t = taus[i]
+        p, w = _flow(bs, bp, E, t)
+        if _event(bs, p, w) < 0.0:
+            lo, hi = prev, t
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                pm, wm = _flow(bs, bp, E, mid)
+                if _event(bs, pm, wm) < 0.0:
+                    hi = mid
+                else:
+                    lo = mid
+            tau, hit = hi, True
+            break
+        prev = t
+    p1, w1 = _flow(bs, bp, E, tau)
+    bs[6] += _work(bs, bp, p0, p1)
+    bs[0], bs[1] = p1, w1
+    if hit:
+        if bs[2] == _LOAD:
+            _unload(bs, bp)
+        elif bs[2] == _ELASTIC:
+            bs[2] = _LOAD if p1 >= bs[3] else _FREE
+        else:
+            bs[2] = _ELASTIC
+    return tau
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def bit_step(bs, bp, E, dt):
+    """Advance the bit by ``dt`` under ``E = 2 F + f`` (``_Bit.step``)."""
+    left = dt
+    for _ in range(64):
+        if left <= 0.0:
+            break
+        if bp[3] == 0.0:
+            left -= _massless(bs, bp, E, left)
+        else:
+            left -= _with_mass(bs, bp, E, left)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blow_loop(F, G, Z, bounds, bs, bp, ctrl, junc, bitrec, field, acc):
+    """The blow's loop (``rod_rock_blow``). ``bounds`` (int): the cell right of each segment
+    boundary, the shank first; ``ctrl``: ``dt, energy_stop``; ``junc`` (n_max, J): forces at the
+    boundaries per step; ``bitrec`` (n_max + 1, 2): rock force and penetration; ``field``
+    (n_max, cells) or (0, cells); ``acc`` out: ``u_shank, grid_loss, steps, ended``. Returns
+    nothing; ``F``, ``G`` hold the final waves."""
+    dt, stop = ctrl[0], ctrl[1]
+    n_cells = F.size
+    n_p = bounds[0]
+    jc = n_p - 1
+    feed, m = bp[4], bp[3]
+    Zl = Z[n_cells - 1]
+    contact, gap = True, 0.0
+    u_shank, grid_loss = 0.0, 0.0
+    N = np.empty(n_cells - 1)
+    Fn = np.empty(n_cells)
+    Gn = np.empty(n_cells)
+    b0, _ = _coeffs(bs, bp)
+    bitrec[0, 0] = b0 * bs[0]
+    bitrec[0, 1] = bs[0]
+    n_max = junc.shape[0]
+    steps, ended = n_max, 0.0
+    for step in range(n_max):
+        for j in range(n_cells - 1):
+            za, zb = Z[j], Z[j + 1]
+            N[j] = (2.0 * zb * F[j] + 2.0 * za * G[j + 1]) / (za + zb)
+        if contact:
+            contact = N[jc] >= 0.0
+        else:
+            contact = gap <= 0.0 and N[jc] >= 0.0
+        if not contact:
+            N[jc] = 0.0
+            gap = max(gap + (-2.0 * G[jc + 1] / Z[jc + 1] - 2.0 * F[jc] / Z[jc]) * dt, 0.0)
+        for j in range(n_cells - 1):
+            Fn[j + 1] = N[j] - G[j + 1]
+            Gn[j] = N[j] - F[j]
+        Fn[0] = -G[0]
+        Fi = F[n_cells - 1]
+        p0, work0, ke0 = bs[0], bs[6], 0.5 * m * bs[1] * bs[1]
+        bit_step(bs, bp, 2.0 * Fi + feed, dt)
+        g_avg = Fi - Zl * (bs[0] - p0) / dt
+        Gn[n_cells - 1] = g_avg
+        e_in = (bs[6] - work0) - feed * (bs[0] - p0) + 0.5 * m * bs[1] * bs[1] - ke0
+        grid_loss += (Fi * Fi - g_avg * g_avg) * dt / Zl - e_in
+        u_shank += (Fn[jc + 1] - G[jc + 1]) / Z[jc + 1] * dt
+        for i in range(bounds.size):
+            junc[step, i] = N[bounds[i] - 1]
+        b, ref = _coeffs(bs, bp)
+        bitrec[step + 1, 0] = max(b * (bs[0] - ref), 0.0)
+        bitrec[step + 1, 1] = bs[0]
+        if field.shape[0] > 0:
+            for j in range(n_cells):
+                field[step, j] = F[j] + G[j]
+        for j in range(n_cells):
+            F[j] = Fn[j]
+            G[j] = Gn[j]
+        if not contact and step % 8 == 0:
+            rod_e = 0.0
+            for j in range(n_p, n_cells):
+                rod_e += (F[j] * F[j] + G[j] * G[j]) / Z[j]
+            if rod_e * dt + 0.5 * m * bs[1] * bs[1] < stop:
+                steps, ended = step + 1, 1.0
+                break
+    acc[0], acc[1], acc[2], acc[3] = u_shank, grid_loss, steps, ended

@@ -1,0 +1,193 @@
+"""The rod-and-rock law (theory §4d): the piston strikes a finite, possibly stepped rod whose bit
+loads a rock with Lundberg's bilinear force-penetration law, under a static feed force.
+
+Dimensionless as the model (theory §1): lengths in piston lengths ``L``, impedances and wave speeds
+relative to the piston's (``Z = E A / C``, ``C``), so that a segment of relative length ``l`` and wave
+speed ``c`` takes ``l / (c s)`` to cross; forces in ``m L Omega^2`` (the model's ``p``), so a rock
+stiffness ``K`` (N/m) is ``k = K / (m Omega^2)``; masses in piston masses ``m``. The piston's
+impedance in these units is ``s`` and its crossing time ``1/s``, so Lundberg's
+``alpha = K (2 L / C) / Z`` is ``2 k / s^2``.
+
+So far the law gives single blows (:func:`single_blow`); the simulator's contact step and the orbits
+under it are not provided (their methods raise ``NotImplementedError`` naming them).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .._shared.validate import check_real
+from .base import ContactLaw
+
+__all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
+
+
+@dataclass(frozen=True)
+class RodSegment:
+    """A uniform piece of the rod (theory §4d).
+
+    Parameters
+    ----------
+    length : float
+        In piston lengths, ``> 0``.
+    impedance : float
+        ``E A / C`` relative to the piston's, ``> 0``.
+    wave_speed : float
+        Relative to the piston's, ``> 0``; default 1 (the same material).
+    """
+
+    length: float
+    impedance: float
+    wave_speed: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("length", "impedance", "wave_speed"):
+            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=0.0, lo_open=True))
+
+    def travel_time(self, model) -> float:
+        """Time a wave takes to cross the segment (model time): ``length / (wave_speed s)``."""
+        return self.length / (self.wave_speed * model.s)
+
+
+@dataclass(frozen=True)
+class BilinearRock:
+    """Lundberg's bilinear bit-rock law (Lundberg 1982; Karlsson, Lundberg and Sundin 1989): the force
+    grows as ``k p`` with the penetration ``p`` while it grows past its largest value, and follows
+    ``k_u (p - p_perm)`` on unloading and reloading below it, with ``p_perm = p_max - R_max / k_u``;
+    the force is compressive only (the bit lifts off for ``p < p_perm``).
+
+    Parameters
+    ----------
+    k : float
+        Loading stiffness (model units of force per length, ``K / (m Omega^2)``), ``> 0``.
+    k_u : float
+        Unloading stiffness, ``k_u >= k`` (``gamma = k_u / k``).
+    """
+
+    k: float
+    k_u: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "k", check_real("k", self.k, lo=0.0, lo_open=True))
+        object.__setattr__(self, "k_u", check_real("k_u", self.k_u, lo=self.k))
+
+    @property
+    def gamma(self) -> float:
+        """``k_u / k >= 1``."""
+        return self.k_u / self.k
+
+
+@dataclass(frozen=True)
+class RodRock(ContactLaw):
+    """The piston strikes a rod of uniform segments; the bit (optional mass) loads a bilinear rock
+    under a static feed force (theory §4d; Lundberg 1982, Chiang and Elias 2000).
+
+    Parameters
+    ----------
+    segments : sequence of RodSegment
+        From the shank to the bit, at least one (stored as a tuple).
+    rock : BilinearRock
+    bit_mass : float
+        In piston masses, ``>= 0``; 0 is Lundberg's massless bit.
+    feed : float
+        Static feed force on the shank (model force units), ``>= 0``.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, RodRock, RodSegment, BilinearRock, single_blow
+    >>> law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)],
+    ...               rock=BilinearRock(k=2.5, k_u=25.0))
+    >>> model = BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
+    >>> law.alpha(model)
+    1.25
+    >>> round(single_blow(model, 1.0, t_max=39.0).efficiency, 6)  # Lundberg's (2/a)(1-e^-a)^2(1-1/g)
+    0.733069
+    """
+
+    segments: tuple = ()
+    rock: BilinearRock | None = None
+    bit_mass: float = 0.0
+    feed: float = 0.0
+
+    name = "rodrock"
+    instantaneous = False
+    rigid_closed_forms = False
+    supports_schur = False
+
+    def __post_init__(self) -> None:
+        segs = tuple(self.segments)
+        if not segs or not all(isinstance(g, RodSegment) for g in segs):
+            raise ValueError("segments must be a non-empty sequence of RodSegment; "
+                             f"got segments={self.segments!r}")
+        object.__setattr__(self, "segments", segs)
+        if not isinstance(self.rock, BilinearRock):
+            raise ValueError(f"rock must be a BilinearRock; got rock={self.rock!r}")
+        object.__setattr__(self, "bit_mass", check_real("bit_mass", self.bit_mass, lo=0.0))
+        object.__setattr__(self, "feed", check_real("feed", self.feed, lo=0.0))
+
+    def alpha(self, model) -> float:
+        """Lundberg's ``alpha = K (2 L / C) / Z`` of the piston, ``2 k / s^2`` in the model's units."""
+        return 2.0 * self.rock.k / model.s ** 2
+
+    def window(self, model) -> float:
+        """The longest blow :func:`single_blow` follows by default: ``20 (1/s + sum of the segments'
+        travel times)``."""
+        return 20.0 * (1.0 / model.s + sum(g.travel_time(model) for g in self.segments))
+
+    def blow(self, model, load, t, y_minus):
+        """The blow of a rigidly moving piston arriving with the rigid velocity of ``y_minus``
+        (drive and flexible modes ignored: see :func:`single_blow`)."""
+        M = model.n_modes + 1
+        return single_blow(model, float(y_minus[M]))
+
+
+def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None = None,
+                t_max: float | None = None, energy_fraction: float = 1e-9, record_field: bool = False):
+    """One blow of the piston on the rod and rock of ``model.law`` (theory §4d).
+
+    Assumed: the piston (the model's bar: length 1, impedance ``s``, mass 1) moves rigidly and
+    unstressed at ``impact_velocity`` when it touches the shank; no drive acts during the blow (the
+    feed force acts on the shank); the rod is at rest, compressed by the feed, the bit resting on
+    fresh rock loaded to the feed force. The model's ``R`` and ``d`` play no part (the rod replaces
+    the restitution; the blow is undamped), nor its flexible modes (the piston is unstressed at
+    impact). Solved by characteristics on a common cell grid, exact for commensurate segments
+    (:mod:`impactbar.dynamics.rodrock`; a compiled loop, ``"rock.blow"`` in
+    :mod:`impactbar.dynamics.implementations`).
+
+    Parameters
+    ----------
+    model : BarModel
+        With ``impact=RodRock(...)``.
+    impact_velocity : float
+        ``> 0``, in the model's velocity unit ``L Omega``.
+    cells_per_piston, t_max, energy_fraction, record_field
+        See :func:`impactbar.dynamics.rodrock.rod_rock_blow`: the grid, the longest blow, the end
+        criterion (piston separated and the rod's wave energy below this fraction of the impact
+        energy) and whether to keep the force field for the Lagrange diagram.
+
+    Returns
+    -------
+    Blow
+        Work on rock, efficiencies, penetrations, force histories, the energy account.
+    """
+    from ..dynamics.rodrock import rod_rock_blow
+
+    law = model.law
+    if not isinstance(law, RodRock):
+        raise ValueError(f"single_blow needs a model with impact=RodRock(...); got impact={model.impact!r}")
+    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
+    if t_max is None:
+        t_max = law.window(model)
+    segs = law.segments
+    return rod_rock_blow(
+        model.s, V, [g.length for g in segs], [g.impedance for g in segs], [g.wave_speed for g in segs],
+        law.rock.k, law.rock.k_u, law.bit_mass, law.feed, cells_per_piston=cells_per_piston,
+        t_max=float(t_max), energy_fraction=check_real("energy_fraction", energy_fraction, lo=0.0),
+        record_field=record_field)
+
+
+def lundberg_efficiency(alpha: float, gamma: float) -> float:
+    """Lundberg's efficiency of a rectangular incident wave on a massless bit and bilinear rock:
+    ``(2/alpha)(1 - e^-alpha)^2 (1 - 1/gamma)`` (theory §4d)."""
+    return 2.0 / alpha * (-math.expm1(-alpha)) ** 2 * (1.0 - 1.0 / gamma)
