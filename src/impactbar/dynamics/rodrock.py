@@ -302,6 +302,13 @@ class Blow:
     cell_edges: np.ndarray | None = None
     length_error: float = 0.0
 
+    def __post_init__(self) -> None:
+        # the scalars as plain floats (the solver hands numpy scalars), like every other result
+        for f in ("energy_at_impact", "feed_work", "available_energy", "work_on_rock", "piston_energy",
+                  "rebound_velocity", "rod_energy", "grid_loss", "max_penetration",
+                  "permanent_penetration", "advance", "cell_time", "length_error"):
+            object.__setattr__(self, f, float(getattr(self, f)))
+
     @property
     def energy_error(self) -> float:
         """Relative mismatch of the energy account (rounding only)."""
