@@ -12,6 +12,11 @@ from typing import ClassVar
 __all__ = ["ContactLaw"]
 
 
+class LawNotSupported(ValueError, NotImplementedError):
+    """A computation asked of an impact law that does not provide it: a ``ValueError`` for the user
+    (the model's ``impact`` does not allow it), a ``NotImplementedError`` for whoever writes the law."""
+
+
 @dataclass(frozen=True)
 class ContactLaw:
     """Base class of the impact laws, in the style of scipy's ``OdeSolver``: a subclass sets
@@ -51,7 +56,7 @@ class ContactLaw:
         float
             ``>= 0``; each flight of a periodic orbit starts this long after its impact.
         """
-        raise NotImplementedError(self._missing("window"))
+        raise LawNotSupported(self._missing("window"))
 
     def impact_map(self, model, load, t: float, y_minus):
         """State where the next flight starts from the state at arrival, with its derivatives
@@ -76,7 +81,7 @@ class ContactLaw:
         jac_t : numpy.ndarray, shape (2 N + 2,)
             ``d y_plus / d t`` at fixed ``y_minus``.
         """
-        raise NotImplementedError(self._missing("impact_map"))
+        raise LawNotSupported(self._missing("impact_map"))
 
     def phase_roots(self, model, load) -> list[tuple[float, int]]:
         """Roots of the law's one-impact phase equation in ``[0, 2 pi)``.
@@ -86,7 +91,7 @@ class ContactLaw:
         list of (float, int)
             ``(phase, multiplicity)`` sorted by phase; ``phase`` is the load time of the arrival.
         """
-        raise NotImplementedError(self._missing("phase_roots"))
+        raise LawNotSupported(self._missing("phase_roots"))
 
     def phase_families(self, model, load) -> list[tuple[float, float]]:
         """Intervals of phases on which the phase equation holds identically (a continuum of
@@ -106,7 +111,7 @@ class ContactLaw:
         -------
         PeriodicOrbit
         """
-        raise NotImplementedError(self._missing("orbit"))
+        raise LawNotSupported(self._missing("orbit"))
 
     def multipliers(self, model, load, phase: float):
         """Exact Floquet multipliers of the one-impact orbit with this phase (theory §7),
@@ -117,7 +122,7 @@ class ContactLaw:
         numpy.ndarray of complex, shape (2 N + 2,)
             Sorted by decreasing modulus.
         """
-        raise NotImplementedError(self._missing("multipliers"))
+        raise LawNotSupported(self._missing("multipliers"))
 
     def existence_edge(self, model, k: int = 1) -> float:
         """Largest load factor ``k p0 / pk`` of the pneumatic load (eq. 33) with one-impact orbits.
@@ -127,7 +132,7 @@ class ContactLaw:
         float
             ``inf`` when orbits exist at every load factor, ``nan`` when none exist.
         """
-        raise NotImplementedError(self._missing("existence_edge"))
+        raise LawNotSupported(self._missing("existence_edge"))
 
     def blow(self, model, load, t: float, y_minus):
         """Per-blow output of a periodic orbit's impact arriving at load time ``t`` in state
@@ -174,10 +179,12 @@ class ContactLaw:
             (the full record, for one solved lazily): :class:`~impactbar.WaveImpact`,
             :class:`~impactbar.laws.InstantImpact`.
         """
-        raise NotImplementedError(self._missing("contact"))
+        raise LawNotSupported(self._missing("contact"))
 
     def _missing(self, method: str) -> str:
-        return f"the impact law {self.name!r} ({type(self).__name__}) does not provide {method}()"
+        return (f"model.impact: the impact law {self.name!r} ({type(self).__name__}) does not provide "
+                f"{method}(), so this computation is not available under it; use impact='paper' or "
+                f"impact='wave'")
 
     def __str__(self) -> str:
         return self.name

@@ -9,7 +9,7 @@ impedance in these units is ``s`` and its crossing time ``1/s``, so Lundberg's
 ``alpha = K (2 L / C) / Z`` is ``2 k / s^2``.
 
 So far the law gives single blows (:func:`single_blow`); the simulator's contact step and the orbits
-under it are not provided (their methods raise ``NotImplementedError`` naming them).
+under it are not provided (their methods raise ``LawNotSupported``, a ``ValueError``, naming them).
 """
 
 from __future__ import annotations
