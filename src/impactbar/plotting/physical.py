@@ -61,7 +61,7 @@ def plot_force_waves(result, ax=None, last: int = 8):
 
         _, ax = plt.subplots()
     n = result.impact_times_s.size
-    window = 2.0 * result.hammer.bar.length_m / result.hammer.bar.wave_speed_m_s
+    window = result.hammer.contact_duration_s  # 2 L / c
     t = np.linspace(0.0, window * (1.0 - 1e-9), 400)
     for i in range(max(0, n - last), n):
         ax.plot(1e6 * t, 1e-3 * result.force_wave(i, t), lw=0.9, label=f"blow {i}")
