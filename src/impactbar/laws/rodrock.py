@@ -8,14 +8,18 @@ stiffness ``K`` (N/m) is ``k = K / (m Omega^2)``; masses in piston masses ``m``.
 impedance in these units is ``s`` and its crossing time ``1/s``, so Lundberg's
 ``alpha = K (2 L / C) / Z`` is ``2 k / s^2``.
 
-So far the law gives single blows (:func:`single_blow`); the simulator's contact step and the orbits
-under it are not provided (their methods raise ``LawNotSupported``, a ``ValueError``, naming them).
+The law gives single blows (:func:`single_blow`) and the simulator's contact step
+(:meth:`RodRock.contact`: ``simulate`` runs under it, one :class:`~impactbar.dynamics.rockcontact.RockContact`
+per blow in ``Trajectory.impacts``); the orbits under it are not provided yet (their methods raise
+``LawNotSupported``, a ``ValueError``, naming them).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from .._shared.validate import check_real
 from .base import ContactLaw
@@ -136,10 +140,36 @@ class RodRock(ContactLaw):
         return 20.0 * (1.0 / model.s + sum(g.travel_time(model) for g in self.segments))
 
     def blow(self, model, load, t, y_minus):
-        """The blow of a rigidly moving piston arriving with the rigid velocity of ``y_minus``
-        (drive and flexible modes ignored: see :func:`single_blow`)."""
+        """The blow of an arrival at load time ``t`` in state ``y_minus`` (shape ``(2 N + 2,)``)
+        with the drive acting: the record of :meth:`contact`."""
         M = model.n_modes + 1
-        return single_blow(model, float(y_minus[M]))
+        c = model.end_weights
+        qm = np.array(y_minus[:M], dtype=float)
+        qm[0] -= float(c @ qm)  # the end exactly on the shank (rounding)
+        return self.contact(model, load, t, qm, np.array(y_minus[M:], dtype=float))[3]
+
+    def contact(self, model, load, t, q_minus, v_minus, *, kernel=None):
+        """The simulator's contact step (theory §4d): the piston's modal state at impact -> the blow
+        by characteristics on the piston and the rod with the drive's force, averaged over each
+        cell step, on the piston's far end (the compiled rock kernel) -> the piston's fields at the
+        blow's end projected on the modes; the rod then rests on the rock (its residual waves
+        discarded, counted in the energy the piston lost), the shank advanced by the blow's
+        permanent penetration, from which the next flight's positions are measured
+        (:func:`impactbar.dynamics.rockcontact.rock_contact`; ``kernel`` is not used).
+
+        Returns
+        -------
+        q_after, v_after : numpy.ndarray, shape (N + 1,)
+        t_release : float
+            ``t + duration`` of the blow.
+        record : RockContact
+            Work on rock, penetrations, efficiencies (those of its :class:`Blow`), the piston's
+            energy balance.
+        """
+        from ..dynamics.rockcontact import rock_contact
+
+        rec = rock_contact(model, load, float(t), q_minus, v_minus)
+        return rec.q_after.copy(), rec.v_after.copy(), float(t) + rec.duration, rec
 
 
 def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None = None,

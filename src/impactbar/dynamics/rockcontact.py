@@ -1,0 +1,249 @@
+"""The simulator's contact step under the rod-and-rock law (theory §4d): the piston's modal state at
+impact -> a blow on the cell grid with the drive acting -> the piston's modal state after the blow.
+
+1. **Fields at impact.** The piston's modal state ``(q, q')`` (positions from the shank, ``u(1) = 0``)
+   gives the Riemann invariants ``alpha = v + N/s``, ``beta = v - N/s`` with the static correction
+   that carries the drive's force ``p(t0)`` at ``x = 0`` (theory §4c; the wave law's
+   ``_Piston``); each piston cell gets their exact cell averages, ``F = s alpha/2``,
+   ``G = -s beta/2``.
+2. **The blow** (:func:`~impactbar.dynamics.rodrock.solve_blow`, the compiled rock kernel): the drive
+   acts on the piston's far end as its **average over each step** (a piecewise-constant drive on
+   the cell grid, exact in impulse per step; the work booked is the averaged drive's). Against the
+   exact drive the fields are in error by ``O(dt |p'|)``: a relative ``O(1/cells_per_piston)``
+   on the piston's state after the blow (a test measures it, halving with the cells). Damping is
+   neglected inside the blow, as in the wave law's window.
+3. **The piston after the blow.** Its cells' fields are projected on the ``N + 1`` free-free modes
+   exactly (piecewise-constant fields: ``q_n' = int v cos(n pi x)``, ``q_n = int N sin(n pi x) /
+   (s^2 n pi)``); the energy the truncation drops is a change of basis (the run's ``projection``).
+4. **Between blows the rod rests on the rock.** The rod's residual waves and the bit's motion at
+   the blow's end are discarded (their energy, ``Blow.rod_energy`` above the static one, is part of
+   the energy the piston lost to the rod); the next blow finds the rod at rest under the feed and
+   the bit on fresh rock, the shank advanced by the blow's permanent penetration (Lundberg's per-blow
+   model). Positions of the next flight are measured from that advanced shank. The error of this
+   against carrying the rod's waves and the rock's state into the next blow is measured in
+   ``tests/laws/test_rock_contact.py`` (``test_rest_between_blows_against_carried_waves``).
+
+The blow ends once the piston has been off the shank for ``separation_time`` (default a round trip
+of a wave through piston and rod, ``2 (1/s + sum of the travel times)``), or as
+:func:`~impactbar.dynamics.rodrock.rod_rock_blow`'s (the piston separated and the rod's wave energy
+below ``energy_fraction`` of the piston's energy at impact), or at ``t_max`` (default
+:meth:`RodRock.window`); a piston still pressed on the shank at ``t_max`` leaves
+the step on the stop and arrives again at once (a new blow).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ._characteristics import _Piston
+from .rodrock import Blow, blow_grid, solve_blow
+
+__all__ = ["RockContact", "rock_contact"]
+
+
+def _drive_averages(load, t0: float, dt: float, n: int) -> np.ndarray:
+    """The load averaged over the steps ``[t0 + i dt, t0 + (i + 1) dt]``, ``i < n``: differences of
+    its exact integral (the rigid mode's velocity under it), shape ``(n,)``."""
+    times = t0 + dt * np.arange(n + 1)
+    _, v = load.propagate(np.zeros(1), 0.0, t0, np.zeros(1), np.zeros(1), times)
+    return np.diff(np.asarray(v, dtype=float)[0]) / dt
+
+
+class RockContact:
+    """One blow of the simulator under :class:`~impactbar.RodRock` (theory §4d): the record of
+    :meth:`RodRock.contact`, made by :func:`rock_contact`.
+
+    Attributes
+    ----------
+    t0, duration : float
+        Load time of the impact and the blow's length (model time; the next flight starts at
+        ``t0 + duration``).
+    q_before, v_before : numpy.ndarray, shape (N + 1,)
+        Modal state at impact (positions from the shank).
+    q_after, v_after : numpy.ndarray, shape (N + 1,)
+        Modal state after the blow, positions from the shank's new rest position (advanced by
+        :attr:`stop_advance`).
+    blow : Blow
+        The blow itself: force histories, work on rock, penetrations, the energy account. Its
+        attributes are also this record's (``record.work_on_rock``, ``record.efficiency``, ...).
+    energy_before : float
+        Energy of the piston's fields at impact on the grid (modal energy plus static correction,
+        cell-averaged).
+    stop_advance : float
+        How far the shank's rest position (the stop of the next flight) moved: the blow's
+        permanent penetration (model length unit ``L``).
+    energy_out : float
+        Energy the piston lost to the rod and rock in the blow: ``energy_before + drive_work -
+        piston_energy`` (the run's ``impact_loss``).
+    """
+
+    sustained = None
+
+    def __init__(self, model, load, t0, q, v, F0, G0, drive, grid, params, blow, q_after, v_after):
+        self.model, self.load = model, load
+        self.t0 = float(t0)
+        self.q_before, self.v_before = q, v
+        self._F0, self._G0, self._drive, self._grid, self._params = F0, G0, drive, grid, params
+        self.blow = blow
+        self.duration = blow.duration
+        self.q_after, self.v_after = q_after, v_after
+        self._partials = {}
+
+    def __repr__(self) -> str:
+        b = self.blow
+        return (f"RockContact(t0={self.t0!r}, duration={self.duration!r}, work_on_rock="
+                f"{b.work_on_rock!r}, efficiency={b.efficiency!r})")
+
+    def __getattr__(self, name):
+        if name.startswith("__") or name == "blow":
+            raise AttributeError(name)
+        return getattr(self.__dict__["blow"], name)
+
+    def resolve(self) -> RockContact:
+        """Itself (solved at once)."""
+        return self
+
+    @property
+    def energy_before(self) -> float:
+        return self.blow.energy_at_impact
+
+    @property
+    def stop_advance(self) -> float:
+        return self.blow.permanent_penetration
+
+    @property
+    def energy_out(self) -> float:
+        return self.blow.energy_into_rod
+
+    def _at(self, tau: float):
+        """The blow stopped at the step ending at or before ``tau``: ``"start"`` before the first
+        step ends, ``"end"`` from the last, else the :class:`Blow` cut there (solved again)."""
+        tau = float(tau)
+        slack = 1e-12 * self.duration + 8.0 * np.finfo(float).eps * max(1.0, abs(self.t0))
+        if not -slack <= tau <= self.duration + slack:
+            raise ValueError(f"tau must lie in [0, {self.duration}] (the blow); got {tau}")
+        dt = self._grid.cell_time
+        n = int(math.floor(tau / dt + 1e-9))
+        if n >= self.blow.shank_forces.size:
+            return "end"
+        if n == 0:
+            return "start"
+        if n not in self._partials:
+            self._partials[n] = solve_blow(self._grid, self._F0, self._G0, self._drive, *self._params,
+                                           t_max=n * dt, n_steps=n)
+        return self._partials[n]
+
+    def state_at(self, tau):
+        """Modal state ``(q, q')`` at ``tau`` since impact, at the last step end (cell time ``dt``),
+        positions from the shank where it is then (``u(1) = -gap``); at the blow's end the state
+        after it.
+
+        Returns
+        -------
+        q, v : numpy.ndarray, shape (N + 1,)
+        """
+        b = self._at(tau)
+        if isinstance(b, str) and b == "start":
+            return self.q_before.copy(), self.v_before.copy()
+        if isinstance(b, str) and b == "end":
+            return self.q_after.copy(), self.v_after.copy()
+        return _modal(self.model, self._grid.piston_cells, b, -b.gap)
+
+    def account(self, tau) -> tuple[float, float, float]:
+        """The piston's energy balance up to ``tau`` (at the last step end, as :meth:`state_at`):
+        ``energy_before + drive_work = field_energy + energy_out``.
+
+        Returns
+        -------
+        drive_work, energy_out, field_energy : float
+        """
+        b = self._at(tau)
+        if isinstance(b, str) and b == "start":
+            return 0.0, 0.0, self.energy_before
+        if isinstance(b, str) and b == "end":
+            b = self.blow
+        return b.drive_work, b.energy_into_rod, b.piston_energy
+
+
+def _modal(model, n_p: int, blow: Blow, end_position: float):
+    """The piston's final cell fields of ``blow`` projected on the model's modes, ``q_0`` such that
+    the struck end is at ``end_position``."""
+    s = model.s
+    F, G = blow.piston_waves
+    v, N = (F - G) / s, F + G  # velocity and compressive force on each cell
+    M = model.n_modes + 1
+    xe = np.arange(n_p + 1) / n_p
+    npi = math.pi * np.arange(1, M)
+    arg = np.multiply.outer(npi, xe)  # (M - 1, n_p + 1)
+    qv = np.empty(M)
+    q = np.zeros(M)
+    qv[0] = float(np.sum(v)) / n_p
+    if M > 1:
+        S, C = np.sin(arg), np.cos(arg)
+        qv[1:] = (np.diff(S, axis=1) @ v) / npi
+        q[1:] = (-np.diff(C, axis=1) @ N) / (s * s * npi * npi)
+    c = model.end_weights
+    q[0] = end_position - float(c[1:] @ q[1:])
+    return q, qv
+
+
+def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
+                 t_max: float | None = None, energy_fraction: float = 1e-9,
+                 separation_time: float | None = None) -> RockContact:
+    """The blow of a piston arriving at the shank in modal state ``(q, q')`` at load time ``t0``,
+    with the drive acting (theory §4d; the module's text states the method and its assumptions).
+
+    Parameters
+    ----------
+    model : BarModel
+        With ``impact=RodRock(...)``; its ``s`` and ``n_modes`` (``R`` and ``d`` play no part).
+    load : Load
+        The drive at ``x = 0``.
+    t0 : float
+        Load time of the impact.
+    q, v : array_like, shape (N + 1,)
+        Modal state at impact, positions from the shank (``u(1) = 0``).
+    cells_per_piston, t_max, energy_fraction
+        As :func:`~impactbar.single_blow`; ``t_max`` defaults to :meth:`RodRock.window`.
+    separation_time : float, optional
+        The blow also ends once the piston has been off the shank this long (model time); default
+        ``2 (1/s + sum of the segments' travel times)``, a round trip of a wave through piston and
+        rod.
+
+    Returns
+    -------
+    RockContact
+    """
+    law = model.law
+    s = float(model.s)
+    segs = law.segments
+    grid = blow_grid(s, [g.length for g in segs], [g.impedance for g in segs], [g.wave_speed for g in segs],
+                     cells_per_piston)
+    n_p, dt = grid.piston_cells, grid.cell_time
+    q = np.array(q, dtype=float)
+    v = np.array(v, dtype=float)
+    t0 = float(t0)
+    piston = _Piston(s, q, v, p_end=float(np.asarray(load(np.array([t0])), dtype=float)[0]))
+    xe = np.arange(n_p + 1) / n_p
+    F = np.zeros(grid.Z.size)
+    G = np.zeros(grid.Z.size)
+    F[:n_p] = 0.5 * s * np.diff(piston.int_alpha(xe)) * n_p
+    G[:n_p] = -0.5 * s * np.diff(piston.int_beta(xe)) * n_p
+    if t_max is None:
+        t_max = law.window(model)
+    n_max = max(1, math.ceil(float(t_max) / dt * (1.0 - 1e-12)))
+    drive = _drive_averages(load, t0, dt, n_max)
+    params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
+    if separation_time is None:
+        separation_time = 2.0 * (1.0 / s + float(np.sum(grid.travel)))
+    blow = solve_blow(grid, F, G, drive, *params, t_max=float(t_max), energy_fraction=energy_fraction,
+                      separation_time=float(separation_time))
+    # the next flight's positions are from the shank's new rest position
+    qa, va = _modal(model, n_p, blow, blow.shank_displacement - blow.gap - blow.permanent_penetration)
+    c = model.end_weights
+    over = float(c @ qa)
+    if over > 0.0:  # the end beyond the new rest position (pressed on at t_max): on the stop
+        qa[0] -= over
+    return RockContact(model, load, t0, q, v, F, G, drive, grid, params, blow, qa, va)
