@@ -186,7 +186,6 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     (n_max, cells) or (0, cells); ``acc`` out: ``u_shank, grid_loss, steps, ended, gap,
     drive_work``. Returns nothing; ``F``, ``G`` hold the final waves."""
     dt, stop, quiet = ctrl[0], ctrl[1], ctrl[2]
-    last = 0
     n_cells = F.size
     n_p = bounds[0]
     jc = n_p - 1
@@ -194,6 +193,7 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     Zl = Z[n_cells - 1]
     gap = ctrl[3]
     contact = gap <= 0.0
+    last = 0 if contact else -1  # the last step in contact (-1: none yet; no end before a contact)
     u_shank, grid_loss, work = 0.0, 0.0, 0.0
     N = np.empty(n_cells - 1)
     Fn = np.empty(n_cells)
@@ -241,10 +241,12 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
             G[j] = Gn[j]
         if contact:
             last = step
+        elif last < 0:
+            pass
         elif quiet > 0.0 and step - last >= quiet:
             steps, ended = step + 1, 2.0
             break
-        if not contact and step % 8 == 0:
+        if not contact and last >= 0 and step % 8 == 0:
             rod_e = 0.0
             for j in range(n_p, n_cells):
                 rod_e += (F[j] * F[j] + G[j] * G[j]) / Z[j]

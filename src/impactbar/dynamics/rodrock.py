@@ -286,6 +286,10 @@ class Blow:
     piston_waves : tuple of numpy.ndarray, shape (piston_cells,) each, or None
         The piston's right- and left-going force waves ``(F, G)`` at the end (cell 0 at its driven
         end).
+    rod_waves : tuple of numpy.ndarray, shape (rod cells,) each, or None
+        The rod's waves ``(F, G)`` at the end, above the feed's static state.
+    bit_velocity : float
+        The bit's velocity at the end.
     """
 
     times: np.ndarray
@@ -315,13 +319,15 @@ class Blow:
     gap: float = 0.0
     shank_displacement: float = 0.0
     piston_waves: tuple | None = None
+    rod_waves: tuple | None = None
+    bit_velocity: float = 0.0
 
     def __post_init__(self) -> None:
         # the scalars as plain floats (the solver hands numpy scalars), like every other result
         for f in ("energy_at_impact", "feed_work", "available_energy", "work_on_rock", "piston_energy",
                   "rebound_velocity", "rod_energy", "grid_loss", "max_penetration",
                   "permanent_penetration", "advance", "cell_time", "length_error", "drive_work", "gap",
-                  "shank_displacement"):
+                  "shank_displacement", "bit_velocity"):
             object.__setattr__(self, f, float(getattr(self, f)))
 
     @property
@@ -511,13 +517,15 @@ def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None) -> BlowGrid
 
 
 def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, energy_fraction=1e-9,
-               separation_time=None, gap=0.0, record_field=False, n_steps=None) -> Blow:
+               separation_time=None, gap=0.0, bit_state=None, record_field=False, n_steps=None) -> Blow:
     """A blow on ``grid`` from the piston's waves ``F, G`` (shape ``(cells,)``, the rod's zero: at rest
     under the feed), with the drive's force ``drive`` on the piston's far end averaged over each step
     (shape ``(n_max,)`` for ``n_max = ceil(t_max / dt)`` steps, or None for no drive); the rest as
     :func:`rod_rock_blow`. ``separation_time`` (model time) also ends the blow once the piston has been
     separated from the shank that long (``ended_by = "separated"``). ``gap >= 0``: the piston's struck
-    end that far behind the shank at the start (0: touching). ``n_steps`` stops after that many steps
+    end that far behind the shank at the start (0: touching). ``bit_state = (p, w)``: the bit at
+    penetration ``p`` into fresh rock (lifted off for ``p < 0``) moving at ``w`` (default: at rest
+    under the feed, ``p = f/k``). ``n_steps`` stops after that many steps
     whatever the energy (a state inside a blow). The result's ``piston_waves`` are the piston's
     final ``(F, G)``, ``gap`` the piston-shank gap and ``shank_displacement`` the shank's dynamic
     displacement at the end."""
@@ -531,6 +539,13 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     if drive.size < n_max:
         raise ValueError(f"drive must have at least {n_max} steps; got {drive.size}")
     bit = _Bit(float(Z[-1]), k, k_u, bit_mass, feed)
+    if bit_state is not None:
+        bit.p, bit.w = float(bit_state[0]), float(bit_state[1])
+        if bit.p < 0.0:
+            bit.branch, bit.p_max, bit.R_max, bit.p_perm = _FREE, 0.0, 0.0, 0.0
+        else:
+            bit.p_max, bit.R_max = bit.p, k * bit.p
+            bit.p_perm = bit.p_max - bit.R_max / k_u
     p_start = bit.p
     static = grid.static * feed * feed
     from .implementations import use_fast
@@ -559,7 +574,8 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
         permanent_penetration=bit.p_perm, advance=bit.p - p_start, ended_by=ended, cell_time=dt,
         piston_cells=n_p, segment_cells=grid.segment_cells, cell_edges=grid.edges,
         length_error=grid.length_error, drive_work=drive_work, gap=gap, shank_displacement=u_shank,
-        piston_waves=(F[:n_p].copy(), G[:n_p].copy()))
+        piston_waves=(F[:n_p].copy(), G[:n_p].copy()), rod_waves=(F[n_p:].copy(), G[n_p:].copy()),
+        bit_velocity=bit.w)
 
 
 def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field):
@@ -570,7 +586,7 @@ def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, reco
     gap = gap0
     contact = gap <= 0.0
     u_shank, grid_loss, work = 0.0, 0.0, 0.0
-    last = 0
+    last = 0 if contact else -1  # the last step in contact (-1: none yet; no end before a contact)
     jc = n_p - 1  # the contact is between cells jc and jc + 1
     junc, bitf, pen, fld = [], [bit.force()], [bit.p], []
     ended = "t_max"
@@ -608,10 +624,12 @@ def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, reco
         F, G = Fn, Gn
         if contact:
             last = step
+        elif last < 0:
+            pass
         elif quiet > 0 and step - last >= quiet:
             ended = "separated"
             break
-        if not contact and step % 8 == 0:
+        if not contact and last >= 0 and step % 8 == 0:
             rod_e = float(np.sum((F[n_p:] ** 2 + G[n_p:] ** 2) / Z[n_p:])) * dt
             if rod_e + 0.5 * bit_mass * bit.w * bit.w < stop:
                 ended = "energy"
