@@ -26,12 +26,12 @@ impact -> a blow on the cell grid with the drive acting -> the piston's modal st
    on rock is low by 2 % when the piston returns within about one time unit and by 15 % after a long
    gap (theory §4d; ``test_rest_between_blows_against_carried_waves``).
 
-The blow ends once the piston has been off the shank for ``separation_time`` (default a round trip
-of a wave through piston and rod, ``2 (1/s + sum of the travel times)``), or as
-:func:`~impactbar.dynamics.rodrock.rod_rock_blow`'s (the piston separated and the rod's wave energy
-below ``energy_fraction`` of the piston's energy at impact), or at ``t_max`` (default
-:meth:`RodRock.window`); a piston still pressed on the shank at ``t_max`` leaves
-the step on the stop and arrives again at once (a new blow).
+The blow lasts a fixed time, :meth:`RodRock.window` (``blow_time``; default ``4/s + 2 sum of the
+travel times``: the contact of ``2/s`` and a wave's round trip through piston and rod after it), so
+that the contact step is a smooth map of the state at impact wherever the piston does not hit the
+shank again inside it (the periodic orbits' impact map); the piston flies inside the blow under the
+drive (on the grid, undamped) once separated. A piston still pressed on the shank at the blow's end
+leaves the step on the stop and arrives again at once (a new blow).
 """
 
 from __future__ import annotations
@@ -79,10 +79,15 @@ class RockContact:
         permanent penetration (model length unit ``L``).
     energy_out : float
         Energy the piston lost to the rod and rock in the blow: ``energy_before + drive_work -
-        piston_energy`` (the run's ``impact_loss``).
+        piston_energy`` (the run's ``impact_loss``), ``work_on_rock + rod_loss``.
+    rod_loss : float
+        The part of ``energy_out`` the rock did not take.
     """
 
     sustained = None
+    #: Contact losses that make a periodic orbit's verdict ``separates``: none (under this law the
+    #: piston's separations and returns inside the blow are part of the blow).
+    separations = 0
 
     def __init__(self, model, load, t0, q, v, F0, G0, drive, grid, params, blow, q_after, v_after):
         self.model, self.load = model, load
@@ -119,6 +124,14 @@ class RockContact:
     @property
     def energy_out(self) -> float:
         return self.blow.energy_into_rod
+
+    @property
+    def rod_loss(self) -> float:
+        """``energy_out - work_on_rock``: what the piston lost that the rock did not take, the rod's
+        residual energy discarded between blows and the grid's loss, less the feed's work and the
+        energy stored under the feed (from the blow's account)."""
+        b = self.blow
+        return b.rod_energy + b.grid_loss - (b.available_energy - b.energy_at_impact - b.drive_work)
 
     def _at(self, tau: float):
         """The blow stopped at the step ending at or before ``tau``: ``"start"`` before the first
@@ -193,8 +206,7 @@ def _modal(model, n_p: int, blow: Blow, end_position: float):
 
 
 def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
-                 t_max: float | None = None, energy_fraction: float = 1e-9,
-                 separation_time: float | None = None) -> RockContact:
+                 duration: float | None = None) -> RockContact:
     """The blow of a piston arriving at the shank in modal state ``(q, q')`` at load time ``t0``,
     with the drive acting (theory §4d; the module's text states the method and its assumptions).
 
@@ -208,12 +220,11 @@ def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None =
         Load time of the impact.
     q, v : array_like, shape (N + 1,)
         Modal state at impact, positions from the shank (``u(1) = 0``).
-    cells_per_piston, t_max, energy_fraction
-        As :func:`~impactbar.single_blow`; ``t_max`` defaults to :meth:`RodRock.window`.
-    separation_time : float, optional
-        The blow also ends once the piston has been off the shank this long (model time); default
-        ``2 (1/s + sum of the segments' travel times)``, a round trip of a wave through piston and
-        rod.
+    cells_per_piston : int, optional
+        As :func:`~impactbar.single_blow`.
+    duration : float, optional
+        Length of the blow (model time, rounded up to whole cell steps); default
+        :meth:`RodRock.window`.
 
     Returns
     -------
@@ -234,15 +245,12 @@ def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None =
     G = np.zeros(grid.Z.size)
     F[:n_p] = 0.5 * s * np.diff(piston.int_alpha(xe)) * n_p
     G[:n_p] = -0.5 * s * np.diff(piston.int_beta(xe)) * n_p
-    if t_max is None:
-        t_max = law.window(model)
-    n_max = max(1, math.ceil(float(t_max) / dt * (1.0 - 1e-12)))
+    if duration is None:
+        duration = law.window(model)
+    n_max = max(1, math.ceil(float(duration) / dt * (1.0 - 1e-12)))
     drive = _drive_averages(load, t0, dt, n_max)
     params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
-    if separation_time is None:
-        separation_time = 2.0 * (1.0 / s + float(np.sum(grid.travel)))
-    blow = solve_blow(grid, F, G, drive, *params, t_max=float(t_max), energy_fraction=energy_fraction,
-                      separation_time=float(separation_time))
+    blow = solve_blow(grid, F, G, drive, *params, t_max=n_max * dt, n_steps=n_max)
     # the next flight's positions are from the shank's new rest position
     qa, va = _modal(model, n_p, blow, blow.shank_displacement - blow.gap - blow.permanent_penetration)
     c = model.end_weights
