@@ -36,6 +36,7 @@ leaves the step on the stop and arrives again at once (a new blow).
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -43,7 +44,7 @@ import numpy as np
 from ._characteristics import _Piston
 from .rodrock import Blow, blow_grid, solve_blow
 
-__all__ = ["RockContact", "rock_contact"]
+__all__ = ["BlowMap", "RockContact", "rock_contact"]
 
 
 def _drive_averages(load, t0: float, dt: float, n: int) -> np.ndarray:
@@ -183,26 +184,58 @@ class RockContact:
         return b.drive_work, b.energy_into_rod, b.piston_energy
 
 
-def _modal(model, n_p: int, blow: Blow, end_position: float):
-    """The piston's final cell fields of ``blow`` projected on the model's modes, ``q_0`` such that
-    the struck end is at ``end_position``."""
-    s = model.s
-    F, G = blow.piston_waves
-    v, N = (F - G) / s, F + G  # velocity and compressive force on each cell
-    M = model.n_modes + 1
+@functools.lru_cache(maxsize=32)
+def _projection(s: float, n_p: int, M: int):
+    """Matrices taking the cells' velocity and force to ``q_n'`` and ``q_n`` (``n >= 1``)."""
     xe = np.arange(n_p + 1) / n_p
     npi = math.pi * np.arange(1, M)
     arg = np.multiply.outer(npi, xe)  # (M - 1, n_p + 1)
+    Pv = np.diff(np.sin(arg), axis=1) / npi[:, None]
+    Pq = -np.diff(np.cos(arg), axis=1) / (s * s * npi * npi)[:, None]
+    return Pv, Pq
+
+
+def _modal(model, n_p: int, blow: Blow, end_position: float):
+    """The piston's final cell fields of ``blow`` projected on the model's modes (exactly: the fields
+    are constant on cells), ``q_0`` such that the struck end is at ``end_position``."""
+    s = float(model.s)
+    F, G = blow.piston_waves
+    v, N = (F - G) / s, F + G  # velocity and compressive force on each cell
+    M = model.n_modes + 1
     qv = np.empty(M)
     q = np.zeros(M)
     qv[0] = float(np.sum(v)) / n_p
     if M > 1:
-        S, C = np.sin(arg), np.cos(arg)
-        qv[1:] = (np.diff(S, axis=1) @ v) / npi
-        q[1:] = (-np.diff(C, axis=1) @ N) / (s * s * npi * npi)
+        Pv, Pq = _projection(s, n_p, M)
+        qv[1:] = Pv @ v
+        q[1:] = Pq @ N
     c = model.end_weights
     q[0] = end_position - float(c[1:] @ q[1:])
     return q, qv
+
+
+@functools.lru_cache(maxsize=32)
+def _field_basis(s: float, n_p: int, M: int):
+    """The piston's cell waves at impact as an affine map of ``(q, q', p(t0))``: the matrix ``A``
+    (``2 n_p`` by ``2 M``) of the modal state and the column ``f`` of the drive's force (the static
+    correction), from the wave law's ``_Piston`` (exact cell averages of the invariants)."""
+    xe = np.arange(n_p + 1) / n_p
+
+    def waves(q, v, p):
+        piston = _Piston(s, q, v, p_end=p)
+        return np.concatenate((0.5 * s * np.diff(piston.int_alpha(xe)) * n_p,
+                               -0.5 * s * np.diff(piston.int_beta(xe)) * n_p))
+
+    z = np.zeros(M)
+    A = np.empty((2 * n_p, 2 * M))
+    for k in range(2 * M):
+        e = np.zeros(2 * M)
+        e[k] = 1.0
+        A[:, k] = waves(e[:M], e[M:], 0.0)
+    A.flags.writeable = False
+    f = waves(z, z, 1.0)
+    f.flags.writeable = False
+    return A, f
 
 
 def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
@@ -230,31 +263,78 @@ def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None =
     -------
     RockContact
     """
-    law = model.law
-    s = float(model.s)
-    segs = law.segments
-    grid = blow_grid(s, [g.length for g in segs], [g.impedance for g in segs], [g.wave_speed for g in segs],
-                     cells_per_piston)
-    n_p, dt = grid.piston_cells, grid.cell_time
-    q = np.array(q, dtype=float)
-    v = np.array(v, dtype=float)
-    t0 = float(t0)
-    piston = _Piston(s, q, v, p_end=float(np.asarray(load(np.array([t0])), dtype=float)[0]))
-    xe = np.arange(n_p + 1) / n_p
-    F = np.zeros(grid.Z.size)
-    G = np.zeros(grid.Z.size)
-    F[:n_p] = 0.5 * s * np.diff(piston.int_alpha(xe)) * n_p
-    G[:n_p] = -0.5 * s * np.diff(piston.int_beta(xe)) * n_p
-    if duration is None:
-        duration = law.window(model)
-    n_max = max(1, math.ceil(float(duration) / dt * (1.0 - 1e-12)))
-    drive = _drive_averages(load, t0, dt, n_max)
-    params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
-    blow = solve_blow(grid, F, G, drive, *params, t_max=n_max * dt, n_steps=n_max)
-    # the next flight's positions are from the shank's new rest position
-    qa, va = _modal(model, n_p, blow, blow.shank_displacement - blow.gap - blow.permanent_penetration)
-    c = model.end_weights
-    over = float(c @ qa)
-    if over > 0.0:  # the end beyond the new rest position (pressed on at t_max): on the stop
-        qa[0] -= over
-    return RockContact(model, load, t0, q, v, F, G, drive, grid, params, blow, qa, va)
+    bm = BlowMap(model, load, t0, cells_per_piston=cells_per_piston, duration=duration)
+    return bm.contact(q, v)
+
+
+@functools.lru_cache(maxsize=32)
+def _grid_for(s, lengths, impedances, speeds, cells_per_piston):
+    return blow_grid(s, lengths, impedances, speeds, cells_per_piston)
+
+
+class BlowMap:
+    """The contact step at one impact time as a map of the piston's state at impact (theory §4d):
+    the grid, the drive's step averages and the projections are set up once, so that the many
+    blows of a finite-difference Jacobian (:meth:`RodRock.impact_map`) share them. The fields at
+    impact are affine in ``(q, q')`` and ``p(t0)`` (the static correction), with matrices cached per
+    ``(s, cells, modes)``.
+
+    Parameters
+    ----------
+    model, load, t0, cells_per_piston, duration
+        As :func:`rock_contact`.
+    """
+
+    def __init__(self, model, load, t0, *, cells_per_piston=None, duration=None):
+        law = model.law
+        self.model, self.load, self.t0 = model, load, float(t0)
+        self.s = s = float(model.s)
+        segs = law.segments
+        self.grid = grid = _grid_for(s, tuple(g.length for g in segs), tuple(g.impedance for g in segs),
+                                     tuple(g.wave_speed for g in segs), cells_per_piston)
+        self.n_p, dt = grid.piston_cells, grid.cell_time
+        self.p_end = float(np.asarray(load(np.array([self.t0])), dtype=float)[0])
+        if duration is None:
+            duration = law.window(model)
+        self.n_max = max(1, math.ceil(float(duration) / dt * (1.0 - 1e-12)))
+        self.drive = _drive_averages(load, self.t0, dt, self.n_max)
+        self.params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
+
+    def fields(self, q, v):
+        """The piston's waves at impact on the grid, ``(F, G)`` of shape ``(cells,)`` each (the rod's
+        zero): the modal sums plus the static correction, cell-averaged (:func:`_field_basis`)."""
+        n_p = self.n_p
+        A, f = _field_basis(self.s, n_p, self.model.n_modes + 1)
+        w = self.p_end * f + A @ np.concatenate((q, v))
+        F = np.zeros(self.grid.Z.size)
+        G = np.zeros(self.grid.Z.size)
+        F[:n_p], G[:n_p] = w[:n_p], w[n_p:]
+        return F, G
+
+    def contact(self, q, v) -> RockContact:
+        """The blow of an arrival in state ``(q, q')`` (the end on the shank) and its record."""
+        model = self.model
+        q = np.array(q, dtype=float)
+        v = np.array(v, dtype=float)
+        F, G = self.fields(q, v)
+        dt = self.grid.cell_time
+        blow = solve_blow(self.grid, F, G, self.drive, *self.params, t_max=self.n_max * dt,
+                          n_steps=self.n_max)
+        # the next flight's positions are from the shank's new rest position
+        end = blow.shank_displacement - blow.gap - blow.permanent_penetration
+        qa, va = _modal(model, self.n_p, blow, end)
+        c = model.end_weights
+        over = float(c @ qa)
+        if over > 0.0:  # the end beyond the new rest position (pressed on at the end): on the stop
+            qa[0] -= over
+        return RockContact(model, self.load, self.t0, q, v, F, G, self.drive, self.grid, self.params,
+                           blow, qa, va)
+
+    def __call__(self, y):
+        """The state after the blow, ``(q_after, q'_after)`` as one vector of shape ``(2 N + 2,)``,
+        from the arrival state ``y`` (its end moved onto the shank first)."""
+        M = self.model.n_modes + 1
+        q = np.array(y[:M], dtype=float)
+        q[0] -= float(self.model.end_weights @ q)
+        rec = self.contact(q, y[M:])
+        return np.concatenate((rec.q_after, rec.v_after))

@@ -167,21 +167,20 @@ class RodRock(ContactLaw):
         jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
         jac_t : numpy.ndarray, shape (2 N + 2,)
         """
+        from ..dynamics.rockcontact import BlowMap
+
         y = np.array(y_minus, dtype=float)
-
-        def step(tt, yy):
-            rec = self.blow(model, load, tt, yy)
-            return np.concatenate((rec.q_after, rec.v_after))
-
-        y_plus = step(float(t), y)
+        t = float(t)
+        step = BlowMap(model, load, t)
+        y_plus = step(y)
         h = 1e-6 * max(1.0, float(np.max(np.abs(y))))
         jac = np.empty((y.size, y.size))
         for j in range(y.size):
             e = np.zeros(y.size)
             e[j] = h
-            jac[:, j] = (step(float(t), y + e) - step(float(t), y - e)) / (2.0 * h)
+            jac[:, j] = (step(y + e) - step(y - e)) / (2.0 * h)
         ht = 1e-6
-        jt = (step(float(t) + ht, y) - step(float(t) - ht, y)) / (2.0 * ht)
+        jt = (BlowMap(model, load, t + ht)(y) - BlowMap(model, load, t - ht)(y)) / (2.0 * ht)
         return y_plus, jac, jt
 
     def blow(self, model, load, t, y_minus):
