@@ -129,3 +129,13 @@ feed = "5 kN"
     assert "J on rock" in res.stdout and "mm per blow" in res.stdout and "m/min" in res.stdout
     rock = json.loads((tmp_path / "o" / "summary.json").read_text())["rock"]
     assert rock["mean_work_on_rock_J"] > 0 and rock["drilling_rate_m_min"] > 0
+
+
+def test_the_docs_example_rock_sits_at_lundbergs_optimum():
+    """docs/physical.md: ``k = 470 kN/mm`` under a 450 mm x 45 mm steel piston gives
+    ``alpha = 1.27`` (Lundberg's optimum 1.2564312 to two digits: theory §4d)."""
+    config = copy.deepcopy(CONFIG)
+    config["rock"] = {"k": "470 kN/mm", "k_u": "4700 kN/mm", "feed": "5 kN"}
+    h = physical.Hammer.from_config(config)
+    assert round(h.model.law.alpha(h.model), 2) == 1.27
+    assert h.model.law.rock.gamma == pytest.approx(10.0)
