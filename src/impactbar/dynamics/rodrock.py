@@ -9,7 +9,8 @@ and ``Z_b`` (right) the welded junction gives ``N = 2 (Z_b F_a + Z_a G_b)/(Z_a +
 ``F_b = N - G_b``. This is exact for waves constant on cells (the uniform piston's), and energy is
 conserved step by step (``F_a^2/Z_a + G_b^2/Z_b = G_a^2/Z_a + F_b^2/Z_b``).
 
-- Piston's far end: free, ``F = -G``. No drive acts during a :func:`rod_rock_blow`.
+- Piston's far end: ``N = p``, the drive's force averaged over each step (:func:`solve_blow`, the
+  simulator's blow); free, ``F = -G``, in a :func:`rod_rock_blow`.
 - Piston-shank contact: unilateral; the welded junction while its force is compressive, free ends
   (``N = 0``) otherwise, with the gap ``g' = v_shank - v_piston`` summed per step (and floored at
   0); contact resumes at the first step that starts with the gap closed and the welded force
