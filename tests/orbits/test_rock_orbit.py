@@ -85,3 +85,19 @@ def test_finite_difference_jacobian_of_the_blow_map(case):
         e[j] = h
         col = (step(t, y + e) - step(t, y - e)) / (2 * h)
         np.testing.assert_allclose(J[:, j], col, atol=1e-6 * max(1.0, np.max(np.abs(col))))
+
+
+def test_continuation_in_the_drive_under_the_rod_rock_law(case):
+    """``continue_orbit`` follows the rod-rock orbit in ``p0`` (the segment problem's unknowns include
+    ``q_0``: the continuation sizes its arclength weights by the problem's own size); each point is
+    an orbit of the problem at its ``p0`` (residual zero)."""
+    from impactbar.orbits.multi_impact import _Segments, _unknowns_from
+
+    model, load, _, orbit = case
+    branch = ib.continue_orbit(orbit, "p0", 0.35, max_points=4)
+    assert len(branch.orbits) == 4 and branch.values[-1] > 0.3
+    o = branch.orbits[-1]
+    problem = _Segments(model, o.load, 2, 2)
+    F, _, _ = problem.evaluate(_unknowns_from(problem, o.impact_times, o.states_after_impact),
+                               jacobian=False)
+    assert np.max(np.abs(F)) < 1e-9
