@@ -101,3 +101,16 @@ def test_continuation_in_the_drive_under_the_rod_rock_law(case):
     F, _, _ = problem.evaluate(_unknowns_from(problem, o.impact_times, o.states_after_impact),
                                jacobian=False)
     assert np.max(np.abs(F)) < 1e-9
+
+
+def test_momentum_per_period(case):
+    """The piston's momentum over a period of the orbit, independent of the energy account: the
+    blows' impulses on the shank (their force histories) equal the drive's impulse ``2 pi n p0`` less
+    the damping's, ``d`` times the piston's rigid displacement over the flights (no damping inside a
+    blow)."""
+    model, load, _, orbit = case
+    impulse = sum(float(np.sum(c.shank_forces)) * c.cell_time for c in orbit.contacts)
+    flights = float(np.sum(np.roll(orbit.states_before_impact, -1, axis=0)[:, 0]
+                           - orbit.states_after_impact[:, 0]))
+    expected = 2 * np.pi * orbit.periods * load.p0 - model.d * flights
+    assert impulse == pytest.approx(expected, rel=1e-9)

@@ -11,9 +11,9 @@ impedance in these units is ``s`` and its crossing time ``1/s``, so Lundberg's
 The law gives single blows (:func:`single_blow`) and the simulator's contact step
 (:meth:`RodRock.contact`: ``simulate`` runs under it, one :class:`~impactbar.dynamics.rockcontact.RockContact`
 per blow in ``Trajectory.impacts``) and its impact map (:meth:`RodRock.impact_map`, the contact step
-with a finite-difference Jacobian: ``find_orbit`` runs under it from a guess, e.g. a simulation);
-``periodic_orbits`` (the one-impact phase equation) and continuation are not provided (their
-methods raise ``LawNotSupported``, a ``ValueError``, naming them).
+with a finite-difference Jacobian: ``find_orbit`` runs under it from a guess, e.g. a simulation, and
+``continue_orbit`` in the drive's parameters); ``periodic_orbits`` (the one-impact phase equation)
+is not provided (its methods raise ``LawNotSupported``, a ``ValueError``, naming them).
 """
 
 from __future__ import annotations
