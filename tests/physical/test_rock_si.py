@@ -5,6 +5,7 @@ import copy
 import math
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -93,35 +94,12 @@ def test_no_rock_section_no_drill():
 
 
 def test_cli_simulate_prints_the_drilling_outputs(tmp_path):
-    """``impactbar simulate CONFIG.toml`` with a ``[rock]`` section prints the work on rock, the
+    """``impactbar simulate examples/rock_drill.toml`` (a ``[rock]`` section) prints the work on rock, the
     penetration per blow, the drilling rate and the efficiencies, and writes them to summary.json."""
     import json
 
-    toml = tmp_path / "drill.toml"
-    toml.write_text('''
-[bar]
-E = "210 GPa"
-density = "7850 kg/m^3"
-length = "450 mm"
-diameter = "45 mm"
-[stop]
-restitution = 0.0
-[drive]
-frequency = "55 Hz"
-[force]
-kind = "pneumatic"
-mean = "3 kN"
-amplitude = "8 kN"
-[model]
-n_modes = 2
-[[rod.segments]]
-length = "1.2 m"
-diameter = "32 mm"
-[rock]
-k = "600 kN/mm"
-k_u = "6000 kN/mm"
-feed = "5 kN"
-''')
+    toml = Path(__file__).parents[2] / "examples" / "rock_drill.toml"
+    assert physical.load_config(toml).drill.rock_k_N_m == pytest.approx(470e6)
     res = subprocess.run([sys.executable, "-m", "impactbar", "simulate", str(toml),
                           "--out", str(tmp_path / "o"), "--periods", "8"],
                          capture_output=True, text=True, timeout=600)
