@@ -1,8 +1,13 @@
-"""Benchmark for issue 18: one blow on a 3-segment rod with 400 cells (:func:`impactbar.single_blow`,
-the rod-and-rock law), against elwaspatid's Bacon-method characteristics on the same rod, grid and
-number of steps (its far end anechoic, no rock), the baseline, in the same run, and against the
-numpy loop (the reference of ``"rock.blow"``).
-Goal: <= 1 ms.
+"""Benchmark for issue 18.
+
+1. One blow on a 3-segment rod with 400 cells (:func:`impactbar.single_blow`, the rod-and-rock law),
+   against elwaspatid's Bacon-method characteristics on the same rod, grid and number of steps (its
+   far end anechoic, no rock), the baseline, in the same run, and against the numpy loop (the
+   reference of ``"rock.blow"``). Goal: <= 1 ms.
+2. A periodic orbit under the rod-rock law (``find_orbit``, 2 blows in 2 load periods, 4 modes, a rod
+   of impedance 2 on a soft rock, from a simulation) against the wave law's orbit of the same bar
+   with the same rod's restitution ``R = 1/3`` (``find_orbit``, 2 impacts in 2 periods, from a
+   simulation), the simulations outside the timing. Goal: <= 10x.
 
 Run: ``python benchmarks/bench_rock.py [--quick]``. Prints a table; nothing is asserted.
 """
@@ -69,6 +74,26 @@ def main(argv=None):
     for name, t, n in rows:
         print(f"{name:40s} {1e3 * t:10.3f} {n:6d}")
     print(f"energy error {blow.energy_error:.2e}, efficiency {blow.efficiency:.4f}")
+    orbits(repeat)
+
+
+def orbits(repeat):
+    """Section 2: a periodic orbit under the rod-rock law against the wave law's."""
+    law = ib.RodRock(segments=[ib.RodSegment(length=2.0, impedance=2.0)],
+                     rock=ib.BilinearRock(k=20.0, k_u=200.0))
+    rock = ib.BarModel(s=10.0, d=0.3, R=0.0, n_modes=4, impact=law)
+    wave = ib.BarModel(s=10.0, d=0.3, R=1.0 / 3.0, n_modes=4, impact="wave")
+    load = ib.CosineLoad(0.3, 1.0)
+    start = ib.InitialState.rigid(-0.1, 0.0, n_modes=4)
+    guesses = {m: ib.simulate(m, load, start, 200.0) for m in (rock, wave)}
+    t_rock = median_time(lambda: ib.find_orbit(rock, load, 2, 2, guess=guesses[rock]), repeat)
+    t_wave = median_time(lambda: ib.find_orbit(wave, load, 2, 2, guess=guesses[wave]), repeat)
+    o = ib.find_orbit(rock, load, 2, 2, guess=guesses[rock])
+    print(f"\n{'periodic orbit (2 in 2, N = 4)':40s} {'time (ms)':>10s}")
+    print(f"{'find_orbit, rod-rock law':40s} {1e3 * t_rock:10.1f}")
+    print(f"{'find_orbit, wave law':40s} {1e3 * t_wave:10.1f}")
+    print(f"ratio {t_rock / t_wave:.1f} (goal <= 10); the orbit: stable {o.stable}, work on rock per blow "
+          f"{[round(c.work_on_rock, 4) for c in o.contacts]}")
 
 
 if __name__ == "__main__":

@@ -55,6 +55,10 @@ def run(args) -> int:
         return 1
     write_impacts(result, out / "impacts.csv")
     summary = summarize(result)
+    if hammer.drill is not None:  # the rod-rock law: drilling outputs (impactbar.physical.rock)
+        from ..physical.rock import rock_summary
+
+        summary["rock"] = rock_summary(result)
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
 
     import matplotlib
@@ -85,6 +89,12 @@ def run(args) -> int:
                  f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
                  f"{summary['mean_power_W']:.4g} W")
     print(line + f"; wrote {out}/{written}, impacts.csv, summary.json")
+    rock = summary.get("rock", {})
+    if "mean_work_on_rock_J" in rock:
+        print(f"rock (second half, {rock['n_blows']} blows): {rock['mean_work_on_rock_J']:.4g} J on rock and "
+              f"{rock['mean_penetration_mm']:.4g} mm per blow, {rock['drilling_rate_m_min']:.4g} m/min at "
+              f"the blow frequency ({rock['measured_rate_m_min']:.4g} m/min over the run), efficiency "
+              f"{rock['mean_efficiency']:.3f} ({rock['mean_efficiency_with_rebound']:.3f} with the rebound)")
     return 0
 
 

@@ -55,7 +55,7 @@ class _OrbitProblem:
         self.model0, self.load0, self.name, self.m, self.n, self.tol = model, load, name, m, n, tol
         self.events, self.stop_on, self.xtol, self.doubled = events, stop_on, xtol, doubled
         self._cache = {}
-        size = 2 * (model.n_modes + 1) * m
+        size = _Segments(model, load, m, n).size  # (t, state) per impact
         # weighted arclength: the state's squared norm is averaged over its components (as AUTO
         # does), so the parameter keeps its share however many modes and impacts there are
         self.W = np.append(np.full(size, 1.0 / size), 1.0)
@@ -402,7 +402,7 @@ def _load_jump(problem, U, index):
     load = problem.segments(U[-1]).load
     if not isinstance(load, PiecewiseConstantLoad):
         return None
-    K = 2 * (problem.model0.n_modes + 1)
+    K = problem.segments(U[-1]).B  # unknowns per impact
     t = U[:-1].reshape(problem.m, K)[:, 0]
 
     br = load.breaks

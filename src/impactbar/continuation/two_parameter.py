@@ -93,7 +93,7 @@ class _BifurcationProblem:
     def __init__(self, model, load, names, m, n, kind):
         self.model0, self.load0, self.names, self.m, self.n = model, load, names, m, n
         self.kind = kind
-        size = 2 * (model.n_modes + 1) * m
+        size = _Segments(model, load, m, n).size  # (t, state) per impact
         self.W = np.concatenate((np.full(size, 1.0 / size), [1.0, 1.0]))
         self.b = self.c = None
         self._cache = {}

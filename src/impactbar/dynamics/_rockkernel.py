@@ -177,20 +177,24 @@ def bit_step(bs, bp, E, dt):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def blow_loop(F, G, Z, bounds, bs, bp, ctrl, junc, bitrec, field, acc):
+def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     """The blow's loop (``rod_rock_blow``). ``bounds`` (int): the cell right of each segment
-    boundary, the shank first; ``ctrl``: ``dt, energy_stop``; ``junc`` (n_max, J): forces at the
+    boundary, the shank first; ``ctrl``: ``dt, energy_stop, quiet, gap`` (end once separated for
+    ``quiet`` steps, 0: never; the piston-shank gap at the start); ``drive`` (n_max,): the drive's
+    force on the piston's far end, averaged over each step; ``junc`` (n_max, J): forces at the
     boundaries per step; ``bitrec`` (n_max + 1, 2): rock force and penetration; ``field``
-    (n_max, cells) or (0, cells); ``acc`` out: ``u_shank, grid_loss, steps, ended``. Returns
-    nothing; ``F``, ``G`` hold the final waves."""
-    dt, stop = ctrl[0], ctrl[1]
+    (n_max, cells) or (0, cells); ``acc`` out: ``u_shank, grid_loss, steps, ended, gap,
+    drive_work``. Returns nothing; ``F``, ``G`` hold the final waves."""
+    dt, stop, quiet = ctrl[0], ctrl[1], ctrl[2]
     n_cells = F.size
     n_p = bounds[0]
     jc = n_p - 1
     feed, m = bp[4], bp[3]
     Zl = Z[n_cells - 1]
-    contact, gap = True, 0.0
-    u_shank, grid_loss = 0.0, 0.0
+    gap = ctrl[3]
+    contact = gap <= 0.0
+    last = 0 if contact else -1  # the last step in contact (-1: none yet; no end before a contact)
+    u_shank, grid_loss, work = 0.0, 0.0, 0.0
     N = np.empty(n_cells - 1)
     Fn = np.empty(n_cells)
     Gn = np.empty(n_cells)
@@ -213,7 +217,9 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, junc, bitrec, field, acc):
         for j in range(n_cells - 1):
             Fn[j + 1] = N[j] - G[j + 1]
             Gn[j] = N[j] - F[j]
-        Fn[0] = -G[0]
+        pd = drive[step]
+        Fn[0] = pd - G[0]  # the driven far end: N = p
+        work += pd * (pd - 2.0 * G[0]) / Z[0] * dt
         Fi = F[n_cells - 1]
         p0, work0, ke0 = bs[0], bs[6], 0.5 * m * bs[1] * bs[1]
         bit_step(bs, bp, 2.0 * Fi + feed, dt)
@@ -233,11 +239,18 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, junc, bitrec, field, acc):
         for j in range(n_cells):
             F[j] = Fn[j]
             G[j] = Gn[j]
-        if not contact and step % 8 == 0:
+        if contact:
+            last = step
+        elif last < 0:
+            pass
+        elif quiet > 0.0 and step - last >= quiet:
+            steps, ended = step + 1, 2.0
+            break
+        if not contact and last >= 0 and step % 8 == 0:
             rod_e = 0.0
             for j in range(n_p, n_cells):
                 rod_e += (F[j] * F[j] + G[j] * G[j]) / Z[j]
             if rod_e * dt + 0.5 * m * bs[1] * bs[1] < stop:
                 steps, ended = step + 1, 1.0
                 break
-    acc[0], acc[1], acc[2], acc[3] = u_shank, grid_loss, steps, ended
+    acc[0], acc[1], acc[2], acc[3], acc[4], acc[5] = u_shank, grid_loss, steps, ended, gap, work

@@ -9,7 +9,8 @@ and ``Z_b`` (right) the welded junction gives ``N = 2 (Z_b F_a + Z_a G_b)/(Z_a +
 ``F_b = N - G_b``. This is exact for waves constant on cells (the uniform piston's), and energy is
 conserved step by step (``F_a^2/Z_a + G_b^2/Z_b = G_a^2/Z_a + F_b^2/Z_b``).
 
-- Piston's far end: free, ``F = -G``. No drive acts during a :func:`rod_rock_blow`.
+- Piston's far end: ``N = p``, the drive's force averaged over each step (:func:`solve_blow`, the
+  simulator's blow); free, ``F = -G``, in a :func:`rod_rock_blow`.
 - Piston-shank contact: unilateral; the welded junction while its force is compressive, free ends
   (``N = 0``) otherwise, with the gap ``g' = v_shank - v_piston`` summed per step (and floored at
   0); contact resumes at the first step that starts with the gap closed and the welded force
@@ -43,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Blow", "rod_rock_blow"]
+__all__ = ["Blow", "BlowGrid", "blow_grid", "rod_rock_blow", "solve_blow"]
 
 # branches of the bilinear law
 _LOAD, _ELASTIC, _FREE = 0, 1, 2
@@ -241,11 +242,14 @@ class Blow:
     field : numpy.ndarray, shape (n, cells) or None
         Force (above the feed's) in every cell, piston then rod (``record_field=True``).
     energy_at_impact : float
-        The piston's kinetic energy ``V^2/2``.
+        The piston's energy at impact (of its fields on the grid): ``V^2/2`` for a rigid piston.
+    drive_work : float
+        Work of the drive's force on the piston's far end during the blow (0 for
+        :func:`rod_rock_blow`; the step-averaged drive of :func:`solve_blow`).
     feed_work : float
         Work of the feed force on the shank during the blow.
     available_energy : float
-        ``energy_at_impact + feed_work`` plus the energy stored under the feed at the start: the
+        ``energy_at_impact + drive_work + feed_work`` plus the energy stored under the feed at the start: the
         rod's static strain energy and the rock's recoverable elastic energy ``f^2/(2 k_u)``.
     work_on_rock : float
         ``int R dp`` over the blow plus ``f^2/(2 k_u)`` (the rock's elastic energy under the feed
@@ -274,8 +278,19 @@ class Blow:
     cell_edges : numpy.ndarray, shape (cells + 1,)
         Cell boundaries in piston lengths, the shank at 0 (the piston in ``[-1, 0]``).
     ended_by : str
-        ``"energy"`` (the piston separated and the rod's wave energy below the fraction) or
+        ``"energy"`` (the piston separated and the rod's wave energy below the fraction),
+        ``"separated"`` (the piston separated for ``separation_time``, :func:`solve_blow`) or
         ``"t_max"``.
+    gap, shank_displacement : float
+        At the end: the piston-shank gap (0 in contact) and the shank's displacement from its
+        static position at impact.
+    piston_waves : tuple of numpy.ndarray, shape (piston_cells,) each, or None
+        The piston's right- and left-going force waves ``(F, G)`` at the end (cell 0 at its driven
+        end).
+    rod_waves : tuple of numpy.ndarray, shape (rod cells,) each, or None
+        The rod's waves ``(F, G)`` at the end, above the feed's static state.
+    bit_velocity : float
+        The bit's velocity at the end.
     """
 
     times: np.ndarray
@@ -301,12 +316,19 @@ class Blow:
     segment_cells: tuple = field(default=())
     cell_edges: np.ndarray | None = None
     length_error: float = 0.0
+    drive_work: float = 0.0
+    gap: float = 0.0
+    shank_displacement: float = 0.0
+    piston_waves: tuple | None = None
+    rod_waves: tuple | None = None
+    bit_velocity: float = 0.0
 
     def __post_init__(self) -> None:
         # the scalars as plain floats (the solver hands numpy scalars), like every other result
         for f in ("energy_at_impact", "feed_work", "available_energy", "work_on_rock", "piston_energy",
                   "rebound_velocity", "rod_energy", "grid_loss", "max_penetration",
-                  "permanent_penetration", "advance", "cell_time", "length_error"):
+                  "permanent_penetration", "advance", "cell_time", "length_error", "drive_work", "gap",
+                  "shank_displacement", "bit_velocity"):
             object.__setattr__(self, f, float(getattr(self, f)))
 
     @property
@@ -317,9 +339,8 @@ class Blow:
 
     @property
     def energy_into_rod(self) -> float:
-        """Energy the piston gave the rod: ``energy_at_impact - piston_energy`` (no drive acts on
-        the piston during the blow)."""
-        return self.energy_at_impact - self.piston_energy
+        """Energy the piston gave the rod: ``energy_at_impact + drive_work - piston_energy``."""
+        return self.energy_at_impact + self.drive_work - self.piston_energy
 
     @property
     def efficiency(self) -> float:
@@ -420,6 +441,63 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     record_field : bool
         Keep the force in every cell at every step (for the Lagrange diagram).
     """
+    grid = blow_grid(s, lengths, impedances, speeds, cells_per_piston)
+    n_p = grid.piston_cells
+    F = np.zeros(grid.Z.size)
+    G = np.zeros(grid.Z.size)
+    F[:n_p] = 0.5 * s * V
+    G[:n_p] = -0.5 * s * V
+    if t_max is None:
+        t_max = 20.0 * (grid.cell_time * n_p + float(np.sum(grid.travel)))
+    return solve_blow(grid, F, G, None, k, k_u, bit_mass, feed, t_max=t_max,
+                      energy_fraction=energy_fraction, record_field=record_field)
+
+
+@dataclass(frozen=True)
+class BlowGrid:
+    """The common cell grid of a blow (see the module's text).
+
+    Attributes
+    ----------
+    s : float
+        The piston's impedance (the model's ``s``).
+    cell_time : float
+        ``dt``, the time a wave takes to cross any cell.
+    piston_cells : int
+        Cells along the piston (its far, driven end is cell 0; the shank is right of the last).
+    segment_cells : tuple of int
+        Each segment's cells.
+    Z : numpy.ndarray, shape (cells,)
+        Every cell's impedance, piston then rod.
+    bounds : numpy.ndarray of int, shape (J,)
+        The cell right of each segment boundary, the shank first.
+    edges : numpy.ndarray, shape (cells + 1,)
+        Cell boundaries in piston lengths, the shank at 0.
+    travel : numpy.ndarray, shape (J,)
+        The segments' exact travel times.
+    static : float
+        The rod's strain energy under a unit feed force (``sum n dt / (2 Z)``).
+    """
+
+    s: float
+    cell_time: float
+    piston_cells: int
+    segment_cells: tuple
+    Z: np.ndarray
+    bounds: np.ndarray
+    edges: np.ndarray
+    travel: np.ndarray
+    static: float
+
+    @property
+    def length_error(self) -> float:
+        """Largest relative change of a segment's travel time by rounding it to whole cells."""
+        cells = np.array(self.segment_cells) * self.cell_time
+        return float(np.max(np.abs(cells - self.travel) / self.travel))
+
+
+def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None) -> BlowGrid:
+    """The cell grid of :func:`rod_rock_blow` (its parameters of the same names)."""
     travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
     Tp = 1.0 / s
     if cells_per_piston is None:
@@ -433,27 +511,51 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
                         + [np.full(n, c / n_p) for n, c in zip(seg_cells, speeds, strict=True)])
     edges = np.concatenate(([0.0], np.cumsum(dx))) - 1.0
     Z = np.concatenate([np.full(n_p, s)] + [np.full(n, s * z) for n, z in pieces])
-    n_cells = Z.size
     bounds = np.cumsum([n_p] + seg_cells)[:-1]  # cell index right of each segment boundary
-    F = np.zeros(n_cells)
-    G = np.zeros(n_cells)
-    F[:n_p] = 0.5 * s * V
-    G[:n_p] = -0.5 * s * V
-    E0 = 0.5 * V * V
-    if t_max is None:
-        t_max = 20.0 * (Tp + float(np.sum(travel)))
-    n_max = max(1, math.ceil(t_max / dt))
+    static = float(sum(n * dt / (2.0 * s * z) for n, z in pieces))
+    return BlowGrid(s=float(s), cell_time=dt, piston_cells=n_p, segment_cells=tuple(seg_cells), Z=Z,
+                    bounds=bounds.astype(np.int64), edges=edges, travel=travel, static=static)
+
+
+def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, energy_fraction=1e-9,
+               separation_time=None, gap=0.0, bit_state=None, record_field=False, n_steps=None) -> Blow:
+    """A blow on ``grid`` from the piston's waves ``F, G`` (shape ``(cells,)``, the rod's zero: at rest
+    under the feed), with the drive's force ``drive`` on the piston's far end averaged over each step
+    (shape ``(n_max,)`` for ``n_max = ceil(t_max / dt)`` steps, or None for no drive); the rest as
+    :func:`rod_rock_blow`. ``separation_time`` (model time) also ends the blow once the piston has been
+    separated from the shank that long (``ended_by = "separated"``). ``gap >= 0``: the piston's struck
+    end that far behind the shank at the start (0: touching). ``bit_state = (p, w)``: the bit at
+    penetration ``p`` into fresh rock (lifted off for ``p < 0``) moving at ``w`` (default: at rest
+    under the feed, ``p = f/k``). ``n_steps`` stops after that many steps
+    whatever the energy (a state inside a blow). The result's ``piston_waves`` are the piston's
+    final ``(F, G)``, ``gap`` the piston-shank gap and ``shank_displacement`` the shank's dynamic
+    displacement at the end."""
+    s, dt, n_p, Z, bounds = grid.s, grid.cell_time, grid.piston_cells, grid.Z, grid.bounds
+    F = np.array(F, dtype=float)
+    G = np.array(G, dtype=float)
+    E0 = float(np.sum((F[:n_p] ** 2 + G[:n_p] ** 2) / Z[:n_p])) * dt
+    n_max = max(1, math.ceil(t_max / dt * (1.0 - 1e-12))) if n_steps is None else max(1, int(n_steps))
+    stop = energy_fraction * E0 if n_steps is None else -1.0
+    drive = np.zeros(n_max) if drive is None else np.ascontiguousarray(drive[:n_max], dtype=float)
+    if drive.size < n_max:
+        raise ValueError(f"drive must have at least {n_max} steps; got {drive.size}")
     bit = _Bit(float(Z[-1]), k, k_u, bit_mass, feed)
+    if bit_state is not None:
+        bit.p, bit.w = float(bit_state[0]), float(bit_state[1])
+        if bit.p < 0.0:
+            bit.branch, bit.p_max, bit.R_max, bit.p_perm = _FREE, 0.0, 0.0, 0.0
+        else:
+            bit.p_max, bit.R_max = bit.p, k * bit.p
+            bit.p_perm = bit.p_max - bit.R_max / k_u
     p_start = bit.p
-    static = float(sum(feed * feed * n * dt / (2.0 * s * z) for n, z in pieces))
+    static = grid.static * feed * feed
     from .implementations import use_fast
 
-    if use_fast("rock.blow"):
-        F, G, junc, bitf, pen, fld, u_shank, grid_loss, ended = _compiled_loop(
-            F, G, Z, bounds, bit, dt, n_max, energy_fraction * E0, record_field)
-    else:
-        F, G, junc, bitf, pen, fld, u_shank, grid_loss, ended = _python_loop(
-            F, G, Z, bounds, bit, dt, n_max, energy_fraction * E0, record_field)
+    loop = _compiled_loop if use_fast("rock.blow") else _python_loop
+    quiet = 0 if separation_time is None else max(1, math.ceil(separation_time / dt))
+    F, G, junc, bitf, pen, fld, acc = loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, float(gap), drive,
+                                           record_field)
+    u_shank, grid_loss, ended, gap, drive_work = acc
     shank = junc[:, 0]
     n = shank.size
     e = (F * F + G * G) / Z * dt
@@ -465,22 +567,27 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     return Blow(
         times=dt * np.arange(n + 1), shank_forces=shank, junction_forces=junc,
         bit_forces=bitf, penetrations=pen, field=fld if record_field else None,
-        energy_at_impact=E0, feed_work=feed_work, available_energy=E0 + feed_work + static + rock0,
+        energy_at_impact=E0, feed_work=feed_work,
+        available_energy=E0 + drive_work + feed_work + static + rock0,
         work_on_rock=bit.work + rock0,
         piston_energy=piston_e, rebound_velocity=float(np.mean((F[:n_p] - G[:n_p]) / s)),
         rod_energy=rod_energy, grid_loss=grid_loss, max_penetration=bit.p_max,
         permanent_penetration=bit.p_perm, advance=bit.p - p_start, ended_by=ended, cell_time=dt,
-        piston_cells=n_p, segment_cells=tuple(seg_cells), cell_edges=edges,
-        length_error=float(np.max(np.abs(np.array(seg_cells) * dt - travel) / travel)))
+        piston_cells=n_p, segment_cells=grid.segment_cells, cell_edges=grid.edges,
+        length_error=grid.length_error, drive_work=drive_work, gap=gap, shank_displacement=u_shank,
+        piston_waves=(F[:n_p].copy(), G[:n_p].copy()), rod_waves=(F[n_p:].copy(), G[n_p:].copy()),
+        bit_velocity=bit.w)
 
 
-def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
+def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field):
     """The blow's loop in numpy (the reference of ``"rock.blow"``)."""
     Za, Zb = Z[:-1], Z[1:]
     wa, wb = 2.0 * Zb / (Za + Zb), 2.0 * Za / (Za + Zb)
     n_p, bit_mass, feed = int(bounds[0]), bit.m, bit.f
-    contact, gap = True, 0.0
-    u_shank, grid_loss = 0.0, 0.0
+    gap = gap0
+    contact = gap <= 0.0
+    u_shank, grid_loss, work = 0.0, 0.0, 0.0
+    last = 0 if contact else -1  # the last step in contact (-1: none yet; no end before a contact)
     jc = n_p - 1  # the contact is between cells jc and jc + 1
     junc, bitf, pen, fld = [], [bit.force()], [bit.p], []
     ended = "t_max"
@@ -499,7 +606,8 @@ def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
         Gn = np.empty_like(G)
         Fn[1:] = N - G[1:]
         Gn[:-1] = N - F[:-1]
-        Fn[0] = -G[0]  # the piston's free far end
+        Fn[0] = drive[step] - G[0]  # the piston's driven far end: N = p
+        work += drive[step] * (drive[step] - 2.0 * G[0]) / Z[0] * dt
         # the bit and the rock
         Fi = F[-1]
         p0, w_work0, ke0 = bit.p, bit.work, 0.5 * bit_mass * bit.w * bit.w
@@ -515,16 +623,24 @@ def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
         if record_field:
             fld.append(F + G)
         F, G = Fn, Gn
-        if not contact and step % 8 == 0:
+        if contact:
+            last = step
+        elif last < 0:
+            pass
+        elif quiet > 0 and step - last >= quiet:
+            ended = "separated"
+            break
+        if not contact and last >= 0 and step % 8 == 0:
             rod_e = float(np.sum((F[n_p:] ** 2 + G[n_p:] ** 2) / Z[n_p:])) * dt
             if rod_e + 0.5 * bit_mass * bit.w * bit.w < stop:
                 ended = "energy"
                 break
-    return (F, G, np.array(junc), np.array(bitf), np.array(pen), np.array(fld), u_shank, grid_loss,
-            ended)
+    junc = np.array(junc).reshape(-1, bounds.size)
+    return (F, G, junc, np.array(bitf), np.array(pen), np.array(fld),
+            (u_shank, grid_loss, ended, gap, work))
 
 
-def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
+def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field):
     """The blow's loop compiled (:func:`impactbar.dynamics._rockkernel.blow_loop`)."""
     from ._rockkernel import blow_loop
 
@@ -534,10 +650,12 @@ def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, record_field):
     junc = np.zeros((n_max, bounds.size))
     bitrec = np.zeros((n_max + 1, 2))
     field = np.zeros((n_max if record_field else 0, F.size))
-    acc = np.zeros(4)
-    blow_loop(F, G, Z, bounds.astype(np.int64), bs, bp, np.array([dt, stop]), junc, bitrec, field, acc)
+    acc = np.zeros(6)
+    ctrl = np.array([dt, stop, float(quiet), gap0])
+    blow_loop(F, G, Z, bounds.astype(np.int64), bs, bp, ctrl, drive, junc, bitrec, field, acc)
     bit.p, bit.w, bit.branch, bit.p_max, bit.R_max, bit.p_perm, bit.work = \
         bs[0], bs[1], int(bs[2]), bs[3], bs[4], bs[5], bs[6]
     n = int(acc[2])
-    return (F, G, junc[:n], bitrec[:n + 1, 0], bitrec[:n + 1, 1], field[:n], float(acc[0]),
-            float(acc[1]), "energy" if acc[3] else "t_max")
+    return (F, G, junc[:n], bitrec[:n + 1, 0], bitrec[:n + 1, 1], field[:n],
+            (float(acc[0]), float(acc[1]), ("t_max", "energy", "separated")[int(acc[3])], float(acc[4]),
+             float(acc[5])))

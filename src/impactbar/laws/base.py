@@ -40,6 +40,10 @@ class ContactLaw:
     open_ended : bool
         The contact step may last until the run's end (a sustained contact): the simulator passes
         its ``t_end`` to :meth:`contact` as a keyword.
+    flight_starts_on_stop : bool
+        Every flight starts with the end on the stop (``c . q = 0`` after :meth:`impact_map`), so
+        that periodic orbits leave ``q_0`` out of their unknowns; ``False`` for a law whose piston
+        may leave the contact step off the stop (the rod-rock law), whose orbits keep it.
     """
 
     name: ClassVar[str] = ""
@@ -47,6 +51,7 @@ class ContactLaw:
     rigid_closed_forms: ClassVar[bool] = False
     supports_schur: ClassVar[bool] = False
     open_ended: ClassVar[bool] = False
+    flight_starts_on_stop: ClassVar[bool] = True
 
     def window(self, model) -> float:
         """Duration of one impact (dimensionless time): 0 for an instantaneous law.

@@ -8,14 +8,20 @@ stiffness ``K`` (N/m) is ``k = K / (m Omega^2)``; masses in piston masses ``m``.
 impedance in these units is ``s`` and its crossing time ``1/s``, so Lundberg's
 ``alpha = K (2 L / C) / Z`` is ``2 k / s^2``.
 
-So far the law gives single blows (:func:`single_blow`); the simulator's contact step and the orbits
-under it are not provided (their methods raise ``LawNotSupported``, a ``ValueError``, naming them).
+The law gives single blows (:func:`single_blow`) and the simulator's contact step
+(:meth:`RodRock.contact`: ``simulate`` runs under it, one :class:`~impactbar.dynamics.rockcontact.RockContact`
+per blow in ``Trajectory.impacts``) and its impact map (:meth:`RodRock.impact_map`, the contact step
+with a finite-difference Jacobian: ``find_orbit`` runs under it from a guess, e.g. a simulation, and
+``continue_orbit`` in the drive's parameters); ``periodic_orbits`` (the one-impact phase equation)
+is not provided (its methods raise ``LawNotSupported``, a ``ValueError``, naming them).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+
+import numpy as np
 
 from .._shared.validate import check_real
 from .base import ContactLaw
@@ -92,6 +98,11 @@ class RodRock(ContactLaw):
         In piston masses, ``>= 0``; 0 is Lundberg's massless bit.
     feed : float
         Static feed force on the shank (model force units), ``>= 0``.
+    blow_time : float, optional
+        Duration of the blow in the simulator and in periodic orbits (model time, ``> 0``; the next
+        flight starts this long after the impact, :meth:`window`). Default
+        ``4/s + 2 sum of the segments' travel times``: the piston's contact of ``2/s`` and a round
+        trip of a wave through piston and rod after it.
 
     Examples
     --------
@@ -109,11 +120,13 @@ class RodRock(ContactLaw):
     rock: BilinearRock | None = None
     bit_mass: float = 0.0
     feed: float = 0.0
+    blow_time: float | None = None
 
     name = "rodrock"
     instantaneous = False
     rigid_closed_forms = False
     supports_schur = False
+    flight_starts_on_stop = False
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
@@ -125,21 +138,82 @@ class RodRock(ContactLaw):
             raise ValueError(f"rock must be a BilinearRock; got rock={self.rock!r}")
         object.__setattr__(self, "bit_mass", check_real("bit_mass", self.bit_mass, lo=0.0))
         object.__setattr__(self, "feed", check_real("feed", self.feed, lo=0.0))
+        if self.blow_time is not None:
+            object.__setattr__(self, "blow_time",
+                               check_real("blow_time", self.blow_time, lo=0.0, lo_open=True))
 
     def alpha(self, model) -> float:
         """Lundberg's ``alpha = K (2 L / C) / Z`` of the piston, ``2 k / s^2`` in the model's units."""
         return 2.0 * self.rock.k / model.s ** 2
 
     def window(self, model) -> float:
-        """The longest blow :func:`single_blow` follows by default: ``20 (1/s + sum of the segments'
-        travel times)``."""
-        return 20.0 * (1.0 / model.s + sum(g.travel_time(model) for g in self.segments))
+        """Duration of the blow in the simulator and in periodic orbits (model time): ``blow_time``,
+        by default ``4/s + 2 sum of the segments' travel times``."""
+        if self.blow_time is not None:
+            return self.blow_time
+        return 4.0 / model.s + 2.0 * sum(g.travel_time(model) for g in self.segments)
+
+    def impact_map(self, model, load, t, y_minus):
+        """The contact step as a map of the arrival state (theory §4d): ``y_plus`` the state
+        :meth:`window` after the impact (positions from the advanced shank), with its Jacobians by
+        **central finite differences** (the blow on the cell grid is piecewise smooth in the state:
+        smooth while the piston does not hit the shank again inside the blow): steps
+        ``h = 1e-6 max(1, |y_minus|_inf)`` in every state component and ``h_t = 1e-6`` in ``t``
+        (truncation ``O(h^2)``, rounding ``O(eps/h)``: about 1e-10 relative), ``4 N + 6`` blows.
+
+        Returns
+        -------
+        y_plus : numpy.ndarray, shape (2 N + 2,)
+        jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
+        jac_t : numpy.ndarray, shape (2 N + 2,)
+        """
+        from ..dynamics.rockcontact import BlowMap
+
+        y = np.array(y_minus, dtype=float)
+        t = float(t)
+        step = BlowMap(model, load, t)
+        y_plus = step(y)
+        h = 1e-6 * max(1.0, float(np.max(np.abs(y))))
+        jac = np.empty((y.size, y.size))
+        for j in range(y.size):
+            e = np.zeros(y.size)
+            e[j] = h
+            jac[:, j] = (step(y + e) - step(y - e)) / (2.0 * h)
+        ht = 1e-6
+        jt = (BlowMap(model, load, t + ht)(y) - BlowMap(model, load, t - ht)(y)) / (2.0 * ht)
+        return y_plus, jac, jt
 
     def blow(self, model, load, t, y_minus):
-        """The blow of a rigidly moving piston arriving with the rigid velocity of ``y_minus``
-        (drive and flexible modes ignored: see :func:`single_blow`)."""
+        """The blow of an arrival at load time ``t`` in state ``y_minus`` (shape ``(2 N + 2,)``)
+        with the drive acting: the record of :meth:`contact`."""
         M = model.n_modes + 1
-        return single_blow(model, float(y_minus[M]))
+        c = model.end_weights
+        qm = np.array(y_minus[:M], dtype=float)
+        qm[0] -= float(c @ qm)  # the end exactly on the shank (rounding)
+        return self.contact(model, load, t, qm, np.array(y_minus[M:], dtype=float))[3]
+
+    def contact(self, model, load, t, q_minus, v_minus, *, kernel=None):
+        """The simulator's contact step (theory §4d): the piston's modal state at impact -> the blow
+        by characteristics on the piston and the rod with the drive's force, averaged over each
+        cell step, on the piston's far end (the compiled rock kernel) -> the piston's fields at the
+        blow's end projected on the modes; the rod then rests on the rock (its residual waves
+        discarded, counted in the energy the piston lost), the shank advanced by the blow's
+        permanent penetration, from which the next flight's positions are measured
+        (:func:`impactbar.dynamics.rockcontact.rock_contact`; ``kernel`` is not used).
+
+        Returns
+        -------
+        q_after, v_after : numpy.ndarray, shape (N + 1,)
+        t_release : float
+            ``t + duration`` of the blow.
+        record : RockContact
+            Work on rock, penetrations, efficiencies (those of its :class:`Blow`), the piston's
+            energy balance.
+        """
+        from ..dynamics.rockcontact import rock_contact
+
+        rec = rock_contact(model, load, float(t), q_minus, v_minus)
+        return rec.q_after.copy(), rec.v_after.copy(), float(t) + rec.duration, rec
 
 
 def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None = None,
@@ -178,7 +252,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         raise ValueError(f"single_blow needs a model with impact=RodRock(...); got impact={model.impact!r}")
     V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
     if t_max is None:
-        t_max = law.window(model)
+        t_max = 20.0 * (1.0 / model.s + sum(g.travel_time(model) for g in law.segments))
     segs = law.segments
     return rod_rock_blow(
         model.s, V, [g.length for g in segs], [g.impedance for g in segs], [g.wave_speed for g in segs],

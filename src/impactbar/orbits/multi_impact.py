@@ -99,17 +99,23 @@ class _Segments:
         self.w2 = model.frequencies**2
         self.d = model.d
         self.c = model.end_weights
-        E = np.zeros((2 * M, 2 * M - 1))  # full state from reduced: q_0 = -sum_{n>=1} c_n q_n
-        E[0, : M - 1] = -self.c[1:]
-        E[1:M, : M - 1] = np.eye(M - 1)
-        E[M:, M - 1:] = np.eye(M)
+        if model.law.flight_starts_on_stop:
+            E = np.zeros((2 * M, 2 * M - 1))  # full state from reduced: q_0 = -sum_{n>=1} c_n q_n
+            E[0, : M - 1] = -self.c[1:]
+            E[1:M, : M - 1] = np.eye(M - 1)
+            E[M:, M - 1:] = np.eye(M)
+            self.keep = slice(1, None)  # the components of a state the unknowns hold
+        else:  # a flight may start off the stop (the rod-rock law): q_0 is an unknown too
+            E = np.eye(2 * M)
+            self.keep = slice(0, None)
         self.E = E
-        self.size = 2 * M * m
+        self.B = 1 + E.shape[1]  # unknowns (and conditions) per impact: its time and state
+        self.size = self.B * m
         self.T = contact_window(model)  # each flight starts T after its impact
 
     # -- pieces -----------------------------------------------------------------------------------
     def split(self, u):
-        z = np.asarray(u, dtype=float).reshape(self.m, 2 * self.M)
+        z = np.asarray(u, dtype=float).reshape(self.m, self.B)
         return z[:, 0], z[:, 1:]
 
     def full(self, x):
@@ -148,13 +154,13 @@ class _Segments:
             (only with ``jacobian``).
         """
         m, M = self.m, self.M
-        K = 2 * M
+        K, B, keep = 2 * M, self.B, self.keep
         t, x = self.split(u)
         F = np.empty(self.size)
         DF = np.zeros((self.size, self.size)) if jacobian else None
         y_plus = np.empty((m, K))
         y_minus = np.empty((m, K))
-        maps = np.empty((m, K, K)) if jacobian else None
+        maps = np.empty((m, B, B)) if jacobian else None
         for j in range(m):
             jn = (j + 1) % m
             t1 = t[jn] + (TWO_PI * self.n if jn == 0 else 0.0)
@@ -163,28 +169,28 @@ class _Segments:
             Y = self.flight(ts, y0, t1)
             yp, Jy, Jt = impact_law(self.model, self.load, t1, Y)
             y_plus[j], y_minus[j] = y0, Y
-            r = slice(K * j, K * (j + 1))
-            F[K * j] = self.c @ Y[:M]
-            F[K * j + 1: K * (j + 1)] = yp[1:] - x[jn]
+            r = slice(B * j, B * (j + 1))
+            F[B * j] = self.c @ Y[:M]
+            F[B * j + 1: B * (j + 1)] = yp[keep] - x[jn]
             if not jacobian:
                 continue
             Phi = self.phi(t1 - ts)
-            A = np.empty((K, K))  # dY / d(t_j, x_j)
+            A = np.empty((K, B))  # dY / d(t_j, x_j)
             A[:, 0] = -Phi @ self.f(ts, y0)
             A[:, 1:] = Phi @ self.E
             f1 = self.f(t1, Y, left=True)  # dY / d t_{j+1}
-            rows = np.vstack((self.c @ A[:M], (Jy @ A)[1:]))
-            tcol = np.concatenate(([self.c @ f1[:M]], (Jy @ f1 + Jt)[1:]))
-            DF[r, K * j: K * (j + 1)] += rows
-            DF[r, K * jn] += tcol
-            DF[K * j + 1: K * (j + 1), K * jn + 1: K * (jn + 1)] -= np.eye(K - 1)
+            rows = np.vstack((self.c @ A[:M], (Jy @ A)[keep]))
+            tcol = np.concatenate(([self.c @ f1[:M]], (Jy @ f1 + Jt)[keep]))
+            DF[r, B * j: B * (j + 1)] += rows
+            DF[r, B * jn] += tcol
+            DF[B * j + 1: B * (j + 1), B * jn + 1: B * (jn + 1)] -= np.eye(B - 1)
             # the impact map z_j -> z_{j+1} with the impact time eliminated (saltation, theory §7)
             v_imp = float(self.c @ Y[M:])
             with np.errstate(divide="ignore", invalid="ignore"):
                 rt = -(self.c @ A[:M]) / v_imp
             dy = Jy @ (A + np.outer(f1, rt)) + np.outer(Jt, rt)
             maps[j, 0] = rt
-            maps[j, 1:] = dy[1:]
+            maps[j, 1:] = dy[keep]
         return F, DF, {"y_plus": y_plus, "y_minus": y_minus, "maps": maps}
 
     def monodromy(self, maps):
@@ -271,7 +277,7 @@ def _build(problem: _Segments, u, *, admissibility: bool = True) -> PeriodicOrbi
 
 def _normalise(problem: _Segments, u):
     """Shift the impact times so that the first lies in ``[0, 2 pi)``; check they increase."""
-    z = np.array(u, dtype=float).reshape(problem.m, 2 * problem.M)
+    z = np.array(u, dtype=float).reshape(problem.m, problem.B)
     z[:, 0] -= TWO_PI * math.floor(z[0, 0] / TWO_PI)
     t = z[:, 0]
     if problem.m > 1 and not np.all(np.diff(t) > 0.0):
@@ -295,9 +301,9 @@ def _unknowns_from(problem: _Segments, times, states):
                          f"{2 * problem.M}; got {times.size} times and states of shape {states.shape}")
     if not (np.all(np.isfinite(times)) and np.all(np.isfinite(states))):
         raise ValueError("guess must be finite")
-    z = np.empty((problem.m, 2 * problem.M))
+    z = np.empty((problem.m, problem.B))
     z[:, 0] = times
-    z[:, 1:] = states[:, 1:]
+    z[:, 1:] = states[:, problem.keep]
     return z.ravel()
 
 
@@ -519,5 +525,5 @@ def _halves_gap(u, problem) -> float:
     (``2 m`` impacts in ``2 n`` periods), the second half's times shifted back by ``2 pi n``: zero
     on an orbit of ``m`` impacts in ``n`` periods traversed twice."""
     z = np.array(u, dtype=float).reshape(2, -1)
-    z[1, ::2 * problem.M] -= TWO_PI * problem.n / 2
+    z[1, ::problem.B] -= TWO_PI * problem.n / 2
     return float(np.max(np.abs(z[0] - z[1])))

@@ -35,13 +35,17 @@ Configuration keys (TOML file or a nested ``dict``, see :meth:`Hammer.from_confi
                kind = "hydraulic": high, low, fraction
                kind = "measured":  csv, tolerance (optional, 0.01), max_harmonics (optional, 256)
     [model]    n_modes                  # optional, default 16
+    [[rod.segments]] length, diameter | area, E, density   # with [rock]: the rod-rock law
+    [bit]      mass                     # optional, default 0 kg
+    [rock]     k, k_u, feed             # N/m, N/m, N (feed optional)
 
 Unknown keys are refused, naming the key.
 
 Layout: ``units`` (pint parsing, lazily imported), ``bar`` (the piston, the short-impact limit),
 ``forces`` (pneumatic, hydraulic, measured), ``config`` (the keys of a TOML config, their checks,
 the presets' data), ``hammer`` (scales and the dimensionless model; a hammer from a config, a TOML
-file or a preset), ``results`` (orbits and simulations in SI). This layer sits on
+file or a preset), ``results`` (orbits and simulations in SI), ``rock`` (the drill string and
+the rock: the rod-rock law in SI and the drilling outputs per blow). This layer sits on
 the core (``impactbar.model``, ``loads``, ``orbits``, ``simulation``) and may import pint; the core
 never imports it.
 """

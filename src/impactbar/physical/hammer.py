@@ -28,6 +28,7 @@ from .config import (
     _section,
 )
 from .forces import Force, FourierFit, HydraulicForce, MeasuredForce, PneumaticForce
+from .rock import ROCK_SECTIONS, DrillString, rock_from_config
 from .units import to_si, to_si_any
 
 
@@ -91,7 +92,11 @@ class Hammer:
         A label for reports.
     impact : {"paper", "wave"}, optional
         The impact law of :class:`~impactbar.BarModel`: ``"paper"`` (eq. 10, default) or
-        ``"wave"`` (the stop as a long rod, the contact solved by characteristics, theory §4b).
+        ``"wave"`` (the stop as a long rod, the contact solved by characteristics, theory §4b);
+        ``"rodrock"`` with ``drill``.
+    drill : DrillString, optional
+        The rod, bit and rock (theory §4d, :mod:`impactbar.physical.rock`): the model's law is then
+        the rod-rock law they define (``impact = "rodrock"``; the stop's ``R`` plays no part).
 
     Notes
     -----
@@ -108,6 +113,7 @@ class Hammer:
     n_modes: int = 16
     name: str = ""
     impact: str = "paper"
+    drill: DrillString | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.bar, Bar):
@@ -135,7 +141,11 @@ class Hammer:
                                                       hi=4096))
         if not isinstance(self.name, str):
             raise ValueError(f"name must be a string; got {self.name!r}")
-        if self.impact not in LAWS:
+        if self.drill is not None:
+            if not isinstance(self.drill, DrillString):
+                raise ValueError(f"drill must be a DrillString; got {type(self.drill).__name__}")
+            object.__setattr__(self, "impact", "rodrock")
+        elif self.impact not in LAWS:
             raise ValueError(f"model.impact must be one of {list(LAWS)}; got {self.impact!r}")
         if isinstance(self.force, MeasuredForce):
             self._measured  # noqa: B018  (fit the series now: a bad curve fails here, not later)
@@ -191,7 +201,8 @@ class Hammer:
     @property
     def model(self) -> BarModel:
         """The dimensionless :class:`~impactbar.BarModel`."""
-        return BarModel(s=self.s, d=self.d, R=self.R, n_modes=self.n_modes, impact=self.impact)
+        impact = self.impact if self.drill is None else self.drill.law(self.bar, self.scales)
+        return BarModel(s=self.s, d=self.d, R=self.R, n_modes=self.n_modes, impact=impact)
 
     @functools.cached_property
     def _measured(self):
@@ -296,6 +307,8 @@ class Hammer:
         fit = self.fourier_fit
         if fit is not None:
             out["fourier"] = dataclasses.asdict(fit)
+        if self.drill is not None:
+            out["drill"] = self.drill.to_dict()
         return out
 
     # -- constructors ------------------------------------------------------------------------
@@ -362,10 +375,10 @@ def _hammer_from_config(config: dict, base_dir) -> Hammer:
     if not isinstance(config, dict):
         raise ValueError("a configuration must be a mapping of sections; got "
                          f"{type(config).__name__}")
-    unknown = sorted(set(config) - set(_SECTIONS) - {"name"})
+    unknown = sorted(set(config) - set(_SECTIONS) - set(ROCK_SECTIONS) - {"name"})
     if unknown:
         raise ValueError(f"unknown key {unknown[0]!r}; allowed at top level: name, "
-                         f"{', '.join(sorted(_SECTIONS))}")
+                         f"{', '.join(sorted(set(_SECTIONS) | set(ROCK_SECTIONS)))}")
     missing = sorted(_REQUIRED - set(config))
     if missing:
         raise ValueError(f"missing section [{missing[0]}]")
@@ -396,8 +409,9 @@ def _hammer_from_config(config: dict, base_dir) -> Hammer:
     if "coefficient" in damp and "ratio" in damp:
         raise ValueError("give at most one of damping.coefficient and damping.ratio")
     name = config.get("name", "")
+    drill = rock_from_config(config, bar)  # [rod], [bit], [rock]: the rod-rock law
     h = Hammer(bar=bar, frequency_Hz=freq, force=force, n_modes=n_modes, name=name, impact=impact,
-               **stop_kw)
+               drill=drill, **stop_kw)
     if "coefficient" in damp:
         val, unit = to_si_any("damping.coefficient", damp["coefficient"], ("N*s/m", "N*s/m**2"),
                               "'2.4 N*s/m' (whole piston) or '12 N*s/m^2' (per unit length)",

@@ -344,7 +344,8 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
                           max_impacts=max_impacts)
     v = np.asarray(traj.impact_velocities, dtype=float) * sc.velocity_m_s
     # the records of a law with a contact (the wave law's rod outputs); an instant impact has none
-    impacts = () if hammer.model.law.instantaneous else traj.impacts
+    # (the rod-rock law's per-blow outputs: impactbar.physical.rock.rock_blows)
+    impacts = () if hammer.model.law.instantaneous or hammer.drill is not None else traj.impacts
     rod = np.full(v.size, np.nan)
     stress = np.full(v.size, np.nan)
     eff = np.full(v.size, np.nan)

@@ -1,0 +1,340 @@
+"""The simulator's contact step under the rod-and-rock law (theory §4d): the piston's modal state at
+impact -> a blow on the cell grid with the drive acting -> the piston's modal state after the blow.
+
+1. **Fields at impact.** The piston's modal state ``(q, q')`` (positions from the shank, ``u(1) = 0``)
+   gives the Riemann invariants ``alpha = v + N/s``, ``beta = v - N/s`` with the static correction
+   that carries the drive's force ``p(t0)`` at ``x = 0`` (theory §4c; the wave law's
+   ``_Piston``); each piston cell gets their exact cell averages, ``F = s alpha/2``,
+   ``G = -s beta/2``.
+2. **The blow** (:func:`~impactbar.dynamics.rodrock.solve_blow`, the compiled rock kernel): the drive
+   acts on the piston's far end as its **average over each step** (a piecewise-constant drive on
+   the cell grid, exact in impulse per step; the work booked is the averaged drive's). With the cell
+   averages of the fields at impact, the piston's state converges to the exact drive's at second
+   order in the cells: against the wave law's exact window on a rod of impedance ``(1+R)/(1-R)``,
+   2e-5 relative at 128 cells per piston, four times less per doubling (a test). Damping is
+   neglected inside the blow, as in the wave law's window.
+3. **The piston after the blow.** Its cells' fields are projected on the ``N + 1`` free-free modes
+   exactly (piecewise-constant fields: ``q_n' = int v cos(n pi x)``, ``q_n = int N sin(n pi x) /
+   (s^2 n pi)``); the energy the truncation drops is a change of basis (the run's ``projection``).
+4. **Between blows the rod rests on the rock.** The rod's residual waves and the bit's motion at
+   the blow's end are discarded (their energy, ``Blow.rod_energy`` above the static one, is part of
+   the energy the piston lost to the rod); the next blow finds the rod at rest under the feed and
+   the bit on fresh rock, the shank advanced by the blow's permanent penetration (Lundberg's per-blow
+   model). Positions of the next flight are measured from that advanced shank. Against carrying
+   the rod's waves and the bit's motion into the next blow (``alpha = 1.25``, ``gamma = 10``, a rod of
+   3 piston lengths, feed 0.2, a quarter of the blow's energy left in the rod), the next blow's work
+   on rock is low by 2 % when the piston returns within about one time unit and by 15 % after a long
+   gap (theory §4d; ``test_rest_between_blows_against_carried_waves``).
+
+The blow lasts a fixed time, :meth:`RodRock.window` (``blow_time``; default ``4/s + 2 sum of the
+travel times``: the contact of ``2/s`` and a wave's round trip through piston and rod after it), so
+that the contact step is a smooth map of the state at impact wherever the piston does not hit the
+shank again inside it (the periodic orbits' impact map); the piston flies inside the blow under the
+drive (on the grid, undamped) once separated. A piston still pressed on the shank at the blow's end
+leaves the step on the stop and arrives again at once (a new blow).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+from ._characteristics import _Piston
+from .rodrock import Blow, blow_grid, solve_blow
+
+__all__ = ["BlowMap", "RockContact", "rock_contact"]
+
+
+def _drive_averages(load, t0: float, dt: float, n: int) -> np.ndarray:
+    """The load averaged over the steps ``[t0 + i dt, t0 + (i + 1) dt]``, ``i < n``: differences of
+    its exact integral (the rigid mode's velocity under it), shape ``(n,)``."""
+    times = t0 + dt * np.arange(n + 1)
+    _, v = load.propagate(np.zeros(1), 0.0, t0, np.zeros(1), np.zeros(1), times)
+    return np.diff(np.asarray(v, dtype=float)[0]) / dt
+
+
+class RockContact:
+    """One blow of the simulator under :class:`~impactbar.RodRock` (theory §4d): the record of
+    :meth:`RodRock.contact`, made by :func:`rock_contact`.
+
+    Attributes
+    ----------
+    t0, duration : float
+        Load time of the impact and the blow's length (model time; the next flight starts at
+        ``t0 + duration``).
+    q_before, v_before : numpy.ndarray, shape (N + 1,)
+        Modal state at impact (positions from the shank).
+    q_after, v_after : numpy.ndarray, shape (N + 1,)
+        Modal state after the blow, positions from the shank's new rest position (advanced by
+        :attr:`stop_advance`).
+    blow : Blow
+        The blow itself: force histories, work on rock, penetrations, the energy account. Its
+        attributes are also this record's (``record.work_on_rock``, ``record.efficiency``, ...).
+    energy_before : float
+        Energy of the piston's fields at impact on the grid (modal energy plus static correction,
+        cell-averaged).
+    stop_advance : float
+        How far the shank's rest position (the stop of the next flight) moved: the blow's
+        permanent penetration (model length unit ``L``).
+    energy_out : float
+        Energy the piston lost to the rod and rock in the blow: ``energy_before + drive_work -
+        piston_energy`` (the run's ``impact_loss``), ``work_on_rock + rod_loss``.
+    rod_loss : float
+        The part of ``energy_out`` the rock did not take.
+    """
+
+    sustained = None
+    #: Contact losses that make a periodic orbit's verdict ``separates``: none (under this law the
+    #: piston's separations and returns inside the blow are part of the blow).
+    separations = 0
+
+    def __init__(self, model, load, t0, q, v, F0, G0, drive, grid, params, blow, q_after, v_after):
+        self.model, self.load = model, load
+        self.t0 = float(t0)
+        self.q_before, self.v_before = q, v
+        self._F0, self._G0, self._drive, self._grid, self._params = F0, G0, drive, grid, params
+        self.blow = blow
+        self.duration = blow.duration
+        self.q_after, self.v_after = q_after, v_after
+        self._partials = {}
+
+    def __repr__(self) -> str:
+        b = self.blow
+        return (f"RockContact(t0={self.t0!r}, duration={self.duration!r}, work_on_rock="
+                f"{b.work_on_rock!r}, efficiency={b.efficiency!r})")
+
+    def __getattr__(self, name):
+        if name.startswith("__") or name == "blow":
+            raise AttributeError(name)
+        return getattr(self.__dict__["blow"], name)
+
+    def resolve(self) -> RockContact:
+        """Itself (solved at once)."""
+        return self
+
+    @property
+    def energy_before(self) -> float:
+        return self.blow.energy_at_impact
+
+    @property
+    def stop_advance(self) -> float:
+        return self.blow.permanent_penetration
+
+    @property
+    def energy_out(self) -> float:
+        return self.blow.energy_into_rod
+
+    @property
+    def rod_loss(self) -> float:
+        """``energy_out - work_on_rock``: what the piston lost that the rock did not take, the rod's
+        residual energy discarded between blows and the grid's loss, less the feed's work and the
+        energy stored under the feed (from the blow's account)."""
+        b = self.blow
+        return b.rod_energy + b.grid_loss - (b.available_energy - b.energy_at_impact - b.drive_work)
+
+    def _at(self, tau: float):
+        """The blow stopped at the step ending at or before ``tau``: ``"start"`` before the first
+        step ends, ``"end"`` from the last, else the :class:`Blow` cut there (solved again)."""
+        tau = float(tau)
+        slack = 1e-12 * self.duration + 8.0 * np.finfo(float).eps * max(1.0, abs(self.t0))
+        if not -slack <= tau <= self.duration + slack:
+            raise ValueError(f"tau must lie in [0, {self.duration}] (the blow); got {tau}")
+        dt = self._grid.cell_time
+        n = int(math.floor(tau / dt + 1e-9))
+        if n >= self.blow.shank_forces.size:
+            return "end"
+        if n == 0:
+            return "start"
+        if n not in self._partials:
+            self._partials[n] = solve_blow(self._grid, self._F0, self._G0, self._drive, *self._params,
+                                           t_max=n * dt, n_steps=n)
+        return self._partials[n]
+
+    def state_at(self, tau):
+        """Modal state ``(q, q')`` at ``tau`` since impact, at the last step end (cell time ``dt``),
+        positions from the shank where it is then (``u(1) = -gap``); at the blow's end the state
+        after it.
+
+        Returns
+        -------
+        q, v : numpy.ndarray, shape (N + 1,)
+        """
+        b = self._at(tau)
+        if isinstance(b, str) and b == "start":
+            return self.q_before.copy(), self.v_before.copy()
+        if isinstance(b, str) and b == "end":
+            return self.q_after.copy(), self.v_after.copy()
+        return _modal(self.model, self._grid.piston_cells, b, -b.gap)
+
+    def account(self, tau) -> tuple[float, float, float]:
+        """The piston's energy balance up to ``tau`` (at the last step end, as :meth:`state_at`):
+        ``energy_before + drive_work = field_energy + energy_out``.
+
+        Returns
+        -------
+        drive_work, energy_out, field_energy : float
+        """
+        b = self._at(tau)
+        if isinstance(b, str) and b == "start":
+            return 0.0, 0.0, self.energy_before
+        if isinstance(b, str) and b == "end":
+            b = self.blow
+        return b.drive_work, b.energy_into_rod, b.piston_energy
+
+
+@functools.lru_cache(maxsize=32)
+def _projection(s: float, n_p: int, M: int):
+    """Matrices taking the cells' velocity and force to ``q_n'`` and ``q_n`` (``n >= 1``)."""
+    xe = np.arange(n_p + 1) / n_p
+    npi = math.pi * np.arange(1, M)
+    arg = np.multiply.outer(npi, xe)  # (M - 1, n_p + 1)
+    Pv = np.diff(np.sin(arg), axis=1) / npi[:, None]
+    Pq = -np.diff(np.cos(arg), axis=1) / (s * s * npi * npi)[:, None]
+    return Pv, Pq
+
+
+def _modal(model, n_p: int, blow: Blow, end_position: float):
+    """The piston's final cell fields of ``blow`` projected on the model's modes (exactly: the fields
+    are constant on cells), ``q_0`` such that the struck end is at ``end_position``."""
+    s = float(model.s)
+    F, G = blow.piston_waves
+    v, N = (F - G) / s, F + G  # velocity and compressive force on each cell
+    M = model.n_modes + 1
+    qv = np.empty(M)
+    q = np.zeros(M)
+    qv[0] = float(np.sum(v)) / n_p
+    if M > 1:
+        Pv, Pq = _projection(s, n_p, M)
+        qv[1:] = Pv @ v
+        q[1:] = Pq @ N
+    c = model.end_weights
+    q[0] = end_position - float(c[1:] @ q[1:])
+    return q, qv
+
+
+@functools.lru_cache(maxsize=32)
+def _field_basis(s: float, n_p: int, M: int):
+    """The piston's cell waves at impact as an affine map of ``(q, q', p(t0))``: the matrix ``A``
+    (``2 n_p`` by ``2 M``) of the modal state and the column ``f`` of the drive's force (the static
+    correction), from the wave law's ``_Piston`` (exact cell averages of the invariants)."""
+    xe = np.arange(n_p + 1) / n_p
+
+    def waves(q, v, p):
+        piston = _Piston(s, q, v, p_end=p)
+        return np.concatenate((0.5 * s * np.diff(piston.int_alpha(xe)) * n_p,
+                               -0.5 * s * np.diff(piston.int_beta(xe)) * n_p))
+
+    z = np.zeros(M)
+    A = np.empty((2 * n_p, 2 * M))
+    for k in range(2 * M):
+        e = np.zeros(2 * M)
+        e[k] = 1.0
+        A[:, k] = waves(e[:M], e[M:], 0.0)
+    A.flags.writeable = False
+    f = waves(z, z, 1.0)
+    f.flags.writeable = False
+    return A, f
+
+
+def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
+                 duration: float | None = None) -> RockContact:
+    """The blow of a piston arriving at the shank in modal state ``(q, q')`` at load time ``t0``,
+    with the drive acting (theory §4d; the module's text states the method and its assumptions).
+
+    Parameters
+    ----------
+    model : BarModel
+        With ``impact=RodRock(...)``; its ``s`` and ``n_modes`` (``R`` and ``d`` play no part).
+    load : Load
+        The drive at ``x = 0``.
+    t0 : float
+        Load time of the impact.
+    q, v : array_like, shape (N + 1,)
+        Modal state at impact, positions from the shank (``u(1) = 0``).
+    cells_per_piston : int, optional
+        As :func:`~impactbar.single_blow`.
+    duration : float, optional
+        Length of the blow (model time, rounded up to whole cell steps); default
+        :meth:`RodRock.window`.
+
+    Returns
+    -------
+    RockContact
+    """
+    bm = BlowMap(model, load, t0, cells_per_piston=cells_per_piston, duration=duration)
+    return bm.contact(q, v)
+
+
+@functools.lru_cache(maxsize=32)
+def _grid_for(s, lengths, impedances, speeds, cells_per_piston):
+    return blow_grid(s, lengths, impedances, speeds, cells_per_piston)
+
+
+class BlowMap:
+    """The contact step at one impact time as a map of the piston's state at impact (theory §4d):
+    the grid, the drive's step averages and the projections are set up once, so that the many
+    blows of a finite-difference Jacobian (:meth:`RodRock.impact_map`) share them. The fields at
+    impact are affine in ``(q, q')`` and ``p(t0)`` (the static correction), with matrices cached per
+    ``(s, cells, modes)``.
+
+    Parameters
+    ----------
+    model, load, t0, cells_per_piston, duration
+        As :func:`rock_contact`.
+    """
+
+    def __init__(self, model, load, t0, *, cells_per_piston=None, duration=None):
+        law = model.law
+        self.model, self.load, self.t0 = model, load, float(t0)
+        self.s = s = float(model.s)
+        segs = law.segments
+        self.grid = grid = _grid_for(s, tuple(g.length for g in segs), tuple(g.impedance for g in segs),
+                                     tuple(g.wave_speed for g in segs), cells_per_piston)
+        self.n_p, dt = grid.piston_cells, grid.cell_time
+        self.p_end = float(np.asarray(load(np.array([self.t0])), dtype=float)[0])
+        if duration is None:
+            duration = law.window(model)
+        self.n_max = max(1, math.ceil(float(duration) / dt * (1.0 - 1e-12)))
+        self.drive = _drive_averages(load, self.t0, dt, self.n_max)
+        self.params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
+
+    def fields(self, q, v):
+        """The piston's waves at impact on the grid, ``(F, G)`` of shape ``(cells,)`` each (the rod's
+        zero): the modal sums plus the static correction, cell-averaged (:func:`_field_basis`)."""
+        n_p = self.n_p
+        A, f = _field_basis(self.s, n_p, self.model.n_modes + 1)
+        w = self.p_end * f + A @ np.concatenate((q, v))
+        F = np.zeros(self.grid.Z.size)
+        G = np.zeros(self.grid.Z.size)
+        F[:n_p], G[:n_p] = w[:n_p], w[n_p:]
+        return F, G
+
+    def contact(self, q, v) -> RockContact:
+        """The blow of an arrival in state ``(q, q')`` (the end on the shank) and its record."""
+        model = self.model
+        q = np.array(q, dtype=float)
+        v = np.array(v, dtype=float)
+        F, G = self.fields(q, v)
+        dt = self.grid.cell_time
+        blow = solve_blow(self.grid, F, G, self.drive, *self.params, t_max=self.n_max * dt,
+                          n_steps=self.n_max)
+        # the next flight's positions are from the shank's new rest position
+        end = blow.shank_displacement - blow.gap - blow.permanent_penetration
+        qa, va = _modal(model, self.n_p, blow, end)
+        c = model.end_weights
+        over = float(c @ qa)
+        if over > 0.0:  # the end beyond the new rest position (pressed on at the end): on the stop
+            qa[0] -= over
+        return RockContact(model, self.load, self.t0, q, v, F, G, self.drive, self.grid, self.params,
+                           blow, qa, va)
+
+    def __call__(self, y):
+        """The state after the blow, ``(q_after, q'_after)`` as one vector of shape ``(2 N + 2,)``,
+        from the arrival state ``y`` (its end moved onto the shank first)."""
+        M = self.model.n_modes + 1
+        q = np.array(y[:M], dtype=float)
+        q[0] -= float(self.model.end_weights @ q)
+        rec = self.contact(q, y[M:])
+        return np.concatenate((rec.q_after, rec.v_after))

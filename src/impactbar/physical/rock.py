@@ -1,0 +1,245 @@
+"""The drill string and the rock in SI units (theory §4d): the ``[rod]``, ``[bit]`` and ``[rock]``
+sections of a hammer configuration, the rod-rock law they define for a hammer, and the per-blow
+outputs in SI (work on rock, penetration, drilling rate, efficiencies).
+
+The rock's two stiffnesses are the slopes of the bit's force-penetration curve, measured with the
+bit in use: the loading slope ``K`` while the bit penetrates, the unloading slope ``K_u`` when the
+force is released (Lundberg, Int. J. Rock Mech. Min. Sci. 19 (1982) 229-239; measured by static and
+dynamic indentation with the same bit in Karlsson, Lundberg & Sundin, ibid. 26 (1989) 45-50). They
+depend on the rock and the bit (size, number of buttons) and are given by the user. The example of
+the docs (``docs/physical.md``) is illustrative, not measured: it puts ``K`` at Lundberg's optimum
+``alpha = K (2 L / c) / Z = 1.26`` for its piston, with ``K_u = 10 K``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._shared.validate import check_real
+from ..laws.rodrock import BilinearRock, RodRock, RodSegment
+from .units import to_si
+
+__all__ = ["DrillString", "RodPiece", "rock_blows", "rock_from_config", "rock_summary"]
+
+#: keys of the sections (added to the hammer configuration's)
+ROCK_SECTIONS = {"rod": {"segments"}, "bit": {"mass"}, "rock": {"k", "k_u", "feed"}}
+_SEGMENT_KEYS = {"length", "diameter", "area", "E", "density"}
+
+
+@dataclass(frozen=True)
+class RodPiece:
+    """A uniform piece of the drill string (shank adapter, rod, coupling) in SI units.
+
+    Parameters
+    ----------
+    length_m : float
+        Length (m), ``> 0``.
+    area_m2 : float
+        Cross-section (m^2), ``> 0``.
+    E_Pa, density_kg_m3 : float
+        Young's modulus (Pa) and density (kg/m^3), ``> 0``.
+    """
+
+    length_m: float
+    area_m2: float
+    E_Pa: float
+    density_kg_m3: float
+
+    def __post_init__(self) -> None:
+        for f in ("length_m", "area_m2", "E_Pa", "density_kg_m3"):
+            object.__setattr__(self, f, check_real(f, getattr(self, f), lo=0.0, lo_open=True))
+
+    @property
+    def wave_speed_m_s(self) -> float:
+        """``c = sqrt(E / rho)`` (m/s)."""
+        return math.sqrt(self.E_Pa / self.density_kg_m3)
+
+    @property
+    def impedance_kg_s(self) -> float:
+        """``Z = E A / c`` (kg/s)."""
+        return self.E_Pa * self.area_m2 / self.wave_speed_m_s
+
+
+@dataclass(frozen=True)
+class DrillString:
+    """The rod, the bit and the rock of a drill in SI units (theory §4d).
+
+    Parameters
+    ----------
+    segments : sequence of RodPiece
+        From the shank to the bit, at least one.
+    rock_k_N_m : float
+        Loading stiffness ``K`` of the bit on the rock (N/m), ``> 0``.
+    rock_k_u_N_m : float
+        Unloading stiffness ``K_u >= K`` (N/m).
+    bit_mass_kg : float
+        Mass of the bit (kg), ``>= 0``; 0 is Lundberg's massless bit.
+    feed_N : float
+        Static feed force on the shank (N), ``>= 0``.
+    """
+
+    segments: tuple
+    rock_k_N_m: float
+    rock_k_u_N_m: float
+    bit_mass_kg: float = 0.0
+    feed_N: float = 0.0
+
+    def __post_init__(self) -> None:
+        segs = tuple(self.segments)
+        if not segs or not all(isinstance(g, RodPiece) for g in segs):
+            raise ValueError(f"rod.segments must be a non-empty sequence of RodPiece; got {self.segments!r}")
+        object.__setattr__(self, "segments", segs)
+        object.__setattr__(self, "rock_k_N_m", check_real("rock.k", self.rock_k_N_m, lo=0.0, lo_open=True))
+        object.__setattr__(self, "rock_k_u_N_m",
+                           check_real("rock.k_u", self.rock_k_u_N_m, lo=self.rock_k_N_m))
+        object.__setattr__(self, "bit_mass_kg", check_real("bit.mass", self.bit_mass_kg, lo=0.0))
+        object.__setattr__(self, "feed_N", check_real("rock.feed", self.feed_N, lo=0.0))
+
+    def law(self, bar, scales) -> RodRock:
+        """The dimensionless law for a piston ``bar`` (:class:`~impactbar.physical.Bar`) and the
+        hammer's ``scales`` (:class:`~impactbar.physical.Scales`): lengths in piston lengths,
+        impedances and wave speeds relative to the piston's, ``k = K / (m Omega^2)``, the bit's mass
+        in piston masses, the feed in ``m L Omega^2`` (theory §1, §4d)."""
+        z_p = bar.E_Pa * bar.area_m2 / bar.wave_speed_m_s
+        m = bar.mass_kg
+        om2 = scales.omega_rad_s ** 2
+        segs = [RodSegment(length=g.length_m / bar.length_m, impedance=g.impedance_kg_s / z_p,
+                           wave_speed=g.wave_speed_m_s / bar.wave_speed_m_s) for g in self.segments]
+        return RodRock(segments=segs, rock=BilinearRock(k=self.rock_k_N_m / (m * om2),
+                                                        k_u=self.rock_k_u_N_m / (m * om2)),
+                       bit_mass=self.bit_mass_kg / m, feed=self.feed_N / scales.force_N)
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary (SI floats)."""
+        return {"rod_segments": [{"length_m": g.length_m, "area_m2": g.area_m2, "E_Pa": g.E_Pa,
+                                  "density_kg_m3": g.density_kg_m3} for g in self.segments],
+                "rock_k_N_m": self.rock_k_N_m, "rock_k_u_N_m": self.rock_k_u_N_m,
+                "bit_mass_kg": self.bit_mass_kg, "feed_N": self.feed_N}
+
+
+def rock_from_config(config: dict, bar) -> DrillString | None:
+    """The drill string of a configuration's ``[rod]``, ``[bit]`` and ``[rock]`` sections, or None
+    when it has no ``[rock]``. ``[[rod.segments]]``: ``length``, ``diameter`` or ``area``, and
+    ``E`` and ``density`` (default the piston's); ``[bit]``: ``mass`` (default 0 kg);
+    ``[rock]``: ``k``, ``k_u`` (N/m, e.g. ``"250 kN/mm"``) and ``feed`` (N, default 0).
+
+    Raises
+    ------
+    ValueError
+        A missing or invalid key (named), or ``[rod]``/``[bit]`` without ``[rock]``.
+    """
+    for name, keys in ROCK_SECTIONS.items():
+        sec = config.get(name, {})
+        if not isinstance(sec, dict):
+            raise ValueError(f"[{name}] must be a table of keys; got {sec!r}")
+        unknown = sorted(set(sec) - keys)
+        if unknown:
+            raise ValueError(f"unknown key {name}.{unknown[0]}; allowed in [{name}]: "
+                             f"{', '.join(sorted(keys))}")
+    if "rock" not in config:
+        if "rod" in config or "bit" in config:
+            raise ValueError("[rod] and [bit] need a [rock] section (rock.k, rock.k_u)")
+        return None
+    rock, rod, bit = config["rock"], config.get("rod", {}), config.get("bit", {})
+    raw = rod.get("segments")
+    if not isinstance(raw, list) or not raw:
+        raise ValueError("rod.segments must be a non-empty array of tables ([[rod.segments]])")
+    pieces = []
+    for i, g in enumerate(raw):
+        where = f"rod.segments[{i}]"
+        if not isinstance(g, dict):
+            raise ValueError(f"{where} must be a table; got {g!r}")
+        unknown = sorted(set(g) - _SEGMENT_KEYS)
+        if unknown:
+            raise ValueError(f"unknown key {where}.{unknown[0]}; allowed: {', '.join(sorted(_SEGMENT_KEYS))}")
+        if ("diameter" in g) == ("area" in g):
+            raise ValueError(f"give exactly one of {where}.diameter and {where}.area")
+        if "length" not in g:
+            raise ValueError(f"missing key {where}.length")
+        length = to_si(f"{where}.length", g["length"], "m", "'1.2 m'", what="a length")
+        if "area" in g:
+            area = to_si(f"{where}.area", g["area"], "m**2", "'7 cm^2'", what="an area")
+        else:
+            dia = to_si(f"{where}.diameter", g["diameter"], "m", "'32 mm'", what="a length")
+            area = math.pi / 4.0 * dia * dia
+        E = to_si(f"{where}.E", g["E"], "Pa", "'210 GPa'", what="a pressure") if "E" in g else bar.E_Pa
+        rho = (to_si(f"{where}.density", g["density"], "kg/m**3", "'7850 kg/m^3'", what="a density")
+               if "density" in g else bar.density_kg_m3)
+        pieces.append(RodPiece(length_m=length, area_m2=area, E_Pa=E, density_kg_m3=rho))
+    for key in ("k", "k_u"):
+        if key not in rock:
+            raise ValueError(f"missing key rock.{key}")
+    k = to_si("rock.k", rock["k"], "N/m", "'250 kN/mm'", what="a stiffness")
+    k_u = to_si("rock.k_u", rock["k_u"], "N/m", "'2500 kN/mm'", what="a stiffness")
+    feed = to_si("rock.feed", rock["feed"], "N", "'5 kN'", what="a force") if "feed" in rock else 0.0
+    mass = to_si("bit.mass", bit["mass"], "kg", "'1.5 kg'", what="a mass") if "mass" in bit else 0.0
+    return DrillString(segments=tuple(pieces), rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed)
+
+
+def rock_blows(hammer, trajectory) -> dict:
+    """Per-blow outputs in SI of a simulation under the rod-rock law (theory §4d).
+
+    Parameters
+    ----------
+    hammer : Hammer
+        With a :class:`DrillString` (``hammer.drill``).
+    trajectory : Trajectory
+        Its dimensionless run (``SimulationResult.trajectory``).
+
+    Returns
+    -------
+    dict of numpy.ndarray, shape (n,) each
+        ``work_on_rock_J`` (J), ``penetration_mm`` (the permanent penetration of each blow, mm),
+        ``efficiency`` and ``efficiency_with_rebound`` (work on rock over the energy available to the
+        blow, without and with the piston's rebound energy credited), and ``drilling_rate_m_min``
+        (penetration per blow times the hammer's blow frequency ``f / k``, m/min).
+    """
+    sc = hammer.scales
+    energy_J = sc.force_N * sc.length_m
+    blows = trajectory.impacts
+    pen = np.array([b.permanent_penetration for b in blows], dtype=float) * sc.length_m
+    return {
+        "work_on_rock_J": np.array([b.work_on_rock for b in blows], dtype=float) * energy_J,
+        "penetration_mm": pen * 1e3,
+        "efficiency": np.array([b.efficiency for b in blows], dtype=float),
+        "efficiency_with_rebound": np.array([b.efficiency_with_rebound for b in blows], dtype=float),
+        "drilling_rate_m_min": pen * hammer.blow_frequency_Hz * 60.0,
+    }
+
+
+def rock_summary(result) -> dict:
+    """Drilling statistics of a :class:`~impactbar.physical.SimulationResult` under the rod-rock law,
+    over the blows of the second half of the run (past the start-up), JSON-ready.
+
+    Returns
+    -------
+    dict
+        ``n_blows``, ``mean_work_on_rock_J`` (J), ``mean_penetration_mm`` (mm per blow),
+        ``drilling_rate_m_min`` (mean penetration per blow times the blow frequency ``f / k``, m/min),
+        ``measured_rate_m_min`` (the penetration of those blows over the time they span, m/min: it
+        counts the small repeated blows of a piston pressed on the shank), ``rock_power_W`` (work on
+        rock over that time, W), ``mean_efficiency`` and ``mean_efficiency_with_rebound``; only
+        ``n_blows`` when fewer than two blows fall in the second half.
+    """
+    blows = rock_blows(result.hammer, result.trajectory)
+    t = result.impact_times_s
+    late = t >= 0.5 * result.t_end_s
+    out = {"n_blows": int(np.count_nonzero(late))}
+    if out["n_blows"] < 2:
+        return out
+    span = float(t[late][-1] - t[late][0])
+    pen = blows["penetration_mm"][late]
+    work = blows["work_on_rock_J"][late]
+    out.update({
+        "mean_work_on_rock_J": float(np.mean(work)),
+        "mean_penetration_mm": float(np.mean(pen)),
+        "drilling_rate_m_min": float(np.mean(pen) * 1e-3 * result.hammer.blow_frequency_Hz * 60.0),
+        "measured_rate_m_min": float(np.sum(pen[:-1]) * 1e-3 / span * 60.0),
+        "rock_power_W": float(np.sum(work[:-1]) / span),
+        "mean_efficiency": float(np.mean(blows["efficiency"][late])),
+        "mean_efficiency_with_rebound": float(np.mean(blows["efficiency_with_rebound"][late])),
+    })
+    return out

@@ -1,0 +1,119 @@
+"""The drill string and the rock in SI units (theory §4d): ``[rod]``, ``[bit]``, ``[rock]`` in a
+configuration, the dimensionless law they define, the per-blow outputs in SI, and the command line."""
+
+import copy
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from impactbar import physical
+from impactbar.physical.rock import rock_blows, rock_from_config, rock_summary
+
+CONFIG = {
+    "name": "drill-on-rock",
+    "bar": {"E": "210 GPa", "density": "7850 kg/m^3", "length": "450 mm", "diameter": "45 mm"},
+    "stop": {"restitution": 0.0},
+    "drive": {"frequency": "55 Hz"},
+    "force": {"kind": "pneumatic", "mean": "3 kN", "amplitude": "8 kN"},
+    "damping": {"ratio": 0.01},
+    "model": {"n_modes": 4},
+    "rod": {"segments": [{"length": "0.4 m", "diameter": "45 mm"},
+                         {"length": "1.2 m", "diameter": "32 mm", "E": "200 GPa"}]},
+    "bit": {"mass": "1.5 kg"},
+    "rock": {"k": "600 kN/mm", "k_u": "6000 kN/mm", "feed": "5 kN"},
+}
+
+
+def test_the_law_in_model_units():
+    """Lengths in piston lengths, impedances ``E A / c`` and wave speeds relative to the piston's,
+    ``k = K / (m Omega^2)``, the bit in piston masses, the feed in ``m L Omega^2``; Lundberg's
+    ``alpha = K (2 L / c) / Z`` computed in SI is the law's."""
+    h = physical.Hammer.from_config(CONFIG)
+    law = h.model.law
+    assert h.impact == "rodrock" and h.model.impact == "rodrock"
+    b, sc = h.bar, h.scales
+    Z = b.density_kg_m3 * b.wave_speed_m_s * b.area_m2
+    alpha_si = 600e6 * (2 * b.length_m / b.wave_speed_m_s) / Z
+    assert law.alpha(h.model) == pytest.approx(alpha_si, rel=1e-12)
+    g0, g1 = law.segments
+    assert g0.length == pytest.approx(0.4 / 0.45, rel=1e-14) and g0.impedance == pytest.approx(1.0, rel=1e-14)
+    c1 = math.sqrt(200e9 / 7850)
+    assert g1.wave_speed == pytest.approx(c1 / b.wave_speed_m_s, rel=1e-14)
+    assert g1.impedance == pytest.approx(200e9 * math.pi / 4 * 0.032**2 / c1 / Z, rel=1e-12)
+    assert law.rock.gamma == pytest.approx(10.0, rel=1e-14)
+    assert law.bit_mass == pytest.approx(1.5 / b.mass_kg, rel=1e-14)
+    assert law.feed * sc.force_N == pytest.approx(5e3, rel=1e-14)
+    assert h.to_dict()["drill"]["rock_k_N_m"] == pytest.approx(600e6)
+
+
+def test_per_blow_outputs_in_si():
+    """Work on rock in J (model energy times ``m L^2 Omega^2``), penetration per blow in mm, the
+    drilling rate at the blow frequency in m/min, efficiencies; the second half's summary."""
+    h = physical.Hammer.from_config(CONFIG)
+    r = physical.simulate(h, periods=12)
+    out = rock_blows(h, r.trajectory)
+    blows = r.trajectory.impacts
+    assert len(blows) == out["work_on_rock_J"].size == r.impact_times_s.size > 2
+    sc = h.scales
+    j = int(np.argmax(out["work_on_rock_J"]))
+    joules = blows[j].work_on_rock * h.bar.mass_kg * sc.velocity_m_s**2
+    assert out["work_on_rock_J"][j] == pytest.approx(joules, rel=1e-12)
+    mm = blows[j].permanent_penetration * h.bar.length_m * 1e3
+    assert out["penetration_mm"][j] == pytest.approx(mm, rel=1e-12)
+    assert out["drilling_rate_m_min"][j] == pytest.approx(mm * 1e-3 * 55.0 * 60.0, rel=1e-12)
+    assert np.all((out["efficiency"] > 0) & (out["efficiency"] <= out["efficiency_with_rebound"])
+                  & (out["efficiency_with_rebound"] <= 1))
+    s = rock_summary(r)
+    assert s["n_blows"] >= 2 and s["mean_work_on_rock_J"] > 0 and 0 < s["mean_efficiency"] <= 1
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (lambda c: c["rock"].pop("k_u"), r"missing key rock\.k_u"),
+    (lambda c: c["rock"].update(k="600 kN"), r"rock\.k must be a stiffness"),
+    (lambda c: c["rod"]["segments"][0].pop("diameter"), r"exactly one of rod\.segments\[0\]\.diameter"),
+    (lambda c: c["rod"]["segments"][1].update(width="1 m"), r"unknown key rod\.segments\[1\]\.width"),
+    (lambda c: c["bit"].update(size="1 m"), r"unknown key bit\.size"),
+    (lambda c: c.pop("rock"), r"\[rod\] and \[bit\] need a \[rock\] section"),
+    (lambda c: c["rock"].update(k_u="100 kN/mm"), r"rock\.k_u"),
+])
+def test_configuration_errors_name_the_key(edit, message):
+    config = copy.deepcopy(CONFIG)
+    edit(config)
+    with pytest.raises(ValueError, match=message):
+        physical.Hammer.from_config(config)
+
+
+def test_no_rock_section_no_drill():
+    config = {k: v for k, v in CONFIG.items() if k not in ("rod", "bit", "rock")}
+    assert rock_from_config(config, None) is None
+    assert physical.Hammer.from_config(config).drill is None
+
+
+def test_cli_simulate_prints_the_drilling_outputs(tmp_path):
+    """``impactbar simulate examples/rock_drill.toml`` (a ``[rock]`` section) prints the work on rock, the
+    penetration per blow, the drilling rate and the efficiencies, and writes them to summary.json."""
+    import json
+
+    toml = Path(__file__).parents[2] / "examples" / "rock_drill.toml"
+    assert physical.load_config(toml).drill.rock_k_N_m == pytest.approx(470e6)
+    res = subprocess.run([sys.executable, "-m", "impactbar", "simulate", str(toml),
+                          "--out", str(tmp_path / "o"), "--periods", "8"],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    assert "J on rock" in res.stdout and "mm per blow" in res.stdout and "m/min" in res.stdout
+    rock = json.loads((tmp_path / "o" / "summary.json").read_text())["rock"]
+    assert rock["mean_work_on_rock_J"] > 0 and rock["drilling_rate_m_min"] > 0
+
+
+def test_the_docs_example_rock_sits_at_lundbergs_optimum():
+    """docs/physical.md: ``k = 470 kN/mm`` under a 450 mm x 45 mm steel piston gives
+    ``alpha = 1.27`` (Lundberg's optimum 1.2564312 to two digits: theory §4d)."""
+    config = copy.deepcopy(CONFIG)
+    config["rock"] = {"k": "470 kN/mm", "k_u": "4700 kN/mm", "feed": "5 kN"}
+    h = physical.Hammer.from_config(config)
+    assert round(h.model.law.alpha(h.model), 2) == 1.27
+    assert h.model.law.rock.gamma == pytest.approx(10.0)
