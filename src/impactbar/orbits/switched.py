@@ -27,7 +27,8 @@ import numpy as np
 
 from .._shared.status import Admissibility
 from .._shared.validate import check_int, check_real
-from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive, _rate_zero, first_rising_crossing
+from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive
+from ..dynamics._switchkernel import first_rising_crossing, rate_zero
 from ..dynamics.modal import fundamental, step_constant
 from ..model import BarModel
 
@@ -448,7 +449,7 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
         for p, z, h in flights:
             if h <= 0.0:
                 continue
-            t_turn = _rate_zero(d, float(z[1]), p)
+            t_turn = rate_zero(d, float(z[1]), p)
             inner = [float(z[0])] if z is not z0 else []
             if 0.0 < t_turn < h:
                 inner.append(float(_apply(_blocks(w2, d, t_turn), _affine(w2, d, p, t_turn,
