@@ -94,3 +94,21 @@ def test_compiled_crossing_and_pending_order():
     for tp, kp in entries:
         n = SK._push(pt, pk, n, tp, kp)
     assert list(zip(pt[:n].tolist(), pk[:n].tolist(), strict=True)) == sorted(entries)
+
+
+@pytest.mark.parametrize("n", [0, 6])
+def test_pieces_take_the_specialised_impact_search_with_the_same_impacts(n, choose):
+    """Each piece's constant force is a Fourier load of its mean alone, so the flights after an impact
+    or a switch take the specialised certified searches (``simulate.impact_search``): the same
+    impacts and switches, to rounding, as the general search (``find_crossing``)."""
+    choose("simulate.switched_rigid", False)
+    model = BarModel(s=10.0, d=0.1, R=0.5, n_modes=n)
+    drive = PositionSwitchedDrive(stroke=1.3, ret=0.7, switch_out=0.8, delay=0.2)
+    start = InitialState.rigid(-1.2, 0.4, n)
+    fast = simulate(model, drive, start, 60.0)
+    choose("simulate.impact_search", False)
+    ref = simulate(model, drive, start, 60.0)
+    assert fast.n_impacts == ref.n_impacts > 10 and fast.switch_kinds == ref.switch_kinds
+    np.testing.assert_allclose(fast.impact_times, ref.impact_times, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(fast.impact_velocities, ref.impact_velocities, rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(fast.switch_times, ref.switch_times, rtol=0, atol=1e-10)

@@ -38,7 +38,7 @@ from ..drives.switched import PositionSwitchedDrive
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
-from ..loads import Load, PiecewiseConstantLoad
+from ..loads import FourierLoad, Load
 from ..model import MAX_MODES, BarModel
 from .switched import SwitchedTrajectory, rigid_piece, run_compiled, run_switched
 from .trajectory import _CONTACT as _CONTACT
@@ -522,7 +522,7 @@ def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
     otherwise."""
     law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
     rigid = model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid")
-    cores = tuple(_core_for(model, PiecewiseConstantLoad([0.0], [lv])) for lv in (drive.stroke, -drive.ret))
+    cores = tuple(_core_for(model, FourierLoad(lv, [])) for lv in (drive.stroke, -drive.ret))
     if rigid:
         piece = rigid_piece(model)
     else:
