@@ -38,11 +38,13 @@ def main(quick=False):
     for n in (0, 8, 32):
         model = BarModel(s=10.0, d=0.05, R=0.215, n_modes=n)
         o = find_orbit(model, drive)
-        reps = 20 if quick else 100
-        t = time.perf_counter()
-        for _ in range(reps):
-            find_orbit(model, drive)
-        orbit_ms = (time.perf_counter() - t) / reps * 1e3
+        reps = 10 if quick else 50
+        orbit_ms = math.inf
+        for _ in range(5):  # the best of five: the machine's other load only adds
+            t = time.perf_counter()
+            for _ in range(reps):
+                find_orbit(model, drive)
+            orbit_ms = min(orbit_ms, (time.perf_counter() - t) / reps * 1e3)
         k = 2 * math.pi / o.period
         square = SquareWaveLoad(1.0 / k**2, 2 * o.durations[3] / o.period)
         scaled = BarModel(s=10.0 / k, d=0.05 / k, R=0.215, n_modes=n)

@@ -9,7 +9,7 @@ the stop."""
 import numpy as np
 import pytest
 
-from impactbar import BarModel, PositionSwitchedDrive, simulate
+from impactbar import BarModel, PositionSwitchedDrive, find_orbit, simulate
 from impactbar.dynamics import _switchkernel as SK
 from impactbar.simulation import InitialState
 
@@ -112,3 +112,40 @@ def test_pieces_take_the_specialised_impact_search_with_the_same_impacts(n, choo
     np.testing.assert_allclose(fast.impact_times, ref.impact_times, rtol=0, atol=1e-10)
     np.testing.assert_allclose(fast.impact_velocities, ref.impact_velocities, rtol=1e-9, atol=1e-10)
     np.testing.assert_allclose(fast.switch_times, ref.switch_times, rtol=0, atol=1e-10)
+
+
+@pytest.mark.parametrize("M, d", [(9, 0.05), (33, 0.3), (5, 0.0)])
+def test_sampled_end_maximum_matches_the_numpy_flow(M, d, rng):
+    """The admissibility check's compiled sampling (rotations, re-evaluated every 32 samples)
+    against the numpy closed form :func:`impactbar.dynamics.modal.step_constant` on the same grid."""
+    from impactbar.dynamics.modal import step_constant
+
+    w2 = (10.0 * np.pi * np.arange(M)) ** 2
+    c = BarModel(s=10.0, d=d, R=0.5, n_modes=M - 1).end_weights
+    q, v = rng.normal(size=M), rng.normal(size=M)
+    for h, n in ((3.7, 2917), (0.2, 3), (1.0, 400)):
+        Q, _ = step_constant(w2, d, 0.7, q, v, np.linspace(0.0, h, n)[1:-1])
+        ref = float(np.max(c @ Q))
+        assert SK.end_max_sampled(w2, d, 0.7, c, q, v, h, n) == pytest.approx(ref, rel=0, abs=1e-12 * M)
+
+
+@pytest.mark.parametrize("d, delay, R", [(0.0, 0.0, 0.215), (0.2, 0.0, 0.5), (0.1, 0.15, 0.3),
+                                         (0.05, 0.0, 0.9)])
+def test_rigid_fixed_point_is_the_orbit(d, delay, R):
+    """The rigid start of find_orbit (secant on the map of arrival velocities) is the orbit: the
+    closed form of theory §10 without damping and delay, and Newton's fixed point (one step, below
+    the tolerance) with them; the non-trivial multiplier of the 2x2 shortcut is the QR split's."""
+    from impactbar.orbits.switched import _split_multipliers
+
+    drive = PositionSwitchedDrive(stroke=1.2, ret=0.8, switch_out=0.9, delay=delay)
+    v, h1, h3 = SK.rigid_orbit_start(d, R, tuple(drive.kernel_view), 1.0)
+    o = find_orbit(BarModel(s=10.0, d=d, R=R, n_modes=0), drive)
+    assert v == pytest.approx(o.impact_velocity, rel=1e-13)
+    assert (h1, h3) == pytest.approx((o.durations[1], o.durations[3]), rel=1e-12)
+    if d == 0.0 and delay == 0.0:
+        closed = drive.rigid_orbit(R)
+        assert v == pytest.approx(closed["impact_velocity"], rel=1e-14)
+    Phi = o._monodromy
+    f = np.linalg.eig(Phi)[1][:, np.argmin(np.abs(np.linalg.eig(Phi)[0] - 1.0))].real
+    trivial, mu = _split_multipliers(Phi, f)
+    assert sorted([trivial, mu[0]]) == pytest.approx(sorted(np.linalg.eigvals(Phi).real), abs=1e-13)

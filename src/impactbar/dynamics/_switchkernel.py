@@ -189,6 +189,101 @@ def _rigid_piece(d, R, level, q, v, t, t_stop):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _rigid_cycle(d, R, drive, v):
+    """The rigid piston's one-impact cycle from the arrival velocity ``v`` (theory §10): stroke for
+    the delay, return until the gap rises through ``switch_out``, return for the delay, stroke until
+    ``q_0`` rises through 0. Returns the next arrival velocity and the free flight times
+    ``(h1, h3)`` (``inf`` where a crossing does not come)."""
+    ps, pr, tau = drive.stroke, drive.ret, drive.delay
+    q, w = rigid_flight(d, 0.0, -R * v, ps, tau)
+    h1 = first_rising_crossing(d, -q, -w, pr, drive.switch_out)
+    if not math.isfinite(h1):
+        return math.nan, h1, math.inf
+    q, w = rigid_flight(d, q, w, -pr, h1 + tau)
+    h3 = first_rising_crossing(d, q, w, ps, 0.0)
+    if not math.isfinite(h3):
+        return math.nan, h1, h3
+    return rigid_flight(d, q, w, ps, h3)[1], h1, h3
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def rigid_fixed_point(d, R, drive, v0):
+    """The rigid piston's one-impact orbit under a position-switched drive: the fixed point of the
+    map of arrival velocities of :func:`_rigid_cycle`, by the secant method from ``v0`` (its
+    derivative is about ``R^2``). Returns ``(v, h1, h3)``, ``v = nan`` where it fails. The start of
+    Newton's method on the segment problem (``impactbar.orbits.switched``), which confirms it."""
+    a = v0
+    fa, h1, h3 = _rigid_cycle(d, R, drive, a)
+    if not math.isfinite(fa):
+        return math.nan, h1, h3
+    ga = fa - a
+    b = fa
+    for _ in range(60):
+        fb, h1, h3 = _rigid_cycle(d, R, drive, b)
+        if not math.isfinite(fb):
+            return math.nan, h1, h3
+        gb = fb - b
+        if gb == 0.0 or abs(gb) <= 1e-15 * abs(b):
+            return b, h1, h3
+        if gb == ga:
+            return math.nan, h1, h3
+        c = b - gb * (b - a) / (gb - ga)
+        if not c > 0.0:
+            return math.nan, h1, h3
+        a, ga, b = b, gb, c
+    return math.nan, h1, h3
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def end_max_sampled(w2, d, p, c, q, v, h, n):
+    """Largest end displacement ``c . q(t)`` at the interior samples ``t_j = j h / (n - 1)``,
+    ``0 < j < n - 1``, of a flight under the constant force ``p`` from ``(q, v)`` (eq. 8; the
+    samples of ``numpy.linspace(0, h, n)[1:-1]``), every flexible mode underdamped.
+
+    Each flexible mode is ``q_s + e^{-d t / 2} (A cos(l t) + B sin(l t))`` with ``q_s = p / w2``,
+    ``l^2 = w2 - d^2 / 4``; its cosine and sine are advanced from sample to sample by a rotation and
+    evaluated afresh every 32 samples (rounding stays near the machine epsilon). The rigid mode is
+    in closed form (theory §10).
+    """
+    M = w2.size
+    step = h / (n - 1)
+    lam = np.empty(M)
+    A = np.empty(M)
+    Bc = np.empty(M)
+    cr = np.empty(M)
+    sr = np.empty(M)
+    cs = np.empty(M)
+    sn = np.empty(M)
+    static = 0.0
+    for i in range(1, M):
+        lam[i] = math.sqrt(w2[i] - 0.25 * d * d)
+        qs = p / w2[i]
+        static += c[i] * qs
+        A[i] = q[i] - qs
+        Bc[i] = (v[i] + 0.5 * d * A[i]) / lam[i]
+        cr[i] = math.cos(lam[i] * step)
+        sr[i] = math.sin(lam[i] * step)
+    worst = -math.inf
+    for j in range(1, n - 1):
+        t = j * step
+        fresh = (j - 1) % 32 == 0
+        acc = 0.0
+        for i in range(1, M):
+            if fresh:
+                cs[i] = math.cos(lam[i] * t)
+                sn[i] = math.sin(lam[i] * t)
+            else:
+                a = cs[i] * cr[i] - sn[i] * sr[i]
+                sn[i] = sn[i] * cr[i] + cs[i] * sr[i]
+                cs[i] = a
+            acc += c[i] * (A[i] * cs[i] + Bc[i] * sn[i])
+        val = c[0] * rigid_flight(d, q[0], v[0], p, t)[0] + static + math.exp(-0.5 * d * t) * acc
+        if val > worst:
+            worst = val
+    return worst
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def _push(pend_t, pend_k, n, t, k):
     """Insert the switch ``(t, k)`` into the first ``n`` entries, kept sorted as Python sorts the
     tuples ``(t, k)``."""
@@ -342,6 +437,12 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
                 cnt[_LS] += 1
     clock[0] = t
     return DONE
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def rigid_orbit_start(d, R, drive, v0):
+    """:func:`rigid_fixed_point` called from Python, with the drive's view as a plain tuple."""
+    return rigid_fixed_point(d, R, DriveKernelView(*drive), v0)
 
 
 @numba.njit(cache=CACHE, nogil=True)
