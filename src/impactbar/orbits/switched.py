@@ -32,7 +32,7 @@ from ..dynamics._switchkernel import end_max_sampled, first_rising_crossing, rat
 from ..dynamics.modal import fundamental, step_constant
 from ..model import BarModel
 
-__all__ = ["SwitchedOrbit", "find_switched_orbit"]
+__all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_at"]
 
 
 @dataclass(frozen=True)
@@ -59,6 +59,9 @@ class SwitchedOrbit:
         rounding of the monodromy matrix).
     admissibility : Admissibility
         Whether the motion is physical (sampled check, theory §5 and §10).
+    switch_velocity : float
+        The gap's rate ``y' = -q_0'`` where it rises through ``switch_out``: 0 where the orbit
+        grazes the switching surface (theory §10).
     """
 
     model: BarModel
@@ -70,7 +73,18 @@ class SwitchedOrbit:
     multipliers: np.ndarray
     trivial_multiplier: float
     admissibility: Admissibility
+    switch_velocity: float = math.nan
     _monodromy: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def impact_velocities(self) -> np.ndarray:
+        """``(1,)``: :attr:`impact_velocity` as an array (as a branch's orbits have them)."""
+        return np.array([self.impact_velocity])
+
+    @property
+    def admissible(self) -> bool:
+        """Whether :attr:`admissibility` is ``"admissible"``."""
+        return self.admissibility == Admissibility.ADMISSIBLE
 
     @property
     def blow_frequency(self) -> float:
@@ -352,17 +366,27 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
         keep = np.r_[0:2 * M, 2 * M + 1]
         X[keep] += np.linalg.solve(Jac[np.ix_(keep, keep)], -r[keep])
     X = _newton(model, drive, X, tol, max_iter, consts)
-    z0 = X[:2 * M]
+    return orbit_at(model, drive, X)
+
+
+def orbit_at(model: BarModel, drive: PositionSwitchedDrive, X) -> SwitchedOrbit:
+    """The orbit of a solution ``X = (state after the impact, h1, h3)`` of the segment problem:
+    multipliers from the monodromy matrix, admissibility (theory §10). Used by
+    :func:`find_switched_orbit` and by the continuation of switched orbits."""
+    M = model.n_modes + 1
+    X = np.asarray(X, dtype=float)
+    z0 = X[:2 * M].copy()
     durations = np.array([drive.delay, X[2 * M], drive.delay, X[2 * M + 1]])
     Phi = _monodromy(model, drive, z0, durations)
-    za, _, _, zd = _legs(model, drive, z0, durations)
+    za, zb, _, zd = _legs(model, drive, z0, durations)
     f = _field(_w2(model), model.d, drive.level(RETURN), za)
     trivial, nontrivial = _split_multipliers(Phi, f)
     c = model.end_weights
     return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)), durations=durations,
                          state=z0, impact_velocity=float(c @ zd[M:]), multipliers=nontrivial,
                          trivial_multiplier=trivial,
-                         admissibility=_admissibility(model, drive, z0, durations), _monodromy=Phi)
+                         admissibility=_admissibility(model, drive, z0, durations),
+                         switch_velocity=float(-zb[M]), _monodromy=Phi)
 
 
 def _newton(model, drive, X, tol, max_iter, consts=None):

@@ -535,7 +535,7 @@ def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
 
     if law.instantaneous and use_fast("simulate.switched_kernel"):
         return run_compiled(model, drive, q, v, t0, t_end, max_imp, piece, InitialState, cores, rigid,
-                            use_fast("simulate.impact_search"))
+                            use_fast("simulate.impact_search"), CHATTER_TAIL)
     return run_switched(model, drive, q, v, t0, t_end, max_imp, piece, InitialState)
 
 

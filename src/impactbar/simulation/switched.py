@@ -329,25 +329,24 @@ _FIRST_CAP = 256
 
 
 def run_compiled(model: BarModel, drive: PositionSwitchedDrive, q, v, t0: float, t_end: float,
-                 max_imp: int, piece, make_state, cores, rigid: bool,
-                 fast_search: bool) -> SwitchedTrajectory:
+                 max_imp: int, piece, make_state, cores, rigid: bool, fast_search: bool,
+                 tail: float) -> SwitchedTrajectory:
     """The valve's event loop compiled (:func:`impactbar.dynamics._switchkernel.run_switched`),
     with the same pieces, impacts and switches as :func:`run_switched` (theory §10).
 
     ``cores`` are the driver's data of the one-piece loads ``+stroke`` and ``-ret``; with ``rigid``
     the rigid bar's pieces take the closed forms of :func:`rigid_piece`; a piece the compiled loop
     hands back (a touch without an impact, and the like) is run by ``piece``; ``fast_search``
-    chooses the driver's impact search (``simulate.impact_search``).
+    chooses the driver's impact search (``simulate.impact_search``); ``tail`` is the driver's
+    chatter tolerance (``CHATTER_TAIL``).
     """
     loop = _Valve(model, drive, np.array(q, dtype=float), np.array(v, dtype=float), t0, t_end, max_imp)
     views = tuple(tuple(core.data) for core in cores)
     B = tuple(cores[0].free.view)
     R, c = cores[0].R, cores[0].c
-    from .simulate import CHATTER_TAIL
-
     dview = tuple(drive.kernel_view)
     M = loop.q.size
-    clock = np.array([t0, t_end, CHATTER_TAIL])
+    clock = np.array([t0, t_end, tail])
     ints = np.zeros(6, dtype=np.int64)
     pend_t = np.empty(_PEND_CAP)
     pend_k = np.empty(_PEND_CAP, dtype=np.int64)
