@@ -76,3 +76,16 @@ def test_missing_and_unknown_sections_are_named():
         Drifter.from_config({**DRIFTER_PRESETS["drifter-issue19"], "force": {}})
     with pytest.raises(ValueError, match="unknown drifter preset"):
         drifter_preset("nope")
+
+
+def test_physical_page_quotes_the_preset_as_computed():
+    import re
+    from pathlib import Path
+
+    text = re.sub(r"\s+", " ", (Path(__file__).resolve().parents[2] / "docs" / "physical.md").read_text())
+    m = re.search(r"`R = 0.215`\): ([0-9.]+) m/s, ([0-9.]+) Hz, ([0-9.]+) J, ([0-9.]+) kW", text)
+    o = drifter_preset("drifter-issue19").orbit()
+    for quoted, value in zip(m.groups(), (o.impact_velocity_m_s, o.blow_frequency_Hz, o.impact_energy_J,
+                                          o.percussive_power_kW), strict=True):
+        decimals = len(quoted.split(".")[1])
+        assert abs(float(quoted) - value) <= 0.5 * 10.0**-decimals
