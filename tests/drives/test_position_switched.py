@@ -57,8 +57,8 @@ def test_drive_is_frozen_and_refused_by_the_time_periodic_machinery():
         periodic_orbits(model, drive)
     with pytest.raises(ValueError, match="no harmonics"):
         drive.harmonics()
-    with pytest.raises(ValueError, match="not implemented"):
-        continue_orbit(find_orbit(model, drive), "R", to=0.6)
+    with pytest.raises(ValueError, match="parameter must be one of"):  # a load's parameter
+        continue_orbit(find_orbit(model, drive), "kappa", to=1.5)
     with pytest.raises(ValueError, match="impacts"):
         find_orbit(model, drive, impacts=2)
     with pytest.raises(ValueError, match="paper"):

@@ -28,8 +28,9 @@ def add_parser(sub) -> None:
     )
     add_bar_and_load_arguments(p, d=0.05, n_modes=4, p0=0.7)
     cg = p.add_argument_group("continuation")
-    cg.add_argument("--parameter", required=True, choices=("p0", "pk", "R", "d", "s", "q", "kappa"),
-                    help="the parameter that varies")
+    cg.add_argument("--parameter", required=True,
+                    choices=("p0", "pk", "R", "d", "s", "q", "kappa", "stroke", "ret", "switch_out", "delay"),
+                    help="the parameter that varies (stroke, ret, switch_out, delay: a drifter's valve)")
     cg.add_argument("--to", type=float, required=True, help="its target value")
     cg.add_argument("--impacts", type=int, default=1, help="impacts m per period of the motion (default 1)")
     cg.add_argument("--periods", type=int, default=1, help="load periods n per period of the motion "
@@ -127,6 +128,12 @@ def run(args) -> int:
 
     check_options(args)
     out = output_folder(args.out)
+    if getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None:
+        from .drifter import drifter_from_args, run_drifter_continue
+
+        drifter = drifter_from_args(args)  # a valve switched on the piston's position (theory §10)
+        if drifter is not None:
+            return run_drifter_continue(args, drifter, out)
     model, load = _model_and_load(args)
     if args.doublings < 0:
         raise ValueError(f"--doublings must be >= 0; got {args.doublings}")

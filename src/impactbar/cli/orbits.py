@@ -82,7 +82,12 @@ def check_options(args) -> None:
 def run(args) -> int:
     check_options(args)
     if getattr(args, "config", None) or getattr(args, "preset", None):
+        from .drifter import drifter_from_args, run_drifter_orbits
         from .physical import run_physical_orbits
+
+        drifter = drifter_from_args(args)  # a valve switched on the piston's position (theory §10)
+        if drifter is not None:
+            return run_drifter_orbits(args, drifter)
 
         return run_physical_orbits(args)
     from .. import BarModel, periodic_orbits

@@ -24,8 +24,11 @@ def add_physical_arguments(parser) -> None:
              "pneumatic|hydraulic|measured, ...; [model] n_modes); see "
              f"{docs_page('Real hammers in SI units')}")
     parser.add_argument(
-        "--preset", default=None, metavar="NAME", choices=sorted(physical.PRESETS),
-        help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}")
+        "--preset", default=None, metavar="NAME",
+        choices=sorted(physical.PRESETS) + sorted(physical.DRIFTER_PRESETS),
+        help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}; or a drifter whose "
+             f"valve switches on the piston's position (theory section 10): "
+             f"{', '.join(sorted(physical.DRIFTER_PRESETS))} (a config with a [valve] section is one too)")
 
 
 def add_impact_argument(parser) -> None:

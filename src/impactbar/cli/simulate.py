@@ -43,7 +43,12 @@ def add_parser(subparsers) -> None:
 def run(args) -> int:
     """Run the simulation and write the outputs; returns the exit status."""
     from ..physical.units import to_si
+    from .drifter import drifter_from_args, run_drifter_simulate
 
+    drifter = drifter_from_args(args)  # a valve switched on the piston's position (theory §10)
+    if drifter is not None:
+        gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")
+        return run_drifter_simulate(args, drifter, output_folder(args.out), gap)
     hammer = hammer_from_args(args)
     gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")
     require("matplotlib")

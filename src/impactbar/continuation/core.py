@@ -19,7 +19,6 @@ from scipy.optimize import brentq
 
 from .._shared.status import BranchStatus, EventKind
 from .._shared.threads import single_threaded_blas
-from .._shared.validate import check_real
 from ..loads import PiecewiseConstantLoad
 from ..orbits.multi_impact import (
     _build,
@@ -35,6 +34,7 @@ from ..orbits.switched import SwitchedOrbit
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
+from .switched import checked_events, continue_switched
 
 __all__ = ["continue_orbit", "EVENT_KINDS"]
 
@@ -152,10 +152,13 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
 
     Parameters
     ----------
-    orbit : PeriodicOrbit, MultiImpactOrbit or BranchEvent
+    orbit : PeriodicOrbit, MultiImpactOrbit, BranchEvent or SwitchedOrbit
         The start. A ``"period-doubling"`` :class:`BranchEvent` starts the doubled branch (``2 m``
         impacts in ``2 n`` periods) from the event, along the bifurcating direction (branch
-        switching).
+        switching). A :class:`~impactbar.SwitchedOrbit` (a position-switched drive, unknown
+        period) is followed in ``"stroke"``, ``"ret"``, ``"switch_out"``, ``"delay"``, ``"R"``,
+        ``"d"`` or ``"s"``, with the grazing of the switching surface among the events (theory
+        §10; :func:`impactbar.continuation.switched.continue_switched`).
     parameter : str
         One of ``"p0"``, ``"pk"`` (a :class:`CosineLoad`), ``"q"``, ``"kappa"`` (a
         :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`).
@@ -205,10 +208,10 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         base = orbit.orbit
     elif isinstance(orbit, PeriodicOrbit):
         base = orbit
-    elif isinstance(orbit, SwitchedOrbit):
-        raise ValueError("continuation of an orbit under a PositionSwitchedDrive (unknown period, "
-                         "theory §10) is not implemented yet: solve find_orbit(model, drive, guess=orbit) "
-                         "along the parameter's values instead")
+    elif isinstance(orbit, SwitchedOrbit):  # an autonomous orbit, unknown period (theory §10)
+        return continue_switched(orbit, parameter, to, _detect, events=events, stop_on=stop_on, xtol=xtol,
+                                 settings=_settings(settings, step=step, max_step=max_step,
+                                                    min_step=min_step, max_points=max_points, tol=tol))
     else:
         raise ValueError(f"orbit must be a PeriodicOrbit, MultiImpactOrbit or BranchEvent; got "
                          f"{type(orbit).__name__}")
@@ -219,11 +222,7 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
     settings = _settings(settings, step=step, max_step=max_step, min_step=min_step,
                          max_points=max_points, tol=tol)
     steps = settings.steps(abs(to - lam0))
-    xtol = check_real("xtol", xtol, lo=0.0, lo_open=True, hi=1e-2)
-    stop_on = tuple(stop_on)
-    for k in stop_on:
-        if k not in EVENT_KINDS:
-            raise ValueError(f"stop_on must hold event kinds from {EVENT_KINDS}; got {k!r}")
+    stop_on, xtol = checked_events(stop_on, xtol)
     direction = 1.0 if to > lam0 else -1.0
     m, n = (2 * base.impacts, 2 * base.periods) if switch is not None else (base.impacts, base.periods)
     problem = _OrbitProblem(model, load, parameter, m, n, settings.tol, events=events,

@@ -15,8 +15,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 from .._shared.validate import check_real
+from ..dynamics.kernelview import DriveKernelView
 
 __all__ = ["PositionSwitchedDrive", "STROKE", "RETURN", "first_rising_crossing"]
 
@@ -95,6 +97,11 @@ class PositionSwitchedDrive:
                                                           lo_open=True))
         object.__setattr__(self, "delay", check_real("delay", self.delay, lo=0.0))
 
+    @cached_property
+    def kernel_view(self) -> DriveKernelView:
+        """The drive as the compiled valve loop reads it (built once)."""
+        return DriveKernelView(self.stroke, self.ret, self.switch_out, self.delay)
+
     def level(self, state: int) -> float:
         """The force ``p`` in valve state ``state`` (``STROKE = 0``: ``+stroke``; ``RETURN = 1``:
         ``-ret``)."""
@@ -128,108 +135,24 @@ class PositionSwitchedDrive:
                 "switch_time": t1, "multiplier": R * R}
 
 
-def _gap(d: float, y0: float, w0: float, a: float, t: float) -> tuple[float, float]:
-    """Gap and its rate after ``t`` under ``y'' + d y' = a`` from ``(y0, w0)`` (closed form)."""
-    if d == 0.0:
-        return y0 + t * (w0 + 0.5 * a * t), w0 + a * t
-    e = math.exp(-d * t)
-    b = -math.expm1(-d * t) / d  # int_0^t e^{-d s} ds
-    y = d * t
-    c = t * t * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0) if abs(y) < 1e-3 else (t - b) / d
-    return y0 + w0 * b + a * c, w0 * e + a * b
-
-
 def first_rising_crossing(d: float, y0: float, w0: float, a: float, level: float) -> float:
-    """First ``t > 0`` at which the gap ``y`` rises through ``level`` under ``y'' + d y' = a``.
+    """First ``t > 0`` at which the gap rises through ``level`` under ``y'' + d y' = a``, ``inf`` if
+    never (theory §10).
 
-    The rate ``y' = w0 e^{-d t} + a b(t)`` is monotone in ``t`` (its derivative ``(a - d w0)
-    e^{-d t}`` keeps its sign), so ``y`` has at most one turning point and at most one rising
-    crossing of any level: no crossing can be missed. It is bracketed on the rising piece and
-    refined to rounding by Newton's method, which converges monotonically there (``y`` is convex
-    or concave throughout) (theory §10).
+    The compiled closed form of the valve loop,
+    :func:`impactbar.dynamics._switchkernel.first_rising_crossing`, imported on first use so that
+    ``import impactbar`` does not load numba.
 
     Parameters
     ----------
-    d : float
-        Damping, ``>= 0``.
-    y0, w0 : float
-        Gap and its rate at ``t = 0``.
-    a : float
-        Constant acceleration of the gap (``-p``).
-    level : float
-        The switch position.
+    d, y0, w0, a, level : float
+        Damping (``>= 0``), the gap and its rate at ``t = 0``, the gap's constant acceleration
+        (``-p``) and the switch position.
 
     Returns
     -------
     float
-        The crossing time, ``inf`` if there is none.
     """
-    if d == 0.0 and a == 0.0:
-        if w0 <= 0.0 or y0 >= level:
-            return math.inf
-        return (level - y0) / w0
-    # the rising piece [t_lo, t_hi] of y (t_hi may be infinite)
-    slope = a - d * w0  # sign of y''
-    if w0 > 0.0:
-        t_lo = 0.0
-        if slope >= 0.0:
-            t_hi = math.inf
-        else:  # y' falls to 0 at t* (if ever)
-            t_hi = _rate_zero(d, w0, a)
-    else:
-        if slope <= 0.0:
-            return math.inf  # y' <= 0 for ever
-        t_lo = _rate_zero(d, w0, a) if w0 < 0.0 else 0.0
-        if not math.isfinite(t_lo):
-            return math.inf
-        t_hi = math.inf
-    y_lo = _gap(d, y0, w0, a, t_lo)[0]
-    if y_lo >= level:  # starts at or above the level moving up: no rising crossing ahead
-        return math.inf
-    if not math.isfinite(t_hi):
-        h = max(1.0, t_lo)
-        t_hi = t_lo + h
-        while _gap(d, y0, w0, a, t_hi)[0] < level:
-            h *= 2.0
-            t_hi = t_lo + h
-            if h > 1e300:  # the gap tends to a finite limit below the level
-                return math.inf
-    elif _gap(d, y0, w0, a, t_hi)[0] < level:
-        return math.inf
-    if d == 0.0:  # the rising root of a t^2/2 + w0 t + y0 - level = 0, in its stable form
-        r = math.sqrt(max(w0 * w0 + 2.0 * a * (level - y0), 0.0))  # the rate at the crossing
-        return 2.0 * (level - y0) / (w0 + r) if w0 >= 0.0 else (r - w0) / a
-    # y'' = (a - d w0) e^{-d t} keeps its sign: y is convex or concave. Newton from the end of the
-    # bracket on the level's far side converges monotonically to the one root (no overshoot): from
-    # the upper end where y is convex, from the lower end where it is concave.
-    t = t_hi if slope > 0.0 else t_lo
-    sign = 0.0
-    for _ in range(200):
-        y, w = _gap(d, y0, w0, a, t)
-        if w <= 0.0:
-            break
-        step = (y - level) / w
-        if step == 0.0 or step * sign < 0.0:  # an overshoot can only be rounding: done
-            break
-        sign = step
-        t_new = min(max(t - step, t_lo), t_hi)
-        if t_new == t:
-            break
-        t = t_new
-    return t
+    from ..dynamics._switchkernel import first_rising_crossing as compiled
 
-
-def _rate_zero(d: float, w0: float, a: float) -> float:
-    """The time ``y' = 0`` (``inf`` if never): ``w0 e^{-d t} + a b(t) = 0``."""
-    if d == 0.0:
-        t = -w0 / a if a != 0.0 else math.inf
-        return t if t > 0.0 else math.inf
-    # w0 e^{-dt} + (a/d)(1 - e^{-dt}) = 0  ->  e^{-dt} = (a/d) / (a/d - w0)
-    r = a / d
-    den = r - w0
-    if den == 0.0:
-        return math.inf
-    x = r / den
-    if not 0.0 < x < 1.0:
-        return math.inf
-    return -math.log(x) / d
+    return float(compiled(float(d), float(y0), float(w0), float(a), float(level)))

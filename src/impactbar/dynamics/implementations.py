@@ -25,6 +25,9 @@ name                          fast (default)                       reference
 ``simulate.switched_rigid``   rigid bar under a position-          the general driver, piece by
                               switched drive in scalar closed      piece (theory §10)
                               forms
+``simulate.switched_kernel``  compiled valve loop under a          the valve's loop in Python, piece
+                              position-switched drive, every       by piece (theory §10)
+                              piece in one call
 ``wave.residual``             compiled wave-law phase residual     ``wave_orbit_states`` phase by
                               of a piecewise-constant load         phase
 ``rock.blow``                 compiled loop of a blow on the rod   the numpy loop
@@ -65,6 +68,7 @@ IMPLEMENTATIONS: dict[str, str] = {
     "simulate.impact_search": "specialised certified searches after an impact",
     "simulate.wave_separation": "compiled characteristics solver for contact windows that lose contact",
     "simulate.switched_rigid": "rigid bar under a position-switched drive in scalar closed forms",
+    "simulate.switched_kernel": "compiled valve loop under a position-switched drive",
     "wave.residual": "compiled wave-law phase residual of a piecewise-constant load",
     "sweeps.create_store": "sweep store written by zarr alone (without xarray)",
     "rock.blow": "compiled loop of a blow on the rod and the rock",

@@ -27,11 +27,12 @@ import numpy as np
 
 from .._shared.status import Admissibility
 from .._shared.validate import check_int, check_real
-from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive, _rate_zero, first_rising_crossing
+from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive
+from ..dynamics._switchkernel import end_max_sampled, first_rising_crossing, rate_zero, rigid_orbit_start
 from ..dynamics.modal import fundamental, step_constant
 from ..model import BarModel
 
-__all__ = ["SwitchedOrbit", "find_switched_orbit"]
+__all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_at"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,9 @@ class SwitchedOrbit:
         rounding of the monodromy matrix).
     admissibility : Admissibility
         Whether the motion is physical (sampled check, theory §5 and §10).
+    switch_velocity : float
+        The gap's rate ``y' = -q_0'`` where it rises through ``switch_out``: 0 where the orbit
+        grazes the switching surface (theory §10).
     """
 
     model: BarModel
@@ -69,7 +73,18 @@ class SwitchedOrbit:
     multipliers: np.ndarray
     trivial_multiplier: float
     admissibility: Admissibility
+    switch_velocity: float = math.nan
     _monodromy: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def impact_velocities(self) -> np.ndarray:
+        """``(1,)``: :attr:`impact_velocity` as an array (as a branch's orbits have them)."""
+        return np.array([self.impact_velocity])
+
+    @property
+    def admissible(self) -> bool:
+        """Whether :attr:`admissibility` is ``"admissible"``."""
+        return self.admissibility == Admissibility.ADMISSIBLE
 
     @property
     def blow_frequency(self) -> float:
@@ -212,13 +227,21 @@ def _matrix(E):
     return out
 
 
-def _residual(model, drive, X):
-    """Residual and exact Jacobian of the segment problem (unknowns: state after the impact,
-    ``h1``, ``h3``), with the flows as per-mode 2x2 blocks."""
+def _constants(model):
+    """What the residual needs of the model, computed once per solve: ``(w2, c, Jv)``, ``Jv`` the
+    impact law (eq. 10) as the diagonal ``(1, .., 1, -R, .., -R)``."""
     M = model.n_modes + 1
-    c = model.end_weights
-    w2, d = _w2(model), model.d
-    ps, pr = drive.level(STROKE), drive.level(RETURN)
+    R = model.law.kernel_restitution(model)
+    return _w2(model), model.end_weights, np.concatenate((np.ones(M), np.full(M, -R)))
+
+
+def _residual(model, drive, X, consts=None):
+    """Residual and exact Jacobian of the segment problem (unknowns: state after the impact,
+    ``h1``, ``h3``), with the flows as per-mode 2x2 blocks; ``consts`` from :func:`_constants`."""
+    M = model.n_modes + 1
+    w2, c, Jv = consts if consts is not None else _constants(model)
+    d = model.d
+    ps, pr = drive.stroke, -drive.ret
     z0, h1, h3 = X[:2 * M], X[2 * M], X[2 * M + 1]
     tau = drive.delay
     E1, E3 = _blocks(w2, d, h1), _blocks(w2, d, h3)
@@ -230,7 +253,6 @@ def _residual(model, drive, X):
     zb = _apply(E1, _affine(w2, d, pr, h1, E1), za)
     zc = _apply(Et, _affine(w2, d, pr, tau, Et), zb) if tau else zb
     zd = _apply(E3, _affine(w2, d, ps, h3, E3), zc)
-    Jv = np.concatenate((np.ones(M), np.full(M, -model.law.kernel_restitution(model))))  # eq. 10
     r = np.empty(2 * M + 2)
     r[:2 * M] = z0 - Jv * zd
     r[2 * M] = -zb[0] - drive.switch_out
@@ -256,13 +278,19 @@ def _residual(model, drive, X):
 
 
 def _rigid_guess(model, drive):
-    """Start of Newton: the rigid undamped undelayed orbit in closed form (theory §10)."""
+    """Start of Newton for the rigid bar: the fixed point of the rigid piston's map of arrival
+    velocities (compiled closed forms, :func:`impactbar.dynamics._switchkernel.rigid_fixed_point`),
+    from the undamped undelayed orbit in closed form (theory §10), which is the start itself where
+    the map's iteration fails."""
     M = model.n_modes + 1
-    R = min(model.R, 0.999)
-    o = drive.rigid_orbit(R)
+    R = model.law.kernel_restitution(model)
+    o = drive.rigid_orbit(min(model.R, 0.999))
+    v, h1, h3 = rigid_orbit_start(float(model.d), float(R), tuple(drive.kernel_view), o["impact_velocity"])
+    if not math.isfinite(v):
+        v, h1, h3 = o["impact_velocity"], o["switch_time"], o["period"] - o["switch_time"]
     z0 = np.zeros(2 * M)
-    z0[M] = -R * o["impact_velocity"]
-    return np.concatenate((z0, [o["switch_time"], o["period"] - o["switch_time"]]))
+    z0[M] = -R * v
+    return np.concatenate((z0, [h1, h3]))
 
 
 def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: int = 1, guess=None,
@@ -322,8 +350,9 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
                          "(with R = 1 no energy leaves and the blows grow without bound)")
     M = model.n_modes + 1
     if guess is None and M > 1:  # the rigid bar's orbit (same damping and delay), then lifted
-        rigid = find_switched_orbit(model.with_(n_modes=0), drive, tol=tol, max_iter=max_iter)
-        X = np.concatenate((_padded(rigid.state, M), rigid.durations[[1, 3]]))
+        rigid = model.with_(n_modes=0)
+        Xr = _newton(rigid, drive, _rigid_guess(rigid, drive), tol, max_iter)
+        X = np.concatenate((_padded(Xr[:2], M), Xr[2:]))
     elif guess is None:
         X = _rigid_guess(model, drive)
     elif isinstance(guess, SwitchedOrbit):
@@ -331,12 +360,45 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     else:
         state, h1, h3 = guess
         X = np.concatenate((_padded(np.asarray(state, dtype=float), M), [float(h1), float(h3)]))
+    consts = _constants(model)
     if guess is None and M > 1:  # the flexible modes at the rigid switch time: one Newton step
-        r, Jac = _residual(model, drive, X)  # without the switch condition, h1 kept
+        r, Jac = _residual(model, drive, X, consts)  # without the switch condition, h1 kept
         keep = np.r_[0:2 * M, 2 * M + 1]
         X[keep] += np.linalg.solve(Jac[np.ix_(keep, keep)], -r[keep])
+    X = _newton(model, drive, X, tol, max_iter, consts)
+    return orbit_at(model, drive, X)
+
+
+def orbit_at(model: BarModel, drive: PositionSwitchedDrive, X) -> SwitchedOrbit:
+    """The orbit of a solution ``X = (state after the impact, h1, h3)`` of the segment problem:
+    multipliers from the monodromy matrix, admissibility (theory §10). Used by
+    :func:`find_switched_orbit` and by the continuation of switched orbits."""
+    M = model.n_modes + 1
+    X = np.asarray(X, dtype=float)
+    z0 = X[:2 * M].copy()
+    durations = np.array([drive.delay, X[2 * M], drive.delay, X[2 * M + 1]])
+    Phi = _monodromy(model, drive, z0, durations)
+    za, zb, _, zd = _legs(model, drive, z0, durations)
+    f = _field(_w2(model), model.d, drive.level(RETURN), za)
+    trivial, nontrivial = _split_multipliers(Phi, f)
+    c = model.end_weights
+    return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)), durations=durations,
+                         state=z0, impact_velocity=float(c @ zd[M:]), multipliers=nontrivial,
+                         trivial_multiplier=trivial,
+                         admissibility=_admissibility(model, drive, z0, durations),
+                         switch_velocity=float(-zb[M]), _monodromy=Phi)
+
+
+def _newton(model, drive, X, tol, max_iter, consts=None):
+    """Newton's method on the segment problem from ``X`` (damped while the flight times would
+    change by more than a half). It stops when a step is below ``tol`` (relative), or when the
+    next step, predicted from quadratic convergence (``|s_k|^2 / |s_(k-1)|``), would be: that
+    saves the last residual, whose only use would be to see the step vanish."""
+    M = model.n_modes + 1
+    consts = consts if consts is not None else _constants(model)
+    last = math.inf
     for _ in range(max_iter):
-        r, Jac = _residual(model, drive, X)
+        r, Jac = _residual(model, drive, X, consts)
         step = np.linalg.solve(Jac, -r)
         big = np.max(np.abs(step[2 * M:]) / np.abs(X[2 * M:]))
         if big > 0.5:  # damped while far: the flight times change by at most a half
@@ -345,22 +407,14 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
         if X[2 * M] <= 0.0 or X[2 * M + 1] <= 0.0:
             raise ValueError("Newton left the region of positive flight times: give a guess closer "
                              "to the orbit (e.g. from simulate)")
-        if np.max(np.abs(step)) <= tol * max(1.0, np.max(np.abs(X))):
-            break
-    else:
-        raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
-                         f"{np.max(np.abs(step)):.2e})")
-    z0 = X[:2 * M]
-    durations = np.array([drive.delay, X[2 * M], drive.delay, X[2 * M + 1]])
-    Phi = _monodromy(model, drive, z0, durations)
-    za, _, _, zd = _legs(model, drive, z0, durations)
-    f = _field(_w2(model), model.d, drive.level(RETURN), za)
-    trivial, nontrivial = _split_multipliers(Phi, f)
-    c = model.end_weights
-    return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)), durations=durations,
-                         state=z0, impact_velocity=float(c @ zd[M:]), multipliers=nontrivial,
-                         trivial_multiplier=trivial,
-                         admissibility=_admissibility(model, drive, z0, durations), _monodromy=Phi)
+        size = float(np.max(np.abs(step)))
+        scale = tol * max(1.0, float(np.max(np.abs(X))))
+        if size <= scale or (big <= 0.5 and math.isfinite(last) and size < 1e-4 * last
+                             and size * size <= scale * last):
+            return X
+        last = size
+    raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
+                     f"{np.max(np.abs(step)):.2e})")
 
 
 def _padded(state, M):
@@ -413,6 +467,9 @@ def _split_multipliers(Phi, f):
     ``(f/|f|, B)`` is block upper triangular (``Phi f = f``)."""
     n = f.size
     fhat = f / np.linalg.norm(f)
+    if n == 2:  # the rigid bar: P = Q^T Phi Q is triangular, so mu = trace - P[0, 0]
+        trivial = float(fhat @ Phi @ fhat)
+        return trivial, np.array([float(np.trace(Phi)) - trivial])
     Q, _ = np.linalg.qr(np.column_stack((fhat, np.eye(n))))
     Q = Q[:, :n]
     Q[:, 0] = fhat
@@ -448,7 +505,7 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
         for p, z, h in flights:
             if h <= 0.0:
                 continue
-            t_turn = _rate_zero(d, float(z[1]), p)
+            t_turn = rate_zero(d, float(z[1]), p)
             inner = [float(z[0])] if z is not z0 else []
             if 0.0 < t_turn < h:
                 inner.append(float(_apply(_blocks(w2, d, t_turn), _affine(w2, d, p, t_turn,
@@ -461,12 +518,16 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
     n = max(samples, int(8 * model.s * model.n_modes * sum(durations)))
     worst = -math.inf
     scale = max(1.0, float(np.max(np.abs(z0[:M]))))
+    under = bool(np.all(w2[1:] > 0.25 * d * d))  # every flexible mode underdamped: compiled
     for p, z, h in flights:
-        if h <= 0.0:
+        if h <= 0.0 or n < 3:
+            continue
+        if under:
+            worst = max(worst, float(end_max_sampled(w2, d, p, c, z[:M], z[M:], h, n)))
             continue
         t = np.linspace(0.0, h, n)[1:-1]
         q, _ = step_constant(w2, d, p, z[:M], z[M:], t)
-        worst = max(worst, float(np.max(c @ q)) if t.size else -math.inf)
+        worst = max(worst, float(np.max(c @ q)))
     if worst > 1e-12 * scale:
         return Admissibility.PENETRATES
     if c @ z0[M:] >= 0.0 and model.R > 0.0:

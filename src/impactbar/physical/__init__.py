@@ -43,9 +43,11 @@ Unknown keys are refused, naming the key.
 
 Layout: ``units`` (pint parsing, lazily imported), ``bar`` (the piston, the short-impact limit),
 ``forces`` (pneumatic, hydraulic, measured), ``config`` (the keys of a TOML config, their checks,
-the presets' data), ``hammer`` (scales and the dimensionless model; a hammer from a config, a TOML
-file or a preset), ``results`` (orbits and simulations in SI), ``rock`` (the drill string and
-the rock: the rod-rock law in SI and the drilling outputs per blow). This layer sits on
+the presets' data), ``drifter`` (a hydraulic drifter whose valve switches on the piston's position,
+theory §10: supply pressure, piston areas, switch position, valve delay; its presets), ``hammer``
+(scales and the dimensionless model; a hammer from a config, a TOML file or a preset), ``results``
+(orbits and simulations in SI), ``rock`` (the drill string and the rock: the rod-rock law in SI and
+the drilling outputs per blow). This layer sits on
 the core (``impactbar.model``, ``loads``, ``orbits``, ``simulation``) and may import pint; the core
 never imports it.
 """
@@ -54,6 +56,10 @@ from .bar import SHORT_IMPACT_LIMIT as SHORT_IMPACT_LIMIT
 from .bar import Bar as Bar
 from .bar import ImpactDurationWarning as ImpactDurationWarning
 from .config import PRESETS as PRESETS
+from .drifter import DRIFTER_PRESETS as DRIFTER_PRESETS
+from .drifter import Drifter as Drifter
+from .drifter import DrifterOrbit as DrifterOrbit
+from .drifter import drifter_preset as drifter_preset
 from .forces import FourierFit as FourierFit
 from .forces import HydraulicForce as HydraulicForce
 from .forces import MeasuredForce as MeasuredForce
@@ -99,5 +105,9 @@ __all__ = [
     "load_config",
     "orbits",
     "simulate",
+    "Drifter",
+    "DrifterOrbit",
+    "DRIFTER_PRESETS",
+    "drifter_preset",
 ]
 

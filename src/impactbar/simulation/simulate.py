@@ -38,9 +38,9 @@ from ..drives.switched import PositionSwitchedDrive
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
-from ..loads import Load, PiecewiseConstantLoad
+from ..loads import FourierLoad, Load
 from ..model import MAX_MODES, BarModel
-from .switched import SwitchedTrajectory, rigid_piece, run_switched
+from .switched import SwitchedTrajectory, rigid_piece, run_compiled, run_switched
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
 from .trajectory import _FREE as _FREE
@@ -517,19 +517,25 @@ def _push_off(c, q) -> None:
 
 
 def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
-    """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces."""
+    """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces:
+    compiled (``simulate.switched_kernel``) for an instantaneous law, in Python piece by piece
+    otherwise."""
     law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
-    if model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid"):
-        return run_switched(model, drive, q, v, t0, t_end, max_imp, rigid_piece(model), InitialState)
-    cores = {lv: _core_for(model, PiecewiseConstantLoad([0.0], [lv])) for lv in (drive.stroke, -drive.ret)}
+    rigid = model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid")
+    cores = tuple(_core_for(model, FourierLoad(lv, [])) for lv in (drive.stroke, -drive.ret))
+    if rigid:
+        piece = rigid_piece(model)
+    else:
+        def piece(level, q, v, t, t_stop):
+            q = np.array(q, dtype=float)
+            v = np.array(v, dtype=float)
+            core = cores[0] if level == drive.stroke else cores[1]
+            _push_off(core.c, q)
+            return _run(core, q, v, t, t_stop, 1)
 
-    def piece(level, q, v, t, t_stop):
-        q = np.array(q, dtype=float)
-        v = np.array(v, dtype=float)
-        core = cores[level]
-        _push_off(core.c, q)
-        return _run(core, q, v, t, t_stop, 1)
-
+    if law.instantaneous and use_fast("simulate.switched_kernel"):
+        return run_compiled(model, drive, q, v, t0, t_end, max_imp, piece, InitialState, cores, rigid,
+                            use_fast("simulate.impact_search"), CHATTER_TAIL)
     return run_switched(model, drive, q, v, t0, t_end, max_imp, piece, InitialState)
 
 

@@ -1,0 +1,111 @@
+"""Command-line pieces for a hydraulic drifter (a valve switched on the piston's position, theory
+§10), taken by ``impactbar orbits``, ``simulate`` and ``continue`` when the config has a ``[valve]``
+section or the preset is a drifter's (:data:`impactbar.physical.DRIFTER_PRESETS`)."""
+
+from __future__ import annotations
+
+import json
+import tomllib
+from pathlib import Path
+
+from .. import physical
+from ._common import json_ready, print_json
+
+__all__ = ["drifter_from_args", "run_drifter_orbits", "run_drifter_simulate", "run_drifter_continue"]
+
+
+def drifter_from_args(args):
+    """The drifter named by ``args.preset`` or ``args.config`` (a TOML file with a ``[valve]``
+    section), else ``None`` (a hammer, or no SI input).
+
+    Raises
+    ------
+    ValueError
+        An unreadable file, or an invalid drifter config (the key named).
+    """
+    name, config = getattr(args, "preset", None), getattr(args, "config", None)
+    if name is not None and name in physical.DRIFTER_PRESETS:
+        return physical.drifter_preset(name)
+    if config is None:
+        return None
+    path = Path(config)
+    try:
+        with path.open("rb") as fh:
+            doc = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError):
+        return None  # the hammer's reader reports it
+    if "valve" not in doc:
+        return None
+    return physical.Drifter.from_config(doc)
+
+
+def _header(d: physical.Drifter) -> str:
+    m, dr = d.model(), d.drive()
+    return (f"drifter {d.name or '(unnamed)'}: piston {d.bar.mass_kg:.4g} kg, L = {d.bar.length_m:.4g} m; "
+            f"stroke {d.stroke_force_N:.4g} N, return {d.return_force_N:.4g} N, switch at "
+            f"{d.switch_out_m * 1e3:.4g} mm, delay {d.delay_s * 1e3:.4g} ms, R = {d.restitution:.4g}\n"
+            f"  dimensionless: s = {m.s:.5g}, d = {m.d:.5g}, N = {m.n_modes}, ret = {dr.ret:.5g}, "
+            f"switch_out = {dr.switch_out:.5g}, delay = {dr.delay:.5g}")
+
+
+def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
+    """``impactbar orbits --preset drifter-... [--json]``: the drifter's one-impact periodic motion
+    (unknown period) with its SI figures."""
+    o = drifter.orbit()
+    s = o.summary()
+    if getattr(args, "json", False):
+        print_json({"drifter": drifter.name, "orbit": s})
+        return 0
+    print(_header(drifter))
+    print(f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
+          f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, "
+          f"percussive power {s['percussive_power_kW']:.4g} kW, {s['admissibility']}, "
+          f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+    return 0
+
+
+def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: float) -> int:
+    """``impactbar simulate --preset drifter-... --out DIR``: simulate ``--periods`` blow periods
+    (of the periodic motion) from rest at ``--gap``; writes ``impacts.csv`` and ``summary.json``."""
+    period = drifter.orbit().period_s
+    tr, s = drifter.simulate(args.periods * period, start_gap_m=gap_m)
+    om, L = drifter.omega_rad_s, drifter.bar.length_m
+    lines = ["time_s,impact_velocity_m_s"]
+    lines += [f"{t / om:.9g},{v * L * om:.9g}" for t, v in zip(tr.impact_times, tr.impact_velocities,
+                                                                 strict=True)]
+    (out / "impacts.csv").write_text("\n".join(lines) + "\n")
+    summary = dict(s, n_impacts=tr.n_impacts, n_switches=len(tr.switch_kinds))
+    (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
+    print(f"{drifter.name or 'drifter'}: {tr.n_impacts} impacts in {tr.t_end / om:.4g} s; second half: "
+          f"{s['blow_frequency_Hz']:.4g} Hz, {s['impact_velocity_m_s']:.4g} m/s, "
+          f"{s['impact_energy_J']:.4g} J per blow, {s['percussive_power_kW']:.4g} kW; "
+          f"wrote {out}/impacts.csv, summary.json")
+    return 0
+
+
+def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
+    """``impactbar continue --preset drifter-... --parameter delay --to X``: the drifter's orbit
+    continued in a dimensionless parameter (theory §10); writes ``branch.csv`` (parameter, period,
+    impact velocity, largest |multiplier|, stable) and ``events.csv``."""
+    from .. import continue_orbit
+
+    start = drifter.orbit().orbit
+    b = continue_orbit(start, args.parameter, args.to, step=args.step, max_step=args.max_step,
+                       max_points=args.max_points)
+    rows = ["parameter,period,impact_velocity,max_abs_multiplier,stable"]
+    for lam, o in zip(b.values, b.orbits, strict=True):
+        mu = max(abs(complex(m)) for m in o.multipliers) if o.multipliers.size else 0.0
+        rows.append(f"{lam:.12g},{o.period:.12g},{o.impact_velocity:.12g},{mu:.12g},{o.stable}")
+    (out / "branch.csv").write_text("\n".join(rows) + "\n")
+    ev = ["kind,value,multiplier_re,multiplier_im"]
+    ev += [f"{e.kind},{e.value:.12g},{e.multiplier.real:.12g},{e.multiplier.imag:.12g}" for e in b.events]
+    (out / "events.csv").write_text("\n".join(ev) + "\n")
+    if getattr(args, "json", False):
+        print_json({"parameter": args.parameter, "to": args.to, "points": len(b), "status": b.status,
+                    "events": [{"kind": e.kind, "value": e.value} for e in b.events],
+                    "files": [str(out / "branch.csv"), str(out / "events.csv")]})
+        return 0
+    print(_header(drifter))
+    print(f"  {len(b)} points, {b.status}; events: "
+          + (", ".join(f"{e.kind} at {args.parameter} = {e.value:.6g}" for e in b.events) or "none"))
+    return 0

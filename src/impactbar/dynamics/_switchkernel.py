@@ -1,0 +1,454 @@
+"""Compiled valve loop of a position-switched drive (theory §10). Plain float arrays only.
+
+Between events the force at ``x = 0`` is a constant level, ``+stroke`` or ``-ret``, so each flight
+is a flight of the ordinary event search (:func:`impactbar.dynamics._kernel._run_free`) under the
+one-piece load of that level; the valve runs around it. The gap ``y = -q_0`` obeys
+``y'' + d y' = -p`` alone (the flexible modes do not enter it), so its rising crossing of the switch
+position is found in closed form (:func:`first_rising_crossing`): the gap's rate is monotone under a
+constant force, no crossing is missed, and it is refined to rounding.
+
+:func:`run_switched` follows the valve through piece after piece in one call, doing in each piece
+exactly what the Python loop of :mod:`impactbar.simulation.switched` does (the same kernel calls with
+the same arguments, hence the same numbers), and hands back to Python every piece it does not resolve
+itself (a touch without an impact, a start through the stop, a full log): Python runs that piece
+with the general driver (sustained contact and all) and calls it again.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ._flightkernel import CACHE
+from ._kernel import END, MAXIMP, _propagate_many, _run_free
+from .kernelview import DriveKernelView, LoadKernelView, ModalBasisView
+
+__all__ = ["gap", "rate_zero", "first_rising_crossing", "run_switched", "STROKE", "RETURN",
+           "DONE", "MAX_IMPACTS", "FULL", "PYTHON"]
+
+#: The valve's two states (indices of the levels ``(+stroke, -ret)``).
+STROKE = 0
+RETURN = 1
+
+# statuses of run_switched
+DONE = 0  # t_end reached
+MAX_IMPACTS = 1  # max_impacts reached
+FULL = 2  # a log is full: Python empties it and calls again
+PYTHON = 3  # the next piece is Python's (a touch, a start through the stop, a full pending list)
+
+# integer slots of the valve's state array
+_VALVE, _NPEND, _NIMP, _MAXIMP, _RIGID, _FAST = range(6)
+# counters of the logs
+_LI, _LS, _LP = range(3)
+# a rebound shorter than this fraction of the time is rest on the stop (the Python loop's test)
+_REST = 1e-13
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def gap(d, y0, w0, a, t):
+    """Gap and its rate after ``t`` under ``y'' + d y' = a`` from ``(y0, w0)`` (closed form)."""
+    if d == 0.0:
+        return y0 + t * (w0 + 0.5 * a * t), w0 + a * t
+    e = math.exp(-d * t)
+    b = -math.expm1(-d * t) / d  # int_0^t e^{-d s} ds
+    y = d * t
+    c = t * t * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0) if abs(y) < 1e-3 else (t - b) / d
+    return y0 + w0 * b + a * c, w0 * e + a * b
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def rate_zero(d, w0, a):
+    """The time ``y' = 0`` under ``y'' + d y' = a`` from the rate ``w0`` (``inf`` if never)."""
+    if d == 0.0:
+        t = -w0 / a if a != 0.0 else math.inf
+        return t if t > 0.0 else math.inf
+    # w0 e^{-dt} + (a/d)(1 - e^{-dt}) = 0  ->  e^{-dt} = (a/d) / (a/d - w0)
+    r = a / d
+    den = r - w0
+    if den == 0.0:
+        return math.inf
+    x = r / den
+    if not 0.0 < x < 1.0:
+        return math.inf
+    return -math.log(x) / d
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def first_rising_crossing(d, y0, w0, a, level):
+    """First ``t > 0`` at which the gap ``y`` rises through ``level`` under ``y'' + d y' = a``.
+
+    The rate ``y' = w0 e^{-d t} + a b(t)`` is monotone in ``t`` (its derivative ``(a - d w0)
+    e^{-d t}`` keeps its sign), so ``y`` has at most one turning point and at most one rising
+    crossing of any level: no crossing can be missed. It is bracketed on the rising piece and
+    refined to rounding by Newton's method, which converges monotonically there (``y`` is convex
+    or concave throughout) (theory §10).
+
+    Parameters
+    ----------
+    d : float
+        Damping, ``>= 0``.
+    y0, w0 : float
+        Gap and its rate at ``t = 0``.
+    a : float
+        Constant acceleration of the gap (``-p``).
+    level : float
+        The switch position.
+
+    Returns
+    -------
+    float
+        The crossing time, ``inf`` if there is none.
+    """
+    if d == 0.0 and a == 0.0:
+        if w0 <= 0.0 or y0 >= level:
+            return math.inf
+        return (level - y0) / w0
+    # the rising piece [t_lo, t_hi] of y (t_hi may be infinite)
+    slope = a - d * w0  # sign of y''
+    if w0 > 0.0:
+        t_lo = 0.0
+        if slope >= 0.0:
+            t_hi = math.inf
+        else:  # y' falls to 0 at t* (if ever)
+            t_hi = rate_zero(d, w0, a)
+    else:
+        if slope <= 0.0:
+            return math.inf  # y' <= 0 for ever
+        t_lo = rate_zero(d, w0, a) if w0 < 0.0 else 0.0
+        if not math.isfinite(t_lo):
+            return math.inf
+        t_hi = math.inf
+    y_lo = gap(d, y0, w0, a, t_lo)[0]
+    if y_lo >= level:  # starts at or above the level moving up: no rising crossing ahead
+        return math.inf
+    if not math.isfinite(t_hi):
+        h = max(1.0, t_lo)
+        t_hi = t_lo + h
+        while gap(d, y0, w0, a, t_hi)[0] < level:
+            h *= 2.0
+            t_hi = t_lo + h
+            if h > 1e300:  # the gap tends to a finite limit below the level
+                return math.inf
+    elif gap(d, y0, w0, a, t_hi)[0] < level:
+        return math.inf
+    if d == 0.0:  # the rising root of a t^2/2 + w0 t + y0 - level = 0, in its stable form
+        r = math.sqrt(max(w0 * w0 + 2.0 * a * (level - y0), 0.0))  # the rate at the crossing
+        return 2.0 * (level - y0) / (w0 + r) if w0 >= 0.0 else (r - w0) / a
+    # y'' = (a - d w0) e^{-d t} keeps its sign: y is convex or concave. Newton from the end of the
+    # bracket on the level's far side converges monotonically to the one root (no overshoot): from
+    # the upper end where y is convex, from the lower end where it is concave.
+    t = t_hi if slope > 0.0 else t_lo
+    sign = 0.0
+    for _ in range(200):
+        y, w = gap(d, y0, w0, a, t)
+        if w <= 0.0:
+            break
+        step = (y - level) / w
+        if step == 0.0 or step * sign < 0.0:  # an overshoot can only be rounding: done
+            break
+        sign = step
+        t_new = min(max(t - step, t_lo), t_hi)
+        if t_new == t:
+            break
+        t = t_new
+    return t
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def rigid_flight(d, q, v, level, h):
+    """The rigid mode ``q_0'' + d q_0' = level`` after ``h`` from ``(q, v)``: ``(q_0, q_0')``."""
+    e = -math.expm1(-d * h) / d if d else h
+    c = (h - e) / d if d else 0.5 * h * h
+    return q + v * e + level * c, v * (1.0 - d * e) + level * e
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _rigid_piece(d, R, level, q, v, t, t_stop):
+    """One constant-force piece of the rigid bar under the paper's law (the closed forms of
+    ``impactbar.simulation.switched.rigid_piece``): ``(t_end, impacted, arrival velocity, q, v,
+    at rest)``, the state at ``t_end`` (after the impact if there is one)."""
+    q0, v0 = q, v
+    resting = q0 >= 0.0 and abs(v0) <= _REST * (1.0 + abs(level)) and level > 0.0
+    if resting:
+        q0 = v0 = 0.0
+        t_imp = math.inf
+    else:
+        t_imp = t + first_rising_crossing(d, q0, v0, level, 0.0)
+    if t_imp < t_stop:
+        vm = rigid_flight(d, q0, v0, level, t_imp - t)[1]
+        vp = -R * vm
+        if level > 0.0 and abs(vp) * (2.0 / level) <= _REST * (1.0 + t_imp):
+            vp = 0.0  # the rebound lasts less than rounding: the piston rests on the stop
+        return t_imp, True, vm, 0.0, vp, resting
+    if resting:
+        return t_stop, False, 0.0, 0.0, 0.0, resting
+    qe, ve = rigid_flight(d, q0, v0, level, t_stop - t)
+    return t_stop, False, 0.0, min(qe, 0.0), ve, resting
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _rigid_cycle(d, R, drive, v):
+    """The rigid piston's one-impact cycle from the arrival velocity ``v`` (theory §10): stroke for
+    the delay, return until the gap rises through ``switch_out``, return for the delay, stroke until
+    ``q_0`` rises through 0. Returns the next arrival velocity and the free flight times
+    ``(h1, h3)`` (``inf`` where a crossing does not come)."""
+    ps, pr, tau = drive.stroke, drive.ret, drive.delay
+    q, w = rigid_flight(d, 0.0, -R * v, ps, tau)
+    h1 = first_rising_crossing(d, -q, -w, pr, drive.switch_out)
+    if not math.isfinite(h1):
+        return math.nan, h1, math.inf
+    q, w = rigid_flight(d, q, w, -pr, h1 + tau)
+    h3 = first_rising_crossing(d, q, w, ps, 0.0)
+    if not math.isfinite(h3):
+        return math.nan, h1, h3
+    return rigid_flight(d, q, w, ps, h3)[1], h1, h3
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def rigid_fixed_point(d, R, drive, v0):
+    """The rigid piston's one-impact orbit under a position-switched drive: the fixed point of the
+    map of arrival velocities of :func:`_rigid_cycle`, by the secant method from ``v0`` (its
+    derivative is about ``R^2``). Returns ``(v, h1, h3)``, ``v = nan`` where it fails. The start of
+    Newton's method on the segment problem (``impactbar.orbits.switched``), which confirms it."""
+    a = v0
+    fa, h1, h3 = _rigid_cycle(d, R, drive, a)
+    if not math.isfinite(fa):
+        return math.nan, h1, h3
+    ga = fa - a
+    b = fa
+    for _ in range(60):
+        fb, h1, h3 = _rigid_cycle(d, R, drive, b)
+        if not math.isfinite(fb):
+            return math.nan, h1, h3
+        gb = fb - b
+        if gb == 0.0 or abs(gb) <= 1e-15 * abs(b):
+            return b, h1, h3
+        if gb == ga:
+            return math.nan, h1, h3
+        c = b - gb * (b - a) / (gb - ga)
+        if not c > 0.0:
+            return math.nan, h1, h3
+        a, ga, b = b, gb, c
+    return math.nan, h1, h3
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def end_max_sampled(w2, d, p, c, q, v, h, n):
+    """Largest end displacement ``c . q(t)`` at the interior samples ``t_j = j h / (n - 1)``,
+    ``0 < j < n - 1``, of a flight under the constant force ``p`` from ``(q, v)`` (eq. 8; the
+    samples of ``numpy.linspace(0, h, n)[1:-1]``), every flexible mode underdamped.
+
+    Each flexible mode is ``q_s + e^{-d t / 2} (A cos(l t) + B sin(l t))`` with ``q_s = p / w2``,
+    ``l^2 = w2 - d^2 / 4``; its cosine and sine are advanced from sample to sample by a rotation and
+    evaluated afresh every 32 samples (rounding stays near the machine epsilon). The rigid mode is
+    in closed form (theory §10).
+    """
+    M = w2.size
+    step = h / (n - 1)
+    lam = np.empty(M)
+    A = np.empty(M)
+    Bc = np.empty(M)
+    cr = np.empty(M)
+    sr = np.empty(M)
+    cs = np.empty(M)
+    sn = np.empty(M)
+    static = 0.0
+    for i in range(1, M):
+        lam[i] = math.sqrt(w2[i] - 0.25 * d * d)
+        qs = p / w2[i]
+        static += c[i] * qs
+        A[i] = q[i] - qs
+        Bc[i] = (v[i] + 0.5 * d * A[i]) / lam[i]
+        cr[i] = math.cos(lam[i] * step)
+        sr[i] = math.sin(lam[i] * step)
+    worst = -math.inf
+    for j in range(1, n - 1):
+        t = j * step
+        fresh = (j - 1) % 32 == 0
+        acc = 0.0
+        for i in range(1, M):
+            if fresh:
+                cs[i] = math.cos(lam[i] * t)
+                sn[i] = math.sin(lam[i] * t)
+            else:
+                a = cs[i] * cr[i] - sn[i] * sr[i]
+                sn[i] = sn[i] * cr[i] + cs[i] * sr[i]
+                cs[i] = a
+            acc += c[i] * (A[i] * cs[i] + Bc[i] * sn[i])
+        val = c[0] * rigid_flight(d, q[0], v[0], p, t)[0] + static + math.exp(-0.5 * d * t) * acc
+        if val > worst:
+            worst = val
+    return worst
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _push(pend_t, pend_k, n, t, k):
+    """Insert the switch ``(t, k)`` into the first ``n`` entries, kept sorted as Python sorts the
+    tuples ``(t, k)``."""
+    i = n
+    while i > 0 and (pend_t[i - 1] > t or (pend_t[i - 1] == t and pend_k[i - 1] > k)):
+        pend_t[i] = pend_t[i - 1]
+        pend_k[i] = pend_k[i - 1]
+        i -= 1
+    pend_t[i] = t
+    pend_k[i] = k
+    return n + 1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
+    """The valve's loop (theory §10), piece by piece, from ``clock[0]`` to ``clock[1]``.
+
+    ``loads`` are the views of the two one-piece loads ``(+stroke, -ret)``, ``B`` the free-free
+    basis, ``state = (q, v)`` the modal state (overwritten), ``ints`` the valve's integers (state,
+    number of pending switches, impacts so far, the largest number, whether the rigid closed form
+    runs, whether the fast impact search runs), ``pending = (times, kinds)`` the switches not yet in
+    effect, sorted, and ``logs = (impact times, impact velocities, switch times, gaps, kinds, piece
+    starts, piece ends, piece levels, piece start states q and v, counters)``.
+
+    Returns
+    -------
+    int
+        :data:`DONE`, :data:`MAX_IMPACTS`, :data:`FULL` or :data:`PYTHON`; ``clock[0]`` is where the
+        loop stopped.
+    """
+    q, v = state
+    pend_t, pend_k = pending
+    imp_t, imp_v, sw_t, sw_y, sw_k, pc_t0, pc_t1, pc_lv, pc_q, pc_v, cnt = logs
+    M = q.size
+    d = B.d
+    tau = drive.delay
+    rigid = ints[_RIGID] != 0
+    fast = ints[_FAST] != 0
+    tail = clock[2]
+    qs = np.empty(M)
+    vs = np.empty(M)
+    out_t = np.empty(1)
+    out_vel = np.empty(1)
+    out_q = np.empty((1, M))
+    out_v = np.empty((1, M))
+    out = (out_t, out_vel, out_q, out_v)
+    ts = np.empty(1)
+    eq = np.empty((M, 1))
+    ev = np.empty((M, 1))
+    t = clock[0]
+    t_end = clock[1]
+    while t < t_end:
+        n_pend = ints[_NPEND]
+        if n_pend + 2 > pend_t.size:
+            return PYTHON
+        if cnt[_LI] >= imp_t.size or cnt[_LP] >= pc_t0.size or cnt[_LS] + n_pend + 2 > sw_t.size:
+            return FULL
+        valve = ints[_VALVE]
+        # the next rising crossing of switch_out while the valve is (and stays) in return
+        t_next = t_end
+        if n_pend:
+            t_next = min(t_next, pend_t[0])
+        cross = math.inf
+        stroke_pending = False
+        for i in range(n_pend):
+            if pend_k[i] == STROKE:
+                stroke_pending = True
+        if valve == RETURN and not stroke_pending:
+            cross = t + first_rising_crossing(d, -q[0], -v[0], drive.ret, drive.switch_out)
+            t_next = min(t_next, cross)
+        level = drive.stroke if valve == STROKE else -drive.ret
+        impacted = False
+        rest = False
+        if rigid:
+            t1, impacted, vm, q0, v0, rest = _rigid_piece(d, R, level, q[0], v[0], t, t_next)
+            if impacted:
+                imp_t[cnt[_LI]] = t1
+                imp_v[cnt[_LI]] = vm
+            qs[0] = q[0]
+            vs[0] = v[0]
+            q[0] = q0
+            v[0] = v0
+        else:
+            g = 0.0
+            sc = 0.0
+            for i in range(M):
+                g += c[i] * q[i]
+                sc += abs(c[i] * q[i])
+            if g > 0.0 and g > 1e-12 * max(1.0, sc):
+                return PYTHON  # a start through the stop: Python refuses it
+            if g > 0.0:
+                q[0] -= g
+            for i in range(M):
+                qs[i] = q[i]
+                vs[i] = v[i]
+            load = loads[valve]
+            n, st, tn = _run_free(load, B, R, c, t, q, v, t_next, 1, tail, out, fast)
+            if st == MAXIMP:
+                impacted = True
+                t1 = tn
+                imp_t[cnt[_LI]] = out_t[0]
+                imp_v[cnt[_LI]] = out_vel[0]
+                for i in range(M):
+                    q[i] = out_q[0, i]
+                    v[i] = out_v[0, i]
+            elif st == END:  # no impact before t_next: the state there by the reference flow
+                t1 = t_next
+                ts[0] = t_next
+                _propagate_many(load, B, t, qs, vs, ts, eq, ev)
+                for i in range(M):
+                    q[i] = eq[i, 0]
+                    v[i] = ev[i, 0]
+            else:  # a touch, chatter or a failure: the general driver's piece, in Python
+                for i in range(M):
+                    q[i] = qs[i]
+                    v[i] = vs[i]
+                clock[0] = t
+                return PYTHON
+        k = cnt[_LP]
+        pc_t0[k] = t
+        pc_t1[k] = t1
+        pc_lv[k] = valve + (2 if rigid and rest else 0)  # + 2: the piston rests on the stop
+        for i in range(M):
+            pc_q[k, i] = qs[i]
+            pc_v[k, i] = vs[i]
+        cnt[_LP] = k + 1
+        t = t1
+        clock[0] = t
+        if impacted:
+            cnt[_LI] += 1
+            ints[_NIMP] += 1
+            ints[_NPEND] = _push(pend_t, pend_k, ints[_NPEND], t + tau, RETURN)
+            if ints[_NIMP] >= ints[_MAXIMP]:
+                return MAX_IMPACTS
+        elif t >= t_end:
+            break
+        elif t == cross:  # the gap rose through switch_out: the switch to stroke is triggered
+            ints[_NPEND] = _push(pend_t, pend_k, ints[_NPEND], cross + tau, STROKE)
+        while ints[_NPEND] and pend_t[0] <= t:  # the switches due now take effect
+            kk = pend_k[0]
+            n_pend = ints[_NPEND] - 1
+            for i in range(n_pend):
+                pend_t[i] = pend_t[i + 1]
+                pend_k[i] = pend_k[i + 1]
+            ints[_NPEND] = n_pend
+            if kk != ints[_VALVE]:
+                ints[_VALVE] = kk
+                sw_t[cnt[_LS]] = t
+                sw_y[cnt[_LS]] = -q[0]
+                sw_k[cnt[_LS]] = kk
+                cnt[_LS] += 1
+    clock[0] = t
+    return DONE
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def rigid_orbit_start(d, R, drive, v0):
+    """:func:`rigid_fixed_point` called from Python, with the drive's view as a plain tuple."""
+    return rigid_fixed_point(d, R, DriveKernelView(*drive), v0)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
+    """:func:`_run_switched` called from Python, with the views as plain tuples (``tuple(view)``:
+    numba dispatches them several times faster than named tuples)."""
+    views = (LoadKernelView(*loads[0]), LoadKernelView(*loads[1]))
+    return _run_switched(views, ModalBasisView(*B), DriveKernelView(*drive), R, c, clock, state, ints,
+                         pending, logs)

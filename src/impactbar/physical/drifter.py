@@ -1,0 +1,298 @@
+r"""A hydraulic drifter in SI units: a piston whose valve switches on its position (theory §10).
+
+The driving force is ``+p A_s`` (stroke, toward the stop) or ``-p A_r`` (return), with ``p`` the
+supply pressure and ``A_s``, ``A_r`` the piston's net areas under pressure in each state; the valve
+goes to stroke when the piston, on its way out, passes the switch position ``x_1`` (measured from the
+stop), to return at each impact, each switch a valve delay ``tau`` after its trigger. The machine is
+autonomous: the blow frequency is an output.
+
+Scales (eq. 2 with the stroke force as the force scale): ``Omega = sqrt(p A_s / (m L))`` so that the
+dimensionless stroke force is 1; ``ret = A_r / A_s``, ``switch_out = x_1 / L``, ``delay = Omega tau``,
+``s = c / (L Omega)``, ``d = D / (M Omega)``. Outputs: blow frequency ``Omega / T`` (Hz), impact
+velocity ``L Omega v`` (m/s), impact energy ``m L^2 Omega^2 e`` (J, ``e`` the dimensionless kinetic
+energy of the bar arriving at the stop), percussive power (energy times blow frequency, kW).
+
+Configuration keys (a nested ``dict`` or TOML, as :meth:`Drifter.from_config` reads them)::
+
+    name = "..."                         # optional
+    [bar]     E, density, length, diameter | area      # the piston
+    [stop]    restitution | area
+    [damping] coefficient                 # optional (N s/m, the whole piston)
+    [valve]   supply_pressure, stroke_area, return_area, switch_out, delay (optional, default 0 ms)
+    [model]   n_modes                     # optional, default 0 (a rigid piston)
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .._shared.validate import check_int, check_real
+from .bar import Bar
+from .units import to_si
+
+__all__ = ["Drifter", "DrifterOrbit", "DRIFTER_PRESETS", "drifter_preset"]
+
+_KEYS = {
+    "bar": {"E", "density", "length", "diameter", "area"},
+    "stop": {"restitution", "area"},
+    "damping": {"coefficient"},
+    "valve": {"supply_pressure", "stroke_area", "return_area", "switch_out", "delay"},
+    "model": {"n_modes"},
+}
+
+
+@dataclass(frozen=True)
+class Drifter:
+    """A hydraulic drifter: piston, stop, valve (theory §10), in SI units.
+
+    Parameters
+    ----------
+    bar : Bar
+        The piston.
+    supply_pressure_Pa : float
+        Supply pressure ``p`` (Pa), ``> 0``.
+    stroke_area_m2, return_area_m2 : float
+        Net piston areas under pressure in the stroke and the return state (m^2), ``> 0``: the
+        forces are ``p A_s`` toward the stop and ``p A_r`` away from it.
+    switch_out_m : float
+        Switch position ``x_1`` (m, from the stop, on the way out), ``> 0``.
+    restitution : float
+        Restitution coefficient ``R`` of the impact (eq. 10), ``0 <= R < 1``.
+    delay_s : float, optional
+        Valve delay ``tau`` (s), ``>= 0``. Default 0.
+    damping_N_s_m : float, optional
+        Viscous damping coefficient of the whole piston (N s/m), ``>= 0``. Default 0.
+    n_modes : int, optional
+        Flexible modes of the piston, ``>= 0`` (0: rigid). Default 0.
+    name : str, optional
+
+    Raises
+    ------
+    ValueError
+        Naming the parameter and its range.
+
+    Examples
+    --------
+    >>> from impactbar.physical.drifter import drifter_preset
+    >>> o = drifter_preset("drifter-issue19").orbit()
+    >>> round(o.impact_velocity_m_s, 4), round(o.blow_frequency_Hz, 2)
+    (9.4957, 47.19)
+    """
+
+    bar: Bar
+    supply_pressure_Pa: float
+    stroke_area_m2: float
+    return_area_m2: float
+    switch_out_m: float
+    restitution: float
+    delay_s: float = 0.0
+    damping_N_s_m: float = 0.0
+    n_modes: int = 0
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.bar, Bar):
+            raise ValueError(f"bar must be a Bar; got {type(self.bar).__name__}")
+        for f in ("supply_pressure_Pa", "stroke_area_m2", "return_area_m2", "switch_out_m"):
+            object.__setattr__(self, f, check_real(f, getattr(self, f), lo=0.0, lo_open=True))
+        object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
+                                                           hi=1.0, hi_open=True))
+        object.__setattr__(self, "delay_s", check_real("delay_s", self.delay_s, lo=0.0))
+        object.__setattr__(self, "damping_N_s_m", check_real("damping_N_s_m", self.damping_N_s_m, lo=0.0))
+        object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=1024))
+
+    # -- scales -----------------------------------------------------------------------------
+    @property
+    def stroke_force_N(self) -> float:
+        """``p A_s`` (N)."""
+        return self.supply_pressure_Pa * self.stroke_area_m2
+
+    @property
+    def return_force_N(self) -> float:
+        """``p A_r`` (N)."""
+        return self.supply_pressure_Pa * self.return_area_m2
+
+    @property
+    def omega_rad_s(self) -> float:
+        """The time scale ``Omega = sqrt(p A_s / (m L))`` (1/s): the stroke force is 1."""
+        return math.sqrt(self.stroke_force_N / (self.bar.mass_kg * self.bar.length_m))
+
+    def model(self):
+        """The dimensionless bar (eq. 2): :class:`~impactbar.BarModel`."""
+        from ..model import BarModel
+
+        om, bar = self.omega_rad_s, self.bar
+        return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om),
+                        d=self.damping_N_s_m / (bar.mass_kg * om), R=self.restitution,
+                        n_modes=self.n_modes)
+
+    def drive(self):
+        """The dimensionless valve: :class:`~impactbar.PositionSwitchedDrive`."""
+        from ..drives import PositionSwitchedDrive
+
+        return PositionSwitchedDrive(stroke=1.0, ret=self.return_area_m2 / self.stroke_area_m2,
+                                     switch_out=self.switch_out_m / self.bar.length_m,
+                                     delay=self.delay_s * self.omega_rad_s)
+
+    # -- results ----------------------------------------------------------------------------
+    def orbit(self, guess=None) -> DrifterOrbit:
+        """The one-impact periodic motion (:func:`impactbar.find_orbit` with the drive), in SI."""
+        from ..orbits import find_orbit
+
+        return DrifterOrbit(self, find_orbit(self.model(), self.drive(), guess=guess))
+
+    def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
+        """Simulate from the piston at rest (or a given gap and velocity) for ``duration_s``
+        (:func:`impactbar.simulate`); returns the :class:`~impactbar.SwitchedTrajectory` and a
+        dict of SI summaries over the last half of the run: ``blows``, ``blow_frequency_Hz``,
+        ``impact_velocity_m_s`` (mean), ``impact_energy_J`` (mean, ``m v^2 / 2`` of the rigid
+        mode's arrival), ``percussive_power_kW``."""
+        from ..simulation import InitialState, simulate
+
+        dur = check_real("duration_s", duration_s, lo=0.0, lo_open=True)
+        L, om = self.bar.length_m, self.omega_rad_s
+        start = InitialState.rigid(-check_real("start_gap_m", start_gap_m, lo=0.0) / L,
+                                   start_velocity_m_s / (L * om), self.n_modes)
+        tr = simulate(self.model(), self.drive(), start, dur * om)
+        t = tr.impact_times / om
+        late = t >= 0.5 * dur
+        v = tr.impact_velocities[late] * L * om
+        n = int(late.sum())
+        f = (n - 1) / float(t[late][-1] - t[late][0]) if n > 1 else math.nan
+        e = 0.5 * self.bar.mass_kg * float((v * v).mean()) if n else math.nan
+        return tr, {"blows": n, "blow_frequency_Hz": f,
+                    "impact_velocity_m_s": float(v.mean()) if n else math.nan,
+                    "impact_energy_J": e, "percussive_power_kW": e * f / 1e3}
+
+    @classmethod
+    def from_config(cls, config: dict) -> Drifter:
+        """A drifter from a nested dict of inputs with units (the keys in the module's docstring;
+        unknown keys refused, naming them)."""
+        if not isinstance(config, dict):
+            raise ValueError(f"config must be a dict; got {type(config).__name__}")
+        extra = sorted(set(config) - set(_KEYS) - {"name"})
+        if extra:
+            raise ValueError(f"unknown section [{extra[0]}]; allowed: {', '.join(sorted(_KEYS))}")
+        sec = {}
+        for name, keys in _KEYS.items():
+            s = config.get(name, {})
+            if not isinstance(s, dict):
+                raise ValueError(f"[{name}] must be a table of keys; got {s!r}")
+            bad = sorted(set(s) - keys)
+            if bad:
+                raise ValueError(f"unknown key {name}.{bad[0]}; allowed in [{name}]: "
+                                 f"{', '.join(sorted(keys))}")
+            sec[name] = s
+        for name, key in (("bar", "E"), ("bar", "density"), ("bar", "length"), ("valve", "supply_pressure"),
+                          ("valve", "stroke_area"), ("valve", "return_area"), ("valve", "switch_out")):
+            if key not in sec[name]:
+                raise ValueError(f"missing key {name}.{key}")
+        b, v, st = sec["bar"], sec["valve"], sec["stop"]
+        bar = Bar.from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
+                             area=b.get("area"))
+        if ("restitution" in st) == ("area" in st):
+            raise ValueError("give exactly one of stop.restitution and stop.area")
+        if "restitution" in st:
+            R = to_si("stop.restitution", st["restitution"], "", "0.215")
+        else:
+            a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
+            R = (a_s - bar.area_m2) / (a_s + bar.area_m2)
+
+        def area(key):
+            return to_si(f"valve.{key}", v[key], "m**2", "'2.8 cm^2'", what="an area")
+
+        return cls(bar=bar,
+                   supply_pressure_Pa=to_si("valve.supply_pressure", v["supply_pressure"], "Pa", "'20 MPa'",
+                                            what="a pressure"),
+                   stroke_area_m2=area("stroke_area"), return_area_m2=area("return_area"),
+                   switch_out_m=to_si("valve.switch_out", v["switch_out"], "m", "'21.5 mm'", what="a length"),
+                   restitution=R,
+                   delay_s=to_si("valve.delay", v.get("delay", "0 ms"), "s", "'1 ms'", what="a time"),
+                   damping_N_s_m=to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"),
+                                       "N*s/m", "'9 N*s/m'", what="a damping coefficient"),
+                   n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")))
+
+
+@dataclass(frozen=True)
+class DrifterOrbit:
+    """A drifter's periodic motion in SI units (theory §10).
+
+    Attributes
+    ----------
+    drifter : Drifter
+    orbit : SwitchedOrbit
+        The dimensionless orbit.
+    """
+
+    drifter: Drifter
+    orbit: object
+
+    @property
+    def blow_frequency_Hz(self) -> float:
+        """``Omega / T`` (Hz)."""
+        return self.drifter.omega_rad_s / self.orbit.period
+
+    @property
+    def period_s(self) -> float:
+        """``T / Omega`` (s)."""
+        return self.orbit.period / self.drifter.omega_rad_s
+
+    @property
+    def impact_velocity_m_s(self) -> float:
+        """The struck end's velocity arriving at the stop, ``L Omega v`` (m/s)."""
+        return self.drifter.bar.length_m * self.drifter.omega_rad_s * self.orbit.impact_velocity
+
+    @property
+    def impact_energy_J(self) -> float:
+        """Kinetic energy of the piston arriving at the stop, ``m L^2 Omega^2 e`` (J)."""
+        d = self.drifter
+        return float(d.bar.mass_kg * (d.bar.length_m * d.omega_rad_s) ** 2 * self.orbit.impact_energy)
+
+    @property
+    def percussive_power_kW(self) -> float:
+        """Impact energy times blow frequency (kW)."""
+        return self.impact_energy_J * self.blow_frequency_Hz / 1e3
+
+    @property
+    def stable(self) -> bool:
+        """Admissible with every non-trivial multiplier inside the unit circle."""
+        return self.orbit.stable
+
+    def summary(self) -> dict:
+        """The SI outputs as a dict (JSON-ready)."""
+        return {"blow_frequency_Hz": float(self.blow_frequency_Hz), "period_ms": 1e3 * self.period_s,
+                "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
+                "percussive_power_kW": self.percussive_power_kW, "stable": self.stable,
+                "admissibility": str(self.orbit.admissibility),
+                "multiplier": abs(complex(self.orbit.multipliers[0])) if self.orbit.multipliers.size else 0.0}
+
+
+#: Drifter presets, from documented numbers.
+DRIFTER_PRESETS: dict[str, dict] = {
+    # Issue 19's worked example (theory §10): a 5.6 kg piston, 5.6 kN each way, the switch 21.5 mm
+    # from the stop, R = 0.215. The piston is the steel cylinder of the "hydraulic-drill" preset
+    # scaled to 5.6 kg: 45 mm diameter, length 5.6 / (7850 pi/4 0.045^2) = 448.54 mm; its 56 mm
+    # shank gives R = 0.215. 5.6 kN each way: 20 MPa (the hydraulic-drill preset's supply) on
+    # 2.8 cm^2 in both states. Rigid by default (n_modes = 0): v = 9.4957 m/s, 47.19 Hz, 252.47 J.
+    "drifter-issue19": {
+        "name": "drifter-issue19",
+        "bar": {"E": "210 GPa", "density": "7850 kg/m^3", "length": "448.54236 mm",
+                "diameter": "45 mm"},
+        "stop": {"restitution": 0.215},
+        "valve": {"supply_pressure": "20 MPa", "stroke_area": "2.8 cm^2", "return_area": "2.8 cm^2",
+                  "switch_out": "21.5 mm", "delay": "0 ms"},
+        "model": {"n_modes": 0},
+    },
+}
+
+
+def drifter_preset(name: str, **changes) -> Drifter:
+    """A drifter preset by name (:data:`DRIFTER_PRESETS`); ``changes`` replace sections' keys, e.g.
+    ``drifter_preset("drifter-issue19", valve={"delay": "1 ms"})``."""
+    if name not in DRIFTER_PRESETS:
+        raise ValueError(f"unknown drifter preset {name!r}; known: {', '.join(DRIFTER_PRESETS)}")
+    cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in DRIFTER_PRESETS[name].items()}
+    for sec, keys in changes.items():
+        cfg.setdefault(sec, {}).update(keys)
+    return Drifter.from_config(cfg)

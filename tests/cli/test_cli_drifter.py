@@ -1,0 +1,80 @@
+"""``impactbar orbits|simulate|continue`` with a hydraulic drifter (theory §10): the preset of issue
+19's example and a TOML config with a [valve] section give the SI figures of the closed form."""
+
+import json
+import math
+
+import pytest
+
+from impactbar.cli import main
+
+CONFIG = """
+name = "my-drifter"
+[bar]
+E = "210 GPa"
+density = "7850 kg/m^3"
+length = "448.54236 mm"
+diameter = "45 mm"
+[stop]
+restitution = 0.215
+[valve]
+supply_pressure = "14 MPa"
+stroke_area = "4 cm^2"
+return_area = "4 cm^2"
+switch_out = "2.15 cm"
+"""
+
+
+def _expected():
+    """Issue 19's example in SI by hand: 5.6 kg, 5.6 kN each way, 21.5 mm, R = 0.215."""
+    a, x1, R = 5600.0 / 5.6, 0.0215, 0.215
+    v = math.sqrt(2 * x1 * 2 * a / (1 - R * R))
+    u1 = math.sqrt(R * R * v * v + 2 * a * x1)
+    return v, 1 / ((u1 - R * v) / a + (u1 + v) / a)
+
+
+@pytest.mark.parametrize("source", ["preset", "config"])
+def test_orbits_json_of_a_drifter(source, tmp_path, capsys):
+    if source == "preset":
+        argv = ["orbits", "--preset", "drifter-issue19", "--json"]
+    else:
+        (tmp_path / "d.toml").write_text(CONFIG)
+        argv = ["orbits", str(tmp_path / "d.toml"), "--json"]
+    assert main(argv) == 0
+    doc = json.loads(capsys.readouterr().out)
+    v, f = _expected()
+    assert doc["orbit"]["impact_velocity_m_s"] == pytest.approx(v, rel=1e-7)
+    assert doc["orbit"]["blow_frequency_Hz"] == pytest.approx(f, rel=1e-7)
+    assert doc["orbit"]["percussive_power_kW"] == pytest.approx(0.5 * 5.6 * v * v * f / 1e3, rel=1e-6)
+
+
+def test_simulate_and_continue_a_drifter(tmp_path, capsys):
+    assert main(["simulate", "--preset", "drifter-issue19", "--out", str(tmp_path / "s"), "--periods", "30",
+                 "--gap", "30 mm"]) == 0
+    summary = json.loads((tmp_path / "s" / "summary.json").read_text())
+    v, f = _expected()
+    assert summary["blow_frequency_Hz"] == pytest.approx(f, rel=1e-7)
+    assert summary["impact_velocity_m_s"] == pytest.approx(v, rel=1e-7)
+    rows = (tmp_path / "s" / "impacts.csv").read_text().splitlines()
+    assert rows[0] == "time_s,impact_velocity_m_s" and len(rows) == summary["n_impacts"] + 1
+    capsys.readouterr()
+    assert main(["continue", "--preset", "drifter-issue19", "--parameter", "delay", "--to", "1.0",
+                 "--out", str(tmp_path / "c"), "--brute", "0", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["status"] == "reached" and doc["events"][0]["kind"] == "admissibility"
+    # the delay (dimensionless) past which the piston grazes the stop on its way out: it leaves at
+    # R v under the stroke force (a_s = 1) for tau, then the return force (a_r = 1) stops its inward
+    # motion w = tau - R v within w^2 / 2, which at the event equals the gap R v tau - tau^2 / 2
+    # (rigid, d = 0, theory §10)
+    from impactbar import find_orbit
+    from impactbar.physical import drifter_preset
+
+    tau = doc["events"][0]["value"]
+    d = drifter_preset("drifter-issue19")
+    o = find_orbit(d.model(), d.drive().__class__(1.0, 1.0, d.drive().switch_out, tau))
+    rv = 0.215 * o.impact_velocity
+    assert rv * tau - tau * tau / 2 == pytest.approx((tau - rv) ** 2 / 2, abs=1e-8)
+    events = (tmp_path / "c" / "events.csv").read_text().splitlines()
+    assert events[0].startswith("kind,value") and any(e.startswith("admissibility,") for e in events[1:])
+    branch = (tmp_path / "c" / "branch.csv").read_text().splitlines()
+    assert len(branch) > 5 and float(branch[-1].split(",")[0]) == pytest.approx(1.0)
