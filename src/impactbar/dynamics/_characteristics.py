@@ -13,6 +13,7 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
+from .._shared.threads import single_threaded_blas
 from . import _windowkernel as KW
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
@@ -195,6 +196,213 @@ class _Piston:
         """``int_0^x beta0``."""
         return self._int(x, -1.0)
 
+
+
+# -- jumps located in the fields at impact (theory §4c) ------------------------------------------
+# The piston's invariants unfold into one 2-periodic function of y in [-1, 1): W(y) = alpha0(y) for
+# y >= 0 and W(y) = beta0(-y) for y < 0 (the free-free modes are its Fourier series,
+# c_n = (a_n + i b_n)/2). A jump J of W at y_k, a jump K of W' and a jump L of W'' there are carried
+# exactly by the periodic Bernoulli functions -J B1(t) - K B2(t) - (2 L/3) B3(t),
+# t = ((y - y_k)/2) mod 1, whose coefficients are
+# exp(-i n pi y_k) (J/(2 pi i n) - K/(2 pi^2 n^2) + i L/(2 pi^3 n^3)).
+
+
+def _bernoulli(t, k):
+    """The Bernoulli polynomial ``B_k(t)``, ``k = 1..4``, on ``0 <= t < 1``."""
+    if k == 1:
+        return t - 0.5
+    if k == 2:
+        return t * t - t + 1.0 / 6.0
+    if k == 3:
+        return t * (t - 0.5) * (t - 1.0)
+    return t * t * (t - 1.0) ** 2 - 1.0 / 30.0
+
+
+def _singular_coefficients(N: int, y, jumps) -> np.ndarray:
+    """Complex coefficients ``c_n``, ``n = 1..N``, of the Bernoulli functions of ``jumps``
+    (``(J, K, L)`` at the positions ``y``)."""
+    n = np.arange(1, N + 1)
+    z = np.exp(-1j * math.pi * np.outer(n, y))
+    J, K, L = (np.asarray(u, dtype=float) for u in jumps)
+    return ((z @ J) / (2j * math.pi * n) - (z @ K) / (2.0 * math.pi**2 * n**2)
+            + 1j * (z @ L) / (2.0 * math.pi**3 * n**3))
+
+
+def locate_jumps(a, b, scale: float, max_jumps: int = 16):
+    """Jumps of the unfolded fields ``W(y)`` (and of ``W'`` there) located from their Fourier
+    coefficients (Eckhoff's method: K. S. Eckhoff, Math. Comp. 64 (1995) 671-690; the candidates
+    from a concentration sum, A. Gelb and E. Tadmor, Appl. Comput. Harmon. Anal. 7 (1999) 101-135).
+
+    With ``h_n = 2 pi i n c_n``, jumps ``J`` of ``W`` and ``K`` of ``W'`` at ``y_k`` give
+    ``h_n = sum_k exp(-i n pi y_k) (J_k - i K_k/(pi n)) + O(n^-2)``. The candidates are the peaks of
+    the concentration sum ``|sum sin(pi n/(N + 1)) h_n exp(i n pi y)|``; their positions are fitted
+    to ``h_n`` for ``N/4 <= n <= N`` by Levenberg-Marquardt on the variable projection (the sizes
+    linear), with a jump of ``W'`` at ``y = 0`` always included (the drive end, whose jump of ``W``
+    the static correction carries). A jump is kept when it is at least ``1e-3`` of the largest and
+    the upper two thirds of the band give it within 10 %; the whole location is dropped (no jumps)
+    when ``N < 32`` or when the jumps leave more than a quarter of ``h`` unexplained (a smooth
+    field, or a truncated series that is the field itself).
+
+    Parameters
+    ----------
+    a, b : numpy.ndarray, shape (N + 1,)
+        Cosine coefficients of the velocity and sine coefficients of ``s u_x`` (:class:`_Piston`,
+        the static correction's tail already in ``b``).
+    scale : float
+        Size of the fields (a jump below ``1e-12 scale`` is none).
+    max_jumps : int
+        Most candidates.
+
+    Returns
+    -------
+    y : numpy.ndarray, shape (k + 1,)
+        Positions in ``[-1, 1)``; the last is the drive end ``y = 0``.
+    jumps : tuple of numpy.ndarray, shape (k + 1,)
+        ``(J, K, L)``, the jumps of ``W, W', W''`` (``J = 0`` at the drive end; ``L = 0``: the
+        Bernoulli functions of :class:`_LocatedPiston` take it, the fit does not).
+    """
+    N = a.size - 1
+    none = np.zeros(1), (np.zeros(1), np.zeros(1), np.zeros(1))
+    if N < 32:  # too few coefficients to tell a jump from a smooth feature
+        return none
+    n = np.arange(1, N + 1)
+    h = 1j * math.pi * n * (a[1:] + 1j * b[1:])
+    w = np.sin(math.pi * n / (N + 1))
+    M = 16 * N  # the concentration sum on y_j = -1 + 2 j/M, by one FFT
+    yg = np.linspace(-1.0, 1.0, M, endpoint=False)
+    cf = np.zeros(M, dtype=complex)
+    cf[1:N + 1] = w * h * (-1.0) ** n
+    S = np.abs(np.fft.ifft(cf).real) * (M / float(np.sum(w)))
+    peaks = np.flatnonzero((S > np.roll(S, 1)) & (S >= np.roll(S, -1)))
+    peaks = peaks[np.argsort(-S[peaks])]
+    thr = max(1e-12 * scale, 2e-3 * (S[peaks[0]] if peaks.size else 0.0))
+
+    def dist(u, v):
+        return abs((u - v + 1.0) % 2.0 - 1.0)
+
+    found: list[float] = []
+    for i in peaks:
+        if S[i] < thr or len(found) >= max_jumps:
+            break
+        if dist(yg[i], 0.0) >= 1.0 / N and all(dist(yg[i], u) >= 3.0 / N for u in found):
+            found.append(float(yg[i]))
+    nn = n[max(1, N // 4) - 1:]
+    rhs_c = h[max(1, N // 4) - 1:]
+    rhs = np.concatenate((rhs_c.real, rhs_c.imag))
+    inv = 1.0 / (math.pi * nn)
+
+    def fit(yk, lo=0):
+        z = np.exp(-1j * math.pi * np.outer(nn[lo:], np.append(yk, 0.0)))
+        m = np.concatenate((z[:, :-1], z * (-1j * inv[lo:])[:, None]), axis=1)
+        m = np.concatenate((m.real, m.imag))
+        Q, Rm = np.linalg.qr(m)
+        b_ = np.concatenate((rhs_c[lo:].real, rhs_c[lo:].imag))
+        coef = np.linalg.solve(Rm, Q.T @ b_)
+        return coef, m @ coef - b_, z, Q
+
+    def normal(yk):  # the variable projection's normal equations (Kaufman's Jacobian)
+        coef, r, z, Q = fit(yk)
+        k = yk.size
+        d = (-1j * math.pi * nn)[:, None] * z[:, :k] * (coef[:k] - 1j * coef[k:2 * k] * inv[:, None])
+        d = np.concatenate((d.real, d.imag))
+        d -= Q @ (Q.T @ d)
+        return d.T @ d, -(d.T @ r), float(r @ r)
+
+    def strong(yk):  # the candidates whose fitted jump matters (a weak one has no position)
+        J = np.abs(fit(yk)[0][:yk.size])
+        return yk[J >= max(1e-3 * (J.max() if J.size else 0.0), 1e-12 * scale)]
+
+    def consistent(yk):  # the jumps that the upper half of the band confirms (within 10 %)
+        J1 = fit(yk)[0][:yk.size]
+        J2 = fit(yk, nn.size // 3)[0][:yk.size]
+        return yk[np.abs(J1 - J2) <= 0.1 * np.abs(J1)]
+
+    with single_threaded_blas():  # small dense problems
+        yk = strong(np.array(found))
+        y0 = yk.copy()
+        lam = 1e-3
+        for _ in range(60 if yk.size else 0):  # Levenberg-Marquardt
+            H, g, cost = normal(yk)
+            dH = np.diag(H).copy()
+            dH[dH <= 0.0] = 1.0
+            for _ in range(20):
+                dy = np.linalg.solve(H + lam * np.diag(dH), g)
+                trial = np.clip(yk + dy, y0 - 1.5 / N, y0 + 1.5 / N)
+                r_t = fit(trial)[1]
+                if float(r_t @ r_t) <= cost:
+                    lam = max(lam / 3.0, 1e-9)
+                    break
+                lam *= 4.0
+            else:
+                break
+            yk = trial
+            if np.max(np.abs(dy)) < 1e-10 / N:
+                break
+        yk = strong(consistent(yk))
+        coef, r = fit(yk)[:2]
+    if not np.all(np.isfinite(coef)) or np.linalg.norm(r) > 0.25 * np.linalg.norm(rhs):
+        return none  # the jumps do not explain the coefficients: a smooth field, or too few modes
+    k = yk.size
+    y = (np.append(yk, 0.0) + 1.0) % 2.0 - 1.0
+    return y, (np.append(coef[:k], 0.0), coef[k:], np.zeros(k + 1))
+
+
+class _LocatedPiston(_Piston):
+    """The fields at impact with their jumps carried exactly (theory §4c): the Bernoulli functions of
+    :func:`locate_jumps` plus the modal series of the continuous remainder (the modes kept less the
+    Bernoulli functions' first ``N`` modes), plus the static correction. On the modes kept it is
+    the modal state, as :class:`_Piston`."""
+
+    def __init__(self, piston: _Piston, y, jumps):
+        self.__dict__.update(piston.__dict__)
+        self.jy = np.asarray(y, dtype=float)
+        self.jJ, self.jK, self.jL = (np.asarray(u, dtype=float) for u in jumps)
+        c = _singular_coefficients(self.npi.size - 1, self.jy, jumps)
+        self.a = piston.a.copy()
+        self.b = piston.b.copy()
+        self.a[1:] -= 2.0 * c.real
+        self.b[1:] -= 2.0 * c.imag
+
+    def _t(self, yv):
+        return ((np.asarray(yv, dtype=float)[..., None] - self.jy) * 0.5) % 1.0
+
+    def _w(self, yv):
+        t = self._t(yv)
+        return -(_bernoulli(t, 1) @ self.jJ) - (_bernoulli(t, 2) @ self.jK) - (
+            2.0 / 3.0) * (_bernoulli(t, 3) @ self.jL)
+
+    def _wint(self, yv):
+        """An antiderivative of the Bernoulli part in ``y`` (periodic and continuous)."""
+        t = self._t(yv)
+        return -(_bernoulli(t, 2) @ self.jJ) - (2.0 / 3.0) * (_bernoulli(t, 3) @ self.jK) - (
+            1.0 / 3.0) * (_bernoulli(t, 4) @ self.jL)
+
+    def alpha(self, x):
+        return super().alpha(x) + self._w(x)
+
+    def beta(self, x):
+        return super().beta(x) + self._w(-np.asarray(x, dtype=float))
+
+    def alpha1(self, x: float) -> float:
+        return super().alpha1(x) + float(self._w(x))
+
+    def beta1(self, x: float) -> float:
+        return super().beta1(x) + float(self._w(-x))
+
+    def int1(self, x: float, sign: float) -> float:
+        return float(self._int(np.asarray(x, dtype=float), sign))
+
+    def _int(self, x, sign):
+        x = np.asarray(x, dtype=float)
+        w0 = self._wint(0.0)
+        extra = self._wint(x) - w0 if sign > 0 else w0 - self._wint(-x)
+        return super()._int(x, sign) + extra
+
+    @property
+    def jump_breaks(self) -> np.ndarray:
+        """``theta`` in ``(0, 2)`` at which the located jumps reach the rod end (``1 - y``)."""
+        th = 1.0 - self.jy[np.abs(self.jJ) > 0.0]
+        return np.sort(th[(th > 0.0) & (th < 2.0)])
 
 
 class _Contact:
@@ -451,11 +659,32 @@ class _Contact:
         F = self.force(self.grid)
         k = int(np.argmax(np.where(inside, F, -np.inf)))
         fmax = self._refine(k, -1.0)
+        # the one-sided limits at the located jumps (a jump's value is one of them)
+        side = self._jumps[:, None] + np.array([-1.0, 1.0]) * 1e-13
+        side = side[self.in_contact(side)]
+        Fs = self.force(side)
+        if Fs.size:
+            fmax = max(fmax, float(Fs.max()))
         full = len(self.contact) == 1 and self.contact[0, 0] == 0.0 and self.contact[0, 1] >= 2.0
         if not full:
             return fmax, 0.0
         k = int(np.argmin(F))
-        return fmax, self._refine(k, 1.0)
+        fmin = self._refine(k, 1.0)
+        return fmax, min(fmin, float(Fs.min())) if Fs.size else fmin
+
+    _jumps = np.empty(0)  # the located jumps' arrival at the rod end (theta), in the grid
+
+    def located(self) -> _Contact:
+        """The same window (contact intervals kept) whose piston fields at impact carry their jumps
+        and kinks exactly (:func:`locate_jumps`, :class:`_LocatedPiston`, theory §4c): the force
+        history without Gibbs overshoot at the jumps left by earlier releases and separations."""
+        y, jumps = locate_jumps(self.piston.a, self.piston.b, self.scale)
+        out = copy.copy(self)
+        out.piston = _LocatedPiston(self.piston, y, jumps)
+        out._jumps = out.piston.jump_breaks
+        out.breaks = np.unique(np.concatenate((self.breaks, out._jumps)))
+        out.grid = np.unique(np.concatenate((self.grid, out._jumps)))
+        return out
 
     def smoothed(self) -> _Contact:
         """The same window (contact intervals kept) whose piston fields are smoothed by the Jackson

@@ -206,8 +206,13 @@ class WaveImpact:
         return self.rod_energy / e0 if e0 > 0.0 else math.nan
 
     @cached_property
+    def _located(self):
+        """The window's solver whose fields at impact carry their jumps exactly (theory §4c)."""
+        return self._solver.located()
+
+    @cached_property
     def _force_extremes(self):
-        return self._solver.force_extremes()
+        return self._located.force_extremes()
 
     @property
     def peak_force(self) -> float:
@@ -219,14 +224,20 @@ class WaveImpact:
 
     @cached_property
     def peak_force_error(self) -> float:
-        """An indicator of the truncation error of :attr:`peak_force` (theory §4c): its distance to
-        the peak of the same window with the piston's fields smoothed by a positive (Jackson) kernel,
-        which overshoots no jump and is within ``O(1/N^2)`` on smooth fields. Where the peak sits on
-        a genuine jump of the fields the two straddle the exact value; where the fields are smooth
-        both are close to it. Not a guaranteed bound."""
+        """An estimate of the truncation error of :attr:`peak_force` (theory §4c), not a guaranteed
+        bound: ``|peak_force - P_J| + 2 s (1 + R) N max_{n >= 3N/4} |c_n|``, with ``P_J`` the peak
+        of the same window whose continuous remainder (the fields less their located jumps) is
+        smoothed by a positive (Jackson) kernel, and ``c_n`` the remainder's top coefficients (the
+        second term bounds the remainder's truncation when its coefficients fall as ``n^-2``, as
+        those of a field with kinks do). A jump that was not located (too weak, or not confirmed
+        by the coefficients) shows in the first term as its Gibbs overshoot."""
         if not len(self._solver.contact):
             return 0.0
-        return abs(self.peak_force - self._solver.smoothed().force_extremes()[0])
+        loc = self._located
+        N = loc.N
+        c = 0.5 * np.abs(loc.piston.a[1:] + 1j * loc.piston.b[1:])
+        tail = 2.0 * self.s * (1.0 + self.R) * N * float(c[max(0, (3 * N) // 4 - 1):].max())
+        return abs(self.peak_force - loc.smoothed().force_extremes()[0]) + tail
 
     def account(self, t) -> tuple[float, float, float]:
         """The energy balance of the contact up to time ``t`` in ``[0, 2/s]``.
@@ -270,7 +281,7 @@ class WaveImpact:
         """Interface force ``F(t)`` (the transmitted wave's force at the rod end), shape of ``t``,
         for ``0 <= t <= 2/s`` (0 outside the window)."""
         t = np.asarray(t, dtype=float)
-        return self._solver.force(t * self.s)
+        return self._located.force(t * self.s)
 
     def state_at(self, t):
         """Modal state ``(q, q')`` at time ``t`` in ``[0, 2/s]`` since contact started: the exact
@@ -312,7 +323,7 @@ class WaveImpact:
             ``max N`` (compressive, >= 0 when any part is compressed) and ``min N`` (< 0 if tensile).
         """
         J = cells or int(min(2048, max(64, 8 * self.q_before.size)))
-        return self._solver.stress_extremes(J)
+        return self._located.stress_extremes(J)
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (floats)."""
