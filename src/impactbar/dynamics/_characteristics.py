@@ -234,14 +234,19 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
     from a concentration sum, A. Gelb and E. Tadmor, Appl. Comput. Harmon. Anal. 7 (1999) 101-135).
 
     With ``h_n = 2 pi i n c_n``, jumps ``J`` of ``W`` and ``K`` of ``W'`` at ``y_k`` give
-    ``h_n = sum_k exp(-i n pi y_k) (J_k - i K_k/(pi n)) + O(n^-2)``. The candidates are the peaks of
-    the concentration sum ``|sum sin(pi n/(N + 1)) h_n exp(i n pi y)|``; their positions are fitted
-    to ``h_n`` for ``N/4 <= n <= N`` by Levenberg-Marquardt on the variable projection (the sizes
-    linear), with a jump of ``W'`` at ``y = 0`` always included (the drive end, whose jump of ``W``
-    the static correction carries). A jump is kept when it is at least ``1e-3`` of the largest and
-    the upper two thirds of the band give it within 10 %; the whole location is dropped (no jumps)
-    when ``N < 32`` or when the jumps leave more than a quarter of ``h`` unexplained (a smooth
-    field, or a truncated series that is the field itself).
+    ``h_n = sum_k exp(-i n pi y_k) (J_k - i K_k/(pi n)) + O(n^-2)``. The jumps are taken one at a
+    time (matching pursuit): the largest peak of the concentration sum
+    ``|sum sin(pi n/(N + 1)) r_n exp(i n pi y)|`` of what the jumps found so far leave unexplained
+    (``r = h`` at first, so that a side lobe is never taken for a jump), after which all positions
+    are fitted to ``h_n`` for ``N/4 <= n <= N`` by Levenberg-Marquardt on the variable projection
+    (the sizes linear), with a jump of ``W'`` at ``y = 0`` always included (the drive end, whose
+    jump of ``W`` the static correction carries). A candidate is refused when it comes within
+    ``0.75/N`` of another (two such jumps are not told apart), fits a jump larger than the fields'
+    variation, or lowers the residual by less than 2 %. A jump is kept when it is at least ``1e-3``
+    of the largest and the upper two thirds of the band give it within 10 %; the whole location is
+    dropped (no jumps) when ``N < 32`` or when the jumps leave more than a quarter of ``h``
+    unexplained (a smooth field, a truncated series that is the field itself, or jumps closer than
+    about ``1/N``: the fields then stay the modal series, with their Gibbs overshoot).
 
     Parameters
     ----------
@@ -270,33 +275,28 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
     w = np.sin(math.pi * n / (N + 1))
     M = 16 * N  # the concentration sum on y_j = -1 + 2 j/M, by one FFT
     yg = np.linspace(-1.0, 1.0, M, endpoint=False)
-    cf = np.zeros(M, dtype=complex)
-    cf[1:N + 1] = w * h * (-1.0) ** n
-    S = np.abs(np.fft.ifft(cf).real) * (M / float(np.sum(w)))
-    peaks = np.flatnonzero((S > np.roll(S, 1)) & (S >= np.roll(S, -1)))
-    peaks = peaks[np.argsort(-S[peaks])]
-    thr = max(1e-12 * scale, 2e-3 * (S[peaks[0]] if peaks.size else 0.0))
+    sign = (-1.0) ** n
 
-    def dist(u, v):
-        return abs((u - v + 1.0) % 2.0 - 1.0)
+    def concentration(hr):
+        cf = np.zeros(M, dtype=complex)
+        cf[1:N + 1] = w * hr * sign
+        return np.abs(np.fft.ifft(cf).real) * (M / float(np.sum(w)))
 
-    found: list[float] = []
-    for i in peaks:
-        if S[i] < thr or len(found) >= max_jumps:
-            break
-        if dist(yg[i], 0.0) >= 1.0 / N and all(dist(yg[i], u) >= 3.0 / N for u in found):
-            found.append(float(yg[i]))
-    nn = n[max(1, N // 4) - 1:]
-    rhs_c = h[max(1, N // 4) - 1:]
+    lo = max(1, N // 4) - 1
+    nn = n[lo:]
+    rhs_c = h[lo:]
     rhs = np.concatenate((rhs_c.real, rhs_c.imag))
     inv = 1.0 / (math.pi * nn)
 
-    def fit(yk, lo=0):
-        z = np.exp(-1j * math.pi * np.outer(nn[lo:], np.append(yk, 0.0)))
-        m = np.concatenate((z[:, :-1], z * (-1j * inv[lo:])[:, None]), axis=1)
+    def columns(yk, k_n):
+        z = np.exp(-1j * math.pi * np.outer(k_n, np.append(yk, 0.0)))
+        return z, np.concatenate((z[:, :-1], z * (-1j / (math.pi * k_n))[:, None]), axis=1)
+
+    def fit(yk, start=0):
+        z, m = columns(yk, nn[start:])
         m = np.concatenate((m.real, m.imag))
         Q, Rm = np.linalg.qr(m)
-        b_ = np.concatenate((rhs_c[lo:].real, rhs_c[lo:].imag))
+        b_ = np.concatenate((rhs_c[start:].real, rhs_c[start:].imag))
         coef = np.linalg.solve(Rm, Q.T @ b_)
         return coef, m @ coef - b_, z, Q
 
@@ -308,20 +308,15 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
         d -= Q @ (Q.T @ d)
         return d.T @ d, -(d.T @ r), float(r @ r)
 
-    def strong(yk):  # the candidates whose fitted jump matters (a weak one has no position)
-        J = np.abs(fit(yk)[0][:yk.size])
-        return yk[J >= max(1e-3 * (J.max() if J.size else 0.0), 1e-12 * scale)]
+    def min_gap(yk):  # the closest two jumps (two closer than about 1/N are not told apart)
+        if yk.size < 2:
+            return math.inf
+        g = np.abs((yk[:, None] - yk[None, :] + 1.0) % 2.0 - 1.0)
+        return float((g + 2.0 * np.eye(yk.size)).min())
 
-    def consistent(yk):  # the jumps that the upper half of the band confirms (within 10 %)
-        J1 = fit(yk)[0][:yk.size]
-        J2 = fit(yk, nn.size // 3)[0][:yk.size]
-        return yk[np.abs(J1 - J2) <= 0.1 * np.abs(J1)]
-
-    with single_threaded_blas():  # small dense problems
-        yk = strong(np.array(found))
-        y0 = yk.copy()
-        lam = 1e-3
-        for _ in range(60 if yk.size else 0):  # Levenberg-Marquardt
+    def refine(yk, iters):  # Levenberg-Marquardt on the positions, each within 1.5/N of its start
+        y0, lam = yk.copy(), 1e-3
+        for _ in range(iters if yk.size else 0):
             H, g, cost = normal(yk)
             dH = np.diag(H).copy()
             dH[dH <= 0.0] = 1.0
@@ -329,7 +324,7 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
                 dy = np.linalg.solve(H + lam * np.diag(dH), g)
                 trial = np.clip(yk + dy, y0 - 1.5 / N, y0 + 1.5 / N)
                 r_t = fit(trial)[1]
-                if float(r_t @ r_t) <= cost:
+                if float(r_t @ r_t) <= cost and min_gap(trial) >= 0.75 / N:
                     lam = max(lam / 3.0, 1e-9)
                     break
                 lam *= 4.0
@@ -338,6 +333,42 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
             yk = trial
             if np.max(np.abs(dy)) < 1e-10 / N:
                 break
+        return yk
+
+    def strong(yk):  # the jumps that matter (a weak one has no position)
+        J = np.abs(fit(yk)[0][:yk.size])
+        return yk[J >= max(1e-3 * (J.max() if J.size else 0.0), 1e-12 * scale)]
+
+    def consistent(yk):  # the jumps that the upper two thirds of the band confirm (within 10 %)
+        J1 = fit(yk)[0][:yk.size]
+        J2 = fit(yk, nn.size // 3)[0][:yk.size]
+        return yk[np.abs(J1 - J2) <= 0.1 * np.abs(J1)]
+
+    with single_threaded_blas():  # small dense problems
+        # matching pursuit: the largest peak of the concentration sum of what the jumps found so
+        # far leave unexplained (so that a side lobe is never taken for a jump), all refitted
+        yk = np.empty(0)
+        S = concentration(h)
+        thr = max(1e-12 * scale, 2e-3 * float(S.max()))
+        cap = 4.0 * float(S.max())  # no jump is larger than the fields' whole variation
+        banned = np.zeros(M, dtype=bool)
+        cost = float(rhs @ rhs)
+        for _ in range(2 * max_jumps):
+            if yk.size >= max_jumps:
+                break
+            near = np.abs((yg[:, None] - np.append(yk, 0.0) + 1.0) % 2.0 - 1.0).min(axis=1) < 1.0 / N
+            i = int(np.argmax(np.where(near | banned, -1.0, S)))
+            if S[i] < thr:
+                break
+            trial = refine(np.append(yk, yg[i]), 12)
+            coef, r = fit(trial)[:2]
+            if (min_gap(trial) < 0.75 / N or np.abs(coef[:trial.size]).max() > cap
+                    or float(r @ r) > 0.98 * cost):
+                banned |= np.abs((yg - yg[i] + 1.0) % 2.0 - 1.0) < 1.0 / N  # unresolved: not a jump
+                continue
+            yk, cost = trial, float(r @ r)
+            S = concentration(h - columns(yk, n)[1] @ coef)
+        yk = refine(yk, 40)
         yk = strong(consistent(yk))
         coef, r = fit(yk)[:2]
     if not np.all(np.isfinite(coef)) or np.linalg.norm(r) > 0.25 * np.linalg.norm(rhs):
