@@ -3,7 +3,6 @@ force at ``x = 0`` (static correction), so the force has no spurious spike at ``
 and minimum forces against an independent whole-system characteristics reference
 (``wave_reference``: piston plus semi-infinite rod, no modes)."""
 
-
 import numpy as np
 import pytest
 
