@@ -201,3 +201,34 @@ def test_no_jumps_in_a_smooth_field_or_a_series_that_is_the_field():
         yf, (Jf, _, _) = locate_jumps(np.concatenate(([0.0], 2 * c.real)),
                                       np.concatenate(([0.0], 2 * c.imag)), 1.0)
         assert yf.size == 1 and not np.any(Jf)
+
+
+# ---------------------------------------------------------------- pressed contact: no chaining ---
+def test_pressed_contact_is_one_record_and_follows_the_reference():
+    """A blow that ends its window still pressed on the rod (``s = 5``, ``R = 0.3``,
+    ``p = 0.9 + cos t``, ``d = 0``) goes on as the sustained contact until the release: one record,
+    no window restarted at the end of another (the chained restarts whose force dipped to 0.2-0.4
+    of its value). Its force, window and pressed phase, follows the whole-system reference (the
+    window to 1e-6; the pressed phase to 2e-3 once the transient of width about ``1/(s N)`` after
+    ``2/s``, where the true force drops by half, has passed), and so does the release."""
+    from impactbar.simulation.simulate import InitialState, simulate
+
+    s, R, load, N = 5.0, 0.3, CosineLoad(0.9, 1.0), 64
+    model = BarModel(s=s, d=0.0, R=R, n_modes=N, impact="wave")
+    run = simulate(model, load, InitialState.rigid(end_displacement=-0.01, velocity=0.0, n_modes=N),
+                   2 * np.pi * 6)
+    records = [w.resolve() for w in run.impacts]
+    for a, b in zip(records[:-1], records[1:], strict=True):
+        assert b.t0 > a.t0 + a.duration + 1.0  # a flight between contacts, never a restart
+    blow = records[-2]
+    assert blow.sustained is not None and blow.duration > 10 * blow.window.duration
+    win = blow.window
+    theta, F, switches = march(s, R, load, win.t0, win.q_before, win.v_before,
+                               periods=(blow.duration + 0.3) / (2 * np.pi), J=20000)
+    release = [t / s for t, on in switches if not on][0]
+    assert blow.duration == pytest.approx(release, abs=1e-3)
+    t_win = np.array([0.05, 0.1, 0.2, 0.3, 0.39])
+    np.testing.assert_allclose(win.force(t_win), np.interp(t_win * s, theta, F), rtol=1e-6)
+    t_sus = np.array([0.45, 0.5, 0.7, 1.0, 2.0, 3.0, 4.0])
+    ref = np.interp(t_sus * s, theta, F)
+    np.testing.assert_allclose(blow.sustained.force(t_sus - win.duration), ref, rtol=2e-3)
