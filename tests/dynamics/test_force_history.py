@@ -232,3 +232,33 @@ def test_pressed_contact_is_one_record_and_follows_the_reference():
     t_sus = np.array([0.45, 0.5, 0.7, 1.0, 2.0, 3.0, 4.0])
     ref = np.interp(t_sus * s, theta, F)
     np.testing.assert_allclose(blow.sustained.force(t_sus - win.duration), ref, rtol=2e-3)
+
+
+# ---------------------------------------------------------------- the 3-in-2 cycle (s = 5) -------
+def test_three_blows_in_two_periods_from_the_exact_fields():
+    """``s = 5``, ``R = 0.3``, ``p = 0.5 + cos t`` at ``d = 0``: the whole system settles on three
+    blows in two load periods (a weak one, which separates and re-contacts, between two strong
+    ones; the strong ones hold contact a little past ``2/s``). The modal simulation cannot be
+    compared with it blow for blow: its contact decisions rest on truncated fields (at
+    ``N = 64..256`` its weak blow has micro-contacts shorter than ``1/(s N)`` that the whole system
+    lacks, and the cycle drifts). So the modal window is given the whole system's own fields at
+    impact, projected on ``N`` modes, and its peak force compared with the whole system's: the
+    fields carry narrow pulses (opposite jumps 0.015 apart). At ``N = 256`` every blow's jumps are
+    located and the peaks agree to 1e-4 (measured 3e-6, 2e-5, 2e-5; the series alone is 2-3 %
+    high); at ``N = 128`` a peak is either within 1e-3 or, where the pulse's jumps lie too close to
+    be told apart, keeps the series' overshoot and ``peak_force_error`` says so."""
+    from wave_reference import project, steady_fields
+
+    s, R, load = 5.0, 0.3, CosineLoad(0.5, 1.0)
+    blows = steady_fields(s, R, load, 0.46, np.zeros(3), np.array([1.0, 0.0, 0.0]), periods=16,
+                          cycle=2, J=20000)
+    assert len(blows) == 3
+    for N, tol in ((256, 1e-4), (128, 1e-3)):
+        model = BarModel(s=s, d=0.0, R=R, n_modes=N, impact="wave")
+        for t0, alpha, beta, F in blows:
+            imp = wave_impact(model, load, t0, *project(s, alpha, beta, model))
+            err = abs(imp.peak_force - F.max())
+            assert err < tol * F.max() or err <= imp.peak_force_error
+            if N == 256:
+                assert err < tol * F.max()
+                assert imp._solver.force_extremes()[0] > 1.01 * F.max()  # the series' overshoot

@@ -469,15 +469,24 @@ class _Contact:
     def located(self) -> _Contact:
         """The same window (contact intervals kept) whose piston fields at impact carry their jumps
         and kinks exactly (:func:`locate_jumps`, :class:`_LocatedPiston`, theory §4c): the force
-        history without Gibbs overshoot at the jumps left by earlier releases and separations."""
+        history without Gibbs overshoot at the jumps left by earlier releases and separations.
+        Itself when no jump is found, or when the located peak force differs from the series'
+        by more than the series can overshoot, ``0.1 s (1 + R)/2`` times the jumps' sum, plus
+        1e-3 of the peak (a jump placed wrong: the series is then the better guess)."""
         from ._jumps import _LocatedPiston, locate_jumps
 
         y, jumps = locate_jumps(self.piston.a, self.piston.b, self.scale)
+        if not np.any(jumps[0]):
+            return self
         out = copy.copy(self)
         out.piston = _LocatedPiston(self.piston, y, jumps)
         out._jumps = out.piston.jump_breaks
         out.breaks = np.unique(np.concatenate((self.breaks, out._jumps)))
         out.grid = np.unique(np.concatenate((self.grid, out._jumps)))
+        plain = self.force_extremes()[0]
+        gibbs = 0.05 * self.s * (1.0 + self.R) * float(np.sum(np.abs(jumps[0]))) + 1e-3 * abs(plain)
+        if abs(out.force_extremes()[0] - plain) > gibbs:
+            return self
         return out
 
     def smoothed(self) -> _Contact:

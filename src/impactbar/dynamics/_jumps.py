@@ -12,6 +12,10 @@ import numpy as np
 from .._shared.threads import single_threaded_blas
 from ._characteristics import _Piston
 
+#: the closest two located jumps may lie, in units of 1/N (closer, a jump and its kink are not told
+#: from two jumps: the fit degenerates)
+GAP = 1.5
+
 # -- jumps located in the fields at impact (theory §4c) ------------------------------------------
 # The piston's invariants unfold into one 2-periodic function of y in [-1, 1): W(y) = alpha0(y) for
 # y >= 0 and W(y) = beta0(-y) for y < 0 (the free-free modes are its Fourier series,
@@ -138,7 +142,7 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
                 dy = np.linalg.solve(H + lam * np.diag(dH), g)
                 trial = np.clip(yk + dy, y0 - 1.5 / N, y0 + 1.5 / N)
                 r_t = fit(trial)[1]
-                if float(r_t @ r_t) <= cost and min_gap(trial) >= 0.75 / N:
+                if float(r_t @ r_t) <= cost and min_gap(trial) >= GAP / N:
                     lam = max(lam / 3.0, 1e-9)
                     break
                 lam *= 4.0
@@ -170,14 +174,14 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
         for _ in range(2 * max_jumps):
             if yk.size >= max_jumps:
                 break
-            near = np.abs((yg[:, None] - np.append(yk, 0.0) + 1.0) % 2.0 - 1.0).min(axis=1) < 1.0 / N
+            near = np.abs((yg[:, None] - np.append(yk, 0.0) + 1.0) % 2.0 - 1.0).min(axis=1) < GAP / N
             i = int(np.argmax(np.where(near | banned, -1.0, S)))
             if S[i] < thr:
                 break
             trial = refine(np.append(yk, yg[i]), 12)
             coef, r = fit(trial)[:2]
             Jt = np.abs(coef[:trial.size])
-            if (min_gap(trial) < 0.75 / N or Jt.max() > cap or float(r @ r) > 0.98 * cost
+            if (min_gap(trial) < GAP / N or Jt.max() > cap or float(r @ r) > 0.98 * cost
                     or Jt[-1] < 1e-3 * Jt.max()):
                 banned |= np.abs((yg - yg[i] + 1.0) % 2.0 - 1.0) < 1.0 / N  # unresolved: not a jump
                 continue

@@ -150,14 +150,16 @@ class WaveImpact:
         correction) and the jumps that earlier releases and separations left in them, located
         from the modal coefficients and carried exactly (theory §4c); the contact intervals and
         the post-window state are those of the modal fields. Accuracy against the exact whole
-        system (``d = 0``; measured on the stable orbits of theory §4c): within 2e-5 relative for
-        ``64 <= N <= 256`` (2e-6 to 1e-6 where the peak sits on a jump, ``s = 10``; 2e-6 and
-        below 1e-6 at ``N = 64, 128`` where the jumps are weak, ``s = 3``; there 6e-4 at
-        ``N = 32``, where those weak jumps are not located yet); below ``N = 32``, or where jumps lie closer than about
-        ``1/N`` to each other, no jump is located and a peak on a jump ``[A]`` of the arriving
-        invariant is high by up to its Gibbs overshoot, ``0.09 (1 + R) s |[A]| / 2``, at every
-        ``N`` (``peak_force_error`` then shows it); a feature narrower than ``1/(s N)`` is not
-        resolved.
+        system (``d = 0``, measured, theory §4c): for ``64 <= N <= 256`` within 2e-5 relative on
+        the stable orbits checked (2e-6 to 1e-6 where the peak sits on a jump, ``s = 10``; 2e-6,
+        then below 1e-6, at ``s = 3``, whose weak jumps are not located at ``N = 32``: 6e-4
+        there), and within 2e-5 on the three blows of a 3-in-2 cycle (``s = 5``) at ``N = 256``.
+        No jump is located below ``N = 32``, nor where two lie closer than about ``1.5/N`` (a
+        pulse narrower than that), nor where the location would move the peak by more than the
+        series can overshoot: a peak on a jump ``[A]`` of the arriving invariant is then high by
+        up to its Gibbs overshoot, ``0.09 (1 + R) s |[A]| / 2``, at every ``N`` (2-4 % on that
+        cycle at ``N = 128``), and ``peak_force_error`` shows it. A feature narrower than
+        ``1/(s N)`` is not resolved.
     """
 
     def __init__(self, s, R, t0, q_before, v_before, q_after, v_after, solver):
