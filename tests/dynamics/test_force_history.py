@@ -159,8 +159,8 @@ def test_jumps_located_from_the_coefficients():
     first 64 Fourier coefficients: the jumps come back to 2e-5 in position and 2e-3 in size (the
     smooth part's low modes limit the fit), and the fields rebuilt from them agree to 2e-3 away
     from the jumps, where the series alone is 0.19 off (its Gibbs overshoot)."""
-    from impactbar.dynamics._characteristics import _Piston
-    from impactbar.dynamics._jumps import _LocatedPiston, locate_jumps
+    from impactbar.dynamics._characteristics import _LocatedPiston, _Piston
+    from impactbar.dynamics._jumps import locate_jumps
 
     N = 64
     n = np.arange(1, N + 1)

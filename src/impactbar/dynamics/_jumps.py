@@ -1,7 +1,7 @@
-"""Jumps of the piston's fields at impact located from the modal coefficients and carried exactly
-(theory §4c): :func:`locate_jumps` (Eckhoff's method) and :class:`_LocatedPiston`, the fields as
-Bernoulli functions at the jumps plus the modal series of a continuous remainder.
-:meth:`impactbar.dynamics._characteristics._Contact.located` uses them for the force history."""
+"""Jumps of the piston's fields at impact located from the modal coefficients (theory §4c):
+:func:`locate_jumps` (Eckhoff's method) and the Bernoulli functions that carry them exactly
+(:class:`impactbar.dynamics._characteristics._LocatedPiston` builds the fields from them for the
+force history)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,6 @@ import math
 import numpy as np
 
 from .._shared.threads import single_threaded_blas
-from ._characteristics import _Piston
 
 #: the closest two located jumps may lie, in units of 1/N (closer, a jump and its kink are not told
 #: from two jumps: the fit degenerates)
@@ -195,61 +194,3 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
     k = yk.size
     y = (np.append(yk, 0.0) + 1.0) % 2.0 - 1.0
     return y, (np.append(coef[:k], 0.0), coef[k:], np.zeros(k + 1))
-
-
-class _LocatedPiston(_Piston):
-    """The fields at impact with their jumps carried exactly (theory §4c): the Bernoulli functions of
-    :func:`locate_jumps` plus the modal series of the continuous remainder (the modes kept less the
-    Bernoulli functions' first ``N`` modes), plus the static correction. On the modes kept it is
-    the modal state, as :class:`_Piston`."""
-
-    def __init__(self, piston: _Piston, y, jumps):
-        self.__dict__.update(piston.__dict__)
-        self.jy = np.asarray(y, dtype=float)
-        self.jJ, self.jK, self.jL = (np.asarray(u, dtype=float) for u in jumps)
-        c = _singular_coefficients(self.npi.size - 1, self.jy, jumps)
-        self.a = piston.a.copy()
-        self.b = piston.b.copy()
-        self.a[1:] -= 2.0 * c.real
-        self.b[1:] -= 2.0 * c.imag
-
-    def _t(self, yv):
-        return ((np.asarray(yv, dtype=float)[..., None] - self.jy) * 0.5) % 1.0
-
-    def _w(self, yv):
-        t = self._t(yv)
-        return -(_bernoulli(t, 1) @ self.jJ) - (_bernoulli(t, 2) @ self.jK) - (
-            2.0 / 3.0) * (_bernoulli(t, 3) @ self.jL)
-
-    def _wint(self, yv):
-        """An antiderivative of the Bernoulli part in ``y`` (periodic and continuous)."""
-        t = self._t(yv)
-        return -(_bernoulli(t, 2) @ self.jJ) - (2.0 / 3.0) * (_bernoulli(t, 3) @ self.jK) - (
-            1.0 / 3.0) * (_bernoulli(t, 4) @ self.jL)
-
-    def alpha(self, x):
-        return super().alpha(x) + self._w(x)
-
-    def beta(self, x):
-        return super().beta(x) + self._w(-np.asarray(x, dtype=float))
-
-    def alpha1(self, x: float) -> float:
-        return super().alpha1(x) + float(self._w(x))
-
-    def beta1(self, x: float) -> float:
-        return super().beta1(x) + float(self._w(-x))
-
-    def int1(self, x: float, sign: float) -> float:
-        return float(self._int(np.asarray(x, dtype=float), sign))
-
-    def _int(self, x, sign):
-        x = np.asarray(x, dtype=float)
-        w0 = self._wint(0.0)
-        extra = self._wint(x) - w0 if sign > 0 else w0 - self._wint(-x)
-        return super()._int(x, sign) + extra
-
-    @property
-    def jump_breaks(self) -> np.ndarray:
-        """``theta`` in ``(0, 2)`` at which the located jumps reach the rod end (``1 - y``)."""
-        th = 1.0 - self.jy[np.abs(self.jJ) > 0.0]
-        return np.sort(th[(th > 0.0) & (th < 2.0)])
