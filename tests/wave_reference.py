@@ -193,6 +193,53 @@ def steady_blows(s, R, load, t_start, q, v, periods=60, cycle=1, J=20000):
     return out["last"], drift
 
 
+def steady_fields(s, R, load, t_start, q, v, periods=60, cycle=1, J=20000):
+    """The piston's fields at the impact of each blow of the last ``cycle`` load periods, after
+    marching ``periods`` of them: the exact fields of the steady motion (jumps and all), to hand to
+    the modal solver projected on its modes (:func:`project`).
+
+    Returns
+    -------
+    list of (t0, alpha0, beta0, F)
+        Load time of the impact, the invariants at ``x = j/J`` (``j = 0..J``) at that instant, and
+        the interface force at the nodes of the window ``[0, 2]`` (in ``theta``) that follows.
+    """
+    theta, F, switches, A, B, th_k = march(s, R, load, t_start, q, v, periods, J,
+                                           keep=2.0 * math.pi * s * (periods - cycle - 1))
+    th = th_k + np.arange(A.size) / J
+    blows = []
+    for t, on in switches:
+        if on and t - 1.0 > th_k and t + 2.0 < th[-1] and (not blows or t - blows[-1] > 2.0 + 1e-9):
+            blows.append(t)
+    T = 2.0 * math.pi * s * cycle
+    out = []
+    jj = np.arange(J + 1)
+    for tb in blows:
+        if tb < blows[-1] - T + 1e-9:
+            continue
+        kb = int(round((tb - th_k) * J))  # the impact's node (the switch acts from a node)
+        tbn = th_k + kb / J
+        k0 = int(np.searchsorted(theta, tbn - 0.5 / J))
+        out.append((t_start + tbn / s, A[kb + J - jj], B[kb - J + jj], F[k0:k0 + 2 * J]))
+    return out
+
+
+def project(s, alpha, beta, model):
+    """The modal state ``(q, v)`` of fields given as invariants at ``x = j/J``: the first ``N + 1``
+    free-free modes by the trapezoidal rule (``O(1/J)`` at a jump), ``u(1) = 0``."""
+    J = alpha.size - 1
+    x = np.arange(J + 1) / J
+    w = np.full(J + 1, 1.0 / J)
+    w[[0, -1]] = 0.5 / J
+    n = np.arange(model.n_modes + 1)
+    v = np.cos(np.pi * np.outer(n, x)) @ (0.5 * (alpha + beta) * w)  # v_n = int v cos(n pi x)
+    sux = 2.0 * np.sin(np.pi * np.outer(n, x)) @ (0.5 * (beta - alpha) * w)  # s u_x's sine terms
+    q = np.zeros(n.size)
+    q[1:] = -sux[1:] / (2.0 * s * np.pi * n[1:])
+    q[0] = -(model.end_weights[1:] @ q[1:])
+    return q, v
+
+
 def random_state(rng, model, amplitude):
     """A modal state with ``u(1) = 0`` and ``u_t(1) = 1`` (arriving at unit speed)."""
     N, s = model.n_modes, model.s

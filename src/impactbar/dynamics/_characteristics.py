@@ -14,6 +14,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from . import _windowkernel as KW
+from ._jumps import _bernoulli, _singular_coefficients, locate_jumps
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
 
@@ -195,6 +196,64 @@ class _Piston:
         """``int_0^x beta0``."""
         return self._int(x, -1.0)
 
+
+
+class _LocatedPiston(_Piston):
+    """The fields at impact with their jumps carried exactly (theory §4c): the Bernoulli functions of
+    :func:`locate_jumps` plus the modal series of the continuous remainder (the modes kept less the
+    Bernoulli functions' first ``N`` modes), plus the static correction. On the modes kept it is
+    the modal state, as :class:`_Piston`."""
+
+    def __init__(self, piston: _Piston, y, jumps):
+        self.__dict__.update(piston.__dict__)
+        self.jy = np.asarray(y, dtype=float)
+        self.jJ, self.jK, self.jL = (np.asarray(u, dtype=float) for u in jumps)
+        c = _singular_coefficients(self.npi.size - 1, self.jy, jumps)
+        self.a = piston.a.copy()
+        self.b = piston.b.copy()
+        self.a[1:] -= 2.0 * c.real
+        self.b[1:] -= 2.0 * c.imag
+
+    def _t(self, yv):
+        return ((np.asarray(yv, dtype=float)[..., None] - self.jy) * 0.5) % 1.0
+
+    def _w(self, yv):
+        t = self._t(yv)
+        return -(_bernoulli(t, 1) @ self.jJ) - (_bernoulli(t, 2) @ self.jK) - (
+            2.0 / 3.0) * (_bernoulli(t, 3) @ self.jL)
+
+    def _wint(self, yv):
+        """An antiderivative of the Bernoulli part in ``y`` (periodic and continuous)."""
+        t = self._t(yv)
+        return -(_bernoulli(t, 2) @ self.jJ) - (2.0 / 3.0) * (_bernoulli(t, 3) @ self.jK) - (
+            1.0 / 3.0) * (_bernoulli(t, 4) @ self.jL)
+
+    def alpha(self, x):
+        return super().alpha(x) + self._w(x)
+
+    def beta(self, x):
+        return super().beta(x) + self._w(-np.asarray(x, dtype=float))
+
+    def alpha1(self, x: float) -> float:
+        return super().alpha1(x) + float(self._w(x))
+
+    def beta1(self, x: float) -> float:
+        return super().beta1(x) + float(self._w(-x))
+
+    def int1(self, x: float, sign: float) -> float:
+        return float(self._int(np.asarray(x, dtype=float), sign))
+
+    def _int(self, x, sign):
+        x = np.asarray(x, dtype=float)
+        w0 = self._wint(0.0)
+        extra = self._wint(x) - w0 if sign > 0 else w0 - self._wint(-x)
+        return super()._int(x, sign) + extra
+
+    @property
+    def jump_breaks(self) -> np.ndarray:
+        """``theta`` in ``(0, 2)`` at which the located jumps reach the rod end (``1 - y``)."""
+        th = 1.0 - self.jy[np.abs(self.jJ) > 0.0]
+        return np.sort(th[(th > 0.0) & (th < 2.0)])
 
 
 class _Contact:
@@ -451,11 +510,41 @@ class _Contact:
         F = self.force(self.grid)
         k = int(np.argmax(np.where(inside, F, -np.inf)))
         fmax = self._refine(k, -1.0)
+        # the one-sided limits at the located jumps (a jump's value is one of them)
+        side = self._jumps[:, None] + np.array([-1.0, 1.0]) * 1e-13
+        side = side[self.in_contact(side)]
+        Fs = self.force(side)
+        if Fs.size:
+            fmax = max(fmax, float(Fs.max()))
         full = len(self.contact) == 1 and self.contact[0, 0] == 0.0 and self.contact[0, 1] >= 2.0
         if not full:
             return fmax, 0.0
         k = int(np.argmin(F))
-        return fmax, self._refine(k, 1.0)
+        fmin = self._refine(k, 1.0)
+        return fmax, min(fmin, float(Fs.min())) if Fs.size else fmin
+
+    _jumps = np.empty(0)  # the located jumps' arrival at the rod end (theta), in the grid
+
+    def located(self) -> _Contact:
+        """The same window (contact intervals kept) whose piston fields at impact carry their jumps
+        and kinks exactly (:func:`locate_jumps`, :class:`_LocatedPiston`, theory §4c): the force
+        history without Gibbs overshoot at the jumps left by earlier releases and separations.
+        Itself when no jump is found, or when the located peak force differs from the series'
+        by more than the series can overshoot, ``0.1 s (1 + R)/2`` times the jumps' sum, plus
+        1e-3 of the peak (a jump placed wrong: the series is then the better guess)."""
+        y, jumps = locate_jumps(self.piston.a, self.piston.b, self.scale)
+        if not np.any(jumps[0]):
+            return self
+        out = copy.copy(self)
+        out.piston = _LocatedPiston(self.piston, y, jumps)
+        out._jumps = out.piston.jump_breaks
+        out.breaks = np.unique(np.concatenate((self.breaks, out._jumps)))
+        out.grid = np.unique(np.concatenate((self.grid, out._jumps)))
+        plain = self.force_extremes()[0]
+        gibbs = 0.05 * self.s * (1.0 + self.R) * float(np.sum(np.abs(jumps[0]))) + 1e-3 * abs(plain)
+        if abs(out.force_extremes()[0] - plain) > gibbs:
+            return self
+        return out
 
     def smoothed(self) -> _Contact:
         """The same window (contact intervals kept) whose piston fields are smoothed by the Jackson
