@@ -150,7 +150,10 @@ def test_ctrl_c_during_paper_in_a_real_process(tmp_path):
     time.sleep(0.5)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=120)
-    assert proc.returncode == 130, stderr
+    # Under ``python -m`` an interrupt that lands early (while the paper's first worker threads start)
+    # can make CPython end the process by SIGINT itself after our handler ran: the shell then shows 130
+    # (128 + 2) as well. The message is the same, once, and no traceback.
+    assert proc.returncode in (130, -signal.SIGINT), stderr
     assert stderr.strip() == "impactbar paper: interrupted"
 
 
