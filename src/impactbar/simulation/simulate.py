@@ -342,9 +342,10 @@ class _Core:
         cap = out_q.shape[0]
         out_t = np.empty(cap)
         out_vel = np.empty(cap)
-        n, st, tn = K.run_free(tuple(D), tuple(B.view), self.R, self.c, float(t), q, v, float(t_end),
-                               int(max_imp), CHATTER_TAIL, (out_t, out_vel, out_q, out_v),
-                               use_fast("simulate.impact_search"))
+        run = K.run_free_rigid if self.N == 0 else K.run_free  # (a rigid run compiles no modal search)
+        n, st, tn = run(tuple(D), tuple(B.view), self.R, self.c, float(t), q, v, float(t_end),
+                        int(max_imp), CHATTER_TAIL, (out_t, out_vel, out_q, out_v),
+                        use_fast("simulate.impact_search"))
         return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
