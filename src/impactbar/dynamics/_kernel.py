@@ -20,7 +20,7 @@ of each mode, ``E_n = (v_n - v_pn)^2 + w2_n (q_n - q_pn)^2``, which never grows
 ``[a, a + 2|h|/h']`` and Newton (safeguarded by bisection) refines it to rounding.
 
 Two specialised searches, with the same guarantee and the same impacts to rounding, take the
-flights after an impact (``run_free_rigid(..., fast=True)``, ``run_free(..., fast=True)``):
+flights after an impact (``run_free_rigid``, ``run_free``, with their fast flag true):
 :func:`rigid1_crossing` for the rigid bar under one harmonic, in scalars with bounds that keep the
 signs of the present curvature, and
 :func:`modal_crossing` for flexible modes under a Fourier load, in folded form (one sine and cosine
@@ -551,12 +551,14 @@ def modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
     return _modal_crossing(LoadKernelView(*load), ModalBasisView(*B), c, fold, ta, qa, va, t_lim, htol, work)
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def _run_free(load, B, R, c, start, t_end, max_imp, tail_tol, out, rigid_fast, modal_fast):
-    """Free flight with impacts from ``(t, q, v)`` in the free-free basis ``B``
-    (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``
-    (:class:`~impactbar.dynamics.kernelview.LoadKernelView`); ``q, v`` are overwritten with the
-    final state.
+def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fast, modal_fast):
+    """Free flight with impacts from ``start = (t, q, v)`` in the free-free basis ``B_t`` (the plain
+    tuple of a :class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load_t`` (that of a
+    :class:`~impactbar.dynamics.kernelview.LoadKernelView`: numba dispatches plain tuples several
+    times faster than named tuples); ``q, v`` are overwritten with the final state. Compiled twice
+    from this one source, as :func:`run_free` (flexible bars: ``rigid_fast`` is ``None``) and
+    :func:`run_free_rigid` (``modal_fast`` is ``None``), each with one signature and no wrapper
+    kernel (a wrapper compiles its callees' code again).
 
     Every impact (``c . q = 0`` reached with ``c . v > 0``) applies ``v -> -R v`` (eqs. 10, 11); its
     time, the arrival velocity ``c . v`` and the state just after are written to
@@ -565,7 +567,7 @@ def _run_free(load, B, R, c, start, t_end, max_imp, tail_tol, out, rigid_fast, m
     bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``) or the end
     arrives tangentially and pressed (CONTACT).
 
-    ``start = (t, q, v)``. With ``rigid_fast`` true the flights that follow an impact (or start
+    With ``rigid_fast`` true the flights that follow an impact (or start
     clearly off the stop, or leaving it) are searched by :func:`rigid1_crossing` (the rigid bar under
     one harmonic), with ``modal_fast`` true by :func:`modal_crossing` (flexible modes under a
     Fourier load, all underdamped): the same impacts, to rounding. A flight from rest on the stop (a release),
@@ -577,6 +579,8 @@ def _run_free(load, B, R, c, start, t_end, max_imp, tail_tol, out, rigid_fast, m
     -------
     n, status, t : int, int, float
     """
+    load = LoadKernelView(*load_t)
+    B = ModalBasisView(*B_t)
     kind, p0, ks, pr, pim = load.kind, load.p0, load.ks, load.pr, load.pim
     breaks, levels = load.breaks, load.levels
     w2, d, hpr, hpi, vpb = B.w2, B.d, B.hpr, B.hpi, B.vpb
@@ -726,21 +730,12 @@ def _run_free(load, B, R, c, start, t_end, max_imp, tail_tol, out, rigid_fast, m
             va[i] = v[i]
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
-    """:func:`_run_free` for a flexible bar (the modal search where ``fast``), called from Python
-    with ``load`` and ``B`` as plain tuples (``tuple(view)``: numba dispatches them several times
-    faster than named tuples)."""
-    return _run_free(LoadKernelView(*load), ModalBasisView(*B), R, c, (t, q, v), t_end, max_imp,
-                     tail_tol, out, None, fast)
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def run_free_rigid(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
-    """:func:`run_free` for the rigid bar (one mode): the search in scalars where ``fast``, and no
-    flexible search compiled."""
-    return _run_free(LoadKernelView(*load), ModalBasisView(*B), R, c, (t, q, v), t_end, max_imp,
-                     tail_tol, out, fast, None)
+#: :func:`_run_free` for flexible bars (``run_free(load, B, R, c, (t, q, v), t_end, max_imp,
+#: tail_tol, out, None, fast)``: the modal search where ``fast``, no rigid one compiled)
+run_free = numba.njit(cache=CACHE, nogil=True)(_run_free)
+#: :func:`_run_free` for the rigid bar (``..., fast, None)``: the search in scalars where ``fast``,
+#: no flexible search compiled)
+run_free_rigid = numba.njit(cache=CACHE, nogil=True)(_run_free)
 
 
 @numba.njit(cache=CACHE, nogil=True)
