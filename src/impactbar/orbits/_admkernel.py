@@ -97,7 +97,7 @@ def _dot(c, x):
     return s
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _g(phase, t, c, work, src):
     """``g(t) = c . q(phase + t)``."""
     q = work[0]
@@ -170,7 +170,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
     return lo, hi, True, best
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
     """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
     pieces, down to a 64th of the widest."""
@@ -194,7 +194,7 @@ def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
     return lo, hi, good
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _newton(phase, lo, hi, prob, work, src):
     """``admissibility._newton_stationary``: the same vectorised iteration, element by element."""
     c, w2, d = prob[0], prob[2], prob[3]
@@ -271,7 +271,7 @@ def _sample_bound(mid, gm, g1, atol, floor):
     return top - atol
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _single(phase, ts, lo, hi, prob, work, src):
     """``admissibility._numpy_search``'s ``single_zero``: ``|g''(ts)| > L3 r``, so that ``ts`` is
     the only zero of ``g'`` on ``[lo, hi]``."""
@@ -310,7 +310,7 @@ def _single(phase, ts, lo, hi, prob, work, src):
     return abs(g2) > L3 * max(ts - lo, hi - ts)
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _top(x, k):
     """Indices of the ``k`` largest ``x``, largest first, the first of equal ones first (as
     ``np.argsort(-x, kind="mergesort")[:k]``)."""
