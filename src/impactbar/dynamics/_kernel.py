@@ -333,7 +333,7 @@ def rigid1_crossing(d, c0, p0, h1, ta, qa, va, t_lim, htol):
     return FAIL, a, q, v, qp, p
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # the hot loop of modal_crossing
 def _modal_eval(load, B, fold, flight, work, t):
     """``h, h', h''`` of the end ``h = c . q`` at ``t`` in the folded form of the flight from
     ``ta`` (see :func:`modal_crossing`; ``flight = (ta, c0, r0, dv0, csum, sq0, sw0)``), and the
