@@ -29,6 +29,12 @@ Run: ``python benchmarks/bench_fast_paths.py [--quick]``. Prints a table; nothin
 ``--against SRC`` instead times the same user-level calls (``periodic_orbits``, ``simulate``) in
 fresh processes on the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x -C /tmp/old``
 then ``--against /tmp/old/src``) and on this one, alternately, and prints both side by side.
+
+``--cold [--against SRC] [--kernels]`` (issue 20) times the first call of each entry point
+(``periodic_orbits`` and ``simulate``: rigid bar, 8 and 64 modes, the wave law) in a fresh process
+with an empty numba cache (``NUMBA_CACHE_DIR`` set to a new folder), as on a new machine: CPU time
+of the call, and with ``--kernels`` the slowest kernels to compile (each without its callees'
+compiles), on ``SRC`` and on this tree alternately.
 """
 
 from __future__ import annotations
