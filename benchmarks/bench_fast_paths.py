@@ -29,6 +29,12 @@ Run: ``python benchmarks/bench_fast_paths.py [--quick]``. Prints a table; nothin
 ``--against SRC`` instead times the same user-level calls (``periodic_orbits``, ``simulate``) in
 fresh processes on the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x -C /tmp/old``
 then ``--against /tmp/old/src``) and on this one, alternately, and prints both side by side.
+
+``--cold [--against SRC] [--kernels]`` (issue 20) times the first call of each entry point
+(``periodic_orbits`` and ``simulate``: rigid bar, 8 and 64 modes, the wave law) in a fresh process
+with an empty numba cache (``NUMBA_CACHE_DIR`` set to a new folder), as on a new machine: CPU time
+of the call, and with ``--kernels`` the slowest kernels to compile (each without its callees'
+compiles), on ``SRC`` and on this tree alternately.
 """
 
 from __future__ import annotations
@@ -269,11 +275,104 @@ def against(src, rounds=2):
         print(f"{key:<52} {b:>12.4g} {n:>12.4g}")
 
 
+_COLD = r"""
+import json, sys, time
+from collections import defaultdict
+t0 = time.process_time()
+import numpy as np
+from impactbar import BarModel, CosineLoad, InitialState, periodic_orbits, simulate
+t_import = time.process_time() - t0
+kernels = defaultdict(float)
+try:  # the compile time of each kernel, its callees' compiles taken out
+    from numba.core import event
+
+    stack = []
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            stack.append((ev.data["dispatcher"].py_func, time.process_time()))
+
+        def on_end(self, ev):
+            fn, t = stack.pop()
+            dt = time.process_time() - t
+            kernels[fn.__module__.rsplit(".", 1)[-1] + "." + fn.__name__] += dt
+            if stack:
+                parent = stack[-1][0]
+                kernels[parent.__module__.rsplit(".", 1)[-1] + "." + parent.__name__] -= dt
+
+    event.register("numba:compile", Listener())
+except ImportError:
+    pass
+entry = sys.argv[1]
+n = {"rigid": 0, "8": 8, "64": 64, "wave": 8}[entry.split()[-1]]
+model = BarModel(5.0, 0.1, 0.5, n, impact="wave" if entry.endswith("wave") else "paper")
+if entry.startswith("periodic_orbits"):
+    def call():
+        periodic_orbits(model, CosineLoad(0.6, 1.0))
+else:
+    def call():
+        simulate(model, CosineLoad(0.6, 1.0), InitialState.rigid(-0.2, 0.0, n), 30.0)
+t = time.process_time()
+call()
+first = time.process_time() - t
+t = time.process_time()
+call()
+warm = time.process_time() - t
+top = sorted(kernels.items(), key=lambda kv: -kv[1])[:8]
+print(json.dumps({"import": t_import, "first": first, "warm": warm, "kernels": top}))
+"""
+
+#: the entry points of the cold-start rows: call and model (rigid, 8 or 64 modes, or the wave law)
+COLD_ENTRIES = ("periodic_orbits rigid", "periodic_orbits 8", "periodic_orbits 64", "periodic_orbits wave",
+                "simulate rigid", "simulate 8", "simulate wave")
+
+
+def cold(src, rounds=1, verbose=False):
+    """The first call of each entry point in a fresh process with an empty numba cache, on another
+    package tree ``src`` (if given) and on this one, alternately (CPU time of the call)."""
+    import json
+    import shutil
+    import tempfile
+    from pathlib import Path
+
+    here = str(Path(__file__).resolve().parents[1] / "src")
+    trees = ([("baseline", src)] if src else []) + [("new", here)]
+    print(f"{'first call, empty numba cache (CPU s)':<52} " + " ".join(f"{n:>12}" for n, _ in trees)
+          + f" {'warm (ms)':>12}")
+    for entry in COLD_ENTRIES:
+        best = {}
+        for _ in range(rounds):
+            for name, path in trees:
+                cache = tempfile.mkdtemp(prefix="impactbar-cold-")
+                try:
+                    env = dict(os.environ, PYTHONPATH=path, NUMBA_CACHE_DIR=cache)
+                    out = subprocess.run([sys.executable, "-c", _COLD, entry], env=env, check=True,
+                                         capture_output=True, text=True).stdout
+                finally:
+                    shutil.rmtree(cache, ignore_errors=True)
+                r = json.loads(out.strip().splitlines()[-1])
+                if name not in best or r["first"] < best[name]["first"]:
+                    best[name] = r
+        cells = " ".join(f"{best[n]['first']:>12.3g}" for n, _ in trees)
+        print(f"{entry:<52} {cells} {best['new']['warm'] * 1e3:>12.3g}", flush=True)
+        if verbose:
+            for name, _ in trees:
+                kern = ", ".join(f"{k} {v:.2f}" for k, v in best[name]["kernels"])
+                print(f"    {name}: {kern}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="fewer repetitions")
     ap.add_argument("--against", metavar="SRC", help="compare with the package tree SRC instead")
+    ap.add_argument("--cold", action="store_true",
+                    help="time each entry point's first call in a fresh process with an empty numba "
+                    "cache (with --against: that tree too, alternately)")
+    ap.add_argument("--kernels", action="store_true", help="with --cold: the slowest kernels to compile")
     a = ap.parse_args(argv)
+    if a.cold:
+        cold(a.against, verbose=a.kernels)
+        return 0
     if a.against:
         against(a.against)
         return 0

@@ -257,9 +257,10 @@ class FourierLoad(Load):
 
     def _set_sparse(self, ks, pks):
         keep = pks != 0
-        self._set(_k=_readonly(np.asarray(ks, dtype=float)[keep]),
-                  _pk=_readonly(np.asarray(pks, dtype=complex)[keep]),
-                  _kmax=int(ks[-1]) if len(ks) else 0)
+        k = np.asarray(ks, dtype=float)[keep]  # (boolean indexing: private copies already)
+        pk = np.asarray(pks, dtype=complex)[keep]
+        k.flags.writeable = pk.flags.writeable = False
+        self._set(_k=k, _pk=pk, _kmax=int(ks[-1]) if len(ks) else 0)
 
     def _key(self):
         return (self.p0, self._kmax, self._k.tobytes(), self._pk.tobytes())
@@ -464,8 +465,9 @@ class CosineLoad(FourierLoad):
 
     def __init__(self, p0, pk, k=1):
         self._set(p0=check_real("p0", p0), pk=check_real("pk", pk), k=check_int("k", k, lo=1, hi=4096))
-        self._set_sparse(np.arange(1, self.k + 1), np.where(np.arange(1, self.k + 1) == self.k,
-                                                             complex(self.pk), 0j))
+        pks = np.zeros(self.k, dtype=complex)
+        pks[-1] = self.pk
+        self._set_sparse(np.arange(1.0, self.k + 1.0), pks)
 
     @property
     def load_factor(self) -> float:

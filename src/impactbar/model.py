@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
@@ -23,6 +24,15 @@ MAX_STIFFNESS = 1e12
 #: Largest finite double: the modal frequencies ``s n pi`` (with ``n = 1`` for the rigid bar's scale
 #: ``s pi``) and the damping's square ``d**2`` (in every mode's decay, eq. 8) must stay below it.
 _FLOAT_MAX = float(np.finfo(float).max)
+
+
+@functools.cache
+def _law_table():
+    """:mod:`impactbar.laws.base`, imported on first use (the law objects sit above the solvers they
+    drive) and then at the cost of a cache lookup (an import statement costs a microsecond)."""
+    from .laws import base
+
+    return base
 
 
 @dataclass(frozen=True)
@@ -84,22 +94,21 @@ class BarModel:
         object.__setattr__(self, "d", check_real("d", self.d, lo=0.0))
         object.__setattr__(self, "R", check_real("R", self.R, lo=0.0, hi=1.0))
         object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=MAX_MODES))
-        from .laws.base import get_law  # the law objects sit above the solvers they drive
-
-        law = get_law(self.impact)  # ValueError listing the names
+        law = _law_table().get_law(self.impact)  # ValueError listing the names
         object.__setattr__(self, "_law", law)
-        object.__setattr__(self, "impact", law.name)
+        if self.impact is not law.name:
+            object.__setattr__(self, "impact", law.name)
         if self.n_modes and self.s * self.n_modes > MAX_STIFFNESS:
             raise ValueError(
                 f"s * n_modes must be at most {MAX_STIFFNESS:g} (got s = {self.s:g}, n_modes = "
                 f"{self.n_modes}): beyond it a mode's phase over one period, 2 pi s n pi, is lost "
                 "in rounding; a bar that stiff moves as a rigid one (n_modes = 0)")
-        if not math.isfinite(float(self.s) * math.pi * max(self.n_modes, 1)):  # no numpy overflow error
+        if not math.isfinite(self.s * math.pi * (self.n_modes or 1)):  # no numpy overflow error
             top = _FLOAT_MAX / (np.pi * max(self.n_modes, 1))
             raise ValueError(
                 f"s must be in (0, {top:.6g}] with n_modes = {self.n_modes} (got s = {self.s:g}): "
                 "beyond it the modal frequencies s n pi (s pi for the rigid bar) are not finite")
-        if not math.isfinite(float(self.d) * float(self.d)):
+        if not math.isfinite(self.d * self.d):
             raise ValueError(
                 f"d must be in [0, {np.sqrt(_FLOAT_MAX):.6g}] (got d = {self.d:g}): beyond it d**2, "
                 "which enters every mode's decay (eq. 8), is not finite")

@@ -15,6 +15,7 @@ import os
 import sys
 
 from . import _common
+from ._compiling import compile_note
 
 __all__ = ["main"]
 
@@ -74,7 +75,8 @@ def main(argv: list[str] | None = None) -> int:
     if closed:
         sys.stdout = _ClosedStdout()
     try:
-        status = int(args.func(args) or 0)
+        with compile_note(f"impactbar {args.command}"):  # a first run: one line while numba compiles
+            status = int(args.func(args) or 0)
         sys.stdout.flush()  # a closed pipe or a full disk shows here, not at interpreter exit
         return status
     except BrokenPipeError:

@@ -63,7 +63,7 @@ def _fundamental(w2, d, tau):
     return e * (C + 0.5 * d * S), e * S, -e * w2 * S, e * (C - 0.5 * d * S)
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def load_value(load, level, t):
     """``p(t)``, ``p'(t)``, ``p''(t)`` of the load view ``load`` (derivatives 0 inside a piece of a
     piecewise-constant load, whose ``level`` the caller passes)."""
@@ -84,7 +84,7 @@ def load_value(load, level, t):
     return p, dp, ddp
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def particular(load, B, level, t, qp, vp):
     """Fill ``qp, vp`` with the particular state at ``t`` (0 for a rigid mode's mean-load part) of
     the basis ``B`` (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``."""
@@ -107,7 +107,7 @@ def particular(load, B, level, t, qp, vp):
                 vp[n] -= k * (hpr[n, j] * sk + hpi[n, j] * ck)
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def advance(load, B, level, ta, anchor, t, state):
     """State ``q, v`` at ``t`` from the anchor ``(ta, qa, va)`` with particular state ``qpa, vpa``
     there (``anchor = (qa, va, qpa, vpa)``); ``state = (q, v, qp, vp)`` receives the state and the
@@ -156,7 +156,7 @@ def functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp):
     return h, dh, ddh, 1e-14 * mag, 1e-14 * dmag
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True)
 def bounds(load, B, wts, alpha, psup, L, state, horizon):
     """Bounds ``A >= |h''|`` and ``J >= |h'''|`` valid on ``[t, t + horizon]`` from the state
     ``(q, v, qp, vp)``, with ``psup >= |p|`` and ``L`` the mean load (or the piece's level)."""

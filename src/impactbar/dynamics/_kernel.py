@@ -20,8 +20,9 @@ of each mode, ``E_n = (v_n - v_pn)^2 + w2_n (q_n - q_pn)^2``, which never grows
 ``[a, a + 2|h|/h']`` and Newton (safeguarded by bisection) refines it to rounding.
 
 Two specialised searches, with the same guarantee and the same impacts to rounding, take the
-flights after an impact (``run_free(..., fast=True)``): :func:`rigid1_crossing` for the rigid bar
-under one harmonic, in scalars with bounds that keep the signs of the present curvature, and
+flights after an impact (``run_free_rigid``, ``run_free``, with their fast flag true):
+:func:`rigid1_crossing` for the rigid bar under one harmonic, in scalars with bounds that keep the
+signs of the present curvature, and
 :func:`modal_crossing` for flexible modes under a Fourier load, in folded form (one sine and cosine
 per mode) with coarse steps on a bound that needs no mode at all. Both refine by Halley steps.
 """
@@ -332,7 +333,7 @@ def rigid1_crossing(d, c0, p0, h1, ta, qa, va, t_lim, htol):
     return FAIL, a, q, v, qp, p
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # the hot loop of modal_crossing
 def _modal_eval(load, B, fold, flight, work, t):
     """``h, h', h''`` of the end ``h = c . q`` at ``t`` in the folded form of the flight from
     ``ta`` (see :func:`modal_crossing`; ``flight = (ta, c0, r0, dv0, csum, sq0, sw0)``), and the
@@ -550,12 +551,14 @@ def modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
     return _modal_crossing(LoadKernelView(*load), ModalBasisView(*B), c, fold, ta, qa, va, t_lim, htol, work)
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
-    """Free flight with impacts from ``(t, q, v)`` in the free-free basis ``B``
-    (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``
-    (:class:`~impactbar.dynamics.kernelview.LoadKernelView`); ``q, v`` are overwritten with the
-    final state.
+def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fast, modal_fast):
+    """Free flight with impacts from ``start = (t, q, v)`` in the free-free basis ``B_t`` (the plain
+    tuple of a :class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load_t`` (that of a
+    :class:`~impactbar.dynamics.kernelview.LoadKernelView`: numba dispatches plain tuples several
+    times faster than named tuples); ``q, v`` are overwritten with the final state. Compiled twice
+    from this one source, as :func:`run_free` (flexible bars: ``rigid_fast`` is ``None``) and
+    :func:`run_free_rigid` (``modal_fast`` is ``None``), each with one signature and no wrapper
+    kernel (a wrapper compiles its callees' code again).
 
     Every impact (``c . q = 0`` reached with ``c . v > 0``) applies ``v -> -R v`` (eqs. 10, 11); its
     time, the arrival velocity ``c . v`` and the state just after are written to
@@ -564,20 +567,25 @@ def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
     bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``) or the end
     arrives tangentially and pressed (CONTACT).
 
-    With ``fast`` true the flights that follow an impact (or start clearly off the stop, or leaving
-    it) are searched by :func:`rigid1_crossing` (the rigid bar under one harmonic) or
-    :func:`modal_crossing` (flexible modes under a Fourier load, all underdamped): the same impacts,
-    to rounding. A flight from rest on the stop (a release), where rounding decides whether the
-    end leaves, and every other case are searched by :func:`find_crossing`.
+    With ``rigid_fast`` true the flights that follow an impact (or start
+    clearly off the stop, or leaving it) are searched by :func:`rigid1_crossing` (the rigid bar under
+    one harmonic), with ``modal_fast`` true by :func:`modal_crossing` (flexible modes under a
+    Fourier load, all underdamped): the same impacts, to rounding. A flight from rest on the stop (a release),
+    where rounding decides whether the end leaves, and every other case are searched by
+    :func:`find_crossing`. Either flag may be ``None``: numba then drops that search from the
+    compiled code (a rigid run compiles no flexible search, and the other way round).
 
     Returns
     -------
     n, status, t : int, int, float
     """
+    load = LoadKernelView(*load_t)
+    B = ModalBasisView(*B_t)
     kind, p0, ks, pr, pim = load.kind, load.p0, load.ks, load.pr, load.pim
     breaks, levels = load.breaks, load.levels
     w2, d, hpr, hpi, vpb = B.w2, B.d, B.hpr, B.hpi, B.vpb
     out_t, out_vel, out_q, out_v = out
+    t, q, v = start
     M = w2.size
     qa = q.copy()
     va = v.copy()
@@ -589,14 +597,18 @@ def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
     anchor[0] = t
     n = 0
     cap = out_t.size
-    rigid1 = fast and kind == 0 and M == 1 and w2[0] == 0.0 and ks.size <= 1
+    rigid1 = False
+    if rigid_fast is not None:
+        rigid1 = rigid_fast and kind == 0 and M == 1 and w2[0] == 0.0 and ks.size <= 1
     k1 = pr1 = pim1 = hr1 = hi1 = 0.0
     if rigid1 and ks.size == 1:
         k1, pr1, pim1, hr1, hi1 = ks[0], pr[0], pim[0], hpr[0, 0], hpi[0, 0]
     habs1 = math.hypot(hr1, hi1)
     qp1 = p1t = 0.0
     # the free-free bar under a Fourier load, every flexible mode underdamped: modal_crossing
-    modal = fast and kind == 0 and M > 1 and w2[0] == 0.0
+    modal = False
+    if modal_fast is not None:
+        modal = modal_fast and kind == 0 and M > 1 and w2[0] == 0.0
     lam = np.empty(M)
     wsq = np.empty(M)
     nq0 = 0.0
@@ -651,14 +663,18 @@ def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
                 vm += abs(c[i] * va[i])
             off = hs < -1e-9 * hm or vs < -1e-9 * vm
         fast1 = rigid1 and off
-        if fast1:
-            st, tc, q[0], v[0], qp1, p1t = rigid1_crossing(d, c[0], p0, h1, anchor[0], qa[0], va[0],
-                                                           t_end, htol)
-        elif modal and off:
-            st, tc = _modal_crossing(load, B, c, fold, anchor[0], qa, va, t_end, htol, mwork)
-            # the state there by the reference flow (qpa, vpa hold the anchor's particular state)
-            advance(load, B, 0.0, anchor[0], anc, tc, stt)
-        else:
+        st = NONE
+        tc = t_end
+        if rigid_fast is not None:  # (the branches on None are dropped at compile time)
+            if fast1:
+                st, tc, q[0], v[0], qp1, p1t = rigid1_crossing(d, c[0], p0, h1, anchor[0], qa[0],
+                                                               va[0], t_end, htol)
+        if modal_fast is not None:
+            if modal and off:
+                st, tc = _modal_crossing(load, B, c, fold, anchor[0], qa, va, t_end, htol, mwork)
+                # the state there by the reference flow (qpa, vpa hold the anchor's particular state)
+                advance(load, B, 0.0, anchor[0], anc, tc, stt)
+        if not (fast1 or (modal and off)):
             st, tc = _find_crossing(load, B, c, 0.0, anchor, qa, va, t_end, htol, work)
         if st == NONE:
             return n, END, t_end
@@ -714,12 +730,12 @@ def _run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
             va[i] = v[i]
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def run_free(load, B, R, c, t, q, v, t_end, max_imp, tail_tol, out, fast):
-    """:func:`_run_free` called from Python, with ``load`` and ``B`` as plain tuples
-    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
-    return _run_free(LoadKernelView(*load), ModalBasisView(*B), R, c, t, q, v, t_end, max_imp, tail_tol,
-                     out, fast)
+#: :func:`_run_free` for flexible bars (``run_free(load, B, R, c, (t, q, v), t_end, max_imp,
+#: tail_tol, out, None, fast)``: the modal search where ``fast``, no rigid one compiled)
+run_free = numba.njit(cache=CACHE, nogil=True)(_run_free)
+#: :func:`_run_free` for the rigid bar (``..., fast, None)``: the search in scalars where ``fast``,
+#: no flexible search compiled)
+run_free_rigid = numba.njit(cache=CACHE, nogil=True)(_run_free)
 
 
 @numba.njit(cache=CACHE, nogil=True)

@@ -100,13 +100,16 @@ def window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
+def wave_window(load_t, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law held in contact throughout: checks that
     the invariant arriving at the rod, ``A(theta)``, stays ``>= 0`` on the scan grid of
     :class:`impactbar.dynamics.impact` (both limits at every jump) and, if so, writes
     ``(q, v) -> -R (q, v) + drive`` into ``qa, va`` (the drive by Gauss-Legendre panels split at the
     load's jumps; ``qa[0]`` from contact) and returns True. False (nothing written) means the
-    contact separates: the caller solves it in full."""
+    contact separates: the caller solves it in full. Called from Python with the load's view as the
+    plain tuple ``load_t`` (numba dispatches it several times faster than a named tuple), made a view
+    here (no wrapper kernel: a wrapper compiles its callees' code again)."""
+    load = LoadKernelView(*load_t)
     kind, psup, breaks = load.kind, load.psup, load.breaks
     M = q.size
     N = M - 1
@@ -184,11 +187,3 @@ def _wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
         g0 += c[n] * qa[n]
     qa[0] = -g0
     return True
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def wave_window(load, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
-    """:func:`_wave_window` called from Python, with ``load`` as plain tuples
-    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
-    return _wave_window(LoadKernelView(*load), s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va)
-

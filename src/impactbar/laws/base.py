@@ -6,6 +6,7 @@ takes its name or the object) and every solver asks ``model.law`` instead of com
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -205,6 +206,12 @@ LAWS: dict[str, type[ContactLaw]] = {}
 PARAMETERISED: dict[str, str] = {}
 
 
+@functools.cache
+def _default_law(cls: type[ContactLaw]) -> ContactLaw:
+    """The one instance of a law without parameters (laws are frozen: every model may share it)."""
+    return cls()
+
+
 def get_law(spec) -> ContactLaw:
     """The law object for a name in :data:`LAWS` or a :class:`ContactLaw` instance.
 
@@ -223,10 +230,12 @@ def get_law(spec) -> ContactLaw:
         For an unknown name or another type (the message lists the names), or the name of a law
         with required parameters (:data:`PARAMETERISED`; the message says how to build it).
     """
+    if type(spec) is str and spec in LAWS:  # (the common case first: no ABC instance check)
+        return _default_law(LAWS[spec])
     if isinstance(spec, ContactLaw):
         return spec
     if isinstance(spec, str) and spec in LAWS:
-        return LAWS[spec]()
+        return _default_law(LAWS[spec])
     if isinstance(spec, str) and spec in PARAMETERISED:
         raise ValueError(f"the impact law {spec!r} has required parameters: "
                          f"pass impact={PARAMETERISED[spec]}")

@@ -81,7 +81,7 @@ def _state(t, work, src):
     q, v, ck, sk = work
     load, F, P = src
     if load.kind == 0:
-        fourier_column(t, q, v, 0, ck, sk, F)
+        fourier_column(t, q, v, np.int64(0), ck, sk, F)  # (a literal 0 would compile it again)
         return
     w2, d, nodes, levels, qn, vn = P
     j = _right(nodes, t) - 1
@@ -97,7 +97,7 @@ def _dot(c, x):
     return s
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _g(phase, t, c, work, src):
     """``g(t) = c . q(phase + t)``."""
     q = work[0]
@@ -125,7 +125,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
     the numpy path raises (more than ``max_intervals`` survivors). With ``prune``, the intervals
     where ``g`` stays below ``best`` (raised by each level's samples, as ``_sample_bound``) are
     dropped too (``_numpy_search``'s ``prune``). ``limits = (min_width, max_intervals, atol, prune,
-    floor)``."""
+    floor)``, all floats (``prune`` 1.0 or 0.0), so that every caller shares one compilation."""
     min_width, max_intervals, atol, prune, floor = limits
     while True:
         n = mids.size
@@ -170,7 +170,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
     return lo, hi, True, best
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
     """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
     pieces, down to a 64th of the widest."""
@@ -189,12 +189,12 @@ def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
             if mj < hi[i] + half:
                 mids[m] = mj
                 m += 1
-    limits = (width / 64.0, max_intervals, atol, False, 0.0)
+    limits = (width / 64.0, float(max_intervals), atol, 0.0, 0.0)  # (floats: one type of _enclose)
     lo, hi, good, _ = _enclose(phase, a, b, mids[:m].copy(), half, limits, -math.inf, prob, work, src)
     return lo, hi, good
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _newton(phase, lo, hi, prob, work, src):
     """``admissibility._newton_stationary``: the same vectorised iteration, element by element."""
     c, w2, d = prob[0], prob[2], prob[3]
@@ -271,7 +271,7 @@ def _sample_bound(mid, gm, g1, atol, floor):
     return top - atol
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _single(phase, ts, lo, hi, prob, work, src):
     """``admissibility._numpy_search``'s ``single_zero``: ``|g''(ts)| > L3 r``, so that ``ts`` is
     the only zero of ``g'`` on ``[lo, hi]``."""
@@ -310,7 +310,7 @@ def _single(phase, ts, lo, hi, prob, work, src):
     return abs(g2) > L3 * max(ts - lo, hi - ts)
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _top(x, k):
     """Indices of the ``k`` largest ``x``, largest first, the first of equal ones first (as
     ``np.argsort(-x, kind="mergesort")[:k]``)."""
@@ -328,7 +328,7 @@ def _top(x, k):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src):
+def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src_tuples):
     """The largest stationary value of ``g = u(1, t)`` over ``[0, horizon]`` after the impact at
     ``phase`` (``admissibility._numpy_search`` and ``_stationary_values``, ``rounds = 8``).
 
@@ -338,7 +338,9 @@ def _admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src
     Fourier flow (``FourierLoad.flow``'s ``kernel_args``, the argument of
     :func:`~impactbar.dynamics._flowkernel.fourier_flow`) and of the piecewise-constant one
     ``(w2, d, nodes, levels, qn, vn)``; the one the load's kind does not use holds placeholders of
-    the same types, so that one compilation serves every load.
+    the same types, so that one compilation serves every load. From Python the load view comes as
+    the plain tuple ``tuple(view)`` in ``src_tuples`` (numba dispatches it several times faster than
+    a named tuple), made a view here (no wrapper kernel: a wrapper compiles its callees' code again).
 
     Returns
     -------
@@ -349,6 +351,7 @@ def _admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src
     err : float
         As ``_stationary_values``'s ``err``.
     """
+    src = (LoadKernelView(*src_tuples[0]), src_tuples[1], src_tuples[2])
     c = prob[0]
     M = c.size
     K = src[0].ks.size
@@ -362,7 +365,7 @@ def _admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src
     mids = np.empty(n0)
     for i in range(n0):
         mids[i] = half0 * (2.0 * i + 1.0)
-    lo, hi, good, best = _enclose(phase, 0.0, horizon, mids, half0, (6e-3, 400_000, atol, True, floor),
+    lo, hi, good, best = _enclose(phase, 0.0, horizon, mids, half0, (6e-3, 400_000.0, atol, 1.0, floor),
                                   -math.inf, prob, work, src)
     if not good:
         return 1, -math.inf, 0.0
@@ -460,12 +463,3 @@ def _admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src
             best = top
             err = max(err, top - np.min(2.0 * gm - upper))
     return 0, best, err
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src):
-    """:func:`_admissibility_search` called from Python, with the load view in ``src`` as plain tuples
-    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
-    return _admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob,
-                                 (LoadKernelView(*src[0]), src[1], src[2]))
-

@@ -148,14 +148,19 @@ class PeriodicOrbit:
 multipliers, stable, schur_roots, schur_stable
             As the attributes.
         """
-        return cls(model=model, load=load, impacts=1, periods=1, impact_times=np.array([phase]),
-                   phases=np.array([phase]), impact_velocities=np.array([impact_velocity]),
-                   admissible=admissible, admissibility=admissibility, clearance=clearance,
-                   clearance_error=clearance_error, multipliers=multipliers, stable=stable,
-                   states_after_impact=np.asarray(state_after_impact)[None, :],
-                   states_before_impact=np.asarray(state_before_impact)[None, :],
-                   contacts=None if impact is None else (impact,), multiplicity=multiplicity,
-                   schur_roots=schur_roots, schur_stable=schur_stable)
+        # every field, set at once: the frozen dataclass' __init__ sets them one by one through
+        # object.__setattr__ (it checks nothing), at a few microseconds per orbit
+        orbit = object.__new__(cls)
+        orbit.__dict__.update(
+            model=model, load=load, impacts=1, periods=1, impact_times=np.array([phase]),
+            phases=np.array([phase]), impact_velocities=np.array([impact_velocity]),
+            admissible=admissible, admissibility=admissibility, clearance=clearance,
+            clearance_error=clearance_error, multipliers=multipliers, stable=stable,
+            states_after_impact=np.asarray(state_after_impact)[None, :],
+            states_before_impact=np.asarray(state_before_impact)[None, :],
+            contacts=None if impact is None else (impact,), multiplicity=multiplicity,
+            schur_roots=schur_roots, schur_stable=schur_stable)
+        return orbit
 
     # -- the first impact, and the one-impact conveniences -------------------------------------------
     @property

@@ -342,9 +342,11 @@ class _Core:
         cap = out_q.shape[0]
         out_t = np.empty(cap)
         out_vel = np.empty(cap)
-        n, st, tn = K.run_free(tuple(D), tuple(B.view), self.R, self.c, float(t), q, v, float(t_end),
-                               int(max_imp), CHATTER_TAIL, (out_t, out_vel, out_q, out_v),
-                               use_fast("simulate.impact_search"))
+        fast = use_fast("simulate.impact_search")
+        # a rigid run compiles no modal search, a flexible one no rigid search
+        run, searches = (K.run_free_rigid, (fast, None)) if self.N == 0 else (K.run_free, (None, fast))
+        n, st, tn = run(tuple(D), tuple(B.view), self.R, self.c, (float(t), q, v), float(t_end),
+                        int(max_imp), CHATTER_TAIL, (out_t, out_vel, out_q, out_v), *searches)
         return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
