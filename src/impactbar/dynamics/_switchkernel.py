@@ -1,7 +1,7 @@
 """Compiled valve loop of a position-switched drive (theory §10). Plain float arrays only.
 
 Between events the force at ``x = 0`` is a constant level, ``+stroke`` or ``-ret``, so each flight
-is a flight of the ordinary event search (:func:`impactbar.dynamics._kernel._run_free`) under the
+is a flight of the ordinary event search (:func:`impactbar.dynamics._kernel.run_free`) under the
 one-piece load of that level; the valve runs around it. The gap ``y = -q_0`` obeys
 ``y'' + d y' = -p`` alone (the flexible modes do not enter it), so its rising crossing of the switch
 position is found in closed form (:func:`first_rising_crossing`): the gap's rate is monotone under a
@@ -22,7 +22,7 @@ import numba
 import numpy as np
 
 from ._flightkernel import CACHE
-from ._kernel import END, MAXIMP, _propagate_many, _run_free
+from ._kernel import END, MAXIMP, _propagate_many, run_free
 from .kernelview import DriveKernelView, LoadKernelView, ModalBasisView
 
 __all__ = ["gap", "rate_zero", "first_rising_crossing", "run_switched", "STROKE", "RETURN",
@@ -301,8 +301,10 @@ def _push(pend_t, pend_k, n, t, k):
 def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     """The valve's loop (theory §10), piece by piece, from ``clock[0]`` to ``clock[1]``.
 
-    ``loads`` are the views of the two one-piece loads ``(+stroke, -ret)``, ``B`` the free-free
-    basis, ``state = (q, v)`` the modal state (overwritten), ``ints`` the valve's integers (state,
+    ``loads`` are the plain tuples of the views of the two one-piece loads ``(+stroke, -ret)``, ``B``
+    that of the free-free basis (plain tuples: the flexible flights call the dispatcher
+    :func:`~impactbar.dynamics._kernel.run_free` with the same types as :func:`simulate` does, so no
+    second specialisation compiles), ``state = (q, v)`` the modal state (overwritten), ``ints`` the valve's integers (state,
     number of pending switches, impacts so far, the largest number, whether the rigid closed form
     runs, whether the fast impact search runs), ``pending = (times, kinds)`` the switches not yet in
     effect, sorted, and ``logs = (impact times, impact velocities, switch times, gaps, kinds, piece
@@ -318,6 +320,8 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     pend_t, pend_k = pending
     imp_t, imp_v, sw_t, sw_y, sw_k, pc_t0, pc_t1, pc_lv, pc_q, pc_v, cnt = logs
     M = q.size
+    B_t = B
+    B = ModalBasisView(*B_t)
     d = B.d
     tau = drive.delay
     rigid = ints[_RIGID] != 0
@@ -379,8 +383,9 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
             for i in range(M):
                 qs[i] = q[i]
                 vs[i] = v[i]
-            load = loads[valve]
-            n, st, tn = _run_free(load, B, R, c, t, q, v, t_next, 1, tail, out, fast)
+            load_t = loads[valve]
+            load = LoadKernelView(*load_t)
+            n, st, tn = run_free(load_t, B_t, R, c, (t, q, v), t_next, 1, tail, out, None, fast)
             if st == MAXIMP:
                 impacted = True
                 t1 = tn
@@ -449,6 +454,4 @@ def rigid_orbit_start(d, R, drive, v0):
 def run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     """:func:`_run_switched` called from Python, with the views as plain tuples (``tuple(view)``:
     numba dispatches them several times faster than named tuples)."""
-    views = (LoadKernelView(*loads[0]), LoadKernelView(*loads[1]))
-    return _run_switched(views, ModalBasisView(*B), DriveKernelView(*drive), R, c, clock, state, ints,
-                         pending, logs)
+    return _run_switched(loads, B, DriveKernelView(*drive), R, c, clock, state, ints, pending, logs)
