@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from impactbar import BarModel, CosineLoad, find_orbit
+from impactbar import BarModel, CosineLoad, find_orbit, periodic_orbits
 from impactbar.orbits import multi_impact
 from impactbar.orbits.multi_impact import MAX_UNKNOWNS, _Segments
 
@@ -47,3 +47,18 @@ def test_newton_stops_on_stagnation():
     with pytest.raises(ValueError, match="did not converge"):
         find_orbit(model, load, impacts=3, periods=2, guess=(u0[:, 0], np.hstack(
             (np.zeros((3, 1)), u0[:, 1:]))), max_iter=1000)
+
+
+def test_stiff_one_mode_bar_under_the_wave_law_finishes():
+    """``BarModel(1e4, 0.01, 0.5, 1, impact="wave")`` under ``CosineLoad(0.6, 1)`` ran past 120 s
+    (issue 24; not reproduced on db27a24, kept as a regression test): its orbits, Newton from one
+    of them (the same phase) and a run of 20 periods take seconds."""
+    from impactbar import InitialState, simulate
+
+    model, load = BarModel(1e4, 0.01, 0.5, 1, impact="wave"), CosineLoad(0.6, 1.0)
+    orbits = periodic_orbits(model, load)
+    assert len(orbits) == 2 and all(o.admissible for o in orbits)
+    again = find_orbit(model, load, guess=orbits[0])
+    assert again.phase == pytest.approx(orbits[0].phase, abs=1e-9)
+    tr = simulate(model, load, InitialState.rigid(-0.1, 0.0, 1), 2 * np.pi * 20)
+    assert tr.impact_times.size > 20 and np.all(np.isfinite(tr.impact_velocities))
