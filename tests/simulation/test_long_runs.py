@@ -56,7 +56,7 @@ def test_ctrl_c_keeps_the_finished_part():
         presser.join()
     assert isinstance(info.value, KeyboardInterrupt)
     tr = info.value.trajectory
-    assert tr.status == "interrupted" and 0.0 < tr.t_end < 2 * math.pi * 1e6
+    assert tr.status == "t_end" and 0.0 < tr.t_end < 2 * math.pi * 1e6
     assert tr.impact_times.size > 0 and tr.impact_times[-1] <= tr.t_end
     # the same run, ended at the same impact (or time, when the block ended without one)
     if tr.t_end == tr.impact_times[-1]:

@@ -69,8 +69,6 @@ class RunStatus(_Explained):
     T_END = ("t_end", "the run reached its end time t_end")
     MAX_IMPACTS = ("max_impacts", "the run recorded its largest number of impacts, max_impacts, "
                    "before t_end")
-    INTERRUPTED = ("interrupted", "the run was interrupted (Ctrl-C) before t_end; it holds what was "
-                   "computed until then")
 
 
 class EventKind(_Explained):

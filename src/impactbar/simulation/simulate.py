@@ -96,8 +96,9 @@ class SimulationInterrupted(KeyboardInterrupt):
     Attributes
     ----------
     trajectory : Trajectory
-        The run up to the block of impacts it had finished, ``status`` ``"interrupted"`` and
-        ``t_end`` the time reached.
+        The run up to the block of impacts it had finished: ``t_end`` is the time reached, and the
+        trajectory is the one a run ending there gives (``status`` ``"t_end"``, or
+        ``"max_impacts"`` where it stopped at an impact).
     """
 
     def __init__(self, trajectory):
@@ -501,7 +502,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     SimulationInterrupted
         On Ctrl-C during a run with ``progress`` or of at least 1,000 load periods (``LONG_RUN``),
         in the main thread: a :class:`KeyboardInterrupt` whose ``trajectory`` holds the run up to
-        the last block of impacts it finished (status ``"interrupted"``).
+        the last block of impacts it finished.
     """
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be a callable of the fraction done; got "
@@ -545,7 +546,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         return _run(core, q, v, t0, t_end, max_imp)
     with _CtrlC() as ctrl_c:
         traj = _run(core, q, v, t0, t_end, max_imp, progress=progress, stop=ctrl_c)
-    if traj.status == RunStatus.INTERRUPTED:
+    if ctrl_c.pressed:  # (also when the run ended in the block where Ctrl-C came)
         raise SimulationInterrupted(traj)
     return traj
 
@@ -613,7 +614,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
     tensile, and the law's contact step at each arrival the kernel stops at without resolving it.
 
     Between blocks of impacts (where the state is a flight's start) it calls ``progress`` and
-    stops, status ``"interrupted"``, when ``stop`` has turned true."""
+    stops there (status ``"t_end"``, ``t_end`` the time reached) when ``stop`` has turned true."""
     law = core.model.law
     instant = law.instantaneous
     segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
@@ -637,7 +638,6 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
             progress(min(1.0, (t - t0) / (t_end - t0)))
             shown = time.monotonic()
         if stop:  # (at a flight's start: the log is consistent)
-            status = RunStatus.INTERRUPTED
             break
         if mode == _FREE:
             left = max_imp - n_imp
