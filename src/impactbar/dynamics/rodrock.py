@@ -391,6 +391,26 @@ def commensurate_cells(times, max_cells: int = 1000, rtol: float = 1e-9):
     return None
 
 
+#: Most cell updates (cells times steps) one blow may take (some seconds), and most stored
+#: values with ``record_field`` (1 GiB as float64): beyond, it is refused before any allocation.
+MAX_CELL_STEPS = 5e9
+MAX_FIELD_VALUES = 2**27
+
+
+def _check_blow_size(n_cells, n_steps, record_field) -> None:
+    """Refuse a blow whose characteristics grid would not finish in bounded time or memory (a rod
+    far longer, in travel time, than the piston; issue 24)."""
+    work = float(n_cells) * max(1.0, math.ceil(n_steps))
+    if not work <= MAX_CELL_STEPS:
+        raise ValueError(f"single blow: {n_cells} cells over {math.ceil(n_steps):.4g} steps "
+                         f"({work:.3g} cell updates) exceed {MAX_CELL_STEPS:g}: the rod's travel "
+                         "time is too long against the piston's (segment lengths / wave speeds), or "
+                         "the grid too fine; use fewer cells_per_piston or a shorter t_max")
+    if record_field and not work <= MAX_FIELD_VALUES:
+        raise ValueError(f"single blow: record_field would keep {work:.3g} values (more than "
+                         f"{MAX_FIELD_VALUES}); use a shorter t_max or fewer cells_per_piston")
+
+
 def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, cells_per_piston=None,
                   t_max=None, energy_fraction=1e-9, record_field=False) -> Blow:
     """One blow by characteristics on the piston and the rod's segments (see the module's text).
@@ -428,6 +448,8 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     n_p = int(cells_per_piston)
     dt = Tp / n_p
     seg_cells = [max(1, round(T / dt)) for T in travel]
+    _check_blow_size(n_p + sum(seg_cells), (20.0 * (Tp + float(np.sum(travel))) if t_max is None
+                                            else t_max) / dt, record_field)
     pieces = list(zip(seg_cells, impedances, strict=True))
     dx = np.concatenate([np.full(n_p, 1.0 / n_p)]
                         + [np.full(n, c / n_p) for n, c in zip(seg_cells, speeds, strict=True)])
