@@ -44,3 +44,11 @@ def test_the_bound_leaves_ordinary_blows_alone():
     with pytest.raises(ValueError, match="record_field would keep"):
         single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=1e5,
                     record_field=True)
+
+
+def test_a_vanishing_wave_speed_is_one_line():
+    law = RodRock(segments=[RodSegment(60.15705218861109, 0.11682630816557603, 5e-324),
+                            RodSegment(6.950329550497215, 0.6089494913145446, 0.039082731548657566)],
+                  rock=BilinearRock(k=0.0814835830846851, k_u=2.7244921698302234), feed=2.0)
+    with pytest.raises(ValueError, match="inf cells"):  # was OverflowError from round(inf)
+        single_blow(BarModel(25.141997661656262, 0.0, 0.0, 0, impact=law), 1.0)

@@ -400,9 +400,9 @@ MAX_FIELD_VALUES = 2**27
 def _check_blow_size(n_cells, n_steps, record_field) -> None:
     """Refuse a blow whose characteristics grid would not finish in bounded time or memory (a rod
     far longer, in travel time, than the piston; issue 24)."""
-    work = float(n_cells) * max(1.0, math.ceil(n_steps))
+    work = float(n_cells) * max(1.0, float(n_steps))
     if not work <= MAX_CELL_STEPS:
-        raise ValueError(f"single blow: {n_cells} cells over {math.ceil(n_steps):.4g} steps "
+        raise ValueError(f"single blow: {n_cells:.6g} cells over {n_steps:.4g} steps "
                          f"({work:.3g} cell updates) exceed {MAX_CELL_STEPS:g}: the rod's travel "
                          "time is too long against the piston's (segment lengths / wave speeds), or "
                          "the grid too fine; use fewer cells_per_piston or a shorter t_max")
@@ -440,16 +440,19 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
     record_field : bool
         Keep the force in every cell at every step (for the Lagrange diagram).
     """
-    travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
+    with np.errstate(over="ignore"):  # a wave speed near 0: an infinite travel time, refused below
+        travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
     Tp = 1.0 / s
+    if not np.all(np.isfinite(travel)):
+        _check_blow_size(math.inf, math.inf, record_field)
     if cells_per_piston is None:
         n0 = commensurate_cells(np.concatenate(([Tp], travel)))
         cells_per_piston = 64 if n0 is None else n0 * math.ceil(8 / n0)
     n_p = int(cells_per_piston)
     dt = Tp / n_p
+    _check_blow_size(n_p + float(np.sum(travel)) / dt, (20.0 * (Tp + float(np.sum(travel)))
+                                                      if t_max is None else t_max) / dt, record_field)
     seg_cells = [max(1, round(T / dt)) for T in travel]
-    _check_blow_size(n_p + sum(seg_cells), (20.0 * (Tp + float(np.sum(travel))) if t_max is None
-                                            else t_max) / dt, record_field)
     pieces = list(zip(seg_cells, impedances, strict=True))
     dx = np.concatenate([np.full(n_p, 1.0 / n_p)]
                         + [np.full(n, c / n_p) for n, c in zip(seg_cells, speeds, strict=True)])
