@@ -210,20 +210,22 @@ def test_paper_writes_the_format_and_dpi_asked(tmp_path, monkeypatch, capsys):
     assert "(.svg, .csv)" in capsys.readouterr().out
 
 
-def test_simulate_drives_a_progress_bar_off_a_terminal_silently(monkeypatch, capsys, tmp_path):
+def test_simulate_drives_a_progress_bar_on_a_terminal_only(monkeypatch, capsys, tmp_path):
     """``impactbar simulate`` hands the library a progress callback (a bar on stderr with an
-    estimate, only on a terminal and without --quiet; issue 24)."""
+    estimate) only on a terminal and without --quiet (issue 24)."""
     seen = {}
 
-    def fake(hammer, *, periods, gap_m, progress):
-        seen["periods"] = periods
-        progress(0.5)
-        progress(1.0)
+    def fake(hammer, *, periods, gap_m, progress=None):
+        seen["periods"], seen["progress"] = periods, progress
+        if progress is not None:
+            progress(0.5)
+            progress(1.0)
         raise RuntimeError("stopped by the test")
 
     monkeypatch.setattr("impactbar.physical.simulate", fake)
-    for extra in ([], ["--quiet"]):
+    for tty, extra, given in ((False, [], False), (True, ["--quiet"], False), (True, [], True)):
+        monkeypatch.setattr(sys.stderr, "isatty", lambda tty=tty: tty, raising=False)
         assert main(["simulate", "--preset", "pneumatic-drill", "--out", str(tmp_path / "o"),
                      "--periods", "1e6", *extra]) == 1
-        assert seen["periods"] == 1e6
-        assert _one_line_error(capsys, "simulate").endswith("stopped by the test")
+        assert seen["periods"] == 1e6 and (seen["progress"] is not None) == given
+        assert capsys.readouterr().err.strip().splitlines()[-1].endswith("stopped by the test")

@@ -51,8 +51,11 @@ def run(args) -> int:
     out = output_folder(args.out)
     try:  # a bar with an estimate of the time left (stderr, a terminal, not --quiet)
         with progress_bar(args.periods, desc="simulate", unit="period", quiet=args.quiet) as bar:
+            def progress(f):
+                bar.update(f * args.periods - bar.n)
+
             result = physical.simulate(hammer, periods=args.periods, gap_m=gap,
-                                       progress=lambda f: bar.update(f * args.periods - bar.n))
+                                       progress=None if bar.disable else progress)
     except RuntimeError as exc:
         print(f"impactbar simulate: error: {exc}", file=sys.stderr)
         return 1

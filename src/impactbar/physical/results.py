@@ -344,7 +344,7 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
     t_end = TWO_PI * periods
     traj = run_simulation(hammer.model, hammer.load,
                           InitialState.rigid(end_displacement=-gap_m / sc.length_m, velocity=0.0), t_end,
-                          max_impacts=max_impacts, progress=progress)
+                          max_impacts=max_impacts, **({} if progress is None else {"progress": progress}))
     v = np.asarray(traj.impact_velocities, dtype=float) * sc.velocity_m_s
     # the records of a law with a contact (the wave law's rod outputs); an instant impact has none
     impacts = () if hammer.model.law.instantaneous else traj.impacts

@@ -27,7 +27,6 @@ free-free modes and the free motion resumes.
 from __future__ import annotations
 
 import math
-import signal
 import threading
 import time
 from dataclasses import dataclass
@@ -42,6 +41,8 @@ from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
 from ..loads import Load, PiecewiseConstantLoad
 from ..model import MAX_MODES, BarModel
+from ._interrupt import SimulationInterrupted as SimulationInterrupted
+from ._interrupt import _CtrlC
 from .switched import SwitchedTrajectory, rigid_piece, run_switched
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
@@ -89,22 +90,6 @@ LONG_RUN = 2000.0 * math.pi
 PROGRESS_EVERY = 0.1
 
 
-class SimulationInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a long :func:`simulate` run: a :class:`KeyboardInterrupt` that carries what
-    the run computed until then.
-
-    Attributes
-    ----------
-    trajectory : Trajectory
-        The run up to the block of impacts it had finished: ``t_end`` is the time reached, and the
-        trajectory is the one a run ending there gives (``status`` ``"t_end"``, or
-        ``"max_impacts"`` where it stopped at an impact).
-    """
-
-    def __init__(self, trajectory):
-        super().__init__(f"simulate interrupted at t = {trajectory.t_end:.6g} after "
-                         f"{trajectory.impact_times.size} impacts")
-        self.trajectory = trajectory
 
 
 
@@ -549,37 +534,6 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     if ctrl_c.pressed:  # (also when the run ended in the block where Ctrl-C came)
         raise SimulationInterrupted(traj)
     return traj
-
-
-class _CtrlC:
-    """While a long run is in progress, Ctrl-C sets a flag the driver reads between blocks of
-    impacts (so that it stops at a consistent state); a second Ctrl-C interrupts at once. Only in
-    the main thread (elsewhere no handler can be set: the flag stays down)."""
-
-    def __init__(self):
-        self.pressed = False
-        self._old = None
-
-    def __bool__(self):
-        return self.pressed
-
-    def _handler(self, signum, frame):
-        if self.pressed:
-            raise KeyboardInterrupt
-        self.pressed = True
-
-    def __enter__(self):
-        if threading.current_thread() is threading.main_thread():
-            try:
-                self._old = signal.signal(signal.SIGINT, self._handler)
-            except ValueError:  # pragma: no cover - not the main interpreter
-                self._old = None
-        return self
-
-    def __exit__(self, *exc):
-        if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
-        return False
 
 
 def _push_off(c, q) -> None:
