@@ -523,7 +523,7 @@ def cli_calls(rng, n, slow):
         for _ in range(n):
             cmd, vals = commands[rng.integers(len(commands))]
             argv = [a.format(v=vals[rng.integers(len(vals))], o=outs[rng.integers(len(outs))]) for a in cmd]
-            case(c, lambda argv=argv: _cli_case(argv), slow)
+            case(c, lambda argv=argv: (os.chdir(tmp), _cli_case(argv))[1], slow)  # (relative outs in tmp)
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
     return c

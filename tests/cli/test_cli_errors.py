@@ -229,3 +229,13 @@ def test_simulate_drives_a_progress_bar_on_a_terminal_only(monkeypatch, capsys, 
                      "--periods", "1e6", *extra]) == 1
         assert seen["periods"] == 1e6 and (seen["progress"] is not None) == given
         assert capsys.readouterr().err.strip().splitlines()[-1].endswith("stopped by the test")
+
+
+@pytest.mark.parametrize("command", [["simulate", "--preset", "pneumatic-drill", "--quiet"],
+                                     ["paper", "--quiet"]])
+def test_an_empty_out_is_refused(command, tmp_path, monkeypatch, capsys, no_computing):
+    """``--out ''`` wrote the outputs into the working directory (found by the fuzz campaign)."""
+    monkeypatch.chdir(tmp_path)
+    assert main([*command, "--out", ""]) == 2
+    assert "--out: an empty path" in _one_line_error(capsys, command[0])
+    assert not any(tmp_path.iterdir())
