@@ -409,7 +409,7 @@ def find_orbit_calls(rng, n, slow):
                 kw[key] = WEIRD[rng.integers(len(WEIRD))]
         g = rng.integers(4)
         M = m.n_modes + 1
-        k = kw.get("impacts", 1) if isinstance(kw.get("impacts", 1), int) else 1
+        k = kw.get("impacts", 1) if type(kw.get("impacts", 1)) is int else 1  # (not True, not 1e400)
         k = min(max(k, 1), 64)
         guess = [None, (np.sort(rng.uniform(0, 7, k)), rng.normal(0, 10, (k, 2 * M))),
                  (np.full(k, np.nan), np.zeros((k, 2 * M))), "x"][g]

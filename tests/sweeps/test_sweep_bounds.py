@@ -31,6 +31,11 @@ def test_huge_max_orbits_refused_before_allocating():
     assert time.perf_counter() - t0 < 1.0
 
 
+def test_an_integer_beyond_the_float_range_is_one_line():  # a fuzz campaign reproducer
+    with pytest.raises(ValueError, match=r"max_orbits = 1000.*inf values per variable"):
+        parse_spec(_doc(max_orbits=10**400))
+
+
 def test_the_bound_counts_the_chunk_points():
     doc = _doc(max_orbits=MAX_CHUNK_VALUES // 4, chunk_points=4)
     doc["axes"] = {"R": {"values": [0.1, 0.2, 0.3, 0.4]}}

@@ -419,8 +419,9 @@ def _check_chunk_size(spec) -> None:
     key = f"[{spec.task}] {name} = {spec.extra_size}" if name else f"chunk_points = {spec.chunk_points}"
     hint = (f" (the load admits at most {_max_orbits_bound(spec)} one-impact orbits)"
             if name == "max_orbits" else "")
-    raise ValueError(f"{key}: a work chunk of {points} grid points would hold {values:.3g} values per "
-                     f"variable ({8 * values / 2**30:.3g} GiB); the limit is {MAX_CHUNK_VALUES} "
+    vf = float(values) if values < 1e300 else math.inf  # (an integer beyond the float range)
+    raise ValueError(f"{key}: a work chunk of {points} grid points would hold {vf:.3g} values per "
+                     f"variable ({8 * vf / 2**30:.3g} GiB); the limit is {MAX_CHUNK_VALUES} "
                      f"values ({8 * MAX_CHUNK_VALUES // 2**20} MiB) per chunk: lower {name or 'it'}"
                      f"{hint} or chunk_points")
 
