@@ -3,7 +3,13 @@
 Categories: constructor inputs, ``periodic_orbits`` calls (NaN, non-ValueError, the rigid-mode
 impact velocity ``2 pi p0 / (1 + R)``, scale invariance of every verdict under ``load * L``),
 ``simulate`` runs (energy balance, penetration, non-ValueError, time), grazing runs against scipy,
-SIGKILL and damage trials of sweeps, physical configurations and unit strings.
+SIGKILL and damage trials of sweeps, physical configurations and unit strings; and (issue 24) the
+newer paths: the wave law (``periodic_orbits``, ``find_orbit``, ``simulate`` from 0 to 256 modes
+and stiff bars), ``find_orbit`` with bad and extreme sizes, guesses, ``tol`` and ``max_iter``,
+``continue_orbit`` with bad parameters and settings, sweep specs with bad values in every key,
+every CLI subcommand with bad options and output locations (in-process: a traceback escaping
+``main`` or an exit status other than 0, 1, 2 is bad), the rod-rock law and ``single_blow``, and
+the position-switched drive.
 
 Usage: ``python benchmarks/fuzz_campaign.py [--scale 1.0] [--seed 0] [--only CATEGORY ...]``.
 A count of "bad" outcomes per category is printed; ``--scale`` multiplies the number of cases.
@@ -46,7 +52,7 @@ def _child(fn, conn):
     except ValueError:
         labels = ["ValueError"]
     except Exception as exc:  # noqa: BLE001 - what the campaign counts
-        labels = [f"BAD {type(exc).__name__}"]
+        labels = [f"BAD {type(exc).__name__}: {str(exc)[:120]}"]
     conn.send(labels)
     conn.close()
 
@@ -67,6 +73,8 @@ def case(counter, fn, limit):
     p.join()
     for lab in labels:
         counter[lab] += 1
+    if any(lab.startswith("BAD") for lab in labels):  # the reproducer: the case's bound arguments
+        print(f"  {labels[-1]}: {fn.__defaults__!r}"[:600], file=sys.stderr, flush=True)
     return labels
 
 
@@ -351,9 +359,236 @@ def physical(rng, n, slow):
     return c
 
 
+def _nan_in(*arrays) -> bool:
+    return any(np.any(np.isnan(np.asarray(a, dtype=complex))) for a in arrays)
+
+
+def _orbit_labels(orbits):
+    labels = ["ok"]
+    for o in orbits:
+        if _nan_in(o.impact_times, o.impact_velocities, o.clearance, o.multipliers):
+            labels.append("BAD nan")
+    return labels
+
+
+def wave_law(rng, n, slow):
+    """periodic_orbits, find_orbit and short runs under the wave law, from 0 to 256 modes, s from
+    0.2 to 1e5 (windows longer than the period included)."""
+    c = Counter()
+    for _ in range(n):
+        N = int([0, 1, 2, 8, 64, 256][rng.integers(6)])
+        s = float(10 ** rng.uniform(-0.7, 5 if N <= 1 else 1.5))
+        m = ib.BarModel(s, float([0.0, rng.uniform(0, 0.3)][rng.integers(2)]),
+                        float([0.0, 1.0, rng.uniform(0, 1)][rng.integers(3)]), N, impact="wave")
+        ld = random_load(rng)
+        what = rng.integers(3)
+
+        def one(m=m, ld=ld, what=what):
+            if what == 0:
+                return _orbit_labels(ib.periodic_orbits(m, ld))
+            if what == 1:
+                return _orbit_labels([ib.find_orbit(m, ld)])
+            # (a sustained contact costs O(N^2) per unit time at N modes: shorter runs at many modes)
+            t_end = 20.0 if m.n_modes <= 8 else 2.0
+            tr = ib.simulate(m, ld, ib.InitialState.rigid(-0.1, 0.0, m.n_modes), t_end)
+            return ["BAD nan"] if _nan_in(tr.impact_times, tr.impact_velocities) else ["ok"]
+
+        case(c, one, slow)
+    return c
+
+
+def find_orbit_calls(rng, n, slow):
+    """find_orbit with weird sizes, guesses, tolerances and iteration counts."""
+    c = Counter()
+    for _ in range(n):
+        m = random_model(rng, modes=(0, 1, 4, 16))
+        ld = random_load(rng)
+        kw = {}
+        for key in ("impacts", "periods", "tol", "max_iter"):
+            if rng.random() < 0.4:
+                kw[key] = WEIRD[rng.integers(len(WEIRD))]
+        g = rng.integers(4)
+        M = m.n_modes + 1
+        k = kw.get("impacts", 1) if type(kw.get("impacts", 1)) is int else 1  # (not True, not 1e400)
+        k = min(max(k, 1), 64)
+        guess = [None, (np.sort(rng.uniform(0, 7, k)), rng.normal(0, 10, (k, 2 * M))),
+                 (np.full(k, np.nan), np.zeros((k, 2 * M))), "x"][g]
+
+        def one(m=m, ld=ld, kw=kw, guess=guess):
+            return _orbit_labels([ib.find_orbit(m, ld, guess=guess, **kw)])
+
+        case(c, one, slow)
+    return c
+
+
+def continuation_calls(rng, n, slow):
+    """continue_orbit from an orbit, with bad parameter names, targets and settings."""
+    c = Counter()
+    for _ in range(n):
+        m = random_model(rng, modes=(0, 1, 4))
+        ld = ib.CosineLoad(float(rng.uniform(0.1, 1.0)), 1.0)
+        par = ["p0", "pk", "R", "d", "s", "x", "n_modes", ""][rng.integers(8)]
+        to = [float(rng.uniform(0, 2)), WEIRD[rng.integers(len(WEIRD))]][rng.integers(2)]
+        kw = {}
+        for key in ("step", "max_step", "min_step", "max_points", "tol"):
+            if rng.random() < 0.25:
+                kw[key] = WEIRD[rng.integers(len(WEIRD))]
+
+        def one(m=m, ld=ld, par=par, to=to, kw=kw):
+            orbits = ib.periodic_orbits(m, ld)
+            if not orbits:
+                return ["ok"]
+            b = ib.continue_orbit(orbits[0], par, to, **kw)
+            return ["BAD nan"] if _nan_in(b.values) else ["ok"]
+
+        case(c, one, slow)
+    return c
+
+
+def spec_values(rng, n, slow):
+    """Sweep specs with one weird value put into one key (parse only: nothing is computed)."""
+    from impactbar.sweeps.spec import parse_spec
+
+    c = Counter()
+    weird = [*WEIRD, [1, 2], {"a": 1}, "", "cosine", [[1.0, 0.0]], {"values": []},
+             {"start": 0, "stop": 1, "num": 10**9}, {"values": [1.0] * 3}]
+    paths = [("task",), ("model", "s"), ("model", "n_modes"), ("model", "impact"), ("load", "kind"),
+             ("load", "p0"), ("load", "k"), ("axes", "R"), ("axes", "p0"), ("axes", "n_modes"),
+             ("chunk_points",), ("orbits", "max_orbits"), ("orbits",)]
+    for _ in range(n):
+        doc = {"task": "orbits", "model": {"s": 10.0, "d": 0.01, "R": 0.5, "n_modes": 0},
+               "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+               "axes": {"R": {"values": [0.2, 0.5]}}, "orbits": {}}
+        for _ in range(int(rng.integers(1, 3))):
+            path = paths[rng.integers(len(paths))]
+            node = doc
+            for key in path[:-1]:
+                node = node.setdefault(key, {}) if isinstance(node.get(key, {}), dict) else {}
+            node[path[-1]] = weird[rng.integers(len(weird))]
+
+        def one(doc=doc):
+            parse_spec(doc)
+            return ["ok"]
+
+        case(c, one, slow)
+    return c
+
+
+def _cli_case(argv):
+    """Run ``impactbar argv`` in this (forked) process: a traceback escaping ``main``, or an exit
+    status other than 0, 1, 2, is bad."""
+    import contextlib
+    import io
+
+    from impactbar.cli import main as cli_main
+
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+            rc = cli_main(argv)
+    except SystemExit as exc:  # argparse's own usage errors
+        rc = exc.code
+    if rc not in (0, 1, 2, None):
+        return [f"BAD exit status {rc}"]
+    if "Traceback" in err.getvalue():
+        return ["BAD traceback on stderr"]
+    return ["ok" if rc in (0, None) else "ValueError"]
+
+
+def cli_calls(rng, n, slow):
+    """Every subcommand with a weird option value or output location."""
+    c = Counter()
+    tmp = Path(tempfile.mkdtemp(prefix="ib-campaign-cli-"))
+    try:
+        (tmp / "afile").write_text("x")
+        outs = [str(tmp / "o"), str(tmp / "afile"), str(tmp / "afile" / "x"), "/proc/x", "",
+                str(tmp / ("n" * 300)), str(tmp / "missing" / "deeper" / "f.png")]
+        bad = ["nan", "-1", "0", "1e400", "x", "", "10 mm", "inf", "1e-300", "-0", "1e12"]
+        ok = ["3", "0.5", "20"]
+        commands = [  # (argv, values): the valid values only where the run stays short
+            (["orbits", "--s", "{v}", "--n-modes", "{v}"], bad + ok),
+            (["orbits", "--impact", "wave", "--p0", "{v}"], bad + ok),
+            (["orbits", "--preset", "pneumatic-drill", "--json"], ok),
+            (["simulate", "--preset", "pneumatic-drill", "--out", "{o}", "--periods", "{v}", "--quiet"],
+             bad + ok),
+            (["simulate", "--preset", "hydraulic-drill", "--out", "{o}", "--gap", "{v}", "--quiet",
+              "--periods", "3"], bad + ["2 mm", "0 m"]),
+            (["plot", "{o}", "--out", "{o}"], ok),
+            (["paper", "--out", "{o}", "--dpi", "{v}", "--quiet"], bad + ["100000"]),
+            (["experiment", "--preset", "pneumatic-drill", "--out", "{o}", "--starts", "{v}", "--quiet"],
+             bad),
+            (["continue", "--out", "{o}"], ok),
+            (["sweep", "{o}", "--out", "{o}", "--quiet"], ok),
+        ]
+        for _ in range(n):
+            cmd, vals = commands[rng.integers(len(commands))]
+            argv = [a.format(v=vals[rng.integers(len(vals))], o=outs[rng.integers(len(outs))]) for a in cmd]
+            case(c, lambda argv=argv: (os.chdir(tmp), _cli_case(argv))[1], slow)  # (relative outs in tmp)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+    return c
+
+
+def rodrock_calls(rng, n, slow):
+    """RodRock laws with random segments, rock, bit mass and feed; single_blow and simulate."""
+    c = Counter()
+    for _ in range(n):
+        def r():
+            return WEIRD[rng.integers(len(WEIRD))] if rng.random() < 0.2 else float(10 ** rng.uniform(-2, 2))
+
+        args = {"segs": [(r(), r(), r()) for _ in range(int(rng.integers(1, 4)))], "k": r(), "k_u": r(),
+                "bit": [0.0, r()][rng.integers(2)], "feed": [0.0, r()][rng.integers(2)],
+                "s": float(10 ** rng.uniform(-0.5, 1.5)), "v": [1.0, r()][rng.integers(2)],
+                "what": int(rng.integers(2))}
+
+        def one(a=args):
+            law = ib.RodRock(segments=[ib.RodSegment(*g) for g in a["segs"]],
+                             rock=ib.BilinearRock(k=a["k"], k_u=a["k_u"]), bit_mass=a["bit"], feed=a["feed"])
+            m = ib.BarModel(a["s"], 0.0, 0.0, 0, impact=law)
+            if a["what"] == 0:
+                b = ib.single_blow(m, a["v"])
+                return ["BAD nan"] if _nan_in(b.efficiency) else ["ok"]
+            tr = ib.simulate(m, ib.CosineLoad(0.6, 1.0), ib.InitialState.rigid(-0.1, 0.0), 20.0)
+            return ["BAD nan"] if _nan_in(tr.impact_times, tr.impact_velocities) else ["ok"]
+
+        case(c, one, slow)
+    return c
+
+
+def drive_calls(rng, n, slow):
+    """PositionSwitchedDrive with random levels, switch position and delay: simulate, find_orbit,
+    and the time-periodic functions that must refuse it."""
+    c = Counter()
+    for _ in range(n):
+        def r():
+            return WEIRD[rng.integers(len(WEIRD))] if rng.random() < 0.2 else float(rng.uniform(-0.5, 2))
+
+        a = {"stroke": r(), "ret": r(), "switch_out": r(), "delay": [0.0, r()][rng.integers(2)],
+             "N": int([0, 1, 4][rng.integers(3)]), "what": int(rng.integers(3))}
+
+        def one(a=a):
+            drive = ib.PositionSwitchedDrive(stroke=a["stroke"], ret=a["ret"], switch_out=a["switch_out"],
+                                             delay=a["delay"])
+            m = ib.BarModel(5.0, 0.05, 0.5, a["N"])
+            if a["what"] == 0:
+                tr = ib.simulate(m, drive, ib.InitialState.rigid(-0.1, 0.0, a["N"]), 30.0)
+                return ["BAD nan"] if _nan_in(tr.impact_times, tr.impact_velocities) else ["ok"]
+            if a["what"] == 1:
+                o = ib.find_orbit(m, drive)
+                return ["BAD nan"] if _nan_in(o.impact_velocity, o.multipliers) else ["ok"]
+            ib.periodic_orbits(m, drive)
+            return ["BAD periodic_orbits accepted a switched drive"]
+
+        case(c, one, slow)
+    return c
+
+
 CATEGORIES = {"constructors": (constructors, 400), "orbits": (orbits_calls, 150),
               "simulate": (simulate_runs, 60), "grazing": (grazing_vs_scipy, 60),
-              "sweeps": (sweeps, 3), "physical": (physical, 60)}
+              "sweeps": (sweeps, 3), "physical": (physical, 60),
+              "wave": (wave_law, 80), "find_orbit": (find_orbit_calls, 80),
+              "continuation": (continuation_calls, 40), "specs": (spec_values, 150),
+              "cli": (cli_calls, 60), "rodrock": (rodrock_calls, 60), "drive": (drive_calls, 60)}
 
 
 def main(argv=None):

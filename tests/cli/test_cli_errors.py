@@ -211,3 +211,34 @@ def test_paper_writes_the_format_and_dpi_asked(tmp_path, monkeypatch, capsys):
     assert main(["paper", "--quick", "--out", str(tmp_path), "--dpi", "300", "--format", "svg"]) == 0
     assert seen["dpi"] == 300 and seen["format"] == "svg"
     assert "(.svg, .csv)" in capsys.readouterr().out
+
+
+def test_simulate_drives_a_progress_bar_on_a_terminal_only(monkeypatch, capsys, tmp_path):
+    """``impactbar simulate`` hands the library a progress callback (a bar on stderr with an
+    estimate) only on a terminal and without --quiet (issue 24)."""
+    seen = {}
+
+    def fake(hammer, *, periods, gap_m, progress=None):
+        seen["periods"], seen["progress"] = periods, progress
+        if progress is not None:
+            progress(0.5)
+            progress(1.0)
+        raise RuntimeError("stopped by the test")
+
+    monkeypatch.setattr("impactbar.physical.simulate", fake)
+    for tty, extra, given in ((False, [], False), (True, ["--quiet"], False), (True, [], True)):
+        monkeypatch.setattr(sys.stderr, "isatty", lambda tty=tty: tty, raising=False)
+        assert main(["simulate", "--preset", "pneumatic-drill", "--out", str(tmp_path / "o"),
+                     "--periods", "1e6", *extra]) == 1
+        assert seen["periods"] == 1e6 and (seen["progress"] is not None) == given
+        assert capsys.readouterr().err.strip().splitlines()[-1].endswith("stopped by the test")
+
+
+@pytest.mark.parametrize("command", [["simulate", "--preset", "pneumatic-drill", "--quiet"],
+                                     ["paper", "--quiet"]])
+def test_an_empty_out_is_refused(command, tmp_path, monkeypatch, capsys, no_computing):
+    """``--out ''`` wrote the outputs into the working directory (found by the fuzz campaign)."""
+    monkeypatch.chdir(tmp_path)
+    assert main([*command, "--out", ""]) == 2
+    assert "--out: an empty path" in _one_line_error(capsys, command[0])
+    assert not any(tmp_path.iterdir())

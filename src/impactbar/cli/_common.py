@@ -204,6 +204,8 @@ def output_folder(path, *, option: str = "--out") -> Path:
     ...
     impactbar.cli._common.UsageError: --out ...: cannot write there (Not a directory)
     """
+    if not str(path).strip():  # Path("") is the working directory: never meant
+        raise UsageError(f"{option}: an empty path; give a folder")
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise UsageError(f"{option} {path}: exists and is not a folder")
@@ -233,6 +235,8 @@ def output_file(path, *, option: str = "--out") -> Path:
     ...     output_file(pathlib.Path(tmp) / "new" / "fig.png").parent.is_dir()
     True
     """
+    if not str(path).strip():
+        raise UsageError(f"{option}: an empty path; give a file name")
     p = Path(path)
     if p.is_dir():
         raise UsageError(f"{option} {path}: is a folder; give a file name")

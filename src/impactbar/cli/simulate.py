@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import physical
 from ..plotting.physical import plot_blows, plot_force_waves, plot_motion
-from ._common import output_folder, require
+from ._common import add_quiet_argument, output_folder, progress_bar, require
 from .physical import add_impact_argument, add_physical_arguments, hammer_from_args, json_ready
 
 __all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows", "plot_force_waves"]
@@ -37,6 +37,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--gap", default="0 mm", metavar="LENGTH",
                    help="initial distance of the struck end from the stop, with a unit; the "
                         "piston starts at rest (default '0 mm')")
+    add_quiet_argument(p)
     p.set_defaults(func=run)
 
 
@@ -53,8 +54,13 @@ def run(args) -> int:
     gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")
     require("matplotlib")
     out = output_folder(args.out)
-    try:
-        result = physical.simulate(hammer, periods=args.periods, gap_m=gap)
+    try:  # a bar with an estimate of the time left (stderr, a terminal, not --quiet)
+        with progress_bar(args.periods, desc="simulate", unit="period", quiet=args.quiet) as bar:
+            def progress(f):
+                bar.update(f * args.periods - bar.n)
+
+            result = physical.simulate(hammer, periods=args.periods, gap_m=gap,
+                                       progress=None if bar.disable else progress)
     except RuntimeError as exc:
         print(f"impactbar simulate: error: {exc}", file=sys.stderr)
         return 1

@@ -301,14 +301,14 @@ def _push(pend_t, pend_k, n, t, k):
 def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     """The valve's loop (theory §10), piece by piece, from ``clock[0]`` to ``clock[1]``.
 
-    ``loads`` are the plain tuples of the views of the two one-piece loads ``(+stroke, -ret)``, ``B``
-    that of the free-free basis (plain tuples: the flexible flights call the dispatcher
-    :func:`~impactbar.dynamics._kernel.run_free` with the same types as :func:`simulate` does, so no
-    second specialisation compiles), ``state = (q, v)`` the modal state (overwritten), ``ints`` the valve's integers (state,
-    number of pending switches, impacts so far, the largest number, whether the rigid closed form
-    runs, whether the fast impact search runs), ``pending = (times, kinds)`` the switches not yet in
-    effect, sorted, and ``logs = (impact times, impact velocities, switch times, gaps, kinds, piece
-    starts, piece ends, piece levels, piece start states q and v, counters)``.
+    ``loads`` are the plain tuples of the views of the two one-piece loads ``(+stroke, -ret)``, ``B`` that of
+    the free-free basis (plain tuples: the flexible flights call the dispatcher
+    :func:`~impactbar.dynamics._kernel.run_free` with the same types as :func:`simulate` does, so no second
+    specialisation compiles), ``state = (q, v)`` the modal state (overwritten), ``ints`` the valve's integers
+    (state, number of pending switches, impacts so far, the largest number, whether the rigid closed form
+    runs, whether the fast impact search runs), ``pending = (times, kinds)`` the switches not yet in effect,
+    sorted, and ``logs = (impact times, impact velocities, switch times, gaps, kinds, piece starts, piece
+    ends, piece levels, piece start states q and v, counters)``.
 
     Returns
     -------

@@ -412,6 +412,26 @@ def commensurate_cells(times, max_cells: int = 1000, rtol: float = 1e-9):
     return None
 
 
+#: Most cell updates (cells times steps) one blow may take (some seconds), and most stored
+#: values with ``record_field`` (1 GiB as float64): beyond, it is refused before any allocation.
+MAX_CELL_STEPS = 5e9
+MAX_FIELD_VALUES = 2**27
+
+
+def _check_blow_size(n_cells, n_steps, record_field) -> None:
+    """Refuse a blow whose characteristics grid would not finish in bounded time or memory (a rod
+    far longer, in travel time, than the piston; issue 24)."""
+    work = float(n_cells) * max(1.0, float(n_steps))
+    if not work <= MAX_CELL_STEPS:
+        raise ValueError(f"single blow: {n_cells:.6g} cells over {n_steps:.4g} steps "
+                         f"({work:.3g} cell updates) exceed {MAX_CELL_STEPS:g}: the rod's travel "
+                         "time is too long against the piston's (segment lengths / wave speeds), or "
+                         "the grid too fine; use fewer cells_per_piston or a shorter t_max")
+    if record_field and not work <= MAX_FIELD_VALUES:
+        raise ValueError(f"single blow: record_field would keep {work:.3g} values (more than "
+                         f"{MAX_FIELD_VALUES}); use a shorter t_max or fewer cells_per_piston")
+
+
 def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, cells_per_piston=None,
                   t_max=None, energy_fraction=1e-9, record_field=False) -> Blow:
     """One blow by characteristics on the piston and the rod's segments (see the module's text).
@@ -498,13 +518,17 @@ class BlowGrid:
 
 def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None) -> BlowGrid:
     """The cell grid of :func:`rod_rock_blow` (its parameters of the same names)."""
-    travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
+    with np.errstate(over="ignore"):  # a wave speed near 0: an infinite travel time, refused below
+        travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
     Tp = 1.0 / s
+    if not np.all(np.isfinite(travel)):
+        _check_blow_size(math.inf, math.inf, False)
     if cells_per_piston is None:
         n0 = commensurate_cells(np.concatenate(([Tp], travel)))
         cells_per_piston = 64 if n0 is None else n0 * math.ceil(8 / n0)
     n_p = int(cells_per_piston)
     dt = Tp / n_p
+    _check_blow_size(n_p + float(np.sum(travel)) / dt, 1, False)  # the steps: in solve_blow
     seg_cells = [max(1, round(T / dt)) for T in travel]
     pieces = list(zip(seg_cells, impedances, strict=True))
     dx = np.concatenate([np.full(n_p, 1.0 / n_p)]
@@ -534,6 +558,7 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     F = np.array(F, dtype=float)
     G = np.array(G, dtype=float)
     E0 = float(np.sum((F[:n_p] ** 2 + G[:n_p] ** 2) / Z[:n_p])) * dt
+    _check_blow_size(grid.Z.size, (t_max / dt if n_steps is None else n_steps), record_field)
     n_max = max(1, math.ceil(t_max / dt * (1.0 - 1e-12))) if n_steps is None else max(1, int(n_steps))
     stop = energy_fraction * E0 if n_steps is None else -1.0
     drive = np.zeros(n_max) if drive is None else np.ascontiguousarray(drive[:n_max], dtype=float)

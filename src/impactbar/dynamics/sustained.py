@@ -228,8 +228,18 @@ class SustainedContact:
         return None
 
     def fv_at(self, piece, t) -> np.ndarray:
-        """``c . q'`` (the struck end's velocity) at the times ``t``."""
-        return self.c @ piece.states(t)[self.N:]
+        """``c . q'`` (the struck end's velocity) at the times ``t``: the row ``c . q'`` of the
+        eigenvectors and of the particular response applied directly, ``O(N)`` per time (the
+        whole state is ``O(N^2)``; issue 24: 256 modes took minutes)."""
+        t = np.asarray(t, dtype=float)
+        dt = t - piece.ta
+        tr = (self.fv * piece.coef) @ np.exp(np.outer(self.lam, dt))
+        cv = np.concatenate((np.zeros(self.N), self.c))
+        if self._data.kind == 0:
+            part = (cv @ self._resp) @ np.exp(1j * np.outer(self._ks, t))
+        else:
+            part = float(cv @ self._a_inv_b) * piece.level
+        return (tr + part).real
 
     # ---- outputs ---------------------------------------------------------------------------------
     def _piece_at(self, t_abs):

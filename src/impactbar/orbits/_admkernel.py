@@ -119,6 +119,65 @@ def _joint(phase, mid, half, prob, work, src):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _joint_upper(phase, mid, half, prob, work, src):
+    """``(g(mid), g'(mid), L, U, X)``: :func:`_joint`, an upper bound ``U`` of ``g`` and a margin
+    ``X`` that excludes a zero of ``g'`` on ``[mid - half, mid + half]`` where it is positive, both
+    with the high modes' tail split off.
+
+    With the modes ``n <= K`` (their ``g_K``, ``g_K'`` and bound ``L_K`` of ``|g_K''|``) and the
+    rest bounded by their energies (``E_n`` the bound of ``sqrt(v^2 + (w q - p_c / w)^2)`` on the
+    interval, as in ``L``): ``|q_n| <= |p_c| / w_n^2 + E_n / w_n`` and ``|q_n'| <= E_n``, so
+    ``g <= g_K(mid) + (|g_K'(mid)| + L_K h) h + sum_{n > K} |c_n| (|p_c| / w_n^2 + E_n / w_n)``
+    and ``|g'| >= |g_K'(mid)| - L_K h - sum_{n > K} |c_n| E_n``. ``U`` is the least bound over
+    ``K`` and ``X`` the largest margin (``K = N``: the tests from ``L`` alone). The high modes that
+    ring after an impact make ``L`` large, but move the end little and slowly: these bounds prune
+    and exclude the intervals that the ones from ``L`` keep."""
+    c, absc, w2, d, psup = prob
+    q, v = work[0], work[1]
+    ta = phase + mid
+    _state(ta, work, src)
+    center, delta = _variation(ta, half, src)
+    M = c.size
+    grow = math.exp(d * half)
+    above = np.empty(M)  # above[K]: the tail's bound of |g| over the modes n > K
+    vabove = np.empty(M)  # ... and of |g'|
+    tail = 0.0
+    vtail = 0.0
+    for n in range(M - 1, -1, -1):
+        above[n] = tail
+        vabove[n] = vtail
+        vn = v[n, 0]
+        if w2[n] > 0.0:
+            wc = math.sqrt(w2[n])
+            r = wc * q[n, 0] - center / wc
+            Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
+            tail += absc[n] * (abs(center) / w2[n] + Eb / wc)
+            vtail += absc[n] * Eb
+        else:
+            tail = math.inf  # a mode without stiffness is never in the tail
+            vtail = math.inf
+    gK = 0.0
+    g1 = 0.0
+    L = 0.0
+    best = math.inf
+    margin = -math.inf
+    for n in range(M):
+        vn = v[n, 0]
+        gK += c[n] * q[n, 0]
+        g1 += c[n] * vn
+        if w2[n] > 0.0:
+            wc = math.sqrt(w2[n])
+            r = wc * q[n, 0] - center / wc
+            Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
+            L += absc[n] * (delta + (d + wc) * Eb)
+        else:
+            L += absc[n] * (psup + d * ((abs(vn) + psup * half) * grow))
+        best = min(best, gK + (abs(g1) + L * half) * half + above[n])
+        margin = max(margin, abs(g1) - (L * half + vabove[n]) * (1.0 + 1e-9))
+    return gK, g1, L, best, margin
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
     """The bisection loop of ``certified.enclose_zeros`` (``merge=False``) from the midpoints
     ``mids`` of intervals of half-width ``half``; returns ``(lo, hi, ok, best)``, ``ok`` false where
@@ -132,17 +191,19 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
         gs = np.empty(n)
         fs = np.empty(n)
         ls = np.empty(n)
+        us = np.empty(n)
+        xs = np.empty(n)
         for i in range(n):
-            gs[i], fs[i], ls[i] = _joint(phase, mids[i], half, prob, work, src)
+            gs[i], fs[i], ls[i], us[i], xs[i] = _joint_upper(phase, mids[i], half, prob, work, src)
         if prune:
             best = max(best, _sample_bound(mids, gs, fs, atol, floor))
         keep = np.empty(n, dtype=np.bool_)
         nk = 0
         for i in range(n):
             bound = ls[i] * half
-            keep[i] = abs(fs[i]) <= bound * (1.0 + 1e-9) + atol + 1e-300
+            keep[i] = abs(fs[i]) <= bound * (1.0 + 1e-9) + atol + 1e-300 and not xs[i] > atol + 1e-300
             if prune and keep[i]:
-                keep[i] = gs[i] + (abs(fs[i]) + ls[i] * half) * half >= best
+                keep[i] = min(gs[i] + (abs(fs[i]) + ls[i] * half) * half, us[i]) >= best
             if keep[i]:
                 nk += 1
         kept = np.empty(nk)
@@ -246,8 +307,8 @@ def _value_bounds(phase, lo, hi, prob, work, src):
     for i in range(n):
         mid = 0.5 * (lo[i] + hi[i])
         half = 0.5 * (hi[i] - lo[i])
-        gm[i], g1[i], L2 = _joint(phase, mid, half, prob, work, src)
-        upper[i] = gm[i] + (abs(g1[i]) + L2 * half) * half
+        gm[i], g1[i], L2, ut, _ = _joint_upper(phase, mid, half, prob, work, src)
+        upper[i] = min(gm[i] + (abs(g1[i]) + L2 * half) * half, ut)
     return gm, upper, g1
 
 

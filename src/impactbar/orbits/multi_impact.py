@@ -42,7 +42,12 @@ from .stability import sort_multipliers, stable_verdict
 __all__ = ["MultiImpactOrbit", "find_orbit"]
 
 TWO_PI = 2.0 * math.pi
-
+MAX_UNKNOWNS = 6000
+"""Largest segment problem, ``2 (N + 1) m`` unknowns: its dense Newton Jacobian takes
+``8 * unknowns**2`` bytes (288 MB at the bound) and each Newton step a dense solve (seconds)."""
+STALL_ITERATIONS = 40
+"""Newton gives up when its residual has not halved in this many iterations (a bad start
+wanders rather than converges)."""
 
 
 # ------------------------------------------------------------------------------------------------
@@ -96,6 +101,12 @@ class _Segments:
         self.model, self.load, self.m, self.n = model, load, m, n
         M = model.n_modes + 1
         self.M = M
+        size = 2 * M * m
+        if size > MAX_UNKNOWNS:
+            raise ValueError(
+                f"impacts={m} with n_modes={model.n_modes} gives 2 (n_modes + 1) impacts = {size} "
+                f"unknowns; the multi-impact problem is limited to {MAX_UNKNOWNS} (its dense Newton "
+                f"Jacobian would take {8 * size**2 / 2**30:.3g} GiB): use fewer impacts or modes")
         self.w2 = model.frequencies**2
         self.d = model.d
         self.c = model.end_weights
@@ -205,11 +216,18 @@ class _Segments:
 
     def newton(self, u, *, tol=1e-12, max_iter=40):
         """Newton's method on ``F(u) = 0``. Returns the converged ``u`` or ``None``, and the
-        iteration count."""
+        iteration count; it stops early (``None``) when the residual has not halved in
+        ``STALL_ITERATIONS`` iterations."""
         u = np.array(u, dtype=float)
+        best, best_it = math.inf, 0
         for it in range(1, max_iter + 1):
             F, DF, _ = self.evaluate(u)
             if not np.all(np.isfinite(F)) or not np.all(np.isfinite(DF)):
+                return None, it
+            size = float(np.max(np.abs(F)))
+            if size <= 0.5 * best:
+                best, best_it = size, it
+            elif it - best_it >= STALL_ITERATIONS:
                 return None, it
             try:
                 du = np.linalg.solve(DF, F)
@@ -456,7 +474,8 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     tol : float
         Relative tolerance of the Newton step.
     max_iter : int
-        Newton iterations per start.
+        Newton iterations per start, ``1 <= max_iter <= 1000``; a start stops earlier when the
+        residual has not halved in 40 iterations.
 
     Returns
     -------
@@ -467,8 +486,9 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     ------
     ValueError
         For bad arguments (named), an unknown impact law, wave-law windows that do not fit
-        (``impacts * 2/s >= 2 pi periods``), or when Newton does not converge from any start
-        derived from ``guess`` (or only back onto the undoubled orbit).
+        (``impacts * 2/s >= 2 pi periods``), a problem of more than ``MAX_UNKNOWNS = 6000``
+        unknowns ``2 (n_modes + 1) impacts`` (its dense Jacobian), or when Newton does not
+        converge from any start derived from ``guess`` (or only back onto the undoubled orbit).
 
     Examples
     --------
@@ -482,6 +502,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     :class:`~impactbar.SwitchedOrbit` (``impacts = 1``, ``periods`` ignored; the
     paper's impact law), from :func:`~impactbar.orbits.find_switched_orbit`.
     """
+    max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
     if isinstance(load, PositionSwitchedDrive):
         from .switched import find_switched_orbit
 
@@ -491,7 +512,6 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     m = check_int("impacts", impacts, lo=1, hi=4096)
     n = check_int("periods", periods, lo=1, hi=4096)
     tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
-    max_iter = check_int("max_iter", max_iter, lo=1)
     impact_law(model, load, 0.0, np.zeros(2 * model.n_modes + 2))  # the law is supported
     if not m * contact_window(model) < TWO_PI * n:
         raise ValueError(f"impacts={m} contact windows of 2/s = {contact_window(model):.6g} do not fit "

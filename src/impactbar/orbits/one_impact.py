@@ -385,7 +385,7 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
 def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
     """An orbit of the wave law (theory §4b): contact over ``[0, 2/s]``, flight over ``[2/s, 2 pi]``."""
     from ..dynamics.impact import wave_impact
-    from .wave import wave_impact_map_jacobian, wave_orbit_states
+    from .wave import wave_floquet_multipliers, wave_orbit_states
 
     M = model.n_modes + 1
     _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
@@ -405,7 +405,7 @@ def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> P
                                              horizon=TWO_PI - T, at_rest=at_rest)
     status = _window_departure(status, at_rest, v_dep, impact is not None and bool(impact.separations))
     admissible = status == Admissibility.ADMISSIBLE
-    mu = _sorted_multipliers(wave_impact_map_jacobian, 2 * M, model, load, phase, y_end, y_minus, rate)
+    mu = wave_floquet_multipliers(model, load, phase, y_end, y_minus, rate)
     blocks = schur_blocks(model, load, phase)
     return PeriodicOrbit.one_impact(
         model=model, load=load, phase=float(phase), multiplicity=int(mult), impact_velocity=v_imp,

@@ -42,10 +42,17 @@ from ..dynamics.modal import fundamental
 from ..loads import FourierLoad, Load, PiecewiseConstantLoad
 from ..model import BarModel
 from .phase import _cosine_roots
-from .stability import _arrival_derivative
+from .stability import (
+    STRUCTURED_FROM,
+    STRUCTURED_MAX_DAMPING,
+    _aberth,
+    _arrival_derivative,
+    _impact_fields,
+    sort_multipliers,
+)
 
 __all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_phase_families",
-           "wave_impact_map_jacobian", "wave_existence_edge", "window_map"]
+           "wave_impact_map_jacobian", "wave_floquet_multipliers", "wave_existence_edge", "window_map"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -430,3 +437,91 @@ def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y
     DP[0, :] = r
     DP[1:, :] = dY[1:, :]
     return DP
+
+
+def wave_floquet_multipliers(model: BarModel, load: Load, phase: float, y_end, y_minus, drive_rate, *,
+                             method: str = "auto") -> np.ndarray:
+    """Floquet multipliers of a one-impact orbit under the wave law: the eigenvalues of
+    :func:`wave_impact_map_jacobian` (theory §7, §4b), sorted by
+    :func:`~impactbar.orbits.stability.sort_multipliers`.
+
+    ``method="dense"`` takes the eigenvalues of the Jacobian, ``O(N^3)``. ``method="structured"``
+    uses the structure the paper's law has (:func:`~impactbar.orbits.stability.floquet_multipliers`):
+    in the state extended by the window's end time, the map is ``W S (P + h e_t^T)`` (flight of
+    fixed length ``2 pi - 2/s``, saltation ``S``, window ``W``). ``W = diag(-R I, 1) +
+    (Q g') e_t^T`` on the image of ``S`` (which keeps the end on the rod end, so contact's
+    projection ``Q`` acts only on the drive's rate ``g' = d(g, h)/d phase``), and ``e_t^T S (P + h
+    e_t^T) = (1 - c.h/v) e_t^T - (P^T c)^T / v`` lies in the span of the saltation's own factors:
+    the map is the block-diagonal ``diag(-R Phi_n(2 pi - 2/s), 1)`` plus a rank-2 correction, and its
+    eigenvalues (those of the map and one zero) come from the same Aberth-Ehrlich iteration,
+    ``O(N^2)``. With ``R = 0`` the map is ``u r^T`` (rank one): one multiplier ``r . u``, the rest 0.
+    ``"auto"`` (default) takes the structured method from 40 flexible modes on for ``d <= 1`` (as
+    for the paper's law), the dense one otherwise or where the iteration does not settle.
+
+    Parameters
+    ----------
+    model, load, phase, y_end, y_minus, drive_rate
+        As for :func:`wave_impact_map_jacobian`.
+    method : {"auto", "dense", "structured"}
+
+    Returns
+    -------
+    numpy.ndarray of complex, shape (2 N + 2,)
+        Infinite at exact grazing (zero impact velocity).
+
+    Raises
+    ------
+    ValueError
+        For an unknown ``method``.
+    """
+    if method not in ("auto", "dense", "structured"):
+        raise ValueError(f"method must be 'auto', 'dense' or 'structured'; got {method!r}")
+    M = model.n_modes + 1
+    if method == "auto":
+        use = model.n_modes >= STRUCTURED_FROM and model.d <= STRUCTURED_MAX_DAMPING
+        method = "structured" if use else "dense"
+    try:
+        if method == "dense" or model.n_modes == 0:
+            DP = wave_impact_map_jacobian(model, load, phase, y_end, y_minus, drive_rate)
+            return sort_multipliers(np.linalg.eigvals(DP))
+        if model.R == 0.0:  # DP = u r^T
+            DP = wave_impact_map_jacobian(model, load, phase, y_end, y_minus, drive_rate)
+            u = np.concatenate(([1.0], np.concatenate(drive_rate)[1:]))
+            return sort_multipliers(np.concatenate(([complex(DP[0] @ u)], np.zeros(2 * M - 1))))
+        parts = _wave_structured_parts(model, load, phase, y_end, y_minus, drive_rate)
+    except ValueError:  # exact grazing: a multiplier is infinite
+        return np.full(2 * M, np.inf + 0j)
+    mu = _aberth(*parts)
+    if mu is None:
+        DP = wave_impact_map_jacobian(model, load, phase, y_end, y_minus, drive_rate)
+        return sort_multipliers(np.linalg.eigvals(DP))
+    return sort_multipliers(mu)
+
+
+def _wave_structured_parts(model, load, phase, y_end, y_minus, drive_rate):
+    """The blocks and rank-2 factors (as :func:`impactbar.orbits.stability._structured_parts`) of
+    the wave law's impact map in the state extended by the window's end time (see
+    :func:`wave_floquet_multipliers`)."""
+    M = model.n_modes + 1
+    R = model.R
+    c = model.end_weights
+    T, F = _window(model)
+    v, (f0q, f0v), (f1q, f1v) = _impact_fields(model, load, phase + T, y_end, y_minus, phase + TWO_PI)
+    p11, p12, p21, p22 = _flight_fundamental(model)
+    hq = f1q - (p11 * f0q + p12 * f0v)
+    hv = f1v - (p21 * f0q + p22 * f0v)
+    ch = float(c @ hq)
+    gq, gv = (np.array(a, dtype=float) for a in drive_rate)
+    gq[0] = -float(c[1:] @ gq[1:])  # contact's projection of the drive's rate
+    a0, a1 = 1.0 - ch / v, -1.0 / v
+    U = np.empty((M, 2, 2))
+    U[:, 0, 0] = -R * hq + R * ch / v * f1q + a0 * gq
+    U[:, 1, 0] = -R * hv + R * ch / v * f1v + a0 * gv
+    U[:, 0, 1] = R * f1q / v + a1 * gq
+    U[:, 1, 1] = R * f1v / v + a1 * gv
+    V = np.zeros((M, 2, 2))
+    V[:, 0, 1] = c * p11
+    V[:, 1, 1] = c * p12
+    ut = np.array([-ch / v, -1.0 / v])
+    vt = np.array([1.0, 0.0])
+    return -R * p11, -R * p12, -R * p21, -R * p22, U, V, ut, vt

@@ -314,7 +314,7 @@ def _evaluate(fn, t: np.ndarray) -> np.ndarray:
 
 
 def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
-             max_impacts: int | None = None) -> SimulationResult:
+             max_impacts: int | None = None, progress=None) -> SimulationResult:
     """Simulate ``hammer`` from rest, ``gap_m`` off the stop, over ``periods`` impact periods.
 
     Parameters
@@ -326,6 +326,9 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
         Initial distance of the struck end from the stop (m), ``>= 0``; the piston starts at rest.
     max_impacts : int, optional
         Passed to ``impactbar.simulate``.
+    progress : callable, optional
+        Passed to ``impactbar.simulate``: called as ``progress(fraction)`` with the fraction of
+        the run done (e.g. to drive a progress bar).
 
     Returns
     -------
@@ -341,7 +344,7 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
     t_end = TWO_PI * periods
     traj = run_simulation(hammer.model, hammer.load,
                           InitialState.rigid(end_displacement=-gap_m / sc.length_m, velocity=0.0), t_end,
-                          max_impacts=max_impacts)
+                          max_impacts=max_impacts, **({} if progress is None else {"progress": progress}))
     v = np.asarray(traj.impact_velocities, dtype=float) * sc.velocity_m_s
     # the records of a law with a contact (the wave law's rod outputs); an instant impact has none
     # (the rod-rock law's per-blow outputs: impactbar.physical.rock.rock_blows)

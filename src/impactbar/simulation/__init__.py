@@ -13,8 +13,10 @@ Part of the core: imports ``impactbar.model``, ``impactbar.loads``, ``impactbar.
 
 from .simulate import EnergyAccount as EnergyAccount
 from .simulate import InitialState as InitialState
+from .simulate import SimulationInterrupted as SimulationInterrupted
 from .simulate import Trajectory as Trajectory
 from .simulate import simulate as simulate
 from .switched import SwitchedTrajectory as SwitchedTrajectory
 
-__all__ = ["EnergyAccount", "InitialState", "Trajectory", "simulate", "SwitchedTrajectory"]
+__all__ = ["EnergyAccount", "InitialState", "Trajectory", "simulate", "SwitchedTrajectory",
+           "SimulationInterrupted"]

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,6 +41,8 @@ from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
 from ..loads import FourierLoad, Load
 from ..model import MAX_MODES, BarModel
+from ._interrupt import SimulationInterrupted as SimulationInterrupted
+from ._interrupt import _CtrlC
 from .switched import SwitchedTrajectory, rigid_piece, run_compiled, run_switched
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
@@ -54,7 +57,7 @@ from .trajectory import _Segment as _Segment
 from .trajectory import _SegmentLog as _SegmentLog
 from .trajectory import _Segments as _Segments
 
-__all__ = ["InitialState", "Trajectory", "EnergyAccount", "simulate"]
+__all__ = ["InitialState", "Trajectory", "EnergyAccount", "SimulationInterrupted", "simulate"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -79,6 +82,14 @@ MAX_TIME = 1e8
 #: Largest ``s * n_modes`` :func:`simulate` accepts: the guaranteed event search steps on the
 #: scale of the stiffest mode's period, so beyond it a run does not finish in bounded time.
 MAX_SIMULATE_STIFFNESS = 1e5
+#: A run at least this long (dimensionless time, 1,000 load periods) catches Ctrl-C between
+#: blocks of impacts and keeps what it computed (:class:`SimulationInterrupted`), as does any run
+#: with a ``progress`` callback.
+LONG_RUN = 2000.0 * math.pi
+#: Least wall time (s) between two calls of a run's ``progress`` callback.
+PROGRESS_EVERY = 0.1
+
+
 
 
 
@@ -428,7 +439,7 @@ class _Core:
 # the driver
 # --------------------------------------------------------------------------------------------------
 def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.0,
-             max_impacts=None) -> Trajectory:
+             max_impacts=None, progress=None) -> Trajectory:
     r"""Follow the bar from ``initial`` through impact after impact (paper Section 5).
 
     Between impacts every mode obeys ``q_n'' + d q_n' + (s n pi)^2 q_n = p(t)`` (eq. 6) and is
@@ -458,6 +469,11 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     max_impacts : int, optional
         Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact (under
         the wave law the end of its contact window).
+    progress : callable, optional
+        Called as ``progress(fraction)`` with the fraction of ``[t0, t_end]`` done, in ``[0, 1]``,
+        between blocks of impacts (at most every 0.1 s of wall time) and once at the end: e.g. to
+        drive a progress bar with an estimate of the time left. Not with a
+        :class:`~impactbar.PositionSwitchedDrive`.
 
     Returns
     -------
@@ -470,7 +486,14 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         (``u(1, t0) > 0``), an undamped resonance between a mode and a load harmonic, or a bar too
         stiff for the guaranteed event search, ``s * n_modes > 1e5`` (``MAX_SIMULATE_STIFFNESS``: the
         search steps on the scale of the stiffest mode's period).
+    SimulationInterrupted
+        On Ctrl-C during a run with ``progress`` or of at least 1,000 load periods (``LONG_RUN``),
+        in the main thread: a :class:`KeyboardInterrupt` whose ``trajectory`` holds the run up to
+        the last block of impacts it finished.
     """
+    if progress is not None and not callable(progress):
+        raise ValueError(f"progress must be a callable of the fraction done; got "
+                         f"{type(progress).__name__}")
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
     if not isinstance(initial, InitialState):
@@ -506,7 +529,13 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         return _run_switched(model, load, q, v, t0, t_end, max_imp)
     core = _core_for(model, load)
     _push_off(core.c, q)
-    return _run(core, q, v, t0, t_end, max_imp)
+    if progress is None and t_end - t0 < LONG_RUN:
+        return _run(core, q, v, t0, t_end, max_imp)
+    with _CtrlC() as ctrl_c:
+        traj = _run(core, q, v, t0, t_end, max_imp, progress=progress, stop=ctrl_c)
+    if ctrl_c.pressed:  # (also when the run ended in the block where Ctrl-C came)
+        raise SimulationInterrupted(traj)
+    return traj
 
 
 def _push_off(c, q) -> None:
@@ -541,10 +570,13 @@ def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
     return run_switched(model, drive, q, v, t0, t_end, max_imp, piece, InitialState)
 
 
-def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
+def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Trajectory:
     """The driver, for every law: free flight by the compiled kernel (which applies an
     instantaneous law itself, with chatter), sustained contact until the stop's reaction turns
-    tensile, and the law's contact step at each arrival the kernel stops at without resolving it."""
+    tensile, and the law's contact step at each arrival the kernel stops at without resolving it.
+
+    Between blocks of impacts (where the state is a flight's start) it calls ``progress`` and
+    stops there (status ``"t_end"``, ``t_end`` the time reached) when ``stop`` has turned true."""
     law = core.model.law
     instant = law.instantaneous
     segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
@@ -562,7 +594,13 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
     cap = 1024
     if not instant:  # the kernel's state at the arrival it stops at
         aq, av = np.empty((1, q.size)), np.empty((1, q.size))
+    shown = time.monotonic()
     while True:
+        if progress is not None and time.monotonic() - shown >= PROGRESS_EVERY:
+            progress(min(1.0, (t - t0) / (t_end - t0)))
+            shown = time.monotonic()
+        if stop:  # (at a flight's start: the log is consistent)
+            break
         if mode == _FREE:
             left = max_imp - n_imp
             if left <= 0:  # pragma: no cover - run_free stops at max_imp itself
@@ -679,6 +717,8 @@ def _run(core: _Core, q, v, t0, t_end, max_imp) -> Trajectory:
         qe, ve = qe[:, 0], ve[:, 0]
         if last.basis == _CONTACT:
             qe, ve = core.release_state(qe, ve)
+    if progress is not None:
+        progress(min(1.0, (t - t0) / (t_end - t0)))
     imp_t = _joined(times) if instant else np.array(times, dtype=float)
     imp_v = _joined(vels) if instant else np.array(vels, dtype=float)
     ci = np.array(contacts, dtype=float).reshape(-1, 2)

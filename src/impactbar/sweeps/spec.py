@@ -37,6 +37,10 @@ _OPTIONS = {
     },
 }
 
+#: most values one variable of a work chunk may hold, ``chunk points * extra size``: the task
+#: allocates each chunk's variables at once (32 MiB each as float64)
+MAX_CHUNK_VALUES = 2**22
+
 #: grid points per chunk when the spec does not say
 DEFAULT_CHUNK_POINTS = {"orbits": 400, "montecarlo": 4, "bifurcation": 32}
 #: ... and for a sweep in the rigid closed forms (:func:`closed_form_task`): a chunk of 4,096 points
@@ -134,6 +138,7 @@ class SweepSpec:
             closed = closed_form_task(self)
             cp = DEFAULT_CLOSED_FORM_CHUNK_POINTS if closed else DEFAULT_CHUNK_POINTS[self.task]
         object.__setattr__(self, "chunk_points", check_int("chunk_points", cp, lo=1))
+        _check_chunk_size(self)
 
     # -- the grid ----------------------------------------------------------------------------
     @property
@@ -401,6 +406,24 @@ def _check_options(task, options, spec) -> dict:
         else:
             out[name] = check_real(key, v, lo=lo, lo_open=lo_open, hi=hi)
     return out
+
+
+def _check_chunk_size(spec) -> None:
+    """Refuse an extra dimension (``max_orbits``, ``keep``) that would make a work chunk's
+    variables larger than ``MAX_CHUNK_VALUES`` values, before anything is allocated."""
+    points = math.prod(spec.chunk_shape)
+    values = points * spec.extra_size
+    if values <= MAX_CHUNK_VALUES:
+        return
+    name = {"orbits": "max_orbits", "bifurcation": "keep"}.get(spec.task)
+    key = f"[{spec.task}] {name} = {spec.extra_size}" if name else f"chunk_points = {spec.chunk_points}"
+    hint = (f" (the load admits at most {_max_orbits_bound(spec)} one-impact orbits)"
+            if name == "max_orbits" else "")
+    vf = float(values) if values < 1e300 else math.inf  # (an integer beyond the float range)
+    raise ValueError(f"{key}: a work chunk of {points} grid points would hold {vf:.3g} values per "
+                     f"variable ({8 * vf / 2**30:.3g} GiB); the limit is {MAX_CHUNK_VALUES} "
+                     f"values ({8 * MAX_CHUNK_VALUES // 2**20} MiB) per chunk: lower {name or 'it'}"
+                     f"{hint} or chunk_points")
 
 
 def _max_orbits_bound(spec) -> int:
