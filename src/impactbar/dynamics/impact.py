@@ -141,7 +141,10 @@ class WaveImpact:
     energy_after_field : float
         Energy of the exact post-window field (``energy_before + drive_work - rod_energy``).
     efficiency : float
-        ``rod_energy / energy_before`` (Lundberg's transfer efficiency).
+        ``rod_energy / (energy_before + drive_work)``: the share of the energy available to the blow
+        (the piston's energy at impact plus the drive's work during the window) that the rod
+        carries away (Lundberg's transfer efficiency, with the drive); at most 1, since the energy
+        balance leaves ``energy_after_field >= 0``.
     peak_force_error : float
         An indicator of the truncation error of ``peak_force`` (see the property).
     peak_force, min_force : float
@@ -202,8 +205,8 @@ class WaveImpact:
 
     @property
     def efficiency(self) -> float:
-        e0 = self.energy_before
-        return self.rod_energy / e0 if e0 > 0.0 else math.nan
+        available = self.energy_before + self.drive_work
+        return self.rod_energy / available if available > 0.0 else math.nan
 
     @cached_property
     def _force_extremes(self):
