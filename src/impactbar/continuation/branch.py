@@ -225,16 +225,18 @@ class Branch:
                             columns=["kind", "parameter", "value", "index", "multiplier", "phase",
                                      "impacts", "periods"])
 
-    def plot(self, ax=None, *, y: str = "impact_velocity", color=None, label=None, events=True):
+    def plot(self, ax=None, *, y: str = "phase", color=None, label=None, events=True):
         """Plot the branch: stable stretches solid, unstable or inadmissible dashed, events marked.
 
         Parameters
         ----------
         ax : matplotlib.axes.Axes, optional
             Drawn on a new figure's axes if omitted.
-        y : {"impact_velocity", "phase", "max_abs_multiplier"}
+        y : {"phase", "impact_velocity", "max_abs_multiplier"}
             What to plot against the parameter; per-impact quantities give one curve per impact
-            (phases unwrapped along the branch, so a curve does not jump at ``2 pi``).
+            (phases unwrapped along the branch, so a curve does not jump at ``2 pi``). The default,
+            the phase, separates the two sides of a fold; the impact velocity is ``2 pi p0/(1 + R)``
+            on every one-impact orbit (theory §4).
         color, label : optional
             Line colour and legend label.
         events : bool
