@@ -85,6 +85,53 @@ def explicit_options(parser: argparse.ArgumentParser, argv: list[str]) -> frozen
     return frozenset(vars(ns))
 
 
+class _DeprecatedAlias(argparse.Action):
+    """The old spelling of an option: stores its value apart (hidden from ``--help``);
+    :func:`resolve_deprecated` moves it to the new option with a warning."""
+
+    def __init__(self, option_strings, dest, *, new: str, new_dest: str, **kwargs):
+        super().__init__(option_strings, dest, help=argparse.SUPPRESS, **kwargs)
+        self.new, self.new_dest = new, new_dest
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, True if self.nargs == 0 else values)
+
+
+def add_deprecated_alias(parser, old: str, new: str, new_dest: str, *, flag: bool = False,
+                         **kwargs) -> None:
+    """Keep ``old`` working as a deprecated spelling of the option ``new`` (destination
+    ``new_dest``): given, it sets ``new_dest`` and :func:`resolve_deprecated` prints
+    ``warning: OLD is deprecated; use NEW``; given with ``new`` it is refused. ``flag``: a switch
+    without a value; ``kwargs`` (``type``, ``metavar``) as for ``add_argument``."""
+    dest = "_deprecated_" + old.lstrip("-").replace("-", "_")
+    parser.add_argument(old, dest=dest, default=None, action=_DeprecatedAlias, new=new,
+                        new_dest=new_dest, nargs=0 if flag else None, **kwargs)
+
+
+def resolve_deprecated(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                       command: str) -> None:
+    """Move the values of the deprecated spellings given (:func:`add_deprecated_alias`) to their
+    new options, one warning line each on stderr.
+
+    Raises
+    ------
+    UsageError
+        The old and the new spelling given together.
+    """
+    for a in parser._actions:
+        if not isinstance(a, _DeprecatedAlias) or getattr(args, a.dest, None) is None:
+            continue
+        old = a.option_strings[0]
+        if given(args, a.new_dest):
+            raise UsageError(f"{a.new} and {old} cannot be used together: {old} is the old name "
+                             f"of {a.new}")
+        print(f"impactbar {command}: warning: {old} is deprecated; use {a.new}", file=sys.stderr)
+        setattr(args, a.new_dest, getattr(args, a.dest))
+        record = getattr(args, _GIVEN, None)
+        if record is not None:
+            setattr(args, _GIVEN, record | {a.new_dest})
+
+
 def given(args: argparse.Namespace, dest: str) -> bool:
     """Whether the option with destination ``dest`` was given on the command line.
 

@@ -28,9 +28,11 @@ def add_parser(subparsers) -> None:
                     "--impact wave also forces.png (the force waves sent into the rod).")
     add_physical_arguments(p)
     add_impact_argument(p)
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--out", default="out/simulate", metavar="DIR",
+                   help="output folder (created; default out/simulate)")
     p.add_argument("--periods", type=float, default=40.0, metavar="N",
-                   help="length of the run in impact periods (default 40)")
+                   help="length of the run in load periods, one drive period 1/f_b each (the "
+                        "dimensionless 2 pi; default 40)")
     p.add_argument("--blow-fraction", type=float, default=0.25, metavar="F",
                    help="an impact is a blow when its impact velocity is at least F times the run's "
                         "largest; slower ones are chatter, counted apart (default 0.25)")

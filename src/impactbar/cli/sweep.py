@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._common import UsageError, add_quiet_argument, docs_page, output_folder
+from ._common import UsageError, add_deprecated_alias, add_quiet_argument, docs_page, output_folder
 
 
 def add_parser(sub) -> None:
@@ -30,9 +30,8 @@ def add_parser(sub) -> None:
                        help="address of a running dask scheduler, e.g. tcp://host:8786, instead")
     p.add_argument("--overwrite", action="store_true",
                    help="replace a store that holds a different sweep")
-    p.add_argument("--no-progress", action="store_true",
-                   help="no progress bar (it shows only when stderr is a terminal)")
     add_quiet_argument(p)
+    add_deprecated_alias(p, "--no-progress", "--quiet", "quiet", flag=True)
     p.set_defaults(func=run)
 
 
@@ -52,7 +51,7 @@ def run(args) -> int:
           f"{spec.chunk_points} -> {args.out}", file=sys.stderr)
     res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,
                     overwrite=args.overwrite,
-                    progress=not (args.no_progress or args.quiet) and sys.stderr.isatty())
+                    progress=not args.quiet and sys.stderr.isatty())
     rate = (f", {res.computed * spec.n_points / spec.n_chunks / res.seconds:.1f} points/s"
             if res.computed and res.seconds > 0 else "")
     print(f"{args.out}: {res.already_done + res.computed}/{res.n_chunks} chunks stored "
