@@ -120,3 +120,83 @@ def test_the_cli_page_table_lists_every_shared_option_with_its_default():
 def test_help_states_the_shared_defaults(command):
     text = _subparsers()[command].format_help()
     assert "(default 0.05)" in text and "(default 4)" in text and "(default 0.3)" in text
+
+
+class _Tty:
+    """A stderr that says it is a terminal."""
+
+    def __init__(self):
+        import io
+
+        self.buf = io.StringIO()
+
+    def isatty(self):
+        return True
+
+    def write(self, text):
+        return self.buf.write(text)
+
+    def flush(self):
+        pass
+
+
+def test_continue_and_simulate_show_stages_on_a_terminal_only(monkeypatch, tmp_path, capsys):
+    """Issue 21 item 14: ``continue`` and ``simulate`` name the stage running and the time elapsed
+    on a terminal's stderr; nothing with ``--quiet`` or off a terminal."""
+    import sys
+
+    from impactbar.cli import _common
+
+    tty = _Tty()
+    monkeypatch.setattr(sys, "stderr", tty)
+    argv = ["continue", "--n-modes", "0", "--parameter", "p0", "--to", "0.8", "--brute", "0",
+            "--json", "--out", str(tmp_path / "c")]
+    assert main(argv) == 0
+    text = tty.buf.getvalue()
+    assert "continue: 0/2 stages done, start" in text and "branches in p0" in text
+    assert "2/2 stages done, done" in text
+    tty.buf = type(tty.buf)()
+    assert main([*argv, "--quiet"]) == 0
+    assert tty.buf.getvalue() == ""
+    # simulate's two stages (the run, the outputs), with the run faked
+    import impactbar.physical as ph
+
+    real = ph.simulate
+    monkeypatch.setattr(ph, "simulate", lambda h, **kw: real(h, periods=2, gap_m=kw["gap_m"]))
+    assert main(["simulate", "--preset", "pneumatic-drill", "--out", str(tmp_path / "s")]) == 0
+    text = tty.buf.getvalue()
+    assert "simulate pneumatic-drill: 0/2 stages done, 40 periods" in text and ", outputs" in text
+    capsys.readouterr()
+    monkeypatch.setattr(sys, "stderr", __import__("io").StringIO())  # not a terminal
+    with _common.stage_bar(2, desc="x", first="a") as bar:
+        assert bar.bar.disable
+
+
+def test_json_load_is_structured(capsys):
+    import json
+
+    assert main(["orbits", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["load"] == {"kind": "cosine", "p0": 0.3, "pk": 1.0,
+                                                           "k": 1}
+    assert main(["orbits", "--load", "square", "--kappa", "1.4", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["load"] == {"kind": "square", "q": 1.0, "kappa": 1.4}
+
+
+def test_documented_commands_write_only_into_ignored_folders():
+    """Every ``impactbar`` command of the README and the docs that writes a folder writes it under
+    a path .gitignore ignores (a new user's clone stays clean), its default included."""
+    root = DOCS.parents[1]
+    ignored = [line.strip("/") for line in (root / ".gitignore").read_text().splitlines()
+               if line.startswith("/")]
+    texts = [root / "README.md", *sorted((root / "docs").glob("*.md"))]
+    subs = _subparsers()
+    seen = 0
+    for path in texts:
+        for cmd in re.findall(r"impactbar (paper|continue|simulate|experiment)\b([^`\n]*)",
+                              path.read_text(encoding="utf-8")):
+            name, rest = cmd
+            m = re.search(r"--out[ =](\S+)", rest)
+            out = m.group(1) if m else subs[name].get_default("out") or "out/experiment"
+            assert out.split("/")[0] in ignored, (path.name, name, rest)
+            seen += 1
+    assert seen >= 5

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ._common import add_deprecated_alias, output_folder, print_json, refuse
+from ._common import add_deprecated_alias, add_quiet_argument, output_folder, print_json, refuse, stage_bar
 from .orbits import add_bar_and_load_arguments
 from .orbits import check_options as check_bar_and_load
 
@@ -59,6 +59,7 @@ def add_parser(sub) -> None:
                     help="the diagram's ordinate (default phase, which separates the two sides of a "
                     "fold; the impact velocity is 2 pi p0/(1 + R) on every one-impact orbit)")
     og.add_argument("--json", action="store_true", help="print a JSON summary instead of a table")
+    add_quiet_argument(og)
     try:
         from .physical import add_physical_arguments  # the SI layer, where installed
     except ImportError:
@@ -127,8 +128,6 @@ def check_options(args) -> None:
 
 
 def run(args) -> int:
-    from ..continuation import doubling_cascade, parameter_value, simulated_diagram
-
     check_options(args)
     out = output_folder(args.out)
     model, load = _model_and_load(args)
@@ -136,49 +135,16 @@ def run(args) -> int:
         raise ValueError(f"--doublings must be >= 0; got {args.doublings}")
     if args.brute < 0:
         raise ValueError(f"--brute must be >= 0; got {args.brute}")
-    start = _start(model, load, args)
-    kw = {"step": args.step, "max_step": args.max_step, "max_points": args.max_points}
-    branches = list(doubling_cascade(start, args.parameter, args.to, doublings=args.doublings,
-                                     **kw).branches)
-    written = []
-    for i, b in enumerate(branches):
-        path = out / f"branch_{i}_{b.impacts}per{b.periods}.csv"
-        b.to_dataframe().to_csv(path)
-        written.append(path)
-    events = [dict(e.to_dict(), branch=i) for i, b in enumerate(branches) for e in b.events]
-    ev_path = out / "events.csv"
-    _write_events(ev_path, events)
-    written.append(ev_path)
-    try:
-        import xarray as xr  # noqa: F401
-    except ImportError:
-        pass
-    else:
-        for i, b in enumerate(branches):
-            path = out / f"branch_{i}_{b.impacts}per{b.periods}.nc"
-            b.to_xarray().to_netcdf(path)
-            written.append(path)
-    diagram = None
-    if args.brute:
-        lam0 = parameter_value(model, load, args.parameter)
-        lo, hi = min(b.values.min() for b in branches), max(b.values.max() for b in branches)
-        values = np.linspace(lam0, args.to, args.brute)
-        values = values[(values >= lo) & (values <= hi)] if values.size > 1 else values
-        q, v = start.modal_state_after_impact
-        from .. import InitialState
-
-        # the flight starts after the impact (under the wave law: at the end of its window 2/s)
-        t0 = float(start.impact_times[0]) if hasattr(start, "impact_times") else start.phase
-        t0 += model.law.window(model)
-        diagram = simulated_diagram(model, load, args.parameter, values, transient=args.transient,
-                                    record=args.record, start=InitialState(q, v), t0=t0)
-    try:
-        path = _plot(branches, diagram, args, out)
-    except ImportError:
-        path = None
-    if path is not None:
-        written.append(path)
-    curves = _curves(branches, args, out, written) if args.curve else []
+    stages = 2 + (args.brute > 0) + (args.curve is not None)
+    with stage_bar(stages, desc="continue", first="start", quiet=args.quiet) as bar:
+        start = _start(model, load, args)
+        bar.stage(f"branches in {args.parameter}")
+        branches, diagram, written = _branches(start, model, load, args, out, bar)
+        curves = []
+        if args.curve:
+            bar.stage("two-parameter curves")
+            curves = _curves(branches, args, out, written)
+        bar.stage("done")
     if args.json:
         doc = {"parameter": args.parameter, "to": args.to,
                "branches": [{"impacts": b.impacts, "periods": b.periods, "points": len(b),
@@ -204,6 +170,55 @@ def run(args) -> int:
     for p in written:
         print(f"wrote {p}")
     return 0
+
+
+def _branches(start, model, load, args, out, bar):
+    """The cascade of branches from ``start``, written out, and the brute-force diagram."""
+    from ..continuation import doubling_cascade, parameter_value, simulated_diagram
+
+    kw = {"step": args.step, "max_step": args.max_step, "max_points": args.max_points}
+    branches = list(doubling_cascade(start, args.parameter, args.to, doublings=args.doublings,
+                                     **kw).branches)
+    written = []
+    for i, b in enumerate(branches):
+        path = out / f"branch_{i}_{b.impacts}per{b.periods}.csv"
+        b.to_dataframe().to_csv(path)
+        written.append(path)
+    events = [dict(e.to_dict(), branch=i) for i, b in enumerate(branches) for e in b.events]
+    ev_path = out / "events.csv"
+    _write_events(ev_path, events)
+    written.append(ev_path)
+    try:
+        import xarray as xr  # noqa: F401
+    except ImportError:
+        pass
+    else:
+        for i, b in enumerate(branches):
+            path = out / f"branch_{i}_{b.impacts}per{b.periods}.nc"
+            b.to_xarray().to_netcdf(path)
+            written.append(path)
+    diagram = None
+    if args.brute:
+        bar.stage("brute-force diagram")
+        lam0 = parameter_value(model, load, args.parameter)
+        lo, hi = min(b.values.min() for b in branches), max(b.values.max() for b in branches)
+        values = np.linspace(lam0, args.to, args.brute)
+        values = values[(values >= lo) & (values <= hi)] if values.size > 1 else values
+        q, v = start.modal_state_after_impact
+        from .. import InitialState
+
+        # the flight starts after the impact (under the wave law: at the end of its window 2/s)
+        t0 = float(start.impact_times[0]) if hasattr(start, "impact_times") else start.phase
+        t0 += model.law.window(model)
+        diagram = simulated_diagram(model, load, args.parameter, values, transient=args.transient,
+                                    record=args.record, start=InitialState(q, v), t0=t0)
+    try:
+        path = _plot(branches, diagram, args, out)
+    except ImportError:
+        path = None
+    if path is not None:
+        written.append(path)
+    return branches, diagram, written
 
 
 def _curves(branches, args, out, written):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..laws import LAWS
-from ._common import print_json, refuse
+from ._common import load_record, print_json, refuse
 
 #: the dimensionless inputs, which a hammer in SI (CONFIG.toml or --preset) sets itself
 DIMENSIONLESS = ("s", "d", "R", "n_modes", "load", "p0", "pk", "k", "q", "kappa")
@@ -101,7 +101,7 @@ def run(args) -> int:
         doc = {
             "model": {"s": model.s, "d": model.d, "R": model.R, "n_modes": model.n_modes,
                       "impact": model.impact},
-            "load": repr(load),
+            "load": load_record(load),
             "orbits": [o.to_dict() for o in orbits],
         }
         print_json(doc)

@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import physical
 from ..plotting.physical import plot_blows, plot_force_waves, plot_motion
-from ._common import output_folder, require
+from ._common import add_quiet_argument, output_folder, require, stage_bar
 from .physical import add_impact_argument, add_physical_arguments, hammer_from_args, json_ready
 
 __all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows", "plot_force_waves"]
@@ -39,6 +39,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--gap", default="0 mm", metavar="LENGTH",
                    help="initial distance of the struck end from the stop, with a unit; the "
                         "piston starts at rest (default '0 mm')")
+    add_quiet_argument(p)
     p.set_defaults(func=run)
 
 
@@ -54,11 +55,35 @@ def run(args) -> int:
     gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")
     require("matplotlib")
     out = output_folder(args.out)
-    try:
-        result = physical.simulate(hammer, periods=args.periods, gap_m=gap)
-    except RuntimeError as exc:
-        print(f"impactbar simulate: error: {exc}", file=sys.stderr)
-        return 1
+    with stage_bar(2, desc=f"simulate {hammer.name or 'hammer'}", first=f"{args.periods:g} periods",
+                   quiet=args.quiet) as bar:
+        try:
+            result = physical.simulate(hammer, periods=args.periods, gap_m=gap)
+        except RuntimeError as exc:
+            print(f"impactbar simulate: error: {exc}", file=sys.stderr)
+            return 1
+        bar.stage("outputs")
+        written, summary = _write_outputs(result, out, args)
+        bar.stage("done")
+    line = (f"{hammer.name or 'hammer'}: {summary['n_impacts']} impacts in {result.t_end_s:.4g} s "
+            f"({summary['n_blows']} blows, {summary['n_chatter']} chatter)")
+    if summary["n_blows_second_half"] >= 2:
+        line += (f"; second half, {summary['n_blows_second_half']} blows: "
+                 f"{summary['mean_impact_velocity_m_s']:.3f} m/s, "
+                 f"{summary['mean_blow_energy_J']:.2f} J per blow, every "
+                 f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
+                 f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
+                 f"{summary['mean_power_W']:.4g} W")
+        if np.isfinite(summary["mean_efficiency"]):
+            line += f", efficiency {summary['mean_efficiency']:.3f}"
+    print(line + f"; wrote {out}/{written}, impacts.csv, summary.json")
+    if not summary["settled"]:
+        print(f"impactbar simulate: warning: {summary['message']}", file=sys.stderr)
+    return 0
+
+
+def _write_outputs(result, out, args) -> tuple[str, dict]:
+    """impacts.csv, summary.json and the figures; returns the figures' names and the summary."""
     write_impacts(result, out / "impacts.csv")
     summary = summarize(result, blow_fraction=args.blow_fraction)
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
@@ -83,21 +108,7 @@ def run(args) -> int:
         fig.savefig(out / "forces.png", dpi=120)
         plt.close(fig)
         written += ", forces.png"
-    line = (f"{hammer.name or 'hammer'}: {summary['n_impacts']} impacts in {result.t_end_s:.4g} s "
-            f"({summary['n_blows']} blows, {summary['n_chatter']} chatter)")
-    if summary["n_blows_second_half"] >= 2:
-        line += (f"; second half, {summary['n_blows_second_half']} blows: "
-                 f"{summary['mean_impact_velocity_m_s']:.3f} m/s, "
-                 f"{summary['mean_blow_energy_J']:.2f} J per blow, every "
-                 f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
-                 f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
-                 f"{summary['mean_power_W']:.4g} W")
-        if np.isfinite(summary["mean_efficiency"]):
-            line += f", efficiency {summary['mean_efficiency']:.3f}"
-    print(line + f"; wrote {out}/{written}, impacts.csv, summary.json")
-    if not summary["settled"]:
-        print(f"impactbar simulate: warning: {summary['message']}", file=sys.stderr)
-    return 0
+    return written, summary
 
 
 def write_impacts(result: physical.SimulationResult, path) -> None:

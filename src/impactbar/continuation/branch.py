@@ -99,6 +99,32 @@ class Branch:
     def __len__(self) -> int:
         return int(self.values.size)
 
+    def __repr__(self) -> str:
+        """One line: the motion, the parameter's range, the points, the events, the status."""
+        if len(self):
+            span = f"{self.parameter} {self.values[0]:.6g} -> {self.values[-1]:.6g}"
+        else:
+            span = f"{self.parameter} (empty)"
+        kinds: dict[str, int] = {}
+        for e in self.events:
+            kinds[str(e.kind)] = kinds.get(str(e.kind), 0) + 1
+        ev = ", ".join(f"{n} {k}" if n > 1 else k for k, n in kinds.items()) or "none"
+        return (f"Branch({self.impacts} per {self.periods}, {span}, {len(self)} points, "
+                f"events: {ev}, status {str(self.status)!r})")
+
+    def _repr_html_(self) -> str:
+        """A short table for notebooks: the summary line and one row per event."""
+        import html
+
+        rows = "".join(
+            f"<tr><td>{html.escape(str(e.kind))}</td><td>{e.value:.10g}</td><td>{e.index}</td>"
+            f"<td>{'' if math.isnan(e.multiplier.real) else f'{e.multiplier:.6g}'}</td></tr>"
+            for e in self.events)
+        table = ("<table><thead><tr><th>event</th><th>" + html.escape(self.parameter)
+                 + "</th><th>index</th><th>multiplier</th></tr></thead><tbody>" + rows
+                 + "</tbody></table>") if self.events else ""
+        return f"<p><code>{html.escape(repr(self))}</code></p>{table}"
+
     @property
     def stable(self) -> np.ndarray:
         """``(P,)`` bool: admissible with every ``|multiplier| < 1``."""

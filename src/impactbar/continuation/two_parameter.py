@@ -57,6 +57,14 @@ class BifurcationCurve:
     def __len__(self) -> int:
         return int(self.values.shape[0])
 
+    def __repr__(self) -> str:
+        """One line: the kind, the parameters, the ends, the points, the status."""
+        a, b = self.parameters
+        ends = (f"({a}, {b}) from {tuple(round(float(x), 6) for x in self.values[0])} to "
+                f"{tuple(round(float(x), 6) for x in self.values[-1])}, " if len(self) else "")
+        return (f"BifurcationCurve({str(self.kind)!r}, {ends}{len(self)} points, "
+                f"status {str(self.status)!r})")
+
     def to_dataframe(self):
         """One row per point: both parameters, the first impact's phase and velocity, the largest
         multiplier modulus and the clearance; requires pandas."""

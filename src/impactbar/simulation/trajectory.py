@@ -255,6 +255,11 @@ class Trajectory:
     _segments: _Segments = field(repr=False)
     n_release_retries: int = 0
 
+    def __repr__(self) -> str:
+        """One line: model, load, time span, impacts, status (not the arrays)."""
+        return (f"Trajectory({self.model!r}, {self.load!r}, t {self.t0:.6g} -> {self.t_end:.6g}, "
+                f"{self.impact_times.size} impacts, status {str(self.status)!r})")
+
     @property
     def n_impacts(self) -> int:
         return int(self.impact_times.size)
