@@ -44,6 +44,14 @@ class BranchEvent:
         The orbit at the event.
     multiplier : complex
         The critical multiplier (NaN for grazing and admissibility events).
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, CosineLoad, continue_orbit, periodic_orbits
+    >>> start = periodic_orbits(BarModel(s=3.0, d=0.0, R=0.6, n_modes=0), CosineLoad(0.9, 1.0))[1]
+    >>> fold = continue_orbit(start, "p0", to=1.5).events[0]  # the rigid fold: (1 + R)/(pi (1 - R))
+    >>> str(fold.kind), round(fold.value, 6), round(fold.multiplier.real, 6)
+    ('fold', 1.27324, 1.0)
     """
 
     kind: str
@@ -85,6 +93,16 @@ class Branch:
         ``"stopped at <event kind>"``.
     impacts, periods : int
         ``m`` and ``n``.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, CosineLoad, continue_orbit, periodic_orbits
+    >>> start = periodic_orbits(BarModel(s=3.0, d=0.0, R=0.6, n_modes=0), CosineLoad(0.9, 1.0))[1]
+    >>> branch = continue_orbit(start, "p0", to=0.66)
+    >>> branch.parameter, branch.impacts, branch.periods, str(branch.status)
+    ('p0', 1, 1, 'reached')
+    >>> [(str(e.kind), round(e.value, 6)) for e in branch.events]
+    [('period-doubling', 0.756847)]
     """
 
     parameter: str

@@ -156,6 +156,16 @@ class WaveImpact:
         a genuine jump of the fields (left by an earlier release or separation at ``d = 0``) is
         high by up to the Gibbs overshoot, ``0.09 (1 + R) s |[A]| / 2`` for a jump ``[A]`` of the
         arriving invariant, at every ``N``; a feature narrower than ``1/(s N)`` is not resolved.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar import BarModel, CosineLoad, wave_impact
+    >>> q, v = np.zeros(6), np.zeros(6)
+    >>> v[0] = 1.0  # a rigid piston arriving at unit speed, no drive
+    >>> imp = wave_impact(BarModel(s=7.0, d=0.0, R=0.3, n_modes=5), CosineLoad(0.0, 0.0), 0.0, q, v)
+    >>> round(imp.duration, 12), round(float(imp.efficiency), 12)  # 2/s and 1 - R^2
+    (0.285714285714, 0.91)
     """
 
     def __init__(self, s, R, t0, q_before, v_before, q_after, v_after, solver):
@@ -379,6 +389,16 @@ def wave_impact(model, load, t0: float, q, v) -> WaveImpact:
     ValueError
         If the shapes do not match the model, a value is not finite, or the piston arrives moving
         away from the rod (``u_t(1) < 0`` beyond rounding).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar import BarModel, CosineLoad, wave_impact
+    >>> q, v = np.zeros(6), np.zeros(6)
+    >>> v[0] = 1.0
+    >>> imp = wave_impact(BarModel(s=7.0, d=0.0, R=0.3, n_modes=5), CosineLoad(0.0, 0.0), 0.0, q, v)
+    >>> round(imp.impulse, 12), round(float(imp.v_after[0]), 12)  # momentum (1 + R) v, rebound -R v
+    (1.3, -0.3)
     """
     s, R = float(model.s), float(model.R)
     M = model.n_modes + 1

@@ -53,6 +53,15 @@ class SwitchedTrajectory:
         Why the run stopped.
     pieces : tuple of Trajectory
         The constant-force pieces, in order (each a run of the ordinary driver).
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, InitialState, PositionSwitchedDrive, simulate
+    >>> drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
+    >>> run = simulate(BarModel(s=10.0, d=0.05, R=0.5, n_modes=0), drive,
+    ...                InitialState.rigid(-0.5, 0.0), 60.0)
+    >>> type(run).__name__, run.n_impacts > 5
+    ('SwitchedTrajectory', True)
     """
 
     model: BarModel
