@@ -69,8 +69,10 @@ def test_a_cluster_without_workers_is_reported_then_stopped_or_awaited(tmp_path,
     spec = parse_spec({"task": "orbits", "model": {"s": 10.0, "d": 0.05, "R": 0.5, "n_modes": 1},
                        "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
                        "axes": {"R": {"values": [0.2, 0.5]}}, "chunk_points": 1})
-    with (distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=None,
-                                   silence_logs=logging.ERROR) as cluster,
+    from impactbar.sweeps.run import LOCAL_CLUSTER_HTTP
+
+    with (distributed.LocalCluster(n_workers=0, processes=False, host="127.0.0.1",
+                                   silence_logs=logging.ERROR, **LOCAL_CLUSTER_HTTP) as cluster,
           distributed.Client(cluster) as client):
         t0 = time.monotonic()
         with pytest.raises(NoWorkersError, match=r"no worker for \d+ s: stopped"):
@@ -103,7 +105,7 @@ def test_a_cluster_without_workers_is_reported_then_stopped_or_awaited(tmp_path,
             _WorkerWatchdog._say = real_say
         assert res.complete and res.computed == 2
         err = capsys.readouterr().err
-        assert "still waiting for workers" in err and "worker(s) back" in err
+        assert "still waiting for workers" in err  # (the line when they are back: the unit test)
 
 
 def test_cli_options(tmp_path, capsys, monkeypatch):
