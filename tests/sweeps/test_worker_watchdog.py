@@ -69,10 +69,9 @@ def test_a_cluster_without_workers_is_reported_then_stopped_or_awaited(tmp_path,
     spec = parse_spec({"task": "orbits", "model": {"s": 10.0, "d": 0.05, "R": 0.5, "n_modes": 1},
                        "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
                        "axes": {"R": {"values": [0.2, 0.5]}}, "chunk_points": 1})
-    from impactbar.sweeps.run import LOCAL_CLUSTER_HTTP
-
-    with (distributed.LocalCluster(n_workers=0, processes=False, host="127.0.0.1",
-                                   silence_logs=logging.ERROR, **LOCAL_CLUSTER_HTTP) as cluster,
+    with (distributed.LocalCluster(n_workers=0, processes=False, dashboard_address="127.0.0.1:0",
+                                   scheduler_kwargs={"dashboard": False},
+                                   silence_logs=logging.ERROR) as cluster,
           distributed.Client(cluster) as client):
         t0 = time.monotonic()
         with pytest.raises(NoWorkersError, match=r"no worker for \d+ s: stopped"):
