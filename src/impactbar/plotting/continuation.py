@@ -114,7 +114,7 @@ def plot_bifurcation_curves(curves, ax=None):
     return ax
 
 
-def plot_bifurcation_diagram(branches, diagram=None, ax=None, *, y: str = "impact_velocity"):
+def plot_bifurcation_diagram(branches, diagram=None, ax=None, *, y: str = "phase"):
     """Continued branches over a brute-force bifurcation diagram (grey dots, e.g. from
     :func:`impactbar.continuation.diagram.simulated_diagram`): stable solid, unstable dashed,
     events marked.
@@ -126,8 +126,9 @@ def plot_bifurcation_diagram(branches, diagram=None, ax=None, *, y: str = "impac
     diagram : mapping, optional
         ``diagram["parameter"]`` and ``diagram[y]``, arrays of equal shape ``(n,)``.
     ax : matplotlib.axes.Axes, optional
-    y : {"impact_velocity", "phase", "max_abs_multiplier"}
-        The branches' ordinate (see :func:`plot_branch`).
+    y : {"phase", "impact_velocity", "max_abs_multiplier"}
+        The branches' ordinate (see :func:`plot_branch`; the phase, the default, separates the two
+        sides of a fold).
 
     Returns
     -------
