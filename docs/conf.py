@@ -202,7 +202,8 @@ nitpick_ignore = [("py:attr", "rank"), ("py:attr", "name"), ("py:attr", "chunk_g
 
 def _resolve_short(app, env, node, contnode):
     """``missing-reference``: a Python reference by a short or re-exported name, resolved to the
-    documented object it names (the alias table above), or to the class or module that documents
+    documented object it names (a member of the class or module where it stands, the alias table
+    above, a unique qualified name ending so), else to the class or module whose docstring names
     it; ``None`` (unresolved) when nothing documented matches."""
     from sphinx.util.nodes import make_refnode
 
@@ -210,9 +211,13 @@ def _resolve_short(app, env, node, contnode):
         return None
     objects = env.get_domain("py").objects
     parts = node["reftarget"].lstrip("~.").split(".")
+    # where the reference stands: ``:meth:`harmonics``` in the docstring of ``Load``
+    module, cls = node.get("py:module"), node.get("py:class")
+    owners = [".".join(x for x in (module, cls) if x)] if cls else []
+    owners += [module] if module else []
     for k in range(len(parts), 0, -1):  # the name, then its owner (a class, a module)
         head, rest = ".".join(parts[:k]), parts[k:]
-        names = [numpydoc_xref_aliases.get(head, head)]
+        names = [f"{o}.{head}" for o in owners] + [numpydoc_xref_aliases.get(head, head)]
         by_suffix = [n for n in objects if n.endswith("." + head)]
         names += by_suffix if len(by_suffix) == 1 else []  # an ambiguous short name stays unlinked
         for base in names:
@@ -221,6 +226,13 @@ def _resolve_short(app, env, node, contnode):
                     entry = objects[full]
                     return make_refnode(app.builder, node["refdoc"], entry.docname, entry.node_id,
                                         contnode, full)
+    # a member or constant without its own entry (a private helper, a module constant): the page
+    # of the class or module whose docstring names it
+    for owner in owners:
+        if owner in objects:
+            entry = objects[owner]
+            return make_refnode(app.builder, node["refdoc"], entry.docname, entry.node_id, contnode,
+                                owner)
     return None
 
 
