@@ -47,7 +47,14 @@ html_static_path: list[str] = []
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_validation_checks: set[str] = set()
-numpydoc_xref_param_type = False
+# Parameter types link to the API pages of this package (numpydoc's xref): the public names below,
+# whether written short (``BarModel``) or qualified. No intersphinx: the inventories of numpy,
+# scipy, pandas, xarray and pint would be fetched from their sites at every build, and the build
+# must work offline (CI machines reach PyPI only; no PyPI package ships those inventories), so
+# their types (``numpy.ndarray``, ``pandas.DataFrame``, ...) show as plain text. numpydoc's own
+# default links point into those inventories (``python:``, ``numpy:``): mapped to plain words here.
+numpydoc_xref_param_type = True
+numpydoc_xref_ignore = "all"  # link only the names below; any other word stays text
 autosummary_generate = True
 # the API tables' summaries end at a sentence's period, not at the one of "(eq. 14)" or "Figs. 5, 6"
 _autosummary.WELL_KNOWN_ABBREVIATIONS = (*_autosummary.WELL_KNOWN_ABBREVIATIONS, "eq.", "eqs.", "Fig.",
@@ -123,7 +130,8 @@ def _write_api() -> None:
         title = "Top level: ``impactbar``" if modname == "impactbar" else f"``{modname}``"
         first = (inspect.getdoc(mod) or "").split("\n\n")[0]
         lines += [title, "-" * len(title), "", first if modname != "impactbar" else "", "",
-                  f".. currentmodule:: {modname}", "", ".. autosummary::", "   :toctree: api",
+                  f".. module:: {modname}", "", f".. currentmodule:: {modname}", "",
+                  ".. autosummary::", "   :toctree: api",
                   "   :nosignatures:", ""]
         lines += [f"   {n}" for n in names]
         lines.append("")
@@ -148,6 +156,88 @@ def _write_guides() -> None:
     path = HERE / "guides.md"
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
+
+
+def _xref_aliases() -> dict[str, str]:
+    """``numpydoc_xref_aliases``: every documented public class and function by its short and its
+    qualified name, and numpydoc's default links made plain words (see above)."""
+    import importlib
+
+    from numpydoc.xref import DEFAULT_LINKS
+
+    out = {k: k for k in DEFAULT_LINKS}
+    page: dict[int, str] = {}  # each object's page: the first module that documents it
+    for modname in ("impactbar", *PUBLIC_MODULES):
+        try:
+            mod = importlib.import_module(modname)
+        except ImportError:  # pragma: no cover - a module not in this build
+            continue
+        for n in getattr(mod, "__all__", ()):
+            obj = getattr(mod, n, None)
+            if inspect.isclass(obj) or inspect.isfunction(obj):
+                target = page.setdefault(id(obj), f"{modname}.{n}")
+                out.setdefault(n, target)
+                out[f"{modname}.{n}"] = target
+    return out
+
+
+numpydoc_xref_aliases = _xref_aliases()
+
+# The build is nitpicky (``-n``: every cross-reference must resolve). Docstrings name the package's
+# objects as their readers do, short (:class:`CosineLoad`, :meth:`SimulationResult.is_blow`) or by
+# a module that re-exports them; :func:`_resolve_short` finds those on the pages where they are
+# documented (a method or attribute without its own entry: its class's page). Left unlinked, as
+# plain text, by design: other packages' names (no intersphinx, see above) and the package's
+# private modules and helpers, which the API reference does not document.
+nitpick_ignore_regex = [
+    ("py:.*", r"(numpy|scipy|pandas|xarray|pint|dask|distributed|zarr|matplotlib|dataclasses|"
+              r"enum|collections|concurrent)(\..*)?"),
+    ("py:.*", r"impactbar\.(dynamics|orbits\.(rigid|wave|one_impact|phase|stability)|"
+              r"_shared|sweeps\.(spec|run|store|tasks)|continuation\.(engine|core))(\..*)?"),
+]
+# Short names in the first line of a docstring, which the API tables show outside their class or
+# module (so ``rank`` cannot tell ``Admissibility.rank`` from another ``rank``); the pages resolve them.
+nitpick_ignore = [("py:attr", "rank"), ("py:attr", "name"), ("py:attr", "chunk_grid"),
+                  ("py:func", "sort_multipliers"), ("py:data", "LAWS")]
+
+def _resolve_short(app, env, node, contnode):
+    """``missing-reference``: a Python reference by a short or re-exported name, resolved to the
+    documented object it names (a member of the class or module where it stands, the alias table
+    above, a unique qualified name ending so), else to the class or module whose docstring names
+    it; ``None`` (unresolved) when nothing documented matches."""
+    from sphinx.util.nodes import make_refnode
+
+    if node.get("refdomain") != "py":
+        return None
+    objects = env.get_domain("py").objects
+    parts = node["reftarget"].lstrip("~.").split(".")
+    # where the reference stands: ``:meth:`harmonics``` in the docstring of ``Load``
+    module, cls = node.get("py:module"), node.get("py:class")
+    owners = [".".join(x for x in (module, cls) if x)] if cls else []
+    owners += [module] if module else []
+    for k in range(len(parts), 0, -1):  # the name, then its owner (a class, a module)
+        head, rest = ".".join(parts[:k]), parts[k:]
+        names = [f"{o}.{head}" for o in owners] + [numpydoc_xref_aliases.get(head, head)]
+        by_suffix = [n for n in objects if n.endswith("." + head)]
+        names += by_suffix if len(by_suffix) == 1 else []  # an ambiguous short name stays unlinked
+        for base in names:
+            for full in (".".join([base, *rest]), base):
+                if full in objects:
+                    entry = objects[full]
+                    return make_refnode(app.builder, node["refdoc"], entry.docname, entry.node_id,
+                                        contnode, full)
+    # a member or constant without its own entry (a private helper, a module constant): the page
+    # of the class or module whose docstring names it
+    for owner in owners:
+        if owner in objects:
+            entry = objects[owner]
+            return make_refnode(app.builder, node["refdoc"], entry.docname, entry.node_id, contnode,
+                                owner)
+    return None
+
+
+def setup(app):
+    app.connect("missing-reference", _resolve_short)
 
 
 _write_api()  # before Sphinx looks for source files, so autosummary sees it

@@ -58,6 +58,14 @@ class Load(ABC):
     ----------
     p0 : float
         Mean load (dimensionless, eq. 2).
+
+    Examples
+    --------
+    >>> from impactbar import CosineLoad, Load
+    >>> isinstance(CosineLoad(0.3, 1.0), Load)
+    True
+    >>> CosineLoad(0.3, 1.0) == CosineLoad(0.3, 1.0)  # loads compare by value
+    True
     """
 
     p0: float
@@ -246,6 +254,13 @@ class FourierLoad(Load):
     ------
     ValueError
         If ``p0`` or a coefficient is not finite, or there are more than 4096 harmonics.
+
+    Examples
+    --------
+    >>> from impactbar import FourierLoad
+    >>> load = FourierLoad(0.2, [0.5, 0.1j])  # p(t) = 0.2 + 0.5 cos t - 0.1 sin 2t
+    >>> float(load(0.0))
+    0.7
     """
 
     def __init__(self, p0, coefficients):
@@ -461,6 +476,15 @@ class CosineLoad(FourierLoad):
     ------
     ValueError
         If ``p0`` or ``pk`` is not a finite real, or ``k`` is not an integer in range.
+
+    Examples
+    --------
+    >>> from impactbar import CosineLoad
+    >>> load = CosineLoad(p0=0.3, pk=1.0)
+    >>> load
+    CosineLoad(p0=0.3, pk=1.0, k=1)
+    >>> float(load(0.0))  # p0 + pk at t = 0
+    1.3
     """
 
     def __init__(self, p0, pk, k=1):
@@ -493,6 +517,16 @@ class PiecewiseConstantLoad(Load):
     ------
     ValueError
         If the breaks are not increasing in ``[0, 2 pi)`` starting at 0, or a level is not finite.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar import PiecewiseConstantLoad
+    >>> load = PiecewiseConstantLoad(breaks=[0.0, 2.0], levels=[1.0, -0.5])
+    >>> load(np.array([1.0, 3.0]))
+    array([ 1. , -0.5])
+    >>> round(load.p0, 6)  # the mean, (2 - 0.5 (2 pi - 2)) / (2 pi)
+    -0.022535
     """
 
     def __init__(self, breaks, levels):
@@ -699,6 +733,16 @@ class SquareWaveLoad(PiecewiseConstantLoad):
     ------
     ValueError
         If ``q <= 0`` or ``kappa`` is outside ``[1, 2]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar import SquareWaveLoad
+    >>> load = SquareWaveLoad(q=1.0, kappa=1.2)
+    >>> load(np.array([0.5, 4.0]))
+    array([ 1., -1.])
+    >>> round(load.p0, 12)
+    0.2
     """
 
     def __init__(self, q, kappa):

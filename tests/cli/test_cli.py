@@ -70,7 +70,8 @@ def test_n_modes_everywhere_and_the_old_experiment_alias(tmp_path, capsys):
 
 def test_json_is_strict_with_null_for_non_finite_numbers(capsys):
     # R = 0: the clearance of an orbit that sticks is -inf; JSON has no infinity
-    assert main(["orbits", "--R", "0", "--n-modes", "0", "--s", "50", "--p0", "0.31", "--json"]) == 0
+    assert main(["orbits", "--R", "0", "--d", "0", "--n-modes", "0", "--s", "50", "--p0", "0.31",
+                 "--json"]) == 0
     text = capsys.readouterr().out
     doc = json.loads(text, parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
     assert doc["orbits"]

@@ -38,6 +38,14 @@ class Admissibility(_Explained):
     ----------
     message : str
         One sentence explaining the verdict.
+
+    Examples
+    --------
+    >>> from impactbar import Admissibility
+    >>> Admissibility("sticks") == "sticks"  # a member is its string
+    True
+    >>> Admissibility.STICKS.message.split(":")[0]
+    'the end does not leave the stop after the impact'
     """
 
     PENETRATES = ("penetrates", "the struck end swings through the stop between impacts "
@@ -64,7 +72,14 @@ class Admissibility(_Explained):
 
 
 class RunStatus(_Explained):
-    """Why a simulation run (:func:`impactbar.simulate`) stopped."""
+    """Why a simulation run (:func:`impactbar.simulate`) stopped.
+
+    Examples
+    --------
+    >>> from impactbar import RunStatus
+    >>> RunStatus.T_END, RunStatus.T_END.message
+    ('t_end', 'the run reached its end time t_end')
+    """
 
     T_END = ("t_end", "the run reached its end time t_end")
     MAX_IMPACTS = ("max_impacts", "the run recorded its largest number of impacts, max_impacts, "
@@ -73,7 +88,14 @@ class RunStatus(_Explained):
 
 class EventKind(_Explained):
     """The kinds of special points located on a branch of periodic motions (theory §7), in the
-    order they are reported."""
+    order they are reported.
+
+    Examples
+    --------
+    >>> from impactbar import EventKind
+    >>> EventKind("fold").message
+    'a multiplier goes through +1 where the branch turns back in the parameter'
+    """
 
     FOLD = ("fold", "a multiplier goes through +1 where the branch turns back in the parameter")
     BRANCH_POINT = ("branch-point", "a multiplier goes through +1 without a turn of the branch")
@@ -88,7 +110,14 @@ class EventKind(_Explained):
 
 
 class CurveKind(_Explained):
-    """The kinds of events a two-parameter curve follows (:func:`continue_bifurcation`)."""
+    """The kinds of events a two-parameter curve follows (:func:`continue_bifurcation`).
+
+    Examples
+    --------
+    >>> from impactbar import CurveKind
+    >>> [str(k) for k in CurveKind]
+    ['fold', 'period-doubling', 'grazing']
+    """
 
     FOLD = ("fold", "a curve of folds: a multiplier stays at +1")
     PERIOD_DOUBLING = ("period-doubling", "a curve of period doublings: a multiplier stays at -1")
@@ -100,7 +129,14 @@ def _stopped_at(kind: EventKind) -> tuple[str, str]:
 
 
 class BranchStatus(_Explained):
-    """Why a continuation (:func:`continue_orbit`, :func:`continue_bifurcation`) stopped."""
+    """Why a continuation (:func:`continue_orbit`, :func:`continue_bifurcation`) stopped.
+
+    Examples
+    --------
+    >>> from impactbar import BranchStatus
+    >>> BranchStatus("reached").message
+    'the parameter reached its target value'
+    """
 
     REACHED = ("reached", "the parameter reached its target value")
     MAX_POINTS = ("max_points", "the curve has its largest number of points, max_points")

@@ -75,6 +75,8 @@ def main(argv: list[str] | None = None) -> int:
     if closed:
         sys.stdout = _ClosedStdout()
     try:
+        if sub is not None:
+            _common.resolve_deprecated(sub, args, args.command)
         with compile_note(f"impactbar {args.command}"):  # a first run: one line while numba compiles
             status = int(args.func(args) or 0)
         sys.stdout.flush()  # a closed pipe or a full disk shows here, not at interpreter exit

@@ -85,6 +85,53 @@ def explicit_options(parser: argparse.ArgumentParser, argv: list[str]) -> frozen
     return frozenset(vars(ns))
 
 
+class _DeprecatedAlias(argparse.Action):
+    """The old spelling of an option: stores its value apart (hidden from ``--help``);
+    :func:`resolve_deprecated` moves it to the new option with a warning."""
+
+    def __init__(self, option_strings, dest, *, new: str, new_dest: str, **kwargs):
+        super().__init__(option_strings, dest, help=argparse.SUPPRESS, **kwargs)
+        self.new, self.new_dest = new, new_dest
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, True if self.nargs == 0 else values)
+
+
+def add_deprecated_alias(parser, old: str, new: str, new_dest: str, *, flag: bool = False,
+                         **kwargs) -> None:
+    """Keep ``old`` working as a deprecated spelling of the option ``new`` (destination
+    ``new_dest``): given, it sets ``new_dest`` and :func:`resolve_deprecated` prints
+    ``warning: OLD is deprecated; use NEW``; given with ``new`` it is refused. ``flag``: a switch
+    without a value; ``kwargs`` (``type``, ``metavar``) as for ``add_argument``."""
+    dest = "_deprecated_" + old.lstrip("-").replace("-", "_")
+    parser.add_argument(old, dest=dest, default=None, action=_DeprecatedAlias, new=new,
+                        new_dest=new_dest, nargs=0 if flag else None, **kwargs)
+
+
+def resolve_deprecated(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                       command: str) -> None:
+    """Move the values of the deprecated spellings given (:func:`add_deprecated_alias`) to their
+    new options, one warning line each on stderr.
+
+    Raises
+    ------
+    UsageError
+        The old and the new spelling given together.
+    """
+    for a in parser._actions:
+        if not isinstance(a, _DeprecatedAlias) or getattr(args, a.dest, None) is None:
+            continue
+        old = a.option_strings[0]
+        if given(args, a.new_dest):
+            raise UsageError(f"{a.new} and {old} cannot be used together: {old} is the old name "
+                             f"of {a.new}")
+        print(f"impactbar {command}: warning: {old} is deprecated; use {a.new}", file=sys.stderr)
+        setattr(args, a.new_dest, getattr(args, a.dest))
+        record = getattr(args, _GIVEN, None)
+        if record is not None:
+            setattr(args, _GIVEN, record | {a.new_dest})
+
+
 def given(args: argparse.Namespace, dest: str) -> bool:
     """Whether the option with destination ``dest`` was given on the command line.
 
@@ -140,6 +187,41 @@ def json_ready(obj):
     return obj
 
 
+def load_record(load) -> dict:
+    """A load as JSON-ready structured data: ``{"kind": ..., <its constructor's parameters>}``,
+    with the kinds and field names of a sweep spec's ``[load]`` where they apply (``cosine``:
+    ``p0, pk, k``; ``square``: ``q, kappa``), else the class name and the parameters the object
+    exposes; ``repr`` is added when a parameter cannot be read back.
+
+    Examples
+    --------
+    >>> from impactbar import CosineLoad, SquareWaveLoad
+    >>> from impactbar.cli._common import load_record
+    >>> load_record(CosineLoad(0.3, 1.0))
+    {'kind': 'cosine', 'p0': 0.3, 'pk': 1.0, 'k': 1}
+    >>> load_record(SquareWaveLoad(1.0, 1.2))
+    {'kind': 'square', 'q': 1.0, 'kappa': 1.2}
+    """
+    import inspect
+
+    kinds = {"CosineLoad": "cosine", "SquareWaveLoad": "square"}
+    name = type(load).__name__
+    out = {"kind": kinds.get(name, name)}
+    try:
+        params = list(inspect.signature(type(load).__init__).parameters)[1:]
+    except (TypeError, ValueError):
+        params = []
+    complete = True
+    for p in params:
+        if hasattr(load, p):
+            out[p] = json_ready(getattr(load, p))
+        else:
+            complete = False
+    if not complete or not params:
+        out["repr"] = repr(load)
+    return out
+
+
 def print_json(doc, *, file=None) -> None:
     """Print ``doc`` as indented strict JSON (see :func:`json_ready`)."""
     print(json.dumps(json_ready(doc), indent=2, allow_nan=False), file=file or sys.stdout)
@@ -157,6 +239,56 @@ def progress_bar(total: int, *, desc: str, unit: str, quiet: bool = False):
     enabled = not quiet and hasattr(sys.stderr, "isatty") and sys.stderr.isatty()
     return tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, disable=not enabled,
                 leave=False, dynamic_ncols=True)
+
+
+class _Stages:
+    """The bar :func:`stage_bar` returns: ``stage(name)`` finishes the current stage and names the
+    next; a thread refreshes the elapsed time while a stage runs."""
+
+    def __init__(self, bar, interval: float):
+        import threading
+
+        self.bar = bar
+        self._stop = threading.Event()
+        self._thread = None
+        if not bar.disable:
+            self._thread = threading.Thread(target=self._tick, args=(interval,), daemon=True)
+            self._thread.start()
+
+    def _tick(self, interval):
+        while not self._stop.wait(interval):
+            self.bar.refresh()
+
+    def stage(self, name: str, *, done: bool = True) -> None:
+        """Finish the stage running (``done``) and show ``name`` as the one now running."""
+        if done:
+            self.bar.update(1)
+        self.bar.set_postfix_str(name, refresh=True)
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        self.bar.close()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+
+def stage_bar(total: int, *, desc: str, first: str, quiet: bool = False,
+              interval: float = 0.5) -> _Stages:
+    """A progress bar on stderr over the ``total`` stages of a computation that reports nothing
+    while a stage runs (a simulation, a continuation): the stages done, the one running (``first``
+    to begin with) and the time elapsed, refreshed every ``interval`` seconds. Disabled with
+    ``quiet`` or when stderr is not a terminal, as :func:`progress_bar`."""
+    bar = progress_bar(total, desc=desc, unit="stage", quiet=quiet)
+    bar.bar_format = "{desc}: {n_fmt}/{total_fmt} stages done{postfix} [{elapsed}]"  # no rate, no ETA
+    out = _Stages(bar, interval)
+    out.stage(first, done=False)
+    return out
 
 
 def missing_dependency_hint(exc: ImportError) -> str | None:

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ._common import output_folder, print_json, refuse
+from ._common import add_deprecated_alias, add_quiet_argument, output_folder, print_json, refuse, stage_bar
 from .orbits import add_bar_and_load_arguments
 from .orbits import check_options as check_bar_and_load
 
@@ -26,15 +26,17 @@ def add_parser(sub) -> None:
         "Dimensionless inputs (eq. 2); a CONFIG.toml or --preset gives the bar and load in SI "
         "units, the parameter still varies in dimensionless units.",
     )
-    add_bar_and_load_arguments(p, d=0.05, n_modes=4, p0=0.7)
+    add_bar_and_load_arguments(p)
     cg = p.add_argument_group("continuation")
     cg.add_argument("--parameter", required=True,
                     choices=("p0", "pk", "R", "d", "s", "q", "kappa", "stroke", "ret", "switch_out", "delay"),
                     help="the parameter that varies (stroke, ret, switch_out, delay: a drifter's valve)")
     cg.add_argument("--to", type=float, required=True, help="its target value")
     cg.add_argument("--impacts", type=int, default=1, help="impacts m per period of the motion (default 1)")
-    cg.add_argument("--periods", type=int, default=1, help="load periods n per period of the motion "
-                    "(default 1); with m or n > 1 the start is found from a simulation")
+    cg.add_argument("--load-periods", type=int, default=1, metavar="N",
+                    help="load periods n per period of the motion (default 1); with m or n > 1 the "
+                    "start is found from a simulation")
+    add_deprecated_alias(cg, "--periods", "--load-periods", "load_periods", type=int)
     cg.add_argument("--orbit", default="stable",
                     help="the one-impact orbit to start from: 'stable' (default: the stable one, else "
                     "the first admissible, else the first) or its index in phase order")
@@ -47,16 +49,18 @@ def add_parser(sub) -> None:
     cg.add_argument("--max-step", type=float, default=None, help="largest arclength step")
     cg.add_argument("--max-points", type=int, default=2000, help="points per branch (default 2000)")
     og = p.add_argument_group("output")
-    og.add_argument("--out", default="continue-out", help="output folder (default continue-out)")
+    og.add_argument("--out", default="out/continue", help="output folder (default out/continue)")
     og.add_argument("--brute", type=int, default=40,
                     help="parameter values of the brute-force simulation diagram (default 40; 0: none)")
     og.add_argument("--transient", type=float, default=100.0,
                     help="load periods discarded at each brute-force value (default 100)")
     og.add_argument("--record", type=float, default=20.0,
                     help="load periods recorded at each brute-force value (default 20)")
-    og.add_argument("--y", choices=("impact_velocity", "phase"), default="impact_velocity",
-                    help="the diagram's ordinate (default impact_velocity)")
+    og.add_argument("--y", choices=("phase", "impact_velocity"), default="phase",
+                    help="the diagram's ordinate (default phase, which separates the two sides of a "
+                    "fold; the impact velocity is 2 pi p0/(1 + R) on every one-impact orbit)")
     og.add_argument("--json", action="store_true", help="print a JSON summary instead of a table")
+    add_quiet_argument(og)
     try:
         from .physical import add_physical_arguments  # the SI layer, where installed
     except ImportError:
@@ -85,9 +89,10 @@ def _start(model, load, args):
     """The orbit the first branch starts from."""
     from .. import InitialState, find_orbit, periodic_orbits, simulate
 
-    if args.impacts < 1 or args.periods < 1:
-        raise ValueError(f"--impacts and --periods must be >= 1; got {args.impacts}, {args.periods}")
-    if args.impacts == 1 and args.periods == 1:
+    if args.impacts < 1 or args.load_periods < 1:
+        raise ValueError(f"--impacts and --load-periods must be >= 1; got {args.impacts}, "
+                         f"{args.load_periods}")
+    if args.impacts == 1 and args.load_periods == 1:
         orbits = periodic_orbits(model, load)
         if not orbits:
             raise ValueError("no one-impact orbit exists at the start values (above the existence edge)")
@@ -101,14 +106,14 @@ def _start(model, load, args):
             raise ValueError(f"--orbit must be an index in [0, {len(orbits) - 1}]; got {i}")
         return orbits[i]
     tr = simulate(model, load, InitialState.rigid(-0.01, 0.0, n_modes=model.n_modes),
-                  TWO_PI * max(300, 20 * args.periods))
-    return find_orbit(model, load, args.impacts, args.periods, guess=tr)
+                  TWO_PI * max(300, 20 * args.load_periods))
+    return find_orbit(model, load, args.impacts, args.load_periods, guess=tr)
 
 
 def check_options(args) -> None:
     """Refuse the options the chosen mode ignores: the dimensionless inputs with a hammer in SI,
     the other load's options with ``--load``, ``--orbit`` when the start is found from a simulation
-    (``--impacts`` or ``--periods`` above 1), and the brute-force diagram's options with
+    (``--impacts`` or ``--load-periods`` above 1), and the brute-force diagram's options with
     ``--brute 0``.
 
     Raises
@@ -116,16 +121,14 @@ def check_options(args) -> None:
     UsageError
     """
     check_bar_and_load(args)  # the same bar and load options as ``impactbar orbits``
-    if args.impacts != 1 or args.periods != 1:
-        refuse(args, ("orbit",), because="with --impacts or --periods above 1 (the start is then found "
+    if args.impacts != 1 or args.load_periods != 1:
+        refuse(args, ("orbit",), because="with --impacts or --load-periods above 1 (the start is then found "
                "from a simulation; --orbit picks a one-impact orbit)")
     if args.brute == 0:
         refuse(args, ("transient", "record"), because="with --brute 0 (no brute-force simulation)")
 
 
 def run(args) -> int:
-    from ..continuation import doubling_cascade, parameter_value, simulated_diagram
-
     check_options(args)
     out = output_folder(args.out)
     if getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None:
@@ -139,49 +142,16 @@ def run(args) -> int:
         raise ValueError(f"--doublings must be >= 0; got {args.doublings}")
     if args.brute < 0:
         raise ValueError(f"--brute must be >= 0; got {args.brute}")
-    start = _start(model, load, args)
-    kw = {"step": args.step, "max_step": args.max_step, "max_points": args.max_points}
-    branches = list(doubling_cascade(start, args.parameter, args.to, doublings=args.doublings,
-                                     **kw).branches)
-    written = []
-    for i, b in enumerate(branches):
-        path = out / f"branch_{i}_{b.impacts}per{b.periods}.csv"
-        b.to_dataframe().to_csv(path)
-        written.append(path)
-    events = [dict(e.to_dict(), branch=i) for i, b in enumerate(branches) for e in b.events]
-    ev_path = out / "events.csv"
-    _write_events(ev_path, events)
-    written.append(ev_path)
-    try:
-        import xarray as xr  # noqa: F401
-    except ImportError:
-        pass
-    else:
-        for i, b in enumerate(branches):
-            path = out / f"branch_{i}_{b.impacts}per{b.periods}.nc"
-            b.to_xarray().to_netcdf(path)
-            written.append(path)
-    diagram = None
-    if args.brute:
-        lam0 = parameter_value(model, load, args.parameter)
-        lo, hi = min(b.values.min() for b in branches), max(b.values.max() for b in branches)
-        values = np.linspace(lam0, args.to, args.brute)
-        values = values[(values >= lo) & (values <= hi)] if values.size > 1 else values
-        q, v = start.modal_state_after_impact
-        from .. import InitialState
-
-        # the flight starts after the impact (under the wave law: at the end of its window 2/s)
-        t0 = float(start.impact_times[0]) if hasattr(start, "impact_times") else start.phase
-        t0 += model.law.window(model)
-        diagram = simulated_diagram(model, load, args.parameter, values, transient=args.transient,
-                                    record=args.record, start=InitialState(q, v), t0=t0)
-    try:
-        path = _plot(branches, diagram, args, out)
-    except ImportError:
-        path = None
-    if path is not None:
-        written.append(path)
-    curves = _curves(branches, args, out, written) if args.curve else []
+    stages = 2 + (args.brute > 0) + (args.curve is not None)
+    with stage_bar(stages, desc="continue", first="start", quiet=args.quiet) as bar:
+        start = _start(model, load, args)
+        bar.stage(f"branches in {args.parameter}")
+        branches, diagram, written = _branches(start, model, load, args, out, bar)
+        curves = []
+        if args.curve:
+            bar.stage("two-parameter curves")
+            curves = _curves(branches, args, out, written)
+        bar.stage("done")
     if args.json:
         doc = {"parameter": args.parameter, "to": args.to,
                "branches": [{"impacts": b.impacts, "periods": b.periods, "points": len(b),
@@ -207,6 +177,55 @@ def run(args) -> int:
     for p in written:
         print(f"wrote {p}")
     return 0
+
+
+def _branches(start, model, load, args, out, bar):
+    """The cascade of branches from ``start``, written out, and the brute-force diagram."""
+    from ..continuation import doubling_cascade, parameter_value, simulated_diagram
+
+    kw = {"step": args.step, "max_step": args.max_step, "max_points": args.max_points}
+    branches = list(doubling_cascade(start, args.parameter, args.to, doublings=args.doublings,
+                                     **kw).branches)
+    written = []
+    for i, b in enumerate(branches):
+        path = out / f"branch_{i}_{b.impacts}per{b.periods}.csv"
+        b.to_dataframe().to_csv(path)
+        written.append(path)
+    events = [dict(e.to_dict(), branch=i) for i, b in enumerate(branches) for e in b.events]
+    ev_path = out / "events.csv"
+    _write_events(ev_path, events)
+    written.append(ev_path)
+    try:
+        import xarray as xr  # noqa: F401
+    except ImportError:
+        pass
+    else:
+        for i, b in enumerate(branches):
+            path = out / f"branch_{i}_{b.impacts}per{b.periods}.nc"
+            b.to_xarray().to_netcdf(path)
+            written.append(path)
+    diagram = None
+    if args.brute:
+        bar.stage("brute-force diagram")
+        lam0 = parameter_value(model, load, args.parameter)
+        lo, hi = min(b.values.min() for b in branches), max(b.values.max() for b in branches)
+        values = np.linspace(lam0, args.to, args.brute)
+        values = values[(values >= lo) & (values <= hi)] if values.size > 1 else values
+        q, v = start.modal_state_after_impact
+        from .. import InitialState
+
+        # the flight starts after the impact (under the wave law: at the end of its window 2/s)
+        t0 = float(start.impact_times[0]) if hasattr(start, "impact_times") else start.phase
+        t0 += model.law.window(model)
+        diagram = simulated_diagram(model, load, args.parameter, values, transient=args.transient,
+                                    record=args.record, start=InitialState(q, v), t0=t0)
+    try:
+        path = _plot(branches, diagram, args, out)
+    except ImportError:
+        path = None
+    if path is not None:
+        written.append(path)
+    return branches, diagram, written
 
 
 def _curves(branches, args, out, written):

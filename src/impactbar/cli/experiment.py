@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import time
 
@@ -28,9 +29,11 @@ def add_parser(sub) -> None:
                    help="pneumatic: p0 + pk cos(k t) (eq. 33); hydraulic: square wave (eq. 34)")
     p.add_argument("--starts", type=int, default=200, help="random starts (default 200)")
     p.add_argument("--periods", type=float, default=300.0,
-                   help="load periods per run; the last 25 %% are classified (default 300)")
+                   help="length of each run in load periods (2 pi each); the last 25 %% are "
+                        "classified (default 300)")
     p.add_argument("--seed", type=int, default=0, help="seed of the random starts (default 0)")
-    p.add_argument("--workers", type=int, default=2, help="threads (default 2)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="runs computed at once, in threads (default: the cores)")
     p.add_argument("--s", type=float, default=10.0, help="wave-speed ratio s (default 10)")
     p.add_argument("--d", type=float, default=0.03 / (2 * math.pi),
                    help="damping d (default 0.03 / 2 pi, the paper's 2 pi d = 0.03)")
@@ -90,7 +93,7 @@ def run(args) -> int:
     starts = max(int(args.starts), 0)
     with progress_bar(starts, desc=f"{args.hammer} starts", unit="run", quiet=args.quiet) as bar:
         result = run_experiment(model, load, starts=args.starts, periods=args.periods,
-                                seed=args.seed, workers=args.workers,
+                                seed=args.seed, workers=args.workers or (os.cpu_count() or 1),
                                 progress=lambda n: bar.update(n - bar.n))
     print(result.summary())
     print(f"({time.perf_counter() - t0:.1f} s)")

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..laws import LAWS
-from ._common import print_json, refuse
+from ._common import load_record, print_json, refuse
 
 #: the dimensionless inputs, which a hammer in SI (CONFIG.toml or --preset) sets itself
 DIMENSIONLESS = ("s", "d", "R", "n_modes", "load", "p0", "pk", "k", "q", "kappa")
@@ -11,10 +11,16 @@ DIMENSIONLESS = ("s", "d", "R", "n_modes", "load", "p0", "pk", "k", "q", "kappa"
 LOAD_OPTIONS = {"cosine": ("p0", "pk", "k"), "square": ("q", "kappa")}
 
 
-def add_bar_and_load_arguments(p, *, d: float, n_modes: int, p0: float) -> None:
+#: the one set of defaults of the dimensionless bar and load options (``orbits`` and ``continue``)
+DEFAULTS = {"s": 10.0, "d": 0.05, "R": 0.5, "n_modes": 4, "p0": 0.3, "pk": 1.0, "k": 1, "q": 1.0,
+            "kappa": 1.2}
+
+
+def add_bar_and_load_arguments(p) -> None:
     """The dimensionless bar (``--s --d --R --n-modes --impact``) and load (``--load --p0 --pk --k
-    --q --kappa``) options, with the subcommand's own defaults for ``d``, ``n_modes`` and ``p0``
-    (shared by ``impactbar orbits`` and ``impactbar continue``)."""
+    --q --kappa``) options with the defaults :data:`DEFAULTS` (shared by ``impactbar orbits`` and
+    ``impactbar continue``)."""
+    d, n_modes, p0 = DEFAULTS["d"], DEFAULTS["n_modes"], DEFAULTS["p0"]
     g = p.add_argument_group("bar (dimensionless, eq. 2)")
     g.add_argument("--s", type=float, default=10.0, help="wave-speed ratio C/(L Omega) > 0 (default 10)")
     g.add_argument("--d", type=float, default=d, help=f"damping D/(M Omega) >= 0 (default {d:g})")
@@ -41,7 +47,7 @@ def add_parser(sub) -> None:
         description="Every one-impact-per-period orbit (paper Section 2) with admissibility, exact "
         "Floquet multipliers and the paper's Schur criterion. Dimensionless inputs (eq. 2).",
     )
-    add_bar_and_load_arguments(p, d=0.0, n_modes=8, p0=0.3)
+    add_bar_and_load_arguments(p)
     p.add_argument("--json", action="store_true",
                    help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
     try:
@@ -100,7 +106,7 @@ def run(args) -> int:
         doc = {
             "model": {"s": model.s, "d": model.d, "R": model.R, "n_modes": model.n_modes,
                       "impact": model.impact},
-            "load": repr(load),
+            "load": load_record(load),
             "orbits": [o.to_dict() for o in orbits],
         }
         print_json(doc)

@@ -11,7 +11,7 @@ def add_parser(sub) -> None:
     p = sub.add_parser("paper", help="reproduce the paper's Figs. 4-8 as PNG and CSV files",
                        description="Recompute Figs. 4-8 of Bjorkenstam (1977), with admissibility "
                        "and exact multipliers, and write figN.png (or .pdf, .svg) and figN.csv.")
-    p.add_argument("--out", default="paper-figures", help="output folder (default: paper-figures)")
+    p.add_argument("--out", default="out/paper", help="output folder (default out/paper)")
     p.add_argument("--quick", action="store_true", help="fewer points per curve")
     add_figure_arguments(p, dpi=130)
     add_quiet_argument(p)

@@ -17,9 +17,6 @@ __all__ = ["add_parser", "run", "summarize", "plot_motion", "plot_blows", "plot_
 
 # the drawing lives in impactbar.plotting; re-exported here for the old import path
 
-#: impacts slower than this fraction of the rigid-limit impact velocity are chatter, not blows
-BLOW_FRACTION = 0.01
-
 
 def add_parser(subparsers) -> None:
     """Register ``simulate``."""
@@ -31,9 +28,14 @@ def add_parser(subparsers) -> None:
                     "--impact wave also forces.png (the force waves sent into the rod).")
     add_physical_arguments(p)
     add_impact_argument(p)
-    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created)")
+    p.add_argument("--out", default="out/simulate", metavar="DIR",
+                   help="output folder (created; default out/simulate)")
     p.add_argument("--periods", type=float, default=40.0, metavar="N",
-                   help="length of the run in impact periods (default 40)")
+                   help="length of the run in load periods, one drive period 1/f_b each (the "
+                        "dimensionless 2 pi; default 40)")
+    p.add_argument("--blow-fraction", type=float, default=0.25, metavar="F",
+                   help="an impact is a blow when its impact velocity is at least F times the run's "
+                        "largest; slower ones are chatter, counted apart (default 0.25)")
     p.add_argument("--gap", default="0 mm", metavar="LENGTH",
                    help="initial distance of the struck end from the stop, with a unit; the "
                         "piston starts at rest (default '0 mm')")
@@ -51,6 +53,10 @@ def run(args) -> int:
         gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")
         return run_drifter_simulate(args, drifter, output_folder(args.out), gap)
     hammer = hammer_from_args(args)
+    if not 0.0 < args.blow_fraction <= 1.0:
+        print(f"impactbar simulate: error: --blow-fraction must be in (0, 1]; got "
+              f"{args.blow_fraction}", file=sys.stderr)
+        return 2
     gap = to_si("--gap", args.gap, "m", "'2 mm'", what="a length")
     require("matplotlib")
     out = output_folder(args.out)
@@ -64,9 +70,35 @@ def run(args) -> int:
     except RuntimeError as exc:
         print(f"impactbar simulate: error: {exc}", file=sys.stderr)
         return 1
+    written, summary = _write_outputs(result, out, args)
+    line = (f"{hammer.name or 'hammer'}: {summary['n_impacts']} impacts in {result.t_end_s:.4g} s "
+            f"({summary['n_blows']} blows, {summary['n_chatter']} chatter)")
+    if summary["n_blows_second_half"] >= 2:
+        line += (f"; second half, {summary['n_blows_second_half']} blows: "
+                 f"{summary['mean_impact_velocity_m_s']:.3f} m/s, "
+                 f"{summary['mean_blow_energy_J']:.2f} J per blow, every "
+                 f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
+                 f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
+                 f"{summary['mean_power_W']:.4g} W")
+        if np.isfinite(summary["mean_efficiency"]):
+            line += f", efficiency {summary['mean_efficiency']:.3f}"
+    print(line + f"; wrote {out}/{written}, impacts.csv, summary.json")
+    rock = summary.get("rock", {})
+    if "mean_work_on_rock_J" in rock:
+        print(f"rock (second half, {rock['n_blows']} blows): {rock['mean_work_on_rock_J']:.4g} J on rock and "
+              f"{rock['mean_penetration_mm']:.4g} mm per blow, {rock['drilling_rate_m_min']:.4g} m/min at "
+              f"the blow frequency ({rock['measured_rate_m_min']:.4g} m/min over the run), efficiency "
+              f"{rock['mean_efficiency']:.3f} ({rock['mean_efficiency_with_rebound']:.3f} with the rebound)")
+    if not summary["settled"]:
+        print(f"impactbar simulate: warning: {summary['message']}", file=sys.stderr)
+    return 0
+
+
+def _write_outputs(result, out, args) -> tuple[str, dict]:
+    """impacts.csv, summary.json and the figures; returns the figures' names and the summary."""
     write_impacts(result, out / "impacts.csv")
-    summary = summarize(result)
-    if hammer.drill is not None:  # the rod-rock law: drilling outputs (impactbar.physical.rock)
+    summary = summarize(result, blow_fraction=args.blow_fraction)
+    if result.hammer.drill is not None:  # the rod-rock law: drilling outputs (impactbar.physical.rock)
         from ..physical.rock import rock_summary
 
         summary["rock"] = rock_summary(result)
@@ -82,31 +114,17 @@ def run(args) -> int:
     fig.savefig(out / "motion.png", dpi=120)
     plt.close(fig)
     fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
-    plot_blows(result, ax)
+    plot_blows(result, ax, blow_fraction=args.blow_fraction)
     fig.savefig(out / "blows.png", dpi=120)
     plt.close(fig)
     written = "motion.png, blows.png"
     if np.any(np.isfinite(result.rod_energies_J)):
         fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
-        plot_force_waves(result, ax)
+        plot_force_waves(result, ax, blow_fraction=args.blow_fraction)
         fig.savefig(out / "forces.png", dpi=120)
         plt.close(fig)
         written += ", forces.png"
-    line = f"{hammer.name or 'hammer'}: {summary['n_impacts']} impacts in {result.t_end_s:.4g} s"
-    if "mean_blow_energy_J" in summary:
-        line += (f"; second half: {summary['mean_impact_velocity_m_s']:.3f} m/s, "
-                 f"{summary['mean_blow_energy_J']:.2f} J per blow, every "
-                 f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
-                 f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
-                 f"{summary['mean_power_W']:.4g} W")
-    print(line + f"; wrote {out}/{written}, impacts.csv, summary.json")
-    rock = summary.get("rock", {})
-    if "mean_work_on_rock_J" in rock:
-        print(f"rock (second half, {rock['n_blows']} blows): {rock['mean_work_on_rock_J']:.4g} J on rock and "
-              f"{rock['mean_penetration_mm']:.4g} mm per blow, {rock['drilling_rate_m_min']:.4g} m/min at "
-              f"the blow frequency ({rock['measured_rate_m_min']:.4g} m/min over the run), efficiency "
-              f"{rock['mean_efficiency']:.3f} ({rock['mean_efficiency_with_rebound']:.3f} with the rebound)")
-    return 0
+    return written, summary
 
 
 def write_impacts(result: physical.SimulationResult, path) -> None:
@@ -115,11 +133,13 @@ def write_impacts(result: physical.SimulationResult, path) -> None:
     result.to_dataframe().to_csv(path, float_format="%.9g", lineterminator="\r\n")
 
 
-def summarize(result: physical.SimulationResult) -> dict:
+def summarize(result: physical.SimulationResult, *, blow_fraction: float = 0.25) -> dict:
     """The hammer's inputs and the impact statistics, JSON-ready.
 
-    Statistics are over the second half of the run (past the start-up) and over blows: impacts
-    faster than 1 % of the rigid-limit impact velocity; slower ones are counted as chatter.
+    The statistics are :meth:`~impactbar.physical.SimulationResult.blow_statistics`: over the
+    blows of the second half of the run (past the start-up), an impact being a blow when its impact
+    velocity is at least ``blow_fraction`` of the run's largest; slower ones are counted as chatter.
+    ``settled`` and ``message`` say whether the blows repeat a cycle.
     """
     t = result.impact_times_s
     v = result.impact_velocities_m_s
@@ -128,24 +148,5 @@ def summarize(result: physical.SimulationResult) -> dict:
     out.update({"t_end_s": result.t_end_s, "n_impacts": int(t.size)})
     if t.size:
         out.update({"last_impact_velocity_m_s": float(v[-1]), "last_blow_energy_J": float(e[-1])})
-    blow = v >= BLOW_FRACTION * result.hammer.rigid_impact_velocity_m_s
-    late = blow & (t >= 0.5 * result.t_end_s)
-    out["n_blows_second_half"] = int(np.count_nonzero(late))
-    out["n_chatter_impacts"] = int(np.count_nonzero(~blow))
-    if np.count_nonzero(late) >= 2:
-        tl, el = t[late], e[late]
-        dt = np.diff(tl)
-        out.update({
-            "mean_blow_interval_s": float(np.mean(dt)),
-            "blow_interval_std_s": float(np.std(dt)),
-            "mean_impact_velocity_m_s": float(np.mean(v[late])),
-            "mean_blow_energy_J": float(np.mean(el)),
-            "mean_power_W": float(np.sum(el[1:]) / (tl[-1] - tl[0])),
-        })
-        if np.all(np.isfinite(result.rod_energies_J[late])):  # the wave law
-            out.update({
-                "mean_rod_energy_J": float(np.mean(result.rod_energies_J[late])),
-                "mean_peak_rod_stress_Pa": float(np.mean(result.peak_rod_stresses_Pa[late])),
-                "mean_efficiency": float(np.mean(result.efficiencies[late])),
-            })
+    out.update(result.blow_statistics(blow_fraction=blow_fraction).to_dict())
     return out

@@ -6,7 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from ._common import UsageError, add_quiet_argument, docs_page, output_folder
+from ._common import UsageError, add_deprecated_alias, add_quiet_argument, docs_page, output_folder
 
 
 def add_parser(sub) -> None:
@@ -30,9 +30,14 @@ def add_parser(sub) -> None:
                        help="address of a running dask scheduler, e.g. tcp://host:8786, instead")
     p.add_argument("--overwrite", action="store_true",
                    help="replace a store that holds a different sweep")
-    p.add_argument("--no-progress", action="store_true",
-                   help="no progress bar (it shows only when stderr is a terminal)")
+    p.add_argument("--worker-timeout", type=float, default=60.0, metavar="SECONDS",
+                   help="on a dask cluster, say so on stderr when it has had no worker for this "
+                   "long while chunks remain (default 60; 0: never)")
+    p.add_argument("--no-workers", choices=("wait", "stop"), default="wait",
+                   help="then keep waiting for workers to join (wait, default) or stop, keeping "
+                   "the chunks finished (stop; exit status 1; rerunning resumes)")
     add_quiet_argument(p)
+    add_deprecated_alias(p, "--no-progress", "--quiet", "quiet", flag=True)
     p.set_defaults(func=run)
 
 
@@ -50,9 +55,18 @@ def run(args) -> int:
     output_folder(store.resolve().parent, option=f"--out {args.out}: the folder")
     print(f"{spec.task}: {spec.n_points} points in {spec.n_chunks} chunks of up to "
           f"{spec.chunk_points} -> {args.out}", file=sys.stderr)
-    res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,
-                    overwrite=args.overwrite,
-                    progress=not (args.no_progress or args.quiet) and sys.stderr.isatty())
+    if not args.worker_timeout >= 0:
+        raise ValueError(f"--worker-timeout must be >= 0 (0: never); got {args.worker_timeout}")
+    from ..sweeps import NoWorkersError
+
+    try:
+        res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,
+                        overwrite=args.overwrite,
+                        progress=not args.quiet and sys.stderr.isatty(),
+                        worker_timeout=args.worker_timeout or None, no_workers=args.no_workers)
+    except NoWorkersError as exc:
+        print(f"impactbar sweep: error: {exc}", file=sys.stderr)
+        return 1
     rate = (f", {res.computed * spec.n_points / spec.n_chunks / res.seconds:.1f} points/s"
             if res.computed and res.seconds > 0 else "")
     print(f"{args.out}: {res.already_done + res.computed}/{res.n_chunks} chunks stored "

@@ -44,6 +44,14 @@ class BranchEvent:
         The orbit at the event.
     multiplier : complex
         The critical multiplier (NaN for grazing and admissibility events).
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, CosineLoad, continue_orbit, periodic_orbits
+    >>> start = periodic_orbits(BarModel(s=3.0, d=0.0, R=0.6, n_modes=0), CosineLoad(0.9, 1.0))[1]
+    >>> fold = continue_orbit(start, "p0", to=1.5).events[0]  # the rigid fold: (1 + R)/(pi (1 - R))
+    >>> str(fold.kind), round(fold.value, 6), round(fold.multiplier.real, 6)
+    ('fold', 1.27324, 1.0)
     """
 
     kind: str
@@ -85,6 +93,16 @@ class Branch:
         ``"stopped at <event kind>"``.
     impacts, periods : int
         ``m`` and ``n``.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, CosineLoad, continue_orbit, periodic_orbits
+    >>> start = periodic_orbits(BarModel(s=3.0, d=0.0, R=0.6, n_modes=0), CosineLoad(0.9, 1.0))[1]
+    >>> branch = continue_orbit(start, "p0", to=0.66)
+    >>> branch.parameter, branch.impacts, branch.periods, str(branch.status)
+    ('p0', 1, 1, 'reached')
+    >>> [(str(e.kind), round(e.value, 6)) for e in branch.events]
+    [('period-doubling', 0.756847)]
     """
 
     parameter: str
@@ -98,6 +116,32 @@ class Branch:
 
     def __len__(self) -> int:
         return int(self.values.size)
+
+    def __repr__(self) -> str:
+        """One line: the motion, the parameter's range, the points, the events, the status."""
+        if len(self):
+            span = f"{self.parameter} {self.values[0]:.6g} -> {self.values[-1]:.6g}"
+        else:
+            span = f"{self.parameter} (empty)"
+        kinds: dict[str, int] = {}
+        for e in self.events:
+            kinds[str(e.kind)] = kinds.get(str(e.kind), 0) + 1
+        ev = ", ".join(f"{n} {k}" if n > 1 else k for k, n in kinds.items()) or "none"
+        return (f"Branch({self.impacts} per {self.periods}, {span}, {len(self)} points, "
+                f"events: {ev}, status {str(self.status)!r})")
+
+    def _repr_html_(self) -> str:
+        """A short table for notebooks: the summary line and one row per event."""
+        import html
+
+        rows = "".join(
+            f"<tr><td>{html.escape(str(e.kind))}</td><td>{e.value:.10g}</td><td>{e.index}</td>"
+            f"<td>{'' if math.isnan(e.multiplier.real) else f'{e.multiplier:.6g}'}</td></tr>"
+            for e in self.events)
+        table = ("<table><thead><tr><th>event</th><th>" + html.escape(self.parameter)
+                 + "</th><th>index</th><th>multiplier</th></tr></thead><tbody>" + rows
+                 + "</tbody></table>") if self.events else ""
+        return f"<p><code>{html.escape(repr(self))}</code></p>{table}"
 
     @property
     def stable(self) -> np.ndarray:
@@ -225,16 +269,18 @@ class Branch:
                             columns=["kind", "parameter", "value", "index", "multiplier", "phase",
                                      "impacts", "periods"])
 
-    def plot(self, ax=None, *, y: str = "impact_velocity", color=None, label=None, events=True):
+    def plot(self, ax=None, *, y: str = "phase", color=None, label=None, events=True):
         """Plot the branch: stable stretches solid, unstable or inadmissible dashed, events marked.
 
         Parameters
         ----------
         ax : matplotlib.axes.Axes, optional
             Drawn on a new figure's axes if omitted.
-        y : {"impact_velocity", "phase", "max_abs_multiplier"}
+        y : {"phase", "impact_velocity", "max_abs_multiplier"}
             What to plot against the parameter; per-impact quantities give one curve per impact
-            (phases unwrapped along the branch, so a curve does not jump at ``2 pi``).
+            (phases unwrapped along the branch, so a curve does not jump at ``2 pi``). The default,
+            the phase, separates the two sides of a fold; the impact velocity is ``2 pi p0/(1 + R)``
+            on every one-impact orbit (theory §4).
         color, label : optional
             Line colour and legend label.
         events : bool

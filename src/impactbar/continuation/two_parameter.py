@@ -46,6 +46,17 @@ class BifurcationCurve:
     status : BranchStatus
         Why the continuation stopped (a string): ``"reached"``, ``"max_points"``,
         ``"step too small"``, ``"parameter range"`` or ``"turned back"``.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, CosineLoad, continue_bifurcation, continue_orbit, periodic_orbits
+    >>> start = periodic_orbits(BarModel(s=3.0, d=0.0, R=0.6, n_modes=0), CosineLoad(0.9, 1.0))[1]
+    >>> fold = continue_orbit(start, "p0", to=1.5).events[0]
+    >>> curve = continue_bifurcation(fold, "R", to=0.7)
+    >>> str(curve.kind), curve.parameters
+    ('fold', ('p0', 'R'))
+    >>> curve.values[-1].round(6)  # p0 = (1 + R)/(pi (1 - R)) at R = 0.7
+    array([1.803756, 0.7     ])
     """
 
     kind: str
@@ -56,6 +67,14 @@ class BifurcationCurve:
 
     def __len__(self) -> int:
         return int(self.values.shape[0])
+
+    def __repr__(self) -> str:
+        """One line: the kind, the parameters, the ends, the points, the status."""
+        a, b = self.parameters
+        ends = (f"({a}, {b}) from {tuple(round(float(x), 6) for x in self.values[0])} to "
+                f"{tuple(round(float(x), 6) for x in self.values[-1])}, " if len(self) else "")
+        return (f"BifurcationCurve({str(self.kind)!r}, {ends}{len(self)} points, "
+                f"status {str(self.status)!r})")
 
     def to_dataframe(self):
         """One row per point: both parameters, the first impact's phase and velocity, the largest

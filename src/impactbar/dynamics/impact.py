@@ -141,7 +141,10 @@ class WaveImpact:
     energy_after_field : float
         Energy of the exact post-window field (``energy_before + drive_work - rod_energy``).
     efficiency : float
-        ``rod_energy / energy_before`` (Lundberg's transfer efficiency).
+        ``rod_energy / (energy_before + drive_work)``: the share of the energy available to the blow
+        (the piston's energy at impact plus the drive's work during the window) that the rod
+        carries away (Lundberg's transfer efficiency, with the drive); at most 1, since the energy
+        balance leaves ``energy_after_field >= 0``.
     peak_force_error : float
         An estimate of the truncation error of ``peak_force`` (see the property).
     peak_force, min_force : float
@@ -160,6 +163,16 @@ class WaveImpact:
         up to its Gibbs overshoot, ``0.09 (1 + R) s |[A]| / 2``, at every ``N`` (2-4 % on that
         cycle at ``N = 128``), and ``peak_force_error`` shows it. A feature narrower than
         ``1/(s N)`` is not resolved.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar import BarModel, CosineLoad, wave_impact
+    >>> q, v = np.zeros(6), np.zeros(6)
+    >>> v[0] = 1.0  # a rigid piston arriving at unit speed, no drive
+    >>> imp = wave_impact(BarModel(s=7.0, d=0.0, R=0.3, n_modes=5), CosineLoad(0.0, 0.0), 0.0, q, v)
+    >>> round(imp.duration, 12), round(float(imp.efficiency), 12)  # 2/s and 1 - R^2
+    (0.285714285714, 0.91)
     """
 
     def __init__(self, s, R, t0, q_before, v_before, q_after, v_after, solver):
@@ -209,8 +222,8 @@ class WaveImpact:
 
     @property
     def efficiency(self) -> float:
-        e0 = self.energy_before
-        return self.rod_energy / e0 if e0 > 0.0 else math.nan
+        available = self.energy_before + self.drive_work
+        return self.rod_energy / available if available > 0.0 else math.nan
 
     @cached_property
     def _located(self):
@@ -394,6 +407,16 @@ def wave_impact(model, load, t0: float, q, v) -> WaveImpact:
     ValueError
         If the shapes do not match the model, a value is not finite, or the piston arrives moving
         away from the rod (``u_t(1) < 0`` beyond rounding).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar import BarModel, CosineLoad, wave_impact
+    >>> q, v = np.zeros(6), np.zeros(6)
+    >>> v[0] = 1.0
+    >>> imp = wave_impact(BarModel(s=7.0, d=0.0, R=0.3, n_modes=5), CosineLoad(0.0, 0.0), 0.0, q, v)
+    >>> round(imp.impulse, 12), round(float(imp.v_after[0]), 12)  # momentum (1 + R) v, rebound -R v
+    (1.3, -0.3)
     """
     s, R = float(model.s), float(model.R)
     M = model.n_modes + 1

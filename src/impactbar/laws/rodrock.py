@@ -41,6 +41,12 @@ class RodSegment:
         ``E A / C`` relative to the piston's, ``> 0``.
     wave_speed : float
         Relative to the piston's, ``> 0``; default 1 (the same material).
+
+    Examples
+    --------
+    >>> from impactbar import RodSegment
+    >>> RodSegment(length=40.0, impedance=1.0)  # the wave speed defaults to the piston's
+    RodSegment(length=40.0, impedance=1.0, wave_speed=1.0)
     """
 
     length: float
@@ -69,6 +75,12 @@ class BilinearRock:
         Loading stiffness (model units of force per length, ``K / (m Omega^2)``), ``> 0``.
     k_u : float
         Unloading stiffness, ``k_u >= k`` (``gamma = k_u / k``).
+
+    Examples
+    --------
+    >>> from impactbar import BilinearRock
+    >>> BilinearRock(k=2.5, k_u=25.0)
+    BilinearRock(k=2.5, k_u=25.0)
     """
 
     k: float
@@ -244,6 +256,15 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     -------
     Blow
         Work on rock, efficiencies, penetrations, force histories, the energy account.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
+    >>> law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)],
+    ...               rock=BilinearRock(k=2.5, k_u=25.0))
+    >>> blow = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0)
+    >>> round(blow.efficiency, 6), round(blow.work_on_rock, 6)  # of the impact energy 1/2
+    (0.733069, 0.366534)
     """
     from ..dynamics.rodrock import rod_rock_blow
 

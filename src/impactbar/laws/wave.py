@@ -168,7 +168,7 @@ class WaveLaw(ContactLaw):
 class PressedContact:
     """A contact window followed by the sustained contact (theory §4b): the record of
     :meth:`WaveLaw.contact` when the window ends with the end still moving into the rod. The blow's
-    own outputs (force wave, peak stresses, efficiency) are the window's; the energies and the
+    own outputs (force wave, peak stresses) are the window's; the energies, the efficiency and the
     advance cover the whole contact.
 
     Attributes
@@ -184,6 +184,9 @@ class PressedContact:
     rod_energy, drive_work, advance : float
         Over the whole contact: the energy sent into the rod, the drive's work, the rod end's
         advance.
+    efficiency : float
+        ``rod_energy / (energy_before + drive_work)`` over the whole contact: the share of the
+        energy available to the blow that the rod carries away (at most 1).
     """
 
     def __init__(self, window, sustained):
@@ -211,6 +214,11 @@ class PressedContact:
     @property
     def advance(self) -> float:
         return self.window.advance + self.sustained.advance
+
+    @property
+    def efficiency(self) -> float:
+        available = self.window.energy_before + self.drive_work
+        return self.rod_energy / available if available > 0.0 else float("nan")
 
     def state_at(self, tau):
         """Modal state at ``tau`` since the contact started (positions from the rod end)."""

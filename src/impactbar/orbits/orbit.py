@@ -104,6 +104,15 @@ class PeriodicOrbit:
     ``2/s``. Positions are measured from the rod end, which each blow advances. The multipliers are
     those of the wave law's impact map (theory §7, §4b); ``schur_roots`` and ``schur_stable`` remain
     the paper's criterion for its eq. 10.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, CosineLoad, periodic_orbits
+    >>> orbit = periodic_orbits(BarModel(s=3.0, d=0.0, R=0.6, n_modes=0), CosineLoad(0.9, 1.0))[1]
+    >>> orbit.impacts, orbit.periods
+    (1, 1)
+    >>> round(orbit.phase, 4), str(orbit.admissibility), orbit.stable
+    (2.3565, 'admissible', True)
     """
 
     model: BarModel

@@ -62,6 +62,14 @@ class SwitchedOrbit:
     switch_velocity : float
         The gap's rate ``y' = -q_0'`` where it rises through ``switch_out``: 0 where the orbit
         grazes the switching surface (theory §10).
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, PositionSwitchedDrive, find_orbit
+    >>> drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
+    >>> orbit = find_orbit(BarModel(s=10.0, d=0.05, R=0.5, n_modes=0), drive)
+    >>> round(orbit.period, 6), round(orbit.blow_frequency * orbit.period, 12)  # found, not given
+    (4.607776, 1.0)
     """
 
     model: BarModel

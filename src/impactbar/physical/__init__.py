@@ -71,7 +71,8 @@ from .hammer import preset as preset
 
 #: names from ``results`` (which needs the orbit solver and the compiled simulator), imported on
 #: first use (PEP 562) so that importing this layer, and the command line, stays fast
-_LAZY = ("PhysicalOrbit", "PhysicalOrbitList", "SimulationResult", "orbits", "simulate")
+_LAZY = ("PhysicalOrbit", "PhysicalOrbitList", "SimulationResult", "BlowStatistics", "orbits",
+         "simulate")
 
 
 def __getattr__(name: str):
@@ -98,6 +99,7 @@ __all__ = [
     "PhysicalOrbit",
     "PhysicalOrbitList",
     "SimulationResult",
+    "BlowStatistics",
     "ImpactDurationWarning",
     "SHORT_IMPACT_LIMIT",
     "PRESETS",

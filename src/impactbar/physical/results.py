@@ -56,8 +56,9 @@ class PhysicalOrbit:
         Peak compressive stress of the transmitted wave in the rod (Pa), ``F_max / A_s``; under
         eq. 10 the plateau of a rigid-body piston at the impact velocity, ``rho c v (1 - R)/2``.
     efficiency : float
-        ``rod_energy_J`` over the piston's kinetic plus strain energy at impact (Lundberg's
-        transfer efficiency).
+        ``rod_energy_J`` over the energy available to the blow: the piston's kinetic plus strain
+        energy at impact plus the drive's work during the contact (Lundberg's transfer efficiency,
+        with the drive); at most 1.
     rod_advance_m : float
         Advance of the rod end per blow (m), impulse over ``Z_s``.
     """
@@ -137,7 +138,7 @@ PHYSICAL_ORBIT_COLUMNS = {
     "max_abs_multiplier": ("largest |Floquet multiplier|", "1"),
     "rod_energy_J": ("energy carried into the rod per blow (theory §4b)", "J"),
     "peak_rod_stress_Pa": ("peak compressive stress of the transmitted wave in the rod", "Pa"),
-    "efficiency": ("rod energy over the piston's energy before impact", "1"),
+    "efficiency": ("rod energy over the energy available to the blow", "1"),
     "rod_advance_m": ("advance of the rod end per blow", "m"),
 }
 
@@ -192,6 +193,88 @@ def orbits(hammer: Hammer) -> PhysicalOrbitList:
     return PhysicalOrbitList(PhysicalOrbit.from_orbit(o, hammer) for o in found)
 
 
+#: default threshold of :meth:`SimulationResult.is_blow`: a blow's impact velocity is at least this
+#: fraction of the run's largest
+BLOW_FRACTION = 0.25
+#: default relative tolerance of the settled-motion verdict of :meth:`SimulationResult.blow_statistics`
+SETTLE_TOLERANCE = 0.01
+
+
+@dataclass(frozen=True)
+class BlowStatistics:
+    """The blows of a simulated hammer, chatter apart (:meth:`SimulationResult.blow_statistics`).
+
+    Means are over the blows of the run's second half (past the start-up); a figure that cannot be
+    had (fewer than two blows, or a law without a rod wave) is NaN.
+
+    Attributes
+    ----------
+    blow_fraction, settle_tolerance : float
+        The thresholds used (see :meth:`SimulationResult.blow_statistics`).
+    n_impacts, n_blows, n_chatter : int
+        Impacts of the whole run, and how many of them are blows and chatter.
+    n_blows_second_half, n_chatter_second_half : int
+        The same over the second half.
+    mean_impact_velocity_m_s, impact_velocity_std_m_s : float
+        Mean and standard deviation of the blows' impact velocities (m/s).
+    mean_blow_energy_J : float
+        Mean energy per blow ``m v^2 / 2`` (J).
+    mean_blow_interval_s, blow_interval_std_s : float
+        Mean and standard deviation of the time between blows (s).
+    mean_power_W : float
+        Blow energy per unit time over the blows of the second half (W).
+    mean_rod_energy_J, mean_peak_rod_stress_Pa, mean_efficiency : float
+        Wave law only: the blows' mean rod energy (J), peak rod stress (Pa) and transfer efficiency
+        (each <= 1, see :class:`PhysicalOrbit`).
+    blows_per_cycle : int
+        ``m`` when the blows repeat a cycle of ``m`` blows, 0 when the motion has not settled.
+    message : str
+        The verdict in words.
+    """
+
+    blow_fraction: float
+    settle_tolerance: float
+    n_impacts: int
+    n_blows: int
+    n_chatter: int
+    n_blows_second_half: int
+    n_chatter_second_half: int
+    mean_impact_velocity_m_s: float
+    impact_velocity_std_m_s: float
+    mean_blow_energy_J: float
+    mean_blow_interval_s: float
+    blow_interval_std_s: float
+    mean_power_W: float
+    mean_rod_energy_J: float
+    mean_peak_rod_stress_Pa: float
+    mean_efficiency: float
+    blows_per_cycle: int
+    message: str
+
+    @property
+    def settled(self) -> bool:
+        """Whether the blows repeat a cycle (``blows_per_cycle > 0``)."""
+        return self.blows_per_cycle > 0
+
+    def to_dict(self) -> dict:
+        """The fields and ``settled``, JSON-ready (NaN for the figures that cannot be had)."""
+        return {**dataclasses.asdict(self), "settled": self.settled}
+
+
+def _cycle_length(t: np.ndarray, v: np.ndarray, tol: float) -> int:
+    """The smallest ``m`` such that the last ``m`` blows repeat the ``m`` before them (impact
+    velocities to ``tol`` of the largest, intervals to ``tol`` of the mean); 0 when none does."""
+    if t.size < 3:
+        return 0
+    dt = np.diff(t)
+    vmax, dmean = float(np.max(np.abs(v))), float(np.mean(dt))
+    for m in range(1, dt.size // 2 + 1):
+        if (np.all(np.abs(v[-m:] - v[-2 * m:-m]) <= tol * vmax)
+                and np.all(np.abs(dt[-m:] - dt[-2 * m:-m]) <= tol * dmean)):
+            return m
+    return 0
+
+
 @dataclass(frozen=True, eq=False)
 class SimulationResult:
     """A simulated motion of a hammer in SI units.
@@ -212,6 +295,13 @@ class SimulationResult:
     rod_energies_J, peak_rod_stresses_Pa, efficiencies : numpy.ndarray, shape (n,)
         Under the wave law (theory §4b) the energy and the peak stress of the wave each blow sends
         into the rod, and the transfer efficiency (see :class:`PhysicalOrbit`); NaN under eq. 10.
+
+    Notes
+    -----
+    Not every impact is a blow: after a blow the piston may rebound and chatter on the rod with
+    impacts far slower than the blows. :meth:`is_blow` separates them and :meth:`blow_statistics`
+    reports the blows alone, chatter counted apart, with a verdict on whether the motion has
+    settled.
     """
 
     hammer: Hammer
@@ -244,6 +334,92 @@ class SimulationResult:
         inside = (t >= 0.0) & (t <= w.duration)
         return np.where(inside, w.force(np.clip(t, 0.0, w.duration)), 0.0) * sc.force_N
 
+    def is_blow(self, blow_fraction: float = BLOW_FRACTION) -> np.ndarray:
+        """Which impacts are blows rather than chatter.
+
+        Parameters
+        ----------
+        blow_fraction : float, optional
+            An impact is a blow when its impact velocity is at least this fraction of the largest
+            impact velocity of the run, in ``(0, 1]``; the default 0.25 keeps the impacts with at
+            least 1/16 of the hardest blow's energy.
+
+        Returns
+        -------
+        numpy.ndarray of bool, shape (n,)
+            One flag per impact; the others are chatter.
+        """
+        blow_fraction = check_real("blow_fraction", blow_fraction, lo=0.0, hi=1.0, lo_open=True)
+        v = self.impact_velocities_m_s
+        if v.size == 0:
+            return np.zeros(0, dtype=bool)
+        return v >= blow_fraction * float(np.max(v)) if np.max(v) > 0 else np.zeros(v.size, bool)
+
+    def blow_statistics(self, *, blow_fraction: float = BLOW_FRACTION,
+                        settle_tolerance: float = SETTLE_TOLERANCE) -> BlowStatistics:
+        """Per-blow figures over the blows of the run's second half, and whether the motion has
+        settled.
+
+        Parameters
+        ----------
+        blow_fraction : float, optional
+            Threshold between blows and chatter, see :meth:`is_blow`.
+        settle_tolerance : float, optional
+            The motion has settled when the last blows repeat a cycle of ``m`` blows (``m = 1, 2,
+            ...``, two whole cycles inside the second half): each blow's impact velocity within
+            ``settle_tolerance`` times the largest, and each interval within ``settle_tolerance``
+            times the mean interval, of the blow one cycle earlier. In ``(0, 1)``.
+
+        Returns
+        -------
+        BlowStatistics
+        """
+        settle_tolerance = check_real("settle_tolerance", settle_tolerance, lo=0.0, hi=1.0,
+                                      lo_open=True, hi_open=True)
+        blow = self.is_blow(blow_fraction)
+        t = self.impact_times_s
+        late = blow & (t >= 0.5 * self.t_end_s)
+        nan = float("nan")
+        stats = {"blow_fraction": blow_fraction, "settle_tolerance": settle_tolerance,
+                 "n_impacts": int(t.size), "n_blows": int(np.count_nonzero(blow)),
+                 "n_chatter": int(t.size - np.count_nonzero(blow)),
+                 "n_blows_second_half": int(np.count_nonzero(late)),
+                 "n_chatter_second_half": int(np.count_nonzero(~blow & (t >= 0.5 * self.t_end_s)))}
+        tl, vl, el = t[late], self.impact_velocities_m_s[late], self.blow_energies_J[late]
+        if tl.size >= 2:
+            dt = np.diff(tl)
+            stats.update(mean_blow_interval_s=float(np.mean(dt)), blow_interval_std_s=float(np.std(dt)),
+                         mean_power_W=float(np.sum(el[1:]) / (tl[-1] - tl[0])))
+        if tl.size:
+            stats.update(mean_impact_velocity_m_s=float(np.mean(vl)),
+                         impact_velocity_std_m_s=float(np.std(vl)),
+                         mean_blow_energy_J=float(np.mean(el)))
+        rod = self.rod_energies_J
+        if tl.size and rod is not None and np.all(np.isfinite(rod[late])):  # the wave law
+            stats.update(mean_rod_energy_J=float(np.mean(rod[late])),
+                         mean_peak_rod_stress_Pa=float(np.mean(self.peak_rod_stresses_Pa[late])),
+                         mean_efficiency=float(np.mean(self.efficiencies[late])))
+        m = _cycle_length(tl, vl, settle_tolerance)
+        stats["blows_per_cycle"] = m
+        if m == 0:
+            if tl.size >= 2:
+                cv_t = stats["blow_interval_std_s"] / stats["mean_blow_interval_s"]
+                cv_v = stats["impact_velocity_std_m_s"] / stats["mean_impact_velocity_m_s"]
+                spread = (f"the intervals between blows vary by {cv_t:.0%} and their impact "
+                          f"velocities by {cv_v:.0%} (std over mean)")
+            else:
+                spread = f"there are only {tl.size} blow(s)"
+            stats["message"] = (f"the motion has not settled: over the second half's {tl.size} blows "
+                                f"{spread}, and no cycle of blows repeats to {settle_tolerance:.0%}; "
+                                f"run longer, or the motion is not periodic")
+        elif m == 1:
+            stats["message"] = "the motion has settled: one blow per cycle"
+        else:
+            stats["message"] = (f"the motion has settled into a cycle of {m} different blows; the "
+                                f"means are over the cycle")
+        defaults = {f.name: nan for f in dataclasses.fields(BlowStatistics)}
+        return BlowStatistics(**{**defaults, **stats})
+
     def to_dataframe(self):
         """The impacts as a table, in SI units.
 
@@ -265,7 +441,7 @@ class SimulationResult:
                         efficiency=self.efficiencies)
             meta.update(rod_energy_J=("energy carried into the rod (theory §4b)", "J"),
                         peak_rod_stress_Pa=("peak compressive stress of the transmitted wave", "Pa"),
-                        efficiency=("rod energy over the piston's energy before impact", "1"))
+                        efficiency=("rod energy over the energy available to the blow", "1"))
         return _tables.frame(cols, meta, index="impact",
                              attrs={"hammer": self.hammer.name or "", "t_end_s": self.t_end_s})
 

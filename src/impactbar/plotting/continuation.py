@@ -9,7 +9,7 @@ from ._common import axes as _axes
 __all__ = ["plot_branch", "plot_bifurcation_curve", "plot_bifurcation_curves", "plot_bifurcation_diagram"]
 
 
-def plot_branch(branch, ax=None, *, y: str = "impact_velocity", color=None, label=None, events=True):
+def plot_branch(branch, ax=None, *, y: str = "phase", color=None, label=None, events=True):
     """Plot a continuation branch (:class:`~impactbar.continuation.Branch`): stable stretches solid,
     unstable or inadmissible dashed, events marked.
 
@@ -18,9 +18,11 @@ def plot_branch(branch, ax=None, *, y: str = "impact_velocity", color=None, labe
     branch : Branch
     ax : matplotlib.axes.Axes, optional
         Drawn on a new figure's axes if omitted.
-    y : {"impact_velocity", "phase", "max_abs_multiplier"}
+    y : {"phase", "impact_velocity", "max_abs_multiplier"}
         What to plot against the parameter; per-impact quantities give one curve per impact
-        (phases unwrapped along the branch, so a curve does not jump at ``2 pi``).
+        (phases unwrapped along the branch, so a curve does not jump at ``2 pi``). The default,
+        the phase, separates the two sides of a fold and a branch that returns; the impact
+        velocity does not on one-impact orbits (``2 pi p0/(1 + R)`` on each, theory §4).
     color, label : optional
         Line colour and legend label.
     events : bool
@@ -112,7 +114,7 @@ def plot_bifurcation_curves(curves, ax=None):
     return ax
 
 
-def plot_bifurcation_diagram(branches, diagram=None, ax=None, *, y: str = "impact_velocity"):
+def plot_bifurcation_diagram(branches, diagram=None, ax=None, *, y: str = "phase"):
     """Continued branches over a brute-force bifurcation diagram (grey dots, e.g. from
     :func:`impactbar.continuation.diagram.simulated_diagram`): stable solid, unstable dashed,
     events marked.
@@ -124,8 +126,9 @@ def plot_bifurcation_diagram(branches, diagram=None, ax=None, *, y: str = "impac
     diagram : mapping, optional
         ``diagram["parameter"]`` and ``diagram[y]``, arrays of equal shape ``(n,)``.
     ax : matplotlib.axes.Axes, optional
-    y : {"impact_velocity", "phase", "max_abs_multiplier"}
-        The branches' ordinate (see :func:`plot_branch`).
+    y : {"phase", "impact_velocity", "max_abs_multiplier"}
+        The branches' ordinate (see :func:`plot_branch`; the phase, the default, separates the two
+        sides of a fold).
 
     Returns
     -------

@@ -113,6 +113,13 @@ class InitialState:
     ------
     ValueError
         If the arrays are not 1-d, of different lengths, empty, or not finite.
+
+    Examples
+    --------
+    >>> from impactbar import InitialState
+    >>> start = InitialState.rigid(end_displacement=-0.01, velocity=0.0, n_modes=2)
+    >>> start.modal_displacement, start.modal_velocity
+    (array([-0.01,  0.  ,  0.  ]), array([0., 0., 0.]))
     """
 
     modal_displacement: np.ndarray
@@ -490,6 +497,18 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         On Ctrl-C during a run with ``progress`` or of at least 1,000 load periods (``LONG_RUN``),
         in the main thread: a :class:`KeyboardInterrupt` whose ``trajectory`` holds the run up to
         the last block of impacts it finished.
+
+    Examples
+    --------
+    >>> import math
+    >>> from impactbar import BarModel, CosineLoad, InitialState, simulate
+    >>> model = BarModel(s=10.0, d=0.05, R=0.5, n_modes=2)
+    >>> run = simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0, n_modes=2),
+    ...                2 * math.pi * 20)
+    >>> str(run.status), run.n_impacts > 10
+    ('t_end', True)
+    >>> run.energy.relative_residual < 1e-8  # the energy account closes
+    True
     """
     if progress is not None and not callable(progress):
         raise ValueError(f"progress must be a callable of the fraction done; got "

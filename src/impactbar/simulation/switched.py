@@ -59,6 +59,15 @@ class SwitchedTrajectory:
         and ``end_velocity(t)`` (a run of the ordinary driver, a :class:`~impactbar.Trajectory`,
         where the piece has a contact; else a closed-form flight); ``pieces.starts`` holds their
         ``t0``.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, InitialState, PositionSwitchedDrive, simulate
+    >>> drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
+    >>> run = simulate(BarModel(s=10.0, d=0.05, R=0.5, n_modes=0), drive,
+    ...                InitialState.rigid(-0.5, 0.0), 60.0)
+    >>> type(run).__name__, run.n_impacts > 5
+    ('SwitchedTrajectory', True)
     """
 
     model: BarModel

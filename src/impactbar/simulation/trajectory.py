@@ -52,6 +52,16 @@ class EnergyAccount:
       point of a chatter sequence (the bounces it skips would have dissipated it),
     - ``projection`` is what the changes of modal basis at the start and end of permanent contact
       add (a truncated projection does not conserve energy; theory §8).
+
+    Examples
+    --------
+    >>> import math
+    >>> from impactbar import BarModel, CosineLoad, InitialState, simulate
+    >>> model = BarModel(s=10.0, d=0.05, R=0.5, n_modes=2)
+    >>> account = simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0, n_modes=2),
+    ...                    2 * math.pi * 20).energy
+    >>> account.work > account.impact_loss > 0, account.relative_residual < 1e-8
+    (True, True)
     """
 
     work: float
@@ -240,6 +250,18 @@ class Trajectory:
 
     Methods ``end_displacement(t)``, ``end_velocity(t)``, ``displacement(x, t)`` and
     ``modal_state(t)`` evaluate the closed-form motion at any times in ``[t0, t_end]``.
+
+    Examples
+    --------
+    >>> import math
+    >>> from impactbar import BarModel, CosineLoad, InitialState, simulate
+    >>> model = BarModel(s=10.0, d=0.05, R=0.5, n_modes=2)
+    >>> run = simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0, n_modes=2),
+    ...                2 * math.pi * 20)
+    >>> run.impact_times.shape == run.impact_velocities.shape == (run.n_impacts,)
+    True
+    >>> bool(run.end_displacement(run.impact_times[-1]) > -1e-9)  # at the stop when it strikes
+    True
     """
 
     model: BarModel
@@ -254,6 +276,11 @@ class Trajectory:
     _core: _Core = field(repr=False)
     _segments: _Segments = field(repr=False)
     n_release_retries: int = 0
+
+    def __repr__(self) -> str:
+        """One line: model, load, time span, impacts, status (not the arrays)."""
+        return (f"Trajectory({self.model!r}, {self.load!r}, t {self.t0:.6g} -> {self.t_end:.6g}, "
+                f"{self.impact_times.size} impacts, status {str(self.status)!r})")
 
     @property
     def n_impacts(self) -> int:

@@ -47,6 +47,7 @@ never imports it.
 from __future__ import annotations
 
 from .plot import plot_sweep as plot_sweep
+from .run import NoWorkersError as NoWorkersError
 from .run import SweepRun as SweepRun
 from .run import run_sweep as run_sweep
 from .spec import LOAD_KINDS as LOAD_KINDS
@@ -75,6 +76,7 @@ __all__ = [
     "chunk_slices",
     "compute_chunk",
     "run_sweep",
+    "NoWorkersError",
     "open_sweep",
     "point_done",
     "stored_spec",

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._shared.validate import check_int
+from .._shared.validate import check_int, check_real
 from .spec import SweepSpec, closed_form_task
 from .store import _checksum, _open_group, _prepare_store, _write_chunks, _write_done
 from .tasks import compute_chunk
@@ -23,6 +23,8 @@ EXECUTORS = ("auto", "threads", "dask")
 
 #: How long :func:`run_sweep` waits for a ``scheduler`` to answer
 CONNECT_TIMEOUT = "10s"
+#: what :func:`run_sweep` does when its cluster has had no worker for ``worker_timeout`` seconds
+NO_WORKERS = ("wait", "stop")
 #: the local cluster's HTTP servers: no dashboard, loopback, a free port
 LOCAL_CLUSTER_HTTP = {"dashboard_address": "127.0.0.1:0", "scheduler_kwargs": {"dashboard": False},
                       "worker_dashboard_address": None}
@@ -71,7 +73,8 @@ def default_workers() -> int:
 
 def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = None,
               n_workers: int | None = None, overwrite: bool = False, progress: bool = True,
-              executor: str = "auto") -> SweepRun:
+              executor: str = "auto", worker_timeout: float | None = 60.0,
+              no_workers: str = "wait") -> SweepRun:
     """Compute a sweep into a zarr store, resuming whatever an earlier run finished.
 
     Parameters
@@ -100,6 +103,14 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
         bar's vectorised closed forms (:func:`impactbar.sweeps.spec.closed_form_task`, where
         starting a cluster costs more than the whole work), a local cluster otherwise. The store,
         its checksums, flags and lock, resumption and the progress bar are the same either way.
+    worker_timeout : float or None, optional
+        On a dask cluster: when it has had no worker for this many seconds (the last one died or
+        left) while chunks remain, say so on stderr (one line: the time, the chunks left, what
+        happens next), and again when workers are back; ``None``: never. Default 60 s, ``> 0``.
+    no_workers : {"wait", "stop"}, optional
+        What follows that message: ``"wait"`` (default) keeps waiting for workers to join;
+        ``"stop"`` cancels the chunks left and raises :class:`NoWorkersError` (the chunks finished
+        are stored; rerunning resumes).
 
     Returns
     -------
@@ -112,12 +123,29 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
         folder that is not a sweep store, its folder cannot be written, another driver holds the
         store's lock, ``scheduler`` does not answer within ``CONNECT_TIMEOUT``, ``n_workers``
         is outside ``[1, max_workers()]``, or ``executor`` is unknown or ``"threads"`` with a
-        ``client`` or ``scheduler``; nothing is computed (or left behind) then.
+        ``client`` or ``scheduler``, or ``worker_timeout`` or ``no_workers`` is out of range;
+        nothing is computed (or left behind) then.
+    NoWorkersError
+        With ``no_workers="stop"``, when the cluster has had no worker for ``worker_timeout``
+        seconds.
 
     Notes
     -----
     On resume every chunk flagged done is read back and checked against its stored CRC-32; a
     missing, truncated or corrupted chunk is recomputed.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from impactbar import run_sweep  # a store in zarr: needs xarray and zarr (extra distributed)
+    >>> from impactbar.sweeps import parse_spec
+    >>> spec = parse_spec({"task": "orbits",
+    ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+    ...                    "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+    ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
+    >>> run = run_sweep(spec, pathlib.Path(tempfile.mkdtemp()) / "r.zarr", progress=False)
+    >>> run.complete, run.computed  # the rigid closed forms: in threads of this process, no cluster
+    (True, 1)
     """
     if not isinstance(spec, SweepSpec):
         raise ValueError(f"spec must be a SweepSpec; got {type(spec).__name__}")
@@ -127,6 +155,10 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
         n_workers = check_int("n_workers", n_workers, lo=1, hi=max_workers())
     if executor not in EXECUTORS:
         raise ValueError(f"executor must be one of {EXECUTORS}; got {executor!r}")
+    if worker_timeout is not None:
+        worker_timeout = check_real("worker_timeout", worker_timeout, lo=0.0, lo_open=True)
+    if no_workers not in NO_WORKERS:
+        raise ValueError(f"no_workers must be one of {NO_WORKERS}; got {no_workers!r}")
     remote = client is not None or scheduler is not None
     if executor == "threads" and remote:
         raise ValueError("executor='threads' computes in this process; it takes no client or scheduler")
@@ -151,7 +183,9 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
             if threads:
                 results = _thread_results(spec, todo, default_workers() if n_workers is None else n_workers)
             else:
-                results = _dask_results(spec, todo, client)
+                watchdog = None if worker_timeout is None else _WorkerWatchdog(
+                    lambda: _count_workers(client), worker_timeout, no_workers)
+                results = _dask_results(spec, todo, client, watchdog)
             return _drive(spec, path, done, sums, todo, results, progress)
     except BaseException:
         for p in created:  # folders this call made and left empty
@@ -282,24 +316,127 @@ def _drive(spec, path, done, sums, todo, results, progress) -> SweepRun:
     return SweepRun(path, spec.n_chunks, already, computed, time.perf_counter() - t_start)
 
 
-def _dask_results(spec, todo, client):
+def _dask_results(spec, todo, client, watchdog=None):
     """The chunks ``todo`` computed on a dask cluster: lists of ``(chunk, data)``, each list the
-    chunks that finished since the previous one."""
+    chunks that finished since the previous one; ``watchdog`` (a :class:`_WorkerWatchdog`) watches
+    the workers meanwhile."""
     from distributed import as_completed
 
     tag = uuid.uuid4().hex[:8]
     futures = [client.submit(compute_chunk, spec, i, key=f"impactbar-{spec.task}-{tag}-{i}",
                              pure=False) for i in todo]
     chunk_of = {f.key: i for f, i in zip(futures, todo, strict=True)}
+    left = [len(futures)]
+    if watchdog is not None:
+        watchdog.pending = lambda: left[0]
+        watchdog.on_stop = lambda: client.cancel([f for f in futures if not f.done()])
+        watchdog.start()
     try:
         for finished in as_completed(futures).batches():
+            left[0] -= len(finished)
             yield from _finished_batches([(chunk_of[fut.key], fut) for fut in finished])
             for fut in finished:
                 fut.release()
+        if watchdog is not None and watchdog.stopped:
+            raise NoWorkersError(watchdog.message)
+    except BaseException:
+        if watchdog is not None and watchdog.stopped:
+            raise NoWorkersError(watchdog.message) from None
+        raise
     finally:
+        if watchdog is not None:
+            watchdog.close()
         for f in futures:
             if not f.done():
                 f.cancel()
+
+
+class NoWorkersError(RuntimeError):
+    """A sweep stopped because its dask cluster had no worker for ``worker_timeout`` seconds
+    (``run_sweep(..., no_workers="stop")``); the chunks finished are stored."""
+
+
+def _count_workers(client) -> int:
+    """Workers connected to ``client``'s scheduler (0 when the scheduler does not answer)."""
+    try:
+        return len(client.nthreads())
+    except Exception:  # noqa: BLE001 - a scheduler gone counts as no worker
+        return 0
+
+
+class _WorkerWatchdog:
+    """Says on stderr when a cluster has had no worker for ``timeout`` seconds while chunks wait,
+    and again when workers are back; with ``action="stop"`` it then calls ``on_stop`` (which
+    cancels the chunks left) and sets ``stopped``.
+
+    ``check(now)`` is the whole logic (a clock value in, the line printed, if any, out); a daemon
+    thread calls it every ``poll`` seconds between :meth:`start` and :meth:`close`.
+    """
+
+    def __init__(self, count_workers, timeout: float, action: str = "wait", *, poll: float = 1.0,
+                 out=None):
+        self.count_workers, self.timeout, self.action, self.poll = count_workers, timeout, action, poll
+        self.out = out
+        self.pending = lambda: 0
+        self.on_stop = lambda: None
+        self.since = None  # when the workers were first seen gone
+        self.warned = False
+        self.stopped = False
+        self.message = ""
+        self._thread = None
+        self._event = None
+
+    def check(self, now: float) -> str | None:
+        """Look at the workers once at clock ``now`` (s); returns the line printed, if any."""
+        if self.stopped:
+            return None
+        n = self.count_workers()
+        if n > 0:
+            line = None
+            if self.warned:
+                line = f"impactbar sweep: {n} worker(s) back; the sweep goes on"
+                self._say(line)
+            self.since, self.warned = None, False
+            return line
+        if self.since is None:
+            self.since = now
+            return None
+        waited = now - self.since
+        if waited < self.timeout or self.warned:
+            return None
+        self.warned = True
+        head = (f"impactbar sweep: warning: no worker for {waited:.0f} s (timeout {self.timeout:g} s); "
+                f"{self.pending()} chunk(s) left")
+        if self.action == "stop":
+            self.stopped = True
+            self.message = (f"no worker for {waited:.0f} s: stopped; the chunks finished are stored, "
+                            "rerun the same command to resume")
+            self._say(head + "; stopping")
+            self.on_stop()
+            return head + "; stopping"
+        self._say(head + "; still waiting for workers (Ctrl-C stops; rerunning resumes)")
+        return head + "; still waiting for workers (Ctrl-C stops; rerunning resumes)"
+
+    def _say(self, line: str) -> None:
+        print(line, file=self.out or sys.stderr, flush=True)
+
+    def start(self) -> None:
+        import threading
+
+        self._event = threading.Event()
+
+        def loop():
+            while not self._event.wait(self.poll):
+                self.check(time.monotonic())
+
+        self._thread = threading.Thread(target=loop, name="impactbar-sweep-watchdog", daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        if self._thread is not None:
+            self._event.set()
+            self._thread.join()
+            self._thread = None
 
 
 def _thread_results(spec, todo, n_threads):

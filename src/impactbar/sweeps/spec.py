@@ -117,6 +117,16 @@ class SweepSpec:
         Grid points per work chunk (about; chunks are blocks of the grid), ``>= 1``. Default 400
         for ``orbits`` (4,096 where every point takes the rigid closed forms,
         :func:`closed_form_task`), 4 for ``montecarlo``, 32 for ``bifurcation``.
+
+    Examples
+    --------
+    >>> from impactbar.sweeps import parse_spec
+    >>> spec = parse_spec({"task": "orbits",
+    ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+    ...                    "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+    ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
+    >>> spec.task, spec.shape, spec.n_chunks
+    ('orbits', (10,), 1)
     """
 
     task: str
@@ -220,6 +230,19 @@ def load_spec(path) -> SweepSpec:
     ValueError
         If the file is not valid TOML, or a key is unknown, missing or out of range; the message
         names the key.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from impactbar import load_spec
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "spec.toml"
+    >>> with open(path, "w") as f:
+    ...     for line in ['task = "orbits"', "[model]", "s = 100.0", "d = 0.0", "R = 0.5", "n_modes = 0",
+    ...                  "[load]", 'kind = "cosine"', "p0 = 0.5", "pk = 1.0", "k = 1",
+    ...                  "[axes]", "R = { start = 0.0, stop = 0.9, num = 10 }"]:
+    ...         print(line, file=f)
+    >>> load_spec(path).n_points
+    10
     """
     path = Path(path)
     try:

@@ -368,6 +368,21 @@ def open_sweep(path):
     ------
     ValueError
         If ``path`` is not an impactbar sweep store.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> from impactbar import open_sweep, run_sweep  # needs xarray and zarr (extra distributed)
+    >>> from impactbar.sweeps import parse_spec
+    >>> spec = parse_spec({"task": "orbits",
+    ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+    ...                    "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+    ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
+    >>> store = pathlib.Path(tempfile.mkdtemp()) / "r.zarr"
+    >>> _ = run_sweep(spec, store, progress=False)
+    >>> ds = open_sweep(store)
+    >>> dict(ds.sizes)["R"], "impact_velocity" in ds
+    (10, True)
     """
     import xarray as xr
 
