@@ -70,6 +70,24 @@ def test_small_bit_mass_recovers_the_massless_bit():
     assert errs[1] < 0.2 * errs[0] and errs[1] < 1e-3
 
 
+@pytest.mark.parametrize("m", [1e-6, 1e-9])
+def test_a_very_light_bit_stays_finite(m):
+    """A bit so light that its time constant ``m/Z`` is far below the cell step (a stiff bit: the
+    exponentials of its motion under- and overflow apart) still gives the massless bit's blow,
+    within ``O(m)`` (a continuation in ``bit_mass`` from 0 steps to such masses), compiled and in the
+    reference loop alike."""
+    from impactbar.dynamics.implementations import use_reference
+
+    alpha, gamma = 1.2, 4.0
+    _, ref = _long_rod_blow(alpha, gamma, cells=64)
+    _, blow = _long_rod_blow(alpha, gamma, bit_mass=m, cells=64)
+    assert blow.energy_error < 1e-10
+    assert abs(blow.efficiency - ref.efficiency) < 10 * m + 1e-7  # the events located to ~1e-8
+    with use_reference("rock.blow"):
+        _, slow = _long_rod_blow(alpha, gamma, bit_mass=m, cells=64)
+    assert slow.work_on_rock == pytest.approx(blow.work_on_rock, rel=1e-10)
+
+
 @pytest.mark.parametrize("ratio", [2.25, 1 / 2.25])
 def test_striker_on_a_long_rod(ratio):
     """A striker of impedance 1 on a long rod of impedance ``z``: the force ``z/(1 + z) V s`` for
