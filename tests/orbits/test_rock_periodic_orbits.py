@@ -78,3 +78,11 @@ def test_no_orbit_gives_an_empty_list():
                      rock=ib.BilinearRock(k=20.0, k_u=200.0))
     model = ib.BarModel(s=10.0, d=0.3, R=0.0, n_modes=4, impact=law)
     assert list(ib.periodic_orbits(model, ib.CosineLoad(1.0, 1.0))) == []
+
+
+def test_find_orbit_without_a_guess_starts_from_periodic_orbits(case):
+    """``find_orbit`` with no guess starts from ``periodic_orbits`` (stable first), now under this
+    law too: the stable orbit, to the digits Newton gives."""
+    model, load, orbits = case
+    o = ib.find_orbit(model, load)
+    assert o.phase == pytest.approx(orbits[1].phase, abs=1e-10) and o.stable
