@@ -13,7 +13,7 @@ The law gives single blows (:func:`single_blow`) and the simulator's contact ste
 per blow in ``Trajectory.impacts``) and its impact map (:meth:`RodRock.impact_map`, the contact step
 with a finite-difference Jacobian: ``find_orbit`` runs under it from a guess, e.g. a simulation, and
 ``continue_orbit`` in the drive's and the rock's parameters); ``periodic_orbits`` finds the
-one-impact orbits by Newton's method from guesses (:func:`rock_periodic_orbits`): there is no
+one-impact orbits by Newton's method from guesses (:func:`~impactbar.laws.rock_periodic_orbits`): there is no
 phase equation (the law's ``phase_roots`` and ``orbit`` raise ``LawNotSupported``, a
 ``ValueError``, naming them).
 """
@@ -200,7 +200,7 @@ class RodRock(ContactLaw):
 
     def periodic_orbits(self, model, load):
         """The one-impact orbits, by :func:`find_orbit` from the paper law's orbits and a settled
-        simulation as guesses (:func:`rock_periodic_orbits`; there is no
+        simulation as guesses (:func:`~impactbar.laws.rock_periodic_orbits`; there is no
         phase equation: the blow map is numerical). :func:`~impactbar.periodic_orbits` calls it.
 
         Returns

@@ -67,7 +67,7 @@ class PhysicalOrbit:
         permanent penetration (mm), the drilling rate at the blow frequency (m/min) and the
         efficiency with the rebound credited; there ``rod_energy_J`` is the energy the piston gave
         rod and rock, ``efficiency`` work on rock over the energy available to the blow,
-        ``rod_advance_m`` the penetration (:func:`~impactbar.physical.rock.rock_orbit_figures`).
+        ``rod_advance_m`` the penetration (``impactbar.physical.rock.rock_orbit_figures``).
         NaN under the other laws.
     """
 
