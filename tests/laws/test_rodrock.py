@@ -70,6 +70,24 @@ def test_small_bit_mass_recovers_the_massless_bit():
     assert errs[1] < 0.2 * errs[0] and errs[1] < 1e-3
 
 
+@pytest.mark.parametrize("m", [1e-6, 1e-9])
+def test_a_very_light_bit_stays_finite(m):
+    """A bit so light that its time constant ``m/Z`` is far below the cell step (a stiff bit: the
+    exponentials of its motion under- and overflow apart) still gives the massless bit's blow,
+    within ``O(m)`` (a continuation in ``bit_mass`` from 0 steps to such masses), compiled and in the
+    reference loop alike."""
+    from impactbar.dynamics.implementations import use_reference
+
+    alpha, gamma = 1.2, 4.0
+    _, ref = _long_rod_blow(alpha, gamma, cells=64)
+    _, blow = _long_rod_blow(alpha, gamma, bit_mass=m, cells=64)
+    assert blow.energy_error < 1e-10
+    assert abs(blow.efficiency - ref.efficiency) < 10 * m + 1e-7  # the events located to ~1e-8
+    with use_reference("rock.blow"):
+        _, slow = _long_rod_blow(alpha, gamma, bit_mass=m, cells=64)
+    assert slow.work_on_rock == pytest.approx(blow.work_on_rock, rel=1e-10)
+
+
 @pytest.mark.parametrize("ratio", [2.25, 1 / 2.25])
 def test_striker_on_a_long_rod(ratio):
     """A striker of impedance 1 on a long rod of impedance ``z``: the force ``z/(1 + z) V s`` for
@@ -291,10 +309,10 @@ def test_the_reflection_from_a_stiff_elastic_rock_throws_the_piston_back():
 
 
 def test_computations_the_law_does_not_provide_are_refused_with_a_value_error():
-    """The one-impact phase equation is not provided under the rod-rock law (simulation and
-    find_orbit are: test_rock_contact.py, tests/orbits/test_rock_orbit.py): periodic_orbits refuses
-    the model with a ValueError naming ``model.impact`` (also a NotImplementedError, for law
-    authors)."""
+    """The one-impact phase equation is not provided under the rod-rock law (periodic_orbits finds
+    the orbits by Newton's method instead: tests/orbits/test_rock_periodic_orbits.py): the law's
+    phase_roots refuses the model with a ValueError naming ``model.impact`` (also a
+    NotImplementedError, for law authors)."""
     import impactbar as ib
     from impactbar.laws.base import LawNotSupported
 
@@ -302,7 +320,7 @@ def test_computations_the_law_does_not_provide_are_refused_with_a_value_error():
                      rock=ib.BilinearRock(k=2.5, k_u=25.0))
     model = ib.BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
     load = ib.CosineLoad(0.5, 1.0)
-    calls = [lambda: ib.periodic_orbits(model, load)]
+    calls = [lambda: law.phase_roots(model, load), lambda: law.orbit(model, load, 1.0, 1)]
     for call in calls:
         with pytest.raises(ValueError, match=r"model\.impact: the impact law 'rodrock'") as info:
             call()

@@ -117,3 +117,41 @@ def test_the_docs_example_rock_sits_at_lundbergs_optimum():
     h = physical.Hammer.from_config(config)
     assert round(h.model.law.alpha(h.model), 2) == 1.27
     assert h.model.law.rock.gamma == pytest.approx(10.0)
+
+
+def test_cli_orbits_prints_the_drilling_outputs_per_blow():
+    """``impactbar orbits examples/rock_drill.toml --json``: the one-impact orbits under the rod-rock
+    law (periodic_orbits by Newton from guesses) with each blow's work on rock (J), penetration (mm),
+    drilling rate (m/min) and efficiencies; the same figures as a run of the simulator started on
+    the orbit, converted by :func:`rock_blows` (to 1e-8), and the table prints them."""
+    import json
+
+    import impactbar as ib
+
+    toml = Path(__file__).parents[2] / "examples" / "rock_drill.toml"
+    res = subprocess.run([sys.executable, "-m", "impactbar", "orbits", str(toml), "--json"],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    found = json.loads(res.stdout)["orbits"]
+    assert found
+    from impactbar.cli.physical import format_table
+
+    hammer = physical.load_config(toml)
+    model, load = hammer.model, hammer.load
+    si = physical.orbits(hammer)
+    orbits = [o.orbit for o in si]
+    assert [o["phase_rad"] for o in found] == pytest.approx([o.phase for o in orbits], abs=1e-9)
+    T = model.law.window(model)
+    M = model.n_modes + 1
+    for row, o in zip(found, orbits, strict=True):
+        y = o.states_after_impact[0]
+        t0 = o.impact_times[0] + T
+        run = ib.simulate(model, load, ib.InitialState(modal_displacement=y[:M], modal_velocity=y[M:]),
+                          t0 + 2 * math.pi, t0=t0)
+        blows = rock_blows(hammer, run)
+        for key in ("work_on_rock_J", "penetration_mm", "drilling_rate_m_min", "efficiency",
+                    "efficiency_with_rebound"):
+            assert row[key] == pytest.approx(blows[key][0], rel=1e-8), key
+        assert 0.0 <= row["efficiency"] <= row["efficiency_with_rebound"] <= 1.0
+    table = format_table(hammer, si)  # what ``impactbar orbits examples/rock_drill.toml`` prints
+    assert "drilling per blow" in table and f"{found[0]['work_on_rock_J']:8.2f}" in table

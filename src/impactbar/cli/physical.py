@@ -119,4 +119,12 @@ def format_table(hammer: physical.Hammer, found) -> str:
             f"{o.power_W:9.1f} {o.peak_stress_Pa / 1e6:9.1f} {o.rod_energy_J:8.2f} "
             f"{o.peak_rod_stress_Pa / 1e6:8.1f} {o.efficiency:6.3f} {str(o.admissible):>10} "
             f"{str(o.stable):>6} {o.max_abs_multiplier:8.4f}")
+    if getattr(h, "drill", None) is not None:  # the rod-rock law: drilling per blow (theory §4d)
+        head = (f"{'phase/rad':>9} {'rock/J':>8} {'pen./mm':>8} {'rate m/min':>10} {'eff.':>6} "
+                f"{'eff.+reb.':>9}")
+        lines += ["drilling per blow (work on rock, permanent penetration, rate at the blow "
+                  "frequency, efficiency without and with the rebound)", head, "-" * len(head)]
+        lines += [f"{o.phase_rad:9.4f} {o.work_on_rock_J:8.2f} {o.penetration_mm:8.4f} "
+                  f"{o.drilling_rate_m_min:10.4f} {o.efficiency:6.3f} {o.efficiency_with_rebound:9.3f}"
+                  for o in found]
     return "\n".join(lines)

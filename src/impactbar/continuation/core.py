@@ -161,7 +161,9 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         §10; :func:`impactbar.continuation.switched.continue_switched`).
     parameter : str
         One of ``"p0"``, ``"pk"`` (a :class:`CosineLoad`), ``"q"``, ``"kappa"`` (a
-        :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`).
+        :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`); under the
+        rod-rock law also ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"``
+        (``impactbar.continuation.parameters.ROCK_PARAMETERS``, theory §4d).
     to : float
         Target value; the branch stops there, or where it leaves the range between the start and
         ``to`` after a fold. A branch started at a period doubling may bifurcate to either side:
@@ -216,7 +218,7 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         raise ValueError(f"orbit must be a PeriodicOrbit, MultiImpactOrbit or BranchEvent; got "
                          f"{type(orbit).__name__}")
     model, load = base.model, base.load
-    _check_parameter(model, load, parameter)
+    _check_parameter(model, load, parameter, continuation=True)
     lam0 = parameter_value(model, load, parameter)
     to = _target(parameter, lam0, to)
     settings = _settings(settings, step=step, max_step=max_step, min_step=min_step,

@@ -260,7 +260,7 @@ def continue_bifurcation(event: BranchEvent, parameter: str, to: float, *,
         raise ValueError(f"event must be a fold, period doubling or grazing point; got {event.kind!r}")
     o = event.orbit
     model, load = o.model, o.load
-    _check_parameter(model, load, parameter)
+    _check_parameter(model, load, parameter, continuation=True)
     if parameter == event.parameter:
         raise ValueError(f"parameter must differ from the branch's parameter {event.parameter!r}")
     l1 = float(event.value)

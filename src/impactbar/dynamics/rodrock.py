@@ -158,7 +158,10 @@ class _Bit:
             delta = math.sqrt(disc)
             lam2 = half - delta
             e2 = math.exp(lam2 * tau)
-            S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
+            if delta * tau > 1.0:  # a stiff bit (small mass): e2 underflows, expm1 overflows
+                S = (math.exp((half + delta) * tau) - e2) / (2.0 * delta)
+            else:
+                S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
             C = e2 + delta * S
         else:
             om = math.sqrt(-disc)

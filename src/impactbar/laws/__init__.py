@@ -19,13 +19,14 @@ from .paper import PaperLaw as PaperLaw
 from .rodrock import BilinearRock as BilinearRock
 from .rodrock import RodRock as RodRock
 from .rodrock import RodSegment as RodSegment
+from .rodrock import rock_periodic_orbits as rock_periodic_orbits
 from .rodrock import single_blow as single_blow
 from .wave import PressedContact as PressedContact
 from .wave import WaveLaw as WaveLaw
 
 __all__ = ["ContactLaw", "PaperLaw", "WaveLaw", "PressedContact", "InstantImpact", "LAWS", "get_law",
            "RodRock",
-           "RodSegment", "BilinearRock", "single_blow"]
+           "RodSegment", "BilinearRock", "single_blow", "rock_periodic_orbits"]
 
 #: The impact laws by name: ``"paper"`` (eq. 10) and ``"wave"`` (the long rod, theory §4b). The rod
 #: and the rock (``"rodrock"``, theory §4d) has required parameters: only a ``RodRock(...)`` object

@@ -12,8 +12,10 @@ The law gives single blows (:func:`single_blow`) and the simulator's contact ste
 (:meth:`RodRock.contact`: ``simulate`` runs under it, one :class:`~impactbar.dynamics.rockcontact.RockContact`
 per blow in ``Trajectory.impacts``) and its impact map (:meth:`RodRock.impact_map`, the contact step
 with a finite-difference Jacobian: ``find_orbit`` runs under it from a guess, e.g. a simulation, and
-``continue_orbit`` in the drive's parameters); ``periodic_orbits`` (the one-impact phase equation)
-is not provided (its methods raise ``LawNotSupported``, a ``ValueError``, naming them).
+``continue_orbit`` in the drive's and the rock's parameters); ``periodic_orbits`` finds the
+one-impact orbits by Newton's method from guesses (:func:`~impactbar.laws.rock_periodic_orbits`): there is no
+phase equation (the law's ``phase_roots`` and ``orbit`` raise ``LawNotSupported``, a
+``ValueError``, naming them).
 """
 
 from __future__ import annotations
@@ -23,10 +25,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_real
 from .base import ContactLaw
 
-__all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
+__all__ = ["BilinearRock", "RodRock", "RodSegment", "rock_periodic_orbits", "single_blow"]
 
 
 @dataclass(frozen=True)
@@ -195,6 +198,17 @@ class RodRock(ContactLaw):
         jt = (BlowMap(model, load, t + ht)(y) - BlowMap(model, load, t - ht)(y)) / (2.0 * ht)
         return y_plus, jac, jt
 
+    def periodic_orbits(self, model, load):
+        """The one-impact orbits, by :func:`find_orbit` from the paper law's orbits and a settled
+        simulation as guesses (:func:`~impactbar.laws.rock_periodic_orbits`; there is no
+        phase equation: the blow map is numerical). :func:`~impactbar.periodic_orbits` calls it.
+
+        Returns
+        -------
+        OrbitList
+        """
+        return rock_periodic_orbits(model, load)
+
     def blow(self, model, load, t, y_minus):
         """The blow of an arrival at load time ``t`` in state ``y_minus`` (shape ``(2 N + 2,)``)
         with the drive acting: the record of :meth:`contact`."""
@@ -286,3 +300,114 @@ def lundberg_efficiency(alpha: float, gamma: float) -> float:
     """Lundberg's efficiency of a rectangular incident wave on a massless bit and bilinear rock:
     ``(2/alpha)(1 - e^-alpha)^2 (1 - 1/gamma)`` (theory §4d)."""
     return 2.0 / alpha * (-math.expm1(-alpha)) ** 2 * (1.0 - 1.0 / gamma)
+
+
+# ------------------------------------------------------------------------------------------------
+# one-impact orbits by Newton from guesses (periodic_orbits under this law)
+# ------------------------------------------------------------------------------------------------
+_TWO_PI = 2.0 * math.pi
+_SETTLE_PERIODS = 60  # load periods of the simulation guess
+
+
+def _equivalent_restitution(model) -> float:
+    """``-rebound_velocity / V`` of a rigid piston's blow at ``V = 1`` on the model's rod and rock,
+    clipped to ``[0, 0.95]``: the restitution of the paper-law guesses."""
+    blow = single_blow(model, 1.0)
+    return min(0.95, max(0.0, -float(blow.rebound_velocity)))
+
+
+def _paper_guesses(model, load):
+    from ..orbits import periodic_orbits
+
+    law = model.law
+    paper = model.with_(impact="paper", R=_equivalent_restitution(model))
+    T = law.window(model)
+    guesses = []
+    for o in sorted(periodic_orbits(paper, load), key=lambda o: (not o.stable, o.phase)):
+        if not np.isfinite(o.phase):
+            continue
+        q, v = o.modal_state(np.array([T]))
+        guesses.append((np.array([o.phase]), np.concatenate((q[:, 0], v[:, 0]))[None, :]))
+    return guesses
+
+
+def _simulated_guess(model, load):
+    from ..simulation import InitialState, simulate
+
+    try:
+        tr = simulate(model, load, InitialState.rigid(-0.1, 0.0, n_modes=model.n_modes),
+                      _TWO_PI * _SETTLE_PERIODS)
+    except ValueError:
+        return None
+    ti = np.asarray(tr.impact_times)
+    if ti.size < 4 or not np.allclose(np.diff(ti[-4:]), _TWO_PI, atol=1e-3):
+        return None
+    return tr
+
+
+def rock_periodic_orbits(model, load):
+    """The one-impact orbits under the rod-rock law, by Newton's method from guesses (theory §4d):
+    :func:`~impactbar.periodic_orbits` for a model with ``impact=RodRock(...)``.
+
+    The blow is a numerical map (characteristics on the cell grid,
+    :meth:`~impactbar.RodRock.impact_map`), so there is no closed-form phase equation to search:
+    each orbit is found by :func:`~impactbar.find_orbit` (one impact in one period, the flight's
+    start ``q_0`` among the unknowns) from two kinds of guesses:
+
+    1. the paper law's one-impact orbits of the same bar and load (``periodic_orbits`` with
+       ``impact="paper"``) with the restitution of a rigid piston's blow on this rod and rock,
+       ``R = -rebound_velocity / V`` at ``V = 1`` (clipped to ``[0, 0.95]``), each taken at its
+       phase with the state it has ``blow_time`` after the impact (where this law's flight starts);
+    2. where none of those gives a stable orbit, the end of a simulation from rest (60 load
+       periods), if it has settled to one blow per period.
+
+    Orbits found twice (phases within ``1e-7``) are kept once. Guesses from which Newton does not
+    converge give nothing: the list holds the orbits found, not a certified set of all of them.
+
+    Parameters
+    ----------
+    model : BarModel
+        With ``impact=RodRock(...)``.
+    load : Load
+        Of period ``2 pi``.
+
+    Returns
+    -------
+    OrbitList
+        Sorted by phase; each a :class:`~impactbar.PeriodicOrbit` of :func:`~impactbar.find_orbit`
+        (multipliers of the finite-difference impact map, admissibility, one ``RockContact`` per
+        blow in ``contacts``). Empty when no guess converges.
+
+    Examples
+    --------
+    >>> import impactbar as ib
+    >>> law = ib.RodRock(segments=[ib.RodSegment(length=10.0, impedance=2.0)],
+    ...                  rock=ib.BilinearRock(k=60.0, k_u=1e6), blow_time=2.0)
+    >>> model = ib.BarModel(s=10.0, d=0.3, R=0.0, n_modes=0, impact=law)
+    >>> load = ib.PiecewiseConstantLoad([0.0, 1.0, 3.0], [-1.0, 2.0, 0.0])
+    >>> orbits = ib.periodic_orbits(model, load)  # calls rock_periodic_orbits
+    >>> [(round(o.phase, 4), o.stable) for o in orbits]
+    [(2.6008, False), (3.5461, True)]
+    """
+    from ..orbits import find_orbit
+    from ..orbits.one_impact import OrbitList
+
+    found = []
+    starts = _paper_guesses(model, load)
+    with single_threaded_blas():
+        for guess in [*starts, None]:
+            if guess is None:
+                if any(o.stable for o in found):
+                    break
+                guess = _simulated_guess(model, load)
+                if guess is None:
+                    break
+            try:
+                orbit = find_orbit(model, load, 1, 1, guess=guess)
+            except ValueError:
+                continue
+            if all(abs(math.remainder(orbit.phase - o.phase, _TWO_PI)) > 1e-7 for o in found):
+                found.append(orbit)
+    out = OrbitList(sorted(found, key=lambda o: o.phase))
+    out._families = ()
+    return out

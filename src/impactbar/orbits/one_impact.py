@@ -159,6 +159,9 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     """
     _check_inputs(model, load)
     _check_modes(model)
+    by_newton = getattr(model.law, "periodic_orbits", None)  # a law without a phase equation
+    if by_newton is not None:
+        return by_newton(model, load)
     fast = _rigid_orbits(model, load)
     if fast is not None:
         return fast

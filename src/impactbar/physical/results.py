@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -61,6 +62,13 @@ class PhysicalOrbit:
         with the drive); at most 1.
     rod_advance_m : float
         Advance of the rod end per blow (m), impulse over ``Z_s``.
+    work_on_rock_J, penetration_mm, drilling_rate_m_min, efficiency_with_rebound : float
+        Under the rod-rock law (a ``[rock]`` section, theory §4d) the blow's work on rock (J),
+        permanent penetration (mm), the drilling rate at the blow frequency (m/min) and the
+        efficiency with the rebound credited; there ``rod_energy_J`` is the energy the piston gave
+        rod and rock, ``efficiency`` work on rock over the energy available to the blow,
+        ``rod_advance_m`` the penetration (``impactbar.physical.rock.rock_orbit_figures``).
+        NaN under the other laws.
     """
 
     orbit: object
@@ -78,6 +86,10 @@ class PhysicalOrbit:
     peak_rod_stress_Pa: float
     efficiency: float
     rod_advance_m: float
+    work_on_rock_J: float = math.nan
+    penetration_mm: float = math.nan
+    drilling_rate_m_min: float = math.nan
+    efficiency_with_rebound: float = math.nan
 
     @classmethod
     def from_orbit(cls, orbit, hammer: Hammer) -> PhysicalOrbit:
@@ -106,6 +118,10 @@ def _rod_figures(orbit, hammer: Hammer, v_m_s: float) -> dict:
     energy_J = sc.force_N * sc.length_m  # the energy unit m L^2 Omega^2
     rod_area_ratio = (1.0 - R) / (1.0 + R)  # A / A_s
     b = hammer.bar
+    if getattr(hammer, "drill", None) is not None:  # the rod-rock law: the blow's drilling figures
+        from .rock import rock_orbit_figures
+
+        return rock_orbit_figures(orbit, hammer)
     w = orbit.impact
     if w is not None:  # the wave law: the contact solved by characteristics
         return {"rod_energy_J": float(w.rod_energy * energy_J),

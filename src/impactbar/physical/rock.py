@@ -243,3 +243,31 @@ def rock_summary(result) -> dict:
         "mean_efficiency_with_rebound": float(np.mean(blows["efficiency_with_rebound"][late])),
     })
     return out
+
+
+def rock_orbit_figures(orbit, hammer) -> dict:
+    """The SI figures of a periodic orbit under the rod-rock law (theory §4d), per blow (the first
+    of the orbit): the fields of :class:`~impactbar.physical.PhysicalOrbit` that
+    :func:`~impactbar.physical.orbits` fills from the blow instead of from a transmitted wave.
+
+    Returns
+    -------
+    dict
+        ``rod_energy_J`` (the energy the piston gave the rod and rock, J), ``peak_rod_stress_Pa``
+        (the largest shank force over the first segment's area, Pa), ``efficiency`` and
+        ``efficiency_with_rebound`` (work on rock over the energy available to the blow),
+        ``rod_advance_m`` and ``penetration_mm`` (the permanent penetration, m and mm),
+        ``work_on_rock_J`` (J) and ``drilling_rate_m_min`` (penetration times the blow frequency
+        ``f / k``, m/min).
+    """
+    sc = hammer.scales
+    b = orbit.contacts[0]
+    pen_m = float(b.permanent_penetration) * sc.length_m
+    return {"rod_energy_J": float(b.energy_out) * sc.force_N * sc.length_m,
+            "peak_rod_stress_Pa": float(np.max(b.shank_forces)) * sc.force_N
+            / hammer.drill.segments[0].area_m2,
+            "efficiency": float(b.efficiency), "rod_advance_m": pen_m,
+            "work_on_rock_J": float(b.work_on_rock) * sc.force_N * sc.length_m,
+            "penetration_mm": pen_m * 1e3,
+            "drilling_rate_m_min": pen_m * hammer.blow_frequency_Hz * 60.0,
+            "efficiency_with_rebound": float(b.efficiency_with_rebound)}
