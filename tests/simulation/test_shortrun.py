@@ -24,6 +24,7 @@ CASES = [  # model, load, start, t_end, max_impacts
 
 
 def _same(a, b):
+    assert type(a) is type(b) and vars(a).keys() == vars(b).keys()  # every field set
     assert a.t0 == b.t0 and a.t_end == b.t_end and a.status == b.status
     assert a.n_release_retries == b.n_release_retries
     for name in ("impact_times", "impact_velocities", "contact_intervals"):
