@@ -18,7 +18,8 @@ Rows (baseline | new | ratio | the issue's goal):
 - ``simulate``: impacts per second, the general certified impact search (the reference of
   ``"simulate.impact_search"``)
   against the specialised ones (rigid bar in scalars, flexible modes in folded form), and a
-  100-impact run, with the kernel data rebuilt on every call (as before) against the cached core.
+  100-impact run, with the kernel data rebuilt on every call (as before) against the cached core;
+  the rigid bar's 1-impact run against a compiled minimal loop for it (``_peers.py``, issue 20).
 
 Times are medians of repeated runs of CPU time (``time.process_time``) for the in-process rows and
 of wall time for the fresh processes, so that other load on a shared machine weighs less. BLAS runs
@@ -56,6 +57,9 @@ from impactbar.dynamics.implementations import use_reference  # noqa: E402
 from impactbar.orbits import stability  # noqa: E402
 from impactbar.orbits.one_impact import _periodic_orbits_general  # noqa: E402
 from impactbar.orbits.rigid import rigid_cosine_orbits  # noqa: E402
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from _peers import minimal_loop_rigid  # noqa: E402
 
 ROWS = []
 
@@ -209,6 +213,12 @@ def bench_simulate(quick):
             higher_is_better=True)
         row(f"simulate, {n_modes} modes, a 100-impact run", base100 * 1e6, new100 * 1e6, "us",
             "fixed cost <= 50 us")
+        if n_modes == 0:  # against a compiled minimal loop for the same run (benchmarks/_peers.py)
+            new1 = cpu_median(lambda: run(1), 201)
+            peer1 = cpu_median(lambda q=q, v=v, t0=t0: minimal_loop_rigid(q[0], v[0], t0, t0 + 1e7, 1, 1.2,
+                                                                          1.0, 0.02, 0.8), 201)
+            row("simulate, rigid, a 1-impact run: vs a minimal loop", peer1 * 1e6, new1 * 1e6, "us",
+                "<= 2x the peer (issue 20)")
 
 
 _USER_LEVEL = r"""
@@ -249,6 +259,12 @@ for N, n in ((0, 20000), (8, 5000), (64, 1000)):
     out[f"simulate, {N} modes (impacts/s)"] = n / cpu(lambda: run(n), 3)
     out[f"simulate, {N} modes, 1-impact run (us)"] = cpu(lambda: run(1), 101) * 1e6
     out[f"simulate, {N} modes, 100-impact run (us)"] = cpu(lambda: run(100), 51) * 1e6
+    if N == 0:  # the peer: a compiled minimal loop for the same run (benchmarks/_peers.py)
+        from _peers import minimal_loop_rigid
+
+        peer = lambda k: minimal_loop_rigid(q[0], v[0], o.phase, o.phase + 1e7, k, 1.2, 1.0, 0.02, 0.8)
+        out["peer: compiled minimal loop, rigid, 1-impact run (us)"] = cpu(lambda: peer(1), 101) * 1e6
+        out["peer: compiled minimal loop, rigid, 100-impact run (us)"] = cpu(lambda: peer(100), 51) * 1e6
 print(json.dumps(out))
 """
 
@@ -259,10 +275,11 @@ def against(src, rounds=2):
     from pathlib import Path
 
     here = str(Path(__file__).resolve().parents[1] / "src")
+    peers = str(Path(__file__).resolve().parent)  # _peers.py
     runs = {"baseline": [], "new": []}
     for _ in range(rounds):
         for name, path in (("baseline", src), ("new", here)):
-            env = dict(os.environ, PYTHONPATH=path)  # with the one-thread BLAS set above
+            env = dict(os.environ, PYTHONPATH=path + os.pathsep + peers)  # one-thread BLAS, as above
             out = subprocess.run([sys.executable, "-c", _USER_LEVEL], env=env, check=True,
                                  capture_output=True, text=True).stdout
             runs[name].append(json.loads(out.strip().splitlines()[-1]))

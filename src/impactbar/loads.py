@@ -431,10 +431,11 @@ class FourierLoad(Load):
             for dst, src in zip((cq, sq, cv, sv), folded, strict=True):
                 dst[flex] = src[:, 0]
 
-        def own(a, dtype=float):
+        def own(a):
             # contiguous and writable: a read-only view (the cached transfer functions) would be
-            # another type to numba, and so another compilation of every kernel that takes it
-            return np.require(a, dtype, ["C", "W"])
+            # another type to numba, and so another compilation of every kernel that takes it (a
+            # copy of these short rows costs less than np.require's checks)
+            return np.array(a, dtype=float, order="C")
 
         args = (float(t0), float(d), float(self.p0), self.kernel_view.ks,
                 own(hp.real), own(hp.imag), own(hv.real), own(hv.imag),

@@ -47,6 +47,8 @@ def check_real(
 
 def check_int(name: str, value, *, lo: int | None = None, hi: int | None = None) -> int:
     """Return ``value`` as an int, or raise ``ValueError`` naming ``name`` and its range."""
+    if type(value) is int and (lo is None or lo <= value) and (hi is None or value <= hi):
+        return value  # the common case, inside the range
     if isinstance(value, bool) or not isinstance(value, numbers.Integral | np.integer):
         rng = _range_text(lo, hi, False, False)
         raise ValueError(f"{name} must be an integer {rng}; got {value!r} ({type(value).__name__})")

@@ -3,7 +3,7 @@ the run stops at a consistent state and keeps what it computed (issue 24)."""
 
 from __future__ import annotations
 
-import signal
+import _signal  # signal.signal's own call, without its enum conversions (a short run's fixed cost)
 import threading
 
 __all__ = ["SimulationInterrupted"]
@@ -47,12 +47,12 @@ class _CtrlC:
     def __enter__(self):
         if threading.current_thread() is threading.main_thread():
             try:
-                self._old = signal.signal(signal.SIGINT, self._handler)
+                self._old = _signal.signal(_signal.SIGINT, self._handler)
             except ValueError:  # pragma: no cover - not the main interpreter
                 self._old = None
         return self
 
     def __exit__(self, *exc):
         if self._old is not None:
-            signal.signal(signal.SIGINT, self._old)
+            _signal.signal(_signal.SIGINT, self._old)
         return False

@@ -43,6 +43,7 @@ from ..loads import FourierLoad, Load
 from ..model import MAX_MODES, BarModel
 from ._interrupt import SimulationInterrupted as SimulationInterrupted
 from ._interrupt import _CtrlC
+from ._shortrun import SHORT_RUN_IMPACTS, entry_point, run_short
 from .switched import SwitchedTrajectory, rigid_piece, run_compiled, run_switched
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
@@ -340,6 +341,7 @@ class _Core:
         self.to_contact = np.ascontiguousarray((kappa[:, None] * ov).T)  # r = P q, (N, N+1)
         self.to_free = np.ascontiguousarray(2.0 * ov)  # q = P r, (N+1, N)
         self.kappa = kappa
+        self.free_args = (tuple(self.data), tuple(self.free.view), self.R, self.c)  # built once
 
     # ---- energies ----------------------------------------------------------------------------
     def energy(self, basis: int, q: np.ndarray, v: np.ndarray) -> float:
@@ -353,18 +355,18 @@ class _Core:
         return float(0.5 * np.sum(self.kappa * v * v))
 
     # ---- kernel calls ------------------------------------------------------------------------
-    def run_free(self, t, q, v, t_end, max_imp, out_q, out_v):
+    def run_free(self, t, q, v, t_end, max_imp, out_q, out_v, direct=False):
         """Free flight with impacts (the kernel's ``run_free``); the states after the impacts go
-        into the rows of ``out_q, out_v`` (shape (cap, N + 1)), at most ``cap`` of them."""
-        D, B = self.data, self.free
-        cap = out_q.shape[0]
-        out_t = np.empty(cap)
-        out_vel = np.empty(cap)
+        into the rows of ``out_q, out_v`` (shape (cap, N + 1)), at most ``cap`` of them. ``direct``: by
+        the kernel's entry point, untyped, once it has its one signature (C-contiguous float arrays)."""
+        out_t, out_vel = np.empty(out_q.shape[0]), np.empty(out_q.shape[0])
         fast = use_fast("simulate.impact_search")
         # a rigid run compiles no modal search, a flexible one no rigid search
         run, searches = (K.run_free_rigid, (fast, None)) if self.N == 0 else (K.run_free, (None, fast))
-        n, st, tn = run(tuple(D), tuple(B.view), self.R, self.c, (float(t), q, v), float(t_end),
-                        int(max_imp), CHATTER_TAIL, (out_t, out_vel, out_q, out_v), *searches)
+        if direct:  # (numba's typing of 11 arguments costs 2 us)
+            run = entry_point(run)
+        n, st, tn = run(*self.free_args, (float(t), q, v), float(t_end), int(max_imp), CHATTER_TAIL,
+                        (out_t, out_vel, out_q, out_v), *searches)
         return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
@@ -598,6 +600,10 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
     stops there (status ``"t_end"``, ``t_end`` the time reached) when ``stop`` has turned true."""
     law = core.model.law
     instant = law.instantaneous
+    traj = run_short(core, q, v, t0, t_end, max_imp, InitialState._trusted) if instant and \
+        max_imp <= SHORT_RUN_IMPACTS and progress is None else None
+    if traj is not None:  # one kernel call ended the run in flight, with no contact
+        return traj
     segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
     segs.add(t0, _FREE, q, v, "start")
     times: list = []  # blocks of the kernel's impacts (arrays), or the law's contact steps (floats)

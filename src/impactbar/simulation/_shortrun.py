@@ -1,0 +1,80 @@
+"""A short run's fixed cost (issue 20): the driver's path for a run under an instantaneous law that
+stops at ``max_impacts`` or ``t_end`` in flight, with no contact, in one call of the compiled
+kernel. It builds the run's log of pieces straight from the kernel's output (the start and one
+free flight per impact) instead of through the general driver's growing log, and gives the same
+result to the bit; any other run (chatter, a touch, more impacts than one block holds) is left to
+the general driver, which computes it from the start again."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._shared.status import RunStatus
+from ..dynamics import _kernel as K
+from .trajectory import _FREE, Trajectory, _Segments
+
+#: the most impacts a run may ask for (``max_impacts``) to take this path: a run that meets a
+#: contact is computed again by the general driver, so at most this many impacts are done twice
+SHORT_RUN_IMPACTS = 256
+
+# the pieces' kinds, shared read-only by every short run's log (views of the first n + 1)
+_BASIS = np.full(SHORT_RUN_IMPACTS + 1, _FREE, dtype=np.int8)  # all free flights
+_ENTRY = np.ones(SHORT_RUN_IMPACTS + 1, dtype=np.int8)  # 'impact' ...
+_ENTRY[0] = 0  # ... after the 'start'
+_BASIS.setflags(write=False)
+_ENTRY.setflags(write=False)
+
+_ENTRY_POINTS: dict = {}  # dispatcher -> the compiled entry point of its one signature
+
+
+def entry_point(dispatcher):
+    """The compiled entry point of a numba dispatcher that has exactly one signature (called
+    without typing its arguments: the caller passes that signature's types), else the dispatcher
+    itself (not compiled yet, or compiled for more than one signature, or numba's JIT disabled)."""
+    hit = _ENTRY_POINTS.get(dispatcher)
+    if hit is not None:
+        return hit
+    overloads = getattr(dispatcher, "overloads", {})
+    if len(overloads) != 1:
+        return dispatcher
+    (compiled,) = overloads.values()
+    _ENTRY_POINTS[dispatcher] = compiled.entry_point
+    return compiled.entry_point
+
+
+def run_short(core, q, v, t0, t_end, max_imp, state) -> Trajectory | None:
+    """The run from ``(t0, q, v)`` as :func:`~impactbar.simulate`'s general driver gives it, when the
+    kernel's one call ends it in flight (status ``END`` or ``MAXIMP``); None otherwise, with ``q,
+    v`` as they came. ``state`` makes the final state from two arrays (``InitialState._trusted``)."""
+    M = q.size
+    Q = np.empty((max_imp + 1, M))
+    V = np.empty((max_imp + 1, M))
+    Q[0] = q
+    V[0] = v
+    # (the kernel overwrites its start with the final state)
+    n, st, tn, ot, ov = core.run_free(t0, q, v, t_end, max_imp, Q[1:], V[1:], direct=True)
+    if st == K.END:
+        t, status = t_end, RunStatus.T_END
+    elif st == K.MAXIMP:
+        t, status = tn, RunStatus.MAX_IMPACTS
+    else:
+        q[:] = Q[0]
+        v[:] = V[0]
+        return None
+    ts = np.empty(n + 1)
+    ts[0] = t0
+    ts[1:] = ot
+    if t == ts[n]:  # the run ended on a piece's start (max_impacts)
+        qe, ve = Q[n].copy(), V[n].copy()
+    else:
+        qe, ve = core.propagate(_FREE, ts[n], Q[n], V[n], [t])
+        qe, ve = qe[:, 0], ve[:, 0]
+    segs = _Segments(M - 1, ts, _BASIS[:n + 1], _ENTRY[:n + 1], Q[:n + 1], V[:n + 1], {})
+    # the dataclass's fields set at once (its __init__ sets them one by one: a short run's cost)
+    traj = object.__new__(Trajectory)
+    traj.__dict__.update(model=core.model, load=core.load, t0=t0, t_end=t,
+                         impact_times=ot if 2 * n >= ot.base.size else ot.copy(),
+                         impact_velocities=ov if 2 * n >= ov.base.size else ov.copy(),
+                         contact_intervals=np.zeros((0, 2)), final_state=state(qe, ve), status=status,
+                         _core=core, _segments=segs, n_release_retries=0)
+    return traj
