@@ -237,15 +237,18 @@ def _project_free(a, b, npi, win, R, lo, hi, incoming, h, gl, dv, dse):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
+def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law, separations included (theory §4b),
-    under the load view ``load`` (:class:`~impactbar.dynamics.kernelview.LoadKernelView`).
+    under the load ``load_t``, the plain tuple of a
+    :class:`~impactbar.dynamics.kernelview.LoadKernelView` (numba dispatches plain tuples several
+    times faster than named tuples; no wrapper kernel: a wrapper compiles its callees' code again).
 
     Writes the post-contact modal state into ``qa, va`` and the contact intervals (``theta = s (t -
     t0)`` in ``[0, 2]``) into ``contact`` (shape ``(MAX_INTERVALS, 2)``) and returns their number;
     -1 (nothing to trust) when the piston arrives moving away from the rod, a root search fails or
     the intervals overflow: the caller then solves the window in Python.
     """
+    load = LoadKernelView(*load_t)
     kind, psup, breaks, levels = load.kind, load.psup, load.breaks, load.levels
     M = q.size
     N = M - 1
@@ -462,13 +465,6 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
         sign = -sign
     qa[0] = q0
     return nc
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
-    """:func:`_wave_contact` called from Python, with ``load`` as plain tuples
-    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
-    return _wave_contact(LoadKernelView(*load), s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact)
 
 
 @numba.njit(cache=CACHE, nogil=True)
