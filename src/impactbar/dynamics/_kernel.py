@@ -71,11 +71,13 @@ _MAX_STEPS = 2_000_000
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
+def find_crossing(load_t, B_t, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
     """First ``t`` in ``[anchor, t_lim]`` where ``h(t) >= 0`` (see the module docstring), in the
-    basis ``B`` (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``
-    (:class:`~impactbar.dynamics.kernelview.LoadKernelView`); ``work = (q, v, qp, vp, qpa, vpa)``,
-    arrays of the basis' size.
+    basis ``B_t`` (the plain tuple of a :class:`~impactbar.dynamics.kernelview.ModalBasisView`)
+    under ``load_t`` (that of a :class:`~impactbar.dynamics.kernelview.LoadKernelView`: numba
+    dispatches plain tuples several times faster than named tuples); ``work = (q, v, qp, vp, qpa,
+    vpa)``, arrays of the basis' size. Python and :func:`run_free` call it with the same types: one
+    compilation, no wrapper kernel (a wrapper compiles its callees' code again).
 
     A start with ``0 <= h <= htol`` and ``h' <= 0`` (the end just left the stop) counts as
     ``h = 0``. ``anchor_t[0]`` and ``qa, va`` hold the anchor (the start of the search); for a
@@ -86,6 +88,8 @@ def _find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
     -------
     status, t : int, float
     """
+    load = LoadKernelView(*load_t)
+    B = ModalBasisView(*B_t)
     q, v, qp, vp, qpa, vpa = work
     kind, p0, psup, breaks = load.kind, load.p0, load.psup, load.breaks
     w2, d = B.w2, B.d
@@ -176,14 +180,6 @@ def _find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
         p, dp, ddp = load_value(load, level, a)
         h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
     return FAIL, a
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def find_crossing(load, B, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
-    """:func:`_find_crossing` called from Python, with ``load`` and ``B`` as plain tuples
-    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
-    return _find_crossing(LoadKernelView(*load), ModalBasisView(*B), wts, alpha, anchor_t, qa, va,
-                          t_lim, htol, work)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -675,7 +671,7 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
                 # the state there by the reference flow (qpa, vpa hold the anchor's particular state)
                 advance(load, B, 0.0, anchor[0], anc, tc, stt)
         if not (fast1 or (modal and off)):
-            st, tc = _find_crossing(load, B, c, 0.0, anchor, qa, va, t_end, htol, work)
+            st, tc = find_crossing(load_t, B_t, c, 0.0, anchor, qa, va, t_end, htol, work)
         if st == NONE:
             return n, END, t_end
         if st == FAIL:
@@ -738,11 +734,18 @@ run_free = numba.njit(cache=CACHE, nogil=True)(_run_free)
 run_free_rigid = numba.njit(cache=CACHE, nogil=True)(_run_free)
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def _propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
+def _propagate(load_t, B_t, ta, qa, va, ts, out_q, out_v):
     """Exact states at the sorted times ``ts >= ta`` from ``(ta, qa, va)`` into ``out_q, out_v``
     (shape (M, T)); a piecewise-constant load is followed jump by jump, by piece index (no
-    rounding of a jump time into the wrong piece)."""
+    rounding of a jump time into the wrong piece). ``load_t`` and ``B_t``: a
+    :class:`~impactbar.dynamics.kernelview.LoadKernelView` and a
+    :class:`~impactbar.dynamics.kernelview.ModalBasisView`, or their plain tuples. Compiled twice
+    from this one source, as :func:`propagate_many` (called from Python with plain tuples: numba
+    dispatches them several times faster than named tuples) and ``_propagate_many`` (called from
+    compiled code with the views), each with one signature and no wrapper kernel (a wrapper
+    compiles its callees' code again)."""
+    load = LoadKernelView(*load_t)
+    B = ModalBasisView(*B_t)
     kind, breaks = load.kind, load.breaks
     w2 = B.w2
     M = w2.size
@@ -771,8 +774,7 @@ def _propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
             out_v[n, i] = v[n]
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def propagate_many(load, B, ta, qa, va, ts, out_q, out_v):
-    """:func:`_propagate_many` called from Python, with ``load`` and ``B`` as plain tuples
-    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
-    return _propagate_many(LoadKernelView(*load), ModalBasisView(*B), ta, qa, va, ts, out_q, out_v)
+#: :func:`_propagate` called from Python (``load`` and ``B`` as plain tuples)
+propagate_many = numba.njit(cache=CACHE, nogil=True)(_propagate)
+#: :func:`_propagate` called from compiled code (``load`` and ``B`` as the views)
+_propagate_many = numba.njit(cache=CACHE, nogil=True)(_propagate)

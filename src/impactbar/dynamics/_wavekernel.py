@@ -124,7 +124,7 @@ def _Acum(a, b, npi, win, acum1, th):
 def _f(mode, base, a, b, npi, win, acum1, x):
     """The root searches' functions: ``A(x-)`` (mode 0) or the gap ``base - Acum(x)`` (mode 1)."""
     if mode == 0:
-        return _A(a, b, npi, win, x, True)
+        return _A(a, b, npi, win, x, np.bool_(True))
     return base - _Acum(a, b, npi, win, acum1, x)
 
 
@@ -225,7 +225,7 @@ def _project_free(a, b, npi, win, R, lo, hi, incoming, h, gl, dv, dse):
                         dbe = 0.0
                     else:
                         dal = 0.0
-                        pv = _p(win, x, False)
+                        pv = _p(win, x, np.bool_(False))
                         dbe = (1.0 + R) * (_trig(a, b, npi, x, 1.0) + 2.0 * pv / s)
                     wc = 0.5 * (dal + dbe) * w
                     ws = 0.5 * (dbe - dal) * w
@@ -237,15 +237,18 @@ def _project_free(a, b, npi, win, R, lo, hi, incoming, h, gl, dv, dse):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
+def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law, separations included (theory §4b),
-    under the load view ``load`` (:class:`~impactbar.dynamics.kernelview.LoadKernelView`).
+    under the load ``load_t``, the plain tuple of a
+    :class:`~impactbar.dynamics.kernelview.LoadKernelView` (numba dispatches plain tuples several
+    times faster than named tuples; no wrapper kernel: a wrapper compiles its callees' code again).
 
     Writes the post-contact modal state into ``qa, va`` and the contact intervals (``theta = s (t -
     t0)`` in ``[0, 2]``) into ``contact`` (shape ``(MAX_INTERVALS, 2)``) and returns their number;
     -1 (nothing to trust) when the piston arrives moving away from the rod, a root search fails or
     the intervals overflow: the caller then solves the window in Python.
     """
+    load = LoadKernelView(*load_t)
     kind, psup, breaks, levels = load.kind, load.psup, load.breaks, load.levels
     M = q.size
     N = M - 1
@@ -295,7 +298,8 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
     else:
         lw[:] = 0.0
     win = (load, t0, s, jw, nj, lw, ew, cw)
-    p_end = _p(win, 0.0, False)  # the static correction
+    # (flags as np.bool_ / np.int64: a literal True, False, 0 or 1 compiles the callee once per value)
+    p_end = _p(win, 0.0, np.bool_(False))  # the static correction
     b[0] = -p_end / s
     for n in range(1, M):
         b[n] += 2.0 * p_end / (s * npi[n])
@@ -304,7 +308,7 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
         scale += abs(a[n]) + abs(b[n])
     tol = 1e-13 * scale
     acum1 = _trig_int(a, b, npi, 1.0, 1.0)
-    if _A(a, b, npi, win, 0.0, False) < -tol:
+    if _A(a, b, npi, win, 0.0, np.bool_(False)) < -tol:
         return -1
     # -- the scan grid: breaks at 1 and at 1 + the jumps of the first half
     hg = scan_step(N, rate)
@@ -342,10 +346,10 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
     Ag = np.empty(ng)
     Agl = np.empty(ng)
     for k in range(ng):
-        Ag[k] = _A(a, b, npi, win, grid[k], False)
+        Ag[k] = _A(a, b, npi, win, grid[k], np.bool_(False))
         Agl[k] = Ag[k]
         if isbreak[k]:
-            Agl[k] = _A(a, b, npi, win, grid[k], True)
+            Agl[k] = _A(a, b, npi, win, grid[k], np.bool_(True))
     # -- contact, separation, re-contact
     nc = 0
     th = 0.0
@@ -374,8 +378,8 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
             else:
                 lo = max(th, grid[k - 1])
                 th_sep = lo
-                if _A(a, b, npi, win, lo, False) > 0.0:
-                    th_sep, ok = _brent(0, 0.0, a, b, npi, win, acum1, lo, grid[k])
+                if _A(a, b, npi, win, lo, np.bool_(False)) > 0.0:
+                    th_sep, ok = _brent(np.int64(0), 0.0, a, b, npi, win, acum1, lo, grid[k])
                     if not ok:
                         return -1
             contact[nc, 0] = start
@@ -396,7 +400,7 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
                 x = 0.5 * (th + grid[k0])
                 found = False
                 for _i in range(40):
-                    if _f(1, base, a, b, npi, win, acum1, x) > 0.0:
+                    if _f(np.int64(1), base, a, b, npi, win, acum1, x) > 0.0:
                         found = True
                         break
                     x = 0.5 * (th + x)
@@ -410,14 +414,14 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
                     th = grid[k0]
                     continue
                 lo = x
-            ga = _f(1, base, a, b, npi, win, acum1, lo)
-            gb = _f(1, base, a, b, npi, win, acum1, grid[k])
+            ga = _f(np.int64(1), base, a, b, npi, win, acum1, lo)
+            gb = _f(np.int64(1), base, a, b, npi, win, acum1, grid[k])
             if ga <= 0.0:
                 th_re = lo
             elif gb > 0.0:
                 th_re = grid[k]
             else:
-                th_re, ok = _brent(1, base, a, b, npi, win, acum1, lo, grid[k])
+                th_re, ok = _brent(np.int64(1), base, a, b, npi, win, acum1, lo, grid[k])
                 if not ok:
                     return -1
             th = th_re
@@ -441,10 +445,10 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
             continue
         lo, hi = ga_, min(gb_, 1.0)
         if hi > lo:
-            _project_free(a, b, npi, win, R, 1.0 - hi, 1.0 - lo, True, h, gl, dv, dse)
+            _project_free(a, b, npi, win, R, 1.0 - hi, 1.0 - lo, np.bool_(True), h, gl, dv, dse)
         lo, hi = max(ga_, 1.0), gb_
         if hi > lo:
-            _project_free(a, b, npi, win, R, lo - 1.0, hi - 1.0, False, h, gl, dv, dse)
+            _project_free(a, b, npi, win, R, lo - 1.0, hi - 1.0, np.bool_(False), h, gl, dv, dse)
     for n in range(M):
         va[n] += dv[n]
         if n > 0:
@@ -461,13 +465,6 @@ def _wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
         sign = -sign
     qa[0] = q0
     return nc
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def wave_contact(load, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
-    """:func:`_wave_contact` called from Python, with ``load`` as plain tuples
-    (``tuple(view)``: numba dispatches them several times faster than named tuples)."""
-    return _wave_contact(LoadKernelView(*load), s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact)
 
 
 @numba.njit(cache=CACHE, nogil=True)
