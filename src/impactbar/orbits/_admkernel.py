@@ -232,15 +232,17 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
 
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
-def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
+def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, best, floor, prob, work, src):
     """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
-    pieces, down to a 64th of the widest."""
+    pieces, down to a 64th of the widest, dropping on the way the pieces where ``g`` stays below
+    ``best`` (a lower bound of the largest stationary value, raised by each level's samples as in
+    the first enclosure: such a piece cannot hold the largest one). Returns ``(lo, hi, ok, best)``."""
     width = 0.0
     for i in range(lo.size):
         width = max(width, hi[i] - lo[i])
     x = max(abs(a), abs(b), 1.0)
     if not width > 4.0 * (np.nextafter(x, np.inf) - x) * n0:
-        return lo.copy(), hi.copy(), True
+        return lo.copy(), hi.copy(), True, best
     half = 0.5 * width / n0
     mids = np.empty(lo.size * n0)
     m = 0
@@ -250,9 +252,8 @@ def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
             if mj < hi[i] + half:
                 mids[m] = mj
                 m += 1
-    limits = (width / 64.0, float(max_intervals), atol, 0.0, 0.0)  # (floats: one type of _enclose)
-    lo, hi, good, _ = _enclose(phase, a, b, mids[:m].copy(), half, limits, -math.inf, prob, work, src)
-    return lo, hi, good
+    limits = (width / 64.0, float(max_intervals), atol, 1.0, floor)  # (floats: one type of _enclose)
+    return _enclose(phase, a, b, mids[:m].copy(), half, limits, best, prob, work, src)
 
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
@@ -510,7 +511,8 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src_
             if retry[i]:
                 rlo[j], rhi[j], rgm[j], rup[j] = lo[i], hi[i], gm[i], upper[i]
                 j += 1
-        lo, hi, good = _enclose_in(phase, 0.0, horizon, rlo, rhi, 8, 20_000, atol, prob, work, src)
+        lo, hi, good, best = _enclose_in(phase, 0.0, horizon, rlo, rhi, 8, 20_000, atol, best, floor, prob,
+                                         work, src)
         if not good:  # a zero of high order: the enclosure no longer shrinks
             top = np.max(rup)
             best = max(best, top)
