@@ -131,7 +131,13 @@ def _joint_upper(phase, mid, half, prob, work, src):
     and ``|g'| >= |g_K'(mid)| - L_K h - sum_{n > K} |c_n| E_n``. ``U`` is the least bound over
     ``K`` and ``X`` the largest margin (``K = N``: the tests from ``L`` alone). The high modes that
     ring after an impact make ``L`` large, but move the end little and slowly: these bounds prune
-    and exclude the intervals that the ones from ``L`` keep."""
+    and exclude the intervals that the ones from ``L`` keep.
+
+    ``X`` also holds the second-order margin ``|g'(mid)| - |g''(mid)| h - L3 h^2 / 2`` (``L3`` the
+    bound of ``|g'''|`` of :func:`_single`, Taylor's theorem about ``mid``) where the load is smooth
+    on the interval: once ``h`` is below the period of the highest mode, it excludes the intervals
+    where the end rests nearly still (the plateaus that a contact window of the wave law leaves,
+    where ``|g'|`` stays below ``L h`` down to tiny ``h``)."""
     c, absc, w2, d, psup = prob
     q, v = work[0], work[1]
     ta = phase + mid
@@ -156,24 +162,33 @@ def _joint_upper(phase, mid, half, prob, work, src):
         else:
             tail = math.inf  # a mode without stiffness is never in the tail
             vtail = math.inf
+    smooth = src[0].kind == 0 or delta == 0.0  # g'' continuous on the interval
+    slope = src[0].p1 if src[0].kind == 0 else 0.0
     gK = 0.0
     g1 = 0.0
+    g2 = 0.0
     L = 0.0
+    L3 = 0.0
     best = math.inf
     margin = -math.inf
     for n in range(M):
         vn = v[n, 0]
         gK += c[n] * q[n, 0]
         g1 += c[n] * vn
+        g2 += c[n] * (center - d * vn - w2[n] * q[n, 0])
         if w2[n] > 0.0:
             wc = math.sqrt(w2[n])
             r = wc * q[n, 0] - center / wc
             Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
             L += absc[n] * (delta + (d + wc) * Eb)
+            L3 += absc[n] * (slope + d * (delta + (d + wc) * Eb) + w2[n] * Eb)
         else:
             L += absc[n] * (psup + d * ((abs(vn) + psup * half) * grow))
+            L3 += absc[n] * (slope + d * (psup + d * ((abs(vn) + psup * half) * grow)))
         best = min(best, gK + (abs(g1) + L * half) * half + above[n])
         margin = max(margin, abs(g1) - (L * half + vabove[n]) * (1.0 + 1e-9))
+    if smooth:
+        margin = max(margin, abs(g1) - (abs(g2) * half + 0.5 * L3 * half * half) * (1.0 + 1e-9))
     return gK, g1, L, best, margin
 
 
