@@ -42,7 +42,8 @@ def test_closed_form_moment_of_a_constant_drive_is_exact():
     n = np.arange(1, 65)
     np.testing.assert_allclose(h[1:], 0.0, atol=1e-15)
     assert h[0] == pytest.approx(0.5, abs=1e-15)  # int_1^2 P / s
-    np.testing.assert_allclose(g[1:], (1.0 - (-1.0) ** n) / (4.0 * (math.pi * n) ** 2), rtol=1e-12, atol=1e-17)
+    expected = (1.0 - (-1.0) ** n) / (4.0 * (math.pi * n) ** 2)
+    np.testing.assert_allclose(g[1:], expected, rtol=1e-12, atol=1e-17)
 
 
 @pytest.mark.parametrize("n", [1, 16, 17, 100, 300])
