@@ -247,11 +247,13 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
 
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
-def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, best, floor, prob, work, src):
+def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src):
     """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
     pieces, down to a 64th of the widest, dropping on the way the pieces where ``g`` stays below
     ``best`` (a lower bound of the largest stationary value, raised by each level's samples as in
-    the first enclosure: such a piece cannot hold the largest one). Returns ``(lo, hi, ok, best)``."""
+    the first enclosure: such a piece cannot hold the largest one). ``bounds = (max_intervals,
+    atol, floor)``. Returns ``(lo, hi, ok, best)``."""
+    max_intervals, atol, floor = bounds
     width = 0.0
     for i in range(lo.size):
         width = max(width, hi[i] - lo[i])
@@ -526,8 +528,8 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src_
             if retry[i]:
                 rlo[j], rhi[j], rgm[j], rup[j] = lo[i], hi[i], gm[i], upper[i]
                 j += 1
-        lo, hi, good, best = _enclose_in(phase, 0.0, horizon, rlo, rhi, 8, 20_000, atol, best, floor, prob,
-                                         work, src)
+        lo, hi, good, best = _enclose_in(phase, 0.0, horizon, rlo, rhi, 8, (20_000.0, atol, floor), best,
+                                         prob, work, src)
         if not good:  # a zero of high order: the enclosure no longer shrinks
             top = np.max(rup)
             best = max(best, top)
