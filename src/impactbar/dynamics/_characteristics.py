@@ -311,6 +311,32 @@ class _Contact:
         u = th - 1.0
         return self._acum1 + self.piston.int1(u, -1.0) + 2.0 * self.p.integral1(u) / self.s
 
+    def _A_uniform(self, grid, m: int):
+        """:meth:`A` on the scan grid of a window whose drive has no jump: ``theta = j/m`` on
+        ``[0, 1]`` and ``1 + j/m`` on ``[1, 2]``, where the modal sums at ``x = k/m`` are one
+        type-I discrete cosine and sine transform each (``O(m log m)``, the dense sums' values to
+        rounding). ``None`` where the grid is not that one (or ``m <= N``: the sums would alias)."""
+        if grid.size != 2 * m + 1 or m <= self.N:
+            return None
+        from scipy.fft import dct, dst
+
+        pst = self.piston
+        z = np.zeros(m + 1)
+        z[:self.N + 1] = pst.a
+        cos_sum = 0.5 * (dct(z, type=1) + z[0])  # sum_n a_n cos(n pi k/m), k = 0..m
+        sin_sum = np.zeros(m + 1)  # sum_{n>=1} b_n sin(n pi k/m); 0 at both ends
+        if m > 1:
+            y = np.zeros(m - 1)
+            y[:self.N] = pst.b[1:]
+            sin_sum[1:m] = 0.5 * dst(y, type=1)
+        out = np.empty(2 * m + 1)
+        x = 1.0 - grid[:m]  # alpha0(1 - theta) at theta = j/m: x = k/m, k = m - j
+        k = np.arange(m, 0, -1)
+        out[:m] = cos_sum[k] - (sin_sum[k] + pst.b[0] * (1.0 - x))
+        u = grid[m:] - 1.0  # beta0(theta - 1) plus the drive
+        out[m:] = cos_sum + sin_sum + pst.b[0] * (1.0 - u) + 2.0 * self.p(u) / self.s
+        return out
+
     # -- contact and separation --------------------------------------------------------------------
     def solve(self):
         tol = 1e-13 * self.scale
@@ -321,7 +347,9 @@ class _Contact:
         edges = np.concatenate(([0.0], self.breaks, [2.0]))
         grid = np.unique(np.concatenate([np.linspace(a, b, max(2, math.ceil((b - a) / hg) + 1))
                                          for a, b in zip(edges[:-1], edges[1:], strict=True)]))
-        Ag = self.A(grid)
+        Ag = self._A_uniform(grid, math.ceil(1.0 / hg)) if self.breaks.size == 1 else None
+        if Ag is None:
+            Ag = self.A(grid)
         Agl = Ag.copy()  # left limits: they differ at the breaks only
         at = np.searchsorted(grid, self.breaks)
         Agl[at] = self.A(grid[at], left=True)

@@ -72,7 +72,10 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     wl = _WindowLoad(load, s, t0)
     npi = math.pi * np.arange(n_modes + 1)
     view = getattr(load, "kernel_view", None)
-    if view is not None:  # the compiled quadrature (the same panels)
+    exact = _exact_moments(load, wl, npi) if n_modes >= _CLOSED_FROM else None
+    if exact is not None:  # closed forms, O(N K): the same moments to rounding
+        (ca, cb), (sa, sb) = exact
+    elif view is not None:  # the compiled quadrature (the same panels)
         mc, ms = np.zeros((2, n_modes + 1)), np.zeros((2, n_modes + 1))
         KW.window_moments(tuple(view), s, wl.rate, t0, np.ascontiguousarray(wl.jumps), _GL_X, _GL_W, mc, ms)
         (ca, cb), (sa, sb) = mc, ms
@@ -99,6 +102,55 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     dg = h.copy()
     dg[0] = 0.0
     return g, h, dg, dh
+
+
+#: From this many modes on, :func:`window_drive` takes the moments in closed form (below it the
+#: compiled quadrature is the faster one)
+_CLOSED_FROM = 48
+
+
+def _unit_moment(w):
+    """``int_0^1 e^{i w theta} dtheta = sin(w)/w + i 2 sin^2(w/2)/w`` (1 at ``w = 0``), without the
+    cancellation of ``(e^{i w} - 1)/(i w)`` at small ``w``."""
+    w = np.asarray(w, dtype=float)
+    half = np.sinc(w / (2.0 * math.pi))  # sin(w/2) / (w/2)
+    return np.sinc(w / math.pi) + 0.5j * w * half * half
+
+
+def _exact_moments(load, wl, npi):
+    """The moments ``I^c_n, I^s_n`` of :func:`window_drive` over ``[0, 1]`` and ``[1, 2]`` in closed
+    form, as ``(cos (2, M), sin (2, M))``, for a load of finitely many harmonics (``O(N K)``) or a
+    piecewise-constant one (``O(N)`` per piece); ``None`` for another load (or a subclass that
+    evaluates itself otherwise), which the quadrature serves. ``int_lo^hi e^{i w theta} =
+    e^{i w lo} (hi - lo) E(w (hi - lo))`` with ``E`` of :func:`_unit_moment`."""
+    from ..loads import FourierLoad, PiecewiseConstantLoad
+
+    kind = type(load)
+    out = np.zeros((2, npi.size), dtype=complex)
+    if isinstance(load, FourierLoad) and kind.__call__ is FourierLoad.__call__:
+        # P(theta) = p0 + Re sum a_k e^{i kappa_k theta}, a_k = p_k e^{i k t0}, kappa_k = k / s
+        k = np.asarray(load.orders, dtype=float)
+        a = load.amplitudes * np.exp(1j * k * wl.t0)
+        kappa = k / wl.s
+        wp = npi[:, None] + kappa[None, :]
+        wm = npi[:, None] - kappa[None, :]
+        ep, em, e0 = a[None, :] * _unit_moment(wp), np.conj(a)[None, :] * _unit_moment(wm), _unit_moment(npi)
+        for row, lo in enumerate((0.0, 1.0)):
+            out[row] = load.p0 * np.exp(1j * npi * lo) * e0
+            if k.size:
+                out[row] += 0.5 * (ep * np.exp(1j * wp * lo) + em * np.exp(1j * wm * lo)).sum(axis=1)
+        return out.real, out.imag
+    if isinstance(load, PiecewiseConstantLoad) and kind.__call__ is PiecewiseConstantLoad.__call__:
+        levels, _, edges = wl._pieces
+        th = wl.s * edges  # the pieces in theta, [0, 2] cut at the load's jumps
+        th[0], th[-1] = 0.0, 2.0
+        for row, (lo, hi) in enumerate(((0.0, 1.0), (1.0, 2.0))):
+            for j in range(levels.size):
+                a, b = max(th[j], lo), min(th[j + 1], hi)
+                if b > a:
+                    out[row] += levels[j] * (b - a) * np.exp(1j * npi * a) * _unit_moment(npi * (b - a))
+        return out.real, out.imag
+    return None
 
 
 class WaveImpact:

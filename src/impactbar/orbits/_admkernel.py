@@ -131,7 +131,13 @@ def _joint_upper(phase, mid, half, prob, work, src):
     and ``|g'| >= |g_K'(mid)| - L_K h - sum_{n > K} |c_n| E_n``. ``U`` is the least bound over
     ``K`` and ``X`` the largest margin (``K = N``: the tests from ``L`` alone). The high modes that
     ring after an impact make ``L`` large, but move the end little and slowly: these bounds prune
-    and exclude the intervals that the ones from ``L`` keep."""
+    and exclude the intervals that the ones from ``L`` keep.
+
+    ``X`` also holds the second-order margin ``|g'(mid)| - |g''(mid)| h - L3 h^2 / 2`` (``L3`` the
+    bound of ``|g'''|`` of :func:`_single`, Taylor's theorem about ``mid``) where the load is smooth
+    on the interval: once ``h`` is below the period of the highest mode, it excludes the intervals
+    where the end rests nearly still (the plateaus that a contact window of the wave law leaves,
+    where ``|g'|`` stays below ``L h`` down to tiny ``h``)."""
     c, absc, w2, d, psup = prob
     q, v = work[0], work[1]
     ta = phase + mid
@@ -156,24 +162,33 @@ def _joint_upper(phase, mid, half, prob, work, src):
         else:
             tail = math.inf  # a mode without stiffness is never in the tail
             vtail = math.inf
+    smooth = src[0].kind == 0 or delta == 0.0  # g'' continuous on the interval
+    slope = src[0].p1 if src[0].kind == 0 else 0.0
     gK = 0.0
     g1 = 0.0
+    g2 = 0.0
     L = 0.0
+    L3 = 0.0
     best = math.inf
     margin = -math.inf
     for n in range(M):
         vn = v[n, 0]
         gK += c[n] * q[n, 0]
         g1 += c[n] * vn
+        g2 += c[n] * (center - d * vn - w2[n] * q[n, 0])
         if w2[n] > 0.0:
             wc = math.sqrt(w2[n])
             r = wc * q[n, 0] - center / wc
             Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
             L += absc[n] * (delta + (d + wc) * Eb)
+            L3 += absc[n] * (slope + d * (delta + (d + wc) * Eb) + w2[n] * Eb)
         else:
             L += absc[n] * (psup + d * ((abs(vn) + psup * half) * grow))
+            L3 += absc[n] * (slope + d * (psup + d * ((abs(vn) + psup * half) * grow)))
         best = min(best, gK + (abs(g1) + L * half) * half + above[n])
         margin = max(margin, abs(g1) - (L * half + vabove[n]) * (1.0 + 1e-9))
+    if smooth:
+        margin = max(margin, abs(g1) - (abs(g2) * half + 0.5 * L3 * half * half) * (1.0 + 1e-9))
     return gK, g1, L, best, margin
 
 
@@ -232,15 +247,19 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
 
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
-def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
+def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src):
     """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
-    pieces, down to a 64th of the widest."""
+    pieces, down to a 64th of the widest, dropping on the way the pieces where ``g`` stays below
+    ``best`` (a lower bound of the largest stationary value, raised by each level's samples as in
+    the first enclosure: such a piece cannot hold the largest one). ``bounds = (max_intervals,
+    atol, floor)``. Returns ``(lo, hi, ok, best)``."""
+    max_intervals, atol, floor = bounds
     width = 0.0
     for i in range(lo.size):
         width = max(width, hi[i] - lo[i])
     x = max(abs(a), abs(b), 1.0)
     if not width > 4.0 * (np.nextafter(x, np.inf) - x) * n0:
-        return lo.copy(), hi.copy(), True
+        return lo.copy(), hi.copy(), True, best
     half = 0.5 * width / n0
     mids = np.empty(lo.size * n0)
     m = 0
@@ -250,9 +269,8 @@ def _enclose_in(phase, a, b, lo, hi, n0, max_intervals, atol, prob, work, src):
             if mj < hi[i] + half:
                 mids[m] = mj
                 m += 1
-    limits = (width / 64.0, float(max_intervals), atol, 0.0, 0.0)  # (floats: one type of _enclose)
-    lo, hi, good, _ = _enclose(phase, a, b, mids[:m].copy(), half, limits, -math.inf, prob, work, src)
-    return lo, hi, good
+    limits = (width / 64.0, float(max_intervals), atol, 1.0, floor)  # (floats: one type of _enclose)
+    return _enclose(phase, a, b, mids[:m].copy(), half, limits, best, prob, work, src)
 
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
@@ -510,7 +528,8 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src_
             if retry[i]:
                 rlo[j], rhi[j], rgm[j], rup[j] = lo[i], hi[i], gm[i], upper[i]
                 j += 1
-        lo, hi, good = _enclose_in(phase, 0.0, horizon, rlo, rhi, 8, 20_000, atol, prob, work, src)
+        lo, hi, good, best = _enclose_in(phase, 0.0, horizon, rlo, rhi, 8, (20_000.0, atol, floor), best,
+                                         prob, work, src)
         if not good:  # a zero of high order: the enclosure no longer shrinks
             top = np.max(rup)
             best = max(best, top)

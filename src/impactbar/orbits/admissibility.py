@@ -173,12 +173,18 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
     floor = _SAMPLE_FLOOR if at_rest else 0.0
     last["best"] = -math.inf
 
-    def prune(mids, half, g1, L2):
-        """Branch and bound already in the enclosure: drop the intervals where ``g`` stays below a
-        lower bound of the largest stationary value (from this level's samples)."""
+    def prune_below(mids, half, g1, L2, best):
+        """Branch and bound in an enclosure: ``(keep, best)``, the intervals where ``g`` may reach
+        ``best`` (a lower bound of the largest stationary value, first raised by this level's
+        samples) and that bound."""
         g = last["g"]
-        last["best"] = max(last["best"], _sample_bound(mids, g, g1, atol, floor))
-        return g + (np.abs(g1) + L2 * half) * half >= last["best"]
+        best = max(best, _sample_bound(mids, g, g1, atol, floor))
+        return g + (np.abs(g1) + L2 * half) * half >= best, best
+
+    def prune(mids, half, g1, L2):
+        """Branch and bound already in the first enclosure (its lower bound kept in ``last``)."""
+        keep, last["best"] = prune_below(mids, half, g1, L2, last["best"])
+        return keep
 
     slope = _load_slope(load)
 
@@ -204,7 +210,7 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
     # the stationary points that can carry the largest value are refined to full precision
     values, err_b = _stationary_values(states, gprime_and_bound, load, phase, c, w2, d, clusters,
                                        atol=atol, horizon=horizon, floor=floor, best=last["best"],
-                                       single=single_zero)
+                                       single=single_zero, prune=prune_below)
     return max(values, default=-math.inf), err_b
 
 
@@ -282,7 +288,7 @@ def _sample_bound(mid, gm, g1, atol, floor):
 
 
 def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8, atol=0.0,
-                       horizon=TWO_PI, floor=0.0, best=-math.inf, single=None):
+                       horizon=TWO_PI, floor=0.0, best=-math.inf, single=None, prune=None):
     """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
 
     Every narrow interval that may hold a zero of ``g'`` has an upper bound of ``g`` on it,
@@ -300,6 +306,11 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
     of the enclosure, :func:`_sample_bound`); the midpoint samples of ``intervals`` raise it.
     ``single(t, lo, hi)``, if given, says where ``t`` is certainly the only zero of ``g'`` in
     ``[lo, hi]`` (``g''`` keeps its sign there): such an interval is not searched again.
+    ``prune(mids, half, g'(mids), L, best) -> (keep, best)``, if given, is a branch and bound for
+    the enclosures (``keep`` the intervals where ``g`` may reach ``best``, which the level's samples
+    may raise): the intervals searched again are split with it, so that the pieces where ``g``
+    stays below the best value found are dropped as they are split (the ringing that a contact
+    window leaves makes many pieces hold a zero of ``g'``), not only once they are narrow.
 
     Returns
     -------
@@ -371,10 +382,19 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
         if rest.size == 0:
             break
         width = float(np.max(rest[:, 1] - rest[:, 0]))
+        level = None
+        if prune is not None:
+            found = [best]
+
+            def level(mids, half, g1, L2, found=found):
+                keep, found[0] = prune(mids, half, g1, L2, found[0])
+                return keep
         try:
             cur = np.array(enclose_zeros(None, None, 0.0, horizon, n0=8, min_width=width / 64.0,
                                          joint=bound, intervals=rest, merge=False,
-                                         max_intervals=20_000, atol=atol)).reshape(-1, 2)
+                                         max_intervals=20_000, atol=atol, prune=level)).reshape(-1, 2)
+            if prune is not None:
+                best = found[0]
         except RuntimeError:  # a zero of high order: the enclosure no longer shrinks
             lower = 2.0 * gm - upper  # gm - slack
             values.append(float(np.max(upper)))  # conservative: never below the true value

@@ -1,0 +1,76 @@
+"""The wave law's window at many modes (issue 24): the drive's moments in closed form against the
+compiled Gauss-Legendre quadrature they replace from 48 modes on, the contact scan by type-I
+DCT/DST against the dense modal sums, and the admissibility search's plateau exclusion (compiled)
+against the numpy search at 128 modes."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, periodic_orbits
+from impactbar.dynamics import _windowkernel as KW
+from impactbar.dynamics import impact
+from impactbar.dynamics._characteristics import _Contact
+from impactbar.dynamics.implementations import use_reference
+
+LOADS = [CosineLoad(0.6, 1.0), FourierLoad(0.5, [1.0, 0.0, 0.3j]), SquareWaveLoad(1.0, 1.4),
+         SquareWaveLoad(0.7, 1.9)]
+
+
+@pytest.mark.parametrize("load", LOADS, ids=lambda x: type(x).__name__)
+@pytest.mark.parametrize("s", [0.35, 3.0, 10.0])
+def test_closed_form_moments_match_the_quadrature(monkeypatch, load, s):
+    for t0 in (0.1, 2.5, 6.2):
+        for n in (48, 200):
+            fast = impact.window_drive(s, 0.4, n, load, t0, derivative=True)
+            with monkeypatch.context() as mp:
+                mp.setattr(impact, "_exact_moments", lambda *a: None)
+                ref = impact.window_drive(s, 0.4, n, load, t0, derivative=True)
+            scale = max(float(np.max(np.abs(ref[1]))), 1.0)
+            for x, y in zip(fast, ref, strict=True):
+                # rounding: the rates carry n pi times the moments' rounding
+                np.testing.assert_allclose(x, y, rtol=0.0, atol=5e-14 * scale * n)
+
+
+def test_closed_form_moment_of_a_constant_drive_is_exact():
+    # a level held over the whole window: int_1^2 cos(n pi theta) = 0, int_1^2 sin = ((-1)^n - 1)/(n pi),
+    # so h_n = 0 and g_n = (1 - (-1)^n) / (s^2 (n pi)^2) (R = 0, s = 2)
+    g, h = impact.window_drive(2.0, 0.0, 64, SquareWaveLoad(1.0, 1.4), 0.1)
+    n = np.arange(1, 65)
+    np.testing.assert_allclose(h[1:], 0.0, atol=1e-15)
+    assert h[0] == pytest.approx(0.5, abs=1e-15)  # int_1^2 P / s
+    expected = (1.0 - (-1.0) ** n) / (4.0 * (math.pi * n) ** 2)
+    np.testing.assert_allclose(g[1:], expected, rtol=1e-12, atol=1e-17)
+
+
+@pytest.mark.parametrize("n", [1, 16, 17, 100, 300])
+def test_dct_scan_matches_the_dense_sums(n):
+    rng = np.random.default_rng(n)
+    for load in LOADS[:2]:
+        for s in (0.4, 3.0, 10.0):
+            q = rng.normal(size=n + 1) / (1.0 + np.arange(n + 1))
+            v = rng.normal(size=n + 1) / (1.0 + np.arange(n + 1))
+            c = _Contact(s, 0.5, q, v, load, 1.3)
+            hg = KW.scan_step(c.N, float(c.p.rate))
+            grid = np.unique(np.concatenate([np.linspace(0.0, 1.0, math.ceil(1.0 / hg) + 1),
+                                             np.linspace(1.0, 2.0, math.ceil(1.0 / hg) + 1)]))
+            fast = c._A_uniform(grid, math.ceil(1.0 / hg))
+            assert fast is not None
+            np.testing.assert_allclose(fast, c.A(grid), rtol=0.0, atol=1e-13 * c.scale)
+
+
+@pytest.mark.parametrize("load", [CosineLoad(0.6, 1.0), CosineLoad(0.3, 1.0, 2)], ids=["k1", "k2"])
+def test_wave_law_many_modes_same_clearance_as_the_numpy_search(load):
+    # s = 3, R = 0.5: the second orbit's flight rests on a plateau after the window, where the
+    # end's velocity stays below L h down to tiny intervals (the second-order margin excludes them)
+    model = BarModel(3.0, 0.0, 0.5, 128, impact="wave")
+    fast = periodic_orbits(model, load)
+    with use_reference("admissibility.search"):
+        ref = periodic_orbits(model, load)
+    assert len(fast) == len(ref) > 0
+    for o, g in zip(fast, ref, strict=True):
+        assert o.admissibility == g.admissibility
+        assert o.clearance == pytest.approx(g.clearance, rel=1e-12, abs=1e-12)
