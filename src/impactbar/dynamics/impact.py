@@ -30,6 +30,7 @@ import numpy as np
 
 from . import _windowkernel as KW
 from ._characteristics import _GL_W, _GL_X, _Contact, _panels, _WindowLoad
+from .kernelview import FOURIER, PIECEWISE
 
 __all__ = ["WaveImpact", "wave_impact", "window_drive"]
 
@@ -72,7 +73,7 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     wl = _WindowLoad(load, s, t0)
     npi = math.pi * np.arange(n_modes + 1)
     view = getattr(load, "kernel_view", None)
-    exact = _exact_moments(load, wl, npi) if n_modes >= _CLOSED_FROM else None
+    exact = _exact_moments(view, wl, npi) if n_modes >= _CLOSED_FROM else None
     if exact is not None:  # closed forms, O(N K): the same moments to rounding
         (ca, cb), (sa, sb) = exact
     elif view is not None:  # the compiled quadrature (the same panels)
@@ -117,30 +118,30 @@ def _unit_moment(w):
     return np.sinc(w / math.pi) + 0.5j * w * half * half
 
 
-def _exact_moments(load, wl, npi):
+def _exact_moments(view, wl, npi):
     """The moments ``I^c_n, I^s_n`` of :func:`window_drive` over ``[0, 1]`` and ``[1, 2]`` in closed
-    form, as ``(cos (2, M), sin (2, M))``, for a load of finitely many harmonics (``O(N K)``) or a
-    piecewise-constant one (``O(N)`` per piece); ``None`` for another load (or a subclass that
-    evaluates itself otherwise), which the quadrature serves. ``int_lo^hi e^{i w theta} =
-    e^{i w lo} (hi - lo) E(w (hi - lo))`` with ``E`` of :func:`_unit_moment`."""
-    from ..loads import FourierLoad, PiecewiseConstantLoad
-
-    kind = type(load)
+    form, as ``(cos (2, M), sin (2, M))``, for a load whose kernel view (``view``, the
+    :class:`~impactbar.dynamics.kernelview.LoadKernelView` the compiled quadrature would read) holds
+    finitely many harmonics (``O(N K)``) or pieces (``O(N)`` per piece); ``None`` without a view,
+    which the numpy quadrature serves. ``int_lo^hi e^{i w theta} = e^{i w lo} (hi - lo) E(w (hi -
+    lo))`` with ``E`` of :func:`_unit_moment`."""
+    if view is None:
+        return None
     out = np.zeros((2, npi.size), dtype=complex)
-    if isinstance(load, FourierLoad) and kind.__call__ is FourierLoad.__call__:
+    if view.kind == FOURIER:
         # P(theta) = p0 + Re sum a_k e^{i kappa_k theta}, a_k = p_k e^{i k t0}, kappa_k = k / s
-        k = np.asarray(load.orders, dtype=float)
-        a = load.amplitudes * np.exp(1j * k * wl.t0)
+        k = np.asarray(view.ks, dtype=float)
+        a = (view.pr + 1j * view.pim) * np.exp(1j * k * wl.t0)
         kappa = k / wl.s
         wp = npi[:, None] + kappa[None, :]
         wm = npi[:, None] - kappa[None, :]
         ep, em, e0 = a[None, :] * _unit_moment(wp), np.conj(a)[None, :] * _unit_moment(wm), _unit_moment(npi)
         for row, lo in enumerate((0.0, 1.0)):
-            out[row] = load.p0 * np.exp(1j * npi * lo) * e0
+            out[row] = view.p0 * np.exp(1j * npi * lo) * e0
             if k.size:
                 out[row] += 0.5 * (ep * np.exp(1j * wp * lo) + em * np.exp(1j * wm * lo)).sum(axis=1)
         return out.real, out.imag
-    if isinstance(load, PiecewiseConstantLoad) and kind.__call__ is PiecewiseConstantLoad.__call__:
+    if view.kind == PIECEWISE and wl._pieces is not None:
         levels, _, edges = wl._pieces
         th = wl.s * edges  # the pieces in theta, [0, 2] cut at the load's jumps
         th[0], th[-1] = 0.0, 2.0
