@@ -4,6 +4,8 @@ of the rigid piston's return map of arrival velocities (elementary kinematics, n
 as the simulator's fixed point; the one-impact orbit traversed twice."""
 
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -104,6 +106,11 @@ def test_branch_switching_starts_the_period_two_branch_at_the_doubling(doubled):
     assert first.multipliers[0] == pytest.approx(pd.multiplier.real ** 2, abs=1e-6)  # (-1)^2
     gaps = [abs(o.impact_velocities[0] - o.impact_velocities[1]) for o in branch.orbits[1:]]
     assert np.all(np.diff(gaps) > 0)
+    # the branch loses admissibility where theory §10 says (quoted to 4 decimals)
+    theory = re.sub(r"\s+", " ", (Path(__file__).resolve().parents[2] / "docs" / "theory.md").read_text())
+    quoted = re.search(r"loses admissibility at \$\\tau \\approx ([0-9.]+)\$", theory).group(1)
+    assert branch.events[-1].kind == "admissibility"
+    assert abs(float(quoted) - branch.events[-1].value) <= 0.5e-4
     # subcritical: the period-2 orbits lie before the doubling (delay below it) and are unstable
     assert np.all(branch.values[1:] < pd.value)
     assert all(o.multipliers[0] > 1.0 for o in branch.orbits[1:])
