@@ -138,3 +138,18 @@ def test_multi_impact_needs_a_guess_of_the_right_size():
         find_orbit(MODEL, drive, impacts=2)
     with pytest.raises(ValueError, match="guess must hold 2 states"):
         find_orbit(MODEL, drive, impacts=2, guess=(np.zeros((3, 2)), [1.0] * 3, [1.0] * 3))
+
+
+def test_a_simulated_run_as_the_guess():
+    """The last valve cycles of a rigid run started off the orbit: Newton from them finds the
+    one-impact orbit (and, asked for two impacts, that orbit traversed twice)."""
+    drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=0.3, delay=1.0)
+    o = find_orbit(MODEL, drive)
+    run = simulate(MODEL, drive, InitialState.rigid(-0.2, 0.0), 1e4, max_impacts=30)
+    assert abs(run.impact_velocities[-1] - o.impact_velocity) > 1e-9  # not yet on it
+    for m in (1, 2):
+        om = find_orbit(MODEL, drive, impacts=m, guess=run)
+        np.testing.assert_allclose(om.impact_velocities, o.impact_velocity, rtol=1e-12)
+        assert om.period == pytest.approx(m * o.period, rel=1e-12)
+    with pytest.raises(ValueError, match="at least 31"):
+        find_orbit(MODEL, drive, impacts=30, guess=run)
