@@ -37,7 +37,7 @@ __all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_at"]
 
 @dataclass(frozen=True)
 class SwitchedOrbit:
-    """A periodic motion with one impact per period under a position-switched drive (theory §10).
+    """A periodic motion with ``m`` impacts per period under a position-switched drive (theory §10).
 
     Attributes
     ----------
@@ -45,13 +45,15 @@ class SwitchedOrbit:
     drive : PositionSwitchedDrive
     period : float
         Period ``T`` (the model's time unit, eq. 2).
-    durations : numpy.ndarray, shape (4,)
-        The four flights of the period: stroke ``tau``, return ``h1`` (to the switch crossing),
-        return ``tau``, stroke ``h3`` (to the impact).
+    durations : numpy.ndarray, shape (4 m,)
+        The four flights between consecutive impacts, for each impact in turn: stroke ``tau``,
+        return ``h1`` (to the switch crossing), return ``tau``, stroke ``h3`` (to the impact).
     state : numpy.ndarray, shape (2 N + 2,)
-        Modal state ``(q_0..q_N, q_0'..q_N')`` just after the impact.
+        Modal state ``(q_0..q_N, q_0'..q_N')`` just after the first impact.
     impact_velocity : float
-        ``u_t(1, T-)``, the struck end's velocity arriving at the stop.
+        ``u_t(1, t-)``, the struck end's velocity arriving at the stop at the end of the first
+        interval from ``state`` (for ``m = 1`` the impact ``state`` follows; every interval's in
+        :attr:`impact_velocities`).
     multipliers : numpy.ndarray, shape (2 N + 1,)
         Non-trivial Floquet multipliers (those of the Poincare map), largest modulus first.
     trivial_multiplier : float
@@ -60,8 +62,10 @@ class SwitchedOrbit:
     admissibility : Admissibility
         Whether the motion is physical (sampled check, theory §5 and §10).
     switch_velocity : float
-        The gap's rate ``y' = -q_0'`` where it rises through ``switch_out``: 0 where the orbit
-        grazes the switching surface (theory §10).
+        The gap's rate ``y' = -q_0'`` where it rises through ``switch_out`` (the smallest over the
+        period's crossings): 0 where the orbit grazes the switching surface (theory §10).
+    states : numpy.ndarray, shape (m, 2 N + 2), optional
+        The modal state just after each impact (``states[0]`` is ``state``).
 
     Examples
     --------
@@ -93,8 +97,9 @@ class SwitchedOrbit:
 
     @property
     def impact_velocities(self) -> np.ndarray:
-        """``(m,)``: the struck end's velocity arriving at each impact of the period, in order
-        (``impact_velocity`` first)."""
+        """``(m,)``: the struck end's velocity arriving at the impact that ends each interval from
+        ``states[k]``, in order (``impact_velocity`` first; the last one's impact leads to
+        ``state``)."""
         if self._velocities is None:
             return np.array([self.impact_velocity])
         return np.asarray(self._velocities)
