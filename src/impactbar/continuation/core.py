@@ -34,7 +34,7 @@ from ..orbits.switched import SwitchedOrbit
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
-from .switched import checked_events, continue_switched
+from .switched import checked_events, continue_switched, doubled_first_points
 
 __all__ = ["continue_orbit", "EVENT_KINDS"]
 
@@ -206,6 +206,11 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
     if isinstance(orbit, BranchEvent):
         if orbit.kind != EventKind.PERIOD_DOUBLING:
             raise ValueError(f"a BranchEvent start must be a period doubling; got {str(orbit.kind)!r}")
+        if isinstance(orbit.orbit, SwitchedOrbit):  # the doubled branch of a switched orbit
+            return continue_switched(orbit, parameter, to, _detect, events=events, stop_on=stop_on,
+                                     xtol=xtol, settings=_settings(settings, step=step, max_step=max_step,
+                                                                   min_step=min_step, max_points=max_points,
+                                                                   tol=tol))
         switch = orbit
         base = orbit.orbit
     elif isinstance(orbit, PeriodicOrbit):
@@ -284,26 +289,16 @@ def _switch(engine, ev, lam0, steps):
     real = np.abs(mu.imag) <= 1e-9 * np.maximum(1.0, np.abs(mu))
     ranks = [r for r, i in enumerate(np.argsort(near, kind="stable")) if r == 0 or
              (real[i] and near[i] <= 0.1)]
-    h0, _, min_step = steps
+    def gap(U):
+        return _halves_gap(U[:-1], engine.problem.segments(U[-1]))
+
     for rank in ranks:
         z, w = doubling_direction(ev.orbit, rank)
         U0 = np.append(z, lam0)
         w = np.append(w, 0.0)
         w /= engine.norm(w)
-        for sign in (1.0, -1.0):
-            h = h0
-            while h >= min_step:
-                pred = U0 + sign * h * w
-                U1, _ = engine.correct(pred, w, pred)
-                if U1 is not None:
-                    p = engine.problem.segments(U1[-1])
-                    move = float(np.max(np.abs(U1[:-1] - U0[:-1])))
-                    if move > 1e-3 * h and _halves_gap(U1[:-1], p) >= 0.1 * move \
-                            and engine.problem.acceptable(U1):
-                        t1 = engine.tangent(U1, (U1 - U0) / engine.norm(U1 - U0))
-                        yield U0, (U1, t1)
-                        break
-                h *= 0.5
+        for first in doubled_first_points(engine, U0, w, steps, gap):
+            yield U0, first
 
 
 def _detect(engine, points, tangents, tests, orbits, xtol):

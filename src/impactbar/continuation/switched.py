@@ -24,7 +24,7 @@ from .._shared.status import BranchStatus, EventKind
 from .._shared.validate import check_real
 from ..drives.switched import PositionSwitchedDrive
 from ..model import BarModel
-from ..orbits.switched import SwitchedOrbit, _constants, _residual, orbit_at
+from ..orbits.switched import SwitchedOrbit, _constants, _flight_index, _residual_m, orbit_at
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _target
@@ -47,10 +47,13 @@ def _with(model: BarModel, drive: PositionSwitchedDrive, name: str, value: float
 class _SwitchedProblem:
     """The segment problem of a switched orbit in ``U = (state, h1, h3, lambda)``, for the engine."""
 
-    def __init__(self, model, drive, name, detect, *, events=True, stop_on=(), xtol=1e-10):
+    def __init__(self, model, drive, name, detect, *, events=True, stop_on=(), xtol=1e-10, impacts=1,
+                 doubled=False):
         self.model0, self.drive0, self.name, self.detect = model, drive, name, detect
         self.events, self.stop_on, self.xtol = events, stop_on, xtol
-        size = 2 * (model.n_modes + 1) + 2
+        self.m, self.doubled = impacts, doubled
+        size = impacts * (2 * (model.n_modes + 1) + 2)
+        self.flights = _flight_index(model.n_modes + 1, impacts)
         self.W = np.append(np.full(size, 1.0 / size), 1.0)
         self.pair = functools.lru_cache(maxsize=16)(self._pair)
 
@@ -63,13 +66,13 @@ class _SwitchedProblem:
 
     def F(self, U):
         model, drive, consts = self.pair(float(U[-1]))
-        return _residual(model, drive, U[:-1], consts)[0]
+        return _residual_m(model, drive, U[:-1], self.m, consts)[0]
 
     def FJ(self, U, F_lam=None):
         """Residual, the Jacobian ``[F_u, F_lam]`` (``F_u`` exact, ``F_lam`` by central
         differences unless given, one-sided at the edge of the parameter's range) and ``F_lam``."""
         model, drive, consts = self.pair(float(U[-1]))
-        F, DF = _residual(model, drive, U[:-1], consts)
+        F, DF = _residual_m(model, drive, U[:-1], self.m, consts)
         if F_lam is None:
             h = 1e-6 * max(1.0, abs(U[-1]))
             sides = []
@@ -87,10 +90,13 @@ class _SwitchedProblem:
 
     def orbit(self, U, admissibility=True):
         model, drive, _ = self.pair(U[-1])
-        return orbit_at(model, drive, U[:-1])
+        return orbit_at(model, drive, U[:-1], self.m)
 
     def acceptable(self, U):
-        return bool(U[-3] > 0.0 and U[-2] > 0.0)  # positive flight times
+        """Positive flight times; on a branch started at a period doubling, halves that differ
+        (else the corrector fell back onto the one-impact orbit traversed twice)."""
+        ok = bool(np.all(U[self.flights] > 0.0))
+        return ok and (not self.doubled or _halves_gap(U) > 1e-7 * max(1.0, float(np.max(np.abs(U)))))
 
     def after_point(self, engine, points, tangents, orbits):
         if not self.events:
@@ -165,21 +171,70 @@ def checked_events(stop_on, xtol: float) -> tuple[tuple, float]:
     return stop_on, xtol
 
 
-def continue_switched(orbit: SwitchedOrbit, parameter: str, to: float, detect, *,
+def _halves_gap(U) -> float:
+    """Largest difference between the two halves of a doubled point's unknowns (its parameter
+    apart)."""
+    u = U[:-1]
+    n = u.size // 2
+    return float(np.max(np.abs(u[:n] - u[n:])))
+
+
+def _doubled_starts(engine, ev, steps):
+    """Branch switching at a period doubling of a switched orbit: the doubling point as a
+    two-impact solution ``(X, X, lambda)`` and the first point of the period-2 branch, along the
+    null vector of the doubled problem's ``F_u`` (antisymmetric between the halves: the
+    eigenvector of the multiplier ``-1``), tried both ways. Yields ``(U0, (U1, t1))``; a first point
+    counts only if its halves differ by a tenth of its distance from the doubling."""
+    o = ev.orbit
+    X = np.concatenate((o.state, o.durations[[1, 3]]))
+    U0 = np.concatenate((X, X, [float(ev.value)]))
+    _, J, _ = engine.problem.FJ(U0, np.zeros(U0.size - 1))
+    w = np.append(np.linalg.svd(J[:, :-1])[2][-1], 0.0)
+    w /= engine.norm(w)
+    for first in doubled_first_points(engine, U0, w, steps, _halves_gap):
+        yield U0, first
+
+
+def doubled_first_points(engine, U0, w, steps, gap):
+    """First points of a doubled branch from the doubling ``U0`` along ``w``, each way in turn:
+    Newton on the hyperplane normal to ``w`` from ``U0 +- h w``, ``h`` halved from the first step
+    until a point is found whose halves differ (``gap(U)``) by a tenth of its distance from ``U0``.
+    Yields ``(U1, t1)``, the point and its tangent (shared with the branch switching of
+    :func:`impactbar.continue_orbit` for time-periodic orbits)."""
+    h0, _, min_step = steps
+    for sign in (1.0, -1.0):
+        h = h0
+        while h >= min_step:
+            pred = U0 + sign * h * w
+            U1, _ = engine.correct(pred, w, pred)
+            if U1 is not None:
+                move = float(np.max(np.abs(U1[:-1] - U0[:-1])))
+                if move > 1e-3 * h and gap(U1) >= 0.1 * move and engine.problem.acceptable(U1):
+                    yield U1, engine.tangent(U1, (U1 - U0) / engine.norm(U1 - U0))
+                    break
+            h *= 0.5
+
+
+def continue_switched(orbit, parameter: str, to: float, detect, *,
                       settings: ContinuationSettings | None = None, events: bool = True, stop_on=(),
                       xtol: float = 1e-10) -> Branch:
     """Follow a periodic motion under a position-switched drive as one parameter changes, by
     pseudo-arclength continuation (theory §7, §10). Called by :func:`impactbar.continue_orbit`
-    when its start is a :class:`~impactbar.SwitchedOrbit`.
+    when its start is a :class:`~impactbar.SwitchedOrbit`, or a ``"period-doubling"``
+    :class:`BranchEvent` of a branch of them.
 
     Parameters
     ----------
-    orbit : SwitchedOrbit
-        The start (from :func:`impactbar.find_orbit` with the drive).
+    orbit : SwitchedOrbit or BranchEvent
+        The start (from :func:`impactbar.find_orbit` with the drive), ``m`` impacts per period; or
+        a period doubling of a one-impact branch: the two-impact branch that bifurcates there is
+        followed (branch switching: its first point is taken along the doubled problem's null
+        vector, whose halves are opposite, both ways tried), while the parameter stays within
+        ``|to - doubling|`` of the doubling, on whichever side it bifurcates.
     parameter : str
         One of :data:`SWITCHED_PARAMETERS`: ``"stroke"``, ``"ret"`` (force levels, dimensionless,
         eq. 2), ``"switch_out"`` (bar lengths), ``"delay"`` (dimensionless time), ``"R"``, ``"d"``,
-        ``"s"``.
+        ``"s"``; the event's own parameter for a period doubling.
     to : float
         Target value; the branch stops there or where it leaves the range between start and ``to``.
     detect : callable
@@ -200,13 +255,23 @@ def continue_switched(orbit: SwitchedOrbit, parameter: str, to: float, detect, *
     -------
     Branch
         Its ``orbits`` are :class:`~impactbar.SwitchedOrbit` (``period``, ``blow_frequency``,
-        multipliers); ``impacts = periods = 1``.
+        multipliers); ``impacts = m`` (``2`` from a period doubling), ``periods = 1``.
 
     Raises
     ------
     ValueError
-        For a bad argument (named), or a start that is not a solution.
+        For a bad argument (named), a start that is not a solution, or a period doubling from
+        which no two-impact branch leaves.
     """
+    switch = None
+    if isinstance(orbit, BranchEvent):
+        if orbit.kind != EventKind.PERIOD_DOUBLING or not isinstance(orbit.orbit, SwitchedOrbit) \
+                or orbit.orbit.impacts != 1:
+            raise ValueError("orbit: a BranchEvent start must be a period doubling of a one-impact "
+                             "switched orbit")
+        if parameter != orbit.parameter:
+            raise ValueError(f"parameter must be the doubling's own, {orbit.parameter!r}; got {parameter!r}")
+        switch, orbit = orbit, orbit.orbit
     if not isinstance(orbit, SwitchedOrbit):
         raise ValueError(f"orbit must be a SwitchedOrbit; got {type(orbit).__name__}")
     if parameter not in SWITCHED_PARAMETERS:
@@ -219,9 +284,25 @@ def continue_switched(orbit: SwitchedOrbit, parameter: str, to: float, detect, *
     steps = settings.steps(abs(to - lam0))
     stop_on, xtol = checked_events(stop_on, xtol)
     direction = 1.0 if to > lam0 else -1.0
-    problem = _SwitchedProblem(model, drive, parameter, detect, events=events, stop_on=stop_on, xtol=xtol)
+    m = 2 if switch is not None else orbit.impacts
+    problem = _SwitchedProblem(model, drive, parameter, detect, events=events, stop_on=stop_on, xtol=xtol,
+                               impacts=m, doubled=switch is not None)
     engine = _Engine(problem, settings.tol)
-    U0 = np.concatenate((orbit.state, orbit.durations[[1, 3]], [lam0]))
+    if switch is not None:
+        lo, hi = lam0 - abs(to - lam0), lam0 + abs(to - lam0)  # it may leave on either side
+        for U0, first in _doubled_starts(engine, switch, steps):
+            P, orbits, found, status = engine.march(U0, None, to, direction, lo, hi, steps,
+                                                    settings.max_points, first=first)
+            if len(orbits) > 2 or status != BranchStatus.STEP_TOO_SMALL:
+                break
+        else:
+            raise ValueError("branch switching at the period doubling failed: no two-impact branch "
+                             "along the doubled problem's null vector")
+        return Branch(parameter=parameter, values=P[:, -1].copy(), orbits=orbits, events=tuple(found),
+                      status=status, impacts=m, periods=1, _points=P)
+    states = orbit.states if orbit.states is not None else orbit.state[None, :]
+    U0 = np.concatenate([np.concatenate((z, orbit.durations[4 * k + 1:4 * k + 4:2]))
+                         for k, z in enumerate(states)] + [[lam0]])
     F0, J0, _ = problem.FJ(U0)
     if float(np.max(np.abs(F0))) > 1e-9 * max(1.0, float(np.max(np.abs(U0)))):
         raise ValueError("orbit: not a solution of the segment problem at the start value")
@@ -232,4 +313,4 @@ def continue_switched(orbit: SwitchedOrbit, parameter: str, to: float, detect, *
     lo, hi = min(lam0, to), max(lam0, to)
     P, orbits, found, status = engine.march(U0, t0, to, direction, lo, hi, steps, settings.max_points)
     return Branch(parameter=parameter, values=P[:, -1].copy(), orbits=orbits, events=tuple(found),
-                  status=status, impacts=1, periods=1, _points=P)
+                  status=status, impacts=m, periods=1, _points=P)

@@ -37,7 +37,7 @@ __all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_at"]
 
 @dataclass(frozen=True)
 class SwitchedOrbit:
-    """A periodic motion with one impact per period under a position-switched drive (theory §10).
+    """A periodic motion with ``m`` impacts per period under a position-switched drive (theory §10).
 
     Attributes
     ----------
@@ -45,13 +45,15 @@ class SwitchedOrbit:
     drive : PositionSwitchedDrive
     period : float
         Period ``T`` (the model's time unit, eq. 2).
-    durations : numpy.ndarray, shape (4,)
-        The four flights of the period: stroke ``tau``, return ``h1`` (to the switch crossing),
-        return ``tau``, stroke ``h3`` (to the impact).
+    durations : numpy.ndarray, shape (4 m,)
+        The four flights between consecutive impacts, for each impact in turn: stroke ``tau``,
+        return ``h1`` (to the switch crossing), return ``tau``, stroke ``h3`` (to the impact).
     state : numpy.ndarray, shape (2 N + 2,)
-        Modal state ``(q_0..q_N, q_0'..q_N')`` just after the impact.
+        Modal state ``(q_0..q_N, q_0'..q_N')`` just after the first impact.
     impact_velocity : float
-        ``u_t(1, T-)``, the struck end's velocity arriving at the stop.
+        ``u_t(1, t-)``, the struck end's velocity arriving at the stop at the end of the first
+        interval from ``state`` (for ``m = 1`` the impact ``state`` follows; every interval's in
+        :attr:`impact_velocities`).
     multipliers : numpy.ndarray, shape (2 N + 1,)
         Non-trivial Floquet multipliers (those of the Poincare map), largest modulus first.
     trivial_multiplier : float
@@ -60,8 +62,10 @@ class SwitchedOrbit:
     admissibility : Admissibility
         Whether the motion is physical (sampled check, theory §5 and §10).
     switch_velocity : float
-        The gap's rate ``y' = -q_0'`` where it rises through ``switch_out``: 0 where the orbit
-        grazes the switching surface (theory §10).
+        The gap's rate ``y' = -q_0'`` where it rises through ``switch_out`` (the smallest over the
+        period's crossings): 0 where the orbit grazes the switching surface (theory §10).
+    states : numpy.ndarray, shape (m, 2 N + 2), optional
+        The modal state just after each impact (``states[0]`` is ``state``).
 
     Examples
     --------
@@ -83,11 +87,22 @@ class SwitchedOrbit:
     admissibility: Admissibility
     switch_velocity: float = math.nan
     _monodromy: np.ndarray = field(repr=False, default=None)
+    states: np.ndarray = field(repr=False, default=None)
+    _velocities: np.ndarray = field(repr=False, default=None)
+
+    @property
+    def impacts(self) -> int:
+        """Impacts per period ``m`` (the ``durations`` hold four flights per impact)."""
+        return self.durations.size // 4
 
     @property
     def impact_velocities(self) -> np.ndarray:
-        """``(1,)``: :attr:`impact_velocity` as an array (as a branch's orbits have them)."""
-        return np.array([self.impact_velocity])
+        """``(m,)``: the struck end's velocity arriving at the impact that ends each interval from
+        ``states[k]``, in order (``impact_velocity`` first; the last one's impact leads to
+        ``state``)."""
+        if self._velocities is None:
+            return np.array([self.impact_velocity])
+        return np.asarray(self._velocities)
 
     @property
     def admissible(self) -> bool:
@@ -96,24 +111,30 @@ class SwitchedOrbit:
 
     @property
     def blow_frequency(self) -> float:
-        """Blows per unit of the model's time, ``1 / T``; with the time scale ``t = Omega t_SI``
-        (eq. 2) the blow frequency in Hz is ``Omega / T``."""
-        return 1.0 / self.period
+        """Blows per unit of the model's time, ``m / T`` (``m`` impacts per period); with the time
+        scale ``t = Omega t_SI`` (eq. 2) the blow frequency in Hz is ``Omega m / T``."""
+        return self.impacts / self.period
 
     @property
     def switch_times(self) -> np.ndarray:
-        """Times after the impact at which the switches take effect: to return, then to stroke,
-        shape ``(2,)``."""
-        tau, h1, tau2, _ = self.durations
-        return np.array([tau, tau + h1 + tau2])
+        """Times after the first impact at which the switches take effect: to return, then to
+        stroke, for each impact of the period in turn, shape ``(2 m,)``."""
+        start = np.concatenate(([0.0], np.cumsum(self.durations)))[:-1:4]
+        tau, h1, tau2 = self.durations[0::4], self.durations[1::4], self.durations[2::4]
+        return np.column_stack((start + tau, start + tau + h1 + tau2)).ravel()
 
     @property
     def impact_energy(self) -> float:
         """Kinetic energy of the bar arriving at the stop, ``(1/2) int_0^1 u_t^2 dx`` (units of
-        ``m L^2 Omega^2``, eq. 2)."""
-        z = _before_impact(self.model, self.drive, self.state, self.durations)
-        v = z[self.model.n_modes + 1:]
-        return 0.5 * (v[0] ** 2 + 2.0 * float(np.sum(v[1:] ** 2)))
+        ``m L^2 Omega^2``, eq. 2), the mean over the ``m`` impacts of the period (so that the
+        percussive power is ``impact_energy * blow_frequency``)."""
+        M = self.model.n_modes + 1
+        states = self.states if self.states is not None else self.state[None, :]
+        total = 0.0
+        for k, z0 in enumerate(states):
+            v = _before_impact(self.model, self.drive, z0, self.durations[4 * k:4 * k + 4])[M:]
+            total += 0.5 * (v[0] ** 2 + 2.0 * float(np.sum(v[1:] ** 2)))
+        return total / len(states)
 
     @property
     def stable(self) -> bool:
@@ -285,6 +306,36 @@ def _residual(model, drive, X, consts=None):
     return r, Jac
 
 
+def _residual_m(model, drive, X, m, consts=None):
+    """Residual and exact Jacobian of the ``m``-impact segment problem (multiple shooting, theory
+    §10): ``X`` holds ``m`` blocks ``(state after impact k, h1_k, h3_k)``; block ``k`` carries the
+    switch and contact conditions of its interval, and its impact law lands on the state of block
+    ``k + 1`` (of block 0 for the last)."""
+    if m == 1:
+        return _residual(model, drive, X, consts)
+    consts = consts if consts is not None else _constants(model)
+    n = X.size // m
+    S = n - 2
+    r = np.empty(X.size)
+    Jac = np.zeros((X.size, X.size))
+    eye = np.eye(S)
+    for k in range(m):
+        a, nxt = k * n, ((k + 1) % m) * n
+        rk, Jk = _residual(model, drive, X[a:a + n], consts)
+        rk[:S] += X[nxt:nxt + S] - X[a:a + S]
+        Jk[:S, :S] -= eye
+        r[a:a + n] = rk
+        Jac[a:a + n, a:a + n] = Jk
+        Jac[a:a + S, nxt:nxt + S] += eye
+    return r, Jac
+
+
+def _flight_index(M, m):
+    """Positions of the free flight times ``h1_k, h3_k`` in the unknowns of :func:`_residual_m`."""
+    n = 2 * M + 2
+    return np.array([k * n + 2 * M + j for k in range(m) for j in (0, 1)])
+
+
 def _rigid_guess(model, drive):
     """Start of Newton for the rigid bar: the fixed point of the rigid piston's map of arrival
     velocities (compiled closed forms, :func:`impactbar.dynamics._switchkernel.rigid_fixed_point`),
@@ -303,10 +354,14 @@ def _rigid_guess(model, drive):
 
 def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: int = 1, guess=None,
                         *, tol: float = 1e-13, max_iter: int = 50) -> SwitchedOrbit:
-    """The one-impact periodic motion under a position-switched drive (theory §10).
+    """The periodic motion with ``m`` impacts per period under a position-switched drive (theory §10).
 
     Called by :func:`impactbar.find_orbit` when its load is a
-    :class:`~impactbar.PositionSwitchedDrive`.
+    :class:`~impactbar.PositionSwitchedDrive`. Between consecutive impacts the valve goes through
+    its cycle once (stroke ``tau``, return until the switch crossing, return ``tau``, stroke until
+    the impact); with ``m >= 2`` the intervals may differ (a period-2 motion after a period
+    doubling), and the unknowns are the ``m`` states after the impacts and the ``2 m`` free flight
+    times (multiple shooting).
 
     Parameters
     ----------
@@ -314,11 +369,14 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
         Rigid or flexible bar under the paper's impact law (eq. 10).
     drive : PositionSwitchedDrive
     impacts : int
-        Impacts per period; only ``1`` so far.
-    guess : SwitchedOrbit, tuple or None
-        Where Newton starts: an orbit (e.g. from a nearby parameter), a tuple ``(state, h1, h3)``
-        (state after the impact, shape ``(2 N + 2,)``, and the two free flight durations), or
-        ``None``: the rigid closed form of :meth:`PositionSwitchedDrive.rigid_orbit`.
+        Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed.
+    guess : SwitchedOrbit, SwitchedTrajectory, tuple or None
+        Where Newton starts: an orbit (e.g. from a nearby parameter; a one-impact orbit is
+        repeated ``m`` times, which Newton keeps unless the halves are perturbed), a run of
+        :func:`impactbar.simulate` under the drive (its last ``m`` complete valve cycles, rigid
+        bar), a tuple ``(states, h1, h3)`` (states after the impacts, shape ``(m, 2 N + 2)`` or
+        ``(2 N + 2,)`` for ``m = 1``, and the free flight durations, shape ``(m,)``), or ``None``
+        (``m = 1`` only): the rigid closed form of :meth:`PositionSwitchedDrive.rigid_orbit`.
     tol : float
         Relative tolerance of the Newton step.
     max_iter : int
@@ -331,7 +389,8 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     Raises
     ------
     ValueError
-        On a bad argument, an impact law other than the paper's, or when Newton does not converge.
+        On a bad argument, an impact law other than the paper's, ``impacts >= 2`` without a guess,
+        or when Newton does not converge.
 
     Examples
     --------
@@ -342,12 +401,18 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     ...                PositionSwitchedDrive(stroke=1, ret=1, switch_out=1))
     >>> round(o.period, 6), round(o.impact_velocity, 6), round(float(o.multipliers[0]), 6)
     (4.569933, 2.047892, 0.046225)
+
+    The same orbit as a two-impact one (its two intervals equal, the period doubled):
+
+    >>> o2 = find_orbit(o.model, o.drive, impacts=2, guess=o)
+    >>> o2.impacts, round(o2.period / o.period, 12), round(o2.blow_frequency * o.period, 12)
+    (2, 2.0, 1.0)
     """
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
     if not isinstance(drive, PositionSwitchedDrive):
         raise ValueError(f"drive must be a PositionSwitchedDrive; got {type(drive).__name__}")
-    check_int("impacts", impacts, lo=1, hi=1)
+    m = check_int("impacts", impacts, lo=1)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
     if not model.law.instantaneous:
@@ -357,62 +422,121 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
         raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
                          "(with R = 1 no energy leaves and the blows grow without bound)")
     M = model.n_modes + 1
+    if guess is None and m > 1:
+        raise ValueError(f"impacts={m} needs a guess (an orbit, a simulated run or a tuple): without "
+                         f"one Newton would find the one-impact orbit traversed {m} times")
     if guess is None and M > 1:  # the rigid bar's orbit (same damping and delay), then lifted
         rigid = model.with_(n_modes=0)
         Xr = _newton(rigid, drive, _rigid_guess(rigid, drive), tol, max_iter)
         X = np.concatenate((_padded(Xr[:2], M), Xr[2:]))
     elif guess is None:
         X = _rigid_guess(model, drive)
-    elif isinstance(guess, SwitchedOrbit):
-        X = np.concatenate((_padded(guess.state, M), guess.durations[[1, 3]]))
     else:
-        state, h1, h3 = guess
-        X = np.concatenate((_padded(np.asarray(state, dtype=float), M), [float(h1), float(h3)]))
+        X = _guess_unknowns(guess, M, m)
     consts = _constants(model)
     if guess is None and M > 1:  # the flexible modes at the rigid switch time: one Newton step
         r, Jac = _residual(model, drive, X, consts)  # without the switch condition, h1 kept
         keep = np.r_[0:2 * M, 2 * M + 1]
         X[keep] += np.linalg.solve(Jac[np.ix_(keep, keep)], -r[keep])
-    X = _newton(model, drive, X, tol, max_iter, consts)
-    return orbit_at(model, drive, X)
+    X = _newton(model, drive, X, tol, max_iter, consts, m)
+    return orbit_at(model, drive, X, m)
 
 
-def orbit_at(model: BarModel, drive: PositionSwitchedDrive, X) -> SwitchedOrbit:
-    """The orbit of a solution ``X = (state after the impact, h1, h3)`` of the segment problem:
-    multipliers from the monodromy matrix, admissibility (theory §10). Used by
+def _guess_unknowns(guess, M, m):
+    """The unknowns of :func:`_residual_m` from a guess of :func:`find_switched_orbit`."""
+    if isinstance(guess, SwitchedOrbit):
+        states = guess.states if guess.states is not None else guess.state[None, :]
+        h1, h3 = guess.durations[1::4], guess.durations[3::4]
+        reps = -(-m // len(states))
+        states, h1, h3 = np.tile(states, (reps, 1))[:m], np.tile(h1, reps)[:m], np.tile(h3, reps)[:m]
+    elif hasattr(guess, "switch_kinds") and hasattr(guess, "impact_times"):
+        states, h1, h3 = _from_run(guess, m)
+    else:
+        try:
+            states, h1, h3 = guess
+        except (TypeError, ValueError):
+            raise ValueError("guess must be a SwitchedOrbit, a simulated run under the drive or a "
+                             "tuple (states, h1, h3)") from None
+        states = np.atleast_2d(np.asarray(states, dtype=float))
+        h1, h3 = np.atleast_1d(np.asarray(h1, dtype=float)), np.atleast_1d(np.asarray(h3, dtype=float))
+    if len(states) != m or h1.size != m or h3.size != m:
+        raise ValueError(f"guess must hold {m} states and {m} flight times of each kind (impacts={m}); "
+                         f"got {len(states)}, {h1.size}, {h3.size}")
+    return np.concatenate([np.concatenate((_padded(z, M), [a, b]))
+                           for z, a, b in zip(states, h1, h3, strict=True)])
+
+
+def _from_run(run, m):
+    """States after the last ``m`` impacts of a rigid run and the flight times between its switches
+    (each interval: return at ``t_i + tau``, stroke at the crossing ``+ tau``, the next impact)."""
+    if run.model.n_modes != 0:
+        raise ValueError("a simulated run as a guess is read for the rigid bar only; pass the orbit "
+                         "of the rigid bar or a tuple (states, h1, h3)")
+    ti, vi = np.asarray(run.impact_times), np.asarray(run.impact_velocities)
+    ts = np.asarray(run.switch_times)
+    kinds = tuple(run.switch_kinds)
+    if ti.size < m + 1:
+        raise ValueError(f"guess: the run has {ti.size} impacts; impacts={m} needs at least {m + 1}")
+    tau, R = run.drive.delay, run.model.R
+    states, h1, h3 = [], [], []
+    for k in range(ti.size - m - 1, ti.size - 1):
+        a, b = ti[k], ti[k + 1]
+        stroke = [t for t, kind in zip(ts, kinds, strict=True) if kind == "stroke" and a < t <= b]
+        if not stroke:
+            raise ValueError("guess: the run's last impacts are not one valve cycle apart")
+        ts_on = stroke[-1]
+        states.append([0.0, -R * vi[k]])
+        h1.append(ts_on - a - 2.0 * tau)
+        h3.append(b - ts_on)
+    return np.array(states), np.array(h1), np.array(h3)
+
+
+def orbit_at(model: BarModel, drive: PositionSwitchedDrive, X, impacts: int = 1) -> SwitchedOrbit:
+    """The orbit of a solution ``X`` of the segment problem (``impacts`` blocks ``(state after the
+    impact, h1, h3)``): multipliers from the monodromy matrix, admissibility (theory §10). Used by
     :func:`find_switched_orbit` and by the continuation of switched orbits."""
     M = model.n_modes + 1
     X = np.asarray(X, dtype=float)
-    z0 = X[:2 * M].copy()
-    durations = np.array([drive.delay, X[2 * M], drive.delay, X[2 * M + 1]])
-    Phi = _monodromy(model, drive, z0, durations)
-    za, zb, _, zd = _legs(model, drive, z0, durations)
-    f = _field(_w2(model), model.d, drive.level(RETURN), za)
-    trivial, nontrivial = _split_multipliers(Phi, f)
-    c = model.end_weights
+    n = 2 * M + 2
+    Phi = np.eye(2 * M)
+    states, durations, velocities, switch, adm = [], [], [], [], Admissibility.ADMISSIBLE
+    for k in range(impacts):
+        z0 = X[k * n:k * n + 2 * M].copy()
+        dur = np.array([drive.delay, X[k * n + 2 * M], drive.delay, X[k * n + 2 * M + 1]])
+        Phi = _monodromy(model, drive, z0, dur) @ Phi
+        _, zb, _, zd = _legs(model, drive, z0, dur)
+        states.append(z0)
+        durations.append(dur)
+        velocities.append(float(model.end_weights @ zd[M:]))
+        switch.append(float(-zb[M]))
+        if adm == Admissibility.ADMISSIBLE:
+            adm = _admissibility(model, drive, z0, dur)
+    za = _legs(model, drive, states[0], durations[0])[0]
+    trivial, nontrivial = _split_multipliers(Phi, _field(_w2(model), model.d, drive.level(RETURN), za))
+    durations = np.concatenate(durations)
     return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)), durations=durations,
-                         state=z0, impact_velocity=float(c @ zd[M:]), multipliers=nontrivial,
-                         trivial_multiplier=trivial,
-                         admissibility=_admissibility(model, drive, z0, durations),
-                         switch_velocity=float(-zb[M]), _monodromy=Phi)
+                         state=states[0], impact_velocity=velocities[0], multipliers=nontrivial,
+                         trivial_multiplier=trivial, admissibility=adm, switch_velocity=min(switch),
+                         _monodromy=Phi, states=np.array(states), _velocities=np.array(velocities))
 
 
-def _newton(model, drive, X, tol, max_iter, consts=None):
+def _newton(model, drive, X, tol, max_iter, consts=None, m=1):
     """Newton's method on the segment problem from ``X`` (damped while the flight times would
     change by more than a half). It stops when a step is below ``tol`` (relative), or when the
     next step, predicted from quadratic convergence (``|s_k|^2 / |s_(k-1)|``), would be: that
     saves the last residual, whose only use would be to see the step vanish."""
     M = model.n_modes + 1
     consts = consts if consts is not None else _constants(model)
+    hi = _flight_index(M, m)
     last = math.inf
     for _ in range(max_iter):
-        r, Jac = _residual(model, drive, X, consts)
+        r, Jac = _residual_m(model, drive, X, m, consts)
         step = np.linalg.solve(Jac, -r)
-        big = np.max(np.abs(step[2 * M:]) / np.abs(X[2 * M:]))
+        big = np.max(np.abs(step[hi]) / np.abs(X[hi]))
         if big > 0.5:  # damped while far: the flight times change by at most a half
             step *= 0.5 / big
         X = X + step
-        if X[2 * M] <= 0.0 or X[2 * M + 1] <= 0.0:
+        if np.any(X[hi] <= 0.0):
             raise ValueError("Newton left the region of positive flight times: give a guess closer "
                              "to the orbit (e.g. from simulate)")
         size = float(np.max(np.abs(step)))
@@ -464,6 +588,7 @@ def _monodromy(model, drive, z0, durations):
     p_after = ps if tau else pr
     A_imp = J @ A + np.outer(J @ fd - _field(w2, d, p_after, z0p), dti @ A)
     if tau:  # stroke for tau, then the switch to return delayed from the impact: dt = dt_i
+        za = _apply(_blocks(w2, d, tau), _affine(w2, d, ps, tau, _blocks(w2, d, tau)), z0p)  # next
         A = Eta_s @ A_imp + np.outer(_field(w2, d, ps, za) - _field(w2, d, pr, za), dti @ A)
     else:
         A = A_imp
