@@ -33,14 +33,17 @@ _FORCE_KEYS = {
 _REQUIRED = {"bar", "stop", "drive", "force"}
 
 
-def _section(config: dict, name: str) -> dict:
+def _section(config: dict, name: str, allowed: set | None = None) -> dict:
+    """The table ``[name]`` of ``config`` (empty if absent), refused unless a table whose keys are
+    among ``allowed`` (default: the hammer's keys of that section), naming the first unknown key."""
+    allowed = _SECTIONS[name] if allowed is None else allowed
     sec = config.get(name, {})
     if not isinstance(sec, dict):
         raise ValueError(f"[{name}] must be a table of keys; got {sec!r}")
-    unknown = sorted(set(sec) - _SECTIONS[name])
+    unknown = sorted(set(sec) - allowed)
     if unknown:
         raise ValueError(f"unknown key {name}.{unknown[0]}; allowed in [{name}]: "
-                         f"{', '.join(sorted(_SECTIONS[name]))}")
+                         f"{', '.join(sorted(allowed))}")
     return sec
 
 

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 from .._shared.validate import check_int, check_real
 from .bar import Bar
+from .config import _section
 from .units import to_si
 
 __all__ = ["Drifter", "DrifterOrbit", "DRIFTER_PRESETS", "drifter_preset"]
@@ -176,14 +177,7 @@ class Drifter:
             raise ValueError(f"unknown section [{extra[0]}]; allowed: {', '.join(sorted(_KEYS))}")
         sec = {}
         for name, keys in _KEYS.items():
-            s = config.get(name, {})
-            if not isinstance(s, dict):
-                raise ValueError(f"[{name}] must be a table of keys; got {s!r}")
-            bad = sorted(set(s) - keys)
-            if bad:
-                raise ValueError(f"unknown key {name}.{bad[0]}; allowed in [{name}]: "
-                                 f"{', '.join(sorted(keys))}")
-            sec[name] = s
+            sec[name] = _section(config, name, keys)
         for name, key in (("bar", "E"), ("bar", "density"), ("bar", "length"), ("valve", "supply_pressure"),
                           ("valve", "stroke_area"), ("valve", "return_area"), ("valve", "switch_out")):
             if key not in sec[name]:

@@ -20,6 +20,7 @@ import numpy as np
 
 from .._shared.validate import check_real
 from ..laws.rodrock import BilinearRock, RodRock, RodSegment
+from .config import _section
 from .units import to_si
 
 __all__ = ["DrillString", "RodPiece", "rock_blows", "rock_from_config", "rock_summary"]
@@ -132,13 +133,7 @@ def rock_from_config(config: dict, bar) -> DrillString | None:
         A missing or invalid key (named), or ``[rod]``/``[bit]`` without ``[rock]``.
     """
     for name, keys in ROCK_SECTIONS.items():
-        sec = config.get(name, {})
-        if not isinstance(sec, dict):
-            raise ValueError(f"[{name}] must be a table of keys; got {sec!r}")
-        unknown = sorted(set(sec) - keys)
-        if unknown:
-            raise ValueError(f"unknown key {name}.{unknown[0]}; allowed in [{name}]: "
-                             f"{', '.join(sorted(keys))}")
+        _section(config, name, keys)
     if "rock" not in config:
         if "rod" in config or "bit" in config:
             raise ValueError("[rod] and [bit] need a [rock] section (rock.k, rock.k_u)")
