@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot_stability_chart", "plot_fraction_maps", "plot_bifurcation", "stability_category",
-           "STABILITY_CATEGORIES"]
+__all__ = ["plot_stability_chart", "plot_efficiency_map", "plot_fraction_maps", "plot_bifurcation",
+           "stability_category", "STABILITY_CATEGORIES"]
 
 #: categories of the stability chart, in colour order
 STABILITY_CATEGORIES = ("no orbit", "no admissible orbit", "admissible, none stable", "stable orbit",
@@ -104,6 +104,59 @@ def plot_stability_chart(ds, dims, ax=None):
         ax.set_ylabel("phase (rad)")
         ax.legend(**_LEGEND)
     ax.set_title(" ".join(filter(None, ["one-impact orbits", _title(ds, dims)])))
+    return ax
+
+
+def plot_efficiency_map(ds, dims, ax=None):
+    """The efficiency of the blows of an ``orbits`` sweep under the rod-rock law (a store with the
+    ``efficiency`` variable, :class:`impactbar.sweeps.SweepSpec`'s ``rock``), reduced to one or two
+    axes: at each point, the largest efficiency of a stable orbit's blow (work on rock over the
+    energy available to the blow, theory section 4d; blank where no orbit is stable).
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        The store (:func:`impactbar.sweeps.open_sweep`) reduced to ``dims``
+        (:func:`impactbar.sweeps.plot.reduce_axes`).
+    dims : sequence of str
+        One or two axes (two: the first is the chart's rows).
+    ax : matplotlib.axes.Axes, optional
+
+    Returns
+    -------
+    matplotlib.axes.Axes
+
+    Raises
+    ------
+    ValueError
+        If the store has no ``efficiency`` (not a rod-rock sweep), or ``dims`` is not one or two axes.
+    """
+    if "efficiency" not in ds.variables:
+        raise ValueError("the sweep has no efficiency: it was not run under the rod-rock law "
+                         "(a [rock] table in the spec)")
+    if len(dims) not in (1, 2):
+        raise ValueError(f"an efficiency map shows one or two axes; got {list(dims)}")
+    fig, ax = _axes(ax)
+    order = (*dims, "orbit")
+    eff = np.asarray(ds["efficiency"].transpose(*order).values, dtype=float)
+    stable = np.asarray(ds["stable"].transpose(*order).values, dtype=bool)
+    best = np.max(np.where(stable & np.isfinite(eff), eff, -np.inf), axis=-1)
+    best[~np.isfinite(best)] = np.nan
+    if len(dims) == 2:
+        y, x = dims
+        mesh = ax.pcolormesh(ds[x].values, ds[y].values, np.ma.masked_invalid(best), cmap="viridis",
+                             vmin=0.0, vmax=1.0, shading="nearest")
+        fig.colorbar(mesh, ax=ax, label="efficiency of the blow")
+        ax.set_xlabel(_axis_label(ds, x))
+        ax.set_ylabel(_axis_label(ds, y))
+    else:
+        x = dims[0]
+        ax.plot(ds[x].values, best, "o-", color="C0", ms=3, label="stable orbit")
+        ax.set_xlabel(_axis_label(ds, x))
+        ax.set_ylabel("efficiency of the blow")
+        ax.set_ylim(0.0, 1.0)
+        ax.legend(**_LEGEND)
+    ax.set_title(" ".join(filter(None, ["blows on rock", _title(ds, dims)])))
     return ax
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from ..plotting.sweeps import (  # the drawing; re-exported here for the old import path
     STABILITY_CATEGORIES,
     plot_bifurcation,
+    plot_efficiency_map,
     plot_fraction_maps,
     plot_stability_chart,
     stability_category,
@@ -115,7 +116,11 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Pat
     except Exception as exc:  # a damaged zarr chunk: zarr and its codecs raise many kinds
         raise ValueError(f"{store}: the stored data cannot be read ({type(exc).__name__}: {exc}); "
                          "rerun the sweep on this store to recompute the damaged chunks") from None
-    if task == "orbits":
+    if task == "orbits" and "efficiency" in red.variables:  # a rod-rock sweep: the blows' efficiency too
+        fig, (left, right) = plt.subplots(1, 2, figsize=(12.0, 4.8), layout="constrained")
+        plot_stability_chart(red, dims, ax=left)
+        plot_efficiency_map(red, dims, ax=right)
+    elif task == "orbits":
         fig = plot_stability_chart(red, dims).figure
     elif task == "montecarlo":
         fig = plot_fraction_maps(red, dims)

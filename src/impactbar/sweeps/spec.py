@@ -47,7 +47,18 @@ DEFAULT_CHUNK_POINTS = {"orbits": 400, "montecarlo": 4, "bifurcation": 32}
 #: takes some 20 ms to compute, about what writing it costs
 DEFAULT_CLOSED_FORM_CHUNK_POINTS = 4096
 
-_TOP_KEYS = ("task", "model", "load", "axes", "chunk_points", *TASKS)
+_TOP_KEYS = ("task", "model", "load", "axes", "rock", "chunk_points", *TASKS)
+
+#: keys of the optional ``[rock]`` table (the rod-rock law, :class:`impactbar.RodRock`) and of
+#: each of its ``segments``
+ROCK_KEYS = ("k", "k_u", "bit_mass", "feed", "blow_time", "segments")
+SEGMENT_KEYS = ("length", "impedance", "wave_speed")
+#: axes a spec with ``[rock]`` may also sweep (the names of :data:`impactbar.continuation.ROCK_PARAMETERS`;
+#: ``segment<i>.length`` for each segment ``i``)
+ROCK_AXES = ("rock.k", "rock.k_u", "bit_mass", "feed")
+#: grid points per chunk of an ``orbits`` sweep under the rod-rock law (Newton on a numerical blow
+#: map: some 0.1 s a point)
+DEFAULT_ROCK_CHUNK_POINTS = 16
 
 #: names of the extra dimension of each task
 _EXTRA_DIM = {"orbits": "orbit", "montecarlo": "motion", "bifurcation": "impact"}
@@ -97,7 +108,8 @@ class SweepSpec:
     task : {"orbits", "montecarlo", "bifurcation"}
     model : dict
         ``s``, ``d``, ``R``, ``n_modes`` of :class:`impactbar.BarModel`, all required, and
-        optionally its ``impact`` law (``"paper"`` or ``"wave"``; not an axis).
+        optionally its ``impact`` law (``"paper"`` or ``"wave"``; ``"rodrock"`` with ``rock``; not
+        an axis).
     load : dict
         ``kind`` (``"cosine"``, ``"square"`` or ``"fourier"``) and that load's fields, all required:
         ``p0, pk, k`` (:class:`impactbar.CosineLoad`), ``q, kappa``
@@ -105,7 +117,10 @@ class SweepSpec:
         (:class:`impactbar.FourierLoad`; ``coefficients`` as ``[[re, im], ...]`` or real numbers).
     axes : tuple of Axis
         At least one; each names a field present in ``model`` or ``load`` (its value there is the
-        base, replaced along the axis). The grid is their outer product, first axis slowest.
+        base, replaced along the axis), or with ``rock`` one of ``"rock.k"``, ``"rock.k_u"``,
+        ``"bit_mass"``, ``"feed"``, ``"segment<i>.length"`` (the names of
+        :func:`impactbar.continuation.with_parameter`). The grid is their outer product, first axis
+        slowest.
     options : dict
         The task's options, defaults filled in. ``orbits``: ``max_orbits`` (length of the
         ``orbit`` dimension; default the most one-impact orbits the load can have: ``2 k`` for a
@@ -116,7 +131,18 @@ class SweepSpec:
     chunk_points : int
         Grid points per work chunk (about; chunks are blocks of the grid), ``>= 1``. Default 400
         for ``orbits`` (4,096 where every point takes the rigid closed forms,
-        :func:`closed_form_task`), 4 for ``montecarlo``, 32 for ``bifurcation``.
+        :func:`closed_form_task`; 16 under the rod-rock law), 4 for ``montecarlo``, 32 for
+        ``bifurcation``.
+    rock : dict, optional
+        The rod and rock of the rod-rock law (:class:`impactbar.RodRock`, theory section 4d), in
+        the law's dimensionless units: ``k``, ``k_u`` (:class:`impactbar.BilinearRock`),
+        ``segments`` (a list of tables ``{length, impedance, wave_speed}``, shank first,
+        :class:`impactbar.RodSegment`), and optionally ``bit_mass`` (0), ``feed`` (0) and
+        ``blow_time``. The model's law is then ``RodRock`` (``[model] impact`` absent or
+        ``"rodrock"``), and the ``orbits`` task also stores, per orbit, the blow's
+        ``work_on_rock``, ``penetration`` (permanent, per blow), ``efficiency`` and
+        ``efficiency_with_rebound`` (:class:`impactbar.Blow`). Its orbits come from Newton's
+        method from guesses (:func:`impactbar.laws.rock_periodic_orbits`), not a certified search.
 
     Examples
     --------
@@ -135,18 +161,23 @@ class SweepSpec:
     axes: tuple
     options: dict = field(default_factory=dict)
     chunk_points: int | None = None
+    rock: dict | None = None
 
     def __post_init__(self) -> None:
         if self.task not in TASKS:
             raise ValueError(f"task must be one of {list(TASKS)}; got {self.task!r}")
-        object.__setattr__(self, "model", _check_model(self.model))
+        if self.rock is not None:
+            object.__setattr__(self, "rock", _check_rock(self.rock))
+        object.__setattr__(self, "model", _check_model(self.model, self.rock))
         object.__setattr__(self, "load", _check_load(self.load))
-        object.__setattr__(self, "axes", _check_axes(self.axes, self.model, self.load))
+        object.__setattr__(self, "axes", _check_axes(self.axes, self.model, self.load, self.rock))
         object.__setattr__(self, "options", _check_options(self.task, self.options, self))
         cp = self.chunk_points
         if cp is None:
             closed = closed_form_task(self)
             cp = DEFAULT_CLOSED_FORM_CHUNK_POINTS if closed else DEFAULT_CHUNK_POINTS[self.task]
+            if self.rock is not None and self.task == "orbits":
+                cp = DEFAULT_ROCK_CHUNK_POINTS
         object.__setattr__(self, "chunk_points", check_int("chunk_points", cp, lo=1))
         _check_chunk_size(self)
 
@@ -202,7 +233,7 @@ class SweepSpec:
         BarModel, Load
         """
         changes = {a.name: a.values[i] for a, i in zip(self.axes, index, strict=True)}
-        return _build(self.model, self.load, changes)
+        return _build(self.model, self.load, changes, self.rock)
 
     # -- serialisation ------------------------------------------------------------------------
     def to_dict(self) -> dict:
@@ -214,6 +245,8 @@ class SweepSpec:
             "axes": {a.name: {"values": list(a.values)} for a in self.axes},
             "chunk_points": self.chunk_points,
         }
+        if self.rock is not None:
+            d["rock"] = {k: ([dict(g) for g in v] if k == "segments" else v) for k, v in self.rock.items()}
         d[self.task] = dict(self.options)
         return d
 
@@ -290,8 +323,11 @@ def parse_spec(doc) -> SweepSpec:
     load = dict(doc["load"])
     if "coefficients" in load and isinstance(load["coefficients"], list):
         load["coefficients"] = _coefficients(load["coefficients"])
+    rock = doc.get("rock")
+    if rock is not None and not isinstance(rock, dict):
+        raise ValueError(f"[rock] must be a table; got {rock!r}")
     return SweepSpec(task=task, model=dict(doc["model"]), load=load, axes=axes,
-                     options=dict(doc.get(task, {})), chunk_points=doc.get("chunk_points"))
+                     options=dict(doc.get(task, {})), chunk_points=doc.get("chunk_points"), rock=rock)
 
 
 def _axis_values(name, table) -> tuple:
@@ -329,7 +365,7 @@ def _coefficients(seq) -> tuple:
     return tuple(out)
 
 
-def _check_model(model) -> dict:
+def _check_model(model, rock=None) -> dict:
     if not isinstance(model, dict):
         raise ValueError(f"[model] must be a table; got {model!r}")
     unknown = [k for k in model if k not in (*MODEL_FIELDS, "impact")]
@@ -340,14 +376,76 @@ def _check_model(model) -> dict:
         raise ValueError(f"[model] missing key(s) {missing}")
     from ..model import BarModel
 
+    impact = model.get("impact", "paper")
+    if rock is not None:
+        if "impact" in model and impact != "rodrock":
+            raise ValueError(f"[model] impact = {impact!r} but the spec has a [rock] table (the rod-rock "
+                             "law): drop impact or set it to 'rodrock'")
+        impact = _rock_law(rock)
+    elif impact == "rodrock":
+        raise ValueError("[model] impact = 'rodrock' needs a [rock] table: k, k_u and segments")
     try:
-        m = BarModel(**{k: model[k] for k in MODEL_FIELDS}, impact=model.get("impact", "paper"))
+        m = BarModel(**{k: model[k] for k in MODEL_FIELDS}, impact=impact)
     except ValueError as exc:
         raise ValueError(f"[model] {exc}") from None
     out = {"s": m.s, "d": m.d, "R": m.R, "n_modes": m.n_modes}
-    if "impact" in model:  # optional: the impact law, "paper" (eq. 10, default) or "wave"
-        out["impact"] = m.impact
+    if "impact" in model or rock is not None:  # the impact law: "paper" (eq. 10, default), "wave"
+        out["impact"] = m.impact                # or "rodrock" (with [rock])
     return out
+
+
+def _check_rock(rock) -> dict:
+    """The ``[rock]`` table, validated by building the law; its values normalised (floats, the
+    segments as tables with every key)."""
+    if not isinstance(rock, dict):
+        raise ValueError(f"[rock] must be a table; got {rock!r}")
+    unknown = [k for k in rock if k not in ROCK_KEYS]
+    if unknown:
+        raise ValueError(f"[rock] unknown key(s) {unknown}; allowed: {list(ROCK_KEYS)}")
+    missing = [k for k in ("k", "k_u", "segments") if k not in rock]
+    if missing:
+        raise ValueError(f"[rock] missing key(s) {missing}")
+    segs = rock["segments"]
+    if not isinstance(segs, list | tuple) or not segs:
+        raise ValueError(f"[rock] segments must be a non-empty list of tables {{length, impedance}}; "
+                         f"got {segs!r}")
+    out = {k: rock[k] for k in ROCK_KEYS if k in rock and k != "segments"}
+    out["segments"] = []
+    for i, g in enumerate(segs):
+        if not isinstance(g, dict):
+            raise ValueError(f"[rock] segments[{i}] must be a table {{length, impedance}}; got {g!r}")
+        bad = [k for k in g if k not in SEGMENT_KEYS]
+        if bad or not {"length", "impedance"} <= set(g):
+            raise ValueError(f"[rock] segments[{i}] needs keys length and impedance (and optionally "
+                             f"wave_speed); got {sorted(g)}")
+        out["segments"].append(dict(g))
+    try:
+        law = _rock_law(out)
+    except ValueError as exc:
+        raise ValueError(f"[rock] {exc}") from None
+    norm = {"k": law.rock.k, "k_u": law.rock.k_u, "bit_mass": law.bit_mass, "feed": law.feed}
+    if law.blow_time is not None:
+        norm["blow_time"] = law.blow_time
+    norm["segments"] = tuple({"length": g.length, "impedance": g.impedance, "wave_speed": g.wave_speed}
+                             for g in law.segments)
+    return norm
+
+
+def _rock_law(rock: dict):
+    """The :class:`impactbar.RodRock` of a ``[rock]`` table (its constructors validate)."""
+    from ..laws import BilinearRock, RodRock, RodSegment
+
+    segs = [RodSegment(**g) for g in rock["segments"]]
+    return RodRock(segments=segs, rock=BilinearRock(k=rock["k"], k_u=rock["k_u"]),
+                   bit_mass=rock.get("bit_mass", 0.0), feed=rock.get("feed", 0.0),
+                   blow_time=rock.get("blow_time"))
+
+
+def _rock_axes(rock) -> list:
+    """The rod-rock parameters a spec with this ``[rock]`` may sweep."""
+    if rock is None:
+        return []
+    return [*ROCK_AXES, *(f"segment{i}.length" for i in range(len(rock["segments"])))]
 
 
 def _check_load(load) -> dict:
@@ -383,10 +481,11 @@ def _check_load(load) -> dict:
     return out
 
 
-def _check_axes(axes, model, load) -> tuple:
+def _check_axes(axes, model, load, rock=None) -> tuple:
     if not isinstance(axes, tuple | list) or not axes:
         raise ValueError("[axes] must name at least one field to sweep")
-    sweepable = [*MODEL_FIELDS, *(f for f in LOAD_KINDS[load["kind"]] if f != "coefficients")]
+    sweepable = [*MODEL_FIELDS, *(f for f in LOAD_KINDS[load["kind"]] if f != "coefficients"),
+                 *_rock_axes(rock)]
     seen = set()
     out = []
     for ax in axes:
@@ -394,17 +493,25 @@ def _check_axes(axes, model, load) -> tuple:
             raise ValueError(f"[axes] entries must be Axis; got {ax!r}")
         if ax.name not in sweepable:
             raise ValueError(f"[axes] {ax.name!r} is not a field of [model] or of this [load] "
-                             f"(kind = {load['kind']!r}); sweepable: {sweepable}")
+                             f"(kind = {load['kind']!r}){' or [rock]' if rock else ''}; "
+                             f"sweepable: {sweepable}")
         if ax.name in seen:
             raise ValueError(f"[axes] {ax.name!r} is given twice")
         seen.add(ax.name)
         values = []
         for v in ax.values:
             try:
-                m, ld = _build(model, load, {ax.name: v})
+                m, ld = _build(model, load, {ax.name: v}, rock)
             except ValueError as exc:
                 raise ValueError(f"[axes] {ax.name} = {v!r}: {exc}") from None
-            values.append(getattr(m, ax.name) if ax.name in MODEL_FIELDS else getattr(ld, ax.name))
+            if ax.name in MODEL_FIELDS:
+                values.append(getattr(m, ax.name))
+            elif ax.name in LOAD_KINDS[load["kind"]]:
+                values.append(getattr(ld, ax.name))
+            else:
+                from ..continuation.parameters import parameter_value
+
+                values.append(parameter_value(m, ld, ax.name))
         if len(set(values)) != len(values):
             raise ValueError(f"[axes] {ax.name}: values must be distinct; got {values}")
         out.append(Axis(ax.name, tuple(values)))
@@ -454,12 +561,13 @@ def _max_orbits_bound(spec) -> int:
     polynomial of degree ``K`` (at most ``2 K`` roots); for the square wave ``V`` is monotone on
     each of its two pieces."""
     kind = spec.load["kind"]
+    extra = 1 if spec.rock is not None else 0  # the rod-rock law's guess from a settled run
     if kind == "square":
-        return 2
+        return 2 + extra
     if kind == "fourier":
-        return max(2, 2 * len(spec.load["coefficients"]))
+        return max(2, 2 * len(spec.load["coefficients"])) + extra
     ks = [spec.load["k"]] + [v for a in spec.axes if a.name == "k" for v in a.values]
-    return 2 * max(ks)
+    return 2 * max(ks) + extra
 
 
 def _make_load(load: dict):
@@ -473,12 +581,21 @@ def _make_load(load: dict):
     return FourierLoad(load["p0"], [complex(re_, im_) for re_, im_ in load["coefficients"]])
 
 
-def _build(model: dict, load: dict, changes: dict):
+def _build(model: dict, load: dict, changes: dict, rock: dict | None = None):
     from ..model import BarModel
 
     m = {k: changes.get(k, v) for k, v in model.items()}
     ld = {k: changes.get(k, v) for k, v in load.items()}
-    return BarModel(**m), _make_load(ld)
+    if rock is None:
+        return BarModel(**m), _make_load(ld)
+    from ..continuation.parameters import with_parameter
+
+    m["impact"] = _rock_law(rock)
+    bar, load_ = BarModel(**m), _make_load(ld)
+    for name in _rock_axes(rock):
+        if name in changes:
+            bar, load_ = with_parameter(bar, load_, name, changes[name])
+    return bar, load_
 
 def motion_classes() -> tuple[str, ...]:
     """The ``motion`` coordinate of a ``montecarlo`` store: the classes of
@@ -496,7 +613,7 @@ def closed_form_task(spec) -> bool:
     than starting a cluster, so :func:`impactbar.sweeps.run_sweep` computes it in threads of the
     driver process by default, in chunks of :data:`DEFAULT_CLOSED_FORM_CHUNK_POINTS` points unless
     the spec gives ``chunk_points``."""
-    if spec.task != "orbits" or spec.load["kind"] not in ("cosine", "square"):
+    if spec.task != "orbits" or spec.load["kind"] not in ("cosine", "square") or spec.rock is not None:
         return False
     if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
         return False

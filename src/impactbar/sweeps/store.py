@@ -49,7 +49,18 @@ AXIS_NAMES = {
     "k": "order of the load harmonic",
     "q": "square-wave level",
     "kappa": "square-wave kappa (fraction of the period at +q, times 2)",
+    "rock.k": "rock loading stiffness",
+    "rock.k_u": "rock unloading stiffness",
+    "bit_mass": "bit mass (piston masses)",
+    "feed": "feed force",
 }
+
+
+def _axis_name(name: str) -> str:
+    """The long name of a grid axis (``segment<i>.length`` for every segment ``i``)."""
+    if name.startswith("segment") and name.endswith(".length"):
+        return f"length of rod segment {name[7:-7]} (piston lengths)"
+    return AXIS_NAMES.get(name, name)
 
 
 def _var_attrs(name: str, description: str) -> dict:
@@ -83,7 +94,7 @@ def _template(spec: SweepSpec):
                                   attrs=_var_attrs(_SUM, "CRC-32 of the work chunk's data "
                                                          "(-1 before it is stored)"))
     coords = {a.name: xr.Variable((a.name,), np.asarray(a.values),
-                                  attrs={"long_name": AXIS_NAMES.get(a.name, a.name),
+                                  attrs={"long_name": _axis_name(a.name),
                                          "units": UNITS.get(a.name, "1")})
               for a in spec.axes}
     if spec.task == "montecarlo":
@@ -138,7 +149,7 @@ def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
         values = np.asarray(a.values)
         arrays.append((a.name, values, values.dtype, values.shape, values.shape,
                        np.nan if values.dtype.kind == "f" else 0, (a.name,),
-                       attrs({"long_name": AXIS_NAMES.get(a.name, a.name), "units": UNITS.get(a.name, "1")},
+                       attrs({"long_name": _axis_name(a.name), "units": UNITS.get(a.name, "1")},
                              values.dtype, np.nan)))
     if spec.task == "montecarlo":
         classes = np.asarray(motion_classes(), dtype=object)

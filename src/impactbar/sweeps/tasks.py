@@ -41,6 +41,14 @@ def _variables(spec: SweepSpec) -> dict:
     common = {"failed": (b1, False, False, "the computation raised ValueError at this point "
                                             "(e.g. an undamped resonance s n pi = k)")}
     if spec.task == "orbits":
+        rock = {} if spec.rock is None else {
+            "work_on_rock": (f8, np.nan, True, "work done on the rock in the orbit's blow (model units)"),
+            "penetration": (f8, np.nan, True, "permanent penetration of the orbit's blow (model "
+                                              "lengths): the rod's advance per period"),
+            "efficiency": (f8, np.nan, True, "work on rock over the energy available to the blow"),
+            "efficiency_with_rebound": (f8, np.nan, True, "the same with the piston's rebound "
+                                                          "energy credited"),
+        }
         return {
             "phase": (f8, np.nan, True, "phase lag of the one-impact orbit (rad, in [0, 2 pi))"),
             "impact_velocity": (f8, np.nan, True, "velocity of the struck end before impact"),
@@ -49,6 +57,7 @@ def _variables(spec: SweepSpec) -> dict:
             "schur_stable": (b1, False, True, "the paper's Schur criterion (eqs. 27-31)"),
             "max_abs_multiplier": (f8, np.nan, True, "largest |Floquet multiplier|"),
             "n_orbits": (np.dtype("int32"), 0, False, "number of one-impact orbits"),
+            **rock,
             **common,
         }
     if spec.task == "montecarlo":
@@ -139,6 +148,8 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     point-by-point path (degenerate orbits, ``kappa = 2``), or ``None`` if the closed forms do not
     apply."""
     kind = spec.load["kind"]
+    if spec.rock is not None:
+        return None
     law = get_law(spec.model.get("impact", "paper"))
     if kind not in ("cosine", "square") or not law.rigid_closed_forms:
         return None
@@ -206,8 +217,14 @@ def _orbits_point(spec, model, load, flat, out, local) -> None:
         out["impact_velocity"][at] = o.impact_velocity
         out["admissible"][at] = o.admissible
         out["stable"][at] = o.stable
-        out["schur_stable"][at] = o.schur_stable
+        out["schur_stable"][at] = bool(o.schur_stable)  # None (no Schur test) under the rod-rock law
         out["max_abs_multiplier"][at] = o.max_abs_multiplier
+        if spec.rock is not None:
+            blow = o.contacts[0]  # the orbit's one blow (a RockContact, read through to its Blow)
+            out["work_on_rock"][at] = blow.work_on_rock
+            out["penetration"][at] = blow.permanent_penetration
+            out["efficiency"][at] = blow.efficiency
+            out["efficiency_with_rebound"][at] = blow.efficiency_with_rebound
 
 
 def _montecarlo_point(spec, model, load, flat, out, local) -> None:
