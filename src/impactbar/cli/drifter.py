@@ -43,8 +43,11 @@ def _header(d: physical.Drifter) -> str:
     m, dr = d.model(), d.drive()
     return (f"drifter {d.name or '(unnamed)'}: piston {d.bar.mass_kg:.4g} kg, L = {d.bar.length_m:.4g} m; "
             f"stroke {d.stroke_force_N:.4g} N, return {d.return_force_N:.4g} N, switch at "
-            f"{d.switch_out_m * 1e3:.4g} mm, delay {d.delay_s * 1e3:.4g} ms, R = {d.restitution:.4g}\n"
-            f"  dimensionless: s = {m.s:.5g}, d = {m.d:.5g}, N = {m.n_modes}, ret = {dr.ret:.5g}, "
+            f"{d.switch_out_m * 1e3:.4g} mm, delay {d.delay_s * 1e3:.4g} ms, "
+            + (f"R = {d.restitution:.4g}\n" if d.drill is None else
+               f"a drill string of {len(d.drill.segments)} segment(s) on rock "
+               f"(k = {d.drill.rock_k_N_m / 1e6:.4g} kN/mm)\n")
+            + f"  dimensionless: s = {m.s:.5g}, d = {m.d:.5g}, N = {m.n_modes}, ret = {dr.ret:.5g}, "
             f"switch_out = {dr.switch_out:.5g}, delay = {dr.delay:.5g}")
 
 
@@ -61,6 +64,12 @@ def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
           f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, "
           f"percussive power {s['percussive_power_kW']:.4g} kW, {s['admissibility']}, "
           f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+    if "rock" in s:  # a drill string and rock (theory section 4d): the blow on the rock
+        r = s["rock"]
+        print(f"  per blow: work on rock {r['work_on_rock_J']:.4g} J, "
+              f"penetration {r['penetration_mm']:.4g} mm, "
+              f"efficiency {r['efficiency']:.3f} ({r['efficiency_with_rebound']:.3f} with the rebound "
+              f"credited); drilling rate {r['drilling_rate_m_min']:.4g} m/min")
     return 0
 
 

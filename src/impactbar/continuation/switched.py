@@ -62,7 +62,7 @@ class _SwitchedProblem:
         model, drive = _with(self.model0, self.drive0, self.name, lam)
         if model.R >= 1.0:
             raise ValueError("R must be < 1 for a switched orbit")
-        return model, drive, _constants(model)
+        return model, drive, _constants(model, drive)
 
     def F(self, U):
         model, drive, consts = self.pair(float(U[-1]))

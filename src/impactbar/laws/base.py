@@ -45,6 +45,9 @@ class ContactLaw:
         Every flight starts with the end on the stop (``c . q = 0`` after :meth:`impact_map`), so
         that periodic orbits leave ``q_0`` out of their unknowns; ``False`` for a law whose piston
         may leave the contact step off the stop (the rod-rock law), whose orbits keep it.
+    uses_restitution : bool
+        The model's restitution ``R`` enters the contact (``False`` for the rod-rock law, whose rod
+        and rock replace it).
     """
 
     name: ClassVar[str] = ""
@@ -53,6 +56,18 @@ class ContactLaw:
     supports_schur: ClassVar[bool] = False
     open_ended: ClassVar[bool] = False
     flight_starts_on_stop: ClassVar[bool] = True
+    uses_restitution: ClassVar[bool] = True
+
+    def paper_equivalent(self, model):
+        """The same bar under the paper's law (eq. 10) with the restitution this law's contact
+        gives: the model's ``R`` (clipped to ``0.95``), unless a law says otherwise. Newton's
+        method for this law's orbits starts from that bar's orbits.
+
+        Returns
+        -------
+        BarModel
+        """
+        return model.with_(impact="paper", R=min(model.R, 0.95))
 
     def window(self, model) -> float:
         """Duration of one impact (dimensionless time): 0 for an instantaneous law.

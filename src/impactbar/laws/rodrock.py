@@ -142,6 +142,7 @@ class RodRock(ContactLaw):
     rigid_closed_forms = False
     supports_schur = False
     flight_starts_on_stop = False
+    uses_restitution = False
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
@@ -161,12 +162,31 @@ class RodRock(ContactLaw):
         """Lundberg's ``alpha = K (2 L / C) / Z`` of the piston, ``2 k / s^2`` in the model's units."""
         return 2.0 * self.rock.k / model.s ** 2
 
+    def paper_equivalent(self, model):
+        """The same bar under the paper's law with the restitution of a rigid piston's blow on this
+        rod and rock, ``R = -rebound_velocity / V`` at ``V = 1`` (:func:`single_blow`, clipped to
+        ``[0, 0.95]``): whose orbits start Newton's method for this law's (theory §4d).
+
+        Returns
+        -------
+        BarModel
+        """
+        return model.with_(impact="paper", R=_equivalent_restitution(model))
+
     def window(self, model) -> float:
         """Duration of the blow in the simulator and in periodic orbits (model time): ``blow_time``,
-        by default ``4/s + 2 sum of the segments' travel times``."""
-        if self.blow_time is not None:
-            return self.blow_time
-        return 4.0 / model.s + 2.0 * sum(g.travel_time(model) for g in self.segments)
+        by default ``4/s + 2 sum of the segments' travel times``, rounded up to whole steps of the
+        blow's cell grid (the simulator's blow lasts whole steps, so the orbits' flights start
+        where its flights do)."""
+        from ..dynamics.rockcontact import _grid_for
+
+        T = self.blow_time
+        if T is None:
+            T = 4.0 / model.s + 2.0 * sum(g.travel_time(model) for g in self.segments)
+        segs = self.segments
+        dt = _grid_for(float(model.s), tuple(g.length for g in segs), tuple(g.impedance for g in segs),
+                       tuple(g.wave_speed for g in segs), None).cell_time
+        return max(1, math.ceil(float(T) / dt * (1.0 - 1e-12))) * dt
 
     def impact_map(self, model, load, t, y_minus):
         """The contact step as a map of the arrival state (theory §4d): ``y_plus`` the state

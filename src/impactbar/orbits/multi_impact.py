@@ -500,7 +500,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     With a :class:`~impactbar.PositionSwitchedDrive` in place of the load the system is autonomous
     and the period is unknown (theory §10): the result is a
     :class:`~impactbar.SwitchedOrbit` (``impacts`` per period, a ``guess`` needed for two or
-    more; ``periods`` ignored; the paper's impact law), from
+    more; ``periods`` ignored; under every impact law), from
     :func:`~impactbar.orbits.find_switched_orbit`.
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)

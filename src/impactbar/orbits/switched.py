@@ -16,6 +16,16 @@ Jacobian. The monodromy matrix is the product of the flows' fundamental matrices
 matrices at the switch and the impact (Hiskens & Pai 2000; di Bernardo et al., *Piecewise-smooth
 Dynamical Systems*, 2008, §2.5); one of its eigenvalues is the trivial ``1`` along the flow, reported
 apart, the others are the multipliers of the Poincare map.
+
+Under a law whose contact takes time (the wave law, theory §4b; the rod-rock law, §4d) the impact
+is the law's contact, held under the stroke force for its duration ``ContactLaw.window`` (as
+:func:`impactbar.simulate` runs it: the switch to return counts from the contact's end). The
+unknowns hold the state where the contact ends; eq. 10 is replaced by the contact's map with its
+Jacobian (exact for the wave law, central differences for the rod-rock law); the period is
+``T = window + 2 tau + h1 + h3``. The multipliers are those of the return map on the arrival
+surface ``c . q = 0``, built from the same Jacobian by the implicit function theorem (the switch
+and arrival times depend on the state); the trivial multiplier along the flow is then exactly 1.
+The flows, the residual and Newton's method are in ``impactbar.orbits._switchflow``.
 """
 
 from __future__ import annotations
@@ -28,9 +38,29 @@ import numpy as np
 from .._shared.status import Admissibility
 from .._shared.validate import check_int, check_real
 from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive
-from ..dynamics._switchkernel import end_max_sampled, first_rising_crossing, rate_zero, rigid_orbit_start
-from ..dynamics.modal import fundamental, step_constant
+from ..dynamics._switchkernel import rigid_orbit_start
 from ..model import BarModel
+from ._switchflow import (  # noqa: F401 (the segment problem; _residual_m, _flight_index for continuation)
+    ContactMap,
+    _admissibility,
+    _affine,
+    _apply,
+    _before_impact,
+    _blocks,
+    _constants,
+    _field,
+    _flight_index,
+    _flights,
+    _fund,
+    _jump,
+    _legs,
+    _matrix,
+    _newton,
+    _padded,
+    _residual,
+    _residual_m,
+    _w2,
+)
 
 __all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_at"]
 
@@ -66,6 +96,11 @@ class SwitchedOrbit:
         period's crossings): 0 where the orbit grazes the switching surface (theory §10).
     states : numpy.ndarray, shape (m, 2 N + 2), optional
         The modal state just after each impact (``states[0]`` is ``state``).
+    contact_time : float
+        Under a law whose contact takes time (the wave law, the rod-rock law), the contact's
+        duration (the window ``2/s``, ``RodRock.window``): ``state`` and ``states`` are then where
+        each contact ends, the ``durations`` follow it, and ``period = sum(durations) + m
+        contact_time``. 0 under the paper's law.
 
     Examples
     --------
@@ -89,6 +124,7 @@ class SwitchedOrbit:
     _monodromy: np.ndarray = field(repr=False, default=None)
     states: np.ndarray = field(repr=False, default=None)
     _velocities: np.ndarray = field(repr=False, default=None)
+    contact_time: float = 0.0
 
     @property
     def impacts(self) -> int:
@@ -119,7 +155,9 @@ class SwitchedOrbit:
     def switch_times(self) -> np.ndarray:
         """Times after the first impact at which the switches take effect: to return, then to
         stroke, for each impact of the period in turn, shape ``(2 m,)``."""
-        start = np.concatenate(([0.0], np.cumsum(self.durations)))[:-1:4]
+        steps = self.durations.reshape(-1, 4).copy()
+        steps[:, 0] += self.contact_time  # the contact, then the stroke's tau
+        start = np.concatenate(([0.0], np.cumsum(steps.sum(axis=1))))[:-1] + self.contact_time
         tau, h1, tau2 = self.durations[0::4], self.durations[1::4], self.durations[2::4]
         return np.column_stack((start + tau, start + tau + h1 + tau2)).ravel()
 
@@ -141,199 +179,22 @@ class SwitchedOrbit:
         """Admissible with every non-trivial multiplier inside the unit circle."""
         return self.admissibility == Admissibility.ADMISSIBLE and bool(np.all(np.abs(self.multipliers) < 1.0))
 
+    @property
+    def contacts(self) -> tuple:
+        """The record of each impact's contact under a law whose contact takes time, in order
+        (:meth:`~impactbar.laws.ContactLaw.blow` of each arrival under the stroke force: a
+        :class:`~impactbar.WaveImpact` under the wave law; under the rod-rock law a record with the
+        blow's ``work_on_rock``, ``permanent_penetration``, ``efficiency``, ... of
+        :class:`~impactbar.Blow`); empty under the paper's law."""
+        if self.model.law.instantaneous:
+            return ()
+        from ..loads import FourierLoad
 
-# --------------------------------------------------------------------------------------------------
-# flows
-# --------------------------------------------------------------------------------------------------
-def _w2(model: BarModel) -> np.ndarray:
-    return (model.s * np.pi * np.arange(model.n_modes + 1)) ** 2
-
-
-def _field(w2, d, p, z):
-    M = w2.size
-    q, v = z[:M], z[M:]
-    return np.concatenate((v, p - d * v - w2 * q))
-
-
-def _fund(w2, d, h):
-    """The flow's Jacobian ``E(h)``, shape ``(2M, 2M)`` (block-diagonal per mode)."""
-    return _matrix(_blocks(w2, d, h))
-
-
-def _jump(model: BarModel) -> np.ndarray:
-    """The paper's impact law (eq. 10) as a matrix: ``q`` kept, ``v -> -R v``."""
-    M = model.n_modes + 1
-    return np.diag(np.concatenate((np.ones(M), np.full(M, -model.law.kernel_restitution(model)))))
-
-
-def _legs(model, drive, z0, durations):
-    """States at the ends of the four flights from ``z0`` (after the impact)."""
-    w2, d = _w2(model), model.d
-    ps, pr = drive.level(STROKE), drive.level(RETURN)
-    tau, h1, _, h3 = durations
-    out = []
-    z = z0
-    for p, h in ((ps, tau), (pr, h1), (pr, tau), (ps, h3)):
-        if h:
-            E = _blocks(w2, d, h)
-            z = _apply(E, _affine(w2, d, p, h, E), z)
-        out.append(z)
-    return tuple(out)
-
-
-def _before_impact(model, drive, z0, durations):
-    return _legs(model, drive, z0, durations)[3]
-
-
-# --------------------------------------------------------------------------------------------------
-# Newton on the segment problem
-# --------------------------------------------------------------------------------------------------
-def _blocks(w2, d, h):
-    """The flow's Jacobian over ``h`` as its per-mode 2x2 blocks ``(a, b, c, e)``, each ``(M,)``
-    (:func:`~impactbar.dynamics.modal.fundamental`, with the rigid mode and underdamped flexible
-    modes in direct closed form)."""
-    h = float(h)
-    lam2 = w2[1:] - 0.25 * d * d
-    if lam2.size and not np.all(lam2 > 0.0):  # an overdamped mode: the general forms
-        return fundamental(w2, d, np.full(w2.shape, h))
-    b0 = -math.expm1(-d * h) / d if d else h
-    a = np.empty(w2.size)
-    b = np.empty(w2.size)
-    c = np.empty(w2.size)
-    e = np.empty(w2.size)
-    a[0], b[0], c[0], e[0] = 1.0, b0, 0.0, math.exp(-d * h)
-    if lam2.size:
-        lam = np.sqrt(lam2)
-        damp = math.exp(-0.5 * d * h)
-        cs = damp * np.cos(lam * h)
-        sn = damp * np.sin(lam * h) / lam
-        a[1:] = cs + 0.5 * d * sn
-        b[1:] = sn
-        c[1:] = -w2[1:] * sn
-        e[1:] = cs - 0.5 * d * sn
-    return a, b, c, e
-
-
-def _affine(w2, d, p, h, E):
-    """The constant part ``g`` of the flow ``z(h) = E z0 + g`` under the force ``p`` (eq. 8)."""
-    a, _, c, _ = E
-    gq = np.empty(w2.size)
-    gv = np.empty(w2.size)
-    y = d * h
-    if d == 0.0:
-        b0, c0 = h, 0.5 * h * h
-    else:
-        b0 = -math.expm1(-y) / d
-        c0 = h * h * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0) if abs(y) < 1e-2 \
-            else (h - b0) / d
-    gq[0], gv[0] = p * c0, p * b0
-    if w2.size > 1:
-        qs = p / w2[1:]  # static deflection of the flexible modes
-        gq[1:] = qs * (1.0 - a[1:])
-        gv[1:] = -c[1:] * qs
-    return gq, gv
-
-
-def _compose(E2, E1):
-    a2, b2, c2, e2 = E2
-    a1, b1, c1, e1 = E1
-    return a2 * a1 + b2 * c1, a2 * b1 + b2 * e1, c2 * a1 + e2 * c1, c2 * b1 + e2 * e1
-
-
-def _apply(E, g, z):
-    M = g[0].size
-    a, b, c, e = E
-    q, v = z[:M], z[M:]
-    return np.concatenate((a * q + b * v + g[0], c * q + e * v + g[1]))
-
-
-def _matrix(E):
-    a, b, c, e = E
-    M = a.size
-    out = np.zeros((2 * M, 2 * M))
-    i = np.arange(M)
-    out[i, i], out[i, M + i], out[M + i, i], out[M + i, M + i] = a, b, c, e
-    return out
-
-
-def _constants(model):
-    """What the residual needs of the model, computed once per solve: ``(w2, c, Jv)``, ``Jv`` the
-    impact law (eq. 10) as the diagonal ``(1, .., 1, -R, .., -R)``."""
-    M = model.n_modes + 1
-    R = model.law.kernel_restitution(model)
-    return _w2(model), model.end_weights, np.concatenate((np.ones(M), np.full(M, -R)))
-
-
-def _residual(model, drive, X, consts=None):
-    """Residual and exact Jacobian of the segment problem (unknowns: state after the impact,
-    ``h1``, ``h3``), with the flows as per-mode 2x2 blocks; ``consts`` from :func:`_constants`."""
-    M = model.n_modes + 1
-    w2, c, Jv = consts if consts is not None else _constants(model)
-    d = model.d
-    ps, pr = drive.stroke, -drive.ret
-    z0, h1, h3 = X[:2 * M], X[2 * M], X[2 * M + 1]
-    tau = drive.delay
-    E1, E3 = _blocks(w2, d, h1), _blocks(w2, d, h3)
-    if tau:
-        Et = _blocks(w2, d, tau)
-        za = _apply(Et, _affine(w2, d, ps, tau, Et), z0)
-    else:
-        Et, za = None, z0
-    zb = _apply(E1, _affine(w2, d, pr, h1, E1), za)
-    zc = _apply(Et, _affine(w2, d, pr, tau, Et), zb) if tau else zb
-    zd = _apply(E3, _affine(w2, d, ps, h3, E3), zc)
-    r = np.empty(2 * M + 2)
-    r[:2 * M] = z0 - Jv * zd
-    r[2 * M] = -zb[0] - drive.switch_out
-    r[2 * M + 1] = c @ zd[:M]
-    Eb = _compose(E1, Et) if tau else E1  # z0 -> zb
-    Ebd = _compose(E3, Et) if tau else E3  # zb -> zd
-    Ed = _compose(Ebd, Eb)
-    dzb_dh1 = _field(w2, d, pr, zb)
-    dzd_dh1 = _apply(Ebd, (np.zeros(M), np.zeros(M)), dzb_dh1)
-    dzd_dh3 = _field(w2, d, ps, zd)
-    Jac = np.zeros((2 * M + 2, 2 * M + 2))
-    Jac[:2 * M, :2 * M] = np.eye(2 * M) - Jv[:, None] * _matrix(Ed)
-    Jac[:2 * M, 2 * M] = -Jv * dzd_dh1
-    Jac[:2 * M, 2 * M + 1] = -Jv * dzd_dh3
-    Jac[2 * M, 0] = -Eb[0][0]
-    Jac[2 * M, M] = -Eb[1][0]
-    Jac[2 * M, 2 * M] = -dzb_dh1[0]
-    Jac[2 * M + 1, :M] = c * Ed[0]
-    Jac[2 * M + 1, M:2 * M] = c * Ed[1]
-    Jac[2 * M + 1, 2 * M] = c @ dzd_dh1[:M]
-    Jac[2 * M + 1, 2 * M + 1] = c @ dzd_dh3[:M]
-    return r, Jac
-
-
-def _residual_m(model, drive, X, m, consts=None):
-    """Residual and exact Jacobian of the ``m``-impact segment problem (multiple shooting, theory
-    §10): ``X`` holds ``m`` blocks ``(state after impact k, h1_k, h3_k)``; block ``k`` carries the
-    switch and contact conditions of its interval, and its impact law lands on the state of block
-    ``k + 1`` (of block 0 for the last)."""
-    if m == 1:
-        return _residual(model, drive, X, consts)
-    consts = consts if consts is not None else _constants(model)
-    n = X.size // m
-    S = n - 2
-    r = np.empty(X.size)
-    Jac = np.zeros((X.size, X.size))
-    eye = np.eye(S)
-    for k in range(m):
-        a, nxt = k * n, ((k + 1) % m) * n
-        rk, Jk = _residual(model, drive, X[a:a + n], consts)
-        rk[:S] += X[nxt:nxt + S] - X[a:a + S]
-        Jk[:S, :S] -= eye
-        r[a:a + n] = rk
-        Jac[a:a + n, a:a + n] = Jk
-        Jac[a:a + S, nxt:nxt + S] += eye
-    return r, Jac
-
-
-def _flight_index(M, m):
-    """Positions of the free flight times ``h1_k, h3_k`` in the unknowns of :func:`_residual_m`."""
-    n = 2 * M + 2
-    return np.array([k * n + 2 * M + j for k in range(m) for j in (0, 1)])
+        load = FourierLoad(float(self.drive.stroke), [])
+        states = self.states if self.states is not None else self.state[None, :]
+        arrivals = [_before_impact(self.model, self.drive, z0, self.durations[4 * k:4 * k + 4])
+                    for k, z0 in enumerate(states)]
+        return tuple(self.model.law.blow(self.model, load, 0.0, zd) for zd in arrivals)
 
 
 def _rigid_guess(model, drive):
@@ -366,7 +227,10 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     Parameters
     ----------
     model : BarModel
-        Rigid or flexible bar under the paper's impact law (eq. 10).
+        Rigid or flexible bar, under any impact law: the paper's (eq. 10), or a contact that takes
+        time, the wave law (theory §4b) or the rod-rock law (§4d), held under the stroke force
+        (theory §10; the orbit's ``state`` is then where the contact
+        ends, and ``contacts`` holds the blows).
     drive : PositionSwitchedDrive
     impacts : int
         Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed.
@@ -389,8 +253,8 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     Raises
     ------
     ValueError
-        On a bad argument, an impact law other than the paper's, ``impacts >= 2`` without a guess,
-        or when Newton does not converge.
+        On a bad argument, ``impacts >= 2`` without a guess, a simulated run as the guess under a
+        law other than the paper's, or when Newton does not converge.
 
     Examples
     --------
@@ -415,9 +279,11 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     m = check_int("impacts", impacts, lo=1)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
-    if not model.law.instantaneous:
-        raise ValueError(f"find_orbit with a PositionSwitchedDrive supports the paper's instantaneous "
-                         f"impact law only (model.impact = 'paper'); got {model.impact!r}")
+    if not model.law.instantaneous:  # the wave law, the rod-rock law: the contact's map
+        if model.R >= 1.0 and model.law.uses_restitution:
+            raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
+                             "(with R = 1 no energy leaves and the blows grow without bound)")
+        return find_contact_orbit(model, drive, m, guess, tol, max_iter)
     if model.R >= 1.0:
         raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
                          "(with R = 1 no energy leaves and the blows grow without bound)")
@@ -433,7 +299,7 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
         X = _rigid_guess(model, drive)
     else:
         X = _guess_unknowns(guess, M, m)
-    consts = _constants(model)
+    consts = _constants(model, drive)
     if guess is None and M > 1:  # the flexible modes at the rigid switch time: one Newton step
         r, Jac = _residual(model, drive, X, consts)  # without the switch condition, h1 kept
         keep = np.r_[0:2 * M, 2 * M + 1]
@@ -495,6 +361,8 @@ def orbit_at(model: BarModel, drive: PositionSwitchedDrive, X, impacts: int = 1)
     """The orbit of a solution ``X`` of the segment problem (``impacts`` blocks ``(state after the
     impact, h1, h3)``): multipliers from the monodromy matrix, admissibility (theory §10). Used by
     :func:`find_switched_orbit` and by the continuation of switched orbits."""
+    if not model.law.instantaneous:
+        return contact_orbit_at(model, drive, X, impacts)
     M = model.n_modes + 1
     X = np.asarray(X, dtype=float)
     n = 2 * M + 2
@@ -518,47 +386,6 @@ def orbit_at(model: BarModel, drive: PositionSwitchedDrive, X, impacts: int = 1)
                          state=states[0], impact_velocity=velocities[0], multipliers=nontrivial,
                          trivial_multiplier=trivial, admissibility=adm, switch_velocity=min(switch),
                          _monodromy=Phi, states=np.array(states), _velocities=np.array(velocities))
-
-
-def _newton(model, drive, X, tol, max_iter, consts=None, m=1):
-    """Newton's method on the segment problem from ``X`` (damped while the flight times would
-    change by more than a half). It stops when a step is below ``tol`` (relative), or when the
-    next step, predicted from quadratic convergence (``|s_k|^2 / |s_(k-1)|``), would be: that
-    saves the last residual, whose only use would be to see the step vanish."""
-    M = model.n_modes + 1
-    consts = consts if consts is not None else _constants(model)
-    hi = _flight_index(M, m)
-    last = math.inf
-    for _ in range(max_iter):
-        r, Jac = _residual_m(model, drive, X, m, consts)
-        step = np.linalg.solve(Jac, -r)
-        big = np.max(np.abs(step[hi]) / np.abs(X[hi]))
-        if big > 0.5:  # damped while far: the flight times change by at most a half
-            step *= 0.5 / big
-        X = X + step
-        if np.any(X[hi] <= 0.0):
-            raise ValueError("Newton left the region of positive flight times: give a guess closer "
-                             "to the orbit (e.g. from simulate)")
-        size = float(np.max(np.abs(step)))
-        scale = tol * max(1.0, float(np.max(np.abs(X))))
-        if size <= scale or (big <= 0.5 and math.isfinite(last) and size < 1e-4 * last
-                             and size * size <= scale * last):
-            return X
-        last = size
-    raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
-                     f"{np.max(np.abs(step)):.2e})")
-
-
-def _padded(state, M):
-    state = np.asarray(state, dtype=float)
-    if state.size == 2 * M:
-        return state.copy()
-    m = state.size // 2
-    out = np.zeros(2 * M)
-    k = min(m, M)
-    out[:k] = state[:k]
-    out[M:M + k] = state[m:m + k]
-    return out
 
 
 def _monodromy(model, drive, z0, durations):
@@ -617,52 +444,96 @@ def _split_multipliers(Phi, f):
     return float(P[0, 0]), mu
 
 
-def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibility:
-    """The end off the stop inside every flight, the return crossing the first one, and a forward
-    impact (theory §5, §10): exact for the rigid bar (one turning point per flight), sampled on a
-    grid finer than the stiffest mode's period for a flexible one."""
+# --------------------------------------------------------------------------------------------------
+# contacts that take time (the wave law, the rod-rock law)
+# --------------------------------------------------------------------------------------------------
+def find_contact_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: int, guess, tol: float,
+                       max_iter: int):
+    """:func:`~impactbar.orbits.find_switched_orbit` under a law whose contact takes time (module
+    docstring): without a guess, Newton starts from the orbit of the same bar under the paper's law
+    (``ContactLaw.paper_equivalent``: the same ``R``, or a rigid piston's rebound from the rod and
+    rock), solved first for the rigid bar and lifted to the flexible one."""
     M = model.n_modes + 1
-    w2, d = _w2(model), model.d
+    if guess is None:
+        if impacts > 1:
+            raise ValueError(f"impacts={impacts} needs a guess (an orbit or a tuple): without one Newton "
+                             f"would find the one-impact orbit traversed {impacts} times")
+        rigid = model.with_(n_modes=0)
+        p = find_switched_orbit(rigid.law.paper_equivalent(rigid), drive, tol=tol, max_iter=max_iter)
+        Xr = _newton(rigid, drive, np.concatenate((p.state, p.durations[[1, 3]])), tol, max_iter,
+                     _constants(rigid, drive))
+        X = np.concatenate((_padded(Xr[:2], M), Xr[2:]))
+    else:
+        if hasattr(guess, "switch_kinds") and hasattr(guess, "impact_times"):
+            raise ValueError("a simulated run as a guess is read under the paper's law only; under a law "
+                             "whose contact takes time pass an orbit or a tuple (states, h1, h3), the "
+                             "states where the contacts end")
+        X = _guess_unknowns(guess, M, impacts)
+    X = _newton(model, drive, X, tol, max_iter, _constants(model, drive), impacts)
+    return contact_orbit_at(model, drive, X, impacts)
+
+
+def _surface_basis(c: np.ndarray) -> np.ndarray:
+    """Orthonormal basis, shape ``(2M, 2M - 1)``, of the arrival surface's tangent space
+    ``{dz : c . dq = 0}``."""
+    M = c.size
+    a = np.concatenate((c, np.zeros(M)))
+    q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(2 * M))))
+    return q[:, 1:2 * M]
+
+
+def contact_orbit_at(model: BarModel, drive: PositionSwitchedDrive, X, impacts: int = 1):
+    """The :class:`~impactbar.SwitchedOrbit` of a solution ``X`` (``impacts`` blocks ``(state where
+    the contact ends, h1, h3)``) under a law whose contact takes time: multipliers of the return map
+    on the arrival surface, admissibility of the flights (as for the paper's law) and of the
+    contacts (held for their whole window: the wave law's ``separates`` and ``sticks``, theory §4b).
+    Called by :func:`~impactbar.orbits.switched.orbit_at`."""
+    from .admissibility import _window_departure
+
+    M = model.n_modes + 1
+    X = np.asarray(X, dtype=float)
+    n = 2 * M + 2
     c = model.end_weights
-    ps, pr = drive.level(STROKE), drive.level(RETURN)
-    tau, h1, _, h3 = durations
-    za, zb, zc, zd = _legs(model, drive, z0, durations)
-    if c @ zd[M:] <= 0.0:
-        return Admissibility.BACKWARD_IMPACT
-    # the crossing must be the first rising one of the gap in the return flight
-    t_first = first_rising_crossing(d, -za[0], -za[M], -pr, drive.switch_out)
-    if not math.isclose(t_first, h1, rel_tol=1e-8, abs_tol=1e-12):
-        return Admissibility.PENETRATES
-    flights = ((ps, z0, tau), (pr, za, h1), (pr, zb, tau), (ps, zc, h3))
-    if M == 1:  # the rigid bar: q_0 has at most one turning point per flight (theory §10), exact
-        for p, z, h in flights:
-            if h <= 0.0:
-                continue
-            t_turn = rate_zero(d, float(z[1]), p)
-            inner = [float(z[0])] if z is not z0 else []
-            if 0.0 < t_turn < h:
-                inner.append(float(_apply(_blocks(w2, d, t_turn), _affine(w2, d, p, t_turn,
-                                                                          _blocks(w2, d, t_turn)), z)[0]))
-            if inner and max(inner) > 1e-12 * max(1.0, drive.switch_out):
-                return Admissibility.PENETRATES
-        if c @ z0[M:] >= 0.0 and model.R > 0.0:
-            return Admissibility.STICKS
-        return Admissibility.ADMISSIBLE
-    n = max(samples, int(8 * model.s * model.n_modes * sum(durations)))
-    worst = -math.inf
-    scale = max(1.0, float(np.max(np.abs(z0[:M]))))
-    under = bool(np.all(w2[1:] > 0.25 * d * d))  # every flexible mode underdamped: compiled
-    for p, z, h in flights:
-        if h <= 0.0 or n < 3:
-            continue
-        if under:
-            worst = max(worst, float(end_max_sampled(w2, d, p, c, z[:M], z[M:], h, n)))
-            continue
-        t = np.linspace(0.0, h, n)[1:-1]
-        q, _ = step_constant(w2, d, p, z[:M], z[M:], t)
-        worst = max(worst, float(np.max(c @ q)))
-    if worst > 1e-12 * scale:
-        return Admissibility.PENETRATES
-    if c @ z0[M:] >= 0.0 and model.R > 0.0:
-        return Admissibility.STICKS
-    return Admissibility.ADMISSIBLE
+    cmap = ContactMap(model, drive)
+    w2 = _w2(model)
+    B = _surface_basis(c)
+    P = np.eye(2 * M - 1)
+    states, durations, velocities, switch, adm = [], [], [], [], Admissibility.ADMISSIBLE
+    first_dzd = JP_prev = None
+    for k in range(impacts):
+        Xk = X[k * n:(k + 1) * n]
+        z0 = Xk[:2 * M].copy()
+        dur = np.array([drive.delay, Xk[2 * M], drive.delay, Xk[2 * M + 1]])
+        _, zd, _, Ed, _, dzd_dh1, dzd_dh3 = _flights(model, drive, Xk, w2)
+        # the arrival's dependence on z0 with the switch and arrival times implicit
+        _, Jac = _residual(model, drive, Xk, (w2, c, cmap))
+        G_z, G_h = Jac[2 * M:, :2 * M], Jac[2 * M:, 2 * M:]
+        dzd = _matrix(Ed) - np.column_stack((dzd_dh1, dzd_dh3)) @ np.linalg.solve(G_h, G_z)
+        if k:
+            P = B.T @ dzd @ JP_prev @ B @ P
+        _, JP_prev = cmap(zd)
+        JP_prev = JP_prev.copy()
+        if k == 0:
+            first_dzd = dzd
+        _, zb, _, _ = _legs(model, drive, z0, dur)
+        states.append(z0)
+        durations.append(dur)
+        velocities.append(float(c @ zd[M:]))
+        switch.append(float(-zb[M]))
+        if adm == Admissibility.ADMISSIBLE:
+            adm = _admissibility(model, drive, z0, dur)
+            if velocities[-1] > 0.0:
+                rec = model.law.blow(model, cmap.load, 0.0, zd)
+                separates = bool(getattr(rec, "separations", ()))
+                adm = _window_departure(adm, False, float(c @ z0[M:]), separates)
+    P = B.T @ first_dzd @ JP_prev @ B @ P  # the last contact lands on the first block's state
+    mu = np.linalg.eigvals(P) if P.size else np.array([])
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    if np.all(np.abs(mu.imag) <= 1e-14 * np.maximum(1.0, np.abs(mu))):
+        mu = mu.real
+    durations = np.concatenate(durations)
+    return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)) + impacts * cmap.window,
+                         durations=durations, state=states[0], impact_velocity=velocities[0],
+                         multipliers=mu, trivial_multiplier=1.0, admissibility=adm,
+                         switch_velocity=min(switch), states=np.array(states),
+                         _velocities=np.array(velocities), contact_time=cmap.window)

@@ -20,6 +20,12 @@ Configuration keys (a nested ``dict`` or TOML, as :meth:`Drifter.from_config` re
     [damping] coefficient                 # optional (N s/m, the whole piston)
     [valve]   supply_pressure, stroke_area, return_area, switch_out, delay (optional, default 0 ms)
     [model]   n_modes                     # optional, default 0 (a rigid piston)
+    [[rod.segments]], [bit], [rock]       # optional: the drill string and the rock (theory §4d), as
+                                          # for a hammer (impactbar.physical.rock); [stop] not needed
+
+With a ``[rock]`` the piston strikes the drill string and the orbit's blow gives the work on rock
+(J), the penetration per blow (mm), the efficiencies and the drilling rate (m/min: the penetration
+times the blow frequency).
 """
 
 from __future__ import annotations
@@ -30,6 +36,7 @@ from dataclasses import dataclass
 from .._shared.validate import check_int, check_real
 from .bar import Bar
 from .config import _section
+from .rock import ROCK_SECTIONS, DrillString, rock_from_config
 from .units import to_si
 
 __all__ = ["Drifter", "DrifterOrbit", "DRIFTER_PRESETS", "drifter_preset"]
@@ -67,6 +74,9 @@ class Drifter:
     n_modes : int, optional
         Flexible modes of the piston, ``>= 0`` (0: rigid). Default 0.
     name : str, optional
+    drill : DrillString, optional
+        The drill string and the rock (``impactbar.physical.rock``, theory §4d): the model's law
+        is then the rod-rock law (``restitution`` plays no part).
 
     Raises
     ------
@@ -91,6 +101,7 @@ class Drifter:
     damping_N_s_m: float = 0.0
     n_modes: int = 0
     name: str = ""
+    drill: DrillString | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.bar, Bar):
@@ -102,6 +113,8 @@ class Drifter:
         object.__setattr__(self, "delay_s", check_real("delay_s", self.delay_s, lo=0.0))
         object.__setattr__(self, "damping_N_s_m", check_real("damping_N_s_m", self.damping_N_s_m, lo=0.0))
         object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=1024))
+        if self.drill is not None and not isinstance(self.drill, DrillString):
+            raise ValueError(f"drill must be a DrillString; got {type(self.drill).__name__}")
 
     # -- scales -----------------------------------------------------------------------------
     @property
@@ -124,9 +137,21 @@ class Drifter:
         from ..model import BarModel
 
         om, bar = self.omega_rad_s, self.bar
+        impact = "paper" if self.drill is None else self.drill.law(bar, self.scales)
         return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om),
                         d=self.damping_N_s_m / (bar.mass_kg * om), R=self.restitution,
-                        n_modes=self.n_modes)
+                        n_modes=self.n_modes, impact=impact)
+
+    @property
+    def scales(self):
+        """The units of the dimensionless model (:class:`~impactbar.physical.Scales`): time
+        ``1/Omega``, length ``L``, force ``p A_s`` (the stroke force is 1)."""
+        from .hammer import Scales
+
+        om, bar = self.omega_rad_s, self.bar
+        return Scales(omega_rad_s=om, time_s=1.0 / om, length_m=bar.length_m,
+                      velocity_m_s=bar.length_m * om, force_N=self.stroke_force_N,
+                      damping_N_s_m2=bar.mass_kg / bar.length_m * om)
 
     def drive(self):
         """The dimensionless valve: :class:`~impactbar.PositionSwitchedDrive`."""
@@ -172,9 +197,10 @@ class Drifter:
         unknown keys refused, naming them)."""
         if not isinstance(config, dict):
             raise ValueError(f"config must be a dict; got {type(config).__name__}")
-        extra = sorted(set(config) - set(_KEYS) - {"name"})
+        extra = sorted(set(config) - set(_KEYS) - set(ROCK_SECTIONS) - {"name"})
         if extra:
-            raise ValueError(f"unknown section [{extra[0]}]; allowed: {', '.join(sorted(_KEYS))}")
+            raise ValueError(f"unknown section [{extra[0]}]; allowed: "
+                             f"{', '.join(sorted((*_KEYS, *ROCK_SECTIONS)))}")
         sec = {}
         for name, keys in _KEYS.items():
             sec[name] = _section(config, name, keys)
@@ -185,9 +211,12 @@ class Drifter:
         b, v, st = sec["bar"], sec["valve"], sec["stop"]
         bar = Bar.from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
                              area=b.get("area"))
-        if ("restitution" in st) == ("area" in st):
+        drill = rock_from_config(config, bar)  # [rod], [bit], [rock]: the rod-rock law
+        if drill is not None and not st:
+            R = 0.0  # the rod and the rock replace the stop
+        elif ("restitution" in st) == ("area" in st):
             raise ValueError("give exactly one of stop.restitution and stop.area")
-        if "restitution" in st:
+        elif "restitution" in st:
             R = to_si("stop.restitution", st["restitution"], "", "0.215")
         else:
             a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
@@ -205,7 +234,7 @@ class Drifter:
                    delay_s=to_si("valve.delay", v.get("delay", "0 ms"), "s", "'1 ms'", what="a time"),
                    damping_N_s_m=to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"),
                                        "N*s/m", "'9 N*s/m'", what="a damping coefficient"),
-                   n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")))
+                   n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")), drill=drill)
 
 
 @dataclass(frozen=True)
@@ -253,13 +282,33 @@ class DrifterOrbit:
         """Admissible with every non-trivial multiplier inside the unit circle."""
         return self.orbit.stable
 
+    def rock(self) -> dict:
+        """With a drill string (``drifter.drill``), the SI figures of the orbit's first blow on the
+        rock (``impactbar.physical.rock.rock_orbit_figures``): ``work_on_rock_J``,
+        ``penetration_mm``, ``drilling_rate_m_min`` (the penetration times the blow frequency),
+        ``efficiency``, ``efficiency_with_rebound``, ``rod_energy_J``, ``peak_rod_stress_Pa``; an
+        empty dict without one."""
+        if self.drifter.drill is None:
+            return {}
+        from types import SimpleNamespace
+
+        from .rock import rock_orbit_figures
+
+        view = SimpleNamespace(scales=self.drifter.scales, drill=self.drifter.drill,
+                               blow_frequency_Hz=self.blow_frequency_Hz)
+        return rock_orbit_figures(self.orbit, view)
+
     def summary(self) -> dict:
-        """The SI outputs as a dict (JSON-ready)."""
-        return {"blow_frequency_Hz": float(self.blow_frequency_Hz), "period_ms": 1e3 * self.period_s,
-                "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
-                "percussive_power_kW": self.percussive_power_kW, "stable": self.stable,
-                "admissibility": str(self.orbit.admissibility),
-                "multiplier": abs(complex(self.orbit.multipliers[0])) if self.orbit.multipliers.size else 0.0}
+        """The SI outputs as a dict (JSON-ready), with :meth:`rock`'s figures under ``rock`` when the
+        drifter has a drill string."""
+        out = {"blow_frequency_Hz": float(self.blow_frequency_Hz), "period_ms": 1e3 * self.period_s,
+               "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
+               "percussive_power_kW": self.percussive_power_kW, "stable": self.stable,
+               "admissibility": str(self.orbit.admissibility),
+               "multiplier": abs(complex(self.orbit.multipliers[0])) if self.orbit.multipliers.size else 0.0}
+        if self.drifter.drill is not None:
+            out["rock"] = self.rock()
+        return out
 
 
 #: Drifter presets, from documented numbers.

@@ -1,0 +1,69 @@
+"""A drifter on a drill string and rock (issues 18 and 19): the SI figures of its blow, the drilling
+rate, and the command line."""
+
+import os
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import impactbar
+from impactbar import InitialState, simulate
+from impactbar.physical import Drifter
+
+EXAMPLE = Path(__file__).parents[2] / "examples" / "drifter_rock.toml"
+
+
+def load_config(path):
+    with open(path, "rb") as f:
+        return tomllib.load(f)
+
+
+@pytest.fixture(scope="module")
+def drifter():
+    return Drifter.from_config(load_config(EXAMPLE))
+
+
+def test_drilling_rate_is_penetration_times_the_simulated_blow_frequency(drifter):
+    """The orbit's figures against a simulation of the same drifter (independent time integration):
+    the blow frequency from the simulated impacts, the penetration from the blow of the simulated
+    arrival (rigid piston: the arrival state is (0, v))."""
+    o = drifter.orbit()
+    r = o.rock()
+    model, drive = drifter.model(), drifter.drive()
+    tr = simulate(model, drive, InitialState.rigid(-0.05, 0.0, 0), 60 * o.orbit.period)
+    ti = np.asarray(tr.impact_times)
+    f_hz = drifter.omega_rad_s / float(ti[-1] - ti[-2])
+    assert o.blow_frequency_Hz == pytest.approx(f_hz, rel=1e-12)
+    from impactbar.loads import FourierLoad
+
+    blow = model.law.blow(model, FourierLoad(1.0, []), 0.0, np.array([0.0, tr.impact_velocities[-1]]))
+    pen_m = float(blow.permanent_penetration) * drifter.bar.length_m
+    assert r["penetration_mm"] == pytest.approx(pen_m * 1e3, rel=1e-9)
+    assert r["drilling_rate_m_min"] == pytest.approx(pen_m * f_hz * 60.0, rel=1e-9)
+    assert 0.0 < r["efficiency"] <= r["efficiency_with_rebound"] <= 1.0
+    assert r["work_on_rock_J"] < o.impact_energy_J  # the stroke force does little work in the blow
+    assert o.stable and model.impact == "rodrock"
+
+
+def test_drifter_rock_config_needs_rock_for_rod_and_refuses_unknown_sections():
+    cfg = load_config(EXAMPLE)
+    del cfg["rock"]
+    with pytest.raises(ValueError, match=r"\[rod\] and \[bit\] need a \[rock\]"):
+        Drifter.from_config(cfg)
+    cfg = load_config(EXAMPLE)
+    cfg["drill"] = {}
+    with pytest.raises(ValueError, match=r"unknown section \[drill\]"):
+        Drifter.from_config(cfg)
+
+
+def test_cli_orbits_prints_the_blow_on_rock():
+    env = dict(os.environ, PYTHONPATH=str(Path(impactbar.__file__).resolve().parents[1]), MPLBACKEND="Agg")
+    res = subprocess.run([sys.executable, "-m", "impactbar.cli", "orbits", str(EXAMPLE)], env=env,
+                         capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    assert "drilling rate" in res.stdout and "work on rock" in res.stdout
+    assert "drill string of 2 segment(s)" in res.stdout
