@@ -142,3 +142,29 @@ def test_efficiency_map_refuses_a_sweep_without_rock(tmp_path):
     run_sweep(spec, tmp_path / "p.zarr", progress=False)
     with pytest.raises(ValueError, match="not run under the rod-rock law"):
         plot_efficiency_map(open_sweep(tmp_path / "p.zarr"), ["R"])
+
+
+def test_montecarlo_and_bifurcation_under_rock_without_warnings():
+    """The other tasks under the rod-rock law: every run settles on one blow per load period
+    (``k=1``), as a direct simulation shows; no RuntimeWarning leaks (the bounce test multiplied
+    R = 0 by the first impact's infinite previous velocity)."""
+    import warnings
+
+    from impactbar import InitialState, simulate
+    from impactbar.sweeps import motion_classes
+
+    base = rock_doc(**{"rock.k": {"values": [30.0, 90.0]}})
+    for task, opts in (("montecarlo", {"starts": 2, "periods": 20.0}),
+                       ("bifurcation", {"periods": 20.0, "keep": 4})):
+        doc = dict(base, task=task, **{task: opts})
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            out = compute_chunk(parse_spec(doc), 0)
+        assert not out["failed"].any()
+        if task == "montecarlo":
+            np.testing.assert_array_equal(out["fraction"][:, motion_classes().index("k=1")], 1.0)
+        else:
+            np.testing.assert_allclose(np.diff(out["impact_phase"], axis=1), 0.0, atol=1e-6)
+    model, load = parse_spec(doc).point((0,))
+    tr = simulate(model, load, InitialState.rigid(-0.2, 0.0, 0), 40 * 2 * np.pi)
+    np.testing.assert_allclose(np.diff(tr.impact_times[-4:]), 2 * np.pi, atol=1e-6)

@@ -391,7 +391,8 @@ def _main_impacts(tr: Trajectory, sel: np.ndarray, period: float) -> np.ndarray:
         after_release = last_release > prev
         prev = np.maximum(prev, last_release)
     flight = t - prev
-    bounce = ~after_release & (flight < 0.5 * period) & (v < 1.5 * tr.model.R * v_prev)
+    with np.errstate(invalid="ignore"):  # R = 0 times the first impact's v_prev = inf: no bounce
+        bounce = ~after_release & (flight < 0.5 * period) & (v < 1.5 * tr.model.R * v_prev)
     return ((flight >= 0.05 * period) & ~bounce)[sel]
 
 
