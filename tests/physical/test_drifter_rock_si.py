@@ -67,3 +67,13 @@ def test_cli_orbits_prints_the_blow_on_rock():
     assert res.returncode == 0, res.stderr
     assert "drilling rate" in res.stdout and "work on rock" in res.stdout
     assert "drill string of 2 segment(s)" in res.stdout
+
+
+def test_simulated_drilling_figures_equal_the_orbits(drifter):
+    """``Drifter.simulate`` reads the blows' records of the run (an independent time integration)
+    and, once settled, gives the orbit's work on rock, penetration and drilling rate."""
+    o = drifter.orbit()
+    _, s = drifter.simulate(40 * o.period_s)
+    r = o.rock()
+    for key in ("work_on_rock_J", "penetration_mm", "efficiency", "drilling_rate_m_min"):
+        assert s[key] == pytest.approx(r[key], rel=1e-6), key

@@ -87,8 +87,10 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
     print(f"{drifter.name or 'drifter'}: {tr.n_impacts} impacts in {tr.t_end / om:.4g} s; second half: "
           f"{s['blow_frequency_Hz']:.4g} Hz, {s['impact_velocity_m_s']:.4g} m/s, "
-          f"{s['impact_energy_J']:.4g} J per blow, {s['percussive_power_kW']:.4g} kW; "
-          f"wrote {out}/impacts.csv, summary.json")
+          f"{s['impact_energy_J']:.4g} J per blow, {s['percussive_power_kW']:.4g} kW"
+          + (f"; on rock {s['work_on_rock_J']:.4g} J and {s['penetration_mm']:.4g} mm per blow, "
+             f"{s['drilling_rate_m_min']:.4g} m/min" if "drilling_rate_m_min" in s else "")
+          + f"; wrote {out}/impacts.csv, summary.json")
     return 0
 
 

@@ -33,6 +33,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from .._shared.validate import check_int, check_real
 from .bar import Bar
 from .config import _section
@@ -173,7 +175,9 @@ class Drifter:
         (:func:`impactbar.simulate`); returns the :class:`~impactbar.SwitchedTrajectory` and a
         dict of SI summaries over the last half of the run: ``blows``, ``blow_frequency_Hz``,
         ``impact_velocity_m_s`` (mean), ``impact_energy_J`` (mean, ``m v^2 / 2`` of the rigid
-        mode's arrival), ``percussive_power_kW``."""
+        mode's arrival), ``percussive_power_kW``; with a drill string also the means per blow of
+        ``work_on_rock_J``, ``penetration_mm`` and ``efficiency``, and ``drilling_rate_m_min``
+        (the mean penetration times the blow frequency)."""
         from ..simulation import InitialState, simulate
 
         dur = check_real("duration_s", duration_s, lo=0.0, lo_open=True)
@@ -187,9 +191,23 @@ class Drifter:
         n = int(late.sum())
         f = (n - 1) / float(t[late][-1] - t[late][0]) if n > 1 else math.nan
         e = 0.5 * self.bar.mass_kg * float((v * v).mean()) if n else math.nan
-        return tr, {"blows": n, "blow_frequency_Hz": f,
-                    "impact_velocity_m_s": float(v.mean()) if n else math.nan,
-                    "impact_energy_J": e, "percussive_power_kW": e * f / 1e3}
+        out = {"blows": n, "blow_frequency_Hz": f, "impact_velocity_m_s": float(v.mean()) if n else math.nan,
+               "impact_energy_J": e, "percussive_power_kW": e * f / 1e3}
+        pieces = tr.pieces
+        recs = [r for i in range(len(pieces)) for r in getattr(pieces[i], "impacts", ())]
+        if self.drill is not None and len(recs) == late.size:  # the blows' records, one per impact
+            late_recs = [r for r, keep in zip(recs, late, strict=True) if keep]
+            sc = self.scales
+            work = [float(r.work_on_rock) * sc.force_N * sc.length_m for r in late_recs]
+            pen = [float(r.permanent_penetration) * sc.length_m for r in late_recs]
+
+            def mean(x):
+                return float(np.mean(x)) if x else math.nan
+
+            out.update(work_on_rock_J=mean(work), penetration_mm=1e3 * mean(pen),
+                       efficiency=mean([float(r.efficiency) for r in late_recs]),
+                       drilling_rate_m_min=mean(pen) * f * 60.0)
+        return tr, out
 
     @classmethod
     def from_config(cls, config: dict) -> Drifter:
