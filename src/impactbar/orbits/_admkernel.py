@@ -218,7 +218,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
             bound = ls[i] * half
             keep[i] = abs(fs[i]) <= bound * (1.0 + 1e-9) + atol + 1e-300 and not xs[i] > atol + 1e-300
             if prune and keep[i]:
-                keep[i] = min(gs[i] + (abs(fs[i]) + ls[i] * half) * half, us[i]) >= best
+                keep[i] = min(gs[i] + (abs(fs[i]) + 0.5 * ls[i] * half) * half, us[i]) >= best
             if keep[i]:
                 nk += 1
         kept = np.empty(nk)
@@ -317,7 +317,8 @@ def _newton(phase, lo, hi, prob, work, src):
 
 @numba.njit(cache=CACHE, nogil=True)
 def _value_bounds(phase, lo, hi, prob, work, src):
-    """``g`` at the midpoints of ``[lo, hi]`` and its upper bound ``g(mid) + (|g'| + L h) h``."""
+    """``g`` at the midpoints of ``[lo, hi]`` and its upper bound ``g(mid) + (|g'| + L h / 2) h``
+    (Taylor's theorem, ``L`` bounding ``|g''|``)."""
     n = lo.size
     gm = np.empty(n)
     upper = np.empty(n)
@@ -326,7 +327,7 @@ def _value_bounds(phase, lo, hi, prob, work, src):
         mid = 0.5 * (lo[i] + hi[i])
         half = 0.5 * (hi[i] - lo[i])
         gm[i], g1[i], L2, ut, _ = _joint_upper(phase, mid, half, prob, work, src)
-        upper[i] = min(gm[i] + (abs(g1[i]) + L2 * half) * half, ut)
+        upper[i] = min(gm[i] + (abs(g1[i]) + 0.5 * L2 * half) * half, ut)
     return gm, upper, g1
 
 

@@ -179,7 +179,7 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
         samples) and that bound."""
         g = last["g"]
         best = max(best, _sample_bound(mids, g, g1, atol, floor))
-        return g + (np.abs(g1) + L2 * half) * half >= best, best
+        return g + (np.abs(g1) + 0.5 * L2 * half) * half >= best, best
 
     def prune(mids, half, g1, L2):
         """Branch and bound already in the first enclosure (its lower bound kept in ``last``)."""
@@ -292,7 +292,7 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
     """Largest values of ``g = c . q`` at its stationary points, by branch and bound.
 
     Every narrow interval that may hold a zero of ``g'`` has an upper bound of ``g`` on it,
-    ``g(mid) + (|g'(mid)| + L h) h``. Best first: the :data:`SEEDS` intervals with the largest
+    ``g(mid) + (|g'(mid)| + L h / 2) h``. Best first: the :data:`SEEDS` intervals with the largest
     bounds get a Newton iteration; the best value found prunes every interval whose bound cannot
     beat it, and the others get a vectorised Newton iteration. A converged zero ``t*`` of ``g'``
     gives a stationary value; as ``g <= g(t*) + L r^2 / 2`` on its interval (``r`` the distance to
@@ -328,7 +328,7 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
         half = 0.5 * (iv[:, 1] - iv[:, 0])
         gm = c @ states(mid)[0]
         g1, L2 = bound(mid, half)
-        return gm, gm + (np.abs(g1) + L2 * half) * half, g1
+        return gm, gm + (np.abs(g1) + 0.5 * L2 * half) * half, g1
 
     values: list[float] = []
     err = 0.0
