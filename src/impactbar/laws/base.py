@@ -61,11 +61,17 @@ class ContactLaw:
     def paper_equivalent(self, model):
         """The same bar under the paper's law (eq. 10) with the restitution this law's contact
         gives: the model's ``R`` (clipped to ``0.95``), unless a law says otherwise. Newton's
-        method for this law's orbits starts from that bar's orbits.
+        method for this law's orbits starts from that bar's orbits (theory §10).
+
+        Parameters
+        ----------
+        model : BarModel
+            A bar under this law.
 
         Returns
         -------
         BarModel
+            ``model`` with ``impact="paper"`` and the equivalent ``R``.
         """
         return model.with_(impact="paper", R=min(model.R, 0.95))
 

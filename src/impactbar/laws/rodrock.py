@@ -165,11 +165,17 @@ class RodRock(ContactLaw):
     def paper_equivalent(self, model):
         """The same bar under the paper's law with the restitution of a rigid piston's blow on this
         rod and rock, ``R = -rebound_velocity / V`` at ``V = 1`` (:func:`single_blow`, clipped to
-        ``[0, 0.95]``): whose orbits start Newton's method for this law's (theory §4d).
+        ``[0, 0.95]``): whose orbits start Newton's method for this law's (theory §4d, §10).
+
+        Parameters
+        ----------
+        model : BarModel
+            A bar under this law.
 
         Returns
         -------
         BarModel
+            ``model`` with ``impact="paper"`` and that ``R``.
         """
         return model.with_(impact="paper", R=_equivalent_restitution(model))
 

@@ -301,11 +301,17 @@ class DrifterOrbit:
         return self.orbit.stable
 
     def rock(self) -> dict:
-        """With a drill string (``drifter.drill``), the SI figures of the orbit's first blow on the
-        rock (``impactbar.physical.rock.rock_orbit_figures``): ``work_on_rock_J``,
-        ``penetration_mm``, ``drilling_rate_m_min`` (the penetration times the blow frequency),
-        ``efficiency``, ``efficiency_with_rebound``, ``rod_energy_J``, ``peak_rod_stress_Pa``; an
-        empty dict without one."""
+        """The SI figures of the orbit's first blow on the rock (theory §4d, §10).
+
+        Returns
+        -------
+        dict
+            With a drill string (``drifter.drill``), those of
+            ``impactbar.physical.rock.rock_orbit_figures``: ``work_on_rock_J`` (J),
+            ``penetration_mm`` (mm), ``drilling_rate_m_min`` (the penetration times the blow
+            frequency, m/min), ``efficiency`` and ``efficiency_with_rebound`` (at most 1),
+            ``rod_energy_J``, ``peak_rod_stress_Pa``, ``rod_advance_m``; an empty dict without one.
+        """
         if self.drifter.drill is None:
             return {}
         from types import SimpleNamespace
