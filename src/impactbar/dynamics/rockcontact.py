@@ -42,7 +42,7 @@ import math
 import numpy as np
 
 from ._characteristics import _Piston
-from .rodrock import Blow, blow_grid, solve_blow
+from .rodrock import Blow, blow_grid, solve_blow, whole_steps
 
 __all__ = ["BlowMap", "RockContact", "rock_contact"]
 
@@ -296,7 +296,7 @@ class BlowMap:
         self.p_end = float(np.asarray(load(np.array([self.t0])), dtype=float)[0])
         if duration is None:
             duration = law.window(model)
-        self.n_max = max(1, math.ceil(float(duration) / dt * (1.0 - 1e-12)))
+        self.n_max = whole_steps(duration, dt)
         self.drive = _drive_averages(load, self.t0, dt, self.n_max)
         self.params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
 

@@ -553,6 +553,12 @@ def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None) -> BlowGrid
                     bounds=bounds.astype(np.int64), edges=edges, travel=travel, static=static)
 
 
+def whole_steps(duration: float, dt: float) -> int:
+    """Cell steps of length ``dt`` a blow of ``duration`` lasts: ``ceil(duration / dt)``, at least
+    one (a duration within rounding of a whole number of steps is that number)."""
+    return max(1, math.ceil(float(duration) / dt * (1.0 - 1e-12)))
+
+
 def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, energy_fraction=1e-9,
                separation_time=None, gap=0.0, bit_state=None, record_field=False, n_steps=None) -> Blow:
     """A blow on ``grid`` from the piston's waves ``F, G`` (shape ``(cells,)``, the rod's zero: at rest
@@ -571,7 +577,7 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     G = np.array(G, dtype=float)
     E0 = float(np.sum((F[:n_p] ** 2 + G[:n_p] ** 2) / Z[:n_p])) * dt
     _check_blow_size(grid.Z.size, (t_max / dt if n_steps is None else n_steps), record_field)
-    n_max = max(1, math.ceil(t_max / dt * (1.0 - 1e-12))) if n_steps is None else max(1, int(n_steps))
+    n_max = whole_steps(t_max, dt) if n_steps is None else max(1, int(n_steps))
     stop = energy_fraction * E0 if n_steps is None else -1.0
     drive = np.zeros(n_max) if drive is None else np.ascontiguousarray(drive[:n_max], dtype=float)
     if drive.size < n_max:

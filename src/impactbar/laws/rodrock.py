@@ -185,6 +185,7 @@ class RodRock(ContactLaw):
         blow's cell grid (the simulator's blow lasts whole steps, so the orbits' flights start
         where its flights do)."""
         from ..dynamics.rockcontact import _grid_for
+        from ..dynamics.rodrock import whole_steps
 
         T = self.blow_time
         if T is None:
@@ -192,7 +193,7 @@ class RodRock(ContactLaw):
         segs = self.segments
         dt = _grid_for(float(model.s), tuple(g.length for g in segs), tuple(g.impedance for g in segs),
                        tuple(g.wave_speed for g in segs), None).cell_time
-        return max(1, math.ceil(float(T) / dt * (1.0 - 1e-12))) * dt
+        return whole_steps(T, dt) * dt
 
     def impact_map(self, model, load, t, y_minus):
         """The contact step as a map of the arrival state (theory §4d): ``y_plus`` the state
@@ -346,7 +347,7 @@ def _paper_guesses(model, load):
     from ..orbits import periodic_orbits
 
     law = model.law
-    paper = model.with_(impact="paper", R=_equivalent_restitution(model))
+    paper = law.paper_equivalent(model)
     T = law.window(model)
     guesses = []
     for o in sorted(periodic_orbits(paper, load), key=lambda o: (not o.stable, o.phase)):

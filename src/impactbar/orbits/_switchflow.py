@@ -213,16 +213,26 @@ def _residual(model, drive, X, consts=None):
         Jac[:2 * M, :2 * M] = np.eye(2 * M) - JP @ _matrix(Ed)
         Jac[:2 * M, 2 * M] = -JP @ dzd_dh1
         Jac[:2 * M, 2 * M + 1] = -JP @ dzd_dh3
-    r[2 * M] = -zb[0] - drive.switch_out
-    r[2 * M + 1] = c @ zd[:M]
-    Jac[2 * M, 0] = -Eb[0][0]
-    Jac[2 * M, M] = -Eb[1][0]
-    Jac[2 * M, 2 * M] = -dzb_dh1[0]
-    Jac[2 * M + 1, :M] = c * Ed[0]
-    Jac[2 * M + 1, M:2 * M] = c * Ed[1]
-    Jac[2 * M + 1, 2 * M] = c @ dzd_dh1[:M]
-    Jac[2 * M + 1, 2 * M + 1] = c @ dzd_dh3[:M]
+    r[2 * M:], Jac[2 * M:] = _conditions(drive, c, zb, zd, Eb, Ed, dzb_dh1, dzd_dh1, dzd_dh3)
     return r, Jac
+
+
+def _conditions(drive, c, zb, zd, Eb, Ed, dzb_dh1, dzd_dh1, dzd_dh3):
+    """The switch and contact conditions of the segment problem and their Jacobian rows in
+    ``(z0, h1, h3)``, from the flights of :func:`_flights`: ``-q_0 = switch_out`` at the switch
+    crossing, ``c . q = 0`` at the arrival. Returns ``(g, G)``, shapes ``(2,)`` and
+    ``(2, 2 M + 2)``."""
+    M = c.size
+    g = np.array([-zb[0] - drive.switch_out, c @ zd[:M]])
+    G = np.zeros((2, 2 * M + 2))
+    G[0, 0] = -Eb[0][0]
+    G[0, M] = -Eb[1][0]
+    G[0, 2 * M] = -dzb_dh1[0]
+    G[1, :M] = c * Ed[0]
+    G[1, M:2 * M] = c * Ed[1]
+    G[1, 2 * M] = c @ dzd_dh1[:M]
+    G[1, 2 * M + 1] = c @ dzd_dh3[:M]
+    return g, G
 
 
 def _residual_m(model, drive, X, m, consts=None):

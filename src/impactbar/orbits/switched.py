@@ -47,6 +47,7 @@ from ._switchflow import (  # noqa: F401 (the segment problem; _residual_m, _fli
     _apply,
     _before_impact,
     _blocks,
+    _conditions,
     _constants,
     _field,
     _flight_index,
@@ -504,18 +505,16 @@ def contact_orbit_at(model: BarModel, drive: PositionSwitchedDrive, X, impacts: 
         Xk = X[k * n:(k + 1) * n]
         z0 = Xk[:2 * M].copy()
         dur = np.array([drive.delay, Xk[2 * M], drive.delay, Xk[2 * M + 1]])
-        _, zd, _, Ed, _, dzd_dh1, dzd_dh3 = _flights(model, drive, Xk, w2)
+        flights = _flights(model, drive, Xk, w2)
+        zb, zd, _, Ed, _, dzd_dh1, dzd_dh3 = flights
         # the arrival's dependence on z0 with the switch and arrival times implicit
-        _, Jac = _residual(model, drive, Xk, (w2, c, cmap))
-        G_z, G_h = Jac[2 * M:, :2 * M], Jac[2 * M:, 2 * M:]
-        dzd = _matrix(Ed) - np.column_stack((dzd_dh1, dzd_dh3)) @ np.linalg.solve(G_h, G_z)
+        G = _conditions(drive, c, *flights)[1]
+        dzd = _matrix(Ed) - np.column_stack((dzd_dh1, dzd_dh3)) @ np.linalg.solve(G[:, 2 * M:], G[:, :2 * M])
         if k:
             P = B.T @ dzd @ JP_prev @ B @ P
-        _, JP_prev = cmap(zd)
-        JP_prev = JP_prev.copy()
+        JP_prev = cmap(zd)[1]
         if k == 0:
             first_dzd = dzd
-        _, zb, _, _ = _legs(model, drive, z0, dur)
         states.append(z0)
         durations.append(dur)
         velocities.append(float(c @ zd[M:]))

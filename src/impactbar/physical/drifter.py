@@ -193,9 +193,9 @@ class Drifter:
         e = 0.5 * self.bar.mass_kg * float((v * v).mean()) if n else math.nan
         out = {"blows": n, "blow_frequency_Hz": f, "impact_velocity_m_s": float(v.mean()) if n else math.nan,
                "impact_energy_J": e, "percussive_power_kW": e * f / 1e3}
-        pieces = tr.pieces
+        pieces = tr.pieces if self.drill is not None else ()
         recs = [r for i in range(len(pieces)) for r in getattr(pieces[i], "impacts", ())]
-        if self.drill is not None and len(recs) == late.size:  # the blows' records, one per impact
+        if recs and len(recs) == late.size:  # with a drill string: the blows' records, one per impact
             late_recs = [r for r, keep in zip(recs, late, strict=True) if keep]
             sc = self.scales
             work = [float(r.work_on_rock) * sc.force_N * sc.length_m for r in late_recs]
