@@ -20,7 +20,7 @@ from impactbar import BarModel, CosineLoad, periodic_orbits, physical
 def _clear_caches():
     from impactbar.orbits import stability, wave
 
-    for f in (wave._phase_scan, wave._flight_fundamental, stability.period_fundamental):
+    for f in (wave._phase_scan, wave._state_series, wave._flight_fundamental, stability.period_fundamental):
         f.cache_clear()
 
 

@@ -294,3 +294,22 @@ def test_one_compiled_search_serves_every_load():
         for load in loads + loads:  # the second time, the loads' cached transfer functions
             _periodic_orbits_general(model, load)
     assert len(_admkernel.admissibility_search.signatures) == 1
+
+
+def test_newton_leaves_an_interval_once_it_converged_or_left_it():
+    """``_newton_stationary`` on ``g = cos t`` (one mode, ``w2 = 1``, no load): the interval
+    holding the zero ``pi`` of ``g'`` converges to it; one without a zero fails after one
+    evaluation (its first step leaves it) and is not evaluated again while the other iterates."""
+    seen = []
+
+    def states(t):
+        t = np.asarray(t, dtype=float)
+        seen.append(t.size)
+        return np.cos(t)[None, :], -np.sin(t)[None, :]
+
+    lo, hi = np.array([2.9, 1.0]), np.array([3.3, 1.4])
+    t, ok = admissibility._newton_stationary(states, lambda t: np.zeros(np.shape(t)), 0.0, np.ones(1),
+                                             np.ones(1), 0.0, lo, hi)
+    assert ok.tolist() == [True, False]
+    assert t[0] == pytest.approx(math.pi, abs=1e-12)
+    assert seen[0] == 2 and all(n == 1 for n in seen[1:]) and len(seen) > 2

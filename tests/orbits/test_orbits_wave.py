@@ -244,3 +244,47 @@ def test_square_wave_residual_compiled_as_wave_orbit_states(rng):
         assert a.phase == pytest.approx(b.phase, abs=1e-12)
         assert a.admissibility == b.admissibility
         np.testing.assert_allclose(a.multipliers, b.multipliers, rtol=1e-10, atol=1e-12)
+
+
+def test_states_from_the_phase_series_are_the_direct_ones(rng):
+    """Under a load of finitely many harmonics the wave law's orbit states are evaluated from
+    their trigonometric series in the phase (one set of ``2 K + 1`` samples per model and load):
+    against the flight and the window's drive computed at each phase, on random models, loads and
+    phases; the rates against ``window_drive``'s and against central differences of the states;
+    every phase root a zero of the direct residual; a load with its own evaluation is computed
+    phase by phase."""
+    from impactbar import FourierLoad
+    from impactbar.dynamics.impact import window_drive
+    from impactbar.orbits import wave as W
+
+    for trial in range(12):
+        model = BarModel(s=float(rng.choice([1.0, 3.0, 10.0])), d=float(rng.choice([0.0, 0.03])),
+                         R=float(rng.uniform(0.0, 0.9)), n_modes=int(rng.choice([0, 3, 8, 50])),
+                         impact="wave")
+        harmonics = rng.normal(size=3) + 1j * rng.normal(size=3)
+        harmonics[1] *= trial % 2  # orders (1, 3) or (1, 2, 3)
+        load = FourierLoad(float(rng.uniform(0.0, 1.0)), list(harmonics))
+        assert W._has_series(model, load)
+        for phase in rng.uniform(0.0, TWO_PI, 4):
+            r, y_end, y_minus, (dg, dh), (g, h) = W._orbit_states(model, load, phase)
+            r0, y_end0, y_minus0, _, (g0, h0) = W._direct_states(model, load, phase, rates=False)
+            scale = np.abs(y_minus0).max()
+            assert abs(r - r0) <= 1e-12 * scale
+            for a, b in ((y_end, y_end0), (y_minus, y_minus0), (g, g0), (h, h0)):
+                np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * max(scale, np.abs(b).max()))
+            _, _, dg0, dh0 = window_drive(model.s, model.R, model.n_modes, load, phase, derivative=True)
+            np.testing.assert_allclose(dg, dg0, rtol=0, atol=1e-11 * np.abs(dg0).max())
+            np.testing.assert_allclose(dh, dh0, rtol=0, atol=1e-11 * np.abs(dh0).max())
+            eps = 1e-5
+            hp, hm = (W._direct_states(model, load, phase + e, rates=False)[4][1] for e in (eps, -eps))
+            np.testing.assert_allclose(dh, (hp - hm) / (2 * eps), rtol=0, atol=1e-7 * np.abs(dh0).max())
+        for phase, _ in W.wave_phase_roots(model, load):
+            r0, _, y_minus0, _, _ = W._direct_states(model, load, phase, rates=False)
+            assert abs(r0) <= 1e-11 * np.abs(y_minus0).max()
+
+    class Shifted(FourierLoad):
+        def __call__(self, t):
+            return super().__call__(np.asarray(t) + 0.1)
+
+    assert not W._has_series(BarModel(3.0, 0.0, 0.5, 4, impact="wave"), Shifted(0.3, [1.0]))
+    assert not W._has_series(BarModel(0.3, 0.0, 0.5, 4, impact="wave"), CosineLoad(0.6, 1.0))  # 2/s > 2 pi

@@ -482,6 +482,13 @@ def wave_impact(model, load, t0: float, q, v) -> WaveImpact:
     t0 = float(t0)
     if not math.isfinite(t0):
         raise ValueError(f"t0 must be finite; got {t0}")
+    return _wave_impact(model, load, t0, q, v, window_drive(s, R, model.n_modes, load, t0))
+
+
+def _wave_impact(model, load, t0: float, q, v, drive) -> WaveImpact:
+    """:func:`wave_impact` from checked inputs, with the window's drive part ``drive = (g, h)`` of
+    :func:`window_drive` already computed (the orbit builder has it)."""
+    s, R = float(model.s), float(model.R)
     sol = _Contact(s, R, q, v, load, t0).solve()
-    qa, va = sol.post_state(q, v, window_drive(s, R, model.n_modes, load, t0))
+    qa, va = sol.post_state(q, v, drive)
     return WaveImpact(s, R, t0, q.copy(), v.copy(), qa, va, sol)

@@ -275,19 +275,23 @@ def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src):
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _newton(phase, lo, hi, prob, work, src):
-    """``admissibility._newton_stationary``: the same vectorised iteration, element by element."""
+    """``admissibility._newton_stationary``: the same iteration, element by element (an element
+    leaves it once converged or out of its interval)."""
     c, w2, d = prob[0], prob[2], prob[3]
     q, v = work[0], work[1]
     n = lo.size
     t = np.empty(n)
     ok = np.zeros(n, dtype=np.bool_)
     inside = np.zeros(n, dtype=np.bool_)
+    active = np.ones(n, dtype=np.bool_)
     for i in range(n):
         t[i] = 0.5 * (lo[i] + hi[i])
     M = c.size
     for _ in range(8):
         done = True
         for i in range(n):
+            if not active[i]:
+                continue
             ta = phase + t[i]
             _state(ta, work, src)
             p = _load(ta, src)
@@ -308,7 +312,8 @@ def _newton(phase, lo, hi, prob, work, src):
             inside[i] = (t_new >= lo[i]) and (t_new <= hi[i]) and fin
             t[i] = min(max(t_new, lo[i]), hi[i])
             ok[i] = inside[i] and abs(step) < 1e-12
-            if not (ok[i] or not inside[i]):
+            active[i] = inside[i] and not ok[i]
+            if active[i]:
                 done = False
         if done:
             break
@@ -408,7 +413,7 @@ def _top(x, k):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src_tuples):
+def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, prob, src_tuples):
     """The largest stationary value of ``g = u(1, t)`` over ``[0, horizon]`` after the impact at
     ``phase`` (``admissibility._numpy_search`` and ``_stationary_values``, ``rounds = 8``).
 
@@ -421,6 +426,8 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src_
     the same types, so that one compilation serves every load. From Python the load view comes as
     the plain tuple ``tuple(view)`` in ``src_tuples`` (numba dispatches it several times faster than
     a named tuple), made a view here (no wrapper kernel: a wrapper compiles its callees' code again).
+    ``seeds`` intervals are tried first by the branch and bound (``admissibility.SEEDS``), and an
+    interval searched again is split into ``pieces`` (``admissibility.RETRY_PIECES``).
 
     Returns
     -------
@@ -529,7 +536,7 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, floor, prob, src_
             if retry[i]:
                 rlo[j], rhi[j], rgm[j], rup[j] = lo[i], hi[i], gm[i], upper[i]
                 j += 1
-        lo, hi, good, best = _enclose_in(phase, 0.0, horizon, rlo, rhi, 8, (20_000.0, atol, floor), best,
+        lo, hi, good, best = _enclose_in(phase, 0.0, horizon, rlo, rhi, pieces, (20_000.0, atol, floor), best,
                                          prob, work, src)
         if not good:  # a zero of high order: the enclosure no longer shrinks
             top = np.max(rup)

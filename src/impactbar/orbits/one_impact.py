@@ -387,11 +387,11 @@ def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> Period
 
 def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
     """An orbit of the wave law (theory §4b): contact over ``[0, 2/s]``, flight over ``[2/s, 2 pi]``."""
-    from ..dynamics.impact import wave_impact
-    from .wave import wave_floquet_multipliers, wave_orbit_states
+    from ..dynamics.impact import _wave_impact
+    from .wave import _orbit_states, wave_floquet_multipliers
 
     M = model.n_modes + 1
-    _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
+    _, y_end, y_minus, rate, drive = _orbit_states(model, load, phase)
     c = model.end_weights
     v_imp = float(c @ y_minus[M:])
     T = 2.0 / model.s
@@ -399,7 +399,7 @@ def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> P
     if v_imp > 0.0:
         qm = y_minus[:M].copy()
         qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
-        impact = wave_impact(model, load, phase, qm, y_minus[M:])
+        impact = _wave_impact(model, load, float(phase), qm, y_minus[M:].copy(), drive)
     # the departure: the end must leave the rod end when the window closes
     v_dep = float(c @ y_end[M:])
     scale = max(abs(v_imp), load.sup_abs, 1e-300)

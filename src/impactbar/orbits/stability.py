@@ -113,21 +113,25 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
 
 
 def _arrival_derivative(model: BarModel, load: Load, t_start: float, flight: float, y_start, y_minus,
-                        t_arrive: float):
+                        t_arrive: float, fund=None):
     """Derivative of the state at the next impact with respect to ``z = (t_start, q_1..q_N,
     q_0'..q_N')`` at the start of a flight of length ``flight`` (theory §7).
 
     ``dY = Psi [dy - f(t_start, y) dt_start] + f(t', Y) dt'`` with the saltation
     ``dt' = -(c . dq)/(c . q')``; ``q_0`` follows from contact at the start. Returns ``(dY, r)``,
     ``dY`` of shape ``(2 N + 2, 2 N + 2)`` and ``r = dt'/dz``. Raises ``ValueError`` at grazing.
+    ``fund``, if given, is the fundamental matrix over ``flight`` (``(p11, p12, p21, p22)`` of
+    :func:`~impactbar.dynamics.modal.fundamental`), cached by the caller.
     """
     M = model.n_modes + 1
     c = model.end_weights
     v_imp, f0, f1 = _impact_fields(model, load, t_start, y_start, y_minus, t_arrive)
     f0, f1 = np.concatenate(f0), np.concatenate(f1)
     # the period's fundamental matrix is cached per model
-    p11, p12, p21, p22 = (period_fundamental(model) if flight == TWO_PI
-                          else fundamental(model.frequencies**2, model.d, flight))
+    if fund is None:
+        fund = (period_fundamental(model) if flight == TWO_PI
+                else fundamental(model.frequencies**2, model.d, flight))
+    p11, p12, p21, p22 = fund
     # Psi = [[diag p11, diag p12], [diag p21, diag p22]] applied to f0 and to the embedding of
     # x = (q_1..q_N, v_0..v_N) into the full state (q_0 = -sum c_n q_n), entry by entry
     A = np.zeros((2 * M, 2 * M))

@@ -118,7 +118,70 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool 
         Modal state just before the impact (orbit time ``2 pi-``).
     drive_rate : tuple of numpy.ndarray
         ``d(g, h)/d phase`` (for the impact map's Jacobian); ``(None, None)`` with ``rates=False``.
+
+    Notes
+    -----
+    Every output is linear in the load, and a shift of the phase is a shift of the load: under a
+    load of finitely many harmonics (a :class:`~impactbar.loads.FourierLoad`, highest order ``K``)
+    each output is a trigonometric polynomial of the phase of degree ``K``. Its coefficients are
+    recovered exactly from ``2 K + 1`` phases (once per model and load, the samples the phase scan
+    of :func:`wave_phase_roots` takes), and every later phase is a sum of ``K + 1`` terms: the same
+    states to rounding, with the rates the exact derivative of the same sums. Other loads are
+    computed phase by phase.
     """
+    r, y_end, y_minus, rate, _ = _orbit_states(model, load, phase, rates=rates)
+    return r, y_end, y_minus, rate
+
+
+def _orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
+    """:func:`wave_orbit_states` and the drive's part ``(g, h)`` of the window (for
+    :func:`~impactbar.dynamics.impact.wave_impact`), from the phase series where the load has one."""
+    series = _state_series(model, load) if _has_series(model, load) else None
+    if series is None:
+        return _direct_states(model, load, phase, rates=rates)
+    M = model.n_modes + 1
+    coef = series
+    k = np.arange(coef.shape[0])
+    e = np.exp(1j * k * float(phase))
+    e[1:] *= 2.0
+    vals = (e @ coef).real  # c_0 + 2 Re sum_k c_k e^{i k phase}
+    y_end, y_minus = vals[:2 * M], vals[2 * M:4 * M]
+    g, h = vals[4 * M:5 * M], vals[5 * M:]
+    rate = (None, None)
+    if rates:
+        dvals = ((1j * k * e) @ coef).real
+        rate = (dvals[4 * M:5 * M], dvals[5 * M:])
+    return float(model.end_weights @ y_minus[:M]), y_end, y_minus, rate, (g, h)
+
+
+def _has_series(model: BarModel, load: Load) -> bool:
+    """Whether the states are a trigonometric polynomial of the phase (:func:`wave_orbit_states`'
+    notes): a load of finitely many harmonics whose evaluation is :class:`FourierLoad`'s own, and a
+    window shorter than the period."""
+    return (isinstance(load, FourierLoad) and load.orders.size > 0 and _window(model)[1] > 0.0
+            and all(getattr(type(load), f) is getattr(FourierLoad, f)
+                    for f in ("__call__", "propagate", "flow")))
+
+
+@functools.lru_cache(maxsize=16)
+def _state_series(model: BarModel, load: FourierLoad) -> np.ndarray:
+    """Coefficients ``c_k``, ``k = 0..K``, shape ``(K + 1, 6 N + 6)``, of ``(y_end, y_minus, g, h)``
+    (rows of :func:`_direct_states`) as ``c_0 + 2 Re sum_k c_k e^{i k phase}``: the discrete Fourier
+    transform of ``2 K + 1`` equally spaced phases, exact for a trigonometric polynomial of degree
+    ``K``. Computed once per model and load (both immutable), read-only."""
+    K = int(np.max(load.orders))
+    Ms = 2 * K + 1
+    rows = []
+    for p in TWO_PI * np.arange(Ms) / Ms:
+        _, y_end, y_minus, _, (g, h) = _direct_states(model, load, float(p), rates=False)
+        rows.append(np.concatenate((y_end, y_minus, g, h)))
+    coef = np.fft.fft(np.array(rows), axis=0)[:K + 1] / Ms
+    coef.flags.writeable = False
+    return coef
+
+
+def _direct_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
+    """:func:`_orbit_states` at one phase, by the flight and the window's drive (any load)."""
     s, R, N = model.s, model.R, model.n_modes
     T, F = _window(model)
     fq, fv = _forced_flight(model, load, phase + T, phase + TWO_PI)
@@ -138,7 +201,7 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool 
     vm = (a11 * r2 - a21 * r1) / det
     y_end = window_map(model, np.concatenate((qm, vm)), g, h)
     qm[0] = y_end[0] + p12[0] * y_end[N + 1] + fq[0]
-    return float(model.end_weights @ qm), y_end, np.concatenate((qm, vm)), (dg, dh)
+    return float(model.end_weights @ qm), y_end, np.concatenate((qm, vm)), (dg, dh), (g, h)
 
 
 def window_map(model: BarModel, y_minus, g, h) -> np.ndarray:
@@ -171,7 +234,7 @@ def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     ph = np.asarray(phase, dtype=float)
     if use_fast("wave.residual") and isinstance(load, PiecewiseConstantLoad) and _window(model)[1] > 0.0:
         return _square_wave_residuals(model, load, ph)
-    out = np.array([wave_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
+    out = np.array([_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
     return out.reshape(ph.shape)
 
 
@@ -261,9 +324,13 @@ def _phase_scan(model: BarModel, load: Load) -> tuple[tuple, tuple]:
         K = int(np.max(load.orders)) if load.orders.size else 0
         if K == 0:
             return (), ()
-        Ms = 2 * K + 1
-        ph = TWO_PI * np.arange(Ms) / Ms
-        coef = np.fft.fft(wave_phase_residual(model, load, ph)) / Ms  # r = sum c_k e^{i k phi}
+        if _has_series(model, load):  # the residual's coefficients from the states' series
+            M = model.n_modes + 1
+            coef = _state_series(model, load)[:, 2 * M:3 * M] @ model.end_weights
+        else:
+            Ms = 2 * K + 1
+            ph = TWO_PI * np.arange(Ms) / Ms
+            coef = np.fft.fft(wave_phase_residual(model, load, ph)) / Ms  # r = sum c_k e^{i k phi}
         c0 = coef[0].real
         if load.orders.size == 1:
             k = int(load.orders[0])
@@ -431,7 +498,8 @@ def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y
     """
     M = model.n_modes + 1
     T, F = _window(model)
-    dY, r = _arrival_derivative(model, load, phase + T, F, y_end, y_minus, phase + TWO_PI)
+    dY, r = _arrival_derivative(model, load, phase + T, F, y_end, y_minus, phase + TWO_PI,
+                                _flight_fundamental(model))
     dY = -model.R * dY + np.outer(np.concatenate(drive_rate), r)
     DP = np.empty((2 * M, 2 * M))
     DP[0, :] = r
