@@ -74,3 +74,32 @@ def test_wave_law_many_modes_same_clearance_as_the_numpy_search(load):
     for o, g in zip(fast, ref, strict=True):
         assert o.admissibility == g.admissibility
         assert o.clearance == pytest.approx(g.clearance, rel=1e-12, abs=1e-12)
+
+
+@pytest.mark.parametrize("n", [1, 16, 47])
+def test_compiled_moments_of_a_piecewise_constant_drive_against_quad(n):
+    """The compiled window moments of a piecewise-constant load (closed form between the jumps)
+    against scipy's adaptive quadrature of ``P(theta) cos(n pi theta)`` and ``... sin ...`` over each
+    half of the window, split at the jumps."""
+    from scipy.integrate import quad
+
+    from impactbar.dynamics._characteristics import _GL_W, _GL_X, _WindowLoad
+
+    for load in LOADS[2:]:
+        for s, t0 in ((0.35, 0.1), (3.0, 2.5), (10.0, 6.2), (33.0, 1.38)):
+            wl = _WindowLoad(load, s, t0)
+            jumps = np.ascontiguousarray(wl.jumps)
+            mc, ms = np.zeros((2, n + 1)), np.zeros((2, n + 1))
+            KW.window_moments(tuple(load.kernel_view), s, 0.0, t0, jumps, _GL_X, _GL_W, mc, ms)
+
+            def drive(th, load=load, s=s, t0=t0):
+                return float(load(t0 + th / s))
+
+            for half in (0, 1):
+                inside = jumps[(jumps > half) & (jumps < half + 1)]
+                edges = np.concatenate(([half], inside, [half + 1]))
+                for k in range(n + 1):
+                    for weight, got in (("cos", mc[half, k]), ("sin", ms[half, k])):
+                        ref = sum(quad(drive, a, b, weight=weight, wvar=k * math.pi, epsabs=1e-14)[0]
+                                  for a, b in zip(edges[:-1], edges[1:], strict=True))
+                        assert got == pytest.approx(ref, abs=1e-13)

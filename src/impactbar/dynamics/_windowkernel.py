@@ -59,7 +59,10 @@ def window_jumps(load, s, t0, jumps):
 def _window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
     """Add the moments ``int P(theta) cos(n pi theta)``, ``... sin ...`` of the drive
     ``P(theta) = p(t0 + theta/s)`` over ``[0, 1]`` (row 0) and ``[1, 2]`` (row 1) to ``ic_, is_``
-    (shape (2, M)): Gauss-Legendre panels split at the load's ``jumps`` (in theta, sorted)."""
+    (shape (2, M)): Gauss-Legendre panels split at the load's ``jumps`` (in theta, sorted); for a
+    piecewise-constant load, constant between the jumps, the moments of each piece in closed form,
+    ``P (sin(n pi b) - sin(n pi a)) / (n pi)`` and ``P (cos(n pi a) - cos(n pi b)) / (n pi)`` (the
+    quadrature's values to rounding, ``O(M)`` per piece instead of ``O(M)`` per node)."""
     M = ic_.shape[1]
     N = M - 1
     nj = jumps.size
@@ -73,7 +76,19 @@ def _window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
                     hi = jumps[i]
                     break
             width = hi - lo
-            if width > 0.0:
+            if width > 0.0 and load.kind == 1:
+                P = _window_load(load, t0 + 0.5 * (lo + hi) / s)
+                ic_[half, 0] += P * width
+                ca, sa = math.cos(math.pi * lo), math.sin(math.pi * lo)
+                cb, sb = math.cos(math.pi * hi), math.sin(math.pi * hi)
+                can, san, cbn, sbn = 1.0, 0.0, 1.0, 0.0
+                for n in range(1, M):
+                    can, san = can * ca - san * sa, san * ca + can * sa
+                    cbn, sbn = cbn * cb - sbn * sb, sbn * cb + cbn * sb
+                    k = P / (math.pi * n)
+                    ic_[half, n] += k * (sbn - san)
+                    is_[half, n] += k * (can - cbn)
+            elif width > 0.0:
                 npan = max(1, int(math.ceil(width / hq)))
                 half_w = 0.5 * width / npan
                 for pnl in range(npan):
