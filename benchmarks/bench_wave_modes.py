@@ -20,8 +20,11 @@ from impactbar import BarModel, CosineLoad, periodic_orbits, physical
 def _clear_caches():
     from impactbar.orbits import stability, wave
 
-    for f in (wave._phase_scan, wave._state_series, wave._flight_fundamental, stability.period_fundamental):
-        f.cache_clear()
+    # (getattr: an older tree, timed for comparison, may lack some of these caches)
+    for f in (getattr(wave, "_phase_scan", None), getattr(wave, "_state_series", None),
+              getattr(wave, "_flight_fundamental", None), stability.period_fundamental):
+        if f is not None:
+            f.cache_clear()
 
 
 def median_time(fn, repeat):
