@@ -399,7 +399,7 @@ def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> P
     if v_imp > 0.0:
         qm = y_minus[:M].copy()
         qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
-        impact = _wave_impact(model, load, float(phase), qm, y_minus[M:].copy(), drive)
+        impact = _wave_impact(model, load, float(phase), qm, y_minus[M:], drive)
     # the departure: the end must leave the rod end when the window closes
     v_dep = float(c @ y_end[M:])
     scale = max(abs(v_imp), load.sup_abs, 1e-300)

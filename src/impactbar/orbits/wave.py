@@ -136,11 +136,10 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool 
 def _orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
     """:func:`wave_orbit_states` and the drive's part ``(g, h)`` of the window (for
     :func:`~impactbar.dynamics.impact.wave_impact`), from the phase series where the load has one."""
-    series = _state_series(model, load) if _has_series(model, load) else None
-    if series is None:
+    if not _has_series(model, load):
         return _direct_states(model, load, phase, rates=rates)
     M = model.n_modes + 1
-    coef = series
+    coef = _state_series(model, load)
     k = np.arange(coef.shape[0])
     e = np.exp(1j * k * float(phase))
     e[1:] *= 2.0
@@ -168,7 +167,9 @@ def _state_series(model: BarModel, load: FourierLoad) -> np.ndarray:
     """Coefficients ``c_k``, ``k = 0..K``, shape ``(K + 1, 6 N + 6)``, of ``(y_end, y_minus, g, h)``
     (rows of :func:`_direct_states`) as ``c_0 + 2 Re sum_k c_k e^{i k phase}``: the discrete Fourier
     transform of ``2 K + 1`` equally spaced phases, exact for a trigonometric polynomial of degree
-    ``K``. Computed once per model and load (both immutable), read-only."""
+    ``K`` (any :class:`FourierLoad`: the phase scan reads the residual's coefficients from it even
+    where :func:`_has_series` leaves the states to :func:`_direct_states`). Computed once per model
+    and load (both immutable), read-only."""
     K = int(np.max(load.orders))
     Ms = 2 * K + 1
     rows = []
@@ -324,13 +325,9 @@ def _phase_scan(model: BarModel, load: Load) -> tuple[tuple, tuple]:
         K = int(np.max(load.orders)) if load.orders.size else 0
         if K == 0:
             return (), ()
-        if _has_series(model, load):  # the residual's coefficients from the states' series
-            M = model.n_modes + 1
-            coef = _state_series(model, load)[:, 2 * M:3 * M] @ model.end_weights
-        else:
-            Ms = 2 * K + 1
-            ph = TWO_PI * np.arange(Ms) / Ms
-            coef = np.fft.fft(wave_phase_residual(model, load, ph)) / Ms  # r = sum c_k e^{i k phi}
+        # r = c0 + 2 Re sum_k c_k e^{i k phi}: the residual's coefficients from the states' series
+        M = model.n_modes + 1
+        coef = _state_series(model, load)[:, 2 * M:3 * M] @ model.end_weights
         c0 = coef[0].real
         if load.orders.size == 1:
             k = int(load.orders[0])
