@@ -21,9 +21,25 @@ from ._flightkernel import CACHE, _bc
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def fourier_column(tj, q, v, j, ck, sk, flow):
+def fourier_column(tj, q, v, j, ck, sk, flow, C, S):
     """Column ``j`` of :func:`fourier_flow`: the states at the time ``tj``, written into ``q, v``
-    (``ck, sk`` are scratch of shape ``(K,)``)."""
+    (``ck, sk`` are scratch of shape ``(K,)``, ``C, S`` of shape ``(M,)``)."""
+    t0, kind, lam = flow[0], flow[9], flow[10]
+    tau = tj - t0
+    for n in range(lam.size):
+        if kind[n] == 1:
+            x = lam[n] * tau
+            C[n] = math.cos(x)
+            S[n] = math.sin(x)
+    fourier_column_phased(tj, q, v, j, ck, sk, flow, C, S)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def fourier_column_phased(tj, q, v, j, ck, sk, flow, C, S):
+    """:func:`fourier_column` with the folded modes' phases given: ``C, S`` (shape ``(M,)``) hold
+    ``cos, sin(lam_n (tj - t0))``, kept by a caller that steps the time by fixed amounts (a
+    rotation per mode in place of a cosine and a sine: the certified search's bisection). Only the
+    folded modes (``kind`` 1) read ``C, S``."""
     t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq, cv, sv, dq, dv = flow
     M = hpr.shape[0]
     K = k.size
@@ -41,11 +57,8 @@ def fourier_column(tj, q, v, j, ck, sk, flow):
             vs += hvr[n, m] * ck[m] - hvi[n, m] * sk[m]
         qs += static[n]
         if kind[n] == 1:
-            x = lam[n] * tau
-            C = math.cos(x)
-            S = math.sin(x)
-            qs += (cq[n] * C + sq[n] * S) * ed
-            vs += (cv[n] * C + sv[n] * S) * ed
+            qs += (cq[n] * C[n] + sq[n] * S[n]) * ed
+            vs += (cv[n] * C[n] + sv[n] * S[n]) * ed
         elif kind[n] == 2:
             b, c = _bc(d, tau)
             qs += dq[n] + b * dv[n] + p0 * c
@@ -69,8 +82,10 @@ def fourier_flow(t, flow):
     v = np.empty((M, T))
     ck = np.empty(K)
     sk = np.empty(K)
+    C = np.empty(M)
+    S = np.empty(M)
     for j in range(T):
-        fourier_column(t[j], q, v, j, ck, sk, flow)
+        fourier_column(t[j], q, v, j, ck, sk, flow, C, S)
     return q, v
 
 

@@ -23,6 +23,7 @@ tensile (``alpha < 0``) and resumes when the gap closes.
 
 from __future__ import annotations
 
+import functools
 import math
 from functools import cached_property
 
@@ -118,6 +119,25 @@ def _unit_moment(w):
     return np.sinc(w / math.pi) + 0.5j * w * half * half
 
 
+@functools.lru_cache(maxsize=32)
+def _fourier_moment_tables(M: int, s: float, ks: tuple):
+    """The parts of :func:`_exact_moments` under a Fourier load that do not depend on the start of
+    contact, shape ``(2, M)`` and ``(2, M, K)`` (rows: the halves ``[0, 1]``, ``[1, 2]``):
+    ``e^{i w lo} E(w)`` at ``w = n pi`` and ``n pi +/- k/s``; the moments are then
+    ``p0 T0 + (Tp a + Tm conj(a)) / 2``, ``a_k = p_k e^{i k t0}``. Cached per window (read-only):
+    the phase scan and the orbits' series take them at many starts."""
+    npi = math.pi * np.arange(M)
+    kappa = np.asarray(ks, dtype=float) / s
+    wp = npi[:, None] + kappa[None, :]
+    wm = npi[:, None] - kappa[None, :]
+    e0, ep, em = _unit_moment(npi), _unit_moment(wp), _unit_moment(wm)
+    out = tuple(np.stack([f * np.exp(1j * w * lo) for lo in (0.0, 1.0)])
+                for f, w in ((e0, npi), (ep, wp), (em, wm)))
+    for t in out:
+        t.flags.writeable = False
+    return out
+
+
 def _exact_moments(view, wl, npi):
     """The moments ``I^c_n, I^s_n`` of :func:`window_drive` over ``[0, 1]`` and ``[1, 2]`` in closed
     form, as ``(cos (2, M), sin (2, M))``, for a load whose kernel view (``view``, the
@@ -132,14 +152,10 @@ def _exact_moments(view, wl, npi):
         # P(theta) = p0 + Re sum a_k e^{i kappa_k theta}, a_k = p_k e^{i k t0}, kappa_k = k / s
         k = np.asarray(view.ks, dtype=float)
         a = (view.pr + 1j * view.pim) * np.exp(1j * k * wl.t0)
-        kappa = k / wl.s
-        wp = npi[:, None] + kappa[None, :]
-        wm = npi[:, None] - kappa[None, :]
-        ep, em, e0 = a[None, :] * _unit_moment(wp), np.conj(a)[None, :] * _unit_moment(wm), _unit_moment(npi)
-        for row, lo in enumerate((0.0, 1.0)):
-            out[row] = view.p0 * np.exp(1j * npi * lo) * e0
-            if k.size:
-                out[row] += 0.5 * (ep * np.exp(1j * wp * lo) + em * np.exp(1j * wm * lo)).sum(axis=1)
+        t0, tp, tm = _fourier_moment_tables(npi.size, float(wl.s), tuple(k.tolist()))
+        out[:] = view.p0 * t0
+        if k.size:
+            out += 0.5 * (tp @ a + tm @ np.conj(a))
         return out.real, out.imag
     if view.kind == PIECEWISE and wl._pieces is not None:
         levels, _, edges = wl._pieces

@@ -18,12 +18,15 @@ import math
 import numba
 import numpy as np
 
-from ..dynamics._flowkernel import bound_column, fourier_column, piecewise_column
+from ..dynamics._flowkernel import bound_column, fourier_column, fourier_column_phased, piecewise_column
 from ..dynamics._kernel import CACHE
 from ..dynamics.kernelview import LoadKernelView
 
 TWO_PI = 2.0 * math.pi
 _MAXF = np.finfo(np.float64).max
+#: the most entries (intervals times modes) of the folded modes' phases that the bisection keeps
+#: to step them by rotations (two arrays of 8 MiB); a level with more evaluates them directly
+_PHASE_BUDGET = 1 << 20
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -78,10 +81,11 @@ def _variation(mid, half, src):
 @numba.njit(cache=CACHE, nogil=True)
 def _state(t, work, src):
     """The modal state at the absolute time ``t`` into column 0 of ``q, v`` (shape ``(M, 1)``)."""
-    q, v, ck, sk = work
+    q, v, ck, sk = work[0], work[1], work[2], work[3]
     load, F, P = src
     if load.kind == 0:
-        fourier_column(t, q, v, np.int64(0), ck, sk, F)  # (a literal 0 would compile it again)
+        # (a literal 0 would compile it again)
+        fourier_column(t, q, v, np.int64(0), ck, sk, F, work[8], work[9])
         return
     w2, d, nodes, levels, qn, vn = P
     j = _right(nodes, t) - 1
@@ -138,15 +142,21 @@ def _joint_upper(phase, mid, half, prob, work, src):
     on the interval: once ``h`` is below the period of the highest mode, it excludes the intervals
     where the end rests nearly still (the plateaus that a contact window of the wave law leaves,
     where ``|g'|`` stays below ``L h`` down to tiny ``h``)."""
+    _state(phase + mid, work, src)
+    return _upper(phase + mid, half, prob, work, src)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _upper(ta, half, prob, work, src):
+    """:func:`_joint_upper` from the state at the absolute time ``ta`` (the interval's midpoint),
+    already in ``work``."""
     c, absc, w2, d, psup = prob
-    q, v = work[0], work[1]
-    ta = phase + mid
-    _state(ta, work, src)
+    q, v, w, eb, above, vabove = work[0], work[1], work[4], work[5], work[6], work[7]
     center, delta = _variation(ta, half, src)
     M = c.size
     grow = math.exp(d * half)
-    above = np.empty(M)  # above[K]: the tail's bound of |g| over the modes n > K
-    vabove = np.empty(M)  # ... and of |g'|
+    # above[K]: the tail's bound of |g| over the modes n > K, vabove[K] that of |g'|; eb[n]: the
+    # bound E_n of the mode's energy on the interval (one square root per mode, used twice)
     tail = 0.0
     vtail = 0.0
     for n in range(M - 1, -1, -1):
@@ -154,9 +164,10 @@ def _joint_upper(phase, mid, half, prob, work, src):
         vabove[n] = vtail
         vn = v[n, 0]
         if w2[n] > 0.0:
-            wc = math.sqrt(w2[n])
+            wc = w[n]
             r = wc * q[n, 0] - center / wc
             Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
+            eb[n] = Eb
             tail += absc[n] * (abs(center) / w2[n] + Eb / wc)
             vtail += absc[n] * Eb
         else:
@@ -177,14 +188,14 @@ def _joint_upper(phase, mid, half, prob, work, src):
         g1 += c[n] * vn
         g2 += c[n] * (center - d * vn - w2[n] * q[n, 0])
         if w2[n] > 0.0:
-            wc = math.sqrt(w2[n])
-            r = wc * q[n, 0] - center / wc
-            Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
-            L += absc[n] * (delta + (d + wc) * Eb)
-            L3 += absc[n] * (slope + d * (delta + (d + wc) * Eb) + w2[n] * Eb)
+            Eb = eb[n]
+            b = delta + (d + w[n]) * Eb
+            L += absc[n] * b
+            L3 += absc[n] * (slope + d * b + w2[n] * Eb)
         else:
-            L += absc[n] * (psup + d * ((abs(vn) + psup * half) * grow))
-            L3 += absc[n] * (slope + d * (psup + d * ((abs(vn) + psup * half) * grow)))
+            b = psup + d * ((abs(vn) + psup * half) * grow)
+            L += absc[n] * b
+            L3 += absc[n] * (slope + d * b)
         best = min(best, gK + (abs(g1) + L * half) * half + above[n])
         margin = max(margin, abs(g1) - (L * half + vabove[n]) * (1.0 + 1e-9))
     if smooth:
@@ -201,6 +212,22 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
     dropped too (``_numpy_search``'s ``prune``). ``limits = (min_width, max_intervals, atol, prune,
     floor)``, all floats (``prune`` 1.0 or 0.0), so that every caller shares one compilation."""
     min_width, max_intervals, atol, prune, floor = limits
+    q, v, ck, sk = work[0], work[1], work[2], work[3]
+    F = src[1]
+    t0, lam = F[0], F[10]
+    M = q.shape[0]
+    rotate = src[0].kind == 0  # a Fourier load: the folded modes' phases stepped by rotations
+    # the phases cos, sin(lam (t - t0)) at the kept intervals' midpoints (rows parent[i] of C, S)
+    # (two pairs of buffers, swapped between levels and grown as needed: a fresh array per level
+    # costs its page faults each time)
+    C = np.empty((0, M))
+    S = np.empty((0, M))
+    Cn = np.empty((0, M))
+    Sn = np.empty((0, M))
+    parent = np.empty(0, dtype=np.int64)
+    ch = np.empty(M)  # cos, sin(lam half) of the current level
+    sh = np.empty(M)
+    have = False
     while True:
         n = mids.size
         gs = np.empty(n)
@@ -208,8 +235,33 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
         ls = np.empty(n)
         us = np.empty(n)
         xs = np.empty(n)
+        store = rotate and n * M <= _PHASE_BUDGET
+        if store and Cn.shape[0] < n:
+            rows = max(n, 2 * Cn.shape[0])
+            Cn = np.empty((rows, M))
+            Sn = np.empty((rows, M))
         for i in range(n):
-            gs[i], fs[i], ls[i], us[i], xs[i] = _joint_upper(phase, mids[i], half, prob, work, src)
+            ta = phase + mids[i]
+            if store:
+                ci = Cn[i]
+                si = Sn[i]
+                if have:  # a child at its parent's midpoint -/+ half: rotate the parent's phases
+                    sg = 1.0 if i % 2 else -1.0
+                    pc = C[parent[i // 2]]
+                    ps = S[parent[i // 2]]
+                    for m in range(M):
+                        ci[m] = pc[m] * ch[m] - sg * (ps[m] * sh[m])
+                        si[m] = ps[m] * ch[m] + sg * (pc[m] * sh[m])
+                else:
+                    tau = ta - t0
+                    for m in range(M):
+                        x = lam[m] * tau
+                        ci[m] = math.cos(x)
+                        si[m] = math.sin(x)
+                fourier_column_phased(ta, q, v, np.int64(0), ck, sk, F, ci, si)
+            else:
+                _state(ta, work, src)
+            gs[i], fs[i], ls[i], us[i], xs[i] = _upper(ta, half, prob, work, src)
         if prune:
             best = max(best, _sample_bound(mids, gs, fs, atol, floor))
         keep = np.empty(n, dtype=np.bool_)
@@ -222,10 +274,12 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
             if keep[i]:
                 nk += 1
         kept = np.empty(nk)
+        parent = np.empty(nk, dtype=np.int64)
         j = 0
         for i in range(n):
             if keep[i]:
                 kept[j] = mids[i]
+                parent[j] = i
                 j += 1
         mids = kept
         if mids.size == 0 or 2.0 * half <= min_width:
@@ -233,6 +287,14 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
         if mids.size > max_intervals:
             return np.empty(0), np.empty(0), False, best
         half *= 0.5
+        have = store
+        if have:
+            C, Cn = Cn, C
+            S, Sn = Sn, S
+            for m in range(M):
+                x = lam[m] * half
+                ch[m] = math.cos(x)
+                sh[m] = math.sin(x)
         split = np.empty(2 * mids.size)  # sorted, as the midpoints are and 4 half apart
         for i in range(mids.size):
             split[2 * i] = mids[i] - half
@@ -446,7 +508,10 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
     v = np.empty((M, 1))
     ck = np.empty(K)
     sk = np.empty(K)
-    work = (q, v, ck, sk)
+    # scratch of _joint_upper (the frequencies, the modes' energy bounds and the tails' bounds) and
+    # of fourier_column (the folded modes' phases)
+    w = np.sqrt(prob[2])
+    work = (q, v, ck, sk, w, np.empty(M), np.empty(M), np.empty(M), np.empty(M), np.empty(M))
     n0 = 64
     half0 = 0.5 * horizon / n0
     mids = np.empty(n0)
