@@ -248,8 +248,9 @@ def test_square_wave_residual_compiled_as_wave_orbit_states(rng):
 
 def test_states_from_the_phase_series_are_the_direct_ones(rng):
     """Under a load of finitely many harmonics the wave law's orbit states are evaluated from
-    their trigonometric series in the phase (one set of ``2 K + 1`` samples per model and load):
-    against the flight and the window's drive computed at each phase, on random models, loads and
+    their trigonometric series in the phase (one set of ``2 K + 1`` samples per model and load,
+    whose flights share one forced trajectory): against the flight from rest and the window's drive
+    computed at each phase, on random models (the rigid bar, damped or not), loads and
     phases; the rates against ``window_drive``'s and against central differences of the states;
     every phase root a zero of the direct residual; a load with its own evaluation is computed
     phase by phase."""

@@ -172,11 +172,12 @@ def _state_series(model: BarModel, load: FourierLoad) -> np.ndarray:
     and load (both immutable), read-only."""
     K = int(np.max(load.orders))
     Ms = 2 * K + 1
-    rows = []
-    for p in TWO_PI * np.arange(Ms) / Ms:
-        _, y_end, y_minus, _, (g, h) = _direct_states(model, load, float(p), rates=False)
-        rows.append(np.concatenate((y_end, y_minus, g, h)))
-    coef = np.fft.fft(np.array(rows), axis=0)[:K + 1] / Ms
+    phases = TWO_PI * np.arange(Ms) / Ms
+    N = model.n_modes
+    drives = [window_drive(model.s, model.R, N, load, float(p)) for p in phases]
+    g, h = np.array([a for a, _ in drives]), np.array([b for _, b in drives])
+    _, y_end, y_minus = _periodic_solve(model, _forced_flights(model, load, phases), g, h)
+    coef = np.fft.fft(np.concatenate((y_end, y_minus, g, h), axis=1), axis=0)[:K + 1] / Ms
     coef.flags.writeable = False
     return coef
 
@@ -185,13 +186,23 @@ def _direct_states(model: BarModel, load: Load, phase: float, *, rates: bool = T
     """:func:`_orbit_states` at one phase, by the flight and the window's drive (any load)."""
     s, R, N = model.s, model.R, model.n_modes
     T, F = _window(model)
-    fq, fv = _forced_flight(model, load, phase + T, phase + TWO_PI)
+    forced = _forced_flight(model, load, phase + T, phase + TWO_PI)
     if rates:
         g, h, dg, dh = window_drive(s, R, N, load, phase, derivative=True)
     else:
         (g, h), dg, dh = window_drive(s, R, N, load, phase), None, None
+    r, y_end, y_minus = _periodic_solve(model, forced, g, h)
+    return float(r), y_end, y_minus, (dg, dh), (g, h)
+
+
+def _periodic_solve(model: BarModel, forced, g, h):
+    """The periodicity conditions ``y- = Phi (J y- + (g, h)) + f`` (``J = -R I``, ``Phi`` the
+    flight's fundamental matrix, ``f = forced`` the flight from rest, ``(g, h)`` the window's drive)
+    solved mode by mode, and the window's map: ``(u(1, 2 pi-), y_end, y_minus)``. Every array may
+    carry a leading axis of phases (shape ``(P, N + 1)``; the outputs then do too)."""
+    R, N = model.R, model.n_modes
+    fq, fv = forced
     p11, p12, p21, p22 = _flight_fundamental(model)
-    # y- = Phi (J y- + (g, h)) + f,  J = -R I
     a11, a12, a21, a22 = 1.0 + R * p11, R * p12, R * p21, 1.0 + R * p22
     det = a11 * a22 - a12 * a21
     if np.any(np.abs(det) < 1e-13):
@@ -200,9 +211,33 @@ def _direct_states(model: BarModel, load: Load, phase: float, *, rates: bool = T
     r2 = p21 * g + p22 * h + fv
     qm = (a22 * r1 - a12 * r2) / det
     vm = (a11 * r2 - a21 * r1) / det
-    y_end = window_map(model, np.concatenate((qm, vm)), g, h)
-    qm[0] = y_end[0] + p12[0] * y_end[N + 1] + fq[0]
-    return float(model.end_weights @ qm), y_end, np.concatenate((qm, vm)), (dg, dh), (g, h)
+    y_minus = np.concatenate((qm, vm), axis=-1)
+    y_end = -R * y_minus + np.concatenate((g, h), axis=-1)  # window_map, row by row
+    c = model.end_weights
+    y_end[..., 0] = -(y_end[..., 1:N + 1] @ c[1:])
+    y_minus[..., 0] = y_end[..., 0] + p12[0] * y_end[..., N + 1] + fq[..., 0]
+    return y_minus[..., :N + 1] @ c, y_end, y_minus
+
+
+def _forced_flights(model: BarModel, load: Load, phases):
+    """``(fq, fv)``, shape ``(P, N + 1)``: :func:`_forced_flight` over ``[phase + 2/s, phase + 2 pi]``
+    for each of the ``phases``. Under a load whose flow is :class:`FourierLoad`'s closed form (valid
+    at every time) one trajectory ``X`` from rest serves them all: the forced system is linear, so
+    the state from rest over the flight is ``X(t1) - Phi X(t0)`` (``Phi`` the flight's fundamental
+    matrix, as in :func:`_periodic_solve`). Other loads take one flight per phase."""
+    T, _ = _window(model)
+    phases = np.asarray(phases, dtype=float)
+    if not (isinstance(load, FourierLoad) and type(load).flow is FourierLoad.flow):
+        return tuple(np.array(a) for a in zip(*(_forced_flight(model, load, float(p) + T, float(p) + TWO_PI)
+                                               for p in phases), strict=True))
+    w2 = model.frequencies**2
+    zeros = np.zeros(w2.size)
+    X = load.flow(w2, model.d, float(phases[0]) + T, zeros, zeros)
+    q, v = X(np.concatenate((phases + T, phases + TWO_PI)))
+    P = phases.size
+    q0, v0, q1, v1 = q[:, :P].T, v[:, :P].T, q[:, P:].T, v[:, P:].T
+    p11, p12, p21, p22 = _flight_fundamental(model)
+    return q1 - (p11 * q0 + p12 * v0), v1 - (p21 * q0 + p22 * v0)
 
 
 def window_map(model: BarModel, y_minus, g, h) -> np.ndarray:
