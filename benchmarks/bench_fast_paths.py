@@ -7,7 +7,8 @@ Rows (baseline | new | ratio | the issue's goal):
   against the same formulas in plain floats (cosine and square wave); and per point of a
   vectorised call over a 40,000-point grid;
 - the sweep ``orbits`` task, rigid bar: ``compute_chunk`` point by point against the vectorised
-  chunk (400 points);
+  chunk (400 points); and 4,000-point chunks of a 200 x 200 grid by the vectorised numpy closed
+  forms (the reference of ``"orbits.rigid_arrays"``) against the compiled loop over the points;
 - ``periodic_orbits`` with 8 and 64 modes (cosine, square wave) and 256 modes (cosine): with the
   dense eigenvalue problem for the multipliers against the structured method; the multipliers alone
   at 256 modes;
@@ -128,6 +129,26 @@ def bench_chunk(quick):
     n = 400 * len(chunks)
     row("sweep orbits task, rigid: compute_chunk", n / base, n / new, "points/s", ">= 100,000 /s per core",
         higher_is_better=True)
+    # issue 20: 4,000-point chunks over the whole 200 x 200 grid (its ten chunks: the points without
+    # an orbit are cheap, so one chunk alone flatters), the numpy closed forms (the reference of
+    # "orbits.rigid_arrays") against the compiled loop over the points, at d = 0 and d = 0.05
+    for d in (0.0, 0.05):
+        spec = parse_spec({
+            "task": "orbits",
+            "model": {"s": 100.0, "d": d, "R": 0.5, "n_modes": 0},
+            "load": {"kind": "cosine", "p0": 0.3, "pk": 1.0, "k": 1},
+            "axes": {"R": {"start": 0.0, "stop": 0.95, "num": 200},
+                     "p0": {"start": 0.2, "stop": 0.45, "num": 200}},
+            "chunk_points": 4000,
+        })
+        chunks = range(spec.n_chunks)
+        with use_reference("orbits.rigid_arrays"):
+            base = cpu_median(lambda spec=spec, chunks=chunks: [tasks.compute_chunk(spec, c) for c in chunks],
+                              3)
+        new = cpu_median(lambda spec=spec, chunks=chunks: [tasks.compute_chunk(spec, c) for c in chunks], 3)
+        n = spec.n_points
+        row(f"compute_chunk, 4,000 points, d = {d}: numpy vs compiled", n / base, n / new, "points/s",
+            ">= 1,000,000 /s (issue 20)", higher_is_better=True)
 
 
 def bench_modes(rep):

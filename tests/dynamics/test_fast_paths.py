@@ -163,6 +163,63 @@ def test_rigid_scalar_path_equals_vectorised_closed_form(rng, k):
     assert (res.status == 4).any() and (res.status == 0).any()
 
 
+def _assert_rigid_arrays_equal(fast, ref):
+    """Two ``RigidOrbits`` of the same points: the same orbits, flags and fallbacks, the numbers to
+    rounding (the points left to the general path are compared by their flag only)."""
+    assert np.array_equal(fast.fallback, ref.fallback)
+    ok = ~ref.fallback
+    for name in ("n_orbits", "multiplicity", "status", "stable", "schur_stable"):
+        assert np.array_equal(getattr(fast, name)[ok], getattr(ref, name)[ok]), name
+    assert np.allclose(fast.phase[ok], ref.phase[ok], rtol=0.0, atol=1e-12, equal_nan=True)
+    for name in ("impact_velocity", "v_plus", "q_minus", "clearance", "clearance_error"):
+        a, b = getattr(fast, name)[ok], getattr(ref, name)[ok]
+        assert np.array_equal(np.isinf(a), np.isinf(b)), name
+        fin = np.isfinite(b) | np.isnan(b)
+        assert np.allclose(a[fin], b[fin], rtol=1e-10, atol=1e-12, equal_nan=True), name
+    used = ref.status[ok] >= 0
+    mu_f, mu_r = fast.multipliers[ok][used], ref.multipliers[ok][used]
+    scale = np.maximum(1.0, np.abs(mu_r[:, :1]))
+    fin = np.isfinite(mu_r)
+    assert np.array_equal(fin, np.isfinite(mu_f))
+    assert np.all(np.abs(mu_f - mu_r)[fin] <= (1e-10 * scale * np.ones_like(mu_r.real))[fin])
+    for a, b in zip(fast.schur_roots[ok][used], ref.schur_roots[ok][used], strict=True):
+        assert _set_distance(a, b) < 1e-10  # a complex pair in either order
+
+
+@pytest.mark.parametrize("k", [1, 2, 3])
+def test_compiled_rigid_arrays_equal_numpy_closed_forms(rng, k):
+    """The closed forms compiled point by point (orbits/_rigidkernel.py, what sweeps use) against
+    the vectorised numpy closed forms (the reference of "orbits.rigid_arrays"), which seek every
+    zero of the flight's velocity where the kernel seeks only the maxima's (theory §5): the same
+    orbits, flags, clearances, multipliers and fallbacks, on random parameters with the edge values
+    d = 0, R = 0, R = 1 and a degenerate point."""
+    cases = [_random_rigid_case(rng, k) for _ in range(600)] + [(0.1, 0.5, 0.0, 1.0)]
+    d, R, p0, pk = (np.array(c) for c in zip(*cases, strict=True))
+    fast = rigid_cosine_orbits(d, R, p0, pk, k)
+    with use_reference("orbits.rigid_arrays"):
+        ref = rigid_cosine_orbits(d, R, p0, pk, k)
+    _assert_rigid_arrays_equal(fast, ref)
+    assert fast.fallback.any() and (fast.n_orbits == 0).any()
+    assert (fast.status == 1).any() and (fast.status == 0).any() and fast.stable.any()
+
+
+def test_compiled_rigid_square_wave_equals_numpy_closed_forms(rng):
+    """The same for the square wave (eq. 34), with kappa = 2 (a constant load: no orbit here)."""
+    from impactbar.orbits.rigid import rigid_square_orbits
+
+    n = 800
+    d = np.where(rng.random(n) < 0.3, 0.0, 0.3 * rng.random(n))
+    R = np.where(rng.random(n) < 0.15, 0.0, rng.random(n))
+    q = rng.uniform(0.2, 2.0, n)
+    kappa = np.where(rng.random(n) < 0.05, 2.0, rng.uniform(1.0, 1.95, n))
+    fast = rigid_square_orbits(d, R, q, kappa)
+    with use_reference("orbits.rigid_arrays"):
+        ref = rigid_square_orbits(d, R, q, kappa)
+    _assert_rigid_arrays_equal(fast, ref)
+    assert np.all(fast.n_orbits[kappa == 2.0] == 0)
+    assert (fast.status == 4).any() and (fast.status == 0).any() and (fast.status == 1).any()
+
+
 def test_periodic_orbits_rigid_scalar_switch(rng, monkeypatch):
     """periodic_orbits on a rigid bar returns the same orbits with the plain-float path and with the
     vectorised closed form (the reference of "orbits.rigid_scalar"), fallbacks included."""

@@ -18,6 +18,8 @@ name                          fast (default)                       reference
                               search compiled
 ``orbits.rigid_scalar``       rigid-bar closed forms in plain      vectorised numpy closed forms on
                               floats, one point                    1-element arrays
+``orbits.rigid_arrays``       rigid-bar closed forms compiled,     vectorised numpy closed forms
+                              point by point over arrays
 ``simulate.impact_search``    specialised certified searches       general certified search
                               after an impact                      (``find_crossing``)
 ``simulate.wave_separation``  compiled characteristics solver      Python solver (``wave_impact``)
@@ -65,6 +67,7 @@ IMPLEMENTATIONS: dict[str, str] = {
     "admissibility.bound": "compiled bound of |g''| inside the numpy admissibility search",
     "admissibility.search": "whole certified admissibility search compiled",
     "orbits.rigid_scalar": "rigid-bar closed forms in plain floats for one point",
+    "orbits.rigid_arrays": "rigid-bar closed forms compiled, point by point over parameter arrays",
     "simulate.impact_search": "specialised certified searches after an impact",
     "simulate.wave_separation": "compiled characteristics solver for contact windows that lose contact",
     "simulate.switched_rigid": "rigid bar under a position-switched drive in scalar closed forms",

@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.status import Admissibility
+from ..dynamics.implementations import use_fast
 from .stability import MARGINAL, quadratic_roots
 
 __all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_multipliers", "phase_G_array",
@@ -277,6 +278,8 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     d, R, p0, pk = (np.ravel(x) for x in np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (d, R, p0, pk))))
     k = int(k)
+    if use_fast("orbits.rigid_arrays"):
+        return _compiled("cosine_orbits", (d, R, p0, pk, k), 2 * k)
     ph, mult = _cosine_roots(d, R, p0, pk, k)
     pi_, ji = np.nonzero(~np.isnan(ph))  # one row per orbit
     o_d, o_R, o_p0, o_pk, o_ph = d[pi_], R[pi_], p0[pi_], pk[pi_], ph[pi_, ji]
@@ -315,6 +318,33 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
     g = sub.displacement(t)
     return _assemble(ph, mult, pi_, ji, o_d, o_R, o_p0, psup, v_plus, v_minus, q_minus, p_plus, p_plus,
                      fl._V(o_ph), oi, g)
+
+
+def _compiled(kernel: str, args: tuple, J: int) -> RigidOrbits:
+    """The closed forms by the compiled loop over the points (``orbits/_rigidkernel.py``, the fast
+    side of ``"orbits.rigid_arrays"``): the result's arrays, filled with the unused slots' values,
+    are written orbit by orbit."""
+    from . import _rigidkernel
+
+    P = args[0].size
+    out = RigidOrbits(
+        n_orbits=np.zeros(P, dtype=np.int64),
+        phase=np.full((P, J), np.nan),
+        multiplicity=np.zeros((P, J), dtype=np.int64),
+        impact_velocity=np.full((P, J), np.nan),
+        v_plus=np.full((P, J), np.nan),
+        q_minus=np.full((P, J), np.nan),
+        status=np.full((P, J), -1, dtype=np.int8),
+        clearance=np.full((P, J), np.nan),
+        clearance_error=np.full((P, J), np.nan),
+        multipliers=np.full((P, J, 2), np.nan, dtype=complex),
+        schur_roots=np.full((P, J, 2), np.nan, dtype=complex),
+        schur_stable=np.zeros((P, J), dtype=bool),
+        stable=np.zeros((P, J), dtype=bool),
+        fallback=np.zeros(P, dtype=bool),
+    )
+    getattr(_rigidkernel, kernel)(*(np.ascontiguousarray(a) for a in args[:4]), *args[4:], tuple(out))
+    return out
 
 
 def _log1p_ratio(x):
@@ -362,6 +392,8 @@ def rigid_square_orbits(d, R, q, kappa) -> RigidOrbits:
     """
     d, R, q, kappa = (np.ravel(x) for x in np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (d, R, q, kappa))))
+    if use_fast("orbits.rigid_arrays"):
+        return _compiled("square_orbits", (d, R, q, kappa), 2)
     a = kappa * np.pi  # the jump from +q to -q
     p0 = q * (kappa - 1.0)
     starts = np.stack((np.zeros_like(a), a), axis=1)  # (P, 2)

@@ -183,16 +183,23 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
             raise RuntimeError(f"{int(n[i])} orbits at grid point {at} exceed [orbits] "
                                f"max_orbits = {J}; raise it in the spec")
         w = min(J, res.phase.shape[1])
+        whole = sel.size == covered.size  # one group, every point of the block in order
         idx = np.unravel_index(sel, block)
         out["n_orbits"][idx] = n
+        used = res.status[:, :w] >= 0
         for name, values in (("phase", res.phase), ("impact_velocity", res.impact_velocity),
                              ("admissible", res.admissible), ("stable", res.stable),
                              ("schur_stable", res.schur_stable),
                              ("max_abs_multiplier", res.max_abs_multiplier)):
             target = out[name]
-            col = target[idx]  # (points, J)
-            col[:, :w] = np.where(res.status[:, :w] >= 0, values[:, :w], col[:, :w])
-            target[idx] = col
+            if whole:  # a view of shape (points, J): no gather and scatter
+                col = target.view()
+                col.shape = (sel.size, target.shape[-1])
+            else:
+                col = target[idx]  # (points, J)
+            col[:, :w] = np.where(used, values[:, :w], col[:, :w])
+            if not whole:
+                target[idx] = col
         todo.extend(sel[res.fallback].tolist())
     todo.extend(np.nonzero(~covered)[0].tolist())
     todo = [tuple(int(x) for x in np.unravel_index(p, block)) for p in sorted(todo)]
