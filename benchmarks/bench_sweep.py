@@ -18,7 +18,10 @@ starts). Prints a table; nothing is asserted. With ``--workers 1 2 4`` other siz
 or threads, store creation, every chunk, exit) at the grid sizes of ``--grids`` (default 200 and
 632, about 40,000 and 400,000 points), with the spec's 400-point chunks and with the default
 chunking; with ``--against SRC`` the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x
--C /tmp/old``) is timed alternately with this one, in the same run.
+-C /tmp/old``) is timed alternately with this one, in the same run. Each cell's runs alternate with
+the vectorised peer's (issue 20): a fresh process that computes the same grid by the numpy closed
+forms (the reference of ``"orbits.rigid_arrays"``) in one call over all its points and saves the
+sweep's variables with ``np.savez``; the last column is the peer's wall time over this tree's.
 """
 
 from __future__ import annotations
@@ -91,28 +94,57 @@ def process_seconds(spec_file: Path, out: Path, src: str, workers: int) -> float
     return time.perf_counter() - t
 
 
+#: the vectorised peer (issue 20): one process that computes the same grid's orbits by the numpy
+#: closed forms in one call over all its points and saves the sweep's variables with ``np.savez``
+_PEER = """
+import sys
+import numpy as np
+from impactbar.dynamics.implementations import use_reference
+from impactbar.orbits.rigid import rigid_cosine_orbits
+n = int(sys.argv[1])
+R, p0 = np.meshgrid(np.linspace(0.0, 0.95, n), np.linspace(0.2, 0.45, n), indexing="ij")
+with use_reference("orbits.rigid_arrays"):
+    res = rigid_cosine_orbits(0.0, R, p0, 1.0, 1)
+np.savez(sys.argv[2], n_orbits=res.n_orbits, phase=res.phase, impact_velocity=res.impact_velocity,
+         admissible=res.admissible, stable=res.stable, schur_stable=res.schur_stable,
+         max_abs_multiplier=res.max_abs_multiplier)
+"""
+
+
+def peer_seconds(n: int, out: Path, src: str) -> float:
+    """Wall time of the vectorised peer process for the ``n x n`` grid."""
+    env = dict(os.environ, PYTHONPATH=src)
+    t = time.perf_counter()
+    subprocess.run([sys.executable, "-c", _PEER, str(n), str(out)], check=True, capture_output=True, env=env)
+    return time.perf_counter() - t
+
+
 def main_process(args) -> None:
     here = str(Path(__file__).resolve().parents[1] / "src")
     trees = [("baseline", args.against)] if args.against else []
     trees.append(("this tree", here))
     print(f"cores: {os.cpu_count()}, load average at start: {os.getloadavg()[0]:.2f}")
     print("| points | chunk_points | " + " | ".join(f"{name}: points/s (median wall s)" for name, _ in trees)
-          + (" | ratio |" if len(trees) > 1 else " |"))
-    print("|" + "---|" * (2 + len(trees) + (len(trees) > 1)))
+          + (" | ratio" if len(trees) > 1 else "")
+          + " | vectorised peer: points/s (wall s) | this tree / peer |")
+    print("|" + "---|" * (4 + len(trees) + (len(trees) > 1)))
     with tempfile.TemporaryDirectory() as tmp:
         for n in args.grids:
             for chunk in (400, None):
                 spec_file = Path(tmp) / f"orbits-{n}-{chunk}.toml"
                 spec_file.write_text(_toml(n, chunk))
-                times = {name: [] for name, _ in trees}
+                times = {name: [] for name, _ in trees} | {"peer": []}
                 for _ in range(args.repeat):
                     for name, src in trees:  # alternately, so that both see the same load
                         times[name].append(process_seconds(spec_file, Path(tmp) / "s.zarr", src,
                                                            args.workers[-1]))
+                    times["peer"].append(peer_seconds(n, Path(tmp) / "peer.npz", here))
                 med = [statistics.median(times[name]) for name, _ in trees]
+                peer = statistics.median(times["peer"])
                 cells = " | ".join(f"{n * n / m:,.0f} ({m:.2f} s)" for m in med)
-                ratio = f" | {med[0] / med[-1]:.2f} |" if len(trees) > 1 else " |"
-                print(f"| {n * n:,} | {chunk or 'default'} | {cells}{ratio}", flush=True)
+                ratio = f" | {med[0] / med[-1]:.2f}" if len(trees) > 1 else ""
+                print(f"| {n * n:,} | {chunk or 'default'} | {cells}{ratio} | "
+                      f"{n * n / peer:,.0f} ({peer:.2f} s) | {peer / med[-1]:.2f} |", flush=True)
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
 
 

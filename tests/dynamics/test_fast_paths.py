@@ -398,20 +398,44 @@ def test_sweep_chunk_closed_form_equals_point_by_point(monkeypatch):
 
 
 def _assert_chunks_equal_point_by_point(spec, monkeypatch):
-    """Every chunk by compute_chunk's closed forms and point by point; returns the former."""
+    """Every chunk by compute_chunk's closed forms, numpy's (a small sweep's) and the compiled ones
+    (a sweep of 100,000 points or more), and point by point; returns the compiled ones' chunks."""
     from impactbar.sweeps import tasks
 
+    numpy_ = [tasks.compute_chunk(spec, c) for c in range(spec.n_chunks)]
+    monkeypatch.setattr(tasks, "COMPILED_CLOSED_FORMS_FROM", 0)
     fast = [tasks.compute_chunk(spec, c) for c in range(spec.n_chunks)]
     monkeypatch.setattr(tasks, "_rigid_chunk", lambda *a: None)
     slow = [tasks.compute_chunk(spec, c) for c in range(spec.n_chunks)]
-    for a, b in zip(fast, slow, strict=True):
-        assert a.keys() == b.keys()
+    for a, b, c in zip(fast, slow, numpy_, strict=True):
+        assert a.keys() == b.keys() == c.keys()
         for name in a:
             if a[name].dtype.kind == "f":
                 assert np.allclose(a[name], b[name], rtol=1e-10, atol=1e-12, equal_nan=True), name
+                assert np.allclose(c[name], b[name], rtol=1e-10, atol=1e-12, equal_nan=True), name
             else:
                 assert np.array_equal(a[name], b[name]), name
+                assert np.array_equal(c[name], b[name]), name
     return fast
+
+
+def test_small_rigid_sweep_loads_no_numba():
+    """A rigid closed-form sweep below 100,000 points takes the numpy closed forms and imports no
+    numba; a larger one takes the compiled loop (the same numbers: the tests above)."""
+    _run_python(
+        "import sys\n"
+        "from impactbar.sweeps.spec import parse_spec\n"
+        "from impactbar.sweeps import tasks\n"
+        "def spec(n):\n"
+        "    return parse_spec({'task': 'orbits', 'model': {'s': 10.0, 'd': 0.0, 'R': 0.5, 'n_modes': 0},\n"
+        "                       'load': {'kind': 'cosine', 'p0': 0.3, 'pk': 1.0, 'k': 1},\n"
+        "                       'axes': {'R': {'start': 0.0, 'stop': 0.9, 'num': n},\n"
+        "                                'p0': {'start': 0.2, 'stop': 0.45, 'num': n}}})\n"
+        "assert tasks.compute_chunk(spec(300), 0)['n_orbits'].sum() > 0\n"
+        "assert 'numba' not in sys.modules\n"
+        "assert tasks.compute_chunk(spec(320), 0)['n_orbits'].sum() > 0\n"
+        "assert 'numba' in sys.modules\n"
+    )
 
 
 def test_sweep_chunk_square_wave_closed_form_equals_point_by_point(monkeypatch):

@@ -107,7 +107,7 @@ def test_spec_normalises_and_round_trips():
     assert [a.name for a in spec.axes] == ["R", "p0"]
     assert spec.axes[0].values == tuple(np.linspace(0.0, 0.9, 10))
     assert spec.options == {"max_orbits": 2}
-    assert spec.chunk_points == 4096  # every point in the rigid closed forms (closed_form_task)
+    assert spec.chunk_points == 32768  # every point in the rigid closed forms (closed_form_task)
     assert parse_spec(_with(base_doc(), ("model", "n_modes"), 2)).chunk_points == 400
     again = parse_spec(json.loads(spec.to_json()))
     assert again == spec and again.to_json() == spec.to_json()

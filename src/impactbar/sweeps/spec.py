@@ -43,9 +43,10 @@ MAX_CHUNK_VALUES = 2**22
 
 #: grid points per chunk when the spec does not say
 DEFAULT_CHUNK_POINTS = {"orbits": 400, "montecarlo": 4, "bifurcation": 32}
-#: ... and for a sweep in the rigid closed forms (:func:`closed_form_task`): a chunk of 4,096 points
-#: takes some 20 ms to compute, about what writing it costs
-DEFAULT_CLOSED_FORM_CHUNK_POINTS = 4096
+#: ... and for a sweep in the rigid closed forms (:func:`closed_form_task`): a chunk of 32,768 points
+#: takes some 30 ms to compute (the compiled closed forms), about what writing it costs, so that a
+#: sweep is not bound by the store's writes (one file per variable and chunk)
+DEFAULT_CLOSED_FORM_CHUNK_POINTS = 32768
 
 _TOP_KEYS = ("task", "model", "load", "axes", "rock", "chunk_points", *TASKS)
 
@@ -130,7 +131,7 @@ class SweepSpec:
         impacts stored), ``seed`` (0).
     chunk_points : int
         Grid points per work chunk (about; chunks are blocks of the grid), ``>= 1``. Default 400
-        for ``orbits`` (4,096 where every point takes the rigid closed forms,
+        for ``orbits`` (32,768 where every point takes the rigid closed forms,
         :func:`closed_form_task`; 16 under the rod-rock law), 4 for ``montecarlo``, 32 for
         ``bifurcation``.
     rock : dict, optional

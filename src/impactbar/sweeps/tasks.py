@@ -3,13 +3,21 @@ no dask, no storage."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
 
 from .._shared.validate import check_int
+from ..dynamics.implementations import implementation
 from ..laws import get_law
 from .spec import SweepSpec, motion_classes
+
+#: a sweep in the rigid closed forms with fewer grid points than this takes the numpy closed forms
+#: (the reference of ``"orbits.rigid_arrays"``) rather than the compiled loop: importing numba and
+#: loading the compiled loop from its cache (about 0.45 s; some 3 s to compile it on a new machine)
+#: costs more than the numpy closed forms take for the whole sweep (about 300,000 points/s a core)
+COMPILED_CLOSED_FORMS_FROM = 100_000
 
 
 # ------------------------------------------------------------------------------------------------
@@ -173,7 +181,9 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     covered = np.zeros(math.prod(block), dtype=bool)
     for sel, solve, names, extra in groups:
         covered[sel] = True
-        res = solve(*(flat(n)[sel] for n in names), *extra)
+        with (implementation("orbits.rigid_arrays", "reference") if spec.n_points < COMPILED_CLOSED_FORMS_FROM
+              else contextlib.nullcontext()):
+            res = solve(*(flat(n)[sel] for n in names), *extra)
         n = res.n_orbits
         if np.any(n > J):
             i = int(np.argmax(n > J))
