@@ -188,11 +188,13 @@ def _displacement(t, ph, k, ca, cb, p0, d, free, W0):
 
 
 @numba.njit(**_JIT)
-def _cosine_zero(ph, k, ca, cb, p0, pk, d, free, a, b, fa, va, vb):
-    """The zero of the flight's velocity in ``[a, b]`` (``sign v(a) = fa``, one zero inside, ``va``,
-    ``vb`` the velocities at the ends): Halley steps with ``v' = p - d v`` and ``v'' = p' - d v'``
-    (the load's cosine and sine are computed for ``v`` anyway) from the secant's zero, safeguarded
-    by bisection; the same zero as ``_rigid_scalar``'s Newton steps from the middle."""
+def _cosine_zero(flight, a, b, fa, va, vb):
+    """The zero of the velocity of the flight ``(ph, k, ca, cb, p0, pk, d, free)`` in ``[a, b]``
+    (``sign v(a) = fa``, one zero inside, ``va``, ``vb`` the velocities at the ends): Halley steps
+    with ``v' = p - d v`` and ``v'' = p' - d v'`` (the load's cosine and sine are computed for
+    ``v`` anyway) from the secant's zero, safeguarded by bisection; the same zero as
+    ``_rigid_scalar``'s Newton steps from the middle."""
+    ph, k, ca, cb, p0, pk, d, free = flight
     t = a + (b - a) * (va / (va - vb))
     if not a < t < b:
         t = 0.5 * (a + b)
@@ -311,7 +313,7 @@ def cosine_orbits(d, R, p0, pk, k, out):
             for j in range(nb):
                 if n_max > 0 and not brk[j, 2] > 0.0:
                     continue
-                tz = _cosine_zero(ph, kf, ca, cb, p0i, pki, di, free, brk[j, 0], brk[j, 1], brk[j, 2],
+                tz = _cosine_zero((ph, kf, ca, cb, p0i, pki, di, free), brk[j, 0], brk[j, 1], brk[j, 2],
                                   brk[j, 3], brk[j, 4])
                 g = _displacement(tz, ph, kf, ca, cb, p0i, di, free, W0)
                 gmax = g if ng == 0 else max(gmax, g)
