@@ -112,11 +112,11 @@ def test_periodic_orbits_with_compiled_flow_equal_numpy_path(monkeypatch, n_mode
 
 
 def test_phased_column_equals_numpy_flow():
-    """``fourier_column_phased`` (the certified search's bisection: the folded modes' phases stepped
-    by rotations) against the numpy flow: the same states to rounding from the exact phases, and
-    from phases carried down 30 levels of halving steps as the bisection carries them (random
-    rigid, folded and damped modes, several harmonics)."""
-    from impactbar.dynamics._flowkernel import fourier_column_phased
+    """``fourier_column`` with the phases given (``phased``: the certified search's bisection, the
+    folded modes' phases stepped by rotations) against the numpy flow: the same states to rounding
+    from the exact phases, and from phases carried down 30 levels of halving steps as the
+    bisection carries them (random rigid, folded and damped modes, several harmonics)."""
+    from impactbar.dynamics._flowkernel import fourier_column
 
     rng = np.random.default_rng(5)
     for _ in range(10):
@@ -144,7 +144,7 @@ def test_phased_column_equals_numpy_flow():
                 C, S = C * ch - sg * (S * sh), S * ch + sg * (C * sh)
                 mid += sg * half
             if level in (0, 30):
-                fourier_column_phased(mid, q, v, 0, ck, sk, flow, C, S)
+                fourier_column(mid, q, v, np.int64(0), ck, sk, flow, C, S, np.bool_(True))
                 qr, vr = reference(mid)
                 scale = 1.0 + np.max(np.abs(qr)) + np.max(np.abs(vr))
                 assert np.max(np.abs(q - qr)) < 1e-12 * scale and np.max(np.abs(v - vr)) < 1e-12 * scale

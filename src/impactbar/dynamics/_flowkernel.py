@@ -21,29 +21,24 @@ from ._flightkernel import CACHE, _bc
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def fourier_column(tj, q, v, j, ck, sk, flow, C, S):
+def fourier_column(tj, q, v, j, ck, sk, flow, C, S, phased):
     """Column ``j`` of :func:`fourier_flow`: the states at the time ``tj``, written into ``q, v``
-    (``ck, sk`` are scratch of shape ``(K,)``, ``C, S`` of shape ``(M,)``)."""
-    t0, kind, lam = flow[0], flow[9], flow[10]
-    tau = tj - t0
-    for n in range(lam.size):
-        if kind[n] == 1:
-            x = lam[n] * tau
-            C[n] = math.cos(x)
-            S[n] = math.sin(x)
-    fourier_column_phased(tj, q, v, j, ck, sk, flow, C, S)
+    (``ck, sk`` are scratch of shape ``(K,)``, ``C, S`` of shape ``(M,)``).
 
-
-@numba.njit(cache=CACHE, nogil=True)
-def fourier_column_phased(tj, q, v, j, ck, sk, flow, C, S):
-    """:func:`fourier_column` with the folded modes' phases given: ``C, S`` (shape ``(M,)``) hold
-    ``cos, sin(lam_n (tj - t0))``, kept by a caller that steps the time by fixed amounts (a
-    rotation per mode in place of a cosine and a sine: the certified search's bisection). Only the
-    folded modes (``kind`` 1) read ``C, S``."""
+    ``phased`` (``np.bool_``, not a literal: one compile) says that ``C, S`` already hold the
+    folded modes' phases ``cos, sin(lam_n (tj - t0))``, kept by a caller that steps the time by
+    fixed amounts (a rotation per mode in place of a cosine and a sine: the certified search's
+    bisection); otherwise they are computed here. Only the folded modes (``kind`` 1) read them."""
     t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq, cv, sv, dq, dv = flow
     M = hpr.shape[0]
     K = k.size
     tau = tj - t0
+    if not phased:
+        for n in range(M):
+            if kind[n] == 1:
+                x = lam[n] * tau
+                C[n] = math.cos(x)
+                S[n] = math.sin(x)
     for m in range(K):
         x = k[m] * tj
         ck[m] = math.cos(x)
@@ -85,7 +80,7 @@ def fourier_flow(t, flow):
     C = np.empty(M)
     S = np.empty(M)
     for j in range(T):
-        fourier_column(t[j], q, v, j, ck, sk, flow, C, S)
+        fourier_column(t[j], q, v, j, ck, sk, flow, C, S, np.bool_(False))
     return q, v
 
 

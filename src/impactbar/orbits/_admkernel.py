@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-from ..dynamics._flowkernel import bound_column, fourier_column, fourier_column_phased, piecewise_column
+from ..dynamics._flowkernel import bound_column, fourier_column, piecewise_column
 from ..dynamics._kernel import CACHE
 from ..dynamics.kernelview import LoadKernelView
 
@@ -84,8 +84,8 @@ def _state(t, work, src):
     q, v, ck, sk = work[0], work[1], work[2], work[3]
     load, F, P = src
     if load.kind == 0:
-        # (a literal 0 would compile it again)
-        fourier_column(t, q, v, np.int64(0), ck, sk, F, work[8], work[9])
+        # (a literal 0 or True would compile it again)
+        fourier_column(t, q, v, np.int64(0), ck, sk, F, work[8], work[9], np.bool_(False))
         return
     w2, d, nodes, levels, qn, vn = P
     j = _right(nodes, t) - 1
@@ -123,10 +123,11 @@ def _joint(phase, mid, half, prob, work, src):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _joint_upper(phase, mid, half, prob, work, src):
-    """``(g(mid), g'(mid), L, U, X)``: :func:`_joint`, an upper bound ``U`` of ``g`` and a margin
-    ``X`` that excludes a zero of ``g'`` on ``[mid - half, mid + half]`` where it is positive, both
-    with the high modes' tail split off.
+def _upper(ta, half, prob, work, src):
+    """``(g(mid), g'(mid), L, U, X)`` from the state at the absolute time ``ta = phase + mid`` (the
+    interval's midpoint), already in ``work`` (:func:`_state`): :func:`_joint`, an upper bound ``U``
+    of ``g`` and a margin ``X`` that excludes a zero of ``g'`` on ``[mid - half, mid + half]`` where
+    it is positive, both with the high modes' tail split off.
 
     With the modes ``n <= K`` (their ``g_K``, ``g_K'`` and bound ``L_K`` of ``|g_K''|``) and the
     rest bounded by their energies (``E_n`` the bound of ``sqrt(v^2 + (w q - p_c / w)^2)`` on the
@@ -142,14 +143,6 @@ def _joint_upper(phase, mid, half, prob, work, src):
     on the interval: once ``h`` is below the period of the highest mode, it excludes the intervals
     where the end rests nearly still (the plateaus that a contact window of the wave law leaves,
     where ``|g'|`` stays below ``L h`` down to tiny ``h``)."""
-    _state(phase + mid, work, src)
-    return _upper(phase + mid, half, prob, work, src)
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def _upper(ta, half, prob, work, src):
-    """:func:`_joint_upper` from the state at the absolute time ``ta`` (the interval's midpoint),
-    already in ``work``."""
     c, absc, w2, d, psup = prob
     q, v, w, eb, above, vabove = work[0], work[1], work[4], work[5], work[6], work[7]
     center, delta = _variation(ta, half, src)
@@ -258,7 +251,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
                         x = lam[m] * tau
                         ci[m] = math.cos(x)
                         si[m] = math.sin(x)
-                fourier_column_phased(ta, q, v, np.int64(0), ck, sk, F, ci, si)
+                fourier_column(ta, q, v, np.int64(0), ck, sk, F, ci, si, np.bool_(True))
             else:
                 _state(ta, work, src)
             gs[i], fs[i], ls[i], us[i], xs[i] = _upper(ta, half, prob, work, src)
@@ -393,7 +386,8 @@ def _value_bounds(phase, lo, hi, prob, work, src):
     for i in range(n):
         mid = 0.5 * (lo[i] + hi[i])
         half = 0.5 * (hi[i] - lo[i])
-        gm[i], g1[i], L2, ut, _ = _joint_upper(phase, mid, half, prob, work, src)
+        _state(phase + mid, work, src)
+        gm[i], g1[i], L2, ut, _ = _upper(phase + mid, half, prob, work, src)
         upper[i] = min(gm[i] + (abs(g1[i]) + 0.5 * L2 * half) * half, ut)
     return gm, upper, g1
 
@@ -508,7 +502,7 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
     v = np.empty((M, 1))
     ck = np.empty(K)
     sk = np.empty(K)
-    # scratch of _joint_upper (the frequencies, the modes' energy bounds and the tails' bounds) and
+    # scratch of _upper (the frequencies, the modes' energy bounds and the tails' bounds) and
     # of fourier_column (the folded modes' phases)
     w = np.sqrt(prob[2])
     work = (q, v, ck, sk, w, np.empty(M), np.empty(M), np.empty(M), np.empty(M), np.empty(M))
