@@ -38,11 +38,11 @@ def _right(a, x):
     return n
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def _load(t, src):
-    """The load ``p(t)`` at the absolute time ``t`` (``src = (load, F, P)``: the load's kernel view,
-    the Fourier flow's data and the piecewise flow's data, see :func:`admissibility_search`)."""
-    load = src[0]
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def _load(t, load):
+    """The load ``p(t)`` at the absolute time ``t`` (``load``: the load's kernel view, ``src[0]`` of
+    :func:`admissibility_search`). Inlined, and given the view alone: a kernel call counts a
+    reference to every array it is passed, and ``src`` holds some twenty."""
     if load.kind == 0:
         k, pr, pim, p0 = load.ks, load.pr, load.pim, load.p0
         s = 0.0
@@ -58,12 +58,11 @@ def _load(t, src):
     return lv[idx]
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def _variation(mid, half, src):
+@numba.njit(cache=CACHE, nogil=True, inline="always")
+def _variation(mid, half, load):
     """``(center, delta)`` with ``|p - center| <= delta`` on ``[mid - half, mid + half]`` (as
-    ``Load.variation``)."""
-    center = _load(mid, src)
-    load = src[0]
+    ``Load.variation``; ``load`` the view, as :func:`_load`)."""
+    center = _load(mid, load)
     if load.kind == 0:
         return center, min(load.p1 * half, 2.0 * load.posc)
     brk, spread = load.breaks, load.spread
@@ -117,13 +116,13 @@ def _joint(phase, mid, half, prob, work, src):
     q, v = work[0], work[1]
     ta = phase + mid
     _state(ta, work, src)
-    center, delta = _variation(ta, half, src)
+    center, delta = _variation(ta, half, src[0])
     g1, L = bound_column(c, absc, w2, d, psup, q, v, 0, center, delta, half)
     return _dot(c, q), g1, L
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _upper(ta, half, prob, work, src):
+def _upper(ta, half, prob, work, load):
     """``(g(mid), g'(mid), L, U, X)`` from the state at the absolute time ``ta = phase + mid`` (the
     interval's midpoint), already in ``work`` (:func:`_state`): :func:`_joint`, an upper bound ``U``
     of ``g`` and a margin ``X`` that excludes a zero of ``g'`` on ``[mid - half, mid + half]`` where
@@ -145,7 +144,7 @@ def _upper(ta, half, prob, work, src):
     where ``|g'|`` stays below ``L h`` down to tiny ``h``)."""
     c, absc, w2, d, psup = prob
     q, v, w, eb, above, vabove = work[0], work[1], work[4], work[5], work[6], work[7]
-    center, delta = _variation(ta, half, src)
+    center, delta = _variation(ta, half, load)
     M = c.size
     grow = math.exp(d * half)
     # above[K]: the tail's bound of |g| over the modes n > K, vabove[K] that of |g'|; eb[n]: the
@@ -166,8 +165,8 @@ def _upper(ta, half, prob, work, src):
         else:
             tail = math.inf  # a mode without stiffness is never in the tail
             vtail = math.inf
-    smooth = src[0].kind == 0 or delta == 0.0  # g'' continuous on the interval
-    slope = src[0].p1 if src[0].kind == 0 else 0.0
+    smooth = load.kind == 0 or delta == 0.0  # g'' continuous on the interval
+    slope = load.p1 if load.kind == 0 else 0.0
     gK = 0.0
     g1 = 0.0
     g2 = 0.0
@@ -254,7 +253,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
                 fourier_column(ta, q, v, np.int64(0), ck, sk, F, ci, si, np.bool_(True))
             else:
                 _state(ta, work, src)
-            gs[i], fs[i], ls[i], us[i], xs[i] = _upper(ta, half, prob, work, src)
+            gs[i], fs[i], ls[i], us[i], xs[i] = _upper(ta, half, prob, work, src[0])
         if prune:
             best = max(best, _sample_bound(mids, gs, fs, atol, floor))
         keep = np.empty(n, dtype=np.bool_)
@@ -349,7 +348,7 @@ def _newton(phase, lo, hi, prob, work, src):
                 continue
             ta = phase + t[i]
             _state(ta, work, src)
-            p = _load(ta, src)
+            p = _load(ta, src[0])
             g1 = 0.0
             g2 = 0.0
             for k in range(M):
@@ -387,7 +386,7 @@ def _value_bounds(phase, lo, hi, prob, work, src):
         mid = 0.5 * (lo[i] + hi[i])
         half = 0.5 * (hi[i] - lo[i])
         _state(phase + mid, work, src)
-        gm[i], g1[i], L2, ut, _ = _upper(phase + mid, half, prob, work, src)
+        gm[i], g1[i], L2, ut, _ = _upper(phase + mid, half, prob, work, src[0])
         upper[i] = min(gm[i] + (abs(g1[i]) + 0.5 * L2 * half) * half, ut)
     return gm, upper, g1
 
@@ -422,7 +421,7 @@ def _single(phase, ts, lo, hi, prob, work, src):
     half = 0.5 * (hi - lo)
     ta = phase + mid
     _state(ta, work, src)
-    center, delta = _variation(ta, half, src)
+    center, delta = _variation(ta, half, src[0])
     if src[0].kind == 0:
         slope = src[0].p1
     else:
@@ -444,7 +443,7 @@ def _single(phase, ts, lo, hi, prob, work, src):
         L3 += absc[n] * t3
     ta = phase + ts
     _state(ta, work, src)
-    p = _load(ta, src)
+    p = _load(ta, src[0])
     g2 = 0.0
     for n in range(M):
         g2 += c[n] * (p - d * v[n, 0] - w2[n] * q[n, 0])
