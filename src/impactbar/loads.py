@@ -431,15 +431,14 @@ class FourierLoad(Load):
             for dst, src in zip((cq, sq, cv, sv), folded, strict=True):
                 dst[flex] = src[:, 0]
 
-        def own(a):
-            # contiguous and writable: a read-only view (the cached transfer functions) would be
-            # another type to numba, and so another compilation of every kernel that takes it (a
-            # copy of these short rows costs less than np.require's checks)
-            return np.array(a, dtype=float, order="C")
-
-        args = (float(t0), float(d), float(self.p0), self.kernel_view.ks,
-                own(hp.real), own(hp.imag), own(hv.real), own(hv.imag),
-                own(static[:, 0]), kind, lamv, cq, sq, cv, sv, own(dq[:, 0]), own(dv[:, 0]))
+        # the per-mode data in two arrays (three with kind), not fourteen: a kernel call counts a
+        # reference to each array it is passed, and the certified search passes these once per
+        # evaluation. np.stack makes them fresh, contiguous and writable (a read-only view, as
+        # the cached transfer functions are, would be another type to numba, and so another
+        # compilation of every kernel that takes it)
+        H = np.stack((hp.real, hp.imag, hv.real, hv.imag))  # (4, M, K)
+        V = np.stack((static[:, 0], lamv, cq, sq, cv, sv, dq[:, 0], dv[:, 0]))  # (8, M)
+        args = (float(t0), float(d), float(self.p0), self.kernel_view.ks, H, V, kind)
 
         def evaluate(t):
             return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), args)

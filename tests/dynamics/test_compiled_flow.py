@@ -131,7 +131,7 @@ def test_phased_column_equals_numpy_flow():
         flow = load.flow(w2, d, t0, q0, v0).kernel_args
         with use_reference("loads.flow"):
             reference = load.flow(w2, d, t0, q0, v0)
-        lam, M = flow[10], n + 1
+        lam, M = flow[5][1], n + 1
         q, v = np.empty((M, 1)), np.empty((M, 1))
         ck, sk = np.empty(K), np.empty(K)
         mid, half = t0 + float(rng.uniform(0.0, 6.0)), 1.0

@@ -29,14 +29,14 @@ def fourier_column(tj, q, v, j, ck, sk, flow, C, S, phased):
     folded modes' phases ``cos, sin(lam_n (tj - t0))``, kept by a caller that steps the time by
     fixed amounts (a rotation per mode in place of a cosine and a sine: the certified search's
     bisection); otherwise they are computed here. Only the folded modes (``kind`` 1) read them."""
-    t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq, cv, sv, dq, dv = flow
-    M = hpr.shape[0]
+    t0, d, p0, k, H, V, kind = flow
+    M = H.shape[1]
     K = k.size
     tau = tj - t0
     if not phased:
         for n in range(M):
             if kind[n] == 1:
-                x = lam[n] * tau
+                x = V[1, n] * tau
                 C[n] = math.cos(x)
                 S[n] = math.sin(x)
     for m in range(K):
@@ -48,16 +48,16 @@ def fourier_column(tj, q, v, j, ck, sk, flow, C, S, phased):
         qs = 0.0
         vs = 0.0
         for m in range(K):
-            qs += hpr[n, m] * ck[m] - hpi[n, m] * sk[m]
-            vs += hvr[n, m] * ck[m] - hvi[n, m] * sk[m]
-        qs += static[n]
+            qs += H[0, n, m] * ck[m] - H[1, n, m] * sk[m]
+            vs += H[2, n, m] * ck[m] - H[3, n, m] * sk[m]
+        qs += V[0, n]
         if kind[n] == 1:
-            qs += (cq[n] * C[n] + sq[n] * S[n]) * ed
-            vs += (cv[n] * C[n] + sv[n] * S[n]) * ed
+            qs += (V[2, n] * C[n] + V[3, n] * S[n]) * ed
+            vs += (V[4, n] * C[n] + V[5, n] * S[n]) * ed
         elif kind[n] == 2:
             b, c = _bc(d, tau)
-            qs += dq[n] + b * dv[n] + p0 * c
-            vs += math.exp(-d * tau) * dv[n] + p0 * b
+            qs += V[6, n] + b * V[7, n] + p0 * c
+            vs += math.exp(-d * tau) * V[7, n] + p0 * b
         q[n, j] = qs
         v[n, j] = vs
 
@@ -65,12 +65,14 @@ def fourier_column(tj, q, v, j, ck, sk, flow, C, S, phased):
 @numba.njit(cache=CACHE, nogil=True)
 def fourier_flow(t, flow):
     """States ``(q, v)`` of shape ``(M, T)`` at the times ``t`` (shape ``(T,)``) of the flow
-    ``flow = (t0, d, p0, k, hpr, hpi, hvr, hvi, static, kind, lam, cq, sq, cv, sv, dq, dv)`` from
-    ``FourierLoad.flow``: start time, damping, mean load, orders, ``H p`` and ``i k H p`` (real and
-    imaginary parts, shape ``(M, K)``), the static deflections, and per mode: ``kind[n]`` is 1 for
-    a folded underdamped flexible mode (coefficients ``cq, sq, cv, sv`` and frequency ``lam``), 2 for
-    the rigid mode (free part ``dq, dv``), 0 for the particular solution alone."""
-    M = flow[4].shape[0]
+    ``flow = (t0, d, p0, k, H, V, kind)`` from ``FourierLoad.flow``: start time, damping, mean
+    load, orders; ``H`` (shape ``(4, M, K)``) holds ``H p`` and ``i k H p``, real and imaginary
+    parts; ``V`` (shape ``(8, M)``) holds per mode the static deflection, and the frequency ``lam``
+    and coefficients ``cq, sq, cv, sv`` of a folded underdamped flexible mode (``kind[n]`` 1), and
+    the free part ``dq, dv`` of the rigid mode (``kind[n]`` 2; 0: the particular solution alone).
+    Three arrays where there were fourteen: every kernel call counts a reference to each array it
+    is passed, and the certified search passes these once per evaluation."""
+    M = flow[4].shape[1]
     K = flow[3].size
     T = t.size
     q = np.empty((M, T))

@@ -206,7 +206,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
     min_width, max_intervals, atol, prune, floor = limits
     q, v, ck, sk = work[0], work[1], work[2], work[3]
     F = src[1]
-    t0, lam = F[0], F[10]
+    t0, lam = F[0], F[5][1]
     M = q.shape[0]
     rotate = src[0].kind == 0  # a Fourier load: the folded modes' phases stepped by rotations
     # the phases cos, sin(lam (t - t0)) at the kept intervals' midpoints (rows parent[i] of C, S)

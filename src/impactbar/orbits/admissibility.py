@@ -135,8 +135,7 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
 
 
 _E1, _E2 = np.zeros(0), np.zeros((1, 0))
-_NO_FOURIER = (0.0, 0.0, 0.0, _E1, _E2, _E2, _E2, _E2, _E1, np.zeros(0, dtype=np.int64), _E1, _E1, _E1,
-               _E1, _E1, _E1, _E1)
+_NO_FOURIER = (0.0, 0.0, 0.0, _E1, np.zeros((4, 1, 0)), np.zeros((8, 0)), np.zeros(0, dtype=np.int64))
 _NO_PIECES = (_E1, 0.0, _E1, _E1, _E2, _E2)
 
 
