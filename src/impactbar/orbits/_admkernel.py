@@ -121,7 +121,7 @@ def _joint(phase, mid, half, prob, work, src):
     return _dot(c, q), g1, L
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, error_model="numpy")  # (no zero-division checks: vectorised)
 def _upper(ta, half, prob, work, load):
     """``(g(mid), g'(mid), L, U, X)`` from the state at the absolute time ``ta = phase + mid`` (the
     interval's midpoint), already in ``work`` (:func:`_state`): :func:`_joint`, an upper bound ``U``
@@ -148,25 +148,38 @@ def _upper(ta, half, prob, work, load):
     M = c.size
     grow = math.exp(d * half)
     # above[K]: the tail's bound of |g| over the modes n > K, vabove[K] that of |g'|; eb[n]: the
-    # bound E_n of the mode's energy on the interval (one square root per mode, used twice)
+    # bound E_n of the mode's energy on the interval (one square root per mode, used twice).
+    # First each mode's terms, in a loop without a carried dependence (so that it is vectorised:
+    # its square root and divisions were most of the bound's cost at many modes), then the
+    # tails' sums, from the last mode down, in the same order as before.
+    ac = abs(center)
+    dh = delta * half
+    slope = load.p1 if load.kind == 0 else 0.0
+    l3 = work[8]  # (the scratch of _state's phases, free here)
+    for n in range(M):
+        vn = v[n, 0]
+        flex = w2[n] > 0.0
+        wc = w[n] if flex else 1.0  # (no division by zero: selects, still vectorised)
+        ws = w2[n] if flex else 1.0
+        r = wc * q[n, 0] - center / wc
+        Eb = (math.sqrt(vn * vn + r * r) + dh) * grow
+        # eb[n]: |c_n| times the bound of |q_n''|, l3[n]: of |q_n'''|; a mode without stiffness
+        # is never in the tail: its tail terms are infinite
+        b = delta + (d + wc) * Eb if flex else psup + d * ((abs(vn) + psup * half) * grow)
+        eb[n] = absc[n] * b
+        l3[n] = absc[n] * (slope + d * b + w2[n] * Eb) if flex else absc[n] * (slope + d * b)
+        above[n] = absc[n] * (ac / ws + Eb / wc) if flex else math.inf
+        vabove[n] = absc[n] * Eb if flex else math.inf
     tail = 0.0
     vtail = 0.0
     for n in range(M - 1, -1, -1):
+        tn = above[n]
+        vt = vabove[n]
         above[n] = tail
         vabove[n] = vtail
-        vn = v[n, 0]
-        if w2[n] > 0.0:
-            wc = w[n]
-            r = wc * q[n, 0] - center / wc
-            Eb = (math.sqrt(vn * vn + r * r) + delta * half) * grow
-            eb[n] = Eb
-            tail += absc[n] * (abs(center) / w2[n] + Eb / wc)
-            vtail += absc[n] * Eb
-        else:
-            tail = math.inf  # a mode without stiffness is never in the tail
-            vtail = math.inf
+        tail += tn
+        vtail += vt
     smooth = load.kind == 0 or delta == 0.0  # g'' continuous on the interval
-    slope = load.p1 if load.kind == 0 else 0.0
     gK = 0.0
     g1 = 0.0
     g2 = 0.0
@@ -179,15 +192,8 @@ def _upper(ta, half, prob, work, load):
         gK += c[n] * q[n, 0]
         g1 += c[n] * vn
         g2 += c[n] * (center - d * vn - w2[n] * q[n, 0])
-        if w2[n] > 0.0:
-            Eb = eb[n]
-            b = delta + (d + w[n]) * Eb
-            L += absc[n] * b
-            L3 += absc[n] * (slope + d * b + w2[n] * Eb)
-        else:
-            b = psup + d * ((abs(vn) + psup * half) * grow)
-            L += absc[n] * b
-            L3 += absc[n] * (slope + d * b)
+        L += eb[n]
+        L3 += l3[n]
         best = min(best, gK + (abs(g1) + L * half) * half + above[n])
         margin = max(margin, abs(g1) - (L * half + vabove[n]) * (1.0 + 1e-9))
     if smooth:
