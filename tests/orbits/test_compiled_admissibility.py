@@ -313,3 +313,37 @@ def test_newton_leaves_an_interval_once_it_converged_or_left_it():
     assert ok.tolist() == [True, False]
     assert t[0] == pytest.approx(math.pi, abs=1e-12)
     assert seen[0] == 2 and all(n == 1 for n in seen[1:]) and len(seen) > 2
+
+
+def test_searches_in_threads_keep_their_own_phase_buffers(monkeypatch):
+    """The bisection's store of the modes' phases (``_admkernel.phase_buffers``) is kept per
+    thread and reused from one search to the next: searches that run at once in threads (the
+    kernel releases the GIL, as a threaded dask sweep runs it) give bit for bit what they give
+    one after another, and a thread reuses its own buffers."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from impactbar.orbits import _admkernel
+
+    calls = []
+    search = _admkernel.admissibility_search
+
+    def capture(*args):
+        calls.append(args)
+        return search(*args)
+
+    monkeypatch.setattr(_admkernel, "admissibility_search", capture)
+    for s, load in ((3.0, CosineLoad(0.6, 1.0)), (2.0, CosineLoad(0.5, 1.2)), (4.0, CosineLoad(0.7, 0.9))):
+        _periodic_orbits_general(BarModel(s, 0.0, 0.5, 96, impact="wave"), load)
+    monkeypatch.undo()
+    assert len(calls) >= 4
+
+    def run(args):
+        bufs = _admkernel.phase_buffers(args[7][0].size)
+        return search(*args[:8], bufs, args[9]), bufs
+
+    serial = [run(a)[0] for a in calls]
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(run, calls * 3))
+    assert [r for r, _ in threaded] == serial * 3
+    assert _admkernel.phase_buffers(96) is _admkernel.phase_buffers(96)
+    assert len({id(b) for _, b in threaded} - {id(_admkernel.phase_buffers(96))}) <= 4

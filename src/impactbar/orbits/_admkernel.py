@@ -14,6 +14,7 @@ Results agree with the numpy path to rounding. Imported lazily, so ``import impa
 from __future__ import annotations
 
 import math
+import threading
 
 import numba
 import numpy as np
@@ -25,8 +26,9 @@ from ..dynamics.kernelview import LoadKernelView
 TWO_PI = 2.0 * math.pi
 _MAXF = np.finfo(np.float64).max
 #: the most entries (intervals times modes) of the folded modes' phases that the bisection keeps
-#: to step them by rotations (two arrays of 8 MiB); a level with more evaluates them directly
-_PHASE_BUDGET = 1 << 20
+#: to step them by rotations (four arrays of 8 MiB at most, ``phase_buffers``); a level with more
+#: evaluates them directly
+PHASE_BUDGET = 1 << 20
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -202,13 +204,14 @@ def _upper(ta, half, prob, work, load):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
+def _enclose(phase, a, b, mids, half, limits, best, prob, work, src, phases):
     """The bisection loop of ``certified.enclose_zeros`` (``merge=False``) from the midpoints
     ``mids`` of intervals of half-width ``half``; returns ``(lo, hi, ok, best)``, ``ok`` false where
     the numpy path raises (more than ``max_intervals`` survivors). With ``prune``, the intervals
     where ``g`` stays below ``best`` (raised by each level's samples, as ``_sample_bound``) are
     dropped too (``_numpy_search``'s ``prune``). ``limits = (min_width, max_intervals, atol, prune,
-    floor)``, all floats (``prune`` 1.0 or 0.0), so that every caller shares one compilation."""
+    floor)``, all floats (``prune`` 1.0 or 0.0), so that every caller shares one compilation.
+    ``phases``: the four buffers of :func:`admissibility_search`."""
     min_width, max_intervals, atol, prune, floor = limits
     q, v, ck, sk = work[0], work[1], work[2], work[3]
     F = src[1]
@@ -216,12 +219,9 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
     M = q.shape[0]
     rotate = src[0].kind == 0  # a Fourier load: the folded modes' phases stepped by rotations
     # the phases cos, sin(lam (t - t0)) at the kept intervals' midpoints (rows parent[i] of C, S)
-    # (two pairs of buffers, swapped between levels and grown as needed: a fresh array per level
-    # costs its page faults each time)
-    C = np.empty((0, M))
-    S = np.empty((0, M))
-    Cn = np.empty((0, M))
-    Sn = np.empty((0, M))
+    # (two pairs of buffers, swapped between levels; given by the caller, who keeps them from one
+    # search to the next: fresh arrays cost their page faults at every search)
+    C, S, Cn, Sn = phases
     parent = np.empty(0, dtype=np.int64)
     ch = np.empty(M)  # cos, sin(lam half) of the current level
     sh = np.empty(M)
@@ -233,11 +233,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
         ls = np.empty(n)
         us = np.empty(n)
         xs = np.empty(n)
-        store = rotate and n * M <= _PHASE_BUDGET
-        if store and Cn.shape[0] < n:
-            rows = max(n, 2 * Cn.shape[0])
-            Cn = np.empty((rows, M))
-            Sn = np.empty((rows, M))
+        store = rotate and n <= Cn.shape[0]
         for i in range(n):
             ta = phase + mids[i]
             if store:
@@ -307,7 +303,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src):
 
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
-def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src):
+def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src, phases):
     """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
     pieces, down to a 64th of the widest, dropping on the way the pieces where ``g`` stays below
     ``best`` (a lower bound of the largest stationary value, raised by each level's samples as in
@@ -330,7 +326,7 @@ def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src):
                 mids[m] = mj
                 m += 1
     limits = (width / 64.0, float(max_intervals), atol, 1.0, floor)  # (floats: one type of _enclose)
-    return _enclose(phase, a, b, mids[:m].copy(), half, limits, best, prob, work, src)
+    return _enclose(phase, a, b, mids[:m].copy(), half, limits, best, prob, work, src, phases)
 
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
@@ -473,8 +469,24 @@ def _top(x, k):
     return out
 
 
+_BUFFERS = threading.local()
+
+
+def phase_buffers(M):
+    """The four ``(R, M)`` buffers of :func:`admissibility_search` (``R = PHASE_BUDGET // M``),
+    kept per thread and reused by every search with ``M`` modes: a search touches only the rows it
+    needs, and reused pages cost no page faults (fresh arrays at every bisection, some 3 MiB each,
+    cost the wave law's two searches at 1024 modes 10 of their 68 ms)."""
+    bufs = getattr(_BUFFERS, "phases", None)
+    if bufs is None or bufs[0].shape[1] != M:
+        rows = PHASE_BUDGET // max(M, 1)
+        bufs = tuple(np.empty((rows, M)) for _ in range(4))
+        _BUFFERS.phases = bufs  # (one set per thread: the last M only)
+    return bufs
+
+
 @numba.njit(cache=CACHE, nogil=True)
-def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, prob, src_tuples):
+def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, prob, phases, src_tuples):
     """The largest stationary value of ``g = u(1, t)`` over ``[0, horizon]`` after the impact at
     ``phase`` (``admissibility._numpy_search`` and ``_stationary_values``, ``rounds = 8``).
 
@@ -488,7 +500,9 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
     the plain tuple ``tuple(view)`` in ``src_tuples`` (numba dispatches it several times faster than
     a named tuple), made a view here (no wrapper kernel: a wrapper compiles its callees' code again).
     ``seeds`` intervals are tried first by the branch and bound (``admissibility.SEEDS``), and an
-    interval searched again is split into ``pieces`` (``admissibility.RETRY_PIECES``).
+    interval searched again is split into ``pieces`` (``admissibility.RETRY_PIECES``). ``phases``:
+    four arrays of shape ``(R, M)`` (:func:`phase_buffers`), the bisection's store of the folded
+    modes' phases; a level of more than ``R`` intervals computes them directly.
 
     Returns
     -------
@@ -517,7 +531,7 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
     for i in range(n0):
         mids[i] = half0 * (2.0 * i + 1.0)
     lo, hi, good, best = _enclose(phase, 0.0, horizon, mids, half0, (6e-3, 400_000.0, atol, 1.0, floor),
-                                  -math.inf, prob, work, src)
+                                  -math.inf, prob, work, src, phases)
     if not good:
         return 1, -math.inf, 0.0
     if at_rest:
@@ -601,7 +615,7 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
                 rlo[j], rhi[j], rgm[j], rup[j] = lo[i], hi[i], gm[i], upper[i]
                 j += 1
         lo, hi, good, best = _enclose_in(phase, 0.0, horizon, rlo, rhi, pieces, (20_000.0, atol, floor), best,
-                                         prob, work, src)
+                                         prob, work, src, phases)
         if not good:  # a zero of high order: the enclosure no longer shrinks
             top = np.max(rup)
             best = max(best, top)

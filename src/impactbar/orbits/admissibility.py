@@ -124,11 +124,11 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         F = _NO_FOURIER
     else:
         return None
-    from ._admkernel import admissibility_search
+    from ._admkernel import admissibility_search, phase_buffers
 
     code, v_max, err = admissibility_search(phase, horizon, at_rest, atol, SEEDS, RETRY_PIECES,
                                             _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
-                                            (tuple(load.kernel_view), F, P))
+                                            phase_buffers(c.size), (tuple(load.kernel_view), F, P))
     if code:
         raise RuntimeError("zero search did not converge (Lipschitz bound too loose)")
     return float(v_max), float(err)
