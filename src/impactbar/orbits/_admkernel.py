@@ -145,7 +145,8 @@ def _upper(ta, half, prob, work, load):
     where the end rests nearly still (the plateaus that a contact window of the wave law leaves,
     where ``|g'|`` stays below ``L h`` down to tiny ``h``)."""
     c, absc, w2, d, psup = prob
-    q, v, w, eb, above, vabove = work[0], work[1], work[4], work[5], work[6], work[7]
+    q, v, W, eb, above, vabove = work[0], work[1], work[4], work[5], work[6], work[7]
+    w, iw, iw2 = W[0], W[1], W[2]
     center, delta = _variation(ta, half, load)
     M = c.size
     grow = math.exp(d * half)
@@ -161,16 +162,15 @@ def _upper(ta, half, prob, work, load):
     for n in range(M):
         vn = v[n, 0]
         flex = w2[n] > 0.0
-        wc = w[n] if flex else 1.0  # (no division by zero: selects, still vectorised)
-        ws = w2[n] if flex else 1.0
-        r = wc * q[n, 0] - center / wc
+        wc = w[n]
+        r = wc * q[n, 0] - center * iw[n]
         Eb = (math.sqrt(vn * vn + r * r) + dh) * grow
         # eb[n]: |c_n| times the bound of |q_n''|, l3[n]: of |q_n'''|; a mode without stiffness
         # is never in the tail: its tail terms are infinite
         b = delta + (d + wc) * Eb if flex else psup + d * ((abs(vn) + psup * half) * grow)
         eb[n] = absc[n] * b
         l3[n] = absc[n] * (slope + d * b + w2[n] * Eb) if flex else absc[n] * (slope + d * b)
-        above[n] = absc[n] * (ac / ws + Eb / wc) if flex else math.inf
+        above[n] = absc[n] * (ac * iw2[n] + Eb * iw[n]) if flex else math.inf
         vabove[n] = absc[n] * Eb if flex else math.inf
     tail = 0.0
     vtail = 0.0
@@ -523,8 +523,15 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
     sk = np.empty(K)
     # scratch of _upper (the frequencies, the modes' energy bounds and the tails' bounds) and
     # of fourier_column (the folded modes' phases)
-    w = np.sqrt(prob[2])
-    work = (q, v, ck, sk, w, np.empty(M), np.empty(M), np.empty(M), np.empty(M), np.empty(M))
+    # (the frequencies and their reciprocals, so that the bounds take no division; 1 for a mode
+    # without stiffness, where they are not used)
+    W = np.ones((3, M))
+    for n in range(M):
+        if prob[2][n] > 0.0:
+            W[0, n] = math.sqrt(prob[2][n])
+            W[1, n] = 1.0 / W[0, n]
+            W[2, n] = 1.0 / prob[2][n]
+    work = (q, v, ck, sk, W, np.empty(M), np.empty(M), np.empty(M), np.empty(M), np.empty(M))
     n0 = 64
     half0 = 0.5 * horizon / n0
     mids = np.empty(n0)
