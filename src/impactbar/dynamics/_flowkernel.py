@@ -44,31 +44,22 @@ def fourier_column(tj, q, v, j, ck, sk, flow, C, S, phased):
         ck[m] = math.cos(x)
         sk[m] = math.sin(x)
     ed = math.exp(-0.5 * d * tau) if d != 0.0 else 1.0
-    # the modes innermost, loops without branches where they can be (so that they are vectorised),
-    # each sum in the same order as term by term: the particular solution, harmonic by harmonic
     for n in range(M):
-        q[n, j] = 0.0
-        v[n, j] = 0.0
-    for m in range(K):
-        cm = ck[m]
-        sm = sk[m]
-        for n in range(M):
-            q[n, j] += H[0, n, m] * cm - H[1, n, m] * sm
-            v[n, j] += H[2, n, m] * cm - H[3, n, m] * sm
-    rigid = False
-    for n in range(M):
-        qs = q[n, j] + V[0, n]
-        vs = v[n, j]
-        folded = kind[n] == 1  # (C, S are read only there: elsewhere they may hold anything)
-        q[n, j] = qs + (V[2, n] * C[n] + V[3, n] * S[n]) * ed if folded else qs
-        v[n, j] = vs + (V[4, n] * C[n] + V[5, n] * S[n]) * ed if folded else vs
-        rigid |= kind[n] == 2
-    if rigid:
-        b, c = _bc(d, tau)
-        for n in range(M):
-            if kind[n] == 2:
-                q[n, j] += V[6, n] + b * V[7, n] + p0 * c
-                v[n, j] += math.exp(-d * tau) * V[7, n] + p0 * b
+        qs = 0.0
+        vs = 0.0
+        for m in range(K):
+            qs += H[0, n, m] * ck[m] - H[1, n, m] * sk[m]
+            vs += H[2, n, m] * ck[m] - H[3, n, m] * sk[m]
+        qs += V[0, n]
+        if kind[n] == 1:
+            qs += (V[2, n] * C[n] + V[3, n] * S[n]) * ed
+            vs += (V[4, n] * C[n] + V[5, n] * S[n]) * ed
+        elif kind[n] == 2:
+            b, c = _bc(d, tau)
+            qs += V[6, n] + b * V[7, n] + p0 * c
+            vs += math.exp(-d * tau) * V[7, n] + p0 * b
+        q[n, j] = qs
+        v[n, j] = vs
 
 
 @numba.njit(cache=CACHE, nogil=True)
