@@ -150,11 +150,11 @@ def _upper(ta, half, prob, work, load):
     center, delta = _variation(ta, half, load)
     M = c.size
     grow = math.exp(d * half)
-    # above[K]: the tail's bound of |g| over the modes n > K, vabove[K] that of |g'|; eb[n]: the
-    # bound E_n of the mode's energy on the interval (one square root per mode, used twice).
-    # First each mode's terms, in a loop without a carried dependence (so that it is vectorised:
-    # its square root and divisions were most of the bound's cost at many modes), then the
-    # tails' sums, from the last mode down, in the same order as before.
+    # above[K]: the tail's bound of |g| over the modes n > K, vabove[K] that of |g'|; eb[n] and
+    # l3[n]: mode n's terms of L and L3. First each mode's terms from the bound E_n of its energy
+    # on the interval (one square root per mode), in a loop without a carried dependence (so that
+    # it is vectorised: its square root and divisions were most of the bound's cost at many
+    # modes), then the tails' sums, from the last mode down, in the same order as before.
     ac = abs(center)
     dh = delta * half
     slope = load.p1 if load.kind == 0 else 0.0
@@ -521,10 +521,9 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
     v = np.empty((M, 1))
     ck = np.empty(K)
     sk = np.empty(K)
-    # scratch of _upper (the frequencies, the modes' energy bounds and the tails' bounds) and
-    # of fourier_column (the folded modes' phases)
-    # (the frequencies and their reciprocals, so that the bounds take no division; 1 for a mode
-    # without stiffness, where they are not used)
+    # scratch of _upper (the frequencies and their reciprocals, so that the bounds take no
+    # division, 1 for a mode without stiffness, where they are not used; the modes' terms of L
+    # and the tails' bounds) and of fourier_column (the folded modes' phases; _upper's terms of L3)
     W = np.ones((3, M))
     for n in range(M):
         if prob[2][n] > 0.0:
