@@ -49,7 +49,7 @@ def test_compiled_valve_loop_matches_the_python_loop(n, d, R, delay, choose):
         # Python's results differ in the last bits there, and the sticking's end follows the
         # micro-impacts (a known defect: the run is rounding-sensitive from that point on). Up to
         # it, the same bits; and the loops may part only at an impact slower than 1e-6.
-        assert R == 0.0 and k > 5
+        assert R == 0.0 and 5 < k < min(fast.n_impacts, ref.n_impacts)  # (not one run's end)
         assert max(abs(fast.impact_velocities[k]), abs(ref.impact_velocities[k])) < 1e-6
         t_k = min(fast.impact_times[k], ref.impact_times[k])
         sw = ref.switch_times < t_k
