@@ -124,3 +124,21 @@ def test_events_are_critical_and_scale_free(s, R, n_modes, impact):
     scaled = [(e.kind, e.value / L) for e in c.events if 0.05 < e.value / L < 1.5]
     assert [k for k, _ in scaled] == [k for k, _ in inside]
     np.testing.assert_allclose([v for _, v in scaled], [v for _, v in inside], rtol=1e-6, atol=1e-9)
+
+
+@pytest.mark.parametrize("path", ["fast", "reference"])
+def test_no_branch_point_at_the_start_of_a_doubled_branch(path):
+    """Issue 20: the branch born at a period doubling starts on the parent's doubling, where the
+    doubled orbit's multiplier is (-1)^2 = +1 and det(I - P) is zero up to rounding; its sign there
+    is no crossing. Before the fix, the rigid bar's float path (same orbits to 1e-14) reported a
+    branch point at the start, p0 = 0.75684712062, where the general path's corrector failed by
+    chance at a chord position of 5e-11."""
+    from impactbar.dynamics.implementations import implementation
+
+    model = BarModel(s=3.0, d=0.0, R=0.6, n_modes=0)
+    with implementation("orbits.rigid_segments", path):
+        b1 = continue_orbit(_cos_negative(model, 0.9), "p0", to=0.66, stop_on=("period-doubling",))
+        b2 = continue_orbit(b1.events[-1], "p0", to=0.66, stop_on=("period-doubling",))
+    assert [e.kind for e in b2.events] == ["period-doubling"]
+    assert b2.events[0].value == pytest.approx(0.6859464472726, abs=1e-11)
+    _critical_ok(b2)

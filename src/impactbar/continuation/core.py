@@ -113,7 +113,13 @@ class _OrbitProblem:
         """The events between the last two points, and the status to stop with (``stop_on``)."""
         if not self.events:
             return [], None
-        new = _detect(engine, points, tangents, [_tests(o) for o in orbits[-2:]], orbits, self.xtol)
+        tests = [_tests(o) for o in orbits[-2:]]
+        if self.doubled and len(points) == 2:
+            # the first point is the parent's period doubling, where the doubled orbit has the
+            # multiplier (-1)^2 = +1: det(I - P) is zero there up to rounding, and its sign no
+            # crossing (the event is the parent's period doubling, reported on its branch)
+            tests[0]["fold"] = tests[1]["fold"]
+        new = _detect(engine, points, tangents, tests, orbits, self.xtol)
         hit = [e for e in new if e.kind in self.stop_on]
         return new, (BranchStatus.stopped_at(hit[0].kind) if hit else None)
 

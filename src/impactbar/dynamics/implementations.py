@@ -7,36 +7,42 @@ one to the other. Which one runs is chosen here, by name, never by module global
 environment (whether numba's cache folder is writable, for instance, chooses nothing: numba then
 compiles in memory). The fast implementation is the default.
 
-============================  ===================================  ==================================
-name                          fast (default)                       reference
-============================  ===================================  ==================================
-``loads.flow``                compiled flows of Fourier and        numpy closed forms (``Load.flow``)
-                              piecewise-constant loads
-``admissibility.bound``       compiled bound of ``|g''|`` inside   numpy bound
-                              the numpy admissibility search
-``admissibility.search``      whole certified admissibility        numpy search (theory §5)
-                              search compiled
-``orbits.rigid_scalar``       rigid-bar closed forms in plain      vectorised numpy closed forms on
-                              floats, one point                    1-element arrays
-``orbits.rigid_arrays``       rigid-bar closed forms compiled,     vectorised numpy closed forms
-                              point by point over arrays
-``simulate.impact_search``    specialised certified searches       general certified search
-                              after an impact                      (``find_crossing``)
-``simulate.wave_separation``  compiled characteristics solver      Python solver (``wave_impact``)
-                              where contact is lost
-``simulate.switched_rigid``   rigid bar under a position-          the general driver, piece by
-                              switched drive in scalar closed      piece (theory §10)
-                              forms
-``simulate.switched_kernel``  compiled valve loop under a          the valve's loop in Python, piece
-                              position-switched drive, every       by piece (theory §10)
-                              piece in one call
-``wave.residual``             compiled wave-law phase residual     ``wave_orbit_states`` phase by
-                              of a piecewise-constant load         phase
-``rock.blow``                 compiled loop of a blow on the rod   the numpy loop
-                              and the rock (theory §4d)
-``sweeps.create_store``       sweep store written by zarr alone    store written by xarray's
-                                                                   ``to_zarr``
-============================  ===================================  ==================================
+================================  ===================================  ==================================
+name                              fast (default)                       reference
+================================  ===================================  ==================================
+``loads.flow``                    compiled flows of Fourier and        numpy closed forms (``Load.flow``)
+                                  piecewise-constant loads
+``admissibility.bound``           compiled bound of ``|g''|`` inside   numpy bound
+                                  the numpy admissibility search
+``admissibility.search``          whole certified admissibility        numpy search (theory §5)
+                                  search compiled
+``admissibility.rigid_cosine``    rigid bar's flights under a cosine   the certified search
+                                  load: one zero of the velocity per
+                                  arc of constant load sign
+``orbits.rigid_scalar``           rigid-bar closed forms in plain      vectorised numpy closed forms on
+                                  floats, one point                    1-element arrays
+``orbits.rigid_arrays``           rigid-bar closed forms compiled,     vectorised numpy closed forms
+                                  point by point over arrays
+``orbits.rigid_segments``         rigid bar's multi-impact segment     the general segment problem's
+                                  problem (``find_orbit``,             numpy evaluation (any ``N``)
+                                  continuation) in plain floats
+``simulate.impact_search``        specialised certified searches       general certified search
+                                  after an impact                      (``find_crossing``)
+``simulate.wave_separation``      compiled characteristics solver      Python solver (``wave_impact``)
+                                  where contact is lost
+``simulate.switched_rigid``       rigid bar under a position-          the general driver, piece by
+                                  switched drive in scalar closed      piece (theory §10)
+                                  forms
+``simulate.switched_kernel``      compiled valve loop under a          the valve's loop in Python, piece
+                                  position-switched drive, every       by piece (theory §10)
+                                  piece in one call
+``wave.residual``                 compiled wave-law phase residual     ``wave_orbit_states`` phase by
+                                  of a piecewise-constant load         phase
+``rock.blow``                     compiled loop of a blow on the rod   the numpy loop
+                                  and the rock (theory §4d)
+``sweeps.create_store``           sweep store written by zarr alone    store written by xarray's
+                                                                       ``to_zarr``
+================================  ===================================  ==================================
 
 Examples
 --------
@@ -66,8 +72,10 @@ IMPLEMENTATIONS: dict[str, str] = {
     "loads.flow": "compiled flows of Fourier and piecewise-constant loads",
     "admissibility.bound": "compiled bound of |g''| inside the numpy admissibility search",
     "admissibility.search": "whole certified admissibility search compiled",
+    "admissibility.rigid_cosine": "rigid bar's clearance under a cosine load from its velocity's zeros",
     "orbits.rigid_scalar": "rigid-bar closed forms in plain floats for one point",
     "orbits.rigid_arrays": "rigid-bar closed forms compiled, point by point over parameter arrays",
+    "orbits.rigid_segments": "rigid-bar multi-impact segment problem in plain floats",
     "simulate.impact_search": "specialised certified searches after an impact",
     "simulate.wave_separation": "compiled characteristics solver for contact windows that lose contact",
     "simulate.switched_rigid": "rigid bar under a position-switched drive in scalar closed forms",

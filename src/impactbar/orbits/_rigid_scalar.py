@@ -16,11 +16,14 @@ import cmath
 import math
 from typing import NamedTuple
 
+import numpy as np
+
 from .stability import MARGINAL
 
 TWO_PI = 2.0 * math.pi
 INF = math.inf
 NAN = math.nan
+_RIGID_W2 = np.zeros(1)  # the rigid mode's squared frequency, for Load.propagate
 
 
 class RigidOrbit(NamedTuple):
@@ -316,3 +319,124 @@ def square_orbits(d, R, q, kappa):
             return None
         out.append(orbit)
     return out
+
+
+# ------------------------------------------------------------------------------------------------
+# the rigid bar's flight under any load, in plain floats (the multi-impact segment problem)
+# ------------------------------------------------------------------------------------------------
+SCALAR_HARMONICS = 16
+"""Most harmonics a Fourier load may have for :class:`RigidFlight` to sum them in plain floats (a
+load with more is summed by numpy, one call per time)."""
+
+
+class RigidFlight:
+    """The rigid bar's flight ``q'' + d q' = p(t)`` (eq. 8 with ``N = 0``) from one state to a later
+    time, and the load there, in plain floats.
+
+    Under a :class:`~impactbar.FourierLoad` the flight is the closed form of
+    :meth:`~impactbar.FourierLoad.flow` for the rigid mode, term by term: the periodic part
+    ``Re sum_k H_k p_k e^{ikt}`` with ``H_k = 1 / (i k d - k^2)``, and the free part
+    ``q = dq + b(tau) dv + p_0 c(tau)``, ``v = e^{-d tau} dv + p_0 b(tau)`` of the start's
+    difference ``(dq, dv)`` from the periodic part (theory §2, §4). Any other load flies by its own
+    :meth:`~impactbar.loads.Load.propagate` (one call, converted to floats).
+
+    Parameters
+    ----------
+    d : float
+        Damping, ``>= 0``.
+    load : Load
+        The drive load.
+    """
+
+    __slots__ = ("d", "load", "p0", "terms", "numpy_terms")
+
+    def __init__(self, d, load):
+        self.d, self.load = float(d), load
+        self.terms = self.numpy_terms = None
+        k = getattr(load, "_k", None)
+        if k is None:  # not a Fourier load
+            self.p0 = None
+            return
+        self.p0 = float(load.p0)
+        pk = load._pk
+        hp = pk / (1j * k * self.d - k * k)  # the rigid mode's transfer terms (FourierLoad._transfer)
+        hv = hp * (1j * k)
+        if k.size <= SCALAR_HARMONICS:
+            self.terms = tuple(zip(k.tolist(), pk.tolist(), hp.tolist(), hv.tolist(), strict=True))
+        else:
+            self.numpy_terms = (k, pk, hp, hv)
+
+    def _periodic(self, t):
+        """``(q_p, v_p)(t)`` of the periodic part, and ``p(t)``."""
+        if self.terms is not None:
+            qp = vp = p = 0.0
+            for k, pk, hp, hv in self.terms:
+                e = cmath.exp(complex(0.0, k * t))
+                qp += (hp * e).real
+                vp += (hv * e).real
+                p += (pk * e).real
+            return qp, vp, self.p0 + p
+        k, pk, hp, hv = self.numpy_terms
+        e = np.exp(1j * k * t)
+        return float((hp @ e).real), float((hv @ e).real), self.p0 + float((pk @ e).real)
+
+    def state(self, t0, q0, v0, t1):
+        """``(q, v)`` at ``t1`` of the flight from ``(q0, v0)`` at ``t0``, and the load ``p(t0)`` and
+        ``p(t1-)`` (left limit), as floats."""
+        if self.p0 is None:
+            load = self.load
+            q, v = load.propagate(_RIGID_W2, self.d, t0, [q0], [v0], [t1])
+            return (float(q[0, 0]), float(v[0, 0]), float(load(t0)), float(load.left_limit(t1)))
+        d = self.d
+        qp0, vp0, p_start = self._periodic(t0)
+        qp1, vp1, p_end = self._periodic(t1)
+        dq, dv = q0 - qp0, v0 - vp0
+        tau = t1 - t0
+        b = _b(d, tau)
+        return (qp1 + dq + b * dv + self.p0 * _c(d, tau), vp1 + math.exp(-d * tau) * dv + self.p0 * b,
+                p_start, p_end)
+
+
+def cosine_clearance(d, p0, pk, k, t0, v0, horizon, at_rest):
+    """The rigid bar's clearance over one flight under ``p0 + pk cos(k t)``: the largest ``u(1, t)``
+    at a zero of its velocity in ``(t0, t0 + horizon)``, the flight starting on the stop at load time
+    ``t0`` with velocity ``v0`` (theory §5).
+
+    Since ``v' = p(t) - d v``, every zero of ``v`` crosses with the sign of the load there, so an arc
+    of constant load sign holds at most one; the arcs' ends are the load's zeros, in closed form, and
+    each zero of ``v`` is found by :func:`_bracketed_zero` between them (as :func:`cosine_orbits`
+    does over one period). ``at_rest``: the end leaves at rest, the sign just after ``t0`` is the
+    load's. Returns ``-inf`` where the velocity keeps its sign.
+    """
+    den = d * d + k * k
+    ca, cb = pk * d / den, pk * k / den  # the periodic velocity ca cos(k t) + cb sin(k t)
+    x0 = k * t0
+    free = v0 - (ca * math.cos(x0) + cb * math.sin(x0))
+    W0 = (ca * math.sin(x0) - cb * math.cos(x0)) / k
+
+    def velocity(tau):
+        x = k * (t0 + tau)
+        return ca * math.cos(x) + cb * math.sin(x) + p0 * _b(d, tau) + free * math.exp(-d * tau)
+
+    def load(tau):
+        return p0 + pk * math.cos(k * (t0 + tau))
+
+    bounds = [0.0]
+    crossing = -p0 / pk if pk != 0.0 else INF
+    if abs(crossing) < 1.0:  # the load's zeros in (0, horizon): k t = +-alpha mod 2 pi
+        alpha, period = math.acos(crossing), TWO_PI / k
+        first = sorted(((z - t0) % period) for z in (alpha / k, -alpha / k))
+        for j in range(int(horizon / period) + 1):
+            bounds.extend(f + j * period for f in first if 0.0 < f + j * period < horizon)
+    bounds.append(horizon)
+    clearance = -INF
+    s_lo = _sign(load(0.0) if at_rest else v0)  # the sign just after the impact
+    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+        s_hi = _sign(velocity(hi))
+        if s_lo * s_hi < 0.0 and hi > lo:
+            tau = _bracketed_zero(velocity, load, d, lo, hi, s_lo)
+            x = k * (t0 + tau)
+            g = (ca * math.sin(x) - cb * math.cos(x)) / k - W0 + p0 * _c(d, tau) + free * _b(d, tau)
+            clearance = max(clearance, g)
+        s_lo = s_hi
+    return clearance

@@ -10,6 +10,8 @@ import numpy as np
 from .._shared.status import Admissibility
 from ..dynamics.certified import enclose_zeros
 from ..dynamics.implementations import use_fast
+from ..loads import CosineLoad
+from ._rigid_scalar import cosine_clearance
 
 TWO_PI = 2.0 * math.pi
 
@@ -17,6 +19,9 @@ TWO_PI = 2.0 * math.pi
 # search (enclosure, Newton steps, branch and bound) by the compiled kernel
 # :mod:`impactbar.orbits._admkernel` where the load's flow is compiled; "admissibility.bound", the
 # bounds of the numpy search by the compiled kernel. Their references are the numpy paths.
+# "admissibility.rigid_cosine": the rigid bar's flights under a cosine load from the zeros of its
+# velocity, one per arc of constant load sign (_rigid_scalar.cosine_clearance); its reference is the
+# certified search.
 #: intervals tried first by the branch and bound on the stationary values (see _stationary_values)
 SEEDS = 4
 #: pieces into which the branch and bound splits an interval it searches again (then halved down
@@ -70,17 +75,23 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     if at_rest is None:
         at_rest = R == 0.0
     found = None
-    if use_fast("admissibility.search"):
+    # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
+    # point of g; the end leaves the stop iff its acceleration there points away from the stop.
+    if at_rest:
+        acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
+    # (a rigid flight that starts pressed on the stop sticks: the searches' clearances differ there
+    # only in what the departure's neighbourhood counts, and the certified search's is the one kept)
+    if (M == 1 and type(load) is CosineLoad and q0[0] == 0.0 and not (at_rest and not acc0 < 0.0)
+            and use_fast("admissibility.rigid_cosine")):
+        found = (cosine_clearance(float(d), load.p0, load.pk, load.k, float(phase), float(v0[0]),
+                                  float(horizon), bool(at_rest)), 0.0)
+    if found is None and use_fast("admissibility.search"):
         found = _compiled_search(load, w2, float(d), float(phase), q0, v0, c, absc, float(psup),
                                  float(horizon), bool(at_rest), 1e-13 * scale, flow)
     if found is None:
         found = _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest, scale,
                               flow)
     clearance, err_b = found
-    # the departure: for R = 0 every velocity is zero just after impact, so t = 0 is a stationary
-    # point of g; the end leaves the stop iff its acceleration there points away from the stop.
-    if at_rest:
-        acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
     # rounding of the values themselves: relative to the problem's scale (linear in the load), so
     # that every verdict is invariant under load -> L load
     err = err_b + 1e-12 * (scale + (abs(clearance) if clearance > -math.inf else 0.0))

@@ -22,6 +22,7 @@ Admissibility adds the characteristics solution's verdict on each contact (``"se
 from __future__ import annotations
 
 import math
+from functools import cached_property
 
 import numpy as np
 
@@ -29,9 +30,12 @@ from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
 from ..drives.switched import PositionSwitchedDrive
+from ..dynamics.implementations import use_fast
 from ..dynamics.modal import fundamental
 from ..loads import Load
 from ..model import BarModel
+from ._rigid_scalar import RigidFlight
+from ._rigid_scalar import _b as _scalar_b
 from .admissibility import _admissibility, _window_departure
 from .one_impact import periodic_orbits
 from .orbit import MultiImpactOrbit as MultiImpactOrbit
@@ -110,21 +114,30 @@ class _Segments:
         self.w2 = model.frequencies**2
         self.d = model.d
         self.c = model.end_weights
-        if model.law.flight_starts_on_stop:
-            E = np.zeros((2 * M, 2 * M - 1))  # full state from reduced: q_0 = -sum_{n>=1} c_n q_n
-            E[0, : M - 1] = -self.c[1:]
-            E[1:M, : M - 1] = np.eye(M - 1)
-            E[M:, M - 1:] = np.eye(M)
-            self.keep = slice(1, None)  # the components of a state the unknowns hold
-        else:  # a flight may start off the stop (the rod-rock law): q_0 is an unknown too
-            E = np.eye(2 * M)
-            self.keep = slice(0, None)
-        self.E = E
-        self.B = 1 + E.shape[1]  # unknowns (and conditions) per impact: its time and state
+        self.on_stop = model.law.flight_starts_on_stop
+        # the components of a state the unknowns hold: q_0 = -sum_{n>=1} c_n q_n follows from contact,
+        # unless a flight may start off the stop (the rod-rock law), where q_0 is an unknown too
+        self.keep = slice(1, None) if self.on_stop else slice(0, None)
+        self.B = 2 * M + (0 if self.on_stop else 1)  # unknowns (and conditions) per impact
         self.size = self.B * m
         self.T = contact_window(model)  # each flight starts T after its impact
+        # the rigid bar under the paper's law: the whole evaluation in plain floats (issue 20)
+        self.rigid = (RigidFlight(model.d, load) if M == 1 and model.law.rigid_closed_forms
+                      and use_fast("orbits.rigid_segments") else None)
 
     # -- pieces -----------------------------------------------------------------------------------
+    @cached_property
+    def E(self):
+        """Full state from reduced, shape ``(2 M, B - 1)`` (built once, on the general path only)."""
+        M = self.M
+        if not self.on_stop:
+            return np.eye(2 * M)
+        E = np.zeros((2 * M, 2 * M - 1))
+        E[0, : M - 1] = -self.c[1:]
+        E[1:M, : M - 1] = np.eye(M - 1)
+        E[M:, M - 1:] = np.eye(M)
+        return E
+
     def split(self, u):
         z = np.asarray(u, dtype=float).reshape(self.m, self.B)
         return z[:, 0], z[:, 1:]
@@ -164,6 +177,8 @@ class _Segments:
             ``y_plus``, ``y_minus`` (m, 2 M) and the per-impact map Jacobians ``maps`` (m, 2 M, 2 M)
             (only with ``jacobian``).
         """
+        if self.rigid is not None:
+            return self._evaluate_rigid(u, jacobian)
         m, M = self.m, self.M
         K, B, keep = 2 * M, self.B, self.keep
         t, x = self.split(u)
@@ -204,6 +219,46 @@ class _Segments:
             maps[j, 1:] = dy[keep]
         return F, DF, {"y_plus": y_plus, "y_minus": y_minus, "maps": maps}
 
+    def _evaluate_rigid(self, u, jacobian):
+        """:meth:`evaluate` for the rigid bar under the paper's law, in plain floats: the same
+        residual, Jacobian and impact maps as the general path with ``M = 1`` (the state after an
+        impact is ``(0, v)``, eq. 10 is ``(q, v) -> (q, -R v)``, the fundamental matrix is
+        ``[[1, b(T)], [0, e^{-d T}]]``), without its dozens of small numpy calls per flight."""
+        m, d, R, flight = self.m, self.d, self.model.R, self.rigid
+        z = np.asarray(u, dtype=float).reshape(m, 2)
+        t, x = z[:, 0].tolist(), z[:, 1].tolist()
+        F = np.empty(2 * m)
+        y_plus = np.zeros((m, 2))
+        y_plus[:, 1] = x
+        y_minus = np.empty((m, 2))
+        DF = np.zeros((2 * m, 2 * m)) if jacobian else None
+        maps = np.empty((m, 2, 2)) if jacobian else None
+        for j in range(m):
+            jn = (j + 1) % m
+            t0, v0 = t[j], x[j]
+            t1 = t[jn] + (TWO_PI * self.n if jn == 0 else 0.0)
+            q1, v1, p0, p1 = flight.state(t0, 0.0, v0, t1)
+            y_minus[j] = q1, v1
+            F[2 * j] = q1
+            F[2 * j + 1] = -R * v1 - x[jn]
+            if not jacobian:
+                continue
+            T = t1 - t0
+            b, e = _scalar_b(d, T), math.exp(-d * T)
+            a0, a1 = p0 - d * v0, p1 - d * v1  # accelerations at both ends of the flight
+            A00, A01, A10, A11 = -(v0 + b * a0), b, -e * a0, e  # d(q1, v1) / d(t0, v0)
+            r, c = 2 * j, 2 * jn
+            DF[r, c] += v1  # d / d t1
+            DF[r + 1, c] -= R * a1
+            DF[r, r] += A00
+            DF[r, r + 1] += A01
+            DF[r + 1, r] -= R * A10
+            DF[r + 1, r + 1] -= R * A11
+            DF[r + 1, c + 1] -= 1.0
+            rt0, rt1 = _quotient(-A00, v1), _quotient(-A01, v1)  # d t1 / d(t0, v0) at contact
+            maps[j] = (rt0, rt1), (-R * (A10 + a1 * rt0), -R * (A11 + a1 * rt1))
+        return F, DF, {"y_plus": y_plus, "y_minus": y_minus, "maps": maps}
+
     def monodromy(self, maps):
         """Product of the impact-map Jacobians, first impact first: ``DP_m ... DP_1``."""
         P = maps[0]
@@ -238,6 +293,16 @@ class _Segments:
                 F, _, _ = self.evaluate(u, jacobian=False)
                 return (u if np.all(np.isfinite(F)) else None), it
         return None, max_iter
+
+
+def _quotient(a: float, b: float) -> float:
+    """``a / b`` as numpy divides floats with its warnings off: ``+-inf`` or NaN where ``b = 0``
+    (a grazing arrival's saltation term)."""
+    if b != 0.0 or b != b:
+        return a / b if b == b else math.nan
+    if a == 0.0 or a != a:
+        return math.nan
+    return math.copysign(math.inf, a) * math.copysign(1.0, b)
 
 
 def _sorted_multipliers(P):
