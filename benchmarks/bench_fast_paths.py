@@ -28,7 +28,8 @@ on one thread (``OMP_NUM_THREADS`` etc. default to 1 here), since CPU time count
 
 Run: ``python benchmarks/bench_fast_paths.py [--quick]``. Prints a table; nothing is asserted.
 
-``--against SRC`` instead times the same user-level calls (``periodic_orbits``, ``simulate``) in
+``--against SRC`` instead times the same user-level calls (``periodic_orbits``, ``simulate``, and the
+rigid bar's 2-per-2 ``continue_orbit`` branch per point, issue 20) in
 fresh processes on the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x -C /tmp/old``
 then ``--against /tmp/old/src``) and on this one, alternately, and prints both side by side.
 
@@ -292,6 +293,16 @@ for N, n in ((0, 20000), (8, 5000), (64, 1000)):
         peer = lambda k: minimal_loop_rigid(q[0], v[0], o.phase, o.phase + 1e7, k, 1.2, 1.0, 0.02, 0.8)
         out["peer: compiled minimal loop, rigid, 1-impact run (us)"] = cpu(lambda: peer(1), 101) * 1e6
         out["peer: compiled minimal loop, rigid, 100-impact run (us)"] = cpu(lambda: peer(100), 51) * 1e6
+# the rigid 2-per-2 branch from the one-impact orbit's period doubling to its own (51 points; as
+# bench_continuation.py's second case), per point of the branch
+from impactbar import continue_orbit
+
+rigid = BarModel(s=3.0, d=0.0, R=0.6, n_modes=0)
+one = next(o for o in po(rigid, CosineLoad(0.9, 1.0)) if np.cos(o.phase) < 0)
+pd = continue_orbit(one, "p0", to=0.66, stop_on=("period-doubling",)).events[-1]
+points = len(continue_orbit(pd, "p0", to=0.66, stop_on=("period-doubling",)))
+out["continue_orbit, rigid 2-per-2 branch, per point (ms)"] = cpu(
+    lambda: continue_orbit(pd, "p0", to=0.66, stop_on=("period-doubling",)), 7) / points * 1e3
 print(json.dumps(out))
 """
 

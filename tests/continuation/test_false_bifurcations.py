@@ -132,7 +132,7 @@ def test_no_branch_point_at_the_start_of_a_doubled_branch(path):
     doubled orbit's multiplier is (-1)^2 = +1 and det(I - P) is zero up to rounding; its sign there
     is no crossing. Before the fix, the rigid bar's float path (same orbits to 1e-14) reported a
     branch point at the start, p0 = 0.75684712062, where the general path's corrector failed by
-    chance at a chord position of 5e-11."""
+    chance at the first chord position the location tried."""
     from impactbar.dynamics.implementations import implementation
 
     model = BarModel(s=3.0, d=0.0, R=0.6, n_modes=0)
