@@ -34,7 +34,7 @@ from ..orbits.switched import SwitchedOrbit
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
-from .switched import checked_events, continue_switched, doubled_first_points
+from .switched import checked_events, continue_switched, doubled_first_points, first_chord_tests
 
 __all__ = ["continue_orbit", "EVENT_KINDS"]
 
@@ -113,12 +113,7 @@ class _OrbitProblem:
         """The events between the last two points, and the status to stop with (``stop_on``)."""
         if not self.events:
             return [], None
-        tests = [_tests(o) for o in orbits[-2:]]
-        if self.doubled and len(points) == 2:
-            # the first point is the parent's period doubling, where the doubled orbit has the
-            # multiplier (-1)^2 = +1: det(I - P) is zero there up to rounding, and its sign no
-            # crossing (the event is the parent's period doubling, reported on its branch)
-            tests[0]["fold"] = tests[1]["fold"]
+        tests = first_chord_tests([_tests(o) for o in orbits[-2:]], self.doubled, len(points))
         new = _detect(engine, points, tangents, tests, orbits, self.xtol)
         hit = [e for e in new if e.kind in self.stop_on]
         return new, (BranchStatus.stopped_at(hit[0].kind) if hit else None)

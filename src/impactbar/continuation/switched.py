@@ -101,7 +101,8 @@ class _SwitchedProblem:
     def after_point(self, engine, points, tangents, orbits):
         if not self.events:
             return [], None
-        new = self.detect(engine, points, tangents, [_tests(o) for o in orbits[-2:]], orbits, self.xtol)
+        tests = first_chord_tests([_tests(o) for o in orbits[-2:]], self.doubled, len(points))
+        new = self.detect(engine, points, tangents, tests, orbits, self.xtol)
         graze = _switch_grazing(engine, points, tangents, orbits, self.xtol)
         if graze is not None:
             new.append(graze)
@@ -113,6 +114,17 @@ class _SwitchedProblem:
 
     def corner(self, engine, U, index):
         return None
+
+
+def first_chord_tests(tests: list, doubled: bool, points: int) -> list:
+    """The test functions at the last two points of a branch, ``tests``, with the fold test of a
+    doubled branch's first point replaced by its second's: that point is the parent's period
+    doubling, where the doubled orbit has the multiplier ``(-1)^2 = +1``, so ``det(I - P)`` is zero
+    there up to rounding and its sign is no crossing (the event is the parent's period doubling,
+    reported on its branch; theory §7)."""
+    if doubled and points == 2:
+        tests[0] = dict(tests[0], fold=tests[1]["fold"])
+    return tests
 
 
 def _tests(o: SwitchedOrbit) -> dict:
