@@ -18,6 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..loads import FourierLoad
 from .stability import MARGINAL
 
 TWO_PI = 2.0 * math.pi
@@ -334,7 +335,8 @@ class RigidFlight:
     time, and the load there, in plain floats.
 
     Under a :class:`~impactbar.FourierLoad` the flight is the closed form of
-    :meth:`~impactbar.FourierLoad.flow` for the rigid mode, term by term: the periodic part
+    :meth:`~impactbar.FourierLoad.flow` for the rigid mode, term by term (a subclass that redefines
+    the load's value or flow flies by its own :meth:`~impactbar.loads.Load.propagate`): the periodic part
     ``Re sum_k H_k p_k e^{ikt}`` with ``H_k = 1 / (i k d - k^2)``, and the free part
     ``q = dq + b(tau) dv + p_0 c(tau)``, ``v = e^{-d tau} dv + p_0 b(tau)`` of the start's
     difference ``(dq, dv)`` from the periodic part (theory §2, §4). Any other load flies by its own
@@ -353,12 +355,13 @@ class RigidFlight:
     def __init__(self, d, load):
         self.d, self.load = float(d), load
         self.terms = self.numpy_terms = None
-        k = getattr(load, "_k", None)
-        if k is None:  # not a Fourier load
+        kind = type(load)
+        if not (isinstance(load, FourierLoad) and all(  # a subclass that redefines the load flies by it
+                getattr(kind, f) is getattr(FourierLoad, f) for f in ("__call__", "propagate", "flow"))):
             self.p0 = None
             return
         self.p0 = float(load.p0)
-        pk = load._pk
+        k, pk = load.orders.astype(float), load.amplitudes
         hp = pk / (1j * k * self.d - k * k)  # the rigid mode's transfer terms (FourierLoad._transfer)
         hv = hp * (1j * k)
         if k.size <= SCALAR_HARMONICS:
