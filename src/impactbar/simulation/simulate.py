@@ -364,14 +364,19 @@ class _Core:
         """Free flight with impacts (the kernel's ``run_free``); the states after the impacts go
         into the rows of ``out_q, out_v`` (shape (cap, N + 1)), at most ``cap`` of them. ``direct``: by
         the kernel's entry point, untyped, once it has its one signature (C-contiguous float arrays)."""
-        out_t, out_vel = np.empty(out_q.shape[0]), np.empty(out_q.shape[0])
+        cap = out_q.shape[0]
+        out_t, out_vel = np.empty(cap), np.empty(cap)
         fast = use_fast("simulate.impact_search")
         # a rigid run compiles no modal search, a flexible one no rigid search
-        run, searches = (K.run_free_rigid, (fast, None)) if self.N == 0 else (K.run_free, (None, fast))
+        if self.N == 0:
+            run, rigid_fast, modal_fast = K.run_free_rigid, fast, None
+        else:
+            run, rigid_fast, modal_fast = K.run_free, None, fast
         if direct:  # (numba's typing of 11 arguments costs 2 us)
             run = entry_point(run)
-        n, st, tn = run(*self.free_args, (float(t), q, v), float(t_end), int(max_imp), CHATTER_TAIL,
-                        (out_t, out_vel, out_q, out_v), *searches)
+        D, B, R, c = self.free_args
+        n, st, tn = run(D, B, R, c, (float(t), q, v), float(t_end), int(max_imp), CHATTER_TAIL,
+                        (out_t, out_vel, out_q, out_v), rigid_fast, modal_fast)
         return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
