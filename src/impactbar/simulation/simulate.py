@@ -313,8 +313,8 @@ def _core_for(model: BarModel, load: Load) -> _Core:
     if core is None:
         core = _Core(model, load)
         with _CORES_LOCK:
-            if len(_CORES) > _CORES_MAX:  # (the pairs and the last call's entry)
-                _CORES.pop(next(iter(_CORES)))
+            if len(_CORES) - (_LAST in _CORES) >= _CORES_MAX:  # the oldest pair goes
+                _CORES.pop(next(k for k in _CORES if k is not _LAST))
             _CORES[key] = core
     with _CORES_LOCK:
         _CORES[_LAST] = (model, load, core)
