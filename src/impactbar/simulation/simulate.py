@@ -85,7 +85,9 @@ MAX_TIME = 1e8
 MAX_SIMULATE_STIFFNESS = 1e5
 #: A run at least this long (dimensionless time, 1,000 load periods) catches Ctrl-C between
 #: blocks of impacts and keeps what it computed (:class:`SimulationInterrupted`), as does any run
-#: with a ``progress`` callback.
+#: with a ``progress`` callback; not a run that asks for at most ``SHORT_RUN_IMPACTS`` (256) impacts
+#: (``max_impacts``): it is done in one call of the compiled kernel, or in a few blocks where it
+#: meets the stop, and the handler's two system calls were a tenth of a 1-impact run's cost.
 LONG_RUN = 2000.0 * math.pi
 #: Least wall time (s) between two calls of a run's ``progress`` callback.
 PROGRESS_EVERY = 0.1
@@ -506,9 +508,11 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         stiff for the guaranteed event search, ``s * n_modes > 1e5`` (``MAX_SIMULATE_STIFFNESS``: the
         search steps on the scale of the stiffest mode's period).
     SimulationInterrupted
-        On Ctrl-C during a run with ``progress`` or of at least 1,000 load periods (``LONG_RUN``),
-        in the main thread: a :class:`KeyboardInterrupt` whose ``trajectory`` holds the run up to
-        the last block of impacts it finished.
+        On Ctrl-C during a run with ``progress``, or of at least 1,000 load periods (``LONG_RUN``)
+        that asks for more than 256 impacts (``max_impacts``), in the main thread: a
+        :class:`KeyboardInterrupt` whose ``trajectory`` holds the run up to the last block of impacts
+        it finished. (A run of at most 256 impacts is short: Ctrl-C is then an ordinary
+        :class:`KeyboardInterrupt`.)
 
     Examples
     --------
@@ -560,8 +564,8 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         return _run_switched(model, load, q, v, t0, t_end, max_imp)
     core = _core_for(model, load)
     _push_off(core.c, q)
-    if progress is None and t_end - t0 < LONG_RUN:
-        return _run(core, q, v, t0, t_end, max_imp)
+    if progress is None and (t_end - t0 < LONG_RUN or max_imp <= SHORT_RUN_IMPACTS):
+        return _run(core, q, v, t0, t_end, max_imp)  # (no Ctrl-C handler: a short run's cost)
     with _CtrlC() as ctrl_c:
         traj = _run(core, q, v, t0, t_end, max_imp, progress=progress, stop=ctrl_c)
     if ctrl_c.pressed:  # (also when the run ended in the block where Ctrl-C came)
