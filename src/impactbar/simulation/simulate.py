@@ -85,15 +85,11 @@ MAX_TIME = 1e8
 MAX_SIMULATE_STIFFNESS = 1e5
 #: A run at least this long (dimensionless time, 1,000 load periods) catches Ctrl-C between
 #: blocks of impacts and keeps what it computed (:class:`SimulationInterrupted`), as does any run
-#: with a ``progress`` callback; not a run that asks for at most ``SHORT_RUN_IMPACTS`` (256) impacts
-#: (``max_impacts``): it is done in one call of the compiled kernel, or in a few blocks where it
-#: meets the stop, and the handler's two system calls were a tenth of a 1-impact run's cost.
+#: with a ``progress`` callback; not a run of at most ``SHORT_RUN_IMPACTS`` (256) impacts, done in
+#: one compiled call or a few blocks (the handler's system calls were a tenth of a 1-impact run).
 LONG_RUN = 2000.0 * math.pi
 #: Least wall time (s) between two calls of a run's ``progress`` callback.
 PROGRESS_EVERY = 0.1
-
-
-
 
 
 # --------------------------------------------------------------------------------------------------
@@ -301,11 +297,9 @@ _LAST = "last"  # _CORES[_LAST]: (model, load, core) of the last call (cleared w
 
 
 def _core_for(model: BarModel, load: Load) -> _Core:
-    """The kernel's data for this model and load, built once and reused by later runs (a short
-    run's fixed cost; the Monte Carlo experiments run thousands with the same pair). Keyed by the
-    model's value and the load's value (both are frozen, so an entry never goes stale); a core is
-    never modified. The model and load objects of the last call are found by identity, without
-    hashing them (a frozen dataclass's hash builds the tuple of its fields: 0.3 us of a short run)."""
+    """The kernel's data for this model and load, built once and reused by later runs (a short run's
+    fixed cost; the Monte Carlo experiments run thousands with one pair). Keyed by the values of the
+    model and the load (both frozen: an entry never goes stale), the last call's found by identity."""
     last = _CORES.get(_LAST)
     if last is not None and last[0] is model and last[1] is load:
         return last[2]
@@ -314,11 +308,10 @@ def _core_for(model: BarModel, load: Load) -> _Core:
         core = _CORES.get(key)
     if core is None:
         core = _Core(model, load)
-        with _CORES_LOCK:
-            if len(_CORES) - (_LAST in _CORES) >= _CORES_MAX:  # the oldest pair goes
-                _CORES.pop(next(k for k in _CORES if k is not _LAST))
-            _CORES[key] = core
     with _CORES_LOCK:
+        if key not in _CORES and len(_CORES) - (_LAST in _CORES) >= _CORES_MAX:  # the oldest pair goes
+            _CORES.pop(next(k for k in _CORES if k is not _LAST))
+        _CORES[key] = core
         _CORES[_LAST] = (model, load, core)
     return core
 
@@ -366,14 +359,11 @@ class _Core:
         """Free flight with impacts (the kernel's ``run_free``); the states after the impacts go
         into the rows of ``out_q, out_v`` (shape (cap, N + 1)), at most ``cap`` of them. ``direct``: by
         the kernel's entry point, untyped, once it has its one signature (C-contiguous float arrays)."""
-        cap = out_q.shape[0]
-        out_t, out_vel = np.empty(cap), np.empty(cap)
+        out_t, out_vel = np.empty(out_q.shape[0]), np.empty(out_q.shape[0])
         fast = use_fast("simulate.impact_search")
         # a rigid run compiles no modal search, a flexible one no rigid search
-        if self.N == 0:
-            run, rigid_fast, modal_fast = K.run_free_rigid, fast, None
-        else:
-            run, rigid_fast, modal_fast = K.run_free, None, fast
+        run, rigid_fast, modal_fast = (K.run_free_rigid, fast, None) if self.N == 0 else \
+            (K.run_free, None, fast)
         if direct:  # (numba's typing of 11 arguments costs 2 us)
             run = entry_point(run)
         D, B, R, c = self.free_args
@@ -509,10 +499,9 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         search steps on the scale of the stiffest mode's period).
     SimulationInterrupted
         On Ctrl-C during a run with ``progress``, or of at least 1,000 load periods (``LONG_RUN``)
-        that asks for more than 256 impacts (``max_impacts``), in the main thread: a
-        :class:`KeyboardInterrupt` whose ``trajectory`` holds the run up to the last block of impacts
-        it finished. (A run of at most 256 impacts is short: Ctrl-C is then an ordinary
-        :class:`KeyboardInterrupt`.)
+        and more than 256 ``max_impacts``, in the main thread: a :class:`KeyboardInterrupt` whose
+        ``trajectory`` holds the run up to the last block of impacts it finished (in a run of at most
+        256 impacts Ctrl-C is an ordinary :class:`KeyboardInterrupt`).
 
     Examples
     --------
@@ -539,10 +528,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     t_end = check_real("t_end", t_end, lo=t0, hi=t0 + MAX_TIME, lo_open=True)
     if abs(t_end) > MAX_TIME:
         raise ValueError(f"t_end must be in [-{MAX_TIME:g}, {MAX_TIME:g}]; got {t_end}")
-    if max_impacts is None:
-        max_imp = np.iinfo(np.int64).max
-    else:
-        max_imp = check_int("max_impacts", max_impacts, lo=1)
+    max_imp = np.iinfo(np.int64).max if max_impacts is None else check_int("max_impacts", max_impacts, lo=1)
     N = model.n_modes
     if N and model.s * N > MAX_SIMULATE_STIFFNESS:
         raise ValueError(
