@@ -69,3 +69,22 @@ def test_ctrl_c_keeps_the_finished_part():
                                atol=1e-9)
     # the handler is gone: a later Ctrl-C is an ordinary KeyboardInterrupt again
     assert signal.getsignal(signal.SIGINT) is before
+
+
+def test_a_run_of_few_impacts_sets_no_ctrl_c_handler(monkeypatch):
+    """A run that asks for at most 256 impacts takes no Ctrl-C handler however long its span (the
+    handler's two system calls were a tenth of a 1-impact run's cost); one that asks for more does."""
+    mod = importlib.import_module("impactbar.simulation.simulate")
+    entered = []
+
+    class Spy(mod._CtrlC):
+        def __enter__(self):
+            entered.append(True)
+            return super().__enter__()
+
+    monkeypatch.setattr(mod, "_CtrlC", Spy)
+    span = 2.0 * mod.LONG_RUN
+    assert simulate(MODEL, LOAD, START, span, max_impacts=mod.SHORT_RUN_IMPACTS).n_impacts == 256
+    assert entered == []
+    assert simulate(MODEL, LOAD, START, span, max_impacts=mod.SHORT_RUN_IMPACTS + 1).n_impacts == 257
+    assert entered == [True]

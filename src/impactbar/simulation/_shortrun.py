@@ -17,12 +17,14 @@ from .trajectory import _FREE, Trajectory, _Segments
 #: contact is computed again by the general driver, so at most this many impacts are done twice
 SHORT_RUN_IMPACTS = 256
 
-# the pieces' kinds, shared read-only by every short run's log (views of the first n + 1)
+# the pieces' kinds, shared read-only by every short run's log: a run of n impacts gets _KINDS[n],
+# views of the first n + 1 (made once: slicing them per run was a short run's cost)
 _BASIS = np.full(SHORT_RUN_IMPACTS + 1, _FREE, dtype=np.int8)  # all free flights
 _ENTRY = np.ones(SHORT_RUN_IMPACTS + 1, dtype=np.int8)  # 'impact' ...
 _ENTRY[0] = 0  # ... after the 'start'
 _BASIS.setflags(write=False)
 _ENTRY.setflags(write=False)
+_KINDS = [(_BASIS[:n + 1], _ENTRY[:n + 1]) for n in range(SHORT_RUN_IMPACTS + 1)]
 
 _ENTRY_POINTS: dict = {}  # dispatcher -> the compiled entry point of its one signature
 
@@ -45,7 +47,8 @@ def entry_point(dispatcher):
 def run_short(core, q, v, t0, t_end, max_imp, state) -> Trajectory | None:
     """The run from ``(t0, q, v)`` as :func:`~impactbar.simulate`'s general driver gives it, when the
     kernel's one call ends it in flight (status ``END`` or ``MAXIMP``); None otherwise, with ``q,
-    v`` as they came. ``state`` makes the final state from two arrays (``InitialState._trusted``)."""
+    v`` as they came. ``state`` makes the final state from two arrays (``InitialState._trusted``);
+    ``t0, t_end`` are floats and ``max_imp`` an int (the kernel's entry point takes no others)."""
     M = q.size
     Q = np.empty((max_imp + 1, M))
     V = np.empty((max_imp + 1, M))
@@ -53,10 +56,11 @@ def run_short(core, q, v, t0, t_end, max_imp, state) -> Trajectory | None:
     V[0] = v
     # (the kernel overwrites its start with the final state)
     n, st, tn, ot, ov = core.run_free(t0, q, v, t_end, max_imp, Q[1:], V[1:], direct=True)
-    if st == K.END:
-        t, status = t_end, RunStatus.T_END
-    elif st == K.MAXIMP:
+    if st == K.MAXIMP:  # ended on the last impact: the state after it is in q, v (and Q[n])
         t, status = tn, RunStatus.MAX_IMPACTS
+    elif st == K.END:
+        t, status = t_end, RunStatus.T_END
+        Q, V = Q[:n + 1], V[:n + 1]
     else:
         q[:] = Q[0]
         v[:] = V[0]
@@ -64,17 +68,20 @@ def run_short(core, q, v, t0, t_end, max_imp, state) -> Trajectory | None:
     ts = np.empty(n + 1)
     ts[0] = t0
     ts[1:] = ot
-    if t == ts[n]:  # the run ended on a piece's start (max_impacts)
+    if st == K.MAXIMP:
+        qe, ve = q, v
+    elif t == ts[n]:  # the last impact at t_end itself
         qe, ve = Q[n].copy(), V[n].copy()
     else:
         qe, ve = core.propagate(_FREE, ts[n], Q[n], V[n], [t])
         qe, ve = qe[:, 0], ve[:, 0]
-    segs = _Segments(M - 1, ts, _BASIS[:n + 1], _ENTRY[:n + 1], Q[:n + 1], V[:n + 1], {})
+    segs = _Segments(M - 1, ts, *_KINDS[n], Q, V, {})
+    whole = 2 * n >= max_imp  # (ot, ov: the first n of the kernel's max_imp; copied where mostly unused)
     # the dataclass's fields set at once (its __init__ sets them one by one: a short run's cost)
     traj = object.__new__(Trajectory)
     traj.__dict__.update(model=core.model, load=core.load, t0=t0, t_end=t,
-                         impact_times=ot if 2 * n >= ot.base.size else ot.copy(),
-                         impact_velocities=ov if 2 * n >= ov.base.size else ov.copy(),
+                         impact_times=ot if whole else ot.copy(),
+                         impact_velocities=ov if whole else ov.copy(),
                          contact_intervals=np.zeros((0, 2)), final_state=state(qe, ve), status=status,
                          _core=core, _segments=segs, n_release_retries=0)
     return traj
