@@ -18,11 +18,13 @@ from impactbar import BarModel, CosineLoad, periodic_orbits, physical
 
 
 def _clear_caches():
+    from impactbar.dynamics import _characteristics
     from impactbar.orbits import stability, wave
 
     # (getattr: an older tree, timed for comparison, may lack some of these caches)
     for f in (getattr(wave, "_phase_scan", None), getattr(wave, "_state_series", None),
-              getattr(wave, "_flight_fundamental", None), stability.period_fundamental):
+              getattr(wave, "_flight_fundamental", None), stability.period_fundamental,
+              getattr(_characteristics, "_held_scan_table", None)):
         if f is not None:
             f.cache_clear()
 

@@ -341,3 +341,38 @@ def test_scalar_root_search_matches_the_array_forms(load):
                                                       rel=1e-12, abs=1e-12 * f.scale)
             assert f.Acum1(x) == pytest.approx(float(g.Acum(x)[0]), rel=1e-12, abs=1e-12 * f.scale)
     assert separated >= 10  # the searches were exercised
+
+
+def test_held_window_is_the_solvers():
+    """``wave.held_window``: a window the tabulated scan calls held throughout is one the
+    characteristics solver holds throughout, with the same bits (contact, gap, post-window state,
+    and the integrals its solver, built when asked, gives), over random arrivals from near grazing
+    to fast ones under smooth and square-wave drives; and the fast path does take windows (its
+    solver is not built until asked) and leaves the separating ones to the solver."""
+    from impactbar.dynamics.implementations import use_reference
+
+    rng = np.random.default_rng(20)
+    loads = [CosineLoad(0.3, 1.0), CosineLoad(0.1, 2.0, 2), SquareWaveLoad(0.2, 1.3)]
+    held = separated = 0
+    for i in range(120):
+        N = int(rng.integers(0, 40))
+        model = BarModel(s=float(rng.uniform(2.0, 60.0)), d=0.0, R=float(rng.uniform(0.0, 0.9)), n_modes=N)
+        q, v = random_state(rng, model, float(rng.uniform(0.0, 0.3 if i % 2 else 3.0)))
+        speed = float(10.0 ** rng.uniform(-3.0, 1.5))  # arrival speed: near grazing to fast
+        q, v = speed * q, speed * v
+        load, t0 = loads[i % 3], float(rng.uniform(0.0, 2.0 * math.pi))
+        fast = wave_impact(model, load, t0, q, v)
+        lazy = "_solver" not in fast.__dict__
+        with use_reference("wave.held_window"):
+            ref = wave_impact(model, load, t0, q, v)
+        assert "_solver" in ref.__dict__
+        for name in ("contact", "q_after", "v_after"):
+            assert np.array_equal(getattr(fast, name), getattr(ref, name)), name
+        assert fast.gap == ref.gap and fast.separations == ref.separations
+        if lazy:
+            held += 1
+            assert fast.separations == 0 and fast.gap == 0.0
+            for name in ("impulse", "rod_energy", "drive_work", "energy_before", "peak_force"):
+                assert getattr(fast, name) == getattr(ref, name), name
+        separated += ref.separations > 0
+    assert held >= 20 and separated >= 10, (held, separated)

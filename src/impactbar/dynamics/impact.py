@@ -30,7 +30,8 @@ from functools import cached_property
 import numpy as np
 
 from . import _windowkernel as KW
-from ._characteristics import _GL_W, _GL_X, _Contact, _panels, _WindowLoad
+from ._characteristics import _GL_W, _GL_X, _Contact, _panels, _WindowLoad, held_post_state, held_throughout
+from .implementations import use_fast
 from .kernelview import FOURIER, PIECEWISE
 
 __all__ = ["WaveImpact", "wave_impact", "window_drive"]
@@ -252,6 +253,25 @@ class WaveImpact:
         self._solver = solver
         self.contact = solver.contact / s
         self.gap = solver.gap_theta / s
+
+    @classmethod
+    def _held(cls, s, R, t0, q_before, v_before, q_after, v_after, load) -> WaveImpact:
+        """A window known to hold contact throughout (``_characteristics.held_throughout``): one
+        contact interval ``[0, 2/s]``, no gap, its solver built on first use."""
+        imp = cls.__new__(cls)
+        imp.s, imp.R, imp.t0 = s, R, t0
+        imp.duration = 2.0 / s
+        imp.q_before, imp.v_before = q_before, v_before
+        imp.q_after, imp.v_after = q_after, v_after
+        imp._load = load
+        imp.contact = np.array([[0.0, 2.0]]) / s  # the solver's, as __init__ takes them
+        imp.gap = 0.0 / s
+        return imp
+
+    @cached_property
+    def _solver(self) -> _Contact:
+        """The characteristics solution of a window made by :meth:`_held` (``__init__`` sets it)."""
+        return _Contact(self.s, self.R, self.q_before, self.v_before, self._load, self.t0).solve()
 
     def resolve(self) -> WaveImpact:
         """Itself (the simulator's lazily solved windows resolve to a ``WaveImpact``)."""
@@ -505,6 +525,10 @@ def _wave_impact(model, load, t0: float, q, v, drive) -> WaveImpact:
     """:func:`wave_impact` from checked inputs, with the window's drive part ``drive = (g, h)`` of
     :func:`window_drive` already computed (the orbit builder has it)."""
     s, R = float(model.s), float(model.R)
+    if use_fast("wave.held_window") and held_throughout(s, q, v, load, t0):
+        # held throughout: the solver's post-window state without its scan; solved when asked
+        qa, va = held_post_state(s, R, q, v, drive)
+        return WaveImpact._held(s, R, t0, q.copy(), v.copy(), qa, va, load)
     sol = _Contact(s, R, q, v, load, t0).solve()
     qa, va = sol.post_state(q, v, drive)
     return WaveImpact(s, R, t0, q.copy(), v.copy(), qa, va, sol)

@@ -38,6 +38,10 @@ name                              fast (default)                       reference
                                   piece in one call
 ``wave.residual``                 compiled wave-law phase residual     ``wave_orbit_states`` phase by
                                   of a piecewise-constant load         phase
+``wave.held_window``              a contact window held throughout     the characteristics solver's scan
+                                  decided by a tabulated scan with a   (``wave_impact``)
+                                  margin; its solver built on first
+                                  use
 ``rock.blow``                     compiled loop of a blow on the rod   the numpy loop
                                   and the rock (theory §4d)
 ``sweeps.create_store``           sweep store written by zarr alone    store written by xarray's
@@ -81,6 +85,7 @@ IMPLEMENTATIONS: dict[str, str] = {
     "simulate.switched_rigid": "rigid bar under a position-switched drive in scalar closed forms",
     "simulate.switched_kernel": "compiled valve loop under a position-switched drive",
     "wave.residual": "compiled wave-law phase residual of a piecewise-constant load",
+    "wave.held_window": "contact window held throughout decided by a tabulated scan, solved when asked",
     "sweeps.create_store": "sweep store written by zarr alone (without xarray)",
     "rock.blow": "compiled loop of a blow on the rod and the rock",
 }
