@@ -148,6 +148,46 @@ def _assemble(phase, mult, d, R, p0, psup, v_plus, v_minus, q_minus, p_plus, p_m
                       schur_ok, stable)
 
 
+class _CosineFlight:
+    """The rigid bar's flight from the stop under ``p0 + pk cos(k t)`` (as ``rigid._CosineFlight``),
+    in the time ``tau`` since its start at load time ``t0`` with velocity ``v0``: the periodic
+    velocity ``V = ca cos(k t) + cb sin(k t)``, its antiderivative, and the free part."""
+
+    __slots__ = ("d", "p0", "pk", "k", "t0", "ca", "cb", "free", "W0")
+
+    def __init__(self, d, p0, pk, k, t0, v0):
+        den = d * d + k * k
+        self.d, self.p0, self.pk, self.k, self.t0 = d, p0, pk, k, t0
+        self.ca, self.cb = pk * d / den, pk * k / den
+        x = k * t0
+        self.free = v0 - (self.ca * math.cos(x) + self.cb * math.sin(x))
+        self.W0 = (self.ca * math.sin(x) - self.cb * math.cos(x)) / k
+
+    def velocity(self, tau):
+        x = self.k * (self.t0 + tau)
+        return (self.ca * math.cos(x) + self.cb * math.sin(x) + self.p0 * _b(self.d, tau)
+                + self.free * math.exp(-self.d * tau))
+
+    def displacement(self, tau):
+        x = self.k * (self.t0 + tau)
+        return ((self.ca * math.sin(x) - self.cb * math.cos(x)) / self.k - self.W0
+                + self.p0 * _c(self.d, tau) + self.free * _b(self.d, tau))
+
+    def load(self, tau):
+        return self.p0 + self.pk * math.cos(self.k * (self.t0 + tau))
+
+    def stationary_values(self, bounds, s_lo):
+        """``u(1, .)`` at the zeros of the velocity between consecutive ``bounds`` (the load's zeros,
+        so at most one per arc), ``s_lo`` the velocity's sign just after the start (theory §5)."""
+        g = []
+        for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+            s_hi = _sign(self.velocity(hi))
+            if s_lo * s_hi < 0.0 and hi > lo:
+                g.append(self.displacement(_bracketed_zero(self.velocity, self.load, self.d, lo, hi, s_lo)))
+            s_lo = s_hi
+        return g
+
+
 # ------------------------------------------------------------------------------------------------
 # the cosine load p0 + pk cos(k t)
 # ------------------------------------------------------------------------------------------------
@@ -172,9 +212,6 @@ def cosine_orbits(d, R, p0, pk, k):
     phases.sort()
     mult = 2 if double else 1
 
-    # the flight (rigid._CosineFlight): V(t) = ca cos(k t) + cb sin(k t), W its antiderivative
-    ca = pk * d / den
-    cb = pk * k / den
     v_plus = -R * TWO_PI * p0 / (1.0 + R)  # theory §4: the rigid mode strikes at 2 pi p0/(1+R)
     psup = abs(p0) + abs(pk)
     r0 = R == 0.0
@@ -185,36 +222,15 @@ def cosine_orbits(d, R, p0, pk, k):
                   if crosses else [])
     out = []
     for ph in phases:
-        x = k * ph
-        free = v_plus - (ca * math.cos(x) + cb * math.sin(x))
-        W0 = (ca * math.sin(x) - cb * math.cos(x)) / k
-
-        def velocity(t, ph=ph, free=free):
-            x = k * (ph + t)
-            return ca * math.cos(x) + cb * math.sin(x) + p0 * _b(d, t) + free * math.exp(-d * t)
-
-        def displacement(t, ph=ph, free=free, W0=W0):
-            x = k * (ph + t)
-            return (ca * math.sin(x) - cb * math.cos(x)) / k - W0 + p0 * _c(d, t) + free * _b(d, t)
-
-        def load(t, ph=ph):
-            return p0 + pk * math.cos(k * (ph + t))
-
-        v_minus = velocity(TWO_PI)
-        q_minus = displacement(TWO_PI)
+        flight = _CosineFlight(d, p0, pk, k, ph, v_plus)
+        v_minus = flight.velocity(TWO_PI)
+        q_minus = flight.displacement(TWO_PI)
         p_plus = p0 + pk * math.cos(k * ph)
         # the stationary points of u(1, t): at most one zero of v per arc of constant load sign
         inner = sorted((z - ph) % TWO_PI for z in load_zeros) + [TWO_PI] * (2 * k - len(load_zeros))
-        bounds = [0.0, *inner, TWO_PI]
-        g = []
-        s_lo = _sign(p_plus if r0 else v_plus)  # the sign just after the impact
-        for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-            s_hi = _sign(velocity(hi))
-            if s_lo * s_hi < 0.0 and hi > lo:
-                g.append(displacement(_bracketed_zero(velocity, load, d, lo, hi, s_lo)))
-            s_lo = s_hi
+        g = flight.stationary_values([0.0, *inner, TWO_PI], _sign(p_plus if r0 else v_plus))
         orbit = _assemble(ph, mult, d, R, p0, psup, v_plus, v_minus, q_minus, p_plus, p_plus,
-                          ca * math.cos(x) + cb * math.sin(x), g)
+                          flight.ca * math.cos(k * ph) + flight.cb * math.sin(k * ph), g)
         if orbit is None:
             return None
         out.append(orbit)
@@ -411,19 +427,7 @@ def cosine_clearance(d, p0, pk, k, t0, v0, horizon, at_rest):
     does over one period). ``at_rest``: the end leaves at rest, the sign just after ``t0`` is the
     load's. Returns ``-inf`` where the velocity keeps its sign.
     """
-    den = d * d + k * k
-    ca, cb = pk * d / den, pk * k / den  # the periodic velocity ca cos(k t) + cb sin(k t)
-    x0 = k * t0
-    free = v0 - (ca * math.cos(x0) + cb * math.sin(x0))
-    W0 = (ca * math.sin(x0) - cb * math.cos(x0)) / k
-
-    def velocity(tau):
-        x = k * (t0 + tau)
-        return ca * math.cos(x) + cb * math.sin(x) + p0 * _b(d, tau) + free * math.exp(-d * tau)
-
-    def load(tau):
-        return p0 + pk * math.cos(k * (t0 + tau))
-
+    flight = _CosineFlight(d, p0, pk, k, t0, v0)
     bounds = [0.0]
     crossing = -p0 / pk if pk != 0.0 else INF
     if abs(crossing) < 1.0:  # the load's zeros in (0, horizon): k t = +-alpha mod 2 pi
@@ -432,14 +436,5 @@ def cosine_clearance(d, p0, pk, k, t0, v0, horizon, at_rest):
         for j in range(int(horizon / period) + 1):
             bounds.extend(f + j * period for f in first if 0.0 < f + j * period < horizon)
     bounds.append(horizon)
-    clearance = -INF
-    s_lo = _sign(load(0.0) if at_rest else v0)  # the sign just after the impact
-    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
-        s_hi = _sign(velocity(hi))
-        if s_lo * s_hi < 0.0 and hi > lo:
-            tau = _bracketed_zero(velocity, load, d, lo, hi, s_lo)
-            x = k * (t0 + tau)
-            g = (ca * math.sin(x) - cb * math.cos(x)) / k - W0 + p0 * _c(d, tau) + free * _b(d, tau)
-            clearance = max(clearance, g)
-        s_lo = s_hi
-    return clearance
+    g = flight.stationary_values(bounds, _sign(flight.load(0.0) if at_rest else v0))
+    return max(g) if g else -INF
