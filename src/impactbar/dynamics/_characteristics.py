@@ -310,7 +310,7 @@ def held_throughout(s: float, q, v, load, t0: float) -> bool:
     if wl.jumps.size:
         return False
     piston = _Piston(s, q, v, wl.value(0.0))
-    scale = float(np.sum(np.abs(piston.a)) + np.sum(np.abs(piston.b)) + 2.0 * load.sup_abs / s)
+    scale = _window_scale(piston, load, s)
     table, w, u = _held_scan_table(N + 1, KW.scan_step(N, float(wl.rate)))
     A = np.concatenate((piston.a, piston.b[1:])) @ table + piston.b[0] * w
     A[w.size - u.size:] += 2.0 * wl(u) / s
@@ -328,6 +328,12 @@ def held_post_state(s: float, R: float, q, v, drive):
     return qa, va
 
 
+def _window_scale(piston, load, s: float) -> float:
+    """The scale of a window's invariants, the solver's tolerances and :func:`held_throughout`'s
+    margin are relative to: the piston's wave amplitudes and the drive's largest ``2 |p| / s``."""
+    return float(np.sum(np.abs(piston.a)) + np.sum(np.abs(piston.b)) + 2.0 * load.sup_abs / s)
+
+
 class _Contact:
     """The characteristics solution over the window, in ``theta = s t`` (``0..2``)."""
 
@@ -340,8 +346,7 @@ class _Contact:
         # A(theta): alpha arriving at the rod; smooth between these breaks
         self.breaks = np.unique(np.concatenate(([1.0], 1.0 + self.p.jumps[self.p.jumps < 1.0])))
         self.h_quad = 8.0 / (2.0 * math.pi * (self.N + 1) + 2.0 * self.p.rate + 1.0)
-        self.scale = float(np.sum(np.abs(self.piston.a)) + np.sum(np.abs(self.piston.b))
-                           + 2.0 * load.sup_abs / s)
+        self.scale = _window_scale(self.piston, load, s)
         self._acum1 = float(self.piston.int_alpha(1.0))
 
     # -- the incoming invariant at the rod and its integral ------------------------------------
