@@ -42,21 +42,8 @@ def test_compiled_valve_loop_matches_the_python_loop(n, d, R, delay, choose):
     fast, ref = _pair(choose, model, drive, InitialState.rigid(-1.2, 0.4, n), 40.0)
     exact = n > 0
     tol = 0.0 if exact else 1e-12
-    k = _first_difference(fast, ref) if exact else None
-    if k is not None:
-        # The two loops part at a chatter micro-impact of the piston pressed on the stop (R = 0):
-        # in CI's minimum-versions environment (numba 0.59, numpy 1.26) the compiled loop's and
-        # Python's results differ in the last bits there, and the sticking's end follows the
-        # micro-impacts (a known defect: the run is rounding-sensitive from that point on). Up to
-        # it, the same bits; and the loops may part only at an impact slower than 1e-6.
-        assert R == 0.0 and 5 < k < min(fast.n_impacts, ref.n_impacts)  # (not one run's end)
-        assert max(abs(fast.impact_velocities[k]), abs(ref.impact_velocities[k])) < 1e-6
-        t_k = min(fast.impact_times[k], ref.impact_times[k])
-        sw = ref.switch_times < t_k
-        np.testing.assert_array_equal(fast.switch_times[:sw.sum()], ref.switch_times[sw])
-        t = np.linspace(0.0, t_k, 201)
-        np.testing.assert_allclose(fast.end_displacement(t), ref.end_displacement(t), rtol=0, atol=1e-12)
-        return
+    if exact:  # (R = 0 included: no micro-impact of a piston pressed on the stop to part them)
+        assert _first_difference(fast, ref) is None
     assert fast.n_impacts == ref.n_impacts > 5
     assert fast.switch_kinds == ref.switch_kinds and len(fast.switch_kinds) > 5
     assert len(fast.pieces) == len(ref.pieces)

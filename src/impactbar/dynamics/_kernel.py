@@ -103,6 +103,12 @@ def find_crossing(load_t, B_t, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
     h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
     L = p0 if kind == 0 else level
     ps = psup if kind == 0 else abs(level)
+    if -noise <= h <= htol + noise and abs(dh) <= dnoise and ddh > 0.0:
+        # a start on the stop and at rest, both to rounding, and pressed on it: the end stays
+        # there. (Left to the steps, a start a rounding error short of the stop flies a hair and
+        # returns at a speed of about sqrt(2 |h| h''): a false impact, and with R = 0 the next
+        # start is the same again, an endless chain of them.)
+        return TOUCH, a
     for _ in range(_MAX_STEPS):
         if h > htol + noise or (h >= 0.0 and dh > dnoise):
             return CROSS, a
