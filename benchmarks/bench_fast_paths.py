@@ -29,7 +29,8 @@ on one thread (``OMP_NUM_THREADS`` etc. default to 1 here), since CPU time count
 Run: ``python benchmarks/bench_fast_paths.py [--quick]``. Prints a table; nothing is asserted.
 
 ``--against SRC`` instead times the same user-level calls (``periodic_orbits``, ``simulate``, and the
-rigid bar's 2-per-2 ``continue_orbit`` branch per point, issue 20) in
+rigid bar's 2-per-2 ``continue_orbit`` branch per point, issue 20; ``periodic_orbits`` from 64 to
+1024 modes and the exponent of its growth) in
 fresh processes on the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x -C /tmp/old``
 then ``--against /tmp/old/src``) and on this one, alternately, and prints both side by side.
 
@@ -274,8 +275,9 @@ for n in (8, 64):
         lambda: po(BarModel(5, 0.1, 0.5, n), CosineLoad(0.6, 1)), 11) * 1e3
 out["periodic_orbits, square wave, 64 modes (ms)"] = cpu(
     lambda: po(BarModel(5, 0.1, 0.5, 64), SquareWaveLoad(1, 1.2)), 3) * 1e3
-out["periodic_orbits, cosine, 256 modes (ms)"] = cpu(
-    lambda: po(BarModel(5, 0.1, 0.5, 256), CosineLoad(0.6, 1)), 3) * 1e3
+for n, rep in ((256, 5), (1024, 5)):
+    out[f"periodic_orbits, cosine, {n} modes (ms)"] = cpu(
+        lambda: po(BarModel(5, 0.1, 0.5, n), CosineLoad(0.6, 1)), rep) * 1e3
 for N, n in ((0, 20000), (8, 5000), (64, 1000)):
     model, load = BarModel(1.37, 0.02, 0.8, N), CosineLoad(1.2, 1.0)
     o = next(o for o in po(model, load) if o.stable)
@@ -328,6 +330,11 @@ def against(src, rounds=2):
         b = best(r[key] for r in runs["baseline"])
         n = best(r[key] for r in runs["new"])
         print(f"{key:<52} {b:>12.4g} {n:>12.4g}")
+    # the growth of periodic_orbits' cost with the modes, T ~ N^exponent from 64 to 1024 (goal <= 1.2)
+    lo, hi = "periodic_orbits, cosine, 64 modes (ms)", "periodic_orbits, cosine, 1024 modes (ms)"
+    exps = [np.log(min(r[hi] for r in runs[k]) / min(r[lo] for r in runs[k])) / np.log(16.0)
+            for k in ("baseline", "new")]
+    print(f"{'periodic_orbits, exponent from 64 to 1024 modes':<52} {exps[0]:>12.3g} {exps[1]:>12.3g}")
 
 
 _COLD = r"""

@@ -327,7 +327,12 @@ def test_compiled_aberth_gives_up_cleanly():
     assert _set_distance(mu, dense) < 1e-10
     assert stability._aberth(*parts, iters=1) is None
     x = np.full(4, 1.0 + 0.0j)  # on the pole of a block with trace 1, determinant 0
-    assert not aberth_iterate(x, np.ones(2), np.zeros(2), np.zeros((8, 2)), np.zeros(4, complex), 5, 1e-12)
+    assert not aberth_iterate(x, np.ones(2), np.zeros(2), np.zeros((4, 2)), np.zeros(2, complex), 5, 1e-12)
+    a, b, c, e, U, V, ut, vt = parts  # factors that are not the extended state's: refused
+    V = V.copy()
+    V[3, 0, 0] = 1.0
+    with pytest.raises(ValueError, match="extended state"):
+        stability._aberth(a, b, c, e, U, V, ut, vt)
 
 
 def test_heavy_damping_keeps_the_dense_method():

@@ -32,15 +32,21 @@ def _cdiv(a, b):
 
 # x / 0 gives inf (checked below); reassociation lets the sums over the modes run in SIMD lanes
 @numba.njit(cache=CACHE, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "arcp"})
-def aberth_iterate(x, tr, dt, X, Nt, iters, tol):
+def aberth_iterate(x, tr, dt, X, ut, iters, tol):
     """Refine the approximations ``x`` (shape ``(K,)``, complex, changed in place) of the zeros of
     ``det(B - x) det(S(x)) / x`` (see ``stability._aberth``); returns ``True`` once every
     correction is below ``tol`` relative to ``max(1, |x|)``, ``False`` if ``iters`` sweeps do not
     settle or a correction is not finite.
 
-    ``tr, dt`` (shape ``(M,)``) are the blocks' traces and determinants, ``X`` (shape ``(8, M)``)
-    the (real) coefficients ``N0, N1`` (rows) of ``V_n^T adj(B_n - x) U_n = N0_n + x N1_n`` (row-major 2 x 2),
-    ``Nt`` (shape ``(4,)``) those of the impact-time row."""
+    ``tr, dt`` (shape ``(M,)``) are the blocks' traces and determinants. The rank-2 factor ``V``
+    has no modal part in its first column (it is ``e_tau``, the impact time's coordinate) and the
+    impact-time row is ``vt ut^T`` with ``vt = (1, 0)``, so the secular matrix is
+    ``S(x) = [[1 + ut_0 / (1 - x), ut_1 / (1 - x)], [s_0(x), 1 + s_1(x)]]`` with
+    ``s_m(x) = sum_n (X[m, n] + x X[m + 2, n]) / det(B_n - x)``: ``X`` (shape ``(4, M)``, real)
+    holds the second row of ``N0_n, N1_n`` in ``V_n^T adj(B_n - x) U_n = N0_n + x N1_n``, ``ut``
+    (shape ``(2,)``, complex) the impact-time factor. Per zero and sweep: five sums over the modes
+    (four and the pole term ``sum (2 x - tr_n) / det(B_n - x)``) with their derivatives, and
+    Aberth's sum over the other zeros."""
     K = x.shape[0]
     M = tr.shape[0]
     active = np.ones(K, dtype=np.bool_)
@@ -58,15 +64,11 @@ def aberth_iterate(x, tr, dt, X, Nt, iters, tol):
             xi = x[i]
             xr = xi.real
             xm = xi.imag
-            # sums over the modes, as scalars (real and imaginary parts): W X_j, dW X_j, W, W tr
+            # sums over the modes, as scalars (real and imaginary parts): W X_m, dW X_m, W, W tr
             s0r = s0i = d0r = d0i = 0.0
             s1r = s1i = d1r = d1i = 0.0
             s2r = s2i = d2r = d2i = 0.0
             s3r = s3i = d3r = d3i = 0.0
-            s4r = s4i = d4r = d4i = 0.0
-            s5r = s5i = d5r = d5i = 0.0
-            s6r = s6i = d6r = d6i = 0.0
-            s7r = s7i = d7r = d7i = 0.0
             s8r = s8i = s9r = s9i = 0.0
             for n in range(M):
                 # W = 1 / det(B_n - x) = 1 / (x^2 - tr x + dt), in real arithmetic (X is real)
@@ -103,50 +105,28 @@ def aberth_iterate(x, tr, dt, X, Nt, iters, tol):
                 s3i += wi * xj
                 d3r += vr * xj
                 d3i += vi * xj
-                xj = X[4, n]
-                s4r += wr * xj
-                s4i += wi * xj
-                d4r += vr * xj
-                d4i += vi * xj
-                xj = X[5, n]
-                s5r += wr * xj
-                s5i += wi * xj
-                d5r += vr * xj
-                d5i += vi * xj
-                xj = X[6, n]
-                s6r += wr * xj
-                s6i += wi * xj
-                d6r += vr * xj
-                d6i += vi * xj
-                xj = X[7, n]
-                s7r += wr * xj
-                s7i += wi * xj
-                d7r += vr * xj
-                d7i += vi * xj
                 s8r += wr
                 s8i += wi
                 s9r += wr * t
                 s9i += wi * t
-            s = (complex(s0r, s0i), complex(s1r, s1i), complex(s2r, s2i), complex(s3r, s3i),
-                 complex(s4r, s4i), complex(s5r, s5i), complex(s6r, s6i), complex(s7r, s7i),
-                 complex(s8r, s8i), complex(s9r, s9i))
-            sd = (complex(d0r, d0i), complex(d1r, d1i), complex(d2r, d2i), complex(d3r, d3i),
-                  complex(d4r, d4i), complex(d5r, d5i), complex(d6r, d6i), complex(d7r, d7i))
+            s0 = complex(s0r, s0i)
+            s1 = complex(s1r, s1i)
+            s2 = complex(s2r, s2i)
+            s3 = complex(s3r, s3i)
             wt = _cdiv(1.0, 1.0 - xi)
-            s00 = s[0] + xi * s[4] + wt * Nt[0]
-            s01 = s[1] + xi * s[5] + wt * Nt[1]
-            s02 = s[2] + xi * s[6] + wt * Nt[2]
-            s03 = s[3] + xi * s[7] + wt * Nt[3]
             w2 = wt * wt
-            s10 = s[4] + sd[0] + xi * sd[4] + w2 * Nt[0]
-            s11 = s[5] + sd[1] + xi * sd[5] + w2 * Nt[1]
-            s12 = s[6] + sd[2] + xi * sd[6] + w2 * Nt[2]
-            s13 = s[7] + sd[3] + xi * sd[7] + w2 * Nt[3]
-            S00 = 1.0 + s00
-            S11 = 1.0 + s03
-            detS = S00 * S11 - s01 * s02
-            trSS = _cdiv(S11 * s10 - s01 * s12 - s02 * s11 + S00 * s13, detS)
-            logd = 2.0 * xi * s[8] - s[9] - wt + trSS - _cdiv(1.0, xi)
+            # S = [[S00, S01], [S10, S11]] and its derivative [[D00, D01], [D10, D11]]
+            S00 = 1.0 + wt * ut[0]
+            S01 = wt * ut[1]
+            S10 = s0 + xi * s2
+            S11 = 1.0 + (s1 + xi * s3)
+            D00 = w2 * ut[0]
+            D01 = w2 * ut[1]
+            D10 = s2 + complex(d0r, d0i) + xi * complex(d2r, d2i)
+            D11 = s3 + complex(d1r, d1i) + xi * complex(d3r, d3i)
+            detS = S00 * S11 - S01 * S10
+            trSS = _cdiv(S11 * D00 - S01 * D10 - S10 * D01 + S00 * D11, detS)
+            logd = 2.0 * xi * complex(s8r, s8i) - complex(s9r, s9i) - wt + trSS - _cdiv(1.0, xi)
             newton = _cdiv(1.0, logd)
             # Aberth's sum of 1 / (x_i - x_j) over the others, in real arithmetic
             acr = 0.0

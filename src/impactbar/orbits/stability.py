@@ -318,17 +318,25 @@ def _aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
     ``det(B + U V^T - x) = det(B - x) det(S(x))`` with the 2 x 2 secular matrix
     ``S(x) = I + sum_n V_n^T adj(B_n - x) U_n / det(B_n - x) + vt ut^T / (1 - x)``; each
     ``V_n^T adj(B_n - x) U_n`` is linear in ``x``, so ``S`` and ``S'`` for all the current
-    approximations are two sums over the modes. The Newton quotient is ``1 / (log det)'``. The sweeps
-    run compiled (``_aberthkernel.aberth_iterate``), ``O(N^2)`` each.
+    approximations are sums over the modes. In the extended state ``V``'s first column is
+    ``e_tau`` (no modal part) and ``vt = (1, 0)``, so ``S``'s first row depends on the impact-time
+    factor alone and its second row takes four sums over the modes. The Newton quotient is
+    ``1 / (log det)'``. The sweeps run compiled (``_aberthkernel.aberth_iterate``), ``O(N^2)`` each.
+
+    Raises
+    ------
+    ValueError
+        If ``V`` has a modal part in its first column or ``vt`` is not ``(1, 0)`` (not the
+        extended state's factors).
     """
-    M = a.size
+    if np.any(V[:, :, 0]) or vt[0] != 1.0 or vt[1] != 0.0:
+        raise ValueError("_aberth needs the extended state's factors: V[:, :, 0] = 0 and vt = (1, 0)")
     tr = a + e
     dt = a * e - b * c
-    # V_n^T adj(B_n - x) U_n = N0_n + x N1_n, adj(B_n - x) = [[e, -b], [-c, a]] - x I
+    # the second row of V_n^T adj(B_n - x) U_n = N0_n + x N1_n, adj(B_n - x) = [[e, -b], [-c, a]] - x I
     adj0 = np.stack((np.stack((e, -b), -1), np.stack((-c, a), -1)), -2)
-    N0 = np.einsum("kij,kil,kjm->klm", adj0, V, U).reshape(M, 4)
-    N1 = -np.einsum("kil,kim->klm", V, U).reshape(M, 4)
-    Nt = np.outer(vt, ut).reshape(4)
+    N0 = np.einsum("kij,ki,kjm->km", adj0, V[:, :, 1], U)
+    N1 = -np.einsum("ki,kim->km", V[:, :, 1], U)
     # start: each block's eigenvalues, nudged off the poles (golden-angle directions)
     disc = np.sqrt((0.25 * tr * tr - dt).astype(complex))
     x = np.concatenate((0.5 * tr + disc, 0.5 * tr - disc))
@@ -338,5 +346,5 @@ def _aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
 
     X = np.ascontiguousarray(np.concatenate((N0, N1), axis=1).T, dtype=float)
     ok = aberth_iterate(x, np.ascontiguousarray(tr, dtype=float), np.ascontiguousarray(dt, dtype=float), X,
-                        Nt.astype(complex), int(iters), float(tol))
+                        np.asarray(ut, dtype=complex), int(iters), float(tol))
     return x if ok else None
