@@ -18,13 +18,15 @@ from impactbar import BarModel, CosineLoad, periodic_orbits, physical
 
 
 def _clear_caches():
-    from impactbar.dynamics import _characteristics
+    from impactbar.dynamics import _characteristics, impact
     from impactbar.orbits import stability, wave
 
-    # (getattr: an older tree, timed for comparison, may lack some of these caches)
+    # (getattr: an older tree, timed for comparison, may lack some of these caches; the wave law's
+    # Fourier moment tables too, which from 64 modes on were timed once per run, not per call)
     for f in (getattr(wave, "_phase_scan", None), getattr(wave, "_state_series", None),
               getattr(wave, "_flight_fundamental", None), stability.period_fundamental,
-              getattr(_characteristics, "_held_scan_table", None)):
+              getattr(_characteristics, "_held_scan_table", None),
+              getattr(impact, "_fourier_moment_tables", None)):
         if f is not None:
             f.cache_clear()
 
