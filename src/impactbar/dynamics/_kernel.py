@@ -566,8 +566,9 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
     time, the arrival velocity ``c . v`` and the state just after are written to
     ``out = (out_t, out_vel, out_q, out_v)``. Stops at
     ``t_end`` (END), after ``max_imp`` impacts (MAXIMP), when the buffers are full (FULL), when the
-    bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``) or the end
-    arrives tangentially and pressed (CONTACT).
+    bounces accumulate (CHATTER: the returned time is the accumulation point, ``v = 0``; with
+    ``R > 0`` tested before the count, so the last impact asked for may end in CHATTER too, its
+    bounces summed) or the end arrives tangentially and pressed (CONTACT).
 
     With ``rigid_fast`` true the flights that follow an impact (or start
     clearly off the stop, or leaving it) are searched by :func:`rigid1_crossing` (the rigid bar under
@@ -698,7 +699,11 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
             out_q[n, i] = q[i]
             out_v[n, i] = v[i]
         n += 1
-        if n >= max_imp:
+        # With R > 0 the chatter test comes before the count's: the bounces that accumulate after
+        # the last impact asked for are its own, not impacts of their own. (R = 0 leaves the end at
+        # rest on the stop, no bounce to sum; R < 0: the kernel applies no law, the law's contact
+        # step does, one arrival per call.)
+        if n >= max_imp and R <= 0.0:
             return n, MAXIMP, tc
         if fast1:  # functional(...) of the rigid bar, term by term
             ddh = c[0] * (p1t - d * v[0])
@@ -711,7 +716,7 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
                 level = 0.0
             p, dp, ddp = load_value(load, level, tc)
             h, dh, ddh, noise, dnoise = functional(w2, d, c, 0.0, p, dp, ddp, q, v, qp, vp)
-        if ddh > 0.0:
+        if ddh > 0.0 and R >= 0.0:  # (R = 0: the end stays on the stop, tail 0)
             # R < 1: the bounces accumulate at tc + tail. R = 1: they do not accumulate, but
             # damping shrinks them without end (ever more impacts per unit time)
             tail = 2.0 * R * vend / ddh / (1.0 - R) if R < 1.0 else math.inf
@@ -723,6 +728,8 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
                 for i in range(M):
                     v[i] = 0.0
                 return n, CHATTER, tc + (tail if R < 1.0 else 0.0)
+        if n >= max_imp:
+            return n, MAXIMP, tc
         if n >= cap:
             return n, FULL, tc
         t = tc

@@ -26,20 +26,27 @@ _BASIS.setflags(write=False)
 _ENTRY.setflags(write=False)
 _KINDS = [(_BASIS[:n + 1], _ENTRY[:n + 1]) for n in range(SHORT_RUN_IMPACTS + 1)]
 
-_ENTRY_POINTS: dict = {}  # dispatcher -> the compiled entry point of its one signature
+_ENTRY_POINTS: dict = {}  # dispatcher -> the compiled entry point for Python's argument types
 
 
-def entry_point(dispatcher):
-    """The compiled entry point of a numba dispatcher that has exactly one signature (called
-    without typing its arguments: the caller passes that signature's types), else the dispatcher
-    itself (not compiled yet, or compiled for more than one signature, or numba's JIT disabled)."""
+def entry_point(dispatcher, args):
+    """The compiled entry point of a numba dispatcher for the types of ``args`` (called without
+    typing its arguments: every later call passes the same types), else the dispatcher itself (not
+    compiled for those types yet, or numba's JIT disabled). The types are checked on the first
+    call only; the dispatcher may also hold overloads compiled for other callers, such as a kernel
+    that passes a literal (``run_free`` called by the valve's loop with ``max_imp`` the literal 1),
+    whose entry point would read these arguments with that other signature."""
     hit = _ENTRY_POINTS.get(dispatcher)
     if hit is not None:
         return hit
-    overloads = getattr(dispatcher, "overloads", {})
-    if len(overloads) != 1:
+    overloads = getattr(dispatcher, "overloads", None)
+    if not overloads:
         return dispatcher
-    (compiled,) = overloads.values()
+    from numba import typeof
+
+    compiled = overloads.get(tuple(typeof(a) for a in args))
+    if compiled is None:
+        return dispatcher
     _ENTRY_POINTS[dispatcher] = compiled.entry_point
     return compiled.entry_point
 

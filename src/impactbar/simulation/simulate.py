@@ -358,17 +358,17 @@ class _Core:
     def run_free(self, t, q, v, t_end, max_imp, out_q, out_v, direct=False):
         """Free flight with impacts (the kernel's ``run_free``); the states after the impacts go
         into the rows of ``out_q, out_v`` (shape (cap, N + 1)), at most ``cap`` of them. ``direct``: by
-        the kernel's entry point, untyped, once it has its one signature (C-contiguous float arrays)."""
+        the kernel's entry point for these argument types, untyped (numba's typing of 11 arguments
+        costs 2 us), once it is compiled for them."""
         out_t, out_vel = np.empty(out_q.shape[0]), np.empty(out_q.shape[0])
         fast = use_fast("simulate.impact_search")
         # a rigid run compiles no modal search, a flexible one no rigid search
         run, rigid_fast, modal_fast = (K.run_free_rigid, fast, None) if self.N == 0 else \
             (K.run_free, None, fast)
-        if direct:  # (numba's typing of 11 arguments costs 2 us)
-            run = entry_point(run)
         D, B, R, c = self.free_args
-        n, st, tn = run(D, B, R, c, (float(t), q, v), float(t_end), int(max_imp), CHATTER_TAIL,
-                        (out_t, out_vel, out_q, out_v), rigid_fast, modal_fast)
+        args = (D, B, R, c, (float(t), q, v), float(t_end), int(max_imp), CHATTER_TAIL,
+                (out_t, out_vel, out_q, out_v), rigid_fast, modal_fast)
+        n, st, tn = (entry_point(run, args) if direct else run)(*args)
         return n, st, tn, out_t[:n], out_vel[:n]
 
     def find_release(self, t, r, rv, t_end):
@@ -479,7 +479,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         Start time, ``|t0| <= 1e8``. Default 0.
     max_impacts : int, optional
         Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact (under
-        the wave law the end of its contact window).
+        the wave law the end of its window; where its bounces accumulate, their accumulation point).
     progress : callable, optional
         Called as ``progress(fraction)`` with the fraction of ``[t0, t_end]`` done, in ``[0, 1]``,
         between blocks of impacts (at most every 0.1 s of wall time) and once at the end: e.g. to
@@ -680,8 +680,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
                 # the release and stay in contact a little longer (fourfold) before asking again.
                 t_rel, seg_index, k_times, n_saved = last_release
                 segs.truncate(seg_index + 1)
-                del times[k_times:]
-                del vels[k_times:]
+                del times[k_times:], vels[k_times:]
                 n_imp = n_saved
                 contacts[-1][1] = math.nan
                 dwell = min(max(4.0 * dwell, DWELL_START), DWELL_MAX)
@@ -709,8 +708,9 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
                     segs.add(t, _CONTACT, r, rv, "touch")
                 contacts.append([t, math.nan])
                 mode = _CONTACT
-                if t >= t_end:
-                    contacts[-1][1] = t_end
+                if t >= t_end or (st == K.CHATTER and n_imp >= max_imp):  # (the last impact's bounces)
+                    contacts[-1][1] = min(t, t_end)
+                    status = RunStatus.T_END if t >= t_end else RunStatus.MAX_IMPACTS
                     break
         # ---- in contact: from (t, r, rv) find the release ----
         st, tr, rr, rrv = core.find_release(t, r, rv, t_end)
