@@ -147,7 +147,7 @@ def test_ctrl_c_during_paper_in_a_real_process(tmp_path):
     deadline = time.monotonic() + 120
     while not out.exists() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.05)  # the folder is made by the check before the computing starts
-    time.sleep(0.5)
+    time.sleep(2.0)  # (past the imports: in the computing, or in numba's compiling on a first run)
     proc.send_signal(signal.SIGINT)
     stdout, stderr = proc.communicate(timeout=120)
     # Under ``python -m`` an interrupt that lands early (while the paper's first worker threads start)
@@ -242,3 +242,27 @@ def test_an_empty_out_is_refused(command, tmp_path, monkeypatch, capsys, no_comp
     assert main([*command, "--out", ""]) == 2
     assert "--out: an empty path" in _one_line_error(capsys, command[0])
     assert not any(tmp_path.iterdir())
+
+
+def test_an_interrupt_wrapped_by_an_import_is_still_an_interrupt(monkeypatch, capsys):
+    """Python 3.11 wraps an exception raised inside ``__set_name__`` (Ctrl-C while matplotlib
+    imports, say) in a RuntimeError; the command still ends with one line and 130. Any other
+    RuntimeError is not caught."""
+    import impactbar.cli.paper as paper_cli
+
+    def interrupted(args):
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise RuntimeError("Error calling __set_name__ on '_deprecate_privatize_attribute'") from exc
+
+    monkeypatch.setattr(paper_cli, "run", interrupted)
+    assert main(["paper", "--quiet"]) == 130
+    assert capsys.readouterr().err.strip() == "impactbar paper: interrupted"
+
+    def broken(args):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(paper_cli, "run", broken)
+    with pytest.raises(RuntimeError, match="a bug"):
+        main(["paper", "--quiet"])

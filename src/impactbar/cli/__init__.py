@@ -87,6 +87,13 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"impactbar {args.command}: interrupted", file=sys.stderr)
         return 130
+    except RuntimeError as exc:
+        # Python 3.11 wraps an exception raised while a class body is set up (``__set_name__``, as
+        # in an import that Ctrl-C interrupts) in a RuntimeError: still an interrupt
+        if not isinstance(exc.__cause__, KeyboardInterrupt):
+            raise
+        print(f"impactbar {args.command}: interrupted", file=sys.stderr)
+        return 130
     except ValueError as exc:
         print(f"impactbar {args.command}: error: {exc}", file=sys.stderr)
         return 2
