@@ -74,24 +74,27 @@ def main(argv: list[str] | None = None) -> int:
     closed = sys.stdout is None  # started with stdout closed (``impactbar orbits >&-``)
     if closed:
         sys.stdout = _ClosedStdout()
+    ctrl_c = _CtrlC()
     try:
-        if sub is not None:
-            _common.resolve_deprecated(sub, args, args.command)
-        with compile_note(f"impactbar {args.command}"):  # a first run: one line while numba compiles
-            status = int(args.func(args) or 0)
-        sys.stdout.flush()  # a closed pipe or a full disk shows here, not at interpreter exit
-        return status
+        try:
+            if sub is not None:
+                _common.resolve_deprecated(sub, args, args.command)
+            with ctrl_c, compile_note(f"impactbar {args.command}"):  # (a note while numba compiles)
+                status = int(args.func(args) or 0)
+            if ctrl_c.pressed:  # an interrupt that a library's compiled code swallowed
+                raise KeyboardInterrupt
+            sys.stdout.flush()  # a closed pipe or a full disk shows here, not at interpreter exit
+            return status
+        except Exception as exc:
+            # an interrupt that a library turned into another error (matplotlib's drawing: a
+            # ValueError; Python 3.11's __set_name__ during an import: a RuntimeError)
+            if ctrl_c.pressed or isinstance(exc.__cause__, KeyboardInterrupt):
+                raise KeyboardInterrupt from exc
+            raise
     except BrokenPipeError:
         _silence_stdout()  # Python's own flush at exit would fail again
         return 141
     except KeyboardInterrupt:
-        print(f"impactbar {args.command}: interrupted", file=sys.stderr)
-        return 130
-    except RuntimeError as exc:
-        # Python 3.11 wraps an exception raised while a class body is set up (``__set_name__``, as
-        # in an import that Ctrl-C interrupts) in a RuntimeError: still an interrupt
-        if not isinstance(exc.__cause__, KeyboardInterrupt):
-            raise
         print(f"impactbar {args.command}: interrupted", file=sys.stderr)
         return 130
     except ValueError as exc:
@@ -111,6 +114,37 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         if closed:
             sys.stdout = None
+
+
+class _CtrlC:
+    """While a command runs, Ctrl-C is remembered as well as raised (Python's own handler only
+    raises): a library's compiled code may swallow the KeyboardInterrupt, or turn it into another
+    error, and the command still ends as interrupted. Installed only over Python's default
+    handler, in the main thread."""
+
+    def __init__(self):
+        self.pressed = False
+        self._old = None
+
+    def _handler(self, signum, frame):
+        self.pressed = True
+        raise KeyboardInterrupt
+
+    def __enter__(self):
+        import signal
+        import threading
+
+        if threading.current_thread() is threading.main_thread() and \
+                signal.getsignal(signal.SIGINT) is signal.default_int_handler:
+            self._old = signal.signal(signal.SIGINT, self._handler)
+        return self
+
+    def __exit__(self, *exc):
+        if self._old is not None:
+            import signal
+
+            signal.signal(signal.SIGINT, self._old)
+        return False
 
 
 class _ClosedStdout:
