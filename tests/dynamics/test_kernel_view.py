@@ -167,6 +167,61 @@ def test_no_compiled_kernel_takes_more_than_12_arguments():
     assert {name: n for name, n in counts.items() if n > 12} == {}
 
 
+#: numpy functions whose numba implementation compiles a generic routine of its own on a first run
+#: (np.sort's quicksort 1.3 s of CPU time, np.max's reduction 0.5 s)
+_SLOW_TO_COMPILE = {"sort", "argsort", "max", "min", "amax", "amin"}
+
+
+def _slow_to_compile(fn):
+    """The lines of ``fn`` that call such a numpy function or assign an array to a slice (``a[:n] =
+    b``: numba's broadcasting setitem with its error messages, 2.2 s on a first run; a slice filled
+    with a number is cheap)."""
+    tree = ast.parse(inspect.getsource(fn).lstrip())
+    found = []
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)
+                and isinstance(node.func.value, ast.Name) and node.func.value.id == "np"
+                and node.func.attr in _SLOW_TO_COMPILE):
+            found.append(node.lineno)
+        if isinstance(node, ast.Assign | ast.AugAssign):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            sliced = any(isinstance(t, ast.Subscript)
+                         and any(isinstance(n, ast.Slice) for n in ast.walk(t.slice)) for t in targets)
+            number = isinstance(node.value, ast.Constant) or (
+                isinstance(node.value, ast.UnaryOp) and isinstance(node.value.operand, ast.Constant))
+            if sliced and not number:
+                found.append(node.lineno)
+    return found
+
+
+def test_slow_to_compile_finds_a_planted_use():
+    def planted(a, b, n):  # pragma: no cover - parsed, never run
+        a[:] = 0.0
+        a[:n] = b[:n]
+        return np.max(a) + np.sort(b)[0]
+
+    assert _slow_to_compile(planted) == [3, 4, 4]
+
+
+def test_no_compiled_kernel_uses_what_is_slow_to_compile():
+    """A first run compiles every kernel it calls; numba's own np.sort, np.max, np.min and array
+    slice assignment add seconds to it (issue 20), so the kernels write those few loops out."""
+    found = {name: _slow_to_compile(d.py_func) for name, d in _dispatchers()}
+    assert {name: lines for name, lines in found.items() if lines} == {}
+
+
+def test_sort_head_sorts_as_numpy():
+    from impactbar.dynamics._flightkernel import sort_head
+
+    rng = np.random.default_rng(3)
+    for n in (0, 1, 2, 7, 40):
+        a = np.concatenate((rng.uniform(-1.0, 1.0, n), [5.0, 6.0]))
+        a[: n // 3] = a[n // 2: n // 2 + n // 3]  # some equal values
+        want = np.sort(a[:n])
+        got = sort_head(a, n)
+        assert got.size == n and np.array_equal(got, want) and np.array_equal(a[n:], [5.0, 6.0])
+
+
 def test_the_kernel_view_is_the_only_path_from_a_load_into_compiled_code():
     """No module but ``loads.py`` reads a load's private attributes; no kernel that Python code
     calls takes a load's fields as separate arguments; and after simulations and orbit searches

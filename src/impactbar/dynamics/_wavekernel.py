@@ -18,7 +18,7 @@ import math
 import numba
 import numpy as np
 
-from ._flightkernel import CACHE, TWO_PI, load_value
+from ._flightkernel import CACHE, TWO_PI, load_value, sort_head
 from ._kernel import _propagate_many
 from ._windowkernel import _window_moments, scan_step, window_jumps
 from .kernelview import LoadKernelView, ModalBasisView
@@ -274,7 +274,7 @@ def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
                 if t0 < tj < t0 + T:
                     jt[nj] = tj
                     nj += 1
-        jt = np.sort(jt[:nj])
+        jt = sort_head(jt, nj)
     nj = jt.size
     jw = np.empty(nj)
     ew = np.empty(nj + 2)  # piece edges, time since t0

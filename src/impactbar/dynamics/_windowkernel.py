@@ -10,7 +10,7 @@ import math
 import numba
 import numpy as np
 
-from ._flightkernel import CACHE, TWO_PI, load_value, piece_of
+from ._flightkernel import CACHE, TWO_PI, load_value, piece_of, sort_head
 from .kernelview import LoadKernelView
 
 
@@ -51,7 +51,7 @@ def window_jumps(load, s, t0, jumps):
                 if t0 < tj < t0 + T and nj < jumps.size:
                     jumps[nj] = s * (tj - t0)
                     nj += 1
-        jumps[:nj] = np.sort(jumps[:nj])
+        sort_head(jumps, nj)
     return nj
 
 

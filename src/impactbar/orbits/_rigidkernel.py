@@ -22,6 +22,7 @@ import math
 import numba
 import numpy as np
 
+from ..dynamics._flightkernel import sort_head
 from ..dynamics._kernel import CACHE
 from .stability import MARGINAL
 
@@ -160,18 +161,6 @@ def _store(out, i, j, phase, mult, v_minus, v_plus, q_minus, orbit):
     out[12][i, j] = orbit[9]
 
 
-@numba.njit(inline="always", **_JIT)
-def _insertion_sort(a, n):
-    """Sort ``a[:n]`` in place (a handful of values)."""
-    for m in range(1, n):
-        x = a[m]
-        j = m - 1
-        while j >= 0 and a[j] > x:
-            a[j + 1] = a[j]
-            j -= 1
-        a[j + 1] = x
-
-
 # ------------------------------------------------------------------------------------------------
 # the cosine load p0 + pk cos(k t)
 # ------------------------------------------------------------------------------------------------
@@ -255,7 +244,7 @@ def cosine_orbits(d, R, p0, pk, k, out):
                 n += 1
             if double:
                 break
-        _insertion_sort(phs, n)
+        sort_head(phs, n)
         mult = 2 if double else 1
         n_orbits[i] = n
 
@@ -287,7 +276,7 @@ def cosine_orbits(d, R, p0, pk, k, out):
                 else:
                     zs[j] = TWO_PI
                     zs[k + j] = TWO_PI
-            _insertion_sort(zs, K2)
+            sort_head(zs, K2)
             for j in range(K2):
                 bounds[j + 1] = zs[j]
             bounds[K2 + 1] = TWO_PI
@@ -375,7 +364,7 @@ def square_orbits(d, R, q, kappa, out):
         if tau < len1:
             phs[n] = (a + tau) % TWO_PI
             n += 1
-        _insertion_sort(phs, n)
+        sort_head(phs, n)
         mult = 1
         if n == 2 and (phs[1] - phs[0] < 1e-9 or phs[0] + TWO_PI - phs[1] < 1e-9):
             n, mult = 1, 2  # one double root, as in phase_roots
