@@ -773,3 +773,46 @@ def test_modal_simulate_equals_general_search(n_modes):
     for a, b in ((new.final_state.modal_displacement, ref.final_state.modal_displacement),
                  (new.final_state.modal_velocity, ref.final_state.modal_velocity)):
         np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-10 * float(np.max(np.abs(b))))
+
+
+_ABERTH_BITS = r"""
+import sys
+import numpy as np
+
+if sys.argv[1] == "primed":  # the rigid sweep chunk compiled first (plain kernels, numba's max() in them)
+    from impactbar.orbits.rigid import rigid_cosine_orbits
+
+    n = 100_001  # above the numpy closed forms' limit: the compiled chunk
+    rigid_cosine_orbits(np.full(n, 0.1), np.full(n, 0.5), np.full(n, 0.6), np.ones(n), 1)
+from impactbar.orbits._aberthkernel import aberth_iterate
+
+rng = np.random.default_rng(7)
+M = 48
+tr = rng.uniform(-1.5, 1.5, M)
+dt = rng.uniform(0.3, 0.9, M)
+X = rng.normal(size=(4, M)) * 1e-2
+ut = np.array([0.1 + 0.05j, -0.2 + 0.1j])
+disc = np.sqrt((0.25 * tr * tr - dt).astype(complex))
+x = np.concatenate((0.5 * tr + disc, 0.5 * tr - disc))
+x = x * (1.0 + 1e-3 * np.exp(2j * np.pi * 0.618 * np.arange(2 * M)))
+aberth_iterate(x, tr, dt, X, ut, 3, 1e-300)  # three sweeps, every zero corrected in each
+print(x.tobytes().hex())
+"""
+
+
+def test_compiled_aberth_does_not_depend_on_the_process_history(tmp_path):
+    """The fast-math Aberth sweeps compile to the same machine code whatever the process compiled
+    before: after the rigid sweep chunk, the multipliers' iterates came out different in their last
+    bits (the kernel took numba's implementations with the flags of their first caller; see the
+    comment in ``_aberthkernel``)."""
+    import os
+    import subprocess
+    import sys
+
+    bits = []
+    for mode in ("fresh", "primed"):
+        env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / mode))
+        out = subprocess.run([sys.executable, "-c", _ABERTH_BITS, mode], capture_output=True, text=True,
+                             check=True, env=env)
+        bits.append(out.stdout.strip())
+    assert bits[0] == bits[1]

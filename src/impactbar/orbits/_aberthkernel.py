@@ -15,7 +15,7 @@ import numpy as np
 from ..dynamics._kernel import CACHE
 
 
-@numba.njit(cache=CACHE, nogil=True)
+@numba.njit(cache=CACHE, nogil=True, fastmath=False)
 def _cdiv(a, b):
     """``a / b`` for complex ``b``, scaled against overflow; ``b = 0`` gives a non-finite value (as
     numpy does) where numba's complex division would raise."""
@@ -29,6 +29,54 @@ def _cdiv(a, b):
     bi = b.imag / s
     q = 1.0 / (s * (br * br + bi * bi))
     return complex(a.real * br + a.imag * bi, a.imag * br - a.real * bi) * q
+
+# The fast-math kernel below does real arithmetic only, and everything else through the helpers
+# here, compiled without fast math, said explicitly: a callee that does not say inherits fast math
+# from the kernel that compiles it first, and numba compiles its own implementations of complex
+# multiplication, division and abs, of max() and of the array constructors once per process with
+# the flags of their first caller. The kernel's machine code, and the multipliers' last bits, so
+# depended on which kernels the process had compiled before (2 ulp at 64 modes between a fresh
+# process and one that had run the test suite).
+
+
+@numba.njit(cache=CACHE, nogil=True, fastmath=False)
+def _work(K):
+    """The sweeps' buffers for ``K`` zeros: all active, no correction yet."""
+    return np.ones(K, dtype=np.bool_), np.zeros(K, dtype=np.complex128), np.empty(K), np.empty(K)
+
+
+@numba.njit(cache=CACHE, nogil=True, fastmath=False)
+def _correction(xi, s, ds, s89, ut, acr, aci):
+    """Aberth's correction of the zero ``xi`` from the sums over the modes (``s = (s_0, ..., s_3)``
+    and ``ds``, their derivatives, as real and imaginary parts; ``s89``: those of the pole term)
+    and Aberth's sum ``acr + i aci`` over the other zeros (see :func:`aberth_iterate`)."""
+    s0 = complex(s[0], s[1])
+    s1 = complex(s[2], s[3])
+    s2 = complex(s[4], s[5])
+    s3 = complex(s[6], s[7])
+    wt = _cdiv(1.0, 1.0 - xi)
+    w2 = wt * wt
+    # S = [[S00, S01], [S10, S11]] and its derivative [[D00, D01], [D10, D11]]
+    S00 = 1.0 + wt * ut[0]
+    S01 = wt * ut[1]
+    S10 = s0 + xi * s2
+    S11 = 1.0 + (s1 + xi * s3)
+    D00 = w2 * ut[0]
+    D01 = w2 * ut[1]
+    D10 = s2 + complex(ds[0], ds[1]) + xi * complex(ds[4], ds[5])
+    D11 = s3 + complex(ds[2], ds[3]) + xi * complex(ds[6], ds[7])
+    detS = S00 * S11 - S01 * S10
+    trSS = _cdiv(S11 * D00 - S01 * D10 - S10 * D01 + S00 * D11, detS)
+    logd = 2.0 * xi * complex(s89[0], s89[1]) - complex(s89[2], s89[3]) - wt + trSS - _cdiv(1.0, xi)
+    newton = _cdiv(1.0, logd)
+    return _cdiv(newton, 1.0 - newton * complex(acr, aci))
+
+
+@numba.njit(cache=CACHE, nogil=True, fastmath=False)
+def _settled(c, x, tol):
+    """Whether the correction ``c`` of the zero ``x`` is below ``tol`` relative to ``max(1, |x|)``."""
+    return abs(c) <= tol * max(1.0, abs(x))
+
 
 # x / 0 gives inf (checked below); reassociation lets the sums over the modes run in SIMD lanes
 @numba.njit(cache=CACHE, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "arcp"})
@@ -49,11 +97,8 @@ def aberth_iterate(x, tr, dt, X, ut, iters, tol):
     Aberth's sum over the other zeros."""
     K = x.shape[0]
     M = tr.shape[0]
-    active = np.ones(K, dtype=np.bool_)
+    active, corr, xre, xim = _work(K)
     n_active = K
-    corr = np.zeros(K, dtype=np.complex128)
-    xre = np.empty(K)
-    xim = np.empty(K)
     for _ in range(iters):
         for i in range(K):
             xre[i] = x[i].real
@@ -109,25 +154,6 @@ def aberth_iterate(x, tr, dt, X, ut, iters, tol):
                 s8i += wi
                 s9r += wr * t
                 s9i += wi * t
-            s0 = complex(s0r, s0i)
-            s1 = complex(s1r, s1i)
-            s2 = complex(s2r, s2i)
-            s3 = complex(s3r, s3i)
-            wt = _cdiv(1.0, 1.0 - xi)
-            w2 = wt * wt
-            # S = [[S00, S01], [S10, S11]] and its derivative [[D00, D01], [D10, D11]]
-            S00 = 1.0 + wt * ut[0]
-            S01 = wt * ut[1]
-            S10 = s0 + xi * s2
-            S11 = 1.0 + (s1 + xi * s3)
-            D00 = w2 * ut[0]
-            D01 = w2 * ut[1]
-            D10 = s2 + complex(d0r, d0i) + xi * complex(d2r, d2i)
-            D11 = s3 + complex(d1r, d1i) + xi * complex(d3r, d3i)
-            detS = S00 * S11 - S01 * S10
-            trSS = _cdiv(S11 * D00 - S01 * D10 - S10 * D01 + S00 * D11, detS)
-            logd = 2.0 * xi * complex(s8r, s8i) - complex(s9r, s9i) - wt + trSS - _cdiv(1.0, xi)
-            newton = _cdiv(1.0, logd)
             # Aberth's sum of 1 / (x_i - x_j) over the others, in real arithmetic
             acr = 0.0
             aci = 0.0
@@ -138,14 +164,15 @@ def aberth_iterate(x, tr, dt, X, ut, iters, tol):
                     q = 1.0 / (ur * ur + um * um)
                     acr += ur * q
                     aci -= um * q
-            c = _cdiv(newton, 1.0 - newton * complex(acr, aci))
-            if not (np.isfinite(c.real) and np.isfinite(c.imag)):
+            c = _correction(xi, (s0r, s0i, s1r, s1i, s2r, s2i, s3r, s3i),
+                            (d0r, d0i, d1r, d1i, d2r, d2i, d3r, d3i), (s8r, s8i, s9r, s9i), ut, acr, aci)
+            if not (math.isfinite(c.real) and math.isfinite(c.imag)):
                 return False
             corr[i] = c
         for i in range(K):
             if active[i]:
                 x[i] -= corr[i]
-                if abs(corr[i]) <= tol * max(1.0, abs(x[i])):
+                if _settled(corr[i], x[i], tol):
                     active[i] = False
                     n_active -= 1
         if n_active == 0:
