@@ -16,8 +16,10 @@ __all__ = ["add_parser", "run"]
 
 
 def _tasks():
-    """``(label, call)`` pairs, each a small first call of one kind of computation; together they
-    compile every kernel that a user's call reaches (the kernels take one signature each)."""
+    """``(label, call)`` pairs, each a small first call of one kind of computation; the kernels take
+    one signature each, so these compile what later calls of those kinds reach, whatever their
+    parameters, loads and sizes (``tests/cli/test_warmup.py`` checks both laws, 0 to 48 modes, both
+    loads, the drive, the rock and the chunks)."""
     import numpy as np
 
     from .. import (
