@@ -271,20 +271,22 @@ def test_the_wave_kernels_and_the_crossing_search_compile_once_per_run(tmp_path)
     """A literal flag (``True``, ``0``) passed to a kernel is a signature of its own, and a wrapper
     kernel compiles its callee again: after wave-law runs under both kinds of load (in a fresh
     process with an empty numba cache, so that the helpers compile rather than load with their
-    caller), the wave law's helpers, the crossing search and the flow each hold one signature."""
+    caller), the wave law's helpers, the crossing search, the flow and the sort of the window's
+    jumps (``sort_head``: its count starts as the literal 0) each hold one signature."""
     code = """
 import impactbar.dynamics._kernel as K, impactbar.dynamics._wavekernel as WK
+import impactbar.dynamics._flightkernel as FK
 from impactbar import *  # noqa: F403
 for n, load in ((8, CosineLoad(0.6, 1.0)), (16, SquareWaveLoad(0.8, 1.0))):
     simulate(BarModel(5.0, 0.1, 0.5, n, impact="wave"), load, InitialState.rigid(-0.2, 0.0, n), 40.0)
 for d in (WK.wave_contact, WK._p, WK._A, WK._f, WK._brent, WK._project_free, K.find_crossing,
-          K.propagate_many):
+          K.propagate_many, FK.sort_head):
     print(len(d.signatures))
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
                          env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path),
                               "NUMBA_CACHE_DIR": str(tmp_path)})
-    assert out.stdout.split() == ["1"] * 8
+    assert out.stdout.split() == ["1"] * 9
 
 # -- implementations ------------------------------------------------------------------------------
 def test_registry_switches_by_name_only_where_asked():

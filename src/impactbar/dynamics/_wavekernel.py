@@ -274,7 +274,7 @@ def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
                 if t0 < tj < t0 + T:
                     jt[nj] = tj
                     nj += 1
-        jt = sort_head(jt, nj)
+        jt = sort_head(jt, np.int64(nj))  # (np.int64: a literal nj would compile sort_head again)
     nj = jt.size
     jw = np.empty(nj)
     ew = np.empty(nj + 2)  # piece edges, time since t0

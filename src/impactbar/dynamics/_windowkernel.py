@@ -51,7 +51,7 @@ def window_jumps(load, s, t0, jumps):
                 if t0 < tj < t0 + T and nj < jumps.size:
                     jumps[nj] = s * (tj - t0)
                     nj += 1
-        sort_head(jumps, nj)
+        sort_head(jumps, np.int64(nj))  # (np.int64: a literal nj would compile sort_head again)
     return nj
 
 

@@ -244,7 +244,7 @@ def cosine_orbits(d, R, p0, pk, k, out):
                 n += 1
             if double:
                 break
-        sort_head(phs, n)
+        sort_head(phs, np.int64(n))  # (np.int64: a literal n would compile sort_head again)
         mult = 2 if double else 1
         n_orbits[i] = n
 
@@ -364,7 +364,7 @@ def square_orbits(d, R, q, kappa, out):
         if tau < len1:
             phs[n] = (a + tau) % TWO_PI
             n += 1
-        sort_head(phs, n)
+        sort_head(phs, np.int64(n))  # (np.int64: a literal n would compile sort_head again)
         mult = 1
         if n == 2 and (phs[1] - phs[0] < 1e-9 or phs[0] + TWO_PI - phs[1] < 1e-9):
             n, mult = 1, 2  # one double root, as in phase_roots
