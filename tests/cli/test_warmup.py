@@ -36,7 +36,7 @@ simulate(piston, drive, InitialState.rigid(-0.4, 0.0, 2), 30.0)
 find_orbit(piston.with_(n_modes=0), drive)
 law = RodRock(segments=[RodSegment(length=20.0, impedance=1.0)], rock=BilinearRock(k=3.0, k_u=30.0))
 single_blow(BarModel(2.0, 0.0, 0.0, 0, impact=law), 1.5, t_max=25.0)
-n = 100_001
+n = 7
 rigid_square_orbits(np.full(n, 0.1), np.full(n, 0.5), np.full(n, 1.0), np.full(n, 1.2))
 print(compiled)
 """

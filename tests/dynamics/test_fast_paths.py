@@ -782,7 +782,7 @@ import numpy as np
 if sys.argv[1] == "primed":  # the rigid sweep chunk compiled first (plain kernels, numba's max() in them)
     from impactbar.orbits.rigid import rigid_cosine_orbits
 
-    n = 100_001  # above the numpy closed forms' limit: the compiled chunk
+    n = 4  # (rigid_cosine_orbits runs the compiled loop at any size)
     rigid_cosine_orbits(np.full(n, 0.1), np.full(n, 0.5), np.full(n, 0.6), np.ones(n), 1)
 from impactbar.orbits._aberthkernel import aberth_iterate
 

@@ -42,7 +42,7 @@ def _tasks():
     rigid, flex = BarModel(5.0, 0.1, 0.5, 0), BarModel(5.0, 0.1, 0.5, 8)
     wave = flex.with_(impact="wave")
     piston, drive = BarModel(20.0, 0.0, 0.215, 0), PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
-    n = 100_001  # above the numpy closed forms' limit: a sweep's compiled chunk
+    n = 4  # (the compiled loop at any size; a sweep takes it from COMPILED_CLOSED_FORMS_FROM points)
     law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)], rock=BilinearRock(k=2.5, k_u=25.0))
     return (
         ("periodic orbits, flexible bar", lambda: periodic_orbits(flex, cos)),
