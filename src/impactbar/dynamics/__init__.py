@@ -13,3 +13,12 @@ compiled Aberth-Ehrlich iteration), ``kernelview`` (the one view of a load, and 
 that compiled code reads), ``implementations`` (the registry that chooses between fast and reference
 implementations). The contact laws' own numerics are in :mod:`impactbar.laws`. The bottom of the
 core: imports only numpy, scipy and numba, never another impactbar subpackage."""
+
+#: names that moved to the wave law's package (the laws sit above the shared building blocks)
+_MOVED = {"WaveImpact": "impactbar.WaveImpact", "wave_impact": "impactbar.wave_impact"}
+
+
+def __getattr__(name: str):
+    if name in _MOVED:
+        raise AttributeError(f"impactbar.dynamics.{name} moved to {_MOVED[name]} (impactbar.laws.wave)")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
