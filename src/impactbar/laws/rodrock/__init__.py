@@ -8,7 +8,8 @@ at impact through the blow to its state after, :class:`~impactbar.laws.rodrock.c
 ``_rockkernel`` (the blow's compiled loop).
 """
 
-from .blow import Blow as Blow
+import importlib
+
 from .law import BilinearRock as BilinearRock
 from .law import RodRock as RodRock
 from .law import RodSegment as RodSegment
@@ -16,3 +17,13 @@ from .law import lundberg_efficiency as lundberg_efficiency
 from .law import single_blow as single_blow
 
 __all__ = ["RodRock", "RodSegment", "BilinearRock", "single_blow", "Blow"]
+
+
+def __getattr__(name: str):
+    # PEP 562: the blow's module (its dataclasses, the drawing hooks) loads on first use, so that
+    # ``import impactbar`` (which builds the table of laws) stays as light as before
+    if name == "Blow":
+        value = importlib.import_module(".blow", __name__).Blow
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
