@@ -9,6 +9,7 @@ import tomllib
 from pathlib import Path
 
 from .. import physical
+from ..physical.drifter import RENAMED_DRIFTER_PRESETS
 from ._common import json_ready, print_json
 
 __all__ = ["drifter_from_args", "run_drifter_orbits", "run_drifter_simulate", "run_drifter_continue"]
@@ -24,7 +25,7 @@ def drifter_from_args(args):
         An unreadable file, or an invalid drifter config (the key named).
     """
     name, config = getattr(args, "preset", None), getattr(args, "config", None)
-    if name is not None and name in physical.DRIFTER_PRESETS:
+    if name is not None and (name in physical.DRIFTER_PRESETS or name in RENAMED_DRIFTER_PRESETS):
         return physical.drifter_preset(name)
     if config is None:
         return None
