@@ -57,6 +57,8 @@ def test_simulate_and_continue_a_drifter(tmp_path, capsys):
     assert summary["impact_velocity_m_s"] == pytest.approx(v, rel=1e-7)
     rows = (tmp_path / "s" / "impacts.csv").read_text().splitlines()
     assert rows[0] == "time_s,impact_velocity_m_s" and len(rows) == summary["n_impacts"] + 1
+    # the figures a hammer's run gets; no rod, so no force history nor stress along it
+    assert {p.name for p in (tmp_path / "s").glob("*.png")} == {"motion.png", "blows.png"}
     capsys.readouterr()
     assert main(["continue", "--preset", "hydraulic-drifter", "--parameter", "delay", "--to", "1.0",
                  "--out", str(tmp_path / "c"), "--brute", "0", "--json"]) == 0
