@@ -109,6 +109,11 @@ def _listener(prog, after, stream, deferring):
     return type("CompileWatch", (_Watch, event.Listener), {})(prog, after, stream, deferring)
 
 
+def _check_after(after) -> None:
+    if not after > 0.0:
+        raise ValueError(f"after must be > 0 seconds, got {after!r}")
+
+
 def watch_compiles(prog: str = "impactbar", *, after: float = 2.0) -> None:
     """Listen, for the rest of the process, to numba's compiles of impactbar's kernels, and print
     ``"<prog>: compiling numba kernels (...)"`` on stderr once they have run for ``after`` seconds
@@ -127,8 +132,7 @@ def watch_compiles(prog: str = "impactbar", *, after: float = 2.0) -> None:
     ValueError
         ``after`` not positive.
     """
-    if not after > 0.0:
-        raise ValueError(f"after must be > 0 seconds, got {after!r}")
+    _check_after(after)
     with _LOCK:
         if _STATE["watching"]:
             return
@@ -167,8 +171,7 @@ def compile_note(prog: str = "impactbar", *, after: float = 2.0, stream=None):
     >>> out.getvalue()
     ''
     """
-    if not after > 0.0:
-        raise ValueError(f"after must be > 0 seconds, got {after!r}")
+    _check_after(after)
     try:
         from numba.core import event
     except ImportError:  # pragma: no cover - numba is a dependency; nothing to watch without it

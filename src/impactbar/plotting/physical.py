@@ -22,20 +22,26 @@ def plot_motion(result, axes=None):
     -------
     the two Axes
     """
+    n = int(min(200_000, max(2000, 400 * result.t_end_s * result.hammer.blow_frequency_Hz)))
+    ts = np.linspace(0.0, result.t_end_s, n)
+    return _end_motion(axes, ts, 1e3 * result.end_displacement_m(ts), result.end_velocity_m_s(ts),
+                       result.impact_times_s, result.impact_velocities_m_s,
+                       result.hammer.name or "hammer")
+
+
+def _end_motion(axes, ts, u_mm, v, t_impacts, v_impacts, title):
+    """The two panels of an SI run: end displacement (mm) and velocity (m/s), impacts marked."""
     if axes is None:
         import matplotlib.pyplot as plt
 
         _, axes = plt.subplots(2, 1, sharex=True)
     ax_u, ax_v = axes
-    n = int(min(200_000, max(2000, 400 * result.t_end_s * result.hammer.blow_frequency_Hz)))
-    ts = np.linspace(0.0, result.t_end_s, n)
-    ax_u.plot(ts, 1e3 * result.end_displacement_m(ts), lw=0.8)
+    ax_u.plot(ts, u_mm, lw=0.8)
     ax_u.axhline(0.0, color="k", lw=0.6)
     ax_u.set_ylabel("end displacement / mm")
-    ax_u.set_title(result.hammer.name or "hammer")
-    ax_v.plot(ts, result.end_velocity_m_s(ts), lw=0.8)
-    ax_v.plot(result.impact_times_s, result.impact_velocities_m_s, "o", ms=3,
-              label="impact velocity")
+    ax_u.set_title(title)
+    ax_v.plot(ts, v, lw=0.8)
+    ax_v.plot(t_impacts, v_impacts, "o", ms=3, label="impact velocity")
     ax_v.set_xlabel("time / s")
     ax_v.set_ylabel("end velocity / (m/s)")
     ax_v.legend(loc="best", fontsize="small")
@@ -118,24 +124,10 @@ def plot_drifter_motion(drifter, run, axes=None):
     -------
     the two Axes
     """
-    if axes is None:
-        import matplotlib.pyplot as plt
-
-        _, axes = plt.subplots(2, 1, sharex=True)
-    ax_u, ax_v = axes
     om, L = drifter.omega_rad_s, drifter.bar.length_m
     t = np.linspace(run.t0, run.t_end, int(min(200_000, max(2000, 400 * max(run.n_impacts, 1)))))
-    ax_u.plot(t / om, 1e3 * L * run.end_displacement(t), lw=0.8)
-    ax_u.axhline(0.0, color="k", lw=0.6)
-    ax_u.set_ylabel("end displacement / mm")
-    ax_u.set_title(drifter.name or "drifter")
-    ax_v.plot(t / om, L * om * run.end_velocity(t), lw=0.8)
-    ti, vi = _drifter_impacts(drifter, run)
-    ax_v.plot(ti, vi, "o", ms=3, label="impact velocity")
-    ax_v.set_xlabel("time / s")
-    ax_v.set_ylabel("end velocity / (m/s)")
-    ax_v.legend(loc="best", fontsize="small")
-    return ax_u, ax_v
+    return _end_motion(axes, t / om, 1e3 * L * run.end_displacement(t), L * om * run.end_velocity(t),
+                       *_drifter_impacts(drifter, run), drifter.name or "drifter")
 
 
 def plot_drifter_blows(drifter, run, ax=None):
