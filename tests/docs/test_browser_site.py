@@ -35,6 +35,8 @@ CHROMIUM = os.environ.get("IMPACTBAR_CHROMIUM") or next(
     (p for p in map(shutil.which, ("chromium", "chromium-browser", "google-chrome")) if p), None)
 
 pytestmark = [
+    pytest.mark.slow,  # a browser per page: minutes (.ci/run runs it with --runslow)
+    pytest.mark.timeout(3600),  # the rendering of every page is the first test's fixture
     pytest.mark.skipif(not (SITE / "index.html").is_file(), reason=f"no built documentation at {SITE}"),
     pytest.mark.skipif(CHROMIUM is None, reason="no chromium (Debian: apt-get install chromium)"),
 ]
@@ -136,7 +138,7 @@ def _render(page: Path) -> str:
 def site() -> dict[str, _Page]:
     """Every page of the site, rendered and parsed, by its path relative to the site."""
     pages = sorted(SITE.rglob("*.html"))
-    with ThreadPoolExecutor(max_workers=max(2, min(8, os.cpu_count() or 2))) as pool:
+    with ThreadPoolExecutor(max_workers=min(8, 2 * (os.cpu_count() or 1))) as pool:
         doms = list(pool.map(_render, pages))
     out = {}
     for page, dom in zip(pages, doms, strict=True):
