@@ -109,7 +109,7 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
     ValueError
         Under a law other than the paper's (e.g. the wave impact law), whose phase equation is
         another (theory §4b): its existence edges come from the law's ``existence_edge``
-        (:func:`impactbar.orbits.wave.wave_existence_edge`, pneumatic) or from the orbits themselves.
+        (:func:`impactbar.laws.wave.periodic.wave_existence_edge`, pneumatic) or from the orbits themselves.
     """
     if not model.law.supports_schur:
         raise ValueError("max_phase_residual is eq. 14's, the paper's impact law; model.impact must "
