@@ -195,8 +195,9 @@ numpydoc_xref_aliases = _xref_aliases()
 nitpick_ignore_regex = [
     ("py:.*", r"(numpy|scipy|pandas|xarray|pint|dask|distributed|zarr|matplotlib|dataclasses|"
               r"enum|collections|concurrent)(\..*)?"),
-    ("py:.*", r"impactbar\.(dynamics|orbits\.(rigid|wave|one_impact|phase|stability)|"
-              r"_shared|sweeps\.(spec|run|store|tasks)|continuation\.(engine|core))(\..*)?"),
+    ("py:.*", r"impactbar\.(dynamics|orbits\.(rigid|one_impact|multi_impact|phase|stability)|"
+              r"laws\.(base|paper|wave|rodrock)|_shared|sweeps\.(spec|run|store|tasks)|"
+              r"continuation\.(engine|core))(\..*)?"),
 ]
 # Short names in the first line of a docstring, which the API tables show outside their class or
 # module (so ``rank`` cannot tell ``Admissibility.rank`` from another ``rank``); the pages resolve them.

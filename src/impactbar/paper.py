@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .laws.wave.periodic import wave_existence_edge
 from .loads import CosineLoad, SquareWaveLoad
 from .model import BarModel
 from .orbits.charts import (
@@ -31,8 +32,7 @@ from .orbits.charts import (
     pneumatic_existence_edge,
     pneumatic_stability_curve,
 )
-from .orbits.one_impact import periodic_orbits
-from .orbits.wave import wave_existence_edge
+from .orbits.multi_impact import periodic_orbits
 from .plotting.paper import (
     R_CURVES,
     _save,
