@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.base import autonomous
 from ..dynamics.certified import enclose_zeros, zeros_in_clusters
 from ..loads import Load
 from ..model import BarModel
@@ -37,8 +37,8 @@ def phase_G(d: float, R: float) -> float:
 def _check_inputs(model, load):
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-    if isinstance(load, PositionSwitchedDrive):  # not a function of time (theory §10)
-        raise ValueError("a PositionSwitchedDrive is not periodic in time: the phase equation and "
+    if autonomous(load):  # a drive is not a function of time (theory §10)
+        raise ValueError(f"a {type(load).__name__} is not periodic in time: the phase equation and "
                          "the one-impact orbits of a periodic load do not apply; use find_orbit(model, "
                          "drive) (unknown period, theory §10) or simulate")
     if not isinstance(load, Load):
