@@ -57,7 +57,7 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
-__all__ = ["Drive", "DriveState", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
+__all__ = ["Drive", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
            "SurfaceEvent", "FlightKernel", "KernelRun", "OrbitData", "OrbitProblem", "autonomous",
            "newton", "split_multipliers"]
 
@@ -196,6 +196,30 @@ class SurfaceEvent(DriveEvent):
         return float(self.function(t, q, v, z))
 
 
+@dataclass(frozen=True)
+class FlightSettings:
+    """The integrator of the flights of a drive with state (scipy's ``solve_ivp``), chosen by the
+    drive (:attr:`Drive.integrator`).
+
+    Attributes
+    ----------
+    method : str
+        A method of ``solve_ivp``: ``"LSODA"`` (default: ODEPACK's, switching between Adams and BDF
+        as the problem turns stiff, as an oil column against the piston's inertia does), ``"Radau"``
+        or ``"BDF"`` (stiff), ``"DOP853"`` (not stiff, high order).
+    rtol, atol : float
+        Relative and absolute tolerances (defaults ``1e-10`` and ``1e-12``): the flights and the
+        event times are accurate to about these.
+    max_step : float
+        Largest step (default ``inf``).
+    """
+
+    method: str = "LSODA"
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    max_step: float = math.inf
+
+
 # --------------------------------------------------------------------------------------------------
 # optional compiled event loop
 # --------------------------------------------------------------------------------------------------
@@ -312,6 +336,8 @@ class Drive(ABC):
         events, whose flights are then closed forms).
     state_names : tuple of str
         Names of the ``k`` variables (logged with the run's drive state).
+    integrator : FlightSettings
+        The integrator of a drive with state (method and tolerances of ``solve_ivp``).
     parameters : tuple of str
         The fields :func:`impactbar.continue_orbit` can follow (each a float).
     levels : tuple of float or None
@@ -343,6 +369,7 @@ class Drive(ABC):
     """
 
     autonomous: ClassVar[bool] = True
+    integrator: ClassVar[FlightSettings] = FlightSettings()
     state_size: ClassVar[int] = 0
     state_names: ClassVar[tuple[str, ...]] = ()
     parameters: ClassVar[tuple[str, ...]] = ()
@@ -535,6 +562,12 @@ class OrbitProblem(ABC):
     @abstractmethod
     def orbit(self, X: np.ndarray) -> OrbitData:
         """The orbit of a solution ``X``."""
+
+    @abstractmethod
+    def pieces(self, X: np.ndarray) -> list:
+        """The flights of the period as ``(t0, t1, f)``: ``f(t)`` gives the modal state ``(q, v)``,
+        shapes ``(N + 1, T)``, at orbit times ``t0 <= t <= t1`` from the first state of the unknowns
+        (the contacts' windows lie between the flights)."""
 
     @abstractmethod
     def admissibility(self, X: np.ndarray, k: int):

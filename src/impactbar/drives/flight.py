@@ -15,47 +15,27 @@ Two kinds of flight, by the drive:
   rounding, but a pair of crossings inside one grid step is not seen).
 - **a drive with state** ``z`` (``z' = rate(mode, z, q, q')``, the force ``p(mode, z, q, q')``): the
   bar's modes ``q_n'' + d q_n' + (s n pi)^2 q_n = p`` (eq. 6) and ``z`` are integrated together by
-  scipy's ``solve_ivp`` (``"Radau"`` by default: the flexible modes and an oil column are stiff)
+  scipy's ``solve_ivp`` (the drive's method: ``"LSODA"`` by default, which turns to BDF where the
+  problem is stiff, as an oil column against the piston's inertia is)
   with the arrival ``c . q = 0`` (rising) and the drive's events as terminal event functions,
-  located by scipy to the integrator's tolerance (``rtol``, ``atol`` of :class:`FlightSettings`).
+  located by scipy to the integrator's tolerance (``rtol``, ``atol`` of the drive's
+  :attr:`~impactbar.Drive.integrator`, a :class:`~impactbar.drives.base.FlightSettings`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
 
 from ..dynamics.modal import step_constant
-from .base import DriveEvent, DriveState
+from .base import DriveEvent, DriveState, FlightSettings
 
 __all__ = ["FlightSettings", "Flight", "ClosedPiece", "OdePiece", "fly", "ARRIVAL", "EVENT", "END"]
 
 #: how a flight ended
 ARRIVAL, EVENT, END = 0, 1, 2
-
-
-@dataclass(frozen=True)
-class FlightSettings:
-    """The integrator of the flights of a drive with state (scipy's ``solve_ivp``).
-
-    Attributes
-    ----------
-    method : str
-        ``"Radau"`` (default), ``"BDF"`` or ``"LSODA"`` (stiff), or ``"DOP853"``.
-    rtol, atol : float
-        Relative and absolute tolerances (defaults ``1e-10`` and ``1e-12``): the flights and the
-        event times are accurate to about these.
-    max_step : float
-        Largest step (default ``inf``).
-    """
-
-    method: str = "Radau"
-    rtol: float = 1e-10
-    atol: float = 1e-12
-    max_step: float = math.inf
 
 
 DEFAULT_SETTINGS = FlightSettings()
@@ -171,7 +151,7 @@ class Flight(NamedTuple):
 
 
 def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
-        settings: FlightSettings = DEFAULT_SETTINGS) -> Flight:
+        settings: FlightSettings | None = None) -> Flight:
     """One flight from ``(q, v)`` and the drive's ``state`` at ``t`` to the next arrival at the stop
     (``c . q = 0`` with ``c . q' > 0``), the drive's next event or ``t_stop`` (module docstring).
 
@@ -184,8 +164,8 @@ def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
     q, v : numpy.ndarray, shape (N + 1,)
         Off the stop, or on it leaving (``c . q <= 0``).
     t_stop : float
-    settings : FlightSettings
-        The integrator of a drive with state.
+    settings : FlightSettings, optional
+        The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
 
     Returns
     -------
@@ -195,7 +175,7 @@ def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
     v = np.array(v, dtype=float)
     if drive.piecewise_constant:
         return _closed(model, drive, state, t, q, v, t_stop)
-    return _ode(model, drive, state, t, q, v, t_stop, settings)
+    return _ode(model, drive, state, t, q, v, t_stop, settings if settings is not None else drive.integrator)
 
 
 # --------------------------------------------------------------------------------------------------

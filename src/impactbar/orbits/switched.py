@@ -14,10 +14,14 @@ which is a :class:`~impactbar.PeriodicOrbit`. It calls only the interface:
   constant between events, ``solve_ivp`` for a drive with state) followed by the impact law and
   the drive's map at the impact, minus the next unknowns (multiple shooting); the period is the sum
   of the flights. Its Jacobian, hence the multipliers, is by central finite differences (module
-  constants ``FD_STEP_CLOSED``, ``FD_STEP_ODE``): with closed-form flights and events, errors of
-  about ``1e-9`` (measured against the valve's exact Jacobian in
-  ``tests/drives/test_new_drive.py``); with a drive's state integrated to ``rtol = 1e-10``, about
-  ``1e-6`` (the integrator's error over the step).
+  constants ``FD_STEP_CLOSED``, ``FD_STEP_ODE``): with closed-form flights and events the
+  multipliers' errors measured against the valve's exact Jacobian (the same motion, ``s = 10``,
+  ``R = 0.215``) are ``6e-11`` on the rigid bar, ``3e-8`` with 3 modes, ``1e-7`` with 6 (the
+  truncation error of the differences grows with the stiffest mode's frequency); with a drive's
+  state integrated by LSODA to ``rtol = 1e-10``, ``4e-10`` on the lag drive of
+  ``tests/drives/test_new_drive.py`` (against differences of an integration at ``1e-12``). The
+  fixed point itself is exact to rounding with closed-form flights (the Jacobian only steers
+  Newton), to the integrator's tolerance otherwise.
 
 The multipliers are those of the return map on the section just after the impacts (the arrival
 surface ``c . q = 0`` times the drive's state); the trivial one along the flow is set apart
@@ -34,7 +38,7 @@ import numpy as np
 from .._shared.status import Admissibility
 from .._shared.validate import check_int, check_real
 from ..drives.base import DriveState, OrbitData, OrbitProblem, autonomous, newton, sorted_multipliers
-from ..drives.flight import ARRIVAL, DEFAULT_SETTINGS, EVENT, FlightSettings, fly
+from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..model import BarModel
 from .orbit import PeriodicOrbit
 
@@ -218,6 +222,11 @@ class SwitchedOrbit(PeriodicOrbit):
             sel = (t >= t0) & (t <= t1)
             if np.any(sel):
                 q[:, sel], v[:, sel] = piece(t[sel])
+        if self.contact_time:  # inside the contacts' windows: the law's records
+            for ti, rec in zip(self.impact_times, self.contacts, strict=True):
+                for i in np.flatnonzero((t >= ti) & (t <= ti + self.contact_time) & np.isnan(q[0])):
+                    if hasattr(rec, "state_at"):
+                        q[:, i], v[:, i] = rec.state_at(min(t[i] - ti, self.contact_time))
         return q, v
 
     def modal_state(self, t):
@@ -384,7 +393,8 @@ def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
 # the generic problem: shooting over the drive's flights
 # --------------------------------------------------------------------------------------------------
 #: central-difference steps of the shooting Jacobian (relative to ``max(1, |X_j|)``): closed-form
-#: flights (rounding ~1e-16: error ~ h^2 + eps/h ~ 1e-10) and integrated ones (rtol 1e-10: ~1e-6)
+#: flights (rounding ~1e-16; the measured errors are in the module docstring: smaller steps meet the
+#: rounding, larger ones the truncation) and integrated ones (rtol 1e-10: noise / step ~1e-6 at most)
 FD_STEP_CLOSED = 1e-6
 FD_STEP_ODE = 1e-4
 #: impacts followed from rest (or from a run's end) before Newton starts, at most
@@ -398,11 +408,13 @@ class ShootingProblem(OrbitProblem):
     ``m`` intervals between impacts, with the drive's flights (:func:`impactbar.drives.flight.fly`),
     the impact law and the drive's maps.
 
-    Unknowns: ``m`` blocks ``(q, q', z)`` just after each impact (where its contact ends). Each block
-    starts at a fixed time ``tau_k`` in a fixed mode (those of the guess: the system is autonomous,
-    the mode's scheduled events are counted from ``tau_k``). Residual: the block's flight to its
-    impact, the impact law (eq. 10, or the law's contact under the drive's force) and the drive's
-    map at the impact, minus the next block. Jacobian: central differences.
+    Unknowns: ``m`` blocks ``(q, q', z)`` just after each impact (where its contact ends), each
+    flown from its projection on the section ``c . q = 0`` (``q_0`` shifted: a perturbation of the
+    unknowns must not start a flight through the stop). Each block starts at a fixed time ``tau_k``
+    in a fixed mode (those of the guess: the system is autonomous, the mode's scheduled events are
+    counted from ``tau_k``). Residual: the block's flight to its impact, the impact law (eq. 10, or
+    the law's contact under the drive's force) and the drive's map at the impact, minus the next
+    block. Jacobian: central differences.
 
     Parameters
     ----------
@@ -410,13 +422,13 @@ class ShootingProblem(OrbitProblem):
     drive : Drive
     impacts : int
     settings : FlightSettings, optional
-        The integrator of a drive with state.
+        The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
     """
 
     def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None):
         self.model, self.drive = model, drive
         self.impacts = check_int("impacts", impacts, lo=1)
-        self.settings = settings if settings is not None else DEFAULT_SETTINGS
+        self.settings = settings if settings is not None else drive.integrator
         law = model.law
         if not drive.piecewise_constant and not law.instantaneous:
             raise ValueError(f"a drive with state ({type(drive).__name__}) takes an instantaneous impact law "
@@ -439,7 +451,9 @@ class ShootingProblem(OrbitProblem):
         state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
         the drive's events ``(time, event, mode after)``."""
         model, drive, M = self.model, self.drive, self.M
-        t, q, v, z = tau, y[:M], y[M:2 * M], y[2 * M:]
+        c = model.end_weights
+        t, q, v, z = tau, np.array(y[:M], dtype=float), y[M:2 * M], y[2 * M:]
+        q[0] -= float(c @ q)  # on the section c . q = 0 (the unknowns' perturbations leave it)
         state = DriveState(mode, np.array(z, dtype=float))
         pieces, events = [], []
         end = tau + HORIZON
@@ -479,8 +493,9 @@ class ShootingProblem(OrbitProblem):
     def initial(self, guess, tol, max_iter):
         """The blocks' start times, modes and states: from a :class:`SwitchedOrbit` of the same drive
         (its states, the drive's states, its impact times), from a run of :func:`impactbar.simulate`
-        (continued from its end) or from rest on the stop (``None``), the motion followed impact after
-        impact until the impact velocities settle (at most ``SETTLE_IMPACTS``)."""
+        (continued from its end) or, without one, from rest on the stop (the rigid bar; a flexible bar
+        from the rigid bar's orbit), the motion followed impact after impact until the impact
+        velocities settle (at most ``SETTLE_IMPACTS``)."""
         model, drive, m, M = self.model, self.drive, self.impacts, self.M
         if isinstance(guess, SwitchedOrbit):
             problem = guess._problem
@@ -493,6 +508,13 @@ class ShootingProblem(OrbitProblem):
                 return self._settle(tau, mode, np.asarray(guess._unknowns, dtype=float), m - 1)
             raise ValueError("guess: an orbit of another problem (drive or impacts); give a run of "
                              "simulate under the drive")
+        if guess is None and M > 1:  # the rigid bar's orbit, lifted, then followed
+            rigid = ShootingProblem(model.with_(n_modes=0), drive, m, self.settings)
+            Xr = rigid.solve(rigid.initial(None, tol, max_iter), tol, max_iter)
+            y = np.zeros(self.n)
+            y[0], y[M], y[2 * M:] = Xr[0], Xr[1], Xr[2:self.n - 2 * M + 2]
+            tau, mode = rigid.blocks[0]
+            return self._settle(tau, mode, y, SETTLE_IMPACTS)
         if guess is None:
             q, v = np.zeros(M), np.zeros(M)
             state = drive.start(model, q, v)
@@ -607,7 +629,7 @@ class ShootingProblem(OrbitProblem):
             t_arr, qa, va, st = arrival
             before.append(np.concatenate((qa, va)))
             velocities.append(float(c @ va))
-            times.append(shift + t_arr - tau)
+            times.append(float(shift + t_arr - tau))
             forces.append(float(drive.force(st.mode, st.z, qa, va)))
             last = tau
             prev_name = drive.mode_name(mode)
@@ -623,7 +645,8 @@ class ShootingProblem(OrbitProblem):
             durations.append(t_arr - last)
             shift += t_after - tau
         blocks = X.reshape(m, n)
-        return OrbitData(period=shift, durations=np.array(durations), states_after=blocks[:, :2 * M].copy(),
+        return OrbitData(period=float(shift), durations=np.array(durations),
+                         states_after=blocks[:, :2 * M].copy(),
                          states_before=np.array(before), impact_velocities=np.array(velocities),
                          impact_times=np.array(times), drive_states=blocks[:, 2 * M:].copy(), multipliers=mu,
                          trivial_multiplier=1.0, switch_times=np.array(switch_t),

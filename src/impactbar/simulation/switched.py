@@ -31,7 +31,7 @@ import numpy as np
 
 from .._shared.status import RunStatus
 from ..drives.base import DriveState, FlightKernel, KernelRun
-from ..drives.flight import DEFAULT_SETTINGS, END, EVENT, RestPiece, fly
+from ..drives.flight import END, EVENT, RestPiece, fly
 from ..dynamics.implementations import use_fast
 from ..model import BarModel
 from .trajectory import EnergyAccount, Trajectory
@@ -551,7 +551,7 @@ CHATTER_WINDOW = 1e-6
 
 
 def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int, make_state,
-                 settings=DEFAULT_SETTINGS) -> SwitchedTrajectory:
+                 settings=None) -> SwitchedTrajectory:
     """The event-driven run of a drive with state (module docstring): flights by
     :func:`impactbar.drives.flight.fly`, the paper's impact law (eq. 10) at each arrival, the
     drive's maps at its events and impacts; a rigid piston whose rebound is slower than
@@ -570,6 +570,7 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     R = law.kernel_restitution(model)
     c = model.end_weights
     M = model.n_modes + 1
+    settings = settings if settings is not None else drive.integrator
     loop = _Run(model, drive, q, v, t0, t_end, max_imp)
     loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
     recent: list[float] = []

@@ -455,6 +455,25 @@ class ValveProblem(OrbitProblem):
         dur = np.array([self.drive.delay, X[k * n + 2 * self.M], self.drive.delay, X[k * n + 2 * self.M + 1]])
         return z0, dur
 
+    def pieces(self, X):
+        """The flights of the period as ``(t0, t1, f)``, ``f(t) -> (q, v)`` at orbit times (from the
+        state after the first impact; the contacts' windows between them)."""
+        model, drive, M = self.model, self.drive, self.M
+        w2, d = _w2(model), model.d
+        window = 0.0 if model.law.instantaneous else float(model.law.window(model))
+        ps, pr = drive.level(STROKE), drive.level(RETURN)
+        out, t = [], 0.0
+        for k in range(self.impacts):
+            z0, dur = self._block(np.asarray(X, dtype=float), k)
+            starts = (z0, *_legs(model, drive, z0, dur)[:3])
+            for p, h, z in zip((ps, pr, pr, ps), dur, starts, strict=True):
+                if h:
+                    out.append((t, t + h, lambda tt, p=p, z=z, t0=t: step_constant(w2, d, p, z[:M], z[M:],
+                                                                                      tt - t0)))
+                    t += h
+            t += window
+        return out
+
     def admissibility(self, X, k):
         """The flights after impact ``k``: the end off the stop, the return crossing the first one,
         a forward impact (:func:`_admissibility`)."""
