@@ -319,6 +319,24 @@ def test_a_drive_with_state_on_a_flexible_bar():
     np.testing.assert_allclose(run.impact_times, times, rtol=0, atol=1e-6)
 
 
+def test_the_energy_account_of_a_drives_run_closes():
+    """The bar's account over the run's flights: the impacts' loss is ``(1 - R^2) v^2 / 2`` per impact
+    of the rigid piston (eq. 10), and the drive's work balances the rest to the quadrature's (closed
+    forms) or the integrator's (a drive with state) accuracy."""
+    model = BarModel(s=10.0, d=0.05, R=0.215, n_modes=0)
+    valve = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0, delay=0.2)
+    for drive in (valve, TwoLevel(1.0, 1.0, 1.0), Lag(1.0, 1.0, 1.0, lag=0.5)):
+        run = simulate(model, drive, InitialState.rigid(-0.5, 0.3), 40.0)
+        account = run.energy
+        assert run.n_impacts > 5 and account.work > 0.0
+        lost = float(np.sum(0.5 * (1.0 - model.R**2) * run.impact_velocities**2))
+        assert account.impact_loss == pytest.approx(lost, rel=1e-9)
+        assert account.relative_residual < (1e-12 if drive.piecewise_constant else 1e-9)
+    flexible = simulate(model.with_(n_modes=3), PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0),
+                        InitialState.rigid(-0.5, 0.3, 3), 40.0)
+    assert flexible.energy.relative_residual < 1e-12
+
+
 def test_refusals_name_what_is_missing():
     model = BarModel(s=10.0, d=0.1, R=0.3, n_modes=0)
     with pytest.raises(ValueError, match="instantaneous impact law"):

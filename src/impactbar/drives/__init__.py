@@ -14,11 +14,14 @@ imports only ``impactbar.model``, ``impactbar.dynamics`` and ``impactbar._shared
 from .base import Drive as Drive
 from .base import DriveEvent as DriveEvent
 from .base import DriveState as DriveState
+from .base import FlightSettings as FlightSettings
 from .base import GapCrossing as GapCrossing
+from .base import OrbitData as OrbitData
+from .base import OrbitProblem as OrbitProblem
 from .base import RateCrossing as RateCrossing
 from .base import SurfaceEvent as SurfaceEvent
 from .base import TimedEvent as TimedEvent
 from .switched import PositionSwitchedDrive as PositionSwitchedDrive
 
 __all__ = ["Drive", "DriveState", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent", "SurfaceEvent",
-           "PositionSwitchedDrive"]
+           "FlightSettings", "OrbitProblem", "OrbitData", "PositionSwitchedDrive"]

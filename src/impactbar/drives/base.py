@@ -77,6 +77,14 @@ class DriveState(NamedTuple):
         The drive's discrete state (chosen by the drive; the solvers only hand it back).
     z : numpy.ndarray, shape (k,)
         The continuous state, ``k = Drive.state_size`` (shape ``(0,)`` for a drive without state).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar import DriveState
+    >>> state = DriveState(mode="stroke", z=np.array([2.0e7]))  # e.g. a chamber pressure
+    >>> state.mode, state.z.shape
+    ('stroke', (1,))
     """
 
     mode: Hashable
@@ -310,22 +318,24 @@ class Drive(ABC):
     the test file alone). Subclasses are frozen dataclasses (validated once, hashable, compared by
     value).
 
-    ================================  ===================================================================
-    member                            what it gives
-    ================================  ===================================================================
-    ``state_size``                    ``k``, size of the continuous state ``z`` (0: piecewise-constant force)
-    ``parameters``                    names of the fields :func:`~impactbar.continue_orbit` may follow
-    :meth:`with_`                     a copy with new parameter values (validated again)
-    :meth:`start`                     the state at the start of a run, from the bar's
-    :meth:`force`                     ``p`` on the piston, from the state (and the bar's, for ``k > 0``)
-    :meth:`rate`                      ``z'`` between events (``k > 0``)
-    :meth:`events`                    the events that can end a flight in a mode
-    :meth:`jump`                      the state after an event
-    :meth:`impact`                    the state after an impact
-    :meth:`mode_name`                 a mode's name, logged at each switch
-    ``levels``, :meth:`compiled_loop` optional: a compiled event loop
-    :meth:`orbit_problem`             optional: a periodic-orbit problem of the drive's own
-    ================================  ===================================================================
+    ==================================  ===============================================================
+    member                              what it gives
+    ==================================  ===============================================================
+    ``state_size``                      ``k``, size of the continuous state ``z`` (0: a force constant
+                                        between events)
+    ``parameters``                      names of the fields :func:`~impactbar.continue_orbit` may follow
+    :meth:`with_`                       a copy with new parameter values (validated again)
+    :meth:`start`                       the state at the start of a run, from the bar's
+    :meth:`force`                       ``p`` on the piston, from the state (and the bar's, ``k > 0``)
+    :meth:`rate`                        ``z'`` between events (``k > 0``)
+    :meth:`events`                      the events that can end a flight in a mode
+    :meth:`jump`                        the state after an event
+    :meth:`impact`                      the state after an impact
+    :meth:`mode_name`                   a mode's name, logged at each switch
+    ``integrator``                      ``solve_ivp``'s method and tolerances for ``z``
+    ``levels``, :meth:`compiled_loop`   optional: a compiled event loop
+    :meth:`orbit_problem`               optional: a periodic-orbit problem of the drive's own
+    ==================================  ===============================================================
 
     Attributes
     ----------
@@ -344,12 +354,12 @@ class Drive(ABC):
         For a drive with a compiled event loop, the constant forces it takes (the valve:
         ``(+stroke, -ret)``); ``None`` otherwise.
 
+    The example below is a force of constant size pushing the piston onto the stop (no event, no
+    state): the bounces of a rigid piston dropped from the gap ``y0`` arrive at
+    ``v_1 = sqrt(2 p y0)``, then ``R v_1``, ``R^2 v_1`` (eq. 10, energy).
+
     Examples
     --------
-    A force of constant size pushing the piston onto the stop (no event, no state): the bounces of
-    a rigid piston dropped from the gap ``y0`` arrive at ``v_1 = sqrt(2 p y0)``, then ``R v_1``,
-    ``R^2 v_1`` (eq. 10, energy):
-
     >>> from dataclasses import dataclass
     >>> from impactbar import BarModel, Drive, DriveState, InitialState, simulate
     >>> import numpy as np

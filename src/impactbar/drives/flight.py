@@ -56,6 +56,10 @@ class ClosedPiece:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         return step_constant(self.w2, self.d, self.p, self.q, self.v, t - self.t0)
 
+    def force(self, t):
+        """The force on the piston at times ``t``: ``p``."""
+        return np.full(np.atleast_1d(t).shape, float(self.p))
+
     def drive_state(self, t):
         """The drive's continuous state at times ``t``: constant, shape ``(k, T)``."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -69,12 +73,19 @@ class ClosedPiece:
 
 
 class OdePiece:
-    """A flight of a drive with state, by ``solve_ivp``'s dense output from ``t0`` to ``t_end``."""
+    """A flight of a drive with state, by ``solve_ivp``'s dense output from ``t0`` to ``t_end``;
+    ``p(q, v, z)`` the drive's force in the flight's mode."""
 
-    __slots__ = ("t0", "t_end", "sol", "M", "c")
+    __slots__ = ("t0", "t_end", "sol", "M", "c", "p")
 
-    def __init__(self, t0, t_end, sol, M, c):
-        self.t0, self.t_end, self.sol, self.M, self.c = t0, t_end, sol, M, c
+    def __init__(self, t0, t_end, sol, M, c, p=None):
+        self.t0, self.t_end, self.sol, self.M, self.c, self.p = t0, t_end, sol, M, c, p
+
+    def force(self, t):
+        """The force on the piston at times ``t``."""
+        y = self._y(t)
+        M = self.M
+        return np.array([self.p(y[:M, j], y[M:2 * M, j], y[2 * M:, j]) for j in range(y.shape[1])])
 
     def _y(self, t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -108,6 +119,9 @@ class RestPiece:
     def modal(self, t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
         return np.zeros((self.M, t.size)), np.zeros((self.M, t.size))
+
+    def force(self, t):
+        return np.zeros(np.atleast_1d(t).size)  # (no work: the piston does not move)
 
     def drive_state(self, t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -329,9 +343,9 @@ def _ode(model, drive, state, t, q, v, t_stop, settings):
     if sol.status < 0:
         raise ValueError(f"the flight of the drive's state could not be integrated from t = {t:.6g}: "
                          f"{sol.message}")
-    te = sol.t[-1]
+    te = float(sol.t[-1])
     y = sol.y[:, -1].copy()
-    piece = OdePiece(t, te, sol.sol, M, c)
+    piece = OdePiece(t, te, sol.sol, M, c, lambda q, v, z: drive.force(mode, z, q, v))
     if sol.status == 1:  # an event ended it
         hit = [i for i, tt in enumerate(sol.t_events) if tt.size]
         if 0 in hit:
