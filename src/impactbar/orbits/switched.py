@@ -40,6 +40,7 @@ from .._shared.validate import check_int, check_real
 from ..drives.base import DriveState, OrbitData, OrbitProblem, autonomous, newton, sorted_multipliers
 from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..model import BarModel
+from .admissibility import _window_departure
 from .orbit import PeriodicOrbit
 
 __all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_problem", "orbit_of", "ShootingProblem",
@@ -177,7 +178,8 @@ class SwitchedOrbit(PeriodicOrbit):
     def states(self) -> np.ndarray:
         """``(m, 2 N + 2)``: the modal state where each interval starts (after the impact before
         it); ``states[0]`` is :attr:`state`."""
-        return np.roll(self.states_after_impact, 1, axis=0)
+        after = self.states_after_impact
+        return np.roll(after, 1, axis=0) if len(after) > 1 else after
 
     @property
     def impact_velocity(self) -> float:
@@ -356,14 +358,10 @@ def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
     and, under a law whose contact takes time, of the contacts (held for their whole window: the wave
     law's ``separates`` and ``sticks``, theory §4b). Used by :func:`find_switched_orbit` and by the
     continuation of switched orbits."""
-    from .admissibility import _window_departure
-
     model = problem.model
     m = problem.impacts
     X = np.asarray(X, dtype=float)
     data: OrbitData = problem.orbit(X)
-    M = model.n_modes + 1
-    c = model.end_weights
     law = model.law
     adm = Admissibility.ADMISSIBLE
     for k in range(m):
@@ -373,16 +371,19 @@ def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
         if not law.instantaneous and data.impact_velocities[k] > 0.0:
             rec = law.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
             separates = bool(getattr(rec, "separations", ()))
-            adm = _window_departure(adm, False, float(c @ data.states_after[k][M:]), separates)
+            v_after = data.states_after[k][model.n_modes + 1:]
+            adm = _window_departure(adm, False, float(model.end_weights @ v_after), separates)
     mu = data.multipliers
     stable = adm == Admissibility.ADMISSIBLE and bool(np.all(np.abs(mu) < 1.0))
     impact_times = data.impact_times
+    phases = np.mod(TWO_PI * impact_times / data.period, TWO_PI) if m > 1 else np.zeros(1)
     return SwitchedOrbit(
         model=model, load=problem.drive, impacts=m, periods=1, impact_times=impact_times,
-        phases=np.mod(TWO_PI * impact_times / data.period, TWO_PI), impact_velocities=data.impact_velocities,
+        phases=phases, impact_velocities=data.impact_velocities,
         admissible=adm == Admissibility.ADMISSIBLE, admissibility=adm, clearance=math.nan,
         clearance_error=math.nan, multipliers=mu, stable=stable,
-        states_after_impact=np.roll(data.states_after, -1, axis=0), states_before_impact=data.states_before,
+        states_after_impact=np.roll(data.states_after, -1, axis=0) if m > 1 else data.states_after,
+        states_before_impact=data.states_before,
         contacts=None, period=data.period, durations=data.durations,
         trivial_multiplier=data.trivial_multiplier, switch_times=data.switch_times,
         switch_velocity=data.switch_velocity, contact_time=data.contact_time, drive_states=data.drive_states,

@@ -24,6 +24,8 @@ __all__ = ["ValveLoop"]
 _PEND_CAP = 64
 #: impacts in the compiled loop's first logs (doubled at each call, up to 65536)
 _FIRST_CAP = 256
+#: the valve's states' names by index (the kinds of the switches logged)
+_NAMES = [KIND[k] for k in range(len(KIND))]
 
 
 class ValveLoop:
@@ -81,7 +83,7 @@ class ValveLoop:
             imp_v.append(logs[1][:ni])
             sw_t.append(logs[2][:ns])
             sw_y.append(logs[3][:ns])
-            sw_k.extend(KIND[int(k)] for k in logs[4][:ns])
+            sw_k.extend(map(_NAMES.__getitem__, logs[4][:ns].tolist()))
             if npc:
                 blocks.append((logs[5][:npc], logs[6][:npc], logs[7][:npc], logs[8][:npc], logs[9][:npc]))
             valve, n_imp = int(ints[0]), int(ints[2])

@@ -31,12 +31,12 @@ and arrival times depend on the state); the trivial multiplier along the flow is
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 
 from ..._shared.status import Admissibility
-from ..._shared.validate import check_int
 from ...dynamics.modal import fundamental, step_constant
 from ...model import BarModel
 from .._crossing import first_rising_crossing, rate_zero
@@ -69,7 +69,14 @@ class ContactMap:
 
 
 def _w2(model: BarModel) -> np.ndarray:
-    return (model.s * np.pi * np.arange(model.n_modes + 1)) ** 2
+    """``(s n pi)^2``, ``n = 0..N`` (eq. 6), built once per ``(s, N)`` (the flows ask for it at every
+    step; callers only read it)."""
+    return _w2_of(model.s, model.n_modes + 1)
+
+
+@functools.lru_cache(maxsize=64)
+def _w2_of(s: float, M: int) -> np.ndarray:
+    return (s * np.pi * np.arange(M)) ** 2
 
 
 def _field(w2, d, p, z):
@@ -382,7 +389,7 @@ class ValveProblem(OrbitProblem):
 
     def __init__(self, model: BarModel, drive, impacts: int, constant_load) -> None:
         self.model, self.drive, self.constant_load = model, drive, constant_load
-        self.impacts = m = check_int("impacts", impacts, lo=1)
+        self.impacts = m = impacts  # (validated by the solvers that ask for the problem)
         law = model.law
         if model.R >= 1.0 and (law.instantaneous or law.uses_restitution):
             raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
@@ -556,6 +563,8 @@ class ValveProblem(OrbitProblem):
 def _impact_times(durations, contact_time):
     """Times after the first impact (where its contact ends) of the arrivals that end each
     interval."""
+    if durations.size == 4:
+        return np.array([float(np.sum(durations))])
     per = durations.reshape(-1, 4).sum(axis=1)
     return np.cumsum(per) + contact_time * np.arange(per.size)
 
@@ -563,6 +572,10 @@ def _impact_times(durations, contact_time):
 def _switch_times(durations, contact_time):
     """Times after the first impact at which the switches take effect: to return, then to stroke,
     for each impact of the period in turn, shape ``(2 m,)``."""
+    if durations.size == 4:  # the arithmetic below, in scalars
+        start = 0.0 + contact_time
+        tau, h1, tau2 = float(durations[0]), float(durations[1]), float(durations[2])
+        return np.array([start + tau, start + tau + h1 + tau2])
     steps = durations.reshape(-1, 4).copy()
     steps[:, 0] += contact_time  # the contact, then the stroke's tau
     start = np.concatenate(([0.0], np.cumsum(steps.sum(axis=1))))[:-1] + contact_time
