@@ -33,7 +33,7 @@ from impactbar import (
     find_orbit,
     simulate,
 )
-from impactbar.drives import GapCrossing
+from impactbar.drives import GapCrossing, TimedEvent
 
 STROKE, RETURN = 0, 1
 NAMES = ("stroke", "return")
@@ -66,6 +66,54 @@ class TwoLevel(Drive):
 
     def impact(self, mode, z, t, q, v):
         return DriveState(RETURN, z)
+
+
+@dataclass(frozen=True)
+class Delayed(Drive):
+    """The valve's rules written here: each switch takes effect ``delay`` after its trigger (the
+    crossing of ``x1``, the impact). The mode is ``(level, pending)``, ``pending`` the triggered
+    switches ``(time, level)``, sorted; a :class:`~impactbar.drives.TimedEvent` at the first."""
+
+    stroke: float
+    ret: float
+    x1: float
+    delay: float
+
+    parameters = ("stroke", "ret", "x1", "delay")
+
+    def start(self, model, q, v):
+        return DriveState((RETURN if -q[0] < self.x1 else STROKE, ()), np.zeros(0))
+
+    def mode_name(self, mode):
+        return NAMES[mode[0]]
+
+    def force(self, mode, z, q, v):
+        return self.stroke if mode[0] == STROKE else -self.ret
+
+    def events(self, mode):
+        level, pending = mode
+        out = ()
+        if level == RETURN and all(k != STROKE for _, k in pending):
+            out += (GapCrossing("x1", level=self.x1, direction=1),)
+        if pending:
+            out += (TimedEvent("switch", time=pending[0][0]),)
+        return out
+
+    @staticmethod
+    def _due(level, pending, t):
+        while pending and pending[0][0] <= t:
+            level, pending = pending[0][1], pending[1:]
+        return (level, pending)
+
+    def jump(self, mode, z, event, t, q, v):
+        level, pending = mode
+        if event.name == "x1":
+            pending = tuple(sorted(pending + ((t + self.delay, STROKE),)))
+        return DriveState(self._due(level, pending, t), z)
+
+    def impact(self, mode, z, t, q, v):
+        level, pending = mode
+        return DriveState(self._due(level, tuple(sorted(pending + ((t + self.delay, RETURN),))), t), z)
 
 
 @dataclass(frozen=True)
@@ -199,6 +247,26 @@ def test_simulate_two_level_is_the_valves_run():
     assert run.switch_kinds == ref.switch_kinds
     np.testing.assert_allclose(run.switch_times, ref.switch_times, rtol=0, atol=1e-12)
     assert run.final_valve == ref.final_valve
+
+
+@pytest.mark.parametrize("n_modes", [0, 2])
+def test_scheduled_switches_are_the_valves_delay(n_modes):
+    """The valve's delayed switches written with the interface's timed events: the orbit is the
+    valve's (its exact segment problem), and so is the branch in the delay, whose scheduled times
+    the shooting problem makes again at each value (the drive's map at the impact before each
+    block)."""
+    model = BarModel(s=10.0, d=0.1, R=0.3, n_modes=n_modes)
+    o = find_orbit(model, Delayed(1.0, 1.0, 1.0, 0.1))
+    ref = find_orbit(model, PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0, delay=0.1))
+    assert o.period == pytest.approx(ref.period, rel=1e-12)
+    np.testing.assert_allclose(o.multipliers, ref.multipliers, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(o.switch_times, ref.switch_times, rtol=0, atol=1e-12)
+    branch = continue_orbit(o, "delay", to=0.2)  # (on 2 modes the orbit loses admissibility at 0.218)
+    end = branch.orbits[-1]
+    assert branch.values[-1] == pytest.approx(0.2) and end.drive.delay == branch.values[-1]
+    valve = find_orbit(model, PositionSwitchedDrive(1.0, 1.0, 1.0, delay=end.drive.delay))
+    assert end.period == pytest.approx(valve.period, rel=1e-11)
+    assert end.impact_velocity == pytest.approx(valve.impact_velocity, rel=1e-11)
 
 
 def test_continue_two_level_follows_the_closed_form():

@@ -188,7 +188,7 @@ class TimedEvent(DriveEvent):
         return t - self.time
 
     def first_time(self, d, p, t, q, v):
-        return self.time
+        return max(self.time, t)  # (one due already: at once)
 
 
 @dataclass(frozen=True)

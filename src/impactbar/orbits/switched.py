@@ -445,6 +445,7 @@ class ShootingProblem(OrbitProblem):
         self.closed = drive.piecewise_constant
         self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
         self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
+        self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
 
     # -- flights ------------------------------------------------------------------------------------
     def _flight(self, tau, mode, y, keep=False):
@@ -502,11 +503,12 @@ class ShootingProblem(OrbitProblem):
             problem = guess._problem
             if isinstance(problem, ShootingProblem) and problem.drive == drive and problem.impacts == m \
                     and problem.blocks:
-                self.blocks = list(problem.blocks)
+                self.adopt(problem)
                 return np.asarray(guess._unknowns, dtype=float).copy()
             if guess.impacts == 1 and m > 1 and isinstance(problem, ShootingProblem) and problem.blocks:
                 tau, mode = problem.blocks[0]
-                return self._settle(tau, mode, np.asarray(guess._unknowns, dtype=float), m - 1)
+                source = problem.sources[0] if problem.sources else None
+                return self._settle(tau, mode, np.asarray(guess._unknowns, dtype=float), m - 1, source)
             raise ValueError("guess: an orbit of another problem (drive or impacts); give a run of "
                              "simulate under the drive")
         if guess is None and M > 1:  # the rigid bar's orbit, lifted, then followed
@@ -533,17 +535,18 @@ class ShootingProblem(OrbitProblem):
             return self._settle(float(guess.t_end), final.mode, y, SETTLE_IMPACTS)
         raise ValueError("guess must be a SwitchedOrbit of the drive, a run of simulate under it or None")
 
-    def _settle(self, tau, mode, y, n_max):
+    def _settle(self, tau, mode, y, n_max, source=None):
         """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
         impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``), and
-        take the starts of the last ``m`` intervals as the blocks."""
-        m = self.impacts
+        take the starts of the last ``m`` intervals as the blocks (with the impacts before them)."""
+        m, M = self.impacts, self.M
         c = self.model.end_weights
-        hist = [(tau, mode, y)]
+        hist = [(tau, mode, y, source)]
         speeds = []
         for _ in range(n_max):
             y, tau, mode, arrival, _, _ = self._flight(tau, mode, y)
-            hist.append((tau, mode, y))
+            source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
+            hist.append((tau, mode, y, source))
             speeds.append(float(c @ arrival[2]))
             if speeds[-1] <= 0.0:
                 raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
@@ -553,6 +556,7 @@ class ShootingProblem(OrbitProblem):
                 break
         blocks = hist[-m:]
         self.blocks = [(b[0], b[1]) for b in blocks]
+        self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
         return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
 
     def residual(self, X):
@@ -585,10 +589,21 @@ class ShootingProblem(OrbitProblem):
 
     def adopt(self, other: OrbitProblem) -> ShootingProblem:
         """The blocks' start times and modes of ``other`` (each of its blocks for each of ours, in
-        turn: a doubled branch repeats the one-impact orbit's)."""
+        turn: a doubled branch repeats the one-impact orbit's), each mode made again by this drive's
+        map at the impact before the block (its scheduled events follow this drive's parameters)."""
         blocks = getattr(other, "blocks", None)
-        if blocks:
-            self.blocks = [blocks[k % len(blocks)] for k in range(self.impacts)]
+        if not blocks:
+            return self
+        sources = getattr(other, "sources", None) or []
+        self.blocks, self.sources = [], []
+        for k in range(self.impacts):
+            tau, mode = blocks[k % len(blocks)]
+            if sources:
+                source = sources[k % len(sources)]
+                arr_mode, z, _, q, v = source
+                mode = self.drive.impact(arr_mode, z, tau, q, v).mode
+                self.sources.append(source)
+            self.blocks.append((tau, mode))
         return self
 
     def admissibility(self, X, k):
