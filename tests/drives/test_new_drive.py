@@ -399,6 +399,8 @@ def test_the_energy_account_of_a_drives_run_closes():
         assert run.n_impacts > 5 and account.work > 0.0
         lost = float(np.sum(0.5 * (1.0 - model.R**2) * run.impact_velocities**2))
         assert account.impact_loss == pytest.approx(lost, rel=1e-9)
+        records = run.impacts  # one per impact, as a Trajectory's
+        assert [r.impact_velocity for r in records] == pytest.approx(list(run.impact_velocities), rel=1e-12)
         assert account.relative_residual < (1e-12 if drive.piecewise_constant else 1e-9)
     flexible = simulate(model.with_(n_modes=3), PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0),
                         InitialState.rigid(-0.5, 0.3, 3), 40.0)

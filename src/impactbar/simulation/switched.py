@@ -203,10 +203,24 @@ class SwitchedTrajectory(Trajectory):
 
     @property
     def impacts(self) -> tuple:
-        """The record of each impact, in order, from the flights that hold them (the law's per-blow
-        output, :attr:`impactbar.Trajectory.impacts`; the closed-form flights of the compiled loop
-        and the flights of a drive with state hold none)."""
-        return tuple(r for i in range(len(self.pieces)) for r in getattr(self.pieces[i], "impacts", ()))
+        """The record of each impact, in order, one per :attr:`impact_times` (the law's per-blow
+        output, :attr:`impactbar.Trajectory.impacts`): the driver's runs give theirs; a closed-form or
+        integrated flight that ends at an impact, the law's contact of its arrival under the force
+        there (:meth:`impactbar.laws.ContactLaw.contact`), built on access."""
+        from ..loads import FourierLoad
+
+        model, law = self.model, self.model.law
+        hits = set(self.impact_times.tolist())
+        out = []
+        for j in range(len(self.pieces)):
+            piece = self.pieces[j]
+            if isinstance(piece, Trajectory):
+                out.extend(piece.impacts)
+            elif piece.t_end in hits and piece.t_end > piece.t0:
+                q, v = piece.modal([piece.t_end])
+                p = float(piece.force([piece.t_end])[0])
+                out.append(law.contact(model, FourierLoad(p, []), piece.t_end, q[:, 0], v[:, 0])[3])
+        return tuple(out)
 
     @cached_property
     def energy(self) -> EnergyAccount:
