@@ -33,7 +33,7 @@ import numpy as np
 from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.base import autonomous
 from ..dynamics.implementations import use_fast
 from ..dynamics.modal import fundamental
 from ..loads import Load
@@ -567,14 +567,14 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     >>> round(o.phase, 4), o.impacts
     (3.0367, 1)
 
-    With a :class:`~impactbar.PositionSwitchedDrive` in place of the load the system is autonomous
-    and the period is unknown (theory §10): the result is a
-    :class:`~impactbar.SwitchedOrbit` (``impacts`` per period, a ``guess`` needed for two or
-    more; ``periods`` ignored; under every impact law), from
+    With a :class:`~impactbar.Drive` in place of the load (e.g. a
+    :class:`~impactbar.PositionSwitchedDrive`) the system is autonomous and the period is unknown
+    (theory §10): the result is a :class:`~impactbar.SwitchedOrbit`, a :class:`PeriodicOrbit`
+    (``impacts`` per period; ``periods`` ignored; under every impact law), from
     :func:`~impactbar.orbits.find_switched_orbit`.
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
-    if isinstance(load, PositionSwitchedDrive):
+    if autonomous(load):  # a drive: an autonomous orbit, unknown period (theory §10)
         from .switched import find_switched_orbit
 
         return find_switched_orbit(model, load, impacts, guess, tol=min(tol, 1e-13),

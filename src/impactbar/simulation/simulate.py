@@ -35,16 +35,16 @@ import numpy as np
 
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.base import autonomous
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
-from ..loads import FourierLoad, Load
+from ..loads import Load
 from ..model import MAX_MODES, BarModel
 from ._interrupt import SimulationInterrupted as SimulationInterrupted
 from ._interrupt import _CtrlC
 from ._shortrun import SHORT_RUN_IMPACTS, entry_point, run_short
-from .switched import SwitchedTrajectory, rigid_piece, run_compiled, run_switched
+from .switched import Driver, run_drive
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
 from .trajectory import _FREE as _FREE
@@ -463,12 +463,13 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     ----------
     model : BarModel
         The bar: ``s``, ``d``, ``R`` and ``N`` flexible modes.
-    load : FourierLoad or PiecewiseConstantLoad or PositionSwitchedDrive
+    load : FourierLoad or PiecewiseConstantLoad or Drive
         The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
-        ``t mod 2 pi``); or a drive switched by the piston's position (theory §10), whose valve
-        starts in return when the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it: the
-        result is then a :class:`~impactbar.SwitchedTrajectory` with the
-        switches logged.
+        ``t mod 2 pi``); or a :class:`~impactbar.Drive` (theory §10: autonomous, with state of its
+        own, e.g. the valve of :class:`~impactbar.PositionSwitchedDrive`, which starts in return when
+        the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it): the result is then a
+        :class:`~impactbar.SwitchedTrajectory` (a :class:`Trajectory`) with the drive's switches
+        logged (:mod:`impactbar.simulation.switched`).
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
@@ -484,11 +485,12 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         Called as ``progress(fraction)`` with the fraction of ``[t0, t_end]`` done, in ``[0, 1]``,
         between blocks of impacts (at most every 0.1 s of wall time) and once at the end: e.g. to
         drive a progress bar with an estimate of the time left. Not with a
-        :class:`~impactbar.PositionSwitchedDrive`.
+        :class:`~impactbar.Drive`.
 
     Returns
     -------
-    Trajectory or SwitchedTrajectory
+    Trajectory
+        A :class:`~impactbar.SwitchedTrajectory` under a drive.
 
     Raises
     ------
@@ -545,9 +547,9 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
-    if isinstance(load, PositionSwitchedDrive):
+    if autonomous(load):  # a drive (theory §10): its own event loop over pieces of this driver
         _push_off(model.end_weights, q)
-        return _run_switched(model, load, q, v, t0, t_end, max_imp)
+        return run_drive(model, load, q, v, t0, t_end, max_imp, _DRIVER)
     core = _core_for(model, load)
     _push_off(core.c, q)
     if progress is None and (t_end - t0 < LONG_RUN or max_imp <= SHORT_RUN_IMPACTS):
@@ -566,29 +568,6 @@ def _push_off(c, q) -> None:
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
-
-
-def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
-    """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces:
-    compiled (``simulate.switched_kernel``) for an instantaneous law, in Python piece by piece
-    otherwise."""
-    law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
-    rigid = model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid")
-    cores = tuple(_core_for(model, FourierLoad(lv, [])) for lv in (drive.stroke, -drive.ret))
-    if rigid:
-        piece = rigid_piece(model)
-    else:
-        def piece(level, q, v, t, t_stop):
-            q = np.array(q, dtype=float)
-            v = np.array(v, dtype=float)
-            core = cores[0] if level == drive.stroke else cores[1]
-            _push_off(core.c, q)
-            return _run(core, q, v, t, t_stop, 1)
-
-    if law.instantaneous and use_fast("simulate.switched_kernel"):
-        return run_compiled(model, drive, q, v, t0, t_end, max_imp, piece, InitialState, cores, rigid,
-                            use_fast("simulate.impact_search"), CHATTER_TAIL)
-    return run_switched(model, drive, q, v, t0, t_end, max_imp, piece, InitialState)
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Trajectory:
@@ -798,3 +777,7 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
     vels.append(arrival)
     segs.add(ti, _WINDOW, qm, vm, "impact", record)
     return q, v, t_release
+
+
+#: the driver as a drive's run takes it (:func:`impactbar.simulation.switched.run_drive`)
+_DRIVER = Driver(core_for=_core_for, run=_run, push_off=_push_off, make_state=InitialState, tail=CHATTER_TAIL)
