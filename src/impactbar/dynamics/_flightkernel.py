@@ -198,8 +198,20 @@ def sort_head(a, n):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def piece_end(breaks, m, j):
+    """End time of the piece ``(m, j)`` (period ``m``, piece ``j``) of a piecewise-constant load."""
+    if j + 1 < breaks.size:
+        return m * TWO_PI + breaks[j + 1]
+    return (m + 1) * TWO_PI
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def piece_of(breaks, t):
-    """Period index and piece index of time ``t`` for a piecewise-constant load."""
+    """Period index and piece index of time ``t`` for a piecewise-constant load: the piece whose
+    start ``m 2 pi + breaks[j]`` and end (:func:`piece_end`) hold ``start <= t < end``, both computed
+    as the event search computes them. (The phase ``t - m 2 pi`` alone rounds: a release found at a
+    jump, ``te = piece_end(..)``, came out a rounding error inside the piece before it, so the
+    flight from there started under the old level.)"""
     m = math.floor(t / TWO_PI)
     tm = t - m * TWO_PI
     if tm >= TWO_PI:
@@ -209,14 +221,21 @@ def piece_of(breaks, t):
     for i in range(breaks.size):
         if breaks[i] <= tm:
             j = i
+    J = breaks.size
+    for _ in range(2):  # at most one piece off either way
+        if t >= piece_end(breaks, m, j):
+            j += 1
+            if j == J:
+                j = 0
+                m += 1
+        elif t < m * TWO_PI + breaks[j]:
+            j -= 1
+            if j < 0:
+                j = J - 1
+                m -= 1
+        else:
+            break
     return m, j
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def piece_end(breaks, m, j):
-    if j + 1 < breaks.size:
-        return m * TWO_PI + breaks[j + 1]
-    return (m + 1) * TWO_PI
 
 
 @numba.njit(cache=CACHE, nogil=True)
