@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numba
+import numpy as np
 
 TWO_PI = 2.0 * math.pi
 
@@ -217,7 +218,7 @@ def piece_of(breaks, t):
     if tm >= TWO_PI:
         m += 1
         tm -= TWO_PI
-    j = 0
+    j = np.int64(0)  # (not the literal 0: piece_end is compiled for one signature)
     for i in range(breaks.size):
         if breaks[i] <= tm:
             j = i
@@ -226,7 +227,7 @@ def piece_of(breaks, t):
         if t >= piece_end(breaks, m, j):
             j += 1
             if j == J:
-                j = 0
+                j = np.int64(0)
                 m += 1
         elif t < m * TWO_PI + breaks[j]:
             j -= 1
