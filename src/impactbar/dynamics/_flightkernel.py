@@ -2,7 +2,8 @@
 §4): the modes advanced from an anchor (eq. 8), the particular solution of each load kind, the
 bounds ``A`` on ``|h''|`` and ``J`` on ``|h'''|`` over a step, and the steps that cannot cross
 ``h = 0`` (see :mod:`impactbar.dynamics._kernel`, which searches events with them). Plain float
-arrays only; where numba caches compiled code (``CACHE``) is decided here, once for every kernel."""
+arrays only; where numba caches compiled code (``CACHE``) is decided here, once for every kernel,
+and the tiered execution of first calls installed (:mod:`impactbar.dynamics._tiers`)."""
 
 from __future__ import annotations
 
@@ -24,6 +25,12 @@ try:  # numba caches next to this file, or else in the user's cache folder
     CACHE = True
 except RuntimeError:  # a read-only install and no writable cache folder: compile in memory
     CACHE = False
+
+# a first call of a kernel not yet compiled runs its Python source while a child process compiles
+# it into the cache (issue 41; impactbar.dynamics._tiers)
+from ._tiers import install as _install_tiers  # noqa: E402
+
+_install_tiers()
 
 @numba.njit(cache=CACHE, nogil=True)
 def _bc(d, tau):
