@@ -74,8 +74,9 @@ class FirstBlock(NamedTuple):
 
 
 #: runs of at most this many modal coordinates reuse their thread's buffers for the first block
-#: (2 x 1025 x M floats, 0.5 MB at M = 32); a larger run allocates its own
-POOLED_MODES = 32
+#: (2 x 1025 x M floats: 4 MB at 256; one set per thread, for the last M it ran); a larger run
+#: allocates its own for the rows it may use
+POOLED_MODES = 256
 _POOL = threading.local()
 
 
@@ -85,27 +86,23 @@ class _Block:
     times (``[0]``: the start's, then the impacts') and the impacts' arrival velocities (``[1]``,
     from column 1), and the kernel's output views of them, made once."""
 
-    __slots__ = ("QV", "TV", "q0", "v0", "out")
+    __slots__ = ("M", "QV", "TV", "q0", "v0", "out")
 
-    def __init__(self, M):
-        self.QV = np.empty((2, FIRST_BLOCK + 1, M))
-        self.TV = np.empty((2, FIRST_BLOCK + 1))
+    def __init__(self, M, rows=FIRST_BLOCK):
+        self.M = M
+        self.QV = np.empty((2, rows + 1, M))
+        self.TV = np.empty((2, rows + 1))
         Q, V = self.QV
         self.q0, self.v0 = Q[0], V[0]
         self.out = (self.TV[0, 1:], self.TV[1, 1:], Q[1:], V[1:])
 
 
-def _block(M) -> _Block:
-    """This thread's buffers for ``M`` modal coordinates (fresh ones beyond ``POOLED_MODES``)."""
+def _block(M, max_imp) -> _Block:
+    """This thread's buffers for ``M`` modal coordinates, made anew where the last run's had
+    another ``M``; beyond ``POOLED_MODES``, fresh ones of ``min(max_imp, FIRST_BLOCK)`` rows."""
     if M > POOLED_MODES:
-        return _Block(M)
-    try:
-        return _POOL.blocks[M]
-    except AttributeError:
-        _POOL.blocks = {}
-    except KeyError:
-        pass
-    b = _POOL.blocks[M] = _Block(M)
+        return _Block(M, min(max_imp, FIRST_BLOCK))
+    b = _POOL.block = _Block(M)
     return b
 
 
@@ -116,14 +113,13 @@ def run_short(core, q, v, t0, t_end, max_imp, state) -> tuple[Trajectory | None,
     the final state from two arrays (``InitialState._trusted``); ``t0, t_end`` are floats and
     ``max_imp`` an int (the kernel's entry point takes no others).
 
-    The kernel writes into buffers of ``FIRST_BLOCK`` impacts whatever ``max_imp``: below it, it
-    stops at ``max_imp`` (``MAXIMP``) before the buffers are full, as in the general driver's first
-    block of ``max_imp`` rows; the rows used are copied out."""
+    The kernel writes into buffers of ``FIRST_BLOCK`` impacts whatever ``max_imp`` (below it, it
+    stops at ``max_imp``, ``MAXIMP``, before the buffers are full, as in the general driver's first
+    block of ``max_imp`` rows); the rows used are copied out."""
     M = q.size
-    try:  # (_block, inlined)
-        b = _POOL.blocks[M] if M <= POOLED_MODES else _Block(M)
-    except (AttributeError, KeyError):
-        b = _block(M)
+    b = getattr(_POOL, "block", None)
+    if b is None or b.M != M:
+        b = _block(M, max_imp)
     b.q0[...] = q  # (faster than Q[0] = q)
     b.v0[...] = v
     TV = b.TV
