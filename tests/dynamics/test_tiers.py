@@ -138,7 +138,7 @@ def test_twins_call_twins_and_round_hypot_as_numba_does():
 
 
 def test_fast_math_kernels_are_never_interpreted():
-    from impactbar.orbits import _aberthkernel as A
+    from impactbar.dynamics import _aberthkernel as A
 
     fast = [d for d in vars(A).values() if isinstance(d, numba.core.registry.CPUDispatcher)
             and d.targetoptions.get("fastmath")]

@@ -12,6 +12,8 @@ import math
 import numba
 import numpy as np
 
+from .._shared.compiling import watch_compiles
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -26,11 +28,15 @@ try:  # numba caches next to this file, or else in the user's cache folder
 except RuntimeError:  # a read-only install and no writable cache folder: compile in memory
     CACHE = False
 
+# one line on stderr, once per process, while impactbar's kernels compile for more than 2 s
+watch_compiles()
+
 # a first call of a kernel not yet compiled runs its Python source while a child process compiles
 # it into the cache (issue 41; impactbar.dynamics._tiers)
 from ._tiers import install as _install_tiers  # noqa: E402
 
-_install_tiers()
+_install_tiers(cache=CACHE)
+
 
 @numba.njit(cache=CACHE, nogil=True)
 def _bc(d, tau):

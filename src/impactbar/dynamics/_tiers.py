@@ -94,9 +94,7 @@ def _decide() -> bool:
         return False
     from numba.core import config
 
-    from ._flightkernel import CACHE
-
-    if not CACHE or config.DISABLE_JIT:
+    if not _STATE.get("cache") or config.DISABLE_JIT:
         return False
     try:
         cpus = len(os.sched_getaffinity(0))
@@ -105,9 +103,11 @@ def _decide() -> bool:
     return cpus >= 2
 
 
-def install() -> None:
-    """Put the hook on numba's dispatcher (once; a no-op where the tier is off)."""
+def install(cache: bool) -> None:
+    """Put the hook on numba's dispatcher (once; a no-op where the tier is off, or where ``cache``
+    says numba has no disk cache to compile into)."""
     global _ORIGINAL
+    _STATE.setdefault("cache", cache)
     if _ORIGINAL is not None or not enabled():
         return
     from numba.core.dispatcher import Dispatcher

@@ -18,7 +18,7 @@ from .._shared import tables as _tables
 
 if TYPE_CHECKING:
     from .._shared.status import Admissibility
-    from ..dynamics.impact import WaveImpact
+    from ..laws.wave.impact import WaveImpact
     from ..loads import Load
     from ..model import BarModel
 

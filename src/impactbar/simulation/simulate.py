@@ -14,7 +14,7 @@ not instantaneous (the wave law, ``BarModel(impact="wave")``, theory §4b: a con
 ``2/s`` with the long rod, solved by characteristics) makes the kernel stop at the arrival, and its
 contact step (:meth:`impactbar.laws.ContactLaw.contact`) gives the state where the flight resumes
 (under the wave law after a sustained contact where the window ends with the end still driven into
-the rod: :mod:`impactbar.dynamics.sustained`).
+the rod: :mod:`impactbar.laws.wave.sustained`).
 
 With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
 accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field
@@ -29,22 +29,22 @@ from __future__ import annotations
 import math
 import threading
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.base import autonomous
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
-from ..loads import FourierLoad, Load
-from ..model import MAX_MODES, BarModel
+from ..loads import Load
+from ..model import BarModel
 from ._interrupt import SimulationInterrupted as SimulationInterrupted
 from ._interrupt import _CtrlC
 from ._shortrun import FIRST_BLOCK, SHORT_RUN_IMPACTS, entry_point, run_short
-from .switched import SwitchedTrajectory, rigid_piece, run_compiled, run_switched
+from .initial import InitialState as InitialState
+from .switched import Driver, run_drive
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
 from .trajectory import _FREE as _FREE
@@ -91,151 +91,6 @@ LONG_RUN = 2000.0 * math.pi
 #: Least wall time (s) between two calls of a run's ``progress`` callback.
 PROGRESS_EVERY = 0.1
 _NO_LIMIT = int(np.iinfo(np.int64).max)  # max_impacts=None (np.iinfo per call: 2 us)
-
-
-# --------------------------------------------------------------------------------------------------
-# initial state
-# --------------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class InitialState:
-    """Modal state of the free-free bar (theory §2).
-
-    ``u(x) = q_0 + 2 sum_{n>=1} q_n cos(n pi x)`` and the same for the velocity field.
-
-    Parameters
-    ----------
-    modal_displacement : array_like, shape (N + 1,)
-        ``q_0..q_N`` (dimensionless).
-    modal_velocity : array_like, shape (N + 1,)
-        ``q_0'..q_N'``.
-
-    Raises
-    ------
-    ValueError
-        If the arrays are not 1-d, of different lengths, empty, or not finite.
-
-    Examples
-    --------
-    >>> from impactbar import InitialState
-    >>> start = InitialState.rigid(end_displacement=-0.01, velocity=0.0, n_modes=2)
-    >>> start.modal_displacement, start.modal_velocity
-    (array([-0.01,  0.  ,  0.  ]), array([0., 0., 0.]))
-    """
-
-    modal_displacement: np.ndarray
-    modal_velocity: np.ndarray
-
-    def __post_init__(self) -> None:
-        q = _real_vector("modal_displacement", self.modal_displacement)
-        v = _real_vector("modal_velocity", self.modal_velocity)
-        if q.size != v.size:
-            raise ValueError(
-                f"modal_velocity must have the length of modal_displacement ({q.size}); "
-                f"got {v.size}"
-            )
-        q.setflags(write=False)
-        v.setflags(write=False)
-        object.__setattr__(self, "modal_displacement", q)
-        object.__setattr__(self, "modal_velocity", v)
-
-    @classmethod
-    def _trusted(cls, q: np.ndarray, v: np.ndarray) -> InitialState:
-        """A state from arrays the simulator made (finite, 1-d, of one length): no checks, no copy."""
-        self = object.__new__(cls)
-        q.setflags(write=False)
-        v.setflags(write=False)
-        self.__dict__.update(modal_displacement=q, modal_velocity=v)  # (a frozen dataclass's fields)
-        return self
-
-    @property
-    def n_modes(self) -> int:
-        """Flexible modes ``N`` the state carries."""
-        return self.modal_displacement.size - 1
-
-    @classmethod
-    def rigid(cls, end_displacement, velocity, n_modes: int = 0) -> InitialState:
-        """An undeformed bar with its struck end at ``end_displacement`` moving at ``velocity``.
-
-        Parameters
-        ----------
-        end_displacement : float
-            ``u(1)``, ``<= 0`` (the stop is at 0).
-        velocity : float
-            Uniform velocity (positive towards the stop).
-        n_modes : int, optional
-            Flexible modes to carry (all zero). A one-mode state is also accepted by
-            :func:`simulate` for any model and padded with zeros.
-
-        Raises
-        ------
-        ValueError
-            If ``end_displacement > 0`` (the start would penetrate the stop).
-        """
-        e = check_real("end_displacement", end_displacement, hi=0.0)
-        vel = check_real("velocity", velocity)
-        n_modes = check_int("n_modes", n_modes, lo=0, hi=MAX_MODES)
-        q = np.zeros(n_modes + 1)
-        v = np.zeros(n_modes + 1)
-        q[0] = e
-        v[0] = vel
-        return cls(q, v)
-
-    @classmethod
-    def from_fields(cls, u0, v0, model: BarModel) -> InitialState:
-        """Project displacement and velocity fields on the free-free modes (eq. 5).
-
-        Parameters
-        ----------
-        u0, v0 : callable
-            Vectorised functions of ``x`` in ``[0, 1]`` giving ``u(x, t0)`` and ``u_t(x, t0)``.
-        model : BarModel
-            Gives the number of modes ``N``.
-
-        Returns
-        -------
-        InitialState
-            ``q_n = int_0^1 u0(x) cos(n pi x) dx`` (Gauss-Legendre, exact for polynomials of
-            degree below 64 per panel), ``n = 0..N``.
-
-        Raises
-        ------
-        ValueError
-            If a field is not callable or returns non-finite values, or ``u0(1) > 0``.
-        """
-        if not isinstance(model, BarModel):
-            raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-        for name, f in (("u0", u0), ("v0", v0)):
-            if not callable(f):
-                raise ValueError(f"{name} must be a callable of x; got {type(f).__name__}")
-        panels = max(8, model.n_modes // 4 + 1)
-        xg, wg = np.polynomial.legendre.leggauss(32)
-        edges = np.linspace(0.0, 1.0, panels + 1)
-        half = 0.5 * (edges[1:] - edges[:-1])[:, None]
-        x = (half * (xg[None, :] + 1.0) + edges[:-1, None]).ravel()
-        w = (half * wg[None, :]).ravel()
-        basis = np.cos(np.pi * np.outer(x, np.arange(model.n_modes + 1)))
-        out = []
-        for name, f in (("u0", u0), ("v0", v0)):
-            vals = np.broadcast_to(np.asarray(f(x), dtype=float), x.shape)
-            if not np.all(np.isfinite(vals)):
-                raise ValueError(f"{name} must return finite values on [0, 1]")
-            out.append((w * vals) @ basis)
-        end = float(np.asarray(u0(np.array([1.0])), dtype=float).ravel()[0])
-        if end > 0.0:
-            raise ValueError(f"u0 must keep the struck end off the stop, u0(1) <= 0; got {end}")
-        return cls(out[0], out[1])
-
-
-def _real_vector(name, value) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=float, copy=True)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a 1-d array of real numbers; got {value!r}") from exc
-    if arr.ndim != 1 or arr.size == 0:
-        raise ValueError(f"{name} must be a non-empty 1-d array; got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite; got {arr}")
-    return arr
 
 
 # --------------------------------------------------------------------------------------------------
@@ -481,12 +336,13 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     ----------
     model : BarModel
         The bar: ``s``, ``d``, ``R`` and ``N`` flexible modes.
-    load : FourierLoad or PiecewiseConstantLoad or PositionSwitchedDrive
+    load : FourierLoad or PiecewiseConstantLoad or Drive
         The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
-        ``t mod 2 pi``); or a drive switched by the piston's position (theory §10), whose valve
-        starts in return when the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it: the
-        result is then a :class:`~impactbar.SwitchedTrajectory` with the
-        switches logged.
+        ``t mod 2 pi``); or a :class:`~impactbar.Drive` (theory §10: autonomous, with state of its
+        own, e.g. the valve of :class:`~impactbar.PositionSwitchedDrive`, which starts in return when
+        the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it): the result is then a
+        :class:`~impactbar.SwitchedTrajectory` (a :class:`Trajectory`) with the drive's switches
+        logged (:mod:`impactbar.simulation.switched`).
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
@@ -502,11 +358,12 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         Called as ``progress(fraction)`` with the fraction of ``[t0, t_end]`` done, in ``[0, 1]``,
         between blocks of impacts (at most every 0.1 s of wall time) and once at the end: e.g. to
         drive a progress bar with an estimate of the time left. Not with a
-        :class:`~impactbar.PositionSwitchedDrive`.
+        :class:`~impactbar.Drive`.
 
     Returns
     -------
-    Trajectory or SwitchedTrajectory
+    Trajectory
+        A :class:`~impactbar.SwitchedTrajectory` under a drive.
 
     Raises
     ------
@@ -563,9 +420,9 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
-    if isinstance(load, PositionSwitchedDrive):
+    if autonomous(load):  # a drive (theory §10): its own event loop over pieces of this driver
         _push_off(model.end_weights, q)
-        return _run_switched(model, load, q, v, t0, t_end, max_imp)
+        return run_drive(model, load, q, v, t0, t_end, max_imp, _DRIVER)
     core = _core_for(model, load)
     _push_off(core.c, q)
     if progress is None and (t_end - t0 < LONG_RUN or max_imp <= SHORT_RUN_IMPACTS):
@@ -590,29 +447,6 @@ def _push_off(c, q) -> None:
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
-
-
-def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
-    """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces:
-    compiled (``simulate.switched_kernel``) for an instantaneous law, in Python piece by piece
-    otherwise."""
-    law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
-    rigid = model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid")
-    cores = tuple(_core_for(model, FourierLoad(lv, [])) for lv in (drive.stroke, -drive.ret))
-    if rigid:
-        piece = rigid_piece(model)
-    else:
-        def piece(level, q, v, t, t_stop):
-            q = np.array(q, dtype=float)
-            v = np.array(v, dtype=float)
-            core = cores[0] if level == drive.stroke else cores[1]
-            _push_off(core.c, q)
-            return _run(core, q, v, t, t_stop, 1)
-
-    if law.instantaneous and use_fast("simulate.switched_kernel"):
-        return run_compiled(model, drive, q, v, t0, t_end, max_imp, piece, InitialState, cores, rigid,
-                            use_fast("simulate.impact_search"), CHATTER_TAIL)
-    return run_switched(model, drive, q, v, t0, t_end, max_imp, piece, InitialState)
 
 
 def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first=None) -> Trajectory:
@@ -837,3 +671,7 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
     vels.append(arrival)
     segs.add(ti, _WINDOW, qm, vm, "impact", record)
     return q, v, t_release
+
+
+#: the driver as a drive's run takes it (:func:`impactbar.simulation.switched.run_drive`)
+_DRIVER = Driver(core_for=_core_for, run=_run, push_off=_push_off, make_state=InitialState, tail=CHATTER_TAIL)
