@@ -625,12 +625,12 @@ def _halves_gap(u, problem) -> float:
 # by Newton's method from guesses where it has none (both here, since each calls the other)
 # ------------------------------------------------------------------------------------------------
 def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
-    """Every one-impact-per-period steady state of the bar under the load (paper Section 2).
+    r"""Every one-impact-per-period steady state of the bar under the load (paper Section 2).
 
-    Each root ``phase`` of the phase equation (eq. 14) in ``[0, 2 pi)`` gives one orbit: the flexible
+    Each root ``phase`` of the phase equation (eq. 14) in :math:`[0, 2\pi)` gives one orbit: the flexible
     modes' start state solves the periodicity and impact conditions (eqs. 10-13) exactly, mode by
-    mode; the rigid mode strikes at ``2 pi p0 / (1 + R)`` and its constant is fixed by contact
-    ``u(1, 0) = 0`` (:func:`~impactbar.orbits.one_impact.phase_equation_orbits`; under the wave law
+    mode; the rigid mode strikes at :math:`2\pi p_0/(1 + R)` and its constant is fixed by contact
+    :math:`u(1, 0) = 0` (:func:`~impactbar.orbits.one_impact.phase_equation_orbits`; under the wave law
     its own phase equation, theory §4b). Under a law without a phase equation
     (:attr:`~impactbar.laws.ContactLaw.has_phase_equation` ``False``, e.g. the rod-rock law) the
     orbits come from Newton's method from guesses instead (:func:`periodic_orbits_by_newton`): the
@@ -640,7 +640,7 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     ----------
     model : BarModel
     load : Load
-        Any load of period ``2 pi``: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
+        Any load of period :math:`2\pi`: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
 
     Returns
     -------
@@ -653,7 +653,7 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     Raises
     ------
     ValueError
-        For inputs of the wrong type, or at an undamped resonance ``s n pi = k`` (eq. 16).
+        For inputs of the wrong type, or at an undamped resonance :math:`s n \pi = k` (eq. 16).
 
     Examples
     --------

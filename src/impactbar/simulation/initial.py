@@ -15,9 +15,9 @@ from ..model import MAX_MODES, BarModel
 # --------------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class InitialState:
-    """Modal state of the free-free bar (theory §2).
+    r"""Modal state of the free-free bar (theory §2).
 
-    ``u(x) = q_0 + 2 sum_{n>=1} q_n cos(n pi x)`` and the same for the velocity field.
+    :math:`u(x) = q_0 + 2 \sum_{n \ge 1} q_n \cos(n \pi x)` and the same for the velocity field.
 
     Parameters
     ----------
@@ -99,7 +99,7 @@ class InitialState:
 
     @classmethod
     def from_fields(cls, u0, v0, model: BarModel) -> InitialState:
-        """Project displacement and velocity fields on the free-free modes (eq. 5).
+        r"""Project displacement and velocity fields on the free-free modes (eq. 5).
 
         Parameters
         ----------
@@ -111,7 +111,7 @@ class InitialState:
         Returns
         -------
         InitialState
-            ``q_n = int_0^1 u0(x) cos(n pi x) dx`` (Gauss-Legendre, exact for polynomials of
+            :math:`q_n = \int_0^1 u_0(x) \cos(n \pi x)\,dx` (Gauss-Legendre, exact for polynomials of
             degree below 64 per panel), ``n = 0..N``.
 
         Raises

@@ -326,10 +326,10 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
              max_impacts=None, progress=None) -> Trajectory:
     r"""Follow the bar from ``initial`` through impact after impact (paper Section 5).
 
-    Between impacts every mode obeys ``q_n'' + d q_n' + (s n pi)^2 q_n = p(t)`` (eq. 6) and is
-    advanced in closed form; at an impact (``u(1,t) = 0``, ``u_t(1,t) > 0``)
-    ``u_t(x, t+) = -R u_t(x, t-)`` (eqs. 10, 11). Chatter is jumped over to its accumulation point,
-    after which the bar stays on the stop (fixed at ``x = 1``, theory §8) until the stop's
+    Between impacts every mode obeys :math:`q_n'' + d q_n' + (s n \pi)^2 q_n = p(t)` (eq. 6) and is
+    advanced in closed form; at an impact (:math:`u(1,t) = 0`, :math:`u_t(1,t) > 0`)
+    :math:`u_t(x, t^+) = -R\,u_t(x, t^-)` (eqs. 10, 11). Chatter is jumped over to its accumulation point,
+    after which the bar stays on the stop (fixed at :math:`x = 1`, theory §8) until the stop's
     reaction would turn tensile.
 
     Parameters
@@ -338,9 +338,9 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         The bar: ``s``, ``d``, ``R`` and ``N`` flexible modes.
     load : FourierLoad or PiecewiseConstantLoad or Drive
         The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
-        ``t mod 2 pi``); or a :class:`~impactbar.Drive` (theory §10: autonomous, with state of its
+        :math:`t \bmod 2\pi`); or a :class:`~impactbar.Drive` (theory §10: autonomous, with state of its
         own, e.g. the valve of :class:`~impactbar.PositionSwitchedDrive`, which starts in return when
-        the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it): the result is then a
+        the gap :math:`-q_0` is below ``switch_out`` and in stroke beyond it): the result is then a
         :class:`~impactbar.SwitchedTrajectory` (a :class:`Trajectory`) with the drive's switches
         logged (:mod:`impactbar.simulation.switched`).
     initial : InitialState
@@ -369,7 +369,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     ------
     ValueError
         On a bad parameter (named in the message), a start that penetrates the stop
-        (``u(1, t0) > 0``), an undamped resonance between a mode and a load harmonic, or a bar too
+        (:math:`u(1, t_0) > 0`), an undamped resonance between a mode and a load harmonic, or a bar too
         stiff for the guaranteed event search, ``s * n_modes > 1e5`` (``MAX_SIMULATE_STIFFNESS``: the
         search steps on the scale of the stiffest mode's period).
     SimulationInterrupted
