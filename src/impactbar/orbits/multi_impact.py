@@ -504,27 +504,27 @@ def _guesses(problem: _Segments, guess):
 
 def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, guess=None, *,
                tol: float = 1e-12, max_iter: int = 40) -> PeriodicOrbit:
-    """A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
+    r"""A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
     the exact impact map (eqs. 8, 10, 11; theory §4, §5, §7).
 
-    Each flight is the closed-form motion of the modal oscillators (eq. 8); the unknowns are the
-    impact times and the states just after them, the conditions are contact at each impact and the
-    impact law (eq. 10, or the wave law of theory §4b) between consecutive flights, closing after
-    ``2 pi periods``. The Jacobian is exact (fundamental matrix, vector field at both ends of each
-    flight, the wave law's drive rate); the multipliers are the eigenvalues of the product of the
-    ``impacts`` impact-map Jacobians with their saltation terms.
+    Each flight is the closed-form motion of the modal oscillators (eq. 8); the unknowns are the impact
+    times and the states just after them, the conditions are contact at each impact and the impact law
+    (eq. 10, or the wave law of theory §4b) between consecutive flights, closing after :math:`2\pi n` (``n
+    = periods``). The Jacobian is exact (fundamental matrix, vector field at both ends of each flight, the
+    wave law's drive rate); the multipliers are the eigenvalues of the product of the ``impacts``
+    impact-map Jacobians with their saltation terms.
 
     Parameters
     ----------
     model : BarModel
         Either impact law: the paper's (eq. 10) or the wave law (``impact="wave"``, theory §4b),
-        where each impact lasts ``2/s`` and the flights start at the windows' ends.
+        where each impact lasts :math:`2/s` and the flights start at the windows' ends.
     load : Load
-        Any load of period ``2 pi``.
+        Any load of period :math:`2\pi`.
     impacts : int
-        ``m >= 1``, impacts per period of the motion.
+        :math:`m \ge 1`, impacts per period of the motion.
     periods : int
-        ``n >= 1``, load periods per period of the motion.
+        :math:`n \ge 1`, load periods per period of the motion.
     guess : optional
         Where Newton starts:
 
