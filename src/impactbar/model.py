@@ -24,7 +24,7 @@ _FLOAT_MAX = float(np.finfo(float).max)
 
 @dataclass(frozen=True)
 class BarModel:
-    r"""An elastic bar driven at ``x = 0`` and striking a rigid stop at ``x = 1``.
+    r"""An elastic bar driven at :math:`x = 0` and striking a rigid stop at :math:`x = 1`.
 
     Field equation (paper eq. 3, theory §1), dimensionless:
 

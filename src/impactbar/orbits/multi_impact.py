@@ -538,14 +538,14 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
           eigenvector, so that an orbit near or past its period doubling gives the doubled orbit
           (a ``ValueError`` if Newton only finds the guess again);
         - a :class:`Trajectory`: its last ``impacts`` impacts (they must span about
-          ``2 pi periods``);
+          :math:`2\pi n` with ``n = periods``);
         - a tuple ``(impact_times, states_after_impact)`` of shapes ``(m,)`` and ``(m, 2 N + 2)``
           (under the wave law, the states at the windows' ends).
     tol : float
         Relative tolerance of the Newton step.
     max_iter : int
-        Newton iterations per start, ``1 <= max_iter <= 1000``; a start stops earlier when the
-        residual has not halved in 40 iterations.
+        Newton iterations per start, from 1 to 1000; a start stops earlier when the residual has not
+        halved in 40 iterations.
 
     Returns
     -------
@@ -556,7 +556,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     ------
     ValueError
         For bad arguments (named), an unknown impact law, wave-law windows that do not fit
-        (``impacts * 2/s >= 2 pi periods``), a problem of more than ``MAX_UNKNOWNS = 6000``
+        (:math:`2m/s \ge 2\pi n`), a problem of more than ``MAX_UNKNOWNS = 6000``
         unknowns ``2 (n_modes + 1) impacts`` (its dense Jacobian), or when Newton does not
         converge from any start derived from ``guess`` (or only back onto the undoubled orbit).
 

@@ -346,13 +346,14 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
-        End of the run (dimensionless time), ``t0 < t_end <= t0 + 1e8`` and ``|t_end| <= 1e8``
+        End of the run (dimensionless time), :math:`t_0 < t_{end} \le t_0 + 10^8` and
+        :math:`|t_{end}| \le 10^8`
         (``MAX_TIME``: beyond, impact times are not resolved in double precision, and the run would
         not end in bounded time).
     t0 : float, optional
-        Start time, ``|t0| <= 1e8``. Default 0.
+        Start time, :math:`|t_0| \le 10^8`. Default 0.
     max_impacts : int, optional
-        Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact (under
+        Stop at this many impacts (at least 1); ``t_end`` of the result is then the last impact (under
         the wave law the end of its window; where its bounces accumulate, their accumulation point).
     progress : callable, optional
         Called as ``progress(fraction)`` with the fraction of ``[t0, t_end]`` done, in ``[0, 1]``,
