@@ -457,6 +457,22 @@ class Drive(ABC):
         is then asked for nothing (the simulator builds the flights from the codes)."""
         return None
 
+    def flight(self, model, state: DriveState, t: float, q: np.ndarray, v: np.ndarray, t_stop: float,
+               settings: FlightSettings | None = None, variational: bool = False):
+        """The drive's own integration of one flight (``None``: the generic flight of
+        :func:`impactbar.drives.flight.fly`, ``solve_ivp`` over :meth:`force` and :meth:`rate`).
+
+        A drive with stiff state of its own (the oil circuit) integrates its flights with its own
+        compiled vector field; it returns a :class:`~impactbar.drives.flight.Flight` ending at the
+        first of the arrival at the stop, one of its :meth:`events` or ``t_stop``, and with
+        ``variational`` (when :attr:`variational` is true) the flight's fundamental matrix of
+        ``(q, q', z)`` in ``Flight.sensitivity``."""
+        return None
+
+    #: Whether :meth:`flight` integrates the variational equations when asked (the generic
+    #: periodic orbits then take the shooting Jacobian and the multipliers from them).
+    variational: ClassVar[bool] = False
+
     def orbit_problem(self, model, impacts: int,
                       constant_load: Callable[[float], Any]) -> OrbitProblem | None:
         """The drive's own periodic-orbit problem (closed-form flights, exact Jacobian), or ``None``
