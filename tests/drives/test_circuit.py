@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from impactbar import BarModel, InitialState, PositionSwitchedDrive, find_orbit, simulate
+from impactbar import BarModel, InitialState, PositionSwitchedDrive, continue_orbit, find_orbit, simulate
 from impactbar.drives import DriveState
 from impactbar.drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve
 from impactbar.drives.circuit import _kernel as K
@@ -153,3 +153,21 @@ def test_simulate_stays_on_orbit(orbit):
     assert run.n_impacts == 20
     assert np.allclose(np.diff(run.impact_times), orbit.period, rtol=1e-8)
     assert np.allclose(run.impact_velocities, orbit.impact_velocity, rtol=1e-8)
+
+
+@pytest.mark.slow  # 20 s: a start from rest and about ten continuation points of about 1 s
+def test_continuation_locates_the_accumulator_emptying():
+    start = find_orbit(RIGID, pumped(precharge=1.11))
+    branch = continue_orbit(start, "precharge", to=1.116)
+    assert str(branch.status) == "reached"
+    (ev,) = [e for e in branch.events if e.kind == "border-collision"]
+    assert ev.surface == "accumulator" and 1.111 < ev.value < 1.115
+    # at the event the least supply pressure over the period is the pre-charge: sampled densely here
+    problem = ev.orbit.problem
+    lows = [np.min(p.drive_state(np.linspace(p.t0, p.t_end, 2001))[2])
+            for p in problem.flights(problem.unknowns(ev.orbit))]
+    assert min(lows) == pytest.approx(ev.value, abs=1e-6)
+    # the multipliers jump there: the accumulator's compliance leaves the supply node for a while
+    before = [o for o in branch.orbits if o.drive.precharge < ev.value]
+    after = [o for o in branch.orbits if o.drive.precharge > ev.value + 2e-3]
+    assert abs(before[-1].multipliers[0]) > 0.95 > 0.93 > abs(after[0].multipliers[0])

@@ -473,6 +473,14 @@ class Drive(ABC):
     #: periodic orbits then take the shooting Jacobian and the multipliers from them).
     variational: ClassVar[bool] = False
 
+    def border_tests(self, pieces) -> dict:
+        """Test functions of the drive's own border collisions over one period of an orbit
+        (``{surface: value}``, each changing sign where the drive's state touches that switching
+        surface during the period: the return map changes its formula there); ``pieces`` are the
+        period's flights as the drive's :meth:`flight` gives them. The continuation of switched
+        orbits locates each change of sign as a ``"border-collision"`` event. Default: none."""
+        return {}
+
     def orbit_problem(self, model, impacts: int,
                       constant_load: Callable[[float], Any]) -> OrbitProblem | None:
         """The drive's own periodic-orbit problem (closed-form flights, exact Jacobian), or ``None``

@@ -763,6 +763,16 @@ class ShootingProblem(OrbitProblem):
                          switch_velocity=min(crossings) if crossings else math.nan, contact_time=window,
                          contact_forces=np.array(forces), monodromy=Phi)
 
+    def flights(self, X) -> list:
+        """The period's flights as the drive's flights give them (their own times: each block
+        from its start ``tau_k``), e.g. for the drive's :meth:`~impactbar.Drive.border_tests`."""
+        n = self.n
+        out = []
+        for k in range(self.impacts):
+            tau, mode = self.blocks[k]
+            out += self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[4]
+        return out
+
     def pieces(self, X):
         """The flights of the period as ``(t0, t1, f)``, ``f(t) -> (q, v)`` at orbit times."""
         n, m = self.n, self.impacts

@@ -184,6 +184,17 @@ class HydraulicCircuitDrive(Drive):
         part, field = PARAMETERS[name]
         return float(getattr(getattr(self, part), field))
 
+    def __getattr__(self, name: str):
+        # the parameters read by name as attributes (``drive.precharge``), as the generic
+        # continuation reads a drive's parameters (only called where the ordinary lookup fails)
+        if name in PARAMETERS:
+            part, field = PARAMETERS[name]
+            holder = self.__dict__.get(part)
+            if holder is not None:
+                value = getattr(holder, field)
+                return float(value) if value is not None else None
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
     # -- compiled data ----------------------------------------------------------------------------
     def _par(self, model, mode, variational=False) -> np.ndarray:
         par = _par_base(self, model.n_modes, float(model.d), float(model.s)).copy()
@@ -337,6 +348,34 @@ class HydraulicCircuitDrive(Drive):
         from .flight import circuit_flight
 
         return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational)
+
+    def border_tests(self, pieces) -> dict:
+        """The circuit's border collisions over one period (theory §11): ``"accumulator"``, the
+        least supply pressure less the pre-charge (through 0 where the accumulator starts emptying
+        during the cycle), and ``"relief"``, the relief pressure less the greatest supply pressure
+        (through 0 where the relief valve starts opening); each extreme from the flights' cubic
+        Hermite interpolants (the integrator's accuracy). A held supply has neither.
+
+        Returns
+        -------
+        dict of float
+        """
+        sup, acc = self.supply, self.accumulator
+        out: dict = {}
+        has_acc = acc is not None and acc.volume > 0 and not sup.held
+        if not (has_acc or (sup.has_relief and not sup.held)):
+            return out
+        lo, hi = math.inf, -math.inf
+        for p in pieces:
+            if not hasattr(p, "supply_extremes"):
+                continue
+            a, b = p.supply_extremes()
+            lo, hi = min(lo, a), max(hi, b)
+        if has_acc:
+            out[_ACC] = lo - acc.precharge
+        if sup.has_relief and not sup.held:
+            out[_REL] = sup.relief_pressure - hi
+        return out
 
     # -- results ----------------------------------------------------------------------------------
     def energy(self, run) -> CircuitEnergy:

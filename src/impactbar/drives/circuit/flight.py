@@ -85,6 +85,20 @@ class CircuitPiece:
         z = self.drive_state(t)
         return z[1] - self.alpha * z[0]
 
+    def supply_extremes(self) -> tuple[float, float]:
+        """The least and the greatest supply pressure over the piece (its steps and the stationary
+        points of its cubic Hermite interpolant)."""
+        j = 2 * self.M + 2
+        ps = self.y[:, j]
+        if self.t.size < 2:
+            return float(ps[0]), float(ps[0])
+        from scipy.interpolate import CubicHermiteSpline
+
+        sp = CubicHermiteSpline(self.t, ps, self.f[:, j])
+        roots = sp.derivative().roots(extrapolate=False)
+        vals = np.concatenate((ps, sp(roots))) if roots.size else ps
+        return float(np.min(vals)), float(np.max(vals))
+
     def energies(self):
         """The eight energy quadratures over the piece (theory §11)."""
         return self.y[-1, 2 * self.M + 4:2 * self.M + 4 + K.N_ENERGY].copy()
