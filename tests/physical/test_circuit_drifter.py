@@ -56,3 +56,16 @@ def test_from_config_errors():
         circuit_preset("circuit-drifter", valve={"flow_coefficient": "6e-6 m^3/s"})
     with pytest.raises(ValueError, match="unknown circuit preset"):
         circuit_preset("nope")
+
+
+def test_readme_numbers_and_the_example_config(point):
+    import tomllib
+    from pathlib import Path
+
+    line = (f"{point.blow_frequency_Hz:.1f} Hz, {point.impact_energy_J:.0f} J, "
+            f"{point.mean_supply_pressure_Pa / 1e6:.1f} MPa, efficiency {point.hydraulic_efficiency:.2f}")
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    assert f"# {line}\n" in readme
+    example = Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter.toml"
+    with open(example, "rb") as f:
+        assert CircuitDrifter.from_config(tomllib.load(f)) == point.drifter  # the preset's numbers
