@@ -171,3 +171,19 @@ def test_continuation_locates_the_accumulator_emptying():
     before = [o for o in branch.orbits if o.drive.precharge < ev.value]
     after = [o for o in branch.orbits if o.drive.precharge > ev.value + 2e-3]
     assert abs(before[-1].multipliers[0]) > 0.95 > 0.93 > abs(after[0].multipliers[0])
+
+
+def test_bad_input():
+    with pytest.raises(ValueError, match="precharge must be below the relief pressure"):
+        HydraulicCircuitDrive(*(getattr(pumped(), f) for f in ("chambers", "valve")),
+                              Supply(pump_flow=0.07, hose_volume=1.0, front_coefficient=2.0,
+                                     tank_pressure=0.03, relief_pressure=0.4, relief_coefficient=1.0),
+                              Oil(70.0, 0.01), Accumulator(precharge=0.5, volume=2.0))
+    with pytest.raises(ValueError, match="area_ratio"):
+        Chambers(area_ratio=1.2, rear_volume=0.4, front_volume=0.2)
+    with pytest.raises(ValueError, match="exactly one of pump_flow"):
+        Supply(pump_flow=0.07, pressure=1.0, hose_volume=1.0, front_coefficient=2.0, tank_pressure=0.03)
+    with pytest.raises(ValueError, match="rear chamber empties"):  # the stroke overruns a small chamber
+        simulate(RIGID, pumped().with_(rear_volume=0.02), InitialState.rigid(0.0, 0.0), 10.0)
+    with pytest.raises(ValueError, match="singular"):  # a pump far too small: the supply collapses
+        find_orbit(RIGID, pumped(pump_flow=0.001))

@@ -39,6 +39,10 @@ def test_preset_operating_point(point):
     assert h["p_s_Pa"].min() < p < h["p_s_Pa"].max()
     assert trapezoid(h["p_s_Pa"], h["t_s"]) / point.period_s == pytest.approx(p, rel=1e-5)
     assert h["V_r_m3"].min() > 0 and h["x_v"].min() >= 0 and h["x_v"].max() <= 1
+    low = point.minimum_pressures_Pa  # the extremes of the interpolants, below the sampled ones
+    for name, key in (("front", "p_f_Pa"), ("rear", "p_r_Pa"), ("supply", "p_s_Pa")):
+        assert 0 < low[name] <= h[key].min() < low[name] + 1e3
+    assert not point.cavitates
 
 
 def test_from_config_errors():

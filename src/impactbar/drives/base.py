@@ -619,14 +619,21 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
     Raises
     ------
     ValueError
-        When a flight time turns non-positive or ``max_iter`` steps do not converge.
+        When a flight time turns non-positive, the Jacobian is singular or ``max_iter`` steps do not
+        converge.
     """
     hi = positive
     last = math.inf
     step = np.zeros(0)
     for _ in range(max_iter):
         r, Jac = residual(X)
-        step = np.linalg.solve(Jac, -r)
+        try:
+            step = np.linalg.solve(Jac, -r)
+        except np.linalg.LinAlgError:
+            raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at the "
+                             "guess (the motion it starts from does not repeat: e.g. a drive too weak to "
+                             "bring the piston back to the stop); give a guess, or check the drive's "
+                             "parameters with simulate") from None
         big = float(np.max(np.abs(step[hi]) / np.abs(X[hi]))) if hi.size else 0.0
         if big > 0.5:  # damped while far: the flight times change by at most a half
             step *= 0.5 / big

@@ -370,6 +370,23 @@ class CircuitDrifterOrbit:
         return float(used * self.drifter.energy_scale_J / self.period_s / 1e3)
 
     @property
+    def minimum_pressures_Pa(self) -> dict:
+        """The least absolute pressure of each oil volume over the period (Pa): ``front``, ``rear``,
+        ``supply`` (from the flights' Hermite interpolants). The model has no cavitation: where one
+        falls below the oil's vapour pressure (a few kPa; :attr:`cavitates` flags below 0) the
+        motion it computes is not the machine's."""
+        problem = self.orbit.problem
+        pieces = [p for p in problem.flights(problem.unknowns(self.orbit)) if hasattr(p, "extremes")]
+        return {name: min(p.extremes(k)[0] for p in pieces) * PRESSURE_SCALE
+                for k, name in ((0, "front"), (1, "rear"), (2, "supply"))}
+
+    @property
+    def cavitates(self) -> bool:
+        """Whether an absolute pressure of the orbit falls below 0 (:attr:`minimum_pressures_Pa`):
+        the oil would cavitate there, which the model does not represent."""
+        return min(self.minimum_pressures_Pa.values()) < 0.0
+
+    @property
     def impact_power_kW(self) -> float:
         """The kinetic energy at impact times the blow frequency (kW)."""
         return self.impact_energy_J * self.blow_frequency_Hz / 1e3
@@ -424,6 +441,8 @@ class CircuitDrifterOrbit:
                 "mean_supply_pressure_MPa": self.mean_supply_pressure_Pa / 1e6,
                 "pump_power_kW": self.pump_power_kW, "impact_power_kW": self.impact_power_kW,
                 "hydraulic_efficiency": self.hydraulic_efficiency, "stable": self.stable,
+                "minimum_pressure_MPa": min(self.minimum_pressures_Pa.values()) / 1e6,
+                "cavitates": self.cavitates,
                 "multiplier": float(abs(complex(self.multipliers[0]))) if self.multipliers.size else 0.0}
 
 

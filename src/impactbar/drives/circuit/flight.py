@@ -85,19 +85,24 @@ class CircuitPiece:
         z = self.drive_state(t)
         return z[1] - self.alpha * z[0]
 
-    def supply_extremes(self) -> tuple[float, float]:
-        """The least and the greatest supply pressure over the piece (its steps and the stationary
-        points of its cubic Hermite interpolant)."""
-        j = 2 * self.M + 2
-        ps = self.y[:, j]
+    def extremes(self, k: int) -> tuple[float, float]:
+        """The least and the greatest value of the drive's state component ``k`` (0 ``p_f``, 1
+        ``p_r``, 2 ``p_s``, 3 ``x_v``) over the piece: its steps and the stationary points of its
+        cubic Hermite interpolant."""
+        j = 2 * self.M + k
+        x = self.y[:, j]
         if self.t.size < 2:
-            return float(ps[0]), float(ps[0])
+            return float(x[0]), float(x[0])
         from scipy.interpolate import CubicHermiteSpline
 
-        sp = CubicHermiteSpline(self.t, ps, self.f[:, j])
+        sp = CubicHermiteSpline(self.t, x, self.f[:, j])
         roots = sp.derivative().roots(extrapolate=False)
-        vals = np.concatenate((ps, sp(roots))) if roots.size else ps
+        vals = np.concatenate((x, sp(roots))) if roots.size else x
         return float(np.min(vals)), float(np.max(vals))
+
+    def supply_extremes(self) -> tuple[float, float]:
+        """The least and the greatest supply pressure over the piece (:meth:`extremes`)."""
+        return self.extremes(2)
 
     def energies(self):
         """The eight energy quadratures over the piece (theory §11)."""
