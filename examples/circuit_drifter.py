@@ -1,7 +1,7 @@
 """A hydraulic drifter with its oil circuit (theory §11): its operating point, the pressures and the
 valve over one period, and the p-V (indicator) diagram of each chamber.
 
-    python examples/circuit_drifter.py [config.toml] [figure.png]
+    python examples/circuit_drifter.py [figure.png] [config.toml]
 """
 
 import sys
@@ -15,7 +15,7 @@ from impactbar.physical import CircuitDrifter
 CONFIG = Path(__file__).with_name("circuit_drifter.toml")
 
 
-def main(config=CONFIG, out="circuit_drifter.png"):
+def main(out="circuit_drifter.png", config=CONFIG):
     with open(config, "rb") as f:
         drifter = CircuitDrifter.from_config(tomllib.load(f))
     point = drifter.orbit()

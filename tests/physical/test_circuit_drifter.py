@@ -73,3 +73,19 @@ def test_readme_numbers_and_the_example_config(point):
     example = Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter.toml"
     with open(example, "rb") as f:
         assert CircuitDrifter.from_config(tomllib.load(f)) == point.drifter  # the preset's numbers
+
+
+def test_cli_names_the_circuit_parameters():
+    from impactbar.drives.circuit import PARAMETERS
+    from impactbar.physical.circuit import CIRCUIT_PARAMETERS
+
+    assert CIRCUIT_PARAMETERS == tuple(PARAMETERS)
+
+
+def test_cli_orbits_prints_the_operating_point(point, capsys):
+    from impactbar.cli import main
+
+    example = __import__("pathlib").Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter.toml"
+    assert main(["orbits", str(example)]) == 0
+    out = capsys.readouterr().out
+    assert f"blow frequency {point.blow_frequency_Hz:.4g} Hz" in out and "stable" in out

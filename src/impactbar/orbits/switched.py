@@ -617,15 +617,15 @@ class ShootingProblem(OrbitProblem):
     def _settle(self, tau, mode, y, n_max, source=None):
         """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
         impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``, or
-        ``1e-6`` for a drive with variational flights), and take the starts of the last ``m``
+        ``1e-4`` for a drive with variational flights), and take the starts of the last ``m``
         intervals as the blocks (with the impacts before them)."""
         m, M = self.impacts, self.M
         c = self.model.end_weights
         # a drive whose flights give Newton the exact Jacobian (variational equations) is handed
-        # over once the impacts agree to 1e-6: Newton's quadratic convergence does the rest, where
+        # over once the impacts agree to 1e-4: Newton's quadratic convergence does the rest, where
         # a slow mode (the oil circuit's supply pressure, multiplier ~0.9) would take hundreds of
         # impacts to settle to 1e-11
-        settle = 1e-6 if self.variational else 1e-11
+        settle = 1e-4 if self.variational else 1e-11
         hist = [(tau, mode, y, source)]
         speeds = []
         for _ in range(n_max):

@@ -37,10 +37,19 @@ from .bar import Bar
 from .config import _section
 from .units import to_si
 
-__all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_preset", "PRESSURE_SCALE"]
+__all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_preset", "PRESSURE_SCALE",
+           "CIRCUIT_PARAMETERS"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
 PRESSURE_SCALE = 1.0e7
+
+#: The circuit's continuation parameters (dimensionless; those of
+#: :data:`impactbar.drives.circuit.PARAMETERS`, named here so that the command line need not load
+#: the compiled circuit to list them).
+CIRCUIT_PARAMETERS = ("pump_flow", "supply_pressure", "hose_volume", "front_coefficient", "tank_pressure",
+                      "relief_pressure", "relief_coefficient", "precharge", "accumulator_volume",
+                      "polytropic_exponent", "switch_out", "switch_in", "switching_time", "valve_coefficient",
+                      "area_ratio", "rear_volume", "front_volume", "bulk_modulus", "transition_pressure")
 
 _KEYS = {
     "bar": {"E", "density", "length", "diameter", "area"},
