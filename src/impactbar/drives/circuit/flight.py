@@ -3,13 +3,13 @@ r"""One flight of the bar under the oil circuit, integrated by SUNDIALS' CVODE (
 **The integrator, chosen by measurement.** The circuit is stiff (an oil volume behind an orifice
 relaxes in ``V / (beta K phi')``, some ``1e-5`` of a period on the example drifter, ``1e-8`` in
 the ideal limit, against a period of order 1) and the accuracy asked of it is tight (the energy
-account to ``1e-8``, periodic orbits to ``1e-8``), so ``rtol = 1e-10``. On the rigid example drifter
-(``benchmarks/bench_circuit.py``, 20 blows, this 2-core machine while shared) scipy's ``Radau`` with
-the compiled right-hand side and Jacobian took 1500 steps and 12 000 evaluations per blow, 3.4 s per
-blow (its step is Python: about 2 ms); ``BDF`` and ``LSODA`` are Python-stepped too. CVODE (BDF of
-orders 1 to 5, SUNDIALS, through the maintained binding ``scikit-sundae``) runs its steps, Newton
-iterations and root finding in C and calls the compiled (numba) right-hand side, Jacobian and event
-functions: about 2000 evaluations and 0.08 s per blow on the same machine, 40 times faster. Its
+account to ``1e-8``, periodic orbits to ``1e-8``), so ``rtol = 1e-10``. scipy's ``Radau``,
+``BDF`` and ``LSODA`` take their steps in Python; CVODE (BDF of orders 1 to 5, SUNDIALS, through
+the maintained binding ``scikit-sundae``) runs its steps, Newton iterations and root finding in C
+and calls the compiled (numba) right-hand side, Jacobian and event functions. On one stroke flight
+of the preset ``circuit-drifter`` (``benchmarks/bench_circuit.py``, this 2-core machine while
+shared) ``Radau`` with the same compiled right-hand side and Jacobian took about 0.9 s, CVODE about
+0.007 s, some hundred times less, their impact times 5e-11 apart. Its
 events (the arrival ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply
 pressure through the pre-charge and the relief pressure) are located by CVODE's root finding to the
 integrator's tolerance (the ramp's end, linear in time, to rounding).
