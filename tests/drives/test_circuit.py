@@ -202,3 +202,19 @@ def test_bad_input():
         simulate(RIGID, pumped().with_(rear_volume=0.02), InitialState.rigid(0.0, 0.0), 10.0)
     with pytest.raises(ValueError, match="singular"):  # a pump far too small: the supply collapses
         find_orbit(RIGID, pumped(pump_flow=0.001))
+
+
+@pytest.mark.slow  # 40 s: a start from rest and some thirty continuation points
+def test_continuation_locates_the_relief_opening():
+    drive = pumped(pump_flow=0.0725).with_(relief_pressure=1.25, relief_coefficient=1.0)
+    branch = continue_orbit(find_orbit(RIGID, drive), "pump_flow", to=0.075)
+    (ev,) = [e for e in branch.events if e.kind == "border-collision"]
+    assert ev.surface == "relief" and 0.0729 < ev.value < 0.0735  # measured: 0.0731904
+    # at the event the greatest supply pressure over the period is the relief pressure (sampled)
+    problem = ev.orbit.problem
+    highs = [np.max(p.drive_state(np.linspace(p.t0, p.t_end, 2001))[2])
+             for p in problem.flights(problem.unknowns(ev.orbit))]
+    assert max(highs) == pytest.approx(1.25, abs=1e-6)
+    # the relief flow stiffens the supply node: the slow multiplier drops (0.913 -> below 0.6)
+    after = [o for o in branch.orbits if o.drive.pump_flow > ev.value + 1e-3]
+    assert abs(after[0].multipliers[0]) < 0.8 < 0.9 < abs(ev.orbit.multipliers[0])
