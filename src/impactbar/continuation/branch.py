@@ -33,7 +33,9 @@ class BranchEvent:
         ``"branch-point"`` (a multiplier through ``+1`` without a turn), ``"period-doubling"``
         (``-1``), ``"neimark-sacker"`` (a complex pair through the unit circle), ``"grazing"`` (the
         end touches the stop between impacts, or an impact velocity goes through 0) or
-        ``"admissibility"`` (another change of admissibility, e.g. sticking at ``R = 0``).
+        ``"admissibility"`` (another change of admissibility, e.g. sticking at ``R = 0``) or, under
+        a drive with state, ``"border-collision"`` (its state touches one of its switching surfaces
+        during the period: :meth:`~impactbar.Drive.border_tests`; which one in ``surface``).
     parameter : str
         Name of the continuation parameter.
     value : float
@@ -43,7 +45,10 @@ class BranchEvent:
     orbit : MultiImpactOrbit
         The orbit at the event.
     multiplier : complex
-        The critical multiplier (NaN for grazing and admissibility events).
+        The critical multiplier (NaN for grazing, admissibility and border-collision events).
+    surface : str
+        A border collision's surface, as the drive names it (e.g. the oil circuit's
+        ``"accumulator"``, ``"relief"``); ``""`` for the other kinds.
 
     Examples
     --------
@@ -61,13 +66,17 @@ class BranchEvent:
     orbit: MultiImpactOrbit = field(repr=False)
     multiplier: complex
     _point: np.ndarray = field(repr=False, default=None)
+    surface: str = ""
 
     def to_dict(self) -> dict:
         """A JSON-ready summary."""
-        return {"kind": self.kind, "parameter": self.parameter, "value": self.value,
-                "index": self.index, "multiplier": [self.multiplier.real, self.multiplier.imag],
-                "phase": self.orbit.phase, "impacts": self.orbit.impacts,
-                "periods": self.orbit.periods}
+        out = {"kind": self.kind, "parameter": self.parameter, "value": self.value,
+               "index": self.index, "multiplier": [self.multiplier.real, self.multiplier.imag],
+               "phase": self.orbit.phase, "impacts": self.orbit.impacts,
+               "periods": self.orbit.periods}
+        if self.surface:
+            out["surface"] = self.surface
+        return out
 
 
 @dataclass(frozen=True, eq=False)

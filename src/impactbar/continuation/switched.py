@@ -109,8 +109,9 @@ class _SwitchedProblem:
         tests = first_chord_tests([_tests(o) for o in orbits[-2:]], self.doubled, len(points))
         new = self.detect(engine, points, tangents, tests, orbits, self.xtol)
         graze = _switch_grazing(engine, points, tangents, orbits, self.xtol)
-        if graze is not None:
-            new.append(graze)
+        borders = _borders(engine, points, tangents, orbits, self.xtol)
+        if graze is not None or borders:
+            new += ([graze] if graze is not None else []) + borders
             Ua = points[-2]
             ta = tangents[-2] if tangents[-2] is not None else points[-1] - Ua
             new.sort(key=lambda e: engine.dot(ta, e._point - Ua))
@@ -143,12 +144,10 @@ def _tests(o: SwitchedOrbit) -> dict:
             "grazing": math.nan, "impact": o.impact_velocity, "admissible": o.admissible}
 
 
-def _switch_grazing(engine, points, tangents, orbits, xtol):
-    """A grazing of the switching surface between the last two points: the gap's rate at the
-    switch crossing changes sign; located by Brent's method along the chord (as the other events)."""
-    a, b = orbits[-2].switch_velocity, orbits[-1].switch_velocity
-    if not a * b < 0.0:
-        return None
+def _locate(engine, points, tangents, value, xtol):
+    """The point where ``value(orbit)`` changes sign between the last two points, by Brent's method
+    along the chord (each trial point corrected onto the branch); ``None`` where it cannot be
+    located."""
     Ua, Ub = points[-2], points[-1]
     ta = tangents[-2] if tangents[-2] is not None else (Ub - Ua) / engine.norm(Ub - Ua)
     hb = engine.dot(ta, Ub - Ua)
@@ -160,7 +159,7 @@ def _switch_grazing(engine, points, tangents, orbits, xtol):
         if U is None:
             raise ValueError("no point")
         found[hh] = U
-        return engine.orbit(U).switch_velocity
+        return value(engine.orbit(U))
 
     try:
         hh = brentq(g, 0.0, hb, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200) if hb else None
@@ -172,9 +171,45 @@ def _switch_grazing(engine, points, tangents, orbits, xtol):
     if U is None:
         g(hh)
         U = found[hh]
+    return U
+
+
+def _switch_grazing(engine, points, tangents, orbits, xtol):
+    """A grazing of the switching surface between the last two points: the gap's rate at the
+    switch crossing changes sign; located by Brent's method along the chord (as the other events)."""
+    a, b = orbits[-2].switch_velocity, orbits[-1].switch_velocity
+    if not a * b < 0.0:
+        return None
+    U = _locate(engine, points, tangents, lambda o: o.switch_velocity, xtol)
+    if U is None:
+        return None
     return BranchEvent(kind=EventKind.GRAZING, parameter=engine.problem.name, value=float(U[-1]),
                        index=len(points) - 1, orbit=engine.orbit(U), multiplier=complex(math.nan, math.nan),
                        _point=U)
+
+
+def border_tests(o) -> dict:
+    """The drive's border-collision tests at a switched orbit (:meth:`~impactbar.Drive.border_tests`
+    over the flights of its period); ``{}`` for a drive without them."""
+    problem = o.problem
+    if not hasattr(problem, "flights"):
+        return {}
+    return o.drive.border_tests(problem.flights(problem.unknowns(o)))
+
+
+def _borders(engine, points, tangents, orbits, xtol) -> list:
+    """The drive's border collisions between the last two points (a test of
+    :func:`border_tests` through 0), each located by Brent's method along the chord."""
+    a, b = border_tests(orbits[-2]), border_tests(orbits[-1])
+    out = []
+    for name in a:
+        if name in b and a[name] * b[name] < 0.0:
+            U = _locate(engine, points, tangents, lambda o, name=name: border_tests(o)[name], xtol)
+            if U is not None:
+                out.append(BranchEvent(kind=EventKind.BORDER_COLLISION, parameter=engine.problem.name,
+                                       value=float(U[-1]), index=len(points) - 1, orbit=engine.orbit(U),
+                                       multiplier=complex(math.nan, math.nan), _point=U, surface=name))
+    return out
 
 
 def checked_events(stop_on, xtol: float) -> tuple[tuple, float]:
@@ -262,7 +297,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     events : bool
         Detect and locate events: ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` (from the
         non-trivial multipliers), ``"grazing"`` (an impact velocity, or the gap's rate at the switch
-        crossing, through 0), ``"admissibility"``.
+        crossing, through 0), ``"admissibility"``, ``"border-collision"`` (the drive's state touching
+        one of its switching surfaces: :meth:`~impactbar.Drive.border_tests`).
     stop_on : iterable of str
         Event kinds at which to stop.
     xtol : float
@@ -304,7 +340,9 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     m = 2 if switch is not None else orbit.impacts
     problem = _SwitchedProblem(model, drive, parameter, detect, events=events, stop_on=stop_on, xtol=xtol,
                                impacts=m, doubled=switch is not None, base=orbit.problem)
-    engine = _Engine(problem, settings.tol)
+    # Newton's corrector no finer than the flights' accuracy (a drive with integrated flights: ten
+    # times the integrator's rtol, ShootingProblem.accuracy; closed forms keep the settings' tol)
+    engine = _Engine(problem, max(settings.tol, float(getattr(orbit.problem, "accuracy", 0.0))))
     if switch is not None:
         lo, hi = lam0 - abs(to - lam0), lam0 + abs(to - lam0)  # it may leave on either side
         for U0, first in _doubled_starts(engine, switch, steps):

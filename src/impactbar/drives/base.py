@@ -457,6 +457,30 @@ class Drive(ABC):
         is then asked for nothing (the simulator builds the flights from the codes)."""
         return None
 
+    def flight(self, model, state: DriveState, t: float, q: np.ndarray, v: np.ndarray, t_stop: float,
+               settings: FlightSettings | None = None, variational: bool = False):
+        """The drive's own integration of one flight (``None``: the generic flight of
+        :func:`impactbar.drives.flight.fly`, ``solve_ivp`` over :meth:`force` and :meth:`rate`).
+
+        A drive with stiff state of its own (the oil circuit) integrates its flights with its own
+        compiled vector field; it returns a :class:`~impactbar.drives.flight.Flight` ending at the
+        first of the arrival at the stop, one of its :meth:`events` or ``t_stop``, and with
+        ``variational`` (when :attr:`variational` is true) the flight's fundamental matrix of
+        ``(q, q', z)`` in ``Flight.sensitivity``."""
+        return None
+
+    #: Whether :meth:`flight` integrates the variational equations when asked (the generic
+    #: periodic orbits then take the shooting Jacobian and the multipliers from them).
+    variational: ClassVar[bool] = False
+
+    def border_tests(self, pieces) -> dict:
+        """Test functions of the drive's own border collisions over one period of an orbit
+        (``{surface: value}``, each changing sign where the drive's state touches that switching
+        surface during the period: the return map changes its formula there); ``pieces`` are the
+        period's flights as the drive's :meth:`flight` gives them. The continuation of switched
+        orbits locates each change of sign as a ``"border-collision"`` event. Default: none."""
+        return {}
+
     def orbit_problem(self, model, impacts: int,
                       constant_load: Callable[[float], Any]) -> OrbitProblem | None:
         """The drive's own periodic-orbit problem (closed-form flights, exact Jacobian), or ``None``
@@ -595,14 +619,21 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
     Raises
     ------
     ValueError
-        When a flight time turns non-positive or ``max_iter`` steps do not converge.
+        When a flight time turns non-positive, the Jacobian is singular or ``max_iter`` steps do not
+        converge.
     """
     hi = positive
     last = math.inf
     step = np.zeros(0)
     for _ in range(max_iter):
         r, Jac = residual(X)
-        step = np.linalg.solve(Jac, -r)
+        try:
+            step = np.linalg.solve(Jac, -r)
+        except np.linalg.LinAlgError:
+            raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at the "
+                             "guess (the motion it starts from does not repeat: e.g. a drive too weak to "
+                             "bring the piston back to the stop); give a guess, or check the drive's "
+                             "parameters with simulate") from None
         big = float(np.max(np.abs(step[hi]) / np.abs(X[hi]))) if hi.size else 0.0
         if big > 0.5:  # damped while far: the flight times change by at most a half
             step *= 0.5 / big

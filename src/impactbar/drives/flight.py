@@ -153,6 +153,10 @@ class Flight(NamedTuple):
         The drive's events at ``t`` (with :data:`EVENT`), in the drive's order.
     piece : ClosedPiece or OdePiece
         The flight, to evaluate it at any time in it.
+    sensitivity : numpy.ndarray or None
+        From a drive's own flight with the variational equations (:meth:`Drive.flight` with
+        ``variational=True``): the fundamental matrix of ``(q, q', z)`` from the start to the end
+        (before the map of the event that ends it); ``None`` otherwise.
     """
 
     t: float
@@ -162,10 +166,11 @@ class Flight(NamedTuple):
     end: int
     events: tuple
     piece: object
+    sensitivity: np.ndarray | None = None
 
 
 def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
-        settings: FlightSettings | None = None) -> Flight:
+        settings: FlightSettings | None = None, variational: bool = False) -> Flight:
     """One flight from ``(q, v)`` and the drive's ``state`` at ``t`` to the next arrival at the stop
     (``c . q = 0`` with ``c . q' > 0``), the drive's next event or ``t_stop`` (module docstring).
 
@@ -180,13 +185,21 @@ def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
     t_stop : float
     settings : FlightSettings, optional
         The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
+    variational : bool, optional
+        Ask a drive's own flight (:meth:`Drive.flight`) for the fundamental matrix of the flight
+        (``Flight.sensitivity``).
 
     Returns
     -------
     Flight
+        A drive that integrates its flights itself (:meth:`Drive.flight`, e.g. the oil circuit's
+        CVODE) gives its own.
     """
     q = np.array(q, dtype=float)
     v = np.array(v, dtype=float)
+    own = drive.flight(model, state, t, q, v, t_stop, settings, variational)
+    if own is not None:
+        return own
     if drive.piecewise_constant:
         return _closed(model, drive, state, t, q, v, t_stop)
     return _ode(model, drive, state, t, q, v, t_stop, settings if settings is not None else drive.integrator)

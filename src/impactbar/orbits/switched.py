@@ -443,15 +443,20 @@ class ShootingProblem(OrbitProblem):
         self.size = self.impacts * self.n
         self.positive = np.zeros(0, dtype=np.int64)
         self.closed = drive.piecewise_constant
+        #: the Jacobian from the variational equations (a drive whose flights integrate them)
+        self.variational = bool(getattr(drive, "variational", False)) and not self.closed \
+            and law.instantaneous
         self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
         self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
         self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
 
     # -- flights ------------------------------------------------------------------------------------
-    def _flight(self, tau, mode, y, keep=False):
+    def _flight(self, tau, mode, y, keep=False, variational=False):
         """From ``y = (q, q', z)`` in ``mode`` at ``tau`` to the next impact and through it: the
         state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
-        the drive's events ``(time, event, mode after)``."""
+        the drive's events ``(time, event, mode after)``; with ``variational`` (a drive whose flights
+        integrate the variational equations, :attr:`~impactbar.Drive.variational`) also the
+        Jacobian of the state after the impact with respect to ``y`` (:meth:`_through`)."""
         model, drive, M = self.model, self.drive, self.M
         c = model.end_weights
         t, q, v, z = tau, np.array(y[:M], dtype=float), y[M:2 * M], y[2 * M:]
@@ -459,13 +464,20 @@ class ShootingProblem(OrbitProblem):
         state = DriveState(mode, np.array(z, dtype=float))
         pieces, events = [], []
         end = tau + HORIZON
+        D = None
+        if variational:  # the projection on the section
+            D = np.eye(self.n)
+            D[0, :M] -= c
         while True:
-            fl = fly(model, drive, state, t, q, v, end, self.settings)
+            fl = fly(model, drive, state, t, q, v, end, self.settings, variational)
             if keep:
                 pieces.append(fl.piece)
             t, q, v = fl.t, fl.q, fl.v
+            before = state.mode
             state = DriveState(state.mode, fl.z)
             if fl.end == ARRIVAL:
+                if variational:
+                    D = self._through(before, fl, None, D)
                 break
             if fl.end != EVENT:
                 raise ValueError(f"no impact within {HORIZON:g} of t = {tau:.6g} under the drive: the "
@@ -474,6 +486,8 @@ class ShootingProblem(OrbitProblem):
                 state = drive.jump(state.mode, state.z, e, t, q, v)
                 if keep:
                     events.append((t, e, state.mode, e.crossing_speed(q, v)))
+            if variational:
+                D = self._through(before, fl, fl.events, D)
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
         if law.instantaneous:
@@ -485,7 +499,72 @@ class ShootingProblem(OrbitProblem):
             qa, va = np.asarray(ya[:M], dtype=float), np.asarray(ya[M:], dtype=float)
             t_after = t + float(law.window(model))
         after = drive.impact(state.mode, state.z, t_after, qa, va)
-        return np.concatenate((qa, va, after.z)), t_after, after.mode, arrival, pieces, events
+        if variational:  # the impact law (eq. 10) and the drive's map at the impact
+            G = np.eye(self.n)
+            G[M:2 * M, M:2 * M] *= -law.kernel_restitution(model)
+            G[2 * M:, 2 * M:] = self._map_jacobian(lambda zz: drive.impact(state.mode, zz, t_after, qa, va).z,
+                                                   state.z)
+            D = G @ D
+        out = np.concatenate((qa, va, after.z))
+        if variational:
+            return out, t_after, after.mode, arrival, pieces, events, D
+        return out, t_after, after.mode, arrival, pieces, events
+
+    def _through(self, mode, fl, fired, D):
+        """The Jacobian through the end of a flight (Hiskens & Pai 2000): the flight's fundamental
+        matrix ``Phi`` (``fl.sensitivity``), the event's time moved by the perturbation,
+        ``Phi - f^- (grad h . Phi) / (grad h . f^-)`` (``h`` the arrival ``c . q`` or the fired
+        event's function, ``f^-`` the vector field in the mode before), then the drive's map at the
+        event (its Jacobian by central differences: the maps are affine or constant in the state);
+        composed with ``D``, the Jacobian so far."""
+        model, drive, M, n = self.model, self.drive, self.M, self.n
+        from ..drives.flight import vector_field
+
+        y = np.concatenate((fl.q, fl.v, fl.z))
+        f = vector_field(model, drive, mode)(fl.t, y)
+        if fired is None:
+            grad = np.concatenate((model.end_weights, np.zeros(M + self.k)))
+        else:
+            e = fired[0]
+
+            def h(yy):
+                return e.value(fl.t, yy[:M], yy[M:2 * M], yy[2 * M:])
+
+            grad = np.empty(n)
+            for j in range(n):
+                step = 1e-7 * max(1.0, abs(y[j]))
+                yp, ym = y.copy(), y.copy()
+                yp[j] += step
+                ym[j] -= step
+                grad[j] = (h(yp) - h(ym)) / (2.0 * step)
+        Phi = fl.sensitivity
+        rate = float(grad @ f)
+        Dt = Phi - np.outer(f, grad @ Phi) / rate
+        if fired:
+            def z_after(zz):
+                st = DriveState(mode, zz)
+                for e in fired:
+                    st = drive.jump(st.mode, st.z, e, fl.t, fl.q, fl.v)
+                return st.z
+
+            G = np.eye(n)
+            G[2 * M:, 2 * M:] = self._map_jacobian(z_after, fl.z)
+            Dt = G @ Dt
+        return Dt @ D
+
+    @staticmethod
+    def _map_jacobian(fn, z):
+        """The Jacobian of a drive's map ``z -> fn(z)`` by central differences."""
+        z = np.asarray(z, dtype=float)
+        k = z.size
+        out = np.empty((k, k))
+        for j in range(k):
+            step = 1e-7 * max(1.0, abs(z[j]))
+            zp, zm = z.copy(), z.copy()
+            zp[j] += step
+            zm[j] -= step
+            out[:, j] = (np.asarray(fn(zp), dtype=float) - np.asarray(fn(zm), dtype=float)) / (2.0 * step)
+        return out
 
     def _map(self, k, y):
         tau, mode = self.blocks[k]
@@ -537,10 +616,16 @@ class ShootingProblem(OrbitProblem):
 
     def _settle(self, tau, mode, y, n_max, source=None):
         """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
-        impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``), and
-        take the starts of the last ``m`` intervals as the blocks (with the impacts before them)."""
+        impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``, or
+        ``1e-4`` for a drive with variational flights), and take the starts of the last ``m``
+        intervals as the blocks (with the impacts before them)."""
         m, M = self.impacts, self.M
         c = self.model.end_weights
+        # a drive whose flights give Newton the exact Jacobian (variational equations) is handed
+        # over once the impacts agree to 1e-4: Newton's quadratic convergence does the rest, where
+        # a slow mode (the oil circuit's supply pressure, multiplier ~0.9) would take hundreds of
+        # impacts to settle to 1e-11
+        settle = 1e-4 if self.variational else 1e-11
         hist = [(tau, mode, y, source)]
         speeds = []
         for _ in range(n_max):
@@ -552,7 +637,7 @@ class ShootingProblem(OrbitProblem):
                 raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
                                  "without one) does not strike the stop: give a guess")
             if n_max > m and len(speeds) > 2 * m + 2 and \
-                    abs(speeds[-1] - speeds[-1 - m]) <= 1e-11 * max(1.0, abs(speeds[-1])):
+                    abs(speeds[-1] - speeds[-1 - m]) <= settle * max(1.0, abs(speeds[-1])):
                 break
         blocks = hist[-m:]
         self.blocks = [(b[0], b[1]) for b in blocks]
@@ -560,7 +645,9 @@ class ShootingProblem(OrbitProblem):
         return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
 
     def residual(self, X):
-        """The shooting residual and its Jacobian by central differences."""
+        """The shooting residual and its Jacobian: from the variational equations where the drive's
+        flights integrate them (:attr:`~impactbar.Drive.variational`, :meth:`_through`), else by
+        central differences."""
         n, m = self.n, self.impacts
         r = np.empty(X.size)
         J = np.zeros((X.size, X.size))
@@ -568,6 +655,13 @@ class ShootingProblem(OrbitProblem):
         for k in range(m):
             y = X[k * n:(k + 1) * n]
             nxt = ((k + 1) % m) * n
+            if self.variational:
+                tau, mode = self.blocks[k]
+                out = self._flight(tau, mode, y, variational=True)
+                r[k * n:(k + 1) * n] = out[0] - X[nxt:nxt + n]
+                J[k * n:(k + 1) * n, k * n:(k + 1) * n] = out[6]
+                J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
+                continue
             r[k * n:(k + 1) * n] = self._map(k, y) - X[nxt:nxt + n]
             for j in range(n):
                 h = step * max(1.0, abs(y[j]))
@@ -668,6 +762,16 @@ class ShootingProblem(OrbitProblem):
                          trivial_multiplier=1.0, switch_times=np.array(switch_t),
                          switch_velocity=min(crossings) if crossings else math.nan, contact_time=window,
                          contact_forces=np.array(forces), monodromy=Phi)
+
+    def flights(self, X) -> list:
+        """The period's flights as the drive's flights give them (their own times: each block
+        from its start ``tau_k``), e.g. for the drive's :meth:`~impactbar.Drive.border_tests`."""
+        n = self.n
+        out = []
+        for k in range(self.impacts):
+            tau, mode = self.blocks[k]
+            out += self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[4]
+        return out
 
     def pieces(self, X):
         """The flights of the period as ``(t0, t1, f)``, ``f(t) -> (q, v)`` at orbit times."""
