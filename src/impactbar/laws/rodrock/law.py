@@ -211,7 +211,8 @@ class RodRock(ContactLaw):
         :meth:`window` after the impact (positions from the advanced shank), with its Jacobians by
         **central finite differences** (the blow on the cell grid is piecewise smooth in the state:
         smooth while the piston does not hit the shank again inside the blow): steps
-        ``h = 1e-6 max(1, |y_minus|_inf)`` in every state component and ``h_t = 1e-6`` in ``t``
+        ``h = 1e-6 |y_minus|_inf`` (relative, so that the map's Jacobian is the same at every scale of
+        the load) in every state component and ``h_t = 1e-6`` in ``t``
         (truncation ``O(h^2)``, rounding ``O(eps/h)``: about 1e-10 relative), ``4 N + 6`` blows.
 
         Returns
@@ -226,7 +227,7 @@ class RodRock(ContactLaw):
         t = float(t)
         step = BlowMap(model, load, t)
         y_plus = step(y)
-        h = 1e-6 * max(1.0, float(np.max(np.abs(y))))
+        h = 1e-6 * (float(np.max(np.abs(y))) or 1.0)  # relative: the orbit's scale is the load's
         jac = np.empty((y.size, y.size))
         for j in range(y.size):
             e = np.zeros(y.size)
