@@ -107,3 +107,13 @@ def test_rock_parameter_names_are_checked(case):
         with_parameter(model, load, "bit_mass", -1.0)
     with pytest.raises(ValueError, match="whole cells"):  # the blow is piecewise constant in a length
         ib.continue_orbit(case, "segment0.length", 2.5)
+
+
+def test_a_target_beyond_the_end_the_start_sits_on_is_refused(case):
+    """The start has no feed (``feed = 0``, the end of its range ``[0, inf)``): a target ``feed = -1``
+    is refused at the call, naming the parameter, instead of a one-point branch "step too small";
+    a target beyond a range the branch can enter (``R`` to 1.2 in tests/continuation) is kept."""
+    with pytest.raises(ValueError, match=r"to = -1 is outside the allowed range of feed.*feed = 0"):
+        ib.continue_orbit(case, "feed", to=-1.0)
+    with pytest.raises(ValueError, match="bit_mass"):
+        ib.continue_orbit(case, "bit_mass", to=-0.5)

@@ -86,3 +86,32 @@ def test_find_orbit_without_a_guess_starts_from_periodic_orbits(case):
     model, load, orbits = case
     o = ib.find_orbit(model, load)
     assert o.phase == pytest.approx(orbits[1].phase, abs=1e-10) and o.stable
+
+
+def _scaled(load, c):
+    return ib.PiecewiseConstantLoad(load.breaks, c * load.levels)
+
+
+def test_orbits_do_not_depend_on_the_scale_of_the_load(case):
+    """The problem is homogeneous of degree one in the load (no feed, a bilinear rock): scaled by
+    ``c`` from 1e-9 to 1e9 it has the same orbits, phases and multipliers, with states times ``c``.
+    The impact map's finite-difference step was ``1e-6 max(1, |y|)``, a thousand times the state at
+    ``c = 1e-9``: there the stable orbit (3.5461) was lost and an unstable one (2.4454) came with the
+    multiplier -2.437 instead of -1.562 (issue 42)."""
+    model, load, orbits = case
+    ref = [(o.phase, o.stable, o.impact_velocity) for o in orbits]
+    assert [(round(p, 4), st) for p, st, _ in ref] == [(2.6008, False), (3.5461, True)]
+    for c in (1e-9, 1e-7, 1e-3, 1e3, 1e9):
+        got = ib.periodic_orbits(model, _scaled(load, c))
+        assert [o.stable for o in got] == [st for _, st, _ in ref]
+        for o, (phase, _, v) in zip(got, ref, strict=True):
+            assert o.phase == pytest.approx(phase, abs=1e-8)
+            assert o.impact_velocity == pytest.approx(c * v, rel=1e-7)
+    # the third orbit (phase 2.4454, a flip multiplier) from the same relative guess at every scale
+    guess = (np.array([2.4454]), np.array([[-0.14544947, -0.08505581]]))
+    mults = []
+    for c in (1e-9, 1.0, 1e9):
+        o = ib.find_orbit(model, _scaled(load, c), guess=(guess[0], c * guess[1]))
+        assert o.phase == pytest.approx(2.4453985456, abs=1e-8) and not o.stable
+        mults.append(np.sort(o.multipliers.real)[0])
+    np.testing.assert_allclose(mults, -1.56178087, rtol=1e-5)

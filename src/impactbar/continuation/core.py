@@ -220,7 +220,7 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
     model, load = base.model, base.load
     _check_parameter(model, load, parameter, continuation=True)
     lam0 = parameter_value(model, load, parameter)
-    to = _target(parameter, lam0, to)
+    to = _target(parameter, lam0, to, model, load)
     settings = _settings(settings, step=step, max_step=max_step, min_step=min_step,
                          max_points=max_points, tol=tol)
     steps = settings.steps(abs(to - lam0))

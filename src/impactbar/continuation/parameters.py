@@ -153,9 +153,23 @@ def _check_parameter(model, load, name, *, continuation=False):
                      "use R, d or s (or p0 for a FourierLoad)")
 
 
-def _target(parameter, start, to):
-    """The checked target value ``to`` of a continuation in ``parameter`` from ``start``."""
+def _target(parameter, start, to, model=None, load=None):
+    """The checked target value ``to`` of a continuation in ``parameter`` from ``start``; with
+    ``model`` and ``load``, a target outside the parameter's allowed range is refused where the start
+    sits at the end of that range on the target's side (no branch can leave it that way; a target
+    beyond a range the branch can enter stops the branch at its end, status ``"parameter range"``)."""
     to = check_real("to", to)
     if to == start:
         raise ValueError(f"to must differ from the start value {parameter} = {start}")
+    if model is not None:
+        try:
+            with_parameter(model, load, parameter, to)
+        except ValueError as outside:
+            near = start + 1e-9 * (to - start) if start != 0.0 else 1e-12 * to
+            try:
+                with_parameter(model, load, parameter, near)
+            except ValueError:
+                raise ValueError(f"to = {to:g} is outside the allowed range of {parameter} and the start "
+                                 f"{parameter} = {start:g} is at its end: no branch leaves it that "
+                                 f"way ({outside})") from None
     return to

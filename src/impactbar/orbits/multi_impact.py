@@ -690,11 +690,14 @@ def _paper_guesses(model: BarModel, load: Load) -> list:
 
 def _simulated_guess(model: BarModel, load: Load):
     """A simulation from rest over :data:`SETTLE_PERIODS` load periods, if it has settled to one
-    impact per period; else ``None``."""
+    impact per period; else ``None``. It starts a gap of 0.1 times the problem's force scale (the
+    load's bound, or the law's feed where larger) from the stop, so that the guess is the same
+    motion at every scale of the load (the problem is homogeneous of degree one in it)."""
     from ..simulation import InitialState, simulate  # the simulator, loaded where a guess needs it
 
+    scale = max(float(load.sup_abs), float(getattr(model.law, "feed", 0.0))) or 1.0
     try:
-        tr = simulate(model, load, InitialState.rigid(-0.1, 0.0, n_modes=model.n_modes),
+        tr = simulate(model, load, InitialState.rigid(-0.1 * scale, 0.0, n_modes=model.n_modes),
                       TWO_PI * SETTLE_PERIODS)
     except ValueError:
         return None
@@ -722,7 +725,11 @@ def periodic_orbits_by_newton(model: BarModel, load: Load) -> OrbitList:
        ``[0, 0.95]``), each taken at its phase with the state it has one window
        (:meth:`~impactbar.laws.ContactLaw.window`) after the impact, where this law's flight starts;
     2. where none of those gives a stable orbit, the end of a simulation from rest (60 load
-       periods), if it has settled to one impact per period.
+       periods, started a gap of 0.1 times the load's bound from the stop), if it has settled to
+       one impact per period.
+
+    Steps and starts scale with the load (the finite-difference steps of the impact map are
+    relative to the state), so that the orbits found are the same at every scale of the load.
 
     Orbits found twice (phases within ``1e-7``) are kept once. Guesses from which Newton does not
     converge give nothing: the list holds the orbits found, not a certified set of all of them.

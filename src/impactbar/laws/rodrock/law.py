@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..._shared.validate import check_real
+from ..._shared.validate import check_int, check_real
 from ..base import ContactLaw
 
 __all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
@@ -211,7 +211,8 @@ class RodRock(ContactLaw):
         :meth:`window` after the impact (positions from the advanced shank), with its Jacobians by
         **central finite differences** (the blow on the cell grid is piecewise smooth in the state:
         smooth while the piston does not hit the shank again inside the blow): steps
-        ``h = 1e-6 max(1, |y_minus|_inf)`` in every state component and ``h_t = 1e-6`` in ``t``
+        ``h = 1e-6 |y_minus|_inf`` (relative, so that the map's Jacobian is the same at every scale of
+        the load) in every state component and ``h_t = 1e-6`` in ``t``
         (truncation ``O(h^2)``, rounding ``O(eps/h)``: about 1e-10 relative), ``4 N + 6`` blows.
 
         Returns
@@ -226,7 +227,7 @@ class RodRock(ContactLaw):
         t = float(t)
         step = BlowMap(model, load, t)
         y_plus = step(y)
-        h = 1e-6 * max(1.0, float(np.max(np.abs(y))))
+        h = 1e-6 * (float(np.max(np.abs(y))) or 1.0)  # relative: the orbit's scale is the load's
         jac = np.empty((y.size, y.size))
         for j in range(y.size):
             e = np.zeros(y.size)
@@ -392,6 +393,16 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     Blow
         Work on rock, efficiencies, penetrations, force histories, the energy account.
 
+    Raises
+    ------
+    ValueError
+        Before any array is built: ``model`` not a ``BarModel`` under ``RodRock``;
+        ``impact_velocity`` not finite and ``> 0`` or its wave force ``s V`` outside
+        ``[1e-100, 1e100]``; the law's ``feed`` above ``1e100`` or its ``bit_mass`` in
+        ``(0, 1e-100)`` (the wave energies would overflow); ``t_max`` not finite and ``> 0``;
+        ``cells_per_piston`` not an integer ``>= 1``; a grid of more than ``5e9`` cell updates (a rod
+        far longer, in travel time, than the piston, or too fine a grid).
+
     Examples
     --------
     >>> from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
@@ -403,18 +414,57 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     """
     from .blow import rod_rock_blow
 
-    law = model.law
+    law = getattr(model, "law", None)
     if not isinstance(law, RodRock):
-        raise ValueError(f"single_blow needs a model with impact=RodRock(...); got impact={model.impact!r}")
-    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
-    if t_max is None:
-        t_max = 20.0 * (1.0 / model.s + sum(g.travel_time(model) for g in law.segments))
+        got = f"impact={model.impact!r}" if hasattr(model, "impact") else f"model={model!r}"
+        raise ValueError(f"single_blow needs a BarModel with impact=RodRock(...); got {got}")
+    V, t_max, cells_per_piston = _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston,
+                                                  record_field)
     segs = law.segments
     return rod_rock_blow(
         model.s, V, [g.length for g in segs], [g.impedance for g in segs], [g.wave_speed for g in segs],
         law.rock.k, law.rock.k_u, law.bit_mass, law.feed, cells_per_piston=cells_per_piston,
-        t_max=float(t_max), energy_fraction=check_real("energy_fraction", energy_fraction, lo=0.0),
+        t_max=t_max, energy_fraction=check_real("energy_fraction", energy_fraction, lo=0.0),
         record_field=record_field)
+
+
+#: The largest force scale (``s V``, the feed) and the smallest nonzero bit mass a blow accepts: the
+#: wave energies are sums of squared forces, which beyond these would overflow or underflow.
+MAX_FORCE = 1e100
+MIN_BIT_MASS = 1e-100
+
+
+def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, record_field):
+    """The checked ``(V, t_max, cells_per_piston)`` of :func:`single_blow`, refused (``ValueError``
+    naming the parameter and its range) before any array is built."""
+    from .blow import _check_blow_size, commensurate_cells
+
+    s = model.s
+    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
+    if not 1.0 / MAX_FORCE <= s * V <= MAX_FORCE:
+        raise ValueError(f"impact_velocity must give a wave force s V in [{1 / MAX_FORCE:g}, {MAX_FORCE:g}] "
+                         f"(s = {s:g}); got impact_velocity = {V:g}, whose wave energies would "
+                         "overflow or underflow")
+    if law.feed > MAX_FORCE:
+        raise ValueError(f"feed must be in [0, {MAX_FORCE:g}] for a blow (its static energy would "
+                         f"overflow); got feed = {law.feed:g}")
+    if 0.0 < law.bit_mass < MIN_BIT_MASS:
+        raise ValueError(f"bit_mass must be 0 (a massless bit) or in [{MIN_BIT_MASS:g}, inf) for a blow; "
+                         f"got bit_mass = {law.bit_mass:g}")
+    travel = [g.travel_time(model) for g in law.segments]
+    if t_max is None:
+        t_max = 20.0 * (1.0 / s + sum(travel))
+    else:
+        t_max = check_real("t_max", t_max, lo=0.0, lo_open=True)
+    if cells_per_piston is not None:
+        cells_per_piston = check_int("cells_per_piston", cells_per_piston, lo=1)
+        n_p = cells_per_piston
+    else:  # the default grid of rod_rock_blow (at least 8 cells)
+        n0 = commensurate_cells(np.array([1.0 / s] + travel))
+        n_p = 64 if n0 is None else n0 * math.ceil(8 / n0)
+    dt = 1.0 / (s * n_p)
+    _check_blow_size(n_p + sum(travel) / dt, t_max / dt, record_field)
+    return V, float(t_max), cells_per_piston
 
 
 def lundberg_efficiency(alpha: float, gamma: float) -> float:

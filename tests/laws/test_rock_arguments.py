@@ -1,0 +1,80 @@
+"""Every argument of :func:`impactbar.single_blow` is checked at the call, before any array is built:
+a one-line ``ValueError`` naming the parameter and its range, never another exception type, a NaN or
+an answer that silently rounds the input (issue 42)."""
+
+import math
+import time
+
+import pytest
+
+import impactbar as ib
+
+LAW = ib.RodRock(segments=[ib.RodSegment(length=40.0, impedance=1.0)],
+                 rock=ib.BilinearRock(k=2.5, k_u=25.0))
+MODEL = ib.BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=LAW)
+
+
+def _law(**kw):
+    fields = dict(segments=LAW.segments, rock=LAW.rock)
+    fields.update(kw)
+    return MODEL.with_(impact=ib.RodRock(**fields))
+
+
+@pytest.mark.parametrize("cells", [0, 0.5, 1.5, -1, math.inf, math.nan, "8", True, 8.0])
+def test_cells_per_piston_must_be_a_positive_integer(cells):
+    with pytest.raises(ValueError, match=r"cells_per_piston must be an integer in \[1, inf\)") as err:
+        ib.single_blow(MODEL, 1.0, cells_per_piston=cells)
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("t_max", [-1, 0, 0.0, -math.inf, math.inf, math.nan, "3"])
+def test_t_max_must_be_positive_and_finite(t_max):
+    with pytest.raises(ValueError, match="t_max must be"):
+        ib.single_blow(MODEL, 1.0, t_max=t_max)
+
+
+@pytest.mark.parametrize("model", [None, "model", ib.BarModel(s=2.0, d=0.0, R=0.0, n_modes=0)])
+def test_the_model_must_be_under_the_rod_rock_law(model):
+    with pytest.raises(ValueError, match="single_blow needs a BarModel with impact=RodRock"):
+        ib.single_blow(model, 1.0)
+
+
+@pytest.mark.parametrize("V", [1e160, 1e300, 1e-200, 1e-300])
+def test_impact_velocities_whose_energies_overflow_are_refused(V):
+    """V = 1e160 gave an efficiency NaN, V = 1e-200 a result whose efficiency divided by zero."""
+    with pytest.raises(ValueError, match=r"impact_velocity must give a wave force s V in \[1e-100"):
+        ib.single_blow(MODEL, V)
+
+
+def test_feed_and_bit_mass_that_overflow_are_refused_and_their_neighbours_answered():
+    with pytest.raises(ValueError, match=r"feed must be in \[0, 1e\+100\]"):
+        ib.single_blow(_law(feed=1e200), 1.0)
+    with pytest.raises(ValueError, match="bit_mass must be 0"):
+        ib.single_blow(_law(bit_mass=1e-300), 1.0)
+    for model in (_law(feed=1e20), _law(bit_mass=1e-90)):
+        eta = ib.single_blow(model, 1.0).efficiency
+        assert 0.0 <= eta <= 1.0
+    # the edges of the accepted range still answer with numbers
+    for V in (1e-100 / MODEL.s, 1e100 / MODEL.s):
+        blow = ib.single_blow(MODEL, V)
+        assert math.isfinite(blow.efficiency) and 0.0 <= blow.efficiency <= 1.0
+
+
+def test_a_rod_too_long_is_refused_before_its_grid_is_built():
+    """A rod 1e7 piston lengths long was refused only after its 8e7-cell grid was built (8 s): the
+    whole cost, cells times steps, is checked first. Work counted, not timed: the refusal comes from
+    the size check, and the grid builder is never called."""
+    from impactbar.laws.rodrock import blow as blow_module
+
+    model = _law(segments=[ib.RodSegment(length=1e7, impedance=1.0)])
+    calls = []
+    original = blow_module.blow_grid
+    blow_module.blow_grid = lambda *a, **k: calls.append(a) or original(*a, **k)
+    try:
+        start = time.perf_counter()
+        with pytest.raises(ValueError, match="cell updates"):
+            ib.single_blow(model, 1.0)
+    finally:
+        blow_module.blow_grid = original
+    assert calls == []
+    assert time.perf_counter() - start < 60.0  # a guard against a hang, not a speed assertion
