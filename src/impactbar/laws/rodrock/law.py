@@ -452,6 +452,8 @@ def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, recor
         raise ValueError(f"bit_mass must be 0 (a massless bit) or in [{MIN_BIT_MASS:g}, inf) for a blow; "
                          f"got bit_mass = {law.bit_mass:g}")
     travel = [g.travel_time(model) for g in law.segments]
+    if not all(math.isfinite(T) for T in travel):  # a wave speed near 0: refused as the grid would be
+        _check_blow_size(math.inf, math.inf, False)
     if t_max is None:
         t_max = 20.0 * (1.0 / s + sum(travel))
     else:
