@@ -9,17 +9,20 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from dataclasses import FrozenInstanceError
 from functools import cached_property
+from typing import ClassVar
 
 import numpy as np
 
+from ._shared.schema import Field, Schema
 from ._shared.validate import check_complex_array, check_int, check_real
 from .dynamics.implementations import use_fast
 from .dynamics.kernelview import LoadKernelView
 from .dynamics.modal import b_integral, c_integral, fundamental, step_constant
 
-__all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad"]
+__all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad", "LOADS"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -54,6 +57,19 @@ class Load(ABC):
       numpy reference paths only the methods above;
     - :meth:`_key`: the values that identify it (equality, hashing, caches).
 
+    What the solvers, sweeps, the SI layer and the CLI ask of a load, declared by each class (a
+    load class with a :attr:`kind` is an entry of the table :data:`LOADS`):
+
+    - :attr:`kind`, :attr:`description`, :attr:`parameters` (its constructor's, with long names
+      and dtypes) and :attr:`continuation_parameters`; :meth:`to_record`, :meth:`from_record` and
+      :meth:`with_` (a copy with parameters changed);
+    - :attr:`period` (its fundamental period), :attr:`max_one_impact_orbits` (a bound of the roots
+      of the phase equation, eq. 14);
+    - the forms a special solver recognises: :meth:`cosine_form` (the rigid closed forms,
+      pneumatic), :meth:`square_form` (the rigid closed forms, hydraulic), :meth:`pieces` (the
+      jumps of a piecewise-constant load);
+    - :meth:`compiled_view`: the kernel view where compiled code may stand for the load's methods.
+
     Attributes
     ----------
     p0 : float
@@ -69,6 +85,16 @@ class Load(ABC):
     """
 
     p0: float
+
+    #: the load's name in the table :data:`LOADS`: a sweep spec's ``[load] kind``, the CLI's
+    #: ``--load``, the ``"kind"`` of :meth:`to_record` (empty for a load not in the table)
+    kind: ClassVar[str] = ""
+    #: what the load is, in a few words (the CLI's help)
+    description: ClassVar[str] = ""
+    #: the constructor's parameters, in order, each with its long name and dtype
+    parameters: ClassVar[Schema] = Schema()
+    #: the parameters a branch of orbits can be continued in (:func:`impactbar.continue_orbit`)
+    continuation_parameters: ClassVar[tuple[str, ...]] = ()
 
     # -- frozen, compared by value ------------------------------------------------------------
     def __setattr__(self, name, value):
@@ -231,6 +257,124 @@ class Load(ABC):
         v = (-a21 * qz + a11 * vz) / det
         return q, v
 
+    # -- what the solvers, sweeps, the SI layer and the CLI ask of a load ------------------------
+    def to_record(self) -> dict:
+        """The load as JSON-ready data, ``{"kind": ..., <each of its parameters>}`` (a sweep spec's
+        ``[load]`` table); :meth:`from_record` reads it back.
+
+        Raises
+        ------
+        ValueError
+            For a load that is not in the table :data:`LOADS` (no :attr:`kind`).
+
+        Examples
+        --------
+        >>> from impactbar import CosineLoad, Load
+        >>> CosineLoad(0.3, 1.0).to_record()
+        {'kind': 'cosine', 'p0': 0.3, 'pk': 1.0, 'k': 1}
+        >>> Load.from_record({'kind': 'square', 'q': 1.0, 'kappa': 1.2})
+        SquareWaveLoad(q=1.0, kappa=1.2)
+        """
+        if not self.kind:
+            raise ValueError(f"a {type(self).__name__} has no kind: it is not in the table of loads")
+        return {"kind": self.kind, **self.parameters.record(self)}
+
+    @staticmethod
+    def from_record(record: Mapping) -> Load:
+        """The load of a record ``{"kind": ..., <parameters>}`` (:meth:`to_record`); complex
+        parameters as ``[re, im]`` pairs, complex or real numbers.
+
+        Raises
+        ------
+        ValueError
+            Naming the missing or unknown key, an unknown kind, or a parameter out of its range.
+        """
+        if not isinstance(record, Mapping):
+            raise ValueError(f"a load record must be a mapping; got {record!r}")
+        if "kind" not in record:
+            raise ValueError(f"missing key 'kind' (one of {list(LOADS)})")
+        kind = record["kind"]
+        if not isinstance(kind, str) or kind not in LOADS:
+            raise ValueError(f"kind must be one of {list(LOADS)}; got {kind!r}")
+        cls = LOADS[kind]
+        names = cls.parameters.names
+        unknown = [k for k in record if k != "kind" and k not in names]
+        if unknown:
+            raise ValueError(f"unknown key(s) {unknown} for kind = {kind!r}; allowed: {list(names)}")
+        missing = [k for k in names if k not in record]
+        if missing:
+            raise ValueError(f"missing key(s) {missing} for kind = {kind!r}")
+        args = {}
+        for f in cls.parameters:
+            v = record[f.name]
+            if f.dtype == "c16" and isinstance(v, list | tuple):
+                v = [complex(*c) if isinstance(c, list | tuple) else c for c in v]
+            args[f.name] = v
+        return cls(**args)
+
+    def with_(self, **changes) -> Load:
+        """A copy with some :attr:`parameters` changed (validated again by the constructor).
+
+        Raises
+        ------
+        ValueError
+            For a name that is not a parameter of this load, or a value out of its range.
+
+        Examples
+        --------
+        >>> from impactbar import CosineLoad
+        >>> CosineLoad(0.3, 1.0).with_(pk=2.0)
+        CosineLoad(p0=0.3, pk=2.0, k=1)
+        """
+        names = self.parameters.names
+        unknown = [k for k in changes if k not in names]
+        if unknown or not names:
+            raise ValueError(f"{unknown or list(changes)} not parameter(s) of {type(self).__name__}; "
+                             f"it has {list(names)}")
+        return type(self)(**{n: changes[n] if n in changes else getattr(self, n) for n in names})
+
+    @property
+    def period(self) -> float:
+        """The load's fundamental period (dimensionless time): ``2 pi``, or ``2 pi / g`` for a load
+        of harmonics whose orders have the greatest common divisor ``g``."""
+        return TWO_PI
+
+    @property
+    def max_one_impact_orbits(self) -> int:
+        """A bound of the one-impact orbits the load admits (the roots of the phase equation,
+        eq. 14, in a period); the default is a sweep's width of 2."""
+        return 2
+
+    def cosine_form(self) -> tuple[float, float, int] | None:
+        """``(p0, pk, k)`` where the load is ``p0 + pk cos(k t)`` with real ``pk`` (eq. 33), the
+        form of the pneumatic closed forms; ``None`` otherwise."""
+        return None
+
+    def square_form(self) -> tuple[float, float] | None:
+        """``(q, kappa)`` where the load is the square wave of eq. 34, the form of the hydraulic
+        closed forms; ``None`` otherwise."""
+        return None
+
+    def pieces(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(breaks, levels)`` where the load is constant on pieces (its jumps at ``breaks``, shape
+        ``(J,)``); ``None`` for a continuous load."""
+        return None
+
+    def compiled_view(self, *methods: str) -> LoadKernelView | None:
+        """:attr:`kernel_view` where compiled code may stand for the load's ``methods``: they are
+        those of the class that built the view. A subclass that redefines one of them (its own
+        evaluation) gets ``None``, and the numpy paths evaluate it through its methods.
+
+        Parameters
+        ----------
+        *methods : str
+            Names of the methods the compiled code replaces (``"__call__"``, ``"flow"``, ...).
+        """
+        owner = next((c for c in type(self).__mro__ if "kernel_view" in c.__dict__), Load)
+        if owner is Load or any(getattr(type(self), m) is not getattr(owner, m) for m in methods):
+            return None
+        return self.kernel_view
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self._repr_args()})"
 
@@ -263,6 +407,13 @@ class FourierLoad(Load):
     0.7
     """
 
+    kind = "fourier"
+    description = "p0 + Re sum_k p_k exp(i k t), finitely many harmonics (eq. 7)"
+    parameters = Schema(Field("p0", "mean load"),
+                        Field("coefficients", "complex harmonics p_1, p_2, ... (eq. 7)", dtype="c16",
+                              per="harmonic"))
+    continuation_parameters = ("p0",)
+
     def __init__(self, p0, coefficients):
         self._set(p0=check_real("p0", p0))
         coefficients = check_complex_array("coefficients", coefficients)
@@ -294,6 +445,30 @@ class FourierLoad(Load):
     def amplitudes(self) -> np.ndarray:
         """Complex ``p_k`` of the non-zero harmonics, shape ``(K',)``."""
         return self._pk.copy()
+
+    @property
+    def coefficients(self) -> np.ndarray:
+        """The complex harmonics ``p_1 .. p_K`` (the constructor's ``coefficients``), shape
+        ``(K,)``."""
+        return self.harmonics()
+
+    @property
+    def period(self) -> float:
+        g = 0
+        for k in self.orders.tolist():
+            g = math.gcd(g, k)
+        return TWO_PI / g if g else TWO_PI
+
+    @property
+    def max_one_impact_orbits(self) -> int:
+        """``2 K``: the phase equation (eq. 14) is a trigonometric polynomial of degree ``K`` (at
+        least 2)."""
+        return max(2, 2 * self._kmax)
+
+    def cosine_form(self):
+        if self._k.size != 1 or self._pk[0].imag != 0.0:
+            return None
+        return self.p0, float(self._pk[0].real), int(self._k[0])
 
     def harmonics(self, n: int | None = None) -> np.ndarray:
         K = self._kmax if n is None else check_int("n", n, lo=0)
@@ -487,6 +662,12 @@ class CosineLoad(FourierLoad):
     1.3
     """
 
+    kind = "cosine"
+    description = "pneumatic p0 + pk cos(k t) (eq. 33)"
+    parameters = Schema(Field("p0", "mean load"), Field("pk", "amplitude of the harmonic"),
+                        Field("k", "order of the harmonic, >= 1", "", dtype="i8"))
+    continuation_parameters = ("p0", "pk")
+
     def __init__(self, p0, pk, k=1):
         self._set(p0=check_real("p0", p0), pk=check_real("pk", pk), k=check_int("k", k, lo=1, hi=4096))
         pks = np.zeros(self.k, dtype=complex)
@@ -497,6 +678,9 @@ class CosineLoad(FourierLoad):
     def load_factor(self) -> float:
         """``k p0 / pk`` (eq. 38), ``inf`` for ``pk = 0``."""
         return self.k * self.p0 / self.pk if self.pk != 0 else math.inf
+
+    def cosine_form(self):
+        return self.p0, self.pk, self.k
 
     def _repr_args(self):
         return f"p0={self.p0!r}, pk={self.pk!r}, k={self.k!r}"
@@ -528,6 +712,11 @@ class PiecewiseConstantLoad(Load):
     >>> round(load.p0, 6)  # the mean, (2 - 0.5 (2 pi - 2)) / (2 pi)
     -0.022535
     """
+
+    kind = "piecewise"
+    description = "constant on pieces of the period"
+    parameters = Schema(Field("breaks", "start times of the pieces in [0, 2 pi)", per="piece"),
+                        Field("levels", "load on each piece", per="piece"))
 
     def __init__(self, breaks, levels):
         try:
@@ -563,6 +752,14 @@ class PiecewiseConstantLoad(Load):
     def levels(self) -> np.ndarray:
         """Load on each piece, shape ``(J,)``."""
         return self._lv.copy()
+
+    @property
+    def max_one_impact_orbits(self) -> int:
+        """``J`` (at least 2): the rigid velocity of eq. 14 is monotone on each piece."""
+        return max(2, self._b.size)
+
+    def pieces(self):
+        return self.breaks, self.levels
 
     def _index(self, t, left=False):
         tm = np.mod(np.asarray(t, dtype=float), TWO_PI)
@@ -745,6 +942,12 @@ class SquareWaveLoad(PiecewiseConstantLoad):
     0.2
     """
 
+    kind = "square"
+    description = "hydraulic square wave, +q then -q (eq. 34)"
+    parameters = Schema(Field("q", "level of the square wave, > 0"),
+                        Field("kappa", "fraction of the period at +q times 2, in [1, 2]"))
+    continuation_parameters = ("q", "kappa")
+
     def __init__(self, q, kappa):
         q = check_real("q", q, lo=0.0, lo_open=True)
         kappa = check_real("kappa", kappa, lo=1.0, hi=2.0)
@@ -760,6 +963,9 @@ class SquareWaveLoad(PiecewiseConstantLoad):
         """``kappa`` (Section 4 of the paper)."""
         return self.kappa
 
+    def square_form(self):
+        return self.q, self.kappa
+
     def harmonics(self, n: int | None = None) -> np.ndarray:
         if n is None:
             raise ValueError("n is required: a square wave has infinitely many harmonics")
@@ -770,3 +976,8 @@ class SquareWaveLoad(PiecewiseConstantLoad):
 
     def _repr_args(self):
         return f"q={self.q!r}, kappa={self.kappa!r}"
+
+
+#: The table of loads: kind -> class, every load a sweep spec, a record and the CLI can name.
+LOADS: dict[str, type[Load]] = {cls.kind: cls for cls in
+                                (CosineLoad, SquareWaveLoad, FourierLoad, PiecewiseConstantLoad)}

@@ -55,8 +55,10 @@ def _orbit_rows(model, load, x, R):
     rows = []
     orbits = periodic_orbits(model, load)
     for i, o in enumerate(orbits):
-        if isinstance(load, CosineLoad):  # branch 0: load falling through its mean at impact
-            branch = 0 if math.cos(load.k * o.phase) * load.pk < 0 else 1
+        cosine = load.cosine_form()
+        if cosine is not None:  # branch 0: load falling through its mean at impact
+            _, pk, k = cosine
+            branch = 0 if math.cos(k * o.phase) * pk < 0 else 1
         else:
             branch = i
         rows.append({"R": R, "x": x, "branch": branch, "phase": o.phase, "stable": o.stable,

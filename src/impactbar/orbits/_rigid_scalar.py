@@ -18,7 +18,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..loads import FourierLoad
+from ..dynamics.kernelview import FOURIER
 from .stability import MARGINAL
 
 TWO_PI = 2.0 * math.pi
@@ -371,9 +371,8 @@ class RigidFlight:
     def __init__(self, d, load):
         self.d, self.load = float(d), load
         self.terms = self.numpy_terms = None
-        kind = type(load)
-        if not (isinstance(load, FourierLoad) and all(  # a subclass that redefines the load flies by it
-                getattr(kind, f) is getattr(FourierLoad, f) for f in ("__call__", "propagate", "flow"))):
+        view = load.compiled_view("__call__", "propagate", "flow")  # a subclass that redefines
+        if view is None or view.kind != FOURIER:  # the load flies by its own propagate
             self.p0 = None
             return
         self.p0 = float(load.p0)

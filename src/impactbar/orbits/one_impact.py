@@ -15,7 +15,7 @@ from .._shared import tables as _tables
 from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from ..dynamics.implementations import use_fast
-from ..loads import FourierLoad, Load, SquareWaveLoad
+from ..loads import FourierLoad, Load
 from ..model import BarModel
 from .admissibility import _admissibility, _window_departure
 from .orbit import PeriodicOrbit
@@ -193,19 +193,6 @@ def _check_modes(model: BarModel) -> None:
                          f"(dense Floquet multipliers, O(n_modes^3)); got {model.n_modes}")
 
 
-def _cosine_parameters(load: Load):
-    """``(p0, pk, k)`` if ``load`` is ``p0 + pk cos(k t)`` with real ``pk != 0``, else ``None``."""
-    if not isinstance(load, FourierLoad):
-        return None
-    orders = load.orders
-    if len(orders) != 1:
-        return None
-    pk = complex(load.amplitudes[0])
-    if pk.imag != 0.0:
-        return None
-    return load.p0, pk.real, int(orders[0])
-
-
 # single points of the rigid bar take the closed forms in plain floats (``orbits/_rigid_scalar.py``);
 # the reference of "orbits.rigid_scalar" (dynamics.implementations) is the vectorised numpy closed forms
 
@@ -216,24 +203,24 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     load, a degenerate orbit)."""
     if model.n_modes != 0 or not model.law.rigid_closed_forms:
         return None
-    if isinstance(load, SquareWaveLoad) and load.kappa < 2.0:
-        args, solve = (model.d, model.R, load.q, load.kappa), "square"
+    square, cosine = load.square_form(), load.cosine_form()
+    if square is not None and square[1] < 2.0:  # kappa = 2: a constant load, the general path
+        args, square = (model.d, model.R, *square), True
+    elif cosine is not None and cosine[1] != 0.0:  # pk = 0: a constant load, the general path
+        args, square = (model.d, model.R, *cosine), False
     else:
-        par = _cosine_parameters(load)
-        if par is None:
-            return None
-        args, solve = (model.d, model.R, *par), "cosine"
+        return None
     if use_fast("orbits.rigid_scalar"):
         from . import _rigid_scalar
 
-        found = (_rigid_scalar.square_orbits if solve == "square" else _rigid_scalar.cosine_orbits)(*args)
+        found = (_rigid_scalar.square_orbits if square else _rigid_scalar.cosine_orbits)(*args)
         if found is None:
             return None
         return OrbitList(_rigid_orbit(model, load, o.phase, o.multiplicity, o.impact_velocity, o.status,
                                       o.clearance, o.clearance_error, np.array(o.multipliers),
                                       o.stable, np.array(o.schur_roots), o.schur_stable, o.v_plus,
                                       o.q_minus) for o in found)
-    res = (rigid_square_orbits if solve == "square" else rigid_cosine_orbits)(*args)
+    res = (rigid_square_orbits if square else rigid_cosine_orbits)(*args)
     if res.fallback[0]:
         return None
     return OrbitList(_rigid_orbit(
@@ -268,9 +255,10 @@ def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
     if N > 0:
         w2 = model.frequencies[1:] ** 2
         p11, p12, p21, p22 = (a[1:] for a in period_fundamental(model))
-        if isinstance(load, FourierLoad):
+        if isinstance(load, FourierLoad):  # fast-path guard: the closed-form periodic response
             # the response from rest over one period, (I - Phi(2 pi)) y_p(phase) with y_p the
-            # periodic response (what the flow from rest computes, without building it)
+            # periodic response (what the flow from rest computes, without building it; it also
+            # fixes the orbit's last bits, which the general path's propagation would change)
             qp, vp = load.periodic_state(w2, d, [phase])
             qp, vp = qp[:, 0], vp[:, 0]
             fq = qp - (p11 * qp + p12 * vp)
@@ -341,7 +329,8 @@ def _impact_states(model: BarModel, load: Load, phase: float, return_flow: bool 
     y_plus = _start_state(model, load, phase)
     w2 = model.frequencies**2
     flow = None
-    if isinstance(load, FourierLoad):  # its propagate is this flow: built once, used twice
+    if isinstance(load, FourierLoad):  # fast-path guard: its propagate is this flow, built once, used
+        # twice (here and by the admissibility search, which would build it again)
         flow = load.flow(w2, model.d, phase, y_plus[:M], y_plus[M:])
         qm, vm = flow([phase + TWO_PI])
     else:

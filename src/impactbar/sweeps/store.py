@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from ..dynamics.implementations import use_fast
+from ..loads import LOADS
 from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, _SUM, SweepSpec, motion_classes, parse_spec
 from .tasks import _variables, chunk_slices
 
@@ -38,17 +39,14 @@ UNITS = {
     _DONE: "",
 }
 
-#: long names of the grid axes (model and load parameters, eq. 2 and theory §3)
+#: long names of the grid axes (model and load parameters, eq. 2 and theory §3; the loads' from
+#: the table of loads)
 AXIS_NAMES = {
     "s": "wave-speed ratio C/(L Omega)",
     "d": "damping D/(M Omega)",
     "R": "restitution coefficient",
     "n_modes": "flexible modes kept",
-    "p0": "mean load",
-    "pk": "load amplitude (harmonic k)",
-    "k": "order of the load harmonic",
-    "q": "square-wave level",
-    "kappa": "square-wave kappa (fraction of the period at +q, times 2)",
+    **{f.name: f.long_name for cls in LOADS.values() for f in cls.parameters if f.per is None},
     "rock.k": "rock loading stiffness",
     "rock.k_u": "rock unloading stiffness",
     "bit_mass": "bit mass (piston masses)",
@@ -384,10 +382,11 @@ def open_sweep(path):
     --------
     >>> import pathlib, tempfile
     >>> from impactbar import open_sweep, run_sweep  # needs xarray and zarr (extra distributed)
+    >>> from impactbar import CosineLoad
     >>> from impactbar.sweeps import parse_spec
     >>> spec = parse_spec({"task": "orbits",
     ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
-    ...                    "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+    ...                    "load": CosineLoad(p0=0.5, pk=1.0, k=1).to_record(),
     ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
     >>> store = pathlib.Path(tempfile.mkdtemp()) / "r.zarr"
     >>> _ = run_sweep(spec, store, progress=False)

@@ -155,35 +155,24 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     :func:`impactbar.periodic_orbits`, tested against it). Returns the local indices left to the
     point-by-point path (degenerate orbits, ``kappa = 2``), or ``None`` if the closed forms do not
     apply."""
-    kind = spec.load["kind"]
-    if spec.rock is not None:
+    from ..orbits.rigid import CLOSED_FORM_KINDS, closed_form_groups
+
+    if spec.rock is not None or spec.load["kind"] not in CLOSED_FORM_KINDS:
         return None
-    law = get_law(spec.model.get("impact", "paper"))
-    if kind not in ("cosine", "square") or not law.rigid_closed_forms:
+    if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
         return None
     par = _chunk_parameters(spec, slices, block)
     if np.any(par["n_modes"] != 0):
         return None
-    from ..orbits.rigid import rigid_cosine_orbits, rigid_square_orbits
-
-    def flat(name):
-        return par[name].astype(float).ravel()
-
-    if kind == "cosine":
-        ks = par["k"].astype(int).ravel()
-        groups = [(np.nonzero(ks == k)[0], rigid_cosine_orbits, ("d", "R", "p0", "pk"), (int(k),))
-                  for k in np.unique(ks)]
-    else:
-        sel = np.nonzero(flat("kappa") < 2.0)[0]  # kappa = 2 is a constant load: the general path
-        groups = [(sel, rigid_square_orbits, ("d", "R", "q", "kappa"), ())]
+    groups = closed_form_groups(spec.load["kind"], {n: v.ravel() for n, v in par.items()})
     J = spec.options["max_orbits"]
     todo = []
     covered = np.zeros(math.prod(block), dtype=bool)
-    for sel, solve, names, extra in groups:
+    for sel, solve, args in groups:
         covered[sel] = True
         with (implementation("orbits.rigid_arrays", "reference") if spec.n_points < COMPILED_CLOSED_FORMS_FROM
               else contextlib.nullcontext()):
-            res = solve(*(flat(n)[sel] for n in names), *extra)
+            res = solve(*args)
         n = res.n_orbits
         if np.any(n > J):
             i = int(np.argmax(n > J))
