@@ -237,6 +237,9 @@ def test_a_subclass_with_its_own_evaluation_gets_no_compiled_view():
         def __call__(self, t):
             return super().__call__(np.asarray(t) + 0.1)
 
-    assert CosineLoad(0.3, 1.0).compiled_view("__call__", "flow") is not None
-    assert Shifted(0.3, 1.0).compiled_view("flow") is not None
-    assert Shifted(0.3, 1.0).compiled_view("__call__", "flow") is None
+    from impactbar.dynamics.kernelview import FOURIER, PIECEWISE
+
+    assert CosineLoad(0.3, 1.0).compiled_kind("__call__", "flow") == FOURIER == CosineLoad.kernel_kind
+    assert SquareWaveLoad(1.0, 1.2).compiled_kind("__call__") == PIECEWISE
+    assert Shifted(0.3, 1.0).compiled_kind("flow") == FOURIER
+    assert Shifted(0.3, 1.0).compiled_kind("__call__", "flow") is None

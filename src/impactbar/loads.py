@@ -19,7 +19,7 @@ import numpy as np
 from ._shared.schema import Field, Schema
 from ._shared.validate import check_complex_array, check_int, check_real
 from .dynamics.implementations import use_fast
-from .dynamics.kernelview import LoadKernelView
+from .dynamics.kernelview import FOURIER, PIECEWISE, LoadKernelView
 from .dynamics.modal import b_integral, c_integral, fundamental, step_constant
 
 __all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad", "LOADS"]
@@ -68,7 +68,8 @@ class Load(ABC):
     - the forms a special solver recognises: :meth:`cosine_form` (the rigid closed forms,
       pneumatic), :meth:`square_form` (the rigid closed forms, hydraulic), :meth:`pieces` (the
       jumps of a piecewise-constant load);
-    - :meth:`compiled_view`: the kernel view where compiled code may stand for the load's methods.
+    - :attr:`kernel_kind` and :meth:`compiled_kind`: the kind of its kernel view, where compiled
+      code may stand for the load's methods.
 
     Attributes
     ----------
@@ -95,6 +96,8 @@ class Load(ABC):
     parameters: ClassVar[Schema] = Schema()
     #: the parameters a branch of orbits can be continued in (:func:`impactbar.continue_orbit`)
     continuation_parameters: ClassVar[tuple[str, ...]] = ()
+    #: the ``kind`` of the :attr:`kernel_view` the class declares (``None``: it declares none)
+    kernel_kind: ClassVar[int | None] = None
 
     # -- frozen, compared by value ------------------------------------------------------------
     def __setattr__(self, name, value):
@@ -360,10 +363,12 @@ class Load(ABC):
         ``(J,)``); ``None`` for a continuous load."""
         return None
 
-    def compiled_view(self, *methods: str) -> LoadKernelView | None:
-        """:attr:`kernel_view` where compiled code may stand for the load's ``methods``: they are
-        those of the class that built the view. A subclass that redefines one of them (its own
-        evaluation) gets ``None``, and the numpy paths evaluate it through its methods.
+    def compiled_kind(self, *methods: str) -> int | None:
+        """The kind of :attr:`kernel_view` (:data:`~impactbar.dynamics.kernelview.FOURIER` or
+        ``PIECEWISE``) where compiled code may stand for the load's ``methods``: they are those of
+        the class that declares the view. A subclass that redefines one of them (its own
+        evaluation) gets ``None``, and the numpy paths evaluate it through its methods. The view
+        itself is not built.
 
         Parameters
         ----------
@@ -373,7 +378,7 @@ class Load(ABC):
         owner = next((c for c in type(self).__mro__ if "kernel_view" in c.__dict__), Load)
         if owner is Load or any(getattr(type(self), m) is not getattr(owner, m) for m in methods):
             return None
-        return self.kernel_view
+        return owner.kernel_kind
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self._repr_args()})"
@@ -413,6 +418,7 @@ class FourierLoad(Load):
                         Field("coefficients", "complex harmonics p_1, p_2, ... (eq. 7)", dtype="c16",
                               per="harmonic"))
     continuation_parameters = ("p0",)
+    kernel_kind = FOURIER
 
     def __init__(self, p0, coefficients):
         self._set(p0=check_real("p0", p0))
@@ -717,6 +723,7 @@ class PiecewiseConstantLoad(Load):
     description = "constant on pieces of the period"
     parameters = Schema(Field("breaks", "start times of the pieces in [0, 2 pi)", per="piece"),
                         Field("levels", "load on each piece", per="piece"))
+    kernel_kind = PIECEWISE
 
     def __init__(self, breaks, levels):
         try:

@@ -371,8 +371,8 @@ class RigidFlight:
     def __init__(self, d, load):
         self.d, self.load = float(d), load
         self.terms = self.numpy_terms = None
-        view = load.compiled_view("__call__", "propagate", "flow")  # a subclass that redefines
-        if view is None or view.kind != FOURIER:  # the load flies by its own propagate
+        # a subclass that redefines the load flies by its own propagate
+        if load.compiled_kind("__call__", "propagate", "flow") != FOURIER:
             self.p0 = None
             return
         self.p0 = float(load.p0)

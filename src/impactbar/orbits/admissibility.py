@@ -115,10 +115,10 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
 def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol, flow=None):
     """``(clearance, err)`` of :func:`_numpy_search` by the compiled kernel, or
     ``None`` where it does not apply (a load or flow it does not know: the numpy path then runs)."""
-    view = load.compiled_view("__call__", "variation", "flow")
-    if view is None:
+    kind = load.compiled_kind("__call__", "variation", "flow")
+    if kind is None:
         return None
-    if view.kind == FOURIER:
+    if kind == FOURIER:
         if flow is None:
             flow = load.flow(w2, d, phase, q0, v0)
         args = getattr(flow, "kernel_args", None)
@@ -231,10 +231,10 @@ def _load_slope(load):
     """``(bound of |p'|, only without a jump)`` where the load is smooth between its jumps: a
     Fourier load's ``sum k |p_k|``; 0 for a piecewise-constant load, on an interval without a jump;
     ``None`` for another load (no certificate of a single zero)."""
-    view = load.compiled_view("__call__", "variation")
-    if view is None:
+    kind = load.compiled_kind("__call__", "variation")
+    if kind is None:
         return None
-    return (view.p1, False) if view.kind == FOURIER else (0.0, True)
+    return (load.kernel_view.p1, False) if kind == FOURIER else (0.0, True)
 
 
 def _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, slope):
