@@ -32,6 +32,7 @@ from .orbits.charts import (
     pneumatic_stability_curve,
 )
 from .orbits.one_impact import periodic_orbits
+from .orbits.orbit import PeriodicOrbit
 from .orbits.wave import wave_existence_edge
 from .plotting.paper import (
     R_CURVES,
@@ -51,6 +52,11 @@ TWO_PI = 2.0 * math.pi
 RIGID = BarModel(s=50.0, d=0.0, R=0.0, n_modes=0)  # the paper's s -> infinity limit
 
 
+#: an orbit's columns in the figures' rows (the CSV format of ``impactbar paper``, kept as it is)
+_ROW_FIELDS = PeriodicOrbit.fields.select(names=("phase", "stable", "schur_stable", "admissible",
+                                                 "admissibility", "max_abs_multiplier"))
+
+
 def _orbit_rows(model, load, x, R):
     rows = []
     orbits = periodic_orbits(model, load)
@@ -61,9 +67,7 @@ def _orbit_rows(model, load, x, R):
             branch = 0 if math.cos(k * o.phase) * pk < 0 else 1
         else:
             branch = i
-        rows.append({"R": R, "x": x, "branch": branch, "phase": o.phase, "stable": o.stable,
-                     "schur_stable": o.schur_stable, "admissible": o.admissible,
-                     "admissibility": o.admissibility, "max_abs_multiplier": o.max_abs_multiplier})
+        rows.append({"R": R, "x": x, "branch": branch, **_ROW_FIELDS.record(o)})
     return rows
 
 

@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Field", "SI", "Schema"]
+__all__ = ["Field", "SI", "Schema", "END_MOTION"]
 
 #: the value a field of each dtype kind takes where it has none (a sweep's fill, an empty table)
 _FILL = {"f": math.nan, "c": complex(math.nan, math.nan), "b": False, "i": 0, "u": 0, "U": "", "O": None}
@@ -65,12 +65,16 @@ class SI:
         multiplied by (``"velocity_m_s"``); ``None`` for a value that keeps its number (an angle).
     long_name : str, optional
         Its long name; the field's own by default.
+    label, fmt : str, optional
+        Its header and format in CLI tables (:class:`Field`).
     """
 
     name: str
     units: str
     scale: str | None = None
     long_name: str | None = None
+    label: str | None = None
+    fmt: str = ".4g"
 
 
 @dataclass(frozen=True)
@@ -102,6 +106,14 @@ class Field:
     per : str, optional
         ``None`` for one value per result; the name of a dimension (``"impact"``, ``"multiplier"``)
         for an array of values along it.
+    element : str, optional
+        The name of one of an array's values, where they are spread over columns or a table's
+        dimension (``"phase"`` for ``phases``: ``phase_0``, ``phase_1``, ...); the name by default.
+    optional : bool
+        Left out of a record (``to_dict``) where its value is ``None`` (a figure only some results
+        have).
+    scale : float
+        The value is shown divided by it in CLI tables (``1e6`` for a stress in Pa shown in MPa).
     """
 
     name: str
@@ -114,6 +126,9 @@ class Field:
     fmt: str = ""
     attr: str | None = None
     per: str | None = None
+    element: str | None = None
+    optional: bool = False
+    scale: float = 1.0
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "views", frozenset(self.views))
@@ -127,6 +142,11 @@ class Field:
     def header(self) -> str:
         """The label, or the name."""
         return self.label or self.name
+
+    @property
+    def item(self) -> str:
+        """The name of one of an array's values (:attr:`element`, or the name)."""
+        return self.element or self.name
 
     def get(self, obj):
         """The field's value on ``obj`` (following :attr:`attr`)."""
@@ -156,11 +176,16 @@ class Field:
             return float(value)
         return value if isinstance(value, str) else str(value)
 
-    def format(self, value) -> str:
-        """``value`` by :attr:`fmt` (``str`` for a flag, text, or ``None``)."""
+    def format(self, value, most: int = 6) -> str:
+        """``value`` by :attr:`fmt` (``str`` for a flag, text, or ``None``); an array as ``[a, b,
+        ...]``, its first ``most`` values and the count of the others."""
+        if isinstance(value, np.ndarray | list | tuple):
+            items = [self.format(v) for v in value[:most]]
+            more = f", ... ({len(value)} in all)" if len(value) > most else ""
+            return f"[{', '.join(items)}{more}]"
         if value is None or not self.fmt or isinstance(value, bool | np.bool_ | str):
             return str(value)
-        return format(value, self.fmt)
+        return format(value / self.scale if self.scale != 1.0 else value, self.fmt)
 
 
 class Schema(tuple):
@@ -216,28 +241,41 @@ class Schema(tuple):
         with)."""
         return {f.name: (f.long_name, f.units) for f in self}
 
-    def record(self, obj, *, skip_none: bool = False) -> dict:
-        """``name -> value`` of every field on ``obj``, JSON-ready (:meth:`Field.plain`); with
-        ``skip_none`` a field whose value is ``None`` is left out."""
+    def record(self, obj) -> dict:
+        """``name -> value`` of every field on ``obj``, JSON-ready (:meth:`Field.plain`); an
+        ``optional`` field whose value is ``None`` is left out."""
         out = {}
         for f in self:
             value = f.get(obj)
-            if value is None and skip_none:
+            if value is None and f.optional:
                 continue
             out[f.name] = f.plain(value)
         return out
 
-    def columns(self, objs) -> dict[str, np.ndarray]:
-        """``name -> array`` of every field over ``objs`` (one value each), of the field's dtype
-        (``object`` for text); ``None`` becomes the field's fill."""
+    def columns(self, objs) -> dict:
+        """``name -> values`` of every field over ``objs`` (one value each): an array of the
+        field's dtype (a float's ``None`` as NaN), or a list for text and where a flag or count
+        is ``None`` (pandas infers the column's type from it, ``None`` kept)."""
         objs = list(objs)
         out = {}
         for f in self:
             values = [f.get(o) for o in objs]
-            values = [f.fill if v is None else v for v in values]
-            out[f.name] = np.array(values, dtype=object if f.dtype == "U" else f.dtype) \
-                if values else np.zeros(0, dtype=object if f.dtype == "U" else f.dtype)
+            kind = np.dtype(f.dtype).kind
+            if kind == "f":
+                values = [f.fill if v is None else v for v in values]
+            if not values:
+                out[f.name] = np.zeros(0, dtype=object if kind in "UO" else f.dtype)
+            elif kind in "UO" or any(v is None for v in values):
+                out[f.name] = values
+            else:
+                out[f.name] = np.array(values, dtype=f.dtype)
         return out
+
+    def stack(self, objs, name: str) -> np.ndarray:
+        """The field ``name`` over ``objs`` as one array of its dtype, shape ``(len(objs), ...)``."""
+        f = self[name]
+        values = [f.get(o) for o in objs]
+        return np.array(values, dtype=f.dtype) if values else np.zeros(0, f.dtype)
 
     def frame(self, objs, *, index: str, index_meta: tuple[str, str], extra: Mapping | None = None,
               extra_meta: Mapping | None = None, attrs: Mapping | None = None):
@@ -264,14 +302,28 @@ class Schema(tuple):
 
     def summary(self, obj) -> list[str]:
         """``"label value"`` of every field on ``obj`` whose value is not ``None`` (the repr's
-        items); a flag gives its label when true, ``"not <label>"`` when false."""
+        items): a flag gives its label when true, ``"not <label>"`` when false; text gives its
+        value alone (after its label where it has one); an array of one value gives it under its
+        :attr:`Field.item` name."""
         out = []
         for f in self:
             value = f.get(obj)
             if value is None:
                 continue
+            label = f.header
+            if isinstance(value, np.ndarray) and value.shape == (1,):
+                value, label = value[0], f.label or f.item
+            label = label.replace("_", " ")
             if isinstance(value, bool | np.bool_):
-                out.append(f.header if value else f"not {f.header}")
+                out.append(label if value else f"not {label}")
+            elif np.dtype(f.dtype).kind == "U":  # text: its value, after its label if it has one
+                out.append(f"{f.label} {value}" if f.label else str(value))
             else:
-                out.append(f"{f.header} {f.format(value)}")
+                out.append(f"{label} {f.format(value)}")
         return out
+
+
+#: The struck end's motion sampled in time, a table's columns (:meth:`impactbar.PeriodicOrbit.to_dataframe`,
+#: :meth:`impactbar.Trajectory.to_xarray`), dimensionless (eq. 2)
+END_MOTION = Schema(Field("end_displacement", "displacement u(1, t) of the struck end"),
+                    Field("end_velocity", "velocity u_t(1, t) of the struck end"))

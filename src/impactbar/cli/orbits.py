@@ -102,7 +102,7 @@ def run(args) -> int:
             return run_drifter_orbits(args, drifter)
 
         return run_physical_orbits(args)
-    from .. import BarModel, periodic_orbits
+    from .. import BarModel, PeriodicOrbit, periodic_orbits
 
     model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes,
                      impact=getattr(args, "impact", None) or "paper")
@@ -121,11 +121,6 @@ def run(args) -> int:
     if not orbits:
         print("no one-impact orbit exists (above the existence edge, eq. 38)")
         return 0
-    head = f"{'phase':>9} {'impact vel.':>12} {'admissibility':>16} {'clearance':>11} " \
-           f"{'max|mu|':>9} {'stable':>7} {'paper':>6}"
-    print(head)
-    for o in orbits:
-        print(f"{o.phase:9.5f} {o.impact_velocity:12.6f} {o.admissibility:>16} {o.clearance:11.3e} "
-              f"{o.max_abs_multiplier:9.5f} {str(o.stable):>7} {str(o.schur_stable):>6}")
+    print("\n".join(PeriodicOrbit.fields.select("cli").table(orbits, width=2)))  # the orbit's CLI columns
     return 0
 

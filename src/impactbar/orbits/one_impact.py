@@ -12,6 +12,7 @@ import math
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.schema import Field, Schema
 from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from ..dynamics.implementations import use_fast
@@ -35,20 +36,10 @@ __all__ = ["PeriodicOrbit", "periodic_orbits", "orbit_multipliers"]
 
 TWO_PI = 2.0 * math.pi
 
-#: the columns of :meth:`OrbitList.to_dataframe`: name -> (long_name, units)
-ORBIT_COLUMNS = {
-    "orbit": ("orbit number, in order of phase", "1"),
-    "phase": ("phase lag between load and impact cycle, a root of eq. 14", "rad"),
-    "multiplicity": ("multiplicity of the root (2 at a fold)", "1"),
-    "impact_velocity": ("velocity of the struck end before impact", "1"),
-    "admissible": ("the end stays off the stop between impacts (theory §5)", ""),
-    "admissibility": ("admissible, or why not", ""),
-    "clearance": ("largest u(1, t) at a stationary point between impacts", "1"),
-    "clearance_error": ("bound on the error of clearance", "1"),
-    "stable": ("admissible and every |Floquet multiplier| < 1 (theory §7)", ""),
-    "max_abs_multiplier": ("largest |Floquet multiplier|", "1"),
-    "schur_stable": ("the paper's Schur criterion, eqs. 27-31 (theory §6)", ""),
-}
+#: the columns of :meth:`OrbitList.to_dataframe`: the orbit's fields in the view ``"table"``
+#: (:data:`impactbar.orbits.orbit.ORBIT_FIELDS`), then the model's numbers (and the load, as text)
+ORBIT_COLUMNS = PeriodicOrbit.fields.select("table") + Schema(
+    *(Field(f.name, f.long_name, f.units, f.dtype, attr=f"model.{f.name}") for f in BarModel.parameters))
 
 
 class OrbitList(list):
@@ -84,32 +75,32 @@ class OrbitList(list):
         """Whether the list holds a degenerate family (:attr:`families` not empty)."""
         return bool(self.families)
 
+    def __repr__(self) -> str:
+        """A line for the list, then one per orbit (the orbits' short reprs; at most 12)."""
+        if not self:
+            return "OrbitList([])"
+        fam = f", {len(self.families)} degenerate famil{'ies' if len(self.families) > 1 else 'y'}" \
+            if self.families else ""
+        lines = [f"OrbitList of {len(self)} orbit{'s' if len(self) > 1 else ''}{fam}:"]
+        lines += [f"  {o!r}" for o in self[:12]]
+        if len(self) > 12:
+            lines.append(f"  ... and {len(self) - 12} more")
+        return "\n".join(lines)
+
     def to_dataframe(self):
         """One row per orbit: phase, impact velocity, admissibility, clearance, stability.
 
         Returns
         -------
         pandas.DataFrame
-            Index ``orbit`` (0, 1, ... in order of phase), the columns of :data:`ORBIT_COLUMNS`
-            plus the model's ``s``, ``d``, ``R``, ``n_modes`` and the ``load`` (as text), so frames
-            of several models concatenate; ``attrs["columns"]`` gives each column's ``long_name``
-            and ``units`` (dimensionless numbers have units ``"1"``, eq. 2).
+            Index ``orbit`` (0, 1, ... in order of phase), the columns of :data:`ORBIT_COLUMNS`:
+            the orbit's, the model's ``s``, ``d``, ``R``, ``n_modes`` and the ``load`` (as text), so
+            frames of several models concatenate; ``attrs["columns"]`` gives each column's
+            ``long_name`` and ``units`` (dimensionless numbers have units ``"1"``, eq. 2).
         """
-        keys = [k for k in ORBIT_COLUMNS if k != "orbit"]
-        cols = {"orbit": np.arange(len(self))}
-        for k in keys:
-            cols[k] = [getattr(o, k) for o in self]
-        for k in ("s", "d", "R", "n_modes"):
-            cols[k] = [getattr(o.model, k) for o in self]
-        cols["load"] = [repr(o.load) for o in self]
-        meta = dict(ORBIT_COLUMNS, s=("wave-speed ratio C/(L Omega), eq. 2", "1"),
-                    d=("damping D/(M Omega), eq. 2", "1"), R=("restitution coefficient", "1"),
-                    n_modes=("flexible modes kept", "1"), load=("the load", ""))
-        df = _tables.frame(cols, meta, index="orbit")
-        if len(self) == 0:  # keep the dtypes of a non-empty table
-            df = df.astype({"multiplicity": int, "admissible": bool, "admissibility": object,
-                            "stable": bool, "schur_stable": bool, "n_modes": int, "load": object})
-        return df
+        loads = [repr(o.load) for o in self] or np.zeros(0, dtype=object)
+        return ORBIT_COLUMNS.frame(self, index="orbit", index_meta=("orbit number, in order of phase", "1"),
+                                   extra={"load": loads}, extra_meta={"load": ("the load", "")})
 
     def to_xarray(self):
         """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``orbit``, every variable with

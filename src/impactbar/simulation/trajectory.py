@@ -12,11 +12,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.schema import END_MOTION, Field, Schema
 from ..loads import Load
 from ..model import BarModel
 
@@ -277,10 +278,22 @@ class Trajectory:
     _segments: _Segments = field(repr=False)
     n_release_retries: int = 0
 
+    #: the declared fields, one value per impact: the columns of :meth:`to_dataframe` (``time``,
+    #: ``velocity``) and the variables of :meth:`to_xarray` (``impact_time``, ``impact_velocity``)
+    fields: ClassVar[Schema] = Schema(
+        Field("impact_times", "time of the impact (load frame)", per="impact", element="time",
+              views={"table"}),
+        Field("impact_velocities", "velocity u_t(1, t-) of the struck end before the impact",
+              per="impact", element="velocity", views={"table"}))
+
     def __repr__(self) -> str:
         """One line: model, load, time span, impacts, status (not the arrays)."""
-        return (f"Trajectory({self.model!r}, {self.load!r}, t {self.t0:.6g} -> {self.t_end:.6g}, "
-                f"{self.impact_times.size} impacts, status {str(self.status)!r})")
+        return f"{type(self).__name__}({', '.join(self._repr_items())})"
+
+    def _repr_items(self) -> list[str]:
+        """The items of the repr, in order; a subclass extends the list (its own numbers)."""
+        return [repr(self.model), repr(self.load), f"t {self.t0:.6g} -> {self.t_end:.6g}",
+                f"{self.impact_times.size} impacts", f"status {str(self.status)!r}"]
 
     @property
     def n_impacts(self) -> int:
@@ -463,11 +476,10 @@ class Trajectory:
             the load, ``t0``, ``t_end``, ``status``, the contact intervals and each column's
             ``long_name`` and ``units``.
         """
+        table = self.fields.select("table")
         return _tables.frame(
-            {"impact": np.arange(self.n_impacts), "time": self.impact_times,
-             "velocity": self.impact_velocities},
-            {"impact": ("impact number", "1"), "time": ("time of the impact (load frame)", "1"),
-             "velocity": ("velocity u_t(1, t-) of the struck end before the impact", "1")},
+            {"impact": np.arange(self.n_impacts), **{f.item: f.get(self) for f in table}},
+            {"impact": ("impact number", "1"), **{f.item: (f.long_name, f.units) for f in table}},
             index="impact",
             attrs={"model": repr(self.model), "load": repr(self.load), "t0": self.t0,
                    "t_end": self.t_end, "status": self.status,
@@ -497,17 +509,14 @@ class Trajectory:
         if n < 0:
             raise ValueError(f"n must be an integer >= 0; got {n}")
         ds = _tables.to_xarray(self.to_dataframe()).rename(
-            {"time": "impact_time", "velocity": "impact_velocity"})
+            {f.item: f"impact_{f.item}" for f in self.fields.select("table")})
         ds.attrs.pop("contact_intervals", None)
         if n:
             t = np.linspace(self.t0, self.t_end, n)
             end = _tables.to_xarray(_tables.frame(
-                {"t": t, "end_displacement": self.end_displacement(t),
-                 "end_velocity": self.end_velocity(t)},
-                {"t": ("time (load frame)", "1"),
-                 "end_displacement": ("displacement u(1, t) of the struck end", "1"),
-                 "end_velocity": ("velocity u_t(1, t) of the struck end", "1")}, index="t"))
-            for name in ("end_displacement", "end_velocity"):
+                {"t": t, "end_displacement": self.end_displacement(t), "end_velocity": self.end_velocity(t)},
+                {"t": ("time (load frame)", "1"), **END_MOTION.meta()}, index="t"))
+            for name in END_MOTION.names:
                 ds[name] = end[name]
         return ds
 
