@@ -270,24 +270,10 @@ class Branch:
         return pd.DataFrame([e.to_dict() for e in self.events], columns=list(BranchEvent.fields.names))
 
     def plot(self, ax=None, *, y: str = "phase", color=None, label=None, events=True):
-        """Plot the branch: stable stretches solid, unstable or inadmissible dashed, events marked.
-
-        Parameters
-        ----------
-        ax : matplotlib.axes.Axes, optional
-            Drawn on a new figure's axes if omitted.
-        y : str
-            What to plot against the parameter, as :func:`impactbar.plotting.plot_branch` takes it
-            (the phase, the default, separates the two sides of a fold).
-        color, label : optional
-            Line colour and legend label.
-        events : bool
-            Mark and name the events.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
+        """Plot the branch: stable stretches solid, unstable or inadmissible dashed, events marked
+        (:func:`impactbar.plotting.plot_branch`, with these keywords; it returns the axes). ``y``
+        names what is plotted against the parameter (the phase, the default, separates the two
+        sides of a fold)."""
         from ..plotting.continuation import plot_branch
 
         return plot_branch(self, ax, y=y, color=color, label=label, events=events)

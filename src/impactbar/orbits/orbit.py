@@ -311,19 +311,8 @@ multipliers, stable, schur_roots, schur_stable
         return self.states_after_impact[0, :M].copy(), self.states_after_impact[0, M:].copy()
 
     def plot(self, ax=None, n: int = 2000):
-        """Draw the end displacement over one period (:func:`impactbar.plotting.plot_orbit`).
-
-        Parameters
-        ----------
-        ax : matplotlib.axes.Axes, optional
-            Drawn on a new figure's axes if omitted.
-        n : int
-            Time samples drawn.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
+        """Draw the end displacement over one period, on ``ax`` (a new figure's axes if omitted)
+        at ``n`` times: :func:`impactbar.plotting.plot_orbit`, which returns the axes."""
         from ..plotting.orbits import plot_orbit
 
         return plot_orbit(self, ax, n)

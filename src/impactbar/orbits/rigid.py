@@ -24,6 +24,7 @@ import numpy as np
 from .._shared.status import Admissibility
 from ..dynamics.implementations import use_fast
 from ..loads import CosineLoad, SquareWaveLoad
+from ._rigid_scalar import harmonic_term, trace_det
 from .stability import MARGINAL, quadratic_roots
 
 __all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_multipliers", "phase_G_array",
@@ -131,18 +132,9 @@ def rigid_multipliers(d, R, p_plus, p_minus, v_plus, v_minus):
     """
     d, R, p_plus, p_minus, v_plus, v_minus = np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (d, R, p_plus, p_minus, v_plus, v_minus)))
-    b = _b(d, TWO_PI)
-    e = np.exp(-TWO_PI * d)
-    a_p = p_plus - d * v_plus
-    a_m = p_minus - d * v_minus
     graze = ~(np.abs(v_minus) > 1e-14 * np.abs(v_minus))  # relative, as the general path: zero only
-    vm = np.where(graze, 1.0, v_minus)
-    r0 = (v_plus + b * a_p) / vm
-    r1 = -b / vm
-    j10 = -R * (-e * a_p + a_m * r0)
-    j11 = -R * (e + a_m * r1)
-    half_tr = 0.5 * (r0 + j11)
-    det = r0 * j11 - r1 * j10
+    half_tr, det = trace_det(_b(d, TWO_PI), np.exp(-TWO_PI * d), R, p_plus, p_minus, v_plus,
+                             np.where(graze, 1.0, v_minus), d)
     disc = np.sqrt((half_tr * half_tr - det).astype(complex))
     # the stable pair: the larger root first, the other from the product
     big = half_tr + np.where(half_tr >= 0.0, 1.0, -1.0) * disc
@@ -223,9 +215,7 @@ class RigidOrbits(NamedTuple):
 def _cosine_roots(d, R, p0, pk, k):
     """Roots of the phase equation for ``p0 + pk cos(k t)`` (eq. 14 in closed form), shape (P, 2k)."""
     # F = (1 + R) Re[pk e^{i k phase}/(d + i k)] - p0 G = A cos(k phase + theta) - B
-    den = d * d + k * k
-    zr = (1.0 + R) * pk * d / den
-    zi = -(1.0 + R) * pk * k / den
+    _, zr, zi = harmonic_term(d, R, pk, k)
     A = np.hypot(zr, zi)
     theta = np.arctan2(zi, zr)
     B = p0 * phase_G_array(d, R)

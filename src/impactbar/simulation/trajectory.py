@@ -56,12 +56,10 @@ class EnergyAccount:
 
     Examples
     --------
-    >>> import math
     >>> from impactbar import BarModel, CosineLoad, InitialState, simulate
-    >>> model = BarModel(s=10.0, d=0.05, R=0.5, n_modes=2)
-    >>> account = simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0, n_modes=2),
-    ...                    2 * math.pi * 20).energy
-    >>> account.work > account.impact_loss > 0, account.relative_residual < 1e-8
+    >>> run = simulate(BarModel(s=10.0, d=0.05, R=0.5, n_modes=2), CosineLoad(0.3, 1.0),
+    ...                InitialState.rigid(-0.01, 0.0, n_modes=2), 125.0)
+    >>> run.energy.work > run.energy.impact_loss > 0, run.energy.relative_residual < 1e-8
     (True, True)
     """
 
@@ -254,11 +252,12 @@ class Trajectory:
 
     Examples
     --------
-    >>> import math
-    >>> from impactbar import BarModel, CosineLoad, InitialState, simulate
-    >>> model = BarModel(s=10.0, d=0.05, R=0.5, n_modes=2)
-    >>> run = simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0, n_modes=2),
-    ...                2 * math.pi * 20)
+    >>> from impactbar import BarModel, InitialState, SquareWaveLoad, simulate
+    >>> start = InitialState.rigid(-0.01, 0.0, n_modes=1)
+    >>> run = simulate(BarModel(s=10.0, d=0.05, R=0.5, n_modes=1), SquareWaveLoad(1.0, 1.2), start, 60.0)
+    >>> run  # a short repr: the model, the load, the time span, the impacts, why it stopped
+    Trajectory(BarModel(s=10.0, d=0.05, R=0.5, n_modes=1, impact='paper'), SquareWaveLoad(q=1.0,
+               kappa=1.2), t 0 -> 60, 26 impacts, status 't_end')
     >>> run.impact_times.shape == run.impact_velocities.shape == (run.n_impacts,)
     True
     >>> bool(run.end_displacement(run.impact_times[-1]) > -1e-9)  # at the stop when it strikes
@@ -358,20 +357,9 @@ class Trajectory:
         return tuple(out)
 
     def plot(self, ax=None, n: int = 4000):
-        """Draw the end displacement over the run, impacts marked
-        (:func:`impactbar.plotting.plot_trajectory`).
-
-        Parameters
-        ----------
-        ax : matplotlib.axes.Axes, optional
-            Drawn on a new figure's axes if omitted.
-        n : int
-            Time samples drawn.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
+        """Draw the end displacement over the run, impacts marked, on ``ax`` (a new figure's axes
+        if omitted) at ``n`` times: :func:`impactbar.plotting.plot_trajectory`, which returns the
+        axes."""
         from ..plotting.simulation import plot_trajectory
 
         return plot_trajectory(self, ax, n)

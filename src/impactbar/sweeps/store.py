@@ -370,18 +370,15 @@ def open_sweep(path):
     Examples
     --------
     >>> import pathlib, tempfile
-    >>> from impactbar import open_sweep, run_sweep  # needs xarray and zarr (extra distributed)
-    >>> from impactbar import CosineLoad
-    >>> from impactbar.sweeps import parse_spec
-    >>> spec = parse_spec({"task": "orbits",
-    ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
-    ...                    "load": CosineLoad(p0=0.5, pk=1.0, k=1).to_record(),
-    ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
+    >>> from impactbar import CosineLoad, open_sweep, run_sweep  # needs xarray and zarr (extra distributed)
+    >>> from impactbar.sweeps import Axis, SweepSpec
+    >>> spec = SweepSpec(task="orbits", model={"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+    ...                  load=CosineLoad(0.5, 1.0).to_record(), axes=(Axis("R", (0.0, 0.45, 0.9)),))
     >>> store = pathlib.Path(tempfile.mkdtemp()) / "r.zarr"
     >>> _ = run_sweep(spec, store, progress=False)
     >>> ds = open_sweep(store)
     >>> dict(ds.sizes)["R"], "impact_velocity" in ds
-    (10, True)
+    (3, True)
     """
     import xarray as xr
 
