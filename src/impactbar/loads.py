@@ -330,10 +330,9 @@ class Load(ABC):
         CosineLoad(p0=0.3, pk=2.0, k=1)
         """
         names = self.parameters.names
-        unknown = [k for k in changes if k not in names]
-        if unknown or not names:
-            raise ValueError(f"{unknown or list(changes)} not parameter(s) of {type(self).__name__}; "
-                             f"it has {list(names)}")
+        if not names or not all(k in names for k in changes):
+            unknown = [k for k in changes if k not in names] or list(changes)
+            raise ValueError(f"{unknown} not parameter(s) of {type(self).__name__}; it has {list(names)}")
         return type(self)(**{n: changes[n] if n in changes else getattr(self, n) for n in names})
 
     @property

@@ -10,18 +10,23 @@ from it: a field appears in the views named in its ``views``.
 
 The views (names used across the package):
 
-``"dict"``
+``"dict"`` (``"dict_one_impact"`` for a one-impact orbit)
     the JSON-ready summary (``to_dict``);
 ``"table"``
     one column per field in a table of results (``to_dataframe``, ``to_xarray``);
+``"branch"``
+    the orbit's columns along a branch of orbits (``Branch.to_dataframe``, ``to_xarray``);
 ``"sweep"``
     one variable per field in a sweep's store (per orbit);
 ``"si"``
     the field copied, as it is, into the SI results of :mod:`impactbar.physical`;
-``"cli"``
+``"cli"`` (``"cli_rock"``: the drilling table)
     a column of the CLI's tables (its ``label`` and ``fmt``);
 ``"repr"``
     a number in the short ``repr`` (its ``label`` and ``fmt``).
+
+A view name is a plain string: a field in no view is still declared (its long name and units
+label it wherever it is shown by name).
 
 Examples
 --------
@@ -41,6 +46,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -225,7 +231,7 @@ class Schema(tuple):
             return key in self.names
         return super().__contains__(key)
 
-    @property
+    @cached_property
     def names(self) -> tuple[str, ...]:
         """The fields' names, in order."""
         return tuple(f.name for f in self)
