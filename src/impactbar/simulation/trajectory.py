@@ -277,14 +277,6 @@ class Trajectory:
     _segments: _Segments = field(repr=False)
     n_release_retries: int = 0
 
-    #: the declared fields, one value per impact: the columns of :meth:`to_dataframe` (``time``,
-    #: ``velocity``) and the variables of :meth:`to_xarray` (``impact_time``, ``impact_velocity``)
-    fields: ClassVar[Schema] = Schema(
-        Field("impact_times", "time of the impact (load frame)", per="impact", element="time",
-              views={"table"}),
-        Field("impact_velocities", "velocity u_t(1, t-) of the struck end before the impact",
-              per="impact", element="velocity", views={"table"}))
-
     def __repr__(self) -> str:
         """One line: model, load, time span, impacts, status (not the arrays)."""
         return f"{type(self).__name__}({', '.join(self._repr_items())})"
@@ -293,6 +285,14 @@ class Trajectory:
         """The items of the repr, in order; a subclass extends the list (its own numbers)."""
         return [repr(self.model), repr(self.load), f"t {self.t0:.6g} -> {self.t_end:.6g}",
                 f"{self.impact_times.size} impacts", f"status {str(self.status)!r}"]
+
+    #: the declared fields, one value per impact: the columns of :meth:`to_dataframe` (``time``,
+    #: ``velocity``) and the variables of :meth:`to_xarray` (``impact_time``, ``impact_velocity``)
+    fields: ClassVar[Schema] = Schema(
+        Field("impact_times", "time of the impact (load frame)", per="impact", element="time",
+              views={"table"}),
+        Field("impact_velocities", "velocity u_t(1, t-) of the struck end before the impact",
+              per="impact", element="velocity", views={"table"}))
 
     @property
     def n_impacts(self) -> int:
