@@ -56,6 +56,7 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate  # noqa: E402
+from impactbar.dynamics import monodromy  # noqa: E402
 from impactbar.dynamics.implementations import use_reference  # noqa: E402
 from impactbar.orbits import stability  # noqa: E402
 from impactbar.orbits.one_impact import _periodic_orbits_general  # noqa: E402
@@ -165,12 +166,12 @@ def bench_modes(rep):
              ("square wave, 64 modes", BarModel(5.0, 0.1, 0.5, 64), SquareWaveLoad(1.0, 1.2), 3, "<= 40 ms"),
              ("cosine, 256 modes", BarModel(5.0, 0.1, 0.5, 256), CosineLoad(0.6, 1.0), 3, "<= 30 ms")]
     for name, model, load, r, goal in cases:
-        keep = stability.STRUCTURED_FROM
-        stability.STRUCTURED_FROM = 10**9  # every multiplier by the dense eigenvalue problem
+        keep = monodromy.STRUCTURED_FROM
+        monodromy.STRUCTURED_FROM = 10**9  # every multiplier by the dense eigenvalue problem
         try:
             base = cpu_median(lambda model=model, load=load: periodic_orbits(model, load), max(r, 3))
         finally:
-            stability.STRUCTURED_FROM = keep
+            monodromy.STRUCTURED_FROM = keep
         new = cpu_median(lambda model=model, load=load: periodic_orbits(model, load), max(r, 3))
         row(f"periodic_orbits, {name}", base * 1e3, new * 1e3, "ms", goal)
     model, load = BarModel(5.0, 0.1, 0.5, 256), CosineLoad(0.6, 1.0)

@@ -19,8 +19,9 @@ from impactbar import BarModel, CosineLoad, periodic_orbits, physical
 
 
 def _clear_caches():
-    from impactbar.dynamics import _characteristics, impact
-    from impactbar.orbits import stability, wave
+    from impactbar.laws.wave import _characteristics, impact
+    from impactbar.laws.wave import periodic as wave
+    from impactbar.orbits import stability
 
     # (getattr: an older tree, timed for comparison, may lack some of these caches; the wave law's
     # Fourier moment tables too, which from 64 modes on were timed once per run, not per call)

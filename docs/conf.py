@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import inspect
 import os
+import re
 from pathlib import Path
 
 from sphinx.ext import autosummary as _autosummary
@@ -129,8 +130,10 @@ def _write_api() -> None:
             continue
         title = "Top level: ``impactbar``" if modname == "impactbar" else f"``{modname}``"
         first = (inspect.getdoc(mod) or "").split("\n\n")[0]
-        lines += [title, "-" * len(title), "", first if modname != "impactbar" else "", "",
-                  f".. module:: {modname}", "", f".. currentmodule:: {modname}", "",
+        # the module's target first: placed after the summary, docutils hands its id on to the
+        # autosummary table, which writes no id, and every link to the module pointed at nothing
+        lines += [title, "-" * len(title), "", f".. module:: {modname}", "",
+                  first if modname != "impactbar" else "", "", f".. currentmodule:: {modname}", "",
                   ".. autosummary::", "   :toctree: api",
                   "   :nosignatures:", ""]
         lines += [f"   {n}" for n in names]
@@ -192,8 +195,9 @@ numpydoc_xref_aliases = _xref_aliases()
 nitpick_ignore_regex = [
     ("py:.*", r"(numpy|scipy|pandas|xarray|pint|dask|distributed|zarr|matplotlib|dataclasses|"
               r"enum|collections|concurrent)(\..*)?"),
-    ("py:.*", r"impactbar\.(dynamics|orbits\.(rigid|wave|one_impact|phase|stability)|"
-              r"_shared|sweeps\.(spec|run|store|tasks)|continuation\.(engine|core))(\..*)?"),
+    ("py:.*", r"impactbar\.(dynamics|orbits\.(rigid|one_impact|multi_impact|phase|stability)|"
+              r"laws\.(base|paper|wave|rodrock)|_shared|sweeps\.(spec|run|store|tasks)|"
+              r"continuation\.(engine|core))(\..*)?"),
 ]
 # Short names in the first line of a docstring, which the API tables show outside their class or
 # module (so ``rank`` cannot tell ``Admissibility.rank`` from another ``rank``); the pages resolve them.
@@ -236,8 +240,36 @@ def _resolve_short(app, env, node, contnode):
     return None
 
 
+#: a ``[docs]`` link of a highlighted source page (sphinx.ext.viewcode) and the block it stands in
+_BACKLINK = re.compile(r'(<div class="viewcode-block" id="([^"]+)">\s*<a class="viewcode-back" '
+                       r'href="[^"#]*?([^"#/]+)\.html#)([^"]*)"')
+
+
+def _fix_viewcode_backlinks(app, pagename, templatename, context, doctree):
+    """``html-page-context``: the ``[docs]`` links of the source pages point at the object's anchor.
+
+    viewcode keeps one documented module name per source module and writes every backlink as that
+    name plus the object's name, so where a module's objects are documented under two modules
+    (``impactbar.RodRock`` and ``impactbar.laws.rock_periodic_orbits``, both from
+    ``impactbar.laws.rodrock``) half the links named an anchor that does not exist. Each API page
+    documents one object, ``api/<module>.<name>.html``, so the anchor is that module plus the
+    block's name."""
+    if not pagename.startswith("_modules/") or "body" not in context:
+        return
+
+    def fix(m):
+        name, stem = m.group(2), m.group(3)
+        top = name.split(".")[0]
+        if not stem.endswith("." + top):
+            return m.group(0)
+        return f'{m.group(1)}{stem[: -len(top)]}{name}"'
+
+    context["body"] = _BACKLINK.sub(fix, context["body"])
+
+
 def setup(app):
     app.connect("missing-reference", _resolve_short)
+    app.connect("html-page-context", _fix_viewcode_backlinks)
 
 
 _write_api()  # before Sphinx looks for source files, so autosummary sees it

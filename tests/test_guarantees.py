@@ -325,7 +325,7 @@ def test_orbits_finite_invariant_and_scale_free(model, load, exponent):
         if np.all(np.isfinite(o.multipliers)) and model.n_modes <= 1:
             # multiplier product = det of the impact map's Jacobian (Liouville + saltation)
             M = model.n_modes + 1
-            from impactbar.orbits.one_impact import _impact_states
+            from impactbar.laws.paper.periodic import _impact_states
             from impactbar.orbits.stability import impact_map_jacobian
             yp, ym = _impact_states(model, load, o.phase)
             det = np.linalg.det(impact_map_jacobian(model, load, o.phase, yp, ym))

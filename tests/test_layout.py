@@ -85,3 +85,42 @@ def test_no_module_over_800_lines():
     long = {str(p.relative_to(top)): n for p in top.rglob("*.py")
             if (n := len(p.read_text(encoding="utf-8").splitlines())) > 800}
     assert long == {}
+
+
+SOLVERS = ("impactbar.orbits", "impactbar.simulation", "impactbar.continuation")
+
+
+def test_laws_and_the_model_import_no_solver():
+    """Each contact law is a package below the solvers (issue 37): no module of ``impactbar.laws``,
+    nor ``impactbar.model`` (which holds a law), reaches the orbit solvers, the simulator or the
+    continuation, directly or through another module; so following a model through
+    ``periodic_orbits`` never climbs back up a layer."""
+    g = grimp.build_graph("impactbar", cache_dir=None, exclude_type_checking_imports=True)
+    laws = sorted(m for m in g.modules if m.startswith("impactbar.laws"))
+    assert {"impactbar.laws.paper", "impactbar.laws.wave", "impactbar.laws.rodrock"} <= set(laws)
+    for m in [*laws, "impactbar.model"]:
+        up = {u for u in g.find_upstream_modules(m) if u.startswith(SOLVERS)}
+        assert up == set(), (m, sorted(up))
+
+
+def test_every_law_hook_the_solvers_call_is_declared_on_the_base():
+    """Every ``law.<name>`` the solvers read (orbits, simulation, continuation, drives) is declared on
+    :class:`~impactbar.laws.ContactLaw` with a docstring, so that a new law knows what to provide."""
+    import re
+
+    import impactbar
+    from impactbar.laws import ContactLaw
+
+    top = Path(impactbar.__file__).parent
+    called = set()
+    for sub in ("orbits", "simulation", "continuation", "drives"):
+        for p in (top / sub).rglob("*.py"):
+            code = [ln for ln in p.read_text(encoding="utf-8").splitlines()
+                    if not ln.lstrip().startswith(">>>")]  # (not a docstring's example)
+            called |= set(re.findall(r"\blaw\.([a-z_]+)\b", "\n".join(code)))
+    assert {"impact_map", "window", "orbit_state", "phase_roots", "contact"} <= called
+    missing = sorted(n for n in called if not hasattr(ContactLaw, n))
+    assert missing == []
+    for n in called:  # a method has its docstring, a flag its entry among the class's attributes
+        member = getattr(ContactLaw, n)
+        assert member.__doc__ if callable(member) else f"    {n} : " in ContactLaw.__doc__, n

@@ -45,11 +45,18 @@ for o in found:
 # ---------------------------------------------
 # The rigid-limit identity ``v = F_mean / (f m (1 + R))`` (theory §4) predicts the impact velocity of
 # any one-impact motion; the flexible piston follows it, and the motion stays stable only in a band
-# of mean forces (theory §6).
+# of mean forces (theory §6). One-impact motions exist only below the existence edge (eq. 38:
+# ``k p0/pk`` at most about ``(1/pi)(1 + R)/(1 - R)``, here with the damping), so the sweep runs up
+# to that mean force for this amplitude: above it there is no one-impact motion to plot. Each mean
+# force has two motions, a stable and an unstable one in the band, two unstable ones below it.
 import matplotlib.pyplot as plt
 import numpy as np
 
-means = np.linspace(500, 2100, 25)
+from impactbar.orbits.charts import pneumatic_existence_edge
+
+F_edge = float(pneumatic_existence_edge(hammer.R, hammer.d, 1)) * 2150.0  # N, for 2150 N amplitude
+print(f"one-impact motions exist up to a mean force of {F_edge:.0f} N")
+means = np.linspace(400, F_edge, 25)
 rows = []
 for F in means:
     cfg = {**config, "force": {**config["force"], "mean": f"{F} N"}}

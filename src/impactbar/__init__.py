@@ -5,11 +5,13 @@ The public API; everything else is private.
 Layout, bottom to top (each layer imports only from the layers below it):
 
 - the core, on plain dimensionless arrays (numpy, scipy, numba only):
-  ``dynamics`` (closed-form modal flow, certified zero search, compiled kernel), then ``model``
-  (:class:`BarModel`) and ``loads`` (periodic loads with their exact modal response), then
-  ``orbits`` (periodic orbits, admissibility, stability, charts) and ``simulation`` (the
-  event-driven simulator and the random-start experiments), then ``continuation`` (branches of
-  periodic motions and their bifurcations; pandas, xarray, matplotlib only inside its views);
+  ``dynamics`` (closed-form modal flow, certified zero search, compiled kernel), then ``loads``
+  (periodic loads with their exact modal response) and ``drives``, then ``laws`` (the impact laws,
+  each a package with its numerics: ``paper``, ``wave``, ``rodrock``), then ``model``
+  (:class:`BarModel`), then ``simulation`` (the event-driven simulator and the random-start
+  experiments), then ``orbits`` (periodic orbits, admissibility, stability, charts; simulations are
+  its guesses), then ``continuation`` (branches of periodic motions and their bifurcations; pandas,
+  xarray, matplotlib only inside its views);
 - the product, on top of the core: ``physical`` (SI units through pint), ``sweeps`` (dask,
   xarray, zarr), ``plotting`` and ``paper`` (matplotlib), ``cli`` (one module per subcommand).
 
@@ -45,13 +47,13 @@ _LAZY = {
     "continue_orbit": ".continuation",
     "BifurcationCurve": ".continuation",
     "continue_bifurcation": ".continuation",
-    "WaveImpact": ".dynamics",
+    "WaveImpact": ".laws.wave",
     "RodRock": ".laws",
     "RodSegment": ".laws",
     "BilinearRock": ".laws",
     "single_blow": ".laws",
-    "Blow": ".dynamics.rodrock",
-    "wave_impact": ".dynamics",
+    "Blow": ".laws.rodrock",
+    "wave_impact": ".laws.wave",
     "InitialState": ".simulation",
     "Trajectory": ".simulation",
     "EnergyAccount": ".simulation",

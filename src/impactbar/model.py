@@ -2,18 +2,15 @@
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
 from ._shared.schema import Field, Schema
 from ._shared.validate import check_int, check_real
-
-if TYPE_CHECKING:
-    from .laws.base import ContactLaw
+from .laws import ContactLaw, get_law
 
 __all__ = ["BarModel"]
 
@@ -25,15 +22,6 @@ MAX_STIFFNESS = 1e12
 #: Largest finite double: the modal frequencies ``s n pi`` (with ``n = 1`` for the rigid bar's scale
 #: ``s pi``) and the damping's square ``d**2`` (in every mode's decay, eq. 8) must stay below it.
 _FLOAT_MAX = float(np.finfo(float).max)
-
-
-@functools.cache
-def _law_table():
-    """:mod:`impactbar.laws.base`, imported on first use (the law objects sit above the solvers they
-    drive) and then at the cost of a cache lookup (an import statement costs a microsecond)."""
-    from .laws import base
-
-    return base
 
 
 @dataclass(frozen=True)
@@ -100,7 +88,7 @@ class BarModel:
         object.__setattr__(self, "d", check_real("d", self.d, lo=0.0))
         object.__setattr__(self, "R", check_real("R", self.R, lo=0.0, hi=1.0))
         object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=MAX_MODES))
-        law = _law_table().get_law(self.impact)  # ValueError listing the names
+        law = get_law(self.impact)  # ValueError listing the names
         object.__setattr__(self, "_law", law)
         if self.impact is not law.name:
             object.__setattr__(self, "impact", law.name)
@@ -123,8 +111,6 @@ class BarModel:
     def law(self) -> ContactLaw:
         """The impact law as an object (:class:`impactbar.laws.ContactLaw`)."""
         if self._law.name != self.impact:  # a name set past the validation: looked up again
-            from .laws.base import get_law
-
             return get_law(self.impact)
         return self._law
 

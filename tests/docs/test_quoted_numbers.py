@@ -90,3 +90,50 @@ def test_the_R0_stable_band_is_quoted_as_computed(page):
 def test_the_hydraulic_edge_at_R0_is_sqrt2(page):
     assert _quoted(page, r"(sqrt ?2[`$] at [`$]R = 0)")
     assert hydraulic_existence_edge(RIGID) == pytest.approx(math.sqrt(2), abs=2e-13)
+
+
+def _readme_block(marker: str) -> tuple[str, dict]:
+    """The README's Python block holding ``marker``, executed: its text and its namespace."""
+    blocks = re.findall(r"```python\n(.*?)```", PAGES["README.md"].read_text(), flags=re.S)
+    block = next(b for b in blocks if marker in b)
+    namespace = {"__name__": "__readme__"}
+    exec(compile(block, "README.md", "exec"), namespace)
+    return block, namespace
+
+
+def test_the_continuation_example_s_doubling_and_fold_are_quoted_as_computed():
+    block, ns = _readme_block("continue_orbit(start")
+    pd, fold = (float(x) for x in re.search(r"period doubling \(([0-9.]+)\) and a fold \(([0-9.]+)\)",
+                                             block).groups())
+    kinds = {e.kind: e.value for e in ns["branch"].events}
+    assert abs(kinds["period-doubling"] - pd) <= 0.5e-4 and abs(kinds["fold"] - fold) <= 0.5e-4
+
+
+def test_the_rod_rock_example_s_efficiency_and_lundbergs_optimum_are_quoted_as_computed():
+    from scipy.optimize import brentq
+
+    block, ns = _readme_block("single_blow(")
+    quoted = re.search(r"blow\.efficiency  # ([0-9.]+)", block).group(1)
+    alpha, gamma = 1.25, 10.0
+    closed = 2 / alpha * (1 - math.exp(-alpha)) ** 2 * (1 - 1 / gamma)
+    assert _agrees(quoted, ns["blow"].efficiency) and _agrees(quoted, closed)
+    best, at = _quoted("README.md", r"the maximum ([0-9.]+) at alpha = ([0-9.]+)")
+    a = brentq(lambda x: 2 * x * math.exp(-x) - (1 - math.exp(-x)), 0.5, 3.0, xtol=1e-14)
+    assert _agrees(at, a) and _agrees(best, 2 / a * (1 - math.exp(-a)) ** 2)
+
+
+def test_the_wave_law_s_multipliers_on_the_pneumatic_preset_are_quoted_as_computed():
+    """README: on the pneumatic preset's stable orbit (8 flexible modes, as theory §4b measures it)
+    the largest multiplier is 0.976 under eq. 10 and R e^(-pi d) = 0.115 under the wave law."""
+    from impactbar import physical
+
+    paper_q, wave_q = _quoted("README.md", r"multipliers drop from ([0-9.]+) \(eq\. 10\) to "
+                              r"`R e\^\(-pi d\)` = ([0-9.]+)")
+    largest = {}
+    for law in ("paper", "wave"):
+        h = physical.Hammer.from_config({**physical.PRESETS["pneumatic-drill"],
+                                         "model": {"n_modes": 8, "impact": law}})
+        largest[law] = [o.max_abs_multiplier for o in physical.orbits(h) if o.stable]
+    assert len(largest["paper"]) == len(largest["wave"]) == 1
+    assert _agrees(paper_q, largest["paper"][0]) and _agrees(wave_q, largest["wave"][0])
+    assert _agrees(wave_q, h.R * math.exp(-math.pi * h.d))

@@ -52,3 +52,17 @@ def test_the_paste_check_can_fail():
     for line in ["for i in range(2):", "    x = i", "y = 1", ""]:
         console.push(line)
     assert console.errors == ["SyntaxError"]
+
+
+def test_the_readme_opens_with_a_paragraph_and_a_figure_then_the_user_s_and_the_developer_s_command():
+    """The user's command and the developer's stand apart, one line each, the user's first, so that
+    pasting the first does not also run the test suite; the figure above them exists."""
+    text = README.read_text()
+    bash = re.findall(r"```bash\n(.*?)```", text, flags=re.S)
+    user, dev = bash[0].strip(), bash[1].strip()
+    assert "\n" not in user and 'pip install ".[all]"' in user and "impactbar paper" in user
+    assert "pytest" not in user and "ruff" not in user
+    assert "\n" not in dev and 'pip install -e ".[test]"' in dev and dev.endswith("python -m pytest")
+    images = re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", text)
+    assert images and all((README.parent / i).is_file() for i in images)
+    assert text.index(images[0]) < text.index("```bash")

@@ -10,8 +10,9 @@ import pytest
 from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, periodic_orbits
 from impactbar.dynamics.implementations import implementation, use_reference
 from impactbar.dynamics.modal import fundamental
+from impactbar.laws.paper.periodic import _impact_states
 from impactbar.orbits import impact_map_jacobian
-from impactbar.orbits.one_impact import _impact_states, _periodic_orbits_general, orbit_multipliers
+from impactbar.orbits.one_impact import _periodic_orbits_general, orbit_multipliers
 from impactbar.orbits.rigid import STATUS, rigid_cosine_orbits, rigid_multipliers
 from impactbar.orbits.stability import floquet_multipliers, period_fundamental, sort_multipliers
 
@@ -314,25 +315,26 @@ def test_structured_multipliers_equal_dense_eigvals(rng, n_modes):
 def test_compiled_aberth_gives_up_cleanly():
     """The compiled Aberth sweeps: the same zeros as dense eigvals when they settle, ``None`` (so the
     dense method takes over) when the sweeps run out or a start sits on a pole, never an error."""
-    from impactbar.orbits import stability
-    from impactbar.orbits._aberthkernel import aberth_iterate
+    from impactbar.dynamics._aberthkernel import aberth_iterate
+    from impactbar.dynamics.monodromy import _aberth
+    from impactbar.laws.paper.stability import _structured_parts
 
     model, load = BarModel(5.0, 0.1, 0.5, 48), CosineLoad(0.6, 1.0)
     ph = _phases(model, load)[0][0]
     yp, ym = _impact_states(model, load, ph)
-    parts = stability._structured_parts(model, load, ph, yp, ym)
+    parts = _structured_parts(model, load, ph, yp, ym)
     dense = np.linalg.eigvals(impact_map_jacobian(model, load, ph, yp, ym))
-    mu = stability._aberth(*parts)
+    mu = _aberth(*parts)
     assert mu is not None and mu.shape == (2 * 49,)
     assert _set_distance(mu, dense) < 1e-10
-    assert stability._aberth(*parts, iters=1) is None
+    assert _aberth(*parts, iters=1) is None
     x = np.full(4, 1.0 + 0.0j)  # on the pole of a block with trace 1, determinant 0
     assert not aberth_iterate(x, np.ones(2), np.zeros(2), np.zeros((4, 2)), np.zeros(2, complex), 5, 1e-12)
     a, b, c, e, U, V, ut, vt = parts  # factors that are not the extended state's: refused
     V = V.copy()
     V[3, 0, 0] = 1.0
     with pytest.raises(ValueError, match="extended state"):
-        stability._aberth(a, b, c, e, U, V, ut, vt)
+        _aberth(a, b, c, e, U, V, ut, vt)
 
 
 def test_heavy_damping_keeps_the_dense_method():
@@ -784,7 +786,7 @@ if sys.argv[1] == "primed":  # the rigid sweep chunk compiled first (plain kerne
 
     n = 4  # (rigid_cosine_orbits runs the compiled loop at any size)
     rigid_cosine_orbits(np.full(n, 0.1), np.full(n, 0.5), np.full(n, 0.6), np.ones(n), 1)
-from impactbar.orbits._aberthkernel import aberth_iterate
+from impactbar.dynamics._aberthkernel import aberth_iterate
 
 rng = np.random.default_rng(7)
 M = 48

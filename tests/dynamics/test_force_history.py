@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, CosineLoad, periodic_orbits
-from impactbar.dynamics.impact import wave_impact
+from impactbar.laws.wave.impact import wave_impact
 from wave_reference import march, piston_stress_extremes, steady_blows
 
 
@@ -148,7 +148,7 @@ def test_piston_stress_extremes_against_the_reference(case):
 # ---------------------------------------------------------------- the jump locator itself --------
 def _coefficients(N, y, J, K, smooth):
     """``(a, b)`` of the unfolded field ``W = sum -J B1 - K B2 + smooth`` (theory §4c), ``n <= N``."""
-    from impactbar.dynamics._jumps import _singular_coefficients
+    from impactbar.laws.wave._jumps import _singular_coefficients
 
     c = _singular_coefficients(N, y, (J, K, np.zeros(len(y)))) + smooth
     return np.concatenate(([0.7], 2 * c.real)), np.concatenate(([0.0], 2 * c.imag))
@@ -159,8 +159,8 @@ def test_jumps_located_from_the_coefficients():
     first 64 Fourier coefficients: the jumps come back to 2e-5 in position and 2e-3 in size (the
     smooth part's low modes limit the fit), and the fields rebuilt from them agree to 2e-3 away
     from the jumps, where the series alone is 0.19 off (its Gibbs overshoot)."""
-    from impactbar.dynamics._characteristics import _LocatedPiston, _Piston
-    from impactbar.dynamics._jumps import locate_jumps
+    from impactbar.laws.wave._characteristics import _LocatedPiston, _Piston
+    from impactbar.laws.wave._jumps import locate_jumps
 
     N = 64
     n = np.arange(1, N + 1)
@@ -191,7 +191,7 @@ def test_jumps_located_from_the_coefficients():
 def test_no_jumps_in_a_smooth_field_or_a_series_that_is_the_field():
     """A smooth field (coefficients falling exponentially) and a random truncated series (the field
     itself, as a random modal state is) have no jumps to locate: the fields stay the series."""
-    from impactbar.dynamics._jumps import locate_jumps
+    from impactbar.laws.wave._jumps import locate_jumps
 
     rng = np.random.default_rng(7)
     N = 96

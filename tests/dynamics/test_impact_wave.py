@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, CosineLoad, SquareWaveLoad
-from impactbar.dynamics.impact import wave_impact, window_drive
+from impactbar.laws.wave.impact import wave_impact, window_drive
 from wave_reference import random_state
 
 NO_DRIVE = CosineLoad(0.0, 0.0)
@@ -251,7 +251,7 @@ def test_bad_input():
 def test_window_load_integral_against_the_load_flow(load):
     """The drive's integral over the window (closed form, piece by piece) against the load's own
     exact rigid-mode flow ``q'' = p``."""
-    from impactbar.dynamics.impact import _WindowLoad
+    from impactbar.laws.wave.impact import _WindowLoad
 
     for s, t0 in ((0.3, 5.0), (7.0, 2 * math.pi - 0.1), (7.0, 1.0)):
         th = np.linspace(0, 2, 13)
@@ -307,7 +307,7 @@ def test_scalar_root_search_matches_the_array_forms(load):
     """The contact solver's scalar evaluations in its root searches (``A1``, ``Acum1``) against its
     array forms, on random states that separate and re-contact: same contact intervals and
     post-window states to 1e-12, on the search points and at random points."""
-    from impactbar.dynamics.impact import _Contact
+    from impactbar.laws.wave.impact import _Contact
 
     rng = np.random.default_rng(7)
     separated = 0

@@ -248,7 +248,7 @@ def test_the_kernel_view_is_the_only_path_from_a_load_into_compiled_code():
     # in a fresh process, so that no other test's direct kernel calls add signatures
     code = """
 import numba, impactbar.orbits._admkernel as A
-import impactbar.dynamics._kernel as K, impactbar.dynamics._windowkernel as KW
+import impactbar.dynamics._kernel as K, impactbar.laws.wave._windowkernel as KW
 from impactbar import *  # noqa: F403
 for impact in ("paper", "wave"):
     model = BarModel(4.0, 0.05, 0.6, 3, impact=impact)
@@ -274,7 +274,7 @@ def test_the_wave_kernels_and_the_crossing_search_compile_once_per_run(tmp_path)
     caller), the wave law's helpers, the crossing search, the flow and the sort of the window's
     jumps (``sort_head``: its count starts as the literal 0) each hold one signature."""
     code = """
-import impactbar.dynamics._kernel as K, impactbar.dynamics._wavekernel as WK
+import impactbar.dynamics._kernel as K, impactbar.laws.wave._wavekernel as WK
 import impactbar.dynamics._flightkernel as FK
 from impactbar import *  # noqa: F403
 for n, load in ((8, CosineLoad(0.6, 1.0)), (16, SquareWaveLoad(0.8, 1.0))):
@@ -327,7 +327,8 @@ def test_registry_choice_is_per_thread():
 
 def test_no_module_global_chooses_an_implementation():
     """The old switches are gone from the package (the registry replaced them)."""
-    from impactbar.orbits import admissibility, one_impact, wave
+    from impactbar.laws.wave import periodic as wave
+    from impactbar.orbits import admissibility, one_impact
     from impactbar.sweeps import store
 
     S = importlib.import_module("impactbar.simulation.simulate")

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, periodic_orbits
-from impactbar.dynamics import _windowkernel as KW
-from impactbar.dynamics import impact
-from impactbar.dynamics._characteristics import _Contact
 from impactbar.dynamics.implementations import use_reference
+from impactbar.laws.wave import _windowkernel as KW
+from impactbar.laws.wave import impact
+from impactbar.laws.wave._characteristics import _Contact
 
 LOADS = [CosineLoad(0.6, 1.0), FourierLoad(0.5, [1.0, 0.0, 0.3j]), SquareWaveLoad(1.0, 1.4),
          SquareWaveLoad(0.7, 1.9)]
@@ -84,7 +84,7 @@ def test_compiled_moments_of_a_piecewise_constant_drive_against_quad(n):
     half of the window, split at the jumps."""
     from scipy.integrate import quad
 
-    from impactbar.dynamics._characteristics import _GL_W, _GL_X, _WindowLoad
+    from impactbar.laws.wave._characteristics import _GL_W, _GL_X, _WindowLoad
 
     for load in LOADS[2:]:
         for s, t0 in ((0.35, 0.1), (3.0, 2.5), (10.0, 6.2), (33.0, 1.38)):

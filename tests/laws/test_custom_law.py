@@ -1,6 +1,8 @@
 """The developer page's worked example (docs/developers.md includes ``VelocityRestitution`` from
-this file): a law added as one class plus one table entry runs through the simulator and the
-multi-impact orbit solver, checked against closed forms of the rigid bar."""
+this file): a law added as one class plus one table entry runs through the simulator, the orbit
+solvers (``find_orbit``, and ``periodic_orbits`` by Newton's method from guesses), the continuation
+and the sweeps, checked against closed forms of the rigid bar (issue 37: nothing outside this file
+changes for it)."""
 
 import math
 from dataclasses import dataclass
@@ -10,6 +12,7 @@ import pytest
 
 from impactbar import BarModel, CosineLoad, InitialState, find_orbit, periodic_orbits, simulate
 from impactbar.laws import LAWS, ContactLaw, InstantImpact
+from impactbar.orbits import orbit_multipliers
 
 
 @dataclass(frozen=True)
@@ -20,6 +23,8 @@ class VelocityRestitution(ContactLaw):
     w_ref: float = 1.0
     name = "velocity"
     instantaneous = False  # the compiled kernel applies a constant R only: the driver calls contact
+    has_phase_equation = False  # periodic_orbits: Newton's method from the paper law's orbits
+    parameters = ("w_ref",)  # continued like R or p0
 
     def window(self, model):
         return 0.0
@@ -90,5 +95,67 @@ def test_periodic_orbit_by_the_multi_impact_solver():
 def test_what_the_law_leaves_out_is_refused_by_name():
     model = BarModel(s=10.0, d=0.0, R=0.7, n_modes=0, impact=VelocityRestitution())
     with pytest.raises(NotImplementedError, match=r"'velocity' \(VelocityRestitution\) does not provide "
-                                                  r"phase_roots\(\)"):
-        periodic_orbits(model, CosineLoad(0.3, 1.0))
+                                                  r"multipliers\(\)"):
+        orbit_multipliers(model, CosineLoad(0.3, 1.0), 1.0)
+    with pytest.raises(ValueError, match=r"does not provide phase_roots\(\)"):
+        model.law.phase_roots(model, CosineLoad(0.3, 1.0))
+
+
+def _closed_form(law, model, p0, pk):
+    """The rigid bar's one-impact orbits at ``d = 0`` under the law, independently of the solvers:
+    the period's momentum ``2 pi p0`` is what the impact takes, ``(1 + e(V)) V`` with
+    ``e(V) = R / (1 + V / w_ref)`` (a quadratic in ``V``); the flight from ``-e V`` back to the stop,
+    ``2 pi (-e V) + int_0^{2 pi} (2 pi - t) p(phase + t) dt = 0``, gives ``sin(phase) = (V - pi p0) / pk``
+    for ``p = p0 + pk cos t``. Returns ``V`` and the two phases in ``[0, 2 pi)``."""
+    w, R, c = law.w_ref, model.R, 2.0 * math.pi * p0
+    # V^2 / w + V (1 + R - c / w) - c = 0
+    a, b = 1.0 / w, 1.0 + R - c / w
+    V = (-b + math.sqrt(b * b + 4.0 * a * c)) / (2.0 * a)
+    x = math.asin((V - math.pi * p0) / pk)
+    return V, sorted(((x % (2 * math.pi)), (math.pi - x) % (2 * math.pi)))
+
+
+def test_a_law_added_in_this_file_reaches_the_orbits_continuation_and_sweeps(monkeypatch, tmp_path):
+    """Issue 37: the law above, registered by name and nothing else changed, reaches
+    ``periodic_orbits`` (by Newton's method from guesses: it has no phase equation),
+    ``continue_orbit`` (in the load's ``p0`` and in its own ``w_ref``) and a sweep, each checked
+    against the rigid bar's closed form (:func:`_closed_form`)."""
+    pytest.importorskip("xarray")
+    from impactbar import continue_orbit
+    from impactbar.sweeps import open_sweep, parse_spec, run_sweep
+
+    monkeypatch.setitem(LAWS, "velocity", VelocityRestitution)
+    model = BarModel(s=10.0, d=0.0, R=0.9, n_modes=0, impact="velocity")
+    law, load = model.law, CosineLoad(0.5, 1.0)  # one of the two orbits stable: no simulated guess
+
+    orbits = periodic_orbits(model, load)
+    V, phases = _closed_form(law, model, 0.5, 1.0)
+    assert [o.phase for o in orbits] == pytest.approx(phases, abs=1e-10)
+    for o in orbits:
+        assert o.impact_velocity == pytest.approx(V, rel=1e-10)
+    assert any(o.stable for o in orbits)
+
+    start = next(o for o in orbits if o.stable)
+    branch = continue_orbit(start, "p0", to=0.45)
+    assert str(branch.status) == "reached" and len(branch) > 3
+    for p0, o in zip(branch.values, branch.orbits, strict=True):
+        V, phases = _closed_form(law, model, p0, 1.0)
+        assert o.impact_velocity == pytest.approx(V, rel=1e-9)
+        assert min(abs(math.remainder(o.phase - ph, 2 * math.pi)) for ph in phases) < 1e-8
+    branch = continue_orbit(start, "w_ref", to=1.2)  # the law's own parameter
+    assert str(branch.status) == "reached"
+    for w, o in zip(branch.values, branch.orbits, strict=True):
+        assert o.model.law.w_ref == w
+        assert o.impact_velocity == pytest.approx(_closed_form(o.model.law, model, 0.5, 1.0)[0], rel=1e-9)
+
+    spec = parse_spec({"task": "orbits", "model": {"s": 10.0, "d": 0.0, "R": 0.9, "n_modes": 0,
+                                                   "impact": "velocity"},
+                       "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+                       "axes": {"p0": {"values": [0.45, 0.5]}}})
+    run_sweep(spec, tmp_path / "sweep.zarr", executor="threads", n_workers=1, progress=False)
+    ds = open_sweep(tmp_path / "sweep.zarr")
+    for i, p0 in enumerate((0.45, 0.5)):
+        V, phases = _closed_form(law, model, p0, 1.0)
+        assert int(ds["n_orbits"][i]) == 2 and not bool(ds["failed"][i])
+        np.testing.assert_allclose(ds["phase"][i, :2], phases, atol=1e-10)
+        np.testing.assert_allclose(ds["impact_velocity"][i, :2], V, rtol=1e-10)

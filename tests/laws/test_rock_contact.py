@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import impactbar as ib
-from impactbar.dynamics.impact import wave_impact
-from impactbar.dynamics.rockcontact import RockContact, rock_contact
+from impactbar.laws.rodrock.contact import RockContact, rock_contact
+from impactbar.laws.wave.impact import wave_impact
 
 
 def _law(length=3.0, impedance=1.0, k=50.0, gamma=10.0, bit_mass=0.0, feed=0.0):
@@ -143,7 +143,7 @@ def _two_blows(tau, feed, s=8.0, k=40.0, gamma=10.0, length=3.0, cells=16):
     ``4/s + 2 sum of the travel times``) with the rod at rest and the shank at its rest position
     (the law's assumption), and with the rod's waves and the bit's motion carried (both on fresh rock).
     Returns the work on rock of blow 2, ``(rest, carried)``."""
-    from impactbar.dynamics.rodrock import blow_grid, solve_blow
+    from impactbar.laws.rodrock.blow import blow_grid, solve_blow
 
     grid = blow_grid(s, [length], [1.0], [1.0], cells)
     n_p, dt = grid.piston_cells, grid.cell_time

@@ -154,7 +154,7 @@ def test_semi_infinite_rod_limit():
     """A stiff rock at the end of a long rod: within the first return trip the shank force and the
     energy into the rod are the wave law's (``wave_impact`` of a rigidly moving piston without drive,
     the rod of area ratio ``(1 + R)/(1 - R)``), to 1e-12."""
-    from impactbar.dynamics.impact import wave_impact
+    from impactbar.laws.wave.impact import wave_impact
     from impactbar.loads import CosineLoad
 
     s, R, V = 3.0, 0.4, 0.7
@@ -320,7 +320,7 @@ def test_computations_the_law_does_not_provide_are_refused_with_a_value_error():
                      rock=ib.BilinearRock(k=2.5, k_u=25.0))
     model = ib.BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
     load = ib.CosineLoad(0.5, 1.0)
-    calls = [lambda: law.phase_roots(model, load), lambda: law.orbit(model, load, 1.0, 1)]
+    calls = [lambda: law.phase_roots(model, load), lambda: law.orbit_state(model, load, 1.0)]
     for call in calls:
         with pytest.raises(ValueError, match=r"model\.impact: the impact law 'rodrock'") as info:
             call()

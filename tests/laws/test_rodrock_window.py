@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import impactbar as ib
-from impactbar.dynamics.rockcontact import BlowMap
+from impactbar.laws.rodrock.contact import BlowMap
 from impactbar.physical import Drifter
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "drifter_rock.toml"

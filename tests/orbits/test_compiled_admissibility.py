@@ -205,7 +205,7 @@ def test_enclose_zeros_prune_keeps_exactly_what_it_is_told():
 def test_start_state_is_periodic_under_fourier_loads():
     """The flexible modes' start state (from the periodic response, eqs. 10-13) is the fixed point of
     one period's flow followed by the impact law: ``q+ = q-``, ``v+ = -R v-`` mode by mode, to 1e-12."""
-    from impactbar.orbits.one_impact import _start_state
+    from impactbar.laws.paper.periodic import _start_state
 
     rng = np.random.default_rng(5)
     for _ in range(12):

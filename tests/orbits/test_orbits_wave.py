@@ -10,8 +10,8 @@ from scipy.integrate import quad
 from scipy.optimize import brentq
 
 from impactbar import BarModel, CosineLoad, SquareWaveLoad, periodic_orbits
-from impactbar.dynamics.impact import wave_impact
 from impactbar.dynamics.implementations import use_reference
+from impactbar.laws.wave.impact import wave_impact
 from modal_reference import central_difference_jacobian
 
 TWO_PI = 2 * math.pi
@@ -97,7 +97,7 @@ def test_orbit_is_a_fixed_point_of_the_independent_map(load):
 @pytest.mark.parametrize("load", [CosineLoad(0.3, 1.0), SquareWaveLoad(1.0, 1.3)])
 def test_jacobian_against_finite_differences(load):
     model = BarModel(s=10.0, d=0.005, R=0.5, n_modes=4, impact="wave")
-    from impactbar.orbits.wave import wave_impact_map_jacobian, wave_orbit_states
+    from impactbar.laws.wave.periodic import wave_impact_map_jacobian, wave_orbit_states
 
     for o in periodic_orbits(model, load):
         _, ye, ym, rate = wave_orbit_states(model, load, o.phase)
@@ -135,7 +135,7 @@ def test_impact_parameter_is_validated():
 
 def test_wave_existence_edge_matches_the_orbits():
     """Just below the edge there are orbits, just above none (pneumatic load, wave law)."""
-    from impactbar.orbits.wave import wave_existence_edge
+    from impactbar.laws.wave.periodic import wave_existence_edge
 
     for k, s in ((1, 5.0), (3, 12.0)):
         model = BarModel(s=s, d=0.004, R=0.3, n_modes=3, impact="wave")
@@ -147,8 +147,8 @@ def test_wave_existence_edge_matches_the_orbits():
 def test_stability_edges_under_the_wave_law():
     """The rigid-limit band of the wave law tends to the paper's ``1/sqrt(4 + pi^2) .. 1/pi`` at
     ``R = 0`` (theory §6); the paper's Schur criterion is refused under the wave law."""
+    from impactbar.laws.wave.periodic import wave_existence_edge
     from impactbar.orbits.charts import pneumatic_stability_edges
-    from impactbar.orbits.wave import wave_existence_edge
 
     model = BarModel(s=2e4, d=0.0, R=0.0, n_modes=0, impact="wave")
     edges = pneumatic_stability_edges(model, 1)
@@ -191,7 +191,7 @@ def test_phase_scan_reuses_its_samples_and_the_cached_flight_matrix():
     equispaced one plus 31 points around each sampled minimum of ``|r|``, and the cached flight
     matrix is the fundamental matrix over ``2 pi - 2/s``."""
     from impactbar.dynamics.modal import fundamental
-    from impactbar.orbits.wave import _flight_fundamental, _refined_grid, wave_phase_residual
+    from impactbar.laws.wave.periodic import _flight_fundamental, _refined_grid, wave_phase_residual
 
     model = wave(BarModel(s=12.0, d=0.01, R=0.3, n_modes=5))
     load = SquareWaveLoad(0.08, 1.2)
@@ -224,7 +224,7 @@ def test_square_wave_residual_compiled_as_wave_orbit_states(rng):
 
     from impactbar import PiecewiseConstantLoad
 
-    W = importlib.import_module("impactbar.orbits.wave")
+    W = importlib.import_module("impactbar.laws.wave.periodic")
     for trial in range(16):
         model = BarModel(s=float(rng.choice([0.5, 1.0, 3.0, 10.0, 60.0])), d=float(rng.choice([0.0, 0.02])),
                          R=float(rng.uniform(0.0, 0.95)), n_modes=int(rng.integers(0, 9)), impact="wave")
@@ -255,8 +255,8 @@ def test_states_from_the_phase_series_are_the_direct_ones(rng):
     every phase root a zero of the direct residual; a load with its own evaluation is computed
     phase by phase."""
     from impactbar import FourierLoad
-    from impactbar.dynamics.impact import window_drive
-    from impactbar.orbits import wave as W
+    from impactbar.laws.wave import periodic as W
+    from impactbar.laws.wave.impact import window_drive
 
     for trial in range(12):
         model = BarModel(s=float(rng.choice([1.0, 3.0, 10.0])), d=float(rng.choice([0.0, 0.03])),

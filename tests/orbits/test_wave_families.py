@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, SquareWaveLoad, periodic_orbits
-from impactbar.orbits.wave import wave_phase_families, wave_phase_residual, wave_phase_roots
+from impactbar.laws.wave.periodic import wave_phase_families, wave_phase_residual, wave_phase_roots
 
 RIGID = BarModel(1, 0, 0.9, 0, impact="wave")
 

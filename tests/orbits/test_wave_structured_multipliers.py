@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, CosineLoad, SquareWaveLoad, periodic_orbits
-from impactbar.orbits.wave import wave_floquet_multipliers, wave_orbit_states, wave_phase_roots
+from impactbar.laws.wave.periodic import wave_floquet_multipliers, wave_orbit_states, wave_phase_roots
 
 CASES = [
     (50, 0.0, 0.5, CosineLoad(0.6, 1.0)),

@@ -6,10 +6,9 @@ import json
 import numpy as np
 import pytest
 
-from impactbar import BarModel, SquareWaveLoad
+from impactbar import BarModel, SquareWaveLoad, wave_impact
 from impactbar import physical as ph
 from impactbar.cli import main
-from impactbar.dynamics import wave_impact
 from impactbar.physical.results import _cycle_length
 
 

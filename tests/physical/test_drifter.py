@@ -17,7 +17,7 @@ def _closed_form_si(m, F_s, F_r, x1, R):
 
 
 def test_issue19_preset_is_the_closed_form_in_si():
-    d = drifter_preset("drifter-issue19")
+    d = drifter_preset("hydraulic-drifter")
     assert d.bar.mass_kg == pytest.approx(5.6, rel=1e-8)
     assert d.stroke_force_N == pytest.approx(5600.0, rel=1e-12) == d.return_force_N
     v, T = _closed_form_si(d.bar.mass_kg, 5600.0, 5600.0, 0.0215, 0.215)
@@ -35,21 +35,21 @@ def test_issue19_preset_is_the_closed_form_in_si():
 
 
 def test_simulated_drifter_settles_on_the_orbit():
-    d = drifter_preset("drifter-issue19", valve={"delay": "0.5 ms"}, damping={"coefficient": "5 N*s/m"})
+    d = drifter_preset("hydraulic-drifter", valve={"delay": "0.5 ms"}, damping={"coefficient": "5 N*s/m"})
     o = d.orbit()
     tr, s = d.simulate(1.0, start_gap_m=0.03)
     assert s["blows"] > 20
     assert s["blow_frequency_Hz"] == pytest.approx(o.blow_frequency_Hz, rel=1e-8)
     assert s["impact_velocity_m_s"] == pytest.approx(o.impact_velocity_m_s, rel=1e-8)
     assert s["percussive_power_kW"] == pytest.approx(o.percussive_power_kW, rel=1e-7)
-    assert o.blow_frequency_Hz < drifter_preset("drifter-issue19").orbit().blow_frequency_Hz
+    assert o.blow_frequency_Hz < drifter_preset("hydraulic-drifter").orbit().blow_frequency_Hz
 
 
 def test_flexible_piston_is_close_to_the_rigid_one():
     """The 448 mm steel piston is stiff at these forces (s = 244): with 4 flexible modes the
     blow's frequency and energy stay within a percent of the rigid piston's."""
-    rigid = drifter_preset("drifter-issue19").orbit()
-    flex = drifter_preset("drifter-issue19", model={"n_modes": 4}).orbit()
+    rigid = drifter_preset("hydraulic-drifter").orbit()
+    flex = drifter_preset("hydraulic-drifter", model={"n_modes": 4}).orbit()
     assert flex.blow_frequency_Hz == pytest.approx(rigid.blow_frequency_Hz, rel=1e-2)
     assert flex.impact_energy_J == pytest.approx(rigid.impact_energy_J, rel=1e-2)
 
@@ -64,16 +64,16 @@ def test_flexible_piston_is_close_to_the_rigid_one():
 ])
 def test_drifter_config_is_checked(change, match):
     with pytest.raises(ValueError, match=match):
-        drifter_preset("drifter-issue19", **change)
+        drifter_preset("hydraulic-drifter", **change)
 
 
 def test_missing_and_unknown_sections_are_named():
-    cfg = {k: dict(v) if isinstance(v, dict) else v for k, v in DRIFTER_PRESETS["drifter-issue19"].items()}
+    cfg = {k: dict(v) if isinstance(v, dict) else v for k, v in DRIFTER_PRESETS["hydraulic-drifter"].items()}
     del cfg["valve"]["switch_out"]
     with pytest.raises(ValueError, match="missing key valve.switch_out"):
         Drifter.from_config(cfg)
     with pytest.raises(ValueError, match=r"unknown section \[force\]"):
-        Drifter.from_config({**DRIFTER_PRESETS["drifter-issue19"], "force": {}})
+        Drifter.from_config({**DRIFTER_PRESETS["hydraulic-drifter"], "force": {}})
     with pytest.raises(ValueError, match="unknown drifter preset"):
         drifter_preset("nope")
 
@@ -84,8 +84,15 @@ def test_physical_page_quotes_the_preset_as_computed():
 
     text = re.sub(r"\s+", " ", (Path(__file__).resolve().parents[2] / "docs" / "physical.md").read_text())
     m = re.search(r"`R = 0.215`\): ([0-9.]+) m/s, ([0-9.]+) Hz, ([0-9.]+) J, ([0-9.]+) kW", text)
-    o = drifter_preset("drifter-issue19").orbit()
+    o = drifter_preset("hydraulic-drifter").orbit()
     for quoted, value in zip(m.groups(), (o.impact_velocity_m_s, o.blow_frequency_Hz, o.impact_energy_J,
                                           o.percussive_power_kW), strict=True):
         decimals = len(quoted.split(".")[1])
         assert abs(float(quoted) - value) <= 0.5 * 10.0**-decimals
+
+
+def test_the_former_preset_name_still_works_with_a_warning():
+    with pytest.warns(FutureWarning, match="'hydraulic-drifter'"):
+        old = drifter_preset("drifter-issue19")
+    assert old == drifter_preset("hydraulic-drifter")
+    assert "drifter-issue19" not in DRIFTER_PRESETS  # listed under its new name only

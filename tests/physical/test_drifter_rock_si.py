@@ -77,3 +77,27 @@ def test_simulated_drilling_figures_equal_the_orbits(drifter):
     r = o.rock()
     for key in ("work_on_rock_J", "penetration_mm", "efficiency", "drilling_rate_m_min"):
         assert s[key] == pytest.approx(r[key], rel=1e-6), key
+
+
+def test_cli_simulate_draws_a_blow_s_force_history_and_the_stress_along_the_rod(tmp_path):
+    """``impactbar simulate examples/drifter_rock.toml``: the hammer's figures, and on the drill
+    string the last blow's forces at the boundaries and on the rock, and the stress along the rod
+    (whose largest compression at the shank is the shank force's peak over its area)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from impactbar.cli import main
+    from impactbar.plotting.physical import plot_rod_stress
+
+    assert main(["simulate", str(EXAMPLE), "--out", str(tmp_path / "s"), "--periods", "8"]) == 0
+    names = {p.name for p in (tmp_path / "s").glob("*.png")}
+    assert names == {"motion.png", "blows.png", "forces.png", "stress.png"}
+    d = Drifter.from_config(tomllib.loads(EXAMPLE.read_text()))
+    run, _ = d.simulate(8 * d.orbit().period_s)
+    rec = [r for i in range(len(run.pieces)) for r in getattr(run.pieces[i], "impacts", ())][-1]
+    ax = plot_rod_stress(d, rec)
+    shank = float(np.max(rec.blow.junction_forces[:, 0])) * d.scales.force_N
+    assert ax.lines[0].get_ydata()[0] == pytest.approx(shank / d.drill.segments[0].area_m2 / 1e6, rel=1e-12)
+    plt.close(ax.figure)

@@ -105,8 +105,8 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
     separation and the same post-contact state, over random states, loads and wave speeds (windows
     longer than the load period and jumps of the square wave in both halves included)."""
     from impactbar import FourierLoad, wave_impact
-    from impactbar.dynamics import _windowkernel as K
-    from impactbar.laws.wave import _GL20_W, _GL20_X
+    from impactbar.laws.wave import _windowkernel as K
+    from impactbar.laws.wave.law import _GL20_W, _GL20_X
     from wave_reference import random_state
 
     for trial in range(60):
@@ -138,8 +138,8 @@ def test_compiled_separating_window_matches_the_characteristics_solver(rng):
     (arrivals down to grazing speed), loads and wave speeds (windows longer than the load's period,
     and square-wave jumps in both halves, included)."""
     from impactbar import FourierLoad, wave_impact
-    from impactbar.dynamics import _wavekernel as WK
-    from impactbar.laws.wave import _GL20_W, _GL20_X
+    from impactbar.laws.wave import _wavekernel as WK
+    from impactbar.laws.wave.law import _GL20_W, _GL20_X
     from wave_reference import random_state
 
     separating = 0
@@ -178,7 +178,7 @@ def test_separating_windows_compiled_as_in_python(preset, monkeypatch):
     from impactbar import physical
     from impactbar.dynamics.implementations import use_reference
 
-    D = sys.modules["impactbar.dynamics.impact"]
+    D = sys.modules["impactbar.laws.wave.impact"]
     h = physical.preset(preset)
     model = h.model.with_(impact="wave")
     start = InitialState.rigid(-0.05, 0.0, n_modes=model.n_modes)
@@ -215,9 +215,9 @@ def test_compiled_windows_spanning_many_load_periods(s):
     """A window ``2/s`` covering 10 to 26 periods of a square wave (20 to 52 jumps): both compiled
     windows take every jump (the one without separation once kept only 16), as :func:`wave_impact`."""
     from impactbar import wave_impact
-    from impactbar.dynamics import _wavekernel as WK
-    from impactbar.dynamics import _windowkernel as K
-    from impactbar.laws.wave import _GL20_W, _GL20_X
+    from impactbar.laws.wave import _wavekernel as WK
+    from impactbar.laws.wave import _windowkernel as K
+    from impactbar.laws.wave.law import _GL20_W, _GL20_X
 
     model = BarModel(s=s, d=0.0, R=0.5, n_modes=2)
     load = SquareWaveLoad(2.0, 1.5)

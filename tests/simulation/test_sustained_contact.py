@@ -10,9 +10,9 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, simulate
-from impactbar.dynamics.impact import wave_impact
-from impactbar.dynamics.sustained import rod_impedance, sustained_contact
 from impactbar.laws import PressedContact
+from impactbar.laws.wave.impact import wave_impact
+from impactbar.laws.wave.sustained import rod_impedance, sustained_contact
 
 TWO_PI = 2 * math.pi
 PRESS = SquareWaveLoad(1.0, 1.2)  # presses over [0, 1.2 pi), pulls over the rest

@@ -9,7 +9,8 @@ import tomllib
 from pathlib import Path
 
 from .. import physical
-from ._common import json_ready, print_json
+from ..physical.drifter import RENAMED_DRIFTER_PRESETS
+from ._common import json_ready, print_json, require
 
 __all__ = ["drifter_from_args", "run_drifter_orbits", "run_drifter_simulate", "run_drifter_continue"]
 
@@ -24,7 +25,7 @@ def drifter_from_args(args):
         An unreadable file, or an invalid drifter config (the key named).
     """
     name, config = getattr(args, "preset", None), getattr(args, "config", None)
-    if name is not None and name in physical.DRIFTER_PRESETS:
+    if name is not None and (name in physical.DRIFTER_PRESETS or name in RENAMED_DRIFTER_PRESETS):
         return physical.drifter_preset(name)
     if config is None:
         return None
@@ -74,8 +75,10 @@ def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
 
 
 def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: float) -> int:
-    """``impactbar simulate --preset drifter-... --out DIR``: simulate ``--periods`` blow periods
-    (of the periodic motion) from rest at ``--gap``; writes ``impacts.csv`` and ``summary.json``."""
+    """``impactbar simulate --preset hydraulic-drifter --out DIR``: simulate ``--periods`` blow
+    periods (of the periodic motion) from rest at ``--gap``; writes ``impacts.csv``,
+    ``summary.json``, ``motion.png`` and ``blows.png``, and on a drill string ``forces.png`` and
+    ``stress.png`` (a blow's force history, the stress along the rod)."""
     period = drifter.orbit().period_s
     tr, s = drifter.simulate(args.periods * period, start_gap_m=gap_m)
     om, L = drifter.omega_rad_s, drifter.bar.length_m
@@ -85,13 +88,55 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
     (out / "impacts.csv").write_text("\n".join(lines) + "\n")
     summary = dict(s, n_impacts=tr.n_impacts, n_switches=len(tr.switch_kinds))
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
+    written = _drifter_figures(drifter, tr, out)
     print(f"{drifter.name or 'drifter'}: {tr.n_impacts} impacts in {tr.t_end / om:.4g} s; second half: "
           f"{s['blow_frequency_Hz']:.4g} Hz, {s['impact_velocity_m_s']:.4g} m/s, "
           f"{s['impact_energy_J']:.4g} J per blow, {s['percussive_power_kW']:.4g} kW"
           + (f"; on rock {s['work_on_rock_J']:.4g} J and {s['penetration_mm']:.4g} mm per blow, "
              f"{s['drilling_rate_m_min']:.4g} m/min" if "drilling_rate_m_min" in s else "")
-          + f"; wrote {out}/impacts.csv, summary.json")
+          + f"; wrote {out}/{written}, impacts.csv, summary.json")
     return 0
+
+
+def _drifter_figures(drifter: physical.Drifter, run, out: Path) -> str:
+    """motion.png and blows.png, as a hammer's run gets them; on a drill string also forces.png (the
+    force history of the last blow at every boundary and on the rock) and stress.png (the stress
+    along the rod in that blow). Returns the names written."""
+    require("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..plotting.physical import (
+        plot_blow_forces,
+        plot_drifter_blows,
+        plot_drifter_motion,
+        plot_rod_stress,
+    )
+
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6), constrained_layout=True)
+    plot_drifter_motion(drifter, run, axes)
+    fig.savefig(out / "motion.png", dpi=120)
+    plt.close(fig)
+    fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
+    plot_drifter_blows(drifter, run, ax)
+    fig.savefig(out / "blows.png", dpi=120)
+    plt.close(fig)
+    written = "motion.png, blows.png"
+    records = [r for i in range(len(run.pieces)) for r in getattr(run.pieces[i], "impacts", ())
+               if getattr(r, "blow", None) is not None] if drifter.drill is not None else []
+    if records:
+        fig, ax = plt.subplots(figsize=(8, 4), constrained_layout=True)
+        plot_blow_forces(drifter, records[-1], ax)
+        fig.savefig(out / "forces.png", dpi=120)
+        plt.close(fig)
+        fig, ax = plt.subplots(figsize=(8, 3.5), constrained_layout=True)
+        plot_rod_stress(drifter, records[-1], ax)
+        fig.savefig(out / "stress.png", dpi=120)
+        plt.close(fig)
+        written += ", forces.png, stress.png"
+    return written
 
 
 def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:

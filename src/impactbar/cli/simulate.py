@@ -78,16 +78,18 @@ def run(args) -> int:
                  f"{summary['mean_impact_velocity_m_s']:.3f} m/s, "
                  f"{summary['mean_blow_energy_J']:.2f} J per blow, every "
                  f"{summary['mean_blow_interval_s'] * 1e3:.2f} ms "
-                 f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms), "
+                 f"(std {summary['blow_interval_std_s'] * 1e3:.2f} ms; "
+                 f"{summary['blow_frequency_Hz']:.4g} Hz), "
                  f"{summary['mean_power_W']:.4g} W")
         if np.isfinite(summary["mean_efficiency"]):
             line += f", efficiency {summary['mean_efficiency']:.3f}"
     print(line + f"; wrote {out}/{written}, impacts.csv, summary.json")
     rock = summary.get("rock", {})
     if "mean_work_on_rock_J" in rock:
-        print(f"rock (second half, {rock['n_blows']} blows): {rock['mean_work_on_rock_J']:.4g} J on rock and "
-              f"{rock['mean_penetration_mm']:.4g} mm per blow, {rock['drilling_rate_m_min']:.4g} m/min at "
-              f"the blow frequency ({rock['measured_rate_m_min']:.4g} m/min over the run), efficiency "
+        print(f"rock (second half, {rock['n_blows']} blows, {rock['n_chatter']} chatter): "
+              f"{rock['mean_work_on_rock_J']:.4g} J on rock and {rock['mean_penetration_mm']:.4g} mm per "
+              f"blow, {rock['drilling_rate_m_min']:.4g} m/min at the measured blow frequency "
+              f"({rock['measured_rate_m_min']:.4g} m/min over the run, chatter included), efficiency "
               f"{rock['mean_efficiency']:.3f} ({rock['mean_efficiency_with_rebound']:.3f} with the rebound)")
     if not summary["settled"]:
         print(f"impactbar simulate: warning: {summary['message']}", file=sys.stderr)
@@ -101,7 +103,7 @@ def _write_outputs(result, out, args) -> tuple[str, dict]:
     if result.hammer.drill is not None:  # the rod-rock law: drilling outputs (impactbar.physical.rock)
         from ..physical.rock import rock_summary
 
-        summary["rock"] = rock_summary(result)
+        summary["rock"] = rock_summary(result, blow_fraction=args.blow_fraction)
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
 
     import matplotlib
@@ -139,14 +141,19 @@ def summarize(result: physical.SimulationResult, *, blow_fraction: float = 0.25)
     The statistics are :meth:`~impactbar.physical.SimulationResult.blow_statistics`: over the
     blows of the second half of the run (past the start-up), an impact being a blow when its impact
     velocity is at least ``blow_fraction`` of the run's largest; slower ones are counted as chatter.
-    ``settled`` and ``message`` say whether the blows repeat a cycle.
+    ``settled`` and ``message`` say whether the blows repeat a cycle. ``blow_frequency_Hz`` is the
+    blows' measured frequency (the inverse of their mean interval; NaN with fewer than two), the
+    drive's imposed one ``f / k`` being ``drive_blow_frequency_Hz``.
     """
     t = result.impact_times_s
     v = result.impact_velocities_m_s
     e = result.blow_energies_J
     out = result.hammer.to_dict()
+    out["drive_blow_frequency_Hz"] = out.pop("blow_frequency_Hz")  # f / k, imposed by the drive
     out.update({"t_end_s": result.t_end_s, "n_impacts": int(t.size)})
     if t.size:
         out.update({"last_impact_velocity_m_s": float(v[-1]), "last_blow_energy_J": float(e[-1])})
-    out.update(result.blow_statistics(blow_fraction=blow_fraction).to_dict())
+    stats = result.blow_statistics(blow_fraction=blow_fraction)
+    out.update(stats.to_dict())
+    out["blow_frequency_Hz"] = 1.0 / stats.mean_blow_interval_s  # measured; NaN below two blows
     return out

@@ -161,9 +161,9 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         §10; :func:`impactbar.continuation.switched.continue_switched`).
     parameter : str
         One of ``"p0"``, ``"pk"`` (a :class:`CosineLoad`), ``"q"``, ``"kappa"`` (a
-        :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`); under the
-        rod-rock law also ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"``
-        (``impactbar.continuation.parameters.ROCK_PARAMETERS``, theory §4d).
+        :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`), and the
+        impact law's own (:attr:`~impactbar.laws.ContactLaw.parameters`): under the rod-rock law
+        ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"`` (theory §4d).
     to : float
         Target value; the branch stops there, or where it leaves the range between the start and
         ``to`` after a fold. A branch started at a period doubling may bifurcate to either side:

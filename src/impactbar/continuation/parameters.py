@@ -1,12 +1,11 @@
 """Continuation parameters: the fields of :class:`BarModel` and of the loads (paper eqs. 2, 33, 34),
-and those of the rod-rock law (theory §4d)."""
+and the impact law's own (:attr:`~impactbar.laws.ContactLaw.parameters`: the rod-rock law's,
+theory §4d)."""
 
 from __future__ import annotations
 
-import dataclasses
-import re
-
 from .._shared.validate import check_real
+from ..laws import RodRock
 from ..loads import LOADS, Load
 from ..model import BarModel
 
@@ -24,10 +23,8 @@ PARAMETERS = tuple(dict.fromkeys((*MODEL_PARAMETERS,
 #: mass, the feed force, and ``"segment<i>.length"`` (``i`` from 0 at the shank; the default
 #: ``blow_time`` follows the lengths). :func:`~impactbar.continue_orbit` takes all but the lengths
 #: (the blow's cell grid rounds them to whole cells: the orbit changes in steps with a length);
-#: :func:`~impactbar.continuation.simulated_diagram` takes them all.
-ROCK_PARAMETERS = ("rock.k", "rock.k_u", "bit_mass", "feed", "segment<i>.length")
-
-_SEGMENT = re.compile(r"segment(\d+)\.length")
+#: :func:`~impactbar.continuation.simulated_diagram` takes them all (:attr:`RodRock.parameters`).
+ROCK_PARAMETERS = RodRock.parameters
 
 def parameter_value(model: BarModel, load: Load, name: str) -> float:
     """Current value of a continuation parameter.
@@ -61,8 +58,8 @@ def parameter_value(model: BarModel, load: Load, name: str) -> float:
     >>> parameter_value(model, load, "rock.k"), parameter_value(model, load, "segment0.length")
     (20.0, 2.0)
     """
-    if _is_rock(model, name):
-        return _rock_value(model.law, name)
+    if _is_law_parameter(model, name):
+        return model.law.parameter_value(name)
     _check_parameter(model, load, name)
     if name in MODEL_PARAMETERS:
         return float(getattr(model, name))
@@ -102,64 +99,38 @@ def with_parameter(model: BarModel, load: Load, name: str, value: float):
     >>> model.law.rock
     BilinearRock(k=30.0, k_u=200.0)
     """
-    if _is_rock(model, name):
-        return model.with_(impact=_rock_with(model.law, name, float(value))), load
+    if _is_law_parameter(model, name):
+        return model.with_(impact=model.law.with_parameter(name, float(value))), load
     _check_parameter(model, load, name)
     if name in MODEL_PARAMETERS:
         return model.with_(**{name: value}), load
     return model, load.with_(**{name: value})
 
 
-def _is_rock(model, name) -> bool:
-    """Whether ``name`` is a rod-rock parameter (checked against the model's law: a ``ValueError``
-    naming the law for a model without one)."""
-    if name not in ("rock.k", "rock.k_u", "bit_mass", "feed") and not _SEGMENT.fullmatch(str(name)):
+def _is_law_parameter(model, name) -> bool:
+    """Whether ``name`` is one of the model's impact law's own parameters
+    (:meth:`~impactbar.laws.ContactLaw.has_parameter`; a ``ValueError`` for a segment the rod does not
+    have, and for one of the rod-rock law's names under another law, naming it)."""
+    if name in PARAMETERS:
         return False
-    from ..laws.rodrock import RodRock
-
     law = getattr(model, "law", None)
-    if not isinstance(law, RodRock):
+    if law is not None and law.has_parameter(name):
+        law.parameter_value(name)  # a ValueError for a parameter the law does not have (a segment)
+        return True
+    if RodRock.has_parameter(name):
         raise ValueError(f"parameter {name!r} is one of the rod-rock law's {ROCK_PARAMETERS}; the model "
                          f"has impact={getattr(model, 'impact', None)!r}")
-    match = _SEGMENT.fullmatch(name)
-    if match and int(match.group(1)) >= len(law.segments):
-        raise ValueError(f"parameter {name!r}: the rod has {len(law.segments)} segment(s), "
-                         f"segment0 to segment{len(law.segments) - 1}")
-    return True
-
-
-def _rock_value(law, name) -> float:
-    if name.startswith("rock."):
-        return float(getattr(law.rock, name[5:]))
-    match = _SEGMENT.fullmatch(name)
-    if match:
-        return float(law.segments[int(match.group(1))].length)
-    return float(getattr(law, name))
-
-
-def _rock_with(law, name, value):
-    """The law with one parameter changed (validated again by the constructors)."""
-    if name.startswith("rock."):
-        return dataclasses.replace(law, rock=dataclasses.replace(law.rock, **{name[5:]: value}))
-    match = _SEGMENT.fullmatch(name)
-    if match:
-        i = int(match.group(1))
-        segs = list(law.segments)
-        segs[i] = dataclasses.replace(segs[i], length=value)
-        return dataclasses.replace(law, segments=segs)
-    return dataclasses.replace(law, **{name: value})
+    return False
 
 
 def _check_parameter(model, load, name, *, continuation=False):
     """Whether ``name`` is a parameter of the model and load; for ``continuation`` also that the
     problem is smooth in it (not a segment length: the blow's cell grid rounds the segments to
-    whole cells, so the blow changes in steps with a length)."""
-    if _is_rock(model, name):
-        if continuation and _SEGMENT.fullmatch(name):
-            raise ValueError(f"parameter {name!r} cannot be continued: the blow's cell grid rounds the "
-                             "segments' travel times to whole cells, so the orbit changes in steps "
-                             "with a length; follow it with simulated_diagram or find_orbit at each "
-                             "length")
+    whole cells, so the blow changes in steps with a length: the law's
+    :meth:`~impactbar.laws.ContactLaw.check_continuable`)."""
+    if _is_law_parameter(model, name):
+        if continuation:
+            model.law.check_continuable(name)
         return
     if name not in PARAMETERS:
         raise ValueError(f"parameter must be one of {PARAMETERS}; got {name!r}")

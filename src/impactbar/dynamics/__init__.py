@@ -1,26 +1,24 @@
-"""The bar's motion between and at impacts, on plain dimensionless arrays.
+"""The bar's motion between and at impacts, on plain dimensionless arrays: the building blocks every
+impact law and every solver shares.
 
 Layout: ``modal`` (the closed-form fundamental matrix of each damped mode and the integrals of a
 constant load over a step, paper eqs. 5-9), ``certified`` (certified enclosure of the zeros of a
-function with a Lipschitz or derivative bound), ``impact`` (the wave-resolved contact with a long
-rod, solved by characteristics, theory §4b), ``_kernel`` (the numba-compiled flight, impact search
-and event loop behind :func:`impactbar.simulate`), ``sustained`` (the wave law's sustained contact:
-the struck end against the rod's impedance, theory §4b), ``_wavekernel`` and ``_flowkernel``
-(compiled contact windows of the wave law, compiled flows of the loads), ``kernelview`` (the one
-view of a load, and of a modal basis, that compiled code reads), ``implementations`` (the registry
-that chooses between fast and reference implementations). The bottom of the core: imports only
-numpy, scipy and numba, never another impactbar subpackage."""
+function with a Lipschitz or derivative bound, and the zeros of one harmonic in closed form),
+``monodromy`` (a flight's linearisation with the saltation term at its arrival, the order of the
+Floquet multipliers and their structured eigenvalue method, theory §7), ``invariants`` (the piston's
+fields as Riemann invariants, where the laws that follow a blow along characteristics start,
+theory §4c), ``_kernel`` (the numba-compiled flight, impact search and event loop behind
+:func:`impactbar.simulate`), ``_flowkernel`` (compiled flows of the loads), ``_aberthkernel`` (the
+compiled Aberth-Ehrlich iteration), ``kernelview`` (the one view of a load, and of a modal basis,
+that compiled code reads), ``implementations`` (the registry that chooses between fast and reference
+implementations). The contact laws' own numerics are in :mod:`impactbar.laws`. The bottom of the
+core: imports only numpy, scipy and numba, never another impactbar subpackage."""
 
-import importlib
-
-__all__ = ["WaveImpact", "wave_impact"]
+#: names that moved to the wave law's package (the laws sit above the shared building blocks)
+_MOVED = {"WaveImpact": "impactbar.WaveImpact", "wave_impact": "impactbar.wave_impact"}
 
 
 def __getattr__(name: str):
-    # PEP 562: ``impactbar.loads`` imports ``dynamics.modal``; the contact solver (scipy.optimize,
-    # numba) is imported only when it is used, so ``import impactbar`` stays light
-    if name in __all__:
-        value = getattr(importlib.import_module(".impact", __name__), name)
-        globals()[name] = value
-        return value
+    if name in _MOVED:
+        raise AttributeError(f"impactbar.dynamics.{name} moved to {_MOVED[name]} (impactbar.laws.wave)")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -10,6 +10,8 @@ import math
 
 import numba
 
+from .._shared.compiling import watch_compiles
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -23,6 +25,9 @@ try:  # numba caches next to this file, or else in the user's cache folder
     CACHE = True
 except RuntimeError:  # a read-only install and no writable cache folder: compile in memory
     CACHE = False
+
+# one line on stderr, once per process, while impactbar's kernels compile for more than 2 s
+watch_compiles()
 
 @numba.njit(cache=CACHE, nogil=True)
 def _bc(d, tau):

@@ -4,13 +4,18 @@ An interval ``[m - h, m + h]`` can hold a zero of ``f`` only if ``|f(m)| <= L h`
 of ``|f'|`` on it; every other interval is excluded for certain. The survivors are bisected until
 they are narrow, then grouped into clusters; each zero lies in a cluster. Callers refine inside the
 clusters (Brent on a sign change, a bounded minimisation for a double zero at a fold or tangency).
+A single harmonic needs no search: :func:`cosine_roots` gives its zeros in closed form.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["enclose_zeros", "zeros_in_clusters"]
+TWO_PI = 2.0 * math.pi
+
+__all__ = ["enclose_zeros", "zeros_in_clusters", "cosine_roots"]
 
 
 def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: float = 1e-7,
@@ -133,3 +138,43 @@ def zeros_in_clusters(f, clusters, *, atol: float):
             out.append((brentq(f1, lo, tm, xtol=1e-15, rtol=8.9e-16), 1))
             out.append((brentq(f1, tm, hi, xtol=1e-15, rtol=8.9e-16), 1))
     return out
+
+
+def cosine_roots(A, theta, B, k, tol=1e-15):
+    """The zeros of one harmonic in closed form, where no search is needed (the phase equations of a
+    load with one harmonic, eq. 14 and theory §4b).
+
+    The roots in ``[0, 2 pi)`` of ``A cos(k phase + theta) = B`` are ``k phase = -theta +-
+    arccos(B / A) (mod 2 pi)``: ``2k`` of them, or ``k`` double ones at ``|B| = A``.
+
+    Parameters
+    ----------
+    A : float
+        Amplitude, ``> 0``.
+    theta : float
+        Phase offset (rad).
+    B : float
+        Right-hand side.
+    k : int
+        Order of the harmonic, ``>= 1``.
+    tol : float
+        Relative tolerance of ``|B| = A`` (a double root) and of ``|B| > A`` (no root).
+
+    Returns
+    -------
+    list of (float, int)
+        ``(phase, multiplicity)`` sorted by phase; empty when ``|B| > A (1 + tol)``.
+    """
+    ratio = B / A
+    if abs(ratio) > 1.0 + tol:
+        return []
+    if abs(ratio) >= 1.0 - tol:
+        base, mult = [math.acos(max(-1.0, min(1.0, ratio)))], 2
+    else:
+        a = math.acos(ratio)
+        base, mult = [a, -a], 1
+    out = []
+    for b in base:
+        for j in range(k):
+            out.append(((b - theta + TWO_PI * j) / k) % TWO_PI)
+    return [(t, mult) for t in sorted(out)]

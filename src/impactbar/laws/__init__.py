@@ -1,10 +1,16 @@
-"""Impact laws as objects, looked up in one table (theory §4, §4b).
+"""Impact laws as objects, looked up in one table (theory §4, §4b, §4d).
 
 ``LAWS`` maps each law's name to its class, in the style of scipy's ``METHODS``;
 :func:`get_law` turns a name or a law object into a law object. A law (:class:`ContactLaw`) owns
 everything that differs between laws: its contact window, the impact map with its Jacobian, the
-one-impact phase equation and orbits, the simulator's contact step and the per-blow outputs.
-Adding a law is one module with a :class:`ContactLaw` subclass and one entry in ``LAWS``
+one-impact phase equation and the orbits' states (:class:`OrbitState`), the simulator's contact
+step and the per-blow outputs, its own continuation parameters.
+
+Each law is one subpackage holding its numerics: ``paper`` (eq. 10, theory §4), ``wave`` (the long
+rod, theory §4b), ``rodrock`` (the finite rod and the rock, theory §4d). The laws sit below the
+solvers (orbits, simulation, continuation), which reach them as ``model.law``; a law imports only
+the core below it (``dynamics``, ``loads``, ``_shared``) and returns plain data that the solvers
+build their results from. Adding a law is one :class:`ContactLaw` subclass and one entry in ``LAWS``
 (see the developer page of the documentation).
 """
 
@@ -13,26 +19,35 @@ from __future__ import annotations
 from .base import LAWS as LAWS
 from .base import PARAMETERISED as PARAMETERISED
 from .base import ContactLaw as ContactLaw
+from .base import LawNotSupported as LawNotSupported
+from .base import OrbitState as OrbitState
 from .base import get_law as get_law
 from .paper import InstantImpact as InstantImpact
 from .paper import PaperLaw as PaperLaw
 from .rodrock import BilinearRock as BilinearRock
 from .rodrock import RodRock as RodRock
 from .rodrock import RodSegment as RodSegment
-from .rodrock import rock_periodic_orbits as rock_periodic_orbits
 from .rodrock import single_blow as single_blow
 from .wave import PressedContact as PressedContact
 from .wave import WaveLaw as WaveLaw
 
-__all__ = ["ContactLaw", "PaperLaw", "WaveLaw", "PressedContact", "InstantImpact", "LAWS", "get_law",
-           "RodRock",
-           "RodSegment", "BilinearRock", "single_blow", "rock_periodic_orbits"]
+__all__ = ["ContactLaw", "OrbitState", "LawNotSupported", "PaperLaw", "WaveLaw", "PressedContact",
+           "InstantImpact", "LAWS", "get_law", "RodRock", "RodSegment", "BilinearRock", "single_blow"]
 
 #: The impact laws by name: ``"paper"`` (eq. 10) and ``"wave"`` (the long rod, theory §4b). The rod
 #: and the rock (``"rodrock"``, theory §4d) has required parameters: only a ``RodRock(...)`` object
 #: builds it, so its name is in ``PARAMETERISED`` (``get_law("rodrock")`` says how), not in ``LAWS``.
-#: The table itself lives in :mod:`impactbar.laws.base`, below the laws' implementations, so that
-#: :class:`~impactbar.BarModel` can resolve a name without importing the solvers the laws drive.
+#: The table itself lives in :mod:`impactbar.laws.base`, below the laws' implementations.
 LAWS.update({"paper": PaperLaw, "wave": WaveLaw})
 PARAMETERISED.update({"rodrock": "RodRock(segments=[RodSegment(length=..., impedance=...), ...], "
                                  "rock=BilinearRock(k=..., k_u=...))"})
+
+#: names that moved up to the solvers (a law imports no solver): where each is now
+_MOVED = {"rock_periodic_orbits": "impactbar.orbits.rock_periodic_orbits"}
+
+
+def __getattr__(name: str):
+    if name in _MOVED:
+        raise AttributeError(f"impactbar.laws.{name} moved to {_MOVED[name]} (the laws sit below the "
+                             "orbit solvers)")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -1,21 +1,60 @@
-"""The contact-law interface: everything that differs between impact laws (theory §4, §4b).
+"""The contact-law interface: everything that differs between impact laws (theory §4, §4b, §4d).
 
 A law is a frozen, hashable object; :class:`~impactbar.BarModel` holds one (``BarModel(impact=...)``
-takes its name or the object) and every solver asks ``model.law`` instead of comparing names.
+takes its name or the object) and every solver asks ``model.law`` instead of comparing names. The
+laws sit below the solvers (the layer contract in ``pyproject.toml``): a law returns plain data,
+numbers, arrays, its own records (:class:`OrbitState`, a blow's record), and the solvers build their
+results from them.
 """
 
 from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
-__all__ = ["ContactLaw"]
+import numpy as np
+
+__all__ = ["ContactLaw", "LawNotSupported", "OrbitState"]
 
 
 class LawNotSupported(ValueError, NotImplementedError):
     """A computation asked of an impact law that does not provide it: a ``ValueError`` for the user
     (the model's ``impact`` does not allow it), a ``NotImplementedError`` for whoever writes the law."""
+
+
+@dataclass(frozen=True, eq=False)
+class OrbitState:
+    """What a law computes of its one-impact orbit at a root of its phase equation
+    (:meth:`ContactLaw.orbit_state`); the orbit solver decides the orbit's admissibility from it
+    (theory §5) and builds the :class:`~impactbar.PeriodicOrbit`.
+
+    Attributes
+    ----------
+    state_after_impact : numpy.ndarray, shape (2 N + 2,)
+        Modal state ``(q_0..q_N, q_0'..q_N')`` where the flight starts: at load time ``phase +
+        window(model)`` (the impact's end), the end on the stop (or the advanced rod end).
+    state_before_impact : numpy.ndarray, shape (2 N + 2,)
+        Modal state at the arrival (load time ``phase``, one period after the impact).
+    multipliers : numpy.ndarray of complex, shape (2 N + 2,)
+        Exact Floquet multipliers, sorted by decreasing modulus (``inf`` at exact grazing).
+    impact : object, optional
+        The impact's record (for example :class:`~impactbar.WaveImpact`), ``None`` for an
+        instantaneous impact or an arrival that does not move into the stop.
+    separates : bool
+        Contact is lost inside the law's window (theory §4b): the orbit is not admissible as a held
+        contact.
+    flow : callable, optional
+        The flight's flow from ``state_after_impact`` (``load.flow(...)``), where the law built it:
+        the admissibility search reuses it.
+    """
+
+    state_after_impact: np.ndarray
+    state_before_impact: np.ndarray
+    multipliers: np.ndarray
+    impact: Any = None
+    separates: bool = False
+    flow: Any = None
 
 
 @dataclass(frozen=True)
@@ -48,6 +87,16 @@ class ContactLaw:
     uses_restitution : bool
         The model's restitution ``R`` enters the contact (``False`` for the rod-rock law, whose rod
         and rock replace it).
+    has_phase_equation : bool
+        :func:`~impactbar.periodic_orbits` finds the one-impact orbits from the law's phase
+        equation (:meth:`phase_roots`, :meth:`phase_families`, :meth:`orbit_state`). ``False``: the
+        law has none (its blow is a numerical map), and ``periodic_orbits`` finds them by Newton's
+        method from guesses (:func:`impactbar.orbits.periodic_orbits_by_newton`: the orbits of
+        :meth:`paper_equivalent` and a settled simulation), which needs :meth:`window`,
+        :meth:`impact_map` and :meth:`contact` only.
+    parameters : tuple of str
+        The law's own continuation parameters (:func:`~impactbar.continue_orbit`, the sweeps' axes),
+        read by :meth:`parameter_value` and changed by :meth:`with_parameter`; none by default.
     """
 
     name: ClassVar[str] = ""
@@ -57,6 +106,8 @@ class ContactLaw:
     open_ended: ClassVar[bool] = False
     flight_starts_on_stop: ClassVar[bool] = True
     uses_restitution: ClassVar[bool] = True
+    has_phase_equation: ClassVar[bool] = True
+    parameters: ClassVar[tuple[str, ...]] = ()
 
     def paper_equivalent(self, model):
         """The same bar under the paper's law (eq. 10) with the restitution this law's contact
@@ -77,6 +128,10 @@ class ContactLaw:
 
     def window(self, model) -> float:
         """Duration of one impact (dimensionless time): 0 for an instantaneous law.
+
+        Parameters
+        ----------
+        model : BarModel
 
         Returns
         -------
@@ -111,7 +166,13 @@ class ContactLaw:
         raise LawNotSupported(self._missing("impact_map"))
 
     def phase_roots(self, model, load) -> list[tuple[float, int]]:
-        """Roots of the law's one-impact phase equation in ``[0, 2 pi)``.
+        """Roots of the law's one-impact phase equation in ``[0, 2 pi)`` (for a law with
+        :attr:`has_phase_equation`).
+
+        Parameters
+        ----------
+        model : BarModel
+        load : Load
 
         Returns
         -------
@@ -131,18 +192,35 @@ class ContactLaw:
         """
         return []
 
-    def orbit(self, model, load, phase: float, multiplicity: int):
-        """The one-impact orbit with this phase, with admissibility and multipliers.
+    def orbit_state(self, model, load, phase: float) -> OrbitState:
+        """The one-impact orbit whose arrival is at this root of :meth:`phase_roots`: its states at
+        the impact's end and at the arrival, its multipliers, the impact's record. The orbit solver
+        decides admissibility from them (theory §5) and builds the
+        :class:`~impactbar.PeriodicOrbit`.
+
+        Parameters
+        ----------
+        model : BarModel
+        load : Load
+        phase : float
+            Load time of the arrival (rad), a root of the phase equation.
 
         Returns
         -------
-        PeriodicOrbit
+        OrbitState
         """
-        raise LawNotSupported(self._missing("orbit"))
+        raise LawNotSupported(self._missing("orbit_state"))
 
     def multipliers(self, model, load, phase: float):
         """Exact Floquet multipliers of the one-impact orbit with this phase (theory §7),
-        without the admissibility check.
+        without the admissibility check (:func:`~impactbar.orbits.orbit_multipliers`).
+
+        Parameters
+        ----------
+        model : BarModel
+        load : Load
+        phase : float
+            A root of :meth:`phase_roots` (rad).
 
         Returns
         -------
@@ -152,7 +230,14 @@ class ContactLaw:
         raise LawNotSupported(self._missing("multipliers"))
 
     def existence_edge(self, model, k: int = 1) -> float:
-        """Largest load factor ``k p0 / pk`` of the pneumatic load (eq. 33) with one-impact orbits.
+        """Largest load factor ``k p0 / pk`` of the pneumatic load (eq. 33) with one-impact orbits
+        (the stability charts, :mod:`impactbar.orbits.charts`).
+
+        Parameters
+        ----------
+        model : BarModel
+        k : int
+            Order of the harmonic, ``>= 1``.
 
         Returns
         -------
@@ -162,15 +247,40 @@ class ContactLaw:
         raise LawNotSupported(self._missing("existence_edge"))
 
     def blow(self, model, load, t: float, y_minus):
-        """Per-blow output of a periodic orbit's impact arriving at load time ``t`` in state
-        ``y_minus`` (shape ``(2 N + 2,)``), or ``None`` where the law has none to add (an
-        instantaneous impact on an orbit)."""
+        """Per-blow output of a periodic orbit's impact (the ``contacts`` of
+        :func:`~impactbar.find_orbit`'s orbits).
+
+        Parameters
+        ----------
+        model : BarModel
+        load : Load
+        t : float
+            Load time of the arrival.
+        y_minus : numpy.ndarray, shape (2 N + 2,)
+            Modal state at the arrival.
+
+        Returns
+        -------
+        object or None
+            The blow's record (as :meth:`contact` returns it), or ``None`` where the law has none
+            to add (an instantaneous impact on an orbit).
+        """
         return None
 
     def kernel_restitution(self, model) -> float:
         """Factor ``r`` of the compiled free-flight kernel's velocity map ``v -> -r v`` at an
-        arrival: ``R`` for an instantaneous law that the kernel applies itself (eq. 10); ``-1``
-        (``v -> v``, nothing applied) for a law the simulator resolves by :meth:`contact`."""
+        arrival (the simulator's flight kernel, theory §8).
+
+        Parameters
+        ----------
+        model : BarModel
+
+        Returns
+        -------
+        float
+            ``R`` for an instantaneous law that the kernel applies itself (eq. 10); ``-1``
+            (``v -> v``, nothing applied) for a law the simulator resolves by :meth:`contact`.
+        """
         return model.R if self.instantaneous else -1.0
 
     def contact(self, model, load, t: float, q_minus, v_minus, *, kernel=None):
@@ -207,6 +317,84 @@ class ContactLaw:
             :class:`~impactbar.laws.InstantImpact`.
         """
         raise LawNotSupported(self._missing("contact"))
+
+    def has_parameter(self, name: str) -> bool:
+        """Whether ``name`` is one of the law's own continuation parameters (:attr:`parameters`).
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        bool
+        """
+        return name in self.parameters
+
+    def parameter_value(self, name: str) -> float:
+        """The value of one of the law's own continuation parameters.
+
+        Parameters
+        ----------
+        name : str
+            One of :attr:`parameters`.
+
+        Returns
+        -------
+        float
+
+        Raises
+        ------
+        ValueError
+            For a name that is not one of the law's parameters (the message lists them).
+        """
+        self._check_parameter(name)
+        return float(getattr(self, name))
+
+    def with_parameter(self, name: str, value: float) -> ContactLaw:
+        """A copy of the law with one of its own continuation parameters changed (validated again
+        by the constructor).
+
+        Parameters
+        ----------
+        name : str
+            One of :attr:`parameters`.
+        value : float
+
+        Returns
+        -------
+        ContactLaw
+
+        Raises
+        ------
+        ValueError
+            For a name that is not one of the law's parameters, or a value the law refuses.
+        """
+        import dataclasses
+
+        self._check_parameter(name)
+        return dataclasses.replace(self, **{name: value})
+
+    def check_continuable(self, name: str) -> None:
+        """Refuse a parameter in which the law's impact map is not smooth, so that a branch cannot
+        be continued in it (:func:`~impactbar.continue_orbit`); every parameter is accepted by
+        default.
+
+        Parameters
+        ----------
+        name : str
+            One of :attr:`parameters`.
+
+        Raises
+        ------
+        ValueError
+            Saying why the parameter cannot be continued.
+        """
+
+    def _check_parameter(self, name: str) -> None:
+        if not self.has_parameter(name):
+            raise ValueError(f"parameter {name!r} is not one of the impact law {self.name!r}'s "
+                             f"parameters {self.parameters}")
 
     def _missing(self, method: str) -> str:
         return (f"model.impact: the impact law {self.name!r} ({type(self).__name__}) does not provide "

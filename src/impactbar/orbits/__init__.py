@@ -1,18 +1,23 @@
 """Periodic impacting motions and their stability (paper Sections 2 and 3).
 
-Layout: ``phase`` (the phase equation, eq. 14, and its roots), ``admissibility`` (does the struck end
-stay off the stop between impacts), ``stability`` (the exact Jacobian of the impact map with its
-saltation term, the Floquet multipliers by a dense or a structured O(N^2) eigenvalue method, and the
-paper's Schur blocks, eqs. 25-32), ``rigid`` (the rigid bar in closed form, vectorised over
-parameter arrays), ``wave`` (the phase equation, periodic states and impact-map Jacobian under the
-wave impact law, theory §4b), ``orbit`` (:class:`PeriodicOrbit`, the one result type: ``m``
-impacts in ``n`` load periods; ``MultiImpactOrbit`` is another name for it), ``one_impact``
-(:func:`periodic_orbits`: the one-impact orbits), ``multi_impact`` (:func:`find_orbit`: ``m``
-impacts in ``n`` load periods by Newton on the segment problem, one segment per flight),
-``charts`` (existence, stability and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits
-with an unknown period under a position-switched drive, theory §10).
-Part of the core: imports only ``impactbar.model``, ``impactbar.loads``, ``impactbar.dynamics``,
-numpy and scipy.
+Layout: ``phase`` (the phase equation, eq. 14, and its roots: the paper law's, with the solvers'
+check of their inputs), ``admissibility`` (does the struck end stay off the stop between impacts),
+``stability`` (the verdict and the paper's Schur blocks, eqs. 25-32, for every one-impact orbit),
+``rigid`` (the rigid bar in closed form, vectorised over parameter arrays), ``orbit``
+(:class:`PeriodicOrbit`, the one result type: ``m`` impacts in ``n`` load periods;
+``MultiImpactOrbit`` is another name for it), ``one_impact`` (the one-impact orbits from the law's
+phase equation), ``multi_impact`` (:func:`find_orbit`: ``m`` impacts in ``n`` load periods by Newton
+on the segment problem, one segment per flight; and :func:`periodic_orbits`, the one-impact orbits
+under every law: from the phase equation, or by Newton's method from guesses for a law without one,
+:func:`periodic_orbits_by_newton`), ``charts`` (existence, stability
+and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits with an unknown period under a
+position-switched drive, theory §10).
+
+Each law's own numerics (its phase equation, the states of its orbits, the exact Jacobian of its
+impact map and its Floquet multipliers) are in :mod:`impactbar.laws`; the solvers here reach them
+through ``model.law`` and build the results. Part of the core: imports only ``impactbar.laws``,
+``impactbar.model``, ``impactbar.loads``, ``impactbar.dynamics``, the simulator
+(``impactbar.simulation``, whose runs are guesses), numpy and scipy.
 """
 
 import importlib
@@ -22,11 +27,12 @@ import importlib
 _HOME = {
     "MultiImpactOrbit": "orbit", "find_orbit": "multi_impact", "impact_law": "multi_impact",
     "OrbitList": "one_impact", "PeriodicOrbit": "orbit", "orbit_multipliers": "one_impact",
-    "periodic_orbits": "one_impact",
+    "periodic_orbits": "multi_impact",
     "phase_G": "phase", "phase_residual": "phase", "phase_roots": "phase",
     "RigidOrbits": "rigid", "rigid_cosine_orbits": "rigid", "rigid_square_orbits": "rigid",
     "floquet_multipliers": "stability", "impact_map_jacobian": "stability",
     "SwitchedOrbit": "switched", "find_switched_orbit": "switched",
+    "periodic_orbits_by_newton": "multi_impact", "rock_periodic_orbits": "multi_impact",
 }
 
 __all__ = [
@@ -47,6 +53,8 @@ __all__ = [
     "impact_law",
     "SwitchedOrbit",
     "find_switched_orbit",
+    "periodic_orbits_by_newton",
+    "rock_periodic_orbits",
 ]
 
 

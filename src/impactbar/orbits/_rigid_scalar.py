@@ -9,11 +9,11 @@ the general path on random parameters (``tests/dynamics/test_fast_paths.py``).
 
 This module is the one source of the compiled loop over a sweep's points too: the functions named
 in :data:`SHARED` use plain floats, tuples and ``math``/``cmath`` only, and
-:mod:`impactbar.orbits._rigidkernel` compiles these very functions with numba; two of them
-(:func:`trace_det`, :func:`harmonic_term`), plain arithmetic, serve the vectorised closed forms as
-they are. Sources: the phase equation (eq. 14, theory §4), the stationary points of the end's
-displacement arc by arc (theory §5), the 2 x 2 impact-map Jacobian (theory §7), the paper's rigid
-block (eqs. 29, 30, theory §6).
+:mod:`impactbar.orbits._rigidkernel` compiles these very functions with numba; two of them, plain
+arithmetic, serve the vectorised closed forms as they are (:func:`harmonic_term`, and ``trace_det``,
+which the paper law's ``rigid_multipliers`` defines). Sources: the phase equation (eq. 14, theory
+§4), the stationary points of the end's displacement arc by arc (theory §5), the 2 x 2 impact-map
+Jacobian (theory §7), the paper's rigid block (eqs. 29, 30, theory §6).
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..dynamics.kernelview import FOURIER
+from ..laws.paper.stability import trace_det
 from .stability import MARGINAL
 
 TWO_PI = 2.0 * math.pi
@@ -83,19 +84,6 @@ def _c(d, t):
 
 def _sign(x):
     return 1.0 if x > 0.0 else (-1.0 if x < 0.0 else (0.0 if x == 0.0 else NAN))
-
-
-def trace_det(b, e, R, p_plus, p_minus, v_plus, v_minus, d):
-    """Half the trace and the determinant of the rigid bar's 2 x 2 impact-map Jacobian (theory §7
-    with ``N = 0``), ``b = b(2 pi)``, ``e = exp(-2 pi d)``: plain arithmetic, the same for floats
-    (here, and compiled) and for numpy arrays (:func:`impactbar.orbits.rigid.rigid_multipliers`)."""
-    a_p = p_plus - d * v_plus
-    a_m = p_minus - d * v_minus
-    r0 = (v_plus + b * a_p) / v_minus
-    r1 = -b / v_minus
-    j10 = -R * (-e * a_p + a_m * r0)
-    j11 = -R * (e + a_m * r1)
-    return 0.5 * (r0 + j11), r0 * j11 - r1 * j10
 
 
 def multipliers(d, R, p_plus, p_minus, v_plus, v_minus):

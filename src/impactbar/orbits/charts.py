@@ -16,9 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from ..laws.paper.phase import pneumatic_existence_edge as pneumatic_existence_edge
 from ..loads import CosineLoad, Load, SquareWaveLoad
 from ..model import BarModel
-from .one_impact import orbit_multipliers, periodic_orbits
+from .multi_impact import periodic_orbits
+from .one_impact import orbit_multipliers
 from .phase import phase_G, phase_residual
 
 __all__ = [
@@ -107,7 +109,7 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
     ValueError
         Under a law other than the paper's (e.g. the wave impact law), whose phase equation is
         another (theory §4b): its existence edges come from the law's ``existence_edge``
-        (:func:`impactbar.orbits.wave.wave_existence_edge`, pneumatic) or from the orbits themselves.
+        (:func:`impactbar.laws.wave.periodic.wave_existence_edge`, pneumatic) or from the orbits themselves.
     """
     if not model.law.supports_schur:
         raise ValueError("max_phase_residual is eq. 14's, the paper's impact law; model.impact must "
@@ -132,33 +134,6 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
 
 
 # ------------------------------------------------------------------ pneumatic (Figs. 5, 6) --------
-def pneumatic_existence_edge(R, d: float = 0.0, k: int = 1):
-    """Existence edge of the pneumatic load (eq. 38 generalised to ``d > 0``), closed form.
-
-    One-impact orbits exist iff ``k p0 / pk <= k (1 + R) / (sqrt(d^2 + k^2) G(d, R))``; at ``d = 0``
-    this is ``(1/pi)(1 + R)/(1 - R)`` (eq. 38).
-
-    Parameters
-    ----------
-    R : float or array_like
-        Restitution coefficient(s) in ``[0, 1)``.
-    d : float
-        Damping.
-    k : int
-        Order of the harmonic.
-
-    Returns
-    -------
-    float or numpy.ndarray
-        The load factor ``k p0 / pk`` at the fold.
-    """
-    R = np.asarray(R, dtype=float)
-    G = np.vectorize(lambda r: phase_G(d, r))(R)
-    with np.errstate(divide="ignore"):
-        out = k * (1.0 + R) / (math.hypot(d, k) * G)
-    return float(out) if out.ndim == 0 else out
-
-
 def _stable_branch_phase(model: BarModel, load: CosineLoad) -> float | None:
     """Phase of the orbit on the paper's stable branch: ``cos(k phase)`` of opposite sign to ``pk``
     (load decreasing through the mean at impact), the first of its ``k`` copies. Under the wave law

@@ -14,9 +14,13 @@ each with its saltation term (theory §7).
 Under the wave impact law (theory §4b) each impact is a contact of duration ``2/s`` with a long
 rod: the segment's state is taken at the end of the contact window, the flight lasts the interval
 between impacts less ``2/s``, and the map across the window is affine in the arrival state, with the
-drive's part and its rate from :func:`impactbar.dynamics.impact.window_drive` (the analytic
-Jacobian of :func:`impactbar.orbits.wave.wave_impact_map_jacobian`, composed over the impacts).
+drive's part and its rate from :func:`impactbar.laws.wave.impact.window_drive` (the analytic
+Jacobian of :func:`impactbar.laws.wave.periodic.wave_impact_map_jacobian`, composed over the impacts).
 Admissibility adds the characteristics solution's verdict on each contact (``"separates"``).
+
+Here too :func:`periodic_orbits`, the one-impact orbits under every law (find_orbit's default
+guess): from the law's phase equation (:mod:`impactbar.orbits.one_impact`), or, for a law without
+one, by this solver from guesses (:func:`periodic_orbits_by_newton`).
 """
 
 from __future__ import annotations
@@ -37,13 +41,14 @@ from ..model import BarModel
 from ._rigid_scalar import RigidFlight
 from ._rigid_scalar import _b as _scalar_b
 from .admissibility import _admissibility, _window_departure
-from .one_impact import periodic_orbits
+from .one_impact import OrbitList, _check_modes, phase_equation_orbits
 from .orbit import MultiImpactOrbit as MultiImpactOrbit
 from .orbit import PeriodicOrbit
 from .phase import _check_inputs
 from .stability import sort_multipliers, stable_verdict
 
-__all__ = ["MultiImpactOrbit", "find_orbit"]
+__all__ = ["MultiImpactOrbit", "find_orbit", "periodic_orbits", "periodic_orbits_by_newton",
+           "rock_periodic_orbits"]
 
 TWO_PI = 2.0 * math.pi
 MAX_UNKNOWNS = 6000
@@ -613,3 +618,166 @@ def _halves_gap(u, problem) -> float:
     z = np.array(u, dtype=float).reshape(2, -1)
     z[1, ::problem.B] -= TWO_PI * problem.n / 2
     return float(np.max(np.abs(z[0] - z[1])))
+
+
+# ------------------------------------------------------------------------------------------------
+# the one-impact orbits of every law (find_orbit's default guess): from the law's phase equation, or
+# by Newton's method from guesses where it has none (both here, since each calls the other)
+# ------------------------------------------------------------------------------------------------
+def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
+    """Every one-impact-per-period steady state of the bar under the load (paper Section 2).
+
+    Each root ``phase`` of the phase equation (eq. 14) in ``[0, 2 pi)`` gives one orbit: the flexible
+    modes' start state solves the periodicity and impact conditions (eqs. 10-13) exactly, mode by
+    mode; the rigid mode strikes at ``2 pi p0 / (1 + R)`` and its constant is fixed by contact
+    ``u(1, 0) = 0`` (:func:`~impactbar.orbits.one_impact.phase_equation_orbits`; under the wave law
+    its own phase equation, theory §4b). Under a law without a phase equation
+    (:attr:`~impactbar.laws.ContactLaw.has_phase_equation` ``False``, e.g. the rod-rock law) the
+    orbits come from Newton's method from guesses instead (:func:`periodic_orbits_by_newton`): the
+    orbits found, not a certified set.
+
+    Parameters
+    ----------
+    model : BarModel
+    load : Load
+        Any load of period ``2 pi``: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
+
+    Returns
+    -------
+    OrbitList
+        A ``list`` of :class:`PeriodicOrbit` sorted by phase, empty when none exists (e.g. above the
+        fold, eq. 38); ``.to_dataframe()`` and ``.to_xarray()`` make it a table. Where the phase
+        equation holds on a whole interval (a degenerate family, wave law), ``.families`` holds
+        the interval and one orbit with ``multiplicity = 0`` stands for it, at its middle.
+
+    Raises
+    ------
+    ValueError
+        For inputs of the wrong type, or at an undamped resonance ``s n pi = k`` (eq. 16).
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, CosineLoad, periodic_orbits
+    >>> orbits = periodic_orbits(BarModel(s=10, d=0, R=0.5, n_modes=4), CosineLoad(0.5, 1.0))
+    >>> [round(o.phase, 4) for o in orbits]
+    [0.5511, 2.5905]
+    """
+    _check_inputs(model, load)
+    _check_modes(model)
+    if not model.law.has_phase_equation:  # the blow is a numerical map: Newton from guesses
+        return periodic_orbits_by_newton(model, load)
+    return phase_equation_orbits(model, load)
+
+
+#: load periods of the simulation guess
+SETTLE_PERIODS = 60
+
+
+def _paper_guesses(model: BarModel, load: Load) -> list:
+    """The one-impact orbits of the law's paper-equivalent bar, stable ones first, each at its phase
+    with the state it has one window after its impact (where this law's flight starts)."""
+    law = model.law
+    paper = law.paper_equivalent(model)
+    T = law.window(model)
+    guesses = []
+    for o in sorted(periodic_orbits(paper, load), key=lambda o: (not o.stable, o.phase)):
+        if not np.isfinite(o.phase):
+            continue
+        q, v = o.modal_state(np.array([T]))
+        guesses.append((np.array([o.phase]), np.concatenate((q[:, 0], v[:, 0]))[None, :]))
+    return guesses
+
+
+def _simulated_guess(model: BarModel, load: Load):
+    """A simulation from rest over :data:`SETTLE_PERIODS` load periods, if it has settled to one
+    impact per period; else ``None``."""
+    from ..simulation import InitialState, simulate  # the simulator, loaded where a guess needs it
+
+    try:
+        tr = simulate(model, load, InitialState.rigid(-0.1, 0.0, n_modes=model.n_modes),
+                      TWO_PI * SETTLE_PERIODS)
+    except ValueError:
+        return None
+    ti = np.asarray(tr.impact_times)
+    if ti.size < 4 or not np.allclose(np.diff(ti[-4:]), TWO_PI, atol=1e-3):
+        return None
+    return tr
+
+
+def periodic_orbits_by_newton(model: BarModel, load: Load) -> OrbitList:
+    """The one-impact orbits under a law without a phase equation, by Newton's method from guesses
+    (theory §4d, §10): :func:`~impactbar.periodic_orbits` for such a model (e.g.
+    ``impact=RodRock(...)``).
+
+    The blow is a numerical map (for the rod-rock law, characteristics on the cell grid,
+    :meth:`~impactbar.RodRock.impact_map`), so there is no closed-form phase equation to search:
+    each orbit is found by :func:`~impactbar.find_orbit` (one impact in one period, the flight's
+    start ``q_0`` among the unknowns where the law's flights may start off the stop) from two kinds
+    of guesses:
+
+    1. the one-impact orbits of the law's paper-equivalent bar
+       (:meth:`~impactbar.laws.ContactLaw.paper_equivalent`: the same bar and load under the paper's
+       law with the restitution this law's contact gives; for the rod-rock law a rigid piston's
+       rebound from its rod and rock, ``R = -rebound_velocity / V`` at ``V = 1``, clipped to
+       ``[0, 0.95]``), each taken at its phase with the state it has one window
+       (:meth:`~impactbar.laws.ContactLaw.window`) after the impact, where this law's flight starts;
+    2. where none of those gives a stable orbit, the end of a simulation from rest (60 load
+       periods), if it has settled to one impact per period.
+
+    Orbits found twice (phases within ``1e-7``) are kept once. Guesses from which Newton does not
+    converge give nothing: the list holds the orbits found, not a certified set of all of them.
+
+    Parameters
+    ----------
+    model : BarModel
+        Under a law with ``has_phase_equation = False`` (any law with ``window``, ``impact_map`` and
+        ``contact`` is accepted).
+    load : Load
+        Of period ``2 pi``.
+
+    Returns
+    -------
+    OrbitList
+        Sorted by phase; each a :class:`~impactbar.PeriodicOrbit` of :func:`~impactbar.find_orbit`
+        (multipliers of the law's impact map, admissibility, the law's record per blow in
+        ``contacts``). Empty when no guess converges.
+
+    Raises
+    ------
+    ValueError
+        For a model or load :func:`~impactbar.find_orbit` refuses (named).
+
+    Examples
+    --------
+    >>> import impactbar as ib
+    >>> law = ib.RodRock(segments=[ib.RodSegment(length=10.0, impedance=2.0)],
+    ...                  rock=ib.BilinearRock(k=60.0, k_u=1e6), blow_time=2.0)
+    >>> model = ib.BarModel(s=10.0, d=0.3, R=0.0, n_modes=0, impact=law)
+    >>> load = ib.PiecewiseConstantLoad([0.0, 1.0, 3.0], [-1.0, 2.0, 0.0])
+    >>> orbits = ib.periodic_orbits(model, load)  # calls periodic_orbits_by_newton
+    >>> [(round(o.phase, 4), o.stable) for o in orbits]
+    [(2.6008, False), (3.5461, True)]
+    """
+    found = []
+    starts = _paper_guesses(model, load)
+    with single_threaded_blas():
+        for guess in [*starts, None]:
+            if guess is None:
+                if any(o.stable for o in found):
+                    break
+                guess = _simulated_guess(model, load)
+                if guess is None:
+                    break
+            try:
+                orbit = find_orbit(model, load, 1, 1, guess=guess)
+            except ValueError:
+                continue
+            if all(abs(math.remainder(orbit.phase - o.phase, TWO_PI)) > 1e-7 for o in found):
+                found.append(orbit)
+    out = OrbitList(sorted(found, key=lambda o: o.phase))
+    out._families = ()
+    return out
+
+
+#: :func:`periodic_orbits_by_newton` under the name it had in ``impactbar.laws`` (the rod-rock law's)
+rock_periodic_orbits = periodic_orbits_by_newton

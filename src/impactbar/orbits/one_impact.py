@@ -1,8 +1,10 @@
-"""One-impact periodic orbits (paper Section 2, theory §4, §5, §7).
+"""One-impact periodic orbits from the law's phase equation (paper Section 2, theory §4, §5, §7).
 
-``periodic_orbits(model, load)`` finds every root ``phase`` of the phase equation (eq. 14),
-builds the orbit's modal state, decides admissibility rigorously, and computes the exact Floquet
-multipliers and the paper's Schur criterion.
+``phase_equation_orbits(model, load)`` finds every root ``phase`` of the law's phase equation
+(eq. 14 under the paper's law), takes the orbit's modal states and exact Floquet multipliers from
+the law, decides admissibility rigorously, and adds the paper's Schur criterion.
+:func:`~impactbar.periodic_orbits` (:mod:`impactbar.orbits.multi_impact`) calls it for a law with a
+phase equation, and Newton's method from guesses for one without.
 """
 
 from __future__ import annotations
@@ -16,23 +18,15 @@ from .._shared.schema import Field, Schema
 from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from ..dynamics.implementations import use_fast
-from ..loads import FourierLoad, Load
+from ..loads import Load
 from ..model import BarModel
 from .admissibility import _admissibility, _window_departure
 from .orbit import PeriodicOrbit
 from .phase import _check_inputs
-from .rigid import STATUS, rigid_cosine_orbits, rigid_multipliers, rigid_square_orbits
-from .stability import (
-    floquet_multipliers,
-    period_fundamental,
-    quadratic_roots,
-    schur_blocks,
-    schur_test,
-    sort_multipliers,
-    stable_verdict,
-)
+from .rigid import STATUS, rigid_cosine_orbits, rigid_square_orbits
+from .stability import quadratic_roots, schur_blocks, schur_test, stable_verdict
 
-__all__ = ["PeriodicOrbit", "periodic_orbits", "orbit_multipliers"]
+__all__ = ["PeriodicOrbit", "phase_equation_orbits", "orbit_multipliers"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -51,7 +45,7 @@ class OrbitList(list):
     families : tuple of (float, float)
         Intervals of phases on which the phase equation holds identically (a degenerate family:
         a continuum of orbits, e.g. under the wave law,
-        :func:`impactbar.orbits.wave.wave_phase_families`); each is stood for in the list by one
+        :func:`impactbar.laws.wave.periodic.wave_phase_families`); each is stood for in the list by one
         orbit at the interval's middle, with ``multiplicity = 0``. Empty for isolated orbits only.
 
     Methods
@@ -114,45 +108,32 @@ class OrbitList(list):
         return _tables.to_xarray(self.to_dataframe())
 
 
-def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
-    """Every one-impact-per-period steady state of the bar under the load (paper Section 2).
-
-    Each root ``phase`` of the phase equation (eq. 14) in ``[0, 2 pi)`` gives one orbit: the flexible
-    modes' start state solves the periodicity and impact conditions (eqs. 10-13) exactly, mode by
-    mode; the rigid mode strikes at ``2 pi p0 / (1 + R)`` and its constant is fixed by contact
-    ``u(1, 0) = 0``.
+def phase_equation_orbits(model: BarModel, load: Load) -> OrbitList:
+    """The one-impact orbits from the law's phase equation (:func:`~impactbar.periodic_orbits` for a
+    law with :attr:`~impactbar.laws.ContactLaw.has_phase_equation`): each root ``phase`` of the phase
+    equation (eq. 14 under the paper's law) in ``[0, 2 pi)`` gives one orbit, whose states and
+    multipliers the law computes (:meth:`~impactbar.laws.ContactLaw.orbit_state`) and whose
+    admissibility is decided here; the rigid bar under the paper's law in closed form.
 
     Parameters
     ----------
     model : BarModel
     load : Load
-        Any load of period ``2 pi``: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
+        Any load of period ``2 pi``.
 
     Returns
     -------
     OrbitList
-        A ``list`` of :class:`PeriodicOrbit` sorted by phase, empty when none exists (e.g. above the
-        fold, eq. 38); ``.to_dataframe()`` and ``.to_xarray()`` make it a table. Where the phase
-        equation holds on a whole interval (a degenerate family, wave law), ``.families`` holds
-        the interval and one orbit with ``multiplicity = 0`` stands for it, at its middle.
+        As :func:`~impactbar.periodic_orbits`.
 
     Raises
     ------
     ValueError
-        For inputs of the wrong type, or at an undamped resonance ``s n pi = k`` (eq. 16).
-
-    Examples
-    --------
-    >>> from impactbar import BarModel, CosineLoad, periodic_orbits
-    >>> orbits = periodic_orbits(BarModel(s=10, d=0, R=0.5, n_modes=4), CosineLoad(0.5, 1.0))
-    >>> [round(o.phase, 4) for o in orbits]
-    [0.5511, 2.5905]
+        For inputs of the wrong type, at an undamped resonance ``s n pi = k`` (eq. 16), or under a
+        law without a phase equation (``LawNotSupported``).
     """
     _check_inputs(model, load)
     _check_modes(model)
-    by_newton = getattr(model.law, "periodic_orbits", None)  # a law without a phase equation
-    if by_newton is not None:
-        return by_newton(model, load)
     fast = _rigid_orbits(model, load)
     if fast is not None:
         return fast
@@ -168,7 +149,7 @@ def _periodic_orbits_general(model: BarModel, load: Load) -> OrbitList:
     with single_threaded_blas():
         roots = list(law.phase_roots(model, load))
         roots += [((0.5 * (lo + hi)) % TWO_PI, 0) for lo, hi in families]  # one orbit each
-        out = OrbitList(law.orbit(model, load, ph, mult) for ph, mult in sorted(roots))
+        out = OrbitList(_one_impact_orbit(model, load, ph, mult) for ph, mult in sorted(roots))
     out._families = families
     return out
 
@@ -237,44 +218,6 @@ def _rigid_orbit(model, load, phase, multiplicity, impact_velocity, status, clea
     )
 
 
-def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
-    """Modal state just after the impact of the orbit with this phase (eqs. 10-13)."""
-    N = model.n_modes
-    R, d = model.R, model.d
-    q = np.zeros(N + 1)
-    v = np.zeros(N + 1)
-    if N > 0:
-        w2 = model.frequencies[1:] ** 2
-        p11, p12, p21, p22 = (a[1:] for a in period_fundamental(model))
-        if isinstance(load, FourierLoad):  # fast-path guard: the closed-form periodic response
-            # the response from rest over one period, (I - Phi(2 pi)) y_p(phase) with y_p the
-            # periodic response (what the flow from rest computes, without building it; it also
-            # fixes the orbit's last bits, which the general path's propagation would change)
-            qp, vp = load.periodic_state(w2, d, [phase])
-            qp, vp = qp[:, 0], vp[:, 0]
-            fq = qp - (p11 * qp + p12 * vp)
-            fv = vp - (p21 * qp + p22 * vp)
-        else:
-            zeros = np.zeros(N)
-            fq, fv = load.propagate(w2, d, phase, zeros, zeros, [phase + TWO_PI])
-            fq, fv = fq[:, 0], fv[:, 0]
-        # y = J_R (Phi y + f),  J_R = diag(1, -R)
-        a11, a12, a21, a22 = 1.0 - p11, -p12, R * p21, 1.0 + R * p22
-        det = a11 * a22 - a12 * a21
-        if np.any(np.abs(det) < 1e-13):
-            if R == 1.0 and d == 0.0:
-                raise ValueError("R = 1 with d = 0 and flexible modes: a conservative bar with elastic "
-                                 "impacts has a continuum of one-impact orbits, not isolated ones; "
-                                 "use d > 0, R < 1 or n_modes = 0")
-            raise ValueError("the periodicity conditions are singular (undamped resonance, eq. 16)")
-        r1, r2 = fq, -R * fv
-        q[1:] = (a22 * r1 - a12 * r2) / det
-        v[1:] = (a11 * r2 - a21 * r1) / det
-    v[0] = -R * TWO_PI * load.p0 / (1.0 + R)
-    q[0] = -float(model.end_weights[1:] @ q[1:])
-    return np.concatenate((q, v))
-
-
 def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool = False) -> np.ndarray:
     """Floquet multipliers of the orbit with this phase, without the admissibility check.
 
@@ -299,111 +242,35 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     return model.law.multipliers(model, load, phase)
 
 
-def _paper_multipliers(model: BarModel, load: Load, phase: float) -> np.ndarray:
-    """:func:`orbit_multipliers` under the paper's law (eq. 10)."""
-    y_plus, y_minus = _impact_states(model, load, phase)
-    if model.n_modes == 0:  # the 2 x 2 Jacobian in closed form
-        mu = rigid_multipliers(model.d, model.R, float(load(phase)), float(load.left_limit(phase)),
-                               y_plus[1], y_minus[1])
-        if not np.all(np.isfinite(mu)):
-            raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
-        return mu
-    with single_threaded_blas():
-        return floquet_multipliers(model, load, phase, y_plus, y_minus)
-
-
-def _impact_states(model: BarModel, load: Load, phase: float, return_flow: bool = False):
-    """Modal states just after (``t = 0+``) and just before (``t = 2 pi-``) the orbit's impact;
-    with ``return_flow``, also the flight's flow (``load.flow`` from ``y_plus``) where it is the
-    one that gave ``y_minus`` (a Fourier load; else ``None``), for the admissibility search."""
+def _one_impact_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
+    """The one-impact orbit at a root ``phase`` of the law's phase equation: the law's states and
+    multipliers (:meth:`~impactbar.laws.ContactLaw.orbit_state`), its admissibility decided here
+    with certified bounds over the flight (theory §5; for a law whose impact lasts a window, the
+    flight from the window's end, and the departure at the window's end), the paper's Schur
+    criterion (eqs. 27-31)."""
+    law = model.law
+    st = law.orbit_state(model, load, phase)
     M = model.n_modes + 1
-    y_plus = _start_state(model, load, phase)
-    w2 = model.frequencies**2
-    flow = None
-    if isinstance(load, FourierLoad):  # fast-path guard: its propagate is this flow, built once, used
-        # twice (here and by the admissibility search, which would build it again)
-        flow = load.flow(w2, model.d, phase, y_plus[:M], y_plus[M:])
-        qm, vm = flow([phase + TWO_PI])
-    else:
-        qm, vm = load.propagate(w2, model.d, phase, y_plus[:M], y_plus[M:], [phase + TWO_PI])
-    y_minus = np.concatenate((qm[:, 0], vm[:, 0]))
-    return (y_plus, y_minus, flow) if return_flow else (y_plus, y_minus)
-
-
-def _build_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
-    M = model.n_modes + 1
-    y_plus, y_minus, flow = _impact_states(model, load, phase, return_flow=True)
+    y_plus, y_minus = st.state_after_impact, st.state_before_impact
     c = model.end_weights
     v_imp = float(c @ y_minus[M:])
-
-    status, clearance, cerr = _admissibility(model, load, phase, y_plus, v_imp, flow=flow)
+    T = law.window(model)
+    if T == 0.0:  # the flight starts at the impact
+        status, clearance, cerr = _admissibility(model, load, phase, y_plus, v_imp, flow=st.flow)
+    else:  # the flight starts where the window closes: the end must leave the stop there
+        v_dep = float(c @ y_plus[M:])
+        scale = max(abs(v_imp), load.sup_abs, 1e-300)
+        at_rest = abs(v_dep) <= 1e-12 * scale
+        status, clearance, cerr = _admissibility(model, load, phase + T, y_plus, v_imp,
+                                                 horizon=TWO_PI - T, at_rest=at_rest, flow=st.flow)
+        status = _window_departure(status, at_rest, v_dep, st.separates)
     admissible = status == Admissibility.ADMISSIBLE
-
-    try:
-        mu = floquet_multipliers(model, load, phase, y_plus, y_minus)
-    except ValueError:  # exact grazing: a multiplier is infinite
-        mu = np.full(2 * M, np.inf + 0j)
-    blocks = schur_blocks(model, load, phase)
-    return PeriodicOrbit.one_impact(
-        model=model,
-        load=load,
-        phase=float(phase),
-        multiplicity=int(mult),
-        impact_velocity=v_imp,
-        admissible=admissible,
-        admissibility=status,
-        clearance=clearance,
-        clearance_error=cerr,
-        multipliers=mu,
-        stable=stable_verdict(admissible, mu),
-        schur_roots=quadratic_roots(blocks),
-        schur_stable=schur_test(blocks),
-        state_after_impact=y_plus,
-        state_before_impact=y_minus,
-    )
-
-
-
-
-def _build_wave_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
-    """An orbit of the wave law (theory §4b): contact over ``[0, 2/s]``, flight over ``[2/s, 2 pi]``."""
-    from ..dynamics.impact import _wave_impact
-    from .wave import _orbit_states, wave_floquet_multipliers
-
-    M = model.n_modes + 1
-    _, y_end, y_minus, rate, drive = _orbit_states(model, load, phase)
-    c = model.end_weights
-    v_imp = float(c @ y_minus[M:])
-    T = 2.0 / model.s
-    impact = None
-    if v_imp > 0.0:
-        qm = y_minus[:M].copy()
-        qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
-        impact = _wave_impact(model, load, float(phase), qm, y_minus[M:], drive)
-    # the departure: the end must leave the rod end when the window closes
-    v_dep = float(c @ y_end[M:])
-    scale = max(abs(v_imp), load.sup_abs, 1e-300)
-    at_rest = abs(v_dep) <= 1e-12 * scale
-    status, clearance, cerr = _admissibility(model, load, phase + T, y_end, v_imp,
-                                             horizon=TWO_PI - T, at_rest=at_rest)
-    status = _window_departure(status, at_rest, v_dep, impact is not None and bool(impact.separations))
-    admissible = status == Admissibility.ADMISSIBLE
-    mu = wave_floquet_multipliers(model, load, phase, y_end, y_minus, rate)
+    mu = st.multipliers
     blocks = schur_blocks(model, load, phase)
     return PeriodicOrbit.one_impact(
         model=model, load=load, phase=float(phase), multiplicity=int(mult), impact_velocity=v_imp,
         admissible=admissible, admissibility=status, clearance=clearance, clearance_error=cerr,
         multipliers=mu, stable=stable_verdict(admissible, mu),
         schur_roots=quadratic_roots(blocks), schur_stable=schur_test(blocks),
-        state_after_impact=y_end, state_before_impact=y_minus, impact=impact,
+        state_after_impact=y_plus, state_before_impact=y_minus, impact=st.impact,
     )
-
-
-def _sorted_multipliers(jacobian, size, *args) -> np.ndarray:
-    """Eigenvalues of ``jacobian(*args)`` in the order of :func:`sort_multipliers`; infinite at exact
-    grazing."""
-    try:
-        DP = jacobian(*args)
-    except ValueError:  # exact grazing: a multiplier is infinite
-        return np.full(size, np.inf + 0j)
-    return sort_multipliers(np.linalg.eigvals(DP))

@@ -19,7 +19,7 @@ from .._shared.schema import END_MOTION, SI, Field, Schema
 
 if TYPE_CHECKING:
     from .._shared.status import Admissibility
-    from ..dynamics.impact import WaveImpact
+    from ..laws.wave.impact import WaveImpact
     from ..loads import Load
     from ..model import BarModel
 

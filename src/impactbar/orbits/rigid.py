@@ -23,8 +23,9 @@ import numpy as np
 
 from .._shared.status import Admissibility
 from ..dynamics.implementations import use_fast
+from ..laws.paper.stability import _b, rigid_multipliers
 from ..loads import CosineLoad, SquareWaveLoad
-from ._rigid_scalar import harmonic_term, trace_det
+from ._rigid_scalar import harmonic_term
 from .stability import MARGINAL, quadratic_roots
 
 __all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_multipliers", "phase_G_array",
@@ -90,13 +91,6 @@ def phase_G_array(d, R):
     return TWO_PI * ((1.0 + R) * _beta(TWO_PI * np.asarray(d, dtype=float)) - R)
 
 
-def _b(d, t):
-    """``b(t) = (1 - exp(-d t)) / d`` elementwise (``t`` at ``d = 0``)."""
-    y = d * t
-    dd = np.where(d == 0.0, 1.0, d)
-    return np.where(np.abs(y) < 1e-8, t * (1.0 - 0.5 * y), -np.expm1(-y) / dd)
-
-
 def _c(d, t):
     """``c(t) = (t - b(t)) / d`` elementwise (``t^2/2`` at ``d = 0``), series where it cancels."""
     y = d * t
@@ -104,49 +98,6 @@ def _c(d, t):
     dd = np.where(small, 1.0, d)
     series = t * t * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0)
     return np.where(small, series, (t - (-np.expm1(-dd * t) / dd)) / dd)
-
-
-def rigid_multipliers(d, R, p_plus, p_minus, v_plus, v_minus):
-    """Floquet multipliers of a rigid-bar one-impact orbit: eigenvalues of the 2 x 2 impact-map
-    Jacobian (theory §7 with ``N = 0``), elementwise over arrays.
-
-    With ``b = b(2 pi)``, ``e = exp(-2 pi d)``, the state ``z = (tau, q_0')`` and ``v-`` the arrival
-    velocity, the Jacobian is
-    ``[[r0, r1], [-R (-e a+ + a- r0), -R (e + a- r1)]]`` with ``a+- = p(phase+-) - d v+-``,
-    ``r0 = (v+ + b a+)/v-``, ``r1 = -b/v-``.
-
-    Parameters
-    ----------
-    d, R : array_like
-        Damping and restitution coefficient.
-    p_plus, p_minus : array_like
-        Load just after and just before the impact, ``p(phase)``, ``p(phase-)``.
-    v_plus, v_minus : array_like
-        Rigid velocity just after and just before the impact.
-
-    Returns
-    -------
-    numpy.ndarray of complex, shape ``broadcast + (2,)``
-        Sorted by decreasing modulus (the one with positive imaginary part first in a complex pair).
-        ``inf`` where the arrival velocity is zero (grazing, the saltation term is infinite).
-    """
-    d, R, p_plus, p_minus, v_plus, v_minus = np.broadcast_arrays(
-        *(np.asarray(x, dtype=float) for x in (d, R, p_plus, p_minus, v_plus, v_minus)))
-    graze = ~(np.abs(v_minus) > 1e-14 * np.abs(v_minus))  # relative, as the general path: zero only
-    half_tr, det = trace_det(_b(d, TWO_PI), np.exp(-TWO_PI * d), R, p_plus, p_minus, v_plus,
-                             np.where(graze, 1.0, v_minus), d)
-    disc = np.sqrt((half_tr * half_tr - det).astype(complex))
-    # the stable pair: the larger root first, the other from the product
-    big = half_tr + np.where(half_tr >= 0.0, 1.0, -1.0) * disc
-    small = np.where(big != 0.0, det / np.where(big != 0.0, big, 1.0), 0.0)
-    mu = np.stack((big, small), axis=-1)
-    # order: decreasing modulus; a complex pair with the positive imaginary part first
-    m0, m1 = np.abs(mu[..., 0]), np.abs(mu[..., 1])
-    tie = np.abs(m1 - m0) <= 1e-12 * np.maximum(m0, m1)  # as stability.sort_multipliers
-    swap = (~tie & (m1 > m0)) | (tie & (mu[..., 1].imag > mu[..., 0].imag))
-    mu = np.where(swap[..., None], mu[..., ::-1], mu)
-    mu[graze] = np.inf + 0j
-    return mu
 
 
 class RigidOrbits(NamedTuple):

@@ -88,7 +88,7 @@ class Drifter:
     Examples
     --------
     >>> from impactbar.physical.drifter import drifter_preset
-    >>> o = drifter_preset("drifter-issue19").orbit()
+    >>> o = drifter_preset("hydraulic-drifter").orbit()
     >>> round(o.impact_velocity_m_s, 4), round(o.blow_frequency_Hz, 2)
     (9.4957, 47.19)
     """
@@ -337,13 +337,13 @@ class DrifterOrbit:
 
 #: Drifter presets, from documented numbers.
 DRIFTER_PRESETS: dict[str, dict] = {
-    # Issue 19's worked example (theory §10): a 5.6 kg piston, 5.6 kN each way, the switch 21.5 mm
+    # The worked example of theory §10: a 5.6 kg piston, 5.6 kN each way, the switch 21.5 mm
     # from the stop, R = 0.215. The piston is the steel cylinder of the "hydraulic-drill" preset
     # scaled to 5.6 kg: 45 mm diameter, length 5.6 / (7850 pi/4 0.045^2) = 448.54 mm; its 56 mm
     # shank gives R = 0.215. 5.6 kN each way: 20 MPa (the hydraulic-drill preset's supply) on
     # 2.8 cm^2 in both states. Rigid by default (n_modes = 0): v = 9.4957 m/s, 47.19 Hz, 252.47 J.
-    "drifter-issue19": {
-        "name": "drifter-issue19",
+    "hydraulic-drifter": {
+        "name": "hydraulic-drifter",
         "bar": {"E": "210 GPa", "density": "7850 kg/m^3", "length": "448.54236 mm",
                 "diameter": "45 mm"},
         "stop": {"restitution": 0.215},
@@ -352,11 +352,26 @@ DRIFTER_PRESETS: dict[str, dict] = {
         "model": {"n_modes": 0},
     },
 }
+#: former names of presets, still accepted with a FutureWarning
+RENAMED_DRIFTER_PRESETS = {"drifter-issue19": "hydraulic-drifter"}
 
 
 def drifter_preset(name: str, **changes) -> Drifter:
     """A drifter preset by name (:data:`DRIFTER_PRESETS`); ``changes`` replace sections' keys, e.g.
-    ``drifter_preset("drifter-issue19", valve={"delay": "1 ms"})``."""
+    ``drifter_preset("hydraulic-drifter", valve={"delay": "1 ms"})``.
+
+    Raises
+    ------
+    ValueError
+        An unknown preset name, or a change that makes the config invalid (the key named).
+    """
+    if name in RENAMED_DRIFTER_PRESETS:
+        import warnings
+
+        new = RENAMED_DRIFTER_PRESETS[name]
+        warnings.warn(f"the drifter preset {name!r} is now called {new!r}; the old name will go",
+                      FutureWarning, stacklevel=2)
+        name = new
     if name not in DRIFTER_PRESETS:
         raise ValueError(f"unknown drifter preset {name!r}; known: {', '.join(DRIFTER_PRESETS)}")
     cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in DRIFTER_PRESETS[name].items()}

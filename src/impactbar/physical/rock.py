@@ -205,35 +205,55 @@ def rock_blows(hammer, trajectory) -> dict:
     }
 
 
-def rock_summary(result) -> dict:
+def rock_summary(result, *, blow_fraction: float | None = None) -> dict:
     """Drilling statistics of a :class:`~impactbar.physical.SimulationResult` under the rod-rock law,
-    over the blows of the second half of the run (past the start-up), JSON-ready.
+    over the blows of the second half of the run (past the start-up), chatter apart, JSON-ready.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        A run of a hammer with a drill string.
+    blow_fraction : float, optional
+        The threshold between blows and chatter of
+        :meth:`~impactbar.physical.SimulationResult.is_blow` (its default when omitted).
 
     Returns
     -------
     dict
-        ``n_blows``, ``mean_work_on_rock_J`` (J), ``mean_penetration_mm`` (mm per blow),
-        ``drilling_rate_m_min`` (mean penetration per blow times the blow frequency ``f / k``, m/min),
-        ``measured_rate_m_min`` (the penetration of those blows over the time they span, m/min: it
-        counts the small repeated blows of a piston pressed on the shank), ``rock_power_W`` (work on
-        rock over that time, W), ``mean_efficiency`` and ``mean_efficiency_with_rebound``; only
-        ``n_blows`` when fewer than two blows fall in the second half.
+        ``n_blows`` and ``n_chatter`` (the second half's blows and chatter impacts),
+        ``blow_frequency_Hz`` (the blows' measured frequency: blows per second between the first and
+        the last of them), ``mean_work_on_rock_J`` (J) and ``mean_penetration_mm`` (mm) per blow,
+        ``drilling_rate_m_min`` (mean penetration per blow times the measured blow frequency, m/min),
+        ``measured_rate_m_min`` (the penetration of every impact between the first and the last blow,
+        chatter included, over the time they span, m/min), ``rock_power_W`` (work on rock over that
+        time, W), ``mean_efficiency`` and ``mean_efficiency_with_rebound`` of the blows; only
+        ``n_blows`` and ``n_chatter`` when fewer than two blows fall in the second half.
+
+    Raises
+    ------
+    ValueError
+        ``blow_fraction`` outside ``(0, 1]``.
     """
     blows = rock_blows(result.hammer, result.trajectory)
     t = result.impact_times_s
-    late = t >= 0.5 * result.t_end_s
-    out = {"n_blows": int(np.count_nonzero(late))}
+    second = t >= 0.5 * result.t_end_s
+    blow = result.is_blow() if blow_fraction is None else result.is_blow(blow_fraction)
+    late = blow & second
+    out = {"n_blows": int(np.count_nonzero(late)), "n_chatter": int(np.count_nonzero(~blow & second))}
     if out["n_blows"] < 2:
         return out
-    span = float(t[late][-1] - t[late][0])
+    tl = t[late]
+    span = float(tl[-1] - tl[0])
+    frequency = (tl.size - 1) / span
+    inside = second & (t >= tl[0]) & (t < tl[-1])  # the blows but the last, and their chatter
     pen = blows["penetration_mm"][late]
-    work = blows["work_on_rock_J"][late]
     out.update({
-        "mean_work_on_rock_J": float(np.mean(work)),
+        "blow_frequency_Hz": float(frequency),
+        "mean_work_on_rock_J": float(np.mean(blows["work_on_rock_J"][late])),
         "mean_penetration_mm": float(np.mean(pen)),
-        "drilling_rate_m_min": float(np.mean(pen) * 1e-3 * result.hammer.blow_frequency_Hz * 60.0),
-        "measured_rate_m_min": float(np.sum(pen[:-1]) * 1e-3 / span * 60.0),
-        "rock_power_W": float(np.sum(work[:-1]) / span),
+        "drilling_rate_m_min": float(np.mean(pen) * 1e-3 * frequency * 60.0),
+        "measured_rate_m_min": float(np.sum(blows["penetration_mm"][inside]) * 1e-3 / span * 60.0),
+        "rock_power_W": float(np.sum(blows["work_on_rock_J"][inside]) / span),
         "mean_efficiency": float(np.mean(blows["efficiency"][late])),
         "mean_efficiency_with_rebound": float(np.mean(blows["efficiency_with_rebound"][late])),
     })

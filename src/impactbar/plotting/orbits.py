@@ -81,5 +81,6 @@ def plot_multipliers(orbit, ax=None):
     ax.set_aspect("equal")
     ax.set_xlabel("Re")
     ax.set_ylabel("Im")
-    ax.legend(fontsize=8)
+    # below the axes: inside, it covered the multipliers near the unit circle
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
     return ax

@@ -14,7 +14,7 @@ not instantaneous (the wave law, ``BarModel(impact="wave")``, theory §4b: a con
 ``2/s`` with the long rod, solved by characteristics) makes the kernel stop at the arrival, and its
 contact step (:meth:`impactbar.laws.ContactLaw.contact`) gives the state where the flight resumes
 (under the wave law after a sustained contact where the window ends with the end still driven into
-the rod: :mod:`impactbar.dynamics.sustained`).
+the rod: :mod:`impactbar.laws.wave.sustained`).
 
 With ``R < 1`` and a load pressing the end on the stop the bounces shrink geometrically and
 accumulate in finite time; the simulation jumps to the accumulation point, where the velocity field

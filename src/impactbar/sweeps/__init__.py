@@ -1,4 +1,4 @@
-"""Parameter sweeps and Monte Carlo on ``dask.distributed``, stored chunk by chunk in zarr (issue 4).
+"""Parameter sweeps and Monte Carlo on ``dask.distributed``, stored chunk by chunk in zarr.
 
 A sweep is described by a :class:`SweepSpec` (usually read from a TOML file with
 :func:`load_spec`): a task, a base bar and load, and axes, each sweeping one scalar field of the

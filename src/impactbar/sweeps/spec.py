@@ -147,7 +147,7 @@ class SweepSpec:
         ``"rodrock"``), and the ``orbits`` task also stores, per orbit, the blow's
         ``work_on_rock``, ``penetration`` (permanent, per blow), ``efficiency`` and
         ``efficiency_with_rebound`` (:class:`impactbar.Blow`). Its orbits come from Newton's
-        method from guesses (:func:`impactbar.laws.rock_periodic_orbits`), not a certified search.
+        method from guesses (:func:`impactbar.orbits.rock_periodic_orbits`), not a certified search.
 
     Examples
     --------

@@ -1,9 +1,10 @@
 """The wave impact law (theory §4b): the stop is a long rod, the contact lasts ``2/s`` and is
 solved by characteristics with the drive acting.
 
-The orbit machinery is :mod:`impactbar.orbits.wave` (phase equation, states, the impact map's
-Jacobian, the existence edge); the characteristics solver is :mod:`impactbar.dynamics.impact`
-(:class:`~impactbar.WaveImpact`) with its compiled kernels.
+The orbit machinery is :mod:`impactbar.laws.wave.periodic` (phase equation, states, the impact map's
+Jacobian, the existence edge); the characteristics solver is :mod:`impactbar.laws.wave.impact`
+(:class:`~impactbar.WaveImpact`) with its compiled kernels, the sustained contact
+:mod:`impactbar.laws.wave.sustained`.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import ContactLaw
+from ..base import ContactLaw
 
 __all__ = ["PressedContact", "WaveLaw"]
 
@@ -41,11 +42,11 @@ class WaveLaw(ContactLaw):
     def impact_map(self, model, load, t, y_minus):
         """Contact held for the whole window: ``(q_n, q_n') -> -R (q_n, q_n') + (g_n, h_n)(t)`` for
         ``n >= 1``, ``q_0' -> -R q_0' + h_0``, with the drive part of
-        :func:`impactbar.dynamics.impact.window_drive`, and ``q_0`` set by contact with the
+        :func:`impactbar.laws.wave.impact.window_drive`, and ``q_0`` set by contact with the
         (advanced) rod end at the window's end; ``d(g, h)/dt`` is the drive's rate. Whether the
         contact really holds is decided on the orbit (``"separates"``)."""
-        from ..dynamics.impact import window_drive
-        from ..orbits.wave import window_map
+        from .impact import window_drive
+        from .periodic import window_map
 
         M = model.n_modes + 1
         g, h, dg, dh = window_drive(model.s, model.R, model.n_modes, load, float(t), derivative=True)
@@ -59,29 +60,29 @@ class WaveLaw(ContactLaw):
         return y_plus, jac, jt
 
     def phase_roots(self, model, load):
-        """:func:`impactbar.orbits.wave.wave_phase_roots`."""
-        from ..orbits.wave import wave_phase_roots  # here: it loads scipy.optimize and numba
+        """:func:`impactbar.laws.wave.periodic.wave_phase_roots`."""
+        from .periodic import wave_phase_roots  # here: it loads scipy.optimize and numba
 
         return wave_phase_roots(model, load)
 
     def phase_families(self, model, load):
-        """:func:`impactbar.orbits.wave.wave_phase_families`."""
-        from ..orbits.wave import wave_phase_families
+        """:func:`impactbar.laws.wave.periodic.wave_phase_families`."""
+        from .periodic import wave_phase_families
 
         return wave_phase_families(model, load)
 
-    def orbit(self, model, load, phase, multiplicity):
+    def orbit_state(self, model, load, phase):
         """Contact over ``[0, 2/s]``, flight over ``[2/s, 2 pi]``, with the contact's
-        :class:`~impactbar.WaveImpact` (theory §4b)."""
-        from ..orbits.one_impact import _build_wave_orbit
+        :class:`~impactbar.WaveImpact` (theory §4b; :func:`impactbar.laws.wave.periodic.orbit_state`)."""
+        from .periodic import orbit_state
 
-        return _build_wave_orbit(model, load, phase, multiplicity)
+        return orbit_state(model, load, phase)
 
     def multipliers(self, model, load, phase):
-        """Eigenvalues of :func:`impactbar.orbits.wave.wave_impact_map_jacobian`."""
-        from .._shared.threads import single_threaded_blas
-        from ..orbits.stability import sort_multipliers
-        from ..orbits.wave import wave_impact_map_jacobian, wave_orbit_states
+        """Eigenvalues of :func:`impactbar.laws.wave.periodic.wave_impact_map_jacobian`."""
+        from ..._shared.threads import single_threaded_blas
+        from ...dynamics.monodromy import sort_multipliers
+        from .periodic import wave_impact_map_jacobian, wave_orbit_states
 
         _, y_end, y_minus, rate = wave_orbit_states(model, load, phase)
         with single_threaded_blas():
@@ -89,15 +90,15 @@ class WaveLaw(ContactLaw):
                 wave_impact_map_jacobian(model, load, phase, y_end, y_minus, rate)))
 
     def existence_edge(self, model, k: int = 1) -> float:
-        """:func:`impactbar.orbits.wave.wave_existence_edge`."""
-        from ..orbits.wave import wave_existence_edge
+        """:func:`impactbar.laws.wave.periodic.wave_existence_edge`."""
+        from .periodic import wave_existence_edge
 
         return wave_existence_edge(model, k)
 
     def blow(self, model, load, t, y_minus):
-        """The contact by characteristics (:func:`~impactbar.dynamics.impact.wave_impact`) of an
+        """The contact by characteristics (:func:`~impactbar.laws.wave.impact.wave_impact`) of an
         arrival in state ``y_minus`` at ``t``."""
-        from ..dynamics.impact import wave_impact
+        from .impact import wave_impact
 
         M = model.n_modes + 1
         c = model.end_weights
@@ -108,9 +109,9 @@ class WaveLaw(ContactLaw):
     def contact(self, model, load, t, q_minus, v_minus, *, kernel=None, t_end=None):
         """The window ``[t, t + 2/s]``: by the compiled kernels when ``kernel`` is given (the
         :class:`~impactbar.WaveImpact` then solved on first use), else by
-        :func:`~impactbar.dynamics.impact.wave_impact`. A window that ends with the struck end
+        :func:`~impactbar.laws.wave.impact.wave_impact`. A window that ends with the struck end
         still moving into the rod goes on as the sustained contact
-        (:class:`~impactbar.dynamics.sustained.SustainedContact`, theory §4b) until the interface
+        (:class:`~impactbar.laws.wave.sustained.SustainedContact`, theory §4b) until the interface
         force would turn tensile, or until ``t_end`` (default: two load periods after the window,
         where a contact still pressed resumes as a new arrival); the record then is a
         :class:`PressedContact`."""
@@ -119,7 +120,7 @@ class WaveLaw(ContactLaw):
         ends = float(c @ v)
         scale = max(float(np.abs(c) @ np.abs(q)), 1e-300)
         if model.R < 1.0 and ends > 0.0 and abs(float(c @ q)) <= 1e-12 * scale + 1e-300:
-            from ..dynamics.sustained import sustained_contact
+            from .sustained import sustained_contact
 
             horizon = t_release + 4.0 * np.pi if t_end is None else max(float(t_end), t_release)
             if horizon > t_release:
@@ -135,16 +136,16 @@ class WaveLaw(ContactLaw):
         return q, v, t_release, imp
 
     def _window(self, model, load, t, q_minus, v_minus, kernel):
-        from ..dynamics.impact import wave_impact
+        from .impact import wave_impact
 
         ti, qm, vm = float(t), q_minus, v_minus
         t_release = ti + 2.0 / model.s
         if kernel is None:
             imp = wave_impact(model, load, ti, qm, vm)
             return imp.q_after.copy(), imp.v_after.copy(), t_release, imp
-        from ..dynamics import _wavekernel as WK
-        from ..dynamics import _windowkernel as KW
-        from ..dynamics.implementations import use_fast
+        from ...dynamics.implementations import use_fast
+        from . import _wavekernel as WK
+        from . import _windowkernel as KW
 
         c = kernel.c
         D = kernel.data
@@ -236,7 +237,7 @@ class PressedContact:
             return self.window.account(tau)
         w1, r1, f1 = self.window.account(wd)
         w2, r2, _, f2 = self.sustained.account(tau - wd)
-        from ..dynamics.impact import modal_energy
+        from .impact import modal_energy
 
         proj = f1 - modal_energy(self.sustained.model.s, self.window.q_after, self.window.v_after)
         return w1 + w2, r1 + r2, f2 + proj
@@ -266,7 +267,7 @@ class _Window:
         self.q_after, self.v_after = q_after, v_after
 
     def resolve(self):
-        from ..dynamics.impact import wave_impact
+        from .impact import wave_impact
 
         if self._impact is None:
             self._impact = wave_impact(*self._args)

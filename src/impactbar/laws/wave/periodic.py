@@ -3,7 +3,7 @@
 The impact starts at load time ``phase`` and lasts the window ``T = 2/s``; the flight lasts
 ``2 pi - T``. Held in contact for the whole window, the contact map is affine (theory §4b):
 ``(q_n, q_n') -> -R (q_n, q_n') + (g_n, h_n)(phase)`` for ``n >= 1``, ``q_0' -> -R q_0' + h_0``, with the
-drive part of :func:`impactbar.dynamics.impact.window_drive`, and the rigid displacement set by
+drive part of :func:`impactbar.laws.wave.impact.window_drive`, and the rigid displacement set by
 contact at the window's end (positions from the rod end, which each blow advances). Periodicity is
 then solved mode by mode, and the phase equation is the return of the struck end to the rod end:
 
@@ -30,35 +30,34 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq
 
-from ..dynamics import _kernel as K
-from ..dynamics.impact import window_drive
-from ..dynamics.implementations import use_fast
-from ..dynamics.kernelview import ModalBasisView
-from ..dynamics.modal import fundamental
-from ..loads import FourierLoad, Load, PiecewiseConstantLoad
-from ..model import BarModel
-from .phase import _cosine_roots
-from .stability import (
-    STRUCTURED_FROM,
-    STRUCTURED_MAX_DAMPING,
-    _aberth,
-    _arrival_derivative,
-    _impact_fields,
-    sort_multipliers,
-)
+from ...dynamics import _kernel as K
+from ...dynamics import monodromy as MD
+from ...dynamics.certified import cosine_roots
+from ...dynamics.implementations import use_fast
+from ...dynamics.kernelview import FOURIER, PIECEWISE, ModalBasisView
+from ...dynamics.modal import fundamental
+from ...dynamics.monodromy import _aberth, _arrival_derivative, _impact_fields, sort_multipliers
+from ...loads import FourierLoad, Load, PiecewiseConstantLoad
+from ..base import OrbitState
+from .impact import _wave_impact, window_drive
+
+if TYPE_CHECKING:
+    from ...model import BarModel
 
 __all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_phase_families",
-           "wave_impact_map_jacobian", "wave_floquet_multipliers", "wave_existence_edge", "window_map"]
+           "wave_impact_map_jacobian", "wave_floquet_multipliers", "wave_existence_edge", "window_map",
+           "orbit_state"]
 
 TWO_PI = 2.0 * math.pi
 
 
 # "wave.residual" (dynamics.implementations): the phase residual of a piecewise-constant load by one
-# compiled call for all phases (``dynamics._wavekernel.square_wave_residuals``); the reference is
+# compiled call for all phases (``laws.wave._wavekernel.square_wave_residuals``); the reference is
 # :func:`wave_orbit_states` phase by phase (the same residuals to rounding)
 
 
@@ -86,7 +85,7 @@ def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
     w2 = model.frequencies**2
     M = w2.size
     zeros = np.zeros(M)
-    if isinstance(load, PiecewiseConstantLoad):
+    if load.kernel_kind == PIECEWISE:  # fast path: the compiled flow of a piecewise-constant load
         q, v = np.empty((M, 1)), np.empty((M, 1))
         K.propagate_many(tuple(load.kernel_view), tuple(ModalBasisView.unforced(w2, model.d)), float(t0),
                          zeros, zeros, np.array([float(t1)]), q, v)
@@ -135,7 +134,7 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool 
 
 def _orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
     """:func:`wave_orbit_states` and the drive's part ``(g, h)`` of the window (for
-    :func:`~impactbar.dynamics.impact.wave_impact`), from the phase series where the load has one."""
+    :func:`~impactbar.laws.wave.impact.wave_impact`), from the phase series where the load has one."""
     if not _has_series(model, load):
         return _direct_states(model, load, phase, rates=rates)
     M = model.n_modes + 1
@@ -157,9 +156,8 @@ def _has_series(model: BarModel, load: Load) -> bool:
     """Whether the states are a trigonometric polynomial of the phase (:func:`wave_orbit_states`'
     notes): a load of finitely many harmonics whose evaluation is :class:`FourierLoad`'s own, and a
     window shorter than the period."""
-    return (isinstance(load, FourierLoad) and load.orders.size > 0 and _window(model)[1] > 0.0
-            and all(getattr(type(load), f) is getattr(FourierLoad, f)
-                    for f in ("__call__", "propagate", "flow")))
+    return (load.compiled_kind("__call__", "propagate", "flow") == FOURIER and load.orders.size > 0
+            and _window(model)[1] > 0.0)
 
 
 @functools.lru_cache(maxsize=16)
@@ -227,7 +225,7 @@ def _forced_flights(model: BarModel, load: Load, phases):
     matrix, as in :func:`_periodic_solve`). Other loads take one flight per phase."""
     T, _ = _window(model)
     phases = np.asarray(phases, dtype=float)
-    if not (isinstance(load, FourierLoad) and type(load).flow is FourierLoad.flow):
+    if load.compiled_kind("flow") != FOURIER:  # (a flow that is not FourierLoad's closed form)
         return tuple(np.array(a) for a in zip(*(_forced_flight(model, load, float(p) + T, float(p) + TWO_PI)
                                                for p in phases), strict=True))
     w2 = model.frequencies**2
@@ -249,7 +247,7 @@ def window_map(model: BarModel, y_minus, g, h) -> np.ndarray:
     y_minus : array_like, shape (2 N + 2,)
         Modal state ``(q, q')`` at arrival.
     g, h : numpy.ndarray, shape (N + 1,)
-        The drive's part (:func:`impactbar.dynamics.impact.window_drive`).
+        The drive's part (:func:`impactbar.laws.wave.impact.window_drive`).
 
     Returns
     -------
@@ -268,7 +266,7 @@ def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
     ``phase``."""
     ph = np.asarray(phase, dtype=float)
-    if use_fast("wave.residual") and isinstance(load, PiecewiseConstantLoad) and _window(model)[1] > 0.0:
+    if use_fast("wave.residual") and load.kernel_kind == PIECEWISE and _window(model)[1] > 0.0:
         return _square_wave_residuals(model, load, ph)
     out = np.array([_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
     return out.reshape(ph.shape)
@@ -276,8 +274,8 @@ def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
 
 def _square_wave_residuals(model: BarModel, load: PiecewiseConstantLoad, ph: np.ndarray) -> np.ndarray:
     """:func:`wave_phase_residual` for a piecewise-constant load, all phases in one compiled call."""
-    from ..dynamics import _wavekernel as WK
-    from ..dynamics.impact import _GL_W, _GL_X
+    from . import _wavekernel as WK
+    from .impact import _GL_W, _GL_X
 
     p11, p12, p21, p22 = _flight_fundamental(model)
     R = model.R
@@ -356,7 +354,7 @@ def _phase_scan(model: BarModel, load: Load) -> tuple[tuple, tuple]:
     if F <= 0.0:
         return (), ()
     families = ()
-    if isinstance(load, FourierLoad):
+    if load.kernel_kind == FOURIER:  # finitely many harmonics: the residual's own series
         K = int(np.max(load.orders)) if load.orders.size else 0
         if K == 0:
             return (), ()
@@ -369,7 +367,7 @@ def _phase_scan(model: BarModel, load: Load) -> tuple[tuple, tuple]:
             ck = 2.0 * coef[k]  # r = c0 + |ck| cos(k phase + arg ck)
             if ck == 0.0:
                 return (), ()
-            return tuple(_cosine_roots(abs(ck), math.atan2(ck.imag, ck.real), -c0, k, tol=1e-13)), ()
+            return tuple(cosine_roots(abs(ck), math.atan2(ck.imag, ck.real), -c0, k, tol=1e-13)), ()
         ks = np.arange(1, K + 1)
 
         def resid(p):
@@ -468,7 +466,7 @@ def wave_existence_edge(model: BarModel, k: int = 1) -> float:
     -------
     float
     """
-    from ..loads import CosineLoad
+    from ...loads import CosineLoad
 
     if _window(model)[1] <= 0.0:
         return math.nan
@@ -497,6 +495,26 @@ def _refined_grid(resid, n: int) -> tuple[np.ndarray, np.ndarray]:
     if not np.all(known):
         out[~known] = resid(full[~known])
     return full, out
+
+
+def orbit_state(model: BarModel, load: Load, phase: float) -> OrbitState:
+    """The wave law's one-impact orbit with this phase (theory §4b): contact over ``[0, 2/s]``, flight
+    over ``[2/s, 2 pi]``. The states at the window's end and at the arrival, the multipliers
+    (:func:`wave_floquet_multipliers`) and, for an arrival moving into the rod, the contact by
+    characteristics (:class:`~impactbar.WaveImpact`) with whether it loses contact inside the
+    window."""
+    M = model.n_modes + 1
+    _, y_end, y_minus, rate, drive = _orbit_states(model, load, phase)
+    c = model.end_weights
+    v_imp = float(c @ y_minus[M:])
+    impact = None
+    if v_imp > 0.0:
+        qm = y_minus[:M].copy()
+        qm[0] -= float(c @ qm)  # the end exactly on the rod end (rounding)
+        impact = _wave_impact(model, load, float(phase), qm, y_minus[M:], drive)
+    mu = wave_floquet_multipliers(model, load, phase, y_end, y_minus, rate)
+    return OrbitState(state_after_impact=y_end, state_before_impact=y_minus, multipliers=mu, impact=impact,
+                      separates=impact is not None and bool(impact.separations))
 
 
 def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y_minus,
@@ -543,10 +561,10 @@ def wave_floquet_multipliers(model: BarModel, load: Load, phase: float, y_end, y
                              method: str = "auto") -> np.ndarray:
     """Floquet multipliers of a one-impact orbit under the wave law: the eigenvalues of
     :func:`wave_impact_map_jacobian` (theory §7, §4b), sorted by
-    :func:`~impactbar.orbits.stability.sort_multipliers`.
+    :func:`~impactbar.dynamics.monodromy.sort_multipliers`.
 
     ``method="dense"`` takes the eigenvalues of the Jacobian, ``O(N^3)``. ``method="structured"``
-    uses the structure the paper's law has (:func:`~impactbar.orbits.stability.floquet_multipliers`):
+    uses the structure the paper's law has (:func:`~impactbar.laws.paper.stability.floquet_multipliers`):
     in the state extended by the window's end time, the map is ``W S (P + h e_t^T)`` (flight of
     fixed length ``2 pi - 2/s``, saltation ``S``, window ``W``). ``W = diag(-R I, 1) +
     (Q g') e_t^T`` on the image of ``S`` (which keeps the end on the rod end, so contact's
@@ -578,7 +596,7 @@ def wave_floquet_multipliers(model: BarModel, load: Load, phase: float, y_end, y
         raise ValueError(f"method must be 'auto', 'dense' or 'structured'; got {method!r}")
     M = model.n_modes + 1
     if method == "auto":
-        use = model.n_modes >= STRUCTURED_FROM and model.d <= STRUCTURED_MAX_DAMPING
+        use = model.n_modes >= MD.STRUCTURED_FROM and model.d <= MD.STRUCTURED_MAX_DAMPING
         method = "structured" if use else "dense"
     try:
         if method == "dense" or model.n_modes == 0:
@@ -599,7 +617,7 @@ def wave_floquet_multipliers(model: BarModel, load: Load, phase: float, y_end, y
 
 
 def _wave_structured_parts(model, load, phase, y_end, y_minus, drive_rate):
-    """The blocks and rank-2 factors (as :func:`impactbar.orbits.stability._structured_parts`) of
+    """The blocks and rank-2 factors (as :func:`impactbar.laws.paper.stability._structured_parts`) of
     the wave law's impact map in the state extended by the window's end time (see
     :func:`wave_floquet_multipliers`)."""
     M = model.n_modes + 1

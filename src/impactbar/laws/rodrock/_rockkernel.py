@@ -1,5 +1,5 @@
 """Compiled blow on the rod and the rock (theory §4d): the loop of
-:func:`impactbar.dynamics.rodrock.rod_rock_blow` with its bit (``_Bit``), step for step the same
+:func:`impactbar.laws.rodrock.blow.rod_rock_blow` with its bit (``_Bit``), step for step the same
 arithmetic (the reference is the Python loop, ``use_reference("rock.blow")``).
 
 Bit state ``bs`` (float64, 7): ``p, w, branch, p_max, R_max, p_perm, work``; parameters ``bp`` (5):
@@ -13,7 +13,7 @@ import math
 import numba
 import numpy as np
 
-from ._kernel import CACHE
+from ...dynamics._kernel import CACHE
 
 _LOAD, _ELASTIC, _FREE = 0.0, 1.0, 2.0
 

@@ -1,6 +1,6 @@
 """Jumps of the piston's fields at impact located from the modal coefficients (theory §4c):
 :func:`locate_jumps` (Eckhoff's method) and the Bernoulli functions that carry them exactly
-(:class:`impactbar.dynamics._characteristics._LocatedPiston` builds the fields from them for the
+(:class:`impactbar.laws.wave._characteristics._LocatedPiston` builds the fields from them for the
 force history)."""
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .._shared.threads import single_threaded_blas
+from ..._shared.threads import single_threaded_blas
 
 #: the closest two located jumps may lie, in units of 1/N (closer, a jump and its kink are not told
 #: from two jumps: the fit degenerates)

@@ -3,10 +3,10 @@ impact -> a blow on the cell grid with the drive acting -> the piston's modal st
 
 1. **Fields at impact.** The piston's modal state ``(q, q')`` (positions from the shank, ``u(1) = 0``)
    gives the Riemann invariants ``alpha = v + N/s``, ``beta = v - N/s`` with the static correction
-   that carries the drive's force ``p(t0)`` at ``x = 0`` (theory §4c; the wave law's
-   ``_Piston``); each piston cell gets their exact cell averages, ``F = s alpha/2``,
+   that carries the drive's force ``p(t0)`` at ``x = 0`` (theory §4c;
+   :mod:`impactbar.dynamics.invariants`); each piston cell gets their exact cell averages, ``F = s alpha/2``,
    ``G = -s beta/2``.
-2. **The blow** (:func:`~impactbar.dynamics.rodrock.solve_blow`, the compiled rock kernel): the drive
+2. **The blow** (:func:`~impactbar.laws.rodrock.blow.solve_blow`, the compiled rock kernel): the drive
    acts on the piston's far end as its **average over each step** (a piecewise-constant drive on
    the cell grid, exact in impulse per step; the work booked is the averaged drive's). With the cell
    averages of the fields at impact, the piston's state converges to the exact drive's at second
@@ -41,8 +41,8 @@ import math
 
 import numpy as np
 
-from ._characteristics import _Piston
-from .rodrock import Blow, blow_grid, solve_blow, whole_steps
+from ...dynamics.invariants import _Piston
+from .blow import Blow, blow_grid, solve_blow, whole_steps
 
 __all__ = ["BlowMap", "RockContact", "rock_contact"]
 

@@ -29,10 +29,10 @@ from functools import cached_property
 
 import numpy as np
 
+from ...dynamics.implementations import use_fast
+from ...dynamics.kernelview import FOURIER, PIECEWISE
 from . import _windowkernel as KW
 from ._characteristics import _GL_W, _GL_X, _Contact, _panels, _WindowLoad, held_post_state, held_throughout
-from .implementations import use_fast
-from .kernelview import FOURIER, PIECEWISE
 
 __all__ = ["WaveImpact", "wave_impact", "window_drive"]
 

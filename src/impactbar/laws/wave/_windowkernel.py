@@ -1,7 +1,7 @@
 """Compiled contact windows of the wave impact law (theory §4b): the drive's moments over a window,
 the load's jumps inside it, the scan step of the contact test, and the window held in contact
 throughout (:func:`wave_window`; the windows in which contact is lost are
-:func:`impactbar.dynamics._wavekernel.wave_contact`'s)."""
+:func:`impactbar.laws.wave._wavekernel.wave_contact`'s)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import math
 import numba
 import numpy as np
 
-from ._flightkernel import CACHE, TWO_PI, load_value, piece_of, sort_head
-from .kernelview import LoadKernelView
+from ...dynamics._flightkernel import CACHE, TWO_PI, load_value, piece_of, sort_head
+from ...dynamics.kernelview import LoadKernelView
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -120,7 +120,7 @@ def window_moments(load, s, rate, t0, jumps, gl_x, gl_w, ic_, is_):
 def wave_window(load_t, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law held in contact throughout: checks that
     the invariant arriving at the rod, ``A(theta)``, stays ``>= 0`` on the scan grid of
-    :class:`impactbar.dynamics.impact` (both limits at every jump) and, if so, writes
+    :mod:`impactbar.laws.wave.impact` (both limits at every jump) and, if so, writes
     ``(q, v) -> -R (q, v) + drive`` into ``qa, va`` (the drive by Gauss-Legendre panels split at the
     load's jumps; ``qa[0]`` from contact) and returns True. False (nothing written) means the
     contact separates: the caller solves it in full. Called from Python with the load's view as the

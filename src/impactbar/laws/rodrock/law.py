@@ -9,27 +9,32 @@ impedance in these units is ``s`` and its crossing time ``1/s``, so Lundberg's
 ``alpha = K (2 L / C) / Z`` is ``2 k / s^2``.
 
 The law gives single blows (:func:`single_blow`) and the simulator's contact step
-(:meth:`RodRock.contact`: ``simulate`` runs under it, one :class:`~impactbar.dynamics.rockcontact.RockContact`
-per blow in ``Trajectory.impacts``) and its impact map (:meth:`RodRock.impact_map`, the contact step
-with a finite-difference Jacobian: ``find_orbit`` runs under it from a guess, e.g. a simulation, and
-``continue_orbit`` in the drive's and the rock's parameters); ``periodic_orbits`` finds the
-one-impact orbits by Newton's method from guesses (:func:`~impactbar.laws.rock_periodic_orbits`): there is no
-phase equation (the law's ``phase_roots`` and ``orbit`` raise ``LawNotSupported``, a
-``ValueError``, naming them).
+(:meth:`RodRock.contact`: ``simulate`` runs under it, one
+:class:`~impactbar.laws.rodrock.contact.RockContact` per blow in ``Trajectory.impacts``) and its
+impact map (:meth:`RodRock.impact_map`, the contact step with a finite-difference Jacobian:
+``find_orbit`` runs under it from a guess, e.g. a simulation, and ``continue_orbit`` in the drive's
+and the rock's parameters, :attr:`RodRock.parameters`). It has no phase equation
+(:attr:`~impactbar.laws.ContactLaw.has_phase_equation` is ``False``: its ``phase_roots`` and
+``orbit_state`` raise ``LawNotSupported``, a ``ValueError``, naming them): ``periodic_orbits`` finds
+the one-impact orbits by Newton's method from guesses
+(:func:`~impactbar.orbits.periodic_orbits_by_newton`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
-from .._shared.threads import single_threaded_blas
-from .._shared.validate import check_real
-from .base import ContactLaw
+from ..._shared.validate import check_real
+from ..base import ContactLaw
 
-__all__ = ["BilinearRock", "RodRock", "RodSegment", "rock_periodic_orbits", "single_blow"]
+__all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
+
+_SEGMENT = re.compile(r"segment(\d+)\.length")
 
 
 @dataclass(frozen=True)
@@ -143,6 +148,12 @@ class RodRock(ContactLaw):
     supports_schur = False
     flight_starts_on_stop = False
     uses_restitution = False
+    has_phase_equation = False
+    #: the law's continuation parameters, in its units: the rock's loading and unloading stiffnesses
+    #: (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's mass, the feed force, and
+    #: ``"segment<i>.length"`` (``i`` from 0 at the shank; the default ``blow_time`` follows the
+    #: lengths), which the blow's cell grid rounds to whole cells (:meth:`check_continuable`)
+    parameters = ("rock.k", "rock.k_u", "bit_mass", "feed", "segment<i>.length")
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
@@ -184,8 +195,8 @@ class RodRock(ContactLaw):
         by default ``4/s + 2 sum of the segments' travel times``, rounded up to whole steps of the
         blow's cell grid (the simulator's blow lasts whole steps, so the orbits' flights start
         where its flights do)."""
-        from ..dynamics.rockcontact import _grid_for
-        from ..dynamics.rodrock import whole_steps
+        from .blow import whole_steps
+        from .contact import _grid_for
 
         T = self.blow_time
         if T is None:
@@ -209,7 +220,7 @@ class RodRock(ContactLaw):
         jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
         jac_t : numpy.ndarray, shape (2 N + 2,)
         """
-        from ..dynamics.rockcontact import BlowMap
+        from .contact import BlowMap
 
         y = np.array(y_minus, dtype=float)
         t = float(t)
@@ -224,17 +235,6 @@ class RodRock(ContactLaw):
         ht = 1e-6
         jt = (BlowMap(model, load, t + ht)(y) - BlowMap(model, load, t - ht)(y)) / (2.0 * ht)
         return y_plus, jac, jt
-
-    def periodic_orbits(self, model, load):
-        """The one-impact orbits, by :func:`find_orbit` from the paper law's orbits and a settled
-        simulation as guesses (:func:`~impactbar.laws.rock_periodic_orbits`; there is no
-        phase equation: the blow map is numerical). :func:`~impactbar.periodic_orbits` calls it.
-
-        Returns
-        -------
-        OrbitList
-        """
-        return rock_periodic_orbits(model, load)
 
     def blow(self, model, load, t, y_minus):
         """The blow of an arrival at load time ``t`` in state ``y_minus`` (shape ``(2 N + 2,)``)
@@ -252,7 +252,7 @@ class RodRock(ContactLaw):
         blow's end projected on the modes; the rod then rests on the rock (its residual waves
         discarded, counted in the energy the piston lost), the shank advanced by the blow's
         permanent penetration, from which the next flight's positions are measured
-        (:func:`impactbar.dynamics.rockcontact.rock_contact`; ``kernel`` is not used).
+        (:func:`impactbar.laws.rodrock.contact.rock_contact`; ``kernel`` is not used).
 
         Returns
         -------
@@ -263,10 +263,104 @@ class RodRock(ContactLaw):
             Work on rock, penetrations, efficiencies (those of its :class:`Blow`), the piston's
             energy balance.
         """
-        from ..dynamics.rockcontact import rock_contact
+        from .contact import rock_contact
 
         rec = rock_contact(model, load, float(t), q_minus, v_minus)
         return rec.q_after.copy(), rec.v_after.copy(), float(t) + rec.duration, rec
+
+    @classmethod
+    def has_parameter(cls, name: str) -> bool:
+        """Whether ``name`` is one of :attr:`parameters` (``"segment<i>.length"`` for any ``i``).
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        bool
+        """
+        return name in ("rock.k", "rock.k_u", "bit_mass", "feed") or bool(_SEGMENT.fullmatch(str(name)))
+
+    def parameter_value(self, name: str) -> float:
+        """The value of one of :attr:`parameters` (``"rock.k"``, ``"segment0.length"``, ...).
+
+        Parameters
+        ----------
+        name : str
+
+        Returns
+        -------
+        float
+
+        Raises
+        ------
+        ValueError
+            For another name, or a segment the rod does not have.
+        """
+        self._check_parameter(name)
+        if name.startswith("rock."):
+            return float(getattr(self.rock, name[5:]))
+        match = _SEGMENT.fullmatch(name)
+        if match:
+            return float(self.segments[int(match.group(1))].length)
+        return float(getattr(self, name))
+
+    def with_parameter(self, name: str, value: float) -> RodRock:
+        """A copy with one of :attr:`parameters` changed (validated again by the constructors).
+
+        Parameters
+        ----------
+        name : str
+        value : float
+
+        Returns
+        -------
+        RodRock
+
+        Raises
+        ------
+        ValueError
+            For another name, a segment the rod does not have, or a value the constructors refuse
+            (for example ``rock.k`` above ``rock.k_u``).
+        """
+        self._check_parameter(name)
+        if name.startswith("rock."):
+            return dataclasses.replace(self, rock=dataclasses.replace(self.rock, **{name[5:]: value}))
+        match = _SEGMENT.fullmatch(name)
+        if match:
+            i = int(match.group(1))
+            segs = list(self.segments)
+            segs[i] = dataclasses.replace(segs[i], length=value)
+            return dataclasses.replace(self, segments=segs)
+        return dataclasses.replace(self, **{name: value})
+
+    def check_continuable(self, name: str) -> None:
+        """Refuse a segment's length: the blow's cell grid rounds the segments' travel times to whole
+        cells, so the orbit changes in steps with a length.
+
+        Parameters
+        ----------
+        name : str
+
+        Raises
+        ------
+        ValueError
+            For ``"segment<i>.length"``.
+        """
+        if _SEGMENT.fullmatch(str(name)):
+            raise ValueError(f"parameter {name!r} cannot be continued: the blow's cell grid rounds the "
+                             "segments' travel times to whole cells, so the orbit changes in steps "
+                             "with a length; follow it with simulated_diagram or find_orbit at each "
+                             "length")
+
+    def _check_parameter(self, name: str) -> None:
+        if not self.has_parameter(name):
+            raise ValueError(f"parameter {name!r} is not one of the rod-rock law's {self.parameters}")
+        match = _SEGMENT.fullmatch(str(name))
+        if match and int(match.group(1)) >= len(self.segments):
+            raise ValueError(f"parameter {name!r}: the rod has {len(self.segments)} segment(s), "
+                             f"segment0 to segment{len(self.segments) - 1}")
 
 
 def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None = None,
@@ -279,7 +373,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     fresh rock loaded to the feed force. The model's ``R`` and ``d`` play no part (the rod replaces
     the restitution; the blow is undamped), nor its flexible modes (the piston is unstressed at
     impact). Solved by characteristics on a common cell grid, exact for commensurate segments
-    (:mod:`impactbar.dynamics.rodrock`; a compiled loop, ``"rock.blow"`` in
+    (:mod:`impactbar.laws.rodrock.blow`; a compiled loop, ``"rock.blow"`` in
     :mod:`impactbar.dynamics.implementations`).
 
     Parameters
@@ -289,7 +383,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     impact_velocity : float
         ``> 0``, in the model's velocity unit ``L Omega``.
     cells_per_piston, t_max, energy_fraction, record_field
-        See :func:`impactbar.dynamics.rodrock.rod_rock_blow`: the grid, the longest blow, the end
+        See :func:`impactbar.laws.rodrock.blow.rod_rock_blow`: the grid, the longest blow, the end
         criterion (piston separated and the rod's wave energy below this fraction of the impact
         energy) and whether to keep the force field for the Lagrange diagram.
 
@@ -307,7 +401,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     >>> round(blow.efficiency, 6), round(blow.work_on_rock, 6)  # of the impact energy 1/2
     (0.733069, 0.366534)
     """
-    from ..dynamics.rodrock import rod_rock_blow
+    from .blow import rod_rock_blow
 
     law = model.law
     if not isinstance(law, RodRock):
@@ -329,112 +423,8 @@ def lundberg_efficiency(alpha: float, gamma: float) -> float:
     return 2.0 / alpha * (-math.expm1(-alpha)) ** 2 * (1.0 - 1.0 / gamma)
 
 
-# ------------------------------------------------------------------------------------------------
-# one-impact orbits by Newton from guesses (periodic_orbits under this law)
-# ------------------------------------------------------------------------------------------------
-_TWO_PI = 2.0 * math.pi
-_SETTLE_PERIODS = 60  # load periods of the simulation guess
-
-
 def _equivalent_restitution(model) -> float:
     """``-rebound_velocity / V`` of a rigid piston's blow at ``V = 1`` on the model's rod and rock,
     clipped to ``[0, 0.95]``: the restitution of the paper-law guesses."""
     blow = single_blow(model, 1.0)
     return min(0.95, max(0.0, -float(blow.rebound_velocity)))
-
-
-def _paper_guesses(model, load):
-    from ..orbits import periodic_orbits
-
-    law = model.law
-    paper = law.paper_equivalent(model)
-    T = law.window(model)
-    guesses = []
-    for o in sorted(periodic_orbits(paper, load), key=lambda o: (not o.stable, o.phase)):
-        if not np.isfinite(o.phase):
-            continue
-        q, v = o.modal_state(np.array([T]))
-        guesses.append((np.array([o.phase]), np.concatenate((q[:, 0], v[:, 0]))[None, :]))
-    return guesses
-
-
-def _simulated_guess(model, load):
-    from ..simulation import InitialState, simulate
-
-    try:
-        tr = simulate(model, load, InitialState.rigid(-0.1, 0.0, n_modes=model.n_modes),
-                      _TWO_PI * _SETTLE_PERIODS)
-    except ValueError:
-        return None
-    ti = np.asarray(tr.impact_times)
-    if ti.size < 4 or not np.allclose(np.diff(ti[-4:]), _TWO_PI, atol=1e-3):
-        return None
-    return tr
-
-
-def rock_periodic_orbits(model, load):
-    """The one-impact orbits under the rod-rock law, by Newton's method from guesses (theory §4d):
-    :func:`~impactbar.periodic_orbits` for a model with ``impact=RodRock(...)``.
-
-    The blow is a numerical map (characteristics on the cell grid,
-    :meth:`~impactbar.RodRock.impact_map`), so there is no closed-form phase equation to search:
-    each orbit is found by :func:`~impactbar.find_orbit` (one impact in one period, the flight's
-    start ``q_0`` among the unknowns) from two kinds of guesses:
-
-    1. the paper law's one-impact orbits of the same bar and load (``periodic_orbits`` with
-       ``impact="paper"``) with the restitution of a rigid piston's blow on this rod and rock,
-       ``R = -rebound_velocity / V`` at ``V = 1`` (clipped to ``[0, 0.95]``), each taken at its
-       phase with the state it has ``blow_time`` after the impact (where this law's flight starts);
-    2. where none of those gives a stable orbit, the end of a simulation from rest (60 load
-       periods), if it has settled to one blow per period.
-
-    Orbits found twice (phases within ``1e-7``) are kept once. Guesses from which Newton does not
-    converge give nothing: the list holds the orbits found, not a certified set of all of them.
-
-    Parameters
-    ----------
-    model : BarModel
-        With ``impact=RodRock(...)``.
-    load : Load
-        Of period ``2 pi``.
-
-    Returns
-    -------
-    OrbitList
-        Sorted by phase; each a :class:`~impactbar.PeriodicOrbit` of :func:`~impactbar.find_orbit`
-        (multipliers of the finite-difference impact map, admissibility, one ``RockContact`` per
-        blow in ``contacts``). Empty when no guess converges.
-
-    Examples
-    --------
-    >>> import impactbar as ib
-    >>> law = ib.RodRock(segments=[ib.RodSegment(length=10.0, impedance=2.0)],
-    ...                  rock=ib.BilinearRock(k=60.0, k_u=1e6), blow_time=2.0)
-    >>> model = ib.BarModel(s=10.0, d=0.3, R=0.0, n_modes=0, impact=law)
-    >>> load = ib.PiecewiseConstantLoad([0.0, 1.0, 3.0], [-1.0, 2.0, 0.0])
-    >>> orbits = ib.periodic_orbits(model, load)  # calls rock_periodic_orbits
-    >>> [(round(o.phase, 4), o.stable) for o in orbits]
-    [(2.6008, False), (3.5461, True)]
-    """
-    from ..orbits import find_orbit
-    from ..orbits.one_impact import OrbitList
-
-    found = []
-    starts = _paper_guesses(model, load)
-    with single_threaded_blas():
-        for guess in [*starts, None]:
-            if guess is None:
-                if any(o.stable for o in found):
-                    break
-                guess = _simulated_guess(model, load)
-                if guess is None:
-                    break
-            try:
-                orbit = find_orbit(model, load, 1, 1, guess=guess)
-            except ValueError:
-                continue
-            if all(abs(math.remainder(orbit.phase - o.phase, _TWO_PI)) > 1e-7 for o in found):
-                found.append(orbit)
-    out = OrbitList(sorted(found, key=lambda o: o.phase))
-    out._families = ()
-    return out

@@ -1,12 +1,12 @@
 """Compiled contact window of the wave impact law with separation (theory §4b).
 
-:func:`wave_contact` is the characteristics solution of :class:`impactbar.dynamics._characteristics._Contact`
+:func:`wave_contact` is the characteristics solution of :class:`impactbar.laws.wave._characteristics._Contact`
 and its post-contact projection, step for step, for the loads the simulator's kernel takes (a load of
 finitely many harmonics, ``kind = 0``, or a piecewise-constant one, ``kind = 1``): the same scan grid
 of the invariant ``A(theta)`` arriving at the rod end, the same tolerance, the same separation and
 re-contact searches (Brent's method as :func:`scipy.optimize.brentq`, to ``1e-15``), the same
 Gauss-Legendre panels for the waves reflected by the free end. The simulator calls it for the windows
-in which contact is lost (:func:`impactbar.dynamics._windowkernel.wave_window` takes the others);
+in which contact is lost (:func:`impactbar.laws.wave._windowkernel.wave_window` takes the others);
 the reference of ``"simulate.wave_separation"`` (:mod:`impactbar.dynamics.implementations`) is the
 Python solver, which it is tested against.
 """
@@ -18,10 +18,10 @@ import math
 import numba
 import numpy as np
 
-from ._flightkernel import CACHE, TWO_PI, load_value, sort_head
-from ._kernel import _propagate_many
+from ...dynamics._flightkernel import CACHE, TWO_PI, load_value, sort_head
+from ...dynamics._kernel import _propagate_many
+from ...dynamics.kernelview import LoadKernelView, ModalBasisView
 from ._windowkernel import _window_moments, scan_step, window_jumps
-from .kernelview import LoadKernelView, ModalBasisView
 
 #: contact intervals a window may hold before the kernel gives up (the caller then solves it in Python)
 MAX_INTERVALS = 256
@@ -32,7 +32,7 @@ _MAX_LOOPS = 10_000
 def _trig(a, b, npi, x, sgn):
     """``sum a_n cos(n pi x) + sgn (b_0 (1 - x) + sum_{n >= 1} b_n sin(n pi x))``: ``beta0(x)``
     (``sgn = 1``), ``alpha0(x)`` (-1); ``b_0`` is the static correction's ``(1 - x)`` coefficient
-    (:class:`impactbar.dynamics._characteristics._Piston`)."""
+    (:class:`impactbar.laws.wave._characteristics._Piston`)."""
     acc_c = a[0]
     acc_s = b[0] * (1.0 - x)
     for n in range(1, a.size):
@@ -471,8 +471,8 @@ def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
 def _square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
     """The wave law's phase residual ``u(1, 2 pi-)`` of a one-impact orbit under a piecewise-constant
     load, for each of ``phases`` into ``out``: the computation of
-    :func:`impactbar.orbits.wave.wave_orbit_states` (drive of the window by the panels of
-    :func:`~impactbar.dynamics._windowkernel.window_moments`, the flight driven from rest by
+    :func:`impactbar.laws.wave.periodic.wave_orbit_states` (drive of the window by the panels of
+    :func:`~impactbar.laws.wave._windowkernel.window_moments`, the flight driven from rest by
     :func:`~impactbar.dynamics._kernel.propagate_many`, the periodicity conditions solved mode by mode
     with the flight's fundamental matrix ``fund = (p11, p12, p21, p22)``) in the basis ``B`` (its
     ``w2`` and ``d``; a piecewise-constant load has no harmonic response)."""

@@ -1,4 +1,6 @@
-"""The paper's impact law (eq. 10, theory §4): an instantaneous impact on a rigid stop."""
+"""The paper's impact law (eq. 10, theory §4): an instantaneous impact on a rigid stop. Its phase
+equation (eq. 14) is :mod:`impactbar.laws.paper.phase`, its one-impact orbits and their multipliers
+:mod:`impactbar.laws.paper.periodic` and :mod:`impactbar.laws.paper.stability`."""
 
 from __future__ import annotations
 
@@ -7,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .base import ContactLaw
+from ..base import ContactLaw
 
 __all__ = ["PaperLaw", "InstantImpact"]
 
@@ -124,27 +126,28 @@ class PaperLaw(ContactLaw):
         return y_plus, np.diag(diag), np.zeros(2 * M)
 
     def phase_roots(self, model, load):
-        """The certified roots of eq. 14 (:func:`impactbar.orbits.phase.phase_roots`)."""
-        from ..orbits.phase import phase_roots
+        """The certified roots of eq. 14 (:func:`impactbar.laws.paper.phase.phase_roots`)."""
+        from .phase import phase_roots
 
         return phase_roots(model, load)
 
-    def orbit(self, model, load, phase, multiplicity):
-        """The orbit of eqs. 10-13 with its exact multipliers and the paper's Schur blocks."""
-        from ..orbits.one_impact import _build_orbit
+    def orbit_state(self, model, load, phase):
+        """The orbit of eqs. 10-13 with its exact multipliers
+        (:func:`impactbar.laws.paper.periodic.orbit_state`)."""
+        from .periodic import orbit_state
 
-        return _build_orbit(model, load, phase, multiplicity)
+        return orbit_state(model, load, phase)
 
     def multipliers(self, model, load, phase):
         """The impact map's multipliers: in closed form for the rigid bar, else from the
-        monodromy with its saltation term (theory §7)."""
-        from ..orbits.one_impact import _paper_multipliers
+        monodromy with its saltation term (theory §7; :func:`impactbar.laws.paper.periodic.multipliers`)."""
+        from .periodic import multipliers
 
-        return _paper_multipliers(model, load, phase)
+        return multipliers(model, load, phase)
 
     def existence_edge(self, model, k: int = 1) -> float:
         """Eq. 38's edge ``k (1 + R) / (sqrt(d^2 + k^2) G)`` (``inf`` for ``R = 1``)."""
-        from ..orbits.charts import pneumatic_existence_edge
+        from .phase import pneumatic_existence_edge
 
         return pneumatic_existence_edge(model.R, model.d, k) if model.R < 1 else math.inf
 

@@ -45,7 +45,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from .._shared.schema import Field, Schema
+from ..._shared.schema import Field, Schema
 
 __all__ = ["Blow", "BlowGrid", "blow_grid", "rod_rock_blow", "solve_blow"]
 
@@ -440,7 +440,7 @@ class Blow:
         -------
         matplotlib.axes.Axes
         """
-        from ..plotting.rock import plot_lagrange
+        from ...plotting.rock import plot_lagrange
 
         return plot_lagrange(self, ax=ax, **kwargs)
 
@@ -452,7 +452,7 @@ class Blow:
         -------
         matplotlib.axes.Axes
         """
-        from ..plotting.rock import plot_force_penetration
+        from ...plotting.rock import plot_force_penetration
 
         return plot_force_penetration(self, ax=ax, **kwargs)
 
@@ -636,7 +636,7 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
             bit.p_perm = bit.p_max - bit.R_max / k_u
     p_start = bit.p
     static = grid.static * feed * feed
-    from .implementations import use_fast
+    from ...dynamics.implementations import use_fast
 
     loop = _compiled_loop if use_fast("rock.blow") else _python_loop
     quiet = 0 if separation_time is None else max(1, math.ceil(separation_time / dt))
@@ -728,7 +728,7 @@ def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, reco
 
 
 def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field):
-    """The blow's loop compiled (:func:`impactbar.dynamics._rockkernel.blow_loop`)."""
+    """The blow's loop compiled (:func:`impactbar.laws.rodrock._rockkernel.blow_loop`)."""
     from ._rockkernel import blow_loop
 
     F, G = F.copy(), G.copy()
