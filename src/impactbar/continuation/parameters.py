@@ -42,6 +42,7 @@ def parameter_value(model: BarModel, load: Load, name: str) -> float:
     Returns
     -------
     float
+        The parameter's value (dimensionless, or in the law's units).
 
     Raises
     ------

@@ -85,12 +85,9 @@ def floquet_multipliers(model: BarModel, load: Load, phase: float, y_plus, y_min
 
     Parameters
     ----------
-    model : BarModel
-    load : Load
-    phase : float
-        Load time of the impact (rad).
-    y_plus, y_minus : array_like, shape (2 N + 2,)
-        Modal state just after and just before the impact.
+    model, load, phase, y_plus, y_minus
+        As :func:`impact_map_jacobian`: the bar, the load, the impact's load time (rad) and the
+        modal states just after and just before it, shape ``(2 N + 2,)``.
     method : {"auto", "dense", "structured"}
 
     Returns
