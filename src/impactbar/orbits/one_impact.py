@@ -175,13 +175,16 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     load, a degenerate orbit)."""
     if model.n_modes != 0 or not model.law.rigid_closed_forms:
         return None
-    square, cosine = load.square_form(), load.cosine_form()
-    if square is not None and square[1] < 2.0:  # kappa = 2: a constant load, the general path
-        args, square = (model.d, model.R, *square), True
-    elif cosine is not None and cosine[1] != 0.0:  # pk = 0: a constant load, the general path
-        args, square = (model.d, model.R, *cosine), False
+    form = load.square_form()
+    if form is not None:
+        if not form[1] < 2.0:  # kappa = 2: a constant load, the general path
+            return None
+        args, square = (model.d, model.R, *form), True
     else:
-        return None
+        form = load.cosine_form()
+        if form is None or form[1] == 0.0:  # pk = 0: a constant load, the general path
+            return None
+        args, square = (model.d, model.R, *form), False
     if use_fast("orbits.rigid_scalar"):
         from . import _rigid_scalar
 

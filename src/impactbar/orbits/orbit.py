@@ -234,15 +234,10 @@ class PeriodicOrbit:
 multipliers, stable, schur_roots, schur_stable
             As the attributes.
         """
-        return cls(
-            model=model, load=load, impacts=1, periods=1, impact_times=np.array([phase]),
-            phases=np.array([phase]), impact_velocities=np.array([impact_velocity]),
-            admissible=admissible, admissibility=admissibility, clearance=clearance,
-            clearance_error=clearance_error, multipliers=multipliers, stable=stable,
-            states_after_impact=np.asarray(state_after_impact)[None, :],
-            states_before_impact=np.asarray(state_before_impact)[None, :],
-            contacts=None if impact is None else (impact,), multiplicity=multiplicity,
-            schur_roots=schur_roots, schur_stable=schur_stable)
+        return cls(model, load, 1, 1, np.array([phase]), np.array([phase]), np.array([impact_velocity]),
+                   admissible, admissibility, clearance, clearance_error, multipliers, stable,
+                   np.asarray(state_after_impact)[None, :], np.asarray(state_before_impact)[None, :],
+                   None if impact is None else (impact,), multiplicity, schur_roots, schur_stable)
 
     # -- the short repr -------------------------------------------------------------------------------
     def __repr__(self) -> str:
