@@ -84,9 +84,10 @@ sphinx_gallery_conf = {
 }
 
 #: public submodules whose ``__all__`` is documented (besides the top-level names)
-PUBLIC_MODULES = ("impactbar.orbits", "impactbar.orbits.charts", "impactbar.simulation",
-                  "impactbar.simulation.experiments", "impactbar.physical", "impactbar.sweeps",
-                  "impactbar.paper", "impactbar.plotting", "impactbar.laws")
+PUBLIC_MODULES = ("impactbar.drives", "impactbar.drives.circuit", "impactbar.orbits",
+                  "impactbar.orbits.charts", "impactbar.simulation", "impactbar.simulation.experiments",
+                  "impactbar.physical", "impactbar.sweeps", "impactbar.paper", "impactbar.plotting",
+                  "impactbar.laws")
 
 
 def _public_names(module, documented: set[int]) -> list[str]:

@@ -13,6 +13,26 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
+def _import_the_package():
+    """Import every module of impactbar now. Hypothesis draws some examples from the constants of
+    the project's modules loaded when it draws; with all of them loaded before the first test, a
+    test's examples no longer depend on which modules the tests before it happened to import."""
+    import importlib
+    import pkgutil
+
+    import impactbar
+
+    for info in pkgutil.walk_packages(impactbar.__path__, "impactbar."):
+        if not info.name.endswith("__main__"):  # (that one runs the command line)
+            try:
+                importlib.import_module(info.name)
+            except ImportError:  # an optional dependency missing: its tests say so themselves
+                pass
+
+
+_import_the_package()
+
+
 def pytest_addoption(parser):
     parser.addoption("--runslow", action="store_true", default=False, help="run tests marked slow")
 

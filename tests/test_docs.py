@@ -9,7 +9,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-SECTIONS = ["1", "2", "3", "4", "4b", "5", "6", "7", "8", "9", "10"]
+SECTIONS = ["1", "2", "3", "4", "4b", "5", "6", "7", "8", "9", "10", "11", "12"]
 
 
 def test_theory_keeps_the_numbered_sections_with_stable_anchors():

@@ -322,8 +322,9 @@ def test_orbits_finite_invariant_and_scale_free(model, load, exponent):
             # the rigid-mode invariant: momentum balance over one period (theory §4)
             assert o.impact_velocity == pytest.approx(TWO_PI * load.p0 / (1 + model.R), rel=1e-9,
                                                       abs=1e-12)
-        if np.all(np.isfinite(o.multipliers)) and model.n_modes <= 1:
-            # multiplier product = det of the impact map's Jacobian (Liouville + saltation)
+        if np.all(np.isfinite(o.multipliers)) and model.n_modes <= 1 and o.admissibility != "grazing":
+            # multiplier product = det of the impact map's Jacobian (Liouville + saltation); not at
+            # grazing, where the saltation term 1/(c . q') blows up and both sides are ill-conditioned
             M = model.n_modes + 1
             from impactbar.laws.paper.periodic import _impact_states
             from impactbar.orbits.stability import impact_map_jacobian

@@ -6,12 +6,13 @@ Layout, bottom to top (each layer imports only from the layers below it):
 
 - the core, on plain dimensionless arrays (numpy, scipy, numba only):
   ``dynamics`` (closed-form modal flow, certified zero search, compiled kernel), then ``loads``
-  (periodic loads with their exact modal response) and ``drives``, then ``laws`` (the impact laws,
-  each a package with its numerics: ``paper``, ``wave``, ``rodrock``), then ``model``
-  (:class:`BarModel`), then ``simulation`` (the event-driven simulator and the random-start
-  experiments), then ``orbits`` (periodic orbits, admissibility, stability, charts; simulations are
-  its guesses), then ``continuation`` (branches of periodic motions and their bifurcations; pandas,
-  xarray, matplotlib only inside its views);
+  (periodic loads with their exact modal response) and ``drives`` (:class:`Drive`: autonomous drives
+  with state of their own, the valve with its numerics), then ``laws`` (the impact laws, each a
+  package with its numerics: ``paper``, ``wave``, ``rodrock``), then ``model`` (:class:`BarModel`),
+  then ``simulation`` (the event-driven simulator and the random-start experiments), then ``orbits``
+  (periodic orbits, admissibility, stability, charts; simulations are its guesses), then
+  ``continuation`` (branches of periodic motions and their bifurcations; pandas, xarray, matplotlib
+  only inside its views);
 - the product, on top of the core: ``physical`` (SI units through pint), ``sweeps`` (dask,
   xarray, zarr), ``plotting`` and ``paper`` (matplotlib), ``cli`` (one module per subcommand).
 
@@ -26,6 +27,8 @@ from ._shared.status import CurveKind as CurveKind
 from ._shared.status import EventKind as EventKind
 from ._shared.status import RunStatus as RunStatus
 from ._version import __version__ as __version__
+from .drives import Drive as Drive
+from .drives import DriveState as DriveState
 from .drives import PositionSwitchedDrive as PositionSwitchedDrive
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
@@ -55,6 +58,8 @@ _LAZY = {
     "Blow": ".laws.rodrock",
     "wave_impact": ".laws.wave",
     "InitialState": ".simulation",
+    "SteppedPiston": ".dynamics.stepped",
+    "PistonModes": ".dynamics.stepped",
     "Trajectory": ".simulation",
     "EnergyAccount": ".simulation",
     "simulate": ".simulation",
@@ -93,6 +98,8 @@ __all__ = [
     "SquareWaveLoad",
     "FourierLoad",
     "PiecewiseConstantLoad",
+    "Drive",
+    "DriveState",
     "PositionSwitchedDrive",
     "PeriodicOrbit",
     "periodic_orbits",
@@ -112,6 +119,8 @@ __all__ = [
     "single_blow",
     "Blow",
     "InitialState",
+    "SteppedPiston",
+    "PistonModes",
     "Trajectory",
     "EnergyAccount",
     "simulate",

@@ -26,38 +26,39 @@ _FLOAT_MAX = float(np.finfo(float).max)
 
 @dataclass(frozen=True)
 class BarModel:
-    r"""An elastic bar driven at ``x = 0`` and striking a rigid stop at ``x = 1``.
+    r"""An elastic bar driven at :math:`x = 0` and striking a rigid stop at :math:`x = 1`.
 
     Field equation (paper eq. 3, theory §1), dimensionless:
 
     .. math:: u_{tt} + d\,u_t - s^2 u_{xx} = 0, \quad 0 < x < 1,
 
-    with ``s^2 u_x(0,t) = -p(t)``, ``u_x(1,t) = 0`` between impacts (eq. 4) and the impact law
-    ``u(x,0+) = u(x,2pi-)``, ``u_t(x,0+) = -R u_t(x,2pi-)`` (eqs. 10, 11). The finite cosine
-    transform (eqs. 5, 6) turns it into the modal oscillators
+    with :math:`s^2 u_x(0,t) = -p(t)`, :math:`u_x(1,t) = 0` between impacts (eq. 4) and the impact
+    law :math:`u(x,0^+) = u(x,2\pi^-)`, :math:`u_t(x,0^+) = -R\,u_t(x,2\pi^-)` (eqs. 10, 11). The finite
+    cosine transform (eqs. 5, 6) turns it into the modal oscillators
 
     .. math:: q_n'' + d q_n' + (s n \pi)^2 q_n = p(t), \quad n = 0..N.
 
     Parameters
     ----------
     s : float
-        Wave-speed ratio ``C / (L Omega)`` (dimensionless, eq. 2), ``s > 0``.
+        Wave-speed ratio :math:`C/(L\Omega)` (dimensionless, eq. 2), :math:`s > 0`.
     d : float
-        Damping ``D / (M Omega)`` (dimensionless, eq. 2), ``d >= 0``.
+        Damping :math:`D/(M\Omega)` (dimensionless, eq. 2), :math:`d \ge 0`.
     R : float
-        Restitution coefficient, ``0 <= R <= 1`` (eq. 10).
+        Restitution coefficient, :math:`0 \le R \le 1` (eq. 10).
     n_modes : int
-        Flexible modes kept, ``N >= 0``; ``0`` is the rigid bar. At most 4096, and with
-        ``s * n_modes <= 1e12`` (beyond, the modes' phases over a period are lost in rounding);
-        for the rigid bar ``s * pi`` must be finite (``s <= 5.7e307``), and ``d**2`` (``d <= 1.3e154``).
+        Flexible modes kept, :math:`N \ge 0`; ``0`` is the rigid bar. At most 4096, and with
+        :math:`s N \le 10^{12}` (beyond, the modes' phases over a period are lost in rounding);
+        for the rigid bar :math:`s\pi` must be finite (:math:`s \le 5.7 \cdot 10^{307}`), and
+        :math:`d^2` (:math:`d \le 1.3 \cdot 10^{154}`).
     impact : {"paper", "wave"} or ContactLaw
         The impact law, by its name in :data:`impactbar.laws.LAWS` or as a law object
         (:class:`impactbar.laws.ContactLaw`; the attribute then holds its name, :attr:`law` the
         object). ``"paper"`` (default): eq. 10, the velocity field reversed and scaled by
-        ``-R`` at an instant impact, the displacement kept. ``"wave"``: the stop is a long rod of
-        the same material with area ratio ``A_s/A = (1 + R)/(1 - R)`` and the contact, lasting
-        ``2/s``, is solved by characteristics with the drive acting (theory §4b); velocity and strain
-        fields leave multiplied by ``-R`` when the drive is absent.
+        :math:`-R` at an instant impact, the displacement kept. ``"wave"``: the stop is a long rod of
+        the same material with area ratio :math:`A_s/A = (1 + R)/(1 - R)` and the contact, lasting
+        :math:`2/s`, is solved by characteristics with the drive acting (theory §4b); velocity and strain
+        fields leave multiplied by :math:`-R` when the drive is absent.
 
     Raises
     ------
@@ -116,29 +117,29 @@ class BarModel:
 
     @property
     def frequencies(self) -> np.ndarray:
-        """Undamped modal frequencies ``s n pi`` for ``n = 0..N``, shape ``(N + 1,)`` (eq. 6)."""
+        r"""Undamped modal frequencies :math:`s n \pi` for :math:`n = 0..N`, shape ``(N + 1,)`` (eq. 6)."""
         return self.s * np.pi * np.arange(self.n_modes + 1, dtype=float)
 
     @property
     def end_weights(self) -> np.ndarray:
-        """Weights ``c`` with ``u(1, t) = c . q``: ``(1, 2(-1)^1, ..., 2(-1)^N)``, shape ``(N + 1,)``
-        (eq. 15 at ``x = 1``)."""
+        r"""Weights :math:`c` with :math:`u(1, t) = c \cdot q`: :math:`(1, 2(-1)^1, \dots, 2(-1)^N)`,
+        shape ``(N + 1,)`` (eq. 15 at :math:`x = 1`)."""
         c = 2.0 * (-1.0) ** np.arange(self.n_modes + 1)
         c[0] = 1.0
         return c
 
     def shape_functions(self, x) -> np.ndarray:
-        """Mode shapes at ``x`` for the inverse transform (eq. 15).
+        r"""Mode shapes at :math:`x` for the inverse transform (eq. 15).
 
         Parameters
         ----------
         x : array_like, shape (...)
-            Positions along the bar, ``0 <= x <= 1`` (dimensionless).
+            Positions along the bar, :math:`0 \le x \le 1` (dimensionless).
 
         Returns
         -------
         numpy.ndarray, shape (..., N + 1)
-            ``1`` for ``n = 0`` and ``2 cos(n pi x)`` for ``n >= 1``.
+            :math:`1` for :math:`n = 0` and :math:`2 \cos(n \pi x)` for :math:`n \ge 1`.
 
         Raises
         ------

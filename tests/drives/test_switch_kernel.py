@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, PositionSwitchedDrive, find_orbit, simulate
-from impactbar.dynamics import _switchkernel as SK
+from impactbar.drives.switched import _kernel as SK
 from impactbar.simulation import InitialState
 
 CASES = [  # n_modes, d, R, delay
@@ -71,7 +71,7 @@ def test_compiled_loop_stops_at_max_impacts_and_refills_its_logs(choose, monkeyp
     assert cut.t_end == full.impact_times[6]
     np.testing.assert_array_equal(cut.impact_times, full.impact_times[:7])
     # logs of 1 impact per call: many calls, the same run
-    import impactbar.simulation.switched as S
+    import impactbar.drives.switched.loop as S
 
     calls = []
     real = SK.run_switched
@@ -147,7 +147,7 @@ def test_rigid_fixed_point_is_the_orbit(d, delay, R):
     """The rigid start of find_orbit (secant on the map of arrival velocities) is the orbit: the
     closed form of theory §10 without damping and delay, and Newton's fixed point (one step, below
     the tolerance) with them; the non-trivial multiplier of the 2x2 shortcut is the QR split's."""
-    from impactbar.orbits.switched import _split_multipliers
+    from impactbar.drives.base import split_multipliers as _split_multipliers
 
     drive = PositionSwitchedDrive(stroke=1.2, ret=0.8, switch_out=0.9, delay=delay)
     v, h1, h3 = SK.rigid_orbit_start(d, R, tuple(drive.kernel_view), 1.0)

@@ -36,7 +36,7 @@ OLD_STRINGS = {
                     "unchecked"},
     RunStatus: {"t_end", "max_impacts"},
     EventKind: {"fold", "branch-point", "period-doubling", "neimark-sacker", "grazing",
-                "admissibility", "load-jump"},
+                "admissibility", "load-jump", "border-collision"},
     CurveKind: {"fold", "period-doubling", "grazing"},
 }
 

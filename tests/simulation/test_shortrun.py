@@ -1,14 +1,22 @@
-"""The short-run path of ``simulate`` (issue 20) gives the general driver's result to the bit."""
+"""The short-run path of ``simulate`` (issues 20, 41) gives the general driver's result to the bit:
+runs it ends (at ``max_impacts`` or ``t_end``) and runs whose first block it hands over (chatter,
+sustained contact, more impacts than the block holds)."""
 
+import dataclasses
 import importlib
+import inspect
+import math
 
 import numpy as np
 import pytest
 
-from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, simulate
+from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, Trajectory, simulate
+from impactbar.dynamics.implementations import use_reference
 
 S = importlib.import_module("impactbar.simulation.simulate")
 
+_RIGID, _BAR8 = BarModel(1.37, 0.02, 0.8, 0), BarModel(1.37, 0.02, 0.8, 8)
+_PNEU = CosineLoad(1.2, 1.0)
 CASES = [  # model, load, start, t_end, max_impacts
     (BarModel(1.37, 0.02, 0.8, 0), CosineLoad(1.2, 1.0), InitialState.rigid(-0.1, 0.0), 1e6, 1),
     (BarModel(1.37, 0.02, 0.8, 0), CosineLoad(1.2, 1.0), InitialState.rigid(-0.1, 0.0), 1e6, 37),
@@ -20,6 +28,18 @@ CASES = [  # model, load, start, t_end, max_impacts
     # chatter and sustained contact: the general driver takes over
     (BarModel(1.0, 0.02, 0.5, 0), CosineLoad(0.8, 1.0), InitialState.rigid(-0.3, 0.0), 60.0, 100),
     (BarModel(3.3, 0.05, 0.5, 8), CosineLoad(0.8, 1.0), InitialState.rigid(-0.3, 0.0, 8), 30.0, 50),
+    # runs to t_end, any number of impacts (issue 41): none, one, a few, more than the first block
+    (_RIGID, _PNEU, InitialState.rigid(-0.1, 0.0), 0.7, None),
+    (_RIGID, _PNEU, InitialState.rigid(-0.1, 0.0), 2 * math.pi, None),
+    (_RIGID, _PNEU, InitialState.rigid(-0.1, 0.0), 300.0, None),
+    (_RIGID, _PNEU, InitialState.rigid(-0.1, 0.0), 2 * math.pi * 3000, None),
+    (_RIGID, _PNEU, InitialState.rigid(-0.1, 0.0), 2 * math.pi * 3000, 1500),
+    (_BAR8, _PNEU, InitialState.rigid(-0.1, 0.2, 8), 2 * math.pi, None),
+    (_BAR8, _PNEU, InitialState.rigid(-0.1, 0.2, 8), 2 * math.pi * 1100, None),
+    (BarModel(5.0, 0.1, 0.5, 3), SquareWaveLoad(1.0, 1.2), InitialState.rigid(-0.2, 0.0, 3), 40.0, None),
+    (BarModel(1.0, 0.02, 0.5, 0), CosineLoad(0.8, 1.0), InitialState.rigid(-0.3, 0.0), 60.0, None),
+    (BarModel(100, 0.0, 0.5, 0), SquareWaveLoad(1.0, 1.5), InitialState.rigid(-1.0, 0.3), 120.0, None),
+    (BarModel(3.3, 0.05, 0.5, 8), CosineLoad(0.8, 1.0), InitialState.rigid(-0.3, 0.0, 8), 30.0, None),
 ]
 
 
@@ -49,10 +69,34 @@ def test_short_run_is_the_general_drivers_result(case, monkeypatch):
     model, load, start, span, k = CASES[case]
     t0 = 0.3
     short = simulate(model, load, start, t0 + span, t0=t0, max_impacts=k)
-    monkeypatch.setattr(S, "SHORT_RUN_IMPACTS", 0)  # the general driver only
-    general = simulate(model, load, start, t0 + span, t0=t0, max_impacts=k)
+    with use_reference("simulate.short_run"):  # the general driver only
+        general = simulate(model, load, start, t0 + span, t0=t0, max_impacts=k)
     assert short.n_impacts >= (0 if span < 1.0 else 1)
     _same(short, general)
+
+
+def test_a_run_at_t_end_ends_in_the_flows_state():
+    """A run ended at ``t_end`` in flight: its final state, the kernel's, is the log's flow from the
+    last impact evaluated at ``t_end``, to the bit (the short path no longer evaluates it again)."""
+    for model, load, start, span, k in CASES:
+        run = simulate(model, load, start, 0.3 + span, t0=0.3, max_impacts=k)
+        if run.status != "t_end" or run.contact_intervals.size:
+            continue
+        q, v = run.modal_state([run.t_end])
+        assert np.array_equal(q[:, 0], run.final_state.modal_displacement)
+        assert np.array_equal(v[:, 0], run.final_state.modal_velocity)
+
+
+def test_trajectory_constructor_takes_the_fields_in_their_order():
+    """``Trajectory.__init__`` is written out (a frozen dataclass's generated one cost 4 us): its
+    parameters must stay the dataclass's fields, in their order, with their defaults."""
+    params = list(inspect.signature(Trajectory.__init__).parameters.values())[1:]
+    fields = dataclasses.fields(Trajectory)
+    assert [p.name for p in params] == [f.name for f in fields]
+    for p, f in zip(params, fields, strict=True):
+        assert p.default == (inspect.Parameter.empty if f.default is dataclasses.MISSING else f.default)
+    run = simulate(*CASES[0][:3], 1e6, max_impacts=3)
+    assert vars(dataclasses.replace(run, status="t_end")).keys() == vars(run).keys()
 
 
 def test_short_run_path_is_taken_and_left(monkeypatch):
@@ -63,7 +107,7 @@ def test_short_run_path_is_taken_and_left(monkeypatch):
 
     def spy(*a):
         out = real(*a)
-        calls.append(out is not None)
+        calls.append(out[0] is not None)
         return out
 
     monkeypatch.setattr(S, "run_short", spy)

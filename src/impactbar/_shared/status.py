@@ -105,6 +105,10 @@ class EventKind(_Explained):
     ADMISSIBILITY = ("admissibility", "another change of admissibility, e.g. sticking at R = 0")
     LOAD_JUMP = ("load-jump", "an impact runs into a jump of a piecewise-constant load, where the "
                  "branch has a corner (e.g. the hydraulic existence edge, Fig. 8)")
+    BORDER_COLLISION = ("border-collision", "a drive's state touches one of its switching surfaces "
+                        "during the period (the oil circuit's supply pressure at the accumulator's "
+                        "pre-charge or the relief pressure): the return map changes its formula there "
+                        "and the multipliers jump")
 
 
 class CurveKind(_Explained):
@@ -154,6 +158,7 @@ class BranchStatus(_Explained):
     STOPPED_AT_GRAZING = _stopped_at(EventKind.GRAZING)
     STOPPED_AT_ADMISSIBILITY = _stopped_at(EventKind.ADMISSIBILITY)
     STOPPED_AT_LOAD_JUMP = _stopped_at(EventKind.LOAD_JUMP)
+    STOPPED_AT_BORDER_COLLISION = _stopped_at(EventKind.BORDER_COLLISION)
 
     @classmethod
     def stopped_at(cls, kind: str) -> BranchStatus:

@@ -1,6 +1,8 @@
 """Command-line pieces for a hydraulic drifter (a valve switched on the piston's position, theory
 §10), taken by ``impactbar orbits``, ``simulate`` and ``continue`` when the config has a ``[valve]``
-section or the preset is a drifter's (:data:`impactbar.physical.DRIFTER_PRESETS`)."""
+section or the preset is a drifter's (:data:`impactbar.physical.DRIFTER_PRESETS`); with a
+``[chambers]`` section (or a preset of :data:`impactbar.physical.CIRCUIT_PRESETS`) a drifter with
+its oil circuit (theory §11), taken by ``orbits`` and ``continue``."""
 
 from __future__ import annotations
 
@@ -27,6 +29,8 @@ def drifter_from_args(args):
     name, config = getattr(args, "preset", None), getattr(args, "config", None)
     if name is not None and (name in physical.DRIFTER_PRESETS or name in RENAMED_DRIFTER_PRESETS):
         return physical.drifter_preset(name)
+    if name is not None and name in physical.CIRCUIT_PRESETS:
+        return physical.circuit_preset(name)
     if config is None:
         return None
     path = Path(config)
@@ -35,9 +39,42 @@ def drifter_from_args(args):
             doc = tomllib.load(fh)
     except (OSError, tomllib.TOMLDecodeError):
         return None  # the hammer's reader reports it
+    if "chambers" in doc:
+        return physical.CircuitDrifter.from_config(doc)
     if "valve" not in doc:
         return None
     return physical.Drifter.from_config(doc)
+
+
+def _circuit_header(d: physical.CircuitDrifter) -> str:
+    m, dr = d.model(), d.drive()
+    si = d.si
+    acc = (f"accumulator {si['accumulator_volume_m3'] * 1e3:.4g} L at {si['precharge_Pa'] / 1e6:.4g} MPa"
+           if si["accumulator_volume_m3"] > 0 else "no accumulator")
+    return (f"drifter {d.name or '(unnamed)'} with its oil circuit: piston {d.bar.mass_kg:.4g} kg, "
+            f"areas {si['rear_area_m2'] * 1e4:.4g} / {si['front_area_m2'] * 1e4:.4g} cm^2, pump "
+            f"{si['pump_flow_m3_s'] * 6e4:.4g} L/min, {acc}, R = {d.restitution:.4g}\n"
+            f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
+            f"precharge = {dr.value('precharge') if dr.accumulator is not None else float('nan'):.5g}, "
+            f"pump_flow = {dr.value('pump_flow'):.5g}, switch_out = {dr.value('switch_out'):.5g}")
+
+
+def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
+    """``impactbar orbits CONFIG`` with a ``[chambers]`` section: the operating point of the drifter
+    with its oil circuit (theory §11) in SI."""
+    s = drifter.orbit().summary()
+    if getattr(args, "json", False):
+        print_json({"drifter": drifter.name, "orbit": s})
+        return 0
+    print(_circuit_header(drifter))
+    print(f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
+          f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, mean supply "
+          f"pressure {s['mean_supply_pressure_MPa']:.4g} MPa, pump power {s['pump_power_kW']:.4g} kW, "
+          f"hydraulic efficiency {s['hydraulic_efficiency']:.3f}, least pressure "
+          f"{s['minimum_pressure_MPa']:.4g} MPa"
+          + (" (cavitates)" if s["cavitates"] else "")
+          + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+    return 0
 
 
 def _header(d: physical.Drifter) -> str:
@@ -55,6 +92,8 @@ def _header(d: physical.Drifter) -> str:
 def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
     """``impactbar orbits --preset drifter-... [--json]``: the drifter's one-impact periodic motion
     (unknown period) with its SI figures."""
+    if isinstance(drifter, physical.CircuitDrifter):
+        return run_circuit_orbits(args, drifter)
     o = drifter.orbit()
     s = o.summary()
     if getattr(args, "json", False):
@@ -79,6 +118,10 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
     periods (of the periodic motion) from rest at ``--gap``; writes ``impacts.csv``,
     ``summary.json``, ``motion.png`` and ``blows.png``, and on a drill string ``forces.png`` and
     ``stress.png`` (a blow's force history, the stress along the rod)."""
+    if isinstance(drifter, physical.CircuitDrifter):
+        raise ValueError("impactbar simulate does not take a drifter with its oil circuit yet: use "
+                         "impactbar.physical.CircuitDrifter.simulate, or impactbar orbits for its "
+                         "operating point")
     period = drifter.orbit().period_s
     tr, s = drifter.simulate(args.periods * period, start_gap_m=gap_m)
     om, L = drifter.omega_rad_s, drifter.bar.length_m
@@ -154,14 +197,15 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
         rows.append(f"{lam:.12g},{o.period:.12g},{o.impact_velocity:.12g},{mu:.12g},{o.stable}")
     (out / "branch.csv").write_text("\n".join(rows) + "\n")
     ev = ["kind,value,multiplier_re,multiplier_im"]
-    ev += [f"{e.kind},{e.value:.12g},{e.multiplier.real:.12g},{e.multiplier.imag:.12g}" for e in b.events]
+    ev += [f"{e.kind}{' ' + e.surface if e.surface else ''},{e.value:.12g},{e.multiplier.real:.12g},"
+           f"{e.multiplier.imag:.12g}" for e in b.events]
     (out / "events.csv").write_text("\n".join(ev) + "\n")
     if getattr(args, "json", False):
         print_json({"parameter": args.parameter, "to": args.to, "points": len(b), "status": b.status,
                     "events": [{"kind": e.kind, "value": e.value} for e in b.events],
                     "files": [str(out / "branch.csv"), str(out / "events.csv")]})
         return 0
-    print(_header(drifter))
+    print(_circuit_header(drifter) if isinstance(drifter, physical.CircuitDrifter) else _header(drifter))
     print(f"  {len(b)} points, {b.status}; events: "
           + (", ".join(f"{e.kind} at {args.parameter} = {e.value:.6g}" for e in b.events) or "none"))
     return 0

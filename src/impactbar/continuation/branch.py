@@ -58,7 +58,9 @@ class BranchEvent:
         ``"branch-point"`` (a multiplier through ``+1`` without a turn), ``"period-doubling"``
         (``-1``), ``"neimark-sacker"`` (a complex pair through the unit circle), ``"grazing"`` (the
         end touches the stop between impacts, or an impact velocity goes through 0) or
-        ``"admissibility"`` (another change of admissibility, e.g. sticking at ``R = 0``).
+        ``"admissibility"`` (another change of admissibility, e.g. sticking at ``R = 0``) or, under
+        a drive with state, ``"border-collision"`` (its state touches one of its switching surfaces
+        during the period: :meth:`~impactbar.Drive.border_tests`; which one in ``surface``).
     parameter : str
         Name of the continuation parameter.
     value : float
@@ -68,7 +70,10 @@ class BranchEvent:
     orbit : MultiImpactOrbit
         The orbit at the event.
     multiplier : complex
-        The critical multiplier (NaN for grazing and admissibility events).
+        The critical multiplier (NaN for grazing, admissibility and border-collision events).
+    surface : str
+        A border collision's surface, as the drive names it (e.g. the oil circuit's
+        ``"accumulator"``, ``"relief"``); ``""`` for the other kinds.
 
     Examples
     --------
@@ -86,6 +91,7 @@ class BranchEvent:
     orbit: MultiImpactOrbit = field(repr=False)
     multiplier: complex
     _point: np.ndarray = field(repr=False, default=None)
+    surface: str = ""
 
     #: the declared fields: :meth:`to_dict`, :meth:`Branch.events_dataframe` and the ``event_``
     #: variables of :meth:`Branch.to_xarray` (those in the view ``"branch"``)
@@ -100,7 +106,9 @@ class BranchEvent:
         Field("phase", "load phase of the first impact", "rad", attr="orbit.phase", views={"branch"}),
         Field("impacts", "impacts per period of the motion, m", "", dtype="i8", attr="orbit.impacts"),
         Field("periods", "load periods per period of the motion, n", "", dtype="i8",
-              attr="orbit.periods"))
+              attr="orbit.periods"),
+        Field("surface", "the border a border collision crosses (empty for other events)", "",
+              dtype="U"))
 
     def __repr__(self) -> str:
         """One line: the kind, where, the multiplier."""

@@ -19,6 +19,7 @@ from scipy.optimize import brentq
 
 from .._shared.status import BranchStatus, EventKind
 from .._shared.threads import single_threaded_blas
+from ..drives.base import autonomous
 from ..orbits.multi_impact import (
     _build,
     _halves_gap,
@@ -29,7 +30,7 @@ from ..orbits.multi_impact import (
     doubling_direction,
 )
 from ..orbits.orbit import PeriodicOrbit
-from ..orbits.switched import SwitchedOrbit
+from ..orbits.switched import check_orbit
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
@@ -155,10 +156,11 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
     orbit : PeriodicOrbit, MultiImpactOrbit, BranchEvent or SwitchedOrbit
         The start. A ``"period-doubling"`` :class:`BranchEvent` starts the doubled branch (``2 m``
         impacts in ``2 n`` periods) from the event, along the bifurcating direction (branch
-        switching). A :class:`~impactbar.SwitchedOrbit` (a position-switched drive, unknown
-        period) is followed in ``"stroke"``, ``"ret"``, ``"switch_out"``, ``"delay"``, ``"R"``,
-        ``"d"`` or ``"s"``, with the grazing of the switching surface among the events (theory
-        §10; :func:`impactbar.continuation.switched.continue_switched`).
+        switching). A :class:`~impactbar.SwitchedOrbit` (an orbit under a :class:`~impactbar.Drive`,
+        unknown period) is followed in one of the drive's parameters (the valve's ``"stroke"``,
+        ``"ret"``, ``"switch_out"``, ``"delay"``) or ``"R"``, ``"d"``, ``"s"``, with the grazing of a
+        switching surface among the events (theory §10;
+        :func:`impactbar.continuation.switched.continue_switched`).
     parameter : str
         One of ``"p0"``, ``"pk"`` (a :class:`CosineLoad`), ``"q"``, ``"kappa"`` (a
         :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`), and the
@@ -206,22 +208,14 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
     if isinstance(orbit, BranchEvent):
         if orbit.kind != EventKind.PERIOD_DOUBLING:
             raise ValueError(f"a BranchEvent start must be a period doubling; got {str(orbit.kind)!r}")
-        if isinstance(orbit.orbit, SwitchedOrbit):  # the doubled branch of a switched orbit
-            return continue_switched(orbit, parameter, to, _detect, events=events, stop_on=stop_on,
-                                     xtol=xtol, settings=_settings(settings, step=step, max_step=max_step,
-                                                                   min_step=min_step, max_points=max_points,
-                                                                   tol=tol))
         switch = orbit
-        base = orbit.orbit
-    elif isinstance(orbit, PeriodicOrbit):
-        base = orbit
-    elif isinstance(orbit, SwitchedOrbit):  # an autonomous orbit, unknown period (theory §10)
+        base = check_orbit(orbit.orbit, "orbit.orbit")
+    else:
+        base = check_orbit(orbit)
+    if autonomous(base.load):  # an orbit under a drive: unknown period (theory §10)
         return continue_switched(orbit, parameter, to, _detect, events=events, stop_on=stop_on, xtol=xtol,
                                  settings=_settings(settings, step=step, max_step=max_step,
                                                     min_step=min_step, max_points=max_points, tol=tol))
-    else:
-        raise ValueError(f"orbit must be a PeriodicOrbit, MultiImpactOrbit or BranchEvent; got "
-                         f"{type(orbit).__name__}")
     model, load = base.model, base.load
     _check_parameter(model, load, parameter, continuation=True)
     lam0 = parameter_value(model, load, parameter)

@@ -1,19 +1,18 @@
-"""Continuation of periodic motions under a position-switched drive (theory §10).
+"""Continuation of periodic motions under a drive (theory §10).
 
-The augmented problem for the engine (:mod:`impactbar.continuation.engine`) is the segment problem
-of :func:`impactbar.orbits.find_switched_orbit` (unknowns: the state after the impact and the free
-flight times ``h1``, ``h3``; conditions: the impact law, the switch crossing and the contact) with
-the continued parameter appended: a field of the drive (``stroke``, ``ret``, ``switch_out``,
-``delay``) or of the bar (``R``, ``d``, ``s``). The events are those of
-:func:`impactbar.continue_orbit` (fold, period doubling, Neimark-Sacker, an impact velocity through
-0, a change of admissibility), confirmed by the multipliers of the autonomous map (the trivial one
-along the flow set apart), and the grazing of the switching surface: the gap's rate at the switch
-crossing going through 0.
+The augmented problem for the engine (:mod:`impactbar.continuation.engine`) is the drive's
+periodic-orbit problem (:func:`impactbar.orbits.switched.orbit_problem`: the drive's own, e.g. the
+valve's segment problem, unknowns the state after the impact and the free flight times ``h1``,
+``h3``; or the generic shooting problem) with the continued parameter appended: one of the drive's
+:attr:`~impactbar.Drive.parameters` (the valve's ``stroke``, ``ret``, ``switch_out``, ``delay``) or
+of the bar (``R``, ``d``, ``s``). The events are those of :func:`impactbar.continue_orbit` (fold,
+period doubling, Neimark-Sacker, an impact velocity through 0, a change of admissibility), confirmed
+by the multipliers of the autonomous map (the trivial one along the flow set apart), and the grazing
+of a switching surface: the gap's rate at a switch crossing going through 0.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import math
 
@@ -22,9 +21,9 @@ from scipy.optimize import brentq
 
 from .._shared.status import BranchStatus, EventKind
 from .._shared.validate import check_real
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.base import autonomous
 from ..model import BarModel
-from ..orbits.switched import SwitchedOrbit, _constants, _flight_index, _residual_m, orbit_at
+from ..orbits.switched import SwitchedOrbit, orbit_of, orbit_problem
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _target
@@ -33,46 +32,53 @@ __all__ = ["SWITCHED_PARAMETERS", "continue_switched"]
 
 EVENT_KINDS = tuple(EventKind)
 
-#: Parameters a switched orbit can be continued in: the drive's fields and the bar's.
-SWITCHED_PARAMETERS = ("stroke", "ret", "switch_out", "delay", "R", "d", "s")
+#: Parameters of the bar a switched orbit can be continued in (besides the drive's own,
+#: :attr:`~impactbar.Drive.parameters`).
+MODEL_PARAMETERS = ("R", "d", "s")
+#: Parameters a valve's orbit can be continued in: the drive's fields and the bar's.
+SWITCHED_PARAMETERS = ("stroke", "ret", "switch_out", "delay", *MODEL_PARAMETERS)
 
 
-def _with(model: BarModel, drive: PositionSwitchedDrive, name: str, value: float):
+def parameters_of(drive) -> tuple:
+    """The parameters an orbit under ``drive`` can be continued in: the drive's and the bar's."""
+    return (*drive.parameters, *MODEL_PARAMETERS)
+
+
+def _with(model: BarModel, drive, name: str, value: float):
     """The model and drive with one parameter changed (validated again by their constructors)."""
-    if name in ("R", "d", "s"):
+    if name in MODEL_PARAMETERS:
         return model.with_(**{name: value}), drive
-    return model, dataclasses.replace(drive, **{name: value})
+    return model, drive.with_(**{name: value})
 
 
 class _SwitchedProblem:
-    """The segment problem of a switched orbit in ``U = (state, h1, h3, lambda)``, for the engine."""
+    """The periodic-orbit problem of a drive in ``U = (X, lambda)``, for the engine."""
 
     def __init__(self, model, drive, name, detect, *, events=True, stop_on=(), xtol=1e-10, impacts=1,
-                 doubled=False):
+                 doubled=False, base=None):
         self.model0, self.drive0, self.name, self.detect = model, drive, name, detect
         self.events, self.stop_on, self.xtol = events, stop_on, xtol
-        self.m, self.doubled = impacts, doubled
-        size = impacts * (2 * (model.n_modes + 1) + 2)
-        self.flights = _flight_index(model.n_modes + 1, impacts)
-        self.W = np.append(np.full(size, 1.0 / size), 1.0)
+        self.m, self.doubled, self.base = impacts, doubled, base
         self.pair = functools.lru_cache(maxsize=16)(self._pair)
+        start = self.pair(float(getattr(model if name in MODEL_PARAMETERS else drive, name)))[2]
+        self.flights = start.positive
+        self.W = np.append(np.full(start.size, 1.0 / start.size), 1.0)
 
     def _pair(self, lam: float):
-        """The model, drive and residual constants at the parameter value ``lam``."""
+        """The model, drive and orbit problem at the parameter value ``lam``."""
         model, drive = _with(self.model0, self.drive0, self.name, lam)
-        if model.R >= 1.0:
-            raise ValueError("R must be < 1 for a switched orbit")
-        return model, drive, _constants(model, drive)
+        problem = orbit_problem(model, drive, self.m)
+        if self.base is not None:
+            problem.adopt(self.base)
+        return model, drive, problem
 
     def F(self, U):
-        model, drive, consts = self.pair(float(U[-1]))
-        return _residual_m(model, drive, U[:-1], self.m, consts)[0]
+        return self.pair(float(U[-1]))[2].residual(U[:-1])[0]
 
     def FJ(self, U, F_lam=None):
-        """Residual, the Jacobian ``[F_u, F_lam]`` (``F_u`` exact, ``F_lam`` by central
+        """Residual, the Jacobian ``[F_u, F_lam]`` (``F_u`` the problem's, ``F_lam`` by central
         differences unless given, one-sided at the edge of the parameter's range) and ``F_lam``."""
-        model, drive, consts = self.pair(float(U[-1]))
-        F, DF = _residual_m(model, drive, U[:-1], self.m, consts)
+        F, DF = self.pair(float(U[-1]))[2].residual(U[:-1])
         if F_lam is None:
             h = 1e-6 * max(1.0, abs(U[-1]))
             sides = []
@@ -89,8 +95,7 @@ class _SwitchedProblem:
         return F, np.column_stack((DF, F_lam)), F_lam
 
     def orbit(self, U, admissibility=True):
-        model, drive, _ = self.pair(U[-1])
-        return orbit_at(model, drive, U[:-1], self.m)
+        return orbit_of(self.pair(float(U[-1]))[2], U[:-1])
 
     def acceptable(self, U):
         """Positive flight times; on a branch started at a period doubling, halves that differ
@@ -104,8 +109,9 @@ class _SwitchedProblem:
         tests = first_chord_tests([_tests(o) for o in orbits[-2:]], self.doubled, len(points))
         new = self.detect(engine, points, tangents, tests, orbits, self.xtol)
         graze = _switch_grazing(engine, points, tangents, orbits, self.xtol)
-        if graze is not None:
-            new.append(graze)
+        borders = _borders(engine, points, tangents, orbits, self.xtol)
+        if graze is not None or borders:
+            new += ([graze] if graze is not None else []) + borders
             Ua = points[-2]
             ta = tangents[-2] if tangents[-2] is not None else points[-1] - Ua
             new.sort(key=lambda e: engine.dot(ta, e._point - Ua))
@@ -138,12 +144,10 @@ def _tests(o: SwitchedOrbit) -> dict:
             "grazing": math.nan, "impact": o.impact_velocity, "admissible": o.admissible}
 
 
-def _switch_grazing(engine, points, tangents, orbits, xtol):
-    """A grazing of the switching surface between the last two points: the gap's rate at the
-    switch crossing changes sign; located by Brent's method along the chord (as the other events)."""
-    a, b = orbits[-2].switch_velocity, orbits[-1].switch_velocity
-    if not a * b < 0.0:
-        return None
+def _locate(engine, points, tangents, value, xtol):
+    """The point where ``value(orbit)`` changes sign between the last two points, by Brent's method
+    along the chord (each trial point corrected onto the branch); ``None`` where it cannot be
+    located."""
     Ua, Ub = points[-2], points[-1]
     ta = tangents[-2] if tangents[-2] is not None else (Ub - Ua) / engine.norm(Ub - Ua)
     hb = engine.dot(ta, Ub - Ua)
@@ -155,7 +159,7 @@ def _switch_grazing(engine, points, tangents, orbits, xtol):
         if U is None:
             raise ValueError("no point")
         found[hh] = U
-        return engine.orbit(U).switch_velocity
+        return value(engine.orbit(U))
 
     try:
         hh = brentq(g, 0.0, hb, xtol=xtol, rtol=4 * np.finfo(float).eps, maxiter=200) if hb else None
@@ -167,9 +171,45 @@ def _switch_grazing(engine, points, tangents, orbits, xtol):
     if U is None:
         g(hh)
         U = found[hh]
+    return U
+
+
+def _switch_grazing(engine, points, tangents, orbits, xtol):
+    """A grazing of the switching surface between the last two points: the gap's rate at the
+    switch crossing changes sign; located by Brent's method along the chord (as the other events)."""
+    a, b = orbits[-2].switch_velocity, orbits[-1].switch_velocity
+    if not a * b < 0.0:
+        return None
+    U = _locate(engine, points, tangents, lambda o: o.switch_velocity, xtol)
+    if U is None:
+        return None
     return BranchEvent(kind=EventKind.GRAZING, parameter=engine.problem.name, value=float(U[-1]),
                        index=len(points) - 1, orbit=engine.orbit(U), multiplier=complex(math.nan, math.nan),
                        _point=U)
+
+
+def border_tests(o) -> dict:
+    """The drive's border-collision tests at a switched orbit (:meth:`~impactbar.Drive.border_tests`
+    over the flights of its period); ``{}`` for a drive without them."""
+    problem = o.problem
+    if not hasattr(problem, "flights"):
+        return {}
+    return o.drive.border_tests(problem.flights(problem.unknowns(o)))
+
+
+def _borders(engine, points, tangents, orbits, xtol) -> list:
+    """The drive's border collisions between the last two points (a test of
+    :func:`border_tests` through 0), each located by Brent's method along the chord."""
+    a, b = border_tests(orbits[-2]), border_tests(orbits[-1])
+    out = []
+    for name in a:
+        if name in b and a[name] * b[name] < 0.0:
+            U = _locate(engine, points, tangents, lambda o, name=name: border_tests(o)[name], xtol)
+            if U is not None:
+                out.append(BranchEvent(kind=EventKind.BORDER_COLLISION, parameter=engine.problem.name,
+                                       value=float(U[-1]), index=len(points) - 1, orbit=engine.orbit(U),
+                                       multiplier=complex(math.nan, math.nan), _point=U, surface=name))
+    return out
 
 
 def checked_events(stop_on, xtol: float) -> tuple[tuple, float]:
@@ -198,7 +238,7 @@ def _doubled_starts(engine, ev, steps):
     eigenvector of the multiplier ``-1``), tried both ways. Yields ``(U0, (U1, t1))``; a first point
     counts only if its halves differ by a tenth of its distance from the doubling."""
     o = ev.orbit
-    X = np.concatenate((o.state, o.durations[[1, 3]]))
+    X = o.problem.unknowns(o)
     U0 = np.concatenate((X, X, [float(ev.value)]))
     _, J, _ = engine.problem.FJ(U0, np.zeros(U0.size - 1))
     w = np.append(np.linalg.svd(J[:, :-1])[2][-1], 0.0)
@@ -230,10 +270,10 @@ def doubled_first_points(engine, U0, w, steps, gap):
 def continue_switched(orbit, parameter: str, to: float, detect, *,
                       settings: ContinuationSettings | None = None, events: bool = True, stop_on=(),
                       xtol: float = 1e-10) -> Branch:
-    """Follow a periodic motion under a position-switched drive as one parameter changes, by
-    pseudo-arclength continuation (theory §7, §10). Called by :func:`impactbar.continue_orbit`
-    when its start is a :class:`~impactbar.SwitchedOrbit`, or a ``"period-doubling"``
-    :class:`BranchEvent` of a branch of them.
+    """Follow a periodic motion under a drive as one parameter changes, by pseudo-arclength
+    continuation (theory §7, §10). Called by :func:`impactbar.continue_orbit` when its start is a
+    :class:`~impactbar.SwitchedOrbit`, or a ``"period-doubling"`` :class:`BranchEvent` of a branch of
+    them.
 
     Parameters
     ----------
@@ -244,9 +284,9 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         vector, whose halves are opposite, both ways tried), while the parameter stays within
         ``|to - doubling|`` of the doubling, on whichever side it bifurcates.
     parameter : str
-        One of :data:`SWITCHED_PARAMETERS`: ``"stroke"``, ``"ret"`` (force levels, dimensionless,
-        eq. 2), ``"switch_out"`` (bar lengths), ``"delay"`` (dimensionless time), ``"R"``, ``"d"``,
-        ``"s"``; the event's own parameter for a period doubling.
+        One of the drive's :attr:`~impactbar.Drive.parameters` (the valve's ``"stroke"``, ``"ret"``:
+        force levels, dimensionless, eq. 2; ``"switch_out"``: bar lengths; ``"delay"``: dimensionless
+        time) or ``"R"``, ``"d"``, ``"s"``; the event's own parameter for a period doubling.
     to : float
         Target value; the branch stops there or where it leaves the range between start and ``to``.
     detect : callable
@@ -257,7 +297,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     events : bool
         Detect and locate events: ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` (from the
         non-trivial multipliers), ``"grazing"`` (an impact velocity, or the gap's rate at the switch
-        crossing, through 0), ``"admissibility"``.
+        crossing, through 0), ``"admissibility"``, ``"border-collision"`` (the drive's state touching
+        one of its switching surfaces: :meth:`~impactbar.Drive.border_tests`).
     stop_on : iterable of str
         Event kinds at which to stop.
     xtol : float
@@ -277,20 +318,20 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     """
     switch = None
     if isinstance(orbit, BranchEvent):
-        if orbit.kind != EventKind.PERIOD_DOUBLING or not isinstance(orbit.orbit, SwitchedOrbit) \
+        if orbit.kind != EventKind.PERIOD_DOUBLING or not autonomous(getattr(orbit.orbit, "load", None)) \
                 or orbit.orbit.impacts != 1:
             raise ValueError("orbit: a BranchEvent start must be a period doubling of a one-impact "
                              "switched orbit")
         if parameter != orbit.parameter:
             raise ValueError(f"parameter must be the doubling's own, {orbit.parameter!r}; got {parameter!r}")
         switch, orbit = orbit, orbit.orbit
-    if not isinstance(orbit, SwitchedOrbit):
+    if not autonomous(getattr(orbit, "load", None)):
         raise ValueError(f"orbit must be a SwitchedOrbit; got {type(orbit).__name__}")
-    if parameter not in SWITCHED_PARAMETERS:
-        raise ValueError(f"parameter must be one of {SWITCHED_PARAMETERS} for a switched orbit; "
-                         f"got {parameter!r}")
     model, drive = orbit.model, orbit.drive
-    lam0 = float(getattr(model if parameter in ("R", "d", "s") else drive, parameter))
+    allowed = parameters_of(drive)
+    if parameter not in allowed:
+        raise ValueError(f"parameter must be one of {allowed} for a switched orbit; got {parameter!r}")
+    lam0 = float(getattr(model if parameter in MODEL_PARAMETERS else drive, parameter))
     to = _target(parameter, lam0, to)
     settings = _settings(settings)
     steps = settings.steps(abs(to - lam0))
@@ -298,8 +339,10 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     direction = 1.0 if to > lam0 else -1.0
     m = 2 if switch is not None else orbit.impacts
     problem = _SwitchedProblem(model, drive, parameter, detect, events=events, stop_on=stop_on, xtol=xtol,
-                               impacts=m, doubled=switch is not None)
-    engine = _Engine(problem, settings.tol)
+                               impacts=m, doubled=switch is not None, base=orbit.problem)
+    # Newton's corrector no finer than the flights' accuracy (a drive with integrated flights: ten
+    # times the integrator's rtol, ShootingProblem.accuracy; closed forms keep the settings' tol)
+    engine = _Engine(problem, max(settings.tol, float(getattr(orbit.problem, "accuracy", 0.0))))
     if switch is not None:
         lo, hi = lam0 - abs(to - lam0), lam0 + abs(to - lam0)  # it may leave on either side
         for U0, first in _doubled_starts(engine, switch, steps):
@@ -312,9 +355,7 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
                              "along the doubled problem's null vector")
         return Branch(parameter=parameter, values=P[:, -1].copy(), orbits=orbits, events=tuple(found),
                       status=status, impacts=m, periods=1, _points=P)
-    states = orbit.states if orbit.states is not None else orbit.state[None, :]
-    U0 = np.concatenate([np.concatenate((z, orbit.durations[4 * k + 1:4 * k + 4:2]))
-                         for k, z in enumerate(states)] + [[lam0]])
+    U0 = np.append(orbit.problem.unknowns(orbit), lam0)
     F0, J0, _ = problem.FJ(U0)
     if float(np.max(np.abs(F0))) > 1e-9 * max(1.0, float(np.max(np.abs(U0)))):
         raise ValueError("orbit: not a solution of the segment problem at the start value")

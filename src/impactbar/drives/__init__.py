@@ -1,6 +1,27 @@
-"""Drives that are not functions of time: the valve of a hydraulic drifter switched by the piston's
-position (theory §10). The system they drive is autonomous; its blow frequency is an output."""
+"""Drives that are not functions of time (theory §10): the :class:`Drive` interface and the valve of
+a hydraulic drifter switched by the piston's position. The system they drive is autonomous; its blow
+frequency is an output.
 
+Layout: ``base`` (:class:`Drive`, :class:`DriveState`, the events :class:`DriveEvent`,
+:class:`GapCrossing`, :class:`RateCrossing`, :class:`TimedEvent`, :class:`SurfaceEvent`, and the
+periodic-orbit problem a drive may bring, :class:`OrbitProblem`), ``_crossing`` (the rigid
+coordinate's crossings under a constant force in closed form, compiled), ``flight`` (the flight of a
+drive with state between impacts, by scipy's ``solve_ivp``), ``switched`` (the valve,
+:class:`PositionSwitchedDrive`, with its compiled loop and its segment problem). Below the solvers:
+imports only ``impactbar.model``, ``impactbar.dynamics`` and ``impactbar._shared``.
+"""
+
+from .base import Drive as Drive
+from .base import DriveEvent as DriveEvent
+from .base import DriveState as DriveState
+from .base import FlightSettings as FlightSettings
+from .base import GapCrossing as GapCrossing
+from .base import OrbitData as OrbitData
+from .base import OrbitProblem as OrbitProblem
+from .base import RateCrossing as RateCrossing
+from .base import SurfaceEvent as SurfaceEvent
+from .base import TimedEvent as TimedEvent
 from .switched import PositionSwitchedDrive as PositionSwitchedDrive
 
-__all__ = ["PositionSwitchedDrive"]
+__all__ = ["Drive", "DriveState", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent", "SurfaceEvent",
+           "FlightSettings", "OrbitProblem", "OrbitData", "PositionSwitchedDrive"]

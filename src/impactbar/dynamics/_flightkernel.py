@@ -2,13 +2,15 @@
 §4): the modes advanced from an anchor (eq. 8), the particular solution of each load kind, the
 bounds ``A`` on ``|h''|`` and ``J`` on ``|h'''|`` over a step, and the steps that cannot cross
 ``h = 0`` (see :mod:`impactbar.dynamics._kernel`, which searches events with them). Plain float
-arrays only; where numba caches compiled code (``CACHE``) is decided here, once for every kernel."""
+arrays only; where numba caches compiled code (``CACHE``) is decided here, once for every kernel,
+and the tiered execution of first calls installed (:mod:`impactbar.dynamics._tiers`)."""
 
 from __future__ import annotations
 
 import math
 
 import numba
+import numpy as np
 
 from .._shared.compiling import watch_compiles
 
@@ -28,6 +30,13 @@ except RuntimeError:  # a read-only install and no writable cache folder: compil
 
 # one line on stderr, once per process, while impactbar's kernels compile for more than 2 s
 watch_compiles()
+
+# a first call of a kernel not yet compiled runs its Python source while a child process compiles
+# it into the cache (issue 41; impactbar.dynamics._tiers)
+from ._tiers import install as _install_tiers  # noqa: E402
+
+_install_tiers(cache=CACHE)
+
 
 @numba.njit(cache=CACHE, nogil=True)
 def _bc(d, tau):
@@ -203,25 +212,44 @@ def sort_head(a, n):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def piece_end(breaks, m, j):
+    """End time of the piece ``(m, j)`` (period ``m``, piece ``j``) of a piecewise-constant load."""
+    if j + 1 < breaks.size:
+        return m * TWO_PI + breaks[j + 1]
+    return (m + 1) * TWO_PI
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def piece_of(breaks, t):
-    """Period index and piece index of time ``t`` for a piecewise-constant load."""
+    """Period index and piece index of time ``t`` for a piecewise-constant load: the piece whose
+    start ``m 2 pi + breaks[j]`` and end (:func:`piece_end`) hold ``start <= t < end``, both computed
+    as the event search computes them. (The phase ``t - m 2 pi`` alone rounds: a release found at a
+    jump, ``te = piece_end(..)``, came out a rounding error inside the piece before it, so the
+    flight from there started under the old level.)"""
     m = math.floor(t / TWO_PI)
     tm = t - m * TWO_PI
     if tm >= TWO_PI:
         m += 1
         tm -= TWO_PI
-    j = 0
+    j = np.int64(0)  # (not the literal 0: piece_end is compiled for one signature)
     for i in range(breaks.size):
         if breaks[i] <= tm:
             j = i
+    J = breaks.size
+    for _ in range(2):  # at most one piece off either way
+        if t >= piece_end(breaks, m, j):
+            j += 1
+            if j == J:
+                j = np.int64(0)
+                m += 1
+        elif t < m * TWO_PI + breaks[j]:
+            j -= 1
+            if j < 0:
+                j = J - 1
+                m -= 1
+        else:
+            break
     return m, j
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def piece_end(breaks, m, j):
-    if j + 1 < breaks.size:
-        return m * TWO_PI + breaks[j + 1]
-    return (m + 1) * TWO_PI
 
 
 @numba.njit(cache=CACHE, nogil=True)

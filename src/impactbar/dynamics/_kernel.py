@@ -71,6 +71,19 @@ _MAX_STEPS = 2_000_000
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def flow_scratch(qa, va):
+    """The working arrays of a flight from the anchor ``qa, va``, rows of one block (one allocation:
+    a short run's fixed cost): copies of ``qa, va``, then ``qp, vp, qpa, vpa`` and two more of the
+    same length (``q, v`` of a flow evaluated apart from its start), uninitialised."""
+    M = qa.size
+    blk = np.empty((8, M))
+    for n in range(M):
+        blk[0, n] = qa[n]
+        blk[1, n] = va[n]
+    return blk[0], blk[1], blk[2], blk[3], blk[4], blk[5], blk[6], blk[7]
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def find_crossing(load_t, B_t, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
     """First ``t`` in ``[anchor, t_lim]`` where ``h(t) >= 0`` (see the module docstring), in the
     basis ``B_t`` (the plain tuple of a :class:`~impactbar.dynamics.kernelview.ModalBasisView`)
@@ -137,51 +150,25 @@ def find_crossing(load_t, B_t, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
             return NONE, t_lim
         horizon = min(hcap, TWO_PI)
         A, J = bounds(load, B, wts, alpha, ps, L, state, horizon)
-        g = min(h, 0.0)
-        if 0.0 < dh <= dnoise:
-            dh = 0.0  # a slope lost in rounding
-        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= horizon:
-            # bracketed, unique root on [a, a + 2|g|/dh]: safeguarded Newton
-            lo = a
-            hi = a + 2.0 * (-g) / dh
-            t = a - g / dh
-            if t > hi:
-                t = hi
+        g, dh, bracketed = _bracketed(h, dh, dnoise, A, horizon)
+        if bracketed:  # a unique root on [a, a + 2|g|/dh]: safeguarded Newton
+            lo, hi, t = _bracket(a, g, dh)
             for _it in range(100):
                 advance(load, B, level, ta, anchor, t, state)
                 p, dp, ddp = load_value(load, level, t)
                 h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
-                if h < 0.0:
-                    lo = t
-                else:
-                    hi = t
-                step = -h / dh if dh > 0.0 else 0.0
-                tn = t + step
-                if abs(step) <= 1e-15 * (1.0 + abs(t)) or hi - lo <= 4e-16 * (1.0 + abs(t)):
+                lo, hi, t, done = _refine(t, h, -h / dh if dh > 0.0 else 0.0, lo, hi)
+                if done:
                     break
-                if not (lo < tn < hi):
-                    tn = 0.5 * (lo + hi)
-                t = tn
-            if h < 0.0:
-                t = tn  # the converged Newton point, a rounding error past the last h < 0
             advance(load, B, level, ta, anchor, t, state)
             return CROSS, t
-        tau = _quadratic_step(g, dh, A)
         # the cubic bound h + h' s + h'' s^2/2 + J s^3/6 is far better where h'' < 0 is small
         # (leaving the stop): take the larger of the two certified steps. Both hold only where
         # A and J do, on [a, a + horizon] (the rigid mode's velocity bound grows with the horizon)
-        tc = _cubic_step(g, dh, ddh, J, horizon)
-        if tc > tau:
-            tau = tc
-        if tau <= 4e-16 * (1.0 + abs(a)):
-            # tangential contact: h = 0, h' = 0 to rounding, and h'' >= 0: pressed on the stop
+        touch, a = _step_on(_quadratic_step(g, dh, A), _cubic_step(g, dh, ddh, J, horizon), a, horizon,
+                            hcap, t_cap)
+        if touch:  # tangential contact: h = 0, h' = 0 to rounding, and h'' >= 0: pressed on the stop
             return TOUCH, a
-        if tau > horizon:
-            tau = horizon
-        if tau >= hcap:
-            a = t_cap
-        else:
-            a = a + tau
         advance(load, B, level, ta, anchor, a, state)
         p, dp, ddp = load_value(load, level, a)
         h, dh, ddh, noise, dnoise = functional(w2, d, wts, alpha, p, dp, ddp, q, v, qp, vp)
@@ -189,22 +176,67 @@ def find_crossing(load_t, B_t, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _halley(t, h, dh, ddh, lo, hi):
-    """One safeguarded Halley step for the root of an increasing ``h`` bracketed by ``[lo, hi]``
-    from ``t`` (``h, h', h''`` there): the new bracket, the next point (bisection where the step
-    leaves the bracket) and whether the step or the bracket is down to rounding."""
+def _bracketed(h, dh, dnoise, A, room):
+    """The certified searches' test for a bracketed root (the module docstring): with
+    ``g = min(h, 0)`` and a slope within its rounding ``dnoise`` taken as 0, the root is unique on
+    ``[a, a + 2|g|/h']`` where ``4 A |g| < h'^2`` (``A >= |h''|`` there) and that interval fits in
+    ``room``. Returns ``g, h', bracketed``."""
+    g = min(h, 0.0)
+    if 0.0 < dh <= dnoise:
+        dh = 0.0  # a slope lost in rounding
+    return g, dh, dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= room
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _bracket(a, g, dh):
+    """The bracket ``[a, a + 2|g|/h']`` of :func:`_bracketed` and the Newton point from ``a`` in it."""
+    hi = a + 2.0 * (-g) / dh
+    t = a - g / dh
+    if t > hi:
+        t = hi
+    return a, hi, t
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _refine(t, h, step, lo, hi):
+    """One safeguarded step (Newton's or Halley's, ``step``) for the root of an increasing ``h``
+    bracketed by ``[lo, hi]``, from ``t`` where ``h`` was evaluated: the new bracket, the next point
+    (bisection where the step leaves the bracket) and whether the step or the bracket is down to
+    rounding, the point then being the root's: the step's end where ``h(t) < 0`` (a rounding error
+    past the last ``h < 0``), else ``t``."""
     if h < 0.0:
         lo = t
     else:
         hi = t
-    den = 2.0 * dh * dh - h * ddh
-    step = -2.0 * h * dh / den if dh > 0.0 and den > 0.0 else 0.0
     tn = t + step
     if abs(step) <= 1e-15 * (1.0 + abs(t)) or hi - lo <= 4e-16 * (1.0 + abs(t)):
-        return lo, hi, tn, True
+        return lo, hi, tn if h < 0.0 else t, True
     if not (lo < tn < hi):
         tn = 0.5 * (lo + hi)
     return lo, hi, tn, False
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _halley_step(h, dh, ddh):
+    """Halley's step to a root of ``h`` from ``h, h', h''`` (0 where it is not defined)."""
+    den = 2.0 * dh * dh - h * ddh
+    return -2.0 * h * dh / den if dh > 0.0 and den > 0.0 else 0.0
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _step_on(tau, tc, a, horizon, hcap, t_cap):
+    """The larger of two certified steps ``tau, tc`` from ``a``, at most ``horizon``: ``touch, a``,
+    with ``touch`` where the step is down to rounding (a tangential contact; ``a`` unchanged), else
+    the step's end, ``t_cap`` where it reaches ``hcap = t_cap - a``."""
+    if tc > tau:
+        tau = tc
+    if tau <= 4e-16 * (1.0 + abs(a)):
+        return True, a
+    if tau > horizon:
+        tau = horizon
+    if tau >= hcap:
+        return False, t_cap
+    return False, a + tau
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -280,31 +312,23 @@ def rigid1_crossing(d, c0, p0, h1, ta, qa, va, t_lim, htol):
         mpp = p - d * v + kk * qp  # m'' = D e^{-d tau} here, and its rounding
         err = 1e-15 * (abs(p) + d * abs(v) + kk * abs(qp))
         A = c0 * (abs(mpp) + err + kk * habs) * (1.0 + 1e-12)
-        g = min(h, 0.0)
-        if 0.0 < dh <= dnoise:
-            dh = 0.0  # a slope lost in rounding
-        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= hcap:
-            # bracketed, unique root on [a, a + 2|g|/dh] where h' > 0: safeguarded Halley from
-            # the root of the local quadratic model
-            lo = a
-            hib = a + 2.0 * (-g) / dh
-            t = a + _quadratic_step(g, dh, max(ddh, 0.0)) if ddh >= 0.0 else a - g / dh
+        g, dh, bracketed = _bracketed(h, dh, dnoise, A, hcap)
+        if bracketed:
+            # a unique root on [a, a + 2|g|/dh] where h' > 0: safeguarded Halley from the root of
+            # the local quadratic model
+            lo, hib, tb = _bracket(a, g, dh)
+            t = a + _quadratic_step(g, dh, max(ddh, 0.0)) if ddh >= 0.0 else tb
             if not (lo < t <= hib):
-                t = a - g / dh
-                if t > hib:
-                    t = hib
-            tn = t
+                t = tb
             for _it in range(100):
                 q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t)
                 h = c0 * q
                 dh = c0 * v
                 ddh = c0 * (p - d * v)
-                lo, hib, tn, done = _halley(t, h, dh, ddh, lo, hib)
+                lo, hib, t, done = _refine(t, h, _halley_step(h, dh, ddh), lo, hib)
                 if done:
                     break
-                t = tn
-            if h < 0.0:
-                t = tn  # the converged point, a rounding error past the last h < 0
+            if h < 0.0:  # t moved on from the last point evaluated: the state there
                 q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, t)
             return CROSS, t, q, v, qp, p
         horizon = min(hcap, TWO_PI)
@@ -316,21 +340,15 @@ def rigid1_crossing(d, c0, p0, h1, ta, qa, va, t_lim, htol):
         tau = S if beta == 0.0 else min(_quadratic_step(g, dh, alpha1), S)
         if alpha1 > A:  # the two-sided bound's step may be the longer one
             tau = max(tau, _quadratic_step(g, dh, A))
+        tc = 0.0
         if ddh < 0.0:
             # the curvature pulls the end away (leaving the stop): the cubic bound with the exact
             # h'' of find_crossing, |h'''| <= c0 (d |m''| + k^3 |H|)
             J = c0 * (d * (abs(mpp) + err) + kk * k * habs) * (1.0 + 1e-12)
             tc = _cubic_step_fast(g, dh, ddh, J, horizon)
-            if tc > tau:
-                tau = tc
-        if tau <= 4e-16 * (1.0 + abs(a)):
+        touch, a = _step_on(tau, tc, a, horizon, hcap, t_lim)
+        if touch:
             return TOUCH, a, q, v, qp, p
-        if tau > horizon:
-            tau = horizon
-        if tau >= hcap:
-            a = t_lim
-        else:
-            a = a + tau
         q, v, qp, vp, p = _rigid1_state(d, p0, k, pr, pim, hr, hi, ta, qa, qpa, dv, a)
     return FAIL, a, q, v, qp, p
 
@@ -511,38 +529,19 @@ def _modal_crossing(load, B, c, fold, ta, qa, va, t_lim, htol, work):
         a0 = psup + d * vmax
         A = ac0 * a0 + aflex
         J = ac0 * (p1 + d * a0) + jflex
-        g = min(h, 0.0)
-        if 0.0 < dh <= dnoise:
-            dh = 0.0  # a slope lost in rounding
-        if dh > 0.0 and 4.0 * A * (-g) < dh * dh and 2.0 * (-g) / dh <= horizon:
-            # bracketed, unique root on [a, a + 2|g|/dh] where h' > 0: safeguarded Halley
-            lo = a
-            hib = a + 2.0 * (-g) / dh
-            t = a - g / dh
-            if t > hib:
-                t = hib
-            tn = t
+        g, dh, bracketed = _bracketed(h, dh, dnoise, A, horizon)
+        if bracketed:  # a unique root on [a, a + 2|g|/dh] where h' > 0: safeguarded Halley
+            lo, hib, t = _bracket(a, g, dh)
             for _it in range(100):
                 h, dh, ddh, rv = _modal_eval(load, B, fold, flight, work, t)
-                lo, hib, tn, done = _halley(t, h, dh, ddh, lo, hib)
+                lo, hib, t, done = _refine(t, h, _halley_step(h, dh, ddh), lo, hib)
                 if done:
                     break
-                t = tn
-            if h < 0.0:
-                t = tn  # the converged point, a rounding error past the last h < 0
             return CROSS, t
-        tau = _quadratic_step(g, dh, A)
-        tc = _cubic_step_fast(g, dh, ddh, J, horizon)
-        if tc > tau:
-            tau = tc
-        if tau <= 4e-16 * (1.0 + abs(a)):
+        touch, a = _step_on(_quadratic_step(g, dh, A), _cubic_step_fast(g, dh, ddh, J, horizon), a,
+                            horizon, hcap, t_lim)
+        if touch:
             return TOUCH, a
-        if tau > horizon:
-            tau = horizon
-        if tau >= hcap:
-            a = t_lim
-        else:
-            a = a + tau
     return FAIL, a
 
 
@@ -590,13 +589,7 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
     out_t, out_vel, out_q, out_v = out
     t, q, v = start
     M = w2.size
-    qa = q.copy()
-    va = v.copy()
-    qp = np.empty(M)
-    vp = np.empty(M)
-    qpa = np.empty(M)
-    vpa = np.empty(M)
-    anchor = np.empty(1)
+    qa, va, qp, vp, qpa, vpa, anchor, _ = flow_scratch(q, v)
     anchor[0] = t
     n = 0
     cap = out_t.size
@@ -607,47 +600,42 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
     if rigid1 and ks.size == 1:
         k1, pr1, pim1, hr1, hi1 = ks[0], pr[0], pim[0], hpr[0, 0], hpi[0, 0]
     habs1 = math.hypot(hr1, hi1)
+    h1 = (k1, pr1, pim1, hr1, hi1, habs1)
     qp1 = p1t = 0.0
-    # the free-free bar under a Fourier load, every flexible mode underdamped: modal_crossing
+    work = (q, v, qp, vp, qpa, vpa)
+    # the free-free bar under a Fourier load, every flexible mode underdamped: modal_crossing (its
+    # data set up only where it is compiled: a rigid run allocates and sums none of it)
     modal = False
     if modal_fast is not None:
         modal = modal_fast and kind == 0 and M > 1 and w2[0] == 0.0
-    lam = np.empty(M)
-    wsq = np.empty(M)
-    nq0 = 0.0
-    nv0 = 0.0
-    for i in range(M):
-        lam2 = w2[i] - 0.25 * d * d
-        if i > 0 and lam2 <= 0.0:
-            modal = False
-        lam[i] = math.sqrt(abs(lam2))
-        wsq[i] = math.sqrt(w2[i])
-        hs = 0.0
-        for j in range(ks.size):
-            hs += math.hypot(hpr[i, j], hpi[i, j])
-        nq0 += 2.0 * abs(c[i]) * (hs + (abs(p0) / w2[i] if i > 0 else 0.0))
-        nv0 += 2.0 * abs(c[i]) * vpb[i]
-    K = ks.size
-    hcr = np.zeros(K)
-    hci = np.zeros(K)
-    hwr = np.zeros(K)
-    hwi = np.zeros(K)
-    for i in range(M):
-        for j in range(K):
-            hcr[j] += c[i] * hpr[i, j]
-            hci[j] += c[i] * hpi[i, j]
-            hwr[j] += c[i] * w2[i] * hpr[i, j]
-            hwi[j] += c[i] * w2[i] * hpi[i, j]
-    ca = np.empty(M)
-    cb = np.empty(M)
-    cva = np.empty(M)
-    cvb = np.empty(M)
-    fold = (lam, wsq, hcr, hci, hwr, hwi, nq0, nv0)
-    work = (q, v, qp, vp, qpa, vpa)
-    mwork = (qpa, vpa, ca, cb, cva, cvb)
-    h1 = (k1, pr1, pim1, hr1, hi1, habs1)
-    anc = (qa, va, qpa, vpa)  # (the arrays are updated in place: the tuples are built once)
-    stt = (q, v, qp, vp)
+        K = ks.size
+        mblk = np.empty((6, M))  # (one allocation: a short run's fixed cost)
+        lam, wsq, ca, cb, cva, cvb = mblk[0], mblk[1], mblk[2], mblk[3], mblk[4], mblk[5]
+        kblk = np.zeros((4, K))
+        hcr, hci, hwr, hwi = kblk[0], kblk[1], kblk[2], kblk[3]
+        nq0 = 0.0
+        nv0 = 0.0
+        for i in range(M):
+            lam2 = w2[i] - 0.25 * d * d
+            if i > 0 and lam2 <= 0.0:
+                modal = False
+            lam[i] = math.sqrt(abs(lam2))
+            wsq[i] = math.sqrt(w2[i])
+            hs = 0.0
+            for j in range(ks.size):
+                hs += math.hypot(hpr[i, j], hpi[i, j])
+            nq0 += 2.0 * abs(c[i]) * (hs + (abs(p0) / w2[i] if i > 0 else 0.0))
+            nv0 += 2.0 * abs(c[i]) * vpb[i]
+        for i in range(M):
+            for j in range(K):
+                hcr[j] += c[i] * hpr[i, j]
+                hci[j] += c[i] * hpi[i, j]
+                hwr[j] += c[i] * w2[i] * hpr[i, j]
+                hwi[j] += c[i] * w2[i] * hpi[i, j]
+        fold = (lam, wsq, hcr, hci, hwr, hwi, nq0, nv0)
+        mwork = (qpa, vpa, ca, cb, cva, cvb)
+        anc = (qa, va, qpa, vpa)  # (the arrays are updated in place: the tuples are built once)
+        stt = (q, v, qp, vp)
     while True:
         htol = 0.0
         for i in range(M):
@@ -762,14 +750,7 @@ def _propagate(load_t, B_t, ta, qa, va, ts, out_q, out_v):
     kind, breaks = load.kind, load.breaks
     w2 = B.w2
     M = w2.size
-    qa = qa.copy()
-    va = va.copy()
-    q = np.empty(M)
-    v = np.empty(M)
-    qp = np.empty(M)
-    vp = np.empty(M)
-    qpa = np.empty(M)
-    vpa = np.empty(M)
+    qa, va, qp, vp, qpa, vpa, q, v = flow_scratch(qa, va)
     anchor = (qa, va, qpa, vpa)
     state = (q, v, qp, vp)
     m, j, level = first_piece(load, B, ta, qpa, vpa)

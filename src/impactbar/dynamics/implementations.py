@@ -28,6 +28,10 @@ name                              fast (default)                       reference
                                   continuation) in plain floats
 ``simulate.impact_search``        specialised certified searches       general certified search
                                   after an impact                      (``find_crossing``)
+``simulate.short_run``            a run's first block of impacts in    the general driver from the start
+                                  one kernel call, the result built
+                                  from its output when it ends the
+                                  run in flight
 ``simulate.wave_separation``      compiled characteristics solver      Python solver (``wave_impact``)
                                   where contact is lost
 ``simulate.switched_rigid``       rigid bar under a position-          the general driver, piece by
@@ -81,6 +85,7 @@ IMPLEMENTATIONS: dict[str, str] = {
     "orbits.rigid_arrays": "rigid-bar closed forms compiled, point by point over parameter arrays",
     "orbits.rigid_segments": "rigid-bar multi-impact segment problem in plain floats",
     "simulate.impact_search": "specialised certified searches after an impact",
+    "simulate.short_run": "a run's first block in one kernel call, its result built from the kernel's output",
     "simulate.wave_separation": "compiled characteristics solver for contact windows that lose contact",
     "simulate.switched_rigid": "rigid bar under a position-switched drive in scalar closed forms",
     "simulate.switched_kernel": "compiled valve loop under a position-switched drive",

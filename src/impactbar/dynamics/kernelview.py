@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["LoadKernelView", "ModalBasisView", "DriveKernelView", "FOURIER", "PIECEWISE"]
+__all__ = ["LoadKernelView", "ModalBasisView", "FOURIER", "PIECEWISE"]
 
 #: ``kind`` of a load of finitely many harmonics (eq. 7)
 FOURIER = 0
@@ -116,24 +116,3 @@ class ModalBasisView(NamedTuple):
         M = w2.size
         empty = np.zeros((M, 0))
         return cls(w2, float(d), empty, empty.copy(), np.zeros(M), np.zeros(M), np.zeros(M))
-
-
-class DriveKernelView(NamedTuple):
-    """A position-switched drive as the compiled valve loop reads it (theory §10; built once by
-    :attr:`impactbar.PositionSwitchedDrive.kernel_view`).
-
-    Attributes
-    ----------
-    stroke, ret : float
-        Force toward the stop in the stroke state and away from it in the return state
-        (dimensionless, eq. 2), both ``> 0``.
-    switch_out : float
-        Gap ``y = -q_0`` at which the return force gives way to the stroke force on the way out.
-    delay : float
-        Valve delay (dimensionless time), ``>= 0``.
-    """
-
-    stroke: float
-    ret: float
-    switch_out: float
-    delay: float

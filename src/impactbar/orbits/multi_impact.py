@@ -33,7 +33,7 @@ import numpy as np
 from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.base import autonomous
 from ..dynamics.implementations import use_fast
 from ..dynamics.modal import fundamental
 from ..loads import Load
@@ -504,27 +504,27 @@ def _guesses(problem: _Segments, guess):
 
 def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, guess=None, *,
                tol: float = 1e-12, max_iter: int = 40) -> PeriodicOrbit:
-    """A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
+    r"""A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
     the exact impact map (eqs. 8, 10, 11; theory §4, §5, §7).
 
-    Each flight is the closed-form motion of the modal oscillators (eq. 8); the unknowns are the
-    impact times and the states just after them, the conditions are contact at each impact and the
-    impact law (eq. 10, or the wave law of theory §4b) between consecutive flights, closing after
-    ``2 pi periods``. The Jacobian is exact (fundamental matrix, vector field at both ends of each
-    flight, the wave law's drive rate); the multipliers are the eigenvalues of the product of the
-    ``impacts`` impact-map Jacobians with their saltation terms.
+    Each flight is the closed-form motion of the modal oscillators (eq. 8); the unknowns are the impact
+    times and the states just after them, the conditions are contact at each impact and the impact law
+    (eq. 10, or the wave law of theory §4b) between consecutive flights, closing after :math:`2\pi n` (``n
+    = periods``). The Jacobian is exact (fundamental matrix, vector field at both ends of each flight, the
+    wave law's drive rate); the multipliers are the eigenvalues of the product of the ``impacts``
+    impact-map Jacobians with their saltation terms.
 
     Parameters
     ----------
     model : BarModel
         Either impact law: the paper's (eq. 10) or the wave law (``impact="wave"``, theory §4b),
-        where each impact lasts ``2/s`` and the flights start at the windows' ends.
+        where each impact lasts :math:`2/s` and the flights start at the windows' ends.
     load : Load
-        Any load of period ``2 pi``.
+        Any load of period :math:`2\pi`.
     impacts : int
-        ``m >= 1``, impacts per period of the motion.
+        :math:`m \ge 1`, impacts per period of the motion.
     periods : int
-        ``n >= 1``, load periods per period of the motion.
+        :math:`n \ge 1`, load periods per period of the motion.
     guess : optional
         Where Newton starts:
 
@@ -538,14 +538,14 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
           eigenvector, so that an orbit near or past its period doubling gives the doubled orbit
           (a ``ValueError`` if Newton only finds the guess again);
         - a :class:`Trajectory`: its last ``impacts`` impacts (they must span about
-          ``2 pi periods``);
+          :math:`2\pi n` with ``n = periods``);
         - a tuple ``(impact_times, states_after_impact)`` of shapes ``(m,)`` and ``(m, 2 N + 2)``
           (under the wave law, the states at the windows' ends).
     tol : float
         Relative tolerance of the Newton step.
     max_iter : int
-        Newton iterations per start, ``1 <= max_iter <= 1000``; a start stops earlier when the
-        residual has not halved in 40 iterations.
+        Newton iterations per start, from 1 to 1000; a start stops earlier when the residual has not
+        halved in 40 iterations.
 
     Returns
     -------
@@ -556,7 +556,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     ------
     ValueError
         For bad arguments (named), an unknown impact law, wave-law windows that do not fit
-        (``impacts * 2/s >= 2 pi periods``), a problem of more than ``MAX_UNKNOWNS = 6000``
+        (:math:`2m/s \ge 2\pi n`), a problem of more than ``MAX_UNKNOWNS = 6000``
         unknowns ``2 (n_modes + 1) impacts`` (its dense Jacobian), or when Newton does not
         converge from any start derived from ``guess`` (or only back onto the undoubled orbit).
 
@@ -567,14 +567,14 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     >>> round(o.phase, 4), o.impacts
     (3.0367, 1)
 
-    With a :class:`~impactbar.PositionSwitchedDrive` in place of the load the system is autonomous
-    and the period is unknown (theory §10): the result is a
-    :class:`~impactbar.SwitchedOrbit` (``impacts`` per period, a ``guess`` needed for two or
-    more; ``periods`` ignored; under every impact law), from
+    With a :class:`~impactbar.Drive` in place of the load (e.g. a
+    :class:`~impactbar.PositionSwitchedDrive`) the system is autonomous and the period is unknown
+    (theory §10): the result is a :class:`~impactbar.SwitchedOrbit`, a :class:`PeriodicOrbit`
+    (``impacts`` per period; ``periods`` ignored; under every impact law), from
     :func:`~impactbar.orbits.find_switched_orbit`.
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
-    if isinstance(load, PositionSwitchedDrive):
+    if autonomous(load):  # a drive: an autonomous orbit, unknown period (theory §10)
         from .switched import find_switched_orbit
 
         return find_switched_orbit(model, load, impacts, guess, tol=min(tol, 1e-13),
@@ -625,12 +625,12 @@ def _halves_gap(u, problem) -> float:
 # by Newton's method from guesses where it has none (both here, since each calls the other)
 # ------------------------------------------------------------------------------------------------
 def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
-    """Every one-impact-per-period steady state of the bar under the load (paper Section 2).
+    r"""Every one-impact-per-period steady state of the bar under the load (paper Section 2).
 
-    Each root ``phase`` of the phase equation (eq. 14) in ``[0, 2 pi)`` gives one orbit: the flexible
+    Each root ``phase`` of the phase equation (eq. 14) in :math:`[0, 2\pi)` gives one orbit: the flexible
     modes' start state solves the periodicity and impact conditions (eqs. 10-13) exactly, mode by
-    mode; the rigid mode strikes at ``2 pi p0 / (1 + R)`` and its constant is fixed by contact
-    ``u(1, 0) = 0`` (:func:`~impactbar.orbits.one_impact.phase_equation_orbits`; under the wave law
+    mode; the rigid mode strikes at :math:`2\pi p_0/(1 + R)` and its constant is fixed by contact
+    :math:`u(1, 0) = 0` (:func:`~impactbar.orbits.one_impact.phase_equation_orbits`; under the wave law
     its own phase equation, theory §4b). Under a law without a phase equation
     (:attr:`~impactbar.laws.ContactLaw.has_phase_equation` ``False``, e.g. the rod-rock law) the
     orbits come from Newton's method from guesses instead (:func:`periodic_orbits_by_newton`): the
@@ -640,7 +640,7 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     ----------
     model : BarModel
     load : Load
-        Any load of period ``2 pi``: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
+        Any load of period :math:`2\pi`: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
 
     Returns
     -------
@@ -653,7 +653,7 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     Raises
     ------
     ValueError
-        For inputs of the wrong type, or at an undamped resonance ``s n pi = k`` (eq. 16).
+        For inputs of the wrong type, or at an undamped resonance :math:`s n \pi = k` (eq. 16).
 
     Examples
     --------

@@ -5,7 +5,7 @@ public entry points."""
 
 from __future__ import annotations
 
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.base import autonomous
 from ..laws.paper.phase import phase_G as phase_G
 from ..laws.paper.phase import phase_residual as phase_residual
 from ..laws.paper.phase import phase_roots as _phase_roots
@@ -18,8 +18,8 @@ __all__ = ["phase_G", "phase_residual", "phase_roots"]
 def _check_inputs(model, load):
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-    if isinstance(load, PositionSwitchedDrive):  # not a function of time (theory §10)
-        raise ValueError("a PositionSwitchedDrive is not periodic in time: the phase equation and "
+    if autonomous(load):  # a drive is not a function of time (theory §10)
+        raise ValueError(f"a {type(load).__name__} is not periodic in time: the phase equation and "
                          "the one-impact orbits of a periodic load do not apply; use find_orbit(model, "
                          "drive) (unknown period, theory §10) or simulate")
     if not isinstance(load, Load):

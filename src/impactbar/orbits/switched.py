@@ -1,31 +1,31 @@
-"""Periodic motions under a position-switched drive: autonomous, with an unknown period (theory §10).
+r"""Periodic motions under a drive: autonomous, with an unknown period (theory §10).
 
-One period of a one-impact orbit, counted from an impact (the valve's rules of
-:class:`~impactbar.PositionSwitchedDrive`, delay ``tau``):
+:func:`find_switched_orbit` (what :func:`impactbar.find_orbit` calls with a
+:class:`~impactbar.Drive` in place of the load) solves the drive's periodic-orbit problem, an
+:class:`~impactbar.drives.OrbitProblem`, by Newton's method and returns a :class:`SwitchedOrbit`,
+which is a :class:`~impactbar.PeriodicOrbit`. It calls only the interface:
 
-1. stroke force for ``tau`` (the switch to return triggered by the impact takes effect);
-2. return force for ``h1``, until the gap ``y = -q_0`` rises through ``switch_out``;
-3. return force for ``tau`` (the switch to stroke takes effect);
-4. stroke force for ``h3``, until the struck end reaches the stop, ``c . q = 0``; the impact law
-   (eq. 10) gives the state after the impact.
+- a drive that brings a problem of its own (:meth:`~impactbar.Drive.orbit_problem`) is solved with
+  it: the valve of :class:`~impactbar.PositionSwitchedDrive` has closed-form flights and the exact
+  Jacobian (:mod:`impactbar.drives.switched.segment`);
+- any other drive with the generic shooting problem :class:`ShootingProblem`: the unknowns are the
+  bar's and the drive's states just after each of the ``m`` impacts of the period, the residual the
+  flight from each to the next impact (:func:`impactbar.drives.flight.fly`: closed forms for a force
+  constant between events, ``solve_ivp`` for a drive with state) followed by the impact law and
+  the drive's map at the impact, minus the next unknowns (multiple shooting); the period is the sum
+  of the flights. Its Jacobian, hence the multipliers, is by central finite differences (module
+  constants ``FD_STEP_CLOSED``, ``FD_STEP_ODE``): with closed-form flights and events the
+  multipliers' errors measured against the valve's exact Jacobian (the same motion, ``s = 10``,
+  ``R = 0.215``) are ``6e-11`` on the rigid bar, ``3e-8`` with 3 modes, ``1e-7`` with 6 (the
+  truncation error of the differences grows with the stiffest mode's frequency); with a drive's
+  state integrated by LSODA to ``rtol = 1e-10``, ``4e-10`` on the lag drive of
+  ``tests/drives/test_new_drive.py`` (against differences of an integration at ``1e-12``). The
+  fixed point itself is exact to rounding with closed-form flights (the Jacobian only steers
+  Newton), to the integrator's tolerance otherwise.
 
-Every flight is the closed-form constant-force flow of the modes (eq. 8). The unknowns are the
-state after the impact and the durations ``h1``, ``h3`` (the period is ``T = 2 tau + h1 + h3``); the
-conditions are the switch, the contact and the impact law, solved by Newton's method with the exact
-Jacobian. The monodromy matrix is the product of the flows' fundamental matrices and of the saltation
-matrices at the switch and the impact (Hiskens & Pai 2000; di Bernardo et al., *Piecewise-smooth
-Dynamical Systems*, 2008, §2.5); one of its eigenvalues is the trivial ``1`` along the flow, reported
-apart, the others are the multipliers of the Poincare map.
-
-Under a law whose contact takes time (the wave law, theory §4b; the rod-rock law, §4d) the impact
-is the law's contact, held under the stroke force for its duration ``ContactLaw.window`` (as
-:func:`impactbar.simulate` runs it: the switch to return counts from the contact's end). The
-unknowns hold the state where the contact ends; eq. 10 is replaced by the contact's map with its
-Jacobian (exact for the wave law, central differences for the rod-rock law); the period is
-``T = window + 2 tau + h1 + h3``. The multipliers are those of the return map on the arrival
-surface ``c . q = 0``, built from the same Jacobian by the implicit function theorem (the switch
-and arrival times depend on the state); the trivial multiplier along the flow is then exactly 1.
-The flows, the residual and Newton's method are in ``impactbar.orbits._switchflow``.
+The multipliers are those of the return map on the section just after the impacts (the arrival
+surface ``c . q = 0`` times the drive's state); the trivial one along the flow is set apart
+(``trivial_multiplier``).
 """
 
 from __future__ import annotations
@@ -37,114 +37,155 @@ import numpy as np
 
 from .._shared.status import Admissibility
 from .._shared.validate import check_int, check_real
-from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive
-from ..dynamics._switchkernel import rigid_orbit_start
+from ..drives.base import DriveState, OrbitData, OrbitProblem, autonomous, newton, sorted_multipliers
+from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..model import BarModel
-from ._switchflow import (  # noqa: F401 (the segment problem; _residual_m, _flight_index for continuation)
-    ContactMap,
-    _admissibility,
-    _affine,
-    _apply,
-    _before_impact,
-    _blocks,
-    _conditions,
-    _constants,
-    _field,
-    _flight_index,
-    _flights,
-    _fund,
-    _jump,
-    _legs,
-    _matrix,
-    _newton,
-    _padded,
-    _residual,
-    _residual_m,
-    _w2,
-)
+from .admissibility import _window_departure
+from .orbit import PeriodicOrbit
 
-__all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_at"]
+__all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_problem", "orbit_of", "ShootingProblem",
+           "check_orbit"]
+
+TWO_PI = 2.0 * math.pi
 
 
-@dataclass(frozen=True)
-class SwitchedOrbit:
-    """A periodic motion with ``m`` impacts per period under a position-switched drive (theory §10).
+class _LazyContacts:
+    """``SwitchedOrbit.contacts``: set by the constructor (``None``: not computed yet), computed on
+    first access from the arrivals (the law's :meth:`~impactbar.laws.ContactLaw.blow` under the
+    force the drive holds during each contact)."""
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return None
+        value = obj.__dict__.get("_contacts")
+        if value is None:
+            value = obj.__dict__["_contacts"] = obj._blows()
+        return value
+
+    def __set__(self, obj, value):
+        obj.__dict__["_contacts"] = value
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class SwitchedOrbit(PeriodicOrbit):
+    """A periodic motion with ``m`` impacts per period under a drive (a :class:`~impactbar.Drive`,
+    theory §10): a :class:`~impactbar.PeriodicOrbit` whose ``load`` is the drive, whose period is an
+    output and whose ``periods`` is 1.
+
+    Orbit time ``t`` runs from :attr:`state`, just after the period's first impact (where its contact
+    ends, under a law whose contact takes time). Impact ``k`` ends the ``k``-th interval: it happens
+    at ``impact_times[k]`` (the last at ``period``, the first impact again), arriving at
+    ``impact_velocities[k]`` from ``states_before_impact[k]``; ``states_after_impact[k]`` is the
+    state just after it (``states`` lists the states where the intervals start, ``states[0]`` is
+    ``state``).
 
     Attributes
     ----------
     model : BarModel
-    drive : PositionSwitchedDrive
+    load : Drive
+        The drive (also :attr:`drive`).
+    impacts : int
+        ``m``.
+    periods : int
+        1.
     period : float
         Period ``T`` (the model's time unit, eq. 2).
-    durations : numpy.ndarray, shape (4 m,)
-        The four flights between consecutive impacts, for each impact in turn: stroke ``tau``,
+    durations : numpy.ndarray
+        The flights between consecutive events of the period (the drive's switches and the
+        impacts), in order from :attr:`state`; for the valve four per impact: stroke ``tau``,
         return ``h1`` (to the switch crossing), return ``tau``, stroke ``h3`` (to the impact).
-    state : numpy.ndarray, shape (2 N + 2,)
-        Modal state ``(q_0..q_N, q_0'..q_N')`` just after the first impact.
-    impact_velocity : float
-        ``u_t(1, t-)``, the struck end's velocity arriving at the stop at the end of the first
-        interval from ``state`` (for ``m = 1`` the impact ``state`` follows; every interval's in
-        :attr:`impact_velocities`).
-    multipliers : numpy.ndarray, shape (2 N + 1,)
+    impact_times : numpy.ndarray, shape (m,)
+        Orbit times of the impacts (arrivals), increasing, the last equal to ``period`` less the last
+        contact's duration.
+    phases : numpy.ndarray, shape (m,)
+        ``2 pi`` times the fraction of the period at each impact (rad, the last 0).
+    impact_velocities : numpy.ndarray, shape (m,)
+        ``u_t(1, t-)`` at each impact (``impact_velocity`` is the first's).
+    multipliers : numpy.ndarray, shape (2 N + 1 + k,)
         Non-trivial Floquet multipliers (those of the Poincare map), largest modulus first.
     trivial_multiplier : float
         The multiplier along the flow, ``1`` in exact arithmetic (its distance from 1 measures the
-        rounding of the monodromy matrix).
+        rounding of the monodromy matrix; exactly 1 where the multipliers are those of the return
+        map on the arrival surface).
     admissibility : Admissibility
-        Whether the motion is physical (sampled check, theory §5 and §10).
+        Whether the motion is physical (theory §5 and §10).
+    admissible, stable : bool
+        ``admissibility`` is admissible; and every non-trivial multiplier inside the unit circle.
+    switch_times : numpy.ndarray
+        Times after :attr:`state` at which the drive switched (for the valve: to return, then to
+        stroke, for each impact in turn).
     switch_velocity : float
-        The gap's rate ``y' = -q_0'`` where it rises through ``switch_out`` (the smallest over the
-        period's crossings): 0 where the orbit grazes the switching surface (theory §10).
-    states : numpy.ndarray, shape (m, 2 N + 2), optional
-        The modal state just after each impact (``states[0]`` is ``state``).
+        The gap's rate ``y' = -q_0'`` where it crosses a switch position (the smallest over the
+        period's crossings): 0 where the orbit grazes the switching surface (theory §10); ``nan``
+        for a drive without position crossings.
     contact_time : float
-        Under a law whose contact takes time (the wave law, the rod-rock law), the contact's
-        duration (the window ``2/s``, ``RodRock.window``): ``state`` and ``states`` are then where
-        each contact ends, the ``durations`` follow it, and ``period = sum(durations) + m
-        contact_time``. 0 under the paper's law.
+        Under a law whose contact takes time, the contact's duration (``ContactLaw.window``):
+        ``state`` and ``states`` are then where each contact ends. 0 under the paper's law.
+    drive_states : numpy.ndarray, shape (m, k)
+        The drive's continuous state where each interval starts (empty for a drive without state).
+    contacts : tuple
+        The record of each impact's contact under a law whose contact takes time, in order
+        (:meth:`~impactbar.laws.ContactLaw.blow` of each arrival under the force the drive holds: a
+        :class:`~impactbar.WaveImpact` under the wave law; under the rod-rock law a record with the
+        blow's ``work_on_rock``, ``permanent_penetration``, ``efficiency``, ... of
+        :class:`~impactbar.Blow`); empty under the paper's law. Computed on first access.
+    clearance, clearance_error : float
+        ``nan`` (admissibility is decided on the flights themselves).
 
     Examples
     --------
-    >>> from impactbar import BarModel, PositionSwitchedDrive, find_orbit
+    >>> from impactbar import BarModel, PeriodicOrbit, PositionSwitchedDrive, find_orbit
     >>> drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
     >>> orbit = find_orbit(BarModel(s=10.0, d=0.05, R=0.5, n_modes=0), drive)
     >>> round(orbit.period, 6), round(orbit.blow_frequency * orbit.period, 12)  # found, not given
     (4.607776, 1.0)
+    >>> isinstance(orbit, PeriodicOrbit), orbit.drive is orbit.load
+    (True, True)
     """
 
-    model: BarModel
-    drive: PositionSwitchedDrive
-    period: float
-    durations: np.ndarray
-    state: np.ndarray
-    impact_velocity: float
-    multipliers: np.ndarray
-    trivial_multiplier: float
-    admissibility: Admissibility
+    period: float = math.nan
+    durations: np.ndarray = field(default=None, repr=False)
+    trivial_multiplier: float = math.nan
+    switch_times: np.ndarray = field(default=None, repr=False)
     switch_velocity: float = math.nan
-    _monodromy: np.ndarray = field(repr=False, default=None)
-    states: np.ndarray = field(repr=False, default=None)
-    _velocities: np.ndarray = field(repr=False, default=None)
     contact_time: float = 0.0
+    drive_states: np.ndarray = field(default=None, repr=False)
+    contact_forces: np.ndarray = field(default=None, repr=False)
+    _monodromy: np.ndarray = field(default=None, repr=False)
+    _problem: object = field(default=None, repr=False)
+    _unknowns: np.ndarray = field(default=None, repr=False)
+
+    contacts = _LazyContacts()
 
     @property
-    def impacts(self) -> int:
-        """Impacts per period ``m`` (the ``durations`` hold four flights per impact)."""
-        return self.durations.size // 4
+    def drive(self):
+        """The drive (the orbit's ``load``)."""
+        return self.load
 
     @property
-    def impact_velocities(self) -> np.ndarray:
-        """``(m,)``: the struck end's velocity arriving at the impact that ends each interval from
-        ``states[k]``, in order (``impact_velocity`` first; the last one's impact leads to
-        ``state``)."""
-        if self._velocities is None:
-            return np.array([self.impact_velocity])
-        return np.asarray(self._velocities)
+    def problem(self):
+        """The :class:`~impactbar.drives.OrbitProblem` this orbit solves (continuation starts from
+        it)."""
+        return self._problem
 
     @property
-    def admissible(self) -> bool:
-        """Whether :attr:`admissibility` is ``"admissible"``."""
-        return self.admissibility == Admissibility.ADMISSIBLE
+    def state(self) -> np.ndarray:
+        """The modal state ``(q_0..q_N, q_0'..q_N')`` just after the period's first impact (where its
+        contact ends), shape ``(2 N + 2,)``."""
+        return self.states[0]
+
+    @property
+    def states(self) -> np.ndarray:
+        """``(m, 2 N + 2)``: the modal state where each interval starts (after the impact before
+        it); ``states[0]`` is :attr:`state`."""
+        after = self.states_after_impact
+        return np.roll(after, 1, axis=0) if len(after) > 1 else after
+
+    @property
+    def impact_velocity(self) -> float:
+        """``u_t(1, t-)`` at the first impact, the one that ends the first interval from
+        :attr:`state` (for ``m = 1`` the one that :attr:`state` follows)."""
+        return float(self.impact_velocities[0])
 
     @property
     def blow_frequency(self) -> float:
@@ -153,97 +194,122 @@ class SwitchedOrbit:
         return self.impacts / self.period
 
     @property
-    def switch_times(self) -> np.ndarray:
-        """Times after the first impact at which the switches take effect: to return, then to
-        stroke, for each impact of the period in turn, shape ``(2 m,)``."""
-        steps = self.durations.reshape(-1, 4).copy()
-        steps[:, 0] += self.contact_time  # the contact, then the stroke's tau
-        start = np.concatenate(([0.0], np.cumsum(steps.sum(axis=1))))[:-1] + self.contact_time
-        tau, h1, tau2 = self.durations[0::4], self.durations[1::4], self.durations[2::4]
-        return np.column_stack((start + tau, start + tau + h1 + tau2)).ravel()
-
-    @property
     def impact_energy(self) -> float:
         """Kinetic energy of the bar arriving at the stop, ``(1/2) int_0^1 u_t^2 dx`` (units of
         ``m L^2 Omega^2``, eq. 2), the mean over the ``m`` impacts of the period (so that the
         percussive power is ``impact_energy * blow_frequency``)."""
         M = self.model.n_modes + 1
-        states = self.states if self.states is not None else self.state[None, :]
         total = 0.0
-        for k, z0 in enumerate(states):
-            v = _before_impact(self.model, self.drive, z0, self.durations[4 * k:4 * k + 4])[M:]
+        for zd in self.states_before_impact:
+            v = zd[M:]
             total += 0.5 * (v[0] ** 2 + 2.0 * float(np.sum(v[1:] ** 2)))
-        return total / len(states)
+        return total / self.impacts
 
-    @property
-    def stable(self) -> bool:
-        """Admissible with every non-trivial multiplier inside the unit circle."""
-        return self.admissibility == Admissibility.ADMISSIBLE and bool(np.all(np.abs(self.multipliers) < 1.0))
-
-    @property
-    def contacts(self) -> tuple:
-        """The record of each impact's contact under a law whose contact takes time, in order
-        (:meth:`~impactbar.laws.ContactLaw.blow` of each arrival under the stroke force: a
-        :class:`~impactbar.WaveImpact` under the wave law; under the rod-rock law a record with the
-        blow's ``work_on_rock``, ``permanent_penetration``, ``efficiency``, ... of
-        :class:`~impactbar.Blow`); empty under the paper's law."""
+    def _blows(self) -> tuple:
         if self.model.law.instantaneous:
             return ()
-        from ..loads import FourierLoad
+        law = self.model.law
+        return tuple(law.blow(self.model, _constant_load(float(p)), 0.0, zd)
+                     for p, zd in zip(self.contact_forces, self.states_before_impact, strict=True))
 
-        load = FourierLoad(float(self.drive.stroke), [])
-        states = self.states if self.states is not None else self.state[None, :]
-        arrivals = [_before_impact(self.model, self.drive, z0, self.durations[4 * k:4 * k + 4])
-                    for k, z0 in enumerate(states)]
-        return tuple(self.model.law.blow(self.model, load, 0.0, zd) for zd in arrivals)
+    def _state_in_period(self, t):
+        """The modal state at orbit times ``0 <= t <= period`` from :attr:`state`: the flights of
+        the period again (:meth:`OrbitProblem.pieces`); inside a contact the law's record where it
+        has one (``state_at``), else ``nan``."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        M = self.model.n_modes + 1
+        q = np.full((M, t.size), np.nan)
+        v = np.full((M, t.size), np.nan)
+        for t0, t1, piece in self._problem.pieces(self._unknowns):
+            sel = (t >= t0) & (t <= t1)
+            if np.any(sel):
+                q[:, sel], v[:, sel] = piece(t[sel])
+        if self.contact_time:  # inside the contacts' windows: the law's records
+            for ti, rec in zip(self.impact_times, self.contacts, strict=True):
+                for i in np.flatnonzero((t >= ti) & (t <= ti + self.contact_time) & np.isnan(q[0])):
+                    if hasattr(rec, "state_at"):
+                        q[:, i], v[:, i] = rec.state_at(min(t[i] - ti, self.contact_time))
+        return q, v
+
+    def modal_state(self, t):
+        """Modal displacements and velocities at orbit times ``t`` (from :attr:`state`, taken
+        modulo the period), shape ``(N + 1, T)`` each."""
+        t = np.atleast_1d(np.asarray(t, dtype=float)).ravel()
+        return self._state_in_period(np.mod(t, self.period))
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary: :meth:`PeriodicOrbit.to_dict` with the ``period``, the
+        ``blow_frequency``, the ``impact_energy``, the ``switch_times`` and the
+        ``trivial_multiplier``."""
+        out = super().to_dict()
+        out.update(period=self.period, blow_frequency=self.blow_frequency, impact_energy=self.impact_energy,
+                   switch_times=np.asarray(self.switch_times).tolist(),
+                   trivial_multiplier=self.trivial_multiplier)
+        return out
+
+    def _attrs(self) -> dict:
+        out = super()._attrs()
+        out.update(period=self.period, drive=repr(self.load))
+        return out
 
 
-def _rigid_guess(model, drive):
-    """Start of Newton for the rigid bar: the fixed point of the rigid piston's map of arrival
-    velocities (compiled closed forms, :func:`impactbar.dynamics._switchkernel.rigid_fixed_point`),
-    from the undamped undelayed orbit in closed form (theory §10), which is the start itself where
-    the map's iteration fails."""
-    M = model.n_modes + 1
-    R = model.law.kernel_restitution(model)
-    o = drive.rigid_orbit(min(model.R, 0.999))
-    v, h1, h3 = rigid_orbit_start(float(model.d), float(R), tuple(drive.kernel_view), o["impact_velocity"])
-    if not math.isfinite(v):
-        v, h1, h3 = o["impact_velocity"], o["switch_time"], o["period"] - o["switch_time"]
-    z0 = np.zeros(2 * M)
-    z0[M] = -R * v
-    return np.concatenate((z0, [h1, h3]))
+def _constant_load(p: float):
+    """The load of the constant force ``p`` (a one-piece :class:`~impactbar.FourierLoad`)."""
+    from ..loads import FourierLoad
+
+    return FourierLoad(p, [])
 
 
-def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: int = 1, guess=None,
-                        *, tol: float = 1e-13, max_iter: int = 50) -> SwitchedOrbit:
-    """The periodic motion with ``m`` impacts per period under a position-switched drive (theory §10).
+def check_orbit(orbit, name: str = "orbit") -> PeriodicOrbit:
+    """``orbit`` if it is a :class:`~impactbar.PeriodicOrbit` (a :class:`SwitchedOrbit` included),
+    else a ``ValueError`` naming ``name``."""
+    if not isinstance(orbit, PeriodicOrbit):
+        raise ValueError(f"{name} must be a PeriodicOrbit, MultiImpactOrbit, SwitchedOrbit or BranchEvent; "
+                         f"got {type(orbit).__name__}")
+    return orbit
 
-    Called by :func:`impactbar.find_orbit` when its load is a
-    :class:`~impactbar.PositionSwitchedDrive`. Between consecutive impacts the valve goes through
-    its cycle once (stroke ``tau``, return until the switch crossing, return ``tau``, stroke until
-    the impact); with ``m >= 2`` the intervals may differ (a period-2 motion after a period
-    doubling), and the unknowns are the ``m`` states after the impacts and the ``2 m`` free flight
-    times (multiple shooting).
+
+def orbit_problem(model: BarModel, drive, impacts: int = 1,
+                  settings: FlightSettings | None = None) -> OrbitProblem:
+    """The periodic-orbit problem of ``drive`` on ``model`` with ``impacts`` impacts per period: the
+    drive's own (:meth:`~impactbar.Drive.orbit_problem`) or the generic :class:`ShootingProblem`."""
+    problem = drive.orbit_problem(model, impacts, _constant_load)
+    return problem if problem is not None else ShootingProblem(model, drive, impacts, settings)
+
+
+def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *, tol: float = 1e-13,
+                        max_iter: int = 50) -> SwitchedOrbit:
+    """The periodic motion with ``m`` impacts per period under a drive (theory §10).
+
+    Called by :func:`impactbar.find_orbit` when its load is a :class:`~impactbar.Drive`. Between
+    consecutive impacts the drive goes through its cycle (for the valve: stroke ``tau``, return until
+    the switch crossing, return ``tau``, stroke until the impact); with ``m >= 2`` the intervals may
+    differ (a period-2 motion after a period doubling), and the unknowns hold the ``m`` states after
+    the impacts (multiple shooting). The problem is the drive's own or the generic shooting problem
+    (module docstring).
 
     Parameters
     ----------
     model : BarModel
         Rigid or flexible bar, under any impact law: the paper's (eq. 10), or a contact that takes
-        time, the wave law (theory §4b) or the rod-rock law (§4d), held under the stroke force
-        (theory §10; the orbit's ``state`` is then where the contact
-        ends, and ``contacts`` holds the blows).
-    drive : PositionSwitchedDrive
+        time, the wave law (theory §4b) or the rod-rock law (§4d), held under the drive's force
+        (theory §10; the orbit's ``state`` is then where the contact ends, and ``contacts`` holds
+        the blows). A drive with state takes the paper's law.
+    drive : Drive
     impacts : int
-        Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed.
+        Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed for the valve.
     guess : SwitchedOrbit, SwitchedTrajectory, tuple or None
-        Where Newton starts: an orbit (e.g. from a nearby parameter; a one-impact orbit is
-        repeated ``m`` times, which Newton keeps unless the halves are perturbed), a run of
-        :func:`impactbar.simulate` under the drive (its last ``m`` complete valve cycles, rigid
-        bar), a tuple ``(states, h1, h3)`` (states after the impacts, shape ``(m, 2 N + 2)`` or
-        ``(2 N + 2,)`` for ``m = 1``, and the free flight durations, shape ``(m,)``), or ``None``
-        (``m = 1`` only): the rigid closed form of :meth:`PositionSwitchedDrive.rigid_orbit`.
+        Where Newton starts: an orbit (e.g. from a nearby parameter; a one-impact orbit is repeated
+        ``m`` times, which Newton keeps unless the halves are perturbed), a run of
+        :func:`impactbar.simulate` under the drive (the valve: its last ``m`` complete valve cycles,
+        rigid bar; a generic drive: the run continued from its end to its next impacts), a tuple
+        (the valve: ``(states, h1, h3)``, states after the impacts, shape ``(m, 2 N + 2)`` or
+        ``(2 N + 2,)`` for ``m = 1``, and the free flight durations, shape ``(m,)``), or ``None``:
+        the valve's rigid closed form of :meth:`PositionSwitchedDrive.rigid_orbit`; a generic
+        drive's motion from rest on the stop, followed until its impacts settle.
     tol : float
-        Relative tolerance of the Newton step.
+        Relative tolerance of the Newton step (a generic drive with state: at least ten times the
+        integrator's ``rtol``).
     max_iter : int
         Largest number of Newton steps.
 
@@ -254,8 +320,8 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     Raises
     ------
     ValueError
-        On a bad argument, ``impacts >= 2`` without a guess, a simulated run as the guess under a
-        law other than the paper's, or when Newton does not converge.
+        On a bad argument, ``impacts >= 2`` without a guess (the valve), a simulated run as the guess
+        under a law other than the paper's (the valve), or when Newton does not converge.
 
     Examples
     --------
@@ -275,264 +341,449 @@ def find_switched_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: 
     """
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-    if not isinstance(drive, PositionSwitchedDrive):
-        raise ValueError(f"drive must be a PositionSwitchedDrive; got {type(drive).__name__}")
+    if not autonomous(drive):
+        raise ValueError(f"drive must be a Drive; got {type(drive).__name__}")
     m = check_int("impacts", impacts, lo=1)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
-    if not model.law.instantaneous:  # the wave law, the rod-rock law: the contact's map
-        if model.R >= 1.0 and model.law.uses_restitution:
-            raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
-                             "(with R = 1 no energy leaves and the blows grow without bound)")
-        return find_contact_orbit(model, drive, m, guess, tol, max_iter)
-    if model.R >= 1.0:
-        raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
-                         "(with R = 1 no energy leaves and the blows grow without bound)")
-    M = model.n_modes + 1
-    if guess is None and m > 1:
-        raise ValueError(f"impacts={m} needs a guess (an orbit, a simulated run or a tuple): without "
-                         f"one Newton would find the one-impact orbit traversed {m} times")
-    if guess is None and M > 1:  # the rigid bar's orbit (same damping and delay), then lifted
-        rigid = model.with_(n_modes=0)
-        Xr = _newton(rigid, drive, _rigid_guess(rigid, drive), tol, max_iter)
-        X = np.concatenate((_padded(Xr[:2], M), Xr[2:]))
-    elif guess is None:
-        X = _rigid_guess(model, drive)
-    else:
-        X = _guess_unknowns(guess, M, m)
-    consts = _constants(model, drive)
-    if guess is None and M > 1:  # the flexible modes at the rigid switch time: one Newton step
-        r, Jac = _residual(model, drive, X, consts)  # without the switch condition, h1 kept
-        keep = np.r_[0:2 * M, 2 * M + 1]
-        X[keep] += np.linalg.solve(Jac[np.ix_(keep, keep)], -r[keep])
-    X = _newton(model, drive, X, tol, max_iter, consts, m)
-    return orbit_at(model, drive, X, m)
+    problem = orbit_problem(model, drive, m)
+    X = problem.initial(guess, tol, max_iter)
+    X = problem.solve(X, tol, max_iter)
+    return orbit_of(problem, X)
 
 
-def _guess_unknowns(guess, M, m):
-    """The unknowns of :func:`_residual_m` from a guess of :func:`find_switched_orbit`."""
-    if isinstance(guess, SwitchedOrbit):
-        states = guess.states if guess.states is not None else guess.state[None, :]
-        h1, h3 = guess.durations[1::4], guess.durations[3::4]
-        reps = -(-m // len(states))
-        states, h1, h3 = np.tile(states, (reps, 1))[:m], np.tile(h1, reps)[:m], np.tile(h3, reps)[:m]
-    elif hasattr(guess, "switch_kinds") and hasattr(guess, "impact_times"):
-        states, h1, h3 = _from_run(guess, m)
-    else:
-        try:
-            states, h1, h3 = guess
-        except (TypeError, ValueError):
-            raise ValueError("guess must be a SwitchedOrbit, a simulated run under the drive or a "
-                             "tuple (states, h1, h3)") from None
-        states = np.atleast_2d(np.asarray(states, dtype=float))
-        h1, h3 = np.atleast_1d(np.asarray(h1, dtype=float)), np.atleast_1d(np.asarray(h3, dtype=float))
-    if len(states) != m or h1.size != m or h3.size != m:
-        raise ValueError(f"guess must hold {m} states and {m} flight times of each kind (impacts={m}); "
-                         f"got {len(states)}, {h1.size}, {h3.size}")
-    return np.concatenate([np.concatenate((_padded(z, M), [a, b]))
-                           for z, a, b in zip(states, h1, h3, strict=True)])
-
-
-def _from_run(run, m):
-    """States after the last ``m`` impacts of a rigid run and the flight times between its switches
-    (each interval: return at ``t_i + tau``, stroke at the crossing ``+ tau``, the next impact)."""
-    if run.model.n_modes != 0:
-        raise ValueError("a simulated run as a guess is read for the rigid bar only; pass the orbit "
-                         "of the rigid bar or a tuple (states, h1, h3)")
-    ti, vi = np.asarray(run.impact_times), np.asarray(run.impact_velocities)
-    ts = np.asarray(run.switch_times)
-    kinds = tuple(run.switch_kinds)
-    if ti.size < m + 1:
-        raise ValueError(f"guess: the run has {ti.size} impacts; impacts={m} needs at least {m + 1}")
-    tau, R = run.drive.delay, run.model.R
-    states, h1, h3 = [], [], []
-    for k in range(ti.size - m - 1, ti.size - 1):
-        a, b = ti[k], ti[k + 1]
-        stroke = [t for t, kind in zip(ts, kinds, strict=True) if kind == "stroke" and a < t <= b]
-        if not stroke:
-            raise ValueError("guess: the run's last impacts are not one valve cycle apart")
-        ts_on = stroke[-1]
-        states.append([0.0, -R * vi[k]])
-        h1.append(ts_on - a - 2.0 * tau)
-        h3.append(b - ts_on)
-    return np.array(states), np.array(h1), np.array(h3)
-
-
-def orbit_at(model: BarModel, drive: PositionSwitchedDrive, X, impacts: int = 1) -> SwitchedOrbit:
-    """The orbit of a solution ``X`` of the segment problem (``impacts`` blocks ``(state after the
-    impact, h1, h3)``): multipliers from the monodromy matrix, admissibility (theory §10). Used by
-    :func:`find_switched_orbit` and by the continuation of switched orbits."""
-    if not model.law.instantaneous:
-        return contact_orbit_at(model, drive, X, impacts)
-    M = model.n_modes + 1
+def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
+    """The :class:`SwitchedOrbit` of a solution ``X`` of ``problem``: its data
+    (:meth:`OrbitProblem.orbit`), the admissibility of the flights (:meth:`OrbitProblem.admissibility`)
+    and, under a law whose contact takes time, of the contacts (held for their whole window: the wave
+    law's ``separates`` and ``sticks``, theory §4b). Used by :func:`find_switched_orbit` and by the
+    continuation of switched orbits."""
+    model = problem.model
+    m = problem.impacts
     X = np.asarray(X, dtype=float)
-    n = 2 * M + 2
-    Phi = np.eye(2 * M)
-    states, durations, velocities, switch, adm = [], [], [], [], Admissibility.ADMISSIBLE
-    for k in range(impacts):
-        z0 = X[k * n:k * n + 2 * M].copy()
-        dur = np.array([drive.delay, X[k * n + 2 * M], drive.delay, X[k * n + 2 * M + 1]])
-        Phi = _monodromy(model, drive, z0, dur) @ Phi
-        _, zb, _, zd = _legs(model, drive, z0, dur)
-        states.append(z0)
-        durations.append(dur)
-        velocities.append(float(model.end_weights @ zd[M:]))
-        switch.append(float(-zb[M]))
-        if adm == Admissibility.ADMISSIBLE:
-            adm = _admissibility(model, drive, z0, dur)
-    za = _legs(model, drive, states[0], durations[0])[0]
-    trivial, nontrivial = _split_multipliers(Phi, _field(_w2(model), model.d, drive.level(RETURN), za))
-    durations = np.concatenate(durations)
-    return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)), durations=durations,
-                         state=states[0], impact_velocity=velocities[0], multipliers=nontrivial,
-                         trivial_multiplier=trivial, admissibility=adm, switch_velocity=min(switch),
-                         _monodromy=Phi, states=np.array(states), _velocities=np.array(velocities))
-
-
-def _monodromy(model, drive, z0, durations):
-    """Monodromy matrix based just after the switch to return takes effect (theory §10): flows'
-    fundamental matrices and the saltation matrices of the delayed switch and of the impact."""
-    M = model.n_modes + 1
-    w2, d = _w2(model), model.d
-    ps, pr = drive.level(STROKE), drive.level(RETURN)
-    tau, h1, _, h3 = durations
-    za, zb, zc, zd = _legs(model, drive, z0, durations)
-    I2 = np.eye(2 * M)
-    Eta_r = _fund(w2, d, tau) if tau else I2
-    Eta_s = Eta_r
-    # return flight h1, crossing at zb: dt_c = -(g . dz_b) / (g . f), g = grad(-q_0)
-    A = _fund(w2, d, h1)
-    g = np.zeros(2 * M)
-    g[0] = -1.0
-    dtc = -np.outer(1.0, g) / (g @ _field(w2, d, pr, zb))  # row: dt_c = dtc @ dz_b
-    A_c = Eta_r @ A  # dz_c- from dz_a+
-    A = A_c + np.outer(_field(w2, d, pr, zc) - _field(w2, d, ps, zc), dtc[0] @ A)
-    A = _fund(w2, d, h3) @ A  # dz_d-
-    gc = np.concatenate((model.end_weights, np.zeros(M)))
-    fd = _field(w2, d, ps, zd)
-    dti = -gc / (gc @ fd)  # dt_i = dti @ dz_d
-    J = _jump(model)
-    z0p = J @ zd
-    p_after = ps if tau else pr
-    A_imp = J @ A + np.outer(J @ fd - _field(w2, d, p_after, z0p), dti @ A)
-    if tau:  # stroke for tau, then the switch to return delayed from the impact: dt = dt_i
-        za = _apply(_blocks(w2, d, tau), _affine(w2, d, ps, tau, _blocks(w2, d, tau)), z0p)  # next
-        A = Eta_s @ A_imp + np.outer(_field(w2, d, ps, za) - _field(w2, d, pr, za), dti @ A)
-    else:
-        A = A_imp
-    return A
-
-
-def _split_multipliers(Phi, f):
-    """The trivial multiplier along ``f`` and the others: ``Phi`` in the orthonormal basis
-    ``(f/|f|, B)`` is block upper triangular (``Phi f = f``)."""
-    n = f.size
-    fhat = f / np.linalg.norm(f)
-    if n == 2:  # the rigid bar: P = Q^T Phi Q is triangular, so mu = trace - P[0, 0]
-        trivial = float(fhat @ Phi @ fhat)
-        return trivial, np.array([float(np.trace(Phi)) - trivial])
-    Q, _ = np.linalg.qr(np.column_stack((fhat, np.eye(n))))
-    Q = Q[:, :n]
-    Q[:, 0] = fhat
-    Q, _ = np.linalg.qr(Q)
-    if Q[:, 0] @ fhat < 0:
-        Q[:, 0] = -Q[:, 0]
-    P = Q.T @ Phi @ Q
-    mu = np.linalg.eigvals(P[1:, 1:]) if n > 1 else np.array([])
-    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
-    if np.all(np.abs(mu.imag) <= 1e-14 * np.maximum(1.0, np.abs(mu))):
-        mu = mu.real
-    return float(P[0, 0]), mu
+    data: OrbitData = problem.orbit(X)
+    law = model.law
+    adm = Admissibility.ADMISSIBLE
+    for k in range(m):
+        if adm != Admissibility.ADMISSIBLE:
+            break
+        adm = problem.admissibility(X, k)
+        if not law.instantaneous and data.impact_velocities[k] > 0.0:
+            rec = law.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
+            separates = bool(getattr(rec, "separations", ()))
+            v_after = data.states_after[k][model.n_modes + 1:]
+            adm = _window_departure(adm, False, float(model.end_weights @ v_after), separates)
+    mu = data.multipliers
+    stable = adm == Admissibility.ADMISSIBLE and bool(np.all(np.abs(mu) < 1.0))
+    impact_times = data.impact_times
+    phases = np.mod(TWO_PI * impact_times / data.period, TWO_PI) if m > 1 else np.zeros(1)
+    return SwitchedOrbit(
+        model=model, load=problem.drive, impacts=m, periods=1, impact_times=impact_times,
+        phases=phases, impact_velocities=data.impact_velocities,
+        admissible=adm == Admissibility.ADMISSIBLE, admissibility=adm, clearance=math.nan,
+        clearance_error=math.nan, multipliers=mu, stable=stable,
+        states_after_impact=np.roll(data.states_after, -1, axis=0) if m > 1 else data.states_after,
+        states_before_impact=data.states_before,
+        contacts=None, period=data.period, durations=data.durations,
+        trivial_multiplier=data.trivial_multiplier, switch_times=data.switch_times,
+        switch_velocity=data.switch_velocity, contact_time=data.contact_time, drive_states=data.drive_states,
+        contact_forces=data.contact_forces, _monodromy=data.monodromy, _problem=problem, _unknowns=X)
 
 
 # --------------------------------------------------------------------------------------------------
-# contacts that take time (the wave law, the rod-rock law)
+# the generic problem: shooting over the drive's flights
 # --------------------------------------------------------------------------------------------------
-def find_contact_orbit(model: BarModel, drive: PositionSwitchedDrive, impacts: int, guess, tol: float,
-                       max_iter: int):
-    """:func:`~impactbar.orbits.find_switched_orbit` under a law whose contact takes time (module
-    docstring): without a guess, Newton starts from the orbit of the same bar under the paper's law
-    (``ContactLaw.paper_equivalent``: the same ``R``, or a rigid piston's rebound from the rod and
-    rock), solved first for the rigid bar and lifted to the flexible one."""
-    M = model.n_modes + 1
-    if guess is None:
-        if impacts > 1:
-            raise ValueError(f"impacts={impacts} needs a guess (an orbit or a tuple): without one Newton "
-                             f"would find the one-impact orbit traversed {impacts} times")
-        rigid = model.with_(n_modes=0)
-        p = find_switched_orbit(rigid.law.paper_equivalent(rigid), drive, tol=tol, max_iter=max_iter)
-        Xr = _newton(rigid, drive, np.concatenate((p.state, p.durations[[1, 3]])), tol, max_iter,
-                     _constants(rigid, drive))
-        X = np.concatenate((_padded(Xr[:2], M), Xr[2:]))
-    else:
-        if hasattr(guess, "switch_kinds") and hasattr(guess, "impact_times"):
-            raise ValueError("a simulated run as a guess is read under the paper's law only; under a law "
-                             "whose contact takes time pass an orbit or a tuple (states, h1, h3), the "
-                             "states where the contacts end")
-        X = _guess_unknowns(guess, M, impacts)
-    X = _newton(model, drive, X, tol, max_iter, _constants(model, drive), impacts)
-    return contact_orbit_at(model, drive, X, impacts)
+#: central-difference steps of the shooting Jacobian (relative to ``max(1, |X_j|)``): closed-form
+#: flights (rounding ~1e-16; the measured errors are in the module docstring: smaller steps meet the
+#: rounding, larger ones the truncation) and integrated ones (rtol 1e-10: noise / step ~1e-6 at most)
+FD_STEP_CLOSED = 1e-6
+FD_STEP_ODE = 1e-4
+#: impacts followed from rest (or from a run's end) before Newton starts, at most
+SETTLE_IMPACTS = 400
+#: longest flight between two impacts (model time units) before a flight counts as never arriving
+HORIZON = 1e4
 
 
-def _surface_basis(c: np.ndarray) -> np.ndarray:
-    """Orthonormal basis, shape ``(2M, 2M - 1)``, of the arrival surface's tangent space
-    ``{dz : c . dq = 0}``."""
-    M = c.size
-    a = np.concatenate((c, np.zeros(M)))
-    q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(2 * M))))
-    return q[:, 1:2 * M]
+class ShootingProblem(OrbitProblem):
+    """The generic periodic-orbit problem of a drive (module docstring): multiple shooting over the
+    ``m`` intervals between impacts, with the drive's flights (:func:`impactbar.drives.flight.fly`),
+    the impact law and the drive's maps.
 
+    Unknowns: ``m`` blocks ``(q, q', z)`` just after each impact (where its contact ends), each
+    flown from its projection on the section ``c . q = 0`` (``q_0`` shifted: a perturbation of the
+    unknowns must not start a flight through the stop). Each block starts at a fixed time ``tau_k``
+    in a fixed mode (those of the guess: the system is autonomous, the mode's scheduled events are
+    counted from ``tau_k``). Residual: the block's flight to its impact, the impact law (eq. 10, or
+    the law's contact under the drive's force) and the drive's map at the impact, minus the next
+    block. Jacobian: central differences.
 
-def contact_orbit_at(model: BarModel, drive: PositionSwitchedDrive, X, impacts: int = 1):
-    """The :class:`~impactbar.SwitchedOrbit` of a solution ``X`` (``impacts`` blocks ``(state where
-    the contact ends, h1, h3)``) under a law whose contact takes time: multipliers of the return map
-    on the arrival surface, admissibility of the flights (as for the paper's law) and of the
-    contacts (held for their whole window: the wave law's ``separates`` and ``sticks``, theory §4b).
-    Called by :func:`~impactbar.orbits.switched.orbit_at`."""
-    from .admissibility import _window_departure
+    Parameters
+    ----------
+    model : BarModel
+    drive : Drive
+    impacts : int
+    settings : FlightSettings, optional
+        The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
+    """
 
-    M = model.n_modes + 1
-    X = np.asarray(X, dtype=float)
-    n = 2 * M + 2
-    c = model.end_weights
-    cmap = ContactMap(model, drive)
-    w2 = _w2(model)
-    B = _surface_basis(c)
-    P = np.eye(2 * M - 1)
-    states, durations, velocities, switch, adm = [], [], [], [], Admissibility.ADMISSIBLE
-    first_dzd = JP_prev = None
-    for k in range(impacts):
-        Xk = X[k * n:(k + 1) * n]
-        z0 = Xk[:2 * M].copy()
-        dur = np.array([drive.delay, Xk[2 * M], drive.delay, Xk[2 * M + 1]])
-        flights = _flights(model, drive, Xk, w2)
-        zb, zd, _, Ed, _, dzd_dh1, dzd_dh3 = flights
-        # the arrival's dependence on z0 with the switch and arrival times implicit
-        G = _conditions(drive, c, *flights)[1]
-        dzd = _matrix(Ed) - np.column_stack((dzd_dh1, dzd_dh3)) @ np.linalg.solve(G[:, 2 * M:], G[:, :2 * M])
-        if k:
-            P = B.T @ dzd @ JP_prev @ B @ P
-        JP_prev = cmap(zd)[1]
-        if k == 0:
-            first_dzd = dzd
-        states.append(z0)
-        durations.append(dur)
-        velocities.append(float(c @ zd[M:]))
-        switch.append(float(-zb[M]))
-        if adm == Admissibility.ADMISSIBLE:
-            adm = _admissibility(model, drive, z0, dur)
-            if velocities[-1] > 0.0:
-                rec = model.law.blow(model, cmap.load, 0.0, zd)
-                separates = bool(getattr(rec, "separations", ()))
-                adm = _window_departure(adm, False, float(c @ z0[M:]), separates)
-    P = B.T @ first_dzd @ JP_prev @ B @ P  # the last contact lands on the first block's state
-    mu = np.linalg.eigvals(P) if P.size else np.array([])
-    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
-    if np.all(np.abs(mu.imag) <= 1e-14 * np.maximum(1.0, np.abs(mu))):
-        mu = mu.real
-    durations = np.concatenate(durations)
-    return SwitchedOrbit(model=model, drive=drive, period=float(np.sum(durations)) + impacts * cmap.window,
-                         durations=durations, state=states[0], impact_velocity=velocities[0],
-                         multipliers=mu, trivial_multiplier=1.0, admissibility=adm,
-                         switch_velocity=min(switch), states=np.array(states),
-                         _velocities=np.array(velocities), contact_time=cmap.window)
+    def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None):
+        self.model, self.drive = model, drive
+        self.impacts = check_int("impacts", impacts, lo=1)
+        self.settings = settings if settings is not None else drive.integrator
+        law = model.law
+        if not drive.piecewise_constant and not law.instantaneous:
+            raise ValueError(f"a drive with state ({type(drive).__name__}) takes an instantaneous impact law "
+                             f"(the paper's) for now; got impact={model.impact!r}")
+        if law.instantaneous and model.R >= 1.0:
+            raise ValueError("model.R must be < 1 for a periodic motion under a drive (with R = 1 no "
+                             "energy leaves at the impacts)")
+        self.M = model.n_modes + 1
+        self.k = drive.state_size
+        self.n = 2 * self.M + self.k
+        self.size = self.impacts * self.n
+        self.positive = np.zeros(0, dtype=np.int64)
+        self.closed = drive.piecewise_constant
+        #: the Jacobian from the variational equations (a drive whose flights integrate them)
+        self.variational = bool(getattr(drive, "variational", False)) and not self.closed \
+            and law.instantaneous
+        self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
+        self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
+        self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
+
+    # -- flights ------------------------------------------------------------------------------------
+    def _flight(self, tau, mode, y, keep=False, variational=False):
+        """From ``y = (q, q', z)`` in ``mode`` at ``tau`` to the next impact and through it: the
+        state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
+        the drive's events ``(time, event, mode after)``; with ``variational`` (a drive whose flights
+        integrate the variational equations, :attr:`~impactbar.Drive.variational`) also the
+        Jacobian of the state after the impact with respect to ``y`` (:meth:`_through`)."""
+        model, drive, M = self.model, self.drive, self.M
+        c = model.end_weights
+        t, q, v, z = tau, np.array(y[:M], dtype=float), y[M:2 * M], y[2 * M:]
+        q[0] -= float(c @ q)  # on the section c . q = 0 (the unknowns' perturbations leave it)
+        state = DriveState(mode, np.array(z, dtype=float))
+        pieces, events = [], []
+        end = tau + HORIZON
+        D = None
+        if variational:  # the projection on the section
+            D = np.eye(self.n)
+            D[0, :M] -= c
+        while True:
+            fl = fly(model, drive, state, t, q, v, end, self.settings, variational)
+            if keep:
+                pieces.append(fl.piece)
+            t, q, v = fl.t, fl.q, fl.v
+            before = state.mode
+            state = DriveState(state.mode, fl.z)
+            if fl.end == ARRIVAL:
+                if variational:
+                    D = self._through(before, fl, None, D)
+                break
+            if fl.end != EVENT:
+                raise ValueError(f"no impact within {HORIZON:g} of t = {tau:.6g} under the drive: the "
+                                 "piston does not come back to the stop")
+            for e in fl.events:
+                state = drive.jump(state.mode, state.z, e, t, q, v)
+                if keep:
+                    events.append((t, e, state.mode, e.crossing_speed(q, v)))
+            if variational:
+                D = self._through(before, fl, fl.events, D)
+        arrival = (t, q.copy(), v.copy(), state)
+        law = model.law
+        if law.instantaneous:
+            qa, va = q, -law.kernel_restitution(model) * v
+            t_after = t
+        else:
+            p = drive.force(state.mode, state.z, q, v)
+            ya, _, _ = law.impact_map(model, _constant_load(float(p)), 0.0, np.concatenate((q, v)))
+            qa, va = np.asarray(ya[:M], dtype=float), np.asarray(ya[M:], dtype=float)
+            t_after = t + float(law.window(model))
+        after = drive.impact(state.mode, state.z, t_after, qa, va)
+        if variational:  # the impact law (eq. 10) and the drive's map at the impact
+            G = np.eye(self.n)
+            G[M:2 * M, M:2 * M] *= -law.kernel_restitution(model)
+            G[2 * M:, 2 * M:] = self._map_jacobian(lambda zz: drive.impact(state.mode, zz, t_after, qa, va).z,
+                                                   state.z)
+            D = G @ D
+        out = np.concatenate((qa, va, after.z))
+        if variational:
+            return out, t_after, after.mode, arrival, pieces, events, D
+        return out, t_after, after.mode, arrival, pieces, events
+
+    def _through(self, mode, fl, fired, D):
+        """The Jacobian through the end of a flight (Hiskens & Pai 2000): the flight's fundamental
+        matrix ``Phi`` (``fl.sensitivity``), the event's time moved by the perturbation,
+        ``Phi - f^- (grad h . Phi) / (grad h . f^-)`` (``h`` the arrival ``c . q`` or the fired
+        event's function, ``f^-`` the vector field in the mode before), then the drive's map at the
+        event (its Jacobian by central differences: the maps are affine or constant in the state);
+        composed with ``D``, the Jacobian so far."""
+        model, drive, M, n = self.model, self.drive, self.M, self.n
+        from ..drives.flight import vector_field
+
+        y = np.concatenate((fl.q, fl.v, fl.z))
+        f = vector_field(model, drive, mode)(fl.t, y)
+        if fired is None:
+            grad = np.concatenate((model.end_weights, np.zeros(M + self.k)))
+        else:
+            e = fired[0]
+
+            def h(yy):
+                return e.value(fl.t, yy[:M], yy[M:2 * M], yy[2 * M:])
+
+            grad = np.empty(n)
+            for j in range(n):
+                step = 1e-7 * max(1.0, abs(y[j]))
+                yp, ym = y.copy(), y.copy()
+                yp[j] += step
+                ym[j] -= step
+                grad[j] = (h(yp) - h(ym)) / (2.0 * step)
+        Phi = fl.sensitivity
+        rate = float(grad @ f)
+        Dt = Phi - np.outer(f, grad @ Phi) / rate
+        if fired:
+            def z_after(zz):
+                st = DriveState(mode, zz)
+                for e in fired:
+                    st = drive.jump(st.mode, st.z, e, fl.t, fl.q, fl.v)
+                return st.z
+
+            G = np.eye(n)
+            G[2 * M:, 2 * M:] = self._map_jacobian(z_after, fl.z)
+            Dt = G @ Dt
+        return Dt @ D
+
+    @staticmethod
+    def _map_jacobian(fn, z):
+        """The Jacobian of a drive's map ``z -> fn(z)`` by central differences."""
+        z = np.asarray(z, dtype=float)
+        k = z.size
+        out = np.empty((k, k))
+        for j in range(k):
+            step = 1e-7 * max(1.0, abs(z[j]))
+            zp, zm = z.copy(), z.copy()
+            zp[j] += step
+            zm[j] -= step
+            out[:, j] = (np.asarray(fn(zp), dtype=float) - np.asarray(fn(zm), dtype=float)) / (2.0 * step)
+        return out
+
+    def _map(self, k, y):
+        tau, mode = self.blocks[k]
+        return self._flight(tau, mode, y)[0]
+
+    # -- the problem --------------------------------------------------------------------------------
+    def initial(self, guess, tol, max_iter):
+        """The blocks' start times, modes and states: from a :class:`SwitchedOrbit` of the same drive
+        (its states, the drive's states, its impact times), from a run of :func:`impactbar.simulate`
+        (continued from its end) or, without one, from rest on the stop (the rigid bar; a flexible bar
+        from the rigid bar's orbit), the motion followed impact after impact until the impact
+        velocities settle (at most ``SETTLE_IMPACTS``)."""
+        model, drive, m, M = self.model, self.drive, self.impacts, self.M
+        if isinstance(guess, SwitchedOrbit):
+            problem = guess._problem
+            if isinstance(problem, ShootingProblem) and problem.drive == drive and problem.impacts == m \
+                    and problem.blocks:
+                self.adopt(problem)
+                return np.asarray(guess._unknowns, dtype=float).copy()
+            if guess.impacts == 1 and m > 1 and isinstance(problem, ShootingProblem) and problem.blocks:
+                tau, mode = problem.blocks[0]
+                source = problem.sources[0] if problem.sources else None
+                return self._settle(tau, mode, np.asarray(guess._unknowns, dtype=float), m - 1, source)
+            raise ValueError("guess: an orbit of another problem (drive or impacts); give a run of "
+                             "simulate under the drive")
+        if guess is None and M > 1:  # the rigid bar's orbit, lifted, then followed
+            rigid = ShootingProblem(model.with_(n_modes=0), drive, m, self.settings)
+            Xr = rigid.solve(rigid.initial(None, tol, max_iter), tol, max_iter)
+            y = np.zeros(self.n)
+            y[0], y[M], y[2 * M:] = Xr[0], Xr[1], Xr[2:self.n - 2 * M + 2]
+            tau, mode = rigid.blocks[0]
+            return self._settle(tau, mode, y, SETTLE_IMPACTS)
+        if guess is None:
+            q, v = np.zeros(M), np.zeros(M)
+            state = drive.start(model, q, v)
+            return self._settle(0.0, state.mode, np.concatenate((q, v, state.z)), SETTLE_IMPACTS)
+        if hasattr(guess, "final_state") and hasattr(guess, "switch_kinds"):  # a run under the drive
+            fin = guess.final_state
+            q = np.asarray(fin.modal_displacement, dtype=float)
+            v = np.asarray(fin.modal_velocity, dtype=float)
+            if q.size != M:
+                raise ValueError("guess: the run's model has another number of modes")
+            final = guess._final_drive
+            if final is None or guess.load != drive:
+                raise ValueError("guess: a run under another drive")
+            y = np.concatenate((q, v, final.z))
+            return self._settle(float(guess.t_end), final.mode, y, SETTLE_IMPACTS)
+        raise ValueError("guess must be a SwitchedOrbit of the drive, a run of simulate under it or None")
+
+    def _settle(self, tau, mode, y, n_max, source=None):
+        """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
+        impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``, or
+        ``1e-4`` for a drive with variational flights), and take the starts of the last ``m``
+        intervals as the blocks (with the impacts before them)."""
+        m, M = self.impacts, self.M
+        c = self.model.end_weights
+        # a drive whose flights give Newton the exact Jacobian (variational equations) is handed
+        # over once the impacts agree to 1e-4: Newton's quadratic convergence does the rest, where
+        # a slow mode (the oil circuit's supply pressure, multiplier ~0.9) would take hundreds of
+        # impacts to settle to 1e-11
+        settle = 1e-4 if self.variational else 1e-11
+        hist = [(tau, mode, y, source)]
+        speeds = []
+        for _ in range(n_max):
+            y, tau, mode, arrival, _, _ = self._flight(tau, mode, y)
+            source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
+            hist.append((tau, mode, y, source))
+            speeds.append(float(c @ arrival[2]))
+            if speeds[-1] <= 0.0:
+                raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
+                                 "without one) does not strike the stop: give a guess")
+            if n_max > m and len(speeds) > 2 * m + 2 and \
+                    abs(speeds[-1] - speeds[-1 - m]) <= settle * max(1.0, abs(speeds[-1])):
+                break
+        blocks = hist[-m:]
+        self.blocks = [(b[0], b[1]) for b in blocks]
+        self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
+        return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
+
+    def residual(self, X):
+        """The shooting residual and its Jacobian: from the variational equations where the drive's
+        flights integrate them (:attr:`~impactbar.Drive.variational`, :meth:`_through`), else by
+        central differences."""
+        n, m = self.n, self.impacts
+        r = np.empty(X.size)
+        J = np.zeros((X.size, X.size))
+        step = FD_STEP_CLOSED if self.closed else FD_STEP_ODE
+        for k in range(m):
+            y = X[k * n:(k + 1) * n]
+            nxt = ((k + 1) % m) * n
+            if self.variational:
+                tau, mode = self.blocks[k]
+                out = self._flight(tau, mode, y, variational=True)
+                r[k * n:(k + 1) * n] = out[0] - X[nxt:nxt + n]
+                J[k * n:(k + 1) * n, k * n:(k + 1) * n] = out[6]
+                J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
+                continue
+            r[k * n:(k + 1) * n] = self._map(k, y) - X[nxt:nxt + n]
+            for j in range(n):
+                h = step * max(1.0, abs(y[j]))
+                yp, ym = y.copy(), y.copy()
+                yp[j] += h
+                ym[j] -= h
+                J[k * n:(k + 1) * n, k * n + j] = (self._map(k, yp) - self._map(k, ym)) / (2.0 * h)
+            J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
+        return r, J
+
+    def solve(self, X, tol, max_iter):
+        """Newton's method (:func:`~impactbar.drives.base.newton`), the tolerance no finer than the
+        flights' accuracy."""
+        return newton(self.residual, X, self.positive, max(tol, self.accuracy), max_iter)
+
+    def unknowns(self, orbit):
+        """The unknowns of a found orbit of this problem."""
+        return np.asarray(orbit._unknowns, dtype=float).copy()
+
+    def adopt(self, other: OrbitProblem) -> ShootingProblem:
+        """The blocks' start times and modes of ``other`` (each of its blocks for each of ours, in
+        turn: a doubled branch repeats the one-impact orbit's), each mode made again by this drive's
+        map at the impact before the block (its scheduled events follow this drive's parameters)."""
+        blocks = getattr(other, "blocks", None)
+        if not blocks:
+            return self
+        sources = getattr(other, "sources", None) or []
+        self.blocks, self.sources = [], []
+        for k in range(self.impacts):
+            tau, mode = blocks[k % len(blocks)]
+            if sources:
+                source = sources[k % len(sources)]
+                arr_mode, z, _, q, v = source
+                mode = self.drive.impact(arr_mode, z, tau, q, v).mode
+                self.sources.append(source)
+            self.blocks.append((tau, mode))
+        return self
+
+    def admissibility(self, X, k):
+        """By construction each flight ends at its first arrival and each event is its first
+        crossing; an arrival must come forward (``"backward impact"``), and the end must leave the
+        stop after it (``"sticks"``)."""
+        n, M = self.n, self.M
+        c = self.model.end_weights
+        y = X[k * n:(k + 1) * n]
+        tau, mode = self.blocks[k]
+        y_after, _, _, arrival, _, _ = self._flight(tau, mode, y)
+        if float(c @ arrival[2]) <= 0.0:
+            return Admissibility.BACKWARD_IMPACT
+        if c @ y_after[M:2 * M] >= 0.0 and self.model.R > 0.0 and self.model.law.instantaneous:
+            return Admissibility.STICKS
+        return Admissibility.ADMISSIBLE
+
+    def orbit(self, X) -> OrbitData:
+        """The period, durations, states, switches and the multipliers of the return map on the
+        section after the impacts (the product of the blocks' Jacobians projected on ``c . q = 0``
+        times the drive's states)."""
+        model, drive, n, m, M = self.model, self.drive, self.n, self.impacts, self.M
+        c = model.end_weights
+        _, J = self.residual(X)
+        Phi = np.eye(n)
+        for k in range(m):  # the blocks' Jacobians (their diagonal blocks; with m = 1, J = DP - I)
+            Phi = (J[k * n:(k + 1) * n, k * n:(k + 1) * n] + (np.eye(n) if m == 1 else 0.0)) @ Phi
+        a = np.concatenate((c, np.zeros(M + self.k)))
+        Q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(n))))
+        B = Q[:, 1:n]
+        mu = sorted_multipliers(np.linalg.eigvals(B.T @ Phi @ B))
+        before, velocities, times, durations, switch_t, crossings, forces = [], [], [], [], [], [], []
+        shift = 0.0
+        window = 0.0 if model.law.instantaneous else float(model.law.window(model))
+        for k in range(m):
+            tau, mode = self.blocks[k]
+            y = X[k * n:(k + 1) * n]
+            y_after, t_after, _, arrival, _, events = self._flight(tau, mode, y, keep=True)
+            t_arr, qa, va, st = arrival
+            before.append(np.concatenate((qa, va)))
+            velocities.append(float(c @ va))
+            times.append(float(shift + t_arr - tau))
+            forces.append(float(drive.force(st.mode, st.z, qa, va)))
+            last = tau
+            prev_name = drive.mode_name(mode)
+            for te, _, mode_after, speed in events:
+                durations.append(te - last)
+                last = te
+                name = drive.mode_name(mode_after)
+                if name != prev_name:
+                    switch_t.append(shift + te - tau)
+                prev_name = name
+                if not math.isnan(speed):
+                    crossings.append(speed)
+            durations.append(t_arr - last)
+            shift += t_after - tau
+        blocks = X.reshape(m, n)
+        return OrbitData(period=float(shift), durations=np.array(durations),
+                         states_after=blocks[:, :2 * M].copy(),
+                         states_before=np.array(before), impact_velocities=np.array(velocities),
+                         impact_times=np.array(times), drive_states=blocks[:, 2 * M:].copy(), multipliers=mu,
+                         trivial_multiplier=1.0, switch_times=np.array(switch_t),
+                         switch_velocity=min(crossings) if crossings else math.nan, contact_time=window,
+                         contact_forces=np.array(forces), monodromy=Phi)
+
+    def flights(self, X) -> list:
+        """The period's flights as the drive's flights give them (their own times: each block
+        from its start ``tau_k``), e.g. for the drive's :meth:`~impactbar.Drive.border_tests`."""
+        n = self.n
+        out = []
+        for k in range(self.impacts):
+            tau, mode = self.blocks[k]
+            out += self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[4]
+        return out
+
+    def pieces(self, X):
+        """The flights of the period as ``(t0, t1, f)``, ``f(t) -> (q, v)`` at orbit times."""
+        n, m = self.n, self.impacts
+        out = []
+        shift = 0.0
+        for k in range(m):
+            tau, mode = self.blocks[k]
+            y = X[k * n:(k + 1) * n]
+            _, t_after, _, _, pieces, _ = self._flight(tau, mode, y, keep=True)
+            for p in pieces:
+                off = shift - tau
+                out.append((p.t0 + off, p.t_end + off, lambda tt, p=p, off=off: p.modal(tt - off)))
+            shift += t_after - tau
+        return out

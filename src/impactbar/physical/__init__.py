@@ -44,7 +44,8 @@ Unknown keys are refused, naming the key.
 Layout: ``units`` (pint parsing, lazily imported), ``bar`` (the piston, the short-impact limit),
 ``forces`` (pneumatic, hydraulic, measured), ``config`` (the keys of a TOML config, their checks,
 the presets' data), ``drifter`` (a hydraulic drifter whose valve switches on the piston's position,
-theory §10: supply pressure, piston areas, switch position, valve delay; its presets), ``hammer``
+theory §10: supply pressure, piston areas, switch position, valve delay; its presets), ``circuit``
+(a drifter with its oil circuit, theory §11: chambers, valve, pump, accumulator; its presets), ``hammer``
 (scales and the dimensionless model; a hammer from a config, a TOML file or a preset), ``results``
 (orbits and simulations in SI), ``rock`` (the drill string and the rock: the rod-rock law in SI and
 the drilling outputs per blow). This layer sits on
@@ -55,6 +56,10 @@ never imports it.
 from .bar import SHORT_IMPACT_LIMIT as SHORT_IMPACT_LIMIT
 from .bar import Bar as Bar
 from .bar import ImpactDurationWarning as ImpactDurationWarning
+from .circuit import CIRCUIT_PRESETS as CIRCUIT_PRESETS
+from .circuit import CircuitDrifter as CircuitDrifter
+from .circuit import CircuitDrifterOrbit as CircuitDrifterOrbit
+from .circuit import circuit_preset as circuit_preset
 from .config import PRESETS as PRESETS
 from .drifter import DRIFTER_PRESETS as DRIFTER_PRESETS
 from .drifter import Drifter as Drifter
@@ -108,6 +113,10 @@ __all__ = [
     "orbits",
     "simulate",
     "Drifter",
+    "CircuitDrifter",
+    "CircuitDrifterOrbit",
+    "CIRCUIT_PRESETS",
+    "circuit_preset",
     "DrifterOrbit",
     "DRIFTER_PRESETS",
     "drifter_preset",

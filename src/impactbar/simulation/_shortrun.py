@@ -1,11 +1,18 @@
-"""A short run's fixed cost (issue 20): the driver's path for a run under an instantaneous law that
-stops at ``max_impacts`` or ``t_end`` in flight, with no contact, in one call of the compiled
-kernel. It builds the run's log of pieces straight from the kernel's output (the start and one
-free flight per impact) instead of through the general driver's growing log, and gives the same
-result to the bit; any other run (chatter, a touch, more impacts than one block holds) is left to
-the general driver, which computes it from the start again."""
+"""A run's fixed cost (issues 20, 41): the first block of impacts of a run under an instantaneous
+law, done by one call of the compiled kernel with the least Python around it. When that call ends
+the run in flight (at ``max_impacts`` or ``t_end``, with no contact) the run's log of pieces is
+built straight from the kernel's output (the start and one free flight per impact) and its final
+state is the kernel's own (at ``t_end`` the kernel's flight stops there, in the arithmetic of the
+flow the log evaluates); otherwise (chatter, a touch, more impacts than the block holds) the block
+is handed to the general driver, which goes on from where the kernel stopped. Either way the result
+is the general driver's, to the bit (``tests/simulation/test_shortrun.py``; the switch
+``"simulate.short_run"`` of :mod:`impactbar.dynamics.implementations` runs the general driver from
+the start)."""
 
 from __future__ import annotations
+
+import threading
+from typing import NamedTuple
 
 import numpy as np
 
@@ -13,18 +20,21 @@ from .._shared.status import RunStatus
 from ..dynamics import _kernel as K
 from .trajectory import _FREE, Trajectory, _Segments
 
-#: the most impacts a run may ask for (``max_impacts``) to take this path: a run that meets a
-#: contact is computed again by the general driver, so at most this many impacts are done twice
+#: a run that asks for at most this many impacts (``max_impacts``) takes no Ctrl-C handler, however
+#: long its span (:func:`~impactbar.simulate`)
 SHORT_RUN_IMPACTS = 256
+#: the impacts of a run's first block: the general driver's first block (its log's first rows), so
+#: that a run's blocks, and with them its bits, are the same on both paths
+FIRST_BLOCK = 1024
 
 # the pieces' kinds, shared read-only by every short run's log: a run of n impacts gets _KINDS[n],
 # views of the first n + 1 (made once: slicing them per run was a short run's cost)
-_BASIS = np.full(SHORT_RUN_IMPACTS + 1, _FREE, dtype=np.int8)  # all free flights
-_ENTRY = np.ones(SHORT_RUN_IMPACTS + 1, dtype=np.int8)  # 'impact' ...
+_BASIS = np.full(FIRST_BLOCK + 1, _FREE, dtype=np.int8)  # all free flights
+_ENTRY = np.ones(FIRST_BLOCK + 1, dtype=np.int8)  # 'impact' ...
 _ENTRY[0] = 0  # ... after the 'start'
 _BASIS.setflags(write=False)
 _ENTRY.setflags(write=False)
-_KINDS = [(_BASIS[:n + 1], _ENTRY[:n + 1]) for n in range(SHORT_RUN_IMPACTS + 1)]
+_KINDS = [(_BASIS[:n + 1], _ENTRY[:n + 1]) for n in range(FIRST_BLOCK + 1)]
 
 _ENTRY_POINTS: dict = {}  # dispatcher -> the compiled entry point for Python's argument types
 
@@ -51,44 +61,91 @@ def entry_point(dispatcher, args):
     return compiled.entry_point
 
 
-def run_short(core, q, v, t0, t_end, max_imp, state) -> Trajectory | None:
-    """The run from ``(t0, q, v)`` as :func:`~impactbar.simulate`'s general driver gives it, when the
-    kernel's one call ends it in flight (status ``END`` or ``MAXIMP``); None otherwise, with ``q,
-    v`` as they came. ``state`` makes the final state from two arrays (``InitialState._trusted``);
-    ``t0, t_end`` are floats and ``max_imp`` an int (the kernel's entry point takes no others)."""
+class FirstBlock(NamedTuple):
+    """The kernel's first call of a run it did not end: what the general driver goes on from."""
+
+    n: int  # impacts done
+    status: int  # the kernel's status (CHATTER, CONTACT, FULL, FAILED)
+    t: float  # where it stopped
+    times: np.ndarray  # (n,) the impacts' times and arrival velocities
+    velocities: np.ndarray
+    q: np.ndarray  # (n + 1, N + 1): the start's state and the states after the impacts
+    v: np.ndarray
+
+
+#: runs of at most this many modal coordinates reuse their thread's buffers for the first block
+#: (2 x 1025 x M floats: 4 MB at 256; one set per thread, for the last M it ran); a larger run
+#: allocates its own for the rows it may use
+POOLED_MODES = 256
+_POOL = threading.local()
+
+
+class _Block:
+    """Buffers for a run's first block of ``FIRST_BLOCK`` impacts, ``M`` modal coordinates: ``QV``
+    the states (``[0]`` displacements, ``[1]`` velocities; row 0 the start), ``TV`` the pieces'
+    times (``[0]``: the start's, then the impacts') and the impacts' arrival velocities (``[1]``,
+    from column 1), and the kernel's output views of them, made once."""
+
+    __slots__ = ("M", "QV", "TV", "q0", "v0", "out")
+
+    def __init__(self, M, rows=FIRST_BLOCK):
+        self.M = M
+        self.QV = np.empty((2, rows + 1, M))
+        self.TV = np.empty((2, rows + 1))
+        Q, V = self.QV
+        self.q0, self.v0 = Q[0], V[0]
+        self.out = (self.TV[0, 1:], self.TV[1, 1:], Q[1:], V[1:])
+
+
+def _block(M, max_imp) -> _Block:
+    """This thread's buffers for ``M`` modal coordinates, made anew where the last run's had
+    another ``M``; beyond ``POOLED_MODES``, fresh ones of ``min(max_imp, FIRST_BLOCK)`` rows."""
+    if M > POOLED_MODES:
+        return _Block(M, min(max_imp, FIRST_BLOCK))
+    b = _POOL.block = _Block(M)
+    return b
+
+
+def run_short(core, q, v, t0, t_end, max_imp, state) -> tuple[Trajectory | None, FirstBlock | None]:
+    """The run from ``(t0, q, v)`` as :func:`~impactbar.simulate`'s general driver gives it when the
+    kernel's first call ends it in flight (status ``END`` or ``MAXIMP``): ``(trajectory, None)``;
+    otherwise ``(None, block)``, with ``q, v`` the kernel's state where it stopped. ``state`` makes
+    the final state from two arrays (``InitialState._trusted``); ``t0, t_end`` are floats and
+    ``max_imp`` an int (the kernel's entry point takes no others).
+
+    The kernel writes into buffers of ``FIRST_BLOCK`` impacts whatever ``max_imp`` (below it, it
+    stops at ``max_imp``, ``MAXIMP``, before the buffers are full, as in the general driver's first
+    block of ``max_imp`` rows); the rows used are copied out."""
     M = q.size
-    Q = np.empty((max_imp + 1, M))
-    V = np.empty((max_imp + 1, M))
-    Q[0] = q
-    V[0] = v
-    # (the kernel overwrites its start with the final state)
-    n, st, tn, ot, ov = core.run_free(t0, q, v, t_end, max_imp, Q[1:], V[1:], direct=True)
-    if st == K.MAXIMP:  # ended on the last impact: the state after it is in q, v (and Q[n])
+    b = getattr(_POOL, "block", None)
+    if b is None or b.M != M:
+        b = _block(M, max_imp)
+    b.q0[...] = q  # (faster than Q[0] = q)
+    b.v0[...] = v
+    TV = b.TV
+    TV[0, 0] = t0
+    # (the kernel overwrites its start with its state where it stops)
+    n, st, tn = core.run_block(t0, q, v, t_end, max_imp, b.out, True)
+    k = n + 1
+    if st == K.MAXIMP:  # ended on the last impact: the state after it is in q, v (and row n)
         t, status = tn, RunStatus.MAX_IMPACTS
-    elif st == K.END:
+    elif st == K.END:  # q, v: the flight's state at t_end, as the log's flow gives it
         t, status = t_end, RunStatus.T_END
-        Q, V = Q[:n + 1], V[:n + 1]
-    else:
-        q[:] = Q[0]
-        v[:] = V[0]
-        return None
-    ts = np.empty(n + 1)
-    ts[0] = t0
-    ts[1:] = ot
-    if st == K.MAXIMP:
-        qe, ve = q, v
-    elif t == ts[n]:  # the last impact at t_end itself
-        qe, ve = Q[n].copy(), V[n].copy()
-    else:
-        qe, ve = core.propagate(_FREE, ts[n], Q[n], V[n], [t])
-        qe, ve = qe[:, 0], ve[:, 0]
-    segs = _Segments(M - 1, ts, *_KINDS[n], Q, V, {})
-    whole = 2 * n >= max_imp  # (ot, ov: the first n of the kernel's max_imp; copied where mostly unused)
-    # the dataclass's fields set at once (its __init__ sets them one by one: a short run's cost)
-    traj = object.__new__(Trajectory)
-    traj.__dict__.update(model=core.model, load=core.load, t0=t0, t_end=t,
-                         impact_times=ot if whole else ot.copy(),
-                         impact_velocities=ov if whole else ov.copy(),
-                         contact_intervals=np.zeros((0, 2)), final_state=state(qe, ve), status=status,
-                         _core=core, _segments=segs, n_release_retries=0)
-    return traj
+        if n and TV[0, n] == t_end:  # the last impact at t_end itself: the state after it
+            q, v = b.QV[0, n].copy(), b.QV[1, n].copy()
+    else:  # the rows the general driver goes on from (copies: the buffers serve the next run)
+        tv = TV[:, :k].copy()
+        qv = b.QV[:, :k].copy()
+        return None, FirstBlock(n, st, tn, tv[0, 1:], tv[1, 1:], qv[0], qv[1])
+    # the rows used, copied (both states in one copy, and no unpacking: iterating a numpy array costs
+    # 2 us; a compiled copy returning the arrays costs more than these, 0.5 us per array returned)
+    qv = b.QV[:, :k].copy()
+    tv = TV[:, :k].copy()
+    basis, entry = _KINDS[n]
+    segs = _Segments(M - 1, tv[0], basis, entry, qv[0], qv[1], {})
+    return Trajectory(core.model, core.load, t0, t, TV[0, 1:k].copy(), tv[1, 1:], _NO_CONTACTS,
+                      state(q, v), status, core, segs, 0), None
+
+
+_NO_CONTACTS = np.zeros((0, 2))
+_NO_CONTACTS.setflags(write=False)

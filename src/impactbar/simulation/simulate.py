@@ -29,22 +29,22 @@ from __future__ import annotations
 import math
 import threading
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.base import autonomous
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
-from ..loads import FourierLoad, Load
-from ..model import MAX_MODES, BarModel
+from ..loads import Load
+from ..model import BarModel
 from ._interrupt import SimulationInterrupted as SimulationInterrupted
 from ._interrupt import _CtrlC
-from ._shortrun import SHORT_RUN_IMPACTS, entry_point, run_short
-from .switched import SwitchedTrajectory, rigid_piece, run_compiled, run_switched
+from ._shortrun import FIRST_BLOCK, SHORT_RUN_IMPACTS, entry_point, run_short
+from .initial import InitialState as InitialState
+from .switched import Driver, run_drive
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
 from .trajectory import _FREE as _FREE
@@ -90,151 +90,7 @@ MAX_SIMULATE_STIFFNESS = 1e5
 LONG_RUN = 2000.0 * math.pi
 #: Least wall time (s) between two calls of a run's ``progress`` callback.
 PROGRESS_EVERY = 0.1
-
-
-# --------------------------------------------------------------------------------------------------
-# initial state
-# --------------------------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class InitialState:
-    """Modal state of the free-free bar (theory §2).
-
-    ``u(x) = q_0 + 2 sum_{n>=1} q_n cos(n pi x)`` and the same for the velocity field.
-
-    Parameters
-    ----------
-    modal_displacement : array_like, shape (N + 1,)
-        ``q_0..q_N`` (dimensionless).
-    modal_velocity : array_like, shape (N + 1,)
-        ``q_0'..q_N'``.
-
-    Raises
-    ------
-    ValueError
-        If the arrays are not 1-d, of different lengths, empty, or not finite.
-
-    Examples
-    --------
-    >>> from impactbar import InitialState
-    >>> start = InitialState.rigid(end_displacement=-0.01, velocity=0.0, n_modes=2)
-    >>> start.modal_displacement, start.modal_velocity
-    (array([-0.01,  0.  ,  0.  ]), array([0., 0., 0.]))
-    """
-
-    modal_displacement: np.ndarray
-    modal_velocity: np.ndarray
-
-    def __post_init__(self) -> None:
-        q = _real_vector("modal_displacement", self.modal_displacement)
-        v = _real_vector("modal_velocity", self.modal_velocity)
-        if q.size != v.size:
-            raise ValueError(
-                f"modal_velocity must have the length of modal_displacement ({q.size}); "
-                f"got {v.size}"
-            )
-        q.setflags(write=False)
-        v.setflags(write=False)
-        object.__setattr__(self, "modal_displacement", q)
-        object.__setattr__(self, "modal_velocity", v)
-
-    @classmethod
-    def _trusted(cls, q: np.ndarray, v: np.ndarray) -> InitialState:
-        """A state from arrays the simulator made (finite, 1-d, of one length): no checks, no copy."""
-        self = object.__new__(cls)
-        q.setflags(write=False)
-        v.setflags(write=False)
-        self.__dict__.update(modal_displacement=q, modal_velocity=v)  # (a frozen dataclass's fields)
-        return self
-
-    @property
-    def n_modes(self) -> int:
-        """Flexible modes ``N`` the state carries."""
-        return self.modal_displacement.size - 1
-
-    @classmethod
-    def rigid(cls, end_displacement, velocity, n_modes: int = 0) -> InitialState:
-        """An undeformed bar with its struck end at ``end_displacement`` moving at ``velocity``.
-
-        Parameters
-        ----------
-        end_displacement : float
-            ``u(1)``, ``<= 0`` (the stop is at 0).
-        velocity : float
-            Uniform velocity (positive towards the stop).
-        n_modes : int, optional
-            Flexible modes to carry (all zero). A one-mode state is also accepted by
-            :func:`simulate` for any model and padded with zeros.
-
-        Raises
-        ------
-        ValueError
-            If ``end_displacement > 0`` (the start would penetrate the stop).
-        """
-        e = check_real("end_displacement", end_displacement, hi=0.0)
-        vel = check_real("velocity", velocity)
-        n_modes = check_int("n_modes", n_modes, lo=0, hi=MAX_MODES)
-        q = np.zeros(n_modes + 1)
-        v = np.zeros(n_modes + 1)
-        q[0] = e
-        v[0] = vel
-        return cls(q, v)
-
-    @classmethod
-    def from_fields(cls, u0, v0, model: BarModel) -> InitialState:
-        """Project displacement and velocity fields on the free-free modes (eq. 5).
-
-        Parameters
-        ----------
-        u0, v0 : callable
-            Vectorised functions of ``x`` in ``[0, 1]`` giving ``u(x, t0)`` and ``u_t(x, t0)``.
-        model : BarModel
-            Gives the number of modes ``N``.
-
-        Returns
-        -------
-        InitialState
-            ``q_n = int_0^1 u0(x) cos(n pi x) dx`` (Gauss-Legendre, exact for polynomials of
-            degree below 64 per panel), ``n = 0..N``.
-
-        Raises
-        ------
-        ValueError
-            If a field is not callable or returns non-finite values, or ``u0(1) > 0``.
-        """
-        if not isinstance(model, BarModel):
-            raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-        for name, f in (("u0", u0), ("v0", v0)):
-            if not callable(f):
-                raise ValueError(f"{name} must be a callable of x; got {type(f).__name__}")
-        panels = max(8, model.n_modes // 4 + 1)
-        xg, wg = np.polynomial.legendre.leggauss(32)
-        edges = np.linspace(0.0, 1.0, panels + 1)
-        half = 0.5 * (edges[1:] - edges[:-1])[:, None]
-        x = (half * (xg[None, :] + 1.0) + edges[:-1, None]).ravel()
-        w = (half * wg[None, :]).ravel()
-        basis = np.cos(np.pi * np.outer(x, np.arange(model.n_modes + 1)))
-        out = []
-        for name, f in (("u0", u0), ("v0", v0)):
-            vals = np.broadcast_to(np.asarray(f(x), dtype=float), x.shape)
-            if not np.all(np.isfinite(vals)):
-                raise ValueError(f"{name} must return finite values on [0, 1]")
-            out.append((w * vals) @ basis)
-        end = float(np.asarray(u0(np.array([1.0])), dtype=float).ravel()[0])
-        if end > 0.0:
-            raise ValueError(f"u0 must keep the struck end off the stop, u0(1) <= 0; got {end}")
-        return cls(out[0], out[1])
-
-
-def _real_vector(name, value) -> np.ndarray:
-    try:
-        arr = np.array(value, dtype=float, copy=True)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a 1-d array of real numbers; got {value!r}") from exc
-    if arr.ndim != 1 or arr.size == 0:
-        raise ValueError(f"{name} must be a non-empty 1-d array; got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite; got {arr}")
-    return arr
+_NO_LIMIT = int(np.iinfo(np.int64).max)  # max_impacts=None (np.iinfo per call: 2 us)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -342,6 +198,10 @@ class _Core:
         self.to_free = np.ascontiguousarray(2.0 * ov)  # q = P r, (N+1, N)
         self.kappa = kappa
         self.free_args = (tuple(self.data), tuple(self.free.view), self.R, self.c)  # built once
+        self.instant = model.law.instantaneous
+        # the kernel for a flight of this bar, compiled without the other kind's search
+        self.kernel = K.run_free_rigid if self.N == 0 else K.run_free
+        self._entry = None
 
     # ---- energies ----------------------------------------------------------------------------
     def energy(self, basis: int, q: np.ndarray, v: np.ndarray) -> float:
@@ -361,15 +221,28 @@ class _Core:
         the kernel's entry point for these argument types, untyped (numba's typing of 11 arguments
         costs 2 us), once it is compiled for them."""
         out_t, out_vel = np.empty(out_q.shape[0]), np.empty(out_q.shape[0])
-        fast = use_fast("simulate.impact_search")
-        # a rigid run compiles no modal search, a flexible one no rigid search
-        run, rigid_fast, modal_fast = (K.run_free_rigid, fast, None) if self.N == 0 else \
-            (K.run_free, None, fast)
-        D, B, R, c = self.free_args
-        args = (D, B, R, c, (float(t), q, v), float(t_end), int(max_imp), CHATTER_TAIL,
-                (out_t, out_vel, out_q, out_v), rigid_fast, modal_fast)
-        n, st, tn = (entry_point(run, args) if direct else run)(*args)
+        n, st, tn = self.run_block(float(t), q, v, float(t_end), int(max_imp),
+                                   (out_t, out_vel, out_q, out_v), direct)
         return n, st, tn, out_t[:n], out_vel[:n]
+
+    def run_block(self, t, q, v, t_end, max_imp, out, direct=False):
+        """:meth:`run_free` into ``out = (out_t, out_vel, out_q, out_v)`` (``t, t_end`` floats,
+        ``max_imp`` an int): ``n, status, t``."""
+        fast = use_fast("simulate.impact_search")
+        D, B, R, c = self.free_args
+        # a rigid run compiles no modal search, a flexible one no rigid search
+        if self.N == 0:
+            args = (D, B, R, c, (t, q, v), t_end, max_imp, CHATTER_TAIL, out, fast, None)
+        else:
+            args = (D, B, R, c, (t, q, v), t_end, max_imp, CHATTER_TAIL, out, None, fast)
+        if not direct:
+            return self.kernel(*args)
+        run = self._entry
+        if run is None:  # (the entry point once compiled, found once per core)
+            run = entry_point(self.kernel, args)
+            if run is not self.kernel:
+                self._entry = run
+        return run(*args)
 
     def find_release(self, t, r, rv, t_end):
         """First time after ``t`` when the stop reaction turns tensile; state there."""
@@ -453,48 +326,51 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
              max_impacts=None, progress=None) -> Trajectory:
     r"""Follow the bar from ``initial`` through impact after impact (paper Section 5).
 
-    Between impacts every mode obeys ``q_n'' + d q_n' + (s n pi)^2 q_n = p(t)`` (eq. 6) and is
-    advanced in closed form; at an impact (``u(1,t) = 0``, ``u_t(1,t) > 0``)
-    ``u_t(x, t+) = -R u_t(x, t-)`` (eqs. 10, 11). Chatter is jumped over to its accumulation point,
-    after which the bar stays on the stop (fixed at ``x = 1``, theory §8) until the stop's
+    Between impacts every mode obeys :math:`q_n'' + d q_n' + (s n \pi)^2 q_n = p(t)` (eq. 6) and is
+    advanced in closed form; at an impact (:math:`u(1,t) = 0`, :math:`u_t(1,t) > 0`)
+    :math:`u_t(x, t^+) = -R\,u_t(x, t^-)` (eqs. 10, 11). Chatter is jumped over to its accumulation point,
+    after which the bar stays on the stop (fixed at :math:`x = 1`, theory §8) until the stop's
     reaction would turn tensile.
 
     Parameters
     ----------
     model : BarModel
         The bar: ``s``, ``d``, ``R`` and ``N`` flexible modes.
-    load : FourierLoad or PiecewiseConstantLoad or PositionSwitchedDrive
+    load : FourierLoad or PiecewiseConstantLoad or Drive
         The load at ``x = 0``, evaluated at absolute time (an impact at ``t`` has load phase
-        ``t mod 2 pi``); or a drive switched by the piston's position (theory §10), whose valve
-        starts in return when the gap ``-q_0`` is below ``switch_out`` and in stroke beyond it: the
-        result is then a :class:`~impactbar.SwitchedTrajectory` with the
-        switches logged.
+        :math:`t \bmod 2\pi`); or a :class:`~impactbar.Drive` (theory §10: autonomous, with state of its
+        own, e.g. the valve of :class:`~impactbar.PositionSwitchedDrive`, which starts in return when
+        the gap :math:`-q_0` is below ``switch_out`` and in stroke beyond it): the result is then a
+        :class:`~impactbar.SwitchedTrajectory` (a :class:`Trajectory`) with the drive's switches
+        logged (:mod:`impactbar.simulation.switched`).
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
-        End of the run (dimensionless time), ``t0 < t_end <= t0 + 1e8`` and ``|t_end| <= 1e8``
+        End of the run (dimensionless time), :math:`t_0 < t_{end} \le t_0 + 10^8` and
+        :math:`|t_{end}| \le 10^8`
         (``MAX_TIME``: beyond, impact times are not resolved in double precision, and the run would
         not end in bounded time).
     t0 : float, optional
-        Start time, ``|t0| <= 1e8``. Default 0.
+        Start time, :math:`|t_0| \le 10^8`. Default 0.
     max_impacts : int, optional
-        Stop at this many impacts (``>= 1``); ``t_end`` of the result is then the last impact (under
+        Stop at this many impacts (at least 1); ``t_end`` of the result is then the last impact (under
         the wave law the end of its window; where its bounces accumulate, their accumulation point).
     progress : callable, optional
         Called as ``progress(fraction)`` with the fraction of ``[t0, t_end]`` done, in ``[0, 1]``,
         between blocks of impacts (at most every 0.1 s of wall time) and once at the end: e.g. to
         drive a progress bar with an estimate of the time left. Not with a
-        :class:`~impactbar.PositionSwitchedDrive`.
+        :class:`~impactbar.Drive`.
 
     Returns
     -------
-    Trajectory or SwitchedTrajectory
+    Trajectory
+        A :class:`~impactbar.SwitchedTrajectory` under a drive.
 
     Raises
     ------
     ValueError
         On a bad parameter (named in the message), a start that penetrates the stop
-        (``u(1, t0) > 0``), an undamped resonance between a mode and a load harmonic, or a bar too
+        (:math:`u(1, t_0) > 0`), an undamped resonance between a mode and a load harmonic, or a bar too
         stiff for the guaranteed event search, ``s * n_modes > 1e5`` (``MAX_SIMULATE_STIFFNESS``: the
         search steps on the scale of the stiffest mode's period).
     SimulationInterrupted
@@ -528,7 +404,7 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
     t_end = check_real("t_end", t_end, lo=t0, hi=t0 + MAX_TIME, lo_open=True)
     if abs(t_end) > MAX_TIME:
         raise ValueError(f"t_end must be in [-{MAX_TIME:g}, {MAX_TIME:g}]; got {t_end}")
-    max_imp = np.iinfo(np.int64).max if max_impacts is None else check_int("max_impacts", max_impacts, lo=1)
+    max_imp = _NO_LIMIT if max_impacts is None else check_int("max_impacts", max_impacts, lo=1)
     N = model.n_modes
     if N and model.s * N > MAX_SIMULATE_STIFFNESS:
         raise ValueError(
@@ -545,13 +421,17 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
-    if isinstance(load, PositionSwitchedDrive):
+    if autonomous(load):  # a drive (theory §10): its own event loop over pieces of this driver
         _push_off(model.end_weights, q)
-        return _run_switched(model, load, q, v, t0, t_end, max_imp)
+        return run_drive(model, load, q, v, t0, t_end, max_imp, _DRIVER)
     core = _core_for(model, load)
     _push_off(core.c, q)
     if progress is None and (t_end - t0 < LONG_RUN or max_imp <= SHORT_RUN_IMPACTS):
-        return _run(core, q, v, t0, t_end, max_imp)  # (no Ctrl-C handler: a short run's cost)
+        # (no Ctrl-C handler: a short run's cost)
+        if core.instant and use_fast("simulate.short_run"):  # the first block: it may end the run
+            traj, first = run_short(core, q, v, t0, t_end, max_imp, InitialState._trusted)
+            return traj if traj is not None else _run(core, q, v, t0, t_end, max_imp, first=first)
+        return _run(core, q, v, t0, t_end, max_imp)
     with _CtrlC() as ctrl_c:
         traj = _run(core, q, v, t0, t_end, max_imp, progress=progress, stop=ctrl_c)
     if ctrl_c.pressed:  # (also when the run ended in the block where Ctrl-C came)
@@ -561,51 +441,33 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
 
 def _push_off(c, q) -> None:
     """Refuse a start through the stop; a penetration within rounding is shifted off (in place)."""
-    g = float(c.dot(q))  # (the bits of c @ q, at less than half its cost on small arrays)
+    # (the bits of c @ q: c.dot(q) at less than half its cost on small arrays; one product for the
+    # rigid bar, at a fifth of it)
+    g = c.item(0) * q.item(0) if q.size == 1 else float(c.dot(q))
     if g > 0.0 and g > 1e-12 * max(1.0, float(np.sum(np.abs(c * q)))):
         raise ValueError(f"initial penetrates the stop: u(1, t0) = {g:.3e} > 0")
     if g > 0.0:
         q[0] -= g
 
 
-def _run_switched(model, drive, q, v, t0, t_end, max_imp) -> SwitchedTrajectory:
-    """The valve's loop (theory §10) over pieces of the ordinary driver under constant forces:
-    compiled (``simulate.switched_kernel``) for an instantaneous law, in Python piece by piece
-    otherwise."""
-    law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
-    rigid = model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid")
-    cores = tuple(_core_for(model, FourierLoad(lv, [])) for lv in (drive.stroke, -drive.ret))
-    if rigid:
-        piece = rigid_piece(model)
-    else:
-        def piece(level, q, v, t, t_stop):
-            q = np.array(q, dtype=float)
-            v = np.array(v, dtype=float)
-            core = cores[0] if level == drive.stroke else cores[1]
-            _push_off(core.c, q)
-            return _run(core, q, v, t, t_stop, 1)
-
-    if law.instantaneous and use_fast("simulate.switched_kernel"):
-        return run_compiled(model, drive, q, v, t0, t_end, max_imp, piece, InitialState, cores, rigid,
-                            use_fast("simulate.impact_search"), CHATTER_TAIL)
-    return run_switched(model, drive, q, v, t0, t_end, max_imp, piece, InitialState)
-
-
-def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Trajectory:
+def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first=None) -> Trajectory:
     """The driver, for every law: free flight by the compiled kernel (which applies an
     instantaneous law itself, with chatter), sustained contact until the stop's reaction turns
     tensile, and the law's contact step at each arrival the kernel stops at without resolving it.
 
     Between blocks of impacts (where the state is a flight's start) it calls ``progress`` and
-    stops there (status ``"t_end"``, ``t_end`` the time reached) when ``stop`` has turned true."""
-    law = core.model.law
-    instant = law.instantaneous
-    traj = run_short(core, q, v, t0, t_end, max_imp, InitialState._trusted) if instant and \
-        max_imp <= SHORT_RUN_IMPACTS and progress is None else None
-    if traj is not None:  # one kernel call ended the run in flight, with no contact
-        return traj
-    segs = _SegmentLog(core.N, min(max_imp, 1024) + 1)  # a short run's pieces without a resize
-    segs.add(t0, _FREE, q, v, "start")
+    stops there (status ``"t_end"``, ``t_end`` the time reached) when ``stop`` has turned true.
+    ``first``: the first block, done by :func:`run_short`, which ``q, v`` are the end of."""
+    instant = core.instant
+    if first is None and instant and progress is None and use_fast("simulate.short_run"):
+        traj, first = run_short(core, q, v, t0, t_end, max_imp, InitialState._trusted)
+        if traj is not None:  # the kernel's first call ended the run in flight, with no contact
+            return traj
+    segs = _SegmentLog(core.N, min(max_imp, FIRST_BLOCK) + 1)  # a short run's pieces without a resize
+    if first is None:
+        segs.add(t0, _FREE, q, v, "start")
+    else:  # run_short's first block: the log goes on from it (q, v are where its kernel stopped)
+        segs.add(t0, _FREE, first.q[0], first.v[0], "start")
     times: list = []  # blocks of the kernel's impacts (arrays), or the law's contact steps (floats)
     vels: list = []
     contacts: list[list[float]] = []
@@ -616,7 +478,8 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
     dwell = 0.0
     retries = 0
     last_release = None  # (time, contact segment index, len(times), n_imp) for undoing
-    cap = 1024
+    cap = FIRST_BLOCK
+    in_flight = False  # the run ended at t_end in a flight of the kernel's: q, v its state there
     if not instant:  # the kernel's state at the arrival it stops at
         aq, av = np.empty((1, q.size)), np.empty((1, q.size))
     shown = time.monotonic()
@@ -646,10 +509,18 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
                         status = RunStatus.MAX_IMPACTS
                         break
                     continue
+            elif first is not None:  # the first block, done by run_short: its rows into the log
+                n, st, tn, ot, ov = first.n, first.status, first.t, first.times, first.velocities
+                oq, ovv = segs.impact_rows(n)
+                oq[...] = first.q[1:]
+                ovv[...] = first.v[1:]
+                del oq, ovv
+                first = None
+                cap = min(cap * 2, 1 << 16)
             else:
                 # the kernel writes into the log's next rows; at most an eighth more than the log
                 # holds, so the run's peak memory stays near its stored trajectory
-                oq, ovv = segs.impact_rows(min(cap, left, max(1024, segs.count // 8)))
+                oq, ovv = segs.impact_rows(min(cap, left, max(FIRST_BLOCK, segs.count // 8)))
                 n, st, tn, ot, ov = core.run_free(t, q, v, t_end, left, oq, ovv)
                 del oq, ovv  # no view of the log may outlive the call (it is resized in place)
                 cap = min(cap * 2, 1 << 16)
@@ -664,6 +535,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
                                  f"{core.N}); use fewer modes")
             if st == K.END:
                 t = t_end
+                in_flight = True
                 break
             if st == K.MAXIMP:
                 t = tn
@@ -736,6 +608,8 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False) -> Tr
     elif segs.basis[i] == _WINDOW:  # the run ended inside a law's contact step
         last = segs.last()
         qe, ve = last.frozen.state_at(min(t - last.t, last.frozen.duration))
+    elif in_flight:  # the kernel's state at t_end: the flow from the last piece's start, to the bit
+        qe, ve = q, v
     else:
         last = segs.last()
         qe, ve = core.propagate(last.basis, last.t, last.q, last.v, [t])
@@ -798,3 +672,7 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
     vels.append(arrival)
     segs.add(ti, _WINDOW, qm, vm, "impact", record)
     return q, v, t_release
+
+
+#: the driver as a drive's run takes it (:func:`impactbar.simulation.switched.run_drive`)
+_DRIVER = Driver(core_for=_core_for, run=_run, push_off=_push_off, make_state=InitialState, tail=CHATTER_TAIL)

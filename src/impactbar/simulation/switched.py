@@ -1,92 +1,147 @@
-"""Simulation under a position-switched drive: the valve's event loop (theory §10).
+"""Simulation under a drive (theory §10): the event-driven run of any :class:`~impactbar.Drive`,
+and its result, :class:`SwitchedTrajectory`.
 
-Between events the force is constant, so every mode moves in closed form (eq. 8) and the
-existing driver of :mod:`impactbar.simulation.simulate` (certified impact search, chatter,
-sustained contact, every impact law) follows the bar under that constant force. Around it this
-module runs the valve: the rising crossing of the switch position by the gap ``y = -q_0`` is found in
-closed form (``impactbar.drives.switched.first_rising_crossing``: the gap's rate is monotone under a
-constant force, so no crossing is missed, and it is refined to rounding), each switch takes effect
-``delay`` after its trigger, and each impact triggers the switch to return.
+The run calls only the drive's interface (:mod:`impactbar.drives.base`):
+
+- **a force constant between events** (no continuous state, e.g. the valve of
+  :class:`~impactbar.PositionSwitchedDrive`): each flight is a piece of the ordinary driver of
+  :mod:`impactbar.simulation.simulate` (certified impact search, chatter, sustained contact, every
+  impact law) under that constant force, run until the drive's next event, whose time comes in
+  closed form (:meth:`~impactbar.drives.DriveEvent.first_time`: no crossing is missed, each is
+  refined to rounding) or, for an event surface without one, by bracketing on the closed-form
+  flight; at the event the drive's map acts, at each impact :meth:`~impactbar.Drive.impact`. A drive
+  with a compiled event loop (:meth:`~impactbar.Drive.compiled_loop`) runs there under an
+  instantaneous law, handing back the pieces it does not resolve (the same pieces, impacts and
+  switches; switch ``simulate.switched_kernel``).
+- **a drive with state** ``z``: the bar's modes and ``z`` are integrated together by scipy's
+  ``solve_ivp`` (:func:`impactbar.drives.flight.fly`, a stiff method), the arrivals and the drive's
+  events located to the integrator's tolerance; at an impact the paper's law acts (eq. 10) and the
+  rigid piston rests on the stop while the drive presses it. A law whose contact takes time, and a
+  flexible bar held on the stop, are refused for such a drive (for now).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 
 from .._shared.status import RunStatus
-from ..drives.switched import RETURN, STROKE, PositionSwitchedDrive
-from ..dynamics import _switchkernel as SK
-from ..dynamics._switchkernel import first_rising_crossing
+from ..drives.base import DriveState, FlightKernel, KernelRun
+from ..drives.flight import END, EVENT, RestPiece, fly
+from ..dynamics.implementations import use_fast
 from ..model import BarModel
+from .trajectory import EnergyAccount, Trajectory
 
-__all__ = ["SwitchedTrajectory", "run_switched", "run_compiled"]
-
-_KIND = {STROKE: "stroke", RETURN: "return"}
+__all__ = ["SwitchedTrajectory", "Driver", "run_drive", "run_stateful"]
 
 
-@dataclass(frozen=True, eq=False)
-class SwitchedTrajectory:
-    """The result of :func:`impactbar.simulate` under a
-    :class:`~impactbar.PositionSwitchedDrive` (theory §10).
+class Driver(NamedTuple):
+    """The ordinary driver of :mod:`impactbar.simulation.simulate` as a drive's run uses it.
+
+    Attributes
+    ----------
+    core_for : callable
+        ``core_for(model, load)``: the driver's data of a (model, load) pair.
+    run : callable
+        ``run(core, q, v, t, t_stop, max_impacts)``: a run of the driver (a
+        :class:`~impactbar.Trajectory`).
+    push_off : callable
+        ``push_off(c, q)``: refuses a start through the stop (shifts one within rounding off it).
+    make_state : callable
+        ``make_state(q, v)``: an :class:`~impactbar.InitialState`.
+    tail : float
+        The driver's chatter tolerance.
+    """
+
+    core_for: Callable
+    run: Callable
+    push_off: Callable
+    make_state: Callable
+    tail: float
+
+
+@dataclass(frozen=True, eq=False, kw_only=True)
+class SwitchedTrajectory(Trajectory):
+    """The result of :func:`impactbar.simulate` under a drive (a :class:`~impactbar.Drive`, theory
+    §10): a :class:`~impactbar.Trajectory` whose ``load`` is the drive, with the drive's switches
+    logged and the run kept as its flights.
 
     Attributes
     ----------
     model : BarModel
-    drive : PositionSwitchedDrive
+    load : Drive
+        The drive (also :attr:`drive`).
     t0, t_end : float
         Start and end of the run.
     impact_times, impact_velocities : numpy.ndarray, shape (I,)
         Impacts and the struck end's velocity just before each, as in
         :class:`~impactbar.Trajectory`.
+    contact_intervals : numpy.ndarray, shape (m, 2)
+        The intervals of sustained contact of the flights (the bar held on the stop).
     switch_times : numpy.ndarray, shape (S,)
-        Times at which the valve switched (took effect).
+        Times at which the drive's mode changed (a switch took effect).
     switch_positions : numpy.ndarray, shape (S,)
         The gap ``y = -q_0`` there.
     switch_kinds : tuple of str, length S
-        ``"stroke"`` or ``"return"``: the state the valve switched to.
+        The name of the mode switched to (:meth:`~impactbar.Drive.mode_name`; the valve's
+        ``"stroke"`` or ``"return"``).
     final_state : InitialState
         Modal state at ``t_end``.
-    final_valve : str
-        The valve's state at ``t_end``.
+    final_mode : str
+        The name of the drive's mode at ``t_end`` (also :attr:`final_valve`).
+    final_drive_state : numpy.ndarray, shape (k,)
+        The drive's continuous state at ``t_end`` (empty for a drive without state).
     status : RunStatus
         Why the run stopped.
     pieces : sequence
-        The constant-force pieces, in order: each has ``t0``, ``t_end``, ``end_displacement(t)``
-        and ``end_velocity(t)`` (a run of the ordinary driver, a :class:`~impactbar.Trajectory`,
-        where the piece has a contact; else a closed-form flight); ``pieces.starts`` holds their
-        ``t0``.
+        The flights, in order: each has ``t0``, ``t_end``, ``end_displacement(t)``,
+        ``end_velocity(t)`` and ``modal(t)`` (a run of the ordinary driver, a
+        :class:`~impactbar.Trajectory`, where the flight has a contact; else a closed-form flight or,
+        for a drive with state, ``solve_ivp``'s dense output); ``pieces.starts`` holds their ``t0``.
 
     Examples
     --------
-    >>> from impactbar import BarModel, InitialState, PositionSwitchedDrive, simulate
+    >>> from impactbar import BarModel, InitialState, PositionSwitchedDrive, simulate, Trajectory
     >>> drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
     >>> run = simulate(BarModel(s=10.0, d=0.05, R=0.5, n_modes=0), drive,
     ...                InitialState.rigid(-0.5, 0.0), 60.0)
-    >>> type(run).__name__, run.n_impacts > 5
-    ('SwitchedTrajectory', True)
+    >>> type(run).__name__, isinstance(run, Trajectory), run.n_impacts > 5
+    ('SwitchedTrajectory', True, True)
     """
 
-    model: BarModel
-    drive: PositionSwitchedDrive
-    t0: float
-    t_end: float
-    impact_times: np.ndarray
-    impact_velocities: np.ndarray
     switch_times: np.ndarray
     switch_positions: np.ndarray
     switch_kinds: tuple
-    final_state: object
-    final_valve: str
-    status: RunStatus
+    final_mode: str
     pieces: Sequence = field(repr=False)
+    final_drive_state: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    _final_drive: DriveState | None = field(default=None, repr=False)
+
+    def __repr__(self) -> str:
+        """One line: model, drive, time span, impacts, switches, status (not the arrays)."""
+        return (f"SwitchedTrajectory({self.model!r}, {self.load!r}, t {self.t0:.6g} -> {self.t_end:.6g}, "
+                f"{self.impact_times.size} impacts, {len(self.switch_kinds)} switches, "
+                f"status {str(self.status)!r})")
 
     @property
-    def n_impacts(self) -> int:
-        return int(self.impact_times.size)
+    def drive(self):
+        """The drive (the trajectory's ``load``)."""
+        return self.load
+
+    @property
+    def final_valve(self) -> str:
+        """The valve's state at ``t_end`` (:attr:`final_mode`)."""
+        return self.final_mode
+
+    @property
+    def in_contact_at_end(self) -> bool:
+        last = self.pieces[-1] if len(self.pieces) else None
+        return bool(getattr(last, "in_contact_at_end", False))
 
     def end_displacement(self, t) -> np.ndarray:
         """``u(1, t)`` at times in ``[t0, t_end]``, shape ``(T,)``."""
@@ -96,18 +151,137 @@ class SwitchedTrajectory:
         """``u_t(1, t)`` at times in ``[t0, t_end]``, shape ``(T,)``."""
         return self._each(t, "end_velocity")
 
-    def _each(self, t, name):
+    def _times(self, t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if np.any(t < self.t0) or np.any(t > self.t_end) or not np.all(np.isfinite(t)):
             raise ValueError(f"t must lie in [t0, t_end] = [{self.t0}, {self.t_end}]")
         starts = self.pieces.starts
         idx = np.clip(np.searchsorted(starts, t, side="right") - 1, 0, len(starts) - 1)
+        return t, idx
+
+    def _each(self, t, name):
+        t, idx = self._times(t)
         out = np.empty_like(t)
         for j in np.unique(idx):
             sel = idx == j
             piece = self.pieces[j]
             out[sel] = getattr(piece, name)(np.minimum(t[sel], piece.t_end))
         return out
+
+    def modal_state(self, t):
+        """Free-free modal state ``(q, v)`` at times ``t`` in ``[t0, t_end]``, shape ``(N + 1, T)``
+        each."""
+        t, idx = self._times(t)
+        M = self.model.n_modes + 1
+        Q, V = np.zeros((M, t.size)), np.zeros((M, t.size))
+        for j in np.unique(idx):
+            sel = idx == j
+            piece = self.pieces[j]
+            tt = np.minimum(t[sel], piece.t_end)
+            Q[:, sel], V[:, sel] = piece.modal_state(tt) if isinstance(piece, Trajectory) else piece.modal(tt)
+        return Q, V
+
+    def displacement(self, x, t) -> np.ndarray:
+        """``u(x, t)`` on a grid, shape ``(T, X)`` (``x`` in ``[0, 1]``, ``t`` in ``[t0, t_end]``)."""
+        x = np.atleast_1d(np.asarray(x, dtype=float))
+        q, _ = self.modal_state(t)
+        return (self.model.shape_functions(x) @ q).T
+
+    def drive_state(self, t) -> np.ndarray:
+        """The drive's continuous state ``z`` at times ``t`` in ``[t0, t_end]``, shape ``(k, T)``
+        (the chamber pressures of an oil circuit; ``(0, T)`` for a drive without state)."""
+        t, idx = self._times(t)
+        k = self.final_drive_state.size
+        out = np.zeros((k, t.size))
+        if not k:
+            return out
+        for j in np.unique(idx):
+            sel = idx == j
+            piece = self.pieces[j]
+            out[:, sel] = piece.drive_state(np.minimum(t[sel], piece.t_end))
+        return out
+
+    @property
+    def impacts(self) -> tuple:
+        """The record of each impact, in order, one per :attr:`impact_times` (the law's per-blow
+        output, :attr:`impactbar.Trajectory.impacts`): the driver's runs give theirs; a closed-form or
+        integrated flight that ends at an impact, the law's contact of its arrival under the force
+        there (:meth:`impactbar.laws.ContactLaw.contact`), built on access."""
+        from ..loads import FourierLoad
+
+        model, law = self.model, self.model.law
+        hits = set(self.impact_times.tolist())
+        out = []
+        for j in range(len(self.pieces)):
+            piece = self.pieces[j]
+            if isinstance(piece, Trajectory):
+                out.extend(piece.impacts)
+            elif piece.t_end in hits and piece.t_end > piece.t0:
+                q, v = piece.modal([piece.t_end])
+                p = float(piece.force([piece.t_end])[0])
+                out.append(law.contact(model, FourierLoad(p, []), piece.t_end, q[:, 0], v[:, 0])[3])
+        return tuple(out)
+
+    @cached_property
+    def energy(self) -> EnergyAccount:
+        """The bar's energy account of the run (:class:`~impactbar.EnergyAccount`): the flights that
+        are runs of the ordinary driver give their own accounts; on the others the drive's work
+        ``int p u_t(0, t) dt`` and the damping loss by Gauss-Legendre quadrature (16 nodes on steps of
+        at most ``1.5 / (w_max + 1)``), and the energy lost between one flight's end and the next one's
+        start (the impacts, eq. 10) counted as impact loss. The drive's own energy (an oil circuit's)
+        is not in it."""
+        return _drive_energy(self)
+
+
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
+
+
+def _drive_energy(tr: SwitchedTrajectory) -> EnergyAccount:
+    """:attr:`SwitchedTrajectory.energy`."""
+    model = tr.model
+    n = np.arange(model.n_modes + 1)
+    kappa = np.where(n == 0, 1.0, 2.0)
+    w2 = model.frequencies**2
+    d = model.d
+    hmax = 1.5 / (math.sqrt(float(np.max(w2))) + 1.0)
+
+    def energy(q, v):
+        return float(0.5 * np.sum(kappa * v * v) + 0.5 * np.sum(kappa * w2 * q * q))
+
+    work = damp = imp = chat = proj = 0.0
+    initial = final = None
+    for j in range(len(tr.pieces)):
+        piece = tr.pieces[j]
+        if isinstance(piece, Trajectory):
+            acc = piece.energy
+            work, damp, imp = work + acc.work, damp + acc.damping_loss, imp + acc.impact_loss
+            chat, proj = chat + acc.chatter_loss, proj + acc.projection
+            start, end = acc.initial, acc.final
+        else:
+            a, b = float(piece.t0), float(piece.t_end)
+            if b > a:
+                edges = np.linspace(a, b, max(1, math.ceil((b - a) / hmax)) + 1)
+                half = 0.5 * np.diff(edges)
+                nodes = (half[:, None] * (_GL_X[None, :] + 1.0) + edges[:-1, None]).ravel()
+                weights = (half[:, None] * _GL_W[None, :]).ravel()
+                _, v = piece.modal(nodes)
+                work += float(np.sum(weights * piece.force(nodes) * (kappa @ v)))
+                damp += d * float(np.sum(weights * (kappa @ (v * v))))
+            (q0, v0), (q1, v1) = piece.modal([a]), piece.modal([b])
+            start, end = energy(q0[:, 0], v0[:, 0]), energy(q1[:, 0], v1[:, 0])
+        if initial is None:
+            initial = start
+        else:
+            imp += final - start  # the impact between two flights (eq. 10)
+        final = end
+    last = energy(tr.final_state.modal_displacement, tr.final_state.modal_velocity)
+    if initial is None:
+        initial = final = last
+    elif not isinstance(tr.pieces[len(tr.pieces) - 1], Trajectory):  # a run ending at an impact
+        imp += final - last
+        final = last
+    return EnergyAccount(work=work, initial=initial, final=final, damping_loss=damp, impact_loss=imp,
+                         chatter_loss=chat, projection=proj)
 
 
 class _State:
@@ -139,6 +313,13 @@ class _RigidFlight:
         c = (h - e) / self.d if self.d else 0.5 * h * h
         return self.q + self.v * e + self.level * c, self.v * (1.0 - self.d * e) + self.level * e
 
+    def modal(self, t):
+        q, v = self._at(np.atleast_1d(np.asarray(t, dtype=float)))
+        return q[None, :], v[None, :]
+
+    def force(self, t):
+        return np.full(np.atleast_1d(t).shape, float(self.level))
+
     def end_displacement(self, t):
         return np.minimum(self._at(np.asarray(t, dtype=float))[0], 0.0)
 
@@ -147,10 +328,12 @@ class _RigidFlight:
 
 
 def rigid_piece(model: BarModel):
-    """The piece function of :func:`run_switched` for the rigid bar under the paper's law, in closed
+    """The piece function of :func:`run_drive` for the rigid bar under the paper's law, in closed
     form: the impact is the first rising crossing of ``q_0`` through 0 (the same monotonicity
     argument as the switch's, theory §10), then ``v -> -R v`` (eq. 10); with the force pressing and
     a rebound too small to resolve (or ``R = 0``), the piston rests on the stop until ``t_stop``."""
+    from ..drives._crossing import first_rising_crossing
+
     d, R = model.d, model.law.kernel_restitution(model)
 
     def piece(level, q, v, t, t_stop):
@@ -187,14 +370,8 @@ def vp_scale(d: float, level: float) -> float:
     return 2.0 / level
 
 
-def initial_valve(drive: PositionSwitchedDrive, q0: float) -> int:
-    """The valve's state at the start of a run: return while the gap is below ``switch_out``,
-    stroke beyond it."""
-    return RETURN if -q0 < drive.switch_out else STROKE
-
-
 class _Flight:
-    """One constant-force flight of the flexible bar that the compiled valve loop followed (no
+    """One constant-force flight of the flexible bar that a compiled event loop followed (no
     contact in it): evaluated by the driver's exact flow from its start (eq. 8)."""
 
     __slots__ = ("core", "t0", "t_end", "q", "v")
@@ -202,21 +379,24 @@ class _Flight:
     def __init__(self, core, t0, t_end, q, v):
         self.core, self.t0, self.t_end, self.q, self.v = core, t0, t_end, q, v
 
-    def _at(self, t):
+    def modal(self, t):
         from .trajectory import _FREE
 
-        return self.core.propagate(_FREE, self.t0, self.q, self.v, np.asarray(t, dtype=float))
+        return self.core.propagate(_FREE, self.t0, self.q, self.v, np.atleast_1d(np.asarray(t, dtype=float)))
+
+    def force(self, t):
+        return np.full(np.atleast_1d(t).shape, float(self.core.load.p0))
 
     def end_displacement(self, t):
-        return np.minimum(self.core.c @ self._at(t)[0], 0.0)
+        return np.minimum(self.core.c @ self.modal(t)[0], 0.0)
 
     def end_velocity(self, t):
-        return self.core.c @ self._at(t)[1]
+        return self.core.c @ self.modal(t)[1]
 
 
 class _Pieces(Sequence):
-    """The pieces of a switched run: those the Python loop ran (objects) and those the compiled
-    loop logged (arrays of their starts, made into flights when asked for)."""
+    """The pieces of a switched run: those the Python loop ran (objects) and those a compiled loop
+    logged (arrays of their starts, made into flights when asked for)."""
 
     def __init__(self, blocks, make):
         self._blocks = blocks  # ("py", piece) or ("k", t0, t1, code, q, v)
@@ -245,14 +425,13 @@ class _Pieces(Sequence):
         return self._make(float(b[1][j]), float(b[2][j]), int(b[3][j]), b[4][j], b[5][j])
 
 
-class _Valve:
-    """The valve's loop (theory §10), one piece per :meth:`step`: the Python reference, and the
-    fallback of the compiled loop for the pieces it hands back."""
+class _Run:
+    """The state and the logs of a run under a drive; :meth:`step` runs one flight of a drive
+    without state (the Python reference, and the fallback of a compiled loop)."""
 
     def __init__(self, model, drive, q, v, t0, t_end, max_imp):
         self.model, self.drive = model, drive
-        self.valve = initial_valve(drive, float(q[0]))
-        self.pending: list[tuple[float, int]] = []  # (time the switch takes effect, state), sorted
+        self.state = drive.start(model, q, v)
         self.q, self.v, self.t, self.t0, self.t_end, self.max_imp = q, v, t0, t0, t_end, max_imp
         self.blocks: list = []
         self.imp_t: list = []
@@ -260,23 +439,39 @@ class _Valve:
         self.sw_t: list = []
         self.sw_y: list = []
         self.sw_k: list = []
+        self.rests: list = []  # a drive with state: the rigid piston at rest on the stop
         self.n_imp = 0
         self.status = RunStatus.T_END
         self.done = False
 
+    def switch(self, new: DriveState, t: float) -> None:
+        """Take the drive's new state, logging a switch where its mode's name changes."""
+        drive = self.drive
+        name = drive.mode_name(new.mode)
+        if name != drive.mode_name(self.state.mode):
+            self.sw_t.append(t)
+            self.sw_y.append(-float(self.q[0]))
+            self.sw_k.append(name)
+        self.state = new
+
     def step(self, piece) -> None:
-        """Run the next piece with ``piece`` and apply the valve's rules at its end."""
+        """Run the next flight with ``piece`` (the ordinary driver under the drive's constant force)
+        until the drive's next event, and apply the drive's map at its end."""
         drive, q, v, t = self.drive, self.q, self.v, self.t
-        pending = self.pending
+        mode, z = self.state
+        level = drive.force(mode, z, q, v)
+        events = drive.events(mode)
         t_next = self.t_end
-        if pending:
-            t_next = min(t_next, pending[0][0])
-        cross = math.inf
-        if self.valve == RETURN and not any(k == STROKE for _, k in pending):
-            a = -drive.level(RETURN)  # y'' + d y' = -p
-            cross = t + first_rising_crossing(self.model.d, -float(q[0]), -float(v[0]), a, drive.switch_out)
-            t_next = min(t_next, cross)
-        traj = piece(drive.level(self.valve), q, v, t, t_next)
+        times = []
+        for e in events:
+            te = e.first_time(self.model.d, level, t, q, v)
+            if math.isnan(te):  # an event surface without a closed form: bracketed
+                from ..drives.flight import _bracket
+
+                te = _bracket(e, self.model, level, t, q, v, z, self.t_end)
+            times.append(te)
+            t_next = min(t_next, te)
+        traj = piece(level, q, v, t, t_next)
         self.blocks.append(("py", traj))
         state = traj.final_state
         self.q = q = state.modal_displacement
@@ -286,130 +481,255 @@ class _Valve:
             self.imp_t.extend(traj.impact_times.tolist())
             self.imp_v.extend(traj.impact_velocities.tolist())
             self.n_imp += traj.n_impacts
-            pending.append((t + drive.delay, RETURN))  # the impact triggers the switch to return
-            pending.sort()
-            if self.n_imp >= self.max_imp:
+            if self.n_imp >= self.max_imp:  # the run ends at the impact, the drive as it arrived
                 self.status = RunStatus.MAX_IMPACTS
                 self.done = True
                 return
+            self.switch(drive.impact(mode, z, t, q, self.v), t)
         elif t >= self.t_end:
             self.done = True
             return
-        elif t == cross:  # the gap rose through switch_out: the switch to stroke is triggered
-            pending.append((cross + drive.delay, STROKE))
-            pending.sort()
-        while pending and pending[0][0] <= t:  # the switches due now take effect
-            _, k = pending.pop(0)
-            if k != self.valve:
-                self.valve = k
-                self.sw_t.append(t)
-                self.sw_y.append(-float(q[0]))
-                self.sw_k.append(_KIND[k])
+        else:  # the drive's events due now, in its order
+            new = self.state
+            for e, te in zip(events, times, strict=True):
+                if te == t:
+                    new = drive.jump(new.mode, new.z, e, t, q, self.v)
+            self.switch(new, t)
+
+    def absorb(self, res: KernelRun) -> None:
+        """Take what a compiled loop did."""
+        self.imp_t.extend(res.impact_times.tolist())
+        self.imp_v.extend(res.impact_velocities.tolist())
+        self.sw_t.extend(res.switch_times.tolist())
+        self.sw_y.extend(res.switch_gaps.tolist())
+        self.sw_k.extend(res.switch_names)
+        for block in res.pieces:
+            self.blocks.append(("k", *block))
+        self.state, self.n_imp = res.state, res.n_impacts
+        self.t, self.q, self.v = res.t, res.q, res.v
 
     def result(self, make_state, make_piece) -> SwitchedTrajectory:
+        pieces = _Pieces(self.blocks, make_piece)
+        runs = [b[1] for b in self.blocks if b[0] == "py" and isinstance(b[1], Trajectory)]
+        spans = [r.contact_intervals for r in runs if r.contact_intervals.size] + \
+            [np.array(self.rests, dtype=float).reshape(-1, 2)]
+        contact = np.concatenate(spans)
+        retries = sum(r.n_release_retries for r in runs)
         return SwitchedTrajectory(
-            model=self.model, drive=self.drive, t0=self.t0, t_end=self.t, impact_times=np.array(self.imp_t),
-            impact_velocities=np.array(self.imp_v), switch_times=np.array(self.sw_t),
-            switch_positions=np.array(self.sw_y), switch_kinds=tuple(self.sw_k),
+            model=self.model, load=self.drive, t0=self.t0, t_end=self.t, impact_times=np.array(self.imp_t),
+            impact_velocities=np.array(self.imp_v), contact_intervals=contact,
             final_state=make_state(np.array(self.q, dtype=float), np.array(self.v, dtype=float)),
-            final_valve=_KIND[self.valve], status=self.status, pieces=_Pieces(self.blocks, make_piece))
+            status=self.status, _core=None, _segments=None, n_release_retries=retries,
+            switch_times=np.array(self.sw_t), switch_positions=np.array(self.sw_y),
+            switch_kinds=tuple(self.sw_k),
+            final_mode=self.drive.mode_name(self.state.mode), pieces=pieces,
+            final_drive_state=np.array(self.state.z, dtype=float), _final_drive=self.state)
 
 
-def run_switched(model: BarModel, drive: PositionSwitchedDrive, q, v, t0: float, t_end: float,
-                 max_imp: int, piece, make_state) -> SwitchedTrajectory:
-    """The valve's event loop in Python, piece by piece (theory §10; the reference of
-    :func:`run_compiled`).
+def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int,
+              driver: Driver) -> SwitchedTrajectory:
+    """A drive's run (module docstring): a drive with state by ``solve_ivp``'s flights
+    (:func:`run_stateful`); a force constant between events over pieces of the ordinary driver under
+    that force (``driver``), with the drive's compiled loop where it has one
+    (:meth:`~impactbar.Drive.compiled_loop`, switch ``simulate.switched_kernel``, an instantaneous
+    law), in Python piece by piece otherwise (:func:`run_pieces`)."""
+    if not drive.piecewise_constant:
+        return run_stateful(model, drive, q, v, t0, t_end, max_imp, driver.make_state)
+    from ..loads import FourierLoad
+
+    law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
+    rigid = model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid")
+    cores: dict = {}
+
+    def core_of(level):
+        core = cores.get(level)
+        if core is None:
+            core = cores[level] = driver.core_for(model, FourierLoad(level, []))
+        return core
+
+    if rigid:
+        piece = rigid_piece(model)
+    else:
+        def piece(level, q, v, t, t_stop):
+            q = np.array(q, dtype=float)
+            v = np.array(v, dtype=float)
+            core = core_of(level)
+            driver.push_off(core.c, q)
+            return driver.run(core, q, v, t, t_stop, 1)
+
+    levels = drive.levels
+    if levels is None or not law.instantaneous or not use_fast("simulate.switched_kernel"):
+        return run_pieces(model, drive, q, v, t0, t_end, max_imp, piece, driver.make_state)
+    level_cores = tuple(core_of(lv) for lv in levels)
+    first = level_cores[0]
+    kernel = FlightKernel(loads=tuple(tuple(core.data) for core in level_cores), basis=tuple(first.free.view),
+                          R=first.R, c=first.c, tail=driver.tail, rigid=rigid,
+                          fast_search=use_fast("simulate.impact_search"))
+    return run_pieces(model, drive, q, v, t0, t_end, max_imp, piece, driver.make_state, kernel, level_cores)
+
+
+def run_pieces(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int, piece, make_state,
+               kernel: FlightKernel | None = None, cores=None) -> SwitchedTrajectory:
+    """The event-driven run of a drive whose force is constant between events (module docstring).
 
     ``piece(level, q, v, t, t_stop)`` runs the ordinary driver under the constant force ``level``
     from ``(q, v)`` at ``t`` until ``t_stop`` or its first impact, and returns its
-    :class:`~impactbar.Trajectory` (or a :func:`rigid_piece` flight); ``make_state(q, v)`` makes
-    the final :class:`~impactbar.InitialState`.
+    :class:`~impactbar.Trajectory` (or a :func:`rigid_piece` flight); ``make_state(q, v)`` makes the
+    final :class:`~impactbar.InitialState`. With ``kernel`` (the driver's data of the drive's
+    ``levels``, ``cores`` their driver objects) the drive's compiled loop
+    (:meth:`~impactbar.Drive.compiled_loop`) runs the flights it resolves, and this loop the
+    others, one at a time.
     """
-    loop = _Valve(model, drive, q, v, t0, t_end, max_imp)
+    loop = _Run(model, drive, q, v, t0, t_end, max_imp)
+    runner = drive.compiled_loop(model, kernel) if kernel is not None else None
+    if runner is not None:
+        loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
     while loop.t < t_end and not loop.done:
+        if runner is not None:
+            res = runner.run(loop.state, loop.t, np.array(loop.q, dtype=float), np.array(loop.v, dtype=float),
+                             t_end, loop.n_imp, loop.max_imp)
+            loop.absorb(res)
+            if res.status == KernelRun.MAX_IMPACTS:
+                loop.status = RunStatus.MAX_IMPACTS
+                break
+            if res.status == KernelRun.DONE:
+                break
+            if loop.t >= t_end:  # pragma: no cover - the compiled loop reports DONE there
+                break
         loop.step(piece)
+    make_piece = None
+    if runner is not None:
+        levels = drive.levels
+        L = len(levels)
+        if kernel.rigid:
+            d = model.d
+
+            def make_piece(t0, t1, code, q, v):
+                f = object.__new__(_RigidFlight)
+                f.t0, f.t_end, f.level, f.d = t0, t1, levels[code % L], d
+                f.stuck = code >= L
+                f.q, f.v = (0.0, 0.0) if f.stuck else (float(q[0]), float(v[0]))
+                return f
+        else:
+            def make_piece(t0, t1, code, q, v):
+                return _Flight(cores[code], t0, t1, q, v)
+
+    return loop.result(make_state, make_piece)
+
+
+# --------------------------------------------------------------------------------------------------
+# a drive with state
+# --------------------------------------------------------------------------------------------------
+#: a rebound slower than this (relative to the arrival speed, or absolute) ends in rest on the stop
+REST_SPEED = 1e-9
+#: more impacts than this within ``CHATTER_WINDOW`` of each other: a flexible bar held on the stop
+CHATTER_IMPACTS = 200
+CHATTER_WINDOW = 1e-6
+
+
+def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int, make_state,
+                 settings=None) -> SwitchedTrajectory:
+    """The event-driven run of a drive with state (module docstring): flights by
+    :func:`impactbar.drives.flight.fly`, the paper's impact law (eq. 10) at each arrival, the
+    drive's maps at its events and impacts; a rigid piston whose rebound is slower than
+    ``REST_SPEED`` while the drive presses it rests on the stop until the force turns or a drive
+    event comes.
+
+    Raises
+    ------
+    ValueError
+        Under a law whose contact takes time, or where a flexible bar would be held on the stop.
+    """
+    law = model.law
+    if not law.instantaneous:
+        raise ValueError(f"a drive with state ({type(drive).__name__}) runs under an instantaneous impact "
+                         f"law (the paper's) for now; got impact={model.impact!r}")
+    R = law.kernel_restitution(model)
+    c = model.end_weights
+    M = model.n_modes + 1
+    settings = settings if settings is not None else drive.integrator
+    loop = _Run(model, drive, q, v, t0, t_end, max_imp)
+    loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
+    recent: list[float] = []
+    while loop.t < t_end and not loop.done:
+        mode, z = loop.state
+        fl = fly(model, drive, loop.state, loop.t, loop.q, loop.v, t_end, settings)
+        loop.blocks.append(("py", fl.piece))
+        loop.t, loop.q, loop.v = fl.t, fl.q, fl.v
+        loop.state = DriveState(mode, fl.z)
+        if fl.end == END:
+            break
+        if fl.end == EVENT:
+            new = loop.state
+            for e in fl.events:
+                new = drive.jump(new.mode, new.z, e, fl.t, fl.q, fl.v)
+            loop.switch(new, fl.t)
+            continue
+        # an arrival: the paper's law, then the drive's map
+        arrival = float(c @ fl.v)
+        loop.imp_t.append(fl.t)
+        loop.imp_v.append(arrival)
+        loop.n_imp += 1
+        v_after = -R * fl.v
+        recent = [tt for tt in recent if fl.t - tt <= CHATTER_WINDOW] + [fl.t]
+        if loop.n_imp >= max_imp:
+            loop.v = v_after
+            loop.status = RunStatus.MAX_IMPACTS
+            break
+        loop.v = v_after
+        loop.switch(drive.impact(loop.state.mode, loop.state.z, fl.t, fl.q, v_after), fl.t)
+        mode, z = loop.state
+        pressing = drive.force(mode, z, loop.q, np.zeros(M)) > 0.0
+        slow = abs(float(c @ v_after)) <= REST_SPEED * max(1.0, arrival)
+        if M > 1 and (len(recent) > CHATTER_IMPACTS or (slow and pressing)):
+            raise ValueError(f"the flexible bar is held on the stop at t = {fl.t:.6g} under a drive with "
+                             "state: sustained contact is not supported for such a drive yet (use "
+                             "n_modes = 0)")
+        if M == 1 and slow and pressing:
+            loop.v = np.zeros(1)
+            _rest(model, drive, loop, t_end, settings)
     return loop.result(make_state, None)
 
 
-#: room in the compiled loop's pending list (more pending switches: the Python loop's step)
-_PEND_CAP = 64
-#: impacts in the compiled loop's first logs (doubled at each call, up to 65536)
-_FIRST_CAP = 256
+def _rest(model, drive, loop, t_end, settings) -> None:
+    """The rigid piston at rest on the stop while the drive presses it: ``z`` integrated with
+    ``q = q' = 0`` until the force turns (falls through 0), a drive event or ``t_end``."""
+    from scipy.integrate import solve_ivp
 
+    mode, z = loop.state
+    q0, v0 = np.zeros(1), np.zeros(1)
+    t = loop.t
+    events = drive.events(mode)
 
-def run_compiled(model: BarModel, drive: PositionSwitchedDrive, q, v, t0: float, t_end: float,
-                 max_imp: int, piece, make_state, cores, rigid: bool, fast_search: bool,
-                 tail: float) -> SwitchedTrajectory:
-    """The valve's event loop compiled (:func:`impactbar.dynamics._switchkernel.run_switched`),
-    with the same pieces, impacts and switches as :func:`run_switched` (theory §10).
+    def push(tt, y):
+        return drive.force(mode, y, q0, v0)
 
-    ``cores`` are the driver's data of the one-piece loads ``+stroke`` and ``-ret``; with ``rigid``
-    the rigid bar's pieces take the closed forms of :func:`rigid_piece`; a piece the compiled loop
-    hands back (a touch without an impact, and the like) is run by ``piece``; ``fast_search``
-    chooses the driver's impact search (``simulate.impact_search``); ``tail`` is the driver's
-    chatter tolerance (``CHATTER_TAIL``).
-    """
-    loop = _Valve(model, drive, np.array(q, dtype=float), np.array(v, dtype=float), t0, t_end, max_imp)
-    views = tuple(tuple(core.data) for core in cores)
-    B = tuple(cores[0].free.view)
-    R, c = cores[0].R, cores[0].c
-    dview = tuple(drive.kernel_view)
-    M = loop.q.size
-    clock = np.array([t0, t_end, tail])
-    ints = np.zeros(6, dtype=np.int64)
-    pend_t = np.empty(_PEND_CAP)
-    pend_k = np.empty(_PEND_CAP, dtype=np.int64)
-    cap = _FIRST_CAP
-    while loop.t < t_end and not loop.done:
-        if len(loop.pending) + 2 > _PEND_CAP:
-            loop.step(piece)
-            continue
-        left = loop.max_imp - loop.n_imp
-        n_i = max(1, min(cap, left))
-        n_p = 4 * n_i + 8
-        logs = (np.empty(n_i), np.empty(n_i), np.empty(n_p + _PEND_CAP), np.empty(n_p + _PEND_CAP),
-                np.empty(n_p + _PEND_CAP, dtype=np.int64), np.empty(n_p), np.empty(n_p),
-                np.empty(n_p, dtype=np.int64), np.empty((n_p, M)), np.empty((n_p, M)),
-                np.zeros(3, dtype=np.int64))
-        cap = min(2 * cap, 1 << 16)
-        n_pend = len(loop.pending)
-        for i, (tp, kp) in enumerate(loop.pending):
-            pend_t[i], pend_k[i] = tp, kp
-        ints[:] = (loop.valve, n_pend, loop.n_imp, loop.max_imp, rigid, fast_search)
-        clock[0] = loop.t
-        q, v = np.array(loop.q, dtype=float), np.array(loop.v, dtype=float)
-        st = SK.run_switched(views, B, dview, R, c, clock, (q, v), ints, (pend_t, pend_k), logs)
-        ni, ns, npc = (int(x) for x in logs[-1])
-        loop.imp_t.extend(logs[0][:ni].tolist())
-        loop.imp_v.extend(logs[1][:ni].tolist())
-        loop.sw_t.extend(logs[2][:ns].tolist())
-        loop.sw_y.extend(logs[3][:ns].tolist())
-        loop.sw_k.extend(_KIND[int(k)] for k in logs[4][:ns])
-        if npc:
-            loop.blocks.append(("k", logs[5][:npc], logs[6][:npc], logs[7][:npc], logs[8][:npc],
-                                logs[9][:npc]))
-        loop.valve, loop.n_imp = int(ints[0]), int(ints[2])
-        loop.pending = [(float(pend_t[i]), int(pend_k[i])) for i in range(int(ints[1]))]
-        loop.t, loop.q, loop.v = float(clock[0]), q, v
-        if st == SK.MAX_IMPACTS:
-            loop.status = RunStatus.MAX_IMPACTS
-            break
-        if st == SK.PYTHON:
-            loop.step(piece)
-        elif st == SK.DONE:
-            break
+    push.terminal, push.direction = True, -1
+    fns = [push]
+    for e in events:
+        def g(tt, y, e=e):
+            return e.value(tt, q0, v0, y)
 
-    if rigid:
-        d = model.d
-
-        def make_piece(t0, t1, code, q, v):
-            f = object.__new__(_RigidFlight)
-            f.t0, f.t_end, f.level, f.d = t0, t1, drive.level(code % 2), d
-            f.stuck = code >= 2
-            f.q, f.v = (0.0, 0.0) if f.stuck else (float(q[0]), float(v[0]))
-            return f
-    else:
-        def make_piece(t0, t1, code, q, v):
-            return _Flight(cores[code], t0, t1, q, v)
-
-    return loop.result(make_state, make_piece)
+        g.terminal, g.direction = True, e.direction
+        fns.append(g)
+    if z.size:
+        sol = solve_ivp(lambda tt, y: drive.rate(mode, y, q0, v0), (t, t_end), np.asarray(z, dtype=float),
+                        method=settings.method, rtol=settings.rtol, atol=settings.atol, events=fns,
+                        dense_output=True)
+        te, z_end, dense = float(sol.t[-1]), sol.y[:, -1].copy(), sol.sol
+        hit = [i for i, tt in enumerate(sol.t_events) if tt.size] if sol.status == 1 else []
+    else:  # no state: only the drive's scheduled or surface events can end the rest
+        times = [e.first_time(model.d, 0.0, t, q0, v0) for e in events]
+        te = min([tt for tt in times if not math.isnan(tt)] + [t_end])
+        z_end, dense = z, None
+        hit = [i + 1 for i, tt in enumerate(times) if tt == te]
+    loop.blocks.append(("py", RestPiece(t, te, dense, z, 1, model.end_weights)))
+    loop.rests.append((t, te))
+    loop.t, loop.q, loop.v = te, q0.copy(), v0.copy()
+    loop.state = DriveState(mode, z_end)
+    fired = [events[i - 1] for i in hit if i > 0]
+    if fired:
+        new = loop.state
+        for e in fired:
+            new = drive.jump(new.mode, new.z, e, te, loop.q, loop.v)
+        loop.switch(new, te)

@@ -109,6 +109,8 @@ class _Segments:
     """The pieces of closed-form motion of a run, stored as arrays (one row per piece); indexing
     gives a :class:`_Segment`."""
 
+    __slots__ = ("n_modes", "t", "basis", "entry", "q", "v", "frozen")
+
     def __init__(self, n_modes, t, basis, entry, q, v, frozen):
         self.n_modes = n_modes
         self.t = t
@@ -212,7 +214,7 @@ class _SegmentLog:
         return _Segments(self.M - 1, self.t, self.basis, self.entry, self.q, self.v, dict(self.frozen))
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, init=False)
 class Trajectory:
     """The result of :func:`simulate`.
 
@@ -276,6 +278,17 @@ class Trajectory:
     _core: _Core = field(repr=False)
     _segments: _Segments = field(repr=False)
     n_release_retries: int = 0
+
+    def __init__(self, model: BarModel, load: Load, t0: float, t_end: float, impact_times: np.ndarray,
+                 impact_velocities: np.ndarray, contact_intervals: np.ndarray, final_state: InitialState,
+                 status: str, _core: _Core, _segments: _Segments, n_release_retries: int = 0):
+        # the fields at once: a frozen dataclass's generated __init__ sets them one by one through
+        # object.__setattr__ (4 us, a third of a 1-impact run's cost); the parameters are the fields
+        # in their order (tests/simulation/test_shortrun.py holds them to dataclasses.fields)
+        self.__dict__.update(model=model, load=load, t0=t0, t_end=t_end, impact_times=impact_times,
+                             impact_velocities=impact_velocities, contact_intervals=contact_intervals,
+                             final_state=final_state, status=status, _core=_core, _segments=_segments,
+                             n_release_retries=n_release_retries)
 
     def __repr__(self) -> str:
         """One line: model, load, time span, impacts, status (not the arrays)."""

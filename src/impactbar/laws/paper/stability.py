@@ -67,21 +67,22 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
 
 def floquet_multipliers(model: BarModel, load: Load, phase: float, y_plus, y_minus, *,
                         method: str = "auto") -> np.ndarray:
-    """Floquet multipliers of a one-impact orbit under the paper's impact law (eqs. 10, 11): the
+    r"""Floquet multipliers of a one-impact orbit under the paper's impact law (eqs. 10, 11): the
     eigenvalues of the impact map's Jacobian (theory §7), sorted by :func:`sort_multipliers`.
 
-    ``method="dense"`` takes the eigenvalues of :func:`impact_map_jacobian`, ``O(N^3)``.
-    ``method="structured"`` uses the structure of the map: in the state extended by the impact
-    time, ``(y, tau)``, the Jacobian is the block-diagonal ``diag(J_R Phi_n(2 pi), 1)`` (one 2 x 2
-    block per mode) plus a rank-2 correction (the impact-time dependence and the saltation term),
-    and its eigenvalues are those of the map plus one zero. By the matrix determinant lemma they
-    are the zeros of ``det(B - x) det(I_2 + V^T (B - x)^{-1} U)`` divided by ``x``, found all at
-    once by the Aberth-Ehrlich iteration from the blocks' own eigenvalues, ``O(N^2)``; with
-    ``R = 0`` the velocity rows vanish and ``N + 1`` multipliers are exactly 0, the rest those of
-    the ``(N + 1)``-square displacement block. Where the iteration does not settle, the dense
+    ``method="dense"`` takes the eigenvalues of :func:`impact_map_jacobian`, :math:`O(N^3)`.
+    ``method="structured"`` uses the structure of the map: in the state extended by the impact time,
+    :math:`(y, \tau)`, the Jacobian is the block-diagonal :math:`\operatorname{diag}(J_R \Phi_n(2\pi), 1)`
+    (one :math:`2 \times 2` block per mode) plus a rank-2 correction (the impact-time dependence and the
+    saltation term), and its eigenvalues are those of the map plus one zero. By the matrix determinant
+    lemma they are the zeros of :math:`\det(B - x) \det(I_2 + V^T (B - x)^{-1} U)` divided by :math:`x`,
+    found all at once by the Aberth-Ehrlich iteration from the blocks' own eigenvalues, :math:`O(N^2)`;
+    with :math:`R = 0` the velocity rows vanish and :math:`N + 1` multipliers are exactly 0, the rest
+    those of the :math:`(N + 1)`-square displacement block. Where the iteration does not settle, the dense
     method is used. ``"auto"`` (default) picks the structured method from 40 flexible modes on, for
-    ``d <= 1`` (tested against the dense method to 1e-10 of the spectral radius there; with heavier
-    damping the flexible multipliers crowd near 0, ``|mu| ~ e^{-2 pi d}``, and agree only to ~1e-8).
+    :math:`d \le 1` (tested against the dense method to :math:`10^{-10}` of the spectral radius there;
+    with heavier damping the flexible multipliers crowd near 0, :math:`|\mu| \sim e^{-2\pi d}`, and agree
+    only to about :math:`10^{-8}`).
 
     Parameters
     ----------

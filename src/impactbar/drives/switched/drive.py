@@ -17,18 +17,15 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 
-from .._shared.validate import check_real
-from ..dynamics.kernelview import DriveKernelView
+from ..._shared.validate import check_real
+from ..base import Drive, DriveState, GapCrossing, TimedEvent
+from ._state import _NO_STATE, KIND, RETURN, STROKE, DriveKernelView, _due, initial_valve
 
-__all__ = ["PositionSwitchedDrive", "STROKE", "RETURN", "first_rising_crossing"]
-
-#: The valve's two states (indices into :meth:`PositionSwitchedDrive.level`).
-STROKE = 0
-RETURN = 1
-
+__all__ = ["PositionSwitchedDrive", "DriveKernelView", "STROKE", "RETURN", "KIND", "first_rising_crossing",
+           "initial_valve"]
 
 @dataclass(frozen=True)
-class PositionSwitchedDrive:
+class PositionSwitchedDrive(Drive):
     r"""A drive whose force switches on the piston's position (a hydraulic drifter's valve, theory §10).
 
     The force at ``x = 0`` (eq. 4) is ``p = +stroke`` in the stroke state and ``p = -ret`` in the
@@ -41,8 +38,17 @@ class PositionSwitchedDrive:
     each switch taking effect ``delay`` after the event that triggers it. The system is autonomous:
     a periodic motion has an unknown period, found with the impact and switch times
     (:func:`impactbar.find_orbit`), and the blow frequency is an output. Such a drive takes the place
-    of a load in :func:`impactbar.simulate` and :func:`impactbar.find_orbit`; the time-periodic
-    machinery (harmonics, :func:`impactbar.periodic_orbits`, sweeps) refuses it.
+    of a load in :func:`impactbar.simulate`, :func:`impactbar.find_orbit` and
+    :func:`impactbar.continue_orbit`; the time-periodic machinery (harmonics,
+    :func:`impactbar.periodic_orbits`, sweeps) refuses it.
+
+    As a :class:`~impactbar.Drive` it has no continuous state (``state_size = 0``): its mode is the
+    pair ``(valve, pending)``, the valve's state and the switches triggered but not yet in effect
+    (``(time, state)`` pairs, sorted); its events are the gap's rising crossing of ``switch_out``
+    (a :class:`~impactbar.drives.GapCrossing`, in return with no switch to stroke pending) and the
+    first pending switch (a :class:`~impactbar.drives.TimedEvent`). It brings numerics of its own:
+    a compiled event loop (:mod:`impactbar.drives.switched.loop`) and the closed-form segment problem
+    of its periodic orbits with the exact Jacobian (:mod:`impactbar.drives.switched.segment`).
 
     Rigid piston, no damping, no delay (the check of theory §10): with accelerations ``a_s = stroke``,
     ``a_r = ret`` the period-1 orbit has the impact velocity
@@ -90,6 +96,8 @@ class PositionSwitchedDrive:
     switch_out: float
     delay: float = 0.0
 
+    parameters = ("stroke", "ret", "switch_out", "delay")
+
     def __post_init__(self) -> None:
         object.__setattr__(self, "stroke", check_real("stroke", self.stroke, lo=0.0, lo_open=True))
         object.__setattr__(self, "ret", check_real("ret", self.ret, lo=0.0, lo_open=True))
@@ -107,10 +115,67 @@ class PositionSwitchedDrive:
         ``-ret``)."""
         return self.stroke if state == STROKE else -self.ret
 
-    def harmonics(self, n=None):
-        """Refused: the drive is not a function of time (theory §10)."""
-        raise ValueError("a PositionSwitchedDrive is not periodic in time: it has no harmonics "
-                         "(use simulate or find_orbit with it, theory §10)")
+    # -- the Drive interface ----------------------------------------------------------------------
+    def start(self, model, q, v) -> DriveState:
+        """Return while the gap ``-q_0`` is below ``switch_out``, stroke beyond it; nothing pending."""
+        return DriveState((initial_valve(self, float(q[0])), ()), _NO_STATE)
+
+    def mode_name(self, mode) -> str:
+        """``"stroke"`` or ``"return"``: the valve's state."""
+        return KIND[mode[0]]
+
+    def force(self, mode, z, q, v) -> float:
+        """``+stroke`` or ``-ret``, by the valve's state (:meth:`level`)."""
+        return self.level(mode[0])
+
+    @cached_property
+    def _crossing(self) -> GapCrossing:
+        return GapCrossing("switch_out", level=self.switch_out, direction=1)
+
+    def events(self, mode) -> tuple:
+        """The rising crossing of ``switch_out`` while in return with no switch to stroke pending,
+        then the first pending switch."""
+        valve, pending = mode
+        out = ()
+        if valve == RETURN and not any(k == STROKE for _, k in pending):
+            out = (self._crossing,)
+        if pending:
+            out += (TimedEvent("switch", time=pending[0][0]),)
+        return out
+
+    def jump(self, mode, z, event, t, q, v) -> DriveState:
+        """The crossing triggers the switch to stroke, ``delay`` later; the switches due at ``t``
+        take effect."""
+        valve, pending = mode
+        if event is self._crossing:
+            pending = tuple(sorted(pending + ((t + self.delay, STROKE),)))
+        return DriveState(_due(valve, pending, t), z)
+
+    def impact(self, mode, z, t, q, v) -> DriveState:
+        """The impact triggers the switch to return, ``delay`` later; the switches due at ``t`` take
+        effect."""
+        valve, pending = mode
+        pending = tuple(sorted(pending + ((t + self.delay, RETURN),)))
+        return DriveState(_due(valve, pending, t), z)
+
+    @property
+    def levels(self) -> tuple[float, float]:
+        """The forces of the compiled valve loop, by valve state: ``(+stroke, -ret)``."""
+        return (self.stroke, -self.ret)
+
+    def compiled_loop(self, model, kernel):
+        """The compiled valve loop (:class:`~impactbar.drives.switched.loop.ValveLoop`) under an
+        instantaneous law."""
+        from .loop import ValveLoop
+
+        return ValveLoop(self, kernel)
+
+    def orbit_problem(self, model, impacts, constant_load):
+        """The valve's segment problem (:class:`~impactbar.drives.switched.segment.ValveProblem`):
+        closed-form flights, the exact Jacobian, the multipliers from the monodromy matrix."""
+        from .segment import ValveProblem
+
+        return ValveProblem(model, self, impacts, constant_load)
 
     def rigid_orbit(self, R: float) -> dict:
         """The rigid, undamped, undelayed period-1 orbit in closed form (theory §10).
@@ -139,9 +204,8 @@ def first_rising_crossing(d: float, y0: float, w0: float, a: float, level: float
     """First ``t > 0`` at which the gap rises through ``level`` under ``y'' + d y' = a``, ``inf`` if
     never (theory §10).
 
-    The compiled closed form of the valve loop,
-    :func:`impactbar.dynamics._switchkernel.first_rising_crossing`, imported on first use so that
-    ``import impactbar`` does not load numba.
+    The compiled closed form, :func:`impactbar.drives._crossing.first_rising_crossing`, imported on
+    first use so that ``import impactbar`` does not load numba.
 
     Parameters
     ----------
@@ -153,6 +217,6 @@ def first_rising_crossing(d: float, y0: float, w0: float, a: float, level: float
     -------
     float
     """
-    from ..dynamics._switchkernel import first_rising_crossing as compiled
+    from .._crossing import first_rising_crossing as compiled
 
     return float(compiled(float(d), float(y0), float(w0), float(a), float(level)))

@@ -1,0 +1,686 @@
+r"""The drive interface: what the solvers ask of a drive that is not a function of time (theory §10).
+
+A *drive* takes the place of a periodic :class:`~impactbar.Load` at the driven end ``x = 0``, but
+its force is not a function of time: it is a function of the drive's own state, which changes with
+the bar's motion. The bar and the drive together are autonomous (the blow frequency is an output).
+Each drive is a hybrid system (a *switched* system) with
+
+- a discrete ``mode`` (any hashable value: the valve's position, pending delayed switches, ...) and a
+  continuous state ``z`` of ``state_size`` numbers (empty for a force that is piecewise constant; the
+  chamber pressures of an oil circuit), together a :class:`DriveState`;
+- between events, the force :meth:`Drive.force` on the piston and the rate :meth:`Drive.rate` of
+  ``z``, coupled to the modes of the bar, ``q_n'' + d q_n' + (s n pi)^2 q_n = p`` (eq. 6);
+- events, :meth:`Drive.events`: crossings of a position or velocity by the piston, scheduled times
+  (a valve's delay, a ramp's end) or any surface ``g(t, q, q', z) = 0`` crossed in a direction
+  (:class:`DriveEvent`), each with its map :meth:`Drive.jump`, and the map at an impact,
+  :meth:`Drive.impact`;
+- its parameters for continuation, :attr:`Drive.parameters`, and their copies :meth:`Drive.with_`.
+
+The solvers dispatch on this interface, never on a drive's class: :func:`impactbar.simulate`
+(:mod:`impactbar.simulation.switched`), :func:`impactbar.find_orbit`
+(:mod:`impactbar.orbits.switched`) and :func:`impactbar.continue_orbit`
+(:mod:`impactbar.continuation.switched`). A drive without state (``state_size == 0``) has a force
+that is constant between events: its flights are the closed-form flights of the modes (eq. 8), run by
+the simulator's certified event search, and its events in closed form where they are crossings of
+the piston's position or velocity or scheduled times (:meth:`DriveEvent.first_time`). A drive with
+state is integrated with scipy's ``solve_ivp`` (stiff methods) and its events located to the
+integrator's tolerance. A drive may add numerics of its own where they pay: a compiled event loop
+(:meth:`Drive.compiled_loop`) and a closed-form periodic-orbit problem with an exact Jacobian
+(:meth:`Drive.orbit_problem`), as the valve of :class:`~impactbar.PositionSwitchedDrive` does;
+otherwise the generic paths run.
+
+The design follows three well-kept codes: the event functions of scipy's ``solve_ivp`` (a scalar
+function of the state whose zero is crossed in a ``direction``, +1 rising, -1 falling, 0 either, and
+that ends the step: :class:`DriveEvent`), Siconos' event-driven simulation of nonsmooth dynamical
+systems (a vector field between events, ``computeF``, and a map at each event, its non-smooth law:
+:meth:`Drive.rate` and :meth:`Drive.jump`; scheduled events beside state events), and Hopsan's
+components (parameters registered by name, read by the solver and copied with new values:
+:attr:`Drive.parameters`, :meth:`Drive.with_`). The saltation matrices of the multipliers follow
+Hiskens and Pai (2000).
+
+References
+----------
+I. A. Hiskens, M. A. Pai, "Trajectory sensitivity analysis of hybrid systems", IEEE Trans. Circuits
+Syst. I 47(2) (2000) 204-220.
+V. Acary, B. Brogliato, *Numerical Methods for Nonsmooth Dynamical Systems*, Springer (2008), ch. 7
+(event-driven schemes, the basis of Siconos' ``EventDriven`` simulation).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Hashable
+from dataclasses import dataclass
+from typing import Any, ClassVar, NamedTuple
+
+import numpy as np
+
+__all__ = ["Drive", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
+           "SurfaceEvent", "FlightKernel", "KernelRun", "OrbitData", "OrbitProblem", "autonomous",
+           "newton", "split_multipliers"]
+
+
+def autonomous(forcing) -> bool:
+    """Whether ``forcing`` is a drive (an autonomous forcing, :attr:`Drive.autonomous`) rather than
+    a periodic load: the question the solvers ask before taking the drive's path."""
+    return bool(getattr(forcing, "autonomous", False))
+
+
+class DriveState(NamedTuple):
+    """A drive's state: its discrete ``mode`` and its continuous state ``z``.
+
+    Attributes
+    ----------
+    mode : hashable
+        The drive's discrete state (chosen by the drive; the solvers only hand it back).
+    z : numpy.ndarray, shape (k,)
+        The continuous state, ``k = Drive.state_size`` (shape ``(0,)`` for a drive without state).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar import DriveState
+    >>> state = DriveState(mode="stroke", z=np.array([2.0e7]))  # e.g. a chamber pressure
+    >>> state.mode, state.z.shape
+    ('stroke', (1,))
+    """
+
+    mode: Hashable
+    z: np.ndarray
+
+
+# --------------------------------------------------------------------------------------------------
+# events
+# --------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class DriveEvent:
+    """An event of a drive: the zero of an event function crossed in a direction (scipy's
+    ``solve_ivp`` convention). A base class; the solvers use :meth:`value` and, under a constant
+    force, :meth:`first_time`.
+
+    Attributes
+    ----------
+    name : str
+        What the drive calls it (handed back to :meth:`Drive.jump`).
+    direction : int
+        ``+1``: the function rises through 0; ``-1``: it falls; ``0``: either.
+    """
+
+    name: str
+    direction: int = 0
+
+    def value(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray) -> float:
+        """The event function ``g(t, q, q', z)`` (its zero is the event)."""
+        raise NotImplementedError  # pragma: no cover - every event kind defines it
+
+    def first_time(self, d: float, p: float, t: float, q: np.ndarray, v: np.ndarray) -> float:
+        """The first time after ``t`` at which the event happens on the flight under the constant
+        force ``p`` from the modal state ``(q, v)`` at ``t`` (damping ``d``): in closed form,
+        ``inf`` if never; ``nan`` where the event has no closed form (the solver then locates it
+        numerically)."""
+        return math.nan
+
+    def crossing_speed(self, q: np.ndarray, v: np.ndarray) -> float:
+        """At a crossing of a switch position, the gap's rate in the crossing's direction (0 where
+        the motion grazes the switching surface); ``nan`` for other events."""
+        return math.nan
+
+
+@dataclass(frozen=True)
+class GapCrossing(DriveEvent):
+    """The piston's gap ``y = -q_0`` (its rigid coordinate measured from the stop, bar lengths)
+    crossing ``level`` (theory §10): ``g = -q_0 - level``. Under a constant force the rigid
+    coordinate obeys ``q_0'' + d q_0' = p`` alone, its rate is monotone, and the first crossing is
+    found in closed form and refined to rounding
+    (:func:`~impactbar.drives._crossing.first_rising_crossing`): none is missed."""
+
+    level: float = 0.0
+    direction: int = 1
+
+    def value(self, t, q, v, z):
+        return -float(q[0]) - self.level
+
+    def crossing_speed(self, q, v):
+        return -float(v[0]) if self.direction >= 0 else float(v[0])
+
+    def first_time(self, d, p, t, q, v):
+        from ._crossing import first_rising_crossing
+
+        up = t + first_rising_crossing(d, -float(q[0]), -float(v[0]), -p, self.level) \
+            if self.direction >= 0 else math.inf
+        down = t + first_rising_crossing(d, float(q[0]), float(v[0]), p, -self.level) \
+            if self.direction <= 0 else math.inf
+        return min(up, down)
+
+
+@dataclass(frozen=True)
+class RateCrossing(DriveEvent):
+    """The gap's rate ``y' = -q_0'`` (the piston's velocity away from the stop) crossing ``level``:
+    ``g = -q_0' - level``. Under a constant force the rate is monotone: at most one crossing, in
+    closed form (:func:`~impactbar.drives._crossing.first_rate_crossing`)."""
+
+    level: float = 0.0
+
+    def value(self, t, q, v, z):
+        return -float(v[0]) - self.level
+
+    def first_time(self, d, p, t, q, v):
+        from ._crossing import first_rate_crossing
+
+        w0 = -float(v[0])
+        dt = first_rate_crossing(d, w0, -p, self.level)
+        if self.direction and math.isfinite(dt) and (-p - d * w0) * self.direction <= 0.0:
+            return math.inf  # it crosses the other way
+        return t + dt
+
+
+@dataclass(frozen=True)
+class TimedEvent(DriveEvent):
+    """An event at a scheduled time (a valve's delay after its trigger, the end of a ramp):
+    ``g = t - time``, rising."""
+
+    time: float = math.inf
+    direction: int = 1
+
+    def value(self, t, q, v, z):
+        return t - self.time
+
+    def first_time(self, d, p, t, q, v):
+        return max(self.time, t)  # (one due already: at once)
+
+
+@dataclass(frozen=True)
+class SurfaceEvent(DriveEvent):
+    """Any event surface ``g(t, q, q', z) = 0`` (``function``, a callable of the time, the modal
+    displacements and velocities and the drive's continuous state) crossed in ``direction``; located
+    numerically (to the integrator's tolerance on a flight of a drive with state; by bracketing on a
+    grid finer than the stiffest mode's period and Brent's method on a closed-form flight)."""
+
+    function: Callable[..., float] | None = None
+
+    def value(self, t, q, v, z):
+        return float(self.function(t, q, v, z))
+
+
+@dataclass(frozen=True)
+class FlightSettings:
+    """The integrator of the flights of a drive with state (scipy's ``solve_ivp``), chosen by the
+    drive (:attr:`Drive.integrator`).
+
+    Attributes
+    ----------
+    method : str
+        A method of ``solve_ivp``: ``"LSODA"`` (default: ODEPACK's, switching between Adams and BDF
+        as the problem turns stiff, as an oil column against the piston's inertia does), ``"Radau"``
+        or ``"BDF"`` (stiff), ``"DOP853"`` (not stiff, high order).
+    rtol, atol : float
+        Relative and absolute tolerances (defaults ``1e-10`` and ``1e-12``): the flights and the
+        event times are accurate to about these.
+    max_step : float
+        Largest step (default ``inf``).
+    """
+
+    method: str = "LSODA"
+    rtol: float = 1e-10
+    atol: float = 1e-12
+    max_step: float = math.inf
+
+
+# --------------------------------------------------------------------------------------------------
+# optional compiled event loop
+# --------------------------------------------------------------------------------------------------
+class FlightKernel(NamedTuple):
+    """What the simulator hands a drive's compiled event loop (:meth:`Drive.compiled_loop`): the
+    compiled driver's data for the constant forces :attr:`Drive.levels`.
+
+    Attributes
+    ----------
+    loads : tuple
+        The plain tuples of the :class:`~impactbar.dynamics.kernelview.LoadKernelView` of each level.
+    basis : tuple
+        The plain tuple of the free-free :class:`~impactbar.dynamics.kernelview.ModalBasisView`.
+    R : float
+        The impact law's restitution as the kernel applies it (``kernel_restitution``).
+    c : numpy.ndarray, shape (N + 1,)
+        Weights of the struck end's displacement, ``u(1, t) = c . q``.
+    tail : float
+        The driver's chatter tolerance.
+    rigid : bool
+        Whether the rigid bar's flights take the scalar closed forms.
+    fast_search : bool
+        Whether the driver's specialised impact searches run.
+    """
+
+    loads: tuple
+    basis: tuple
+    R: float
+    c: np.ndarray
+    tail: float
+    rigid: bool
+    fast_search: bool
+
+
+class KernelRun(NamedTuple):
+    """What a drive's compiled event loop hands back to the simulator after a call.
+
+    Attributes
+    ----------
+    status : int
+        :attr:`DONE` (``t_end`` reached), :attr:`MAX_IMPACTS` or :attr:`PYTHON` (the next flight is
+        the simulator's: a touch without an impact, a start through the stop, ...).
+    state : DriveState
+        The drive's state where the loop stopped.
+    t : float
+        Where it stopped; ``q``, ``v`` the modal state there (arrays of the call, overwritten).
+    n_impacts : int
+        Impacts so far (the run's count).
+    impact_times, impact_velocities : numpy.ndarray
+        The impacts of this call.
+    switch_times, switch_gaps : numpy.ndarray
+        The drive's switches of this call and the gap ``-q_0`` at each.
+    switch_names : list of str
+        The name of the mode entered at each switch (:meth:`Drive.mode_name`).
+    pieces : tuple or None
+        The flights of this call: ``(starts, ends, codes, q, v)``, ``codes`` the index of the level
+        in :attr:`Drive.levels` plus ``len(levels)`` where the rigid piston rests on the stop.
+    """
+
+    status: int
+    state: DriveState
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+    n_impacts: int
+    impact_times: np.ndarray
+    impact_velocities: np.ndarray
+    switch_times: np.ndarray
+    switch_gaps: np.ndarray
+    switch_names: list
+    pieces: tuple | None
+
+    DONE = 0
+    MAX_IMPACTS = 1
+    PYTHON = 3
+
+
+# --------------------------------------------------------------------------------------------------
+# the drive
+# --------------------------------------------------------------------------------------------------
+class Drive(ABC):
+    r"""A drive of the piston that is not a function of time: autonomous, with state of its own
+    (theory §10). A base class: subclasses declare the force, the events and their maps.
+
+    The solvers (:func:`impactbar.simulate`, :func:`impactbar.find_orbit`,
+    :func:`impactbar.continue_orbit`) take a drive wherever they take a load and call only the
+    members below; a new drive needs nothing else (``tests/drives/test_new_drive.py`` defines two in
+    the test file alone). Subclasses are frozen dataclasses (validated once, hashable, compared by
+    value).
+
+    ==================================  ===============================================================
+    member                              what it gives
+    ==================================  ===============================================================
+    ``state_size``                      ``k``, size of the continuous state ``z`` (0: a force constant
+                                        between events)
+    ``parameters``                      names of the fields :func:`~impactbar.continue_orbit` may follow
+    :meth:`with_`                       a copy with new parameter values (validated again)
+    :meth:`start`                       the state at the start of a run, from the bar's
+    :meth:`force`                       ``p`` on the piston, from the state (and the bar's, ``k > 0``)
+    :meth:`rate`                        ``z'`` between events (``k > 0``)
+    :meth:`events`                      the events that can end a flight in a mode
+    :meth:`jump`                        the state after an event
+    :meth:`impact`                      the state after an impact
+    :meth:`mode_name`                   a mode's name, logged at each switch
+    ``integrator``                      ``solve_ivp``'s method and tolerances for ``z``
+    ``levels``, :meth:`compiled_loop`   optional: a compiled event loop
+    :meth:`orbit_problem`               optional: a periodic-orbit problem of the drive's own
+    ==================================  ===============================================================
+
+    Attributes
+    ----------
+    autonomous : bool
+        ``True``: what the solvers ask (:func:`autonomous`) before taking a drive's path.
+    state_size : int
+        ``k``, the number of continuous state variables ``z`` (0 for a force that is constant between
+        events, whose flights are then closed forms).
+    state_names : tuple of str
+        Names of the ``k`` variables (logged with the run's drive state).
+    integrator : FlightSettings
+        The integrator of a drive with state (method and tolerances of ``solve_ivp``).
+    parameters : tuple of str
+        The fields :func:`impactbar.continue_orbit` can follow (each a float).
+    levels : tuple of float or None
+        For a drive with a compiled event loop, the constant forces it takes (the valve:
+        ``(+stroke, -ret)``); ``None`` otherwise.
+
+    The example below is a force of constant size pushing the piston onto the stop (no event, no
+    state): the bounces of a rigid piston dropped from the gap ``y0`` arrive at
+    ``v_1 = sqrt(2 p y0)``, then ``R v_1``, ``R^2 v_1`` (eq. 10, energy).
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> from impactbar import BarModel, Drive, DriveState, InitialState, simulate
+    >>> import numpy as np
+    >>> @dataclass(frozen=True)
+    ... class Push(Drive):
+    ...     p: float
+    ...     parameters = ("p",)
+    ...     def start(self, model, q, v): return DriveState(0, np.zeros(0))
+    ...     def force(self, mode, z, q, v): return self.p
+    ...     def events(self, mode): return ()
+    ...     def jump(self, mode, z, event, t, q, v): return DriveState(mode, z)
+    ...     def impact(self, mode, z, t, q, v): return DriveState(mode, z)
+    >>> run = simulate(BarModel(s=10, d=0, R=0.5, n_modes=0), Push(2.0), InitialState.rigid(-1.0, 0.0),
+    ...                5.0, max_impacts=3)
+    >>> [round(float(v), 12) for v in run.impact_velocities]
+    [2.0, 1.0, 0.5]
+    """
+
+    autonomous: ClassVar[bool] = True
+    integrator: ClassVar[FlightSettings] = FlightSettings()
+    state_size: ClassVar[int] = 0
+    state_names: ClassVar[tuple[str, ...]] = ()
+    parameters: ClassVar[tuple[str, ...]] = ()
+
+    # -- parameters -------------------------------------------------------------------------------
+    def with_(self, **changes) -> Drive:
+        """A copy with the given parameters changed (validated again by the constructor).
+
+        Raises
+        ------
+        ValueError
+            For a name not in :attr:`parameters` (named) or a value the constructor refuses.
+        """
+        bad = sorted(set(changes) - set(self.parameters))
+        if bad:
+            raise ValueError(f"parameter must be one of {self.parameters} for a {type(self).__name__}; "
+                             f"got {bad[0]!r}")
+        return dataclasses.replace(self, **changes)
+
+    # -- state ------------------------------------------------------------------------------------
+    @abstractmethod
+    def start(self, model, q: np.ndarray, v: np.ndarray) -> DriveState:
+        """The drive's state at the start of a run from the bar's modal state ``(q, q')``."""
+
+    def mode_name(self, mode) -> str:
+        """The name of a mode, logged at each switch (``SwitchedTrajectory.switch_kinds``)."""
+        return str(mode)
+
+    # -- between events ---------------------------------------------------------------------------
+    @abstractmethod
+    def force(self, mode, z: np.ndarray, q: np.ndarray, v: np.ndarray) -> float:
+        """The force ``p`` on the piston at ``x = 0`` (dimensionless, eq. 2) in ``mode`` with the
+        continuous state ``z`` and the bar's modal state ``(q, q')``. With ``state_size == 0`` it
+        depends on the mode alone (constant between events)."""
+
+    def rate(self, mode, z: np.ndarray, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """``z'``, the rate of the continuous state between events, shape ``(state_size,)``."""
+        return np.zeros(0)
+
+    @property
+    def piecewise_constant(self) -> bool:
+        """Whether the force is constant between events (no continuous state): flights in closed
+        form."""
+        return self.state_size == 0
+
+    # -- events -----------------------------------------------------------------------------------
+    @abstractmethod
+    def events(self, mode) -> tuple[DriveEvent, ...]:
+        """The events that can end a flight in ``mode``, in the order their maps apply when two
+        happen at once."""
+
+    @abstractmethod
+    def jump(self, mode, z: np.ndarray, event: DriveEvent, t: float, q: np.ndarray,
+             v: np.ndarray) -> DriveState:
+        """The drive's state after ``event`` at time ``t`` (the bar's state ``(q, q')`` there is
+        continuous across it)."""
+
+    @abstractmethod
+    def impact(self, mode, z: np.ndarray, t: float, q: np.ndarray, v: np.ndarray) -> DriveState:
+        """The drive's state after an impact, ``(q, q')`` the bar's state just after it (after the
+        impact law; under a law whose contact takes time, where the contact ends, at ``t``)."""
+
+    # -- optional numerics of the drive's own ----------------------------------------------------
+    @property
+    def levels(self) -> tuple[float, ...] | None:
+        """The constant forces of a compiled event loop (:meth:`compiled_loop`), ``None`` without
+        one."""
+        return None
+
+    def compiled_loop(self, model, kernel: FlightKernel):
+        """A compiled event loop for a run (``None``: the simulator's loop in Python).
+
+        Returns an object whose ``run(state, t, q, v, t_end, n_impacts, max_impacts)`` follows the
+        drive through many flights and returns a :class:`KernelRun`; ``piece(t0, t1, code, q, v)``
+        is then asked for nothing (the simulator builds the flights from the codes)."""
+        return None
+
+    def flight(self, model, state: DriveState, t: float, q: np.ndarray, v: np.ndarray, t_stop: float,
+               settings: FlightSettings | None = None, variational: bool = False):
+        """The drive's own integration of one flight (``None``: the generic flight of
+        :func:`impactbar.drives.flight.fly`, ``solve_ivp`` over :meth:`force` and :meth:`rate`).
+
+        A drive with stiff state of its own (the oil circuit) integrates its flights with its own
+        compiled vector field; it returns a :class:`~impactbar.drives.flight.Flight` ending at the
+        first of the arrival at the stop, one of its :meth:`events` or ``t_stop``, and with
+        ``variational`` (when :attr:`variational` is true) the flight's fundamental matrix of
+        ``(q, q', z)`` in ``Flight.sensitivity``."""
+        return None
+
+    #: Whether :meth:`flight` integrates the variational equations when asked (the generic
+    #: periodic orbits then take the shooting Jacobian and the multipliers from them).
+    variational: ClassVar[bool] = False
+
+    def border_tests(self, pieces) -> dict:
+        """Test functions of the drive's own border collisions over one period of an orbit
+        (``{surface: value}``, each changing sign where the drive's state touches that switching
+        surface during the period: the return map changes its formula there); ``pieces`` are the
+        period's flights as the drive's :meth:`flight` gives them. The continuation of switched
+        orbits locates each change of sign as a ``"border-collision"`` event. Default: none."""
+        return {}
+
+    def orbit_problem(self, model, impacts: int,
+                      constant_load: Callable[[float], Any]) -> OrbitProblem | None:
+        """The drive's own periodic-orbit problem (closed-form flights, exact Jacobian), or ``None``
+        for the generic shooting problem of :mod:`impactbar.orbits.switched`. ``constant_load(p)``
+        gives the load of a constant force ``p`` (for a contact law's map)."""
+        return None
+
+    def harmonics(self, n=None):
+        """Refused: a drive is not a function of time (theory §10)."""
+        raise ValueError(f"a {type(self).__name__} is not periodic in time: it has no harmonics "
+                         "(use simulate or find_orbit with it, theory §10)")
+
+
+# --------------------------------------------------------------------------------------------------
+# periodic orbits of a drive: the problem a solver of find_orbit asks for
+# --------------------------------------------------------------------------------------------------
+class OrbitData(NamedTuple):
+    """What an :class:`OrbitProblem` gives of a solution: the fields of
+    :class:`~impactbar.SwitchedOrbit` the orbit solver does not compute itself.
+
+    Attributes
+    ----------
+    period : float
+    durations : numpy.ndarray
+        The flights between consecutive events of the period, in order from the first impact (or
+        the end of its contact).
+    states_after, states_before : numpy.ndarray, shape (m, 2 N + 2)
+        The bar's state just after each impact (where its contact ends) and on arrival at the next
+        impact, in order (the last arrival leads to ``states_after[0]``).
+    impact_velocities : numpy.ndarray, shape (m,)
+        The struck end's velocity at each of those arrivals.
+    impact_times : numpy.ndarray, shape (m,)
+        Their times after the first state of ``states_after``.
+    drive_states : numpy.ndarray, shape (m, k)
+        The drive's continuous state just after each impact.
+    multipliers : numpy.ndarray
+        The non-trivial Floquet multipliers, largest modulus first.
+    trivial_multiplier : float
+    switch_times : numpy.ndarray
+        Times after the first impact at which the drive switched.
+    switch_velocity : float
+        The smallest rate of the gap at the drive's position crossings (0 where a switching surface
+        is grazed), ``nan`` where the drive has none.
+    contact_time : float
+        The law's window (0 under the paper's law).
+    contact_forces : numpy.ndarray, shape (m,)
+        The drive's force held during each contact.
+    monodromy : numpy.ndarray or None
+    """
+
+    period: float
+    durations: np.ndarray
+    states_after: np.ndarray
+    states_before: np.ndarray
+    impact_velocities: np.ndarray
+    impact_times: np.ndarray
+    drive_states: np.ndarray
+    multipliers: np.ndarray
+    trivial_multiplier: float
+    switch_times: np.ndarray
+    switch_velocity: float
+    contact_time: float
+    contact_forces: np.ndarray
+    monodromy: np.ndarray | None
+
+
+class OrbitProblem(ABC):
+    """The periodic-orbit problem of a drive (unknown period, theory §10): unknowns ``X``, a residual
+    with its Jacobian, Newton's start from a guess and the orbit of a solution. The valve's
+    (:class:`~impactbar.drives.switched.segment.ValveProblem`) and the generic shooting problem
+    (:class:`~impactbar.orbits.switched.ShootingProblem`) implement it; :func:`impactbar.find_orbit`
+    and :func:`impactbar.continue_orbit` call only these members.
+
+    Attributes
+    ----------
+    model, drive, impacts
+        The bar, the drive and the impacts per period ``m``.
+    size : int
+        The number of unknowns.
+    positive : numpy.ndarray of int
+        Indices of the unknowns that must stay positive (flight times): Newton's step is damped so
+        that they change by at most a half.
+    """
+
+    model: Any
+    drive: Drive
+    impacts: int
+    size: int
+    positive: np.ndarray
+
+    @abstractmethod
+    def initial(self, guess, tol: float, max_iter: int) -> np.ndarray:
+        """Newton's start from ``guess`` (``None``: the drive's default)."""
+
+    @abstractmethod
+    def residual(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The residual and its Jacobian at ``X``."""
+
+    def solve(self, X: np.ndarray, tol: float, max_iter: int) -> np.ndarray:
+        """Newton's method from ``X`` (:func:`newton`)."""
+        return newton(self.residual, X, self.positive, tol, max_iter)
+
+    def adopt(self, other: OrbitProblem) -> OrbitProblem:
+        """Take from ``other``, the problem of a nearby solution (another parameter value, or the
+        one-impact problem of a doubled branch), what this one needs besides the unknowns (the
+        generic shooting's start times and modes); returns ``self``."""
+        return self
+
+    @abstractmethod
+    def unknowns(self, orbit) -> np.ndarray:
+        """The unknowns of a found orbit (a :class:`~impactbar.SwitchedOrbit` of this problem)."""
+
+    @abstractmethod
+    def orbit(self, X: np.ndarray) -> OrbitData:
+        """The orbit of a solution ``X``."""
+
+    @abstractmethod
+    def pieces(self, X: np.ndarray) -> list:
+        """The flights of the period as ``(t0, t1, f)``: ``f(t)`` gives the modal state ``(q, v)``,
+        shapes ``(N + 1, T)``, at orbit times ``t0 <= t <= t1`` from the first state of the unknowns
+        (the contacts' windows lie between the flights)."""
+
+    @abstractmethod
+    def admissibility(self, X: np.ndarray, k: int):
+        """The admissibility of the flights after impact ``k`` (an
+        :class:`~impactbar.Admissibility`), the contacts apart."""
+
+
+def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
+    """Newton's method on ``residual(X) -> (r, J)`` from ``X``, damped while the unknowns at
+    ``positive`` (flight times) would change by more than a half. It stops when a step is below
+    ``tol`` (relative), or when the next step, predicted from quadratic convergence
+    (``|s_k|^2 / |s_(k-1)|``), would be: that saves the last residual, whose only use would be to
+    see the step vanish.
+
+    Raises
+    ------
+    ValueError
+        When a flight time turns non-positive, the Jacobian is singular or ``max_iter`` steps do not
+        converge.
+    """
+    hi = positive
+    last = math.inf
+    step = np.zeros(0)
+    for _ in range(max_iter):
+        r, Jac = residual(X)
+        try:
+            step = np.linalg.solve(Jac, -r)
+        except np.linalg.LinAlgError:
+            raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at the "
+                             "guess (the motion it starts from does not repeat: e.g. a drive too weak to "
+                             "bring the piston back to the stop); give a guess, or check the drive's "
+                             "parameters with simulate") from None
+        big = float(np.max(np.abs(step[hi]) / np.abs(X[hi]))) if hi.size else 0.0
+        if big > 0.5:  # damped while far: the flight times change by at most a half
+            step *= 0.5 / big
+        X = X + step
+        if np.any(X[hi] <= 0.0):
+            raise ValueError("Newton left the region of positive flight times: give a guess closer "
+                             "to the orbit (e.g. from simulate)")
+        size = float(np.max(np.abs(step)))
+        scale = tol * max(1.0, float(np.max(np.abs(X))))
+        if size <= scale or (big <= 0.5 and math.isfinite(last) and size < 1e-4 * last
+                             and size * size <= scale * last):
+            return X
+        last = size
+    raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
+                     f"{np.max(np.abs(step)):.2e})")
+
+
+def split_multipliers(Phi: np.ndarray, f: np.ndarray) -> tuple[float, np.ndarray]:
+    """The trivial multiplier along the vector field ``f`` and the others (theory §10): ``Phi`` in
+    the orthonormal basis ``(f/|f|, B)`` is block upper triangular (``Phi f = f``).
+
+    Returns
+    -------
+    trivial : float
+    multipliers : numpy.ndarray
+        The others, largest modulus first (real where every imaginary part is rounding).
+    """
+    n = f.size
+    fhat = f / np.linalg.norm(f)
+    if n == 2:  # the rigid bar: P = Q^T Phi Q is triangular, so mu = trace - P[0, 0]
+        trivial = float(fhat @ Phi @ fhat)
+        return trivial, np.array([float(np.trace(Phi)) - trivial])
+    Q, _ = np.linalg.qr(np.column_stack((fhat, np.eye(n))))
+    Q = Q[:, :n]
+    Q[:, 0] = fhat
+    Q, _ = np.linalg.qr(Q)
+    if Q[:, 0] @ fhat < 0:
+        Q[:, 0] = -Q[:, 0]
+    P = Q.T @ Phi @ Q
+    mu = np.linalg.eigvals(P[1:, 1:]) if n > 1 else np.array([])
+    return float(P[0, 0]), sorted_multipliers(mu)
+
+
+def sorted_multipliers(mu: np.ndarray) -> np.ndarray:
+    """Multipliers by decreasing modulus (stable order), real where every imaginary part is
+    rounding."""
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    if np.all(np.abs(mu.imag) <= 1e-14 * np.maximum(1.0, np.abs(mu))):
+        mu = mu.real
+    return mu

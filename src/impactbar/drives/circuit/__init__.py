@@ -1,0 +1,21 @@
+"""The drifter's oil circuit as a drive with state (theory §11): chambers, main valve, supply node
+with pump, gas accumulator and relief valve, and its numerics.
+
+Layout: ``parts`` (the frozen parts: :class:`Chambers`, :class:`Valve`, :class:`Supply`,
+:class:`Accumulator`, :class:`Oil`), ``drive`` (:class:`HydraulicCircuitDrive`, the
+:class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``flight`` (one
+flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_kernel`` (the
+compiled vector field, Jacobian and event functions).
+"""
+
+from .drive import PARAMETERS as PARAMETERS
+from .drive import CircuitEnergy as CircuitEnergy
+from .drive import HydraulicCircuitDrive as HydraulicCircuitDrive
+from .parts import Accumulator as Accumulator
+from .parts import Chambers as Chambers
+from .parts import Oil as Oil
+from .parts import Supply as Supply
+from .parts import Valve as Valve
+
+__all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS", "Chambers", "Valve", "Supply",
+           "Accumulator", "Oil"]

@@ -1,0 +1,462 @@
+r"""The drifter's oil circuit as a drive with state (theory §11): chambers, valve, supply node with
+pump, accumulator and relief valve, composed from the frozen parts of :mod:`.parts`.
+
+State ``z = (p_f, p_r, p_s, x_v)``: the front and rear chamber pressures, the supply pressure and the
+valve's opening. Mode ``(target, moving, acc, relief)``: the valve's commanded position (1 stroke,
+0 return), whether its spool is ramping there, whether the accumulator holds oil (``p_s > p_0``) and
+whether the relief valve is open (``p_s > p_rel``); each flag changes at an event, so that the vector
+field is smooth between events.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..base import Drive, DriveState, FlightSettings, GapCrossing, SurfaceEvent
+from . import _kernel as K
+from .parts import Accumulator, Chambers, Oil, Supply, Valve
+
+__all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
+
+#: The circuit's continuation parameters and the part that holds each (``with_`` takes them by name).
+PARAMETERS = {
+    "pump_flow": ("supply", "pump_flow"), "supply_pressure": ("supply", "pressure"),
+    "hose_volume": ("supply", "hose_volume"), "front_coefficient": ("supply", "front_coefficient"),
+    "tank_pressure": ("supply", "tank_pressure"), "relief_pressure": ("supply", "relief_pressure"),
+    "relief_coefficient": ("supply", "relief_coefficient"),
+    "precharge": ("accumulator", "precharge"), "accumulator_volume": ("accumulator", "volume"),
+    "polytropic_exponent": ("accumulator", "polytropic_exponent"),
+    "switch_out": ("valve", "switch_out"), "switch_in": ("valve", "switch_in"),
+    "switching_time": ("valve", "switching_time"), "valve_coefficient": ("valve", "coefficient"),
+    "area_ratio": ("chambers", "area_ratio"), "rear_volume": ("chambers", "rear_volume"),
+    "front_volume": ("chambers", "front_volume"),
+    "bulk_modulus": ("oil", "bulk_modulus"), "transition_pressure": ("oil", "transition_pressure"),
+}
+
+_SWITCH_OUT = "switch_out"
+_SWITCH_IN = "switch_in"
+_RAMP = "ramp_end"
+_ACC = "accumulator"
+_REL = "relief"
+
+
+class CircuitEnergy(dict):
+    """The oil circuit's energy account over a run or an orbit (theory §11), a dict of floats in the
+    model's energy unit ``m L^2 Omega^2`` (eq. 2): ``pump`` (the pump's work, ``int p_s Q_p``),
+    ``piston`` (the oil's work on the piston, ``int F (-w')``), ``orifices`` (``int Q dp`` of every
+    opening), ``tank`` (``int p_t Q`` to the tank), ``compression`` (``int (V p / beta) p'`` of the
+    three oil volumes), ``accumulator`` (``int p_s C_a p_s'``), and ``residual`` (the pump's work
+    less all the others: 0 to the integrator's tolerance) and ``relative_residual`` (over the pump's
+    work)."""
+
+    @classmethod
+    def from_terms(cls, E) -> CircuitEnergy:
+        E = np.asarray(E, dtype=float)
+        out = cls(pump=float(E[0]), piston=float(E[1]), orifices=float(E[2]), tank=float(E[3]),
+                  compression=float(E[4] + E[5] + E[6]), accumulator=float(E[7]))
+        out["residual"] = float(E[0] - np.sum(E[1:]))
+        out["relative_residual"] = out["residual"] / max(abs(float(E[0])), 1e-300)
+        return out
+
+
+@dataclass(frozen=True)
+class HydraulicCircuitDrive(Drive):
+    r"""A hydraulic drifter's oil circuit driving the piston (theory §11): a drive with state
+    ``z = (p_f, p_r, p_s, x_v)``.
+
+    The force on the piston's driven end (eq. 4) is ``p = p_r - alpha p_f`` (pressures in the
+    pressure scale, the rear area 1, the front annulus ``alpha``). Between events
+
+    - ``p_f' = beta / V_f (K_f phi(p_s - p_f) - alpha w')``, ``V_f = V_f0 + alpha w``;
+    - ``p_r' = beta / V_r (K_v x_v phi(p_s - p_r) - K_v (1 - x_v) phi(p_r - p_t) + w')``,
+      ``V_r = V_r0 - w``;
+    - ``p_s' = (Q_p - K_f phi(p_s - p_f) - K_v x_v phi(p_s - p_r) - K_rel max(0, p_s - p_rel)) / C``,
+      ``C = V_s / beta + C_a(p_s)`` (0 for a supply held at a pressure);
+    - ``x_v' = +-1 / tau_v`` while the spool ramps, else 0;
+
+    with ``w = -u(0, t)`` the driven end's displacement away from the stop and ``phi`` the smoothed
+    orifice law (:class:`~impactbar.drives.circuit.Oil`). Events: the gap ``y = -q_0`` rising through
+    ``switch_out`` opens the valve (armed while it is closed or closing), each impact closes it (or,
+    with ``switch_in``, the gap falling through it), each a ramp from where the spool is; the ramp's
+    end; ``p_s`` through the pre-charge and the relief pressure. Pressures and ``x_v`` are continuous
+    through impacts.
+
+    Parameters
+    ----------
+    chambers : Chambers
+    valve : Valve
+    supply : Supply
+    oil : Oil
+    accumulator : Accumulator, optional
+        ``None``: none.
+    start_pressures : tuple of float, optional
+        ``(p_f, p_r, p_s)`` or ``(p_f, p_r, p_s, x_v)`` at the start of a run; default: the supply
+        and the front chamber at the pre-charge (the accumulator just empty; the held pressure for a
+        held supply, the tank pressure without an accumulator), the rear chamber at the tank
+        pressure, the valve at the position the start's gap commands (with ``x_v`` given and away
+        from it, the spool starts ramping there: an orbit's state after an impact, restarted).
+
+    Raises
+    ------
+    ValueError
+        A part of the wrong type, a pre-charge above the relief pressure, start pressures out of range.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, InitialState, simulate
+    >>> from impactbar.drives.circuit import (Accumulator, Chambers, HydraulicCircuitDrive, Oil,
+    ...                                       Supply, Valve)
+    >>> drive = HydraulicCircuitDrive(
+    ...     Chambers(area_ratio=0.5, rear_volume=0.4, front_volume=0.2),
+    ...     Valve(switch_out=0.048, coefficient=2.0, switching_time=0.05),
+    ...     Supply(pump_flow=None, pressure=2.0, hose_volume=1.0, front_coefficient=2.0,
+    ...            tank_pressure=0.03),
+    ...     Oil(bulk_modulus=140.0, transition_pressure=0.01))
+    >>> run = simulate(BarModel(s=52, d=0, R=0.215, n_modes=0), drive, InitialState.rigid(0.0, 0.0),
+    ...                10.0)
+    >>> run.n_impacts > 3, abs(drive.energy(run)["relative_residual"]) < 1e-8
+    (True, True)
+    """
+
+    chambers: Chambers
+    valve: Valve
+    supply: Supply
+    oil: Oil
+    accumulator: Accumulator | None = None
+    start_pressures: tuple | None = None
+
+    state_size = 4
+    state_names = ("p_f", "p_r", "p_s", "x_v")
+    parameters = tuple(PARAMETERS)
+    integrator = FlightSettings(method="CVODE", rtol=1e-10, atol=1e-12)
+    variational = True
+
+    def __post_init__(self) -> None:
+        for name, cls in (("chambers", Chambers), ("valve", Valve), ("supply", Supply), ("oil", Oil)):
+            if not isinstance(getattr(self, name), cls):
+                raise ValueError(f"{name} must be a {cls.__name__}; got {type(getattr(self, name)).__name__}")
+        acc = self.accumulator
+        if acc is not None and not isinstance(acc, Accumulator):
+            raise ValueError(f"accumulator must be an Accumulator or None; got {type(acc).__name__}")
+        sup = self.supply
+        if acc is not None and acc.volume > 0 and math.isfinite(sup.relief_pressure) \
+                and acc.precharge >= sup.relief_pressure:
+            raise ValueError(f"accumulator.precharge must be below the relief pressure "
+                             f"{sup.relief_pressure:g}; got {acc.precharge:g} (the accumulator would never "
+                             "take oil)")
+        if self.start_pressures is not None:
+            sp = tuple(float(x) for x in self.start_pressures)
+            if len(sp) not in (3, 4) or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
+                    or (len(sp) == 4 and sp[3] > 1.0):
+                raise ValueError(f"start_pressures must be three finite pressures >= 0 (p_f, p_r, p_s), "
+                                 f"optionally with the valve opening x_v in [0, 1]; "
+                                 f"got {self.start_pressures!r}")
+            object.__setattr__(self, "start_pressures", sp)
+
+    # -- parameters --------------------------------------------------------------------------------
+    def with_(self, **changes) -> HydraulicCircuitDrive:
+        """A copy with parameters changed by name (:data:`PARAMETERS`: ``pump_flow``, ``precharge``,
+        ``switching_time``, ...), validated again.
+
+        Raises
+        ------
+        ValueError
+            An unknown name (the allowed ones listed) or a value a part refuses.
+        """
+        parts: dict = {}
+        for name, value in changes.items():
+            if name not in PARAMETERS:
+                raise ValueError(f"parameter must be one of {self.parameters}; got {name!r}")
+            part, field = PARAMETERS[name]
+            if getattr(self, part) is None:
+                raise ValueError(f"{name}: the circuit has no {part}")
+            parts.setdefault(part, {})[field] = value
+        new = {p: dataclasses.replace(getattr(self, p), **f) for p, f in parts.items()}
+        return dataclasses.replace(self, **new)
+
+    def value(self, name: str) -> float:
+        """The value of a parameter by name (:data:`PARAMETERS`)."""
+        part, field = PARAMETERS[name]
+        return float(getattr(getattr(self, part), field))
+
+    def __getattr__(self, name: str):
+        # the parameters read by name as attributes (``drive.precharge``), as the generic
+        # continuation reads a drive's parameters (only called where the ordinary lookup fails)
+        if name in PARAMETERS:
+            part, field = PARAMETERS[name]
+            holder = self.__dict__.get(part)
+            if holder is not None:
+                value = getattr(holder, field)
+                return float(value) if value is not None else None
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+
+    # -- compiled data ----------------------------------------------------------------------------
+    def _par(self, model, mode, variational=False) -> np.ndarray:
+        par = _par_base(self, model.n_modes, float(model.d), float(model.s)).copy()
+        target, moving, acc, rel = mode
+        par[K.ACC] = float(acc)
+        par[K.REL] = float(rel)
+        tau = self.valve.switching_time
+        par[K.XRATE] = (1.0 if target else -1.0) / tau if moving else 0.0
+        par[K.OPEN] = (1.0 if target else -1.0) if moving else 0.0
+        par[K.ARMO] = 1.0 if target == 0 else 0.0
+        par[K.ARMI] = 1.0 if (target == 1 and self.valve.switch_in is not None) else 0.0
+        par[K.VAR] = 1.0 if variational else 0.0
+        return par
+
+    def _directions(self, mode):
+        target, moving, acc, rel = mode
+        return (1, 1, -1, 1 if target else -1, -1 if acc else 1, -1 if rel else 1)
+
+    def _fired(self, mode, hit):
+        names = {K.OUT_EV: _SWITCH_OUT, K.IN_EV: _SWITCH_IN, K.RAMP_EV: _RAMP, K.ACC_EV: _ACC, K.REL_EV: _REL}
+        wanted = {names[i] for i in hit if i in names}
+        return tuple(e for e in self.events(mode) if e.name in wanted)
+
+    def _failure(self, model, sol, t) -> str:
+        return (f"the oil circuit's flight from t = {t:.6g} could not be integrated ({sol.message}): "
+                "check that the chambers keep a positive volume (rear_volume against the stroke) and that "
+                "the pump flow and the areas can move the piston")
+
+    def _check_volumes(self, model, piece, t) -> None:
+        M = model.n_modes + 1
+        e = np.where(np.arange(M) == 0, 1.0, 2.0)
+        w = -(piece.y[:, :M] @ e)
+        nur = self.chambers.rear_volume - w
+        nuf = self.chambers.front_volume + self.chambers.area_ratio * w
+        if np.min(nur) <= 0.0 or np.min(nuf) <= 0.0:
+            which = "rear" if np.min(nur) <= 0.0 else "front"
+            now = getattr(self.chambers, which + "_volume")
+            raise ValueError(f"the {which} chamber empties (V <= 0) near t = {t:.6g}: the piston overtravels "
+                             f"it; give a larger {which}_volume (now {now:g}) or a switch position nearer "
+                             "the stop")
+
+    # -- the Drive interface ----------------------------------------------------------------------
+    def start(self, model, q, v) -> DriveState:
+        sup, acc = self.supply, self.accumulator
+        xv = None
+        if self.start_pressures is not None:
+            pf, pr, ps = self.start_pressures[:3]
+            if len(self.start_pressures) == 4:
+                xv = self.start_pressures[3]
+        else:
+            if sup.held:
+                ps = sup.pressure
+            elif acc is not None and acc.volume > 0:
+                ps = max(acc.precharge, sup.tank_pressure)
+            else:
+                ps = sup.tank_pressure
+            pf, pr = ps, sup.tank_pressure
+        if sup.held:
+            ps = sup.pressure
+        gap = -float(np.asarray(q)[0])
+        target = 1 if gap >= self.valve.switch_out else 0
+        z = np.array([pf, pr, ps, float(target)])
+        if xv is not None and xv != float(target):
+            z[3] = xv
+            return self._toward(self._mode(1 - target, 0, ps), z, target)
+        return DriveState(self._mode(target, 0, ps), z)
+
+    def _mode(self, target, moving, ps):
+        acc = self.accumulator
+        has_acc = acc is not None and acc.volume > 0 and not self.supply.held
+        a = 1 if has_acc and ps >= acc.precharge else 0
+        r = 1 if self.supply.has_relief and not self.supply.held and ps > self.supply.relief_pressure else 0
+        return (target, moving, a, r)
+
+    def mode_name(self, mode) -> str:
+        return "stroke" if mode[0] == 1 else "return"
+
+    def force(self, mode, z, q, v) -> float:
+        return float(z[1] - self.chambers.area_ratio * z[0])
+
+    def rate(self, mode, z, q, v) -> np.ndarray:
+        q = np.asarray(q, dtype=float)
+        M = q.size
+        par = self._par(_RateModel(M), mode)
+        y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)))
+        out = np.empty(2 * M + 4 + K.N_ENERGY)
+        K.field_at(np.concatenate((y, np.zeros(K.N_ENERGY)))[None, :], par, out[None, :])
+        return out[2 * M:2 * M + 4].copy()
+
+    def events(self, mode):
+        target, moving, acc, rel = mode
+        out = []
+        if target == 0:
+            out.append(GapCrossing(_SWITCH_OUT, level=self.valve.switch_out, direction=1))
+        if target == 1 and self.valve.switch_in is not None:
+            out.append(GapCrossing(_SWITCH_IN, level=self.valve.switch_in, direction=-1))
+        if moving:
+            lvl = float(target)
+            out.append(SurfaceEvent(_RAMP, direction=1 if target else -1,
+                                    function=lambda t, q, v, z, lvl=lvl: float(z[3]) - lvl))
+        if self.accumulator is not None and self.accumulator.volume > 0 and not self.supply.held:
+            p0 = self.accumulator.precharge
+            out.append(SurfaceEvent(_ACC, direction=-1 if acc else 1,
+                                    function=lambda t, q, v, z, p0=p0: float(z[2]) - p0))
+        if self.supply.has_relief and not self.supply.held:
+            pr = self.supply.relief_pressure
+            out.append(SurfaceEvent(_REL, direction=-1 if rel else 1,
+                                    function=lambda t, q, v, z, pr=pr: float(z[2]) - pr))
+        return tuple(out)
+
+    def _held(self, z) -> np.ndarray:
+        """``z`` with a held supply's pressure written again (it never changes: written at each map,
+        the return map's Jacobian has no unit multiplier along ``p_s``, so Newton's is regular)."""
+        z = np.array(z, dtype=float)
+        if self.supply.held:
+            z[2] = self.supply.pressure
+        return z
+
+    def _toward(self, mode, z, target):
+        z = self._held(z)
+        _, _, acc, rel = mode
+        tau = self.valve.switching_time
+        if tau <= 0.0 or z[3] == float(target):
+            z[3] = float(target)
+            return DriveState((target, 0, acc, rel), z)
+        return DriveState((target, 1, acc, rel), z)
+
+    def jump(self, mode, z, event, t, q, v) -> DriveState:
+        target, moving, acc, rel = mode
+        name = event.name
+        if name == _SWITCH_OUT:
+            return self._toward(mode, z, 1)
+        if name == _SWITCH_IN:
+            return self._toward(mode, z, 0)
+        z = self._held(z)
+        if name == _RAMP:
+            z[3] = float(target)
+            return DriveState((target, 0, acc, rel), z)
+        if name == _ACC:
+            return DriveState((target, moving, 1 - acc, rel), z)
+        if name == _REL:
+            return DriveState((target, moving, acc, 1 - rel), z)
+        raise ValueError(f"unknown event {name!r} of the oil circuit")  # pragma: no cover
+
+    def impact(self, mode, z, t, q, v) -> DriveState:
+        if self.valve.switch_in is not None:
+            return DriveState(mode, self._held(z))
+        return self._toward(mode, z, 0)
+
+    def flight(self, model, state, t, q, v, t_stop, settings=None, variational=False):
+        from .flight import circuit_flight
+
+        return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational)
+
+    def border_tests(self, pieces) -> dict:
+        """The circuit's border collisions over one period (theory §11): ``"accumulator"``, the
+        least supply pressure less the pre-charge (through 0 where the accumulator starts emptying
+        during the cycle), and ``"relief"``, the relief pressure less the greatest supply pressure
+        (through 0 where the relief valve starts opening); each extreme from the flights' cubic
+        Hermite interpolants (the integrator's accuracy). A held supply has neither.
+
+        Returns
+        -------
+        dict of float
+        """
+        sup, acc = self.supply, self.accumulator
+        out: dict = {}
+        has_acc = acc is not None and acc.volume > 0 and not sup.held
+        if not (has_acc or (sup.has_relief and not sup.held)):
+            return out
+        lo, hi = math.inf, -math.inf
+        for p in pieces:
+            if not hasattr(p, "supply_extremes"):
+                continue
+            a, b = p.supply_extremes()
+            lo, hi = min(lo, a), max(hi, b)
+        if has_acc:
+            out[_ACC] = lo - acc.precharge
+        if sup.has_relief and not sup.held:
+            out[_REL] = sup.relief_pressure - hi
+        return out
+
+    # -- results ----------------------------------------------------------------------------------
+    def energy(self, run) -> CircuitEnergy:
+        """The circuit's energy account over a run of :func:`impactbar.simulate` under this drive
+        (theory §11): each term the sum of the flights' quadratures.
+
+        Returns
+        -------
+        CircuitEnergy
+        """
+        total = np.zeros(K.N_ENERGY)
+        for j in range(len(run.pieces)):
+            piece = run.pieces[j]
+            if hasattr(piece, "energies"):
+                total += piece.energies()
+        return CircuitEnergy.from_terms(total)
+
+    def histories(self, run, t=None) -> dict:
+        """The circuit's time histories over a run: ``t`` (the integrator's steps, or the given
+        times) and ``p_f``, ``p_r``, ``p_s``, ``x_v``, the gap ``y`` and the chambers' volumes
+        ``V_f``, ``V_r`` (units of theory §11).
+
+        Returns
+        -------
+        dict of numpy.ndarray
+        """
+        if t is None:
+            t = np.unique(np.concatenate([run.pieces[j].t for j in range(len(run.pieces))
+                                          if hasattr(run.pieces[j], "t")]))
+        t = np.asarray(t, dtype=float)
+        z = run.drive_state(t)
+        q, _ = run.modal_state(t)
+        M = q.shape[0]
+        w = -(np.where(np.arange(M) == 0, 1.0, 2.0) @ q)
+        return {"t": t, "p_f": z[0], "p_r": z[1], "p_s": z[2], "x_v": z[3], "y": -q[0],
+                "V_f": self.chambers.front_volume + self.chambers.area_ratio * w,
+                "V_r": self.chambers.rear_volume - w}
+
+    # -- the ideal drive it tends to (theory §11) ---------------------------------------------------
+    def ideal_levels(self, supply_pressure: float) -> tuple[float, float]:
+        """The forces of the ideal valve it tends to with the supply held at ``supply_pressure``
+        (``beta``, every ``K`` to infinity, ``tau_v`` to 0): ``(stroke, ret)`` =
+        ``(p_s (1 - alpha), alpha p_s - p_t)``."""
+        a = self.chambers.area_ratio
+        return supply_pressure * (1.0 - a), a * supply_pressure - self.supply.tank_pressure
+
+
+class _RateModel:
+    """The little of a model that :meth:`HydraulicCircuitDrive.rate` needs: the mode count."""
+
+    def __init__(self, M):
+        self.n_modes, self.d, self.s = M - 1, 0.0, 1.0
+
+
+@functools.lru_cache(maxsize=64)
+def _par_base(drive: HydraulicCircuitDrive, n_modes: int, d: float, s: float) -> np.ndarray:
+    """The parameter vector of the compiled kernels (:mod:`._kernel`) for a drive and a bar."""
+    M = n_modes + 1
+    ch, va, su, oil, acc = drive.chambers, drive.valve, drive.supply, drive.oil, drive.accumulator
+    par = np.zeros(K.HEAD + 2 * M)
+    par[K.ALPHA], par[K.NUR], par[K.NUF] = ch.area_ratio, ch.rear_volume, ch.front_volume
+    par[K.KV], par[K.KF] = va.coefficient, su.front_coefficient
+    par[K.QP] = su.pump_flow if su.pump_flow is not None else 0.0
+    par[K.NUS], par[K.PT] = su.hose_volume, su.tank_pressure
+    par[K.PREL] = su.relief_pressure if math.isfinite(su.relief_pressure) else 1e300
+    par[K.KREL] = su.relief_coefficient
+    has_acc = acc is not None and acc.volume > 0 and not su.held
+    par[K.P0] = acc.precharge if acc is not None else 1.0
+    par[K.NU0] = acc.volume if has_acc else 0.0
+    par[K.NPOL] = acc.polytropic_exponent if acc is not None else 1.4
+    par[K.BETA], par[K.PTR2] = oil.bulk_modulus, oil.transition_pressure ** 2
+    par[K.HELD] = 1.0 if su.held else 0.0
+    par[K.PSH] = su.pressure if su.held else 0.0
+    par[K.XOUT] = va.switch_out
+    par[K.XIN] = va.switch_in if va.switch_in is not None else -1.0
+    par[K.DAMP] = d
+    par[K.NM] = float(M)
+    par[K.HASREL] = 1.0 if su.has_relief and not su.held else 0.0
+    par[K.HASACC] = 1.0 if has_acc else 0.0
+    n = np.arange(M)
+    par[K.HEAD:K.HEAD + M] = np.where(n == 0, 1.0, 2.0 * (-1.0) ** n)
+    par[K.HEAD + M:K.HEAD + 2 * M] = (s * math.pi * n) ** 2
+    par.flags.writeable = False
+    return par

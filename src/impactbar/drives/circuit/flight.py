@@ -1,0 +1,194 @@
+r"""One flight of the bar under the oil circuit, integrated by SUNDIALS' CVODE (theory §11).
+
+**The integrator, chosen by measurement.** The circuit is stiff (an oil volume behind an orifice
+relaxes in ``V / (beta K phi')``, some ``1e-5`` of a period on the example drifter, ``1e-8`` in
+the ideal limit, against a period of order 1) and the accuracy asked of it is tight (the energy
+account to ``1e-8``, periodic orbits to ``1e-8``), so ``rtol = 1e-10``. scipy's ``Radau``,
+``BDF`` and ``LSODA`` take their steps in Python; CVODE (BDF of orders 1 to 5, SUNDIALS, through
+the maintained binding ``scikit-sundae``) runs its steps, Newton iterations and root finding in C
+and calls the compiled (numba) right-hand side, Jacobian and event functions. On one stroke flight
+of the preset ``circuit-drifter`` (``benchmarks/bench_circuit.py``, this 2-core machine while
+shared) ``Radau`` with the same compiled right-hand side and Jacobian took about 0.9 s, CVODE about
+0.007 s, some hundred times less, their impact times 5e-11 apart. Its
+events (the arrival ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply
+pressure through the pre-charge and the relief pressure) are located by CVODE's root finding to the
+integrator's tolerance (the ramp's end, linear in time, to rounding).
+
+Each flight starts its energy quadratures at 0; with ``variational=True`` it integrates the
+fundamental matrix ``Phi`` of the first ``2 N + 6`` components beside them (the variational
+equations ``Phi' = A Phi``) and returns ``Phi`` at its end, before the event's map (the solvers
+apply the saltation there, Hiskens & Pai 2000).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..base import DriveState, FlightSettings
+from ..flight import ARRIVAL, END, EVENT, Flight
+from . import _kernel as K
+
+__all__ = ["CircuitPiece", "circuit_flight", "DEFAULT_SETTINGS"]
+
+#: The circuit's integrator: CVODE's BDF at these tolerances (``atol`` relative to the states'
+#: scale, 1 in the units of theory §11).
+DEFAULT_SETTINGS = FlightSettings(method="CVODE", rtol=1e-10, atol=1e-12)
+
+
+class CircuitPiece:
+    """A flight of the circuit: the steps of the integration (exact to the integrator's tolerance
+    at each step) and a cubic Hermite interpolant between them (the vector field at each step).
+
+    Attributes
+    ----------
+    t0, t_end : float
+    t : numpy.ndarray, shape (S,)
+        The integrator's steps.
+    y : numpy.ndarray, shape (S, 2 N + 6 + 8)
+        The state and the energy quadratures (from 0 at ``t0``) at each step.
+    """
+
+    __slots__ = ("t0", "t_end", "t", "y", "f", "M", "c", "alpha", "_spline")
+
+    def __init__(self, t, y, par, M, c, alpha):
+        self.t, self.y = t, y
+        self.t0, self.t_end = float(t[0]), float(t[-1])
+        self.M, self.c, self.alpha = M, c, alpha
+        f = np.empty_like(y)
+        K.field_at(np.ascontiguousarray(y), par, f)
+        self.f = f
+        self._spline = None
+
+    def _at(self, t):
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
+        if self.t.size < 2:
+            return np.repeat(self.y[:1].T, t.size, axis=1)
+        if self._spline is None:
+            from scipy.interpolate import CubicHermiteSpline
+
+            self._spline = CubicHermiteSpline(self.t, self.y, self.f, axis=0)
+        return self._spline(t).T
+
+    def modal(self, t):
+        """``(q, v)`` at times ``t``, shape ``(N + 1, T)`` each."""
+        Y = self._at(t)
+        return Y[:self.M], Y[self.M:2 * self.M]
+
+    def drive_state(self, t):
+        """``(p_f, p_r, p_s, x_v)`` at times ``t``, shape ``(4, T)``."""
+        return self._at(t)[2 * self.M:2 * self.M + 4]
+
+    def force(self, t):
+        """The force on the piston, ``p_r - alpha p_f``."""
+        z = self.drive_state(t)
+        return z[1] - self.alpha * z[0]
+
+    def extremes(self, k: int) -> tuple[float, float]:
+        """The least and the greatest value of the drive's state component ``k`` (0 ``p_f``, 1
+        ``p_r``, 2 ``p_s``, 3 ``x_v``) over the piece: its steps and the stationary points of its
+        cubic Hermite interpolant."""
+        j = 2 * self.M + k
+        x = self.y[:, j]
+        if self.t.size < 2:
+            return float(x[0]), float(x[0])
+        from scipy.interpolate import CubicHermiteSpline
+
+        sp = CubicHermiteSpline(self.t, x, self.f[:, j])
+        roots = sp.derivative().roots(extrapolate=False)
+        vals = np.concatenate((x, sp(roots))) if roots.size else x
+        return float(np.min(vals)), float(np.max(vals))
+
+    def supply_extremes(self) -> tuple[float, float]:
+        """The least and the greatest supply pressure over the piece (:meth:`extremes`)."""
+        return self.extremes(2)
+
+    def energies(self):
+        """The eight energy quadratures over the piece (theory §11)."""
+        return self.y[-1, 2 * self.M + 4:2 * self.M + 4 + K.N_ENERGY].copy()
+
+    def end_displacement(self, t):
+        return np.minimum(self.c @ self.modal(t)[0], 0.0)
+
+    def end_velocity(self, t):
+        return self.c @ self.modal(t)[1]
+
+
+def _solver(par, settings, directions, n_total, max_steps):
+    from sksundae.cvode import CVODE
+
+    rhs, jac, events = K.rhs, K.jac, K.events
+
+    def f(t, y, yp):
+        rhs(t, y, yp, par)
+
+    def jf(t, y, yp, JJ):
+        jac(t, y, yp, JJ, par)
+
+    def ev(t, y, g):
+        events(t, y, g, par)
+
+    ev.terminal = [True] * K.N_EVENTS
+    ev.direction = list(directions)
+    return CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
+                 num_events=K.N_EVENTS, max_num_steps=max_steps)
+
+
+def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
+                   settings: FlightSettings | None = None, variational: bool = False) -> Flight:
+    """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
+    stop, the circuit's next event or ``t_stop`` (module docstring).
+
+    Returns
+    -------
+    Flight
+        With ``piece`` a :class:`CircuitPiece` and, with ``variational``, ``sensitivity`` the
+        fundamental matrix of ``(q, q', p_f, p_r, p_s, x_v)`` over the flight (before the map of
+        the event that ends it).
+
+    Raises
+    ------
+    ValueError
+        Where CVODE fails (the message says why: a chamber emptied, a pressure out of range).
+    """
+    settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
+    mode, z = state
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    M = q.size
+    n = 2 * M + 4
+    par = drive._par(model, mode, variational)
+    y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(K.N_ENERGY)))
+    if variational:
+        y0 = np.concatenate((y0, np.eye(n).ravel()))
+    end = t_stop if math.isfinite(t_stop) else t + 1e4
+    if end <= t:
+        piece = CircuitPiece(np.array([t]), y0[None, :n + K.N_ENERGY], par, M, model.end_weights,
+                             drive.chambers.area_ratio)
+        return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
+                      np.eye(n) if variational else None)
+    solver = _solver(par, settings, drive._directions(mode), y0.size, 200000)
+    sol = solver.solve(np.array([t, end]), y0)
+    if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
+        raise ValueError(drive._failure(model, sol, t))
+    ts = np.asarray(sol.t, dtype=float)
+    Y = np.asarray(sol.y, dtype=float)
+    keep = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
+    ts, Y = ts[keep], Y[keep]
+    piece = CircuitPiece(ts, np.ascontiguousarray(Y[:, :n + K.N_ENERGY]), par, M, model.end_weights,
+                         drive.chambers.area_ratio)
+    drive._check_volumes(model, piece, t)
+    yend = Y[-1]
+    te = float(ts[-1])
+    qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
+    Phi = yend[n + K.N_ENERGY:].reshape(n, n).copy() if variational else None
+    if sol.status == 2 and sol.i_events is not None:
+        hit = np.flatnonzero(np.atleast_2d(sol.i_events)[-1])
+        if K.ARRIVAL_EV in hit:
+            qe[0] -= float(model.end_weights @ qe)  # exactly on the stop
+            return Flight(te, qe, ve, ze, ARRIVAL, (), piece, Phi)
+        fired = drive._fired(mode, hit)
+        if fired:
+            return Flight(te, qe, ve, ze, EVENT, fired, piece, Phi)
+    return Flight(te, qe, ve, ze, END, (), piece, Phi)

@@ -1,0 +1,234 @@
+r"""The parts of a drifter's oil circuit (theory §11), dimensionless, each a small frozen dataclass.
+
+The circuit is composed as a lumped fluid-power network is in Hopsan's component library: capacitive
+volumes (Hopsan's C-type components, ``HydraulicVolume``: a volume ``V`` and the oil's bulk modulus
+``beta``, ``p' = beta / V (sum of flows in - V')``), resistive orifices between them (Q-type,
+``HydraulicTurbulentOrifice``: ``Q = K sqrt(dp)`` with ``K = C_q A sqrt(2 / rho)``) and a gas
+accumulator (``HydraulicAckumulator``: a polytropic gas ``p V^n = p_0 V_0^n``). Here the parts hold
+the numbers and :class:`~impactbar.drives.circuit.HydraulicCircuitDrive` composes them into one
+system of ordinary differential equations.
+
+Units (theory §11, eq. 2): pressures in a pressure scale ``P`` (absolute), areas in the rear area
+``A_r``, lengths in the bar's length ``L``, volumes in ``A_r L``, time in ``1 / Omega`` with
+``Omega = sqrt(P A_r / (m L))`` (so that the rear pressure ``P`` on ``A_r`` is the force scale
+``m L Omega^2``), flows in ``A_r L Omega``, an orifice's coefficient ``K`` (m^3 s^-1 Pa^-1/2) as
+``K sqrt(P) / (A_r L Omega)``, the relief's (m^3 s^-1 Pa^-1) as ``K_rel P / (A_r L Omega)``, the
+bulk modulus as ``beta / P``. :class:`impactbar.physical.CircuitDrifter` makes them from SI inputs.
+
+References
+----------
+Hopsan (Linkoping University, Division of Fluid and Mechatronic Systems), component library
+``componentLibraries/defaultLibrary/Hydraulic``: ``Volumes&Lines/HydraulicVolume.hpp``,
+``Restrictors/HydraulicTurbulentOrifice.hpp``, ``Volumes&Lines/HydraulicAckumulator.hpp``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from ..._shared.validate import check_real
+
+__all__ = ["Chambers", "Valve", "Supply", "Accumulator", "Oil"]
+
+
+def _positive(obj, *names) -> None:
+    for n in names:
+        object.__setattr__(obj, n, check_real(n, getattr(obj, n), lo=0.0, lo_open=True))
+
+
+def _non_negative(obj, *names) -> None:
+    for n in names:
+        object.__setattr__(obj, n, check_real(n, getattr(obj, n), lo=0.0))
+
+
+@dataclass(frozen=True)
+class Chambers:
+    """The piston's two chambers (C-type volumes): the rear (stroke) chamber of area 1 (the area
+    scale) pushing the piston toward the stop, the front (return) annulus of area ``area_ratio``
+    pushing it away.
+
+    Parameters
+    ----------
+    area_ratio : float
+        ``A_f / A_r``, in ``(0, 1)``: the stroke needs ``A_r > A_f`` under a common supply.
+    rear_volume, front_volume : float
+        The chambers' oil volumes with the rigid piston on the stop (``A_r L`` units), ``> 0``. With
+        the driven end's displacement ``w`` from there (away from the stop), ``V_r = rear_volume - w``
+        and ``V_f = front_volume + area_ratio w``.
+
+    Raises
+    ------
+    ValueError
+        A value out of its range (named).
+    """
+
+    area_ratio: float
+    rear_volume: float
+    front_volume: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "area_ratio", check_real("area_ratio", self.area_ratio, lo=0.0, hi=1.0,
+                                                          lo_open=True, hi_open=True))
+        _positive(self, "rear_volume", "front_volume")
+
+
+@dataclass(frozen=True)
+class Valve:
+    """The main valve (two Q-type openings that share one spool): the rear chamber to the supply
+    through ``coefficient * x_v``, to the tank through ``coefficient * (1 - x_v)``, the opening ``x_v``
+    ramping between 0 (return) and 1 (stroke) in ``switching_time``.
+
+    Parameters
+    ----------
+    switch_out : float
+        The gap (bar lengths) whose rising crossing opens the valve (armed while it is closed or
+        closing), ``> 0``.
+    coefficient : float
+        The opening's flow coefficient ``K_v``, ``> 0``.
+    switching_time : float, optional
+        A full stroke of the spool, ``>= 0`` (0: an instant switch). Default 0.
+    switch_in : float or None, optional
+        The gap whose falling crossing closes the valve (armed while it is open or opening); ``None``
+        (default): the valve closes at each impact.
+
+    Raises
+    ------
+    ValueError
+        A value out of its range (named), or ``switch_in >= switch_out``.
+    """
+
+    switch_out: float
+    coefficient: float
+    switching_time: float = 0.0
+    switch_in: float | None = None
+
+    def __post_init__(self) -> None:
+        _positive(self, "switch_out", "coefficient")
+        _non_negative(self, "switching_time")
+        if self.switch_in is not None:
+            object.__setattr__(self, "switch_in", check_real("switch_in", self.switch_in, lo=0.0,
+                                                             hi=self.switch_out, lo_open=True, hi_open=True))
+
+
+@dataclass(frozen=True)
+class Supply:
+    """The supply node: a pump of constant flow into a hose of volume ``hose_volume`` (a C-type
+    volume), the front chamber fed from it through ``front_coefficient``, a relief valve to the tank;
+    or a supply held at a pressure (``pump_flow=None``, ``pressure`` given: an ideal pressure
+    source).
+
+    Parameters
+    ----------
+    pump_flow : float or None
+        ``Q_p``, ``> 0``; ``None`` with ``pressure`` for a held supply.
+    hose_volume : float
+        ``V_s``, ``> 0`` (a held supply ignores it).
+    front_coefficient : float
+        ``K_f``, the front chamber's feed, ``> 0``.
+    tank_pressure : float
+        ``p_t`` (absolute), ``>= 0``.
+    relief_pressure : float, optional
+        ``p_rel``, above the tank pressure; ``inf`` (default): no relief valve.
+    relief_coefficient : float, optional
+        ``K_rel`` of the relief flow ``K_rel max(0, p_s - p_rel)``, ``>= 0``. Default 0.
+    pressure : float or None, optional
+        The held supply pressure, ``> tank_pressure`` (with ``pump_flow=None``).
+
+    Raises
+    ------
+    ValueError
+        A value out of its range (named); neither or both of ``pump_flow`` and ``pressure``.
+    """
+
+    pump_flow: float | None
+    hose_volume: float
+    front_coefficient: float
+    tank_pressure: float
+    relief_pressure: float = math.inf
+    relief_coefficient: float = 0.0
+    pressure: float | None = None
+
+    def __post_init__(self) -> None:
+        if (self.pump_flow is None) == (self.pressure is None):
+            raise ValueError("give exactly one of pump_flow (a pump) and pressure (a supply held at a "
+                             "pressure)")
+        _positive(self, "hose_volume", "front_coefficient")
+        _non_negative(self, "tank_pressure", "relief_coefficient")
+        if self.pump_flow is not None:
+            _positive(self, "pump_flow")
+        else:
+            object.__setattr__(self, "pressure", check_real("pressure", self.pressure,
+                                                            lo=self.tank_pressure, lo_open=True))
+        if not (isinstance(self.relief_pressure, float) and math.isinf(self.relief_pressure)
+                and self.relief_pressure > 0):
+            object.__setattr__(self, "relief_pressure", check_real(
+                "relief_pressure", self.relief_pressure, lo=self.tank_pressure, lo_open=True))
+
+    @property
+    def held(self) -> bool:
+        """Whether the supply is held at :attr:`pressure` (no pump, no state of its own)."""
+        return self.pump_flow is None
+
+    @property
+    def has_relief(self) -> bool:
+        """A relief valve that can open (finite pressure, positive coefficient)."""
+        return math.isfinite(self.relief_pressure) and self.relief_coefficient > 0.0
+
+
+@dataclass(frozen=True)
+class Accumulator:
+    """A gas accumulator on the supply node: below its pre-charge it holds no oil; above it the gas
+    (pre-charge ``p_0`` at volume ``V_0``, polytropic exponent ``n``) holds
+    ``V_0 (1 - (p_0 / p_s)^(1/n))`` of oil, a compliance ``(V_0 / n) p_0^(1/n) p_s^(-1/n - 1)``.
+
+    Parameters
+    ----------
+    precharge : float
+        ``p_0`` (absolute), ``> 0``.
+    volume : float
+        ``V_0``, ``>= 0`` (0: no accumulator).
+    polytropic_exponent : float, optional
+        ``n`` in ``[1, 2]`` (1 isothermal, 1.4 adiabatic nitrogen). Default 1.4.
+
+    Raises
+    ------
+    ValueError
+        A value out of its range (named).
+    """
+
+    precharge: float
+    volume: float
+    polytropic_exponent: float = 1.4
+
+    def __post_init__(self) -> None:
+        _positive(self, "precharge")
+        _non_negative(self, "volume")
+        object.__setattr__(self, "polytropic_exponent", check_real(
+            "polytropic_exponent", self.polytropic_exponent, lo=1.0, hi=2.0))
+
+
+@dataclass(frozen=True)
+class Oil:
+    """The oil: its bulk modulus and the transition pressure of the orifices' smoothed law
+    ``phi(dp) = dp (dp^2 + p_tr^2)^(-1/4)`` (turbulent, ``sign(dp) sqrt|dp|``, for ``|dp| >> p_tr``,
+    differentiable at 0).
+
+    Parameters
+    ----------
+    bulk_modulus : float
+        ``beta``, ``> 0``.
+    transition_pressure : float
+        ``p_tr``, ``> 0``.
+
+    Raises
+    ------
+    ValueError
+        A value out of its range (named).
+    """
+
+    bulk_modulus: float
+    transition_pressure: float
+
+    def __post_init__(self) -> None:
+        _positive(self, "bulk_modulus", "transition_pressure")

@@ -1,0 +1,16 @@
+"""The hydraulic drifter's valve: a drive switched by the piston's position (theory §10), with its
+numerics.
+
+Layout: ``drive`` (:class:`PositionSwitchedDrive`, the :class:`~impactbar.Drive` interface: force
+levels, the switch crossing and the delayed switches, their maps), ``loop`` (the compiled event loop
+the simulator runs under an instantaneous law), ``_kernel`` (its numba kernels, the rigid piston's
+closed forms), ``segment`` (the periodic orbits' segment problem: closed-form flights, the exact
+Jacobian, Newton's start, the monodromy matrix and the flights' admissibility).
+"""
+
+from .drive import RETURN as RETURN
+from .drive import STROKE as STROKE
+from .drive import PositionSwitchedDrive as PositionSwitchedDrive
+from .drive import first_rising_crossing as first_rising_crossing
+
+__all__ = ["PositionSwitchedDrive", "STROKE", "RETURN", "first_rising_crossing"]

@@ -1,0 +1,501 @@
+r"""A hydraulic drifter with its oil circuit, in SI units (theory §11): chambers, valve, pump, supply
+hose, gas accumulator and relief valve driving the piston; the blow frequency, the impact energy and
+the supply pressure are outputs.
+
+Scales (theory §11, eq. 2): the pressure scale ``P`` = :data:`PRESSURE_SCALE` (10 MPa; pressures
+are absolute), the rear area ``A_r`` as the area scale, ``Omega = sqrt(P A_r / (m L))``, volumes in
+``A_r L``, flows in ``A_r L Omega``, an orifice's coefficient ``K`` (m^3 s^-1 Pa^-1/2) as
+``K sqrt(P) / (A_r L Omega)``, the relief's (m^3 s^-1 Pa^-1) as ``K_rel P / (A_r L Omega)``.
+
+Configuration keys (a nested ``dict`` or TOML, as :meth:`CircuitDrifter.from_config` reads them)::
+
+    name = "..."                                   # optional
+    [bar]         E, density, length, diameter | area        # the piston
+    [stop]        restitution | area
+    [damping]     coefficient                                # optional (N s/m)
+    [model]       n_modes                                    # optional, default 0 (rigid)
+    [chambers]    rear_area, front_area, rear_volume, front_volume   # the volumes at impact
+    [valve]       switch_out, switch_in (optional), switching_time, flow_coefficient
+    [supply]      pump_flow, hose_volume, front_flow_coefficient, tank_pressure,
+                  relief_pressure, relief_coefficient        # the relief optional
+    [accumulator] precharge, volume, polytropic_exponent     # optional section
+    [oil]         bulk_modulus, transition_pressure
+
+Pressures are absolute ("0.3 MPa" of tank pressure is 0.2 MPa gauge), flow coefficients in
+``m^3/s/Pa^0.5`` (the relief's in ``m^3/s/Pa``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._shared.validate import check_int, check_real
+from .bar import Bar
+from .config import _section
+from .units import to_si
+
+__all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_preset", "PRESSURE_SCALE",
+           "CIRCUIT_PARAMETERS"]
+
+#: The pressure scale ``P`` of the dimensionless circuit (Pa).
+PRESSURE_SCALE = 1.0e7
+
+#: The circuit's continuation parameters (dimensionless; those of
+#: :data:`impactbar.drives.circuit.PARAMETERS`, named here so that the command line need not load
+#: the compiled circuit to list them).
+CIRCUIT_PARAMETERS = ("pump_flow", "supply_pressure", "hose_volume", "front_coefficient", "tank_pressure",
+                      "relief_pressure", "relief_coefficient", "precharge", "accumulator_volume",
+                      "polytropic_exponent", "switch_out", "switch_in", "switching_time", "valve_coefficient",
+                      "area_ratio", "rear_volume", "front_volume", "bulk_modulus", "transition_pressure")
+
+_KEYS = {
+    "bar": {"E", "density", "length", "diameter", "area"},
+    "stop": {"restitution", "area"},
+    "damping": {"coefficient"},
+    "model": {"n_modes"},
+    "chambers": {"rear_area", "front_area", "rear_volume", "front_volume"},
+    "valve": {"switch_out", "switch_in", "switching_time", "flow_coefficient"},
+    "supply": {"pump_flow", "hose_volume", "front_flow_coefficient", "tank_pressure", "relief_pressure",
+               "relief_coefficient"},
+    "accumulator": {"precharge", "volume", "polytropic_exponent"},
+    "oil": {"bulk_modulus", "transition_pressure"},
+}
+_REQUIRED = {
+    "bar": ("E", "density", "length"),
+    "chambers": ("rear_area", "front_area", "rear_volume", "front_volume"),
+    "valve": ("switch_out", "switching_time", "flow_coefficient"),
+    "supply": ("pump_flow", "hose_volume", "front_flow_coefficient", "tank_pressure"),
+    "oil": ("bulk_modulus", "transition_pressure"),
+}
+
+
+@dataclass(frozen=True)
+class CircuitDrifter:
+    """A hydraulic drifter with its oil circuit (theory §11), in SI units; built by
+    :meth:`from_config` (the keys in the module's docstring).
+
+    Parameters
+    ----------
+    bar : Bar
+        The piston.
+    restitution : float
+        ``R`` of the impact (eq. 10), ``[0, 1)``.
+    si : dict
+        The circuit's SI values by key (``rear_area_m2``, ``front_area_m2``, ``rear_volume_m3``,
+        ``front_volume_m3``, ``switch_out_m``, ``switch_in_m`` (or ``None``), ``switching_time_s``,
+        ``valve_coefficient``, ``pump_flow_m3_s``, ``hose_volume_m3``, ``front_coefficient``,
+        ``tank_pressure_Pa``, ``relief_pressure_Pa`` (``inf``: none), ``relief_coefficient``,
+        ``precharge_Pa``, ``accumulator_volume_m3`` (0: none), ``polytropic_exponent``,
+        ``bulk_modulus_Pa``, ``transition_pressure_Pa``).
+    damping_N_s_m : float, optional
+    n_modes : int, optional
+    name : str, optional
+
+    Raises
+    ------
+    ValueError
+        A value out of range (named).
+
+    Examples
+    --------
+    >>> from impactbar.physical.circuit import circuit_preset
+    >>> o = circuit_preset("circuit-drifter").orbit()
+    >>> o.stable, 40 < o.blow_frequency_Hz < 60, 0 < o.hydraulic_efficiency < 1
+    (True, True, True)
+    """
+
+    bar: Bar
+    restitution: float
+    si: dict
+    damping_N_s_m: float = 0.0
+    n_modes: int = 0
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.bar, Bar):
+            raise ValueError(f"bar must be a Bar; got {type(self.bar).__name__}")
+        object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
+                                                           hi=1.0, hi_open=True))
+        object.__setattr__(self, "damping_N_s_m", check_real("damping_N_s_m", self.damping_N_s_m, lo=0.0))
+        object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=1024))
+        si = self.si
+        if si["front_area_m2"] >= si["rear_area_m2"]:
+            raise ValueError(f"chambers.front_area must be below chambers.rear_area "
+                             f"({si['rear_area_m2']:g} m^2) for the stroke to push toward the stop; "
+                             f"got {si['front_area_m2']:g} m^2")
+        self.drive()  # the parts' own checks, with their names
+
+    # -- scales ------------------------------------------------------------------------------------
+    @property
+    def omega_rad_s(self) -> float:
+        """``Omega = sqrt(P A_r / (m L))`` (1/s)."""
+        return math.sqrt(PRESSURE_SCALE * self.si["rear_area_m2"] / (self.bar.mass_kg * self.bar.length_m))
+
+    @property
+    def volume_scale_m3(self) -> float:
+        """``A_r L`` (m^3)."""
+        return self.si["rear_area_m2"] * self.bar.length_m
+
+    @property
+    def flow_scale_m3_s(self) -> float:
+        """``A_r L Omega`` (m^3/s)."""
+        return self.volume_scale_m3 * self.omega_rad_s
+
+    @property
+    def energy_scale_J(self) -> float:
+        """``m L^2 Omega^2`` (J)."""
+        return self.bar.mass_kg * (self.bar.length_m * self.omega_rad_s) ** 2
+
+    def model(self):
+        """The dimensionless bar (eq. 2): :class:`~impactbar.BarModel`."""
+        from ..model import BarModel
+
+        om, bar = self.omega_rad_s, self.bar
+        return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om), d=self.damping_N_s_m / (bar.mass_kg * om),
+                        R=self.restitution, n_modes=self.n_modes)
+
+    def drive(self):
+        """The dimensionless circuit: :class:`~impactbar.drives.circuit.HydraulicCircuitDrive`."""
+        from ..drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve
+
+        si, P, L = self.si, PRESSURE_SCALE, self.bar.length_m
+        V, Q, om = self.volume_scale_m3, self.flow_scale_m3_s, self.omega_rad_s
+        k = math.sqrt(P) / Q
+        acc = None
+        if si["accumulator_volume_m3"] > 0.0:
+            acc = Accumulator(precharge=si["precharge_Pa"] / P, volume=si["accumulator_volume_m3"] / V,
+                              polytropic_exponent=si["polytropic_exponent"])
+        return HydraulicCircuitDrive(
+            Chambers(area_ratio=si["front_area_m2"] / si["rear_area_m2"],
+                     rear_volume=si["rear_volume_m3"] / V, front_volume=si["front_volume_m3"] / V),
+            Valve(switch_out=si["switch_out_m"] / L, coefficient=si["valve_coefficient"] * k,
+                  switching_time=si["switching_time_s"] * om,
+                  switch_in=None if si["switch_in_m"] is None else si["switch_in_m"] / L),
+            Supply(pump_flow=si["pump_flow_m3_s"] / Q, hose_volume=si["hose_volume_m3"] / V,
+                   front_coefficient=si["front_coefficient"] * k, tank_pressure=si["tank_pressure_Pa"] / P,
+                   relief_pressure=si["relief_pressure_Pa"] / P,
+                   relief_coefficient=si["relief_coefficient"] * P / Q),
+            Oil(bulk_modulus=si["bulk_modulus_Pa"] / P, transition_pressure=si["transition_pressure_Pa"] / P),
+            acc)
+
+    # -- results -----------------------------------------------------------------------------------
+    def orbit(self, guess=None) -> CircuitDrifterOrbit:
+        """The one-impact periodic motion, its operating point in SI (:func:`impactbar.find_orbit`
+        with the circuit: from rest on the stop, the motion followed until it settles, then Newton
+        with the variational equations' Jacobian).
+
+        Raises
+        ------
+        ValueError
+            Where the motion from rest does not settle onto a periodic one (e.g. a pump flow that
+            cannot move the piston), or a chamber empties.
+        """
+        from ..orbits import find_orbit
+
+        g = guess.orbit if isinstance(guess, CircuitDrifterOrbit) else guess
+        return CircuitDrifterOrbit(self, find_orbit(self.model(), self.drive(), guess=g))
+
+    def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
+        """Simulate from the piston at rest on the stop (or a given gap and velocity), the circuit at
+        its start pressures, for ``duration_s`` (:func:`impactbar.simulate`).
+
+        Returns
+        -------
+        dict
+            ``impact_times_s``, ``impact_velocities_m_s`` (arrays), ``histories`` (``t_s`` and the
+            pressures ``p_f_Pa``, ``p_r_Pa``, ``p_s_Pa``, the valve opening ``x_v``, the gap
+            ``gap_m``) and ``run`` (the dimensionless :class:`~impactbar.SwitchedTrajectory`).
+        """
+        from ..simulation import InitialState, simulate
+
+        dur = check_real("duration_s", duration_s, lo=0.0, lo_open=True)
+        L, om = self.bar.length_m, self.omega_rad_s
+        start = InitialState.rigid(-check_real("start_gap_m", start_gap_m, lo=0.0) / L,
+                                   start_velocity_m_s / (L * om), self.n_modes)
+        drive = self.drive()
+        run = simulate(self.model(), drive, start, dur * om)
+        h = drive.histories(run)
+        P = PRESSURE_SCALE
+        hist = {"t_s": h["t"] / om, "p_f_Pa": h["p_f"] * P, "p_r_Pa": h["p_r"] * P, "p_s_Pa": h["p_s"] * P,
+                "x_v": h["x_v"], "gap_m": h["y"] * L}
+        return {"impact_times_s": np.asarray(run.impact_times) / om,
+                "impact_velocities_m_s": np.asarray(run.impact_velocities) * L * om, "histories": hist,
+                "run": run}
+
+    @classmethod
+    def from_config(cls, config: dict) -> CircuitDrifter:
+        """A drifter with its oil circuit from a nested dict of inputs with units (the keys in the
+        module's docstring; unknown keys refused, naming them).
+
+        Raises
+        ------
+        ValueError
+            An unknown section or key, a missing key, a value with the wrong unit or out of range
+            (each named).
+        """
+        if not isinstance(config, dict):
+            raise ValueError(f"config must be a dict; got {type(config).__name__}")
+        extra = sorted(set(config) - set(_KEYS) - {"name"})
+        if extra:
+            raise ValueError(f"unknown section [{extra[0]}]; allowed: {', '.join(sorted(_KEYS))}")
+        sec = {name: _section(config, name, keys) for name, keys in _KEYS.items()}
+        for name, keys in _REQUIRED.items():
+            for key in keys:
+                if key not in sec[name]:
+                    raise ValueError(f"missing key {name}.{key}")
+        b, st = sec["bar"], sec["stop"]
+        bar = Bar.from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
+                             area=b.get("area"))
+        if ("restitution" in st) == ("area" in st):
+            raise ValueError("give exactly one of stop.restitution and stop.area")
+        if "restitution" in st:
+            R = to_si("stop.restitution", st["restitution"], "", "0.215")
+        else:
+            a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
+            R = (a_s - bar.area_m2) / (a_s + bar.area_m2)
+
+        def q(section, key, unit, example, what, default=None):
+            value = sec[section].get(key, default)
+            return None if value is None else to_si(f"{section}.{key}", value, unit, example, what=what)
+
+        area, vol, press = ("m**2", "'5.6 cm^2'", "an area"), ("m**3", "'0.1 L'", "a volume"), \
+            ("Pa", "'20 MPa'", "a pressure")
+        orifice = ("m**3/s/Pa**0.5", "'7.5e-6 m^3/s/Pa^0.5'", "a flow coefficient (m^3/s/Pa^0.5)")
+        acc = sec["accumulator"]
+        if acc and not {"precharge", "volume"} <= set(acc):
+            raise ValueError("[accumulator] needs precharge and volume")
+        si = {
+            "rear_area_m2": q("chambers", "rear_area", *area),
+            "front_area_m2": q("chambers", "front_area", *area),
+            "rear_volume_m3": q("chambers", "rear_volume", *vol),
+            "front_volume_m3": q("chambers", "front_volume", *vol),
+            "switch_out_m": q("valve", "switch_out", "m", "'21.5 mm'", "a length"),
+            "switch_in_m": q("valve", "switch_in", "m", "'10 mm'", "a length"),
+            "switching_time_s": q("valve", "switching_time", "s", "'1 ms'", "a time"),
+            "valve_coefficient": q("valve", "flow_coefficient", *orifice),
+            "pump_flow_m3_s": q("supply", "pump_flow", "m**3/s", "'70 L/min'", "a flow"),
+            "hose_volume_m3": q("supply", "hose_volume", *vol),
+            "front_coefficient": q("supply", "front_flow_coefficient", *orifice),
+            "tank_pressure_Pa": q("supply", "tank_pressure", *press),
+            "relief_pressure_Pa": q("supply", "relief_pressure", *press) if "relief_pressure" in sec["supply"]
+            else math.inf,
+            "relief_coefficient": q("supply", "relief_coefficient", "m**3/s/Pa", "'5e-10 m^3/s/Pa'",
+                                    "a flow coefficient (m^3/s/Pa)", "0 m**3/s/Pa"),
+            "precharge_Pa": q("accumulator", "precharge", *press) if acc else PRESSURE_SCALE,
+            "accumulator_volume_m3": q("accumulator", "volume", *vol) if acc else 0.0,
+            "polytropic_exponent": to_si("accumulator.polytropic_exponent",
+                                         acc.get("polytropic_exponent", 1.4), "", "1.4"),
+            "bulk_modulus_Pa": q("oil", "bulk_modulus", *press),
+            "transition_pressure_Pa": q("oil", "transition_pressure", *press),
+        }
+        if "relief_pressure" in sec["supply"] and si["relief_coefficient"] <= 0.0:
+            raise ValueError("supply.relief_coefficient must be > 0 with a relief_pressure")
+        return cls(bar=bar, restitution=R, si=si,
+                   damping_N_s_m=to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"),
+                                       "N*s/m", "'9 N*s/m'", what="a damping coefficient"),
+                   n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")))
+
+
+@dataclass(frozen=True)
+class CircuitDrifterOrbit:
+    """A drifter's operating point with its oil circuit, in SI units (theory §11).
+
+    Attributes
+    ----------
+    drifter : CircuitDrifter
+    orbit : SwitchedOrbit
+        The dimensionless orbit (its state includes the pressures and the valve opening).
+    """
+
+    drifter: CircuitDrifter
+    orbit: object
+
+    @property
+    def period_s(self) -> float:
+        """``T / Omega`` (s)."""
+        return self.orbit.period / self.drifter.omega_rad_s
+
+    @property
+    def blow_frequency_Hz(self) -> float:
+        """Blows per second."""
+        return self.orbit.impacts / self.period_s
+
+    @property
+    def impact_velocity_m_s(self) -> float:
+        """The piston's velocity arriving at the stop (m/s)."""
+        return self.drifter.bar.length_m * self.drifter.omega_rad_s * self.orbit.impact_velocity
+
+    @property
+    def impact_energy_J(self) -> float:
+        """Kinetic energy of the piston arriving at the stop (J)."""
+        return float(self.drifter.energy_scale_J * self.orbit.impact_energy)
+
+    @property
+    def multipliers(self) -> np.ndarray:
+        """The Floquet multipliers of the return map (from the variational equations)."""
+        return self.orbit.multipliers
+
+    @property
+    def stable(self) -> bool:
+        """Admissible with every multiplier inside the unit circle."""
+        return bool(self.orbit.stable)
+
+    def _energies(self) -> np.ndarray:
+        problem = self.orbit.problem
+        return np.sum([p.energies() for p in problem.flights(problem.unknowns(self.orbit))
+                       if hasattr(p, "energies")], axis=0)
+
+    @property
+    def energy_account(self) -> dict:
+        """The circuit's energy account over one period (J): the terms of
+        :class:`~impactbar.drives.circuit.CircuitEnergy` in SI."""
+        from ..drives.circuit import CircuitEnergy
+
+        acc = CircuitEnergy.from_terms(self._energies())
+        scale = self.drifter.energy_scale_J
+        return {k: (v if k == "relative_residual" else v * scale) for k, v in acc.items()}
+
+    @property
+    def mean_supply_pressure_Pa(self) -> float:
+        """The supply pressure averaged over the period (Pa, absolute): the pump's work over
+        ``Q_p T`` (the held pressure for a held supply)."""
+        sup = self.orbit.drive.supply
+        if sup.held:
+            return sup.pressure * PRESSURE_SCALE
+        return float(self._energies()[0] / (sup.pump_flow * self.orbit.period)) * PRESSURE_SCALE
+
+    @property
+    def pump_power_kW(self) -> float:
+        """The pump's mean power ``Q_p (p_s - p_t)`` over the period (kW)."""
+        sup = self.orbit.drive.supply
+        E = self._energies()[0]
+        if sup.held:
+            used = E * (1.0 - sup.tank_pressure / sup.pressure)
+        else:
+            used = E - sup.tank_pressure * sup.pump_flow * self.orbit.period
+        return float(used * self.drifter.energy_scale_J / self.period_s / 1e3)
+
+    @property
+    def minimum_pressures_Pa(self) -> dict:
+        """The least absolute pressure of each oil volume over the period (Pa): ``front``, ``rear``,
+        ``supply`` (from the flights' Hermite interpolants). The model has no cavitation: where one
+        falls below the oil's vapour pressure (a few kPa; :attr:`cavitates` flags below 0) the
+        motion it computes is not the machine's."""
+        problem = self.orbit.problem
+        pieces = [p for p in problem.flights(problem.unknowns(self.orbit)) if hasattr(p, "extremes")]
+        return {name: min(p.extremes(k)[0] for p in pieces) * PRESSURE_SCALE
+                for k, name in ((0, "front"), (1, "rear"), (2, "supply"))}
+
+    @property
+    def cavitates(self) -> bool:
+        """Whether an absolute pressure of the orbit falls below 0 (:attr:`minimum_pressures_Pa`):
+        the oil would cavitate there, which the model does not represent."""
+        return min(self.minimum_pressures_Pa.values()) < 0.0
+
+    @property
+    def impact_power_kW(self) -> float:
+        """The kinetic energy at impact times the blow frequency (kW)."""
+        return self.impact_energy_J * self.blow_frequency_Hz / 1e3
+
+    @property
+    def hydraulic_efficiency(self) -> float:
+        """The energy the blows deliver (the piston's kinetic energy before the impacts less after
+        them) per second over :attr:`pump_power_kW`: a fraction of the hydraulic power, below 1."""
+        o = self.orbit
+        M = o.model.n_modes + 1
+
+        def ke(states):
+            return sum(0.5 * (v[0] ** 2 + 2.0 * float(np.sum(v[1:] ** 2))) for v in (s[M:] for s in states))
+
+        delivered = (ke(o.states_before_impact) - ke(o.states_after_impact)) * self.drifter.energy_scale_J
+        return float(delivered / self.period_s / 1e3 / self.pump_power_kW)
+
+    def histories(self, points: int = 400) -> dict:
+        """The pressures (Pa), the valve opening and the chambers' volumes (m^3) over one period,
+        from the impact: ``t_s``, ``p_f_Pa``, ``p_r_Pa``, ``p_s_Pa``, ``x_v``, ``gap_m``, ``V_f_m3``,
+        ``V_r_m3`` at ``points`` times."""
+        points = check_int("points", points, lo=2)
+        d, o = self.drifter, self.orbit
+        problem = o.problem
+        pieces = problem.flights(problem.unknowns(o))
+        t0 = pieces[0].t0
+        t = np.linspace(t0, pieces[-1].t_end, points)
+        z = np.empty((4, points))
+        q0 = np.empty(points)
+        for p in pieces:
+            sel = (t >= p.t0) & (t <= p.t_end)
+            if np.any(sel):
+                z[:, sel] = p.drive_state(t[sel])
+                q0[sel] = p.modal(t[sel])[0][0]
+        dr = o.drive
+        M = o.model.n_modes + 1
+        w = np.zeros(points)
+        for p in pieces:
+            sel = (t >= p.t0) & (t <= p.t_end)
+            if np.any(sel):
+                w[sel] = -(np.where(np.arange(M) == 0, 1.0, 2.0) @ p.modal(t[sel])[0])
+        P, V = PRESSURE_SCALE, d.volume_scale_m3
+        return {"t_s": (t - t0) / d.omega_rad_s, "p_f_Pa": z[0] * P, "p_r_Pa": z[1] * P, "p_s_Pa": z[2] * P,
+                "x_v": z[3], "gap_m": -q0 * d.bar.length_m,
+                "V_f_m3": (dr.chambers.front_volume + dr.chambers.area_ratio * w) * V,
+                "V_r_m3": (dr.chambers.rear_volume - w) * V}
+
+    def summary(self) -> dict:
+        """The SI outputs as a dict (JSON-ready)."""
+        return {"blow_frequency_Hz": self.blow_frequency_Hz, "period_ms": 1e3 * self.period_s,
+                "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
+                "mean_supply_pressure_MPa": self.mean_supply_pressure_Pa / 1e6,
+                "pump_power_kW": self.pump_power_kW, "impact_power_kW": self.impact_power_kW,
+                "hydraulic_efficiency": self.hydraulic_efficiency, "stable": self.stable,
+                "minimum_pressure_MPa": min(self.minimum_pressures_Pa.values()) / 1e6,
+                "cavitates": self.cavitates,
+                "multiplier": float(abs(complex(self.multipliers[0]))) if self.multipliers.size else 0.0}
+
+
+#: Presets of drifters with their oil circuit.
+CIRCUIT_PRESETS: dict[str, dict] = {
+    # The piston of the "hydraulic-drifter" preset (5.6 kg, 45 mm, 448.54 mm; R = 0.215 from its
+    # 56 mm shank), areas that give the same 5.6 kN each way at 20 MPa (A_r - A_f = A_f = 2.8 cm^2),
+    # the same switch position; the pump sized to the ideal orbit's oil use (the rear chamber's
+    # stroke volume, about 30 cm^3, at about 47 blows per second: 70 L/min); chamber volumes of a
+    # few times the stroke volume; a spool that switches in 1 ms; openings that pass the piston's
+    # peak flow (about 6 L/s) with a drop of about 1 MPa (K = Q / sqrt(dp) = 6e-3 / 1e3); mineral
+    # oil's effective bulk modulus with some air, 1.4 GPa; a 0.5 L accumulator pre-charged to
+    # 10 MPa with nitrogen (adiabatic, n = 1.4); 0.3 MPa absolute in the tank line; a relief valve
+    # at 25 MPa.
+    "circuit-drifter": {
+        "name": "circuit-drifter",
+        "bar": {"E": "210 GPa", "density": "7850 kg/m^3", "length": "448.54236 mm", "diameter": "45 mm"},
+        "stop": {"restitution": 0.215},
+        "chambers": {"rear_area": "5.6 cm^2", "front_area": "2.8 cm^2", "rear_volume": "0.1 L",
+                     "front_volume": "0.05 L"},
+        "valve": {"switch_out": "21.5 mm", "switching_time": "1 ms",
+                  "flow_coefficient": "6e-6 m^3/s/Pa^0.5"},
+        "supply": {"pump_flow": "70 L/min", "hose_volume": "0.25 L",
+                   "front_flow_coefficient": "6e-6 m^3/s/Pa^0.5", "tank_pressure": "0.3 MPa",
+                   "relief_pressure": "25 MPa", "relief_coefficient": "5e-10 m^3/s/Pa"},
+        "accumulator": {"precharge": "10 MPa", "volume": "0.5 L", "polytropic_exponent": 1.4},
+        "oil": {"bulk_modulus": "1.4 GPa", "transition_pressure": "0.2 MPa"},
+    },
+}
+
+
+def circuit_preset(name: str, **changes) -> CircuitDrifter:
+    """A preset of a drifter with its oil circuit by name (:data:`CIRCUIT_PRESETS`); ``changes``
+    replace sections' keys, e.g. ``circuit_preset("circuit-drifter", accumulator={"precharge":
+    "12 MPa"})``.
+
+    Raises
+    ------
+    ValueError
+        An unknown preset name, or a change that makes the config invalid (the key named).
+    """
+    if name not in CIRCUIT_PRESETS:
+        raise ValueError(f"unknown circuit preset {name!r}; known: {', '.join(CIRCUIT_PRESETS)}")
+    cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in CIRCUIT_PRESETS[name].items()}
+    for sec, keys in changes.items():
+        cfg.setdefault(sec, {}).update(keys)
+    return CircuitDrifter.from_config(cfg)

@@ -1,0 +1,145 @@
+"""Tiered first calls (issue 41, ``impactbar.dynamics._tiers``): with an empty numba cache a first
+call runs the kernels' Python source while a child process compiles them, and gives the machine
+code's results to the bit; later calls take the machine code; functions not of impactbar's are
+numba's as before; a twin that meets an overflow Python refuses hands the call to the machine code
+with its arguments as they came."""
+
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+
+from impactbar import BarModel, CosineLoad, InitialState, SquareWaveLoad, periodic_orbits, simulate
+from impactbar.dynamics import _tiers
+
+SRC = str(Path(__file__).resolve().parents[2] / "src")
+#: what the expressions of CALLS see
+NAMES = {"BarModel": BarModel, "CosineLoad": CosineLoad, "InitialState": InitialState,
+         "SquareWaveLoad": SquareWaveLoad, "periodic_orbits": periodic_orbits, "simulate": simulate}
+
+# the first calls, each as (name, expression); the subprocess evaluates them with the tier on and an
+# empty cache, this process with the machine code
+CALLS = {
+    "rigid simulate": "simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0), "
+                      "InitialState.rigid(-0.2, 0.0), 30.0)",
+    "rigid sticking under the square wave": "simulate(BarModel(100, 0, 0.5, 0), SquareWaveLoad(1.0, 1.5), "
+                                            "InitialState.rigid(-1.0, 0.3), 120.0)",
+    "8-mode simulate": "simulate(BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0), "
+                       "InitialState.rigid(-0.2, 0.0, 8), 30.0)",
+    "wave-law simulate": "simulate(BarModel(5.0, 0.1, 0.5, 4, impact='wave'), CosineLoad(0.6, 1.0), "
+                         "InitialState.rigid(-0.2, 0.0, 4), 12.0)",
+    "8-mode periodic_orbits": "periodic_orbits(BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0))",
+    "square-wave periodic_orbits": "periodic_orbits(BarModel(5.0, 0.1, 0.5, 3), SquareWaveLoad(1.0, 1.2))",
+}
+
+
+def _digest(x):
+    """The bits of a result: a trajectory's impacts, contacts and final state; orbits' phases,
+    multipliers, clearances and admissibility."""
+    if isinstance(x, list):
+        return [[o.phase, *np.abs(o.multipliers).tolist(), o.clearance, bool(o.admissible)] for o in x]
+    return [x.impact_times.tolist(), x.impact_velocities.tolist(), x.contact_intervals.tolist(),
+            x.final_state.modal_displacement.tolist(), x.final_state.modal_velocity.tolist()]
+
+
+_FIRST_CALLS = r"""
+import json, sys
+from numba.core import event
+compiled = []
+class Count(event.Listener):
+    def on_start(self, ev): pass
+    def on_end(self, ev): compiled.append(ev.data["dispatcher"].py_func.__name__)
+event.register("numba:compile", Count())
+import numba
+from impactbar.dynamics import _tiers
+sys.path.insert(0, sys.argv[1])
+from test_tiers import CALLS, NAMES, _digest
+out = {name: _digest(eval(expr, dict(NAMES))) for name, expr in CALLS.items()}
+kernels = list(compiled)
+
+@numba.njit
+def users_own(x):
+    return 2.0 * x
+
+users_own(1.5)  # a function not of impactbar's: numba's, compiled here at once
+print(json.dumps({"results": out, "compiled": kernels, "users_own": len(users_own.signatures),
+                  "tiered": _tiers.enabled(), "requests": len(_tiers._REQUESTED)}))
+"""
+
+
+@pytest.fixture(scope="module")
+def first_calls(tmp_path_factory):
+    cache = tmp_path_factory.mktemp("numba-cache")
+    env = dict(os.environ, IMPACTBAR_TIERED="1", NUMBA_CACHE_DIR=str(cache),
+               PYTHONPATH=SRC + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    out = subprocess.run([sys.executable, "-c", _FIRST_CALLS, str(Path(__file__).parent)], env=env,
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2 if hasattr(os, "sched_getaffinity") else False,
+                    reason="the tier needs two CPUs")
+def test_first_calls_run_interpreted_and_give_the_machine_codes_bits(first_calls):
+    assert first_calls["tiered"] and first_calls["requests"] > 0
+    assert first_calls["compiled"] == []  # no kernel compiled in the process that called
+    for name, expr in CALLS.items():
+        assert first_calls["results"][name] == _digest(eval(expr, dict(NAMES))), name
+
+
+def test_functions_not_of_impactbar_are_numbas(first_calls):
+    assert first_calls["users_own"] == 1
+
+
+def test_the_hook_leaves_a_call_with_machine_code_alone():
+    """A kernel numba holds machine code for never reaches the hook (its dispatcher calls the
+    machine code): the hook only sees cold calls."""
+    run = simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0), InitialState.rigid(-0.2, 0.0), 30.0)
+    assert run.n_impacts > 0
+    from impactbar.dynamics import _kernel as K
+
+    assert K.run_free_rigid.signatures  # compiled (tier off in the test process)
+
+
+@numba.njit
+def _overflows(a):
+    a[0] = 7.0  # (the twin writes this before it fails: the call must start again from a[0] = 0)
+    return math.exp(a[1]), a[0]
+
+
+def test_a_twin_that_overflows_hands_the_call_to_the_machine_code():
+    """``math.exp(1000)`` is inf in machine code and OverflowError in Python: the twin's call is
+    run again by the machine code, from the arguments as they came."""
+    a = np.array([0.0, 1000.0])
+    with pytest.raises(OverflowError):
+        _tiers.twin(_overflows)(a.copy())
+    value, first = _tiers._Twin(_overflows)(a)
+    assert value == math.inf and first == 7.0 and a[0] == 7.0
+    assert _overflows.signatures  # numba compiled it for the call
+
+
+def test_twins_call_twins_and_round_hypot_as_numba_does():
+    from impactbar.dynamics import _kernel as K
+
+    t = _tiers.twin(K.run_free)
+    assert t.__globals__["find_crossing"] is _tiers.twin(K.find_crossing)
+    assert t.__globals__["math"].hypot(3e-300, 4e-300) == numba.njit(lambda x, y: math.hypot(x, y))(3e-300,
+                                                                                                     4e-300)
+    rng = np.random.default_rng(5)
+    xy = rng.normal(size=(2000, 2)) * 10.0 ** rng.integers(-8, 8, size=(2000, 2))
+    hyp = numba.njit(lambda x, y: math.hypot(x, y))
+    assert all(t.__globals__["math"].hypot(x, y) == hyp(x, y) for x, y in xy)
+
+
+def test_fast_math_kernels_are_never_interpreted():
+    from impactbar.dynamics import _aberthkernel as A
+
+    fast = [d for d in vars(A).values() if isinstance(d, numba.core.registry.CPUDispatcher)
+            and d.targetoptions.get("fastmath")]
+    assert fast and not any(_tiers._exact(d) for d in fast)

@@ -1,0 +1,91 @@
+"""The drifter with its oil circuit in SI (issue 38): ``impactbar.physical.circuit``.
+
+The operating point of the preset against numbers computed here independently of the SI layer: the
+SI outputs against the dimensionless orbit times the scales written out here, the oil's work on the
+piston over a period against the energy the blow takes (the rigid, undamped piston's kinetic energy
+before the impact less after it), the mean supply pressure between the extremes of its history.
+"""
+
+import math
+
+import pytest
+from scipy.integrate import trapezoid
+
+from impactbar.physical.circuit import CIRCUIT_PRESETS, CircuitDrifter, circuit_preset
+
+
+@pytest.fixture(scope="module")
+def point():
+    return circuit_preset("circuit-drifter").orbit()
+
+
+def test_preset_operating_point(point):
+    d = point.drifter
+    m = 7850 * math.pi / 4 * 0.045 ** 2 * 0.44854236
+    om = math.sqrt(1e7 * 5.6e-4 / (m * 0.44854236))
+    assert d.omega_rad_s == pytest.approx(om, rel=1e-12)
+    o = point.orbit
+    assert point.blow_frequency_Hz == pytest.approx(om / o.period, rel=1e-12)
+    assert point.impact_velocity_m_s == pytest.approx(0.44854236 * om * o.impact_velocity, rel=1e-12)
+    assert point.impact_energy_J == pytest.approx(0.5 * m * point.impact_velocity_m_s ** 2, rel=1e-9)
+    assert point.stable and 40 < point.blow_frequency_Hz < 55 and 8 < point.impact_velocity_m_s < 12
+    acc = point.energy_account
+    assert abs(acc["relative_residual"]) < 1e-10
+    # the oil's work on the piston over a period is what the impact takes: (1 - R^2) m v^2 / 2
+    assert acc["piston"] == pytest.approx((1 - 0.215 ** 2) * point.impact_energy_J, rel=1e-7)
+    assert 0 < point.hydraulic_efficiency < 1
+    h = point.histories(2001)
+    p = point.mean_supply_pressure_Pa
+    assert h["p_s_Pa"].min() < p < h["p_s_Pa"].max()
+    assert trapezoid(h["p_s_Pa"], h["t_s"]) / point.period_s == pytest.approx(p, rel=1e-5)
+    assert h["V_r_m3"].min() > 0 and h["x_v"].min() >= 0 and h["x_v"].max() <= 1
+    low = point.minimum_pressures_Pa  # the extremes of the interpolants, below the sampled ones
+    for name, key in (("front", "p_f_Pa"), ("rear", "p_r_Pa"), ("supply", "p_s_Pa")):
+        assert 0 < low[name] <= h[key].min() < low[name] + 1e3
+    assert not point.cavitates
+
+
+def test_from_config_errors():
+    cfg = CIRCUIT_PRESETS["circuit-drifter"]
+    with pytest.raises(ValueError, match="unknown section"):
+        CircuitDrifter.from_config({**cfg, "pump": {}})
+    with pytest.raises(ValueError, match="missing key supply.pump_flow"):
+        CircuitDrifter.from_config({**cfg, "supply": {k: v for k, v in cfg["supply"].items()
+                                                      if k != "pump_flow"}})
+    with pytest.raises(ValueError, match="chambers.front_area"):
+        circuit_preset("circuit-drifter", chambers={"front_area": "6 cm^2"})
+    with pytest.raises(ValueError, match="precharge"):
+        circuit_preset("circuit-drifter", accumulator={"precharge": "30 MPa"})
+    with pytest.raises(ValueError, match="valve.flow_coefficient"):
+        circuit_preset("circuit-drifter", valve={"flow_coefficient": "6e-6 m^3/s"})
+    with pytest.raises(ValueError, match="unknown circuit preset"):
+        circuit_preset("nope")
+
+
+def test_readme_numbers_and_the_example_config(point):
+    import tomllib
+    from pathlib import Path
+
+    line = (f"{point.blow_frequency_Hz:.1f} Hz, {point.impact_energy_J:.0f} J, "
+            f"{point.mean_supply_pressure_Pa / 1e6:.1f} MPa, efficiency {point.hydraulic_efficiency:.2f}")
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    assert f"# {line}\n" in readme
+    example = Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter.toml"
+    with open(example, "rb") as f:
+        assert CircuitDrifter.from_config(tomllib.load(f)) == point.drifter  # the preset's numbers
+
+
+def test_cli_names_the_circuit_parameters():
+    from impactbar.drives.circuit import PARAMETERS
+    from impactbar.physical.circuit import CIRCUIT_PARAMETERS
+
+    assert CIRCUIT_PARAMETERS == tuple(PARAMETERS)
+
+
+def test_cli_orbits_prints_the_operating_point(point, capsys):
+    from impactbar.cli import main
+
+    example = __import__("pathlib").Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter.toml"
+    assert main(["orbits", str(example)]) == 0
+    out = capsys.readouterr().out
+    assert f"blow frequency {point.blow_frequency_Hz:.4g} Hz" in out and "stable" in out
