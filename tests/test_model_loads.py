@@ -155,3 +155,91 @@ def test_scales_that_overflow_are_refused_at_the_boundary(impact):
     for d in (math.nextafter(d_max, math.inf), 1e300):
         with pytest.raises(ValueError, match=r"^d must be in \[0, 1\.34078e\+154\]"):
             BarModel(1.0, d, 0.5, 4, impact=impact)
+
+
+# ------------------------------------------------------------------------------------------------
+# the table of loads: what each load declares
+# ------------------------------------------------------------------------------------------------
+TABLE_EXAMPLES = [CosineLoad(0.3, 1.0, 2), SquareWaveLoad(1.0, 1.2), FourierLoad(0.2, [0.5, 0.1j, 0.0]),
+                  PiecewiseConstantLoad([0.0, 2.0, 4.0], [1.0, -0.5, 0.25])]
+
+
+def test_the_table_holds_every_load_class_by_its_kind():
+    from impactbar.loads import LOADS
+
+    assert {type(ld) for ld in TABLE_EXAMPLES} == set(LOADS.values())
+    for kind, cls in LOADS.items():
+        assert cls.kind == kind and cls.description and cls.parameters
+        assert set(cls.continuation_parameters) <= set(cls.parameters.names)
+
+
+@pytest.mark.parametrize("load", TABLE_EXAMPLES, ids=lambda ld: ld.kind)
+def test_a_record_reads_back_as_the_same_load(load):
+    import json
+
+    from impactbar import Load
+
+    record = load.to_record()
+    assert record["kind"] == load.kind and list(record)[1:] == list(load.parameters.names)
+    assert json.loads(json.dumps(record)) == record  # plain JSON
+    assert Load.from_record(record) == load
+    assert load.with_() == load
+
+
+@pytest.mark.parametrize(
+    ("record", "match"),
+    [({"p0": 0.3}, "missing key 'kind'"), ({"kind": "sine"}, "kind must be one of"),
+     ({"kind": ["cosine"]}, "kind must be one of"), ({"kind": "cosine", "p0": 0.3, "pk": 1.0},
+                                                     r"missing key\(s\) \['k'\]"),
+     ({"kind": "square", "q": 1.0, "kappa": 1.2, "k": 1}, r"unknown key\(s\) \['k'\]"),
+     ({"kind": "square", "q": -1.0, "kappa": 1.2}, "q must be")])
+def test_a_bad_record_names_the_key(record, match):
+    from impactbar import Load
+
+    with pytest.raises(ValueError, match=match):
+        Load.from_record(record)
+
+
+def test_with_changes_parameters_and_validates():
+    assert CosineLoad(0.3, 1.0, 2).with_(pk=2.0) == CosineLoad(0.3, 2.0, 2)
+    assert FourierLoad(0.2, [0.5, 0.1j]).with_(p0=0.4) == FourierLoad(0.4, [0.5, 0.1j])
+    with pytest.raises(ValueError, match="kappa"):
+        SquareWaveLoad(1.0, 1.2).with_(kappa=2.5)
+    with pytest.raises(ValueError, match="not parameter"):
+        SquareWaveLoad(1.0, 1.2).with_(pk=1.0)
+
+
+def test_declared_forms_and_periods_against_the_loads_values():
+    t = np.linspace(0.0, TWO_PI, 101)
+    for load in TABLE_EXAMPLES + [FourierLoad(0.5, [0.0, 2.0])]:
+        cosine, square, pieces = load.cosine_form(), load.square_form(), load.pieces()
+        if cosine is not None:
+            p0, pk, k = cosine
+            np.testing.assert_allclose(load(t), p0 + pk * np.cos(k * t), atol=1e-14)
+        if square is not None:
+            q, kappa = square
+            np.testing.assert_array_equal(load(t), np.where(t % TWO_PI < kappa * math.pi, q, -q))
+        if pieces is not None:
+            breaks, levels = pieces
+            np.testing.assert_array_equal(load(breaks), levels)
+        else:
+            assert np.all(np.isfinite(load.harmonics()))
+        T = load.period
+        np.testing.assert_allclose(load(t + T), load(t), atol=1e-13)
+    assert FourierLoad(0.5, [0.0, 2.0]).cosine_form() == (0.5, 2.0, 2)
+    assert FourierLoad(0.5, [0.0, 2.0]).period == math.pi
+    assert FourierLoad(0.5, [1j]).cosine_form() is None  # a sine is no cosine form
+    assert CosineLoad(0.3, 1.0, 3).max_one_impact_orbits == 6
+
+
+def test_a_subclass_with_its_own_evaluation_gets_no_compiled_view():
+    class Shifted(CosineLoad):
+        def __call__(self, t):
+            return super().__call__(np.asarray(t) + 0.1)
+
+    from impactbar.dynamics.kernelview import FOURIER, PIECEWISE
+
+    assert CosineLoad(0.3, 1.0).compiled_kind("__call__", "flow") == FOURIER == CosineLoad.kernel_kind
+    assert SquareWaveLoad(1.0, 1.2).compiled_kind("__call__") == PIECEWISE
+    assert Shifted(0.3, 1.0).compiled_kind("flow") == FOURIER
+    assert Shifted(0.3, 1.0).compiled_kind("__call__", "flow") is None

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
+from ._shared.schema import Field, Schema
 from ._shared.validate import check_int, check_real
 from .laws import ContactLaw, get_law
 
@@ -76,6 +78,11 @@ class BarModel:
     n_modes: int
     impact: str = "paper"
     _law: ContactLaw = field(default=None, init=False, repr=False)
+
+    #: the numbers of a model, with their long names (tables, a sweep's axes)
+    parameters: ClassVar[Schema] = Schema(
+        Field("s", "wave-speed ratio C/(L Omega), eq. 2"), Field("d", "damping D/(M Omega), eq. 2"),
+        Field("R", "restitution coefficient"), Field("n_modes", "flexible modes kept", dtype="i8"))
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "s", check_real("s", self.s, lo=0.0, lo_open=True))

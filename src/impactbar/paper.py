@@ -33,6 +33,7 @@ from .orbits.charts import (
     pneumatic_stability_curve,
 )
 from .orbits.multi_impact import periodic_orbits
+from .orbits.orbit import PeriodicOrbit
 from .plotting.paper import (
     R_CURVES,
     _save,
@@ -51,17 +52,22 @@ TWO_PI = 2.0 * math.pi
 RIGID = BarModel(s=50.0, d=0.0, R=0.0, n_modes=0)  # the paper's s -> infinity limit
 
 
+#: an orbit's columns in the figures' rows (the CSV format of ``impactbar paper``, kept as it is)
+_ROW_FIELDS = PeriodicOrbit.fields.select(names=("phase", "stable", "schur_stable", "admissible",
+                                                 "admissibility", "max_abs_multiplier"))
+
+
 def _orbit_rows(model, load, x, R):
     rows = []
     orbits = periodic_orbits(model, load)
     for i, o in enumerate(orbits):
-        if isinstance(load, CosineLoad):  # branch 0: load falling through its mean at impact
-            branch = 0 if math.cos(load.k * o.phase) * load.pk < 0 else 1
+        cosine = load.cosine_form()
+        if cosine is not None:  # branch 0: load falling through its mean at impact
+            _, pk, k = cosine
+            branch = 0 if math.cos(k * o.phase) * pk < 0 else 1
         else:
             branch = i
-        rows.append({"R": R, "x": x, "branch": branch, "phase": o.phase, "stable": o.stable,
-                     "schur_stable": o.schur_stable, "admissible": o.admissible,
-                     "admissibility": o.admissibility, "max_abs_multiplier": o.max_abs_multiplier})
+        rows.append({"R": R, "x": x, "branch": branch, **_ROW_FIELDS.record(o)})
     return rows
 
 
@@ -244,67 +250,51 @@ def reproduce(out_dir, *, quick: bool = False, progress=None, dpi: int = 130,
     f = 0.3 if quick else 1.0
     summary: list[tuple[str, str, str]] = []
 
-    def done(name):
+    def figure(name, data, write, plot):
+        """Write a figure's data (CSV) and the figure, and say it is done."""
+        write(out / f"{name}.csv", data)
+        ax = plot(data)
+        _save((ax[0] if isinstance(ax, tuple) else ax).figure, out / f"{name}.{format}", dpi=dpi)
         if progress is not None:
             progress(name)
 
-    # Fig. 4
     rows4 = fig4_data(max(10, int(120 * f)))
-    _write_rows(out / "fig4.csv", rows4)
-    ax = fig4_plot(rows4)
-    _save(ax.figure, out / f"fig4.{format}", dpi=dpi)
+    figure("fig4", rows4, _write_rows, fig4_plot)
     r0 = [r for r in rows4 if r["R"] == 0.0 and r["stable"]]
     summary.append(("4", "R=0: stable orbits that stick (paper counts them)",
                     f"{sum(not r['admissible'] for r in rows4 if r['R'] == 0.0 and r['schur_stable'])}"
                     f" of {sum(r['schur_stable'] for r in rows4 if r['R'] == 0.0)} sampled"))
     summary.append(("4", "R=0: admissible stable orbits sampled", str(len(r0))))
-    done("fig4")
 
-    # Fig. 5
     d5 = fig5_data(max(8, int(40 * f)))
-    _write_columns(out / "fig5.csv", d5)
-    ax, _, _ = fig5_plot(d5)
-    _save(ax.figure, out / f"fig5.{format}", dpi=dpi)
-    summary.append(("5", "R=0, 2pid=0: stable band p0/p1",
-                    f"{d5['stability_exact_2pid=0'][0]:.6f} .. {d5['existence_2pid=0'][0]:.6f}"))
-    summary.append(("5", "R=0, 2pid=0: inadmissible (sticks) for p0/p1 in",
-                    f"{d5['sticks_from_2pid=0'][0]:.6f} .. {d5['sticks_to_2pid=0'][0]:.6f}"))
-    summary.append(("5", "R=0, 2pid=0: stable band p0/p1, wave law (s pi = 157)",
-                    f"{d5['stability_wave_2pid=0'][0]:.6f} .. {d5['existence_wave_2pid=0'][0]:.6f}"))
-    summary.append(("5", "R=0, 2pid=0.03: stable band p0/p1",
-                    f"{d5['stability_exact_2pid=0.03'][0]:.6f} .. {d5['existence_2pid=0.03'][0]:.6f}"))
-    done("fig5")
+    figure("fig5", d5, _write_columns, fig5_plot)
+    for what, lo, hi in (("R=0, 2pid=0: stable band p0/p1", "stability_exact_2pid=0", "existence_2pid=0"),
+                         ("R=0, 2pid=0: inadmissible (sticks) for p0/p1 in", "sticks_from_2pid=0",
+                          "sticks_to_2pid=0"),
+                         ("R=0, 2pid=0: stable band p0/p1, wave law (s pi = 157)", "stability_wave_2pid=0",
+                          "existence_wave_2pid=0"),
+                         ("R=0, 2pid=0.03: stable band p0/p1", "stability_exact_2pid=0.03",
+                          "existence_2pid=0.03")):
+        summary.append(("5", what, f"{d5[lo][0]:.6f} .. {d5[hi][0]:.6f}"))
 
-    # Fig. 6
     d6 = fig6_data(19 if f >= 1 else 10)  # both grids hold R = 0.5
-    _write_columns(out / "fig6.csv", d6)
-    ax = fig6_plot(d6)
-    _save(ax.figure, out / f"fig6.{format}", dpi=dpi)
+    figure("fig6", d6, _write_columns, fig6_plot)
     i5 = int(np.argmin(np.abs(d6["R"] - 0.5)))
     for tag in ("inf", "10.1", "10.01"):
         summary.append(("6", f"R={d6['R'][i5]:.2f}, s pi={tag}: edge paper / exact / wave law",
                         f"{d6[f'paper_spi={tag}'][i5]:.5f} / {d6[f'exact_spi={tag}'][i5]:.5f}"
                         f" / {d6[f'wave_spi={tag}'][i5]:.5f}"))
-    done("fig6")
 
-    # Fig. 7
     rows7 = fig7_data(max(10, int(100 * f)))
-    _write_rows(out / "fig7.csv", rows7)
-    ax = fig7_plot(rows7)
-    _save(ax.figure, out / f"fig7.{format}", dpi=dpi)
+    figure("fig7", rows7, _write_rows, fig7_plot)
     summary.append(("7", "stable one-impact orbits found", str(sum(r["stable"] for r in rows7))))
     summary.append(("7", "orbits sampled / inadmissible",
                     f"{len(rows7)} / {sum(not r['admissible'] for r in rows7)}"))
-    done("fig7")
 
-    # Fig. 8
     d8 = fig8_data(max(8, int(40 * f)))
-    _write_columns(out / "fig8.csv", d8)
-    ax, _ = fig8_plot(d8)
-    _save(ax.figure, out / f"fig8.{format}", dpi=dpi)
+    figure("fig8", d8, _write_columns, fig8_plot)
     summary.append(("8", "R=0, 2pid=0: kappa* (closed form sqrt 2)",
                     f"{d8['existence_2pid=0'][0]:.10f}"))
     summary.append(("8", "max |root-found - closed form|, 2pid=0",
                     f"{np.max(np.abs(d8['existence_2pid=0'] - d8['closed_form_2pid=0'])):.1e}"))
-    done("fig8")
     return summary

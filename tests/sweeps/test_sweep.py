@@ -658,3 +658,23 @@ def test_spec_dataclass_is_frozen_and_validates():
         spec.task = "montecarlo"
     with pytest.raises(ValueError, match="task must be one of"):
         SweepSpec(task="x", model=spec.model, load=spec.load, axes=spec.axes)
+
+
+def test_every_load_of_the_table_sweeps():
+    """The spec takes every kind of the table of loads (``Load.to_record``): a piecewise-constant
+    load's arrays too, its orbits those of periodic_orbits."""
+    from impactbar import PiecewiseConstantLoad
+
+    load = PiecewiseConstantLoad([0.0, 2.0], [1.0, -0.5])
+    doc = base_doc(model={"s": 10.0, "d": 0.05, "R": 0.5, "n_modes": 1}, load=load.to_record(),
+                   axes={"R": {"values": [0.3, 0.5]}})
+    spec = parse_spec(doc)
+    assert json.loads(spec.to_json())["load"] == load.to_record()
+    assert spec.point((1,))[1] == load
+    out = compute_chunk(spec, 0)
+    for i, R in enumerate((0.3, 0.5)):
+        orbits = periodic_orbits(BarModel(10.0, 0.05, R, 1), load)
+        assert out["n_orbits"][i] == len(orbits) > 0
+        np.testing.assert_array_equal(out["phase"][i, :len(orbits)], [o.phase for o in orbits])
+    with pytest.raises(ValueError, match=r"\[axes\] 'levels' is not a field"):
+        parse_spec({**doc, "axes": {"levels": {"values": [1.0]}}})

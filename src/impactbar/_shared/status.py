@@ -50,8 +50,7 @@ class Admissibility(_Explained):
 
     PENETRATES = ("penetrates", "the struck end swings through the stop between impacts "
                   "(u(1, t) > 0 at some t inside a flight)")
-    BACKWARD_IMPACT = ("backward impact", "the end reaches the stop moving away from it (impact "
-                       "velocity u_t(1, t-) < 0)")
+    BACKWARD_IMPACT = ("backward impact", "the end reaches the stop moving away from it, u_t(1, t-) < 0")
     GRAZING = ("grazing", "the end touches the stop with zero velocity, between impacts or at the "
                "impact itself (the boundary of admissibility)")
     STICKS = ("sticks", "the end does not leave the stop after the impact: with R = 0 the load "
@@ -61,8 +60,7 @@ class Admissibility(_Explained):
                  "window, so the orbit's contact map does not hold")
     ADMISSIBLE = ("admissible", "the end stays off the stop between impacts, leaves it after each "
                   "impact and arrives moving forward: a physical motion")
-    UNCHECKED = ("unchecked", "admissibility was not decided (a continuation's intermediate point "
-                 "computed without the certified check)")
+    UNCHECKED = ("unchecked", "not decided: a continuation's intermediate point, not checked")
 
     @property
     def rank(self) -> int:
@@ -138,8 +136,9 @@ class BranchStatus(_Explained):
     Examples
     --------
     >>> from impactbar import BranchStatus
-    >>> BranchStatus("reached").message
-    'the parameter reached its target value'
+    >>> status = BranchStatus("reached")  # a string, with its message
+    >>> status == "reached", status.message
+    (True, 'the parameter reached its target value')
     """
 
     REACHED = ("reached", "the parameter reached its target value")

@@ -188,38 +188,20 @@ def json_ready(obj):
 
 
 def load_record(load) -> dict:
-    """A load as JSON-ready structured data: ``{"kind": ..., <its constructor's parameters>}``,
-    with the kinds and field names of a sweep spec's ``[load]`` where they apply (``cosine``:
-    ``p0, pk, k``; ``square``: ``q, kappa``), else the class name and the parameters the object
-    exposes; ``repr`` is added when a parameter cannot be read back.
+    """A load as JSON-ready structured data: its :meth:`~impactbar.Load.to_record`, ``{"kind": ...,
+    <its constructor's parameters>}``, the kinds and field names of a sweep spec's ``[load]``; for
+    an object the table of loads does not know, its class name as ``kind`` and its ``repr``.
 
     Examples
     --------
-    >>> from impactbar import CosineLoad, SquareWaveLoad
+    >>> from impactbar import SquareWaveLoad
     >>> from impactbar.cli._common import load_record
-    >>> load_record(CosineLoad(0.3, 1.0))
-    {'kind': 'cosine', 'p0': 0.3, 'pk': 1.0, 'k': 1}
-    >>> load_record(SquareWaveLoad(1.0, 1.2))
-    {'kind': 'square', 'q': 1.0, 'kappa': 1.2}
+    >>> load_record(SquareWaveLoad(1.0, 1.2)) == SquareWaveLoad(1.0, 1.2).to_record()
+    True
     """
-    import inspect
-
-    kinds = {"CosineLoad": "cosine", "SquareWaveLoad": "square"}
-    name = type(load).__name__
-    out = {"kind": kinds.get(name, name)}
-    try:
-        params = list(inspect.signature(type(load).__init__).parameters)[1:]
-    except (TypeError, ValueError):
-        params = []
-    complete = True
-    for p in params:
-        if hasattr(load, p):
-            out[p] = json_ready(getattr(load, p))
-        else:
-            complete = False
-    if not complete or not params:
-        out["repr"] = repr(load)
-    return out
+    if getattr(load, "kind", ""):
+        return json_ready(load.to_record())
+    return {"kind": type(load).__name__, "repr": repr(load)}
 
 
 def print_json(doc, *, file=None) -> None:

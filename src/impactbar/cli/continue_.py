@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from ._common import add_deprecated_alias, add_quiet_argument, output_folder, print_json, refuse, stage_bar
-from .orbits import add_bar_and_load_arguments
+from .orbits import add_bar_and_load_arguments, add_physical_arguments_if_installed, load_from_args
 from .orbits import check_options as check_bar_and_load
 
 TWO_PI = 2.0 * math.pi
@@ -66,17 +66,12 @@ def add_parser(sub) -> None:
                     "fold; the impact velocity is 2 pi p0/(1 + R) on every one-impact orbit)")
     og.add_argument("--json", action="store_true", help="print a JSON summary instead of a table")
     add_quiet_argument(og)
-    try:
-        from .physical import add_physical_arguments  # the SI layer, where installed
-    except ImportError:
-        pass
-    else:
-        add_physical_arguments(p)
+    add_physical_arguments_if_installed(p)
     p.set_defaults(func=run)
 
 
 def _model_and_load(args):
-    from .. import BarModel, CosineLoad, SquareWaveLoad
+    from .. import BarModel
 
     if getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None:
         from .physical import hammer_from_args
@@ -85,9 +80,7 @@ def _model_and_load(args):
         return hammer.model, hammer.load
     model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes,
                      impact=getattr(args, "impact", None) or "paper")
-    if args.load == "cosine":
-        return model, CosineLoad(args.p0, args.pk, args.k)
-    return model, SquareWaveLoad(args.q, args.kappa)
+    return model, load_from_args(args)
 
 
 def _start(model, load, args):

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 from ..laws import LAWS
+from ..loads import LOADS, Load
 from ._common import load_record, print_json, refuse
 
+#: the options of each load kind: the loads of the table whose parameters are all numbers
+LOAD_OPTIONS = {kind: cls.parameters.names for kind, cls in LOADS.items()
+                if all(f.per is None for f in cls.parameters)}
 #: the dimensionless inputs, which a hammer in SI (CONFIG.toml or --preset) sets itself
-DIMENSIONLESS = ("s", "d", "R", "n_modes", "load", "p0", "pk", "k", "q", "kappa")
-#: the options of each load kind
-LOAD_OPTIONS = {"cosine": ("p0", "pk", "k"), "square": ("q", "kappa")}
+DIMENSIONLESS = ("s", "d", "R", "n_modes", "load",
+                 *dict.fromkeys(p for options in LOAD_OPTIONS.values() for p in options))
 
 
 #: the one set of defaults of the dimensionless bar and load options (``orbits`` and ``continue``)
@@ -20,7 +23,7 @@ def add_bar_and_load_arguments(p) -> None:
     """The dimensionless bar (``--s --d --R --n-modes --impact``) and load (``--load --p0 --pk --k
     --q --kappa``) options with the defaults :data:`DEFAULTS` (shared by ``impactbar orbits`` and
     ``impactbar continue``)."""
-    d, n_modes, p0 = DEFAULTS["d"], DEFAULTS["n_modes"], DEFAULTS["p0"]
+    d, n_modes = DEFAULTS["d"], DEFAULTS["n_modes"]
     g = p.add_argument_group("bar (dimensionless, eq. 2)")
     g.add_argument("--s", type=float, default=10.0, help="wave-speed ratio C/(L Omega) > 0 (default 10)")
     g.add_argument("--d", type=float, default=d, help=f"damping D/(M Omega) >= 0 (default {d:g})")
@@ -31,13 +34,24 @@ def add_bar_and_load_arguments(p) -> None:
                    help="impact law: 'paper' (eq. 10, default) or 'wave' (the stop as a long rod, "
                         "the contact solved by characteristics); overrides a config's [model] impact")
     lg = p.add_argument_group("load")
-    lg.add_argument("--load", choices=("cosine", "square"), default="cosine",
-                    help="cosine: pneumatic p0 + pk cos(k t) (eq. 33); square: hydraulic (eq. 34)")
-    lg.add_argument("--p0", type=float, default=p0, help=f"cosine: mean load (default {p0:g})")
-    lg.add_argument("--pk", type=float, default=1.0, help="cosine: amplitude (default 1)")
-    lg.add_argument("--k", type=int, default=1, help="cosine: order of the harmonic (default 1)")
-    lg.add_argument("--q", type=float, default=1.0, help="square: level q > 0 (default 1)")
-    lg.add_argument("--kappa", type=float, default=1.2, help="square: kappa in [1, 2] (default 1.2)")
+    kinds = tuple(LOAD_OPTIONS)
+    lg.add_argument("--load", choices=kinds, default=kinds[0],
+                    help="; ".join(f"{k}: {LOADS[k].description}" for k in kinds))
+    for kind in kinds:  # each load's parameters, from the table of loads
+        for f in LOADS[kind].parameters:
+            lg.add_argument(f"--{f.name}", type=int if f.dtype.startswith("i") else float,
+                            default=DEFAULTS[f.name],
+                            help=f"{kind}: {f.long_name} (default {DEFAULTS[f.name]:g})")
+
+
+def add_physical_arguments_if_installed(p) -> None:
+    """The SI options (a hammer's CONFIG.toml or ``--preset``) where the SI layer is installed
+    (shared by ``impactbar orbits`` and ``impactbar continue``)."""
+    try:
+        from .physical import add_physical_arguments
+    except ImportError:
+        return
+    add_physical_arguments(p)
 
 
 def add_parser(sub) -> None:
@@ -50,21 +64,13 @@ def add_parser(sub) -> None:
     add_bar_and_load_arguments(p)
     p.add_argument("--json", action="store_true",
                    help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
-    try:
-        from .physical import add_physical_arguments  # the SI layer, where installed
-    except ImportError:
-        pass
-    else:
-        add_physical_arguments(p)
+    add_physical_arguments_if_installed(p)
     p.set_defaults(func=run)
 
 
-def _load(args):
-    from .. import CosineLoad, SquareWaveLoad
-
-    if args.load == "cosine":
-        return CosineLoad(args.p0, args.pk, args.k)
-    return SquareWaveLoad(args.q, args.kappa)
+def load_from_args(args) -> Load:
+    """The load ``--load`` names, from its options (the table of loads)."""
+    return Load.from_record({"kind": args.load, **{n: getattr(args, n) for n in LOAD_OPTIONS[args.load]}})
 
 
 def check_options(args) -> None:
@@ -96,11 +102,11 @@ def run(args) -> int:
             return run_drifter_orbits(args, drifter)
 
         return run_physical_orbits(args)
-    from .. import BarModel, periodic_orbits
+    from .. import BarModel, PeriodicOrbit, periodic_orbits
 
     model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes,
                      impact=getattr(args, "impact", None) or "paper")
-    load = _load(args)
+    load = load_from_args(args)
     orbits = periodic_orbits(model, load)
     if args.json:
         doc = {
@@ -115,11 +121,6 @@ def run(args) -> int:
     if not orbits:
         print("no one-impact orbit exists (above the existence edge, eq. 38)")
         return 0
-    head = f"{'phase':>9} {'impact vel.':>12} {'admissibility':>16} {'clearance':>11} " \
-           f"{'max|mu|':>9} {'stable':>7} {'paper':>6}"
-    print(head)
-    for o in orbits:
-        print(f"{o.phase:9.5f} {o.impact_velocity:12.6f} {o.admissibility:>16} {o.clearance:11.3e} "
-              f"{o.max_abs_multiplier:9.5f} {str(o.stable):>7} {str(o.schur_stable):>6}")
+    print("\n".join(PeriodicOrbit.fields.select("cli").table(orbits, width=2)))  # the orbit's CLI columns
     return 0
 

@@ -111,22 +111,10 @@ def format_table(hammer: physical.Hammer, found) -> str:
         lines.append("no one-impact periodic motion")
         return "\n".join(lines)
     lines.append(f"  impact law: {h.impact}")
-    head = (f"{'phase/rad':>9} {'u_t':>9} {'v/(m/s)':>8} {'E/J':>8} {'P/W':>9} {'sigma/MPa':>9} "
-            f"{'E_rod/J':>8} {'rod/MPa':>8} {'eff.':>6} {'admissible':>10} {'stable':>6} {'max|mu|':>8}")
-    lines += [head, "-" * len(head)]
-    for o in found:
-        lines.append(
-            f"{o.phase_rad:9.4f} {o.impact_velocity:9.5f} {o.impact_velocity_m_s:8.3f} "
-            f"{o.blow_energy_J:8.2f} "
-            f"{o.power_W:9.1f} {o.peak_stress_Pa / 1e6:9.1f} {o.rod_energy_J:8.2f} "
-            f"{o.peak_rod_stress_Pa / 1e6:8.1f} {o.efficiency:6.3f} {str(o.admissible):>10} "
-            f"{str(o.stable):>6} {o.max_abs_multiplier:8.4f}")
+    head, *rows = physical.PhysicalOrbit.fields.select("cli").table(found, width=2)  # declared columns
+    lines += [head, "-" * len(head), *rows]
     if getattr(h, "drill", None) is not None:  # the rod-rock law: drilling per blow (theory §4d)
-        head = (f"{'phase/rad':>9} {'rock/J':>8} {'pen./mm':>8} {'rate m/min':>10} {'eff.':>6} "
-                f"{'eff.+reb.':>9}")
+        head, *rows = physical.PhysicalOrbit.fields.select("cli_rock").table(found, width=2)
         lines += ["drilling per blow (work on rock, permanent penetration, rate at the blow "
-                  "frequency, efficiency without and with the rebound)", head, "-" * len(head)]
-        lines += [f"{o.phase_rad:9.4f} {o.work_on_rock_J:8.2f} {o.penetration_mm:8.4f} "
-                  f"{o.drilling_rate_m_min:10.4f} {o.efficiency:6.3f} {o.efficiency_with_rebound:9.3f}"
-                  for o in found]
+                  "frequency, efficiency without and with the rebound)", head, "-" * len(head), *rows]
     return "\n".join(lines)

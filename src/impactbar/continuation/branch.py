@@ -8,16 +8,41 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
+from .._shared.schema import Field, Schema
 from .._shared.validate import check_real
 from ..orbits.multi_impact import MultiImpactOrbit, find_orbit
+from ..orbits.orbit import ORBIT_FIELDS
 from .parameters import with_parameter
 
-__all__ = ["Branch", "BranchEvent"]
+__all__ = ["Branch", "BranchEvent", "orbit_columns"]
 
 TWO_PI = 2.0 * math.pi
+
+#: the orbit's fields at each point of a branch: those of :data:`ORBIT_FIELDS` in the view ``"branch"``
+POINT_FIELDS = ORBIT_FIELDS.select("branch")
+
+
+def orbit_columns(orbits) -> dict:
+    """The orbits of a branch or curve as a table's columns (:data:`POINT_FIELDS`): ``name ->
+    array`` of one value per orbit, an array along impacts or multipliers spread over columns
+    ``<element>_<j>`` (a complex one as ``<element>_<j>_real`` and ``_imag``)."""
+    out = {}
+    scalars = Schema(*(f for f in POINT_FIELDS if f.per is None)).columns(orbits)
+    for f in POINT_FIELDS:
+        if f.per is None:
+            out[f.name] = scalars[f.name]
+            continue
+        values = POINT_FIELDS.stack(orbits, f.name).reshape(len(orbits), -1)
+        for j in range(values.shape[1]):
+            if f.dtype == "c16":
+                out[f"{f.item}_{j}_real"], out[f"{f.item}_{j}_imag"] = values[:, j].real, values[:, j].imag
+            else:
+                out[f"{f.item}_{j}"] = values[:, j]
+    return out
 
 # ------------------------------------------------------------------------------------------------
 # results
@@ -68,15 +93,31 @@ class BranchEvent:
     _point: np.ndarray = field(repr=False, default=None)
     surface: str = ""
 
+    #: the declared fields: :meth:`to_dict`, :meth:`Branch.events_dataframe` and the ``event_``
+    #: variables of :meth:`Branch.to_xarray` (those in the view ``"branch"``)
+    fields: ClassVar[Schema] = Schema(
+        Field("kind", "the kind of event", "", dtype="U", views={"branch"}),
+        Field("parameter", "the continuation parameter", "", dtype="U"),
+        Field("value", "the parameter's value at the event", views={"branch"}),
+        Field("index", "the event lies between branch points index - 1 and index", "", dtype="i8",
+              views={"branch"}),
+        Field("multiplier", "the critical multiplier (NaN for grazing and admissibility)", dtype="c16",
+              views={"branch"}),
+        Field("phase", "load phase of the first impact", "rad", attr="orbit.phase", views={"branch"}),
+        Field("impacts", "impacts per period of the motion, m", "", dtype="i8", attr="orbit.impacts"),
+        Field("periods", "load periods per period of the motion, n", "", dtype="i8",
+              attr="orbit.periods"),
+        Field("surface", "the border a border collision crosses (empty for other events)", "",
+              dtype="U"))
+
+    def __repr__(self) -> str:
+        """One line: the kind, where, the multiplier."""
+        mu = "" if math.isnan(self.multiplier.real) else f", multiplier {self.multiplier:.6g}"
+        return f"BranchEvent({str(self.kind)!r} at {self.parameter} = {self.value:.10g}{mu})"
+
     def to_dict(self) -> dict:
-        """A JSON-ready summary."""
-        out = {"kind": self.kind, "parameter": self.parameter, "value": self.value,
-               "index": self.index, "multiplier": [self.multiplier.real, self.multiplier.imag],
-               "phase": self.orbit.phase, "impacts": self.orbit.impacts,
-               "periods": self.orbit.periods}
-        if self.surface:
-            out["surface"] = self.surface
-        return out
+        """A JSON-ready summary: the fields of :attr:`fields`."""
+        return self.fields.record(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -152,40 +193,18 @@ class Branch:
                  + "</tbody></table>") if self.events else ""
         return f"<p><code>{html.escape(repr(self))}</code></p>{table}"
 
-    @property
-    def stable(self) -> np.ndarray:
-        """``(P,)`` bool: admissible with every ``|multiplier| < 1``."""
-        return np.array([o.stable for o in self.orbits], dtype=bool)
+    def _along(name, doc):  # noqa: N805 - a property of the orbits' field ``name`` along the branch
+        return property(lambda self: POINT_FIELDS.stack(self.orbits, name), doc=doc)
 
-    @property
-    def admissible(self) -> np.ndarray:
-        """``(P,)`` bool."""
-        return np.array([o.admissible for o in self.orbits], dtype=bool)
-
-    @property
-    def multipliers(self) -> np.ndarray:
-        """``(P, 2 N + 2)`` complex, by decreasing modulus."""
-        return np.array([o.multipliers for o in self.orbits])
-
-    @property
-    def phases(self) -> np.ndarray:
-        """``(P, m)`` load phases of the impacts (rad)."""
-        return np.array([o.phases for o in self.orbits])
-
-    @property
-    def impact_times(self) -> np.ndarray:
-        """``(P, m)`` load times of the impacts."""
-        return np.array([o.impact_times for o in self.orbits])
-
-    @property
-    def impact_velocities(self) -> np.ndarray:
-        """``(P, m)`` velocities of the end before each impact."""
-        return np.array([o.impact_velocities for o in self.orbits])
-
-    @property
-    def max_abs_multiplier(self) -> np.ndarray:
-        """``(P,)`` spectral radius of the ``m``-fold impact map."""
-        return np.array([o.max_abs_multiplier for o in self.orbits])
+    stable = _along("stable", "``(P,)`` bool: admissible with every ``|multiplier| < 1``.")
+    admissible = _along("admissible", "``(P,)`` bool.")
+    multipliers = _along("multipliers", "``(P, 2 N + 2)`` complex, by decreasing modulus.")
+    phases = _along("phases", "``(P, m)`` load phases of the impacts (rad).")
+    impact_times = _along("impact_times", "``(P, m)`` load times of the impacts.")
+    impact_velocities = _along("impact_velocities", "``(P, m)`` velocities of the end before each impact.")
+    max_abs_multiplier = _along("max_abs_multiplier",
+                                "``(P,)`` spectral radius of the ``m``-fold impact map.")
+    del _along
 
     def to_xarray(self):
         """The branch as an :class:`xarray.Dataset`; requires xarray.
@@ -194,43 +213,37 @@ class Branch:
         -------
         xarray.Dataset
             Dims ``point`` (P), ``impact`` (m), ``multiplier`` (2 N + 2), ``event``; the parameter
-            is a coordinate along ``point``; ``impact_time``, ``phase``, ``impact_velocity``
-            (point, impact), ``multiplier_real``/``_imag`` (point, multiplier), ``stable``,
-            ``admissible``, ``admissibility``, ``clearance``, ``max_abs_multiplier`` (point), and
-            ``event_kind``, ``event_value``, ``event_index``, ``event_phase``,
-            ``event_multiplier_real``/``_imag`` (event); attributes ``parameter``, ``impacts``,
-            ``periods``, ``status``.
+            is a coordinate along ``point``; the orbits' fields of :data:`POINT_FIELDS` along
+            ``point`` (``impact_time``, ``phase``, ``impact_velocity`` along ``impact`` too,
+            ``multiplier_real``/``_imag`` along ``multiplier``; ``stable``, ``admissible``,
+            ``admissibility``, ``clearance``, ``max_abs_multiplier``), and the events' fields
+            (:attr:`BranchEvent.fields`, ``event_kind``, ``event_value``, ``event_index``,
+            ``event_phase``, ``event_multiplier_real``/``_imag``) along ``event``; every variable
+            with ``long_name`` and ``units``; attributes ``parameter``, ``impacts``, ``periods``,
+            ``status``.
         """
         import xarray as xr
 
         P, m = len(self), self.impacts
-        mu = self.multipliers
-        ev = self.events
-        ds = xr.Dataset(
-            {
-                "impact_time": (("point", "impact"), self.impact_times),
-                "phase": (("point", "impact"), self.phases),
-                "impact_velocity": (("point", "impact"), self.impact_velocities),
-                "multiplier_real": (("point", "multiplier"), mu.real),
-                "multiplier_imag": (("point", "multiplier"), mu.imag),
-                "max_abs_multiplier": ("point", self.max_abs_multiplier),
-                "stable": ("point", self.stable),
-                "admissible": ("point", self.admissible),
-                "admissibility": ("point", np.array([o.admissibility for o in self.orbits], dtype=str)),
-                "clearance": ("point", np.array([o.clearance for o in self.orbits])),
-                "event_kind": ("event", np.array([e.kind for e in ev], dtype=str)),
-                "event_value": ("event", np.array([e.value for e in ev], dtype=float)),
-                "event_index": ("event", np.array([e.index for e in ev], dtype=int)),
-                "event_phase": ("event", np.array([e.orbit.phase for e in ev], dtype=float)),
-                "event_multiplier_real": ("event", np.array([e.multiplier.real for e in ev])),
-                "event_multiplier_imag": ("event", np.array([e.multiplier.imag for e in ev])),
-            },
-            coords={self.parameter: ("point", self.values), "point": np.arange(P),
-                    "impact": np.arange(m)},
-            attrs={"parameter": self.parameter, "impacts": m, "periods": self.periods,
-                   "status": self.status},
-        )
-        return ds
+        data = {}
+        for dim, fields, objs, prefix in (("point", POINT_FIELDS, self.orbits, ""),
+                                          ("event", BranchEvent.fields.select("branch"), self.events,
+                                           "event_")):
+            for f in fields:
+                values = fields.stack(objs, f.name) if f.dtype != "U" else \
+                    np.array([str(f.get(o)) for o in objs], dtype=str)
+                dims = (dim,) if f.per is None else (dim, f.per)
+                attrs = {"long_name": f.long_name, "units": f.units}
+                name = prefix + f.item
+                if f.dtype == "c16":
+                    data[name + "_real"] = (dims, values.real, attrs)
+                    data[name + "_imag"] = (dims, values.imag, attrs)
+                else:
+                    data[name] = (dims, values, attrs)
+        return xr.Dataset(data, coords={self.parameter: ("point", self.values), "point": np.arange(P),
+                                        "impact": np.arange(m)},
+                          attrs={"parameter": self.parameter, "impacts": m, "periods": self.periods,
+                                 "status": self.status})
 
     def to_dataframe(self):
         """The branch as a table; requires pandas.
@@ -238,28 +251,15 @@ class Branch:
         Returns
         -------
         pandas.DataFrame
-            One row per point (index ``point``): the parameter, ``phase_j``, ``impact_time_j``,
-            ``impact_velocity_j`` for each impact ``j``, ``stable``, ``admissible``,
-            ``admissibility``, ``clearance``, ``max_abs_multiplier``, and ``multiplier_k_real``,
-            ``multiplier_k_imag`` for each multiplier ``k`` (by decreasing modulus).
+            One row per point (index ``point``): the parameter, then the orbits' fields
+            (:func:`orbit_columns`): ``impact_time_j``, ``phase_j``, ``impact_velocity_j`` for each
+            impact ``j``, ``admissible``, ``admissibility``, ``clearance``, ``stable``,
+            ``max_abs_multiplier``, and ``multiplier_k_real``, ``multiplier_k_imag`` for each
+            multiplier ``k`` (by decreasing modulus).
         """
         import pandas as pd
 
-        data = {self.parameter: self.values}
-        for j in range(self.impacts):
-            data[f"phase_{j}"] = self.phases[:, j]
-            data[f"impact_time_{j}"] = self.impact_times[:, j]
-            data[f"impact_velocity_{j}"] = self.impact_velocities[:, j]
-        data["stable"] = self.stable
-        data["admissible"] = self.admissible
-        data["admissibility"] = [o.admissibility for o in self.orbits]
-        data["clearance"] = [o.clearance for o in self.orbits]
-        data["max_abs_multiplier"] = self.max_abs_multiplier
-        mu = self.multipliers
-        for k in range(mu.shape[1]):
-            data[f"multiplier_{k}_real"] = mu[:, k].real
-            data[f"multiplier_{k}_imag"] = mu[:, k].imag
-        df = pd.DataFrame(data)
+        df = pd.DataFrame({self.parameter: self.values, **orbit_columns(self.orbits)})
         df.index.name = "point"
         return df
 
@@ -269,36 +269,19 @@ class Branch:
         Returns
         -------
         pandas.DataFrame
-            One row per event: ``kind``, ``parameter``, ``value``, ``index``, ``multiplier``
-            (``[re, im]``), ``phase``, ``impacts``, ``periods``.
+            One row per event: the fields of :attr:`BranchEvent.fields` (``kind``, ``parameter``,
+            ``value``, ``index``, ``multiplier`` as ``[re, im]``, ``phase``, ``impacts``,
+            ``periods``).
         """
         import pandas as pd
 
-        return pd.DataFrame([e.to_dict() for e in self.events],
-                            columns=["kind", "parameter", "value", "index", "multiplier", "phase",
-                                     "impacts", "periods"])
+        return pd.DataFrame([e.to_dict() for e in self.events], columns=list(BranchEvent.fields.names))
 
     def plot(self, ax=None, *, y: str = "phase", color=None, label=None, events=True):
-        """Plot the branch: stable stretches solid, unstable or inadmissible dashed, events marked.
-
-        Parameters
-        ----------
-        ax : matplotlib.axes.Axes, optional
-            Drawn on a new figure's axes if omitted.
-        y : {"phase", "impact_velocity", "max_abs_multiplier"}
-            What to plot against the parameter; per-impact quantities give one curve per impact
-            (phases unwrapped along the branch, so a curve does not jump at ``2 pi``). The default,
-            the phase, separates the two sides of a fold; the impact velocity is ``2 pi p0/(1 + R)``
-            on every one-impact orbit (theory §4).
-        color, label : optional
-            Line colour and legend label.
-        events : bool
-            Mark and name the events.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
+        """Plot the branch: stable stretches solid, unstable or inadmissible dashed, events marked
+        (:func:`impactbar.plotting.plot_branch`, with these keywords; it returns the axes). ``y``
+        names what is plotted against the parameter (the phase, the default, separates the two
+        sides of a fold)."""
         from ..plotting.continuation import plot_branch
 
         return plot_branch(self, ax, y=y, color=color, label=label, events=events)

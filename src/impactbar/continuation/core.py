@@ -20,7 +20,6 @@ from scipy.optimize import brentq
 from .._shared.status import BranchStatus, EventKind
 from .._shared.threads import single_threaded_blas
 from ..drives.base import autonomous
-from ..loads import PiecewiseConstantLoad
 from ..orbits.multi_impact import (
     _build,
     _halves_gap,
@@ -390,13 +389,13 @@ def _load_jump(problem, U, index):
     differentiable there, and the branch has a corner, e.g. the hydraulic existence edge, Fig. 8):
     Newton on ``F(u, lambda) = 0`` with the impact time nearest a jump pinned to it. Returns a
     ``"load-jump"`` event, or None when no impact is near a jump or Newton fails."""
-    load = problem.segments(U[-1]).load
-    if not isinstance(load, PiecewiseConstantLoad):
+    pieces = problem.segments(U[-1]).load.pieces()
+    if pieces is None:  # a continuous load: no jump
         return None
     K = problem.segments(U[-1]).B  # unknowns per impact
     t = U[:-1].reshape(problem.m, K)[:, 0]
 
-    br = load.breaks
+    br = pieces[0]
     rel = np.mod(t[:, None] - br[None, :] + math.pi, TWO_PI) - math.pi
     j, b = (int(i) for i in np.unravel_index(int(np.argmin(np.abs(rel))), rel.shape))
     if abs(rel[j, b]) > 1e-3:
@@ -405,7 +404,7 @@ def _load_jump(problem, U, index):
 
     def pinned(V):  # the impact time held on the jump, which moves with the parameter
         V = np.array(V, dtype=float)
-        V[K * j] = problem.segments(V[-1]).load.breaks[b] + shift
+        V[K * j] = problem.segments(V[-1]).load.pieces()[0][b] + shift
         return V
 
     keep = np.ones(U.size, dtype=bool)

@@ -6,13 +6,17 @@ from __future__ import annotations
 
 from .._shared.validate import check_real
 from ..laws import RodRock
-from ..loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
+from ..loads import LOADS, Load
 from ..model import BarModel
 
 __all__ = ["PARAMETERS", "ROCK_PARAMETERS", "parameter_value", "with_parameter"]
 
-#: Parameters a branch can be continued in: BarModel fields and load fields.
-PARAMETERS = ("p0", "pk", "R", "d", "s", "q", "kappa")
+#: The BarModel fields a branch can be continued in.
+MODEL_PARAMETERS = ("R", "d", "s")
+#: Parameters a branch can be continued in: BarModel fields and the loads' continuation parameters
+#: (:attr:`impactbar.Load.continuation_parameters` of the table of loads).
+PARAMETERS = tuple(dict.fromkeys((*MODEL_PARAMETERS,
+                                  *(p for cls in LOADS.values() for p in cls.continuation_parameters))))
 
 #: Parameters of a model with ``impact=RodRock(...)`` (theory §4d), in the law's units: the rock's
 #: loading and unloading stiffnesses (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's
@@ -38,6 +42,7 @@ def parameter_value(model: BarModel, load: Load, name: str) -> float:
     Returns
     -------
     float
+        The parameter's value (dimensionless, or in the law's units).
 
     Raises
     ------
@@ -57,7 +62,7 @@ def parameter_value(model: BarModel, load: Load, name: str) -> float:
     if _is_law_parameter(model, name):
         return model.law.parameter_value(name)
     _check_parameter(model, load, name)
-    if name in ("R", "d", "s"):
+    if name in MODEL_PARAMETERS:
         return float(getattr(model, name))
     return float(getattr(load, name))
 
@@ -98,17 +103,9 @@ def with_parameter(model: BarModel, load: Load, name: str, value: float):
     if _is_law_parameter(model, name):
         return model.with_(impact=model.law.with_parameter(name, float(value))), load
     _check_parameter(model, load, name)
-    if name in ("R", "d", "s"):
+    if name in MODEL_PARAMETERS:
         return model.with_(**{name: value}), load
-    if isinstance(load, CosineLoad):
-        args = {"p0": load.p0, "pk": load.pk}
-        args[name] = value
-        return model, CosineLoad(args["p0"], args["pk"], load.k)
-    if isinstance(load, SquareWaveLoad):
-        args = {"q": load.q, "kappa": load.kappa}
-        args[name] = value
-        return model, SquareWaveLoad(args["q"], args["kappa"])
-    return model, FourierLoad(value, load.harmonics())  # p0 of a FourierLoad
+    return model, load.with_(**{name: value})
 
 
 def _is_law_parameter(model, name) -> bool:
@@ -138,19 +135,12 @@ def _check_parameter(model, load, name, *, continuation=False):
         return
     if name not in PARAMETERS:
         raise ValueError(f"parameter must be one of {PARAMETERS}; got {name!r}")
-    if name in ("R", "d", "s"):
+    if name in MODEL_PARAMETERS:
         return
-    ok = {CosineLoad: ("p0", "pk"), SquareWaveLoad: ("q", "kappa")}
-    for cls, names in ok.items():
-        if isinstance(load, cls):
-            if name not in names:
-                raise ValueError(f"parameter {name!r} is not a field of {cls.__name__}; use one of "
-                                 f"{names + ('R', 'd', 's')}")
-            return
-    if isinstance(load, FourierLoad) and name == "p0":
-        return
-    raise ValueError(f"parameter {name!r} cannot be continued for a {type(load).__name__}; "
-                     "use R, d or s (or p0 for a FourierLoad)")
+    names = getattr(load, "continuation_parameters", ())
+    if name not in names:
+        raise ValueError(f"parameter {name!r} is not a field of {type(load).__name__} that can be "
+                         f"continued; use one of {(*names, *MODEL_PARAMETERS)}")
 
 
 def _target(parameter, start, to, model=None, load=None):

@@ -19,7 +19,7 @@ import numpy as np
 from .._shared.status import CurveKind
 from .._shared.threads import single_threaded_blas
 from ..orbits.multi_impact import _build, _normalise, _Segments, _unknowns_from
-from .branch import BranchEvent
+from .branch import BranchEvent, orbit_columns
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
 
@@ -77,18 +77,12 @@ class BifurcationCurve:
                 f"status {str(self.status)!r})")
 
     def to_dataframe(self):
-        """One row per point: both parameters, the first impact's phase and velocity, the largest
-        multiplier modulus and the clearance; requires pandas."""
+        """One row per point: both parameters, then the orbits' fields as a branch's table gives
+        them (:func:`impactbar.continuation.branch.orbit_columns`); requires pandas."""
         import pandas as pd
 
         a, b = self.parameters
-        df = pd.DataFrame({
-            a: self.values[:, 0], b: self.values[:, 1],
-            "phase": [o.phase for o in self.orbits],
-            "impact_velocity": [o.impact_velocity for o in self.orbits],
-            "max_abs_multiplier": [o.max_abs_multiplier for o in self.orbits],
-            "clearance": [o.clearance for o in self.orbits],
-        })
+        df = pd.DataFrame({a: self.values[:, 0], b: self.values[:, 1], **orbit_columns(self.orbits)})
         df.index.name = "point"
         return df
 

@@ -4,10 +4,16 @@ parameter arrays: what a sweep's chunk of thousands of points needs.
 The vectorised numpy closed forms of :mod:`impactbar.orbits.rigid` (the reference of the switch
 ``"orbits.rigid_arrays"``, :mod:`impactbar.dynamics.implementations`) make some fifty passes over
 temporary arrays per call, and their bracketed zero search iterates every orbit until the slowest
-has converged. These kernels take the formulas of :mod:`impactbar.orbits._rigid_scalar` (one point
-in plain floats, line by line the same as the vectorised ones) and run them in one compiled loop
-over the points, writing each orbit's fields straight into the result's arrays. The tests hold them
-to the numpy closed forms and to the general path (``tests/dynamics/test_fast_paths.py``).
+has converged. These kernels run the formulas of :mod:`impactbar.orbits._rigid_scalar` (one point in
+plain floats, line by line the same as the vectorised ones) in one compiled loop over the points,
+writing each orbit's fields straight into the result's arrays.
+
+One source: the formulas themselves (the phase equation's roots, the flights, the verdict and the
+multipliers, :data:`impactbar.orbits._rigid_scalar.SHARED`) are numba's copies of the functions of
+``_rigid_scalar``, the reference, made by :func:`_compiled` from that module's code; only the loops
+over the points and the cosine flight's zero search (Halley steps from the secant's zero where the
+reference takes Newton's from the middle: the same zero) are written here. The tests hold them to
+the numpy closed forms and to the general path (``tests/dynamics/test_fast_paths.py``).
 
 Sources: the phase equation (eq. 14, theory §4), the stationary points of the end's displacement
 arc by arc (theory §5), the 2 x 2 impact-map Jacobian (theory §7), the paper's rigid block (eqs. 29,
@@ -16,15 +22,15 @@ arc by arc (theory §5), the 2 x 2 impact-map Jacobian (theory §7), the paper's
 
 from __future__ import annotations
 
-import cmath
 import math
+import types
 
 import numba
 import numpy as np
 
 from ..dynamics._flightkernel import sort_head
 from ..dynamics._kernel import CACHE
-from .stability import MARGINAL
+from . import _rigid_scalar
 
 TWO_PI = 2.0 * math.pi
 INF = math.inf
@@ -33,117 +39,30 @@ NAN = math.nan
 _JIT = dict(cache=CACHE, nogil=True, error_model="numpy")
 
 
-@numba.njit(**_JIT)
-def _b(d, t):
-    """``b(t) = (1 - exp(-d t)) / d`` (``t`` at ``d = 0``)."""
-    y = d * t
-    if abs(y) < 1e-8:
-        return t * (1.0 - 0.5 * y)
-    return -math.expm1(-y) / d
+def _compiled(names) -> dict:
+    """numba's copies of the functions ``names`` of :mod:`._rigid_scalar` (the reference), made from
+    its code: each copy runs in the reference module's globals with every one of ``names`` replaced
+    by its copy, so that the copies call one another compiled (cached as the reference's functions,
+    next to its source)."""
+    scope = dict(vars(_rigid_scalar))
+    for name in names:
+        f = getattr(_rigid_scalar, name)
+        copy = types.FunctionType(f.__code__, scope, f.__name__, f.__defaults__, f.__closure__)
+        copy.__qualname__ = f.__qualname__
+        scope[name] = numba.njit(**_JIT)(copy)
+    return {name: scope[name] for name in names}
 
 
-@numba.njit(**_JIT)
-def _c(d, t):
-    """``c(t) = (t - b(t)) / d`` (``t^2/2`` at ``d = 0``), by its series where it cancels."""
-    y = d * t
-    if abs(y) < 1e-2:
-        return t * t * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0)
-    return (t - (-math.expm1(-y) / d)) / d
-
-
-@numba.njit(**_JIT)
-def _G(d, R):
-    """``G(d, R)`` of the phase equation (eq. 14, theory §4)."""
-    y = TWO_PI * d
-    if y < 1e-2:
-        beta = 0.5 + y / 12.0 - y**3 / 720.0 + y**5 / 30240.0
-    else:
-        beta = 1.0 / (-math.expm1(-y)) - 1.0 / y
-    return TWO_PI * ((1.0 + R) * beta - R)
-
-
-@numba.njit(**_JIT)
-def _sign(x):
-    if x > 0.0:
-        return 1.0
-    if x < 0.0:
-        return -1.0
-    if x == 0.0:
-        return 0.0
-    return NAN
-
-
-@numba.njit(**_JIT)
-def _assemble(d, R, p0, psup, v_plus, v_minus, p_plus, p_minus, V_phase, ng, gmax):
-    """One orbit's flags, clearance, multipliers and the paper's block from its states and the
-    largest value ``gmax`` of ``u(1, .)`` at the ``ng`` zeros of its velocity: ``(ok, status,
-    clearance, clearance_error, mu0, mu1, schur0, schur1, schur_stable, stable)``, ``ok`` false
-    for a degenerate orbit (arrival or departure nearly at rest), which the general path takes."""
-    scale = max(abs(v_minus), psup, 1e-300)
-    acc0 = p_plus - d * v_plus
-    r0 = R == 0.0
-    if (not abs(v_minus) > 1e-6 * scale or (r0 and not abs(acc0) > 1e-6 * scale)
-            or (not r0 and not abs(v_plus) > 1e-6 * scale)):
-        return (False, 0, 0.0, 0.0, complex(0.0, 0.0), complex(0.0, 0.0), complex(0.0, 0.0),
-                complex(0.0, 0.0), False, False)
-    clearance = gmax if ng > 0 else -INF
-    gabs = abs(clearance) if ng > 0 else 0.0
-    err = 1e-12 * (scale + gabs)
-    tol = max(err, 1e-11 * scale)
-    status = 0
-    if clearance >= -tol:
-        status = 2
-    if clearance > tol:
-        status = 1
-    if r0 and not acc0 < 0.0:
-        status = 4
-    if not v_minus > 1e-12 * scale:
-        status = 2 if abs(v_minus) <= 1e-12 * scale else 3
-    # the Floquet multipliers: the 2 x 2 impact-map Jacobian (theory §7 with N = 0)
-    if not abs(v_minus) > 1e-14 * abs(v_minus):  # grazing: the saltation term is infinite
-        mu0 = complex(INF, 0.0)
-        mu1 = complex(INF, 0.0)
-    else:
-        b = _b(d, TWO_PI)
-        e = math.exp(-TWO_PI * d)
-        a_p = p_plus - d * v_plus
-        a_m = p_minus - d * v_minus
-        r0_ = (v_plus + b * a_p) / v_minus
-        r1_ = -b / v_minus
-        j10 = -R * (-e * a_p + a_m * r0_)
-        j11 = -R * (e + a_m * r1_)
-        half_tr = 0.5 * (r0_ + j11)
-        det = r0_ * j11 - r1_ * j10
-        disc = cmath.sqrt(complex(half_tr * half_tr - det, 0.0))
-        big = half_tr + (1.0 if half_tr >= 0.0 else -1.0) * disc
-        small = det / big if big != 0.0 else complex(0.0, 0.0)
-        m0, m1 = abs(big), abs(small)
-        tie = abs(m1 - m0) <= 1e-12 * max(m0, m1)
-        if (not tie and m1 > m0) or (tie and small.imag > big.imag):
-            mu0, mu1 = small, big
-        else:
-            mu0, mu1 = big, small
-    # the paper's rigid block (eqs. 29, 30) with sigma = 0, multiplied through by p0
-    e2 = math.exp(-TWO_PI * d)
-    S2 = p_plus - p0 - d * V_phase
-    y = TWO_PI * d
-    factor = 1.0 - 0.5 * y if y < 1e-8 else -math.expm1(-y) / y
-    a2 = p0
-    a1 = -(1.0 + R * R * e2) * p0 - factor * (1.0 + R) ** 2 * S2
-    a0 = R * e2 * (R * p0)
-    disc = cmath.sqrt(complex(a1 * a1 - 4.0 * a2 * a0, 0.0))
-    sgn = 1.0 if a1 * disc.real >= 0.0 else -1.0
-    qq = -0.5 * (a1 + sgn * disc)
-    s0 = qq / a2 if a2 != 0.0 else complex(INF, 0.0)
-    s1 = a0 / qq if qq != 0.0 else complex(0.0, 0.0)
-    schur_ok = abs(a0) < abs(a2) and abs(a1) < abs(a0 + a2)
-    stable = status == 0 and abs(mu0) < 1.0 - MARGINAL and abs(mu1) < 1.0 - MARGINAL
-    return True, status, clearance, err, mu0, mu1, s0, s1, schur_ok, stable
+_copies = _compiled(_rigid_scalar.SHARED)
+(_b, _sign, _verdict, _cosine_roots, _cosine_flight, _crossing, _velocity, _displacement, _exp_level_time,
+ _square_wave, _square_impact, _square_flight) = (_copies[name] for name in (
+    "_b", "_sign", "_verdict", "_cosine_roots", "_cosine_flight", "_crossing", "_velocity", "_displacement",
+    "_exp_level_time", "_square_wave", "_square_impact", "_square_flight"))
 
 
 @numba.njit(inline="always", **_JIT)
 def _store(out, i, j, phase, mult, v_minus, v_plus, q_minus, orbit):
-    """Write orbit ``j`` of point ``i`` (``orbit``, from :func:`_assemble`) into ``out``, the fields
+    """Write orbit ``j`` of point ``i`` (``orbit``, from :func:`_verdict`) into ``out``, the fields
     of ``RigidOrbits`` in order (straight-line code: inlined, its references cost nothing)."""
     out[1][i, j] = phase
     out[2][i, j] = mult
@@ -164,18 +83,6 @@ def _store(out, i, j, phase, mult, v_minus, v_plus, q_minus, orbit):
 # ------------------------------------------------------------------------------------------------
 # the cosine load p0 + pk cos(k t)
 # ------------------------------------------------------------------------------------------------
-@numba.njit(**_JIT)
-def _velocity(t, ph, k, ca, cb, p0, d, free):
-    x = k * (ph + t)
-    return ca * math.cos(x) + cb * math.sin(x) + p0 * _b(d, t) + free * math.exp(-d * t)
-
-
-@numba.njit(**_JIT)
-def _displacement(t, ph, k, ca, cb, p0, d, free, W0):
-    x = k * (ph + t)
-    return (ca * math.sin(x) - cb * math.cos(x)) / k - W0 + p0 * _c(d, t) + free * _b(d, t)
-
-
 @numba.njit(**_JIT)
 def _cosine_zero(flight, a, b, fa, va, vb):
     """The zero of the velocity of the flight ``(ph, k, ca, cb, p0, pk, d, free)`` in ``[a, b]``
@@ -225,18 +132,10 @@ def cosine_orbits(d, R, p0, pk, k, out):
     kf = float(k)
     for i in range(d.size):
         di, Ri, p0i, pki = d[i], R[i], p0[i], pk[i]
-        den = di * di + kf * kf
-        zr = (1.0 + Ri) * pki * di / den
-        zi = -(1.0 + Ri) * pki * kf / den
-        A = math.hypot(zr, zi)
-        theta = math.atan2(zi, zr)
-        B = p0i * _G(di, Ri)
-        ratio = B / A if A > 0.0 else INF
-        if not (abs(ratio) <= 1.0 + 1e-15 and A > 0.0):
+        exists, double, a, theta, den = _cosine_roots(di, Ri, p0i, pki, kf)
+        if not exists:
             n_orbits[i] = 0
             continue
-        double = abs(ratio) >= 1.0 - 1e-15
-        a = math.acos(min(max(ratio, -1.0), 1.0))
         n = 0
         for base in (a, -a):
             for j in range(k):
@@ -248,24 +147,16 @@ def cosine_orbits(d, R, p0, pk, k, out):
         mult = 2 if double else 1
         n_orbits[i] = n
 
-        # the flight: V(t) = ca cos(k t) + cb sin(k t), W its antiderivative
-        ca = pki * di / den
-        cb = pki * kf / den
         v_plus = -Ri * TWO_PI * p0i / (1.0 + Ri)  # theory §4: the rigid mode strikes at 2 pi p0/(1+R)
         psup = abs(p0i) + abs(pki)
         r0 = Ri == 0.0
-        crossing = -p0i / pki if pki != 0.0 else INF
-        crosses = abs(crossing) < 1.0
-        alpha = math.acos(min(max(crossing, -1.0), 1.0))
+        crosses, alpha = _crossing(p0i, pki)
         for m in range(n):
             ph = phs[m]
-            x = kf * ph
-            free = v_plus - (ca * math.cos(x) + cb * math.sin(x))
-            W0 = (ca * math.sin(x) - cb * math.cos(x)) / kf
-            x1 = kf * (ph + TWO_PI)
-            c1, s1, bT = math.cos(x1), math.sin(x1), _b(di, TWO_PI)
-            v_minus = ca * c1 + cb * s1 + p0i * bT + free * math.exp(-di * TWO_PI)
-            q_minus = (ca * s1 - cb * c1) / kf - W0 + p0i * _c(di, TWO_PI) + free * bT
+            # the flight: V(t) = ca cos(k t) + cb sin(k t), W its antiderivative
+            ca, cb, free, W0 = _cosine_flight(di, pki, kf, den, ph, v_plus)
+            v_minus = _velocity(TWO_PI, ph, kf, ca, cb, p0i, di, free)
+            q_minus = _displacement(TWO_PI, ph, kf, ca, cb, p0i, di, free, W0)
             p_plus = p0i + pki * math.cos(kf * ph)
             # the stationary points of u(1, t): at most one zero of v per arc of constant load sign
             bounds[0] = 0.0
@@ -307,8 +198,9 @@ def cosine_orbits(d, R, p0, pk, k, out):
                 g = _displacement(tz, ph, kf, ca, cb, p0i, di, free, W0)
                 gmax = g if ng == 0 else max(gmax, g)
                 ng += 1
-            orbit = _assemble(di, Ri, p0i, psup, v_plus, v_minus, p_plus, p_plus,
-                              ca * math.cos(x) + cb * math.sin(x), ng, gmax)
+            x = kf * ph
+            orbit = _verdict(di, Ri, p0i, psup, v_plus, v_minus, p_plus, p_plus,
+                             ca * math.cos(x) + cb * math.sin(x), ng, gmax)
             if not orbit[0]:
                 fallback[i] = True
                 break
@@ -319,49 +211,25 @@ def cosine_orbits(d, R, p0, pk, k, out):
 # the square wave of eq. 34
 # ------------------------------------------------------------------------------------------------
 @numba.njit(**_JIT)
-def _exp_level_time(v, alpha, d, target):
-    """Time ``tau >= 0`` at which ``v e^{-d tau} + alpha b(tau)`` reaches ``target``; NaN if never."""
-    den = alpha - d * v
-    if den == 0.0:
-        return NAN
-    x = d * (v - target) / den
-    if not x > -1.0:
-        return NAN
-    ratio = 1.0 - 0.5 * x if abs(x) < 1e-8 else math.log1p(x) / x
-    tau = (target - v) / den * ratio
-    return tau if tau >= 0.0 else NAN
-
-
-@numba.njit(**_JIT)
 def square_orbits(d, R, q, kappa, out):
     """Every one-impact orbit of the rigid bar under the square wave (eq. 34) at each point,
     written into ``out`` as :func:`cosine_orbits`; none where ``kappa >= 2`` (a constant load,
     which the callers leave to the general path)."""
     n_orbits, fallback = out[0], out[13]
     phs = np.empty(2)
-    edges = np.empty(4)
     for i in range(d.size):
         di, Ri, qi = d[i], R[i], q[i]
         if not kappa[i] < 2.0:
             n_orbits[i] = 0
             continue
-        a = kappa[i] * math.pi  # the jump from +q to -q
-        p0 = qi * (kappa[i] - 1.0)
-        len0, len1 = a, TWO_PI - a
-        al0, al1 = qi - p0, -qi - p0  # p - p0 on each piece
-        bT0, bT1 = _b(di, len0), _b(di, len1)
-        E2 = math.exp(-di * a)
-        D2 = al0 * bT0
-        v0 = -(D2 * bT1 + al0 * _c(di, len0) + al1 * _c(di, len1)) / (bT0 + E2 * bT1)
-        V0, V1 = v0, v0 * E2 + D2
-        target = p0 * _G(di, Ri) / (1.0 + Ri)
+        a, p0, V0, V1, al0, al1, target = _square_wave(di, Ri, qi, kappa[i])
         n = 0
         tau = _exp_level_time(V0, al0, di, target)
-        if tau < len0:  # NaN compares false
+        if tau < a:  # NaN compares false
             phs[n] = tau % TWO_PI
             n += 1
         tau = _exp_level_time(V1, al1, di, target)
-        if tau < len1:
+        if tau < TWO_PI - a:
             phs[n] = (a + tau) % TWO_PI
             n += 1
         sort_head(phs, np.int64(n))  # (np.int64: a literal n would compile sort_head again)
@@ -371,34 +239,11 @@ def square_orbits(d, R, q, kappa, out):
         n_orbits[i] = n
 
         v_plus = -Ri * TWO_PI * p0 / (1.0 + Ri)
-        r0 = Ri == 0.0
         for m in range(n):
             ph = phs[m]
-            if ph >= a:
-                V_phase = V1 * math.exp(-di * (ph - a)) + al1 * _b(di, ph - a)
-                p_plus = -qi
-            else:
-                V_phase = V0 * math.exp(-di * ph) + al0 * _b(di, ph)
-                p_plus = qi
-            p_minus = -qi if (ph == 0.0 or ph > a) else qi  # the left limit
-            # the flight: three arcs of constant load in orbit time, cut where the load jumps
-            c1, c2 = (a - ph) % TWO_PI, (-ph) % TWO_PI
-            edges[0], edges[1], edges[2], edges[3] = 0.0, min(c1, c2), max(c1, c2), TWO_PI
-            qs, vs = 0.0, v_plus
-            ng = 0
-            gmax = -INF
-            for j in range(3):
-                T = edges[j + 1] - edges[j]
-                mid = (ph + 0.5 * (edges[j] + edges[j + 1])) % TWO_PI
-                L = qi if mid < a else -qi
-                tz = NAN if (j == 0 and r0) else _exp_level_time(vs, L, di, 0.0)
-                if tz < T and not (j == 0 and tz <= 0.0):  # the impact itself is no stationary point
-                    g = qs + vs * _b(di, tz) + L * _c(di, tz)
-                    gmax = g if ng == 0 else max(gmax, g)
-                    ng += 1
-                qs = qs + vs * _b(di, T) + L * _c(di, T)
-                vs = vs * math.exp(-di * T) + L * _b(di, T)
-            orbit = _assemble(di, Ri, p0, qi, v_plus, vs, p_plus, p_minus, V_phase, ng, gmax)
+            V_phase, p_plus, p_minus = _square_impact(ph, a, qi, di, V0, V1, al0, al1)
+            qs, vs, ng, gmax = _square_flight(ph, a, qi, di, v_plus, Ri == 0.0)
+            orbit = _verdict(di, Ri, p0, qi, v_plus, vs, p_plus, p_minus, V_phase, ng, gmax)
             if not orbit[0]:
                 fallback[i] = True
                 break

@@ -10,6 +10,7 @@ import numpy as np
 from .._shared.status import Admissibility
 from ..dynamics.certified import enclose_zeros
 from ..dynamics.implementations import use_fast
+from ..dynamics.kernelview import FOURIER
 from ..loads import CosineLoad
 from ._rigid_scalar import cosine_clearance
 
@@ -81,6 +82,8 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
         acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
     # (a rigid flight that starts pressed on the stop sticks: the searches' clearances differ there
     # only in what the departure's neighbourhood counts, and the certified search's is the one kept)
+    # (fast-path guard: the rigid cosine flight's closed form, for CosineLoad itself only, whose
+    # clearance it fixes to the last bit; a subclass or another load takes the certified search)
     if (M == 1 and type(load) is CosineLoad and q0[0] == 0.0 and not (at_rest and not acc0 < 0.0)
             and use_fast("admissibility.rigid_cosine")):
         found = (cosine_clearance(float(d), load.p0, load.pk, load.k, float(phase), float(v0[0]),
@@ -112,11 +115,10 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
 def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol, flow=None):
     """``(clearance, err)`` of :func:`_numpy_search` by the compiled kernel, or
     ``None`` where it does not apply (a load or flow it does not know: the numpy path then runs)."""
-    from ..loads import FourierLoad, PiecewiseConstantLoad
-
-    kind = type(load)
-    if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
-                                             for f in ("__call__", "variation", "flow")):
+    kind = load.compiled_kind("__call__", "variation", "flow")
+    if kind is None:
+        return None
+    if kind == FOURIER:
         if flow is None:
             flow = load.flow(w2, d, phase, q0, v0)
         args = getattr(flow, "kernel_args", None)
@@ -124,8 +126,7 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
             return None
         F = args
         P = _NO_PIECES
-    elif isinstance(load, PiecewiseConstantLoad) and all(
-            getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation", "flow")):
+    else:  # piecewise constant
         # one period and a margin: a midpoint of the search may fall just past the flight's end
         pieces = getattr(load.flow(w2, d, phase, q0, v0, horizon=TWO_PI + 1.0), "pieces", None)
         if pieces is None:
@@ -133,8 +134,6 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         nodes, levels, qn, vn = pieces
         P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, vn)
         F = _NO_FOURIER
-    else:
-        return None
     from ._admkernel import admissibility_search, phase_buffers
 
     code, v_max, err = admissibility_search(phase, horizon, at_rest, atol, SEEDS, RETRY_PIECES,
@@ -232,16 +231,10 @@ def _load_slope(load):
     """``(bound of |p'|, only without a jump)`` where the load is smooth between its jumps: a
     Fourier load's ``sum k |p_k|``; 0 for a piecewise-constant load, on an interval without a jump;
     ``None`` for another load (no certificate of a single zero)."""
-    from ..loads import FourierLoad, PiecewiseConstantLoad
-
-    kind = type(load)
-    if isinstance(load, FourierLoad) and all(getattr(kind, f) is getattr(FourierLoad, f)
-                                             for f in ("__call__", "variation")):
-        return load.kernel_view.p1, False
-    if isinstance(load, PiecewiseConstantLoad) and all(
-            getattr(kind, f) is getattr(PiecewiseConstantLoad, f) for f in ("__call__", "variation")):
-        return 0.0, True
-    return None
+    kind = load.compiled_kind("__call__", "variation")
+    if kind is None:
+        return None
+    return (load.kernel_view.p1, False) if kind == FOURIER else (0.0, True)
 
 
 def _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, slope):

@@ -17,7 +17,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..laws.paper.phase import pneumatic_existence_edge as pneumatic_existence_edge
-from ..loads import CosineLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
+from ..loads import CosineLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .multi_impact import periodic_orbits
 from .one_impact import orbit_multipliers
@@ -114,8 +114,9 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
     if not model.law.supports_schur:
         raise ValueError("max_phase_residual is eq. 14's, the paper's impact law; model.impact must "
                          f"be 'paper' (got {model.impact!r})")
-    if isinstance(load, PiecewiseConstantLoad):
-        return float(np.max(phase_residual(model, load, load.breaks)))
+    pieces = load.pieces()
+    if pieces is not None:  # V is monotone on each piece: the largest residual is at a jump
+        return float(np.max(phase_residual(model, load, pieces[0])))
     orders = getattr(load, "orders", None)
     if orders is not None and len(orders) == 1:
         k = int(orders[0])

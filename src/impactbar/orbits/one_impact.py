@@ -14,10 +14,11 @@ import math
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.schema import Field, Schema
 from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from ..dynamics.implementations import use_fast
-from ..loads import FourierLoad, Load, SquareWaveLoad
+from ..loads import Load
 from ..model import BarModel
 from .admissibility import _admissibility, _window_departure
 from .orbit import PeriodicOrbit
@@ -29,20 +30,10 @@ __all__ = ["PeriodicOrbit", "phase_equation_orbits", "orbit_multipliers"]
 
 TWO_PI = 2.0 * math.pi
 
-#: the columns of :meth:`OrbitList.to_dataframe`: name -> (long_name, units)
-ORBIT_COLUMNS = {
-    "orbit": ("orbit number, in order of phase", "1"),
-    "phase": ("phase lag between load and impact cycle, a root of eq. 14", "rad"),
-    "multiplicity": ("multiplicity of the root (2 at a fold)", "1"),
-    "impact_velocity": ("velocity of the struck end before impact", "1"),
-    "admissible": ("the end stays off the stop between impacts (theory §5)", ""),
-    "admissibility": ("admissible, or why not", ""),
-    "clearance": ("largest u(1, t) at a stationary point between impacts", "1"),
-    "clearance_error": ("bound on the error of clearance", "1"),
-    "stable": ("admissible and every |Floquet multiplier| < 1 (theory §7)", ""),
-    "max_abs_multiplier": ("largest |Floquet multiplier|", "1"),
-    "schur_stable": ("the paper's Schur criterion, eqs. 27-31 (theory §6)", ""),
-}
+#: the columns of :meth:`OrbitList.to_dataframe`: the orbit's fields in the view ``"table"``
+#: (:data:`impactbar.orbits.orbit.ORBIT_FIELDS`), then the model's numbers (and the load, as text)
+ORBIT_COLUMNS = PeriodicOrbit.fields.select("table") + Schema(
+    *(Field(f.name, f.long_name, f.units, f.dtype, attr=f"model.{f.name}") for f in BarModel.parameters))
 
 
 class OrbitList(list):
@@ -78,32 +69,32 @@ class OrbitList(list):
         """Whether the list holds a degenerate family (:attr:`families` not empty)."""
         return bool(self.families)
 
+    def __repr__(self) -> str:
+        """A line for the list, then one per orbit (the orbits' short reprs; at most 12)."""
+        if not self:
+            return "OrbitList([])"
+        fam = f", {len(self.families)} degenerate famil{'ies' if len(self.families) > 1 else 'y'}" \
+            if self.families else ""
+        lines = [f"OrbitList of {len(self)} orbit{'s' if len(self) > 1 else ''}{fam}:"]
+        lines += [f"  {o!r}" for o in self[:12]]
+        if len(self) > 12:
+            lines.append(f"  ... and {len(self) - 12} more")
+        return "\n".join(lines)
+
     def to_dataframe(self):
         """One row per orbit: phase, impact velocity, admissibility, clearance, stability.
 
         Returns
         -------
         pandas.DataFrame
-            Index ``orbit`` (0, 1, ... in order of phase), the columns of :data:`ORBIT_COLUMNS`
-            plus the model's ``s``, ``d``, ``R``, ``n_modes`` and the ``load`` (as text), so frames
-            of several models concatenate; ``attrs["columns"]`` gives each column's ``long_name``
-            and ``units`` (dimensionless numbers have units ``"1"``, eq. 2).
+            Index ``orbit`` (0, 1, ... in order of phase), the columns of :data:`ORBIT_COLUMNS`:
+            the orbit's, the model's ``s``, ``d``, ``R``, ``n_modes`` and the ``load`` (as text), so
+            frames of several models concatenate; ``attrs["columns"]`` gives each column's
+            ``long_name`` and ``units`` (dimensionless numbers have units ``"1"``, eq. 2).
         """
-        keys = [k for k in ORBIT_COLUMNS if k != "orbit"]
-        cols = {"orbit": np.arange(len(self))}
-        for k in keys:
-            cols[k] = [getattr(o, k) for o in self]
-        for k in ("s", "d", "R", "n_modes"):
-            cols[k] = [getattr(o.model, k) for o in self]
-        cols["load"] = [repr(o.load) for o in self]
-        meta = dict(ORBIT_COLUMNS, s=("wave-speed ratio C/(L Omega), eq. 2", "1"),
-                    d=("damping D/(M Omega), eq. 2", "1"), R=("restitution coefficient", "1"),
-                    n_modes=("flexible modes kept", "1"), load=("the load", ""))
-        df = _tables.frame(cols, meta, index="orbit")
-        if len(self) == 0:  # keep the dtypes of a non-empty table
-            df = df.astype({"multiplicity": int, "admissible": bool, "admissibility": object,
-                            "stable": bool, "schur_stable": bool, "n_modes": int, "load": object})
-        return df
+        loads = [repr(o.load) for o in self] or np.zeros(0, dtype=object)
+        return ORBIT_COLUMNS.frame(self, index="orbit", index_meta=("orbit number, in order of phase", "1"),
+                                   extra={"load": loads}, extra_meta={"load": ("the load", "")})
 
     def to_xarray(self):
         """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``orbit``, every variable with
@@ -174,19 +165,6 @@ def _check_modes(model: BarModel) -> None:
                          f"(dense Floquet multipliers, O(n_modes^3)); got {model.n_modes}")
 
 
-def _cosine_parameters(load: Load):
-    """``(p0, pk, k)`` if ``load`` is ``p0 + pk cos(k t)`` with real ``pk != 0``, else ``None``."""
-    if not isinstance(load, FourierLoad):
-        return None
-    orders = load.orders
-    if len(orders) != 1:
-        return None
-    pk = complex(load.amplitudes[0])
-    if pk.imag != 0.0:
-        return None
-    return load.p0, pk.real, int(orders[0])
-
-
 # single points of the rigid bar take the closed forms in plain floats (``orbits/_rigid_scalar.py``);
 # the reference of "orbits.rigid_scalar" (dynamics.implementations) is the vectorised numpy closed forms
 
@@ -197,24 +175,27 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     load, a degenerate orbit)."""
     if model.n_modes != 0 or not model.law.rigid_closed_forms:
         return None
-    if isinstance(load, SquareWaveLoad) and load.kappa < 2.0:
-        args, solve = (model.d, model.R, load.q, load.kappa), "square"
-    else:
-        par = _cosine_parameters(load)
-        if par is None:
+    form = load.square_form()
+    if form is not None:
+        if not form[1] < 2.0:  # kappa = 2: a constant load, the general path
             return None
-        args, solve = (model.d, model.R, *par), "cosine"
+        args, square = (model.d, model.R, *form), True
+    else:
+        form = load.cosine_form()
+        if form is None or form[1] == 0.0:  # pk = 0: a constant load, the general path
+            return None
+        args, square = (model.d, model.R, *form), False
     if use_fast("orbits.rigid_scalar"):
         from . import _rigid_scalar
 
-        found = (_rigid_scalar.square_orbits if solve == "square" else _rigid_scalar.cosine_orbits)(*args)
+        found = (_rigid_scalar.square_orbits if square else _rigid_scalar.cosine_orbits)(*args)
         if found is None:
             return None
         return OrbitList(_rigid_orbit(model, load, o.phase, o.multiplicity, o.impact_velocity, o.status,
                                       o.clearance, o.clearance_error, np.array(o.multipliers),
                                       o.stable, np.array(o.schur_roots), o.schur_stable, o.v_plus,
                                       o.q_minus) for o in found)
-    res = (rigid_square_orbits if solve == "square" else rigid_cosine_orbits)(*args)
+    res = (rigid_square_orbits if square else rigid_cosine_orbits)(*args)
     if res.fallback[0]:
         return None
     return OrbitList(_rigid_orbit(

@@ -10,11 +10,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.schema import END_MOTION, SI, Field, Schema
 
 if TYPE_CHECKING:
     from .._shared.status import Admissibility
@@ -22,12 +23,64 @@ if TYPE_CHECKING:
     from ..loads import Load
     from ..model import BarModel
 
-__all__ = ["PeriodicOrbit", "MultiImpactOrbit"]
+__all__ = ["PeriodicOrbit", "MultiImpactOrbit", "ORBIT_FIELDS"]
 
 TWO_PI = 2.0 * math.pi
 
+_ONE = "dict_one_impact"  # the view of a one-impact orbit's to_dict (module impactbar._shared.schema)
 
-@dataclass(frozen=True, eq=False)
+#: The declared fields of a periodic orbit, in order: every view of an orbit is generated from them
+#: (:meth:`PeriodicOrbit.to_dict`, :meth:`OrbitList.to_dataframe`, the branch tables, a sweep's
+#: variables, the SI results, the CLI's table, the repr). A new field of an orbit is declared here,
+#: with the views that show it.
+ORBIT_FIELDS = Schema(
+    Field("impacts", "impacts per period of the motion, m", "", dtype="i8", views={"dict"}),
+    Field("periods", "load periods per period of the motion, n", "", dtype="i8", views={"dict"}),
+    Field("impact_times", "load time of each impact", per="impact", element="impact_time",
+          views={"dict", "branch"}),
+    Field("phase", "phase lag between load and impact cycle, a root of eq. 14", "rad",
+          views={_ONE, "table", "sweep", "cli"}, fmt=".5f",
+          si=SI("phase_rad", "rad", None, "phase of the load at impact", "phase/rad", ".4f")),
+    Field("phases", "load phase of each impact", "rad", per="impact", element="phase",
+          views={"dict", "branch", "repr"}, fmt=".4f"),
+    Field("multiplicity", "multiplicity of the root (2 at a fold)", "", dtype="i8",
+          views={_ONE, "table"}),
+    Field("impact_velocity", "velocity of the struck end before impact", views={
+          _ONE, "table", "sweep", "si", "cli"}, label="impact vel.", fmt=".6f",
+          si=SI("impact_velocity_m_s", "m/s", "velocity_m_s", "impact velocity", "v/(m/s)", ".3f")),
+    Field("impact_velocities", "velocity of the struck end before each impact", per="impact",
+          element="impact_velocity", views={"dict", "branch", "repr"}, fmt=".6g"),
+    Field("admissible", "the end stays off the stop between impacts (theory §5)", "", dtype="b1",
+          views={"dict", _ONE, "table", "sweep", "si", "branch"}),
+    Field("admissibility", "admissible, or why not", "", dtype="U",
+          views={"dict", _ONE, "table", "branch", "cli", "repr"}),
+    Field("clearance", "largest u(1, t) at a stationary point between impacts",
+          views={"dict", _ONE, "table", "branch", "cli"}, fmt=".3e"),
+    Field("clearance_error", "bound on the error of clearance", views={"table"}),
+    Field("stable", "admissible and every |Floquet multiplier| < 1 (theory §7)", "", dtype="b1",
+          views={"dict", _ONE, "table", "sweep", "si", "branch", "cli", "repr"}),
+    Field("max_abs_multiplier", "largest |Floquet multiplier|", views={
+          "dict", _ONE, "table", "sweep", "si", "branch", "cli", "repr"}, label="max|mu|", fmt=".5f"),
+    Field("multipliers", "Floquet multipliers, by decreasing modulus", dtype="c16", per="multiplier",
+          element="multiplier", views={"dict", _ONE, "branch"}),
+    Field("schur_stable", "the paper's Schur criterion, eqs. 27-31 (theory §6)", "", dtype="b1",
+          views={_ONE, "table", "sweep", "cli"}, label="paper"),
+    Field("schur_roots", "roots of the paper's quadratic blocks, eqs. 27-31", dtype="c16",
+          per="multiplier", views={_ONE}),
+    Field("impact_law", "the impact law", "", dtype="U", attr="model.impact", views={_ONE}),
+    Field("rod_energy", "energy carried into the rod per blow (theory §4b)", attr="impact.rod_energy",
+          views={_ONE}, optional=True),
+    Field("peak_force", "peak contact force", attr="impact.peak_force", views={_ONE}, optional=True),
+    Field("peak_rod_stress", "peak compressive stress of the transmitted wave",
+          attr="impact.peak_rod_stress", views={_ONE}, optional=True),
+    Field("efficiency", "rod energy over the energy available to the blow",
+          attr="impact.efficiency", views={_ONE}, optional=True),
+    Field("advance", "advance of the rod end per blow", attr="impact.advance", views={_ONE},
+          optional=True),
+)
+
+
+@dataclass(frozen=True, eq=False, init=False)
 class PeriodicOrbit:
     """A periodic motion with ``impacts`` impacts in ``periods`` load periods, with its stability.
 
@@ -113,7 +166,31 @@ class PeriodicOrbit:
     (1, 1)
     >>> round(orbit.phase, 4), str(orbit.admissibility), orbit.stable
     (2.3565, 'admissible', True)
+    >>> orbit  # a short repr: the motion, its impacts, admissibility and stability
+    PeriodicOrbit(1 impact in 1 load period, phase 2.3565, impact velocity 3.53429, admissible,
+                  stable, max|mu| 0.60000)
     """
+
+    #: the declared fields (:data:`ORBIT_FIELDS`), from which every view of the orbit is generated
+    fields: ClassVar[Schema] = ORBIT_FIELDS
+
+    def __init__(self, model: BarModel, load: Load, impacts: int, periods: int, impact_times: np.ndarray,
+                 phases: np.ndarray, impact_velocities: np.ndarray, admissible: bool,
+                 admissibility: Admissibility | str, clearance: float, clearance_error: float,
+                 multipliers: np.ndarray, stable: bool, states_after_impact: np.ndarray,
+                 states_before_impact: np.ndarray, contacts: tuple | None = None,
+                 multiplicity: int = 1, schur_roots: np.ndarray | None = None,
+                 schur_stable: bool | None = None) -> None:
+        # every attribute set at once: the generated __init__ of a frozen dataclass sets them one
+        # by one through object.__setattr__, 3 us more per orbit (measured; 6 % of periodic_orbits
+        # on a rigid bar, whose closed forms take some 100 us)
+        vars(self).update(
+            model=model, load=load, impacts=impacts, periods=periods, impact_times=impact_times,
+            phases=phases, impact_velocities=impact_velocities, admissible=admissible,
+            admissibility=admissibility, clearance=clearance, clearance_error=clearance_error,
+            multipliers=multipliers, stable=stable, states_after_impact=states_after_impact,
+            states_before_impact=states_before_impact, contacts=contacts, multiplicity=multiplicity,
+            schur_roots=schur_roots, schur_stable=schur_stable)
 
     model: BarModel
     load: Load
@@ -157,19 +234,23 @@ class PeriodicOrbit:
 multipliers, stable, schur_roots, schur_stable
             As the attributes.
         """
-        # every field, set at once: the frozen dataclass' __init__ sets them one by one through
-        # object.__setattr__ (it checks nothing), at a few microseconds per orbit
-        orbit = object.__new__(cls)
-        orbit.__dict__.update(
-            model=model, load=load, impacts=1, periods=1, impact_times=np.array([phase]),
-            phases=np.array([phase]), impact_velocities=np.array([impact_velocity]),
-            admissible=admissible, admissibility=admissibility, clearance=clearance,
-            clearance_error=clearance_error, multipliers=multipliers, stable=stable,
-            states_after_impact=np.asarray(state_after_impact)[None, :],
-            states_before_impact=np.asarray(state_before_impact)[None, :],
-            contacts=None if impact is None else (impact,), multiplicity=multiplicity,
-            schur_roots=schur_roots, schur_stable=schur_stable)
-        return orbit
+        return cls(model, load, 1, 1, np.array([phase]), np.array([phase]), np.array([impact_velocity]),
+                   admissible, admissibility, clearance, clearance_error, multipliers, stable,
+                   np.asarray(state_after_impact)[None, :], np.asarray(state_before_impact)[None, :],
+                   None if impact is None else (impact,), multiplicity, schur_roots, schur_stable)
+
+    # -- the short repr -------------------------------------------------------------------------------
+    def __repr__(self) -> str:
+        """One line: the motion (impacts in load periods), the impacts' phases and velocities, the
+        admissibility, the stability and the largest multiplier; the arrays are
+        :meth:`to_dict`'s."""
+        return f"{type(self).__name__}({', '.join(self._repr_items())})"
+
+    def _repr_items(self) -> list[str]:
+        """The items of the repr, in order; a subclass extends the list (its own numbers)."""
+        m, n = self.impacts, self.periods
+        return [f"{m} impact{'s' if m != 1 else ''} in {n} load period{'s' if n != 1 else ''}",
+                *self.fields.select("repr").summary(self)]
 
     # -- the first impact, and the one-impact conveniences -------------------------------------------
     @property
@@ -225,19 +306,8 @@ multipliers, stable, schur_roots, schur_stable
         return self.states_after_impact[0, :M].copy(), self.states_after_impact[0, M:].copy()
 
     def plot(self, ax=None, n: int = 2000):
-        """Draw the end displacement over one period (:func:`impactbar.plotting.plot_orbit`).
-
-        Parameters
-        ----------
-        ax : matplotlib.axes.Axes, optional
-            Drawn on a new figure's axes if omitted.
-        n : int
-            Time samples drawn.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
+        """Draw the end displacement over one period, on ``ax`` (a new figure's axes if omitted)
+        at ``n`` times: :func:`impactbar.plotting.plot_orbit`, which returns the axes."""
         from ..plotting.orbits import plot_orbit
 
         return plot_orbit(self, ax, n)
@@ -324,7 +394,8 @@ multipliers, stable, schur_roots, schur_stable
     # -- conversions --------------------------------------------------------------------------------
     def to_dict(self) -> dict:
         """A JSON-ready summary (floats, lists; multipliers as ``[re, im]``; ``clearance`` may be
-        ``-inf``).
+        ``-inf``): the fields of :data:`ORBIT_FIELDS` in the view ``"dict_one_impact"`` or
+        ``"dict"``.
 
         A one-impact orbit of :func:`periodic_orbits` (one with ``schur_roots``) gives its scalar
         description (``phase``, ``multiplicity``, ``impact_velocity``, the Schur criterion, the
@@ -332,32 +403,7 @@ multipliers, stable, schur_roots, schur_stable
         efficiency and advance); any other orbit ``impacts``, ``periods`` and the arrays
         ``impact_times``, ``phases``, ``impact_velocities``.
         """
-        verdict = {  # the same keys, in the same place, in both summaries
-            "admissible": self.admissible,
-            "admissibility": self.admissibility,
-            "clearance": self.clearance,
-            "stable": self.stable,
-            "max_abs_multiplier": self.max_abs_multiplier,
-            "multipliers": [[m.real, m.imag] for m in self.multipliers],
-        }
-        if self.schur_roots is None:
-            return {"impacts": self.impacts, "periods": self.periods,
-                    "impact_times": self.impact_times.tolist(), "phases": self.phases.tolist(),
-                    "impact_velocities": self.impact_velocities.tolist(), **verdict}
-        impact = self.impact
-        return {
-            "phase": self.phase,
-            "multiplicity": self.multiplicity,
-            "impact_velocity": self.impact_velocity,
-            **verdict,
-            "schur_stable": self.schur_stable,
-            "schur_roots": [[m.real, m.imag] for m in self.schur_roots],
-            "impact_law": self.model.impact,
-            **({} if impact is None else {
-                "rod_energy": impact.rod_energy, "peak_force": impact.peak_force,
-                "peak_rod_stress": impact.peak_rod_stress, "efficiency": impact.efficiency,
-                "advance": impact.advance}),
-        }
+        return self.fields.select("dict" if self.schur_roots is None else _ONE).record(self)
 
     def to_dataframe(self, n: int = 256):
         """The struck end's motion over one period of the motion as a table.
@@ -383,10 +429,8 @@ multipliers, stable, schur_roots, schur_stable
         c = self.model.end_weights
         return _tables.frame(
             {"t": t, "end_displacement": c @ q, "end_velocity": c @ v},
-            {"t": ("orbit time since the impact", "1"),
-             "end_displacement": ("displacement u(1, t) of the struck end", "1"),
-             "end_velocity": ("velocity u_t(1, t) of the struck end", "1")},
-            index="t", attrs=self._attrs())
+            {"t": ("orbit time since the impact", "1"), **END_MOTION.meta()}, index="t",
+            attrs=self._attrs())
 
     def to_xarray(self, nx: int = 51, nt: int = 256):
         """The displacement and velocity fields over one period of the motion as an

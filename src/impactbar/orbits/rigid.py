@@ -24,16 +24,56 @@ import numpy as np
 from .._shared.status import Admissibility
 from ..dynamics.implementations import use_fast
 from ..laws.paper.stability import _b, rigid_multipliers
+from ..loads import CosineLoad, SquareWaveLoad
+from ._rigid_scalar import harmonic_term
 from .stability import MARGINAL, quadratic_roots
 
 __all__ = ["RigidOrbits", "rigid_cosine_orbits", "rigid_square_orbits", "rigid_multipliers", "phase_G_array",
-           "STATUS"]
+           "STATUS", "CLOSED_FORM_KINDS", "closed_form_groups"]
 
 TWO_PI = 2.0 * math.pi
 
 #: admissibility codes used by :class:`RigidOrbits`, in the order of their integer codes
 STATUS = (Admissibility.ADMISSIBLE, Admissibility.PENETRATES, Admissibility.GRAZING,
           Admissibility.BACKWARD_IMPACT, Admissibility.STICKS)
+
+
+#: the kinds of load (the table of loads, :data:`impactbar.loads.LOADS`) whose one-impact orbits of
+#: the rigid bar have closed forms here
+CLOSED_FORM_KINDS = (CosineLoad.kind, SquareWaveLoad.kind)
+
+
+def closed_form_groups(kind: str, par):
+    """The points of a grid that the closed forms take, in groups of one call each.
+
+    Parameters
+    ----------
+    kind : str
+        The load's kind, one of :data:`CLOSED_FORM_KINDS`.
+    par : mapping of str to numpy.ndarray, shape (P,) each
+        The model's ``d`` and ``R`` and the load's parameters at every point (numbers).
+
+    Returns
+    -------
+    list of (numpy.ndarray, callable, tuple) or None
+        ``(points, solve, args)``: ``solve(*args)`` gives the :class:`RigidOrbits` of the points
+        ``points`` (indices into the grid), in order; the points not in any group (a square wave of
+        ``kappa = 2``, a constant load) take the general path. ``None`` for a kind without closed
+        forms.
+    """
+    if kind == CosineLoad.kind:
+        ks = par["k"].astype(int)
+        groups = []
+        for k in np.unique(ks):
+            sel = np.nonzero(ks == k)[0]
+            groups.append((sel, rigid_cosine_orbits,
+                           (*(par[n][sel].astype(float) for n in ("d", "R", "p0", "pk")), int(k))))
+        return groups
+    if kind == SquareWaveLoad.kind:
+        sel = np.nonzero(par["kappa"].astype(float) < 2.0)[0]  # kappa = 2: a constant load, the general path
+        return [(sel, rigid_square_orbits, tuple(par[n][sel].astype(float)
+                                                 for n in ("d", "R", "q", "kappa")))]
+    return None
 
 
 def _beta(y):
@@ -126,9 +166,7 @@ class RigidOrbits(NamedTuple):
 def _cosine_roots(d, R, p0, pk, k):
     """Roots of the phase equation for ``p0 + pk cos(k t)`` (eq. 14 in closed form), shape (P, 2k)."""
     # F = (1 + R) Re[pk e^{i k phase}/(d + i k)] - p0 G = A cos(k phase + theta) - B
-    den = d * d + k * k
-    zr = (1.0 + R) * pk * d / den
-    zi = -(1.0 + R) * pk * k / den
+    _, zr, zi = harmonic_term(d, R, pk, k)
     A = np.hypot(zr, zi)
     theta = np.arctan2(zi, zr)
     B = p0 * phase_G_array(d, R)

@@ -15,7 +15,7 @@ import numpy as np
 
 from .._shared.validate import check_int, check_real
 from ..laws import LAWS
-from ..loads import CosineLoad, FourierLoad, Load, PiecewiseConstantLoad, SquareWaveLoad
+from ..loads import FourierLoad, Load
 from ..model import BarModel
 from .bar import SHORT_IMPACT_LIMIT, TWO_PI, Bar, ImpactDurationWarning, _positive
 from .config import (
@@ -349,15 +349,18 @@ class Hammer:
         """
         omega = bar.wave_speed_m_s / (bar.length_m * model.s)
         fscale = bar.mass_kg * bar.length_m * omega**2
-        if isinstance(load, CosineLoad):
-            force = PneumaticForce(load.p0 * fscale, load.pk * fscale, load.k)
-            f = omega * load.k / TWO_PI
-        elif isinstance(load, SquareWaveLoad):
-            force = HydraulicForce(load.q * fscale, -load.q * fscale, load.kappa / 2.0)
+        cosine, square, pieces = load.cosine_form(), load.square_form(), load.pieces()
+        if cosine is not None:
+            p0, pk, k = cosine
+            force = PneumaticForce(p0 * fscale, pk * fscale, k)
+            f = omega * k / TWO_PI
+        elif square is not None:
+            q, kappa = square
+            force = HydraulicForce(q * fscale, -q * fscale, kappa / 2.0)
             f = omega / TWO_PI
-        elif isinstance(load, PiecewiseConstantLoad) and load.breaks.size == 2:
-            force = HydraulicForce(load.levels[0] * fscale, load.levels[1] * fscale,
-                                   load.breaks[1] / TWO_PI)
+        elif pieces is not None and pieces[0].size == 2:
+            breaks, levels = pieces
+            force = HydraulicForce(levels[0] * fscale, levels[1] * fscale, breaks[1] / TWO_PI)
             f = omega / TWO_PI
         else:
             raise ValueError(f"load: cannot express {type(load).__name__} as an SI force")

@@ -4,13 +4,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.schema import Field, Schema
 from .._shared.validate import check_real
 from ..orbits import periodic_orbits
+from ..orbits.orbit import ORBIT_FIELDS
 from ..simulation import InitialState
 from ..simulation import simulate as run_simulation
 from .bar import TWO_PI
@@ -20,20 +23,78 @@ from .hammer import Hammer
 # --------------------------------------------------------------------------------------------
 # results in SI
 # --------------------------------------------------------------------------------------------
+def _orbit_si_fields() -> tuple[Schema, dict]:
+    """The orbit's fields in SI, generated from its declared fields (:data:`ORBIT_FIELDS`): each in
+    the view ``"si"`` as it is, and each SI column a field declares; with ``name -> (orbit field,
+    scale)``, the scale an attribute of :class:`~impactbar.physical.Scales` (``None``: the number
+    as it is)."""
+    fields, convert = [], {}
+    for f in ORBIT_FIELDS:
+        if "si" in f.views:
+            fields.append(dataclasses.replace(f, views={"dict", "table", "cli"}))
+            convert[f.name] = (f.name, None)
+        if f.si is not None:
+            fields.append(Field(f.si.name, f.si.long_name or f.long_name, f.si.units, f.dtype,
+                                views={"dict", "table", "cli", "cli_rock"}, label=f.si.label,
+                                fmt=f.si.fmt))
+            convert[f.si.name] = (f.name, f.si.scale)
+    return Schema(*fields), convert
+
+
+_ORBIT_SI, _CONVERT = _orbit_si_fields()
+
+#: The declared fields of :class:`PhysicalOrbit`: the orbit's in SI (generated from
+#: :data:`impactbar.orbits.orbit.ORBIT_FIELDS`), then the hammer's figures per blow
+PHYSICAL_ORBIT_FIELDS = _ORBIT_SI + Schema(
+    Field("blow_energy_J", "energy per blow m v^2 / 2", "J", views={"dict", "table", "cli"},
+          label="E/J", fmt=".2f"),
+    Field("blow_frequency_Hz", "blows per second", "Hz", views={"dict", "table"}),
+    Field("power_W", "impact power", "W", views={"dict", "table", "cli"}, label="P/W", fmt=".1f"),
+    Field("peak_stress_Pa", "peak compressive stress at impact", "Pa", views={"dict", "table", "cli"},
+          label="sigma/MPa", fmt=".1f", scale=1e6),
+    Field("rod_energy_J", "energy carried into the rod per blow (theory §4b)", "J",
+          views={"dict", "table", "cli"}, label="E_rod/J", fmt=".2f"),
+    Field("peak_rod_stress_Pa", "peak compressive stress of the transmitted wave in the rod", "Pa",
+          views={"dict", "table", "cli"}, label="rod/MPa", fmt=".1f", scale=1e6),
+    Field("efficiency", "rod energy over the energy available to the blow", views={
+          "dict", "table", "cli", "cli_rock"}, label="eff.", fmt=".3f"),
+    Field("rod_advance_m", "advance of the rod end per blow", "m", views={"dict", "table"}),
+    Field("work_on_rock_J", "work on rock per blow (theory §4d)", "J", views={"dict", "cli_rock"},
+          label="rock/J", fmt=".2f"),
+    Field("penetration_mm", "permanent penetration per blow", "mm", views={"dict", "cli_rock"},
+          label="pen./mm", fmt=".4f"),
+    Field("drilling_rate_m_min", "penetration times the blow frequency", "m/min",
+          views={"dict", "cli_rock"}, label="rate m/min", fmt=".4f"),
+    Field("efficiency_with_rebound", "work on rock over the available energy less the rebound's",
+          views={"dict", "cli_rock"}, label="eff.+reb.", fmt=".3f"),
+)
+
+
 @dataclass(frozen=True)
 class PhysicalOrbit:
     """A one-impact periodic motion with its engineering figures in SI.
+
+    Its fields are declared once, in :data:`PHYSICAL_ORBIT_FIELDS` (what :meth:`to_dict`, the
+    tables and the CLI show): the orbit's own in SI, generated from the dimensionless orbit's
+    declared fields (a field of :class:`~impactbar.PeriodicOrbit` in the view ``"si"``, or with an
+    SI column, appears here with nothing else changed), then the hammer's figures per blow.
 
     Attributes
     ----------
     orbit : PeriodicOrbit
         The dimensionless orbit (``impactbar.periodic_orbits``).
+    scales : Scales
+        The hammer's units (what the orbit's fields are converted with).
     phase_rad : float
         Phase ``phi`` of the load at impact (rad).
     impact_velocity : float
         Dimensionless impact velocity ``u_t(1, 2 pi-)``.
     impact_velocity_m_s : float
         Impact velocity ``v = L Omega u_t`` (m/s).
+    admissible, stable : bool
+        As in the dimensionless orbit (theory §5, §7).
+    max_abs_multiplier : float
+        Largest modulus of the Floquet multipliers.
     blow_energy_J : float
         Energy per blow ``m v^2 / 2`` (J): the kinetic energy of the piston moving as a rigid body
         at the struck end's velocity. This is the standard figure of merit of rock drills; it
@@ -44,10 +105,6 @@ class PhysicalOrbit:
         Impact power, energy per blow times blow frequency (W).
     peak_stress_Pa : float
         Peak compressive stress at impact (Pa), see :meth:`Hammer.peak_stress_Pa`.
-    admissible, stable : bool
-        As in the dimensionless orbit (theory §5, §7).
-    max_abs_multiplier : float
-        Largest modulus of the Floquet multipliers.
     rod_energy_J : float
         Energy carried into the rod by the transmitted stress wave per blow (J), ``int F^2/Z_s dt``.
         Under the wave law (theory §4b) from the contact solved by characteristics, the drive
@@ -72,16 +129,11 @@ class PhysicalOrbit:
     """
 
     orbit: object
-    phase_rad: float
-    impact_velocity: float
-    impact_velocity_m_s: float
+    scales: object = field(repr=False)
     blow_energy_J: float
     blow_frequency_Hz: float
     power_W: float
     peak_stress_Pa: float
-    admissible: bool
-    stable: bool
-    max_abs_multiplier: float
     rod_energy_J: float
     peak_rod_stress_Pa: float
     efficiency: float
@@ -91,6 +143,17 @@ class PhysicalOrbit:
     drilling_rate_m_min: float = math.nan
     efficiency_with_rebound: float = math.nan
 
+    #: the declared fields (:data:`PHYSICAL_ORBIT_FIELDS`)
+    fields: ClassVar[Schema] = PHYSICAL_ORBIT_FIELDS
+
+    def __getattr__(self, name: str):
+        """The orbit's fields in SI: its own value, or converted with the hammer's scales."""
+        if name not in _CONVERT:
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        source, scale = _CONVERT[name]
+        value = getattr(self.orbit, source)
+        return value if scale is None else float(value) * getattr(self.scales, scale)
+
     @classmethod
     def from_orbit(cls, orbit, hammer: Hammer) -> PhysicalOrbit:
         """Convert a dimensionless ``PeriodicOrbit`` of ``hammer``'s model."""
@@ -98,18 +161,13 @@ class PhysicalOrbit:
         energy = 0.5 * hammer.mass_kg * v * v
         fb = hammer.blow_frequency_Hz
         rod = _rod_figures(orbit, hammer, v)
-        return cls(
-            orbit=orbit, phase_rad=float(orbit.phase),
-            impact_velocity=float(orbit.impact_velocity), impact_velocity_m_s=v,
-            blow_energy_J=energy, blow_frequency_Hz=fb, power_W=energy * fb,
-            peak_stress_Pa=float(hammer.peak_stress_Pa(v)), admissible=bool(orbit.admissible),
-            stable=bool(orbit.stable), max_abs_multiplier=float(orbit.max_abs_multiplier), **rod)
+        return cls(orbit=orbit, scales=hammer.scales, blow_energy_J=energy, blow_frequency_Hz=fb,
+                   power_W=energy * fb, peak_stress_Pa=float(hammer.peak_stress_Pa(v)), **rod)
 
     def to_dict(self) -> dict:
-        """JSON-ready figures (without the dimensionless orbit object)."""
-        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)
-                if f.name != "orbit"}
-
+        """JSON-ready figures (without the dimensionless orbit object): the fields of
+        :data:`PHYSICAL_ORBIT_FIELDS`."""
+        return self.fields.record(self)
 
 def _rod_figures(orbit, hammer: Hammer, v_m_s: float) -> dict:
     """The transmitted wave's figures of one orbit in SI (see :class:`PhysicalOrbit`)."""
@@ -139,24 +197,8 @@ def _rod_figures(orbit, hammer: Hammer, v_m_s: float) -> dict:
             "rod_advance_m": float((1.0 - R) * v[0] / hammer.s * sc.length_m)}
 
 
-#: the columns of :meth:`PhysicalOrbitList.to_dataframe`: name -> (long_name, units)
-PHYSICAL_ORBIT_COLUMNS = {
-    "orbit": ("orbit number, in order of phase", "1"),
-    "phase_rad": ("phase of the load at impact", "rad"),
-    "impact_velocity": ("dimensionless impact velocity u_t(1, 2 pi-)", "1"),
-    "impact_velocity_m_s": ("impact velocity", "m/s"),
-    "blow_energy_J": ("energy per blow m v^2 / 2", "J"),
-    "blow_frequency_Hz": ("blows per second", "Hz"),
-    "power_W": ("impact power", "W"),
-    "peak_stress_Pa": ("peak compressive stress at impact", "Pa"),
-    "admissible": ("the end stays off the stop between impacts (theory §5)", ""),
-    "stable": ("admissible and every |Floquet multiplier| < 1 (theory §7)", ""),
-    "max_abs_multiplier": ("largest |Floquet multiplier|", "1"),
-    "rod_energy_J": ("energy carried into the rod per blow (theory §4b)", "J"),
-    "peak_rod_stress_Pa": ("peak compressive stress of the transmitted wave in the rod", "Pa"),
-    "efficiency": ("rod energy over the energy available to the blow", "1"),
-    "rod_advance_m": ("advance of the rod end per blow", "m"),
-}
+#: the columns of :meth:`PhysicalOrbitList.to_dataframe`: the fields in the view ``"table"``
+PHYSICAL_ORBIT_COLUMNS = PHYSICAL_ORBIT_FIELDS.select("table")
 
 
 class PhysicalOrbitList(list):
@@ -174,12 +216,8 @@ class PhysicalOrbitList(list):
         pandas.DataFrame
             Index ``orbit``; ``attrs["columns"]`` gives each column's ``long_name`` and ``units``.
         """
-        cols = {"orbit": np.arange(len(self))}
-        for k in PHYSICAL_ORBIT_COLUMNS:
-            if k != "orbit":
-                cols[k] = np.array([getattr(o, k) for o in self],
-                                   dtype=bool if k in ("admissible", "stable") else float)
-        return _tables.frame(cols, PHYSICAL_ORBIT_COLUMNS, index="orbit")
+        return PHYSICAL_ORBIT_COLUMNS.frame(self, index="orbit",
+                                            index_meta=("orbit number, in order of phase", "1"))
 
     def to_xarray(self):
         """:meth:`to_dataframe` as an ``xarray.Dataset`` along ``orbit``.

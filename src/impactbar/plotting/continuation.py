@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..orbits.orbit import ORBIT_FIELDS
 from ._common import axes as _axes
 
 __all__ = ["plot_branch", "plot_bifurcation_curve", "plot_bifurcation_curves", "plot_bifurcation_diagram"]
@@ -18,11 +19,14 @@ def plot_branch(branch, ax=None, *, y: str = "phase", color=None, label=None, ev
     branch : Branch
     ax : matplotlib.axes.Axes, optional
         Drawn on a new figure's axes if omitted.
-    y : {"phase", "impact_velocity", "max_abs_multiplier"}
-        What to plot against the parameter; per-impact quantities give one curve per impact
-        (phases unwrapped along the branch, so a curve does not jump at ``2 pi``). The default,
-        the phase, separates the two sides of a fold and a branch that returns; the impact
-        velocity does not on one-impact orbits (``2 pi p0/(1 + R)`` on each, theory §4).
+    y : str
+        What to plot against the parameter: a number of the orbits' tables along a branch (the
+        fields of :data:`impactbar.orbits.orbit.ORBIT_FIELDS` in the view ``"branch"``:
+        ``"phase"``, ``"impact_velocity"``, ``"impact_time"``, ``"clearance"``,
+        ``"max_abs_multiplier"``); per-impact quantities give one curve per impact (phases
+        unwrapped along the branch, so a curve does not jump at ``2 pi``). The default, the phase,
+        separates the two sides of a fold and a branch that returns; the impact velocity does not
+        on one-impact orbits (``2 pi p0/(1 + R)`` on each, theory §4).
     color, label : optional
         Line colour and legend label.
     events : bool
@@ -34,13 +38,13 @@ def plot_branch(branch, ax=None, *, y: str = "phase", color=None, label=None, ev
     """
     import matplotlib.pyplot as plt
 
-    if y not in ("impact_velocity", "phase", "max_abs_multiplier"):
-        raise ValueError(f"y must be 'impact_velocity', 'phase' or 'max_abs_multiplier'; got {y!r}")
+    f = _ordinate(y)
     if ax is None:
         _, ax = plt.subplots()
     x = branch.values
-    Y = {"impact_velocity": branch.impact_velocities, "phase": np.unwrap(branch.phases, axis=0),
-         "max_abs_multiplier": branch.max_abs_multiplier[:, None]}[y]
+    Y = ORBIT_FIELDS.stack(branch.orbits, f.name).reshape(len(x), -1)
+    if f.units == "rad":
+        Y = np.unwrap(Y, axis=0)
     stable = branch.stable
     color = color or ax._get_lines.get_next_color()
     first = True
@@ -57,16 +61,23 @@ def plot_branch(branch, ax=None, *, y: str = "phase", color=None, label=None, ev
         marks = {"fold": "o", "branch-point": "s", "period-doubling": "D", "neimark-sacker": "^",
                  "grazing": "x", "admissibility": "+"}
         for e in branch.events:
-            yy = {"impact_velocity": e.orbit.impact_velocities, "phase": e.orbit.phases,
-                  "max_abs_multiplier": [e.orbit.max_abs_multiplier]}[y]
+            yy = np.atleast_1d(f.get(e.orbit))
             ax.plot([e.value] * len(yy), yy, ls="none", marker=marks.get(e.kind, "*"), color="k",
                     mfc="none")
             ax.annotate(e.kind.replace("period-doubling", "PD").replace("neimark-sacker", "NS"),
                         (e.value, yy[0]), textcoords="offset points", xytext=(4, 4), fontsize=7)
     ax.set_xlabel(branch.parameter)
-    ax.set_ylabel({"impact_velocity": "impact velocity", "phase": "phase (rad)",
-                   "max_abs_multiplier": "max |multiplier|"}[y])
+    ax.set_ylabel(f.item.replace("_", " ") + (f" ({f.units})" if f.units not in ("", "1") else ""))
     return ax
+
+
+def _ordinate(y: str):
+    """The orbit's field plotted as ``y`` along a branch (by its name, or the name of one value)."""
+    numbers = [f for f in ORBIT_FIELDS.select("branch") if f.dtype == "f8"]
+    for f in numbers:
+        if y == f.item:
+            return f
+    raise ValueError(f"y must be one of {[f.item for f in numbers]}; got {y!r}")
 
 
 def plot_bifurcation_curve(curve, ax=None, *, swap: bool = False, **kwargs):
@@ -126,7 +137,7 @@ def plot_bifurcation_diagram(branches, diagram=None, ax=None, *, y: str = "phase
     diagram : mapping, optional
         ``diagram["parameter"]`` and ``diagram[y]``, arrays of equal shape ``(n,)``.
     ax : matplotlib.axes.Axes, optional
-    y : {"phase", "impact_velocity", "max_abs_multiplier"}
+    y : str
         The branches' ordinate (see :func:`plot_branch`; the phase, the default, separates the two
         sides of a fold).
 

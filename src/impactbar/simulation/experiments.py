@@ -31,7 +31,7 @@ import numpy as np
 
 from .._shared import tables as _tables
 from .._shared.validate import check_int, check_real
-from ..loads import CosineLoad, FourierLoad, Load, SquareWaveLoad
+from ..loads import CosineLoad, Load, SquareWaveLoad
 from ..model import BarModel
 from .simulate import InitialState, Trajectory, simulate
 
@@ -80,13 +80,7 @@ def load_period(load: Load) -> float:
     """The fundamental period of the load (dimensionless time): ``2 pi / k`` for a
     :class:`CosineLoad` of order ``k``, ``2 pi / gcd(orders)`` for a :class:`FourierLoad`, ``2 pi``
     otherwise."""
-    if isinstance(load, FourierLoad):
-        orders = [int(k) for k in load.orders]
-        g = 0
-        for k in orders:
-            g = math.gcd(g, k)
-        return TWO_PI / g if g else TWO_PI
-    return TWO_PI
+    return load.period
 
 
 def classify(tr: Trajectory, *, window: float = 0.25, tol: float = 1e-4,

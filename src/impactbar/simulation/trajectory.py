@@ -12,11 +12,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.schema import END_MOTION, Field, Schema
 from ..loads import Load
 from ..model import BarModel
 
@@ -55,12 +56,10 @@ class EnergyAccount:
 
     Examples
     --------
-    >>> import math
     >>> from impactbar import BarModel, CosineLoad, InitialState, simulate
-    >>> model = BarModel(s=10.0, d=0.05, R=0.5, n_modes=2)
-    >>> account = simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0, n_modes=2),
-    ...                    2 * math.pi * 20).energy
-    >>> account.work > account.impact_loss > 0, account.relative_residual < 1e-8
+    >>> run = simulate(BarModel(s=10.0, d=0.05, R=0.5, n_modes=2), CosineLoad(0.3, 1.0),
+    ...                InitialState.rigid(-0.01, 0.0, n_modes=2), 125.0)
+    >>> run.energy.work > run.energy.impact_loss > 0, run.energy.relative_residual < 1e-8
     (True, True)
     """
 
@@ -255,11 +254,12 @@ class Trajectory:
 
     Examples
     --------
-    >>> import math
-    >>> from impactbar import BarModel, CosineLoad, InitialState, simulate
-    >>> model = BarModel(s=10.0, d=0.05, R=0.5, n_modes=2)
-    >>> run = simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0, n_modes=2),
-    ...                2 * math.pi * 20)
+    >>> from impactbar import BarModel, InitialState, SquareWaveLoad, simulate
+    >>> start = InitialState.rigid(-0.01, 0.0, n_modes=1)
+    >>> run = simulate(BarModel(s=10.0, d=0.05, R=0.5, n_modes=1), SquareWaveLoad(1.0, 1.2), start, 60.0)
+    >>> run  # a short repr: the model, the load, the time span, the impacts, why it stopped
+    Trajectory(BarModel(s=10.0, d=0.05, R=0.5, n_modes=1, impact='paper'), SquareWaveLoad(q=1.0,
+               kappa=1.2), t 0 -> 60, 26 impacts, status 't_end')
     >>> run.impact_times.shape == run.impact_velocities.shape == (run.n_impacts,)
     True
     >>> bool(run.end_displacement(run.impact_times[-1]) > -1e-9)  # at the stop when it strikes
@@ -292,8 +292,20 @@ class Trajectory:
 
     def __repr__(self) -> str:
         """One line: model, load, time span, impacts, status (not the arrays)."""
-        return (f"Trajectory({self.model!r}, {self.load!r}, t {self.t0:.6g} -> {self.t_end:.6g}, "
-                f"{self.impact_times.size} impacts, status {str(self.status)!r})")
+        return f"{type(self).__name__}({', '.join(self._repr_items())})"
+
+    def _repr_items(self) -> list[str]:
+        """The items of the repr, in order; a subclass extends the list (its own numbers)."""
+        return [repr(self.model), repr(self.load), f"t {self.t0:.6g} -> {self.t_end:.6g}",
+                f"{self.impact_times.size} impacts", f"status {str(self.status)!r}"]
+
+    #: the declared fields, one value per impact: the columns of :meth:`to_dataframe` (``time``,
+    #: ``velocity``) and the variables of :meth:`to_xarray` (``impact_time``, ``impact_velocity``)
+    fields: ClassVar[Schema] = Schema(
+        Field("impact_times", "time of the impact (load frame)", per="impact", element="time",
+              views={"table"}),
+        Field("impact_velocities", "velocity u_t(1, t-) of the struck end before the impact",
+              per="impact", element="velocity", views={"table"}))
 
     @property
     def n_impacts(self) -> int:
@@ -358,20 +370,9 @@ class Trajectory:
         return tuple(out)
 
     def plot(self, ax=None, n: int = 4000):
-        """Draw the end displacement over the run, impacts marked
-        (:func:`impactbar.plotting.plot_trajectory`).
-
-        Parameters
-        ----------
-        ax : matplotlib.axes.Axes, optional
-            Drawn on a new figure's axes if omitted.
-        n : int
-            Time samples drawn.
-
-        Returns
-        -------
-        matplotlib.axes.Axes
-        """
+        """Draw the end displacement over the run, impacts marked, on ``ax`` (a new figure's axes
+        if omitted) at ``n`` times: :func:`impactbar.plotting.plot_trajectory`, which returns the
+        axes."""
         from ..plotting.simulation import plot_trajectory
 
         return plot_trajectory(self, ax, n)
@@ -476,11 +477,10 @@ class Trajectory:
             the load, ``t0``, ``t_end``, ``status``, the contact intervals and each column's
             ``long_name`` and ``units``.
         """
+        table = self.fields.select("table")
         return _tables.frame(
-            {"impact": np.arange(self.n_impacts), "time": self.impact_times,
-             "velocity": self.impact_velocities},
-            {"impact": ("impact number", "1"), "time": ("time of the impact (load frame)", "1"),
-             "velocity": ("velocity u_t(1, t-) of the struck end before the impact", "1")},
+            {"impact": np.arange(self.n_impacts), **{f.item: f.get(self) for f in table}},
+            {"impact": ("impact number", "1"), **{f.item: (f.long_name, f.units) for f in table}},
             index="impact",
             attrs={"model": repr(self.model), "load": repr(self.load), "t0": self.t0,
                    "t_end": self.t_end, "status": self.status,
@@ -510,17 +510,14 @@ class Trajectory:
         if n < 0:
             raise ValueError(f"n must be an integer >= 0; got {n}")
         ds = _tables.to_xarray(self.to_dataframe()).rename(
-            {"time": "impact_time", "velocity": "impact_velocity"})
+            {f.item: f"impact_{f.item}" for f in self.fields.select("table")})
         ds.attrs.pop("contact_intervals", None)
         if n:
             t = np.linspace(self.t0, self.t_end, n)
             end = _tables.to_xarray(_tables.frame(
-                {"t": t, "end_displacement": self.end_displacement(t),
-                 "end_velocity": self.end_velocity(t)},
-                {"t": ("time (load frame)", "1"),
-                 "end_displacement": ("displacement u(1, t) of the struck end", "1"),
-                 "end_velocity": ("velocity u_t(1, t) of the struck end", "1")}, index="t"))
-            for name in ("end_displacement", "end_velocity"):
+                {"t": t, "end_displacement": self.end_displacement(t), "end_velocity": self.end_velocity(t)},
+                {"t": ("time (load frame)", "1"), **END_MOTION.meta()}, index="t"))
+            for name in END_MOTION.names:
                 ds[name] = end[name]
         return ds
 

@@ -87,13 +87,11 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Pat
     Examples
     --------
     >>> import pathlib, tempfile
-    >>> from impactbar import plot_sweep, run_sweep  # needs matplotlib, xarray and zarr
+    >>> from impactbar import CosineLoad, plot_sweep, run_sweep  # needs matplotlib, xarray and zarr
     >>> from impactbar.sweeps import parse_spec
-    >>> spec = parse_spec({"task": "orbits",
-    ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
-    ...                    "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
-    ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
     >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> spec = parse_spec({"task": "orbits", "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+    ...                    "load": CosineLoad(0.5, 1.0).to_record(), "axes": {"R": {"values": [0.2, 0.9]}}})
     >>> _ = run_sweep(spec, folder / "r.zarr", progress=False)
     >>> plot_sweep(folder / "r.zarr", folder / "chart.png").name
     'chart.png'

@@ -12,14 +12,17 @@ import numpy as np
 
 from .._shared.validate import check_int, check_real
 from ..laws import get_law
+from ..loads import LOADS, Load
 
 TASKS = ("orbits", "montecarlo", "bifurcation")
 
-#: the fields of each load kind, in constructor order
-LOAD_KINDS = {"cosine": ("p0", "pk", "k"), "square": ("q", "kappa"), "fourier": ("p0", "coefficients")}
+#: the fields of each load kind, in constructor order (the table of loads)
+LOAD_KINDS = {kind: cls.parameters.names for kind, cls in LOADS.items()}
 
 MODEL_FIELDS = ("s", "d", "R", "n_modes")
-INT_FIELDS = frozenset({"n_modes", "k"})
+#: the integer fields (an axis of them holds integers)
+INT_FIELDS = frozenset({"n_modes", *(f.name for cls in LOADS.values() for f in cls.parameters
+                                     if f.dtype.startswith("i"))})
 
 #: task options: name -> (default, kind, lower bound, lower bound open, upper bound)
 _OPTIONS = {
@@ -81,9 +84,9 @@ class Axis:
     Parameters
     ----------
     name : str
-        A field of :class:`impactbar.BarModel` (``s``, ``d``, ``R``, ``n_modes``) or of the spec's
-        load (``p0``, ``pk``, ``k`` for ``cosine``; ``q``, ``kappa`` for ``square``; ``p0`` for
-        ``fourier``).
+        A field of :class:`impactbar.BarModel` (``s``, ``d``, ``R``, ``n_modes``) or a number of the
+        spec's load (``p0``, ``pk``, ``k`` of a cosine; ``q``, ``kappa`` of a square wave; ``p0`` of
+        a Fourier load).
     values : tuple of float (tuple of int for ``n_modes`` and ``k``), shape (n,)
         The values, distinct, ``n >= 1``; dimensionless like the field.
     """
@@ -112,10 +115,11 @@ class SweepSpec:
         optionally its ``impact`` law (``"paper"`` or ``"wave"``; ``"rodrock"`` with ``rock``; not
         an axis).
     load : dict
-        ``kind`` (``"cosine"``, ``"square"`` or ``"fourier"``) and that load's fields, all required:
-        ``p0, pk, k`` (:class:`impactbar.CosineLoad`), ``q, kappa``
-        (:class:`impactbar.SquareWaveLoad`), ``p0, coefficients``
-        (:class:`impactbar.FourierLoad`; ``coefficients`` as ``[[re, im], ...]`` or real numbers).
+        ``kind`` (a key of the table of loads, :data:`impactbar.loads.LOADS`) and that load's
+        :attr:`~impactbar.Load.parameters`, all required: ``p0, pk, k``
+        (:class:`impactbar.CosineLoad`), ``q, kappa`` (:class:`impactbar.SquareWaveLoad`),
+        ``p0, coefficients`` (:class:`impactbar.FourierLoad`; ``coefficients`` as ``[[re, im],
+        ...]`` or real numbers), ``breaks, levels`` (:class:`impactbar.PiecewiseConstantLoad`).
     axes : tuple of Axis
         At least one; each names a field present in ``model`` or ``load`` (its value there is the
         base, replaced along the axis), or with ``rock`` one of ``"rock.k"``, ``"rock.k_u"``,
@@ -147,10 +151,11 @@ class SweepSpec:
 
     Examples
     --------
+    >>> from impactbar import CosineLoad
     >>> from impactbar.sweeps import parse_spec
     >>> spec = parse_spec({"task": "orbits",
     ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
-    ...                    "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+    ...                    "load": CosineLoad(p0=0.5, pk=1.0, k=1).to_record(),
     ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
     >>> spec.task, spec.shape, spec.n_chunks
     ('orbits', (10,), 1)
@@ -242,7 +247,7 @@ class SweepSpec:
         d = {
             "task": self.task,
             "model": dict(self.model),
-            "load": {k: ([list(c) for c in v] if k == "coefficients" else v) for k, v in self.load.items()},
+            "load": {k: _lists(v) for k, v in self.load.items()},
             "axes": {a.name: {"values": list(a.values)} for a in self.axes},
             "chunk_points": self.chunk_points,
         }
@@ -268,11 +273,12 @@ def load_spec(path) -> SweepSpec:
     Examples
     --------
     >>> import pathlib, tempfile
-    >>> from impactbar import load_spec
+    >>> from impactbar import CosineLoad, load_spec
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "spec.toml"
+    >>> load = CosineLoad(p0=0.5, pk=1.0, k=1).to_record()  # the [load] table's keys and values
     >>> with open(path, "w") as f:
     ...     for line in ['task = "orbits"', "[model]", "s = 100.0", "d = 0.0", "R = 0.5", "n_modes = 0",
-    ...                  "[load]", 'kind = "cosine"', "p0 = 0.5", "pk = 1.0", "k = 1",
+    ...                  "[load]", *(f"{key} = {value!r}" for key, value in load.items()),
     ...                  "[axes]", "R = { start = 0.0, stop = 0.9, num = 10 }"]:
     ...         print(line, file=f)
     >>> load_spec(path).n_points
@@ -322,8 +328,6 @@ def parse_spec(doc) -> SweepSpec:
     axes_doc = doc["axes"]
     axes = tuple(Axis(name, _axis_values(name, table)) for name, table in axes_doc.items())
     load = dict(doc["load"])
-    if "coefficients" in load and isinstance(load["coefficients"], list):
-        load["coefficients"] = _coefficients(load["coefficients"])
     rock = doc.get("rock")
     if rock is not None and not isinstance(rock, dict):
         raise ValueError(f"[rock] must be a table; got {rock!r}")
@@ -354,14 +358,15 @@ def _axis_values(name, table) -> tuple:
     raise ValueError(f"[axes] {name} must have keys start, stop, num or just values; got {sorted(keys)}")
 
 
-def _coefficients(seq) -> tuple:
+def _complex_pairs(name, seq) -> tuple:
+    """Complex numbers given as ``[re, im]`` pairs or real numbers, as ``(re, im)`` tuples."""
     out = []
     for j, c in enumerate(seq):
         if isinstance(c, list) and len(c) == 2:
-            re_ = check_real(f"[load] coefficients[{j}][0]", c[0])
-            im_ = check_real(f"[load] coefficients[{j}][1]", c[1])
+            re_ = check_real(f"[load] {name}[{j}][0]", c[0])
+            im_ = check_real(f"[load] {name}[{j}][1]", c[1])
         else:
-            re_, im_ = check_real(f"[load] coefficients[{j}]", c), 0.0
+            re_, im_ = check_real(f"[load] {name}[{j}]", c), 0.0
         out.append((re_, im_))
     return tuple(out)
 
@@ -449,44 +454,42 @@ def _rock_axes(rock) -> list:
     return [*ROCK_AXES, *(f"segment{i}.length" for i in range(len(rock["segments"])))]
 
 
+def _lists(v):
+    """Tuples (nested) as lists, for JSON."""
+    return [_lists(x) for x in v] if isinstance(v, tuple | list) else v
+
+
 def _check_load(load) -> dict:
+    """The ``[load]`` table, validated by building the load (the table of loads); its numbers
+    normalised (floats, ints), its arrays as tuples (complex numbers as ``(re, im)``)."""
     if not isinstance(load, dict):
         raise ValueError(f"[load] must be a table; got {load!r}")
-    if "kind" not in load:
-        raise ValueError(f"[load] missing key 'kind' (one of {list(LOAD_KINDS)})")
-    kind = load["kind"]
-    if not isinstance(kind, str) or kind not in LOAD_KINDS:
-        raise ValueError(f"[load] kind must be one of {list(LOAD_KINDS)}; got {kind!r}")
-    fields = LOAD_KINDS[kind]
-    unknown = [k for k in load if k != "kind" and k not in fields]
-    if unknown:
-        raise ValueError(f"[load] unknown key(s) {unknown} for kind = {kind!r}; allowed: {list(fields)}")
-    missing = [k for k in fields if k not in load]
-    if missing:
-        raise ValueError(f"[load] missing key(s) {missing} for kind = {kind!r}")
-    out = {"kind": kind}
-    for k in fields:
-        v = load[k]
-        if k == "coefficients":
-            v = _coefficients(v) if isinstance(v, list) else tuple(tuple(map(float, c)) for c in v)
-        out[k] = v
+    out = dict(load)
+    kind = out.get("kind")
+    cls = LOADS.get(kind) if isinstance(kind, str) else None
+    for f in cls.parameters if cls is not None else ():
+        v = out.get(f.name)
+        if f.per is not None and isinstance(v, list | tuple):  # arrays as tuples
+            if f.dtype == "c16":
+                v = (_complex_pairs(f.name, v) if isinstance(v, list)
+                     else tuple(tuple(map(float, c)) for c in v))
+            else:
+                v = tuple(check_real(f"[load] {f.name}[{j}]", x) for j, x in enumerate(v))
+            out[f.name] = v
     try:
-        ld = _make_load(out)
+        ld = Load.from_record(out)
     except ValueError as exc:
         raise ValueError(f"[load] {exc}") from None
-    for k in fields:  # normalised values (floats, ints)
-        if k != "coefficients":
-            out[k] = getattr(ld, k) if hasattr(ld, k) else out[k]
-    if kind == "fourier":
-        out["p0"] = float(ld.p0)
+    for f in ld.parameters:  # normalised numbers (floats, ints)
+        if f.per is None:
+            out[f.name] = getattr(ld, f.name)
     return out
 
 
 def _check_axes(axes, model, load, rock=None) -> tuple:
     if not isinstance(axes, tuple | list) or not axes:
         raise ValueError("[axes] must name at least one field to sweep")
-    sweepable = [*MODEL_FIELDS, *(f for f in LOAD_KINDS[load["kind"]] if f != "coefficients"),
-                 *_rock_axes(rock)]
+    sweepable = [*MODEL_FIELDS, *_load_numbers(load), *_rock_axes(rock)]
     seen = set()
     out = []
     for ax in axes:
@@ -507,7 +510,7 @@ def _check_axes(axes, model, load, rock=None) -> tuple:
                 raise ValueError(f"[axes] {ax.name} = {v!r}: {exc}") from None
             if ax.name in MODEL_FIELDS:
                 values.append(getattr(m, ax.name))
-            elif ax.name in LOAD_KINDS[load["kind"]]:
+            elif ax.name in _load_numbers(load):
                 values.append(getattr(ld, ax.name))
             else:
                 from ..continuation.parameters import parameter_value
@@ -557,29 +560,23 @@ def _check_chunk_size(spec) -> None:
                      f"{hint} or chunk_points")
 
 
+def _load_numbers(load: dict) -> tuple[str, ...]:
+    """The numbers of the spec's load (its parameters an axis may sweep)."""
+    return tuple(f.name for f in LOADS[load["kind"]].parameters if f.per is None)
+
+
 def _max_orbits_bound(spec) -> int:
-    """Most one-impact orbits the load admits: the phase equation (eq. 14) is a trigonometric
-    polynomial of degree ``K`` (at most ``2 K`` roots); for the square wave ``V`` is monotone on
-    each of its two pieces."""
-    kind = spec.load["kind"]
+    """Most one-impact orbits the load admits (:attr:`impactbar.Load.max_one_impact_orbits`) over
+    the base load and every value of the load's axes (the bound of each load depends on one of its
+    parameters at most: the order ``k`` of a cosine)."""
     extra = 1 if spec.rock is not None else 0  # the rod-rock law's guess from a settled run
-    if kind == "square":
-        return 2 + extra
-    if kind == "fourier":
-        return max(2, 2 * len(spec.load["coefficients"])) + extra
-    ks = [spec.load["k"]] + [v for a in spec.axes if a.name == "k" for v in a.values]
-    return 2 * max(ks) + extra
+    loads = [_make_load(spec.load)] + [_make_load({**spec.load, a.name: v}) for a in spec.axes
+                                       if a.name in _load_numbers(spec.load) for v in a.values]
+    return max(ld.max_one_impact_orbits for ld in loads) + extra
 
 
 def _make_load(load: dict):
-    from ..loads import CosineLoad, FourierLoad, SquareWaveLoad
-
-    kind = load["kind"]
-    if kind == "cosine":
-        return CosineLoad(load["p0"], load["pk"], load["k"])
-    if kind == "square":
-        return SquareWaveLoad(load["q"], load["kappa"])
-    return FourierLoad(load["p0"], [complex(re_, im_) for re_, im_ in load["coefficients"]])
+    return Load.from_record(load)
 
 
 def _build(model: dict, load: dict, changes: dict, rock: dict | None = None):
@@ -614,7 +611,9 @@ def closed_form_task(spec) -> bool:
     than starting a cluster, so :func:`impactbar.sweeps.run_sweep` computes it in threads of the
     driver process by default, in chunks of :data:`DEFAULT_CLOSED_FORM_CHUNK_POINTS` points unless
     the spec gives ``chunk_points``."""
-    if spec.task != "orbits" or spec.load["kind"] not in ("cosine", "square") or spec.rock is not None:
+    from ..orbits.rigid import CLOSED_FORM_KINDS
+
+    if spec.task != "orbits" or spec.load["kind"] not in CLOSED_FORM_KINDS or spec.rock is not None:
         return False
     if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
         return False

@@ -13,6 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from ..dynamics.implementations import use_fast
+from ..loads import LOADS
+from ..model import BarModel
 from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, _SUM, SweepSpec, motion_classes, parse_spec
 from .tasks import _variables, chunk_slices
 
@@ -21,34 +23,16 @@ from .tasks import _variables, chunk_slices
 # ------------------------------------------------------------------------------------------------
 #: units of the stored variables and axes (CF convention: "1" for dimensionless numbers, eq. 2;
 #: flags, counts and names carry ""); a variable not listed is dimensionless
-UNITS = {
-    "phase": "rad",
-    "impact_phase": "load periods",
-    "interval_mean": "load periods",
-    "interval_std": "load periods",
-    "all_interval_mean": "load periods",
-    "all_interval_std": "load periods",
-    "admissible": "",
-    "stable": "",
-    "schur_stable": "",
-    "failed": "",
-    "n_orbits": "",
-    "n_impacts": "",
+UNITS = {  # (the variables' own are declared with them: impactbar.sweeps.tasks._variables)
     "motion": "",
     _DONE: "",
 }
 
-#: long names of the grid axes (model and load parameters, eq. 2 and theory §3)
+#: long names of the grid axes (model and load parameters, eq. 2 and theory §3; the loads' from
+#: the table of loads)
 AXIS_NAMES = {
-    "s": "wave-speed ratio C/(L Omega)",
-    "d": "damping D/(M Omega)",
-    "R": "restitution coefficient",
-    "n_modes": "flexible modes kept",
-    "p0": "mean load",
-    "pk": "load amplitude (harmonic k)",
-    "k": "order of the load harmonic",
-    "q": "square-wave level",
-    "kappa": "square-wave kappa (fraction of the period at +q, times 2)",
+    **{f.name: f.long_name for f in BarModel.parameters},
+    **{f.name: f.long_name for cls in LOADS.values() for f in cls.parameters if f.per is None},
     "rock.k": "rock loading stiffness",
     "rock.k_u": "rock unloading stiffness",
     "bit_mass": "bit mass (piston masses)",
@@ -63,10 +47,10 @@ def _axis_name(name: str) -> str:
     return AXIS_NAMES.get(name, name)
 
 
-def _var_attrs(name: str, description: str) -> dict:
+def _var_attrs(name: str, description: str, units: str | None = None) -> dict:
     """``long_name``, ``units`` and ``description`` of a stored variable."""
-    return {"long_name": description.split(" (")[0], "units": UNITS.get(name, "1"),
-            "description": description}
+    units = UNITS.get(name, "1") if units is None else units
+    return {"long_name": description.split(" (")[0], "units": units, "description": description}
 
 
 def _template(spec: SweepSpec):
@@ -80,12 +64,13 @@ def _template(spec: SweepSpec):
     extra_dim = _EXTRA_DIM[spec.task]
     chunks = spec.chunk_shape
     data_vars = {}
-    for name, (dtype, fill, extra, desc) in _variables(spec).items():
+    for f in _variables(spec):
+        extra = f.per is not None
         shape = spec.shape + ((spec.extra_size,) if extra else ())
         ch = chunks + ((spec.extra_size,) if extra else ())
-        arr = da.full(shape, fill, dtype=dtype, chunks=ch)
-        data_vars[name] = xr.Variable(dims + ((extra_dim,) if extra else ()), arr,
-                                      attrs=_var_attrs(name, desc))
+        arr = da.full(shape, f.fill, dtype=f.dtype, chunks=ch)
+        data_vars[f.name] = xr.Variable(dims + ((extra_dim,) if extra else ()), arr,
+                                        attrs=_var_attrs(f.name, f.long_name, f.units))
     data_vars[_DONE] = xr.Variable(("chunk",), da.zeros(spec.n_chunks, dtype=np.int8,
                                                           chunks=spec.n_chunks),
                                    attrs=_var_attrs(_DONE, "1 once the work chunk is stored"))
@@ -137,10 +122,12 @@ def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
     dims = tuple(a.name for a in spec.axes)
     extra_dim = _EXTRA_DIM[spec.task]
     arrays = []  # name, values or None, dtype, shape, chunks, fill, dimension names, attributes
-    for name, (dtype, fill, extra, desc) in _variables(spec).items():
+    for f in _variables(spec):
+        extra, dtype = f.per is not None, np.dtype(f.dtype)
         tail = (spec.extra_size,) if extra else ()
-        arrays.append((name, None, dtype, spec.shape + tail, spec.chunk_shape + tail, fill,
-                       dims + ((extra_dim,) if extra else ()), attrs(_var_attrs(name, desc), dtype, fill)))
+        arrays.append((f.name, None, dtype, spec.shape + tail, spec.chunk_shape + tail, f.fill,
+                       dims + ((extra_dim,) if extra else ()),
+                       attrs(_var_attrs(f.name, f.long_name, f.units), dtype, f.fill)))
     arrays.append((_DONE, None, np.dtype(np.int8), (spec.n_chunks,), (spec.n_chunks,), 0, ("chunk",),
                    _var_attrs(_DONE, "1 once the work chunk is stored")))
     arrays.append((_SUM, None, np.dtype(np.int64), (spec.n_chunks,), (spec.n_chunks,), 0, ("chunk",),
@@ -236,8 +223,8 @@ def _prepare_store(spec: SweepSpec, path: Path, overwrite: bool):
 def _checksum(spec: SweepSpec, result: dict) -> int:
     """CRC-32 of a chunk's data, every variable cast to its stored dtype, in a fixed order."""
     crc = 0
-    for name, (dtype, _, _, _) in _variables(spec).items():
-        crc = zlib.crc32(np.ascontiguousarray(result[name], dtype=dtype).tobytes(), crc)
+    for f in _variables(spec):
+        crc = zlib.crc32(np.ascontiguousarray(result[f.name], dtype=f.dtype).tobytes(), crc)
     return crc
 
 
@@ -245,8 +232,8 @@ def _stored_checksum(spec: SweepSpec, group, chunk: int) -> int:
     """CRC-32 of what the store holds for a chunk (raises if a zarr chunk cannot be read)."""
     slices = chunk_slices(spec, chunk)
     data = {}
-    for name, (_, _, extra, _) in _variables(spec).items():
-        data[name] = group[name][slices + ((slice(None),) if extra else ())]
+    for f in _variables(spec):
+        data[f.name] = group[f.name][slices + ((slice(None),) if f.per is not None else ())]
     return _checksum(spec, data)
 
 
@@ -383,17 +370,15 @@ def open_sweep(path):
     Examples
     --------
     >>> import pathlib, tempfile
-    >>> from impactbar import open_sweep, run_sweep  # needs xarray and zarr (extra distributed)
-    >>> from impactbar.sweeps import parse_spec
-    >>> spec = parse_spec({"task": "orbits",
-    ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
-    ...                    "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
-    ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
+    >>> from impactbar import CosineLoad, open_sweep, run_sweep  # needs xarray and zarr (extra distributed)
+    >>> from impactbar.sweeps import Axis, SweepSpec
+    >>> spec = SweepSpec(task="orbits", model={"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+    ...                  load=CosineLoad(0.5, 1.0).to_record(), axes=(Axis("R", (0.0, 0.45, 0.9)),))
     >>> store = pathlib.Path(tempfile.mkdtemp()) / "r.zarr"
     >>> _ = run_sweep(spec, store, progress=False)
     >>> ds = open_sweep(store)
     >>> dict(ds.sizes)["R"], "impact_velocity" in ds
-    (10, True)
+    (3, True)
     """
     import xarray as xr
 

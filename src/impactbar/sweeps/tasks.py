@@ -4,10 +4,12 @@ no dask, no storage."""
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import math
 
 import numpy as np
 
+from .._shared.schema import Field, Schema
 from .._shared.validate import check_int
 from ..dynamics.implementations import implementation
 from ..laws import get_law
@@ -43,51 +45,46 @@ def point_seed(base_seed: int, flat_index: int) -> int:
     return int(np.random.SeedSequence([base_seed, flat_index]).generate_state(1, np.uint64)[0])
 
 
-def _variables(spec: SweepSpec) -> dict:
-    """Name -> (dtype, fill, has the extra dimension, description) of the task's variables."""
-    f8, b1 = np.dtype("float64"), np.dtype("bool")
-    common = {"failed": (b1, False, False, "the computation raised ValueError at this point "
-                                            "(e.g. an undamped resonance s n pi = k)")}
+_FAILED = Field("failed", "the computation raised ValueError at this point (e.g. an undamped "
+                          "resonance s n pi = k)", "", dtype="b1")
+#: the ``orbits`` task's variables under the rod-rock law: figures of each orbit's blow
+#: (:class:`impactbar.Blow`, read on ``orbit.contacts[0]``), along ``orbit``
+_ROCK = Schema(
+    Field("work_on_rock", "work done on the rock in the orbit's blow (model units)", per="orbit"),
+    Field("penetration", "permanent penetration of the orbit's blow (model lengths): the rod's "
+                         "advance per period", attr="permanent_penetration", per="orbit"),
+    Field("efficiency", "work on rock over the energy available to the blow", per="orbit"),
+    Field("efficiency_with_rebound", "the same with the piston's rebound energy credited", per="orbit"))
+_MOTION = "load periods"
+_TASK_VARIABLES = {
+    "montecarlo": Schema(
+        Field("fraction", "fraction of the random starts in each long-run motion", per="motion"),
+        Field("interval_mean", "mean interval between main impacts (load periods)", _MOTION),
+        Field("interval_std", "std of the intervals between main impacts (load periods)", _MOTION),
+        Field("all_interval_mean", "mean interval between any impacts (load periods)", _MOTION),
+        Field("all_interval_std", "std of the intervals between any impacts (load periods)", _MOTION),
+        Field("run_spread", "median over runs of each run's interval std/mean")),
+    "bifurcation": Schema(
+        Field("impact_velocity", "velocity of the struck end before each of the last impacts (oldest "
+                                 "first)", per="impact"),
+        Field("impact_phase", "load phase of each of the last impacts (load periods, in [0, 1))",
+              "load periods", per="impact"),
+        Field("n_impacts", "impacts in the whole run", "", dtype="i8")),
+}
+
+
+def _variables(spec: SweepSpec) -> Schema:
+    """The task's variables, each a :class:`~impactbar._shared.schema.Field` (dtype, fill, long name,
+    units); ``per`` names the extra dimension of those along it. An ``orbits`` sweep stores the
+    orbit's fields in the view ``"sweep"`` (:data:`impactbar.orbits.orbit.ORBIT_FIELDS`) along
+    ``orbit``."""
     if spec.task == "orbits":
-        rock = {} if spec.rock is None else {
-            "work_on_rock": (f8, np.nan, True, "work done on the rock in the orbit's blow (model units)"),
-            "penetration": (f8, np.nan, True, "permanent penetration of the orbit's blow (model "
-                                              "lengths): the rod's advance per period"),
-            "efficiency": (f8, np.nan, True, "work on rock over the energy available to the blow"),
-            "efficiency_with_rebound": (f8, np.nan, True, "the same with the piston's rebound "
-                                                          "energy credited"),
-        }
-        return {
-            "phase": (f8, np.nan, True, "phase lag of the one-impact orbit (rad, in [0, 2 pi))"),
-            "impact_velocity": (f8, np.nan, True, "velocity of the struck end before impact"),
-            "admissible": (b1, False, True, "end stays off the stop between impacts"),
-            "stable": (b1, False, True, "admissible and every |Floquet multiplier| < 1"),
-            "schur_stable": (b1, False, True, "the paper's Schur criterion (eqs. 27-31)"),
-            "max_abs_multiplier": (f8, np.nan, True, "largest |Floquet multiplier|"),
-            "n_orbits": (np.dtype("int32"), 0, False, "number of one-impact orbits"),
-            **rock,
-            **common,
-        }
-    if spec.task == "montecarlo":
-        return {
-            "fraction": (f8, np.nan, True, "fraction of the random starts in each long-run motion"),
-            "interval_mean": (f8, np.nan, False, "mean interval between main impacts (load periods)"),
-            "interval_std": (f8, np.nan, False, "std of the intervals between main impacts "
-                                                "(load periods)"),
-            "all_interval_mean": (f8, np.nan, False, "mean interval between any impacts (load periods)"),
-            "all_interval_std": (f8, np.nan, False, "std of the intervals between any impacts "
-                                                    "(load periods)"),
-            "run_spread": (f8, np.nan, False, "median over runs of each run's interval std/mean"),
-            **common,
-        }
-    return {
-        "impact_velocity": (f8, np.nan, True, "velocity of the struck end before each of the last "
-                                              "impacts (oldest first)"),
-        "impact_phase": (f8, np.nan, True, "load phase of each of the last impacts (load periods, "
-                                           "in [0, 1))"),
-        "n_impacts": (np.dtype("int64"), 0, False, "impacts in the whole run"),
-        **common,
-    }
+        from ..orbits.orbit import ORBIT_FIELDS
+
+        orbit = Schema(*(dataclasses.replace(f, per="orbit") for f in ORBIT_FIELDS.select("sweep")))
+        count = Field("n_orbits", "number of one-impact orbits", "", dtype="i4")
+        return orbit + Schema(count) + (_ROCK if spec.rock is not None else Schema()) + Schema(_FAILED)
+    return _TASK_VARIABLES[spec.task] + Schema(_FAILED)
 
 
 def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
@@ -117,9 +114,10 @@ def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
     slices = chunk_slices(spec, chunk)
     block = tuple(s.stop - s.start for s in slices)
     out = {}
-    for name, (dtype, fill, extra, _) in _variables(spec).items():
-        shape = block + ((spec.extra_size,) if extra else ())
-        out[name] = np.full(shape, fill, dtype=dtype)
+    variables = _variables(spec)
+    for f in variables:
+        shape = block + ((spec.extra_size,) if f.per else ())
+        out[f.name] = np.full(shape, f.fill, dtype=f.dtype)
     one = {"orbits": _orbits_point, "montecarlo": _montecarlo_point, "bifurcation": _bifurcation_point}
     todo = None
     if spec.task == "orbits":
@@ -132,8 +130,8 @@ def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
                 model, load = spec.point(index)
                 one[spec.task](spec, model, load, flat, out, local)
             except ValueError:
-                for name, (_, fill, _, _) in _variables(spec).items():
-                    out[name][local] = fill
+                for f in variables:
+                    out[f.name][local] = f.fill
                 out["failed"][local] = True
     return out
 
@@ -155,35 +153,25 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     :func:`impactbar.periodic_orbits`, tested against it). Returns the local indices left to the
     point-by-point path (degenerate orbits, ``kappa = 2``), or ``None`` if the closed forms do not
     apply."""
-    kind = spec.load["kind"]
-    if spec.rock is not None:
+    from ..orbits.orbit import ORBIT_FIELDS
+    from ..orbits.rigid import CLOSED_FORM_KINDS, closed_form_groups
+
+    if spec.rock is not None or spec.load["kind"] not in CLOSED_FORM_KINDS:
         return None
-    law = get_law(spec.model.get("impact", "paper"))
-    if kind not in ("cosine", "square") or not law.rigid_closed_forms:
+    if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
         return None
     par = _chunk_parameters(spec, slices, block)
     if np.any(par["n_modes"] != 0):
         return None
-    from ..orbits.rigid import rigid_cosine_orbits, rigid_square_orbits
-
-    def flat(name):
-        return par[name].astype(float).ravel()
-
-    if kind == "cosine":
-        ks = par["k"].astype(int).ravel()
-        groups = [(np.nonzero(ks == k)[0], rigid_cosine_orbits, ("d", "R", "p0", "pk"), (int(k),))
-                  for k in np.unique(ks)]
-    else:
-        sel = np.nonzero(flat("kappa") < 2.0)[0]  # kappa = 2 is a constant load: the general path
-        groups = [(sel, rigid_square_orbits, ("d", "R", "q", "kappa"), ())]
+    groups = closed_form_groups(spec.load["kind"], {n: v.ravel() for n, v in par.items()})
     J = spec.options["max_orbits"]
     todo = []
     covered = np.zeros(math.prod(block), dtype=bool)
-    for sel, solve, names, extra in groups:
+    for sel, solve, args in groups:
         covered[sel] = True
         with (implementation("orbits.rigid_arrays", "reference") if spec.n_points < COMPILED_CLOSED_FORMS_FROM
               else contextlib.nullcontext()):
-            res = solve(*(flat(n)[sel] for n in names), *extra)
+            res = solve(*args)
         n = res.n_orbits
         if np.any(n > J):
             i = int(np.argmax(n > J))
@@ -197,10 +185,8 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
         idx = np.unravel_index(sel, block)
         out["n_orbits"][idx] = n
         used = res.status[:, :w] >= 0
-        for name, values in (("phase", res.phase), ("impact_velocity", res.impact_velocity),
-                             ("admissible", res.admissible), ("stable", res.stable),
-                             ("schur_stable", res.schur_stable),
-                             ("max_abs_multiplier", res.max_abs_multiplier)):
+        for name in ORBIT_FIELDS.select("sweep").names:  # the closed forms give each of them
+            values = getattr(res, name)
             target = out[name]
             if whole:  # a view of shape (points, J): no gather and scatter
                 col = target.view()
@@ -214,13 +200,14 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     todo.extend(np.nonzero(~covered)[0].tolist())
     todo = [tuple(int(x) for x in np.unravel_index(p, block)) for p in sorted(todo)]
     for local in todo:  # reset what the point-by-point path will recompute
-        for name, (_, fill, _, _) in _variables(spec).items():
-            out[name][local] = fill
+        for f in _variables(spec):
+            out[f.name][local] = f.fill
     return todo
 
 
 def _orbits_point(spec, model, load, flat, out, local) -> None:
     from ..orbits import periodic_orbits
+    from ..orbits.orbit import ORBIT_FIELDS
 
     orbits = periodic_orbits(model, load)
     n = len(orbits)
@@ -230,18 +217,13 @@ def _orbits_point(spec, model, load, flat, out, local) -> None:
     out["n_orbits"][local] = n
     for j, o in enumerate(orbits):
         at = (*local, j)
-        out["phase"][at] = o.phase
-        out["impact_velocity"][at] = o.impact_velocity
-        out["admissible"][at] = o.admissible
-        out["stable"][at] = o.stable
-        out["schur_stable"][at] = bool(o.schur_stable)  # None (no Schur test) under the rod-rock law
-        out["max_abs_multiplier"][at] = o.max_abs_multiplier
+        for f in ORBIT_FIELDS.select("sweep"):
+            value = f.get(o)  # schur_stable is None (no Schur test) under the rod-rock law
+            out[f.name][at] = f.fill if value is None else value
         if spec.rock is not None:
             blow = o.contacts[0]  # the orbit's one blow (a RockContact, read through to its Blow)
-            out["work_on_rock"][at] = blow.work_on_rock
-            out["penetration"][at] = blow.permanent_penetration
-            out["efficiency"][at] = blow.efficiency
-            out["efficiency_with_rebound"][at] = blow.efficiency_with_rebound
+            for f in _ROCK:
+                out[f.name][at] = f.get(blow)
 
 
 def _montecarlo_point(spec, model, load, flat, out, local) -> None:

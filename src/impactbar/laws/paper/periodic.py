@@ -11,8 +11,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..._shared.threads import single_threaded_blas
+from ...dynamics.kernelview import FOURIER
 from ...dynamics.monodromy import period_fundamental
-from ...loads import FourierLoad
 from ..base import OrbitState
 from .stability import floquet_multipliers, rigid_multipliers
 
@@ -34,9 +34,10 @@ def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
     if N > 0:
         w2 = model.frequencies[1:] ** 2
         p11, p12, p21, p22 = (a[1:] for a in period_fundamental(model))
-        if isinstance(load, FourierLoad):
+        if load.kernel_kind == FOURIER:  # fast path: a Fourier load's closed-form periodic response
             # the response from rest over one period, (I - Phi(2 pi)) y_p(phase) with y_p the
-            # periodic response (what the flow from rest computes, without building it)
+            # periodic response (what the flow from rest computes, without building it; it also
+            # fixes the orbit's last bits, which the general path's propagation would change)
             qp, vp = load.periodic_state(w2, d, [phase])
             qp, vp = qp[:, 0], vp[:, 0]
             fq = qp - (p11 * qp + p12 * vp)
@@ -70,7 +71,7 @@ def _impact_states(model: BarModel, load: Load, phase: float, return_flow: bool 
     y_plus = _start_state(model, load, phase)
     w2 = model.frequencies**2
     flow = None
-    if isinstance(load, FourierLoad):  # its propagate is this flow: built once, used twice
+    if load.kernel_kind == FOURIER:  # fast path: its propagate is this flow, built once, used twice
         flow = load.flow(w2, model.d, phase, y_plus[:M], y_plus[M:])
         qm, vm = flow([phase + TWO_PI])
     else:

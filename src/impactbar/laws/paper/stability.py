@@ -25,7 +25,7 @@ if TYPE_CHECKING:
     from ...loads import Load
     from ...model import BarModel
 
-__all__ = ["impact_map_jacobian", "floquet_multipliers", "rigid_multipliers"]
+__all__ = ["impact_map_jacobian", "floquet_multipliers", "rigid_multipliers", "trace_det"]
 
 
 def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_minus) -> np.ndarray:
@@ -86,12 +86,9 @@ def floquet_multipliers(model: BarModel, load: Load, phase: float, y_plus, y_min
 
     Parameters
     ----------
-    model : BarModel
-    load : Load
-    phase : float
-        Load time of the impact (rad).
-    y_plus, y_minus : array_like, shape (2 N + 2,)
-        Modal state just after and just before the impact.
+    model, load, phase, y_plus, y_minus
+        As :func:`impact_map_jacobian`: the bar, the load, the impact's load time (rad) and the
+        modal states just after and just before it, shape ``(2 N + 2,)``.
     method : {"auto", "dense", "structured"}
 
     Returns
@@ -163,6 +160,20 @@ def _b(d, t):
     return np.where(np.abs(y) < 1e-8, t * (1.0 - 0.5 * y), -np.expm1(-y) / dd)
 
 
+def trace_det(b, e, R, p_plus, p_minus, v_plus, v_minus, d):
+    """Half the trace and the determinant of the rigid bar's 2 x 2 impact-map Jacobian (theory §7
+    with ``N = 0``), ``b = b(2 pi)``, ``e = exp(-2 pi d)``: plain arithmetic, the same for numpy
+    arrays (:func:`rigid_multipliers`) and for floats (``impactbar.orbits._rigid_scalar``, and its
+    compiled copy)."""
+    a_p = p_plus - d * v_plus
+    a_m = p_minus - d * v_minus
+    r0 = (v_plus + b * a_p) / v_minus
+    r1 = -b / v_minus
+    j10 = -R * (-e * a_p + a_m * r0)
+    j11 = -R * (e + a_m * r1)
+    return 0.5 * (r0 + j11), r0 * j11 - r1 * j10
+
+
 def rigid_multipliers(d, R, p_plus, p_minus, v_plus, v_minus):
     """Floquet multipliers of a rigid-bar one-impact orbit: eigenvalues of the 2 x 2 impact-map
     Jacobian (theory §7 with ``N = 0``), elementwise over arrays.
@@ -189,18 +200,9 @@ def rigid_multipliers(d, R, p_plus, p_minus, v_plus, v_minus):
     """
     d, R, p_plus, p_minus, v_plus, v_minus = np.broadcast_arrays(
         *(np.asarray(x, dtype=float) for x in (d, R, p_plus, p_minus, v_plus, v_minus)))
-    b = _b(d, TWO_PI)
-    e = np.exp(-TWO_PI * d)
-    a_p = p_plus - d * v_plus
-    a_m = p_minus - d * v_minus
     graze = ~(np.abs(v_minus) > 1e-14 * np.abs(v_minus))  # relative, as the general path: zero only
-    vm = np.where(graze, 1.0, v_minus)
-    r0 = (v_plus + b * a_p) / vm
-    r1 = -b / vm
-    j10 = -R * (-e * a_p + a_m * r0)
-    j11 = -R * (e + a_m * r1)
-    half_tr = 0.5 * (r0 + j11)
-    det = r0 * j11 - r1 * j10
+    half_tr, det = trace_det(_b(d, TWO_PI), np.exp(-TWO_PI * d), R, p_plus, p_minus, v_plus,
+                             np.where(graze, 1.0, v_minus), d)
     disc = np.sqrt((half_tr * half_tr - det).astype(complex))
     # the stable pair: the larger root first, the other from the product
     big = half_tr + np.where(half_tr >= 0.0, 1.0, -1.0) * disc

@@ -41,8 +41,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
+
+from ..._shared.schema import Field, Schema
 
 __all__ = ["Blow", "BlowGrid", "blow_grid", "rod_rock_blow", "solve_blow"]
 
@@ -303,7 +306,48 @@ class Blow:
     >>> blow = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0)
     >>> round(blow.work_on_rock / blow.energy_at_impact, 6) == round(blow.efficiency, 6)
     True
+    >>> blow  # a short repr: the energy account and the rock's penetration (to_dict: every number)
+    Blow(ended by t_max, energy at impact 0.5, work on rock 0.3665, efficiency 0.7331, permanent
+         penetration 0.5137, duration 39, rebound velocity 0)
     """
+
+    #: the declared fields, the numbers of a blow (model units): :meth:`to_dict`, and those in the
+    #: view ``"repr"`` the short repr; the arrays are the attributes
+    fields: ClassVar[Schema] = Schema(
+        Field("ended_by", "why the blow ended", "", dtype="U", views={"repr"}, label="ended by"),
+        *(Field(name, long_name, views=views, fmt=".4g") for name, long_name, views in (
+            ("energy_at_impact", "the piston's energy at impact", {"repr"}),
+            ("drive_work", "work of the drive on the piston during the blow", ()),
+            ("feed_work", "work of the feed force on the shank during the blow", ()),
+            ("available_energy", "energy available to the blow", ()),
+            ("work_on_rock", "work done on the rock", {"repr"}),
+            ("efficiency", "work on rock over the available energy", {"repr"}),
+            ("efficiency_with_rebound", "the same with the piston's rebound energy credited", ()),
+            ("piston_energy", "energy returned to the piston", ()),
+            ("rod_energy", "the rod's residual energy and the bit's kinetic energy", ()),
+            ("grid_loss", "energy removed by the cell averages of the bit's reflected wave", ()),
+            ("energy_error", "relative mismatch of the energy account", ()),
+            ("max_penetration", "largest penetration", ()),
+            ("permanent_penetration", "permanent penetration", {"repr"}),
+            ("advance", "the bit's displacement over the blow", ()),
+            ("duration", "length of the blow", {"repr"}),
+            ("rebound_velocity", "the piston's mean velocity at the end", {"repr"}),
+            ("bit_velocity", "the bit's velocity at the end", ()),
+            ("gap", "piston-shank gap at the end", ()),
+            ("shank_displacement", "the shank's displacement from its static position at impact", ()),
+            ("cell_time", "the grid's time step dt", ()),
+            ("length_error", "largest relative change of a segment's travel time by the grid", ()))),
+        Field("piston_cells", "cells along the piston", "", dtype="i8"))
+
+    def __repr__(self) -> str:
+        """One line: why it ended, the energy account, the penetration (the arrays: the
+        attributes; every number: :meth:`to_dict`)."""
+        return f"Blow({', '.join(self.fields.select('repr').summary(self))})"
+
+    def to_dict(self) -> dict:
+        """Every number of the blow (:attr:`fields`), JSON-ready; the arrays (force histories,
+        penetrations, the field) are the attributes."""
+        return self.fields.record(self)
 
     times: np.ndarray
     shank_forces: np.ndarray

@@ -39,7 +39,7 @@ from ...dynamics import _kernel as K
 from ...dynamics import monodromy as MD
 from ...dynamics.certified import cosine_roots
 from ...dynamics.implementations import use_fast
-from ...dynamics.kernelview import ModalBasisView
+from ...dynamics.kernelview import FOURIER, PIECEWISE, ModalBasisView
 from ...dynamics.modal import fundamental
 from ...dynamics.monodromy import _aberth, _arrival_derivative, _impact_fields, sort_multipliers
 from ...loads import FourierLoad, Load, PiecewiseConstantLoad
@@ -85,7 +85,7 @@ def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
     w2 = model.frequencies**2
     M = w2.size
     zeros = np.zeros(M)
-    if isinstance(load, PiecewiseConstantLoad):
+    if load.kernel_kind == PIECEWISE:  # fast path: the compiled flow of a piecewise-constant load
         q, v = np.empty((M, 1)), np.empty((M, 1))
         K.propagate_many(tuple(load.kernel_view), tuple(ModalBasisView.unforced(w2, model.d)), float(t0),
                          zeros, zeros, np.array([float(t1)]), q, v)
@@ -156,9 +156,8 @@ def _has_series(model: BarModel, load: Load) -> bool:
     """Whether the states are a trigonometric polynomial of the phase (:func:`wave_orbit_states`'
     notes): a load of finitely many harmonics whose evaluation is :class:`FourierLoad`'s own, and a
     window shorter than the period."""
-    return (isinstance(load, FourierLoad) and load.orders.size > 0 and _window(model)[1] > 0.0
-            and all(getattr(type(load), f) is getattr(FourierLoad, f)
-                    for f in ("__call__", "propagate", "flow")))
+    return (load.compiled_kind("__call__", "propagate", "flow") == FOURIER and load.orders.size > 0
+            and _window(model)[1] > 0.0)
 
 
 @functools.lru_cache(maxsize=16)
@@ -226,7 +225,7 @@ def _forced_flights(model: BarModel, load: Load, phases):
     matrix, as in :func:`_periodic_solve`). Other loads take one flight per phase."""
     T, _ = _window(model)
     phases = np.asarray(phases, dtype=float)
-    if not (isinstance(load, FourierLoad) and type(load).flow is FourierLoad.flow):
+    if load.compiled_kind("flow") != FOURIER:  # (a flow that is not FourierLoad's closed form)
         return tuple(np.array(a) for a in zip(*(_forced_flight(model, load, float(p) + T, float(p) + TWO_PI)
                                                for p in phases), strict=True))
     w2 = model.frequencies**2
@@ -267,7 +266,7 @@ def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
     ``phase``."""
     ph = np.asarray(phase, dtype=float)
-    if use_fast("wave.residual") and isinstance(load, PiecewiseConstantLoad) and _window(model)[1] > 0.0:
+    if use_fast("wave.residual") and load.kernel_kind == PIECEWISE and _window(model)[1] > 0.0:
         return _square_wave_residuals(model, load, ph)
     out = np.array([_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
     return out.reshape(ph.shape)
@@ -355,7 +354,7 @@ def _phase_scan(model: BarModel, load: Load) -> tuple[tuple, tuple]:
     if F <= 0.0:
         return (), ()
     families = ()
-    if isinstance(load, FourierLoad):
+    if load.kernel_kind == FOURIER:  # finitely many harmonics: the residual's own series
         K = int(np.max(load.orders)) if load.orders.size else 0
         if K == 0:
             return (), ()

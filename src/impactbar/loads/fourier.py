@@ -1,0 +1,322 @@
+"""Loads of finitely many harmonics (paper eqs. 7, 33): :class:`FourierLoad`, :class:`CosineLoad`."""
+
+from __future__ import annotations
+
+import math
+from functools import cached_property
+
+import numpy as np
+
+from .._shared.schema import Field, Schema
+from .._shared.validate import check_complex_array, check_int, check_real
+from ..dynamics.implementations import use_fast
+from ..dynamics.kernelview import FOURIER, LoadKernelView
+from ..dynamics.modal import b_integral, c_integral, fundamental
+from .base import TWO_PI, Load
+
+__all__ = ["FourierLoad", "CosineLoad"]
+
+
+class FourierLoad(Load):
+    r"""A load given by finitely many harmonics (eq. 7).
+
+    .. math:: p(t) = p_0 + \mathrm{Re} \sum_{k=1}^{K} p_k e^{i k t}
+
+    Parameters
+    ----------
+    p0 : float
+        Mean load (dimensionless).
+    coefficients : array_like of complex, shape (K,)
+        ``coefficients[j]`` is the complex harmonic ``p_{j+1}``.
+
+    Raises
+    ------
+    ValueError
+        If ``p0`` or a coefficient is not finite, or there are more than 4096 harmonics.
+
+    Examples
+    --------
+    >>> from impactbar import FourierLoad
+    >>> load = FourierLoad(0.2, [0.5, 0.1j])  # p(t) = 0.2 + 0.5 cos t - 0.1 sin 2t
+    >>> float(load(0.0))
+    0.7
+    """
+
+    kind = "fourier"
+    description = "p0 + Re sum_k p_k exp(i k t), finitely many harmonics (eq. 7)"
+    parameters = Schema(Field("p0", "mean load"),
+                        Field("coefficients", "complex harmonics p_1, p_2, ... (eq. 7)", dtype="c16",
+                              per="harmonic"))
+    continuation_parameters = ("p0",)
+    kernel_kind = FOURIER
+
+    def __init__(self, p0, coefficients):
+        self._set(p0=check_real("p0", p0))
+        coefficients = check_complex_array("coefficients", coefficients)
+        if coefficients.size > 4096:
+            raise ValueError(f"coefficients must have at most 4096 entries; got {coefficients.size}")
+        self._set_sparse(np.arange(1, coefficients.size + 1), coefficients)
+
+    def _set_sparse(self, ks, pks):
+        keep = pks != 0
+        k = np.asarray(ks, dtype=float)[keep]  # (boolean indexing: private copies already)
+        pk = np.asarray(pks, dtype=complex)[keep]
+        k.flags.writeable = pk.flags.writeable = False
+        self._set(_k=k, _pk=pk, _kmax=int(ks[-1]) if len(ks) else 0)
+
+    def _key(self):
+        return (self.p0, self._kmax, self._k.tobytes(), self._pk.tobytes())
+
+    @cached_property
+    def kernel_view(self) -> LoadKernelView:
+        """The harmonics as the compiled kernels read them (kind 0), built once."""
+        return LoadKernelView.fourier(self.p0, self._k, self._pk)
+
+    @property
+    def orders(self) -> np.ndarray:
+        """Orders ``k`` of the non-zero harmonics, shape ``(K',)``."""
+        return self._k.astype(int)
+
+    @property
+    def amplitudes(self) -> np.ndarray:
+        """Complex ``p_k`` of the non-zero harmonics, shape ``(K',)``."""
+        return self._pk.copy()
+
+    @property
+    def coefficients(self) -> np.ndarray:
+        """The complex harmonics ``p_1 .. p_K`` (the constructor's ``coefficients``), shape
+        ``(K,)``."""
+        return self.harmonics()
+
+    @property
+    def period(self) -> float:
+        g = 0
+        for k in self.orders.tolist():
+            g = math.gcd(g, k)
+        return TWO_PI / g if g else TWO_PI
+
+    @property
+    def max_one_impact_orbits(self) -> int:
+        """``2 K``: the phase equation (eq. 14) is a trigonometric polynomial of degree ``K`` (at
+        least 2)."""
+        return max(2, 2 * self._kmax)
+
+    def cosine_form(self):
+        if self._k.size != 1 or self._pk[0].imag != 0.0:
+            return None
+        return self.p0, float(self._pk[0].real), int(self._k[0])
+
+    def harmonics(self, n: int | None = None) -> np.ndarray:
+        K = self._kmax if n is None else check_int("n", n, lo=0)
+        out = np.zeros(K, dtype=complex)
+        sel = self._k <= K
+        out[self._k[sel].astype(int) - 1] = self._pk[sel]
+        return out
+
+    def __call__(self, t):
+        t = np.asarray(t, dtype=float)
+        e = np.exp(1j * np.multiply.outer(t, self._k))
+        return self.p0 + (e @ self._pk).real
+
+    @property
+    def sup_abs(self) -> float:
+        return abs(self.p0) + float(np.sum(np.abs(self._pk)))
+
+    @property
+    def sup_oscillation(self) -> float:
+        return float(np.sum(np.abs(self._pk)))
+
+    def variation(self, mid, half):
+        lip = float(np.sum(self._k * np.abs(self._pk)))
+        half = np.asarray(half, dtype=float)
+        return self(mid), np.minimum(lip * half, 2.0 * self.sup_oscillation)
+
+    def _transfer(self, w2, d):
+        """``H_nk p_k``, shape (M, K'), raising at an undamped resonance (eq. 16); the last few
+        results are kept (read-only), since an orbit's computations ask for the same ones."""
+        cache = self.__dict__.setdefault("_transfer_cache", {})
+        key = (float(d), w2.tobytes())
+        hp = cache.get(key)
+        if hp is not None:
+            return hp
+        den = w2[:, None] + 1j * self._k[None, :] * d - self._k[None, :] ** 2
+        if np.any(np.abs(den) <= 1e-12 * np.maximum(1.0, self._k[None, :] ** 2)):
+            raise ValueError(
+                "undamped resonance: a mode frequency s*n*pi equals a load harmonic k (eq. 16); "
+                "use d > 0 or move s"
+            )
+        hp = self._pk[None, :] / den
+        hp.flags.writeable = False
+        if len(cache) >= 8:  # bounded; clear() is atomic, so threads sharing a load are safe
+            cache.clear()
+        cache[key] = hp
+        return hp
+
+    def periodic_state(self, w2, d, t):
+        w2 = np.asarray(w2, dtype=float)
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        hp = self._transfer(w2, d)
+        e = np.exp(1j * np.outer(self._k, t))  # (K', T)
+        q = (hp @ e).real
+        v = ((hp * (1j * self._k)) @ e).real
+        pos = w2 > 0
+        q[pos] += self.p0 / w2[pos, None]
+        return q, v
+
+    def propagate(self, w2, d, t0, q0, v0, t):
+        return self.flow(w2, d, t0, q0, v0)(t)
+
+    def flow(self, w2, d, t0, q0, v0):
+        w2 = np.asarray(w2, dtype=float)
+        hp = self._transfer(w2, d)  # (M, K')
+        hv = hp * (1j * self._k)
+        qp0, vp0 = self.periodic_state(w2, d, [t0])
+        dq = np.asarray(q0, dtype=float)[:, None] - qp0
+        dv = np.asarray(v0, dtype=float)[:, None] - vp0
+        rigid = w2 == 0.0
+        flex = ~rigid
+        static = np.where(rigid, 0.0, self.p0 / np.where(rigid, 1.0, w2))[:, None]
+        w2f = w2[flex][:, None]
+        k = self._k
+        rows = np.nonzero(flex)[0]
+        lam2 = w2f[:, 0] - 0.25 * d * d
+        folded = rows.size > 0 and bool(np.all(lam2 > 0.0))
+        if folded:
+            # underdamped flexible modes (the rule): Phi(tau) applied to (dq, dv) folded into
+            # e^{-d tau/2} (a cos(lam tau) + b sin(lam tau)), the coefficients computed once
+            lam = np.sqrt(lam2)[:, None]
+            dqf, dvf = dq[rows], dv[rows]
+            cq, sq = dqf, (0.5 * d * dqf + dvf) / lam
+            cv, sv = dvf, -(w2f * dqf + 0.5 * d * dvf) / lam
+            if rows[-1] - rows[0] + 1 == rows.size:  # contiguous rows: update in place
+                rows = slice(int(rows[0]), int(rows[-1]) + 1)
+        if use_fast("loads.flow") and (folded or rows.size == 0):
+            return self._compiled_flow(w2, d, t0, hp, hv, static, rigid, lam if folded else None,
+                                       (cq, sq, cv, sv) if folded else None, dq, dv)
+
+        def evaluate(t):
+            t = np.atleast_1d(np.asarray(t, dtype=float))
+            tau = (t - t0)[None, :]
+            e = np.exp(1j * np.outer(k, t))
+            q = (hp @ e).real + static
+            v = (hv @ e).real
+            if folded:
+                x = lam * tau
+                C, S = np.cos(x), np.sin(x)
+                qf = cq * C
+                qf += sq * S
+                vf = cv * C
+                vf += sv * S
+                if d:
+                    ed = np.exp(-0.5 * d * tau)
+                    qf *= ed
+                    vf *= ed
+                q[rows] += qf
+                v[rows] += vf
+            else:
+                p11, p12, p21, p22 = fundamental(w2f, d, tau)
+                q[flex] += p11 * dq[flex] + p12 * dv[flex]
+                v[flex] += p21 * dq[flex] + p22 * dv[flex]
+            if np.any(rigid):  # rigid mode: closed form, with the mean load added exactly
+                b = b_integral(d, tau[0])
+                q[rigid] += dq[rigid] + b * dv[rigid] + self.p0 * c_integral(d, tau[0])
+                v[rigid] += np.exp(-d * tau[0]) * dv[rigid] + self.p0 * b
+            return q, v
+
+        return evaluate
+
+    def _compiled_flow(self, w2, d, t0, hp, hv, static, rigid, lam, folded, dq, dv):
+        """:meth:`flow`'s evaluation compiled (:mod:`impactbar.dynamics._flowkernel`): the same
+        closed form, for underdamped flexible modes and the rigid mode."""
+        from ..dynamics._flowkernel import fourier_flow
+
+        M = w2.size
+        kind = np.where(rigid, 2, 0).astype(np.int64)
+        zeros = np.zeros(M)
+        lamv, cq, sq, cv, sv = zeros, zeros, zeros, zeros, zeros
+        if folded is not None:
+            flex = ~rigid
+            kind[flex] = 1
+            lamv, cq, sq, cv, sv = (np.zeros(M) for _ in range(5))
+            lamv[flex] = lam[:, 0]
+            for dst, src in zip((cq, sq, cv, sv), folded, strict=True):
+                dst[flex] = src[:, 0]
+
+        # the per-mode data in two arrays (three with kind), not fourteen: a kernel call counts a
+        # reference to each array it is passed, and the certified search passes these once per
+        # evaluation. np.stack makes them fresh, contiguous and writable (a read-only view, as
+        # the cached transfer functions are, would be another type to numba, and so another
+        # compilation of every kernel that takes it)
+        H = np.stack((hp.real, hp.imag, hv.real, hv.imag))  # (4, M, K)
+        V = np.stack((static[:, 0], lamv, cq, sq, cv, sv, dq[:, 0], dv[:, 0]))  # (8, M)
+        args = (float(t0), float(d), float(self.p0), self.kernel_view.ks, H, V, kind)
+
+        def evaluate(t):
+            return fourier_flow(np.atleast_1d(np.asarray(t, dtype=float)).ravel(), args)
+
+        evaluate.kernel_args = args  # for the compiled admissibility search
+        return evaluate
+
+    def rigid_velocity(self, d, t):
+        t = np.asarray(t, dtype=float)
+        e = np.exp(1j * np.multiply.outer(t, self._k))
+        return (e @ (self._pk / (d + 1j * self._k))).real
+
+    def _repr_args(self):
+        return f"p0={self.p0!r}, coefficients={self.harmonics().tolist()!r}"
+
+
+class CosineLoad(FourierLoad):
+    r"""Pneumatic-hammer load (eq. 33): one harmonic of order ``k`` on a mean load.
+
+    .. math:: p(t) = p_0 + p_k \cos(k t)
+
+    For ``k > 1`` the load period is ``2 pi / k`` and a one-impact orbit strikes once every ``k``
+    load periods. The load factor is ``k p0 / pk``.
+
+    Parameters
+    ----------
+    p0 : float
+        Mean load (dimensionless).
+    pk : float
+        Amplitude of the harmonic (dimensionless, real).
+    k : int, optional
+        Order of the harmonic, ``1 <= k <= 4096``. Default 1.
+
+    Raises
+    ------
+    ValueError
+        If ``p0`` or ``pk`` is not a finite real, or ``k`` is not an integer in range.
+
+    Examples
+    --------
+    >>> from impactbar import CosineLoad
+    >>> load = CosineLoad(p0=0.3, pk=1.0)
+    >>> load
+    CosineLoad(p0=0.3, pk=1.0, k=1)
+    >>> float(load(0.0))  # p0 + pk at t = 0
+    1.3
+    """
+
+    kind = "cosine"
+    description = "pneumatic p0 + pk cos(k t) (eq. 33)"
+    parameters = Schema(Field("p0", "mean load"), Field("pk", "amplitude of the harmonic"),
+                        Field("k", "order of the harmonic, >= 1", "", dtype="i8"))
+    continuation_parameters = ("p0", "pk")
+
+    def __init__(self, p0, pk, k=1):
+        self._set(p0=check_real("p0", p0), pk=check_real("pk", pk), k=check_int("k", k, lo=1, hi=4096))
+        pks = np.zeros(self.k, dtype=complex)
+        pks[-1] = self.pk
+        self._set_sparse(np.arange(1.0, self.k + 1.0), pks)
+
+    @property
+    def load_factor(self) -> float:
+        """``k p0 / pk`` (eq. 38), ``inf`` for ``pk = 0``."""
+        return self.k * self.p0 / self.pk if self.pk != 0 else math.inf
+
+    def cosine_form(self):
+        return self.p0, self.pk, self.k
+
+    def _repr_args(self):
+        return f"p0={self.p0!r}, pk={self.pk!r}, k={self.k!r}"
