@@ -81,21 +81,28 @@ def _fundamental(w2, d, tau):
 def load_value(load, level, t):
     """``p(t)``, ``p'(t)``, ``p''(t)`` of the load view ``load`` (derivatives 0 inside a piece of a
     piecewise-constant load, whose ``level`` the caller passes)."""
-    kind, p0, ks, pr, pim = load.kind, load.p0, load.ks, load.pr, load.pim
-    if kind == 1:
+    if load.kind == 1:
         return level, 0.0, 0.0
-    p = p0
-    dp = 0.0
-    ddp = 0.0
+    return harmonic_sum(load.p0, load.ks, load.pr, load.pim, t)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def harmonic_sum(h0, ks, hr, hi, t):
+    """``h(t) = h0 + sum_j Re((hr_j + i hi_j) e^{i k_j t})`` and its first two derivatives: a
+    Fourier load (eq. 7), and the particular response at the struck end that the event search
+    sums the same way."""
+    h = h0
+    dh = 0.0
+    ddh = 0.0
     for j in range(ks.size):
         k = ks[j]
         ck = math.cos(k * t)
         sk = math.sin(k * t)
-        a = pr[j] * ck - pim[j] * sk
-        p += a
-        dp -= k * (pr[j] * sk + pim[j] * ck)
-        ddp -= k * k * a
-    return p, dp, ddp
+        a = hr[j] * ck - hi[j] * sk
+        h += a
+        dh -= k * (hr[j] * sk + hi[j] * ck)
+        ddh -= k * k * a
+    return h, dh, ddh
 
 
 @numba.njit(cache=CACHE, nogil=True)

@@ -45,6 +45,7 @@ from ._flightkernel import (  # the closed-form flight and the certified step, b
     bounds,
     first_piece,
     functional,
+    harmonic_sum,
     load_value,
     next_piece,
     particular,
@@ -411,17 +412,7 @@ def _coarse_eval(d, c0, p0, ks, hcr, hci, sq0, ta, r0, dv0, t):
     tau = t - ta
     b, c = _bc(d, tau)
     ed = math.exp(-d * tau)
-    hq = sq0
-    hv = 0.0
-    h2 = 0.0
-    for j in range(ks.size):
-        k = ks[j]
-        ck = math.cos(k * t)
-        sk = math.sin(k * t)
-        x = hcr[j] * ck - hci[j] * sk
-        hq += x
-        hv -= k * (hcr[j] * sk + hci[j] * ck)
-        h2 -= k * k * x
+    hq, hv, h2 = harmonic_sum(sq0, ks, hcr, hci, t)
     rv = dv0 * ed + p0 * b
     return c0 * (r0 + dv0 * b + p0 * c) + hq, c0 * rv + hv, c0 * (p0 - d * rv) + h2, rv
 
