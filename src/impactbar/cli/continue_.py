@@ -29,8 +29,10 @@ def add_parser(sub) -> None:
     add_bar_and_load_arguments(p)
     cg = p.add_argument_group("continuation")
     cg.add_argument("--parameter", required=True,
-                    choices=("p0", "pk", "R", "d", "s", "q", "kappa", "stroke", "ret", "switch_out", "delay"),
-                    help="the parameter that varies (stroke, ret, switch_out, delay: a drifter's valve)")
+                    choices=("p0", "pk", "R", "d", "s", "q", "kappa", "stroke", "ret", "switch_out", "delay",
+                             "delay_out", "delay_in"),
+                    help="the parameter that varies (stroke, ret, switch_out, delay, delay_out, delay_in: a "
+                         "drifter's valve)")
     cg.add_argument("--to", type=float, required=True, help="its target value")
     cg.add_argument("--impacts", type=int, default=1, help="impacts m per period of the motion (default 1)")
     cg.add_argument("--load-periods", type=int, default=1, metavar="N",
