@@ -32,10 +32,11 @@ def add_parser(sub) -> None:
 
     cg.add_argument("--parameter", required=True,
                     choices=tuple(dict.fromkeys(("p0", "pk", "R", "d", "s", "q", "kappa", "stroke", "ret",
-                                                 "switch_out", "delay", *CIRCUIT_PARAMETERS))),
-                    help="the parameter that varies (stroke, ret, switch_out, delay: a drifter's valve; "
-                    "precharge, pump_flow, ... : a drifter's oil circuit, dimensionless, pressures in "
-                    "10 MPa)")
+                                                 "switch_out", "delay", "delay_out", "delay_in",
+                                                 *CIRCUIT_PARAMETERS))),
+                    help="the parameter that varies (stroke, ret, switch_out, delay, delay_out, delay_in: "
+                    "a drifter's valve; precharge, pump_flow, ... : a drifter's oil circuit, "
+                    "dimensionless, pressures in 10 MPa)")
     cg.add_argument("--to", type=float, required=True, help="its target value")
     cg.add_argument("--impacts", type=int, default=1, help="impacts m per period of the motion (default 1)")
     cg.add_argument("--load-periods", type=int, default=1, metavar="N",

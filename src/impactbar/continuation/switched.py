@@ -36,7 +36,7 @@ EVENT_KINDS = tuple(EventKind)
 #: :attr:`~impactbar.Drive.parameters`).
 MODEL_PARAMETERS = ("R", "d", "s")
 #: Parameters a valve's orbit can be continued in: the drive's fields and the bar's.
-SWITCHED_PARAMETERS = ("stroke", "ret", "switch_out", "delay", *MODEL_PARAMETERS)
+SWITCHED_PARAMETERS = ("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in", *MODEL_PARAMETERS)
 
 
 def parameters_of(drive) -> tuple:
@@ -285,8 +285,9 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         ``|to - doubling|`` of the doubling, on whichever side it bifurcates.
     parameter : str
         One of the drive's :attr:`~impactbar.Drive.parameters` (the valve's ``"stroke"``, ``"ret"``:
-        force levels, dimensionless, eq. 2; ``"switch_out"``: bar lengths; ``"delay"``: dimensionless
-        time) or ``"R"``, ``"d"``, ``"s"``; the event's own parameter for a period doubling.
+        force levels, dimensionless, eq. 2; ``"switch_out"``: bar lengths; ``"delay"`` (both delays),
+        ``"delay_out"``, ``"delay_in"``: dimensionless time) or ``"R"``, ``"d"``, ``"s"``; the event's
+        own parameter for a period doubling.
     to : float
         Target value; the branch stops there or where it leaves the range between start and ``to``.
     detect : callable
@@ -331,7 +332,11 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     allowed = parameters_of(drive)
     if parameter not in allowed:
         raise ValueError(f"parameter must be one of {allowed} for a switched orbit; got {parameter!r}")
-    lam0 = float(getattr(model if parameter in MODEL_PARAMETERS else drive, parameter))
+    lam0 = getattr(model if parameter in MODEL_PARAMETERS else drive, parameter)
+    if lam0 is None:  # the valve's delay where its two delays differ
+        raise ValueError(f"parameter {parameter!r} has no value on this drive ({drive!r}): follow one of "
+                         f"its own, e.g. 'delay_out' or 'delay_in'")
+    lam0 = float(lam0)
     to = _target(parameter, lam0, to)
     settings = _settings(settings)
     steps = settings.steps(abs(to - lam0))

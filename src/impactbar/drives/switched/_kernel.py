@@ -79,13 +79,14 @@ def _rigid_cycle(d, R, drive, v):
     """The rigid piston's one-impact cycle from the arrival velocity ``v`` (theory §10): stroke for
     the delay, return until the gap rises through ``switch_out``, return for the delay, stroke until
     ``q_0`` rises through 0. Returns the next arrival velocity and the free flight times
-    ``(h1, h3)`` (``inf`` where a crossing does not come)."""
-    ps, pr, tau = drive.stroke, drive.ret, drive.delay
-    q, w = rigid_flight(d, 0.0, -R * v, ps, tau)
+    ``(h1, h3)`` (``inf`` where a crossing does not come). The delays: ``delay_in`` after the
+    impact, ``delay_out`` after the crossing."""
+    ps, pr = drive.stroke, drive.ret
+    q, w = rigid_flight(d, 0.0, -R * v, ps, drive.delay_in)
     h1 = first_rising_crossing(d, -q, -w, pr, drive.switch_out)
     if not math.isfinite(h1):
         return math.nan, h1, math.inf
-    q, w = rigid_flight(d, q, w, -pr, h1 + tau)
+    q, w = rigid_flight(d, q, w, -pr, h1 + drive.delay_out)
     h3 = first_rising_crossing(d, q, w, ps, 0.0)
     if not math.isfinite(h3):
         return math.nan, h1, h3
@@ -209,7 +210,6 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     B_t = B
     B = ModalBasisView(*B_t)
     d = B.d
-    tau = drive.delay
     rigid = ints[_RIGID] != 0
     fast = ints[_FAST] != 0
     tail = clock[2]
@@ -306,13 +306,13 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
         if impacted:
             cnt[_LI] += 1
             ints[_NIMP] += 1
-            ints[_NPEND] = _push(pend_t, pend_k, ints[_NPEND], t + tau, RETURN)
+            ints[_NPEND] = _push(pend_t, pend_k, ints[_NPEND], t + drive.delay_in, RETURN)
             if ints[_NIMP] >= ints[_MAXIMP]:
                 return MAX_IMPACTS
         elif t >= t_end:
             break
         elif t == cross:  # the gap rose through switch_out: the switch to stroke is triggered
-            ints[_NPEND] = _push(pend_t, pend_k, ints[_NPEND], cross + tau, STROKE)
+            ints[_NPEND] = _push(pend_t, pend_k, ints[_NPEND], cross + drive.delay_out, STROKE)
         while ints[_NPEND] and pend_t[0] <= t:  # the switches due now take effect
             kk = pend_k[0]
             n_pend = ints[_NPEND] - 1

@@ -30,14 +30,18 @@ class DriveKernelView(NamedTuple):
         (dimensionless, eq. 2), both ``> 0``.
     switch_out : float
         Gap ``y = -q_0`` at which the return force gives way to the stroke force on the way out.
-    delay : float
-        Valve delay (dimensionless time), ``>= 0``.
+    delay_out : float
+        The valve's delay after the ``switch_out`` crossing (the switch to stroke; dimensionless
+        time), ``>= 0``.
+    delay_in : float
+        Its delay after the impact (the switch to return), ``>= 0``.
     """
 
     stroke: float
     ret: float
     switch_out: float
-    delay: float
+    delay_out: float
+    delay_in: float
 
 
 def initial_valve(drive, q0: float) -> int:

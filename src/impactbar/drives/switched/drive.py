@@ -32,10 +32,10 @@ class PositionSwitchedDrive(Drive):
     return state. The valve goes
 
     - from return to stroke when the gap ``y = -q_0`` (the piston's rigid coordinate, measured from
-      the stop) rises through ``switch_out`` (on the way out);
-    - from stroke to return at each impact;
+      the stop) rises through ``switch_out`` (on the way out), taking effect ``delay_out`` later;
+    - from stroke to return at each impact, taking effect ``delay_in`` later
 
-    each switch taking effect ``delay`` after the event that triggers it. The system is autonomous:
+    (a spool valve's own closing and opening times; ``delay`` gives both). The system is autonomous:
     a periodic motion has an unknown period, found with the impact and switch times
     (:func:`impactbar.find_orbit`), and the blow frequency is an output. Such a drive takes the place
     of a load in :func:`impactbar.simulate`, :func:`impactbar.find_orbit` and
@@ -66,15 +66,22 @@ class PositionSwitchedDrive(Drive):
         Gap ``y = -q_0`` (dimensionless, in bar lengths) at which the return force gives way to the
         stroke force on the way out, ``> 0``.
     delay : float, optional
-        Valve delay ``tau`` (dimensionless time): each switch takes effect this long after the
-        crossing or the impact that triggers it, ``>= 0``. Default 0.
+        Valve delay ``tau`` (dimensionless time) of both switches: each takes effect this long after
+        the crossing or the impact that triggers it, ``>= 0``. Default 0. After construction it is
+        the common delay, or ``None`` where ``delay_out`` and ``delay_in`` differ.
+    delay_out : float, optional
+        The delay of the switch to stroke after the ``switch_out`` crossing (dimensionless time),
+        ``>= 0``. Default ``delay``.
+    delay_in : float, optional
+        The delay of the switch to return after the impact (dimensionless time), ``>= 0``. Default
+        ``delay``.
 
     Raises
     ------
     ValueError
-        If a level or position is not finite or out of its range (named in the message): with
-        ``stroke <= 0`` the piston never reaches the stop, with ``ret <= 0`` it never reaches the
-        switch position, with ``switch_out <= 0`` the valve switches at the stop itself.
+        If a level, position or delay is not finite or out of its range (named in the message):
+        with ``stroke <= 0`` the piston never reaches the stop, with ``ret <= 0`` it never reaches
+        the switch position, with ``switch_out <= 0`` the valve switches at the stop itself.
 
     References
     ----------
@@ -89,26 +96,58 @@ class PositionSwitchedDrive(Drive):
     >>> from impactbar import PositionSwitchedDrive
     >>> PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0).level(0)
     1.0
+    >>> valve = PositionSwitchedDrive(1.0, 1.0, 1.0, delay=0.1, delay_in=0.05)
+    >>> valve.delay_out, valve.delay_in, valve.delay
+    (0.1, 0.05, None)
+    >>> valve.with_(delay=0.2) == PositionSwitchedDrive(1.0, 1.0, 1.0, delay=0.2)
+    True
     """
 
     stroke: float
     ret: float
     switch_out: float
-    delay: float = 0.0
+    delay: float | None = 0.0
+    delay_out: float | None = None
+    delay_in: float | None = None
 
-    parameters = ("stroke", "ret", "switch_out", "delay")
+    parameters = ("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in")
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "stroke", check_real("stroke", self.stroke, lo=0.0, lo_open=True))
         object.__setattr__(self, "ret", check_real("ret", self.ret, lo=0.0, lo_open=True))
         object.__setattr__(self, "switch_out", check_real("switch_out", self.switch_out, lo=0.0,
                                                           lo_open=True))
-        object.__setattr__(self, "delay", check_real("delay", self.delay, lo=0.0))
+        both = 0.0 if self.delay is None else check_real("delay", self.delay, lo=0.0)
+        out = both if self.delay_out is None else check_real("delay_out", self.delay_out, lo=0.0)
+        inn = both if self.delay_in is None else check_real("delay_in", self.delay_in, lo=0.0)
+        object.__setattr__(self, "delay_out", out)
+        object.__setattr__(self, "delay_in", inn)
+        object.__setattr__(self, "delay", out if out == inn else None)
+
+    def with_(self, **changes) -> PositionSwitchedDrive:
+        """A copy with the given parameters changed (validated again): ``delay`` sets both delays,
+        ``delay_out`` and ``delay_in`` one each.
+
+        Raises
+        ------
+        ValueError
+            For a name not in :attr:`parameters` or a value the constructor refuses.
+        """
+        bad = sorted(set(changes) - set(self.parameters))
+        if bad:
+            raise ValueError(f"parameter must be one of {self.parameters} for a PositionSwitchedDrive; "
+                             f"got {bad[0]!r}")
+        kw = {"stroke": self.stroke, "ret": self.ret, "switch_out": self.switch_out,
+              "delay_out": self.delay_out, "delay_in": self.delay_in}
+        if "delay" in changes:
+            kw["delay_out"] = kw["delay_in"] = changes.pop("delay")
+        kw.update(changes)
+        return PositionSwitchedDrive(**kw)
 
     @cached_property
     def kernel_view(self) -> DriveKernelView:
         """The drive as the compiled valve loop reads it (built once)."""
-        return DriveKernelView(self.stroke, self.ret, self.switch_out, self.delay)
+        return DriveKernelView(self.stroke, self.ret, self.switch_out, self.delay_out, self.delay_in)
 
     def level(self, state: int) -> float:
         """The force ``p`` in valve state ``state`` (``STROKE = 0``: ``+stroke``; ``RETURN = 1``:
@@ -144,18 +183,18 @@ class PositionSwitchedDrive(Drive):
         return out
 
     def jump(self, mode, z, event, t, q, v) -> DriveState:
-        """The crossing triggers the switch to stroke, ``delay`` later; the switches due at ``t``
-        take effect."""
+        """The crossing triggers the switch to stroke, ``delay_out`` later; the switches due at
+        ``t`` take effect."""
         valve, pending = mode
         if event is self._crossing:
-            pending = tuple(sorted(pending + ((t + self.delay, STROKE),)))
+            pending = tuple(sorted(pending + ((t + self.delay_out, STROKE),)))
         return DriveState(_due(valve, pending, t), z)
 
     def impact(self, mode, z, t, q, v) -> DriveState:
-        """The impact triggers the switch to return, ``delay`` later; the switches due at ``t`` take
-        effect."""
+        """The impact triggers the switch to return, ``delay_in`` later; the switches due at ``t``
+        take effect."""
         valve, pending = mode
-        pending = tuple(sorted(pending + ((t + self.delay, RETURN),)))
+        pending = tuple(sorted(pending + ((t + self.delay_in, RETURN),)))
         return DriveState(_due(valve, pending, t), z)
 
     @property

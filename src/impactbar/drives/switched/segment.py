@@ -1,16 +1,18 @@
 r"""The valve's periodic orbits: the segment problem (theory §10).
 
 One period of a one-impact orbit, counted from an impact (the valve's rules of
-:class:`~impactbar.PositionSwitchedDrive`, delay ``tau``):
+:class:`~impactbar.PositionSwitchedDrive`, delays ``tau_in`` after the impact and ``tau_out`` after
+the crossing):
 
-1. stroke force for ``tau`` (the switch to return triggered by the impact takes effect);
+1. stroke force for ``tau_in`` (the switch to return triggered by the impact takes effect);
 2. return force for ``h1``, until the gap ``y = -q_0`` rises through ``switch_out``;
-3. return force for ``tau`` (the switch to stroke takes effect);
+3. return force for ``tau_out`` (the switch to stroke takes effect);
 4. stroke force for ``h3``, until the struck end reaches the stop, ``c . q = 0``; the impact law
    (eq. 10) gives the state after the impact.
 
 Every flight is the closed-form constant-force flow of the modes (eq. 8). The unknowns are the
-state after the impact and the durations ``h1``, ``h3`` (the period is ``T = 2 tau + h1 + h3``); the
+state after the impact and the durations ``h1``, ``h3`` (the period is
+``T = tau_in + h1 + tau_out + h3``); the
 conditions are the switch, the contact and the impact law, solved by Newton's method with the exact
 Jacobian (:class:`ValveProblem`, the valve's :class:`~impactbar.drives.OrbitProblem`). The monodromy
 matrix is the product of the flows' fundamental matrices and of the saltation matrices at the switch
@@ -24,7 +26,7 @@ is the law's contact, held under the stroke force for its duration ``ContactLaw.
 :func:`impactbar.simulate` runs it: the switch to return counts from the contact's end). The
 unknowns hold the state where the contact ends; eq. 10 is replaced by the contact's map with its
 Jacobian (exact for the wave law, central differences for the rod-rock law); the period is
-``T = window + 2 tau + h1 + h3``. The multipliers are those of the return map on the arrival
+``T = window + tau_in + h1 + tau_out + h3``. The multipliers are those of the return map on the arrival
 surface ``c . q = 0``, built from the same Jacobian by the implicit function theorem (the switch
 and arrival times depend on the state); the trivial multiplier along the flow is then exactly 1.
 """
@@ -103,10 +105,9 @@ def _legs(model, drive, z0, durations):
     """States at the ends of the four flights from ``z0`` (after the impact)."""
     w2, d = _w2(model), model.d
     ps, pr = drive.level(STROKE), drive.level(RETURN)
-    tau, h1, _, h3 = durations
     out = []
     z = z0
-    for p, h in ((ps, tau), (pr, h1), (pr, tau), (ps, h3)):
+    for p, h in zip((ps, pr, pr, ps), durations, strict=True):
         if h:
             E = _blocks(w2, d, h)
             z = _apply(E, _affine(w2, d, p, h, E), z)
@@ -208,18 +209,19 @@ def _flights(model, drive, X, w2):
     d = model.d
     ps, pr = drive.stroke, -drive.ret
     z0, h1, h3 = X[:2 * M], X[2 * M], X[2 * M + 1]
-    tau = drive.delay
+    t_in, t_out = drive.delay_in, drive.delay_out
     E1, E3 = _blocks(w2, d, h1), _blocks(w2, d, h3)
-    if tau:
-        Et = _blocks(w2, d, tau)
-        za = _apply(Et, _affine(w2, d, ps, tau, Et), z0)
+    if t_in:
+        Ei = _blocks(w2, d, t_in)
+        za = _apply(Ei, _affine(w2, d, ps, t_in, Ei), z0)
     else:
-        Et, za = None, z0
+        Ei, za = None, z0
+    Eo = (Ei if t_out == t_in else _blocks(w2, d, t_out)) if t_out else None
     zb = _apply(E1, _affine(w2, d, pr, h1, E1), za)
-    zc = _apply(Et, _affine(w2, d, pr, tau, Et), zb) if tau else zb
+    zc = _apply(Eo, _affine(w2, d, pr, t_out, Eo), zb) if t_out else zb
     zd = _apply(E3, _affine(w2, d, ps, h3, E3), zc)
-    Eb = _compose(E1, Et) if tau else E1  # z0 -> zb
-    Ebd = _compose(E3, Et) if tau else E3  # zb -> zd
+    Eb = _compose(E1, Ei) if t_in else E1  # z0 -> zb
+    Ebd = _compose(E3, Eo) if t_out else E3  # zb -> zd
     Ed = _compose(Ebd, Eb)
     dzb_dh1 = _field(w2, d, pr, zb)
     dzd_dh1 = _apply(Ebd, (np.zeros(M), np.zeros(M)), dzb_dh1)
@@ -322,7 +324,7 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
     w2, d = _w2(model), model.d
     c = model.end_weights
     ps, pr = drive.level(STROKE), drive.level(RETURN)
-    tau, h1, _, h3 = durations
+    t_in, h1, t_out, h3 = durations
     za, zb, zc, zd = _legs(model, drive, z0, durations)
     if c @ zd[M:] <= 0.0:
         return Admissibility.BACKWARD_IMPACT
@@ -330,7 +332,7 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
     t_first = first_rising_crossing(d, -za[0], -za[M], -pr, drive.switch_out)
     if not math.isclose(t_first, h1, rel_tol=1e-8, abs_tol=1e-12):
         return Admissibility.PENETRATES
-    flights = ((ps, z0, tau), (pr, za, h1), (pr, zb, tau), (ps, zc, h3))
+    flights = ((ps, z0, t_in), (pr, za, h1), (pr, zb, t_out), (ps, zc, h3))
     if M == 1:  # the rigid bar: q_0 has at most one turning point per flight (theory §10), exact
         for p, z, h in flights:
             if h <= 0.0:
@@ -462,7 +464,8 @@ class ValveProblem(OrbitProblem):
     def _block(self, X, k):
         n = 2 * self.M + 2
         z0 = X[k * n:k * n + 2 * self.M].copy()
-        dur = np.array([self.drive.delay, X[k * n + 2 * self.M], self.drive.delay, X[k * n + 2 * self.M + 1]])
+        dur = np.array([self.drive.delay_in, X[k * n + 2 * self.M], self.drive.delay_out,
+                        X[k * n + 2 * self.M + 1]])
         return z0, dur
 
     def pieces(self, X):
@@ -534,7 +537,7 @@ class ValveProblem(OrbitProblem):
         for k in range(m):
             Xk = X[k * n:(k + 1) * n]
             z0 = Xk[:2 * M].copy()
-            dur = np.array([drive.delay, Xk[2 * M], drive.delay, Xk[2 * M + 1]])
+            dur = np.array([drive.delay_in, Xk[2 * M], drive.delay_out, Xk[2 * M + 1]])
             flights = _flights(model, drive, Xk, w2)
             zb, zd, _, Ed, _, dzd_dh1, dzd_dh3 = flights
             # the arrival's dependence on z0 with the switch and arrival times implicit
@@ -648,7 +651,8 @@ def _from_run(run, m):
     kinds = tuple(run.switch_kinds)
     if ti.size < m + 1:
         raise ValueError(f"guess: the run has {ti.size} impacts; impacts={m} needs at least {m + 1}")
-    tau, R = run.drive.delay, run.model.R
+    R = run.model.R
+    delays = run.drive.delay_in + run.drive.delay_out
     states, h1, h3 = [], [], []
     for k in range(ti.size - m - 1, ti.size - 1):
         a, b = ti[k], ti[k + 1]
@@ -657,7 +661,7 @@ def _from_run(run, m):
             raise ValueError("guess: the run's last impacts are not one valve cycle apart")
         ts_on = stroke[-1]
         states.append([0.0, -R * vi[k]])
-        h1.append(ts_on - a - 2.0 * tau)
+        h1.append(ts_on - a - delays)
         h3.append(b - ts_on)
     return np.array(states), np.array(h1), np.array(h3)
 
@@ -668,11 +672,11 @@ def _monodromy(model, drive, z0, durations):
     M = model.n_modes + 1
     w2, d = _w2(model), model.d
     ps, pr = drive.level(STROKE), drive.level(RETURN)
-    tau, h1, _, h3 = durations
+    t_in, h1, t_out, h3 = durations
     za, zb, zc, zd = _legs(model, drive, z0, durations)
     I2 = np.eye(2 * M)
-    Eta_r = _fund(w2, d, tau) if tau else I2
-    Eta_s = Eta_r
+    Eta_r = _fund(w2, d, t_out) if t_out else I2
+    Eta_s = _fund(w2, d, t_in) if t_in else I2
     # return flight h1, crossing at zb: dt_c = -(g . dz_b) / (g . f), g = grad(-q_0)
     A = _fund(w2, d, h1)
     g = np.zeros(2 * M)
@@ -686,10 +690,11 @@ def _monodromy(model, drive, z0, durations):
     dti = -gc / (gc @ fd)  # dt_i = dti @ dz_d
     J = _jump(model)
     z0p = J @ zd
-    p_after = ps if tau else pr
+    p_after = ps if t_in else pr
     A_imp = J @ A + np.outer(J @ fd - _field(w2, d, p_after, z0p), dti @ A)
-    if tau:  # stroke for tau, then the switch to return delayed from the impact: dt = dt_i
-        za = _apply(_blocks(w2, d, tau), _affine(w2, d, ps, tau, _blocks(w2, d, tau)), z0p)  # next
+    if t_in:  # stroke for tau_in, then the switch to return delayed from the impact: dt = dt_i
+        Ei = _blocks(w2, d, t_in)
+        za = _apply(Ei, _affine(w2, d, ps, t_in, Ei), z0p)  # next
         A = Eta_s @ A_imp + np.outer(_field(w2, d, ps, za) - _field(w2, d, pr, za), dti @ A)
     else:
         A = A_imp
