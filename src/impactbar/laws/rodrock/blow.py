@@ -643,6 +643,12 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     F, G, junc, bitf, pen, fld, acc = loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, float(gap), drive,
                                            record_field)
     u_shank, grid_loss, ended, gap, drive_work = acc
+    if bit.branch == _LOAD and bit.p > bit.p_max:
+        # the window ended while the bit still advanced into the rock: its largest penetration is the
+        # last, and what would stay of it the unloading line from there (issue 42: they were those of
+        # the last unloading, 0 on a first loading)
+        bit.p_max, bit.R_max = bit.p, bit.k * bit.p
+        bit.p_perm = bit.p_max - bit.R_max / bit.k_u
     shank = junc[:, 0]
     n = shank.size
     e = (F * F + G * G) / Z * dt
