@@ -63,17 +63,20 @@ def _massless(bs, bp, E, T):
     lam = b / Z
     tau = T
     nxt, p_nxt = -1.0, 0.0
+    # g = b (p_inf - p0), Z times the rate at p0: the forms below lose nothing to a soft rock's huge
+    # p_inf (issue 42: k = 1e-16 read as a rigid wall)
+    g = E - b * (p0 - ref)
     if bs[2] == _ELASTIC:
         if p_inf > bs[3] >= p0:
-            tau_h = -math.log((p_inf - bs[3]) / (p_inf - p0)) / lam
+            tau_h = -math.log1p(-(bs[3] - p0) * b / g) / lam
             if tau_h < T:
                 tau, nxt, p_nxt = tau_h, _LOAD, bs[3]
         elif p_inf < bs[5] <= p0:
-            tau_h = -math.log((p_inf - bs[5]) / (p_inf - p0)) / lam
+            tau_h = -math.log1p(-(bs[5] - p0) * b / g) / lam
             if tau_h < T:
                 tau, nxt, p_nxt = tau_h, _FREE, bs[5]
     if nxt < 0.0:
-        p1 = p_inf + (p0 - p_inf) * math.exp(-lam * tau)
+        p1 = p0 + g / Z * (-math.expm1(-lam * tau)) / lam
     else:
         p1 = p_nxt
     bs[6] += _work(bs, bp, p0, p1)
@@ -97,11 +100,14 @@ def _flow(bs, bp, E, tau):
     x0, w0 = bs[0] - p_eq, bs[1]
     half = -Z / (2.0 * m)
     disc = half * half - b / m
+    delta = 0.0
     if disc >= 0.0:
         delta = math.sqrt(disc)
         e2 = math.exp((half - delta) * tau)
         if delta * tau > 1.0:  # a stiff bit (small mass): e2 underflows, expm1 overflows
-            S = (math.exp((half + delta) * tau) - e2) / (2.0 * delta)
+            # lam_1 = half + delta without the cancellation of a stiff bit's two near-opposite terms:
+            # lam_1 lam_2 = b/m (issue 42: bit masses 1e-100 .. 1e-16 lost the rock's load)
+            S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
         else:
             S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
         C = e2 + delta * S
@@ -109,6 +115,15 @@ def _flow(bs, bp, E, tau):
         om = math.sqrt(-disc)
         e = math.exp(half * tau)
         C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
+    if delta > 0.5 * abs(half):
+        # overdamped: p - p0 = g/(m 2 delta) (expm1(lam_1 t)/lam_1 - expm1(lam_2 t)/lam_2) + S w0 with
+        # g = E - b (p0 - p_ref), without p_eq, which a soft rock makes huge (issue 42: k = 1e-16
+        # read as a rigid wall)
+        g = E - b * (bs[0] - ref)
+        lam1, lam2 = b / m / (half - delta), half - delta
+        f1 = math.expm1(lam1 * tau) / lam1 if lam1 * tau != 0.0 else tau
+        f2 = math.expm1(lam2 * tau) / lam2
+        return bs[0] + g / m * (f1 - f2) / (2.0 * delta) + S * w0, C * w0 + S * (g / m + half * w0)
     x = C * x0 + S * (-half * x0 + w0)
     w = C * w0 + S * (-b / m * x0 + half * w0)
     return p_eq + x, w

@@ -120,17 +120,20 @@ class _Bit:
         p_inf = E / b + ref
         lam = b / Z
         tau, nxt = T, None
+        # g = b (p_inf - p0), Z times the rate at p0: the forms below lose nothing to a soft rock's
+        # huge p_inf (issue 42: k = 1e-16 read as a rigid wall)
+        g = E - b * (p0 - ref)
         if self.branch == _ELASTIC:
             if p_inf > self.p_max >= p0:
-                tau_h = -math.log((p_inf - self.p_max) / (p_inf - p0)) / lam
+                tau_h = -math.log1p(-(self.p_max - p0) * b / g) / lam
                 if tau_h < T:
                     tau, nxt = tau_h, (_LOAD, self.p_max)
             elif p_inf < self.p_perm <= p0:
-                tau_h = -math.log((p_inf - self.p_perm) / (p_inf - p0)) / lam
+                tau_h = -math.log1p(-(self.p_perm - p0) * b / g) / lam
                 if tau_h < T:
                     tau, nxt = tau_h, (_FREE, self.p_perm)
         if nxt is None:
-            p1 = p_inf + (p0 - p_inf) * math.exp(-lam * tau)
+            p1 = p0 + g / Z * (-math.expm1(-lam * tau)) / lam
         else:
             p1 = nxt[1]
         self.work += self._work(p0, p1)
@@ -157,12 +160,15 @@ class _Bit:
         x0, w0 = self.p - p_eq, self.w
         half = -Z / (2.0 * m)
         disc = half * half - b / m
+        delta = 0.0
         if disc >= 0.0:
             delta = math.sqrt(disc)
             lam2 = half - delta
             e2 = math.exp(lam2 * tau)
             if delta * tau > 1.0:  # a stiff bit (small mass): e2 underflows, expm1 overflows
-                S = (math.exp((half + delta) * tau) - e2) / (2.0 * delta)
+                # lam_1 = half + delta without the cancellation of a stiff bit's two near-opposite terms:
+                # lam_1 lam_2 = b/m (issue 42: bit masses 1e-100 .. 1e-16 lost the rock's load)
+                S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
             else:
                 S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
             C = e2 + delta * S
@@ -171,6 +177,15 @@ class _Bit:
             e = math.exp(half * tau)
             C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
         # A - half I = [[-half, 1], [-b/m, half]]
+        if delta > 0.5 * abs(half):
+            # overdamped: p - p0 = g/(m 2 delta) (expm1(lam_1 t)/lam_1 - expm1(lam_2 t)/lam_2) + S w0 with
+            # g = E - b (p0 - p_ref), without p_eq, which a soft rock makes huge (issue 42: k = 1e-16
+            # read as a rigid wall)
+            g = E - b * (self.p - ref)
+            lam1, lam2 = b / m / (half - delta), half - delta
+            f1 = math.expm1(lam1 * tau) / lam1 if lam1 * tau != 0.0 else tau
+            f2 = math.expm1(lam2 * tau) / lam2
+            return self.p + g / m * (f1 - f2) / (2.0 * delta) + S * w0, C * w0 + S * (g / m + half * w0)
         x = C * x0 + S * (-half * x0 + w0)
         w = C * w0 + S * (-b / m * x0 + half * w0)
         return p_eq + x, w
