@@ -142,8 +142,11 @@ def test_ctrl_c_is_one_line_and_exit_130(monkeypatch, tmp_path, capsys):
 
 def test_ctrl_c_during_paper_in_a_real_process(tmp_path):
     out = tmp_path / "figs"
+    # (the child's SIGINT at its default: a test run started in the background of a non-interactive
+    # shell ignores SIGINT, the child inherits that, and Python then never raises KeyboardInterrupt)
     proc = subprocess.Popen([sys.executable, "-m", "impactbar", "paper", "--out", str(out)], env=ENV,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     deadline = time.monotonic() + 120
     while not out.exists() and time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.05)  # the folder is made by the check before the computing starts
