@@ -62,6 +62,10 @@ def test_per_blow_outputs_in_si():
     j = int(np.argmax(out["work_on_rock_J"]))
     joules = blows[j].work_on_rock * h.bar.mass_kg * sc.velocity_m_s**2
     assert out["work_on_rock_J"][j] == pytest.approx(joules, rel=1e-12)
+    np.testing.assert_allclose(out["rock_dissipated_J"] + out["rock_stored_J"], out["work_on_rock_J"],
+                               rtol=1e-12)
+    assert out["rock_dissipated_J"][j] == pytest.approx(
+        blows[j].rock_dissipated * h.bar.mass_kg * sc.velocity_m_s**2, rel=1e-12)
     mm = blows[j].permanent_penetration * h.bar.length_m * 1e3
     assert out["penetration_mm"][j] == pytest.approx(mm, rel=1e-12)
     assert out["drilling_rate_m_min"][j] == pytest.approx(mm * 1e-3 * 55.0 * 60.0, rel=1e-12)

@@ -187,10 +187,12 @@ def rock_blows(hammer, trajectory) -> dict:
     Returns
     -------
     dict of numpy.ndarray, shape (n,) each
-        ``work_on_rock_J`` (J), ``penetration_mm`` (the permanent penetration of each blow, mm),
-        ``efficiency`` and ``efficiency_with_rebound`` (work on rock over the energy available to the
-        blow, without and with the piston's rebound energy credited), and ``drilling_rate_m_min``
-        (penetration per blow times the hammer's blow frequency ``f / k``, m/min).
+        ``work_on_rock_J`` (J), split as ``rock_dissipated_J`` (taken for good) and
+        ``rock_stored_J`` (the rock's elastic energy when the blow's window ends, J),
+        ``penetration_mm`` (the permanent penetration of each blow, mm), ``efficiency`` and
+        ``efficiency_with_rebound`` (work on rock over the energy available to the blow, without and
+        with the piston's rebound energy credited), and ``drilling_rate_m_min`` (penetration per
+        blow times the hammer's blow frequency ``f / k``, m/min).
     """
     sc = hammer.scales
     energy_J = sc.force_N * sc.length_m
@@ -198,6 +200,8 @@ def rock_blows(hammer, trajectory) -> dict:
     pen = np.array([b.permanent_penetration for b in blows], dtype=float) * sc.length_m
     return {
         "work_on_rock_J": np.array([b.work_on_rock for b in blows], dtype=float) * energy_J,
+        "rock_dissipated_J": np.array([b.rock_dissipated for b in blows], dtype=float) * energy_J,
+        "rock_stored_J": np.array([b.rock_stored_energy for b in blows], dtype=float) * energy_J,
         "penetration_mm": pen * 1e3,
         "efficiency": np.array([b.efficiency for b in blows], dtype=float),
         "efficiency_with_rebound": np.array([b.efficiency_with_rebound for b in blows], dtype=float),

@@ -276,6 +276,14 @@ class Blow:
         ``int R dp`` over the blow plus ``f^2/(2 k_u)`` (the rock's elastic energy under the feed
         at the start, which the blow may take back): ``>= 0``; the rock's elastic energy left at
         the end is included.
+    rock_stored_energy : float
+        The rock's elastic energy at the end, ``R^2/(2 k_u)`` of the rock force ``R`` left then
+        (what its unloading line would give back; 0 once the bit has lifted, or with a rigid
+        unloading).
+    rock_dissipated : float
+        ``work_on_rock - rock_stored_energy``: the work the rock has taken for good (crushing), which
+        a longer window can only increase; ``work_on_rock`` of a window cut while the bit still
+        loads includes elastic energy a longer one gives back.
     piston_energy : float
         Energy returned to the piston (its wave energy at the end).
     rebound_velocity : float
@@ -336,6 +344,9 @@ class Blow:
             ("feed_work", "work of the feed force on the shank during the blow", ()),
             ("available_energy", "energy available to the blow", ()),
             ("work_on_rock", "work done on the rock", {"repr"}),
+            ("rock_dissipated", "work on rock taken for good: the work less the rock's elastic energy",
+             ()),
+            ("rock_stored_energy", "the rock's elastic energy at the end", ()),
             ("efficiency", "work on rock over the available energy", {"repr"}),
             ("efficiency_with_rebound", "the same with the piston's rebound energy credited", ()),
             ("piston_energy", "energy returned to the piston", ()),
@@ -393,13 +404,14 @@ class Blow:
     piston_waves: tuple | None = None
     rod_waves: tuple | None = None
     bit_velocity: float = 0.0
+    rock_stored_energy: float = 0.0
 
     def __post_init__(self) -> None:
         # the scalars as plain floats (the solver hands numpy scalars), like every other result
         for f in ("energy_at_impact", "feed_work", "available_energy", "work_on_rock", "piston_energy",
                   "rebound_velocity", "rod_energy", "grid_loss", "max_penetration",
                   "permanent_penetration", "advance", "cell_time", "length_error", "drive_work", "gap",
-                  "shank_displacement", "bit_velocity"):
+                  "shank_displacement", "bit_velocity", "rock_stored_energy"):
             object.__setattr__(self, f, float(getattr(self, f)))
 
     @property
@@ -407,6 +419,11 @@ class Blow:
         """Relative mismatch of the energy account (rounding only)."""
         total = self.work_on_rock + self.piston_energy + self.rod_energy + self.grid_loss
         return abs(self.available_energy - total) / self.available_energy
+
+    @property
+    def rock_dissipated(self) -> float:
+        """``work_on_rock - rock_stored_energy``: the work the rock keeps (theory §4d)."""
+        return self.work_on_rock - self.rock_stored_energy
 
     @property
     def energy_into_rod(self) -> float:
@@ -684,7 +701,13 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
         piston_cells=n_p, segment_cells=grid.segment_cells, cell_edges=grid.edges,
         length_error=grid.length_error, drive_work=drive_work, gap=gap, shank_displacement=u_shank,
         piston_waves=(F[:n_p].copy(), G[:n_p].copy()), rod_waves=(F[n_p:].copy(), G[n_p:].copy()),
-        bit_velocity=bit.w)
+        bit_velocity=bit.w, rock_stored_energy=_rock_stored(float(bitf[-1]), bit.k_u))
+
+
+def _rock_stored(R, k_u) -> float:
+    """The rock's elastic energy ``R^2/(2 k_u)`` under the rock force ``R`` (0 off the rock or with
+    a rigid unloading)."""
+    return 0.0 if R <= 0.0 or math.isinf(k_u) else R * R / (2.0 * k_u)
 
 
 def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field):
