@@ -583,12 +583,196 @@ def drive_calls(rng, n, slow):
     return c
 
 
+# --------------------------------------------------------------------------------------------------
+# issue 42: the newer paths with invariants that do not trust the library
+# --------------------------------------------------------------------------------------------------
+def _one_line(fn):
+    """``fn`` with a refusal that spans lines counted as bad (an error is one line)."""
+    def run():
+        try:
+            return fn()
+        except ValueError as exc:
+            if "\n" in str(exc).strip():
+                return [f"BAD multi-line error: {str(exc)[:80]!r}"]
+            raise
+    run.__defaults__ = getattr(fn, "__defaults__", None)
+    return run
+
+
+def _draw(rng, lo, hi, weird):
+    """A weird value with probability ``weird``, else ``10^U(lo, hi)``."""
+    return WEIRD[rng.integers(len(WEIRD))] if rng.random() < weird else float(10 ** rng.uniform(lo, hi))
+
+
+def _close(a, b, rel, abs_=0.0):
+    return abs(a - b) <= rel * max(abs(a), abs(b)) + abs_
+
+
+def _blow_labels(b, tol=1e-9):
+    out = []
+    nums = [b.efficiency, b.efficiency_with_rebound, b.work_on_rock, b.max_penetration,
+            b.permanent_penetration, b.rebound_velocity, b.rock_dissipated, b.rock_stored_energy]
+    if not np.all(np.isfinite(nums)):
+        return ["BAD not finite"]
+    if not -tol <= b.efficiency <= 1.0 + tol or not -tol <= b.efficiency_with_rebound <= 1.0 + tol:
+        out.append("BAD efficiency outside [0, 1]")
+    if b.energy_error > 1e-9:
+        out.append("BAD blow's energy account")
+    if b.permanent_penetration > b.max_penetration * (1 + tol) + tol * abs(b.max_penetration):
+        out.append("BAD permanent > max penetration")
+    scale = max(b.available_energy, 1e-300)
+    if b.rock_dissipated < -tol * scale or b.rock_dissipated > b.work_on_rock + tol * scale:
+        out.append("BAD dissipated work outside [0, work on rock]")
+    return out
+
+
+def rock_invariants(rng, n, slow):
+    """single_blow under random rod-rock laws (one to three segments, rock, bit mass, feed; one in
+    thirty arguments weird): efficiencies in [0, 1], the blow's account, permanent <= max penetration,
+    0 <= dissipated <= work on rock; the blow homogeneous in (V, feed) (same efficiency, penetrations
+    scaled); a bit mass of 1e-12 within 1e-6 of the massless bit; refusals one line."""
+    c = Counter()
+    for _ in range(n):
+        def u(lo, hi):
+            return _draw(rng, lo, hi, 0.03)
+
+        k = float(10 ** rng.uniform(-2, 2))
+        a = {"segs": [(u(-1, 1), u(-1, 1)) for _ in range(int(rng.integers(1, 4)))], "k": k,
+             "k_u": k * float(10 ** rng.uniform(-0.2, 2)),
+             "bit": [0.0, 0.0, 1e-12, u(-3, 1)][rng.integers(4)], "feed": [0.0, u(-2, 0)][rng.integers(2)],
+             "s": float(10 ** rng.uniform(-0.5, 1.5)), "v": u(-3, 3), "lam": float(10 ** rng.uniform(-6, 6)),
+             "t_max": [None, None, float(rng.uniform(0.5, 10))][rng.integers(3)]}
+
+        def one(a=a):
+            def blow(v, feed, bit):
+                law = ib.RodRock(segments=[ib.RodSegment(*g) for g in a["segs"]],
+                                 rock=ib.BilinearRock(k=a["k"], k_u=a["k_u"]), bit_mass=bit, feed=feed)
+                m = ib.BarModel(a["s"], 0.0, 0.0, 0, impact=law)
+                return ib.single_blow(m, v) if a["t_max"] is None else ib.single_blow(m, v, t_max=a["t_max"])
+
+            b = blow(a["v"], a["feed"], a["bit"])
+            out = _blow_labels(b)
+            lam = a["lam"]
+            try:
+                b2 = blow(a["v"] * lam, a["feed"] * lam, a["bit"])
+            except ValueError:  # the scaled one out of range: refused, not answered wrongly
+                b2 = None
+            if b2 is not None:
+                if not _close(b.efficiency, b2.efficiency, 1e-8, 1e-12):
+                    out.append("BAD efficiency changes with the scale")
+                if not _close(b.max_penetration * lam, b2.max_penetration, 1e-7, 1e-12 * lam):
+                    out.append("BAD penetration not proportional to the scale")
+            if a["bit"] == 1e-12:
+                b0 = blow(a["v"], a["feed"], 0.0)
+                if not _close(b.efficiency, b0.efficiency, 1e-6, 1e-9):
+                    out.append("BAD bit mass 1e-12 far from the massless bit")
+            return out or ["ok"]
+
+        case(c, _one_line(one), slow)
+    return c
+
+
+def drive_invariants(rng, n, slow):
+    """The position-switched drive on rigid and flexible bars (extreme levels and switches
+    included): find_orbit's orbit finite, its period and multipliers unchanged and its velocities
+    scaled when every force and switch is scaled by lambda; simulate's energy account closing;
+    bounded time; refusals one line."""
+    c = Counter()
+    for _ in range(n):
+        def u(lo, hi):
+            return _draw(rng, lo, hi, 0.05)
+
+        a = {"stroke": u(-3, 2), "ret": u(-3, 3), "switch_out": u(-3, 3),
+             "delay": [0.0, 0.0, u(-3, 0)][rng.integers(3)], "N": int([0, 1, 2, 4][rng.integers(4)]),
+             "s": float(10 ** rng.uniform(0, 1)), "d": float(rng.uniform(0, 0.3)),
+             "R": float(rng.uniform(0, 0.9)), "lam": float(10 ** rng.uniform(-3, 3)),
+             "what": int(rng.integers(2))}
+
+        def one(a=a):
+            m = ib.BarModel(a["s"], a["d"], a["R"], a["N"])
+
+            def drive(lam):  # (the raw arguments first: the scaled ones only once they are accepted)
+                x = {k: a[k] if lam == 1.0 else float(a[k]) * lam for k in ("stroke", "ret", "switch_out")}
+                return ib.PositionSwitchedDrive(**x, delay=a["delay"])
+
+            if a["what"] == 0:
+                tr = ib.simulate(m, drive(1.0), ib.InitialState.rigid(-0.1 * a["switch_out"], 0.0, a["N"]),
+                                 30.0)
+                if _nan_in(tr.impact_times, tr.impact_velocities):
+                    return ["BAD nan"]
+                e = tr.energy
+                return ["BAD energy account"] if e.relative_residual > 1e-8 else ["ok"]
+            o = ib.find_orbit(m, drive(1.0))
+            if _nan_in(o.impact_velocities, o.multipliers) or not math.isfinite(o.period):
+                return ["BAD not finite"]
+            try:
+                o2 = ib.find_orbit(m, drive(a["lam"]))
+            except ValueError:
+                return ["BAD scaled drive refused where the unscaled one answered"]
+            out = []
+            if not _close(o.period, o2.period, 1e-7):
+                out.append("BAD period changes with the scale")
+            if not _close(o.impact_velocities[0] * a["lam"], o2.impact_velocities[0], 1e-7):
+                out.append("BAD velocity not proportional to the scale")
+            if o.admissible != o2.admissible:
+                out.append("BAD admissibility changes with the scale")
+            return out or ["ok"]
+
+        case(c, _one_line(one), slow)
+    return c
+
+
+def sustained_invariants(rng, n, slow):
+    """The wave law's sustained contact under pressing loads: the run's energy account closing, every
+    contact's efficiency in [0, 1], and the run unchanged (times) and scaled (velocities) when the load
+    and the start are scaled by lambda."""
+    c = Counter()
+    for _ in range(n):
+        a = {"s": float(10 ** rng.uniform(0, 1.5)), "d": float([0.0, rng.uniform(0, 0.3)][rng.integers(2)]),
+             "R": float(rng.uniform(0.05, 0.9)), "N": int([0, 1, 4, 8][rng.integers(4)]),
+             "p0": float(rng.uniform(0.5, 4)), "pk": float(rng.uniform(0, 2)), "k": int(rng.integers(1, 3)),
+             "lam": float(10 ** rng.uniform(-4, 4))}
+
+        def one(a=a):
+            m = ib.BarModel(a["s"], a["d"], a["R"], a["N"], impact="wave")
+
+            def run(lam):
+                return ib.simulate(m, ib.CosineLoad(a["p0"] * lam, a["pk"] * lam, a["k"]),
+                                   ib.InitialState.rigid(-0.1 * lam, 0.0, a["N"]), 4 * math.pi)
+
+            tr = run(1.0)
+            if _nan_in(tr.impact_times, tr.impact_velocities):
+                return ["BAD nan"]
+            out = []
+            if tr.energy.relative_residual > 1e-8:
+                out.append("BAD energy account")
+            for b in tr.impacts:
+                eff = getattr(b, "efficiency", 0.5)
+                if not -1e-12 <= eff <= 1.0 + 1e-12:
+                    out.append("BAD efficiency outside [0, 1]")
+            tr2 = run(a["lam"])
+            if tr2.n_impacts != tr.n_impacts:
+                out.append("BAD impacts change with the scale")
+            elif tr.n_impacts:
+                if not np.allclose(tr.impact_times, tr2.impact_times, rtol=1e-8, atol=1e-8):
+                    out.append("BAD impact times change with the scale")
+                if not np.allclose(tr.impact_velocities * a["lam"], tr2.impact_velocities, rtol=1e-6,
+                                   atol=1e-9 * a["lam"]):
+                    out.append("BAD velocities not proportional to the scale")
+            return out or ["ok"]
+
+        case(c, _one_line(one), slow)
+    return c
+
+
 CATEGORIES = {"constructors": (constructors, 400), "orbits": (orbits_calls, 150),
               "simulate": (simulate_runs, 60), "grazing": (grazing_vs_scipy, 60),
               "sweeps": (sweeps, 3), "physical": (physical, 60),
               "wave": (wave_law, 80), "find_orbit": (find_orbit_calls, 80),
               "continuation": (continuation_calls, 40), "specs": (spec_values, 150),
-              "cli": (cli_calls, 60), "rodrock": (rodrock_calls, 60), "drive": (drive_calls, 60)}
+              "cli": (cli_calls, 60), "rodrock": (rodrock_calls, 60), "drive": (drive_calls, 60),
+              "rock42": (rock_invariants, 1000), "drive42": (drive_invariants, 600),
+              "sustained42": (sustained_invariants, 400)}
 
 
 def main(argv=None):

@@ -78,3 +78,13 @@ def test_bounded_sampling_finds_what_the_grid_finds(d):
     # and a flight that stays off the stop is proven off without one sample
     z[0] = -1e6
     assert segment._end_max_bounded(w2, d, p, c, z, h, 48) == -math.inf
+
+
+@pytest.mark.parametrize("name", ["stroke", "ret", "switch_out"])
+def test_levels_beyond_1e100_are_refused(name):
+    """ret = 1e308 overflowed inside a run and was refused as "release search did not converge at
+    t = nan"; now the drive refuses it by name, and 1e100 is answered."""
+    kw = {"stroke": 1.0, "ret": 0.5, "switch_out": 1.0}
+    with pytest.raises(ValueError, match=rf"{name} must be in \(0, 1e\+100\]; got 1e\+308"):
+        PositionSwitchedDrive(**{**kw, name: 1e308})
+    assert getattr(PositionSwitchedDrive(**{**kw, name: 1e100}), name) == 1e100

@@ -21,6 +21,8 @@ from ..._shared.validate import check_real
 from ..base import Drive, DriveState, GapCrossing, TimedEvent
 from ._state import _NO_STATE, KIND, RETURN, STROKE, DriveKernelView, _due, initial_valve
 
+_MAX_LEVEL = 1e100  # the largest stroke, ret and switch_out
+
 __all__ = ["PositionSwitchedDrive", "DriveKernelView", "STROKE", "RETURN", "KIND", "first_rising_crossing",
            "initial_valve"]
 
@@ -81,7 +83,8 @@ class PositionSwitchedDrive(Drive):
     ValueError
         If a level, position or delay is not finite or out of its range (named in the message):
         with ``stroke <= 0`` the piston never reaches the stop, with ``ret <= 0`` it never reaches
-        the switch position, with ``switch_out <= 0`` the valve switches at the stop itself.
+        the switch position, with ``switch_out <= 0`` the valve switches at the stop itself; each of
+        the three at most ``1e100`` (beyond, the motion's energies leave the float range).
 
     References
     ----------
@@ -113,10 +116,10 @@ class PositionSwitchedDrive(Drive):
     parameters = ("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in")
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "stroke", check_real("stroke", self.stroke, lo=0.0, lo_open=True))
-        object.__setattr__(self, "ret", check_real("ret", self.ret, lo=0.0, lo_open=True))
-        object.__setattr__(self, "switch_out", check_real("switch_out", self.switch_out, lo=0.0,
-                                                          lo_open=True))
+        # (at most 1e100: the motion's squares, energies and forces stay inside the float range)
+        for name in ("stroke", "ret", "switch_out"):
+            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=0.0, hi=_MAX_LEVEL,
+                                                      lo_open=True))
         both = 0.0 if self.delay is None else check_real("delay", self.delay, lo=0.0)
         out = both if self.delay_out is None else check_real("delay_out", self.delay_out, lo=0.0)
         inn = both if self.delay_in is None else check_real("delay_in", self.delay_in, lo=0.0)
