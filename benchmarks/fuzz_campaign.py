@@ -653,10 +653,16 @@ def rock_invariants(rng, n, slow):
             b = blow(a["v"], a["feed"], a["bit"])
             out = _blow_labels(b)
             lam = a["lam"]
+            # a long blow with many re-contacts can depend on rounding (a grazing re-contact decided
+            # at 1e-16): where a 1e-12 change of the start moves the efficiency, scale is not tested
+            nudged = blow(float(a["v"]) * (1 + 1e-12), float(a["feed"]) * (1 + 1e-12), a["bit"])
+            sensitive = not _close(b.efficiency, nudged.efficiency, 1e-9, 1e-12)
             try:
-                b2 = blow(a["v"] * lam, a["feed"] * lam, a["bit"])
+                b2 = None if sensitive else blow(a["v"] * lam, a["feed"] * lam, a["bit"])
             except ValueError:  # the scaled one out of range: refused, not answered wrongly
                 b2 = None
+            if sensitive:
+                out.append("ok, rounding-sensitive: scale not tested")
             if b2 is not None:
                 if not _close(b.efficiency, b2.efficiency, 1e-8, 1e-12):
                     out.append("BAD efficiency changes with the scale")
