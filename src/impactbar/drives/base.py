@@ -623,6 +623,7 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
         converge.
     """
     hi = positive
+    lo = np.setdiff1d(np.arange(np.size(X)), hi)  # the states (positions and velocities)
     last = math.inf
     step = np.zeros(0)
     for _ in range(max_iter):
@@ -641,14 +642,26 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
         if np.any(X[hi] <= 0.0):
             raise ValueError("Newton left the region of positive flight times: give a guess closer "
                              "to the orbit (e.g. from simulate)")
-        size = float(np.max(np.abs(step)))
-        scale = tol * max(1.0, float(np.max(np.abs(X))))
-        if size <= scale or (big <= 0.5 and math.isfinite(last) and size < 1e-4 * last
-                             and size * size <= scale * last):
+        # the step relative to the states' and the times' own sizes (issue 42: relative to
+        # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
+        size = max(_relative(step, X, lo), _relative(step, X, hi))
+        if size <= tol or (big <= 0.5 and math.isfinite(last) and size < 1e-4 * last
+                           and size * size <= tol * last):
             return X
+        if size < 1e-9 and size > 0.25 * last:  # no more progress: the rounding floor of a
+            return X  # poorly conditioned orbit (multipliers near 1), reached
         last = size
     raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
                      f"{np.max(np.abs(step)):.2e})")
+
+
+def _relative(step, X, index) -> float:
+    """``max |step|`` over ``index`` relative to ``max |X|`` there (0 for an empty index)."""
+    if not np.size(index):
+        return 0.0
+    ref = float(np.max(np.abs(X[index])))
+    size = float(np.max(np.abs(step[index])))
+    return size / ref if ref > 0.0 else size
 
 
 def split_multipliers(Phi: np.ndarray, f: np.ndarray) -> tuple[float, np.ndarray]:

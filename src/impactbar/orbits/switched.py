@@ -347,8 +347,15 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
     problem = orbit_problem(model, drive, m)
-    X = problem.initial(guess, tol, max_iter)
-    X = problem.solve(X, tol, max_iter)
+    X0 = problem.initial(guess, tol, max_iter)
+    X = problem.solve(X0, tol, max_iter)
+    times, start = X[problem.positive], X0[problem.positive]
+    if times.size and float(np.sum(times)) < 1e-6 * float(np.sum(start)):
+        # the flights shrank to nothing (a root of the equations, not a motion; issue 42: it was
+        # returned as a "backward impact" orbit of period 3e-9, a different one at each scale)
+        raise ValueError(f"find_orbit: Newton reached a degenerate solution (flights of total length "
+                         f"{float(np.sum(times)):.3g} from {float(np.sum(start)):.3g} at the guess), not a "
+                         "periodic motion; give a guess (e.g. simulate(...) under the drive)")
     return orbit_of(problem, X)
 
 

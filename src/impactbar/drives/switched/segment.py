@@ -415,14 +415,14 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
             if 0.0 < t_turn < h:
                 inner.append(float(_apply(_blocks(w2, d, t_turn), _affine(w2, d, p, t_turn,
                                                                           _blocks(w2, d, t_turn)), z)[0]))
-            if inner and max(inner) > 1e-12 * max(1.0, drive.switch_out):
+            if inner and max(inner) > 1e-12 * drive.switch_out:
                 return Admissibility.PENETRATES
         if c @ z0[M:] >= 0.0 and model.R > 0.0:
             return Admissibility.STICKS
         return Admissibility.ADMISSIBLE
     n = max(samples, int(8 * model.s * model.n_modes * sum(durations)))
     worst = -math.inf
-    scale = max(1.0, float(np.max(np.abs(z0[:M]))))
+    scale = max(drive.switch_out, float(np.max(np.abs(z0[:M]))))  # (lengths scale with the drive)
     if n > _DIRECT_SAMPLES:  # a long period: sample only where the energy bound cannot decide
         density = 8.0 * model.s * model.n_modes
         for p, z, h in flights:
