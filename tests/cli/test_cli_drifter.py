@@ -80,3 +80,74 @@ def test_simulate_and_continue_a_drifter(tmp_path, capsys):
     assert events[0].startswith("kind,value") and any(e.startswith("admissibility,") for e in events[1:])
     branch = (tmp_path / "c" / "branch.csv").read_text().splitlines()
     assert len(branch) > 5 and float(branch[-1].split(",")[0]) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("source", ["preset", "config"])
+def test_drifter_command_prints_the_operating_point(source, tmp_path, capsys):
+    """``impactbar drifter`` (issue 38): the ideal valve's operating point is the closed form."""
+    if source == "preset":
+        argv = ["drifter", "--preset", "hydraulic-drifter"]
+    else:
+        (tmp_path / "d.toml").write_text(CONFIG)
+        argv = ["drifter", str(tmp_path / "d.toml")]
+    assert main([*argv, "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    v, f = _expected()
+    assert doc["orbit"]["impact_velocity_m_s"] == pytest.approx(v, rel=1e-7)
+    assert doc["orbit"]["blow_frequency_Hz"] == pytest.approx(f, rel=1e-7)
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert f"blow frequency {f:.4g} Hz" in text and f"impact velocity {v:.4g} m/s" in text
+
+
+def test_drifter_command_refuses_a_hammer(capsys):
+    assert main(["drifter", "--preset", "pneumatic-drill"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "needs a drifter" in err and "circuit-drifter" in err and "\n" not in err
+
+
+def test_circuit_si_parameters_are_the_drive_parameters():
+    """Every config key of ``SI_PARAMETERS`` converts the preset's own config value to the value
+    its dimensionless drive holds (two paths: the drive's builder and the SI table)."""
+    from impactbar.physical.circuit import CIRCUIT_PRESETS, SI_PARAMETERS, circuit_preset
+
+    d = circuit_preset("circuit-drifter")
+    drive, config = d.drive(), CIRCUIT_PRESETS["circuit-drifter"]
+    checked = 0
+    for key, (param, _, _) in SI_PARAMETERS.items():
+        section, name = key.split(".")
+        if name not in config.get(section, {}):
+            continue
+        got, value = d.to_dimensionless(key, config[section][name])
+        assert got == param
+        assert value == pytest.approx(drive.value(param), rel=1e-12)
+        assert d.from_dimensionless(key, value) == pytest.approx(
+            d.to_dimensionless(key, config[section][name])[1] / d._si_factor(key), rel=1e-12)
+        checked += 1
+    assert checked >= 14
+    with pytest.raises(ValueError, match="parameter must be one of accumulator.precharge"):
+        d.to_dimensionless("accumulator.pressure", "1 MPa")
+    with pytest.raises(ValueError, match="accumulator.precharge"):
+        d.to_dimensionless("accumulator.precharge", 12.0)  # a bare number: its unit is needed
+
+
+def test_continue_a_circuit_in_si(tmp_path, capsys):
+    """``impactbar continue CONFIG --parameter accumulator.precharge --to '10.2 MPa'``: the branch in
+    the pre-charge in Pa beside its dimensionless value (10 MPa units)."""
+    assert main(["continue", "--preset", "circuit-drifter", "--parameter", "accumulator.precharge",
+                 "--to", "10.2 MPa", "--out", str(tmp_path), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["status"] == "reached" and doc["to"] == "10.2 MPa"
+    rows = (tmp_path / "branch.csv").read_text().splitlines()
+    assert rows[0].startswith("accumulator.precharge (Pa),parameter,period")
+    values = [[float(x) for x in r.split(",")[:2]] for r in rows[1:]]
+    assert values[0][0] == pytest.approx(1e7) and values[-1][0] == pytest.approx(1.02e7, rel=1e-9)
+    for si, dimensionless in values:
+        assert si == pytest.approx(dimensionless * 1e7, rel=1e-12)
+    # refusals: a unit for a dimensionless parameter, a config key for a drifter without a circuit
+    assert main(["continue", "--preset", "circuit-drifter", "--parameter", "precharge", "--to", "12 MPa",
+                 "--out", str(tmp_path)]) == 2
+    assert "--to must be a number" in capsys.readouterr().err
+    assert main(["continue", "--preset", "hydraulic-drifter", "--parameter", "supply.pump_flow", "--to",
+                 "80 L/min", "--out", str(tmp_path)]) == 2
+    assert "oil circuit" in capsys.readouterr().err

@@ -20,7 +20,7 @@ from ._compiling import compile_note
 __all__ = ["main"]
 
 #: subcommand modules, in the order ``--help`` lists them
-SUBCOMMANDS = ("paper", "orbits", "continue_", "experiment", "simulate", "sweep", "plot", "warmup")
+SUBCOMMANDS = ("paper", "orbits", "drifter", "continue_", "experiment", "simulate", "sweep", "plot", "warmup")
 
 
 def build_parser() -> argparse.ArgumentParser:

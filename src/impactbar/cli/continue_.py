@@ -28,16 +28,20 @@ def add_parser(sub) -> None:
     )
     add_bar_and_load_arguments(p)
     cg = p.add_argument_group("continuation")
-    from ..physical.circuit import CIRCUIT_PARAMETERS
+    from ..physical.circuit import CIRCUIT_PARAMETERS, SI_PARAMETERS
 
     cg.add_argument("--parameter", required=True,
                     choices=tuple(dict.fromkeys(("p0", "pk", "R", "d", "s", "q", "kappa", "stroke", "ret",
                                                  "switch_out", "delay", "delay_out", "delay_in",
-                                                 *CIRCUIT_PARAMETERS))),
-                    help="the parameter that varies (stroke, ret, switch_out, delay, delay_out, delay_in: "
-                    "a drifter's valve; precharge, pump_flow, ... : a drifter's oil circuit, "
-                    "dimensionless, pressures in 10 MPa)")
-    cg.add_argument("--to", type=float, required=True, help="its target value")
+                                                 *CIRCUIT_PARAMETERS, *SI_PARAMETERS))),
+                    metavar="PARAMETER",
+                    help="the parameter that varies: p0, pk, R, d, s, q, kappa (bar and load); stroke, "
+                    "ret, switch_out, delay, delay_out, delay_in (a drifter's valve); a drifter's oil "
+                    "circuit by its config key in SI (accumulator.precharge, supply.pump_flow, "
+                    "valve.switching_time, oil.bulk_modulus, ...; --to with its unit, '12 MPa') or "
+                    "dimensionless (precharge, pump_flow, ...: pressures in 10 MPa)")
+    cg.add_argument("--to", type=_number_or_quantity, required=True,
+                    help="its target value (with its unit for a config key: '12 MPa', '80 L/min')")
     cg.add_argument("--impacts", type=int, default=1, help="impacts m per period of the motion (default 1)")
     cg.add_argument("--load-periods", type=int, default=1, metavar="N",
                     help="load periods n per period of the motion (default 1); with m or n > 1 the "
@@ -69,6 +73,14 @@ def add_parser(sub) -> None:
     add_quiet_argument(og)
     add_physical_arguments_if_installed(p)
     p.set_defaults(func=run)
+
+
+def _number_or_quantity(text: str):
+    """``--to``: a number, or a quantity with its unit (``"12 MPa"``) for a config key."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 def _model_and_load(args):
@@ -136,6 +148,12 @@ def run(args) -> int:
         drifter = drifter_from_args(args)  # a valve switched on the piston's position (theory §10)
         if drifter is not None:
             return run_drifter_continue(args, drifter, out)
+    if "." in args.parameter:
+        raise ValueError(f"--parameter {args.parameter} (a config key in SI) needs a drifter config "
+                         "with its oil circuit ([chambers] section) or the preset circuit-drifter")
+    if isinstance(args.to, str):
+        raise ValueError(f"--to must be a number for --parameter {args.parameter} (dimensionless); "
+                         f"got {args.to!r}")
     model, load = _model_and_load(args)
     if args.doublings < 0:
         raise ValueError(f"--doublings must be >= 0; got {args.doublings}")

@@ -11,10 +11,42 @@ import tomllib
 from pathlib import Path
 
 from .. import physical
+from ..physical.circuit import SI_PARAMETERS
 from ..physical.drifter import RENAMED_DRIFTER_PRESETS
 from ._common import json_ready, print_json, require
 
-__all__ = ["drifter_from_args", "run_drifter_orbits", "run_drifter_simulate", "run_drifter_continue"]
+__all__ = ["add_parser", "drifter_from_args", "run_drifter_orbits", "run_drifter_simulate",
+           "run_drifter_continue"]
+
+
+def add_parser(sub) -> None:
+    """``impactbar drifter CONFIG.toml | --preset NAME [--json]``: a drifter's operating point."""
+    from .physical import add_physical_arguments
+
+    p = sub.add_parser(
+        "drifter",
+        help="a hydraulic drifter's operating point (blow frequency, impact energy, pressures, stability)",
+        description="The periodic motion of a hydraulic drifter in SI units: its valve switched on the "
+        "piston's position (a config with a [valve] section, theory section 10) or with its oil "
+        "circuit (a [chambers] section: chambers, pump, accumulator, relief, theory section 11). "
+        "Prints the blow frequency, impact velocity and energy, and, with the circuit, the mean "
+        "supply pressure, pump power, hydraulic efficiency, least pressure and the stability. "
+        "'impactbar continue CONFIG --parameter accumulator.precharge --to \"12 MPa\"' follows it.")
+    add_physical_arguments(p)
+    p.add_argument("--json", action="store_true",
+                   help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
+    p.set_defaults(func=_run_drifter)
+
+
+def _run_drifter(args) -> int:
+    drifter = drifter_from_args(args)
+    if drifter is None:
+        what = f"preset {args.preset!r}" if getattr(args, "preset", None) else (
+            f"{args.config}" if getattr(args, "config", None) else "no input")
+        presets = ", ".join(sorted({*physical.DRIFTER_PRESETS, *physical.CIRCUIT_PRESETS}))
+        raise ValueError(f"impactbar drifter needs a drifter: a CONFIG.toml with a [valve] or [chambers] "
+                         f"section, or --preset {presets}; got {what}")
+    return run_drifter_orbits(args, drifter)
 
 
 def drifter_from_args(args):
@@ -188,24 +220,46 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     impact velocity, largest |multiplier|, stable) and ``events.csv``."""
     from .. import continue_orbit
 
+    name, to = args.parameter, args.to
+    si = "." in name  # a config key in SI (issue 38): accumulator.precharge, supply.pump_flow, ...
+    if si and not isinstance(drifter, physical.CircuitDrifter):
+        raise ValueError(f"--parameter {name} (a config key in SI) is a parameter of a drifter with its "
+                         "oil circuit; this drifter's valve takes stroke, ret, switch_out, delay, "
+                         "delay_out, delay_in")
+    if si:
+        parameter, to = drifter.to_dimensionless(name, to)
+        unit = SI_PARAMETERS[name][1].replace("**", "^")
+
+        def shown(x):
+            return drifter.from_dimensionless(name, x)
+    else:
+        if isinstance(to, str):
+            raise ValueError(f"--to must be a number for --parameter {name} (dimensionless); got {to!r}")
+        parameter, unit = name, ""
+
+        def shown(x):
+            return x
     start = drifter.orbit().orbit
-    b = continue_orbit(start, args.parameter, args.to, step=args.step, max_step=args.max_step,
+    b = continue_orbit(start, parameter, to, step=args.step, max_step=args.max_step,
                        max_points=args.max_points)
-    rows = ["parameter,period,impact_velocity,max_abs_multiplier,stable"]
+    head = f"{name} ({unit})," if si else ""
+    rows = [f"{head}parameter,period,impact_velocity,max_abs_multiplier,stable"]
     for lam, o in zip(b.values, b.orbits, strict=True):
         mu = max(abs(complex(m)) for m in o.multipliers) if o.multipliers.size else 0.0
-        rows.append(f"{lam:.12g},{o.period:.12g},{o.impact_velocity:.12g},{mu:.12g},{o.stable}")
+        rows.append((f"{shown(lam):.12g}," if si else "")
+                    + f"{lam:.12g},{o.period:.12g},{o.impact_velocity:.12g},{mu:.12g},{o.stable}")
     (out / "branch.csv").write_text("\n".join(rows) + "\n")
-    ev = ["kind,value,multiplier_re,multiplier_im"]
+    ev = ["kind,value,multiplier_re,multiplier_im" + (f",{name} ({unit})" if si else "")]
     ev += [f"{e.kind}{' ' + e.surface if e.surface else ''},{e.value:.12g},{e.multiplier.real:.12g},"
-           f"{e.multiplier.imag:.12g}" for e in b.events]
+           f"{e.multiplier.imag:.12g}" + (f",{shown(e.value):.12g}" if si else "") for e in b.events]
     (out / "events.csv").write_text("\n".join(ev) + "\n")
     if getattr(args, "json", False):
-        print_json({"parameter": args.parameter, "to": args.to, "points": len(b), "status": b.status,
-                    "events": [{"kind": e.kind, "value": e.value} for e in b.events],
+        print_json({"parameter": name, "to": args.to, "points": len(b), "status": b.status,
+                    "events": [{"kind": e.kind, "value": shown(e.value)} for e in b.events],
                     "files": [str(out / "branch.csv"), str(out / "events.csv")]})
         return 0
     print(_circuit_header(drifter) if isinstance(drifter, physical.CircuitDrifter) else _header(drifter))
     print(f"  {len(b)} points, {b.status}; events: "
-          + (", ".join(f"{e.kind} at {args.parameter} = {e.value:.6g}" for e in b.events) or "none"))
+          + (", ".join(f"{e.kind} at {name} = {shown(e.value):.6g}{' ' + unit if unit else ''}"
+                       for e in b.events) or "none"))
     return 0

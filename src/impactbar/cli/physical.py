@@ -26,11 +26,13 @@ def add_physical_arguments(parser) -> None:
              f"{docs_page('Real hammers in SI units')}")
     parser.add_argument(
         "--preset", default=None, metavar="NAME",
-        choices=sorted(physical.PRESETS) + sorted(physical.DRIFTER_PRESETS)
+        choices=sorted(physical.PRESETS) + sorted(physical.DRIFTER_PRESETS) + sorted(physical.CIRCUIT_PRESETS)
         + sorted(RENAMED_DRIFTER_PRESETS),  # the former names still work, with a warning
         help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}; or a drifter whose "
              f"valve switches on the piston's position (theory section 10): "
-             f"{', '.join(sorted(physical.DRIFTER_PRESETS))} (a config with a [valve] section is one too)")
+             f"{', '.join(sorted(physical.DRIFTER_PRESETS))} (a config with a [valve] section is one too); "
+             f"or a drifter with its oil circuit (theory section 11): "
+             f"{', '.join(sorted(physical.CIRCUIT_PRESETS))} (a config with a [chambers] section)")
 
 
 def add_impact_argument(parser) -> None:

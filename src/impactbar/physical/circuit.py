@@ -38,7 +38,7 @@ from .config import _section
 from .units import to_si
 
 __all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_preset", "PRESSURE_SCALE",
-           "CIRCUIT_PARAMETERS"]
+           "CIRCUIT_PARAMETERS", "SI_PARAMETERS"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
 PRESSURE_SCALE = 1.0e7
@@ -50,6 +50,29 @@ CIRCUIT_PARAMETERS = ("pump_flow", "supply_pressure", "hose_volume", "front_coef
                       "relief_pressure", "relief_coefficient", "precharge", "accumulator_volume",
                       "polytropic_exponent", "switch_out", "switch_in", "switching_time", "valve_coefficient",
                       "area_ratio", "rear_volume", "front_volume", "bulk_modulus", "transition_pressure")
+
+#: The circuit's continuation parameters by their config names (``section.key``), in SI: the
+#: dimensionless parameter each one sets, its unit and an example value.
+SI_PARAMETERS = {
+    "accumulator.precharge": ("precharge", "Pa", "'12 MPa'"),
+    "accumulator.volume": ("accumulator_volume", "m**3", "'0.5 L'"),
+    "accumulator.polytropic_exponent": ("polytropic_exponent", "", "1.4"),
+    "supply.pump_flow": ("pump_flow", "m**3/s", "'80 L/min'"),
+    "supply.hose_volume": ("hose_volume", "m**3", "'1 L'"),
+    "supply.front_flow_coefficient": ("front_coefficient", "m**3/s/Pa**0.5", "'7.5e-6 m^3/s/Pa^0.5'"),
+    "supply.tank_pressure": ("tank_pressure", "Pa", "'0.3 MPa'"),
+    "supply.relief_pressure": ("relief_pressure", "Pa", "'25 MPa'"),
+    "supply.relief_coefficient": ("relief_coefficient", "m**3/s/Pa", "'5e-10 m^3/s/Pa'"),
+    "valve.switch_out": ("switch_out", "m", "'21.5 mm'"),
+    "valve.switch_in": ("switch_in", "m", "'10 mm'"),
+    "valve.switching_time": ("switching_time", "s", "'1 ms'"),
+    "valve.flow_coefficient": ("valve_coefficient", "m**3/s/Pa**0.5", "'7.5e-6 m^3/s/Pa^0.5'"),
+    "chambers.front_area": ("area_ratio", "m**2", "'5.6 cm^2'"),
+    "chambers.rear_volume": ("rear_volume", "m**3", "'0.15 L'"),
+    "chambers.front_volume": ("front_volume", "m**3", "'0.1 L'"),
+    "oil.bulk_modulus": ("bulk_modulus", "Pa", "'1.4 GPa'"),
+    "oil.transition_pressure": ("transition_pressure", "Pa", "'0.5 MPa'"),
+}
 
 _KEYS = {
     "bar": {"E", "density", "length", "diameter", "area"},
@@ -148,6 +171,60 @@ class CircuitDrifter:
     def energy_scale_J(self) -> float:
         """``m L^2 Omega^2`` (J)."""
         return self.bar.mass_kg * (self.bar.length_m * self.omega_rad_s) ** 2
+
+    def _si_factor(self, name: str) -> float:
+        """The factor from the SI value of the config key ``name`` to its dimensionless parameter."""
+        if name not in SI_PARAMETERS:
+            raise ValueError(f"parameter must be one of {', '.join(SI_PARAMETERS)} (a config key); "
+                             f"got {name!r}")
+        P, L, V, Q = PRESSURE_SCALE, self.bar.length_m, self.volume_scale_m3, self.flow_scale_m3_s
+        return {"Pa": 1.0 / P, "m**3": 1.0 / V, "m**3/s": 1.0 / Q, "m**3/s/Pa**0.5": math.sqrt(P) / Q,
+                "m**3/s/Pa": P / Q, "m": 1.0 / L, "s": self.omega_rad_s, "": 1.0,
+                "m**2": 1.0 / self.si["rear_area_m2"]}[SI_PARAMETERS[name][1]]
+
+    def to_dimensionless(self, name: str, value) -> tuple[str, float]:
+        """The dimensionless circuit parameter (theory §11) that the config key ``name`` sets, and
+        its value for ``value`` in SI (``"12 MPa"``, ``"80 L/min"``; a bare number only for the
+        polytropic exponent).
+
+        Parameters
+        ----------
+        name : str
+            A key of :data:`SI_PARAMETERS` (``"accumulator.precharge"``, ``"supply.pump_flow"``, ...).
+        value : str, pint.Quantity or float
+
+        Returns
+        -------
+        parameter : str
+            The drive's parameter (``"precharge"``, ...), for :func:`impactbar.continue_orbit`.
+        value : float
+            Dimensionless (pressures in 10 MPa, volumes in ``A_r L``, flows in ``A_r L Omega``).
+
+        Raises
+        ------
+        ValueError
+            An unknown key, or a value without its unit, of the wrong dimension or not finite.
+
+        Examples
+        --------
+        >>> from impactbar.physical.circuit import circuit_preset
+        >>> circuit_preset("circuit-drifter").to_dimensionless("accumulator.precharge", "12 MPa")
+        ('precharge', 1.2)
+        """
+        factor = self._si_factor(name)
+        parameter, unit, example = SI_PARAMETERS[name]
+        return parameter, to_si(name, value, unit, example) * factor
+
+    def from_dimensionless(self, name: str, value: float) -> float:
+        """The SI value (in the unit of :data:`SI_PARAMETERS`) of the config key ``name`` whose
+        dimensionless parameter has ``value``: the inverse of :meth:`to_dimensionless`.
+
+        Raises
+        ------
+        ValueError
+            An unknown key.
+        """
+        return float(value) / self._si_factor(name)
 
     def model(self):
         """The dimensionless bar (eq. 2): :class:`~impactbar.BarModel`."""
