@@ -5,6 +5,7 @@ an answer that silently rounds the input (issue 42)."""
 import math
 import time
 
+import numpy as np
 import pytest
 
 import impactbar as ib
@@ -78,3 +79,19 @@ def test_a_rod_too_long_is_refused_before_its_grid_is_built():
         blow_module.blow_grid = original
     assert calls == []
     assert time.perf_counter() - start < 60.0  # a guard against a hang, not a speed assertion
+
+
+@pytest.mark.parametrize("name", ["impedance", "wave_speed"])
+@pytest.mark.parametrize("value", [1e308, 1e101, 9e-101, 5e-324])
+def test_segment_impedance_and_wave_speed_in_range(name, value):
+    """An impedance of 1e308 or 5e-324 gave a NaN efficiency (issue 42's fuzzing): refused by name;
+    the impedance range's ends answer with finite numbers."""
+    kw = {"length": 1.0, "impedance": 1.0, name: value}
+    with pytest.raises(ValueError, match=rf"{name} must be in \[1e-100, 1e\+100\]"):
+        ib.RodSegment(**kw)
+    for edge in (1e-100, 1e100) if name == "impedance" else ():  # (a slow wave: the grid's refusal)
+        law = ib.RodRock(segments=[ib.RodSegment(2.0, 2.0), ib.RodSegment(**{**kw, name: edge})],
+                         rock=ib.BilinearRock(k=0.8, k_u=1.5), bit_mass=0.003, feed=0.02)
+        b = ib.single_blow(ib.BarModel(0.6, 0.0, 0.0, 0, impact=law), 0.03, t_max=8.0)
+        assert np.isfinite([b.efficiency, b.energy_error, b.rebound_velocity]).all()
+        assert 0.0 <= b.efficiency <= 1.0

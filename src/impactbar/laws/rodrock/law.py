@@ -46,9 +46,15 @@ class RodSegment:
     length : float
         In piston lengths, ``> 0``.
     impedance : float
-        ``E A / C`` relative to the piston's, ``> 0``.
+        ``E A / C`` relative to the piston's, in ``[1e-100, 1e100]`` (beyond, the waves' energies
+        ``F^2/Z`` leave the float range).
     wave_speed : float
-        Relative to the piston's, ``> 0``; default 1 (the same material).
+        Relative to the piston's, in ``[1e-100, 1e100]``; default 1 (the same material).
+
+    Raises
+    ------
+    ValueError
+        A value that is not a finite real number in its range (named).
 
     Examples
     --------
@@ -62,8 +68,9 @@ class RodSegment:
     wave_speed: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("length", "impedance", "wave_speed"):
-            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=0.0, lo_open=True))
+        object.__setattr__(self, "length", check_real("length", self.length, lo=0.0, lo_open=True))
+        for name in ("impedance", "wave_speed"):  # (issue 42: 1e308 and 5e-324 gave a NaN efficiency)
+            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=1e-100, hi=1e100))
 
     def travel_time(self, model) -> float:
         """Time a wave takes to cross the segment (model time): ``length / (wave_speed s)``."""
