@@ -95,3 +95,15 @@ def test_segment_impedance_and_wave_speed_in_range(name, value):
         b = ib.single_blow(ib.BarModel(0.6, 0.0, 0.0, 0, impact=law), 0.03, t_max=8.0)
         assert np.isfinite([b.efficiency, b.energy_error, b.rebound_velocity]).all()
         assert 0.0 <= b.efficiency <= 1.0
+
+
+def test_a_rod_far_stiffer_than_the_piston_credits_no_rebound():
+    """Impedance 2^63: the piston takes back all its energy, and the efficiency with the rebound
+    credited was 0/0, a ZeroDivisionError (issue 42's fuzzing, this very case); now 0."""
+    law = ib.RodRock(segments=[ib.RodSegment(1.8400366552848355, 2.0**63)],
+                     rock=ib.BilinearRock(k=0.10724390519846495, k_u=1.5415866541763654),
+                     bit_mass=0.6983524061366733)
+    b = ib.single_blow(ib.BarModel(17.465647413945874, 0.0, 0.0, 0, impact=law), 64.72202229529337,
+                       t_max=5.052707310485503)
+    assert b.piston_energy == b.available_energy  # (to the last bit, here)
+    assert b.efficiency_with_rebound == 0.0 and 0.0 <= b.efficiency < 1e-30 and b.energy_error < 1e-12

@@ -438,8 +438,10 @@ class Blow:
     @property
     def efficiency_with_rebound(self) -> float:
         """Work on rock over the available energy less the energy returned to the piston (the
-        rebound credited; ``<= 1``)."""
-        return self.work_on_rock / (self.available_energy - self.piston_energy)
+        rebound credited; ``<= 1``); 0 when the piston took back all of it (a rod of far higher
+        impedance: the rod and rock took nothing to credit)."""
+        delivered = self.available_energy - self.piston_energy
+        return self.work_on_rock / delivered if delivered > 0.0 else 0.0
 
     @property
     def duration(self) -> float:
