@@ -713,11 +713,9 @@ def _guess_unknowns(guess, M, m):
 
 
 def _from_run(run, m):
-    """States after the last ``m`` impacts of a rigid run and the flight times between its switches
-    (each interval: return at ``t_i + tau``, stroke at the crossing ``+ tau``, the next impact)."""
-    if run.model.n_modes != 0:
-        raise ValueError("a simulated run as a guess is read for the rigid bar only; pass the orbit "
-                         "of the rigid bar or a tuple (states, h1, h3)")
+    """States after the last ``m`` impacts of a run and the flight times between its switches
+    (each interval: return at ``t_i + tau``, stroke at the crossing ``+ tau``, the next impact); a
+    flexible bar's states are its flights' modal states at their starts (issue 40)."""
     ti, vi = np.asarray(run.impact_times), np.asarray(run.impact_velocities)
     ts = np.asarray(run.switch_times)
     kinds = tuple(run.switch_kinds)
@@ -732,10 +730,21 @@ def _from_run(run, m):
         if not stroke:
             raise ValueError("guess: the run's last impacts are not one valve cycle apart")
         ts_on = stroke[-1]
-        states.append([0.0, -R * vi[k]])
+        states.append([0.0, -R * vi[k]] if run.model.n_modes == 0 else _state_after(run, a))
         h1.append(ts_on - a - delays)
         h3.append(b - ts_on)
     return np.array(states), np.array(h1), np.array(h3)
+
+
+def _state_after(run, t):
+    """The modal state ``(q, v)`` of a run at the start of its flight that starts at ``t`` (an
+    impact's time): the state after that impact."""
+    starts = np.array([float(p.t0) for p in run.pieces])
+    j = int(np.argmin(np.abs(starts - t)))
+    if not math.isclose(starts[j], t, rel_tol=1e-12, abs_tol=1e-12):
+        raise ValueError(f"guess: no flight of the run starts at its impact at t = {t:.12g}")
+    q, v = run.pieces[j].modal(np.array([starts[j]]))
+    return np.concatenate((q[:, 0], v[:, 0]))
 
 
 def _monodromy(model, drive, z0, durations):
