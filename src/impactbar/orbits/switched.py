@@ -302,11 +302,14 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
         Where Newton starts: an orbit (e.g. from a nearby parameter; a one-impact orbit is repeated
         ``m`` times, which Newton keeps unless the halves are perturbed), a run of
         :func:`impactbar.simulate` under the drive (the valve: its last ``m`` complete valve cycles,
-        rigid bar; a generic drive: the run continued from its end to its next impacts), a tuple
-        (the valve: ``(states, h1, h3)``, states after the impacts, shape ``(m, 2 N + 2)`` or
-        ``(2 N + 2,)`` for ``m = 1``, and the free flight durations, shape ``(m,)``), or ``None``:
-        the valve's rigid closed form of :meth:`PositionSwitchedDrive.rigid_orbit`; a generic
-        drive's motion from rest on the stop, followed until its impacts settle.
+        rigid or flexible bar, the modal states after the impacts; a generic drive: the run
+        continued from its end to its next impacts), a tuple (the valve: ``(states, h1, h3)``,
+        states after the impacts, shape ``(m, 2 N + 2)`` or ``(2 N + 2,)`` for ``m = 1``, and the
+        free flight durations, shape ``(m,)``), or ``None``: the valve's rigid closed form of
+        :meth:`PositionSwitchedDrive.rigid_orbit` (on a flexible bar lifted to the modes and, where
+        Newton fails from it or reaches an orbit that is not stable, followed by a run from rest
+        over ``SETTLE_PERIODS`` rigid periods once settled; theory §10); a generic drive's motion
+        from rest on the stop, followed until its impacts settle.
     tol : float
         Relative tolerance of the Newton step (a generic drive with state: at least ten times the
         integrator's ``rtol``).
@@ -321,7 +324,9 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     ------
     ValueError
         On a bad argument, ``impacts >= 2`` without a guess (the valve), a simulated run as the guess
-        under a law other than the paper's (the valve), or when Newton does not converge.
+        under a law other than the paper's (the valve), when Newton does not converge (the default
+        guess of a flexible bar: from any of its starts, each named in the message) or reaches a
+        degenerate root (flights of length 0).
 
     Examples
     --------
