@@ -9,11 +9,7 @@ and ``Z_b`` (right) the welded junction gives ``N = 2 (Z_b F_a + Z_a G_b)/(Z_a +
 ``F_b = N - G_b``. This is exact for waves constant on cells (the uniform piston's), and energy is
 conserved step by step (``F_a^2/Z_a + G_b^2/Z_b = G_a^2/Z_a + F_b^2/Z_b``).
 
-- A stepped piston (:class:`~impactbar.dynamics.stepped.SteppedPiston`, theory §12): its segments
-  are cells of impedances ``s mu_j`` (``mu_j`` the masses per length, the piston's mass 1), welded to
-  each other like the rod's, so that on a long rod it sends the staircase of its impedances; as
-  elwaspatid builds a stepped striker (``Barhete`` of its segments' lengths and diameters, the striker
-  given its velocity, in contact with the bar: ``WP2``; D. Brizard, github.com/dbrizard/elwaspatid).
+- A stepped piston (theory §12): cells of its segments' impedances, welded (``_piston``).
 - Piston's far end: ``N = p``, the drive's force averaged over each step (:func:`solve_blow`, the
   simulator's blow); free, ``F = -G``, in a :func:`rod_rock_blow`.
 - Piston-shank contact: unilateral; the welded junction while its force is compressive, free ends
@@ -51,6 +47,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..._shared.schema import Field, Schema
+from ._piston import piston_cells, piston_segments
 
 __all__ = ["Blow", "BlowGrid", "blow_grid", "rod_rock_blow", "solve_blow"]
 
@@ -616,20 +613,14 @@ class BlowGrid:
 
 
 def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None) -> BlowGrid:
-    """The cell grid of :func:`rod_rock_blow` (its parameters of the same names).
-
-    ``piston`` (a :class:`~impactbar.dynamics.stepped.SteppedPiston`, default None: uniform) makes the
-    piston's cells a staircase of impedances ``s mu_j`` (``mu_j`` its segments' masses per length,
-    the piston's mass 1 and length 1), its segments rounded to whole cells from the driven end
-    (cumulatively, so that the piston keeps ``cells_per_piston`` cells) and the impedances scaled so
-    that the rounded piston's mass is 1 (theory §12). A one-segment piston is the uniform one, cell
-    for cell."""
+    """The cell grid of :func:`rod_rock_blow` (its parameters of the same names; the piston's cells:
+    :func:`~impactbar.laws.rodrock._piston.piston_cells`)."""
     with np.errstate(over="ignore"):  # a wave speed near 0: an infinite travel time, refused below
         travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
     Tp = 1.0 / s
     if not np.all(np.isfinite(travel)):
         _check_blow_size(math.inf, math.inf, False)
-    p_len, p_mu = _piston_segments(piston)
+    p_len, p_mu = piston_segments(piston)
     p_travel = p_len * Tp
     if cells_per_piston is None:
         n0 = commensurate_cells(np.concatenate(([Tp], p_travel, travel)))
@@ -642,27 +633,13 @@ def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None
     dx = np.concatenate([np.full(n_p, 1.0 / n_p)]
                         + [np.full(n, c / n_p) for n, c in zip(seg_cells, speeds, strict=True)])
     edges = np.concatenate(([0.0], np.cumsum(dx))) - 1.0
-    p_cells = np.diff(np.round(np.concatenate(([0.0], np.cumsum(p_len))) * n_p)).astype(np.int64)
-    z_p = np.repeat(p_mu, p_cells)
-    Z = np.concatenate([s * z_p / (np.sum(z_p) / n_p)] + [np.full(n, s * z) for n, z in pieces])
+    p_cells, Z_p = piston_cells(s, p_len, p_mu, n_p)
+    Z = np.concatenate([Z_p] + [np.full(n, s * z) for n, z in pieces])
     bounds = np.cumsum([n_p] + seg_cells)[:-1]  # cell index right of each segment boundary
     static = float(sum(n * dt / (2.0 * s * z) for n, z in pieces))
     return BlowGrid(s=float(s), cell_time=dt, piston_cells=n_p, segment_cells=tuple(seg_cells), Z=Z,
                     bounds=bounds.astype(np.int64), edges=edges, travel=travel, static=static,
                     piston_segment_cells=tuple(int(n) for n in p_cells), piston_travel=p_travel)
-
-
-def _piston_segments(piston):
-    """``(lengths, masses per length)`` of the piston's segments, each shape ``(n,)``, from the driven
-    end (``(1,), (1,)`` for None, the uniform piston)."""
-    if piston is None:
-        return np.ones(1), np.ones(1)
-    from ...dynamics.stepped import SteppedPiston
-
-    if not isinstance(piston, SteppedPiston):
-        raise ValueError("piston must be a SteppedPiston or None (the uniform piston); "
-                         f"got piston={piston!r}")
-    return piston.lengths, piston.mass_per_length
 
 
 def whole_steps(duration: float, dt: float) -> int:

@@ -459,9 +459,10 @@ MIN_BIT_MASS = 1e-100
 def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, record_field, piston=None):
     """The checked ``(V, t_max, cells_per_piston)`` of :func:`single_blow`, refused (``ValueError``
     naming the parameter and its range) before any array is built."""
-    from .blow import _check_blow_size, _piston_segments, commensurate_cells
+    from ._piston import piston_segments
+    from .blow import _check_blow_size, commensurate_cells
 
-    p_len, _ = _piston_segments(piston)
+    p_len, _ = piston_segments(piston)
 
     s = model.s
     V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
