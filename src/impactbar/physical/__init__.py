@@ -48,7 +48,8 @@ theory §10: supply pressure, piston areas, switch position, valve delay; its pr
 (a drifter with its oil circuit, theory §11: chambers, valve, pump, accumulator; its presets), ``hammer``
 (scales and the dimensionless model; a hammer from a config, a TOML file or a preset), ``results``
 (orbits and simulations in SI), ``rock`` (the drill string and the rock: the rod-rock law in SI and
-the drilling outputs per blow). This layer sits on
+the drilling outputs per blow), ``piston`` (the stepped piston of most work on rock per blow,
+theory §12). This layer sits on
 the core (``impactbar.model``, ``loads``, ``orbits``, ``simulation``) and may import pint; the core
 never imports it.
 """
@@ -73,6 +74,8 @@ from .hammer import Hammer as Hammer
 from .hammer import Scales as Scales
 from .hammer import load_config as load_config
 from .hammer import preset as preset
+from .piston import OptimalPiston as OptimalPiston
+from .piston import optimize_piston as optimize_piston
 
 #: names from ``results`` (which needs the orbit solver and the compiled simulator), imported on
 #: first use (PEP 562) so that importing this layer, and the command line, stays fast
@@ -120,5 +123,7 @@ __all__ = [
     "DrifterOrbit",
     "DRIFTER_PRESETS",
     "drifter_preset",
+    "OptimalPiston",
+    "optimize_piston",
 ]
 

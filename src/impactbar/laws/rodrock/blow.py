@@ -9,6 +9,7 @@ and ``Z_b`` (right) the welded junction gives ``N = 2 (Z_b F_a + Z_a G_b)/(Z_a +
 ``F_b = N - G_b``. This is exact for waves constant on cells (the uniform piston's), and energy is
 conserved step by step (``F_a^2/Z_a + G_b^2/Z_b = G_a^2/Z_a + F_b^2/Z_b``).
 
+- A stepped piston (theory §12): cells of its segments' impedances, welded (``_piston``).
 - Piston's far end: ``N = p``, the drive's force averaged over each step (:func:`solve_blow`, the
   simulator's blow); free, ``F = -G``, in a :func:`rod_rock_blow`.
 - Piston-shank contact: unilateral; the welded junction while its force is compressive, free ends
@@ -46,6 +47,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..._shared.schema import Field, Schema
+from ._piston import piston_cells, piston_segments
 
 __all__ = ["Blow", "BlowGrid", "blow_grid", "rod_rock_blow", "solve_blow"]
 
@@ -523,7 +525,7 @@ def _check_blow_size(n_cells, n_steps, record_field) -> None:
 
 
 def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, cells_per_piston=None,
-                  t_max=None, energy_fraction=1e-9, record_field=False) -> Blow:
+                  t_max=None, energy_fraction=1e-9, record_field=False, piston=None) -> Blow:
     """One blow by characteristics on the piston and the rod's segments (see the module's text).
 
     Parameters
@@ -550,13 +552,25 @@ def rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, 
         energy) is below this fraction of the impact energy.
     record_field : bool
         Keep the force in every cell at every step (for the Lagrange diagram).
+    piston : SteppedPiston, optional
+        A stepped piston (theory §12): its segments, from the driven end to the struck end, carried
+        by characteristics as cells of impedances ``s mu_j`` (``mu_j`` the segments' masses per
+        length, the piston's mass 1 and length 1, one material: wave speed 1), welded to each other
+        and joined to the shank by the same unilateral contact (the rod's impedances stay relative
+        to ``s``, a uniform piston's of the same mass and length). Default None: the uniform piston
+        (the same as a one-segment ``SteppedPiston``, cell for cell). The default grid makes its
+        segments whole numbers of cells too (``Blow.length_error`` counts them).
+
+    Returns
+    -------
+    Blow
     """
-    grid = blow_grid(s, lengths, impedances, speeds, cells_per_piston)
+    grid = blow_grid(s, lengths, impedances, speeds, cells_per_piston, piston)
     n_p = grid.piston_cells
     F = np.zeros(grid.Z.size)
     G = np.zeros(grid.Z.size)
-    F[:n_p] = 0.5 * s * V
-    G[:n_p] = -0.5 * s * V
+    F[:n_p] = 0.5 * grid.Z[:n_p] * V  # moving rigidly at V, unstressed: v = (F - G)/Z, N = F + G = 0
+    G[:n_p] = -F[:n_p]
     if t_max is None:
         t_max = 20.0 * (grid.cell_time * n_p + float(np.sum(grid.travel)))
     return solve_blow(grid, F, G, None, k, k_u, bit_mass, feed, t_max=t_max,
@@ -587,6 +601,10 @@ class BlowGrid:
         The segments' exact travel times.
     static : float
         The rod's strain energy under a unit feed force (``sum n dt / (2 Z)``).
+    piston_segment_cells : tuple of int
+        Each of the piston's segments' cells, from its driven end (one segment: the uniform piston).
+    piston_travel : numpy.ndarray, shape (n_segments,), or None
+        The piston's segments' exact travel times.
     """
 
     s: float
@@ -598,23 +616,33 @@ class BlowGrid:
     edges: np.ndarray
     travel: np.ndarray
     static: float
+    piston_segment_cells: tuple = (1,)
+    piston_travel: np.ndarray | None = None
 
     @property
     def length_error(self) -> float:
-        """Largest relative change of a segment's travel time by rounding it to whole cells."""
+        """Largest relative change of a segment's travel time (the rod's and the piston's) by
+        rounding it to whole cells."""
         cells = np.array(self.segment_cells) * self.cell_time
-        return float(np.max(np.abs(cells - self.travel) / self.travel))
+        err = float(np.max(np.abs(cells - self.travel) / self.travel))
+        if self.piston_travel is not None:
+            pc = np.array(self.piston_segment_cells) * self.cell_time
+            err = max(err, float(np.max(np.abs(pc - self.piston_travel) / self.piston_travel)))
+        return err
 
 
-def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None) -> BlowGrid:
-    """The cell grid of :func:`rod_rock_blow` (its parameters of the same names)."""
+def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None) -> BlowGrid:
+    """The cell grid of :func:`rod_rock_blow` (its parameters of the same names; the piston's cells:
+    :func:`~impactbar.laws.rodrock._piston.piston_cells`)."""
     with np.errstate(over="ignore"):  # a wave speed near 0: an infinite travel time, refused below
         travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
     Tp = 1.0 / s
     if not np.all(np.isfinite(travel)):
         _check_blow_size(math.inf, math.inf, False)
+    p_len, p_mu = piston_segments(piston)
+    p_travel = p_len * Tp
     if cells_per_piston is None:
-        n0 = commensurate_cells(np.concatenate(([Tp], travel)))
+        n0 = commensurate_cells(np.concatenate(([Tp], p_travel, travel)))
         cells_per_piston = 64 if n0 is None else n0 * math.ceil(8 / n0)
     n_p = int(cells_per_piston)
     dt = Tp / n_p
@@ -624,11 +652,13 @@ def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None) -> BlowGrid
     dx = np.concatenate([np.full(n_p, 1.0 / n_p)]
                         + [np.full(n, c / n_p) for n, c in zip(seg_cells, speeds, strict=True)])
     edges = np.concatenate(([0.0], np.cumsum(dx))) - 1.0
-    Z = np.concatenate([np.full(n_p, s)] + [np.full(n, s * z) for n, z in pieces])
+    p_cells, Z_p = piston_cells(s, p_len, p_mu, n_p)
+    Z = np.concatenate([Z_p] + [np.full(n, s * z) for n, z in pieces])
     bounds = np.cumsum([n_p] + seg_cells)[:-1]  # cell index right of each segment boundary
     static = float(sum(n * dt / (2.0 * s * z) for n, z in pieces))
     return BlowGrid(s=float(s), cell_time=dt, piston_cells=n_p, segment_cells=tuple(seg_cells), Z=Z,
-                    bounds=bounds.astype(np.int64), edges=edges, travel=travel, static=static)
+                    bounds=bounds.astype(np.int64), edges=edges, travel=travel, static=static,
+                    piston_segment_cells=tuple(int(n) for n in p_cells), piston_travel=p_travel)
 
 
 def whole_steps(duration: float, dt: float) -> int:

@@ -372,7 +372,8 @@ class RodRock(ContactLaw):
 
 
 def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None = None,
-                t_max: float | None = None, energy_fraction: float = 1e-9, record_field: bool = False):
+                t_max: float | None = None, energy_fraction: float = 1e-9, record_field: bool = False,
+                piston=None):
     """One blow of the piston on the rod and rock of ``model.law`` (theory §4d).
 
     Assumed: the piston (the model's bar: length 1, impedance ``s``, mass 1) moves rigidly and
@@ -394,6 +395,13 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         See :func:`impactbar.laws.rodrock.blow.rod_rock_blow`: the grid, the longest blow, the end
         criterion (piston separated and the rod's wave energy below this fraction of the impact
         energy) and whether to keep the force field for the Lagrange diagram.
+    piston : SteppedPiston, optional
+        A stepped piston of the model's mass and length (theory §12): its segments, from the driven
+        end to the struck end, carried by characteristics on the same grid as the rod's, each of
+        impedance ``s mu_j`` (``mu_j`` its mass per length, the piston's mass 1), so that on a long
+        rod it sends the staircase wave its impedances give; the rod's impedances stay relative to
+        ``s`` (a uniform piston of the same mass and length). Default None: the uniform piston,
+        whose results a one-segment ``SteppedPiston`` reproduces to the bit.
 
     Returns
     -------
@@ -408,7 +416,8 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         ``[1e-100, 1e100]``; the law's ``feed`` above ``1e100`` or its ``bit_mass`` in
         ``(0, 1e-100)`` (the wave energies would overflow); ``t_max`` not finite and ``> 0``;
         ``cells_per_piston`` not an integer ``>= 1``; a grid of more than ``5e9`` cell updates (a rod
-        far longer, in travel time, than the piston, or too fine a grid).
+        far longer, in travel time, than the piston, or too fine a grid); ``piston`` neither None
+        nor a ``SteppedPiston``.
 
     Examples
     --------
@@ -418,6 +427,19 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     >>> blow = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0)
     >>> round(blow.efficiency, 6), round(blow.work_on_rock, 6)  # of the impact energy 1/2
     (0.733069, 0.366534)
+
+    A piston with a heavy head (the struck end) and a light tail, on a rod of the head's impedance,
+    sends a two-step wave: ``Z_h V/2`` for the head's round trip, then ``(1 + R)`` times it for the
+    tail's, ``R = (Z_t - Z_h)/(Z_t + Z_h) = -1/3`` (theory §12; the shank's force on each step):
+
+    >>> from impactbar import SteppedPiston
+    >>> head = SteppedPiston([0.75, 0.25], [1.0, 2.0])  # tail, head: areas 1 and 2
+    >>> head.mass_per_length  # the rod of the head's impedance: 1.6 s
+    array([0.8, 1.6])
+    >>> rod = RodRock(segments=[RodSegment(length=40.0, impedance=1.6)], rock=BilinearRock(k=2.5, k_u=25.0))
+    >>> b = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=rod), 1.0, t_max=39.0, piston=head)
+    >>> b.shank_forces[:16:4].round(6)  # 1/16 per step: the head's 0.25, the tail's 0.75
+    array([1.6     , 1.066667, 1.066667, 1.066667])
     """
     from .blow import rod_rock_blow
 
@@ -426,13 +448,13 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         got = f"impact={model.impact!r}" if hasattr(model, "impact") else f"model={model!r}"
         raise ValueError(f"single_blow needs a BarModel with impact=RodRock(...); got {got}")
     V, t_max, cells_per_piston = _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston,
-                                                  record_field)
+                                                  record_field, piston)
     segs = law.segments
     return rod_rock_blow(
         model.s, V, [g.length for g in segs], [g.impedance for g in segs], [g.wave_speed for g in segs],
         law.rock.k, law.rock.k_u, law.bit_mass, law.feed, cells_per_piston=cells_per_piston,
         t_max=t_max, energy_fraction=check_real("energy_fraction", energy_fraction, lo=0.0),
-        record_field=record_field)
+        record_field=record_field, piston=piston)
 
 
 #: The largest force scale (``s V``, the feed) and the smallest nonzero bit mass a blow accepts: the
@@ -441,10 +463,13 @@ MAX_FORCE = 1e100
 MIN_BIT_MASS = 1e-100
 
 
-def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, record_field):
+def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, record_field, piston=None):
     """The checked ``(V, t_max, cells_per_piston)`` of :func:`single_blow`, refused (``ValueError``
     naming the parameter and its range) before any array is built."""
+    from ._piston import piston_segments
     from .blow import _check_blow_size, commensurate_cells
+
+    p_len, _ = piston_segments(piston)
 
     s = model.s
     V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
@@ -469,7 +494,7 @@ def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, recor
         cells_per_piston = check_int("cells_per_piston", cells_per_piston, lo=1)
         n_p = cells_per_piston
     else:  # the default grid of rod_rock_blow (at least 8 cells)
-        n0 = commensurate_cells(np.array([1.0 / s] + travel))
+        n0 = commensurate_cells(np.concatenate(([1.0 / s], p_len / s, travel)))
         n_p = 64 if n0 is None else n0 * math.ceil(8 / n0)
     dt = 1.0 / (s * n_p)
     _check_blow_size(n_p + sum(travel) / dt, t_max / dt, record_field)

@@ -1,0 +1,315 @@
+r"""The shape of a stepped piston that does the most work on the rock per blow (theory §12), in SI.
+
+A piston of ``n`` uniform segments of one material, of given mass ``m`` and length ``L``, strikes the
+rod at a given velocity; its segments' lengths and cross-sections set the incident stress wave
+(Lundberg & Okrouhlik, "Efficiency of a percussive rock drilling process with consideration of
+wave energy radiation into the rock", Int. J. Impact Eng. 32 (2006) 1573-1583; Lundberg & Collet,
+"Optimal wave shape with respect to efficiency in percussive drilling with detachable drill bit",
+Int. J. Impact Eng. 37 (2010) 901-906; Chiang & Stamm, "Design optimization of valveless DTH
+pneumatic hammers by a weighted pseudo-gradient search method", J. Mech. Design 120 (1998) 687-694).
+:func:`optimize_piston` maximises the work on the rock of one blow (:func:`~impactbar.single_blow`
+with the piston's segments carried by characteristics) over the segments' lengths and areas, the mass
+and the length held, the peak of the incident stress wave in the rod kept at or below a limit.
+
+Method. The design variables are the segments' length fractions and mass fractions, each the softmax
+of ``n - 1`` free numbers (so every design has the given length and mass and positive segments; the
+uniform piston is the origin). During the search the piston is cut into ``cells`` cells of one travel
+time and a cell that a segment boundary crosses gets the mass of the parts it holds (the mass
+per length averaged over the cell): the work is then continuous in the boundaries, within ``O(1/cells)``
+of the exact blow of the stepped piston. The search is scipy's Nelder-Mead (derivative-free: the blow
+on the lattice is piecewise smooth, with kinks where the rock changes branch or the piston leaves the
+shank) on the work less a penalty on the stress above the limit, started at the uniform piston and
+restarted once from its result. The best design's boundaries are then moved to whole cells (its
+segments' masses kept) and its blow solved exactly on that grid; the uniform piston's blow is solved
+on the same grid, and the better of the two feasible designs is returned, so that the result is
+never worse than the uniform piston.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .._shared.validate import check_int, check_real
+from .rock import RodPiece
+
+__all__ = ["OptimalPiston", "optimize_piston"]
+
+#: the free numbers of the softmax are kept in [-BOUND, BOUND]: segments' masses or lengths at most
+#: e^(2 BOUND) apart (the stepped piston accepts impedances 1e6 apart)
+BOUND = 6.0
+#: the penalty per unit of relative excess stress, against the work's scale 1 (the impact energy)
+PENALTY = 10.0
+
+
+@dataclass(frozen=True)
+class OptimalPiston:
+    """The best stepped piston found by :func:`optimize_piston` and the uniform piston beside it
+    (SI units; theory §12).
+
+    Attributes
+    ----------
+    lengths_m, areas_m2 : numpy.ndarray, shape (n,)
+        The segments' lengths (m) and cross-sections (m^2), from the driven end to the struck end.
+    work_on_rock_J, efficiency, peak_stress_Pa : float
+        Of its blow: the work on the rock (J), that over the impact energy ``m V^2/2`` (plus the
+        feed's), and the peak of the incident stress wave in the rod's first piece (Pa).
+    uniform_work_on_rock_J, uniform_efficiency, uniform_peak_stress_Pa : float
+        The same of the uniform piston of the same mass and length.
+    feasible : bool
+        Whether the peak stress is within the limit (if neither this shape nor the uniform piston
+        meets it, the one closest to it).
+    evaluations : int
+        Blows solved by the search.
+    cell_time_s : float
+        The time step of the characteristics' grid (s).
+    times_s : numpy.ndarray, shape (k + 1,)
+        The step ends of the blows (s).
+    incident_force_N, uniform_incident_force_N : numpy.ndarray, shape (k,)
+        The piston-shank force on each step (N) of this shape and of the uniform piston: the
+        incident wave while nothing returns from the rod.
+    blow, uniform_blow : Blow
+        The two blows in the model's units (piston mass, length and wave speed 1).
+    max_stress_Pa, mass_kg, length_m, impact_velocity_m_s : float
+        The inputs.
+    """
+
+    lengths_m: np.ndarray
+    areas_m2: np.ndarray
+    work_on_rock_J: float
+    efficiency: float
+    peak_stress_Pa: float
+    uniform_work_on_rock_J: float
+    uniform_efficiency: float
+    uniform_peak_stress_Pa: float
+    feasible: bool
+    evaluations: int
+    cell_time_s: float
+    times_s: np.ndarray = field(repr=False)
+    incident_force_N: np.ndarray = field(repr=False)
+    uniform_incident_force_N: np.ndarray = field(repr=False)
+    blow: object = field(repr=False)
+    uniform_blow: object = field(repr=False)
+    max_stress_Pa: float = math.inf
+    mass_kg: float = 0.0
+    length_m: float = 0.0
+    impact_velocity_m_s: float = 0.0
+
+    def __repr__(self) -> str:
+        seg = ", ".join(f"{le * 1e3:.4g} mm x {d * 1e3:.4g} mm" for le, d in
+                        zip(self.lengths_m, self.diameters_m, strict=True))
+        return (f"OptimalPiston({seg}; work on rock {self.work_on_rock_J:.5g} J (uniform "
+                f"{self.uniform_work_on_rock_J:.5g} J), efficiency {self.efficiency:.4f}, peak stress "
+                f"{self.peak_stress_Pa / 1e6:.4g} MPa)")
+
+    @property
+    def diameters_m(self) -> np.ndarray:
+        """The segments' diameters (m) for circular sections, shape ``(n,)``."""
+        return np.sqrt(4.0 * self.areas_m2 / math.pi)
+
+    @property
+    def gain(self) -> float:
+        """The work on the rock over the uniform piston's (``>= 1`` when both are feasible)."""
+        return self.work_on_rock_J / self.uniform_work_on_rock_J
+
+    def plot(self, axes=None):
+        """The best shape and its incident wave against the uniform piston's
+        (:func:`impactbar.plotting.piston.plot_piston_design`; matplotlib imported on this call).
+
+        Returns
+        -------
+        numpy.ndarray of matplotlib.axes.Axes, shape (2,)
+        """
+        from ..plotting.piston import plot_piston_design
+
+        return plot_piston_design(self, axes=axes)
+
+
+def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, segments=3,
+                    E=None, density=None, bit_mass=0.0, feed=0.0, cells=48, t_max=None,
+                    max_evaluations=None) -> OptimalPiston:
+    r"""The stepped piston of given mass and length that does the most work on the rock per blow,
+    the incident stress in the rod at most ``max_stress`` (theory §12; SI in and out).
+
+    Parameters
+    ----------
+    rod : RodPiece or sequence of RodPiece
+        The drill string from the shank to the bit (:class:`~impactbar.physical.rock.RodPiece`).
+    rock : tuple of float
+        ``(K, K_u)``: Lundberg's loading and unloading stiffnesses of the bit on the rock (N/m),
+        ``0 < K <= K_u``.
+    mass : float
+        The piston's mass (kg), ``> 0``.
+    length : float
+        The piston's length (m), ``> 0``.
+    max_stress : float
+        The largest compressive stress (Pa, ``> 0``) allowed in the incident wave: the peak
+        piston-shank force over the first rod piece's area (``math.inf``: no limit).
+    impact_velocity : float
+        The piston's velocity at impact (m/s), ``> 0``; moving rigidly and unstressed.
+    segments : int
+        ``n``, the piston's segments, 1 to 8 (1: the uniform piston, nothing to optimise).
+    E, density : float, optional
+        The piston's Young's modulus (Pa) and density (kg/m^3); default the first rod piece's.
+    bit_mass, feed : float
+        The bit's mass (kg, ``>= 0``) and the static feed force (N, ``>= 0``).
+    cells : int
+        Cells along the piston in the search and in the final blows (8 to 1024): the rod's pieces
+        are rounded to whole cells of ``L / (c cells)`` (:attr:`Blow.length_error`).
+    t_max : float, optional
+        The blow's duration (s). Default: the rod-rock law's window, the piston's contact of
+        ``4 L/c`` and a wave's round trip through piston and rod after it (so that on a long rod
+        the work of the first passage of the wave, Lundberg's).
+    max_evaluations : int, optional
+        Most blows of each Nelder-Mead run; default ``300 (2 n - 2)``.
+
+    Returns
+    -------
+    OptimalPiston
+        The best shape, its blow and the uniform piston's beside it.
+
+    Raises
+    ------
+    ValueError
+        A parameter out of its range (named), ``rod`` not a ``RodPiece`` or a sequence of them,
+        ``rock`` not a pair ``0 < K <= K_u``.
+
+    Examples
+    --------
+    >>> from impactbar.physical.piston import optimize_piston
+    >>> from impactbar.physical.rock import RodPiece
+    >>> rod = [RodPiece(length_m=6.0, area_m2=1.0e-3, E_Pa=2.1e11, density_kg_m3=7850.0)]
+    >>> best = optimize_piston(rod, (3.0e8, 3.0e9), mass=2.355, length=0.3, max_stress=2.5e8,
+    ...                        impact_velocity=10.0, segments=2)
+    >>> bool(best.work_on_rock_J >= best.uniform_work_on_rock_J) and best.feasible
+    True
+    >>> round(best.uniform_efficiency, 4)  # a matched uniform piston: Lundberg's at alpha = 0.857
+    0.6958
+    >>> best.lengths_m.round(4), best.diameters_m.round(4)  # heavy at the driven end, slender struck end
+    (array([0.125, 0.175]), array([0.0395, 0.0327]))
+    """
+    pieces = _pieces(rod)
+    K, K_u = _rock(rock)
+    m = check_real("mass", mass, lo=0.0, lo_open=True)
+    L = check_real("length", length, lo=0.0, lo_open=True)
+    sigma = math.inf if max_stress == math.inf else check_real("max_stress", max_stress, lo=0.0,
+                                                                  lo_open=True)
+    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
+    n = check_int("segments", segments, lo=1, hi=8)
+    E = pieces[0].E_Pa if E is None else check_real("E", E, lo=0.0, lo_open=True)
+    rho = pieces[0].density_kg_m3 if density is None else check_real("density", density, lo=0.0, lo_open=True)
+    mb = check_real("bit_mass", bit_mass, lo=0.0)
+    f = check_real("feed", feed, lo=0.0)
+    N = check_int("cells", cells, lo=8, hi=1024)
+    c = math.sqrt(E / rho)
+    # the model's units: length L, time L/c (s = 1), mass m; force m c^2/L, energy m c^2
+    force_N, energy_J, time_s = m * c * c / L, m * c * c, L / c
+    Zu = m * c / L  # a uniform piston's impedance
+    seg = ([g.length_m / L for g in pieces], [g.impedance_kg_s / Zu for g in pieces],
+           [g.wave_speed_m_s / c for g in pieces])
+    k, k_u = K * L * L / (m * c * c), K_u * L * L / (m * c * c)
+    travel = sum(le / sp for le, sp in zip(seg[0], seg[2], strict=True))
+    T = 4.0 + 2.0 * travel if t_max is None else check_real("t_max", t_max, lo=0.0, lo_open=True) / time_s
+    scale = force_N / (pieces[0].area_m2 * sigma) if math.isfinite(sigma) else 0.0  # stress / limit per force
+    v = V / c
+
+    from ..dynamics.stepped import SteppedPiston
+    from ..laws.rodrock.blow import rod_rock_blow
+
+    def blow(piston):
+        return rod_rock_blow(1.0, v, *seg, k, k_u, mb / m, f / force_N, cells_per_piston=N, t_max=T,
+                             piston=piston)
+
+    def merit(b):
+        """Work (in impact energies) less the penalty; the relative excess stress."""
+        excess = max(0.0, float(np.max(b.shank_forces)) * scale - 1.0)
+        return b.work_on_rock / b.energy_at_impact - PENALTY * excess, excess
+
+    uniform = blow(None)
+    count = [0]
+    best_x = np.zeros(2 * n - 2)
+    if n > 1:
+        from scipy.optimize import minimize
+
+        def objective(x):
+            count[0] += 1
+            return -merit(blow(_cell_piston(x, n, N, SteppedPiston)))[0]
+
+        maxfev = 300 * (2 * n - 2) if max_evaluations is None else check_int("max_evaluations",
+                                                                             max_evaluations, lo=1)
+        for _ in range(2):  # started at the uniform piston, restarted once from the result
+            simplex = np.vstack([best_x] + [best_x + 0.5 * e for e in np.eye(best_x.size)])
+            res = minimize(objective, best_x, method="Nelder-Mead",
+                           options={"initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-9,
+                                    "maxfev": maxfev})
+            best_x = np.clip(res.x, -BOUND, BOUND)
+    lf, mf = _fractions(best_x, n)
+    cells_per = _whole_cells(lf, N)
+    shaped = blow(SteppedPiston(cells_per, mf / cells_per)) if n > 1 else uniform
+    (w_s, x_s), (w_u, x_u) = merit(shaped), merit(uniform)
+    if (x_s > 0.0 or w_s < w_u) and (x_u == 0.0 or x_u < x_s):  # the uniform piston is better
+        shaped, x_s = uniform, x_u
+        cells_per = _whole_cells(np.full(n, 1.0 / n), N)
+        mf = cells_per / N
+    lengths = cells_per / N * L
+    areas = mf * m / (rho * lengths)
+    stress = float(np.max(shaped.shank_forces)) * force_N / pieces[0].area_m2
+    u_stress = float(np.max(uniform.shank_forces)) * force_N / pieces[0].area_m2
+    steps = min(shaped.shank_forces.size, uniform.shank_forces.size)
+    return OptimalPiston(
+        lengths_m=lengths, areas_m2=areas, work_on_rock_J=shaped.work_on_rock * energy_J,
+        efficiency=shaped.efficiency, peak_stress_Pa=stress,
+        uniform_work_on_rock_J=uniform.work_on_rock * energy_J, uniform_efficiency=uniform.efficiency,
+        uniform_peak_stress_Pa=u_stress, feasible=x_s == 0.0, evaluations=count[0],
+        cell_time_s=shaped.cell_time * time_s, times_s=shaped.times[:steps + 1] * time_s,
+        incident_force_N=shaped.shank_forces[:steps] * force_N,
+        uniform_incident_force_N=uniform.shank_forces[:steps] * force_N, blow=shaped, uniform_blow=uniform,
+        max_stress_Pa=sigma, mass_kg=m, length_m=L, impact_velocity_m_s=V)
+
+
+def _fractions(x, n):
+    """Length and mass fractions, shape ``(n,)`` each, of the free numbers ``x`` (shape
+    ``(2 n - 2,)``): softmaxes with the first segment's number 0."""
+    x = np.clip(np.asarray(x, float), -BOUND, BOUND)
+    a = np.exp(np.concatenate(([0.0], x[:n - 1])))
+    b = np.exp(np.concatenate(([0.0], x[n - 1:])))
+    return a / a.sum(), b / b.sum()
+
+
+def _cell_piston(x, n, N, SteppedPiston):
+    """The piston of the free numbers ``x`` on ``N`` cells: each cell's mass per length the mass it
+    holds over its length (continuous in the segments' boundaries)."""
+    lf, mf = _fractions(x, n)
+    edges = np.concatenate(([0.0], np.cumsum(lf)))
+    edges[-1] = 1.0
+    held = np.interp(np.arange(N + 1) / N, edges, np.concatenate(([0.0], np.cumsum(mf))))
+    return SteppedPiston(np.ones(N), np.maximum(np.diff(held), 1e-300))
+
+
+def _whole_cells(lf, N):
+    """The segments' cells, shape ``(n,)`` (float), each at least 1, summing to ``N``: the boundaries
+    rounded to whole cells."""
+    n = lf.size
+    b = np.round(np.cumsum(lf)[:-1] * N)
+    prev = 0.0
+    for i in range(n - 1):
+        b[i] = prev = min(max(b[i], prev + 1.0), float(N - (n - 1 - i)))
+    return np.diff(np.concatenate(([0.0], b, [float(N)])))
+
+
+def _pieces(rod):
+    pieces = (rod,) if isinstance(rod, RodPiece) else tuple(rod) if isinstance(rod, (list, tuple)) else ()
+    if not pieces or not all(isinstance(g, RodPiece) for g in pieces):
+        raise ValueError(f"rod must be a RodPiece or a non-empty sequence of RodPiece; got rod={rod!r}")
+    return pieces
+
+
+def _rock(rock):
+    try:
+        K, K_u = rock
+    except (TypeError, ValueError):
+        raise ValueError(f"rock must be a pair (K, K_u) of stiffnesses in N/m; got rock={rock!r}") from None
+    K = check_real("rock K", K, lo=0.0, lo_open=True)
+    return K, check_real("rock K_u", K_u, lo=K)
