@@ -624,7 +624,7 @@ def _halves_gap(u, problem) -> float:
 # the one-impact orbits of every law (find_orbit's default guess): from the law's phase equation, or
 # by Newton's method from guesses where it has none (both here, since each calls the other)
 # ------------------------------------------------------------------------------------------------
-def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
+def periodic_orbits(model: BarModel, load: Load, *, window=None) -> OrbitList:
     r"""Every one-impact-per-period steady state of the bar under the load (paper Section 2).
 
     Each root ``phase`` of the phase equation (eq. 14) in :math:`[0, 2\pi)` gives one orbit: the flexible
@@ -641,6 +641,9 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     model : BarModel
     load : Load
         Any load of period :math:`2\pi`: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
+
+    window : (float, float), optional
+        Under a drive only: the periods searched (:func:`~impactbar.orbits.switched.drive_orbits`).
 
     Returns
     -------
@@ -661,7 +664,18 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     >>> orbits = periodic_orbits(BarModel(s=10, d=0, R=0.5, n_modes=4), CosineLoad(0.5, 1.0))
     >>> [round(o.phase, 4) for o in orbits]
     [0.5511, 2.5905]
+
+    With a :class:`~impactbar.Drive` in place of the load (autonomous, the period unknown, theory
+    §10) it lists every one-impact orbit with a period in ``window``, by increasing period
+    (:func:`~impactbar.orbits.switched.drive_orbits`: a certified search for the valve of
+    :class:`~impactbar.PositionSwitchedDrive`).
     """
+    if autonomous(load):  # a drive: every one-impact orbit in a window of periods (theory §10)
+        from .switched import drive_orbits
+
+        return drive_orbits(model, load, window)
+    if window is not None:
+        raise ValueError("window is for a drive's orbits (unknown period); a load's period is 2 pi")
     _check_inputs(model, load)
     _check_modes(model)
     if not model.law.has_phase_equation:  # the blow is a numerical map: Newton from guesses

@@ -42,7 +42,7 @@ import numpy as np
 from ..._shared.status import Admissibility
 from ...dynamics.modal import fundamental, step_constant
 from .._crossing import first_rising_crossing, rate_zero
-from ..base import OrbitData, OrbitProblem, sorted_multipliers, split_multipliers
+from ..base import OrbitData, OrbitProblem, OrbitSearch, sorted_multipliers, split_multipliers
 from ._kernel import end_max_sampled, rigid_orbit_start
 from ._state import RETURN, STROKE
 
@@ -392,6 +392,8 @@ class ValveProblem(OrbitProblem):
         bound).
     """
 
+    default_start = "the rigid piston's orbit"
+
     def __init__(self, model: BarModel, drive, impacts: int, constant_load) -> None:
         self.model, self.drive, self.constant_load = model, drive, constant_load
         self.impacts = m = impacts  # (validated by the solvers that ask for the problem)
@@ -421,8 +423,8 @@ class ValveProblem(OrbitProblem):
     def initial(self, guess, tol, max_iter):
         """Newton's start. ``guess`` is a :class:`~impactbar.SwitchedOrbit` (a one-impact orbit is
         repeated ``m`` times), a run of :func:`impactbar.simulate` under the drive (its last ``m``
-        complete valve cycles, rigid bar, the paper's law), a tuple ``(states, h1, h3)``, or ``None``
-        (``m = 1``): the rigid bar's orbit from the closed form of
+        complete valve cycles, rigid or flexible bar, the paper's law: :func:`_from_run`), a tuple
+        ``(states, h1, h3)``, or ``None`` (``m = 1``): the rigid bar's orbit from the closed form of
         :meth:`~impactbar.PositionSwitchedDrive.rigid_orbit` and the fixed point of the rigid
         piston's map of arrival velocities, solved and lifted to the flexible bar with one Newton
         step on its modes; under a law whose contact takes time, from the orbit of the same bar
@@ -454,6 +456,32 @@ class ValveProblem(OrbitProblem):
         keep = np.r_[0:2 * M, 2 * M + 1]  # one Newton step without the switch condition, h1 kept
         X[keep] += np.linalg.solve(Jac[np.ix_(keep, keep)], -r[keep])
         return X
+
+    def search(self, window):
+        """Every one-impact orbit with a period in ``window`` under the paper's law, certified
+        (:func:`~impactbar.drives.switched.search.search_one_impact`: exclusion by bounds from the
+        closed forms, the Krawczyk test on each root); ``None`` (the solvers' non-certified search)
+        for ``m >= 2``, under a law whose contact takes time, or with an overdamped mode."""
+        from .search import OneImpactEquations, default_window, search_one_impact
+
+        model, drive = self.model, self.drive
+        if self.impacts != 1 or not model.law.instantaneous or \
+                (model.n_modes and not model.s * math.pi > 0.5 * model.d):
+            return None
+        tau = drive.delay_in + drive.delay_out
+        if window is None:
+            window = default_window(model, drive)
+        lo, hi = max(float(window[0]), tau), float(window[1])
+        if not hi > lo:
+            raise ValueError(f"window must hold periods above the two delays ({tau:g}); got {window}")
+        eq = OneImpactEquations(model, drive)
+        with np.errstate(all="ignore"):
+            res = search_one_impact(eq, (lo, hi))
+        starts = [eq.state(T, h) for T, h in res.roots]
+        return OrbitSearch(starts=starts, certified=res.certified, window=res.window,
+                           unresolved=res.unresolved,
+                           method=f"certified search over the periods {lo:.6g} to {hi:.6g} "
+                                  f"({res.cells} cells)")
 
     def unknowns(self, orbit):
         """The unknowns of a found orbit: its states after the impacts and its ``h1``, ``h3``."""
@@ -641,28 +669,40 @@ def _guess_unknowns(guess, M, m):
 
 
 def _from_run(run, m):
-    """States after the last ``m`` impacts of a rigid run and the flight times between its switches
-    (each interval: return at ``t_i + tau``, stroke at the crossing ``+ tau``, the next impact)."""
-    if run.model.n_modes != 0:
-        raise ValueError("a simulated run as a guess is read for the rigid bar only; pass the orbit "
-                         "of the rigid bar or a tuple (states, h1, h3)")
-    ti, vi = np.asarray(run.impact_times), np.asarray(run.impact_velocities)
+    """States just after the last ``m`` complete valve cycles of a run (rigid or flexible bar, the
+    paper's law) and the flight times between its switches (each interval from the impact at
+    ``t_i``: return from ``t_i + delay_in``, the ``switch_out`` crossing ``h1`` later, stroke from the
+    crossing ``+ delay_out``, the next impact ``h3`` later). The state after impact ``k`` is the
+    run's modal state at ``t_k`` (its flight from the impact; where a run's piece gives the state on
+    arrival instead, the impact law is applied to it)."""
+    ti = np.asarray(run.impact_times)
     ts = np.asarray(run.switch_times)
     kinds = tuple(run.switch_kinds)
     if ti.size < m + 1:
-        raise ValueError(f"guess: the run has {ti.size} impacts; impacts={m} needs at least {m + 1}")
-    R = run.model.R
-    delays = run.drive.delay_in + run.drive.delay_out
+        raise ValueError(f"guess: the run has {ti.size} impacts; impacts={m} needs at least {m + 1} (run it "
+                         "longer, until its impacts settle)")
+    R = run.model.law.kernel_restitution(run.model)
+    c = run.model.end_weights
+    drive = run.drive
+    delays = drive.delay_in + drive.delay_out
     states, h1, h3 = [], [], []
     for k in range(ti.size - m - 1, ti.size - 1):
         a, b = ti[k], ti[k + 1]
         stroke = [t for t, kind in zip(ts, kinds, strict=True) if kind == "stroke" and a < t <= b]
         if not stroke:
-            raise ValueError("guess: the run's last impacts are not one valve cycle apart")
+            raise ValueError("guess: the run's last impacts are not one valve cycle apart (a chatter or a "
+                             "sticking motion): give an orbit or a tuple (states, h1, h3)")
         ts_on = stroke[-1]
-        states.append([0.0, -R * vi[k]])
+        q, v = run.modal_state(np.array([a]))
+        q, v = q[:, 0], v[:, 0]
+        if float(c @ v) > 0.0:  # the state on arrival: the impact law (eq. 10)
+            v = -R * v
+        states.append(np.concatenate((q, v)))
         h1.append(ts_on - a - delays)
         h3.append(b - ts_on)
+    if min(h1) <= 0.0 or min(h3) <= 0.0:
+        raise ValueError("guess: the run's valve cycles do not follow the drive's delays (a run under "
+                         "another drive?)")
     return np.array(states), np.array(h1), np.array(h3)
 
 
