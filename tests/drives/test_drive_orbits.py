@@ -220,3 +220,48 @@ def test_orbit_list_tables():
     model, drive = ISSUE_CASES[0]
     frame = periodic_orbits(model, drive).to_dataframe()
     assert len(frame) == 7 and frame["stable"].sum() == 1
+
+
+@pytest.mark.parametrize("model, drive", [*ISSUE_CASES, (BarModel(5, 0.05, 0.4, 4),
+                                                         PositionSwitchedDrive(1, 1, 0.3, delay_out=0.1,
+                                                                               delay_in=0.02))])
+def test_reduced_equations_are_the_segment_problem(model, drive, rng):
+    # the search's two equations in (T, h3) (drives/switched/search.py) against the segment
+    # residual (drives/switched/segment.py): the state they build satisfies every periodicity row
+    # but the rigid position's, whose misfit is F1, and the switch row is F2; their Jacobian
+    # against central differences; their interval enclosure over a box holds sampled Jacobians
+    from impactbar.drives.switched.search import OneImpactEquations
+    from impactbar.drives.switched.segment import _residual
+
+    eq = OneImpactEquations(model, drive)
+    M = model.n_modes + 1
+    for _ in range(3):
+        T = rng.uniform(1.0, 5.0)
+        h = rng.uniform(0.1, T - eq.tau - 0.1)
+        F, J, _ = eq.point(T, h)
+        r, _ = _residual(model, drive, eq.state(T, h))
+        assert np.max(np.abs(r[1:2 * M])) < 1e-12
+        assert r[0] == pytest.approx(-F[0, 0], abs=1e-12) and r[2 * M] == pytest.approx(F[0, 1], abs=1e-12)
+        e = 1e-6
+        dT = (eq.point(T + e, h)[0] - eq.point(T - e, h)[0])[0] / (2 * e)
+        dh = (eq.point(T, h + e)[0] - eq.point(T, h - e)[0])[0] / (2 * e)
+        assert np.max(np.abs(np.column_stack((dT, dh)) - J[0])) < 1e-6 * max(1.0, np.max(np.abs(J)))
+        rT, rh = 0.05, 0.03
+        box = eq.jacobian_box(np.array([T]), np.array([h]), np.array([rT]), np.array([rh]))
+        _, Js, _ = eq.point(rng.uniform(T - rT, T + rT, 500), rng.uniform(h - rh, h + rh, 500))
+        for i in range(2):
+            for j in range(2):
+                lo, hi = box[i][j].lo[0] - 1e-12, box[i][j].hi[0] + 1e-12
+                assert np.all((Js[:, i, j] >= lo) & (Js[:, i, j] <= hi))
+
+
+def test_undamped_resonances_are_reported():
+    model, drive = BarModel(3, 0.0, 0.6, 2), PositionSwitchedDrive(1, 0.5, 0.15)
+    orbits = periodic_orbits(model, drive, window=(0.5, 1.5))
+    reasons = {r for _, _, r in orbits.unresolved}
+    assert reasons == {"resonance"}
+    for lo, hi, _ in orbits.unresolved:  # each holds a resonance T = 2 k / (s n)
+        k_n = 0.5 * model.s * np.arange(1, 3) * 0.5 * (lo + hi)
+        assert np.min(np.abs(k_n - np.round(k_n))) < 1e-6
+    with pytest.raises(ValueError, match="undamped resonances"):
+        periodic_orbits(BarModel(10, 0.0, 0.5, 8), PositionSwitchedDrive(1, 1, 1))

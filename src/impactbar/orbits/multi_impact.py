@@ -575,7 +575,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
     if autonomous(load):  # a drive: an autonomous orbit, unknown period (theory §10)
-        from .switched import find_switched_orbit
+        from .switched_search import find_switched_orbit
 
         return find_switched_orbit(model, load, impacts, guess, tol=min(tol, 1e-13),
                                    max_iter=max(max_iter, 50))
@@ -640,10 +640,11 @@ def periodic_orbits(model: BarModel, load: Load, *, window=None) -> OrbitList:
     ----------
     model : BarModel
     load : Load
-        Any load of period :math:`2\pi`: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
-
+        Any load of period :math:`2\pi`: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...;
+        or a :class:`~impactbar.Drive` (theory §10): every one-impact orbit with a period in
+        ``window`` (:func:`~impactbar.orbits.drive_orbits`).
     window : (float, float), optional
-        Under a drive only: the periods searched (:func:`~impactbar.orbits.switched.drive_orbits`).
+        Under a drive only: the periods searched.
 
     Returns
     -------
@@ -664,14 +665,9 @@ def periodic_orbits(model: BarModel, load: Load, *, window=None) -> OrbitList:
     >>> orbits = periodic_orbits(BarModel(s=10, d=0, R=0.5, n_modes=4), CosineLoad(0.5, 1.0))
     >>> [round(o.phase, 4) for o in orbits]
     [0.5511, 2.5905]
-
-    With a :class:`~impactbar.Drive` in place of the load (autonomous, the period unknown, theory
-    §10) it lists every one-impact orbit with a period in ``window``, by increasing period
-    (:func:`~impactbar.orbits.switched.drive_orbits`: a certified search for the valve of
-    :class:`~impactbar.PositionSwitchedDrive`).
     """
     if autonomous(load):  # a drive: every one-impact orbit in a window of periods (theory §10)
-        from .switched import drive_orbits
+        from .switched_search import drive_orbits
 
         return drive_orbits(model, load, window)
     if window is not None:

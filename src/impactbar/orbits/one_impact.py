@@ -48,7 +48,7 @@ class OrbitList(list):
         :func:`impactbar.laws.wave.periodic.wave_phase_families`); each is stood for in the list by one
         orbit at the interval's middle, with ``multiplicity = 0``. Empty for isolated orbits only.
     window : (float, float) or None
-        Under a drive (:func:`~impactbar.orbits.switched.drive_orbits`): the window of periods
+        Under a drive (:func:`~impactbar.orbits.drive_orbits`): the window of periods
         searched; ``None`` under a load (the load's period is given).
     certified : tuple of bool
         Under a drive: per orbit, whether the search proved it the only root in a box around it

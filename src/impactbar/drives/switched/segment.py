@@ -370,6 +370,11 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
 # --------------------------------------------------------------------------------------------------
 # the valve's OrbitProblem
 # --------------------------------------------------------------------------------------------------
+#: most undamped resonances ``T = 2 k / (s n)`` in the window of a search of every orbit (``d = 0``):
+#: orbits crowd at each, and each takes the search down to its smallest cells (about 1.5 s for 260)
+MAX_RESONANCES = 1000
+
+
 class ValveProblem(OrbitProblem):
     """The valve's periodic-orbit problem (module docstring): ``impacts`` blocks ``(state after
     impact k, h1_k, h3_k)``, the exact Jacobian, Newton's start and the orbit's multipliers.
@@ -474,6 +479,12 @@ class ValveProblem(OrbitProblem):
         lo, hi = max(float(window[0]), tau), float(window[1])
         if not hi > lo:
             raise ValueError(f"window must hold periods above the two delays ({tau:g}); got {window}")
+        if model.d == 0.0 and model.n_modes:  # undamped: orbits crowd at every resonance T = 2 k / (s n)
+            count = (hi - lo) * model.s * model.n_modes * (model.n_modes + 1) / 4.0
+            if count > MAX_RESONANCES:
+                raise ValueError(f"window ({lo:.6g}, {hi:.6g}) holds about {count:.0f} undamped resonances "
+                                 f"T = 2 k / (s n) of the flexible modes (at most {MAX_RESONANCES}): narrow "
+                                 "the window, or give the bar some damping d > 0")
         eq = OneImpactEquations(model, drive)
         with np.errstate(all="ignore"):
             res = search_one_impact(eq, (lo, hi))
