@@ -6,7 +6,9 @@ root with flights shrunk to nothing was returned as an orbit, a different one at
 
 import pytest
 
-from impactbar import BarModel, PositionSwitchedDrive, find_orbit
+from impactbar import BarModel, PositionSwitchedDrive, find_orbit, periodic_orbits
+from impactbar.orbits.switched import orbit_problem
+from impactbar.orbits.switched_search import _solve
 
 
 def _pair(model, stroke, ret, switch_out, lam, delay=0.0):
@@ -27,11 +29,20 @@ def test_a_poorly_conditioned_orbit_converges_at_every_scale(lam):
 
 @pytest.mark.parametrize("lam", [1.0, 2.0 ** -7])
 def test_a_degenerate_root_is_refused(lam):
+    """Newton from the rigid orbit reaches flights of total length 3e-9: refused, and the default
+    goes on to the search, whose admissible orbit is the same at both scales."""
     model = BarModel(1.254752090566295, 0.2550514112740797, 0.2413567701357589, 2)
     drive = PositionSwitchedDrive(0.07897905817702264 * lam, 0.0754537997215749 * lam,
                                   0.004086703010728663 * lam)
+    problem = orbit_problem(model, drive, 1)
     with pytest.raises(ValueError, match="degenerate solution"):
-        find_orbit(model, drive)
+        _solve(problem, problem.initial(None, 1e-13, 50), 1e-13, 50)
+    o = find_orbit(model, drive)
+    listed = periodic_orbits(model, drive)
+    assert o.admissible and o.period == pytest.approx(0.5556874341845957, rel=1e-10)
+    assert [x.admissible for x in listed] == [True, False, False, False, False]
+    assert listed[0].period == pytest.approx(o.period, rel=1e-12)
+    assert o.impact_velocities[0] == pytest.approx(0.03201894 * lam, rel=1e-6)
 
 
 def test_admissibility_does_not_depend_on_the_scale():

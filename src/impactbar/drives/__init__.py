@@ -18,10 +18,11 @@ from .base import FlightSettings as FlightSettings
 from .base import GapCrossing as GapCrossing
 from .base import OrbitData as OrbitData
 from .base import OrbitProblem as OrbitProblem
+from .base import OrbitSearch as OrbitSearch
 from .base import RateCrossing as RateCrossing
 from .base import SurfaceEvent as SurfaceEvent
 from .base import TimedEvent as TimedEvent
 from .switched import PositionSwitchedDrive as PositionSwitchedDrive
 
 __all__ = ["Drive", "DriveState", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent", "SurfaceEvent",
-           "FlightSettings", "OrbitProblem", "OrbitData", "PositionSwitchedDrive"]
+           "FlightSettings", "OrbitProblem", "OrbitData", "OrbitSearch", "PositionSwitchedDrive"]

@@ -58,8 +58,8 @@ from typing import Any, ClassVar, NamedTuple
 import numpy as np
 
 __all__ = ["Drive", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
-           "SurfaceEvent", "FlightKernel", "KernelRun", "OrbitData", "OrbitProblem", "autonomous",
-           "newton", "split_multipliers"]
+           "SurfaceEvent", "FlightKernel", "KernelRun", "OrbitData", "OrbitProblem", "OrbitSearch",
+           "autonomous", "newton", "split_multipliers"]
 
 
 def autonomous(forcing) -> bool:
@@ -547,6 +547,33 @@ class OrbitData(NamedTuple):
     monodromy: np.ndarray | None
 
 
+class OrbitSearch(NamedTuple):
+    """What an :class:`OrbitProblem` gives of a systematic search of its solutions
+    (:meth:`OrbitProblem.search`): the starts of Newton's method, one per solution, and what is
+    certified of them.
+
+    Attributes
+    ----------
+    starts : list of numpy.ndarray
+        The unknowns of each solution found (to be polished by :meth:`OrbitProblem.solve`).
+    certified : numpy.ndarray of bool
+        Per start: the solution is proved unique in a box around it, and the search proved that
+        the window holds no solution outside those boxes and :attr:`unresolved`.
+    window : (float, float)
+        The periods searched.
+    unresolved : tuple of (float, float, str)
+        Period intervals the search could not decide, with the reason.
+    method : str
+        One line: how the starts were found (for the result's record).
+    """
+
+    starts: list
+    certified: np.ndarray
+    window: tuple
+    unresolved: tuple
+    method: str
+
+
 class OrbitProblem(ABC):
     """The periodic-orbit problem of a drive (unknown period, theory §10): unknowns ``X``, a residual
     with its Jacobian, Newton's start from a guess and the orbit of a solution. The valve's
@@ -563,6 +590,12 @@ class OrbitProblem(ABC):
     positive : numpy.ndarray of int
         Indices of the unknowns that must stay positive (flight times): Newton's step is damped so
         that they change by at most a half.
+    default_start : str
+        What :meth:`initial` starts from without a guess, in words (the error of
+        :func:`impactbar.find_orbit` lists it among the starts it tried).
+    starts_from_rest : bool
+        Whether that start already is the motion from rest on the stop followed until it settles
+        (the default guess chain of :func:`impactbar.find_orbit` then skips its own run from rest).
     """
 
     model: Any
@@ -570,6 +603,8 @@ class OrbitProblem(ABC):
     impacts: int
     size: int
     positive: np.ndarray
+    default_start: str = "the drive's default start"
+    starts_from_rest: bool = False
 
     @abstractmethod
     def initial(self, guess, tol: float, max_iter: int) -> np.ndarray:
@@ -596,6 +631,12 @@ class OrbitProblem(ABC):
     @abstractmethod
     def orbit(self, X: np.ndarray) -> OrbitData:
         """The orbit of a solution ``X``."""
+
+    def search(self, window: tuple[float, float] | None) -> OrbitSearch | None:
+        """A systematic search of every solution with a period in ``window`` (``None``: the
+        problem's default window), or ``None`` where the problem has none (the solvers then take
+        their non-certified search from guesses)."""
+        return None
 
     @abstractmethod
     def pieces(self, X: np.ndarray) -> list:

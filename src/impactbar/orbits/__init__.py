@@ -31,7 +31,7 @@ _HOME = {
     "phase_G": "phase", "phase_residual": "phase", "phase_roots": "phase",
     "RigidOrbits": "rigid", "rigid_cosine_orbits": "rigid", "rigid_square_orbits": "rigid",
     "floquet_multipliers": "stability", "impact_map_jacobian": "stability",
-    "SwitchedOrbit": "switched", "find_switched_orbit": "switched",
+    "SwitchedOrbit": "switched", "find_switched_orbit": "switched_search", "drive_orbits": "switched_search",
     "periodic_orbits_by_newton": "multi_impact", "rock_periodic_orbits": "multi_impact",
 }
 
@@ -53,6 +53,7 @@ __all__ = [
     "impact_law",
     "SwitchedOrbit",
     "find_switched_orbit",
+    "drive_orbits",
     "periodic_orbits_by_newton",
     "rock_periodic_orbits",
 ]

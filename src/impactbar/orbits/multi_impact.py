@@ -575,7 +575,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
     if autonomous(load):  # a drive: an autonomous orbit, unknown period (theory §10)
-        from .switched import find_switched_orbit
+        from .switched_search import find_switched_orbit
 
         return find_switched_orbit(model, load, impacts, guess, tol=min(tol, 1e-13),
                                    max_iter=max(max_iter, 50))
@@ -624,7 +624,7 @@ def _halves_gap(u, problem) -> float:
 # the one-impact orbits of every law (find_orbit's default guess): from the law's phase equation, or
 # by Newton's method from guesses where it has none (both here, since each calls the other)
 # ------------------------------------------------------------------------------------------------
-def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
+def periodic_orbits(model: BarModel, load: Load, *, window=None) -> OrbitList:
     r"""Every one-impact-per-period steady state of the bar under the load (paper Section 2).
 
     Each root ``phase`` of the phase equation (eq. 14) in :math:`[0, 2\pi)` gives one orbit: the flexible
@@ -640,7 +640,11 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     ----------
     model : BarModel
     load : Load
-        Any load of period :math:`2\pi`: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...
+        Any load of period :math:`2\pi`: ``CosineLoad``, ``SquareWaveLoad``, ``FourierLoad``, ...;
+        or a :class:`~impactbar.Drive` (theory §10): every one-impact orbit with a period in
+        ``window`` (:func:`~impactbar.orbits.drive_orbits`).
+    window : (float, float), optional
+        Under a drive only: the periods searched.
 
     Returns
     -------
@@ -662,6 +666,12 @@ def periodic_orbits(model: BarModel, load: Load) -> OrbitList:
     >>> [round(o.phase, 4) for o in orbits]
     [0.5511, 2.5905]
     """
+    if autonomous(load):  # a drive: every one-impact orbit in a window of periods (theory §10)
+        from .switched_search import drive_orbits
+
+        return drive_orbits(model, load, window)
+    if window is not None:
+        raise ValueError("window is for a drive's orbits (unknown period); a load's period is 2 pi")
     _check_inputs(model, load)
     _check_modes(model)
     if not model.law.has_phase_equation:  # the blow is a numerical map: Newton from guesses

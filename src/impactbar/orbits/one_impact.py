@@ -47,6 +47,15 @@ class OrbitList(list):
         a continuum of orbits, e.g. under the wave law,
         :func:`impactbar.laws.wave.periodic.wave_phase_families`); each is stood for in the list by one
         orbit at the interval's middle, with ``multiplicity = 0``. Empty for isolated orbits only.
+    window : (float, float) or None
+        Under a drive (:func:`~impactbar.orbits.drive_orbits`): the window of periods
+        searched; ``None`` under a load (the load's period is given).
+    certified : tuple of bool
+        Under a drive: per orbit, whether the search proved it the only root in a box around it
+        (empty under a load, whose search is certified throughout).
+    unresolved : tuple of (float, float, str)
+        Under a drive: the intervals of periods the search could not decide, with the reason
+        (empty: every root in the window is listed).
 
     Methods
     -------
@@ -56,13 +65,28 @@ class OrbitList(list):
         The same as an ``xarray.Dataset`` along the dimension ``orbit``.
     """
 
-    __slots__ = ("_families",)
+    __slots__ = ("_families", "_window", "_certified", "_unresolved")
 
     @property
     def families(self) -> tuple:
         """``((start, end), ...)``: the degenerate families' phase intervals (rad); empty when the
         list holds isolated orbits only."""
         return getattr(self, "_families", ())
+
+    @property
+    def window(self) -> tuple | None:
+        """The window of periods searched under a drive (``None`` under a load)."""
+        return getattr(self, "_window", None)
+
+    @property
+    def certified(self) -> tuple:
+        """Per orbit under a drive, whether it is certified the only root in a box around it."""
+        return getattr(self, "_certified", ())
+
+    @property
+    def unresolved(self) -> tuple:
+        """Under a drive, the period intervals the search could not decide, with the reason."""
+        return getattr(self, "_unresolved", ())
 
     @property
     def degenerate(self) -> bool:

@@ -36,16 +36,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._shared.status import Admissibility
-from .._shared.validate import check_int, check_real
-from ..drives.base import DriveState, OrbitData, OrbitProblem, autonomous, newton, sorted_multipliers
+from .._shared.validate import check_int
+from ..drives.base import DriveState, OrbitData, OrbitProblem, newton, sorted_multipliers
 from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..model import BarModel
-from ._drive_guess import default_chain, solve_from
 from .admissibility import _window_departure
 from .orbit import PeriodicOrbit
 
-__all__ = ["SwitchedOrbit", "find_switched_orbit", "orbit_problem", "orbit_of", "ShootingProblem",
-           "check_orbit"]
+__all__ = ["SwitchedOrbit", "orbit_problem", "orbit_of", "ShootingProblem", "check_orbit"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -278,87 +276,6 @@ def orbit_problem(model: BarModel, drive, impacts: int = 1,
     return problem if problem is not None else ShootingProblem(model, drive, impacts, settings)
 
 
-def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *, tol: float = 1e-13,
-                        max_iter: int = 50) -> SwitchedOrbit:
-    """The periodic motion with ``m`` impacts per period under a drive (theory §10).
-
-    Called by :func:`impactbar.find_orbit` when its load is a :class:`~impactbar.Drive`. Between
-    consecutive impacts the drive goes through its cycle (for the valve: stroke ``tau``, return until
-    the switch crossing, return ``tau``, stroke until the impact); with ``m >= 2`` the intervals may
-    differ (a period-2 motion after a period doubling), and the unknowns hold the ``m`` states after
-    the impacts (multiple shooting). The problem is the drive's own or the generic shooting problem
-    (module docstring).
-
-    Parameters
-    ----------
-    model : BarModel
-        Rigid or flexible bar, under any impact law: the paper's (eq. 10), or a contact that takes
-        time, the wave law (theory §4b) or the rod-rock law (§4d), held under the drive's force
-        (theory §10; the orbit's ``state`` is then where the contact ends, and ``contacts`` holds
-        the blows). A drive with state takes the paper's law.
-    drive : Drive
-    impacts : int
-        Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed for the valve.
-    guess : SwitchedOrbit, SwitchedTrajectory, tuple or None
-        Where Newton starts: an orbit (e.g. from a nearby parameter; a one-impact orbit is repeated
-        ``m`` times, which Newton keeps unless the halves are perturbed), a run of
-        :func:`impactbar.simulate` under the drive (the valve: its last ``m`` complete valve cycles,
-        rigid or flexible bar, the modal states after the impacts; a generic drive: the run
-        continued from its end to its next impacts), a tuple (the valve: ``(states, h1, h3)``,
-        states after the impacts, shape ``(m, 2 N + 2)`` or ``(2 N + 2,)`` for ``m = 1``, and the
-        free flight durations, shape ``(m,)``), or ``None``: the valve's rigid closed form of
-        :meth:`PositionSwitchedDrive.rigid_orbit` (on a flexible bar lifted to the modes and, where
-        Newton fails from it or reaches an orbit that is not stable, followed by a run from rest
-        over ``SETTLE_PERIODS`` rigid periods once settled; theory §10); a generic drive's motion
-        from rest on the stop, followed until its impacts settle.
-    tol : float
-        Relative tolerance of the Newton step (a generic drive with state: at least ten times the
-        integrator's ``rtol``).
-    max_iter : int
-        Largest number of Newton steps.
-
-    Returns
-    -------
-    SwitchedOrbit
-
-    Raises
-    ------
-    ValueError
-        On a bad argument, ``impacts >= 2`` without a guess (the valve), a simulated run as the guess
-        under a law other than the paper's (the valve), when Newton does not converge (the default
-        guess of a flexible bar: from any of its starts, each named in the message) or reaches a
-        degenerate root (flights of length 0).
-
-    Examples
-    --------
-    The rigid piston of theory §10 (``v = sqrt(2 x1 (a_s + a_r) / (1 - R^2))``, multiplier ``R^2``):
-
-    >>> from impactbar import BarModel, PositionSwitchedDrive, find_orbit
-    >>> o = find_orbit(BarModel(s=10, d=0, R=0.215, n_modes=0),
-    ...                PositionSwitchedDrive(stroke=1, ret=1, switch_out=1))
-    >>> round(o.period, 6), round(o.impact_velocity, 6), round(float(o.multipliers[0]), 6)
-    (4.569933, 2.047892, 0.046225)
-
-    The same orbit as a two-impact one (its two intervals equal, the period doubled):
-
-    >>> o2 = find_orbit(o.model, o.drive, impacts=2, guess=o)
-    >>> o2.impacts, round(o2.period / o.period, 12), round(o2.blow_frequency * o.period, 12)
-    (2, 2.0, 1.0)
-    """
-    if not isinstance(model, BarModel):
-        raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-    if not autonomous(drive):
-        raise ValueError(f"drive must be a Drive; got {type(drive).__name__}")
-    m = check_int("impacts", impacts, lo=1)
-    tol = check_real("tol", tol, lo=0.0, lo_open=True)
-    max_iter = check_int("max_iter", max_iter, lo=1)
-    problem = orbit_problem(model, drive, m)
-    if guess is None and m == 1 and model.n_modes > 0 and model.law.instantaneous \
-            and hasattr(drive, "rigid_orbit"):
-        return default_chain(problem, tol, max_iter, orbit_of)
-    return solve_from(problem, guess, tol, max_iter, orbit_of)
-
-
 def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
     """The :class:`SwitchedOrbit` of a solution ``X`` of ``problem``: its data
     (:meth:`OrbitProblem.orbit`), the admissibility of the flights (:meth:`OrbitProblem.admissibility`)
@@ -432,6 +349,9 @@ class ShootingProblem(OrbitProblem):
     settings : FlightSettings, optional
         The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
     """
+
+    default_start = "the motion from rest on the stop, followed until its impacts settle"
+    starts_from_rest = True
 
     def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None):
         self.model, self.drive = model, drive

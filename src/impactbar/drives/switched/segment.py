@@ -33,16 +33,16 @@ and arrival times depend on the state); the trivial multiplier along the flow is
 
 from __future__ import annotations
 
-import functools
 import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..._shared.status import Admissibility
-from ...dynamics.modal import fundamental, step_constant
+from ...dynamics.modal import step_constant
 from .._crossing import first_rising_crossing, rate_zero, rigid_flight
-from ..base import OrbitData, OrbitProblem, sorted_multipliers, split_multipliers
+from ..base import OrbitData, OrbitProblem, OrbitSearch, sorted_multipliers, split_multipliers
+from ._flow import _affine, _apply, _blocks, _compose, _field, _fund, _matrix, _w2
 from ._kernel import end_max_sampled, rigid_orbit_start
 from ._state import RETURN, STROKE
 
@@ -73,28 +73,6 @@ class ContactMap:
         return self._last[1], self._last[2]
 
 
-def _w2(model: BarModel) -> np.ndarray:
-    """``(s n pi)^2``, ``n = 0..N`` (eq. 6), built once per ``(s, N)`` (the flows ask for it at every
-    step; callers only read it)."""
-    return _w2_of(model.s, model.n_modes + 1)
-
-
-@functools.lru_cache(maxsize=64)
-def _w2_of(s: float, M: int) -> np.ndarray:
-    return (s * np.pi * np.arange(M)) ** 2
-
-
-def _field(w2, d, p, z):
-    M = w2.size
-    q, v = z[:M], z[M:]
-    return np.concatenate((v, p - d * v - w2 * q))
-
-
-def _fund(w2, d, h):
-    """The flow's Jacobian ``E(h)``, shape ``(2M, 2M)`` (block-diagonal per mode)."""
-    return _matrix(_blocks(w2, d, h))
-
-
 def _jump(model: BarModel) -> np.ndarray:
     """The paper's impact law (eq. 10) as a matrix: ``q`` kept, ``v -> -R v``."""
     M = model.n_modes + 1
@@ -117,74 +95,6 @@ def _legs(model, drive, z0, durations):
 
 def _before_impact(model, drive, z0, durations):
     return _legs(model, drive, z0, durations)[3]
-
-
-def _blocks(w2, d, h):
-    """The flow's Jacobian over ``h`` as its per-mode 2x2 blocks ``(a, b, c, e)``, each ``(M,)``
-    (:func:`~impactbar.dynamics.modal.fundamental`, with the rigid mode and underdamped flexible
-    modes in direct closed form)."""
-    h = float(h)
-    lam2 = w2[1:] - 0.25 * d * d
-    if lam2.size and not np.all(lam2 > 0.0):  # an overdamped mode: the general forms
-        return fundamental(w2, d, np.full(w2.shape, h))
-    b0 = -math.expm1(-d * h) / d if d else h
-    a = np.empty(w2.size)
-    b = np.empty(w2.size)
-    c = np.empty(w2.size)
-    e = np.empty(w2.size)
-    a[0], b[0], c[0], e[0] = 1.0, b0, 0.0, math.exp(-d * h)
-    if lam2.size:
-        lam = np.sqrt(lam2)
-        damp = math.exp(-0.5 * d * h)
-        cs = damp * np.cos(lam * h)
-        sn = damp * np.sin(lam * h) / lam
-        a[1:] = cs + 0.5 * d * sn
-        b[1:] = sn
-        c[1:] = -w2[1:] * sn
-        e[1:] = cs - 0.5 * d * sn
-    return a, b, c, e
-
-
-def _affine(w2, d, p, h, E):
-    """The constant part ``g`` of the flow ``z(h) = E z0 + g`` under the force ``p`` (eq. 8)."""
-    a, _, c, _ = E
-    gq = np.empty(w2.size)
-    gv = np.empty(w2.size)
-    y = d * h
-    if d == 0.0:
-        b0, c0 = h, 0.5 * h * h
-    else:
-        b0 = -math.expm1(-y) / d
-        c0 = h * h * (0.5 - y / 6.0 + y * y / 24.0 - y**3 / 120.0 + y**4 / 720.0) if abs(y) < 1e-2 \
-            else (h - b0) / d
-    gq[0], gv[0] = p * c0, p * b0
-    if w2.size > 1:
-        qs = p / w2[1:]  # static deflection of the flexible modes
-        gq[1:] = qs * (1.0 - a[1:])
-        gv[1:] = -c[1:] * qs
-    return gq, gv
-
-
-def _compose(E2, E1):
-    a2, b2, c2, e2 = E2
-    a1, b1, c1, e1 = E1
-    return a2 * a1 + b2 * c1, a2 * b1 + b2 * e1, c2 * a1 + e2 * c1, c2 * b1 + e2 * e1
-
-
-def _apply(E, g, z):
-    M = g[0].size
-    a, b, c, e = E
-    q, v = z[:M], z[M:]
-    return np.concatenate((a * q + b * v + g[0], c * q + e * v + g[1]))
-
-
-def _matrix(E):
-    a, b, c, e = E
-    M = a.size
-    out = np.zeros((2 * M, 2 * M))
-    i = np.arange(M)
-    out[i, i], out[i, M + i], out[M + i, i], out[M + i, M + i] = a, b, c, e
-    return out
 
 
 def _constants(model, drive=None, constant_load=None):
@@ -442,6 +352,11 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
 # --------------------------------------------------------------------------------------------------
 # the valve's OrbitProblem
 # --------------------------------------------------------------------------------------------------
+#: most undamped resonances ``T = 2 k / (s n)`` in the window of a search of every orbit (``d = 0``):
+#: orbits crowd at each, and each takes the search down to its smallest cells (about 1.5 s for 260)
+MAX_RESONANCES = 1000
+
+
 class ValveProblem(OrbitProblem):
     """The valve's periodic-orbit problem (module docstring): ``impacts`` blocks ``(state after
     impact k, h1_k, h3_k)``, the exact Jacobian, Newton's start and the orbit's multipliers.
@@ -463,6 +378,8 @@ class ValveProblem(OrbitProblem):
         With ``model.R >= 1`` under a law that uses it (no energy leaves: the blows grow without
         bound).
     """
+
+    default_start = "the rigid piston's orbit"
 
     def __init__(self, model: BarModel, drive, impacts: int, constant_load) -> None:
         self.model, self.drive, self.constant_load = model, drive, constant_load
@@ -493,8 +410,8 @@ class ValveProblem(OrbitProblem):
     def initial(self, guess, tol, max_iter):
         """Newton's start. ``guess`` is a :class:`~impactbar.SwitchedOrbit` (a one-impact orbit is
         repeated ``m`` times), a run of :func:`impactbar.simulate` under the drive (its last ``m``
-        complete valve cycles, rigid bar, the paper's law), a tuple ``(states, h1, h3)``, or ``None``
-        (``m = 1``): the rigid bar's orbit from the closed form of
+        complete valve cycles, rigid or flexible bar, the paper's law: :func:`_from_run`), a tuple
+        ``(states, h1, h3)``, or ``None`` (``m = 1``): the rigid bar's orbit from the closed form of
         :meth:`~impactbar.PositionSwitchedDrive.rigid_orbit` and the fixed point of the rigid
         piston's map of arrival velocities, solved and lifted to the flexible bar with one Newton
         step on its modes; under a law whose contact takes time, from the orbit of the same bar
@@ -526,6 +443,38 @@ class ValveProblem(OrbitProblem):
         keep = np.r_[0:2 * M, 2 * M + 1]  # one Newton step without the switch condition, h1 kept
         X[keep] += np.linalg.solve(Jac[np.ix_(keep, keep)], -r[keep])
         return X
+
+    def search(self, window):
+        """Every one-impact orbit with a period in ``window`` under the paper's law, certified
+        (:func:`~impactbar.drives.switched.search.search_one_impact`: exclusion by bounds from the
+        closed forms, the Krawczyk test on each root); ``None`` (the solvers' non-certified search)
+        for ``m >= 2``, under a law whose contact takes time, or with an overdamped mode."""
+        from .search import OneImpactEquations, default_window, search_one_impact
+
+        model, drive = self.model, self.drive
+        if self.impacts != 1 or not model.law.instantaneous or \
+                (model.n_modes and not model.s * math.pi > 0.5 * model.d):
+            return None
+        tau = drive.delay_in + drive.delay_out
+        if window is None:
+            window = default_window(model, drive)
+        lo, hi = max(float(window[0]), tau), float(window[1])
+        if not hi > lo:
+            raise ValueError(f"window must hold periods above the two delays ({tau:g}); got {window}")
+        if model.d == 0.0 and model.n_modes:  # undamped: orbits crowd at every resonance T = 2 k / (s n)
+            count = (hi - lo) * model.s * model.n_modes * (model.n_modes + 1) / 4.0
+            if count > MAX_RESONANCES:
+                raise ValueError(f"window ({lo:.6g}, {hi:.6g}) holds about {count:.0f} undamped resonances "
+                                 f"T = 2 k / (s n) of the flexible modes (at most {MAX_RESONANCES}): narrow "
+                                 "the window, or give the bar some damping d > 0")
+        eq = OneImpactEquations(model, drive)
+        with np.errstate(all="ignore"):
+            res = search_one_impact(eq, (lo, hi))
+        starts = [eq.state(T, h) for T, h in res.roots]
+        return OrbitSearch(starts=starts, certified=res.certified, window=res.window,
+                           unresolved=res.unresolved,
+                           method=f"certified search over the periods {lo:.6g} to {hi:.6g} "
+                                  f"({res.cells} cells)")
 
     def unknowns(self, orbit):
         """The unknowns of a found orbit: its states after the impacts and its ``h1``, ``h3``."""
@@ -713,38 +662,41 @@ def _guess_unknowns(guess, M, m):
 
 
 def _from_run(run, m):
-    """States after the last ``m`` impacts of a run and the flight times between its switches
-    (each interval: return at ``t_i + tau``, stroke at the crossing ``+ tau``, the next impact); a
-    flexible bar's states are its flights' modal states at their starts (issue 40)."""
-    ti, vi = np.asarray(run.impact_times), np.asarray(run.impact_velocities)
+    """States just after the last ``m`` complete valve cycles of a run (rigid or flexible bar, the
+    paper's law) and the flight times between its switches (each interval from the impact at
+    ``t_i``: return from ``t_i + delay_in``, the ``switch_out`` crossing ``h1`` later, stroke from the
+    crossing ``+ delay_out``, the next impact ``h3`` later). The state after impact ``k`` is the
+    run's modal state at ``t_k`` (its flight from the impact; where a run's piece gives the state on
+    arrival instead, the impact law is applied to it)."""
+    ti = np.asarray(run.impact_times)
     ts = np.asarray(run.switch_times)
     kinds = tuple(run.switch_kinds)
     if ti.size < m + 1:
-        raise ValueError(f"guess: the run has {ti.size} impacts; impacts={m} needs at least {m + 1}")
-    R = run.model.R
-    delays = run.drive.delay_in + run.drive.delay_out
+        raise ValueError(f"guess: the run has {ti.size} impacts; impacts={m} needs at least {m + 1} (run it "
+                         "longer, until its impacts settle)")
+    R = run.model.law.kernel_restitution(run.model)
+    c = run.model.end_weights
+    drive = run.drive
+    delays = drive.delay_in + drive.delay_out
     states, h1, h3 = [], [], []
     for k in range(ti.size - m - 1, ti.size - 1):
         a, b = ti[k], ti[k + 1]
         stroke = [t for t, kind in zip(ts, kinds, strict=True) if kind == "stroke" and a < t <= b]
         if not stroke:
-            raise ValueError("guess: the run's last impacts are not one valve cycle apart")
+            raise ValueError("guess: the run's last impacts are not one valve cycle apart (a chatter or a "
+                             "sticking motion): give an orbit or a tuple (states, h1, h3)")
         ts_on = stroke[-1]
-        states.append([0.0, -R * vi[k]] if run.model.n_modes == 0 else _state_after(run, a))
+        q, v = run.modal_state(np.array([a]))
+        q, v = q[:, 0], v[:, 0]
+        if float(c @ v) > 0.0:  # the state on arrival: the impact law (eq. 10)
+            v = -R * v
+        states.append(np.concatenate((q, v)))
         h1.append(ts_on - a - delays)
         h3.append(b - ts_on)
+    if min(h1) <= 0.0 or min(h3) <= 0.0:
+        raise ValueError("guess: the run's valve cycles do not follow the drive's delays (a run under "
+                         "another drive?)")
     return np.array(states), np.array(h1), np.array(h3)
-
-
-def _state_after(run, t):
-    """The modal state ``(q, v)`` of a run at the start of its flight that starts at ``t`` (an
-    impact's time): the state after that impact."""
-    starts = np.array([float(p.t0) for p in run.pieces])
-    j = int(np.argmin(np.abs(starts - t)))
-    if not math.isclose(starts[j], t, rel_tol=1e-12, abs_tol=1e-12):
-        raise ValueError(f"guess: no flight of the run starts at its impact at t = {t:.12g}")
-    q, v = run.pieces[j].modal(np.array([starts[j]]))
-    return np.concatenate((q[:, 0], v[:, 0]))
 
 
 def _monodromy(model, drive, z0, durations):
