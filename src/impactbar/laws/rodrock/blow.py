@@ -313,7 +313,7 @@ class Blow:
     bit_velocity : float
         The bit's velocity at the end.
     method : str
-        ``"exact"`` (:func:`impactbar.laws.rodrock.exact.exact_rod_rock_blow`: every wave exact; the
+        ``"exact"`` (``impactbar.laws.rodrock.exact.exact_rod_rock_blow``: every wave exact; the
         arrays are samples of exact histories, ``cell_time`` their step, and the methods
         :meth:`shank_force`, :meth:`junction_force`, :meth:`bit_force` evaluate the histories
         exactly) or ``"lattice"`` (the cell grid of this module, first order in ``cell_time``).

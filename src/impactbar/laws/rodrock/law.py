@@ -375,7 +375,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     fresh rock loaded to the feed force. The model's ``R`` and ``d`` play no part (the rod replaces
     the restitution; the blow is undamped), nor its flexible modes (the piston is unstressed at
     impact). Without a feed, every wave is carried exactly (``method="exact"``,
-    :mod:`impactbar.laws.rodrock.exact`: pieces of constants and exponentials between break points,
+    ``impactbar.laws.rodrock.exact``: pieces of constants and exponentials between break points,
     every switch a located root) and the blow runs until its end is certified (``ended_by``:
     ``"separated"``, the piston gone for good and the rock unable to yield again, the rod perhaps
     ringing on it; ``"lifted"``, the rod off the rock for good too; ``"spent"``, the energy that
