@@ -68,7 +68,7 @@ def test_the_exact_blow_is_the_limit_of_the_refined_lattice(name):
     its last refinements (plus 0.02/n for the rebound) of its 1024-cell solution, run to the
     exact blow's certified end."""
     model = CASES[name]
-    blow = ib.single_blow(model, 1.0)
+    blow = ib.single_blow(model, 1.0, method="exact")
     assert blow.method == "exact"
     assert blow.ended_by in ("separated", "lifted", "spent") and blow.uncertainty == 0.0
     exact = np.array([blow.efficiency, blow.max_penetration, blow.permanent_penetration,

@@ -312,21 +312,11 @@ class Blow:
         The rod's waves ``(F, G)`` at the end, above the feed's static state.
     bit_velocity : float
         The bit's velocity at the end.
-    method : str
-        ``"exact"`` (``impactbar.laws.rodrock.exact.exact_rod_rock_blow``: every wave exact; the
-        arrays are samples of exact histories, ``cell_time`` their step, and the methods
-        :meth:`shank_force`, :meth:`junction_force`, :meth:`bit_force` evaluate the histories
-        exactly) or ``"lattice"`` (the cell grid of this module, first order in ``cell_time``).
-    uncertainty : float
-        0 when the end is certified (``ended_by`` one of ``"separated"``, ``"lifted"``, ``"spent"``);
-        after ``"t_max"``, ``"budget"`` of the exact method, a bound on the energy that could still
-        reach the rock, over the available energy (how much the efficiency could still grow).
-    loadings : numpy.ndarray, shape (n, 5), or None
-        Exact method: one row per loading episode of the rock: start and end time, penetration at
-        start and end, the work dissipated.
-    radiated : float
-        Energy carried away by the bit's reflected wave on a semi-infinite rod (counted in
-        ``rod_energy``; 0 on a finite rod).
+    method, uncertainty, loadings, radiated : str, float, numpy.ndarray (n, 5) or None, float
+        ``"exact"`` (``impactbar.laws.rodrock.exact``: the arrays sample exact histories, which the
+        force methods evaluate) or ``"lattice"`` (first order in ``cell_time``); 0 for a certified
+        end, else a bound on the efficiency still to gain; exact: per loading of the rock, start and
+        end time and penetration, the work dissipated; the energy a semi-infinite rod radiated.
 
     Examples
     --------
@@ -453,43 +443,32 @@ class Blow:
         return float(self.times[-1])
 
     def shank_force(self, t) -> np.ndarray:
-        """Piston-shank force at times ``t`` (exact method: exact; lattice: constant on each step;
-        0 outside the blow)."""
+        """Piston-shank force at times ``t`` (lattice: constant on each step; 0 outside)."""
         return self.junction_force(0, t)
 
     def junction_force(self, j: int, t) -> np.ndarray:
         """Force at segment boundary ``j`` (0: the shank) at times ``t`` (exact method: exact)."""
         if self.exact is not None:
-            return self._inside(self.exact.junction_force(1 + int(j), t), t)
+            t = np.asarray(t, dtype=float)
+            return np.where((t >= 0.0) & (t < self.duration), self.exact.junction_force(1 + int(j), t), 0.0)
         return self._steps(self.junction_forces[:, j], t)
 
     def bit_force(self, t) -> np.ndarray:
-        """Rock force at times ``t`` (exact method: exact; lattice: linear between step ends,
-        exact at them)."""
+        """Rock force at times ``t`` (exact method: exact; lattice: linear between step ends)."""
         if self.exact is not None:
             return self.exact.bit_force(np.clip(np.asarray(t, dtype=float), 0.0, self.duration))
         return np.interp(t, self.times, self.bit_forces, left=self.bit_forces[0], right=self.bit_forces[-1])
 
     def peak_forces(self):
-        """The largest compressive force at every segment boundary (the shank first) and at the
-        bit, and when each is first reached (exact method: the exact maxima of the pieces; lattice:
-        of the step values).
-
-        Returns
-        -------
-        values, times : numpy.ndarray, shape (J + 1,)
-        """
+        """The largest force at every segment boundary (the shank first) and at the bit, and when
+        first reached (exact method: the maxima of the pieces; lattice: of the step values):
+        ``values, times``, arrays of shape ``(J + 1,)``."""
         if self.exact is not None:
-            v, t = self.exact.peak_forces()
-            return v, t
-        i = np.argmax(self.junction_forces, axis=0)
-        jb = int(np.argmax(self.bit_forces))
+            return self.exact.peak_forces()
+        i, jb = np.argmax(self.junction_forces, axis=0), int(np.argmax(self.bit_forces))
         return (np.append(self.junction_forces[i, np.arange(i.size)], self.bit_forces[jb]),
                 np.append(self.times[i], self.times[jb]))
 
-    def _inside(self, values, t):
-        t = np.asarray(t, dtype=float)
-        return np.where((t >= 0.0) & (t < self.duration), values, 0.0)
 
     def _steps(self, values, t):
         t = np.asarray(t, dtype=float)

@@ -62,6 +62,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import _exacthistory as H
 from . import _exactkernel as K
 from . import _exactpieces as P
 
@@ -260,7 +261,7 @@ def _eval_channel(pools, c, t, kind, head=None):
     order = np.argsort(flat, kind="stable")
     out = np.zeros(flat.size)
     head = int(CHI[c, 1]) if head is None else int(head)
-    K.eval_history(PF, PI, TK, TC, lam, head, np.ascontiguousarray(flat[order]), out, kind, lamk)
+    H.eval_history(PF, PI, TK, TC, lam, head, np.ascontiguousarray(flat[order]), out, kind, lamk)
     res = np.empty(flat.size)
     res[order] = out
     return res.reshape(t.shape)
@@ -269,7 +270,7 @@ def _eval_channel(pools, c, t, kind, head=None):
 def _channel_max(pools, c, t_end):
     PF, PI, TK, TC, CHI, lam, lamk = pools
     res = np.zeros(2)
-    K.history_max(PF, PI, TK, TC, lam, int(CHI[c, 1]), float(t_end), res)
+    H.history_max(PF, PI, TK, TC, lam, int(CHI[c, 1]), float(t_end), res)
     return res[0], res[1]
 
 

@@ -400,9 +400,9 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         samples per piston crossing time of the recorded arrays (default 32), ``energy_fraction``
         unused.
     method : {"auto", "exact", "lattice"}
-        ``"auto"``: exact without a feed and without ``cells_per_piston`` (and where a wave's round
-        trip takes at most ``MAX_EXACT_PASS_WINDOWS`` of the shortest travel time), else the
-        lattice.
+        ``"auto"``: exact for a massless bit without a feed and without ``cells_per_piston`` (and
+        where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` of the shortest travel
+        time), else the lattice.
     semi_infinite : bool
         Lundberg's idealisation (exact method): the wave the bit reflects leaves the rod and never
         returns (its energy in ``radiated``); the blow ends when the energy is spent.
@@ -446,7 +446,8 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     if not isinstance(semi_infinite, bool | np.bool_):
         raise ValueError(f"semi_infinite must be True or False; got semi_infinite={semi_infinite!r}")
     exact = method == "exact" or (method == "auto" and (semi_infinite or (
-        law.feed == 0.0 and cells_per_piston is None and _exact_is_cheap(model, law))))
+        law.feed == 0.0 and law.bit_mass == 0.0 and cells_per_piston is None
+        and _exact_is_cheap(model, law))))
     if semi_infinite and not exact:
         raise ValueError("semi_infinite=True needs method='exact' (or 'auto'); the lattice carries "
                          "the rod's finite length")
