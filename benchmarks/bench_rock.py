@@ -18,22 +18,11 @@ import argparse
 import contextlib
 import io
 import math
-import time
 
-import numpy as np
+from _timing import median_time  # this folder's shared timer
 
 import impactbar as ib
 from impactbar.dynamics.implementations import use_reference
-
-
-def median_time(fn, repeat):
-    fn()
-    ts = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return float(np.median(ts))
 
 
 def main(argv=None):

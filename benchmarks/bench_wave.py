@@ -13,25 +13,14 @@ from __future__ import annotations
 
 import argparse
 import math
-import time
 
-import numpy as np
+from _timing import median_time  # this folder's shared timer
 
 from impactbar import InitialState, periodic_orbits, physical, simulate
 from impactbar.dynamics.implementations import implementation
 
 TWO_PI = 2 * math.pi
 #: the simulator's module (the package ``impactbar.simulation`` re-exports the function by that name)
-
-
-def median_time(fn, repeat):
-    fn()  # warm-up (numba compilation, caches)
-    ts = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t0)
-    return float(np.median(ts))
 
 
 def cases():

@@ -126,3 +126,15 @@ def test_rounded_piston_keeps_its_mass():
     assert b.length_error == pytest.approx(abs(0.3 - 0.33) / 0.33, rel=1e-12)
     assert b.energy_at_impact == pytest.approx(0.5, rel=1e-15)
     assert b.energy_error < 1e-12
+
+
+def test_a_stepped_piston_is_the_lattices():
+    """The exact solver carries a uniform piston only: a stepped one is refused with it, and
+    ``method="auto"`` gives the lattice."""
+    model = _model([(3.0, 1.0)])
+    piston = SteppedPiston([0.5, 0.5], [1.0, 2.0])
+    for kw in ({"method": "exact"}, {"semi_infinite": True}):
+        with pytest.raises(ValueError, match="piston"):
+            ib.single_blow(model, 1.0, piston=piston, **kw)
+    assert ib.single_blow(model, 1.0, piston=piston).method == "lattice"
+    assert ib.single_blow(model, 1.0).method == "exact"

@@ -129,6 +129,11 @@ class Blow:
         The rod's waves ``(F, G)`` at the end, above the feed's static state.
     bit_velocity : float
         The bit's velocity at the end.
+    method, uncertainty, loadings, radiated : str, float, numpy.ndarray (n, 5) or None, float
+        ``"exact"`` (``impactbar.laws.rodrock.exact``: the arrays sample exact histories, which the
+        force methods evaluate) or ``"lattice"`` (first order in ``cell_time``); 0 for a certified
+        end, else a bound on the efficiency still to gain; exact: per loading of the rock, start and
+        end time and penetration, the work dissipated; the energy a semi-infinite rod radiated.
 
     Examples
     --------
@@ -170,9 +175,12 @@ class Blow:
             ("bit_velocity", "the bit's velocity at the end", ()),
             ("gap", "piston-shank gap at the end", ()),
             ("shank_displacement", "the shank's displacement from its static position at impact", ()),
+            ("uncertainty", "bound on the efficiency the blow could still gain", ()),
+            ("radiated", "energy radiated by a semi-infinite rod", ()),
             ("cell_time", "the grid's time step dt", ()),
             ("length_error", "largest relative change of a segment's travel time by the grid", ()))),
-        Field("piston_cells", "cells along the piston", "", dtype="i8"))
+        Field("piston_cells", "cells along the piston", "", dtype="i8"),
+        Field("method", "the blow's solver", "", dtype="U"))
 
     def __repr__(self) -> str:
         """One line: why it ended, the energy account, the penetration (the arrays: the
@@ -214,13 +222,19 @@ class Blow:
     rod_waves: tuple | None = None
     bit_velocity: float = 0.0
     rock_stored_energy: float = 0.0
+    method: str = "lattice"
+    uncertainty: float = 0.0
+    loadings: np.ndarray | None = None
+    radiated: float = 0.0
+    exact: object = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         # the scalars as plain floats (the solver hands numpy scalars), like every other result
         for f in ("energy_at_impact", "feed_work", "available_energy", "work_on_rock", "piston_energy",
                   "rebound_velocity", "rod_energy", "grid_loss", "max_penetration",
                   "permanent_penetration", "advance", "cell_time", "length_error", "drive_work", "gap",
-                  "shank_displacement", "bit_velocity", "rock_stored_energy"):
+                  "shank_displacement", "bit_velocity", "rock_stored_energy", "uncertainty",
+                  "radiated"):
             object.__setattr__(self, f, float(getattr(self, f)))
 
     @property
@@ -258,16 +272,32 @@ class Blow:
         return float(self.times[-1])
 
     def shank_force(self, t) -> np.ndarray:
-        """Piston-shank force at times ``t`` (constant on each step; 0 outside the blow)."""
-        return self._steps(self.shank_forces, t)
+        """Piston-shank force at times ``t`` (lattice: constant on each step; 0 outside)."""
+        return self.junction_force(0, t)
 
     def junction_force(self, j: int, t) -> np.ndarray:
-        """Force at segment boundary ``j`` (0: the shank) at times ``t``."""
+        """Force at segment boundary ``j`` (0: the shank) at times ``t`` (exact method: exact)."""
+        if self.exact is not None:
+            t = np.asarray(t, dtype=float)
+            return np.where((t >= 0.0) & (t < self.duration), self.exact.junction_force(1 + int(j), t), 0.0)
         return self._steps(self.junction_forces[:, j], t)
 
     def bit_force(self, t) -> np.ndarray:
-        """Rock force at times ``t`` (linear between step ends; exact at them)."""
+        """Rock force at times ``t`` (exact method: exact; lattice: linear between step ends)."""
+        if self.exact is not None:
+            return self.exact.bit_force(np.clip(np.asarray(t, dtype=float), 0.0, self.duration))
         return np.interp(t, self.times, self.bit_forces, left=self.bit_forces[0], right=self.bit_forces[-1])
+
+    def peak_forces(self):
+        """The largest force at every segment boundary (the shank first) and at the bit, and when
+        first reached (exact method: the maxima of the pieces; lattice: of the step values):
+        ``values, times``, arrays of shape ``(J + 1,)``."""
+        if self.exact is not None:
+            return self.exact.peak_forces()
+        i, jb = np.argmax(self.junction_forces, axis=0), int(np.argmax(self.bit_forces))
+        return (np.append(self.junction_forces[i, np.arange(i.size)], self.bit_forces[jb]),
+                np.append(self.times[i], self.times[jb]))
+
 
     def _steps(self, values, t):
         t = np.asarray(t, dtype=float)

@@ -373,7 +373,7 @@ class RodRock(ContactLaw):
 
 def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None = None,
                 t_max: float | None = None, energy_fraction: float = 1e-9, record_field: bool = False,
-                piston=None):
+                piston=None, method: str = "auto", semi_infinite: bool = False):
     """One blow of the piston on the rod and rock of ``model.law`` (theory §4d).
 
     Assumed: the piston (the model's bar: length 1, impedance ``s``, mass 1) moves rigidly and
@@ -381,9 +381,16 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     feed force acts on the shank); the rod is at rest, compressed by the feed, the bit resting on
     fresh rock loaded to the feed force. The model's ``R`` and ``d`` play no part (the rod replaces
     the restitution; the blow is undamped), nor its flexible modes (the piston is unstressed at
-    impact). Solved by characteristics on a common cell grid, exact for commensurate segments
-    (:mod:`impactbar.laws.rodrock.blow`; a compiled loop, ``"rock.blow"`` in
-    :mod:`impactbar.dynamics.implementations`).
+    impact). Without a feed, every wave is carried exactly (``method="exact"``,
+    ``impactbar.laws.rodrock.exact``: pieces of constants and exponentials between break points,
+    every switch a located root) and the blow runs until its end is certified (``ended_by``:
+    ``"separated"``, the piston gone for good and the rock unable to yield again, the rod perhaps
+    ringing on it; ``"lifted"``, the rod off the rock for good too; ``"spent"``, the energy that
+    could still reach the rock below 1e-17 of the available), no ``t_max`` needed. With a feed, or
+    a ``cells_per_piston``, the lattice of :mod:`impactbar.laws.rodrock.blow` (``method="lattice"``:
+    first order in the cell time, the bit's reflected wave stored as cell averages; to
+    ``t_max``, default 20 travel times through piston and rod, or until the rod's wave energy is
+    spent).
 
     Parameters
     ----------
@@ -394,7 +401,11 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     cells_per_piston, t_max, energy_fraction, record_field
         See :func:`impactbar.laws.rodrock.blow.rod_rock_blow`: the grid, the longest blow, the end
         criterion (piston separated and the rod's wave energy below this fraction of the impact
-        energy) and whether to keep the force field for the Lagrange diagram.
+        energy) and whether to keep the force field for the Lagrange diagram. For the exact method
+        ``t_max`` is an optional horizon (``ended_by = "t_max"``, ``uncertainty`` bounding what the
+        efficiency could still gain), ``cells_per_piston`` (given with ``method="exact"``) the
+        samples per piston crossing time of the recorded arrays (default 32), ``energy_fraction``
+        unused.
     piston : SteppedPiston, optional
         A stepped piston of the model's mass and length (theory §12): its segments, from the driven
         end to the struck end, carried by characteristics on the same grid as the rod's, each of
@@ -402,6 +413,13 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         rod it sends the staircase wave its impedances give; the rod's impedances stay relative to
         ``s`` (a uniform piston of the same mass and length). Default None: the uniform piston,
         whose results a one-segment ``SteppedPiston`` reproduces to the bit.
+    method : {"auto", "exact", "lattice"}
+        ``"auto"``: exact for a uniform piston, a massless bit, no feed and no ``cells_per_piston`` (and
+        where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` of the shortest travel
+        time), else the lattice.
+    semi_infinite : bool
+        Lundberg's idealisation (exact method): the wave the bit reflects leaves the rod and never
+        returns (its energy in ``radiated``); the blow ends when the energy is spent.
 
     Returns
     -------
@@ -417,7 +435,8 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         ``(0, 1e-100)`` (the wave energies would overflow); ``t_max`` not finite and ``> 0``;
         ``cells_per_piston`` not an integer ``>= 1``; a grid of more than ``5e9`` cell updates (a rod
         far longer, in travel time, than the piston, or too fine a grid); ``piston`` neither None
-        nor a ``SteppedPiston``.
+        nor a ``SteppedPiston``, or given with ``method="exact"`` or ``semi_infinite``; ``method`` not
+        one of those above; ``semi_infinite`` not a bool, or with the lattice.
 
     Examples
     --------
@@ -427,6 +446,9 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     >>> blow = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0)
     >>> round(blow.efficiency, 6), round(blow.work_on_rock, 6)  # of the impact energy 1/2
     (0.733069, 0.366534)
+    >>> ib = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, semi_infinite=True)
+    >>> ib.ended_by, round(ib.efficiency, 12)  # Lundberg's idealisation, no horizon
+    ('spent', 0.733068583061)
 
     A piston with a heavy head (the struck end) and a light tail, on a rod of the head's impedance,
     sends a two-step wave: ``Z_h V/2`` for the head's round trip, then ``(1 + R)`` times it for the
@@ -447,9 +469,25 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     if not isinstance(law, RodRock):
         got = f"impact={model.impact!r}" if hasattr(model, "impact") else f"model={model!r}"
         raise ValueError(f"single_blow needs a BarModel with impact=RodRock(...); got {got}")
+    if method not in ("auto", "exact", "lattice"):
+        raise ValueError(f"method must be 'auto', 'exact' or 'lattice'; got method={method!r}")
+    if not isinstance(semi_infinite, bool | np.bool_):
+        raise ValueError(f"semi_infinite must be True or False; got semi_infinite={semi_infinite!r}")
+    if piston is not None and (method == "exact" or semi_infinite):
+        raise ValueError("piston: a stepped piston is carried by the lattice only; give method='lattice' "
+                         "(or 'auto') and semi_infinite=False with it")
+    exact = method == "exact" or (method == "auto" and piston is None and (semi_infinite or (
+        law.feed == 0.0 and law.bit_mass == 0.0 and cells_per_piston is None
+        and _exact_is_cheap(model, law))))
+    if semi_infinite and not exact:
+        raise ValueError("semi_infinite=True needs method='exact' (or 'auto'); the lattice carries "
+                         "the rod's finite length")
+    segs = law.segments
+    if exact:
+        return _exact_single_blow(model, law, impact_velocity, t_max, cells_per_piston, record_field,
+                                  semi_infinite)
     V, t_max, cells_per_piston = _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston,
                                                   record_field, piston)
-    segs = law.segments
     return rod_rock_blow(
         model.s, V, [g.length for g in segs], [g.impedance for g in segs], [g.wave_speed for g in segs],
         law.rock.k, law.rock.k_u, law.bit_mass, law.feed, cells_per_piston=cells_per_piston,
@@ -457,10 +495,57 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         record_field=record_field, piston=piston)
 
 
+def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field, semi_infinite):
+    """:func:`single_blow` by the exact solver (checked arguments; ``cells_per_piston`` the samples
+    per piston crossing time of the recorded arrays, default 32)."""
+    from .exact import exact_rod_rock_blow
+
+    V = _check_force_scale(model, law, impact_velocity)
+    if t_max is not None:
+        t_max = check_real("t_max", t_max, lo=0.0, lo_open=True)
+    samples = 32 if samples is None else check_int("cells_per_piston", samples, lo=1)
+    segs = law.segments
+    return exact_rod_rock_blow(model.s, V, [g.length for g in segs], [g.impedance for g in segs],
+                               [g.wave_speed for g in segs], law.rock.k, law.rock.k_u, law.bit_mass,
+                               law.feed, t_max=t_max, semi_infinite=semi_infinite,
+                               samples_per_piston=samples, record_field=bool(record_field))
+
+
 #: The largest force scale (``s V``, the feed) and the smallest nonzero bit mass a blow accepts: the
 #: wave energies are sums of squared forces, which beyond these would overflow or underflow.
 MAX_FORCE = 1e100
 MIN_BIT_MASS = 1e-100
+
+
+#: The most windows (of the shortest travel time in piston and rod) one round trip of a wave through
+#: them may take for ``method="auto"`` to choose the exact solver: beyond, its cost grows with them
+#: and the lattice, whose cost is bounded up front, is used.
+MAX_EXACT_PASS_WINDOWS = 1e4
+
+
+def _exact_is_cheap(model, law) -> bool:
+    """Whether a round trip through piston and rod takes at most ``MAX_EXACT_PASS_WINDOWS`` windows."""
+    with np.errstate(over="ignore", divide="ignore"):
+        travel = np.array([1.0 / model.s] + [g.travel_time(model) for g in law.segments])
+    ratio = 2.0 * float(np.sum(travel)) / float(np.min(travel))
+    return bool(np.all(np.isfinite(travel))) and ratio <= MAX_EXACT_PASS_WINDOWS
+
+
+def _check_force_scale(model, law, impact_velocity) -> float:
+    """The checked impact velocity: its wave force ``s V`` and the feed within ``MAX_FORCE``, the
+    bit's mass 0 or at least ``MIN_BIT_MASS``."""
+    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
+    if not 1.0 / MAX_FORCE <= model.s * V <= MAX_FORCE:
+        raise ValueError(f"impact_velocity must give a wave force s V in [{1 / MAX_FORCE:g}, {MAX_FORCE:g}] "
+                         f"(s = {model.s:g}); got impact_velocity = {V:g}, whose wave energies would "
+                         "overflow or underflow")
+    if law.feed > MAX_FORCE:
+        raise ValueError(f"feed must be in [0, {MAX_FORCE:g}] for a blow (its static energy would "
+                         f"overflow); got feed = {law.feed:g}")
+    if 0.0 < law.bit_mass < MIN_BIT_MASS:
+        raise ValueError(f"bit_mass must be 0 (a massless bit) or in [{MIN_BIT_MASS:g}, inf) for a blow; "
+                         f"got bit_mass = {law.bit_mass:g}")
+    return V
 
 
 def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, record_field, piston=None):
@@ -470,19 +555,8 @@ def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, recor
     from .blow import _check_blow_size, commensurate_cells
 
     p_len, _ = piston_segments(piston)
-
     s = model.s
-    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
-    if not 1.0 / MAX_FORCE <= s * V <= MAX_FORCE:
-        raise ValueError(f"impact_velocity must give a wave force s V in [{1 / MAX_FORCE:g}, {MAX_FORCE:g}] "
-                         f"(s = {s:g}); got impact_velocity = {V:g}, whose wave energies would "
-                         "overflow or underflow")
-    if law.feed > MAX_FORCE:
-        raise ValueError(f"feed must be in [0, {MAX_FORCE:g}] for a blow (its static energy would "
-                         f"overflow); got feed = {law.feed:g}")
-    if 0.0 < law.bit_mass < MIN_BIT_MASS:
-        raise ValueError(f"bit_mass must be 0 (a massless bit) or in [{MIN_BIT_MASS:g}, inf) for a blow; "
-                         f"got bit_mass = {law.bit_mass:g}")
+    V = _check_force_scale(model, law, impact_velocity)
     travel = [g.travel_time(model) for g in law.segments]
     if not all(math.isfinite(T) for T in travel):  # a wave speed near 0: refused as the grid would be
         _check_blow_size(math.inf, math.inf, False)

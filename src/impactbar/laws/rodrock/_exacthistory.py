@@ -1,0 +1,153 @@
+"""Histories of the exact blow (theory §4d): a recorded channel evaluated at given times, and its
+largest value (:mod:`impactbar.laws.rodrock._exactkernel` records them)."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ...dynamics._kernel import CACHE
+from ._exactpieces import DC, EPS, INF, blk_abs, blk_bound, blk_clear, blk_eval, blk_value
+
+# ------------------------------------------------------------------------------------------------
+# histories
+# ------------------------------------------------------------------------------------------------
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def eval_history(PF, PI, TK, TC, lam, head, times, out, kind, lamk):
+    """A history channel at ``times`` (sorted): ``kind`` 0 the value, 1 the bit's penetration
+    (``ref + x``), 2 the rock's force (``b x`` with ``b = lamk[branch]``)."""
+    E = lam.size
+    B = np.zeros((E, DC), dtype=np.complex128)
+    N = np.zeros(E, dtype=np.int64)
+    p = head
+    if p < 0:
+        return
+    for i in range(times.size):
+        t = times[i]
+        while PI[p, 0] >= 0 and PF[PI[p, 0], 0] <= t:
+            p = PI[p, 0]
+        tau = t - PF[p, 0]
+        if tau < 0.0:
+            tau = 0.0
+        blk_clear(B, N)
+        ts = PI[p, 1]
+        for k in range(ts, ts + PI[p, 2]):
+            e = TK[k] // DC
+            d = TK[k] - e * DC
+            B[e, d] += TC[k]
+            if d + 1 > N[e]:
+                N[e] = d + 1
+        v = blk_value(B, N, lam, tau)
+        if kind == 1:
+            v += PF[p, 2]
+        elif kind == 2:
+            v = max(lamk[PI[p, 3]] * v, 0.0)
+        out[i] = v
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def piece_max(B, N, lam, BIN, L, stack):
+    """The largest value of a piece on ``[0, L]`` and where it is first reached (to rounding):
+    branch and bound on ``phi(m) + |phi'(m)| w/2 + M2 w^2/8``, the best point refined by Newton's
+    steps on ``phi'``."""
+    f0 = blk_value(B, N, lam, 0.0)
+    best = f0
+    tb = 0.0
+    fL = blk_value(B, N, lam, L)
+    a0, _x, _y = blk_abs(B, N, lam, 0.0)
+    tol = 8.0 * EPS * a0
+    if fL > best + tol:
+        best = fL
+        tb = L
+    if L <= 0.0:
+        return best, tb
+    stack[0, 0] = 0.0
+    stack[0, 1] = L
+    sp = 1
+    it = 0
+    while sp > 0 and it < 4000:
+        it += 1
+        sp -= 1
+        a = stack[sp, 0]
+        b = stack[sp, 1]
+        w = b - a
+        m = 0.5 * (a + b)
+        fm, dm, _ = blk_eval(B, N, lam, m)
+        M2 = blk_bound(B, N, lam, BIN, a, b, 2)
+        if fm + abs(dm) * 0.5 * w + M2 * w * w * 0.125 <= best + tol:
+            continue
+        if fm > best + tol:
+            best = fm
+            tb = m
+        if w <= 64.0 * EPS * L or sp + 2 > stack.shape[0]:
+            continue
+        stack[sp, 0] = m
+        stack[sp, 1] = b
+        stack[sp + 1, 0] = a
+        stack[sp + 1, 1] = m
+        sp += 2
+    if 0.0 < tb < L:  # Newton on phi' = 0 from the best point
+        x = tb
+        for _ in range(30):
+            _f, d1, d2 = blk_eval(B, N, lam, x)
+            if d2 >= 0.0:
+                break
+            xn = x - d1 / d2
+            if not (0.0 < xn < L) or abs(xn - x) <= 2.0 * EPS * x:
+                break
+            x = xn
+        fx = blk_value(B, N, lam, x)
+        if fx >= best:
+            best = fx
+            tb = x
+    return best, tb
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def history_max(PF, PI, TK, TC, lam, head, t_end, res):
+    """The largest value of a history channel up to ``t_end`` and the time it is first reached
+    (``res``: value, time)."""
+    E = lam.size
+    B = np.zeros((E, DC), dtype=np.complex128)
+    N = np.zeros(E, dtype=np.int64)
+    BIN = np.zeros((DC, DC))
+    for a in range(DC):
+        BIN[a, 0] = 1.0
+        for b in range(1, a + 1):
+            BIN[a, b] = BIN[a - 1, b - 1] + (BIN[a - 1, b] if b < a else 0.0)
+    stack = np.zeros((256, 2))
+    best = -INF
+    tb = 0.0
+    p = head
+    while p >= 0:
+        nx = PI[p, 0]
+        L = (PF[nx, 0] if nx >= 0 else t_end) - PF[p, 0]
+        if L < 0.0:
+            break
+        if L <= 1e-11 * max(1.0, abs(PF[p, 0])) and nx >= 0:
+            # a sliver between two arrivals that rounding set apart (incommensurate segments): its
+            # value mixes the old wave on one input with the new on the other, a force that never acts
+            p = nx
+            continue
+        if PI[p, 2] == 0:
+            v = 0.0
+            tv = PF[p, 0]
+        else:
+            blk_clear(B, N)
+            ts = PI[p, 1]
+            for k in range(ts, ts + PI[p, 2]):
+                e = TK[k] // DC
+                d = TK[k] - e * DC
+                B[e, d] += TC[k]
+                if d + 1 > N[e]:
+                    N[e] = d + 1
+            v, tau = piece_max(B, N, lam, BIN, L, stack)
+            tv = PF[p, 0] + tau
+        if v > best + 8.0 * EPS * abs(v):
+            best = v
+            tb = tv
+        p = nx
+    res[0] = best
+    res[1] = tb

@@ -1,0 +1,796 @@
+"""Exact pieces of the exact blow (theory §4d): the block algebra of exponential polynomials, the exact
+solution of ``y' - r y = g``, the certified first crossing of zero, the pool of pieces and the channels
+(delay lines) that carry them. The driver is :mod:`impactbar.laws.rodrock._exactkernel`, whose text
+describes the representation."""
+
+from __future__ import annotations
+
+import cmath
+import math
+
+import numba
+import numpy as np
+
+from ...dynamics._kernel import CACHE
+
+DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
+NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
+EPS = 2.220446049250313e-16
+SERIES_TOL = 1e-18
+
+# ------------------------------------------------------------------------------------------------
+# blocks
+# ------------------------------------------------------------------------------------------------
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_clear(B, N):
+    for e in range(N.size):
+        for d in range(N[e]):
+            B[e, d] = 0.0
+        N[e] = 0
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_is_zero(N):
+    for e in range(N.size):
+        if N[e] > 0:
+            return False
+    return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_axpy(B, N, s, A, NA):
+    """``B += s A``."""
+    for e in range(NA.size):
+        n = NA[e]
+        if n == 0:
+            continue
+        for d in range(n):
+            B[e, d] += s * A[e, d]
+        if n > N[e]:
+            N[e] = n
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_set_comb(B, N, s1, A1, N1, s2, A2, N2):
+    """``B = s1 A1 + s2 A2``."""
+    blk_clear(B, N)
+    if s1 != 0.0:
+        blk_axpy(B, N, s1, A1, N1)
+    if s2 != 0.0:
+        blk_axpy(B, N, s2, A2, N2)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_add_const(B, N, c):
+    """Add the constant ``c`` (exponent 0 is entry 0 of the table)."""
+    if c == 0.0:
+        return
+    B[0, 0] += c
+    if N[0] == 0:
+        N[0] = 1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_trim(B, N):
+    """Drop trailing zero coefficients."""
+    for e in range(N.size):
+        n = N[e]
+        while n > 0 and B[e, n - 1] == 0.0:
+            n -= 1
+        N[e] = n
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _expl(lam_e, tau):
+    return cmath.exp(lam_e * tau)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_eval(B, N, lam, tau):
+    """Value, first and second derivative (real parts) at ``tau``."""
+    f0 = 0.0
+    f1 = 0.0
+    f2 = 0.0
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        q0 = 0.0j
+        q1 = 0.0j
+        q2 = 0.0j
+        for d in range(n - 1, -1, -1):  # Horner for Q, Q', Q''
+            q2 = q2 * tau + 2.0 * q1
+            q1 = q1 * tau + q0
+            q0 = q0 * tau + B[e, d]
+        le = lam[e]
+        if le == 0.0:
+            f0 += q0.real
+            f1 += q1.real
+            f2 += q2.real
+        else:
+            ex = _expl(le, tau)
+            f0 += (ex * q0).real
+            f1 += (ex * (q1 + le * q0)).real
+            f2 += (ex * (q2 + 2.0 * le * q1 + le * le * q0)).real
+    return f0, f1, f2
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_value(B, N, lam, tau):
+    f = 0.0
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        q = 0.0j
+        for d in range(n - 1, -1, -1):
+            q = q * tau + B[e, d]
+        le = lam[e]
+        if le == 0.0:
+            f += q.real
+        else:
+            f += (_expl(le, tau) * q).real
+    return f
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_abs(B, N, lam, tau):
+    """Sums of the absolute values of the terms of the value and of its first two derivatives at
+    ``tau`` (their rounding scales)."""
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        g = math.exp(lam[e].real * tau)
+        al = abs(lam[e])
+        for d in range(n):
+            c = abs(B[e, d]) * g
+            if c == 0.0:
+                continue
+            p0 = tau ** d
+            p1 = d * tau ** (d - 1) if d >= 1 else 0.0
+            p2 = d * (d - 1) * tau ** (d - 2) if d >= 2 else 0.0
+            a0 += c * p0
+            a1 += c * (al * p0 + p1)
+            a2 += c * (al * al * p0 + 2.0 * al * p1 + p2)
+    return a0, a1, a2
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_bound(B, N, lam, BIN, a, b, k):
+    """An upper bound of ``|phi^(k)|`` on ``[a, b]`` (``0 <= a <= b``), from the terms."""
+    tot = 0.0
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        re = lam[e].real
+        g = math.exp(re * (a if re <= 0.0 else b))
+        al = abs(lam[e])
+        for d in range(n):
+            c = abs(B[e, d])
+            if c == 0.0:
+                continue
+            s = 0.0
+            ff = 1.0  # d! / (d - i)!
+            for i in range(min(k, d) + 1):
+                s += BIN[k, i] * al ** (k - i) * ff * b ** (d - i)
+                ff *= d - i
+            tot += c * g * s
+    return tot
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_deriv(D, ND, B, N, lam):
+    """``D = d/dtau B``."""
+    blk_clear(D, ND)
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        le = lam[e]
+        for d in range(n):
+            c = B[e, d]
+            if c == 0.0:
+                continue
+            if le != 0.0:
+                D[e, d] += le * c
+            if d > 0:
+                D[e, d - 1] += d * c
+        m = n if le != 0.0 else n - 1
+        ND[e] = m if m > 0 else 0
+    blk_trim(D, ND)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_shift(B, N, delta, lam, BIN):
+    """Re-express ``B`` from the origin ``delta`` (in place): ``c (delta + s)^d e^{lam (delta + s)}``
+    expanded in ``s``."""
+    if delta == 0.0:
+        return
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        ex = _expl(lam[e], delta) if lam[e] != 0.0 else 1.0 + 0.0j
+        # new_k = ex * sum_{d >= k} c_d binom(d, k) delta^(d - k)
+        for k in range(n):
+            s = 0.0j
+            p = 1.0
+            for d in range(k, n):
+                s += B[e, d] * BIN[d, k] * p
+                p *= delta
+            B[e, k] = s * ex
+        # (k-order loop reads B[e, d] for d >= k, written only after: safe)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def moments(mu, a, b, K, out):
+    """``out[k] = int_a^b tau^k e^{mu tau} dtau`` for ``k < K`` (complex ``mu``, ``0 <= a <= b``):
+    upward recursion ``I_k = [tau^k e^{mu tau}/mu]_a^b - k/mu I_{k-1}`` while ``k < |mu| b`` (stable
+    there), the series ``sum_j mu^j/j! (b^{k+j+1} - a^{k+j+1})/(k+j+1)`` beyond."""
+    amu = abs(mu)
+    eb = cmath.exp(mu * b) if amu > 0.0 else 1.0 + 0.0j
+    ea = cmath.exp(mu * a) if amu > 0.0 else 1.0 + 0.0j
+    pb = 1.0
+    pa = 1.0
+    prev = 0.0j
+    for k in range(K):
+        if k < amu * b and amu * b > 1.0:
+            if k == 0:
+                val = (eb - ea) / mu
+            else:
+                val = (pb * eb - pa * ea) / mu - k / mu * prev
+        else:
+            val = 0.0j
+            term = 1.0 + 0.0j
+            qb = pb * b
+            qa = pa * a
+            for jj in range(400):
+                inc = term * (qb - qa) / (k + jj + 1)
+                val += inc
+                if jj > 2 and abs(inc) <= 1e-17 * abs(val):
+                    break
+                term = term * mu / (jj + 1)
+                qb *= b
+                qa *= a
+        out[k] = val
+        prev = val
+        pb *= b
+        pa *= a
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_integral(B, N, lam, a, b):
+    """``int_a^b phi``, in the variable ``u = tau / b`` (coefficients ``c_d b^d``): a piece valid
+    on a short interval only (a series of a stiff exponent) has huge coefficients ``c_d`` whose
+    products would overflow, though its values do not."""
+    if b <= 0.0:
+        return 0.0
+    mom = np.empty(DC, dtype=np.complex128)
+    s = 0.0j
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        moments(lam[e] * b, a / b, 1.0, n, mom)
+        sc = 1.0
+        for d in range(n):
+            s += B[e, d] * sc * mom[d]
+            sc *= b
+    return s.real * b
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_integral_sq(B, N, lam, a, b):
+    """``int_a^b phi^2`` (``phi`` real: its conjugate terms are in the table): per pair of exponents
+    the product polynomial against the moments of ``e^{(lam_1 + lam_2) tau}``."""
+    if b <= 0.0:
+        return 0.0
+    # in the variable u = tau / b, coefficients c_d b^d (see blk_integral: no overflow of the products
+    # of a short-lived series' huge coefficients)
+    mom = np.empty(2 * DC, dtype=np.complex128)
+    prod = np.empty(2 * DC, dtype=np.complex128)
+    E = N.size
+    C = np.empty((E, DC), dtype=np.complex128)
+    for e in range(E):
+        sc = 1.0
+        for d in range(N[e]):
+            C[e, d] = B[e, d] * sc
+            sc *= b
+    s = 0.0j
+    for e1 in range(E):
+        n1 = N[e1]
+        if n1 == 0:
+            continue
+        for e2 in range(e1, E):
+            n2 = N[e2]
+            if n2 == 0:
+                continue
+            m = n1 + n2 - 1
+            for k in range(m):
+                prod[k] = 0.0
+            for d1 in range(n1):
+                c1 = C[e1, d1]
+                if c1 == 0.0:
+                    continue
+                for d2 in range(n2):
+                    prod[d1 + d2] += c1 * C[e2, d2]
+            moments((lam[e1] + lam[e2]) * b, a / b, 1.0, m, mom)
+            t = 0.0j
+            for k in range(m):
+                t += prod[k] * mom[k]
+            s += t if e1 == e2 else 2.0 * t
+    return s.real * b
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
+    """``Y`` = the solution of ``y' - r y = g`` with ``y(0) = y0`` on ``[0, L]`` (``G`` the block of
+    ``g``; ``r = lam[rc]``), without cancellation: a forcing exponent ``lam_e`` within ``NEAR / L`` of
+    ``r`` by the Taylor recursion of the initial-value problem, around the exponent of the two with
+    the smaller real part so that the series grows rather than alternates (``(D - delta) Q = P``,
+    ``Q(0) = 0``, ``delta = r - lam_e``, in slot ``e``, or ``e^{r tau}`` times the integral of the
+    series of ``e^{(lam_e - r) s} P(s)``, in slot ``rc``; for ``delta = 0`` exact, one degree more;
+    else a series cut below ``SERIES_TOL`` on ``[0, L]``), a farther one by back-substitution of
+    ``(D + lam_e - r) Q = P`` (contracting there); the homogeneous ``C e^{r tau}`` exact. Returns
+    ``(status, series)``: status 1 when the degree limit was reached; ``series`` whether a series
+    was cut (the piece then holds only on ``[0, L]``)."""
+    blk_clear(Y, NY)
+    status = 0
+    series = False
+    for e in range(NG.size):
+        n = NG[e]
+        if n == 0:
+            continue
+        delta = r - lam[e]
+        if e != rc and abs(delta) * L <= NEAR and lam[e].real > r.real:
+            # e^{r tau} int_0^tau e^{(lam_e - r) s} P(s) ds: the series of e^{(lam_e - r) s} grows
+            series = True
+            dp = -delta
+            ex = np.empty(DC, dtype=np.complex128)  # dp^m / m!
+            ex[0] = 1.0
+            for mm in range(1, DC):
+                ex[mm] = ex[mm - 1] * dp / mm
+            top = 0.0
+            Lp = 1.0
+            last = 0
+            for kk in range(DC - 1):
+                R = 0.0j  # the coefficient of s^kk in e^{dp s} P(s)
+                for i in range(min(kk, n - 1) + 1):
+                    R += G[e, i] * ex[kk - i]
+                q = R / (kk + 1)
+                Y[rc, kk + 1] += q
+                last = kk + 1
+                Lp *= L
+                mag = abs(q) * Lp
+                if mag > top:
+                    top = mag
+                if kk + 1 >= n and (q == 0.0 or mag <= SERIES_TOL * top):
+                    break
+                if kk + 2 >= DC:
+                    status = 1
+            if last + 1 > NY[rc]:
+                NY[rc] = last + 1
+        elif e == rc or abs(delta) * L <= NEAR:
+            if e != rc:
+                series = True
+            q = 0.0j
+            top = 0.0
+            Lp = 1.0
+            last = 0
+            for jj in range(DC - 1):
+                P = G[e, jj] if jj < n else 0.0j
+                q = (P + delta * q) / (jj + 1)
+                Y[e, jj + 1] += q
+                last = jj + 1
+                Lp *= L
+                mag = abs(q) * Lp
+                if mag > top:
+                    top = mag
+                if jj + 1 >= n and (q == 0.0 or mag <= SERIES_TOL * top):
+                    break
+                if jj + 2 >= DC:
+                    status = 1
+            if last + 1 > NY[e]:
+                NY[e] = last + 1
+        else:
+            a0 = lam[e] - r
+            qn = 0.0j
+            for jj in range(n - 1, -1, -1):
+                qn = (G[e, jj] - (jj + 1) * qn) / a0
+                Y[e, jj] += qn
+            if n > NY[e]:
+                NY[e] = n
+    at0 = 0.0j
+    mag0 = abs(y0)
+    for e in range(NY.size):
+        if NY[e] > 0:
+            at0 += Y[e, 0]
+            mag0 += abs(Y[e, 0])
+    C = y0 - at0
+    if abs(C) <= 4.0 * EPS * mag0:  # rounding: the particular solution starts at y0
+        C = 0.0j
+    if C != 0.0:
+        Y[rc, 0] += C
+        if NY[rc] == 0:
+            NY[rc] = 1
+    blk_trim(Y, NY)
+    # the exponents near r folded into the one of them with the smallest real part: one polynomial,
+    # whose coefficients cancel where its value does
+    c = rc
+    for e in range(NY.size):
+        if NY[e] > 0 and abs(lam[e] - r) * L <= NEAR and lam[e].real < lam[c].real:
+            c = e
+    for e in range(NY.size):
+        if e != c and NY[e] > 0 and abs(lam[e] - r) * L <= NEAR:
+            if blk_fold(Y, NY, e, c, lam, L) != 0:
+                status = 1
+            series = True
+    blk_trim(Y, NY)
+    return status, series
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_fold(Y, NY, e, c, lam, L):
+    """Move the terms of exponent ``e`` into exponent ``c`` (``Re lam_c <= Re lam_e``): ``P(tau)
+    e^{lam_e tau} = e^{lam_c tau} P(tau) e^{d tau}``, ``d = lam_e - lam_c``, the series cut below
+    ``SERIES_TOL`` on ``[0, L]``. Returns 1 at the degree limit."""
+    n = NY[e]
+    d = lam[e] - lam[c]
+    ex = np.empty(DC, dtype=np.complex128)
+    ex[0] = 1.0
+    for mm in range(1, DC):
+        ex[mm] = ex[mm - 1] * d / mm
+    top = 0.0
+    Lp = 1.0
+    status = 1
+    last = 0
+    for kk in range(DC):
+        R = 0.0j
+        for i in range(min(kk, n - 1) + 1):
+            R += Y[e, i] * ex[kk - i]
+        Y[c, kk] += R
+        last = kk
+        mag = abs(R) * Lp
+        Lp *= L
+        if mag > top:
+            top = mag
+        if kk >= n - 1 and mag <= SERIES_TOL * top:
+            status = 0
+            break
+    if last + 1 > NY[c]:
+        NY[c] = last + 1
+    for i in range(n):
+        Y[e, i] = 0.0
+    NY[e] = 0
+    return status
+
+
+# ------------------------------------------------------------------------------------------------
+# the first crossing of zero
+# ------------------------------------------------------------------------------------------------
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _refine(B, N, lam, a, b):
+    """The root in ``[a, b]`` of a piece decreasing through it (``phi(a) >= 0 > phi(b)``): Newton's
+    steps kept inside the bracket, bisection where they leave it; the point with ``phi <= 0``."""
+    x = 0.5 * (a + b)
+    for _ in range(200):
+        f, f1, _f2 = blk_eval(B, N, lam, x)
+        if f >= 0.0:
+            a = x
+        else:
+            b = x
+        if b - a <= 2.0 * EPS * max(abs(a), abs(b)) or b - a <= 1e-300:
+            break
+        xn = x - f / f1 if f1 != 0.0 else 0.5 * (a + b)
+        if not (a < xn < b):
+            xn = 0.5 * (a + b)
+        if xn == x:
+            xn = 0.5 * (a + b)
+            if xn == a or xn == b:
+                break
+        x = xn
+    return b
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def first_negative(B, N, lam, BIN, L, stack, D):
+    """The first ``tau`` in ``[0, L]`` where the piece is negative beyond rounding (it is ``>= 0`` at 0
+    up to rounding; one that starts at zero is left by its first non-vanishing derivative), ``-1``
+    if none, ``-2`` if the search gave up (its work bounded). ``stack``: work array, shape
+    (>= 256, 4); ``D``: three scratch blocks ``(D1, N1, D2, N2, D3, N3)`` for the derivatives, whose
+    own terms bound them (a sum that cancels to a constant has a derivative block of rounding
+    size, where bounds from the terms of the sum would not see the cancellation)."""
+    if L <= 0.0 or blk_is_zero(N):
+        return -1.0
+    D1, N1, D2, N2, D3, N3 = D
+    blk_deriv(D1, N1, B, N, lam)
+    blk_deriv(D2, N2, D1, N1, lam)
+    blk_deriv(D3, N3, D2, N2, lam)
+    f0, f1, f2 = blk_eval(B, N, lam, 0.0)
+    a0, a1, a2 = blk_abs(B, N, lam, 0.0)
+    e0 = 16.0 * EPS * a0
+    e1 = 16.0 * EPS * a1
+    e2 = 16.0 * EPS * a2
+    if f0 < -e0:
+        return 0.0
+    s = 0.0
+    if f0 <= e0:  # starts at zero
+        if f1 < -e1:
+            return 0.0
+        if f1 <= e1 and f2 < -e2:
+            return 0.0
+        g1 = f1 if f1 > e1 else 0.0
+        g2 = f2 if f2 > e2 else 0.0
+        M3 = blk_bound(D3, N3, lam, BIN, 0.0, L, 0)
+        if M3 <= 0.0:
+            s = L
+        elif g1 == 0.0 and g2 == 0.0:
+            s = 0.0  # flat to rounding at the start: the search below decides
+        else:
+            # phi(s) - phi(0) >= g1 s + g2 s^2/2 - M3 s^3/6 > 0 below the positive root
+            aa = M3 / 6.0
+            s = 0.5 * (0.5 * g2 + math.sqrt(0.25 * g2 * g2 + 4.0 * aa * g1)) / (2.0 * aa)
+        if s >= L:
+            return -1.0
+    aL, _b1, _b2 = blk_abs(B, N, lam, L)
+    err = 16.0 * EPS * max(a0, aL)
+    fs = blk_value(B, N, lam, s) if s > 0.0 else max(f0, 0.0)
+    if fs < -err:
+        return _refine(B, N, lam, 0.0, s)
+    fL = blk_value(B, N, lam, L)
+    stack[0, 0] = s
+    stack[0, 1] = L
+    stack[0, 2] = max(fs, 0.0)
+    stack[0, 3] = fL
+    sp = 1
+    wmin = 4.0 * EPS * L
+    it = 0
+    while sp > 0:
+        sp -= 1
+        a = stack[sp, 0]
+        b = stack[sp, 1]
+        fa = stack[sp, 2]
+        fb = stack[sp, 3]
+        w = b - a
+        it += 1
+        if it > 4000:
+            return -2.0
+        M1 = blk_bound(D1, N1, lam, BIN, a, b, 0)
+        if fa + fb - M1 * w > -2.0 * err:
+            continue
+        if fb < -err:
+            gm = blk_value(D1, N1, lam, 0.5 * (a + b))
+            M2 = blk_bound(D2, N2, lam, BIN, a, b, 0)
+            if gm + 0.5 * M2 * w < 0.0:
+                return _refine(B, N, lam, a, b)
+        if w <= wmin:
+            if fb < -err:
+                return _refine(B, N, lam, a, b)
+            continue  # a tangency to rounding: no crossing
+        m = 0.5 * (a + b)
+        fm = blk_value(B, N, lam, m)
+        if fm < -err:
+            stack[sp, 0] = a
+            stack[sp, 1] = m
+            stack[sp, 2] = fa
+            stack[sp, 3] = fm
+            sp += 1
+        else:
+            if sp + 2 > stack.shape[0]:
+                return -2.0
+            stack[sp, 0] = m
+            stack[sp, 1] = b
+            stack[sp, 2] = max(fm, 0.0)
+            stack[sp, 3] = fb
+            stack[sp + 1, 0] = a
+            stack[sp + 1, 1] = m
+            stack[sp + 1, 2] = fa
+            stack[sp + 1, 3] = max(fm, 0.0)
+            sp += 2
+    return -1.0
+
+
+# ------------------------------------------------------------------------------------------------
+# the pool of pieces and the channels
+# ------------------------------------------------------------------------------------------------
+# PF (cap, 3) float: t0 (emission start), valid_until (inf: exact), ref (bit history: p - x)
+# PI (cap, 4) int: next, term start, term count, flag (bit history: the branch)
+# TK (tcap,) int: e * DC + d;  TC (tcap,) complex: coefficient
+# CNT int: pieces, terms, (unused), overflow
+# CH_T (nch,) float delay; CHI (nch, 2) int: tail (last emitted), cursor (the receiver's piece)
+
+INF = math.inf
+LOAD, ELASTIC, FREE = 0, 1, 2
+# end codes
+GOING, SEPARATED, LIFTED, SPENT, TMAX, BUDGET, RINGS, FAILED = 0, 1, 2, 3, 4, 5, 6, 7
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _term_bound(re, d, Lb):
+    """``max |tau^d e^{re tau}|`` over ``[0, Lb]``."""
+    if d == 0:
+        return 1.0
+    if re < 0.0:
+        tm = d / (-re)
+        if tm < Lb:
+            return math.exp(d * (math.log(tm) - 1.0))
+        return math.exp(d * math.log(Lb) + re * Lb)
+    return Lb ** d
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_prune(B, N, lam, tol, Lb):
+    """Zero the terms below ``tol`` on ``[0, Lb]``."""
+    for e in range(N.size):
+        re = lam[e].real
+        for d in range(N[e]):
+            c = B[e, d]
+            if c != 0.0 and abs(c) * _term_bound(re, d, Lb) < tol:
+                B[e, d] = 0.0
+    blk_trim(B, N)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def pool_load(B, N, piece, delta, lam, BIN, PI, TK, TC):
+    blk_clear(B, N)
+    ts = PI[piece, 1]
+    for k in range(ts, ts + PI[piece, 2]):
+        e = TK[k] // DC
+        d = TK[k] - e * DC
+        B[e, d] += TC[k]
+        if d + 1 > N[e]:
+            N[e] = d + 1
+    blk_shift(B, N, delta, lam, BIN)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _write_terms(B, N, TK, TC, CNT):
+    """Append the nonzero terms; ``(start, count)`` or ``(-1, 0)`` when the term pool is full."""
+    start = CNT[1]
+    nt = start
+    for e in range(N.size):
+        for d in range(N[e]):
+            c = B[e, d]
+            if c != 0.0:
+                if nt >= TK.size:
+                    CNT[3] = 1
+                    return -1, 0
+                TK[nt] = e * DC + d
+                TC[nt] = c
+                nt += 1
+    CNT[1] = nt
+    return start, nt - start
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _same(B, N, S, NS, tol):
+    """Whether two blocks agree to rounding (``tol`` absolute, besides a relative 1e-13)."""
+    top = 0.0
+    for e in range(N.size):
+        for d in range(max(N[e], NS[e])):
+            x = abs(B[e, d]) if d < N[e] else 0.0
+            y = abs(S[e, d]) if d < NS[e] else 0.0
+            top = max(top, x, y)
+    lim = 1e-13 * top + tol
+    for e in range(N.size):
+        for d in range(max(N[e], NS[e])):
+            x = B[e, d] if d < N[e] else 0.0j
+            y = S[e, d] if d < NS[e] else 0.0j
+            if abs(x - y) > lim:
+                return False
+    return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def emit(c, a, B, N, valid, flag, ref, PF, PI, TK, TC, CNT, CHI, lam, BIN, S, NS, tol, Lb):
+    """Emit on channel ``c`` the piece ``B`` from emission time ``a`` (``B`` is pruned in place). A
+    piece equal to the continuation of the open one (exact, the same flag) is not emitted; one
+    emitted at the open piece's own start replaces it. Returns False when the pool is full. Terms
+    are pruned on the piece's life: ``Lb``, or up to ``valid`` for a piece holding series."""
+    blk_prune(B, N, lam, tol, min(Lb, max(valid - a, 0.0)))
+    tail = CHI[c, 0]
+    if tail >= 0:
+        t0 = PF[tail, 0]
+        if t0 == a:  # replace (nobody has received it yet)
+            st, nt = _write_terms(B, N, TK, TC, CNT)
+            if st < 0:
+                return False
+            PI[tail, 1] = st
+            PI[tail, 2] = nt
+            PI[tail, 3] = flag
+            PF[tail, 1] = valid
+            PF[tail, 2] = ref
+            return True
+        if PF[tail, 1] == INF and PI[tail, 3] == flag and valid == INF and PF[tail, 2] == ref:
+            if PI[tail, 2] == 0:
+                if blk_is_zero(N):
+                    return True
+            else:
+                pool_load(S, NS, tail, a - t0, lam, BIN, PI, TK, TC)
+                if _same(B, N, S, NS, tol):
+                    return True
+    npc = CNT[0]
+    if npc >= PF.shape[0]:
+        CNT[3] = 1
+        return False
+    st, nt = _write_terms(B, N, TK, TC, CNT)
+    if st < 0:
+        return False
+    PF[npc, 0] = a
+    PF[npc, 1] = valid
+    PF[npc, 2] = ref
+    PI[npc, 0] = -1
+    PI[npc, 1] = st
+    PI[npc, 2] = nt
+    PI[npc, 3] = flag
+    CNT[0] = npc + 1
+    if tail >= 0:
+        PI[tail, 0] = npc
+    else:
+        CHI[c, 1] = npc  # a history: its first piece
+    CHI[c, 0] = npc
+    return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def advance(c, a, CHI, CH_T, PF, PI):
+    """Move the receiver's cursor on channel ``c`` to the piece arriving at ``a``; returns it and the
+    next piece's arrival (inf if not emitted yet)."""
+    cur = CHI[c, 1]
+    T = CH_T[c]
+    while True:
+        nx = PI[cur, 0]
+        if nx < 0:
+            CHI[c, 1] = cur
+            return cur, INF
+        arr = PF[nx, 0] + T
+        if arr <= a:
+            cur = nx
+        else:
+            CHI[c, 1] = cur
+            return cur, arr
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def load_input(B, N, c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN):
+    """The piece of channel ``c`` arriving at ``a``, from origin ``a``; returns its validity (arrival
+    time)."""
+    arr = PF[piece, 0] + CH_T[c]
+    pool_load(B, N, piece, a - arr, lam, BIN, PI, TK, TC)
+    v = PF[piece, 1]
+    return v + CH_T[c] if v < INF else INF
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def chan_integrals(c, t, Z, CHI, CH_T, PF, PI, TK, TC, lam, BIN, B, N):
+    """``int f`` and ``int f^2 / Z`` over the wave now in the channel's segment (emitted in
+    ``[t - T, t]``)."""
+    lo = t - CH_T[c]
+    p = CHI[c, 1]
+    s1 = 0.0
+    s2 = 0.0
+    while p >= 0:
+        t0 = PF[p, 0]
+        nx = PI[p, 0]
+        tend = PF[nx, 0] if nx >= 0 else t
+        a = max(t0, lo)
+        b = min(tend, t)
+        if b > a and PI[p, 2] > 0:
+            pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
+            s1 += blk_integral(B, N, lam, a - t0, b - t0)
+            s2 += blk_integral_sq(B, N, lam, a - t0, b - t0)
+        if tend >= t:
+            break
+        p = nx
+    return s1, s2 / Z
+
+

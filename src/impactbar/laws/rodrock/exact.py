@@ -1,0 +1,646 @@
+r"""The exact blow: a piston of uniform segments strikes a rod of uniform segments whose bit loads a
+bilinear rock (theory §4d), every wave carried exactly (:mod:`impactbar.laws.rodrock._exactkernel`).
+
+**What is exact.** Each segment is a delay line: a force wave leaving one end arrives at the other
+its travel time later, unchanged, so the state of the chain is the set of waves that left each end
+in the last travel time. Every such wave is a chain of *pieces*, each a finite sum
+``Re sum c tau^d e^{lam tau}`` over a table of exponents: constants (a rigid piston's waves), the
+characteristic roots of the bit on each branch of the rock (``-k/Z``, ``-k_u/Z`` and 0 for a
+massless bit; the roots of ``m r^2 + Z r + b`` with a mass), and those of the data (a drive, a
+piston's modal fields). Every operation maps such pieces to such pieces exactly:
+
+- a welded junction between impedances ``Z_L`` and ``Z_R`` transmits and reflects,
+  ``f_out = (2 Z_R f_in + (Z_L - Z_R) g_in)/(Z_L + Z_R)``,
+  ``g_out = ((Z_R - Z_L) f_in + 2 Z_L g_in)/(Z_L + Z_R)``;
+- the piston's free far end reflects ``f_out = -g_in`` (``N = p(t)`` under a drive);
+- the piston-shank interface is welded while its force ``N = 2 (Z_R f_in + Z_L g_in)/(Z_L + Z_R)`` is
+  compressive and free (``N = 0``) otherwise; the gap is the exact integral of ``v_s - v_p``, and
+  contact resumes where it closes;
+- at the bit, ``m p'' + Z p' + R(p) = 2 F + f`` (``F`` the arriving wave, ``f`` the feed) is linear on
+  each branch of Lundberg's law (loading ``R = k p``, unloading and reloading
+  ``R = k_u (p - p_perm)``, lift-off ``R = 0``) and is solved in closed form: polynomial times
+  exponential terms where the forcing shares an exponent with the branch (one degree more);
+  the reflected wave is ``G = F - Z p'``.
+
+Every switch (separation, re-contact, unloading, reloading, lift-off, landing) is the first zero of
+an exact piece, located by a certified branch-and-bound search and refined by safeguarded Newton
+steps to rounding. Nothing is averaged over cells; segment lengths need not be commensurate.
+Exponents closer than ``0.05 / h`` (``h`` the shortest travel time) are handled as one, the
+difference carried by the Taylor series of ``e^{delta tau}`` over at most ``h`` (to ``1e-18``), so a
+soft rock (``k -> 0``), a light bit (``m -> 0``: below ``1e-18`` of the bit's time scales the
+massless bit itself) or ``k_u -> k`` change nothing abruptly. Terms below ``1e-19`` of the blow's
+force scale on its time scale are dropped.
+
+**When the blow ends** (:attr:`ExactBlow.ended_by`), from bounds that hold for all later time:
+
+- ``"separated"``: the piston has left the shank for good (its mean velocity ``<= 0`` and its struck
+  end, within ``2 sqrt(2 C_p E_int)`` of where it is, behind the lowest point the shank can reach:
+  with a feed, the static position less what the rod's energy ``Psi`` above the static state can
+  lift it; without one, the rod's mean velocity bounded by ``sqrt(2 Psi / M_r)``) and the rock
+  can no longer yield (``Psi < (R_max - f)^2/(2 k_u)``, the energy that loading past ``p_max`` needs);
+  the rod may go on ringing on the rock without loss;
+- ``"lifted"``: the same, the rod having left the rock for good (no feed, the bit off the rock,
+  the rod moving back, its waves unable to bring the bit back);
+- ``"spent"``: the energy that could still reach the rock (the rod's, the bit's and the rock's above
+  the static state, and the piston's while it may strike again) is below ``1e-17`` of the available
+  energy: no result can move by more;
+- ``"t_max"``: the horizon the caller gave;
+- ``"rings"``: the cost bound reached with the rock unable to yield but the piston's return not
+  excluded (a lossless rod and piston touching again and again);
+- ``"budget"``: the cost bound reached otherwise (``uncertainty`` bounds what the rock could still
+  take).
+
+A semi-infinite rod (Lundberg's idealisation: the wave the bit reflects never returns) is the
+option ``semi_infinite=True``: the bit's reflected wave leaves the chain (its energy booked as
+``radiated``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import _exacthistory as H
+from . import _exactkernel as K
+from . import _exactpieces as P
+
+__all__ = ["ExactBlow", "exact_blow", "exact_rod_rock_blow"]
+
+_END_NAMES = {P.SEPARATED: "separated", P.LIFTED: "lifted", P.SPENT: "spent", P.TMAX: "t_max",
+              P.BUDGET: "budget", P.RINGS: "rings", P.FAILED: "failed"}
+_SPENT = 1e-17
+_TOL = 1e-19
+#: cost bounds of one blow (pieces stored, windows of the shortest travel time)
+MAX_PIECES = 2_000_000
+MAX_WINDOWS = 2_000_000
+
+
+def _roots(m, Z, b):
+    """Roots of ``m r^2 + Z r + b`` (fast first), or of ``Z r + b`` for ``m = 0``; without
+    cancellation."""
+    if m == 0.0:
+        return [complex(-b / Z)]
+    disc = Z * Z - 4.0 * m * b
+    if disc >= 0.0:
+        q = -0.5 * (Z + math.sqrt(disc))
+        return [complex(q / m), complex(b / q) if b != 0.0 else 0j]
+    om = math.sqrt(-disc) / (2.0 * m)
+    re = -Z / (2.0 * m)
+    return [complex(re, om), complex(re, -om)]
+
+
+def _table(data, roots):
+    """The exponent table: 0, the data's exponents and the roots, each once; the roots' indices."""
+    lam = [0j]
+    for x in [*data, *roots]:
+        if all(complex(x) != y for y in lam):
+            lam.append(complex(x))
+    return np.array(lam, dtype=complex), [lam.index(complex(r)) for r in roots]
+
+
+def _compliance(T, Z, lead_mass):
+    """``int N^2 dx / EA`` for the chain (segments' travel times ``T`` and impedances ``Z`` in order
+    from the loaded end's far side to the loaded end) under a unit force at its end balanced by
+    uniform acceleration, ``lead_mass`` a point mass at the far side: the compliance of the end
+    relative to the centre of mass."""
+    masses = np.asarray(Z) * np.asarray(T)
+    M = lead_mass + masses.sum()
+    n0 = lead_mass / M
+    c = 0.0
+    for Ti, Zi, mi in zip(T, Z, masses, strict=True):
+        n1 = n0 + mi / M
+        c += Ti / Zi * (n0 * n0 + n0 * n1 + n1 * n1) / 3.0
+        n0 = n1
+    return c
+
+
+@dataclass(frozen=True)
+class ExactBlow:
+    """One blow of the exact solver (:func:`exact_blow`; theory §4d), in the model's units.
+
+    Attributes
+    ----------
+    efficiency : float
+        ``work_on_rock / available_energy`` (``<= 1``).
+    efficiency_with_rebound : float
+        ``work_on_rock / (available_energy - piston_energy)`` (the rebound credited; ``<= 1``).
+    work_on_rock : float
+        The work the rock dissipated (``k (1 - 1/gamma) (p_b^2 - p_a^2)/2`` summed over the loadings):
+        final once the blow has ended.
+    rock_energy : float
+        The rock's stored elastic energy at the end, ``R^2/(2 k_u)``.
+    available_energy : float
+        ``energy_at_impact + feed_work + drive_work`` plus the energy stored under the feed at
+        impact (``f^2 C_rod / 2 + f^2/(2 k_u)``).
+    energy_at_impact, feed_work, drive_work : float
+        The piston's energy at impact, the feed's work on the shank, the drive's on the piston.
+    piston_energy, rod_energy, radiated : float
+        The piston's energy at the end; the rod's (its waves, its strain under the feed, the bit's
+        kinetic energy); the energy the bit's reflected wave carried away on a semi-infinite rod.
+    energy_error : float
+        ``|available - (work_on_rock + rock_energy + piston_energy + rod_energy + radiated)| /
+        available``: rounding.
+    rebound_velocity : float
+        The piston's mean velocity at the end (negative: moving back).
+    max_penetration, permanent_penetration, advance : float
+        ``p_max`` (the bit's largest penetration, from the rock's surface), ``p_max - R_max/k_u``
+        (where the rock's force vanishes on the last unloading line), the bit's displacement over
+        the blow. Updated continuously: a blow stopped while the bit advances has them at its end.
+    peak_bit_force, peak_bit_time : float
+        ``R_max = k p_max`` and the time it was reached.
+    duration : float
+        The time at which the end was established.
+    ended_by : str
+        ``"separated"``, ``"lifted"``, ``"spent"``, ``"t_max"``, ``"rings"`` or ``"budget"`` (see
+        :mod:`impactbar.laws.rodrock.exact`).
+    uncertainty : float
+        Zero when the end is certified; otherwise the energy that could still reach the rock, over
+        the available energy: a bound on how much the efficiency could still grow.
+    loadings : numpy.ndarray, shape (n, 5)
+        One row per loading episode (the rock yielding): start and end time, penetration at start
+        and end, the work dissipated.
+    separations, recontacts : int
+        How often the piston left the shank and struck it again.
+    bit_velocity, gap, shank_displacement : float
+        At the end.
+    pieces, windows : int
+        The cost: pieces stored, windows of the shortest travel time.
+    diagnostics : dict
+        ``searches_abandoned`` (crossing searches that hit their work bound: 0 in a sound run),
+        ``degree_limit`` (series that reached the degree limit: 0), ``terms`` (stored).
+    """
+
+    efficiency: float
+    efficiency_with_rebound: float
+    work_on_rock: float
+    rock_energy: float
+    available_energy: float
+    energy_at_impact: float
+    feed_work: float
+    drive_work: float
+    piston_energy: float
+    rod_energy: float
+    radiated: float
+    energy_error: float
+    rebound_velocity: float
+    max_penetration: float
+    permanent_penetration: float
+    advance: float
+    peak_bit_force: float
+    peak_bit_time: float
+    duration: float
+    ended_by: str
+    uncertainty: float
+    loadings: np.ndarray
+    separations: int
+    recontacts: int
+    bit_velocity: float
+    gap: float
+    shank_displacement: float
+    pieces: int
+    windows: int
+    diagnostics: dict = field(default_factory=dict)
+    _hist: tuple = field(repr=False, default=())
+
+    # -- histories ------------------------------------------------------------------------------
+    def junction_force(self, j: int, t) -> np.ndarray:
+        """Force at junction ``j`` at times ``t`` (``j`` counts the interfaces from the piston's far
+        end: 1 .. J - 1; the shank is ``contact_junction``), 0 before the blow."""
+        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        if not 1 <= j < nodes:
+            raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
+        return scale * _eval_channel(pools, 2 * nodes + 1 + j, t, kind=0)
+
+    @property
+    def contact_junction(self) -> int:
+        """The index of the piston-shank interface among the junctions."""
+        return self._hist[3]
+
+    def shank_force(self, t) -> np.ndarray:
+        """The piston-shank force at times ``t``."""
+        return self.junction_force(self.contact_junction, t)
+
+    def penetration(self, t) -> np.ndarray:
+        """The bit's penetration at times ``t``."""
+        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        return scale * _eval_channel(pools, 3 * nodes + 1, t, kind=1)
+
+    def bit_force(self, t) -> np.ndarray:
+        """The rock's force on the bit at times ``t``."""
+        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        return scale * _eval_channel(pools, 3 * nodes + 1, t, kind=2)
+
+    def peak_forces(self):
+        """The largest compressive force at every junction and at the bit, and when each is first
+        reached (exact maxima of the pieces).
+
+        Returns
+        -------
+        values, times : numpy.ndarray, shape (J,)
+            Junctions ``1 .. J - 1`` then the bit (its ``R_max``).
+        """
+        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        vals, times = [], []
+        for j in range(1, nodes):
+            v, t = _channel_max(pools, 2 * nodes + 1 + j, self.duration)
+            vals.append(scale * v)
+            times.append(t)
+        vals.append(self.peak_bit_force)
+        times.append(self.peak_bit_time)
+        return np.array(vals), np.array(times)
+
+
+def _eval_channel(pools, c, t, kind, head=None):
+    """Channel ``c``'s history at times ``t`` (from its first piece, or ``head``: a wave channel's
+    ``CHI[c, 1]`` is its receiver's cursor, its first piece the ``c``-th of the pool)."""
+    PF, PI, TK, TC, CHI, lam, lamk = pools
+    t = np.atleast_1d(np.asarray(t, dtype=float))
+    flat = t.ravel()
+    order = np.argsort(flat, kind="stable")
+    out = np.zeros(flat.size)
+    head = int(CHI[c, 1]) if head is None else int(head)
+    H.eval_history(PF, PI, TK, TC, lam, head, np.ascontiguousarray(flat[order]), out, kind, lamk)
+    res = np.empty(flat.size)
+    res[order] = out
+    return res.reshape(t.shape)
+
+
+def _channel_max(pools, c, t_end):
+    PF, PI, TK, TC, CHI, lam, lamk = pools
+    res = np.zeros(2)
+    H.history_max(PF, PI, TK, TC, lam, int(CHI[c, 1]), float(t_end), res)
+    return res[0], res[1]
+
+
+def _check_chain(name, times, imps):
+    T = np.asarray(times, dtype=float)
+    Z = np.asarray(imps, dtype=float)
+    if T.ndim != 1 or T.size == 0 or T.shape != Z.shape:
+        raise ValueError(f"{name}: travel times and impedances must be 1-d, non-empty, of one length; "
+                         f"got shapes {T.shape} and {Z.shape}")
+    for what, a in (("travel times", T), ("impedances", Z)):
+        if not np.all(np.isfinite(a)) or not np.all(a > 0.0):
+            raise ValueError(f"{name}: {what} must be finite and > 0; got {a}")
+    return T, Z
+
+
+def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k, k_u, bit_mass=0.0,
+               feed=0.0, impact_velocity, semi_infinite=False, t_max=None, record=True,
+               max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS) -> ExactBlow:
+    r"""The blow of a rigidly moving, unstressed piston on a rod resting on the rock under the feed,
+    every wave exact (theory §4d; the module's text says what is exact and how the end is decided).
+
+    Parameters
+    ----------
+    piston_times, piston_impedances : array_like, shape (P,)
+        The piston's segments from its far (driven) end to its struck end: travel times (model time)
+        and impedances (model units; a uniform piston of the model is ``[1/s]``, ``[s]``).
+    rod_times, rod_impedances : array_like, shape (R,)
+        The rod's segments from the shank to the bit.
+    k, k_u : float
+        The rock's loading and unloading stiffness, ``0 < k <= k_u``.
+    bit_mass : float
+        ``>= 0`` (model masses; the piston of the model has mass 1).
+    feed : float
+        The static feed force on the shank, ``>= 0``.
+    impact_velocity : float
+        ``> 0``.
+    semi_infinite : bool
+        Lundberg's idealisation: the wave the bit reflects leaves the chain and never returns.
+    t_max : float, optional
+        Stop there (``ended_by = "t_max"``); by default the blow runs until its end is certified.
+    record : bool
+        Keep the force and penetration histories (for :meth:`ExactBlow.junction_force` and the
+        peaks).
+    max_pieces, max_windows : int
+        Bounds of the cost (``ended_by = "budget"`` or ``"rings"`` past them).
+
+    Returns
+    -------
+    ExactBlow
+
+    Raises
+    ------
+    ValueError
+        An argument outside its range (named), or a blow whose energies the float range cannot hold.
+    """
+    Tp, Zp = _check_chain("piston", piston_times, piston_impedances)
+    Tr, Zr = _check_chain("rod", rod_times, rod_impedances)
+    from ..._shared.validate import check_int, check_real
+
+    k = check_real("k", k, lo=0.0, lo_open=True)
+    k_u = check_real("k_u", k_u, lo=k)
+    m = check_real("bit_mass", bit_mass, lo=0.0)
+    f = check_real("feed", feed, lo=0.0)
+    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
+    if t_max is not None:
+        t_max = check_real("t_max", t_max, lo=0.0, lo_open=True)
+    max_pieces = check_int("max_pieces", max_pieces, lo=16)
+    max_windows = check_int("max_windows", max_windows, lo=1)
+    if not isinstance(semi_infinite, bool | np.bool_):
+        raise ValueError(f"semi_infinite must be True or False; got {semi_infinite!r}")
+    T = np.concatenate((Tp, Tr))
+    Z = np.concatenate((Zp, Zr))
+    h = float(T.min())
+    Tsum = float(T.sum())
+    if not (Tsum / h <= 1e9):
+        raise ValueError(f"the travel times span {T.min():.3g} to {T.max():.3g}: the shortest would "
+                         "need more than 1e9 windows to cross the chain once")
+    if 2.0 * Tp.sum() / h > max_windows:
+        raise ValueError(f"max_windows = {max_windows} cannot hold even the piston's contact "
+                         f"({2.0 * Tp.sum() / h:.3g} windows of the shortest travel time {h:.3g})")
+    Zb = float(Zr[-1])
+    # scale: the largest of the impact force and the feed is 1
+    scale = max(float(Zp[-1]) * V, f)
+    Vn, fn = V / scale * 1.0, f / scale
+    C_rod = float(np.sum(Tr / Zr))
+    e_scale = 0.5 * float(np.sum(Zp * Tp)) * Vn * Vn + fn * fn * (0.5 * C_rod + 0.5 / k_u)
+    if not (1e-290 < scale * scale * e_scale < 1e290):
+        raise ValueError(f"impact_velocity = {V:g} and feed = {f:g} give a blow whose energy "
+                         f"(~{scale * scale * e_scale:.3g}) the float range cannot hold; choose units that "
+                         "keep it within 1e-290 .. 1e290")
+    # a bit lighter than 1e-18 of its time scales is the massless bit
+    if m > 0.0 and m * max(k_u / (Zb * Zb), 1.0 / (Zb * h)) < 1e-18:
+        m = 0.0
+    branches = [k, k_u, 0.0]
+    roots = []
+    for b in branches:
+        if m == 0.0:
+            roots.append([complex(-b / Zb)])
+        elif b == 0.0:
+            roots.append([complex(-Zb / m), 0j])
+        else:
+            roots.append(_roots(m, Zb, b))
+    flat = [r for rs in roots for r in rs]
+    lam, index = _table([], flat)
+    nr = 2 if m > 0.0 else 1
+    RT = np.zeros((3, 2), dtype=complex)
+    RC = np.zeros((3, 2), dtype=np.int64)
+    RD = np.zeros((3, 2), dtype=complex)
+    i = 0
+    for br in range(3):
+        for q in range(nr):
+            RT[br, q] = flat[i]
+            RC[br, q] = index[i]
+            i += 1
+    Mp = float(np.sum(Zp * Tp))
+    Mr = float(np.sum(Zr * Tr)) + m
+    Lb = max(2.0 * Tsum, h)
+    PR = np.zeros(32)
+    PR[0], PR[1], PR[2], PR[3], PR[4], PR[5] = k, k_u, m, fn, Zb, h
+    PR[7] = 1.0 if semi_infinite else 0.0
+    PR[8], PR[9], PR[10], PR[11] = Lb, _SPENT, 0.5 * Mp * Vn * Vn, C_rod
+    PR[12] = _compliance(Tp, Zp, 0.0)
+    PR[13] = _compliance(Tr[::-1], Zr[::-1], m)
+    PR[14] = _compliance(Tr, Zr, 0.0)
+    PR[15], PR[16], PR[17] = Mp, Mr, h
+    PR[18] = math.inf if t_max is None else t_max
+    PR[19] = max_windows
+    PR[20], PR[21], PR[22], PR[23], PR[24] = fn / k, Tp.size, 0.0, 1.0 if record else 0.0, max_pieces
+    pcap, tcap, ecap = 4096, 16384, 64
+    while True:
+        ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb)
+        K.run(ws)
+        if ws[24][0] == 0:
+            break
+        pcap, tcap, ecap = 4 * pcap, 4 * tcap, 4 * ecap
+    return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
+
+
+def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb):
+    J = T.size
+    nch = 3 * J + 2
+    PF = np.zeros((pcap, 3))
+    PI = np.zeros((pcap, 4), dtype=np.int64)
+    TK = np.zeros(tcap, dtype=np.int64)
+    TC = np.zeros(tcap, dtype=complex)
+    CNT = np.zeros(4, dtype=np.int64)
+    CHI = np.full((nch, 2), -1, dtype=np.int64)
+    CH_T = np.zeros(nch)
+    CH_TOL = np.full(nch, _TOL)
+    CH_TOL[3 * J + 1] = _TOL * max(1.0 / k, Lb / Zb)
+    n = 0
+    nt = 0
+    for i in range(1, J + 1):
+        for c, val in ((2 * (i - 1), 0.5 * Z[i - 1] * Vn), (2 * i - 1, -0.5 * Z[i - 1] * Vn)):
+            CH_T[c] = T[i - 1]
+            PF[n, 0] = -T[i - 1]
+            PF[n, 1] = math.inf
+            PI[n, 0] = -1
+            PI[n, 1] = nt
+            if i <= n_p and val != 0.0:
+                TK[nt] = 0
+                TC[nt] = val
+                nt += 1
+                PI[n, 2] = 1
+            CHI[c, 0] = n
+            CHI[c, 1] = n
+            n += 1
+    # the drive channel: no drive
+    c = 2 * J
+    PF[n, 0] = -1.0
+    PF[n, 1] = math.inf
+    PI[n, 0] = -1
+    PI[n, 1] = nt
+    CHI[c, 0] = n
+    CHI[c, 1] = n
+    n += 1
+    CNT[0], CNT[1] = n, nt
+    BIN = np.zeros((P.DC, P.DC))
+    for a in range(P.DC):
+        for b in range(a + 1):
+            BIN[a, b] = math.comb(a, b)
+    WB = np.zeros((16, lam.size, P.DC), dtype=complex)
+    WN = np.zeros((16, lam.size), dtype=np.int64)
+    STK = np.zeros((256, 4))
+    SZ = Z.astype(float)
+    ST = T.astype(float)
+    NSF = np.zeros((J + 1, 4))
+    NSI = np.full((J + 1, 4), -1, dtype=np.int64)
+    NSI[:, 3] = 0
+    NSI[n_p, 3] = 1  # in contact at impact
+    BS = np.zeros(16)
+    p0 = fn / k
+    BS[0], BS[1], BS[2], BS[3], BS[4], BS[5] = p0, p0, 0.0, p0, fn, p0 - fn / k_u
+    BS[9], BS[10], BS[11], BS[12] = p0, 0.0, 0.0, p0
+    BI = np.zeros(4, dtype=np.int64)
+    EP = np.zeros((ecap, 5))
+    CI = np.zeros(8, dtype=np.int64)
+    CT = np.zeros(16)
+    return (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+            RT, RC, RD, EP, CI, CT)
+
+
+def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record):
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    J = SZ.size
+    n_p = Tp.size
+    t_end = float(CT[0])
+    K.account(ws, t_end)
+    Pp, Ep, Er = CT[3], CT[4], CT[6]
+    br = int(BI[0])
+    p = BS[0]
+    R = k * BS[1] if br == P.LOAD else (k_u * BS[1] if br == P.ELASTIC else 0.0)
+    xs = NSF[n_p, 1]
+    gap = NSF[n_p, 0]
+    E0 = 0.5 * Mp * Vn * Vn
+    feed_work = fn * xs
+    static = 0.5 * fn * fn * C_rod
+    available = E0 + feed_work + static + 0.5 * fn * fn / k_u
+    dissipated = BS[6]
+    rock_e = R * R / (2.0 * k_u)
+    rod_e = Er + 0.5 * m * BS[2] ** 2 + fn * (xs - (p - BS[9])) + static
+    radiated = BS[8]
+    err = abs(available - (dissipated + rock_e + Ep + rod_e + radiated)) / available
+    nep = int(BI[1])
+    loads = EP[:nep].copy()
+    if br == P.LOAD:  # a loading under way at the end
+        loads = np.vstack((loads, [[BS[11], t_end, BS[12], p,
+                                    0.5 * (1.0 - k / k_u) * k * (p - BS[12]) * (p + BS[12])]]))
+    ended = _END_NAMES.get(int(CI[1]), "failed")
+    unc = 0.0
+    if ended in ("budget", "t_max", "rings"):
+        rem = CT[7] + (Ep if ended != "rings" else 0.0)
+        unc = rem / available if ended != "rings" else 0.0
+    s2 = scale * scale
+    loads[:, 2:4] *= scale
+    loads[:, 4] *= s2
+    hist = ()
+    if record:
+        lamk = np.array([k, k_u, 0.0])
+        hist = (scale, (PF, PI, TK, TC, CHI, lam, lamk), J, n_p)
+    return ExactBlow(
+        efficiency=dissipated / available,
+        efficiency_with_rebound=dissipated / (available - Ep),
+        work_on_rock=s2 * dissipated, rock_energy=s2 * rock_e, available_energy=s2 * available,
+        energy_at_impact=s2 * E0, feed_work=s2 * feed_work, drive_work=0.0, piston_energy=s2 * Ep,
+        rod_energy=s2 * rod_e, radiated=s2 * radiated, energy_error=err,
+        rebound_velocity=scale * Pp / Mp, max_penetration=scale * BS[3],
+        permanent_penetration=scale * BS[5], advance=scale * (p - BS[9]),
+        peak_bit_force=scale * BS[4], peak_bit_time=float(BS[10]), duration=t_end, ended_by=ended,
+        uncertainty=unc, loadings=loads, separations=int(CI[5]), recontacts=int(CI[6]),
+        bit_velocity=scale * BS[2], gap=scale * gap, shank_displacement=scale * xs,
+        pieces=int(CNT[0]), windows=int(CI[2]),
+        diagnostics={"searches_abandoned": int(CI[4]), "degree_limit": int(CI[7]), "terms": int(CNT[1])},
+        _hist=hist)
+
+
+#: ``ended_by`` of a certified end (the blow's numbers are final): no contact, and no yield of the
+#: rock, can happen again, or no energy that could still reach the rock is left
+CERTIFIED = ("separated", "lifted", "spent")
+
+
+def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, t_max=None,
+                        semi_infinite=False, samples_per_piston=32, record_field=False,
+                        max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS):
+    r"""One blow of a rigid, unstressed uniform piston on a stepped rod, every wave exact
+    (:func:`exact_blow`), as the :class:`~impactbar.laws.rodrock.blow.Blow` of :func:`single_blow`.
+
+    Parameters
+    ----------
+    s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed
+        As :func:`impactbar.laws.rodrock.blow.rod_rock_blow`: the piston's impedance (the model's
+        ``s``; its crossing time ``1/s``), the impact velocity, the segments (shape ``(J,)`` each;
+        piston lengths, impedances and wave speeds relative to the piston's), the rock's loading and
+        unloading stiffness, the bit's mass (piston masses) and the feed force (model units).
+    t_max : float, optional
+        Stop there (``ended_by = "t_max"``); by default the blow runs until its end is certified.
+    semi_infinite : bool
+        Lundberg's idealisation: the wave the bit reflects leaves the rod and never returns.
+    samples_per_piston : int
+        Samples per piston crossing time ``1/s`` in the recorded arrays (``times``, the force
+        histories, ``field``); the numbers and the methods ``shank_force``, ``junction_force``,
+        ``bit_force`` are exact whatever it is.
+    record_field : bool
+        Sample the force in piston and rod on a grid of cells (``samples_per_piston`` along the
+        piston, each segment as many as its travel time holds, at least 1) at the sample times.
+    max_pieces, max_windows : int
+        Bounds of the cost (then ``ended_by = "budget"`` or ``"rings"``, with ``uncertainty``).
+
+    Returns
+    -------
+    Blow
+        ``method = "exact"``; ``grid_loss = 0``, ``cell_time`` the sampling step.
+
+    Raises
+    ------
+    ValueError
+        As :func:`exact_blow`.
+
+    Notes
+    -----
+    Theory §4d, "exact blows". As the lattice's, ``work_on_rock`` is the work done on the rock:
+    what it dissipated (Lundberg's ``k (1 - 1/gamma)`` times the growth of ``p^2/2`` on every
+    loading, ``rock_dissipated``) plus its recoverable elastic energy at the end
+    (``rock_stored_energy``, 0 once the bit has lifted off).
+    """
+    from .blow import Blow
+
+    s = float(s)
+    lengths = np.asarray(lengths, float)
+    imps = np.asarray(impedances, float)
+    travel = lengths / (np.asarray(speeds, float) * s)
+    ex = exact_blow([1.0 / s], [s], travel, s * imps, k=k, k_u=k_u, bit_mass=bit_mass, feed=feed,
+                    impact_velocity=V, semi_infinite=semi_infinite, t_max=t_max, record=True,
+                    max_pieces=max_pieces, max_windows=max_windows)
+    dt = 1.0 / (s * samples_per_piston)
+    T = ex.duration
+    n = max(1, math.ceil(T / dt * (1.0 - 1e-12)))
+    seg_cells = tuple(max(1, round(Ti / dt)) for Ti in travel)
+    _check_samples(n, J=lengths.size, cells=(samples_per_piston + sum(seg_cells)) if record_field else 0)
+    times = np.minimum(dt * np.arange(n + 1), T)
+    mid = 0.5 * (times[:-1] + times[1:])
+    J = lengths.size
+    junc = np.column_stack([ex.junction_force(1 + j, mid) for j in range(J)])
+    fld = edges = None
+    if record_field:
+        fld, edges = _field(ex, np.concatenate(([1.0 / s], travel)), np.concatenate(([1.0], lengths)),
+                            (samples_per_piston, *seg_cells), mid)
+    return Blow(
+        times=times, shank_forces=junc[:, 0].copy(), junction_forces=junc,
+        bit_forces=ex.bit_force(times), penetrations=ex.penetration(times), field=fld,
+        energy_at_impact=ex.energy_at_impact, feed_work=ex.feed_work,
+        available_energy=ex.available_energy, work_on_rock=ex.work_on_rock + ex.rock_energy,
+        piston_energy=ex.piston_energy, rebound_velocity=ex.rebound_velocity,
+        rod_energy=ex.rod_energy + ex.radiated, grid_loss=0.0, rock_stored_energy=ex.rock_energy,
+        max_penetration=ex.max_penetration, permanent_penetration=ex.permanent_penetration,
+        advance=ex.advance, ended_by=ex.ended_by, cell_time=dt, piston_cells=samples_per_piston,
+        segment_cells=seg_cells, cell_edges=edges, length_error=0.0, drive_work=0.0, gap=ex.gap,
+        shank_displacement=ex.shank_displacement, piston_waves=None, rod_waves=None,
+        bit_velocity=ex.bit_velocity, method="exact", uncertainty=ex.uncertainty, loadings=ex.loadings,
+        radiated=ex.radiated, exact=ex)
+
+
+#: Most values the recorded arrays of one exact blow may hold (1 GiB as float64)
+MAX_SAMPLES = 2**27
+
+
+def _check_samples(n, J, cells):
+    """Refuse recorded arrays of ``n`` samples of ``J + 1`` histories and ``cells`` field values
+    beyond ``MAX_SAMPLES``."""
+    total = float(n) * (J + 3 + cells)
+    if total > MAX_SAMPLES:
+        what = "record_field would keep" if cells else "the recorded histories would keep"
+        raise ValueError(f"single blow: {what} {total:.3g} values (more than {MAX_SAMPLES}) over "
+                         f"{n} samples; use a shorter t_max or fewer cells_per_piston")
+
+
+def _field(ex, travel, lengths, cells, t):
+    """The force ``F + G`` at the centres of ``cells[i]`` cells of every segment (piston first) at
+    the times ``t``: the right-going wave that left the segment's left end ``u T`` earlier and the
+    left-going one that left its right end ``(1 - u) T`` earlier (``u`` the cell's fraction)."""
+    scale, pools = ex._hist[0], ex._hist[1]
+    cols, edges = [], [np.array([-1.0])]
+    x0 = -1.0
+    for i, (Ti, Li, n) in enumerate(zip(travel, lengths, cells, strict=True)):
+        u = (np.arange(n) + 0.5) / n
+        for ui in u:
+            F = _eval_channel(pools, 2 * i, t - ui * Ti, kind=0, head=2 * i)
+            G = _eval_channel(pools, 2 * i + 1, t - (1.0 - ui) * Ti, kind=0, head=2 * i + 1)
+            cols.append(scale * (F + G))
+        edges.append(x0 + Li * np.arange(1, n + 1) / n)
+        x0 += Li
+    return np.column_stack(cols), np.concatenate(edges)
