@@ -505,10 +505,10 @@ def _refine(B, N, lam, a, b):
 def first_negative(B, N, lam, BIN, L, stack, D):
     """The first ``tau`` in ``[0, L]`` where the piece is negative beyond rounding (it is ``>= 0`` at 0
     up to rounding; one that starts at zero is left by its first non-vanishing derivative), ``-1``
-    if none, ``-2`` if the search gave up (its work bounded). ``stack``: work array, shape
-    (>= 256, 4); ``D``: three scratch blocks ``(D1, N1, D2, N2, D3, N3)`` for the derivatives, whose
-    own terms bound them (a sum that cancels to a constant has a derivative block of rounding
-    size, where bounds from the terms of the sum would not see the cancellation)."""
+    if none, ``-2`` if the search gave up (its work bounded). A subinterval is excluded by the
+    Lipschitz bound or by the cubic Taylor bound from its left end (a piece rising from ~0 whose
+    fast terms cancel, a bit with mass). ``stack``: work array, shape (>= 256, 4); ``D``: three
+    scratch blocks ``(D1, N1, D2, N2, D3, N3)`` for the derivatives, bounded by their own terms."""
     if L <= 0.0 or blk_is_zero(N):
         return -1.0
     D1, N1, D2, N2, D3, N3 = D
@@ -566,6 +566,10 @@ def first_negative(B, N, lam, BIN, L, stack, D):
             return -2.0
         M1 = blk_bound(D1, N1, lam, BIN, a, b, 0)
         if fa + fb - M1 * w > -2.0 * err:
+            continue
+        g0, g1, g2 = blk_eval(B, N, lam, a)
+        M3 = blk_bound(D3, N3, lam, BIN, a, b, 0)
+        if g0 + min(g1, 0.0) * w + min(0.0, w * w * (0.5 * g2 - M3 * w / 6.0)) > -err:
             continue
         if fb < -err:
             gm = blk_value(D1, N1, lam, 0.5 * (a + b))
