@@ -12,6 +12,7 @@ import numba
 import numpy as np
 
 from ...dynamics._kernel import CACHE
+from ._exactintegrals import blk_integral, blk_integral_sq, moments  # noqa: F401 (the kernel's)
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
@@ -227,106 +228,6 @@ def blk_shift(B, N, delta, lam, BIN):
                 p *= delta
             B[e, k] = s * ex
         # (k-order loop reads B[e, d] for d >= k, written only after: safe)
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def moments(mu, a, b, K, out):
-    """``out[k] = int_a^b tau^k e^{mu tau} dtau`` for ``k < K`` (complex ``mu``, ``0 <= a <= b``):
-    upward recursion ``I_k = [tau^k e^{mu tau}/mu]_a^b - k/mu I_{k-1}`` while ``k < |mu| b`` (stable
-    there), the series ``sum_j mu^j/j! (b^{k+j+1} - a^{k+j+1})/(k+j+1)`` beyond."""
-    amu = abs(mu)
-    eb = cmath.exp(mu * b) if amu > 0.0 else 1.0 + 0.0j
-    ea = cmath.exp(mu * a) if amu > 0.0 else 1.0 + 0.0j
-    pb = 1.0
-    pa = 1.0
-    prev = 0.0j
-    for k in range(K):
-        if k < amu * b and amu * b > 1.0:
-            if k == 0:
-                val = (eb - ea) / mu
-            else:
-                val = (pb * eb - pa * ea) / mu - k / mu * prev
-        else:
-            val = 0.0j
-            term = 1.0 + 0.0j
-            qb = pb * b
-            qa = pa * a
-            for jj in range(400):
-                inc = term * (qb - qa) / (k + jj + 1)
-                val += inc
-                if jj > 2 and abs(inc) <= 1e-17 * abs(val):
-                    break
-                term = term * mu / (jj + 1)
-                qb *= b
-                qa *= a
-        out[k] = val
-        prev = val
-        pb *= b
-        pa *= a
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def blk_integral(B, N, lam, a, b):
-    """``int_a^b phi``, in the variable ``u = tau / b`` (coefficients ``c_d b^d``): a piece valid
-    on a short interval only (a series of a stiff exponent) has huge coefficients ``c_d`` whose
-    products would overflow, though its values do not."""
-    if b <= 0.0:
-        return 0.0
-    mom = np.empty(DC, dtype=np.complex128)
-    s = 0.0j
-    for e in range(N.size):
-        n = N[e]
-        if n == 0:
-            continue
-        moments(lam[e] * b, a / b, 1.0, n, mom)
-        sc = 1.0
-        for d in range(n):
-            s += B[e, d] * sc * mom[d]
-            sc *= b
-    return s.real * b
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def blk_integral_sq(B, N, lam, a, b):
-    """``int_a^b phi^2`` (``phi`` real: its conjugate terms are in the table): per pair of exponents
-    the product polynomial against the moments of ``e^{(lam_1 + lam_2) tau}``."""
-    if b <= 0.0:
-        return 0.0
-    # in the variable u = tau / b, coefficients c_d b^d (see blk_integral: no overflow of the products
-    # of a short-lived series' huge coefficients)
-    mom = np.empty(2 * DC, dtype=np.complex128)
-    prod = np.empty(2 * DC, dtype=np.complex128)
-    E = N.size
-    C = np.empty((E, DC), dtype=np.complex128)
-    for e in range(E):
-        sc = 1.0
-        for d in range(N[e]):
-            C[e, d] = B[e, d] * sc
-            sc *= b
-    s = 0.0j
-    for e1 in range(E):
-        n1 = N[e1]
-        if n1 == 0:
-            continue
-        for e2 in range(e1, E):
-            n2 = N[e2]
-            if n2 == 0:
-                continue
-            m = n1 + n2 - 1
-            for k in range(m):
-                prod[k] = 0.0
-            for d1 in range(n1):
-                c1 = C[e1, d1]
-                if c1 == 0.0:
-                    continue
-                for d2 in range(n2):
-                    prod[d1 + d2] += c1 * C[e2, d2]
-            moments((lam[e1] + lam[e2]) * b, a / b, 1.0, m, mom)
-            t = 0.0j
-            for k in range(m):
-                t += prod[k] * mom[k]
-            s += t if e1 == e2 else 2.0 * t
-    return s.real * b
 
 
 @numba.njit(cache=CACHE, nogil=True)
