@@ -414,9 +414,9 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         ``s`` (a uniform piston of the same mass and length). Default None: the uniform piston,
         whose results a one-segment ``SteppedPiston`` reproduces to the bit.
     method : {"auto", "exact", "lattice"}
-        ``"auto"``: exact for a uniform piston, no feed and no ``cells_per_piston``, the bit massless
-        or not (and where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` of the
-        shortest travel time), else the lattice.
+        ``"auto"``: exact for a uniform piston, a massless bit, no feed and no ``cells_per_piston`` (and
+        where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` of the shortest travel
+        time), else the lattice.
     semi_infinite : bool
         Lundberg's idealisation (exact method): the wave the bit reflects leaves the rod and never
         returns (its energy in ``radiated``); the blow ends when the energy is spent.
@@ -477,7 +477,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         raise ValueError("piston: a stepped piston is carried by the lattice only; give method='lattice' "
                          "(or 'auto') and semi_infinite=False with it")
     exact = method == "exact" or (method == "auto" and piston is None and (semi_infinite or (
-        law.feed == 0.0 and cells_per_piston is None
+        law.feed == 0.0 and law.bit_mass == 0.0 and cells_per_piston is None
         and _exact_is_cheap(model, law))))
     if semi_infinite and not exact:
         raise ValueError("semi_infinite=True needs method='exact' (or 'auto'); the lattice carries "
