@@ -99,8 +99,8 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
 def _emit(ws, c, a, blk, valid, flag, ref):
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    return emit(c, a, WB[blk], WN[blk], valid, flag, ref, PF, PI, TK, TC, CNT, CHI, lam, BIN, WB[10], WN[10],
-                CH_TOL[c], PR[8])
+    return emit(c, a, WB[blk], WN[blk], valid, flag, ref, (PF, PI, TK, TC, CNT, CHI, lam, BIN), WB[10],
+                WN[10], CH_TOL[c], PR[8])
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -525,8 +525,9 @@ def account(ws, t):
     Er = 0.0
     for i in range(1, J + 1):
         Z = SZ[i - 1]
-        m1, e1 = chan_integrals(2 * (i - 1), t, Z, CHI, CH_T, PF, PI, TK, TC, lam, BIN, WB[12], WN[12])
-        m2, e2 = chan_integrals(2 * i - 1, t, Z, CHI, CH_T, PF, PI, TK, TC, lam, BIN, WB[12], WN[12])
+        pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+        m1, e1 = chan_integrals(2 * (i - 1), t, Z, CH_T, pool, WB[12], WN[12])
+        m2, e2 = chan_integrals(2 * i - 1, t, Z, CH_T, pool, WB[12], WN[12])
         if i <= n_p:
             Pp += m1 - m2
             Ep += e1 + e2

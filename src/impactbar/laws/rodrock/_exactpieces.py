@@ -12,6 +12,7 @@ import numba
 import numpy as np
 
 from ...dynamics._kernel import CACHE
+from ._exactintegrals import blk_integral, blk_integral_sq, moments  # noqa: F401 (the kernel's)
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
@@ -230,106 +231,6 @@ def blk_shift(B, N, delta, lam, BIN):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def moments(mu, a, b, K, out):
-    """``out[k] = int_a^b tau^k e^{mu tau} dtau`` for ``k < K`` (complex ``mu``, ``0 <= a <= b``):
-    upward recursion ``I_k = [tau^k e^{mu tau}/mu]_a^b - k/mu I_{k-1}`` while ``k < |mu| b`` (stable
-    there), the series ``sum_j mu^j/j! (b^{k+j+1} - a^{k+j+1})/(k+j+1)`` beyond."""
-    amu = abs(mu)
-    eb = cmath.exp(mu * b) if amu > 0.0 else 1.0 + 0.0j
-    ea = cmath.exp(mu * a) if amu > 0.0 else 1.0 + 0.0j
-    pb = 1.0
-    pa = 1.0
-    prev = 0.0j
-    for k in range(K):
-        if k < amu * b and amu * b > 1.0:
-            if k == 0:
-                val = (eb - ea) / mu
-            else:
-                val = (pb * eb - pa * ea) / mu - k / mu * prev
-        else:
-            val = 0.0j
-            term = 1.0 + 0.0j
-            qb = pb * b
-            qa = pa * a
-            for jj in range(400):
-                inc = term * (qb - qa) / (k + jj + 1)
-                val += inc
-                if jj > 2 and abs(inc) <= 1e-17 * abs(val):
-                    break
-                term = term * mu / (jj + 1)
-                qb *= b
-                qa *= a
-        out[k] = val
-        prev = val
-        pb *= b
-        pa *= a
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def blk_integral(B, N, lam, a, b):
-    """``int_a^b phi``, in the variable ``u = tau / b`` (coefficients ``c_d b^d``): a piece valid
-    on a short interval only (a series of a stiff exponent) has huge coefficients ``c_d`` whose
-    products would overflow, though its values do not."""
-    if b <= 0.0:
-        return 0.0
-    mom = np.empty(DC, dtype=np.complex128)
-    s = 0.0j
-    for e in range(N.size):
-        n = N[e]
-        if n == 0:
-            continue
-        moments(lam[e] * b, a / b, 1.0, n, mom)
-        sc = 1.0
-        for d in range(n):
-            s += B[e, d] * sc * mom[d]
-            sc *= b
-    return s.real * b
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def blk_integral_sq(B, N, lam, a, b):
-    """``int_a^b phi^2`` (``phi`` real: its conjugate terms are in the table): per pair of exponents
-    the product polynomial against the moments of ``e^{(lam_1 + lam_2) tau}``."""
-    if b <= 0.0:
-        return 0.0
-    # in the variable u = tau / b, coefficients c_d b^d (see blk_integral: no overflow of the products
-    # of a short-lived series' huge coefficients)
-    mom = np.empty(2 * DC, dtype=np.complex128)
-    prod = np.empty(2 * DC, dtype=np.complex128)
-    E = N.size
-    C = np.empty((E, DC), dtype=np.complex128)
-    for e in range(E):
-        sc = 1.0
-        for d in range(N[e]):
-            C[e, d] = B[e, d] * sc
-            sc *= b
-    s = 0.0j
-    for e1 in range(E):
-        n1 = N[e1]
-        if n1 == 0:
-            continue
-        for e2 in range(e1, E):
-            n2 = N[e2]
-            if n2 == 0:
-                continue
-            m = n1 + n2 - 1
-            for k in range(m):
-                prod[k] = 0.0
-            for d1 in range(n1):
-                c1 = C[e1, d1]
-                if c1 == 0.0:
-                    continue
-                for d2 in range(n2):
-                    prod[d1 + d2] += c1 * C[e2, d2]
-            moments((lam[e1] + lam[e2]) * b, a / b, 1.0, m, mom)
-            t = 0.0j
-            for k in range(m):
-                t += prod[k] * mom[k]
-            s += t if e1 == e2 else 2.0 * t
-    return s.real * b
-
-
-@numba.njit(cache=CACHE, nogil=True)
 def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     """``Y`` = the solution of ``y' - r y = g`` with ``y(0) = y0`` on ``[0, L]`` (``G`` the block of
     ``g``; ``r = lam[rc]``), without cancellation: a forcing exponent ``lam_e`` within ``NEAR / L`` of
@@ -505,10 +406,10 @@ def _refine(B, N, lam, a, b):
 def first_negative(B, N, lam, BIN, L, stack, D):
     """The first ``tau`` in ``[0, L]`` where the piece is negative beyond rounding (it is ``>= 0`` at 0
     up to rounding; one that starts at zero is left by its first non-vanishing derivative), ``-1``
-    if none, ``-2`` if the search gave up (its work bounded). ``stack``: work array, shape
-    (>= 256, 4); ``D``: three scratch blocks ``(D1, N1, D2, N2, D3, N3)`` for the derivatives, whose
-    own terms bound them (a sum that cancels to a constant has a derivative block of rounding
-    size, where bounds from the terms of the sum would not see the cancellation)."""
+    if none, ``-2`` if the search gave up (its work bounded). A subinterval is excluded by the
+    Lipschitz bound or by the cubic Taylor bound from its left end (a piece rising from ~0 whose
+    fast terms cancel, a bit with mass). ``stack``: work array, shape (>= 256, 4); ``D``: three
+    scratch blocks ``(D1, N1, D2, N2, D3, N3)`` for the derivatives, bounded by their own terms."""
     if L <= 0.0 or blk_is_zero(N):
         return -1.0
     D1, N1, D2, N2, D3, N3 = D
@@ -566,6 +467,10 @@ def first_negative(B, N, lam, BIN, L, stack, D):
             return -2.0
         M1 = blk_bound(D1, N1, lam, BIN, a, b, 0)
         if fa + fb - M1 * w > -2.0 * err:
+            continue
+        g0, g1, g2 = blk_eval(B, N, lam, a)
+        M3 = blk_bound(D3, N3, lam, BIN, a, b, 0)
+        if g0 + min(g1, 0.0) * w + min(0.0, w * w * (0.5 * g2 - M3 * w / 6.0)) > -err:
             continue
         if fb < -err:
             gm = blk_value(D1, N1, lam, 0.5 * (a + b))
@@ -691,11 +596,13 @@ def _same(B, N, S, NS, tol):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def emit(c, a, B, N, valid, flag, ref, PF, PI, TK, TC, CNT, CHI, lam, BIN, S, NS, tol, Lb):
+def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     """Emit on channel ``c`` the piece ``B`` from emission time ``a`` (``B`` is pruned in place). A
     piece equal to the continuation of the open one (exact, the same flag) is not emitted; one
     emitted at the open piece's own start replaces it. Returns False when the pool is full. Terms
-    are pruned on the piece's life: ``Lb``, or up to ``valid`` for a piece holding series."""
+    are pruned on the piece's life: ``Lb``, or up to ``valid`` for a piece holding series.
+    ``pool`` is the tuple ``(PF, PI, TK, TC, CNT, CHI, lam, BIN)``; ``S, NS`` a scratch block."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     blk_prune(B, N, lam, tol, min(Lb, max(valid - a, 0.0)))
     tail = CHI[c, 0]
     if tail >= 0:
@@ -771,9 +678,10 @@ def load_input(B, N, c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def chan_integrals(c, t, Z, CHI, CH_T, PF, PI, TK, TC, lam, BIN, B, N):
+def chan_integrals(c, t, Z, CH_T, pool, B, N):
     """``int f`` and ``int f^2 / Z`` over the wave now in the channel's segment (emitted in
-    ``[t - T, t]``)."""
+    ``[t - T, t]``); ``pool`` as :func:`emit`'s, ``B, N`` a scratch block."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     lo = t - CH_T[c]
     p = CHI[c, 1]
     s1 = 0.0

@@ -75,6 +75,8 @@ _TOL = 1e-19
 #: cost bounds of one blow (pieces stored, windows of the shortest travel time)
 MAX_PIECES = 2_000_000
 MAX_WINDOWS = 2_000_000
+#: the wave-piece pool is enlarged 4-fold while it overflows, never past this many bytes
+MAX_POOL_BYTES = 2 ** 31
 
 
 def _roots(m, Z, b):
@@ -324,7 +326,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     Raises
     ------
     ValueError
-        An argument outside its range (named), or a blow whose energies the float range cannot hold.
+        An argument outside its range (named), a blow whose energies the float range cannot hold,
+        or one whose wave pieces would need more than ``MAX_POOL_BYTES`` (2 GiB) of memory.
     """
     Tp, Zp = _check_chain("piston", piston_times, piston_impedances)
     Tr, Zr = _check_chain("rod", rod_times, rod_impedances)
@@ -406,6 +409,11 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         if ws[24][0] == 0:
             break
         pcap, tcap, ecap = 4 * pcap, 4 * tcap, 4 * ecap
+        if pcap * 56 + tcap * 24 > MAX_POOL_BYTES:
+            raise ValueError(
+                f"the exact blow needs more than {MAX_POOL_BYTES / 2 ** 30:.0f} GiB of wave pieces "
+                f"(bit_mass = {m:g}: a light bit's fast branches make long series); use "
+                "method='lattice', or a bit_mass of 0 (the massless bit) or a heavier one")
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
 
 

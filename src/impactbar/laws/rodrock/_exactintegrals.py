@@ -1,0 +1,125 @@
+"""Integrals of exact pieces (theory §4d): the moments ``int tau^k e^{mu tau}``, ``int phi`` and
+``int phi^2`` of a block (:mod:`impactbar.laws.rodrock._exactpieces` describes the blocks)."""
+
+from __future__ import annotations
+
+import cmath
+import math
+
+import numba
+import numpy as np
+
+from ...dynamics._kernel import CACHE
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def moments(mu, a, b, K, out):
+    """``out[k] = int_a^b tau^k e^{mu tau} dtau`` for ``k < K`` (complex ``mu``, ``0 <= a <= b``):
+    upward recursion ``I_k = [tau^k e^{mu tau}/mu]_a^b - k/mu I_{k-1}`` while ``k < |mu| b``, the
+    downward one ``I_{k-1} = ([tau^k e^{mu tau}]_a^b - mu I_k)/k`` beyond (each stable where it is
+    used; started from 0 where ``prod |mu| b/k`` has damped its error below 1e-20), the series
+    ``sum_j mu^j/j! (b^{k+j+1} - a^{k+j+1})/(k+j+1)`` for ``|mu| b <= 1`` (an alternating series
+    for larger ``|mu| b`` loses ``e^{|mu| b}``: a bit with mass, its fast roots, issue 39)."""
+    amu = abs(mu)
+    eb = cmath.exp(mu * b) if amu > 0.0 else 1.0 + 0.0j
+    ea = cmath.exp(mu * a) if amu > 0.0 else 1.0 + 0.0j
+    x = amu * b
+    k0 = min(K, math.ceil(x)) if x > 1.0 else 0
+    if k0 < K and x > 1.0:
+        top = K
+        damp = 1.0
+        while damp > 1e-20:
+            top += 1
+            damp *= x / top
+        cur = 0.0j
+        for kk in range(top, k0, -1):
+            cur = (b ** kk * eb - (a ** kk if a > 0.0 else 0.0) * ea - mu * cur) / kk
+            if kk - 1 < K:
+                out[kk - 1] = cur
+    pb = 1.0
+    pa = 1.0
+    prev = 0.0j
+    for k in range(K if x <= 1.0 else k0):
+        if x > 1.0:
+            val = (eb - ea) / mu if k == 0 else (pb * eb - pa * ea) / mu - k / mu * prev
+        else:
+            val = 0.0j
+            term = 1.0 + 0.0j
+            qb = pb * b
+            qa = pa * a
+            for jj in range(400):
+                inc = term * (qb - qa) / (k + jj + 1)
+                val += inc
+                if jj > 2 and abs(inc) <= 1e-17 * abs(val):
+                    break
+                term = term * mu / (jj + 1)
+                qb *= b
+                qa *= a
+        out[k] = val
+        prev = val
+        pb *= b
+        pa *= a
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_integral(B, N, lam, a, b):
+    """``int_a^b phi``, in the variable ``u = tau / b`` (coefficients ``c_d b^d``): a piece valid
+    on a short interval only (a series of a stiff exponent) has huge coefficients ``c_d`` whose
+    products would overflow, though its values do not."""
+    if b <= 0.0:
+        return 0.0
+    mom = np.empty(B.shape[1], dtype=np.complex128)
+    s = 0.0j
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        moments(lam[e] * b, a / b, 1.0, n, mom)
+        sc = 1.0
+        for d in range(n):
+            s += B[e, d] * sc * mom[d]
+            sc *= b
+    return s.real * b
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_integral_sq(B, N, lam, a, b):
+    """``int_a^b phi^2`` (``phi`` real: its conjugate terms are in the table): per pair of exponents
+    the product polynomial against the moments of ``e^{(lam_1 + lam_2) tau}``."""
+    if b <= 0.0:
+        return 0.0
+    # in the variable u = tau / b, coefficients c_d b^d (see blk_integral: no overflow of the products
+    # of a short-lived series' huge coefficients)
+    mom = np.empty(2 * B.shape[1], dtype=np.complex128)
+    prod = np.empty(2 * B.shape[1], dtype=np.complex128)
+    E = N.size
+    C = np.empty((E, B.shape[1]), dtype=np.complex128)
+    for e in range(E):
+        sc = 1.0
+        for d in range(N[e]):
+            C[e, d] = B[e, d] * sc
+            sc *= b
+    s = 0.0j
+    for e1 in range(E):
+        n1 = N[e1]
+        if n1 == 0:
+            continue
+        for e2 in range(e1, E):
+            n2 = N[e2]
+            if n2 == 0:
+                continue
+            m = n1 + n2 - 1
+            for k in range(m):
+                prod[k] = 0.0
+            for d1 in range(n1):
+                c1 = C[e1, d1]
+                if c1 == 0.0:
+                    continue
+                for d2 in range(n2):
+                    prod[d1 + d2] += c1 * C[e2, d2]
+            moments((lam[e1] + lam[e2]) * b, a / b, 1.0, m, mom)
+            t = 0.0j
+            for k in range(m):
+                t += prod[k] * mom[k]
+            s += t if e1 == e2 else 2.0 * t
+    return s.real * b
