@@ -228,3 +228,72 @@ def test_a_vanishing_bit_mass_is_the_massless_exact_blow():
     for name in ("efficiency", "rebound_velocity", "permanent_penetration", "max_penetration"):
         assert getattr(light, name) == pytest.approx(getattr(none, name), rel=1e-6, abs=1e-9), name
     assert light.energy_error < 1e-12
+
+
+def test_a_negligible_bit_is_the_massless_bit():
+    """A bit whose time constant m / Z_b is at most 1e-10 of the shortest travel time counts as
+    massless (auto chooses the exact solver, as for m = 0, and gives the same blow); the lattice,
+    which carries the mass, confirms that such a mass moves nothing past 1e-9; a larger one keeps
+    the lattice under auto and its mass under method='exact'."""
+    segs = [(1.0, 1.0), (0.5, 0.5), (2.0, 1.0)]
+    none = ib.single_blow(_model(segs, 0.5, 1.0), 1.0)
+    light = ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-12), 1.0)
+    assert light.method == "exact" and light.efficiency == none.efficiency
+    assert light.rebound_velocity == none.rebound_velocity
+    assert ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-12), 1.0, method="exact").efficiency \
+        == none.efficiency
+    lat0 = ib.single_blow(_model(segs, 0.5, 1.0), 1.0, method="lattice")
+    lat = ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-12), 1.0, method="lattice")
+    assert lat.efficiency == pytest.approx(lat0.efficiency, rel=1e-9)
+    assert ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-3), 1.0).method == "lattice"
+    # overdamped on the rock is part of the rule: the same mass on a rock stiff enough to ring
+    # (4 m k_u > Z_b^2) is the lattice's, which refuses a bit ringing 1e6 radians a step (it was
+    # a MemoryError)
+    with pytest.raises(ValueError, match="bit_mass = 1e-12 on k_u = 1e\\+12 rings"):
+        ib.single_blow(_model(segs, 0.5, 1e12, bit_mass=1e-12), 1.0)
+
+
+def test_auto_bounds_the_exact_solvers_cost():
+    """A rod whose round trip takes more than 2000 of the shortest travel time is the lattice's
+    (whose cost is checked before any array: here refused), never a minute of the exact solver."""
+    model = ib.BarModel(s=13.0, d=0.0, R=0.0, n_modes=0, impact=ib.RodRock(
+        segments=[ib.RodSegment(4096.0, 0.236), ib.RodSegment(3.08, 2.25)],
+        rock=ib.BilinearRock(26.3, 224.0)))
+    with pytest.raises(ValueError, match="cell updates"):
+        ib.single_blow(model, 0.23)
+
+
+def test_auto_gives_a_blow_of_too_many_pieces_to_the_lattice(monkeypatch):
+    """Incommensurate segments under a slow, soft rock multiply the break points (every sum of
+    travel times is one): past ``AUTO_MAX_PIECES`` auto hands the blow to the lattice instead of
+    running the exact solver for minutes (a fuzz case took 22 s to its 2e6-piece budget)."""
+    from impactbar.laws.rodrock import law as rl
+
+    model = ib.BarModel(s=17.58, d=0.0, R=0.0, n_modes=0, impact=ib.RodRock(
+        segments=[ib.RodSegment(4.534, 1.014), ib.RodSegment(0.254, 3.496)],
+        rock=ib.BilinearRock(0.01457, 0.3624)))
+    blow = ib.single_blow(model, 65.8)
+    assert blow.method == "lattice" and 0.0 <= blow.efficiency <= 1.0
+    # the same path on a small budget, where the exact blow would have ended well within the default
+    monkeypatch.setattr(rl, "AUTO_MAX_PIECES", 20)
+    assert ib.single_blow(CASES["three segments, alpha 1, gamma 2"], 1.0).method == "lattice"
+    monkeypatch.setattr(rl, "AUTO_MAX_PIECES", 100_000)
+    assert ib.single_blow(CASES["three segments, alpha 1, gamma 2"], 1.0).method == "exact"
+
+
+def test_an_exact_blow_whose_account_does_not_close_is_not_taken():
+    """A fuzz case (issue 42's harness): a stiff rock under a soft second segment, where the rock's
+    branches switch back and forth at one instant (31 empty loadings at t = 4.199) and the exact
+    solver loses 1.6 % of the energy. Its account says so: auto takes the lattice's blow (whose
+    account closes), method='exact' warns."""
+    law = ib.RodRock(segments=[ib.RodSegment(0.30808884095518085, 1.3450922023208967),
+                               ib.RodSegment(1.8763786056908842, 0.28641206300956745)],
+                     rock=ib.BilinearRock(11.625294706399107, 19.29003501445997))
+    model = ib.BarModel(0.6603504559224972, 0.0, 0.0, 0, impact=law)
+    with pytest.warns(RuntimeWarning, match="energy account is off"):
+        exact = ib.single_blow(model, 3.1837404009743664, method="exact")
+    assert exact.energy_error > 1e-3
+    blow = ib.single_blow(model, 3.1837404009743664)
+    assert blow.method == "lattice" and blow.energy_error < 1e-12
+    # where the account closes, auto's answer is the exact one (the issue's cases)
+    assert ib.single_blow(CASES["three segments, alpha 1, gamma 2"], 1.0).method == "exact"

@@ -25,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -415,8 +416,13 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         whose results a one-segment ``SteppedPiston`` reproduces to the bit.
     method : {"auto", "exact", "lattice"}
         ``"auto"``: exact for a uniform piston, a massless bit, no feed and no ``cells_per_piston`` (and
-        where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` of the shortest travel
-        time), else the lattice.
+        where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` (2000) of the shortest
+        travel time and its waves need at most ``AUTO_MAX_PIECES`` (1e5) pieces), else the
+        lattice; an exact blow whose energy account does not close to ``1e-9`` is not taken
+        either (auto: the lattice's instead; ``"exact"``: a ``RuntimeWarning``). A bit whose time constant ``m / Z_b`` (``Z_b`` the last rod
+        segment's impedance) is at most ``1e-10`` of the shortest travel time, and overdamped on the
+        rock (``4 m k_u <= Z_b^2``), counts as massless for both the choice and the exact solver:
+        its effect on every result is of that relative order.
     semi_infinite : bool
         Lundberg's idealisation (exact method): the wave the bit reflects leaves the rod and never
         returns (its energy in ``radiated``); the blow ends when the energy is spent.
@@ -434,7 +440,8 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         ``[1e-100, 1e100]``; the law's ``feed`` above ``1e100`` or its ``bit_mass`` in
         ``(0, 1e-100)`` (the wave energies would overflow); ``t_max`` not finite and ``> 0``;
         ``cells_per_piston`` not an integer ``>= 1``; a grid of more than ``5e9`` cell updates (a rod
-        far longer, in travel time, than the piston, or too fine a grid); ``piston`` neither None
+        far longer, in travel time, than the piston, or too fine a grid); a bit ringing on the rock
+        more than ``1e6`` radians a lattice step; ``piston`` neither None
         nor a ``SteppedPiston``, or given with ``method="exact"`` or ``semi_infinite``; ``method`` not
         one of those above; ``semi_infinite`` not a bool, or with the lattice.
 
@@ -476,18 +483,34 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     if piston is not None and (method == "exact" or semi_infinite):
         raise ValueError("piston: a stepped piston is carried by the lattice only; give method='lattice' "
                          "(or 'auto') and semi_infinite=False with it")
+    massless = law.bit_mass == 0.0 or _bit_is_negligible(model, law)
     exact = method == "exact" or (method == "auto" and piston is None and (semi_infinite or (
-        law.feed == 0.0 and law.bit_mass == 0.0 and cells_per_piston is None
+        law.feed == 0.0 and massless and cells_per_piston is None
         and _exact_is_cheap(model, law))))
     if semi_infinite and not exact:
         raise ValueError("semi_infinite=True needs method='exact' (or 'auto'); the lattice carries "
                          "the rod's finite length")
     segs = law.segments
     if exact:
-        return _exact_single_blow(model, law, impact_velocity, t_max, cells_per_piston, record_field,
-                                  semi_infinite)
-    V, t_max, cells_per_piston = _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston,
-                                                  record_field, piston)
+        auto = method == "auto" and not semi_infinite
+        blow = _exact_single_blow(model, law, impact_velocity, t_max, cells_per_piston, record_field,
+                                  semi_infinite, 0.0 if massless else law.bit_mass,
+                                  AUTO_MAX_PIECES if auto else None)
+        bad = not blow.energy_error <= EXACT_ACCOUNT_TOLERANCE
+        if bad and not auto:
+            warnings.warn(f"the exact blow's energy account is off by {blow.energy_error:.2g} of the "
+                          "available energy (a switch of the rock's branches it could not resolve); "
+                          "method='lattice' gives the first-order solution", RuntimeWarning, stacklevel=2)
+        if not (auto and (bad or blow.ended_by == "budget")):
+            return blow
+        try:  # waves broken into too many pieces (incommensurate segments, a slow soft rock)
+            V, t_max, cells_per_piston = _check_blow_call(model, law, impact_velocity, t_max,
+                                                          cells_per_piston, record_field, piston)
+        except ValueError:  # the lattice too costly: the exact blow's budget end stands
+            return blow
+    else:
+        V, t_max, cells_per_piston = _check_blow_call(model, law, impact_velocity, t_max,
+                                                      cells_per_piston, record_field, piston)
     return rod_rock_blow(
         model.s, V, [g.length for g in segs], [g.impedance for g in segs], [g.wave_speed for g in segs],
         law.rock.k, law.rock.k_u, law.bit_mass, law.feed, cells_per_piston=cells_per_piston,
@@ -495,9 +518,11 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         record_field=record_field, piston=piston)
 
 
-def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field, semi_infinite):
+def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field, semi_infinite,
+                       bit_mass, max_pieces=None):
     """:func:`single_blow` by the exact solver (checked arguments; ``cells_per_piston`` the samples
-    per piston crossing time of the recorded arrays, default 32)."""
+    per piston crossing time of the recorded arrays, default 32; ``bit_mass`` 0 for a negligible
+    bit)."""
     from .exact import exact_rod_rock_blow
 
     V = _check_force_scale(model, law, impact_velocity)
@@ -506,8 +531,9 @@ def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field
     samples = 32 if samples is None else check_int("cells_per_piston", samples, lo=1)
     segs = law.segments
     return exact_rod_rock_blow(model.s, V, [g.length for g in segs], [g.impedance for g in segs],
-                               [g.wave_speed for g in segs], law.rock.k, law.rock.k_u, law.bit_mass,
+                               [g.wave_speed for g in segs], law.rock.k, law.rock.k_u, bit_mass,
                                law.feed, t_max=t_max, semi_infinite=semi_infinite,
+                               **({} if max_pieces is None else {"max_pieces": max_pieces}),
                                samples_per_piston=samples, record_field=bool(record_field))
 
 
@@ -520,7 +546,25 @@ MIN_BIT_MASS = 1e-100
 #: The most windows (of the shortest travel time in piston and rod) one round trip of a wave through
 #: them may take for ``method="auto"`` to choose the exact solver: beyond, its cost grows with them
 #: and the lattice, whose cost is bounded up front, is used.
-MAX_EXACT_PASS_WINDOWS = 1e4
+MAX_EXACT_PASS_WINDOWS = 2e3
+
+#: The exact blow's energy account (relative to the available energy) closes to rounding, about
+#: 1e-15; past this its answer is not taken (``method="auto"``: the lattice's instead) or is warned
+#: of (``method="exact"``)
+EXACT_ACCOUNT_TOLERANCE = 1e-9
+
+#: The most wave pieces ``method="auto"`` lets the exact solver store (about a second; the blows
+#: tried need 60 to 700) before it gives the blow to the lattice: incommensurate segments and a slow,
+#: soft rock multiply the break points (each sum of travel times is one) until they cost more than
+#: the lattice's cells.
+AUTO_MAX_PIECES = 100_000
+
+#: A bit is negligible (taken as massless by the exact solver) when its time constant ``m / Z_b``
+#: against the last rod segment's impedance is at most this fraction of the shortest travel time and
+#: it is overdamped on the rock (``4 m k_u <= Z_b^2``): its effect on every result is of that
+#: relative order, far below the exact blow's accuracy, while its fast branch would make the exact
+#: solver's series long (a bit of 1e-8 asked for more than 20 GB).
+NEGLIGIBLE_BIT = 1e-10
 
 
 def _exact_is_cheap(model, law) -> bool:
@@ -529,6 +573,17 @@ def _exact_is_cheap(model, law) -> bool:
         travel = np.array([1.0 / model.s] + [g.travel_time(model) for g in law.segments])
     ratio = 2.0 * float(np.sum(travel)) / float(np.min(travel))
     return bool(np.all(np.isfinite(travel))) and ratio <= MAX_EXACT_PASS_WINDOWS
+
+
+def _bit_is_negligible(model, law) -> bool:
+    """Whether the bit's mass is negligible (``NEGLIGIBLE_BIT``)."""
+    m = law.bit_mass
+    Zb = model.s * law.segments[-1].impedance
+    with np.errstate(over="ignore", divide="ignore"):
+        travel = [1.0 / model.s] + [g.travel_time(model) for g in law.segments]
+    shortest = min(travel)
+    return bool(0.0 < m and math.isfinite(Zb) and shortest > 0.0 and m <= NEGLIGIBLE_BIT * Zb * shortest
+                and 4.0 * m * law.rock.k_u <= Zb * Zb)
 
 
 def _check_force_scale(model, law, impact_velocity) -> float:
@@ -572,7 +627,19 @@ def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, recor
         n_p = 64 if n0 is None else n0 * math.ceil(8 / n0)
     dt = 1.0 / (s * n_p)
     _check_blow_size(n_p + sum(travel) / dt, t_max / dt, record_field)
+    m, Zb = law.bit_mass, s * law.segments[-1].impedance
+    if m > 0.0:  # the lattice samples an underdamped bit's ringing on the rock within each step
+        ring = math.sqrt(max(law.rock.k_u / m - (Zb / (2.0 * m)) ** 2, 0.0)) * dt
+        if ring > MAX_BIT_RINGS:
+            raise ValueError(f"bit_mass = {m:g} on k_u = {law.rock.k_u:g} rings {ring:.3g} radians a lattice "
+                             f"step (more than {MAX_BIT_RINGS:g}): give a heavier bit, a bit_mass of 0, or "
+                             "a finer grid (cells_per_piston)")
     return V, float(t_max), cells_per_piston
+
+
+#: The most radians an underdamped bit may ring on the rock within one lattice step (its events are
+#: sampled a quarter period apart there).
+MAX_BIT_RINGS = 1e6
 
 
 def lundberg_efficiency(alpha: float, gamma: float) -> float:
