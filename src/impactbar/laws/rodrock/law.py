@@ -419,10 +419,11 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` (2000) of the shortest
         travel time and its waves need at most ``AUTO_MAX_PIECES`` (1e5) pieces), else the
         lattice; an exact blow whose energy account does not close to ``1e-9`` is not taken
-        either (auto: the lattice's instead; ``"exact"``: a ``RuntimeWarning``). A bit whose time constant ``m / Z_b`` (``Z_b`` the last rod
-        segment's impedance) is at most ``1e-10`` of the shortest travel time, and overdamped on the
-        rock (``4 m k_u <= Z_b^2``), counts as massless for both the choice and the exact solver:
-        its effect on every result is of that relative order.
+        either (auto: the lattice's instead; ``"exact"``: a ``RuntimeWarning``). A bit whose time
+        constant ``m / Z_b`` (``Z_b`` the last rod segment's impedance) is at most ``1e-10`` of the
+        shortest travel time, and overdamped on the rock (``4 m k_u <= Z_b^2``), counts as massless
+        for both the choice and the exact solver: its effect on every result is of that relative
+        order.
     semi_infinite : bool
         Lundberg's idealisation (exact method): the wave the bit reflects leaves the rod and never
         returns (its energy in ``radiated``); the blow ends when the energy is spent.
