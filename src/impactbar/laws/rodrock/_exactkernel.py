@@ -45,6 +45,7 @@ from ...dynamics._kernel import CACHE
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
     BUDGET,
     ELASTIC,
+    EPS,
     FREE,
     GOING,
     INF,
@@ -378,6 +379,7 @@ def node_bit(ws, t, t1):
         blk_axpy(WB[6], WN[6], 2.0, WB[0], WN[0])
         blk_add_const(WB[6], WN[6], f)
         guard = 0
+        turned = False  # unloaded at this very instant (a turning point)
         while True:
             br = BI[0]
             x0 = BS[1]
@@ -394,6 +396,9 @@ def node_bit(ws, t, t1):
                 blk_clear(WB[9], WN[9])
                 blk_axpy(WB[9], WN[9], -1.0, WB[7], WN[7])
                 xtop = BS[4] / ku
+                if turned:  # a reload within rounding of the turning point is none: the velocity,
+                    # zero there, has rounding-level signs on the two branches (they chattered)
+                    xtop += 4096.0 * EPS * abs(xtop)
                 blk_add_const(WB[9], WN[9], xtop)
                 t1a = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR)
                 if t1a == -2.0:
@@ -458,6 +463,7 @@ def node_bit(ws, t, t1):
                 return True
             blk_shift(WB[0], WN[0], te, lam, BIN)
             blk_shift(WB[6], WN[6], te, lam, BIN)
+            turned = br == LOAD
             if br == LOAD:  # unloading from p_max
                 _episode_end(ws, a, x1)
                 BI[0] = ELASTIC
