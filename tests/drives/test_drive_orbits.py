@@ -240,3 +240,22 @@ def test_undamped_resonances_are_reported():
         assert np.min(np.abs(k_n - np.round(k_n))) < 1e-6
     with pytest.raises(ValueError, match="undamped resonances"):
         periodic_orbits(BarModel(10, 0.0, 0.5, 8), PositionSwitchedDrive(1, 1, 1))
+
+
+def test_the_default_chain_skips_a_search_it_cannot_afford(monkeypatch):
+    """A fuzz case (issue 42's harness): strokes of 0.03 against a return of 732, a period near
+    2000, and one mode at s = 8.3: the default window held about 74,000 resonances and the chain's
+    last step, the search of every orbit, took minutes. Past ``MAX_DEFAULT_RESONANCES`` it is
+    skipped (find_orbit answers from its first steps or says what it tried); the issue's second
+    case (2,340 in its window) still reaches the search."""
+    import impactbar.orbits.switched_search as ss
+
+    calls = []
+    real = ss._searched
+    monkeypatch.setattr(ss, "_searched", lambda *a: calls.append(1) or real(*a))
+    model = BarModel(8.312238249550228, 0.0018142798082551258, 0.889269330963702, 1)
+    drive = PositionSwitchedDrive(0.03426521879195014, 731.6706397390018, 1.63858368445898)
+    orbit = find_orbit(model, drive)
+    assert calls == [] and np.isfinite(orbit.period)
+    model, drive = ISSUE_CASES[1]
+    assert find_orbit(model, drive).stable and calls == [1]

@@ -444,6 +444,18 @@ class ValveProblem(OrbitProblem):
         X[keep] += np.linalg.solve(Jac[np.ix_(keep, keep)], -r[keep])
         return X
 
+    def resonances(self, window=None) -> float:
+        """About how many resonances ``T = 2 k / (s n)`` of the flexible modes lie in ``window``
+        (default: the search's default window); 0 for the rigid bar. The search's cost grows with
+        them."""
+        from .search import default_window
+
+        model = self.model
+        if not model.n_modes:
+            return 0.0
+        lo, hi = default_window(model, self.drive) if window is None else window
+        return (float(hi) - float(lo)) * model.s * model.n_modes * (model.n_modes + 1) / 4.0
+
     def search(self, window):
         """Every one-impact orbit with a period in ``window`` under the paper's law, certified
         (:func:`~impactbar.drives.switched.search.search_one_impact`: exclusion by bounds from the
@@ -462,7 +474,7 @@ class ValveProblem(OrbitProblem):
         if not hi > lo:
             raise ValueError(f"window must hold periods above the two delays ({tau:g}); got {window}")
         if model.d == 0.0 and model.n_modes:  # undamped: orbits crowd at every resonance T = 2 k / (s n)
-            count = (hi - lo) * model.s * model.n_modes * (model.n_modes + 1) / 4.0
+            count = self.resonances((lo, hi))
             if count > MAX_RESONANCES:
                 raise ValueError(f"window ({lo:.6g}, {hi:.6g}) holds about {count:.0f} undamped resonances "
                                  f"T = 2 k / (s n) of the flexible modes (at most {MAX_RESONANCES}): narrow "

@@ -46,6 +46,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     BUDGET,
     ELASTIC,
     EPS,
+    FAILED,
     FREE,
     GOING,
     INF,
@@ -220,6 +221,8 @@ def node_contact(ws, t, t1):
             if ts == -2.0:
                 CI[4] += 1
                 ts = -1.0
+            if ts > 0.0 and a + ts == a:  # below the clock's resolution: at once (else no progress)
+                ts = 0.0
             if ts == 0.0 and flips >= 2:
                 ts = -1.0
             if ts == 0.0:
@@ -265,6 +268,8 @@ def node_contact(ws, t, t1):
             if tc == -2.0:
                 CI[4] += 1
                 tc = -1.0
+            if tc > 0.0 and a + tc == a:
+                tc = 0.0
             if tc == 0.0 and flips >= 2:
                 tc = -1.0
             if tc == 0.0:
@@ -676,6 +681,8 @@ def run(ws):
         CI[2] = w + 1
         CT[0] = t1
         code = certify(ws, t1)
+        if not (math.isfinite(BS[0]) and math.isfinite(CT[7])):  # overflowed pieces: stop, say so
+            code = FAILED
         if code == GOING and t1 >= tmax:
             code = TMAX
         if code == GOING and (CNT[0] > maxp or CI[2] >= PR[19]):

@@ -417,7 +417,8 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     method : {"auto", "exact", "lattice"}
         ``"auto"``: exact for a uniform piston, a massless bit, no feed and no ``cells_per_piston`` (and
         where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` (2000) of the shortest
-        travel time and its waves need at most ``AUTO_MAX_PIECES`` (1e5) pieces), else the
+        travel time, ``k / Z_b`` times the shortest travel time is at most ``1e6`` and its waves
+        need at most ``AUTO_MAX_PIECES`` (1e5) pieces), else the
         lattice; an exact blow whose energy account does not close to ``1e-9`` is not taken
         either (auto: the lattice's instead; ``"exact"``: a ``RuntimeWarning``). A bit whose time
         constant ``m / Z_b`` (``Z_b`` the last rod segment's impedance) is at most ``1e-10`` of the
@@ -498,6 +499,10 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
                                   semi_infinite, 0.0 if massless else law.bit_mass,
                                   AUTO_MAX_PIECES if auto else None)
         bad = not blow.energy_error <= EXACT_ACCOUNT_TOLERANCE
+        if not auto and (blow.ended_by == "failed" or not math.isfinite(blow.efficiency)):
+            raise ValueError("method='exact': the blow's pieces overflowed (a rock far stiffer than the "
+                             f"rod: k / Z_b = {law.rock.k / (model.s * law.segments[-1].impedance):.3g}); "
+                             "use method='lattice' (or 'auto')")
         if bad and not auto:
             warnings.warn(f"the exact blow's energy account is off by {blow.energy_error:.2g} of the "
                           "available energy (a switch of the rock's branches it could not resolve); "
@@ -568,12 +573,22 @@ AUTO_MAX_PIECES = 100_000
 NEGLIGIBLE_BIT = 1e-10
 
 
+#: The largest loading exponent ``k / Z_b`` times the shortest travel time for ``method="auto"`` to
+#: choose the exact solver: a rock that stiff against the rod (a rod of impedance 1e-12 of the
+#: piston's gave 2e8) makes its pieces overflow, where the lattice still answers.
+MAX_EXACT_LOADING_EXPONENT = 1e6
+
+
 def _exact_is_cheap(model, law) -> bool:
-    """Whether a round trip through piston and rod takes at most ``MAX_EXACT_PASS_WINDOWS`` windows."""
+    """Whether a round trip through piston and rod takes at most ``MAX_EXACT_PASS_WINDOWS`` windows
+    and the rock's loading exponent over the shortest of them is at most
+    ``MAX_EXACT_LOADING_EXPONENT``."""
     with np.errstate(over="ignore", divide="ignore"):
         travel = np.array([1.0 / model.s] + [g.travel_time(model) for g in law.segments])
+        rate = law.rock.k / (model.s * law.segments[-1].impedance) * float(np.min(travel))
     ratio = 2.0 * float(np.sum(travel)) / float(np.min(travel))
-    return bool(np.all(np.isfinite(travel))) and ratio <= MAX_EXACT_PASS_WINDOWS
+    return (bool(np.all(np.isfinite(travel))) and ratio <= MAX_EXACT_PASS_WINDOWS
+            and rate <= MAX_EXACT_LOADING_EXPONENT)
 
 
 def _bit_is_negligible(model, law) -> bool:
