@@ -217,7 +217,7 @@ def node_contact(ws, t, t1):
         L = b - a
         if NSI[j, 3] == 1:  # in contact
             blk_set_comb(WB[4], WN[4], 2.0 * ZR / s, WB[0], WN[0], 2.0 * ZL / s, WB[1], WN[1])
-            ts = first_negative(WB[4], WN[4], lam, BIN, L, STK, SCR)
+            ts = first_negative(WB[4], WN[4], lam, BIN, L, STK, SCR, a)
             if ts == -2.0:
                 CI[4] += 1
                 ts = -1.0
@@ -264,7 +264,7 @@ def node_contact(ws, t, t1):
             st, gser = blk_ode1(WB[9], WN[9], WB[5], WN[5], lam, 0, 0.0j, NSF[j, 0] + 0.0j, L)
             if st != 0:
                 CI[7] += 1
-            tc = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR)
+            tc = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR, a)
             if tc == -2.0:
                 CI[4] += 1
                 tc = -1.0
@@ -396,7 +396,7 @@ def node_bit(ws, t, t1):
             # the first switch
             te = -1.0
             if br == LOAD:
-                te = first_negative(WB[8], WN[8], lam, BIN, L, STK, SCR)
+                te = first_negative(WB[8], WN[8], lam, BIN, L, STK, SCR, a)
             elif br == ELASTIC:
                 blk_clear(WB[9], WN[9])
                 blk_axpy(WB[9], WN[9], -1.0, WB[7], WN[7])
@@ -405,11 +405,11 @@ def node_bit(ws, t, t1):
                     # zero there, has rounding-level signs on the two branches (they chattered)
                     xtop += 4096.0 * EPS * abs(xtop)
                 blk_add_const(WB[9], WN[9], xtop)
-                t1a = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR)
+                t1a = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR, a)
                 if t1a == -2.0:
                     CI[4] += 1
                     t1a = -1.0
-                t2a = first_negative(WB[7], WN[7], lam, BIN, t1a if t1a >= 0.0 else L, STK, SCR)
+                t2a = first_negative(WB[7], WN[7], lam, BIN, t1a if t1a >= 0.0 else L, STK, SCR, a)
                 if t2a == -2.0:
                     CI[4] += 1
                     t2a = -1.0
@@ -423,7 +423,7 @@ def node_bit(ws, t, t1):
             else:
                 blk_clear(WB[9], WN[9])
                 blk_axpy(WB[9], WN[9], -1.0, WB[7], WN[7])
-                te = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR)
+                te = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR, a)
             if te == -2.0:
                 CI[4] += 1
                 te = -1.0

@@ -403,13 +403,19 @@ def _refine(B, N, lam, a, b):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def first_negative(B, N, lam, BIN, L, stack, D):
+def first_negative(B, N, lam, BIN, L, stack, D, t0):
     """The first ``tau`` in ``[0, L]`` where the piece is negative beyond rounding (it is ``>= 0`` at 0
     up to rounding; one that starts at zero is left by its first non-vanishing derivative), ``-1``
     if none, ``-2`` if the search gave up (its work bounded). A subinterval is excluded by the
     Lipschitz bound or by the cubic Taylor bound from its left end (a piece rising from ~0 whose
     fast terms cancel, a bit with mass). ``stack``: work array, shape (>= 256, 4); ``D``: three
-    scratch blocks ``(D1, N1, D2, N2, D3, N3)`` for the derivatives, bounded by their own terms."""
+    scratch blocks ``(D1, N1, D2, N2, D3, N3)`` for the derivatives, bounded by their own terms.
+
+    ``t0`` is the piece's start on the blow's clock: a switch located there is known to its
+    resolution ``dt = 8 eps |t0|`` only, so a value (a slope) at the start within ``dt`` times the
+    slope (the curvature) of zero counts as zero. (A fast piece, a bit of small mass, crosses zero
+    with a slope of 1e6: its value at the located root is then 1e-10, and read as a sign it switched
+    the contact back at once; the chatter guard then kept a tensile contact to the window's end.)"""
     if L <= 0.0 or blk_is_zero(N):
         return -1.0
     D1, N1, D2, N2, D3, N3 = D
@@ -418,8 +424,9 @@ def first_negative(B, N, lam, BIN, L, stack, D):
     blk_deriv(D3, N3, D2, N2, lam)
     f0, f1, f2 = blk_eval(B, N, lam, 0.0)
     a0, a1, a2 = blk_abs(B, N, lam, 0.0)
-    e0 = 16.0 * EPS * a0
-    e1 = 16.0 * EPS * a1
+    dt = 8.0 * EPS * abs(t0)
+    e0 = 16.0 * EPS * a0 + dt * abs(f1)
+    e1 = 16.0 * EPS * a1 + dt * abs(f2)
     e2 = 16.0 * EPS * a2
     if f0 < -e0:
         return 0.0
