@@ -45,6 +45,38 @@ def test_preset_operating_point(point):
     assert not point.cavitates
 
 
+def test_indicator_diagrams_enclose_the_oils_work_on_the_piston(point):
+    """The areas of the chambers' p-V loops (trapezoids over the sampled histories) against the
+    energy account's ``piston`` term (a quadrature carried along the integration): second order in
+    the spacing, their Richardson limit equal to 1e-8; the rear chamber drives, the front one takes
+    work back (a loop run anticlockwise)."""
+    acc = point.energy_account["piston"]
+    errs = {n: point.indicator_work_J(n)["piston"] / acc - 1.0 for n in (2000, 4000, 8000, 16000)}
+    assert abs(errs[4000]) < 2e-6
+    assert 3.5 < errs[2000] / errs[4000] < 4.5 and 3.5 < errs[8000] / errs[16000] < 4.5
+    assert abs((4.0 * errs[16000] - errs[8000]) / 3.0) < 1e-8
+    w = point.indicator_work_J()
+    assert w["rear"] > acc > 0 > w["front"] and w["piston"] == w["rear"] + w["front"]
+
+
+def test_the_operating_point_figure(point):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    axes = point.plot(points=500)
+    assert axes.shape == (4,)
+    h = point.histories(500)
+    rear = axes[2].get_lines()[0]
+    assert rear.get_xdata() == pytest.approx(h["V_r_m3"] * 1e6)
+    assert rear.get_ydata() == pytest.approx(h["p_r_Pa"] / 1e6)
+    assert f"{point.indicator_work_J(histories=h)['rear']:.4g} J" in axes[2].get_title()
+    plt.close("all")
+    with pytest.raises(ValueError, match="points"):
+        point.plot(points=1)
+
+
 def test_from_config_errors():
     cfg = CIRCUIT_PRESETS["circuit-drifter"]
     with pytest.raises(ValueError, match="unknown section"):

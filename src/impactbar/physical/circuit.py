@@ -520,6 +520,51 @@ class CircuitDrifterOrbit:
                 "V_f_m3": (dr.chambers.front_volume + dr.chambers.area_ratio * w) * V,
                 "V_r_m3": (dr.chambers.rear_volume - w) * V}
 
+    def indicator_work_J(self, points: int = 4000, *, histories: dict | None = None) -> dict:
+        r"""The work each chamber's oil does on the piston over one period, the area of its
+        indicator (p-V) diagram (theory §11): ``rear`` :math:`\oint p_r\,dV_r`, ``front``
+        :math:`\oint p_f\,dV_f` and their sum ``piston`` (J; positive where the chamber drives the
+        piston, its loop running clockwise in the p-V plane), by the trapezoidal rule over
+        :meth:`histories` (second order in their spacing; at the default 4000 points the sum
+        matches the energy account's ``piston`` term, a quadrature along the integration, to 2e-6
+        on the preset, and their Richardson extrapolation from 8000 and 16000 points to 1e-8).
+
+        Parameters
+        ----------
+        points : int
+            Samples over the period, ``>= 2``.
+        histories : dict, optional
+            :meth:`histories`' output to use instead of sampling again.
+
+        Returns
+        -------
+        dict
+            ``rear``, ``front``, ``piston`` (J).
+
+        Raises
+        ------
+        ValueError
+            ``points`` below 2.
+        """
+        from scipy.integrate import trapezoid
+
+        h = self.histories(points) if histories is None else histories
+        rear = float(trapezoid(h["p_r_Pa"], h["V_r_m3"]))
+        front = float(trapezoid(h["p_f_Pa"], h["V_f_m3"]))
+        return {"rear": rear, "front": front, "piston": rear + front}
+
+    def plot(self, axes=None, points: int = 2000):
+        """The pressures and the valve over one period and each chamber's indicator diagram
+        (:func:`impactbar.plotting.circuit.plot_circuit_orbit`; matplotlib imported on this call).
+
+        Returns
+        -------
+        numpy.ndarray of matplotlib.axes.Axes, shape (4,)
+        """
+        from ..plotting.circuit import plot_circuit_orbit
+
+        return plot_circuit_orbit(self, axes=axes, points=points)
+
     def summary(self) -> dict:
         """The SI outputs as a dict (JSON-ready)."""
         return {"blow_frequency_Hz": self.blow_frequency_Hz, "period_ms": 1e3 * self.period_s,

@@ -1,0 +1,64 @@
+"""The figures of a drifter's operating point with its oil circuit (theory §11): the pressures and
+the valve over one period, and each chamber's indicator (p-V) diagram."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["plot_circuit_orbit"]
+
+
+def plot_circuit_orbit(orbit, axes=None, points: int = 2000):
+    """A drifter's operating point over one period, from the impact: the three pressures (front,
+    rear and supply chamber) and the valve opening against time, and the indicator (p-V) diagram
+    of the rear and of the front chamber with the work its loop encloses
+    (:meth:`~impactbar.physical.circuit.CircuitDrifterOrbit.indicator_work_J`).
+
+    Parameters
+    ----------
+    orbit : CircuitDrifterOrbit
+        :meth:`~impactbar.physical.circuit.CircuitDrifter.orbit`'s result.
+    axes : sequence of four matplotlib.axes.Axes, optional
+        Pressures, valve opening, rear p-V, front p-V. Default: a new 2 x 2 figure.
+    points : int
+        Samples over the period, ``>= 2``.
+
+    Returns
+    -------
+    numpy.ndarray of matplotlib.axes.Axes, shape (4,)
+
+    Raises
+    ------
+    ValueError
+        ``points`` below 2.
+    """
+    import matplotlib.pyplot as plt
+
+    h = orbit.histories(points)
+    if axes is None:
+        _, axes = plt.subplots(2, 2, figsize=(9.0, 6.5), layout="constrained")
+    ax_p, ax_v, ax_rear, ax_front = np.asarray(axes).ravel()
+    t = h["t_s"] * 1e3
+    for key, label in (("p_f_Pa", "front chamber"), ("p_r_Pa", "rear chamber"), ("p_s_Pa", "supply")):
+        ax_p.plot(t, h[key] / 1e6, label=label)
+    ax_p.set_xlabel("time from impact (ms)")
+    ax_p.set_ylabel("pressure (MPa, absolute)")
+    ax_p.set_title(f"{orbit.blow_frequency_Hz:.4g} Hz, {orbit.impact_energy_J:.4g} J a blow")
+    ax_p.legend(loc="best", fontsize="small")
+    ax_v.plot(t, h["x_v"], color="C3", label="valve (1: rear chamber to supply)")
+    ax_v.set_xlabel("time from impact (ms)")
+    ax_v.set_ylabel("valve opening")
+    ax_gap = ax_v.twinx()
+    ax_gap.plot(t, h["gap_m"] * 1e3, color="C7", ls="--", label="gap to the stop")
+    ax_gap.set_ylabel("gap to the stop (mm)")
+    lines = ax_v.get_lines() + ax_gap.get_lines()
+    ax_v.legend(lines, [ln.get_label() for ln in lines], loc="best", fontsize="small")
+    work = orbit.indicator_work_J(histories=h)
+    for ax, p, V, name in ((ax_rear, "p_r_Pa", "V_r_m3", "rear"), (ax_front, "p_f_Pa", "V_f_m3", "front")):
+        ax.plot(h[V] * 1e6, h[p] / 1e6, color="C1" if name == "rear" else "C0")
+        ax.plot(h[V][0] * 1e6, h[p][0] / 1e6, "ko", ms=4, label="impact")
+        ax.set_xlabel(f"{name} chamber volume (cm³)")
+        ax.set_ylabel("pressure (MPa, absolute)")
+        ax.set_title(f"{name} chamber: work on the piston {work[name]:.4g} J a period")
+        ax.legend(loc="best", fontsize="small")
+    return np.asarray([ax_p, ax_v, ax_rear, ax_front])
