@@ -196,6 +196,9 @@ def _richardson(model, duration):
     ([(1.0, 1.0)], 4.0, 20.0, 0.05),
     ([(1.0, 1.0), (0.5, 0.5), (2.0, 1.0)], 2.0, 4.0, 0.01),
     ([(2.0, 1.0), (1.0, 0.6)], 2.0, 10.0, 0.3),
+    # a bit ringing on a stiff rock: thousands of bounces (the bit's switches were given up past 64
+    # an arrival interval, the energy account then 7e-2 off)
+    ([(4.0, 0.4)], 0.4, 4e5, 0.3),
 ])
 def test_a_bit_mass_is_the_richardson_limit_of_the_lattice(segs, k, k_u, m):
     """Efficiency, rebound and permanent penetration within 4 times the Richardson extrapolation's
@@ -207,6 +210,7 @@ def test_a_bit_mass_is_the_richardson_limit_of_the_lattice(segs, k, k_u, m):
     tol = 4.0 * np.abs(r1 - r0) + 1e-6
     assert np.all(np.abs(exact - r1) <= tol), (exact, r1, tol)
     assert blow.energy_error < 1e-12
+    assert blow.exact.diagnostics["searches_abandoned"] == 0
 
 
 def test_a_pool_past_its_memory_bound_is_refused(monkeypatch):

@@ -97,6 +97,12 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
 #     threshold
 
 
+#: Most switches of the bit's branches between two arrivals at the bit (each a located root); a bit
+#: ringing on a stiff rock bounces on it (2 switches a bounce: 64 gave up there, its energy account
+#: off by 7e-2, rod 4 long, k_u 4e5, bit mass 0.3); past it the search is given up (`uncertainty`)
+MAX_BIT_SWITCHES = 1_000_000
+
+
 @numba.njit(cache=CACHE, nogil=True)
 def _emit(ws, c, a, blk, valid, flag, ref):
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
@@ -383,7 +389,9 @@ def node_bit(ws, t, t1):
         blk_clear(WB[6], WN[6])
         blk_axpy(WB[6], WN[6], 2.0, WB[0], WN[0])
         blk_add_const(WB[6], WN[6], f)
-        guard = 0
+        stall = 0  # switches at one instant (a chatter of the branches: given up past 64)
+        switches = 0  # switches in this arrival interval: a bit ringing on a stiff rock bounces
+        # thousands of times (2 switches a bounce; the bound only keeps a call's cost finite)
         turned = False  # unloaded at this very instant (a turning point)
         while True:
             br = BI[0]
@@ -461,9 +469,10 @@ def node_bit(ws, t, t1):
                 BS[0] = ref + x1
                 break
             # a switch at a + te
+            stall = stall + 1 if a + te == a else 0
             a += te
-            guard += 1
-            if guard > 64:
+            switches += 1
+            if stall > 64 or switches > MAX_BIT_SWITCHES:
                 CI[4] += 1
                 return True
             blk_shift(WB[0], WN[0], te, lam, BIN)
