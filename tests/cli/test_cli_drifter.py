@@ -138,6 +138,7 @@ def test_continue_a_circuit_in_si(tmp_path, capsys):
                  "--to", "10.2 MPa", "--out", str(tmp_path), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["status"] == "reached" and doc["to"] == "10.2 MPa"
+    assert str(tmp_path / "diagram.png") in doc["files"] and (tmp_path / "diagram.png").stat().st_size > 0
     rows = (tmp_path / "branch.csv").read_text().splitlines()
     assert rows[0].startswith("accumulator.precharge (Pa),parameter,period")
     values = [[float(x) for x in r.split(",")[:2]] for r in rows[1:]]

@@ -77,6 +77,40 @@ def test_the_operating_point_figure(point):
         point.plot(points=1)
 
 
+def test_a_branch_in_the_precharge_in_si(point):
+    """``continue_circuit`` in ``accumulator.precharge``: its start is the operating point, its end
+    the operating point of a drifter configured afresh at the end's pre-charge (through the config's
+    units, not the branch's conversion); the figure draws what the arrays hold."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from impactbar.physical import continue_circuit
+
+    b = continue_circuit(point.drifter, "accumulator.precharge", "10.4 MPa")
+    assert b.branch.status == "reached" and len(b) >= 3
+    assert b.values[0] == pytest.approx(1e7, rel=1e-12) and b.values[-1] == pytest.approx(1.04e7, rel=1e-9)
+    assert b.blow_frequency_Hz[0] == pytest.approx(point.blow_frequency_Hz, rel=1e-9)
+    assert b.impact_energy_J[0] == pytest.approx(point.impact_energy_J, rel=1e-9)
+    end = circuit_preset("circuit-drifter", accumulator={"precharge": f"{float(b.values[-1])!r} Pa"}).orbit()
+    assert b.blow_frequency_Hz[-1] == pytest.approx(end.blow_frequency_Hz, rel=1e-8)
+    assert b.impact_energy_J[-1] == pytest.approx(end.impact_energy_J, rel=1e-8)
+    assert b.stable.all() and np.all(b.max_abs_multiplier < 1.0) and b.events == []
+    assert "accumulator.precharge from 1e+07 to 1.04e+07 Pa" in repr(b)
+    axes = b.plot()
+    line = axes[1].get_lines()[0]
+    assert line.get_xdata() == pytest.approx(b.values / 1e6)
+    assert line.get_ydata() == pytest.approx(b.impact_energy_J)
+    assert axes[1].get_xlabel() == "accumulator.precharge (MPa)"
+    plt.close("all")
+    with pytest.raises(ValueError, match="accumulator.precharge"):
+        continue_circuit(point.drifter, "accumulator.precharge", 12.0)
+    with pytest.raises(ValueError, match="to must be a number"):
+        continue_circuit(point.drifter, "precharge", "12 MPa")
+
+
 def test_from_config_errors():
     cfg = CIRCUIT_PRESETS["circuit-drifter"]
     with pytest.raises(ValueError, match="unknown section"):

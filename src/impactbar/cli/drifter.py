@@ -239,9 +239,16 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
 
         def shown(x):
             return x
-    start = drifter.orbit().orbit
-    b = continue_orbit(start, parameter, to, step=args.step, max_step=args.max_step,
-                       max_points=args.max_points)
+    diagram = None
+    if isinstance(drifter, physical.CircuitDrifter):  # the SI branch and its bifurcation diagram
+        sib = physical.continue_circuit(drifter, name, args.to if si else to, step=args.step,
+                                        max_step=args.max_step, max_points=args.max_points)
+        b = sib.branch
+        diagram = _circuit_diagram(sib, out)
+    else:
+        start = drifter.orbit().orbit
+        b = continue_orbit(start, parameter, to, step=args.step, max_step=args.max_step,
+                           max_points=args.max_points)
     head = f"{name} ({unit})," if si else ""
     rows = [f"{head}parameter,period,impact_velocity,max_abs_multiplier,stable"]
     for lam, o in zip(b.values, b.orbits, strict=True):
@@ -253,13 +260,32 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     ev += [f"{e.kind}{' ' + e.surface if e.surface else ''},{e.value:.12g},{e.multiplier.real:.12g},"
            f"{e.multiplier.imag:.12g}" + (f",{shown(e.value):.12g}" if si else "") for e in b.events]
     (out / "events.csv").write_text("\n".join(ev) + "\n")
+    files = [out / "branch.csv", out / "events.csv"] + ([diagram] if diagram is not None else [])
     if getattr(args, "json", False):
         print_json({"parameter": name, "to": args.to, "points": len(b), "status": b.status,
                     "events": [{"kind": e.kind, "value": shown(e.value)} for e in b.events],
-                    "files": [str(out / "branch.csv"), str(out / "events.csv")]})
+                    "files": [str(f) for f in files]})
         return 0
     print(_circuit_header(drifter) if isinstance(drifter, physical.CircuitDrifter) else _header(drifter))
     print(f"  {len(b)} points, {b.status}; events: "
           + (", ".join(f"{e.kind} at {name} = {shown(e.value):.6g}{' ' + unit if unit else ''}"
                        for e in b.events) or "none"))
+    for f in files:
+        print(f"wrote {f}")
     return 0
+
+
+def _circuit_diagram(branch, out: Path):
+    """``diagram.png``: the circuit's bifurcation diagram in SI (None without matplotlib)."""
+    try:
+        import matplotlib
+    except ImportError:
+        return None
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    axes = branch.plot()
+    path = out / "diagram.png"
+    axes[0].figure.savefig(path, dpi=130)
+    plt.close(axes[0].figure)
+    return path

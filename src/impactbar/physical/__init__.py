@@ -61,6 +61,8 @@ from .circuit import CIRCUIT_PRESETS as CIRCUIT_PRESETS
 from .circuit import CircuitDrifter as CircuitDrifter
 from .circuit import CircuitDrifterOrbit as CircuitDrifterOrbit
 from .circuit import circuit_preset as circuit_preset
+from .circuit_branch import CircuitBranch as CircuitBranch
+from .circuit_branch import continue_circuit as continue_circuit
 from .config import PRESETS as PRESETS
 from .drifter import DRIFTER_PRESETS as DRIFTER_PRESETS
 from .drifter import Drifter as Drifter
@@ -120,6 +122,8 @@ __all__ = [
     "CircuitDrifterOrbit",
     "CIRCUIT_PRESETS",
     "circuit_preset",
+    "CircuitBranch",
+    "continue_circuit",
     "DrifterOrbit",
     "DRIFTER_PRESETS",
     "drifter_preset",

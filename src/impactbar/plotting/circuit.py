@@ -1,11 +1,12 @@
 """The figures of a drifter's operating point with its oil circuit (theory §11): the pressures and
-the valve over one period, and each chamber's indicator (p-V) diagram."""
+the valve over one period, each chamber's indicator (p-V) diagram, and the bifurcation diagram of
+the operating point in one circuit parameter."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot_circuit_orbit"]
+__all__ = ["plot_circuit_branch", "plot_circuit_orbit"]
 
 
 def plot_circuit_orbit(orbit, axes=None, points: int = 2000):
@@ -62,3 +63,49 @@ def plot_circuit_orbit(orbit, axes=None, points: int = 2000):
         ax.set_title(f"{name} chamber: work on the piston {work[name]:.4g} J a period")
         ax.legend(loc="best", fontsize="small")
     return np.asarray([ax_p, ax_v, ax_rear, ax_front])
+
+
+def plot_circuit_branch(branch, axes=None):
+    """The bifurcation diagram of a drifter's operating point in one circuit parameter, in SI: the
+    blow frequency above, the impact energy below, against the parameter; stable points solid,
+    unstable ones dashed, every located event (fold, period doubling, Neimark-Sacker point,
+    accumulator emptying, relief opening) a marked vertical line.
+
+    Parameters
+    ----------
+    branch : CircuitBranch
+        :func:`~impactbar.physical.circuit_branch.continue_circuit`'s result.
+    axes : sequence of two matplotlib.axes.Axes, optional
+        Default: a new figure with two rows sharing the parameter axis.
+
+    Returns
+    -------
+    numpy.ndarray of matplotlib.axes.Axes, shape (2,)
+    """
+    import matplotlib.pyplot as plt
+
+    if axes is None:
+        _, axes = plt.subplots(2, 1, figsize=(7.0, 6.0), sharex=True, layout="constrained")
+    ax_f, ax_e = np.asarray(axes).ravel()
+    scale, unit = _shown_unit(branch.unit)
+    x = branch.values * scale
+    stable = branch.stable
+    for ax, y, label in ((ax_f, branch.blow_frequency_Hz, "blow frequency (Hz)"),
+                         (ax_e, branch.impact_energy_J, "impact energy (J)")):
+        for flag, style, name in ((True, "-", "stable"), (False, "--", "unstable")):
+            if np.any(stable == flag):
+                ax.plot(x, np.where(stable == flag, y, np.nan), "C0" + style, label=name)
+        for i, e in enumerate(branch.events):
+            ax.axvline(e["value"] * scale, color=f"C{1 + i % 8}", lw=0.8, ls=":",
+                       label=e["kind"] if ax is ax_f else None)
+        ax.set_ylabel(label)
+    ax_f.legend(loc="best", fontsize="small")
+    ax_e.set_xlabel(f"{branch.parameter}" + (f" ({unit})" if unit else ""))
+    return np.asarray([ax_f, ax_e])
+
+
+def _shown_unit(unit: str):
+    """The factor and unit a parameter in SI is drawn in (pressures in MPa, volumes in L, flows in
+    L/min, times in ms)."""
+    return {"Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"), "s": (1e3, "ms"),
+            "m": (1e3, "mm")}.get(unit, (1.0, unit.replace("**", "^")))
