@@ -152,3 +152,30 @@ def test_continue_a_circuit_in_si(tmp_path, capsys):
     assert main(["continue", "--preset", "hydraulic-drifter", "--parameter", "supply.pump_flow", "--to",
                  "80 L/min", "--out", str(tmp_path)]) == 2
     assert "oil circuit" in capsys.readouterr().err
+
+
+def test_simulate_a_circuit_drifter_from_rest(tmp_path, capsys):
+    """``impactbar simulate --preset circuit-drifter``: impacts.csv's energies are m v^2 / 2 with the
+    piston's mass from its geometry; from rest the accumulator charges, so every blow is faster than
+    the one before and slower than the operating point's; pressures.csv holds the absolute
+    pressures and the valve's opening in [0, 1]."""
+    assert main(["simulate", "--preset", "circuit-drifter", "--periods", "8", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "wrote" in out and "operating point's 10.02 m/s" in out
+    rows = [[float(x) for x in r.split(",")] for r in (tmp_path / "impacts.csv").read_text().splitlines()[1:]]
+    m = 7850 * math.pi / 4 * 0.045 ** 2 * 0.44854236
+    assert len(rows) >= 5
+    for _, v, e in rows:
+        assert e == pytest.approx(0.5 * m * v * v, rel=1e-8)
+    v = [r[1] for r in rows]
+    assert all(b > a for a, b in zip(v, v[1:], strict=False)) and v[-1] < 10.02
+    assert all(b > a for a, b in zip([r[0] for r in rows], [r[0] for r in rows][1:], strict=False))
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["n_impacts"] == len(rows) and summary["operating_point"]["stable"]
+    p = (tmp_path / "pressures.csv").read_text().splitlines()
+    assert p[0] == "t_s,p_f_Pa,p_r_Pa,p_s_Pa,x_v,gap_m"
+    cols = list(zip(*([float(x) for x in r.split(",")] for r in p[1:]), strict=True))
+    assert min(cols[4]) >= 0.0 and max(cols[4]) <= 1.0 and min(min(c) for c in cols[1:4]) > 0.0
+    assert (tmp_path / "motion.png").stat().st_size > 0
+    assert main(["simulate", "--preset", "circuit-drifter", "--periods", "0", "--out", str(tmp_path)]) == 2
+    assert "--periods must be > 0" in capsys.readouterr().err

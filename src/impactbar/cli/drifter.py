@@ -10,6 +10,8 @@ import json
 import tomllib
 from pathlib import Path
 
+import numpy as np
+
 from .. import physical
 from ..physical.circuit import SI_PARAMETERS
 from ..physical.drifter import RENAMED_DRIFTER_PRESETS
@@ -151,9 +153,7 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
     ``summary.json``, ``motion.png`` and ``blows.png``, and on a drill string ``forces.png`` and
     ``stress.png`` (a blow's force history, the stress along the rod)."""
     if isinstance(drifter, physical.CircuitDrifter):
-        raise ValueError("impactbar simulate does not take a drifter with its oil circuit yet: use "
-                         "impactbar.physical.CircuitDrifter.simulate, or impactbar orbits for its "
-                         "operating point")
+        return run_circuit_simulate(args, drifter, out, gap_m)
     period = drifter.orbit().period_s
     tr, s = drifter.simulate(args.periods * period, start_gap_m=gap_m)
     om, L = drifter.omega_rad_s, drifter.bar.length_m
@@ -170,6 +170,53 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
           + (f"; on rock {s['work_on_rock_J']:.4g} J and {s['penetration_mm']:.4g} mm per blow, "
              f"{s['drilling_rate_m_min']:.4g} m/min" if "drilling_rate_m_min" in s else "")
           + f"; wrote {out}/{written}, impacts.csv, summary.json")
+    return 0
+
+
+def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_m: float) -> int:
+    """``impactbar simulate --preset circuit-drifter``: the drifter with its oil circuit from rest at
+    ``--gap`` for ``--periods`` periods of its operating point; writes ``impacts.csv`` (time,
+    impact velocity and energy), ``pressures.csv`` (the pressures, the valve and the gap),
+    ``summary.json`` and ``motion.png`` (:func:`impactbar.plotting.plot_circuit_run`)."""
+    if not args.periods > 0:
+        raise ValueError(f"--periods must be > 0; got {args.periods}")
+    point = drifter.orbit()
+    r = drifter.simulate(args.periods * point.period_s, start_gap_m=gap_m)
+    m = drifter.bar.mass_kg
+    t, v = r["impact_times_s"], r["impact_velocities_m_s"]
+    lines = ["time_s,impact_velocity_m_s,impact_energy_J"]
+    lines += [f"{ti:.9g},{vi:.9g},{0.5 * m * vi * vi:.9g}" for ti, vi in zip(t, v, strict=True)]
+    (out / "impacts.csv").write_text("\n".join(lines) + "\n")
+    h = r["histories"]
+    keys = ("t_s", "p_f_Pa", "p_r_Pa", "p_s_Pa", "x_v", "gap_m")
+    rows = [",".join(keys)] + [",".join(f"{x:.9g}" for x in row) for row in zip(*(h[k] for k in keys),
+                                                                              strict=True)]
+    (out / "pressures.csv").write_text("\n".join(rows) + "\n")
+    last = v[len(v) // 2:]
+    summary = {"duration_s": float(args.periods * point.period_s), "n_impacts": int(t.size),
+               "last_impact_velocity_m_s": float(v[-1]) if v.size else None,
+               "mean_impact_energy_second_half_J": float(np.mean(0.5 * m * last ** 2)) if last.size else None,
+               "operating_point": point.summary(),
+               "minimum_pressure_MPa": float(min(np.min(h[k]) for k in ("p_f_Pa", "p_r_Pa", "p_s_Pa")) / 1e6)}
+    (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
+    written = "impacts.csv, pressures.csv, summary.json"
+    try:
+        import matplotlib
+    except ImportError:
+        matplotlib = None
+    if matplotlib is not None:
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from ..plotting.circuit import plot_circuit_run
+
+        axes = plot_circuit_run(r, mass_kg=m)
+        axes[0].figure.savefig(out / "motion.png", dpi=120)
+        plt.close(axes[0].figure)
+        written += ", motion.png"
+    print(f"{drifter.name or 'drifter'}: {t.size} impacts in {summary['duration_s']:.4g} s from rest at "
+          f"{gap_m * 1e3:.4g} mm; the last at {v[-1] if v.size else float('nan'):.4g} m/s (the operating "
+          f"point's {point.impact_velocity_m_s:.4g} m/s); wrote {out}/{written}")
     return 0
 
 

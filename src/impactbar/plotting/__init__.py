@@ -18,6 +18,7 @@ that plot themselves (``PeriodicOrbit.plot``, ``Trajectory.plot``, ``Branch.plot
 
 from .circuit import plot_circuit_branch as plot_circuit_branch
 from .circuit import plot_circuit_orbit as plot_circuit_orbit
+from .circuit import plot_circuit_run as plot_circuit_run
 from .continuation import plot_bifurcation_curve as plot_bifurcation_curve
 from .continuation import plot_branch as plot_branch
 from .orbits import plot_multipliers as plot_multipliers
@@ -42,4 +43,4 @@ __all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_trajector
            "plot_impact_map", "plot_intervals", "plot_experiment", "plot_branch", "plot_bifurcation_curve",
            "plot_motion", "plot_blows", "plot_force_waves", "plot_stability_chart", "plot_fraction_maps",
            "plot_bifurcation", "plot_lagrange", "plot_force_penetration", "plot_efficiency_map",
-           "plot_circuit_orbit", "plot_circuit_branch"]
+           "plot_circuit_orbit", "plot_circuit_branch", "plot_circuit_run"]

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["plot_circuit_branch", "plot_circuit_orbit"]
+__all__ = ["plot_circuit_branch", "plot_circuit_orbit", "plot_circuit_run"]
 
 
 def plot_circuit_orbit(orbit, axes=None, points: int = 2000):
@@ -109,3 +109,49 @@ def _shown_unit(unit: str):
     L/min, times in ms)."""
     return {"Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"), "s": (1e3, "ms"),
             "m": (1e3, "mm")}.get(unit, (1.0, unit.replace("**", "^")))
+
+
+def plot_circuit_run(run, axes=None, *, mass_kg: float | None = None):
+    """A run of a drifter with its oil circuit against time: the three pressures above, the gap to
+    the stop and the valve opening in the middle, and (with ``mass_kg``) the energy of every
+    impact below.
+
+    Parameters
+    ----------
+    run : dict
+        :meth:`~impactbar.physical.circuit.CircuitDrifter.simulate`'s result.
+    axes : sequence of matplotlib.axes.Axes, optional
+        Three (two without ``mass_kg``) axes. Default: a new figure, one row each, sharing time.
+    mass_kg : float, optional
+        The piston's mass (kg), for the impact energies ``m v^2 / 2``.
+
+    Returns
+    -------
+    numpy.ndarray of matplotlib.axes.Axes, shape (3,) or (2,)
+    """
+    import matplotlib.pyplot as plt
+
+    rows = 3 if mass_kg is not None else 2
+    if axes is None:
+        _, axes = plt.subplots(rows, 1, figsize=(8.0, 2.6 * rows), sharex=True, layout="constrained")
+    axes = np.asarray(axes).ravel()
+    h = run["histories"]
+    t = h["t_s"] * 1e3
+    for key, label in (("p_f_Pa", "front chamber"), ("p_r_Pa", "rear chamber"), ("p_s_Pa", "supply")):
+        axes[0].plot(t, h[key] / 1e6, lw=0.8, label=label)
+    axes[0].set_ylabel("pressure (MPa)")
+    axes[0].legend(loc="best", fontsize="small")
+    axes[1].plot(t, h["gap_m"] * 1e3, color="C7", lw=0.8, label="gap to the stop")
+    axes[1].plot(run["impact_times_s"] * 1e3, np.zeros(len(run["impact_times_s"])), "k|", ms=8,
+                 label="impacts")
+    axes[1].set_ylabel("gap (mm)")
+    ax_v = axes[1].twinx()
+    ax_v.plot(t, h["x_v"], color="C3", lw=0.6, alpha=0.6)
+    ax_v.set_ylabel("valve opening", color="C3")
+    axes[1].legend(loc="upper left", fontsize="small")
+    if mass_kg is not None:
+        v = np.asarray(run["impact_velocities_m_s"])
+        axes[2].plot(run["impact_times_s"] * 1e3, 0.5 * mass_kg * v * v, "o", ms=3)
+        axes[2].set_ylabel("impact energy (J)")
+    axes[-1].set_xlabel("time (ms)")
+    return axes
