@@ -117,7 +117,8 @@ class BarModel:
                 "which enters every mode's decay (eq. 8), is not finite")
 
     def __repr__(self) -> str:
-        text = f"BarModel(s={self.s!r}, d={self.d!r}, R={self.R!r}, n_modes={self.n_modes!r}, impact={self.impact!r}"
+        text = (f"BarModel(s={self.s!r}, d={self.d!r}, R={self.R!r}, n_modes={self.n_modes!r}, "
+                f"impact={self.impact!r}")
         return text + (")" if self.piston is None else f", piston={self.piston!r})")
 
     def _set_piston(self) -> None:
@@ -129,7 +130,7 @@ class BarModel:
         if piston.n_segments == 1:  # the uniform bar, exactly
             object.__setattr__(self, "piston", None)
             return
-        if self._law.name != "paper":
+        if not self._law.stepped_piston:
             raise ValueError(
                 f"piston: a stepped piston's modes are supported under the paper's law only (got impact = "
                 f"{self._law.name!r}): the wave and rod-rock laws carry a uniform bar by characteristics; "

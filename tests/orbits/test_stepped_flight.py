@@ -14,8 +14,17 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
 
-from impactbar import (BarModel, CosineLoad, InitialState, PositionSwitchedDrive, SquareWaveLoad,
-                       SteppedPiston, find_orbit, periodic_orbits, simulate)
+from impactbar import (
+    BarModel,
+    CosineLoad,
+    InitialState,
+    PositionSwitchedDrive,
+    SquareWaveLoad,
+    SteppedPiston,
+    find_orbit,
+    periodic_orbits,
+    simulate,
+)
 
 EQUAL = SteppedPiston([0.4, 0.6], [1.0, 1.0])  # stepped paths, uniform bar
 HEAD_NECK = SteppedPiston([0.3, 0.7], [2.0, 1.0])
@@ -48,8 +57,8 @@ def test_sticking_overlaps_against_quadrature(piston):
     mu, starts, lengths = piston.mass_per_length, piston.starts, piston.lengths
 
     def integral(f):
-        return sum(mu[j] * quad(f, starts[j], starts[j] + lengths[j], epsabs=1e-13, epsrel=1e-13, limit=200)[0]
-                   for j in range(piston.n_segments))
+        return sum(mu[j] * quad(f, starts[j], starts[j] + lengths[j], epsabs=1e-13, epsrel=1e-13,
+                                limit=200)[0] for j in range(piston.n_segments))
 
     def phi(n, x):
         return float(free.shapes(np.array([min(max(x, 0.0), 1.0)]))[0, n])
@@ -65,7 +74,8 @@ def test_sticking_overlaps_against_quadrature(piston):
             assert st.to_free[n, m] == pytest.approx(o * psi0[m] / phi0[n], abs=1e-11)
             assert st.to_contact[m, n] == pytest.approx(o * phi0[n] / psi0[m], abs=1e-11)
     for m in range(N):
-        assert st.reaction_weights[m] == pytest.approx(psi0[m] * integral(lambda x, m=m: psi(m, x)), abs=1e-11)
+        weight = psi0[m] * integral(lambda x, m=m: psi(m, x))
+        assert st.reaction_weights[m] == pytest.approx(weight, abs=1e-11)
         assert integral(lambda x, m=m: psi(m, x) ** 2) == pytest.approx(1.0, abs=1e-11)
 
 

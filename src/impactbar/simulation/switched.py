@@ -713,9 +713,9 @@ def _rest(model, drive, loop, t_end, settings) -> None:
         fns.append(g)
     if z.size:
         extra = {} if model.piston is None else {"model": model}
-        sol = solve_ivp(lambda tt, y: drive.rate(mode, y, q0, v0, **extra), (t, t_end), np.asarray(z, dtype=float),
-                        method=settings.method, rtol=settings.rtol, atol=settings.atol, events=fns,
-                        dense_output=True)
+        sol = solve_ivp(lambda tt, y: drive.rate(mode, y, q0, v0, **extra), (t, t_end),
+                        np.asarray(z, dtype=float), method=settings.method, rtol=settings.rtol,
+                        atol=settings.atol, events=fns, dense_output=True)
         te, z_end, dense = float(sol.t[-1]), sol.y[:, -1].copy(), sol.sol
         hit = [i for i, tt in enumerate(sol.t_events) if tt.size] if sol.status == 1 else []
     else:  # no state: only the drive's scheduled or surface events can end the rest
