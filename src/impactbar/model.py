@@ -10,6 +10,7 @@ import numpy as np
 
 from ._shared.schema import Field, Schema
 from ._shared.validate import check_int, check_real
+from .dynamics.stepped import SteppedPiston
 from .laws import ContactLaw, get_law
 
 __all__ = ["BarModel"]
@@ -63,13 +64,17 @@ class BarModel:
     Raises
     ------
     ValueError
-        If a parameter is of the wrong type, not finite, or outside its range; the message names it.
+        If a parameter is of the wrong type, not finite, or outside its range; the message names it;
+        or if ``piston`` is given under a law other than the paper's.
 
     Examples
     --------
-    >>> from impactbar import BarModel
+    >>> from impactbar import BarModel, SteppedPiston
     >>> BarModel(s=10.0, d=0.0, R=0.5, n_modes=8).frequencies[:2]
     array([ 0.        , 31.41592654])
+    >>> stepped = BarModel(10.0, 0.0, 0.5, 2, piston=SteppedPiston([0.3, 0.7], [2.0, 1.0]))
+    >>> stepped.frequencies.round(4)  # s k_n, k_n the stepped bar's wavenumbers
+    array([ 0.    , 28.3478, 64.6044])
     """
 
     s: float
@@ -77,7 +82,9 @@ class BarModel:
     R: float
     n_modes: int
     impact: str = "paper"
+    piston: SteppedPiston | None = None
     _law: ContactLaw = field(default=None, init=False, repr=False)
+    _modal: tuple = field(default=None, init=False, repr=False, compare=False)
 
     #: the numbers of a model, with their long names (tables, a sweep's axes)
     parameters: ClassVar[Schema] = Schema(
@@ -93,6 +100,7 @@ class BarModel:
         object.__setattr__(self, "_law", law)
         if self.impact is not law.name:
             object.__setattr__(self, "impact", law.name)
+        self._set_piston()
         if self.n_modes and self.s * self.n_modes > MAX_STIFFNESS:
             raise ValueError(
                 f"s * n_modes must be at most {MAX_STIFFNESS:g} (got s = {self.s:g}, n_modes = "
@@ -108,6 +116,59 @@ class BarModel:
                 f"d must be in [0, {np.sqrt(_FLOAT_MAX):.6g}] (got d = {self.d:g}): beyond it d**2, "
                 "which enters every mode's decay (eq. 8), is not finite")
 
+    def __repr__(self) -> str:
+        text = (f"BarModel(s={self.s!r}, d={self.d!r}, R={self.R!r}, n_modes={self.n_modes!r}, "
+                f"impact={self.impact!r}")
+        return text + (")" if self.piston is None else f", piston={self.piston!r})")
+
+    def _set_piston(self) -> None:
+        piston = self.piston
+        if piston is None:
+            return
+        if not isinstance(piston, SteppedPiston):
+            raise ValueError(f"piston must be a SteppedPiston or None; got {type(piston).__name__}")
+        if piston.n_segments == 1:  # the uniform bar, exactly
+            object.__setattr__(self, "piston", None)
+            return
+        if not self._law.stepped_piston:
+            raise ValueError(
+                f"piston: a stepped piston's modes are supported under the paper's law only (got impact = "
+                f"{self._law.name!r}): the wave and rod-rock laws carry a uniform bar by characteristics; "
+                "a stepped piston's blow on a rod is single_blow(..., piston=...)")
+        sticking = piston.sticking_basis(self.n_modes)
+        modes = piston.modes(self.n_modes)
+        ends = modes.shapes(np.array([0.0, 1.0]))  # (2, N + 1)
+        w = self.s * modes.wavenumbers
+        c = ends[1] * ends[0]
+        c[0] = 1.0
+        kappa = ends[0] * ends[0]
+        kappa[0] = 1.0
+        for a in (w, c, kappa):
+            a.flags.writeable = False
+        object.__setattr__(self, "_modal", (w, c, modes, kappa, sticking))
+
+    @property
+    def modes(self):
+        """The stepped piston's free-free modes (:class:`~impactbar.PistonModes`),
+        or ``None`` for the uniform bar."""
+        return None if self._modal is None else self._modal[2]
+
+    @property
+    def sticking(self):
+        """The stepped piston held on the stop (:class:`~impactbar.StickingBasis`:
+        its fixed-free modes and their maps to the free ones), or ``None`` for the uniform bar."""
+        return None if self._modal is None else self._modal[4]
+
+    @property
+    def drive_weights(self) -> np.ndarray:
+        r"""Weights :math:`\kappa` with :math:`u_t(0, t) = \kappa \cdot q'`: :math:`(1, 2, \dots,
+        2)`, or :math:`\phi_n(0)^2` with a stepped piston; also the energy's,
+        :math:`E = \tfrac12 \sum_n \kappa_n (q_n'^2 + \omega_n^2 q_n^2)` (theory §2, §12),
+        shape ``(N + 1,)``."""
+        if self._modal is not None:
+            return self._modal[3].copy()
+        return np.where(np.arange(self.n_modes + 1) == 0, 1.0, 2.0)
+
     @property
     def law(self) -> ContactLaw:
         """The impact law as an object (:class:`impactbar.laws.ContactLaw`)."""
@@ -117,13 +178,19 @@ class BarModel:
 
     @property
     def frequencies(self) -> np.ndarray:
-        r"""Undamped modal frequencies :math:`s n \pi` for :math:`n = 0..N`, shape ``(N + 1,)`` (eq. 6)."""
+        r"""Undamped modal frequencies :math:`s n \pi` for :math:`n = 0..N`, shape ``(N + 1,)`` (eq. 6);
+        :math:`s k_n` with a stepped piston (theory §12)."""
+        if self._modal is not None:
+            return self._modal[0].copy()
         return self.s * np.pi * np.arange(self.n_modes + 1, dtype=float)
 
     @property
     def end_weights(self) -> np.ndarray:
         r"""Weights :math:`c` with :math:`u(1, t) = c \cdot q`: :math:`(1, 2(-1)^1, \dots, 2(-1)^N)`,
-        shape ``(N + 1,)`` (eq. 15 at :math:`x = 1`)."""
+        shape ``(N + 1,)`` (eq. 15 at :math:`x = 1`); :math:`(1, \phi_1(0)\phi_1(1), \dots)` with a
+        stepped piston's mass-orthonormal modes :math:`\phi_n` (theory §12)."""
+        if self._modal is not None:
+            return self._modal[1].copy()
         c = 2.0 * (-1.0) ** np.arange(self.n_modes + 1)
         c[0] = 1.0
         return c
@@ -139,7 +206,8 @@ class BarModel:
         Returns
         -------
         numpy.ndarray, shape (..., N + 1)
-            :math:`1` for :math:`n = 0` and :math:`2 \cos(n \pi x)` for :math:`n \ge 1`.
+            :math:`1` for :math:`n = 0` and :math:`2 \cos(n \pi x)` for :math:`n \ge 1`; with a
+            stepped piston :math:`\phi_n(0)\,\phi_n(x)` (theory §12).
 
         Raises
         ------
@@ -149,6 +217,11 @@ class BarModel:
         x = np.asarray(x, dtype=float)
         if not np.all(np.isfinite(x)) or np.any((x < 0.0) | (x > 1.0)):
             raise ValueError("x must lie in [0, 1]")
+        if self._modal is not None:
+            modes = self._modal[2]
+            phi = modes.shapes(x) * modes.shapes(np.zeros(1))[0]
+            phi[..., 0] = 1.0
+            return phi
         n = np.arange(self.n_modes + 1)
         phi = 2.0 * np.cos(np.pi * x[..., None] * n)
         phi[..., 0] = 1.0
@@ -156,7 +229,8 @@ class BarModel:
 
     def with_(self, **changes) -> BarModel:
         """A copy with some fields changed (validated again)."""
-        fields = {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes, "impact": self._law}
+        fields = {"s": self.s, "d": self.d, "R": self.R, "n_modes": self.n_modes, "impact": self._law,
+                  "piston": self.piston}
         unknown = set(changes) - set(fields)
         if unknown:
             raise ValueError(f"unknown BarModel field(s): {sorted(unknown)}; allowed: {sorted(fields)}")

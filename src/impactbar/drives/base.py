@@ -415,8 +415,11 @@ class Drive(ABC):
         continuous state ``z`` and the bar's modal state ``(q, q')``. With ``state_size == 0`` it
         depends on the mode alone (constant between events)."""
 
-    def rate(self, mode, z: np.ndarray, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """``z'``, the rate of the continuous state between events, shape ``(state_size,)``."""
+    def rate(self, mode, z: np.ndarray, q: np.ndarray, v: np.ndarray, model=None) -> np.ndarray:
+        """``z'``, the rate of the continuous state between events, shape ``(state_size,)``.
+        ``model`` (a :class:`~impactbar.BarModel`) is passed only for a stepped piston, whose driven
+        end moves as ``model.drive_weights @ q`` (the uniform bar's ``q_0 + 2 sum q_n`` otherwise;
+        a drive written without the argument serves uniform bars)."""
         return np.zeros(0)
 
     @property

@@ -320,7 +320,8 @@ def vector_field(model, drive, mode):
         out[:M] = v
         out[M:2 * M] = drive.force(mode, z, q, v) - d * v - w2 * q
         if z.size:
-            out[2 * M:] = drive.rate(mode, z, q, v)
+            out[2 * M:] = (drive.rate(mode, z, q, v) if model.piston is None
+                           else drive.rate(mode, z, q, v, model=model))
         return out
 
     return f

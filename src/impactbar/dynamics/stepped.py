@@ -34,7 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["SteppedPiston", "PistonModes"]
+__all__ = ["SteppedPiston", "PistonModes", "StickingBasis"]
 
 #: the most modes :meth:`SteppedPiston.modes` computes (as the uniform bar's models allow)
 MAX_MODES = 4096
@@ -102,6 +102,66 @@ class PistonModes:
         a = self.amplitudes[:, j, 0]  # (N + 1, ...)
         b = self.amplitudes[:, j, 1]
         return np.moveaxis(a, 0, -1) * np.cos(k * xi) + np.moveaxis(b, 0, -1) * np.sin(k * xi)
+
+
+@dataclass(frozen=True)
+class StickingBasis:
+    r"""The stepped piston held on the stop at its struck end (theory §8, §12): its fixed-free modes
+    and the maps between them and the free-free modes, as the simulator's sticking phase uses them.
+
+    The fixed-free modes :math:`\psi_m` (:math:`\psi_m(1) = 0`, no force at :math:`x = 0`,
+    mass-orthonormal) in coordinates :math:`r_m` scaled as the free ones, :math:`u(x, t) = \sum_m
+    r_m \psi_m(0) \psi_m(x)`, obey :math:`r_m'' + d r_m' + (s l_m)^2 r_m = p(t)`. The overlaps
+    follow from Green's identity on the two eigenproblems (no quadrature):
+
+    .. math:: \int_0^1 \mu\,\phi_n \psi_m\,dx = \frac{\mu_N\,\psi_m'(1)\,\phi_n(1)}{k_n^2 - l_m^2},
+
+    :math:`\mu_N` the last segment's mass per length; the stop's reaction is
+    :math:`F = p\,(1 - \sum_m a_m) + \sum_m a_m (s l_m)^2 r_m` with
+    :math:`a_m = \psi_m(0) \int_0^1 \mu\,\psi_m\,dx` (the momentum balance of the bar).
+
+    Attributes
+    ----------
+    wavenumbers : numpy.ndarray, shape (N,)
+        :math:`l_1 < \dots < l_N`, the fixed-free wavenumbers.
+    to_contact : numpy.ndarray, shape (N, N + 1)
+        :math:`r = P q` for a free-free state :math:`q`.
+    to_free : numpy.ndarray, shape (N + 1, N)
+        :math:`q = Q r`.
+    reaction_weights : numpy.ndarray, shape (N,)
+        :math:`a_m`.
+    contact_weights : numpy.ndarray, shape (N,)
+        :math:`\psi_m(0)^2`, the weights of :math:`r_m'` in the driven end's velocity.
+    modes : PistonModes
+        The fixed-free modes (no rigid mode: ``modes.shapes(x)`` has N columns).
+    """
+
+    wavenumbers: np.ndarray
+    to_contact: np.ndarray
+    to_free: np.ndarray
+    reaction_weights: np.ndarray
+    contact_weights: np.ndarray
+    modes: PistonModes
+
+    def shapes(self, x) -> np.ndarray:
+        r"""The fixed-free shapes scaled as the coordinates :math:`r_m`: :math:`u = \sum_m r_m
+        \psi_m(0)\,\psi_m(x)` (theory §8, §12).
+
+        Parameters
+        ----------
+        x : array_like, shape (X,)
+            Positions along the piston, :math:`0 \le x \le 1` (dimensionless).
+
+        Returns
+        -------
+        numpy.ndarray, shape (X, N)
+
+        Raises
+        ------
+        ValueError
+            If a position is not finite or lies outside :math:`[0, 1]`.
+        """
+        return self.modes.shapes(x) * self.modes.shapes(np.zeros(1))[0]
 
 
 @dataclass(frozen=True)
@@ -244,24 +304,109 @@ class SteppedPiston:
             "stepped piston: the frequency equation's roots could not be separated (a mode without as "
             "many nodes as its index)")
 
-    def _roots(self, n: int, refine: int = 0) -> np.ndarray:
+    def end_displacement(self, k) -> np.ndarray:
+        r"""The fixed-free frequency equation: the displacement at :math:`x = 1` of the motion of
+        wavenumber ``k`` (shape ``(...)``, > 0) that starts with :math:`(u, F) = (1, 0)` at
+        :math:`x = 0`; zero at the wavenumbers of the piston held at its struck end (theory §12).
+
+        Returns
+        -------
+        numpy.ndarray, shape (...)
+        """
+        k = np.asarray(k, dtype=float)
+        u, _ = self._propagate(k)
+        return u[-1]
+
+    def fixed_modes(self, n_modes: int) -> PistonModes:
+        r"""The first ``n_modes`` modes of the piston held at its struck end (:math:`u(1) = 0`, free
+        at :math:`x = 0`), exact, mass-orthonormal (theory §8, §12); the uniform bar's are
+        :math:`l_m = (m - 1/2)\pi`, :math:`\psi_m = \sqrt 2 \cos(l_m x)`.
+
+        Parameters
+        ----------
+        n_modes : int
+            :math:`N`, :math:`0 \le N \le 4096`.
+
+        Returns
+        -------
+        PistonModes
+            Wavenumbers of shape ``(N,)`` (no rigid mode) and amplitudes of shape
+            ``(N, n_segments, 2)``.
+
+        Raises
+        ------
+        ValueError
+            If ``n_modes`` is not an integer in range.
+        """
+        if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) \
+                or not 0 <= n_modes <= MAX_MODES:
+            raise ValueError(f"n_modes must be an integer in [0, {MAX_MODES}]; got {n_modes!r}")
+        n_modes = int(n_modes)
+        for refine in range(8):
+            k = self._roots(n_modes, refine, self.end_displacement) if n_modes else np.zeros(0)
+            amp = self._amplitudes(np.concatenate(([0.0], k)))[1:]
+            modes = PistonModes(k, amp, self)
+            if self._nodes_ok(modes, fixed=True):
+                return modes
+        raise RuntimeError(  # pragma: no cover - never seen
+            "stepped piston: the fixed-free frequency equation's roots could not be separated")
+
+    def sticking_basis(self, n_modes: int) -> StickingBasis:
+        r"""The fixed-free modes and their maps to the free-free ones (:class:`StickingBasis`),
+        for ``n_modes`` (:math:`N`) modes of each kind (theory §8, §12).
+
+        Parameters
+        ----------
+        n_modes : int
+            :math:`N`, :math:`0 \le N \le 4096`.
+
+        Returns
+        -------
+        StickingBasis
+
+        Raises
+        ------
+        ValueError
+            If ``n_modes`` is not an integer in range.
+        """
+        free = self.modes(n_modes)
+        fixed = self.fixed_modes(n_modes)
+        k, lw = free.wavenumbers, fixed.wavenumbers
+        phi0, phi1 = free.shapes(np.array([0.0, 1.0]))
+        psi0 = fixed.shapes(np.zeros(1))[0]
+        # psi_m'(1) from the last segment's amplitudes
+        a, b = fixed.amplitudes[:, -1, 0], fixed.amplitudes[:, -1, 1]
+        le = float(self.lengths[-1])
+        dpsi1 = lw * (-a * np.sin(lw * le) + b * np.cos(lw * le))
+        mu_end = float(self.mass_per_length[-1])
+        overlap = mu_end * dpsi1[None, :] * phi1[:, None] / (k[:, None] ** 2 - lw[None, :] ** 2)
+        to_free = overlap * psi0[None, :] / phi0[:, None]
+        to_contact = (overlap * phi0[:, None] / psi0[None, :]).T
+        reaction = psi0 * overlap[0] / phi1[0]  # phi_0 = 1: int mu psi_m
+        arrays = (lw, to_contact, to_free, reaction, psi0 * psi0)
+        for arr in arrays:
+            arr.flags.writeable = False
+        return StickingBasis(*arrays, fixed)
+
+    def _roots(self, n: int, refine: int = 0, f=None) -> np.ndarray:
         # a grid of 16 points per pi / (4 l_min) (halved again on each retry): two roots closer than
         # a step would cancel their sign changes, which the node count of modes() detects
         h = math.pi / 16.0 * min(1.0, float(self.lengths.min()) * 4.0) / 2.0**refine
         left: list[np.ndarray] = []
         found = 0
+        f = self.end_force if f is None else f
         lo = 1e-3 * h
-        g_lo = float(self.end_force(np.array([lo]))[0])
+        g_lo = float(f(np.array([lo]))[0])
         while found < n:
             pts = lo + h * np.arange(0, 4097)
-            g = self.end_force(pts)
+            g = f(pts)
             g[0] = g_lo
             i = np.flatnonzero(np.signbit(g[1:]) != np.signbit(g[:-1]))[:n - found]
             left.append(pts[i])
             found += i.size
             lo, g_lo = float(pts[-1]), float(g[-1])
         a = np.concatenate(left)
-        return _refine(self.end_force, a, a + h)
+        return _refine(f, a, a + h)
 
     def _amplitudes(self, k: np.ndarray) -> np.ndarray:
         """(a, b) per segment for each mode, mass-orthonormal."""
@@ -287,13 +432,19 @@ class SteppedPiston:
         return amp / np.sqrt(norm2)[:, None, None]
 
     @staticmethod
-    def _nodes_ok(modes: PistonModes) -> bool:
-        """Whether mode n has exactly n nodes for every n (Sturm-Liouville): no root was missed."""
+    def _nodes_ok(modes: PistonModes, fixed: bool = False) -> bool:
+        """Whether mode n has exactly n nodes for every n (Sturm-Liouville): no root was missed
+        (a fixed-free mode m = 1.. has m - 1 nodes before its held end)."""
+        if modes.wavenumbers.size == 0:
+            return True
         k_max = float(modes.wavenumbers[-1])
         if k_max == 0.0:
             return True
         # zeros in a segment are pi/k apart: 8 samples per pi/k_max catch every sign change
         x = np.linspace(0.0, 1.0, int(8 * k_max / math.pi) + 64)
+        if fixed:  # short of the held end's own zero
+            x = x[:-1] + 0.5 * (x[1] - x[0])
+            x = np.concatenate(([0.0], x))
         phi = modes.shapes(x)
         nodes = np.count_nonzero(np.signbit(phi[1:]) != np.signbit(phi[:-1]), axis=0)
         return bool(np.array_equal(nodes, np.arange(modes.wavenumbers.size)))

@@ -94,6 +94,10 @@ class ContactLaw:
         method from guesses (:func:`impactbar.orbits.periodic_orbits_by_newton`: the orbits of
         :meth:`paper_equivalent` and a settled simulation), which needs :meth:`window`,
         :meth:`impact_map` and :meth:`contact` only.
+    stepped_piston : bool
+        The law acts on the modal state alone (no characteristics on a uniform piston), so that a
+        stepped piston's modes (``BarModel(..., piston=...)``, theory §12) serve it; ``False``
+        (the default) refuses a stepped piston.
     parameters : tuple of str
         The law's own continuation parameters (:func:`~impactbar.continue_orbit`, the sweeps' axes),
         read by :meth:`parameter_value` and changed by :meth:`with_parameter`; none by default.
@@ -107,6 +111,7 @@ class ContactLaw:
     flight_starts_on_stop: ClassVar[bool] = True
     uses_restitution: ClassVar[bool] = True
     has_phase_equation: ClassVar[bool] = True
+    stepped_piston: ClassVar[bool] = False
     parameters: ClassVar[tuple[str, ...]] = ()
 
     def paper_equivalent(self, model):

@@ -53,7 +53,10 @@ def schur_blocks(model: BarModel, load: Load, phase: float) -> np.ndarray:
     if N > 0:
         w2 = model.frequencies[1:] ** 2
         _, vper = load.periodic_state(w2, d, [phase])
-        sig = float(np.sum((-1.0) ** np.arange(1, N + 1) * vper[:, 0])) / math.pi
+        if model.piston is None:
+            sig = float(np.sum((-1.0) ** np.arange(1, N + 1) * vper[:, 0])) / math.pi
+        else:  # (c_n / 2 for the stepped piston's (-1)^n, theory §12)
+            sig = float(model.end_weights[1:] @ vper[:, 0]) / (2.0 * math.pi)
     else:
         sig = 0.0
     S2 = float(load(phase)) - p0 - d * float(load.rigid_velocity(d, phase))

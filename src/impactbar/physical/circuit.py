@@ -513,7 +513,7 @@ class CircuitDrifterOrbit:
         for p in pieces:
             sel = (t >= p.t0) & (t <= p.t_end)
             if np.any(sel):
-                w[sel] = -(np.where(np.arange(M) == 0, 1.0, 2.0) @ p.modal(t[sel])[0])
+                w[sel] = -(o.model.drive_weights[:M] @ p.modal(t[sel])[0])
         P, V = PRESSURE_SCALE, d.volume_scale_m3
         return {"t_s": (t - t0) / d.omega_rad_s, "p_f_Pa": z[0] * P, "p_r_Pa": z[1] * P, "p_s_Pa": z[2] * P,
                 "x_v": z[3], "gap_m": -q0 * d.bar.length_m,

@@ -185,18 +185,30 @@ class _Core:
         self.c = np.ascontiguousarray(model.end_weights)
         self.free = _Basis(model.frequencies**2, model.d, self.data)
         m = np.arange(1, self.N + 1, dtype=float)
-        self.mu = (m - 0.5) * np.pi
+        sticking = model.sticking  # a stepped piston's fixed-free modes (theory §12), or None
+        self.mu = (m - 0.5) * np.pi if sticking is None else sticking.wavenumbers
         self.contact = _Basis((model.s * self.mu) ** 2, model.d, self.data)
         # stop reaction F = p (1 - sum a) + sum a_m w2_m r_m, a_m = 2 (-1)^(m+1) / mu_m
-        self.a = 2.0 * (-1.0) ** (m + 1) / self.mu if self.N else np.zeros(0)
+        if sticking is not None:
+            self.a = np.array(sticking.reaction_weights)
+        else:
+            self.a = 2.0 * (-1.0) ** (m + 1) / self.mu if self.N else np.zeros(0)
         self.f_alpha = 1.0 - float(np.sum(self.a))
         self.f_wts = np.ascontiguousarray(self.a * self.contact.w2)
         n = np.arange(self.N + 1, dtype=float)
-        ov = _overlap(n, m)  # (N+1, N)
-        kappa = np.where(n == 0, 1.0, 2.0)
-        self.to_contact = np.ascontiguousarray((kappa[:, None] * ov).T)  # r = P q, (N, N+1)
-        self.to_free = np.ascontiguousarray(2.0 * ov)  # q = P r, (N+1, N)
+        if sticking is None:
+            ov = _overlap(n, m)  # (N+1, N)
+            kappa = np.where(n == 0, 1.0, 2.0)
+            self.to_contact = np.ascontiguousarray((kappa[:, None] * ov).T)  # r = P q, (N, N+1)
+            self.to_free = np.ascontiguousarray(2.0 * ov)  # q = P r, (N+1, N)
+            self.contact_kappa = np.full(self.N, 2.0)
+        else:
+            kappa = model.drive_weights
+            self.to_contact = np.ascontiguousarray(sticking.to_contact)
+            self.to_free = np.ascontiguousarray(sticking.to_free)
+            self.contact_kappa = np.array(sticking.contact_weights)
         self.kappa = kappa
+        self.sticking = sticking
         self.free_args = (tuple(self.data), tuple(self.free.view), self.R, self.c)  # built once
         self.instant = model.law.instantaneous
         # the kernel for a flight of this bar, compiled without the other kind's search
@@ -209,7 +221,8 @@ class _Core:
         if basis == _FREE:
             k = self.kappa
             return float(0.5 * np.sum(k * v * v) + 0.5 * np.sum(k * self.free.w2 * q * q))
-        return float(np.sum(v * v) + np.sum(self.contact.w2 * q * q))
+        k = self.contact_kappa
+        return float(0.5 * np.sum(k * v * v) + 0.5 * np.sum(k * self.contact.w2 * q * q))
 
     def kinetic(self, v: np.ndarray) -> float:
         return float(0.5 * np.sum(self.kappa * v * v))
@@ -288,6 +301,12 @@ class _Core:
             if e > 0.0:
                 x[0] -= 2.0 * e
         return q, v
+
+    def contact_shapes(self, x) -> np.ndarray:
+        """The fixed-free shapes at positions ``x`` (shape ``(X,)``): ``u = shapes @ r``, shape ``(X, N)``."""
+        if self.sticking is not None:
+            return self.sticking.shapes(x)
+        return 2.0 * np.cos(np.outer(x, self.mu))
 
     def contact_state(self, q, v):
         return self.to_contact @ q, self.to_contact @ v

@@ -239,8 +239,7 @@ _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 def _drive_energy(tr: SwitchedTrajectory) -> EnergyAccount:
     """:attr:`SwitchedTrajectory.energy`."""
     model = tr.model
-    n = np.arange(model.n_modes + 1)
-    kappa = np.where(n == 0, 1.0, 2.0)
+    kappa = model.drive_weights  # (1, 2, .., 2): u_t(0) = kappa . q'
     w2 = model.frequencies**2
     d = model.d
     hmax = 1.5 / (math.sqrt(float(np.max(w2))) + 1.0)
@@ -713,9 +712,10 @@ def _rest(model, drive, loop, t_end, settings) -> None:
         g.terminal, g.direction = True, e.direction
         fns.append(g)
     if z.size:
-        sol = solve_ivp(lambda tt, y: drive.rate(mode, y, q0, v0), (t, t_end), np.asarray(z, dtype=float),
-                        method=settings.method, rtol=settings.rtol, atol=settings.atol, events=fns,
-                        dense_output=True)
+        extra = {} if model.piston is None else {"model": model}
+        sol = solve_ivp(lambda tt, y: drive.rate(mode, y, q0, v0, **extra), (t, t_end),
+                        np.asarray(z, dtype=float), method=settings.method, rtol=settings.rtol,
+                        atol=settings.atol, events=fns, dense_output=True)
         te, z_end, dense = float(sol.t[-1]), sol.y[:, -1].copy(), sol.sol
         hit = [i for i, tt in enumerate(sol.t_events) if tt.size] if sol.status == 1 else []
     else:  # no state: only the drive's scheduled or surface events can end the rest

@@ -433,7 +433,7 @@ class Trajectory:
         """
         x = np.atleast_1d(np.asarray(x, dtype=float))
         phi_free = self.model.shape_functions(x)  # (X, N+1)
-        phi_contact = 2.0 * np.cos(np.outer(x, self._core.mu))  # (X, N)
+        phi_contact = self._core.contact_shapes(x)  # (X, N)
         t = self._check_times(t)
         out = np.zeros((t.size, x.size))
         for sel, basis, q, _ in self._modal(t):
@@ -559,7 +559,7 @@ def _segment_integrals(core: _Core, seg: _Segment, tb: float):
     if seg.basis == _FREE:
         kap = core.kappa
     else:
-        kap = np.full(core.N, 2.0)
+        kap = core.contact_kappa
     for i in range(0, nodes.size, chunk):
         tt = nodes[i:i + chunk]
         _, v = core.propagate(seg.basis, ta, seg.q, seg.v, tt)

@@ -20,7 +20,7 @@ import numpy as np
 # parameter indices in ``par``
 ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)
 HELD, PSH, XOUT, XIN, ACC, REL, XRATE, ARMO, ARMI, DAMP, NM, OPEN, VAR, HASREL, HASACC = range(15, 30)
-HEAD = 30  # then the driven end's weights (M) and the squared frequencies (M)
+HEAD = 30  # then the struck end's weights (M), the squared frequencies (M) and the driven end's (M)
 
 N_ENERGY = 8
 N_EVENTS = 6
@@ -49,7 +49,7 @@ def _flows(y, par, M):
     w = 0.0
     wd = 0.0
     for i in range(M):
-        e = 1.0 if i == 0 else 2.0
+        e = par[HEAD + 2 * M + i]
         w -= e * y[i]
         wd -= e * y[M + i]
     F = 2 * M
@@ -120,7 +120,7 @@ def jac_base(y, par, M, A):
     fpf = b / nuf * (qf - alpha * wd)
     fpr = b / nur * (qin - qout + wd)
     for i in range(M):
-        e = 1.0 if i == 0 else 2.0
+        e = par[HEAD + 2 * M + i]
         A[F, i] = fpf * alpha * e / nuf
         A[F, M + i] = b * alpha * e / nuf
         A[F + 1, i] = -fpr * e / nur

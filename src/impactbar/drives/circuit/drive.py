@@ -197,7 +197,7 @@ class HydraulicCircuitDrive(Drive):
 
     # -- compiled data ----------------------------------------------------------------------------
     def _par(self, model, mode, variational=False) -> np.ndarray:
-        par = _par_base(self, model.n_modes, float(model.d), float(model.s)).copy()
+        par = _par_base(self, model).copy()
         target, moving, acc, rel = mode
         par[K.ACC] = float(acc)
         par[K.REL] = float(rel)
@@ -225,8 +225,7 @@ class HydraulicCircuitDrive(Drive):
 
     def _check_volumes(self, model, piece, t) -> None:
         M = model.n_modes + 1
-        e = np.where(np.arange(M) == 0, 1.0, 2.0)
-        w = -(piece.y[:, :M] @ e)
+        w = -(piece.y[:, :M] @ model.drive_weights)
         nur = self.chambers.rear_volume - w
         nuf = self.chambers.front_volume + self.chambers.area_ratio * w
         if np.min(nur) <= 0.0 or np.min(nuf) <= 0.0:
@@ -275,10 +274,10 @@ class HydraulicCircuitDrive(Drive):
     def force(self, mode, z, q, v) -> float:
         return float(z[1] - self.chambers.area_ratio * z[0])
 
-    def rate(self, mode, z, q, v) -> np.ndarray:
+    def rate(self, mode, z, q, v, model=None) -> np.ndarray:
         q = np.asarray(q, dtype=float)
         M = q.size
-        par = self._par(_RateModel(M), mode)
+        par = self._par(_RateModel(M) if model is None else model, mode)
         y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)))
         out = np.empty(2 * M + 4 + K.N_ENERGY)
         K.field_at(np.concatenate((y, np.zeros(K.N_ENERGY)))[None, :], par, out[None, :])
@@ -409,7 +408,7 @@ class HydraulicCircuitDrive(Drive):
         z = run.drive_state(t)
         q, _ = run.modal_state(t)
         M = q.shape[0]
-        w = -(np.where(np.arange(M) == 0, 1.0, 2.0) @ q)
+        w = -(run.model.drive_weights[:M] @ q)
         return {"t": t, "p_f": z[0], "p_r": z[1], "p_s": z[2], "x_v": z[3], "y": -q[0],
                 "V_f": self.chambers.front_volume + self.chambers.area_ratio * w,
                 "V_r": self.chambers.rear_volume - w}
@@ -424,18 +423,31 @@ class HydraulicCircuitDrive(Drive):
 
 
 class _RateModel:
-    """The little of a model that :meth:`HydraulicCircuitDrive.rate` needs: the mode count."""
+    """The little of a uniform bar's model that :meth:`HydraulicCircuitDrive.rate` needs: the mode
+    count and the ends' weights (hashable by the count: the parameters are cached)."""
 
     def __init__(self, M):
         self.n_modes, self.d, self.s = M - 1, 0.0, 1.0
+        n = np.arange(M)
+        self.end_weights = np.where(n == 0, 1.0, 2.0 * (-1.0) ** n)
+        self.frequencies = np.pi * n
+        self.drive_weights = np.where(n == 0, 1.0, 2.0)
+
+    def __hash__(self):
+        return hash(("_RateModel", self.n_modes))
+
+    def __eq__(self, other):
+        return isinstance(other, _RateModel) and other.n_modes == self.n_modes
 
 
 @functools.lru_cache(maxsize=64)
-def _par_base(drive: HydraulicCircuitDrive, n_modes: int, d: float, s: float) -> np.ndarray:
-    """The parameter vector of the compiled kernels (:mod:`._kernel`) for a drive and a bar."""
-    M = n_modes + 1
+def _par_base(drive: HydraulicCircuitDrive, model) -> np.ndarray:
+    """The parameter vector of the compiled kernels (:mod:`._kernel`) for a drive and a bar (its
+    struck end's weights, squared frequencies and driven end's weights: a stepped piston's too)."""
+    M = model.n_modes + 1
+    d = float(model.d)
     ch, va, su, oil, acc = drive.chambers, drive.valve, drive.supply, drive.oil, drive.accumulator
-    par = np.zeros(K.HEAD + 2 * M)
+    par = np.zeros(K.HEAD + 3 * M)
     par[K.ALPHA], par[K.NUR], par[K.NUF] = ch.area_ratio, ch.rear_volume, ch.front_volume
     par[K.KV], par[K.KF] = va.coefficient, su.front_coefficient
     par[K.QP] = su.pump_flow if su.pump_flow is not None else 0.0
@@ -455,8 +467,8 @@ def _par_base(drive: HydraulicCircuitDrive, n_modes: int, d: float, s: float) ->
     par[K.NM] = float(M)
     par[K.HASREL] = 1.0 if su.has_relief and not su.held else 0.0
     par[K.HASACC] = 1.0 if has_acc else 0.0
-    n = np.arange(M)
-    par[K.HEAD:K.HEAD + M] = np.where(n == 0, 1.0, 2.0 * (-1.0) ** n)
-    par[K.HEAD + M:K.HEAD + 2 * M] = (s * math.pi * n) ** 2
+    par[K.HEAD:K.HEAD + M] = model.end_weights
+    par[K.HEAD + M:K.HEAD + 2 * M] = model.frequencies ** 2
+    par[K.HEAD + 2 * M:K.HEAD + 3 * M] = model.drive_weights
     par.flags.writeable = False
     return par

@@ -19,8 +19,17 @@ if TYPE_CHECKING:
 
 def _w2(model: BarModel) -> np.ndarray:
     """``(s n pi)^2``, ``n = 0..N`` (eq. 6), built once per ``(s, N)`` (the flows ask for it at every
-    step; callers only read it)."""
+    step; callers only read it); a stepped piston's ``(s k_n)^2`` (theory §12)."""
+    if model.piston is not None:
+        return _w2_stepped(model)
     return _w2_of(model.s, model.n_modes + 1)
+
+
+@functools.lru_cache(maxsize=64)
+def _w2_stepped(model: BarModel) -> np.ndarray:
+    w2 = model.frequencies ** 2
+    w2.flags.writeable = False
+    return w2
 
 
 @functools.lru_cache(maxsize=64)

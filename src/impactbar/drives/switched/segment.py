@@ -330,11 +330,12 @@ def _admissibility(model, drive, z0, durations, samples: int = 400) -> Admissibi
         if c @ z0[M:] >= 0.0 and model.R > 0.0:
             return Admissibility.STICKS
         return Admissibility.ADMISSIBLE
-    n = max(samples, int(8 * model.s * model.n_modes * sum(durations)))
+    top = model.s * model.n_modes if model.piston is None else float(np.sqrt(w2[-1])) / math.pi
+    n = max(samples, int(8 * top * sum(durations)))
     worst = -math.inf
     scale = max(drive.switch_out, float(np.max(np.abs(z0[:M]))))  # (lengths scale with the drive)
     if n > _DIRECT_SAMPLES:  # a long period: sample only where the energy bound cannot decide
-        density = 8.0 * model.s * model.n_modes
+        density = 8.0 * top
         for p, z, h in flights:
             if h > 0.0:
                 worst = max(worst, _end_max_bounded(w2, d, p, c, z, h, density))

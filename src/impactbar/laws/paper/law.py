@@ -110,6 +110,7 @@ class PaperLaw(ContactLaw):
     instantaneous = True
     rigid_closed_forms = True
     supports_schur = True
+    stepped_piston = True
 
     def window(self, model) -> float:
         """0: the impact is instantaneous."""
