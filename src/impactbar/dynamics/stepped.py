@@ -134,6 +134,16 @@ class StickingBasis:
         :math:`\psi_m(0)^2`, the weights of :math:`r_m'` in the driven end's velocity.
     modes : PistonModes
         The fixed-free modes (no rigid mode: ``modes.shapes(x)`` has N columns).
+
+    Examples
+    --------
+    >>> import math
+    >>> from impactbar import SteppedPiston
+    >>> held = SteppedPiston([0.5, 0.5], [1.0, 1.0]).sticking_basis(3)  # the uniform bar
+    >>> (held.wavenumbers / math.pi).round(12)  # (m - 1/2) pi
+    array([0.5, 1.5, 2.5])
+    >>> held.contact_weights.round(12)  # psi_m(0)^2 = 2
+    array([2., 2., 2.])
     """
 
     wavenumbers: np.ndarray
