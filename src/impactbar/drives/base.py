@@ -687,13 +687,14 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
             raise ValueError("Newton left the region of positive flight times: give a guess closer "
                              "to the orbit (e.g. from simulate)")
         # the step relative to the states' and the times' own sizes (issue 42: relative to
-        # max(1, |X|) it depended on the drive's scale, states scaling with it and times not); the
-        # states' size floored by how much they change with the times (|dr/dt| |t|, which scales as
-        # they do): states that vanish at the orbit (R = 0: at rest on the stop) otherwise made
-        # a rounding step of 1e-33 look like a relative change of 1
-        floor = 1e-3 * float(np.max(np.abs(Jac[:, hi]))) * float(np.max(np.abs(X[hi]))) \
-            if hi.size and lo.size else 0.0
-        size = max(_relative(step, X, lo, floor), _relative(step, X, hi))
+        # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
+        size = max(_relative(step, X, lo), _relative(step, X, hi))
+        # states that vanish at the orbit (R = 0: at rest on the stop): a rounding step of 1e-33 in
+        # them read as a relative change of 1; they are converged when their step is below tol
+        # times how much they change with the flight times (|dr/dt| |t|, scaling as they do)
+        if lo.size and hi.size and _relative(step, X, hi) <= tol and float(np.max(np.abs(step[lo]))) \
+                <= tol * float(np.max(np.abs(Jac[:, hi]))) * float(np.max(np.abs(X[hi]))):
+            return X
         if size <= tol or (big <= 0.5 and math.isfinite(last) and size < 1e-4 * last
                            and size * size <= tol * last):
             return X
@@ -704,12 +705,11 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
                      f"{np.max(np.abs(step)):.2e})")
 
 
-def _relative(step, X, index, floor: float = 0.0) -> float:
-    """``max |step|`` over ``index`` relative to ``max |X|`` there, or ``floor`` if larger (0 for an
-    empty index)."""
+def _relative(step, X, index) -> float:
+    """``max |step|`` over ``index`` relative to ``max |X|`` there (0 for an empty index)."""
     if not np.size(index):
         return 0.0
-    ref = max(float(np.max(np.abs(X[index]))), floor)
+    ref = float(np.max(np.abs(X[index])))
     size = float(np.max(np.abs(step[index])))
     return size / ref if ref > 0.0 else size
 
