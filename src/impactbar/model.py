@@ -136,7 +136,7 @@ class BarModel:
                 f"{self._law.name!r}): the wave and rod-rock laws carry a uniform bar by characteristics; "
                 "a stepped piston's blow on a rod is single_blow(..., piston=...)")
         sticking = piston.sticking_basis(self.n_modes)
-        modes = piston.modes(self.n_modes)
+        modes = sticking.free
         ends = modes.shapes(np.array([0.0, 1.0]))  # (2, N + 1)
         w = self.s * modes.wavenumbers
         c = ends[1] * ends[0]

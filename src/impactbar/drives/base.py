@@ -688,11 +688,12 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
                              "to the orbit (e.g. from simulate)")
         # the step relative to the states' and the times' own sizes (issue 42: relative to
         # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
-        size = max(_relative(step, X, lo), _relative(step, X, hi))
+        times = _relative(step, X, hi)
+        size = max(_relative(step, X, lo), times)
         # states that vanish at the orbit (R = 0: at rest on the stop): a rounding step of 1e-33 in
         # them read as a relative change of 1; they are converged when their step is below tol
         # times how much they change with the flight times (|dr/dt| |t|, scaling as they do)
-        if lo.size and hi.size and _relative(step, X, hi) <= tol and float(np.max(np.abs(step[lo]))) \
+        if lo.size and hi.size and times <= tol and float(np.max(np.abs(step[lo]))) \
                 <= tol * float(np.max(np.abs(Jac[:, hi]))) * float(np.max(np.abs(X[hi]))):
             return X
         if size <= tol or (big <= 0.5 and math.isfinite(last) and size < 1e-4 * last

@@ -134,6 +134,8 @@ class StickingBasis:
         :math:`\psi_m(0)^2`, the weights of :math:`r_m'` in the driven end's velocity.
     modes : PistonModes
         The fixed-free modes (no rigid mode: ``modes.shapes(x)`` has N columns).
+    free : PistonModes
+        The free-free modes they map to (the rigid one and ``N`` flexible ones).
 
     Examples
     --------
@@ -152,6 +154,7 @@ class StickingBasis:
     reaction_weights: np.ndarray
     contact_weights: np.ndarray
     modes: PistonModes
+    free: PistonModes
 
     def shapes(self, x) -> np.ndarray:
         r"""The fixed-free shapes scaled as the coordinates :math:`r_m`: :math:`u = \sum_m r_m
@@ -299,20 +302,7 @@ class SteppedPiston:
             If the roots cannot be separated on a grid refined 8 times (never seen: every mode
             returned has as many nodes as its index, the certificate that no root was missed).
         """
-        if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) \
-                or not 0 <= n_modes <= MAX_MODES:
-            raise ValueError(f"n_modes must be an integer in [0, {MAX_MODES}]; got {n_modes!r}")
-        n_modes = int(n_modes)
-        for refine in range(8):
-            k = np.zeros(n_modes + 1)
-            if n_modes:
-                k[1:] = self._roots(n_modes, refine)
-            modes = PistonModes(k, self._amplitudes(k), self)
-            if self._nodes_ok(modes):
-                return modes
-        raise RuntimeError(  # pragma: no cover - never seen
-            "stepped piston: the frequency equation's roots could not be separated (a mode without as "
-            "many nodes as its index)")
+        return self._solve_modes(n_modes, fixed=False)
 
     def end_displacement(self, k) -> np.ndarray:
         r"""The fixed-free frequency equation: the displacement at :math:`x = 1` of the motion of
@@ -348,18 +338,27 @@ class SteppedPiston:
         ValueError
             If ``n_modes`` is not an integer in range.
         """
+        return self._solve_modes(n_modes, fixed=True)
+
+    def _solve_modes(self, n_modes, fixed: bool) -> PistonModes:
+        """:meth:`modes` (the rigid mode and ``n_modes`` free-free ones) or :meth:`fixed_modes`:
+        the roots of the frequency equation on grids refined until every mode's node count holds."""
         if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) \
                 or not 0 <= n_modes <= MAX_MODES:
             raise ValueError(f"n_modes must be an integer in [0, {MAX_MODES}]; got {n_modes!r}")
         n_modes = int(n_modes)
+        equation = self.end_displacement if fixed else self.end_force
         for refine in range(8):
-            k = self._roots(n_modes, refine, self.end_displacement) if n_modes else np.zeros(0)
-            amp = self._amplitudes(np.concatenate(([0.0], k)))[1:]
-            modes = PistonModes(k, amp, self)
-            if self._nodes_ok(modes, fixed=True):
+            k = np.zeros(n_modes + 1)  # (k_0 = 0: the rigid mode, dropped when held)
+            if n_modes:
+                k[1:] = self._roots(n_modes, refine, equation)
+            amp = self._amplitudes(k)
+            modes = PistonModes(k[1:], amp[1:], self) if fixed else PistonModes(k, amp, self)
+            if self._nodes_ok(modes, fixed=fixed):
                 return modes
         raise RuntimeError(  # pragma: no cover - never seen
-            "stepped piston: the fixed-free frequency equation's roots could not be separated")
+            "stepped piston: the frequency equation's roots could not be separated (a mode without as "
+            "many nodes as its index)")
 
     def sticking_basis(self, n_modes: int) -> StickingBasis:
         r"""The fixed-free modes and their maps to the free-free ones (:class:`StickingBasis`),
@@ -396,15 +395,14 @@ class SteppedPiston:
         arrays = (lw, to_contact, to_free, reaction, psi0 * psi0)
         for arr in arrays:
             arr.flags.writeable = False
-        return StickingBasis(*arrays, fixed)
+        return StickingBasis(*arrays, fixed, free)
 
-    def _roots(self, n: int, refine: int = 0, f=None) -> np.ndarray:
+    def _roots(self, n: int, refine: int, f) -> np.ndarray:
         # a grid of 16 points per pi / (4 l_min) (halved again on each retry): two roots closer than
         # a step would cancel their sign changes, which the node count of modes() detects
         h = math.pi / 16.0 * min(1.0, float(self.lengths.min()) * 4.0) / 2.0**refine
         left: list[np.ndarray] = []
         found = 0
-        f = self.end_force if f is None else f
         lo = 1e-3 * h
         g_lo = float(f(np.array([lo]))[0])
         while found < n:

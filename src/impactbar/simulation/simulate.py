@@ -196,14 +196,13 @@ class _Core:
         self.f_alpha = 1.0 - float(np.sum(self.a))
         self.f_wts = np.ascontiguousarray(self.a * self.contact.w2)
         n = np.arange(self.N + 1, dtype=float)
+        kappa = model.drive_weights  # (1, 2, .., 2), or a stepped piston's phi_n(0)^2
         if sticking is None:
             ov = _overlap(n, m)  # (N+1, N)
-            kappa = np.where(n == 0, 1.0, 2.0)
             self.to_contact = np.ascontiguousarray((kappa[:, None] * ov).T)  # r = P q, (N, N+1)
             self.to_free = np.ascontiguousarray(2.0 * ov)  # q = P r, (N+1, N)
             self.contact_kappa = np.full(self.N, 2.0)
         else:
-            kappa = model.drive_weights
             self.to_contact = np.ascontiguousarray(sticking.to_contact)
             self.to_free = np.ascontiguousarray(sticking.to_free)
             self.contact_kappa = np.array(sticking.contact_weights)

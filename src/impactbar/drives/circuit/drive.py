@@ -277,7 +277,7 @@ class HydraulicCircuitDrive(Drive):
     def rate(self, mode, z, q, v, model=None) -> np.ndarray:
         q = np.asarray(q, dtype=float)
         M = q.size
-        par = self._par(_RateModel(M) if model is None else model, mode)
+        par = self._par(_rate_model(M) if model is None else model, mode)
         y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)))
         out = np.empty(2 * M + 4 + K.N_ENERGY)
         K.field_at(np.concatenate((y, np.zeros(K.N_ENERGY)))[None, :], par, out[None, :])
@@ -423,8 +423,8 @@ class HydraulicCircuitDrive(Drive):
 
 
 class _RateModel:
-    """The little of a uniform bar's model that :meth:`HydraulicCircuitDrive.rate` needs: the mode
-    count and the ends' weights (hashable by the count: the parameters are cached)."""
+    """The little of a uniform bar's model that :meth:`HydraulicCircuitDrive.rate` needs (the
+    drives sit below :class:`~impactbar.BarModel`): the mode count and the ends' weights."""
 
     def __init__(self, M):
         self.n_modes, self.d, self.s = M - 1, 0.0, 1.0
@@ -433,11 +433,12 @@ class _RateModel:
         self.frequencies = np.pi * n
         self.drive_weights = np.where(n == 0, 1.0, 2.0)
 
-    def __hash__(self):
-        return hash(("_RateModel", self.n_modes))
 
-    def __eq__(self, other):
-        return isinstance(other, _RateModel) and other.n_modes == self.n_modes
+@functools.lru_cache(maxsize=16)
+def _rate_model(M: int) -> _RateModel:
+    """One :class:`_RateModel` per mode count (by identity a key of :func:`_par_base`'s cache,
+    built once rather than at every call of the vector field)."""
+    return _RateModel(M)
 
 
 @functools.lru_cache(maxsize=64)

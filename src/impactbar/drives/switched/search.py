@@ -161,8 +161,7 @@ class OneImpactEquations:
         self.dl = self.ps + self.pr
         self.t_in, self.t_out = float(drive.delay_in), float(drive.delay_out)
         self.tau = self.t_in + self.t_out
-        n = np.arange(1, model.n_modes + 1)
-        self.w2 = (model.s * np.pi * n) ** 2 if model.piston is None else model.frequencies[1:] ** 2
+        self.w2 = model.frequencies[1:] ** 2
         self.lam = np.sqrt(self.w2 - 0.25 * d * d)
         self.c = np.asarray(model.end_weights[1:], dtype=float)
         self.absc = np.abs(self.c)
