@@ -140,6 +140,35 @@ def test_ctrl_c_is_one_line_and_exit_130(monkeypatch, tmp_path, capsys):
     assert capsys.readouterr().err.strip() == "impactbar paper: interrupted"
 
 
+def test_ctrl_c_inside_a_c_callback_is_not_reported(monkeypatch):
+    """A Ctrl-C that lands in a ctypes callback (numba compiling through llvmlite on a first run)
+    cannot propagate and CPython reports it to ``sys.unraisablehook`` ("Exception ignored ...");
+    after a Ctrl-C the command drops that report, and passes every other one on as before."""
+    import ctypes
+
+    from impactbar import cli
+
+    reported = []
+    monkeypatch.setattr(sys, "unraisablehook", lambda u: reported.append(type(u.exc_value).__name__))
+    callback_type = ctypes.CFUNCTYPE(None)
+
+    def interrupt():
+        raise KeyboardInterrupt
+
+    def fail():
+        raise RuntimeError("a real error in a callback")
+
+    interrupting, failing = callback_type(interrupt), callback_type(fail)
+    with cli._CtrlC() as ctrl_c:
+        assert ctrl_c._hook is not None  # installed (pytest's main thread, Python's SIGINT handler)
+        interrupting()  # before any Ctrl-C: reported
+        ctrl_c.pressed = True  # as the handler sets it
+        interrupting()  # dropped
+        failing()
+    interrupting()  # outside a command: reported
+    assert reported == ["KeyboardInterrupt", "RuntimeError", "KeyboardInterrupt"]
+
+
 def test_ctrl_c_during_paper_in_a_real_process(tmp_path):
     out = tmp_path / "figs"
     # (the child's SIGINT at its default: a test run started in the background of a non-interactive

@@ -120,15 +120,24 @@ class _CtrlC:
     """While a command runs, Ctrl-C is remembered as well as raised (Python's own handler only
     raises): a library's compiled code may swallow the KeyboardInterrupt, or turn it into another
     error, and the command still ends as interrupted. Installed only over Python's default
-    handler, in the main thread."""
+    handler, in the main thread. A KeyboardInterrupt raised inside a C callback (numba's compiler
+    caching an object through llvmlite's ctypes callback) cannot propagate: CPython reports it as
+    "Exception ignored ..." with a traceback; after a Ctrl-C that report is dropped (the command
+    ends as interrupted), any other goes to the hook as before."""
 
     def __init__(self):
         self.pressed = False
         self._old = None
+        self._hook = None
 
     def _handler(self, signum, frame):
         self.pressed = True
         raise KeyboardInterrupt
+
+    def _unraisable(self, unraisable):
+        if self.pressed and isinstance(unraisable.exc_value, KeyboardInterrupt):
+            return
+        self._hook(unraisable)
 
     def __enter__(self):
         import signal
@@ -137,6 +146,7 @@ class _CtrlC:
         if threading.current_thread() is threading.main_thread() and \
                 signal.getsignal(signal.SIGINT) is signal.default_int_handler:
             self._old = signal.signal(signal.SIGINT, self._handler)
+            self._hook, sys.unraisablehook = sys.unraisablehook, self._unraisable
         return self
 
     def __exit__(self, *exc):
@@ -144,6 +154,7 @@ class _CtrlC:
             import signal
 
             signal.signal(signal.SIGINT, self._old)
+            sys.unraisablehook = self._hook
         return False
 
 
