@@ -85,7 +85,8 @@ def _circuit_header(d: physical.CircuitDrifter) -> str:
     si = d.si
     acc = (f"accumulator {si['accumulator_volume_m3'] * 1e3:.4g} L at {si['precharge_Pa'] / 1e6:.4g} MPa"
            if si["accumulator_volume_m3"] > 0 else "no accumulator")
-    return (f"drifter {d.name or '(unnamed)'} with its oil circuit: piston {d.bar.mass_kg:.4g} kg, "
+    shape = "" if isinstance(d.bar, physical.Bar) else f" ({d.bar.describe()})"
+    return (f"drifter {d.name or '(unnamed)'} with its oil circuit: piston {d.bar.mass_kg:.4g} kg{shape}, "
             f"areas {si['rear_area_m2'] * 1e4:.4g} / {si['front_area_m2'] * 1e4:.4g} cm^2, pump "
             f"{si['pump_flow_m3_s'] * 6e4:.4g} L/min, {acc}, R = {d.restitution:.4g}\n"
             f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
@@ -113,7 +114,8 @@ def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
 
 def _header(d: physical.Drifter) -> str:
     m, dr = d.model(), d.drive()
-    return (f"drifter {d.name or '(unnamed)'}: piston {d.bar.mass_kg:.4g} kg, L = {d.bar.length_m:.4g} m; "
+    shape = (f"L = {d.bar.length_m:.4g} m" if isinstance(d.bar, physical.Bar) else d.bar.describe())
+    return (f"drifter {d.name or '(unnamed)'}: piston {d.bar.mass_kg:.4g} kg, {shape}; "
             f"stroke {d.stroke_force_N:.4g} N, return {d.return_force_N:.4g} N, switch at "
             f"{d.switch_out_m * 1e3:.4g} mm, delay {d.delay_s * 1e3:.4g} ms, "
             + (f"R = {d.restitution:.4g}\n" if d.drill is None else

@@ -95,8 +95,7 @@ def format_table(hammer: physical.Hammer, found) -> str:
     """A plain-text report: the hammer, then one row per orbit."""
     h = hammer
     lines = [
-        f"hammer {h.name or '(unnamed)'}: piston {h.mass_kg:.3g} kg, L = {h.bar.length_m:.4g} m, "
-        f"A = {h.bar.area_m2 * 1e4:.4g} cm^2, c = {h.bar.wave_speed_m_s:.0f} m/s",
+        f"hammer {h.name or '(unnamed)'}: piston {h.mass_kg:.3g} kg, {h.bar.describe()}",
         f"  drive {h.frequency_Hz:.4g} Hz, blows {h.blow_frequency_Hz:.4g} Hz, mean force "
         f"{h.mean_force_N:.4g} N, R = {h.R:.4g}, damping ratio {h.damping_ratio:.3g}",
         f"  dimensionless: s = {h.s:.5g}, d = {h.d:.5g}, R = {h.R:.5g}, N = {h.n_modes}, "

@@ -27,7 +27,7 @@ the contact duration ``2 L / c`` against the period (the paper assumes impacts a
 Configuration keys (TOML file or a nested ``dict``, see :meth:`Hammer.from_config`)::
 
     name = "..."                        # optional label
-    [bar]      E, density, length, diameter | area
+    [bar]      E, density, length, diameter | area   # lists: a stepped piston, driven end first
     [damping]  coefficient | ratio      # optional section; no damping if absent
     [stop]     restitution | area
     [drive]    frequency
@@ -41,7 +41,8 @@ Configuration keys (TOML file or a nested ``dict``, see :meth:`Hammer.from_confi
 
 Unknown keys are refused, naming the key.
 
-Layout: ``units`` (pint parsing, lazily imported), ``bar`` (the piston, the short-impact limit),
+Layout: ``units`` (pint parsing, lazily imported), ``bar`` (the piston, uniform or stepped, the
+short-impact limit),
 ``forces`` (pneumatic, hydraulic, measured), ``config`` (the keys of a TOML config, their checks,
 the presets' data), ``drifter`` (a hydraulic drifter whose valve switches on the piston's position,
 theory §10: supply pressure, piston areas, switch position, valve delay; its presets), ``circuit``
@@ -57,6 +58,8 @@ never imports it.
 from .bar import SHORT_IMPACT_LIMIT as SHORT_IMPACT_LIMIT
 from .bar import Bar as Bar
 from .bar import ImpactDurationWarning as ImpactDurationWarning
+from .bar import SteppedBar as SteppedBar
+from .bar import piston_from_units as piston_from_units
 from .circuit import CIRCUIT_PRESETS as CIRCUIT_PRESETS
 from .circuit import CircuitDrifter as CircuitDrifter
 from .circuit import CircuitDrifterOrbit as CircuitDrifterOrbit
@@ -100,6 +103,8 @@ def __dir__():
 
 __all__ = [
     "Bar",
+    "SteppedBar",
+    "piston_from_units",
     "PneumaticForce",
     "HydraulicForce",
     "MeasuredForce",

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._shared.validate import check_int, check_real
-from .bar import Bar
+from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
 from .units import to_si
 
@@ -102,8 +102,9 @@ class CircuitDrifter:
 
     Parameters
     ----------
-    bar : Bar
-        The piston.
+    bar : Bar or SteppedBar
+        The piston: uniform, or of uniform segments (theory §12; ``[bar]`` with lists of lengths
+        and diameters or areas, driven end first).
     restitution : float
         ``R`` of the impact (eq. 10), ``[0, 1)``.
     si : dict
@@ -130,7 +131,7 @@ class CircuitDrifter:
     (True, True, True)
     """
 
-    bar: Bar
+    bar: Bar | SteppedBar
     restitution: float
     si: dict
     damping_N_s_m: float = 0.0
@@ -138,8 +139,7 @@ class CircuitDrifter:
     name: str = ""
 
     def __post_init__(self) -> None:
-        if not isinstance(self.bar, Bar):
-            raise ValueError(f"bar must be a Bar; got {type(self.bar).__name__}")
+        check_piston(self.bar, True)
         object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
                                                            hi=1.0, hi_open=True))
         object.__setattr__(self, "damping_N_s_m", check_real("damping_N_s_m", self.damping_N_s_m, lo=0.0))
@@ -232,7 +232,7 @@ class CircuitDrifter:
 
         om, bar = self.omega_rad_s, self.bar
         return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om), d=self.damping_N_s_m / (bar.mass_kg * om),
-                        R=self.restitution, n_modes=self.n_modes)
+                        R=self.restitution, n_modes=self.n_modes, piston=self.bar.piston)
 
     def drive(self):
         """The dimensionless circuit: :class:`~impactbar.drives.circuit.HydraulicCircuitDrive`."""
@@ -324,8 +324,8 @@ class CircuitDrifter:
                 if key not in sec[name]:
                     raise ValueError(f"missing key {name}.{key}")
         b, st = sec["bar"], sec["stop"]
-        bar = Bar.from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
-                             area=b.get("area"))
+        bar = piston_from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
+                                area=b.get("area"))
         if ("restitution" in st) == ("area" in st):
             raise ValueError("give exactly one of stop.restitution and stop.area")
         if "restitution" in st:

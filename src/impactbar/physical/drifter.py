@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._shared.validate import check_int, check_real
-from .bar import Bar
+from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
 from .units import to_si
@@ -58,8 +58,9 @@ class Drifter:
 
     Parameters
     ----------
-    bar : Bar
-        The piston.
+    bar : Bar or SteppedBar
+        The piston: uniform, or of uniform segments (theory §12; ``[bar]`` with lists of lengths
+        and diameters or areas, driven end first).
     supply_pressure_Pa : float
         Supply pressure ``p`` (Pa), ``> 0``.
     stroke_area_m2, return_area_m2 : float
@@ -93,7 +94,7 @@ class Drifter:
     (9.4957, 47.19)
     """
 
-    bar: Bar
+    bar: Bar | SteppedBar
     supply_pressure_Pa: float
     stroke_area_m2: float
     return_area_m2: float
@@ -106,8 +107,7 @@ class Drifter:
     drill: DrillString | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.bar, Bar):
-            raise ValueError(f"bar must be a Bar; got {type(self.bar).__name__}")
+        check_piston(self.bar, self.drill is None, "the rod-rock law ([rock])")
         for f in ("supply_pressure_Pa", "stroke_area_m2", "return_area_m2", "switch_out_m"):
             object.__setattr__(self, f, check_real(f, getattr(self, f), lo=0.0, lo_open=True))
         object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
@@ -142,7 +142,7 @@ class Drifter:
         impact = "paper" if self.drill is None else self.drill.law(bar, self.scales)
         return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om),
                         d=self.damping_N_s_m / (bar.mass_kg * om), R=self.restitution,
-                        n_modes=self.n_modes, impact=impact)
+                        n_modes=self.n_modes, impact=impact, piston=self.bar.piston)
 
     @property
     def scales(self):
@@ -227,8 +227,8 @@ class Drifter:
             if key not in sec[name]:
                 raise ValueError(f"missing key {name}.{key}")
         b, v, st = sec["bar"], sec["valve"], sec["stop"]
-        bar = Bar.from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
-                             area=b.get("area"))
+        bar = piston_from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
+                                area=b.get("area"))
         drill = rock_from_config(config, bar)  # [rod], [bit], [rock]: the rod-rock law
         if drill is not None and not st:
             R = 0.0  # the rod and the rock replace the stop

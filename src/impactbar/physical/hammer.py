@@ -17,7 +17,16 @@ from .._shared.validate import check_int, check_real
 from ..laws import LAWS
 from ..loads import FourierLoad, Load
 from ..model import BarModel
-from .bar import SHORT_IMPACT_LIMIT, TWO_PI, Bar, ImpactDurationWarning, _positive
+from .bar import (
+    SHORT_IMPACT_LIMIT,
+    TWO_PI,
+    Bar,
+    ImpactDurationWarning,
+    SteppedBar,
+    _positive,
+    check_piston,
+    piston_from_units,
+)
 from .config import (
     _REQUIRED,
     _SECTIONS,
@@ -71,8 +80,8 @@ class Hammer:
 
     Parameters
     ----------
-    bar : Bar
-        The piston.
+    bar : Bar or SteppedBar
+        The piston: uniform, or of uniform segments (theory §12; under the paper's impact law only).
     frequency_Hz : float
         Drive frequency ``f`` (Hz), the frequency of the force cycle, ``> 0``.
     force : PneumaticForce, HydraulicForce or MeasuredForce
@@ -104,7 +113,7 @@ class Hammer:
     cycle is ``k`` force cycles and the blow frequency is ``f / k``.
     """
 
-    bar: Bar
+    bar: Bar | SteppedBar
     frequency_Hz: float
     force: Force
     restitution: float | None = None
@@ -116,8 +125,7 @@ class Hammer:
     drill: DrillString | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.bar, Bar):
-            raise ValueError(f"bar must be a Bar; got {type(self.bar).__name__}")
+        check_piston(self.bar, True)  # a Bar or a SteppedBar; the law is checked below
         if not isinstance(self.force, PneumaticForce | HydraulicForce | MeasuredForce):
             raise ValueError("force must be a PneumaticForce, HydraulicForce or MeasuredForce; got "
                              f"{type(self.force).__name__}")
@@ -147,6 +155,8 @@ class Hammer:
             object.__setattr__(self, "impact", "rodrock")
         elif self.impact not in LAWS:
             raise ValueError(f"model.impact must be one of {list(LAWS)}; got {self.impact!r}")
+        check_piston(self.bar, self.drill is None and LAWS[self.impact].stepped_piston,
+                     f"impact = {self.impact!r}")
         if isinstance(self.force, MeasuredForce):
             self._measured  # noqa: B018  (fit the series now: a bad curve fails here, not later)
 
@@ -195,14 +205,16 @@ class Hammer:
 
     @property
     def damping_ratio(self) -> float:
-        """Damping ratio ``zeta = d / (2 s pi)`` of the first flexible mode (dimensionless)."""
-        return self.d / (2.0 * math.pi * self.s)
+        """Damping ratio ``zeta = d / (2 s k_1)`` of the first flexible mode (dimensionless;
+        ``k_1 = pi`` for a uniform piston, the stepped piston's first wavenumber otherwise)."""
+        return self.d / (2.0 * self.bar.first_wavenumber * self.s)
 
     @property
     def model(self) -> BarModel:
         """The dimensionless :class:`~impactbar.BarModel`."""
         impact = self.impact if self.drill is None else self.drill.law(self.bar, self.scales)
-        return BarModel(s=self.s, d=self.d, R=self.R, n_modes=self.n_modes, impact=impact)
+        return BarModel(s=self.s, d=self.d, R=self.R, n_modes=self.n_modes, impact=impact,
+                        piston=self.bar.piston)
 
     @functools.cached_property
     def _measured(self):
@@ -309,6 +321,9 @@ class Hammer:
             out["fourier"] = dataclasses.asdict(fit)
         if self.drill is not None:
             out["drill"] = self.drill.to_dict()
+        if isinstance(self.bar, SteppedBar):  # area_m2 and diameter_m above: the struck end's
+            out["segments"] = {"lengths_m": self.bar.lengths_m.tolist(),
+                               "areas_m2": self.bar.areas_m2.tolist()}
         return out
 
     # -- constructors ------------------------------------------------------------------------
@@ -338,7 +353,7 @@ class Hammer:
         return load_config(path)
 
     @classmethod
-    def from_dimensionless(cls, model: BarModel, load: Load, bar: Bar, *, stop_area_m2=None,
+    def from_dimensionless(cls, model: BarModel, load: Load, bar: Bar | SteppedBar, *, stop_area_m2=None,
                            name: str = "") -> Hammer:
         """The hammer whose dimensionless form, for the piston ``bar``, is ``(model, load)``:
         the inverse of :attr:`model` and :attr:`load` (eq. 2 solved for ``f``, ``D`` and forces).
@@ -347,6 +362,9 @@ class Hammer:
         :class:`~impactbar.PiecewiseConstantLoad`. The restitution is ``model.R`` unless
         ``stop_area_m2`` is given (then it must give the same ``R``).
         """
+        check_piston(bar, True)
+        if model.piston != bar.piston:
+            raise ValueError(f"bar: the model's piston is {model.piston!r}, the bar's {bar.piston!r}")
         omega = bar.wave_speed_m_s / (bar.length_m * model.s)
         fscale = bar.mass_kg * bar.length_m * omega**2
         cosine, square, pieces = load.cosine_form(), load.square_form(), load.pieces()
@@ -386,8 +404,8 @@ def _hammer_from_config(config: dict, base_dir) -> Hammer:
     if missing:
         raise ValueError(f"missing section [{missing[0]}]")
     b = _section(config, "bar")
-    bar = Bar.from_units(_need(b, "bar", "E"), _need(b, "bar", "density"),
-                         _need(b, "bar", "length"), diameter=b.get("diameter"), area=b.get("area"))
+    bar = piston_from_units(_need(b, "bar", "E"), _need(b, "bar", "density"),
+                            _need(b, "bar", "length"), diameter=b.get("diameter"), area=b.get("area"))
 
     drive = _section(config, "drive")
     freq = _positive("drive.frequency", to_si("drive.frequency", _need(drive, "drive", "frequency"),
@@ -423,7 +441,7 @@ def _hammer_from_config(config: dict, base_dir) -> Hammer:
         h = dataclasses.replace(h, damping_N_s_m2=val / bar.length_m if unit == "N*s/m" else val)
     elif "ratio" in damp:
         zeta = _dimensionless("damping.ratio", damp["ratio"], lo=0.0)
-        d = 2.0 * zeta * h.s * math.pi
+        d = 2.0 * zeta * h.s * bar.first_wavenumber
         h = dataclasses.replace(h, damping_N_s_m2=d * h.scales.damping_N_s_m2)
     return h
 

@@ -112,13 +112,15 @@ class PhysicalOrbit:
         eq. 10 removes from it).
     peak_rod_stress_Pa : float
         Peak compressive stress of the transmitted wave in the rod (Pa), ``F_max / A_s``; under
-        eq. 10 the plateau of a rigid-body piston at the impact velocity, ``rho c v (1 - R)/2``.
+        eq. 10 the plateau of a rigid-body piston at the impact velocity, ``rho c v (1 - R)/2`` (of
+        a stepped piston: the first step of its staircase, the struck segment's).
     efficiency : float
         ``rod_energy_J`` over the energy available to the blow: the piston's kinetic plus strain
         energy at impact plus the drive's work during the contact (Lundberg's transfer efficiency,
         with the drive); at most 1.
     rod_advance_m : float
-        Advance of the rod end per blow (m), impulse over ``Z_s``.
+        Advance of the rod end per blow (m), impulse over ``Z_s`` (the stop's impedance, from
+        ``R`` and the struck end's).
     work_on_rock_J, penetration_mm, drilling_rate_m_min, efficiency_with_rebound : float
         Under the rod-rock law (a ``[rock]`` section, theory §4d) the blow's work on rock (J),
         permanent penetration (mm), the drilling rate at the blow frequency (m/min) and the
@@ -185,16 +187,27 @@ def _rod_figures(orbit, hammer: Hammer, v_m_s: float) -> dict:
         return {"rod_energy_J": float(w.rod_energy * energy_J),
                 "peak_rod_stress_Pa": float(w.peak_force * sc.force_N * rod_area_ratio / b.area_m2),
                 "efficiency": float(w.efficiency), "rod_advance_m": float(w.advance * sc.length_m)}
+    # the paper's law (eq. 10) reverses the whole velocity field times R: the rod takes (1 - R^2) of the
+    # kinetic energy, E = 1/2 sum kappa_n (q_n'^2 + w_n^2 q_n^2) with a stepped piston's weights (theory §12)
+    model = hammer.model
     M = hammer.n_modes + 1
     q, v = orbit.state_before_impact[:M], orbit.state_before_impact[M:]
-    wn = hammer.s * np.pi * np.arange(1, M)
-    kinetic = 0.5 * v[0] ** 2 + float(np.sum(v[1:] ** 2))
-    strain = float(np.sum((wn * q[1:]) ** 2))
+    if model.piston is None:
+        wn = hammer.s * np.pi * np.arange(1, M)
+        kinetic = 0.5 * v[0] ** 2 + float(np.sum(v[1:] ** 2))
+        strain = float(np.sum((wn * q[1:]) ** 2))
+        end_mass = 1.0
+    else:
+        kappa, w = model.drive_weights, model.frequencies
+        kinetic = 0.5 * float(kappa @ (v * v))
+        strain = 0.5 * float(kappa @ ((w * q) ** 2))
+        end_mass = float(model.piston.mass_per_length[-1])  # the struck end's impedance, the mean's 1
     rod = (1.0 - R * R) * kinetic
+    # the stop's impulse (1 + R) q_0' pushes a long rod of impedance Z_e (1 + R)/(1 - R) by impulse / Z
     return {"rod_energy_J": float(rod * energy_J),
             "peak_rod_stress_Pa": float(b.density_kg_m3 * b.wave_speed_m_s * v_m_s * 0.5 * (1.0 - R)),
             "efficiency": float(rod / (kinetic + strain)) if kinetic + strain > 0 else float("nan"),
-            "rod_advance_m": float((1.0 - R) * v[0] / hammer.s * sc.length_m)}
+            "rod_advance_m": float((1.0 - R) * v[0] / (hammer.s * end_mass) * sc.length_m)}
 
 
 #: the columns of :meth:`PhysicalOrbitList.to_dataframe`: the fields in the view ``"table"``
