@@ -30,6 +30,7 @@ surface ``c . q = 0`` times the drive's state); the trivial one along the flow i
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -324,8 +325,56 @@ FD_STEP_CLOSED = 1e-6
 FD_STEP_ODE = 1e-4
 #: impacts followed from rest (or from a run's end) before Newton starts, at most
 SETTLE_IMPACTS = 400
+#: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
+#: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance)
+SETTLE_RTOL = 1e-7
 #: longest flight between two impacts (model time units) before a flight counts as never arriving
 HORIZON = 1e4
+
+
+#: the dominant-mode extrapolation of :func:`dominant_limit` is taken where each of the last two
+#: steps is a multiple ``rho`` of the one before to this fraction of its size, the two multiples
+#: agree to ``DOMINANT_AGREE (1 - rho)`` (the map is linear enough there for the limit
+#: ``1 / (1 - rho)`` to be right to about 10 %) and ``|rho| < DOMINANT_RHO``
+DOMINANT_FIT = 0.02
+DOMINANT_AGREE = 0.1
+DOMINANT_RHO = 0.995
+
+
+def _ratio(d1, d2):
+    """``rho`` with ``d2 = rho d1`` in least squares, or None where that does not fit."""
+    n1 = float(d1 @ d1)
+    if not n1 > 0.0:
+        return None
+    rho = float(d1 @ d2) / n1
+    if float(np.linalg.norm(d2 - rho * d1)) > DOMINANT_FIT * float(np.linalg.norm(d2)):
+        return None
+    return rho
+
+
+def dominant_limit(y0, y1, y2, y3):
+    """The limit of four iterates of a map that converge along one real multiplier (theory §11).
+
+    Parameters
+    ----------
+    y0, y1, y2, y3 : numpy.ndarray, shape (n,)
+        Consecutive iterates (the states after successive impacts; dimensionless).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,), or None
+        ``y3 + rho / (1 - rho) (y3 - y2)`` (Aitken's delta-squared in vector form, as in
+        Steffensen's method) where each of the last two steps is one multiple ``rho`` of the step
+        before (:data:`DOMINANT_FIT`, :data:`DOMINANT_AGREE`, ``|rho| <`` :data:`DOMINANT_RHO`);
+        ``None`` where they do not fit one multiplier (a complex pair, two modes of one size, a
+        map still far from linear).
+    """
+    d1, d2, d3 = y1 - y0, y2 - y1, y3 - y2
+    r1, r2 = _ratio(d1, d2), _ratio(d2, d3)
+    if r1 is None or r2 is None or not abs(r2) < DOMINANT_RHO or \
+            abs(r2 - r1) > DOMINANT_AGREE * (1.0 - r2):
+        return None
+    return y3 + r2 / (1.0 - r2) * d3
 
 
 class ShootingProblem(OrbitProblem):
@@ -378,7 +427,7 @@ class ShootingProblem(OrbitProblem):
         self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
 
     # -- flights ------------------------------------------------------------------------------------
-    def _flight(self, tau, mode, y, keep=False, variational=False):
+    def _flight(self, tau, mode, y, keep=False, variational=False, settings=None):
         """From ``y = (q, q', z)`` in ``mode`` at ``tau`` to the next impact and through it: the
         state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
         the drive's events ``(time, event, mode after)``; with ``variational`` (a drive whose flights
@@ -396,7 +445,7 @@ class ShootingProblem(OrbitProblem):
             D = np.eye(self.n)
             D[0, :M] -= c
         while True:
-            fl = fly(model, drive, state, t, q, v, end, self.settings, variational)
+            fl = fly(model, drive, state, t, q, v, end, settings or self.settings, variational)
             if keep:
                 pieces.append(fl.piece)
             t, q, v = fl.t, fl.q, fl.v
@@ -553,12 +602,23 @@ class ShootingProblem(OrbitProblem):
         # a slow mode (the oil circuit's supply pressure, multiplier ~0.9) would take hundreds of
         # impacts to settle to 1e-11
         settle = 1e-4 if self.variational else 1e-11
+        # and where one real multiplier is left (the supply's), its mode is extrapolated away (Aitken's
+        # delta-squared on the map's iterates, as in Steffensen's method) instead of followed
+        accelerate = self.variational and m == 1 and n_max > m
         hist = [(tau, mode, y, source)]
         speeds = []
+        iterates = 1  # consecutive iterates of the map at the end of hist
+        # the motion is followed only to hand Newton a start: where Newton's flights are the
+        # variational ones, at a looser tolerance (SETTLE_RTOL; Newton's own flights keep the drive's)
+        loose = (dataclasses.replace(self.settings, rtol=max(self.settings.rtol, SETTLE_RTOL),
+                                     atol=max(self.settings.atol, SETTLE_RTOL * self.settings.atol
+                                              / self.settings.rtol))
+                 if self.variational else None)
         for _ in range(n_max):
-            y, tau, mode, arrival, _, _ = self._flight(tau, mode, y)
+            y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=loose)
             source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
             hist.append((tau, mode, y, source))
+            iterates += 1
             speeds.append(float(c @ arrival[2]))
             if speeds[-1] <= 0.0:
                 raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
@@ -566,6 +626,12 @@ class ShootingProblem(OrbitProblem):
             if n_max > m and len(speeds) > 2 * m + 2 and \
                     abs(speeds[-1] - speeds[-1 - m]) <= settle * max(1.0, abs(speeds[-1])):
                 break
+            if accelerate and iterates >= 4 and mode == hist[-2][1] == hist[-3][1] == hist[-4][1]:
+                star = dominant_limit(hist[-4][2], hist[-3][2], hist[-2][2], y)
+                if star is not None:
+                    y = star
+                    hist[-1] = (tau, mode, y, source)
+                    iterates = 1
         blocks = hist[-m:]
         self.blocks = [(b[0], b[1]) for b in blocks]
         self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []

@@ -1,0 +1,79 @@
+"""The start of Newton for a drive with state (issue 38's speed): the motion from rest followed at a
+loose tolerance, and the slow supply mode extrapolated away (Aitken's delta-squared on the Poincare
+map's iterates) instead of followed for a hundred impacts."""
+
+import numpy as np
+import pytest
+
+import impactbar.orbits.switched as S
+from impactbar import find_orbit
+from impactbar.physical import circuit_preset
+
+
+def _iterates(A, b, y0, n):
+    ys = [np.asarray(y0, dtype=float)]
+    for _ in range(n):
+        ys.append(A @ ys[-1] + b)
+    return ys
+
+
+def _map(eigenvalues, seed=3):
+    rng = np.random.default_rng(seed)
+    V = rng.normal(size=(len(eigenvalues), len(eigenvalues)))
+    A = V @ np.diag(eigenvalues) @ np.linalg.inv(V)
+    b = rng.normal(size=len(eigenvalues))
+    return A, b, np.linalg.solve(np.eye(len(eigenvalues)) - A, b)
+
+
+def test_dominant_limit_is_the_fixed_point_of_a_linear_map():
+    """One multiplier 0.92 left (the others 1e-3 and spent after a few iterates): the limit of the
+    iterates, against the fixed point of the map solved directly."""
+    A, b, fixed = _map([0.92, 1e-3, -2e-3, 5e-4])
+    ys = _iterates(A, b, np.zeros(4), 8)
+    star = S.dominant_limit(*ys[-4:])
+    assert star is not None
+    assert np.linalg.norm(star - fixed) <= 1e-9 * np.linalg.norm(fixed)
+    # the plain iterates are still 0.92^8 = 0.5 of the way off
+    assert np.linalg.norm(ys[-1] - fixed) > 0.1 * np.linalg.norm(fixed)
+
+
+@pytest.mark.parametrize("eigenvalues", [
+    [0.9 + 0.3j, 0.9 - 0.3j, 1e-3],  # a complex pair: the steps turn
+    [0.999, 1e-3, 2e-3],  # too close to 1 for the limit to be trusted
+    [0.9, -0.85, 1e-3],  # two modes of one size
+])
+def test_dominant_limit_refuses_what_one_multiplier_does_not_fit(eigenvalues):
+    if np.iscomplexobj(eigenvalues):
+        a, w = 0.9, 0.3
+        A = np.array([[a, -w, 0.0], [w, a, 0.0], [0.0, 0.0, 1e-3]])
+        b = np.array([0.3, -0.2, 0.5])
+    else:
+        A, b, _ = _map(eigenvalues)
+    ys = _iterates(A, b, np.ones(3), 6)
+    assert S.dominant_limit(*ys[-4:]) is None
+
+
+def test_the_accelerated_start_finds_the_same_operating_point_in_fewer_flights(monkeypatch):
+    """The rigid preset circuit drifter: the default start with and without the extrapolation and the
+    loose tolerance (DOMINANT_FIT = 0 never extrapolates; SETTLE_RTOL = the drive's tolerance),
+    the same orbit to the flights' accuracy, reached with under half the flights."""
+    d = circuit_preset("circuit-drifter")
+    model, drive = d.model().with_(n_modes=0), d.drive()
+    count = [0]
+    flight = S.ShootingProblem._flight
+
+    def counted(self, *args, **kwargs):
+        count[0] += 1
+        return flight(self, *args, **kwargs)
+
+    monkeypatch.setattr(S.ShootingProblem, "_flight", counted)
+    fast = find_orbit(model, drive)
+    n_fast, count[0] = count[0], 0
+    monkeypatch.setattr(S, "DOMINANT_FIT", 0.0)
+    monkeypatch.setattr(S, "SETTLE_RTOL", 1e-10)
+    slow = find_orbit(model, drive)
+    assert fast.stable and slow.stable
+    assert fast.period == pytest.approx(slow.period, rel=1e-8)
+    assert fast.impact_velocity == pytest.approx(slow.impact_velocity, rel=1e-8)
+    np.testing.assert_allclose(fast.drive_states[0], slow.drive_states[0], rtol=1e-8, atol=1e-10)
+    assert n_fast < count[0] / 2
