@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import time
 
+import impactbar.orbits._settling as settling
 import impactbar.orbits.switched as S
 from impactbar import InitialState, PositionSwitchedDrive, continue_orbit, find_orbit, simulate
 from impactbar.physical import circuit_preset
@@ -61,12 +62,12 @@ def row(d, drive, n):
 def _plain_start(model, drive):
     """``find_orbit`` with the start of before the settling's acceleration: every impact followed at the
     drive's tolerance until the impact velocities agree to 1e-4, no extrapolation."""
-    fit, rtol = S.DOMINANT_FIT, S.SETTLE_RTOL
-    S.DOMINANT_FIT, S.SETTLE_RTOL = 0.0, drive.integrator.rtol
+    fit, rtol = settling.DOMINANT_FIT, S.SETTLE_RTOL
+    settling.DOMINANT_FIT, S.SETTLE_RTOL = 0.0, drive.integrator.rtol
     try:
         return find_orbit(model, drive)
     finally:
-        S.DOMINANT_FIT, S.SETTLE_RTOL = fit, rtol
+        settling.DOMINANT_FIT, S.SETTLE_RTOL = fit, rtol
 
 
 def integrators(d, drive):

@@ -5,6 +5,7 @@ map's iterates) instead of followed for a hundred impacts."""
 import numpy as np
 import pytest
 
+import impactbar.orbits._settling as settling
 import impactbar.orbits.switched as S
 from impactbar import find_orbit
 from impactbar.physical import circuit_preset
@@ -30,7 +31,7 @@ def test_dominant_limit_is_the_fixed_point_of_a_linear_map():
     iterates, against the fixed point of the map solved directly."""
     A, b, fixed = _map([0.92, 1e-3, -2e-3, 5e-4])
     ys = _iterates(A, b, np.zeros(4), 8)
-    star = S.dominant_limit(*ys[-4:])
+    star = settling.dominant_limit(*ys[-4:])
     assert star is not None
     assert np.linalg.norm(star - fixed) <= 1e-9 * np.linalg.norm(fixed)
     # the plain iterates are still 0.92^8 = 0.5 of the way off
@@ -50,7 +51,7 @@ def test_dominant_limit_refuses_what_one_multiplier_does_not_fit(eigenvalues):
     else:
         A, b, _ = _map(eigenvalues)
     ys = _iterates(A, b, np.ones(3), 6)
-    assert S.dominant_limit(*ys[-4:]) is None
+    assert settling.dominant_limit(*ys[-4:]) is None
 
 
 def test_the_accelerated_start_finds_the_same_operating_point_in_fewer_flights(monkeypatch):
@@ -69,7 +70,7 @@ def test_the_accelerated_start_finds_the_same_operating_point_in_fewer_flights(m
     monkeypatch.setattr(S.ShootingProblem, "_flight", counted)
     fast = find_orbit(model, drive)
     n_fast, count[0] = count[0], 0
-    monkeypatch.setattr(S, "DOMINANT_FIT", 0.0)
+    monkeypatch.setattr(settling, "DOMINANT_FIT", 0.0)
     monkeypatch.setattr(S, "SETTLE_RTOL", 1e-10)
     slow = find_orbit(model, drive)
     assert fast.stable and slow.stable

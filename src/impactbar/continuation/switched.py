@@ -73,7 +73,7 @@ class _SwitchedProblem:
         return model, drive, problem
 
     def F(self, U):
-        return self.pair(float(U[-1]))[2].residual(U[:-1])[0]
+        return self.pair(float(U[-1]))[2].value(U[:-1])
 
     def FJ(self, U, F_lam=None):
         """Residual, the Jacobian ``[F_u, F_lam]`` (``F_u`` the problem's, ``F_lam`` by central

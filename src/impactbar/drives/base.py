@@ -617,6 +617,11 @@ class OrbitProblem(ABC):
     def residual(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The residual and its Jacobian at ``X``."""
 
+    def value(self, X: np.ndarray) -> np.ndarray:
+        """The residual alone at ``X`` (a problem whose Jacobian costs more than its residual, as the
+        variational flights of a drive with state, computes only this)."""
+        return self.residual(X)[0]
+
     def solve(self, X: np.ndarray, tol: float, max_iter: int) -> np.ndarray:
         """Newton's method from ``X`` (:func:`newton`)."""
         return newton(self.residual, X, self.positive, tol, max_iter)

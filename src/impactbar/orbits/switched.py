@@ -41,6 +41,7 @@ from .._shared.validate import check_int
 from ..drives.base import DriveState, OrbitData, OrbitProblem, newton, sorted_multipliers
 from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..model import BarModel
+from ._settling import dominant_limit
 from .admissibility import _window_departure
 from .orbit import PeriodicOrbit
 
@@ -332,51 +333,6 @@ SETTLE_RTOL = 1e-7
 HORIZON = 1e4
 
 
-#: the dominant-mode extrapolation of :func:`dominant_limit` is taken where each of the last two
-#: steps is a multiple ``rho`` of the one before to this fraction of its size, the two multiples
-#: agree to ``DOMINANT_AGREE (1 - rho)`` (the map is linear enough there for the limit
-#: ``1 / (1 - rho)`` to be right to about 10 %) and ``|rho| < DOMINANT_RHO``
-DOMINANT_FIT = 0.02
-DOMINANT_AGREE = 0.1
-DOMINANT_RHO = 0.995
-
-
-def _ratio(d1, d2):
-    """``rho`` with ``d2 = rho d1`` in least squares, or None where that does not fit."""
-    n1 = float(d1 @ d1)
-    if not n1 > 0.0:
-        return None
-    rho = float(d1 @ d2) / n1
-    if float(np.linalg.norm(d2 - rho * d1)) > DOMINANT_FIT * float(np.linalg.norm(d2)):
-        return None
-    return rho
-
-
-def dominant_limit(y0, y1, y2, y3):
-    """The limit of four iterates of a map that converge along one real multiplier (theory §11).
-
-    Parameters
-    ----------
-    y0, y1, y2, y3 : numpy.ndarray, shape (n,)
-        Consecutive iterates (the states after successive impacts; dimensionless).
-
-    Returns
-    -------
-    numpy.ndarray, shape (n,), or None
-        ``y3 + rho / (1 - rho) (y3 - y2)`` (Aitken's delta-squared in vector form, as in
-        Steffensen's method) where each of the last two steps is one multiple ``rho`` of the step
-        before (:data:`DOMINANT_FIT`, :data:`DOMINANT_AGREE`, ``|rho| <`` :data:`DOMINANT_RHO`);
-        ``None`` where they do not fit one multiplier (a complex pair, two modes of one size, a
-        map still far from linear).
-    """
-    d1, d2, d3 = y1 - y0, y2 - y1, y3 - y2
-    r1, r2 = _ratio(d1, d2), _ratio(d2, d3)
-    if r1 is None or r2 is None or not abs(r2) < DOMINANT_RHO or \
-            abs(r2 - r1) > DOMINANT_AGREE * (1.0 - r2):
-        return None
-    return y3 + r2 / (1.0 - r2) * d3
-
-
 class ShootingProblem(OrbitProblem):
     """The generic periodic-orbit problem of a drive (module docstring): multiple shooting over the
     ``m`` intervals between impacts, with the drive's flights (:func:`impactbar.drives.flight.fly`),
@@ -425,6 +381,7 @@ class ShootingProblem(OrbitProblem):
         self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
         self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
         self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
+        self._last = None  # the last flight: (its start, keep, variational, its result)
 
     # -- flights ------------------------------------------------------------------------------------
     def _flight(self, tau, mode, y, keep=False, variational=False, settings=None):
@@ -432,7 +389,24 @@ class ShootingProblem(OrbitProblem):
         state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
         the drive's events ``(time, event, mode after)``; with ``variational`` (a drive whose flights
         integrate the variational equations, :attr:`~impactbar.Drive.variational`) also the
-        Jacobian of the state after the impact with respect to ``y`` (:meth:`_through`)."""
+        Jacobian of the state after the impact with respect to ``y`` (:meth:`_through`). The last
+        flight is remembered: the same start asked again (an orbit's data, then its admissibility)
+        is not flown again."""
+        try:
+            key = (float(tau), mode, np.asarray(y, dtype=float).tobytes(), settings)
+            hash(key)
+        except TypeError:  # a mode that cannot be a key
+            key = None
+        last = self._last
+        if key is not None and last is not None and last[0] == key and (last[1] or not keep) and \
+                (last[2] or not variational):
+            return last[3] if variational else last[3][:6]
+        out = self._fly(tau, mode, y, keep, variational, settings)
+        self._last = None if key is None else (key, keep, variational, out)
+        return out
+
+    def _fly(self, tau, mode, y, keep, variational, settings):
+        """:meth:`_flight`, flown."""
         model, drive, M = self.model, self.drive, self.M
         c = model.end_weights
         t, q, v, z = tau, np.array(y[:M], dtype=float), y[M:2 * M], y[2 * M:]
@@ -665,6 +639,15 @@ class ShootingProblem(OrbitProblem):
             J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
         return r, J
 
+    def value(self, X):
+        """The shooting residual alone: the flights without their variational equations."""
+        n, m = self.n, self.impacts
+        r = np.empty(X.size)
+        for k in range(m):
+            nxt = ((k + 1) % m) * n
+            r[k * n:(k + 1) * n] = self._map(k, X[k * n:(k + 1) * n]) - X[nxt:nxt + n]
+        return r
+
     def solve(self, X, tol, max_iter):
         """Newton's method (:func:`~impactbar.drives.base.newton`), the tolerance no finer than the
         flights' accuracy."""
@@ -714,10 +697,14 @@ class ShootingProblem(OrbitProblem):
         times the drive's states)."""
         model, drive, n, m, M = self.model, self.drive, self.n, self.impacts, self.M
         c = model.end_weights
-        _, J = self.residual(X)
-        Phi = np.eye(n)
-        for k in range(m):  # the blocks' Jacobians (their diagonal blocks; with m = 1, J = DP - I)
-            Phi = (J[k * n:(k + 1) * n, k * n:(k + 1) * n] + (np.eye(n) if m == 1 else 0.0)) @ Phi
+        if self.variational and m == 1:  # one flight gives the Jacobian and (kept) the data below
+            tau, mode = self.blocks[0]
+            Phi = self._flight(tau, mode, X[:n], keep=True, variational=True)[6]
+        else:
+            _, J = self.residual(X)
+            Phi = np.eye(n)
+            for k in range(m):  # the blocks' Jacobians (their diagonal blocks; with m = 1, J = DP - I)
+                Phi = (J[k * n:(k + 1) * n, k * n:(k + 1) * n] + (np.eye(n) if m == 1 else 0.0)) @ Phi
         a = np.concatenate((c, np.zeros(M + self.k)))
         Q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(n))))
         B = Q[:, 1:n]
