@@ -34,6 +34,7 @@ def test_one_segment_recovers_the_uniform_optimum():
     assert best.work_on_rock_J == pytest.approx(best.efficiency * 0.5 * MASS * V * V, rel=1e-14)
     assert best.evaluations == 0 and best.feasible
     np.testing.assert_allclose(best.areas_m2, [AREA], rtol=1e-14)
+    assert best.bar.piston is None and best.bar.mass_kg == pytest.approx(MASS, rel=1e-14)
     # the incident wave Z V/2 for 2 L/c, Z = rho c A: the peak stress rho c V/2
     assert best.peak_stress_Pa == pytest.approx(RHO * C * V / 2, rel=1e-13)
 
@@ -54,6 +55,10 @@ def _check_design(best, limit, K):
                            t_max=44.0)
     expect = best.work_on_rock_J / (0.5 * MASS * V * V)
     assert again.work_on_rock / again.energy_at_impact == pytest.approx(expect, rel=1e-12)
+    # the design as an SI piston: its mass and length, and the impedances it was solved with
+    bar = best.bar
+    assert bar.mass_kg == pytest.approx(MASS, rel=1e-13) and bar.length_m == pytest.approx(LENGTH, rel=1e-14)
+    np.testing.assert_allclose(bar.piston.impedances, mu / mu[0], rtol=1e-13)
 
 
 @pytest.mark.parametrize("alpha, gain", [(0.5, 1.0066), (1.2564312, 1.0376), (3.0, 1.1577)])

@@ -74,6 +74,8 @@ class OptimalPiston:
         The two blows in the model's units (piston mass, length and wave speed 1).
     max_stress_Pa, mass_kg, length_m, impact_velocity_m_s : float
         The inputs.
+    E_Pa, density_kg_m3 : float
+        The piston's material (the inputs, or the first rod piece's).
     """
 
     lengths_m: np.ndarray
@@ -96,6 +98,8 @@ class OptimalPiston:
     mass_kg: float = 0.0
     length_m: float = 0.0
     impact_velocity_m_s: float = 0.0
+    E_Pa: float = math.nan
+    density_kg_m3: float = math.nan
 
     def __repr__(self) -> str:
         seg = ", ".join(f"{le * 1e3:.4g} mm x {d * 1e3:.4g} mm" for le, d in
@@ -108,6 +112,17 @@ class OptimalPiston:
     def diameters_m(self) -> np.ndarray:
         """The segments' diameters (m) for circular sections, shape ``(n,)``."""
         return np.sqrt(4.0 * self.areas_m2 / math.pi)
+
+    @property
+    def bar(self):
+        """The piston found, as a :class:`~impactbar.physical.SteppedBar` (a
+        :class:`~impactbar.physical.Bar` for one segment), to put into a ``Hammer``, a ``Drifter``
+        or a ``CircuitDrifter`` (theory §12)."""
+        from .bar import Bar, SteppedBar
+
+        if self.lengths_m.size == 1:
+            return Bar(self.E_Pa, self.density_kg_m3, float(self.lengths_m[0]), float(self.areas_m2[0]))
+        return SteppedBar(self.E_Pa, self.density_kg_m3, self.lengths_m, self.areas_m2)
 
     @property
     def gain(self) -> float:
@@ -189,6 +204,8 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     0.6958
     >>> best.lengths_m.round(4), best.diameters_m.round(4)  # heavy at the driven end, slender struck end
     (array([0.125, 0.175]), array([0.0395, 0.0327]))
+    >>> round(best.bar.mass_kg, 6), best.bar.n_segments  # the piston for a Hammer or a Drifter
+    (2.355, 2)
     """
     pieces = _pieces(rod)
     K, K_u = _rock(rock)
@@ -266,7 +283,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         cell_time_s=shaped.cell_time * time_s, times_s=shaped.times[:steps + 1] * time_s,
         incident_force_N=shaped.shank_forces[:steps] * force_N,
         uniform_incident_force_N=uniform.shank_forces[:steps] * force_N, blow=shaped, uniform_blow=uniform,
-        max_stress_Pa=sigma, mass_kg=m, length_m=L, impact_velocity_m_s=V)
+        max_stress_Pa=sigma, mass_kg=m, length_m=L, impact_velocity_m_s=V, E_Pa=E, density_kg_m3=rho)
 
 
 def _fractions(x, n):
