@@ -189,6 +189,8 @@ def test_equal_sections_give_the_uniform_circuit_drifters_operating_point():
     for k in ("period_s", "impact_velocity_m_s", "mean_supply_pressure_Pa"):
         assert _close(getattr(o0, k), getattr(o1, k), 1e-8), k
     np.testing.assert_allclose(o1.orbit.multipliers, o0.orbit.multipliers, rtol=1e-6, atol=1e-8)
+    assert repr(o1).startswith("CircuitDrifterOrbit(circuit-drifter: ") and len(repr(o1)) < 120
+    assert f"mean supply {o1.mean_supply_pressure_Pa / 1e6:.4g} MPa" in repr(o1)
 
 
 def test_the_stepped_drifter_example(capsys):
@@ -209,6 +211,8 @@ def test_the_stepped_drifter_example(capsys):
     np.testing.assert_allclose(model.piston.impedances, ref_shape.impedances, rtol=1e-14)
     o = d.orbit()
     assert o.orbit.admissible
+    assert repr(o) == (f"DrifterOrbit(stepped-drifter: {o.blow_frequency_Hz:.4g} Hz, impact "
+                       f"{o.impact_velocity_m_s:.4g} m/s, {o.impact_energy_J:.4g} J, stable)")
     assert main(["orbits", str(EXAMPLE)]) == 0
     out = capsys.readouterr().out
     assert "2 segments (150 mm x 24.63 cm^2 + 298.5 mm x 11.52 cm^2)" in out

@@ -390,6 +390,11 @@ class CircuitDrifterOrbit:
     drifter: CircuitDrifter
     orbit: object
 
+    def __repr__(self) -> str:
+        return (f"CircuitDrifterOrbit({self.drifter.name or 'drifter'}: {self.blow_frequency_Hz:.4g} Hz, "
+                f"impact {self.impact_velocity_m_s:.4g} m/s, {self.impact_energy_J:.4g} J, mean supply "
+                f"{self.mean_supply_pressure_Pa / 1e6:.4g} MPa, {'stable' if self.stable else 'not stable'})")
+
     @property
     def period_s(self) -> float:
         """``T / Omega`` (s)."""

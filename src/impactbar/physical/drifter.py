@@ -269,6 +269,11 @@ class DrifterOrbit:
     drifter: Drifter
     orbit: object
 
+    def __repr__(self) -> str:
+        return (f"DrifterOrbit({self.drifter.name or 'drifter'}: {self.blow_frequency_Hz:.4g} Hz, impact "
+                f"{self.impact_velocity_m_s:.4g} m/s, {self.impact_energy_J:.4g} J, "
+                f"{'stable' if self.stable else 'not stable'})")
+
     @property
     def blow_frequency_Hz(self) -> float:
         """``Omega / T`` (Hz)."""
