@@ -90,20 +90,14 @@ class Bar(_Figures):
         diameter="40 mm")``; exactly one of ``diameter`` (circular section) and ``area``."""
         if (diameter is None) == (area is None):
             raise ValueError(f"give exactly one of {prefix}.diameter and {prefix}.area")
-        if diameter is not None:
-            dia = to_si(f"{prefix}.diameter", diameter, "m", "'40 mm'", what="a length")
-            check_real(f"{prefix}.diameter", dia, lo=0.0, lo_open=True)
-            a = math.pi * dia * dia / 4.0
-        else:
-            a = to_si(f"{prefix}.area", area, "m**2", "'12.6 cm^2'", what="an area")
-            check_real(f"{prefix}.area", a, lo=0.0, lo_open=True)
+        key, value = ("diameter", diameter) if diameter is not None else ("area", area)
+        a = _section_area(f"{prefix}.{key}", key, value)
         return cls(
             E_Pa=_positive(f"{prefix}.E", to_si(f"{prefix}.E", E, "Pa", "'210 GPa'",
                                                   what="a pressure (Young's modulus)")),
             density_kg_m3=_positive(f"{prefix}.density", to_si(
                 f"{prefix}.density", density, "kg/m**3", "'7850 kg/m^3'", what="a density")),
-            length_m=_positive(f"{prefix}.length", to_si(f"{prefix}.length", length, "m", "'0.2 m'",
-                                                           what="a length")),
+            length_m=_length(f"{prefix}.length", length),
             area_m2=a,
         )
 
@@ -314,14 +308,8 @@ def piston_from_units(E, density, length, *, diameter=None, area=None, prefix: s
     first = Bar.from_units(E, density, lengths[0], prefix=prefix, **{key: secs[0]})
     if n == 1:
         return first
-    le = [_positive(f"{prefix}.length[{j}]", to_si(f"{prefix}.length[{j}]", x, "m", "'120 mm'",
-                                                    what="a length")) for j, x in enumerate(lengths)]
-    if key == "diameter":
-        a = [math.pi / 4.0 * _positive(f"{prefix}.diameter[{j}]", to_si(
-            f"{prefix}.diameter[{j}]", x, "m", "'45 mm'", what="a length")) ** 2 for j, x in enumerate(secs)]
-    else:
-        a = [_positive(f"{prefix}.area[{j}]", to_si(f"{prefix}.area[{j}]", x, "m**2", "'15.9 cm^2'",
-                                                    what="an area")) for j, x in enumerate(secs)]
+    le = [_length(f"{prefix}.length[{j}]", x) for j, x in enumerate(lengths)]
+    a = [_section_area(f"{prefix}.{key}[{j}]", key, x) for j, x in enumerate(secs)]
     return SteppedBar(first.E_Pa, first.density_kg_m3, le, a)
 
 
@@ -339,5 +327,19 @@ def check_piston(bar, stepped_ok: bool, law: str = "") -> None:
 
 def _positive(name, v):
     return check_real(name, v, lo=0.0, lo_open=True)
+
+
+def _length(name, value) -> float:
+    """A positive length (m) from an input with units, named ``name`` in errors."""
+    return _positive(name, to_si(name, value, "m", "'0.2 m'", what="a length"))
+
+
+def _section_area(name, key, value) -> float:
+    """A positive cross-section (m^2) from a ``"diameter"`` (circular) or an ``"area"`` with units,
+    named ``name`` in errors."""
+    if key == "diameter":
+        dia = _positive(name, to_si(name, value, "m", "'40 mm'", what="a length"))
+        return math.pi * dia * dia / 4.0
+    return _positive(name, to_si(name, value, "m**2", "'12.6 cm^2'", what="an area"))
 
 

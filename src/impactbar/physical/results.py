@@ -189,7 +189,7 @@ def _rod_figures(orbit, hammer: Hammer, v_m_s: float) -> dict:
                 "efficiency": float(w.efficiency), "rod_advance_m": float(w.advance * sc.length_m)}
     # the paper's law (eq. 10) reverses the whole velocity field times R: the rod takes (1 - R^2) of the
     # kinetic energy, E = 1/2 sum kappa_n (q_n'^2 + w_n^2 q_n^2) with a stepped piston's weights (theory §12)
-    model = hammer.model
+    model = orbit.model  # (the hammer's, already built: a stepped piston's modes are not solved again)
     M = hammer.n_modes + 1
     q, v = orbit.state_before_impact[:M], orbit.state_before_impact[M:]
     if model.piston is None:
