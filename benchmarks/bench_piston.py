@@ -3,7 +3,10 @@ side by side in the same process with the uniform piston's closed form (``BarMod
 its cosine shapes) and with the same routine on one segment, and a finite-element solution of the
 same stepped bar at the accuracy the exact one has (an independent method, for scale); and
 ``optimize_piston`` over three segments (goal <= 10 s) beside its baseline, one blow of the uniform
-piston on the same rod and rock (one segment: nothing to optimise) and the search over two segments.
+piston on the same rod and rock (one segment: nothing to optimise) and the search over two segments;
+and one blow of a stepped piston on a stepped rod with re-contacts by the exact solver (every wave
+a delay line, the end certified) beside the uniform piston's exact blow and the lattice's (8 cells
+per piston, first order) on the same rod.
 
 Run: ``python benchmarks/bench_piston.py [--repeat N]``. Prints a table of median CPU times;
 nothing is asserted.
@@ -67,7 +70,30 @@ def main():
         ms = median_cpu(fn, args.repeat) * 1e3
         goal = "<= 10 ms (issue 44)" if name.startswith("stepped piston, 3") else ""
         print(f"{name:<80} {ms:>8.3f}   {goal}")
+    blow_rows(max(1, args.repeat // 3))
     design_rows(max(1, args.repeat // 7))
+
+
+def blow_rows(repeat):
+    """``single_blow`` of a uniform and of stepped pistons on a two-segment rod (the tests' case)."""
+    from impactbar import BilinearRock, RodRock, RodSegment, single_blow
+
+    law = RodRock(segments=[RodSegment(0.75, 1.4), RodSegment(2.25, 0.7)], rock=BilinearRock(k=2.0, k_u=12.0))
+    model = BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
+    print(f"{'one blow on a stepped rod (median CPU time)':<80} {'ms':>8}")
+    pistons = (("uniform piston", None),
+               ("3 segments on a common grid", SteppedPiston([0.25, 0.5, 0.25], [1.0, 2.0, 1.3])),
+               ("2 segments, arbitrary lengths", SteppedPiston([0.37, 0.63], [1.0, 1.6])),
+               ("3 segments, arbitrary lengths", SteppedPiston([0.3, 0.45, 0.25], [1.0, 2.3, 1.4])))
+    for label, piston in pistons:
+        for method in ("exact", "lattice"):
+            out = []
+            ms = median_cpu(lambda p=piston, m=method, out=out: out.append(
+                single_blow(model, 1.0, piston=p, method=m)), repeat) * 1e3
+            b = out[-1]
+            extra = f"ended {b.ended_by}" + (f", {b.exact.pieces} pieces" if method == "exact" else "")
+            name = f"{label}, {method}: efficiency {b.efficiency:.6f} ({extra})"
+            print(f"{name:<80} {ms:>8.2f}")
 
 
 def design_rows(repeat):

@@ -279,7 +279,8 @@ class Blow:
         """Force at segment boundary ``j`` (0: the shank) at times ``t`` (exact method: exact)."""
         if self.exact is not None:
             t = np.asarray(t, dtype=float)
-            return np.where((t >= 0.0) & (t < self.duration), self.exact.junction_force(1 + int(j), t), 0.0)
+            j = self.exact.contact_junction + int(j)
+            return np.where((t >= 0.0) & (t < self.duration), self.exact.junction_force(j, t), 0.0)
         return self._steps(self.junction_forces[:, j], t)
 
     def bit_force(self, t) -> np.ndarray:
@@ -292,8 +293,10 @@ class Blow:
         """The largest force at every segment boundary (the shank first) and at the bit, and when
         first reached (exact method: the maxima of the pieces; lattice: of the step values):
         ``values, times``, arrays of shape ``(J + 1,)``."""
-        if self.exact is not None:
-            return self.exact.peak_forces()
+        if self.exact is not None:  # (a stepped piston's own steps first: not the rod's)
+            values, times = self.exact.peak_forces()
+            first = self.exact.contact_junction - 1
+            return values[first:], times[first:]
         i, jb = np.argmax(self.junction_forces, axis=0), int(np.argmax(self.bit_forces))
         return (np.append(self.junction_forces[i, np.arange(i.size)], self.bit_forces[jb]),
                 np.append(self.times[i], self.times[jb]))

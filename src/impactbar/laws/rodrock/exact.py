@@ -543,9 +543,10 @@ CERTIFIED = ("separated", "lifted", "spent")
 
 def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, t_max=None,
                         semi_infinite=False, samples_per_piston=32, record_field=False,
-                        max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS):
-    r"""One blow of a rigid, unstressed uniform piston on a stepped rod, every wave exact
-    (:func:`exact_blow`), as the :class:`~impactbar.laws.rodrock.blow.Blow` of :func:`single_blow`.
+                        max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, piston=None):
+    r"""One blow of a rigid, unstressed piston (uniform or stepped) on a stepped rod, every wave
+    exact (:func:`exact_blow`), as the :class:`~impactbar.laws.rodrock.blow.Blow` of
+    :func:`single_blow`.
 
     Parameters
     ----------
@@ -567,11 +568,16 @@ def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, fee
         piston, each segment as many as its travel time holds, at least 1) at the sample times.
     max_pieces, max_windows : int
         Bounds of the cost (then ``ended_by = "budget"`` or ``"rings"``, with ``uncertainty``).
+    piston : SteppedPiston, optional
+        A stepped piston of the model's mass and length (theory §12): each segment a delay line of
+        travel time ``l_j / s`` and impedance ``s mu_j`` (``mu_j`` its mass per length), welded to
+        the next; its boundaries need not fall on the samples. Default None: the uniform piston.
 
     Returns
     -------
     Blow
-        ``method = "exact"``; ``grid_loss = 0``, ``cell_time`` the sampling step.
+        ``method = "exact"``; ``grid_loss = 0``, ``cell_time`` the sampling step; ``cell_edges``
+        (with ``record_field``) the sampled cells' edges, piston then rod.
 
     Raises
     ------
@@ -591,22 +597,26 @@ def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, fee
     lengths = np.asarray(lengths, float)
     imps = np.asarray(impedances, float)
     travel = lengths / (np.asarray(speeds, float) * s)
-    ex = exact_blow([1.0 / s], [s], travel, s * imps, k=k, k_u=k_u, bit_mass=bit_mass, feed=feed,
+    from ._piston import piston_segments
+
+    p_len, p_mu = piston_segments(piston)
+    ex = exact_blow(p_len / s, s * p_mu, travel, s * imps, k=k, k_u=k_u, bit_mass=bit_mass, feed=feed,
                     impact_velocity=V, semi_infinite=semi_infinite, t_max=t_max, record=True,
                     max_pieces=max_pieces, max_windows=max_windows)
     dt = 1.0 / (s * samples_per_piston)
     T = ex.duration
     n = max(1, math.ceil(T / dt * (1.0 - 1e-12)))
     seg_cells = tuple(max(1, round(Ti / dt)) for Ti in travel)
-    _check_samples(n, J=lengths.size, cells=(samples_per_piston + sum(seg_cells)) if record_field else 0)
+    p_cells = _piston_samples(p_len, samples_per_piston)
+    _check_samples(n, J=lengths.size, cells=(sum(p_cells) + sum(seg_cells)) if record_field else 0)
     times = np.minimum(dt * np.arange(n + 1), T)
     mid = 0.5 * (times[:-1] + times[1:])
     J = lengths.size
-    junc = np.column_stack([ex.junction_force(1 + j, mid) for j in range(J)])
+    junc = np.column_stack([ex.junction_force(ex.contact_junction + j, mid) for j in range(J)])
     fld = edges = None
     if record_field:
-        fld, edges = _field(ex, np.concatenate(([1.0 / s], travel)), np.concatenate(([1.0], lengths)),
-                            (samples_per_piston, *seg_cells), mid)
+        fld, edges = _field(ex, np.concatenate((p_len / s, travel)), np.concatenate((p_len, lengths)),
+                            (*p_cells, *seg_cells), mid)
     return Blow(
         times=times, shank_forces=junc[:, 0].copy(), junction_forces=junc,
         bit_forces=ex.bit_force(times), penetrations=ex.penetration(times), field=fld,
@@ -615,7 +625,7 @@ def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, fee
         piston_energy=ex.piston_energy, rebound_velocity=ex.rebound_velocity,
         rod_energy=ex.rod_energy + ex.radiated, grid_loss=0.0, rock_stored_energy=ex.rock_energy,
         max_penetration=ex.max_penetration, permanent_penetration=ex.permanent_penetration,
-        advance=ex.advance, ended_by=ex.ended_by, cell_time=dt, piston_cells=samples_per_piston,
+        advance=ex.advance, ended_by=ex.ended_by, cell_time=dt, piston_cells=sum(p_cells),
         segment_cells=seg_cells, cell_edges=edges, length_error=0.0, drive_work=0.0, gap=ex.gap,
         shank_displacement=ex.shank_displacement, piston_waves=None, rod_waves=None,
         bit_velocity=ex.bit_velocity, method="exact", uncertainty=ex.uncertainty, loadings=ex.loadings,
@@ -634,6 +644,18 @@ def _check_samples(n, J, cells):
         what = "record_field would keep" if cells else "the recorded histories would keep"
         raise ValueError(f"single blow: {what} {total:.3g} values (more than {MAX_SAMPLES}) over "
                          f"{n} samples; use a shorter t_max or fewer cells_per_piston")
+
+
+def _piston_samples(lengths, n):
+    """The sampled cells of each piston segment (shape ``(P,)``, each at least 1): ``n`` along the
+    piston shared out by the segments' lengths (Hamilton's largest remainders)."""
+    if lengths.size == 1:
+        return (int(n),)
+    share = lengths / lengths.sum() * n
+    cells = np.maximum(np.floor(share).astype(np.int64), 1)
+    while cells.sum() < n:
+        cells[np.argmax(share - cells)] += 1
+    return tuple(int(c) for c in cells)
 
 
 def _field(ex, travel, lengths, cells, t):

@@ -409,13 +409,16 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         unused.
     piston : SteppedPiston, optional
         A stepped piston of the model's mass and length (theory §12): its segments, from the driven
-        end to the struck end, carried by characteristics on the same grid as the rod's, each of
-        impedance ``s mu_j`` (``mu_j`` its mass per length, the piston's mass 1), so that on a long
-        rod it sends the staircase wave its impedances give; the rod's impedances stay relative to
-        ``s`` (a uniform piston of the same mass and length). Default None: the uniform piston,
-        whose results a one-segment ``SteppedPiston`` reproduces to the bit.
+        end to the struck end, each of impedance ``s mu_j`` (``mu_j`` its mass per length, the
+        piston's mass 1), carried by characteristics like the rod's, so that on a long rod it sends
+        the staircase wave its impedances give: exactly by the exact method, each segment a delay
+        line of travel time ``l_j / s`` (its boundaries anywhere), or by the lattice as cells of its
+        grid (boundaries rounded to whole cells, ``length_error``). The rod's impedances stay
+        relative to ``s`` (a uniform piston of the same mass and length). Default None: the uniform
+        piston, whose results a one-segment ``SteppedPiston`` reproduces to the bit.
     method : {"auto", "exact", "lattice"}
-        ``"auto"``: exact for a uniform piston, a massless bit, no feed and no ``cells_per_piston`` (and
+        ``"auto"``: exact for a uniform or stepped piston, a massless bit, no feed and no
+        ``cells_per_piston`` (and
         where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` (2000) of the shortest
         travel time, ``k / Z_b`` times the shortest travel time is at most ``1e6`` and its waves
         need at most ``AUTO_MAX_PIECES`` (1e5) pieces), else the
@@ -444,7 +447,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         ``cells_per_piston`` not an integer ``>= 1``; a grid of more than ``5e9`` cell updates (a rod
         far longer, in travel time, than the piston, or too fine a grid); a bit ringing on the rock
         more than ``1e6`` radians a lattice step; ``piston`` neither None
-        nor a ``SteppedPiston``, or given with ``method="exact"`` or ``semi_infinite``; ``method`` not
+        nor a ``SteppedPiston``; ``method`` not
         one of those above; ``semi_infinite`` not a bool, or with the lattice.
 
     Examples
@@ -468,9 +471,11 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     >>> head.mass_per_length  # the rod of the head's impedance: 1.6 s
     array([0.8, 1.6])
     >>> rod = RodRock(segments=[RodSegment(length=40.0, impedance=1.6)], rock=BilinearRock(k=2.5, k_u=25.0))
-    >>> b = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=rod), 1.0, t_max=39.0, piston=head)
-    >>> b.shank_forces[:16:4].round(6)  # 1/16 per step: the head's 0.25, the tail's 0.75
-    array([1.6     , 1.066667, 1.066667, 1.066667])
+    >>> b = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=rod), 1.0, piston=head)
+    >>> b.method, b.ended_by  # every wave exact, the end certified
+    ('exact', 'lifted')
+    >>> b.shank_force([0.1, 0.3, 0.9, 1.1]).round(6)  # the head's round trip 0.25, the tail's 0.75
+    array([1.6     , 1.066667, 1.066667, 0.      ])
     """
     from .blow import rod_rock_blow
 
@@ -482,13 +487,14 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         raise ValueError(f"method must be 'auto', 'exact' or 'lattice'; got method={method!r}")
     if not isinstance(semi_infinite, bool | np.bool_):
         raise ValueError(f"semi_infinite must be True or False; got semi_infinite={semi_infinite!r}")
-    if piston is not None and (method == "exact" or semi_infinite):
-        raise ValueError("piston: a stepped piston is carried by the lattice only; give method='lattice' "
-                         "(or 'auto') and semi_infinite=False with it")
+    if piston is not None:
+        from ._piston import piston_segments
+
+        piston_segments(piston)  # (checked before any choice is made)
     massless = law.bit_mass == 0.0 or _bit_is_negligible(model, law)
-    exact = method == "exact" or (method == "auto" and piston is None and (semi_infinite or (
+    exact = method == "exact" or (method == "auto" and (semi_infinite or (
         law.feed == 0.0 and massless and cells_per_piston is None
-        and _exact_is_cheap(model, law))))
+        and _exact_is_cheap(model, law, piston))))
     if semi_infinite and not exact:
         raise ValueError("semi_infinite=True needs method='exact' (or 'auto'); the lattice carries "
                          "the rod's finite length")
@@ -497,7 +503,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         auto = method == "auto" and not semi_infinite
         blow = _exact_single_blow(model, law, impact_velocity, t_max, cells_per_piston, record_field,
                                   semi_infinite, 0.0 if massless else law.bit_mass,
-                                  AUTO_MAX_PIECES if auto else None)
+                                  AUTO_MAX_PIECES if auto else None, piston)
         bad = not blow.energy_error <= EXACT_ACCOUNT_TOLERANCE
         if not auto and (blow.ended_by == "failed" or not math.isfinite(blow.efficiency)):
             raise ValueError("method='exact': the blow's pieces overflowed (a rock far stiffer than the "
@@ -525,7 +531,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
 
 
 def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field, semi_infinite,
-                       bit_mass, max_pieces=None):
+                       bit_mass, max_pieces=None, piston=None):
     """:func:`single_blow` by the exact solver (checked arguments; ``cells_per_piston`` the samples
     per piston crossing time of the recorded arrays, default 32; ``bit_mass`` 0 for a negligible
     bit)."""
@@ -540,7 +546,8 @@ def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field
                                [g.wave_speed for g in segs], law.rock.k, law.rock.k_u, bit_mass,
                                law.feed, t_max=t_max, semi_infinite=semi_infinite,
                                **({} if max_pieces is None else {"max_pieces": max_pieces}),
-                               samples_per_piston=samples, record_field=bool(record_field))
+                               samples_per_piston=samples, record_field=bool(record_field),
+                               piston=piston)
 
 
 #: The largest force scale (``s V``, the feed) and the smallest nonzero bit mass a blow accepts: the
@@ -579,12 +586,15 @@ NEGLIGIBLE_BIT = 1e-10
 MAX_EXACT_LOADING_EXPONENT = 1e6
 
 
-def _exact_is_cheap(model, law) -> bool:
-    """Whether a round trip through piston and rod takes at most ``MAX_EXACT_PASS_WINDOWS`` windows
-    and the rock's loading exponent over the shortest of them is at most
-    ``MAX_EXACT_LOADING_EXPONENT``."""
+def _exact_is_cheap(model, law, piston=None) -> bool:
+    """Whether a round trip through piston (its segments, if stepped) and rod takes at most
+    ``MAX_EXACT_PASS_WINDOWS`` windows and the rock's loading exponent over the shortest of them is
+    at most ``MAX_EXACT_LOADING_EXPONENT``."""
+    from ._piston import piston_segments
+
     with np.errstate(over="ignore", divide="ignore"):
-        travel = np.array([1.0 / model.s] + [g.travel_time(model) for g in law.segments])
+        own = piston_segments(piston)[0] / model.s
+        travel = np.concatenate((own, [g.travel_time(model) for g in law.segments]))
         rate = law.rock.k / (model.s * law.segments[-1].impedance) * float(np.min(travel))
     ratio = 2.0 * float(np.sum(travel)) / float(np.min(travel))
     return (bool(np.all(np.isfinite(travel))) and ratio <= MAX_EXACT_PASS_WINDOWS
