@@ -19,10 +19,13 @@ per length averaged over the cell): the work is then continuous in the boundarie
 of the exact blow of the stepped piston. The search is scipy's Nelder-Mead (derivative-free: the blow
 on the lattice is piecewise smooth, with kinks where the rock changes branch or the piston leaves the
 shank) on the work less a penalty on the stress above the limit, started at the uniform piston and
-restarted once from its result. The best design's boundaries are then moved to whole cells (its
-segments' masses kept) and its blow solved exactly on that grid; the uniform piston's blow is solved
-on the same grid, and the better of the two feasible designs is returned, so that the result is
-never worse than the uniform piston.
+restarted once from its result. Without a feed and with a massless bit, the best design's blow is
+then solved by the exact solver (every wave of piston and rod a delay line, the boundaries where
+the search put them; :func:`~impactbar.single_blow`), and so is the uniform piston's; with a feed or
+a bit mass (or where the exact blow would need more than ``1e5`` wave pieces) the boundaries are
+moved to whole cells (the segments' masses kept) and both blows are solved on the lattice. The
+better of the two feasible designs is returned, so that the result is never worse than the uniform
+piston.
 """
 
 from __future__ import annotations
@@ -64,7 +67,7 @@ class OptimalPiston:
     evaluations : int
         Blows solved by the search.
     cell_time_s : float
-        The time step of the characteristics' grid (s).
+        The time step of the lattice, or of the exact blow's samples (s).
     times_s : numpy.ndarray, shape (k + 1,)
         The step ends of the blows (s).
     incident_force_N, uniform_incident_force_N : numpy.ndarray, shape (k,)
@@ -202,8 +205,10 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     True
     >>> round(best.uniform_efficiency, 4)  # a matched uniform piston: Lundberg's at alpha = 0.857
     0.6958
+    >>> best.blow.method  # the design's blow: every wave exact, its boundary where the search put it
+    'exact'
     >>> best.lengths_m.round(4), best.diameters_m.round(4)  # heavy at the driven end, slender struck end
-    (array([0.125, 0.175]), array([0.0395, 0.0327]))
+    (array([0.1277, 0.1723]), array([0.0391, 0.0329]))
     >>> round(best.bar.mass_kg, 6), best.bar.n_segments  # the piston for a Hammer or a Drifter
     (2.355, 2)
     """
@@ -241,10 +246,11 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
 
     def merit(b):
         """Work (in impact energies) less the penalty; the relative excess stress."""
-        excess = max(0.0, float(np.max(b.shank_forces)) * scale - 1.0)
+        excess = max(0.0, _peak(b) * scale - 1.0)
         return b.work_on_rock / b.energy_at_impact - PENALTY * excess, excess
 
     uniform = blow(None)
+    exact = f == 0.0 and mb == 0.0
     count = [0]
     best_x = np.zeros(2 * n - 2)
     if n > 1:
@@ -263,17 +269,25 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
                                     "maxfev": maxfev})
             best_x = np.clip(res.x, -BOUND, BOUND)
     lf, mf = _fractions(best_x, n)
-    cells_per = _whole_cells(lf, N)
-    shaped = blow(SteppedPiston(cells_per, mf / cells_per)) if n > 1 else uniform
+    shaped = None
+    if exact:  # the design where the search put it, every wave exact
+        shaped = _exact_blow(v, seg, k, k_u, T, N, SteppedPiston(lf, mf / lf) if n > 1 else None)
+        plain = _exact_blow(v, seg, k, k_u, T, N, None) if shaped is not None else None
+        if plain is not None:
+            uniform = plain
+        else:
+            shaped = None
+    if shaped is None:  # the boundaries on whole cells, the lattice's blows
+        lf = _whole_cells(lf, N) / N
+        shaped = blow(SteppedPiston(lf, mf / lf)) if n > 1 else uniform
     (w_s, x_s), (w_u, x_u) = merit(shaped), merit(uniform)
     if (x_s > 0.0 or w_s < w_u) and (x_u == 0.0 or x_u < x_s):  # the uniform piston is better
         shaped, x_s = uniform, x_u
-        cells_per = _whole_cells(np.full(n, 1.0 / n), N)
-        mf = cells_per / N
-    lengths = cells_per / N * L
+        lf = mf = np.full(n, 1.0 / n)
+    lengths = lf * L
     areas = mf * m / (rho * lengths)
-    stress = float(np.max(shaped.shank_forces)) * force_N / pieces[0].area_m2
-    u_stress = float(np.max(uniform.shank_forces)) * force_N / pieces[0].area_m2
+    stress = _peak(shaped) * force_N / pieces[0].area_m2
+    u_stress = _peak(uniform) * force_N / pieces[0].area_m2
     steps = min(shaped.shank_forces.size, uniform.shank_forces.size)
     return OptimalPiston(
         lengths_m=lengths, areas_m2=areas, work_on_rock_J=shaped.work_on_rock * energy_J,
@@ -284,6 +298,23 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         incident_force_N=shaped.shank_forces[:steps] * force_N,
         uniform_incident_force_N=uniform.shank_forces[:steps] * force_N, blow=shaped, uniform_blow=uniform,
         max_stress_Pa=sigma, mass_kg=m, length_m=L, impact_velocity_m_s=V, E_Pa=E, density_kg_m3=rho)
+
+
+def _peak(b):
+    """The largest piston-shank force of a blow (exact: the maximum of its pieces)."""
+    return float(b.peak_forces()[0][0])
+
+
+def _exact_blow(v, seg, k, k_u, T, samples, piston):
+    """The blow of ``piston`` (None: uniform) in the window ``T`` by the exact solver, sampled
+    ``samples`` times a piston crossing; None where its pieces would pass the default's bound or its
+    energy account is not closed (:func:`~impactbar.single_blow`'s ``method="auto"``)."""
+    from ..laws.rodrock.exact import exact_rod_rock_blow
+    from ..laws.rodrock.law import AUTO_MAX_PIECES, EXACT_ACCOUNT_TOLERANCE
+
+    b = exact_rod_rock_blow(1.0, v, *seg, k, k_u, 0.0, 0.0, t_max=T, samples_per_piston=samples,
+                            max_pieces=AUTO_MAX_PIECES, piston=piston)
+    return b if b.ended_by != "budget" and b.energy_error <= EXACT_ACCOUNT_TOLERANCE else None
 
 
 def _fractions(x, n):
