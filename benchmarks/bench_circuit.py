@@ -7,7 +7,8 @@ with the preset's forces at its mean supply pressure (``PositionSwitchedDrive``)
 ``find_orbit`` from the default guess (rest on the stop, followed at a loose tolerance with the slow
 supply mode extrapolated away, then Newton with the variational equations' Jacobian; beside it the
 start of before, every impact followed at the drive's tolerance until they repeat to 1e-4), of
-``simulate`` over 100 blows, and of one continuation point in the accumulator's pre-charge; the rigid
+``simulate`` over 100 blows, and of one continuation point in the accumulator's pre-charge (beside it
+the point of before: the parameter's column of the Jacobian by a central difference); the rigid
 piston and 8 modes. Issue 38's goals on this 2-core machine: the rigid orbit <= 0.5 s, with 8 modes
 <= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a few repetitions (the
 machine's other load only adds); compilation is done before the clock starts.
@@ -50,13 +51,27 @@ def row(d, drive, n):
     out["before"] = best(lambda: _plain_start(model, drive), reps)
     out["sim"] = (best(lambda: simulate(model, drive, start, 100.5 * o.period), reps),
                   best(lambda: simulate(model, ideal, start, 100.5 * oi.period), reps))
-    t = time.perf_counter()
-    b = continue_orbit(o, "precharge", to=drive.accumulator.precharge * 1.05, max_points=6, events=False)
-    tc = (time.perf_counter() - t) / max(1, len(b.orbits) - 1)
+    out["cont before"] = best(lambda: _cont_point(o, drive, forward=False), reps)
+    tc = best(lambda: _cont_point(o, drive, forward=True), reps)
     t = time.perf_counter()
     bi = continue_orbit(oi, "switch_out", to=ideal.switch_out * 1.05, max_points=6, events=False)
     out["cont"] = (tc, (time.perf_counter() - t) / max(1, len(bi.orbits) - 1))
     return out
+
+
+def _cont_point(o, drive, forward):
+    """Seconds per point of a continuation in the pre-charge (5 points), the parameter's column of
+    the Jacobian by a forward difference (now) or a central one (before)."""
+    import impactbar.continuation.switched as CS
+
+    keep = CS.FORWARD_LAMBDA
+    CS.FORWARD_LAMBDA = forward
+    try:
+        t = time.perf_counter()
+        b = continue_orbit(o, "precharge", to=drive.accumulator.precharge * 1.05, max_points=6, events=False)
+        return (time.perf_counter() - t) / max(1, len(b.orbits) - 1)
+    finally:
+        CS.FORWARD_LAMBDA = keep
 
 
 def _plain_start(model, drive):
@@ -124,7 +139,9 @@ def main(quick=False):
         r = row(d, drive, n)
         for j, name in enumerate(("circuit", "ideal")):
             print(f"{n:>5} {name:>8} {r['orbit'][j]:>9.4f} {r['sim'][j]:>12.4f} {r['cont'][j]:>14.4f}")
-        print(f"{n:>5} {'before':>8} {r['before']:>9.4f}   (the circuit's orbit, the start of before)")
+        print(f"{n:>5} {'before':>8} {r['before']:>9.4f} {'':>12} {r['cont before']:>14.4f}   (the circuit's "
+              "orbit from the start of before; its continuation point with a central difference in "
+              "the parameter)")
 
 
 if __name__ == "__main__":
