@@ -8,7 +8,8 @@ with the preset's forces at its mean supply pressure (``PositionSwitchedDrive``)
 supply mode extrapolated away, then Newton with the variational equations' Jacobian; beside it the
 start of before, every impact followed at the drive's tolerance until they repeat to 1e-4), of
 ``simulate`` over 100 blows, and of one continuation point in the accumulator's pre-charge (beside it
-the point of before: the parameter's column of the Jacobian by a central difference); the rigid
+the point of before: the parameter's column of the Jacobian by a central difference, full Newton
+steps); the rigid
 piston and 8 modes. Issue 38's goals on this 2-core machine: the rigid orbit <= 0.5 s, with 8 modes
 <= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a few repetitions (the
 machine's other load only adds); compilation is done before the clock starts.
@@ -60,18 +61,19 @@ def row(d, drive, n):
 
 
 def _cont_point(o, drive, forward):
-    """Seconds per point of a continuation in the pre-charge (5 points), the parameter's column of
-    the Jacobian by a forward difference (now) or a central one (before)."""
+    """Seconds per point of a continuation in the pre-charge (5 points): now, the parameter's column
+    of the Jacobian by a forward difference and each corrector's first step a chord step with the
+    last orbit's Jacobian; before, a central difference and full Newton steps."""
     import impactbar.continuation.switched as CS
 
-    keep = CS.FORWARD_LAMBDA
-    CS.FORWARD_LAMBDA = forward
+    keep = CS.FORWARD_LAMBDA, CS.CHORD
+    CS.FORWARD_LAMBDA = CS.CHORD = forward
     try:
         t = time.perf_counter()
         b = continue_orbit(o, "precharge", to=drive.accumulator.precharge * 1.05, max_points=6, events=False)
         return (time.perf_counter() - t) / max(1, len(b.orbits) - 1)
     finally:
-        CS.FORWARD_LAMBDA = keep
+        CS.FORWARD_LAMBDA, CS.CHORD = keep
 
 
 def _plain_start(model, drive):
@@ -141,7 +143,7 @@ def main(quick=False):
             print(f"{n:>5} {name:>8} {r['orbit'][j]:>9.4f} {r['sim'][j]:>12.4f} {r['cont'][j]:>14.4f}")
         print(f"{n:>5} {'before':>8} {r['before']:>9.4f} {'':>12} {r['cont before']:>14.4f}   (the circuit's "
               "orbit from the start of before; its continuation point with a central difference in "
-              "the parameter)")
+              "the parameter and full Newton steps)")
 
 
 if __name__ == "__main__":

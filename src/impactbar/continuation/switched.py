@@ -42,6 +42,9 @@ SWITCHED_PARAMETERS = ("stroke", "ret", "switch_out", "delay", "delay_out", "del
 #: Whether ``F_lam`` is a forward difference where the flights are integrated (the benchmark
 #: compares it with the central difference of before)
 FORWARD_LAMBDA = True
+#: Whether the first corrector step after an orbit takes that orbit's Jacobian (a chord step) where
+#: the flights are integrated (the benchmark compares it with the full Newton step of before)
+CHORD = True
 
 
 def parameters_of(drive) -> tuple:
@@ -65,6 +68,7 @@ class _SwitchedProblem:
         self.events, self.stop_on, self.xtol = events, stop_on, xtol
         self.m, self.doubled, self.base = impacts, doubled, base
         self.pair = functools.lru_cache(maxsize=16)(self._pair)
+        self._chord = None  # the last orbit's F_u, for the next corrector's first step
         start = self.pair(float(getattr(model if name in MODEL_PARAMETERS else drive, name)))[2]
         self.flights = start.positive
         self.W = np.append(np.full(start.size, 1.0 / start.size), 1.0)
@@ -89,7 +93,11 @@ class _SwitchedProblem:
         error ``O(h)``, ``h = 1e-6``, only slows the corrector's convergence, whose residual is
         exact, and tilts the predictor's tangent by as much)."""
         problem = self.pair(float(U[-1]))[2]
-        F, DF = problem.residual(U[:-1])
+        chord, self._chord = self._chord, None
+        if chord is not None and F_lam is None:  # the last orbit's Jacobian: a chord step
+            F, DF = problem.value(U[:-1]), chord
+        else:
+            F, DF = problem.residual(U[:-1])
         if F_lam is None:
             h = 1e-6 * max(1.0, abs(U[-1]))
             sides = []
@@ -110,7 +118,18 @@ class _SwitchedProblem:
         return F, np.column_stack((DF, F_lam)), F_lam
 
     def orbit(self, U, admissibility=True):
-        return orbit_of(self.pair(float(U[-1]))[2], U[:-1])
+        """The orbit at ``U``. Where the flights are integrated, the Jacobian of its residual (from
+        the variational flight the orbit's data came from, remembered by the problem: no flight
+        more) is kept for the first step of the next corrector (a chord step: the residual by a
+        plain flight, ``F_u`` the last orbit's), which the full Jacobian's steps then finish."""
+        problem = self.pair(float(U[-1]))[2]
+        ob = orbit_of(problem, U[:-1])
+        if CHORD and getattr(problem, "variational", False):
+            try:
+                self._chord = problem.residual(U[:-1])[1]
+            except ValueError:
+                self._chord = None
+        return ob
 
     def acceptable(self, U):
         """Positive flight times; on a branch started at a period doubling, halves that differ
