@@ -214,13 +214,7 @@ def test_the_exact_stepped_blow_balances_momentum_and_energy():
     b = ib.single_blow(model, 1.0, piston=piston)
     assert b.method == "exact" and b.ended_by in ("separated", "lifted") and b.exact.recontacts == 2
     assert b.energy_error < 1e-13
-    pools, nodes = b.exact._hist[1], b.exact._hist[2]
-    PF, PI, CHI = pools[0], pools[1], pools[4]
-    p, breaks = int(CHI[2 * nodes + 1 + b.exact.contact_junction, 1]), []
-    while p >= 0:
-        breaks.append(PF[p, 0])
-        p = int(PI[p, 0])
-    breaks = np.unique(np.clip(breaks + [b.duration], 0.0, b.duration))
+    breaks = b.exact.junction_breaks(b.exact.contact_junction)
     x, w = np.polynomial.legendre.leggauss(20)
     impulse = sum(0.5 * (hi - lo) * float(w @ b.shank_force(0.5 * (lo + hi) + 0.5 * (hi - lo) * x))
                   for lo, hi in zip(breaks[:-1], breaks[1:], strict=True))

@@ -79,6 +79,11 @@ MAX_WINDOWS = 2_000_000
 MAX_POOL_BYTES = 2 ** 31
 
 
+class PoolOverflow(ValueError):
+    """The exact blow's wave pieces would need more memory than its bound (a light bit's fast
+    branches make long series): the lattice is the method for such a blow."""
+
+
 def _roots(m, Z, b):
     """Roots of ``m r^2 + Z r + b`` (fast first), or of ``Z r + b`` for ``m = 0``; without
     cancellation."""
@@ -215,6 +220,26 @@ class ExactBlow:
             raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
         return scale * _eval_channel(pools, 2 * nodes + 1 + j, t, kind=0)
 
+    def junction_breaks(self, j: int) -> np.ndarray:
+        """The break points of junction ``j``'s force history (numbered as in
+        :meth:`junction_force`): the times in ``[0, duration]`` where one of its pieces starts, so
+        that between two of them the force is one analytic piece (to integrate it, for instance).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n,)
+            Sorted, with 0 and ``duration``.
+        """
+        pools, nodes = self._hist[1], self._hist[2]
+        if not 1 <= j < nodes:
+            raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
+        PF, PI, CHI = pools[0], pools[1], pools[4]
+        p, out = int(CHI[2 * nodes + 1 + j, 1]), [0.0, self.duration]
+        while p >= 0:
+            out.append(float(PF[p, 0]))
+            p = int(PI[p, 0])
+        return np.unique(np.clip(out, 0.0, self.duration))
+
     @property
     def contact_junction(self) -> int:
         """The index of the piston-shank interface among the junctions."""
@@ -290,7 +315,7 @@ def _check_chain(name, times, imps):
 
 def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k, k_u, bit_mass=0.0,
                feed=0.0, impact_velocity, semi_infinite=False, t_max=None, record=True,
-               max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS) -> ExactBlow:
+               max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, max_pool_bytes=None) -> ExactBlow:
     r"""The blow of a rigidly moving, unstressed piston on a rod resting on the rock under the feed,
     every wave exact (theory §4d; the module's text says what is exact and how the end is decided).
 
@@ -318,6 +343,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         peaks).
     max_pieces, max_windows : int
         Bounds of the cost (``ended_by = "budget"`` or ``"rings"`` past them).
+    max_pool_bytes : int, optional
+        The most memory the wave pieces may take; default ``MAX_POOL_BYTES`` (2 GiB).
 
     Returns
     -------
@@ -327,7 +354,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     ------
     ValueError
         An argument outside its range (named), a blow whose energies the float range cannot hold,
-        or one whose wave pieces would need more than ``MAX_POOL_BYTES`` (2 GiB) of memory.
+        or one whose wave pieces would need more than ``max_pool_bytes`` of memory
+        (:class:`PoolOverflow`, a ``ValueError``).
     """
     Tp, Zp = _check_chain("piston", piston_times, piston_impedances)
     Tr, Zr = _check_chain("rod", rod_times, rod_impedances)
@@ -409,9 +437,10 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         if ws[24][0] == 0:
             break
         pcap, tcap, ecap = 4 * pcap, 4 * tcap, 4 * ecap
-        if pcap * 56 + tcap * 24 > MAX_POOL_BYTES:
-            raise ValueError(
-                f"the exact blow needs more than {MAX_POOL_BYTES / 2 ** 30:.0f} GiB of wave pieces "
+        bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
+        if pcap * 56 + tcap * 24 > bound:
+            raise PoolOverflow(
+                f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces "
                 f"(bit_mass = {m:g}: a light bit's fast branches make long series); use "
                 "method='lattice', or a bit_mass of 0 (the massless bit) or a heavier one")
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
@@ -543,7 +572,7 @@ CERTIFIED = ("separated", "lifted", "spent")
 
 def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, t_max=None,
                         semi_infinite=False, samples_per_piston=32, record_field=False,
-                        max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, piston=None):
+                        max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, piston=None, max_pool_bytes=None):
     r"""One blow of a rigid, unstressed piston (uniform or stepped) on a stepped rod, every wave
     exact (:func:`exact_blow`), as the :class:`~impactbar.laws.rodrock.blow.Blow` of
     :func:`single_blow`.
@@ -568,6 +597,8 @@ def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, fee
         piston, each segment as many as its travel time holds, at least 1) at the sample times.
     max_pieces, max_windows : int
         Bounds of the cost (then ``ended_by = "budget"`` or ``"rings"``, with ``uncertainty``).
+    max_pool_bytes : int, optional
+        The most memory the wave pieces may take (:func:`exact_blow`).
     piston : SteppedPiston, optional
         A stepped piston of the model's mass and length (theory §12): each segment a delay line of
         travel time ``l_j / s`` and impedance ``s mu_j`` (``mu_j`` its mass per length), welded to
@@ -602,7 +633,7 @@ def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, fee
     p_len, p_mu = piston_segments(piston)
     ex = exact_blow(p_len / s, s * p_mu, travel, s * imps, k=k, k_u=k_u, bit_mass=bit_mass, feed=feed,
                     impact_velocity=V, semi_infinite=semi_infinite, t_max=t_max, record=True,
-                    max_pieces=max_pieces, max_windows=max_windows)
+                    max_pieces=max_pieces, max_windows=max_windows, max_pool_bytes=max_pool_bytes)
     dt = 1.0 / (s * samples_per_piston)
     T = ex.duration
     n = max(1, math.ceil(T / dt * (1.0 - 1e-12)))

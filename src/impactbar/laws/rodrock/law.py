@@ -382,7 +382,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     feed force acts on the shank); the rod is at rest, compressed by the feed, the bit resting on
     fresh rock loaded to the feed force. The model's ``R`` and ``d`` play no part (the rod replaces
     the restitution; the blow is undamped), nor its flexible modes (the piston is unstressed at
-    impact). Without a feed, every wave is carried exactly (``method="exact"``,
+    impact). Without a feed (a bit with or without mass), every wave is carried exactly (``method="exact"``,
     ``impactbar.laws.rodrock.exact``: pieces of constants and exponentials between break points,
     every switch a located root) and the blow runs until its end is certified (``ended_by``:
     ``"separated"``, the piston gone for good and the rock unable to yield again, the rod perhaps
@@ -417,11 +417,12 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         relative to ``s`` (a uniform piston of the same mass and length). Default None: the uniform
         piston, whose results a one-segment ``SteppedPiston`` reproduces to the bit.
     method : {"auto", "exact", "lattice"}
-        ``"auto"``: exact for a uniform or stepped piston, a massless bit, no feed and no
-        ``cells_per_piston`` (and
+        ``"auto"``: exact for a uniform or stepped piston, a bit with or without mass, no feed and
+        no ``cells_per_piston`` (and
         where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` (2000) of the shortest
         travel time, ``k / Z_b`` times the shortest travel time is at most ``1e6`` and its waves
-        need at most ``AUTO_MAX_PIECES`` (1e5) pieces), else the
+        need at most ``AUTO_MAX_PIECES`` (1e5) pieces in at most ``AUTO_MAX_POOL_BYTES`` (128 MiB;
+        a light bit's fast branches make long series)), else the
         lattice; an exact blow whose energy account does not close to ``1e-9`` is not taken
         either (auto: the lattice's instead; ``"exact"``: a ``RuntimeWarning``). A bit whose time
         constant ``m / Z_b`` (``Z_b`` the last rod segment's impedance) is at most ``1e-10`` of the
@@ -493,18 +494,25 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         piston_segments(piston)  # (checked before any choice is made)
     massless = law.bit_mass == 0.0 or _bit_is_negligible(model, law)
     exact = method == "exact" or (method == "auto" and (semi_infinite or (
-        law.feed == 0.0 and massless and cells_per_piston is None
-        and _exact_is_cheap(model, law, piston))))
+        law.feed == 0.0 and cells_per_piston is None and _exact_is_cheap(model, law, piston))))
     if semi_infinite and not exact:
         raise ValueError("semi_infinite=True needs method='exact' (or 'auto'); the lattice carries "
                          "the rod's finite length")
     segs = law.segments
     if exact:
+        from .exact import PoolOverflow
+
         auto = method == "auto" and not semi_infinite
-        blow = _exact_single_blow(model, law, impact_velocity, t_max, cells_per_piston, record_field,
-                                  semi_infinite, 0.0 if massless else law.bit_mass,
-                                  AUTO_MAX_PIECES if auto else None, piston)
-        bad = not blow.energy_error <= EXACT_ACCOUNT_TOLERANCE
+        try:
+            blow = _exact_single_blow(model, law, impact_velocity, t_max, cells_per_piston, record_field,
+                                      semi_infinite, 0.0 if massless else law.bit_mass,
+                                      AUTO_MAX_PIECES if auto else None, piston,
+                                      AUTO_MAX_POOL_BYTES if auto else None)
+        except PoolOverflow:
+            if not auto:
+                raise
+            blow = None  # a light bit's long series: the lattice
+        bad = blow is None or not blow.energy_error <= EXACT_ACCOUNT_TOLERANCE
         if not auto and (blow.ended_by == "failed" or not math.isfinite(blow.efficiency)):
             raise ValueError("method='exact': the blow's pieces overflowed (a rock far stiffer than the "
                              f"rod: k / Z_b = {law.rock.k / (model.s * law.segments[-1].impedance):.3g}); "
@@ -518,7 +526,9 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         try:  # waves broken into too many pieces (incommensurate segments, a slow soft rock)
             V, t_max, cells_per_piston = _check_blow_call(model, law, impact_velocity, t_max,
                                                           cells_per_piston, record_field, piston)
-        except ValueError:  # the lattice too costly: the exact blow's budget end stands
+        except ValueError:  # the lattice too costly: the exact blow's budget end stands (a failed
+            if bad:  # or unbalanced one never does: the lattice's reason is the answer)
+                raise
             return blow
     else:
         V, t_max, cells_per_piston = _check_blow_call(model, law, impact_velocity, t_max,
@@ -531,7 +541,7 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
 
 
 def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field, semi_infinite,
-                       bit_mass, max_pieces=None, piston=None):
+                       bit_mass, max_pieces=None, piston=None, max_pool_bytes=None):
     """:func:`single_blow` by the exact solver (checked arguments; ``cells_per_piston`` the samples
     per piston crossing time of the recorded arrays, default 32; ``bit_mass`` 0 for a negligible
     bit)."""
@@ -547,7 +557,7 @@ def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field
                                law.feed, t_max=t_max, semi_infinite=semi_infinite,
                                **({} if max_pieces is None else {"max_pieces": max_pieces}),
                                samples_per_piston=samples, record_field=bool(record_field),
-                               piston=piston)
+                               piston=piston, max_pool_bytes=max_pool_bytes)
 
 
 #: The largest force scale (``s V``, the feed) and the smallest nonzero bit mass a blow accepts: the
@@ -571,6 +581,10 @@ EXACT_ACCOUNT_TOLERANCE = 1e-9
 #: soft rock multiply the break points (each sum of travel times is one) until they cost more than
 #: the lattice's cells.
 AUTO_MAX_PIECES = 100_000
+
+#: The most memory ``method="auto"`` lets the exact solver's pieces take (a light bit's fast
+#: branches make long series; the blows tried need a few MiB) before it gives the blow to the lattice
+AUTO_MAX_POOL_BYTES = 2 ** 27
 
 #: A bit is negligible (taken as massless by the exact solver) when its time constant ``m / Z_b``
 #: against the last rod segment's impedance is at most this fraction of the shortest travel time and
