@@ -52,8 +52,8 @@ def row(d, drive, n):
     out["before"] = best(lambda: _plain_start(model, drive), reps)
     out["sim"] = (best(lambda: simulate(model, drive, start, 100.5 * o.period), reps),
                   best(lambda: simulate(model, ideal, start, 100.5 * oi.period), reps))
-    out["cont before"] = best(lambda: _cont_point(o, drive, forward=False), reps)
-    tc = best(lambda: _cont_point(o, drive, forward=True), reps)
+    out["cont before"] = min(_cont_point(o, drive, forward=False) for _ in range(reps))
+    tc = min(_cont_point(o, drive, forward=True) for _ in range(reps))
     t = time.perf_counter()
     bi = continue_orbit(oi, "switch_out", to=ideal.switch_out * 1.05, max_points=6, events=False)
     out["cont"] = (tc, (time.perf_counter() - t) / max(1, len(bi.orbits) - 1))
