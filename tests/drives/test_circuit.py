@@ -12,6 +12,7 @@ Checked against independent numbers:
   differences of the same flights, and a run restarted on the orbit staying on it.
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -202,6 +203,18 @@ def test_bad_input():
         simulate(RIGID, pumped().with_(rear_volume=0.02), InitialState.rigid(0.0, 0.0), 10.0)
     with pytest.raises(ValueError, match="singular"):  # a pump far too small: the supply collapses
         find_orbit(RIGID, pumped(pump_flow=0.001))
+    # a start above the oil's bulk modulus (70 here) ran 265 s before failing
+    with pytest.raises(ValueError, match="below the oil's bulk modulus 70"):
+        dataclasses.replace(pumped(), start_pressures=(1e8, 1e8, 1e8))
+
+
+def test_a_failing_flight_says_why_in_its_error_only(capsys):
+    """CVODE's failure reaches the caller as the ValueError's reason, not printed on stdout (the
+    binding prints its error handler's message there)."""
+    with pytest.raises(ValueError, match="could not be integrated \\(Convergence tests failed"):
+        circuit_flight(pumped(), RIGID, DriveState((1, 0, 1, 0), np.array([0.9, 0.9, -50.0, 1.0])), 0.0,
+                       np.array([-0.08]), np.array([0.0]), 50.0)
+    assert "cvHandleFailure" not in capsys.readouterr().out
 
 
 @pytest.mark.slow  # 40 s: a start from rest and some thirty continuation points

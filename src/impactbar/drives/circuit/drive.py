@@ -100,6 +100,7 @@ class HydraulicCircuitDrive(Drive):
         held supply, the tank pressure without an accumulator), the rear chamber at the tank
         pressure, the valve at the position the start's gap commands (with ``x_v`` given and away
         from it, the spool starts ramping there: an orbit's state after an impact, restarted).
+        Each pressure in ``[0, beta)``, ``beta`` the oil's bulk modulus.
 
     Raises
     ------
@@ -151,11 +152,13 @@ class HydraulicCircuitDrive(Drive):
                              "take oil)")
         if self.start_pressures is not None:
             sp = tuple(float(x) for x in self.start_pressures)
+            beta = self.oil.bulk_modulus
             if len(sp) not in (3, 4) or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
-                    or (len(sp) == 4 and sp[3] > 1.0):
+                    or (len(sp) == 4 and sp[3] > 1.0) or not all(x < beta for x in sp[:3]):
                 raise ValueError(f"start_pressures must be three finite pressures >= 0 (p_f, p_r, p_s), "
-                                 f"optionally with the valve opening x_v in [0, 1]; "
-                                 f"got {self.start_pressures!r}")
+                                 f"each below the oil's bulk modulus {beta:g} (past it the oil's "
+                                 f"compressibility law means nothing), optionally with the valve opening "
+                                 f"x_v in [0, 1]; got {self.start_pressures!r}")
             object.__setattr__(self, "start_pressures", sp)
 
     # -- parameters --------------------------------------------------------------------------------

@@ -22,6 +22,8 @@ apply the saltation there, Hiskens & Pai 2000).
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 
 import numpy as np
@@ -169,7 +171,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
                       np.eye(n) if variational else None)
     solver = _solver(par, settings, drive._directions(mode), y0.size, 200000)
-    sol = solver.solve(np.array([t, end]), y0)
+    with contextlib.redirect_stdout(io.StringIO()):  # scikit-sundae prints CVODE's errors: in sol.message
+        sol = solver.solve(np.array([t, end]), y0)
     if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
         raise ValueError(drive._failure(model, sol, t))
     ts = np.asarray(sol.t, dtype=float)
