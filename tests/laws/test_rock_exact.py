@@ -446,3 +446,40 @@ def test_auto_never_takes_an_unbalanced_exact_blow(segs, s, k, k_u, m, V):
     assert exact.energy_error > 1e-9
     auto = ib.single_blow(model, V)
     assert auto.method == "lattice" and auto.energy_error < 1e-12
+
+
+def test_a_feed_by_the_exact_method_ends_where_the_rock_may_still_yield():
+    """With a feed a lossless rod ringing on the rock may load it again at any time: ``method="exact"``
+    ends once the piston has gone and the rock is not loading (``"may_yield"``) instead of filling
+    2 GiB of wave pieces (21 s, then a message about a light bit for a massless one), and its
+    ``uncertainty`` bounds the rock work that a run carried on to a later ``t_max`` still finds
+    (here a second yield near t = 68, 0.018 of work, against a bound of 0.21)."""
+    model = _model([(0.75, 1.4), (2.25, 0.7)], 2.0, 12.0, s=2.0, feed=0.2)
+    blow = ib.single_blow(model, 1.0, method="exact")
+    assert blow.ended_by == "may_yield" and blow.method == "exact"
+    assert blow.rebound_velocity < 0.0 and blow.energy_error < 1e-12
+    assert blow.uncertainty > 0.0
+    ex = blow.exact
+    bound = ex.uncertainty * ex.available_energy
+    # the lattice up to the same instant (an independent solver): the same first loading
+    lattice = ib.single_blow(model, 1.0, method="lattice", cells_per_piston=64, t_max=blow.duration)
+    assert lattice.rock_dissipated == pytest.approx(blow.rock_dissipated, rel=1e-9)
+    assert lattice.permanent_penetration == pytest.approx(blow.permanent_penetration, rel=1e-9)
+    later = ib.single_blow(model, 1.0, method="exact", t_max=160.0)
+    assert later.ended_by == "t_max" and later.energy_error < 1e-12
+    n = ex.loadings.shape[0]
+    assert later.exact.loadings.shape[0] > n  # the rock did yield again
+    np.testing.assert_allclose(later.exact.loadings[:n], ex.loadings, rtol=1e-12, atol=1e-14)
+    more = later.exact.work_on_rock - ex.work_on_rock
+    assert 0.0 < more <= bound
+    # without a feed nothing changes: the end is certified as before
+    free = ib.single_blow(_model([(0.75, 1.4), (2.25, 0.7)], 2.0, 12.0, s=2.0), 1.0)
+    assert free.ended_by in ("separated", "lifted", "spent") and free.uncertainty == 0.0
+
+
+def test_a_massless_overflow_names_its_cause():
+    from impactbar.laws.rodrock.exact import PoolOverflow, exact_blow
+
+    with pytest.raises(PoolOverflow, match="broke into more pieces than that by t = .*give a t_max"):
+        exact_blow([0.5], [2.0], [1.5, 1.1], [1.4, 0.7], k=2.0, k_u=12.0, feed=0.2, impact_velocity=1.0,
+                   max_pool_bytes=10 ** 6, t_max=1000.0)

@@ -52,6 +52,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     INF,
     LIFTED,
     LOAD,
+    MAY_YIELD,
     RINGS,
     SEPARATED,
     SPENT,
@@ -650,6 +651,8 @@ def certify(ws, t):
     rem = psi if gone else psi + Ep
     if rem <= PR[9] * avail:
         return SPENT
+    if gone and f > 0.0 and br != LOAD and PR[18] == INF:  # the rock may yield to the ringing rod
+        return MAY_YIELD                                      # for ever (a caller's t_max: on to it)
     return GOING
 
 

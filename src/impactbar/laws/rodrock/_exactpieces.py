@@ -523,7 +523,7 @@ def first_negative(B, N, lam, BIN, L, stack, D, t0):
 INF = math.inf
 LOAD, ELASTIC, FREE = 0, 1, 2
 # end codes
-GOING, SEPARATED, LIFTED, SPENT, TMAX, BUDGET, RINGS, FAILED = 0, 1, 2, 3, 4, 5, 6, 7
+GOING, SEPARATED, LIFTED, SPENT, TMAX, BUDGET, RINGS, FAILED, MAY_YIELD = 0, 1, 2, 3, 4, 5, 6, 7, 8
 
 
 @numba.njit(cache=CACHE, nogil=True)

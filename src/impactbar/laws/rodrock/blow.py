@@ -118,7 +118,8 @@ class Blow:
     ended_by : str
         ``"energy"`` (the piston separated and the rod's wave energy below the fraction),
         ``"separated"`` (the piston separated for ``separation_time``, :func:`solve_blow`) or
-        ``"t_max"``.
+        ``"t_max"``; by the exact method those of
+        ``ExactBlow.ended_by`` (``impactbar.laws.rodrock.exact``).
     gap, shank_displacement : float
         At the end: the piston-shank gap (0 in contact) and the shank's displacement from its
         static position at impact.

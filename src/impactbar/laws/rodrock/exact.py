@@ -44,11 +44,18 @@ force scale on its time scale are dropped.
 - ``"spent"``: the energy that could still reach the rock (the rod's, the bit's and the rock's above
   the static state, and the piston's while it may strike again) is below ``1e-17`` of the available
   energy: no result can move by more;
+- ``"may_yield"`` (with a feed, no ``t_max``): the piston has gone for good and the rock is not
+  loading, but ``Psi`` could still load it past ``R_max``: under the feed a lossless rod ringing on
+  the rock may make it yield again at any later time, so no end is certain. The loading episodes so
+  far are reported, and ``uncertainty`` bounds the rock work still possible: each new yield lowers
+  ``Psi`` by its dissipation less the feed's work on the permanent advance, at least
+  ``1 - f / R_max`` of the dissipation, so the rock can still take at most
+  ``Psi R_max / (R_max - f)``;
 - ``"t_max"``: the horizon the caller gave;
 - ``"rings"``: the cost bound reached with the rock unable to yield but the piston's return not
   excluded (a lossless rod and piston touching again and again);
 - ``"budget"``: the cost bound reached otherwise (``uncertainty`` bounds what the rock could still
-  take).
+  take; with a feed, times ``R_max / (R_max - f)`` as for ``"may_yield"``).
 
 A semi-infinite rod (Lundberg's idealisation: the wave the bit reflects never returns) is the
 option ``semi_infinite=True``: the bit's reflected wave leaves the chain (its energy booked as
@@ -69,7 +76,7 @@ from . import _exactpieces as P
 __all__ = ["ExactBlow", "exact_blow", "exact_rod_rock_blow"]
 
 _END_NAMES = {P.SEPARATED: "separated", P.LIFTED: "lifted", P.SPENT: "spent", P.TMAX: "t_max",
-              P.BUDGET: "budget", P.RINGS: "rings", P.FAILED: "failed"}
+              P.BUDGET: "budget", P.RINGS: "rings", P.FAILED: "failed", P.MAY_YIELD: "may_yield"}
 _SPENT = 1e-17
 _TOL = 1e-19
 #: cost bounds of one blow (pieces stored, windows of the shortest travel time)
@@ -160,11 +167,12 @@ class ExactBlow:
     duration : float
         The time at which the end was established.
     ended_by : str
-        ``"separated"``, ``"lifted"``, ``"spent"``, ``"t_max"``, ``"rings"`` or ``"budget"`` (see
-        :mod:`impactbar.laws.rodrock.exact`).
+        ``"separated"``, ``"lifted"``, ``"spent"``, ``"may_yield"``, ``"t_max"``, ``"rings"`` or
+        ``"budget"`` (see :mod:`impactbar.laws.rodrock.exact`).
     uncertainty : float
-        Zero when the end is certified; otherwise the energy that could still reach the rock, over
-        the available energy: a bound on how much the efficiency could still grow.
+        Zero when the end is certified; otherwise a bound on the rock work still possible, over
+        the available energy (the energy that could still reach the rock, with a feed times
+        ``R_max / (R_max - f)``): how much the efficiency could still grow.
     loadings : numpy.ndarray, shape (n, 5)
         One row per loading episode (the rock yielding): start and end time, penetration at start
         and end, the work dissipated.
@@ -439,10 +447,13 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         pcap, tcap, ecap = 4 * pcap, 4 * tcap, 4 * ecap
         bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
         if pcap * 56 + tcap * 24 > bound:
-            raise PoolOverflow(
-                f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces "
-                f"(bit_mass = {m:g}: a light bit's fast branches make long series); use "
-                "method='lattice', or a bit_mass of 0 (the massless bit) or a heavier one")
+            why = (f"bit_mass = {m:g}: a light bit's fast branches make long series; use "
+                   "method='lattice', or a bit_mass of 0 (the massless bit) or a heavier one"
+                   if m > 0.0 else
+                   "the waves broke into more pieces than that by t = "
+                   f"{ws[25][0]:.6g}; give a t_max, or use method='lattice'")
+            raise PoolOverflow(f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces "
+                               f"({why})")
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
 
 
@@ -539,9 +550,9 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
                                     0.5 * (1.0 - k / k_u) * k * (p - BS[12]) * (p + BS[12])]]))
     ended = _END_NAMES.get(int(CI[1]), "failed")
     unc = 0.0
-    if ended in ("budget", "t_max", "rings"):
-        rem = CT[7] + (Ep if ended != "rings" else 0.0)
-        unc = rem / available if ended != "rings" else 0.0
+    if ended in ("budget", "t_max", "may_yield"):
+        rem = CT[7] + (Ep if ended != "may_yield" else 0.0)
+        unc = rem * _feed_gain(BS[4], fn) / available
     s2 = scale * scale
     loads[:, 2:4] *= scale
     loads[:, 4] *= s2
@@ -563,6 +574,16 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
         pieces=int(CNT[0]), windows=int(CI[2]),
         diagnostics={"searches_abandoned": int(CI[4]), "degree_limit": int(CI[7]), "terms": int(CNT[1])},
         _hist=hist)
+
+
+def _feed_gain(R_max, f):
+    """How much rock work the energy ``Psi`` above the static state can still buy under the feed
+    ``f``: at most ``R_max / (R_max - f)`` of it (each new yield from ``R_max`` on lowers ``Psi`` by
+    its dissipation less the feed's work on the permanent advance, at least ``1 - f / R_max`` of
+    it; theory §4d); 1 without a feed."""
+    if f <= 0.0:
+        return 1.0
+    return R_max / (R_max - f) if R_max > f else math.inf
 
 
 #: ``ended_by`` of a certified end (the blow's numbers are final): no contact, and no yield of the

@@ -387,9 +387,14 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     every switch a located root) and the blow runs until its end is certified (``ended_by``:
     ``"separated"``, the piston gone for good and the rock unable to yield again, the rod perhaps
     ringing on it; ``"lifted"``, the rod off the rock for good too; ``"spent"``, the energy that
-    could still reach the rock below 1e-17 of the available), no ``t_max`` needed. With a feed, or
-    a ``cells_per_piston``, the lattice of :mod:`impactbar.laws.rodrock.blow` (``method="lattice"``:
-    first order in the cell time, the bit's reflected wave stored as cell averages; to
+    could still reach the rock below 1e-17 of the available), no ``t_max`` needed. With a feed,
+    ``method="exact"`` ends once the piston has gone for good and the rock is not loading, if the
+    rod's ringing could still make the rock yield (``"may_yield"``: under the feed a lossless rod
+    may load it again at any later time; the loading episodes so far in ``Blow.loadings`` and
+    ``uncertainty`` bounding the rock work still possible), unless a ``t_max`` asks to go on. By
+    default, with a feed or a ``cells_per_piston``, the lattice of
+    :mod:`impactbar.laws.rodrock.blow` (``method="lattice"``: first order in the cell time,
+    the bit's reflected wave stored as cell averages; to
     ``t_max``, default 20 travel times through piston and rod, or until the rod's wave energy is
     spent).
 
