@@ -19,11 +19,13 @@ per length averaged over the cell): the work is then continuous in the boundarie
 of the exact blow of the stepped piston. The search is scipy's Nelder-Mead (derivative-free: the blow
 on the lattice is piecewise smooth, with kinks where the rock changes branch or the piston leaves the
 shank) on the work less a penalty on the stress above the limit, started at the uniform piston and
-restarted once from its result. Without a feed, the best design's blow is then solved by the exact
-solver (every wave of piston and rod a delay line, the boundaries where the search put them;
-:func:`~impactbar.single_blow`), and so is the uniform piston's; with a feed (or where the exact
-blow would pass its default's bounds) the boundaries are moved to whole cells (the segments'
-masses kept) and both blows are solved on the lattice. The better of the two feasible designs is
+restarted once from its result. The best design's blow is then solved by the exact solver over the
+same window (every wave of piston and rod a delay line, the boundaries where the search put them,
+a feed or a bit mass included; :func:`~impactbar.single_blow`), and so is the uniform piston's. With
+both a feed and a bit mass (the bit held on the rock rings on its unloading stiffness, whose
+switches the exact solver follows one by one: minutes on a stiff rock), or where the exact blow
+would pass its default's bounds, the boundaries are moved to whole cells (the segments' masses
+kept) and both blows are solved on the lattice. The better of the two feasible designs is
 returned, so that the result is never worse than the uniform
 piston.
 """
@@ -250,7 +252,6 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         return b.work_on_rock / b.energy_at_impact - PENALTY * excess, excess
 
     uniform = blow(None)
-    exact = f == 0.0
     count = [0]
     best_x = np.zeros(2 * n - 2)
     if n > 1:
@@ -270,9 +271,11 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
             best_x = np.clip(res.x, -BOUND, BOUND)
     lf, mf = _fractions(best_x, n)
     shaped = None
-    if exact:  # the design where the search put it, every wave exact
-        shaped = _exact_blow(v, seg, k, k_u, mb / m, T, N, SteppedPiston(lf, mf / lf) if n > 1 else None)
-        plain = _exact_blow(v, seg, k, k_u, mb / m, T, N, None) if shaped is not None else None
+    shaped = None
+    if f == 0.0 or mb == 0.0:  # the design where the search put it, every wave exact (a feed too)
+        shaped = _exact_blow(v, seg, k, k_u, mb / m, f / force_N, T, N,
+                             SteppedPiston(lf, mf / lf) if n > 1 else None)
+        plain = _exact_blow(v, seg, k, k_u, mb / m, f / force_N, T, N, None) if shaped is not None else None
         if plain is not None:
             uniform = plain
         else:
@@ -305,7 +308,7 @@ def _peak(b):
     return float(b.peak_forces()[0][0])
 
 
-def _exact_blow(v, seg, k, k_u, bit_mass, T, samples, piston):
+def _exact_blow(v, seg, k, k_u, bit_mass, feed, T, samples, piston):
     """The blow of ``piston`` (None: uniform) in the window ``T`` by the exact solver, sampled
     ``samples`` times a piston crossing; None where its pieces would pass the default's bounds or
     its energy account is not closed (:func:`~impactbar.single_blow`'s ``method="auto"``)."""
@@ -313,7 +316,7 @@ def _exact_blow(v, seg, k, k_u, bit_mass, T, samples, piston):
     from ..laws.rodrock.law import AUTO_MAX_PIECES, AUTO_MAX_POOL_BYTES, EXACT_ACCOUNT_TOLERANCE
 
     try:
-        b = exact_rod_rock_blow(1.0, v, *seg, k, k_u, bit_mass, 0.0, t_max=T, samples_per_piston=samples,
+        b = exact_rod_rock_blow(1.0, v, *seg, k, k_u, bit_mass, feed, t_max=T, samples_per_piston=samples,
                                 max_pieces=AUTO_MAX_PIECES, piston=piston, max_pool_bytes=AUTO_MAX_POOL_BYTES)
     except PoolOverflow:
         return None
