@@ -64,6 +64,7 @@ option ``semi_infinite=True``: the bit's reflected wave leaves the chain (its en
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -438,14 +439,16 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     PR[18] = math.inf if t_max is None else t_max
     PR[19] = max_windows
     PR[20], PR[21], PR[22], PR[23], PR[24] = fn / k, Tp.size, 0.0, 1.0 if record else 0.0, max_pieces
-    pcap, tcap, ecap = 4096, 16384, 64
+    bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
+    pcap, tcap, ecap = 16384, 65536, 256  # 2.5 MB (a pool too small runs the blow again, larger)
+    while pcap > 1024 and pcap * 56 + tcap * 24 > bound:
+        pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     while True:
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb)
         K.run(ws)
         if ws[24][0] == 0:
             break
         pcap, tcap, ecap = 4 * pcap, 4 * tcap, 4 * ecap
-        bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
         if pcap * 56 + tcap * 24 > bound:
             why = (f"bit_mass = {m:g}: a light bit's fast branches make long series; use "
                    "method='lattice', or a bit_mass of 0 (the massless bit) or a heavier one"
@@ -455,6 +458,17 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
             raise PoolOverflow(f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces "
                                f"({why})")
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
+
+
+@functools.cache
+def _binomials():
+    """``C(a, b)`` for ``a, b < P.DC`` (read only: shared by every blow)."""
+    out = np.zeros((P.DC, P.DC))
+    for a in range(P.DC):
+        for b in range(a + 1):
+            out[a, b] = math.comb(a, b)
+    out.flags.writeable = False
+    return out
 
 
 def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb):
@@ -496,10 +510,7 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     CHI[c, 1] = n
     n += 1
     CNT[0], CNT[1] = n, nt
-    BIN = np.zeros((P.DC, P.DC))
-    for a in range(P.DC):
-        for b in range(a + 1):
-            BIN[a, b] = math.comb(a, b)
+    BIN = _binomials()
     WB = np.zeros((16, lam.size, P.DC), dtype=complex)
     WN = np.zeros((16, lam.size), dtype=np.int64)
     STK = np.zeros((256, 4))
