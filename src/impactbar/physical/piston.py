@@ -271,7 +271,6 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
             best_x = np.clip(res.x, -BOUND, BOUND)
     lf, mf = _fractions(best_x, n)
     shaped = None
-    shaped = None
     if f == 0.0 or mb == 0.0:  # the design where the search put it, every wave exact (a feed too)
         shaped = _exact_blow(v, seg, k, k_u, mb / m, f / force_N, T, N,
                              SteppedPiston(lf, mf / lf) if n > 1 else None)

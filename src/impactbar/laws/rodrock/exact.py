@@ -89,7 +89,14 @@ MAX_POOL_BYTES = 2 ** 31
 
 class PoolOverflow(ValueError):
     """The exact blow's wave pieces would need more memory than its bound (a light bit's fast
-    branches make long series): the lattice is the method for such a blow."""
+    branches make long series; waves broken into very many pieces): the lattice is the method for
+    such a blow."""
+
+
+def _pool_bytes(pcap, tcap):
+    """The memory of a pool of ``pcap`` pieces (``PF``, ``PI``: 56 bytes each) and ``tcap`` terms
+    (``TK``, ``TC``: 24 bytes each) of :func:`_workspace`."""
+    return pcap * 56 + tcap * 24
 
 
 def _roots(m, Z, b):
@@ -441,7 +448,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     PR[20], PR[21], PR[22], PR[23], PR[24] = fn / k, Tp.size, 0.0, 1.0 if record else 0.0, max_pieces
     bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
     pcap, tcap, ecap = 16384, 65536, 256  # 2.5 MB (a pool too small runs the blow again, larger)
-    while pcap > 1024 and pcap * 56 + tcap * 24 > bound:
+    while pcap > 1024 and _pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     while True:
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb)
@@ -449,7 +456,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         if ws[24][0] == 0:
             break
         pcap, tcap, ecap = 4 * pcap, 4 * tcap, 4 * ecap
-        if pcap * 56 + tcap * 24 > bound:
+        if _pool_bytes(pcap, tcap) > bound:
             why = (f"bit_mass = {m:g}: a light bit's fast branches make long series; use "
                    "method='lattice', or a bit_mass of 0 (the massless bit) or a heavier one"
                    if m > 0.0 else
