@@ -132,9 +132,9 @@ class BarModel:
             return
         if not self._law.stepped_piston:
             raise ValueError(
-                f"piston: a stepped piston's modes are supported under the paper's law only (got impact = "
-                f"{self._law.name!r}): the wave and rod-rock laws carry a uniform bar by characteristics; "
-                "a stepped piston's blow on a rod is single_blow(..., piston=...)")
+                f"piston: a stepped piston's modes are supported under the paper's and the rod-rock laws "
+                f"(got impact = {self._law.name!r}): the wave law carries a uniform bar by "
+                "characteristics")
         sticking = piston.sticking_basis(self.n_modes)
         modes = sticking.free
         ends = modes.shapes(np.array([0.0, 1.0]))  # (2, N + 1)

@@ -321,8 +321,8 @@ def check_piston(bar, stepped_ok: bool, law: str = "") -> None:
     if isinstance(bar, SteppedBar) and not stepped_ok:
         raise ValueError(
             f"bar: a stepped piston (bar.length a list of segments) is supported under the paper's impact "
-            f"law only; got {law or 'another law'} (its blow on a rod and the rock: "
-            "impactbar.single_blow(..., piston=...), its design: impactbar.physical.optimize_piston)")
+            f"law and the rod-rock law (a [rock] section); got {law or 'another law'} (the wave law "
+            "carries a uniform piston by characteristics)")
 
 
 def _positive(name, v):

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .._shared.validate import check_int, check_real
-from ..laws import LAWS
+from ..laws import LAWS, RodRock
 from ..loads import FourierLoad, Load
 from ..model import BarModel
 from .bar import (
@@ -81,7 +81,8 @@ class Hammer:
     Parameters
     ----------
     bar : Bar or SteppedBar
-        The piston: uniform, or of uniform segments (theory §12; under the paper's impact law only).
+        The piston: uniform, or of uniform segments (theory §12; under the paper's impact law or,
+        with a ``drill``, the rod-rock law).
     frequency_Hz : float
         Drive frequency ``f`` (Hz), the frequency of the force cycle, ``> 0``.
     force : PneumaticForce, HydraulicForce or MeasuredForce
@@ -155,7 +156,8 @@ class Hammer:
             object.__setattr__(self, "impact", "rodrock")
         elif self.impact not in LAWS:
             raise ValueError(f"model.impact must be one of {list(LAWS)}; got {self.impact!r}")
-        check_piston(self.bar, self.drill is None and LAWS[self.impact].stepped_piston,
+        law = RodRock if self.drill is not None else LAWS[self.impact]
+        check_piston(self.bar, law.stepped_piston,
                      f"impact = {self.impact!r}")
         if isinstance(self.force, MeasuredForce):
             self._measured  # noqa: B018  (fit the series now: a bad curve fails here, not later)

@@ -103,8 +103,10 @@ class DrillString:
         """The dimensionless law for a piston ``bar`` (:class:`~impactbar.physical.Bar`) and the
         hammer's ``scales`` (:class:`~impactbar.physical.Scales`): lengths in piston lengths,
         impedances and wave speeds relative to the piston's, ``k = K / (m Omega^2)``, the bit's mass
-        in piston masses, the feed in ``m L Omega^2`` (theory §1, §4d)."""
-        z_p = bar.E_Pa * bar.area_m2 / bar.wave_speed_m_s
+        in piston masses, the feed in ``m L Omega^2`` (theory §1, §4d). The piston's impedance is
+        its mean, ``m c / L`` (a stepped piston's rod impedances stay relative to the uniform
+        piston of the same mass and length, theory §12)."""
+        z_p = bar.mass_kg * bar.wave_speed_m_s / bar.length_m
         m = bar.mass_kg
         om2 = scales.omega_rad_s ** 2
         segs = [RodSegment(length=g.length_m / bar.length_m, impedance=g.impedance_kg_s / z_p,

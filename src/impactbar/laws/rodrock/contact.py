@@ -5,7 +5,8 @@ impact -> a blow on the cell grid with the drive acting -> the piston's modal st
    gives the Riemann invariants ``alpha = v + N/s``, ``beta = v - N/s`` with the static correction
    that carries the drive's force ``p(t0)`` at ``x = 0`` (theory §4c;
    :mod:`impactbar.dynamics.invariants`); each piston cell gets their exact cell averages, ``F = s alpha/2``,
-   ``G = -s beta/2``.
+   ``G = -s beta/2``. A stepped piston (theory §12): its modes' exact cell averages and the static
+   correction of the modes it drops, on cells of its segments' impedances (:func:`_stepped_maps`).
 2. **The blow** (:func:`~impactbar.laws.rodrock.blow.solve_blow`, the compiled rock kernel): the drive
    acts on the piston's far end as its **average over each step** (a piecewise-constant drive on
    the cell grid, exact in impulse per step; the work booked is the averaged drive's). With the cell
@@ -15,7 +16,8 @@ impact -> a blow on the cell grid with the drive acting -> the piston's modal st
    neglected inside the blow, as in the wave law's window.
 3. **The piston after the blow.** Its cells' fields are projected on the ``N + 1`` free-free modes
    exactly (piecewise-constant fields: ``q_n' = int v cos(n pi x)``, ``q_n = int N sin(n pi x) /
-   (s^2 n pi)``); the energy the truncation drops is a change of basis (the run's ``projection``).
+   (s^2 n pi)``; a stepped piston's by :func:`_stepped_maps`); the energy the truncation drops is
+   a change of basis (the run's ``projection``).
 4. **Between blows the rod rests on the rock.** The rod's residual waves and the bit's motion at
    the blow's end are discarded (their energy, ``Blow.rod_energy`` above the static one, is part of
    the energy the piston lost to the rod); the next blow finds the rod at rest under the feed and
@@ -200,13 +202,18 @@ def _modal(model, n_p: int, blow: Blow, end_position: float):
     are constant on cells), ``q_0`` such that the struck end is at ``end_position``."""
     s = float(model.s)
     F, G = blow.piston_waves
-    v, N = (F - G) / s, F + G  # velocity and compressive force on each cell
+    # momentum density (mass per length times velocity: the velocity on a uniform piston) and
+    # compressive force on each cell
+    v, N = (F - G) / s, F + G
     M = model.n_modes + 1
     qv = np.empty(M)
     q = np.zeros(M)
     qv[0] = float(np.sum(v)) / n_p
     if M > 1:
-        Pv, Pq = _projection(s, n_p, M)
+        if model.piston is None:
+            Pv, Pq = _projection(s, n_p, M)
+        else:
+            Pv, Pq = _stepped_maps(s, model.piston, n_p, M)[2:]
         qv[1:] = Pv @ v
         q[1:] = Pq @ N
     c = model.end_weights
@@ -236,6 +243,76 @@ def _field_basis(s: float, n_p: int, M: int):
     f = waves(z, z, 1.0)
     f.flags.writeable = False
     return A, f
+
+
+@functools.lru_cache(maxsize=32)
+def _stepped_maps(s: float, piston, n_p: int, M: int):
+    r"""A stepped piston's maps between its modal state and its cell fields (theory §12), the
+    stepped counterparts of :func:`_field_basis` and :func:`_projection`.
+
+    With :math:`u = \sum_n q_n \psi_n`, :math:`\psi_n = \phi_n(0)\phi_n` (the model's
+    convention, ``BarModel.shape_functions``), :math:`\kappa_n = \phi_n(0)^2`, the mass per length
+    :math:`\mu` of each cell (``Z / s``, piston mass 1) and :math:`EA = s^2 \mu`:
+
+    - at impact, the cell averages :math:`\bar v_i = \sum_n q_n' \int_i \psi_n / \Delta` and
+      :math:`\bar N_i = -s^2 \mu_i \sum_{n \ge 1} (q_n - p/\omega_n^2)\,[\psi_n]_i / \Delta
+      + p\,(1 - \bar m_i)` with the drive's force :math:`p` at :math:`x = 0`: the modes kept plus the
+      static correction of the modes dropped, their inertia-relief strain :math:`-p (1 - m(x)) /
+      (s^2 \mu)` (``m`` the mass from the driven end, :math:`\bar m_i` its cell average) less its
+      first ``N`` modal terms (as :class:`~impactbar.dynamics.invariants._Piston` on the uniform bar);
+      waves ``F = (N + Z v)/2``, ``G = (N - Z v)/2``;
+    - after the blow, the exact projections of piecewise-constant fields,
+      :math:`q_n' = \sum_i \mu_i v_i \int_i \psi_n / \kappa_n` and (integrating
+      :math:`\int \mu u \psi_n` by parts with the mode's equation and its free ends)
+      :math:`q_n = -\sum_i N_i [\psi_n]_i / (\kappa_n \omega_n^2)`.
+
+    Each cell takes the expression of the segment holding its middle (a boundary rounded to whole
+    cells: ``BlowGrid.length_error``).
+
+    Returns
+    -------
+    A : numpy.ndarray, shape (2 n_p, 2 M)
+        The cell waves ``(F, G)`` of the modal state ``(q, q')``.
+    f : numpy.ndarray, shape (2 n_p,)
+        Those of a unit drive force at ``x = 0``.
+    Pv, Pq : numpy.ndarray, shape (M - 1, n_p)
+        ``q_n'`` of the cells' momentum densities ``(F - G)/s`` and ``q_n`` of their forces
+        ``F + G``, ``n >= 1``.
+    """
+    from ._piston import piston_cells
+
+    modes = piston.modes(M - 1)
+    k = modes.wavenumbers[1:]
+    w2 = (s * k) ** 2
+    phi0 = modes.shapes(np.zeros(1))[0, 1:]
+    kappa = phi0 * phi0
+    xe = np.arange(n_p + 1) / n_p
+    _, Z = piston_cells(s, piston.lengths, piston.mass_per_length, n_p)
+    mu = Z / s
+    seg = np.clip(np.searchsorted(piston.starts, 0.5 * (xe[:-1] + xe[1:]), side="right") - 1, 0,
+                  piston.n_segments - 1)
+    amp = modes.amplitudes[1:, seg]  # (M - 1, n_p, 2)
+    a, b = amp[..., 0] * phi0[:, None], amp[..., 1] * phi0[:, None]
+    kk = k[:, None]
+    xl = xe[None, :-1] - piston.starts[seg][None, :]
+    xr = xl + 1.0 / n_p
+    jump = a * (np.cos(kk * xr) - np.cos(kk * xl)) + b * (np.sin(kk * xr) - np.sin(kk * xl))  # [psi]_i
+    area = (a * (np.sin(kk * xr) - np.sin(kk * xl)) - b * (np.cos(kk * xr) - np.cos(kk * xl))) / kk
+    m_edges = np.concatenate(([0.0], np.cumsum(mu) / n_p))
+    m_bar = 0.5 * (m_edges[:-1] + m_edges[1:])
+    # the cell averages of v and N as maps of (q, q') and of p
+    Vq = np.concatenate((np.ones((n_p, 1)), (area * n_p).T), axis=1)  # (n_p, M), of q'
+    Nq = np.concatenate((np.zeros((n_p, 1)), -(s * s) * mu[:, None] * (jump * n_p).T), axis=1)  # of q
+    Np = (1.0 - m_bar) - Nq[:, 1:] @ (1.0 / w2)
+    A = np.zeros((2 * n_p, 2 * M))
+    A[:n_p, :M], A[:n_p, M:] = 0.5 * Nq, 0.5 * Z[:, None] * Vq
+    A[n_p:, :M], A[n_p:, M:] = 0.5 * Nq, -0.5 * Z[:, None] * Vq
+    f = np.concatenate((0.5 * Np, 0.5 * Np))
+    Pv = area / kappa[:, None]
+    Pq = -jump / (kappa * w2)[:, None]
+    for arr in (A, f, Pv, Pq):
+        arr.flags.writeable = False
+    return A, f, Pv, Pq
 
 
 def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
@@ -268,8 +345,8 @@ def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None =
 
 
 @functools.lru_cache(maxsize=32)
-def _grid_for(s, lengths, impedances, speeds, cells_per_piston):
-    return blow_grid(s, lengths, impedances, speeds, cells_per_piston)
+def _grid_for(s, lengths, impedances, speeds, cells_per_piston, piston=None):
+    return blow_grid(s, lengths, impedances, speeds, cells_per_piston, piston)
 
 
 class BlowMap:
@@ -291,7 +368,7 @@ class BlowMap:
         self.s = s = float(model.s)
         segs = law.segments
         self.grid = grid = _grid_for(s, tuple(g.length for g in segs), tuple(g.impedance for g in segs),
-                                     tuple(g.wave_speed for g in segs), cells_per_piston)
+                                     tuple(g.wave_speed for g in segs), cells_per_piston, model.piston)
         self.n_p, dt = grid.piston_cells, grid.cell_time
         self.p_end = float(np.asarray(load(np.array([self.t0])), dtype=float)[0])
         if duration is None:
@@ -304,7 +381,10 @@ class BlowMap:
         """The piston's waves at impact on the grid, ``(F, G)`` of shape ``(cells,)`` each (the rod's
         zero): the modal sums plus the static correction, cell-averaged (:func:`_field_basis`)."""
         n_p = self.n_p
-        A, f = _field_basis(self.s, n_p, self.model.n_modes + 1)
+        if self.model.piston is None:
+            A, f = _field_basis(self.s, n_p, self.model.n_modes + 1)
+        else:
+            A, f = _stepped_maps(self.s, self.model.piston, n_p, self.model.n_modes + 1)[:2]
         w = self.p_end * f + A @ np.concatenate((q, v))
         F = np.zeros(self.grid.Z.size)
         G = np.zeros(self.grid.Z.size)

@@ -157,6 +157,10 @@ class RodRock(ContactLaw):
     flight_starts_on_stop = False
     uses_restitution = False
     has_phase_equation = False
+    #: a stepped piston (``BarModel(..., piston=...)``, theory §12): its modal state becomes the
+    #: cells of its segments' impedances at impact and is projected back on its modes after the blow
+    #: (:func:`~impactbar.laws.rodrock.contact._stepped_maps`)
+    stepped_piston = True
     #: the law's continuation parameters, in its units: the rock's loading and unloading stiffnesses
     #: (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's mass, the feed force, and
     #: ``"segment<i>.length"`` (``i`` from 0 at the shank; the default ``blow_time`` follows the
@@ -211,7 +215,7 @@ class RodRock(ContactLaw):
             T = 4.0 / model.s + 2.0 * sum(g.travel_time(model) for g in self.segments)
         segs = self.segments
         dt = _grid_for(float(model.s), tuple(g.length for g in segs), tuple(g.impedance for g in segs),
-                       tuple(g.wave_speed for g in segs), None).cell_time
+                       tuple(g.wave_speed for g in segs), None, model.piston).cell_time
         return whole_steps(T, dt) * dt
 
     def impact_map(self, model, load, t, y_minus):
@@ -497,6 +501,10 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         from ._piston import piston_segments
 
         piston_segments(piston)  # (checked before any choice is made)
+        if model.piston is not None and piston != model.piston:
+            raise ValueError(f"piston: the model's is {model.piston!r}, the call's {piston!r}; give one "
+                             "(or the same)")
+    piston = model.piston if piston is None else piston
     massless = law.bit_mass == 0.0 or _bit_is_negligible(model, law)
     exact = method == "exact" or (method == "auto" and (semi_infinite or (
         law.feed == 0.0 and cells_per_piston is None and _exact_is_cheap(model, law, piston))))
