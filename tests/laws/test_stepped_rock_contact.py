@@ -182,6 +182,12 @@ def test_a_stepped_pistons_orbit_is_the_settled_motion():
                       t0 + 2 * np.pi * 4, t0=t0)
     np.testing.assert_allclose(np.mod(run.impact_times, 2 * np.pi), orbit.phases[0], atol=1e-9)
     np.testing.assert_allclose(run.impact_velocities, orbit.impact_velocities[0], rtol=1e-9)
+    # followed in the rock's stiffness: the branch's end is the orbit found there afresh
+    branch = ib.continue_orbit(orbit, "rock.k", 24.0)
+    assert branch.status == "reached"
+    there = model.with_(impact=model.law.with_parameter("rock.k", 24.0))
+    fresh = ib.find_orbit(there, load, impacts=1, periods=1, guess=tr)
+    assert branch.orbits[-1].impact_velocities[0] == pytest.approx(fresh.impact_velocities[0], rel=1e-8)
     # the head's section against the uniform piston's: not the same motion
     uniform = ib.find_orbit(model.with_(piston=None), load, impacts=1, periods=1, guess=tr)
     assert abs(uniform.impact_velocities[0] - orbit.impact_velocities[0]) > 1e-3
