@@ -212,6 +212,7 @@ def test_segment_log_truncate_drops_exactly_the_later_chatter_states():
     assert sorted(log.frozen) == [1]
 
 
+@pytest.mark.slow  # about 20 s (a new process compiles its kernels): run by .ci/run
 def test_numba_cache_unwritable_falls_back_to_memory(tmp_path):
     script = textwrap.dedent("""
         import numba.core.caching as C

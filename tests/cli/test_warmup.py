@@ -4,6 +4,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 #: first calls of every kind a user makes, in a new process: the names of the kernels numba compiles
 _FIRST_CALLS = r"""
 import numpy as np
@@ -42,6 +44,7 @@ print(compiled)
 """
 
 
+@pytest.mark.slow  # about 3 minutes (every kernel compiled into an empty cache): run by .ci/run
 def test_after_warmup_a_new_process_compiles_nothing(tmp_path):
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"))
     cmd = [sys.executable, "-m", "impactbar.cli", "warmup"]

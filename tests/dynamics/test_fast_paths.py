@@ -802,6 +802,7 @@ print(x.tobytes().hex())
 """
 
 
+@pytest.mark.slow  # about 20 s (two new processes compile the sweeps): run by .ci/run
 def test_compiled_aberth_does_not_depend_on_the_process_history(tmp_path):
     """The fast-math Aberth sweeps compile to the same machine code whatever the process compiled
     before: after the rigid sweep chunk, the multipliers' iterates came out different in their last
