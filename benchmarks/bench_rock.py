@@ -8,6 +8,10 @@
    of impedance 2 on a soft rock, from a simulation) against the wave law's orbit of the same bar
    with the same rod's restitution ``R = 1/3`` (``find_orbit``, 2 impacts in 2 periods, from a
    simulation), the simulations outside the timing. Goal: <= 10x.
+3. A stepped piston under the rod-rock law (issue 44: its modal state to cells of its segments'
+   impedances and back): one contact step, ``simulate`` over 100 time units and ``find_orbit``
+   (1 blow a period, from a settled simulation) of a heavy-headed piston (sections 1 and 2,
+   ``SteppedPiston([0.6, 0.4], [1, 2])``), against the uniform piston of the same mass in the same run.
 
 Run: ``python benchmarks/bench_rock.py [--quick]``. Prints a table; nothing is asserted.
 """
@@ -64,6 +68,29 @@ def main(argv=None):
         print(f"{name:40s} {1e3 * t:10.3f} {n:6d}")
     print(f"energy error {blow.energy_error:.2e}, efficiency {blow.efficiency:.4f}")
     orbits(repeat)
+    stepped(repeat)
+
+
+def stepped(repeat):
+    """Section 3: a stepped piston under the rod-rock law against the uniform piston."""
+    from impactbar.laws.rodrock.contact import rock_contact
+
+    law = ib.RodRock(segments=[ib.RodSegment(length=2.0, impedance=2.0)],
+                     rock=ib.BilinearRock(k=20.0, k_u=200.0))
+    head = ib.SteppedPiston([0.6, 0.4], [1.0, 2.0])
+    load = ib.CosineLoad(0.3, 1.0)
+    start = ib.InitialState.rigid(-0.1, 0.0, n_modes=4)
+    print(f"\n{'N = 4, one blow a period':28s} {'contact ms':>10s} {'simulate, t<=100, ms':>20s} "
+          f"{'find_orbit ms':>14s} {'blows/100':>9s}")
+    for name, piston in (("uniform piston", None), ("stepped piston (2 segments)", head)):
+        model = ib.BarModel(s=10.0, d=0.3, R=0.0, n_modes=4, impact=law, piston=piston)
+        guess = ib.simulate(model, load, start, 600.0)
+        b = guess.impacts[-1]
+        t_c = median_time(lambda m=model, b=b: rock_contact(m, load, b.t0, b.q_before, b.v_before), repeat)
+        t_s = median_time(lambda m=model: ib.simulate(m, load, start, 100.0), repeat)
+        t_o = median_time(lambda m=model, g=guess: ib.find_orbit(m, load, 1, 1, guess=g), repeat)
+        n = ib.simulate(model, load, start, 100.0).n_impacts
+        print(f"{name:28s} {1e3 * t_c:10.3f} {1e3 * t_s:20.1f} {1e3 * t_o:14.1f} {n:9d}")
 
 
 def orbits(repeat):
