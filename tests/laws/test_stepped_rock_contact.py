@@ -191,3 +191,20 @@ def test_a_stepped_pistons_orbit_is_the_settled_motion():
     # the head's section against the uniform piston's: not the same motion
     uniform = ib.find_orbit(model.with_(piston=None), load, impacts=1, periods=1, guess=tr)
     assert abs(uniform.impact_velocities[0] - orbit.impact_velocities[0]) > 1e-3
+
+
+@pytest.mark.parametrize("piston, bit_mass, feed", [(None, 0.0, 0.0), (THREE, 0.3, 0.5)])
+def test_the_impact_maps_lean_blow_is_the_contact_record(piston, bit_mass, feed):
+    """``BlowMap.__call__`` (the impact map's blows, without their record) gives the state after the
+    blow of :meth:`BlowMap.contact`'s record, for a uniform and a stepped piston, with a bit mass and
+    a feed."""
+    law = _law(length=2.0, impedance=2.0, bit_mass=bit_mass, feed=feed)
+    model = ib.BarModel(s=10.0, d=0.3, R=0.0, n_modes=4, impact=law, piston=piston)
+    rng = np.random.default_rng(1)
+    y = np.concatenate((rng.normal(size=5) * 0.001, [1.2], rng.normal(size=4) * 0.05))
+    bm = BlowMap(model, ib.CosineLoad(0.3, 1.0), 0.7)
+    q = y[:5].copy()
+    q[0] -= model.end_weights @ q
+    rec = bm.contact(q, y[5:])
+    assert rec.blow.permanent_penetration > 0.0 and rec.blow.gap > 0.0  # a blow that left the shank
+    np.testing.assert_array_equal(bm(y), np.concatenate((rec.q_after, rec.v_after)))

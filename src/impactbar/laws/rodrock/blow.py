@@ -521,39 +521,19 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     whatever the energy (a state inside a blow). The result's ``piston_waves`` are the piston's
     final ``(F, G)``, ``gap`` the piston-shank gap and ``shank_displacement`` the shank's dynamic
     displacement at the end."""
-    s, dt, n_p, Z, bounds = grid.s, grid.cell_time, grid.piston_cells, grid.Z, grid.bounds
+    s, dt, n_p, Z = grid.s, grid.cell_time, grid.piston_cells, grid.Z
     F = np.array(F, dtype=float)
     G = np.array(G, dtype=float)
     E0 = float(np.sum((F[:n_p] ** 2 + G[:n_p] ** 2) / Z[:n_p])) * dt
     _check_blow_size(grid.Z.size, (t_max / dt if n_steps is None else n_steps), record_field)
     n_max = whole_steps(t_max, dt) if n_steps is None else max(1, int(n_steps))
     stop = energy_fraction * E0 if n_steps is None else -1.0
-    drive = np.zeros(n_max) if drive is None else np.ascontiguousarray(drive[:n_max], dtype=float)
-    if drive.size < n_max:
-        raise ValueError(f"drive must have at least {n_max} steps; got {drive.size}")
-    bit = _Bit(float(Z[-1]), k, k_u, bit_mass, feed)
-    if bit_state is not None:
-        bit.p, bit.w = float(bit_state[0]), float(bit_state[1])
-        if bit.p < 0.0:
-            bit.branch, bit.p_max, bit.R_max, bit.p_perm = _FREE, 0.0, 0.0, 0.0
-        else:
-            bit.p_max, bit.R_max = bit.p, k * bit.p
-            bit.p_perm = bit.p_max - bit.R_max / k_u
+    bit = _start_bit(Z, k, k_u, bit_mass, feed, bit_state)
     p_start = bit.p
     static = grid.static * feed * feed
-    from ...dynamics.implementations import use_fast
-
-    loop = _compiled_loop if use_fast("rock.blow") else _python_loop
-    quiet = 0 if separation_time is None else max(1, math.ceil(separation_time / dt))
-    F, G, junc, bitf, pen, fld, acc = loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, float(gap), drive,
+    F, G, junc, bitf, pen, fld, acc = _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap,
                                            record_field)
     u_shank, grid_loss, ended, gap, drive_work = acc
-    if bit.branch == _LOAD and bit.p > bit.p_max:
-        # the window ended while the bit still advanced into the rock: its largest penetration is the
-        # last, and what would stay of it the unloading line from there (issue 42: they were those of
-        # the last unloading, 0 on a first loading)
-        bit.p_max, bit.R_max = bit.p, bit.k * bit.p
-        bit.p_perm = bit.p_max - bit.R_max / bit.k_u
     shank = junc[:, 0]
     n = shank.size
     e = (F * F + G * G) / Z * dt
@@ -575,6 +555,55 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
         length_error=grid.length_error, drive_work=drive_work, gap=gap, shank_displacement=u_shank,
         piston_waves=(F[:n_p].copy(), G[:n_p].copy()), rod_waves=(F[n_p:].copy(), G[n_p:].copy()),
         bit_velocity=bit.w, rock_stored_energy=_rock_stored(float(bitf[-1]), bit.k_u))
+
+
+def _start_bit(Z, k, k_u, bit_mass, feed, bit_state) -> _Bit:
+    """The bit at the blow's start (:func:`solve_blow`'s ``bit_state``)."""
+    bit = _Bit(float(Z[-1]), k, k_u, bit_mass, feed)
+    if bit_state is not None:
+        bit.p, bit.w = float(bit_state[0]), float(bit_state[1])
+        if bit.p < 0.0:
+            bit.branch, bit.p_max, bit.R_max, bit.p_perm = _FREE, 0.0, 0.0, 0.0
+        else:
+            bit.p_max, bit.R_max = bit.p, k * bit.p
+            bit.p_perm = bit.p_max - bit.R_max / k_u
+    return bit
+
+
+def _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap, record_field):
+    """The blow's loop (compiled, or numpy's under ``use_reference("rock.blow")``) over at most
+    ``n_max`` steps from the waves ``F, G`` (copied), the bit ``bit`` updated in place; the bit's
+    largest and permanent penetrations taken at the end if it was still advancing. Returns the
+    loop's ``(F, G, junctions, bit forces, penetrations, field, accounts)``."""
+    from ...dynamics.implementations import use_fast
+
+    dt = grid.cell_time
+    drive = np.zeros(n_max) if drive is None else np.ascontiguousarray(drive[:n_max], dtype=float)
+    if drive.size < n_max:
+        raise ValueError(f"drive must have at least {n_max} steps; got {drive.size}")
+    loop = _compiled_loop if use_fast("rock.blow") else _python_loop
+    quiet = 0 if separation_time is None else max(1, math.ceil(separation_time / dt))
+    out = loop(F, G, grid.Z, grid.bounds, bit, dt, n_max, stop, quiet, float(gap), drive, record_field)
+    if bit.branch == _LOAD and bit.p > bit.p_max:
+        # the window ended while the bit still advanced into the rock: its largest penetration is the
+        # last, and what would stay of it the unloading line from there (issue 42: they were those of
+        # the last unloading, 0 on a first loading)
+        bit.p_max, bit.R_max = bit.p, bit.k * bit.p
+        bit.p_perm = bit.p_max - bit.R_max / bit.k_u
+    return out
+
+
+def blow_end(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, n_steps: int):
+    """What the next flight needs of a blow of exactly ``n_steps`` steps (the simulator's impact map,
+    :class:`~impactbar.laws.rodrock.contact.BlowMap`), by the same loop as :func:`solve_blow` and
+    without its record: the piston's final waves ``(F, G)`` (shape ``(piston cells,)`` each), the
+    piston-shank gap, the shank's displacement and the bit's permanent penetration, the same numbers
+    as the :class:`Blow` of ``solve_blow(..., n_steps=n_steps)``."""
+    n_p = grid.piston_cells
+    bit = _start_bit(grid.Z, k, k_u, bit_mass, feed, None)
+    F, G, *_, acc = _run(grid, np.array(F, dtype=float), np.array(G, dtype=float), drive, bit,
+                         max(1, int(n_steps)), -1.0, None, 0.0, False)
+    return F[:n_p], G[:n_p], acc[3], acc[0], bit.p_perm
 
 
 def _rock_stored(R, k_u) -> float:

@@ -44,7 +44,7 @@ import math
 import numpy as np
 
 from ...dynamics.invariants import _Piston
-from .blow import Blow, blow_grid, solve_blow, whole_steps
+from .blow import Blow, blow_end, blow_grid, solve_blow, whole_steps
 
 __all__ = ["BlowMap", "RockContact", "rock_contact"]
 
@@ -200,25 +200,36 @@ def _projection(s: float, n_p: int, M: int):
 def _modal(model, n_p: int, blow: Blow, end_position: float):
     """The piston's final cell fields of ``blow`` projected on the model's modes (exactly: the fields
     are constant on cells), ``q_0`` such that the struck end is at ``end_position``."""
-    s = float(model.s)
     F, G = blow.piston_waves
-    # momentum density (mass per length times velocity: the velocity on a uniform piston) and
-    # compressive force on each cell
-    v, N = (F - G) / s, F + G
+    return _project(model, n_p, F, G, end_position, model.end_weights)
+
+
+def _project(model, n_p: int, F, G, end_position: float, c):
+    """:func:`_modal` of the piston's waves ``F, G`` (shape ``(n_p,)`` each), ``c`` the model's
+    ``end_weights``."""
     M = model.n_modes + 1
-    qv = np.empty(M)
-    q = np.zeros(M)
-    qv[0] = float(np.sum(v)) / n_p
-    if M > 1:
-        if model.piston is None:
-            Pv, Pq = _projection(s, n_p, M)
-        else:
-            Pv, Pq = _stepped_maps(s, model.piston, n_p, M)[2:]
-        qv[1:] = Pv @ v
-        q[1:] = Pq @ N
-    c = model.end_weights
+    r = _projector(float(model.s), model.piston, n_p, M) @ np.concatenate((F, G))
+    q = np.empty(M)
+    qv = r[:M].copy()
+    q[1:] = r[M:]
     q[0] = end_position - float(c[1:] @ q[1:])
     return q, qv
+
+
+@functools.lru_cache(maxsize=32)
+def _projector(s: float, piston, n_p: int, M: int) -> np.ndarray:
+    """The matrix, shape ``(2 M - 1, 2 n_p)``, taking the piston's cell waves ``(F, G)`` to
+    ``(q', q_1..q_N)``: ``q_0' = sum (F - G) / (s n_p)`` (the momentum), then the projections of
+    the momentum densities ``(F - G)/s`` and the forces ``F + G`` (:func:`_projection`, or
+    :func:`_stepped_maps` for a stepped piston)."""
+    P = np.zeros((2 * M - 1, 2 * n_p))
+    P[0, :n_p], P[0, n_p:] = 1.0 / (s * n_p), -1.0 / (s * n_p)
+    if M > 1:
+        Pv, Pq = _projection(s, n_p, M) if piston is None else _stepped_maps(s, piston, n_p, M)[2:]
+        P[1:M, :n_p], P[1:M, n_p:] = Pv / s, -Pv / s
+        P[M:, :n_p], P[M:, n_p:] = Pq, Pq
+    P.flags.writeable = False
+    return P
 
 
 @functools.lru_cache(maxsize=32)
@@ -376,6 +387,7 @@ class BlowMap:
         self.n_max = whole_steps(duration, dt)
         self.drive = _drive_averages(load, self.t0, dt, self.n_max)
         self.params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
+        self._c = model.end_weights
 
     def fields(self, q, v):
         """The piston's waves at impact on the grid, ``(F, G)`` of shape ``(cells,)`` each (the rod's
@@ -412,9 +424,18 @@ class BlowMap:
 
     def __call__(self, y):
         """The state after the blow, ``(q_after, q'_after)`` as one vector of shape ``(2 N + 2,)``,
-        from the arrival state ``y`` (its end moved onto the shank first)."""
-        M = self.model.n_modes + 1
+        from the arrival state ``y`` (its end moved onto the shank first): the numbers of
+        :meth:`contact`'s record, without the record (:func:`~impactbar.laws.rodrock.blow.blow_end`;
+        the impact map's Jacobian flies ``4 N + 6`` of them)."""
+        model = self.model
+        M = model.n_modes + 1
+        c = self._c
         q = np.array(y[:M], dtype=float)
-        q[0] -= float(self.model.end_weights @ q)
-        rec = self.contact(q, y[M:])
-        return np.concatenate((rec.q_after, rec.v_after))
+        q[0] -= float(c @ q)
+        F, G = self.fields(q, np.asarray(y[M:], dtype=float))
+        Fp, Gp, gap, shank, perm = blow_end(self.grid, F, G, self.drive, *self.params, self.n_max)
+        qa, va = _project(model, self.n_p, Fp, Gp, shank - gap - perm, c)
+        over = float(c @ qa)
+        if over > 0.0:  # as in contact: on the stop
+            qa[0] -= over
+        return np.concatenate((qa, va))
