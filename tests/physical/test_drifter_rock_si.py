@@ -101,3 +101,22 @@ def test_cli_simulate_draws_a_blow_s_force_history_and_the_stress_along_the_rod(
     shank = float(np.max(rec.blow.junction_forces[:, 0])) * d.scales.force_N
     assert ax.lines[0].get_ydata()[0] == pytest.approx(shank / d.drill.segments[0].area_m2 / 1e6, rel=1e-12)
     plt.close(ax.figure)
+
+
+def test_a_stepped_drifter_on_rock():
+    """A drifter's stepped piston on a drill string (theory §4d, §12): cut into two segments of one
+    section it gives the uniform piston's operating point on the rock (1e-9), and a heavy head (the
+    stepped drifter example's 56 mm head and 38.3 mm tail, the same mass) another one."""
+    cfg = load_config(EXAMPLE)
+    base = Drifter.from_config(cfg).orbit()
+    half = f"{448.54236 / 2!r} mm"
+    cfg["bar"]["length"], cfg["bar"]["diameter"] = [half, half], ["45 mm", "45 mm"]
+    even = Drifter.from_config(cfg).orbit()
+    for name in ("blow_frequency_Hz", "impact_velocity_m_s"):
+        assert getattr(even, name) == pytest.approx(getattr(base, name), rel=1e-9)
+    for name in ("work_on_rock_J", "penetration_mm"):
+        assert even.rock()[name] == pytest.approx(base.rock()[name], rel=1e-9)
+    cfg["bar"]["length"], cfg["bar"]["diameter"] = ["150 mm", "298.54236 mm"], ["56 mm", "38.3 mm"]
+    heavy = Drifter.from_config(cfg).orbit()
+    w0 = base.rock()["work_on_rock_J"]
+    assert heavy.stable and abs(heavy.rock()["work_on_rock_J"] - w0) > 1e-3 * w0

@@ -107,7 +107,7 @@ class Drifter:
     drill: DrillString | None = None
 
     def __post_init__(self) -> None:
-        check_piston(self.bar, self.drill is None, "the rod-rock law ([rock])")
+        check_piston(self.bar, True)
         for f in ("supply_pressure_Pa", "stroke_area_m2", "return_area_m2", "switch_out_m"):
             object.__setattr__(self, f, check_real(f, getattr(self, f), lo=0.0, lo_open=True))
         object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
