@@ -208,3 +208,24 @@ def test_the_impact_maps_lean_blow_is_the_contact_record(piston, bit_mass, feed)
     rec = bm.contact(q, y[5:])
     assert rec.blow.permanent_penetration > 0.0 and rec.blow.gap > 0.0  # a blow that left the shank
     np.testing.assert_array_equal(bm(y), np.concatenate((rec.q_after, rec.v_after)))
+
+
+def test_the_simulators_cells_converge_and_are_checked():
+    """``RodRock(cells_per_piston=...)`` sets the simulator's blows' grid: an orbit's impact
+    velocities converge as the cells double (their differences fall at least twice per doubling),
+    the default is the commensurate 8; a count out of range is refused by name."""
+    load = ib.CosineLoad(0.3, 1.0)
+    orbits = []
+    for cells in (None, 16, 32, 64):
+        law = _law(length=2.0, impedance=2.0, cells_per_piston=cells)
+        model = ib.BarModel(s=10.0, d=0.3, R=0.0, n_modes=4, impact=law)
+        start = ib.InitialState.rigid(-0.1, 0.0, n_modes=4)
+        guess = orbits[-1] if orbits else ib.simulate(model, load, start, 200.0)
+        orbits.append(ib.find_orbit(model, load, 2, 2, guess=guess))
+    assert BlowMap(model.with_(impact=_law(length=2.0, impedance=2.0)), load, 0.0).grid.piston_cells == 8
+    v = np.array([o.impact_velocities for o in orbits])
+    d = np.max(np.abs(np.diff(v, axis=0)), axis=1)
+    assert 1e-7 < d[0] < 1e-4 and d[1] < d[0] / 2 and d[2] < d[1] / 2
+    for bad in (0, 5000, 2.5):
+        with pytest.raises(ValueError, match="cells_per_piston"):
+            _law(cells_per_piston=bad)

@@ -55,7 +55,7 @@ _TOP_KEYS = ("task", "model", "load", "axes", "rock", "chunk_points", *TASKS)
 
 #: keys of the optional ``[rock]`` table (the rod-rock law, :class:`impactbar.RodRock`) and of
 #: each of its ``segments``
-ROCK_KEYS = ("k", "k_u", "bit_mass", "feed", "blow_time", "segments")
+ROCK_KEYS = ("k", "k_u", "bit_mass", "feed", "blow_time", "cells_per_piston", "segments")
 SEGMENT_KEYS = ("length", "impedance", "wave_speed")
 #: axes a spec with ``[rock]`` may also sweep (the names of :data:`impactbar.continuation.ROCK_PARAMETERS`;
 #: ``segment<i>.length`` for each segment ``i``)
@@ -142,12 +142,13 @@ class SweepSpec:
         The rod and rock of the rod-rock law (:class:`impactbar.RodRock`, theory section 4d), in
         the law's dimensionless units: ``k``, ``k_u`` (:class:`impactbar.BilinearRock`),
         ``segments`` (a list of tables ``{length, impedance, wave_speed}``, shank first,
-        :class:`impactbar.RodSegment`), and optionally ``bit_mass`` (0), ``feed`` (0) and
-        ``blow_time``. The model's law is then ``RodRock`` (``[model] impact`` absent or
-        ``"rodrock"``), and the ``orbits`` task also stores, per orbit, the blow's
-        ``work_on_rock``, ``penetration`` (permanent, per blow), ``efficiency`` and
-        ``efficiency_with_rebound`` (:class:`impactbar.Blow`). Its orbits come from Newton's
-        method from guesses (:func:`impactbar.orbits.rock_periodic_orbits`), not a certified search.
+        :class:`impactbar.RodSegment`), and optionally ``bit_mass`` (0), ``feed`` (0),
+        ``blow_time`` and ``cells_per_piston`` (the blows' grid). The model's law is then
+        ``RodRock`` (``[model] impact`` absent or ``"rodrock"``), and the ``orbits`` task also
+        stores, per orbit, the blow's ``work_on_rock``, ``penetration`` (permanent, per blow),
+        ``efficiency`` and ``efficiency_with_rebound`` (:class:`impactbar.Blow`). Its orbits come
+        from Newton's method from guesses (:func:`impactbar.orbits.rock_periodic_orbits`), not a
+        certified search.
 
     Examples
     --------
@@ -432,6 +433,8 @@ def _check_rock(rock) -> dict:
     norm = {"k": law.rock.k, "k_u": law.rock.k_u, "bit_mass": law.bit_mass, "feed": law.feed}
     if law.blow_time is not None:
         norm["blow_time"] = law.blow_time
+    if law.cells_per_piston is not None:
+        norm["cells_per_piston"] = law.cells_per_piston
     norm["segments"] = tuple({"length": g.length, "impedance": g.impedance, "wave_speed": g.wave_speed}
                              for g in law.segments)
     return norm
@@ -444,7 +447,7 @@ def _rock_law(rock: dict):
     segs = [RodSegment(**g) for g in rock["segments"]]
     return RodRock(segments=segs, rock=BilinearRock(k=rock["k"], k_u=rock["k_u"]),
                    bit_mass=rock.get("bit_mass", 0.0), feed=rock.get("feed", 0.0),
-                   blow_time=rock.get("blow_time"))
+                   blow_time=rock.get("blow_time"), cells_per_piston=rock.get("cells_per_piston"))
 
 
 def _rock_axes(rock) -> list:

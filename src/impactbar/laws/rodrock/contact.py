@@ -378,6 +378,8 @@ class BlowMap:
         self.model, self.load, self.t0 = model, load, float(t0)
         self.s = s = float(model.s)
         segs = law.segments
+        if cells_per_piston is None:
+            cells_per_piston = law.cells_per_piston
         self.grid = grid = _grid_for(s, tuple(g.length for g in segs), tuple(g.impedance for g in segs),
                                      tuple(g.wave_speed for g in segs), cells_per_piston, model.piston)
         self.n_p, dt = grid.piston_cells, grid.cell_time
