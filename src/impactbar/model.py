@@ -134,7 +134,8 @@ class BarModel:
             raise ValueError(
                 f"piston: a stepped piston's modes are supported under the paper's and the rod-rock laws "
                 f"(got impact = {self._law.name!r}): the wave law carries a uniform bar by "
-                "characteristics")
+                "characteristics, its contact a round trip of 2/s; a stepped piston on a long rod is "
+                "RodRock(segments=[RodSegment(length=..., impedance=...)], ...)")
         sticking = piston.sticking_basis(self.n_modes)
         modes = sticking.free
         ends = modes.shapes(np.array([0.0, 1.0]))  # (2, N + 1)

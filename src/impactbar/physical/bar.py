@@ -322,7 +322,8 @@ def check_piston(bar, stepped_ok: bool, law: str = "") -> None:
         raise ValueError(
             f"bar: a stepped piston (bar.length a list of segments) is supported under the paper's impact "
             f"law and the rod-rock law (a [rock] section); got {law or 'another law'} (the wave law "
-            "carries a uniform piston by characteristics)")
+            "carries a uniform piston by characteristics; a stepped piston on a long rod: a [rock] "
+            "section with the rod)")
 
 
 def _positive(name, v):
