@@ -57,6 +57,16 @@ def _drive_averages(load, t0: float, dt: float, n: int) -> np.ndarray:
     return np.diff(np.asarray(v, dtype=float)[0]) / dt
 
 
+def _drive_averages_at(load, starts, dt: float, n: int) -> list:
+    """:func:`_drive_averages` at each of the times ``starts`` (one call of the load's integral)."""
+    starts = np.asarray(starts, dtype=float)
+    t0 = float(np.min(starts))
+    times = (starts[:, None] + dt * np.arange(n + 1)).ravel()
+    _, v = load.propagate(np.zeros(1), 0.0, t0, np.zeros(1), np.zeros(1), times)
+    v = np.asarray(v, dtype=float)[0].reshape(starts.size, n + 1)
+    return [np.diff(row) / dt for row in v]
+
+
 class RockContact:
     """One blow of the simulator under :class:`~impactbar.RodRock` (theory §4d): the record of
     :meth:`RodRock.contact`, made by :func:`rock_contact`.
@@ -390,6 +400,21 @@ class BlowMap:
         self.drive = _drive_averages(load, self.t0, dt, self.n_max)
         self.params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
         self._c = model.end_weights
+
+    def shifted(self, t0s):
+        """Copies of this map at the load times ``t0s`` (the grid and projections shared; the
+        drive's step averages of all of them from one call of the load's integral): the impact
+        map's time derivative (:meth:`RodRock.impact_map`)."""
+        import copy
+
+        drives = _drive_averages_at(self.load, t0s, self.grid.cell_time, self.n_max)
+        ends = np.asarray(self.load(np.asarray(t0s, dtype=float)), dtype=float)
+        out = []
+        for t0, drive, p_end in zip(t0s, drives, ends, strict=True):
+            m = copy.copy(self)
+            m.t0, m.drive, m.p_end = float(t0), drive, float(p_end)
+            out.append(m)
+        return out
 
     def fields(self, q, v):
         """The piston's waves at impact on the grid, ``(F, G)`` of shape ``(cells,)`` each (the rod's
