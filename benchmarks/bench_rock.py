@@ -8,8 +8,9 @@
    of impedance 2 on a soft rock, from a simulation) against the wave law's orbit of the same bar
    with the same rod's restitution ``R = 1/3`` (``find_orbit``, 2 impacts in 2 periods, from a
    simulation), the simulations outside the timing. Goal: <= 10x. Beside it the same ``find_orbit``
-   as before 2026-11-25 (each blow of the finite-difference Jacobian built its whole record; now
-   only the state after it), in the same run: issue 39's goal, a rock orbit with 4 modes <= 20 ms.
+   as before 2026-11-25 (each blow of the finite-difference Jacobian built its whole record, now
+   only the state after it; the time derivative built two new maps), in the same run: issue 39's
+   goal, a rock orbit with 4 modes <= 20 ms.
 3. A stepped piston under the rod-rock law (issue 44: its modal state to cells of its segments'
    impedances and back): one contact step, ``simulate`` over 100 time units and ``find_orbit``
    (1 blow a period, from a settled simulation) of a heavy-headed piston (sections 1 and 2,
@@ -109,8 +110,9 @@ def orbits(repeat):
     t_rock = median_time(lambda: ib.find_orbit(rock, load, 2, 2, guess=guesses[rock]), repeat)
     t_wave = median_time(lambda: ib.find_orbit(wave, load, 2, 2, guess=guesses[wave]), repeat)
     o = ib.find_orbit(rock, load, 2, 2, guess=guesses[rock])
-    # before: each of the Jacobian's 4 N + 6 blows built its whole record (BlowMap.contact)
-    lean = BlowMap.__call__
+    # before: each of the Jacobian's 4 N + 6 blows built its whole record (BlowMap.contact), and the
+    # time derivative two new maps (their drive averages one call of the load's integral each)
+    lean, shifted = BlowMap.__call__, BlowMap.shifted
 
     def recorded(self, y):
         M = self.model.n_modes + 1
@@ -120,11 +122,12 @@ def orbits(repeat):
         return np.concatenate((rec.q_after, rec.v_after))
 
     BlowMap.__call__ = recorded
+    BlowMap.shifted = lambda self, t0s: [BlowMap(self.model, self.load, t0) for t0 in t0s]
     try:
         t_before = median_time(lambda: ib.find_orbit(rock, load, 2, 2, guess=guesses[rock]), repeat)
         o_before = ib.find_orbit(rock, load, 2, 2, guess=guesses[rock])
     finally:
-        BlowMap.__call__ = lean
+        BlowMap.__call__, BlowMap.shifted = lean, shifted
     print(f"\n{'periodic orbit (2 in 2, N = 4)':40s} {'time (ms)':>10s}")
     print(f"{'find_orbit, rod-rock law':40s} {1e3 * t_rock:10.1f}")
     print(f"{'find_orbit, rod-rock law, before':40s} {1e3 * t_before:10.1f}")
