@@ -211,3 +211,27 @@ def test_cli_orbits_prints_the_drilling_outputs_per_blow(tmp_path):
         assert 0.0 <= row["efficiency"] <= row["efficiency_with_rebound"] <= 1.0
     table = format_table(hammer, si)  # what ``impactbar orbits`` prints
     assert "drilling per blow" in table and f"{found[0]['work_on_rock_J']:8.2f}" in table
+
+
+def test_the_blows_grid_in_a_config():
+    """``[rock] cells_per_piston`` sets the simulator's blows' grid (``RodRock.cells_per_piston``):
+    by default the commensurate count; at 4 times it a run's work on rock per blow moves, by more
+    than rounding and less than 10 %; a bad count is refused by name."""
+    from impactbar.laws.rodrock.contact import BlowMap
+
+    h = physical.Hammer.from_config(CONFIG)
+    assert h.model.law.cells_per_piston is None
+    default = BlowMap(h.model, h.load, 0.0).grid.piston_cells
+    cfg = copy.deepcopy(CONFIG)
+    cfg["rock"]["cells_per_piston"] = 4 * default
+    fine = physical.Hammer.from_config(cfg)
+    assert fine.model.law.cells_per_piston == 4 * default
+    assert fine.to_dict()["drill"]["cells_per_piston"] == 4 * default
+    w0 = rock_blows(h, physical.simulate(h, periods=4).trajectory)["work_on_rock_J"]
+    w1 = rock_blows(fine, physical.simulate(fine, periods=4).trajectory)["work_on_rock_J"]
+    assert w0.size == w1.size > 0
+    assert 1e-12 < np.max(np.abs(w1 - w0) / w0) < 0.1
+    for bad in (0, "16", 1.5):
+        cfg["rock"]["cells_per_piston"] = bad
+        with pytest.raises(ValueError, match="rock.cells_per_piston"):
+            physical.Hammer.from_config(cfg)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._shared.validate import check_real
+from .._shared.validate import check_int, check_real
 from ..laws.rodrock import BilinearRock, RodRock, RodSegment
 from .config import _section
 from .units import to_si
@@ -26,7 +26,7 @@ from .units import to_si
 __all__ = ["DrillString", "RodPiece", "rock_blows", "rock_from_config", "rock_summary"]
 
 #: keys of the sections (added to the hammer configuration's)
-ROCK_SECTIONS = {"rod": {"segments"}, "bit": {"mass"}, "rock": {"k", "k_u", "feed"}}
+ROCK_SECTIONS = {"rod": {"segments"}, "bit": {"mass"}, "rock": {"k", "k_u", "feed", "cells_per_piston"}}
 _SEGMENT_KEYS = {"length", "diameter", "area", "E", "density"}
 
 
@@ -80,6 +80,11 @@ class DrillString:
         Mass of the bit (kg), ``>= 0``; 0 is Lundberg's massless bit.
     feed_N : float
         Static feed force on the shank (N), ``>= 0``.
+    cells_per_piston : int, optional
+        Cells along the piston of the simulator's blows (:class:`~impactbar.RodRock`'s
+        ``cells_per_piston``, ``1 <= n <= 4096``; a numerical setting, no physics): default the
+        commensurate count, at least 8. The blows' error is of first order in the cells at most; a
+        run at twice the cells estimates it (theory §4d).
     """
 
     segments: tuple
@@ -87,6 +92,7 @@ class DrillString:
     rock_k_u_N_m: float
     bit_mass_kg: float = 0.0
     feed_N: float = 0.0
+    cells_per_piston: int | None = None
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
@@ -98,6 +104,9 @@ class DrillString:
                            check_real("rock.k_u", self.rock_k_u_N_m, lo=self.rock_k_N_m))
         object.__setattr__(self, "bit_mass_kg", check_real("bit.mass", self.bit_mass_kg, lo=0.0))
         object.__setattr__(self, "feed_N", check_real("rock.feed", self.feed_N, lo=0.0))
+        if self.cells_per_piston is not None:
+            object.__setattr__(self, "cells_per_piston",
+                               check_int("rock.cells_per_piston", self.cells_per_piston, lo=1, hi=4096))
 
     def law(self, bar, scales) -> RodRock:
         """The dimensionless law for a piston ``bar`` (:class:`~impactbar.physical.Bar`) and the
@@ -113,21 +122,25 @@ class DrillString:
                            wave_speed=g.wave_speed_m_s / bar.wave_speed_m_s) for g in self.segments]
         return RodRock(segments=segs, rock=BilinearRock(k=self.rock_k_N_m / (m * om2),
                                                         k_u=self.rock_k_u_N_m / (m * om2)),
-                       bit_mass=self.bit_mass_kg / m, feed=self.feed_N / scales.force_N)
+                       bit_mass=self.bit_mass_kg / m, feed=self.feed_N / scales.force_N,
+                       cells_per_piston=self.cells_per_piston)
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (SI floats)."""
         return {"rod_segments": [{"length_m": g.length_m, "area_m2": g.area_m2, "E_Pa": g.E_Pa,
                                   "density_kg_m3": g.density_kg_m3} for g in self.segments],
                 "rock_k_N_m": self.rock_k_N_m, "rock_k_u_N_m": self.rock_k_u_N_m,
-                "bit_mass_kg": self.bit_mass_kg, "feed_N": self.feed_N}
+                "bit_mass_kg": self.bit_mass_kg, "feed_N": self.feed_N,
+                "cells_per_piston": self.cells_per_piston}
 
 
 def rock_from_config(config: dict, bar) -> DrillString | None:
     """The drill string of a configuration's ``[rod]``, ``[bit]`` and ``[rock]`` sections, or None
     when it has no ``[rock]``. ``[[rod.segments]]``: ``length``, ``diameter`` or ``area``, and
     ``E`` and ``density`` (default the piston's); ``[bit]``: ``mass`` (default 0 kg);
-    ``[rock]``: ``k``, ``k_u`` (N/m, e.g. ``"250 kN/mm"``) and ``feed`` (N, default 0).
+    ``[rock]``: ``k``, ``k_u`` (N/m, e.g. ``"250 kN/mm"``), ``feed`` (N, default 0) and
+    ``cells_per_piston`` (the simulator's blows' grid, :class:`DrillString`; default the
+    commensurate count).
 
     Raises
     ------
@@ -173,7 +186,8 @@ def rock_from_config(config: dict, bar) -> DrillString | None:
     k_u = to_si("rock.k_u", rock["k_u"], "N/m", "'2500 kN/mm'", what="a stiffness")
     feed = to_si("rock.feed", rock["feed"], "N", "'5 kN'", what="a force") if "feed" in rock else 0.0
     mass = to_si("bit.mass", bit["mass"], "kg", "'1.5 kg'", what="a mass") if "mass" in bit else 0.0
-    return DrillString(segments=tuple(pieces), rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed)
+    return DrillString(segments=tuple(pieces), rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed,
+                       cells_per_piston=rock.get("cells_per_piston"))
 
 
 def rock_blows(hammer, trajectory) -> dict:
