@@ -117,7 +117,46 @@ class CircuitPiece:
         return self.c @ self.modal(t)[1]
 
 
-def _solver(par, settings, directions, n_total, max_steps):
+#: Flights by CVODE driven from compiled code (:mod:`._cvode`: no Python between a flight's start and
+#: its end) wherever the SUNDIALS libraries that scikit-sundae ships can be bound
+#: (:func:`._sundials.available`); ``False``: through scikit-sundae's Python interface, each call of
+#: the vector field, the Jacobian and the events a call of Python (the way before, the fallback, and
+#: the baseline of ``benchmarks/bench_circuit.py``). The same steps either way, to the bit.
+COMPILED = True
+
+_MAX_STEPS = 200000
+
+
+def _compiled_driver():
+    """:mod:`._cvode` where :data:`COMPILED` and the libraries bind, else None."""
+    if not COMPILED:
+        return None
+    from . import _sundials
+
+    if not _sundials.available():
+        return None
+    from . import _cvode
+
+    return _cvode
+
+
+def _message(flag) -> str:
+    from sksundae._cy_cvode import CVMESSAGES
+
+    return CVMESSAGES.get(int(flag), f"CVODE's flag {int(flag)}")
+
+
+def _integrate_compiled(cv, par, settings, directions, y0, t, end, keep):
+    """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly`."""
+    ws = cv.workspace(y0.size)
+    flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
+                                      float(settings.atol), np.asarray(directions, dtype=np.int32), par,
+                                      keep, _MAX_STEPS)
+    return int(flag), _message(flag), ts, Y, yend, np.flatnonzero(roots)
+
+
+def _integrate_binding(par, settings, directions, y0, t, end, keep):
+    """The same through scikit-sundae's ``CVODE`` (its Python interface)."""
     from sksundae.cvode import CVODE
 
     rhs, jac, events = K.rhs, K.jac, K.events
@@ -133,8 +172,15 @@ def _solver(par, settings, directions, n_total, max_steps):
 
     ev.terminal = [True] * K.N_EVENTS
     ev.direction = list(directions)
-    return CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
-                 num_events=K.N_EVENTS, max_num_steps=max_steps)
+    solver = CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
+                   num_events=K.N_EVENTS, max_num_steps=_MAX_STEPS)
+    with contextlib.redirect_stdout(io.StringIO()):  # scikit-sundae prints CVODE's errors: in sol.message
+        sol = solver.solve(np.array([t, end]), y0)
+    Y = np.asarray(sol.y, dtype=float)
+    hit = np.array([], dtype=int)
+    if sol.status == 2 and sol.i_events is not None:
+        hit = np.flatnonzero(np.atleast_2d(sol.i_events)[-1])
+    return int(sol.status), sol.message, np.asarray(sol.t, dtype=float), Y[:, :keep], Y[-1], hit
 
 
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
@@ -170,24 +216,24 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
                              drive.chambers.area_ratio)
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
                       np.eye(n) if variational else None)
-    solver = _solver(par, settings, drive._directions(mode), y0.size, 200000)
-    with contextlib.redirect_stdout(io.StringIO()):  # scikit-sundae prints CVODE's errors: in sol.message
-        sol = solver.solve(np.array([t, end]), y0)
-    if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
-        raise ValueError(drive._failure(model, sol, t))
-    ts = np.asarray(sol.t, dtype=float)
-    Y = np.asarray(sol.y, dtype=float)
-    keep = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
-    ts, Y = ts[keep], Y[keep]
-    piece = CircuitPiece(ts, np.ascontiguousarray(Y[:, :n + K.N_ENERGY]), par, M, model.end_weights,
-                         drive.chambers.area_ratio)
+    keep = n + K.N_ENERGY
+    cv = _compiled_driver()
+    if cv is not None:
+        status, message, ts, Y, yend, hit = _integrate_compiled(cv, par, settings, drive._directions(mode),
+                                                                y0, t, end, keep)
+    else:
+        status, message, ts, Y, yend, hit = _integrate_binding(par, settings, drive._directions(mode), y0,
+                                                               t, end, keep)
+    if status < 0 or not np.all(np.isfinite(yend)):
+        raise ValueError(drive._failure(model, message, t))
+    keep_t = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
+    ts, Y = ts[keep_t], Y[keep_t]
+    piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio)
     drive._check_volumes(model, piece, t)
-    yend = Y[-1]
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
     Phi = yend[n + K.N_ENERGY:].reshape(n, n).copy() if variational else None
-    if sol.status == 2 and sol.i_events is not None:
-        hit = np.flatnonzero(np.atleast_2d(sol.i_events)[-1])
+    if status == 2:
         if K.ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop
             return Flight(te, qe, ve, ze, ARRIVAL, (), piece, Phi)

@@ -1,0 +1,143 @@
+"""The oil circuit's flights by CVODE driven from compiled code (``drives.circuit._cvode``) against
+the same CVODE through scikit-sundae's Python interface (the way before, kept as the fallback).
+
+Both run the same SUNDIALS library with the same options and the same compiled vector field, so the
+steps must agree to the bit: a difference in an option, a callback or the root handling shows.
+"""
+
+import sys
+import threading
+
+import numpy as np
+import pytest
+
+from impactbar import BarModel, InitialState, find_orbit, simulate
+from impactbar.drives import DriveState
+from impactbar.drives.circuit import (
+    Accumulator,
+    Chambers,
+    HydraulicCircuitDrive,
+    Oil,
+    Supply,
+    Valve,
+    _sundials,
+)
+from impactbar.drives.circuit import flight as F
+from impactbar.drives.flight import ARRIVAL, EVENT
+
+RIGID = BarModel(s=52, d=0, R=0.215, n_modes=0)
+FLEX = RIGID.with_(n_modes=2)
+
+
+def pumped():
+    return HydraulicCircuitDrive(
+        Chambers(area_ratio=0.5, rear_volume=0.4, front_volume=0.2),
+        Valve(switch_out=0.048, coefficient=2.0, switching_time=0.05),
+        Supply(pump_flow=0.07, hose_volume=1.0, front_coefficient=2.0, tank_pressure=0.03,
+               relief_pressure=1.5, relief_coefficient=0.5),
+        Oil(bulk_modulus=70.0, transition_pressure=0.01),
+        Accumulator(precharge=0.5, volume=2.0))
+
+
+def both(fn, monkeypatch):
+    """``fn()`` by the compiled driver, then through scikit-sundae's interface."""
+    out = fn()
+    monkeypatch.setattr(F, "COMPILED", False)
+    ref = fn()
+    monkeypatch.setattr(F, "COMPILED", True)
+    return out, ref
+
+
+def test_the_libraries_bind_here():
+    if sys.platform != "linux":
+        pytest.skip("scikit-sundae's Linux wheels are the layout checked here")
+    assert _sundials.available(), _sundials.reason()
+    assert F._compiled_driver() is not None
+
+
+@pytest.mark.parametrize("model", [RIGID, FLEX], ids=["rigid", "2 modes"])
+@pytest.mark.parametrize("variational", [False, True])
+def test_a_flight_is_the_bindings_to_the_bit(model, variational, monkeypatch):
+    if not _sundials.available():
+        pytest.skip(_sundials.reason())
+    drive = pumped()
+    M = model.n_modes + 1
+    q, v = np.zeros(M), np.zeros(M)
+    q[0] = -0.08
+    state = DriveState((1, 1, 1, 0), np.array([0.9, 0.9, 0.9, 0.3]))  # the valve opening, then the stroke
+    fl, ref = both(lambda: F.circuit_flight(drive, model, state, 0.0, q, v, 50.0, variational=variational),
+                   monkeypatch)
+    assert fl.end == ref.end == EVENT and fl.events[0].name == "ramp_end"
+    assert fl.piece.t.size > 100
+    assert np.array_equal(fl.piece.t, ref.piece.t)
+    assert np.array_equal(fl.piece.y, ref.piece.y)
+    for a, b in ((fl.q, ref.q), (fl.v, ref.v), (fl.z, ref.z)):
+        assert np.array_equal(a, b)
+    if variational:
+        assert np.array_equal(fl.sensitivity, ref.sensitivity)
+    # CVODE's own counters: every step is kept (and the start)
+    from impactbar.drives.circuit import _cvode
+
+    stats = _cvode.last_workspace().statistics()
+    assert stats["steps"] == fl.piece.t.size - 1
+    assert stats["rhs"] >= stats["steps"] and stats["jacobians"] >= 1
+
+
+def test_runs_and_orbits_are_the_bindings_to_the_bit(monkeypatch):
+    if not _sundials.available():
+        pytest.skip(_sundials.reason())
+    drive = pumped()
+    run, ref = both(lambda: simulate(RIGID, drive, InitialState.rigid(0.0, 0.0), 8.0), monkeypatch)
+    assert run.n_impacts >= 3
+    assert np.array_equal(run.impact_times, ref.impact_times)
+    assert np.array_equal(run.impact_velocities, ref.impact_velocities)
+    assert drive.energy(run) == drive.energy(ref)
+    o, oref = both(lambda: find_orbit(RIGID, drive), monkeypatch)
+    assert o.period == oref.period and np.array_equal(o.multipliers, oref.multipliers)
+
+
+def test_flights_in_threads_are_the_serial_ones():
+    """Each thread has its own CVODE workspace (the compiled loop releases the GIL)."""
+    drive = pumped()
+    state = DriveState((1, 0, 1, 0), np.array([0.9, 0.9, 0.9, 1.0]))
+    starts = [-0.06 - 0.01 * k for k in range(4)]
+
+    def one(x):
+        return F.circuit_flight(drive, RIGID, state, 0.0, np.array([x]), np.array([0.0]), 50.0)
+
+    serial = [one(x) for x in starts]
+    out = [None] * len(starts)
+
+    def work(k):
+        for _ in range(3):
+            out[k] = one(starts[k])
+
+    threads = [threading.Thread(target=work, args=(k,)) for k in range(len(starts))]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    for a, b in zip(out, serial, strict=True):
+        assert a.end == ARRIVAL and a.t == b.t and np.array_equal(a.piece.y, b.piece.y)
+
+
+def test_without_the_libraries_the_flights_go_through_the_binding(monkeypatch):
+    drive = pumped()
+    state = DriveState((1, 0, 1, 0), np.array([0.9, 0.9, 0.9, 1.0]))
+    fl = F.circuit_flight(drive, RIGID, state, 0.0, np.array([-0.08]), np.array([0.0]), 50.0)
+    monkeypatch.setattr(_sundials, "_STATE", {})
+    monkeypatch.setattr(_sundials, "_paths", lambda: None)
+    assert not _sundials.available() and "not found" in _sundials.reason()
+    assert F._compiled_driver() is None
+    ref = F.circuit_flight(drive, RIGID, state, 0.0, np.array([-0.08]), np.array([0.0]), 50.0)
+    assert ref.end == ARRIVAL and ref.t == fl.t and np.array_equal(ref.piece.y, fl.piece.y)
+
+
+def test_a_failure_is_reported_not_printed(capfd):
+    """CVODE's failure reaches the caller as the ValueError's reason; SUNDIALS prints nothing (its
+    error handlers are cleared in the compiled driver's workspace)."""
+    with pytest.raises(ValueError, match="could not be integrated \\(Convergence tests failed"):
+        F.circuit_flight(pumped(), RIGID, DriveState((1, 0, 1, 0), np.array([0.9, 0.9, -50.0, 1.0])), 0.0,
+                         np.array([-0.08]), np.array([0.0]), 50.0)
+    out, err = capfd.readouterr()
+    assert "CVODE" not in out + err and "cvHandleFailure" not in out + err
