@@ -44,6 +44,9 @@ def _ext(name, sig):
 
 _nv_data = _ext("N_VGetArrayPointer", _dp(_p))
 _dense_data = _ext("SUNDenseMatrix_Data", _dp(_p))
+_band_data = _ext("SUNBandMatrix_Data", _dp(_p))
+_band_ldim = _ext("SUNBandMatrix_LDim", types.int64(_p))
+_band_smu = _ext("SUNBandMatrix_StoredUpperBandwidth", types.int64(_p))
 _reinit = _ext("CVodeReInit", _c(_p, _d, _p))
 _tolerances = _ext("CVodeSStolerances", _c(_p, _d, _d))
 _user_data = _ext("CVodeSetUserData", _c(_p, _p))
@@ -78,6 +81,32 @@ def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     par = nb.carray(user_data, K.HEAD + 3 * M)
     JJ = nb.carray(_dense_data(J), (N, N)).T
     K.jac(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(fy), N), JJ, par)
+    return 0
+
+
+_LOW32 = 0xFFFFFFFF  # a sunindextype result: the low 32 bits hold it whether it is int or int64_t
+
+
+@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=True)
+def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
+    """CVODE's ``CVLsJacFn`` for the variational flights: the same matrix as :func:`._kernel.jac` in
+    band storage (half-bandwidths ``n - 1``: ``A`` on the state and on each column of ``Phi``,
+    stored by columns, the energies' rows zero), element ``(i, j)`` at ``data[j ldim + smu + i - j]``."""
+    M, N = _sizes(user_data)
+    par = nb.carray(user_data, K.HEAD + 3 * M)
+    n = 2 * M + 4
+    A = np.empty((n, n))
+    K.jac_base(nb.carray(_nv_data(y), N), par, M, A)
+    ldim = _band_ldim(J) & _LOW32
+    smu = _band_smu(J) & _LOW32
+    data = nb.carray(_band_data(J), N * ldim)
+    data[:] = 0.0
+    for blk in range(n + 1):  # the state, then each column of Phi
+        base = 0 if blk == 0 else n + K.N_ENERGY + (blk - 1) * n
+        for j in range(n):
+            col = (base + j) * ldim + smu - j
+            for i in range(n):
+                data[col + i] = A[i, j]
     return 0
 
 
@@ -176,9 +205,12 @@ def _free(ctx, mem, y, A, LS):
 
 
 class Workspace:
-    """One CVODE memory for systems of size ``N``: BDF, the dense solver with :func:`_jac_c`, the six
-    event functions :func:`_events_c`, SUNDIALS' error messages silenced (a failure's reason reaches
-    the caller as its return flag). Freed when collected.
+    """One CVODE memory for systems of size ``N``: BDF, Newton's method with the dense direct solver
+    and :func:`_jac_c` or, with ``band`` (the variational flights: ``N = n + 8 + n^2``), the band solver
+    of half-bandwidths ``n - 1`` and :func:`_jac_band_c` (``n^2`` times fewer operations a
+    factorisation than the dense one), the six event functions :func:`_events_c`, SUNDIALS' error
+    messages silenced (a failure's reason reaches the caller as its return flag). Freed when
+    collected.
 
     Attributes
     ----------
@@ -186,24 +218,33 @@ class Workspace:
         The addresses :func:`fly` takes.
     """
 
-    def __init__(self, N: int):
+    def __init__(self, N: int, band: int = 0):
         f = S.function
         ctx = ctypes.c_void_p()
         if f("SUNContext_Create")(0, ctypes.byref(ctx)) != 0:
             raise MemoryError("SUNContext_Create failed")
         f("SUNContext_ClearErrHandlers")(ctx)
         y = f("N_VNew_Serial")(N, ctx)
-        A = f("SUNDenseMatrix")(N, N, ctx)
-        LS = f("SUNLinSol_Dense")(y, A, ctx) if y and A else None
+        if band:
+            A = f("SUNBandMatrix")(N, band, band, ctx)
+            LS = f("SUNLinSol_Band")(y, A, ctx) if y and A else None
+        else:
+            A = f("SUNDenseMatrix")(N, N, ctx)
+            LS = f("SUNLinSol_Dense")(y, A, ctx) if y and A else None
         mem = f("CVodeCreate")(CV_BDF, ctx)
-        self.ctx, self.mem, self.y, self.N = ctx.value, mem, y, N
+        self.ctx, self.mem, self.y, self.N, self.band = ctx.value, mem, y, N, band
         self._finalizer = weakref.finalize(self, _free, ctx.value, mem, y, A, LS)
         if not (y and A and LS and mem):
             raise MemoryError("SUNDIALS could not allocate a CVODE workspace")
+        if band:  # the storage the Jacobian writes (SUNBandMatrix: smu = min(N - 1, 2 band))
+            smu = f("SUNBandMatrix_StoredUpperBandwidth")(A) & _LOW32
+            if smu != min(N - 1, 2 * band) or f("SUNBandMatrix_LDim")(A) & _LOW32 != smu + band + 1:
+                raise RuntimeError("SUNDIALS' band matrix is not stored as documented")
+        jac = _jac_band_c if band else _jac_c
         ok = (f("CVodeInit")(mem, _rhs_c.address, 0.0, y) == 0
               and f("CVodeSStolerances")(mem, 1e-10, 1e-12) == 0
               and f("CVodeSetLinearSolver")(mem, LS, A) == 0
-              and f("CVodeSetJacFn")(mem, _jac_c.address) == 0
+              and f("CVodeSetJacFn")(mem, jac.address) == 0
               and f("CVodeRootInit")(mem, K.N_EVENTS, _events_c.address) == 0)
         if not ok:
             raise RuntimeError("CVODE's set-up failed")
@@ -228,14 +269,15 @@ class Workspace:
 _LOCAL = threading.local()
 
 
-def workspace(N: int) -> Workspace:
-    """This thread's workspace for systems of size ``N`` (made on first use)."""
+def workspace(N: int, band: int = 0) -> Workspace:
+    """This thread's workspace for systems of size ``N`` (with the band solver of half-bandwidths
+    ``band``, or dense for 0), made on first use."""
     spaces = getattr(_LOCAL, "spaces", None)
     if spaces is None:
         spaces = _LOCAL.spaces = {}
-    ws = spaces.get(N)
+    ws = spaces.get((N, band))
     if ws is None:
-        ws = spaces[N] = Workspace(N)
+        ws = spaces[(N, band)] = Workspace(N, band)
     _LOCAL.last = ws
     return ws
 

@@ -30,7 +30,7 @@ PREFIX = "impactbar_"
 
 #: the libraries, by stem
 STEMS = ("sundials_core", "sundials_nvecserial", "sundials_sunmatrixdense", "sundials_sunlinsoldense",
-         "sundials_cvode")
+         "sundials_sunmatrixband", "sundials_sunlinsolband", "sundials_cvode")
 
 _vp, _int, _dbl, _long = ctypes.c_void_p, ctypes.c_int, ctypes.c_double, ctypes.c_long
 _i64 = ctypes.c_int64  # sunindextype (int or int64_t: passed in a register, either reads it)
@@ -52,6 +52,11 @@ FUNCTIONS = {
     "SUNDenseMatrix": ("sundials_sunmatrixdense", _vp, (_i64, _i64, _vp)),
     "SUNDenseMatrix_Data": ("sundials_sunmatrixdense", ctypes.POINTER(_dbl), (_vp,)),
     "SUNLinSol_Dense": ("sundials_sunlinsoldense", _vp, (_vp, _vp, _vp)),
+    "SUNBandMatrix": ("sundials_sunmatrixband", _vp, (_i64, _i64, _i64, _vp)),
+    "SUNBandMatrix_Data": ("sundials_sunmatrixband", ctypes.POINTER(_dbl), (_vp,)),
+    "SUNBandMatrix_LDim": ("sundials_sunmatrixband", _i64, (_vp,)),
+    "SUNBandMatrix_StoredUpperBandwidth": ("sundials_sunmatrixband", _i64, (_vp,)),
+    "SUNLinSol_Band": ("sundials_sunlinsolband", _vp, (_vp, _vp, _vp)),
     "CVodeCreate": ("sundials_cvode", _vp, (_int, _vp)),
     "CVodeInit": ("sundials_cvode", _int, (_vp, _vp, _dbl, _vp)),
     "CVodeReInit": ("sundials_cvode", _int, (_vp, _dbl, _vp)),
@@ -115,8 +120,8 @@ def _paths():
 def _load():
     paths = _paths()
     if paths is None:
-        raise OSError("the SUNDIALS libraries (CVODE, serial vectors, dense matrices and solver) were not "
-                      "found beside scikit-sundae nor on the system")
+        raise OSError("the SUNDIALS libraries (CVODE, serial vectors, dense and band matrices and solvers) "
+                      "were not found beside scikit-sundae nor on the system")
     libs = {s: ctypes.CDLL(p) for s, p in paths.items()}
     funcs = {}
     for name, (stem, res, args) in FUNCTIONS.items():

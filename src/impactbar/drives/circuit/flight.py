@@ -23,6 +23,7 @@ apply the saltation there, Hiskens & Pai 2000).
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import math
 
@@ -124,6 +125,11 @@ class CircuitPiece:
 #: the baseline of ``benchmarks/bench_circuit.py``). The same steps either way, to the bit.
 COMPILED = True
 
+#: The variational flights' Newton systems by SUNDIALS' band solver (half-bandwidths ``n - 1``: ``Phi``
+#: is stored by columns, each column's equations coupling only its own components); ``False``: the
+#: dense solver (the way before; ``benchmarks/bench_circuit.py``'s baseline for the flexible piston).
+BAND = True
+
 _MAX_STEPS = 200000
 
 
@@ -148,7 +154,8 @@ def _message(flag) -> str:
 
 def _integrate_compiled(cv, par, settings, directions, y0, t, end, keep):
     """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly`."""
-    ws = cv.workspace(y0.size)
+    n = keep - K.N_ENERGY
+    ws = cv.workspace(y0.size, n - 1 if BAND and y0.size > keep else 0)  # variational: the band solver
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
@@ -217,22 +224,22 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
                       np.eye(n) if variational else None)
     keep = n + K.N_ENERGY
-    cv = _compiled_driver()
-    if cv is not None:
-        status, message, ts, Y, yend, hit = _integrate_compiled(cv, par, settings, drive._directions(mode),
-                                                                y0, t, end, keep)
-    else:
-        status, message, ts, Y, yend, hit = _integrate_binding(par, settings, drive._directions(mode), y0,
-                                                               t, end, keep)
+    # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
+    # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
+    integrate = _integrate_binding if (cv := _compiled_driver()) is None else \
+        functools.partial(_integrate_compiled, cv)
+    status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0, end - t,
+                                                  keep)
     if status < 0 or not np.all(np.isfinite(yend)):
         raise ValueError(drive._failure(model, message, t))
+    ts = ts + t
     keep_t = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
     ts, Y = ts[keep_t], Y[keep_t]
     piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio)
     drive._check_volumes(model, piece, t)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
-    Phi = yend[n + K.N_ENERGY:].reshape(n, n).copy() if variational else None
+    Phi = yend[n + K.N_ENERGY:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
     if status == 2:
         if K.ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop
