@@ -1,5 +1,6 @@
 r"""The oil circuit's vector field, its Jacobian and its event functions, compiled with numba
-(theory §11). Plain arrays only: what SUNDIALS' CVODE calls (through scikit-sundae) at every step.
+(theory §11). Plain arrays only: what SUNDIALS' CVODE calls at every step (as C callbacks,
+:mod:`._cvode`, or through scikit-sundae's interface).
 
 The integrated state is ``Y = (q_0..q_N, q_0'..q_N', p_f, p_r, p_s, x_v, E_0..E_7[, Phi])``: the bar's
 modes (eq. 6), the circuit's state, eight energy quadratures (the terms of the account of theory
