@@ -227,3 +227,29 @@ def test_the_pressures_carry_the_flexible_modes_oscillations():
         k = int(np.argmin(np.abs(omega - model.s * n * np.pi)))
         amp.append(spectrum[k - 20:k + 20].max())
     assert 10**-4.5 < amp[0] < 10**-3.5 and 10**-5.5 < amp[1] < 10**-4.5, amp
+
+
+@pytest.mark.slow  # 10 s: the circuit's kernels compiled in a new process, in memory
+def test_an_unwritable_numba_cache_compiles_the_circuit_in_memory():
+    """Where numba cannot write its cache (a read-only install, no NUMBA_CACHE_DIR), the circuit's
+    kernels and CVODE's callbacks compile in memory, as the simulator's do: they asked for a cache
+    and failed at import ("cannot cache function 'phi': no locator available")."""
+    import subprocess
+    import textwrap
+
+    script = textwrap.dedent("""
+        import numba.core.caching as C
+        def fail(self):
+            raise OSError("read-only")
+        C._CacheLocator.ensure_cache_path = fail
+        from impactbar import find_orbit
+        from impactbar.physical import circuit_preset
+        from impactbar.drives.circuit import flight
+        d = circuit_preset("circuit-drifter")
+        print(find_orbit(d.model(), d.drive()).period, flight._compiled_driver() is not None)
+    """)
+    r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    period, compiled = r.stdout.split()[-2:]
+    assert float(period) == pytest.approx(1.0262627571, rel=1e-8)
+    assert compiled == str(_sundials.available())

@@ -22,6 +22,7 @@ import numba as nb
 import numpy as np
 from numba import types
 
+from ...dynamics._flightkernel import CACHE
 from . import _kernel as K
 from . import _sundials as S
 
@@ -65,7 +66,7 @@ def _sizes(par):
     return M, n + K.N_ENERGY + (n * n if par[K.VAR] > 0.5 else 0)
 
 
-@nb.cfunc(_c(_d, _p, _p, _dp), cache=True)
+@nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
 def _rhs_c(t, y, yp, user_data):
     """CVODE's ``CVRhsFn``: :func:`._kernel.rhs` on the vectors' data; ``user_data`` is ``par``."""
     M, N = _sizes(user_data)
@@ -74,7 +75,7 @@ def _rhs_c(t, y, yp, user_data):
     return 0
 
 
-@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=True)
+@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
 def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     """CVODE's ``CVLsJacFn``: :func:`._kernel.jac` into the dense matrix (stored by columns)."""
     M, N = _sizes(user_data)
@@ -87,7 +88,7 @@ def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
 _LOW32 = 0xFFFFFFFF  # a sunindextype result: the low 32 bits hold it whether it is int or int64_t
 
 
-@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=True)
+@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
 def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     """CVODE's ``CVLsJacFn`` for the variational flights: the same matrix as :func:`._kernel.jac` in
     band storage (half-bandwidths ``n - 1``: ``A`` on the state and on each column of ``Phi``,
@@ -110,7 +111,7 @@ def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     return 0
 
 
-@nb.cfunc(_c(_d, _p, _dp, _dp), cache=True)
+@nb.cfunc(_c(_d, _p, _dp, _dp), cache=CACHE)
 def _events_c(t, y, g, user_data):
     """CVODE's ``CVRootFn``: :func:`._kernel.events`."""
     M, N = _sizes(user_data)
@@ -119,7 +120,7 @@ def _events_c(t, y, g, user_data):
     return 0
 
 
-@nb.njit(cache=True, nogil=True)
+@nb.njit(cache=CACHE, nogil=True)
 def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
     """One flight: CVODE from ``y0`` at ``t0`` to its first root (a terminal event in
     ``directions``) or ``t_end``, every step kept.

@@ -20,6 +20,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ...dynamics._flightkernel import CACHE
+
 # parameter indices in ``par``
 ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)
 HELD, PSH, XOUT, XIN, ACC, REL, XRATE, ARMO, ARMI, DAMP, NM, OPEN, VAR, HASREL, HASACC = range(15, 30)
@@ -29,7 +31,7 @@ N_ENERGY = 8
 N_EVENTS = 6
 ARRIVAL_EV, OUT_EV, IN_EV, RAMP_EV, ACC_EV, REL_EV = range(N_EVENTS)
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_JIT = dict(cache=CACHE, nogil=True, error_model="numpy")  # (in memory where no cache is writable)
 
 
 @nb.njit(**_JIT)
