@@ -4,12 +4,13 @@ The flight's loop (:func:`fly`: ``CVode`` in one-step mode, each step's state ke
 numba and calls SUNDIALS' CVODE (bound by :mod:`._sundials`), which calls back the vector field,
 its Jacobian and the event functions of :mod:`._kernel` as compiled C callbacks
 (:func:`numba.cfunc`): no Python runs between a flight's start and its end. CVODE's options are
-scikit-sundae's defaults (BDF of orders 1 to 5, Newton's method with the dense direct solver and
-the analytic Jacobian, at most 3 Newton iterations a step, 10 convergence failures), so that a flight
-takes the same steps as through scikit-sundae's interface, to the bit (a test).
+scikit-sundae's defaults (BDF of orders 1 to 5, Newton's method with a direct solver and the
+analytic Jacobian, at most 3 Newton iterations a step, 10 convergence failures), so that a flight
+takes the same steps as through scikit-sundae's interface, to the bit (a test); the variational
+flights take the band solver where scikit-sundae's takes the dense one, the same to rounding.
 
-Each thread keeps one CVODE workspace per system size (:func:`workspace`), re-initialised at each
-flight (``CVodeReInit``) rather than built anew.
+Each thread keeps one CVODE workspace per system size and solver (:func:`workspace`),
+re-initialised at each flight (``CVodeReInit``) rather than built anew.
 """
 
 from __future__ import annotations
