@@ -1,27 +1,28 @@
-"""The drifter's oil circuit (theory §11) against the ideal valve it tends to (theory §10), in the
-same run.
+"""The drifter's oil circuit (theory §11): its flights by CVODE driven from compiled code against the
+same CVODE through scikit-sundae's Python interface (the way before), and against the ideal valve it
+tends to (theory §10), in the same run.
 
 Run: ``python benchmarks/bench_circuit.py`` (``--quick``: the rigid piston only). On the preset
 ``circuit-drifter`` (dimensionless, ``impactbar.physical.circuit_preset``) and on the ideal valve
 with the preset's forces at its mean supply pressure (``PositionSwitchedDrive``): the time of
-``find_orbit`` from the default guess (rest on the stop, followed at a loose tolerance with the slow
-supply mode extrapolated away, then Newton with the variational equations' Jacobian; beside it the
-start of before, every impact followed at the drive's tolerance until they repeat to 1e-4), of
-``simulate`` over 100 blows, and of one continuation point in the accumulator's pre-charge (beside it
-the point of before: the parameter's column of the Jacobian by a central difference, full Newton
-steps); the rigid
-piston and 8 modes. Issue 38's goals on this 2-core machine: the rigid orbit <= 0.5 s, with 8 modes
-<= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a few repetitions (the
-machine's other load only adds); compilation is done before the clock starts.
+``find_orbit`` from the default guess, of ``simulate`` over 100 blows and of one continuation point in
+the accumulator's pre-charge; beside each, the same call with ``flight.COMPILED = False`` (every call
+of the vector field, its Jacobian and the events through Python, as before). One stroke flight by
+CVODE both ways and by scipy's Radau on the same compiled right-hand side and Jacobian, with CVODE's
+own counters for it. Without ``--quick``, ``find_orbit`` with flexible pistons: 1 mode both ways,
+8 modes with the variational flights' band solver against the dense one (``flight.BAND = False``,
+the way before; about four minutes). Issue 38's goals on this 2-core machine: the rigid orbit
+<= 0.5 s, with 8 modes <= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a
+few repetitions (the machine's other load only adds); compilation is done before the clock starts.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import time
 
-import impactbar.orbits._settling as settling
-import impactbar.orbits.switched as S
+import impactbar.drives.circuit.flight as FL
 from impactbar import InitialState, PositionSwitchedDrive, continue_orbit, find_orbit, simulate
 from impactbar.physical import circuit_preset
 
@@ -35,68 +36,84 @@ def best(fn, reps):
     return out
 
 
-def row(d, drive, n):
-    """The timings of the circuit and of the ideal valve at its mean supply pressure, ``n`` modes."""
-    model = d.model().with_(n_modes=n)
+@contextlib.contextmanager
+def flags(**values):
+    """``flight.COMPILED`` / ``flight.BAND`` set for a block."""
+    keep = {k: getattr(FL, k) for k in values}
+    for k, v in values.items():
+        setattr(FL, k, v)
+    try:
+        yield
+    finally:
+        for k, v in keep.items():
+            setattr(FL, k, v)
+
+
+def rigid_rows(d, drive):
+    """``{task: (compiled, through scikit-sundae, ideal valve)}`` seconds on the rigid preset."""
+    model = d.model()
     o = find_orbit(model, drive)
     ps = o.drive_states[0][2]
     a = drive.chambers.area_ratio
     ideal = PositionSwitchedDrive(stroke=ps * (1 - a), ret=a * ps - drive.supply.tank_pressure,
                                   switch_out=drive.valve.switch_out)
     oi = find_orbit(model, ideal)
-    reps = 2 if n else 3
-    start = InitialState.rigid(0.0, 0.0, n)
+    start = InitialState.rigid(0.0, 0.0, 0)
+    tasks = {
+        "find_orbit from the default guess": (lambda: find_orbit(model, drive),
+                                              lambda: find_orbit(model, ideal)),
+        "simulate, 100 blows": (lambda: simulate(model, drive, start, 100.5 * o.period),
+                                lambda: simulate(model, ideal, start, 100.5 * oi.period)),
+    }
     out = {}
-    out["orbit"] = (best(lambda: find_orbit(model, drive), reps),
-                    best(lambda: find_orbit(model, ideal), reps))
-    out["before"] = best(lambda: _plain_start(model, drive), reps)
-    out["sim"] = (best(lambda: simulate(model, drive, start, 100.5 * o.period), reps),
-                  best(lambda: simulate(model, ideal, start, 100.5 * oi.period), reps))
-    out["cont before"] = min(_cont_point(o, drive, forward=False) for _ in range(reps))
-    tc = min(_cont_point(o, drive, forward=True) for _ in range(reps))
-    t = time.perf_counter()
-    bi = continue_orbit(oi, "switch_out", to=ideal.switch_out * 1.05, max_points=6, events=False)
-    out["cont"] = (tc, (time.perf_counter() - t) / max(1, len(bi.orbits) - 1))
+    for name, (circuit, ideal_fn) in tasks.items():
+        now = best(circuit, 3)
+        with flags(COMPILED=False):
+            before = best(circuit, 2)
+        out[name] = (now, before, best(ideal_fn, 3))
+    now = min(_cont_point(o, "precharge", drive.accumulator.precharge) for _ in range(3))
+    with flags(COMPILED=False):
+        before = min(_cont_point(o, "precharge", drive.accumulator.precharge) for _ in range(2))
+    ideal_point = min(_cont_point(oi, "switch_out", ideal.switch_out) for _ in range(3))
+    out["a continuation point (pre-charge)"] = (now, before, ideal_point)
     return out
 
 
-def _cont_point(o, drive, forward):
-    """Seconds per point of a continuation in the pre-charge (5 points): now, the parameter's column
-    of the Jacobian by a forward difference and each corrector's first step a chord step with the
-    last orbit's Jacobian; before, a central difference and full Newton steps."""
-    import impactbar.continuation.switched as CS
-
-    keep = CS.FORWARD_LAMBDA, CS.CHORD
-    CS.FORWARD_LAMBDA = CS.CHORD = forward
-    try:
-        t = time.perf_counter()
-        b = continue_orbit(o, "precharge", to=drive.accumulator.precharge * 1.05, max_points=6, events=False)
-        return (time.perf_counter() - t) / max(1, len(b.orbits) - 1)
-    finally:
-        CS.FORWARD_LAMBDA, CS.CHORD = keep
+def _cont_point(o, name, value):
+    """Seconds per point of a continuation in ``name`` over 5 % (at most 5 points)."""
+    t = time.perf_counter()
+    b = continue_orbit(o, name, to=value * 1.05, max_points=6, events=False)
+    return (time.perf_counter() - t) / max(1, len(b.orbits) - 1)
 
 
-def _plain_start(model, drive):
-    """``find_orbit`` with the start of before the settling's acceleration: every impact followed at the
-    drive's tolerance until the impact velocities agree to 1e-4, no extrapolation."""
-    fit, rtol = settling.DOMINANT_FIT, S.SETTLE_RTOL
-    settling.DOMINANT_FIT, S.SETTLE_RTOL = 0.0, drive.integrator.rtol
-    try:
-        return find_orbit(model, drive)
-    finally:
-        settling.DOMINANT_FIT, S.SETTLE_RTOL = fit, rtol
+def flexible_rows(d, drive):
+    """``find_orbit`` with 1 mode compiled and through scikit-sundae, 8 modes with the band solver and
+    the dense one (both compiled; one repetition each)."""
+    out = []
+    m1 = d.model().with_(n_modes=1)
+    find_orbit(m1, drive)
+    now = best(lambda: find_orbit(m1, drive), 2)
+    with flags(COMPILED=False):
+        before = best(lambda: find_orbit(m1, drive), 1)
+    out.append((1, "through scikit-sundae", now, before))
+    m8 = d.model().with_(n_modes=8)
+    now = best(lambda: find_orbit(m8, drive), 1)
+    with flags(BAND=False):
+        before = best(lambda: find_orbit(m8, drive), 1)
+    out.append((8, "dense solver", now, before))
+    return out
 
 
 def integrators(d, drive):
     """One stroke flight of the rigid preset (from rest 60 mm out, the supply at 22 MPa, to the
-    impact) by CVODE and by scipy's Radau on the same compiled right-hand side and Jacobian, both at
-    rtol 1e-10: seconds and right-hand-side evaluations of each."""
+    impact) by CVODE compiled, through scikit-sundae and by scipy's Radau on the same compiled
+    right-hand side and Jacobian, all at rtol 1e-10: seconds, steps, and CVODE's counters."""
     import numpy as np
     from scipy.integrate import solve_ivp
 
     from impactbar.drives import DriveState
+    from impactbar.drives.circuit import _cvode
     from impactbar.drives.circuit import _kernel as K
-    from impactbar.drives.circuit.flight import circuit_flight
 
     model = d.model()
     q, v = np.array([-0.06 / d.bar.length_m]), np.array([0.0])
@@ -121,29 +138,41 @@ def integrators(d, drive):
 
     arrival.terminal, arrival.direction = True, 1
     y0 = np.concatenate((q, v, state.z, np.zeros(K.N_ENERGY)))
-    circuit_flight(drive, model, state, 0.0, q, v, 50.0)  # warm-up
-    t_cv = best(lambda: circuit_flight(drive, model, state, 0.0, q, v, 50.0), 3)
+
+    def one():
+        return FL.circuit_flight(drive, model, state, 0.0, q, v, 50.0)
+
+    one()  # warm-up
+    t_cv = best(one, 5)
+    fl = one()
+    stats = _cvode.last_workspace().statistics()
+    with flags(COMPILED=False):
+        t_py = best(one, 3)
+    f(0.0, y0), jac(0.0, y0)  # (compiled before the clock starts)
+    calls[0] = 0
     t = time.perf_counter()
     ref = solve_ivp(f, (0.0, 50.0), y0, method="Radau", rtol=1e-10, atol=1e-12, jac=jac, events=arrival)
     t_ra = time.perf_counter() - t
-    fl = circuit_flight(drive, model, state, 0.0, q, v, 50.0)
-    return t_cv, fl.piece.t.size, t_ra, ref.t.size, calls[0], abs(ref.t_events[0][0] - fl.t) / fl.t
+    gap = abs(ref.t_events[0][0] - fl.t) / fl.t
+    return t_cv, t_py, fl.piece.t.size, stats, t_ra, ref.t.size, calls[0], gap
 
 
 def main(quick=False):
     d = circuit_preset("circuit-drifter")
     drive = d.drive()
-    t_cv, s_cv, t_ra, s_ra, c_ra, gap = integrators(d, drive)
-    print(f"one stroke flight, rtol 1e-10: CVODE {t_cv:.4f} s ({s_cv} steps), scipy Radau {t_ra:.3f} s "
-          f"({s_ra} steps, {c_ra} evaluations): {t_ra / t_cv:.0f} times; impact times {gap:.1e} apart")
-    print(f"{'modes':>5} {'':>8} {'orbit s':>9} {'100 blows s':>12} {'cont. point s':>14}")
-    for n in (0,) if quick else (0, 8):
-        r = row(d, drive, n)
-        for j, name in enumerate(("circuit", "ideal")):
-            print(f"{n:>5} {name:>8} {r['orbit'][j]:>9.4f} {r['sim'][j]:>12.4f} {r['cont'][j]:>14.4f}")
-        print(f"{n:>5} {'before':>8} {r['before']:>9.4f} {'':>12} {r['cont before']:>14.4f}   (the circuit's "
-              "orbit from the start of before; its continuation point with a central difference in "
-              "the parameter and full Newton steps)")
+    t_cv, t_py, s_cv, stats, t_ra, s_ra, c_ra, gap = integrators(d, drive)
+    print(f"one stroke flight, rtol 1e-10: CVODE compiled {t_cv * 1e3:.2f} ms, through scikit-sundae "
+          f"{t_py * 1e3:.2f} ms ({s_cv} points); scipy Radau {t_ra:.3f} s ({s_ra} steps, {c_ra} "
+          f"evaluations); impact times {gap:.1e} apart")
+    print("  CVODE's counters: " + ", ".join(f"{k} {v}" for k, v in stats.items()))
+    print(f"{'modes':>5} {'task':<36} {'circuit s':>10} {'before s':>10} {'ideal s':>9}   (before: through "
+          "scikit-sundae's Python interface)")
+    for name, (now, before, ideal) in rigid_rows(d, drive).items():
+        print(f"{0:>5} {name:<36} {now:>10.4f} {before:>10.4f} {ideal:>9.4f}")
+    if not quick:
+        for n, what, now, before in flexible_rows(d, drive):
+            print(f"{n:>5} {'find_orbit from the default guess':<36} {now:>10.3f} {before:>10.3f}   "
+                  f"(before: {what})")
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ Layout: ``parts`` (the frozen parts: :class:`Chambers`, :class:`Valve`, :class:`
 :class:`Accumulator`, :class:`Oil`), ``drive`` (:class:`HydraulicCircuitDrive`, the
 :class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``flight`` (one
 flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_kernel`` (the
-compiled vector field, Jacobian and event functions).
+compiled vector field, Jacobian and event functions), ``_sundials`` and ``_cvode`` (CVODE driven from
+compiled code, on the SUNDIALS libraries that scikit-sundae ships).
 """
 
 from .drive import PARAMETERS as PARAMETERS

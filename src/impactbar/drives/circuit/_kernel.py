@@ -1,12 +1,15 @@
 r"""The oil circuit's vector field, its Jacobian and its event functions, compiled with numba
-(theory §11). Plain arrays only: what SUNDIALS' CVODE calls (through scikit-sundae) at every step.
+(theory §11). Plain arrays only: what SUNDIALS' CVODE calls at every step (as C callbacks,
+:mod:`._cvode`, or through scikit-sundae's interface).
 
 The integrated state is ``Y = (q_0..q_N, q_0'..q_N', p_f, p_r, p_s, x_v, E_0..E_7[, Phi])``: the bar's
 modes (eq. 6), the circuit's state, eight energy quadratures (the terms of the account of theory
 §11: pump work, work on the piston, orifice losses, energy to the tank, the compression work of the
 front, rear and supply volumes, the accumulator's gas) and, for the variational equations, the
-fundamental matrix ``Phi`` of the first ``n = 2 N + 6`` components (row-major), ``Phi' = A Phi`` with
-``A`` the Jacobian of the vector field.
+fundamental matrix ``Phi`` of the first ``n = 2 N + 6`` components, stored by columns (column ``j`` at
+``n + 8 + j n``: each column's equations couple only its own ``n`` components, so that the Newton
+matrix is banded, of half-bandwidth ``n - 1``), ``Phi' = A Phi`` with ``A`` the Jacobian of the vector
+field.
 
 ``par`` holds the parameters and the mode (indices below); the callers write the mode's flags
 before each flight.
@@ -17,6 +20,8 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
+from ...dynamics._flightkernel import CACHE
+
 # parameter indices in ``par``
 ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)
 HELD, PSH, XOUT, XIN, ACC, REL, XRATE, ARMO, ARMI, DAMP, NM, OPEN, VAR, HASREL, HASACC = range(15, 30)
@@ -26,7 +31,7 @@ N_ENERGY = 8
 N_EVENTS = 6
 ARRIVAL_EV, OUT_EV, IN_EV, RAMP_EV, ACC_EV, REL_EV = range(N_EVENTS)
 
-_JIT = dict(cache=True, nogil=True, error_model="numpy")
+_JIT = dict(cache=CACHE, nogil=True, error_model="numpy")  # (in memory where no cache is writable)
 
 
 @nb.njit(**_JIT)
@@ -157,14 +162,15 @@ def rhs(t, y, yp, par):
         A = np.empty((n, n))
         jac_base(y, par, M, A)
         off = n + N_ENERGY
-        for i in range(n):
-            for j in range(n):
+        for j in range(n):  # column j of Phi at off + j n
+            c = off + j * n
+            for i in range(n):
                 s = 0.0
                 for k in range(n):
                     a = A[i, k]
                     if a != 0.0:
-                        s += a * y[off + k * n + j]
-                yp[off + i * n + j] = s
+                        s += a * y[c + k]
+                yp[c + i] = s
 
 
 @nb.njit(**_JIT)
@@ -185,10 +191,11 @@ def jac(t, y, yp, JJ, par):
             JJ[i, j] = A[i, j]
     if par[VAR] > 0.5:
         off = n + N_ENERGY
-        for col in range(n):  # Phi[:, col] stacked with stride n: rows off + k n + col
+        for col in range(n):  # Phi[:, col] at off + col n
+            c = off + col * n
             for i in range(n):
                 for k in range(n):
-                    JJ[off + i * n + col, off + k * n + col] = A[i, k]
+                    JJ[c + i, c + k] = A[i, k]
 
 
 @nb.njit(**_JIT)

@@ -221,8 +221,8 @@ class HydraulicCircuitDrive(Drive):
         wanted = {names[i] for i in hit if i in names}
         return tuple(e for e in self.events(mode) if e.name in wanted)
 
-    def _failure(self, model, sol, t) -> str:
-        return (f"the oil circuit's flight from t = {t:.6g} could not be integrated ({sol.message}): "
+    def _failure(self, model, message, t) -> str:
+        return (f"the oil circuit's flight from t = {t:.6g} could not be integrated ({message}): "
                 "check that the chambers keep a positive volume (rear_volume against the stroke) and that "
                 "the pump flow and the areas can move the piston")
 

@@ -4,15 +4,24 @@ r"""One flight of the bar under the oil circuit, integrated by SUNDIALS' CVODE (
 relaxes in ``V / (beta K phi')``, some ``1e-5`` of a period on the example drifter, ``1e-8`` in
 the ideal limit, against a period of order 1) and the accuracy asked of it is tight (the energy
 account to ``1e-8``, periodic orbits to ``1e-8``), so ``rtol = 1e-10``. scipy's ``Radau``,
-``BDF`` and ``LSODA`` take their steps in Python; CVODE (BDF of orders 1 to 5, SUNDIALS, through
-the maintained binding ``scikit-sundae``) runs its steps, Newton iterations and root finding in C
-and calls the compiled (numba) right-hand side, Jacobian and event functions. On one stroke flight
-of the preset ``circuit-drifter`` (``benchmarks/bench_circuit.py``, this 2-core machine while
-shared) ``Radau`` with the same compiled right-hand side and Jacobian took about 0.9 s, CVODE about
-0.007 s, some hundred times less, their impact times 5e-11 apart. Its
-events (the arrival ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply
-pressure through the pre-charge and the relief pressure) are located by CVODE's root finding to the
-integrator's tolerance (the ramp's end, linear in time, to rounding).
+``BDF`` and ``LSODA`` take their steps in Python; CVODE (BDF of orders 1 to 5, SUNDIALS) runs its
+steps, Newton iterations and root finding in C. On one stroke flight of the preset
+``circuit-drifter`` (``benchmarks/bench_circuit.py``, this 2-core machine while shared) ``Radau``
+with the same compiled right-hand side and Jacobian took 0.14 s (203 steps), CVODE 0.5 ms (380),
+their impact times 5e-11 apart. The flight's loop runs in compiled code and hands CVODE the compiled vector
+field, Jacobian and event functions as C callbacks (:mod:`._cvode`, on the SUNDIALS libraries that
+scikit-sundae ships, :mod:`._sundials`): through scikit-sundae's Python interface, where each of
+those calls is a call of Python, the same flight took 8.5 ms (:data:`COMPILED`; the same steps to the
+bit). CVODE's counters on it: 380 steps, 498 right-hand sides, 17 error-test failures, 497 Newton
+iterations, 7 Jacobians: the steps are those BDF's error control asks at this tolerance (the
+pressures' fast transients after each switch and impact, the valve's ramp; measured over 20 periods,
+``rtol = 1e-8`` took a quarter fewer steps for errors a hundred times larger), not failures. The
+variational flights' Newton systems (``n + 8 + n^2`` unknowns) are solved by the band solver
+(:data:`BAND`; ``Phi`` stored by columns). Its events (the arrival
+``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply pressure through the
+pre-charge and the relief pressure) are located by CVODE's root finding to the integrator's
+tolerance (the ramp's end, linear in time, to rounding). Each flight is integrated in its own time,
+from 0 (the vector field does not depend on ``t``).
 
 Each flight starts its energy quadratures at 0; with ``variational=True`` it integrates the
 fundamental matrix ``Phi`` of the first ``2 N + 6`` components beside them (the variational
@@ -23,6 +32,7 @@ apply the saltation there, Hiskens & Pai 2000).
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import math
 
@@ -117,7 +127,52 @@ class CircuitPiece:
         return self.c @ self.modal(t)[1]
 
 
-def _solver(par, settings, directions, n_total, max_steps):
+#: Flights by CVODE driven from compiled code (:mod:`._cvode`: no Python between a flight's start and
+#: its end) wherever the SUNDIALS libraries that scikit-sundae ships can be bound
+#: (:func:`._sundials.available`); ``False``: through scikit-sundae's Python interface, each call of
+#: the vector field, the Jacobian and the events a call of Python (the way before, the fallback, and
+#: the baseline of ``benchmarks/bench_circuit.py``). The same steps either way, to the bit.
+COMPILED = True
+
+#: The variational flights' Newton systems by SUNDIALS' band solver (half-bandwidths ``n - 1``: ``Phi``
+#: is stored by columns, each column's equations coupling only its own components); ``False``: the
+#: dense solver (the way before; ``benchmarks/bench_circuit.py``'s baseline for the flexible piston).
+BAND = True
+
+_MAX_STEPS = 200000
+
+
+def _compiled_driver():
+    """:mod:`._cvode` where :data:`COMPILED` and the libraries bind, else None."""
+    if not COMPILED:
+        return None
+    from . import _sundials
+
+    if not _sundials.available():
+        return None
+    from . import _cvode
+
+    return _cvode
+
+
+def _message(flag) -> str:
+    from sksundae._cy_cvode import CVMESSAGES
+
+    return CVMESSAGES.get(int(flag), f"CVODE's flag {int(flag)}")
+
+
+def _integrate_compiled(cv, par, settings, directions, y0, t, end, keep):
+    """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly`."""
+    n = keep - K.N_ENERGY
+    ws = cv.workspace(y0.size, n - 1 if BAND and y0.size > keep else 0)  # variational: the band solver
+    flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
+                                      float(settings.atol), np.asarray(directions, dtype=np.int32), par,
+                                      keep, _MAX_STEPS)
+    return int(flag), _message(flag), ts, Y, yend, np.flatnonzero(roots)
+
+
+def _integrate_binding(par, settings, directions, y0, t, end, keep):
+    """The same through scikit-sundae's ``CVODE`` (its Python interface)."""
     from sksundae.cvode import CVODE
 
     rhs, jac, events = K.rhs, K.jac, K.events
@@ -133,8 +188,15 @@ def _solver(par, settings, directions, n_total, max_steps):
 
     ev.terminal = [True] * K.N_EVENTS
     ev.direction = list(directions)
-    return CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
-                 num_events=K.N_EVENTS, max_num_steps=max_steps)
+    solver = CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
+                   num_events=K.N_EVENTS, max_num_steps=_MAX_STEPS)
+    with contextlib.redirect_stdout(io.StringIO()):  # scikit-sundae prints CVODE's errors: in sol.message
+        sol = solver.solve(np.array([t, end]), y0)
+    Y = np.asarray(sol.y, dtype=float)
+    hit = np.array([], dtype=int)
+    if sol.status == 2 and sol.i_events is not None:
+        hit = np.flatnonzero(np.atleast_2d(sol.i_events)[-1])
+    return int(sol.status), sol.message, np.asarray(sol.t, dtype=float), Y[:, :keep], Y[-1], hit
 
 
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
@@ -170,24 +232,24 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
                              drive.chambers.area_ratio)
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
                       np.eye(n) if variational else None)
-    solver = _solver(par, settings, drive._directions(mode), y0.size, 200000)
-    with contextlib.redirect_stdout(io.StringIO()):  # scikit-sundae prints CVODE's errors: in sol.message
-        sol = solver.solve(np.array([t, end]), y0)
-    if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
-        raise ValueError(drive._failure(model, sol, t))
-    ts = np.asarray(sol.t, dtype=float)
-    Y = np.asarray(sol.y, dtype=float)
-    keep = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
-    ts, Y = ts[keep], Y[keep]
-    piece = CircuitPiece(ts, np.ascontiguousarray(Y[:, :n + K.N_ENERGY]), par, M, model.end_weights,
-                         drive.chambers.area_ratio)
+    keep = n + K.N_ENERGY
+    # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
+    # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
+    integrate = _integrate_binding if (cv := _compiled_driver()) is None else \
+        functools.partial(_integrate_compiled, cv)
+    status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0, end - t,
+                                                  keep)
+    if status < 0 or not np.all(np.isfinite(yend)):
+        raise ValueError(drive._failure(model, message, t))
+    ts = ts + t
+    keep_t = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
+    ts, Y = ts[keep_t], Y[keep_t]
+    piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio)
     drive._check_volumes(model, piece, t)
-    yend = Y[-1]
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
-    Phi = yend[n + K.N_ENERGY:].reshape(n, n).copy() if variational else None
-    if sol.status == 2 and sol.i_events is not None:
-        hit = np.flatnonzero(np.atleast_2d(sol.i_events)[-1])
+    Phi = yend[n + K.N_ENERGY:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
+    if status == 2:
         if K.ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop
             return Flight(te, qe, ve, ze, ARRIVAL, (), piece, Phi)

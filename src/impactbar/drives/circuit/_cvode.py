@@ -1,0 +1,289 @@
+r"""CVODE driven from compiled code: one flight of the circuit in one call of machine code (theory §11).
+
+The flight's loop (:func:`fly`: ``CVode`` in one-step mode, each step's state kept) is compiled by
+numba and calls SUNDIALS' CVODE (bound by :mod:`._sundials`), which calls back the vector field,
+its Jacobian and the event functions of :mod:`._kernel` as compiled C callbacks
+(:func:`numba.cfunc`): no Python runs between a flight's start and its end. CVODE's options are
+scikit-sundae's defaults (BDF of orders 1 to 5, Newton's method with a direct solver and the
+analytic Jacobian, at most 3 Newton iterations a step, 10 convergence failures), so that a flight
+takes the same steps as through scikit-sundae's interface, to the bit (a test); the variational
+flights take the band solver where scikit-sundae's takes the dense one, the same to rounding.
+
+Each thread keeps one CVODE workspace per system size and solver (:func:`workspace`),
+re-initialised at each flight (``CVodeReInit``) rather than built anew.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import threading
+import weakref
+
+import numba as nb
+import numpy as np
+from numba import types
+
+from ...dynamics._flightkernel import CACHE
+from . import _kernel as K
+from . import _sundials as S
+
+if not S.bind():  # pragma: no cover - imported only where available (flight.py)
+    raise ImportError(f"CVODE cannot be driven from compiled code here: {S.reason()}")
+
+__all__ = ["fly", "workspace", "last_workspace", "Workspace", "CV_ROOT_RETURN", "CV_TSTOP_RETURN",
+           "CV_TOO_MUCH_WORK"]
+
+CV_BDF, CV_ONE_STEP = 2, 2
+CV_SUCCESS, CV_TSTOP_RETURN, CV_ROOT_RETURN, CV_TOO_MUCH_WORK = 0, 1, 2, -1
+
+_p, _c, _d = types.intp, types.intc, types.double  # pointers as integers of their size
+_dp = types.CPointer(types.double)
+
+
+def _ext(name, sig):
+    return types.ExternalFunction(S.PREFIX + name, sig)
+
+
+_nv_data = _ext("N_VGetArrayPointer", _dp(_p))
+_dense_data = _ext("SUNDenseMatrix_Data", _dp(_p))
+_band_data = _ext("SUNBandMatrix_Data", _dp(_p))
+_band_ldim = _ext("SUNBandMatrix_LDim", types.int64(_p))
+_band_smu = _ext("SUNBandMatrix_StoredUpperBandwidth", types.int64(_p))
+_reinit = _ext("CVodeReInit", _c(_p, _d, _p))
+_tolerances = _ext("CVodeSStolerances", _c(_p, _d, _d))
+_user_data = _ext("CVodeSetUserData", _c(_p, _p))
+_root_direction = _ext("CVodeSetRootDirection", _c(_p, _p))
+_stop_time = _ext("CVodeSetStopTime", _c(_p, _d))
+_clear_stop = _ext("CVodeClearStopTime", _c(_p))
+_step = _ext("CVode", _c(_p, _d, _p, _p, _c))
+_root_info = _ext("CVodeGetRootInfo", _c(_p, _p))
+
+
+@nb.njit(inline="always")
+def _sizes(par):
+    """``(M, N)``: the bar's mode count plus one and the integrated state's size (``par``'s flags)."""
+    M = int(par[K.NM])
+    n = 2 * M + 4
+    return M, n + K.N_ENERGY + (n * n if par[K.VAR] > 0.5 else 0)
+
+
+@nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
+def _rhs_c(t, y, yp, user_data):
+    """CVODE's ``CVRhsFn``: :func:`._kernel.rhs` on the vectors' data; ``user_data`` is ``par``."""
+    M, N = _sizes(user_data)
+    par = nb.carray(user_data, K.HEAD + 3 * M)
+    K.rhs(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(yp), N), par)
+    return 0
+
+
+@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
+def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
+    """CVODE's ``CVLsJacFn``: :func:`._kernel.jac` into the dense matrix (stored by columns)."""
+    M, N = _sizes(user_data)
+    par = nb.carray(user_data, K.HEAD + 3 * M)
+    JJ = nb.carray(_dense_data(J), (N, N)).T
+    K.jac(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(fy), N), JJ, par)
+    return 0
+
+
+_LOW32 = 0xFFFFFFFF  # a sunindextype result: the low 32 bits hold it whether it is int or int64_t
+
+
+@nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
+def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
+    """CVODE's ``CVLsJacFn`` for the variational flights: the same matrix as :func:`._kernel.jac` in
+    band storage (half-bandwidths ``n - 1``: ``A`` on the state and on each column of ``Phi``,
+    stored by columns, the energies' rows zero), element ``(i, j)`` at ``data[j ldim + smu + i - j]``."""
+    M, N = _sizes(user_data)
+    par = nb.carray(user_data, K.HEAD + 3 * M)
+    n = 2 * M + 4
+    A = np.empty((n, n))
+    K.jac_base(nb.carray(_nv_data(y), N), par, M, A)
+    ldim = _band_ldim(J) & _LOW32
+    smu = _band_smu(J) & _LOW32
+    data = nb.carray(_band_data(J), N * ldim)
+    data[:] = 0.0
+    for blk in range(n + 1):  # the state, then each column of Phi
+        base = 0 if blk == 0 else n + K.N_ENERGY + (blk - 1) * n
+        for j in range(n):
+            col = (base + j) * ldim + smu - j
+            for i in range(n):
+                data[col + i] = A[i, j]
+    return 0
+
+
+@nb.cfunc(_c(_d, _p, _dp, _dp), cache=CACHE)
+def _events_c(t, y, g, user_data):
+    """CVODE's ``CVRootFn``: :func:`._kernel.events`."""
+    M, N = _sizes(user_data)
+    par = nb.carray(user_data, K.HEAD + 3 * M)
+    K.events(t, nb.carray(_nv_data(y), N), nb.carray(g, K.N_EVENTS), par)
+    return 0
+
+
+@nb.njit(cache=CACHE, nogil=True)
+def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
+    """One flight: CVODE from ``y0`` at ``t0`` to its first root (a terminal event in
+    ``directions``) or ``t_end``, every step kept.
+
+    Parameters
+    ----------
+    mem, yvec : int
+        The workspace's CVODE memory and state vector (:class:`Workspace`), its size ``y0.size``.
+    t0, t_end : float
+    y0 : numpy.ndarray, shape (N,)
+    rtol, atol : float
+    directions : numpy.ndarray of int32, shape (6,)
+        Each event's direction (CVODE's root directions).
+    par : numpy.ndarray
+        The kernels' parameters (:mod:`._kernel`).
+    keep : int
+        The leading components kept at each step.
+    max_steps : int
+
+    Returns
+    -------
+    flag : int
+        CVODE's last return: 2 a root, 1 ``t_end`` reached, negative a failure (-1 ``max_steps``).
+    t : numpy.ndarray, shape (S,)
+    y : numpy.ndarray, shape (S, keep)
+    y_end : numpy.ndarray, shape (N,)
+    roots : numpy.ndarray of int32, shape (6,)
+        CVODE's root information at a root (nonzero where an event function crossed), else 0.
+    """
+    N = y0.size
+    y = nb.carray(_nv_data(yvec), N)
+    y[:] = y0
+    roots = np.zeros(K.N_EVENTS, np.int32)
+    flag = _reinit(mem, t0, yvec)
+    if flag == 0:
+        flag = _tolerances(mem, rtol, atol)
+    if flag == 0:
+        flag = _user_data(mem, par.ctypes.data)
+    if flag == 0:
+        flag = _root_direction(mem, directions.ctypes.data)
+    if flag == 0:
+        flag = _stop_time(mem, t_end)
+    cap = 512
+    T = np.empty(cap)
+    Y = np.empty((cap, keep))
+    T[0] = t0
+    Y[0] = y0[:keep]
+    k = 1
+    tret = np.zeros(1)
+    while flag >= 0:
+        flag = _step(mem, t_end, yvec, tret.ctypes.data, CV_ONE_STEP)
+        if flag < 0:
+            break
+        if k == cap:
+            cap *= 2
+            T2 = np.empty(cap)
+            Y2 = np.empty((cap, keep))
+            T2[:k] = T[:k]
+            Y2[:k] = Y[:k]
+            T, Y = T2, Y2
+        T[k] = tret[0]
+        Y[k] = y[:keep]
+        k += 1
+        if flag == CV_ROOT_RETURN:
+            _root_info(mem, roots.ctypes.data)
+            break
+        if flag == CV_TSTOP_RETURN:
+            break
+        if k > max_steps:
+            flag = CV_TOO_MUCH_WORK
+            break
+    _clear_stop(mem)
+    return flag, T[:k].copy(), Y[:k].copy(), y.copy(), roots
+
+
+def _free(ctx, mem, y, A, LS):
+    f = S.function
+    f("CVodeFree")(ctypes.byref(ctypes.c_void_p(mem)))
+    f("SUNLinSolFree")(LS)
+    f("SUNMatDestroy")(A)
+    f("N_VDestroy")(y)
+    f("SUNContext_Free")(ctypes.byref(ctypes.c_void_p(ctx)))
+
+
+class Workspace:
+    """One CVODE memory for systems of size ``N``: BDF, Newton's method with the dense direct solver
+    and :func:`_jac_c` or, with ``band`` (the variational flights: ``N = n + 8 + n^2``), the band solver
+    of half-bandwidths ``n - 1`` and :func:`_jac_band_c` (``n^2`` times fewer operations a
+    factorisation than the dense one), the six event functions :func:`_events_c`, SUNDIALS' error
+    messages silenced (a failure's reason reaches the caller as its return flag). Freed when
+    collected.
+
+    Attributes
+    ----------
+    mem, y : int
+        The addresses :func:`fly` takes.
+    """
+
+    def __init__(self, N: int, band: int = 0):
+        f = S.function
+        ctx = ctypes.c_void_p()
+        if f("SUNContext_Create")(0, ctypes.byref(ctx)) != 0:
+            raise MemoryError("SUNContext_Create failed")
+        f("SUNContext_ClearErrHandlers")(ctx)
+        y = f("N_VNew_Serial")(N, ctx)
+        if band:
+            A = f("SUNBandMatrix")(N, band, band, ctx)
+            LS = f("SUNLinSol_Band")(y, A, ctx) if y and A else None
+        else:
+            A = f("SUNDenseMatrix")(N, N, ctx)
+            LS = f("SUNLinSol_Dense")(y, A, ctx) if y and A else None
+        mem = f("CVodeCreate")(CV_BDF, ctx)
+        self.ctx, self.mem, self.y, self.N, self.band = ctx.value, mem, y, N, band
+        self._finalizer = weakref.finalize(self, _free, ctx.value, mem, y, A, LS)
+        if not (y and A and LS and mem):
+            raise MemoryError("SUNDIALS could not allocate a CVODE workspace")
+        if band:  # the storage the Jacobian writes (SUNBandMatrix: smu = min(N - 1, 2 band))
+            smu = f("SUNBandMatrix_StoredUpperBandwidth")(A) & _LOW32
+            if smu != min(N - 1, 2 * band) or f("SUNBandMatrix_LDim")(A) & _LOW32 != smu + band + 1:
+                raise RuntimeError("SUNDIALS' band matrix is not stored as documented")
+        jac = _jac_band_c if band else _jac_c
+        ok = (f("CVodeInit")(mem, _rhs_c.address, 0.0, y) == 0
+              and f("CVodeSStolerances")(mem, 1e-10, 1e-12) == 0
+              and f("CVodeSetLinearSolver")(mem, LS, A) == 0
+              and f("CVodeSetJacFn")(mem, jac.address) == 0
+              and f("CVodeRootInit")(mem, K.N_EVENTS, _events_c.address) == 0)
+        if not ok:
+            raise RuntimeError("CVODE's set-up failed")
+
+    def statistics(self) -> dict:
+        """CVODE's counters over the last flight: steps, right-hand sides, error-test failures,
+        Newton iterations and convergence failures, Jacobians, linear-solver set-ups, event-function
+        evaluations."""
+        out = {}
+        for key, name in (("steps", "CVodeGetNumSteps"), ("rhs", "CVodeGetNumRhsEvals"),
+                          ("error_test_failures", "CVodeGetNumErrTestFails"),
+                          ("newton_iterations", "CVodeGetNumNonlinSolvIters"),
+                          ("newton_failures", "CVodeGetNumNonlinSolvConvFails"),
+                          ("jacobians", "CVodeGetNumJacEvals"), ("setups", "CVodeGetNumLinSolvSetups"),
+                          ("event_evaluations", "CVodeGetNumGEvals")):
+            v = ctypes.c_long()
+            S.function(name)(self.mem, ctypes.byref(v))
+            out[key] = int(v.value)
+        return out
+
+
+_LOCAL = threading.local()
+
+
+def workspace(N: int, band: int = 0) -> Workspace:
+    """This thread's workspace for systems of size ``N`` (with the band solver of half-bandwidths
+    ``band``, or dense for 0), made on first use."""
+    spaces = getattr(_LOCAL, "spaces", None)
+    if spaces is None:
+        spaces = _LOCAL.spaces = {}
+    ws = spaces.get((N, band))
+    if ws is None:
+        ws = spaces[(N, band)] = Workspace(N, band)
+    _LOCAL.last = ws
+    return ws
+
+
+def last_workspace() -> Workspace | None:
+    """The workspace of this thread's last flight (its :meth:`Workspace.statistics`)."""
+    return getattr(_LOCAL, "last", None)
