@@ -1,6 +1,8 @@
 """Continuation under the rod-rock law (theory §4d) in the rock's and the rod's parameters
 (``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"``, ``"segment<i>.length"``)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -105,8 +107,23 @@ def test_rock_parameter_names_are_checked(case):
         with_parameter(model, load, "rock.k", 300.0)
     with pytest.raises(ValueError, match="bit_mass"):
         with_parameter(model, load, "bit_mass", -1.0)
-    with pytest.raises(ValueError, match="whole cells"):  # the blow is piecewise constant in a length
-        ib.continue_orbit(case, "segment0.length", 2.5)
+    lattice = dataclasses.replace(model.law, method="lattice")
+    on_grid = ib.find_orbit(model.with_(impact=lattice), load, impacts=2, periods=2, guess=case)
+    with pytest.raises(ValueError, match="whole cells"):  # the lattice's blow is piecewise constant
+        ib.continue_orbit(on_grid, "segment0.length", 2.5)  # in a length
+
+
+def test_continuation_in_a_segments_length_on_the_exact_blows(case):
+    """The exact blows carry each segment as a delay line of its own travel time, so an orbit is
+    followed in a segment's length (issue 39); the branch's end is the orbit found afresh at that
+    length (1e-8), the rod's length changed alone."""
+    branch = ib.continue_orbit(case, "segment0.length", 2.37, max_points=40)
+    assert branch.status == "reached"
+    o = branch.orbits[-1]
+    assert o.model.law.segments[0].length == pytest.approx(2.37, rel=1e-12)
+    again = ib.find_orbit(o.model, o.load, impacts=2, periods=2, guess=case)
+    np.testing.assert_allclose(o.impact_velocities, again.impact_velocities, rtol=1e-8)
+    np.testing.assert_allclose(o.impact_times, again.impact_times, atol=1e-8)
 
 
 def test_a_target_beyond_the_end_the_start_sits_on_is_refused(case):

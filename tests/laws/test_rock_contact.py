@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 import impactbar as ib
-from impactbar.laws.rodrock.contact import RockContact, rock_contact
+from impactbar.laws.rodrock.contact import RockContact
+from impactbar.laws.rodrock.step import rock_contact
 from impactbar.laws.wave.impact import wave_impact
 
 
@@ -57,20 +58,56 @@ def test_contact_window_against_the_wave_law(N):
     assert 3.5 < errors[0] / errors[1] < 4.5  # second order
 
 
+@pytest.mark.parametrize("N", [4, 12])
+@pytest.mark.parametrize("load", [ib.CosineLoad(0.8, 2.0), ib.SquareWaveLoad(2.0, 1.3),
+                                  ib.FourierLoad(0.3, [0.5, 0.2j, 0.1])], ids=["cosine", "square", "fourier"])
+def test_exact_contact_window_is_the_wave_laws(N, load):
+    """The simulator's exact blow (the default: the piston's modal state and the drive as exact
+    pieces, the state projected on the modes in closed form) over the wave law's window on a rod of
+    impedance ``(1 + R)/(1 - R)`` whose bit's reflection returns after it: the wave law's independent
+    characteristics solution (its jumps located, the drive integrated exactly) to rounding, state,
+    the drive's work and the rod's energy, under a cosine, a square wave (a jump in the window for
+    ``t0 = 0.7``? no: its jumps at 0 and ``1.3 pi``) and three harmonics."""
+    s, R = 6.0, 0.4
+    law = _law(length=2.5, impedance=(1 + R) / (1 - R), k=5.0)
+    model = ib.BarModel(s=s, d=0.0, R=R, n_modes=N, impact=law)
+    wave = ib.BarModel(s=s, d=0.0, R=R, n_modes=N, impact="wave")
+    q, v = _arrival(N)
+    q[0] -= model.end_weights @ q
+    t0 = 0.7
+    w = wave_impact(wave, load, t0, q, v)
+    rc = rock_contact(model, load, t0, q, v, duration=2.5 / s)
+    assert rc.blow.method == "exact"
+    qa, va = rc.state_at(2.0 / s)
+    assert np.max(np.abs(qa - w.q_after)) <= 1e-13 * np.max(np.abs(w.q_after))
+    assert np.max(np.abs(va - w.v_after)) <= 1e-13 * np.max(np.abs(w.v_after))
+    drive_work, out, field = rc.account(2.0 / s)
+    assert drive_work == pytest.approx(w.drive_work, rel=1e-13)
+    assert out == pytest.approx(w.rod_energy, rel=1e-13)
+    assert rc.energy_before + drive_work == pytest.approx(field + out, rel=1e-13)
+
+
 def test_contact_without_drive_is_the_single_blow():
     """No drive, a rigid piston, the blow followed as long as the single blow: the contact step's blow
-    is :func:`single_blow`'s, and the piston leaves with its rebound velocity."""
+    is :func:`single_blow`'s (exact, and on the lattice with the same cells), and the piston leaves
+    with its rebound velocity."""
     law = _law(length=2.0, k=20.0, bit_mass=0.3, feed=0.5)
     model = ib.BarModel(s=4.0, d=0.0, R=0.0, n_modes=0, impact=law)
     zero = ib.CosineLoad(0.0, 0.0)
-    b = ib.single_blow(model, 1.3)
-    rc = rock_contact(model, zero, 1.0, [0.0], [1.3], duration=b.duration)
-    assert rc.duration == b.duration
-    for name in ("work_on_rock", "efficiency", "permanent_penetration", "piston_energy", "rebound_velocity"):
-        assert getattr(rc, name) == pytest.approx(getattr(b, name), rel=1e-13, abs=1e-15)
-    assert rc.v_after[0] == pytest.approx(b.rebound_velocity, rel=1e-13)
-    assert rc.drive_work == 0.0
-    assert rc.stop_advance == b.permanent_penetration
+    for cells in (None, 8):
+        if cells is None:
+            b = ib.single_blow(model, 1.3, method="exact", t_max=5.0)
+        else:
+            b = ib.single_blow(model, 1.3, method="lattice", cells_per_piston=cells)
+        rc = rock_contact(model, zero, 1.0, [0.0], [1.3], duration=b.duration, cells_per_piston=cells)
+        assert rc.blow.method == b.method
+        assert rc.duration == b.duration
+        for name in ("work_on_rock", "efficiency", "permanent_penetration", "piston_energy",
+                     "rebound_velocity"):
+            assert getattr(rc, name) == pytest.approx(getattr(b, name), rel=1e-13, abs=1e-15)
+        assert rc.v_after[0] == pytest.approx(b.rebound_velocity, rel=1e-13)
+        assert rc.drive_work == 0.0
+        assert rc.stop_advance == b.permanent_penetration
 
 
 def _run(N=8, d=0.05, t_end=40.0, **kw):

@@ -213,24 +213,34 @@ def test_cli_orbits_prints_the_drilling_outputs_per_blow(tmp_path):
     assert "drilling per blow" in table and f"{found[0]['work_on_rock_J']:8.2f}" in table
 
 
-def test_the_blows_grid_in_a_config():
-    """``[rock] cells_per_piston`` sets the simulator's blows' grid (``RodRock.cells_per_piston``):
-    by default the commensurate count; at 4 times it a run's work on rock per blow moves, by more
-    than rounding and less than 10 %; a bad count is refused by name."""
+def test_the_blows_method_and_grid_in_a_config():
+    """``[rock] method`` and ``cells_per_piston`` set the simulator's blows: exact by default; a
+    ``cells_per_piston`` (at 4 times the commensurate count here) puts them on the lattice, whose
+    work on rock per blow lies off the exact blows' by more than rounding and less than 10 % (the
+    lattice's error); ``method = "lattice"`` takes the commensurate count; bad values are refused by
+    name."""
     from impactbar.laws.rodrock.contact import BlowMap
 
     h = physical.Hammer.from_config(CONFIG)
-    assert h.model.law.cells_per_piston is None
+    assert h.model.law.cells_per_piston is None and h.model.law.blow_method(h.model) == "exact"
     default = BlowMap(h.model, h.load, 0.0).grid.piston_cells
     cfg = copy.deepcopy(CONFIG)
     cfg["rock"]["cells_per_piston"] = 4 * default
     fine = physical.Hammer.from_config(cfg)
     assert fine.model.law.cells_per_piston == 4 * default
+    assert fine.model.law.blow_method(fine.model) == "lattice"
     assert fine.to_dict()["drill"]["cells_per_piston"] == 4 * default
     w0 = rock_blows(h, physical.simulate(h, periods=4).trajectory)["work_on_rock_J"]
     w1 = rock_blows(fine, physical.simulate(fine, periods=4).trajectory)["work_on_rock_J"]
     assert w0.size == w1.size > 0
     assert 1e-12 < np.max(np.abs(w1 - w0) / w0) < 0.1
+    lattice = copy.deepcopy(CONFIG)
+    lattice["rock"]["method"] = "lattice"
+    lat = physical.Hammer.from_config(lattice)
+    assert lat.model.law.blow_method(lat.model) == "lattice" and lat.to_dict()["drill"]["method"] == "lattice"
+    lattice["rock"]["method"] = "cells"
+    with pytest.raises(ValueError, match="rock.method"):
+        physical.Hammer.from_config(lattice)
     for bad in (0, "16", 1.5):
         cfg["rock"]["cells_per_piston"] = bad
         with pytest.raises(ValueError, match="rock.cells_per_piston"):

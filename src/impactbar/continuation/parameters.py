@@ -126,12 +126,12 @@ def _is_law_parameter(model, name) -> bool:
 
 def _check_parameter(model, load, name, *, continuation=False):
     """Whether ``name`` is a parameter of the model and load; for ``continuation`` also that the
-    problem is smooth in it (not a segment length: the blow's cell grid rounds the segments to
-    whole cells, so the blow changes in steps with a length: the law's
+    problem is smooth in it (not a segment length on the lattice: its cell grid rounds the segments
+    to whole cells, so the blow changes in steps with a length: the law's
     :meth:`~impactbar.laws.ContactLaw.check_continuable`)."""
     if _is_law_parameter(model, name):
         if continuation:
-            model.law.check_continuable(name)
+            model.law.check_continuable(name, model)
         return
     if name not in PARAMETERS:
         raise ValueError(f"parameter must be one of {PARAMETERS}; got {name!r}")

@@ -131,6 +131,22 @@ class ContactLaw:
         """
         return model.with_(impact="paper", R=min(model.R, 0.95))
 
+    def coarse_model(self, model):
+        """A cheaper model of the same motion, whose orbits Newton's method reaches from farther
+        guesses, to start this law's Newton from (:func:`~impactbar.find_orbit`), or ``None`` (the
+        default): e.g. the rod-rock law's blows on the lattice for its exact blows.
+
+        Parameters
+        ----------
+        model : BarModel
+            A bar under this law.
+
+        Returns
+        -------
+        BarModel or None
+        """
+        return None
+
     def window(self, model) -> float:
         """Duration of one impact (dimensionless time): 0 for an instantaneous law.
 
@@ -380,7 +396,7 @@ class ContactLaw:
         self._check_parameter(name)
         return dataclasses.replace(self, **{name: value})
 
-    def check_continuable(self, name: str) -> None:
+    def check_continuable(self, name: str, model=None) -> None:
         """Refuse a parameter in which the law's impact map is not smooth, so that a branch cannot
         be continued in it (:func:`~impactbar.continue_orbit`); every parameter is accepted by
         default.
@@ -389,6 +405,8 @@ class ContactLaw:
         ----------
         name : str
             One of :attr:`parameters`.
+        model : BarModel, optional
+            The model under this law (a law whose smoothness depends on it).
 
         Raises
         ------

@@ -30,7 +30,6 @@ from functools import cached_property
 
 import numpy as np
 
-from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
 from ..drives.base import autonomous
@@ -38,14 +37,13 @@ from ..dynamics.implementations import use_fast
 from ..dynamics.modal import fundamental
 from ..loads import Load
 from ..model import BarModel
+from ._assemble import _build
 from ._rigid_scalar import RigidFlight
 from ._rigid_scalar import _b as _scalar_b
-from .admissibility import _admissibility, _window_departure
 from .one_impact import OrbitList, _check_modes, phase_equation_orbits
 from .orbit import MultiImpactOrbit as MultiImpactOrbit
 from .orbit import PeriodicOrbit
 from .phase import _check_inputs
-from .stability import sort_multipliers, stable_verdict
 
 __all__ = ["MultiImpactOrbit", "find_orbit", "periodic_orbits", "periodic_orbits_by_newton",
            "rock_periodic_orbits"]
@@ -310,59 +308,6 @@ def _quotient(a: float, b: float) -> float:
     return math.copysign(math.inf, a) * math.copysign(1.0, b)
 
 
-def _sorted_multipliers(P):
-    return sort_multipliers(np.linalg.eigvals(P))
-
-
-def _build(problem: _Segments, u, *, admissibility: bool = True) -> PeriodicOrbit:
-    """The orbit at a converged solution ``u`` of the segment problem."""
-    model, load = problem.model, problem.load
-    M, m = problem.M, problem.m
-    _, _, info = problem.evaluate(u)
-    t, _ = problem.split(u)
-    c = problem.c
-    v_imp = info["y_minus"][:, M:] @ c
-    mu = _sorted_multipliers(problem.monodromy(info["maps"]))
-    if not np.all(np.isfinite(mu)):
-        mu = np.full(2 * M, np.inf + 0j)
-    Tw = problem.T
-    arrivals = np.append(t[1:], t[0] + TWO_PI * problem.n)  # flight j ends at arrivals[j]
-    contacts = None
-    if Tw > 0.0 and np.all(v_imp > 0.0) and admissibility:
-        contacts = tuple(model.law.blow(model, load, float(ta), ym)  # contact j starts flight j
-                         for ta, ym in zip(t, np.roll(info["y_minus"], 1, axis=0), strict=True))
-    statuses, clear, cerr = [], -math.inf, 0.0
-    if admissibility:
-        for j in range(m):
-            T = arrivals[j] - t[j] - Tw
-            y0 = info["y_plus"][j]
-            at_rest = None
-            if Tw > 0.0:  # the wave law: the end leaves the rod end when the window closes
-                v_dep = float(c @ y0[M:])
-                at_rest = abs(v_dep) <= 1e-12 * max(abs(float(v_imp[j - 1])), load.sup_abs, 1e-300)
-            st, cl, ce = _admissibility(model, load, float(t[j] + Tw), y0, float(v_imp[j]),
-                                        horizon=float(T), at_rest=at_rest)
-            if Tw > 0.0:
-                st = _window_departure(st, at_rest, v_dep,
-                                       contacts is not None and bool(contacts[j].separations))
-            statuses.append(st)
-            if cl > clear:
-                clear, cerr = cl, ce
-        status = min(statuses, key=lambda a: a.rank)
-    else:
-        status = Admissibility.UNCHECKED
-    admissible = status == Admissibility.ADMISSIBLE
-    return PeriodicOrbit(
-        model=model, load=load, impacts=m, periods=problem.n,
-        impact_times=t.copy(), phases=np.mod(t, TWO_PI), impact_velocities=np.roll(v_imp, 1),
-        admissible=admissible, admissibility=status, clearance=float(clear),
-        clearance_error=float(cerr), multipliers=mu,
-        stable=stable_verdict(admissible, mu),
-        states_after_impact=info["y_plus"], states_before_impact=np.roll(info["y_minus"], 1, axis=0),
-        contacts=contacts,
-    )
-
-
 def _normalise(problem: _Segments, u):
     """Shift the impact times so that the first lies in ``[0, 2 pi)``; check they increase."""
     z = np.array(u, dtype=float).reshape(problem.m, problem.B)
@@ -589,20 +534,35 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
                          f"in periods={n} load periods (wave law: s must exceed m/(pi n))")
     problem = _Segments(model, load, m, n)
     starts, avoid = _guesses(problem, guess)
+    coarse = model.law.coarse_model(model)
     with single_threaded_blas():
+        if coarse is not None:  # Newton on the cheaper model first, its orbits polished on this one
+            rough = _Segments(coarse, load, m, n)
+            near = [u for u in (_converge(rough, u0, avoid, tol, max_iter) for u0 in starts) if u is not None]
+            for u0 in near:
+                u = _converge(problem, u0, avoid, tol, min(max_iter, POLISH_ITERATIONS))
+                if u is not None:
+                    return _build(problem, u)
         for u0 in starts:
-            u, _ = problem.newton(u0, tol=tol, max_iter=max_iter)
-            if u is None:
-                continue
-            if avoid is not None and _same_orbit(u, avoid, problem):
-                continue
-            u = _normalise(problem, u)
-            if u is None:
-                continue
-            return _build(problem, u)
+            u = _converge(problem, u0, avoid, tol, max_iter)
+            if u is not None:
+                return _build(problem, u)
     raise ValueError(f"find_orbit: Newton did not converge to an orbit with {m} impacts in {n} "
                      "periods from the guess" + (" (only to the undoubled orbit)" if avoid is not None
                                                   else ""))
+
+
+#: Newton iterations that polish a coarse model's orbit into the law's own (:func:`find_orbit`)
+POLISH_ITERATIONS = 15
+
+
+def _converge(problem, u0, avoid, tol, max_iter):
+    """Newton's method on ``problem`` from ``u0``: the normalised solution, or ``None`` where it does
+    not converge or only finds ``avoid`` (the undoubled orbit)."""
+    u, _ = problem.newton(u0, tol=tol, max_iter=max_iter)
+    if u is None or (avoid is not None and _same_orbit(u, avoid, problem)):
+        return None
+    return _normalise(problem, u)
 
 
 def _same_orbit(u, v, problem):
@@ -741,8 +701,11 @@ def periodic_orbits_by_newton(model: BarModel, load: Load) -> OrbitList:
     Steps and starts scale with the load (the finite-difference steps of the impact map are
     relative to the state), so that the orbits found are the same at every scale of the load.
 
-    Orbits found twice (phases within ``1e-7``) are kept once. Guesses from which Newton does not
-    converge give nothing: the list holds the orbits found, not a certified set of all of them.
+    Where the law has a cheaper model of the same motion (:meth:`~impactbar.laws.ContactLaw.coarse_model`:
+    the rod-rock law's exact blows on the lattice), each guess goes to it first and its orbit is
+    polished on the law's own model. Orbits found twice (phases within ``1e-7``) are kept once.
+    Guesses from which Newton does not converge give nothing: the list holds the orbits found, not a
+    certified set of all of them.
 
     Parameters
     ----------
@@ -776,7 +739,8 @@ def periodic_orbits_by_newton(model: BarModel, load: Load) -> OrbitList:
     [(2.6008, False), (3.5461, True)]
     """
     found = []
-    starts = _paper_guesses(model, load)
+    coarse = model.law.coarse_model(model)
+    starts = _paper_guesses(model if coarse is None else coarse, load)
     with single_threaded_blas():
         for guess in [*starts, None]:
             if guess is None:
@@ -786,6 +750,8 @@ def periodic_orbits_by_newton(model: BarModel, load: Load) -> OrbitList:
                 if guess is None:
                     break
             try:
+                if coarse is not None:  # the cheaper model's orbit from the guess, or none
+                    guess = find_orbit(coarse, load, 1, 1, guess=guess)
                 orbit = find_orbit(model, load, 1, 1, guess=guess)
             except ValueError:
                 continue

@@ -37,7 +37,7 @@ Configuration keys (TOML file or a nested ``dict``, see :meth:`Hammer.from_confi
     [model]    n_modes                  # optional, default 16
     [[rod.segments]] length, diameter | area, E, density   # with [rock]: the rod-rock law
     [bit]      mass                     # optional, default 0 kg
-    [rock]     k, k_u, feed, cells_per_piston  # N/m, N/m, N (feed optional); the blows' grid (optional)
+    [rock]     k, k_u, feed, method, cells_per_piston  # N/m, N/m, N (feed optional); the blows' method
 
 Unknown keys are refused, naming the key.
 

@@ -311,7 +311,8 @@ def _exact_blow(v, seg, k, k_u, bit_mass, feed, T, samples, piston):
     """The blow of ``piston`` (None: uniform) in the window ``T`` by the exact solver, sampled
     ``samples`` times a piston crossing; None where its pieces would pass the default's bounds or
     its energy account is not closed (:func:`~impactbar.single_blow`'s ``method="auto"``)."""
-    from ..laws.rodrock.exact import PoolOverflow, exact_rod_rock_blow
+    from ..laws.rodrock.exact import PoolOverflow
+    from ..laws.rodrock.exactrecord import exact_rod_rock_blow
     from ..laws.rodrock.law import AUTO_MAX_PIECES, AUTO_MAX_POOL_BYTES, EXACT_ACCOUNT_TOLERANCE
 
     try:

@@ -26,7 +26,8 @@ from .units import to_si
 __all__ = ["DrillString", "RodPiece", "rock_blows", "rock_from_config", "rock_summary"]
 
 #: keys of the sections (added to the hammer configuration's)
-ROCK_SECTIONS = {"rod": {"segments"}, "bit": {"mass"}, "rock": {"k", "k_u", "feed", "cells_per_piston"}}
+ROCK_SECTIONS = {"rod": {"segments"}, "bit": {"mass"},
+                 "rock": {"k", "k_u", "feed", "cells_per_piston", "method"}}
 _SEGMENT_KEYS = {"length", "diameter", "area", "E", "density"}
 
 
@@ -81,10 +82,11 @@ class DrillString:
     feed_N : float
         Static feed force on the shank (N), ``>= 0``.
     cells_per_piston : int, optional
-        Cells along the piston of the simulator's blows (:class:`~impactbar.RodRock`'s
-        ``cells_per_piston``, ``1 <= n <= 4096``; a numerical setting, no physics): default the
-        commensurate count, at least 8. The blows' error is of first order in the cells at most; a
-        run at twice the cells estimates it (theory §4d).
+        Puts the simulator's blows on the cell grid with this many cells along the piston
+        (:class:`~impactbar.RodRock`'s ``cells_per_piston``, ``1 <= n <= 4096``; a numerical setting,
+        no physics). Its orbits converge to the exact blows' at second order (theory §4d).
+    method : {"auto", "exact", "lattice"}
+        The simulator's blows (:class:`~impactbar.RodRock`'s ``method``): exact by default.
     """
 
     segments: tuple
@@ -93,6 +95,7 @@ class DrillString:
     bit_mass_kg: float = 0.0
     feed_N: float = 0.0
     cells_per_piston: int | None = None
+    method: str = "auto"
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
@@ -107,6 +110,8 @@ class DrillString:
         if self.cells_per_piston is not None:
             object.__setattr__(self, "cells_per_piston",
                                check_int("rock.cells_per_piston", self.cells_per_piston, lo=1, hi=4096))
+        if self.method not in ("auto", "exact", "lattice"):
+            raise ValueError(f"rock.method must be 'auto', 'exact' or 'lattice'; got {self.method!r}")
 
     def law(self, bar, scales) -> RodRock:
         """The dimensionless law for a piston ``bar`` (:class:`~impactbar.physical.Bar`) and the
@@ -123,7 +128,7 @@ class DrillString:
         return RodRock(segments=segs, rock=BilinearRock(k=self.rock_k_N_m / (m * om2),
                                                         k_u=self.rock_k_u_N_m / (m * om2)),
                        bit_mass=self.bit_mass_kg / m, feed=self.feed_N / scales.force_N,
-                       cells_per_piston=self.cells_per_piston)
+                       cells_per_piston=self.cells_per_piston, method=self.method)
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (SI floats)."""
@@ -131,16 +136,15 @@ class DrillString:
                                   "density_kg_m3": g.density_kg_m3} for g in self.segments],
                 "rock_k_N_m": self.rock_k_N_m, "rock_k_u_N_m": self.rock_k_u_N_m,
                 "bit_mass_kg": self.bit_mass_kg, "feed_N": self.feed_N,
-                "cells_per_piston": self.cells_per_piston}
+                "cells_per_piston": self.cells_per_piston, "method": self.method}
 
 
 def rock_from_config(config: dict, bar) -> DrillString | None:
     """The drill string of a configuration's ``[rod]``, ``[bit]`` and ``[rock]`` sections, or None
     when it has no ``[rock]``. ``[[rod.segments]]``: ``length``, ``diameter`` or ``area``, and
     ``E`` and ``density`` (default the piston's); ``[bit]``: ``mass`` (default 0 kg);
-    ``[rock]``: ``k``, ``k_u`` (N/m, e.g. ``"250 kN/mm"``), ``feed`` (N, default 0) and
-    ``cells_per_piston`` (the simulator's blows' grid, :class:`DrillString`; default the
-    commensurate count).
+    ``[rock]``: ``k``, ``k_u`` (N/m, e.g. ``"250 kN/mm"``), ``feed`` (N, default 0), and the
+    simulator's blows' ``method`` and ``cells_per_piston`` (:class:`DrillString`; default exact).
 
     Raises
     ------
@@ -187,7 +191,7 @@ def rock_from_config(config: dict, bar) -> DrillString | None:
     feed = to_si("rock.feed", rock["feed"], "N", "'5 kN'", what="a force") if "feed" in rock else 0.0
     mass = to_si("bit.mass", bit["mass"], "kg", "'1.5 kg'", what="a mass") if "mass" in bit else 0.0
     return DrillString(segments=tuple(pieces), rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed,
-                       cells_per_piston=rock.get("cells_per_piston"))
+                       cells_per_piston=rock.get("cells_per_piston"), method=rock.get("method", "auto"))
 
 
 def rock_blows(hammer, trajectory) -> dict:

@@ -1,5 +1,5 @@
-"""Histories of the exact blow (theory §4d): a recorded channel evaluated at given times, and its
-largest value (:mod:`impactbar.laws.rodrock._exactkernel` records them)."""
+"""Histories of the exact blow (theory §4d): a recorded channel evaluated at given times, its
+largest value and its integral (:mod:`impactbar.laws.rodrock._exactkernel` records them)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,10 @@ import numba
 import numpy as np
 
 from ...dynamics._kernel import CACHE
-from ._exactpieces import DC, EPS, INF, blk_abs, blk_bound, blk_clear, blk_eval, blk_value
+from ._exactintegrals import blk_integral
+from ._exactpieces import DC, EPS, INF, blk_abs, blk_bound, blk_clear, blk_eval, blk_value, pool_load
+
+NOBIN = np.zeros((1, 1))
 
 # ------------------------------------------------------------------------------------------------
 # histories
@@ -151,3 +154,25 @@ def history_max(PF, PI, TK, TC, lam, head, t_end, res):
         p = nx
     res[0] = best
     res[1] = tb
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def history_integral(PF, PI, TK, TC, lam, head, t_end):
+    """``int_0^{t_end}`` of a history channel (its value), piece by piece in closed form."""
+    E = lam.size
+    B = np.zeros((E, DC), dtype=np.complex128)
+    N = np.zeros(E, dtype=np.int64)
+    total = 0.0
+    p = head
+    while p >= 0:
+        nx = PI[p, 0]
+        t0 = PF[p, 0]
+        t1 = min(PF[nx, 0] if nx >= 0 else t_end, t_end)
+        a = max(t0, 0.0)
+        if t1 > a and PI[p, 2] > 0:
+            pool_load(B, N, p, 0.0, lam, NOBIN, PI, TK, TC)  # (no shift: no binomials read)
+            total += blk_integral(B, N, lam, a - t0, t1 - t0)
+        if t1 >= t_end:
+            break
+        p = nx
+    return total

@@ -66,20 +66,7 @@ def blk_integral(B, N, lam, a, b):
     """``int_a^b phi``, in the variable ``u = tau / b`` (coefficients ``c_d b^d``): a piece valid
     on a short interval only (a series of a stiff exponent) has huge coefficients ``c_d`` whose
     products would overflow, though its values do not."""
-    if b <= 0.0:
-        return 0.0
-    mom = np.empty(B.shape[1], dtype=np.complex128)
-    s = 0.0j
-    for e in range(N.size):
-        n = N[e]
-        if n == 0:
-            continue
-        moments(lam[e] * b, a / b, 1.0, n, mom)
-        sc = 1.0
-        for d in range(n):
-            s += B[e, d] * sc * mom[d]
-            sc *= b
-    return s.real * b
+    return blk_integral_exp(B, N, lam, 0.0j, a, b).real
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -123,3 +110,23 @@ def blk_integral_sq(B, N, lam, a, b):
                 t += prod[k] * mom[k]
             s += t if e1 == e2 else 2.0 * t
     return s.real * b
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_integral_exp(B, N, lam, shift, a, b):
+    """``int_a^b phi(tau) e^{shift tau} dtau`` (complex ``shift``; the complex value, ``phi`` real),
+    in the variable ``u = tau / b`` as :func:`blk_integral`: the projections of a wave on the modes."""
+    if b <= 0.0:
+        return 0.0j
+    mom = np.empty(B.shape[1], dtype=np.complex128)
+    s = 0.0j
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        moments((lam[e] + shift) * b, a / b, 1.0, n, mom)
+        sc = 1.0
+        for d in range(n):
+            s += B[e, d] * sc * mom[d]
+            sc *= b
+    return s * b

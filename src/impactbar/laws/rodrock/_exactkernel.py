@@ -81,16 +81,17 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
 # ------------------------------------------------------------------------------------------------
 # ws = (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
 #       RT, RC, RD, EP, CI, CT)
-# PR: 0 k, 1 k_u, 2 m (0: massless), 3 feed, 4 Z at the bit, 5 H, 6 (unused), 7 semi-infinite rod,
+# PR: 0 k, 1 k_u, 2 m (0: massless), 3 feed, 4 Z at the bit, 5 H, 6 fixed horizon (run to t_max,
+#     certify nothing), 7 semi-infinite rod,
 #     8 Lb (time scale of pruning), 9 spent fraction, 10 E0, 11 rod's static compliance,
 #     12 piston's compliance about its struck end, 13 rod's about the shank, 14 rod's about the bit,
-#     15 piston's mass, 16 rod's mass with the bit's, 17 h (window), 18 t_max, 19 (unused),
+#     15 piston's mass, 16 rod's mass with the bit's, 17 h (window), 18 t_max, 19 max windows,
 #     20 p at the start, 21 contact node index, 22 driven, 23 record, 24 max pieces
 # NSF (J + 1, 4): contact node: gap, shank displacement; NSI (J + 1, 4): used cursors (2), drive
 #     cursor, contact flag
 # BS: 0 p, 1 x (= p - ref), 2 w, 3 p_max, 4 R_max, 5 p_perm, 6 dissipated, 7 int R dp, 8 absorbed
 #     (semi-infinite rod), 9 p at the start, 10 time of p_max, 11 episode start time, 12 episode
-#     start p, 13 int G^2/Z spare; BI: 0 branch, 1 episodes
+#     start p, 13 int G^2/Z spare, 14 the drive's work on the piston; BI: 0 branch, 1 episodes
 # EP (cap, 5): episodes t_start, t_end, p_start, p_end, dissipated
 # CI: 0 status, 1 ended_by, 2 windows done, 3 (unused), 4 crossing searches given up, 5 separations,
 #     6 re-contacts, 7 degree limit reached; CT: 0 time reached, 1 last separation, 2 last loading end,
@@ -152,6 +153,17 @@ def node_end(ws, t, t1):
             NSI[0, 0] = cg
             NSI[0, 2] = cd
         b = min(nb, nbd)
+        if driven:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end, over [a, b)
+            L = min(b, t1) - a
+            if L > 0.0:
+                _load(ws, 0, 2 * J, cd, a)
+                _load(ws, 1, 1, cg, a)
+                pp = blk_integral_sq(WB[0], WN[0], lam, 0.0, L)
+                blk_set_comb(WB[3], WN[3], 1.0, WB[0], WN[0], 1.0, WB[1], WN[1])
+                sp = blk_integral_sq(WB[3], WN[3], lam, 0.0, L)
+                blk_set_comb(WB[3], WN[3], 1.0, WB[0], WN[0], -1.0, WB[1], WN[1])
+                sm = blk_integral_sq(WB[3], WN[3], lam, 0.0, L)
+                BS[14] += (pp - 0.5 * (sp - sm)) / SZ[0]
         if b >= t1:
             return True
         a = b
@@ -692,12 +704,14 @@ def run(ws):
             return
         CI[2] = w + 1
         CT[0] = t1
-        code = certify(ws, t1)
+        # a fixed horizon (the simulator's blow under a drive): on to t_max, nothing certified
+        code = certify(ws, t1) if PR[6] == 0.0 else GOING
         if not (math.isfinite(BS[0]) and math.isfinite(CT[7])):  # overflowed pieces: stop, say so
             code = FAILED
         if code == GOING and t1 >= tmax:
             code = TMAX
         if code == GOING and (CNT[0] > maxp or CI[2] >= PR[19]):
+            account(ws, t1)
             code = RINGS if (BI[0] != LOAD and CT[7] < CT[8]) else BUDGET
         if code != GOING:
             CI[1] = code

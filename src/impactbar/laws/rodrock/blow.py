@@ -284,6 +284,13 @@ class Blow:
             return np.where((t >= 0.0) & (t < self.duration), self.exact.junction_force(j, t), 0.0)
         return self._steps(self.junction_forces[:, j], t)
 
+    def junction_impulse(self, j: int = 0) -> float:
+        """The impulse ``int N dt`` of segment boundary ``j``'s force (0: the shank) over the blow:
+        exact piece by piece (exact method), or the steps' forces times the cell time (lattice)."""
+        if self.exact is not None:
+            return self.exact.junction_impulse(self.exact.contact_junction + int(j))
+        return float(np.sum(self.junction_forces[:, j])) * self.cell_time
+
     def bit_force(self, t) -> np.ndarray:
         """Rock force at times ``t`` (exact method: exact; lattice: linear between step ends)."""
         if self.exact is not None:

@@ -1,5 +1,12 @@
 """The simulator's contact step under the rod-and-rock law (theory §4d): the piston's modal state at
-impact -> a blow on the cell grid with the drive acting -> the piston's modal state after the blow.
+impact -> a blow with the drive acting -> the piston's modal state after the blow.
+
+By default the blow is exact (:class:`~impactbar.laws.rodrock.exactmap.ExactBlowMap`, its record an
+:class:`~impactbar.laws.rodrock.exactmap.ExactRockContact`: the modal state and the drive as exact
+pieces, every wave carried exactly, the projections in closed form;
+:func:`~impactbar.laws.rodrock.step.rock_contact` chooses). With ``RodRock(method="lattice")`` or a
+``cells_per_piston`` it is solved on the cell grid (:class:`BlowMap`, :class:`RockContact`), as
+follows.
 
 1. **Fields at impact.** The piston's modal state ``(q, q')`` (positions from the shank, ``u(1) = 0``)
    gives the Riemann invariants ``alpha = v + N/s``, ``beta = v - N/s`` with the static correction
@@ -46,7 +53,7 @@ import numpy as np
 from ...dynamics.invariants import _Piston
 from .blow import Blow, blow_end, blow_grid, solve_blow, whole_steps
 
-__all__ = ["BlowMap", "RockContact", "rock_contact"]
+__all__ = ["BlowMap", "RockContact"]
 
 
 def _drive_averages(load, t0: float, dt: float, n: int) -> np.ndarray:
@@ -146,13 +153,18 @@ class RockContact:
         b = self.blow
         return b.rod_energy + b.grid_loss - (b.available_energy - b.energy_at_impact - b.drive_work)
 
-    def _at(self, tau: float):
-        """The blow stopped at the step ending at or before ``tau``: ``"start"`` before the first
-        step ends, ``"end"`` from the last, else the :class:`Blow` cut there (solved again)."""
+    def _check_tau(self, tau) -> float:
+        """``tau`` as a float within the blow (to rounding), else a ``ValueError``."""
         tau = float(tau)
         slack = 1e-12 * self.duration + 8.0 * np.finfo(float).eps * max(1.0, abs(self.t0))
         if not -slack <= tau <= self.duration + slack:
             raise ValueError(f"tau must lie in [0, {self.duration}] (the blow); got {tau}")
+        return tau
+
+    def _at(self, tau: float):
+        """The blow stopped at the step ending at or before ``tau``: ``"start"`` before the first
+        step ends, ``"end"`` from the last, else the :class:`Blow` cut there (solved again)."""
+        tau = self._check_tau(tau)
         dt = self._grid.cell_time
         n = int(math.floor(tau / dt + 1e-9))
         if n >= self.blow.shank_forces.size:
@@ -334,35 +346,6 @@ def _stepped_maps(s: float, piston, n_p: int, M: int):
     for arr in (A, f, Pv, Pq):
         arr.flags.writeable = False
     return A, f, Pv, Pq
-
-
-def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
-                 duration: float | None = None) -> RockContact:
-    """The blow of a piston arriving at the shank in modal state ``(q, q')`` at load time ``t0``,
-    with the drive acting (theory §4d; the module's text states the method and its assumptions).
-
-    Parameters
-    ----------
-    model : BarModel
-        With ``impact=RodRock(...)``; its ``s`` and ``n_modes`` (``R`` and ``d`` play no part).
-    load : Load
-        The drive at ``x = 0``.
-    t0 : float
-        Load time of the impact.
-    q, v : array_like, shape (N + 1,)
-        Modal state at impact, positions from the shank (``u(1) = 0``).
-    cells_per_piston : int, optional
-        As :func:`~impactbar.single_blow`.
-    duration : float, optional
-        Length of the blow (model time, rounded up to whole cell steps); default
-        :meth:`RodRock.window`.
-
-    Returns
-    -------
-    RockContact
-    """
-    bm = BlowMap(model, load, t0, cells_per_piston=cells_per_piston, duration=duration)
-    return bm.contact(q, v)
 
 
 @functools.lru_cache(maxsize=32)

@@ -74,7 +74,7 @@ from . import _exacthistory as H
 from . import _exactkernel as K
 from . import _exactpieces as P
 
-__all__ = ["ExactBlow", "exact_blow", "exact_rod_rock_blow"]
+__all__ = ["CERTIFIED", "ExactBlow", "PoolOverflow", "exact_blow"]
 
 _END_NAMES = {P.SEPARATED: "separated", P.LIFTED: "lifted", P.SPENT: "spent", P.TMAX: "t_max",
               P.BUDGET: "budget", P.RINGS: "rings", P.FAILED: "failed", P.MAY_YIELD: "may_yield"}
@@ -256,6 +256,16 @@ class ExactBlow:
             p = int(PI[p, 0])
         return np.unique(np.clip(out, 0.0, self.duration))
 
+    def junction_impulse(self, j: int) -> float:
+        """The impulse ``int N dt`` of junction ``j``'s force (numbered as in :meth:`junction_force`)
+        over the blow, in closed form piece by piece (the blow kept with ``record=True``)."""
+        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        if not 1 <= j < nodes:
+            raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
+        PF, PI, TK, TC, CHI, lam = pools[:6]
+        head = int(CHI[2 * nodes + 1 + j, 1])
+        return scale * H.history_integral(PF, PI, TK, TC, lam, head, float(self.duration))
+
     @property
     def contact_junction(self) -> int:
         """The index of the piston-shank interface among the junctions."""
@@ -330,10 +340,12 @@ def _check_chain(name, times, imps):
 
 
 def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k, k_u, bit_mass=0.0,
-               feed=0.0, impact_velocity, semi_infinite=False, t_max=None, record=True,
-               max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, max_pool_bytes=None) -> ExactBlow:
-    r"""The blow of a rigidly moving, unstressed piston on a rod resting on the rock under the feed,
-    every wave exact (theory §4d; the module's text says what is exact and how the end is decided).
+               feed=0.0, impact_velocity=None, semi_infinite=False, t_max=None, record=True,
+               max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, max_pool_bytes=None, initial=None,
+               drive=None, fixed_horizon=False, lean=False) -> ExactBlow:
+    r"""The blow of a rigidly moving, unstressed piston (or of a piston in any state given by its
+    waves, under a drive) on a rod resting on the rock under the feed, every wave exact (theory §4d;
+    the module's text says what is exact and how the end is decided).
 
     Parameters
     ----------
@@ -348,8 +360,9 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         ``>= 0`` (model masses; the piston of the model has mass 1).
     feed : float
         The static feed force on the shank, ``>= 0``.
-    impact_velocity : float
-        ``> 0``.
+    impact_velocity : float, optional
+        ``> 0``: the piston moves rigidly, unstressed, at this velocity. Exactly one of it and
+        ``initial``.
     semi_infinite : bool
         Lundberg's idealisation: the wave the bit reflects leaves the chain and never returns.
     t_max : float, optional
@@ -361,6 +374,23 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         Bounds of the cost (``ended_by = "budget"`` or ``"rings"`` past them).
     max_pool_bytes : int, optional
         The most memory the wave pieces may take; default ``MAX_POOL_BYTES`` (2 GiB).
+    initial : sequence of 2 P tuples, optional
+        The piston's waves at impact (instead of ``impact_velocity``): for each piston segment, in
+        order, the right-going wave that left its driven-side end and the left-going one that left
+        its struck-side end over the last travel time, each a piece ``(exps, degs, coefs)`` (arrays
+        of one length: ``Re sum coefs tau^degs e^{exps tau}`` for ``0 <= tau < T_i``, ``tau`` from
+        the emission time ``-T_i``; conjugate-complete, so that the sum is real). Built from a
+        modal state by :func:`impactbar.laws.rodrock.exactmap.initial_waves`.
+    drive : tuple, optional
+        The force ``p(t)`` on the piston's far end, ``(starts, pieces)``: pieces as ``initial``'s,
+        the ``j``-th valid from ``starts[j]`` (increasing, ``starts[0] <= 0``; ``tau`` from it) to
+        the next start.
+    fixed_horizon : bool
+        Run to ``t_max`` (required) without deciding the end (a drive can bring the piston back):
+        the simulator's blow of a fixed duration.
+    lean : bool
+        Return only ``(ws, scale)``, the solver's workspace after the run and the forces' scale,
+        without the energies (the impact map's many blows: :mod:`~impactbar.laws.rodrock.exactmap`).
 
     Returns
     -------
@@ -381,9 +411,15 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     k_u = check_real("k_u", k_u, lo=k)
     m = check_real("bit_mass", bit_mass, lo=0.0)
     f = check_real("feed", feed, lo=0.0)
-    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
+    if (impact_velocity is None) == (initial is None):
+        raise ValueError("give exactly one of impact_velocity and initial")
+    V = 0.0
+    if impact_velocity is not None:
+        V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
     if t_max is not None:
         t_max = check_real("t_max", t_max, lo=0.0, lo_open=True)
+    if fixed_horizon and t_max is None:
+        raise ValueError("fixed_horizon needs a t_max")
     max_pieces = check_int("max_pieces", max_pieces, lo=16)
     max_windows = check_int("max_windows", max_windows, lo=1)
     if not isinstance(semi_infinite, bool | np.bool_):
@@ -399,11 +435,15 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         raise ValueError(f"max_windows = {max_windows} cannot hold even the piston's contact "
                          f"({2.0 * Tp.sum() / h:.3g} windows of the shortest travel time {h:.3g})")
     Zb = float(Zr[-1])
-    # scale: the largest of the impact force and the feed is 1
-    scale = max(float(Zp[-1]) * V, f)
+    data = _Data(initial, drive, Tp) if initial is not None else None
+    # scale: the largest of the impact force (the data's waves and drive) and the feed is 1
+    scale = max(float(Zp[-1]) * V if data is None else data.scale, f)
+    if scale == 0.0:
+        scale = 1.0
     Vn, fn = V / scale * 1.0, f / scale
     C_rod = float(np.sum(Tr / Zr))
-    e_scale = 0.5 * float(np.sum(Zp * Tp)) * Vn * Vn + fn * fn * (0.5 * C_rod + 0.5 / k_u)
+    e_scale = 0.5 * float(np.sum(Zp * Tp)) * (Vn * Vn if data is None else 1.0) \
+        + fn * fn * (0.5 * C_rod + 0.5 / k_u)
     if not (1e-290 < scale * scale * e_scale < 1e290):
         raise ValueError(f"impact_velocity = {V:g} and feed = {f:g} give a blow whose energy "
                          f"(~{scale * scale * e_scale:.3g}) the float range cannot hold; choose units that "
@@ -421,7 +461,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         else:
             roots.append(_roots(m, Zb, b))
     flat = [r for rs in roots for r in rs]
-    lam, index = _table([], flat)
+    lam, index = _table([] if data is None else data.exponents, flat)
     nr = 2 if m > 0.0 else 1
     RT = np.zeros((3, 2), dtype=complex)
     RC = np.zeros((3, 2), dtype=np.int64)
@@ -445,13 +485,21 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     PR[15], PR[16], PR[17] = Mp, Mr, h
     PR[18] = math.inf if t_max is None else t_max
     PR[19] = max_windows
-    PR[20], PR[21], PR[22], PR[23], PR[24] = fn / k, Tp.size, 0.0, 1.0 if record else 0.0, max_pieces
+    PR[20], PR[21], PR[23], PR[24] = fn / k, Tp.size, 1.0 if record else 0.0, max_pieces
+    PR[22] = 1.0 if data is not None and data.drive is not None else 0.0
+    PR[6] = 1.0 if fixed_horizon else 0.0
     bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
-    pcap, tcap, ecap = 16384, 65536, 256  # 2.5 MB (a pool too small runs the blow again, larger)
+    # 2.5 MB (a pool too small runs the blow again, larger); the simulator's blows (data given, a
+    # fixed horizon of a few round trips) need tens of pieces: 40 kB first
+    pcap, tcap, ecap = (16384, 65536, 256) if data is None else (256, 2048, 64)
     while pcap > 1024 and _pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     while True:
-        ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb)
+        ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
+                        None if data is None else data.terms(lam, scale))
+        if data is not None and not lean:  # the piston's energy at impact: its waves' (kinetic and
+            K.account(ws, 0.0)  # strain)
+            PR[10] = ws[25][4]
         K.run(ws)
         if ws[24][0] == 0:
             break
@@ -464,7 +512,67 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
                    f"{ws[25][0]:.6g}; give a t_max, or use method='lattice'")
             raise PoolOverflow(f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces "
                                f"({why})")
+    if lean:
+        return ws, scale
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
+
+
+class _Data:
+    """The piston's waves at impact and the drive of :func:`exact_blow`, checked, with their
+    exponents and scale."""
+
+    def __init__(self, initial, drive, Tp):
+        init = list(initial)
+        if len(init) != 2 * Tp.size:
+            raise ValueError(f"initial must hold 2 pieces per piston segment ({2 * Tp.size}); got "
+                             f"{len(init)}")
+        self.initial = [self._piece("initial", x) for x in init]
+        self.drive = None
+        exps = [e for x in self.initial for e in x[0]]
+        bound = 0.0
+        for (_e, d, c), T in zip(self.initial, np.repeat(Tp, 2), strict=True):
+            bound = max(bound, float(np.sum(np.abs(c) * np.maximum(T, 1.0) ** d)))
+        if drive is not None:
+            starts, pieces = drive
+            starts = np.asarray(starts, dtype=float)
+            pieces = [self._piece("drive", x) for x in pieces]
+            if starts.ndim != 1 or starts.size != len(pieces) or starts.size == 0 or \
+                    not np.all(np.isfinite(starts)) or starts[0] > 0.0 or np.any(np.diff(starts) <= 0.0):
+                raise ValueError("drive must be (starts, pieces): increasing finite starts, the first "
+                                 "<= 0, one piece each")
+            self.drive = (starts, pieces)
+            exps += [e for x in pieces for e in x[0]]
+            spans = np.diff(np.append(starts, starts[-1] + 1.0))
+            bound = max(bound, max(float(np.sum(np.abs(c) * np.maximum(L, 1.0) ** d))
+                                   for (_, d, c), L in zip(pieces, spans, strict=True)))
+        self.exponents = list(dict.fromkeys(complex(e) for e in exps))
+        self.scale = bound
+
+    @staticmethod
+    def _piece(name, x):
+        e, d, c = (np.atleast_1d(np.asarray(a)) for a in x)
+        e, c = e.astype(complex), c.astype(complex)
+        d = d.astype(np.int64)
+        if not (e.shape == d.shape == c.shape and e.ndim == 1):
+            raise ValueError(f"{name}: each piece is (exps, degs, coefs), arrays of one length")
+        if not (np.all(np.isfinite(e)) and np.all(np.isfinite(c)) and np.all((d >= 0) & (d < P.DC))):
+            raise ValueError(f"{name}: exponents and coefficients must be finite, degrees in "
+                             f"[0, {P.DC})")
+        return e, d, c
+
+    def terms(self, lam, scale):
+        """The pieces as the pool's terms: ``(keys, coefs)`` per initial channel, and
+        ``(starts, [(keys, coefs), ...])`` of the drive (coefficients over ``scale``)."""
+        index = {complex(x): i for i, x in enumerate(lam)}
+
+        def conv(piece):
+            e, d, c = piece
+            keys = np.array([index[complex(x)] * P.DC for x in e], dtype=np.int64) + d
+            return keys, c / scale
+
+        init = [conv(x) for x in self.initial]
+        drv = None if self.drive is None else (self.drive[0], [conv(x) for x in self.drive[1]])
+        return init, drv
 
 
 @functools.cache
@@ -478,13 +586,18 @@ def _binomials():
     return out
 
 
-def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb):
+def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb, data=None):
     J = T.size
     nch = 3 * J + 2
-    PF = np.zeros((pcap, 3))
-    PI = np.zeros((pcap, 4), dtype=np.int64)
-    TK = np.zeros(tcap, dtype=np.int64)
-    TC = np.zeros(tcap, dtype=complex)
+    init, drive = (None, None) if data is None else data
+    ndrive = 0 if drive is None else len(drive[1])
+    PF = np.zeros((max(pcap, 2 * J + 1 + ndrive + 16), 3))
+    PI = np.zeros((PF.shape[0], 4), dtype=np.int64)
+    extra = 0
+    if init is not None:
+        extra = sum(x[0].size for x in init) + (0 if drive is None else sum(x[0].size for x in drive[1]))
+    TK = np.zeros(tcap + extra, dtype=np.int64)
+    TC = np.zeros(tcap + extra, dtype=complex)
     CNT = np.zeros(4, dtype=np.int64)
     CHI = np.full((nch, 2), -1, dtype=np.int64)
     CH_T = np.zeros(nch)
@@ -492,14 +605,28 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     CH_TOL[3 * J + 1] = _TOL * max(1.0 / k, Lb / Zb)
     n = 0
     nt = 0
+
+    def put(n, nt, keys, coefs):
+        PI[n, 1] = nt
+        for key, cf in zip(keys, coefs, strict=True):
+            if cf != 0.0:
+                TK[nt] = key
+                TC[nt] = cf
+                nt += 1
+        PI[n, 2] = nt - PI[n, 1]
+        return nt
+
     for i in range(1, J + 1):
-        for c, val in ((2 * (i - 1), 0.5 * Z[i - 1] * Vn), (2 * i - 1, -0.5 * Z[i - 1] * Vn)):
+        for side, (c, val) in enumerate(((2 * (i - 1), 0.5 * Z[i - 1] * Vn),
+                                         (2 * i - 1, -0.5 * Z[i - 1] * Vn))):
             CH_T[c] = T[i - 1]
             PF[n, 0] = -T[i - 1]
             PF[n, 1] = math.inf
             PI[n, 0] = -1
             PI[n, 1] = nt
-            if i <= n_p and val != 0.0:
+            if i <= n_p and init is not None:
+                nt = put(n, nt, *init[2 * (i - 1) + side])
+            elif i <= n_p and val != 0.0:
                 TK[nt] = 0
                 TC[nt] = val
                 nt += 1
@@ -507,15 +634,19 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
             CHI[c, 0] = n
             CHI[c, 1] = n
             n += 1
-    # the drive channel: no drive
+    # the drive channel (no drive: one empty piece)
     c = 2 * J
-    PF[n, 0] = -1.0
-    PF[n, 1] = math.inf
-    PI[n, 0] = -1
-    PI[n, 1] = nt
-    CHI[c, 0] = n
     CHI[c, 1] = n
-    n += 1
+    starts = [-1.0] if drive is None else drive[0]
+    for j, t0 in enumerate(starts):
+        PF[n, 0] = t0
+        PF[n, 1] = math.inf
+        PI[n, 0] = -1 if j == len(starts) - 1 else n + 1
+        PI[n, 1] = nt
+        if drive is not None:
+            nt = put(n, nt, *drive[1][j])
+        CHI[c, 0] = n
+        n += 1
     CNT[0], CNT[1] = n, nt
     BIN = _binomials()
     WB = np.zeros((16, lam.size, P.DC), dtype=complex)
@@ -552,10 +683,11 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     R = k * BS[1] if br == P.LOAD else (k_u * BS[1] if br == P.ELASTIC else 0.0)
     xs = NSF[n_p, 1]
     gap = NSF[n_p, 0]
-    E0 = 0.5 * Mp * Vn * Vn
+    E0 = PR[10]  # the piston's energy at impact (0.5 Mp Vn^2 for a rigid piston)
+    drive_work = BS[14]
     feed_work = fn * xs
     static = 0.5 * fn * fn * C_rod
-    available = E0 + feed_work + static + 0.5 * fn * fn / k_u
+    available = E0 + drive_work + feed_work + static + 0.5 * fn * fn / k_u
     dissipated = BS[6]
     rock_e = R * R / (2.0 * k_u)
     rod_e = Er + 0.5 * m * BS[2] ** 2 + fn * (xs - (p - BS[9])) + static
@@ -574,15 +706,14 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     s2 = scale * scale
     loads[:, 2:4] *= scale
     loads[:, 4] *= s2
-    hist = ()
-    if record:
-        lamk = np.array([k, k_u, 0.0])
-        hist = (scale, (PF, PI, TK, TC, CHI, lam, lamk), J, n_p)
+    lamk = np.array([k, k_u, 0.0])
+    hist = (scale, (PF, PI, TK, TC, CHI, lam, lamk), J, n_p)  # (the junctions' only with record)
     return ExactBlow(
         efficiency=dissipated / available,
         efficiency_with_rebound=dissipated / (available - Ep),
         work_on_rock=s2 * dissipated, rock_energy=s2 * rock_e, available_energy=s2 * available,
-        energy_at_impact=s2 * E0, feed_work=s2 * feed_work, drive_work=0.0, piston_energy=s2 * Ep,
+        energy_at_impact=s2 * E0, feed_work=s2 * feed_work, drive_work=s2 * drive_work,
+        piston_energy=s2 * Ep,
         rod_energy=s2 * rod_e, radiated=s2 * radiated, energy_error=err,
         rebound_velocity=scale * Pp / Mp, max_penetration=scale * BS[3],
         permanent_penetration=scale * BS[5], advance=scale * (p - BS[9]),
@@ -607,140 +738,3 @@ def _feed_gain(R_max, f):
 #: ``ended_by`` of a certified end (the blow's numbers are final): no contact, and no yield of the
 #: rock, can happen again, or no energy that could still reach the rock is left
 CERTIFIED = ("separated", "lifted", "spent")
-
-
-def exact_rod_rock_blow(s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed, *, t_max=None,
-                        semi_infinite=False, samples_per_piston=32, record_field=False,
-                        max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, piston=None, max_pool_bytes=None):
-    r"""One blow of a rigid, unstressed piston (uniform or stepped) on a stepped rod, every wave
-    exact (:func:`exact_blow`), as the :class:`~impactbar.laws.rodrock.blow.Blow` of
-    :func:`single_blow`.
-
-    Parameters
-    ----------
-    s, V, lengths, impedances, speeds, k, k_u, bit_mass, feed
-        As :func:`impactbar.laws.rodrock.blow.rod_rock_blow`: the piston's impedance (the model's
-        ``s``; its crossing time ``1/s``), the impact velocity, the segments (shape ``(J,)`` each;
-        piston lengths, impedances and wave speeds relative to the piston's), the rock's loading and
-        unloading stiffness, the bit's mass (piston masses) and the feed force (model units).
-    t_max : float, optional
-        Stop there (``ended_by = "t_max"``); by default the blow runs until its end is certified.
-    semi_infinite : bool
-        Lundberg's idealisation: the wave the bit reflects leaves the rod and never returns.
-    samples_per_piston : int
-        Samples per piston crossing time ``1/s`` in the recorded arrays (``times``, the force
-        histories, ``field``); the numbers and the methods ``shank_force``, ``junction_force``,
-        ``bit_force`` are exact whatever it is.
-    record_field : bool
-        Sample the force in piston and rod on a grid of cells (``samples_per_piston`` along the
-        piston, each segment as many as its travel time holds, at least 1) at the sample times.
-    max_pieces, max_windows : int
-        Bounds of the cost (then ``ended_by = "budget"`` or ``"rings"``, with ``uncertainty``).
-    max_pool_bytes : int, optional
-        The most memory the wave pieces may take (:func:`exact_blow`).
-    piston : SteppedPiston, optional
-        A stepped piston of the model's mass and length (theory §12): each segment a delay line of
-        travel time ``l_j / s`` and impedance ``s mu_j`` (``mu_j`` its mass per length), welded to
-        the next; its boundaries need not fall on the samples. Default None: the uniform piston.
-
-    Returns
-    -------
-    Blow
-        ``method = "exact"``; ``grid_loss = 0``, ``cell_time`` the sampling step; ``cell_edges``
-        (with ``record_field``) the sampled cells' edges, piston then rod.
-
-    Raises
-    ------
-    ValueError
-        As :func:`exact_blow`.
-
-    Notes
-    -----
-    Theory §4d, "exact blows". As the lattice's, ``work_on_rock`` is the work done on the rock:
-    what it dissipated (Lundberg's ``k (1 - 1/gamma)`` times the growth of ``p^2/2`` on every
-    loading, ``rock_dissipated``) plus its recoverable elastic energy at the end
-    (``rock_stored_energy``, 0 once the bit has lifted off).
-    """
-    from .blow import Blow
-
-    s = float(s)
-    lengths = np.asarray(lengths, float)
-    imps = np.asarray(impedances, float)
-    travel = lengths / (np.asarray(speeds, float) * s)
-    from ._piston import piston_segments
-
-    p_len, p_mu = piston_segments(piston)
-    ex = exact_blow(p_len / s, s * p_mu, travel, s * imps, k=k, k_u=k_u, bit_mass=bit_mass, feed=feed,
-                    impact_velocity=V, semi_infinite=semi_infinite, t_max=t_max, record=True,
-                    max_pieces=max_pieces, max_windows=max_windows, max_pool_bytes=max_pool_bytes)
-    dt = 1.0 / (s * samples_per_piston)
-    T = ex.duration
-    n = max(1, math.ceil(T / dt * (1.0 - 1e-12)))
-    seg_cells = tuple(max(1, round(Ti / dt)) for Ti in travel)
-    p_cells = _piston_samples(p_len, samples_per_piston)
-    _check_samples(n, J=lengths.size, cells=(sum(p_cells) + sum(seg_cells)) if record_field else 0)
-    times = np.minimum(dt * np.arange(n + 1), T)
-    mid = 0.5 * (times[:-1] + times[1:])
-    J = lengths.size
-    junc = np.column_stack([ex.junction_force(ex.contact_junction + j, mid) for j in range(J)])
-    fld = edges = None
-    if record_field:
-        fld, edges = _field(ex, np.concatenate((p_len / s, travel)), np.concatenate((p_len, lengths)),
-                            (*p_cells, *seg_cells), mid)
-    return Blow(
-        times=times, shank_forces=junc[:, 0].copy(), junction_forces=junc,
-        bit_forces=ex.bit_force(times), penetrations=ex.penetration(times), field=fld,
-        energy_at_impact=ex.energy_at_impact, feed_work=ex.feed_work,
-        available_energy=ex.available_energy, work_on_rock=ex.work_on_rock + ex.rock_energy,
-        piston_energy=ex.piston_energy, rebound_velocity=ex.rebound_velocity,
-        rod_energy=ex.rod_energy + ex.radiated, grid_loss=0.0, rock_stored_energy=ex.rock_energy,
-        max_penetration=ex.max_penetration, permanent_penetration=ex.permanent_penetration,
-        advance=ex.advance, ended_by=ex.ended_by, cell_time=dt, piston_cells=sum(p_cells),
-        segment_cells=seg_cells, cell_edges=edges, length_error=0.0, drive_work=0.0, gap=ex.gap,
-        shank_displacement=ex.shank_displacement, piston_waves=None, rod_waves=None,
-        bit_velocity=ex.bit_velocity, method="exact", uncertainty=ex.uncertainty, loadings=ex.loadings,
-        radiated=ex.radiated, exact=ex)
-
-
-#: Most values the recorded arrays of one exact blow may hold (1 GiB as float64)
-MAX_SAMPLES = 2**27
-
-
-def _check_samples(n, J, cells):
-    """Refuse recorded arrays of ``n`` samples of ``J + 1`` histories and ``cells`` field values
-    beyond ``MAX_SAMPLES``."""
-    total = float(n) * (J + 3 + cells)
-    if total > MAX_SAMPLES:
-        what = "record_field would keep" if cells else "the recorded histories would keep"
-        raise ValueError(f"single blow: {what} {total:.3g} values (more than {MAX_SAMPLES}) over "
-                         f"{n} samples; use a shorter t_max or fewer cells_per_piston")
-
-
-def _piston_samples(lengths, n):
-    """The sampled cells of each piston segment (shape ``(P,)``, each at least 1): ``n`` along the
-    piston shared out by the segments' lengths (Hamilton's largest remainders)."""
-    if lengths.size == 1:
-        return (int(n),)
-    share = lengths / lengths.sum() * n
-    cells = np.maximum(np.floor(share).astype(np.int64), 1)
-    while cells.sum() < n:
-        cells[np.argmax(share - cells)] += 1
-    return tuple(int(c) for c in cells)
-
-
-def _field(ex, travel, lengths, cells, t):
-    """The force ``F + G`` at the centres of ``cells[i]`` cells of every segment (piston first) at
-    the times ``t``: the right-going wave that left the segment's left end ``u T`` earlier and the
-    left-going one that left its right end ``(1 - u) T`` earlier (``u`` the cell's fraction)."""
-    scale, pools = ex._hist[0], ex._hist[1]
-    cols, edges = [], [np.array([-1.0])]
-    x0 = -1.0
-    for i, (Ti, Li, n) in enumerate(zip(travel, lengths, cells, strict=True)):
-        u = (np.arange(n) + 0.5) / n
-        for ui in u:
-            F = _eval_channel(pools, 2 * i, t - ui * Ti, kind=0, head=2 * i)
-            G = _eval_channel(pools, 2 * i + 1, t - (1.0 - ui) * Ti, kind=0, head=2 * i + 1)
-            cols.append(scale * (F + G))
-        edges.append(x0 + Li * np.arange(1, n + 1) / n)
-        x0 += Li
-    return np.column_stack(cols), np.concatenate(edges)

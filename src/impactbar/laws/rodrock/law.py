@@ -32,6 +32,13 @@ import numpy as np
 
 from ..._shared.validate import check_int, check_real
 from ..base import ContactLaw
+from ._choice import (  # noqa: F401  (the choices' bounds, as before)
+    MAX_EXACT_LOADING_EXPONENT,
+    MAX_EXACT_PASS_WINDOWS,
+    NEGLIGIBLE_BIT,
+    _bit_is_negligible,
+    _exact_is_cheap,
+)
 
 __all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
 
@@ -132,14 +139,20 @@ class RodRock(ContactLaw):
         ``4/s + 2 sum of the segments' travel times``: the piston's contact of ``2/s`` and a round
         trip of a wave through piston and rod after it.
     cells_per_piston : int, optional
-        Cells along the piston of the simulator's blows (``simulate``, ``find_orbit``,
-        ``continue_orbit``: the lattice of :mod:`impactbar.laws.rodrock.blow`), ``1 <= n <= 4096``.
+        Cells along the piston of the simulator's blows on the lattice (``method="lattice"``, or
+        ``"auto"`` with this given: :mod:`impactbar.laws.rodrock.blow`), ``1 <= n <= 4096``.
         Default: the smallest count making the piston's and every segment's travel times whole
-        numbers of cells, at least 8 (else 64, the lengths rounded). The blows' error is of first
+        numbers of cells, at least 8 (else 64, the lengths rounded). The lattice's error is of first
         order in the cell time at most (the bit's exponential response stored as cell averages,
         switches inside a cell); a run with twice the cells estimates it (on a soft rock with one
         loading a blow, an orbit's impact velocities: 1.6e-5 at the default 8 cells, four times less
         per doubling; theory §4d). :func:`single_blow` takes its own ``cells_per_piston``.
+    method : {"auto", "exact", "lattice"}
+        The simulator's blows (``simulate``, ``find_orbit``, ``continue_orbit``): ``"exact"`` every
+        wave of piston and rod carried exactly, the piston's modal state and the drive as exact
+        pieces, the state after the blow projected on the modes in closed form
+        (:mod:`impactbar.laws.rodrock.exactmap`); ``"lattice"`` the cell grid; ``"auto"`` (default)
+        exact unless ``cells_per_piston`` is given.
 
     Examples
     --------
@@ -159,6 +172,7 @@ class RodRock(ContactLaw):
     feed: float = 0.0
     blow_time: float | None = None
     cells_per_piston: int | None = None
+    method: str = "auto"
 
     name = "rodrock"
     instantaneous = False
@@ -174,7 +188,8 @@ class RodRock(ContactLaw):
     #: the law's continuation parameters, in its units: the rock's loading and unloading stiffnesses
     #: (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's mass, the feed force, and
     #: ``"segment<i>.length"`` (``i`` from 0 at the shank; the default ``blow_time`` follows the
-    #: lengths), which the blow's cell grid rounds to whole cells (:meth:`check_continuable`)
+    #: lengths), continued on the exact blows only (the lattice's cell grid rounds them to whole
+    #: cells: :meth:`check_continuable`)
     parameters = ("rock.k", "rock.k_u", "bit_mass", "feed", "segment<i>.length")
 
     def __post_init__(self) -> None:
@@ -193,6 +208,32 @@ class RodRock(ContactLaw):
         if self.cells_per_piston is not None:
             object.__setattr__(self, "cells_per_piston",
                                check_int("cells_per_piston", self.cells_per_piston, lo=1, hi=4096))
+        if self.method not in ("auto", "exact", "lattice"):
+            raise ValueError(f"method must be 'auto', 'exact' or 'lattice'; got method={self.method!r}")
+
+    def blow_method(self, model) -> str:
+        """The method of the simulator's blows of ``model`` under this law: ``"exact"`` for
+        ``method="exact"``, or ``"auto"`` without ``cells_per_piston`` where a round trip of a wave
+        through piston and rod takes at most ``MAX_EXACT_PASS_WINDOWS`` (2000) of the shortest travel
+        time and the rock's loading exponent over it is at most ``MAX_EXACT_LOADING_EXPONENT`` (the
+        exact solver's cost grows with the windows; :func:`single_blow`'s choice); else
+        ``"lattice"``. It depends on the law and the model's geometry only, so that every blow of a
+        run, and :meth:`window`, take one method.
+
+        Parameters
+        ----------
+        model : BarModel
+
+        Returns
+        -------
+        str
+        """
+        if self.method == "exact":
+            return "exact"
+        if self.method == "auto" and self.cells_per_piston is None and \
+                _exact_is_cheap(model, self, model.piston):
+            return "exact"
+        return "lattice"
 
     def alpha(self, model) -> float:
         """Lundberg's ``alpha = K (2 L / C) / Z`` of the piston, ``2 k / s^2`` in the model's units."""
@@ -215,17 +256,38 @@ class RodRock(ContactLaw):
         """
         return model.with_(impact="paper", R=_equivalent_restitution(model))
 
+    def coarse_model(self, model):
+        """``model`` with its blows on the lattice where they are exact (:meth:`blow_method`), else
+        ``None``: Newton's method for the exact blows' orbits starts from the lattice's orbit
+        (:func:`~impactbar.find_orbit`), which it reaches from farther guesses (its blows are
+        smoothed over the cells) at a fraction of the cost, and which lies within the lattice's
+        second-order error of the exact one.
+
+        Parameters
+        ----------
+        model : BarModel
+
+        Returns
+        -------
+        BarModel or None
+        """
+        if self.blow_method(model) != "exact":
+            return None
+        return model.with_(impact=dataclasses.replace(self, method="lattice", cells_per_piston=None))
+
     def window(self, model) -> float:
         """Duration of the blow in the simulator and in periodic orbits (model time): ``blow_time``,
-        by default ``4/s + 2 sum of the segments' travel times``, rounded up to whole steps of the
-        blow's cell grid (the simulator's blow lasts whole steps, so the orbits' flights start
-        where its flights do)."""
+        by default ``4/s + 2 sum of the segments' travel times``; on the lattice rounded up to whole
+        steps of the blow's cell grid (the simulator's blow lasts whole steps, so the orbits' flights
+        start where its flights do)."""
         from .blow import whole_steps
         from .contact import _grid_for
 
         T = self.blow_time
         if T is None:
             T = 4.0 / model.s + 2.0 * sum(g.travel_time(model) for g in self.segments)
+        if self.blow_method(model) == "exact":
+            return float(T)
         segs = self.segments
         dt = _grid_for(float(model.s), tuple(g.length for g in segs), tuple(g.impedance for g in segs),
                        tuple(g.wave_speed for g in segs), self.cells_per_piston,
@@ -234,8 +296,9 @@ class RodRock(ContactLaw):
 
     def impact_map(self, model, load, t, y_minus):
         """The contact step as a map of the arrival state (theory §4d): ``y_plus`` the state
-        :meth:`window` after the impact (positions from the advanced shank), with its Jacobians by
-        **central finite differences** (the blow on the cell grid is piecewise smooth in the state:
+        :meth:`window` after the impact (positions from the advanced shank; the exact blow's, or
+        the lattice's, :meth:`blow_method`), with its Jacobians by
+        **central finite differences** (the blow is piecewise smooth in the state:
         smooth while the piston does not hit the shank again inside the blow): steps
         ``h = 1e-6 |y_minus|_inf`` (relative, so that the map's Jacobian is the same at every scale of
         the load) in every state component and ``h_t = 1e-6`` in ``t``
@@ -247,11 +310,11 @@ class RodRock(ContactLaw):
         jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
         jac_t : numpy.ndarray, shape (2 N + 2,)
         """
-        from .contact import BlowMap
+        from .step import blow_map
 
         y = np.array(y_minus, dtype=float)
         t = float(t)
-        step = BlowMap(model, load, t)
+        step = blow_map(model, load, t)
         y_plus = step(y)
         h = 1e-6 * (float(np.max(np.abs(y))) or 1.0)  # relative: the orbit's scale is the load's
         jac = np.empty((y.size, y.size))
@@ -275,12 +338,13 @@ class RodRock(ContactLaw):
 
     def contact(self, model, load, t, q_minus, v_minus, *, kernel=None):
         """The simulator's contact step (theory §4d): the piston's modal state at impact -> the blow
-        by characteristics on the piston and the rod with the drive's force, averaged over each
-        cell step, on the piston's far end (the compiled rock kernel) -> the piston's fields at the
+        by characteristics on the piston and the rod with the drive's force on the piston's far
+        end, every wave exact (:mod:`impactbar.laws.rodrock.exactmap`; on the lattice,
+        :meth:`blow_method`, the drive averaged over each cell step) -> the piston's waves at the
         blow's end projected on the modes; the rod then rests on the rock (its residual waves
         discarded, counted in the energy the piston lost), the shank advanced by the blow's
         permanent penetration, from which the next flight's positions are measured
-        (:func:`impactbar.laws.rodrock.contact.rock_contact`; ``kernel`` is not used).
+        (:func:`impactbar.laws.rodrock.step.rock_contact`; ``kernel`` is not used).
 
         Returns
         -------
@@ -289,9 +353,10 @@ class RodRock(ContactLaw):
             ``t + duration`` of the blow.
         record : RockContact
             Work on rock, penetrations, efficiencies (those of its :class:`Blow`), the piston's
-            energy balance.
+            energy balance (an :class:`~impactbar.laws.rodrock.exactmap.ExactRockContact` for the
+            exact blows).
         """
-        from .contact import rock_contact
+        from .step import rock_contact
 
         rec = rock_contact(model, load, float(t), q_minus, v_minus)
         return rec.q_after.copy(), rec.v_after.copy(), float(t) + rec.duration, rec
@@ -363,23 +428,29 @@ class RodRock(ContactLaw):
             return dataclasses.replace(self, segments=segs)
         return dataclasses.replace(self, **{name: value})
 
-    def check_continuable(self, name: str) -> None:
-        """Refuse a segment's length: the blow's cell grid rounds the segments' travel times to whole
-        cells, so the orbit changes in steps with a length.
+    def check_continuable(self, name: str, model=None) -> None:
+        """Refuse a segment's length where the blows are the lattice's (:meth:`blow_method`; without
+        ``model``, unless ``method="exact"``): its cell grid rounds the segments' travel times to
+        whole cells, so the orbit changes in steps with a length. The exact blows carry each segment
+        as a delay line of its own travel time, smooth in it.
 
         Parameters
         ----------
         name : str
+        model : BarModel, optional
+            The model under this law.
 
         Raises
         ------
         ValueError
-            For ``"segment<i>.length"``.
+            For ``"segment<i>.length"`` on the lattice.
         """
-        if _SEGMENT.fullmatch(str(name)):
-            raise ValueError(f"parameter {name!r} cannot be continued: the blow's cell grid rounds the "
-                             "segments' travel times to whole cells, so the orbit changes in steps "
-                             "with a length; follow it with simulated_diagram or find_orbit at each "
+        exact = self.method == "exact" if model is None else self.blow_method(model) == "exact"
+        if _SEGMENT.fullmatch(str(name)) and not exact:
+            raise ValueError(f"parameter {name!r} cannot be continued on the lattice: its cell grid rounds "
+                             "the segments' travel times to whole cells, so the orbit changes in steps "
+                             "with a length; use RodRock(method='exact' or 'auto', without "
+                             "cells_per_piston), or follow it with simulated_diagram or find_orbit at each "
                              "length")
 
     def _check_parameter(self, name: str) -> None:
@@ -573,7 +644,7 @@ def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field
     """:func:`single_blow` by the exact solver (checked arguments; ``cells_per_piston`` the samples
     per piston crossing time of the recorded arrays, default 32; ``bit_mass`` 0 for a negligible
     bit)."""
-    from .exact import exact_rod_rock_blow
+    from .exactrecord import exact_rod_rock_blow
 
     V = _check_force_scale(model, law, impact_velocity)
     if t_max is not None:
@@ -594,11 +665,6 @@ MAX_FORCE = 1e100
 MIN_BIT_MASS = 1e-100
 
 
-#: The most windows (of the shortest travel time in piston and rod) one round trip of a wave through
-#: them may take for ``method="auto"`` to choose the exact solver: beyond, its cost grows with them
-#: and the lattice, whose cost is bounded up front, is used.
-MAX_EXACT_PASS_WINDOWS = 2e3
-
 #: The exact blow's energy account (relative to the available energy) closes to rounding, about
 #: 1e-15; past this its answer is not taken (``method="auto"``: the lattice's instead) or is warned
 #: of (``method="exact"``)
@@ -613,46 +679,6 @@ AUTO_MAX_PIECES = 100_000
 #: The most memory ``method="auto"`` lets the exact solver's pieces take (a light bit's fast
 #: branches make long series; the blows tried need a few MiB) before it gives the blow to the lattice
 AUTO_MAX_POOL_BYTES = 2 ** 27
-
-#: A bit is negligible (taken as massless by the exact solver) when its time constant ``m / Z_b``
-#: against the last rod segment's impedance is at most this fraction of the shortest travel time and
-#: it is overdamped on the rock (``4 m k_u <= Z_b^2``): its effect on every result is of that
-#: relative order, far below the exact blow's accuracy, while its fast branch would make the exact
-#: solver's series long (a bit of 1e-8 asked for more than 20 GB).
-NEGLIGIBLE_BIT = 1e-10
-
-
-#: The largest loading exponent ``k / Z_b`` times the shortest travel time for ``method="auto"`` to
-#: choose the exact solver: a rock that stiff against the rod (a rod of impedance 1e-12 of the
-#: piston's gave 2e8) makes its pieces overflow, where the lattice still answers.
-MAX_EXACT_LOADING_EXPONENT = 1e6
-
-
-def _exact_is_cheap(model, law, piston=None) -> bool:
-    """Whether a round trip through piston (its segments, if stepped) and rod takes at most
-    ``MAX_EXACT_PASS_WINDOWS`` windows and the rock's loading exponent over the shortest of them is
-    at most ``MAX_EXACT_LOADING_EXPONENT``."""
-    from ._piston import piston_segments
-
-    with np.errstate(over="ignore", divide="ignore"):
-        own = piston_segments(piston)[0] / model.s
-        travel = np.concatenate((own, [g.travel_time(model) for g in law.segments]))
-        rate = law.rock.k / (model.s * law.segments[-1].impedance) * float(np.min(travel))
-    ratio = 2.0 * float(np.sum(travel)) / float(np.min(travel))
-    return (bool(np.all(np.isfinite(travel))) and ratio <= MAX_EXACT_PASS_WINDOWS
-            and rate <= MAX_EXACT_LOADING_EXPONENT)
-
-
-def _bit_is_negligible(model, law) -> bool:
-    """Whether the bit's mass is negligible (``NEGLIGIBLE_BIT``)."""
-    m = law.bit_mass
-    Zb = model.s * law.segments[-1].impedance
-    with np.errstate(over="ignore", divide="ignore"):
-        travel = [1.0 / model.s] + [g.travel_time(model) for g in law.segments]
-    shortest = min(travel)
-    return bool(0.0 < m and math.isfinite(Zb) and shortest > 0.0 and m <= NEGLIGIBLE_BIT * Zb * shortest
-                and 4.0 * m * law.rock.k_u <= Zb * Zb)
-
 
 def _check_force_scale(model, law, impact_velocity) -> float:
     """The checked impact velocity: its wave force ``s V`` and the feed within ``MAX_FORCE``, the

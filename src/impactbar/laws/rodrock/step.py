@@ -1,0 +1,50 @@
+"""The simulator's contact step under the rod-and-rock law (theory §4d): the exact blow's map
+(:mod:`impactbar.laws.rodrock.exactmap`) or the lattice's (:mod:`impactbar.laws.rodrock.contact`),
+as :meth:`~impactbar.RodRock.blow_method` chooses."""
+
+from __future__ import annotations
+
+from .contact import BlowMap, RockContact
+
+__all__ = ["blow_map", "rock_contact"]
+
+
+def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
+                 duration: float | None = None) -> RockContact:
+    """The blow of a piston arriving at the shank in modal state ``(q, q')`` at load time ``t0``,
+    with the drive acting (theory §4d; the module's text states the method and its assumptions).
+
+    Parameters
+    ----------
+    model : BarModel
+        With ``impact=RodRock(...)``; its ``s`` and ``n_modes`` (``R`` and ``d`` play no part).
+    load : Load
+        The drive at ``x = 0``.
+    t0 : float
+        Load time of the impact.
+    q, v : array_like, shape (N + 1,)
+        Modal state at impact, positions from the shank (``u(1) = 0``).
+    cells_per_piston : int, optional
+        As :func:`~impactbar.single_blow`.
+    duration : float, optional
+        Length of the blow (model time; on the lattice rounded up to whole cell steps); default
+        :meth:`RodRock.window`.
+
+    Returns
+    -------
+    RockContact
+        An :class:`~impactbar.laws.rodrock.exactmap.ExactRockContact` for the exact blows.
+    """
+    return blow_map(model, load, t0, cells_per_piston=cells_per_piston, duration=duration).contact(q, v)
+
+
+def blow_map(model, load, t0, *, cells_per_piston=None, duration=None):
+    """The contact step's map at one impact time: an
+    :class:`~impactbar.laws.rodrock.exactmap.ExactBlowMap` where the law's blows are exact
+    (:meth:`RodRock.blow_method`, and no ``cells_per_piston`` given), else the lattice's
+    :class:`BlowMap`."""
+    if cells_per_piston is None and model.law.blow_method(model) == "exact":
+        from .exactmap import ExactBlowMap
+
+        return ExactBlowMap(model, load, t0, duration=duration)
+    return BlowMap(model, load, t0, cells_per_piston=cells_per_piston, duration=duration)
