@@ -11,7 +11,7 @@ import numpy as np
 from ._shared.schema import Field, Schema
 from ._shared.validate import check_int, check_real
 from .dynamics.stepped import SteppedPiston
-from .laws import ContactLaw, get_law
+from .laws import ContactLaw, get_law, piston_law
 
 __all__ = ["BarModel"]
 
@@ -123,19 +123,19 @@ class BarModel:
 
     def _set_piston(self) -> None:
         piston = self.piston
+        if piston is not None and not isinstance(piston, SteppedPiston):
+            raise ValueError(f"piston must be a SteppedPiston or None; got {type(piston).__name__}")
+        if piston is not None and piston.n_segments == 1:  # the uniform bar, exactly
+            object.__setattr__(self, "piston", piston := None)
+        # (the wave law's long rod struck by a stepped piston: the exact blow, theory §4b, §12)
+        object.__setattr__(self, "_law", piston_law(self._law, piston is not None))
         if piston is None:
             return
-        if not isinstance(piston, SteppedPiston):
-            raise ValueError(f"piston must be a SteppedPiston or None; got {type(piston).__name__}")
-        if piston.n_segments == 1:  # the uniform bar, exactly
-            object.__setattr__(self, "piston", None)
-            return
+        self._law.check_model(self)
         if not self._law.stepped_piston:
             raise ValueError(
-                f"piston: a stepped piston's modes are supported under the paper's and the rod-rock laws "
-                f"(got impact = {self._law.name!r}): the wave law carries a uniform bar by "
-                "characteristics, its contact a round trip of 2/s; a stepped piston on a long rod is "
-                "RodRock(segments=[RodSegment(length=..., impedance=...)], ...)")
+                f"piston: a stepped piston's modes are supported under the paper's, the wave and the "
+                f"rod-rock laws (got impact = {self._law.name!r})")
         sticking = piston.sticking_basis(self.n_modes)
         modes = sticking.free
         ends = modes.shapes(np.array([0.0, 1.0]))  # (2, N + 1)

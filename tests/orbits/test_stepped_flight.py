@@ -181,9 +181,10 @@ def test_equal_segments_drive_orbits_are_the_uniform_bars():
     assert [o.stable for o in a] == [o.stable for o in b]
 
 
-@pytest.mark.parametrize("impact", ["wave"])
-def test_a_stepped_piston_only_under_the_paper_law(impact):
-    with pytest.raises(ValueError, match="piston"):
-        BarModel(3.0, 0.1, 0.6, 4, impact=impact, piston=HEAD_NECK)
+def test_a_stepped_piston_under_every_law_and_checked():
+    """The wave law takes a stepped piston as its long rod's exact blow (theory §12), the other laws
+    as they are; a piston that is not a SteppedPiston is refused by name."""
+    assert type(BarModel(3.0, 0.1, 0.6, 4, impact="wave", piston=HEAD_NECK).law).__name__ == "SteppedLongRod"
+    assert type(BarModel(3.0, 0.1, 0.6, 4, piston=HEAD_NECK).law).__name__ == "PaperLaw"
     with pytest.raises(ValueError, match="piston must be a SteppedPiston"):
         BarModel(3.0, 0.1, 0.6, 4, piston=[0.5, 0.5])

@@ -147,11 +147,26 @@ def test_damping_ratio_of_a_stepped_piston_uses_its_first_mode():
     assert h.to_dict()["segments"]["lengths_m"] == pytest.approx([0.12, 0.33], rel=1e-15)
 
 
-def test_a_stepped_piston_under_the_wave_law_is_refused():
-    cfg = _split(P.PRESETS["hydraulic-drill"])
-    cfg["model"] = {"impact": "wave"}
-    with pytest.raises(ValueError, match=r"and the rod-rock law \(a \[rock\] section\); got impact = 'wave'"):
-        P.Hammer.from_config(cfg)
+def test_equal_sections_under_the_wave_law_give_the_uniform_hammers_orbit():
+    """Under the wave law a stepped piston's contact is the exact blow on the long rod
+    (impactbar.laws.rodrock.longrod); cut into two segments of one section it is the uniform piston,
+    whose contact the wave law's own characteristics solve: the stable-or-not orbit both find has the
+    same phase, impact velocity, rod energy, efficiency and advance (1e-9), and the peak rod stress
+    within the wave law's own estimate of its truncation error (theory §4c)."""
+    cfg = copy.deepcopy(P.PRESETS["hydraulic-drill"])
+    cfg["model"] = {"impact": "wave", "n_modes": 4}
+    uniform = P.Hammer.from_config(cfg)
+    stepped = P.Hammer.from_config(_split(cfg))
+    assert type(stepped.model.law).__name__ == "SteppedLongRod"
+    ref = {round(o.phase_rad, 6): o for o in P.orbits(uniform)}
+    found = P.orbits(stepped)
+    assert found
+    for o in found:
+        u = ref[round(o.phase_rad, 6)]
+        for name in ("phase_rad", "impact_velocity_m_s", "rod_energy_J", "efficiency", "rod_advance_m"):
+            assert getattr(o, name) == pytest.approx(getattr(u, name), rel=1e-9)
+        err = u.orbit.impact.peak_force_error / u.orbit.impact.peak_force
+        assert o.peak_rod_stress_Pa == pytest.approx(u.peak_rod_stress_Pa, rel=max(err, 1e-9))
 
 
 def test_equal_sections_on_a_drill_string_give_the_uniform_hammers_blows():

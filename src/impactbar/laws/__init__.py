@@ -28,11 +28,35 @@ from .rodrock import BilinearRock as BilinearRock
 from .rodrock import RodRock as RodRock
 from .rodrock import RodSegment as RodSegment
 from .rodrock import single_blow as single_blow
+from .rodrock.longrod import SteppedLongRod as SteppedLongRod
 from .wave import PressedContact as PressedContact
 from .wave import WaveLaw as WaveLaw
 
 __all__ = ["ContactLaw", "OrbitState", "LawNotSupported", "PaperLaw", "WaveLaw", "PressedContact",
-           "InstantImpact", "LAWS", "get_law", "RodRock", "RodSegment", "BilinearRock", "single_blow"]
+           "InstantImpact", "LAWS", "get_law", "RodRock", "RodSegment", "BilinearRock", "single_blow",
+           "SteppedLongRod", "piston_law"]
+
+
+def piston_law(law: ContactLaw, stepped: bool) -> ContactLaw:
+    """The law a model under ``law`` takes with a stepped (``stepped``) or a uniform piston: the wave
+    law's long rod struck by a stepped piston is :class:`SteppedLongRod` (its contact the exact blow,
+    theory §4b, §12), and back; every other law takes itself (and takes a stepped piston, or refuses
+    it, by its ``stepped_piston`` flag).
+
+    Parameters
+    ----------
+    law : ContactLaw
+    stepped : bool
+
+    Returns
+    -------
+    ContactLaw
+    """
+    if stepped and isinstance(law, WaveLaw):
+        return SteppedLongRod()
+    if not stepped and isinstance(law, SteppedLongRod):
+        return WaveLaw()
+    return law
 
 #: The impact laws by name: ``"paper"`` (eq. 10) and ``"wave"`` (the long rod, theory §4b). The rod
 #: and the rock (``"rodrock"``, theory §4d) has required parameters: only a ``RodRock(...)`` object

@@ -131,6 +131,20 @@ class ContactLaw:
         """
         return model.with_(impact="paper", R=min(model.R, 0.95))
 
+    def check_model(self, model) -> None:
+        """Refuse a model this law cannot take (called by :class:`~impactbar.BarModel` once its
+        piston is set); every model is accepted by default.
+
+        Parameters
+        ----------
+        model : BarModel
+
+        Raises
+        ------
+        ValueError
+            Naming the parameter out of the law's range.
+        """
+
     def coarse_model(self, model):
         """A cheaper model of the same motion, whose orbits Newton's method reaches from farther
         guesses, to start this law's Newton from (:func:`~impactbar.find_orbit`), or ``None`` (the

@@ -320,10 +320,8 @@ def check_piston(bar, stepped_ok: bool, law: str = "") -> None:
         raise ValueError(f"bar must be a Bar or a SteppedBar; got {type(bar).__name__}")
     if isinstance(bar, SteppedBar) and not stepped_ok:
         raise ValueError(
-            f"bar: a stepped piston (bar.length a list of segments) is supported under the paper's impact "
-            f"law and the rod-rock law (a [rock] section); got {law or 'another law'} (the wave law "
-            "carries a uniform piston by characteristics; a stepped piston on a long rod: a [rock] "
-            "section with the rod)")
+            f"bar: a stepped piston (bar.length a list of segments) is supported under the paper's, the "
+            f"wave and the rod-rock laws; got {law or 'another law'}")
 
 
 def _positive(name, v):

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from .._shared.validate import check_int, check_real
-from ..laws import LAWS, RodRock
+from ..laws import LAWS, RodRock, piston_law
 from ..loads import FourierLoad, Load
 from ..model import BarModel
 from .bar import (
@@ -156,9 +156,8 @@ class Hammer:
             object.__setattr__(self, "impact", "rodrock")
         elif self.impact not in LAWS:
             raise ValueError(f"model.impact must be one of {list(LAWS)}; got {self.impact!r}")
-        law = RodRock if self.drill is not None else LAWS[self.impact]
-        check_piston(self.bar, law.stepped_piston,
-                     f"impact = {self.impact!r}")
+        law = RodRock if self.drill is not None else piston_law(LAWS[self.impact](), True)
+        check_piston(self.bar, law.stepped_piston, f"impact = {self.impact!r}")
         if isinstance(self.force, MeasuredForce):
             self._measured  # noqa: B018  (fit the series now: a bad curve fails here, not later)
 

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -46,7 +47,8 @@ from ._exactmodal import piston_integrals
 from ._piston import piston_segments
 from .contact import RockContact
 
-__all__ = ["ExactBlowMap", "ExactRockContact", "ModalBasis", "drive_pieces", "initial_waves", "project"]
+__all__ = ["ExactBlowMap", "ExactRockContact", "ModalBasis", "RodSpec", "drive_pieces", "initial_waves",
+           "project", "rod_spec"]
 
 
 class ModalBasis:
@@ -276,6 +278,36 @@ def project(basis: ModalBasis, hist, t: float, end_position: float, heads=None):
     return q, v
 
 
+class RodSpec(NamedTuple):
+    """The struck rod of an exact blow map: its segments' travel times and impedances (model
+    units, shape ``(J,)`` each), the rock's and bit's parameters of
+    :func:`~impactbar.laws.rodrock.exact.exact_blow` (``k``, ``k_u``, ``bit_mass``, ``feed``), the
+    segments' lengths (piston lengths),
+    whether the bit's reflection leaves (a semi-infinite rod), and whether the next flight's stop is
+    the shank's rest position on the rock (else the rod's end where the blow left it)."""
+
+    times: np.ndarray
+    impedances: np.ndarray
+    params: dict
+    lengths: np.ndarray
+    semi_infinite: bool = False
+    on_rock: bool = True
+
+
+def rod_spec(model) -> RodSpec:
+    """The rod and rock of a model under :class:`~impactbar.RodRock` as a :class:`RodSpec` (a bit
+    negligible as :func:`~impactbar.single_blow` decides taken as massless)."""
+    from ._choice import _bit_is_negligible
+
+    law = model.law
+    s = float(model.s)
+    bit = 0.0 if _bit_is_negligible(model, law) else law.bit_mass
+    return RodSpec(np.array([g.travel_time(model) for g in law.segments]),
+                   s * np.array([g.impedance for g in law.segments]),
+                   dict(k=law.rock.k, k_u=law.rock.k_u, bit_mass=bit, feed=law.feed),
+                   np.array([g.length for g in law.segments]))
+
+
 class ExactBlowMap:
     """The contact step on the exact scheme at one impact time, as a map of the piston's modal state
     at impact (theory §4d; the module's text): the rod's segments, the piston's modal basis and the
@@ -290,25 +322,20 @@ class ExactBlowMap:
     t0 : float
         Load time of the impact.
     duration : float, optional
-        The blow's length (model time); default :meth:`RodRock.window`.
+        The blow's length (model time); default the law's ``window``.
+    rod : RodSpec, optional
+        The struck rod; default the model's :class:`~impactbar.RodRock` law's (:func:`rod_spec`).
     """
 
-    def __init__(self, model, load, t0, *, duration=None):
-        law = model.law
+    def __init__(self, model, load, t0, *, duration=None, rod=None):
         self.model, self.load, self.t0 = model, load, float(t0)
-        s = float(model.s)
-        self.basis = modal_basis(s, model.piston, model.n_modes)
-        segs = law.segments
-        self.rod_times = np.array([g.travel_time(model) for g in segs])
-        self.rod_impedances = s * np.array([g.impedance for g in segs])
-        self.duration = float(law.window(model) if duration is None else duration)
+        self.basis = modal_basis(float(model.s), model.piston, model.n_modes)
+        self.rod = rod = rod_spec(model) if rod is None else rod
+        self.rod_times, self.rod_impedances, self.params = rod.times, rod.impedances, rod.params
+        self.duration = float(model.law.window(model) if duration is None else duration)
         self.p_end = float(np.asarray(load(np.array([self.t0])), dtype=float)[0])
         h = float(min(self.basis.travel.min(), self.rod_times.min()))
         self.drive = drive_pieces(load, self.t0, self.duration, lead=h)
-        from ._choice import _bit_is_negligible
-
-        bit = 0.0 if _bit_is_negligible(model, law) else law.bit_mass  # (single_blow's choice)
-        self.params = dict(k=law.rock.k, k_u=law.rock.k_u, bit_mass=bit, feed=law.feed)
 
     def solve(self, q, v, *, t_max=None, record=False, lean=False):
         """The :class:`~impactbar.laws.rodrock.exact.ExactBlow` of an arrival in state ``(q, q')``
@@ -320,12 +347,17 @@ class ExactBlowMap:
         return exact_blow(self.basis.travel, self.basis.impedance, self.rod_times, self.rod_impedances,
                           initial=init, drive=self.drive, fixed_horizon=True,
                           t_max=self.duration if t_max is None else float(t_max), record=record,
-                          lean=lean, **self.params)
+                          lean=lean, semi_infinite=self.rod.semi_infinite, **self.params)
+
+    def _end(self, shank, gap, permanent):
+        """The struck end's position after the blow from the stop of the next flight: the shank's
+        new rest position (on the rock, its permanent penetration) or the long rod's end."""
+        return shank - gap - (permanent if self.rod.on_rock else shank)
 
     def state_after(self, ex):
-        """The modal state at the end of ``ex``, positions from the shank's new rest position (the
-        end pressed beyond it put on it)."""
-        end = ex.shank_displacement - ex.gap - ex.permanent_penetration
+        """The modal state at the end of ``ex``, positions from the stop of the next flight (the
+        shank's new rest position, or the long rod's end; the end pressed beyond it put on it)."""
+        end = self._end(ex.shank_displacement, ex.gap, ex.permanent_penetration)
         qa, va = project(self.basis, ex._hist, ex.duration, end)
         return self._on_stop(qa), va
 
@@ -347,7 +379,7 @@ class ExactBlowMap:
         PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam = ws[:9]
         NSF, BS = ws[16], ws[18]
         n_p = self.basis.travel.size
-        end = scale * (NSF[n_p, 1] - NSF[n_p, 0] - BS[5])  # shank - gap - permanent penetration
+        end = self._end(scale * NSF[n_p, 1], scale * NSF[n_p, 0], scale * BS[5])
         qa, va = project(self.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[25][0]), end)
         return np.concatenate((self._on_stop(qa), va))
 
@@ -392,9 +424,7 @@ class ExactRockContact(RockContact):
         self.t0 = bmap.t0
         self.q_before, self.v_before = q, v
         self._map, self.exact = bmap, ex
-        law = model.law
-        lengths = np.array([g.length for g in law.segments])
-        self.blow = blow_from_exact(ex, float(model.s), lengths, bmap.rod_times,
+        self.blow = blow_from_exact(ex, float(model.s), bmap.rod.lengths, bmap.rod_times,
                                     bmap.basis.travel * float(model.s))
         self.duration = ex.duration
         self.q_after, self.v_after = q_after, v_after

@@ -310,22 +310,9 @@ class RodRock(ContactLaw):
         jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
         jac_t : numpy.ndarray, shape (2 N + 2,)
         """
-        from .step import blow_map
+        from .step import blow_map, fd_impact_map
 
-        y = np.array(y_minus, dtype=float)
-        t = float(t)
-        step = blow_map(model, load, t)
-        y_plus = step(y)
-        h = 1e-6 * (float(np.max(np.abs(y))) or 1.0)  # relative: the orbit's scale is the load's
-        jac = np.empty((y.size, y.size))
-        for j in range(y.size):
-            e = np.zeros(y.size)
-            e[j] = h
-            jac[:, j] = (step(y + e) - step(y - e)) / (2.0 * h)
-        ht = 1e-6
-        up, down = step.shifted([t + ht, t - ht])
-        jt = (up(y) - down(y)) / (2.0 * ht)
-        return y_plus, jac, jt
+        return fd_impact_map(blow_map(model, load, float(t)), y_minus, t)
 
     def blow(self, model, load, t, y_minus):
         """The blow of an arrival at load time ``t`` in state ``y_minus`` (shape ``(2 N + 2,)``)

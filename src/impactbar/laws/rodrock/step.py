@@ -4,9 +4,11 @@ as :meth:`~impactbar.RodRock.blow_method` chooses."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from .contact import BlowMap, RockContact
 
-__all__ = ["blow_map", "rock_contact"]
+__all__ = ["blow_map", "fd_impact_map", "rock_contact"]
 
 
 def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
@@ -48,3 +50,31 @@ def blow_map(model, load, t0, *, cells_per_piston=None, duration=None):
 
         return ExactBlowMap(model, load, t0, duration=duration)
     return BlowMap(model, load, t0, cells_per_piston=cells_per_piston, duration=duration)
+
+
+def fd_impact_map(step, y_minus, t):
+    """A contact step's map ``y_plus`` of the arrival state ``y_minus`` at load time ``t``, with its
+    Jacobians by central finite differences (:meth:`RodRock.impact_map`): steps
+    ``h = 1e-6 |y_minus|_inf`` in the state (relative: the same map at every scale of the load) and
+    ``1e-6`` in ``t``, ``4 N + 6`` blows of ``step`` (a :class:`BlowMap` or an
+    :class:`~impactbar.laws.rodrock.exactmap.ExactBlowMap`, with ``shifted`` for ``t``).
+
+    Returns
+    -------
+    y_plus : numpy.ndarray, shape (2 N + 2,)
+    jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
+    jac_t : numpy.ndarray, shape (2 N + 2,)
+    """
+    y = np.array(y_minus, dtype=float)
+    t = float(t)
+    y_plus = step(y)
+    h = 1e-6 * (float(np.max(np.abs(y))) or 1.0)  # relative: the orbit's scale is the load's
+    jac = np.empty((y.size, y.size))
+    for j in range(y.size):
+        e = np.zeros(y.size)
+        e[j] = h
+        jac[:, j] = (step(y + e) - step(y - e)) / (2.0 * h)
+    ht = 1e-6
+    up, down = step.shifted([t + ht, t - ht])
+    jt = (up(y) - down(y)) / (2.0 * ht)
+    return y_plus, jac, jt
