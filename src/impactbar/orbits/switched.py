@@ -209,6 +209,10 @@ class SwitchedOrbit(PeriodicOrbit):
     def _blows(self) -> tuple:
         if self.model.law.instantaneous:
             return ()
+        records = getattr(self._problem, "blow_records", None)
+        coupled = records(self._unknowns) if records is not None else None
+        if coupled is not None:  # blows solved with the drive's state: their own records
+            return tuple(coupled)
         law = self.model.law
         return tuple(law.blow(self.model, _constant_load(float(p)), 0.0, zd)
                      for p, zd in zip(self.contact_forces, self.states_before_impact, strict=True))
@@ -290,12 +294,15 @@ def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
     data: OrbitData = problem.orbit(X)
     law = model.law
     adm = Admissibility.ADMISSIBLE
+    records = getattr(problem, "blow_records", None)
+    coupled = records(X) if records is not None else None
     for k in range(m):
         if adm != Admissibility.ADMISSIBLE:
             break
         adm = problem.admissibility(X, k)
         if not law.instantaneous and data.impact_velocities[k] > 0.0:
-            rec = law.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
+            rec = coupled[k] if coupled is not None else \
+                law.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
             separates = bool(getattr(rec, "separations", ()))
             v_after = data.states_after[k][model.n_modes + 1:]
             adm = _window_departure(adm, False, float(model.end_weights @ v_after), separates)
@@ -324,6 +331,10 @@ def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
 #: rounding, larger ones the truncation) and integrated ones (rtol 1e-10: noise / step ~1e-6 at most)
 FD_STEP_CLOSED = 1e-6
 FD_STEP_ODE = 1e-4
+#: central-difference step of the coupled blow's Jacobian (a drive with state under a law whose
+#: contact takes time), relative to the modal and the drive's components' largest sizes: the blow is
+#: integrated at rtol 1e-10 (noise / step ~1e-5) and its truncation is O(step^2)
+FD_STEP_BLOW = 1e-5
 #: impacts followed from rest (or from a run's end) before Newton starts, at most
 SETTLE_IMPACTS = 400
 #: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
@@ -363,9 +374,13 @@ class ShootingProblem(OrbitProblem):
         self.impacts = check_int("impacts", impacts, lo=1)
         self.settings = settings if settings is not None else drive.integrator
         law = model.law
-        if not drive.piecewise_constant and not law.instantaneous:
-            raise ValueError(f"a drive with state ({type(drive).__name__}) takes an instantaneous impact law "
-                             f"(the paper's) for now; got impact={model.impact!r}")
+        #: a drive with state under a law whose contact takes time: each impact a blow solved with
+        #: the drive's state (theory §11, "The coupled blow"), its Jacobian by central differences
+        self.coupled = not drive.piecewise_constant and not law.instantaneous
+        if self.coupled:
+            from ..simulation.switched import check_coupling
+
+            check_coupling(model, drive)
         if law.instantaneous and model.R >= 1.0:
             raise ValueError("model.R must be < 1 for a periodic motion under a drive (with R = 1 no "
                              "energy leaves at the impacts)")
@@ -376,8 +391,7 @@ class ShootingProblem(OrbitProblem):
         self.positive = np.zeros(0, dtype=np.int64)
         self.closed = drive.piecewise_constant
         #: the Jacobian from the variational equations (a drive whose flights integrate them)
-        self.variational = bool(getattr(drive, "variational", False)) and not self.closed \
-            and law.instantaneous
+        self.variational = bool(getattr(drive, "variational", False)) and not self.closed
         self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
         self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
         self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
@@ -440,6 +454,14 @@ class ShootingProblem(OrbitProblem):
                 D = self._through(before, fl, fl.events, D)
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
+        if self.coupled:  # the blow and the drive's state together, the drive's map at its end
+            out, t_after, after, blow = self._blow(t, q, v, state, settings)
+            if keep:
+                pieces.append(blow)
+            if variational:
+                D = self._blow_jacobian(t, q, v, state, settings) @ D
+                return out, t_after, after.mode, arrival, pieces, events, D
+            return out, t_after, after.mode, arrival, pieces, events
         if law.instantaneous:
             qa, va = q, -law.kernel_restitution(model) * v
             t_after = t
@@ -459,6 +481,46 @@ class ShootingProblem(OrbitProblem):
         if variational:
             return out, t_after, after.mode, arrival, pieces, events, D
         return out, t_after, after.mode, arrival, pieces, events
+
+    def _blow(self, t, q, v, state, settings=None):
+        """The coupled blow of an arrival at ``t`` (:func:`impactbar.simulation.switched.driven_blow`):
+        the state after it with the drive's map at its end ``(q, q', z)``, where it ends, the drive's
+        state after the map and the blow as a :class:`~impactbar.simulation.switched.BlowPiece`."""
+        from ..simulation.switched import BlowPiece, driven_blow
+
+        model = self.model
+        res, after = driven_blow(model, self.drive, state, t, q, v, settings or self.settings)
+        out = np.concatenate((res.q_after, res.v_after, after.z))
+        c = model.end_weights
+        qa = np.array(q, dtype=float)
+        qa[0] -= float(c @ qa)
+        blow = BlowPiece(t, res.t_release, res.record, (qa, np.array(v, dtype=float)), res.pieces, c,
+                         (res.q_after.copy(), res.v_after.copy()))
+        return out, res.t_release, after, blow
+
+    def _blow_jacobian(self, t, q, v, state, settings=None):
+        """The Jacobian of the coupled blow's map ``(q, q', z)`` at arrival ``->`` after it, by central
+        differences (steps ``FD_STEP_BLOW`` times the largest modal and drive components, each group
+        by its own scale), the first row's ``q_0`` kept on the stop: the blow is autonomous (the
+        drive's force follows its state), so it has no time derivative. ``4 N + 12`` blows."""
+        M, n = self.M, self.n
+        y = np.concatenate((q, v, state.z))
+        scale = np.empty(n)
+        scale[:2 * M] = max(float(np.max(np.abs(y[:2 * M]))), 1e-300)
+        scale[2 * M:] = max(float(np.max(np.abs(y[2 * M:]))), 1e-300)
+        G = np.empty((n, n))
+
+        def blow(yy):
+            st = DriveState(state.mode, yy[2 * M:].copy())
+            return self._blow(t, yy[:M], yy[M:2 * M], st, settings)[0]
+
+        for j in range(n):
+            h = FD_STEP_BLOW * scale[j]
+            yp, ym = y.copy(), y.copy()
+            yp[j] += h
+            ym[j] -= h
+            G[:, j] = (blow(yp) - blow(ym)) / (2.0 * h)
+        return G
 
     def _through(self, mode, fl, fired, D):
         """The Jacobian through the end of a flight (Hiskens & Pai 2000): the flight's fundamental
@@ -668,7 +730,7 @@ class ShootingProblem(OrbitProblem):
         self.blocks, self.sources = [], []
         for k in range(self.impacts):
             tau, mode = blocks[k % len(blocks)]
-            if sources:
+            if sources and not self.coupled:  # (a coupled blow's mode is the one at its end: kept)
                 source = sources[k % len(sources)]
                 arr_mode, z, _, q, v = source
                 mode = self.drive.impact(arr_mode, z, tau, q, v).mode
@@ -742,6 +804,13 @@ class ShootingProblem(OrbitProblem):
                          trivial_multiplier=1.0, switch_times=np.array(switch_t),
                          switch_velocity=min(crossings) if crossings else math.nan, contact_time=window,
                          contact_forces=np.array(forces), monodromy=Phi)
+
+    def blow_records(self, X):
+        """The records of the period's blows in order (a drive with state under a law whose contact
+        takes time: each blow solved with the drive's state), ``None`` otherwise."""
+        if not self.coupled:
+            return None
+        return [p.record for p in self.flights(X) if hasattr(p, "record")]
 
     def flights(self, X) -> list:
         """The period's flights as the drive's flights give them (their own times: each block

@@ -351,6 +351,19 @@ class HydraulicCircuitDrive(Drive):
 
         return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational)
 
+    def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
+        """The circuit over a stretch of a blow with the driven end moved by the law's waves
+        (:func:`~impactbar.drives.circuit.endflight.circuit_end_flight`, theory §11, "The coupled
+        blow").
+
+        Returns
+        -------
+        EndFlight
+        """
+        from .endflight import circuit_end_flight
+
+        return circuit_end_flight(self, model, state, breaks, w0, incoming, impedance, settings)
+
     def border_tests(self, pieces) -> dict:
         """The circuit's border collisions over one period (theory §11): ``"accumulator"``, the
         least supply pressure less the pre-charge (through 0 where the accumulator starts emptying
