@@ -214,6 +214,7 @@ class SwitchedTrajectory(Trajectory):
 
         model, law = self.model, self.model.law
         hits = set(self.impact_times.tolist())
+        blows = {float(p.t0) for p in self.pieces if isinstance(p, BlowPiece)}
         out = []
         for j in range(len(self.pieces)):
             piece = self.pieces[j]
@@ -221,6 +222,8 @@ class SwitchedTrajectory(Trajectory):
                 out.extend(piece.impacts)
             elif isinstance(piece, BlowPiece):
                 out.append(piece.record)
+            elif piece.t_end in blows:  # a flight ending at a blow solved with the drive (its record)
+                continue
             elif piece.t_end in hits and piece.t_end > piece.t0:
                 q, v = piece.modal([piece.t_end])
                 p = float(piece.force([piece.t_end])[0])
