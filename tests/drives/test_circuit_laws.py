@@ -76,7 +76,7 @@ def test_the_lattice_blow_converges_to_the_wave_window():
     """A rod of the wave law's impedance ``(1 + R)/(1 - R)``, long enough that nothing returns within
     ``2/s``, a blow of ``2/s``: the lattice's coupled blow tends to the wave law's coupled window, the
     piston's momentum and the drive's work at second order in the cells (measured 4.0 per doubling), the
-    pressures toward it (1.1e-6 at 16 cells, 1.7e-8 at 256)."""
+    pressures toward it (6.2e-8 at 128 cells: theory §11)."""
     drive = held()
     s, R = 20.0, 0.3
     q, v = np.zeros(1), np.array([0.35])
@@ -93,7 +93,7 @@ def test_the_lattice_blow_converges_to_the_wave_window():
                        float(np.max(np.abs(res.drive_state.z - ref.drive_state.z)))))
     e = np.array(errors)
     assert np.all(e[:-1, :2] / e[1:, :2] > 3.5) and np.all(e[:-1, :2] / e[1:, :2] < 4.5)
-    assert e[-1, 0] < 1e-9 and e[-1, 1] < 1e-9 and e[-1, 2] < 1e-7
+    assert e[-1, 0] < 1e-9 and e[-1, 1] < 1e-9 and e[-1, 2] == pytest.approx(6.2e-8, rel=0.05)
     assert np.all(e[:-1, 2] > e[1:, 2])
 
 
@@ -195,18 +195,20 @@ def test_the_energy_accounts_of_a_run_with_blows(law):
 
 def test_the_energy_the_step_averages_drop_falls_with_the_cells():
     """``int (p - p_k)^2 dt / Z_0`` over a blow: first order in the cells while a step is longer than
-    the oil's relaxation, second order beyond (measured 9.2e-9, 6.7e-9, 3.8e-9, 1.4e-9, 4.3e-10 at 4 to
-    64 cells; the work on the piston is about 5e-3)."""
+    the oil's relaxation, second order beyond (9.2e-9, 6.7e-9, 3.8e-9, 1.4e-9, 4.3e-10 at 4 to 64
+    cells, of a work on the piston of about 5e-3: theory §11)."""
     drive = pumped()
     q, v = np.zeros(1), np.array([0.34])
     st = DriveState((1, 0, 1, 0), np.array([1.15, 1.15, 1.15, 1.0]))
     dropped = []
-    for cells in (8, 16, 32, 64):
+    for cells in (4, 8, 16, 32, 64):
         model = BarModel(s=S, d=0, R=0.0, n_modes=0, impact=rock(2.0, cells=cells))
         res = model.law.driven_contact(model, drive, st, 0.0, q, v)
         dropped.append(res.drive_work - res.record.blow.drive_work)
+        assert res.drive_work == pytest.approx(5e-3, rel=0.1)
     d = np.array(dropped)
-    assert np.all(d > 0.0) and np.all(d[:-1] / d[1:] > 1.5) and d[-1] / d[-2] < 0.35 and d[-1] < 1e-9
+    assert np.allclose(d, [9.2e-9, 6.7e-9, 3.8e-9, 1.4e-9, 4.3e-10], rtol=0.05)
+    assert np.all(d > 0.0) and np.all(d[:-1] / d[1:] > 1.3) and d[-1] / d[-2] < 0.35
 
 
 @pytest.mark.parametrize("law", [rock(2.0, cells=4), "wave"])

@@ -67,7 +67,8 @@ def test_the_blow_on_the_rock_moves_the_pressures(point):
     rises 1.1 MPa (21.60 to 22.70 MPa) as the piston stops and its demand for oil with it, the front
     chamber's falls 0.24 MPa, where the force held at the arrival's would keep them; the piston leaves
     at 3.609 m/s against 3.627 m/s under the frozen force, the work on rock 2e-5 apart (the rock takes
-    the blow's first wave, which the drive barely touches). Figures of theory §11."""
+    the blow's first wave, which the drive barely touches); a closed front chamber would have taken
+    12 MPa from the piston's 1.5 mm of travel, 0.86 % of its volume. Figures of theory §11."""
     d, o = point.drifter, point.orbit
     problem = o.problem
     tau, mode = problem.blocks[0]
@@ -86,6 +87,12 @@ def test_the_blow_on_the_rock_moves_the_pressures(point):
     rebound = (round(-o.states_after_impact[0][1] * L * om, 3), round(-v_frozen[0] * L * om, 3))
     assert rebound == (3.609, 3.627)
     assert abs(blow.record.work_on_rock / frozen.work_on_rock - 1.0) == pytest.approx(2.3e-5, rel=0.1)
+    # a closed front chamber: the piston's travel in the blow, its share of the chamber, the pressure
+    w = np.concatenate([p.y[:, 0] for p in blow.drive_pieces])
+    travel = float(np.max(w) - np.min(w))
+    share = drive.chambers.area_ratio * travel / drive.chambers.front_volume
+    assert (round(travel * L * 1e3, 1), round(100 * share, 2)) == (1.5, 0.86)
+    assert round(drive.oil.bulk_modulus * share * MPa) == 12
 
 
 def test_a_circuit_drifter_config_takes_the_drill_string_sections():
