@@ -883,7 +883,12 @@ PRESSED_BLOWS = 1000
 def check_coupling(model, drive) -> None:
     """Refuse, in one line, a drive with state under a law whose contact takes time where the law
     has no coupled blow (:meth:`~impactbar.laws.ContactLaw.driven_contact`) or the drive cannot
-    follow one (:meth:`~impactbar.Drive.end_flight`)."""
+    follow one (:meth:`~impactbar.Drive.end_flight`).
+
+    Raises
+    ------
+    ValueError
+        Naming what is missing."""
     from ..drives.base import Drive
     from ..laws.base import ContactLaw
 
@@ -900,7 +905,12 @@ def check_coupling(model, drive) -> None:
 def check_blow_switches(drive, modes, gaps) -> None:
     """Refuse a blow during which the piston's rigid coordinate crosses one of the drive's position
     switches armed in ``modes`` (the coupled blow does not switch inside it): ``gaps`` the times and
-    the coordinate (:attr:`~impactbar.laws.base.DrivenContact.gaps`)."""
+    the coordinate (:attr:`~impactbar.laws.base.DrivenContact.gaps`, shape ``(2, P)``).
+
+    Raises
+    ------
+    ValueError
+        Naming the switch and where."""
     from ..drives.base import GapCrossing
 
     y = np.asarray(gaps[1], dtype=float)
@@ -923,8 +933,17 @@ def driven_blow(model, drive, state, t, q, v, settings=None):
     law's blow solved with the drive's state (:meth:`~impactbar.laws.ContactLaw.driven_contact`),
     the position switches checked (:func:`check_blow_switches`), then the drive's map at the impact
     where the blow ends (as for the valve of :class:`~impactbar.PositionSwitchedDrive` under these
-    laws: the switch the impact triggers counts from the contact's end). Returns the
-    :class:`~impactbar.laws.base.DrivenContact` and the drive's state after its map."""
+    laws: the switch the impact triggers counts from the contact's end).
+
+    Returns
+    -------
+    DrivenContact, DriveState
+        The blow (:class:`~impactbar.laws.base.DrivenContact`) and the drive's state after its map.
+
+    Raises
+    ------
+    ValueError
+        From the law's coupled blow, or a switch crossed inside it (:func:`check_blow_switches`)."""
     c = model.end_weights
     q = np.array(q, dtype=float)
     v = np.array(v, dtype=float)

@@ -33,7 +33,21 @@ __all__ = ["driven_rock_contact", "causal_cells"]
 
 def causal_cells(Z, n_p: int) -> int:
     """The cells ``m`` from the driven end to the first boundary that reflects (a change of
-    impedance inside the piston, else the shank after its ``n_p`` cells)."""
+    impedance inside the piston, else the shank after its ``n_p`` cells): the arriving waves of
+    ``2 m`` steps do not depend on the drive over them (module docstring).
+
+    Parameters
+    ----------
+    Z : array_like, shape (cells,)
+        The cells' impedances, piston first (``BlowGrid.Z``).
+    n_p : int
+        The piston's cells.
+
+    Returns
+    -------
+    int
+        ``1 <= m <= n_p``.
+    """
     Z = np.asarray(Z, dtype=float)
     for j in range(n_p - 1):
         if Z[j + 1] != Z[j]:
@@ -69,7 +83,23 @@ def _steps(grid, F, G, bs, bp, gap, drive, record):
 
 def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:
     """The blow of a piston arriving at the shank in modal state ``(q, q')`` at ``t0`` with the drive
-    in ``state`` (after its map at the impact), solved together (module docstring).
+    in ``state`` (as it arrives), solved together (module docstring; theory §11, "The coupled
+    blow").
+
+    Parameters
+    ----------
+    model : BarModel
+        Under :class:`~impactbar.RodRock` (its grid, rock, bit and feed; damping neglected in the
+        blow, as in the law's own).
+    drive : Drive
+        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+    state : DriveState
+    t0 : float
+        Time of the arrival (model units).
+    q, v : array_like, shape (N + 1,)
+        Modal state at arrival, positions from the shank (``u(1) = 0``).
+    settings : FlightSettings, optional
+        The drive's integrator (default the drive's).
 
     Returns
     -------

@@ -88,7 +88,22 @@ def _incoming(sol, s):
 
 def driven_wave_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:
     """The window of a piston arriving at the rod end in modal state ``(q, q')`` at ``t0`` with the
-    drive in ``state`` (after its map at the impact), solved together (module docstring).
+    drive in ``state`` (as it arrives), solved together (module docstring; theory §11, "The coupled
+    blow").
+
+    Parameters
+    ----------
+    model : BarModel
+        Under the wave law (its ``s``, ``R`` and modes; damping neglected in the window).
+    drive : Drive
+        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+    state : DriveState
+    t0 : float
+        Time of the arrival (model units).
+    q, v : array_like, shape (N + 1,)
+        Modal state at arrival, positions from the rod end (``u(1) = 0``).
+    settings : FlightSettings, optional
+        The drive's integrator (default the drive's).
 
     Returns
     -------
