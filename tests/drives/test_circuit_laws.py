@@ -175,7 +175,8 @@ def test_the_energy_accounts_of_a_run_with_blows(law):
     ``rtol = 1e-10``, 2e-10 at ``1e-12`` (measured 1.0e-8 and 2.2e-10 under the rod-rock law, 7.0e-9
     and 1.6e-10 under the wave law); the records are the law's, one a blow."""
     from impactbar.drives import FlightSettings
-    from impactbar.simulation.switched import BlowPiece, run_stateful
+    from impactbar.simulation.blows import BlowPiece
+    from impactbar.simulation.switched import run_stateful
 
     model = BarModel(s=S, d=0.0, R=0.215, n_modes=1, impact=law)
     drive = pumped()

@@ -331,10 +331,6 @@ def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
 #: rounding, larger ones the truncation) and integrated ones (rtol 1e-10: noise / step ~1e-6 at most)
 FD_STEP_CLOSED = 1e-6
 FD_STEP_ODE = 1e-4
-#: central-difference step of the coupled blow's Jacobian (a drive with state under a law whose
-#: contact takes time), relative to the modal and the drive's components' largest sizes: the blow is
-#: integrated at rtol 1e-10 (noise / step ~1e-5) and its truncation is O(step^2)
-FD_STEP_BLOW = 1e-5
 #: impacts followed from rest (or from a run's end) before Newton starts, at most
 SETTLE_IMPACTS = 400
 #: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
@@ -378,7 +374,7 @@ class ShootingProblem(OrbitProblem):
         #: the drive's state (theory §11, "The coupled blow"), its Jacobian by central differences
         self.coupled = not drive.piecewise_constant and not law.instantaneous
         if self.coupled:
-            from ..simulation.switched import check_coupling
+            from ..simulation.blows import check_coupling
 
             check_coupling(model, drive)
         if law.instantaneous and model.R >= 1.0:
@@ -455,11 +451,13 @@ class ShootingProblem(OrbitProblem):
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
         if self.coupled:  # the blow and the drive's state together, the drive's map at its end
-            out, t_after, after, blow = self._blow(t, q, v, state, settings)
+            from .coupled import blow_jacobian, coupled_blow
+
+            out, t_after, after, blow = coupled_blow(model, drive, t, q, v, state, settings or self.settings)
             if keep:
                 pieces.append(blow)
             if variational:
-                D = self._blow_jacobian(t, q, v, state, settings) @ D
+                D = blow_jacobian(model, drive, t, q, v, state, settings or self.settings) @ D
                 return out, t_after, after.mode, arrival, pieces, events, D
             return out, t_after, after.mode, arrival, pieces, events
         if law.instantaneous:
@@ -481,46 +479,6 @@ class ShootingProblem(OrbitProblem):
         if variational:
             return out, t_after, after.mode, arrival, pieces, events, D
         return out, t_after, after.mode, arrival, pieces, events
-
-    def _blow(self, t, q, v, state, settings=None):
-        """The coupled blow of an arrival at ``t`` (:func:`impactbar.simulation.switched.driven_blow`):
-        the state after it with the drive's map at its end ``(q, q', z)``, where it ends, the drive's
-        state after the map and the blow as a :class:`~impactbar.simulation.switched.BlowPiece`."""
-        from ..simulation.switched import BlowPiece, driven_blow
-
-        model = self.model
-        res, after = driven_blow(model, self.drive, state, t, q, v, settings or self.settings)
-        out = np.concatenate((res.q_after, res.v_after, after.z))
-        c = model.end_weights
-        qa = np.array(q, dtype=float)
-        qa[0] -= float(c @ qa)
-        blow = BlowPiece(t, res.t_release, res.record, (qa, np.array(v, dtype=float)), res.pieces, c,
-                         (res.q_after.copy(), res.v_after.copy()))
-        return out, res.t_release, after, blow
-
-    def _blow_jacobian(self, t, q, v, state, settings=None):
-        """The Jacobian of the coupled blow's map ``(q, q', z)`` at arrival ``->`` after it, by central
-        differences (steps ``FD_STEP_BLOW`` times the largest modal and drive components, each group
-        by its own scale), the first row's ``q_0`` kept on the stop: the blow is autonomous (the
-        drive's force follows its state), so it has no time derivative. ``4 N + 12`` blows."""
-        M, n = self.M, self.n
-        y = np.concatenate((q, v, state.z))
-        scale = np.empty(n)
-        scale[:2 * M] = max(float(np.max(np.abs(y[:2 * M]))), 1e-300)
-        scale[2 * M:] = max(float(np.max(np.abs(y[2 * M:]))), 1e-300)
-        G = np.empty((n, n))
-
-        def blow(yy):
-            st = DriveState(state.mode, yy[2 * M:].copy())
-            return self._blow(t, yy[:M], yy[M:2 * M], st, settings)[0]
-
-        for j in range(n):
-            h = FD_STEP_BLOW * scale[j]
-            yp, ym = y.copy(), y.copy()
-            yp[j] += h
-            ym[j] -= h
-            G[:, j] = (blow(yp) - blow(ym)) / (2.0 * h)
-        return G
 
     def _through(self, mode, fl, fired, D):
         """The Jacobian through the end of a flight (Hiskens & Pai 2000): the flight's fundamental

@@ -362,7 +362,8 @@ class HydraulicCircuitDrive(Drive):
         """
         from .endflight import circuit_end_flight
 
-        return circuit_end_flight(self, model, state, breaks, w0, incoming, impedance, settings)
+        return circuit_end_flight(self, model, state, breaks, w0, incoming, impedance, settings,
+                                  _rate_model(1))
 
     def border_tests(self, pieces) -> dict:
         """The circuit's border collisions over one period (theory §11): ``"accumulator"``, the

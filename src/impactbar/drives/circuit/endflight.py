@@ -154,7 +154,7 @@ def _solver(drive, mode, settings, ext, model1, state_size):
 
 
 def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incoming, impedance: float,
-                       settings: FlightSettings | None = None) -> EndFlight:
+                       settings: FlightSettings | None = None, one_mode=None) -> EndFlight:
     """The circuit from ``state`` at ``breaks[0]`` to ``breaks[-1]`` with the driven end moving at
     ``u_t(0, t) = a(t) + p / Z`` (module docstring).
 
@@ -175,6 +175,9 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
         ``Z > 0`` of the piston at its driven end (model units: ``s`` for a uniform piston).
     settings : FlightSettings, optional
         CVODE's tolerances (default the drive's).
+    one_mode : object
+        The one-mode bar of the compiled kernels' parameters (``drive._rate_model(1)``: what
+        :meth:`HydraulicCircuitDrive.end_flight` passes).
 
     Returns
     -------
@@ -185,12 +188,10 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     ValueError
         Where CVODE fails, or a chamber empties.
     """
-    from .drive import _rate_model
-
     settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
     breaks = np.asarray(breaks, dtype=float)
     n = breaks.size - 1
-    model1 = _rate_model(1)
+    model1 = one_mode
     ext = np.array([0.0, 1.0 / float(impedance)])
     solvers: dict = {}
     mode, z = state.mode, np.array(state.z, dtype=float)
