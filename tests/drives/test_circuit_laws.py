@@ -32,6 +32,7 @@ from impactbar import (
     PositionSwitchedDrive,
     RodRock,
     RodSegment,
+    continue_orbit,
     find_orbit,
     simulate,
 )
@@ -316,3 +317,16 @@ def test_a_stepped_piston_on_the_rod_and_rock_under_the_circuit():
     assert np.allclose(runs[0].impact_times, runs[1].impact_times, rtol=1e-9)
     assert np.allclose(runs[0].impact_velocities, runs[1].impact_velocities, rtol=1e-8)
     assert np.max(np.abs(runs[2].impact_velocities - runs[1].impact_velocities)) > 1e-3  # another piston
+
+
+def test_continuation_in_the_pump_flow(orbit):
+    """``continue_orbit`` of the operating point under the law in the pump flow: each point an orbit
+    (its residual at the integrator's accuracy), the period falling as the pump gives more oil."""
+    branch = continue_orbit(orbit, "pump_flow", to=0.075, max_points=3, events=False)
+    assert len(branch.orbits) == 3
+    for o in branch.orbits:
+        X = np.asarray(o._unknowns, dtype=float)
+        assert np.max(np.abs(o.problem.value(X))) < 1e-9 and o.stable
+    flows = [o.drive.value("pump_flow") for o in branch.orbits]
+    periods = [o.period for o in branch.orbits]
+    assert flows[-1] > flows[0] and periods[-1] < periods[0]
