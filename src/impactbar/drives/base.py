@@ -507,7 +507,7 @@ class Drive(ABC):
             With ``state`` (the :class:`DriveState` at ``breaks[-1]``), ``w``, ``impulses`` (``int p
             dt`` over each interval, shape ``(n,)``), ``pieces`` (with ``drive_state(t)``,
             ``force(t)``, ``energies()``) and ``events`` (``(t, event, mode after)``): the oil
-            circuit's :class:`~impactbar.drives.circuit.endflight.EndFlight`.
+            circuit's ``EndFlight`` (``impactbar.drives.circuit.endflight``).
         """
         return None
 

@@ -76,7 +76,7 @@ class DrivenContact(NamedTuple):
         The drive's state at ``t_release``.
     pieces : list
         The drive's pieces over the blow (their histories and energy quadratures,
-        :class:`~impactbar.drives.circuit.endflight.EndPiece`).
+        ``impactbar.drives.circuit.endflight.EndPiece``).
     events : list
         The drive's events inside the blow, ``(t, event, mode after)``.
     drive_work : float

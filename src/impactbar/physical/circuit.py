@@ -126,7 +126,7 @@ class CircuitDrifter:
     n_modes : int, optional
     name : str, optional
     drill : DrillString, optional
-        The drill string and the rock (:mod:`impactbar.physical.rock`, theory §4d): the model's law is
+        The drill string and the rock (``impactbar.physical.rock``, theory §4d): the model's law is
         then the rod-rock law (``restitution`` plays no part), each blow solved with the circuit's
         state (theory §11, "The coupled blow").
 

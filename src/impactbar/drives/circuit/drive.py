@@ -353,7 +353,7 @@ class HydraulicCircuitDrive(Drive):
 
     def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
         """The circuit over a stretch of a blow with the driven end moved by the law's waves
-        (:func:`~impactbar.drives.circuit.endflight.circuit_end_flight`, theory §11, "The coupled
+        (``impactbar.drives.circuit.endflight.circuit_end_flight``, theory §11, "The coupled
         blow").
 
         Returns
