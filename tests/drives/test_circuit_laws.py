@@ -190,6 +190,13 @@ def test_the_energy_accounts_of_a_run_with_blows(law):
         residuals.append(run.energy.relative_residual)
         blows = [p for p in run.pieces if isinstance(p, BlowPiece)]
         assert [b.record for b in blows] == list(run.impacts)
+        # the pressures and the valve logged through the blows too: at the circuit's steps in each
+        h = drive.histories(run)
+        for b in blows:
+            inside = (h["t"] > b.t0) & (h["t"] < b.t_end)
+            assert np.count_nonzero(inside) > 10
+            z = b.drive_state(h["t"][inside])
+            assert np.array_equal(h["p_r"][inside], z[1]) and np.array_equal(h["x_v"][inside], z[3])
         dropped = [b.account()[0] - b.account()[1] for b in blows]  # the lattice's averages' loss
         assert all(x >= -1e-15 for x in dropped) if law != "wave" else max(map(abs, dropped)) < 1e-10
     assert residuals[0] < 1.5e-8 and residuals[1] < 5e-10

@@ -124,3 +124,14 @@ def test_the_command_line_prints_the_blow_on_the_rock(point, monkeypatch, capsys
     out = capsys.readouterr().out
     assert "a drill string of 2 segment(s) on rock (k = 470 kN/mm)" in out
     assert "per blow: work on rock 217.4 J, penetration 0.9125 mm" in out and "2.499 m/min" in out
+
+
+def test_the_indicator_work_is_the_oils_work_through_the_blows(point):
+    """The chambers' p-V loops over the period, the volumes inside the blow following the driven end
+    as the circuit integrated it: their sum is the energy account's work of the oil on the piston at
+    second order in the sampling (measured 3.4e-3 J at 4000 points and 1.0e-3 J at 8000, of 271 J;
+    the blow's end re-measures positions from the advanced stop, a step the open path does not
+    integrate)."""
+    acc = point.energy_account["piston"]
+    errors = [abs(point.indicator_work_J(n)["piston"] - acc) for n in (4000, 8000)]
+    assert errors[1] < 2e-5 * acc and 2.5 < errors[0] / errors[1] < 5.0

@@ -545,18 +545,18 @@ class CircuitDrifterOrbit:
         t = np.linspace(t0, pieces[-1].t_end, points)
         z = np.empty((4, points))
         q0 = np.empty(points)
-        for p in pieces:
-            sel = (t >= p.t0) & (t <= p.t_end)
-            if np.any(sel):
-                z[:, sel] = p.drive_state(t[sel])
-                q0[sel] = p.modal(t[sel])[0][0]
         dr = o.drive
         M = o.model.n_modes + 1
         w = np.zeros(points)
         for p in pieces:
             sel = (t >= p.t0) & (t <= p.t_end)
             if np.any(sel):
-                w[sel] = -(o.model.drive_weights[:M] @ p.modal(t[sel])[0])
+                z[:, sel] = p.drive_state(t[sel])
+                q = p.modal(t[sel])[0]
+                q0[sel] = q[0]
+                # inside a blow the driven end as the circuit integrated it (theory §11)
+                w[sel] = p.displacement(t[sel]) if hasattr(p, "displacement") else \
+                    -(o.model.drive_weights[:M] @ q)
         P, V = PRESSURE_SCALE, d.volume_scale_m3
         return {"t_s": (t - t0) / d.omega_rad_s, "p_f_Pa": z[0] * P, "p_r_Pa": z[1] * P, "p_s_Pa": z[2] * P,
                 "x_v": z[3], "gap_m": -q0 * d.bar.length_m,

@@ -72,6 +72,18 @@ class BlowPiece:
             out[sel] = self.drive_pieces[j].force(t[sel])
         return out
 
+    def displacement(self, t):
+        """The driven end's displacement ``w = -u(0, t)`` at times ``t`` in the blow as the drive
+        integrated it (from the stop where it was at the arrival: the chambers' volumes follow it),
+        shape ``(T,)``."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        idx = self._pick(t)
+        out = np.empty(t.size)
+        for j in np.unique(idx):
+            sel = idx == j
+            out[sel] = self.drive_pieces[j].displacement(t[sel])
+        return out
+
     def energies(self):
         """The drive's energy quadratures over the piece (:meth:`HydraulicCircuitDrive.energy`
         sums them): to :attr:`t_end`."""

@@ -426,6 +426,12 @@ class HydraulicCircuitDrive(Drive):
         q, _ = run.modal_state(t)
         M = q.shape[0]
         w = -(run.model.drive_weights[:M] @ q)
+        for j in range(len(run.pieces)):  # inside a blow the driven end as integrated (theory §11)
+            p = run.pieces[j]
+            if hasattr(p, "displacement"):
+                sel = (t > p.t0) & (t < p.t_end)
+                if np.any(sel):
+                    w[sel] = p.displacement(t[sel])
         return {"t": t, "p_f": z[0], "p_r": z[1], "p_s": z[2], "x_v": z[3], "y": -q[0],
                 "V_f": self.chambers.front_volume + self.chambers.area_ratio * w,
                 "V_r": self.chambers.rear_volume - w}
