@@ -88,8 +88,11 @@ def _circuit_header(d: physical.CircuitDrifter) -> str:
     shape = "" if isinstance(d.bar, physical.Bar) else f" ({d.bar.describe()})"
     return (f"drifter {d.name or '(unnamed)'} with its oil circuit: piston {d.bar.mass_kg:.4g} kg{shape}, "
             f"areas {si['rear_area_m2'] * 1e4:.4g} / {si['front_area_m2'] * 1e4:.4g} cm^2, pump "
-            f"{si['pump_flow_m3_s'] * 6e4:.4g} L/min, {acc}, R = {d.restitution:.4g}\n"
-            f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
+            f"{si['pump_flow_m3_s'] * 6e4:.4g} L/min, {acc}, "
+            + (f"R = {d.restitution:.4g}\n" if d.drill is None else
+               f"a drill string of {len(d.drill.segments)} segment(s) on rock "
+               f"(k = {d.drill.rock_k_N_m / 1e6:.4g} kN/mm)\n")
+            + f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
             f"precharge = {dr.value('precharge') if dr.accumulator is not None else float('nan'):.5g}, "
             f"pump_flow = {dr.value('pump_flow'):.5g}, switch_out = {dr.value('switch_out'):.5g}")
 
@@ -109,7 +112,16 @@ def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
           f"{s['minimum_pressure_MPa']:.4g} MPa"
           + (" (cavitates)" if s["cavitates"] else "")
           + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+    if "rock" in s:  # a drill string and rock (theory section 4d): the blow, solved with the circuit
+        _print_rock(s["rock"])
     return 0
+
+
+def _print_rock(r: dict) -> None:
+    print(f"  per blow: work on rock {r['work_on_rock_J']:.4g} J, "
+          f"penetration {r['penetration_mm']:.4g} mm, "
+          f"efficiency {r['efficiency']:.3f} ({r['efficiency_with_rebound']:.3f} with the rebound "
+          f"credited); drilling rate {r['drilling_rate_m_min']:.4g} m/min")
 
 
 def _header(d: physical.Drifter) -> str:
@@ -141,11 +153,7 @@ def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
           f"percussive power {s['percussive_power_kW']:.4g} kW, {s['admissibility']}, "
           f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
     if "rock" in s:  # a drill string and rock (theory section 4d): the blow on the rock
-        r = s["rock"]
-        print(f"  per blow: work on rock {r['work_on_rock_J']:.4g} J, "
-              f"penetration {r['penetration_mm']:.4g} mm, "
-              f"efficiency {r['efficiency']:.3f} ({r['efficiency_with_rebound']:.3f} with the rebound "
-              f"credited); drilling rate {r['drilling_rate_m_min']:.4g} m/min")
+        _print_rock(s["rock"])
     return 0
 
 

@@ -476,6 +476,41 @@ class Drive(ABC):
     #: periodic orbits then take the shooting Jacobian and the multipliers from them).
     variational: ClassVar[bool] = False
 
+    def end_flight(self, model, state: DriveState, breaks, w0: float, incoming, impedance: float,
+                   settings: FlightSettings | None = None):
+        r"""The drive's state over a stretch of a blow under a law whose contact takes time (theory
+        §11, "The coupled blow"), or ``None`` where the drive cannot follow one (a drive with state
+        is then refused under such a law; a drive without state needs none: its force is held).
+
+        Over the stretch the law gives the wave ``a(t)`` arriving at the piston's driven end from
+        inside it, and the driven end answers the drive's force ``p`` as a semi-infinite bar of
+        impedance ``Z``: :math:`u_t(0, t) = a(t) + p/Z`, ``w = -u(0, t)``.
+
+        Parameters
+        ----------
+        model : BarModel
+        state : DriveState
+            At ``breaks[0]``.
+        breaks : numpy.ndarray, shape (n + 1,)
+            Increasing times (model units); ``a`` is constant or smooth between them.
+        w0 : float
+            ``w`` at ``breaks[0]`` (bar lengths, from the stop where it was at impact).
+        incoming : sequence, length n
+            ``a`` on each interval: a float, or a callable of the time.
+        impedance : float
+            ``Z`` (model units: ``s`` for a uniform piston).
+        settings : FlightSettings, optional
+
+        Returns
+        -------
+        object or None
+            With ``state`` (the :class:`DriveState` at ``breaks[-1]``), ``w``, ``impulses`` (``int p
+            dt`` over each interval, shape ``(n,)``), ``pieces`` (with ``drive_state(t)``,
+            ``force(t)``, ``energies()``) and ``events`` (``(t, event, mode after)``): the oil
+            circuit's ``EndFlight`` (``impactbar.drives.circuit.endflight``).
+        """
+        return None
+
     def border_tests(self, pieces) -> dict:
         """Test functions of the drive's own border collisions over one period of an orbit
         (``{surface: value}``, each changing sign where the drive's state touches that switching

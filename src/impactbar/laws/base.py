@@ -11,11 +11,11 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
-__all__ = ["ContactLaw", "LawNotSupported", "OrbitState"]
+__all__ = ["ContactLaw", "LawNotSupported", "OrbitState", "DrivenContact"]
 
 
 class LawNotSupported(ValueError, NotImplementedError):
@@ -55,6 +55,48 @@ class OrbitState:
     impact: Any = None
     separates: bool = False
     flow: Any = None
+
+
+class DrivenContact(NamedTuple):
+    """A contact step solved together with a drive that has state of its own
+    (:meth:`ContactLaw.driven_contact`, theory §11, "The coupled blow").
+
+    Attributes
+    ----------
+    q_after, v_after : numpy.ndarray, shape (N + 1,)
+        Modal state where the flight resumes (positions from the stop where it is then), as
+        :meth:`ContactLaw.contact` returns it.
+    t_release : float
+        Where the flight resumes.
+    record
+        The law's record of the blow (:class:`~impactbar.WaveImpact`,
+        :class:`~impactbar.laws.rodrock.contact.RockContact`), solved with the drive's force as it
+        evolved during the blow.
+    drive_state : DriveState
+        The drive's state at ``t_release``.
+    pieces : list
+        The drive's pieces over the blow (their histories and energy quadratures,
+        ``impactbar.drives.circuit.endflight.EndPiece``).
+    events : list
+        The drive's events inside the blow, ``(t, event, mode after)``.
+    drive_work : float
+        The drive's work on the piston over the blow, ``int p u_t(0, t) dt`` along its integration;
+        the law's record books the work of the force as its blow takes it (the lattice's step
+        averages), and the difference, ``>= 0`` on the lattice, is energy its grid drops.
+    gaps : numpy.ndarray, shape (2, P)
+        Times and the piston's rigid coordinate ``-q_0`` (from the stop where it was at impact)
+        during the blow: where the drive's position switches would be crossed.
+    """
+
+    q_after: np.ndarray
+    v_after: np.ndarray
+    t_release: float
+    record: Any
+    drive_state: Any
+    pieces: list
+    events: list
+    drive_work: float
+    gaps: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -352,6 +394,39 @@ class ContactLaw:
             :class:`~impactbar.laws.InstantImpact`.
         """
         raise LawNotSupported(self._missing("contact"))
+
+    def driven_contact(self, model, drive, state, t: float, q_minus, v_minus, *,
+                       settings=None) -> DrivenContact:
+        """The contact step with a drive that has state of its own, solved together with it (theory
+        §11, "The coupled blow"): the drive's force is not held during the blow but follows its
+        state, which the piston's driven end moves (:meth:`~impactbar.Drive.end_flight`). Not
+        provided by default (an instantaneous law needs none: its impact takes no time).
+
+        Parameters
+        ----------
+        model : BarModel
+        drive : Drive
+            A drive with state that provides :meth:`~impactbar.Drive.end_flight`.
+        state : DriveState
+            The drive's state at the arrival, after its map at the impact.
+        t : float
+            Time of the arrival.
+        q_minus, v_minus : numpy.ndarray, shape (N + 1,)
+            Modal state at arrival, the end on the stop.
+        settings : FlightSettings, optional
+            The drive's integrator.
+
+        Returns
+        -------
+        DrivenContact
+
+        Raises
+        ------
+        ValueError
+            Where the law or the drive cannot (:class:`LawNotSupported`), or the blow cannot be
+            solved (the message says why).
+        """
+        raise LawNotSupported(self._missing("driven_contact"))
 
     def has_parameter(self, name: str) -> bool:
         """Whether ``name`` is one of the law's own continuation parameters (:attr:`parameters`).

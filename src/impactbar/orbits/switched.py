@@ -209,6 +209,10 @@ class SwitchedOrbit(PeriodicOrbit):
     def _blows(self) -> tuple:
         if self.model.law.instantaneous:
             return ()
+        records = getattr(self._problem, "blow_records", None)
+        coupled = records(self._unknowns) if records is not None else None
+        if coupled is not None:  # blows solved with the drive's state: their own records
+            return tuple(coupled)
         law = self.model.law
         return tuple(law.blow(self.model, _constant_load(float(p)), 0.0, zd)
                      for p, zd in zip(self.contact_forces, self.states_before_impact, strict=True))
@@ -290,12 +294,15 @@ def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
     data: OrbitData = problem.orbit(X)
     law = model.law
     adm = Admissibility.ADMISSIBLE
+    records = getattr(problem, "blow_records", None)
+    coupled = records(X) if records is not None else None
     for k in range(m):
         if adm != Admissibility.ADMISSIBLE:
             break
         adm = problem.admissibility(X, k)
         if not law.instantaneous and data.impact_velocities[k] > 0.0:
-            rec = law.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
+            rec = coupled[k] if coupled is not None else \
+                law.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
             separates = bool(getattr(rec, "separations", ()))
             v_after = data.states_after[k][model.n_modes + 1:]
             adm = _window_departure(adm, False, float(model.end_weights @ v_after), separates)
@@ -363,9 +370,13 @@ class ShootingProblem(OrbitProblem):
         self.impacts = check_int("impacts", impacts, lo=1)
         self.settings = settings if settings is not None else drive.integrator
         law = model.law
-        if not drive.piecewise_constant and not law.instantaneous:
-            raise ValueError(f"a drive with state ({type(drive).__name__}) takes an instantaneous impact law "
-                             f"(the paper's) for now; got impact={model.impact!r}")
+        #: a drive with state under a law whose contact takes time: each impact a blow solved with
+        #: the drive's state (theory §11, "The coupled blow"), its Jacobian by central differences
+        self.coupled = not drive.piecewise_constant and not law.instantaneous
+        if self.coupled:
+            from ..simulation.blows import check_coupling
+
+            check_coupling(model, drive)
         if law.instantaneous and model.R >= 1.0:
             raise ValueError("model.R must be < 1 for a periodic motion under a drive (with R = 1 no "
                              "energy leaves at the impacts)")
@@ -376,8 +387,7 @@ class ShootingProblem(OrbitProblem):
         self.positive = np.zeros(0, dtype=np.int64)
         self.closed = drive.piecewise_constant
         #: the Jacobian from the variational equations (a drive whose flights integrate them)
-        self.variational = bool(getattr(drive, "variational", False)) and not self.closed \
-            and law.instantaneous
+        self.variational = bool(getattr(drive, "variational", False)) and not self.closed
         self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
         self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
         self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
@@ -440,6 +450,16 @@ class ShootingProblem(OrbitProblem):
                 D = self._through(before, fl, fl.events, D)
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
+        if self.coupled:  # the blow and the drive's state together, the drive's map at its end
+            from .coupled import blow_jacobian, coupled_blow
+
+            out, t_after, after, blow = coupled_blow(model, drive, t, q, v, state, settings or self.settings)
+            if keep:
+                pieces.append(blow)
+            if variational:
+                D = blow_jacobian(model, drive, t, q, v, state, settings or self.settings) @ D
+                return out, t_after, after.mode, arrival, pieces, events, D
+            return out, t_after, after.mode, arrival, pieces, events
         if law.instantaneous:
             qa, va = q, -law.kernel_restitution(model) * v
             t_after = t
@@ -668,7 +688,7 @@ class ShootingProblem(OrbitProblem):
         self.blocks, self.sources = [], []
         for k in range(self.impacts):
             tau, mode = blocks[k % len(blocks)]
-            if sources:
+            if sources and not self.coupled:  # (a coupled blow's mode is the one at its end: kept)
                 source = sources[k % len(sources)]
                 arr_mode, z, _, q, v = source
                 mode = self.drive.impact(arr_mode, z, tau, q, v).mode
@@ -742,6 +762,13 @@ class ShootingProblem(OrbitProblem):
                          trivial_multiplier=1.0, switch_times=np.array(switch_t),
                          switch_velocity=min(crossings) if crossings else math.nan, contact_time=window,
                          contact_forces=np.array(forces), monodromy=Phi)
+
+    def blow_records(self, X):
+        """The records of the period's blows in order (a drive with state under a law whose contact
+        takes time: each blow solved with the drive's state), ``None`` otherwise."""
+        if not self.coupled:
+            return None
+        return [p.record for p in self.flights(X) if hasattr(p, "record")]
 
     def flights(self, X) -> list:
         """The period's flights as the drive's flights give them (their own times: each block

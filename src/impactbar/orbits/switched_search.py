@@ -41,7 +41,8 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
         Rigid or flexible bar, under any impact law: the paper's (eq. 10), or a contact that takes
         time, the wave law (theory §4b) or the rod-rock law (§4d), held under the drive's force
         (theory §10; the orbit's ``state`` is then where the contact ends, and ``contacts`` holds
-        the blows). A drive with state takes the paper's law.
+        the blows). A drive with state (the oil circuit) takes these laws with each blow solved together
+        with its state (theory §11, "The coupled blow"), the blow's Jacobian by central differences.
     drive : Drive
     impacts : int
         Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed for the valve.

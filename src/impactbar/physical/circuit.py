@@ -20,6 +20,13 @@ Configuration keys (a nested ``dict`` or TOML, as :meth:`CircuitDrifter.from_con
                   relief_pressure, relief_coefficient        # the relief optional
     [accumulator] precharge, volume, polytropic_exponent     # optional section
     [oil]         bulk_modulus, transition_pressure
+    [[rod.segments]], [bit], [rock]                          # optional: the drill string and the rock
+                                                             # (impactbar.physical.rock, theory §4d)
+
+With a ``[rock]`` the piston strikes the drill string (the rod-rock law; ``[stop]`` not needed), each
+blow solved together with the circuit's state (theory §11, "The coupled blow"), and the orbit also
+gives per blow the work on rock, the penetration and the drilling rate (the penetration times the
+blow frequency).
 
 Pressures are absolute ("0.3 MPa" of tank pressure is 0.2 MPa gauge), flow coefficients in
 ``m^3/s/Pa^0.5`` (the relief's in ``m^3/s/Pa``).
@@ -35,6 +42,7 @@ import numpy as np
 from .._shared.validate import check_int, check_real
 from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
+from .rock import ROCK_SECTIONS, DrillString, rock_from_config
 from .units import to_si
 
 __all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_preset", "PRESSURE_SCALE",
@@ -117,6 +125,10 @@ class CircuitDrifter:
     damping_N_s_m : float, optional
     n_modes : int, optional
     name : str, optional
+    drill : DrillString, optional
+        The drill string and the rock (``impactbar.physical.rock``, theory §4d): the model's law is
+        then the rod-rock law (``restitution`` plays no part), each blow solved with the circuit's
+        state (theory §11, "The coupled blow").
 
     Raises
     ------
@@ -137,9 +149,12 @@ class CircuitDrifter:
     damping_N_s_m: float = 0.0
     n_modes: int = 0
     name: str = ""
+    drill: DrillString | None = None
 
     def __post_init__(self) -> None:
         check_piston(self.bar, True)
+        if self.drill is not None and not isinstance(self.drill, DrillString):
+            raise ValueError(f"drill must be a DrillString; got {type(self.drill).__name__}")
         object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
                                                            hi=1.0, hi_open=True))
         object.__setattr__(self, "damping_N_s_m", check_real("damping_N_s_m", self.damping_N_s_m, lo=0.0))
@@ -156,6 +171,17 @@ class CircuitDrifter:
     def omega_rad_s(self) -> float:
         """``Omega = sqrt(P A_r / (m L))`` (1/s)."""
         return math.sqrt(PRESSURE_SCALE * self.si["rear_area_m2"] / (self.bar.mass_kg * self.bar.length_m))
+
+    @property
+    def scales(self):
+        """The units of the dimensionless model (:class:`~impactbar.physical.Scales`): time
+        ``1/Omega``, length ``L``, force ``P A_r = m L Omega^2``."""
+        from .hammer import Scales
+
+        om, bar = self.omega_rad_s, self.bar
+        return Scales(omega_rad_s=om, time_s=1.0 / om, length_m=bar.length_m, velocity_m_s=bar.length_m * om,
+                      force_N=PRESSURE_SCALE * self.si["rear_area_m2"],
+                      damping_N_s_m2=bar.mass_kg / bar.length_m * om)
 
     @property
     def volume_scale_m3(self) -> float:
@@ -231,8 +257,9 @@ class CircuitDrifter:
         from ..model import BarModel
 
         om, bar = self.omega_rad_s, self.bar
+        impact = "paper" if self.drill is None else self.drill.law(bar, self.scales)
         return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om), d=self.damping_N_s_m / (bar.mass_kg * om),
-                        R=self.restitution, n_modes=self.n_modes, piston=self.bar.piston)
+                        R=self.restitution, n_modes=self.n_modes, piston=self.bar.piston, impact=impact)
 
     def drive(self):
         """The dimensionless circuit: :class:`~impactbar.drives.circuit.HydraulicCircuitDrive`."""
@@ -284,7 +311,8 @@ class CircuitDrifter:
         dict
             ``impact_times_s``, ``impact_velocities_m_s`` (arrays), ``histories`` (``t_s`` and the
             pressures ``p_f_Pa``, ``p_r_Pa``, ``p_s_Pa``, the valve opening ``x_v``, the gap
-            ``gap_m``) and ``run`` (the dimensionless :class:`~impactbar.SwitchedTrajectory`).
+            ``gap_m``) and ``run`` (the dimensionless :class:`~impactbar.SwitchedTrajectory`); with a
+            drill string also ``work_on_rock_J`` and ``penetration_mm`` (arrays, per blow).
         """
         from ..simulation import InitialState, simulate
 
@@ -298,9 +326,15 @@ class CircuitDrifter:
         P = PRESSURE_SCALE
         hist = {"t_s": h["t"] / om, "p_f_Pa": h["p_f"] * P, "p_r_Pa": h["p_r"] * P, "p_s_Pa": h["p_s"] * P,
                 "x_v": h["x_v"], "gap_m": h["y"] * L}
-        return {"impact_times_s": np.asarray(run.impact_times) / om,
-                "impact_velocities_m_s": np.asarray(run.impact_velocities) * L * om, "histories": hist,
-                "run": run}
+        out = {"impact_times_s": np.asarray(run.impact_times) / om,
+               "impact_velocities_m_s": np.asarray(run.impact_velocities) * L * om, "histories": hist,
+               "run": run}
+        if self.drill is not None:  # the blows' records, one per impact
+            sc = self.scales
+            blows = run.impacts
+            out["work_on_rock_J"] = np.array([float(b.work_on_rock) for b in blows]) * sc.force_N * L
+            out["penetration_mm"] = np.array([float(b.permanent_penetration) for b in blows]) * L * 1e3
+        return out
 
     @classmethod
     def from_config(cls, config: dict) -> CircuitDrifter:
@@ -315,9 +349,10 @@ class CircuitDrifter:
         """
         if not isinstance(config, dict):
             raise ValueError(f"config must be a dict; got {type(config).__name__}")
-        extra = sorted(set(config) - set(_KEYS) - {"name"})
+        extra = sorted(set(config) - set(_KEYS) - set(ROCK_SECTIONS) - {"name"})
         if extra:
-            raise ValueError(f"unknown section [{extra[0]}]; allowed: {', '.join(sorted(_KEYS))}")
+            raise ValueError(f"unknown section [{extra[0]}]; allowed: "
+                             f"{', '.join(sorted((*_KEYS, *ROCK_SECTIONS)))}")
         sec = {name: _section(config, name, keys) for name, keys in _KEYS.items()}
         for name, keys in _REQUIRED.items():
             for key in keys:
@@ -326,9 +361,12 @@ class CircuitDrifter:
         b, st = sec["bar"], sec["stop"]
         bar = piston_from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
                                 area=b.get("area"))
-        if ("restitution" in st) == ("area" in st):
+        drill = rock_from_config(config, bar)  # [rod], [bit], [rock]: the rod-rock law
+        if drill is not None and not st:
+            R = 0.0  # the rod and the rock replace the stop
+        elif ("restitution" in st) == ("area" in st):
             raise ValueError("give exactly one of stop.restitution and stop.area")
-        if "restitution" in st:
+        elif "restitution" in st:
             R = to_si("stop.restitution", st["restitution"], "", "0.215")
         else:
             a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
@@ -373,7 +411,7 @@ class CircuitDrifter:
         return cls(bar=bar, restitution=R, si=si,
                    damping_N_s_m=to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"),
                                        "N*s/m", "'9 N*s/m'", what="a damping coefficient"),
-                   n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")))
+                   n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")), drill=drill)
 
 
 @dataclass(frozen=True)
@@ -507,18 +545,18 @@ class CircuitDrifterOrbit:
         t = np.linspace(t0, pieces[-1].t_end, points)
         z = np.empty((4, points))
         q0 = np.empty(points)
-        for p in pieces:
-            sel = (t >= p.t0) & (t <= p.t_end)
-            if np.any(sel):
-                z[:, sel] = p.drive_state(t[sel])
-                q0[sel] = p.modal(t[sel])[0][0]
         dr = o.drive
         M = o.model.n_modes + 1
         w = np.zeros(points)
         for p in pieces:
             sel = (t >= p.t0) & (t <= p.t_end)
             if np.any(sel):
-                w[sel] = -(o.model.drive_weights[:M] @ p.modal(t[sel])[0])
+                z[:, sel] = p.drive_state(t[sel])
+                q = p.modal(t[sel])[0]
+                q0[sel] = q[0]
+                # inside a blow the driven end as the circuit integrated it (theory §11)
+                w[sel] = p.displacement(t[sel]) if hasattr(p, "displacement") else \
+                    -(o.model.drive_weights[:M] @ q)
         P, V = PRESSURE_SCALE, d.volume_scale_m3
         return {"t_s": (t - t0) / d.omega_rad_s, "p_f_Pa": z[0] * P, "p_r_Pa": z[1] * P, "p_s_Pa": z[2] * P,
                 "x_v": z[3], "gap_m": -q0 * d.bar.length_m,
@@ -570,8 +608,36 @@ class CircuitDrifterOrbit:
 
         return plot_circuit_orbit(self, axes=axes, points=points)
 
+    def rock(self) -> dict:
+        """The SI figures of the orbit's blow on the rock (theory §4d), solved with the circuit's state
+        (theory §11): ``work_on_rock_J``, ``penetration_mm``, ``drilling_rate_m_min`` (the
+        penetration times the blow frequency), ``efficiency`` and ``efficiency_with_rebound``,
+        ``rod_energy_J``, ``peak_rod_stress_Pa``, ``rod_advance_m``
+        (``impactbar.physical.rock.rock_orbit_figures``); an empty dict without a drill string.
+
+        Returns
+        -------
+        dict
+        """
+        if self.drifter.drill is None:
+            return {}
+        from types import SimpleNamespace
+
+        from .rock import rock_orbit_figures
+
+        view = SimpleNamespace(scales=self.drifter.scales, drill=self.drifter.drill,
+                               blow_frequency_Hz=self.blow_frequency_Hz)
+        return rock_orbit_figures(self.orbit, view)
+
     def summary(self) -> dict:
-        """The SI outputs as a dict (JSON-ready)."""
+        """The SI outputs as a dict (JSON-ready), with :meth:`rock`'s figures under ``rock`` when the
+        drifter has a drill string."""
+        out = self._summary()
+        if self.drifter.drill is not None:
+            out["rock"] = self.rock()
+        return out
+
+    def _summary(self) -> dict:
         return {"blow_frequency_Hz": self.blow_frequency_Hz, "period_ms": 1e3 * self.period_s,
                 "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
                 "mean_supply_pressure_MPa": self.mean_supply_pressure_Pa / 1e6,

@@ -16,8 +16,11 @@ The run calls only the drive's interface (:mod:`impactbar.drives.base`):
 - **a drive with state** ``z``: the bar's modes and ``z`` are integrated together by scipy's
   ``solve_ivp`` (:func:`impactbar.drives.flight.fly`, a stiff method), the arrivals and the drive's
   events located to the integrator's tolerance; at an impact the paper's law acts (eq. 10) and the
-  rigid piston rests on the stop while the drive presses it. A law whose contact takes time, and a
-  flexible bar held on the stop, are refused for such a drive (for now).
+  rigid piston rests on the stop while the drive presses it; under a law whose contact takes time
+  (the wave law, the rod-rock law) the blow and the drive's state are solved together
+  (:meth:`~impactbar.laws.ContactLaw.driven_contact`, theory §11, "The coupled blow"), the run's
+  piece over the blow a :class:`~impactbar.simulation.blows.BlowPiece`. A flexible bar held on the
+  stop is refused for such a drive (for now).
 """
 
 from __future__ import annotations
@@ -35,6 +38,7 @@ from ..drives.base import DriveState, FlightKernel, KernelRun
 from ..drives.flight import END, EVENT, RestPiece, fly
 from ..dynamics.implementations import use_fast
 from ..model import BarModel
+from .blows import BlowPiece, check_coupling, run_coupled
 from .trajectory import EnergyAccount, Trajectory
 
 __all__ = ["SwitchedTrajectory", "Driver", "run_drive", "run_stateful"]
@@ -211,11 +215,16 @@ class SwitchedTrajectory(Trajectory):
 
         model, law = self.model, self.model.law
         hits = set(self.impact_times.tolist())
+        blows = {float(p.t0) for p in self.pieces if isinstance(p, BlowPiece)}
         out = []
         for j in range(len(self.pieces)):
             piece = self.pieces[j]
             if isinstance(piece, Trajectory):
                 out.extend(piece.impacts)
+            elif isinstance(piece, BlowPiece):
+                out.append(piece.record)
+            elif piece.t_end in blows:  # a flight ending at a blow solved with the drive (its record)
+                continue
             elif piece.t_end in hits and piece.t_end > piece.t0:
                 q, v = piece.modal([piece.t_end])
                 p = float(piece.force([piece.t_end])[0])
@@ -256,6 +265,13 @@ def _drive_energy(tr: SwitchedTrajectory) -> EnergyAccount:
             work, damp, imp = work + acc.work, damp + acc.damping_loss, imp + acc.impact_loss
             chat, proj = chat + acc.chatter_loss, proj + acc.projection
             start, end = acc.initial, acc.final
+        elif isinstance(piece, BlowPiece):  # a blow with the drive's state: the law's account
+            w_drive, w_law, out, field_energy, q1, v1 = piece.account()
+            q0, v0 = piece.arrival
+            start, end = energy(q0, v0), energy(q1, v1)
+            work += w_drive
+            imp += out + (w_drive - w_law)  # the blow's grid drops what its force averages miss
+            proj += end - field_energy + piece.record.energy_before - start
         else:
             a, b = float(piece.t0), float(piece.t_end)
             if b > a:
@@ -264,7 +280,10 @@ def _drive_energy(tr: SwitchedTrajectory) -> EnergyAccount:
                 nodes = (half[:, None] * (_GL_X[None, :] + 1.0) + edges[:-1, None]).ravel()
                 weights = (half[:, None] * _GL_W[None, :]).ravel()
                 _, v = piece.modal(nodes)
-                work += float(np.sum(weights * piece.force(nodes) * (kappa @ v)))
+                if hasattr(piece, "energies"):  # the drive's own quadrature along its integration
+                    work += float(piece.energies()[1])
+                else:
+                    work += float(np.sum(weights * piece.force(nodes) * (kappa @ v)))
                 damp += d * float(np.sum(weights * (kappa @ (v * v))))
             (q0, v0), (q1, v1) = piece.modal([a]), piece.modal([b])
             start, end = energy(q0[:, 0], v0[:, 0]), energy(q1[:, 0], v1[:, 0])
@@ -634,15 +653,19 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     ``REST_SPEED`` while the drive presses it rests on the stop until the force turns or a drive
     event comes.
 
+    Under a law whose contact takes time each arrival is a blow solved together with the drive's
+    state (:func:`impactbar.simulation.blows.driven_blow`).
+
     Raises
     ------
     ValueError
-        Under a law whose contact takes time, or where a flexible bar would be held on the stop.
+        A drive or a law that cannot solve a blow together (:func:`check_coupling`), or where a
+        flexible bar would be held on the stop.
     """
     law = model.law
     if not law.instantaneous:
-        raise ValueError(f"a drive with state ({type(drive).__name__}) runs under an instantaneous impact "
-                         f"law (the paper's) for now; got impact={model.impact!r}")
+        check_coupling(model, drive)
+        return run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, _Run)
     R = law.kernel_restitution(model)
     c = model.end_weights
     M = model.n_modes + 1

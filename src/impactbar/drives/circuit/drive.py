@@ -351,6 +351,20 @@ class HydraulicCircuitDrive(Drive):
 
         return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational)
 
+    def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
+        """The circuit over a stretch of a blow with the driven end moved by the law's waves
+        (``impactbar.drives.circuit.endflight.circuit_end_flight``, theory §11, "The coupled
+        blow").
+
+        Returns
+        -------
+        EndFlight
+        """
+        from .endflight import circuit_end_flight
+
+        return circuit_end_flight(self, model, state, breaks, w0, incoming, impedance, settings,
+                                  _rate_model(1))
+
     def border_tests(self, pieces) -> dict:
         """The circuit's border collisions over one period (theory §11): ``"accumulator"``, the
         least supply pressure less the pre-charge (through 0 where the accumulator starts emptying
@@ -412,6 +426,12 @@ class HydraulicCircuitDrive(Drive):
         q, _ = run.modal_state(t)
         M = q.shape[0]
         w = -(run.model.drive_weights[:M] @ q)
+        for j in range(len(run.pieces)):  # inside a blow the driven end as integrated (theory §11)
+            p = run.pieces[j]
+            if hasattr(p, "displacement"):
+                sel = (t > p.t0) & (t < p.t_end)
+                if np.any(sel):
+                    w[sel] = p.displacement(t[sel])
         return {"t": t, "p_f": z[0], "p_r": z[1], "p_s": z[2], "x_v": z[3], "y": -q[0],
                 "V_f": self.chambers.front_volume + self.chambers.area_ratio * w,
                 "V_r": self.chambers.rear_volume - w}

@@ -348,6 +348,21 @@ class RodRock(ContactLaw):
         rec = rock_contact(model, load, float(t), q_minus, v_minus)
         return rec.q_after.copy(), rec.v_after.copy(), float(t) + rec.duration, rec
 
+    def driven_contact(self, model, drive, state, t, q_minus, v_minus, *, settings=None):
+        """The contact step with a drive that has state (the oil circuit), the lattice's blow and the
+        drive's state solved together by a method of steps
+        (:func:`impactbar.laws.rodrock.coupled.driven_rock_contact`; theory §11, "The coupled
+        blow").
+
+        Returns
+        -------
+        DrivenContact
+            Its record a :class:`~impactbar.laws.rodrock.contact.RockContact`.
+        """
+        from .coupled import driven_rock_contact
+
+        return driven_rock_contact(model, drive, state, float(t), q_minus, v_minus, settings)
+
     @classmethod
     def has_parameter(cls, name: str) -> bool:
         """Whether ``name`` is one of :attr:`parameters` (``"segment<i>.length"`` for any ``i``).

@@ -135,6 +135,21 @@ class WaveLaw(ContactLaw):
                 t_release = sc.t0 + sc.duration
         return q, v, t_release, imp
 
+    def driven_contact(self, model, drive, state, t, q_minus, v_minus, *, settings=None):
+        """The window with a drive that has state (the oil circuit): the drive's state over the
+        window in one integration, the driven end moved by the invariant the window sends it, then
+        the window by characteristics with the drive's force
+        (:func:`impactbar.laws.wave.coupled.driven_wave_contact`; theory §11, "The coupled blow").
+
+        Returns
+        -------
+        DrivenContact
+            Its record a :class:`~impactbar.WaveImpact`.
+        """
+        from .coupled import driven_wave_contact
+
+        return driven_wave_contact(model, drive, state, float(t), q_minus, v_minus, settings)
+
     def _window(self, model, load, t, q_minus, v_minus, kernel):
         from .impact import wave_impact
 

@@ -1,0 +1,110 @@
+r"""The oil circuit during a blow, compiled with numba (theory §11, "The coupled blow"): the circuit's
+vector field of :mod:`._kernel` with the driven end's motion given by the law instead of the bar's
+modes.
+
+Inside a blow the law (the wave law's window, the rod-rock law's lattice) knows the wave ``a(t)``
+arriving at the piston's driven end from inside the piston (independent of the drive over a stretch
+of time, the round trip to the first change of impedance), and the driven end answers the drive's
+force ``p`` as a semi-infinite bar of impedance ``Z``: ``u_t(0, t) = a(t) + p / Z``. The integrated
+state is ``Y = (w, p_f, p_r, p_s, x_v, I, E_0..E_7)``: the driven end's displacement ``w = -u(0, t)``
+(``w' = -u_t(0)``), the circuit's state, the force's integral ``I = int p dt`` and the eight energy
+quadratures of :mod:`._kernel`. The vector field is :func:`._kernel._base`'s on a one-mode bar whose
+driven end is ``q_0 = -w`` moving at ``q_0' = u_t(0)`` (the same equations, one source of them).
+
+``ext = (a, 1/Z)`` is set by the caller on each stretch where ``a`` is constant (the lattice's step)
+or each evaluation (the wave law's smooth ``a``).
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+from . import _kernel as K
+
+#: the size of the integrated state: ``w``, four of the circuit, ``I``, the energies
+N_STATE = 6 + K.N_ENERGY
+#: the events during a blow: the ramp's end, the supply pressure through the pre-charge and the relief
+N_EVENTS = 3
+#: their indices among the flight kernel's events (``_kernel.RAMP_EV``, ``ACC_EV``, ``REL_EV``)
+FLIGHT_EVENTS = (K.RAMP_EV, K.ACC_EV, K.REL_EV)
+
+_JIT = dict(cache=True, nogil=True, error_model="numpy")
+
+
+@nb.njit(**_JIT)
+def _one_mode(y, par, ext, buf):
+    """The one-mode bar state of :func:`._kernel._base` for ``y``: ``(q_0, q_0', p_f, p_r, p_s, x_v)``
+    with ``q_0 = -w``, ``q_0' = u_t(0) = a + p / Z``; returns ``u_t(0)``."""
+    p = y[2] - par[K.ALPHA] * y[1]
+    ut = ext[0] + p * ext[1]
+    buf[0] = -y[0]
+    buf[1] = ut
+    for i in range(4):
+        buf[2 + i] = y[1 + i]
+    for i in range(K.N_ENERGY):
+        buf[6 + i] = 0.0
+    return ut
+
+
+@nb.njit(**_JIT)
+def rhs(y, yp, par, ext):
+    """``yp = f(y)`` of the state during a blow (module docstring)."""
+    buf = np.empty(6 + K.N_ENERGY)
+    out = np.empty(6 + K.N_ENERGY)
+    ut = _one_mode(y, par, ext, buf)
+    K._base(buf, par, 1, out)
+    yp[0] = -ut
+    for i in range(4):
+        yp[1 + i] = out[2 + i]
+    yp[5] = y[2] - par[K.ALPHA] * y[1]
+    for i in range(K.N_ENERGY):
+        yp[6 + i] = out[6 + i]
+
+
+@nb.njit(**_JIT)
+def jac(y, JJ, par, ext):
+    """The Jacobian of :func:`rhs` (the energies' rows zero: they feed nothing back), by the chain
+    rule from :func:`._kernel.jac_base` on the one-mode bar."""
+    n = JJ.shape[0]
+    for i in range(n):
+        for j in range(n):
+            JJ[i, j] = 0.0
+    buf = np.empty(6 + K.N_ENERGY)
+    _one_mode(y, par, ext, buf)
+    A = np.empty((6, 6))
+    K.jac_base(buf, par, 1, A)
+    alpha, iz = par[K.ALPHA], ext[1]
+    dut = np.zeros(4)  # d u_t(0) / d(p_f, p_r, p_s, x_v)
+    dut[0] = -alpha * iz
+    dut[1] = iz
+    for i in range(4):
+        JJ[1 + i, 0] = -A[2 + i, 0]  # q_0 = -w
+        for j in range(4):
+            JJ[1 + i, 1 + j] = A[2 + i, 2 + j] + A[2 + i, 1] * dut[j]
+    for j in range(4):
+        JJ[0, 1 + j] = -dut[j]
+    JJ[5, 1] = -alpha
+    JJ[5, 2] = 1.0
+
+
+@nb.njit(**_JIT)
+def events(y, g, par):
+    """The event functions during a blow (their zeros; inactive ones held at 1): the ramp's end, the
+    supply pressure through the pre-charge and through the relief pressure (as :func:`._kernel.events`)."""
+    if par[K.OPEN] > 0.5:
+        g[0] = y[4] - 1.0
+    elif par[K.OPEN] < -0.5:
+        g[0] = y[4]
+    else:
+        g[0] = 1.0
+    g[1] = y[3] - par[K.P0] if par[K.HASACC] > 0.5 else 1.0
+    g[2] = y[3] - par[K.PREL] if par[K.HASREL] > 0.5 else 1.0
+
+
+@nb.njit(**_JIT)
+def field_at(ys, par, ext, out):
+    """:func:`rhs` at each row of ``ys`` (the pieces' Hermite interpolation); ``ext`` one row per
+    row of ``ys``."""
+    for r in range(ys.shape[0]):
+        rhs(ys[r], out[r], par, ext[r])

@@ -1,0 +1,253 @@
+r"""The oil circuit during a blow (theory §11, "The coupled blow"): its state integrated by CVODE with
+the piston's driven end moved by the law's waves, ``u_t(0, t) = a(t) + p / Z``.
+
+A law whose contact takes time (the wave law, the rod-rock law) cannot hold the drive's force during
+the blow: the piston's travel changes the chambers' volumes and so the pressures. Over a stretch of
+the blow the law knows the wave ``a(t)`` arriving at the driven end from inside the piston (the
+piston's state at impact and what the far end sent back, none of it caused by the drive within the
+round trip to the first change of impedance), and the driven end answers the drive's force as a
+semi-infinite bar of impedance ``Z``. :func:`circuit_end_flight` integrates the circuit over such a
+stretch, cut at the law's ``breaks`` (where ``a`` may jump: the lattice's steps, the window's
+corners), with the circuit's own events inside it (the ramp's end, the accumulator, the relief), and
+returns the force's integral over each interval, the driven end's displacement and the pieces
+(histories, energy quadratures). The law then solves its blow with that force; the next stretch's
+``a`` follows from it (a method of steps; no iteration).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from typing import NamedTuple
+
+import numpy as np
+
+from ..base import DriveState, FlightSettings
+from . import _endkernel as EK
+from .flight import DEFAULT_SETTINGS
+
+__all__ = ["EndFlight", "EndPiece", "circuit_end_flight"]
+
+
+class EndPiece:
+    """The circuit over one interval of a blow: the integrator's steps and a cubic Hermite
+    interpolant between them (as :class:`~impactbar.drives.circuit.flight.CircuitPiece`).
+
+    Attributes
+    ----------
+    t0, t_end : float
+    t : numpy.ndarray, shape (S,)
+    y : numpy.ndarray, shape (S, 14)
+        ``(w, p_f, p_r, p_s, x_v, I, E_0..E_7)`` at the steps, ``I`` and the energies from 0 at ``t0``.
+    """
+
+    __slots__ = ("t0", "t_end", "t", "y", "f", "alpha", "_spline")
+
+    def __init__(self, t, y, f, alpha):
+        self.t, self.y, self.f, self.alpha = t, y, f, alpha
+        self.t0, self.t_end = float(t[0]), float(t[-1])
+        self._spline = None
+
+    def _at(self, t):
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
+        if self.t.size < 2:
+            return np.repeat(self.y[:1].T, t.size, axis=1)
+        if self._spline is None:
+            from scipy.interpolate import CubicHermiteSpline
+
+            self._spline = CubicHermiteSpline(self.t, self.y, self.f, axis=0)
+        return self._spline(t).T
+
+    def drive_state(self, t):
+        """``(p_f, p_r, p_s, x_v)`` at times ``t``, shape ``(4, T)``."""
+        return self._at(t)[1:5]
+
+    def force(self, t):
+        """The force on the piston, ``p_r - alpha p_f``, at times ``t``, shape ``(T,)``."""
+        Y = self._at(t)
+        return Y[2] - self.alpha * Y[1]
+
+    def displacement(self, t):
+        """The driven end's displacement ``w = -u(0, t)`` at times ``t``, shape ``(T,)``."""
+        return self._at(t)[0]
+
+    def impulse_at(self, t):
+        """``int p dt`` from ``t0`` to the times ``t``, shape ``(T,)``."""
+        return self._at(t)[5]
+
+    def energies(self):
+        """The eight energy quadratures over the piece (theory §11)."""
+        return self.y[-1, 6:].copy()
+
+    def energies_at(self, t: float):
+        """The energy quadratures from ``t0`` to ``t`` (interpolated)."""
+        return self._at([t])[6:, 0]
+
+    def extremes(self, k: int) -> tuple[float, float]:
+        """The least and the greatest value of the circuit's state component ``k`` (0 ``p_f``, 1
+        ``p_r``, 2 ``p_s``, 3 ``x_v``) over the piece (its steps and the interpolant's stationary
+        points)."""
+        j = 1 + k
+        x = self.y[:, j]
+        if self.t.size < 2:
+            return float(x[0]), float(x[0])
+        from scipy.interpolate import CubicHermiteSpline
+
+        sp = CubicHermiteSpline(self.t, x, self.f[:, j])
+        roots = sp.derivative().roots(extrapolate=False)
+        vals = np.concatenate((x, sp(roots))) if roots.size else x
+        return float(np.min(vals)), float(np.max(vals))
+
+    def supply_extremes(self) -> tuple[float, float]:
+        """The least and the greatest supply pressure over the piece."""
+        return self.extremes(2)
+
+
+class EndFlight(NamedTuple):
+    """What :func:`circuit_end_flight` returns.
+
+    Attributes
+    ----------
+    state : DriveState
+        The circuit's state at the last break.
+    w : float
+        The driven end's displacement there.
+    impulses : numpy.ndarray, shape (n,)
+        ``int p dt`` over each of the ``n`` intervals between the breaks.
+    pieces : list of EndPiece
+        In order (an interval cut by an event gives two).
+    events : list of tuple
+        ``(t, event, mode after)`` of the circuit's events inside the stretch.
+    """
+
+    state: DriveState
+    w: float
+    impulses: np.ndarray
+    pieces: list
+    events: list
+
+
+def _solver(drive, mode, settings, ext, model1, state_size):
+    from sksundae.cvode import CVODE
+
+    par = drive._par(model1, mode)
+    rhs, jac, events = EK.rhs, EK.jac, EK.events
+
+    def f(t, y, yp):
+        fn = ext_fn[0]
+        if fn is not None:
+            ext[0] = fn(t)
+        rhs(y, yp, par, ext)
+
+    def jf(t, y, yp, JJ):
+        jac(y, JJ, par, ext)
+
+    def ev(t, y, g):
+        events(y, g, par)
+
+    ext_fn = [None]
+    ev.terminal = [True] * EK.N_EVENTS
+    ev.direction = [drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS]
+    solver = CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
+                   num_events=EK.N_EVENTS, max_num_steps=200000)
+    return solver, par, ext_fn
+
+
+def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incoming, impedance: float,
+                       settings: FlightSettings | None = None, one_mode=None) -> EndFlight:
+    """The circuit from ``state`` at ``breaks[0]`` to ``breaks[-1]`` with the driven end moving at
+    ``u_t(0, t) = a(t) + p / Z`` (module docstring).
+
+    Parameters
+    ----------
+    drive : HydraulicCircuitDrive
+    model : BarModel
+        The bar (only checked: the circuit's chambers follow the driven end, whatever the piston).
+    state : DriveState
+    breaks : array_like, shape (n + 1,)
+        Increasing times; ``a`` is constant (a float of ``incoming``) or smooth (a callable) on each
+        interval.
+    w0 : float
+        The driven end's displacement ``-u(0)`` at ``breaks[0]``.
+    incoming : sequence of float or callable, length n
+        ``a`` on each interval: a value, or a function of the time.
+    impedance : float
+        ``Z > 0`` of the piston at its driven end (model units: ``s`` for a uniform piston).
+    settings : FlightSettings, optional
+        CVODE's tolerances (default the drive's).
+    one_mode : object
+        The one-mode bar of the compiled kernels' parameters (``drive._rate_model(1)``: what
+        :meth:`HydraulicCircuitDrive.end_flight` passes).
+
+    Returns
+    -------
+    EndFlight
+
+    Raises
+    ------
+    ValueError
+        Where CVODE fails, or a chamber empties.
+    """
+    settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
+    breaks = np.asarray(breaks, dtype=float)
+    n = breaks.size - 1
+    model1 = one_mode
+    ext = np.array([0.0, 1.0 / float(impedance)])
+    solvers: dict = {}
+    mode, z = state.mode, np.array(state.z, dtype=float)
+    w = float(w0)
+    impulses = np.zeros(n)
+    pieces: list = []
+    fired_log: list = []
+    for k in range(n):
+        a = incoming[k]
+        t, t1 = float(breaks[k]), float(breaks[k + 1])
+        while t < t1:
+            key = mode
+            if key not in solvers:
+                solvers[key] = _solver(drive, mode, settings, ext, model1, drive.state_size)
+            solver, par, ext_fn = solvers[key]
+            if callable(a):
+                ext_fn[0] = a
+            else:
+                ext_fn[0] = None
+                ext[0] = float(a)
+            y0 = np.zeros(EK.N_STATE)
+            y0[0], y0[1:5] = w, z
+            with contextlib.redirect_stdout(io.StringIO()):  # (CVODE's errors are in sol.message)
+                sol = solver.solve(np.array([t, t1]), y0)
+            if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
+                raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be integrated "
+                                 f"({sol.message})")
+            ts = np.asarray(sol.t, dtype=float)
+            Y = np.asarray(sol.y, dtype=float)
+            keep = np.concatenate(([True], np.diff(ts) > 0.0))
+            ts, Y = ts[keep], np.ascontiguousarray(Y[keep])
+            exts = np.empty((ts.size, 2))
+            exts[:, 1] = ext[1]
+            exts[:, 0] = [a(tt) for tt in ts] if callable(a) else float(a)
+            f = np.empty_like(Y)
+            EK.field_at(Y, par, exts, f)
+            piece = EndPiece(ts, Y, f, drive.chambers.area_ratio)
+            pieces.append(piece)
+            _check_volumes(drive, Y[:, 0], t)
+            impulses[k] += Y[-1, 5]
+            w, z = float(Y[-1, 0]), Y[-1, 1:5].copy()
+            te = float(ts[-1])
+            if sol.status == 2 and sol.i_events is not None:
+                hit = [EK.FLIGHT_EVENTS[i] for i in np.flatnonzero(np.atleast_2d(sol.i_events)[-1])]
+                st = DriveState(mode, z)
+                for e in drive._fired(mode, hit):
+                    st = drive.jump(st.mode, st.z, e, te, None, None)
+                    fired_log.append((te, e, st.mode))
+                mode, z = st.mode, np.array(st.z, dtype=float)
+            t = te if te < t1 else t1
+    return EndFlight(DriveState(mode, z), w, impulses, pieces, fired_log)
+
+
+def _check_volumes(drive, w, t) -> None:
+    ch = drive.chambers
+    if np.min(ch.rear_volume - w) <= 0.0 or np.min(ch.front_volume + ch.area_ratio * w) <= 0.0:
+        which = "rear" if np.min(ch.rear_volume - w) <= 0.0 else "front"
+        raise ValueError(f"the {which} chamber empties (V <= 0) during the blow near t = {t:.6g}: give a "
+                         f"larger {which}_volume (now {getattr(ch, which + '_volume'):g})")

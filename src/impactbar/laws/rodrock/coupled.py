@@ -1,0 +1,188 @@
+r"""The rod-rock law's blow with a drive that has state (theory §11, "The coupled blow"; §4d): the
+lattice of :mod:`.contact` and the drive's state solved together, by a method of steps.
+
+On the lattice the piston's driven end (the left edge of cell 0, impedance ``Z_0``) takes the drive's
+force averaged over each step, ``p_k``, and moves during the step at
+``u_t(0) = (p_k - 2 G_k) / Z_0``, ``G_k`` the left-going wave arriving in cell 0. A wave the drive
+sends in reaches the first cell boundary where anything reflects (a change of impedance, the shank) in
+``m`` steps and its echo comes back ``m`` steps later, so ``G_k`` over the ``2 m`` steps from ``K`` on
+does not depend on the drive from ``K`` on. Chunk by chunk of ``2 m`` steps:
+
+1. ``G_k`` of the chunk from the lattice run on with no drive (a probe: the same waves);
+2. the drive's state over the chunk, step by step, with the driven end at
+   ``u_t(0, t) = -2 G_k / Z_0 + p(t) / Z_0`` (:meth:`~impactbar.Drive.end_flight`: the oil circuit
+   by CVODE), which gives each step's force average ``p_k = int p dt / dt``;
+3. the lattice run on over the chunk with those averages.
+
+No iteration: each chunk's force is exact (to the integrator's tolerance) for the lattice's driven
+end, whose displacement at the step ends is the integrated one. The blow is then the lattice's with
+those averages (:class:`~impactbar.laws.rodrock.contact.RockContact`, the same numbers). The drive's
+work on the piston, ``int p u_t(0) dt``, exceeds the lattice's ``sum p_k (p_k - 2 G_k) dt / Z_0`` by
+``sum int (p - p_k)^2 dt / Z_0 >= 0``, the part of the outgoing wave that the cell averages drop
+(second order in the step); it is booked as energy the blow took.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..base import DrivenContact, LawNotSupported
+
+__all__ = ["driven_rock_contact", "causal_cells"]
+
+
+def causal_cells(Z, n_p: int) -> int:
+    """The cells ``m`` from the driven end to the first boundary that reflects (a change of
+    impedance inside the piston, else the shank after its ``n_p`` cells): the arriving waves of
+    ``2 m`` steps do not depend on the drive over them (module docstring).
+
+    Parameters
+    ----------
+    Z : array_like, shape (cells,)
+        The cells' impedances, piston first (``BlowGrid.Z``).
+    n_p : int
+        The piston's cells.
+
+    Returns
+    -------
+    int
+        ``1 <= m <= n_p``.
+    """
+    Z = np.asarray(Z, dtype=float)
+    for j in range(n_p - 1):
+        if Z[j + 1] != Z[j]:
+            return j + 1
+    return n_p
+
+
+def _bit_arrays(grid, law):
+    from .blow import _start_bit
+
+    bit = _start_bit(grid.Z, law.rock.k, law.rock.k_u, law.bit_mass, law.feed, None)
+    bs = np.array([bit.p, bit.w, float(bit.branch), bit.p_max, bit.R_max, bit.p_perm, bit.work])
+    bp = np.array([bit.Z, bit.k, bit.k_u, bit.m, bit.f])
+    return bs, bp
+
+
+def _steps(grid, F, G, bs, bp, gap, drive, record):
+    """``drive.size`` steps of the blow's compiled loop from the waves ``F, G`` and the bit ``bs``
+    (updated in place); returns the gap after them and, with ``record``, the force in every cell at
+    the start of each step."""
+    from ._rockkernel import blow_loop
+
+    L = drive.size
+    junc = np.zeros((L, grid.bounds.size))
+    bitrec = np.zeros((L + 1, 2))
+    field = np.zeros((L if record else 0, F.size))
+    acc = np.zeros(6)
+    ctrl = np.array([grid.cell_time, -1.0, 0.0, gap])
+    blow_loop(F, G, grid.Z, grid.bounds.astype(np.int64), bs, bp, ctrl, np.ascontiguousarray(drive), junc,
+              bitrec, field, acc)
+    return float(acc[4]), field
+
+
+def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:
+    """The blow of a piston arriving at the shank in modal state ``(q, q')`` at ``t0`` with the drive
+    in ``state`` (as it arrives), solved together (module docstring; theory §11, "The coupled
+    blow").
+
+    Parameters
+    ----------
+    model : BarModel
+        Under :class:`~impactbar.RodRock` (its grid, rock, bit and feed; damping neglected in the
+        blow, as in the law's own).
+    drive : Drive
+        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+    state : DriveState
+    t0 : float
+        Time of the arrival (model units).
+    q, v : array_like, shape (N + 1,)
+        Modal state at arrival, positions from the shank (``u(1) = 0``).
+    settings : FlightSettings, optional
+        The drive's integrator (default the drive's).
+
+    Returns
+    -------
+    DrivenContact
+        Its ``record`` a :class:`~impactbar.laws.rodrock.contact.RockContact` whose blow took the
+        drive's step averages.
+
+    Raises
+    ------
+    ValueError
+        A drive that cannot follow a blow (:meth:`~impactbar.Drive.end_flight` gives ``None``), or
+        the drive's integration failing.
+    """
+    from ...loads import FourierLoad
+    from .contact import BlowMap
+
+    law = model.law
+    q = np.array(q, dtype=float)
+    v = np.array(v, dtype=float)
+    p0 = float(drive.force(state.mode, state.z, q, v))
+    bm = BlowMap(model, FourierLoad(p0, []), t0)
+    grid = bm.grid
+    n_p, dt, n_max = grid.piston_cells, grid.cell_time, bm.n_max
+    Z0 = float(grid.Z[0])
+    F, G = bm.fields(q, v)
+    F0, G0 = F.copy(), G.copy()
+    bs, bp = _bit_arrays(grid, law)
+    gap = 0.0
+    m = causal_cells(grid.Z, n_p)
+    averages = np.zeros(n_max)
+    w = -float(model.drive_weights @ q)
+    st = state
+    pieces, events = [], []
+    k = 0
+    while k < n_max:
+        L = min(2 * m, n_max - k)
+        # 1. the waves arriving at the driven end over the chunk (not caused by its drive)
+        _, field = _steps(grid, F.copy(), G.copy(), bs.copy(), bp, gap, np.zeros(L), True)
+        arriving = np.empty(L)
+        arriving[0] = G[0]
+        for j in range(1, L):  # F[0] = 0 - G[0] after a step without drive
+            arriving[j] = field[j, 0] + arriving[j - 1]
+        # 2. the drive over the chunk, the driven end at u_t(0) = (p - 2 G_k) / Z_0
+        breaks = t0 + dt * np.arange(k, k + L + 1)
+        fl = drive.end_flight(model, st, breaks, w, list(-2.0 * arriving / Z0), Z0, settings)
+        if fl is None:
+            raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
+                                  "(Drive.end_flight); it runs under an instantaneous impact law only")
+        averages[k:k + L] = fl.impulses / dt
+        st, w = fl.state, fl.w
+        pieces += fl.pieces
+        events += fl.events
+        # 3. the lattice on over the chunk with the drive's averages
+        gap, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False)
+        k += L
+    bm.drive = averages
+    rec = bm.contact(q, v)
+    if not (np.array_equal(rec._F0, F0) and np.array_equal(rec._G0, G0)):  # pragma: no cover - defensive
+        raise RuntimeError("the blow's fields at impact changed between its chunks and its record")
+    work = float(sum(float(p.energies()[1]) for p in pieces))
+    gaps = _rigid_gaps(model, q, v, rec.blow, averages, t0)
+    return DrivenContact(rec.q_after.copy(), rec.v_after.copy(), float(t0) + rec.duration, rec, st, pieces,
+                         events, work, gaps)
+
+
+def _rigid_gaps(model, q, v, blow, averages, t0):
+    """The piston's rigid coordinate ``-q_0`` at the step ends of the blow (from the shank at
+    impact): its momentum changes by the drive's average less the shank's force over each step, so
+    that ``q_0`` is piecewise quadratic, exact on the lattice; the vertices inside the steps added."""
+    dt = blow.cell_time
+    n = blow.shank_forces.size
+    force = averages[:n] - blow.shank_forces
+    vel = float(v[0]) + dt * np.concatenate(([0.0], np.cumsum(force)))
+    pos = float(q[0]) + dt * np.concatenate(([0.0], np.cumsum(0.5 * (vel[:-1] + vel[1:]))))
+    times = t0 + dt * np.arange(n + 1)
+    # where the momentum changes sign inside a step, the rigid coordinate turns there
+    turn = (vel[:-1] * vel[1:] < 0.0) & (force != 0.0)
+    if np.any(turn):
+        i = np.flatnonzero(turn)
+        tau = -vel[i] / force[i]
+        times = np.concatenate((times, times[i] + tau))
+        pos = np.concatenate((pos, pos[i] + vel[i] * tau + 0.5 * force[i] * tau * tau))
+        order = np.argsort(times, kind="stable")
+        times, pos = times[order], pos[order]
+    return np.vstack((times, -pos))
+

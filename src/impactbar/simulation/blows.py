@@ -1,0 +1,302 @@
+"""A drive with state under a law whose contact takes time (theory §11, "The coupled blow"): each
+arrival a blow solved together with the drive's state
+(:meth:`~impactbar.laws.ContactLaw.driven_contact`), the run's piece over it a :class:`BlowPiece`;
+the checks that refuse what the coupled blow cannot do, and the run's loop
+(:func:`run_coupled`, which :func:`impactbar.simulation.switched.run_stateful` calls)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._shared.status import RunStatus
+from ..drives.base import DriveState
+from ..drives.flight import END, EVENT, fly
+
+__all__ = ["BlowPiece", "check_coupling", "check_blow_switches", "driven_blow", "run_coupled",
+           "PRESSED_BLOWS"]
+
+
+class BlowPiece:
+    """A blow of a run under a drive with state and a law whose contact takes time (theory §11, "The
+    coupled blow"): the law's record of the blow (solved with the drive's force as it evolved) and
+    the drive's pieces over it; a piece of :attr:`SwitchedTrajectory.pieces` like the flights.
+
+    Attributes
+    ----------
+    t0, t_end : float
+        The arrival and the blow's end (or the run's end, where the run ends inside the blow).
+    record : object
+        The law's record (:class:`~impactbar.WaveImpact`,
+        :class:`~impactbar.laws.rodrock.contact.RockContact`).
+    arrival : tuple of numpy.ndarray
+        The modal state ``(q, q')`` at the arrival.
+    drive_pieces : list
+        The drive's pieces over the blow (histories, energy quadratures).
+    t : numpy.ndarray
+        The drive's integration steps over the blow (up to :attr:`t_end`).
+    """
+
+    __slots__ = ("t0", "t_end", "record", "arrival", "drive_pieces", "t", "c", "_starts", "_end_state")
+
+    def __init__(self, t0, t_end, record, arrival, drive_pieces, c, end_state=None):
+        self.t0, self.t_end, self.record, self.arrival = float(t0), float(t_end), record, arrival
+        self.drive_pieces, self.c = drive_pieces, c
+        steps = np.unique(np.concatenate([p.t for p in drive_pieces]))
+        self.t = steps[steps <= self.t_end]
+        self._starts = np.array([p.t0 for p in drive_pieces])
+        self._end_state = end_state  # (q, v) where the piece ends; the record's after the whole blow
+
+    def _pick(self, t):
+        return np.clip(np.searchsorted(self._starts, t, side="right") - 1, 0, len(self.drive_pieces) - 1)
+
+    def drive_state(self, t):
+        """The drive's continuous state at times ``t`` in the blow, shape ``(k, T)``."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        idx = self._pick(t)
+        out = None
+        for j in np.unique(idx):
+            sel = idx == j
+            z = self.drive_pieces[j].drive_state(t[sel])
+            if out is None:
+                out = np.empty((z.shape[0], t.size))
+            out[:, sel] = z
+        return out
+
+    def force(self, t):
+        """The drive's force on the piston at times ``t`` in the blow."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        idx = self._pick(t)
+        out = np.empty(t.size)
+        for j in np.unique(idx):
+            sel = idx == j
+            out[sel] = self.drive_pieces[j].force(t[sel])
+        return out
+
+    def displacement(self, t):
+        """The driven end's displacement ``w = -u(0, t)`` at times ``t`` in the blow as the drive
+        integrated it (from the stop where it was at the arrival: the chambers' volumes follow it),
+        shape ``(T,)``."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        idx = self._pick(t)
+        out = np.empty(t.size)
+        for j in np.unique(idx):
+            sel = idx == j
+            out[sel] = self.drive_pieces[j].displacement(t[sel])
+        return out
+
+    def energies(self):
+        """The drive's energy quadratures over the piece (:meth:`HydraulicCircuitDrive.energy`
+        sums them): to :attr:`t_end`."""
+        total = 0.0
+        for p in self.drive_pieces:
+            if p.t_end <= self.t_end:
+                total = total + p.energies()
+            elif p.t0 < self.t_end:
+                total = total + p.energies_at(self.t_end)
+        return total
+
+    def extremes(self, k: int) -> tuple[float, float]:
+        """The least and the greatest value of the drive's state component ``k`` over the blow (its
+        pieces' :meth:`extremes`)."""
+        lo, hi = zip(*(p.extremes(k) for p in self.drive_pieces), strict=True)
+        return float(min(lo)), float(max(hi))
+
+    def supply_extremes(self) -> tuple[float, float]:
+        """The least and the greatest supply pressure over the blow (an oil circuit's)."""
+        return self.extremes(2)
+
+    def account(self):
+        """``(drive work, the law's drive work, energy out, field energy, q, v)`` to :attr:`t_end`:
+        the drive's work on the piston along its integration, the law's record's balance
+        (``energy_before + law's work = field + out``) and the modal state there."""
+        tau = min(self.t_end - self.t0, self.record.duration)
+        w_law, out, field_energy = self.record.account(tau)
+        w_drive = float(self.energies()[1])
+        q, v = self.modal_end()
+        return w_drive, w_law, out, field_energy, q, v
+
+    def modal_end(self):
+        """The modal state where the piece ends."""
+        if self._end_state is not None:
+            return self._end_state
+        return self.record.state_at(min(self.t_end - self.t0, self.record.duration))
+
+    def modal(self, t):
+        """The piston's modal state at times ``t`` in the blow (the law's record, ``state_at``),
+        shape ``(N + 1, T)`` each."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        M = self.arrival[0].size
+        Q, V = np.empty((M, t.size)), np.empty((M, t.size))
+        for i, tt in enumerate(t):
+            if tt >= self.t_end and self._end_state is not None:
+                Q[:, i], V[:, i] = self._end_state
+            elif tt <= self.t0:
+                Q[:, i], V[:, i] = self.arrival
+            else:
+                Q[:, i], V[:, i] = self.record.state_at(min(tt - self.t0, self.record.duration))
+        return Q, V
+
+    def end_displacement(self, t):
+        return np.minimum(self.c @ self.modal(t)[0], 0.0)
+
+    def end_velocity(self, t):
+        return self.c @ self.modal(t)[1]
+
+
+#: more blows than this, each starting at once where the last ended (the piston pressed on the stop
+#: through them), end the run with a ``ValueError``
+PRESSED_BLOWS = 1000
+
+
+def check_coupling(model, drive) -> None:
+    """Refuse, in one line, a drive with state under a law whose contact takes time where the law
+    has no coupled blow (:meth:`~impactbar.laws.ContactLaw.driven_contact`) or the drive cannot
+    follow one (:meth:`~impactbar.Drive.end_flight`).
+
+    Raises
+    ------
+    ValueError
+        Naming what is missing."""
+    from ..drives.base import Drive
+    from ..laws.base import ContactLaw
+
+    law = model.law
+    if type(law).driven_contact is ContactLaw.driven_contact:
+        raise ValueError(f"a drive with state ({type(drive).__name__}) under impact={model.impact!r}: the "
+                         "law has no blow solved with a drive's state (ContactLaw.driven_contact); use the "
+                         "paper's, the wave or the rod-rock law")
+    if type(drive).end_flight is Drive.end_flight:
+        raise ValueError(f"a drive with state ({type(drive).__name__}) runs under an instantaneous impact "
+                         f"law only: it cannot follow a blow (Drive.end_flight); got impact={model.impact!r}")
+
+
+def check_blow_switches(drive, modes, gaps) -> None:
+    """Refuse a blow during which the piston's rigid coordinate crosses one of the drive's position
+    switches armed in ``modes`` (the coupled blow does not switch inside it): ``gaps`` the times and
+    the coordinate (:attr:`~impactbar.laws.base.DrivenContact.gaps`, shape ``(2, P)``).
+
+    Raises
+    ------
+    ValueError
+        Naming the switch and where."""
+    from ..drives.base import GapCrossing
+
+    y = np.asarray(gaps[1], dtype=float)
+    for mode in modes:
+        for e in drive.events(mode):
+            if not isinstance(e, GapCrossing):
+                continue
+            g = y - e.level
+            crossed = (np.any((g[:-1] < 0.0) & (g[1:] >= 0.0)) if e.direction >= 0 else False) or \
+                (np.any((g[:-1] > 0.0) & (g[1:] <= 0.0)) if e.direction <= 0 else False)
+            if crossed:
+                raise ValueError(f"the piston crosses the drive's switch position {e.name!r} ({e.level:g}) "
+                                 f"inside a blow near t = {float(gaps[0][0]):.6g}: the coupled blow does not "
+                                 "switch inside it; give a switch position farther from the stop or a "
+                                 "shorter blow (blow_time)")
+
+
+def driven_blow(model, drive, state, t, q, v, settings=None):
+    """The blow of an arrival at ``t`` in ``(q, q')`` with the drive's ``state`` on arrival: the
+    law's blow solved with the drive's state (:meth:`~impactbar.laws.ContactLaw.driven_contact`),
+    the position switches checked (:func:`check_blow_switches`), then the drive's map at the impact
+    where the blow ends (as for the valve of :class:`~impactbar.PositionSwitchedDrive` under these
+    laws: the switch the impact triggers counts from the contact's end).
+
+    Returns
+    -------
+    DrivenContact, DriveState
+        The blow (:class:`~impactbar.laws.base.DrivenContact`) and the drive's state after its map.
+
+    Raises
+    ------
+    ValueError
+        From the law's coupled blow, or a switch crossed inside it (:func:`check_blow_switches`)."""
+    c = model.end_weights
+    q = np.array(q, dtype=float)
+    v = np.array(v, dtype=float)
+    q[0] -= float(c @ q)  # the end exactly on the stop
+    res = model.law.driven_contact(model, drive, state, t, q, v, settings=settings)
+    modes = [state.mode] + [m for _, _, m in res.events]
+    check_blow_switches(drive, modes, res.gaps)
+    end = res.drive_state
+    after = drive.impact(end.mode, end.z, res.t_release, res.q_after, res.v_after)
+    return res, after
+
+
+def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, new_run):
+    """:func:`~impactbar.simulation.switched.run_stateful` under a law whose contact takes time:
+    flights by :func:`impactbar.drives.flight.fly`, each arrival a blow of :func:`driven_blow` (a
+    :class:`BlowPiece`); a blow that ends with the end pressed on the stop (moving into it) is
+    followed at once by the next. ``new_run`` makes the run's log (the simulator's ``_Run``: its
+    state, logs and result, a :class:`~impactbar.SwitchedTrajectory`).
+
+    Returns
+    -------
+    SwitchedTrajectory
+
+    Raises
+    ------
+    ValueError
+        From a blow (:func:`driven_blow`), or the piston pressed on the stop through
+        ``PRESSED_BLOWS`` blows."""
+    c = model.end_weights
+    settings = settings if settings is not None else drive.integrator
+    loop = new_run(model, drive, q, v, t0, t_end, max_imp)
+    loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
+    pressed = 0
+    while loop.t < t_end and not loop.done:
+        mode, z = loop.state
+        on_stop = float(c @ loop.q) >= -1e-14 * max(1.0, float(np.abs(c) @ np.abs(loop.q))) \
+            and float(c @ loop.v) > 0.0
+        if on_stop:  # pressed on the stop at the end of a blow (or started there): it arrives at once
+            pressed += 1
+            if pressed > PRESSED_BLOWS:
+                raise ValueError(f"the piston stays pressed on the stop through {PRESSED_BLOWS} blows from "
+                                 f"t = {loop.t:.6g}: the drive holds it there")
+            t_arr, q_arr, v_arr = loop.t, loop.q.copy(), loop.v.copy()
+        else:
+            pressed = 0
+            fl = fly(model, drive, loop.state, loop.t, loop.q, loop.v, t_end, settings)
+            loop.blocks.append(("py", fl.piece))
+            loop.t, loop.q, loop.v = fl.t, fl.q, fl.v
+            loop.state = DriveState(mode, fl.z)
+            if fl.end == END:
+                break
+            if fl.end == EVENT:
+                new = loop.state
+                for e in fl.events:
+                    new = drive.jump(new.mode, new.z, e, fl.t, fl.q, fl.v)
+                loop.switch(new, fl.t)
+                continue
+            t_arr, q_arr, v_arr = fl.t, fl.q, fl.v
+        res, after = driven_blow(model, drive, loop.state, t_arr, q_arr, v_arr, settings)
+        loop.imp_t.append(t_arr)
+        loop.imp_v.append(float(c @ v_arr))
+        loop.n_imp += 1
+        q_arr = q_arr.copy()
+        q_arr[0] -= float(c @ q_arr)
+        if res.t_release > t_end:  # the run ends inside the blow
+            piece = BlowPiece(t_arr, t_end, res.record, (q_arr, v_arr.copy()), res.pieces, c)
+            loop.blocks.append(("py", piece))
+            loop.q, loop.v = (np.array(x, dtype=float) for x in piece.modal_end())
+            loop.state = DriveState(_mode_at(res, t_end, loop.state.mode), piece.drive_state([t_end])[:, 0])
+            loop.t = t_end
+            break
+        piece = BlowPiece(t_arr, res.t_release, res.record, (q_arr, v_arr.copy()), res.pieces, c,
+                          (res.q_after.copy(), res.v_after.copy()))
+        loop.blocks.append(("py", piece))
+        loop.t, loop.q, loop.v = res.t_release, res.q_after.copy(), res.v_after.copy()
+        loop.switch(after, res.t_release)
+        if loop.n_imp >= max_imp:
+            loop.status = RunStatus.MAX_IMPACTS
+            break
+    return loop.result(make_state, None)
+
+
+def _mode_at(res, t, mode):
+    """The drive's mode at ``t`` inside the blow of ``res`` (``mode`` at its start)."""
+    for te, _, m in res.events:
+        if te <= t:
+            mode = m
+    return mode
