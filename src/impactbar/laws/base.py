@@ -217,6 +217,22 @@ class ContactLaw:
         """
         raise LawNotSupported(self._missing("window"))
 
+    def impact_state(self, model, load, t: float, y_minus):
+        """The state where the next flight starts, ``y_plus`` of :meth:`impact_map` without its
+        derivatives (a residual of the orbit solver; a law whose Jacobian costs more than its map,
+        such as the rod-rock law's finite differences, gives it alone).
+
+        Parameters
+        ----------
+        model, load, t, y_minus
+            As :meth:`impact_map`.
+
+        Returns
+        -------
+        numpy.ndarray, shape (2 N + 2,)
+        """
+        return self.impact_map(model, load, t, y_minus)[0]
+
     def impact_map(self, model, load, t: float, y_minus):
         """State where the next flight starts from the state at arrival, with its derivatives
         (the seam of the multi-segment orbit solver, theory §7).

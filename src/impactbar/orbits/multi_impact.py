@@ -196,7 +196,10 @@ class _Segments:
             y0 = self.full(x[j])
             ts = t[j] + self.T
             Y = self.flight(ts, y0, t1)
-            yp, Jy, Jt = impact_law(self.model, self.load, t1, Y)
+            if jacobian:
+                yp, Jy, Jt = impact_law(self.model, self.load, t1, Y)
+            else:  # (the state alone: a law's Jacobian may cost many maps)
+                yp = self.model.law.impact_state(self.model, self.load, t1, Y)
             y_plus[j], y_minus[j] = y0, Y
             r = slice(B * j, B * (j + 1))
             F[B * j] = self.c @ Y[:M]
@@ -528,7 +531,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     m = check_int("impacts", impacts, lo=1, hi=4096)
     n = check_int("periods", periods, lo=1, hi=4096)
     tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
-    impact_law(model, load, 0.0, np.zeros(2 * model.n_modes + 2))  # the law is supported
+    model.law.impact_state(model, load, 0.0, np.zeros(2 * model.n_modes + 2))  # the law is supported
     if not m * contact_window(model) < TWO_PI * n:
         raise ValueError(f"impacts={m} contact windows of 2/s = {contact_window(model):.6g} do not fit "
                          f"in periods={n} load periods (wave law: s must exceed m/(pi n))")
@@ -540,7 +543,9 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
             rough = _Segments(coarse, load, m, n)
             near = [u for u in (_converge(rough, u0, avoid, tol, max_iter) for u0 in starts) if u is not None]
             for u0 in near:
-                u = _converge(problem, u0, avoid, tol, min(max_iter, POLISH_ITERATIONS))
+                u = _chord(problem, u0, rough.evaluate(u0)[1], avoid, tol)
+                if u is None:
+                    u = _converge(problem, u0, avoid, tol, min(max_iter, POLISH_ITERATIONS))
                 if u is not None:
                     return _build(problem, u)
         for u0 in starts:
@@ -563,6 +568,32 @@ def _converge(problem, u0, avoid, tol, max_iter):
     if u is None or (avoid is not None and _same_orbit(u, avoid, problem)):
         return None
     return _normalise(problem, u)
+
+
+def _chord(problem, u0, DF, avoid, tol, max_iter=POLISH_ITERATIONS):
+    """The chord method on ``problem`` from ``u0`` with the fixed Jacobian ``DF`` (the coarse model's
+    at its orbit, within that model's error of this one's): each step one evaluation of the residual,
+    no Jacobian; it converges at the rate of the Jacobians' difference. The normalised solution, or
+    ``None`` where the residual stops halving (then Newton's method)."""
+    u = np.array(u0, dtype=float)
+    last = math.inf
+    for _ in range(max_iter):
+        F, _, _ = problem.evaluate(u, jacobian=False)
+        size = float(np.max(np.abs(F)))
+        if not (np.all(np.isfinite(F)) and size <= 0.5 * last):
+            return None
+        last = size
+        try:
+            du = np.linalg.solve(DF, F)
+        except np.linalg.LinAlgError:
+            return None
+        u = u - du
+        if float(np.max(np.abs(du))) <= tol * problem.scale(u):
+            if not np.all(np.isfinite(problem.evaluate(u, jacobian=False)[0])) or \
+                    (avoid is not None and _same_orbit(u, avoid, problem)):
+                return None
+            return _normalise(problem, u)
+    return None
 
 
 def _same_orbit(u, v, problem):

@@ -314,6 +314,12 @@ class RodRock(ContactLaw):
 
         return fd_impact_map(blow_map(model, load, float(t)), y_minus, t)
 
+    def impact_state(self, model, load, t, y_minus):
+        """``y_plus`` of :meth:`impact_map` alone: one blow, no finite differences."""
+        from .step import blow_map
+
+        return blow_map(model, load, float(t))(np.asarray(y_minus, dtype=float))
+
     def blow(self, model, load, t, y_minus):
         """The blow of an arrival at load time ``t`` in state ``y_minus`` (shape ``(2 N + 2,)``)
         with the drive acting: the record of :meth:`contact`."""

@@ -102,6 +102,10 @@ class SteppedLongRod(ContactLaw):
 
         return fd_impact_map(self._map(model, load, t), y_minus, t)
 
+    def impact_state(self, model, load, t, y_minus):
+        """``y_plus`` of :meth:`impact_map` alone: one exact blow."""
+        return self._map(model, load, t)(np.asarray(y_minus, dtype=float))
+
     def blow(self, model, load, t, y_minus):
         """The contact of an arrival at load time ``t`` in state ``y_minus`` (shape ``(2 N + 2,)``):
         the record of :meth:`contact`."""
