@@ -53,9 +53,9 @@ def test_the_tangent_is_the_lattices_derivative(case):
     cells = blow_grid(1.0, *rod, 16, SteppedPiston(np.ones(16), Z)).Z[:16]  # rod_rock_blow's cells
     tb = rod_rock_blow_tangent(1.0, 1.0, *rod, k, k_u, m, f, cells, D, t_max=T)
     blow = _blow(case, Z)
-    # the primal run: the lattice's blow, number for number
-    assert tb.work_on_rock == blow.work_on_rock
-    np.testing.assert_array_equal(tb.shank_forces, blow.shank_forces)
+    # the primal run: the lattice's blow to rounding (the rod's uniform segments delay lines)
+    assert tb.work_on_rock == pytest.approx(blow.work_on_rock, rel=1e-13)
+    np.testing.assert_allclose(tb.shank_forces, blow.shank_forces, rtol=0, atol=1e-13)
     assert tb.energy_at_impact == pytest.approx(blow.energy_at_impact, rel=1e-14)
     assert np.abs(tb.energy_tangent).max() < 1e-14  # the directions keep the mass
     assert tb.ended_by == blow.ended_by

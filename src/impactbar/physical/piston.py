@@ -19,7 +19,8 @@ the segments' masses (a softmax of ``n - 1`` free numbers: the mass held, the un
 origin) are found by scipy's SLSQP with the exact gradient of the work
 (:func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent`, the blow's tangent-linear run), the
 stress limit one inequality per step of the blow on the steps' shank forces and their gradients;
-the boundaries by an ascent over single cells from the uniform piston. A parabola through the best
+the boundaries by a pattern search over the cells from the uniform piston (a local search: with
+three segments or more the shape has several optima). A parabola through the best
 design's work and its neighbours' puts the boundaries between the cells. The best design's blow is
 then solved by the exact solver over the same window (every wave of piston and rod a delay line, a
 feed or a bit mass included; :func:`~impactbar.single_blow`), at its whole cells and between them,
@@ -77,7 +78,7 @@ class OptimalPiston:
         meets it, the one closest to it).
     evaluations : int
         Blows solved by the search (``method="slsqp"``: each with its derivatives in the ``n - 1``
-        mass directions, costing about two to three plain blows).
+        directions of the masses).
     cell_time_s : float
         The time step of the lattice, or of the exact blow's samples (s).
     times_s : numpy.ndarray, shape (k + 1,)
@@ -195,8 +196,8 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         ``4 L/c`` and a wave's round trip through piston and rod after it (so that on a long rod
         the work of the first passage of the wave, Lundberg's).
     method : {"slsqp", "nelder-mead"}
-        The search (theory §12): ``"slsqp"``, the boundaries on whole cells by an ascent over
-        cells and the masses by scipy's SLSQP with the exact gradients of the work and of every
+        The search (theory §12): ``"slsqp"``, the boundaries on whole cells by a pattern search
+        over the cells and the masses by scipy's SLSQP with the exact gradients of the work and of every
         step's shank force, the stress limit one constraint per step; or ``"nelder-mead"``,
         scipy's derivative-free search over lengths and masses on the work less a penalty on the
         excess stress (the search before the gradients, kept to compare with).
@@ -401,9 +402,10 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
     SLSQP on the work per impact energy with its exact gradient (``blow_tangent(Z, dZ)``,
     :func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent`) and, with ``scale > 0``, one
     constraint ``scale N_i <= 1`` per step ``i`` of the ``n_steps`` (the peak stress's limit, every
-    step's force its own constraint: no maximum differentiated); over ``B`` an ascent by single
-    cells (each boundary, and each inner segment moved whole), from the uniform piston, going on in
-    a direction while it gains. At most ``maxfev`` blows (each with its derivatives). Returns the
+    step's force its own constraint: no maximum differentiated); over ``B`` a pattern search from
+    the uniform piston (each boundary, and each inner segment whole, moved by a quarter of a uniform
+    segment's cells, on in a direction while the design gains, the moves halved down to one cell).
+    At most ``maxfev`` blows (each with its derivatives). Returns the
     best design's boundaries and mass fractions, a design between the cells near it (or None) and
     the blows solved."""
     from scipy.optimize import minimize
@@ -460,18 +462,21 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
     seen = {}
     try:
         rank, y = seen[B.tobytes()] = masses(B, y)
-        improved = True
-        while improved:
-            improved = False
-            for move in moves:
-                while True:  # on in this direction while it gains
-                    C = B + move
-                    if np.diff(np.concatenate(([0], C, [N]))).min() < 1 or C.tobytes() in seen:
-                        break
-                    r, yc = seen[C.tobytes()] = masses(C, y)
-                    if r >= rank:
-                        break
-                    B, y, rank, improved = C, yc, r, True
+        step = max(1, N // (4 * n))  # a quarter of a uniform segment's cells, halved down to one
+        while step >= 1:
+            improved = True
+            while improved:
+                improved = False
+                for move in moves:
+                    while True:  # on in this direction while it gains
+                        C = B + step * move
+                        if np.diff(np.concatenate(([0], C, [N]))).min() < 1 or C.tobytes() in seen:
+                            break
+                        r, yc = seen[C.tobytes()] = masses(C, y)
+                        if r >= rank:
+                            break
+                        B, y, rank, improved = C, yc, r, True
+            step //= 2
     except _Budget:
         pass
     # between the cells: per boundary the parabola through the best design's and its two

@@ -1,7 +1,8 @@
 """The tangent-linear (forward-mode) blow on the rod and the rock (theory §12): the loop of
-:func:`impactbar.laws.rodrock._rockkernel.blow_loop` without a drive, step for step the same
-arithmetic (the primal numbers are the compiled loop's to rounding), carrying beside every wave and
-every bit variable its derivatives in ``nv`` directions of the cells' impedances.
+:func:`impactbar.laws.rodrock._rockkernel.blow_loop` without a drive (its junctions and the bit's
+step the same arithmetic, the rod's uniform segments delay lines: the compiled loop's blow to
+rounding), carrying beside every wave and every bit variable its derivatives in ``nv`` directions
+of the piston's cells' impedances.
 
 The switching schedule is held as the primal run decides it: the piston-shank contact on or off per
 step, the rock's branch on each sub-step of the bit, the step that ends the blow. Inside a step a
@@ -249,36 +250,42 @@ def bit_step_tangent(bs, bp, dbs, E, dE, dt, scratch, J):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def blow_loop_tangent(F, G, Z, dF, dG, dZ, bs, dbs, bp, ctrl, shank, dshank, acc):
-    """The blow's loop (``_rockkernel.blow_loop`` with no drive, the piston touching the shank at
-    the start, the rod at rest) with its tangents. ``dF, dG`` (nv, cells): the waves' tangents;
-    ``dZ`` (nv, n_p): the piston's cells' impedances' (the rod's are fixed); ``ctrl``: ``dt,
-    energy_stop``; ``shank``, ``dshank`` out (n_max,), (n_max, nv): the piston-shank force per step
-    and its tangent; ``acc`` out: ``steps, ended``. Returns the final waves ``F, G, dF, dG`` (the
-    arrays passed are work space)."""
+def blow_loop_tangent(Fp, Gp, Zp, dFp, dGp, dZp, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, acc):
+    """The blow's loop (``_rockkernel.blow_loop`` with no drive, the piston touching the shank at the
+    start, the rod at rest) with its tangents. The piston's cells ``Fp, Gp, Zp`` (n_p,) and their
+    tangents ``dFp, dGp, dZp`` (nv, n_p); the rod's uniform segments of ``seg_len`` cells and
+    impedances ``seg_z`` (S,), each a delay line: inside a uniform segment the junction passes the
+    waves on (``N = F + G``), so that its cells are a ring buffer shifted by the step and only the
+    segments' ends meet junctions (the same blow to rounding). ``ctrl``: ``dt, energy_stop``;
+    ``shank``, ``dshank`` out (n_max,), (n_max, nv): the piston-shank force per step and its tangent;
+    ``acc`` out: ``steps, ended``."""
     dt, stop = ctrl[0], ctrl[1]
-    n_cells = F.size
-    nv, n_p = dZ.shape
+    n_p = Zp.size
+    nv = dZp.shape[0]
+    S = seg_len.size
+    off = np.zeros(S + 1, np.int64)
+    for q in range(S):
+        off[q + 1] = off[q] + seg_len[q]
+    Fr = np.zeros(off[S])  # F of cell i of segment q at step t in Fr[off[q] + (i - t) mod n_q]
+    Gr = np.zeros(off[S])  # G of cell i in Gr[off[q] + (i + t) mod n_q]
+    dFr = np.zeros((nv, off[S]))
+    dGr = np.zeros((nv, off[S]))
     jc = n_p - 1
     feed, m = bp[4], bp[3]
-    Zl = Z[n_cells - 1]
+    Zl = seg_z[S - 1]
     contact = True
     gap = 0.0
     last = 0
-    # the junctions' weights (N = wa F + wb G) and, at the piston's, their derivatives' share
-    wa = np.empty(n_cells - 1)
-    wb = np.empty(n_cells - 1)
-    for j in range(n_cells - 1):
-        wa[j] = 2.0 * Z[j + 1] / (Z[j] + Z[j + 1])
-        wb[j] = 2.0 * Z[j] / (Z[j] + Z[j + 1])
-    dZx = np.zeros((nv, n_p + 1))  # the impedances' tangents, the rod's first cell's (0) appended
-    dZx[:, :n_p] = dZ
-    extra = np.zeros((nv, n_p))  # the junctions' derivatives through their impedances
-    N = np.empty(n_cells - 1)
-    Fn = np.zeros(n_cells)
-    Gn = np.zeros(n_cells)
-    dFn = np.zeros((nv, n_cells))
-    dGn = np.zeros((nv, n_cells))
+    Np = np.empty(max(n_p - 1, 0))
+    Fn = np.empty(n_p)
+    Gn = np.empty(n_p)
+    dFn = np.zeros((nv, n_p))
+    dGn = np.zeros((nv, n_p))
+    Ns = np.empty(max(S - 1, 0))
+    dNs = np.zeros((nv, max(S - 1, 0)))
+    Ff, Fl, Gf, Gl = np.empty(S), np.empty(S), np.empty(S), np.empty(S)
+    dFf, dFl, dGf, dGl = np.empty((nv, S)), np.empty((nv, S)), np.empty((nv, S)), np.empty((nv, S))
+    dNc = np.empty(nv)
     dE = np.empty(nv)
     dp0 = np.empty(nv)
     scratch = np.zeros((5, nv))
@@ -286,77 +293,88 @@ def blow_loop_tangent(F, G, Z, dF, dG, dZ, bs, dbs, bp, ctrl, shank, dshank, acc
     n_max = shank.size
     steps, ended = n_max, 0.0
     for step in range(n_max):
-        # the junctions the waves have reached, from the piston and from the bit (the rod at rest
-        # between them: its waves 0 there, as the compiled loop's)
-        hi = min(n_cells - 1, n_p + step + 2)
-        lo = max(hi, n_cells - 4 - step)
-        for j in range(hi):
-            za, zb = Z[j], Z[j + 1]
-            N[j] = (2.0 * zb * F[j] + 2.0 * za * G[j + 1]) / (za + zb)
-        for j in range(lo, n_cells - 1):
-            za, zb = Z[j], Z[j + 1]
-            N[j] = (2.0 * zb * F[j] + 2.0 * za * G[j + 1]) / (za + zb)
-        if contact:
-            contact = N[jc] >= 0.0
-        else:
-            contact = gap <= 0.0 and N[jc] >= 0.0
-        if not contact:
-            N[jc] = 0.0
-            gap = max(gap + (-2.0 * G[jc + 1] / Z[jc + 1] - 2.0 * F[jc] / Z[jc]) * dt, 0.0)
-        for j in range(hi):
-            Fn[j + 1] = N[j] - G[j + 1]
-            Gn[j] = N[j] - F[j]
-        for j in range(lo, n_cells - 1):
-            Fn[j + 1] = N[j] - G[j + 1]
-            Gn[j] = N[j] - F[j]
-        Fn[0] = 0.0 - G[0]
-        for j in range(n_p):
-            den = Z[j] + Z[j + 1]
+        for q in range(S):  # the segments' ends at this step
+            n, o = seg_len[q], off[q]
+            k = step % n
+            i0, i1 = o + (n - k) % n, o + (2 * n - 1 - k) % n  # F of the first, last cell
+            g0, g1 = o + k, o + (n - 1 + k) % n  # G of the first, last cell
+            Ff[q], Fl[q], Gf[q], Gl[q] = Fr[i0], Fr[i1], Gr[g0], Gr[g1]
             for a in range(nv):
-                extra[a, j] = (2.0 * (dZx[a, j + 1] * F[j] + dZx[a, j] * G[j + 1])
-                               - N[j] * (dZx[a, j] + dZx[a, j + 1])) / den
+                dFf[a, q], dFl[a, q], dGf[a, q], dGl[a, q] = dFr[a, i0], dFr[a, i1], dGr[a, g0], dGr[a, g1]
+        # the piston's junctions, welded
+        for j in range(n_p - 1):
+            za, zb = Zp[j], Zp[j + 1]
+            Np[j] = (2.0 * zb * Fp[j] + 2.0 * za * Gp[j + 1]) / (za + zb)
+        # the piston-shank contact
+        za, zb = Zp[jc], seg_z[0]
+        Nc = (2.0 * zb * Fp[jc] + 2.0 * za * Gf[0]) / (za + zb)
+        if contact:
+            contact = Nc >= 0.0
+        else:
+            contact = gap <= 0.0 and Nc >= 0.0
+        if not contact:
+            Nc = 0.0
+            gap = max(gap + (-2.0 * Gf[0] / zb - 2.0 * Fp[jc] / za) * dt, 0.0)
         for a in range(nv):
-            dFa, dGa, dFna, dGna = dF[a], dG[a], dFn[a], dGn[a]
-            for j in range(n_p):
-                dn = wa[j] * dFa[j] + wb[j] * dGa[j + 1] + extra[a, j]
-                dFna[j + 1] = dn - dGa[j + 1]
-                dGna[j] = dn - dFa[j]
-            for j in range(n_p, hi):
-                dn = wa[j] * dFa[j] + wb[j] * dGa[j + 1]
-                dFna[j + 1] = dn - dGa[j + 1]
-                dGna[j] = dn - dFa[j]
-            for j in range(lo, n_cells - 1):
-                dn = wa[j] * dFa[j] + wb[j] * dGa[j + 1]
-                dFna[j + 1] = dn - dGa[j + 1]
-                dGna[j] = dn - dFa[j]
-            if not contact:
-                dFna[jc + 1] = -dGa[jc + 1]
-                dGna[jc] = -dFa[jc]
+            dNc[a] = 0.0 if not contact else (2.0 * (zb * dFp[a, jc] + dZp[a, jc] * Gf[0] + za * dGf[a, 0])
+                                              - Nc * dZp[a, jc]) / (za + zb)
+        # the rod's segments' junctions
+        for q in range(S - 1):
+            za, zb = seg_z[q], seg_z[q + 1]
+            Ns[q] = (2.0 * zb * Fl[q] + 2.0 * za * Gf[q + 1]) / (za + zb)
+            for a in range(nv):
+                dNs[a, q] = (2.0 * zb * dFl[a, q] + 2.0 * za * dGf[a, q + 1]) / (za + zb)
+        # the piston's waves at the next step
+        Fn[0] = 0.0 - Gp[0]
+        for j in range(n_p - 1):
+            Fn[j + 1] = Np[j] - Gp[j + 1]
+            Gn[j] = Np[j] - Fp[j]
+        Gn[jc] = Nc - Fp[jc]
+        for a in range(nv):
+            dFa, dGa, dZa, dFna, dGna = dFp[a], dGp[a], dZp[a], dFn[a], dGn[a]
             dFna[0] = -dGa[0]
-        Fi = F[n_cells - 1]
+            for j in range(n_p - 1):
+                za, zb = Zp[j], Zp[j + 1]
+                dn = (2.0 * (zb * dFa[j] + dZa[j + 1] * Fp[j] + za * dGa[j + 1] + dZa[j] * Gp[j + 1])
+                      - Np[j] * (dZa[j] + dZa[j + 1])) / (za + zb)
+                dFna[j + 1] = dn - dGa[j + 1]
+                dGna[j] = dn - dFa[j]
+            dGna[jc] = dNc[a] - dFa[jc]
+        # the bit and the rock
+        Fi = Fl[S - 1]
         p0 = bs[0]
         for a in range(nv):
-            dE[a] = 2.0 * dF[a, n_cells - 1]
+            dE[a] = 2.0 * dFl[a, S - 1]
             dp0[a] = dbs[0, a]
         bit_step_tangent(bs, bp, dbs, 2.0 * Fi + feed, dE, dt, scratch, J)
-        Gn[n_cells - 1] = Fi - Zl * (bs[0] - p0) / dt
+        g_end = Fi - Zl * (bs[0] - p0) / dt
+        # the segments' ends at the next step: F enters at the first cell (the slot of the last's
+        # F, read above), G at the last (the slot of the first's)
+        for q in range(S):
+            n, o = seg_len[q], off[q]
+            k = (step + 1) % n
+            i0, g1 = o + (n - k) % n, o + (n - 1 + k) % n
+            Fr[i0] = (Nc - Gf[0]) if q == 0 else (Ns[q - 1] - Gf[q])
+            Gr[g1] = (Ns[q] - Fl[q]) if q < S - 1 else g_end
+            for a in range(nv):
+                dFr[a, i0] = (dNc[a] - dGf[a, 0]) if q == 0 else (dNs[a, q - 1] - dGf[a, q])
+                dGr[a, g1] = ((dNs[a, q] - dFl[a, q]) if q < S - 1
+                              else (dFl[a, q] - Zl * (dbs[0, a] - dp0[a]) / dt))
+        shank[step] = Nc
         for a in range(nv):
-            dGn[a, n_cells - 1] = 0.5 * dE[a] - Zl * (dbs[0, a] - dp0[a]) / dt
-        shank[step] = N[jc]
-        for a in range(nv):
-            dshank[step, a] = dFn[a, jc + 1] + dG[a, jc + 1]  # dN at the shank
-        F, Fn = Fn, F
-        G, Gn = Gn, G
-        dF, dFn = dFn, dF
-        dG, dGn = dGn, dG
+            dshank[step, a] = dNc[a]
+        Fp, Fn = Fn, Fp
+        Gp, Gn = Gn, Gp
+        dFp, dFn = dFn, dFp
+        dGp, dGn = dGn, dGp
         if contact:
             last = step
         if not contact and last >= 0 and step % 8 == 0:
             rod_e = 0.0
-            for j in range(n_p, n_cells):
-                rod_e += (F[j] * F[j] + G[j] * G[j]) / Z[j]
+            for q in range(S):
+                for i in range(off[q], off[q + 1]):
+                    rod_e += (Fr[i] * Fr[i] + Gr[i] * Gr[i]) / seg_z[q]
             if rod_e * dt + 0.5 * m * bs[1] * bs[1] < stop:
                 steps, ended = step + 1, 1.0
                 break
     acc[0], acc[1] = steps, ended
-    return F, G, dF, dG

@@ -8,7 +8,8 @@ over the cell on each branch of the bilinear law. Its work on the rock and its p
 on every step are therefore smooth functions of the cells' impedances wherever the switching
 schedule stays the same: the contact on or off per step, the rock's branch on each of the bit's
 sub-steps, the step that ends the blow. :func:`rod_rock_blow_tangent` runs that recursion with its
-forward-mode (tangent-linear) derivative beside it (compiled, ``_rocktangent``): the schedule held
+forward-mode (tangent-linear) derivative beside it (compiled, ``_rocktangent``; the rod's uniform
+segments carried as delay lines, where the lattice's junctions pass the waves on): the schedule held
 as the primal run decides it, the times of the branch changes inside a step moving with the state
 (a massless bit's closed-form switch time differentiated; a bit with mass crosses every switch with
 a continuous vector field, so that its switch time's derivative drops out). The derivatives are
@@ -80,7 +81,7 @@ def rod_rock_blow_tangent(s, V, lengths, impedances, speeds, k, k_u, bit_mass, f
     The piston is ``n_p = len(piston_impedances)`` cells of one travel time ``dt = 1/(s n_p)``, from
     its driven (free) end to the struck end, moving rigidly at ``V`` and unstressed at impact; the
     rod, the rock, the bit and the feed as in :func:`~impactbar.laws.rodrock.blow.rod_rock_blow`
-    with ``cells_per_piston = n_p``, whose blow this is, number for number, when the cells'
+    with ``cells_per_piston = n_p``, whose blow this is, to rounding, when the cells'
     impedances have the mean ``s`` (a piston of mass 1; ``rod_rock_blow(...,
     piston=SteppedPiston(np.ones(n_p), piston_impedances))`` builds the same cells).
 
@@ -161,15 +162,15 @@ def rod_rock_blow_tangent(s, V, lengths, impedances, speeds, k, k_u, bit_mass, f
     t_max = check_real("t_max", t_max, lo=0.0, lo_open=True)
     _check_blow_size(Z.size, t_max / dt, False)
     n_max = whole_steps(t_max, dt)
-    F = np.zeros(Z.size)
-    F[:n_p] = 0.5 * Zp * V
-    G = -F
+    Fp = 0.5 * Zp * V
+    Gp = -Fp
     dZ = np.ascontiguousarray(D.T)
-    dF = np.zeros((nv, Z.size))
-    dF[:, :n_p] = 0.5 * V * dZ
-    dG = -dF
-    E0 = float(np.sum((F[:n_p] ** 2 + G[:n_p] ** 2) / Z[:n_p])) * dt
+    dFp = 0.5 * V * dZ
+    dGp = -dFp
+    E0 = float(np.sum((Fp ** 2 + Gp ** 2) / Zp)) * dt
     dE0 = 0.5 * V * V * dt * D.sum(axis=0)
+    seg_len = np.array(grid.segment_cells, dtype=np.int64)
+    seg_z = Z[n_p + np.concatenate(([0], np.cumsum(seg_len)[:-1]))]
     bs = np.zeros(7)  # fresh rock loaded to the feed (blow._Bit)
     bs[0] = feed / k
     bs[2] = float(_LOAD)
@@ -180,8 +181,8 @@ def rod_rock_blow_tangent(s, V, lengths, impedances, speeds, k, k_u, bit_mass, f
     shank = np.zeros(n_max)
     dshank = np.zeros((n_max, nv))
     acc = np.zeros(2)
-    blow_loop_tangent(F, G, Z, dF, dG, dZ, bs, dbs, bp, np.array([dt, energy_fraction * E0]),
-                      shank, dshank, acc)
+    blow_loop_tangent(Fp, Gp, Zp, dFp, dGp, dZ, seg_len, seg_z, bs, dbs, bp,
+                      np.array([dt, energy_fraction * E0]), shank, dshank, acc)
     n = int(acc[0])
     rock0 = feed * feed / (2.0 * k_u)
     return BlowTangent(work_on_rock=float(bs[6] + rock0), work_tangent=dbs[6].copy(),
