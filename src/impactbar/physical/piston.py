@@ -19,8 +19,8 @@ the segments' masses (a softmax of ``n - 1`` free numbers: the mass held, the un
 origin) are found by scipy's SLSQP with the exact gradient of the work
 (:func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent`, the blow's tangent-linear run), the
 stress limit one inequality per step of the blow on the steps' shank forces and their gradients;
-the boundaries by a pattern search over the cells from the uniform piston (a local search: with
-three segments or more the shape has several optima). A parabola through the best
+the boundaries by two pattern searches over the cells from the uniform piston (local searches:
+with three segments or more the shape has several optima). A parabola through the best
 design's work and its neighbours' puts the boundaries between the cells. The best design's blow is
 then solved by the exact solver over the same window (every wave of piston and rod a delay line, a
 feed or a bit mass included; :func:`~impactbar.single_blow`), at its whole cells and between them,
@@ -196,14 +196,14 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         ``4 L/c`` and a wave's round trip through piston and rod after it (so that on a long rod
         the work of the first passage of the wave, Lundberg's).
     method : {"slsqp", "nelder-mead"}
-        The search (theory §12): ``"slsqp"``, the boundaries on whole cells by a pattern search
-        over the cells and the masses by scipy's SLSQP with the exact gradients of the work and of every
-        step's shank force, the stress limit one constraint per step; or ``"nelder-mead"``,
-        scipy's derivative-free search over lengths and masses on the work less a penalty on the
-        excess stress (the search before the gradients, kept to compare with).
+        The search (theory §12): ``"slsqp"``, the boundaries on whole cells by two pattern
+        searches over the cells and the masses by scipy's SLSQP with the exact gradients of the
+        work and of every step's shank force, the stress limit one constraint per step; or
+        ``"nelder-mead"``, scipy's derivative-free search over lengths and masses on the work less
+        a penalty on the excess stress (the search before the gradients, kept to compare with).
     max_evaluations : int, optional
         Most blows, ``>= 1``: with ``"slsqp"`` of the whole search (each blow with its
-        derivatives), default ``100 (2 n - 2)``; with ``"nelder-mead"`` of each of its two runs
+        derivatives), default ``200 (2 n - 2)``; with ``"nelder-mead"`` of each of its two runs
         (from the uniform piston and again from the result), default ``300 (2 n - 2)``.
 
     Returns
@@ -287,7 +287,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         def blow_tangent(Z, dZ):
             return rod_rock_blow_tangent(1.0, v, *seg, k, k_u, mb / m, f / force_N, Z, dZ, t_max=T)
 
-        maxfev = 100 * (2 * n - 2) if max_evaluations is None else max_evaluations
+        maxfev = 200 * (2 * n - 2) if max_evaluations is None else max_evaluations
         edges, mf, refined, count[0] = _gradient_search(blow_tangent, n, N, scale, whole_steps(T, 1.0 / N),
                                                         maxfev)
         lf = np.diff(np.concatenate(([0.0], edges, [1.0])))
@@ -402,9 +402,10 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
     SLSQP on the work per impact energy with its exact gradient (``blow_tangent(Z, dZ)``,
     :func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent`) and, with ``scale > 0``, one
     constraint ``scale N_i <= 1`` per step ``i`` of the ``n_steps`` (the peak stress's limit, every
-    step's force its own constraint: no maximum differentiated); over ``B`` a pattern search from
-    the uniform piston (each boundary, and each inner segment whole, moved by a quarter of a uniform
-    segment's cells, on in a direction while the design gains, the moves halved down to one cell).
+    step's force its own constraint: no maximum differentiated); over ``B`` two pattern searches
+    from the uniform piston (each boundary, and each inner segment whole, moved by half and by a
+    quarter of a uniform segment's cells, on in a direction while the design gains, the moves
+    halved down to one cell), the better kept.
     At most ``maxfev`` blows (each with its derivatives). Returns the
     best design's boundaries and mass fractions, a design between the cells near it (or None) and
     the blows solved."""
@@ -459,26 +460,44 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
     eye = np.eye(n - 1, dtype=np.int64)
     moves = [d * eye[j] for j in range(n - 1) for d in (1, -1)]
     moves += [d * (eye[j] + eye[j + 1]) for j in range(n - 2) for d in (1, -1)]  # an inner segment whole
-    seen = {}
+    def design(C, y):
+        """``(rank, y)`` of the boundaries ``C``, its masses from ``y`` (or as this run found them)."""
+        key = C.tobytes()
+        if key not in visited:
+            visited[key] = masses(C, y)
+        return visited[key]
+
+    best = [(3,), B, y, {}]  # rank, boundaries, masses, the designs its search visited
     try:
-        rank, y = seen[B.tobytes()] = masses(B, y)
-        step = max(1, N // (4 * n))  # a quarter of a uniform segment's cells, halved down to one
-        while step >= 1:
-            improved = True
-            while improved:
-                improved = False
-                for move in moves:
-                    while True:  # on in this direction while it gains
-                        C = B + step * move
-                        if np.diff(np.concatenate(([0], C, [N]))).min() < 1 or C.tobytes() in seen:
-                            break
-                        r, yc = seen[C.tobytes()] = masses(C, y)
-                        if r >= rank:
-                            break
-                        B, y, rank, improved = C, yc, r, True
-            step //= 2
+        # two pattern searches from the uniform piston, their first moves half and a quarter of a
+        # uniform segment's cells, halved down to one cell (each its own: the masses' optimum at
+        # given boundaries depends on where SLSQP starts)
+        for first in sorted({max(1, N // (2 * n)), max(1, N // (4 * n))}, reverse=True):
+            visited = {}
+            C, yc = B, np.zeros(n - 1)
+            r, yc = design(C, yc)
+            if r < best[0]:
+                best = [r, C, yc, visited]
+            step = first
+            while step >= 1:
+                improved = True
+                while improved:
+                    improved = False
+                    for move in moves:
+                        while True:  # on in this direction while it gains
+                            D = C + step * move
+                            if np.diff(np.concatenate(([0], D, [N]))).min() < 1:
+                                break
+                            rd, yd = design(D, yc)
+                            if rd >= r:
+                                break
+                            C, yc, r, improved = D, yd, rd, True
+                            if r < best[0]:
+                                best = [r, C, yc, visited]
+                step //= 2
     except _Budget:
         pass
+    rank, B, y, seen = best
     # between the cells: per boundary the parabola through the best design's and its two
     # neighbours' work (masses alike), where all three are feasible
     b, yr = B.astype(float), y.copy()
