@@ -405,10 +405,9 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
     step's force its own constraint: no maximum differentiated); over ``B`` two pattern searches
     from the uniform piston (each boundary, and each inner segment whole, moved by half and by a
     quarter of a uniform segment's cells, on in a direction while the design gains, the moves
-    halved down to one cell), the better kept.
-    At most ``maxfev`` blows (each with its derivatives). Returns the
-    best design's boundaries and mass fractions, a design between the cells near it (or None) and
-    the blows solved."""
+    halved down to one cell), the better kept. At most ``maxfev`` blows (each with its
+    derivatives). Returns the best design's boundaries and mass fractions, a design between the
+    cells near it (or None) and the blows solved."""
     from scipy.optimize import minimize
 
     from ..dynamics.stepped import MAX_IMPEDANCE_RATIO
@@ -460,7 +459,8 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
     eye = np.eye(n - 1, dtype=np.int64)
     moves = [d * eye[j] for j in range(n - 1) for d in (1, -1)]
     moves += [d * (eye[j] + eye[j + 1]) for j in range(n - 2) for d in (1, -1)]  # an inner segment whole
-    def design(C, y):
+
+    def design(C, y, visited):
         """``(rank, y)`` of the boundaries ``C``, its masses from ``y`` (or as this run found them)."""
         key = C.tobytes()
         if key not in visited:
@@ -475,7 +475,7 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
         for first in sorted({max(1, N // (2 * n)), max(1, N // (4 * n))}, reverse=True):
             visited = {}
             C, yc = B, np.zeros(n - 1)
-            r, yc = design(C, yc)
+            r, yc = design(C, yc, visited)
             if r < best[0]:
                 best = [r, C, yc, visited]
             step = first
@@ -488,7 +488,7 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
                             D = C + step * move
                             if np.diff(np.concatenate(([0], D, [N]))).min() < 1:
                                 break
-                            rd, yd = design(D, yc)
+                            rd, yd = design(D, yc, visited)
                             if rd >= r:
                                 break
                             C, yc, r, improved = D, yd, rd, True
