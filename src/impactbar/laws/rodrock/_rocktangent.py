@@ -250,16 +250,18 @@ def bit_step_tangent(bs, bp, dbs, E, dE, dt, scratch, J):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def blow_loop_tangent(Fp, Gp, Zp, dFp, dGp, dZp, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, acc):
+def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, acc):
     """The blow's loop (``_rockkernel.blow_loop`` with no drive, the piston touching the shank at the
-    start, the rod at rest) with its tangents. The piston's cells ``Fp, Gp, Zp`` (n_p,) and their
-    tangents ``dFp, dGp, dZp`` (nv, n_p); the rod's uniform segments of ``seg_len`` cells and
+    start, the rod at rest) with its tangents. The piston's cells ``P = (F, G, Z)`` (3, n_p) and
+    their tangents ``dP`` (3, nv, n_p); the rod's uniform segments of ``seg_len`` cells and
     impedances ``seg_z`` (S,), each a delay line: inside a uniform segment the junction passes the
     waves on (``N = F + G``), so that its cells are a ring buffer shifted by the step and only the
     segments' ends meet junctions (the same blow to rounding). ``ctrl``: ``dt, energy_stop``;
     ``shank``, ``dshank`` out (n_max,), (n_max, nv): the piston-shank force per step and its tangent;
     ``acc`` out: ``steps, ended``."""
     dt, stop = ctrl[0], ctrl[1]
+    Fp, Gp, Zp = P[0].copy(), P[1].copy(), P[2]
+    dFp, dGp, dZp = dP[0].copy(), dP[1].copy(), dP[2]
     n_p = Zp.size
     nv = dZp.shape[0]
     S = seg_len.size

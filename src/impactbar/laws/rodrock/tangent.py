@@ -181,7 +181,7 @@ def rod_rock_blow_tangent(s, V, lengths, impedances, speeds, k, k_u, bit_mass, f
     shank = np.zeros(n_max)
     dshank = np.zeros((n_max, nv))
     acc = np.zeros(2)
-    blow_loop_tangent(Fp, Gp, Zp, dFp, dGp, dZ, seg_len, seg_z, bs, dbs, bp,
+    blow_loop_tangent(np.array([Fp, Gp, Zp]), np.array([dFp, dGp, dZ]), seg_len, seg_z, bs, dbs, bp,
                       np.array([dt, energy_fraction * E0]), shank, dshank, acc)
     n = int(acc[0])
     rock0 = feed * feed / (2.0 * k_u)
