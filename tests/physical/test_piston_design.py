@@ -1,6 +1,9 @@
 """optimize_piston (issue 44, theory §12): one segment recovers Lundberg's uniform optimum, more
 segments never do worse than the uniform piston and respect the stress limit, the SI result is the
-blow of the piston it reports, the arguments are checked, the figure draws."""
+blow of the piston it reports, the gradient search does at least as well as Nelder-Mead with fewer
+blows, its premises hold (on whole cells the lattice is the exact blow, across cells its work is
+rippled; its gradient in the masses is the exact solver's), the arguments are checked, the figure
+draws."""
 
 import math
 
@@ -68,7 +71,7 @@ def _check_design(best, limit, K):
     np.testing.assert_allclose(bar.piston.impedances, mu / mu[0], rtol=1e-13)
 
 
-@pytest.mark.parametrize("alpha, gain", [(0.5, 1.0066), (1.2564312, 1.0376), (3.0, 1.1577)])
+@pytest.mark.parametrize("alpha, gain", [(0.5, 1.0070), (1.2564312, 1.0381), (3.0, 1.1585)])
 def test_two_segments_at_least_as_good_as_the_uniform_piston(alpha, gain):
     """Better than the rectangular wave by the gains quoted in theory §12, with a rising incident
     wave (its first step below its peak); the design's blow and the uniform piston's exact."""
@@ -114,6 +117,8 @@ def test_an_unreachable_stress_limit_is_reported():
     (dict(cells=4), "cells"),
     (dict(max_stress=-1.0), "max_stress"),
     (dict(impact_velocity=math.nan), "impact_velocity"),
+    (dict(method="bfgs"), "method"),
+    (dict(max_evaluations=0), "max_evaluations"),
 ])
 def test_arguments_checked(kwargs, match):
     args = dict(rod=ROD, rock=_rock(1.0), mass=MASS, length=LENGTH, max_stress=1e9, impact_velocity=V,
@@ -162,3 +167,122 @@ def test_a_design_under_a_feed_is_solved_exactly():
                                cells_per_piston=n).work_on_rock / again.work_on_rock - 1.0)
             for n in (32, 512)]
     assert errs[1] < 1e-6 and errs[1] < errs[0] / 16
+
+
+@pytest.mark.parametrize("alpha, segments", [pytest.param(0.5, 2, marks=pytest.mark.slow), (1.2564312, 2),
+                                             pytest.param(3.0, 2, marks=pytest.mark.slow),
+                                             pytest.param(0.5, 3, marks=pytest.mark.slow),
+                                             pytest.param(1.2564312, 3, marks=pytest.mark.slow),
+                                             pytest.param(3.0, 3, marks=pytest.mark.slow)])
+def test_the_gradient_search_does_at_least_as_well_as_nelder_mead(alpha, segments):
+    """On the tests' cases the gradient search's design does at least the work of Nelder-Mead's
+    (both final blows the exact solver's, or both the lattice's on whole cells), with fewer blows
+    with two segments (measured: 85, 88, 89 blows against 108, 118, 129; three segments: 458, 406,
+    389 against 318, 292, 385, each blow cheaper)."""
+    K, K_u = _rock(alpha)
+    kw = dict(mass=MASS, length=LENGTH, max_stress=1.3 * RHO * C * V / 2, impact_velocity=V,
+              segments=segments)
+    grad = optimize_piston(ROD, (K, K_u), **kw)
+    nm = optimize_piston(ROD, (K, K_u), method="nelder-mead", **kw)
+    assert grad.feasible and nm.feasible
+    assert grad.work_on_rock_J >= nm.work_on_rock_J * (1 - 1e-12)
+    if segments == 2:
+        assert grad.evaluations < 0.8 * nm.evaluations
+    if (alpha, segments) == (3.0, 3):  # theory §12: a thin extension at the driven end, 7 % more work
+        assert grad.work_on_rock_J > 1.07 * nm.work_on_rock_J
+        assert grad.areas_m2[0] < 0.01 * grad.areas_m2[1] and grad.lengths_m[0] > 0.25 * LENGTH
+    if (alpha, segments) == (0.5, 3):  # CHANGELOG: some 6 % more
+        assert grad.work_on_rock_J > 1.06 * nm.work_on_rock_J
+    _check_design(grad, kw["max_stress"], K)
+
+
+def test_a_budget_of_blows_is_kept():
+    K, K_u = _rock(1.2564312)
+    best = optimize_piston(ROD, (K, K_u), mass=MASS, length=LENGTH, max_stress=1.3 * RHO * C * V / 2,
+                           impact_velocity=V, segments=3, max_evaluations=6)
+    assert best.evaluations == 6 and best.feasible
+    # the masses' first steps already gain (measured 4.3 %): what a search cut short found is kept
+    assert best.work_on_rock_J > 1.03 * best.uniform_work_on_rock_J
+
+
+def _model_units(alpha):
+    """The tests' rod and rock in the model's units of ``optimize_piston`` (piston length, mass,
+    wave speed 1): ``(v, rod, k, k_u)``."""
+    K, K_u = _rock(alpha)
+    scale = LENGTH ** 2 / (MASS * C * C)
+    return V / C, ([20.0], [1.0], [1.0]), K * scale, K_u * scale
+
+
+def test_on_whole_cells_the_lattice_is_the_exact_blow():
+    """The gradient search's premise: with the boundaries on whole cells a stepped piston's waves
+    are constant on cells and, the bit massless and nothing back from the rod's end in the window,
+    the lattice's blow is the exact solver's to rounding (work and every step's shank force)."""
+    from impactbar import SteppedPiston
+    from impactbar.laws.rodrock.blow import rod_rock_blow
+    from impactbar.laws.rodrock.exactrecord import exact_rod_rock_blow
+
+    v, rod, k, k_u = _model_units(3.0)
+    cells = np.array([10, 13, 25])
+    piston = SteppedPiston(cells / 48, np.array([0.4, 0.25, 0.35]) / (cells / 48))
+    lattice = rod_rock_blow(1.0, v, *rod, k, k_u, 0.0, 0.0, cells_per_piston=48, t_max=44.0, piston=piston)
+    exact = exact_rod_rock_blow(1.0, v, *rod, k, k_u, 0.0, 0.0, t_max=44.0, samples_per_piston=48,
+                                piston=piston)
+    assert lattice.work_on_rock == pytest.approx(exact.work_on_rock, rel=1e-12)
+    t = lattice.times[:-1] + 0.5 * lattice.cell_time
+    np.testing.assert_allclose(lattice.shank_forces, exact.shank_force(t), rtol=0,
+                               atol=1e-12 * lattice.shank_forces.max())
+
+
+def test_across_cells_the_lattices_work_is_rippled():
+    """Why the gradient search keeps its boundaries on whole cells: where a boundary crosses a cell
+    (its mass shared, Nelder-Mead's search) the lattice's work has a ripple of one cell's period,
+    whose size halves with the cells but whose slope does not: its exact gradient would not be the
+    exact blow's at any grid (the slope's spread across a ripple larger than the trend's)."""
+    from impactbar import SteppedPiston
+    from impactbar.laws.rodrock.blow import rod_rock_blow
+    from impactbar.physical.piston import _cell_piston
+
+    v, rod, k, k_u = _model_units(3.0)
+    x0 = np.linspace(0.40, 0.60, 41)  # the length's free number; the masses' held
+    out = {}
+    for cells in (48, 96):
+        w = np.array([rod_rock_blow(1.0, v, *rod, k, k_u, 0.0, 0.0, cells_per_piston=cells, t_max=44.0,
+                                    piston=_cell_piston([x, -0.2], 2, cells, SteppedPiston)).efficiency
+                      for x in x0])
+        trend = np.polyfit(x0, w, 2)
+        slope = np.diff(w) / np.diff(x0)
+        out[cells] = (np.ptp(w - np.polyval(trend, x0)), np.ptp(slope), np.polyval(np.polyder(trend), 0.5))
+    (a48, s48, t48), (a96, s96, t96) = out[48], out[96]
+    assert a96 < 0.7 * a48  # the ripple's size falls with the cells ...
+    assert s96 > 0.7 * s48 and s96 > abs(t96) and s48 > abs(t48)  # ... its slope's spread does not
+
+
+def test_the_search_gradient_in_the_masses_is_the_exact_blows():
+    """The gradient search's work and its derivative in the masses' free number (the tangent's,
+    through the softmax and the cells' impedances) are the exact solver's and its central
+    differences, on whole cells (2 segments, 17 and 31 cells of 48)."""
+    from impactbar import SteppedPiston
+    from impactbar.laws.rodrock.blow import whole_steps
+    from impactbar.laws.rodrock.exactrecord import exact_rod_rock_blow
+    from impactbar.laws.rodrock.tangent import rod_rock_blow_tangent
+    from impactbar.physical.piston import _softmax_jacobian, _whole_cell_blow
+
+    v, rod, k, k_u = _model_units(3.0)
+    B, y = np.array([17]), np.array([-0.1])
+    work, dwork, c, dc = _whole_cell_blow(
+        lambda Z, dZ: rod_rock_blow_tangent(1.0, v, *rod, k, k_u, 0.0, 0.0, Z, dZ, t_max=44.0),
+        B, y, 48, 1.0, whole_steps(44.0, 1.0 / 48))
+    lf = np.array([17, 31]) / 48
+
+    def exact(yy):
+        mf = _softmax_jacobian(yy)[0]
+        return exact_rod_rock_blow(1.0, v, *rod, k, k_u, 0.0, 0.0, t_max=44.0, samples_per_piston=48,
+                                   piston=SteppedPiston(lf, mf / lf)).efficiency
+
+    assert work == pytest.approx(exact(y), rel=1e-12)
+    h = 1e-5
+    fd = [(exact(y + d) - exact(y - d)) / (2 * d) for d in (h, h / 2)]
+    assert abs(fd[0] - fd[1]) < 1e-7 * abs(fd[1])
+    assert dwork[0] == pytest.approx((4 * fd[1] - fd[0]) / 3, rel=1e-7)
+    # the constraints: 1 - (shank force per unit limit) on every step, 0 force after the blow's end
+    assert c.size == whole_steps(44.0, 1.0 / 48) and np.all(c <= 1.0) and dc.shape == (c.size, 1)

@@ -11,23 +11,28 @@ pneumatic hammers by a weighted pseudo-gradient search method", J. Mech. Design 
 with the piston's segments carried by characteristics) over the segments' lengths and areas, the mass
 and the length held, the peak of the incident stress wave in the rod kept at or below a limit.
 
-Method. The design variables are the segments' length fractions and mass fractions, each the softmax
-of ``n - 1`` free numbers (so every design has the given length and mass and positive segments; the
-uniform piston is the origin). During the search the piston is cut into ``cells`` cells of one travel
-time and a cell that a segment boundary crosses gets the mass of the parts it holds (the mass
-per length averaged over the cell): the work is then continuous in the boundaries, within ``O(1/cells)``
-of the exact blow of the stepped piston. The search is scipy's Nelder-Mead (derivative-free: the blow
-on the lattice is piecewise smooth, with kinks where the rock changes branch or the piston leaves the
-shank) on the work less a penalty on the stress above the limit, started at the uniform piston and
-restarted once from its result. The best design's blow is then solved by the exact solver over the
-same window (every wave of piston and rod a delay line, the boundaries where the search put them,
-a feed or a bit mass included; :func:`~impactbar.single_blow`), and so is the uniform piston's. With
-both a feed and a bit mass (the bit held on the rock rings on its unloading stiffness, whose
-switches the exact solver follows one by one: minutes on a stiff rock), or where the exact blow
-would pass its default's bounds, the boundaries are moved to whole cells (the segments' masses
-kept) and both blows are solved on the lattice. The better of the two feasible designs is
-returned, so that the result is never worse than the uniform
-piston.
+Method (``method="slsqp"``, the default). The segments' boundaries lie on whole cells of a lattice of
+``cells`` cells of one travel time along the piston: there its waves are constant on cells and the
+lattice's blow is the exact solver's on the lattice's rod (to rounding for a massless bit while
+nothing comes back from the rod's end; else within the bit's cell averages). For given boundaries
+the segments' masses (a softmax of ``n - 1`` free numbers: the mass held, the uniform piston at the
+origin) are found by scipy's SLSQP with the exact gradient of the work
+(:func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent`, the blow's tangent-linear run), the
+stress limit one inequality per step of the blow on the steps' shank forces and their gradients;
+the boundaries by two pattern searches over the cells from the uniform piston (local searches:
+with three segments or more the shape has several optima). A parabola through the best
+design's work and its neighbours' puts the boundaries between the cells. The best design's blow is
+then solved by the exact solver over the same window (every wave of piston and rod a delay line, a
+feed or a bit mass included; :func:`~impactbar.single_blow`), at its whole cells and between them,
+and so is the uniform piston's. With both a feed and a bit mass (the bit held on the rock rings on
+its unloading stiffness, whose switches the exact solver follows one by one: minutes on a stiff
+rock), or where the exact blow would pass its default's bounds, both blows are the lattice's on
+whole cells. The better of the two feasible designs is returned, so that the result is never worse
+than the uniform piston. ``method="nelder-mead"`` is the derivative-free search this replaced (theory
+§12: the lattice's work is rippled in boundaries that cross its cells, so that its gradient there
+misleads): a cell that a boundary crosses gets the mass of the parts it holds, and scipy's
+Nelder-Mead maximises the work less a penalty on the stress above the limit over the softmaxes of
+the length and mass fractions, started at the uniform piston and restarted once from its result.
 """
 
 from __future__ import annotations
@@ -45,8 +50,13 @@ __all__ = ["OptimalPiston", "optimize_piston"]
 #: the free numbers of the softmax are kept in [-BOUND, BOUND]: segments' masses or lengths at most
 #: e^(2 BOUND) apart (the stepped piston accepts impedances 1e6 apart)
 BOUND = 6.0
-#: the penalty per unit of relative excess stress, against the work's scale 1 (the impact energy)
+#: the penalty per unit of relative excess stress, against the work's scale 1 (the impact energy), of
+#: the Nelder-Mead search
 PENALTY = 10.0
+#: the searches of :func:`optimize_piston`
+METHODS = ("slsqp", "nelder-mead")
+#: SLSQP's tolerance on the work per impact energy (neighbouring cells' designs differ by ~1e-5)
+FTOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -67,7 +77,8 @@ class OptimalPiston:
         Whether the peak stress is within the limit (if neither this shape nor the uniform piston
         meets it, the one closest to it).
     evaluations : int
-        Blows solved by the search.
+        Blows solved by the search (``method="slsqp"``: each with its derivatives in the ``n - 1``
+        directions of the masses).
     cell_time_s : float
         The time step of the lattice, or of the exact blow's samples (s).
     times_s : numpy.ndarray, shape (k + 1,)
@@ -149,7 +160,7 @@ class OptimalPiston:
 
 def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, segments=3,
                     E=None, density=None, bit_mass=0.0, feed=0.0, cells=48, t_max=None,
-                    max_evaluations=None) -> OptimalPiston:
+                    method="slsqp", max_evaluations=None) -> OptimalPiston:
     r"""The stepped piston of given mass and length that does the most work on the rock per blow,
     the incident stress in the rod at most ``max_stress`` (theory §12; SI in and out).
 
@@ -177,13 +188,23 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         The bit's mass (kg, ``>= 0``) and the static feed force (N, ``>= 0``).
     cells : int
         Cells along the piston in the search and in the final blows (8 to 1024): the rod's pieces
-        are rounded to whole cells of ``L / (c cells)`` (:attr:`Blow.length_error`).
+        are rounded to whole cells of ``L / (c cells)`` (:attr:`Blow.length_error`); the gradient
+        search's boundaries lie on whole cells of ``L / cells`` (then between them, by the final
+        exact blows).
     t_max : float, optional
         The blow's duration (s). Default: the rod-rock law's window, the piston's contact of
         ``4 L/c`` and a wave's round trip through piston and rod after it (so that on a long rod
         the work of the first passage of the wave, Lundberg's).
+    method : {"slsqp", "nelder-mead"}
+        The search (theory §12): ``"slsqp"``, the boundaries on whole cells by two pattern
+        searches over the cells and the masses by scipy's SLSQP with the exact gradients of the
+        work and of every step's shank force, the stress limit one constraint per step; or
+        ``"nelder-mead"``, scipy's derivative-free search over lengths and masses on the work less
+        a penalty on the excess stress (the search before the gradients, kept to compare with).
     max_evaluations : int, optional
-        Most blows of each Nelder-Mead run; default ``300 (2 n - 2)``.
+        Most blows, ``>= 1``: with ``"slsqp"`` of the whole search (each blow with its
+        derivatives), default ``200 (2 n - 2)``; with ``"nelder-mead"`` of each of its two runs
+        (from the uniform piston and again from the result), default ``300 (2 n - 2)``.
 
     Returns
     -------
@@ -207,10 +228,10 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     True
     >>> round(best.uniform_efficiency, 4)  # a matched uniform piston: Lundberg's at alpha = 0.857
     0.6958
-    >>> best.blow.method  # the design's blow: every wave exact, its boundary where the search put it
+    >>> best.blow.method  # the design's blow: every wave exact
     'exact'
     >>> best.lengths_m.round(4), best.diameters_m.round(4)  # heavy at the driven end, slender struck end
-    (array([0.1277, 0.1723]), array([0.0391, 0.0329]))
+    (array([0.1246, 0.1754]), array([0.0391, 0.033 ]))
     >>> round(best.bar.mass_kg, 6), best.bar.n_segments  # the piston for a Hammer or a Drifter
     (2.355, 2)
     """
@@ -227,6 +248,8 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     mb = check_real("bit_mass", bit_mass, lo=0.0)
     f = check_real("feed", feed, lo=0.0)
     N = check_int("cells", cells, lo=8, hi=1024)
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(map(repr, METHODS))}; got method={method!r}")
     c = math.sqrt(E / rho)
     # the model's units: length L, time L/c (s = 1), mass m; force m c^2/L, energy m c^2
     force_N, energy_J, time_s = m * c * c / L, m * c * c, L / c
@@ -252,24 +275,38 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         return b.work_on_rock / b.energy_at_impact - PENALTY * excess, excess
 
     uniform = blow(None)
+    refined = None  # the gradient search's design between the cells
     count = [0]
     best_x = np.zeros(2 * n - 2)
-    if n > 1:
+    if max_evaluations is not None:
+        max_evaluations = check_int("max_evaluations", max_evaluations, lo=1)
+    if n > 1 and method == "slsqp":
+        from ..laws.rodrock.blow import whole_steps
+        from ..laws.rodrock.tangent import rod_rock_blow_tangent
+
+        def blow_tangent(Z, dZ):
+            return rod_rock_blow_tangent(1.0, v, *seg, k, k_u, mb / m, f / force_N, Z, dZ, t_max=T)
+
+        maxfev = 200 * (2 * n - 2) if max_evaluations is None else max_evaluations
+        edges, mf, refined, count[0] = _gradient_search(blow_tangent, n, N, scale, whole_steps(T, 1.0 / N),
+                                                        maxfev)
+        lf = np.diff(np.concatenate(([0.0], edges, [1.0])))
+    elif n > 1:
         from scipy.optimize import minimize
 
         def objective(x):
             count[0] += 1
             return -merit(blow(_cell_piston(x, n, N, SteppedPiston)))[0]
 
-        maxfev = 300 * (2 * n - 2) if max_evaluations is None else check_int("max_evaluations",
-                                                                             max_evaluations, lo=1)
+        maxfev = 300 * (2 * n - 2) if max_evaluations is None else max_evaluations
         for _ in range(2):  # started at the uniform piston, restarted once from the result
             simplex = np.vstack([best_x] + [best_x + 0.5 * e for e in np.eye(best_x.size)])
             res = minimize(objective, best_x, method="Nelder-Mead",
                            options={"initial_simplex": simplex, "xatol": 1e-3, "fatol": 1e-9,
                                     "maxfev": maxfev})
             best_x = np.clip(res.x, -BOUND, BOUND)
-    lf, mf = _fractions(best_x, n)
+    if method == "nelder-mead" or n == 1:
+        lf, mf = _fractions(best_x, n)
     shaped = None
     if f == 0.0 or mb == 0.0:  # the design where the search put it, every wave exact (a feed too)
         shaped = _exact_blow(v, seg, k, k_u, mb / m, f / force_N, T, N,
@@ -277,6 +314,10 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         plain = _exact_blow(v, seg, k, k_u, mb / m, f / force_N, T, N, None) if shaped is not None else None
         if plain is not None:
             uniform = plain
+            other = None if refined is None else _exact_blow(
+                v, seg, k, k_u, mb / m, f / force_N, T, N, SteppedPiston(refined[0], refined[1] / refined[0]))
+            if other is not None and _better(merit(other), merit(shaped)):
+                shaped, (lf, mf) = other, refined
         else:
             shaped = None
     if shaped is None:  # the boundaries on whole cells, the lattice's blows
@@ -300,6 +341,14 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         incident_force_N=shaped.shank_forces[:steps] * force_N,
         uniform_incident_force_N=uniform.shank_forces[:steps] * force_N, blow=shaped, uniform_blow=uniform,
         max_stress_Pa=sigma, mass_kg=m, length_m=L, impact_velocity_m_s=V, E_Pa=E, density_kg_m3=rho)
+
+
+def _better(a, b):
+    """Whether the merit ``a = (work less penalty, excess)`` beats ``b``: feasible before not, then
+    the more work, or the less excess."""
+    if (a[1] > 0.0) != (b[1] > 0.0):
+        return b[1] > 0.0
+    return a[0] > b[0] if a[1] == 0.0 else a[1] < b[1]
 
 
 def _peak(b):
@@ -340,6 +389,162 @@ def _cell_piston(x, n, N, SteppedPiston):
     edges[-1] = 1.0
     held = np.interp(np.arange(N + 1) / N, edges, np.concatenate(([0.0], np.cumsum(mf))))
     return SteppedPiston(np.ones(N), np.maximum(np.diff(held), 1e-300))
+
+
+class _Budget(Exception):
+    """The search's blows are spent."""
+
+
+def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
+    """The gradient search (theory §12): the segments' boundaries on whole cells ``B`` (shape
+    ``(n - 1,)``), where a stepped piston's lattice blow has its waves constant on cells; for each
+    ``B`` the segments' masses (a softmax of ``n - 1`` free numbers ``y``, bounded) by
+    SLSQP on the work per impact energy with its exact gradient (``blow_tangent(Z, dZ)``,
+    :func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent`) and, with ``scale > 0``, one
+    constraint ``scale N_i <= 1`` per step ``i`` of the ``n_steps`` (the peak stress's limit, every
+    step's force its own constraint: no maximum differentiated); over ``B`` two pattern searches
+    from the uniform piston (each boundary, and each inner segment whole, moved by half and by a
+    quarter of a uniform segment's cells, on in a direction while the design gains, the moves
+    halved down to one cell), the better kept. At most ``maxfev`` blows (each with its
+    derivatives). Returns the best design's boundaries and mass fractions, a design between the
+    cells near it (or None) and the blows solved."""
+    from scipy.optimize import minimize
+
+    from ..dynamics.stepped import MAX_IMPEDANCE_RATIO
+
+    count = [0]
+    # the masses' free numbers bounded so that no two segments' impedances are further apart than
+    # a SteppedPiston takes (a mass ratio e^(2 bound), a length ratio below N)
+    bound = min(BOUND, 0.5 * math.log(MAX_IMPEDANCE_RATIO / N))
+
+    def vertex(B, y):
+        """``(rank, -work, -d work/dy, c, dc/dy)`` of the boundaries ``B`` and masses ``y``."""
+        if count[0] >= maxfev:
+            raise _Budget
+        count[0] += 1
+        work, dwork, c, dc = _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps)
+        excess = max(0.0, -float(c.min()))
+        return (int(excess > 0.0), excess, -work), -work, -dwork, c, dc
+
+    def masses(B, y0):
+        """The best ``(rank, y)`` of the boundaries ``B`` by SLSQP from ``y0``."""
+        last, best = {}, [(2, 0.0, 0.0), y0]
+
+        def evaluate(y):
+            y = np.clip(np.asarray(y, dtype=float), -bound, bound)
+            key = y.tobytes()
+            if key not in last:
+                last.clear()
+                last[key] = vertex(B, y)
+                if last[key][0] < best[0]:
+                    best[0], best[1] = last[key][0], y.copy()
+            return last[key]
+
+        try:
+            # the steps whose force is above half the limit at the start are constrained (every
+            # step's force counts in the rank)
+            steps = np.flatnonzero(evaluate(y0)[3] < 0.5) if scale > 0.0 else ()
+            constraints = ([{"type": "ineq", "fun": lambda y: evaluate(y)[3][steps],
+                             "jac": lambda y: evaluate(y)[4][steps]}] if len(steps) else [])
+            minimize(lambda y: evaluate(y)[1], y0, jac=lambda y: evaluate(y)[2], method="SLSQP",
+                     bounds=[(-bound, bound)] * (n - 1), constraints=constraints,
+                     options={"maxiter": 100, "ftol": FTOL})
+        except _Budget:
+            if best[0][0] == 2:
+                raise
+        return best[0], best[1]
+
+    B = np.round(N * np.arange(1, n) / n).astype(np.int64)  # the uniform piston
+    y = np.zeros(n - 1)
+    eye = np.eye(n - 1, dtype=np.int64)
+    moves = [d * eye[j] for j in range(n - 1) for d in (1, -1)]
+    moves += [d * (eye[j] + eye[j + 1]) for j in range(n - 2) for d in (1, -1)]  # an inner segment whole
+
+    def design(C, y, visited):
+        """``(rank, y)`` of the boundaries ``C``, its masses from ``y`` (or as this run found them)."""
+        key = C.tobytes()
+        if key not in visited:
+            visited[key] = masses(C, y)
+        return visited[key]
+
+    best = [(3,), B, y, {}]  # rank, boundaries, masses, the designs its search visited
+    try:
+        # two pattern searches from the uniform piston, their first moves half and a quarter of a
+        # uniform segment's cells, halved down to one cell (each its own: the masses' optimum at
+        # given boundaries depends on where SLSQP starts)
+        for first in sorted({max(1, N // (2 * n)), max(1, N // (4 * n))}, reverse=True):
+            visited = {}
+            C, yc = B, np.zeros(n - 1)
+            r, yc = design(C, yc, visited)
+            if r < best[0]:
+                best = [r, C, yc, visited]
+            step = first
+            while step >= 1:
+                improved = True
+                while improved:
+                    improved = False
+                    for move in moves:
+                        while True:  # on in this direction while it gains
+                            D = C + step * move
+                            if np.diff(np.concatenate(([0], D, [N]))).min() < 1:
+                                break
+                            rd, yd = design(D, yc, visited)
+                            if rd >= r:
+                                break
+                            C, yc, r, improved = D, yd, rd, True
+                            if r < best[0]:
+                                best = [r, C, yc, visited]
+                step //= 2
+    except _Budget:
+        pass
+    rank, B, y, seen = best
+    # between the cells: per boundary the parabola through the best design's and its two
+    # neighbours' work (masses alike), where all three are feasible
+    b, yr = B.astype(float), y.copy()
+    for j in range(n - 1):
+        side = [seen.get((B + d * eye[j]).tobytes()) for d in (-1, 1)]
+        if rank[0] or any(t is None or t[0][0] for t in side):
+            continue
+        lo, mid, hi = -side[0][0][2], -rank[2], -side[1][0][2]
+        curv = lo - 2.0 * mid + hi
+        if curv < 0.0:
+            d = float(np.clip(0.5 * (lo - hi) / curv, -0.5, 0.5))
+            b[j] += d
+            yr += 0.5 * d * (side[1][1] - side[0][1]) + 0.5 * d * d * (side[1][1] - 2.0 * y + side[0][1])
+    refined = None
+    if np.any(b != B):
+        refined = np.diff(np.concatenate(([0.0], b, [N]))) / N, _softmax_jacobian(yr)[0]
+    return B / N, _softmax_jacobian(y)[0], refined, count[0]
+
+
+def _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps):
+    """The gradient search's blow: the segments' boundaries on the whole cells ``B`` (int, shape
+    ``(n - 1,)``, increasing in ``(0, N)``), their masses ``softmax([0, y])``. Returns the work per
+    impact energy and its gradient in ``y`` (shape ``(n - 1,)``), and the constraints
+    ``c = 1 - scale N_i`` on the ``n_steps`` steps (0 force after the blow's end) and their
+    Jacobian ``(n_steps, n - 1)``; ``blow_tangent(Z, dZ)`` runs
+    :func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent` on the cells' impedances ``Z``
+    (``N`` times the mass per length) along the directions ``dZ``."""
+    mf, J_m = _softmax_jacobian(y)
+    n = mf.size
+    cells = np.diff(np.concatenate(([0], B, [N])))
+    seg = np.repeat(np.arange(n), cells)
+    tb = blow_tangent(N * mf[seg] / cells[seg], N * J_m[seg] / cells[seg][:, None])
+    E0, W = tb.energy_at_impact, tb.work_on_rock
+    c = np.ones(n_steps)
+    dc = np.zeros((n_steps, n - 1))
+    c[:tb.shank_forces.size] -= scale * tb.shank_forces
+    dc[:tb.shank_forces.size] = -scale * tb.shank_tangents
+    return W / E0, tb.work_tangent / E0 - W * tb.energy_tangent / (E0 * E0), c, dc
+
+
+def _softmax_jacobian(y):
+    """The mass fractions ``softmax([0, y])``, shape ``(n,)``, and their Jacobian ``(n, n - 1)``."""
+    e = np.exp(np.concatenate(([0.0], y)))
+    mf = e / e.sum()
+    n = mf.size
+    J = mf[:, None] * ((np.arange(n)[:, None] == np.arange(1, n)[None, :]) - mf[None, 1:])
+    return mf, J
 
 
 def _whole_cells(lf, N):

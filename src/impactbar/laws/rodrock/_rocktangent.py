@@ -1,0 +1,382 @@
+"""The tangent-linear (forward-mode) blow on the rod and the rock (theory §12): the loop of
+:func:`impactbar.laws.rodrock._rockkernel.blow_loop` without a drive (its junctions and the bit's
+step the same arithmetic, the rod's uniform segments delay lines: the compiled loop's blow to
+rounding), carrying beside every wave and every bit variable its derivatives in ``nv`` directions
+of the piston's cells' impedances.
+
+The switching schedule is held as the primal run decides it: the piston-shank contact on or off per
+step, the rock's branch on each sub-step of the bit, the step that ends the blow. Inside a step a
+branch change happens at an event time ``tau`` that moves with the state. A massless bit is put on
+the switch's penetration (``p_max`` or ``p_perm``) and the closed form's ``tau`` is differentiated
+(the logarithm's, or the lift-off's ``(p_perm - p)/rate``), so that the remaining time of the step
+carries it. A bit with mass has its switch located by bisection to rounding; there ``tau`` is held,
+as the flow's vector field is continuous across every switch of the bilinear law (the rock force
+is, on the state the primal keeps: ``p_perm = p_max - R_max/k_u``) and the switch's moving changes
+the state at the step's end only at second order. The derivative returned is thus that of the
+lattice's work and shank forces as functions of the impedances on every piece where the schedule is
+constant (the lattice's blow is piecewise smooth: kinks where the schedule changes).
+
+Tangent bit state ``dbs`` (float64, (7, nv)): the rows of ``bs`` (``p, w, -, p_max, R_max, p_perm,
+work``; the branch row unused).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from ...dynamics._kernel import CACHE
+from ._rockkernel import _ELASTIC, _FREE, _LOAD, _coeffs, _event, _flow
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _t_unload(bs, bp, dbs):
+    bs[3] = bs[0]
+    bs[4] = bp[1] * bs[0]
+    bs[5] = bs[3] - bs[4] / bp[2]
+    bs[2] = _ELASTIC
+    for a in range(dbs.shape[1]):
+        dbs[3, a] = dbs[0, a]
+        dbs[4, a] = bp[1] * dbs[0, a]
+        dbs[5, a] = dbs[3, a] - dbs[4, a] / bp[2]
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dp1):
+    """``work += b (p1 - p0)(0.5 (p0 + p1) - ref)`` and its tangent."""
+    mid = 0.5 * (p0 + p1) - ref
+    bs[6] += b * (p1 - p0) * mid
+    for a in range(dbs.shape[1]):
+        dbs[6, a] += b * ((dp1[a] - dp0[a]) * mid + (p1 - p0) * (0.5 * (dp0[a] + dp1[a]) - dref[a]))
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _t_massless(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref):
+    """``_rockkernel._massless`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``)."""
+    nv = dbs.shape[1]
+    Z = bp[0]
+    b, ref = _coeffs(bs, bp)
+    elastic = bs[2] == _ELASTIC
+    for a in range(nv):
+        dp0[a] = dbs[0, a]
+        dref[a] = dbs[5, a] if elastic else 0.0
+    p0 = bs[0]
+    if bs[2] == _LOAD and E - b * p0 < 0.0:
+        _t_unload(bs, bp, dbs)
+        dtau[:] = 0.0
+        return 0.0
+    if b == 0.0:
+        rate = E / Z
+        t_hit = (bs[5] - p0) / rate if rate > 0.0 and p0 + rate * T >= bs[5] else math.inf
+        tau = min(T, t_hit)
+        if tau == t_hit:
+            p1 = bs[5]
+            for a in range(nv):
+                dtau[a] = (dbs[5, a] - dp0[a]) / rate - t_hit * dE[a] / Z / rate
+                dbs[0, a] = dbs[5, a]
+        else:
+            p1 = p0 + rate * tau
+            for a in range(nv):
+                dtau[a] = dT[a]
+                dbs[0, a] = dp0[a] + dE[a] / Z * tau + rate * dT[a]
+        bs[0] = p1
+        if tau == t_hit:
+            bs[2] = _ELASTIC
+        bs[1] = rate
+        for a in range(nv):
+            dbs[1, a] = dE[a] / Z
+        return tau
+    p_inf = E / b + ref
+    lam = b / Z
+    tau = T
+    nxt, p_nxt, which = -1.0, 0.0, 0
+    g = E - b * (p0 - ref)
+    if bs[2] == _ELASTIC:
+        if p_inf > bs[3] >= p0:
+            tau_h = -math.log1p(-(bs[3] - p0) * b / g) / lam
+            if tau_h < T:
+                tau, nxt, p_nxt, which = tau_h, _LOAD, bs[3], 3
+        elif p_inf < bs[5] <= p0:
+            tau_h = -math.log1p(-(bs[5] - p0) * b / g) / lam
+            if tau_h < T:
+                tau, nxt, p_nxt, which = tau_h, _FREE, bs[5], 5
+    if nxt < 0.0:
+        e = -math.expm1(-lam * tau)
+        p1 = p0 + g / Z * e / lam
+        decay = math.exp(-lam * tau)
+        for a in range(nv):
+            dg = dE[a] - b * (dp0[a] - dref[a])
+            dtau[a] = dT[a]
+            dbs[0, a] = dp0[a] + dg / Z * e / lam + g / Z * decay * dT[a]
+    else:
+        p1 = p_nxt
+        q = (p_nxt - p0) * b / g  # tau_h = -log1p(-q) / lam
+        for a in range(nv):
+            dg = dE[a] - b * (dp0[a] - dref[a])
+            dq = b * (dbs[which, a] - dp0[a]) / g - q * dg / g
+            dtau[a] = dq / ((1.0 - q) * lam)
+            dbs[0, a] = dbs[which, a]
+    _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dbs[0])
+    bs[0] = p1
+    bs[1] = (E - b * (p1 - ref)) / Z
+    for a in range(nv):
+        dbs[1, a] = (dE[a] - b * (dbs[0, a] - dref[a])) / Z
+    if nxt >= 0.0:
+        bs[2] = nxt
+    return tau
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _flow_partials(bs, bp, E, tau, out):
+    """The partial derivatives of ``_rockkernel._flow``'s ``(p, w)`` after ``tau`` with respect to
+    ``(p0, w0, E, p_ref)`` at fixed ``tau``, into ``out`` (2, 4): the flow is affine in them, its
+    matrix from the same ``C``, ``S`` (``dp/dE = int_0^tau S / m``)."""
+    b, ref = _coeffs(bs, bp)
+    Z, m = bp[0], bp[3]
+    if b == 0.0:
+        decay = math.exp(-Z * tau / m)
+        Sf = (m / Z) * (-math.expm1(-Z * tau / m))
+        out[0, 0], out[0, 1], out[0, 2], out[0, 3] = 1.0, Sf, (tau - Sf) / Z, 0.0
+        out[1, 0], out[1, 1], out[1, 2], out[1, 3] = 0.0, decay, (1.0 - decay) / Z, 0.0
+        return
+    half = -Z / (2.0 * m)
+    disc = half * half - b / m
+    delta = 0.0
+    if disc >= 0.0:
+        delta = math.sqrt(disc)
+        e2 = math.exp((half - delta) * tau)
+        if delta * tau > 1.0:
+            S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
+        else:
+            S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
+        C = e2 + delta * S
+    else:
+        om = math.sqrt(-disc)
+        e = math.exp(half * tau)
+        C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
+    if delta > 0.5 * abs(half):
+        lam1, lam2 = b / m / (half - delta), half - delta
+        f1 = math.expm1(lam1 * tau) / lam1 if lam1 * tau != 0.0 else tau
+        f2 = math.expm1(lam2 * tau) / lam2
+        pE = (f1 - f2) / (2.0 * delta) / m
+    else:
+        pE = (1.0 - C + half * S) / b
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = 1.0 - b * pE, S, pE, b * pE
+    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = -b * S / m, C + half * S, S / m, b * S / m
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _t_with_mass(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref, J):
+    """``_rockkernel._with_mass`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``, ``J``)."""
+    nv = dbs.shape[1]
+    if bs[2] == _LOAD and bs[1] < 0.0:
+        _t_unload(bs, bp, dbs)
+        dtau[:] = 0.0
+        return 0.0
+    if bs[2] == _ELASTIC and bs[0] >= bs[3] and bs[1] > 0.0:
+        bs[2] = _LOAD
+        dtau[:] = 0.0
+        return 0.0
+    p0 = bs[0]
+    b, ref = _coeffs(bs, bp)
+    elastic = bs[2] == _ELASTIC
+    for a in range(nv):
+        dp0[a] = dbs[0, a]
+        dref[a] = dbs[5, a] if elastic else 0.0
+    half = bp[0] / (2.0 * bp[3])
+    disc = half * half - b / bp[3]
+    n = 4 if disc >= 0.0 else 4 + math.ceil(4.0 * math.sqrt(-disc) * T / math.pi)
+    taus = np.linspace(0.0, T, n + 1)
+    tau, hit, prev = T, False, 0.0
+    for i in range(1, n + 1):
+        t = taus[i]
+        p, w = _flow(bs, bp, E, t)
+        if _event(bs, p, w) < 0.0:
+            lo, hi = prev, t
+            for _ in range(60):
+                mid = 0.5 * (lo + hi)
+                pm, wm = _flow(bs, bp, E, mid)
+                if _event(bs, pm, wm) < 0.0:
+                    hi = mid
+                else:
+                    lo = mid
+            tau, hit = hi, True
+            break
+        prev = t
+    p1, w1 = _flow(bs, bp, E, tau)
+    _flow_partials(bs, bp, E, tau, J)
+    acc = (E - bp[0] * w1 - b * (p1 - ref)) / bp[3]  # w' at tau on this branch
+    # a switch's time is held: the flow is continuous across it (the rock force is, on the state the
+    # primal keeps consistent: p_perm = p_max - R_max/k_u), so the switch's moving with the state
+    # changes the state at the step's end only at second order; the step's end time moves with the
+    # remaining time (the earlier switches of a massless bit)
+    for a in range(nv):
+        dpf = J[0, 0] * dp0[a] + J[0, 1] * dbs[1, a] + J[0, 2] * dE[a] + J[0, 3] * dref[a]
+        dwf = J[1, 0] * dp0[a] + J[1, 1] * dbs[1, a] + J[1, 2] * dE[a] + J[1, 3] * dref[a]
+        dt_a = 0.0 if hit else dT[a]
+        dtau[a] = dt_a
+        dbs[0, a] = dpf + w1 * dt_a
+        dbs[1, a] = dwf + acc * dt_a
+    _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dbs[0])
+    bs[0], bs[1] = p1, w1
+    if hit:
+        if bs[2] == _LOAD:
+            _t_unload(bs, bp, dbs)
+        elif bs[2] == _ELASTIC:
+            bs[2] = _LOAD if p1 >= bs[3] else _FREE
+        else:
+            bs[2] = _ELASTIC
+    return tau
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def bit_step_tangent(bs, bp, dbs, E, dE, dt, scratch, J):
+    """``_rockkernel.bit_step`` and its tangent: ``dE`` (nv,) the input's; ``scratch`` (5, nv)."""
+    left = dt
+    dleft, dtau, dp0, dref = scratch[0], scratch[1], scratch[2], scratch[3]
+    dleft[:] = 0.0
+    for _ in range(64):
+        if left <= 0.0:
+            break
+        if bp[3] == 0.0:
+            tau = _t_massless(bs, bp, dbs, E, dE, left, dleft, dtau, dp0, dref)
+        else:
+            tau = _t_with_mass(bs, bp, dbs, E, dE, left, dleft, dtau, dp0, dref, J)
+        left -= tau
+        for a in range(dleft.size):
+            dleft[a] -= dtau[a]
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, acc):
+    """The blow's loop (``_rockkernel.blow_loop`` with no drive, the piston touching the shank at the
+    start, the rod at rest) with its tangents. The piston's cells ``P = (F, G, Z)`` (3, n_p) and
+    their tangents ``dP`` (3, nv, n_p); the rod's uniform segments of ``seg_len`` cells and
+    impedances ``seg_z`` (S,), each a delay line: inside a uniform segment the junction passes the
+    waves on (``N = F + G``), so that its cells are a ring buffer shifted by the step and only the
+    segments' ends meet junctions (the same blow to rounding). ``ctrl``: ``dt, energy_stop``;
+    ``shank``, ``dshank`` out (n_max,), (n_max, nv): the piston-shank force per step and its tangent;
+    ``acc`` out: ``steps, ended``."""
+    dt, stop = ctrl[0], ctrl[1]
+    Fp, Gp, Zp = P[0].copy(), P[1].copy(), P[2]
+    dFp, dGp, dZp = dP[0].copy(), dP[1].copy(), dP[2]
+    n_p = Zp.size
+    nv = dZp.shape[0]
+    S = seg_len.size
+    off = np.zeros(S + 1, np.int64)
+    for q in range(S):
+        off[q + 1] = off[q] + seg_len[q]
+    Fr = np.zeros(off[S])  # F of cell i of segment q at step t in Fr[off[q] + (i - t) mod n_q]
+    Gr = np.zeros(off[S])  # G of cell i in Gr[off[q] + (i + t) mod n_q]
+    dFr = np.zeros((nv, off[S]))
+    dGr = np.zeros((nv, off[S]))
+    jc = n_p - 1
+    feed, m = bp[4], bp[3]
+    Zl = seg_z[S - 1]
+    contact = True
+    gap = 0.0
+    last = 0
+    Np = np.empty(max(n_p - 1, 0))
+    Fn = np.empty(n_p)
+    Gn = np.empty(n_p)
+    dFn = np.zeros((nv, n_p))
+    dGn = np.zeros((nv, n_p))
+    Ns = np.empty(max(S - 1, 0))
+    dNs = np.zeros((nv, max(S - 1, 0)))
+    Ff, Fl, Gf, Gl = np.empty(S), np.empty(S), np.empty(S), np.empty(S)
+    dFf, dFl, dGf, dGl = np.empty((nv, S)), np.empty((nv, S)), np.empty((nv, S)), np.empty((nv, S))
+    dNc = np.empty(nv)
+    dE = np.empty(nv)
+    dp0 = np.empty(nv)
+    scratch = np.zeros((5, nv))
+    J = np.zeros((2, 4))
+    n_max = shank.size
+    steps, ended = n_max, 0.0
+    for step in range(n_max):
+        for q in range(S):  # the segments' ends at this step
+            n, o = seg_len[q], off[q]
+            k = step % n
+            i0, i1 = o + (n - k) % n, o + (2 * n - 1 - k) % n  # F of the first, last cell
+            g0, g1 = o + k, o + (n - 1 + k) % n  # G of the first, last cell
+            Ff[q], Fl[q], Gf[q], Gl[q] = Fr[i0], Fr[i1], Gr[g0], Gr[g1]
+            for a in range(nv):
+                dFf[a, q], dFl[a, q], dGf[a, q], dGl[a, q] = dFr[a, i0], dFr[a, i1], dGr[a, g0], dGr[a, g1]
+        # the piston's junctions, welded
+        for j in range(n_p - 1):
+            za, zb = Zp[j], Zp[j + 1]
+            Np[j] = (2.0 * zb * Fp[j] + 2.0 * za * Gp[j + 1]) / (za + zb)
+        # the piston-shank contact
+        za, zb = Zp[jc], seg_z[0]
+        Nc = (2.0 * zb * Fp[jc] + 2.0 * za * Gf[0]) / (za + zb)
+        if contact:
+            contact = Nc >= 0.0
+        else:
+            contact = gap <= 0.0 and Nc >= 0.0
+        if not contact:
+            Nc = 0.0
+            gap = max(gap + (-2.0 * Gf[0] / zb - 2.0 * Fp[jc] / za) * dt, 0.0)
+        for a in range(nv):
+            dNc[a] = 0.0 if not contact else (2.0 * (zb * dFp[a, jc] + dZp[a, jc] * Gf[0] + za * dGf[a, 0])
+                                              - Nc * dZp[a, jc]) / (za + zb)
+        # the rod's segments' junctions
+        for q in range(S - 1):
+            za, zb = seg_z[q], seg_z[q + 1]
+            Ns[q] = (2.0 * zb * Fl[q] + 2.0 * za * Gf[q + 1]) / (za + zb)
+            for a in range(nv):
+                dNs[a, q] = (2.0 * zb * dFl[a, q] + 2.0 * za * dGf[a, q + 1]) / (za + zb)
+        # the piston's waves at the next step
+        Fn[0] = 0.0 - Gp[0]
+        for j in range(n_p - 1):
+            Fn[j + 1] = Np[j] - Gp[j + 1]
+            Gn[j] = Np[j] - Fp[j]
+        Gn[jc] = Nc - Fp[jc]
+        for a in range(nv):
+            dFa, dGa, dZa, dFna, dGna = dFp[a], dGp[a], dZp[a], dFn[a], dGn[a]
+            dFna[0] = -dGa[0]
+            for j in range(n_p - 1):
+                za, zb = Zp[j], Zp[j + 1]
+                dn = (2.0 * (zb * dFa[j] + dZa[j + 1] * Fp[j] + za * dGa[j + 1] + dZa[j] * Gp[j + 1])
+                      - Np[j] * (dZa[j] + dZa[j + 1])) / (za + zb)
+                dFna[j + 1] = dn - dGa[j + 1]
+                dGna[j] = dn - dFa[j]
+            dGna[jc] = dNc[a] - dFa[jc]
+        # the bit and the rock
+        Fi = Fl[S - 1]
+        p0 = bs[0]
+        for a in range(nv):
+            dE[a] = 2.0 * dFl[a, S - 1]
+            dp0[a] = dbs[0, a]
+        bit_step_tangent(bs, bp, dbs, 2.0 * Fi + feed, dE, dt, scratch, J)
+        g_end = Fi - Zl * (bs[0] - p0) / dt
+        # the segments' ends at the next step: F enters at the first cell (the slot of the last's
+        # F, read above), G at the last (the slot of the first's)
+        for q in range(S):
+            n, o = seg_len[q], off[q]
+            k = (step + 1) % n
+            i0, g1 = o + (n - k) % n, o + (n - 1 + k) % n
+            Fr[i0] = (Nc - Gf[0]) if q == 0 else (Ns[q - 1] - Gf[q])
+            Gr[g1] = (Ns[q] - Fl[q]) if q < S - 1 else g_end
+            for a in range(nv):
+                dFr[a, i0] = (dNc[a] - dGf[a, 0]) if q == 0 else (dNs[a, q - 1] - dGf[a, q])
+                dGr[a, g1] = ((dNs[a, q] - dFl[a, q]) if q < S - 1
+                              else (dFl[a, q] - Zl * (dbs[0, a] - dp0[a]) / dt))
+        shank[step] = Nc
+        for a in range(nv):
+            dshank[step, a] = dNc[a]
+        Fp, Fn = Fn, Fp
+        Gp, Gn = Gn, Gp
+        dFp, dFn = dFn, dFp
+        dGp, dGn = dGn, dGp
+        if contact:
+            last = step
+        if not contact and last >= 0 and step % 8 == 0:
+            rod_e = 0.0
+            for q in range(S):
+                for i in range(off[q], off[q + 1]):
+                    rod_e += (Fr[i] * Fr[i] + Gr[i] * Gr[i]) / seg_z[q]
+            if rod_e * dt + 0.5 * m * bs[1] * bs[1] < stop:
+                steps, ended = step + 1, 1.0
+                break
+    acc[0], acc[1] = steps, ended
