@@ -337,3 +337,18 @@ def test_continuation_in_the_pump_flow(orbit):
     flows = [o.drive.value("pump_flow") for o in branch.orbits]
     periods = [o.period for o in branch.orbits]
     assert flows[-1] > flows[0] and periods[-1] < periods[0]
+
+
+def test_continuation_on_rock_in_the_rocks_stiffness(orbit):
+    """``continue_orbit`` of the operating point on the rock in the rod-rock law's own ``"rock.k"``
+    (theory §4d): the stiffness moves and each point is an orbit at its value (the residual of the
+    problem built there at the integrator's accuracy)."""
+    if orbit.model.law.name == "wave":
+        pytest.skip("the wave law has no rock")
+    k0 = orbit.model.law.rock.k
+    branch = continue_orbit(orbit, "rock.k", to=1.5 * k0, max_points=3, events=False)
+    ks = [o.model.law.rock.k for o in branch.orbits]
+    assert len(ks) == 3 and ks[0] == k0 < ks[1] < ks[2]
+    for o in branch.orbits:
+        X = np.asarray(o._unknowns, dtype=float)
+        assert np.max(np.abs(o.problem.value(X))) < 1e-9 and o.stable

@@ -128,3 +128,40 @@ def test_wave_law_orbit_converges_in_the_modes_kept():
     d1, d2 = T[1] - T[0], T[2] - T[1]
     assert 0.0 < d2 < 0.75 * d1
     assert T[2] == pytest.approx(4.78479, abs=1e-5)
+
+
+@pytest.mark.parametrize("n_modes", [0, 2])
+@pytest.mark.parametrize("parameter, to", [("rock.k", 120.0), ("feed", 0.1), ("bit_mass", 0.05),
+                                           ("segment0.length", 12.0)])
+def test_a_drive_orbit_on_rock_is_continued_in_the_laws_parameters(n_modes, parameter, to):
+    """``continue_orbit`` of a valve's orbit in the rod-rock law's own parameters: the parameter moves
+    and each point is the orbit ``find_orbit`` finds afresh at its value (period and impact velocity
+    1e-9; measured 1e-14), with its multipliers (1e-7; measured 7e-9)."""
+    o = ib.find_orbit(bar(ROCK, n_modes), DRIVE)
+    branch = ib.continue_orbit(o, parameter, to=to, max_points=3)
+    values = [b.model.law.parameter_value(parameter) for b in branch.orbits]
+    assert len(values) == 3 and values[-1] > values[0] == pytest.approx(ROCK.parameter_value(parameter))
+    end = branch.orbits[-1]
+    again = ib.find_orbit(end.model, DRIVE)
+    assert end.period == pytest.approx(again.period, rel=1e-9)
+    assert end.impact_velocity == pytest.approx(again.impact_velocity, rel=1e-9)
+    np.testing.assert_allclose(np.sort_complex(end.multipliers), np.sort_complex(again.multipliers),
+                               atol=1e-7)
+
+
+def test_a_law_parameter_of_another_law_is_refused():
+    """Under the wave law the rod-rock law's names are not parameters: a ValueError that lists the
+    ones there are."""
+    o = ib.find_orbit(bar("wave", 2), DRIVE)
+    with pytest.raises(ValueError, match=r"parameter must be one of .*'switch_out'"):
+        ib.continue_orbit(o, "rock.k", to=2.0)
+
+
+def test_every_orbit_of_a_drive_on_rock_is_the_default_chains():
+    """``periodic_orbits(model, drive)`` under the rod-rock law has no certified search of its own:
+    it gives the default chain's orbit (it raised a ValueError about ``R = -1``, the law's marker for
+    a contact that takes time)."""
+    model = bar(ROCK, 2)
+    orbits = ib.periodic_orbits(model, DRIVE)
+    assert len(orbits) == 1 and orbits.window is None and not any(orbits.certified)
+    assert orbits[0].period == pytest.approx(ib.find_orbit(model, DRIVE).period, rel=1e-12)

@@ -158,7 +158,8 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         impacts in ``2 n`` periods) from the event, along the bifurcating direction (branch
         switching). A :class:`~impactbar.SwitchedOrbit` (an orbit under a :class:`~impactbar.Drive`,
         unknown period) is followed in one of the drive's parameters (the valve's ``"stroke"``,
-        ``"ret"``, ``"switch_out"``, ``"delay"``) or ``"R"``, ``"d"``, ``"s"``, with the grazing of a
+        ``"ret"``, ``"switch_out"``, ``"delay"``; the oil circuit's), ``"R"``, ``"d"``, ``"s"`` or the
+        impact law's own (on the rock ``"rock.k"``, ...), with the grazing of a
         switching surface among the events (theory §10;
         :func:`impactbar.continuation.switched.continue_switched`).
     parameter : str

@@ -47,13 +47,31 @@ FORWARD_LAMBDA = True
 CHORD = True
 
 
-def parameters_of(drive) -> tuple:
-    """The parameters an orbit under ``drive`` can be continued in: the drive's and the bar's."""
-    return (*drive.parameters, *MODEL_PARAMETERS)
+def parameters_of(drive, model=None) -> tuple:
+    """The parameters an orbit under ``drive`` can be continued in: the drive's, the bar's and, given
+    the ``model``, its impact law's own (:attr:`~impactbar.laws.ContactLaw.parameters`: the rod-rock
+    law's ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"``, ``"segment<i>.length"``)."""
+    law = getattr(model, "law", None)
+    return (*drive.parameters, *MODEL_PARAMETERS, *(getattr(law, "parameters", ()) or ()))
+
+
+def _is_law_parameter(model, drive, name: str) -> bool:
+    """Whether ``name`` is the impact law's (not the drive's nor the bar's)."""
+    return name not in drive.parameters and name not in MODEL_PARAMETERS and \
+        getattr(model, "law", None) is not None and model.law.has_parameter(name)
+
+
+def _value(model: BarModel, drive, name: str):
+    """The parameter's value (``None`` for a valve's delay where its two delays differ)."""
+    if _is_law_parameter(model, drive, name):
+        return model.law.parameter_value(name)
+    return getattr(model if name in MODEL_PARAMETERS else drive, name)
 
 
 def _with(model: BarModel, drive, name: str, value: float):
     """The model and drive with one parameter changed (validated again by their constructors)."""
+    if _is_law_parameter(model, drive, name):
+        return model.with_(impact=model.law.with_parameter(name, float(value))), drive
     if name in MODEL_PARAMETERS:
         return model.with_(**{name: value}), drive
     return model, drive.with_(**{name: value})
@@ -69,7 +87,7 @@ class _SwitchedProblem:
         self.m, self.doubled, self.base = impacts, doubled, base
         self.pair = functools.lru_cache(maxsize=16)(self._pair)
         self._chord = None  # the last orbit's F_u, for the next corrector's first step
-        start = self.pair(float(getattr(model if name in MODEL_PARAMETERS else drive, name)))[2]
+        start = self.pair(float(_value(model, drive, name)))[2]
         self.flights = start.positive
         self.W = np.append(np.full(start.size, 1.0 / start.size), 1.0)
 
@@ -320,8 +338,12 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     parameter : str
         One of the drive's :attr:`~impactbar.Drive.parameters` (the valve's ``"stroke"``, ``"ret"``:
         force levels, dimensionless, eq. 2; ``"switch_out"``: bar lengths; ``"delay"`` (both delays),
-        ``"delay_out"``, ``"delay_in"``: dimensionless time) or ``"R"``, ``"d"``, ``"s"``; the event's
-        own parameter for a period doubling.
+        ``"delay_out"``, ``"delay_in"``: dimensionless time; the oil circuit's in its units, theory
+        §11), ``"R"``, ``"d"``, ``"s"``, or the impact law's own (under the rod-rock law
+        ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"``, in the law's units, theory §4d;
+        ``"segment<i>.length"`` where its blows are exact: :meth:`RodRock.check_continuable
+        <impactbar.laws.ContactLaw.check_continuable>`); the event's own parameter for a period
+        doubling.
     to : float
         Target value; the branch stops there or where it leaves the range between start and ``to``.
     detect : callable
@@ -363,10 +385,13 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     if not autonomous(getattr(orbit, "load", None)):
         raise ValueError(f"orbit must be a SwitchedOrbit; got {type(orbit).__name__}")
     model, drive = orbit.model, orbit.drive
-    allowed = parameters_of(drive)
-    if parameter not in allowed:
+    allowed = parameters_of(drive, model)
+    if parameter not in allowed and not _is_law_parameter(model, drive, parameter):
         raise ValueError(f"parameter must be one of {allowed} for a switched orbit; got {parameter!r}")
-    lam0 = getattr(model if parameter in MODEL_PARAMETERS else drive, parameter)
+    if _is_law_parameter(model, drive, parameter):
+        model.law.parameter_value(parameter)  # a segment the rod does not have: a ValueError
+        model.law.check_continuable(parameter, model)
+    lam0 = _value(model, drive, parameter)
     if lam0 is None:  # the valve's delay where its two delays differ
         raise ValueError(f"parameter {parameter!r} has no value on this drive ({drive!r}): follow one of "
                          f"its own, e.g. 'delay_out' or 'delay_in'")

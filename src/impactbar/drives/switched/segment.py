@@ -448,11 +448,12 @@ class ValveProblem(OrbitProblem):
     def resonances(self, window=None) -> float:
         """About how many resonances ``T = 2 k / (s n)`` of the flexible modes lie in ``window``
         (default: the search's default window); 0 for the rigid bar. The search's cost grows with
-        them."""
+        them; 0 too where the search does not apply (:meth:`search`: a law whose contact takes
+        time)."""
         from .search import default_window
 
         model = self.model
-        if not model.n_modes:
+        if not model.n_modes or not model.law.instantaneous:
             return 0.0
         lo, hi = default_window(model, self.drive) if window is None else window
         return (float(hi) - float(lo)) * model.s * model.n_modes * (model.n_modes + 1) / 4.0
