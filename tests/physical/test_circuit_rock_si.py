@@ -135,3 +135,43 @@ def test_the_indicator_work_is_the_oils_work_through_the_blows(point):
     acc = point.energy_account["piston"]
     errors = [abs(point.indicator_work_J(n)["piston"] - acc) for n in (4000, 8000)]
     assert errors[1] < 2e-5 * acc and 2.5 < errors[0] / errors[1] < 5.0
+
+
+@pytest.mark.parametrize("key, value, si, name", [("rock.k", "470 kN/mm", 4.7e8, "rock.k"),
+                                                  ("rock.k_u", "4700 kN/mm", 4.7e9, "rock.k_u"),
+                                                  ("rock.feed", "2 kN", 2e3, "feed"),
+                                                  ("bit.mass", "1.5 kg", 1.5, "bit_mass")])
+def test_the_rocks_config_keys_are_the_laws_parameters(key, value, si, name):
+    """A drifter on rock takes the drill string's and the rock's config keys as continuation
+    parameters: the config's own values give the law's dimensionless ones (its rod-rock law built
+    from the config, theory §4d), and back."""
+    drifter = CircuitDrifter.from_config(load_config())
+    parameter, x = drifter.to_dimensionless(key, value)
+    assert parameter == name
+    assert x == pytest.approx(drifter.model().law.parameter_value(name), rel=1e-14)
+    assert drifter.from_dimensionless(key, x) == pytest.approx(si, rel=1e-14)
+
+
+def test_a_rock_parameter_needs_a_rock():
+    """Without a ``[rock]`` section the rock's keys are refused in one line."""
+    config = load_config()
+    for section in ("rock", "rod", "bit"):
+        config.pop(section, None)
+    config["stop"] = {"restitution": 0.3}
+    with pytest.raises(ValueError, match=r"rock\.k is the drill string's and the rock's: the drifter has no"):
+        CircuitDrifter.from_config(config).to_dimensionless("rock.k", "400 kN/mm")
+
+
+def test_the_operating_point_is_followed_in_the_rocks_stiffness(point):
+    """``continue_circuit`` in ``rock.k`` (SI): the branch starts at the config's stiffness, in N/m,
+    and each point is an orbit of the circuit on the rock of its stiffness (the residual of the
+    problem built there at the integrator's accuracy)."""
+    from impactbar.physical import continue_circuit
+
+    branch = continue_circuit(point.drifter, "rock.k", "460 kN/mm", max_points=2)
+    assert branch.unit == "N/m" and branch.values[0] == pytest.approx(4.7e8, rel=1e-12)
+    assert branch.values[1] < branch.values[0]
+    for o in branch.branch.orbits:
+        X = np.asarray(o._unknowns, dtype=float)
+        assert np.max(np.abs(o.problem.value(X))) < 1e-9
+    assert branch.blow_frequency_Hz[0] == pytest.approx(point.blow_frequency_Hz, rel=1e-9)

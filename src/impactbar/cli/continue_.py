@@ -38,7 +38,8 @@ def add_parser(sub) -> None:
                     help="the parameter that varies: p0, pk, R, d, s, q, kappa (bar and load); stroke, "
                     "ret, switch_out, delay, delay_out, delay_in (a drifter's valve); a drifter's oil "
                     "circuit by its config key in SI (accumulator.precharge, supply.pump_flow, "
-                    "valve.switching_time, oil.bulk_modulus, ...; --to with its unit, '12 MPa') or "
+                    "valve.switching_time, oil.bulk_modulus, ...; on a drill string rock.k, rock.k_u, "
+                    "rock.feed, bit.mass; --to with its unit, '12 MPa') or "
                     "dimensionless (precharge, pump_flow, ...: pressures in 10 MPa)")
     cg.add_argument("--to", type=_number_or_quantity, required=True,
                     help="its target value (with its unit for a config key: '12 MPa', '80 L/min')")

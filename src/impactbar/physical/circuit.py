@@ -46,7 +46,7 @@ from .rock import ROCK_SECTIONS, DrillString, rock_from_config
 from .units import to_si
 
 __all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_preset", "PRESSURE_SCALE",
-           "CIRCUIT_PARAMETERS", "SI_PARAMETERS"]
+           "CIRCUIT_PARAMETERS", "ROCK_SI_PARAMETERS", "SI_PARAMETERS"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
 PRESSURE_SCALE = 1.0e7
@@ -80,7 +80,15 @@ SI_PARAMETERS = {
     "chambers.front_volume": ("front_volume", "m**3", "'0.1 L'"),
     "oil.bulk_modulus": ("bulk_modulus", "Pa", "'1.4 GPa'"),
     "oil.transition_pressure": ("transition_pressure", "Pa", "'0.5 MPa'"),
+    # a drifter on the drill string and the rock: the rod-rock law's own (theory §4d)
+    "rock.k": ("rock.k", "N/m", "'250 kN/mm'"),
+    "rock.k_u": ("rock.k_u", "N/m", "'2500 kN/mm'"),
+    "rock.feed": ("feed", "N", "'5 kN'"),
+    "bit.mass": ("bit_mass", "kg", "'1.5 kg'"),
 }
+
+#: The keys of :data:`SI_PARAMETERS` that need a drill string (a ``[rock]`` section).
+ROCK_SI_PARAMETERS = ("rock.k", "rock.k_u", "rock.feed", "bit.mass")
 
 _KEYS = {
     "bar": {"E", "density", "length", "diameter", "area"},
@@ -203,10 +211,15 @@ class CircuitDrifter:
         if name not in SI_PARAMETERS:
             raise ValueError(f"parameter must be one of {', '.join(SI_PARAMETERS)} (a config key); "
                              f"got {name!r}")
+        if name in ROCK_SI_PARAMETERS and self.drill is None:
+            raise ValueError(f"parameter {name} is the drill string's and the rock's: the drifter has no "
+                             "[rock] section")
         P, L, V, Q = PRESSURE_SCALE, self.bar.length_m, self.volume_scale_m3, self.flow_scale_m3_s
+        m, force = self.bar.mass_kg, self.scales.force_N
         return {"Pa": 1.0 / P, "m**3": 1.0 / V, "m**3/s": 1.0 / Q, "m**3/s/Pa**0.5": math.sqrt(P) / Q,
                 "m**3/s/Pa": P / Q, "m": 1.0 / L, "s": self.omega_rad_s, "": 1.0,
-                "m**2": 1.0 / self.si["rear_area_m2"]}[SI_PARAMETERS[name][1]]
+                "m**2": 1.0 / self.si["rear_area_m2"], "N/m": L / force, "N": 1.0 / force,
+                "kg": 1.0 / m}[SI_PARAMETERS[name][1]]
 
     def to_dimensionless(self, name: str, value) -> tuple[str, float]:
         """The dimensionless circuit parameter (theory §11) that the config key ``name`` sets, and
@@ -224,12 +237,16 @@ class CircuitDrifter:
         parameter : str
             The drive's parameter (``"precharge"``, ...), for :func:`impactbar.continue_orbit`.
         value : float
-            Dimensionless (pressures in 10 MPa, volumes in ``A_r L``, flows in ``A_r L Omega``).
+            Dimensionless (pressures in 10 MPa, volumes in ``A_r L``, flows in ``A_r L Omega``; the
+            rock's stiffnesses in ``m Omega^2``, the feed in ``P A_r``, the bit's mass in the
+            piston's: theory §4d). The rock's keys (:data:`ROCK_SI_PARAMETERS`) need a drill
+            string.
 
         Raises
         ------
         ValueError
-            An unknown key, or a value without its unit, of the wrong dimension or not finite.
+            An unknown key, or a value without its unit, of the wrong dimension or not finite; a
+            rock's key for a drifter without a ``[rock]`` section.
 
         Examples
         --------
