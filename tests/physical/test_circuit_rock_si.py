@@ -175,3 +175,14 @@ def test_the_operating_point_is_followed_in_the_rocks_stiffness(point):
         X = np.asarray(o._unknowns, dtype=float)
         assert np.max(np.abs(o.problem.value(X))) < 1e-9
     assert branch.blow_frequency_Hz[0] == pytest.approx(point.blow_frequency_Hz, rel=1e-9)
+
+
+def test_the_examples_lattice_error_at_four_times_the_cells(point):
+    """The example's figures are the lattice's at 8 cells per piston (the coupled blow, theory §11):
+    at 32 cells 45.61 Hz and 216.3 J on the rock; the blow frequency 0.1 % apart (README,
+    docs/physical.md)."""
+    config = load_config()
+    config["rock"]["cells_per_piston"] = 32
+    fine = CircuitDrifter.from_config(config).orbit()
+    assert (round(fine.blow_frequency_Hz, 2), round(fine.rock()["work_on_rock_J"], 1)) == (45.61, 216.3)
+    assert round(100.0 * (point.blow_frequency_Hz / fine.blow_frequency_Hz - 1.0), 1) == 0.1
