@@ -5,7 +5,8 @@ are piecewise Chebyshev interpolants carried by delay lines, the bit's equation 
 Duhamel's integral on graded Gauss-Legendre panels, its switches are roots of colleague matrices.
 The two agree to 1e-14 on the issue's rods (efficiency, work on the rock, penetrations, rebound
 velocity, the peak forces at every junction and at the bit and their times, the loading episodes);
-the tests ask 1e-9."""
+the tests ask 1e-9. Also here: the faults this comparison exposed, each with the test that failed
+before its fix."""
 
 import math
 
@@ -13,7 +14,8 @@ import numpy as np
 import pytest
 from _reference_blow import reference_blow
 
-from impactbar.laws.rodrock.exact import exact_blow
+from impactbar.laws.rodrock import _exactpieces as P
+from impactbar.laws.rodrock.exact import _binomials, exact_blow
 
 #: (piston times, piston impedances, rod times, rod impedances, k, k_u, bit mass): the exact
 #: solver's units, the piston of impedance 1 and crossing time 1 unless stepped
@@ -25,6 +27,14 @@ CASES = {
     "a bit of mass 0.3, lift-off": ([1.0], [1.0], [2.0, 1.0], [1.0, 0.6], 1.0, 5.0, 0.3),
     "stepped piston": ([0.6, 0.4], [0.7, 1.6], [1.3, 0.9], [1.1, 0.5], 0.8, 3.0, 0.0),
     "stepped piston, bit of mass 0.1": ([0.5, 0.5], [1.5, 0.8], [0.7, 1.9], [0.9, 1.4], 1.2, 12.0, 0.1),
+    # a short soft rod under a stiff piston: three separations, two re-contacts, a second loading
+    "short rod, second loading": ([0.8991334349281379], [1.4022475364350362], [0.363115818418278],
+                                  [0.625437386070403], 1.2988179874099806, 2.413001974806762, 0.0),
+    # eight separations, seven re-contacts, two loadings; one re-contact 0.066 after a separation
+    # that a tensile step opened (the gap rising from 0 and bending back: first_negative's fault)
+    "stepped piston, a quick re-contact": ([0.5841726079153196, 1.2615293582476763],
+                                           [1.3732430540965517, 0.6411929633605988], [1.2528792685202423],
+                                           [1.353912855909835], 0.3268085498957647, 23.838480715886703, 0.0),
 }
 SCALARS = ("efficiency", "work_on_rock", "max_penetration", "permanent_penetration", "advance",
            "rebound_velocity", "piston_energy")
@@ -59,3 +69,30 @@ def test_a_stiff_unloading_on_a_long_soft_rod_is_the_independent_solution():
     2e-9 at ``t = 10``): the shank's peak, the spike's top, agrees to 8e-10, the rest to 1e-13."""
     ex, ref = _compare(([1.0], [1.0], [4.0], [0.4], 0.4, 4e5, 0.0), peak_rtol=2e-9)
     assert ex.loadings.shape[0] == 2 and ref.recontacts == 1
+
+
+def _block(coefs):
+    """``sum coefs[d] tau^d`` as an exact piece (exponents 0 and -1 in the table)."""
+    lam = np.array([0j, -1.0 + 0j])
+    B = np.zeros((2, P.DC), complex)
+    N = np.zeros(2, np.int64)
+    B[0, :len(coefs)] = coefs
+    N[0] = len(coefs)
+    D = tuple(x for _ in range(3) for x in (np.zeros((2, P.DC), complex), np.zeros(2, np.int64)))
+    return B, N, lam, D
+
+
+@pytest.mark.parametrize("coefs", [
+    [0.0, 1.0, -1.0],  # no third derivative: the bound took the piece as rising for ever
+    [0.0, 1.0, -2.0, 0.01],  # the cubic bound with the curvature taken as 0
+    [0.0, 1.0, 0.5, -1.0],  # a positive curvature, bent back by the cubic (found before too)
+])
+def test_a_piece_rising_from_zero_and_bending_back_crosses_it(coefs):
+    """``first_negative`` bounded a piece that starts at zero with a positive slope as if its
+    curvature were 0 when it was clearly negative: the interval it excluded reached past the zero
+    (a re-contact, a landing missed: -1 returned for the first two)."""
+    B, N, lam, D = _block(coefs)
+    t = P.first_negative(B, N, lam, _binomials(), 2.0, np.zeros((256, 4)), D, 0.0)
+    roots = np.polynomial.polynomial.polyroots(coefs[1:])
+    exact = min(x.real for x in roots if abs(x.imag) < 1e-12 and x.real > 0.0)
+    assert t == pytest.approx(exact, rel=1e-12)
