@@ -12,7 +12,7 @@ import numba
 import numpy as np
 
 from ...dynamics._kernel import CACHE
-from ._exactintegrals import blk_integral, blk_integral_sq, moments  # noqa: F401 (the kernel's)
+from ._exactintegrals import blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
@@ -116,24 +116,6 @@ def blk_eval(B, N, lam, tau):
             f1 += (ex * (q1 + le * q0)).real
             f2 += (ex * (q2 + 2.0 * le * q1 + le * le * q0)).real
     return f0, f1, f2
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def blk_value(B, N, lam, tau):
-    f = 0.0
-    for e in range(N.size):
-        n = N[e]
-        if n == 0:
-            continue
-        q = 0.0j
-        for d in range(n - 1, -1, -1):
-            q = q * tau + B[e, d]
-        le = lam[e]
-        if le == 0.0:
-            f += q.real
-        else:
-            f += (_expl(le, tau) * q).real
-    return f
 
 
 @numba.njit(cache=CACHE, nogil=True)
