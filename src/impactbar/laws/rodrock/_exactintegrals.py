@@ -1,5 +1,5 @@
-"""Integrals of exact pieces (theory §4d): the moments ``int tau^k e^{mu tau}``, ``int phi`` and
-``int phi^2`` of a block (:mod:`impactbar.laws.rodrock._exactpieces` describes the blocks)."""
+"""Integrals of exact pieces (theory §4d): the moments ``int tau^k e^{mu tau}``, a block's value,
+``int phi`` and ``int phi^2`` of a block (:mod:`impactbar.laws.rodrock._exactpieces` describes the blocks)."""
 
 from __future__ import annotations
 
@@ -70,9 +70,81 @@ def blk_integral(B, N, lam, a, b):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def blk_value(B, N, lam, tau):
+    """The block's value at ``tau`` (the real part of its terms' sum)."""
+    f = 0.0
+    for e in range(N.size):
+        n = N[e]
+        if n == 0:
+            continue
+        q = 0.0j
+        for d in range(n - 1, -1, -1):
+            q = q * tau + B[e, d]
+        le = lam[e]
+        if le == 0.0:
+            f += q.real
+        else:
+            f += (cmath.exp(le * tau) * q).real
+    return f
+
+
+#: Gauss-Legendre nodes and weights on [-1, 1] (20 points: exact to degree 39)
+_GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
+#: the pairwise sum of int phi^2 is kept while its terms are below this many times the result
+#: (rounding then costs at most ~1e-12 of it); past it, quadrature
+SQ_CANCEL = 1e4
+#: the most panels that quadrature takes (a bit ringing on a stiff rock, 1e6 radians over the
+#: piece, is left to the pairwise sum)
+QUAD_PANELS = 4096
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def blk_integral_sq_quad(B, N, lam, a, b):
+    """``int_a^b phi^2`` by Gauss-Legendre quadrature of the block's own values, on panels graded
+    geometrically from ``a`` (the first as wide as the fastest term's time scale, each next twice
+    as wide, none wider than a quarter of the interval or than 4 over the fastest oscillation):
+    a light bit's fast terms decay within a few panels, which resolve them to ~1e-14. NaN where
+    that would take more than ``QUAD_PANELS`` panels."""
+    if b <= a:
+        return 0.0
+    rate = 0.0
+    osc = 0.0
+    for e in range(N.size):
+        if N[e] > 0:
+            rate = max(rate, abs(lam[e]))
+            osc = max(osc, abs(lam[e].imag))
+    L = b - a
+    cap = 0.25 * L
+    if osc > 0.0:
+        cap = min(cap, 4.0 / osc)
+    w = cap if rate * cap <= 1.0 else 1.0 / rate
+    if L / cap + math.log2(max(cap / w, 1.0)) > QUAD_PANELS:
+        return math.nan  # too fast an oscillation for panels: the caller keeps its sum
+    s = 0.0
+    x = a
+    while x < b:
+        hi = min(b, x + w)
+        if b - hi < 1e-3 * w:
+            hi = b
+        half = 0.5 * (hi - x)
+        mid = 0.5 * (hi + x)
+        part = 0.0
+        for i in range(_GL_X.size):
+            v = blk_value(B, N, lam, mid + half * _GL_X[i])
+            part += _GL_W[i] * v * v
+        s += half * part
+        x = hi
+        w = min(2.0 * w, cap)
+    return s
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def blk_integral_sq(B, N, lam, a, b):
     """``int_a^b phi^2`` (``phi`` real: its conjugate terms are in the table): per pair of exponents
-    the product polynomial against the moments of ``e^{(lam_1 + lam_2) tau}``."""
+    the product polynomial against the moments of ``e^{(lam_1 + lam_2) tau}``; where those terms
+    exceed the result ``SQ_CANCEL`` times (a light bit: fast and slow terms of large opposite
+    coefficients cancelled to 1e-6 of the piston's energy, issue 39), by quadrature
+    (:func:`blk_integral_sq_quad`)."""
     if b <= 0.0:
         return 0.0
     # in the variable u = tau / b, coefficients c_d b^d (see blk_integral: no overflow of the products
@@ -87,6 +159,7 @@ def blk_integral_sq(B, N, lam, a, b):
             C[e, d] = B[e, d] * sc
             sc *= b
     s = 0.0j
+    mag = 0.0  # the sum of the terms' moduli: the rounding scale of s
     for e1 in range(E):
         n1 = N[e1]
         if n1 == 0:
@@ -108,7 +181,12 @@ def blk_integral_sq(B, N, lam, a, b):
             t = 0.0j
             for k in range(m):
                 t += prod[k] * mom[k]
+                mag += abs(prod[k] * mom[k])
             s += t if e1 == e2 else 2.0 * t
+    if mag > SQ_CANCEL * abs(s.real):  # the pairs cancel (a light bit's fast terms): quadrature
+        q = blk_integral_sq_quad(B, N, lam, a, b)
+        if not math.isnan(q):
+            return q
     return s.real * b
 
 

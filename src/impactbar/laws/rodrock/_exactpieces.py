@@ -12,7 +12,7 @@ import numba
 import numpy as np
 
 from ...dynamics._kernel import CACHE
-from ._exactintegrals import blk_integral, blk_integral_sq, moments  # noqa: F401 (the kernel's)
+from ._exactintegrals import blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
@@ -116,24 +116,6 @@ def blk_eval(B, N, lam, tau):
             f1 += (ex * (q1 + le * q0)).real
             f2 += (ex * (q2 + 2.0 * le * q1 + le * le * q0)).real
     return f0, f1, f2
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def blk_value(B, N, lam, tau):
-    f = 0.0
-    for e in range(N.size):
-        n = N[e]
-        if n == 0:
-            continue
-        q = 0.0j
-        for d in range(n - 1, -1, -1):
-            q = q * tau + B[e, d]
-        le = lam[e]
-        if le == 0.0:
-            f += q.real
-        else:
-            f += (_expl(le, tau) * q).real
-    return f
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -436,17 +418,23 @@ def first_negative(B, N, lam, BIN, L, stack, D, t0):
             return 0.0
         if f1 <= e1 and f2 < -e2:
             return 0.0
+        # the signed curvature: a piece rising from zero and bending down crosses it again near
+        # -2 f1/f2 (a curvature of rounding's size counts as 0; the slope is >= -e1 here)
         g1 = f1 if f1 > e1 else 0.0
-        g2 = f2 if f2 > e2 else 0.0
+        g2 = f2 if abs(f2) > e2 else 0.0
         M3 = blk_bound(D3, N3, lam, BIN, 0.0, L, 0)
-        if M3 <= 0.0:
-            s = L
-        elif g1 == 0.0 and g2 == 0.0:
+        if g1 == 0.0 and g2 <= 0.0:
             s = 0.0  # flat to rounding at the start: the search below decides
+        elif M3 <= 0.0:
+            # phi(s) - phi(0) = g1 s + g2 s^2/2 > 0 below -2 g1/g2 (half of it kept)
+            s = L if g2 >= 0.0 else min(L, -g1 / g2)
         else:
-            # phi(s) - phi(0) >= g1 s + g2 s^2/2 - M3 s^3/6 > 0 below the positive root
+            # phi(s) - phi(0) >= g1 s + g2 s^2/2 - M3 s^3/6 > 0 below the positive root of
+            # aa s^2 - b s - g1 (half of it kept), in the form free of cancellation for b < 0
             aa = M3 / 6.0
-            s = 0.5 * (0.5 * g2 + math.sqrt(0.25 * g2 * g2 + 4.0 * aa * g1)) / (2.0 * aa)
+            b = 0.5 * g2
+            disc = math.sqrt(b * b + 4.0 * aa * g1)
+            s = 0.5 * ((b + disc) / (2.0 * aa) if b >= 0.0 else 2.0 * g1 / (disc - b))
         if s >= L:
             return -1.0
     aL, _b1, _b2 = blk_abs(B, N, lam, L)
