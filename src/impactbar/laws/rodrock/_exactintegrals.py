@@ -118,7 +118,7 @@ def blk_integral_sq_quad(B, N, lam, a, b):
     if osc > 0.0:
         cap = min(cap, 4.0 / osc)
     w = cap if rate * cap <= 1.0 else 1.0 / rate
-    if L / cap + math.log2(max(cap / w, 1.0)) > QUAD_PANELS:
+    if L / cap + math.log(max(cap / w, 1.0)) / math.log(2.0) > QUAD_PANELS:
         return math.nan  # too fast an oscillation for panels: the caller keeps its sum
     s = 0.0
     x = a
