@@ -64,24 +64,23 @@ class BlowPiece:
 
     def force(self, t):
         """The drive's force on the piston at times ``t`` in the blow."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        idx = self._pick(t)
-        out = np.empty(t.size)
-        for j in np.unique(idx):
-            sel = idx == j
-            out[sel] = self.drive_pieces[j].force(t[sel])
-        return out
+        return self._scalar("force", t)
 
     def displacement(self, t):
         """The driven end's displacement ``w = -u(0, t)`` at times ``t`` in the blow as the drive
         integrated it (from the stop where it was at the arrival: the chambers' volumes follow it),
         shape ``(T,)``."""
+        return self._scalar("displacement", t)
+
+    def _scalar(self, name, t):
+        """A scalar history of the drive pieces (their method ``name``) at times ``t``, each time
+        from the piece that holds it."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         idx = self._pick(t)
         out = np.empty(t.size)
         for j in np.unique(idx):
             sel = idx == j
-            out[sel] = self.drive_pieces[j].displacement(t[sel])
+            out[sel] = getattr(self.drive_pieces[j], name)(t[sel])
         return out
 
     def energies(self):
