@@ -24,7 +24,7 @@ import numpy as np
 
 from ..base import DriveState, FlightSettings
 from . import _endkernel as EK
-from .flight import DEFAULT_SETTINGS
+from .flight import DEFAULT_SETTINGS, _hermite_extremes
 
 __all__ = ["EndFlight", "EndPiece", "circuit_end_flight"]
 
@@ -88,15 +88,7 @@ class EndPiece:
         ``p_r``, 2 ``p_s``, 3 ``x_v``) over the piece (its steps and the interpolant's stationary
         points)."""
         j = 1 + k
-        x = self.y[:, j]
-        if self.t.size < 2:
-            return float(x[0]), float(x[0])
-        from scipy.interpolate import CubicHermiteSpline
-
-        sp = CubicHermiteSpline(self.t, x, self.f[:, j])
-        roots = sp.derivative().roots(extrapolate=False)
-        vals = np.concatenate((x, sp(roots))) if roots.size else x
-        return float(np.min(vals)), float(np.max(vals))
+        return _hermite_extremes(self.t, self.y[:, j], self.f[:, j])
 
     def supply_extremes(self) -> tuple[float, float]:
         """The least and the greatest supply pressure over the piece."""

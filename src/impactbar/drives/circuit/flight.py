@@ -49,6 +49,20 @@ __all__ = ["CircuitPiece", "circuit_flight", "DEFAULT_SETTINGS"]
 DEFAULT_SETTINGS = FlightSettings(method="CVODE", rtol=1e-10, atol=1e-12)
 
 
+def _hermite_extremes(t, x, dxdt) -> tuple[float, float]:
+    """The least and the greatest value of a sampled history ``x(t)`` with its rates ``dxdt``
+    (shapes ``(T,)``): over the samples and the stationary points of its cubic Hermite interpolant
+    (scipy's ``CubicHermiteSpline``)."""
+    if t.size < 2:
+        return float(x[0]), float(x[0])
+    from scipy.interpolate import CubicHermiteSpline
+
+    sp = CubicHermiteSpline(t, x, dxdt)
+    roots = sp.derivative().roots(extrapolate=False)
+    vals = np.concatenate((x, sp(roots))) if roots.size else x
+    return float(np.min(vals)), float(np.max(vals))
+
+
 class CircuitPiece:
     """A flight of the circuit: the steps of the integration (exact to the integrator's tolerance
     at each step) and a cubic Hermite interpolant between them (the vector field at each step).
@@ -102,15 +116,7 @@ class CircuitPiece:
         ``p_r``, 2 ``p_s``, 3 ``x_v``) over the piece: its steps and the stationary points of its
         cubic Hermite interpolant."""
         j = 2 * self.M + k
-        x = self.y[:, j]
-        if self.t.size < 2:
-            return float(x[0]), float(x[0])
-        from scipy.interpolate import CubicHermiteSpline
-
-        sp = CubicHermiteSpline(self.t, x, self.f[:, j])
-        roots = sp.derivative().roots(extrapolate=False)
-        vals = np.concatenate((x, sp(roots))) if roots.size else x
-        return float(np.min(vals)), float(np.max(vals))
+        return _hermite_extremes(self.t, self.y[:, j], self.f[:, j])
 
     def supply_extremes(self) -> tuple[float, float]:
         """The least and the greatest supply pressure over the piece (:meth:`extremes`)."""
