@@ -535,8 +535,14 @@ def piece_momentum(ws, c, t):
         a = max(t0, lo)
         b = min(tend, t)
         if b > a and PI[p, 2] > 0:
-            pool_load(WB[12], WN[12], p, 0.0, lam, BIN, PI, TK, TC)
-            s1 += blk_integral(WB[12], WN[12], lam, a - t0, b - t0)
+            if nx >= 0 and a == t0 and b == tend:  # a closed piece's whole integral, cached
+                if math.isnan(PF[p, 3]):
+                    pool_load(WB[12], WN[12], p, 0.0, lam, BIN, PI, TK, TC)
+                    PF[p, 3] = blk_integral(WB[12], WN[12], lam, 0.0, tend - t0)
+                s1 += PF[p, 3]
+            else:
+                pool_load(WB[12], WN[12], p, 0.0, lam, BIN, PI, TK, TC)
+                s1 += blk_integral(WB[12], WN[12], lam, a - t0, b - t0)
         if tend >= t:
             break
         p = nx

@@ -119,6 +119,18 @@ def blk_eval(B, N, lam, tau):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def cabs(z):
+    """``|z|`` of a complex number: ``sqrt(x^2 + y^2)`` where neither square can overflow or
+    underflow, ``hypot`` (several times slower) elsewhere."""
+    x = abs(z.real)
+    y = abs(z.imag)
+    m = max(x, y)
+    if 1e-150 < m < 1e150:
+        return math.sqrt(x * x + y * y)
+    return math.hypot(x, y)
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def blk_abs(B, N, lam, tau):
     """Sums of the absolute values of the terms of the value and of its first two derivatives at
     ``tau`` (their rounding scales)."""
@@ -130,14 +142,21 @@ def blk_abs(B, N, lam, tau):
         if n == 0:
             continue
         g = math.exp(lam[e].real * tau)
-        al = abs(lam[e])
+        al = cabs(lam[e])
+        pw0 = 1.0  # tau^d
+        pw1 = 0.0  # tau^(d - 1)
+        pw2 = 0.0  # tau^(d - 2)
         for d in range(n):
-            c = abs(B[e, d]) * g
+            if d >= 1:
+                pw2 = pw1 if d >= 2 else 0.0
+                pw1 = pw0
+                pw0 = pw0 * tau
+            c = cabs(B[e, d]) * g
             if c == 0.0:
                 continue
-            p0 = tau ** d
-            p1 = d * tau ** (d - 1) if d >= 1 else 0.0
-            p2 = d * (d - 1) * tau ** (d - 2) if d >= 2 else 0.0
+            p0 = pw0
+            p1 = d * pw1
+            p2 = d * (d - 1) * pw2
             a0 += c * p0
             a1 += c * (al * p0 + p1)
             a2 += c * (al * al * p0 + 2.0 * al * p1 + p2)
@@ -154,9 +173,17 @@ def blk_bound(B, N, lam, BIN, a, b, k):
             continue
         re = lam[e].real
         g = math.exp(re * (a if re <= 0.0 else b))
-        al = abs(lam[e])
+        if k == 0:  # (every caller's) sum |c_d| g b^d, the powers by products
+            pb = 1.0
+            acc = 0.0
+            for d in range(n):
+                acc += cabs(B[e, d]) * pb
+                pb *= b
+            tot += acc * g
+            continue
+        al = cabs(lam[e])
         for d in range(n):
-            c = abs(B[e, d])
+            c = cabs(B[e, d])
             if c == 0.0:
                 continue
             s = 0.0
@@ -251,7 +278,7 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
                 Y[rc, kk + 1] += q
                 last = kk + 1
                 Lp *= L
-                mag = abs(q) * Lp
+                mag = cabs(q) * Lp
                 if mag > top:
                     top = mag
                 if kk + 1 >= n and (q == 0.0 or mag <= SERIES_TOL * top):
@@ -273,7 +300,7 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
                 Y[e, jj + 1] += q
                 last = jj + 1
                 Lp *= L
-                mag = abs(q) * Lp
+                mag = cabs(q) * Lp
                 if mag > top:
                     top = mag
                 if jj + 1 >= n and (q == 0.0 or mag <= SERIES_TOL * top):
@@ -340,7 +367,7 @@ def blk_fold(Y, NY, e, c, lam, L):
             R += Y[e, i] * ex[kk - i]
         Y[c, kk] += R
         last = kk
-        mag = abs(R) * Lp
+        mag = cabs(R) * Lp
         Lp *= L
         if mag > top:
             top = mag
@@ -502,7 +529,9 @@ def first_negative(B, N, lam, BIN, L, stack, D, t0):
 # ------------------------------------------------------------------------------------------------
 # the pool of pieces and the channels
 # ------------------------------------------------------------------------------------------------
-# PF (cap, 3) float: t0 (emission start), valid_until (inf: exact), ref (bit history: p - x)
+# PF (cap, 5) float: t0 (emission start), valid_until (inf: exact), ref (bit history: p - x), and
+#    int f, int f^2 over the piece's whole span once its successor is emitted (NaN until computed:
+#    the energy account sums them instead of integrating every piece in flight again)
 # PI (cap, 4) int: next, term start, term count, flag (bit history: the branch)
 # TK (tcap,) int: e * DC + d;  TC (tcap,) complex: coefficient
 # CNT int: pieces, terms, (unused), overflow
@@ -534,7 +563,7 @@ def blk_prune(B, N, lam, tol, Lb):
         re = lam[e].real
         for d in range(N[e]):
             c = B[e, d]
-            if c != 0.0 and abs(c) * _term_bound(re, d, Lb) < tol:
+            if c != 0.0 and cabs(c) * _term_bound(re, d, Lb) < tol:
                 B[e, d] = 0.0
     blk_trim(B, N)
 
@@ -577,15 +606,15 @@ def _same(B, N, S, NS, tol):
     top = 0.0
     for e in range(N.size):
         for d in range(max(N[e], NS[e])):
-            x = abs(B[e, d]) if d < N[e] else 0.0
-            y = abs(S[e, d]) if d < NS[e] else 0.0
+            x = cabs(B[e, d]) if d < N[e] else 0.0
+            y = cabs(S[e, d]) if d < NS[e] else 0.0
             top = max(top, x, y)
     lim = 1e-13 * top + tol
     for e in range(N.size):
         for d in range(max(N[e], NS[e])):
             x = B[e, d] if d < N[e] else 0.0j
             y = S[e, d] if d < NS[e] else 0.0j
-            if abs(x - y) > lim:
+            if cabs(x - y) > lim:
                 return False
     return True
 
@@ -611,6 +640,8 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
             PI[tail, 3] = flag
             PF[tail, 1] = valid
             PF[tail, 2] = ref
+            PF[tail, 3] = math.nan
+            PF[tail, 4] = math.nan
             return True
         if PF[tail, 1] == INF and PI[tail, 3] == flag and valid == INF and PF[tail, 2] == ref:
             if PI[tail, 2] == 0:
@@ -630,6 +661,8 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     PF[npc, 0] = a
     PF[npc, 1] = valid
     PF[npc, 2] = ref
+    PF[npc, 3] = math.nan
+    PF[npc, 4] = math.nan
     PI[npc, 0] = -1
     PI[npc, 1] = st
     PI[npc, 2] = nt
@@ -688,9 +721,17 @@ def chan_integrals(c, t, Z, CH_T, pool, B, N):
         a = max(t0, lo)
         b = min(tend, t)
         if b > a and PI[p, 2] > 0:
-            pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
-            s1 += blk_integral(B, N, lam, a - t0, b - t0)
-            s2 += blk_integral_sq(B, N, lam, a - t0, b - t0)
+            if nx >= 0 and a == t0 and b == tend:  # the whole of a closed piece: computed once
+                if math.isnan(PF[p, 3]) or math.isnan(PF[p, 4]):
+                    pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
+                    PF[p, 3] = blk_integral(B, N, lam, 0.0, tend - t0)
+                    PF[p, 4] = blk_integral_sq(B, N, lam, 0.0, tend - t0)
+                s1 += PF[p, 3]
+                s2 += PF[p, 4]
+            else:
+                pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
+                s1 += blk_integral(B, N, lam, a - t0, b - t0)
+                s2 += blk_integral_sq(B, N, lam, a - t0, b - t0)
         if tend >= t:
             break
         p = nx

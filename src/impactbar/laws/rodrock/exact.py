@@ -94,9 +94,9 @@ class PoolOverflow(ValueError):
 
 
 def _pool_bytes(pcap, tcap):
-    """The memory of a pool of ``pcap`` pieces (``PF``, ``PI``: 56 bytes each) and ``tcap`` terms
+    """The memory of a pool of ``pcap`` pieces (``PF``, ``PI``: 72 bytes each) and ``tcap`` terms
     (``TK``, ``TC``: 24 bytes each) of :func:`_workspace`."""
-    return pcap * 56 + tcap * 24
+    return pcap * 72 + tcap * 24
 
 
 def _roots(m, Z, b):
@@ -115,11 +115,17 @@ def _roots(m, Z, b):
 
 def _table(data, roots):
     """The exponent table: 0, the data's exponents and the roots, each once; the roots' indices."""
+    lam, index = _table_of(tuple(complex(x) for x in data), tuple(complex(r) for r in roots))
+    return np.array(lam, dtype=complex), list(index)
+
+
+@functools.lru_cache(maxsize=256)
+def _table_of(data, roots):
     lam = [0j]
-    for x in [*data, *roots]:
-        if all(complex(x) != y for y in lam):
-            lam.append(complex(x))
-    return np.array(lam, dtype=complex), [lam.index(complex(r)) for r in roots]
+    for x in (*data, *roots):
+        if all(x != y for y in lam):
+            lam.append(x)
+    return tuple(lam), tuple(lam.index(r) for r in roots)
 
 
 def _compliance(T, Z, lead_mass):
@@ -342,7 +348,7 @@ def _check_chain(name, times, imps):
 def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k, k_u, bit_mass=0.0,
                feed=0.0, impact_velocity=None, semi_infinite=False, t_max=None, record=True,
                max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, max_pool_bytes=None, initial=None,
-               drive=None, fixed_horizon=False, lean=False) -> ExactBlow:
+               drive=None, fixed_horizon=False, lean=False, _trusted=False) -> ExactBlow:
     r"""The blow of a rigidly moving, unstressed piston (or of a piston in any state given by its
     waves, under a drive) on a rod resting on the rock under the feed, every wave exact (theory §4d;
     the module's text says what is exact and how the end is decided).
@@ -435,7 +441,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         raise ValueError(f"max_windows = {max_windows} cannot hold even the piston's contact "
                          f"({2.0 * Tp.sum() / h:.3g} windows of the shortest travel time {h:.3g})")
     Zb = float(Zr[-1])
-    data = _Data(initial, drive, Tp) if initial is not None else None
+    data = _Data(initial, drive, Tp, trusted=_trusted) if initial is not None else None
     # scale: the largest of the impact force (the data's waves and drive) and the feed is 1
     scale = max(float(Zp[-1]) * V if data is None else data.scale, f)
     if scale == 0.0:
@@ -517,34 +523,47 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
 
 
+class _Drive:
+    """The drive of :func:`exact_blow` checked, with its exponents and the bound of its values
+    (made once for the many blows of one :class:`~impactbar.laws.rodrock.exactmap.ExactBlowMap`)."""
+
+    def __init__(self, drive):
+        starts, pieces = drive
+        starts = np.asarray(starts, dtype=float)
+        pieces = [_Data._piece("drive", x) for x in pieces]
+        if starts.ndim != 1 or starts.size != len(pieces) or starts.size == 0 or \
+                not np.all(np.isfinite(starts)) or starts[0] > 0.0 or np.any(np.diff(starts) <= 0.0):
+            raise ValueError("drive must be (starts, pieces): increasing finite starts, the first "
+                             "<= 0, one piece each")
+        self.value = (starts, pieces)
+        self.exponents = [e for x in pieces for e in x[0]]
+        spans = np.diff(np.append(starts, starts[-1] + 1.0))
+        self.bound = max(float(np.sum(np.abs(c) * np.maximum(L, 1.0) ** d))
+                         for (_, d, c), L in zip(pieces, spans, strict=True))
+
+
 class _Data:
     """The piston's waves at impact and the drive of :func:`exact_blow`, checked, with their
     exponents and scale."""
 
-    def __init__(self, initial, drive, Tp):
+    def __init__(self, initial, drive, Tp, *, trusted=False):
         init = list(initial)
         if len(init) != 2 * Tp.size:
             raise ValueError(f"initial must hold 2 pieces per piston segment ({2 * Tp.size}); got "
                              f"{len(init)}")
-        self.initial = [self._piece("initial", x) for x in init]
-        self.drive = None
+        # trusted: the pieces of initial_waves (arrays of the right types, finite where the modal
+        # state is: checked by the caller), and a drive already checked (a _Drive)
+        self.initial = init if trusted else [self._piece("initial", x) for x in init]
         exps = [e for x in self.initial for e in x[0]]
         bound = 0.0
         for (_e, d, c), T in zip(self.initial, np.repeat(Tp, 2), strict=True):
             bound = max(bound, float(np.sum(np.abs(c) * np.maximum(T, 1.0) ** d)))
+        if drive is not None and not isinstance(drive, _Drive):
+            drive = _Drive(drive)
+        self.drive = None if drive is None else drive.value
         if drive is not None:
-            starts, pieces = drive
-            starts = np.asarray(starts, dtype=float)
-            pieces = [self._piece("drive", x) for x in pieces]
-            if starts.ndim != 1 or starts.size != len(pieces) or starts.size == 0 or \
-                    not np.all(np.isfinite(starts)) or starts[0] > 0.0 or np.any(np.diff(starts) <= 0.0):
-                raise ValueError("drive must be (starts, pieces): increasing finite starts, the first "
-                                 "<= 0, one piece each")
-            self.drive = (starts, pieces)
-            exps += [e for x in pieces for e in x[0]]
-            spans = np.diff(np.append(starts, starts[-1] + 1.0))
-            bound = max(bound, max(float(np.sum(np.abs(c) * np.maximum(L, 1.0) ** d))
-                                   for (_, d, c), L in zip(pieces, spans, strict=True)))
+            exps += drive.exponents
+            bound = max(bound, drive.bound)
         self.exponents = list(dict.fromkeys(complex(e) for e in exps))
         self.scale = bound
 
@@ -591,7 +610,8 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     nch = 3 * J + 2
     init, drive = (None, None) if data is None else data
     ndrive = 0 if drive is None else len(drive[1])
-    PF = np.zeros((max(pcap, 2 * J + 1 + ndrive + 16), 3))
+    PF = np.zeros((max(pcap, 2 * J + 1 + ndrive + 16), 5))
+    PF[:, 3:] = math.nan  # the pieces' cached integrals (_exactpieces.chan_integrals)
     PI = np.zeros((PF.shape[0], 4), dtype=np.int64)
     extra = 0
     if init is not None:

@@ -341,13 +341,23 @@ class ExactBlowMap:
         """The :class:`~impactbar.laws.rodrock.exact.ExactBlow` of an arrival in state ``(q, q')``
         (the end on the shank), run to ``t_max`` (default the blow's duration); with ``lean`` only
         the solver's workspace and scale (:func:`~impactbar.laws.rodrock.exact.exact_blow`)."""
-        from .exact import exact_blow
+        from .exact import _Drive, exact_blow
 
         init = initial_waves(self.basis, q, v, self.p_end)
+        # the drive checked once per map (its many blows: a Jacobian's, the chord method's), the
+        # waves of a finite state trusted (a state that is not finite: checked, and refused, there)
+        trusted = bool(np.all(np.isfinite(q)) and np.all(np.isfinite(v)) and math.isfinite(self.p_end))
+        drive = self.drive
+        if trusted and drive is not None:
+            cached = getattr(self, "_checked_drive", None)
+            if cached is None or cached[0] is not drive:
+                cached = (drive, _Drive(drive))
+                self._checked_drive = cached
+            drive = cached[1]
         return exact_blow(self.basis.travel, self.basis.impedance, self.rod_times, self.rod_impedances,
-                          initial=init, drive=self.drive, fixed_horizon=True,
+                          initial=init, drive=drive, fixed_horizon=True,
                           t_max=self.duration if t_max is None else float(t_max), record=record,
-                          lean=lean, semi_infinite=self.rod.semi_infinite, **self.params)
+                          lean=lean, semi_infinite=self.rod.semi_infinite, _trusted=trusted, **self.params)
 
     def _end(self, shank, gap, permanent):
         """The struck end's position after the blow from the stop of the next flight: the shank's
