@@ -93,6 +93,11 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
 #     (semi-infinite rod), 9 p at the start, 10 time of p_max, 11 episode start time, 12 episode
 #     start p, 13 int G^2/Z spare, 14 the drive's work on the piston; BI: 0 branch, 1 episodes
 # EP (cap, 5): episodes t_start, t_end, p_start, p_end, dissipated
+# RD (1 + n, 6) complex: the switch log (the tangent run's schedule, :mod:`._exacttangent`), kept
+#     only when it has more than its header row: RD[0, 0] the count, RD[0, 1] 1 once full; row i + 1:
+#     time, code (LOG_SEP, LOG_RECON, LOG_BIT + the new branch) and, for a re-contact, the contact
+#     force just after it, the jump of the shank's velocity and the gap's rate just before it; for
+#     a separation the waves arriving just before it; for the bit, p' just before (a massless bit)
 # CI: 0 status, 1 ended_by, 2 windows done, 3 (unused), 4 crossing searches given up, 5 separations,
 #     6 re-contacts, 7 degree limit reached; CT: 0 time reached, 1 last separation, 2 last loading end,
 #     3 piston momentum, 4 piston energy, 5 rod momentum, 6 rod wave energy, 7 Psi, 8 yield
@@ -103,6 +108,37 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
 #: ringing on a stiff rock bounces on it (2 switches a bounce: 64 gave up there, its energy account
 #: off by 7e-2, rod 4 long, k_u 4e5, bit mass 0.3); past it the search is given up (`uncertainty`)
 MAX_BIT_SWITCHES = 1_000_000
+
+#: the switch log's codes (RD): the piston leaves the shank, touches it again, the bit's new branch
+LOG_SEP, LOG_RECON, LOG_BIT = 1, 2, 10
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _log(RD, t, code, x1, x2, x3):
+    """Append a switch at ``t`` to the log ``RD`` (nothing where it has only its header row)."""
+    if RD.shape[0] <= 1:
+        return
+    n = int(RD[0, 0].real)
+    if n + 1 >= RD.shape[0]:
+        RD[0, 1] = 1.0
+        return
+    RD[n + 1, 0] = t
+    RD[n + 1, 1] = code
+    RD[n + 1, 2] = x1
+    RD[n + 1, 3] = x2
+    RD[n + 1, 4] = x3
+    RD[0, 0] = n + 1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _log_recontact(RD, t, f, g, gd, ZL, ZR):
+    """Log a re-contact at ``t`` from the arriving waves ``f``, ``g`` and the gap's rate ``gd`` there:
+    the contact force ``N`` just after, the jump of the shank's velocity (free ``-2 g/Z_R`` to welded
+    ``(2 f - N)/Z_L``)."""
+    if RD.shape[0] <= 1:
+        return
+    N = 2.0 * (ZR * f + ZL * g) / (ZL + ZR)
+    _log(RD, t, LOG_RECON, N, (2.0 * f - N) / ZL + 2.0 * g / ZR, gd)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -251,6 +287,16 @@ def node_contact(ws, t, t1):
                 flips += 1
                 CI[5] += 1
                 CT[1] = a
+                if RD.shape[0] > 1:  # the waves arriving just before (the pieces before a, if new)
+                    fm = blk_value(WB[0], WN[0], lam, 0.0)
+                    gm = blk_value(WB[1], WN[1], lam, 0.0)
+                    if cf != NSI[j, 0] and NSI[j, 0] >= 0:
+                        _load(ws, 12, fch, NSI[j, 0], a)
+                        fm = blk_value(WB[12], WN[12], lam, 0.0)
+                    if cg != NSI[j, 1] and NSI[j, 1] >= 0:
+                        _load(ws, 12, gch, NSI[j, 1], a)
+                        gm = blk_value(WB[12], WN[12], lam, 0.0)
+                    _log(RD, a, LOG_SEP, fm, gm, 0.0)
                 continue
             if dirty:
                 blk_set_comb(WB[2], WN[2], 1.0, WB[4], WN[4], -1.0, WB[1], WN[1])
@@ -267,6 +313,9 @@ def node_contact(ws, t, t1):
             blk_set_comb(WB[5], WN[5], 2.0 / ZL, WB[0], WN[0], -1.0 / ZL, WB[4], WN[4])
             NSF[j, 1] += blk_integral(WB[5], WN[5], lam, 0.0, te)
             if ts > 0.0:
+                if RD.shape[0] > 1:
+                    _log(RD, a + ts, LOG_SEP, blk_value(WB[0], WN[0], lam, ts),
+                         blk_value(WB[1], WN[1], lam, ts), 0.0)
                 a += ts
                 NSI[j, 3] = 0
                 NSF[j, 0] = 0.0
@@ -297,6 +346,10 @@ def node_contact(ws, t, t1):
                 dirty = True
                 flips += 1
                 CI[6] += 1
+                if RD.shape[0] > 1:
+                    _log_recontact(RD, a, blk_value(WB[0], WN[0], lam, 0.0),
+                                   blk_value(WB[1], WN[1], lam, 0.0), blk_value(WB[5], WN[5], lam, 0.0),
+                                   ZL, ZR)
                 continue
             if dirty:
                 blk_clear(WB[2], WN[2])
@@ -314,6 +367,10 @@ def node_contact(ws, t, t1):
             te = L if tc < 0.0 else tc
             NSF[j, 1] += -2.0 / ZR * blk_integral(WB[1], WN[1], lam, 0.0, te)
             if tc > 0.0:
+                if RD.shape[0] > 1:
+                    _log_recontact(RD, a + tc, blk_value(WB[0], WN[0], lam, tc),
+                                   blk_value(WB[1], WN[1], lam, tc), blk_value(WB[5], WN[5], lam, tc),
+                                   ZL, ZR)
                 a += tc
                 NSF[j, 0] = 0.0
                 NSI[j, 3] = 1
@@ -377,6 +434,23 @@ def _episode_end(ws, t, p):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def bit_input(ws, a, t1):
+    """The wave ``F`` arriving at the bit from ``a`` (block 0) and its forcing ``E = 2 F + f`` (block
+    6): the end of that piece (at most ``t1``) and its validity."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    J = SZ.size
+    fch = 2 * (J - 1)
+    cf, nb = _advance(ws, fch, a)
+    vf = _load(ws, 0, fch, cf, a)
+    NSI[J, 0] = cf
+    blk_clear(WB[6], WN[6])
+    blk_axpy(WB[6], WN[6], 2.0, WB[0], WN[0])
+    blk_add_const(WB[6], WN[6], PR[3])
+    return min(nb, t1), vf
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def node_bit(ws, t, t1):
     """The bit and the rock: ``m p'' + Z p' + R(p) = 2 F + f`` on the branches of the bilinear law,
     the reflected wave ``G = F - Z p'`` (absorbed on a semi-infinite rod)."""
@@ -384,24 +458,16 @@ def node_bit(ws, t, t1):
      RT, RC, RD, EP, CI, CT) = ws
     SCR = (WB[13], WN[13], WB[14], WN[14], WB[15], WN[15])
     J = SZ.size
-    fch = 2 * (J - 1)
     goch = 2 * J - 1
     hch = 3 * J + 1
     k = PR[0]
     ku = PR[1]
-    f = PR[3]
     Z = PR[4]
     semi = PR[7] != 0.0
     record = PR[23] != 0.0
     a = t
     while True:
-        cf, nb = _advance(ws, fch, a)
-        b = min(nb, t1)
-        vf = _load(ws, 0, fch, cf, a)
-        NSI[J, 0] = cf
-        blk_clear(WB[6], WN[6])
-        blk_axpy(WB[6], WN[6], 2.0, WB[0], WN[0])
-        blk_add_const(WB[6], WN[6], f)
+        b, vf = bit_input(ws, a, t1)
         stall = 0  # switches at one instant (a chatter of the branches: given up past 64)
         switches = 0  # switches in this arrival interval: a bit ringing on a stiff rock bounces
         # thousands of times (2 switches a bounce; the bound only keeps a call's cost finite)
@@ -491,6 +557,7 @@ def node_bit(ws, t, t1):
             blk_shift(WB[0], WN[0], te, lam, BIN)
             blk_shift(WB[6], WN[6], te, lam, BIN)
             turned = br == LOAD
+            pm = BS[2]  # (a massless bit's: p' at the end of the last piece, logged)
             if br == LOAD:  # unloading from p_max
                 _episode_end(ws, a, x1)
                 BI[0] = ELASTIC
@@ -515,6 +582,7 @@ def node_bit(ws, t, t1):
                 BS[1] = 0.0
                 BS[2] = w1
                 BS[0] = BS[5]
+            _log(RD, a, LOG_BIT + BI[0], pm, 0.0, 0.0)
         if b >= t1:
             return True
         a = b

@@ -348,7 +348,7 @@ def _check_chain(name, times, imps):
 def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k, k_u, bit_mass=0.0,
                feed=0.0, impact_velocity=None, semi_infinite=False, t_max=None, record=True,
                max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, max_pool_bytes=None, initial=None,
-               drive=None, fixed_horizon=False, lean=False, _trusted=False) -> ExactBlow:
+               drive=None, fixed_horizon=False, lean=False, _trusted=False, _log=0) -> ExactBlow:
     r"""The blow of a rigidly moving, unstressed piston (or of a piston in any state given by its
     waves, under a drive) on a rod resting on the rock under the feed, every wave exact (theory §4d;
     the module's text says what is exact and how the end is decided).
@@ -471,7 +471,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     nr = 2 if m > 0.0 else 1
     RT = np.zeros((3, 2), dtype=complex)
     RC = np.zeros((3, 2), dtype=np.int64)
-    RD = np.zeros((3, 2), dtype=complex)
+    RD = np.zeros((1 + _log, 6), dtype=complex)  # the switch log (_exactkernel), _log rows
     i = 0
     for br in range(3):
         for q in range(nr):
@@ -501,6 +501,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     while pcap > 1024 and _pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     while True:
+        RD[0] = 0.0  # (a run again with a larger pool logs afresh)
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
                         None if data is None else data.terms(lam, scale))
         if data is not None and not lean:  # the piston's energy at impact: its waves' (kinetic and

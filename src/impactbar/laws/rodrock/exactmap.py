@@ -261,6 +261,14 @@ def project(basis: ModalBasis, hist, t: float, end_position: float, heads=None):
     piston_integrals((PF, PI, TK, TC, lam, _binomials()), np.asarray(heads, dtype=np.int64),
                      np.ascontiguousarray(basis.travel), float(t), np.ascontiguousarray(basis.omega), out)
     out *= scale
+    return modal_state(basis, out, end_position)
+
+
+def modal_state(basis: ModalBasis, out, end_position: float):
+    """The modal state ``(q, q')`` from the piston's wave integrals ``out`` (shape ``(P, N + 1, 2)``:
+    ``int F e^{i omega_n theta}`` and ``int G e^{i omega_n theta}`` per segment, as
+    :func:`~impactbar.laws.rodrock._exactmodal.piston_integrals` gives them) and the struck end's
+    position: the projections of the module's text (linear in both)."""
     Im = out[..., 0] - out[..., 1]  # int (F - G) e^{i w theta}, shape (P, M)
     Ip = out[..., 0] + out[..., 1]  # int (F + G) e^{i w theta}
     a, b = basis.a.T, basis.b.T  # (P, M)
@@ -337,10 +345,11 @@ class ExactBlowMap:
         h = float(min(self.basis.travel.min(), self.rod_times.min()))
         self.drive = drive_pieces(load, self.t0, self.duration, lead=h)
 
-    def solve(self, q, v, *, t_max=None, record=False, lean=False):
+    def solve(self, q, v, *, t_max=None, record=False, lean=False, log=0):
         """The :class:`~impactbar.laws.rodrock.exact.ExactBlow` of an arrival in state ``(q, q')``
         (the end on the shank), run to ``t_max`` (default the blow's duration); with ``lean`` only
-        the solver's workspace and scale (:func:`~impactbar.laws.rodrock.exact.exact_blow`)."""
+        the solver's workspace and scale (:func:`~impactbar.laws.rodrock.exact.exact_blow`), with
+        ``log`` rows of its switch log (:mod:`~impactbar.laws.rodrock.exactjac`)."""
         from .exact import _Drive, exact_blow
 
         init = initial_waves(self.basis, q, v, self.p_end)
@@ -357,7 +366,8 @@ class ExactBlowMap:
         return exact_blow(self.basis.travel, self.basis.impedance, self.rod_times, self.rod_impedances,
                           initial=init, drive=drive, fixed_horizon=True,
                           t_max=self.duration if t_max is None else float(t_max), record=record,
-                          lean=lean, semi_infinite=self.rod.semi_infinite, _trusted=trusted, **self.params)
+                          lean=lean, semi_infinite=self.rod.semi_infinite, _trusted=trusted, _log=log,
+                          **self.params)
 
     def _end(self, shank, gap, permanent):
         """The struck end's position after the blow from the stop of the next flight: the shank's

@@ -297,12 +297,15 @@ class RodRock(ContactLaw):
     def impact_map(self, model, load, t, y_minus):
         """The contact step as a map of the arrival state (theory §4d): ``y_plus`` the state
         :meth:`window` after the impact (positions from the advanced shank; the exact blow's, or
-        the lattice's, :meth:`blow_method`), with its Jacobians by
-        **central finite differences** (the blow is piecewise smooth in the state:
-        smooth while the piston does not hit the shank again inside the blow): steps
-        ``h = 1e-6 |y_minus|_inf`` (relative, so that the map's Jacobian is the same at every scale of
-        the load) in every state component and ``h_t = 1e-6`` in ``t``
-        (truncation ``O(h^2)``, rounding ``O(eps/h)``: about 1e-10 relative), ``4 N + 6`` blows.
+        the lattice's, :meth:`blow_method`), with its Jacobians. For exact blows the Jacobians are
+        exact (theory §4d, "the exact blow's Jacobian": tangent runs of the blow along each state
+        direction and the impact time, the switches held, a re-contact's move carried as impulses;
+        :func:`~impactbar.laws.rodrock.exactjac.exact_impact_map`); on the lattice, and where the
+        exact map has no derivative (a re-contact at zero closing speed), **central finite
+        differences**: steps ``h = 1e-6 |y_minus|_inf`` (relative, so that the map's Jacobian is the
+        same at every scale of the load) in every state component and ``h_t = 1e-6`` in ``t``
+        (truncation ``O(h^2)``, rounding ``O(eps/h)``: about 1e-10 relative where the map is smooth
+        on that scale), ``4 N + 6`` blows.
 
         Returns
         -------
@@ -310,9 +313,9 @@ class RodRock(ContactLaw):
         jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
         jac_t : numpy.ndarray, shape (2 N + 2,)
         """
-        from .step import blow_map, fd_impact_map
+        from .step import blow_map, map_with_jacobians
 
-        return fd_impact_map(blow_map(model, load, float(t)), y_minus, t)
+        return map_with_jacobians(blow_map(model, load, float(t)), y_minus, t)
 
     def impact_state(self, model, load, t, y_minus):
         """``y_plus`` of :meth:`impact_map` alone: one blow, no finite differences."""

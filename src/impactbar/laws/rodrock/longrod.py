@@ -96,11 +96,11 @@ class SteppedLongRod(ContactLaw):
         return ExactBlowMap(model, load, float(t), rod=self._spec(model))
 
     def impact_map(self, model, load, t, y_minus):
-        """The contact step as a map of the arrival state, with its Jacobians by central finite
-        differences (:func:`~impactbar.laws.rodrock.step.fd_impact_map`: ``4 N + 6`` exact blows)."""
-        from .step import fd_impact_map
+        """The contact step as a map of the arrival state, with its exact Jacobians
+        (:func:`~impactbar.laws.rodrock.step.map_with_jacobians`: the exact blow's tangent runs)."""
+        from .step import map_with_jacobians
 
-        return fd_impact_map(self._map(model, load, t), y_minus, t)
+        return map_with_jacobians(self._map(model, load, t), y_minus, t)
 
     def impact_state(self, model, load, t, y_minus):
         """``y_plus`` of :meth:`impact_map` alone: one exact blow."""

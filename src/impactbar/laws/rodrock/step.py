@@ -8,7 +8,7 @@ import numpy as np
 
 from .contact import BlowMap, RockContact
 
-__all__ = ["blow_map", "fd_impact_map", "rock_contact"]
+__all__ = ["blow_map", "fd_impact_map", "map_with_jacobians", "rock_contact"]
 
 
 def rock_contact(model, load, t0: float, q, v, *, cells_per_piston: int | None = None,
@@ -50,6 +50,31 @@ def blow_map(model, load, t0, *, cells_per_piston=None, duration=None):
 
         return ExactBlowMap(model, load, t0, duration=duration)
     return BlowMap(model, load, t0, cells_per_piston=cells_per_piston, duration=duration)
+
+
+def map_with_jacobians(step, y_minus, t):
+    """A contact step's map ``y_plus`` of the arrival state ``y_minus`` at load time ``t`` with its
+    Jacobians (:meth:`RodRock.impact_map`): exact by the blow's tangent runs for an
+    :class:`~impactbar.laws.rodrock.exactmap.ExactBlowMap`
+    (:func:`~impactbar.laws.rodrock.exactjac.exact_impact_map`, ``2 N + 2`` tangent runs), by central
+    differences (:func:`fd_impact_map`) for the lattice's :class:`BlowMap` and where the exact map
+    has no derivative there (a grazing re-contact).
+
+    Returns
+    -------
+    y_plus : numpy.ndarray, shape (2 N + 2,)
+    jac_y : numpy.ndarray, shape (2 N + 2, 2 N + 2)
+    jac_t : numpy.ndarray, shape (2 N + 2,)
+    """
+    from .exactmap import ExactBlowMap
+
+    if isinstance(step, ExactBlowMap):
+        from .exactjac import exact_impact_map
+
+        out = exact_impact_map(step, y_minus, t)
+        if out is not None:
+            return out
+    return fd_impact_map(step, y_minus, t)
 
 
 def fd_impact_map(step, y_minus, t):

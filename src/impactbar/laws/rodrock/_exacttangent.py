@@ -1,0 +1,462 @@
+"""Compiled tangent run of the exact blow (theory §4d, "the exact blow's Jacobian"): the derivative of
+the blow's end state along a direction of its data, exact.
+
+Between its switches the blow is linear in its data: the junctions and the piston-shank weld are
+algebraic, the free ends reflect, the bit obeys a linear equation on each branch of the rock. So the
+derivative of every wave along a direction of the data (the piston's modal state at impact, the
+drive) is the same chain run on the direction's waves with the switches held where the blow put
+them (the schedule the primal run logs, :data:`~impactbar.laws.rodrock._exactkernel.LOG_SEP` ...),
+plus what moving a switch moves:
+
+- a switch across which every node's law is continuous moves nothing to first order: the piston
+  leaving the shank (the force ``N`` falls to zero, the gap opens with zero rate), and every switch
+  of the bit (its force ``R(p)`` is continuous across loading, unloading, lift-off and landing;
+  ``p_max`` moves with ``p`` where ``p' = 0``, so ``p_perm`` is carried as a state);
+- where the piston touches the shank again the weld's force jumps from 0 to ``N_+``: the contact
+  time moves by ``dt = -dgap / gap'`` and both waves the contact emits get an impulse (a Dirac) of
+  weight ``-N_+ dt``; the shank's position moves by ``-[v_s] dt``;
+- a switch that a moving step sets off (the step a re-contact or a drive's jump sent arrives and at
+  once turns the weld's force tensile, or a massless bit's ``p'`` negative) moves with the step, by
+  its ``dt``: the piston leaves with the weld's last force ``N_-`` (an impulse ``N_- dt`` on both
+  waves), the gap opens at its rate after the step, the shank moves at its welded speed until then;
+  ``p_max`` grows by ``p'_- dt``.
+
+The impulses are carried as such, each channel a list of (emission time, weight): a junction and a
+weld transmit and reflect them by the same coefficients as waves; a free end reflects them; a free
+piston end adds ``-2 w/Z`` to the gap; the bit takes ``2 w`` into ``Z p'`` (massless: ``p`` jumps by
+``2 w/Z``, the reflected impulse ``-w``) or into ``m p''`` (``p'`` jumps by ``2 w/m``, reflected
+``+w``). Those in the piston at the end are projected on its modes like its waves.
+
+The tangent workspace is the primal's layout (:func:`impactbar.laws.rodrock.exact._workspace`, no
+feed, nothing recorded), its ``RD`` the primal's log read as the schedule; ``tg`` holds the
+impulses: ``IT`` emission times, ``IW`` weights, ``IN`` the next impulse of the same channel,
+``IJ`` the primal's step each is the derivative of (its shift is ``-w/jump``), ``ICH (nch, 2)``
+each channel's last impulse and its receiver's next, ``TCUR (7,)`` impulses stored, full, the
+contact's and the bit's schedule cursors, a failure code (1 a grazing re-contact, where the map has
+no derivative; 2 the schedule's branches out of step; 3 a switch met by an impulse that did not set
+it off, or by steps moving apart), and the separations and the unloadings that a moving step set
+off.
+"""
+
+from __future__ import annotations
+
+import cmath
+import math
+
+import numba
+
+from ...dynamics._kernel import CACHE
+from ._exactkernel import (
+    LOG_BIT,
+    LOG_SEP,
+    _advance,
+    _emit,
+    _load,
+    bit_input,
+    bit_solve,
+    node_end,
+    node_junction,
+)
+from ._exactpieces import (
+    ELASTIC,
+    FREE,
+    INF,
+    LOAD,
+    blk_axpy,
+    blk_clear,
+    blk_eval,
+    blk_integral,
+    blk_set_comb,
+    blk_shift,
+)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def imp_emit(tg, c, t, w, jump):
+    """An impulse of weight ``w`` leaves on channel ``c`` at ``t``: the derivative of the primal's
+    step ``jump`` there, moving by ``-w/jump`` (the emissions on a channel come in time order)."""
+    IT, IW, IJ, IN, ICH, TCUR = tg
+    if w == 0.0:
+        return
+    n = TCUR[0]
+    if n >= IT.size:
+        TCUR[1] = 1
+        return
+    IT[n] = t
+    IW[n] = w
+    IJ[n] = jump
+    IN[n] = -1
+    tail = ICH[c, 0]
+    if tail >= 0:
+        IN[tail] = n
+    if ICH[c, 1] < 0:
+        ICH[c, 1] = n
+    ICH[c, 0] = n
+    TCUR[0] = n + 1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def imp_arrival(tg, c, T):
+    """When the next impulse not yet received on channel ``c`` (travel time ``T``) arrives (inf:
+    none in flight)."""
+    IT, IW, IJ, IN, ICH, TCUR = tg
+    n = ICH[c, 1]
+    return INF if n < 0 else IT[n] + T
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def imp_pop(tg, c):
+    """Receive channel ``c``'s next impulse: its weight and its step."""
+    IT, IW, IJ, IN, ICH, TCUR = tg
+    n = ICH[c, 1]
+    ICH[c, 1] = IN[n]
+    return IW[n], IJ[n]
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _shift(tg, c1, T1, c2, T2, ts, dt):
+    """The shift ``-w/jump`` shared by the impulses arriving at ``ts`` on channels ``c1`` and ``c2``
+    (``c2`` < 0: one channel), compared with ``dt`` (NaN: none yet); NaN where they differ or a step
+    is zero (no one step to move a switch with)."""
+    IT, IW, IJ, IN, ICH, TCUR = tg
+    for side in range(2):
+        c = c1 if side == 0 else c2
+        T = T1 if side == 0 else T2
+        if c < 0:
+            continue
+        n = ICH[c, 1]
+        while n >= 0 and _coincide(ts, IT[n] + T):
+            if IJ[n] == 0.0:
+                return math.nan
+            d = -IW[n] / IJ[n]
+            if math.isnan(dt):
+                dt = d
+            elif abs(d - dt) > 1e-9 * max(abs(d), abs(dt)):
+                return math.nan
+            n = IN[n]
+    return dt
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _next_event(RD, cur, bit):
+    """The schedule's next row at or after ``cur`` of the contact (``bit`` False) or of the bit; -1
+    when none is left."""
+    n = int(RD[0, 0].real)
+    i = max(cur, 1)  # (row 0 is the log's header)
+    while i <= n:
+        code = int(RD[i, 1].real)
+        if (code >= LOG_BIT) == bit:
+            return i
+        i += 1
+    return -1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _coincide(ts, ti):
+    """Whether an impulse arriving at ``ti`` meets a switch at ``ts`` (to ``1e-12`` of the clock): a
+    moving step that may be what set the switch off, whose derivative the schedule does not hold."""
+    return abs(ti - ts) <= 1e-12 * (1.0 + abs(ts))
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _pass(tg, c1, T1, c2, T2, t1, out1, out2, s11, s12, s21, s22):
+    """Impulses arriving before ``t1`` on channels ``c1`` and ``c2`` (travel times ``T1``, ``T2``) sent
+    on by a stateless node, in the order they arrive (each output channel's list stays in time
+    order): ``s11`` times one from ``c1`` on ``out1``, ``s12`` on ``out2``; ``s21``, ``s22`` those
+    from ``c2`` (an output channel < 0: none)."""
+    while True:
+        a1 = imp_arrival(tg, c1, T1)
+        a2 = imp_arrival(tg, c2, T2)
+        t = min(a1, a2)
+        if t >= t1:
+            return
+        if a1 <= a2:
+            w, jp = imp_pop(tg, c1)
+            r1, r2 = s11, s12
+        else:
+            w, jp = imp_pop(tg, c2)
+            r1, r2 = s21, s22
+        if out1 >= 0:
+            imp_emit(tg, out1, t, r1 * w, r1 * jp)
+        if out2 >= 0:
+            imp_emit(tg, out2, t, r2 * w, r2 * jp)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def t_node_contact(ws, tg, t, t1):
+    """The piston's struck end and the shank on the schedule: welded or free as the primal was, the
+    gap and the shank's position carried, a re-contact's impulses emitted (the module's text)."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    TCUR = tg[5]
+    j = int(PR[21])
+    fch = 2 * (j - 1)
+    gch = 2 * j + 1
+    ZL = SZ[j - 1]
+    ZR = SZ[j]
+    s = ZL + ZR
+    a = t
+    dirty = False
+    while True:
+        cf, nbf = _advance(ws, fch, a)
+        cg, nbg = _advance(ws, gch, a)
+        if cf != NSI[j, 0] or cg != NSI[j, 1]:
+            dirty = True
+        b = min(nbf, nbg, t1)
+        k = _next_event(RD, TCUR[2], False)
+        TCUR[2] = k if k >= 0 else int(RD[0, 0].real) + 1
+        ts = RD[k, 0].real if k >= 0 else INF
+        ti = min(imp_arrival(tg, fch, CH_T[fch]), imp_arrival(tg, gch, CH_T[gch]))
+        e = max(min(b, ts, ti), a)
+        valid = min(_load(ws, 0, fch, cf, a), _load(ws, 1, gch, cg, a))
+        L = e - a
+        if NSI[j, 3] == 1:
+            blk_set_comb(WB[4], WN[4], 2.0 * ZR / s, WB[0], WN[0], 2.0 * ZL / s, WB[1], WN[1])
+            if dirty:
+                blk_set_comb(WB[2], WN[2], 1.0, WB[4], WN[4], -1.0, WB[1], WN[1])
+                blk_set_comb(WB[3], WN[3], 1.0, WB[4], WN[4], -1.0, WB[0], WN[0])
+                if not (_emit(ws, 2 * j, a, 2, valid, 0, 0.0) and _emit(ws, 2 * j - 1, a, 3, valid, 0, 0.0)):
+                    return False
+                dirty = False
+            if L > 0.0:
+                blk_set_comb(WB[5], WN[5], 2.0 / ZL, WB[0], WN[0], -1.0 / ZL, WB[4], WN[4])
+                NSF[j, 1] += blk_integral(WB[5], WN[5], lam, 0.0, L)
+        else:
+            if dirty:
+                blk_clear(WB[2], WN[2])
+                blk_axpy(WB[2], WN[2], -1.0, WB[1], WN[1])
+                blk_clear(WB[3], WN[3])
+                blk_axpy(WB[3], WN[3], -1.0, WB[0], WN[0])
+                if not (_emit(ws, 2 * j, a, 2, valid, 0, 0.0) and _emit(ws, 2 * j - 1, a, 3, valid, 0, 0.0)):
+                    return False
+                dirty = False
+            if L > 0.0:
+                blk_set_comb(WB[5], WN[5], -2.0 / ZL, WB[0], WN[0], -2.0 / ZR, WB[1], WN[1])
+                NSF[j, 0] += blk_integral(WB[5], WN[5], lam, 0.0, L)
+                NSF[j, 1] += -2.0 / ZR * blk_integral(WB[1], WN[1], lam, 0.0, L)
+        NSI[j, 0] = cf
+        NSI[j, 1] = cg
+        a = e
+        if k >= 0 and ts <= e:  # the schedule's switch (at once where overdue)
+            hit = _coincide(ts, min(imp_arrival(tg, fch, CH_T[fch]), imp_arrival(tg, gch, CH_T[gch])))
+            code = int(RD[k, 1].real)
+            gap = NSF[j, 0]
+            NSF[j, 0] = 0.0
+            if code == LOG_SEP:
+                NSI[j, 3] = 0
+                if hit:  # a moving step set it off: the weld's last force, the gap's and the shank's
+                    dt = _shift(tg, fch, CH_T[fch], gch, CH_T[gch], ts, math.nan)  # rates before it
+                    if math.isnan(dt):
+                        TCUR[4] = 3
+                        return True
+                    fm = RD[k, 2].real
+                    gm = RD[k, 3].real
+                    Nm = 2.0 * (ZR * fm + ZL * gm) / s
+                    imp_emit(tg, 2 * j, e, Nm * dt, -Nm)
+                    imp_emit(tg, 2 * j - 1, e, Nm * dt, -Nm)
+                    NSF[j, 0] = (2.0 * fm / ZL + 2.0 * gm / ZR) * dt
+                    NSF[j, 1] += ((2.0 * fm - Nm) / ZL + 2.0 * gm / ZR) * dt
+                    TCUR[5] += 1
+            else:
+                gd = RD[k, 4].real
+                if hit:
+                    TCUR[4] = 3
+                    return True
+                if not gd < 0.0:  # a grazing re-contact: no derivative
+                    TCUR[4] = 1
+                    return True
+                dts = -gap / gd
+                Np = RD[k, 2].real
+                imp_emit(tg, 2 * j, e, -Np * dts, Np)
+                imp_emit(tg, 2 * j - 1, e, -Np * dts, Np)
+                NSF[j, 1] += -RD[k, 3].real * dts
+                NSI[j, 3] = 1
+            TCUR[2] = k + 1
+            dirty = True
+            continue
+        if ti <= e:  # impulses arriving now
+            while imp_arrival(tg, fch, CH_T[fch]) <= e:
+                w, jp = imp_pop(tg, fch)
+                if NSI[j, 3] == 1:
+                    imp_emit(tg, 2 * j, e, 2.0 * ZR / s * w, 2.0 * ZR / s * jp)
+                    imp_emit(tg, 2 * j - 1, e, (ZR - ZL) / s * w, (ZR - ZL) / s * jp)
+                    NSF[j, 1] += 2.0 * w / s
+                else:
+                    imp_emit(tg, 2 * j - 1, e, -w, -jp)
+                    NSF[j, 0] += -2.0 * w / ZL
+            while imp_arrival(tg, gch, CH_T[gch]) <= e:
+                w, jp = imp_pop(tg, gch)
+                if NSI[j, 3] == 1:
+                    imp_emit(tg, 2 * j, e, (ZL - ZR) / s * w, (ZL - ZR) / s * jp)
+                    imp_emit(tg, 2 * j - 1, e, 2.0 * ZL / s * w, 2.0 * ZL / s * jp)
+                    NSF[j, 1] += -2.0 * w / s
+                else:
+                    imp_emit(tg, 2 * j, e, -w, -jp)
+                    NSF[j, 0] += -2.0 * w / ZR
+                    NSF[j, 1] += -2.0 * w / ZR
+            continue
+        if b >= t1:
+            return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def t_node_bit(ws, tg, t, t1):
+    """The bit and the rock on the schedule: each branch's linear equation for the derivative,
+    ``p_max`` and ``p_perm`` carried, arriving impulses taken (the module's text)."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    TCUR = tg[5]
+    J = SZ.size
+    fch = 2 * (J - 1)
+    goch = 2 * J - 1
+    k = PR[0]
+    ku = PR[1]
+    m = PR[2]
+    Z = PR[4]
+    semi = PR[7] != 0.0
+    a = t
+    while True:
+        b, vf = bit_input(ws, a, t1)  # (no feed in the tangent: E = 2 F)
+        while True:
+            br = BI[0]
+            ev = _next_event(RD, TCUR[3], True)
+            TCUR[3] = ev if ev >= 0 else int(RD[0, 0].real) + 1
+            ts = RD[ev, 0].real if ev >= 0 else INF
+            ti = imp_arrival(tg, fch, CH_T[fch])
+            e = max(min(b, ts, ti), a)
+            L = e - a
+            if L > 0.0:
+                series = bit_solve(ws, br, BS[1], BS[2], L)
+                valid = min(vf, a + L) if series else vf
+                if semi:
+                    blk_clear(WB[2], WN[2])
+                else:
+                    blk_set_comb(WB[2], WN[2], 1.0, WB[0], WN[0], -Z, WB[8], WN[8])
+                if not _emit(ws, goch, a, 2, valid, 0, 0.0):
+                    return False
+                x1, w1, _ = blk_eval(WB[7], WN[7], lam, L)
+                blk_shift(WB[0], WN[0], L, lam, BIN)
+                blk_shift(WB[6], WN[6], L, lam, BIN)
+                BS[1] = x1
+                BS[2] = w1
+                if br == LOAD:
+                    BS[3] = x1
+                    BS[4] = k * x1
+                    BS[5] = x1 - BS[4] / ku
+                a = e
+            if ev >= 0 and ts <= e:  # the schedule's switch
+                hit = _coincide(ts, imp_arrival(tg, fch, CH_T[fch]))
+                nxt = int(RD[ev, 1].real) - LOG_BIT
+                if hit and not (m == 0.0 and br == LOAD and nxt == ELASTIC):
+                    TCUR[4] = 3
+                    return True
+                if br == LOAD and nxt == ELASTIC:  # unloading from p_max: x = p - p_perm
+                    if hit:  # a moving step set it off: p_max moves with it (p' before it)
+                        dt = _shift(tg, fch, CH_T[fch], -1, 0.0, ts, math.nan)
+                        if math.isnan(dt):
+                            TCUR[4] = 3
+                            return True
+                        pd = RD[ev, 2].real
+                        BS[3] += pd * dt
+                        BS[4] = k * BS[3]
+                        BS[5] = BS[3] - BS[4] / ku
+                        BS[1] = BS[4] / ku - pd * dt
+                        TCUR[6] += 1
+                    else:
+                        BS[1] = BS[4] / ku
+                elif br == ELASTIC and nxt == LOAD:  # reloading: x = p
+                    BS[1] = BS[5] + BS[1]
+                elif not ((br == ELASTIC and nxt == FREE) or (br == FREE and nxt == ELASTIC)):
+                    TCUR[4] = 2
+                    return True
+                BI[0] = nxt
+                TCUR[3] = ev + 1
+                continue
+            if ti <= e:
+                while imp_arrival(tg, fch, CH_T[fch]) <= e:
+                    w, jp = imp_pop(tg, fch)
+                    if m == 0.0:  # Z p' takes 2 w: p jumps
+                        BS[1] += 2.0 * w / Z
+                        if not semi:
+                            imp_emit(tg, goch, e, -w, -jp)
+                    else:  # m p'' takes it: p' jumps
+                        BS[2] += 2.0 * w / m
+                        if not semi:
+                            imp_emit(tg, goch, e, w, jp)
+                continue
+            if e >= b:
+                break
+        if b >= t1:
+            return True
+        a = b
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def t_run(ws, tg):
+    """The tangent run to ``t_max`` window by window, as :func:`~._exactkernel.run`; ``CI[0]``: 0
+    done, 1 the pool full (again, larger), 2 the impulses' store full, 3 the schedule cannot be
+    followed (``tg``'s failure code)."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    TCUR = tg[5]
+    J = SZ.size
+    n_p = int(PR[21])
+    h = PR[17]
+    tmax = PR[18]
+    dch = 2 * J
+    while True:
+        w = CI[2]
+        t = w * h
+        if t >= tmax:
+            CI[0] = 0
+            return
+        t1 = min((w + 1) * h, tmax)
+        ok = node_end(ws, t, t1)  # f_out = p - g_in
+        _pass(tg, 1, CH_T[1], dch, CH_T[dch], t1, 0, -1, -1.0, 0.0, 1.0, 0.0)
+        for j in range(1, J):
+            if not ok:
+                break
+            if j == n_p:
+                ok = t_node_contact(ws, tg, t, t1)
+            else:
+                ok = node_junction(ws, j, t, t1)
+                ZL = SZ[j - 1]
+                ZR = SZ[j]
+                s = ZL + ZR
+                fch = 2 * (j - 1)
+                gch = 2 * j + 1
+                _pass(tg, fch, CH_T[fch], gch, CH_T[gch], t1, 2 * j, 2 * j - 1, 2.0 * ZR / s, (ZR - ZL) / s,
+                      (ZL - ZR) / s, 2.0 * ZL / s)
+        if ok and TCUR[4] == 0:
+            ok = t_node_bit(ws, tg, t, t1)
+        if not ok or CNT[3] != 0:
+            CI[0] = 1
+            return
+        if TCUR[1] != 0:
+            CI[0] = 2
+            return
+        if TCUR[4] != 0:
+            CI[0] = 3
+            return
+        CI[2] = w + 1
+        CT[0] = t1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def impulse_integrals(tg, travel, CH_T, t, om, out):
+    """The impulses in the piston's segments at ``t`` projected as :func:`~._exactmodal.piston_integrals`
+    projects its waves: ``out[i, n, 0] += w e^{i om_n theta}`` for an impulse on channel ``2 i`` at
+    ``theta = t - t_e`` (``t_e`` its emission), ``out[i, n, 1]`` for channel ``2 i + 1`` at
+    ``theta = T_i - t + t_e``."""
+    IT, IW, IJ, IN, ICH, TCUR = tg
+    for i in range(travel.size):
+        T = travel[i]
+        for side in range(2):
+            c = 2 * i + side
+            n = ICH[c, 1]
+            while n >= 0:
+                if IT[n] + CH_T[c] >= t:  # in flight at t
+                    theta = t - IT[n] if side == 0 else T - t + IT[n]
+                    for q in range(om.size):
+                        out[i, q, side] += IW[n] * cmath.exp(1j * om[q] * theta)
+                n = IN[n]
