@@ -715,7 +715,7 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     err = abs(available - (dissipated + rock_e + Ep + rod_e + radiated)) / available
     nep = int(BI[1])
     loads = EP[:nep].copy()
-    if br == P.LOAD:  # a loading under way at the end
+    if br == P.LOAD and p > BS[12]:  # a loading under way at the end
         loads = np.vstack((loads, [[BS[11], t_end, BS[12], p,
                                     0.5 * (1.0 - k / k_u) * k * (p - BS[12]) * (p + BS[12])]]))
     ended = _END_NAMES.get(int(CI[1]), "failed")
