@@ -127,14 +127,20 @@ def test_past_may_yield_the_rock_yields_again_within_the_bound():
     yields of the rock (near t = 18.7 and 50.5), which the exact blow carried on to the same
     ``t_max`` finds alike, and which took 0.017 of work against the bound of 0.30 the exact blow
     reported at its end."""
-    _later("a stiff piston on a two-segment rod, feed 0.8: two more loadings by t = 52")
+    first, _, ref = _later("a stiff piston on a two-segment rod, feed 0.8: two more loadings by t = 52")
+    assert round(first.duration, 1) == 8.6 and list(ref.loadings[1:, 0].round(1)) == [18.7, 50.5]
+    more, bound = ref.work_on_rock - first.work_on_rock, first.uncertainty * first.available_energy
+    assert (round(more, 3), round(bound, 2)) == (0.017, 0.30)
 
 
 @pytest.mark.slow
 def test_past_may_yield_a_stepped_piston_blow_yields_again_within_the_bound():
     """A stepped piston's blow with two re-contacts and three loadings, ``"may_yield"`` at t = 14.6:
     a fourth yield near t = 27 (0.0085 of work, the bound 0.090); the reference takes 17 s."""
-    _later("stepped piston, feed 0.2: a fourth loading by t = 29.2")
+    first, _, ref = _later("stepped piston, feed 0.2: a fourth loading by t = 29.2")
+    assert round(first.duration, 1) == 14.6 and round(ref.loadings[3, 0]) == 27
+    more, bound = ref.work_on_rock - first.work_on_rock, first.uncertainty * first.available_energy
+    assert (round(more, 4), round(bound, 3)) == (0.0085, 0.090)
 
 
 def test_a_stiff_unloading_on_a_long_soft_rod_is_the_independent_solution():
