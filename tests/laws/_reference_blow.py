@@ -7,21 +7,37 @@ It shares no code with :mod:`impactbar.laws.rodrock.exact` and its kernels, and 
   *piecewise Chebyshev interpolants* in time, fitted adaptively (16, 32, 64 first-kind points, a
   piece halved until its last coefficients fall below ``1e-14`` of its values), breaking only where
   a wave is not smooth (the impact, the arrival of a break, a switch);
+- the waves are the *total* ones: with a feed force ``f`` the rod starts statically compressed,
+  ``F = G = f/2`` in every rod segment, and the feed acts where it does, on the shank (the exact
+  solver instead carries the waves above that static state and puts ``f`` into the bit's equation);
 - the junctions are algebraic (welded: ``N = 2 (Z_b f_a + Z_a g_b)/(Z_a + Z_b)``; the piston's far
-  end free; the piston-shank interface welded while ``N >= 0``, free otherwise, its gap the integral
-  of the relative velocity, contact again where the gap closes);
-- at the bit, ``m p'' + Z p' + R(p) = 2 f`` on each branch of Lundberg's law (loading ``R = k p``,
-  unloading/reloading ``R = k_u (p - p_perm)``, lifted ``R = 0``) is solved by Duhamel's integral of
-  its impulse response (written out below, ``expm1`` and ``sin`` forms free of cancellation) against the
-  arriving wave, evaluated by Gauss-Legendre quadrature on panels graded geometrically towards both
-  ends (exact for the fast exponents of a stiff rock or a light bit);
+  end free; the piston-shank interface welded while the contact force
+  ``N = (2 Z_b f_a + 2 Z_a g_b - Z_a f)/(Z_a + Z_b)`` is ``>= 0`` (the shank's own force then
+  ``N + f``), free otherwise (the shank's force ``f``), its gap the integral of the relative
+  velocity, contact again where the gap closes);
+- at the bit, ``m p'' + Z p' + R(p) = 2 F`` (``F`` the total arriving wave, so ``2 F_dyn + f``) on
+  each branch of Lundberg's law (loading ``R = k p``, unloading/reloading ``R = k_u (p - p_perm)``,
+  lifted ``R = 0``) is solved by Duhamel's integral of its impulse response (written out below,
+  ``expm1`` and ``sin`` forms free of cancellation) against the arriving wave, evaluated by
+  Gauss-Legendre quadrature on panels graded geometrically towards both ends (exact for the fast
+  exponents of a stiff rock or a light bit); the bit starts at rest on fresh rock loaded to the
+  feed, ``p = f/k`` (``p`` from the rock's surface before the feed), on the loading branch;
 - every switch (separation, re-contact, unloading, reloading, lift-off, landing) is the first sign
   change of an interpolant, from the real roots of its colleague matrix (numpy ``chebroots``) and a
   sampled sign check, refined by ``brentq``.
 
-Units are the exact solver's: travel times, impedances, the rock's stiffnesses and the bit's mass as
-:func:`impactbar.laws.rodrock.exact.exact_blow` takes them, a rigid unstressed piston at ``V``, no
-feed. :func:`reference_blow` returns a :class:`Reference` with the quantities the issue names.
+Units are the exact solver's: travel times, impedances, the rock's stiffnesses, the bit's mass and the
+feed as :func:`impactbar.laws.rodrock.exact.exact_blow` takes them, a rigid unstressed piston at ``V``.
+:func:`reference_blow` returns a :class:`Reference` with the quantities the issue names, measured as
+the exact solver measures them (its conventions with a feed: ``advance`` from ``p = f/k``, the
+loading episodes from there, a rod junction's force above the feed's static ``f``, the bit's force
+total).
+
+The energy account, in the total waves: ``E_0 + f x_s + E_s = W + R^2/(2 k_u) + E_p + E_r + m v^2/2``,
+``x_s`` the shank's displacement (the integral of its velocity), ``E_s = f^2 C_rod/2 + f^2/(2 k_u)``
+the energy stored under the feed at impact (``C_rod = sum T_i/Z_i``), ``W`` the work the rock
+dissipated, ``E_p`` and ``E_r`` the wave energies ``int (F^2 + G^2) dt / Z`` of piston and rod (the
+rod's static strain included).
 """
 
 from __future__ import annotations
@@ -291,16 +307,22 @@ class Reference:
     recontacts: int
     energy_error: float
     histories: dict
+    available_energy: float = 0.0
+    feed_work: float = 0.0
+    rod_energy: float = 0.0
+    shank_displacement: float = 0.0
+    bit_velocity: float = 0.0
 
 
 class _Blow:
-    def __init__(self, Tp, Zp, Tr, Zr, k, k_u, m, V):
+    def __init__(self, Tp, Zp, Tr, Zr, k, k_u, m, V, feed=0.0):
         self.T = np.concatenate((Tp, Tr)).astype(float)
         self.Z = np.concatenate((Zp, Zr)).astype(float)
         self.P, self.J = len(Tp), self.T.size
         self.k, self.k_u, self.m, self.V = float(k), float(k_u), float(m), float(V)
+        self.feed = float(feed)
         self.h = float(self.T.min())
-        self.F = float(np.max(np.asarray(Zp) * V))  # force scale
+        self.F = max(float(np.max(np.asarray(Zp) * V)), self.feed)  # force scale
         self.eps = 1e-12 * self.h
         J = self.J
         self.R = [None] + [History() for _ in range(J)]   # emitted at node i - 1 into segment i
@@ -309,17 +331,21 @@ class _Blow:
         self.Rb, self.pb = History(), History()  # rock force, penetration
         for i in range(1, J + 1):
             Ti, Zi = self.T[i - 1], self.Z[i - 1]
-            v = 0.5 * Zi * V if i <= self.P else 0.0
-            self.R[i].add([(-Ti, 0.0, np.array([v]))], True)
-            self.L[i].add([(-Ti, 0.0, np.array([-v]))], True)
+            # the piston moving rigidly, unstressed; the rod at rest, compressed by the feed
+            F0, G0 = (0.5 * Zi * V, -0.5 * Zi * V) if i <= self.P else (0.5 * self.feed, 0.5 * self.feed)
+            self.R[i].add([(-Ti, 0.0, np.array([F0]))], True)
+            self.L[i].add([(-Ti, 0.0, np.array([G0]))], True)
         self.contact, self.gap = True, 0.0
         self.separations = self.recontacts = 0
-        # the bit: branch, penetration, velocity, rock force, p_max, R_max, p_perm
-        self.br, self.p, self.v, self.Rf, self.q = LOAD, 0.0, 0.0, 0.0, 0.0
-        self.pmax = self.Rmax = self.pperm = 0.0
+        # the bit: branch, penetration, velocity, rock force, p_max, R_max, p_perm; at rest on fresh
+        # rock loaded to the feed
+        p0 = self.p0 = self.feed / self.k
+        self.br, self.p, self.v, self.Rf, self.q = LOAD, p0, 0.0, self.feed, p0
+        self.pmax, self.Rmax = p0, self.feed
+        self.pperm = self.pmax - self.Rmax / self.k_u
         self.t_peak = 0.0
         self.episodes = []  # [t0, t1, p0, p1]
-        self.ep = [0.0, None, 0.0, None]
+        self.ep = [0.0, None, p0, None]
         Zb = self.Z[-1]
         rates = [k / Zb, k_u / Zb, 1.0 / self.h]
         osc = 0.0
@@ -393,10 +419,12 @@ class _Blow:
         f, g = self.f_in(i), self.g_in(i)
         Za, Zb = self.Z[i - 1], self.Z[i]
         fl = 1e-14 * self.F
+        fd = self.feed
         while x < y:
             if self.contact:
+                # the contact force N (the piston's end's); the shank's is N + f (the feed pushes it)
                 def N(t):
-                    return 2.0 * (Zb * f(t) + Za * g(t)) / (Za + Zb)
+                    return (2.0 * Zb * f(t) + 2.0 * Za * g(t) - Za * fd) / (Za + Zb)
 
                 Np = _fit(N, x, y, fl, [])
                 te = _first_exit(Np, x, self.F)
@@ -405,15 +433,17 @@ class _Blow:
                     Np = _fit(N, x, e, fl, []) if e < y else Np
                     self.N[i].add(Np, genuine)
                     self.L[i].add(_fit(lambda t, Np=Np: _peval(Np, t) - f(t), x, e, fl, []), genuine)
-                    self.R[i + 1].add(_fit(lambda t, Np=Np: _peval(Np, t) - g(t), x, e, fl, []), genuine)
+                    self.R[i + 1].add(_fit(lambda t, Np=Np: _peval(Np, t) + fd - g(t), x, e, fl, []),
+                                      genuine)
                 if te is not None:
                     self.contact, self.gap = False, 0.0
                     self.separations += 1
                     genuine = True
                 x = e
             else:
+                # v_shank - v_piston, the shank's end force f: v_s = (f - 2 g)/Z_b, v_p = 2 f_in/Z_a
                 def dgap(t):
-                    return -2.0 * g(t) / Zb - 2.0 * f(t) / Za
+                    return (fd - 2.0 * g(t)) / Zb - 2.0 * f(t) / Za
 
                 dp = _fit(dgap, x, y, 1e-14 * self.V, [])
                 gp, acc = [], self.gap
@@ -428,7 +458,7 @@ class _Blow:
                 if e > x + self.eps:
                     self.N[i].add([(x, e, np.array([0.0]))], genuine)
                     self.L[i].add(_fit(lambda t: -f(t), x, e, fl, []), genuine)
-                    self.R[i + 1].add(_fit(lambda t: -g(t), x, e, fl, []), genuine)
+                    self.R[i + 1].add(_fit(lambda t: fd - g(t), x, e, fl, []), genuine)
                     self.gap = float(_peval(gp, np.array([e]))[0]) if e < y else acc
                 if te is not None:
                     self.contact, self.gap = True, 0.0
@@ -624,22 +654,32 @@ class _Blow:
         Er = sum((self.R[i].integral(t_end - self.T[i - 1], t_end, True)
                   + self.L[i].integral(t_end - self.T[i - 1], t_end, True)) / self.Z[i - 1]
                  for i in range(P + 1, self.J + 1))
+        # the shank's displacement: the integral of its velocity (F - G)/Z over the blow
+        Ts, Zs = self.T[P], self.Z[P]
+        xs = (self.R[P + 1].integral(0.0, t_end) - self.L[P + 1].integral(-Ts, t_end - Ts)) / Zs
+        fd = self.feed
+        feed_work = fd * xs
+        stored = 0.5 * fd * fd * float(np.sum(self.T[P:] / self.Z[P:])) + fd * fd / (2.0 * k_u)
+        available = E0 + feed_work + stored
         rock = self.Rf ** 2 / (2.0 * k_u)
-        err = abs(E0 - (work + rock + Ep + Er + 0.5 * m * self.v ** 2)) / E0
+        rod = Er + 0.5 * m * self.v ** 2
+        err = abs(available - (work + rock + Ep + rod)) / available
         vals, times = [], []
         for j in range(1, self.J):
             v_, t_ = self.N[j].maximum(t_end)
-            vals.append(v_)
+            vals.append(v_ - (fd if j > P else 0.0))  # a rod junction's force above the feed's
             times.append(t_)
         vals.append(self.Rmax)
         times.append(self.t_peak)
         return Reference(
-            efficiency=work / E0, work_on_rock=work, rock_energy=rock, piston_energy=Ep,
+            efficiency=work / available, work_on_rock=work, rock_energy=rock, piston_energy=Ep,
             max_penetration=self.pmax, permanent_penetration=self.pmax - self.Rmax / k_u,
-            advance=self.p, rebound_velocity=V - imp / Mp, peak_values=np.array(vals),
+            advance=self.p - self.p0, rebound_velocity=V - imp / Mp, peak_values=np.array(vals),
             peak_times=np.array(times), loadings=loads, separations=self.separations,
             recontacts=self.recontacts, energy_error=err,
-            histories={"junction": self.N, "rock_force": self.Rb, "penetration": self.pb})
+            histories={"junction": self.N, "rock_force": self.Rb, "penetration": self.pb},
+            available_energy=available, feed_work=feed_work, rod_energy=rod, shank_displacement=xs,
+            bit_velocity=self.v)
 
 
 def _shift(c, v):
@@ -650,15 +690,18 @@ def _shift(c, v):
 
 
 def reference_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k, k_u, bit_mass=0.0,
-                   impact_velocity=1.0, t_end):
-    """The blow of a rigid unstressed piston at ``impact_velocity`` on a rod resting on fresh rock (no
-    feed), followed to ``t_end``, solved independently of the package (the module's text says how).
+                   feed=0.0, impact_velocity=1.0, t_end):
+    """The blow of a rigid unstressed piston at ``impact_velocity`` on a rod resting on fresh rock,
+    statically compressed by the feed force ``feed >= 0`` on its shank (the bit at ``p = feed/k``),
+    followed to ``t_end``, solved independently of the package (the module's text says how).
 
     Returns
     -------
     Reference
     """
+    if not feed >= 0.0:
+        raise ValueError(f"feed must be >= 0; got {feed!r}")
     b = _Blow(np.atleast_1d(piston_times), np.atleast_1d(piston_impedances), np.atleast_1d(rod_times),
-              np.atleast_1d(rod_impedances), k, k_u, bit_mass, impact_velocity)
+              np.atleast_1d(rod_impedances), k, k_u, bit_mass, impact_velocity, feed)
     b.run(float(t_end))
     return b.result()

@@ -520,6 +520,31 @@ def test_a_feed_by_the_exact_method_ends_where_the_rock_may_still_yield():
     assert free.ended_by in ("separated", "lifted", "spent") and free.uncertainty == 0.0
 
 
+def test_past_may_yield_the_efficiency_follows_the_feeds_work():
+    """With a feed the efficiency's denominator holds the feed's work to the blow's end, ``f`` times
+    the shank's displacement, which the rod ringing on the rock moves either way: a blow that ends
+    ``"may_yield"`` at t = 23 with an efficiency of 0.651 has 0.507 to 0.688 carried on to 1.25 to 3
+    times that (the shank between -0.31 and 1.42 piston lengths from its start), the rock taking
+    nothing more: there the rock's work, its loading episodes and the ``uncertainty`` are the answer
+    (theory §4d)."""
+    from impactbar.laws.rodrock.exact import exact_blow
+
+    args = dict(k=1.0, k_u=5.0, bit_mass=0.3, feed=0.1, impact_velocity=1.0, record=False)
+    chain = ([1.0], [1.0], [2.0, 1.0], [1.2, 0.6])
+    end = exact_blow(*chain, **args)
+    assert end.ended_by == "may_yield" and end.duration == 23.0
+    assert round(end.efficiency, 3) == 0.651
+    effs, shank = [], []
+    for x in np.arange(1.25, 3.01, 0.25):
+        later = exact_blow(*chain, t_max=x * end.duration, **args)
+        assert later.ended_by == "t_max" and later.work_on_rock == end.work_on_rock
+        assert later.efficiency == pytest.approx(end.work_on_rock / later.available_energy, rel=1e-15)
+        effs.append(later.efficiency)
+        shank.append(later.shank_displacement)
+    assert (round(min(effs), 3), round(max(effs), 3)) == (0.507, 0.688)
+    assert (round(min(shank), 2), round(max(shank), 2)) == (-0.31, 1.42)
+
+
 def test_a_massless_overflow_names_its_cause():
     from impactbar.laws.rodrock.exact import PoolOverflow, exact_blow
 

@@ -483,7 +483,17 @@ def node_bit(ws, t, t1):
             # the first switch
             te = -1.0
             if br == LOAD:
-                te = first_negative(WB[8], WN[8], lam, BIN, L, STK, SCR, a)
+                # unloading where the velocity turns negative beyond the rounding of the force
+                # balance: at rest under the feed (E = k x) it is zero to rounding, and its sign
+                # there (from x0 - E/k, an ulp of x0, times the branch's rates) unloaded and
+                # reloaded the rock at once, each a spurious loading episode
+                e0, _e1, _e2 = blk_eval(WB[6], WN[6], lam, 0.0)
+                rmax = max(abs(RT[br, 0]), abs(RT[br, 1]))  # (RT[br, 1] = 0: a massless bit)
+                tolv = 64.0 * EPS * (abs(x0) * rmax + abs(e0) / Z)
+                blk_clear(WB[9], WN[9])
+                blk_axpy(WB[9], WN[9], 1.0, WB[8], WN[8])
+                blk_add_const(WB[9], WN[9], tolv)
+                te = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR, a)
             elif br == ELASTIC:
                 blk_clear(WB[9], WN[9])
                 blk_axpy(WB[9], WN[9], -1.0, WB[7], WN[7])
@@ -534,12 +544,13 @@ def node_bit(ws, t, t1):
             # work on the rock over the piece
             if br == LOAD:
                 x1 = max(x1, x0)
-                BS[7] += 0.5 * k * (x1 - x0) * (x1 + x0)
-                BS[6] += 0.5 * (1.0 - k / ku) * k * (x1 - x0) * (x1 + x0)
-                BS[3] = x1
-                BS[4] = k * x1
-                BS[5] = x1 - BS[4] / ku
-                BS[10] = a + tt
+                if x1 > x0:  # (p_max, R_max and when first reached: as they were at rest)
+                    BS[7] += 0.5 * k * (x1 - x0) * (x1 + x0)
+                    BS[6] += 0.5 * (1.0 - k / ku) * k * (x1 - x0) * (x1 + x0)
+                    BS[3] = x1
+                    BS[4] = k * x1
+                    BS[5] = x1 - BS[4] / ku
+                    BS[10] = a + tt
             elif br == ELASTIC:
                 BS[7] += 0.5 * ku * (x1 - x0) * (x1 + x0)
             if te < 0.0:
@@ -558,8 +569,9 @@ def node_bit(ws, t, t1):
             blk_shift(WB[6], WN[6], te, lam, BIN)
             turned = br == LOAD
             pm = BS[2]  # (a massless bit's: p' at the end of the last piece, logged)
-            if br == LOAD:  # unloading from p_max
-                _episode_end(ws, a, x1)
+            if br == LOAD:  # unloading from p_max (an episode that did not advance is none)
+                if x1 > BS[12]:
+                    _episode_end(ws, a, x1)
                 BI[0] = ELASTIC
                 BS[1] = BS[4] / ku
                 BS[2] = 0.0  # the turning point (w1 is zero to rounding)

@@ -133,8 +133,11 @@ class Blow:
     method, uncertainty, loadings, radiated : str, float, numpy.ndarray (n, 5) or None, float
         ``"exact"`` (``impactbar.laws.rodrock.exact``: the arrays sample exact histories, which the
         force methods evaluate) or ``"lattice"`` (first order in ``cell_time``); 0 for a certified
-        end, else a bound on the efficiency still to gain; exact: per loading of the rock, start and
-        end time and penetration, the work dissipated; the energy a semi-infinite rod radiated.
+        end, else a bound on the rock work still possible over the available energy, the
+        efficiency still to gain by it (with a feed the efficiency also follows the feed's work,
+        which a rod ringing on the rock moves either way); exact: per loading of the rock (its
+        yielding), start and end time and penetration, the work dissipated; the energy a
+        semi-infinite rod radiated.
 
     Examples
     --------

@@ -50,7 +50,8 @@ force scale on its time scale are dropped.
   far are reported, and ``uncertainty`` bounds the rock work still possible: each new yield lowers
   ``Psi`` by its dissipation less the feed's work on the permanent advance, at least
   ``1 - f / R_max`` of the dissipation, so the rock can still take at most
-  ``Psi R_max / (R_max - f)``;
+  ``Psi R_max / (R_max - f)``. The efficiency is that of the instant the blow ended: its
+  denominator holds the feed's work to then, which the ringing rod moves either way (theory §4d);
 - ``"t_max"``: the horizon the caller gave;
 - ``"rings"``: the cost bound reached with the rock unable to yield but the piston's return not
   excluded (a lossless rod and piston touching again and again);
@@ -186,7 +187,9 @@ class ExactBlow:
     uncertainty : float
         Zero when the end is certified; otherwise a bound on the rock work still possible, over
         the available energy (the energy that could still reach the rock, with a feed times
-        ``R_max / (R_max - f)``): how much the efficiency could still grow.
+        ``R_max / (R_max - f)``): how much the efficiency could still grow by the rock's work. With
+        a feed the efficiency also follows the feed's work in its denominator, which a rod ringing
+        on the rock moves either way without any new yield (theory §4d).
     loadings : numpy.ndarray, shape (n, 5)
         One row per loading episode (the rock yielding): start and end time, penetration at start
         and end, the work dissipated.
@@ -716,7 +719,7 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     err = abs(available - (dissipated + rock_e + Ep + rod_e + radiated)) / available
     nep = int(BI[1])
     loads = EP[:nep].copy()
-    if br == P.LOAD:  # a loading under way at the end
+    if br == P.LOAD and p > BS[12]:  # a loading under way at the end
         loads = np.vstack((loads, [[BS[11], t_end, BS[12], p,
                                     0.5 * (1.0 - k / k_u) * k * (p - BS[12]) * (p + BS[12])]]))
     ended = _END_NAMES.get(int(CI[1]), "failed")

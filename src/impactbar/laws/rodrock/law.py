@@ -492,7 +492,9 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     ``method="exact"`` ends once the piston has gone for good and the rock is not loading, if the
     rod's ringing could still make the rock yield (``"may_yield"``: under the feed a lossless rod
     may load it again at any later time; the loading episodes so far in ``Blow.loadings`` and
-    ``uncertainty`` bounding the rock work still possible), unless a ``t_max`` asks to go on. By
+    ``uncertainty`` bounding the rock work still possible are the answer there: the efficiency's
+    denominator holds the feed's work up to that instant, which the ringing rod moves either way),
+    unless a ``t_max`` asks to go on. By
     default, with a feed or a ``cells_per_piston``, the lattice of
     :mod:`impactbar.laws.rodrock.blow` (``method="lattice"``: first order in the cell time,
     the bit's reflected wave stored as cell averages; to
