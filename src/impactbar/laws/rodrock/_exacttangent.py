@@ -57,6 +57,7 @@ from ._exactkernel import (
     node_end,
     node_junction,
 )
+from ._exactmodal import piston_integrals
 from ._exactpieces import (
     ELASTIC,
     FREE,
@@ -460,3 +461,50 @@ def impulse_integrals(tg, travel, CH_T, t, om, out):
                     for q in range(om.size):
                         out[i, q, side] += IW[n] * cmath.exp(1j * om[q] * theta)
                 n = IN[n]
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def t_batch(ws, tg, template, slots, coefs, out, ends, travel, om):
+    """Tangent runs along many directions of the piston's waves at impact, one workspace reused:
+    before each run the workspace is set back to ``template`` (``(PF, PI, TK, TC, CNT, CHI, NSI)`` as
+    made, its first pieces the piston's waves) with direction ``d``'s coefficients ``coefs[d]`` in
+    the term slots ``slots``; after it, the piston's waves and impulses projected into ``out[d]``
+    (:func:`~._exactmodal.piston_integrals`, :func:`impulse_integrals`) and ``ends[d]`` the shank's
+    displacement, the gap and ``p_perm``. Returns ``(d, status)``: the direction a run stopped at
+    with :func:`t_run`'s nonzero status, or ``(coefs.shape[0], 0)``."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    PF0, PI0, TK0, TC0, CNT0, CHI0, NSI0 = template
+    IT, IW, IJ, IN, ICH, TCUR = tg
+    n0 = PF0.shape[0]
+    nt0 = TK0.size
+    n_p = int(PR[21])
+    for d in range(coefs.shape[0]):
+        PF[:n0] = PF0
+        PI[:n0] = PI0
+        TK[:nt0] = TK0
+        TC[:nt0] = TC0
+        for i in range(slots.size):
+            TC[slots[i]] = coefs[d, i]
+        CNT[:] = CNT0
+        CHI[:] = CHI0
+        NSI[:] = NSI0
+        NSF[:] = 0.0
+        BS[:] = 0.0
+        BI[:] = 0
+        CI[:] = 0
+        CT[:] = 0.0
+        for b in range(WB.shape[0]):
+            blk_clear(WB[b], WN[b])
+        TCUR[:] = 0
+        ICH[:] = -1
+        t_run(ws, tg)
+        if CI[0] != 0:
+            return d, CI[0]
+        heads = CHI[: 2 * n_p, 1].copy()
+        piston_integrals((PF, PI, TK, TC, lam, BIN), heads, travel, CT[0], om, out[d])
+        impulse_integrals(tg, travel, CH_T, CT[0], om, out[d])
+        ends[d, 0] = NSF[n_p, 1]
+        ends[d, 1] = NSF[n_p, 0]
+        ends[d, 2] = BS[5]
+    return coefs.shape[0], 0

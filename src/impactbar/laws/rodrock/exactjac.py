@@ -121,6 +121,66 @@ def _tangent(bmap, ws, primal_scale, initial, drive, impulses, on_stop):
     return dq, dv
 
 
+def _state_columns(bmap, ws, primal_scale, on_stop):
+    """The Jacobian's columns of the state directions ``q_1 .. q_N``, ``q'_0 .. q'_N`` (shape
+    ``(2 N + 2, 2 N + 1)``), by :func:`~._exacttangent.t_batch`: one workspace, every run in one
+    call; None where the schedule cannot be held."""
+    from .exact import _Data, _workspace
+    from .exactmap import initial_waves, modal_state
+
+    basis = bmap.basis
+    M = basis.omega.size
+    K = 2 * M - 1
+    dq = np.zeros((K, M))
+    dv = np.zeros((K, M))
+    dq[np.arange(M - 1), np.arange(1, M)] = 1.0
+    dv[np.arange(M - 1, K), np.arange(M)] = 1.0
+    waves = initial_waves(basis, dq, dv, np.zeros(K))
+    T, Z, lam, RT, RC, RD = ws[15], ws[14], ws[8], ws[20], ws[21], ws[22]
+    n_p = basis.travel.size
+    J = T.size
+    # each direction's scale (exact_blow's: the bound of its waves), its coefficients over it
+    reach = np.maximum(np.repeat(basis.travel, 2), 1.0)
+    scales = np.max([np.sum(np.abs(c) * r ** d, axis=-1) for (_, d, c), r in zip(waves, reach, strict=True)],
+                    axis=0)
+    coefs = np.ascontiguousarray(np.concatenate([c for _, _, c in waves], axis=-1) / scales[:, None])
+    ones = [(e, d, np.ones(c.shape[-1], dtype=complex)) for e, d, c in waves]  # every term a slot
+    PR = ws[13].copy()
+    PR[3], PR[6], PR[20], PR[22], PR[23] = 0.0, 1.0, 0.0, 0.0, 0.0  # no feed, the horizon, no drive
+    CNT0 = ws[4]
+    pcap, tcap, icap = max(256, 2 * int(CNT0[0])), max(2048, 2 * int(CNT0[1])), 64
+    terms = _Data(ones, None, T[:n_p], trusted=True).terms(lam, 1.0)
+    travel = np.ascontiguousarray(basis.travel)
+    om = np.ascontiguousarray(basis.omega)
+    while True:
+        wt = _workspace(T, Z, n_p, 0.0, 0.0, PR[0], PR[1], lam, PR, RT, RC, RD, pcap, tcap, 4, PR[17],
+                        PR[8], PR[4], terms)
+        PF, PI, TK, TC, CNT, CHI = wt[:6]
+        n0, nt0 = int(CNT[0]), int(CNT[1])
+        template = (PF[:n0].copy(), PI[:n0].copy(), TK[:nt0].copy(), TC[:nt0].copy(), CNT.copy(),
+                    CHI.copy(), wt[17].copy())
+        slots = np.concatenate([np.arange(PI[c, 1], PI[c, 1] + PI[c, 2]) for c in range(2 * n_p)])
+        tg = (np.zeros(icap), np.zeros(icap), np.zeros(icap), np.zeros(icap, dtype=np.int64),
+              np.full((3 * J + 2, 2), -1, dtype=np.int64), np.zeros(7, dtype=np.int64))
+        out = np.zeros((K, n_p, M, 2), dtype=complex)
+        ends = np.zeros((K, 3))
+        _, status = TG.t_batch(wt, tg, template, slots, coefs, out, ends, travel, om)
+        if status == 0:
+            break
+        if status == 3:
+            return None
+        if status == 1:
+            pcap, tcap = 4 * pcap, 4 * tcap
+        else:
+            icap *= 4
+    out *= scales[:, None, None, None]
+    ends *= scales[:, None]
+    dq, dv = modal_state(basis, out, bmap._end(ends[:, 0], ends[:, 1], ends[:, 2]))
+    if on_stop:
+        dq[:, 0] -= dq @ basis.end_weights
+    return np.concatenate((dq, dv), axis=1).T
+
+
 def _time_direction(bmap):
     """The impact time's direction of the drive: ``(drive pieces or None, impulses, p'(t0))``, or
     None for a load of no known form (central differences then)."""
@@ -178,16 +238,10 @@ def exact_impact_map(bmap, y_minus, t):
     y_plus = np.concatenate((qa, va))
     jac = np.zeros((2 * M, 2 * M))
     zero = np.zeros(M)
-    for n in range(1, 2 * M):
-        dq, dv = zero.copy(), zero.copy()
-        if n < M:
-            dq[n] = 1.0
-        else:
-            dv[n - M] = 1.0
-        res = _tangent(bmap, ws, scale, initial_waves(basis, dq, dv, 0.0), None, [], on_stop)
-        if res is None:
-            return None
-        jac[:M, n], jac[M:, n] = res
+    cols = _state_columns(bmap, ws, scale, on_stop)
+    if cols is None:
+        return None
+    jac[:, 1:] = cols
     direction = _time_direction(bmap)
     if direction is None:
         up, down = bmap.shifted([bmap.t0 + 1e-6, bmap.t0 - 1e-6])

@@ -117,42 +117,45 @@ def initial_waves(basis: ModalBasis, q, v, p: float) -> list:
     Parameters
     ----------
     basis : ModalBasis
-    q, v : array_like, shape (N + 1,)
-        The modal state at impact.
-    p : float
+    q, v : array_like, shape (..., N + 1)
+        The modal state at impact (or a batch of them, the tangent's directions).
+    p : float or array_like, shape (...)
         The drive's force at ``x = 0`` at impact (its static correction).
 
     Returns
     -------
     list of 2 P tuples ``(exps, degs, coefs)``
         Per segment, the right-going wave emitted at its driven-side end and the left-going one
-        emitted at its struck-side end over ``[-T_i, 0)``, as functions of ``tau = t + T_i``.
+        emitted at its struck-side end over ``[-T_i, 0)``, as functions of ``tau = t + T_i``
+        (``coefs`` of shape ``(..., K)`` for a batch).
     """
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
+    p = np.asarray(p, dtype=float)[..., None]  # (a batch of states: leading axes, coefs alike)
     s = basis.s
     w = basis.omega[1:]
-    Q = q[1:] - p / (w * w) if w.size else q[1:]
+    Q = q[..., 1:] - p / (w * w) if w.size else q[..., 1:]
     out = []
     for i in range(basis.travel.size):
         T, Z, mu = basis.travel[i], basis.impedance[i], basis.mu[i]
         a, b = basis.a[1:, i], basis.b[1:, i]
-        Vn = v[1:] * (a - 1j * b)  # v = v0 + sum Re(Vn e^{i w theta})
+        Vn = v[..., 1:] * (a - 1j * b)  # v = v0 + sum Re(Vn e^{i w theta})
         Nn = -(s * s) * mu * basis.k[1:] * Q * (b + 1j * a)  # the modes' part of N
         c_lin = p * (1.0 - basis.mass_before[i])  # N's static part p (1 - m_i) - p mu s theta
         slope = p * mu * s
         for sign in (1.0, -1.0):  # F = (N + Z v)/2, G = (N - Z v)/2
             A = 0.5 * (Nn + sign * Z * Vn)
-            const = 0.5 * (c_lin + sign * Z * v[0])
+            const = 0.5 * (c_lin + sign * Z * v[..., :1])
             if sign > 0.0:  # F: theta = T - tau
                 C = A * np.exp(1j * w * T)  # Re(C e^{-i w tau})
                 exps = np.concatenate(([0.0, 0.0], -1j * w, 1j * w))
-                coefs = np.concatenate(([const - 0.5 * slope * T, 0.5 * slope], 0.5 * C, 0.5 * np.conj(C)))
+                coefs = np.concatenate((const - 0.5 * slope * T, 0.5 * slope, 0.5 * C, 0.5 * np.conj(C)),
+                                       axis=-1)
             else:  # G: theta = tau
                 exps = np.concatenate(([0.0, 0.0], 1j * w, -1j * w))
-                coefs = np.concatenate(([const, -0.5 * slope], 0.5 * A, 0.5 * np.conj(A)))
+                coefs = np.concatenate((const, -0.5 * slope, 0.5 * A, 0.5 * np.conj(A)), axis=-1)
             degs = np.concatenate(([0, 1], np.zeros(2 * w.size, dtype=np.int64)))
-            out.append((exps, degs, coefs))
+            out.append((exps, degs, coefs.astype(complex)))
     return out
 
 
@@ -264,25 +267,27 @@ def project(basis: ModalBasis, hist, t: float, end_position: float, heads=None):
     return modal_state(basis, out, end_position)
 
 
-def modal_state(basis: ModalBasis, out, end_position: float):
-    """The modal state ``(q, q')`` from the piston's wave integrals ``out`` (shape ``(P, N + 1, 2)``:
-    ``int F e^{i omega_n theta}`` and ``int G e^{i omega_n theta}`` per segment, as
+def modal_state(basis: ModalBasis, out, end_position):
+    """The modal state ``(q, q')`` from the piston's wave integrals ``out`` (shape ``(..., P, N + 1,
+    2)``: ``int F e^{i omega_n theta}`` and ``int G e^{i omega_n theta}`` per segment, as
     :func:`~impactbar.laws.rodrock._exactmodal.piston_integrals` gives them) and the struck end's
-    position: the projections of the module's text (linear in both)."""
-    Im = out[..., 0] - out[..., 1]  # int (F - G) e^{i w theta}, shape (P, M)
+    position (shape ``(...)``): the projections of the module's text (linear in both), each of shape
+    ``(..., N + 1)``."""
+    Im = out[..., 0] - out[..., 1]  # int (F - G) e^{i w theta}, shape (..., P, M)
     Ip = out[..., 0] + out[..., 1]  # int (F + G) e^{i w theta}
     a, b = basis.a.T, basis.b.T  # (P, M)
     M = basis.omega.size
-    v = np.empty(M)
-    q = np.empty(M)
-    v[0] = float(np.sum(Im[:, 0].real))
+    v = np.empty(out.shape[:-3] + (M,))
+    q = np.empty_like(v)
+    v[..., 0] = np.sum(Im[..., 0].real, axis=-1)
     if M > 1:
-        v[1:] = np.sum(a[:, 1:] * Im[:, 1:].real + b[:, 1:] * Im[:, 1:].imag, axis=0) / basis.kappa[1:]
-        proj = np.sum(b[:, 1:] * Ip[:, 1:].real - a[:, 1:] * Ip[:, 1:].imag, axis=0)  # int N psi'/k dtheta
+        v[..., 1:] = np.sum(a[:, 1:] * Im[..., 1:].real + b[:, 1:] * Im[..., 1:].imag,
+                            axis=-2) / basis.kappa[1:]
+        proj = np.sum(b[:, 1:] * Ip[..., 1:].real - a[:, 1:] * Ip[..., 1:].imag, axis=-2)  # int N psi'/k
         w = basis.omega[1:]
-        q[1:] = -basis.s * basis.k[1:] * proj / (basis.kappa[1:] * w * w)
+        q[..., 1:] = -basis.s * basis.k[1:] * proj / (basis.kappa[1:] * w * w)
     c = basis.end_weights
-    q[0] = end_position - float(c[1:] @ q[1:])
+    q[..., 0] = end_position - q[..., 1:] @ c[1:]
     return q, v
 
 
