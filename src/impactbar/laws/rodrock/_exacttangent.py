@@ -464,14 +464,16 @@ def impulse_integrals(tg, travel, CH_T, t, om, out):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def t_batch(ws, tg, template, slots, coefs, out, ends, travel, om):
-    """Tangent runs along many directions of the piston's waves at impact, one workspace reused:
-    before each run the workspace is set back to ``template`` (``(PF, PI, TK, TC, CNT, CHI, NSI)`` as
-    made, its first pieces the piston's waves) with direction ``d``'s coefficients ``coefs[d]`` in
-    the term slots ``slots``; after it, the piston's waves and impulses projected into ``out[d]``
+def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
+    """Tangent runs along many directions of the blow's data, one workspace reused: before each run
+    the workspace is set back to ``template`` (``(PF, PI, TK, TC, CNT, CHI, NSI)`` as made, its first
+    pieces the piston's waves and the drive's) with direction ``d``'s coefficients ``coefs[d]`` in
+    the term slots ``slots``, and its impulses in the drive (the rows ``(d, t, w, jump)`` of
+    ``imps``) sent; after it, the piston's waves and impulses projected into ``out[d]``
     (:func:`~._exactmodal.piston_integrals`, :func:`impulse_integrals`) and ``ends[d]`` the shank's
-    displacement, the gap and ``p_perm``. Returns ``(d, status)``: the direction a run stopped at
-    with :func:`t_run`'s nonzero status, or ``(coefs.shape[0], 0)``."""
+    displacement, the gap, ``p_perm`` and the separations and unloadings a moving step set off.
+    Returns ``(d, status)``: the direction a run stopped at with :func:`t_run`'s nonzero status, or
+    ``(coefs.shape[0], 0)``."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     PF0, PI0, TK0, TC0, CNT0, CHI0, NSI0 = template
@@ -498,6 +500,9 @@ def t_batch(ws, tg, template, slots, coefs, out, ends, travel, om):
             blk_clear(WB[b], WN[b])
         TCUR[:] = 0
         ICH[:] = -1
+        for r in range(imps.shape[0]):
+            if int(imps[r, 0]) == d:
+                imp_emit(tg, 2 * SZ.size, imps[r, 1], imps[r, 2], imps[r, 3])
         t_run(ws, tg)
         if CI[0] != 0:
             return d, CI[0]
@@ -507,4 +512,6 @@ def t_batch(ws, tg, template, slots, coefs, out, ends, travel, om):
         ends[d, 0] = NSF[n_p, 1]
         ends[d, 1] = NSF[n_p, 0]
         ends[d, 2] = BS[5]
+        ends[d, 3] = TCUR[5]
+        ends[d, 4] = TCUR[6]
     return coefs.shape[0], 0

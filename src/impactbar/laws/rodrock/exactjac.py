@@ -21,9 +21,8 @@ from __future__ import annotations
 import numpy as np
 
 from . import _exacttangent as TG
-from ._exactmodal import piston_integrals
 
-__all__ = ["exact_impact_map"]
+__all__ = ["exact_impact_map", "tangents"]
 
 #: rows of the primal's switch log first asked for (doubled while it overflows)
 LOG_ROWS = 64
@@ -60,96 +59,77 @@ def _plus(bmap, ws, scale):
     return qa, va, over > 0.0
 
 
-def _tangent(bmap, ws, primal_scale, initial, drive, impulses, on_stop):
-    """One tangent run of the primal workspace ``ws`` (its forces over ``primal_scale``) along the
-    direction whose piston waves are ``initial``, drive ``drive`` (pieces or None) and drive impulses
-    ``impulses`` (``(t, w, jump)``: the derivative ``w`` of a step ``jump`` of the drive at ``t``):
-    ``(dq, dv)``, or None where the schedule cannot be held."""
-    from .exact import _binomials, _Data, _workspace
+def _bound(pieces, reach):
+    """Each direction's bound of its pieces (:func:`~impactbar.laws.rodrock.exact.exact_blow`'s
+    scale): ``max over pieces of sum |c| max(L, 1)^d``, ``coefs`` of shape ``(K, n)``."""
+    return np.max([np.sum(np.abs(c) * max(r, 1.0) ** d, axis=-1) for (_, d, c), r in zip(pieces, reach,
+                                                                                         strict=True)],
+                  axis=0)
+
+
+def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=False):
+    """Tangent runs of a primal blow along ``K`` directions of its data, all in one compiled call
+    (:func:`~impactbar.laws.rodrock._exacttangent.t_batch`).
+
+    Parameters
+    ----------
+    bmap : ExactBlowMap
+    ws : tuple
+        The primal's workspace, with its switch log (:func:`_primal`).
+    primal_scale : float
+        The primal's force scale.
+    waves : list of 2 P tuples ``(exps, degs, coefs)``
+        The directions' piston waves, ``coefs`` of shape ``(K, n)`` (:func:`initial_waves` of a
+        batch).
+    drive : tuple, optional
+        ``(starts, [(exps, degs, coefs), ...])``: the directions' drives, ``coefs`` of shape
+        ``(K, n_j)``.
+    impulses : list of K lists of ``(t, w, jump)``, optional
+        Each direction's impulses in the drive: the derivative ``w`` of a step ``jump`` of the drive
+        at ``t`` (the step moves by ``-w/jump``).
+    on_stop : bool
+        Whether the primal's end was put back on the stop.
+
+    Returns
+    -------
+    dq, dv : numpy.ndarray, shape (K, N + 1)
+        The derivatives of the state after the blow.
+    set_off : numpy.ndarray, shape (K, 2)
+        The separations and the unloadings that a moving step set off, per run.
+
+    None where the schedule cannot be held.
+    """
+    from .exact import _Data, _workspace
     from .exactmap import modal_state
 
     basis = bmap.basis
-    PR0 = ws[13]
-    T, Z, lam, RT, RC, RD = ws[15], ws[14], ws[8], ws[20], ws[21], ws[22]
-    n_p = int(PR0[21])
-    J = T.size
-    data = _Data(initial, drive, T[:n_p], trusted=True)
-    scale = max(data.scale, max((abs(w) for _, w, _ in impulses), default=0.0))
     M = basis.omega.size
-    if scale == 0.0:
-        return np.zeros(M), np.zeros(M)
-    PR = PR0.copy()
-    PR[3] = 0.0  # no feed: a constant
-    PR[6] = 1.0  # the primal's horizon
-    PR[20] = 0.0
-    PR[22] = 1.0 if drive is not None else 0.0
-    PR[23] = 0.0  # nothing recorded
-    CNT0 = ws[4]
-    pcap, tcap, ecap, icap = max(256, 2 * int(CNT0[0])), max(2048, 2 * int(CNT0[1])), 4, 64
-    terms = data.terms(lam, scale)
-    nch = 3 * J + 2
-    while True:
-        wt = _workspace(T, Z, n_p, 0.0, 0.0, PR[0], PR[1], lam, PR, RT, RC, RD, pcap, tcap, ecap, PR[17],
-                        PR[8], PR[4], terms)
-        tg = (np.zeros(icap), np.zeros(icap), np.zeros(icap), np.zeros(icap, dtype=np.int64),
-              np.full((nch, 2), -1, dtype=np.int64), np.zeros(7, dtype=np.int64))
-        for t, w, jump in impulses:
-            TG.imp_emit(tg, 2 * J, t, w / scale, jump / primal_scale)
-        TG.t_run(wt, tg)
-        status = int(wt[24][0])
-        if status == 0:
-            break
-        if status == 3:
-            return None
-        if status == 1:
-            pcap, tcap = 4 * pcap, 4 * tcap
-        else:
-            icap *= 4
-    NSF, BS, CHI, CH_T = wt[16], wt[18], wt[5], wt[6]
-    end = scale * bmap._end(NSF[n_p, 1], NSF[n_p, 0], BS[5])
-    t_end = float(wt[25][0])
-    out = np.zeros((n_p, M, 2), dtype=complex)
-    travel = np.ascontiguousarray(basis.travel)
-    om = np.ascontiguousarray(basis.omega)
-    piston_integrals((wt[0], wt[1], wt[2], wt[3], lam, _binomials()), CHI[: 2 * n_p, 1].copy(), travel,
-                     t_end, om, out)
-    TG.impulse_integrals(tg, travel, CH_T, t_end, om, out)
-    out *= scale
-    dq, dv = modal_state(basis, out, end)
-    if on_stop:
-        dq[0] -= float(basis.end_weights @ dq)
-    return dq, dv
-
-
-def _state_columns(bmap, ws, primal_scale, on_stop):
-    """The Jacobian's columns of the state directions ``q_1 .. q_N``, ``q'_0 .. q'_N`` (shape
-    ``(2 N + 2, 2 N + 1)``), by :func:`~._exacttangent.t_batch`: one workspace, every run in one
-    call; None where the schedule cannot be held."""
-    from .exact import _Data, _workspace
-    from .exactmap import initial_waves, modal_state
-
-    basis = bmap.basis
-    M = basis.omega.size
-    K = 2 * M - 1
-    dq = np.zeros((K, M))
-    dv = np.zeros((K, M))
-    dq[np.arange(M - 1), np.arange(1, M)] = 1.0
-    dv[np.arange(M - 1, K), np.arange(M)] = 1.0
-    waves = initial_waves(basis, dq, dv, np.zeros(K))
+    K = waves[0][2].shape[0]
+    impulses = [[] for _ in range(K)] if impulses is None else impulses
     T, Z, lam, RT, RC, RD = ws[15], ws[14], ws[8], ws[20], ws[21], ws[22]
     n_p = basis.travel.size
     J = T.size
-    # each direction's scale (exact_blow's: the bound of its waves), its coefficients over it
-    reach = np.maximum(np.repeat(basis.travel, 2), 1.0)
-    scales = np.max([np.sum(np.abs(c) * r ** d, axis=-1) for (_, d, c), r in zip(waves, reach, strict=True)],
-                    axis=0)
-    coefs = np.ascontiguousarray(np.concatenate([c for _, _, c in waves], axis=-1) / scales[:, None])
-    ones = [(e, d, np.ones(c.shape[-1], dtype=complex)) for e, d, c in waves]  # every term a slot
+    scales = _bound(waves, np.repeat(basis.travel, 2))
+    if drive is not None:
+        spans = np.diff(np.append(drive[0], drive[0][-1] + 1.0))
+        scales = np.maximum(scales, _bound(drive[1], spans))
+    scales = np.maximum(scales, [max((abs(w) for _, w, _ in x), default=0.0) for x in impulses])
+    scales[scales == 0.0] = 1.0  # (a zero direction: zero)
+    pieces = list(waves) + ([] if drive is None else list(drive[1]))
+    coefs = np.ascontiguousarray(np.concatenate([c for _, _, c in pieces], axis=-1) / scales[:, None])
+    imps = np.array([(d, t, w / scales[d], jump / primal_scale) for d in range(K) for t, w, jump in
+                     impulses[d]], dtype=float).reshape(-1, 4)
+
+    def ones(x):  # every term a slot of the template
+        return [(e, d, np.ones(c.shape[-1], dtype=complex)) for e, d, c in x]
+
+    template_drive = None if drive is None else (drive[0], ones(drive[1]))
+    terms = _Data(ones(waves), template_drive, T[:n_p], trusted=True).terms(lam, 1.0)
     PR = ws[13].copy()
-    PR[3], PR[6], PR[20], PR[22], PR[23] = 0.0, 1.0, 0.0, 0.0, 0.0  # no feed, the horizon, no drive
+    PR[3], PR[6], PR[20], PR[23] = 0.0, 1.0, 0.0, 0.0  # no feed (a constant), the horizon, no record
+    PR[22] = 0.0 if drive is None else 1.0
     CNT0 = ws[4]
     pcap, tcap, icap = max(256, 2 * int(CNT0[0])), max(2048, 2 * int(CNT0[1])), 64
-    terms = _Data(ones, None, T[:n_p], trusted=True).terms(lam, 1.0)
     travel = np.ascontiguousarray(basis.travel)
     om = np.ascontiguousarray(basis.omega)
     while True:
@@ -159,12 +139,13 @@ def _state_columns(bmap, ws, primal_scale, on_stop):
         n0, nt0 = int(CNT[0]), int(CNT[1])
         template = (PF[:n0].copy(), PI[:n0].copy(), TK[:nt0].copy(), TC[:nt0].copy(), CNT.copy(),
                     CHI.copy(), wt[17].copy())
-        slots = np.concatenate([np.arange(PI[c, 1], PI[c, 1] + PI[c, 2]) for c in range(2 * n_p)])
+        owners = list(range(2 * n_p)) + list(range(2 * J, n0))  # the piston's and the drive's
+        slots = np.concatenate([np.arange(PI[c, 1], PI[c, 1] + PI[c, 2]) for c in owners])
         tg = (np.zeros(icap), np.zeros(icap), np.zeros(icap), np.zeros(icap, dtype=np.int64),
               np.full((3 * J + 2, 2), -1, dtype=np.int64), np.zeros(7, dtype=np.int64))
         out = np.zeros((K, n_p, M, 2), dtype=complex)
-        ends = np.zeros((K, 3))
-        _, status = TG.t_batch(wt, tg, template, slots, coefs, out, ends, travel, om)
+        ends = np.zeros((K, 5))
+        _, status = TG.t_batch(wt, tg, template, slots, coefs, imps, out, ends, travel, om)
         if status == 0:
             break
         if status == 3:
@@ -174,11 +155,11 @@ def _state_columns(bmap, ws, primal_scale, on_stop):
         else:
             icap *= 4
     out *= scales[:, None, None, None]
-    ends *= scales[:, None]
+    ends[:, :3] *= scales[:, None]
     dq, dv = modal_state(basis, out, bmap._end(ends[:, 0], ends[:, 1], ends[:, 2]))
     if on_stop:
         dq[:, 0] -= dq @ basis.end_weights
-    return np.concatenate((dq, dv), axis=1).T
+    return dq, dv, ends[:, 3:].astype(int)
 
 
 def _time_direction(bmap):
@@ -236,20 +217,33 @@ def exact_impact_map(bmap, y_minus, t):
     ws, scale = primal
     qa, va, on_stop = _plus(bmap, ws, scale)
     y_plus = np.concatenate((qa, va))
-    jac = np.zeros((2 * M, 2 * M))
-    zero = np.zeros(M)
-    cols = _state_columns(bmap, ws, scale, on_stop)
-    if cols is None:
+    # the directions: q_1 .. q_N, q'_0 .. q'_N, and the impact time where the load's form is known
+    K = 2 * M - 1
+    dq = np.zeros((K + 1, M))
+    dv = np.zeros((K + 1, M))
+    dq[np.arange(M - 1), np.arange(1, M)] = 1.0
+    dv[np.arange(M - 1, K), np.arange(M)] = 1.0
+    p = np.zeros(K + 1)
+    timed = _time_direction(bmap)
+    drive = impulses = None
+    if timed is not None:
+        t_drive, t_imps, p[K] = timed
+        impulses = [[] for _ in range(K)] + [t_imps]
+        if t_drive is not None:
+            starts, pieces = t_drive
+            drive = (starts, [(e, d, np.vstack((np.zeros((K, c.size), dtype=complex), c[None])))
+                              for e, d, c in pieces])
+    n = K + (timed is not None)
+    res = tangents(bmap, ws, scale, initial_waves(basis, dq[:n], dv[:n], p[:n]),
+                   None if drive is None else drive, impulses, on_stop)
+    if res is None:
         return None
-    jac[:, 1:] = cols
-    direction = _time_direction(bmap)
-    if direction is None:
+    dqa, dva, _ = res
+    jac = np.zeros((2 * M, 2 * M))
+    jac[:, 1:] = np.concatenate((dqa[:K], dva[:K]), axis=1).T
+    if timed is None:
         up, down = bmap.shifted([bmap.t0 + 1e-6, bmap.t0 - 1e-6])
         jt = (up(y) - down(y)) / 2e-6
     else:
-        drive, imps, rate = direction
-        res = _tangent(bmap, ws, scale, initial_waves(basis, zero, zero, rate), drive, imps, on_stop)
-        if res is None:
-            return None
-        jt = np.concatenate(res)
+        jt = np.concatenate((dqa[K], dva[K]))
     return y_plus, jac, jt
