@@ -539,6 +539,11 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     starts, avoid = _guesses(problem, guess)
     coarse = model.law.coarse_model(model)
     with single_threaded_blas():
+        if coarse is not None and guess is not None:  # a guess of the motion: Newton on this model
+            for u0 in starts:  # (its exact Jacobian costs a few blows) while it converges at once
+                u = _converge(problem, u0, avoid, tol, min(max_iter, DIRECT_ITERATIONS))
+                if u is not None:
+                    return _build(problem, u)
         if coarse is not None:  # Newton on the cheaper model first, its orbits polished on this one
             rough = _Segments(coarse, load, m, n)
             near = [u for u in (_converge(rough, u0, avoid, tol, max_iter) for u0 in starts) if u is not None]
@@ -559,6 +564,9 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
 
 #: Newton iterations that polish a coarse model's orbit into the law's own (:func:`find_orbit`)
 POLISH_ITERATIONS = 15
+#: Newton iterations on the law's own model from a given guess before the coarse model is tried
+#: (:func:`find_orbit`; a guess near the orbit converges in three to five)
+DIRECT_ITERATIONS = 8
 
 
 def _converge(problem, u0, avoid, tol, max_iter):
