@@ -111,16 +111,46 @@ def orbits(repeat):
     guesses = {m: ib.simulate(m, load, start, 200.0) for m in (rock, lattice, wave)}
     times = {m: median_time(lambda m=m: ib.find_orbit(m, load, 2, 2, guess=guesses[m]), repeat)
              for m in (rock, lattice, wave)}
+    with _before():
+        t_before = median_time(lambda: ib.find_orbit(rock, load, 2, 2, guess=guesses[rock]), repeat)
     o = ib.find_orbit(rock, load, 2, 2, guess=guesses[rock])
     o_lat = ib.find_orbit(lattice, load, 2, 2, guess=guesses[lattice])
     print(f"\n{'periodic orbit (2 in 2, N = 4)':40s} {'time (ms)':>10s}")
     print(f"{'find_orbit, rod-rock law, exact blows':40s} {1e3 * times[rock]:10.1f}")
+    print(f"{'  before (lattice, chord, differences)':40s} {1e3 * t_before:10.1f}")
     print(f"{'find_orbit, rod-rock law, lattice':40s} {1e3 * times[lattice]:10.1f}")
     print(f"{'find_orbit, wave law':40s} {1e3 * times[wave]:10.1f}")
+    # the map with its Jacobians at the orbit's first impact: tangent runs against differences
+    from impactbar.laws.rodrock.step import blow_map, fd_impact_map
+
+    y = np.concatenate((o.states_before_impact[0][:5], o.states_before_impact[0][5:]))
+    t0 = float(o.impact_times[0])
+    t_tan = median_time(lambda: rock.law.impact_map(rock, load, t0, y), repeat)
+    t_fd = median_time(lambda: fd_impact_map(blow_map(rock, load, t0), y, t0), repeat)
+    t_one = median_time(lambda: rock.law.impact_state(rock, load, t0, y), repeat)
+    print(f"{'impact map with Jacobians, tangent runs':40s} {1e3 * t_tan:10.2f}")
+    print(f"{'  central differences (4 N + 6 blows)':40s} {1e3 * t_fd:10.2f}")
+    print(f"{'  the map alone (one blow)':40s} {1e3 * t_one:10.2f}")
     print("the lattice's orbit: impact velocities "
           f"{np.max(np.abs(o.impact_velocities - o_lat.impact_velocities)):.1e} off the exact blows'")
     print(f"ratio {times[rock] / times[wave]:.1f} to the wave law; the orbit: stable {o.stable}, work on "
           f"rock per blow {[round(c.work_on_rock, 4) for c in o.contacts]}")
+
+
+@contextlib.contextmanager
+def _before():
+    """find_orbit as it was before the exact Jacobian: Newton on the lattice first, the chord
+    method, the multipliers' Jacobian by central differences of the exact blows."""
+    from impactbar.laws.rodrock import exactjac
+    from impactbar.orbits import multi_impact
+
+    direct, exact = multi_impact.DIRECT_ITERATIONS, exactjac.exact_impact_map
+    multi_impact.DIRECT_ITERATIONS = 0
+    exactjac.exact_impact_map = lambda *args: None
+    try:
+        yield
+    finally:
+        multi_impact.DIRECT_ITERATIONS, exactjac.exact_impact_map = direct, exact
 
 
 if __name__ == "__main__":

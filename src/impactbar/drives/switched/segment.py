@@ -25,7 +25,8 @@ Under a law whose contact takes time (the wave law, theory §4b; the rod-rock la
 is the law's contact, held under the stroke force for its duration ``ContactLaw.window`` (as
 :func:`impactbar.simulate` runs it: the switch to return counts from the contact's end). The
 unknowns hold the state where the contact ends; eq. 10 is replaced by the contact's map with its
-Jacobian (exact for the wave law, central differences for the rod-rock law); the period is
+Jacobian (exact for the wave law and the rod-rock law's exact blows, central differences on its
+lattice); the period is
 ``T = window + tau_in + h1 + tau_out + h3``. The multipliers are those of the return map on the arrival
 surface ``c . q = 0``, built from the same Jacobian by the implicit function theorem (the switch
 and arrival times depend on the state); the trivial multiplier along the flow is then exactly 1.
