@@ -20,11 +20,12 @@ def _sorted_multipliers(P):
     return sort_multipliers(np.linalg.eigvals(P))
 
 
-def _build(problem, u, *, admissibility: bool = True) -> PeriodicOrbit:
-    """The orbit at a converged solution ``u`` of the segment problem."""
+def _build(problem, u, *, admissibility: bool = True, evaluated=None) -> PeriodicOrbit:
+    """The orbit at a converged solution ``u`` of the segment problem (``evaluated``: the problem's
+    evaluation at ``u`` with its Jacobian, where the caller has it)."""
     model, load = problem.model, problem.load
     M, m = problem.M, problem.m
-    _, _, info = problem.evaluate(u)
+    _, _, info = problem.evaluate(u) if evaluated is None else evaluated
     t, _ = problem.split(u)
     c = problem.c
     v_imp = info["y_minus"][:, M:] @ c

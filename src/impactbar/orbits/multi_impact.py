@@ -275,10 +275,11 @@ class _Segments:
     def scale(self, u):
         return max(1.0, float(np.max(np.abs(u))))
 
-    def newton(self, u, *, tol=1e-12, max_iter=40):
+    def newton(self, u, *, tol=1e-12, max_iter=40, check=True):
         """Newton's method on ``F(u) = 0``. Returns the converged ``u`` or ``None``, and the
         iteration count; it stops early (``None``) when the residual has not halved in
-        ``STALL_ITERATIONS`` iterations."""
+        ``STALL_ITERATIONS`` iterations. With ``check`` the residual at the converged ``u`` must be
+        finite (the caller checks it otherwise)."""
         u = np.array(u, dtype=float)
         best, best_it = math.inf, 0
         for it in range(1, max_iter + 1):
@@ -296,6 +297,8 @@ class _Segments:
                 return None, it
             u = u - du
             if float(np.max(np.abs(du))) <= tol * self.scale(u):
+                if not check:
+                    return u, it
                 F, _, _ = self.evaluate(u, jacobian=False)
                 return (u if np.all(np.isfinite(F)) else None), it
         return None, max_iter
@@ -541,9 +544,9 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     with single_threaded_blas():
         if coarse is not None and guess is not None:  # a guess of the motion: Newton on this model
             for u0 in starts:  # (its exact Jacobian costs a few blows) while it converges at once
-                u = _converge(problem, u0, avoid, tol, min(max_iter, DIRECT_ITERATIONS))
-                if u is not None:
-                    return _build(problem, u)
+                orbit = _converge_built(problem, u0, avoid, tol, min(max_iter, DIRECT_ITERATIONS))
+                if orbit is not None:
+                    return orbit
         if coarse is not None:  # Newton on the cheaper model first, its orbits polished on this one
             rough = _Segments(coarse, load, m, n)
             near = [u for u in (_converge(rough, u0, avoid, tol, max_iter) for u0 in starts) if u is not None]
@@ -554,9 +557,9 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
                 if u is not None:
                     return _build(problem, u)
         for u0 in starts:
-            u = _converge(problem, u0, avoid, tol, max_iter)
-            if u is not None:
-                return _build(problem, u)
+            orbit = _converge_built(problem, u0, avoid, tol, max_iter)
+            if orbit is not None:
+                return orbit
     raise ValueError(f"find_orbit: Newton did not converge to an orbit with {m} impacts in {n} "
                      "periods from the guess" + (" (only to the undoubled orbit)" if avoid is not None
                                                   else ""))
@@ -576,6 +579,22 @@ def _converge(problem, u0, avoid, tol, max_iter):
     if u is None or (avoid is not None and _same_orbit(u, avoid, problem)):
         return None
     return _normalise(problem, u)
+
+
+def _converge_built(problem, u0, avoid, tol, max_iter):
+    """:func:`_converge`, then the orbit (:func:`_build`) from one evaluation with the Jacobian at
+    the normalised solution (the check of its residual and the multipliers'); ``None`` where Newton
+    does not converge."""
+    u, _ = problem.newton(u0, tol=tol, max_iter=max_iter, check=False)
+    if u is None or (avoid is not None and _same_orbit(u, avoid, problem)):
+        return None
+    u = _normalise(problem, u)
+    if u is None:
+        return None
+    evaluated = problem.evaluate(u)
+    if not np.all(np.isfinite(evaluated[0])):
+        return None
+    return _build(problem, u, evaluated=evaluated)
 
 
 def _chord(problem, u0, DF, avoid, tol, max_iter=POLISH_ITERATIONS):
