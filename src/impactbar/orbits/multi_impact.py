@@ -534,7 +534,7 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     m = check_int("impacts", impacts, lo=1, hi=4096)
     n = check_int("periods", periods, lo=1, hi=4096)
     tol = check_real("tol", tol, lo=0.0, lo_open=True, hi=1e-3)
-    model.law.impact_state(model, load, 0.0, np.zeros(2 * model.n_modes + 2))  # the law is supported
+    _check_law(model, load)
     if not m * contact_window(model) < TWO_PI * n:
         raise ValueError(f"impacts={m} contact windows of 2/s = {contact_window(model):.6g} do not fit "
                          f"in periods={n} load periods (wave law: s must exceed m/(pi n))")
@@ -563,6 +563,19 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     raise ValueError(f"find_orbit: Newton did not converge to an orbit with {m} impacts in {n} "
                      "periods from the guess" + (" (only to the undoubled orbit)" if avoid is not None
                                                   else ""))
+
+
+def _check_law(model, load):
+    """Refuse at once a law without an impact map (``LawNotSupported``) or a load its map cannot
+    take (a ``ValueError``, from one impact state from rest; not under a law with a coarse model,
+    whose map is a whole blow: there the first residual refuses such a load)."""
+    from ..laws.base import ContactLaw, LawNotSupported
+
+    law = model.law
+    if type(law).impact_map is ContactLaw.impact_map:
+        raise LawNotSupported(law._missing("impact_map"))
+    if law.coarse_model(model) is None:
+        law.impact_state(model, load, 0.0, np.zeros(2 * model.n_modes + 2))
 
 
 #: Newton iterations that polish a coarse model's orbit into the law's own (:func:`find_orbit`)
