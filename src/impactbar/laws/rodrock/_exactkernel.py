@@ -86,7 +86,8 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
 #     8 Lb (time scale of pruning), 9 spent fraction, 10 E0, 11 rod's static compliance,
 #     12 piston's compliance about its struck end, 13 rod's about the shank, 14 rod's about the bit,
 #     15 piston's mass, 16 rod's mass with the bit's, 17 h (window), 18 t_max, 19 max windows,
-#     20 p at the start, 21 contact node index, 22 driven, 23 record, 24 max pieces
+#     20 p at the start, 21 contact node index, 22 driven, 23 record, 24 max pieces, 25 no drive
+#     work (a tangent run)
 # NSF (J + 1, 4): contact node: gap, shank displacement; NSI (J + 1, 4): used cursors (2), drive
 #     cursor, contact flag
 # BS: 0 p, 1 x (= p - ref), 2 w, 3 p_max, 4 R_max, 5 p_perm, 6 dissipated, 7 int R dp, 8 absorbed
@@ -189,7 +190,7 @@ def node_end(ws, t, t1):
             NSI[0, 0] = cg
             NSI[0, 2] = cd
         b = min(nb, nbd)
-        if driven:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end, over [a, b)
+        if driven and PR[25] == 0.0:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end
             L = min(b, t1) - a
             if L > 0.0:
                 _load(ws, 0, 2 * J, cd, a)

@@ -128,6 +128,7 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
     PR = ws[13].copy()
     PR[3], PR[6], PR[20], PR[23] = 0.0, 1.0, 0.0, 0.0  # no feed (a constant), the horizon, no record
     PR[22] = 0.0 if drive is None else 1.0
+    PR[25] = 1.0  # (the drive's work is not wanted)
     CNT0 = ws[4]
     pcap, tcap, icap = max(256, 2 * int(CNT0[0])), max(2048, 2 * int(CNT0[1])), 64
     travel = np.ascontiguousarray(basis.travel)
@@ -223,27 +224,22 @@ def exact_impact_map(bmap, y_minus, t):
     dv = np.zeros((K + 1, M))
     dq[np.arange(M - 1), np.arange(1, M)] = 1.0
     dv[np.arange(M - 1, K), np.arange(M)] = 1.0
-    p = np.zeros(K + 1)
-    timed = _time_direction(bmap)
-    drive = impulses = None
-    if timed is not None:
-        t_drive, t_imps, p[K] = timed
-        impulses = [[] for _ in range(K)] + [t_imps]
-        if t_drive is not None:
-            starts, pieces = t_drive
-            drive = (starts, [(e, d, np.vstack((np.zeros((K, c.size), dtype=complex), c[None])))
-                              for e, d, c in pieces])
-    n = K + (timed is not None)
-    res = tangents(bmap, ws, scale, initial_waves(basis, dq[:n], dv[:n], p[:n]),
-                   None if drive is None else drive, impulses, on_stop)
+    res = tangents(bmap, ws, scale, initial_waves(basis, dq[:K], dv[:K], np.zeros(K)), None, None,
+                   on_stop)
     if res is None:
         return None
-    dqa, dva, _ = res
     jac = np.zeros((2 * M, 2 * M))
-    jac[:, 1:] = np.concatenate((dqa[:K], dva[:K]), axis=1).T
+    jac[:, 1:] = np.concatenate(res[:2], axis=1).T
+    # the impact time apart (a drive in the tangent costs every run its exponents)
+    timed = _time_direction(bmap)
     if timed is None:
         up, down = bmap.shifted([bmap.t0 + 1e-6, bmap.t0 - 1e-6])
-        jt = (up(y) - down(y)) / 2e-6
-    else:
-        jt = np.concatenate((dqa[K], dva[K]))
-    return y_plus, jac, jt
+        return y_plus, jac, (up(y) - down(y)) / 2e-6
+    drive, imps, rate = timed
+    if drive is not None:
+        drive = (drive[0], [(e, d, c[None]) for e, d, c in drive[1]])
+    res = tangents(bmap, ws, scale, initial_waves(basis, dq[K:], dv[K:], np.array([rate])), drive, [imps],
+                   on_stop)
+    if res is None:
+        return None
+    return y_plus, jac, np.concatenate((res[0][0], res[1][0]))
