@@ -110,7 +110,7 @@ def modal_basis(s: float, piston, n_modes: int) -> ModalBasis:
     return ModalBasis(s, piston, n_modes)
 
 
-def initial_waves(basis: ModalBasis, q, v, p: float) -> list:
+def initial_waves(basis: ModalBasis, q, v, p) -> list:
     """The piston's waves at impact as the exact solver's pieces (``initial`` of
     :func:`~impactbar.laws.rodrock.exact.exact_blow`; the module's text gives the fields).
 
@@ -128,7 +128,34 @@ def initial_waves(basis: ModalBasis, q, v, p: float) -> list:
         Per segment, the right-going wave emitted at its driven-side end and the left-going one
         emitted at its struck-side end over ``[-T_i, 0)``, as functions of ``tau = t + T_i``
         (``coefs`` of shape ``(..., K)`` for a batch).
+
+    The waves are linear in ``(q, q', p)``: their coefficients are one product with the basis's
+    matrix (:func:`_wave_matrix`, made once per basis from :func:`_waves_of`, the fields' formulas).
     """
+    q = np.asarray(q, dtype=float)
+    x = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(p, dtype=float)[..., None]), axis=-1)
+    exps, degs, W, bounds = _wave_matrix(basis)
+    coefs = x @ W
+    return [(exps[i], degs[i], coefs[..., a:b]) for i, (a, b) in enumerate(bounds)]
+
+
+@functools.lru_cache(maxsize=64)
+def _wave_matrix(basis: ModalBasis):
+    """The waves' exponents and degrees per piece, the matrix ``W`` (shape ``(2 N + 3, n)``, complex)
+    of their coefficients from ``(q, q', p)``, and each piece's columns."""
+    M = basis.omega.size
+    unit = np.eye(2 * M + 1)
+    pieces = _waves_of(basis, unit[:, :M], unit[:, M:2 * M], unit[:, 2 * M])
+    W = np.concatenate([c for _, _, c in pieces], axis=-1)
+    stops = np.cumsum([0] + [c.shape[-1] for _, _, c in pieces])
+    W.flags.writeable = False
+    return ([e for e, _, _ in pieces], [d for _, d, _ in pieces], W,
+            [(int(a), int(b)) for a, b in zip(stops[:-1], stops[1:], strict=True)])
+
+
+def _waves_of(basis: ModalBasis, q, v, p) -> list:
+    """:func:`initial_waves` by the fields' formulas (the module's text), for states of shape
+    ``(..., N + 1)``."""
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     p = np.asarray(p, dtype=float)[..., None]  # (a batch of states: leading axes, coefs alike)
@@ -271,8 +298,34 @@ def modal_state(basis: ModalBasis, out, end_position):
     """The modal state ``(q, q')`` from the piston's wave integrals ``out`` (shape ``(..., P, N + 1,
     2)``: ``int F e^{i omega_n theta}`` and ``int G e^{i omega_n theta}`` per segment, as
     :func:`~impactbar.laws.rodrock._exactmodal.piston_integrals` gives them) and the struck end's
-    position (shape ``(...)``): the projections of the module's text (linear in both), each of shape
-    ``(..., N + 1)``."""
+    position (shape ``(...)``): the projections of the module's text, each of shape ``(..., N + 1)``.
+    They are linear in both: one product with the basis's matrix (:func:`_projection_matrix`, made
+    once per basis from :func:`_modal_of`, the projections' formulas)."""
+    out = np.asarray(out)
+    lead = out.shape[:-3]
+    x = np.concatenate((out.real.reshape(lead + (-1,)), out.imag.reshape(lead + (-1,))), axis=-1)
+    M = basis.omega.size
+    qv = x @ _projection_matrix(basis)
+    q, v = qv[..., :M], qv[..., M:]
+    q[..., 0] += end_position
+    return q, v
+
+
+@functools.lru_cache(maxsize=64)
+def _projection_matrix(basis: ModalBasis):
+    """The matrix (shape ``(4 P (N + 1), 2 N + 2)``) of :func:`modal_state` from the real and the
+    imaginary parts of the integrals ``out``, the end at 0."""
+    P, M = basis.travel.size, basis.omega.size
+    n = P * M * 2
+    unit = np.eye(2 * n)
+    q, v = _modal_of(basis, (unit[:, :n] + 1j * unit[:, n:]).reshape(2 * n, P, M, 2), 0.0)
+    R = np.concatenate((q, v), axis=-1)
+    R.flags.writeable = False
+    return R
+
+
+def _modal_of(basis: ModalBasis, out, end_position):
+    """:func:`modal_state` by the projections' formulas (the module's text)."""
     Im = out[..., 0] - out[..., 1]  # int (F - G) e^{i w theta}, shape (..., P, M)
     Ip = out[..., 0] + out[..., 1]  # int (F + G) e^{i w theta}
     a, b = basis.a.T, basis.b.T  # (P, M)
