@@ -23,6 +23,7 @@ the one-impact orbits by Newton's method from guesses
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import re
 import warnings
@@ -228,12 +229,7 @@ class RodRock(ContactLaw):
         -------
         str
         """
-        if self.method == "exact":
-            return "exact"
-        if self.method == "auto" and self.cells_per_piston is None and \
-                _exact_is_cheap(model, self, model.piston):
-            return "exact"
-        return "lattice"
+        return _blow_method(self, model)
 
     def alpha(self, model) -> float:
         """Lundberg's ``alpha = K (2 L / C) / Z`` of the piston, ``2 k / s^2`` in the model's units."""
@@ -471,6 +467,17 @@ class RodRock(ContactLaw):
         if match and int(match.group(1)) >= len(self.segments):
             raise ValueError(f"parameter {name!r}: the rod has {len(self.segments)} segment(s), "
                              f"segment0 to segment{len(self.segments) - 1}")
+
+
+@functools.lru_cache(maxsize=256)
+def _blow_method(law, model) -> str:
+    """:meth:`RodRock.blow_method`, cached per (frozen, hashable) law and model: every blow of a run
+    or an orbit asks it."""
+    if law.method == "exact":
+        return "exact"
+    if law.method == "auto" and law.cells_per_piston is None and _exact_is_cheap(model, law, model.piston):
+        return "exact"
+    return "lattice"
 
 
 def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None = None,
