@@ -464,6 +464,14 @@ def impulse_integrals(tg, travel, CH_T, t, om, out):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _put(dst, src):
+    """``dst[:len(src)] = src`` for 2-D arrays, written out."""
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
     """Tangent runs along many directions of the blow's data, one workspace reused: before each run
     the workspace is set back to ``template`` (``(PF, PI, TK, TC, CNT, CHI, NSI)`` as made, its first
@@ -478,19 +486,20 @@ def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
      RT, RC, RD, EP, CI, CT) = ws
     PF0, PI0, TK0, TC0, CNT0, CHI0, NSI0 = template
     IT, IW, IJ, IN, ICH, TCUR = tg
-    n0 = PF0.shape[0]
     nt0 = TK0.size
     n_p = int(PR[21])
     for d in range(coefs.shape[0]):
-        PF[:n0] = PF0
-        PI[:n0] = PI0
-        TK[:nt0] = TK0
-        TC[:nt0] = TC0
+        _put(PF, PF0)
+        _put(PI, PI0)
+        for i in range(nt0):  # (loops, not slice copies: numba's compiles for seconds)
+            TK[i] = TK0[i]
+            TC[i] = TC0[i]
         for i in range(slots.size):
             TC[slots[i]] = coefs[d, i]
-        CNT[:] = CNT0
-        CHI[:] = CHI0
-        NSI[:] = NSI0
+        for i in range(CNT0.size):
+            CNT[i] = CNT0[i]
+        _put(CHI, CHI0)
+        _put(NSI, NSI0)
         NSF[:] = 0.0
         BS[:] = 0.0
         BI[:] = 0
