@@ -67,6 +67,7 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -506,7 +507,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     while True:
         RD[0] = 0.0  # (a run again with a larger pool logs afresh)
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
-                        None if data is None else data.terms(lam, scale))
+                        None if data is None else data.terms(lam, scale), reuse=not lean)
         if data is not None and not lean:  # the piston's energy at impact: its waves' (kinetic and
             K.account(ws, 0.0)  # strain)
             PR[10] = ws[25][4]
@@ -609,19 +610,39 @@ def _binomials():
     return out
 
 
-def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb, data=None):
+#: a thread's pool arrays, reused by its next blow (``_pool_arrays``)
+_POOLS = threading.local()
+#: the largest pool kept for reuse (the default one: 4 MB)
+_REUSED_POOL_BYTES = 2 ** 23
+
+
+def _pool_arrays(rows, terms, reuse):
+    """The pool's arrays ``PF``, ``PI`` (``rows`` pieces) and ``TK``, ``TC`` (``terms``), uninitialised:
+    the kernel reads only the pieces and terms it has written (and the first ones, which
+    :func:`_workspace` sets), so that their megabytes cost no zeroing, and ``reuse``: the calling
+    thread's arrays of the last such call (their pages mapped once; a record keeps copies of what
+    it holds, :func:`_result`), up to ``_REUSED_POOL_BYTES``."""
+    if reuse:
+        kept = getattr(_POOLS, "arrays", None)
+        if kept is not None and kept[0].shape[0] == rows and kept[2].size == terms:
+            return kept
+    arrays = (np.empty((rows, 5)), np.empty((rows, 4), dtype=np.int64), np.empty(terms, dtype=np.int64),
+              np.empty(terms, dtype=complex))
+    if reuse and _pool_bytes(rows, terms) <= _REUSED_POOL_BYTES:
+        _POOLS.arrays = arrays
+    return arrays
+
+
+def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb, data=None,
+               reuse=False):
     J = T.size
     nch = 3 * J + 2
     init, drive = (None, None) if data is None else data
     ndrive = 0 if drive is None else len(drive[1])
-    PF = np.zeros((max(pcap, 2 * J + 1 + ndrive + 16), 5))
-    PF[:, 3:] = math.nan  # the pieces' cached integrals (_exactpieces.chan_integrals)
-    PI = np.zeros((PF.shape[0], 4), dtype=np.int64)
     extra = 0
     if init is not None:
         extra = sum(x[0].size for x in init) + (0 if drive is None else sum(x[0].size for x in drive[1]))
-    TK = np.zeros(tcap + extra, dtype=np.int64)
-    TC = np.zeros(tcap + extra, dtype=complex)
+    PF, PI, TK, TC = _pool_arrays(max(pcap, 2 * J + 1 + ndrive + 16), tcap + extra, reuse)
     CNT = np.zeros(4, dtype=np.int64)
     CHI = np.full((nch, 2), -1, dtype=np.int64)
     CH_T = np.zeros(nch)
@@ -644,10 +665,8 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
         for side, (c, val) in enumerate(((2 * (i - 1), 0.5 * Z[i - 1] * Vn),
                                          (2 * i - 1, -0.5 * Z[i - 1] * Vn))):
             CH_T[c] = T[i - 1]
-            PF[n, 0] = -T[i - 1]
-            PF[n, 1] = math.inf
-            PI[n, 0] = -1
-            PI[n, 1] = nt
+            PF[n] = (-T[i - 1], math.inf, 0.0, math.nan, math.nan)  # (NaN: integrals not cached)
+            PI[n] = (-1, nt, 0, 0)
             if i <= n_p and init is not None:
                 nt = put(n, nt, *init[2 * (i - 1) + side])
             elif i <= n_p and val != 0.0:
@@ -663,10 +682,8 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     CHI[c, 1] = n
     starts = [-1.0] if drive is None else drive[0]
     for j, t0 in enumerate(starts):
-        PF[n, 0] = t0
-        PF[n, 1] = math.inf
-        PI[n, 0] = -1 if j == len(starts) - 1 else n + 1
-        PI[n, 1] = nt
+        PF[n] = (t0, math.inf, 0.0, math.nan, math.nan)
+        PI[n] = (-1 if j == len(starts) - 1 else n + 1, nt, 0, 0)
         if drive is not None:
             nt = put(n, nt, *drive[1][j])
         CHI[c, 0] = n
@@ -731,7 +748,9 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     loads[:, 2:4] *= scale
     loads[:, 4] *= s2
     lamk = np.array([k, k_u, 0.0])
-    hist = (scale, (PF, PI, TK, TC, CHI, lam, lamk), J, n_p)  # (the junctions' only with record)
+    npc, nt = int(CNT[0]), int(CNT[1])  # the pieces kept, not the pool's capacity (megabytes)
+    hist = (scale, (PF[:npc].copy(), PI[:npc].copy(), TK[:nt].copy(), TC[:nt].copy(), CHI, lam, lamk), J,
+            n_p)  # (the junctions' only with record)
     return ExactBlow(
         efficiency=dissipated / available,
         efficiency_with_rebound=dissipated / (available - Ep),
