@@ -5,14 +5,13 @@ describes the representation."""
 
 from __future__ import annotations
 
-import cmath
 import math
 
 import numba
 import numpy as np
 
 from ...dynamics._kernel import CACHE
-from ._exactintegrals import blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
+from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
@@ -81,11 +80,6 @@ def blk_trim(B, N):
         while n > 0 and B[e, n - 1] == 0.0:
             n -= 1
         N[e] = n
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def _expl(lam_e, tau):
-    return cmath.exp(lam_e * tau)
 
 
 @numba.njit(cache=CACHE, nogil=True)
