@@ -700,6 +700,21 @@ def load_input(B, N, c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _cached_integrals(p, L, pool, B, N, first, second):
+    """``int f`` (with ``first``) and ``int f^2`` (with ``second``) of the closed piece ``p`` over its
+    whole span ``L``, each computed once (``PF[p, 3:5]``, NaN until then)."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
+    one = first and math.isnan(PF[p, 3])
+    two = second and math.isnan(PF[p, 4])
+    if one or two:
+        pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
+        if one:
+            PF[p, 3] = blk_integral(B, N, lam, 0.0, L)
+        if two:
+            PF[p, 4] = blk_integral_sq(B, N, lam, 0.0, L)
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def chan_integrals(c, t, Z, CH_T, pool, B, N):
     """``int f`` and ``int f^2 / Z`` over the wave now in the channel's segment (emitted in
     ``[t - T, t]``); ``pool`` as :func:`emit`'s, ``B, N`` a scratch block."""
@@ -716,10 +731,7 @@ def chan_integrals(c, t, Z, CH_T, pool, B, N):
         b = min(tend, t)
         if b > a and PI[p, 2] > 0:
             if nx >= 0 and a == t0 and b == tend:  # the whole of a closed piece: computed once
-                if math.isnan(PF[p, 3]) or math.isnan(PF[p, 4]):
-                    pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
-                    PF[p, 3] = blk_integral(B, N, lam, 0.0, tend - t0)
-                    PF[p, 4] = blk_integral_sq(B, N, lam, 0.0, tend - t0)
+                _cached_integrals(p, tend - t0, pool, B, N, True, True)
                 s1 += PF[p, 3]
                 s2 += PF[p, 4]
             else:
@@ -732,3 +744,30 @@ def chan_integrals(c, t, Z, CH_T, pool, B, N):
     return s1, s2 / Z
 
 
+@numba.njit(cache=CACHE, nogil=True)
+def chan_closed_sq(c, t, CH_T, pool, B, N, exact):
+    """A lower bound of ``int f^2`` over the wave now in the channel's segment (emitted in
+    ``[t - T, t]``): the closed pieces wholly in it (:func:`chan_integrals`' sum without its partial
+    pieces at the segment's two ends), each by its ``int f^2`` where cached or ``exact`` (computed
+    and cached as chan_integrals does), else by ``(int f)^2 / L`` (Cauchy-Schwarz; ``int f``
+    cached, several times cheaper: no products of pairs of exponents)."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
+    lo = t - CH_T[c]
+    p = CHI[c, 1]
+    s2 = 0.0
+    while p >= 0:
+        t0 = PF[p, 0]
+        nx = PI[p, 0]
+        tend = PF[nx, 0] if nx >= 0 else t
+        if nx >= 0 and lo <= t0 < tend <= t and PI[p, 2] > 0:
+            L = tend - t0
+            if exact or not math.isnan(PF[p, 4]):
+                _cached_integrals(p, L, pool, B, N, False, True)
+                s2 += PF[p, 4]
+            else:
+                _cached_integrals(p, L, pool, B, N, True, False)
+                s2 += PF[p, 3] * PF[p, 3] / L
+        if tend >= t:
+            break
+        p = nx
+    return s2

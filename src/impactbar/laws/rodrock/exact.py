@@ -707,6 +707,7 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     EP = np.zeros((ecap, 5))
     CI = np.zeros(8, dtype=np.int64)
     CT = np.zeros(16)
+    CT[9] = math.nan  # (no energy pass yet)
     return (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
             RT, RC, RD, EP, CI, CT)
 
@@ -717,7 +718,8 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     J = SZ.size
     n_p = Tp.size
     t_end = float(CT[0])
-    K.account(ws, t_end)
+    if CT[9] != t_end:  # (the energies at the end, unless the run's last pass was there)
+        K.account(ws, t_end)
     Pp, Ep, Er = CT[3], CT[4], CT[6]
     br = int(BI[0])
     p = BS[0]
