@@ -78,20 +78,24 @@ def _expl(lam_e, tau):
 
 @numba.njit(cache=CACHE, nogil=True)
 def blk_value(B, N, lam, tau):
-    """The block's value at ``tau`` (the real part of its terms' sum)."""
+    """The block's value at ``tau`` (the real part of its terms' sum; for a real exponent from the
+    coefficients' real parts alone, the same value)."""
     f = 0.0
     for e in range(N.size):
         n = N[e]
         if n == 0:
             continue
+        le = lam[e]
+        if le.imag == 0.0:
+            qr = 0.0
+            for d in range(n - 1, -1, -1):
+                qr = qr * tau + B[e, d].real
+            f += qr if le == 0.0 else math.exp(le.real * tau) * qr
+            continue
         q = 0.0j
         for d in range(n - 1, -1, -1):
             q = q * tau + B[e, d]
-        le = lam[e]
-        if le == 0.0:
-            f += q.real
-        else:
-            f += (_expl(le, tau) * q).real
+        f += (_expl(le, tau) * q).real
     return f
 
 
