@@ -248,6 +248,11 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     blk_clear(Y, NY)
     status = 0
     series = False
+    near = False  # a forcing exponent near r: a series, or a fold (their coefficients in ex)
+    for e in range(NG.size):
+        if NG[e] > 0 and e != rc and abs(r - lam[e]) * L <= NEAR:
+            near = True
+    ex = np.empty(DC if near else 1, dtype=np.complex128)
     for e in range(NG.size):
         n = NG[e]
         if n == 0:
@@ -257,14 +262,13 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
             # e^{r tau} int_0^tau e^{(lam_e - r) s} P(s) ds: the series of e^{(lam_e - r) s} grows
             series = True
             dp = -delta
-            ex = np.empty(DC, dtype=np.complex128)  # dp^m / m!
-            ex[0] = 1.0
-            for mm in range(1, DC):
-                ex[mm] = ex[mm - 1] * dp / mm
+            ex[0] = 1.0  # dp^m / m!, each as the series reaches it
             top = 0.0
             Lp = 1.0
             last = 0
             for kk in range(DC - 1):
+                if kk > 0:
+                    ex[kk] = ex[kk - 1] * dp / kk
                 R = 0.0j  # the coefficient of s^kk in e^{dp s} P(s)
                 for i in range(min(kk, n - 1) + 1):
                     R += G[e, i] * ex[kk - i]
@@ -333,7 +337,7 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
             c = e
     for e in range(NY.size):
         if e != c and NY[e] > 0 and abs(lam[e] - r) * L <= NEAR:
-            if blk_fold(Y, NY, e, c, lam, L) != 0:
+            if blk_fold(Y, NY, e, c, lam, L, ex) != 0:
                 status = 1
             series = True
     blk_trim(Y, NY)
@@ -341,21 +345,21 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def blk_fold(Y, NY, e, c, lam, L):
+def blk_fold(Y, NY, e, c, lam, L, ex):
     """Move the terms of exponent ``e`` into exponent ``c`` (``Re lam_c <= Re lam_e``): ``P(tau)
     e^{lam_e tau} = e^{lam_c tau} P(tau) e^{d tau}``, ``d = lam_e - lam_c``, the series cut below
-    ``SERIES_TOL`` on ``[0, L]``. Returns 1 at the degree limit."""
+    ``SERIES_TOL`` on ``[0, L]`` (``ex``: scratch of ``DC`` for ``d^m / m!``). Returns 1 at the
+    degree limit."""
     n = NY[e]
     d = lam[e] - lam[c]
-    ex = np.empty(DC, dtype=np.complex128)
-    ex[0] = 1.0
-    for mm in range(1, DC):
-        ex[mm] = ex[mm - 1] * d / mm
+    ex[0] = 1.0  # d^m / m!, each as the series reaches it
     top = 0.0
     Lp = 1.0
     status = 1
     last = 0
     for kk in range(DC):
+        if kk > 0:
+            ex[kk] = ex[kk - 1] * d / kk
         R = 0.0j
         for i in range(min(kk, n - 1) + 1):
             R += Y[e, i] * ex[kk - i]
@@ -552,12 +556,31 @@ def _term_bound(re, d, Lb):
 
 @numba.njit(cache=CACHE, nogil=True)
 def blk_prune(B, N, lam, tol, Lb):
-    """Zero the terms below ``tol`` on ``[0, Lb]``."""
+    """Zero the terms below ``tol`` on ``[0, Lb]``: ``|c| _term_bound < tol``, decided without the
+    bound's logarithm and exponential where bounds of it by products decide it with a margin far
+    beyond their rounding (the same decisions): ``Lb^d`` above it, ``Lb^d / e`` (a decay ``|re| Lb <=
+    1``) or ``|re|^-d / e`` (its value at ``1 / |re|``, a faster decay) below it."""
     for e in range(N.size):
         re = lam[e].real
+        fast = re * Lb < -1.0
+        p = 1.0  # Lb^d
+        q = 1.0  # |re|^-d
         for d in range(N[e]):
+            if d > 0:
+                p *= Lb
+                if fast:
+                    q /= -re
             c = B[e, d]
-            if c != 0.0 and cabs(c) * _term_bound(re, d, Lb) < tol:
+            if c == 0.0:
+                continue
+            a = cabs(c)
+            if d > 0:
+                if 2.0 * a * p < tol:
+                    B[e, d] = 0.0
+                    continue
+                if 0.3 * a * (q if fast else p) >= tol:
+                    continue
+            if a * _term_bound(re, d, Lb) < tol:
                 B[e, d] = 0.0
     blk_trim(B, N)
 
