@@ -17,6 +17,8 @@ DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
 EPS = 2.220446049250313e-16
 SERIES_TOL = 1e-18
+#: arrivals closer than this (relative to the time) are one break point (rounding's slivers)
+SNAP = 64.0 * EPS
 
 # ------------------------------------------------------------------------------------------------
 # blocks
@@ -696,16 +698,19 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
 @numba.njit(cache=CACHE, nogil=True)
 def advance(c, a, CHI, CH_T, PF, PI):
     """Move the receiver's cursor on channel ``c`` to the piece arriving at ``a``; returns it and the
-    next piece's arrival (inf if not emitted yet)."""
+    next piece's arrival (inf if not emitted yet). An arrival within ``SNAP`` of ``a`` (relative) has
+    arrived: break points equal but for the rounding of sums of travel times, summed in different
+    orders (a stepped piston's and rod's paths), are one."""
     cur = CHI[c, 1]
     T = CH_T[c]
+    lim = a + SNAP * abs(a)
     while True:
         nx = PI[cur, 0]
         if nx < 0:
             CHI[c, 1] = cur
             return cur, INF
         arr = PF[nx, 0] + T
-        if arr <= a:
+        if arr <= lim:
             cur = nx
         else:
             CHI[c, 1] = cur

@@ -24,7 +24,8 @@ piston's modal fields). Every operation maps such pieces to such pieces exactly:
 
 Every switch (separation, re-contact, unloading, reloading, lift-off, landing) is the first zero of
 an exact piece, located by a certified branch-and-bound search and refined by safeguarded Newton
-steps to rounding. Nothing is averaged over cells; segment lengths need not be commensurate.
+steps to rounding; arrivals that differ only by the rounding of sums of travel times are one break
+point. Nothing is averaged over cells; segment lengths need not be commensurate.
 Exponents closer than ``0.05 / h`` (``h`` the shortest travel time) are handled as one, the
 difference carried by the Taylor series of ``e^{delta tau}`` over at most ``h`` (to ``1e-18``), so a
 soft rock (``k -> 0``), a light bit (``m -> 0``: below ``1e-18`` of the bit's time scales the
