@@ -1,4 +1,5 @@
-"""The exact blow's break points (issue 39): arrivals equal but for rounding are one break point.
+"""The exact blow's break points and its pool (issue 39): arrivals equal but for rounding are one
+break point, and a blow whose pieces outgrow their memory bound says what it measured.
 
 A wave that reaches a junction along two paths whose travel times were summed in different orders
 arrives at two times an ulp or two apart. Each such pair was two break points with a sliver piece
@@ -6,11 +7,13 @@ between them, whose value mixes the old wave on one input with the new on the ot
 never acts); the slivers multiplied downstream, and one made a spurious separation of the piston and
 the shank. Checked against the independent solution of ``tests/laws/_reference_blow.py``."""
 
+import math
+
 import numpy as np
 import pytest
 from _reference_blow import reference_blow
 
-from impactbar.laws.rodrock.exact import exact_blow
+from impactbar.laws.rodrock.exact import PoolOverflow, exact_blow
 
 #: arrivals closer than this (relative) are one break point (_exactpieces.SNAP)
 SNAP = 64 * np.finfo(float).eps
@@ -58,3 +61,14 @@ def test_a_stepped_pistons_arrivals_along_paths_of_equal_length_are_one():
     np.testing.assert_allclose(left / h, np.round(left / h), rtol=0.0, atol=1e-9)
     assert ex.pieces < 2500
 
+
+def test_an_overflow_says_how_many_pieces_and_terms():
+    """A bit of mass 0.3 (not a light one) whose pieces outgrow a pool of 512 kB: the message said
+    that a light bit's fast branches make long series; it now gives the pieces and their terms by
+    then, and both causes."""
+    with pytest.raises(PoolOverflow, match=r"by t = [0-9.]+: \d+ pieces of [0-9.]+ terms on average.*"
+                                           r"incommensurate segments.*method='lattice'") as err:
+        exact_blow([1.0], [1.0], [1.0, 0.5, 2.0], [1.0, 0.5, 1.0], k=0.7, k_u=7.0, bit_mass=0.3,
+                   impact_velocity=1.0, max_pool_bytes=2 ** 19)
+    assert "light bit" not in str(err.value)
+    assert math.isfinite(float(str(err.value).split("by t = ")[1].split(":")[0]))

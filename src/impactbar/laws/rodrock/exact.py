@@ -500,9 +500,9 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     PR[22] = 1.0 if data is not None and data.drive is not None else 0.0
     PR[6] = 1.0 if fixed_horizon else 0.0
     bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
-    # 2.5 MB (a pool too small runs the blow again, larger); the simulator's blows (data given, a
-    # fixed horizon of a few round trips) need tens of pieces: 40 kB first
-    pcap, tcap, ecap = (16384, 65536, 256) if data is None else (256, 2048, 64)
+    # 4 MB, of which a blow touches what it uses (a pool too small runs the blow again, larger); the
+    # simulator's blows (data given, a fixed horizon of a few round trips) need tens of pieces: 40 kB
+    pcap, tcap, ecap = (16384, 131072, 256) if data is None else (256, 2048, 64)
     while pcap > 1024 and _pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     while True:
@@ -515,15 +515,20 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         K.run(ws)
         if ws[24][0] == 0:
             break
-        pcap, tcap, ecap = 4 * pcap, 4 * tcap, 4 * ecap
+        # what overflowed grows 4-fold: the pieces, the loading episodes, or else the terms (the
+        # pieces hold 5 to 40 terms each: the terms' array fills first)
+        npc, nterms = int(ws[4][0]), int(ws[4][1])
+        full_p, full_e = npc >= ws[0].shape[0], int(ws[19][1]) > ws[23].shape[0]
+        pcap, ecap = 4 * pcap if full_p else pcap, 4 * ecap if full_e else ecap
+        tcap = tcap if full_p or full_e else 4 * tcap
         if _pool_bytes(pcap, tcap) > bound:
-            why = (f"bit_mass = {m:g}: a light bit's fast branches make long series; use "
-                   "method='lattice', or a bit_mass of 0 (the massless bit) or a heavier one"
-                   if m > 0.0 else
-                   "the waves broke into more pieces than that by t = "
-                   f"{ws[25][0]:.6g}; give a t_max, or use method='lattice'")
-            raise PoolOverflow(f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces "
-                               f"({why})")
+            per = nterms / max(npc, 1)
+            raise PoolOverflow(
+                f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces (the waves broke "
+                f"into more pieces than that by t = {ws[25][0]:.6g}: {npc} pieces of {per:.3g} "
+                "terms on average; each sum of the segments' travel times is a break point, so that many or "
+                "incommensurate segments multiply them, and exponents close together, a bit's mass or a soft "
+                "rock, lengthen their series); give a t_max, or use method='lattice'")
     if lean:
         return ws, scale
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
