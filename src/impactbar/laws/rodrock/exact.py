@@ -137,10 +137,10 @@ def _compliance(T, Z, lead_mass):
     uniform acceleration, ``lead_mass`` a point mass at the far side: the compliance of the end
     relative to the centre of mass."""
     masses = np.asarray(Z) * np.asarray(T)
-    M = lead_mass + masses.sum()
+    M = lead_mass + float(masses.sum())
     n0 = lead_mass / M
     c = 0.0
-    for Ti, Zi, mi in zip(T, Z, masses, strict=True):
+    for Ti, Zi, mi in zip(np.asarray(T).tolist(), np.asarray(Z).tolist(), masses.tolist(), strict=True):
         n1 = n0 + mi / M
         c += Ti / Zi * (n0 * n0 + n0 * n1 + n1 * n1) / 3.0
         n0 = n1
@@ -345,7 +345,7 @@ def _check_chain(name, times, imps):
         raise ValueError(f"{name}: travel times and impedances must be 1-d, non-empty, of one length; "
                          f"got shapes {T.shape} and {Z.shape}")
     for what, a in (("travel times", T), ("impedances", Z)):
-        if not np.all(np.isfinite(a)) or not np.all(a > 0.0):
+        if not (0.0 < float(a.min()) and float(a.max()) < math.inf):  # (a NaN fails both)
             raise ValueError(f"{name}: {what} must be finite and > 0; got {a}")
     return T, Z
 
@@ -452,8 +452,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     if scale == 0.0:
         scale = 1.0
     Vn, fn = V / scale * 1.0, f / scale
-    C_rod = float(np.sum(Tr / Zr))
-    e_scale = 0.5 * float(np.sum(Zp * Tp)) * (Vn * Vn if data is None else 1.0) \
+    C_rod = float((Tr / Zr).sum())
+    e_scale = 0.5 * float((Zp * Tp).sum()) * (Vn * Vn if data is None else 1.0) \
         + fn * fn * (0.5 * C_rod + 0.5 / k_u)
     if not (1e-290 < scale * scale * e_scale < 1e290):
         raise ValueError(f"impact_velocity = {V:g} and feed = {f:g} give a blow whose energy "
@@ -483,8 +483,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
             RT[br, q] = flat[i]
             RC[br, q] = index[i]
             i += 1
-    Mp = float(np.sum(Zp * Tp))
-    Mr = float(np.sum(Zr * Tr)) + m
+    Mp = float((Zp * Tp).sum())
+    Mr = float((Zr * Tr).sum()) + m
     Lb = max(2.0 * Tsum, h)
     PR = np.zeros(32)
     PR[0], PR[1], PR[2], PR[3], PR[4], PR[5] = k, k_u, m, fn, Zb, h
