@@ -8,12 +8,23 @@ times (median) and the relative errors of the efficiency and of the rebound velo
 exact blow.
 
 Run: ``python benchmarks/bench_exact_blow.py [--quick]``. Prints a table; nothing is asserted.
+
+``--against SRC`` instead times the exact blow and the default lattice (``single_blow``, CPU time,
+the median of 15 calls after one; the 40-long rod 5) in fresh processes on the package tree ``SRC``
+(e.g. ``git worktree add /tmp/old <commit>`` then ``--against /tmp/old/src``) and on this one,
+alternately, best of three processes each, and prints both side by side.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 from _timing import median_time  # this folder's shared timer
 
@@ -36,10 +47,54 @@ CASES = {
 }
 
 
+def _cpu_times(repeat=15):
+    """``{case: (exact ms, lattice ms)}``: medians of CPU time (one untimed call first)."""
+    out = {}
+    for name, model in CASES.items():
+        n = repeat if "40-long" not in name else 5
+        row = []
+        for kw in ({}, {"method": "lattice"}):
+            ib.single_blow(model, 1.0, **kw)
+            ts = []
+            for _ in range(n):
+                t0 = time.process_time()
+                ib.single_blow(model, 1.0, **kw)
+                ts.append(time.process_time() - t0)
+            row.append(1e3 * sorted(ts)[n // 2])
+        out[name] = row
+    return out
+
+
+def against(src, rounds=3):
+    """The exact blow and the lattice on another package tree and on this one, in fresh processes."""
+    here = Path(__file__).resolve()
+    runs = {"baseline": [], "new": []}
+    for _ in range(rounds):
+        for name, path in (("baseline", src), ("new", str(here.parents[1] / "src"))):
+            env = dict(os.environ, PYTHONPATH=path + os.pathsep + str(here.parent))
+            out = subprocess.run([sys.executable, str(here), "--json"], env=env, check=True,
+                                 capture_output=True, text=True).stdout
+            runs[name].append(json.loads(out.strip().splitlines()[-1]))
+    print(f"{'case (CPU ms, best of ' + str(rounds) + ' processes)':40s} {'exact, baseline':>15s} "
+          f"{'exact, new':>11s} {'lattice, baseline':>17s} {'lattice, new':>12s}")
+    for case in CASES:
+        b = [min(r[case][i] for r in runs["baseline"]) for i in (0, 1)]
+        n = [min(r[case][i] for r in runs["new"]) for i in (0, 1)]
+        print(f"{case:40s} {b[0]:15.2f} {n[0]:11.2f} {b[1]:17.2f} {n[1]:12.2f}")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--against", metavar="SRC", help="compare with the package tree SRC instead")
+    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
     args = parser.parse_args(argv)
+    if args.json:
+        print(json.dumps(_cpu_times()))
+        return
+    if args.against:
+        against(args.against)
+        return
     repeat = 3 if args.quick else 7
     print(f"{'case':28s} {'exact ms':>9s} {'ended by':>9s} {'lattice-8 ms':>12s} {'err eff':>9s} "
           f"{'err reb':>9s} {'lattice-fine ms':>15s} {'err eff':>9s} {'err reb':>9s}")

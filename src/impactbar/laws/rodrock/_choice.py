@@ -37,12 +37,14 @@ def _exact_is_cheap(model, law, piston=None) -> bool:
     at most ``MAX_EXACT_LOADING_EXPONENT``."""
     from ._piston import piston_segments
 
-    with np.errstate(over="ignore", divide="ignore"):
-        own = piston_segments(piston)[0] / model.s
-        travel = np.concatenate((own, [g.travel_time(model) for g in law.segments]))
-        rate = law.rock.k / (model.s * law.segments[-1].impedance) * float(np.min(travel))
-    ratio = 2.0 * float(np.sum(travel)) / float(np.min(travel))
-    return (bool(np.all(np.isfinite(travel))) and ratio <= MAX_EXACT_PASS_WINDOWS
+    s = model.s
+    with np.errstate(over="ignore", divide="ignore"):  # (the array's methods: a call's fixed cost)
+        own = [1.0 / s] if piston is None else list(piston_segments(piston)[0] / s)
+        travel = np.array(own + [g.travel_time(model) for g in law.segments])
+        shortest = float(travel.min())
+        rate = law.rock.k / (s * law.segments[-1].impedance) * shortest
+    ratio = 2.0 * float(travel.sum()) / shortest
+    return (bool(np.isfinite(travel).all()) and ratio <= MAX_EXACT_PASS_WINDOWS
             and rate <= MAX_EXACT_LOADING_EXPONENT)
 
 

@@ -24,9 +24,51 @@ def eval_history(PF, PI, TK, TC, lam, head, times, out, kind, lamk):
     E = lam.size
     B = np.zeros((E, DC), dtype=np.complex128)
     N = np.zeros(E, dtype=np.int64)
+    _eval_into(PF, PI, TK, TC, lam, head, times, out, kind, lamk, B, N)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def eval_histories(PF, PI, TK, TC, lam, heads, times, out, kind, lamk):
+    """:func:`eval_history` of the channels whose first pieces are ``heads`` at the same ``times``,
+    into the columns of ``out`` (shape ``(times.size, heads.size)``)."""
+    E = lam.size
+    B = np.zeros((E, DC), dtype=np.complex128)
+    N = np.zeros(E, dtype=np.int64)
+    col = np.empty(times.size)
+    for j in range(heads.size):
+        _eval_into(PF, PI, TK, TC, lam, heads[j], times, col, kind, lamk, B, N)
+        out[:, j] = col
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def eval_bit(PF, PI, TK, TC, lam, head, times, pen, force, lamk):
+    """The bit's history at ``times`` (sorted): its penetration into ``pen`` and the rock's force into
+    ``force`` (:func:`eval_history`'s kinds 1 and 2), each value computed once."""
+    E = lam.size
+    B = np.zeros((E, DC), dtype=np.complex128)
+    N = np.zeros(E, dtype=np.int64)
+    _eval_into(PF, PI, TK, TC, lam, head, times, pen, 0, lamk, B, N)
+    p = head
+    for i in range(times.size):
+        if p < 0:
+            force[i] = 0.0
+            continue
+        while PI[p, 0] >= 0 and PF[PI[p, 0], 0] <= times[i]:
+            p = PI[p, 0]
+        v = pen[i]
+        force[i] = max(lamk[PI[p, 3]] * v, 0.0)
+        pen[i] = v + PF[p, 2]
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _eval_into(PF, PI, TK, TC, lam, head, times, out, kind, lamk, B, N):
+    """:func:`eval_history` with a scratch block ``B, N``: each piece loaded once for the times on it
+    (0 where the channel holds none)."""
     p = head
     if p < 0:
+        out[:] = 0.0
         return
+    loaded = -1
     for i in range(times.size):
         t = times[i]
         while PI[p, 0] >= 0 and PF[PI[p, 0], 0] <= t:
@@ -34,14 +76,16 @@ def eval_history(PF, PI, TK, TC, lam, head, times, out, kind, lamk):
         tau = t - PF[p, 0]
         if tau < 0.0:
             tau = 0.0
-        blk_clear(B, N)
-        ts = PI[p, 1]
-        for k in range(ts, ts + PI[p, 2]):
-            e = TK[k] // DC
-            d = TK[k] - e * DC
-            B[e, d] += TC[k]
-            if d + 1 > N[e]:
-                N[e] = d + 1
+        if p != loaded:
+            blk_clear(B, N)
+            ts = PI[p, 1]
+            for k in range(ts, ts + PI[p, 2]):
+                e = TK[k] // DC
+                d = TK[k] - e * DC
+                B[e, d] += TC[k]
+                if d + 1 > N[e]:
+                    N[e] = d + 1
+            loaded = p
         v = blk_value(B, N, lam, tau)
         if kind == 1:
             v += PF[p, 2]

@@ -21,9 +21,18 @@ def moments(mu, a, b, K, out):
     started from 0 where ``prod |mu| b/k`` has damped its error below 1e-20). (The power series in
     ``mu`` that ``|mu| b <= 1`` used before gave the same values at several times the cost; for
     larger ``|mu| b`` an alternating series loses ``e^{|mu| b}``: a bit with mass, its fast roots.)"""
-    amu = abs(mu)
-    eb = cmath.exp(mu * b) if amu > 0.0 else 1.0 + 0.0j
-    ea = cmath.exp(mu * a) if amu > 0.0 else 1.0 + 0.0j
+    if mu.imag == 0.0:  # a real exponent (every massless bit's): real arithmetic, the same values
+        m = mu.real  # (the complex ones' imaginary parts are zeros)
+        _recursions(m, abs(m), math.exp(m * b) if m != 0.0 else 1.0, math.exp(m * a) if m != 0.0 else 1.0,
+                    a, b, K, out)
+    else:
+        _recursions(mu, abs(mu), cmath.exp(mu * b), cmath.exp(mu * a), a, b, K, out)
+
+
+@numba.njit(cache=CACHE, nogil=True, inline="always")  # (a call: 5 % of a bit with mass's blow)
+def _recursions(mu, amu, eb, ea, a, b, K, out):
+    """:func:`moments`' recursions, ``eb = e^{mu b}``, ``ea = e^{mu a}`` (compiled for a real and
+    for a complex ``mu``)."""
     x = amu * b
     k0 = min(K, math.ceil(x)) if x > 1.0 else 0
     if k0 < K:
@@ -32,14 +41,15 @@ def moments(mu, a, b, K, out):
         while damp > 1e-20:
             top += 1
             damp *= x / top
-        cur = 0.0j
+        cur = 0.0 * eb
         for kk in range(top, k0, -1):
-            cur = (b ** kk * eb - (a ** kk if a > 0.0 else 0.0) * ea - mu * cur) / kk
+            pb = 1.0 if b == 1.0 else b ** kk  # (b = 1: every caller's, the moments in u = tau / b)
+            cur = (pb * eb - (a ** kk if a > 0.0 else 0.0) * ea - mu * cur) / kk
             if kk - 1 < K:
                 out[kk - 1] = cur
     pb = 1.0
     pa = 1.0
-    prev = 0.0j
+    prev = 0.0 * eb
     for k in range(k0):
         val = (eb - ea) / mu if k == 0 else (pb * eb - pa * ea) / mu - k / mu * prev
         out[k] = val
@@ -57,21 +67,35 @@ def blk_integral(B, N, lam, a, b):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _expl(lam_e, tau):
+    """``e^{lam_e tau}``: for a real exponent ``cmath.exp``'s value (``(r, r 0)``, ``r = e^{lam_e tau}``)
+    without its sine and cosine of 0."""
+    if lam_e.imag == 0.0:
+        r = math.exp(lam_e.real * tau)
+        return complex(r, r * 0.0)
+    return cmath.exp(lam_e * tau)
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def blk_value(B, N, lam, tau):
-    """The block's value at ``tau`` (the real part of its terms' sum)."""
+    """The block's value at ``tau`` (the real part of its terms' sum; for a real exponent from the
+    coefficients' real parts alone, the same value)."""
     f = 0.0
     for e in range(N.size):
         n = N[e]
         if n == 0:
             continue
+        le = lam[e]
+        if le.imag == 0.0:
+            qr = 0.0
+            for d in range(n - 1, -1, -1):
+                qr = qr * tau + B[e, d].real
+            f += qr if le == 0.0 else math.exp(le.real * tau) * qr
+            continue
         q = 0.0j
         for d in range(n - 1, -1, -1):
             q = q * tau + B[e, d]
-        le = lam[e]
-        if le == 0.0:
-            f += q.real
-        else:
-            f += (cmath.exp(le * tau) * q).real
+        f += (_expl(le, tau) * q).real
     return f
 
 

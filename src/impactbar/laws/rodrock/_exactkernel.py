@@ -69,6 +69,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     blk_set_comb,
     blk_shift,
     blk_value,
+    chan_closed_sq,
     chan_integrals,
     emit,
     first_negative,
@@ -102,7 +103,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
 # CI: 0 status, 1 ended_by, 2 windows done, 3 (unused), 4 crossing searches given up, 5 separations,
 #     6 re-contacts, 7 degree limit reached; CT: 0 time reached, 1 last separation, 2 last loading end,
 #     3 piston momentum, 4 piston energy, 5 rod momentum, 6 rod wave energy, 7 Psi, 8 yield
-#     threshold
+#     threshold (3 to 8 by account), 9 the time of account's last pass
 
 
 #: Most switches of the bit's branches between two arrivals at the bit (each a located root); a bit
@@ -671,6 +672,102 @@ def account(ws, t):
     CT[6] = Er
     CT[7] = psi
     CT[8] = (BS[4] - f) * (BS[4] - f) / (2.0 * ku)
+    CT[9] = t
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def may_end(ws, t):
+    """Whether :func:`certify` could find an end at ``t``, decided without its energy pass (most of
+    a blow's cost). Its ends hold for an energy ``Psi`` of rod, bit and rock only below bounds
+    (:func:`_could_end`), so none can where even a lower bound of ``Psi`` exceeds them: the bit's
+    and the rock's energy with that of the rod's closed pieces in flight (the partial pieces at its
+    segments' ends left out; each by ``(int f)^2 / L`` first, then by ``int f^2``, cached), added
+    channel by channel until no end is possible, less 1e-9 of it for rounding. A necessary
+    condition of every end :func:`certify` finds (its momenta are certify's to the bit): keep the
+    two in step."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    J = SZ.size
+    n_p = int(PR[21])
+    m = PR[2]
+    w = BS[2]
+    ku = PR[1]
+    f = PR[3]
+    br = BI[0]
+    if br == FREE:
+        psi = 0.5 * m * w * w + f * (BS[5] - BS[0]) + f * f / (2.0 * ku)
+    else:
+        R = PR[0] * BS[1] if br == LOAD else ku * BS[1]
+        psi = 0.5 * m * w * w + (R - f) * (R - f) / (2.0 * ku)
+    # what certify's ends need besides Psi: the piston out of contact and not moving on (its
+    # momentum), and without a feed whether the rod may fly free of the rock (the rod's momentum)
+    gone = False
+    vp = 0.0
+    Pr = 1.0  # (> 0: the rod cannot fly free)
+    if NSI[n_p, 3] != 1:
+        Pq = 0.0
+        for i in range(1, n_p + 1):
+            Pq += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
+        gone = Pq <= 0.0
+        vp = Pq / PR[15]
+        if gone and f == 0.0 and br == FREE and BS[0] < BS[5]:
+            Pr = 0.0
+            for i in range(n_p + 1, J + 1):
+                Pr += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
+            Pr += m * w
+    xs = NSF[n_p, 1]
+    avail = PR[10] + f * xs + f * f * (PR[11] * 0.5 + 0.5 / ku)
+    if not _could_end(psi, ws, avail, gone, vp, Pr):
+        return False
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+    for exact in (False, True):  # the cheap bound of the pieces' energies first
+        er = 0.0
+        for c in range(2 * n_p, 2 * J):
+            er += chan_closed_sq(c, t, CH_T, pool, WB[12], WN[12], exact) / SZ[c // 2]
+            if not _could_end(psi + er, ws, avail, gone, vp, Pr):
+                return False
+    return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _could_end(psi, ws, avail, gone, vp, Pr):
+    """Whether :func:`certify` could end the blow were ``Psi`` at least ``psi`` (less 1e-9 of it),
+    its tests with that bound: ``SPENT`` needs ``Psi`` below twice the spent fraction of ``avail``;
+    ``SEPARATED``, ``LIFTED`` and ``MAY_YIELD`` the piston out of contact and not moving on
+    (``gone``) and the rock unable to yield (``Psi < thr``) or the rod flying free, or (with a
+    feed) the rock not loading and no ``t_max``; without a feed the rod flying free (``Pr <= 0``
+    and the bit held off the rock by more than the rod's internal motion can bring it back) ahead
+    of the piston (``vp <= Pr / M_r``), or the piston's mean velocity ``vp`` at most
+    ``-sqrt(2 Psi / M_r)``, and its struck end behind the shank's lowest reach. Non-increasing in
+    ``psi``."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    if not math.isfinite(psi):
+        return True  # (overflowed pieces: certify's pass says so)
+    psi = max(psi * (1.0 - 1e-9), 0.0)
+    if psi <= 2.0 * PR[9] * avail:
+        return True
+    if not gone:
+        return False
+    f = PR[3]
+    br = BI[0]
+    thr = (BS[4] - f) * (BS[4] - f) / (2.0 * PR[1])
+    if f > 0.0:
+        return br != LOAD and (psi < thr or PR[18] == INF)
+    n_p = int(PR[21])
+    xs = NSF[n_p, 1]
+    xp = xs - NSF[n_p, 0]
+    Mr = PR[16]
+    rod_free = False
+    if br == FREE and Pr <= 0.0:
+        eint = max(psi - 0.5 * Pr * Pr / Mr, 0.0)
+        if (BS[0] - BS[5]) + 2.0 * math.sqrt(2.0 * PR[14] * eint) < 0.0:
+            rod_free = True
+            if vp <= Pr / Mr and xp < xs - 2.0 * math.sqrt(2.0 * PR[13] * eint):
+                return True
+    if not ((br != LOAD and psi < thr) or rod_free):
+        return False
+    return vp <= -math.sqrt(2.0 * psi / Mr) and xp < xs - 2.0 * math.sqrt(2.0 * PR[13] * psi)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -696,6 +793,8 @@ def certify(ws, t):
             Pq += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
         if Pq > 0.0:
             return GOING
+    if not may_end(ws, t):  # no end possible whatever the energies in flight: no energy pass
+        return GOING
     account(ws, t)
     Pp, Ep, Pr, Er, psi, thr = CT[3], CT[4], CT[5], CT[6], CT[7], CT[8]
     f = PR[3]

@@ -5,19 +5,20 @@ describes the representation."""
 
 from __future__ import annotations
 
-import cmath
 import math
 
 import numba
 import numpy as np
 
 from ...dynamics._kernel import CACHE
-from ._exactintegrals import blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
+from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
 EPS = 2.220446049250313e-16
 SERIES_TOL = 1e-18
+#: arrivals closer than this (relative to the time) are one break point (rounding's slivers)
+SNAP = 64.0 * EPS
 
 # ------------------------------------------------------------------------------------------------
 # blocks
@@ -81,11 +82,6 @@ def blk_trim(B, N):
         while n > 0 and B[e, n - 1] == 0.0:
             n -= 1
         N[e] = n
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def _expl(lam_e, tau):
-    return cmath.exp(lam_e * tau)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -254,6 +250,11 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     blk_clear(Y, NY)
     status = 0
     series = False
+    near = False  # a forcing exponent near r: a series, or a fold (their coefficients in ex)
+    for e in range(NG.size):
+        if NG[e] > 0 and e != rc and abs(r - lam[e]) * L <= NEAR:
+            near = True
+    ex = np.empty(DC if near else 1, dtype=np.complex128)
     for e in range(NG.size):
         n = NG[e]
         if n == 0:
@@ -263,14 +264,13 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
             # e^{r tau} int_0^tau e^{(lam_e - r) s} P(s) ds: the series of e^{(lam_e - r) s} grows
             series = True
             dp = -delta
-            ex = np.empty(DC, dtype=np.complex128)  # dp^m / m!
-            ex[0] = 1.0
-            for mm in range(1, DC):
-                ex[mm] = ex[mm - 1] * dp / mm
+            ex[0] = 1.0  # dp^m / m!, each as the series reaches it
             top = 0.0
             Lp = 1.0
             last = 0
             for kk in range(DC - 1):
+                if kk > 0:
+                    ex[kk] = ex[kk - 1] * dp / kk
                 R = 0.0j  # the coefficient of s^kk in e^{dp s} P(s)
                 for i in range(min(kk, n - 1) + 1):
                     R += G[e, i] * ex[kk - i]
@@ -339,7 +339,7 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
             c = e
     for e in range(NY.size):
         if e != c and NY[e] > 0 and abs(lam[e] - r) * L <= NEAR:
-            if blk_fold(Y, NY, e, c, lam, L) != 0:
+            if blk_fold(Y, NY, e, c, lam, L, ex) != 0:
                 status = 1
             series = True
     blk_trim(Y, NY)
@@ -347,21 +347,21 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def blk_fold(Y, NY, e, c, lam, L):
+def blk_fold(Y, NY, e, c, lam, L, ex):
     """Move the terms of exponent ``e`` into exponent ``c`` (``Re lam_c <= Re lam_e``): ``P(tau)
     e^{lam_e tau} = e^{lam_c tau} P(tau) e^{d tau}``, ``d = lam_e - lam_c``, the series cut below
-    ``SERIES_TOL`` on ``[0, L]``. Returns 1 at the degree limit."""
+    ``SERIES_TOL`` on ``[0, L]`` (``ex``: scratch of ``DC`` for ``d^m / m!``). Returns 1 at the
+    degree limit."""
     n = NY[e]
     d = lam[e] - lam[c]
-    ex = np.empty(DC, dtype=np.complex128)
-    ex[0] = 1.0
-    for mm in range(1, DC):
-        ex[mm] = ex[mm - 1] * d / mm
+    ex[0] = 1.0  # d^m / m!, each as the series reaches it
     top = 0.0
     Lp = 1.0
     status = 1
     last = 0
     for kk in range(DC):
+        if kk > 0:
+            ex[kk] = ex[kk - 1] * d / kk
         R = 0.0j
         for i in range(min(kk, n - 1) + 1):
             R += Y[e, i] * ex[kk - i]
@@ -558,12 +558,31 @@ def _term_bound(re, d, Lb):
 
 @numba.njit(cache=CACHE, nogil=True)
 def blk_prune(B, N, lam, tol, Lb):
-    """Zero the terms below ``tol`` on ``[0, Lb]``."""
+    """Zero the terms below ``tol`` on ``[0, Lb]``: ``|c| _term_bound < tol``, decided without the
+    bound's logarithm and exponential where bounds of it by products decide it with a margin far
+    beyond their rounding (the same decisions): ``Lb^d`` above it, ``Lb^d / e`` (a decay ``|re| Lb <=
+    1``) or ``|re|^-d / e`` (its value at ``1 / |re|``, a faster decay) below it."""
     for e in range(N.size):
         re = lam[e].real
+        fast = re * Lb < -1.0
+        p = 1.0  # Lb^d
+        q = 1.0  # |re|^-d
         for d in range(N[e]):
+            if d > 0:
+                p *= Lb
+                if fast:
+                    q /= -re
             c = B[e, d]
-            if c != 0.0 and cabs(c) * _term_bound(re, d, Lb) < tol:
+            if c == 0.0:
+                continue
+            a = cabs(c)
+            if d > 0:
+                if 2.0 * a * p < tol:
+                    B[e, d] = 0.0
+                    continue
+                if 0.3 * a * (q if fast else p) >= tol:
+                    continue
+            if a * _term_bound(re, d, Lb) < tol:
                 B[e, d] = 0.0
     blk_trim(B, N)
 
@@ -679,16 +698,19 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
 @numba.njit(cache=CACHE, nogil=True)
 def advance(c, a, CHI, CH_T, PF, PI):
     """Move the receiver's cursor on channel ``c`` to the piece arriving at ``a``; returns it and the
-    next piece's arrival (inf if not emitted yet)."""
+    next piece's arrival (inf if not emitted yet). An arrival within ``SNAP`` of ``a`` (relative) has
+    arrived: break points equal but for the rounding of sums of travel times, summed in different
+    orders (a stepped piston's and rod's paths), are one."""
     cur = CHI[c, 1]
     T = CH_T[c]
+    lim = a + SNAP * abs(a)
     while True:
         nx = PI[cur, 0]
         if nx < 0:
             CHI[c, 1] = cur
             return cur, INF
         arr = PF[nx, 0] + T
-        if arr <= a:
+        if arr <= lim:
             cur = nx
         else:
             CHI[c, 1] = cur
@@ -703,6 +725,21 @@ def load_input(B, N, c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN):
     pool_load(B, N, piece, a - arr, lam, BIN, PI, TK, TC)
     v = PF[piece, 1]
     return v + CH_T[c] if v < INF else INF
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _cached_integrals(p, L, pool, B, N, first, second):
+    """``int f`` (with ``first``) and ``int f^2`` (with ``second``) of the closed piece ``p`` over its
+    whole span ``L``, each computed once (``PF[p, 3:5]``, NaN until then)."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
+    one = first and math.isnan(PF[p, 3])
+    two = second and math.isnan(PF[p, 4])
+    if one or two:
+        pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
+        if one:
+            PF[p, 3] = blk_integral(B, N, lam, 0.0, L)
+        if two:
+            PF[p, 4] = blk_integral_sq(B, N, lam, 0.0, L)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -722,10 +759,7 @@ def chan_integrals(c, t, Z, CH_T, pool, B, N):
         b = min(tend, t)
         if b > a and PI[p, 2] > 0:
             if nx >= 0 and a == t0 and b == tend:  # the whole of a closed piece: computed once
-                if math.isnan(PF[p, 3]) or math.isnan(PF[p, 4]):
-                    pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
-                    PF[p, 3] = blk_integral(B, N, lam, 0.0, tend - t0)
-                    PF[p, 4] = blk_integral_sq(B, N, lam, 0.0, tend - t0)
+                _cached_integrals(p, tend - t0, pool, B, N, True, True)
                 s1 += PF[p, 3]
                 s2 += PF[p, 4]
             else:
@@ -738,3 +772,30 @@ def chan_integrals(c, t, Z, CH_T, pool, B, N):
     return s1, s2 / Z
 
 
+@numba.njit(cache=CACHE, nogil=True)
+def chan_closed_sq(c, t, CH_T, pool, B, N, exact):
+    """A lower bound of ``int f^2`` over the wave now in the channel's segment (emitted in
+    ``[t - T, t]``): the closed pieces wholly in it (:func:`chan_integrals`' sum without its partial
+    pieces at the segment's two ends), each by its ``int f^2`` where cached or ``exact`` (computed
+    and cached as chan_integrals does), else by ``(int f)^2 / L`` (Cauchy-Schwarz; ``int f``
+    cached, several times cheaper: no products of pairs of exponents)."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
+    lo = t - CH_T[c]
+    p = CHI[c, 1]
+    s2 = 0.0
+    while p >= 0:
+        t0 = PF[p, 0]
+        nx = PI[p, 0]
+        tend = PF[nx, 0] if nx >= 0 else t
+        if nx >= 0 and lo <= t0 < tend <= t and PI[p, 2] > 0:
+            L = tend - t0
+            if exact or not math.isnan(PF[p, 4]):
+                _cached_integrals(p, L, pool, B, N, False, True)
+                s2 += PF[p, 4]
+            else:
+                _cached_integrals(p, L, pool, B, N, True, False)
+                s2 += PF[p, 3] * PF[p, 3] / L
+        if tend >= t:
+            break
+        p = nx
+    return s2

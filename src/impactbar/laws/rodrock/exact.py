@@ -24,7 +24,8 @@ piston's modal fields). Every operation maps such pieces to such pieces exactly:
 
 Every switch (separation, re-contact, unloading, reloading, lift-off, landing) is the first zero of
 an exact piece, located by a certified branch-and-bound search and refined by safeguarded Newton
-steps to rounding. Nothing is averaged over cells; segment lengths need not be commensurate.
+steps to rounding; arrivals that differ only by the rounding of sums of travel times are one break
+point. Nothing is averaged over cells; segment lengths need not be commensurate.
 Exponents closer than ``0.05 / h`` (``h`` the shortest travel time) are handled as one, the
 difference carried by the Taylor series of ``e^{delta tau}`` over at most ``h`` (to ``1e-18``), so a
 soft rock (``k -> 0``), a light bit (``m -> 0``: below ``1e-18`` of the bit's time scales the
@@ -67,6 +68,7 @@ from __future__ import annotations
 
 import functools
 import math
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -135,10 +137,10 @@ def _compliance(T, Z, lead_mass):
     uniform acceleration, ``lead_mass`` a point mass at the far side: the compliance of the end
     relative to the centre of mass."""
     masses = np.asarray(Z) * np.asarray(T)
-    M = lead_mass + masses.sum()
+    M = lead_mass + float(masses.sum())
     n0 = lead_mass / M
     c = 0.0
-    for Ti, Zi, mi in zip(T, Z, masses, strict=True):
+    for Ti, Zi, mi in zip(np.asarray(T).tolist(), np.asarray(Z).tolist(), masses.tolist(), strict=True):
         n1 = n0 + mi / M
         c += Ti / Zi * (n0 * n0 + n0 * n1 + n1 * n1) / 3.0
         n0 = n1
@@ -343,7 +345,7 @@ def _check_chain(name, times, imps):
         raise ValueError(f"{name}: travel times and impedances must be 1-d, non-empty, of one length; "
                          f"got shapes {T.shape} and {Z.shape}")
     for what, a in (("travel times", T), ("impedances", Z)):
-        if not np.all(np.isfinite(a)) or not np.all(a > 0.0):
+        if not (0.0 < float(a.min()) and float(a.max()) < math.inf):  # (a NaN fails both)
             raise ValueError(f"{name}: {what} must be finite and > 0; got {a}")
     return T, Z
 
@@ -450,8 +452,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     if scale == 0.0:
         scale = 1.0
     Vn, fn = V / scale * 1.0, f / scale
-    C_rod = float(np.sum(Tr / Zr))
-    e_scale = 0.5 * float(np.sum(Zp * Tp)) * (Vn * Vn if data is None else 1.0) \
+    C_rod = float((Tr / Zr).sum())
+    e_scale = 0.5 * float((Zp * Tp).sum()) * (Vn * Vn if data is None else 1.0) \
         + fn * fn * (0.5 * C_rod + 0.5 / k_u)
     if not (1e-290 < scale * scale * e_scale < 1e290):
         raise ValueError(f"impact_velocity = {V:g} and feed = {f:g} give a blow whose energy "
@@ -481,8 +483,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
             RT[br, q] = flat[i]
             RC[br, q] = index[i]
             i += 1
-    Mp = float(np.sum(Zp * Tp))
-    Mr = float(np.sum(Zr * Tr)) + m
+    Mp = float((Zp * Tp).sum())
+    Mr = float((Zr * Tr).sum()) + m
     Lb = max(2.0 * Tsum, h)
     PR = np.zeros(32)
     PR[0], PR[1], PR[2], PR[3], PR[4], PR[5] = k, k_u, m, fn, Zb, h
@@ -498,30 +500,35 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     PR[22] = 1.0 if data is not None and data.drive is not None else 0.0
     PR[6] = 1.0 if fixed_horizon else 0.0
     bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
-    # 2.5 MB (a pool too small runs the blow again, larger); the simulator's blows (data given, a
-    # fixed horizon of a few round trips) need tens of pieces: 40 kB first
-    pcap, tcap, ecap = (16384, 65536, 256) if data is None else (256, 2048, 64)
+    # 4 MB, of which a blow touches what it uses (a pool too small runs the blow again, larger); the
+    # simulator's blows (data given, a fixed horizon of a few round trips) need tens of pieces: 40 kB
+    pcap, tcap, ecap = (16384, 131072, 256) if data is None else (256, 2048, 64)
     while pcap > 1024 and _pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     while True:
         RD[0] = 0.0  # (a run again with a larger pool logs afresh)
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
-                        None if data is None else data.terms(lam, scale))
+                        None if data is None else data.terms(lam, scale), reuse=not lean)
         if data is not None and not lean:  # the piston's energy at impact: its waves' (kinetic and
             K.account(ws, 0.0)  # strain)
             PR[10] = ws[25][4]
         K.run(ws)
         if ws[24][0] == 0:
             break
-        pcap, tcap, ecap = 4 * pcap, 4 * tcap, 4 * ecap
+        # what overflowed grows 4-fold: the pieces, the loading episodes, or else the terms (the
+        # pieces hold 5 to 40 terms each: the terms' array fills first)
+        npc, nterms = int(ws[4][0]), int(ws[4][1])
+        full_p, full_e = npc >= ws[0].shape[0], int(ws[19][1]) > ws[23].shape[0]
+        pcap, ecap = 4 * pcap if full_p else pcap, 4 * ecap if full_e else ecap
+        tcap = tcap if full_p or full_e else 4 * tcap
         if _pool_bytes(pcap, tcap) > bound:
-            why = (f"bit_mass = {m:g}: a light bit's fast branches make long series; use "
-                   "method='lattice', or a bit_mass of 0 (the massless bit) or a heavier one"
-                   if m > 0.0 else
-                   "the waves broke into more pieces than that by t = "
-                   f"{ws[25][0]:.6g}; give a t_max, or use method='lattice'")
-            raise PoolOverflow(f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces "
-                               f"({why})")
+            per = nterms / max(npc, 1)
+            raise PoolOverflow(
+                f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces (the waves broke "
+                f"into more pieces than that by t = {ws[25][0]:.6g}: {npc} pieces of {per:.3g} "
+                "terms on average; each sum of the segments' travel times is a break point, so that many or "
+                "incommensurate segments multiply them, and exponents close together, a bit's mass or a soft "
+                "rock, lengthen their series); give a t_max, or use method='lattice'")
     if lean:
         return ws, scale
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
@@ -609,19 +616,39 @@ def _binomials():
     return out
 
 
-def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb, data=None):
+#: a thread's pool arrays, reused by its next blow (``_pool_arrays``)
+_POOLS = threading.local()
+#: the largest pool kept for reuse (the default one: 4 MB)
+_REUSED_POOL_BYTES = 2 ** 23
+
+
+def _pool_arrays(rows, terms, reuse):
+    """The pool's arrays ``PF``, ``PI`` (``rows`` pieces) and ``TK``, ``TC`` (``terms``), uninitialised:
+    the kernel reads only the pieces and terms it has written (and the first ones, which
+    :func:`_workspace` sets), so that their megabytes cost no zeroing, and ``reuse``: the calling
+    thread's arrays of the last such call (their pages mapped once; a record keeps copies of what
+    it holds, :func:`_result`), up to ``_REUSED_POOL_BYTES``."""
+    if reuse:
+        kept = getattr(_POOLS, "arrays", None)
+        if kept is not None and kept[0].shape[0] == rows and kept[2].size == terms:
+            return kept
+    arrays = (np.empty((rows, 5)), np.empty((rows, 4), dtype=np.int64), np.empty(terms, dtype=np.int64),
+              np.empty(terms, dtype=complex))
+    if reuse and _pool_bytes(rows, terms) <= _REUSED_POOL_BYTES:
+        _POOLS.arrays = arrays
+    return arrays
+
+
+def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb, data=None,
+               reuse=False):
     J = T.size
     nch = 3 * J + 2
     init, drive = (None, None) if data is None else data
     ndrive = 0 if drive is None else len(drive[1])
-    PF = np.zeros((max(pcap, 2 * J + 1 + ndrive + 16), 5))
-    PF[:, 3:] = math.nan  # the pieces' cached integrals (_exactpieces.chan_integrals)
-    PI = np.zeros((PF.shape[0], 4), dtype=np.int64)
     extra = 0
     if init is not None:
         extra = sum(x[0].size for x in init) + (0 if drive is None else sum(x[0].size for x in drive[1]))
-    TK = np.zeros(tcap + extra, dtype=np.int64)
-    TC = np.zeros(tcap + extra, dtype=complex)
+    PF, PI, TK, TC = _pool_arrays(max(pcap, 2 * J + 1 + ndrive + 16), tcap + extra, reuse)
     CNT = np.zeros(4, dtype=np.int64)
     CHI = np.full((nch, 2), -1, dtype=np.int64)
     CH_T = np.zeros(nch)
@@ -644,10 +671,8 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
         for side, (c, val) in enumerate(((2 * (i - 1), 0.5 * Z[i - 1] * Vn),
                                          (2 * i - 1, -0.5 * Z[i - 1] * Vn))):
             CH_T[c] = T[i - 1]
-            PF[n, 0] = -T[i - 1]
-            PF[n, 1] = math.inf
-            PI[n, 0] = -1
-            PI[n, 1] = nt
+            PF[n] = (-T[i - 1], math.inf, 0.0, math.nan, math.nan)  # (NaN: integrals not cached)
+            PI[n] = (-1, nt, 0, 0)
             if i <= n_p and init is not None:
                 nt = put(n, nt, *init[2 * (i - 1) + side])
             elif i <= n_p and val != 0.0:
@@ -663,10 +688,8 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     CHI[c, 1] = n
     starts = [-1.0] if drive is None else drive[0]
     for j, t0 in enumerate(starts):
-        PF[n, 0] = t0
-        PF[n, 1] = math.inf
-        PI[n, 0] = -1 if j == len(starts) - 1 else n + 1
-        PI[n, 1] = nt
+        PF[n] = (t0, math.inf, 0.0, math.nan, math.nan)
+        PI[n] = (-1 if j == len(starts) - 1 else n + 1, nt, 0, 0)
         if drive is not None:
             nt = put(n, nt, *drive[1][j])
         CHI[c, 0] = n
@@ -690,6 +713,7 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     EP = np.zeros((ecap, 5))
     CI = np.zeros(8, dtype=np.int64)
     CT = np.zeros(16)
+    CT[9] = math.nan  # (no energy pass yet)
     return (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
             RT, RC, RD, EP, CI, CT)
 
@@ -700,7 +724,8 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     J = SZ.size
     n_p = Tp.size
     t_end = float(CT[0])
-    K.account(ws, t_end)
+    if CT[9] != t_end:  # (the energies at the end, unless the run's last pass was there)
+        K.account(ws, t_end)
     Pp, Ep, Er = CT[3], CT[4], CT[6]
     br = int(BI[0])
     p = BS[0]
@@ -731,7 +756,9 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     loads[:, 2:4] *= scale
     loads[:, 4] *= s2
     lamk = np.array([k, k_u, 0.0])
-    hist = (scale, (PF, PI, TK, TC, CHI, lam, lamk), J, n_p)  # (the junctions' only with record)
+    npc, nt = int(CNT[0]), int(CNT[1])  # the pieces kept, not the pool's capacity (megabytes)
+    hist = (scale, (PF[:npc].copy(), PI[:npc].copy(), TK[:nt].copy(), TC[:nt].copy(), CHI, lam, lamk), J,
+            n_p)  # (the junctions' only with record)
     return ExactBlow(
         efficiency=dissipated / available,
         efficiency_with_rebound=dissipated / (available - Ep),

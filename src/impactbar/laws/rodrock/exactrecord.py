@@ -113,14 +113,14 @@ def blow_from_exact(ex, s, lengths, travel, piston_lengths, samples_per_piston=3
     times = np.minimum(dt * np.arange(n + 1), T)
     mid = 0.5 * (times[:-1] + times[1:])
     J = lengths.size
-    junc = np.column_stack([ex.junction_force(ex.contact_junction + j, mid) for j in range(J)])
+    junc, bit, pen = _sampled(ex, mid, times, J)
     fld = edges = None
     if record_field:
         fld, edges = _field(ex, np.concatenate((p_len / s, travel)), np.concatenate((p_len, lengths)),
                             (*p_cells, *seg_cells), mid)
     return Blow(
         times=times, shank_forces=junc[:, 0].copy(), junction_forces=junc,
-        bit_forces=ex.bit_force(times), penetrations=ex.penetration(times), field=fld,
+        bit_forces=bit, penetrations=pen, field=fld,
         energy_at_impact=ex.energy_at_impact, feed_work=ex.feed_work,
         available_energy=ex.available_energy, work_on_rock=ex.work_on_rock + ex.rock_energy,
         piston_energy=ex.piston_energy, rebound_velocity=ex.rebound_velocity,
@@ -131,6 +131,23 @@ def blow_from_exact(ex, s, lengths, travel, piston_lengths, samples_per_piston=3
         shank_displacement=ex.shank_displacement, piston_waves=None, rod_waves=None,
         bit_velocity=ex.bit_velocity, method="exact", uncertainty=ex.uncertainty, loadings=ex.loadings,
         radiated=ex.radiated, exact=ex)
+
+
+def _sampled(ex, mid, times, J):
+    """The forces at the rod's ``J`` junctions (the shank first) at the sorted times ``mid``, shape
+    ``(mid.size, J)``, and the rock's force and the penetration at the sorted ``times``: the values
+    of :meth:`ExactBlow.junction_force`, ``bit_force`` and ``penetration``, each piece loaded once."""
+    from . import _exacthistory as H
+
+    scale, (PF, PI, TK, TC, CHI, lam, lamk), nodes, n_p = ex._hist
+    first = 2 * nodes + 1 + n_p
+    junc = np.empty((mid.size, J))
+    H.eval_histories(PF, PI, TK, TC, lam, np.ascontiguousarray(CHI[first:first + J, 1]), mid, junc, 0, lamk)
+    bit = np.empty(times.size)
+    pen = np.empty(times.size)
+    head = int(CHI[3 * nodes + 1, 1])
+    H.eval_bit(PF, PI, TK, TC, lam, head, times, pen, bit, lamk)
+    return scale * junc, scale * bit, scale * pen
 
 
 #: Most values the recorded arrays of one exact blow may hold (1 GiB as float64)

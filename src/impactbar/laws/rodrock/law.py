@@ -536,8 +536,8 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         no ``cells_per_piston`` (and
         where a wave's round trip takes at most ``MAX_EXACT_PASS_WINDOWS`` (2000) of the shortest
         travel time, ``k / Z_b`` times the shortest travel time is at most ``1e6`` and its waves
-        need at most ``AUTO_MAX_PIECES`` (1e5) pieces in at most ``AUTO_MAX_POOL_BYTES`` (128 MiB;
-        a light bit's fast branches make long series)), else the
+        need at most ``AUTO_MAX_PIECES`` (1e5) pieces in at most ``AUTO_MAX_POOL_BYTES`` (64 MiB;
+        exponents close together, a bit's mass or a soft rock, make long series)), else the
         lattice; an exact blow whose energy account does not close to ``1e-9`` is not taken
         either (auto: the lattice's instead; ``"exact"``: a ``RuntimeWarning``). A bit whose time
         constant ``m / Z_b`` (``Z_b`` the last rod segment's impedance) is at most ``1e-10`` of the
@@ -696,9 +696,11 @@ EXACT_ACCOUNT_TOLERANCE = 1e-9
 #: the lattice's cells.
 AUTO_MAX_PIECES = 100_000
 
-#: The most memory ``method="auto"`` lets the exact solver's pieces take (a light bit's fast
-#: branches make long series; the blows tried need a few MiB) before it gives the blow to the lattice
-AUTO_MAX_POOL_BYTES = 2 ** 27
+#: The most memory ``method="auto"`` lets the exact solver's pieces take (their terms: 5 to 40 a
+#: piece, long series where exponents lie close together; the blows tried need a few MiB) before it
+#: gives the blow to the lattice. (128 MiB, when the pool grew its pieces and terms together, held
+#: about the terms 64 MiB holds now.)
+AUTO_MAX_POOL_BYTES = 2 ** 26
 
 def _check_force_scale(model, law, impact_velocity) -> float:
     """The checked impact velocity: its wave force ``s V`` and the feed within ``MAX_FORCE``, the

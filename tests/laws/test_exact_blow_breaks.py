@@ -1,0 +1,74 @@
+"""The exact blow's break points and its pool (issue 39): arrivals equal but for rounding are one
+break point, and a blow whose pieces outgrow their memory bound says what it measured.
+
+A wave that reaches a junction along two paths whose travel times were summed in different orders
+arrives at two times an ulp or two apart. Each such pair was two break points with a sliver piece
+between them, whose value mixes the old wave on one input with the new on the other (a force that
+never acts); the slivers multiplied downstream, and one made a spurious separation of the piston and
+the shank. Checked against the independent solution of ``tests/laws/_reference_blow.py``."""
+
+import math
+
+import numpy as np
+import pytest
+from _reference_blow import reference_blow
+
+from impactbar.laws.rodrock.exact import PoolOverflow, exact_blow
+
+#: arrivals closer than this (relative) are one break point (_exactpieces.SNAP)
+SNAP = 64 * np.finfo(float).eps
+
+
+def _slivers(ex, junctions):
+    """The break points of the junctions' force histories closer than ``SNAP`` to the one before."""
+    out = []
+    for j in junctions:
+        b = ex.junction_breaks(j)
+        out.extend(b[1:][np.diff(b) <= SNAP * b[1:]])
+    return np.array(out)
+
+
+def test_a_spurious_separation_at_a_sliver_is_gone():
+    """A uniform piston on a uniform rod of incommensurate travel time (0.831 and 0.260), a bit of
+    mass 0.19 bouncing on the rock: the piston leaves the shank 7 times and strikes it 6 times
+    (the reference); the exact blow counted 8 and 7, one separation and re-contact at a sliver of
+    the shank's force (five slivers there), its numbers otherwise the reference's to 1e-15."""
+    args = dict(k=0.406723401440983, k_u=2.772040388841514, bit_mass=0.18750482694834514,
+                impact_velocity=1.0)
+    chain = ([0.83095443583531], [1.5830668263354208], [0.25951139443571763], [0.9941853944132228])
+    ex = exact_blow(*chain, **args)
+    assert ex.ended_by == "separated"
+    ref = reference_blow(*chain, t_end=ex.duration, **args)
+    assert (ex.separations, ex.recontacts) == (ref.separations, ref.recontacts) == (7, 6)
+    for name in ("efficiency", "rebound_velocity", "max_penetration", "advance", "piston_energy"):
+        assert getattr(ex, name) == pytest.approx(getattr(ref, name), rel=1e-9), name
+    values, _ = ex.peak_forces()
+    np.testing.assert_allclose(values, ref.peak_values, rtol=1e-9)
+    assert _slivers(ex, [ex.contact_junction]).size == 0
+
+
+def test_a_stepped_pistons_arrivals_along_paths_of_equal_length_are_one():
+    """A two-segment piston on a two-segment rod (the reference tests' "stepped piston"): 776 of the
+    1147 break points at its three junctions were slivers and the blow stored 5808 pieces; now only
+    a window's end can still part two arrivals (the one before it is processed in its window, the
+    one after it at the next window's start: two left, at multiples of the shortest travel time),
+    and it stores 1948 pieces, its numbers the reference's to 1.4e-14 as before (1.1e-14)."""
+    Tp, Zp, Tr, Zr = [0.6, 0.4], [0.7, 1.6], [1.3, 0.9], [1.1, 0.5]
+    ex = exact_blow(Tp, Zp, Tr, Zr, k=0.8, k_u=3.0, impact_velocity=1.0)
+    left = _slivers(ex, [1, 2, 3])
+    h = min(Tp + Tr)
+    assert left.size <= 2
+    np.testing.assert_allclose(left / h, np.round(left / h), rtol=0.0, atol=1e-9)
+    assert ex.pieces < 2500
+
+
+def test_an_overflow_says_how_many_pieces_and_terms():
+    """A bit of mass 0.3 (not a light one) whose pieces outgrow a pool of 512 kB: the message said
+    that a light bit's fast branches make long series; it now gives the pieces and their terms by
+    then, and both causes."""
+    with pytest.raises(PoolOverflow, match=r"by t = [0-9.]+: \d+ pieces of [0-9.]+ terms on average.*"
+                                           r"incommensurate segments.*method='lattice'") as err:
+        exact_blow([1.0], [1.0], [1.0, 0.5, 2.0], [1.0, 0.5, 1.0], k=0.7, k_u=7.0, bit_mass=0.3,
+                   impact_velocity=1.0, max_pool_bytes=2 ** 19)
+    assert "light bit" not in str(err.value)
+    assert math.isfinite(float(str(err.value).split("by t = ")[1].split(":")[0]))
