@@ -1,0 +1,354 @@
+"""When the exact blow ends (theory §4d, "when a blow ends"): the energy account of piston, rod, bit
+and rock at a time, and the certificate that no contact can happen again (the piston gone for good,
+the bit lifted with the rod's waves unable to close the gap, or every wave energy spent), with
+:func:`may_end`, a necessary condition of every end :func:`certify` finds, tested first so that the
+energy pass runs only where an end is possible. The workspace's layout is
+:mod:`impactbar.laws.rodrock._exactkernel`'s."""
+
+from __future__ import annotations
+
+import math
+
+import numba
+
+from ...dynamics._kernel import CACHE
+from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
+    ELASTIC,
+    FREE,
+    GOING,
+    INF,
+    LIFTED,
+    LOAD,
+    MAY_YIELD,
+    SEPARATED,
+    SPENT,
+    blk_integral,
+    blk_integral_sq,
+    pool_load,
+)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _cached_integrals(p, L, pool, B, N, first, second):
+    """``int f`` (with ``first``) and ``int f^2`` (with ``second``) of the closed piece ``p`` over its
+    whole span ``L``, each computed once (``PF[p, 3:5]``, NaN until then)."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
+    one = first and math.isnan(PF[p, 3])
+    two = second and math.isnan(PF[p, 4])
+    if one or two:
+        pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
+        if one:
+            PF[p, 3] = blk_integral(B, N, lam, 0.0, L)
+        if two:
+            PF[p, 4] = blk_integral_sq(B, N, lam, 0.0, L)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def chan_integrals(c, t, Z, CH_T, pool, B, N):
+    """``int f`` and ``int f^2 / Z`` over the wave now in the channel's segment (emitted in
+    ``[t - T, t]``); ``pool`` as :func:`emit`'s, ``B, N`` a scratch block."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
+    lo = t - CH_T[c]
+    p = CHI[c, 1]
+    s1 = 0.0
+    s2 = 0.0
+    while p >= 0:
+        t0 = PF[p, 0]
+        nx = PI[p, 0]
+        tend = PF[nx, 0] if nx >= 0 else t
+        a = max(t0, lo)
+        b = min(tend, t)
+        if b > a and PI[p, 2] > 0:
+            if nx >= 0 and a == t0 and b == tend:  # the whole of a closed piece: computed once
+                _cached_integrals(p, tend - t0, pool, B, N, True, True)
+                s1 += PF[p, 3]
+                s2 += PF[p, 4]
+            else:
+                pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
+                s1 += blk_integral(B, N, lam, a - t0, b - t0)
+                s2 += blk_integral_sq(B, N, lam, a - t0, b - t0)
+        if tend >= t:
+            break
+        p = nx
+    return s1, s2 / Z
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def chan_closed_sq(c, t, CH_T, pool, B, N, exact):
+    """A lower bound of ``int f^2`` over the wave now in the channel's segment (emitted in
+    ``[t - T, t]``): the closed pieces wholly in it (:func:`chan_integrals`' sum without its partial
+    pieces at the segment's two ends), each by its ``int f^2`` where cached or ``exact`` (computed
+    and cached as chan_integrals does), else by ``(int f)^2 / L`` (Cauchy-Schwarz; ``int f``
+    cached, several times cheaper: no products of pairs of exponents)."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
+    lo = t - CH_T[c]
+    p = CHI[c, 1]
+    s2 = 0.0
+    while p >= 0:
+        t0 = PF[p, 0]
+        nx = PI[p, 0]
+        tend = PF[nx, 0] if nx >= 0 else t
+        if nx >= 0 and lo <= t0 < tend <= t and PI[p, 2] > 0:
+            L = tend - t0
+            if exact or not math.isnan(PF[p, 4]):
+                _cached_integrals(p, L, pool, B, N, False, True)
+                s2 += PF[p, 4]
+            else:
+                _cached_integrals(p, L, pool, B, N, True, False)
+                s2 += PF[p, 3] * PF[p, 3] / L
+        if tend >= t:
+            break
+        p = nx
+    return s2
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def piece_momentum(ws, c, t):
+    """``int f`` over the wave now in channel ``c``'s segment."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    lo = t - CH_T[c]
+    p = CHI[c, 1]
+    s1 = 0.0
+    while p >= 0:
+        t0 = PF[p, 0]
+        nx = PI[p, 0]
+        tend = PF[nx, 0] if nx >= 0 else t
+        a = max(t0, lo)
+        b = min(tend, t)
+        if b > a and PI[p, 2] > 0:
+            if nx >= 0 and a == t0 and b == tend:  # a closed piece's whole integral, cached
+                if math.isnan(PF[p, 3]):
+                    pool_load(WB[12], WN[12], p, 0.0, lam, BIN, PI, TK, TC)
+                    PF[p, 3] = blk_integral(WB[12], WN[12], lam, 0.0, tend - t0)
+                s1 += PF[p, 3]
+            else:
+                pool_load(WB[12], WN[12], p, 0.0, lam, BIN, PI, TK, TC)
+                s1 += blk_integral(WB[12], WN[12], lam, a - t0, b - t0)
+        if tend >= t:
+            break
+        p = nx
+    return s1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def account(ws, t):
+    """Momenta and wave energies of the piston and the rod at ``t`` (into ``CT[3:7]``), and ``Psi``,
+    the energy of rod, bit and rock above the static state under the feed (``CT[7]``), and the
+    energy a new yield of the rock needs (``CT[8]``)."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    J = SZ.size
+    n_p = int(PR[21])
+    Pp = 0.0
+    Ep = 0.0
+    Pr = 0.0
+    Er = 0.0
+    for i in range(1, J + 1):
+        Z = SZ[i - 1]
+        pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+        m1, e1 = chan_integrals(2 * (i - 1), t, Z, CH_T, pool, WB[12], WN[12])
+        m2, e2 = chan_integrals(2 * i - 1, t, Z, CH_T, pool, WB[12], WN[12])
+        if i <= n_p:
+            Pp += m1 - m2
+            Ep += e1 + e2
+        else:
+            Pr += m1 - m2
+            Er += e1 + e2
+    m = PR[2]
+    w = BS[2]
+    Pr += m * w
+    ku = PR[1]
+    f = PR[3]
+    br = BI[0]
+    if br == FREE:
+        psi = Er + 0.5 * m * w * w + f * (BS[5] - BS[0]) + f * f / (2.0 * ku)
+    else:
+        R = PR[0] * BS[1] if br == LOAD else ku * BS[1]
+        psi = Er + 0.5 * m * w * w + (R - f) * (R - f) / (2.0 * ku)
+    CT[3] = Pp
+    CT[4] = Ep
+    CT[5] = Pr
+    CT[6] = Er
+    CT[7] = psi
+    CT[8] = (BS[4] - f) * (BS[4] - f) / (2.0 * ku)
+    CT[9] = t
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def may_end(ws, t):
+    """Whether :func:`certify` could find an end at ``t``, decided without its energy pass (most of
+    a blow's cost). Its ends hold for an energy ``Psi`` of rod, bit and rock only below bounds
+    (:func:`_could_end`), so none can where even a lower bound of ``Psi`` exceeds them: the bit's
+    and the rock's energy with that of the rod's closed pieces in flight (the partial pieces at its
+    segments' ends left out; each by ``(int f)^2 / L`` first, then by ``int f^2``, cached), added
+    channel by channel until no end is possible, less 1e-9 of it for rounding. A necessary
+    condition of every end :func:`certify` finds (its momenta are certify's to the bit): keep the
+    two in step."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    J = SZ.size
+    n_p = int(PR[21])
+    m = PR[2]
+    w = BS[2]
+    ku = PR[1]
+    f = PR[3]
+    br = BI[0]
+    if br == FREE:
+        psi = 0.5 * m * w * w + f * (BS[5] - BS[0]) + f * f / (2.0 * ku)
+    else:
+        R = PR[0] * BS[1] if br == LOAD else ku * BS[1]
+        psi = 0.5 * m * w * w + (R - f) * (R - f) / (2.0 * ku)
+    # what certify's ends need besides Psi: the piston out of contact and not moving on (its
+    # momentum), and without a feed whether the rod may fly free of the rock (the rod's momentum)
+    gone = False
+    vp = 0.0
+    Pr = 1.0  # (> 0: the rod cannot fly free)
+    if NSI[n_p, 3] != 1:
+        Pq = 0.0
+        for i in range(1, n_p + 1):
+            Pq += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
+        gone = Pq <= 0.0
+        vp = Pq / PR[15]
+        if gone and f == 0.0 and br == FREE and BS[0] < BS[5]:
+            Pr = 0.0
+            for i in range(n_p + 1, J + 1):
+                Pr += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
+            Pr += m * w
+    xs = NSF[n_p, 1]
+    avail = PR[10] + f * xs + f * f * (PR[11] * 0.5 + 0.5 / ku)
+    if not _could_end(psi, ws, avail, gone, vp, Pr):
+        return False
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+    for exact in (False, True):  # the cheap bound of the pieces' energies first
+        er = 0.0
+        for c in range(2 * n_p, 2 * J):
+            er += chan_closed_sq(c, t, CH_T, pool, WB[12], WN[12], exact) / SZ[c // 2]
+            if not _could_end(psi + er, ws, avail, gone, vp, Pr):
+                return False
+    return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _could_end(psi, ws, avail, gone, vp, Pr):
+    """Whether :func:`certify` could end the blow were ``Psi`` at least ``psi`` (less 1e-9 of it),
+    its tests with that bound: ``SPENT`` needs ``Psi`` below twice the spent fraction of ``avail``;
+    ``SEPARATED``, ``LIFTED`` and ``MAY_YIELD`` the piston out of contact and not moving on
+    (``gone``) and the rock unable to yield (``Psi < thr``) or the rod flying free, or (with a
+    feed) the rock not loading and no ``t_max``; without a feed the rod flying free (``Pr <= 0``
+    and the bit held off the rock by more than the rod's internal motion can bring it back) ahead
+    of the piston (``vp <= Pr / M_r``), or the piston's mean velocity ``vp`` at most
+    ``-sqrt(2 Psi / M_r)``, and its struck end behind the shank's lowest reach. Non-increasing in
+    ``psi``."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    if not math.isfinite(psi):
+        return True  # (overflowed pieces: certify's pass says so)
+    psi = max(psi * (1.0 - 1e-9), 0.0)
+    if psi <= 2.0 * PR[9] * avail:
+        return True
+    if not gone:
+        return False
+    f = PR[3]
+    br = BI[0]
+    thr = (BS[4] - f) * (BS[4] - f) / (2.0 * PR[1])
+    if f > 0.0:
+        return br != LOAD and (psi < thr or PR[18] == INF)
+    n_p = int(PR[21])
+    xs = NSF[n_p, 1]
+    xp = xs - NSF[n_p, 0]
+    Mr = PR[16]
+    rod_free = False
+    if br == FREE and Pr <= 0.0:
+        eint = max(psi - 0.5 * Pr * Pr / Mr, 0.0)
+        if (BS[0] - BS[5]) + 2.0 * math.sqrt(2.0 * PR[14] * eint) < 0.0:
+            rod_free = True
+            if vp <= Pr / Mr and xp < xs - 2.0 * math.sqrt(2.0 * PR[13] * eint):
+                return True
+    if not ((br != LOAD and psi < thr) or rod_free):
+        return False
+    return vp <= -math.sqrt(2.0 * psi / Mr) and xp < xs - 2.0 * math.sqrt(2.0 * PR[13] * psi)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def certify(ws, t):
+    """Whether the blow has ended at ``t`` (an end code, or ``GOING``): the piston can never touch the
+    shank again and the rock can never yield again (``SEPARATED``; ``LIFTED`` when the rod has left
+    the rock for good too), or the energy that could still reach the rock is below the spent
+    fraction of the energy available (``SPENT``). The bounds (theory §4d): the piston's struck end
+    stays below ``x_p + 2 sqrt(2 C_p E_int)`` while its mean velocity is ``<= 0``; with a feed the
+    shank stays above the static position less ``Delta(Psi)`` while the rock cannot yield
+    (``Psi < (R_max - f)^2/(2 k_u)``), else above ``-Phi/f``; without one, the rod's mean velocity
+    stays above ``-sqrt(2 Psi / M_r)``, or is constant once the rod flies free of the rock."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    n_p = int(PR[21])
+    # the energies cost a pass over every piece in flight: only when the piston may have gone, or
+    # every 16 windows for the spent energy
+    if CI[2] % 16 != 0:
+        if NSI[n_p, 3] == 1:
+            return GOING
+        Pq = 0.0
+        for i in range(1, n_p + 1):
+            Pq += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
+        if Pq > 0.0:
+            return GOING
+    if not may_end(ws, t):  # no end possible whatever the energies in flight: no energy pass
+        return GOING
+    account(ws, t)
+    Pp, Ep, Pr, Er, psi, thr = CT[3], CT[4], CT[5], CT[6], CT[7], CT[8]
+    f = PR[3]
+    ku = PR[1]
+    m = PR[2]
+    br = BI[0]
+    Mp = PR[15]
+    Mr = PR[16]
+    contact = NSI[n_p, 3] == 1
+    gap = NSF[n_p, 0]
+    xs = NSF[n_p, 1]
+    avail = PR[10] + f * xs + f * f * (PR[11] * 0.5 + 0.5 / ku)
+    vp = Pp / Mp
+    gone = False
+    rod_free = False
+    if not contact and vp <= 0.0:
+        eint = max(Ep - 0.5 * Pp * Pp / Mp, 0.0)
+        dp = 2.0 * math.sqrt(2.0 * PR[12] * eint)
+        xp = xs - gap
+        if f > 0.0:
+            if br != LOAD and psi < thr:
+                ctot = PR[11] + 1.0 / ku
+                xeq = BS[5] + f / ku - BS[9]
+                if psi <= 0.5 * f * f * ctot:
+                    delta = math.sqrt(2.0 * ctot * psi)
+                else:
+                    delta = f * ctot + (psi - 0.5 * f * f * ctot) / f
+                bs = xeq - delta
+            else:
+                R = PR[0] * BS[1] if br == LOAD else (ku * BS[1] if br == ELASTIC else 0.0)
+                phi = Er + 0.5 * m * BS[2] * BS[2] - f * (BS[0] - BS[9]) + 0.5 * f * f * PR[11] \
+                    + R * R / (2.0 * ku)
+                bs = -phi / f
+            gone = xp + dp < bs
+        else:
+            ekin = Er + 0.5 * m * BS[2] * BS[2]
+            if br == FREE and Pr <= 0.0:
+                eint_r = max(ekin - 0.5 * Pr * Pr / Mr, 0.0)
+                db = 2.0 * math.sqrt(2.0 * PR[14] * eint_r)
+                if (BS[0] - BS[5]) + db < 0.0:
+                    rod_free = True
+                    ds = 2.0 * math.sqrt(2.0 * PR[13] * eint_r)
+                    if vp <= Pr / Mr and xp + dp < xs - ds:
+                        gone = True
+            if not gone:
+                vmax = math.sqrt(2.0 * psi / Mr)
+                if vp <= -vmax and xp + dp < xs - 2.0 * math.sqrt(2.0 * PR[13] * psi):
+                    gone = True
+    frozen = (br != LOAD and psi < thr) or rod_free
+    if gone and frozen:
+        return LIFTED if rod_free else SEPARATED
+    rem = psi if gone else psi + Ep
+    if rem <= PR[9] * avail:
+        return SPENT
+    if gone and f > 0.0 and br != LOAD and PR[18] == INF:  # the rock may yield to the ringing rod
+        return MAY_YIELD                                      # for ever (a caller's t_max: on to it)
+    return GOING
