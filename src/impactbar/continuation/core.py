@@ -20,15 +20,9 @@ from scipy.optimize import brentq
 from .._shared.status import BranchStatus, EventKind
 from .._shared.threads import single_threaded_blas
 from ..drives.base import autonomous
-from ..orbits.multi_impact import (
-    _build,
-    _halves_gap,
-    _normalise,
-    _same_orbit,
-    _Segments,
-    _unknowns_from,
-    doubling_direction,
-)
+from ..orbits._assemble import _build
+from ..orbits._newton import _halves_gap, _normalise, _same_orbit
+from ..orbits.multi_impact import _Segments, _unknowns_from, doubling_direction
 from ..orbits.orbit import PeriodicOrbit
 from ..orbits.switched import check_orbit
 from .branch import Branch, BranchEvent

@@ -18,7 +18,9 @@ import numpy as np
 
 from .._shared.status import CurveKind
 from .._shared.threads import single_threaded_blas
-from ..orbits.multi_impact import _build, _normalise, _Segments, _unknowns_from
+from ..orbits._assemble import _build
+from ..orbits._newton import _normalise
+from ..orbits.multi_impact import _Segments, _unknowns_from
 from .branch import BranchEvent, orbit_columns
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
