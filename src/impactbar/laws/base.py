@@ -525,6 +525,9 @@ class ContactLaw:
                              f"parameters {self.parameters}")
 
     def _missing(self, method: str) -> str:
+        """The message of the :class:`LawNotSupported` raised where a solver needs ``method`` and
+        this law does not provide it (the solvers check a hook before any work: ``find_orbit``'s
+        check of the law)."""
         return (f"model.impact: the impact law {self.name!r} ({type(self).__name__}) does not provide "
                 f"{method}(), so this computation is not available under it; use impact='paper' or "
                 f"impact='wave'")

@@ -37,7 +37,8 @@ def eval_histories(PF, PI, TK, TC, lam, heads, times, out, kind, lamk):
     col = np.empty(times.size)
     for j in range(heads.size):
         _eval_into(PF, PI, TK, TC, lam, heads[j], times, col, kind, lamk, B, N)
-        out[:, j] = col
+        for i in range(times.size):  # (a loop: numba's slice setitem compiles for seconds)
+            out[i, j] = col[i]
 
 
 @numba.njit(cache=CACHE, nogil=True)
