@@ -153,6 +153,32 @@ def test_a_feed_keeps_the_lattice_and_the_choices_are_checked():
         ib.single_blow(model, 1.0, semi_infinite="yes")
 
 
+
+@pytest.mark.parametrize("segs, k, k_u, m, f", [
+    ([(1.0, 2.25), (0.5, 1.6), (2.0, 1.0)], 1.0, 2.0, 0.0, 0.1),
+    ([(1.0, 1.5), (2.0, 1.0)], 1.0, 5.0, 0.3, 0.02),
+    ([(2.0, 1.0)], 2.0, 2e12, 0.0, 0.0),
+])
+def test_a_lattice_stopped_at_its_horizon_bounds_what_the_rock_may_still_take(segs, k, k_u, m, f):
+    """The lattice certifies no end: stopped at its ``t_max`` (its default under a feed) it reported
+    ``uncertainty = 0``, the value of a certified end, where the rock went on yielding. It now bounds
+    the rock work still possible by the energy left in piston, rod, bit and rock (theory §4d), which
+    the same lattice carried ten times as far respects, and which is not small there."""
+    model = _model(segs, k, k_u, bit_mass=m, feed=f)
+    for t_max in (5.0, 10.0, 20.0):
+        blow = ib.single_blow(model, 1.0, method="lattice", t_max=t_max)
+        later = ib.single_blow(model, 1.0, method="lattice", t_max=10.0 * t_max)
+        assert blow.ended_by == "t_max" and 0.1 < blow.uncertainty
+        gained = later.rock_dissipated - blow.rock_dissipated
+        assert gained <= blow.uncertainty * blow.available_energy + 1e-12
+        # (the piston's energy counts: the lattice does not prove it gone)
+        assert blow.uncertainty * blow.available_energy >= blow.piston_energy
+    if f == 0.1:  # the CHANGELOG's example: the default (the lattice to its horizon) and the exact blow
+        lattice, exact = ib.single_blow(model, 1.0), ib.single_blow(model, 1.0, method="exact")
+        assert (lattice.ended_by, exact.ended_by) == ("t_max", "may_yield")
+        assert round(lattice.efficiency, 3) == 0.344 and round(exact.efficiency, 3) == 0.465
+        assert 0.1 < lattice.uncertainty
+
 #: random cases with a bit mass whose energy account did not close before issue 39's second part
 #: (a crossing search given up on a bit resting near the rock: 1.4e-5, 1.5e-9; the moments' series
 #: of a fast root: 4e-6 on a longer blow, not kept here for its cost)

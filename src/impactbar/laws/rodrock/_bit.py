@@ -261,3 +261,13 @@ def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, reco
     junc = np.array(junc).reshape(-1, bounds.size)
     return (F, G, junc, np.array(bitf), np.array(pen), np.array(fld),
             (u_shank, grid_loss, ended, gap, work))
+
+
+def feed_gain(R_max: float, f: float) -> float:
+    """How much rock work the energy ``Psi`` above the static state can still buy under the feed
+    ``f``: at most ``R_max / (R_max - f)`` of it (each new yield from ``R_max`` on lowers ``Psi`` by
+    its dissipation less the feed's work on the permanent advance, at least ``1 - f / R_max`` of
+    it; theory §4d); 1 without a feed."""
+    if f <= 0.0:
+        return 1.0
+    return R_max / (R_max - f) if R_max > f else math.inf

@@ -47,7 +47,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..._shared.schema import Field, Schema
-from ._bit import _FREE, _LOAD, _Bit, _python_loop
+from ._bit import _FREE, _LOAD, _Bit, _python_loop, feed_gain
 from ._piston import piston_cells, piston_segments
 
 __all__ = ["Blow", "BlowGrid", "blow_grid", "rod_rock_blow", "solve_blow"]
@@ -133,7 +133,8 @@ class Blow:
     method, uncertainty, loadings, radiated : str, float, numpy.ndarray (n, 5) or None, float
         ``"exact"`` (``impactbar.laws.rodrock.exact``: the arrays sample exact histories, which the
         force methods evaluate) or ``"lattice"`` (first order in ``cell_time``); 0 for a certified
-        end, else a bound on the rock work still possible over the available energy, the
+        end (or a lattice's end by energy or separation), else (a horizon, a cost bound) a bound on
+        the rock work still possible over the available energy, the
         efficiency still to gain by it (with a feed the efficiency also follows the feed's work,
         which a rod ringing on the rock moves either way); exact: per loading of the rock (its
         yielding), start and end time and penetration, the work dissipated; the energy a
@@ -552,19 +553,37 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     feed_work = feed * u_shank
     rock0 = feed * feed / (2.0 * k_u)  # the rock's recoverable elastic energy under the feed
     rod_energy = rod_waves + feed * (u_shank - (bit.p - p_start)) + static + 0.5 * bit_mass * bit.w * bit.w
+    available = E0 + drive_work + feed_work + static + rock0
+    uncertainty = 0.0
+    if ended == "t_max" and n_steps is None:  # stopped at the horizon, nothing certified
+        uncertainty = _still_possible(rod_waves, piston_e, float(bitf[-1]), bit, feed) / available
     return Blow(
         times=dt * np.arange(n + 1), shank_forces=shank, junction_forces=junc,
         bit_forces=bitf, penetrations=pen, field=fld if record_field else None,
         energy_at_impact=E0, feed_work=feed_work,
-        available_energy=E0 + drive_work + feed_work + static + rock0,
-        work_on_rock=bit.work + rock0,
+        available_energy=available, work_on_rock=bit.work + rock0,
         piston_energy=piston_e, rebound_velocity=float(np.mean((F[:n_p] - G[:n_p]) / s)),
         rod_energy=rod_energy, grid_loss=grid_loss, max_penetration=bit.p_max,
         permanent_penetration=bit.p_perm, advance=bit.p - p_start, ended_by=ended, cell_time=dt,
         piston_cells=n_p, segment_cells=grid.segment_cells, cell_edges=grid.edges,
         length_error=grid.length_error, drive_work=drive_work, gap=gap, shank_displacement=u_shank,
         piston_waves=(F[:n_p].copy(), G[:n_p].copy()), rod_waves=(F[n_p:].copy(), G[n_p:].copy()),
-        bit_velocity=bit.w, rock_stored_energy=_rock_stored(float(bitf[-1]), bit.k_u))
+        bit_velocity=bit.w, rock_stored_energy=_rock_stored(float(bitf[-1]), bit.k_u),
+        uncertainty=uncertainty)
+
+
+def _still_possible(rod_waves, piston_e, R, bit, feed) -> float:
+    """The rock work a lattice blow stopped at its horizon could still take (theory §4d, as the
+    exact blow's bound): the energy ``Psi`` of rod, bit and rock above the static state under the
+    feed (``R`` the rock's force at the end) and the piston's, times what each unit of it can buy
+    under the feed (:func:`~._bit.feed_gain`)."""
+    kinetic = 0.5 * bit.m * bit.w * bit.w
+    rock = 0.0 if math.isinf(bit.k_u) else 1.0 / (2.0 * bit.k_u)
+    if bit.branch == _FREE:
+        psi = rod_waves + kinetic + feed * (bit.p_perm - bit.p) + feed * feed * rock
+    else:
+        psi = rod_waves + kinetic + (R - feed) * (R - feed) * rock
+    return max(psi + piston_e, 0.0) * feed_gain(bit.R_max, feed)
 
 
 def _start_bit(Z, k, k_u, bit_mass, feed, bit_state) -> _Bit:

@@ -76,6 +76,7 @@ import numpy as np
 from . import _exacthistory as H
 from . import _exactkernel as K
 from . import _exactpieces as P
+from ._bit import feed_gain
 
 __all__ = ["CERTIFIED", "ExactBlow", "PoolOverflow", "exact_blow"]
 
@@ -751,7 +752,7 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     unc = 0.0
     if ended in ("budget", "t_max", "may_yield"):
         rem = CT[7] + (Ep if ended != "may_yield" else 0.0)
-        unc = rem * _feed_gain(BS[4], fn) / available
+        unc = rem * feed_gain(BS[4], fn) / available
     s2 = scale * scale
     loads[:, 2:4] *= scale
     loads[:, 4] *= s2
@@ -774,16 +775,6 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
         pieces=int(CNT[0]), windows=int(CI[2]),
         diagnostics={"searches_abandoned": int(CI[4]), "degree_limit": int(CI[7]), "terms": int(CNT[1])},
         _hist=hist)
-
-
-def _feed_gain(R_max, f):
-    """How much rock work the energy ``Psi`` above the static state can still buy under the feed
-    ``f``: at most ``R_max / (R_max - f)`` of it (each new yield from ``R_max`` on lowers ``Psi`` by
-    its dissipation less the feed's work on the permanent advance, at least ``1 - f / R_max`` of
-    it; theory §4d); 1 without a feed."""
-    if f <= 0.0:
-        return 1.0
-    return R_max / (R_max - f) if R_max > f else math.inf
 
 
 #: ``ended_by`` of a certified end (the blow's numbers are final): no contact, and no yield of the

@@ -506,7 +506,10 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     :mod:`impactbar.laws.rodrock.blow` (``method="lattice"``: first order in the cell time,
     the bit's reflected wave stored as cell averages; to
     ``t_max``, default 20 travel times through piston and rod, or until the rod's wave energy is
-    spent).
+    spent). The lattice certifies no end: stopped at ``t_max`` it reports in ``uncertainty`` the
+    rock work still possible by the energy left in piston, rod, bit and rock (the exact blow's bound,
+    the piston's energy included since the lattice does not prove it gone) over the available
+    energy; with a feed that is seldom small.
 
     Parameters
     ----------
