@@ -179,6 +179,23 @@ def test_a_lattice_stopped_at_its_horizon_bounds_what_the_rock_may_still_take(se
         assert round(lattice.efficiency, 3) == 0.344 and round(exact.efficiency, 3) == 0.465
         assert 0.1 < lattice.uncertainty
 
+
+def test_a_blow_gone_wrong_never_reports_an_account_that_closes():
+    """Known fault (a bit with mass under a feed, carried by ``t_max`` past ``"may_yield"`` into the
+    rod's flight off the rock: the pieces' error grows until the numbers are garbage): its energy
+    error was negative (-6e7: the available energy itself gone wrong), which passed every check
+    ``energy_error <= tol``, so ``method="exact"`` did not warn and ``"auto"`` would have taken it.
+    Now it is positive (or inf), ``"exact"`` warns, and the default (the lattice under a feed) is
+    within its first order."""
+    model = _model([(0.5, 1.5)], 11.0, 55.0, s=1.5, bit_mass=0.05, feed=0.34375)
+    with pytest.warns(RuntimeWarning, match="energy account is off"):
+        bad = ib.single_blow(model, 1.0, t_max=30.0, method="exact")
+    assert bad.energy_error > 1e-3
+    blow = ib.single_blow(model, 1.0, t_max=30.0)
+    assert blow.method == "lattice" and 0.0 <= blow.efficiency <= 1.0 and blow.energy_error < 1e-12
+    end = ib.single_blow(model, 1.0, method="exact")  # its certified end, before the fault
+    assert end.ended_by == "may_yield" and end.energy_error < 1e-11
+
 #: random cases with a bit mass whose energy account did not close before issue 39's second part
 #: (a crossing search given up on a bit resting near the rock: 1.4e-5, 1.5e-9; the moments' series
 #: of a fast root: 4e-6 on a longer blow, not kept here for its cost)

@@ -244,9 +244,11 @@ class Blow:
 
     @property
     def energy_error(self) -> float:
-        """Relative mismatch of the energy account (rounding only)."""
+        """Relative mismatch of the energy account (rounding only; ``inf`` where the available
+        energy is not positive, a blow gone wrong)."""
         total = self.work_on_rock + self.piston_energy + self.rod_energy + self.grid_loss
-        return abs(self.available_energy - total) / self.available_energy
+        err = abs(self.available_energy - total) / abs(self.available_energy)
+        return err if self.available_energy > 0.0 and err == err else math.inf
 
     @property
     def rock_dissipated(self) -> float:

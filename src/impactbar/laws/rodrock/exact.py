@@ -742,7 +742,9 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     rock_e = R * R / (2.0 * k_u)
     rod_e = Er + 0.5 * m * BS[2] ** 2 + fn * (xs - (p - BS[9])) + static
     radiated = BS[8]
-    err = abs(available - (dissipated + rock_e + Ep + rod_e + radiated)) / available
+    err = abs(available - (dissipated + rock_e + Ep + rod_e + radiated)) / abs(available)
+    if not (available > 0.0 and err == err):  # (pieces gone wrong: never an account that closes)
+        err = math.inf
     nep = int(BI[1])
     loads = EP[:nep].copy()
     if br == P.LOAD and p > BS[12]:  # a loading under way at the end
