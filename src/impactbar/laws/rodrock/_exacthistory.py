@@ -8,7 +8,17 @@ import numpy as np
 
 from ...dynamics._kernel import CACHE
 from ._exactintegrals import blk_integral
-from ._exactpieces import DC, EPS, INF, blk_abs, blk_bound, blk_clear, blk_eval, blk_value, pool_load
+from ._exactpieces import (
+    DC,
+    EPS,
+    INF,
+    blk_abs,
+    blk_bound,
+    blk_eval,
+    blk_value,
+    pool_load,
+    pool_unpack,
+)
 
 NOBIN = np.zeros((1, 1))
 
@@ -78,14 +88,7 @@ def _eval_into(PF, PI, TK, TC, lam, head, times, out, kind, lamk, B, N):
         if tau < 0.0:
             tau = 0.0
         if p != loaded:
-            blk_clear(B, N)
-            ts = PI[p, 1]
-            for k in range(ts, ts + PI[p, 2]):
-                e = TK[k] // DC
-                d = TK[k] - e * DC
-                B[e, d] += TC[k]
-                if d + 1 > N[e]:
-                    N[e] = d + 1
+            pool_unpack(B, N, p, PI, TK, TC)
             loaded = p
         v = blk_value(B, N, lam, tau)
         if kind == 1:
@@ -183,14 +186,7 @@ def history_max(PF, PI, TK, TC, lam, head, t_end, res):
             v = 0.0
             tv = PF[p, 0]
         else:
-            blk_clear(B, N)
-            ts = PI[p, 1]
-            for k in range(ts, ts + PI[p, 2]):
-                e = TK[k] // DC
-                d = TK[k] - e * DC
-                B[e, d] += TC[k]
-                if d + 1 > N[e]:
-                    N[e] = d + 1
+            pool_unpack(B, N, p, PI, TK, TC)
             v, tau = piece_max(B, N, lam, BIN, L, stack)
             tv = PF[p, 0] + tau
         if v > best + 8.0 * EPS * abs(v):

@@ -588,7 +588,8 @@ def blk_prune(B, N, lam, tol, Lb):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def pool_load(B, N, piece, delta, lam, BIN, PI, TK, TC):
+def pool_unpack(B, N, piece, PI, TK, TC):
+    """The pool's piece ``piece`` into the block ``B, N``, from its own origin."""
     blk_clear(B, N)
     ts = PI[piece, 1]
     for k in range(ts, ts + PI[piece, 2]):
@@ -597,6 +598,11 @@ def pool_load(B, N, piece, delta, lam, BIN, PI, TK, TC):
         B[e, d] += TC[k]
         if d + 1 > N[e]:
             N[e] = d + 1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def pool_load(B, N, piece, delta, lam, BIN, PI, TK, TC):
+    pool_unpack(B, N, piece, PI, TK, TC)
     blk_shift(B, N, delta, lam, BIN)
 
 
