@@ -17,9 +17,9 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from .._shared.forcing import dispatch
 from .._shared.status import BranchStatus, EventKind
 from .._shared.threads import single_threaded_blas
-from ..drives.base import autonomous
 from ..orbits._assemble import _build
 from ..orbits._newton import _halves_gap, _normalise, _same_orbit
 from ..orbits.multi_impact import _Segments, _unknowns_from, doubling_direction
@@ -207,16 +207,25 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         base = check_orbit(orbit.orbit, "orbit.orbit")
     else:
         base = check_orbit(orbit)
-    if autonomous(base.load):  # an orbit under a drive: unknown period (theory §10)
-        return continue_switched(orbit, parameter, to, _detect, events=events, stop_on=stop_on, xtol=xtol,
-                                 settings=_settings(settings, step=step, max_step=max_step,
-                                                    min_step=min_step, max_points=max_points, tol=tol))
+    settings = _settings(settings, step=step, max_step=max_step, min_step=min_step,
+                         max_points=max_points, tol=tol)
+    return dispatch(CONTINUATIONS, base.load, "orbit's load")(orbit, base, switch, parameter, to, settings,
+                                                             events, stop_on, xtol)
+
+
+def _continue_drive(orbit, base, switch, parameter, to, settings, events, stop_on, xtol) -> Branch:
+    """:func:`continue_orbit` under a drive: an autonomous orbit of unknown period (theory §10)."""
+    return continue_switched(orbit, parameter, to, _detect, events=events, stop_on=stop_on, xtol=xtol,
+                             settings=settings)
+
+
+def _continue_load(orbit, base, switch, parameter, to, settings, events, stop_on, xtol) -> Branch:
+    """:func:`continue_orbit` under a periodic load: the segment problem of :func:`find_orbit` with
+    the parameter appended (theory §7)."""
     model, load = base.model, base.load
     _check_parameter(model, load, parameter, continuation=True)
     lam0 = parameter_value(model, load, parameter)
     to = _target(parameter, lam0, to, model, load)
-    settings = _settings(settings, step=step, max_step=max_step, min_step=min_step,
-                         max_points=max_points, tol=tol)
     steps = settings.steps(abs(to - lam0))
     stop_on, xtol = checked_events(stop_on, xtol)
     direction = 1.0 if to > lam0 else -1.0
@@ -242,6 +251,10 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
                                                     settings.max_points)
     return Branch(parameter=parameter, values=P[:, -1].copy(), orbits=orbits, events=tuple(found),
                   status=status, impacts=m, periods=n, _points=P)
+
+
+#: the solver of :func:`continue_orbit` for each forcing family (the one place it is chosen)
+CONTINUATIONS = {"load": _continue_load, "drive": _continue_drive}
 
 
 def _start(engine, base, lam0, direction):

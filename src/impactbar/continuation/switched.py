@@ -21,7 +21,6 @@ from scipy.optimize import brentq
 
 from .._shared.status import BranchStatus, EventKind
 from .._shared.validate import check_real
-from ..drives.base import autonomous
 from ..model import BarModel
 from ..orbits.switched import SwitchedOrbit, orbit_of, orbit_problem
 from .branch import Branch, BranchEvent
@@ -375,15 +374,12 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     """
     switch = None
     if isinstance(orbit, BranchEvent):
-        if orbit.kind != EventKind.PERIOD_DOUBLING or not autonomous(getattr(orbit.orbit, "load", None)) \
-                or orbit.orbit.impacts != 1:
+        if orbit.kind != EventKind.PERIOD_DOUBLING or orbit.orbit.impacts != 1:
             raise ValueError("orbit: a BranchEvent start must be a period doubling of a one-impact "
                              "switched orbit")
         if parameter != orbit.parameter:
             raise ValueError(f"parameter must be the doubling's own, {orbit.parameter!r}; got {parameter!r}")
         switch, orbit = orbit, orbit.orbit
-    if not autonomous(getattr(orbit, "load", None)):
-        raise ValueError(f"orbit must be a SwitchedOrbit; got {type(orbit).__name__}")
     model, drive = orbit.model, orbit.drive
     allowed = parameters_of(drive, model)
     if parameter not in allowed and not _is_law_parameter(model, drive, parameter):

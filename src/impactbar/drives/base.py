@@ -59,13 +59,7 @@ import numpy as np
 
 __all__ = ["Drive", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
            "SurfaceEvent", "FlightKernel", "KernelRun", "OrbitData", "OrbitProblem", "OrbitSearch",
-           "autonomous", "newton", "split_multipliers"]
-
-
-def autonomous(forcing) -> bool:
-    """Whether ``forcing`` is a drive (an autonomous forcing, :attr:`Drive.autonomous`) rather than
-    a periodic load: the question the solvers ask before taking the drive's path."""
-    return bool(getattr(forcing, "autonomous", False))
+           "newton", "split_multipliers"]
 
 
 class DriveState(NamedTuple):
@@ -339,8 +333,9 @@ class Drive(ABC):
 
     Attributes
     ----------
-    autonomous : bool
-        ``True``: what the solvers ask (:func:`autonomous`) before taking a drive's path.
+    family : str
+        ``"drive"``: the forcing family, by which each entry point chooses its solver once
+        (``impactbar._shared.forcing``).
     state_size : int
         ``k``, the number of continuous state variables ``z`` (0 for a force that is constant between
         events, whose flights are then closed forms).
@@ -378,7 +373,7 @@ class Drive(ABC):
     [2.0, 1.0, 0.5]
     """
 
-    autonomous: ClassVar[bool] = True
+    family: ClassVar[str] = "drive"
     integrator: ClassVar[FlightSettings] = FlightSettings()
     state_size: ClassVar[int] = 0
     state_names: ClassVar[tuple[str, ...]] = ()
@@ -525,11 +520,6 @@ class Drive(ABC):
         for the generic shooting problem of :mod:`impactbar.orbits.switched`. ``constant_load(p)``
         gives the load of a constant force ``p`` (for a contact law's map)."""
         return None
-
-    def harmonics(self, n=None):
-        """Refused: a drive is not a function of time (theory §10)."""
-        raise ValueError(f"a {type(self).__name__} is not periodic in time: it has no harmonics "
-                         "(use simulate or find_orbit with it, theory §10)")
 
 
 # --------------------------------------------------------------------------------------------------

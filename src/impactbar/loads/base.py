@@ -93,6 +93,9 @@ class Load(ABC):
     continuation_parameters: ClassVar[tuple[str, ...]] = ()
     #: the ``kind`` of the :attr:`kernel_view` the class declares (``None``: it declares none)
     kernel_kind: ClassVar[int | None] = None
+    #: the forcing family, by which each entry point chooses its solver once (a drive's is
+    #: ``"drive"``)
+    family: ClassVar[str] = "load"
 
     # -- frozen, compared by value ------------------------------------------------------------
     def __setattr__(self, name, value):

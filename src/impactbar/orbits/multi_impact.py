@@ -30,9 +30,10 @@ from functools import cached_property
 
 import numpy as np
 
+from .._shared.forcing import dispatch
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
-from ..drives.base import autonomous
+from ..drives.base import Drive
 from ..dynamics.implementations import use_fast
 from ..dynamics.modal import fundamental
 from ..loads import Load
@@ -445,7 +446,7 @@ def _guesses(problem: _Segments, guess):
                      f"(impact_times, states_after_impact); got {type(guess).__name__}")
 
 
-def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, guess=None, *,
+def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: int = 1, guess=None, *,
                tol: float = 1e-12, max_iter: int = 40) -> PeriodicOrbit:
     r"""A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
     the exact impact map (eqs. 8, 10, 11; theory §4, §5, §7).
@@ -517,11 +518,19 @@ def find_orbit(model: BarModel, load: Load, impacts: int = 1, periods: int = 1, 
     :func:`~impactbar.orbits.find_switched_orbit`.
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
-    if autonomous(load):  # a drive: an autonomous orbit, unknown period (theory §10)
-        from .switched_search import find_switched_orbit
+    return dispatch(FIND_ORBIT, load)(model, load, impacts, periods, guess, tol, max_iter)
 
-        return find_switched_orbit(model, load, impacts, guess, tol=min(tol, 1e-13),
-                                   max_iter=max(max_iter, 50))
+
+def _drive_orbit(model, drive, impacts, periods, guess, tol, max_iter) -> PeriodicOrbit:
+    """:func:`find_orbit` under a drive: an autonomous orbit of unknown period (theory §10;
+    ``periods`` has no meaning there)."""
+    from .switched_search import find_switched_orbit  # (the drives' machinery, loaded on first use)
+
+    return find_switched_orbit(model, drive, impacts, guess, tol=min(tol, 1e-13), max_iter=max(max_iter, 50))
+
+
+def _load_orbit(model, load, impacts, periods, guess, tol, max_iter) -> PeriodicOrbit:
+    """:func:`find_orbit` under a periodic load: Newton on the segment problem (theory §7)."""
     _check_inputs(model, load)
     m = check_int("impacts", impacts, lo=1, hi=4096)
     n = check_int("periods", periods, lo=1, hi=4096)
@@ -579,7 +588,7 @@ DIRECT_ITERATIONS = 8
 # the one-impact orbits of every law (find_orbit's default guess): from the law's phase equation, or
 # by Newton's method from guesses where it has none (both here, since each calls the other)
 # ------------------------------------------------------------------------------------------------
-def periodic_orbits(model: BarModel, load: Load, *, window=None) -> OrbitList:
+def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None) -> OrbitList:
     r"""Every one-impact-per-period steady state of the bar under the load (paper Section 2).
 
     Each root ``phase`` of the phase equation (eq. 14) in :math:`[0, 2\pi)` gives one orbit: the flexible
@@ -621,10 +630,20 @@ def periodic_orbits(model: BarModel, load: Load, *, window=None) -> OrbitList:
     >>> [round(o.phase, 4) for o in orbits]
     [0.5511, 2.5905]
     """
-    if autonomous(load):  # a drive: every one-impact orbit in a window of periods (theory §10)
-        from .switched_search import drive_orbits
+    return dispatch(PERIODIC_ORBITS, load)(model, load, window)
 
-        return drive_orbits(model, load, window)
+
+def _drive_orbits(model, drive, window) -> OrbitList:
+    """:func:`periodic_orbits` under a drive: every one-impact orbit in a window of periods (theory
+    §10)."""
+    from .switched_search import drive_orbits  # (the drives' machinery, loaded on first use)
+
+    return drive_orbits(model, drive, window)
+
+
+def _load_orbits(model, load, window) -> OrbitList:
+    """:func:`periodic_orbits` under a periodic load: the law's phase equation, or Newton from
+    guesses."""
     if window is not None:
         raise ValueError("window is for a drive's orbits (unknown period); a load's period is 2 pi")
     _check_inputs(model, load)
@@ -633,6 +652,11 @@ def periodic_orbits(model: BarModel, load: Load, *, window=None) -> OrbitList:
         return periodic_orbits_by_newton(model, load)
     return phase_equation_orbits(model, load)
 
+
+#: the solver of :func:`find_orbit` for each forcing family (the one place it is chosen)
+FIND_ORBIT = {"load": _load_orbit, "drive": _drive_orbit}
+#: the solver of :func:`periodic_orbits` for each forcing family (the one place it is chosen)
+PERIODIC_ORBITS = {"load": _load_orbits, "drive": _drive_orbits}
 
 #: load periods of the simulation guess
 SETTLE_PERIODS = 60

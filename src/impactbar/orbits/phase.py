@@ -5,7 +5,7 @@ public entry points."""
 
 from __future__ import annotations
 
-from ..drives.base import autonomous
+from .._shared.forcing import check_family
 from ..laws.paper.phase import phase_G as phase_G
 from ..laws.paper.phase import phase_residual as phase_residual
 from ..laws.paper.phase import phase_roots as _phase_roots
@@ -18,13 +18,9 @@ __all__ = ["phase_G", "phase_residual", "phase_roots"]
 def _check_inputs(model, load):
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-    if autonomous(load):  # a drive is not a function of time (theory §10)
-        raise ValueError(f"a {type(load).__name__} is not periodic in time: the phase equation and "
-                         "the one-impact orbits of a periodic load do not apply; use find_orbit(model, "
-                         "drive) (unknown period, theory §10) or simulate")
-    if not isinstance(load, Load):
-        raise ValueError(f"load must be a Load (CosineLoad, SquareWaveLoad, ...); got "
-                         f"{type(load).__name__}")
+    check_family(load, "load", hint=" (a drive is not periodic in time: the phase equation and the "
+                 "one-impact orbits of a periodic load do not apply; use find_orbit(model, drive), unknown "
+                 "period, theory §10, or simulate)")
 
 
 def phase_roots(model: BarModel, load: Load, *, closed_form: bool = True) -> list[tuple[float, int]]:

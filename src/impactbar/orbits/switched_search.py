@@ -15,8 +15,9 @@ import math
 
 import numpy as np
 
+from .._shared.forcing import check_family
 from .._shared.validate import check_int, check_real
-from ..drives.base import OrbitProblem, autonomous
+from ..drives.base import OrbitProblem
 from ..model import BarModel
 from .one_impact import OrbitList
 from .switched import SwitchedOrbit, orbit_of, orbit_problem
@@ -90,8 +91,7 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     """
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-    if not autonomous(drive):
-        raise ValueError(f"drive must be a Drive; got {type(drive).__name__}")
+    check_family(drive, "drive", "drive")
     m = check_int("impacts", impacts, lo=1)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
@@ -274,8 +274,7 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
     """
     if not isinstance(model, BarModel):
         raise ValueError(f"model must be a BarModel; got {type(model).__name__}")
-    if not autonomous(drive):
-        raise ValueError(f"drive must be a Drive; got {type(drive).__name__}")
+    check_family(drive, "drive", "drive")
     if window is not None:
         try:
             lo, hi = (float(w) for w in window)

@@ -32,9 +32,10 @@ import time
 
 import numpy as np
 
+from .._shared.forcing import dispatch
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
-from ..drives.base import autonomous
+from ..drives.base import Drive
 from ..dynamics import _kernel as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
@@ -340,7 +341,7 @@ class _Core:
 # --------------------------------------------------------------------------------------------------
 # the driver
 # --------------------------------------------------------------------------------------------------
-def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.0,
+def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, *, t0=0.0,
              max_impacts=None, progress=None) -> Trajectory:
     r"""Follow the bar from ``initial`` through impact after impact (paper Section 5).
 
@@ -439,9 +440,18 @@ def simulate(model: BarModel, load: Load, initial: InitialState, t_end, *, t0=0.
         raise ValueError(
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
-    if autonomous(load):  # a drive (theory §10): its own event loop over pieces of this driver
-        _push_off(model.end_weights, q)
-        return run_drive(model, load, q, v, t0, t_end, max_imp, _DRIVER)
+    return dispatch(SIMULATORS, load)(model, load, q, v, t0, t_end, max_imp, progress)
+
+
+def _simulate_drive(model, drive, q, v, t0, t_end, max_imp, progress) -> Trajectory:
+    """:func:`simulate` under a drive (theory §10): the drive's own event loop over pieces of this
+    driver."""
+    _push_off(model.end_weights, q)
+    return run_drive(model, drive, q, v, t0, t_end, max_imp, _DRIVER)
+
+
+def _simulate_load(model, load, q, v, t0, t_end, max_imp, progress) -> Trajectory:
+    """:func:`simulate` under a periodic load: the compiled flights and impacts (Section 5)."""
     core = _core_for(model, load)
     _push_off(core.c, q)
     if progress is None and (t_end - t0 < LONG_RUN or max_imp <= SHORT_RUN_IMPACTS):
@@ -691,6 +701,9 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
     segs.add(ti, _WINDOW, qm, vm, "impact", record)
     return q, v, t_release
 
+
+#: the solver of :func:`simulate` for each forcing family (the one place it is chosen)
+SIMULATORS = {"load": _simulate_load, "drive": _simulate_drive}
 
 #: the driver as a drive's run takes it (:func:`impactbar.simulation.switched.run_drive`)
 _DRIVER = Driver(core_for=_core_for, run=_run, push_off=_push_off, make_state=InitialState, tail=CHATTER_TAIL)
