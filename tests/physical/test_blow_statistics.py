@@ -113,3 +113,40 @@ def test_cli_blow_fraction_is_checked(tmp_path, capsys):
     assert main(["simulate", "--preset", "pneumatic-drill", "--out", str(tmp_path / "x"),
                  "--blow-fraction", "0"]) == 2
     assert "--blow-fraction must be in (0, 1]" in capsys.readouterr().err
+
+
+def test_a_cycle_of_two_close_blows_is_not_one_blow_per_cycle():
+    """Two blows 0.4 % apart that alternate (each with its own chatter) are a cycle of two blows,
+    though each is within the 1 % tolerance of the other; a period-1 motion still settling (its
+    blows 0.4 % apart, shrinking by half a blow) is one blow per cycle."""
+    tb = np.cumsum(np.tile([0.024, 0.0252], 12))
+    chatter = [tb + 1e-3, (tb + 2e-3)[1::2]]  # one chatter impact after the first blow, two after the second
+    t = np.sort(np.concatenate([tb, *chatter]))
+    v = np.where(np.isin(t, tb), 0.0, 0.5)
+    v[np.isin(t, tb)] = np.tile([9.201, 9.161], 12)
+    s = _result(t, v, t_end=t[-1] + 0.01).blow_statistics()
+    assert s.blows_per_cycle == 2, s.message
+    assert "cycle of 2 different blows (9.201, 9.161 m/s followed by 1, 2 chatter impacts)" in s.message
+    # the old verdict (the smallest cycle within the tolerance) took this for one blow per cycle
+    settling = 9.18 + 0.02 * (-0.5) ** np.arange(24)
+    s = _result(0.025 * np.arange(1, 25), settling, t_end=0.61).blow_statistics()
+    assert s.blows_per_cycle == 1 and s.message == "the motion has settled: one blow per cycle"
+    with_chatter = _result(t, np.where(np.isin(t, tb), 9.2, 0.5), t_end=t[-1] + 0.01).blow_statistics()
+    assert with_chatter.blows_per_cycle == 2  # the intervals alternate: two blows per cycle
+
+
+def test_the_rock_drill_example_settles_into_a_cycle_of_two_blows():
+    """examples/rock_drill.toml: the blows alternate between two impact velocities 0.4 % apart, the
+    first followed by one chatter impact, the second by two (the 1 % tolerance alone took the cycle
+    for one blow per period); the blows repeat each other every second blow to far better."""
+    from pathlib import Path
+
+    hammer = ph.load_config(Path(__file__).parents[2] / "examples" / "rock_drill.toml")
+    r = ph.simulate(hammer, periods=40.0)
+    s = r.blow_statistics()
+    assert s.blows_per_cycle == 2, s.message
+    blow = r.is_blow()
+    v = r.impact_velocities_m_s[blow][-4:]
+    assert abs(v[-1] - v[-2]) > 0.003 * v[-1] and abs(v[-1] - v[-3]) < 1e-6 * v[-1]
+    chatter = s.message.split("followed by ")[1].split(" chatter")[0].split(", ")
+    assert sorted(int(c) for c in chatter) == [1, 2]

@@ -91,7 +91,9 @@ def run(args) -> int:
               f"blow, {rock['drilling_rate_m_min']:.4g} m/min at the measured blow frequency "
               f"({rock['measured_rate_m_min']:.4g} m/min over the run, chatter included), efficiency "
               f"{rock['mean_efficiency']:.3f} ({rock['mean_efficiency_with_rebound']:.3f} with the rebound)")
-    if not summary["settled"]:
+    if summary["settled"]:
+        print(summary["message"])
+    else:
         print(f"impactbar simulate: warning: {summary['message']}", file=sys.stderr)
     return 0
 

@@ -328,18 +328,59 @@ class BlowStatistics:
         return {**dataclasses.asdict(self), "settled": self.settled}
 
 
+#: differences of blows below this fraction (of the largest impact velocity, of the mean interval)
+#: are the run's rounding and its last settling, not a difference between the blows of a cycle
+CYCLE_FLOOR = 1e-6
+#: a cycle of ``m`` blows is the motion's period only where its blows repeat to within this factor
+#: of how well the cycles of ``2 m, 3 m, ...`` blows repeat: a period-2 motion's two blows differ by
+#: far more than its cycles do, however close the two blows are
+CYCLE_SEPARATION = 10.0
+
+
 def _cycle_length(t: np.ndarray, v: np.ndarray, tol: float) -> int:
-    """The smallest ``m`` such that the last ``m`` blows repeat the ``m`` before them (impact
-    velocities to ``tol`` of the largest, intervals to ``tol`` of the mean); 0 when none does."""
+    """The period, in blows, of the last blows: the smallest ``m`` whose last ``m`` blows repeat the
+    ``m`` before them (impact velocities to ``tol`` of the largest, intervals to ``tol`` of the
+    mean), and repeat them nearly as well as every cycle of ``k m`` blows does (within
+    :data:`CYCLE_SEPARATION`, differences below :data:`CYCLE_FLOOR` counted as equal); 0 when none
+    does."""
     if t.size < 3:
         return 0
     dt = np.diff(t)
     vmax, dmean = float(np.max(np.abs(v))), float(np.mean(dt))
-    for m in range(1, dt.size // 2 + 1):
-        if (np.all(np.abs(v[-m:] - v[-2 * m:-m]) <= tol * vmax)
-                and np.all(np.abs(dt[-m:] - dt[-2 * m:-m]) <= tol * dmean)):
+    top = dt.size // 2
+    err = np.full(top + 1, np.inf)
+    for m in range(1, top + 1):
+        err[m] = max(float(np.max(np.abs(v[-m:] - v[-2 * m:-m]))) / vmax,
+                     float(np.max(np.abs(dt[-m:] - dt[-2 * m:-m]))) / dmean)
+    for m in range(1, top + 1):
+        if err[m] > tol:
+            continue
+        multiples = err[2 * m::m]
+        if multiples.size == 0 or err[m] <= CYCLE_SEPARATION * max(float(np.min(multiples)), CYCLE_FLOOR):
             return m
     return 0
+
+
+def _chatter_after(blow: np.ndarray, last: int) -> list[int]:
+    """The chatter impacts after each of the ``last`` blows of a run (up to the next blow, or the
+    run's end)."""
+    where = np.flatnonzero(blow)[-last:]
+    ends = np.append(where[1:], blow.size)
+    return [int(b - a - 1) for a, b in zip(where, ends, strict=True)]
+
+
+def _settled_message(m: int, v: np.ndarray, chatter: list[int]) -> str:
+    """The verdict of a settled motion: its blows per cycle, each blow's impact velocity and the
+    chatter after each."""
+    if m == 1:
+        after = "" if chatter[0] == 0 else (f", each followed by {chatter[0]} chatter "
+                                            f"impact{'s' if chatter[0] > 1 else ''}")
+        return "the motion has settled: one blow per cycle" + after
+    speeds = ", ".join(f"{x:.4g}" for x in v[-m:])
+    after = "" if not any(chatter) else (" followed by " + ", ".join(str(c) for c in chatter)
+                                          + " chatter impacts")
+    return (f"the motion has settled into a cycle of {m} different blows ({speeds} m/s{after}); the "
+            f"means are over the cycle")
 
 
 @dataclass(frozen=True, eq=False)
@@ -479,11 +520,8 @@ class SimulationResult:
             stats["message"] = (f"the motion has not settled: over the second half's {tl.size} blows "
                                 f"{spread}, and no cycle of blows repeats to {settle_tolerance:.0%}; "
                                 f"run longer, or the motion is not periodic")
-        elif m == 1:
-            stats["message"] = "the motion has settled: one blow per cycle"
         else:
-            stats["message"] = (f"the motion has settled into a cycle of {m} different blows; the "
-                                f"means are over the cycle")
+            stats["message"] = _settled_message(m, vl, _chatter_after(blow, m))
         defaults = {f.name: nan for f in dataclasses.fields(BlowStatistics)}
         return BlowStatistics(**{**defaults, **stats})
 
