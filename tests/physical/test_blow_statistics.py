@@ -150,3 +150,13 @@ def test_the_rock_drill_example_settles_into_a_cycle_of_two_blows():
     assert abs(v[-1] - v[-2]) > 0.003 * v[-1] and abs(v[-1] - v[-3]) < 1e-6 * v[-1]
     chatter = s.message.split("followed by ")[1].split(" chatter")[0].split(", ")
     assert sorted(int(c) for c in chatter) == [1, 2]
+
+
+def test_orbits_of_the_rock_drill_example_point_to_simulate(capsys):
+    """``impactbar orbits examples/rock_drill.toml`` finds no one-impact orbit (the rig's motion is a
+    cycle of two blows with chatter) and says where its motion is found."""
+    from pathlib import Path
+
+    assert main(["orbits", str(Path(__file__).parents[2] / "examples" / "rock_drill.toml")]) == 0
+    out = capsys.readouterr().out
+    assert "no one-impact periodic motion" in out and "impactbar simulate" in out

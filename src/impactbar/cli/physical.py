@@ -109,7 +109,9 @@ def format_table(hammer: physical.Hammer, found) -> str:
                      f"{fit.max_error_N:.4g} N = {fit.relative_error:.2%} of the swing "
                      f"(tolerance {fit.tolerance:.2%})")
     if not found:
-        lines.append("no one-impact periodic motion")
+        lines.append("no one-impact periodic motion (one impact a drive period): the motion may chatter, "
+                     "strike several times a period or settle into a longer cycle; `impactbar simulate "
+                     "CONFIG` follows it from rest and names the cycle it settles into")
         return "\n".join(lines)
     lines.append(f"  impact law: {h.impact}")
     head, *rows = physical.PhysicalOrbit.fields.select("cli").table(found, width=2)  # declared columns
