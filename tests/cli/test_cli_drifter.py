@@ -6,6 +6,7 @@ import math
 
 import pytest
 
+from impactbar import physical
 from impactbar.cli import main
 
 CONFIG = """
@@ -133,18 +134,29 @@ def test_circuit_si_parameters_are_the_drive_parameters():
 
 def test_continue_a_circuit_in_si(tmp_path, capsys):
     """``impactbar continue CONFIG --parameter accumulator.precharge --to '10.2 MPa'``: the branch in
-    the pre-charge in Pa beside its dimensionless value (10 MPa units)."""
+    the pre-charge in the unit of ``--to`` (MPa) beside its dimensionless value (10 MPa units), with
+    what a designer reads at each point in SI (blow frequency, impact energy, mean supply pressure,
+    pump power, hydraulic efficiency), the start's equal to the operating point's."""
     assert main(["continue", "--preset", "circuit-drifter", "--parameter", "accumulator.precharge",
                  "--to", "10.2 MPa", "--out", str(tmp_path), "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert doc["status"] == "reached" and doc["to"] == "10.2 MPa"
     assert str(tmp_path / "diagram.png") in doc["files"] and (tmp_path / "diagram.png").stat().st_size > 0
     rows = (tmp_path / "branch.csv").read_text().splitlines()
-    assert rows[0].startswith("accumulator.precharge (Pa),parameter,period")
+    assert rows[0] == ("accumulator.precharge (MPa),parameter,period,impact_velocity,max_abs_multiplier,"
+                       "stable,blow_frequency_Hz,impact_energy_J,mean_supply_pressure_MPa,pump_power_kW,"
+                       "hydraulic_efficiency")
     values = [[float(x) for x in r.split(",")[:2]] for r in rows[1:]]
-    assert values[0][0] == pytest.approx(1e7) and values[-1][0] == pytest.approx(1.02e7, rel=1e-9)
+    assert values[0][0] == pytest.approx(10.0) and values[-1][0] == pytest.approx(10.2, rel=1e-9)
     for si, dimensionless in values:
-        assert si == pytest.approx(dimensionless * 1e7, rel=1e-12)
+        assert si == pytest.approx(dimensionless * 10.0, rel=1e-12)
+    first = dict(zip(rows[0].split(","), rows[1].split(","), strict=True))
+    op = physical.circuit_preset("circuit-drifter").orbit()
+    assert float(first["blow_frequency_Hz"]) == pytest.approx(op.blow_frequency_Hz, rel=1e-9)
+    assert float(first["impact_energy_J"]) == pytest.approx(op.impact_energy_J, rel=1e-9)
+    p_s = float(first["mean_supply_pressure_MPa"])
+    assert p_s == pytest.approx(op.mean_supply_pressure_Pa / 1e6, rel=1e-9)
+    assert 0.0 < float(first["hydraulic_efficiency"]) < 1.0
     # refusals: a unit for a dimensionless parameter, a config key for a drifter without a circuit
     assert main(["continue", "--preset", "circuit-drifter", "--parameter", "precharge", "--to", "12 MPa",
                  "--out", str(tmp_path)]) == 2
@@ -152,6 +164,25 @@ def test_continue_a_circuit_in_si(tmp_path, capsys):
     assert main(["continue", "--preset", "hydraulic-drifter", "--parameter", "supply.pump_flow", "--to",
                  "80 L/min", "--out", str(tmp_path)]) == 2
     assert "oil circuit" in capsys.readouterr().err
+
+
+def test_continue_reports_in_the_unit_of_to(tmp_path, capsys):
+    """``--to '76 L/min'``: the branch and the relief's border collision (the relief valve starting to
+    open) in L/min, each the SI value of its dimensionless parameter converted."""
+    assert main(["continue", "--preset", "circuit-drifter", "--parameter", "supply.pump_flow",
+                 "--to", "76 L/min", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    d = physical.circuit_preset("circuit-drifter")
+    rows = [r.split(",") for r in (tmp_path / "events.csv").read_text().splitlines()]
+    assert rows[0][-1] == "supply.pump_flow (L/min)"
+    relief = [r for r in rows[1:] if r[0] == "border-collision relief"]
+    assert len(relief) == 1
+    si = d.from_dimensionless("supply.pump_flow", float(relief[0][1]))  # m^3/s
+    assert float(relief[0][-1]) == pytest.approx(si * 6e4, rel=1e-10) and 70 < float(relief[0][-1]) < 76
+    assert f"supply.pump_flow = {si * 6e4:.6g} L/min" in out
+    branch = (tmp_path / "branch.csv").read_text().splitlines()
+    assert branch[0].startswith("supply.pump_flow (L/min),") and float(branch[-1].split(",")[0]) == \
+        pytest.approx(76.0, rel=1e-9)
 
 
 def test_simulate_a_circuit_drifter_from_rest(tmp_path, capsys):

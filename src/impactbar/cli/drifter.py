@@ -271,10 +271,38 @@ def _drifter_figures(drifter: physical.Drifter, run, out: Path) -> str:
     return written
 
 
+#: what branch.csv adds for a drifter with its oil circuit: what a designer reads, in SI
+CIRCUIT_BRANCH_COLUMNS = ("blow_frequency_Hz", "impact_energy_J", "mean_supply_pressure_MPa", "pump_power_kW",
+                          "hydraulic_efficiency")
+
+
+def _circuit_outputs(point) -> tuple:
+    """The values of :data:`CIRCUIT_BRANCH_COLUMNS` at one point of a circuit's branch."""
+    return (point.blow_frequency_Hz, point.impact_energy_J, point.mean_supply_pressure_Pa / 1e6,
+            point.pump_power_kW, point.hydraulic_efficiency)
+
+
+def _user_unit(name: str, to):
+    """The unit the user gave ``--to`` in (``"L/min"`` for ``"100 L/min"``), else the key's SI unit,
+    and the conversion of an SI value into it."""
+    si_unit = SI_PARAMETERS[name][1]
+    if isinstance(to, str) and si_unit:
+        from ..physical.units import registry
+
+        ureg = registry()
+        written = to.strip().split(None, 1)[-1] if len(to.split()) > 1 else ""  # as the user wrote it
+        given = ureg.Quantity(to).units
+        if written and given != ureg.Quantity(1.0, si_unit).units:
+            return written, lambda x: ureg.Quantity(x, si_unit).to(given).magnitude
+    return si_unit.replace("**", "^"), float
+
+
 def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     """``impactbar continue --preset drifter-... --parameter delay --to X``: the drifter's orbit
-    continued in a dimensionless parameter (theory §10); writes ``branch.csv`` (parameter, period,
-    impact velocity, largest |multiplier|, stable) and ``events.csv``."""
+    continued in a dimensionless parameter (theory §10), or an oil circuit's in a config key in SI;
+    writes ``branch.csv`` (parameter, period, impact velocity, largest |multiplier|, stable; a config
+    key's value first, in the unit ``--to`` was given in; for a circuit then
+    :data:`CIRCUIT_BRANCH_COLUMNS` in SI) and ``events.csv``."""
     from .. import continue_orbit
 
     name, to = args.parameter, args.to
@@ -285,10 +313,10 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
                          "delay_out, delay_in")
     if si:
         parameter, to = drifter.to_dimensionless(name, to)
-        unit = SI_PARAMETERS[name][1].replace("**", "^")
+        unit, convert = _user_unit(name, args.to)
 
         def shown(x):
-            return drifter.from_dimensionless(name, x)
+            return convert(drifter.from_dimensionless(name, x))
     else:
         if isinstance(to, str):
             raise ValueError(f"--to must be a number for --parameter {name} (dimensionless); got {to!r}")
@@ -307,11 +335,14 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
         b = continue_orbit(start, parameter, to, step=args.step, max_step=args.max_step,
                            max_points=args.max_points)
     head = f"{name} ({unit})," if si else ""
-    rows = [f"{head}parameter,period,impact_velocity,max_abs_multiplier,stable"]
-    for lam, o in zip(b.values, b.orbits, strict=True):
+    circuit = isinstance(drifter, physical.CircuitDrifter)
+    rows = [f"{head}parameter,period,impact_velocity,max_abs_multiplier,stable"
+            + (f",{','.join(CIRCUIT_BRANCH_COLUMNS)}" if circuit else "")]
+    for i, (lam, o) in enumerate(zip(b.values, b.orbits, strict=True)):
         mu = max(abs(complex(m)) for m in o.multipliers) if o.multipliers.size else 0.0
         rows.append((f"{shown(lam):.12g}," if si else "")
-                    + f"{lam:.12g},{o.period:.12g},{o.impact_velocity:.12g},{mu:.12g},{o.stable}")
+                    + f"{lam:.12g},{o.period:.12g},{o.impact_velocity:.12g},{mu:.12g},{o.stable}"
+                    + ("".join(f",{x:.12g}" for x in _circuit_outputs(sib.points[i])) if circuit else ""))
     (out / "branch.csv").write_text("\n".join(rows) + "\n")
     ev = ["kind,value,multiplier_re,multiplier_im" + (f",{name} ({unit})" if si else "")]
     ev += [f"{e.kind}{' ' + e.surface if e.surface else ''},{e.value:.12g},{e.multiplier.real:.12g},"
