@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._shared.validate import check_int, check_real
+from ._circuit_checks import check_circuit_si, shown
 from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
@@ -387,11 +388,22 @@ class CircuitDrifter:
             R = to_si("stop.restitution", st["restitution"], "", "0.215")
         else:
             a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
+            if not a_s >= bar.area_m2:
+                raise ValueError(f"stop.area must be at least the piston's area ({bar.area_m2 * 1e4:.4g} "
+                                 f"cm^2: the restitution (A_s - A) / (A_s + A) in [0, 1)); got "
+                                 f"{shown(st['area'], a_s, 'm^2')}")
             R = (a_s - bar.area_m2) / (a_s + bar.area_m2)
 
         def q(section, key, unit, example, what, default=None):
-            value = sec[section].get(key, default)
-            return None if value is None else to_si(f"{section}.{key}", value, unit, example, what=what)
+            name = f"{section}.{key}"
+            if key not in sec[section]:  # an optional key left out
+                return None if default is None else to_si(name, default, unit, example, what=what)
+            value = sec[section][key]
+            if value is None:
+                what = what if "(" in what else f"{what} in {unit.replace('**', '^')}"
+                raise ValueError(f"{name} must be {what}, e.g. {example}; got None (leave an optional key "
+                                 "out)")
+            return to_si(name, value, unit, example, what=what)
 
         area, vol, press = ("m**2", "'5.6 cm^2'", "an area"), ("m**3", "'0.1 L'", "a volume"), \
             ("Pa", "'20 MPa'", "a pressure")
@@ -423,12 +435,16 @@ class CircuitDrifter:
             "bulk_modulus_Pa": q("oil", "bulk_modulus", *press),
             "transition_pressure_Pa": q("oil", "transition_pressure", *press),
         }
-        if "relief_pressure" in sec["supply"] and si["relief_coefficient"] <= 0.0:
-            raise ValueError("supply.relief_coefficient must be > 0 with a relief_pressure")
+        check_circuit_si(sec, si, R)
+        damping = to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"), "N*s/m",
+                        "'9 N*s/m'", what="a damping coefficient")
+        if not damping >= 0.0:
+            raise ValueError(f"damping.coefficient must be 0 or above; got "
+                             f"{shown(sec['damping']['coefficient'], damping, 'N*s/m')}")
         return cls(bar=bar, restitution=R, si=si,
-                   damping_N_s_m=to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"),
-                                       "N*s/m", "'9 N*s/m'", what="a damping coefficient"),
-                   n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")), drill=drill)
+                   damping_N_s_m=damping,
+                   n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
+                   name=str(config.get("name", "")), drill=drill)
 
 
 @dataclass(frozen=True)
