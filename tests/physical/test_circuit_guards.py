@@ -106,3 +106,62 @@ def test_range_errors_speak_si(changes, expected):
 def test_an_accumulator_of_no_volume_is_still_none():
     d = circuit_preset("circuit-drifter", accumulator={"volume": "0 L"})
     assert d.drive().accumulator is None
+
+
+_DEGENERATE = [("valve", "switch_out", "21.5 mm", "0.0215 mm"),
+               ("supply", "pump_flow", "70 L/min", "70000 L/min")]
+
+
+@pytest.mark.parametrize(("sec", "key", "was", "value"), _DEGENERATE,
+                         ids=[f"{s}.{k}" for s, k, _, _ in _DEGENERATE])
+def test_no_orbit_of_period_zero(sec, key, was, value, tmp_path, capsys):
+    """From the example's config the run from rest settles onto the piston resting on the stop (its
+    bounces dying away): Newton's fixed point there was returned as an orbit of period 0 and impact
+    velocity 1e-27 (``blow_frequency_Hz`` a ZeroDivisionError, the command line a traceback)."""
+    from pathlib import Path
+
+    from impactbar.cli import main
+
+    with pytest.raises(ValueError, match=r"degenerate solution \(period 0, impact velocity .*e-2\d\): the "
+                                         "piston resting on the stop"):
+        circuit_preset("circuit-drifter", **{sec: {key: value}}).orbit()
+    example = (Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter.toml").read_text()
+    line = f'{key} = "{was}"'
+    assert line in example
+    config = tmp_path / "circuit.toml"
+    config.write_text(example.replace(line, f'{key} = "{value}"'))
+    assert main(["orbits", str(config)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert err.startswith("impactbar orbits: error: find_orbit found no periodic orbit") and "period 0" in err
+
+
+def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simulate(monkeypatch):
+    """At ``oil.transition_pressure = 50 MPa`` the settling of the motion from rest extrapolated the
+    supply pressure (Aitken's step) past the relief pressure without the relief valve's event, and
+    Newton converged with the relief closed at 29.6 MPa against its 25 MPa: a stable "orbit" of period
+    0.866 that simulate, restarted from its state (the relief then open), did not repeat (its first
+    interval 1.036 periods). The extrapolation no longer jumps a switching surface; an orbit whose
+    mode its state contradicts is refused, and so is one that simulate does not repeat."""
+    import dataclasses
+
+    from impactbar import InitialState, simulate
+    from impactbar.orbits import switched, switched_search
+
+    d = circuit_preset("circuit-drifter", oil={"transition_pressure": "50 MPa"})
+    o = d.orbit().orbit
+    (_, mode), = o.problem.blocks
+    p_s, p_rel = o.drive_states[0][2], o.drive.supply.relief_pressure
+    assert (p_s > p_rel) == bool(mode[3])  # the relief valve's flag as its pressure says
+    restart = dataclasses.replace(o.drive, start_pressures=tuple(o.drive_states[0]))
+    run = simulate(o.model, restart, InitialState.rigid(0.0, o.states_after_impact[0][1]), 3.5 * o.period)
+    assert np.allclose(np.diff(np.concatenate(([0.0], run.impact_times))), o.period, rtol=1e-6, atol=0)
+    assert np.allclose(run.impact_velocities, o.impact_velocity, rtol=1e-6, atol=0)
+    # the extrapolation allowed to jump the surface again: each guard refuses what it gives
+    monkeypatch.setattr(switched, "surfaces_ahead", lambda *a, **k: True)
+    with pytest.raises(ValueError, match="drive's mode at an impact is not the one its state gives"):
+        d.orbit()
+    monkeypatch.setattr(switched_search, "surfaces_ahead", lambda *a, **k: True)
+    with pytest.raises(ValueError, match=r"does not repeat when simulate restarts it .*\(the first interval "
+                                         r"1\.03\d+ periods\)"):
+        d.orbit()

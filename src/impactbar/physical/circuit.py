@@ -313,12 +313,18 @@ class CircuitDrifter:
         ------
         ValueError
             Where the motion from rest does not settle onto a periodic one (e.g. a pump flow that
-            cannot move the piston), or a chamber empties.
+            cannot move the piston), or only onto the piston resting on the stop (its bounces dying
+            away: no orbit with a blow), or a chamber empties; or where the orbit found does not
+            repeat when :func:`impactbar.simulate` restarts it (checked over two periods to
+            ``REPEAT_TOL``, without a drill string).
         """
         from ..orbits import find_orbit
 
         g = guess.orbit if isinstance(guess, CircuitDrifterOrbit) else guess
-        return CircuitDrifterOrbit(self, find_orbit(self.model(), self.drive(), guess=g))
+        orbit = find_orbit(self.model(), self.drive(), guess=g)
+        if self.drill is None:  # (a blow with the rock restarts inside its contact: not checked here)
+            _check_repeats(orbit)
+        return CircuitDrifterOrbit(self, orbit)
 
     def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
         """Simulate from the piston at rest on the stop (or a given gap and velocity), the circuit at
@@ -445,6 +451,38 @@ class CircuitDrifter:
                    damping_N_s_m=damping,
                    n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
                    name=str(config.get("name", "")), drill=drill)
+
+
+#: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over
+#: two periods: the impact times and velocities).
+REPEAT_TOL = 1e-6
+
+
+def _check_repeats(orbit) -> None:
+    """Refuse a one-impact orbit of the circuit that :func:`impactbar.simulate`, restarted from its
+    state after the impact (the pressures and the valve's opening as ``start_pressures``, the drive's
+    discrete state from them), does not repeat over two periods to :data:`REPEAT_TOL`: the orbit's
+    discrete state (the valve, the accumulator's and the relief valve's flags) would disagree with
+    its continuous state, a solution of the equations that is not the machine's motion."""
+    import dataclasses
+
+    from ..simulation import InitialState, simulate
+
+    if orbit.impacts != 1:
+        return
+    M = orbit.model.n_modes + 1
+    y = np.asarray(orbit.states_after_impact[0], dtype=float)
+    drive = dataclasses.replace(orbit.drive, start_pressures=tuple(orbit.drive_states[0]))
+    T = orbit.period
+    run = simulate(orbit.model, drive, InitialState(y[:M], y[M:]), 2.0 * T * (1.0 + 1e-3), max_impacts=2)
+    times, speeds = np.asarray(run.impact_times), np.asarray(run.impact_velocities)
+    v = orbit.impact_velocity
+    if times.size < 2 or np.max(np.abs(times - T * np.arange(1, 3))) > REPEAT_TOL * T * 2 \
+            or np.max(np.abs(speeds - v)) > REPEAT_TOL * abs(v):
+        first = f"{times[0] / T:.6g}" if times.size else "none"
+        raise ValueError(f"find_orbit's orbit (period {T:.6g}) does not repeat when simulate restarts it "
+                         f"from its state after the impact (the first interval {first} periods): not a "
+                         "motion of the circuit")
 
 
 @dataclass(frozen=True)
