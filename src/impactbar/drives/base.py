@@ -417,6 +417,15 @@ class Drive(ABC):
         a drive written without the argument serves uniform bars)."""
         return np.zeros(0)
 
+    #: The number of quadratures the drive keeps of its own along a run (the oil circuit's energy
+    #: account: 8), whose integrands :meth:`quadratures` gives; 0: none.
+    n_quadratures: ClassVar[int] = 0
+
+    def quadratures(self, mode, z: np.ndarray, q: np.ndarray, v: np.ndarray, model=None) -> np.ndarray:
+        """The integrands of the drive's own quadratures, shape ``(n_quadratures,)`` (the oil circuit's
+        energy terms), for the rigid piston resting on the stop; ``model`` as in :meth:`rate`."""
+        return np.zeros(0)
+
     @property
     def piecewise_constant(self) -> bool:
         """Whether the force is constant between events (no continuous state): flights in closed

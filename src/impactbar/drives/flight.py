@@ -32,7 +32,8 @@ import numpy as np
 from ..dynamics.modal import step_constant
 from .base import DriveEvent, DriveState, FlightSettings
 
-__all__ = ["FlightSettings", "Flight", "ClosedPiece", "OdePiece", "fly", "ARRIVAL", "EVENT", "END"]
+__all__ = ["FlightSettings", "Flight", "ClosedPiece", "OdePiece", "RestPiece", "QuadratureRestPiece", "fly",
+           "ARRIVAL", "EVENT", "END"]
 
 #: how a flight ended
 ARRIVAL, EVENT, END = 0, 1, 2
@@ -125,15 +126,32 @@ class RestPiece:
 
     def drive_state(self, t):
         t = np.atleast_1d(np.asarray(t, dtype=float))
+        k = len(self.z)
         if self.sol is None:
             return np.repeat(np.asarray(self.z, dtype=float)[:, None], t.size, axis=1)
-        return np.atleast_2d(self.sol(np.clip(t, self.t0, self.t_end)).T).T
+        return np.atleast_2d(self.sol(np.clip(t, self.t0, self.t_end)).T).T[:k]
 
     def end_displacement(self, t):
         return np.zeros(np.atleast_1d(t).size)
 
     def end_velocity(self, t):
         return np.zeros(np.atleast_1d(t).size)
+
+
+class QuadratureRestPiece(RestPiece):
+    """A :class:`RestPiece` of a drive that keeps quadratures of its own
+    (:attr:`~impactbar.drives.Drive.n_quadratures`, the oil circuit's energy account): ``sol``
+    carries them after ``z``, from 0 at ``t0``; ``totals`` are their values at ``t_end``."""
+
+    __slots__ = ("totals",)
+
+    def __init__(self, t0, t_end, sol, z, M, c, totals):
+        super().__init__(t0, t_end, sol, z, M, c)
+        self.totals = np.asarray(totals, dtype=float)
+
+    def energies(self):
+        """The drive's quadratures over the rest (the oil circuit's eight energy terms)."""
+        return self.totals.copy()
 
 
 class Flight(NamedTuple):

@@ -50,3 +50,31 @@ def dominant_limit(y0, y1, y2, y3):
             abs(r2 - r1) > DOMINANT_AGREE * (1.0 - r2):
         return None
     return y3 + r2 / (1.0 - r2) * d3
+
+
+def surfaces_ahead(drive, mode, y, M: int, tol: float = 0.0) -> bool:
+    """Whether the state ``y = (q, q', z)`` (``M`` modes) lies on the near side of each of ``mode``'s
+    surface events (``direction * value <= 0``: a crossing in the event's direction is still ahead),
+    as a flight in ``mode`` needs: past one (the oil circuit's supply pressure above the relief
+    pressure with the relief valve's flag closed) the flight never fires it, and its motion is not the
+    drive's.
+
+    Parameters
+    ----------
+    drive : Drive
+    mode : object
+        The drive's discrete state.
+    y : numpy.ndarray, shape (2 M + k,)
+    M : int
+    tol : float, optional
+        How far past a surface still counts as on it.
+
+    Returns
+    -------
+    bool
+    """
+    from ..drives.base import SurfaceEvent
+
+    q, v, z = y[:M], y[M:2 * M], y[2 * M:]
+    return all(e.direction * e.value(0.0, q, v, z) <= tol for e in drive.events(mode)
+               if isinstance(e, SurfaceEvent))

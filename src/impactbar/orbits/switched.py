@@ -41,7 +41,7 @@ from .._shared.validate import check_int
 from ..drives.base import DriveState, OrbitData, OrbitProblem, newton, sorted_multipliers
 from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..model import BarModel
-from ._settling import dominant_limit
+from ._settling import dominant_limit, surfaces_ahead
 from .admissibility import _window_departure
 from .orbit import PeriodicOrbit
 
@@ -622,7 +622,7 @@ class ShootingProblem(OrbitProblem):
                 break
             if accelerate and iterates >= 4 and mode == hist[-2][1] == hist[-3][1] == hist[-4][1]:
                 star = dominant_limit(hist[-4][2], hist[-3][2], hist[-2][2], y)
-                if star is not None:
+                if star is not None and surfaces_ahead(self.drive, mode, star, M):  # (none jumped over)
                     y = star
                     hist[-1] = (tau, mode, y, source)
                     iterates = 1

@@ -19,6 +19,7 @@ from .._shared.forcing import check_family
 from .._shared.validate import check_int, check_real
 from ..drives.base import OrbitProblem
 from ..model import BarModel
+from ._settling import surfaces_ahead
 from .one_impact import OrbitList
 from .switched import SwitchedOrbit, orbit_of, orbit_problem
 
@@ -98,7 +99,34 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     problem = orbit_problem(model, drive, m)
     if guess is None and m == 1:  # the default chain (the rigid orbit, a run from rest, the search)
         return default_orbit(model, drive, problem, tol, max_iter)
-    return orbit_of(problem, _solve(problem, problem.initial(guess, tol, max_iter), tol, max_iter))
+    return _motion(orbit_of(problem, _solve(problem, problem.initial(guess, tol, max_iter), tol, max_iter)))
+
+
+#: The slowest arrival at the stop that is a blow (the simulator's ``REST_SPEED``: a slower rebound
+#: ends in rest on the stop), in the model's velocity unit.
+MIN_IMPACT_SPEED = 1e-9
+
+
+def _motion(orbit: SwitchedOrbit) -> SwitchedOrbit:
+    """``orbit``, refused where it is no motion: a period that is not positive or an arrival slower
+    than :data:`MIN_IMPACT_SPEED` (a fixed point of the equations with the piston resting on the stop,
+    its blows shrunk to nothing: the oil circuit's run from rest settles onto one where the bounces
+    on the stop die away, period 0 and impact velocity 1e-27)."""
+    v = np.asarray(orbit.impact_velocities, dtype=float)
+    slowest = float(np.min(v)) if v.size else 0.0
+    if not (math.isfinite(orbit.period) and orbit.period > 0.0) or not slowest > MIN_IMPACT_SPEED:
+        raise ValueError(f"find_orbit: Newton reached a degenerate solution (period {orbit.period:.3g}, "
+                         f"impact velocity {slowest:.3g}): the piston resting on the stop, not a periodic "
+                         "motion with a blow")
+    problem = orbit._problem
+    blocks = getattr(problem, "blocks", None)
+    if blocks:  # the shooting problem: each section's mode as its state says
+        for (_, mode), y in zip(blocks, np.asarray(orbit._unknowns).reshape(len(blocks), -1), strict=True):
+            if not surfaces_ahead(problem.drive, mode, y, problem.M, 1e-9):
+                raise ValueError("find_orbit: Newton reached a solution whose drive's mode at an impact is "
+                                 f"not the one its state gives ({problem.drive.mode_name(mode)} with a "
+                                 "switching surface of the drive already crossed), not a motion of the drive")
+    return orbit
 
 
 def _solve(problem: OrbitProblem, X0, tol: float, max_iter: int):
@@ -147,7 +175,7 @@ def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max
     def attempt(what, start):
         try:
             X = _solve(problem, start(), tol, max_iter)
-            orbit = orbit_of(problem, X)
+            orbit = _motion(orbit_of(problem, X))
         except ValueError as err:
             tried.append(f"{what}: {err}")
             return None

@@ -40,6 +40,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._shared.validate import check_int, check_real
+from ._circuit_checks import check_circuit_si, shown
 from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
@@ -312,12 +313,18 @@ class CircuitDrifter:
         ------
         ValueError
             Where the motion from rest does not settle onto a periodic one (e.g. a pump flow that
-            cannot move the piston), or a chamber empties.
+            cannot move the piston), or only onto the piston resting on the stop (its bounces dying
+            away: no orbit with a blow), or a chamber empties; or where the orbit found does not
+            repeat when :func:`impactbar.simulate` restarts it (checked over two periods to
+            ``REPEAT_TOL``, without a drill string).
         """
         from ..orbits import find_orbit
 
         g = guess.orbit if isinstance(guess, CircuitDrifterOrbit) else guess
-        return CircuitDrifterOrbit(self, find_orbit(self.model(), self.drive(), guess=g))
+        orbit = find_orbit(self.model(), self.drive(), guess=g)
+        if self.drill is None:  # (a blow with the rock restarts inside its contact: not checked here)
+            _check_repeats(orbit)
+        return CircuitDrifterOrbit(self, orbit)
 
     def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
         """Simulate from the piston at rest on the stop (or a given gap and velocity), the circuit at
@@ -387,11 +394,22 @@ class CircuitDrifter:
             R = to_si("stop.restitution", st["restitution"], "", "0.215")
         else:
             a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
+            if not a_s >= bar.area_m2:
+                raise ValueError(f"stop.area must be at least the piston's area ({bar.area_m2 * 1e4:.4g} "
+                                 f"cm^2: the restitution (A_s - A) / (A_s + A) in [0, 1)); got "
+                                 f"{shown(st['area'], a_s, 'm^2')}")
             R = (a_s - bar.area_m2) / (a_s + bar.area_m2)
 
         def q(section, key, unit, example, what, default=None):
-            value = sec[section].get(key, default)
-            return None if value is None else to_si(f"{section}.{key}", value, unit, example, what=what)
+            name = f"{section}.{key}"
+            if key not in sec[section]:  # an optional key left out
+                return None if default is None else to_si(name, default, unit, example, what=what)
+            value = sec[section][key]
+            if value is None:
+                what = what if "(" in what else f"{what} in {unit.replace('**', '^')}"
+                raise ValueError(f"{name} must be {what}, e.g. {example}; got None (leave an optional key "
+                                 "out)")
+            return to_si(name, value, unit, example, what=what)
 
         area, vol, press = ("m**2", "'5.6 cm^2'", "an area"), ("m**3", "'0.1 L'", "a volume"), \
             ("Pa", "'20 MPa'", "a pressure")
@@ -423,12 +441,48 @@ class CircuitDrifter:
             "bulk_modulus_Pa": q("oil", "bulk_modulus", *press),
             "transition_pressure_Pa": q("oil", "transition_pressure", *press),
         }
-        if "relief_pressure" in sec["supply"] and si["relief_coefficient"] <= 0.0:
-            raise ValueError("supply.relief_coefficient must be > 0 with a relief_pressure")
+        check_circuit_si(sec, si, R)
+        damping = to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"), "N*s/m",
+                        "'9 N*s/m'", what="a damping coefficient")
+        if not damping >= 0.0:
+            raise ValueError(f"damping.coefficient must be 0 or above; got "
+                             f"{shown(sec['damping']['coefficient'], damping, 'N*s/m')}")
         return cls(bar=bar, restitution=R, si=si,
-                   damping_N_s_m=to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"),
-                                       "N*s/m", "'9 N*s/m'", what="a damping coefficient"),
-                   n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")), drill=drill)
+                   damping_N_s_m=damping,
+                   n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
+                   name=str(config.get("name", "")), drill=drill)
+
+
+#: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over
+#: two periods: the impact times and velocities).
+REPEAT_TOL = 1e-6
+
+
+def _check_repeats(orbit) -> None:
+    """Refuse a one-impact orbit of the circuit that :func:`impactbar.simulate`, restarted from its
+    state after the impact (the pressures and the valve's opening as ``start_pressures``, the drive's
+    discrete state from them), does not repeat over two periods to :data:`REPEAT_TOL`: the orbit's
+    discrete state (the valve, the accumulator's and the relief valve's flags) would disagree with
+    its continuous state, a solution of the equations that is not the machine's motion."""
+    import dataclasses
+
+    from ..simulation import InitialState, simulate
+
+    if orbit.impacts != 1:
+        return
+    M = orbit.model.n_modes + 1
+    y = np.asarray(orbit.states_after_impact[0], dtype=float)
+    drive = dataclasses.replace(orbit.drive, start_pressures=tuple(orbit.drive_states[0]))
+    T = orbit.period
+    run = simulate(orbit.model, drive, InitialState(y[:M], y[M:]), 2.0 * T * (1.0 + 1e-3), max_impacts=2)
+    times, speeds = np.asarray(run.impact_times), np.asarray(run.impact_velocities)
+    v = orbit.impact_velocity
+    if times.size < 2 or np.max(np.abs(times - T * np.arange(1, 3))) > REPEAT_TOL * T * 2 \
+            or np.max(np.abs(speeds - v)) > REPEAT_TOL * abs(v):
+        first = f"{times[0] / T:.6g}" if times.size else "none"
+        raise ValueError(f"find_orbit's orbit (period {T:.6g}) does not repeat when simulate restarts it "
+                         f"from its state after the impact (the first interval {first} periods): not a "
+                         "motion of the circuit")
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ import numpy as np
 
 from .._shared.status import RunStatus
 from ..drives.base import DriveState, FlightKernel, KernelRun
-from ..drives.flight import END, EVENT, RestPiece, fly
+from ..drives.flight import END, EVENT, QuadratureRestPiece, RestPiece, fly
 from ..dynamics.implementations import use_fast
 from ..model import BarModel
 from .blows import BlowPiece, check_coupling, run_coupled
@@ -643,6 +643,8 @@ REST_SPEED = 1e-9
 #: more impacts than this within ``CHATTER_WINDOW`` of each other: a flexible bar held on the stop
 CHATTER_IMPACTS = 200
 CHATTER_WINDOW = 1e-6
+#: the methods of scipy's ``solve_ivp``
+_SCIPY_METHODS = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
 
 def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int, make_state,
@@ -715,38 +717,56 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
 
 def _rest(model, drive, loop, t_end, settings) -> None:
     """The rigid piston at rest on the stop while the drive presses it: ``z`` integrated with
-    ``q = q' = 0`` until the force turns (falls through 0), a drive event or ``t_end``."""
+    ``q = q' = 0`` until the force turns (falls through 0), a drive event or ``t_end``; with it the
+    drive's own quadratures (:attr:`~impactbar.drives.Drive.n_quadratures`: the oil circuit's energy
+    account), from 0. A drive whose flights have an integrator of their own (the circuit's CVODE)
+    rests under scipy's ``Radau`` at its tolerances."""
     from scipy.integrate import solve_ivp
 
     mode, z = loop.state
     q0, v0 = np.zeros(1), np.zeros(1)
     t = loop.t
     events = drive.events(mode)
+    k, nq = len(z), int(drive.n_quadratures) if len(z) else 0
 
     def push(tt, y):
-        return drive.force(mode, y, q0, v0)
+        return drive.force(mode, y[:k], q0, v0)
 
     push.terminal, push.direction = True, -1
     fns = [push]
     for e in events:
         def g(tt, y, e=e):
-            return e.value(tt, q0, v0, y)
+            return e.value(tt, q0, v0, y[:k])
 
         g.terminal, g.direction = True, e.direction
         fns.append(g)
-    if z.size:
+    totals = None
+    if k:
         extra = {} if model.piston is None else {"model": model}
-        sol = solve_ivp(lambda tt, y: drive.rate(mode, y, q0, v0, **extra), (t, t_end),
-                        np.asarray(z, dtype=float), method=settings.method, rtol=settings.rtol,
-                        atol=settings.atol, events=fns, dense_output=True)
-        te, z_end, dense = float(sol.t[-1]), sol.y[:, -1].copy(), sol.sol
+
+        def f(tt, y):
+            zz = y[:k]
+            rate = drive.rate(mode, zz, q0, v0, **extra)
+            return np.concatenate((rate, drive.quadratures(mode, zz, q0, v0, **extra))) if nq else rate
+
+        method = settings.method if settings.method in _SCIPY_METHODS else "Radau"
+        sol = solve_ivp(f, (t, t_end), np.concatenate((np.asarray(z, dtype=float), np.zeros(nq))),
+                        method=method, rtol=settings.rtol, atol=settings.atol, events=fns,
+                        dense_output=True)
+        if sol.status < 0:
+            raise ValueError(f"the drive's state could not be integrated with the piston at rest on the "
+                             f"stop from t = {t:.6g}: {sol.message}")
+        te, z_end, dense = float(sol.t[-1]), sol.y[:k, -1].copy(), sol.sol
+        totals = sol.y[k:, -1].copy()
         hit = [i for i, tt in enumerate(sol.t_events) if tt.size] if sol.status == 1 else []
     else:  # no state: only the drive's scheduled or surface events can end the rest
         times = [e.first_time(model.d, 0.0, t, q0, v0) for e in events]
         te = min([tt for tt in times if not math.isnan(tt)] + [t_end])
         z_end, dense = z, None
         hit = [i + 1 for i, tt in enumerate(times) if tt == te]
-    loop.blocks.append(("py", RestPiece(t, te, dense, z, 1, model.end_weights)))
+    piece = RestPiece(t, te, dense, z, 1, model.end_weights) if not nq else \
+        QuadratureRestPiece(t, te, dense, z, 1, model.end_weights, totals)
+    loop.blocks.append(("py", piece))
     loop.rests.append((t, te))
     loop.t, loop.q, loop.v = te, q0.copy(), v0.copy()
     loop.state = DriveState(mode, z_end)

@@ -277,14 +277,26 @@ class HydraulicCircuitDrive(Drive):
     def force(self, mode, z, q, v) -> float:
         return float(z[1] - self.chambers.area_ratio * z[0])
 
-    def rate(self, mode, z, q, v, model=None) -> np.ndarray:
+    n_quadratures = K.N_ENERGY
+
+    def _field(self, mode, z, q, v, model):
+        """The compiled vector field at one state: ``(M, out)``, ``out`` of shape ``(2 M + 4 + 8,)``."""
         q = np.asarray(q, dtype=float)
         M = q.size
         par = self._par(_rate_model(M) if model is None else model, mode)
-        y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)))
+        y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)[:4]))
         out = np.empty(2 * M + 4 + K.N_ENERGY)
         K.field_at(np.concatenate((y, np.zeros(K.N_ENERGY)))[None, :], par, out[None, :])
+        return M, out
+
+    def rate(self, mode, z, q, v, model=None) -> np.ndarray:
+        M, out = self._field(mode, z, q, v, model)
         return out[2 * M:2 * M + 4].copy()
+
+    def quadratures(self, mode, z, q, v, model=None) -> np.ndarray:
+        """The integrands of the eight terms of the energy account (:class:`CircuitEnergy`)."""
+        M, out = self._field(mode, z, q, v, model)
+        return out[2 * M + 4:].copy()
 
     def events(self, mode):
         target, moving, acc, rel = mode
