@@ -35,7 +35,7 @@ each channel's last impulse and its receiver's next, ``TCUR (7,)`` impulses stor
 contact's and the bit's schedule cursors, a failure code (1 a grazing re-contact, where the map has
 no derivative; 2 the schedule's branches out of step; 3 a switch met by an impulse that did not set
 it off, or by steps moving apart), and the separations and the unloadings that a moving step set
-off.
+off (its slots ``TCUR_*`` of :mod:`._records`).
 """
 
 from __future__ import annotations
