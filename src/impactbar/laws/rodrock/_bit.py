@@ -80,7 +80,7 @@ class _Bit:
         lam = b / Z
         tau, nxt = T, None
         # g = b (p_inf - p0), Z times the rate at p0: the forms below lose nothing to a soft rock's
-        # huge p_inf (issue 42: k = 1e-16 read as a rigid wall)
+        # huge p_inf (with p_inf itself, a rock of k = 1e-16 was read as a rigid wall)
         g = E - b * (p0 - ref)
         if self.branch == _ELASTIC:
             if p_inf > self.p_max >= p0:
@@ -126,7 +126,8 @@ class _Bit:
             e2 = math.exp(lam2 * tau)
             if delta * tau > 1.0:  # a stiff bit (small mass): e2 underflows, expm1 overflows
                 # lam_1 = half + delta without the cancellation of a stiff bit's two near-opposite terms:
-                # lam_1 lam_2 = b/m (issue 42: bit masses 1e-100 .. 1e-16 lost the rock's load)
+                # lam_1 lam_2 = b/m (with the cancellation, bit masses 1e-100 .. 1e-16 lost the rock's
+                # load)
                 S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
             else:
                 S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
@@ -138,8 +139,8 @@ class _Bit:
         # A - half I = [[-half, 1], [-b/m, half]]
         if delta > 0.5 * abs(half):
             # overdamped: p - p0 = g/(m 2 delta) (expm1(lam_1 t)/lam_1 - expm1(lam_2 t)/lam_2) + S w0 with
-            # g = E - b (p0 - p_ref), without p_eq, which a soft rock makes huge (issue 42: k = 1e-16
-            # read as a rigid wall)
+            # g = E - b (p0 - p_ref), without p_eq, which a soft rock makes huge (with it, a rock of
+            # k = 1e-16 was read as a rigid wall)
             g = E - b * (self.p - ref)
             lam1, lam2 = b / m / (half - delta), half - delta
             f1 = math.expm1(lam1 * tau) / lam1 if lam1 * tau != 0.0 else tau

@@ -26,6 +26,38 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     blk_integral_sq,
     pool_load,
 )
+from ._records import (  # the records' slots
+    B_AUX,
+    BI_BRANCH,
+    BS_P,
+    BS_PPERM,
+    BS_PSTART,
+    BS_RMAX,
+    BS_W,
+    BS_X,
+    CI_WIN,
+    CT_EP,
+    CT_ER,
+    CT_PP,
+    CT_PR,
+    CT_PSI,
+    CT_TACC,
+    CT_THR,
+    PR_CBIT,
+    PR_CP,
+    PR_CROD,
+    PR_CSHANK,
+    PR_E0,
+    PR_FEED,
+    PR_K,
+    PR_KU,
+    PR_MASS,
+    PR_MP,
+    PR_MR,
+    PR_NP,
+    PR_SPENT,
+    PR_TMAX,
+)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -119,12 +151,12 @@ def piece_momentum(ws, c, t):
         if b > a and PI[p, 2] > 0:
             if nx >= 0 and a == t0 and b == tend:  # a closed piece's whole integral, cached
                 if math.isnan(PF[p, 3]):
-                    pool_load(WB[12], WN[12], p, 0.0, lam, BIN, PI, TK, TC)
-                    PF[p, 3] = blk_integral(WB[12], WN[12], lam, 0.0, tend - t0)
+                    pool_load(WB[B_AUX], WN[B_AUX], p, 0.0, lam, BIN, PI, TK, TC)
+                    PF[p, 3] = blk_integral(WB[B_AUX], WN[B_AUX], lam, 0.0, tend - t0)
                 s1 += PF[p, 3]
             else:
-                pool_load(WB[12], WN[12], p, 0.0, lam, BIN, PI, TK, TC)
-                s1 += blk_integral(WB[12], WN[12], lam, a - t0, b - t0)
+                pool_load(WB[B_AUX], WN[B_AUX], p, 0.0, lam, BIN, PI, TK, TC)
+                s1 += blk_integral(WB[B_AUX], WN[B_AUX], lam, a - t0, b - t0)
         if tend >= t:
             break
         p = nx
@@ -133,13 +165,13 @@ def piece_momentum(ws, c, t):
 
 @numba.njit(cache=CACHE, nogil=True)
 def account(ws, t):
-    """Momenta and wave energies of the piston and the rod at ``t`` (into ``CT[3:7]``), and ``Psi``,
-    the energy of rod, bit and rock above the static state under the feed (``CT[7]``), and the
-    energy a new yield of the rock needs (``CT[8]``)."""
+    """Momenta and wave energies of the piston and the rod at ``t`` (into ``CT[CT_PP:CT_ER + 1]``),
+    and ``Psi``, the energy of rod, bit and rock above the static state under the feed
+    (``CT[CT_PSI]``), and the energy a new yield of the rock needs (``CT[CT_THR]``)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
-    n_p = int(PR[21])
+    n_p = int(PR[PR_NP])
     Pp = 0.0
     Ep = 0.0
     Pr = 0.0
@@ -147,32 +179,32 @@ def account(ws, t):
     for i in range(1, J + 1):
         Z = SZ[i - 1]
         pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
-        m1, e1 = chan_integrals(2 * (i - 1), t, Z, CH_T, pool, WB[12], WN[12])
-        m2, e2 = chan_integrals(2 * i - 1, t, Z, CH_T, pool, WB[12], WN[12])
+        m1, e1 = chan_integrals(2 * (i - 1), t, Z, CH_T, pool, WB[B_AUX], WN[B_AUX])
+        m2, e2 = chan_integrals(2 * i - 1, t, Z, CH_T, pool, WB[B_AUX], WN[B_AUX])
         if i <= n_p:
             Pp += m1 - m2
             Ep += e1 + e2
         else:
             Pr += m1 - m2
             Er += e1 + e2
-    m = PR[2]
-    w = BS[2]
+    m = PR[PR_MASS]
+    w = BS[BS_W]
     Pr += m * w
-    ku = PR[1]
-    f = PR[3]
-    br = BI[0]
+    ku = PR[PR_KU]
+    f = PR[PR_FEED]
+    br = BI[BI_BRANCH]
     if br == FREE:
-        psi = Er + 0.5 * m * w * w + f * (BS[5] - BS[0]) + f * f / (2.0 * ku)
+        psi = Er + 0.5 * m * w * w + f * (BS[BS_PPERM] - BS[BS_P]) + f * f / (2.0 * ku)
     else:
-        R = PR[0] * BS[1] if br == LOAD else ku * BS[1]
+        R = PR[PR_K] * BS[BS_X] if br == LOAD else ku * BS[BS_X]
         psi = Er + 0.5 * m * w * w + (R - f) * (R - f) / (2.0 * ku)
-    CT[3] = Pp
-    CT[4] = Ep
-    CT[5] = Pr
-    CT[6] = Er
-    CT[7] = psi
-    CT[8] = (BS[4] - f) * (BS[4] - f) / (2.0 * ku)
-    CT[9] = t
+    CT[CT_PP] = Pp
+    CT[CT_EP] = Ep
+    CT[CT_PR] = Pr
+    CT[CT_ER] = Er
+    CT[CT_PSI] = psi
+    CT[CT_THR] = (BS[BS_RMAX] - f) * (BS[BS_RMAX] - f) / (2.0 * ku)
+    CT[CT_TACC] = t
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -188,16 +220,16 @@ def may_end(ws, t):
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
-    n_p = int(PR[21])
-    m = PR[2]
-    w = BS[2]
-    ku = PR[1]
-    f = PR[3]
-    br = BI[0]
+    n_p = int(PR[PR_NP])
+    m = PR[PR_MASS]
+    w = BS[BS_W]
+    ku = PR[PR_KU]
+    f = PR[PR_FEED]
+    br = BI[BI_BRANCH]
     if br == FREE:
-        psi = 0.5 * m * w * w + f * (BS[5] - BS[0]) + f * f / (2.0 * ku)
+        psi = 0.5 * m * w * w + f * (BS[BS_PPERM] - BS[BS_P]) + f * f / (2.0 * ku)
     else:
-        R = PR[0] * BS[1] if br == LOAD else ku * BS[1]
+        R = PR[PR_K] * BS[BS_X] if br == LOAD else ku * BS[BS_X]
         psi = 0.5 * m * w * w + (R - f) * (R - f) / (2.0 * ku)
     # what certify's ends need besides Psi: the piston out of contact and not moving on (its
     # momentum), and without a feed whether the rod may fly free of the rock (the rod's momentum)
@@ -209,21 +241,21 @@ def may_end(ws, t):
         for i in range(1, n_p + 1):
             Pq += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
         gone = Pq <= 0.0
-        vp = Pq / PR[15]
-        if gone and f == 0.0 and br == FREE and BS[0] < BS[5]:
+        vp = Pq / PR[PR_MP]
+        if gone and f == 0.0 and br == FREE and BS[BS_P] < BS[BS_PPERM]:
             Pr = 0.0
             for i in range(n_p + 1, J + 1):
                 Pr += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
             Pr += m * w
     xs = NSF[n_p, 1]
-    avail = PR[10] + f * xs + f * f * (PR[11] * 0.5 + 0.5 / ku)
+    avail = PR[PR_E0] + f * xs + f * f * (PR[PR_CROD] * 0.5 + 0.5 / ku)
     if not _could_end(psi, ws, avail, gone, vp, Pr):
         return False
     pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
     for exact in (False, True):  # the cheap bound of the pieces' energies first
         er = 0.0
         for c in range(2 * n_p, 2 * J):
-            er += chan_closed_sq(c, t, CH_T, pool, WB[12], WN[12], exact) / SZ[c // 2]
+            er += chan_closed_sq(c, t, CH_T, pool, WB[B_AUX], WN[B_AUX], exact) / SZ[c // 2]
             if not _could_end(psi + er, ws, avail, gone, vp, Pr):
                 return False
     return True
@@ -245,29 +277,29 @@ def _could_end(psi, ws, avail, gone, vp, Pr):
     if not math.isfinite(psi):
         return True  # (overflowed pieces: certify's pass says so)
     psi = max(psi * (1.0 - 1e-9), 0.0)
-    if psi <= 2.0 * PR[9] * avail:
+    if psi <= 2.0 * PR[PR_SPENT] * avail:
         return True
     if not gone:
         return False
-    f = PR[3]
-    br = BI[0]
-    thr = (BS[4] - f) * (BS[4] - f) / (2.0 * PR[1])
+    f = PR[PR_FEED]
+    br = BI[BI_BRANCH]
+    thr = (BS[BS_RMAX] - f) * (BS[BS_RMAX] - f) / (2.0 * PR[PR_KU])
     if f > 0.0:
-        return br != LOAD and (psi < thr or PR[18] == INF)
-    n_p = int(PR[21])
+        return br != LOAD and (psi < thr or PR[PR_TMAX] == INF)
+    n_p = int(PR[PR_NP])
     xs = NSF[n_p, 1]
     xp = xs - NSF[n_p, 0]
-    Mr = PR[16]
+    Mr = PR[PR_MR]
     rod_free = False
     if br == FREE and Pr <= 0.0:
         eint = max(psi - 0.5 * Pr * Pr / Mr, 0.0)
-        if (BS[0] - BS[5]) + 2.0 * math.sqrt(2.0 * PR[14] * eint) < 0.0:
+        if (BS[BS_P] - BS[BS_PPERM]) + 2.0 * math.sqrt(2.0 * PR[PR_CBIT] * eint) < 0.0:
             rod_free = True
-            if vp <= Pr / Mr and xp < xs - 2.0 * math.sqrt(2.0 * PR[13] * eint):
+            if vp <= Pr / Mr and xp < xs - 2.0 * math.sqrt(2.0 * PR[PR_CSHANK] * eint):
                 return True
     if not ((br != LOAD and psi < thr) or rod_free):
         return False
-    return vp <= -math.sqrt(2.0 * psi / Mr) and xp < xs - 2.0 * math.sqrt(2.0 * PR[13] * psi)
+    return vp <= -math.sqrt(2.0 * psi / Mr) and xp < xs - 2.0 * math.sqrt(2.0 * PR[PR_CSHANK] * psi)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -282,10 +314,10 @@ def certify(ws, t):
     stays above ``-sqrt(2 Psi / M_r)``, or is constant once the rod flies free of the rock."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    n_p = int(PR[21])
+    n_p = int(PR[PR_NP])
     # the energies cost a pass over every piece in flight: only when the piston may have gone, or
     # every 16 windows for the spent energy
-    if CI[2] % 16 != 0:
+    if CI[CI_WIN] % 16 != 0:
         if NSI[n_p, 3] == 1:
             return GOING
         Pq = 0.0
@@ -296,59 +328,60 @@ def certify(ws, t):
     if not may_end(ws, t):  # no end possible whatever the energies in flight: no energy pass
         return GOING
     account(ws, t)
-    Pp, Ep, Pr, Er, psi, thr = CT[3], CT[4], CT[5], CT[6], CT[7], CT[8]
-    f = PR[3]
-    ku = PR[1]
-    m = PR[2]
-    br = BI[0]
-    Mp = PR[15]
-    Mr = PR[16]
+    Pp, Ep, Pr, Er, psi, thr = CT[CT_PP], CT[CT_EP], CT[CT_PR], CT[CT_ER], CT[CT_PSI], CT[CT_THR]
+    f = PR[PR_FEED]
+    ku = PR[PR_KU]
+    m = PR[PR_MASS]
+    br = BI[BI_BRANCH]
+    Mp = PR[PR_MP]
+    Mr = PR[PR_MR]
     contact = NSI[n_p, 3] == 1
     gap = NSF[n_p, 0]
     xs = NSF[n_p, 1]
-    avail = PR[10] + f * xs + f * f * (PR[11] * 0.5 + 0.5 / ku)
+    avail = PR[PR_E0] + f * xs + f * f * (PR[PR_CROD] * 0.5 + 0.5 / ku)
     vp = Pp / Mp
     gone = False
     rod_free = False
     if not contact and vp <= 0.0:
         eint = max(Ep - 0.5 * Pp * Pp / Mp, 0.0)
-        dp = 2.0 * math.sqrt(2.0 * PR[12] * eint)
+        dp = 2.0 * math.sqrt(2.0 * PR[PR_CP] * eint)
         xp = xs - gap
         if f > 0.0:
             if br != LOAD and psi < thr:
-                ctot = PR[11] + 1.0 / ku
-                xeq = BS[5] + f / ku - BS[9]
+                ctot = PR[PR_CROD] + 1.0 / ku
+                xeq = BS[BS_PPERM] + f / ku - BS[BS_PSTART]
                 if psi <= 0.5 * f * f * ctot:
                     delta = math.sqrt(2.0 * ctot * psi)
                 else:
                     delta = f * ctot + (psi - 0.5 * f * f * ctot) / f
                 bs = xeq - delta
             else:
-                R = PR[0] * BS[1] if br == LOAD else (ku * BS[1] if br == ELASTIC else 0.0)
-                phi = Er + 0.5 * m * BS[2] * BS[2] - f * (BS[0] - BS[9]) + 0.5 * f * f * PR[11] \
+                R = PR[PR_K] * BS[BS_X] if br == LOAD else (ku * BS[BS_X] if br == ELASTIC else 0.0)
+                phi = Er + 0.5 * m * BS[BS_W] * BS[BS_W] - f * (BS[BS_P] - BS[BS_PSTART]) \
+                    + 0.5 * f * f * PR[PR_CROD] \
                     + R * R / (2.0 * ku)
                 bs = -phi / f
             gone = xp + dp < bs
         else:
-            ekin = Er + 0.5 * m * BS[2] * BS[2]
+            ekin = Er + 0.5 * m * BS[BS_W] * BS[BS_W]
             if br == FREE and Pr <= 0.0:
                 eint_r = max(ekin - 0.5 * Pr * Pr / Mr, 0.0)
-                db = 2.0 * math.sqrt(2.0 * PR[14] * eint_r)
-                if (BS[0] - BS[5]) + db < 0.0:
+                db = 2.0 * math.sqrt(2.0 * PR[PR_CBIT] * eint_r)
+                if (BS[BS_P] - BS[BS_PPERM]) + db < 0.0:
                     rod_free = True
-                    ds = 2.0 * math.sqrt(2.0 * PR[13] * eint_r)
+                    ds = 2.0 * math.sqrt(2.0 * PR[PR_CSHANK] * eint_r)
                     if vp <= Pr / Mr and xp + dp < xs - ds:
                         gone = True
             if not gone:
                 vmax = math.sqrt(2.0 * psi / Mr)
-                if vp <= -vmax and xp + dp < xs - 2.0 * math.sqrt(2.0 * PR[13] * psi):
+                if vp <= -vmax and xp + dp < xs - 2.0 * math.sqrt(2.0 * PR[PR_CSHANK] * psi):
                     gone = True
     frozen = (br != LOAD and psi < thr) or rod_free
     if gone and frozen:
         return LIFTED if rod_free else SEPARATED
     rem = psi if gone else psi + Ep
-    if rem <= PR[9] * avail:
+    if rem <= PR[PR_SPENT] * avail:
         return SPENT
-    if gone and f > 0.0 and br != LOAD and PR[18] == INF:  # the rock may yield to the ringing rod
+    if gone and f > 0.0 and br != LOAD and PR[PR_TMAX] == INF:  # the rock may yield to the ringing rod
         return MAY_YIELD                                      # for ever (a caller's t_max: on to it)
     return GOING

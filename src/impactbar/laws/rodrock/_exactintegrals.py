@@ -154,7 +154,7 @@ def blk_integral_sq(B, N, lam, a, b):
     """``int_a^b phi^2`` (``phi`` real: its conjugate terms are in the table): per pair of exponents
     the product polynomial against the moments of ``e^{(lam_1 + lam_2) tau}``; where those terms
     exceed the result ``SQ_CANCEL`` times (a light bit: fast and slow terms of large opposite
-    coefficients cancelled to 1e-6 of the piston's energy, issue 39), by quadrature
+    coefficients cancelled to 1e-6 of the piston's energy), by quadrature
     (:func:`blk_integral_sq_quad`)."""
     if b <= 0.0:
         return 0.0

@@ -70,34 +70,90 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     first_negative,
     load_input,
 )
+from ._records import (  # the records' slots
+    B_AUX,
+    B_E,
+    B_EMIT,
+    B_IN,
+    B_IN2,
+    B_N,
+    B_ODE,
+    B_OUT,
+    B_OUT2,
+    B_RATE,
+    B_SCR1,
+    B_SCR2,
+    B_SCR3,
+    B_X,
+    B_XD,
+    B_ZERO,
+    BI_BRANCH,
+    BI_NEP,
+    BS_ABS,
+    BS_DISS,
+    BS_DRIVEW,
+    BS_EPP,
+    BS_EPT,
+    BS_P,
+    BS_PMAX,
+    BS_PPERM,
+    BS_RDP,
+    BS_RMAX,
+    BS_TPMAX,
+    BS_W,
+    BS_X,
+    CH_FAR_IN,
+    CH_FAR_OUT,
+    CI_DEG,
+    CI_END,
+    CI_GIVEUP,
+    CI_RECON,
+    CI_SEP,
+    CI_STATUS,
+    CI_WIN,
+    CNT_FULL,
+    CNT_PIECES,
+    CT_PSI,
+    CT_T,
+    CT_THR,
+    CT_TLOAD,
+    CT_TSEP,
+    E_CONST,
+    PR_DRIVEN,
+    PR_FEED,
+    PR_FIXED,
+    PR_K,
+    PR_KU,
+    PR_LB,
+    PR_MASS,
+    PR_MAXP,
+    PR_MAXWIN,
+    PR_NODW,
+    PR_NP,
+    PR_RECORD,
+    PR_SEMI,
+    PR_TMAX,
+    PR_WINDOW,
+    PR_ZBIT,
+    RD_HEAD,
+    SEG_FAR,
+)
 
 # ------------------------------------------------------------------------------------------------
 # the workspace
 # ------------------------------------------------------------------------------------------------
 # ws = (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-#       RT, RC, RD, EP, CI, CT)
-# PR: 0 k, 1 k_u, 2 m (0: massless), 3 feed, 4 Z at the bit, 5 H, 6 fixed horizon (run to t_max,
-#     certify nothing), 7 semi-infinite rod,
-#     8 Lb (time scale of pruning), 9 spent fraction, 10 E0, 11 rod's static compliance,
-#     12 piston's compliance about its struck end, 13 rod's about the shank, 14 rod's about the bit,
-#     15 piston's mass, 16 rod's mass with the bit's, 17 h (window), 18 t_max, 19 max windows,
-#     20 p at the start, 21 contact node index, 22 driven, 23 record, 24 max pieces, 25 no drive
-#     work (a tangent run)
+#       RT, RC, RD, EP, CI, CT), its positions WS_* in :mod:`._records`
+# PR, BS, BI, CI, CT, CNT and the blocks WB, WN: their slots are named in :mod:`._records`
 # NSF (J + 1, 4): contact node: gap, shank displacement; NSI (J + 1, 4): used cursors (2), drive
 #     cursor, contact flag
-# BS: 0 p, 1 x (= p - ref), 2 w, 3 p_max, 4 R_max, 5 p_perm, 6 dissipated, 7 int R dp, 8 absorbed
-#     (semi-infinite rod), 9 p at the start, 10 time of p_max, 11 episode start time, 12 episode
-#     start p, 13 int G^2/Z spare, 14 the drive's work on the piston; BI: 0 branch, 1 episodes
 # EP (cap, 5): episodes t_start, t_end, p_start, p_end, dissipated
 # RD (1 + n, 6) complex: the switch log (the tangent run's schedule, :mod:`._exacttangent`), kept
-#     only when it has more than its header row: RD[0, 0] the count, RD[0, 1] 1 once full; row i + 1:
+#     only when it has more than its header row RD_HEAD (RD[RD_HEAD, 0] the count, RD[RD_HEAD, 1]
+#     1 once full); row i + 1:
 #     time, code (LOG_SEP, LOG_RECON, LOG_BIT + the new branch) and, for a re-contact, the contact
 #     force just after it, the jump of the shank's velocity and the gap's rate just before it; for
 #     a separation the waves arriving just before it; for the bit, p' just before (a massless bit)
-# CI: 0 status, 1 ended_by, 2 windows done, 3 (unused), 4 crossing searches given up, 5 separations,
-#     6 re-contacts, 7 degree limit reached; CT: 0 time reached, 1 last separation, 2 last loading end,
-#     3 piston momentum, 4 piston energy, 5 rod momentum, 6 rod wave energy, 7 Psi, 8 yield
-#     threshold (3 to 8 by account), 9 the time of account's last pass
 
 
 #: Most switches of the bit's branches between two arrivals at the bit (each a located root); a bit
@@ -114,16 +170,16 @@ def _log(RD, t, code, x1, x2, x3):
     """Append a switch at ``t`` to the log ``RD`` (nothing where it has only its header row)."""
     if RD.shape[0] <= 1:
         return
-    n = int(RD[0, 0].real)
+    n = int(RD[RD_HEAD, 0].real)
     if n + 1 >= RD.shape[0]:
-        RD[0, 1] = 1.0
+        RD[RD_HEAD, 1] = 1.0
         return
     RD[n + 1, 0] = t
     RD[n + 1, 1] = code
     RD[n + 1, 2] = x1
     RD[n + 1, 3] = x2
     RD[n + 1, 4] = x3
-    RD[0, 0] = n + 1
+    RD[RD_HEAD, 0] = n + 1
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -141,8 +197,8 @@ def _log_recontact(RD, t, f, g, gd, ZL, ZR):
 def _emit(ws, c, a, blk, valid, flag, ref):
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    return emit(c, a, WB[blk], WN[blk], valid, flag, ref, (PF, PI, TK, TC, CNT, CHI, lam, BIN), WB[10],
-                WN[10], CH_TOL[c], PR[8])
+    return emit(c, a, WB[blk], WN[blk], valid, flag, ref, (PF, PI, TK, TC, CNT, CHI, lam, BIN), WB[B_EMIT],
+                WN[B_EMIT], CH_TOL[c], PR[PR_LB])
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -165,37 +221,37 @@ def node_end(ws, t, t1):
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
-    driven = PR[22] != 0.0
+    driven = PR[PR_DRIVEN] != 0.0
     a = t
     while True:
-        cg, nb = _advance(ws, 1, a)
+        cg, nb = _advance(ws, CH_FAR_IN, a)
         cd = -1
         nbd = INF
         if driven:
             cd, nbd = _advance(ws, 2 * J, a)
         if cg != NSI[0, 0] or cd != NSI[0, 2]:
-            valid = _load(ws, 1, 1, cg, a)
-            blk_clear(WB[2], WN[2])
-            blk_axpy(WB[2], WN[2], -1.0, WB[1], WN[1])
+            valid = _load(ws, B_IN2, CH_FAR_IN, cg, a)
+            blk_clear(WB[B_OUT], WN[B_OUT])
+            blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
             if driven:
-                valid = min(valid, _load(ws, 0, 2 * J, cd, a))
-                blk_axpy(WB[2], WN[2], 1.0, WB[0], WN[0])
-            if not _emit(ws, 0, a, 2, valid, 0, 0.0):
+                valid = min(valid, _load(ws, B_IN, 2 * J, cd, a))
+                blk_axpy(WB[B_OUT], WN[B_OUT], 1.0, WB[B_IN], WN[B_IN])
+            if not _emit(ws, CH_FAR_OUT, a, B_OUT, valid, 0, 0.0):
                 return False
             NSI[0, 0] = cg
             NSI[0, 2] = cd
         b = min(nb, nbd)
-        if driven and PR[25] == 0.0:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end
+        if driven and PR[PR_NODW] == 0.0:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end
             L = min(b, t1) - a
             if L > 0.0:
-                _load(ws, 0, 2 * J, cd, a)
-                _load(ws, 1, 1, cg, a)
-                pp = blk_integral_sq(WB[0], WN[0], lam, 0.0, L)
-                blk_set_comb(WB[3], WN[3], 1.0, WB[0], WN[0], 1.0, WB[1], WN[1])
-                sp = blk_integral_sq(WB[3], WN[3], lam, 0.0, L)
-                blk_set_comb(WB[3], WN[3], 1.0, WB[0], WN[0], -1.0, WB[1], WN[1])
-                sm = blk_integral_sq(WB[3], WN[3], lam, 0.0, L)
-                BS[14] += (pp - 0.5 * (sp - sm)) / SZ[0]
+                _load(ws, B_IN, 2 * J, cd, a)
+                _load(ws, B_IN2, CH_FAR_IN, cg, a)
+                pp = blk_integral_sq(WB[B_IN], WN[B_IN], lam, 0.0, L)
+                blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_IN], WN[B_IN], 1.0, WB[B_IN2], WN[B_IN2])
+                sp = blk_integral_sq(WB[B_OUT2], WN[B_OUT2], lam, 0.0, L)
+                blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_IN], WN[B_IN], -1.0, WB[B_IN2], WN[B_IN2])
+                sm = blk_integral_sq(WB[B_OUT2], WN[B_OUT2], lam, 0.0, L)
+                BS[BS_DRIVEW] += (pp - 0.5 * (sp - sm)) / SZ[SEG_FAR]
         if b >= t1:
             return True
         a = b
@@ -213,22 +269,24 @@ def node_junction(ws, j, t, t1):
     ZL = SZ[j - 1]
     ZR = SZ[j]
     s = ZL + ZR
-    record = PR[23] != 0.0
+    record = PR[PR_RECORD] != 0.0
     a = t
     while True:
         cf, nbf = _advance(ws, fch, a)
         cg, nbg = _advance(ws, gch, a)
         if cf != NSI[j, 0] or cg != NSI[j, 1]:
-            valid = min(_load(ws, 0, fch, cf, a), _load(ws, 1, gch, cg, a))
-            blk_set_comb(WB[2], WN[2], 2.0 * ZR / s, WB[0], WN[0], (ZL - ZR) / s, WB[1], WN[1])
-            blk_set_comb(WB[3], WN[3], (ZR - ZL) / s, WB[0], WN[0], 2.0 * ZL / s, WB[1], WN[1])
+            valid = min(_load(ws, B_IN, fch, cf, a), _load(ws, B_IN2, gch, cg, a))
+            blk_set_comb(WB[B_OUT], WN[B_OUT], 2.0 * ZR / s, WB[B_IN], WN[B_IN], (ZL - ZR) / s, WB[B_IN2],
+                         WN[B_IN2])
+            blk_set_comb(WB[B_OUT2], WN[B_OUT2], (ZR - ZL) / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
+                         WN[B_IN2])
             if record:
-                blk_set_comb(WB[4], WN[4], 1.0, WB[0], WN[0], 1.0, WB[3], WN[3])
-                if not _emit(ws, 2 * J + 1 + j, a, 4, valid, 0, 0.0):
+                blk_set_comb(WB[B_N], WN[B_N], 1.0, WB[B_IN], WN[B_IN], 1.0, WB[B_OUT2], WN[B_OUT2])
+                if not _emit(ws, 2 * J + 1 + j, a, B_N, valid, 0, 0.0):
                     return False
-            if not _emit(ws, 2 * j, a, 2, valid, 0, 0.0):
+            if not _emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0):
                 return False
-            if not _emit(ws, 2 * j - 1, a, 3, valid, 0, 0.0):
+            if not _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0):
                 return False
             NSI[j, 0] = cf
             NSI[j, 1] = cg
@@ -245,15 +303,15 @@ def node_contact(ws, t, t1):
     resumes where the gap closes."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    SCR = (WB[13], WN[13], WB[14], WN[14], WB[15], WN[15])
+    SCR = (WB[B_SCR1], WN[B_SCR1], WB[B_SCR2], WN[B_SCR2], WB[B_SCR3], WN[B_SCR3])
     J = SZ.size
-    j = int(PR[21])
+    j = int(PR[PR_NP])
     fch = 2 * (j - 1)
     gch = 2 * j + 1
     ZL = SZ[j - 1]
     ZR = SZ[j]
     s = ZL + ZR
-    record = PR[23] != 0.0
+    record = PR[PR_RECORD] != 0.0
     a = t
     dirty = False
     flips = 0
@@ -264,13 +322,14 @@ def node_contact(ws, t, t1):
             dirty = True
             flips = 0
         b = min(nbf, nbg, t1)
-        valid = min(_load(ws, 0, fch, cf, a), _load(ws, 1, gch, cg, a))
+        valid = min(_load(ws, B_IN, fch, cf, a), _load(ws, B_IN2, gch, cg, a))
         L = b - a
         if NSI[j, 3] == 1:  # in contact
-            blk_set_comb(WB[4], WN[4], 2.0 * ZR / s, WB[0], WN[0], 2.0 * ZL / s, WB[1], WN[1])
-            ts = first_negative(WB[4], WN[4], lam, BIN, L, STK, SCR, a)
+            blk_set_comb(WB[B_N], WN[B_N], 2.0 * ZR / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
+                         WN[B_IN2])
+            ts = first_negative(WB[B_N], WN[B_N], lam, BIN, L, STK, SCR, a)
             if ts == -2.0:
-                CI[4] += 1
+                CI[CI_GIVEUP] += 1
                 ts = -1.0
             if ts > 0.0 and a + ts == a:  # below the clock's resolution: at once (else no progress)
                 ts = 0.0
@@ -281,56 +340,58 @@ def node_contact(ws, t, t1):
                 NSF[j, 0] = 0.0
                 dirty = True
                 flips += 1
-                CI[5] += 1
-                CT[1] = a
+                CI[CI_SEP] += 1
+                CT[CT_TSEP] = a
                 if RD.shape[0] > 1:  # the waves arriving just before (the pieces before a, if new)
-                    fm = blk_value(WB[0], WN[0], lam, 0.0)
-                    gm = blk_value(WB[1], WN[1], lam, 0.0)
+                    fm = blk_value(WB[B_IN], WN[B_IN], lam, 0.0)
+                    gm = blk_value(WB[B_IN2], WN[B_IN2], lam, 0.0)
                     if cf != NSI[j, 0] and NSI[j, 0] >= 0:
-                        _load(ws, 12, fch, NSI[j, 0], a)
-                        fm = blk_value(WB[12], WN[12], lam, 0.0)
+                        _load(ws, B_AUX, fch, NSI[j, 0], a)
+                        fm = blk_value(WB[B_AUX], WN[B_AUX], lam, 0.0)
                     if cg != NSI[j, 1] and NSI[j, 1] >= 0:
-                        _load(ws, 12, gch, NSI[j, 1], a)
-                        gm = blk_value(WB[12], WN[12], lam, 0.0)
+                        _load(ws, B_AUX, gch, NSI[j, 1], a)
+                        gm = blk_value(WB[B_AUX], WN[B_AUX], lam, 0.0)
                     _log(RD, a, LOG_SEP, fm, gm, 0.0)
                 continue
             if dirty:
-                blk_set_comb(WB[2], WN[2], 1.0, WB[4], WN[4], -1.0, WB[1], WN[1])
-                blk_set_comb(WB[3], WN[3], 1.0, WB[4], WN[4], -1.0, WB[0], WN[0])
-                if record and not _emit(ws, 2 * J + 1 + j, a, 4, valid, 0, 0.0):
+                blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN2], WN[B_IN2])
+                blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN], WN[B_IN])
+                if record and not _emit(ws, 2 * J + 1 + j, a, B_N, valid, 0, 0.0):
                     return False
-                if not _emit(ws, 2 * j, a, 2, valid, 0, 0.0):
+                if not _emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0):
                     return False
-                if not _emit(ws, 2 * j - 1, a, 3, valid, 0, 0.0):
+                if not _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0):
                     return False
                 dirty = False
             te = L if ts < 0.0 else ts
             # the common velocity (2 f_in - N)/Z_L
-            blk_set_comb(WB[5], WN[5], 2.0 / ZL, WB[0], WN[0], -1.0 / ZL, WB[4], WN[4])
-            NSF[j, 1] += blk_integral(WB[5], WN[5], lam, 0.0, te)
+            blk_set_comb(WB[B_RATE], WN[B_RATE], 2.0 / ZL, WB[B_IN], WN[B_IN], -1.0 / ZL, WB[B_N], WN[B_N])
+            NSF[j, 1] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, te)
             if ts > 0.0:
                 if RD.shape[0] > 1:
-                    _log(RD, a + ts, LOG_SEP, blk_value(WB[0], WN[0], lam, ts),
-                         blk_value(WB[1], WN[1], lam, ts), 0.0)
+                    _log(RD, a + ts, LOG_SEP, blk_value(WB[B_IN], WN[B_IN], lam, ts),
+                         blk_value(WB[B_IN2], WN[B_IN2], lam, ts), 0.0)
                 a += ts
                 NSI[j, 3] = 0
                 NSF[j, 0] = 0.0
                 dirty = True
                 flips = 1
-                CI[5] += 1
-                CT[1] = a
+                CI[CI_SEP] += 1
+                CT[CT_TSEP] = a
                 NSI[j, 0] = cf
                 NSI[j, 1] = cg
                 continue
         else:
             # gap' = v_s - v_p = -2 g_in/Z_R - 2 f_in/Z_L
-            blk_set_comb(WB[5], WN[5], -2.0 / ZL, WB[0], WN[0], -2.0 / ZR, WB[1], WN[1])
-            st, gser = blk_ode1(WB[9], WN[9], WB[5], WN[5], lam, 0, 0.0j, NSF[j, 0] + 0.0j, L)
+            blk_set_comb(WB[B_RATE], WN[B_RATE], -2.0 / ZL, WB[B_IN], WN[B_IN], -2.0 / ZR, WB[B_IN2],
+                         WN[B_IN2])
+            st, gser = blk_ode1(WB[B_ZERO], WN[B_ZERO], WB[B_RATE], WN[B_RATE], lam, E_CONST, 0.0j,
+                                NSF[j, 0] + 0.0j, L)
             if st != 0:
-                CI[7] += 1
-            tc = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR, a)
+                CI[CI_DEG] += 1
+            tc = first_negative(WB[B_ZERO], WN[B_ZERO], lam, BIN, L, STK, SCR, a)
             if tc == -2.0:
-                CI[4] += 1
+                CI[CI_GIVEUP] += 1
                 tc = -1.0
             if tc > 0.0 and a + tc == a:
                 tc = 0.0
@@ -341,42 +402,44 @@ def node_contact(ws, t, t1):
                 NSF[j, 0] = 0.0
                 dirty = True
                 flips += 1
-                CI[6] += 1
+                CI[CI_RECON] += 1
                 if RD.shape[0] > 1:
-                    _log_recontact(RD, a, blk_value(WB[0], WN[0], lam, 0.0),
-                                   blk_value(WB[1], WN[1], lam, 0.0), blk_value(WB[5], WN[5], lam, 0.0),
+                    _log_recontact(RD, a, blk_value(WB[B_IN], WN[B_IN], lam, 0.0),
+                                   blk_value(WB[B_IN2], WN[B_IN2], lam, 0.0),
+                                   blk_value(WB[B_RATE], WN[B_RATE], lam, 0.0),
                                    ZL, ZR)
                 continue
             if dirty:
-                blk_clear(WB[2], WN[2])
-                blk_axpy(WB[2], WN[2], -1.0, WB[1], WN[1])
-                blk_clear(WB[3], WN[3])
-                blk_axpy(WB[3], WN[3], -1.0, WB[0], WN[0])
-                blk_clear(WB[4], WN[4])
-                if record and not _emit(ws, 2 * J + 1 + j, a, 4, INF, 0, 0.0):
+                blk_clear(WB[B_OUT], WN[B_OUT])
+                blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
+                blk_clear(WB[B_OUT2], WN[B_OUT2])
+                blk_axpy(WB[B_OUT2], WN[B_OUT2], -1.0, WB[B_IN], WN[B_IN])
+                blk_clear(WB[B_N], WN[B_N])
+                if record and not _emit(ws, 2 * J + 1 + j, a, B_N, INF, 0, 0.0):
                     return False
-                if not _emit(ws, 2 * j, a, 2, valid, 0, 0.0):
+                if not _emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0):
                     return False
-                if not _emit(ws, 2 * j - 1, a, 3, valid, 0, 0.0):
+                if not _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0):
                     return False
                 dirty = False
             te = L if tc < 0.0 else tc
-            NSF[j, 1] += -2.0 / ZR * blk_integral(WB[1], WN[1], lam, 0.0, te)
+            NSF[j, 1] += -2.0 / ZR * blk_integral(WB[B_IN2], WN[B_IN2], lam, 0.0, te)
             if tc > 0.0:
                 if RD.shape[0] > 1:
-                    _log_recontact(RD, a + tc, blk_value(WB[0], WN[0], lam, tc),
-                                   blk_value(WB[1], WN[1], lam, tc), blk_value(WB[5], WN[5], lam, tc),
+                    _log_recontact(RD, a + tc, blk_value(WB[B_IN], WN[B_IN], lam, tc),
+                                   blk_value(WB[B_IN2], WN[B_IN2], lam, tc),
+                                   blk_value(WB[B_RATE], WN[B_RATE], lam, tc),
                                    ZL, ZR)
                 a += tc
                 NSF[j, 0] = 0.0
                 NSI[j, 3] = 1
                 dirty = True
                 flips = 1
-                CI[6] += 1
+                CI[CI_RECON] += 1
                 NSI[j, 0] = cf
                 NSI[j, 1] = cg
                 continue
-            NSF[j, 0] = max(blk_value(WB[9], WN[9], lam, te), 0.0)
+            NSF[j, 0] = max(blk_value(WB[B_ZERO], WN[B_ZERO], lam, te), 0.0)
         NSI[j, 0] = cf
         NSI[j, 1] = cg
         if b >= t1:
@@ -392,22 +455,24 @@ def bit_solve(ws, br, x0, w0, L):
     (the pieces then hold only on ``[0, L]``)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    m = PR[2]
+    m = PR[PR_MASS]
     if m == 0.0:
-        blk_clear(WB[5], WN[5])
-        blk_axpy(WB[5], WN[5], 1.0 / PR[4], WB[6], WN[6])
-        st, series = blk_ode1(WB[7], WN[7], WB[5], WN[5], lam, RC[br, 0], RT[br, 0], x0 + 0.0j, L)
+        blk_clear(WB[B_RATE], WN[B_RATE])
+        blk_axpy(WB[B_RATE], WN[B_RATE], 1.0 / PR[PR_ZBIT], WB[B_E], WN[B_E])
+        st, series = blk_ode1(WB[B_X], WN[B_X], WB[B_RATE], WN[B_RATE], lam, RC[br, 0], RT[br, 0], x0 + 0.0j,
+                              L)
     else:
         r2 = RT[br, 1]
-        blk_clear(WB[5], WN[5])
-        blk_axpy(WB[5], WN[5], 1.0 / m, WB[6], WN[6])
-        st, s1 = blk_ode1(WB[11], WN[11], WB[5], WN[5], lam, RC[br, 0], RT[br, 0], w0 - r2 * x0, L)
-        st2, s2 = blk_ode1(WB[7], WN[7], WB[11], WN[11], lam, RC[br, 1], r2, x0 + 0.0j, L)
+        blk_clear(WB[B_RATE], WN[B_RATE])
+        blk_axpy(WB[B_RATE], WN[B_RATE], 1.0 / m, WB[B_E], WN[B_E])
+        st, s1 = blk_ode1(WB[B_ODE], WN[B_ODE], WB[B_RATE], WN[B_RATE], lam, RC[br, 0], RT[br, 0],
+                          w0 - r2 * x0, L)
+        st2, s2 = blk_ode1(WB[B_X], WN[B_X], WB[B_ODE], WN[B_ODE], lam, RC[br, 1], r2, x0 + 0.0j, L)
         st += st2
         series = s1 or s2
     if st != 0:
-        CI[7] += 1
-    blk_deriv(WB[8], WN[8], WB[7], WN[7], lam)
+        CI[CI_DEG] += 1
+    blk_deriv(WB[B_XD], WN[B_XD], WB[B_X], WN[B_X], lam)
     return series
 
 
@@ -415,18 +480,18 @@ def bit_solve(ws, br, x0, w0, L):
 def _episode_end(ws, t, p):
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    n = BI[1]
+    n = BI[BI_NEP]
     if n < EP.shape[0]:
-        EP[n, 0] = BS[11]
+        EP[n, 0] = BS[BS_EPT]
         EP[n, 1] = t
-        EP[n, 2] = BS[12]
+        EP[n, 2] = BS[BS_EPP]
         EP[n, 3] = p
-        k = PR[0]
-        EP[n, 4] = (1.0 - k / PR[1]) * k * (p - BS[12]) * (p + BS[12]) * 0.5
+        k = PR[PR_K]
+        EP[n, 4] = (1.0 - k / PR[PR_KU]) * k * (p - BS[BS_EPP]) * (p + BS[BS_EPP]) * 0.5
     else:
-        CNT[3] = 1
-    BI[1] = n + 1
-    CT[2] = t
+        CNT[CNT_FULL] = 1
+    BI[BI_NEP] = n + 1
+    CT[CT_TLOAD] = t
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -438,11 +503,11 @@ def bit_input(ws, a, t1):
     J = SZ.size
     fch = 2 * (J - 1)
     cf, nb = _advance(ws, fch, a)
-    vf = _load(ws, 0, fch, cf, a)
+    vf = _load(ws, B_IN, fch, cf, a)
     NSI[J, 0] = cf
-    blk_clear(WB[6], WN[6])
-    blk_axpy(WB[6], WN[6], 2.0, WB[0], WN[0])
-    blk_add_const(WB[6], WN[6], PR[3])
+    blk_clear(WB[B_E], WN[B_E])
+    blk_axpy(WB[B_E], WN[B_E], 2.0, WB[B_IN], WN[B_IN])
+    blk_add_const(WB[B_E], WN[B_E], PR[PR_FEED])
     return min(nb, t1), vf
 
 
@@ -452,15 +517,15 @@ def node_bit(ws, t, t1):
     the reflected wave ``G = F - Z p'`` (absorbed on a semi-infinite rod)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    SCR = (WB[13], WN[13], WB[14], WN[14], WB[15], WN[15])
+    SCR = (WB[B_SCR1], WN[B_SCR1], WB[B_SCR2], WN[B_SCR2], WB[B_SCR3], WN[B_SCR3])
     J = SZ.size
     goch = 2 * J - 1
     hch = 3 * J + 1
-    k = PR[0]
-    ku = PR[1]
-    Z = PR[4]
-    semi = PR[7] != 0.0
-    record = PR[23] != 0.0
+    k = PR[PR_K]
+    ku = PR[PR_KU]
+    Z = PR[PR_ZBIT]
+    semi = PR[PR_SEMI] != 0.0
+    record = PR[PR_RECORD] != 0.0
     a = t
     while True:
         b, vf = bit_input(ws, a, t1)
@@ -469,13 +534,13 @@ def node_bit(ws, t, t1):
         # thousands of times (2 switches a bounce; the bound only keeps a call's cost finite)
         turned = False  # unloaded at this very instant (a turning point)
         while True:
-            br = BI[0]
-            x0 = BS[1]
-            w0 = BS[2]
+            br = BI[BI_BRANCH]
+            x0 = BS[BS_X]
+            w0 = BS[BS_W]
             L = b - a
             series = bit_solve(ws, br, x0, w0, L)
             valid = min(vf, a + L) if series else vf
-            ref = 0.0 if br == LOAD else BS[5]
+            ref = 0.0 if br == LOAD else BS[BS_PPERM]
             # the first switch
             te = -1.0
             if br == LOAD:
@@ -483,28 +548,28 @@ def node_bit(ws, t, t1):
                 # balance: at rest under the feed (E = k x) it is zero to rounding, and its sign
                 # there (from x0 - E/k, an ulp of x0, times the branch's rates) unloaded and
                 # reloaded the rock at once, each a spurious loading episode
-                e0, _e1, _e2 = blk_eval(WB[6], WN[6], lam, 0.0)
+                e0, _e1, _e2 = blk_eval(WB[B_E], WN[B_E], lam, 0.0)
                 rmax = max(abs(RT[br, 0]), abs(RT[br, 1]))  # (RT[br, 1] = 0: a massless bit)
                 tolv = 64.0 * EPS * (abs(x0) * rmax + abs(e0) / Z)
-                blk_clear(WB[9], WN[9])
-                blk_axpy(WB[9], WN[9], 1.0, WB[8], WN[8])
-                blk_add_const(WB[9], WN[9], tolv)
-                te = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR, a)
+                blk_clear(WB[B_ZERO], WN[B_ZERO])
+                blk_axpy(WB[B_ZERO], WN[B_ZERO], 1.0, WB[B_XD], WN[B_XD])
+                blk_add_const(WB[B_ZERO], WN[B_ZERO], tolv)
+                te = first_negative(WB[B_ZERO], WN[B_ZERO], lam, BIN, L, STK, SCR, a)
             elif br == ELASTIC:
-                blk_clear(WB[9], WN[9])
-                blk_axpy(WB[9], WN[9], -1.0, WB[7], WN[7])
-                xtop = BS[4] / ku
+                blk_clear(WB[B_ZERO], WN[B_ZERO])
+                blk_axpy(WB[B_ZERO], WN[B_ZERO], -1.0, WB[B_X], WN[B_X])
+                xtop = BS[BS_RMAX] / ku
                 if turned:  # a reload within rounding of the turning point is none: the velocity,
                     # zero there, has rounding-level signs on the two branches (they chattered)
                     xtop += 4096.0 * EPS * abs(xtop)
-                blk_add_const(WB[9], WN[9], xtop)
-                t1a = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR, a)
+                blk_add_const(WB[B_ZERO], WN[B_ZERO], xtop)
+                t1a = first_negative(WB[B_ZERO], WN[B_ZERO], lam, BIN, L, STK, SCR, a)
                 if t1a == -2.0:
-                    CI[4] += 1
+                    CI[CI_GIVEUP] += 1
                     t1a = -1.0
-                t2a = first_negative(WB[7], WN[7], lam, BIN, t1a if t1a >= 0.0 else L, STK, SCR, a)
+                t2a = first_negative(WB[B_X], WN[B_X], lam, BIN, t1a if t1a >= 0.0 else L, STK, SCR, a)
                 if t2a == -2.0:
-                    CI[4] += 1
+                    CI[CI_GIVEUP] += 1
                     t2a = -1.0
                 nxt = -1
                 if t2a >= 0.0 and (t1a < 0.0 or t2a <= t1a):
@@ -514,83 +579,83 @@ def node_bit(ws, t, t1):
                     te = t1a
                     nxt = LOAD
             else:
-                blk_clear(WB[9], WN[9])
-                blk_axpy(WB[9], WN[9], -1.0, WB[7], WN[7])
-                te = first_negative(WB[9], WN[9], lam, BIN, L, STK, SCR, a)
+                blk_clear(WB[B_ZERO], WN[B_ZERO])
+                blk_axpy(WB[B_ZERO], WN[B_ZERO], -1.0, WB[B_X], WN[B_X])
+                te = first_negative(WB[B_ZERO], WN[B_ZERO], lam, BIN, L, STK, SCR, a)
             if te == -2.0:
-                CI[4] += 1
+                CI[CI_GIVEUP] += 1
                 te = -1.0
             # the reflected wave and the history
             if semi:
-                blk_set_comb(WB[3], WN[3], 1.0, WB[0], WN[0], -Z, WB[8], WN[8])
-                BS[8] += blk_integral_sq(WB[3], WN[3], lam, 0.0, te if te >= 0.0 else L) / Z
-                blk_clear(WB[2], WN[2])
+                blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_IN], WN[B_IN], -Z, WB[B_XD], WN[B_XD])
+                BS[BS_ABS] += blk_integral_sq(WB[B_OUT2], WN[B_OUT2], lam, 0.0, te if te >= 0.0 else L) / Z
+                blk_clear(WB[B_OUT], WN[B_OUT])
             else:
-                blk_set_comb(WB[2], WN[2], 1.0, WB[0], WN[0], -Z, WB[8], WN[8])
+                blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_IN], WN[B_IN], -Z, WB[B_XD], WN[B_XD])
             if te != 0.0:
-                if not _emit(ws, goch, a, 2, valid, 0, 0.0):
+                if not _emit(ws, goch, a, B_OUT, valid, 0, 0.0):
                     return False
                 if record:
-                    blk_clear(WB[4], WN[4])
-                    blk_axpy(WB[4], WN[4], 1.0, WB[7], WN[7])
-                    if not _emit(ws, hch, a, 4, valid, br, ref):
+                    blk_clear(WB[B_N], WN[B_N])
+                    blk_axpy(WB[B_N], WN[B_N], 1.0, WB[B_X], WN[B_X])
+                    if not _emit(ws, hch, a, B_N, valid, br, ref):
                         return False
             tt = L if te < 0.0 else te
-            x1, w1, _ = blk_eval(WB[7], WN[7], lam, tt)
+            x1, w1, _ = blk_eval(WB[B_X], WN[B_X], lam, tt)
             # work on the rock over the piece
             if br == LOAD:
                 x1 = max(x1, x0)
                 if x1 > x0:  # (p_max, R_max and when first reached: as they were at rest)
-                    BS[7] += 0.5 * k * (x1 - x0) * (x1 + x0)
-                    BS[6] += 0.5 * (1.0 - k / ku) * k * (x1 - x0) * (x1 + x0)
-                    BS[3] = x1
-                    BS[4] = k * x1
-                    BS[5] = x1 - BS[4] / ku
-                    BS[10] = a + tt
+                    BS[BS_RDP] += 0.5 * k * (x1 - x0) * (x1 + x0)
+                    BS[BS_DISS] += 0.5 * (1.0 - k / ku) * k * (x1 - x0) * (x1 + x0)
+                    BS[BS_PMAX] = x1
+                    BS[BS_RMAX] = k * x1
+                    BS[BS_PPERM] = x1 - BS[BS_RMAX] / ku
+                    BS[BS_TPMAX] = a + tt
             elif br == ELASTIC:
-                BS[7] += 0.5 * ku * (x1 - x0) * (x1 + x0)
+                BS[BS_RDP] += 0.5 * ku * (x1 - x0) * (x1 + x0)
             if te < 0.0:
-                BS[1] = x1
-                BS[2] = w1
-                BS[0] = ref + x1
+                BS[BS_X] = x1
+                BS[BS_W] = w1
+                BS[BS_P] = ref + x1
                 break
             # a switch at a + te
             stall = stall + 1 if a + te == a else 0
             a += te
             switches += 1
             if stall > 64 or switches > MAX_BIT_SWITCHES:
-                CI[4] += 1
+                CI[CI_GIVEUP] += 1
                 return True
-            blk_shift(WB[0], WN[0], te, lam, BIN)
-            blk_shift(WB[6], WN[6], te, lam, BIN)
+            blk_shift(WB[B_IN], WN[B_IN], te, lam, BIN)
+            blk_shift(WB[B_E], WN[B_E], te, lam, BIN)
             turned = br == LOAD
-            pm = BS[2]  # (a massless bit's: p' at the end of the last piece, logged)
+            pm = BS[BS_W]  # (a massless bit's: p' at the end of the last piece, logged)
             if br == LOAD:  # unloading from p_max (an episode that did not advance is none)
-                if x1 > BS[12]:
+                if x1 > BS[BS_EPP]:
                     _episode_end(ws, a, x1)
-                BI[0] = ELASTIC
-                BS[1] = BS[4] / ku
-                BS[2] = 0.0  # the turning point (w1 is zero to rounding)
-                BS[0] = x1
+                BI[BI_BRANCH] = ELASTIC
+                BS[BS_X] = BS[BS_RMAX] / ku
+                BS[BS_W] = 0.0  # the turning point (w1 is zero to rounding)
+                BS[BS_P] = x1
             elif br == ELASTIC:
                 if nxt == FREE:
-                    BI[0] = FREE
-                    BS[1] = 0.0
-                    BS[2] = w1
-                    BS[0] = BS[5]
+                    BI[BI_BRANCH] = FREE
+                    BS[BS_X] = 0.0
+                    BS[BS_W] = w1
+                    BS[BS_P] = BS[BS_PPERM]
                 else:  # reloading at p_max
-                    BI[0] = LOAD
-                    BS[1] = BS[3]
-                    BS[2] = w1
-                    BS[0] = BS[3]
-                    BS[11] = a
-                    BS[12] = BS[3]
+                    BI[BI_BRANCH] = LOAD
+                    BS[BS_X] = BS[BS_PMAX]
+                    BS[BS_W] = w1
+                    BS[BS_P] = BS[BS_PMAX]
+                    BS[BS_EPT] = a
+                    BS[BS_EPP] = BS[BS_PMAX]
             else:  # touching the rock again
-                BI[0] = ELASTIC
-                BS[1] = 0.0
-                BS[2] = w1
-                BS[0] = BS[5]
-            _log(RD, a, LOG_BIT + BI[0], pm, 0.0, 0.0)
+                BI[BI_BRANCH] = ELASTIC
+                BS[BS_X] = 0.0
+                BS[BS_W] = w1
+                BS[BS_P] = BS[BS_PPERM]
+            _log(RD, a, LOG_BIT + BI[BI_BRANCH], pm, 0.0, 0.0)
         if b >= t1:
             return True
         a = b
@@ -599,22 +664,22 @@ def node_bit(ws, t, t1):
 @numba.njit(cache=CACHE, nogil=True)
 def run(ws):
     """Window after window of length ``h`` (every node's inputs over a window left their source
-    before it began) until the blow ends, ``t_max``, or the budget. ``CI[0]``: 0 done, 1 the pool is
+    before it began) until the blow ends, ``t_max``, or the budget. ``CI[CI_STATUS]``: 0 done, 1 the pool is
     full (start again with a larger one)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
-    n_p = int(PR[21])
-    h = PR[17]
-    tmax = PR[18]
-    maxp = PR[24]
+    n_p = int(PR[PR_NP])
+    h = PR[PR_WINDOW]
+    tmax = PR[PR_TMAX]
+    maxp = PR[PR_MAXP]
     while True:
-        w = CI[2]
+        w = CI[CI_WIN]
         t = w * h
         if t >= tmax:
-            CI[1] = TMAX
+            CI[CI_END] = TMAX
             account(ws, t)
-            CI[0] = 0
+            CI[CI_STATUS] = 0
             return
         t1 = min((w + 1) * h, tmax)
         ok = node_end(ws, t, t1)
@@ -627,21 +692,21 @@ def run(ws):
                 ok = node_junction(ws, j, t, t1)
         if ok:
             ok = node_bit(ws, t, t1)
-        if not ok or CNT[3] != 0:
-            CI[0] = 1
+        if not ok or CNT[CNT_FULL] != 0:
+            CI[CI_STATUS] = 1
             return
-        CI[2] = w + 1
-        CT[0] = t1
+        CI[CI_WIN] = w + 1
+        CT[CT_T] = t1
         # a fixed horizon (the simulator's blow under a drive): on to t_max, nothing certified
-        code = certify(ws, t1) if PR[6] == 0.0 else GOING
-        if not (math.isfinite(BS[0]) and math.isfinite(CT[7])):  # overflowed pieces: stop, say so
+        code = certify(ws, t1) if PR[PR_FIXED] == 0.0 else GOING
+        if not (math.isfinite(BS[BS_P]) and math.isfinite(CT[CT_PSI])):  # overflowed pieces: stop, say so
             code = FAILED
         if code == GOING and t1 >= tmax:
             code = TMAX
-        if code == GOING and (CNT[0] > maxp or CI[2] >= PR[19]):
+        if code == GOING and (CNT[CNT_PIECES] > maxp or CI[CI_WIN] >= PR[PR_MAXWIN]):
             account(ws, t1)
-            code = RINGS if (BI[0] != LOAD and CT[7] < CT[8]) else BUDGET
+            code = RINGS if (BI[BI_BRANCH] != LOAD and CT[CT_PSI] < CT[CT_THR]) else BUDGET
         if code != GOING:
-            CI[1] = code
-            CI[0] = 0
+            CI[CI_END] = code
+            CI[CI_STATUS] = 0
             return

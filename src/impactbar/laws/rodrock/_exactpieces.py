@@ -12,6 +12,12 @@ import numpy as np
 
 from ...dynamics._kernel import CACHE
 from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
+from ._records import (  # the records' slots
+    CNT_FULL,
+    CNT_PIECES,
+    CNT_TERMS,
+    E_CONST,
+)
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
@@ -69,9 +75,9 @@ def blk_add_const(B, N, c):
     """Add the constant ``c`` (exponent 0 is entry 0 of the table)."""
     if c == 0.0:
         return
-    B[0, 0] += c
-    if N[0] == 0:
-        N[0] = 1
+    B[E_CONST, 0] += c
+    if N[E_CONST] == 0:
+        N[E_CONST] = 1
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -609,19 +615,19 @@ def pool_load(B, N, piece, delta, lam, BIN, PI, TK, TC):
 @numba.njit(cache=CACHE, nogil=True)
 def _write_terms(B, N, TK, TC, CNT):
     """Append the nonzero terms; ``(start, count)`` or ``(-1, 0)`` when the term pool is full."""
-    start = CNT[1]
+    start = CNT[CNT_TERMS]
     nt = start
     for e in range(N.size):
         for d in range(N[e]):
             c = B[e, d]
             if c != 0.0:
                 if nt >= TK.size:
-                    CNT[3] = 1
+                    CNT[CNT_FULL] = 1
                     return -1, 0
                 TK[nt] = e * DC + d
                 TC[nt] = c
                 nt += 1
-    CNT[1] = nt
+    CNT[CNT_TERMS] = nt
     return start, nt - start
 
 
@@ -676,9 +682,9 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
                 pool_load(S, NS, tail, a - t0, lam, BIN, PI, TK, TC)
                 if _same(B, N, S, NS, tol):
                     return True
-    npc = CNT[0]
+    npc = CNT[CNT_PIECES]
     if npc >= PF.shape[0]:
-        CNT[3] = 1
+        CNT[CNT_FULL] = 1
         return False
     st, nt = _write_terms(B, N, TK, TC, CNT)
     if st < 0:
@@ -692,7 +698,7 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     PI[npc, 1] = st
     PI[npc, 2] = nt
     PI[npc, 3] = flag
-    CNT[0] = npc + 1
+    CNT[CNT_PIECES] = npc + 1
     if tail >= 0:
         PI[tail, 0] = npc
     else:

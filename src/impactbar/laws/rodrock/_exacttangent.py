@@ -35,7 +35,7 @@ each channel's last impulse and its receiver's next, ``TCUR (7,)`` impulses stor
 contact's and the bit's schedule cursors, a failure code (1 a grazing re-contact, where the map has
 no derivative; 2 the schedule's branches out of step; 3 a switch met by an impulse that did not set
 it off, or by steps moving apart), and the separations and the unloadings that a moving step set
-off.
+off (its slots ``TCUR_*`` of :mod:`._records`).
 """
 
 from __future__ import annotations
@@ -70,6 +70,45 @@ from ._exactpieces import (
     blk_set_comb,
     blk_shift,
 )
+from ._records import (  # the records' slots
+    B_E,
+    B_IN,
+    B_IN2,
+    B_N,
+    B_OUT,
+    B_OUT2,
+    B_RATE,
+    B_X,
+    B_XD,
+    BI_BRANCH,
+    BS_PMAX,
+    BS_PPERM,
+    BS_RMAX,
+    BS_W,
+    BS_X,
+    CH_FAR_IN,
+    CH_FAR_OUT,
+    CI_STATUS,
+    CI_WIN,
+    CNT_FULL,
+    CT_T,
+    PR_K,
+    PR_KU,
+    PR_MASS,
+    PR_NP,
+    PR_SEMI,
+    PR_TMAX,
+    PR_WINDOW,
+    PR_ZBIT,
+    RD_HEAD,
+    TCUR_BIT,
+    TCUR_CONTACT,
+    TCUR_FAIL,
+    TCUR_FULL,
+    TCUR_N,
+    TCUR_SEPS,
+    TCUR_UNLOADS,
+)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -79,9 +118,9 @@ def imp_emit(tg, c, t, w, jump):
     IT, IW, IJ, IN, ICH, TCUR = tg
     if w == 0.0:
         return
-    n = TCUR[0]
+    n = TCUR[TCUR_N]
     if n >= IT.size:
-        TCUR[1] = 1
+        TCUR[TCUR_FULL] = 1
         return
     IT[n] = t
     IW[n] = w
@@ -93,7 +132,7 @@ def imp_emit(tg, c, t, w, jump):
     if ICH[c, 1] < 0:
         ICH[c, 1] = n
     ICH[c, 0] = n
-    TCUR[0] = n + 1
+    TCUR[TCUR_N] = n + 1
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -142,7 +181,7 @@ def _shift(tg, c1, T1, c2, T2, ts, dt):
 def _next_event(RD, cur, bit):
     """The schedule's next row at or after ``cur`` of the contact (``bit`` False) or of the bit; -1
     when none is left."""
-    n = int(RD[0, 0].real)
+    n = int(RD[RD_HEAD, 0].real)
     i = max(cur, 1)  # (row 0 is the log's header)
     while i <= n:
         code = int(RD[i, 1].real)
@@ -190,7 +229,7 @@ def t_node_contact(ws, tg, t, t1):
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     TCUR = tg[5]
-    j = int(PR[21])
+    j = int(PR[PR_NP])
     fch = 2 * (j - 1)
     gch = 2 * j + 1
     ZL = SZ[j - 1]
@@ -204,37 +243,42 @@ def t_node_contact(ws, tg, t, t1):
         if cf != NSI[j, 0] or cg != NSI[j, 1]:
             dirty = True
         b = min(nbf, nbg, t1)
-        k = _next_event(RD, TCUR[2], False)
-        TCUR[2] = k if k >= 0 else int(RD[0, 0].real) + 1
+        k = _next_event(RD, TCUR[TCUR_CONTACT], False)
+        TCUR[TCUR_CONTACT] = k if k >= 0 else int(RD[RD_HEAD, 0].real) + 1
         ts = RD[k, 0].real if k >= 0 else INF
         ti = min(imp_arrival(tg, fch, CH_T[fch]), imp_arrival(tg, gch, CH_T[gch]))
         e = max(min(b, ts, ti), a)
-        valid = min(_load(ws, 0, fch, cf, a), _load(ws, 1, gch, cg, a))
+        valid = min(_load(ws, B_IN, fch, cf, a), _load(ws, B_IN2, gch, cg, a))
         L = e - a
         if NSI[j, 3] == 1:
-            blk_set_comb(WB[4], WN[4], 2.0 * ZR / s, WB[0], WN[0], 2.0 * ZL / s, WB[1], WN[1])
+            blk_set_comb(WB[B_N], WN[B_N], 2.0 * ZR / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
+                         WN[B_IN2])
             if dirty:
-                blk_set_comb(WB[2], WN[2], 1.0, WB[4], WN[4], -1.0, WB[1], WN[1])
-                blk_set_comb(WB[3], WN[3], 1.0, WB[4], WN[4], -1.0, WB[0], WN[0])
-                if not (_emit(ws, 2 * j, a, 2, valid, 0, 0.0) and _emit(ws, 2 * j - 1, a, 3, valid, 0, 0.0)):
+                blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN2], WN[B_IN2])
+                blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN], WN[B_IN])
+                if not (_emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0)
+                        and _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0)):
                     return False
                 dirty = False
             if L > 0.0:
-                blk_set_comb(WB[5], WN[5], 2.0 / ZL, WB[0], WN[0], -1.0 / ZL, WB[4], WN[4])
-                NSF[j, 1] += blk_integral(WB[5], WN[5], lam, 0.0, L)
+                blk_set_comb(WB[B_RATE], WN[B_RATE], 2.0 / ZL, WB[B_IN], WN[B_IN], -1.0 / ZL, WB[B_N],
+                             WN[B_N])
+                NSF[j, 1] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, L)
         else:
             if dirty:
-                blk_clear(WB[2], WN[2])
-                blk_axpy(WB[2], WN[2], -1.0, WB[1], WN[1])
-                blk_clear(WB[3], WN[3])
-                blk_axpy(WB[3], WN[3], -1.0, WB[0], WN[0])
-                if not (_emit(ws, 2 * j, a, 2, valid, 0, 0.0) and _emit(ws, 2 * j - 1, a, 3, valid, 0, 0.0)):
+                blk_clear(WB[B_OUT], WN[B_OUT])
+                blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
+                blk_clear(WB[B_OUT2], WN[B_OUT2])
+                blk_axpy(WB[B_OUT2], WN[B_OUT2], -1.0, WB[B_IN], WN[B_IN])
+                if not (_emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0)
+                        and _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0)):
                     return False
                 dirty = False
             if L > 0.0:
-                blk_set_comb(WB[5], WN[5], -2.0 / ZL, WB[0], WN[0], -2.0 / ZR, WB[1], WN[1])
-                NSF[j, 0] += blk_integral(WB[5], WN[5], lam, 0.0, L)
-                NSF[j, 1] += -2.0 / ZR * blk_integral(WB[1], WN[1], lam, 0.0, L)
+                blk_set_comb(WB[B_RATE], WN[B_RATE], -2.0 / ZL, WB[B_IN], WN[B_IN], -2.0 / ZR, WB[B_IN2],
+                             WN[B_IN2])
+                NSF[j, 0] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, L)
+                NSF[j, 1] += -2.0 / ZR * blk_integral(WB[B_IN2], WN[B_IN2], lam, 0.0, L)
         NSI[j, 0] = cf
         NSI[j, 1] = cg
         a = e
@@ -248,7 +292,7 @@ def t_node_contact(ws, tg, t, t1):
                 if hit:  # a moving step set it off: the weld's last force, the gap's and the shank's
                     dt = _shift(tg, fch, CH_T[fch], gch, CH_T[gch], ts, math.nan)  # rates before it
                     if math.isnan(dt):
-                        TCUR[4] = 3
+                        TCUR[TCUR_FAIL] = 3
                         return True
                     fm = RD[k, 2].real
                     gm = RD[k, 3].real
@@ -257,14 +301,14 @@ def t_node_contact(ws, tg, t, t1):
                     imp_emit(tg, 2 * j - 1, e, Nm * dt, -Nm)
                     NSF[j, 0] = (2.0 * fm / ZL + 2.0 * gm / ZR) * dt
                     NSF[j, 1] += ((2.0 * fm - Nm) / ZL + 2.0 * gm / ZR) * dt
-                    TCUR[5] += 1
+                    TCUR[TCUR_SEPS] += 1
             else:
                 gd = RD[k, 4].real
                 if hit:
-                    TCUR[4] = 3
+                    TCUR[TCUR_FAIL] = 3
                     return True
                 if not gd < 0.0:  # a grazing re-contact: no derivative
-                    TCUR[4] = 1
+                    TCUR[TCUR_FAIL] = 1
                     return True
                 dts = -gap / gd
                 Np = RD[k, 2].real
@@ -272,7 +316,7 @@ def t_node_contact(ws, tg, t, t1):
                 imp_emit(tg, 2 * j - 1, e, -Np * dts, Np)
                 NSF[j, 1] += -RD[k, 3].real * dts
                 NSI[j, 3] = 1
-            TCUR[2] = k + 1
+            TCUR[TCUR_CONTACT] = k + 1
             dirty = True
             continue
         if ti <= e:  # impulses arriving now
@@ -310,78 +354,78 @@ def t_node_bit(ws, tg, t, t1):
     J = SZ.size
     fch = 2 * (J - 1)
     goch = 2 * J - 1
-    k = PR[0]
-    ku = PR[1]
-    m = PR[2]
-    Z = PR[4]
-    semi = PR[7] != 0.0
+    k = PR[PR_K]
+    ku = PR[PR_KU]
+    m = PR[PR_MASS]
+    Z = PR[PR_ZBIT]
+    semi = PR[PR_SEMI] != 0.0
     a = t
     while True:
         b, vf = bit_input(ws, a, t1)  # (no feed in the tangent: E = 2 F)
         while True:
-            br = BI[0]
-            ev = _next_event(RD, TCUR[3], True)
-            TCUR[3] = ev if ev >= 0 else int(RD[0, 0].real) + 1
+            br = BI[BI_BRANCH]
+            ev = _next_event(RD, TCUR[TCUR_BIT], True)
+            TCUR[TCUR_BIT] = ev if ev >= 0 else int(RD[RD_HEAD, 0].real) + 1
             ts = RD[ev, 0].real if ev >= 0 else INF
             ti = imp_arrival(tg, fch, CH_T[fch])
             e = max(min(b, ts, ti), a)
             L = e - a
             if L > 0.0:
-                series = bit_solve(ws, br, BS[1], BS[2], L)
+                series = bit_solve(ws, br, BS[BS_X], BS[BS_W], L)
                 valid = min(vf, a + L) if series else vf
                 if semi:
-                    blk_clear(WB[2], WN[2])
+                    blk_clear(WB[B_OUT], WN[B_OUT])
                 else:
-                    blk_set_comb(WB[2], WN[2], 1.0, WB[0], WN[0], -Z, WB[8], WN[8])
-                if not _emit(ws, goch, a, 2, valid, 0, 0.0):
+                    blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_IN], WN[B_IN], -Z, WB[B_XD], WN[B_XD])
+                if not _emit(ws, goch, a, B_OUT, valid, 0, 0.0):
                     return False
-                x1, w1, _ = blk_eval(WB[7], WN[7], lam, L)
-                blk_shift(WB[0], WN[0], L, lam, BIN)
-                blk_shift(WB[6], WN[6], L, lam, BIN)
-                BS[1] = x1
-                BS[2] = w1
+                x1, w1, _ = blk_eval(WB[B_X], WN[B_X], lam, L)
+                blk_shift(WB[B_IN], WN[B_IN], L, lam, BIN)
+                blk_shift(WB[B_E], WN[B_E], L, lam, BIN)
+                BS[BS_X] = x1
+                BS[BS_W] = w1
                 if br == LOAD:
-                    BS[3] = x1
-                    BS[4] = k * x1
-                    BS[5] = x1 - BS[4] / ku
+                    BS[BS_PMAX] = x1
+                    BS[BS_RMAX] = k * x1
+                    BS[BS_PPERM] = x1 - BS[BS_RMAX] / ku
                 a = e
             if ev >= 0 and ts <= e:  # the schedule's switch
                 hit = _coincide(ts, imp_arrival(tg, fch, CH_T[fch]))
                 nxt = int(RD[ev, 1].real) - LOG_BIT
                 if hit and not (m == 0.0 and br == LOAD and nxt == ELASTIC):
-                    TCUR[4] = 3
+                    TCUR[TCUR_FAIL] = 3
                     return True
                 if br == LOAD and nxt == ELASTIC:  # unloading from p_max: x = p - p_perm
                     if hit:  # a moving step set it off: p_max moves with it (p' before it)
                         dt = _shift(tg, fch, CH_T[fch], -1, 0.0, ts, math.nan)
                         if math.isnan(dt):
-                            TCUR[4] = 3
+                            TCUR[TCUR_FAIL] = 3
                             return True
                         pd = RD[ev, 2].real
-                        BS[3] += pd * dt
-                        BS[4] = k * BS[3]
-                        BS[5] = BS[3] - BS[4] / ku
-                        BS[1] = BS[4] / ku - pd * dt
-                        TCUR[6] += 1
+                        BS[BS_PMAX] += pd * dt
+                        BS[BS_RMAX] = k * BS[BS_PMAX]
+                        BS[BS_PPERM] = BS[BS_PMAX] - BS[BS_RMAX] / ku
+                        BS[BS_X] = BS[BS_RMAX] / ku - pd * dt
+                        TCUR[TCUR_UNLOADS] += 1
                     else:
-                        BS[1] = BS[4] / ku
+                        BS[BS_X] = BS[BS_RMAX] / ku
                 elif br == ELASTIC and nxt == LOAD:  # reloading: x = p
-                    BS[1] = BS[5] + BS[1]
+                    BS[BS_X] = BS[BS_PPERM] + BS[BS_X]
                 elif not ((br == ELASTIC and nxt == FREE) or (br == FREE and nxt == ELASTIC)):
-                    TCUR[4] = 2
+                    TCUR[TCUR_FAIL] = 2
                     return True
-                BI[0] = nxt
-                TCUR[3] = ev + 1
+                BI[BI_BRANCH] = nxt
+                TCUR[TCUR_BIT] = ev + 1
                 continue
             if ti <= e:
                 while imp_arrival(tg, fch, CH_T[fch]) <= e:
                     w, jp = imp_pop(tg, fch)
                     if m == 0.0:  # Z p' takes 2 w: p jumps
-                        BS[1] += 2.0 * w / Z
+                        BS[BS_X] += 2.0 * w / Z
                         if not semi:
                             imp_emit(tg, goch, e, -w, -jp)
                     else:  # m p'' takes it: p' jumps
-                        BS[2] += 2.0 * w / m
+                        BS[BS_W] += 2.0 * w / m
                         if not semi:
                             imp_emit(tg, goch, e, w, jp)
                 continue
@@ -394,26 +438,26 @@ def t_node_bit(ws, tg, t, t1):
 
 @numba.njit(cache=CACHE, nogil=True)
 def t_run(ws, tg):
-    """The tangent run to ``t_max`` window by window, as :func:`~._exactkernel.run`; ``CI[0]``: 0
+    """The tangent run to ``t_max`` window by window, as :func:`~._exactkernel.run`; ``CI[CI_STATUS]``: 0
     done, 1 the pool full (again, larger), 2 the impulses' store full, 3 the schedule cannot be
     followed (``tg``'s failure code)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     TCUR = tg[5]
     J = SZ.size
-    n_p = int(PR[21])
-    h = PR[17]
-    tmax = PR[18]
+    n_p = int(PR[PR_NP])
+    h = PR[PR_WINDOW]
+    tmax = PR[PR_TMAX]
     dch = 2 * J
     while True:
-        w = CI[2]
+        w = CI[CI_WIN]
         t = w * h
         if t >= tmax:
-            CI[0] = 0
+            CI[CI_STATUS] = 0
             return
         t1 = min((w + 1) * h, tmax)
         ok = node_end(ws, t, t1)  # f_out = p - g_in
-        _pass(tg, 1, CH_T[1], dch, CH_T[dch], t1, 0, -1, -1.0, 0.0, 1.0, 0.0)
+        _pass(tg, CH_FAR_IN, CH_T[CH_FAR_IN], dch, CH_T[dch], t1, CH_FAR_OUT, -1, -1.0, 0.0, 1.0, 0.0)
         for j in range(1, J):
             if not ok:
                 break
@@ -428,19 +472,19 @@ def t_run(ws, tg):
                 gch = 2 * j + 1
                 _pass(tg, fch, CH_T[fch], gch, CH_T[gch], t1, 2 * j, 2 * j - 1, 2.0 * ZR / s, (ZR - ZL) / s,
                       (ZL - ZR) / s, 2.0 * ZL / s)
-        if ok and TCUR[4] == 0:
+        if ok and TCUR[TCUR_FAIL] == 0:
             ok = t_node_bit(ws, tg, t, t1)
-        if not ok or CNT[3] != 0:
-            CI[0] = 1
+        if not ok or CNT[CNT_FULL] != 0:
+            CI[CI_STATUS] = 1
             return
-        if TCUR[1] != 0:
-            CI[0] = 2
+        if TCUR[TCUR_FULL] != 0:
+            CI[CI_STATUS] = 2
             return
-        if TCUR[4] != 0:
-            CI[0] = 3
+        if TCUR[TCUR_FAIL] != 0:
+            CI[CI_STATUS] = 3
             return
-        CI[2] = w + 1
-        CT[0] = t1
+        CI[CI_WIN] = w + 1
+        CT[CT_T] = t1
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -487,7 +531,7 @@ def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
     PF0, PI0, TK0, TC0, CNT0, CHI0, NSI0 = template
     IT, IW, IJ, IN, ICH, TCUR = tg
     nt0 = TK0.size
-    n_p = int(PR[21])
+    n_p = int(PR[PR_NP])
     for d in range(coefs.shape[0]):
         _put(PF, PF0)
         _put(PI, PI0)
@@ -513,14 +557,14 @@ def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
             if int(imps[r, 0]) == d:
                 imp_emit(tg, 2 * SZ.size, imps[r, 1], imps[r, 2], imps[r, 3])
         t_run(ws, tg)
-        if CI[0] != 0:
-            return d, CI[0]
+        if CI[CI_STATUS] != 0:
+            return d, CI[CI_STATUS]
         heads = CHI[: 2 * n_p, 1].copy()
-        piston_integrals((PF, PI, TK, TC, lam, BIN), heads, travel, CT[0], om, out[d])
-        impulse_integrals(tg, travel, CH_T, CT[0], om, out[d])
+        piston_integrals((PF, PI, TK, TC, lam, BIN), heads, travel, CT[CT_T], om, out[d])
+        impulse_integrals(tg, travel, CH_T, CT[CT_T], om, out[d])
         ends[d, 0] = NSF[n_p, 1]
         ends[d, 1] = NSF[n_p, 0]
-        ends[d, 2] = BS[5]
-        ends[d, 3] = TCUR[5]
-        ends[d, 4] = TCUR[6]
+        ends[d, 2] = BS[BS_PPERM]
+        ends[d, 3] = TCUR[TCUR_SEPS]
+        ends[d, 4] = TCUR[TCUR_UNLOADS]
     return coefs.shape[0], 0

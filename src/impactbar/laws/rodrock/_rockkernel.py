@@ -64,7 +64,7 @@ def _massless(bs, bp, E, T):
     tau = T
     nxt, p_nxt = -1.0, 0.0
     # g = b (p_inf - p0), Z times the rate at p0: the forms below lose nothing to a soft rock's huge
-    # p_inf (issue 42: k = 1e-16 read as a rigid wall)
+    # p_inf (with p_inf itself, a rock of k = 1e-16 was read as a rigid wall)
     g = E - b * (p0 - ref)
     if bs[2] == _ELASTIC:
         if p_inf > bs[3] >= p0:
@@ -106,7 +106,7 @@ def _flow(bs, bp, E, tau):
         e2 = math.exp((half - delta) * tau)
         if delta * tau > 1.0:  # a stiff bit (small mass): e2 underflows, expm1 overflows
             # lam_1 = half + delta without the cancellation of a stiff bit's two near-opposite terms:
-            # lam_1 lam_2 = b/m (issue 42: bit masses 1e-100 .. 1e-16 lost the rock's load)
+            # lam_1 lam_2 = b/m (with the cancellation, bit masses 1e-100 .. 1e-16 lost the rock's load)
             S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
         else:
             S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
@@ -117,8 +117,8 @@ def _flow(bs, bp, E, tau):
         C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
     if delta > 0.5 * abs(half):
         # overdamped: p - p0 = g/(m 2 delta) (expm1(lam_1 t)/lam_1 - expm1(lam_2 t)/lam_2) + S w0 with
-        # g = E - b (p0 - p_ref), without p_eq, which a soft rock makes huge (issue 42: k = 1e-16
-        # read as a rigid wall)
+        # g = E - b (p0 - p_ref), without p_eq, which a soft rock makes huge (with it, a rock of
+        # k = 1e-16 was read as a rigid wall)
         g = E - b * (bs[0] - ref)
         lam1, lam2 = b / m / (half - delta), half - delta
         f1 = math.expm1(lam1 * tau) / lam1 if lam1 * tau != 0.0 else tau

@@ -366,7 +366,7 @@ MAX_FIELD_VALUES = 2**27
 
 def _check_blow_size(n_cells, n_steps, record_field) -> None:
     """Refuse a blow whose characteristics grid would not finish in bounded time or memory (a rod
-    far longer, in travel time, than the piston; issue 24)."""
+    far longer, in travel time, than the piston)."""
     work = float(n_cells) * max(1.0, float(n_steps))
     if not work <= MAX_CELL_STEPS:
         raise ValueError(f"single blow: {n_cells:.6g} cells over {n_steps:.4g} steps "
@@ -617,8 +617,8 @@ def _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap, record_field
     out = loop(F, G, grid.Z, grid.bounds, bit, dt, n_max, stop, quiet, float(gap), drive, record_field)
     if bit.branch == _LOAD and bit.p > bit.p_max:
         # the window ended while the bit still advanced into the rock: its largest penetration is the
-        # last, and what would stay of it the unloading line from there (issue 42: they were those of
-        # the last unloading, 0 on a first loading)
+        # last, and what would stay of it the unloading line from there (not those of the last
+        # unloading, 0 on a first loading)
         bit.p_max, bit.R_max = bit.p, bit.k * bit.p
         bit.p_perm = bit.p_max - bit.R_max / bit.k_u
     return out

@@ -76,6 +76,7 @@ import numpy as np
 from . import _exacthistory as H
 from . import _exactkernel as K
 from . import _exactpieces as P
+from . import _records as S
 from ._bit import feed_gain
 
 __all__ = ["CERTIFIED", "ExactBlow", "PoolOverflow", "exact_blow"]
@@ -487,19 +488,20 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     Mp = float((Zp * Tp).sum())
     Mr = float((Zr * Tr).sum()) + m
     Lb = max(2.0 * Tsum, h)
-    PR = np.zeros(32)
-    PR[0], PR[1], PR[2], PR[3], PR[4], PR[5] = k, k_u, m, fn, Zb, h
-    PR[7] = 1.0 if semi_infinite else 0.0
-    PR[8], PR[9], PR[10], PR[11] = Lb, _SPENT, 0.5 * Mp * Vn * Vn, C_rod
-    PR[12] = _compliance(Tp, Zp, 0.0)
-    PR[13] = _compliance(Tr[::-1], Zr[::-1], m)
-    PR[14] = _compliance(Tr, Zr, 0.0)
-    PR[15], PR[16], PR[17] = Mp, Mr, h
-    PR[18] = math.inf if t_max is None else t_max
-    PR[19] = max_windows
-    PR[20], PR[21], PR[23], PR[24] = fn / k, Tp.size, 1.0 if record else 0.0, max_pieces
-    PR[22] = 1.0 if data is not None and data.drive is not None else 0.0
-    PR[6] = 1.0 if fixed_horizon else 0.0
+    PR = np.zeros(S.PR_SIZE)
+    PR[S.PR_K], PR[S.PR_KU], PR[S.PR_MASS], PR[S.PR_FEED], PR[S.PR_ZBIT], PR[S.PR_H] = k, k_u, m, fn, Zb, h
+    PR[S.PR_SEMI] = 1.0 if semi_infinite else 0.0
+    PR[S.PR_LB], PR[S.PR_SPENT], PR[S.PR_E0], PR[S.PR_CROD] = Lb, _SPENT, 0.5 * Mp * Vn * Vn, C_rod
+    PR[S.PR_CP] = _compliance(Tp, Zp, 0.0)
+    PR[S.PR_CSHANK] = _compliance(Tr[::-1], Zr[::-1], m)
+    PR[S.PR_CBIT] = _compliance(Tr, Zr, 0.0)
+    PR[S.PR_MP], PR[S.PR_MR], PR[S.PR_WINDOW] = Mp, Mr, h
+    PR[S.PR_TMAX] = math.inf if t_max is None else t_max
+    PR[S.PR_MAXWIN] = max_windows
+    PR[S.PR_P0], PR[S.PR_NP] = fn / k, Tp.size
+    PR[S.PR_RECORD], PR[S.PR_MAXP] = 1.0 if record else 0.0, max_pieces
+    PR[S.PR_DRIVEN] = 1.0 if data is not None and data.drive is not None else 0.0
+    PR[S.PR_FIXED] = 1.0 if fixed_horizon else 0.0
     bound = MAX_POOL_BYTES if max_pool_bytes is None else max_pool_bytes
     # 4 MB, of which a blow touches what it uses (a pool too small runs the blow again, larger); the
     # simulator's blows (data given, a fixed horizon of a few round trips) need tens of pieces: 40 kB
@@ -507,26 +509,26 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     while pcap > 1024 and _pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     while True:
-        RD[0] = 0.0  # (a run again with a larger pool logs afresh)
+        RD[S.RD_HEAD] = 0.0  # (a run again with a larger pool logs afresh)
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
                         None if data is None else data.terms(lam, scale), reuse=not lean)
         if data is not None and not lean:  # the piston's energy at impact: its waves' (kinetic and
             K.account(ws, 0.0)  # strain)
-            PR[10] = ws[25][4]
+            PR[S.PR_E0] = ws[S.WS_CT][S.CT_EP]
         K.run(ws)
-        if ws[24][0] == 0:
+        if ws[S.WS_CI][S.CI_STATUS] == 0:
             break
         # what overflowed grows 4-fold: the pieces, the loading episodes, or else the terms (the
         # pieces hold 5 to 40 terms each: the terms' array fills first)
-        npc, nterms = int(ws[4][0]), int(ws[4][1])
-        full_p, full_e = npc >= ws[0].shape[0], int(ws[19][1]) > ws[23].shape[0]
+        npc, nterms = int(ws[S.WS_CNT][S.CNT_PIECES]), int(ws[S.WS_CNT][S.CNT_TERMS])
+        full_p, full_e = npc >= ws[S.WS_PF].shape[0], int(ws[S.WS_BI][S.BI_NEP]) > ws[S.WS_EP].shape[0]
         pcap, ecap = 4 * pcap if full_p else pcap, 4 * ecap if full_e else ecap
         tcap = tcap if full_p or full_e else 4 * tcap
         if _pool_bytes(pcap, tcap) > bound:
             per = nterms / max(npc, 1)
             raise PoolOverflow(
                 f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces (the waves broke "
-                f"into more pieces than that by t = {ws[25][0]:.6g}: {npc} pieces of {per:.3g} "
+                f"into more pieces than that by t = {ws[S.WS_CT][S.CT_T]:.6g}: {npc} pieces of {per:.3g} "
                 "terms on average; each sum of the segments' travel times is a break point, so that many or "
                 "incommensurate segments multiply them, and exponents close together, a bit's mass or a soft "
                 "rock, lengthen their series); give a t_max, or use method='lattice'")
@@ -650,7 +652,7 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     if init is not None:
         extra = sum(x[0].size for x in init) + (0 if drive is None else sum(x[0].size for x in drive[1]))
     PF, PI, TK, TC = _pool_arrays(max(pcap, 2 * J + 1 + ndrive + 16), tcap + extra, reuse)
-    CNT = np.zeros(4, dtype=np.int64)
+    CNT = np.zeros(S.CNT_SIZE, dtype=np.int64)
     CHI = np.full((nch, 2), -1, dtype=np.int64)
     CH_T = np.zeros(nch)
     CH_TOL = np.full(nch, _TOL)
@@ -695,10 +697,10 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
             nt = put(n, nt, *drive[1][j])
         CHI[c, 0] = n
         n += 1
-    CNT[0], CNT[1] = n, nt
+    CNT[S.CNT_PIECES], CNT[S.CNT_TERMS] = n, nt
     BIN = _binomials()
-    WB = np.zeros((16, lam.size, P.DC), dtype=complex)
-    WN = np.zeros((16, lam.size), dtype=np.int64)
+    WB = np.zeros((S.BLOCKS, lam.size, P.DC), dtype=complex)
+    WN = np.zeros((S.BLOCKS, lam.size), dtype=np.int64)
     STK = np.zeros((256, 4))
     SZ = Z.astype(float)
     ST = T.astype(float)
@@ -706,15 +708,16 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     NSI = np.full((J + 1, 4), -1, dtype=np.int64)
     NSI[:, 3] = 0
     NSI[n_p, 3] = 1  # in contact at impact
-    BS = np.zeros(16)
+    BS = np.zeros(S.BS_SIZE)
     p0 = fn / k
-    BS[0], BS[1], BS[2], BS[3], BS[4], BS[5] = p0, p0, 0.0, p0, fn, p0 - fn / k_u
-    BS[9], BS[10], BS[11], BS[12] = p0, 0.0, 0.0, p0
-    BI = np.zeros(4, dtype=np.int64)
+    BS[S.BS_P], BS[S.BS_X], BS[S.BS_W] = p0, p0, 0.0
+    BS[S.BS_PMAX], BS[S.BS_RMAX], BS[S.BS_PPERM] = p0, fn, p0 - fn / k_u
+    BS[S.BS_PSTART], BS[S.BS_TPMAX], BS[S.BS_EPT], BS[S.BS_EPP] = p0, 0.0, 0.0, p0
+    BI = np.zeros(S.BI_SIZE, dtype=np.int64)
     EP = np.zeros((ecap, 5))
-    CI = np.zeros(8, dtype=np.int64)
-    CT = np.zeros(16)
-    CT[9] = math.nan  # (no energy pass yet)
+    CI = np.zeros(S.CI_SIZE, dtype=np.int64)
+    CT = np.zeros(S.CT_SIZE)
+    CT[S.CT_TACC] = math.nan  # (no energy pass yet)
     return (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
             RT, RC, RD, EP, CI, CT)
 
@@ -724,42 +727,43 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
     n_p = Tp.size
-    t_end = float(CT[0])
-    if CT[9] != t_end:  # (the energies at the end, unless the run's last pass was there)
+    t_end = float(CT[S.CT_T])
+    if CT[S.CT_TACC] != t_end:  # (the energies at the end, unless the run's last pass was there)
         K.account(ws, t_end)
-    Pp, Ep, Er = CT[3], CT[4], CT[6]
-    br = int(BI[0])
-    p = BS[0]
-    R = k * BS[1] if br == P.LOAD else (k_u * BS[1] if br == P.ELASTIC else 0.0)
+    Pp, Ep, Er = CT[S.CT_PP], CT[S.CT_EP], CT[S.CT_ER]
+    br = int(BI[S.BI_BRANCH])
+    p = BS[S.BS_P]
+    R = k * BS[S.BS_X] if br == P.LOAD else (k_u * BS[S.BS_X] if br == P.ELASTIC else 0.0)
     xs = NSF[n_p, 1]
     gap = NSF[n_p, 0]
-    E0 = PR[10]  # the piston's energy at impact (0.5 Mp Vn^2 for a rigid piston)
-    drive_work = BS[14]
+    E0 = PR[S.PR_E0]  # the piston's energy at impact (0.5 Mp Vn^2 for a rigid piston)
+    drive_work = BS[S.BS_DRIVEW]
     feed_work = fn * xs
     static = 0.5 * fn * fn * C_rod
     available = E0 + drive_work + feed_work + static + 0.5 * fn * fn / k_u
-    dissipated = BS[6]
+    dissipated = BS[S.BS_DISS]
     rock_e = R * R / (2.0 * k_u)
-    rod_e = Er + 0.5 * m * BS[2] ** 2 + fn * (xs - (p - BS[9])) + static
-    radiated = BS[8]
+    rod_e = Er + 0.5 * m * BS[S.BS_W] ** 2 + fn * (xs - (p - BS[S.BS_PSTART])) + static
+    radiated = BS[S.BS_ABS]
     err = abs(available - (dissipated + rock_e + Ep + rod_e + radiated)) / abs(available)
     if not (available > 0.0 and err == err):  # (pieces gone wrong: never an account that closes)
         err = math.inf
-    nep = int(BI[1])
+    nep = int(BI[S.BI_NEP])
     loads = EP[:nep].copy()
-    if br == P.LOAD and p > BS[12]:  # a loading under way at the end
-        loads = np.vstack((loads, [[BS[11], t_end, BS[12], p,
-                                    0.5 * (1.0 - k / k_u) * k * (p - BS[12]) * (p + BS[12])]]))
-    ended = _END_NAMES.get(int(CI[1]), "failed")
+    if br == P.LOAD and p > BS[S.BS_EPP]:  # a loading under way at the end
+        loads = np.vstack((loads, [[BS[S.BS_EPT], t_end, BS[S.BS_EPP], p,
+                                    0.5 * (1.0 - k / k_u) * k * (p - BS[S.BS_EPP]) * (p + BS[S.BS_EPP])]]))
+    ended = _END_NAMES.get(int(CI[S.CI_END]), "failed")
     unc = 0.0
     if ended in ("budget", "t_max", "may_yield"):
-        rem = CT[7] + (Ep if ended != "may_yield" else 0.0)
-        unc = rem * feed_gain(BS[4], fn) / available
+        rem = CT[S.CT_PSI] + (Ep if ended != "may_yield" else 0.0)
+        unc = rem * feed_gain(BS[S.BS_RMAX], fn) / available
     s2 = scale * scale
     loads[:, 2:4] *= scale
     loads[:, 4] *= s2
     lamk = np.array([k, k_u, 0.0])
-    npc, nt = int(CNT[0]), int(CNT[1])  # the pieces kept, not the pool's capacity (megabytes)
+    # the pieces kept, not the pool's capacity (megabytes)
+    npc, nt = int(CNT[S.CNT_PIECES]), int(CNT[S.CNT_TERMS])
     hist = (scale, (PF[:npc].copy(), PI[:npc].copy(), TK[:nt].copy(), TC[:nt].copy(), CHI, lam, lamk), J,
             n_p)  # (the junctions' only with record)
     return ExactBlow(
@@ -769,13 +773,15 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
         energy_at_impact=s2 * E0, feed_work=s2 * feed_work, drive_work=s2 * drive_work,
         piston_energy=s2 * Ep,
         rod_energy=s2 * rod_e, radiated=s2 * radiated, energy_error=err,
-        rebound_velocity=scale * Pp / Mp, max_penetration=scale * BS[3],
-        permanent_penetration=scale * BS[5], advance=scale * (p - BS[9]),
-        peak_bit_force=scale * BS[4], peak_bit_time=float(BS[10]), duration=t_end, ended_by=ended,
-        uncertainty=unc, loadings=loads, separations=int(CI[5]), recontacts=int(CI[6]),
-        bit_velocity=scale * BS[2], gap=scale * gap, shank_displacement=scale * xs,
-        pieces=int(CNT[0]), windows=int(CI[2]),
-        diagnostics={"searches_abandoned": int(CI[4]), "degree_limit": int(CI[7]), "terms": int(CNT[1])},
+        rebound_velocity=scale * Pp / Mp, max_penetration=scale * BS[S.BS_PMAX],
+        permanent_penetration=scale * BS[S.BS_PPERM], advance=scale * (p - BS[S.BS_PSTART]),
+        peak_bit_force=scale * BS[S.BS_RMAX], peak_bit_time=float(BS[S.BS_TPMAX]), duration=t_end,
+        ended_by=ended,
+        uncertainty=unc, loadings=loads, separations=int(CI[S.CI_SEP]), recontacts=int(CI[S.CI_RECON]),
+        bit_velocity=scale * BS[S.BS_W], gap=scale * gap, shank_displacement=scale * xs,
+        pieces=int(CNT[S.CNT_PIECES]), windows=int(CI[S.CI_WIN]),
+        diagnostics={"searches_abandoned": int(CI[S.CI_GIVEUP]), "degree_limit": int(CI[S.CI_DEG]),
+                     "terms": int(CNT[S.CNT_TERMS])},
         _hist=hist)
 
 

@@ -21,6 +21,39 @@ from __future__ import annotations
 import numpy as np
 
 from . import _exacttangent as TG
+from ._records import (  # the records' slots
+    BS_PPERM,
+    CI_GIVEUP,
+    CNT_PIECES,
+    CNT_TERMS,
+    CT_T,
+    PR_DRIVEN,
+    PR_FEED,
+    PR_FIXED,
+    PR_K,
+    PR_KU,
+    PR_LB,
+    PR_NODW,
+    PR_P0,
+    PR_RECORD,
+    PR_WINDOW,
+    PR_ZBIT,
+    RD_HEAD,
+    TCUR_SIZE,
+    WS_BS,
+    WS_CI,
+    WS_CNT,
+    WS_CT,
+    WS_LAM,
+    WS_NSF,
+    WS_NSI,
+    WS_PR,
+    WS_RC,
+    WS_RD,
+    WS_RT,
+    WS_ST,
+    WS_SZ,
+)
 
 __all__ = ["exact_impact_map", "tangents"]
 
@@ -34,11 +67,11 @@ def _primal(bmap, q, v):
     rows = LOG_ROWS
     while True:
         ws, scale = bmap.solve(q, v, lean=True, log=rows)
-        RD, CI = ws[22], ws[24]
-        if RD[0, 1].real == 0.0:
+        RD, CI = ws[WS_RD], ws[WS_CI]
+        if RD[RD_HEAD, 1].real == 0.0:
             break
         rows *= 4
-    if CI[4] != 0:
+    if CI[CI_GIVEUP] != 0:
         return None
     return ws, scale
 
@@ -49,10 +82,10 @@ def _plus(bmap, ws, scale):
     from .exactmap import project
 
     PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam = ws[:9]
-    NSF, BS = ws[16], ws[18]
+    NSF, BS = ws[WS_NSF], ws[WS_BS]
     n_p = bmap.basis.travel.size
-    end = bmap._end(scale * NSF[n_p, 1], scale * NSF[n_p, 0], scale * BS[5])
-    qa, va = project(bmap.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[25][0]), end)
+    end = bmap._end(scale * NSF[n_p, 1], scale * NSF[n_p, 0], scale * BS[BS_PPERM])
+    qa, va = project(bmap.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[WS_CT][CT_T]), end)
     over = float(bmap.basis.end_weights @ qa)
     if over > 0.0:
         qa[0] -= over
@@ -106,7 +139,7 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
     M = basis.omega.size
     K = waves[0][2].shape[0]
     impulses = [[] for _ in range(K)] if impulses is None else impulses
-    T, Z, lam, RT, RC, RD = ws[15], ws[14], ws[8], ws[20], ws[21], ws[22]
+    T, Z, lam, RT, RC, RD = ws[WS_ST], ws[WS_SZ], ws[WS_LAM], ws[WS_RT], ws[WS_RC], ws[WS_RD]
     n_p = basis.travel.size
     J = T.size
     scales = _bound(waves, np.repeat(basis.travel, 2))
@@ -125,25 +158,26 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
 
     template_drive = None if drive is None else (drive[0], ones(drive[1]))
     terms = _Data(ones(waves), template_drive, T[:n_p], trusted=True).terms(lam, 1.0)
-    PR = ws[13].copy()
-    PR[3], PR[6], PR[20], PR[23] = 0.0, 1.0, 0.0, 0.0  # no feed (a constant), the horizon, no record
-    PR[22] = 0.0 if drive is None else 1.0
-    PR[25] = 1.0  # (the drive's work is not wanted)
-    CNT0 = ws[4]
-    pcap, tcap, icap = max(256, 2 * int(CNT0[0])), max(2048, 2 * int(CNT0[1])), 64
+    PR = ws[WS_PR].copy()
+    # no feed (a constant), the horizon, no record
+    PR[PR_FEED], PR[PR_FIXED], PR[PR_P0], PR[PR_RECORD] = 0.0, 1.0, 0.0, 0.0
+    PR[PR_DRIVEN] = 0.0 if drive is None else 1.0
+    PR[PR_NODW] = 1.0  # (the drive's work is not wanted)
+    CNT0 = ws[WS_CNT]
+    pcap, tcap, icap = max(256, 2 * int(CNT0[CNT_PIECES])), max(2048, 2 * int(CNT0[CNT_TERMS])), 64
     travel = np.ascontiguousarray(basis.travel)
     om = np.ascontiguousarray(basis.omega)
     while True:
-        wt = _workspace(T, Z, n_p, 0.0, 0.0, PR[0], PR[1], lam, PR, RT, RC, RD, pcap, tcap, 4, PR[17],
-                        PR[8], PR[4], terms)
+        wt = _workspace(T, Z, n_p, 0.0, 0.0, PR[PR_K], PR[PR_KU], lam, PR, RT, RC, RD, pcap, tcap, 4,
+                        PR[PR_WINDOW], PR[PR_LB], PR[PR_ZBIT], terms)
         PF, PI, TK, TC, CNT, CHI = wt[:6]
-        n0, nt0 = int(CNT[0]), int(CNT[1])
+        n0, nt0 = int(CNT[CNT_PIECES]), int(CNT[CNT_TERMS])
         template = (PF[:n0].copy(), PI[:n0].copy(), TK[:nt0].copy(), TC[:nt0].copy(), CNT.copy(),
-                    CHI.copy(), wt[17].copy())
+                    CHI.copy(), wt[WS_NSI].copy())
         owners = list(range(2 * n_p)) + list(range(2 * J, n0))  # the piston's and the drive's
         slots = np.concatenate([np.arange(PI[c, 1], PI[c, 1] + PI[c, 2]) for c in owners])
         tg = (np.zeros(icap), np.zeros(icap), np.zeros(icap), np.zeros(icap, dtype=np.int64),
-              np.full((3 * J + 2, 2), -1, dtype=np.int64), np.zeros(7, dtype=np.int64))
+              np.full((3 * J + 2, 2), -1, dtype=np.int64), np.zeros(TCUR_SIZE, dtype=np.int64))
         out = np.zeros((K, n_p, M, 2), dtype=complex)
         ends = np.zeros((K, 5))
         _, status = TG.t_batch(wt, tg, template, slots, coefs, imps, out, ends, travel, om)

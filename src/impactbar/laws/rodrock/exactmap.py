@@ -45,6 +45,13 @@ import numpy as np
 
 from ._exactmodal import piston_integrals
 from ._piston import piston_segments
+from ._records import (  # the records' slots
+    BS_PPERM,
+    CT_T,
+    WS_BS,
+    WS_CT,
+    WS_NSF,
+)
 from .contact import RockContact
 
 __all__ = ["ExactBlowMap", "ExactRockContact", "ModalBasis", "RodSpec", "drive_pieces", "initial_waves",
@@ -455,10 +462,10 @@ class ExactBlowMap:
         q[0] -= float(c @ q)
         ws, scale = self.solve(q, np.asarray(y[M:], dtype=float), lean=True)
         PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam = ws[:9]
-        NSF, BS = ws[16], ws[18]
+        NSF, BS = ws[WS_NSF], ws[WS_BS]
         n_p = self.basis.travel.size
-        end = self._end(scale * NSF[n_p, 1], scale * NSF[n_p, 0], scale * BS[5])
-        qa, va = project(self.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[25][0]), end)
+        end = self._end(scale * NSF[n_p, 1], scale * NSF[n_p, 0], scale * BS[BS_PPERM])
+        qa, va = project(self.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[WS_CT][CT_T]), end)
         return np.concatenate((self._on_stop(qa), va))
 
     def shifted(self, t0s):

@@ -78,7 +78,7 @@ class RodSegment:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "length", check_real("length", self.length, lo=0.0, lo_open=True))
-        for name in ("impedance", "wave_speed"):  # (issue 42: 1e308 and 5e-324 gave a NaN efficiency)
+        for name in ("impedance", "wave_speed"):  # (bounded: 1e308 and 5e-324 gave a NaN efficiency)
             object.__setattr__(self, name, check_real(name, getattr(self, name), lo=1e-100, hi=1e100))
 
     def travel_time(self, model) -> float:

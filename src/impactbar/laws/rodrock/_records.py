@@ -1,0 +1,145 @@
+"""The slots of the exact blow's records (:mod:`impactbar.laws.rodrock._exactkernel`'s workspace, made by
+:func:`impactbar.laws.rodrock.exact._workspace`; the tangent run's ``TCUR``): one name per slot, read
+by the compiled kernels as compile-time constants (numba freezes a module's integer globals), so
+that a slot is found by its name and never by its number.
+
+A record's constants share its name as their prefix (``PR_MASS`` is a slot of ``PR``); ``*_SIZE``
+is the record's length. Slots not named here are unused. Numba's cache does not follow these
+values into the kernels that read them: a change here wants the package's ``__pycache__`` cleared.
+"""
+
+# -- the workspace tuple ``ws`` (its order: the kernels unpack it whole) ----------------------------
+WS_PF = 0  # PF, the pieces' floats (the pool: its rows its capacity)
+WS_CNT = 4  # CNT, the pool's counts
+WS_LAM = 8  # lam, the exponent table
+WS_PR = 13  # PR, the blow's parameters
+WS_SZ = 14  # SZ, the segments' impedances
+WS_ST = 15  # ST, the segments' travel times
+WS_NSF = 16  # NSF, the nodes' float state
+WS_NSI = 17  # NSI, the nodes' cursors and the contact flag
+WS_BS = 18  # BS, the bit's and the rock's state
+WS_BI = 19  # BI, the bit's branch and episode count
+WS_RT = 20  # RT, the branches' roots
+WS_RC = 21  # RC, the roots' indices in the exponent table
+WS_RD = 22  # RD, the switch log
+WS_EP = 23  # EP, the loading episodes
+WS_CI = 24  # CI, the run's status and counters
+WS_CT = 25  # CT, the run's times and energies
+
+# -- PR: the blow's parameters (float64) ---------------------------------------------------------
+PR_SIZE = 32
+PR_K = 0  # the rock's loading stiffness k
+PR_KU = 1  # its unloading stiffness k_u
+PR_MASS = 2  # the bit's mass m (0: the massless bit)
+PR_FEED = 3  # the feed force f (0 in a tangent run)
+PR_ZBIT = 4  # the impedance at the bit (the rod's last segment's)
+PR_H = 5  # h, the shortest travel time (written, not read: PR_WINDOW holds the same h)
+PR_FIXED = 6  # 1: a fixed horizon (run to t_max, certify nothing)
+PR_SEMI = 7  # 1: a semi-infinite rod (the bit's reflected wave leaves the chain)
+PR_LB = 8  # Lb, the time scale on which terms are pruned (max(2 sum T, h))
+PR_SPENT = 9  # the fraction of the available energy below which the blow is spent
+PR_E0 = 10  # the piston's energy at impact
+PR_CROD = 11  # the rod's static compliance C_rod
+PR_CP = 12  # the piston's compliance about its struck end
+PR_CSHANK = 13  # the rod's compliance about the shank (the bit's mass at its far side)
+PR_CBIT = 14  # the rod's compliance about the bit
+PR_MP = 15  # the piston's mass
+PR_MR = 16  # the rod's mass with the bit's
+PR_WINDOW = 17  # h, the window's length (the same value as PR_H)
+PR_TMAX = 18  # t_max (inf: none)
+PR_MAXWIN = 19  # the most windows (the cost bound)
+PR_P0 = 20  # f/k, the bit's penetration at the start (written, not read by the kernels)
+PR_NP = 21  # the contact node's index: the piston's segment count
+PR_DRIVEN = 22  # 1: a drive at the piston's far end
+PR_RECORD = 23  # 1: keep the force and penetration histories
+PR_MAXP = 24  # the most pieces (the cost bound)
+PR_NODW = 25  # 1: the drive's work is not wanted (a tangent run)
+
+# -- BS: the bit's and the rock's state (float64) -------------------------------------------------
+BS_SIZE = 16
+BS_P = 0  # p, the bit's penetration
+BS_X = 1  # x = p - ref, from the branch's reference (0 loading, p_perm else)
+BS_W = 2  # w = p', the bit's velocity
+BS_PMAX = 3  # p_max, the largest penetration
+BS_RMAX = 4  # R_max = k p_max
+BS_PPERM = 5  # p_perm = p_max - R_max/k_u
+BS_DISS = 6  # the work the rock dissipated
+BS_RDP = 7  # int R dp, the rock's work
+BS_ABS = 8  # the energy a semi-infinite rod absorbed (radiated)
+BS_PSTART = 9  # p at the start
+BS_TPMAX = 10  # when p_max was reached
+BS_EPT = 11  # the loading episode's start time
+BS_EPP = 12  # the loading episode's start penetration
+BS_DRIVEW = 14  # the drive's work on the piston
+
+# -- BI: the bit's branch and the episodes (int64) ------------------------------------------------
+BI_SIZE = 4
+BI_BRANCH = 0  # the rock's branch (LOAD, ELASTIC, FREE)
+BI_NEP = 1  # loading episodes ended (EP holds the first of them)
+
+# -- CI: the run's status and counters (int64) ----------------------------------------------------
+CI_SIZE = 8
+CI_STATUS = 0  # 0 done, 1 the pool full (again, larger); a tangent run's 2 and 3 (t_run)
+CI_END = 1  # how the blow ended (SEPARATED, ... of _exactpieces)
+CI_WIN = 2  # windows done
+CI_GIVEUP = 4  # crossing searches given up
+CI_SEP = 5  # separations of piston and shank
+CI_RECON = 6  # re-contacts
+CI_DEG = 7  # series that reached the degree limit
+
+# -- CT: the run's times and energies (float64; CT_PP .. CT_THR by account) -----------------------
+CT_SIZE = 16
+CT_T = 0  # the time reached
+CT_TSEP = 1  # the last separation
+CT_TLOAD = 2  # the last loading episode's end
+CT_PP = 3  # the piston's momentum
+CT_EP = 4  # the piston's energy
+CT_PR = 5  # the rod's momentum
+CT_ER = 6  # the rod's wave energy
+CT_PSI = 7  # Psi, the energy of rod, bit and rock above the static state
+CT_THR = 8  # the energy a new yield of the rock needs
+CT_TACC = 9  # the time of account's last pass (NaN: none yet)
+
+# -- CNT: the pool's counts (int64; the tangent's template CNT0 alike) -----------------------------
+CNT_SIZE = 4
+CNT_PIECES = 0  # pieces stored
+CNT_TERMS = 1  # terms stored
+CNT_FULL = 3  # 1: the pieces, the terms or the episodes overflowed
+
+# -- TCUR: the tangent run's impulse store and schedule (int64) ----------------------------------
+TCUR_SIZE = 7
+TCUR_N = 0  # impulses stored
+TCUR_FULL = 1  # 1: the impulses' store is full
+TCUR_CONTACT = 2  # the contact's cursor in the schedule (RD's rows)
+TCUR_BIT = 3  # the bit's cursor in the schedule
+TCUR_FAIL = 4  # 1 a grazing re-contact, 2 the branches out of step, 3 a switch met by an impulse
+TCUR_SEPS = 5  # separations a moving step set off
+TCUR_UNLOADS = 6  # unloadings a moving step set off
+
+# -- RD: the switch log (complex) -------------------------------------------------------------------
+RD_HEAD = 0  # the header row: [RD_HEAD, 0] the rows written, [RD_HEAD, 1] 1 once full
+
+# -- WB, WN: the scratch blocks (each the coefficients B[e, d] and counts N[e] of one piece) -------
+BLOCKS = 16
+B_IN = 0  # the first wave in: f_in at a junction and the contact, F at the bit, the drive at the far end
+B_IN2 = 1  # the second wave in: g_in (at the piston's far end, the wave arriving there)
+B_OUT = 2  # the wave a node emits: f_out, the far end's, the bit's reflected G
+B_OUT2 = 3  # a junction's second wave out, g_out (scratch of the drive's work, of the absorbed wave)
+B_N = 4  # the node's force N (the bit's penetration where recorded)
+B_RATE = 5  # a rate: the common velocity, the gap's rate; the bit's forcing over Z or m
+B_E = 6  # the bit's forcing E = 2 F + f
+B_X = 7  # the bit's x
+B_XD = 8  # the bit's x'
+B_ZERO = 9  # the piece whose first zero is searched (the gap, the bit's switch)
+B_EMIT = 10  # emit's scratch
+B_ODE = 11  # the bit's first-order stage (x' - r_2 x, with a mass)
+B_AUX = 12  # a piece loaded apart (the energies, the pieces before a separation)
+B_SCR1 = 13  # the crossing search's three scratch blocks
+B_SCR2 = 14
+B_SCR3 = 15
+
+# -- the chain's ends and the exponent table ------------------------------------------------------
+SEG_FAR = 0  # the piston's driven-end segment (SZ, ST count from the piston's far end)
+CH_FAR_OUT = 0  # the channel of the wave leaving the piston's far end (f of segment 1)
+CH_FAR_IN = 1  # the channel of the wave arriving there (g of segment 1)
+E_CONST = 0  # the exponent table's first entry: 0, the constants'
