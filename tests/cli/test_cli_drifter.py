@@ -1,5 +1,6 @@
-"""``impactbar orbits|simulate|continue`` with a hydraulic drifter (theory §10): the preset of issue
-19's example and a TOML config with a [valve] section give the SI figures of the closed form."""
+"""``impactbar orbits|simulate|continue`` with a hydraulic drifter (theory §10): the preset of the
+theory's worked example and a TOML config with a [valve] section give the SI figures of the closed
+form."""
 
 import json
 import math
@@ -26,7 +27,7 @@ switch_out = "2.15 cm"
 
 
 def _expected():
-    """Issue 19's example in SI by hand: 5.6 kg, 5.6 kN each way, 21.5 mm, R = 0.215."""
+    """Theory §10's worked example in SI by hand: 5.6 kg, 5.6 kN each way, 21.5 mm, R = 0.215."""
     a, x1, R = 5600.0 / 5.6, 0.0215, 0.215
     v = math.sqrt(2 * x1 * 2 * a / (1 - R * R))
     u1 = math.sqrt(R * R * v * v + 2 * a * x1)
@@ -84,7 +85,7 @@ def test_simulate_and_continue_a_drifter(tmp_path, capsys):
 
 @pytest.mark.parametrize("source", ["preset", "config"])
 def test_drifter_command_prints_the_operating_point(source, tmp_path, capsys):
-    """``impactbar drifter`` (issue 38): the ideal valve's operating point is the closed form."""
+    """``impactbar drifter``: the ideal valve's operating point is the closed form."""
     if source == "preset":
         argv = ["drifter", "--preset", "hydraulic-drifter"]
     else:
@@ -98,6 +99,15 @@ def test_drifter_command_prints_the_operating_point(source, tmp_path, capsys):
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert f"blow frequency {f:.4g} Hz" in text and f"impact velocity {v:.4g} m/s" in text
+
+
+def test_drifter_command_takes_only_the_documented_presets(capsys):
+    """The preset's former, undocumented name is not a choice of ``--preset``."""
+    with pytest.raises(SystemExit) as exc:
+        main(["drifter", "--preset", "drifter-issue19"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'drifter-issue19'" in err and "hydraulic-drifter" in err
 
 
 def test_drifter_command_refuses_a_hammer(capsys):

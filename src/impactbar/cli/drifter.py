@@ -14,7 +14,6 @@ import numpy as np
 
 from .. import physical
 from ..physical.circuit import SI_PARAMETERS
-from ..physical.drifter import RENAMED_DRIFTER_PRESETS
 from ._common import json_ready, print_json, require
 
 __all__ = ["add_parser", "drifter_from_args", "run_drifter_orbits", "run_drifter_simulate",
@@ -61,7 +60,7 @@ def drifter_from_args(args):
         An unreadable file, or an invalid drifter config (the key named).
     """
     name, config = getattr(args, "preset", None), getattr(args, "config", None)
-    if name is not None and (name in physical.DRIFTER_PRESETS or name in RENAMED_DRIFTER_PRESETS):
+    if name is not None and name in physical.DRIFTER_PRESETS:
         return physical.drifter_preset(name)
     if name is not None and name in physical.CIRCUIT_PRESETS:
         return physical.circuit_preset(name)

@@ -9,7 +9,6 @@ import warnings
 
 from .. import physical
 from ..laws import LAWS
-from ..physical.drifter import RENAMED_DRIFTER_PRESETS
 from ._common import docs_page, json_ready, print_json
 
 __all__ = ["add_physical_arguments", "add_impact_argument", "wants_physical", "hammer_from_args",
@@ -26,8 +25,8 @@ def add_physical_arguments(parser) -> None:
              f"{docs_page('Real hammers in SI units')}")
     parser.add_argument(
         "--preset", default=None, metavar="NAME",
-        choices=sorted(physical.PRESETS) + sorted(physical.DRIFTER_PRESETS) + sorted(physical.CIRCUIT_PRESETS)
-        + sorted(RENAMED_DRIFTER_PRESETS),  # the former names still work, with a warning
+        choices=[*sorted(physical.PRESETS), *sorted(physical.DRIFTER_PRESETS),
+                 *sorted(physical.CIRCUIT_PRESETS)],
         help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}; or a drifter whose "
              f"valve switches on the piston's position (theory section 10): "
              f"{', '.join(sorted(physical.DRIFTER_PRESETS))} (a config with a [valve] section is one too); "
