@@ -277,7 +277,7 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     from .. import continue_orbit
 
     name, to = args.parameter, args.to
-    si = "." in name  # a config key in SI (issue 38): accumulator.precharge, supply.pump_flow, ...
+    si = "." in name  # a config key in SI: accumulator.precharge, supply.pump_flow, ...
     if si and not isinstance(drifter, physical.CircuitDrifter):
         raise ValueError(f"--parameter {name} (a config key in SI) is a parameter of a drifter with its "
                          "oil circuit; this drifter's valve takes stroke, ret, switch_out, delay, "
