@@ -4,6 +4,7 @@ form."""
 
 import json
 import math
+import re
 
 import pytest
 
@@ -108,6 +109,41 @@ def test_drifter_command_takes_only_the_documented_presets(capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "invalid choice: 'drifter-issue19'" in err and "hydraulic-drifter" in err
+
+
+def _help(capsys) -> str:
+    with pytest.raises(SystemExit) as exc:
+        main(["drifter", "--help"])
+    assert exc.value.code == 0
+    return " ".join(capsys.readouterr().out.split())
+
+
+def test_drifter_help_lists_both_drifters_sections_and_keys(capsys):
+    """Every section and key the two readers check (their own tables), each under its drifter; none
+    of the hammer's ([drive], [force])."""
+    from impactbar.physical import circuit, drifter, rock
+
+    text = _help(capsys)
+    valve, rest = text.split("configuration keys of a drifter with its oil circuit")
+    valve = valve.split("configuration keys of a drifter whose valve switches")[1]
+    circ, drill = rest.split("either drifter on a drill string and the rock")
+    for block, table in ((valve, drifter._KEYS), (circ, circuit._KEYS)):
+        for section, keys in table.items():
+            assert f"[{section}] {', '.join(sorted(keys))}" in block, (section, block)
+        assert re.findall(r"\[([\w.]+)\]", block.split("): ", 1)[1]) == list(table)  # those only
+    for section, keys in rock.ROCK_SECTIONS.items():
+        if section != "rod":
+            assert f"[{section}] {', '.join(sorted(keys))}" in drill
+    assert f"[rod.segments] {', '.join(sorted(rock._SEGMENT_KEYS))}" in drill
+    assert "[drive]" not in text and "[force]" not in text
+
+
+def test_drifter_help_follows_the_tables(capsys, monkeypatch):
+    """The help is generated from the readers' tables: a key added to a table shows."""
+    from impactbar.physical import circuit
+
+    monkeypatch.setitem(circuit._KEYS, "accumulator", {*circuit._KEYS["accumulator"], "zz_new_key"})
+    assert "[accumulator] polytropic_exponent, precharge, volume, zz_new_key" in _help(capsys)
 
 
 def test_drifter_command_refuses_a_hammer(capsys):

@@ -7,13 +7,13 @@ its oil circuit (theory §11), taken by ``orbits`` and ``continue``."""
 from __future__ import annotations
 
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
 from .. import physical
 from ..physical.circuit import SI_PARAMETERS
+from ..physical.config import config_kind, read_toml
 from ._common import json_ready, print_json, require
 
 __all__ = ["add_parser", "drifter_from_args", "run_drifter_orbits", "run_drifter_simulate",
@@ -22,21 +22,54 @@ __all__ = ["add_parser", "drifter_from_args", "run_drifter_orbits", "run_drifter
 
 def add_parser(sub) -> None:
     """``impactbar drifter CONFIG.toml | --preset NAME [--json]``: a drifter's operating point."""
+    import argparse
+    import textwrap
+
     from .physical import add_physical_arguments
 
-    p = sub.add_parser(
-        "drifter",
-        help="a hydraulic drifter's operating point (blow frequency, impact energy, pressures, stability)",
-        description="The periodic motion of a hydraulic drifter in SI units: its valve switched on the "
+    description = (
+        "The periodic motion of a hydraulic drifter in SI units: its valve switched on the "
         "piston's position (a config with a [valve] section, theory section 10) or with its oil "
         "circuit (a [chambers] section: chambers, pump, accumulator, relief, theory section 11). "
         "Prints the blow frequency, impact velocity and energy, and, with the circuit, the mean "
         "supply pressure, pump power, hydraulic efficiency, least pressure and the stability. "
         "'impactbar continue CONFIG --parameter accumulator.precharge --to \"12 MPa\"' follows it.")
-    add_physical_arguments(p)
+    p = sub.add_parser(
+        "drifter",
+        help="a hydraulic drifter's operating point (blow frequency, impact energy, pressures, stability)",
+        description=textwrap.fill(description, 78), epilog=drifter_keys_help(),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_physical_arguments(p, config_help="a drifter in SI units: a TOML file with a [valve] section "
+                           "(the valve switched on the piston's position) or a [chambers] section (with "
+                           "its oil circuit); the keys of each are listed below")
     p.add_argument("--json", action="store_true",
                    help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
     p.set_defaults(func=_run_drifter)
+
+
+def drifter_keys_help(width: int = 78) -> str:
+    """The sections and keys of both drifters' configurations, from the tables their readers check
+    (:func:`impactbar.physical.config_keys`), for ``impactbar drifter --help``."""
+    import textwrap
+
+    from ..physical.config import CONFIG_KINDS
+    from ..physical.rock import ROCK_SECTIONS
+
+    def rows(keys: dict) -> list[str]:
+        return [textwrap.fill(", ".join(k), width, initial_indent=f"  {f'[{name}]':16s}",
+                              subsequent_indent=" " * 18) for name, k in keys.items()]
+
+    drill = {}
+    lines = []
+    for kind in ("drifter", "circuit"):
+        keys = physical.config_keys(kind)
+        drill = {n: k for n, k in keys.items() if n.split(".")[0] in ROCK_SECTIONS}
+        what = CONFIG_KINDS[kind][1].replace("§", "section ")
+        lines += [textwrap.fill(f"configuration keys of {what}:", width),
+                  *rows({n: k for n, k in keys.items() if n not in drill}), ""]
+    lines += [textwrap.fill("either drifter on a drill string and the rock ([stop] then left out; "
+                            "[[rod.segments]] an array of tables):", width), *rows(drill)]
+    return "\n".join(lines)
 
 
 def _run_drifter(args) -> int:
@@ -51,8 +84,9 @@ def _run_drifter(args) -> int:
 
 
 def drifter_from_args(args):
-    """The drifter named by ``args.preset`` or ``args.config`` (a TOML file with a ``[valve]``
-    section), else ``None`` (a hammer, or no SI input).
+    """The drifter named by ``args.preset`` or ``args.config`` (a TOML file with a ``[valve]`` or a
+    ``[chambers]`` section, read by :func:`impactbar.physical.load`), else ``None`` (a hammer, or no
+    SI input).
 
     Raises
     ------
@@ -66,17 +100,11 @@ def drifter_from_args(args):
         return physical.circuit_preset(name)
     if config is None:
         return None
-    path = Path(config)
     try:
-        with path.open("rb") as fh:
-            doc = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError):
-        return None  # the hammer's reader reports it
-    if "chambers" in doc:
-        return physical.CircuitDrifter.from_config(doc)
-    if "valve" not in doc:
-        return None
-    return physical.Drifter.from_config(doc)
+        kind = config_kind(read_toml(config))
+    except ValueError:
+        return None  # an unreadable file, a sweep spec: the hammer's reader reports it
+    return None if kind == "hammer" else physical.load(config)
 
 
 def _circuit_header(d: physical.CircuitDrifter) -> str:

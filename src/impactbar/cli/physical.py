@@ -15,12 +15,13 @@ __all__ = ["add_physical_arguments", "add_impact_argument", "wants_physical", "h
            "run_physical_orbits", "json_ready"]
 
 
-def add_physical_arguments(parser) -> None:
-    """Add an optional positional ``config`` (a TOML file) and ``--preset NAME`` to ``parser``."""
+def add_physical_arguments(parser, config_help: str | None = None) -> None:
+    """Add an optional positional ``config`` (a TOML file; ``config_help`` its help, by default a
+    hammer's keys) and ``--preset NAME`` to ``parser``."""
     parser.add_argument(
         "config", nargs="?", default=None, metavar="CONFIG.toml",
-        help="a hammer in SI units (keys: [bar] E, density, length, diameter|area; [damping] "
-             "coefficient|ratio; [stop] restitution|area; [drive] frequency; [force] kind = "
+        help=config_help or "a hammer in SI units (keys: [bar] E, density, length, diameter|area; "
+             "[damping] coefficient|ratio; [stop] restitution|area; [drive] frequency; [force] kind = "
              "pneumatic|hydraulic|measured, ...; [model] n_modes); see "
              f"{docs_page('Real hammers in SI units')}")
     parser.add_argument(
