@@ -213,7 +213,8 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
 def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_m: float) -> int:
     """``impactbar simulate --preset circuit-drifter``: the drifter with its oil circuit from rest at
     ``--gap`` for ``--periods`` periods of its operating point; writes ``impacts.csv`` (time,
-    impact velocity and energy), ``pressures.csv`` (the pressures, the valve and the gap),
+    impact velocity and energy, and on a drill string each blow's work on rock and permanent
+    penetration), ``pressures.csv`` (the pressures, the valve and the gap),
     ``summary.json`` and ``motion.png`` (:func:`impactbar.plotting.plot_circuit_run`)."""
     if not args.periods > 0:
         raise ValueError(f"--periods must be > 0; got {args.periods}")
@@ -221,8 +222,10 @@ def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_
     r = drifter.simulate(args.periods * point.period_s, start_gap_m=gap_m)
     m = drifter.bar.mass_kg
     t, v = r["impact_times_s"], r["impact_velocities_m_s"]
-    lines = ["time_s,impact_velocity_m_s,impact_energy_J"]
-    lines += [f"{ti:.9g},{vi:.9g},{0.5 * m * vi * vi:.9g}" for ti, vi in zip(t, v, strict=True)]
+    cols = {"time_s": t, "impact_velocity_m_s": v, "impact_energy_J": 0.5 * m * v * v}
+    if drifter.drill is not None:  # on the drill string: each blow's work on rock and penetration
+        cols.update(work_on_rock_J=r["work_on_rock_J"], penetration_m=r["penetration_mm"] / 1e3)
+    lines = [",".join(cols)] + [",".join(f"{x:.9g}" for x in row) for row in zip(*cols.values(), strict=True)]
     (out / "impacts.csv").write_text("\n".join(lines) + "\n")
     h = r["histories"]
     keys = ("t_s", "p_f_Pa", "p_r_Pa", "p_s_Pa", "x_v", "gap_m")
@@ -235,6 +238,10 @@ def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_
                "mean_impact_energy_second_half_J": float(np.mean(0.5 * m * last ** 2)) if last.size else None,
                "operating_point": point.summary(),
                "minimum_pressure_MPa": float(min(np.min(h[k]) for k in ("p_f_Pa", "p_r_Pa", "p_s_Pa")) / 1e6)}
+    if drifter.drill is not None:
+        half = slice(len(v) // 2, None)
+        summary.update({f"mean_{k}_second_half": float(np.mean(cols[k][half])) if last.size else None
+                        for k in ("work_on_rock_J", "penetration_m")})
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
     written = "impacts.csv, pressures.csv, summary.json"
     try:
