@@ -225,3 +225,16 @@ def test_simulate_a_circuit_drifter_from_rest(tmp_path, capsys):
     assert (tmp_path / "motion.png").stat().st_size > 0
     assert main(["simulate", "--preset", "circuit-drifter", "--periods", "0", "--out", str(tmp_path)]) == 2
     assert "--periods must be > 0" in capsys.readouterr().err
+
+
+def test_the_readme_quotes_the_drifter_command_as_it_prints(capsys):
+    """README.md's ``impactbar drifter --preset hydraulic-drifter`` block is the command's output now
+    (its numbers the closed form of theory §10, checked above)."""
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    quoted = re.search(r"```console\n\$ impactbar drifter --preset hydraulic-drifter\n(.*?)```", readme,
+                       flags=re.S)
+    assert quoted is not None, "the README's drifter example is gone; update this test with it"
+    assert main(["drifter", "--preset", "hydraulic-drifter"]) == 0
+    assert capsys.readouterr().out == quoted.group(1)
