@@ -5,17 +5,15 @@ valve over one period, and the p-V (indicator) diagram of each chamber.
 """
 
 import sys
-import tomllib
 from pathlib import Path
 
-from impactbar.physical import CircuitDrifter
+from impactbar.physical import load
 
 CONFIG = Path(__file__).with_name("circuit_drifter.toml")
 
 
 def main(out="circuit_drifter.png", config=CONFIG):
-    with open(config, "rb") as f:
-        drifter = CircuitDrifter.from_config(tomllib.load(f))
+    drifter = load(config)  # a CircuitDrifter: the file has a [chambers] section
     point = drifter.orbit()
     for key, value in point.summary().items():
         print(f"{key:26s} {value:.6g}" if isinstance(value, float) else f"{key:26s} {value}")

@@ -1,8 +1,10 @@
-"""``impactbar orbits|simulate|continue`` with a hydraulic drifter (theory §10): the preset of issue
-19's example and a TOML config with a [valve] section give the SI figures of the closed form."""
+"""``impactbar orbits|simulate|continue`` with a hydraulic drifter (theory §10): the preset of the
+theory's worked example and a TOML config with a [valve] section give the SI figures of the closed
+form."""
 
 import json
 import math
+import re
 
 import pytest
 
@@ -27,7 +29,7 @@ switch_out = "2.15 cm"
 
 
 def _expected():
-    """Issue 19's example in SI by hand: 5.6 kg, 5.6 kN each way, 21.5 mm, R = 0.215."""
+    """Theory §10's worked example in SI by hand: 5.6 kg, 5.6 kN each way, 21.5 mm, R = 0.215."""
     a, x1, R = 5600.0 / 5.6, 0.0215, 0.215
     v = math.sqrt(2 * x1 * 2 * a / (1 - R * R))
     u1 = math.sqrt(R * R * v * v + 2 * a * x1)
@@ -85,7 +87,7 @@ def test_simulate_and_continue_a_drifter(tmp_path, capsys):
 
 @pytest.mark.parametrize("source", ["preset", "config"])
 def test_drifter_command_prints_the_operating_point(source, tmp_path, capsys):
-    """``impactbar drifter`` (issue 38): the ideal valve's operating point is the closed form."""
+    """``impactbar drifter``: the ideal valve's operating point is the closed form."""
     if source == "preset":
         argv = ["drifter", "--preset", "hydraulic-drifter"]
     else:
@@ -99,6 +101,50 @@ def test_drifter_command_prints_the_operating_point(source, tmp_path, capsys):
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert f"blow frequency {f:.4g} Hz" in text and f"impact velocity {v:.4g} m/s" in text
+
+
+def test_drifter_command_takes_only_the_documented_presets(capsys):
+    """The preset's former, undocumented name is not a choice of ``--preset``."""
+    with pytest.raises(SystemExit) as exc:
+        main(["drifter", "--preset", "drifter-issue19"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "invalid choice: 'drifter-issue19'" in err and "hydraulic-drifter" in err
+
+
+def _help(capsys) -> str:
+    with pytest.raises(SystemExit) as exc:
+        main(["drifter", "--help"])
+    assert exc.value.code == 0
+    return " ".join(capsys.readouterr().out.split())
+
+
+def test_drifter_help_lists_both_drifters_sections_and_keys(capsys):
+    """Every section and key the two readers check (their own tables), each under its drifter; none
+    of the hammer's ([drive], [force])."""
+    from impactbar.physical import circuit, drifter, rock
+
+    text = _help(capsys)
+    valve, rest = text.split("configuration keys of a drifter with its oil circuit")
+    valve = valve.split("configuration keys of a drifter whose valve switches")[1]
+    circ, drill = rest.split("either drifter on a drill string and the rock")
+    for block, table in ((valve, drifter._KEYS), (circ, circuit._KEYS)):
+        for section, keys in table.items():
+            assert f"[{section}] {', '.join(sorted(keys))}" in block, (section, block)
+        assert re.findall(r"\[([\w.]+)\]", block.split("): ", 1)[1]) == list(table)  # those only
+    for section, keys in rock.ROCK_SECTIONS.items():
+        if section != "rod":
+            assert f"[{section}] {', '.join(sorted(keys))}" in drill
+    assert f"[rod.segments] {', '.join(sorted(rock._SEGMENT_KEYS))}" in drill
+    assert "[drive]" not in text and "[force]" not in text
+
+
+def test_drifter_help_follows_the_tables(capsys, monkeypatch):
+    """The help is generated from the readers' tables: a key added to a table shows."""
+    from impactbar.physical import circuit
+
+    monkeypatch.setitem(circuit._KEYS, "accumulator", {*circuit._KEYS["accumulator"], "zz_new_key"})
+    assert "[accumulator] polytropic_exponent, precharge, volume, zz_new_key" in _help(capsys)
 
 
 def test_drifter_command_refuses_a_hammer(capsys):
@@ -210,3 +256,16 @@ def test_simulate_a_circuit_drifter_from_rest(tmp_path, capsys):
     assert (tmp_path / "motion.png").stat().st_size > 0
     assert main(["simulate", "--preset", "circuit-drifter", "--periods", "0", "--out", str(tmp_path)]) == 2
     assert "--periods must be > 0" in capsys.readouterr().err
+
+
+def test_the_readme_quotes_the_drifter_command_as_it_prints(capsys):
+    """README.md's ``impactbar drifter --preset hydraulic-drifter`` block is the command's output now
+    (its numbers the closed form of theory §10, checked above)."""
+    from pathlib import Path
+
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    quoted = re.search(r"```console\n\$ impactbar drifter --preset hydraulic-drifter\n(.*?)```", readme,
+                       flags=re.S)
+    assert quoted is not None, "the README's drifter example is gone; update this test with it"
+    assert main(["drifter", "--preset", "hydraulic-drifter"]) == 0
+    assert capsys.readouterr().out == quoted.group(1)

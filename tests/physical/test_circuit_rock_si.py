@@ -2,6 +2,7 @@
 solved with the circuit's state (theory §11, "The coupled blow"), and the drilling rate
 (``examples/circuit_drifter_rock.toml``)."""
 
+import json
 import tomllib
 from pathlib import Path
 
@@ -186,3 +187,28 @@ def test_the_examples_lattice_error_at_four_times_the_cells(point):
     fine = CircuitDrifter.from_config(config).orbit()
     assert (round(fine.blow_frequency_Hz, 2), round(fine.rock()["work_on_rock_J"], 1)) == (45.61, 216.3)
     assert round(100.0 * (point.blow_frequency_Hz / fine.blow_frequency_Hz - 1.0), 1) == 0.1
+
+
+def test_the_command_line_simulation_writes_the_work_on_rock_and_the_penetration(point, monkeypatch,
+                                                                                 tmp_path, capsys):
+    """``impactbar simulate examples/circuit_drifter_rock.toml``: impacts.csv holds each blow's work on
+    rock (J) and permanent penetration (m) beside its time, velocity and energy, those that
+    ``CircuitDrifter.simulate`` returns for the same run (3 periods of the operating point from rest;
+    the orbit the fixture's: the same configuration)."""
+    from impactbar.cli import main
+
+    monkeypatch.setattr(CircuitDrifter, "orbit", lambda self, guess=None: point)
+    assert main(["simulate", str(EXAMPLE), "--periods", "3", "--out", str(tmp_path)]) == 0
+    capsys.readouterr()
+    head, *rows = (tmp_path / "impacts.csv").read_text().splitlines()
+    assert head == "time_s,impact_velocity_m_s,impact_energy_J,work_on_rock_J,penetration_m"
+    got = np.array([[float(x) for x in r.split(",")] for r in rows])
+    run = point.drifter.simulate(3 * point.period_s)
+    assert got.shape == (run["impact_times_s"].size, 5) and got.shape[0] >= 2
+    np.testing.assert_allclose(got[:, 0], run["impact_times_s"], rtol=1e-8)
+    np.testing.assert_allclose(got[:, 3], run["work_on_rock_J"], rtol=1e-8)
+    np.testing.assert_allclose(got[:, 4], run["penetration_mm"] / 1e3, rtol=1e-8)
+    # each blow puts into the rock part of the piston's energy at impact (the feed's work is small)
+    assert np.all((got[:, 3] > 0) & (got[:, 3] < got[:, 2])) and np.all(got[:, 4] > 0)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["mean_work_on_rock_J_second_half"] == pytest.approx(got[got.shape[0] // 2:, 3].mean())

@@ -1,4 +1,4 @@
-"""The hydraulic drifter in SI (theory §10): the preset of issue 19's example against the rigid
+"""The hydraulic drifter in SI (theory §10): the preset of theory §10's worked example against the rigid
 piston's closed form done in SI by hand, simulate against find_orbit, and the config's checks."""
 
 import math
@@ -9,14 +9,14 @@ from impactbar.physical.drifter import DRIFTER_PRESETS, Drifter, drifter_preset
 
 
 def _closed_form_si(m, F_s, F_r, x1, R):
-    """Issue 19's rigid piston in SI: impact velocity (m/s) and period (s)."""
+    """The rigid piston of theory §10 in SI: impact velocity (m/s) and period (s)."""
     a_s, a_r = F_s / m, F_r / m
     v = math.sqrt(2 * x1 * (a_s + a_r) / (1 - R * R))
     u1 = math.sqrt(R * R * v * v + 2 * a_r * x1)
     return v, (u1 - R * v) / a_r + (u1 + v) / a_s
 
 
-def test_issue19_preset_is_the_closed_form_in_si():
+def test_hydraulic_drifter_preset_is_the_closed_form_in_si():
     d = drifter_preset("hydraulic-drifter")
     assert d.bar.mass_kg == pytest.approx(5.6, rel=1e-8)
     assert d.stroke_force_N == pytest.approx(5600.0, rel=1e-12) == d.return_force_N
@@ -27,7 +27,7 @@ def test_issue19_preset_is_the_closed_form_in_si():
     assert o.blow_frequency_Hz == pytest.approx(1 / T, rel=1e-10)
     assert o.impact_energy_J == pytest.approx(0.5 * d.bar.mass_kg * v * v, rel=1e-10)
     assert o.percussive_power_kW == pytest.approx(0.5 * d.bar.mass_kg * v * v / T / 1e3, rel=1e-10)
-    # the numbers of the issue (5.6 kg exactly)
+    # the numbers of theory §10's worked example (5.6 kg exactly)
     assert round(o.impact_velocity_m_s, 6) == 9.495684 and round(1e3 * o.period_s, 6) == 21.189907
     assert round(o.blow_frequency_Hz, 2) == 47.19 and round(o.impact_energy_J, 2) == 252.47
     s = o.summary()
@@ -91,8 +91,8 @@ def test_physical_page_quotes_the_preset_as_computed():
         assert abs(float(quoted) - value) <= 0.5 * 10.0**-decimals
 
 
-def test_the_former_preset_name_still_works_with_a_warning():
-    with pytest.warns(FutureWarning, match="'hydraulic-drifter'"):
-        old = drifter_preset("drifter-issue19")
-    assert old == drifter_preset("hydraulic-drifter")
-    assert "drifter-issue19" not in DRIFTER_PRESETS  # listed under its new name only
+def test_only_the_documented_presets_are_taken():
+    """The preset's former, undocumented name is gone: refused by name, as any unknown preset."""
+    assert list(DRIFTER_PRESETS) == ["hydraulic-drifter"]
+    with pytest.raises(ValueError, match="unknown drifter preset 'drifter-issue19'; known: hydraulic-"):
+        drifter_preset("drifter-issue19")

@@ -7,14 +7,13 @@ its oil circuit (theory §11), taken by ``orbits`` and ``continue``."""
 from __future__ import annotations
 
 import json
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
 from .. import physical
 from ..physical.circuit import SI_PARAMETERS
-from ..physical.drifter import RENAMED_DRIFTER_PRESETS
+from ..physical.config import config_kind, read_toml
 from ._common import json_ready, print_json, require
 
 __all__ = ["add_parser", "drifter_from_args", "run_drifter_orbits", "run_drifter_simulate",
@@ -23,21 +22,54 @@ __all__ = ["add_parser", "drifter_from_args", "run_drifter_orbits", "run_drifter
 
 def add_parser(sub) -> None:
     """``impactbar drifter CONFIG.toml | --preset NAME [--json]``: a drifter's operating point."""
+    import argparse
+    import textwrap
+
     from .physical import add_physical_arguments
 
-    p = sub.add_parser(
-        "drifter",
-        help="a hydraulic drifter's operating point (blow frequency, impact energy, pressures, stability)",
-        description="The periodic motion of a hydraulic drifter in SI units: its valve switched on the "
+    description = (
+        "The periodic motion of a hydraulic drifter in SI units: its valve switched on the "
         "piston's position (a config with a [valve] section, theory section 10) or with its oil "
         "circuit (a [chambers] section: chambers, pump, accumulator, relief, theory section 11). "
         "Prints the blow frequency, impact velocity and energy, and, with the circuit, the mean "
         "supply pressure, pump power, hydraulic efficiency, least pressure and the stability. "
         "'impactbar continue CONFIG --parameter accumulator.precharge --to \"12 MPa\"' follows it.")
-    add_physical_arguments(p)
+    p = sub.add_parser(
+        "drifter",
+        help="a hydraulic drifter's operating point (blow frequency, impact energy, pressures, stability)",
+        description=textwrap.fill(description, 78), epilog=drifter_keys_help(),
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_physical_arguments(p, config_help="a drifter in SI units: a TOML file with a [valve] section "
+                           "(the valve switched on the piston's position) or a [chambers] section (with "
+                           "its oil circuit); the keys of each are listed below")
     p.add_argument("--json", action="store_true",
                    help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
     p.set_defaults(func=_run_drifter)
+
+
+def drifter_keys_help(width: int = 78) -> str:
+    """The sections and keys of both drifters' configurations, from the tables their readers check
+    (:func:`impactbar.physical.config_keys`), for ``impactbar drifter --help``."""
+    import textwrap
+
+    from ..physical.config import CONFIG_KINDS
+    from ..physical.rock import ROCK_SECTIONS
+
+    def rows(keys: dict) -> list[str]:
+        return [textwrap.fill(", ".join(k), width, initial_indent=f"  {f'[{name}]':16s}",
+                              subsequent_indent=" " * 18) for name, k in keys.items()]
+
+    drill = {}
+    lines = []
+    for kind in ("drifter", "circuit"):
+        keys = physical.config_keys(kind)
+        drill = {n: k for n, k in keys.items() if n.split(".")[0] in ROCK_SECTIONS}
+        what = CONFIG_KINDS[kind][1].replace("§", "section ")
+        lines += [textwrap.fill(f"configuration keys of {what}:", width),
+                  *rows({n: k for n, k in keys.items() if n not in drill}), ""]
+    lines += [textwrap.fill("either drifter on a drill string and the rock ([stop] then left out; "
+                            "[[rod.segments]] an array of tables):", width), *rows(drill)]
+    return "\n".join(lines)
 
 
 def _run_drifter(args) -> int:
@@ -52,8 +84,9 @@ def _run_drifter(args) -> int:
 
 
 def drifter_from_args(args):
-    """The drifter named by ``args.preset`` or ``args.config`` (a TOML file with a ``[valve]``
-    section), else ``None`` (a hammer, or no SI input).
+    """The drifter named by ``args.preset`` or ``args.config`` (a TOML file with a ``[valve]`` or a
+    ``[chambers]`` section, read by :func:`impactbar.physical.load`), else ``None`` (a hammer, or no
+    SI input).
 
     Raises
     ------
@@ -61,23 +94,17 @@ def drifter_from_args(args):
         An unreadable file, or an invalid drifter config (the key named).
     """
     name, config = getattr(args, "preset", None), getattr(args, "config", None)
-    if name is not None and (name in physical.DRIFTER_PRESETS or name in RENAMED_DRIFTER_PRESETS):
+    if name is not None and name in physical.DRIFTER_PRESETS:
         return physical.drifter_preset(name)
     if name is not None and name in physical.CIRCUIT_PRESETS:
         return physical.circuit_preset(name)
     if config is None:
         return None
-    path = Path(config)
     try:
-        with path.open("rb") as fh:
-            doc = tomllib.load(fh)
-    except (OSError, tomllib.TOMLDecodeError):
-        return None  # the hammer's reader reports it
-    if "chambers" in doc:
-        return physical.CircuitDrifter.from_config(doc)
-    if "valve" not in doc:
-        return None
-    return physical.Drifter.from_config(doc)
+        kind = config_kind(read_toml(config))
+    except ValueError:
+        return None  # an unreadable file, a sweep spec: the hammer's reader reports it
+    return None if kind == "hammer" else physical.load(config)
 
 
 def _circuit_header(d: physical.CircuitDrifter) -> str:
@@ -186,7 +213,8 @@ def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: floa
 def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_m: float) -> int:
     """``impactbar simulate --preset circuit-drifter``: the drifter with its oil circuit from rest at
     ``--gap`` for ``--periods`` periods of its operating point; writes ``impacts.csv`` (time,
-    impact velocity and energy), ``pressures.csv`` (the pressures, the valve and the gap),
+    impact velocity and energy, and on a drill string each blow's work on rock and permanent
+    penetration), ``pressures.csv`` (the pressures, the valve and the gap),
     ``summary.json`` and ``motion.png`` (:func:`impactbar.plotting.plot_circuit_run`)."""
     if not args.periods > 0:
         raise ValueError(f"--periods must be > 0; got {args.periods}")
@@ -194,8 +222,10 @@ def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_
     r = drifter.simulate(args.periods * point.period_s, start_gap_m=gap_m)
     m = drifter.bar.mass_kg
     t, v = r["impact_times_s"], r["impact_velocities_m_s"]
-    lines = ["time_s,impact_velocity_m_s,impact_energy_J"]
-    lines += [f"{ti:.9g},{vi:.9g},{0.5 * m * vi * vi:.9g}" for ti, vi in zip(t, v, strict=True)]
+    cols = {"time_s": t, "impact_velocity_m_s": v, "impact_energy_J": 0.5 * m * v * v}
+    if drifter.drill is not None:  # on the drill string: each blow's work on rock and penetration
+        cols.update(work_on_rock_J=r["work_on_rock_J"], penetration_m=r["penetration_mm"] / 1e3)
+    lines = [",".join(cols)] + [",".join(f"{x:.9g}" for x in row) for row in zip(*cols.values(), strict=True)]
     (out / "impacts.csv").write_text("\n".join(lines) + "\n")
     h = r["histories"]
     keys = ("t_s", "p_f_Pa", "p_r_Pa", "p_s_Pa", "x_v", "gap_m")
@@ -208,6 +238,10 @@ def run_circuit_simulate(args, drifter: physical.CircuitDrifter, out: Path, gap_
                "mean_impact_energy_second_half_J": float(np.mean(0.5 * m * last ** 2)) if last.size else None,
                "operating_point": point.summary(),
                "minimum_pressure_MPa": float(min(np.min(h[k]) for k in ("p_f_Pa", "p_r_Pa", "p_s_Pa")) / 1e6)}
+    if drifter.drill is not None:
+        half = slice(len(v) // 2, None)
+        summary.update({f"mean_{k}_second_half": float(np.mean(cols[k][half])) if last.size else None
+                        for k in ("work_on_rock_J", "penetration_m")})
     (out / "summary.json").write_text(json.dumps(json_ready(summary), indent=2, allow_nan=False))
     written = "impacts.csv, pressures.csv, summary.json"
     try:
@@ -306,7 +340,7 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     from .. import continue_orbit
 
     name, to = args.parameter, args.to
-    si = "." in name  # a config key in SI (issue 38): accumulator.precharge, supply.pump_flow, ...
+    si = "." in name  # a config key in SI: accumulator.precharge, supply.pump_flow, ...
     if si and not isinstance(drifter, physical.CircuitDrifter):
         raise ValueError(f"--parameter {name} (a config key in SI) is a parameter of a drifter with its "
                          "oil circuit; this drifter's valve takes stroke, ret, switch_out, delay, "

@@ -9,25 +9,25 @@ import warnings
 
 from .. import physical
 from ..laws import LAWS
-from ..physical.drifter import RENAMED_DRIFTER_PRESETS
 from ._common import docs_page, json_ready, print_json
 
 __all__ = ["add_physical_arguments", "add_impact_argument", "wants_physical", "hammer_from_args",
            "run_physical_orbits", "json_ready"]
 
 
-def add_physical_arguments(parser) -> None:
-    """Add an optional positional ``config`` (a TOML file) and ``--preset NAME`` to ``parser``."""
+def add_physical_arguments(parser, config_help: str | None = None) -> None:
+    """Add an optional positional ``config`` (a TOML file; ``config_help`` its help, by default a
+    hammer's keys) and ``--preset NAME`` to ``parser``."""
     parser.add_argument(
         "config", nargs="?", default=None, metavar="CONFIG.toml",
-        help="a hammer in SI units (keys: [bar] E, density, length, diameter|area; [damping] "
-             "coefficient|ratio; [stop] restitution|area; [drive] frequency; [force] kind = "
+        help=config_help or "a hammer in SI units (keys: [bar] E, density, length, diameter|area; "
+             "[damping] coefficient|ratio; [stop] restitution|area; [drive] frequency; [force] kind = "
              "pneumatic|hydraulic|measured, ...; [model] n_modes); see "
              f"{docs_page('Real hammers in SI units')}")
     parser.add_argument(
         "--preset", default=None, metavar="NAME",
-        choices=sorted(physical.PRESETS) + sorted(physical.DRIFTER_PRESETS) + sorted(physical.CIRCUIT_PRESETS)
-        + sorted(RENAMED_DRIFTER_PRESETS),  # the former names still work, with a warning
+        choices=[*sorted(physical.PRESETS), *sorted(physical.DRIFTER_PRESETS),
+                 *sorted(physical.CIRCUIT_PRESETS)],
         help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}; or a drifter whose "
              f"valve switches on the piston's position (theory section 10): "
              f"{', '.join(sorted(physical.DRIFTER_PRESETS))} (a config with a [valve] section is one too); "

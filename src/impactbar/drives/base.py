@@ -725,7 +725,7 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
         if np.any(X[hi] <= 0.0):
             raise ValueError("Newton left the region of positive flight times: give a guess closer "
                              "to the orbit (e.g. from simulate)")
-        # the step relative to the states' and the times' own sizes (issue 42: relative to
+        # the step relative to the states' and the times' own sizes (relative to
         # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
         times = _relative(step, X, hi)
         size = max(_relative(step, X, lo), times)

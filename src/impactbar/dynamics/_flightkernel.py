@@ -32,7 +32,7 @@ except RuntimeError:  # a read-only install and no writable cache folder: compil
 watch_compiles()
 
 # a first call of a kernel not yet compiled runs its Python source while a child process compiles
-# it into the cache (issue 41; impactbar.dynamics._tiers)
+# it into the cache (impactbar.dynamics._tiers)
 from ._tiers import install as _install_tiers  # noqa: E402
 
 _install_tiers(cache=CACHE)

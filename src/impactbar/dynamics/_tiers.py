@@ -1,4 +1,4 @@
-"""Tiered execution of the compiled kernels (issue 41): a first call does not wait for numba.
+"""Tiered execution of the compiled kernels: a first call does not wait for numba.
 
 numba compiles a kernel on its first call with the argument types of that call, and caches the
 machine code on disk (``cache=True``): a new machine's first ``simulate`` or ``periodic_orbits``
@@ -29,7 +29,7 @@ two CPUs at least are available to the process (the child compiles beside it), a
 no pool's worker; ``impactbar warmup``, which compiles every kernel in its own process, switches it
 off. It is not the default because it makes a long first computation slower (measured on the
 README's first command, ``impactbar paper`` with an empty cache, on a 2-core machine under load:
-81-125 s of wall time against 52-82 s without it, runs alternated; issue 41): the compile moves to
+81-125 s of wall time against 52-82 s without it, runs alternated): the compile moves to
 the child, whose machine code the process then loads, but the interpretation, the child's import
 and its compiles of kernels the process does not get to use are added. A session of short first
 calls, such as a notebook's, gets its answers at once: the first rigid ``simulate`` in 0.05-0.08 s

@@ -131,7 +131,7 @@ class _Segments:
         self.B = 2 * M + (0 if self.on_stop else 1)  # unknowns (and conditions) per impact
         self.size = self.B * m
         self.T = contact_window(model)  # each flight starts T after its impact
-        # the rigid bar under the paper's law: the whole evaluation in plain floats (issue 20)
+        # the rigid bar under the paper's law: the whole evaluation in plain floats
         self.rigid = (RigidFlight(model.d, load) if M == 1 and model.law.rigid_closed_forms
                       and use_fast("orbits.rigid_segments") else None)
 

@@ -131,7 +131,7 @@ def _motion(orbit: SwitchedOrbit) -> SwitchedOrbit:
 
 def _solve(problem: OrbitProblem, X0, tol: float, max_iter: int):
     """Newton from ``X0``; a degenerate root (the flights shrunk to nothing: a root of the
-    equations, not a motion; issue 42 found one returned as a "backward impact" orbit of period
+    equations, not a motion; the fuzzing campaign found one returned as a "backward impact" orbit of period
     3e-9, a different one at each scale) is refused."""
     X = problem.solve(X0, tol, max_iter)
     times, start = X[problem.positive], X0[problem.positive]
@@ -232,7 +232,8 @@ def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max
 
 
 #: The most resonances of the flexible modes in the default window for ``find_orbit``'s default
-#: chain to end with the search of every orbit (the issue-40 cases hold 500 and 2,340; a fuzz case
+#: chain to end with the search of every orbit (the two drives on which the rigid orbit alone failed
+#: as a start, tests/drives/test_drive_orbits.py, hold 500 and 2,340; a fuzz case
 #: with a period of 1,789 held 74,000 and took minutes)
 MAX_DEFAULT_RESONANCES = 10_000
 

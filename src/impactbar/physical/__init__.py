@@ -47,7 +47,8 @@ short-impact limit),
 the presets' data), ``drifter`` (a hydraulic drifter whose valve switches on the piston's position,
 theory §10: supply pressure, piston areas, switch position, valve delay; its presets), ``circuit``
 (a drifter with its oil circuit, theory §11: chambers, valve, pump, accumulator; its presets), ``hammer``
-(scales and the dimensionless model; a hammer from a config, a TOML file or a preset), ``results``
+(scales and the dimensionless model; a hammer from a config, a TOML file or a preset), ``loader``
+(:func:`load`: any of these machines from its TOML file, told apart by its sections), ``results``
 (orbits and simulations in SI), ``rock`` (the drill string and the rock: the rod-rock law in SI and
 the drilling outputs per blow), ``piston`` (the stepped piston of most work on rock per blow,
 theory §12). This layer sits on
@@ -79,6 +80,8 @@ from .hammer import Hammer as Hammer
 from .hammer import Scales as Scales
 from .hammer import load_config as load_config
 from .hammer import preset as preset
+from .loader import config_keys as config_keys
+from .loader import load as load
 from .piston import OptimalPiston as OptimalPiston
 from .piston import optimize_piston as optimize_piston
 
@@ -119,7 +122,9 @@ __all__ = [
     "SHORT_IMPACT_LIMIT",
     "PRESETS",
     "preset",
+    "load",
     "load_config",
+    "config_keys",
     "orbits",
     "simulate",
     "Drifter",

@@ -33,6 +33,62 @@ _FORCE_KEYS = {
 _REQUIRED = {"bar", "stop", "drive", "force"}
 
 
+#: The kinds of configuration in SI units, each told apart by a section that only it has (the first
+#: found decides; a configuration with neither is a hammer's), with how a message names each.
+CONFIG_KINDS = {
+    "circuit": ("chambers", "a drifter with its oil circuit (it has a [chambers] section; theory §11)"),
+    "drifter": ("valve", "a drifter whose valve switches on the piston's position (it has a [valve] "
+                         "section and no [chambers]; theory §10)"),
+    "hammer": (None, "a hammer under a periodic force (it has no [valve] or [chambers] section)"),
+}
+
+
+def config_kind(config: dict) -> str:
+    """Which machine a configuration describes: ``"circuit"``, ``"drifter"`` or ``"hammer"``
+    (:data:`CONFIG_KINDS`).
+
+    Raises
+    ------
+    ValueError
+        Not a mapping of sections, or a sweep spec (its top-level ``task``).
+    """
+    if not isinstance(config, dict):
+        raise ValueError(f"a configuration must be a mapping of sections; got {type(config).__name__}")
+    if "task" in config:
+        raise ValueError("this is a sweep spec (it has a top-level 'task'), not a machine in SI units: "
+                         "run it with 'impactbar sweep'")
+    return next(kind for kind, (section, _) in CONFIG_KINDS.items() if section is None or section in config)
+
+
+def read_as(kind: str, path, exc: ValueError) -> ValueError:
+    """``exc`` with the file and the kind of machine it was read as in front: what was wrong is
+    then read against the right keys (a misspelt ``[chambers]`` makes a hammer of a circuit)."""
+    return ValueError(f"{path}: read as {CONFIG_KINDS[kind][1]}: {exc}")
+
+
+def read_toml(path) -> dict:
+    """The TOML file at ``path`` as a nested dict.
+
+    Raises
+    ------
+    ValueError
+        A missing or unreadable file, invalid TOML, or nesting too deep to read.
+    """
+    import tomllib
+
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except OSError as exc:
+        raise ValueError(f"cannot read the configuration {str(path)!r}: {exc.strerror}") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{str(path)!r} is not valid TOML: {exc}") from exc
+    except RecursionError as exc:  # tomllib recurses into nested arrays and inline tables
+        raise ValueError(f"{str(path)!r}: arrays or tables nested too deeply for a configuration"
+                         ) from exc
+
+
 def _section(config: dict, name: str, allowed: set | None = None) -> dict:
     """The table ``[name]`` of ``config`` (empty if absent), refused unless a table whose keys are
     among ``allowed`` (default: the hammer's keys of that section), naming the first unknown key."""

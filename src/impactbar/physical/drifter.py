@@ -357,8 +357,6 @@ DRIFTER_PRESETS: dict[str, dict] = {
         "model": {"n_modes": 0},
     },
 }
-#: former names of presets, still accepted with a FutureWarning
-RENAMED_DRIFTER_PRESETS = {"drifter-issue19": "hydraulic-drifter"}
 
 
 def drifter_preset(name: str, **changes) -> Drifter:
@@ -370,13 +368,6 @@ def drifter_preset(name: str, **changes) -> Drifter:
     ValueError
         An unknown preset name, or a change that makes the config invalid (the key named).
     """
-    if name in RENAMED_DRIFTER_PRESETS:
-        import warnings
-
-        new = RENAMED_DRIFTER_PRESETS[name]
-        warnings.warn(f"the drifter preset {name!r} is now called {new!r}; the old name will go",
-                      FutureWarning, stacklevel=2)
-        name = new
     if name not in DRIFTER_PRESETS:
         raise ValueError(f"unknown drifter preset {name!r}; known: {', '.join(DRIFTER_PRESETS)}")
     cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in DRIFTER_PRESETS[name].items()}

@@ -6,7 +6,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import tomllib
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,11 +29,15 @@ from .bar import (
 from .config import (
     _REQUIRED,
     _SECTIONS,
+    CONFIG_KINDS,
     PRESETS,
     _dimensionless,
     _force_from_config,
     _need,
     _section,
+    config_kind,
+    read_as,
+    read_toml,
 )
 from .forces import Force, FourierFit, HydraulicForce, MeasuredForce, PneumaticForce
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
@@ -448,25 +451,25 @@ def _hammer_from_config(config: dict, base_dir) -> Hammer:
 
 
 def load_config(path) -> Hammer:
-    """Read a hammer from a TOML file (keys in the module docstring).
+    """Read a hammer from a TOML file (keys in the module docstring); :func:`~impactbar.physical.load`
+    reads any configuration in SI units (a hammer's, a drifter's, a circuit's).
 
     Raises
     ------
     ValueError
-        A missing or malformed file, or any invalid key or value (named).
+        A missing or malformed file; a drifter's configuration (naming its kind and the reader that
+        takes it); any invalid key or value (named, after the kind of machine the file was read as).
     """
     path = Path(path)
+    config = read_toml(path)
+    kind = config_kind(config)
+    if kind != "hammer":
+        raise ValueError(f"{path} describes {CONFIG_KINDS[kind][1]}, not a hammer: read it with "
+                         "impactbar.physical.load")
     try:
-        with path.open("rb") as fh:
-            config = tomllib.load(fh)
-    except OSError as exc:
-        raise ValueError(f"cannot read the configuration {str(path)!r}: {exc.strerror}") from exc
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"{str(path)!r} is not valid TOML: {exc}") from exc
-    except RecursionError as exc:  # tomllib recurses into nested arrays and inline tables
-        raise ValueError(f"{str(path)!r}: arrays or tables nested too deeply for a configuration"
-                         ) from exc
-    return _hammer_from_config(config, path.parent)
+        return _hammer_from_config(config, path.parent)
+    except ValueError as exc:
+        raise read_as(kind, path, exc) from exc
 
 
 def preset(name: str) -> Hammer:

@@ -1,5 +1,5 @@
 """Ctrl-C during a long :func:`impactbar.simulate` run: caught between blocks of impacts, so that
-the run stops at a consistent state and keeps what it computed (issue 24)."""
+the run stops at a consistent state and keeps what it computed."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A run's fixed cost (issues 20, 41): the first block of impacts of a run under an instantaneous
+"""A run's fixed cost: the first block of impacts of a run under an instantaneous
 law, done by one call of the compiled kernel with the least Python around it. When that call ends
 the run in flight (at ``max_impacts`` or ``t_end``, with no contact) the run's log of pieces is
 built straight from the kernel's output (the start and one free flight per impact) and its final

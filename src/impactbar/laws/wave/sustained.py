@@ -229,7 +229,7 @@ class SustainedContact:
     def fv_at(self, piece, t) -> np.ndarray:
         """``c . q'`` (the struck end's velocity) at the times ``t``: the row ``c . q'`` of the
         eigenvectors and of the particular response applied directly, ``O(N)`` per time (the
-        whole state is ``O(N^2)``; issue 24: 256 modes took minutes)."""
+        whole state is ``O(N^2)``: at 256 modes it took minutes)."""
         t = np.asarray(t, dtype=float)
         dt = t - piece.ta
         tr = (self.fv * piece.coef) @ np.exp(np.outer(self.lam, dt))
@@ -293,7 +293,7 @@ class SustainedContact:
         (the eigenvalues, their conjugates and the load's harmonics ``+-i k``, the real part written
         as half a sum with its conjugate), and so is the load; every integrand is linear or quadratic
         in them, so each integral is ``sum C_j C_l (e^{(mu_j + mu_l) L} - 1)/(mu_j + mu_l)``: ``O(J^2)``
-        per piece, ``J = 2 (2 N + 1) + 2 K``, whatever ``s`` and the duration (issue 42: Gauss-Legendre
+        per piece, ``J = 2 (2 N + 1) + 2 K``, whatever ``s`` and the duration (Gauss-Legendre, as before,
         on panels as fine as the fastest transient took 12 s a load period at ``s = 50``, 40 modes)."""
         key = float(tau)
         memo = self.__dict__.setdefault("_integral_memo", {})
