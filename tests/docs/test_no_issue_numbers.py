@@ -11,17 +11,6 @@ ISSUE = re.compile(r"\bissues?[ \t_#-]*\d+", flags=re.I)
 #: what the documentation's build writes (``.gitignore``): copies of the sources scanned here
 GENERATED = {"_build", "api", "gallery", "tutorials", "api.rst", "sg_execution_times.rst", "guides.md"}
 
-#: Files still allowed to cite issue numbers: only the rod-rock law's, which another change is
-#: rewording now. Remove each path from this list as its text is reworded; do not add to it.
-STILL_ALLOWED = {
-    "src/impactbar/laws/rodrock/_bit.py",
-    "src/impactbar/laws/rodrock/_exactintegrals.py",
-    "src/impactbar/laws/rodrock/_rockkernel.py",
-    "src/impactbar/laws/rodrock/blow.py",
-    "src/impactbar/laws/rodrock/law.py",
-}
-
-
 def _scanned() -> list[Path]:
     docs = [p for p in (ROOT / "docs").rglob("*")
             if p.suffix in (".md", ".py", ".rst") and not GENERATED & set(p.relative_to(ROOT / "docs").parts)]
@@ -42,7 +31,6 @@ def test_the_scan_covers_what_a_user_reads():
             "docs/gallery_src/README.rst", "examples/circuit_drifter.toml", "examples/circuit_drifter.py",
             "src/impactbar/cli/drifter.py", "src/impactbar/physical/drifter.py"} <= names
     assert "CHANGELOG.md" not in names
-    assert STILL_ALLOWED <= names  # each allowed path exists: a moved file leaves the list
 
 
 def test_the_pattern_finds_each_way_of_writing_an_issue_number():
@@ -52,6 +40,5 @@ def test_the_pattern_finds_each_way_of_writing_an_issue_number():
 
 
 def test_no_issue_numbers_reach_the_user():
-    found = [c for p in _scanned() if p.relative_to(ROOT).as_posix() not in STILL_ALLOWED
-             for c in _citations(p)]
+    found = [c for p in _scanned() for c in _citations(p)]
     assert not found, "issue numbers cited (say what the text means instead):\n" + "\n".join(found)
