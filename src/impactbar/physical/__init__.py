@@ -46,7 +46,8 @@ short-impact limit),
 ``forces`` (pneumatic, hydraulic, measured), ``config`` (the keys of a TOML config, their checks,
 the presets' data), ``drifter`` (a hydraulic drifter whose valve switches on the piston's position,
 theory §10: supply pressure, piston areas, switch position, valve delay; its presets), ``circuit``
-(a drifter with its oil circuit, theory §11: chambers, valve, pump, accumulator; its presets), ``hammer``
+(a drifter with its oil circuit, theory §11: chambers, valve, pump, accumulator; its presets),
+``hydraulics`` (a circuit part's flow coefficient from its datasheet), ``hammer``
 (scales and the dimensionless model; a hammer from a config, a TOML file or a preset), ``loader``
 (:func:`load`: any of these machines from its TOML file, told apart by its sections), ``results``
 (orbits and simulations in SI), ``rock`` (the drill string and the rock: the rod-rock law in SI and
@@ -80,6 +81,7 @@ from .hammer import Hammer as Hammer
 from .hammer import Scales as Scales
 from .hammer import load_config as load_config
 from .hammer import preset as preset
+from .hydraulics import flow_coefficient as flow_coefficient
 from .loader import config_keys as config_keys
 from .loader import load as load
 from .piston import OptimalPiston as OptimalPiston
@@ -134,6 +136,7 @@ __all__ = [
     "circuit_preset",
     "CircuitBranch",
     "continue_circuit",
+    "flow_coefficient",
     "DrifterOrbit",
     "DRIFTER_PRESETS",
     "drifter_preset",
