@@ -124,3 +124,63 @@ def test_every_law_hook_the_solvers_call_is_declared_on_the_base():
     for n in called:  # a method has its docstring, a flag its entry among the class's attributes
         member = getattr(ContactLaw, n)
         assert member.__doc__ if callable(member) else f"    {n} : " in ContactLaw.__doc__, n
+
+
+def _module_statements(body):
+    """The statements that run at a module's import: its body and, recursively, the bodies of the
+    ``if``/``try``/``with``/``for``/``while`` blocks in it (not those of functions and classes)."""
+    import ast
+
+    for node in body:
+        yield node
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            continue
+        for field in ("body", "orelse", "finalbody", "handlers"):
+            yield from _module_statements(getattr(node, field, ()))
+
+
+def _module_bool_switches(source: str) -> list[str]:
+    """The module-level assignments of ``True`` or ``False`` to a name in ``source`` (plain,
+    annotated or augmented; a tuple of names each counted): ``"NAME = True"`` each. An assignment to
+    an attribute or an item (``array.flags.writeable = False``) sets no switch of the module and is
+    not counted; no name is excluded."""
+    import ast
+
+    out = []
+    for node in _module_statements(ast.parse(source).body):
+        if isinstance(node, ast.Assign):
+            pairs = []
+            for target in node.targets:
+                if isinstance(target, ast.Tuple) and isinstance(node.value, ast.Tuple):
+                    pairs += zip(target.elts, node.value.elts, strict=False)
+                else:
+                    pairs.append((target, node.value))
+        elif isinstance(node, (ast.AnnAssign, ast.AugAssign)) and node.value is not None:
+            pairs = [(node.target, node.value)]
+        else:
+            continue
+        out += [f"{t.id} = {v.value}" for t, v in pairs if isinstance(t, ast.Name)
+                and isinstance(v, ast.Constant) and isinstance(v.value, bool)]
+    return out
+
+
+def test_the_switch_finder_finds_planted_switches():
+    src = ("A = True\nB: bool = False\nif x:\n    C = True\nelse:\n    D = 1\ntry:\n    E = False\n"
+           "except OSError:\n    pass\nF, G = 1, True\nH = I = False\nflags.writeable = False\n"
+           "def f():\n    J = True\nclass K:\n    L = True\nM = bool(1)\nN = None\n")
+    assert _module_bool_switches(src) == ["A = True", "B = False", "C = True", "E = False", "G = True",
+                                          "H = False", "I = False"]
+
+
+def test_no_module_level_switches():
+    """No module of the package sets a name to ``True`` or ``False`` at its top level (nor in an
+    ``if``/``try`` block there): a choice of the way a computation runs is an argument of the
+    function, or an option of the object, that runs it, never a module global that a test or a
+    benchmark patches (what the switches of the oil circuit's flights and of the switched
+    continuation were). A fact found at import (numba's cache writable) is a function's value."""
+    import impactbar
+
+    top = Path(impactbar.__file__).parent
+    found = {str(p.relative_to(top)): s for p in sorted(top.rglob("*.py"))
+             if (s := _module_bool_switches(p.read_text(encoding="utf-8")))}
+    assert found == {}
