@@ -184,3 +184,85 @@ def test_no_module_level_switches():
     found = {str(p.relative_to(top)): s for p in sorted(top.rglob("*.py"))
              if (s := _module_bool_switches(p.read_text(encoding="utf-8")))}
     assert found == {}
+
+
+def _package_of(module: list[str]) -> str | None:
+    """The top-level package of a module's dotted name, split (``impactbar.orbits.orbit`` ->
+    ``orbits``, ``impactbar.model`` -> ``model``); ``None`` for ``impactbar`` itself."""
+    return module[1] if len(module) > 1 else None
+
+
+def _imports(top: Path):
+    """Every import of every module under ``top`` (the package's folder), those inside functions and
+    under ``if TYPE_CHECKING:`` included: ``(importing module, imported module, imported name or
+    None, line)``, each module a list of its dotted name's parts (relative imports resolved)."""
+    import ast
+
+    for p in sorted(top.rglob("*.py")):
+        parts = [top.name, *p.relative_to(top).with_suffix("").parts]
+        package = p.name == "__init__.py"
+        if package:
+            parts = parts[:-1]
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = parts if package else parts[:-1]
+                    base = base[:len(base) - node.level + 1]
+                    mod = base + (node.module.split(".") if node.module else [])
+                else:
+                    mod = node.module.split(".")
+                for alias in node.names:
+                    yield parts, mod, alias.name, node.lineno
+            elif isinstance(node, ast.Import):
+                for alias in node.names:
+                    yield parts, alias.name.split("."), None, node.lineno
+
+
+def _package_graph(top: Path) -> dict[str, dict[str, list[str]]]:
+    """``{A: {B: ["a.module:line", ...]}}``: the imports by which top-level package ``A`` reaches
+    package ``B`` (every import, :func:`_imports`)."""
+    graph: dict[str, dict[str, list[str]]] = {}
+    for importer, mod, name, line in _imports(top):
+        a = _package_of(importer)
+        if mod[0] != top.name or a is None:
+            continue
+        b = _package_of(mod if len(mod) > 1 or name is None else [*mod, name])
+        if b is not None and b != a:
+            graph.setdefault(a, {}).setdefault(b, []).append(f"{'.'.join(importer)}:{line}")
+    return graph
+
+
+def _two_way(graph: dict[str, dict[str, list[str]]]) -> list[str]:
+    """Each pair of packages that import each other, with the imports both ways."""
+    return [f"{a} <-> {b}: {graph[a][b]} / {graph[b][a]}" for a in sorted(graph) for b in sorted(graph[a])
+            if a < b and a in graph.get(b, {})]
+
+
+def test_the_package_graph_sees_every_import(tmp_path):
+    pkg = tmp_path / "pkg"
+    for folder in ("a", "b", "c"):
+        (pkg / folder).mkdir(parents=True)
+        (pkg / folder / "__init__.py").write_text("")
+    (pkg / "a" / "x.py").write_text("def f():\n    from ..b import y\n")
+    (pkg / "b" / "y.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                                    "    from pkg.a.x import f\n")
+    (pkg / "c" / "z.py").write_text("import pkg.a.x\nfrom .. import b\n")
+    (pkg / "m.py").write_text("from .c import z\n")
+    graph = _package_graph(pkg)
+    assert {a: sorted(v) for a, v in graph.items()} == {"a": ["b"], "b": ["a"], "c": ["a", "b"],
+                                                        "m": ["c"]}
+    assert _two_way(graph) == ["a <-> b: ['pkg.a.x:2'] / ['pkg.b.y:3']"]
+
+
+def test_no_two_packages_import_each_other():
+    """Between the top-level packages (the folders and modules under ``src/impactbar``; the root
+    ``impactbar/__init__.py``, which gathers the public names, apart) the imports go one way only,
+    counting every import: those inside functions (a result's ``plot`` method reaching the drawing)
+    and those under ``if TYPE_CHECKING:`` (a law's annotations) too. What both sides need lives
+    below both (the laws annotate with :class:`~impactbar.laws.base.BarModelLike`, the drawing reads
+    a branch's fields from the branch)."""
+    import impactbar
+
+    graph = _package_graph(Path(impactbar.__file__).parent)
+    assert {"orbits", "laws", "model", "continuation", "cli"} <= set(graph)
+    assert _two_way(graph) == []

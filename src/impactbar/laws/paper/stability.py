@@ -20,15 +20,15 @@ from ...dynamics.monodromy import (
     period_fundamental,
     sort_multipliers,
 )
+from ..base import BarModelLike
 
 if TYPE_CHECKING:
     from ...loads import Load
-    from ...model import BarModel
 
 __all__ = ["impact_map_jacobian", "floquet_multipliers", "rigid_multipliers", "trace_det"]
 
 
-def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_minus) -> np.ndarray:
+def impact_map_jacobian(model: BarModelLike, load: Load, phase: float, y_plus, y_minus) -> np.ndarray:
     """Analytic Jacobian of the impact map at a one-impact fixed point (theory §7).
 
     The map takes ``z = (tau, q_1..q_N, q_0'..q_N')`` just after one impact to the same just after
@@ -65,7 +65,7 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
     return DP
 
 
-def floquet_multipliers(model: BarModel, load: Load, phase: float, y_plus, y_minus, *,
+def floquet_multipliers(model: BarModelLike, load: Load, phase: float, y_plus, y_minus, *,
                         method: str = "auto") -> np.ndarray:
     r"""Floquet multipliers of a one-impact orbit under the paper's impact law (eqs. 10, 11): the
     eigenvalues of the impact map's Jacobian (theory §7), sorted by :func:`sort_multipliers`.
