@@ -266,3 +266,61 @@ def test_no_two_packages_import_each_other():
     graph = _package_graph(Path(impactbar.__file__).parent)
     assert {"orbits", "laws", "model", "continuation", "cli"} <= set(graph)
     assert _two_way(graph) == []
+
+
+#: modules under src/impactbar that are no package of their own but the shared base every package
+#: may reach into (validation, statuses, schemas, numba's cache; the version string)
+SHARED_BASE = ("_shared", "_version")
+#: at most this many imports of a private name or module from another package
+MAX_PRIVATE_IMPORTS = 5
+
+
+def _private(part: str) -> bool:
+    return part.startswith("_") and not part.startswith("__")
+
+
+def _private_imports(top: Path) -> list[str]:
+    """Each import (every one, :func:`_imports`; an ``import from`` once per name) by a module of one
+    top-level package of a name or module of another (not of :data:`SHARED_BASE`) where a part of the
+    imported module's dotted path, or the imported name, starts with a single underscore
+    (``from ..dynamics import _kernel``, ``from ..orbits._newton import normalise``,
+    ``from ..orbits.multi_impact import _Segments``): ``"importer:line <- module.name"`` each."""
+    out = []
+    for importer, mod, name, line in _imports(top):
+        a = _package_of(importer)
+        full = [*mod, name] if name is not None else mod
+        if full[0] != top.name or a is None or len(full) < 2:
+            continue
+        b = full[1]
+        if b in SHARED_BASE or b == a:
+            continue
+        if any(_private(part) for part in full[1:]):
+            out.append(f"{'.'.join(importer)}:{line} <- {'.'.join(full)}")
+    return out
+
+
+def test_the_private_import_count_sees_each_form(tmp_path):
+    pkg = tmp_path / "pkg"
+    for folder in ("a", "b", "_shared"):
+        (pkg / folder).mkdir(parents=True)
+        (pkg / folder / "__init__.py").write_text("")
+    (pkg / "a" / "x.py").write_text(
+        "from ..b import _k, y\nfrom ..b._m import f, g\nimport pkg.b._m\nfrom .._shared import _s\n"
+        "from . import _own\nfrom ..b.c import __doc__\ndef h():\n    from pkg.b.c import _late\n")
+    assert _private_imports(pkg) == [
+        "pkg.a.x:1 <- pkg.b._k", "pkg.a.x:2 <- pkg.b._m.f", "pkg.a.x:2 <- pkg.b._m.g",
+        "pkg.a.x:3 <- pkg.b._m", "pkg.a.x:8 <- pkg.b.c._late"]
+
+
+def test_few_private_names_cross_a_package():
+    """A package takes another's private names (an underscored name, or anything from an underscored
+    module) at most :data:`MAX_PRIVATE_IMPORTS` times, every import counted (those inside functions
+    too): what is truly shared has a public name in a module that says it is the interface
+    between the packages (``dynamics.kernels`` for the compiled building blocks, ``dynamics.monodromy``
+    for the laws' multipliers, ``dynamics.invariants``, ``orbits.segments`` for what the continuation
+    needs of the Newton solver). The shared base (:data:`SHARED_BASE`) is no package and is not
+    counted."""
+    import impactbar
+
+    found = _private_imports(Path(impactbar.__file__).parent)
+    assert len(found) <= MAX_PRIVATE_IMPORTS, "\n".join(found)

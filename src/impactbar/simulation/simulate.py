@@ -35,7 +35,7 @@ import numpy as np
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
 from ..drives.base import autonomous
-from ..dynamics import _kernel as K
+from ..dynamics import kernels as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
 from ..loads import Load

@@ -34,13 +34,13 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from ...dynamics import _kernel as K
+from ...dynamics import kernels as K
 from ...dynamics import monodromy as MD
 from ...dynamics.certified import cosine_roots
 from ...dynamics.implementations import use_fast
 from ...dynamics.kernelview import FOURIER, PIECEWISE, ModalBasisView
 from ...dynamics.modal import fundamental
-from ...dynamics.monodromy import _aberth, _arrival_derivative, _impact_fields, sort_multipliers
+from ...dynamics.monodromy import aberth, arrival_derivative, impact_fields, sort_multipliers
 from ...loads import FourierLoad, Load, PiecewiseConstantLoad
 from ..base import BarModelLike, OrbitState
 from .impact import _wave_impact, window_drive
@@ -544,7 +544,7 @@ def wave_impact_map_jacobian(model: BarModelLike, load: Load, phase: float, y_en
     """
     M = model.n_modes + 1
     T, F = _window(model)
-    dY, r = _arrival_derivative(model, load, phase + T, F, y_end, y_minus, phase + TWO_PI,
+    dY, r = arrival_derivative(model, load, phase + T, F, y_end, y_minus, phase + TWO_PI,
                                 _flight_fundamental(model))
     dY = -model.R * dY + np.outer(np.concatenate(drive_rate), r)
     DP = np.empty((2 * M, 2 * M))
@@ -605,7 +605,7 @@ def wave_floquet_multipliers(model: BarModelLike, load: Load, phase: float, y_en
         parts = _wave_structured_parts(model, load, phase, y_end, y_minus, drive_rate)
     except ValueError:  # exact grazing: a multiplier is infinite
         return np.full(2 * M, np.inf + 0j)
-    mu = _aberth(*parts)
+    mu = aberth(*parts)
     if mu is None:
         DP = wave_impact_map_jacobian(model, load, phase, y_end, y_minus, drive_rate)
         return sort_multipliers(np.linalg.eigvals(DP))
@@ -620,7 +620,7 @@ def _wave_structured_parts(model, load, phase, y_end, y_minus, drive_rate):
     R = model.R
     c = model.end_weights
     T, F = _window(model)
-    v, (f0q, f0v), (f1q, f1v) = _impact_fields(model, load, phase + T, y_end, y_minus, phase + TWO_PI)
+    v, (f0q, f0v), (f1q, f1v) = impact_fields(model, load, phase + T, y_end, y_minus, phase + TWO_PI)
     p11, p12, p21, p22 = _flight_fundamental(model)
     hq = f1q - (p11 * f0q + p12 * f0v)
     hv = f1v - (p21 * f0q + p22 * f0v)
