@@ -6,11 +6,11 @@ Run: ``python benchmarks/bench_circuit.py`` (``--quick``: the rigid piston only)
 ``circuit-drifter`` (dimensionless, ``impactbar.physical.circuit_preset``) and on the ideal valve
 with the preset's forces at its mean supply pressure (``PositionSwitchedDrive``): the time of
 ``find_orbit`` from the default guess, of ``simulate`` over 100 blows and of one continuation point in
-the accumulator's pre-charge; beside each, the same call with ``flight.COMPILED = False`` (every call
+the accumulator's pre-charge; beside each, the same call with the drive's ``compiled=False`` (every call
 of the vector field, its Jacobian and the events through Python, as before). One stroke flight by
 CVODE both ways and by scipy's Radau on the same compiled right-hand side and Jacobian, with CVODE's
 own counters for it. Without ``--quick``, ``find_orbit`` with flexible pistons: 1 mode both ways,
-8 modes with the variational flights' band solver against the dense one (``flight.BAND = False``,
+8 modes with the variational flights' band solver against the dense one (the drive's ``band=False``,
 the way before; about four minutes). Issue 38's goals on this 2-core machine: the rigid orbit
 <= 0.5 s, with 8 modes <= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a
 few repetitions (the machine's other load only adds); compilation is done before the clock starts.
@@ -19,7 +19,8 @@ few repetitions (the machine's other load only adds); compilation is done before
 from __future__ import annotations
 
 import argparse
-import contextlib
+import dataclasses
+import functools
 import time
 
 import impactbar.drives.circuit.flight as FL
@@ -36,17 +37,10 @@ def best(fn, reps):
     return out
 
 
-@contextlib.contextmanager
-def flags(**values):
-    """``flight.COMPILED`` / ``flight.BAND`` set for a block."""
-    keep = {k: getattr(FL, k) for k in values}
-    for k, v in values.items():
-        setattr(FL, k, v)
-    try:
-        yield
-    finally:
-        for k, v in keep.items():
-            setattr(FL, k, v)
+def before(drive, **options):
+    """The drive with its flights integrated the way before (``compiled=False``: through
+    scikit-sundae's Python interface; ``band=False``: the dense solver)."""
+    return dataclasses.replace(drive, **options)
 
 
 def rigid_rows(d, drive):
@@ -59,23 +53,22 @@ def rigid_rows(d, drive):
                                   switch_out=drive.valve.switch_out)
     oi = find_orbit(model, ideal)
     start = InitialState.rigid(0.0, 0.0, 0)
+    slow = before(drive, compiled=False)
     tasks = {
-        "find_orbit from the default guess": (lambda: find_orbit(model, drive),
+        "find_orbit from the default guess": (lambda dr: find_orbit(model, dr),
                                               lambda: find_orbit(model, ideal)),
-        "simulate, 100 blows": (lambda: simulate(model, drive, start, 100.5 * o.period),
+        "simulate, 100 blows": (lambda dr: simulate(model, dr, start, 100.5 * o.period),
                                 lambda: simulate(model, ideal, start, 100.5 * oi.period)),
     }
     out = {}
     for name, (circuit, ideal_fn) in tasks.items():
-        now = best(circuit, 3)
-        with flags(COMPILED=False):
-            before = best(circuit, 2)
-        out[name] = (now, before, best(ideal_fn, 3))
+        out[name] = (best(functools.partial(circuit, drive), 3), best(functools.partial(circuit, slow), 2),
+                     best(ideal_fn, 3))
+    o_slow = find_orbit(model, slow)
     now = min(_cont_point(o, "precharge", drive.accumulator.precharge) for _ in range(3))
-    with flags(COMPILED=False):
-        before = min(_cont_point(o, "precharge", drive.accumulator.precharge) for _ in range(2))
+    then = min(_cont_point(o_slow, "precharge", drive.accumulator.precharge) for _ in range(2))
     ideal_point = min(_cont_point(oi, "switch_out", ideal.switch_out) for _ in range(3))
-    out["a continuation point (pre-charge)"] = (now, before, ideal_point)
+    out["a continuation point (pre-charge)"] = (now, then, ideal_point)
     return out
 
 
@@ -93,14 +86,12 @@ def flexible_rows(d, drive):
     m1 = d.model().with_(n_modes=1)
     find_orbit(m1, drive)
     now = best(lambda: find_orbit(m1, drive), 2)
-    with flags(COMPILED=False):
-        before = best(lambda: find_orbit(m1, drive), 1)
-    out.append((1, "through scikit-sundae", now, before))
+    then = best(lambda: find_orbit(m1, before(drive, compiled=False)), 1)
+    out.append((1, "through scikit-sundae", now, then))
     m8 = d.model().with_(n_modes=8)
     now = best(lambda: find_orbit(m8, drive), 1)
-    with flags(BAND=False):
-        before = best(lambda: find_orbit(m8, drive), 1)
-    out.append((8, "dense solver", now, before))
+    then = best(lambda: find_orbit(m8, before(drive, band=False)), 1)
+    out.append((8, "dense solver", now, then))
     return out
 
 
@@ -139,15 +130,14 @@ def integrators(d, drive):
     arrival.terminal, arrival.direction = True, 1
     y0 = np.concatenate((q, v, state.z, np.zeros(K.N_ENERGY)))
 
-    def one():
-        return FL.circuit_flight(drive, model, state, 0.0, q, v, 50.0)
+    def one(compiled=True):
+        return FL.circuit_flight(drive, model, state, 0.0, q, v, 50.0, compiled=compiled)
 
     one()  # warm-up
     t_cv = best(one, 5)
     fl = one()
     stats = _cvode.last_workspace().statistics()
-    with flags(COMPILED=False):
-        t_py = best(one, 3)
+    t_py = best(lambda: one(compiled=False), 3)
     f(0.0, y0), jac(0.0, y0)  # (compiled before the clock starts)
     calls[0] = 0
     t = time.perf_counter()

@@ -124,3 +124,203 @@ def test_every_law_hook_the_solvers_call_is_declared_on_the_base():
     for n in called:  # a method has its docstring, a flag its entry among the class's attributes
         member = getattr(ContactLaw, n)
         assert member.__doc__ if callable(member) else f"    {n} : " in ContactLaw.__doc__, n
+
+
+def _module_statements(body):
+    """The statements that run at a module's import: its body and, recursively, the bodies of the
+    ``if``/``try``/``with``/``for``/``while`` blocks in it (not those of functions and classes)."""
+    import ast
+
+    for node in body:
+        yield node
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            continue
+        for field in ("body", "orelse", "finalbody", "handlers"):
+            yield from _module_statements(getattr(node, field, ()))
+
+
+def _module_bool_switches(source: str) -> list[str]:
+    """The module-level assignments of ``True`` or ``False`` to a name in ``source`` (plain,
+    annotated or augmented; a tuple of names each counted): ``"NAME = True"`` each. An assignment to
+    an attribute or an item (``array.flags.writeable = False``) sets no switch of the module and is
+    not counted; no name is excluded."""
+    import ast
+
+    out = []
+    for node in _module_statements(ast.parse(source).body):
+        if isinstance(node, ast.Assign):
+            pairs = []
+            for target in node.targets:
+                if isinstance(target, ast.Tuple) and isinstance(node.value, ast.Tuple):
+                    pairs += zip(target.elts, node.value.elts, strict=False)
+                else:
+                    pairs.append((target, node.value))
+        elif isinstance(node, (ast.AnnAssign, ast.AugAssign)) and node.value is not None:
+            pairs = [(node.target, node.value)]
+        else:
+            continue
+        out += [f"{t.id} = {v.value}" for t, v in pairs if isinstance(t, ast.Name)
+                and isinstance(v, ast.Constant) and isinstance(v.value, bool)]
+    return out
+
+
+def test_the_switch_finder_finds_planted_switches():
+    src = ("A = True\nB: bool = False\nif x:\n    C = True\nelse:\n    D = 1\ntry:\n    E = False\n"
+           "except OSError:\n    pass\nF, G = 1, True\nH = I = False\nflags.writeable = False\n"
+           "def f():\n    J = True\nclass K:\n    L = True\nM = bool(1)\nN = None\n")
+    assert _module_bool_switches(src) == ["A = True", "B = False", "C = True", "E = False", "G = True",
+                                          "H = False", "I = False"]
+
+
+def test_no_module_level_switches():
+    """No module of the package sets a name to ``True`` or ``False`` at its top level (nor in an
+    ``if``/``try`` block there): a choice of the way a computation runs is an argument of the
+    function, or an option of the object, that runs it, never a module global that a test or a
+    benchmark patches (what the switches of the oil circuit's flights and of the switched
+    continuation were). A fact found at import (numba's cache writable) is a function's value."""
+    import impactbar
+
+    top = Path(impactbar.__file__).parent
+    found = {str(p.relative_to(top)): s for p in sorted(top.rglob("*.py"))
+             if (s := _module_bool_switches(p.read_text(encoding="utf-8")))}
+    assert found == {}
+
+
+def _package_of(module: list[str]) -> str | None:
+    """The top-level package of a module's dotted name, split (``impactbar.orbits.orbit`` ->
+    ``orbits``, ``impactbar.model`` -> ``model``); ``None`` for ``impactbar`` itself."""
+    return module[1] if len(module) > 1 else None
+
+
+def _imports(top: Path):
+    """Every import of every module under ``top`` (the package's folder), those inside functions and
+    under ``if TYPE_CHECKING:`` included: ``(importing module, imported module, imported name or
+    None, line)``, each module a list of its dotted name's parts (relative imports resolved)."""
+    import ast
+
+    for p in sorted(top.rglob("*.py")):
+        parts = [top.name, *p.relative_to(top).with_suffix("").parts]
+        package = p.name == "__init__.py"
+        if package:
+            parts = parts[:-1]
+        for node in ast.walk(ast.parse(p.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = parts if package else parts[:-1]
+                    base = base[:len(base) - node.level + 1]
+                    mod = base + (node.module.split(".") if node.module else [])
+                else:
+                    mod = node.module.split(".")
+                for alias in node.names:
+                    yield parts, mod, alias.name, node.lineno
+            elif isinstance(node, ast.Import):
+                for alias in node.names:
+                    yield parts, alias.name.split("."), None, node.lineno
+
+
+def _package_graph(top: Path) -> dict[str, dict[str, list[str]]]:
+    """``{A: {B: ["a.module:line", ...]}}``: the imports by which top-level package ``A`` reaches
+    package ``B`` (every import, :func:`_imports`)."""
+    graph: dict[str, dict[str, list[str]]] = {}
+    for importer, mod, name, line in _imports(top):
+        a = _package_of(importer)
+        if mod[0] != top.name or a is None:
+            continue
+        b = _package_of(mod if len(mod) > 1 or name is None else [*mod, name])
+        if b is not None and b != a:
+            graph.setdefault(a, {}).setdefault(b, []).append(f"{'.'.join(importer)}:{line}")
+    return graph
+
+
+def _two_way(graph: dict[str, dict[str, list[str]]]) -> list[str]:
+    """Each pair of packages that import each other, with the imports both ways."""
+    return [f"{a} <-> {b}: {graph[a][b]} / {graph[b][a]}" for a in sorted(graph) for b in sorted(graph[a])
+            if a < b and a in graph.get(b, {})]
+
+
+def test_the_package_graph_sees_every_import(tmp_path):
+    pkg = tmp_path / "pkg"
+    for folder in ("a", "b", "c"):
+        (pkg / folder).mkdir(parents=True)
+        (pkg / folder / "__init__.py").write_text("")
+    (pkg / "a" / "x.py").write_text("def f():\n    from ..b import y\n")
+    (pkg / "b" / "y.py").write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                                    "    from pkg.a.x import f\n")
+    (pkg / "c" / "z.py").write_text("import pkg.a.x\nfrom .. import b\n")
+    (pkg / "m.py").write_text("from .c import z\n")
+    graph = _package_graph(pkg)
+    assert {a: sorted(v) for a, v in graph.items()} == {"a": ["b"], "b": ["a"], "c": ["a", "b"],
+                                                        "m": ["c"]}
+    assert _two_way(graph) == ["a <-> b: ['pkg.a.x:2'] / ['pkg.b.y:3']"]
+
+
+def test_no_two_packages_import_each_other():
+    """Between the top-level packages (the folders and modules under ``src/impactbar``; the root
+    ``impactbar/__init__.py``, which gathers the public names, apart) the imports go one way only,
+    counting every import: those inside functions (a result's ``plot`` method reaching the drawing)
+    and those under ``if TYPE_CHECKING:`` (a law's annotations) too. What both sides need lives
+    below both (the laws annotate with :class:`~impactbar.laws.base.BarModelLike`, the drawing reads
+    a branch's fields from the branch)."""
+    import impactbar
+
+    graph = _package_graph(Path(impactbar.__file__).parent)
+    assert {"orbits", "laws", "model", "continuation", "cli"} <= set(graph)
+    assert _two_way(graph) == []
+
+
+#: modules under src/impactbar that are no package of their own but the shared base every package
+#: may reach into (validation, statuses, schemas, numba's cache; the version string)
+SHARED_BASE = ("_shared", "_version")
+#: at most this many imports of a private name or module from another package
+MAX_PRIVATE_IMPORTS = 5
+
+
+def _private(part: str) -> bool:
+    return part.startswith("_") and not part.startswith("__")
+
+
+def _private_imports(top: Path) -> list[str]:
+    """Each import (every one, :func:`_imports`; an ``import from`` once per name) by a module of one
+    top-level package of a name or module of another (not of :data:`SHARED_BASE`) where a part of the
+    imported module's dotted path, or the imported name, starts with a single underscore
+    (``from ..dynamics import _kernel``, ``from ..orbits._newton import normalise``,
+    ``from ..orbits.multi_impact import _Segments``): ``"importer:line <- module.name"`` each."""
+    out = []
+    for importer, mod, name, line in _imports(top):
+        a = _package_of(importer)
+        full = [*mod, name] if name is not None else mod
+        if full[0] != top.name or a is None or len(full) < 2:
+            continue
+        b = full[1]
+        if b in SHARED_BASE or b == a:
+            continue
+        if any(_private(part) for part in full[1:]):
+            out.append(f"{'.'.join(importer)}:{line} <- {'.'.join(full)}")
+    return out
+
+
+def test_the_private_import_count_sees_each_form(tmp_path):
+    pkg = tmp_path / "pkg"
+    for folder in ("a", "b", "_shared"):
+        (pkg / folder).mkdir(parents=True)
+        (pkg / folder / "__init__.py").write_text("")
+    (pkg / "a" / "x.py").write_text(
+        "from ..b import _k, y\nfrom ..b._m import f, g\nimport pkg.b._m\nfrom .._shared import _s\n"
+        "from . import _own\nfrom ..b.c import __doc__\ndef h():\n    from pkg.b.c import _late\n")
+    assert _private_imports(pkg) == [
+        "pkg.a.x:1 <- pkg.b._k", "pkg.a.x:2 <- pkg.b._m.f", "pkg.a.x:2 <- pkg.b._m.g",
+        "pkg.a.x:3 <- pkg.b._m", "pkg.a.x:8 <- pkg.b.c._late"]
+
+
+def test_few_private_names_cross_a_package():
+    """A package takes another's private names (an underscored name, or anything from an underscored
+    module) at most :data:`MAX_PRIVATE_IMPORTS` times, every import counted (those inside functions
+    too): what is truly shared has a public name in a module that says it is the interface
+    between the packages (``dynamics.kernels`` for the compiled building blocks, ``dynamics.monodromy``
+    for the laws' multipliers, ``dynamics.invariants``, ``orbits.segments`` for what the continuation
+    needs of the Newton solver). The shared base (:data:`SHARED_BASE`) is no package and is not
+    counted."""
+    import impactbar
+
+    found = _private_imports(Path(impactbar.__file__).parent)
+    assert len(found) <= MAX_PRIVATE_IMPORTS, "\n".join(found)

@@ -5,6 +5,7 @@ Both run the same SUNDIALS library with the same options and the same compiled v
 steps must agree to the bit: a difference in an option, a callback or the root handling shows.
 """
 
+import dataclasses
 import sys
 import threading
 
@@ -48,13 +49,10 @@ def start(model):
     return q, v, DriveState((1, 1, 1, 0), np.array([0.9, 0.9, 0.9, 0.3]))
 
 
-def both(fn, monkeypatch):
-    """``fn()`` by the compiled driver, then through scikit-sundae's interface."""
-    out = fn()
-    monkeypatch.setattr(F, "COMPILED", False)
-    ref = fn()
-    monkeypatch.setattr(F, "COMPILED", True)
-    return out, ref
+def both(fn):
+    """``fn(True)`` (by the compiled driver, the default), then ``fn(False)`` (through
+    scikit-sundae's interface)."""
+    return fn(True), fn(False)
 
 
 def test_the_libraries_bind_here():
@@ -65,12 +63,12 @@ def test_the_libraries_bind_here():
 
 
 @pytest.mark.parametrize("model", [RIGID, FLEX], ids=["rigid", "2 modes"])
-def test_a_flight_is_the_bindings_to_the_bit(model, monkeypatch):
+def test_a_flight_is_the_bindings_to_the_bit(model):
     if not _sundials.available():
         pytest.skip(_sundials.reason())
     drive = pumped()
     q, v, state = start(model)
-    fl, ref = both(lambda: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0), monkeypatch)
+    fl, ref = both(lambda c: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, compiled=c))
     assert fl.end == ref.end == EVENT and fl.events[0].name == "ramp_end"
     assert fl.piece.t.size > 100
     assert np.array_equal(fl.piece.t, ref.piece.t)
@@ -86,15 +84,15 @@ def test_a_flight_is_the_bindings_to_the_bit(model, monkeypatch):
 
 
 @pytest.mark.parametrize("model", [RIGID, FLEX], ids=["rigid", "2 modes"])
-def test_a_variational_flight_by_the_band_solver_is_the_dense_ones(model, monkeypatch):
+def test_a_variational_flight_by_the_band_solver_is_the_dense_ones(model):
     """The variational flights' Newton systems solved by the band solver (half-bandwidths n - 1,
     ``Phi`` stored by columns) against scikit-sundae's dense solver: the same to rounding."""
     if not _sundials.available():
         pytest.skip(_sundials.reason())
     drive = pumped()
     q, v, state = start(model)
-    fl, ref = both(lambda: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, variational=True),
-                   monkeypatch)
+    fl, ref = both(lambda c: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, variational=True,
+                                              compiled=c))
     from impactbar.drives.circuit import _cvode
 
     assert _cvode.last_workspace() is not None and _cvode.last_workspace().band == 2 * model.n_modes + 5
@@ -122,15 +120,36 @@ def test_a_variational_flight_by_the_band_solver_is_the_dense_ones(model, monkey
 
 
 def test_runs_and_orbits_are_the_bindings_to_the_bit(monkeypatch):
+    """The drive's ``compiled`` option reaches every flight of a run and of an orbit's search (each
+    through the binding with ``compiled=False``, none with the default)."""
     if not _sundials.available():
         pytest.skip(_sundials.reason())
     drive = pumped()
-    run, ref = both(lambda: simulate(RIGID, drive, InitialState.rigid(0.0, 0.0), 8.0), monkeypatch)
+    assert drive == pumped() and drive != dataclasses.replace(drive, compiled=False)
+    assert repr(dataclasses.replace(drive, compiled=False, band=False)) == repr(drive)
+    with pytest.raises(ValueError, match="compiled must be True or False"):
+        dataclasses.replace(drive, compiled=1)
+
+    through = []
+    binding = F._integrate_binding
+    monkeypatch.setattr(F, "_integrate_binding", lambda *a: through.append(1) or binding(*a))
+
+    def with_(c):
+        through.clear()
+        return dataclasses.replace(drive, compiled=c)
+
+    run = simulate(RIGID, with_(True), InitialState.rigid(0.0, 0.0), 8.0)
+    assert through == []
+    ref = simulate(RIGID, with_(False), InitialState.rigid(0.0, 0.0), 8.0)
+    assert len(through) >= run.n_impacts
     assert run.n_impacts >= 3
     assert np.array_equal(run.impact_times, ref.impact_times)
     assert np.array_equal(run.impact_velocities, ref.impact_velocities)
     assert drive.energy(run) == drive.energy(ref)
-    o, oref = both(lambda: find_orbit(RIGID, drive), monkeypatch)
+    o = find_orbit(RIGID, with_(True))
+    assert through == []
+    oref = find_orbit(RIGID, with_(False))
+    assert len(through) > 0 and oref.drive.compiled is False
     assert o.period == oref.period and np.array_equal(o.multipliers, oref.multipliers)
 
 

@@ -316,7 +316,7 @@ def test_compiled_aberth_gives_up_cleanly():
     """The compiled Aberth sweeps: the same zeros as dense eigvals when they settle, ``None`` (so the
     dense method takes over) when the sweeps run out or a start sits on a pole, never an error."""
     from impactbar.dynamics._aberthkernel import aberth_iterate
-    from impactbar.dynamics.monodromy import _aberth
+    from impactbar.dynamics.monodromy import aberth
     from impactbar.laws.paper.stability import _structured_parts
 
     model, load = BarModel(5.0, 0.1, 0.5, 48), CosineLoad(0.6, 1.0)
@@ -324,17 +324,17 @@ def test_compiled_aberth_gives_up_cleanly():
     yp, ym = _impact_states(model, load, ph)
     parts = _structured_parts(model, load, ph, yp, ym)
     dense = np.linalg.eigvals(impact_map_jacobian(model, load, ph, yp, ym))
-    mu = _aberth(*parts)
+    mu = aberth(*parts)
     assert mu is not None and mu.shape == (2 * 49,)
     assert _set_distance(mu, dense) < 1e-10
-    assert _aberth(*parts, iters=1) is None
+    assert aberth(*parts, iters=1) is None
     x = np.full(4, 1.0 + 0.0j)  # on the pole of a block with trace 1, determinant 0
     assert not aberth_iterate(x, np.ones(2), np.zeros(2), np.zeros((4, 2)), np.zeros(2, complex), 5, 1e-12)
     a, b, c, e, U, V, ut, vt = parts  # factors that are not the extended state's: refused
     V = V.copy()
     V[3, 0, 0] = 1.0
     with pytest.raises(ValueError, match="extended state"):
-        _aberth(a, b, c, e, U, V, ut, vt)
+        aberth(a, b, c, e, U, V, ut, vt)
 
 
 def test_heavy_damping_keeps_the_dense_method():

@@ -159,7 +159,7 @@ def test_jumps_located_from_the_coefficients():
     first 64 Fourier coefficients: the jumps come back to 2e-5 in position and 2e-3 in size (the
     smooth part's low modes limit the fit), and the fields rebuilt from them agree to 2e-3 away
     from the jumps, where the series alone is 0.19 off (its Gibbs overshoot)."""
-    from impactbar.laws.wave._characteristics import _LocatedPiston, _Piston
+    from impactbar.laws.wave._characteristics import PistonInvariants, _LocatedPiston
     from impactbar.laws.wave._jumps import locate_jumps
 
     N = 64
@@ -173,7 +173,7 @@ def test_jumps_located_from_the_coefficients():
     np.testing.assert_allclose(Jf[:-1][order], [0.5, -0.2], atol=2e-3)
     assert yf[-1] == 0.0 and Jf[-1] == 0.0 and not np.any(Lf)
     # W(y) = alpha0(y), y >= 0; beta0(-y), y < 0 (a piston whose series are a, b, no drive)
-    piston = _Piston(1.0, np.zeros(N + 1), np.zeros(N + 1))
+    piston = PistonInvariants(1.0, np.zeros(N + 1), np.zeros(N + 1))
     piston.a, piston.b = a.copy(), b.copy()
     located = _LocatedPiston(piston, yf, (Jf, Kf, Lf))
     x = np.linspace(0.0, 1.0, 2001)

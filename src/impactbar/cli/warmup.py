@@ -75,9 +75,9 @@ def run(args) -> int:
     kernels numba compiled (0 once they are cached)."""
     from numba.core import event
 
-    from ..dynamics import _tiers
+    from ..dynamics.kernels import disable_tiers
 
-    _tiers.disable()  # every kernel compiled here, not run interpreted while a child compiles it
+    disable_tiers()  # every kernel compiled here, not run interpreted while a child compiles it
 
     class Count(event.Listener):
         n = 0

@@ -164,6 +164,10 @@ class Branch:
     periods: int
     _points: np.ndarray = field(repr=False, default=None)
 
+    #: the orbits' fields at each point (:data:`POINT_FIELDS`): the tables' columns and what
+    #: :meth:`plot` can draw (the drawing reads them here, below which it does not import)
+    point_fields: ClassVar[Schema] = POINT_FIELDS
+
     def __len__(self) -> int:
         return int(self.values.size)
 

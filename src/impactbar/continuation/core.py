@@ -20,10 +20,16 @@ from scipy.optimize import brentq
 from .._shared.forcing import dispatch
 from .._shared.status import BranchStatus, EventKind
 from .._shared.threads import single_threaded_blas
-from ..orbits._assemble import _build
-from ..orbits._newton import _halves_gap, _normalise, _same_orbit
-from ..orbits.multi_impact import _Segments, _unknowns_from, doubling_direction
 from ..orbits.orbit import PeriodicOrbit
+from ..orbits.segments import (
+    SegmentProblem,
+    build_orbit,
+    doubling_direction,
+    halves_gap,
+    normalise,
+    same_orbit,
+    unknowns_from,
+)
 from ..orbits.switched import check_orbit
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
@@ -49,7 +55,7 @@ class _OrbitProblem:
         self.model0, self.load0, self.name, self.m, self.n, self.tol = model, load, name, m, n, tol
         self.events, self.stop_on, self.xtol, self.doubled = events, stop_on, xtol, doubled
         self._cache = {}
-        size = _Segments(model, load, m, n).size  # (t, state) per impact
+        size = SegmentProblem(model, load, m, n).size  # (t, state) per impact
         # weighted arclength: the state's squared norm is averaged over its components (as AUTO
         # does), so the parameter keeps its share however many modes and impacts there are
         self.W = np.append(np.full(size, 1.0 / size), 1.0)
@@ -59,7 +65,7 @@ class _OrbitProblem:
         p = self._cache.get(key)
         if p is None:
             model, load = with_parameter(self.model0, self.load0, self.name, key)
-            p = _Segments(model, load, self.m, self.n)
+            p = SegmentProblem(model, load, self.m, self.n)
             if len(self._cache) > 16:
                 self._cache.pop(next(iter(self._cache)))
             self._cache[key] = p
@@ -91,17 +97,17 @@ class _OrbitProblem:
     def orbit(self, U, admissibility=True):
         """The orbit at a branch point, its first impact time brought into ``[0, 2 pi)``."""
         p = self.segments(U[-1])
-        u = _normalise(p, U[:-1])
-        return _build(p, U[:-1] if u is None else u, admissibility=admissibility)
+        u = normalise(p, U[:-1])
+        return build_orbit(p, U[:-1] if u is None else u, admissibility=admissibility)
 
     def acceptable(self, U):
         """The impact times stay in order (and apart by the contact windows); on a branch born at
         a period doubling, the orbit stays doubled (a step onto the undoubled orbit traversed
         twice, which crosses the branch at the doubling, is refused)."""
         p = self.segments(U[-1])
-        if self.doubled and _same_orbit(U[:-1], U[:-1], p):
+        if self.doubled and same_orbit(U[:-1], U[:-1], p):
             return False
-        return _normalise(p, U[:-1]) is not None
+        return normalise(p, U[:-1]) is not None
 
     def after_point(self, engine, points, tangents, orbits):
         """The events between the last two points, and the status to stop with (``stop_on``)."""
@@ -260,7 +266,7 @@ CONTINUATIONS = {"load": _continue_load, "drive": _continue_drive}
 def _start(engine, base, lam0, direction):
     """The start point on the branch and its tangent towards ``to``."""
     problem = engine.problem
-    u0 = _unknowns_from(problem.segments(lam0), base.impact_times, base.states_after_impact)
+    u0 = unknowns_from(problem.segments(lam0), base.impact_times, base.states_after_impact)
     U0 = np.append(u0, lam0)
     F0, J0, _ = problem.FJ(U0)
     if float(np.max(np.abs(F0))) <= 1e-11 * max(1.0, float(np.max(np.abs(U0)))):
@@ -292,7 +298,7 @@ def _switch(engine, ev, lam0, steps):
     ranks = [r for r, i in enumerate(np.argsort(near, kind="stable")) if r == 0 or
              (real[i] and near[i] <= 0.1)]
     def gap(U):
-        return _halves_gap(U[:-1], engine.problem.segments(U[-1]))
+        return halves_gap(U[:-1], engine.problem.segments(U[-1]))
 
     for rank in ranks:
         z, w = doubling_direction(ev.orbit, rank)

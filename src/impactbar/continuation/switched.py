@@ -38,14 +38,6 @@ MODEL_PARAMETERS = ("R", "d", "s")
 SWITCHED_PARAMETERS = ("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in", *MODEL_PARAMETERS)
 
 
-#: Whether ``F_lam`` is a forward difference where the flights are integrated (the benchmark
-#: compares it with the central difference of before)
-FORWARD_LAMBDA = True
-#: Whether the first corrector step after an orbit takes that orbit's Jacobian (a chord step) where
-#: the flights are integrated (the benchmark compares it with the full Newton step of before)
-CHORD = True
-
-
 def parameters_of(drive, model=None) -> tuple:
     """The parameters an orbit under ``drive`` can be continued in: the drive's, the bar's and, given
     the ``model``, its impact law's own (:attr:`~impactbar.laws.ContactLaw.parameters`: the rod-rock
@@ -77,11 +69,17 @@ def _with(model: BarModel, drive, name: str, value: float):
 
 
 class _SwitchedProblem:
-    """The periodic-orbit problem of a drive in ``U = (X, lambda)``, for the engine."""
+    """The periodic-orbit problem of a drive in ``U = (X, lambda)``, for the engine.
+
+    Where the flights are integrated: ``forward_lambda``, ``F_lam`` a forward difference (else the
+    central difference of before); ``chord``, the first corrector step after an orbit with that
+    orbit's Jacobian (a chord step; else the full Newton step of before). Both ``True`` by default
+    (:func:`continue_switched`)."""
 
     def __init__(self, model, drive, name, detect, *, events=True, stop_on=(), xtol=1e-10, impacts=1,
-                 doubled=False, base=None):
+                 doubled=False, base=None, forward_lambda=True, chord=True):
         self.model0, self.drive0, self.name, self.detect = model, drive, name, detect
+        self.forward_lambda, self.chord = forward_lambda, chord
         self.events, self.stop_on, self.xtol = events, stop_on, xtol
         self.m, self.doubled, self.base = impacts, doubled, base
         self.pair = functools.lru_cache(maxsize=16)(self._pair)
@@ -119,7 +117,7 @@ class _SwitchedProblem:
             h = 1e-6 * max(1.0, abs(U[-1]))
             sides = []
             for sign in (1.0, -1.0):
-                if sign < 0.0 and FORWARD_LAMBDA and getattr(problem, "variational", False) and \
+                if sign < 0.0 and self.forward_lambda and getattr(problem, "variational", False) and \
                         sides[0] is not None:
                     sides.append(None)
                     break
@@ -141,7 +139,7 @@ class _SwitchedProblem:
         plain flight, ``F_u`` the last orbit's), which the full Jacobian's steps then finish."""
         problem = self.pair(float(U[-1]))[2]
         ob = orbit_of(problem, U[:-1])
-        if CHORD and getattr(problem, "variational", False):
+        if self.chord and getattr(problem, "variational", False):
             try:
                 self._chord = problem.residual(U[:-1])[1]
             except ValueError:
@@ -320,7 +318,7 @@ def doubled_first_points(engine, U0, w, steps, gap):
 
 def continue_switched(orbit, parameter: str, to: float, detect, *,
                       settings: ContinuationSettings | None = None, events: bool = True, stop_on=(),
-                      xtol: float = 1e-10) -> Branch:
+                      xtol: float = 1e-10, forward_lambda: bool = True, chord: bool = True) -> Branch:
     """Follow a periodic motion under a drive as one parameter changes, by pseudo-arclength
     continuation (theory §7, §10). Called by :func:`impactbar.continue_orbit` when its start is a
     :class:`~impactbar.SwitchedOrbit`, or a ``"period-doubling"`` :class:`BranchEvent` of a branch of
@@ -359,6 +357,11 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         Event kinds at which to stop.
     xtol : float
         Tolerance of the event location along the chord.
+    forward_lambda, chord : bool
+        Where the flights are integrated (the oil circuit): the Jacobian's parameter column by a
+        forward difference (one flight a point instead of two), and each corrector's first step a
+        chord step with the last orbit's Jacobian; ``False``: the central difference and the full
+        Newton step of before (a benchmark's baseline). Ignored for closed-form flights.
 
     Returns
     -------
@@ -399,7 +402,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     direction = 1.0 if to > lam0 else -1.0
     m = 2 if switch is not None else orbit.impacts
     problem = _SwitchedProblem(model, drive, parameter, detect, events=events, stop_on=stop_on, xtol=xtol,
-                               impacts=m, doubled=switch is not None, base=orbit.problem)
+                               impacts=m, doubled=switch is not None, base=orbit.problem,
+                               forward_lambda=forward_lambda, chord=chord)
     # Newton's corrector no finer than the flights' accuracy (a drive with integrated flights: ten
     # times the integrator's rtol, ShootingProblem.accuracy; closed forms keep the settings' tol)
     engine = _Engine(problem, max(settings.tol, float(getattr(orbit.problem, "accuracy", 0.0))))

@@ -18,9 +18,7 @@ import numpy as np
 
 from .._shared.status import CurveKind
 from .._shared.threads import single_threaded_blas
-from ..orbits._assemble import _build
-from ..orbits._newton import _normalise
-from ..orbits.multi_impact import _Segments, _unknowns_from
+from ..orbits.segments import SegmentProblem, build_orbit, normalise, unknowns_from
 from .branch import BranchEvent, orbit_columns
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
@@ -108,7 +106,7 @@ class _BifurcationProblem:
     def __init__(self, model, load, names, m, n, kind):
         self.model0, self.load0, self.names, self.m, self.n = model, load, names, m, n
         self.kind = kind
-        size = _Segments(model, load, m, n).size  # (t, state) per impact
+        size = SegmentProblem(model, load, m, n).size  # (t, state) per impact
         self.W = np.concatenate((np.full(size, 1.0 / size), [1.0, 1.0]))
         self.b = self.c = None
         self._cache = {}
@@ -119,7 +117,7 @@ class _BifurcationProblem:
         if p is None:
             model, load = with_parameter(self.model0, self.load0, self.names[0], key[0])
             model, load = with_parameter(model, load, self.names[1], key[1])
-            p = _Segments(model, load, self.m, self.n)
+            p = SegmentProblem(model, load, self.m, self.n)
             if len(self._cache) > 64:
                 self._cache.pop(next(iter(self._cache)))
             self._cache[key] = p
@@ -141,8 +139,8 @@ class _BifurcationProblem:
         ``I -+ P``: the last entry of the solution of ``[[I -+ P, b], [c^T, 0]] (v, g) = (0, 1)``."""
         p = self.segments(U[-2], U[-1])
         if self.kind == CurveKind.GRAZING:
-            u = _normalise(p, U[:-2])
-            return -_build(p, U[:-2] if u is None else u).clearance
+            u = normalise(p, U[:-2])
+            return -build_orbit(p, U[:-2] if u is None else u).clearance
         _, _, info = p.evaluate(U[:-2])
         A = self.matrix(p, info)
         k = A.shape[0]
@@ -187,11 +185,11 @@ class _BifurcationProblem:
 
     def orbit(self, U, admissibility=True):
         p = self.segments(U[-2], U[-1])
-        u = _normalise(p, U[:-2])
-        return _build(p, U[:-2] if u is None else u, admissibility=admissibility)
+        u = normalise(p, U[:-2])
+        return build_orbit(p, U[:-2] if u is None else u, admissibility=admissibility)
 
     def acceptable(self, U):
-        return _normalise(self.segments(U[-2], U[-1]), U[:-2]) is not None
+        return normalise(self.segments(U[-2], U[-1]), U[:-2]) is not None
 
     def after_point(self, engine, points, tangents, orbits):
         """No events on a curve; every 10 points the bordering vectors are renewed (near the
@@ -270,7 +268,7 @@ def continue_bifurcation(event: BranchEvent, parameter: str, to: float, *,
     engine = _Engine(problem, settings.tol)
     with single_threaded_blas():
         base = problem.segments(l1, l2)
-        U0 = np.concatenate((_unknowns_from(base, o.impact_times, o.states_after_impact), [l1, l2]))
+        U0 = np.concatenate((unknowns_from(base, o.impact_times, o.states_after_impact), [l1, l2]))
         if event.kind != CurveKind.GRAZING:
             problem.set_border(U0)
         e2 = np.zeros(U0.size)

@@ -33,7 +33,7 @@ from ..dynamics.modal import step_constant
 from .base import DriveEvent, DriveState, FlightSettings
 
 __all__ = ["FlightSettings", "Flight", "ClosedPiece", "OdePiece", "RestPiece", "QuadratureRestPiece", "fly",
-           "ARRIVAL", "EVENT", "END"]
+           "bracket_event", "ARRIVAL", "EVENT", "END"]
 
 #: how a flight ended
 ARRIVAL, EVENT, END = 0, 1, 2
@@ -234,7 +234,7 @@ def _closed(model, drive, state, t, q, v, t_stop):
     times = [e.first_time(d, p, t, q, v) for e in events]
     for i, (e, te) in enumerate(zip(events, times, strict=True)):
         if math.isnan(te):  # no closed form: bracketed on the closed-form flight
-            times[i] = _bracket(e, model, p, t, q, v, z, t_stop)
+            times[i] = bracket_event(e, model, p, t, q, v, z, t_stop)
     t_ev = min(times, default=math.inf)
     t_next = min(t_ev, t_stop)
     t_arr, qa, va, arrived = arrival(model, p, t, q, v, t_next)
@@ -264,7 +264,7 @@ def arrival(model, p: float, t: float, q, v, t_stop: float):
             return t_stop, q, v, False
         qe, ve = rigid_flight(d, q0, v0, p, t_stop - t)
         return t_stop, np.array([qe]), np.array([ve]), False
-    from ..dynamics import _kernel as K
+    from ..dynamics import kernels as K
     from ..dynamics.kernelview import LoadKernelView, ModalBasisView
 
     w2 = model.frequencies**2
@@ -289,11 +289,32 @@ def arrival(model, p: float, t: float, q, v, t_stop: float):
     return t_stop, q, v, False
 
 
-def _bracket(event: DriveEvent, model, p, t, q, v, z, t_stop) -> float:
+def bracket_event(event: DriveEvent, model, p, t, q, v, z, t_stop) -> float:
     """The first crossing of a drive event without a closed form on the closed-form flight: the
     event function sampled on a grid (a quarter of the stiffest mode's period, at most 0.05) and the
-    bracket refined by Brent's method; ``inf`` before ``t_stop`` (or a horizon of ``1e4``) without
-    one."""
+    bracket refined by Brent's method (shared with the simulator's drive loop).
+
+    Parameters
+    ----------
+    event : DriveEvent
+        The event (its ``value(t, q, v, z)`` and ``direction``).
+    model : BarModel
+    p : float
+        The constant force over the flight (dimensionless, eq. 2).
+    t : float
+        The flight's start (load time).
+    q, v : numpy.ndarray, shape (N + 1,)
+        The modal state at ``t``.
+    z : numpy.ndarray, shape (k,)
+        The drive's state (constant over the flight).
+    t_stop : float
+        The end of the search (``inf``: a horizon of ``1e4``).
+
+    Returns
+    -------
+    float
+        The crossing's time; ``inf`` before ``t_stop`` without one.
+    """
     from scipy.optimize import brentq
 
     w2, d = model.frequencies**2, model.d

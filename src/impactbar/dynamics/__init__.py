@@ -9,7 +9,8 @@ Floquet multipliers and their structured eigenvalue method, theory §7), ``invar
 fields as Riemann invariants, where the laws that follow a blow along characteristics start,
 theory §4c), ``_kernel`` (the numba-compiled flight, impact search and event loop behind
 :func:`impactbar.simulate`), ``_flowkernel`` (compiled flows of the loads), ``_aberthkernel`` (the
-compiled Aberth-Ehrlich iteration), ``kernelview`` (the one view of a load, and of a modal basis,
+compiled Aberth-Ehrlich iteration), ``kernels`` (what the other packages use of those kernels, by
+public names: the interface), ``kernelview`` (the one view of a load, and of a modal basis,
 that compiled code reads), ``implementations`` (the registry that chooses between fast and reference
 implementations). The contact laws' own numerics are in :mod:`impactbar.laws`. The bottom of the
 core: imports only numpy, scipy and numba, never another impactbar subpackage."""

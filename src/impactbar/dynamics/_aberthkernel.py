@@ -1,5 +1,5 @@
 """Compiled Aberth-Ehrlich iteration behind the structured Floquet multipliers (theory §7), used by
-:func:`impactbar.dynamics.monodromy._aberth` (every law's structured multipliers) in place of the
+:func:`impactbar.dynamics.monodromy.aberth` (every law's structured multipliers) in place of the
 numpy loop (which builds a few ``(K, M)`` complex arrays per sweep). Same iteration, same start,
 same stopping rule, loop by loop: the zeros agree with the numpy path to rounding. Imported lazily,
 so ``import impactbar`` does not load numba.
@@ -82,7 +82,7 @@ def _settled(c, x, tol):
 @numba.njit(cache=CACHE, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "arcp"})
 def aberth_iterate(x, tr, dt, X, ut, iters, tol):
     """Refine the approximations ``x`` (shape ``(K,)``, complex, changed in place) of the zeros of
-    ``det(B - x) det(S(x)) / x`` (see ``monodromy._aberth``); returns ``True`` once every
+    ``det(B - x) det(S(x)) / x`` (see ``monodromy.aberth``); returns ``True`` once every
     correction is below ``tol`` relative to ``max(1, |x|)``, ``False`` if ``iters`` sweeps do not
     settle or a correction is not finite.
 

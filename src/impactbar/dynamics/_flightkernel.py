@@ -21,12 +21,19 @@ def _cache_probe():  # pragma: no cover - never called, only decorated
     return 0
 
 
-try:  # numba caches next to this file, or else in the user's cache folder
-    numba.njit(cache=True)(_cache_probe)
-    #: compiled code is cached on disk, so a new process compiles nothing compiled before
-    CACHE = True
-except RuntimeError:  # a read-only install and no writable cache folder: compile in memory
-    CACHE = False
+def _cache_writable() -> bool:
+    """Whether numba can cache compiled code: next to this file, or else in the user's cache folder
+    (not in a read-only install without a writable cache folder)."""
+    try:
+        numba.njit(cache=True)(_cache_probe)
+    except RuntimeError:
+        return False
+    return True
+
+
+#: compiled code is cached on disk, so a new process compiles nothing compiled before; else (a
+#: read-only install and no writable cache folder) it is compiled in memory
+CACHE = _cache_writable()
 
 # one line on stderr, once per process, while impactbar's kernels compile for more than 2 s
 watch_compiles()

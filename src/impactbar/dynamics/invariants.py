@@ -10,8 +10,10 @@ import math
 
 import numpy as np
 
+__all__ = ["PistonInvariants"]
 
-class _Piston:
+
+class PistonInvariants:
     """The piston's state at impact as the Riemann invariants ``alpha0(x), beta0(x)``: the modal sums
     (``u = q_0 + 2 sum q_n cos(n pi x)``) plus the static correction that carries the drive force
     ``p_end`` at ``x = 0`` (theory §4c).
@@ -26,7 +28,17 @@ class _Piston:
     stored as the coefficients ``b_n`` and ``b[0] = -p_end/s``, the coefficient of ``(1 - x)``
     (``sin(0) = 0`` leaves that slot free). The correction has no projection on the modes kept, so
     the modal state is unchanged; the force at ``x = 0`` is the drive's, and the invariant arriving
-    at the rod has no spurious spike at ``theta = 1``."""
+    at the rod has no spurious spike at ``theta = 1``.
+
+    Parameters
+    ----------
+    s : float
+        The bar's slenderness (eq. 2).
+    q, v : array_like, shape (N + 1,)
+        The modal displacements and velocities at impact (dimensionless).
+    p_end : float, optional
+        The drive's force at ``x = 0`` (dimensionless, eq. 2), default 0.
+    """
 
     def __init__(self, s: float, q, v, p_end: float = 0.0):
         q = np.asarray(q, dtype=float)

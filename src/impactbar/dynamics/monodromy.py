@@ -2,10 +2,10 @@
 (theory §7): the shared building blocks of every impact law's exact multipliers.
 
 :func:`period_fundamental` (each mode's fundamental matrix over one load period, cached per model),
-:func:`_arrival_derivative` (the state at the next arrival differentiated with respect to the start
+:func:`arrival_derivative` (the state at the next arrival differentiated with respect to the start
 of a flight, with the saltation term ``-(c . dq)/(c . q')`` of the arrival time), :func:`sort_multipliers`
 (the one order of every multiplier the package reports) and the structured eigenvalue method
-:func:`_aberth` (``O(N^2)``: a block-diagonal map plus a rank-2 correction, the Aberth-Ehrlich
+:func:`aberth` (``O(N^2)``: a block-diagonal map plus a rank-2 correction, the Aberth-Ehrlich
 iteration compiled in :mod:`impactbar.dynamics._aberthkernel`). A law composes them with its own
 impact map: the paper's ``J_R = diag(I, -R I)`` (:mod:`impactbar.laws.paper.stability`), the wave
 law's window (:mod:`impactbar.laws.wave.periodic`). The model and the load are read through their
@@ -21,7 +21,8 @@ import numpy as np
 
 from .modal import fundamental
 
-__all__ = ["period_fundamental", "sort_multipliers", "STRUCTURED_FROM", "STRUCTURED_MAX_DAMPING"]
+__all__ = ["period_fundamental", "sort_multipliers", "STRUCTURED_FROM", "STRUCTURED_MAX_DAMPING",
+           "impact_fields", "arrival_derivative", "aberth"]
 
 
 TWO_PI = 2.0 * math.pi
@@ -57,7 +58,7 @@ def period_fundamental(model) -> tuple[np.ndarray, ...]:
     return tuple(out)
 
 
-def _impact_fields(model, load, phase: float, y_plus, y_minus, t_arrive=None):
+def impact_fields(model, load, phase: float, y_plus, y_minus, t_arrive=None):
     """The arrival velocity ``c . q'`` and the vector field ``(q', q'')`` of the modes at the start
     of a flight (load time ``phase``, state ``y_plus``) and at its arrival (load time ``t_arrive``,
     default ``phase``: one load period later, state ``y_minus``); raises ``ValueError`` at grazing
@@ -77,7 +78,7 @@ def _impact_fields(model, load, phase: float, y_plus, y_minus, t_arrive=None):
     return v_imp, f0, f1
 
 
-def _arrival_derivative(model, load, t_start: float, flight: float, y_start, y_minus,
+def arrival_derivative(model, load, t_start: float, flight: float, y_start, y_minus,
                         t_arrive: float, fund=None):
     """Derivative of the state at the next impact with respect to ``z = (t_start, q_1..q_N,
     q_0'..q_N')`` at the start of a flight of length ``flight`` (theory §7).
@@ -90,7 +91,7 @@ def _arrival_derivative(model, load, t_start: float, flight: float, y_start, y_m
     """
     M = model.n_modes + 1
     c = model.end_weights
-    v_imp, f0, f1 = _impact_fields(model, load, t_start, y_start, y_minus, t_arrive)
+    v_imp, f0, f1 = impact_fields(model, load, t_start, y_start, y_minus, t_arrive)
     f0, f1 = np.concatenate(f0), np.concatenate(f1)
     # the period's fundamental matrix is cached per model
     if fund is None:
@@ -125,7 +126,7 @@ def sort_multipliers(mu: np.ndarray) -> np.ndarray:
     return mu[np.lexsort((-mu.imag, -key))]
 
 
-def _aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
+def aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
     """Zeros of ``det(B + U V^T - x) / x`` (the multipliers, see :func:`floquet_multipliers`) by
     the Aberth-Ehrlich iteration; ``None`` if it does not converge.
 
@@ -144,7 +145,7 @@ def _aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
         extended state's factors).
     """
     if np.any(V[:, :, 0]) or vt[0] != 1.0 or vt[1] != 0.0:
-        raise ValueError("_aberth needs the extended state's factors: V[:, :, 0] = 0 and vt = (1, 0)")
+        raise ValueError("aberth needs the extended state's factors: V[:, :, 0] = 0 and vt = (1, 0)")
     tr = a + e
     dt = a * e - b * c
     # the second row of V_n^T adj(B_n - x) U_n = N0_n + x N1_n, adj(B_n - x) = [[e, -b], [-c, a]] - x I

@@ -11,11 +11,39 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any, ClassVar, NamedTuple
+from typing import Any, ClassVar, NamedTuple, Protocol
 
 import numpy as np
 
-__all__ = ["ContactLaw", "LawNotSupported", "OrbitState", "DrivenContact"]
+__all__ = ["ContactLaw", "LawNotSupported", "OrbitState", "DrivenContact", "BarModelLike"]
+
+
+class BarModelLike(Protocol):
+    """The bar model as a law's numerics read it: what their annotations name, since the laws sit
+    below :class:`~impactbar.BarModel` (which holds one) and never import it. A ``BarModel`` is one.
+
+    Attributes
+    ----------
+    s, d, R : float
+        The bar's slenderness, damping and restitution (paper eqs. 2, 10).
+    n_modes : int
+        ``N``, the number of flexible modes.
+    frequencies : numpy.ndarray, shape (N + 1,)
+        The modes' circular frequencies (0 for the rigid mode).
+    end_weights : numpy.ndarray, shape (N + 1,)
+        ``c``, the struck end's displacement ``u(1, t) = c . q``.
+    """
+
+    s: float
+    d: float
+    R: float
+    n_modes: int
+
+    @property
+    def frequencies(self) -> np.ndarray: ...
+
+    @property
+    def end_weights(self) -> np.ndarray: ...
 
 
 class LawNotSupported(ValueError, NotImplementedError):

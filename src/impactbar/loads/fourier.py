@@ -228,7 +228,7 @@ class FourierLoad(Load):
     def _compiled_flow(self, w2, d, t0, hp, hv, static, rigid, lam, folded, dq, dv):
         """:meth:`flow`'s evaluation compiled (:mod:`impactbar.dynamics._flowkernel`): the same
         closed form, for underdamped flexible modes and the rigid mode."""
-        from ..dynamics._flowkernel import fourier_flow
+        from ..dynamics.kernels import fourier_flow
 
         M = w2.size
         kind = np.where(rigid, 2, 0).astype(np.int64)

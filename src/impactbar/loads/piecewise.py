@@ -196,7 +196,7 @@ class PiecewiseConstantLoad(Load):
 
         compiled = use_fast("loads.flow") and bool(np.all((w2 == 0.0) | (w2 - 0.25 * d * d > 0.0)))
         if compiled:  # flexible modes underdamped (the rule): the compiled step
-            from ..dynamics._flowkernel import piecewise_flow
+            from ..dynamics.kernels import piecewise_flow
 
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))

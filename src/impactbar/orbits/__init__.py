@@ -7,7 +7,8 @@ check of their inputs), ``admissibility`` (does the struck end stay off the stop
 (:class:`PeriodicOrbit`, the one result type: ``m`` impacts in ``n`` load periods;
 ``MultiImpactOrbit`` is another name for it), ``one_impact`` (the one-impact orbits from the law's
 phase equation), ``multi_impact`` (:func:`find_orbit`: ``m`` impacts in ``n`` load periods by Newton
-on the segment problem, one segment per flight; and :func:`periodic_orbits`, the one-impact orbits
+on the segment problem, one segment per flight, whose parts the continuation uses through
+``segments``; and :func:`periodic_orbits`, the one-impact orbits
 under every law: from the phase equation, or by Newton's method from guesses for a law without one,
 :func:`periodic_orbits_by_newton`), ``charts`` (existence, stability
 and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits with an unknown period under a

@@ -19,8 +19,7 @@ import threading
 import numba
 import numpy as np
 
-from ..dynamics._flowkernel import bound_column, fourier_column, piecewise_column
-from ..dynamics._kernel import CACHE
+from ..dynamics.kernels import CACHE, bound_column, fourier_column, piecewise_column
 from ..dynamics.kernelview import LoadKernelView
 
 TWO_PI = 2.0 * math.pi

@@ -28,8 +28,7 @@ import types
 import numba
 import numpy as np
 
-from ..dynamics._flightkernel import sort_head
-from ..dynamics._kernel import CACHE
+from ..dynamics.kernels import CACHE, sort_head
 from . import _rigid_scalar
 
 TWO_PI = 2.0 * math.pi

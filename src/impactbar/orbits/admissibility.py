@@ -166,7 +166,7 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
         last["g"] = c @ q
         center, delta = load.variation(phase + mid, half)
         if use_fast("admissibility.bound") and q.ndim == 2:
-            from ..dynamics._flowkernel import end_velocity_bound
+            from ..dynamics.kernels import end_velocity_bound
 
             T = q.shape[1]
             return end_velocity_bound(c, absc, w2, float(d), float(psup), q, v,

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..orbits.orbit import ORBIT_FIELDS
 from ._common import axes as _axes
 
 __all__ = ["plot_branch", "plot_bifurcation_curve", "plot_bifurcation_curves", "plot_bifurcation_diagram"]
@@ -38,11 +37,12 @@ def plot_branch(branch, ax=None, *, y: str = "phase", color=None, label=None, ev
     """
     import matplotlib.pyplot as plt
 
-    f = _ordinate(y)
+    fields = branch.point_fields
+    f = _ordinate(fields, y)
     if ax is None:
         _, ax = plt.subplots()
     x = branch.values
-    Y = ORBIT_FIELDS.stack(branch.orbits, f.name).reshape(len(x), -1)
+    Y = fields.stack(branch.orbits, f.name).reshape(len(x), -1)
     if f.units == "rad":
         Y = np.unwrap(Y, axis=0)
     stable = branch.stable
@@ -71,9 +71,10 @@ def plot_branch(branch, ax=None, *, y: str = "phase", color=None, label=None, ev
     return ax
 
 
-def _ordinate(y: str):
-    """The orbit's field plotted as ``y`` along a branch (by its name, or the name of one value)."""
-    numbers = [f for f in ORBIT_FIELDS.select("branch") if f.dtype == "f8"]
+def _ordinate(fields, y: str):
+    """The orbit's field plotted as ``y`` along a branch (by its name, or the name of one value),
+    of the branch's ``fields`` (:attr:`~impactbar.continuation.Branch.point_fields`)."""
+    numbers = [f for f in fields if f.dtype == "f8"]
     for f in numbers:
         if y == f.item:
             return f

@@ -36,7 +36,7 @@ from .._shared.forcing import dispatch
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
 from ..drives.base import Drive
-from ..dynamics import _kernel as K
+from ..dynamics import kernels as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
 from ..loads import Load

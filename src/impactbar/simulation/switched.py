@@ -350,7 +350,7 @@ def rigid_piece(model: BarModel):
     form: the impact is the first rising crossing of ``q_0`` through 0 (the same monotonicity
     argument as the switch's, theory §10), then ``v -> -R v`` (eq. 10); with the force pressing and
     a rebound too small to resolve (or ``R = 0``), the piston rests on the stop until ``t_stop``."""
-    from ..drives._crossing import first_rising_crossing
+    from ..drives.switched import first_rising_crossing
 
     d, R = model.d, model.law.kernel_restitution(model)
 
@@ -484,9 +484,9 @@ class _Run:
         for e in events:
             te = e.first_time(self.model.d, level, t, q, v)
             if math.isnan(te):  # an event surface without a closed form: bracketed
-                from ..drives.flight import _bracket
+                from ..drives.flight import bracket_event
 
-                te = _bracket(e, self.model, level, t, q, v, z, self.t_end)
+                te = bracket_event(e, self.model, level, t, q, v, z, self.t_end)
             times.append(te)
             t_next = min(t_next, te)
         traj = piece(level, q, v, t, t_next)

@@ -23,7 +23,7 @@ import numba as nb
 import numpy as np
 from numba import types
 
-from ...dynamics._flightkernel import CACHE
+from ...dynamics.kernels import CACHE
 from . import _kernel as K
 from . import _sundials as S
 

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ...dynamics._flightkernel import CACHE
+from ...dynamics.kernels import CACHE
 
 # parameter indices in ``par``
 ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)

@@ -101,6 +101,12 @@ class HydraulicCircuitDrive(Drive):
         pressure, the valve at the position the start's gap commands (with ``x_v`` given and away
         from it, the spool starts ramping there: an orbit's state after an impact, restarted).
         Each pressure in ``[0, beta)``, ``beta`` the oil's bulk modulus.
+    compiled, band : bool, optional
+        How the flights are integrated, not what they are (keywords, default ``True``, left out of
+        the drive's repr): CVODE driven from compiled code, and the variational flights' Newton
+        systems by the band solver; ``False``: through scikit-sundae's Python interface (the same
+        steps to the bit), and by the dense solver (the same to rounding). The baselines of
+        ``benchmarks/bench_circuit.py`` (``impactbar.drives.circuit.flight.circuit_flight``).
 
     Raises
     ------
@@ -130,6 +136,8 @@ class HydraulicCircuitDrive(Drive):
     oil: Oil
     accumulator: Accumulator | None = None
     start_pressures: tuple | None = None
+    compiled: bool = dataclasses.field(default=True, repr=False, kw_only=True)
+    band: bool = dataclasses.field(default=True, repr=False, kw_only=True)
 
     state_size = 4
     state_names = ("p_f", "p_r", "p_s", "x_v")
@@ -141,6 +149,9 @@ class HydraulicCircuitDrive(Drive):
         for name, cls in (("chambers", Chambers), ("valve", Valve), ("supply", Supply), ("oil", Oil)):
             if not isinstance(getattr(self, name), cls):
                 raise ValueError(f"{name} must be a {cls.__name__}; got {type(getattr(self, name)).__name__}")
+        for name in ("compiled", "band"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be True or False; got {getattr(self, name)!r}")
         acc = self.accumulator
         if acc is not None and not isinstance(acc, Accumulator):
             raise ValueError(f"accumulator must be an Accumulator or None; got {type(acc).__name__}")
@@ -361,7 +372,8 @@ class HydraulicCircuitDrive(Drive):
     def flight(self, model, state, t, q, v, t_stop, settings=None, variational=False):
         from .flight import circuit_flight
 
-        return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational)
+        return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational,
+                              compiled=self.compiled, band=self.band)
 
     def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
         """The circuit over a stretch of a blow with the driven end moved by the law's waves

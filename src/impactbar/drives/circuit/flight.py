@@ -11,13 +11,13 @@ with the same compiled right-hand side and Jacobian took 0.14 s (203 steps), CVO
 their impact times 5e-11 apart. The flight's loop runs in compiled code and hands CVODE the compiled vector
 field, Jacobian and event functions as C callbacks (:mod:`._cvode`, on the SUNDIALS libraries that
 scikit-sundae ships, :mod:`._sundials`): through scikit-sundae's Python interface, where each of
-those calls is a call of Python, the same flight took 8.5 ms (:data:`COMPILED`; the same steps to the
+those calls is a call of Python, the same flight took 8.5 ms (``compiled=False``; the same steps to the
 bit). CVODE's counters on it: 380 steps, 498 right-hand sides, 17 error-test failures, 497 Newton
 iterations, 7 Jacobians: the steps are those BDF's error control asks at this tolerance (the
 pressures' fast transients after each switch and impact, the valve's ramp; measured over 20 periods,
 ``rtol = 1e-8`` took a quarter fewer steps for errors a hundred times larger), not failures. The
 variational flights' Newton systems (``n + 8 + n^2`` unknowns) are solved by the band solver
-(:data:`BAND`; ``Phi`` stored by columns). Its events (the arrival
+(``band=True``, the default; ``Phi`` stored by columns). Its events (the arrival
 ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply pressure through the
 pre-charge and the relief pressure) are located by CVODE's root finding to the integrator's
 tolerance (the ramp's end, linear in time, to rounding). Each flight is integrated in its own time,
@@ -133,24 +133,12 @@ class CircuitPiece:
         return self.c @ self.modal(t)[1]
 
 
-#: Flights by CVODE driven from compiled code (:mod:`._cvode`: no Python between a flight's start and
-#: its end) wherever the SUNDIALS libraries that scikit-sundae ships can be bound
-#: (:func:`._sundials.available`); ``False``: through scikit-sundae's Python interface, each call of
-#: the vector field, the Jacobian and the events a call of Python (the way before, the fallback, and
-#: the baseline of ``benchmarks/bench_circuit.py``). The same steps either way, to the bit.
-COMPILED = True
-
-#: The variational flights' Newton systems by SUNDIALS' band solver (half-bandwidths ``n - 1``: ``Phi``
-#: is stored by columns, each column's equations coupling only its own components); ``False``: the
-#: dense solver (the way before; ``benchmarks/bench_circuit.py``'s baseline for the flexible piston).
-BAND = True
-
 _MAX_STEPS = 200000
 
 
-def _compiled_driver():
-    """:mod:`._cvode` where :data:`COMPILED` and the libraries bind, else None."""
-    if not COMPILED:
+def _compiled_driver(compiled: bool = True):
+    """:mod:`._cvode` where ``compiled`` and the libraries bind, else None."""
+    if not compiled:
         return None
     from . import _sundials
 
@@ -167,10 +155,11 @@ def _message(flag) -> str:
     return CVMESSAGES.get(int(flag), f"CVODE's flag {int(flag)}")
 
 
-def _integrate_compiled(cv, par, settings, directions, y0, t, end, keep):
-    """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly`."""
+def _integrate_compiled(cv, band, par, settings, directions, y0, t, end, keep):
+    """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly` (``band``: the
+    variational flights' Newton systems by the band solver, else the dense one)."""
     n = keep - K.N_ENERGY
-    ws = cv.workspace(y0.size, n - 1 if BAND and y0.size > keep else 0)  # variational: the band solver
+    ws = cv.workspace(y0.size, n - 1 if band and y0.size > keep else 0)  # variational: the band solver
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
@@ -206,9 +195,25 @@ def _integrate_binding(par, settings, directions, y0, t, end, keep):
 
 
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
-                   settings: FlightSettings | None = None, variational: bool = False) -> Flight:
+                   settings: FlightSettings | None = None, variational: bool = False, *,
+                   compiled: bool = True, band: bool = True) -> Flight:
     """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
     stop, the circuit's next event or ``t_stop`` (module docstring).
+
+    Parameters
+    ----------
+    compiled : bool, optional
+        CVODE driven from compiled code (:mod:`._cvode`: no Python between the flight's start and
+        its end) where the SUNDIALS libraries that scikit-sundae ships bind
+        (:func:`._sundials.available`); ``False``: through scikit-sundae's Python interface, each call
+        of the vector field, the Jacobian and the events a call of Python (the way before, the
+        fallback, and the baseline of ``benchmarks/bench_circuit.py``). The same steps either way, to
+        the bit.
+    band : bool, optional
+        The variational flights' Newton systems by SUNDIALS' band solver (half-bandwidths ``n - 1``:
+        ``Phi`` is stored by columns, each column's equations coupling only its own components);
+        ``False``: the dense solver (the way before; ``benchmarks/bench_circuit.py``'s baseline for
+        the flexible piston). Only with ``compiled``.
 
     Returns
     -------
@@ -241,8 +246,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     keep = n + K.N_ENERGY
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
-    integrate = _integrate_binding if (cv := _compiled_driver()) is None else \
-        functools.partial(_integrate_compiled, cv)
+    integrate = _integrate_binding if (cv := _compiled_driver(compiled)) is None else \
+        functools.partial(_integrate_compiled, cv, band)
     status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0, end - t,
                                                   keep)
     if status < 0 or not np.all(np.isfinite(yend)):

@@ -22,8 +22,7 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics._flightkernel import CACHE
-from ...dynamics._kernel import END, MAXIMP, _propagate_many, run_free
+from ...dynamics.kernels import CACHE, END, MAXIMP, propagate_views, run_free
 from ...dynamics.kernelview import LoadKernelView, ModalBasisView
 from .._crossing import first_rising_crossing, gap, rate_zero, rigid_flight
 from ._state import DriveKernelView
@@ -283,7 +282,7 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
             elif st == END:  # no impact before t_next: the state there by the reference flow
                 t1 = t_next
                 ts[0] = t_next
-                _propagate_many(load, B, t, qs, vs, ts, eq, ev)
+                propagate_views(load, B, t, qs, vs, ts, eq, ev)
                 for i in range(M):
                     q[i] = eq[i, 0]
                     v[i] = ev[i, 0]

@@ -13,19 +13,18 @@ import numpy as np
 from ..._shared.threads import single_threaded_blas
 from ...dynamics.kernelview import FOURIER
 from ...dynamics.monodromy import period_fundamental
-from ..base import OrbitState
+from ..base import BarModelLike, OrbitState
 from .stability import floquet_multipliers, rigid_multipliers
 
 if TYPE_CHECKING:
     from ...loads import Load
-    from ...model import BarModel
 
 __all__ = ["orbit_state", "multipliers"]
 
 TWO_PI = 2.0 * math.pi
 
 
-def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
+def _start_state(model: BarModelLike, load: Load, phase: float) -> np.ndarray:
     """Modal state just after the impact of the orbit with this phase (eqs. 10-13)."""
     N = model.n_modes
     R, d = model.R, model.d
@@ -63,7 +62,7 @@ def _start_state(model: BarModel, load: Load, phase: float) -> np.ndarray:
     return np.concatenate((q, v))
 
 
-def _impact_states(model: BarModel, load: Load, phase: float, return_flow: bool = False):
+def _impact_states(model: BarModelLike, load: Load, phase: float, return_flow: bool = False):
     """Modal states just after (``t = 0+``) and just before (``t = 2 pi-``) the orbit's impact;
     with ``return_flow``, also the flight's flow (``load.flow`` from ``y_plus``) where it is the
     one that gave ``y_minus`` (a Fourier load; else ``None``), for the admissibility search."""
@@ -80,7 +79,7 @@ def _impact_states(model: BarModel, load: Load, phase: float, return_flow: bool 
     return (y_plus, y_minus, flow) if return_flow else (y_plus, y_minus)
 
 
-def orbit_state(model: BarModel, load: Load, phase: float) -> OrbitState:
+def orbit_state(model: BarModelLike, load: Load, phase: float) -> OrbitState:
     """The paper law's one-impact orbit with this phase (eqs. 10-13): the states just after and just
     before the impact, the exact multipliers (infinite at exact grazing) and the flight's flow for
     the admissibility search."""
@@ -92,7 +91,7 @@ def orbit_state(model: BarModel, load: Load, phase: float) -> OrbitState:
     return OrbitState(state_after_impact=y_plus, state_before_impact=y_minus, multipliers=mu, flow=flow)
 
 
-def multipliers(model: BarModel, load: Load, phase: float) -> np.ndarray:
+def multipliers(model: BarModelLike, load: Load, phase: float) -> np.ndarray:
     """Exact Floquet multipliers of the one-impact orbit with this phase under the paper's law
     (eq. 10, theory §7), without the admissibility check: in closed form for the rigid bar, else
     from the monodromy with its saltation term.

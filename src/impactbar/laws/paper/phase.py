@@ -10,10 +10,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ...dynamics.certified import cosine_roots, enclose_zeros, zeros_in_clusters
+from ..base import BarModelLike
 
 if TYPE_CHECKING:
     from ...loads import Load
-    from ...model import BarModel
 
 __all__ = ["phase_G", "phase_residual", "phase_roots", "pneumatic_existence_edge"]
 
@@ -36,7 +36,7 @@ def phase_G(d: float, R: float) -> float:
     return TWO_PI * ((1.0 + R) * _beta(TWO_PI * d) - R)
 
 
-def phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
+def phase_residual(model: BarModelLike, load: Load, phase) -> np.ndarray:
     """Left minus right side of the phase equation (eq. 14, theory §4).
 
     ``F(phase) = (1 + R) Re sum_{k>=1} H_0k p_k (i k) e^{i k phase} - p0 G(d, R)``; the sum is the
@@ -57,7 +57,7 @@ def phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     return (1.0 + R) * load.rigid_velocity(model.d, phase) - load.p0 * phase_G(model.d, R)
 
 
-def phase_roots(model: BarModel, load: Load, *, closed_form: bool = True) -> list[tuple[float, int]]:
+def phase_roots(model: BarModelLike, load: Load, *, closed_form: bool = True) -> list[tuple[float, int]]:
     """Every root of the phase equation in ``[0, 2 pi)``, with its multiplicity (1, or 2 at a fold):
     :func:`impactbar.orbits.phase_roots` without its check of the inputs (the solvers check them
     once). Certified: see there.

@@ -14,21 +14,21 @@ import numpy as np
 from ...dynamics import monodromy as MD
 from ...dynamics.monodromy import (
     TWO_PI,
-    _aberth,
-    _arrival_derivative,
-    _impact_fields,
+    aberth,
+    arrival_derivative,
+    impact_fields,
     period_fundamental,
     sort_multipliers,
 )
+from ..base import BarModelLike
 
 if TYPE_CHECKING:
     from ...loads import Load
-    from ...model import BarModel
 
 __all__ = ["impact_map_jacobian", "floquet_multipliers", "rigid_multipliers", "trace_det"]
 
 
-def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_minus) -> np.ndarray:
+def impact_map_jacobian(model: BarModelLike, load: Load, phase: float, y_plus, y_minus) -> np.ndarray:
     """Analytic Jacobian of the impact map at a one-impact fixed point (theory §7).
 
     The map takes ``z = (tau, q_1..q_N, q_0'..q_N')`` just after one impact to the same just after
@@ -57,7 +57,7 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
         arrives moving backwards (inadmissible) still has a well-defined Jacobian.
     """
     M = model.n_modes + 1
-    dY, r = _arrival_derivative(model, load, phase, TWO_PI, y_plus, y_minus, phase)
+    dY, r = arrival_derivative(model, load, phase, TWO_PI, y_plus, y_minus, phase)
     dY[M:, :] *= -model.R  # velocity reversal
     DP = np.empty((2 * M, 2 * M))
     DP[0, :] = r
@@ -65,7 +65,7 @@ def impact_map_jacobian(model: BarModel, load: Load, phase: float, y_plus, y_min
     return DP
 
 
-def floquet_multipliers(model: BarModel, load: Load, phase: float, y_plus, y_minus, *,
+def floquet_multipliers(model: BarModelLike, load: Load, phase: float, y_plus, y_minus, *,
                         method: str = "auto") -> np.ndarray:
     r"""Floquet multipliers of a one-impact orbit under the paper's impact law (eqs. 10, 11): the
     eigenvalues of the impact map's Jacobian (theory §7), sorted by :func:`sort_multipliers`.
@@ -114,7 +114,7 @@ def floquet_multipliers(model: BarModel, load: Load, phase: float, y_plus, y_min
         DP = impact_map_jacobian(model, load, phase, y_plus, y_minus)
         return sort_multipliers(np.concatenate((np.linalg.eigvals(DP[:M, :M]), np.zeros(M))))
     parts = _structured_parts(model, load, phase, y_plus, y_minus)
-    mu = _aberth(*parts)
+    mu = aberth(*parts)
     if mu is None:
         return sort_multipliers(np.linalg.eigvals(impact_map_jacobian(model, load, phase, y_plus, y_minus)))
     return sort_multipliers(mu)
@@ -135,7 +135,7 @@ def _structured_parts(model, load, phase, y_plus, y_minus):
     M = model.n_modes + 1
     R = model.R
     c = model.end_weights
-    v, (f0q, f0v), (f1q, f1v) = _impact_fields(model, load, phase, y_plus, y_minus)
+    v, (f0q, f0v), (f1q, f1v) = impact_fields(model, load, phase, y_plus, y_minus)
     p11, p12, p21, p22 = period_fundamental(model)
     hq = f1q - (p11 * f0q + p12 * f0v)
     hv = f1v - (p21 * f0q + p22 * f0v)

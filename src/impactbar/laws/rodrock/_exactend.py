@@ -11,7 +11,7 @@ import math
 
 import numba
 
-from ...dynamics._kernel import CACHE
+from ...dynamics.kernels import CACHE
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
     ELASTIC,
     FREE,

@@ -9,7 +9,7 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics._kernel import CACHE
+from ...dynamics.kernels import CACHE
 
 
 @numba.njit(cache=CACHE, nogil=True)

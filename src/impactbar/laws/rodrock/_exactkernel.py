@@ -41,7 +41,7 @@ import math
 
 import numba
 
-from ...dynamics._kernel import CACHE
+from ...dynamics.kernels import CACHE
 from ._exactend import account, certify
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
     BUDGET,

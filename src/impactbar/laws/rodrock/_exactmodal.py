@@ -10,7 +10,7 @@ import cmath
 import numba
 import numpy as np
 
-from ...dynamics._kernel import CACHE
+from ...dynamics.kernels import CACHE
 from ._exactintegrals import blk_integral_exp
 from ._exactpieces import DC, pool_load
 

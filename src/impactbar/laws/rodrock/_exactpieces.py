@@ -10,7 +10,7 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics._kernel import CACHE
+from ...dynamics.kernels import CACHE
 from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
 from ._records import (  # the records' slots
     CNT_FULL,

@@ -45,7 +45,7 @@ import math
 
 import numba
 
-from ...dynamics._kernel import CACHE
+from ...dynamics.kernels import CACHE
 from ._exactkernel import (
     LOG_BIT,
     LOG_SEP,

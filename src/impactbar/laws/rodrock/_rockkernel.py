@@ -13,7 +13,7 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics._kernel import CACHE
+from ...dynamics.kernels import CACHE
 
 _LOAD, _ELASTIC, _FREE = 0.0, 1.0, 2.0
 

@@ -27,7 +27,7 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics._kernel import CACHE
+from ...dynamics.kernels import CACHE
 from ._rockkernel import _ELASTIC, _FREE, _LOAD, _coeffs, _event, _flow
 
 

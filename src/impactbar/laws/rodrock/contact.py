@@ -50,7 +50,7 @@ import math
 
 import numpy as np
 
-from ...dynamics.invariants import _Piston
+from ...dynamics.invariants import PistonInvariants
 from .blow import Blow, blow_end, blow_grid, solve_blow, whole_steps
 
 __all__ = ["BlowMap", "RockContact"]
@@ -258,11 +258,11 @@ def _projector(s: float, piston, n_p: int, M: int) -> np.ndarray:
 def _field_basis(s: float, n_p: int, M: int):
     """The piston's cell waves at impact as an affine map of ``(q, q', p(t0))``: the matrix ``A``
     (``2 n_p`` by ``2 M``) of the modal state and the column ``f`` of the drive's force (the static
-    correction), from the wave law's ``_Piston`` (exact cell averages of the invariants)."""
+    correction), from the wave law's ``PistonInvariants`` (exact cell averages of the invariants)."""
     xe = np.arange(n_p + 1) / n_p
 
     def waves(q, v, p):
-        piston = _Piston(s, q, v, p_end=p)
+        piston = PistonInvariants(s, q, v, p_end=p)
         return np.concatenate((0.5 * s * np.diff(piston.int_alpha(xe)) * n_p,
                                -0.5 * s * np.diff(piston.int_beta(xe)) * n_p))
 
@@ -292,7 +292,8 @@ def _stepped_maps(s: float, piston, n_p: int, M: int):
       + p\,(1 - \bar m_i)` with the drive's force :math:`p` at :math:`x = 0`: the modes kept plus the
       static correction of the modes dropped, their inertia-relief strain :math:`-p (1 - m(x)) /
       (s^2 \mu)` (``m`` the mass from the driven end, :math:`\bar m_i` its cell average) less its
-      first ``N`` modal terms (as :class:`~impactbar.dynamics.invariants._Piston` on the uniform bar);
+      first ``N`` modal terms (as :class:`~impactbar.dynamics.invariants.PistonInvariants` on the
+      uniform bar);
       waves ``F = (N + Z v)/2``, ``G = (N - Z v)/2``;
     - after the blow, the exact projections of piecewise-constant fields,
       :math:`q_n' = \sum_i \mu_i v_i \int_i \psi_n / \kappa_n` and (integrating

@@ -1,5 +1,5 @@
 """The wave law's contact window on characteristics (theory §4b, §4c): the drive over the window
-(:class:`_WindowLoad`), the piston's fields at impact with the static correction (:class:`_Piston`,
+(:class:`_WindowLoad`), the piston's fields at impact with the static correction (:class:`PistonInvariants`,
 shared with the rod-rock law: :mod:`impactbar.dynamics.invariants`) and the solver of the contact
 with the long rod, separations included (:class:`_Contact`).
 :mod:`impactbar.laws.wave.impact` builds :class:`~impactbar.WaveImpact` from it."""
@@ -15,7 +15,7 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from ...dynamics.invariants import _Piston
+from ...dynamics.invariants import PistonInvariants
 from . import _windowkernel as KW
 from ._jumps import _bernoulli, _singular_coefficients, locate_jumps
 
@@ -113,13 +113,13 @@ class _WindowLoad:
         return self.s * v[0]
 
 
-class _LocatedPiston(_Piston):
+class _LocatedPiston(PistonInvariants):
     """The fields at impact with their jumps carried exactly (theory §4c): the Bernoulli functions of
     :func:`locate_jumps` plus the modal series of the continuous remainder (the modes kept less the
     Bernoulli functions' first ``N`` modes), plus the static correction. On the modes kept it is
-    the modal state, as :class:`_Piston`."""
+    the modal state, as :class:`PistonInvariants`."""
 
-    def __init__(self, piston: _Piston, y, jumps):
+    def __init__(self, piston: PistonInvariants, y, jumps):
         self.__dict__.update(piston.__dict__)
         self.jy = np.asarray(y, dtype=float)
         self.jJ, self.jK, self.jL = (np.asarray(u, dtype=float) for u in jumps)
@@ -223,7 +223,7 @@ def held_throughout(s: float, q, v, load, t0: float) -> bool:
     wl = _WindowLoad(load, s, t0)
     if wl.jumps.size:
         return False
-    piston = _Piston(s, q, v, wl.value(0.0))
+    piston = PistonInvariants(s, q, v, wl.value(0.0))
     scale = _window_scale(piston, load, s)
     table, w, u = _held_scan_table(N + 1, KW.scan_step(N, float(wl.rate)))
     A = np.concatenate((piston.a, piston.b[1:])) @ table + piston.b[0] * w
@@ -256,7 +256,7 @@ class _Contact:
         self.fast = fast  # scalar root-search evaluations (False: through the array forms)
         self.N = q.size - 1
         self.p = _WindowLoad(load, s, t0)
-        self.piston = _Piston(s, q, v, self.p.value(0.0))  # the drive's force at x = 0
+        self.piston = PistonInvariants(s, q, v, self.p.value(0.0))  # the drive's force at x = 0
         # A(theta): alpha arriving at the rod; smooth between these breaks
         self.breaks = np.unique(np.concatenate(([1.0], 1.0 + self.p.jumps[self.p.jumps < 1.0])))
         self.h_quad = 8.0 / (2.0 * math.pi * (self.N + 1) + 2.0 * self.p.rate + 1.0)

@@ -75,7 +75,7 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
     Parameters
     ----------
     a, b : numpy.ndarray, shape (N + 1,)
-        Cosine coefficients of the velocity and sine coefficients of ``s u_x`` (:class:`_Piston`,
+        Cosine coefficients of the velocity and sine coefficients of ``s u_x`` (:class:`PistonInvariants`,
         the static correction's tail already in ``b``).
     scale : float
         Size of the fields (a jump below ``1e-12 scale`` is none).

@@ -18,8 +18,7 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics._flightkernel import CACHE, TWO_PI, load_value, sort_head
-from ...dynamics._kernel import _propagate_many
+from ...dynamics.kernels import CACHE, TWO_PI, load_value, propagate_views, sort_head
 from ...dynamics.kernelview import LoadKernelView, ModalBasisView
 from ._windowkernel import _window_moments, scan_step, window_jumps
 
@@ -32,7 +31,7 @@ _MAX_LOOPS = 10_000
 def _trig(a, b, npi, x, sgn):
     """``sum a_n cos(n pi x) + sgn (b_0 (1 - x) + sum_{n >= 1} b_n sin(n pi x))``: ``beta0(x)``
     (``sgn = 1``), ``alpha0(x)`` (-1); ``b_0`` is the static correction's ``(1 - x)`` coefficient
-    (:class:`impactbar.laws.wave._characteristics._Piston`)."""
+    (:class:`impactbar.laws.wave._characteristics.PistonInvariants`)."""
     acc_c = a[0]
     acc_s = b[0] * (1.0 - x)
     for n in range(1, a.size):
@@ -498,7 +497,7 @@ def _square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
         is_[:, :] = 0.0
         _window_moments(load, s, 0.0, ph, jumps[:nj], gl_x, gl_w, ic_, is_)
         ts[0] = ph + TWO_PI
-        _propagate_many(load, B, ph + T, zeros, zeros, ts, fq, fv)
+        propagate_views(load, B, ph + T, zeros, zeros, ts, fq, fv)
         for n in range(M):
             h = (ic_[1, n] - R * ic_[0, n]) / s
             g = 0.0 if n == 0 else -(is_[1, n] - R * is_[0, n]) / (s * s * math.pi * n)

@@ -10,7 +10,7 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics._flightkernel import CACHE, TWO_PI, load_value, piece_of, sort_head
+from ...dynamics.kernels import CACHE, TWO_PI, load_value, piece_of, sort_head
 from ...dynamics.kernelview import LoadKernelView
 
 
@@ -140,8 +140,9 @@ def wave_window(load_t, s, R, c, rate, t0, q, v, gl_x, gl_w, qa, va):
     periods = math.floor((t0 + 2.0 / s) / TWO_PI) - math.floor(t0 / TWO_PI) + 1
     jumps = np.empty(periods * breaks.size if kind == 1 else 0)  # room for every jump in the window
     nj = window_jumps(load, s, t0, jumps)
-    # the static correction (_characteristics._Piston): the strain's b_0 (1 - x) + sum 2 p_end sin(n pi x) /
-    # (s n pi), p_end the drive's force at x = 0 (a square wave's level on the window's first piece)
+    # the static correction (dynamics.invariants.PistonInvariants): the strain's b_0 (1 - x) +
+    # sum 2 p_end sin(n pi x) / (s n pi), p_end the drive's force at x = 0 (a square wave's level on
+    # the window's first piece)
     t_p = t0 + 0.5 * (jumps[0] if nj > 0 else 2.0) / s if kind == 1 else t0
     p_end = _window_load(load, t_p)
     b[0] = -p_end / s

@@ -30,24 +30,20 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import brentq
 
-from ...dynamics import _kernel as K
+from ...dynamics import kernels as K
 from ...dynamics import monodromy as MD
 from ...dynamics.certified import cosine_roots
 from ...dynamics.implementations import use_fast
 from ...dynamics.kernelview import FOURIER, PIECEWISE, ModalBasisView
 from ...dynamics.modal import fundamental
-from ...dynamics.monodromy import _aberth, _arrival_derivative, _impact_fields, sort_multipliers
+from ...dynamics.monodromy import aberth, arrival_derivative, impact_fields, sort_multipliers
 from ...loads import FourierLoad, Load, PiecewiseConstantLoad
-from ..base import OrbitState
+from ..base import BarModelLike, OrbitState
 from .impact import _wave_impact, window_drive
-
-if TYPE_CHECKING:
-    from ...model import BarModel
 
 __all__ = ["wave_orbit_states", "wave_phase_residual", "wave_phase_roots", "wave_phase_families",
            "wave_impact_map_jacobian", "wave_floquet_multipliers", "wave_existence_edge", "window_map",
@@ -61,13 +57,13 @@ TWO_PI = 2.0 * math.pi
 # :func:`wave_orbit_states` phase by phase (the same residuals to rounding)
 
 
-def _window(model: BarModel) -> tuple[float, float]:
+def _window(model: BarModelLike) -> tuple[float, float]:
     T = 2.0 / model.s
     return T, TWO_PI - T
 
 
 @functools.lru_cache(maxsize=64)
-def _flight_fundamental(model: BarModel) -> tuple[np.ndarray, ...]:
+def _flight_fundamental(model: BarModelLike) -> tuple[np.ndarray, ...]:
     """Fundamental matrix over the flight ``2 pi - 2/s`` of every mode (eq. 8), computed once per
     model (a model is immutable) and read-only: the phase scan evaluates the residual hundreds of
     times."""
@@ -79,7 +75,7 @@ def _flight_fundamental(model: BarModel) -> tuple[np.ndarray, ...]:
     return tuple(out)
 
 
-def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
+def _forced_flight(model: BarModelLike, load: Load, t0: float, t1: float):
     """State at ``t1`` of every mode driven from rest at ``t0`` (exact): the compiled flow for a
     piecewise-constant load, the load's own flow otherwise."""
     w2 = model.frequencies**2
@@ -94,7 +90,7 @@ def _forced_flight(model: BarModel, load: Load, t0: float, t1: float):
     return q[:, 0], v[:, 0]
 
 
-def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
+def wave_orbit_states(model: BarModelLike, load: Load, phase: float, *, rates: bool = True):
     """Periodic modal states of the candidate orbit with this phase under the wave law.
 
     Parameters
@@ -132,7 +128,7 @@ def wave_orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool 
     return r, y_end, y_minus, rate
 
 
-def _orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
+def _orbit_states(model: BarModelLike, load: Load, phase: float, *, rates: bool = True):
     """:func:`wave_orbit_states` and the drive's part ``(g, h)`` of the window (for
     :func:`~impactbar.laws.wave.impact.wave_impact`), from the phase series where the load has one."""
     if not _has_series(model, load):
@@ -152,7 +148,7 @@ def _orbit_states(model: BarModel, load: Load, phase: float, *, rates: bool = Tr
     return float(model.end_weights @ y_minus[:M]), y_end, y_minus, rate, (g, h)
 
 
-def _has_series(model: BarModel, load: Load) -> bool:
+def _has_series(model: BarModelLike, load: Load) -> bool:
     """Whether the states are a trigonometric polynomial of the phase (:func:`wave_orbit_states`'
     notes): a load of finitely many harmonics whose evaluation is :class:`FourierLoad`'s own, and a
     window shorter than the period."""
@@ -161,7 +157,7 @@ def _has_series(model: BarModel, load: Load) -> bool:
 
 
 @functools.lru_cache(maxsize=16)
-def _state_series(model: BarModel, load: FourierLoad) -> np.ndarray:
+def _state_series(model: BarModelLike, load: FourierLoad) -> np.ndarray:
     """Coefficients ``c_k``, ``k = 0..K``, shape ``(K + 1, 6 N + 6)``, of ``(y_end, y_minus, g, h)``
     (rows of :func:`_direct_states`) as ``c_0 + 2 Re sum_k c_k e^{i k phase}``: the discrete Fourier
     transform of ``2 K + 1`` equally spaced phases, exact for a trigonometric polynomial of degree
@@ -180,7 +176,7 @@ def _state_series(model: BarModel, load: FourierLoad) -> np.ndarray:
     return coef
 
 
-def _direct_states(model: BarModel, load: Load, phase: float, *, rates: bool = True):
+def _direct_states(model: BarModelLike, load: Load, phase: float, *, rates: bool = True):
     """:func:`_orbit_states` at one phase, by the flight and the window's drive (any load)."""
     s, R, N = model.s, model.R, model.n_modes
     T, F = _window(model)
@@ -193,7 +189,7 @@ def _direct_states(model: BarModel, load: Load, phase: float, *, rates: bool = T
     return float(r), y_end, y_minus, (dg, dh), (g, h)
 
 
-def _periodic_solve(model: BarModel, forced, g, h):
+def _periodic_solve(model: BarModelLike, forced, g, h):
     """The periodicity conditions ``y- = Phi (J y- + (g, h)) + f`` (``J = -R I``, ``Phi`` the
     flight's fundamental matrix, ``f = forced`` the flight from rest, ``(g, h)`` the window's drive)
     solved mode by mode, and the window's map: ``(u(1, 2 pi-), y_end, y_minus)``. Every array may
@@ -217,7 +213,7 @@ def _periodic_solve(model: BarModel, forced, g, h):
     return y_minus[..., :N + 1] @ c, y_end, y_minus
 
 
-def _forced_flights(model: BarModel, load: Load, phases):
+def _forced_flights(model: BarModelLike, load: Load, phases):
     """``(fq, fv)``, shape ``(P, N + 1)``: :func:`_forced_flight` over ``[phase + 2/s, phase + 2 pi]``
     for each of the ``phases``. Under a load whose flow is :class:`FourierLoad`'s closed form (valid
     at every time) one trajectory ``X`` from rest serves them all: the forced system is linear, so
@@ -238,7 +234,7 @@ def _forced_flights(model: BarModel, load: Load, phases):
     return q1 - (p11 * q0 + p12 * v0), v1 - (p21 * q0 + p22 * v0)
 
 
-def window_map(model: BarModel, y_minus, g, h) -> np.ndarray:
+def window_map(model: BarModelLike, y_minus, g, h) -> np.ndarray:
     """The wave law's map across a contact window held for its whole length ``2/s`` (theory §4b).
 
     Parameters
@@ -262,7 +258,7 @@ def window_map(model: BarModel, y_minus, g, h) -> np.ndarray:
     return y_plus
 
 
-def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
+def wave_phase_residual(model: BarModelLike, load: Load, phase) -> np.ndarray:
     """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
     ``phase``."""
     ph = np.asarray(phase, dtype=float)
@@ -272,7 +268,7 @@ def wave_phase_residual(model: BarModel, load: Load, phase) -> np.ndarray:
     return out.reshape(ph.shape)
 
 
-def _square_wave_residuals(model: BarModel, load: PiecewiseConstantLoad, ph: np.ndarray) -> np.ndarray:
+def _square_wave_residuals(model: BarModelLike, load: PiecewiseConstantLoad, ph: np.ndarray) -> np.ndarray:
     """:func:`wave_phase_residual` for a piecewise-constant load, all phases in one compiled call."""
     from . import _wavekernel as WK
     from .impact import _GL_W, _GL_X
@@ -290,7 +286,7 @@ def _square_wave_residuals(model: BarModel, load: PiecewiseConstantLoad, ph: np.
     return out.reshape(ph.shape)
 
 
-def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
+def wave_phase_roots(model: BarModelLike, load: Load) -> list[tuple[float, int]]:
     """Roots of the wave law's phase equation in ``[0, 2 pi)`` with their multiplicity.
 
     For a load with finitely many harmonics (``FourierLoad``, ``CosineLoad``) the residual is a
@@ -323,7 +319,7 @@ def wave_phase_roots(model: BarModel, load: Load) -> list[tuple[float, int]]:
     return list(_phase_scan(model, load)[0])
 
 
-def wave_phase_families(model: BarModel, load: Load) -> list[tuple[float, float]]:
+def wave_phase_families(model: BarModelLike, load: Load) -> list[tuple[float, float]]:
     """Intervals of phases on which the wave law's phase residual vanishes identically: each a
     continuum (a degenerate family) of one-impact orbits.
 
@@ -347,7 +343,7 @@ FLAT_RTOL = 1e-10
 
 
 @functools.lru_cache(maxsize=16)
-def _phase_scan(model: BarModel, load: Load) -> tuple[tuple, tuple]:
+def _phase_scan(model: BarModelLike, load: Load) -> tuple[tuple, tuple]:
     """``(roots, families)`` of :func:`wave_phase_roots` and :func:`wave_phase_families`, computed
     once per model and load (both immutable)."""
     T, F = _window(model)
@@ -447,7 +443,7 @@ def _flat_runs(resid, grid, r):
     return mask, tuple((float(lo) % TWO_PI, float(lo) % TWO_PI + float(hi - lo)) for lo, hi in intervals)
 
 
-def wave_existence_edge(model: BarModel, k: int = 1) -> float:
+def wave_existence_edge(model: BarModelLike, k: int = 1) -> float:
     """Existence edge of the pneumatic load (eq. 33) under the wave law: the largest ``k p0 / pk``
     with one-impact orbits.
 
@@ -497,7 +493,7 @@ def _refined_grid(resid, n: int) -> tuple[np.ndarray, np.ndarray]:
     return full, out
 
 
-def orbit_state(model: BarModel, load: Load, phase: float) -> OrbitState:
+def orbit_state(model: BarModelLike, load: Load, phase: float) -> OrbitState:
     """The wave law's one-impact orbit with this phase (theory §4b): contact over ``[0, 2/s]``, flight
     over ``[2/s, 2 pi]``. The states at the window's end and at the arrival, the multipliers
     (:func:`wave_floquet_multipliers`) and, for an arrival moving into the rod, the contact by
@@ -517,7 +513,7 @@ def orbit_state(model: BarModel, load: Load, phase: float) -> OrbitState:
                       separates=impact is not None and bool(impact.separations))
 
 
-def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y_minus,
+def wave_impact_map_jacobian(model: BarModelLike, load: Load, phase: float, y_end, y_minus,
                              drive_rate) -> np.ndarray:
     """Analytic Jacobian of the wave law's impact map at a one-impact fixed point (theory §7, §4b).
 
@@ -548,7 +544,7 @@ def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y
     """
     M = model.n_modes + 1
     T, F = _window(model)
-    dY, r = _arrival_derivative(model, load, phase + T, F, y_end, y_minus, phase + TWO_PI,
+    dY, r = arrival_derivative(model, load, phase + T, F, y_end, y_minus, phase + TWO_PI,
                                 _flight_fundamental(model))
     dY = -model.R * dY + np.outer(np.concatenate(drive_rate), r)
     DP = np.empty((2 * M, 2 * M))
@@ -557,7 +553,7 @@ def wave_impact_map_jacobian(model: BarModel, load: Load, phase: float, y_end, y
     return DP
 
 
-def wave_floquet_multipliers(model: BarModel, load: Load, phase: float, y_end, y_minus, drive_rate, *,
+def wave_floquet_multipliers(model: BarModelLike, load: Load, phase: float, y_end, y_minus, drive_rate, *,
                              method: str = "auto") -> np.ndarray:
     """Floquet multipliers of a one-impact orbit under the wave law: the eigenvalues of
     :func:`wave_impact_map_jacobian` (theory §7, §4b), sorted by
@@ -609,7 +605,7 @@ def wave_floquet_multipliers(model: BarModel, load: Load, phase: float, y_end, y
         parts = _wave_structured_parts(model, load, phase, y_end, y_minus, drive_rate)
     except ValueError:  # exact grazing: a multiplier is infinite
         return np.full(2 * M, np.inf + 0j)
-    mu = _aberth(*parts)
+    mu = aberth(*parts)
     if mu is None:
         DP = wave_impact_map_jacobian(model, load, phase, y_end, y_minus, drive_rate)
         return sort_multipliers(np.linalg.eigvals(DP))
@@ -624,7 +620,7 @@ def _wave_structured_parts(model, load, phase, y_end, y_minus, drive_rate):
     R = model.R
     c = model.end_weights
     T, F = _window(model)
-    v, (f0q, f0v), (f1q, f1v) = _impact_fields(model, load, phase + T, y_end, y_minus, phase + TWO_PI)
+    v, (f0q, f0v), (f1q, f1v) = impact_fields(model, load, phase + T, y_end, y_minus, phase + TWO_PI)
     p11, p12, p21, p22 = _flight_fundamental(model)
     hq = f1q - (p11 * f0q + p12 * f0v)
     hv = f1v - (p21 * f0q + p22 * f0v)
