@@ -165,3 +165,21 @@ def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simul
     with pytest.raises(ValueError, match=r"does not repeat when simulate restarts it .*\(the first interval "
                                          r"1\.03\d+ periods\)"):
         d.orbit()
+
+
+def test_a_branch_ends_on_its_target_where_the_corrector_would_pass_it():
+    """The preset's circuit with ``switch_in = 8 mm`` and a front feed of 250 L/min at 5 bar, followed
+    in the pump flow to 75 L/min in steps of 0.02: past the relief valve's border collision (72.49
+    L/min) the corrector carried the next point to 76.6 L/min, beyond the target (status 'turned
+    back'); the step is now corrected onto the target instead."""
+    from impactbar import physical
+
+    front = f"{physical.flow_coefficient('250 L/min', '5 bar')} m^3/s/Pa^0.5"
+    valve = {**_PRESET["valve"], "switch_in": "8 mm"}
+    supply = {**_PRESET["supply"], "front_flow_coefficient": front}
+    d = physical.CircuitDrifter.from_config({**_PRESET, "valve": valve, "supply": supply})
+    b = physical.continue_circuit(d, "supply.pump_flow", "75 L/min", step=0.02, max_step=0.02)
+    assert b.branch.status == "reached"
+    assert b.values[-1] * 6e4 == pytest.approx(75.0, rel=1e-12)
+    assert np.all(b.values * 6e4 <= 75.0 * (1 + 1e-12))
+    assert [e["kind"] for e in b.events] == ["border-collision relief"]

@@ -216,6 +216,10 @@ class _Engine:
                                               np.append(Ua[:-1], to))
                     else:
                         Ub, it = self.correct(pred, ta, pred)
+                        if Ub is not None and (Ub[-1] - to) * direction > 0 and (Ua[-1] - to) * direction < 0:
+                            final = True  # corrected past the target: onto the target's hyperplane instead
+                            Ub, it = self.correct(Ua + ta * (to - Ua[-1]) / ta[-1], e_last,
+                                                  np.append(Ua[:-1], to))
                     if Ub is not None:
                         tb = self.tangent(Ub, ta, self.last_J) if not final else ta
                         turned = not final and self.dot(tb, ta) < 0.8
