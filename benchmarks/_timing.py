@@ -1,9 +1,15 @@
 """The benchmarks' shared timer: the median wall time of a call after one warm-up call (numba's
-compilation, caches). Imported by the scripts of this folder (run as ``python benchmarks/...``)."""
+compilation, caches), and the runs of a script on two package trees in fresh processes (the scripts'
+``--against SRC``). Imported by the scripts of this folder (run as ``python benchmarks/...``)."""
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -17,3 +23,18 @@ def median_time(fn, repeat: int) -> float:
         fn()
         ts.append(time.perf_counter() - t0)
     return float(np.median(ts))
+
+
+def fresh_runs(script, src, rounds: int = 3) -> dict:
+    """``script --json`` (its last line of output a JSON object) on the package tree ``src`` and on
+    this one, in fresh processes, alternately: ``{"baseline": [...], "new": [...]}``, ``rounds``
+    objects each."""
+    script = Path(script).resolve()
+    runs = {"baseline": [], "new": []}
+    for _ in range(rounds):
+        for name, path in (("baseline", str(src)), ("new", str(script.parents[1] / "src"))):
+            env = dict(os.environ, PYTHONPATH=path + os.pathsep + str(script.parent))
+            out = subprocess.run([sys.executable, str(script), "--json"], env=env, check=True,
+                                 capture_output=True, text=True).stdout
+            runs[name].append(json.loads(out.strip().splitlines()[-1]))
+    return runs

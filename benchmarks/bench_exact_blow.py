@@ -20,13 +20,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import subprocess
-import sys
 import time
-from pathlib import Path
 
-from _timing import median_time  # this folder's shared timer
+from _timing import fresh_runs, median_time  # this folder's shared timer
 
 import impactbar as ib
 
@@ -67,14 +63,7 @@ def _cpu_times(repeat=15):
 
 def against(src, rounds=3):
     """The exact blow and the lattice on another package tree and on this one, in fresh processes."""
-    here = Path(__file__).resolve()
-    runs = {"baseline": [], "new": []}
-    for _ in range(rounds):
-        for name, path in (("baseline", src), ("new", str(here.parents[1] / "src"))):
-            env = dict(os.environ, PYTHONPATH=path + os.pathsep + str(here.parent))
-            out = subprocess.run([sys.executable, str(here), "--json"], env=env, check=True,
-                                 capture_output=True, text=True).stdout
-            runs[name].append(json.loads(out.strip().splitlines()[-1]))
+    runs = fresh_runs(__file__, src, rounds)
     print(f"{'case (CPU ms, best of ' + str(rounds) + ' processes)':40s} {'exact, baseline':>15s} "
           f"{'exact, new':>11s} {'lattice, baseline':>17s} {'lattice, new':>12s}")
     for case in CASES:

@@ -376,3 +376,66 @@ def test_held_window_is_the_solvers():
                 assert getattr(fast, name) == getattr(ref, name), name
         separated += ref.separations > 0
     assert held >= 20 and separated >= 10, (held, separated)
+
+
+# ------------------------------------------------------------------ quadrature panels and states ---
+def test_the_panels_equal_the_panel_by_panel_rule(rng):
+    """The quadrature's panels, built in one array operation, are those of the rule written panel by
+    panel (Gauss-Legendre, 20 nodes, each piece between breaks cut into equal panels no wider than
+    ``h``), to the bit."""
+    from impactbar.laws.wave._characteristics import _panels
+
+    gx, gw = np.polynomial.legendre.leggauss(20)
+
+    def by_panel(lo, hi, breaks, h):
+        pts = np.unique([lo, hi] + [b for b in breaks if lo < b < hi])
+        xs, ws = [np.empty(0)], [np.empty(0)]
+        for a, b in zip(pts[:-1], pts[1:], strict=True):
+            m = max(1, math.ceil((b - a) / h))
+            half = 0.5 * (b - a) / m
+            for k in range(m):
+                mid = a + half * (2.0 * k + 1.0)
+                xs.append(mid + half * gx)
+                ws.append(half * gw)
+        return np.concatenate(xs), np.concatenate(ws)
+
+    for _ in range(200):
+        lo, hi = np.sort(rng.uniform(-2.0, 3.0, 2))
+        breaks = list(rng.uniform(-3.0, 4.0, rng.integers(0, 60))) + [lo, hi, 0.5, 0.5]
+        h = 10.0 ** rng.uniform(-2.0, 0.5)
+        x, w = _panels(lo, hi, breaks, h)
+        xr, wr = by_panel(lo, hi, breaks, h)
+        assert x.size > 0 and np.array_equal(x, xr) and np.array_equal(w, wr)
+    x, w = _panels(0.5, 0.5, [0.2], 0.1)
+    assert x.size == 0 and w.size == 0
+
+
+def test_the_states_sampled_through_a_window_equal_a_fresh_projection(rng):
+    """A window asked for its state again reads it from the fields' moments tabulated along the
+    characteristics: at every time, the switches and the drive's jumps included, it is the first
+    call's projection of a fresh window (the fields' quadrature at that time) to 1e-13 of the
+    state's scale; and a copy of the window with other fields (``smoothed``) tabulates its own."""
+    s, R, N = 12.0, 0.5, 6
+    model = BarModel(s=s, d=0.0, R=R, n_modes=N)
+    load = SquareWaveLoad(40.0, 1.5)
+    t0 = 2 * math.pi - 0.07
+    q, v = random_state(rng, model, 3.0)
+    imp = wave_impact(model, load, t0, q, v)
+    assert imp.separations > 0 and imp._solver.p.jumps.size > 0
+    sol = imp._solver
+    special = np.concatenate((sol.switches(), sol.p.jumps, 1.0 + sol.p.jumps[sol.p.jumps < 1.0]))
+    th = np.unique(np.concatenate((np.linspace(0.0, 2.0, 23), special)))
+    sampled = [imp.state_at(x / s) for x in th]
+    assert "_line_moments" in sol.__dict__  # the later calls read the tables
+    for x, (qs, vs) in zip(th, sampled, strict=True):
+        qf, vf = wave_impact(model, load, t0, q, v).state_at(x / s)  # a fresh window's first call
+        scale = np.max(np.abs(np.concatenate((qf * s * np.pi * np.arange(N + 1), vf))))
+        assert np.max(np.abs(vs - vf)) < 1e-13 * scale
+        assert np.max(np.abs(qs[1:] - qf[1:])) * s * np.pi < 1e-13 * scale
+        assert abs(qs[0] - qf[0]) < 1e-13 * max(abs(qf[0]), 1.0 / s)
+    smooth = sol.smoothed()
+    smooth.state_at(0.3)
+    for x in (0.7, 1.4):
+        np.testing.assert_allclose(np.concatenate(smooth.state_at(x)),
+                                   np.concatenate(smooth._state_by_panels(x)), rtol=0, atol=1e-13 * scale)
+    assert np.max(np.abs(smooth.state_at(1.4)[1] - sol.state_at(1.4)[1])) > 1e-6 * scale

@@ -22,24 +22,55 @@ from ._jumps import _bernoulli, _singular_coefficients, locate_jumps
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(20)
 
 
+def _panel_halves(lo: float, hi: float, breaks, h: float):
+    """The panels of :func:`_panels` as their midpoints and half widths, shape ``(K,)`` each."""
+    br = np.asarray(breaks, dtype=float).ravel()
+    pts = np.unique(np.concatenate(([lo, hi], br[(br > lo) & (br < hi)])))
+    width = np.diff(pts)
+    if not width.size:
+        return np.empty(0), np.empty(0)
+    m = np.maximum(np.ceil(width / h), 1.0).astype(np.intp)  # panels per piece
+    half = 0.5 * width / m
+    first = np.cumsum(m) - m  # each piece's first panel
+    k = np.arange(first[-1] + m[-1]) - np.repeat(first, m)  # the panel's index in its piece
+    half = np.repeat(half, m)
+    return np.repeat(pts[:-1], m) + half * (2.0 * k + 1.0), half
+
+
 def _panels(lo: float, hi: float, breaks, h: float):
     """Gauss-Legendre nodes and weights on ``[lo, hi]``, split at ``breaks`` and into panels of width
-    at most ``h`` (20 nodes each: exact to rounding for ``e^{i w x}`` with ``w h <= 8``)."""
-    inner = [float(b) for b in np.atleast_1d(breaks) if lo < b < hi]
-    pts = np.unique(np.array([lo, hi] + inner, dtype=float))
-    xs, ws = [], []
-    for a, b in zip(pts[:-1], pts[1:], strict=True):
-        width = b - a
-        if width <= 0.0:
-            continue
-        m = max(1, math.ceil(width / h))
-        half = 0.5 * width / m
-        mids = a + half * (2.0 * np.arange(m) + 1.0)
-        xs.append((mids[:, None] + half * _GL_X[None, :]).ravel())
-        ws.append(np.tile(half * _GL_W, m))
-    if not xs:
-        return np.empty(0), np.empty(0)
-    return np.concatenate(xs), np.concatenate(ws)
+    at most ``h`` (20 nodes each: exact to rounding for ``e^{i w x}`` with ``w h <= 8``). All panels
+    in one array operation: the same nodes and weights, to the bit, as panel by panel."""
+    mids, half = _panel_halves(lo, hi, breaks, h)
+    return (mids[:, None] + half[:, None] * _GL_X).ravel(), (half[:, None] * _GL_W).ravel()
+
+
+class _Moments:
+    """The cumulative moments ``M_n(y) = int_lo^y f(y') e^{i n pi y'} dy'`` of a field ``f`` along one
+    family of characteristics, smooth between ``breaks``: the panels of :func:`_panels` on ``[lo,
+    hi]`` summed once, and at a ``y`` the partial panel up to it by the same 20-node rule (``y`` and
+    ``y'`` alike in a panel with no break inside: exact to rounding, as :func:`_panels`)."""
+
+    def __init__(self, f, lo: float, hi: float, breaks, h: float, npi):
+        mids, half = _panel_halves(lo, hi, breaks, h)
+        self.f, self.npi, self.lo = f, npi, lo
+        self.left = mids - half
+        x = (mids[:, None] + half[:, None] * _GL_X).ravel()
+        fw = f(x) * (half[:, None] * _GL_W).ravel()
+        per = (np.exp(1j * np.multiply.outer(x, npi)) * fw[:, None]).reshape(mids.size, 20, npi.size)
+        self.cum = np.concatenate((np.zeros((1, npi.size)), np.cumsum(per.sum(axis=1), axis=0)))
+
+    def __call__(self, y) -> np.ndarray:
+        """``M_n(y)`` for ``lo <= y <= hi``, shape ``(y.size, N + 1)``, complex."""
+        y = np.atleast_1d(np.asarray(y, dtype=float))
+        k = np.clip(np.searchsorted(self.left, y, side="right") - 1, 0, max(self.left.size - 1, 0))
+        a = self.left[k] if self.left.size else np.full(y.shape, self.lo)
+        half = 0.5 * (y - a)
+        x = ((a + half)[:, None] + half[:, None] * _GL_X).ravel()
+        fw = (self.f(x) * (half[:, None] * _GL_W).ravel()).reshape(y.size, 20)
+        part = np.einsum("ij,ijn->in", fw, np.exp(1j * np.multiply.outer(x, self.npi)).reshape(
+            y.size, 20, self.npi.size))
+        return self.cum[k] + part
 
 
 class _WindowLoad:
@@ -509,12 +540,18 @@ class _Contact:
         p = self.p(x)
         return float(w @ (p * (self._beta_line(x) + p / self.s))) / self.s
 
-    def _x_breaks(self, th):
-        """Positions where the fields at ``th`` may jump: images of the corners, the switches and
-        the load's jumps along the characteristics."""
+    def _line_breaks(self):
+        """Where the fields may jump along each family of characteristics: ``eta = x + theta`` for
+        ``beta`` and ``xi = x - theta`` for ``alpha`` (the corners' images, the switches and the
+        load's jumps)."""
         j, sw = self.p.jumps, self.switches()
         eta = np.concatenate(([1.0, 2.0], 2.0 + j, 1.0 + sw))  # beta line breaks
         xi = np.concatenate(([0.0], -eta, -j))  # alpha line breaks
+        return eta, xi
+
+    def _x_breaks(self, th):
+        """Positions where the fields at ``th`` may jump: :meth:`_line_breaks` at ``th``."""
+        eta, xi = self._line_breaks()
         return np.concatenate((eta - th, xi + th))
 
     def field_energy(self, th=2.0):
@@ -555,7 +592,7 @@ class _Contact:
         y, jumps = locate_jumps(self.piston.a, self.piston.b, self.scale)
         if not np.any(jumps[0]):
             return self
-        out = copy.copy(self)
+        out = self._copy()
         out.piston = _LocatedPiston(self.piston, y, jumps)
         out._jumps = out.piston.jump_breaks
         out.breaks = np.unique(np.concatenate((self.breaks, out._jumps)))
@@ -566,6 +603,13 @@ class _Contact:
             return self
         return out
 
+    def _copy(self) -> _Contact:
+        """A shallow copy without the tables of :meth:`state_at` (the copy's fields differ)."""
+        out = copy.copy(self)
+        out.__dict__.pop("_line_moments", None)
+        out.__dict__.pop("_state_asked", None)
+        return out
+
     def smoothed(self) -> _Contact:
         """The same window (contact intervals kept) whose piston fields are smoothed by the Jackson
         kernel (a positive kernel: no Gibbs overshoot, ``O(1/N^2)`` on smooth fields; Weisse et al.,
@@ -573,7 +617,7 @@ class _Contact:
         M = self.N + 1
         n = np.arange(M)
         g = ((M - n) * np.cos(math.pi * n / M) + np.sin(math.pi * n / M) / math.tan(math.pi / M)) / M
-        out = copy.copy(self)
+        out = self._copy()
         out.piston = copy.copy(self.piston)
         out.piston.a = self.piston.a * g
         out.piston.b = np.concatenate((self.piston.b[:1], self.piston.b[1:] * g[1:]))
@@ -625,15 +669,48 @@ class _Contact:
         return float(self.Acum(c[k, 1])[0] - self.Acum(th)[0])
 
     def state_at(self, th):
-        """Modal state (projected) at ``th``, positions from the rod end's current position."""
-        s = self.s
+        """Modal state (projected) at ``th``, positions from the rod end's current position.
+
+        The first call of a window projects the fields at ``th`` on the panels split where they may
+        jump (:meth:`_state_by_panels`); the window asks again (a history sampled through the blow),
+        so later calls take the projections from the fields' cumulative moments along each family of
+        characteristics, tabulated once (:meth:`_line_moments`): the same integrals, equal to the
+        panels' to rounding (about 1e-15 of the fields' scale), in O(N) per call."""
+        if not self.__dict__.get("_state_asked", False):
+            self._state_asked = True
+            return self._state_by_panels(th)
+        ma, mb = self._line_moments
+        npi = self.piston.npi
+        turn = np.exp(1j * npi * th)  # x = xi + th = eta - th
+        Ia = turn * np.subtract(*ma([1.0 - th, -th]))  # int_0^1 e^{i n pi x} alpha(x, th) dx
+        Ib = np.conj(turn) * np.subtract(*mb([1.0 + th, th]))  # the same of beta
+        return self._state_from(th, 0.5 * (Ia.real + Ib.real), 0.5 * (Ib.imag - Ia.imag)[1:])
+
+    @cached_property
+    def _line_moments(self):
+        """The cumulative moments (:class:`_Moments`) of ``alpha`` on ``xi`` in ``[-2, 1]`` and of
+        ``beta`` on ``eta`` in ``[0, 3]``: every ``theta`` of the window reads its fields there."""
+        eta, xi = self._line_breaks()
+        npi = self.piston.npi
+        return (_Moments(self._alpha_line, -2.0, 1.0, xi, self.h_quad, npi),
+                _Moments(self._beta_line, 0.0, 3.0, eta, self.h_quad, npi))
+
+    def _state_by_panels(self, th):
+        """:meth:`state_at` by the quadrature of the fields at ``th`` (panels split at
+        :meth:`_x_breaks`)."""
         x, w = _panels(0.0, 1.0, self._x_breaks(th), self.h_quad)
         al, be = self.invariants_at(x, th)
-        npi = self.piston.npi
-        arg = np.multiply.outer(npi, x)
-        v = np.cos(arg) @ (0.5 * (al + be) * w)
+        arg = np.multiply.outer(self.piston.npi, x)
+        return self._state_from(th, np.cos(arg) @ (0.5 * (al + be) * w),
+                                np.sin(arg[1:]) @ (0.5 * (be - al) * w))
+
+    def _state_from(self, th, cos_sum, sin_sum):
+        """``(q, v)`` at ``th`` from ``int cos(n pi x) u_t dx`` for ``n = 0..N`` and ``int sin(n pi x)
+        s u_x dx`` for ``n = 1..N`` (``q_0`` from the gap)."""
+        s, npi = self.s, self.piston.npi
+        v = np.asarray(cos_sum, dtype=float)
         q = np.zeros_like(v)
-        q[1:] = -(np.sin(arg[1:]) @ (0.5 * (be - al) * w)) / (s * npi[1:])
+        q[1:] = -sin_sum / (s * npi[1:])
         cw = 2.0 * (-1.0) ** np.arange(q.size)
         q[0] = -self.gap_at(th) / s - float(cw[1:] @ q[1:])
         return q, v
