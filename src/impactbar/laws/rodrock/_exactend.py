@@ -24,6 +24,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     SPENT,
     blk_integral,
     blk_integral_sq,
+    piece_span,
     pool_load,
 )
 from ._records import (  # the records' slots
@@ -76,32 +77,39 @@ def _cached_integrals(p, L, pool, B, N, first, second):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def chan_integrals(c, t, Z, CH_T, pool, B, N):
-    """``int f`` and ``int f^2 / Z`` over the wave now in the channel's segment (emitted in
-    ``[t - T, t]``); ``pool`` as :func:`emit`'s, ``B, N`` a scratch block."""
+def _chan_sums(c, t, CH_T, pool, B, N, second):
+    """``int f`` and, with ``second`` (else 0), ``int f^2`` over the wave now in the channel's segment
+    (emitted in ``[t - T, t]``), a closed piece's whole integrals computed once (``PF[p, 3:5]``);
+    ``pool`` as :func:`emit`'s, ``B, N`` a scratch block."""
     PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     lo = t - CH_T[c]
     p = CHI[c, 1]
     s1 = 0.0
     s2 = 0.0
     while p >= 0:
-        t0 = PF[p, 0]
-        nx = PI[p, 0]
-        tend = PF[nx, 0] if nx >= 0 else t
-        a = max(t0, lo)
-        b = min(tend, t)
+        t0, nx, tend, a, b = piece_span(PF, PI, p, lo, t)
         if b > a and PI[p, 2] > 0:
             if nx >= 0 and a == t0 and b == tend:  # the whole of a closed piece: computed once
-                _cached_integrals(p, tend - t0, pool, B, N, True, True)
+                _cached_integrals(p, tend - t0, pool, B, N, True, second)
                 s1 += PF[p, 3]
-                s2 += PF[p, 4]
+                if second:
+                    s2 += PF[p, 4]
             else:
                 pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
                 s1 += blk_integral(B, N, lam, a - t0, b - t0)
-                s2 += blk_integral_sq(B, N, lam, a - t0, b - t0)
+                if second:
+                    s2 += blk_integral_sq(B, N, lam, a - t0, b - t0)
         if tend >= t:
             break
         p = nx
+    return s1, s2
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def chan_integrals(c, t, Z, CH_T, pool, B, N):
+    """``int f`` and ``int f^2 / Z`` over the wave now in the channel's segment (emitted in
+    ``[t - T, t]``); ``pool`` as :func:`emit`'s, ``B, N`` a scratch block."""
+    s1, s2 = _chan_sums(c, t, CH_T, pool, B, N, True)
     return s1, s2 / Z
 
 
@@ -117,9 +125,7 @@ def chan_closed_sq(c, t, CH_T, pool, B, N, exact):
     p = CHI[c, 1]
     s2 = 0.0
     while p >= 0:
-        t0 = PF[p, 0]
-        nx = PI[p, 0]
-        tend = PF[nx, 0] if nx >= 0 else t
+        t0, nx, tend, _, _ = piece_span(PF, PI, p, lo, t)
         if nx >= 0 and lo <= t0 < tend <= t and PI[p, 2] > 0:
             L = tend - t0
             if exact or not math.isnan(PF[p, 4]):
@@ -139,28 +145,17 @@ def piece_momentum(ws, c, t):
     """``int f`` over the wave now in channel ``c``'s segment."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    lo = t - CH_T[c]
-    p = CHI[c, 1]
-    s1 = 0.0
-    while p >= 0:
-        t0 = PF[p, 0]
-        nx = PI[p, 0]
-        tend = PF[nx, 0] if nx >= 0 else t
-        a = max(t0, lo)
-        b = min(tend, t)
-        if b > a and PI[p, 2] > 0:
-            if nx >= 0 and a == t0 and b == tend:  # a closed piece's whole integral, cached
-                if math.isnan(PF[p, 3]):
-                    pool_load(WB[B_AUX], WN[B_AUX], p, 0.0, lam, BIN, PI, TK, TC)
-                    PF[p, 3] = blk_integral(WB[B_AUX], WN[B_AUX], lam, 0.0, tend - t0)
-                s1 += PF[p, 3]
-            else:
-                pool_load(WB[B_AUX], WN[B_AUX], p, 0.0, lam, BIN, PI, TK, TC)
-                s1 += blk_integral(WB[B_AUX], WN[B_AUX], lam, a - t0, b - t0)
-        if tend >= t:
-            break
-        p = nx
-    return s1
+    return _chan_sums(c, t, CH_T, (PF, PI, TK, TC, CNT, CHI, lam, BIN), WB[B_AUX], WN[B_AUX], False)[0]
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _momentum(ws, t, first, last):
+    """The momentum of segments ``first`` to ``last`` (1-based) at ``t``: ``int (f - g)`` over
+    their waves (:func:`piece_momentum`)."""
+    P = 0.0
+    for i in range(first, last + 1):
+        P += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
+    return P
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -237,16 +232,11 @@ def may_end(ws, t):
     vp = 0.0
     Pr = 1.0  # (> 0: the rod cannot fly free)
     if NSI[n_p, 3] != 1:
-        Pq = 0.0
-        for i in range(1, n_p + 1):
-            Pq += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
+        Pq = _momentum(ws, t, 1, n_p)
         gone = Pq <= 0.0
         vp = Pq / PR[PR_MP]
         if gone and f == 0.0 and br == FREE and BS[BS_P] < BS[BS_PPERM]:
-            Pr = 0.0
-            for i in range(n_p + 1, J + 1):
-                Pr += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
-            Pr += m * w
+            Pr = _momentum(ws, t, n_p + 1, J) + m * w
     xs = NSF[n_p, 1]
     avail = PR[PR_E0] + f * xs + f * f * (PR[PR_CROD] * 0.5 + 0.5 / ku)
     if not _could_end(psi, ws, avail, gone, vp, Pr):
@@ -320,10 +310,7 @@ def certify(ws, t):
     if CI[CI_WIN] % 16 != 0:
         if NSI[n_p, 3] == 1:
             return GOING
-        Pq = 0.0
-        for i in range(1, n_p + 1):
-            Pq += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
-        if Pq > 0.0:
+        if _momentum(ws, t, 1, n_p) > 0.0:
             return GOING
     if not may_end(ws, t):  # no end possible whatever the energies in flight: no energy pass
         return GOING

@@ -297,20 +297,89 @@ def node_junction(ws, j, t, t1):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _crossing(ws, blk, L, a):
+    """Where block ``blk`` first turns negative in ``[0, L]`` (:func:`first_negative`, the clock at
+    ``a``; -1: nowhere), a search given up (-2) counted in ``CI[CI_GIVEUP]`` and read as none."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    SCR = (WB[B_SCR1], WN[B_SCR1], WB[B_SCR2], WN[B_SCR2], WB[B_SCR3], WN[B_SCR3])
+    tc = first_negative(WB[blk], WN[blk], lam, BIN, L, STK, SCR, a)
+    if tc == -2.0:
+        CI[CI_GIVEUP] += 1
+        tc = -1.0
+    return tc
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _contact_switch(ws, blk, L, a, flips):
+    """The contact's next switch: :func:`_crossing` of block ``blk`` (the weld's force, or the gap),
+    at once (0) where below the clock's resolution (else no progress), none (-1) where it would be
+    the third switch at once in a row (a chatter)."""
+    tc = _crossing(ws, blk, L, a)
+    if tc > 0.0 and a + tc == a:  # below the clock's resolution: at once (else no progress)
+        tc = 0.0
+    if tc == 0.0 and flips >= 2:
+        tc = -1.0
+    return tc
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def contact_node(PR, SZ):
+    """The piston-shank node: ``(j, fch, gch, ZL, ZR, s)``, its segment boundary ``j`` (the piston's
+    segments), the channels of the wave arriving from the piston and from the shank, their
+    impedances and ``ZL + ZR``."""
+    j = int(PR[PR_NP])
+    ZL = SZ[j - 1]
+    ZR = SZ[j]
+    return j, 2 * (j - 1), 2 * j + 1, ZL, ZR, ZL + ZR
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def contact_emit(ws, j, a, valid, welded, record, valid_n):
+    """The waves the piston-shank node ``j`` sends from ``a`` on, from those arriving (``B_IN`` from
+    the piston, ``B_IN2`` from the shank): welded, ``N - g_in`` into the shank and ``N - f_in`` into
+    the piston with the force ``N`` in ``B_N``; apart, ``-g_in`` and ``-f_in``. With ``record`` the
+    force ``B_N`` first into the node's history channel (valid to ``valid_n``). Returns whether
+    every emission found room (:func:`_emit`)."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    if welded:
+        blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN2], WN[B_IN2])
+        blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN], WN[B_IN])
+    else:
+        blk_clear(WB[B_OUT], WN[B_OUT])
+        blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
+        blk_clear(WB[B_OUT2], WN[B_OUT2])
+        blk_axpy(WB[B_OUT2], WN[B_OUT2], -1.0, WB[B_IN], WN[B_IN])
+    if record and not _emit(ws, 2 * SZ.size + 1 + j, a, B_N, valid_n, 0, 0.0):
+        return False
+    return _emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0) and _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _contact_flip(ws, j, a, welded):
+    """The piston-shank node ``j`` switching at ``a``: welded again (a re-contact, counted in
+    ``CI[CI_RECON]``) or apart (a separation, counted in ``CI[CI_SEP]``, its time in
+    ``CT[CT_TSEP]``), the gap set to 0."""
+    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
+     RT, RC, RD, EP, CI, CT) = ws
+    NSI[j, 3] = 1 if welded else 0
+    NSF[j, 0] = 0.0
+    if welded:
+        CI[CI_RECON] += 1
+    else:
+        CI[CI_SEP] += 1
+        CT[CT_TSEP] = a
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def node_contact(ws, t, t1):
     """The piston's struck end and the shank: welded while the force is compressive; free ends
     (``f_out = -g_in``, ``g_out = -f_in``) while apart, the gap the integral of ``v_s - v_p``; contact
     resumes where the gap closes."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    SCR = (WB[B_SCR1], WN[B_SCR1], WB[B_SCR2], WN[B_SCR2], WB[B_SCR3], WN[B_SCR3])
-    J = SZ.size
-    j = int(PR[PR_NP])
-    fch = 2 * (j - 1)
-    gch = 2 * j + 1
-    ZL = SZ[j - 1]
-    ZR = SZ[j]
-    s = ZL + ZR
+    j, fch, gch, ZL, ZR, s = contact_node(PR, SZ)
     record = PR[PR_RECORD] != 0.0
     a = t
     dirty = False
@@ -324,24 +393,15 @@ def node_contact(ws, t, t1):
         b = min(nbf, nbg, t1)
         valid = min(_load(ws, B_IN, fch, cf, a), _load(ws, B_IN2, gch, cg, a))
         L = b - a
-        if NSI[j, 3] == 1:  # in contact
+        welded = NSI[j, 3] == 1
+        if welded:  # in contact
             blk_set_comb(WB[B_N], WN[B_N], 2.0 * ZR / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
                          WN[B_IN2])
-            ts = first_negative(WB[B_N], WN[B_N], lam, BIN, L, STK, SCR, a)
-            if ts == -2.0:
-                CI[CI_GIVEUP] += 1
-                ts = -1.0
-            if ts > 0.0 and a + ts == a:  # below the clock's resolution: at once (else no progress)
-                ts = 0.0
-            if ts == 0.0 and flips >= 2:
-                ts = -1.0
+            ts = _contact_switch(ws, B_N, L, a, flips)
             if ts == 0.0:
-                NSI[j, 3] = 0
-                NSF[j, 0] = 0.0
+                _contact_flip(ws, j, a, False)
                 dirty = True
                 flips += 1
-                CI[CI_SEP] += 1
-                CT[CT_TSEP] = a
                 if RD.shape[0] > 1:  # the waves arriving just before (the pieces before a, if new)
                     fm = blk_value(WB[B_IN], WN[B_IN], lam, 0.0)
                     gm = blk_value(WB[B_IN2], WN[B_IN2], lam, 0.0)
@@ -354,33 +414,13 @@ def node_contact(ws, t, t1):
                     _log(RD, a, LOG_SEP, fm, gm, 0.0)
                 continue
             if dirty:
-                blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN2], WN[B_IN2])
-                blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN], WN[B_IN])
-                if record and not _emit(ws, 2 * J + 1 + j, a, B_N, valid, 0, 0.0):
-                    return False
-                if not _emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0):
-                    return False
-                if not _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0):
+                if not contact_emit(ws, j, a, valid, True, record, valid):
                     return False
                 dirty = False
             te = L if ts < 0.0 else ts
             # the common velocity (2 f_in - N)/Z_L
             blk_set_comb(WB[B_RATE], WN[B_RATE], 2.0 / ZL, WB[B_IN], WN[B_IN], -1.0 / ZL, WB[B_N], WN[B_N])
             NSF[j, 1] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, te)
-            if ts > 0.0:
-                if RD.shape[0] > 1:
-                    _log(RD, a + ts, LOG_SEP, blk_value(WB[B_IN], WN[B_IN], lam, ts),
-                         blk_value(WB[B_IN2], WN[B_IN2], lam, ts), 0.0)
-                a += ts
-                NSI[j, 3] = 0
-                NSF[j, 0] = 0.0
-                dirty = True
-                flips = 1
-                CI[CI_SEP] += 1
-                CT[CT_TSEP] = a
-                NSI[j, 0] = cf
-                NSI[j, 1] = cg
-                continue
         else:
             # gap' = v_s - v_p = -2 g_in/Z_R - 2 f_in/Z_L
             blk_set_comb(WB[B_RATE], WN[B_RATE], -2.0 / ZL, WB[B_IN], WN[B_IN], -2.0 / ZR, WB[B_IN2],
@@ -389,20 +429,11 @@ def node_contact(ws, t, t1):
                                 NSF[j, 0] + 0.0j, L)
             if st != 0:
                 CI[CI_DEG] += 1
-            tc = first_negative(WB[B_ZERO], WN[B_ZERO], lam, BIN, L, STK, SCR, a)
-            if tc == -2.0:
-                CI[CI_GIVEUP] += 1
-                tc = -1.0
-            if tc > 0.0 and a + tc == a:
-                tc = 0.0
-            if tc == 0.0 and flips >= 2:
-                tc = -1.0
-            if tc == 0.0:
-                NSI[j, 3] = 1
-                NSF[j, 0] = 0.0
+            ts = _contact_switch(ws, B_ZERO, L, a, flips)
+            if ts == 0.0:
+                _contact_flip(ws, j, a, True)
                 dirty = True
                 flips += 1
-                CI[CI_RECON] += 1
                 if RD.shape[0] > 1:
                     _log_recontact(RD, a, blk_value(WB[B_IN], WN[B_IN], lam, 0.0),
                                    blk_value(WB[B_IN2], WN[B_IN2], lam, 0.0),
@@ -410,35 +441,28 @@ def node_contact(ws, t, t1):
                                    ZL, ZR)
                 continue
             if dirty:
-                blk_clear(WB[B_OUT], WN[B_OUT])
-                blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
-                blk_clear(WB[B_OUT2], WN[B_OUT2])
-                blk_axpy(WB[B_OUT2], WN[B_OUT2], -1.0, WB[B_IN], WN[B_IN])
-                blk_clear(WB[B_N], WN[B_N])
-                if record and not _emit(ws, 2 * J + 1 + j, a, B_N, INF, 0, 0.0):
-                    return False
-                if not _emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0):
-                    return False
-                if not _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0):
+                blk_clear(WB[B_N], WN[B_N])  # (apart: no force; the outputs do not read it)
+                if not contact_emit(ws, j, a, valid, False, record, INF):
                     return False
                 dirty = False
-            te = L if tc < 0.0 else tc
+            te = L if ts < 0.0 else ts
             NSF[j, 1] += -2.0 / ZR * blk_integral(WB[B_IN2], WN[B_IN2], lam, 0.0, te)
-            if tc > 0.0:
-                if RD.shape[0] > 1:
-                    _log_recontact(RD, a + tc, blk_value(WB[B_IN], WN[B_IN], lam, tc),
-                                   blk_value(WB[B_IN2], WN[B_IN2], lam, tc),
-                                   blk_value(WB[B_RATE], WN[B_RATE], lam, tc),
-                                   ZL, ZR)
-                a += tc
-                NSF[j, 0] = 0.0
-                NSI[j, 3] = 1
-                dirty = True
-                flips = 1
-                CI[CI_RECON] += 1
-                NSI[j, 0] = cf
-                NSI[j, 1] = cg
-                continue
+        if ts > 0.0:  # the switch inside the piece: a separation, or a re-contact
+            if RD.shape[0] > 1:
+                fv = blk_value(WB[B_IN], WN[B_IN], lam, ts)
+                gv = blk_value(WB[B_IN2], WN[B_IN2], lam, ts)
+                if welded:
+                    _log(RD, a + ts, LOG_SEP, fv, gv, 0.0)
+                else:
+                    _log_recontact(RD, a + ts, fv, gv, blk_value(WB[B_RATE], WN[B_RATE], lam, ts), ZL, ZR)
+            a += ts
+            _contact_flip(ws, j, a, not welded)
+            dirty = True
+            flips = 1
+            NSI[j, 0] = cf
+            NSI[j, 1] = cg
+            continue
+        if not welded:
             NSF[j, 0] = max(blk_value(WB[B_ZERO], WN[B_ZERO], lam, te), 0.0)
         NSI[j, 0] = cf
         NSI[j, 1] = cg
@@ -517,7 +541,6 @@ def node_bit(ws, t, t1):
     the reflected wave ``G = F - Z p'`` (absorbed on a semi-infinite rod)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    SCR = (WB[B_SCR1], WN[B_SCR1], WB[B_SCR2], WN[B_SCR2], WB[B_SCR3], WN[B_SCR3])
     J = SZ.size
     goch = 2 * J - 1
     hch = 3 * J + 1
@@ -554,7 +577,7 @@ def node_bit(ws, t, t1):
                 blk_clear(WB[B_ZERO], WN[B_ZERO])
                 blk_axpy(WB[B_ZERO], WN[B_ZERO], 1.0, WB[B_XD], WN[B_XD])
                 blk_add_const(WB[B_ZERO], WN[B_ZERO], tolv)
-                te = first_negative(WB[B_ZERO], WN[B_ZERO], lam, BIN, L, STK, SCR, a)
+                te = _crossing(ws, B_ZERO, L, a)
             elif br == ELASTIC:
                 blk_clear(WB[B_ZERO], WN[B_ZERO])
                 blk_axpy(WB[B_ZERO], WN[B_ZERO], -1.0, WB[B_X], WN[B_X])
@@ -563,14 +586,8 @@ def node_bit(ws, t, t1):
                     # zero there, has rounding-level signs on the two branches (they chattered)
                     xtop += 4096.0 * EPS * abs(xtop)
                 blk_add_const(WB[B_ZERO], WN[B_ZERO], xtop)
-                t1a = first_negative(WB[B_ZERO], WN[B_ZERO], lam, BIN, L, STK, SCR, a)
-                if t1a == -2.0:
-                    CI[CI_GIVEUP] += 1
-                    t1a = -1.0
-                t2a = first_negative(WB[B_X], WN[B_X], lam, BIN, t1a if t1a >= 0.0 else L, STK, SCR, a)
-                if t2a == -2.0:
-                    CI[CI_GIVEUP] += 1
-                    t2a = -1.0
+                t1a = _crossing(ws, B_ZERO, L, a)
+                t2a = _crossing(ws, B_X, t1a if t1a >= 0.0 else L, a)
                 nxt = -1
                 if t2a >= 0.0 and (t1a < 0.0 or t2a <= t1a):
                     te = t2a
@@ -581,10 +598,7 @@ def node_bit(ws, t, t1):
             else:
                 blk_clear(WB[B_ZERO], WN[B_ZERO])
                 blk_axpy(WB[B_ZERO], WN[B_ZERO], -1.0, WB[B_X], WN[B_X])
-                te = first_negative(WB[B_ZERO], WN[B_ZERO], lam, BIN, L, STK, SCR, a)
-            if te == -2.0:
-                CI[CI_GIVEUP] += 1
-                te = -1.0
+                te = _crossing(ws, B_ZERO, L, a)
             # the reflected wave and the history
             if semi:
                 blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_IN], WN[B_IN], -Z, WB[B_XD], WN[B_XD])

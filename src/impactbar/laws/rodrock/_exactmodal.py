@@ -12,7 +12,7 @@ import numpy as np
 
 from ...dynamics.kernels import CACHE
 from ._exactintegrals import blk_integral_exp
-from ._exactpieces import DC, pool_load
+from ._exactpieces import DC, piece_span, pool_load
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -34,11 +34,7 @@ def piston_integrals(pool, heads, travel, t, om, out):
         for side in range(2):
             p = heads[2 * i + side]
             while p >= 0:
-                t0 = PF[p, 0]
-                nx = PI[p, 0]
-                tend = PF[nx, 0] if nx >= 0 else t
-                a = max(t0, lo)
-                b = min(tend, t)
+                t0, nx, tend, a, b = piece_span(PF, PI, p, lo, t)
                 if b > a and PI[p, 2] > 0:
                     pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
                     for n in range(om.size):

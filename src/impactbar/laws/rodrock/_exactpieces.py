@@ -242,6 +242,47 @@ def blk_shift(B, N, delta, lam, BIN):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _ode1_series(Y, NY, row, G, e, n, delta, grows, ex, L):
+    """:func:`blk_ode1`'s series for the forcing ``G[e]`` (``n`` coefficients), added into slot
+    ``row`` of ``Y`` (``NY[row]`` raised to its length) until its terms fall below ``SERIES_TOL`` of
+    the largest on ``[0, L]``: with ``grows``, the integral of ``e^{-delta s} P(s)`` (``ex`` (DC,)
+    scratch for the exponential's coefficients), else the Taylor recursion of ``(D - delta) Q = P``.
+    Returns whether the degree limit was reached."""
+    status = False
+    q = 0.0j
+    dp = -delta
+    if grows:
+        ex[0] = 1.0  # dp^m / m!, each as the series reaches it
+    top = 0.0
+    Lp = 1.0
+    last = 0
+    for kk in range(DC - 1):
+        if grows:
+            if kk > 0:
+                ex[kk] = ex[kk - 1] * dp / kk
+            R = 0.0j  # the coefficient of s^kk in e^{dp s} P(s)
+            for i in range(min(kk, n - 1) + 1):
+                R += G[e, i] * ex[kk - i]
+            q = R / (kk + 1)
+        else:
+            P = G[e, kk] if kk < n else 0.0j
+            q = (P + delta * q) / (kk + 1)
+        Y[row, kk + 1] += q
+        last = kk + 1
+        Lp *= L
+        mag = cabs(q) * Lp
+        if mag > top:
+            top = mag
+        if kk + 1 >= n and (q == 0.0 or mag <= SERIES_TOL * top):
+            break
+        if kk + 2 >= DC:
+            status = True
+    if last + 1 > NY[row]:
+        NY[row] = last + 1
+    return status
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     """``Y`` = the solution of ``y' - r y = g`` with ``y(0) = y0`` on ``[0, L]`` (``G`` the block of
     ``g``; ``r = lam[rc]``), without cancellation: a forcing exponent ``lam_e`` within ``NEAR / L`` of
@@ -269,52 +310,13 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
         if e != rc and abs(delta) * L <= NEAR and lam[e].real > r.real:
             # e^{r tau} int_0^tau e^{(lam_e - r) s} P(s) ds: the series of e^{(lam_e - r) s} grows
             series = True
-            dp = -delta
-            ex[0] = 1.0  # dp^m / m!, each as the series reaches it
-            top = 0.0
-            Lp = 1.0
-            last = 0
-            for kk in range(DC - 1):
-                if kk > 0:
-                    ex[kk] = ex[kk - 1] * dp / kk
-                R = 0.0j  # the coefficient of s^kk in e^{dp s} P(s)
-                for i in range(min(kk, n - 1) + 1):
-                    R += G[e, i] * ex[kk - i]
-                q = R / (kk + 1)
-                Y[rc, kk + 1] += q
-                last = kk + 1
-                Lp *= L
-                mag = cabs(q) * Lp
-                if mag > top:
-                    top = mag
-                if kk + 1 >= n and (q == 0.0 or mag <= SERIES_TOL * top):
-                    break
-                if kk + 2 >= DC:
-                    status = 1
-            if last + 1 > NY[rc]:
-                NY[rc] = last + 1
+            if _ode1_series(Y, NY, rc, G, e, n, delta, True, ex, L):
+                status = 1
         elif e == rc or abs(delta) * L <= NEAR:
             if e != rc:
                 series = True
-            q = 0.0j
-            top = 0.0
-            Lp = 1.0
-            last = 0
-            for jj in range(DC - 1):
-                P = G[e, jj] if jj < n else 0.0j
-                q = (P + delta * q) / (jj + 1)
-                Y[e, jj + 1] += q
-                last = jj + 1
-                Lp *= L
-                mag = cabs(q) * Lp
-                if mag > top:
-                    top = mag
-                if jj + 1 >= n and (q == 0.0 or mag <= SERIES_TOL * top):
-                    break
-                if jj + 2 >= DC:
-                    status = 1
-            if last + 1 > NY[e]:
-                NY[e] = last + 1
+            if _ode1_series(Y, NY, e, G, e, n, delta, False, ex, L):
+                status = 1
         else:
             a0 = lam[e] - r
             qn = 0.0j
@@ -604,6 +606,17 @@ def pool_unpack(B, N, piece, PI, TK, TC):
         B[e, d] += TC[k]
         if d + 1 > N[e]:
             N[e] = d + 1
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def piece_span(PF, PI, p, lo, t):
+    """Piece ``p`` of a channel's list read up to ``t``: ``(t0, nx, tend, a, b)``, its start ``t0``,
+    the next piece ``nx`` (-1: none), its end ``tend`` (``t`` while it is the last) and its part
+    ``[a, b]`` within ``[lo, t]`` (none where ``b <= a``)."""
+    t0 = PF[p, 0]
+    nx = PI[p, 0]
+    tend = PF[nx, 0] if nx >= 0 else t
+    return t0, nx, tend, max(t0, lo), min(tend, t)
 
 
 @numba.njit(cache=CACHE, nogil=True)

@@ -54,6 +54,8 @@ from ._exactkernel import (
     _load,
     bit_input,
     bit_solve,
+    contact_emit,
+    contact_node,
     node_end,
     node_junction,
 )
@@ -63,7 +65,6 @@ from ._exactpieces import (
     FREE,
     INF,
     LOAD,
-    blk_axpy,
     blk_clear,
     blk_eval,
     blk_integral,
@@ -76,7 +77,6 @@ from ._records import (  # the records' slots
     B_IN2,
     B_N,
     B_OUT,
-    B_OUT2,
     B_RATE,
     B_X,
     B_XD,
@@ -229,12 +229,7 @@ def t_node_contact(ws, tg, t, t1):
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     TCUR = tg[5]
-    j = int(PR[PR_NP])
-    fch = 2 * (j - 1)
-    gch = 2 * j + 1
-    ZL = SZ[j - 1]
-    ZR = SZ[j]
-    s = ZL + ZR
+    j, fch, gch, ZL, ZR, s = contact_node(PR, SZ)
     a = t
     dirty = False
     while True:
@@ -254,10 +249,7 @@ def t_node_contact(ws, tg, t, t1):
             blk_set_comb(WB[B_N], WN[B_N], 2.0 * ZR / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
                          WN[B_IN2])
             if dirty:
-                blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN2], WN[B_IN2])
-                blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN], WN[B_IN])
-                if not (_emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0)
-                        and _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0)):
+                if not contact_emit(ws, j, a, valid, True, False, 0.0):
                     return False
                 dirty = False
             if L > 0.0:
@@ -266,12 +258,7 @@ def t_node_contact(ws, tg, t, t1):
                 NSF[j, 1] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, L)
         else:
             if dirty:
-                blk_clear(WB[B_OUT], WN[B_OUT])
-                blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
-                blk_clear(WB[B_OUT2], WN[B_OUT2])
-                blk_axpy(WB[B_OUT2], WN[B_OUT2], -1.0, WB[B_IN], WN[B_IN])
-                if not (_emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0)
-                        and _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0)):
+                if not contact_emit(ws, j, a, valid, False, False, 0.0):
                     return False
                 dirty = False
             if L > 0.0:

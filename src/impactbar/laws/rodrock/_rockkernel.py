@@ -42,6 +42,40 @@ def _unload(bs, bp):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _lift_off(bs, E, Z, T, p0):
+    """A massless bit off the rock (``p' = E/Z``): ``(rate, t_hit, tau)``, ``t_hit`` its return to
+    ``p_perm`` (inf: none), ``tau`` the sub-step's end, the earlier of ``T`` and ``t_hit``."""
+    rate = E / Z
+    t_hit = (bs[5] - p0) / rate if rate > 0.0 and p0 + rate * T >= bs[5] else math.inf
+    return rate, t_hit, min(T, t_hit)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _massless_switch(bs, b, ref, E, Z, T, p0):
+    """A massless bit on a rock branch (``Z p' = E - b (p - p_ref)``, ``b > 0``): the sub-step's end
+    ``tau`` and the branch there, ``(tau, nxt, p_nxt, which, g, lam)``: ``nxt`` the next branch
+    (-1: none before ``T``), ``p_nxt`` the penetration of the switch, ``which`` its row of ``bs``
+    (3: ``p_max``, 5: ``p_perm``), ``g = Z p'(0)`` and ``lam = b/Z``."""
+    p_inf = E / b + ref
+    lam = b / Z
+    tau = T
+    nxt, p_nxt, which = -1.0, 0.0, 0
+    # g = b (p_inf - p0), Z times the rate at p0: the forms below lose nothing to a soft rock's huge
+    # p_inf (with p_inf itself, a rock of k = 1e-16 was read as a rigid wall)
+    g = E - b * (p0 - ref)
+    if bs[2] == _ELASTIC:
+        if p_inf > bs[3] >= p0:
+            tau_h = -math.log1p(-(bs[3] - p0) * b / g) / lam
+            if tau_h < T:
+                tau, nxt, p_nxt, which = tau_h, _LOAD, bs[3], 3
+        elif p_inf < bs[5] <= p0:
+            tau_h = -math.log1p(-(bs[5] - p0) * b / g) / lam
+            if tau_h < T:
+                tau, nxt, p_nxt, which = tau_h, _FREE, bs[5], 5
+    return tau, nxt, p_nxt, which, g, lam
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def _massless(bs, bp, E, T):
     Z = bp[0]
     b, ref = _coeffs(bs, bp)
@@ -50,31 +84,14 @@ def _massless(bs, bp, E, T):
         _unload(bs, bp)
         return 0.0
     if b == 0.0:
-        rate = E / Z
-        t_hit = (bs[5] - p0) / rate if rate > 0.0 and p0 + rate * T >= bs[5] else math.inf
-        tau = min(T, t_hit)
+        rate, t_hit, tau = _lift_off(bs, E, Z, T, p0)
         p1 = bs[5] if tau == t_hit else p0 + rate * tau
         bs[0] = p1
         if tau == t_hit:
             bs[2] = _ELASTIC
         bs[1] = rate
         return tau
-    p_inf = E / b + ref
-    lam = b / Z
-    tau = T
-    nxt, p_nxt = -1.0, 0.0
-    # g = b (p_inf - p0), Z times the rate at p0: the forms below lose nothing to a soft rock's huge
-    # p_inf (with p_inf itself, a rock of k = 1e-16 was read as a rigid wall)
-    g = E - b * (p0 - ref)
-    if bs[2] == _ELASTIC:
-        if p_inf > bs[3] >= p0:
-            tau_h = -math.log1p(-(bs[3] - p0) * b / g) / lam
-            if tau_h < T:
-                tau, nxt, p_nxt = tau_h, _LOAD, bs[3]
-        elif p_inf < bs[5] <= p0:
-            tau_h = -math.log1p(-(bs[5] - p0) * b / g) / lam
-            if tau_h < T:
-                tau, nxt, p_nxt = tau_h, _FREE, bs[5]
+    tau, nxt, p_nxt, _, g, lam = _massless_switch(bs, b, ref, E, Z, T, p0)
     if nxt < 0.0:
         p1 = p0 + g / Z * (-math.expm1(-lam * tau)) / lam
     else:
@@ -88,17 +105,10 @@ def _massless(bs, bp, E, T):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _flow(bs, bp, E, tau):
-    b, ref = _coeffs(bs, bp)
-    Z, m = bp[0], bp[3]
-    if b == 0.0:
-        w_inf = E / Z
-        decay = math.exp(-Z * tau / m)
-        p = bs[0] + w_inf * tau + (bs[1] - w_inf) * (m / Z) * (-math.expm1(-Z * tau / m))
-        return p, w_inf + (bs[1] - w_inf) * decay
-    p_eq = ref + E / b
-    x0, w0 = bs[0] - p_eq, bs[1]
-    half = -Z / (2.0 * m)
+def _damped(b, m, half, tau):
+    """The bit's flow on a rock branch, ``m p'' + Z p' + b p = 0`` (``half = -Z/(2m)``, ``b > 0``),
+    after ``tau``: ``(C, S, delta)`` with ``e^{A tau} = C I + S (A - half I)``, ``delta`` the
+    eigenvalues' half-distance where real (else 0)."""
     disc = half * half - b / m
     delta = 0.0
     if disc >= 0.0:
@@ -115,14 +125,37 @@ def _flow(bs, bp, E, tau):
         om = math.sqrt(-disc)
         e = math.exp(half * tau)
         C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
+    return C, S, delta
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _overdamped(b, m, half, delta, tau):
+    """``expm1(lam_1 tau)/lam_1`` and ``expm1(lam_2 tau)/lam_2`` of an overdamped bit's two
+    eigenvalues (``lam_1 = (b/m)/lam_2`` without cancellation)."""
+    lam1, lam2 = b / m / (half - delta), half - delta
+    f1 = math.expm1(lam1 * tau) / lam1 if lam1 * tau != 0.0 else tau
+    return f1, math.expm1(lam2 * tau) / lam2
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _flow(bs, bp, E, tau):
+    b, ref = _coeffs(bs, bp)
+    Z, m = bp[0], bp[3]
+    if b == 0.0:
+        w_inf = E / Z
+        decay = math.exp(-Z * tau / m)
+        p = bs[0] + w_inf * tau + (bs[1] - w_inf) * (m / Z) * (-math.expm1(-Z * tau / m))
+        return p, w_inf + (bs[1] - w_inf) * decay
+    p_eq = ref + E / b
+    x0, w0 = bs[0] - p_eq, bs[1]
+    half = -Z / (2.0 * m)
+    C, S, delta = _damped(b, m, half, tau)
     if delta > 0.5 * abs(half):
         # overdamped: p - p0 = g/(m 2 delta) (expm1(lam_1 t)/lam_1 - expm1(lam_2 t)/lam_2) + S w0 with
         # g = E - b (p0 - p_ref), without p_eq, which a soft rock makes huge (with it, a rock of
         # k = 1e-16 was read as a rigid wall)
         g = E - b * (bs[0] - ref)
-        lam1, lam2 = b / m / (half - delta), half - delta
-        f1 = math.expm1(lam1 * tau) / lam1 if lam1 * tau != 0.0 else tau
-        f2 = math.expm1(lam2 * tau) / lam2
+        f1, f2 = _overdamped(b, m, half, delta, tau)
         return bs[0] + g / m * (f1 - f2) / (2.0 * delta) + S * w0, C * w0 + S * (g / m + half * w0)
     x = C * x0 + S * (-half * x0 + w0)
     w = C * w0 + S * (-b / m * x0 + half * w0)
@@ -139,20 +172,16 @@ def _event(bs, p, w):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _with_mass(bs, bp, E, T):
-    if bs[2] == _LOAD and bs[1] < 0.0:
-        _unload(bs, bp)
-        return 0.0
-    if bs[2] == _ELASTIC and bs[0] >= bs[3] and bs[1] > 0.0:
-        bs[2] = _LOAD
-        return 0.0
-    p0 = bs[0]
+def _switch_time(bs, bp, E, T):
+    """A bit with mass on its branch for at most ``T``: ``(tau, hit)``, the first branch change
+    (``_event`` turning negative; ``hit``) bracketed on samples that catch every one (4 for a
+    non-oscillating flow, more per half period otherwise) and bisected to rounding, else ``T``."""
     b, _ = _coeffs(bs, bp)
     half = bp[0] / (2.0 * bp[3])
     disc = half * half - b / bp[3]
     n = 4 if disc >= 0.0 else 4 + math.ceil(4.0 * math.sqrt(-disc) * T / math.pi)
     taus = np.linspace(0.0, T, n + 1)
-    tau, hit, prev = T, False, 0.0
+    prev = 0.0
     for i in range(1, n + 1):
         t = taus[i]
         p, w = _flow(bs, bp, E, t)
@@ -165,19 +194,39 @@ def _with_mass(bs, bp, E, T):
                     hi = mid
                 else:
                     lo = mid
-            tau, hit = hi, True
-            break
+            return hi, True
         prev = t
+    return T, False
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _branch_after(bs, p1):
+    """The branch a bit with mass enters from a rock branch other than loading at its switch at
+    ``p1``: loading again past ``p_max``, else off the rock; off it, onto the elastic branch."""
+    if bs[2] == _ELASTIC:
+        bs[2] = _LOAD if p1 >= bs[3] else _FREE
+    else:
+        bs[2] = _ELASTIC
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _with_mass(bs, bp, E, T):
+    if bs[2] == _LOAD and bs[1] < 0.0:
+        _unload(bs, bp)
+        return 0.0
+    if bs[2] == _ELASTIC and bs[0] >= bs[3] and bs[1] > 0.0:
+        bs[2] = _LOAD
+        return 0.0
+    p0 = bs[0]
+    tau, hit = _switch_time(bs, bp, E, T)
     p1, w1 = _flow(bs, bp, E, tau)
     bs[6] += _work(bs, bp, p0, p1)
     bs[0], bs[1] = p1, w1
     if hit:
         if bs[2] == _LOAD:
             _unload(bs, bp)
-        elif bs[2] == _ELASTIC:
-            bs[2] = _LOAD if p1 >= bs[3] else _FREE
         else:
-            bs[2] = _ELASTIC
+            _branch_after(bs, p1)
     return tau
 
 

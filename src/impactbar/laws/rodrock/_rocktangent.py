@@ -28,15 +28,24 @@ import numba
 import numpy as np
 
 from ...dynamics.kernels import CACHE
-from ._rockkernel import _ELASTIC, _FREE, _LOAD, _coeffs, _event, _flow
+from ._rockkernel import (
+    _ELASTIC,
+    _LOAD,
+    _branch_after,
+    _coeffs,
+    _damped,
+    _flow,
+    _lift_off,
+    _massless_switch,
+    _overdamped,
+    _switch_time,
+    _unload,
+)
 
 
 @numba.njit(cache=CACHE, nogil=True)
 def _t_unload(bs, bp, dbs):
-    bs[3] = bs[0]
-    bs[4] = bp[1] * bs[0]
-    bs[5] = bs[3] - bs[4] / bp[2]
-    bs[2] = _ELASTIC
+    _unload(bs, bp)
     for a in range(dbs.shape[1]):
         dbs[3, a] = dbs[0, a]
         dbs[4, a] = bp[1] * dbs[0, a]
@@ -53,24 +62,30 @@ def _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dp1):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _t_start(bs, bp, dbs, dp0, dref):
+    """A sub-step's start: the branch's ``(b, p_ref)`` (``_coeffs``), and the tangents of ``p`` and
+    of ``p_ref`` into ``dp0``, ``dref`` (nv,)."""
+    b, ref = _coeffs(bs, bp)
+    elastic = bs[2] == _ELASTIC
+    for a in range(dbs.shape[1]):
+        dp0[a] = dbs[0, a]
+        dref[a] = dbs[5, a] if elastic else 0.0
+    return b, ref
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def _t_massless(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref):
     """``_rockkernel._massless`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``)."""
     nv = dbs.shape[1]
     Z = bp[0]
-    b, ref = _coeffs(bs, bp)
-    elastic = bs[2] == _ELASTIC
-    for a in range(nv):
-        dp0[a] = dbs[0, a]
-        dref[a] = dbs[5, a] if elastic else 0.0
+    b, ref = _t_start(bs, bp, dbs, dp0, dref)
     p0 = bs[0]
     if bs[2] == _LOAD and E - b * p0 < 0.0:
         _t_unload(bs, bp, dbs)
         dtau[:] = 0.0
         return 0.0
     if b == 0.0:
-        rate = E / Z
-        t_hit = (bs[5] - p0) / rate if rate > 0.0 and p0 + rate * T >= bs[5] else math.inf
-        tau = min(T, t_hit)
+        rate, t_hit, tau = _lift_off(bs, E, Z, T, p0)
         if tau == t_hit:
             p1 = bs[5]
             for a in range(nv):
@@ -88,20 +103,7 @@ def _t_massless(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref):
         for a in range(nv):
             dbs[1, a] = dE[a] / Z
         return tau
-    p_inf = E / b + ref
-    lam = b / Z
-    tau = T
-    nxt, p_nxt, which = -1.0, 0.0, 0
-    g = E - b * (p0 - ref)
-    if bs[2] == _ELASTIC:
-        if p_inf > bs[3] >= p0:
-            tau_h = -math.log1p(-(bs[3] - p0) * b / g) / lam
-            if tau_h < T:
-                tau, nxt, p_nxt, which = tau_h, _LOAD, bs[3], 3
-        elif p_inf < bs[5] <= p0:
-            tau_h = -math.log1p(-(bs[5] - p0) * b / g) / lam
-            if tau_h < T:
-                tau, nxt, p_nxt, which = tau_h, _FREE, bs[5], 5
+    tau, nxt, p_nxt, which, g, lam = _massless_switch(bs, b, ref, E, Z, T, p0)
     if nxt < 0.0:
         e = -math.expm1(-lam * tau)
         p1 = p0 + g / Z * e / lam
@@ -142,24 +144,9 @@ def _flow_partials(bs, bp, E, tau, out):
         out[1, 0], out[1, 1], out[1, 2], out[1, 3] = 0.0, decay, (1.0 - decay) / Z, 0.0
         return
     half = -Z / (2.0 * m)
-    disc = half * half - b / m
-    delta = 0.0
-    if disc >= 0.0:
-        delta = math.sqrt(disc)
-        e2 = math.exp((half - delta) * tau)
-        if delta * tau > 1.0:
-            S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
-        else:
-            S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
-        C = e2 + delta * S
-    else:
-        om = math.sqrt(-disc)
-        e = math.exp(half * tau)
-        C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
+    C, S, delta = _damped(b, m, half, tau)
     if delta > 0.5 * abs(half):
-        lam1, lam2 = b / m / (half - delta), half - delta
-        f1 = math.expm1(lam1 * tau) / lam1 if lam1 * tau != 0.0 else tau
-        f2 = math.expm1(lam2 * tau) / lam2
+        f1, f2 = _overdamped(b, m, half, delta, tau)
         pE = (f1 - f2) / (2.0 * delta) / m
     else:
         pE = (1.0 - C + half * S) / b
@@ -180,31 +167,8 @@ def _t_with_mass(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref, J):
         dtau[:] = 0.0
         return 0.0
     p0 = bs[0]
-    b, ref = _coeffs(bs, bp)
-    elastic = bs[2] == _ELASTIC
-    for a in range(nv):
-        dp0[a] = dbs[0, a]
-        dref[a] = dbs[5, a] if elastic else 0.0
-    half = bp[0] / (2.0 * bp[3])
-    disc = half * half - b / bp[3]
-    n = 4 if disc >= 0.0 else 4 + math.ceil(4.0 * math.sqrt(-disc) * T / math.pi)
-    taus = np.linspace(0.0, T, n + 1)
-    tau, hit, prev = T, False, 0.0
-    for i in range(1, n + 1):
-        t = taus[i]
-        p, w = _flow(bs, bp, E, t)
-        if _event(bs, p, w) < 0.0:
-            lo, hi = prev, t
-            for _ in range(60):
-                mid = 0.5 * (lo + hi)
-                pm, wm = _flow(bs, bp, E, mid)
-                if _event(bs, pm, wm) < 0.0:
-                    hi = mid
-                else:
-                    lo = mid
-            tau, hit = hi, True
-            break
-        prev = t
+    b, ref = _t_start(bs, bp, dbs, dp0, dref)
+    tau, hit = _switch_time(bs, bp, E, T)
     p1, w1 = _flow(bs, bp, E, tau)
     _flow_partials(bs, bp, E, tau, J)
     acc = (E - bp[0] * w1 - b * (p1 - ref)) / bp[3]  # w' at tau on this branch
@@ -224,10 +188,8 @@ def _t_with_mass(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref, J):
     if hit:
         if bs[2] == _LOAD:
             _t_unload(bs, bp, dbs)
-        elif bs[2] == _ELASTIC:
-            bs[2] = _LOAD if p1 >= bs[3] else _FREE
         else:
-            bs[2] = _ELASTIC
+            _branch_after(bs, p1)
     return tau
 
 

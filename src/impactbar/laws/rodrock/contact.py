@@ -177,9 +177,9 @@ class RockContact:
         return self._partials[n]
 
     def state_at(self, tau):
-        """Modal state ``(q, q')`` at ``tau`` since impact, at the last step end (cell time ``dt``),
-        positions from the shank where it is then (``u(1) = -gap``); at the blow's end the state
-        after it.
+        """Modal state ``(q, q')`` at ``tau`` since impact, positions from the shank where it is then
+        (``u(1) = -gap``); at the blow's end the state after it. On the lattice the state at the last
+        step end (cell time ``dt``); on the exact scheme (``ExactRockContact``) at ``tau`` itself.
 
         Returns
         -------
@@ -190,11 +190,15 @@ class RockContact:
             return self.q_before.copy(), self.v_before.copy()
         if isinstance(b, str) and b == "end":
             return self.q_after.copy(), self.v_after.copy()
+        return self._state_of(b)
+
+    def _state_of(self, b):
+        """The modal state at the end of the cut blow ``b`` (of :meth:`_at`)."""
         return _modal(self.model, self._grid.piston_cells, b, -b.gap)
 
     def account(self, tau) -> tuple[float, float, float]:
-        """The piston's energy balance up to ``tau`` (at the last step end, as :meth:`state_at`):
-        ``energy_before + drive_work = field_energy + energy_out``.
+        """The piston's energy balance up to ``tau`` (as :meth:`state_at`: on the lattice at the last
+        step end): ``energy_before + drive_work = field_energy + energy_out``.
 
         Returns
         -------
@@ -203,7 +207,11 @@ class RockContact:
         b = self._at(tau)
         if isinstance(b, str) and b == "start":
             return 0.0, 0.0, self.energy_before
-        if isinstance(b, str) and b == "end":
+        return self._account_of(b)
+
+    def _account_of(self, b) -> tuple[float, float, float]:
+        """:meth:`account` of the cut blow ``b`` (of :meth:`_at`; ``"end"``: the whole blow)."""
+        if isinstance(b, str):
             b = self.blow
         return b.drive_work, b.energy_into_rod, b.piston_energy
 

@@ -526,32 +526,12 @@ class ExactRockContact(RockContact):
             self._partials[tau] = self._map.solve(self.q_before, self.v_before, t_max=tau)
         return self._partials[tau]
 
-    def state_at(self, tau):
-        """Modal state ``(q, q')`` at ``tau`` since impact, positions from the shank where it is then
-        (``u(1) = -gap``); at the blow's end the state after it.
-
-        Returns
-        -------
-        q, v : numpy.ndarray, shape (N + 1,)
-        """
-        b = self._at(tau)
-        if isinstance(b, str) and b == "start":
-            return self.q_before.copy(), self.v_before.copy()
-        if isinstance(b, str) and b == "end":
-            return self.q_after.copy(), self.v_after.copy()
+    def _state_of(self, b):
+        """The modal state at the end of the blow ``b`` solved up to ``tau`` (of :meth:`_at`)."""
         return project(self._map.basis, b._hist, b.duration, -b.gap)
 
-    def account(self, tau) -> tuple[float, float, float]:
-        """The piston's energy balance up to ``tau``: ``energy_before + drive_work = field_energy +
-        energy_out``.
-
-        Returns
-        -------
-        drive_work, energy_out, field_energy : float
-        """
-        b = self._at(tau)
-        if isinstance(b, str) and b == "start":
-            return 0.0, 0.0, self.energy_before
-        if isinstance(b, str) and b == "end":
+    def _account_of(self, b) -> tuple[float, float, float]:
+        """:meth:`account` of the blow ``b`` solved up to ``tau`` (``"end"``: the whole blow)."""
+        if isinstance(b, str):
             b = self.exact
         return b.drive_work, b.energy_at_impact + b.drive_work - b.piston_energy, b.piston_energy
