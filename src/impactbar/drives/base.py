@@ -9,7 +9,7 @@ Each drive is a hybrid system (a *switched* system) with
   continuous state ``z`` of ``state_size`` numbers (empty for a force that is piecewise constant; the
   chamber pressures of an oil circuit), together a :class:`DriveState`;
 - between events, the force :meth:`Drive.force` on the piston and the rate :meth:`Drive.rate` of
-  ``z``, coupled to the modes of the bar, ``q_n'' + d q_n' + (s n pi)^2 q_n = p`` (eq. 6);
+  ``z``, coupled to the modes of the bar, :math:`q_n'' + d q_n' + (s n \pi)^2 q_n = p` (eq. 6);
 - events, :meth:`Drive.events`: crossings of a position or velocity by the piston, scheduled times
   (a valve's delay, a ramp's end) or any surface ``g(t, q, q', z) = 0`` crossed in a direction
   (:class:`DriveEvent`), each with its map :meth:`Drive.jump`, and the map at an impact,

@@ -2,10 +2,11 @@ r"""A hydraulic drifter with its oil circuit, in SI units (theory §11): chamber
 hose, gas accumulator and relief valve driving the piston; the blow frequency, the impact energy and
 the supply pressure are outputs.
 
-Scales (theory §11, eq. 2): the pressure scale ``P`` = :data:`PRESSURE_SCALE` (10 MPa; pressures
-are absolute), the rear area ``A_r`` as the area scale, ``Omega = sqrt(P A_r / (m L))``, volumes in
-``A_r L``, flows in ``A_r L Omega``, an orifice's coefficient ``K`` (m^3 s^-1 Pa^-1/2) as
-``K sqrt(P) / (A_r L Omega)``, the relief's (m^3 s^-1 Pa^-1) as ``K_rel P / (A_r L Omega)``.
+Scales (theory §11, eq. 2): the pressure scale :math:`P` = :data:`PRESSURE_SCALE` (10 MPa; pressures
+are absolute), the rear area :math:`A_r` as the area scale, :math:`\Omega = \sqrt{P A_r / (m L)}`,
+volumes in :math:`A_r L`, flows in :math:`A_r L \Omega`, an orifice's coefficient :math:`K`
+(m^3 s^-1 Pa^-1/2) as :math:`K \sqrt{P} / (A_r L \Omega)`, the relief's (m^3 s^-1 Pa^-1) as
+:math:`K_\mathrm{rel} P / (A_r L \Omega)`.
 
 Configuration keys (a nested ``dict`` or TOML, as :meth:`CircuitDrifter.from_config` reads them)::
 
@@ -29,7 +30,7 @@ gives per blow the work on rock, the penetration and the drilling rate (the pene
 blow frequency).
 
 Pressures are absolute ("0.3 MPa" of tank pressure is 0.2 MPa gauge), flow coefficients in
-``m^3/s/Pa^0.5`` (the relief's in ``m^3/s/Pa``).
+:math:`\mathrm{m^3\,s^{-1}\,Pa^{-1/2}}` (the relief's in :math:`\mathrm{m^3\,s^{-1}\,Pa^{-1}}`).
 """
 
 from __future__ import annotations

@@ -1,16 +1,18 @@
 r"""A hydraulic drifter in SI units: a piston whose valve switches on its position (theory §10).
 
-The driving force is ``+p A_s`` (stroke, toward the stop) or ``-p A_r`` (return), with ``p`` the
-supply pressure and ``A_s``, ``A_r`` the piston's net areas under pressure in each state; the valve
-goes to stroke when the piston, on its way out, passes the switch position ``x_1`` (measured from the
-stop), to return at each impact, each switch a valve delay ``tau`` after its trigger. The machine is
+The driving force is :math:`+p A_s` (stroke, toward the stop) or :math:`-p A_r` (return), with
+:math:`p` the supply pressure and :math:`A_s`, :math:`A_r` the piston's net areas under pressure in
+each state; the valve goes to stroke when the piston, on its way out, passes the switch position
+:math:`x_1` (measured from the stop), to return at each impact, each switch a valve delay
+:math:`\tau` after its trigger. The machine is
 autonomous: the blow frequency is an output.
 
-Scales (eq. 2 with the stroke force as the force scale): ``Omega = sqrt(p A_s / (m L))`` so that the
-dimensionless stroke force is 1; ``ret = A_r / A_s``, ``switch_out = x_1 / L``, ``delay = Omega tau``,
-``s = c / (L Omega)``, ``d = D / (M Omega)``. Outputs: blow frequency ``Omega / T`` (Hz), impact
-velocity ``L Omega v`` (m/s), impact energy ``m L^2 Omega^2 e`` (J, ``e`` the dimensionless kinetic
-energy of the bar arriving at the stop), percussive power (energy times blow frequency, kW).
+Scales (eq. 2 with the stroke force as the force scale): :math:`\Omega = \sqrt{p A_s / (m L)}` so
+that the dimensionless stroke force is 1; ``ret`` :math:`= A_r / A_s`, ``switch_out``
+:math:`= x_1 / L`, ``delay`` :math:`= \Omega \tau`, :math:`s = c / (L \Omega)`,
+:math:`d = D / (M \Omega)`. Outputs: blow frequency :math:`\Omega / T` (Hz), impact velocity
+:math:`L \Omega v` (m/s), impact energy :math:`m L^2 \Omega^2 e` (J, :math:`e` the dimensionless
+kinetic energy of the bar arriving at the stop), percussive power (energy times blow frequency, kW).
 
 Configuration keys (a nested ``dict`` or TOML, as :meth:`Drifter.from_config` reads them)::
 

@@ -75,14 +75,14 @@ class HydraulicForce:
     period, ``low_N`` for the rest.
 
     With ``low = -high`` and ``fraction`` :math:`\ge 1/2` it is the paper's square wave with
-    :math:`\kappa = 2 \cdot` ``fraction``; otherwise it is integrated exactly as a piecewise-constant load.
+    :math:`\kappa` twice ``fraction``; otherwise it is integrated exactly as a piecewise-constant load.
 
     Parameters
     ----------
     high_N, low_N : float
         Force levels (N), positive towards the stop, ``high_N > low_N``.
     fraction : float
-        Fraction of the period at the high level, :math:`0 <` ``fraction`` :math:`\le 1`.
+        Fraction of the period at the high level, in :math:`(0, 1]`.
     """
 
     kind: ClassVar[str] = "hydraulic"
