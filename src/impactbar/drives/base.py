@@ -696,7 +696,7 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
     """Newton's method on ``residual(X) -> (r, J)`` from ``X``, damped while the unknowns at
     ``positive`` (flight times) would change by more than a half. It stops when a step is below
     ``tol`` (relative), or when the next step, predicted from quadratic convergence
-    (``|s_k|^2 / |s_(k-1)|``), would be: that saves the last residual, whose only use would be to
+    (:math:`|s_k|^2 / |s_{k-1}|`), would be: that saves the last residual, whose only use would be to
     see the step vanish.
 
     Raises
