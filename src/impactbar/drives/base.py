@@ -9,7 +9,7 @@ Each drive is a hybrid system (a *switched* system) with
   continuous state ``z`` of ``state_size`` numbers (empty for a force that is piecewise constant; the
   chamber pressures of an oil circuit), together a :class:`DriveState`;
 - between events, the force :meth:`Drive.force` on the piston and the rate :meth:`Drive.rate` of
-  ``z``, coupled to the modes of the bar, ``q_n'' + d q_n' + (s n pi)^2 q_n = p`` (eq. 6);
+  ``z``, coupled to the modes of the bar, :math:`q_n'' + d q_n' + (s n \pi)^2 q_n = p` (eq. 6);
 - events, :meth:`Drive.events`: crossings of a position or velocity by the piston, scheduled times
   (a valve's delay, a ramp's end) or any surface ``g(t, q, q', z) = 0`` crossed in a direction
   (:class:`DriveEvent`), each with its map :meth:`Drive.jump`, and the map at an impact,
@@ -350,8 +350,8 @@ class Drive(ABC):
         ``(+stroke, -ret)``); ``None`` otherwise.
 
     The example below is a force of constant size pushing the piston onto the stop (no event, no
-    state): the bounces of a rigid piston dropped from the gap ``y0`` arrive at
-    ``v_1 = sqrt(2 p y0)``, then ``R v_1``, ``R^2 v_1`` (eq. 10, energy).
+    state): the bounces of a rigid piston dropped from the gap :math:`y_0` arrive at
+    :math:`v_1 = \sqrt{2 p y_0}`, then :math:`R v_1`, :math:`R^2 v_1` (eq. 10, energy).
 
     Examples
     --------
@@ -411,9 +411,9 @@ class Drive(ABC):
         depends on the mode alone (constant between events)."""
 
     def rate(self, mode, z: np.ndarray, q: np.ndarray, v: np.ndarray, model=None) -> np.ndarray:
-        """``z'``, the rate of the continuous state between events, shape ``(state_size,)``.
+        r"""``z'``, the rate of the continuous state between events, shape ``(state_size,)``.
         ``model`` (a :class:`~impactbar.BarModel`) is passed only for a stepped piston, whose driven
-        end moves as ``model.drive_weights @ q`` (the uniform bar's ``q_0 + 2 sum q_n`` otherwise;
+        end moves as ``model.drive_weights @ q`` (the uniform bar's :math:`q_0 + 2 \sum_n q_n` otherwise;
         a drive written without the argument serves uniform bars)."""
         return np.zeros(0)
 
@@ -682,8 +682,8 @@ class OrbitProblem(ABC):
 
     @abstractmethod
     def pieces(self, X: np.ndarray) -> list:
-        """The flights of the period as ``(t0, t1, f)``: ``f(t)`` gives the modal state ``(q, v)``,
-        shapes ``(N + 1, T)``, at orbit times ``t0 <= t <= t1`` from the first state of the unknowns
+        r"""The flights of the period as ``(t0, t1, f)``: ``f(t)`` gives the modal state ``(q, v)``,
+        shapes ``(N + 1, T)``, at orbit times :math:`t_0 \le t \le t_1` from the first state of the unknowns
         (the contacts' windows lie between the flights)."""
 
     @abstractmethod
@@ -696,7 +696,7 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
     """Newton's method on ``residual(X) -> (r, J)`` from ``X``, damped while the unknowns at
     ``positive`` (flight times) would change by more than a half. It stops when a step is below
     ``tol`` (relative), or when the next step, predicted from quadratic convergence
-    (``|s_k|^2 / |s_(k-1)|``), would be: that saves the last residual, whose only use would be to
+    (:math:`|s_k|^2 / |s_{k-1}|`), would be: that saves the last residual, whose only use would be to
     see the step vanish.
 
     Raises

@@ -109,8 +109,8 @@ class OdePiece:
 
 
 class RestPiece:
-    """The rigid piston resting on the stop while the drive presses it (``p >= 0``) and its state
-    evolves: ``q = q' = 0``, ``z`` by ``solve_ivp``'s dense output (``sol``, or constant ``z``)."""
+    r"""The rigid piston resting on the stop while the drive presses it (:math:`p \ge 0`) and its state
+    evolves: :math:`q = q' = 0`, ``z`` by ``solve_ivp``'s dense output (``sol``, or constant ``z``)."""
 
     __slots__ = ("t0", "t_end", "sol", "z", "M", "c")
 
@@ -189,7 +189,7 @@ class Flight(NamedTuple):
 
 def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
         settings: FlightSettings | None = None, variational: bool = False) -> Flight:
-    """One flight from ``(q, v)`` and the drive's ``state`` at ``t`` to the next arrival at the stop
+    r"""One flight from ``(q, v)`` and the drive's ``state`` at ``t`` to the next arrival at the stop
     (``c . q = 0`` with ``c . q' > 0``), the drive's next event or ``t_stop`` (module docstring).
 
     Parameters
@@ -199,7 +199,7 @@ def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
     state : DriveState
     t : float
     q, v : numpy.ndarray, shape (N + 1,)
-        Off the stop, or on it leaving (``c . q <= 0``).
+        Off the stop, or on it leaving (:math:`c \cdot q \le 0`).
     t_stop : float
     settings : FlightSettings, optional
         The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).

@@ -1,28 +1,31 @@
 r"""Real hammers in SI units: from a piston, a stop and a driving force to the dimensionless model,
 and back to what the designer of a rock drill reads.
 
-Conversion (paper eq. 2, theory §1). For a bar of Young's modulus ``E``, density ``rho``,
-length ``L`` and cross-section ``A``, driven at ``f`` Hz:
+Conversion (paper eq. 2, theory §1). For a bar of Young's modulus :math:`E`, density :math:`\rho`,
+length :math:`L` and cross-section :math:`A`, driven at :math:`f` Hz:
 
-- mass per unit length ``M = rho A``, piston mass ``m = M L``, wave speed ``c = sqrt(E / rho)``;
-- ``Omega = 2 pi f / k``: the angular frequency of the impact cycle, the first harmonic of the load
-  (``k`` is the order of a pneumatic load, eq. 33; ``k = 1`` for every other force);
-- ``s = c / (L Omega)``, ``d = D / (M Omega)``, ``p = P / (m L Omega^2)``, ``t = Omega T``,
-  ``u = U / L``, so velocities scale with ``L Omega``: ``U_T = L Omega u_t``.
+- mass per unit length :math:`M = \rho A`, piston mass :math:`m = M L`, wave speed
+  :math:`c = \sqrt{E / \rho}`;
+- :math:`\Omega = 2 \pi f / k`: the angular frequency of the impact cycle, the first harmonic of the
+  load (:math:`k` is the order of a pneumatic load, eq. 33; :math:`k = 1` for every other force);
+- :math:`s = c / (L \Omega)`, :math:`d = D / (M \Omega)`, :math:`p = P / (m L \Omega^2)`,
+  :math:`t = \Omega T`, :math:`u = U / L`, so velocities scale with :math:`L \Omega`:
+  :math:`U_T = L \Omega u_t`.
 
-The force scale is ``m L Omega^2 = M L^2 Omega^2``: the boundary condition ``E A U_X(0) = -P`` in
-the variables above reads ``s^2 u_x(0) = -P / (M L^2 Omega^2)``, and the rigid mode
-``m U_TT = P`` reads ``q_0'' = P / (m L Omega^2)``. (The printed paper's ``p = P / (M L Omega^2)``
-drops a square: it is not dimensionless for ``M`` a mass per unit length; theory §1. The tests
-check the scale through the momentum identity ``v = F_mean / (f m (1 + R))``.)
+The force scale is :math:`m L \Omega^2 = M L^2 \Omega^2`: the boundary condition
+:math:`E A U_X(0) = -P` in the variables above reads :math:`s^2 u_x(0) = -P / (M L^2 \Omega^2)`, and
+the rigid mode :math:`m U_{TT} = P` reads :math:`q_0'' = P / (m L \Omega^2)`. (The printed paper's
+:math:`p = P / (M L \Omega^2)` drops a square: it is not dimensionless for :math:`M` a mass per unit
+length; theory §1. The tests check the scale through the momentum identity
+:math:`v = F_\mathrm{mean} / (f m (1 + R))`.)
 
 Every input that has a dimension must be written with its unit (``"210 GPa"``, ``"45 mm"``) or be a
 pint quantity; the dataclasses themselves hold plain SI floats in fields named with their unit
 (``length_m``). Forces are positive when they push the bar towards the stop.
 
-Outputs (:class:`PhysicalOrbit`): impact velocity (m/s), energy per blow ``m v^2 / 2`` (J), blow
-frequency ``Omega / 2 pi`` (Hz), impact power (W), peak stress at impact (Pa) and, on the hammer,
-the contact duration ``2 L / c`` against the period (the paper assumes impacts are short).
+Outputs (:class:`PhysicalOrbit`): impact velocity (m/s), energy per blow :math:`m v^2 / 2` (J),
+blow frequency :math:`\Omega / 2 \pi` (Hz), impact power (W), peak stress at impact (Pa) and, on the
+hammer, the contact duration :math:`2 L / c` against the period (the paper assumes impacts are short).
 
 Configuration keys (TOML file or a nested ``dict``, see :meth:`Hammer.from_config`)::
 

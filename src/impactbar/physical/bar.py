@@ -16,7 +16,7 @@ TWO_PI = 2.0 * math.pi
 
 #: Largest contact duration ``2 L / c``, as a fraction of the impact period, for which the paper's
 #: instantaneous impact law (eqs. 10, 11) is taken as valid; beyond it a warning is issued.
-#: In dimensionless terms the fraction is ``1 / (pi s)``, so the limit is ``s pi >= 20``.
+#: In dimensionless terms the fraction is :math:`1 / (\pi s)`, so the limit is :math:`s \pi \ge 20`.
 SHORT_IMPACT_LIMIT = 0.05
 
 
@@ -34,7 +34,7 @@ class _Figures:
 
     @property
     def wave_speed_m_s(self) -> float:
-        """Bar wave speed ``c = sqrt(E / rho)`` (m/s)."""
+        r"""Bar wave speed :math:`c = \sqrt{E / \rho}` (m/s)."""
         return math.sqrt(self.E_Pa / self.density_kg_m3)
 
     @property
@@ -147,9 +147,9 @@ class SteppedBar(_Figures):
     density_kg_m3 : float
         Density (kg/m^3), ``> 0``.
     lengths_m : array_like, shape (n,)
-        The segments' lengths (m), each ``> 0``, from the driven end to the struck end; ``n >= 2``.
+        The segments' lengths (m), each :math:`> 0`, from the driven end to the struck end; :math:`n \ge 2`.
     areas_m2 : array_like, shape (n,)
-        Their cross-sections (m^2), each ``> 0``, within a factor ``10^6`` of each other.
+        Their cross-sections (m^2), each :math:`> 0`, within a factor :math:`10^6` of each other.
 
     Raises
     ------
@@ -228,7 +228,7 @@ class SteppedBar(_Figures):
 
     @property
     def mass_kg(self) -> float:
-        """Piston mass ``m = rho sum(A_j L_j)`` (kg)."""
+        r"""Piston mass :math:`m = \rho \sum_j A_j L_j` (kg)."""
         return float(self.density_kg_m3 * (self.areas_m2 @ self.lengths_m))
 
     @property

@@ -2,10 +2,11 @@ r"""A hydraulic drifter with its oil circuit, in SI units (theory §11): chamber
 hose, gas accumulator and relief valve driving the piston; the blow frequency, the impact energy and
 the supply pressure are outputs.
 
-Scales (theory §11, eq. 2): the pressure scale ``P`` = :data:`PRESSURE_SCALE` (10 MPa; pressures
-are absolute), the rear area ``A_r`` as the area scale, ``Omega = sqrt(P A_r / (m L))``, volumes in
-``A_r L``, flows in ``A_r L Omega``, an orifice's coefficient ``K`` (m^3 s^-1 Pa^-1/2) as
-``K sqrt(P) / (A_r L Omega)``, the relief's (m^3 s^-1 Pa^-1) as ``K_rel P / (A_r L Omega)``.
+Scales (theory §11, eq. 2): the pressure scale :math:`P` = :data:`PRESSURE_SCALE` (10 MPa; pressures
+are absolute), the rear area :math:`A_r` as the area scale, :math:`\Omega = \sqrt{P A_r / (m L)}`,
+volumes in :math:`A_r L`, flows in :math:`A_r L \Omega`, an orifice's coefficient :math:`K`
+(m^3 s^-1 Pa^-1/2) as :math:`K \sqrt{P} / (A_r L \Omega)`, the relief's (m^3 s^-1 Pa^-1) as
+:math:`K_\mathrm{rel} P / (A_r L \Omega)`.
 
 Configuration keys (a nested ``dict`` or TOML, as :meth:`CircuitDrifter.from_config` reads them)::
 
@@ -29,7 +30,7 @@ gives per blow the work on rock, the penetration and the drilling rate (the pene
 blow frequency).
 
 Pressures are absolute ("0.3 MPa" of tank pressure is 0.2 MPa gauge), flow coefficients in
-``m^3/s/Pa^0.5`` (the relief's in ``m^3/s/Pa``).
+:math:`\mathrm{m^3\,s^{-1}\,Pa^{-1/2}}` (the relief's in :math:`\mathrm{m^3\,s^{-1}\,Pa^{-1}}`).
 """
 
 from __future__ import annotations
@@ -178,13 +179,13 @@ class CircuitDrifter:
     # -- scales ------------------------------------------------------------------------------------
     @property
     def omega_rad_s(self) -> float:
-        """``Omega = sqrt(P A_r / (m L))`` (1/s)."""
+        r"""The time scale :math:`\Omega = \sqrt{P A_r / (m L)}` (1/s)."""
         return math.sqrt(PRESSURE_SCALE * self.si["rear_area_m2"] / (self.bar.mass_kg * self.bar.length_m))
 
     @property
     def scales(self):
-        """The units of the dimensionless model (:class:`~impactbar.physical.Scales`): time
-        ``1/Omega``, length ``L``, force ``P A_r = m L Omega^2``."""
+        r"""The units of the dimensionless model (:class:`~impactbar.physical.Scales`): time
+        :math:`1/\Omega`, length :math:`L`, force :math:`P A_r = m L \Omega^2`."""
         from .hammer import Scales
 
         om, bar = self.omega_rad_s, self.bar
@@ -204,7 +205,7 @@ class CircuitDrifter:
 
     @property
     def energy_scale_J(self) -> float:
-        """``m L^2 Omega^2`` (J)."""
+        r"""The energy scale :math:`m L^2 \Omega^2` (J)."""
         return self.bar.mass_kg * (self.bar.length_m * self.omega_rad_s) ** 2
 
     def _si_factor(self, name: str) -> float:
@@ -223,7 +224,7 @@ class CircuitDrifter:
                 "kg": 1.0 / m}[SI_PARAMETERS[name][1]]
 
     def to_dimensionless(self, name: str, value) -> tuple[str, float]:
-        """The dimensionless circuit parameter (theory §11) that the config key ``name`` sets, and
+        r"""The dimensionless circuit parameter (theory §11) that the config key ``name`` sets, and
         its value for ``value`` in SI (``"12 MPa"``, ``"80 L/min"``; a bare number only for the
         polytropic exponent).
 
@@ -238,8 +239,8 @@ class CircuitDrifter:
         parameter : str
             The drive's parameter (``"precharge"``, ...), for :func:`impactbar.continue_orbit`.
         value : float
-            Dimensionless (pressures in 10 MPa, volumes in ``A_r L``, flows in ``A_r L Omega``; the
-            rock's stiffnesses in ``m Omega^2``, the feed in ``P A_r``, the bit's mass in the
+            Dimensionless (pressures in 10 MPa, volumes in :math:`A_r L`, flows in :math:`A_r L \Omega`; the
+            rock's stiffnesses in :math:`m \Omega^2`, the feed in :math:`P A_r`, the bit's mass in the
             piston's: theory §4d). The rock's keys (:data:`ROCK_SI_PARAMETERS`) need a drill
             string.
 
@@ -646,7 +647,7 @@ class CircuitDrifterOrbit:
         Parameters
         ----------
         points : int
-            Samples over the period, ``>= 2``.
+            Samples over the period, :math:`\ge 2`.
         histories : dict, optional
             :meth:`histories`' output to use instead of sampling again.
 

@@ -1,16 +1,18 @@
 r"""A hydraulic drifter in SI units: a piston whose valve switches on its position (theory §10).
 
-The driving force is ``+p A_s`` (stroke, toward the stop) or ``-p A_r`` (return), with ``p`` the
-supply pressure and ``A_s``, ``A_r`` the piston's net areas under pressure in each state; the valve
-goes to stroke when the piston, on its way out, passes the switch position ``x_1`` (measured from the
-stop), to return at each impact, each switch a valve delay ``tau`` after its trigger. The machine is
+The driving force is :math:`+p A_s` (stroke, toward the stop) or :math:`-p A_r` (return), with
+:math:`p` the supply pressure and :math:`A_s`, :math:`A_r` the piston's net areas under pressure in
+each state; the valve goes to stroke when the piston, on its way out, passes the switch position
+:math:`x_1` (measured from the stop), to return at each impact, each switch a valve delay
+:math:`\tau` after its trigger. The machine is
 autonomous: the blow frequency is an output.
 
-Scales (eq. 2 with the stroke force as the force scale): ``Omega = sqrt(p A_s / (m L))`` so that the
-dimensionless stroke force is 1; ``ret = A_r / A_s``, ``switch_out = x_1 / L``, ``delay = Omega tau``,
-``s = c / (L Omega)``, ``d = D / (M Omega)``. Outputs: blow frequency ``Omega / T`` (Hz), impact
-velocity ``L Omega v`` (m/s), impact energy ``m L^2 Omega^2 e`` (J, ``e`` the dimensionless kinetic
-energy of the bar arriving at the stop), percussive power (energy times blow frequency, kW).
+Scales (eq. 2 with the stroke force as the force scale): :math:`\Omega = \sqrt{p A_s / (m L)}` so
+that the dimensionless stroke force is 1; ``ret`` :math:`= A_r / A_s`, ``switch_out``
+:math:`= x_1 / L`, ``delay`` :math:`= \Omega \tau`, :math:`s = c / (L \Omega)`,
+:math:`d = D / (M \Omega)`. Outputs: blow frequency :math:`\Omega / T` (Hz), impact velocity
+:math:`L \Omega v` (m/s), impact energy :math:`m L^2 \Omega^2 e` (J, :math:`e` the dimensionless
+kinetic energy of the bar arriving at the stop), percussive power (energy times blow frequency, kW).
 
 Configuration keys (a nested ``dict`` or TOML, as :meth:`Drifter.from_config` reads them)::
 
@@ -54,7 +56,7 @@ _KEYS = {
 
 @dataclass(frozen=True)
 class Drifter:
-    """A hydraulic drifter: piston, stop, valve (theory §10), in SI units.
+    r"""A hydraulic drifter: piston, stop, valve (theory §10), in SI units.
 
     Parameters
     ----------
@@ -69,13 +71,13 @@ class Drifter:
     switch_out_m : float
         Switch position ``x_1`` (m, from the stop, on the way out), ``> 0``.
     restitution : float
-        Restitution coefficient ``R`` of the impact (eq. 10), ``0 <= R < 1``.
+        Restitution coefficient :math:`R` of the impact (eq. 10), :math:`0 \le R < 1`.
     delay_s : float, optional
-        Valve delay ``tau`` (s), ``>= 0``. Default 0.
+        Valve delay :math:`\tau` (s), :math:`\ge 0`. Default 0.
     damping_N_s_m : float, optional
-        Viscous damping coefficient of the whole piston (N s/m), ``>= 0``. Default 0.
+        Viscous damping coefficient of the whole piston (N s/m), :math:`\ge 0`. Default 0.
     n_modes : int, optional
-        Flexible modes of the piston, ``>= 0`` (0: rigid). Default 0.
+        Flexible modes of the piston, :math:`\ge 0` (0: rigid). Default 0.
     name : str, optional
     drill : DrillString, optional
         The drill string and the rock (``impactbar.physical.rock``, theory §4d): the model's law
@@ -131,7 +133,7 @@ class Drifter:
 
     @property
     def omega_rad_s(self) -> float:
-        """The time scale ``Omega = sqrt(p A_s / (m L))`` (1/s): the stroke force is 1."""
+        r"""The time scale :math:`\Omega = \sqrt{p A_s / (m L)}` (1/s): the stroke force is 1."""
         return math.sqrt(self.stroke_force_N / (self.bar.mass_kg * self.bar.length_m))
 
     def model(self):
@@ -174,7 +176,7 @@ class Drifter:
         """Simulate from the piston at rest (or a given gap and velocity) for ``duration_s``
         (:func:`impactbar.simulate`); returns the :class:`~impactbar.SwitchedTrajectory` and a
         dict of SI summaries over the last half of the run: ``blows``, ``blow_frequency_Hz``,
-        ``impact_velocity_m_s`` (mean), ``impact_energy_J`` (mean, ``m v^2 / 2`` of the rigid
+        ``impact_velocity_m_s`` (mean), ``impact_energy_J`` (mean, :math:`m v^2 / 2` of the rigid
         mode's arrival), ``percussive_power_kW``; with a drill string also the means per blow of
         ``work_on_rock_J``, ``penetration_mm`` and ``efficiency``, and ``drilling_rate_m_min``
         (the mean penetration times the blow frequency)."""
@@ -291,7 +293,7 @@ class DrifterOrbit:
 
     @property
     def impact_energy_J(self) -> float:
-        """Kinetic energy of the piston arriving at the stop, ``m L^2 Omega^2 e`` (J)."""
+        r"""Kinetic energy of the piston arriving at the stop, :math:`m L^2 \Omega^2 e` (J)."""
         d = self.drifter
         return float(d.bar.mass_kg * (d.bar.length_m * d.omega_rad_s) ** 2 * self.orbit.impact_energy)
 

@@ -23,10 +23,10 @@ from .units import to_si
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class PneumaticForce:
-    r"""Pneumatic hammer force (eq. 33): ``F(T) = F_mean + F_amp cos(2 pi f T)``.
+    r"""Pneumatic hammer force (eq. 33): :math:`F(T) = F_\mathrm{mean} + F_\mathrm{amp} \cos(2 \pi f T)`.
 
     With order ``k > 1`` the bar strikes once every ``k`` cycles of the force (a subharmonic
-    motion): the impact cycle, and the dimensionless time, run at ``Omega = 2 pi f / k``.
+    motion): the impact cycle, and the dimensionless time, run at :math:`\Omega = 2 \pi f / k`.
 
     Parameters
     ----------
@@ -35,7 +35,7 @@ class PneumaticForce:
     amplitude_N : float
         Amplitude of the oscillating part (N).
     k : int, optional
-        Load cycles per impact, ``1 <= k <= 4096``. Default 1.
+        Load cycles per impact, :math:`1 \le k \le 4096`. Default 1.
     """
 
     kind: ClassVar[str] = "pneumatic"
@@ -59,29 +59,30 @@ class PneumaticForce:
         return self.mean_N
 
     def load(self, force_scale_N: float) -> CosineLoad:
-        """The dimensionless :class:`~impactbar.CosineLoad` ``p0 + pk cos(k t)`` for the force
-        scale ``m L Omega^2`` (N)."""
+        r"""The dimensionless :class:`~impactbar.CosineLoad` ``p0 + pk cos(k t)`` for the force
+        scale :math:`m L \Omega^2` (N)."""
         return CosineLoad(self.mean_N / force_scale_N, self.amplitude_N / force_scale_N, self.k)
 
     def to_dict(self) -> dict:
+        """The force as the plain mapping of its kind and SI fields (a JSON-ready summary)."""
         return {"kind": self.kind, "mean_N": self.mean_N, "amplitude_N": self.amplitude_N,
                 "k": self.k}
 
 
 @dataclass(frozen=True)
 class HydraulicForce:
-    """Hydraulic hammer force (eq. 34 generalised): ``high_N`` for the first ``fraction`` of each
+    r"""Hydraulic hammer force (eq. 34 generalised): ``high_N`` for the first ``fraction`` of each
     period, ``low_N`` for the rest.
 
-    With ``low = -high`` and ``fraction >= 1/2`` it is the paper's square wave with
-    ``kappa = 2 fraction``; otherwise it is integrated exactly as a piecewise-constant load.
+    With ``low = -high`` and ``fraction`` :math:`\ge 1/2` it is the paper's square wave with
+    :math:`\kappa` twice ``fraction``; otherwise it is integrated exactly as a piecewise-constant load.
 
     Parameters
     ----------
     high_N, low_N : float
         Force levels (N), positive towards the stop, ``high_N > low_N``.
     fraction : float
-        Fraction of the period at the high level, ``0 < fraction <= 1``.
+        Fraction of the period at the high level, in :math:`(0, 1]`.
     """
 
     kind: ClassVar[str] = "hydraulic"
@@ -103,8 +104,8 @@ class HydraulicForce:
         return self.high_N * self.fraction + self.low_N * (1.0 - self.fraction)
 
     def load(self, force_scale_N: float) -> Load:
-        """The dimensionless load for the force scale ``m L Omega^2`` (N): a
-        :class:`~impactbar.SquareWaveLoad` when the levels are symmetric and ``fraction >= 1/2``,
+        r"""The dimensionless load for the force scale :math:`m L \Omega^2` (N): a
+        :class:`~impactbar.SquareWaveLoad` when the levels are symmetric and ``fraction`` :math:`\ge 1/2`,
         else an exact :class:`~impactbar.PiecewiseConstantLoad`."""
         hi, lo = self.high_N / force_scale_N, self.low_N / force_scale_N
         if self.fraction == 1.0:
@@ -114,6 +115,7 @@ class HydraulicForce:
         return PiecewiseConstantLoad([0.0, TWO_PI * self.fraction], [hi, lo])
 
     def to_dict(self) -> dict:
+        """The force as the plain mapping of its kind and SI fields (a JSON-ready summary)."""
         return {"kind": self.kind, "high_N": self.high_N, "low_N": self.low_N,
                 "fraction": self.fraction}
 
@@ -142,7 +144,7 @@ class FourierFit:
 
 @dataclass(frozen=True, eq=False)
 class MeasuredForce:
-    """A measured force over one period of the drive, taken as periodic and piecewise linear
+    r"""A measured force over one period of the drive, taken as periodic and piecewise linear
     between the samples, and expanded in a Fourier series (eq. 7).
 
     The samples cover one period ``1 / f`` of the drive (``f`` the hammer's drive frequency),
@@ -155,7 +157,7 @@ class MeasuredForce:
     Parameters
     ----------
     times_s : array_like, shape (n,)
-        Sample times (s), strictly increasing, ``n >= 2``.
+        Sample times (s), strictly increasing, :math:`n \ge 2`.
     forces_N : array_like, shape (n,)
         Forces (N), positive towards the stop.
     tolerance : float, optional
@@ -273,7 +275,7 @@ class MeasuredForce:
         return float(np.sum(0.5 * (f2[1:] + f2[:-1]) * np.diff(t2)) / period_s)
 
     def fourier(self, period_s: float):
-        """Exact Fourier coefficients of the curve, truncated to meet :attr:`tolerance`.
+        r"""Exact Fourier coefficients of the curve, truncated to meet :attr:`tolerance`.
 
         Parameters
         ----------
@@ -285,8 +287,9 @@ class MeasuredForce:
         mean_N : float
             Mean force (N).
         harmonics_N : numpy.ndarray of complex, shape (K,)
-            ``P_k`` with ``F(T) = mean + Re sum_k P_k exp(2 pi i k T / period)``, ``k = 1..K`` (N),
-            time counted from the first sample.
+            :math:`P_k` with :math:`F(T) = \bar F + \operatorname{Re} \sum_k P_k e^{2 \pi i k T / T_p}`,
+            :math:`k = 1 \ldots K` (N), with :math:`\bar F` the mean and :math:`T_p` the period, time
+            counted from the first sample.
         fit : FourierFit
 
         Raises
@@ -338,12 +341,14 @@ class MeasuredForce:
         return mean, coef[:n].copy(), FourierFit(n, err, err / swing, self.tolerance)
 
     def load(self, force_scale_N: float, period_s: float) -> FourierLoad:
-        """The dimensionless :class:`~impactbar.FourierLoad` for the force scale ``m L Omega^2`` (N)
+        r"""The dimensionless :class:`~impactbar.FourierLoad` for the force scale :math:`m L \Omega^2` (N)
         and the drive period (s)."""
         mean, harm, _ = self.fourier(period_s)
         return FourierLoad(mean / force_scale_N, harm / force_scale_N)
 
     def to_dict(self) -> dict:
+        """The force as a plain mapping: its kind, source file, sample count and fit settings (the
+        samples themselves left out)."""
         return {"kind": self.kind, "source": self.source, "samples": int(self.times_s.size),
                 "tolerance": self.tolerance, "max_harmonics": self.max_harmonics}
 

@@ -49,7 +49,7 @@ from .units import to_si, to_si_any
 # --------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Scales:
-    """The units of the dimensionless model (eq. 2) for one hammer, in SI.
+    r"""The units of the dimensionless model (eq. 2) for one hammer, in SI.
 
     Attributes
     ----------
@@ -57,15 +57,15 @@ class Scales:
         ``Omega``, the angular frequency of the impact cycle (rad/s); dimensionless time is
         ``t = Omega T``.
     time_s : float
-        ``1 / Omega`` (s).
+        :math:`1 / \Omega` (s).
     length_m : float
-        ``L`` (m): ``U = L u``.
+        :math:`L` (m): :math:`U = L u`.
     velocity_m_s : float
-        ``L Omega`` (m/s): ``U_T = L Omega u_t``.
+        :math:`L \Omega` (m/s): :math:`U_T = L \Omega u_t`.
     force_N : float
-        ``m L Omega^2 = M L^2 Omega^2`` (N): ``P = m L Omega^2 p``.
+        :math:`m L \Omega^2 = M L^2 \Omega^2` (N): :math:`P = m L \Omega^2 p`.
     damping_N_s_m2 : float
-        ``M Omega`` (N s/m^2): ``D = M Omega d``.
+        :math:`M \Omega` (N s/m^2): :math:`D = M \Omega d`.
     """
 
     omega_rad_s: float
@@ -91,14 +91,14 @@ class Hammer:
     force : PneumaticForce, HydraulicForce or MeasuredForce
         The force at the driven end.
     restitution : float, optional
-        Restitution coefficient ``R`` of the stop, ``0 <= R <= 1`` (eq. 10).
+        Restitution coefficient :math:`R` of the stop, :math:`0 \le R \le 1` (eq. 10).
     stop_area_m2 : float, optional
-        Or the stop as a long bar of the same material and area ``A_s >= A`` (m^2):
-        ``R = (A_s - A) / (A_s + A)`` (theory §4). Give exactly one of the two.
+        Or the stop as a long bar of the same material and area :math:`A_s \ge A` (m^2):
+        :math:`R = (A_s - A) / (A_s + A)` (theory §4). Give exactly one of the two.
     damping_N_s_m2 : float, optional
-        Viscous damping per unit length ``D`` of eq. 2 (N s/m^2), ``>= 0``. Default 0. A total
-        coefficient ``c`` (N s/m) of the whole piston is ``D = c / L``; a damping ratio ``zeta``
-        of the first flexible mode is ``d = 2 zeta s pi`` (see :meth:`from_config`).
+        Viscous damping per unit length :math:`D` of eq. 2 (N s/m^2), :math:`\ge 0`. Default 0. A total
+        coefficient :math:`c` (N s/m) of the whole piston is :math:`D = c / L`; a damping ratio :math:`\zeta`
+        of the first flexible mode is :math:`d = 2 \zeta s \pi` (see :meth:`from_config`).
     n_modes : int, optional
         Flexible modes kept in the model, ``0..4096``; 0 is the rigid piston. Default 16.
     name : str, optional
@@ -113,8 +113,8 @@ class Hammer:
 
     Notes
     -----
-    ``Omega = 2 pi f / k`` with ``k`` the order of a pneumatic load (1 otherwise), so one impact
-    cycle is ``k`` force cycles and the blow frequency is ``f / k``.
+    :math:`\Omega = 2 \pi f / k` with :math:`k` the order of a pneumatic load (1 otherwise), so one impact
+    cycle is :math:`k` force cycles and the blow frequency is :math:`f / k`.
     """
 
     bar: Bar | SteppedBar
@@ -185,7 +185,7 @@ class Hammer:
 
     @property
     def blow_frequency_Hz(self) -> float:
-        """Blow frequency ``Omega / 2 pi = f / k`` (Hz) of a one-impact periodic motion."""
+        r"""Blow frequency :math:`\Omega / 2 \pi = f / k` (Hz) of a one-impact periodic motion."""
         return self.frequency_Hz / self.order
 
     @property
@@ -209,8 +209,8 @@ class Hammer:
 
     @property
     def damping_ratio(self) -> float:
-        """Damping ratio ``zeta = d / (2 s k_1)`` of the first flexible mode (dimensionless;
-        ``k_1 = pi`` for a uniform piston, the stepped piston's first wavenumber otherwise)."""
+        r"""Damping ratio ``zeta = d / (2 s k_1)`` of the first flexible mode (dimensionless;
+        :math:`k_1 = \pi` for a uniform piston, the stepped piston's first wavenumber otherwise)."""
         return self.d / (2.0 * self.bar.first_wavenumber * self.s)
 
     @property
@@ -227,8 +227,8 @@ class Hammer:
 
     @property
     def load(self) -> Load:
-        """The dimensionless load (:class:`~impactbar.CosineLoad`, square wave, piecewise
-        constant or :class:`~impactbar.FourierLoad`), with period ``2 pi``."""
+        r"""The dimensionless load (:class:`~impactbar.CosineLoad`, square wave, piecewise
+        constant or :class:`~impactbar.FourierLoad`), with period :math:`2 \pi`."""
         fs = self.scales.force_N
         if isinstance(self.force, MeasuredForce):
             mean, harm, _ = self._measured
@@ -255,9 +255,9 @@ class Hammer:
 
     @property
     def rigid_impact_velocity_m_s(self) -> float:
-        """Impact velocity of the rigid-body mode in any one-impact periodic motion (m/s):
+        r"""Impact velocity of the rigid-body mode in any one-impact periodic motion (m/s):
         ``v = F_mean / (f_b m (1 + R))`` with ``f_b`` the blow frequency (momentum balance over a
-        period, theory §4: ``2 pi p0 / (1 + R)`` dimensionless)."""
+        period, theory §4: :math:`2 \pi p_0 / (1 + R)` dimensionless)."""
         return self.mean_force_N / (self.blow_frequency_Hz * self.mass_kg * (1.0 + self.R))
 
     @property
@@ -267,12 +267,12 @@ class Hammer:
 
     @property
     def contact_fraction(self) -> float:
-        """Contact duration over the impact period, ``2 L f_b / c = 1 / (pi s)`` (dimensionless)."""
+        r"""Contact duration over the impact period, :math:`2 L f_b / c = 1 / (\pi s)` (dimensionless)."""
         return self.contact_duration_s * self.blow_frequency_Hz
 
     def check_short_impacts(self, limit: float = SHORT_IMPACT_LIMIT) -> bool:
-        """Whether impacts are short against the period (``contact_fraction <= limit``); issue an
-        :class:`ImpactDurationWarning` when they are not."""
+        r"""Whether impacts are short against the period (``contact_fraction`` :math:`\le` ``limit``);
+        issue an :class:`ImpactDurationWarning` when they are not."""
         if self.contact_fraction <= limit:
             return True
         warnings.warn(
@@ -333,13 +333,13 @@ class Hammer:
     # -- constructors ------------------------------------------------------------------------
     @classmethod
     def from_config(cls, config: dict, *, base_dir=None) -> Hammer:
-        """A hammer from a nested mapping with the keys of a TOML config (module docstring).
+        r"""A hammer from a nested mapping with the keys of a TOML config (module docstring).
 
         Values with a dimension must carry a unit (``"45 mm"``) or be pint quantities;
         ``restitution``, ``ratio``, ``fraction``, ``k``, ``tolerance``, ``max_harmonics`` and
         ``n_modes`` are plain numbers. ``damping.coefficient`` is either a total coefficient of the
         piston (N s/m, e.g. ``"2.4 N*s/m"``) or one per unit length (N s/m^2), told apart by
-        dimension; ``damping.ratio`` is ``zeta`` of the first flexible mode, ``d = 2 zeta s pi``.
+        dimension; ``damping.ratio`` is :math:`\zeta` of the first flexible mode, :math:`d = 2 \zeta s \pi`.
         A relative ``force.csv`` path is taken from ``base_dir`` (default: the working directory).
 
         Raises

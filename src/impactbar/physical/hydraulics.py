@@ -16,7 +16,7 @@ flow at an override pressure gives :math:`K_{rel} = Q_n / \Delta p_n`.
 References
 ----------
 H. E. Merritt, *Hydraulic Control Systems*, Wiley (1967), chapter 3 (the orifice equation); Hopsan's
-``HydraulicTurbulentOrifice`` (``Q = C_q A sqrt(2 / rho) sqrt(dp)``).
+``HydraulicTurbulentOrifice`` (:math:`Q = C_q A \sqrt{2 / \rho} \sqrt{\Delta p}`).
 """
 
 from __future__ import annotations

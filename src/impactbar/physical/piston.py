@@ -69,7 +69,7 @@ class OptimalPiston:
     lengths_m, areas_m2 : numpy.ndarray, shape (n,)
         The segments' lengths (m) and cross-sections (m^2), from the driven end to the struck end.
     work_on_rock_J, efficiency, peak_stress_Pa : float
-        Of its blow: the work on the rock (J), that over the impact energy ``m V^2/2`` (plus the
+        Of its blow: the work on the rock (J), that over the impact energy :math:`m V^2/2` (plus the
         feed's), and the peak of the incident stress wave in the rod's first piece (Pa).
     uniform_work_on_rock_J, uniform_efficiency, uniform_peak_stress_Pa : float
         The same of the uniform piston of the same mass and length.
@@ -142,7 +142,7 @@ class OptimalPiston:
 
     @property
     def gain(self) -> float:
-        """The work on the rock over the uniform piston's (``>= 1`` when both are feasible)."""
+        r"""The work on the rock over the uniform piston's (:math:`\ge 1` when both are feasible)."""
         return self.work_on_rock_J / self.uniform_work_on_rock_J
 
     def plot(self, axes=None):
@@ -169,8 +169,8 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     rod : RodPiece or sequence of RodPiece
         The drill string from the shank to the bit (:class:`~impactbar.physical.rock.RodPiece`).
     rock : tuple of float
-        ``(K, K_u)``: Lundberg's loading and unloading stiffnesses of the bit on the rock (N/m),
-        ``0 < K <= K_u``.
+        :math:`(K, K_u)`: Lundberg's loading and unloading stiffnesses of the bit on the rock (N/m),
+        :math:`0 < K \le K_u`.
     mass : float
         The piston's mass (kg), ``> 0``.
     length : float
@@ -185,7 +185,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     E, density : float, optional
         The piston's Young's modulus (Pa) and density (kg/m^3); default the first rod piece's.
     bit_mass, feed : float
-        The bit's mass (kg, ``>= 0``) and the static feed force (N, ``>= 0``).
+        The bit's mass (kg, :math:`\ge 0`) and the static feed force (N, :math:`\ge 0`).
     cells : int
         Cells along the piston in the search and in the final blows (8 to 1024): the rod's pieces
         are rounded to whole cells of ``L / (c cells)`` (:attr:`Blow.length_error`); the gradient
@@ -202,7 +202,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         ``"nelder-mead"``, scipy's derivative-free search over lengths and masses on the work less
         a penalty on the excess stress (the search before the gradients, kept to compare with).
     max_evaluations : int, optional
-        Most blows, ``>= 1``: with ``"slsqp"`` of the whole search (each blow with its
+        Most blows, :math:`\ge 1`: with ``"slsqp"`` of the whole search (each blow with its
         derivatives), default ``200 (2 n - 2)``; with ``"nelder-mead"`` of each of its two runs
         (from the uniform piston and again from the result), default ``300 (2 n - 2)``.
 
@@ -215,7 +215,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     ------
     ValueError
         A parameter out of its range (named), ``rod`` not a ``RodPiece`` or a sequence of them,
-        ``rock`` not a pair ``0 < K <= K_u``.
+        ``rock`` not a pair :math:`0 < K \le K_u`.
 
     Examples
     --------

@@ -72,7 +72,7 @@ PHYSICAL_ORBIT_FIELDS = _ORBIT_SI + Schema(
 
 @dataclass(frozen=True)
 class PhysicalOrbit:
-    """A one-impact periodic motion with its engineering figures in SI.
+    r"""A one-impact periodic motion with its engineering figures in SI.
 
     Its fields are declared once, in :data:`PHYSICAL_ORBIT_FIELDS` (what :meth:`to_dict`, the
     tables and the CLI show): the orbit's own in SI, generated from the dimensionless orbit's
@@ -86,32 +86,32 @@ class PhysicalOrbit:
     scales : Scales
         The hammer's units (what the orbit's fields are converted with).
     phase_rad : float
-        Phase ``phi`` of the load at impact (rad).
+        Phase :math:`\phi` of the load at impact (rad).
     impact_velocity : float
-        Dimensionless impact velocity ``u_t(1, 2 pi-)``.
+        Dimensionless impact velocity :math:`u_t(1, 2\pi^-)`.
     impact_velocity_m_s : float
-        Impact velocity ``v = L Omega u_t`` (m/s).
+        Impact velocity :math:`v = L \Omega u_t` (m/s).
     admissible, stable : bool
         As in the dimensionless orbit (theory §5, §7).
     max_abs_multiplier : float
         Largest modulus of the Floquet multipliers.
     blow_energy_J : float
-        Energy per blow ``m v^2 / 2`` (J): the kinetic energy of the piston moving as a rigid body
+        Energy per blow :math:`m v^2 / 2` (J): the kinetic energy of the piston moving as a rigid body
         at the struck end's velocity. This is the standard figure of merit of rock drills; it
         ignores the elastic vibration energy of the piston.
     blow_frequency_Hz : float
-        Blows per second ``Omega / 2 pi`` (Hz).
+        Blows per second :math:`\Omega / 2 \pi` (Hz).
     power_W : float
         Impact power, energy per blow times blow frequency (W).
     peak_stress_Pa : float
         Peak compressive stress at impact (Pa), see :meth:`Hammer.peak_stress_Pa`.
     rod_energy_J : float
-        Energy carried into the rod by the transmitted stress wave per blow (J), ``int F^2/Z_s dt``.
+        Energy carried into the rod by the transmitted stress wave per blow (J), :math:`\int F^2 / Z_s \, dt`.
         Under the wave law (theory §4b) from the contact solved by characteristics, the drive
-        included; under eq. 10 ``(1 - R^2)`` times the piston's kinetic energy at impact (what
+        included; under eq. 10 :math:`(1 - R^2)` times the piston's kinetic energy at impact (what
         eq. 10 removes from it).
     peak_rod_stress_Pa : float
-        Peak compressive stress of the transmitted wave in the rod (Pa), ``F_max / A_s``; under
+        Peak compressive stress of the transmitted wave in the rod (Pa), :math:`F_\mathrm{max} / A_s`; under
         eq. 10 the plateau of a rigid-body piston at the impact velocity, ``rho c v (1 - R)/2`` (of
         a stepped piston: the first step of its staircase, the struck segment's).
     efficiency : float
@@ -285,7 +285,7 @@ class BlowStatistics:
     mean_impact_velocity_m_s, impact_velocity_std_m_s : float
         Mean and standard deviation of the blows' impact velocities (m/s).
     mean_blow_energy_J : float
-        Mean energy per blow ``m v^2 / 2`` (J).
+        Mean energy per blow :math:`m v^2 / 2` (J).
     mean_blow_interval_s, blow_interval_std_s : float
         Mean and standard deviation of the time between blows (s).
     mean_power_W : float
@@ -399,7 +399,7 @@ class SimulationResult:
     impact_velocities_m_s : numpy.ndarray, shape (n,)
         Arrival velocities of the struck end (m/s).
     blow_energies_J : numpy.ndarray, shape (n,)
-        ``m v^2 / 2`` per impact (J).
+        :math:`m v^2 / 2` per impact (J).
     rod_energies_J, peak_rod_stresses_Pa, efficiencies : numpy.ndarray, shape (n,)
         Under the wave law (theory §4b) the energy and the peak stress of the wave each blow sends
         into the rod, and the transfer efficiency (see :class:`PhysicalOrbit`); NaN under eq. 10.
@@ -596,7 +596,7 @@ def _evaluate(fn, t: np.ndarray) -> np.ndarray:
 
 def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
              max_impacts: int | None = None, progress=None) -> SimulationResult:
-    """Simulate ``hammer`` from rest, ``gap_m`` off the stop, over ``periods`` impact periods.
+    r"""Simulate ``hammer`` from rest, ``gap_m`` off the stop, over ``periods`` impact periods.
 
     Parameters
     ----------
@@ -604,7 +604,7 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
     periods : float, optional
         Length of the run in impact periods ``1 / f_b`` (``k`` force cycles each), ``> 0``.
     gap_m : float, optional
-        Initial distance of the struck end from the stop (m), ``>= 0``; the piston starts at rest.
+        Initial distance of the struck end from the stop (m), :math:`\ge 0`; the piston starts at rest.
     max_impacts : int, optional
         Passed to ``impactbar.simulate``.
     progress : callable, optional

@@ -56,7 +56,7 @@ class RodPiece:
 
     @property
     def wave_speed_m_s(self) -> float:
-        """``c = sqrt(E / rho)`` (m/s)."""
+        r"""The wave speed :math:`c = \sqrt{E / \rho}` (m/s)."""
         return math.sqrt(self.E_Pa / self.density_kg_m3)
 
     @property
@@ -67,23 +67,23 @@ class RodPiece:
 
 @dataclass(frozen=True)
 class DrillString:
-    """The rod, the bit and the rock of a drill in SI units (theory §4d).
+    r"""The rod, the bit and the rock of a drill in SI units (theory §4d).
 
     Parameters
     ----------
     segments : sequence of RodPiece
         From the shank to the bit, at least one.
     rock_k_N_m : float
-        Loading stiffness ``K`` of the bit on the rock (N/m), ``> 0``.
+        Loading stiffness :math:`K` of the bit on the rock (N/m), :math:`> 0`.
     rock_k_u_N_m : float
-        Unloading stiffness ``K_u >= K`` (N/m).
+        Unloading stiffness :math:`K_u \ge K` (N/m).
     bit_mass_kg : float
-        Mass of the bit (kg), ``>= 0``; 0 is Lundberg's massless bit.
+        Mass of the bit (kg), :math:`\ge 0`; 0 is Lundberg's massless bit.
     feed_N : float
-        Static feed force on the shank (N), ``>= 0``.
+        Static feed force on the shank (N), :math:`\ge 0`.
     cells_per_piston : int, optional
         Puts the simulator's blows on the cell grid with this many cells along the piston
-        (:class:`~impactbar.RodRock`'s ``cells_per_piston``, ``1 <= n <= 4096``; a numerical setting,
+        (:class:`~impactbar.RodRock`'s ``cells_per_piston``, :math:`1 \le n \le 4096`; a numerical setting,
         no physics). Its orbits converge to the exact blows' at second order (theory §4d).
     method : {"auto", "exact", "lattice"}
         The simulator's blows (:class:`~impactbar.RodRock`'s ``method``): exact by default.
@@ -114,11 +114,12 @@ class DrillString:
             raise ValueError(f"rock.method must be 'auto', 'exact' or 'lattice'; got {self.method!r}")
 
     def law(self, bar, scales) -> RodRock:
-        """The dimensionless law for a piston ``bar`` (:class:`~impactbar.physical.Bar`) and the
+        r"""The dimensionless law for a piston ``bar`` (:class:`~impactbar.physical.Bar`) and the
         hammer's ``scales`` (:class:`~impactbar.physical.Scales`): lengths in piston lengths,
-        impedances and wave speeds relative to the piston's, ``k = K / (m Omega^2)``, the bit's mass
-        in piston masses, the feed in ``m L Omega^2`` (theory §1, §4d). The piston's impedance is
-        its mean, ``m c / L`` (a stepped piston's rod impedances stay relative to the uniform
+        impedances and wave speeds relative to the piston's, the stiffness
+        :math:`k = K / (m \Omega^2)`, the bit's mass in piston masses, the feed in
+        :math:`m L \Omega^2` (theory §1, §4d). The piston's impedance is its mean, :math:`m c / L`
+        (a stepped piston's rod impedances stay relative to the uniform
         piston of the same mass and length, theory §12)."""
         z_p = bar.mass_kg * bar.wave_speed_m_s / bar.length_m
         m = bar.mass_kg

@@ -46,13 +46,14 @@ _REL = "relief"
 
 
 class CircuitEnergy(dict):
-    """The oil circuit's energy account over a run or an orbit (theory §11), a dict of floats in the
-    model's energy unit ``m L^2 Omega^2`` (eq. 2): ``pump`` (the pump's work, ``int p_s Q_p``),
-    ``piston`` (the oil's work on the piston, ``int F (-w')``), ``orifices`` (``int Q dp`` of every
-    opening), ``tank`` (``int p_t Q`` to the tank), ``compression`` (``int (V p / beta) p'`` of the
-    three oil volumes), ``accumulator`` (``int p_s C_a p_s'``), and ``residual`` (the pump's work
-    less all the others: 0 to the integrator's tolerance) and ``relative_residual`` (over the pump's
-    work)."""
+    r"""The oil circuit's energy account over a run or an orbit (theory §11), a dict of floats in the
+    model's energy unit :math:`m L^2 \Omega^2` (eq. 2): ``pump`` (the pump's work,
+    :math:`\int p_s Q_p \, dt`), ``piston`` (the oil's work on the piston, :math:`\int F (-w') \, dt`),
+    ``orifices`` (:math:`\int Q \Delta p \, dt` of every opening), ``tank``
+    (:math:`\int p_t Q \, dt` to the tank), ``compression`` (:math:`\int (V p / \beta) p' \, dt` of
+    the three oil volumes), ``accumulator`` (:math:`\int p_s C_a p_s' \, dt`), and ``residual``
+    (the pump's work less all the others: 0 to the integrator's tolerance) and ``relative_residual``
+    (over the pump's work)."""
 
     @classmethod
     def from_terms(cls, E) -> CircuitEnergy:

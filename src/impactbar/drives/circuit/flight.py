@@ -16,7 +16,7 @@ bit). CVODE's counters on it: 380 steps, 498 right-hand sides, 17 error-test fai
 iterations, 7 Jacobians: the steps are those BDF's error control asks at this tolerance (the
 pressures' fast transients after each switch and impact, the valve's ramp; measured over 20 periods,
 ``rtol = 1e-8`` took a quarter fewer steps for errors a hundred times larger), not failures. The
-variational flights' Newton systems (``n + 8 + n^2`` unknowns) are solved by the band solver
+variational flights' Newton systems (:math:`n + 8 + n^2` unknowns) are solved by the band solver
 (``band=True``, the default; ``Phi`` stored by columns). Its events (the arrival
 ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply pressure through the
 pre-charge and the relief pressure) are located by CVODE's root finding to the integrator's

@@ -1,19 +1,21 @@
 r"""The parts of a drifter's oil circuit (theory §11), dimensionless, each a small frozen dataclass.
 
 The circuit is composed as a lumped fluid-power network is in Hopsan's component library: capacitive
-volumes (Hopsan's C-type components, ``HydraulicVolume``: a volume ``V`` and the oil's bulk modulus
-``beta``, ``p' = beta / V (sum of flows in - V')``), resistive orifices between them (Q-type,
-``HydraulicTurbulentOrifice``: ``Q = K sqrt(dp)`` with ``K = C_q A sqrt(2 / rho)``) and a gas
-accumulator (``HydraulicAckumulator``: a polytropic gas ``p V^n = p_0 V_0^n``). Here the parts hold
+volumes (Hopsan's C-type components, ``HydraulicVolume``: a volume :math:`V` and the oil's bulk
+modulus :math:`\beta`, :math:`p' = \frac{\beta}{V} \left(\sum Q_\mathrm{in} - V'\right)`), resistive
+orifices between them (Q-type, ``HydraulicTurbulentOrifice``: :math:`Q = K \sqrt{\Delta p}` with
+:math:`K = C_q A \sqrt{2 / \rho}`) and a gas accumulator (``HydraulicAckumulator``: a polytropic
+gas :math:`p V^n = p_0 V_0^n`). Here the parts hold
 the numbers and :class:`~impactbar.drives.circuit.HydraulicCircuitDrive` composes them into one
 system of ordinary differential equations.
 
-Units (theory §11, eq. 2): pressures in a pressure scale ``P`` (absolute), areas in the rear area
-``A_r``, lengths in the bar's length ``L``, volumes in ``A_r L``, time in ``1 / Omega`` with
-``Omega = sqrt(P A_r / (m L))`` (so that the rear pressure ``P`` on ``A_r`` is the force scale
-``m L Omega^2``), flows in ``A_r L Omega``, an orifice's coefficient ``K`` (m^3 s^-1 Pa^-1/2) as
-``K sqrt(P) / (A_r L Omega)``, the relief's (m^3 s^-1 Pa^-1) as ``K_rel P / (A_r L Omega)``, the
-bulk modulus as ``beta / P``. :class:`impactbar.physical.CircuitDrifter` makes them from SI inputs.
+Units (theory §11, eq. 2): pressures in a pressure scale :math:`P` (absolute), areas in the rear
+area :math:`A_r`, lengths in the bar's length :math:`L`, volumes in :math:`A_r L`, time in
+:math:`1 / \Omega` with :math:`\Omega = \sqrt{P A_r / (m L)}` (so that the rear pressure :math:`P`
+on :math:`A_r` is the force scale :math:`m L \Omega^2`), flows in :math:`A_r L \Omega`, an orifice's
+coefficient :math:`K` (m^3 s^-1 Pa^-1/2) as :math:`K \sqrt{P} / (A_r L \Omega)`, the relief's
+(m^3 s^-1 Pa^-1) as :math:`K_\mathrm{rel} P / (A_r L \Omega)`, the bulk modulus as
+:math:`\beta / P`. :class:`impactbar.physical.CircuitDrifter` makes them from SI inputs.
 
 References
 ----------
@@ -75,7 +77,7 @@ class Chambers:
 
 @dataclass(frozen=True)
 class Valve:
-    """The main valve (two Q-type openings that share one spool): the rear chamber to the supply
+    r"""The main valve (two Q-type openings that share one spool): the rear chamber to the supply
     through ``coefficient * x_v``, to the tank through ``coefficient * (1 - x_v)``, the opening ``x_v``
     ramping between 0 (return) and 1 (stroke) in ``switching_time``.
 
@@ -87,7 +89,7 @@ class Valve:
     coefficient : float
         The opening's flow coefficient ``K_v``, ``> 0``.
     switching_time : float, optional
-        A full stroke of the spool, ``>= 0`` (0: an instant switch). Default 0.
+        A full stroke of the spool, :math:`\ge 0` (0: an instant switch). Default 0.
     switch_in : float or None, optional
         The gap whose falling crossing closes the valve (armed while it is open or opening); ``None``
         (default): the valve closes at each impact.
@@ -95,7 +97,7 @@ class Valve:
     Raises
     ------
     ValueError
-        A value out of its range (named), or ``switch_in >= switch_out``.
+        A value out of its range (named), or ``switch_in`` :math:`\ge` ``switch_out``.
     """
 
     switch_out: float
@@ -113,7 +115,7 @@ class Valve:
 
 @dataclass(frozen=True)
 class Supply:
-    """The supply node: a pump of constant flow into a hose of volume ``hose_volume`` (a C-type
+    r"""The supply node: a pump of constant flow into a hose of volume ``hose_volume`` (a C-type
     volume), the front chamber fed from it through ``front_coefficient``, a relief valve to the tank;
     or a supply held at a pressure (``pump_flow=None``, ``pressure`` given: an ideal pressure
     source).
@@ -127,11 +129,12 @@ class Supply:
     front_coefficient : float
         ``K_f``, the front chamber's feed, ``> 0``.
     tank_pressure : float
-        ``p_t`` (absolute), ``>= 0``.
+        :math:`p_t` (absolute), :math:`\ge 0`.
     relief_pressure : float, optional
         ``p_rel``, above the tank pressure; ``inf`` (default): no relief valve.
     relief_coefficient : float, optional
-        ``K_rel`` of the relief flow ``K_rel max(0, p_s - p_rel)``, ``>= 0``. Default 0.
+        :math:`K_\mathrm{rel}` of the relief flow :math:`K_\mathrm{rel} \max(0, p_s - p_\mathrm{rel})`,
+        :math:`\ge 0`. Default 0.
     pressure : float or None, optional
         The held supply pressure, ``> tank_pressure`` (with ``pump_flow=None``).
 
@@ -178,16 +181,17 @@ class Supply:
 
 @dataclass(frozen=True)
 class Accumulator:
-    """A gas accumulator on the supply node: below its pre-charge it holds no oil; above it the gas
-    (pre-charge ``p_0`` at volume ``V_0``, polytropic exponent ``n``) holds
-    ``V_0 (1 - (p_0 / p_s)^(1/n))`` of oil, a compliance ``(V_0 / n) p_0^(1/n) p_s^(-1/n - 1)``.
+    r"""A gas accumulator on the supply node: below its pre-charge it holds no oil; above it the gas
+    (pre-charge :math:`p_0` at volume :math:`V_0`, polytropic exponent :math:`n`) holds
+    :math:`V_0 \left(1 - (p_0 / p_s)^{1/n}\right)` of oil, a compliance
+    :math:`(V_0 / n) \, p_0^{1/n} p_s^{-1/n - 1}`.
 
     Parameters
     ----------
     precharge : float
         ``p_0`` (absolute), ``> 0``.
     volume : float
-        ``V_0``, ``>= 0`` (0: no accumulator).
+        :math:`V_0`, :math:`\ge 0` (0: no accumulator).
     polytropic_exponent : float, optional
         ``n`` in ``[1, 2]`` (1 isothermal, 1.4 adiabatic nitrogen). Default 1.4.
 
@@ -210,8 +214,9 @@ class Accumulator:
 
 @dataclass(frozen=True)
 class Oil:
-    """The oil: its bulk modulus and the transition pressure of the orifices' smoothed law
-    ``phi(dp) = dp (dp^2 + p_tr^2)^(-1/4)`` (turbulent, ``sign(dp) sqrt|dp|``, for ``|dp| >> p_tr``,
+    r"""The oil: its bulk modulus and the transition pressure of the orifices' smoothed law
+    :math:`\phi(\Delta p) = \Delta p \, (\Delta p^2 + p_\mathrm{tr}^2)^{-1/4}` (turbulent,
+    :math:`\operatorname{sign}(\Delta p) \sqrt{|\Delta p|}`, for :math:`|\Delta p| \gg p_\mathrm{tr}`,
     differentiable at 0).
 
     Parameters

@@ -52,11 +52,11 @@ class PositionSwitchedDrive(Drive):
     a compiled event loop (:mod:`impactbar.drives.switched.loop`) and the closed-form segment problem
     of its periodic orbits with the exact Jacobian (:mod:`impactbar.drives.switched.segment`).
 
-    Rigid piston, no damping, no delay (the check of theory §10): with accelerations ``a_s = stroke``,
-    ``a_r = ret`` the period-1 orbit has the impact velocity
-    ``v = sqrt(2 x_1 (a_s + a_r) / (1 - R^2))``, the period
-    ``T = (u_1 - R v)/a_r + (u_1 + v)/a_s`` with ``u_1 = sqrt(R^2 v^2 + 2 a_r x_1)``, and the
-    non-trivial multiplier ``R^2``.
+    Rigid piston, no damping, no delay (the check of theory §10): with accelerations :math:`a_s` = ``stroke``,
+    :math:`a_r` = ``ret`` and :math:`x_1` = ``switch_out`` the period-1 orbit has the impact velocity
+    :math:`v = \sqrt{2 x_1 (a_s + a_r) / (1 - R^2)}`, the period
+    :math:`T = (u_1 - R v)/a_r + (u_1 + v)/a_s` with :math:`u_1 = \sqrt{R^2 v^2 + 2 a_r x_1}`, and the
+    non-trivial multiplier :math:`R^2`.
 
     Parameters
     ----------
@@ -68,23 +68,24 @@ class PositionSwitchedDrive(Drive):
         Gap ``y = -q_0`` (dimensionless, in bar lengths) at which the return force gives way to the
         stroke force on the way out, ``> 0``.
     delay : float, optional
-        Valve delay ``tau`` (dimensionless time) of both switches: each takes effect this long after
-        the crossing or the impact that triggers it, ``>= 0``. Default 0. After construction it is
+        Valve delay :math:`\tau` (dimensionless time) of both switches: each takes effect this long after
+        the crossing or the impact that triggers it, :math:`\ge 0`. Default 0. After construction it is
         the common delay, or ``None`` where ``delay_out`` and ``delay_in`` differ.
     delay_out : float, optional
         The delay of the switch to stroke after the ``switch_out`` crossing (dimensionless time),
-        ``>= 0``. Default ``delay``.
+        :math:`\ge 0`. Default ``delay``.
     delay_in : float, optional
-        The delay of the switch to return after the impact (dimensionless time), ``>= 0``. Default
+        The delay of the switch to return after the impact (dimensionless time), :math:`\ge 0`. Default
         ``delay``.
 
     Raises
     ------
     ValueError
         If a level, position or delay is not finite or out of its range (named in the message):
-        with ``stroke <= 0`` the piston never reaches the stop, with ``ret <= 0`` it never reaches
-        the switch position, with ``switch_out <= 0`` the valve switches at the stop itself; each of
-        the three at most ``1e100`` (beyond, the motion's energies leave the float range).
+        with ``stroke`` :math:`\le 0` the piston never reaches the stop, with ``ret`` :math:`\le 0`
+        it never reaches the switch position, with ``switch_out`` :math:`\le 0` the valve switches at
+        the stop itself; each of the three at most :math:`10^{100}` (beyond, the motion's energies
+        leave the float range).
 
     References
     ----------
@@ -220,18 +221,18 @@ class PositionSwitchedDrive(Drive):
         return ValveProblem(model, self, impacts, constant_load)
 
     def rigid_orbit(self, R: float) -> dict:
-        """The rigid, undamped, undelayed period-1 orbit in closed form (theory §10).
+        r"""The rigid, undamped, undelayed period-1 orbit in closed form (theory §10).
 
         Parameters
         ----------
         R : float
-            Restitution coefficient, ``0 <= R < 1``.
+            Restitution coefficient, :math:`0 \le R < 1`.
 
         Returns
         -------
         dict
-            ``impact_velocity`` ``v``, ``period`` ``T``, ``switch_velocity`` ``u_1`` (the gap's
-            rate at the switch), ``switch_time`` (from the impact), ``multiplier`` ``R^2``.
+            ``impact_velocity`` :math:`v`, ``period`` :math:`T`, ``switch_velocity`` :math:`u_1` (the
+            gap's rate at the switch), ``switch_time`` (from the impact), ``multiplier`` :math:`R^2`.
         """
         R = check_real("R", R, lo=0.0, hi=1.0, hi_open=True)
         a_s, a_r, x1 = self.stroke, self.ret, self.switch_out
@@ -243,7 +244,7 @@ class PositionSwitchedDrive(Drive):
 
 
 def first_rising_crossing(d: float, y0: float, w0: float, a: float, level: float) -> float:
-    """First ``t > 0`` at which the gap rises through ``level`` under ``y'' + d y' = a``, ``inf`` if
+    r"""First ``t > 0`` at which the gap rises through ``level`` under ``y'' + d y' = a``, ``inf`` if
     never (theory §10).
 
     The compiled closed form, :func:`impactbar.drives._crossing.first_rising_crossing`, imported on
@@ -252,7 +253,7 @@ def first_rising_crossing(d: float, y0: float, w0: float, a: float, level: float
     Parameters
     ----------
     d, y0, w0, a, level : float
-        Damping (``>= 0``), the gap and its rate at ``t = 0``, the gap's constant acceleration
+        Damping (:math:`\ge 0`), the gap and its rate at ``t = 0``, the gap's constant acceleration
         (``-p``) and the switch position.
 
     Returns

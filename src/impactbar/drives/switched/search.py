@@ -2,32 +2,36 @@ r"""Every one-impact orbit of the valve in a window of periods, certified (theor
 
 Under the paper's impact law a one-impact orbit of :class:`~impactbar.PositionSwitchedDrive` is, for
 given flight times, the solution of linear equations: the schedule of forces (stroke for
-``tau_in``, return for ``h1 + tau_out``, stroke for ``h3``; period ``T = tau_in + h1 + tau_out +
-h3``) fixes every mode's periodic motion, mode by mode. Per flexible mode ``n`` (frequency
-``w_n = s n pi``, static deflection ``P / w_n^2`` under a force ``P``), with the flow ``E(t)`` of
-``q'' + d q' + w_n^2 q = 0``, the impact law ``J = diag(1, -R)`` and the step of the static state
-between the two forces ``Delta = ((stroke + ret) / w_n^2, 0)``, the state just after the impact is
+:math:`\tau_\mathrm{in}`, return for :math:`h_1 + \tau_\mathrm{out}`, stroke for :math:`h_3`; period
+:math:`T = \tau_\mathrm{in} + h_1 + \tau_\mathrm{out} + h_3`) fixes every mode's periodic motion,
+mode by mode. Per flexible mode :math:`n` (frequency :math:`w_n = s n \pi`, static deflection
+:math:`P / w_n^2` under a force :math:`P`), with the flow :math:`E(t)` of
+:math:`q'' + d q' + w_n^2 q = 0`, the impact law :math:`J = \operatorname{diag}(1, -R)` and the step
+of the static state between the two forces
+:math:`\Delta = ((\mathrm{stroke} + \mathrm{ret}) / w_n^2, 0)`, the state just after the impact is
 
 .. math::
 
-    z_n = (stroke / w_n^2, 0) + (I - J E(T))^{-1} J \,[E(T - tau_in) - E(h_3)]\, Delta ,
+    z_n = (\mathrm{stroke} / w_n^2, 0) + (I - J E(T))^{-1} J \,[E(T - \tau_\mathrm{in}) - E(h_3)]\,
+    \Delta ,
 
 the rigid mode's velocity after the impact follows from the impact law, its position from contact
-(``u(1) = 0`` at the impact: ``q_0 = -e``, ``e`` the flexible modes' share of the end's
-displacement). Two conditions remain, on the two unknowns ``(T, h3)``:
+(:math:`u(1) = 0` at the impact: :math:`q_0 = -e`, :math:`e` the flexible modes' share of the end's
+displacement). Two conditions remain, on the two unknowns :math:`(T, h_3)`:
 
-- ``F1``: the rigid coordinate comes back to where it left (a function of the rigid mode alone);
-- ``F2 = e + X - switch_out``: the gap at the crossing, ``X`` the rigid mode's excursion from the
-  impact to it.
+- :math:`F_1`: the rigid coordinate comes back to where it left (a function of the rigid mode alone);
+- :math:`F_2 = e + X - x_1` (:math:`x_1` = ``switch_out``): the gap at the crossing, :math:`X` the
+  rigid mode's excursion from the impact to it.
 
 Both and their exact Jacobian are closed forms (:class:`OneImpactEquations`). The search
-(:func:`search_one_impact`) covers the window ``[T_min, T_max]`` times ``0 <= h3 <= T_max - tau``
-with square cells, bisected: a cell is excluded when ``|F_i(mid)|`` exceeds the bound of its
+(:func:`search_one_impact`) covers the window :math:`[T_\mathrm{min}, T_\mathrm{max}]` times
+:math:`0 \le h_3 \le T_\mathrm{max} - \tau` with square cells, bisected: a cell is excluded when
+:math:`|F_i(\mathrm{mid})|` exceeds the bound of its
 gradient over the cell times its half-width (the mean-value theorem), the gradient enclosed by
-interval arithmetic on the closed forms (each flexible function is ``e^{-d t/2}`` times a
+interval arithmetic on the closed forms (each flexible function is :math:`e^{-d t/2}` times a
 sinusoid, enclosed to second order, and the resolvent's determinant
-``1 - R e^{-dT} - e^{-dT/2}[(1 - R) cos(l T) + (1 + R)(d / 2 l) sin(l T)]`` directly). The
-survivors are grouped into clusters; in each, Newton's method on ``(F1, F2)`` finds a point and
+:math:`1 - R e^{-dT} - e^{-dT/2}[(1 - R) \cos(l T) + (1 + R) \frac{d}{2 l} \sin(l T)]` directly). The
+survivors are grouped into clusters; in each, Newton's method on :math:`(F_1, F_2)` finds a point and
 the Krawczyk test on a box around it, with the same enclosure of the Jacobian, proves that the box
 holds exactly one root (R. Krawczyk, *Computing* 4, 1969; R. E. Moore, *Interval Analysis*,
 1966). So every root with a period in the window is found, once, except in clusters that neither
@@ -143,14 +147,14 @@ def _c(d, t):
 # the reduced equations
 # --------------------------------------------------------------------------------------------------
 class OneImpactEquations:
-    """The valve's one-impact orbits as two equations in ``(T, h3)`` (module docstring), their
+    r"""The valve's one-impact orbits as two equations in :math:`(T, h_3)` (module docstring), their
     exact Jacobian, the enclosure of the Jacobian over boxes, and the state after the impact.
 
     Parameters
     ----------
     model : BarModel
         Under the paper's impact law (restitution ``model.law.kernel_restitution(model)``), every
-        flexible mode underdamped (``d < 2 s pi``).
+        flexible mode underdamped (:math:`d < 2 s \pi`).
     drive : PositionSwitchedDrive
     """
 

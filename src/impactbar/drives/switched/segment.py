@@ -18,7 +18,7 @@ Jacobian (:class:`ValveProblem`, the valve's :class:`~impactbar.drives.OrbitProb
 matrix is the product of the flows' fundamental matrices and of the saltation matrices at the switch
 and the impact (Hiskens & Pai 2000; di Bernardo et al., *Piecewise-smooth Dynamical Systems*, 2008,
 §2.5); one of its eigenvalues is the trivial ``1`` along the flow, reported apart, the others are the
-multipliers of the Poincare map. With ``m >= 2`` impacts the intervals may differ (a period-2 motion
+multipliers of the Poincare map. With :math:`m \ge 2` impacts the intervals may differ (a period-2 motion
 after a period doubling): multiple shooting, ``m`` blocks ``(state after impact k, h1_k, h3_k)``.
 
 Under a law whose contact takes time (the wave law, theory §4b; the rod-rock law, §4d) the impact
@@ -360,7 +360,7 @@ MAX_RESONANCES = 1000
 
 
 class ValveProblem(OrbitProblem):
-    """The valve's periodic-orbit problem (module docstring): ``impacts`` blocks ``(state after
+    r"""The valve's periodic-orbit problem (module docstring): ``impacts`` blocks ``(state after
     impact k, h1_k, h3_k)``, the exact Jacobian, Newton's start and the orbit's multipliers.
 
     Parameters
@@ -370,14 +370,14 @@ class ValveProblem(OrbitProblem):
         force).
     drive : PositionSwitchedDrive
     impacts : int
-        ``m >= 1``.
+        :math:`m \ge 1`.
     constant_load : callable
         ``constant_load(p)``: the load of the constant force ``p`` (a contact law's map).
 
     Raises
     ------
     ValueError
-        With ``model.R >= 1`` under a law that uses it (no energy leaves: the blows grow without
+        With ``model.R`` :math:`\ge 1` under a law that uses it (no energy leaves: the blows grow without
         bound).
     """
 
@@ -460,10 +460,10 @@ class ValveProblem(OrbitProblem):
         return (float(hi) - float(lo)) * model.s * model.n_modes * (model.n_modes + 1) / 4.0
 
     def search(self, window):
-        """Every one-impact orbit with a period in ``window`` under the paper's law, certified
+        r"""Every one-impact orbit with a period in ``window`` under the paper's law, certified
         (:func:`~impactbar.drives.switched.search.search_one_impact`: exclusion by bounds from the
         closed forms, the Krawczyk test on each root); ``None`` (the solvers' non-certified search)
-        for ``m >= 2``, under a law whose contact takes time, or with an overdamped mode."""
+        for :math:`m \ge 2`, under a law whose contact takes time, or with an overdamped mode."""
         from .search import OneImpactEquations, default_window, search_one_impact
 
         model, drive = self.model, self.drive
