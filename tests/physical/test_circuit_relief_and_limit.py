@@ -123,3 +123,27 @@ def test_a_stiff_circuit_runs_from_rest_toward_its_orbit(k, stiff_points):
     assert t.size > 40
     assert np.diff(t)[-1] == pytest.approx(p.period_s, rel=0.03)
     assert v[-1] == pytest.approx(p.impact_velocity_m_s, rel=0.03)
+
+
+#: the front chamber fed through an opening 30 times narrower than the preset's: its pressure falls
+#: to -0.53 MPa absolute as the piston leaves the stop
+STARVED = {"front_flow_coefficient": "2e-7 m^3/s/Pa^0.5"}
+
+
+def test_a_cavitating_motion_is_refused_by_orbit_simulate_and_a_restart():
+    """``orbit()`` returned this orbit flagged ``cavitates`` (the front chamber's least pressure
+    -0.526 MPa, a motion the model does not represent); now the orbit, the run from rest and a start
+    below 0 are all refused, naming the volume."""
+    d = circuit_preset("circuit-drifter", supply=STARVED)
+    with pytest.raises(ValueError, match=r"front pressure to -0\.5\d+ MPa absolute, below 0: the oil would "
+                                         r"cavitate"):
+        d.orbit()
+    with pytest.raises(ValueError, match=r"the run of 1 s takes the front pressure to -\d.*cavitate"):
+        d.simulate(1.0)
+    drive = d.drive()
+    with pytest.raises(ValueError, match="start_pressures"):
+        dataclasses.replace(drive, start_pressures=(-0.01, 2.0, 2.0, 1.0))
+    # a shorter run, before the accumulator has charged, stays above 0 and is kept
+    assert d.simulate(0.02)["histories"]["p_f_Pa"].min() > 0.0
+    # the preset's orbit and runs are untouched
+    assert not circuit_preset("circuit-drifter").orbit().cavitates
