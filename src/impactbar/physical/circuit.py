@@ -317,7 +317,8 @@ class CircuitDrifter:
             cannot move the piston), or only onto the piston resting on the stop (its bounces dying
             away: no orbit with a blow), or a chamber empties; or where the orbit found does not
             repeat when :func:`impactbar.simulate` restarts it (checked over two periods to
-            ``REPEAT_TOL``, without a drill string).
+            ``REPEAT_TOL``, without a drill string), or where an absolute pressure of the orbit
+            falls below 0 (the oil would cavitate: :attr:`CircuitDrifterOrbit.cavitates`).
         """
         from ..orbits import find_orbit
 
@@ -325,7 +326,9 @@ class CircuitDrifter:
         orbit = find_orbit(self.model(), self.drive(), guess=g)
         if self.drill is None:  # (a blow with the rock restarts inside its contact: not checked here)
             _check_repeats(orbit)
-        return CircuitDrifterOrbit(self, orbit)
+        point = CircuitDrifterOrbit(self, orbit)
+        _refuse_cavitation(point.minimum_pressures_Pa, f"the orbit (period {point.period_s * 1e3:.5g} ms)")
+        return point
 
     def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
         """Simulate from the piston at rest on the stop (or a given gap and velocity), the circuit at
@@ -338,6 +341,11 @@ class CircuitDrifter:
             pressures ``p_f_Pa``, ``p_r_Pa``, ``p_s_Pa``, the valve opening ``x_v``, the gap
             ``gap_m``) and ``run`` (the dimensionless :class:`~impactbar.SwitchedTrajectory`); with a
             drill string also ``work_on_rock_J`` and ``penetration_mm`` (arrays, per blow).
+
+        Raises
+        ------
+        ValueError
+            Where an absolute pressure falls below 0 during the run (the oil would cavitate).
         """
         from ..simulation import InitialState, simulate
 
@@ -347,6 +355,7 @@ class CircuitDrifter:
                                    start_velocity_m_s / (L * om), self.n_modes)
         drive = self.drive()
         run = simulate(self.model(), drive, start, dur * om)
+        _refuse_cavitation(_least_pressures(run.pieces), f"the run of {dur:g} s")
         h = drive.histories(run)
         P = PRESSURE_SCALE
         hist = {"t_s": h["t"] / om, "p_f_Pa": h["p_f"] * P, "p_r_Pa": h["p_r"] * P, "p_s_Pa": h["p_s"] * P,
@@ -486,6 +495,26 @@ def _check_repeats(orbit) -> None:
                          "motion of the circuit")
 
 
+def _least_pressures(pieces) -> dict:
+    """The least absolute pressure (Pa) of ``front``, ``rear`` and ``supply`` over the circuit's
+    pieces among ``pieces`` (their Hermite interpolants' extremes)."""
+    pieces = [p for p in pieces if hasattr(p, "extremes")]
+    if not pieces:
+        return {}
+    return {name: min(p.extremes(k)[0] for p in pieces) * PRESSURE_SCALE
+            for k, name in ((0, "front"), (1, "rear"), (2, "supply"))}
+
+
+def _refuse_cavitation(low: dict, what: str) -> None:
+    """Refuse a motion along which an absolute pressure of ``low`` (Pa, by volume) falls below 0:
+    the oil would cavitate, which the model does not represent (theory §11)."""
+    name = min(low, key=low.get) if low else None
+    if name is not None and low[name] < 0.0:
+        raise ValueError(f"{what} takes the {name} pressure to {low[name] / 1e6:.4g} MPa absolute, below "
+                         "0: the oil would cavitate, which the circuit's model does not represent (widen "
+                         "the opening that feeds that volume, or raise the tank pressure)")
+
+
 @dataclass(frozen=True)
 class CircuitDrifterOrbit:
     """A drifter's operating point with its oil circuit, in SI units (theory §11).
@@ -577,14 +606,13 @@ class CircuitDrifterOrbit:
         falls below the oil's vapour pressure (a few kPa; :attr:`cavitates` flags below 0) the
         motion it computes is not the machine's."""
         problem = self.orbit.problem
-        pieces = [p for p in problem.flights(problem.unknowns(self.orbit)) if hasattr(p, "extremes")]
-        return {name: min(p.extremes(k)[0] for p in pieces) * PRESSURE_SCALE
-                for k, name in ((0, "front"), (1, "rear"), (2, "supply"))}
+        return _least_pressures(problem.flights(problem.unknowns(self.orbit)))
 
     @property
     def cavitates(self) -> bool:
         """Whether an absolute pressure of the orbit falls below 0 (:attr:`minimum_pressures_Pa`):
-        the oil would cavitate there, which the model does not represent."""
+        the oil would cavitate there, which the model does not represent (:meth:`CircuitDrifter.orbit`
+        and :meth:`CircuitDrifter.simulate` refuse such a motion)."""
         return min(self.minimum_pressures_Pa.values()) < 0.0
 
     @property
