@@ -96,3 +96,20 @@ def test_only_the_documented_presets_are_taken():
     assert list(DRIFTER_PRESETS) == ["hydraulic-drifter"]
     with pytest.raises(ValueError, match="unknown drifter preset 'drifter-issue19'; known: hydraulic-"):
         drifter_preset("drifter-issue19")
+
+
+def test_one_si_orbit_class_for_drifters_and_its_blow_frequency_counts_the_impacts():
+    """The valve drifter's and the oil circuit's SI orbits are one class (the circuit's adds its
+    pressures); the blow frequency is the impacts over the period: the one-impact orbit found again
+    as a two-impact one (its period doubled) blows as often (it read the period alone, half)."""
+    from impactbar import find_orbit
+    from impactbar.physical import CircuitDrifterOrbit, DrifterOrbit, drifter_preset
+
+    assert issubclass(CircuitDrifterOrbit, DrifterOrbit)
+    d = drifter_preset("hydraulic-drifter")
+    one = d.orbit()
+    two = DrifterOrbit(d, find_orbit(d.model(), d.drive(), impacts=2, guess=one.orbit))
+    assert two.orbit.period == pytest.approx(2 * one.orbit.period, rel=1e-10)
+    assert two.blow_frequency_Hz == pytest.approx(one.blow_frequency_Hz, rel=1e-10)
+    assert one.blow_frequency_Hz == pytest.approx(1.0 / one.period_s, rel=1e-14)
+    assert two.summary()["blow_frequency_Hz"] == pytest.approx(one.summary()["blow_frequency_Hz"], rel=1e-10)

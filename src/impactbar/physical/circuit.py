@@ -44,6 +44,7 @@ from .._shared.validate import check_int, check_real
 from ._circuit_checks import check_circuit_si, shown
 from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
+from .drifter import DrifterOrbit
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
 from .units import to_si
 
@@ -515,9 +516,12 @@ def _refuse_cavitation(low: dict, what: str) -> None:
                          "the opening that feeds that volume, or raise the tank pressure)")
 
 
-@dataclass(frozen=True)
-class CircuitDrifterOrbit:
-    """A drifter's operating point with its oil circuit, in SI units (theory §11).
+@dataclass(frozen=True, repr=False)  # (the base's repr, with the supply pressure)
+class CircuitDrifterOrbit(DrifterOrbit):
+    """A drifter's operating point with its oil circuit, in SI units (theory §11): a
+    :class:`~impactbar.physical.DrifterOrbit` (blow frequency, impact velocity and energy,
+    multipliers, stability, the rock's figures) with the circuit's pressures, powers and energy
+    account.
 
     Attributes
     ----------
@@ -526,43 +530,8 @@ class CircuitDrifterOrbit:
         The dimensionless orbit (its state includes the pressures and the valve opening).
     """
 
-    drifter: CircuitDrifter
-    orbit: object
-
-    def __repr__(self) -> str:
-        return (f"CircuitDrifterOrbit({self.drifter.name or 'drifter'}: {self.blow_frequency_Hz:.4g} Hz, "
-                f"impact {self.impact_velocity_m_s:.4g} m/s, {self.impact_energy_J:.4g} J, mean supply "
-                f"{self.mean_supply_pressure_Pa / 1e6:.4g} MPa, {'stable' if self.stable else 'not stable'})")
-
-    @property
-    def period_s(self) -> float:
-        """``T / Omega`` (s)."""
-        return self.orbit.period / self.drifter.omega_rad_s
-
-    @property
-    def blow_frequency_Hz(self) -> float:
-        """Blows per second."""
-        return self.orbit.impacts / self.period_s
-
-    @property
-    def impact_velocity_m_s(self) -> float:
-        """The piston's velocity arriving at the stop (m/s)."""
-        return self.drifter.bar.length_m * self.drifter.omega_rad_s * self.orbit.impact_velocity
-
-    @property
-    def impact_energy_J(self) -> float:
-        """Kinetic energy of the piston arriving at the stop (J)."""
-        return float(self.drifter.energy_scale_J * self.orbit.impact_energy)
-
-    @property
-    def multipliers(self) -> np.ndarray:
-        """The Floquet multipliers of the return map (from the variational equations)."""
-        return self.orbit.multipliers
-
-    @property
-    def stable(self) -> bool:
-        """Admissible with every multiplier inside the unit circle."""
-        return bool(self.orbit.stable)
+    def _more(self) -> str:
+        return f", mean supply {self.mean_supply_pressure_Pa / 1e6:.4g} MPa"
 
     def _energies(self) -> np.ndarray:
         problem = self.orbit.problem
@@ -617,8 +586,8 @@ class CircuitDrifterOrbit:
 
     @property
     def impact_power_kW(self) -> float:
-        """The kinetic energy at impact times the blow frequency (kW)."""
-        return self.impact_energy_J * self.blow_frequency_Hz / 1e3
+        """The kinetic energy at impact times the blow frequency (kW): :attr:`percussive_power_kW`."""
+        return self.percussive_power_kW
 
     @property
     def hydraulic_efficiency(self) -> float:
@@ -707,35 +676,6 @@ class CircuitDrifterOrbit:
         from ..plotting.circuit import plot_circuit_orbit
 
         return plot_circuit_orbit(self, axes=axes, points=points)
-
-    def rock(self) -> dict:
-        """The SI figures of the orbit's blow on the rock (theory §4d), solved with the circuit's state
-        (theory §11): ``work_on_rock_J``, ``penetration_mm``, ``drilling_rate_m_min`` (the
-        penetration times the blow frequency), ``efficiency`` and ``efficiency_with_rebound``,
-        ``rod_energy_J``, ``peak_rod_stress_Pa``, ``rod_advance_m``
-        (``impactbar.physical.rock.rock_orbit_figures``); an empty dict without a drill string.
-
-        Returns
-        -------
-        dict
-        """
-        if self.drifter.drill is None:
-            return {}
-        from types import SimpleNamespace
-
-        from .rock import rock_orbit_figures
-
-        view = SimpleNamespace(scales=self.drifter.scales, drill=self.drifter.drill,
-                               blow_frequency_Hz=self.blow_frequency_Hz)
-        return rock_orbit_figures(self.orbit, view)
-
-    def summary(self) -> dict:
-        """The SI outputs as a dict (JSON-ready), with :meth:`rock`'s figures under ``rock`` when the
-        drifter has a drill string."""
-        out = self._summary()
-        if self.drifter.drill is not None:
-            out["rock"] = self.rock()
-        return out
 
     def _summary(self) -> dict:
         return {"blow_frequency_Hz": self.blow_frequency_Hz, "period_ms": 1e3 * self.period_s,

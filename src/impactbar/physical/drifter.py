@@ -10,9 +10,10 @@ autonomous: the blow frequency is an output.
 Scales (eq. 2 with the stroke force as the force scale): :math:`\Omega = \sqrt{p A_s / (m L)}` so
 that the dimensionless stroke force is 1; ``ret`` :math:`= A_r / A_s`, ``switch_out``
 :math:`= x_1 / L`, ``delay`` :math:`= \Omega \tau`, :math:`s = c / (L \Omega)`,
-:math:`d = D / (M \Omega)`. Outputs: blow frequency :math:`\Omega / T` (Hz), impact velocity
-:math:`L \Omega v` (m/s), impact energy :math:`m L^2 \Omega^2 e` (J, :math:`e` the dimensionless
-kinetic energy of the bar arriving at the stop), percussive power (energy times blow frequency, kW).
+:math:`d = D / (M \Omega)`. Outputs: blow frequency :math:`n \Omega / T` (Hz, :math:`n` impacts a
+period :math:`T`), impact velocity :math:`L \Omega v` (m/s), impact energy :math:`m L^2 \Omega^2 e`
+(J, :math:`e` the dimensionless kinetic energy of the bar arriving at the stop), percussive power
+(energy times blow frequency, kW).
 
 Configuration keys (a nested ``dict`` or TOML, as :meth:`Drifter.from_config` reads them)::
 
@@ -259,11 +260,13 @@ class Drifter:
 
 @dataclass(frozen=True)
 class DrifterOrbit:
-    """A drifter's periodic motion in SI units (theory §10).
+    """A drifter's periodic motion in SI units (theory §10): the valve drifter's, and the base of the
+    oil circuit's :class:`~impactbar.physical.CircuitDrifterOrbit` (theory §11), which adds what the
+    circuit has.
 
     Attributes
     ----------
-    drifter : Drifter
+    drifter : Drifter or CircuitDrifter
     orbit : SwitchedOrbit
         The dimensionless orbit.
     """
@@ -272,23 +275,27 @@ class DrifterOrbit:
     orbit: object
 
     def __repr__(self) -> str:
-        return (f"DrifterOrbit({self.drifter.name or 'drifter'}: {self.blow_frequency_Hz:.4g} Hz, impact "
-                f"{self.impact_velocity_m_s:.4g} m/s, {self.impact_energy_J:.4g} J, "
+        return (f"{type(self).__name__}({self.drifter.name or 'drifter'}: {self.blow_frequency_Hz:.4g} Hz, "
+                f"impact {self.impact_velocity_m_s:.4g} m/s, {self.impact_energy_J:.4g} J{self._more()}, "
                 f"{'stable' if self.stable else 'not stable'})")
 
-    @property
-    def blow_frequency_Hz(self) -> float:
-        """``Omega / T`` (Hz)."""
-        return self.drifter.omega_rad_s / self.orbit.period
+    def _more(self) -> str:
+        """What a subclass adds to the repr."""
+        return ""
 
     @property
     def period_s(self) -> float:
-        """``T / Omega`` (s)."""
+        r""":math:`T / \Omega` (s)."""
         return self.orbit.period / self.drifter.omega_rad_s
 
     @property
+    def blow_frequency_Hz(self) -> float:
+        """Blows per second: the orbit's impacts over its period (Hz)."""
+        return self.orbit.impacts / self.period_s
+
+    @property
     def impact_velocity_m_s(self) -> float:
-        """The struck end's velocity arriving at the stop, ``L Omega v`` (m/s)."""
+        r"""The struck end's velocity arriving at the stop, :math:`L \Omega v` (m/s)."""
         return self.drifter.bar.length_m * self.drifter.omega_rad_s * self.orbit.impact_velocity
 
     @property
@@ -303,12 +310,17 @@ class DrifterOrbit:
         return self.impact_energy_J * self.blow_frequency_Hz / 1e3
 
     @property
+    def multipliers(self) -> np.ndarray:
+        """The Floquet multipliers of the return map, the trivial one along the flow set apart."""
+        return self.orbit.multipliers
+
+    @property
     def stable(self) -> bool:
         """Admissible with every non-trivial multiplier inside the unit circle."""
-        return self.orbit.stable
+        return bool(self.orbit.stable)
 
     def rock(self) -> dict:
-        """The SI figures of the orbit's first blow on the rock (theory §4d, §10).
+        """The SI figures of the orbit's first blow on the rock (theory §4d, §10, §11).
 
         Returns
         -------
@@ -332,14 +344,18 @@ class DrifterOrbit:
     def summary(self) -> dict:
         """The SI outputs as a dict (JSON-ready), with :meth:`rock`'s figures under ``rock`` when the
         drifter has a drill string."""
-        out = {"blow_frequency_Hz": float(self.blow_frequency_Hz), "period_ms": 1e3 * self.period_s,
-               "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
-               "percussive_power_kW": self.percussive_power_kW, "stable": self.stable,
-               "admissibility": str(self.orbit.admissibility),
-               "multiplier": abs(complex(self.orbit.multipliers[0])) if self.orbit.multipliers.size else 0.0}
+        out = self._summary()
         if self.drifter.drill is not None:
             out["rock"] = self.rock()
         return out
+
+    def _summary(self) -> dict:
+        """The SI outputs without the rock's."""
+        return {"blow_frequency_Hz": float(self.blow_frequency_Hz), "period_ms": 1e3 * self.period_s,
+                "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
+                "percussive_power_kW": self.percussive_power_kW, "stable": self.stable,
+                "admissibility": str(self.orbit.admissibility),
+                "multiplier": abs(complex(self.multipliers[0])) if self.multipliers.size else 0.0}
 
 
 #: Drifter presets, from documented numbers.
