@@ -24,12 +24,12 @@ import numpy as np
 
 from ..base import DriveState, FlightSettings
 from . import _endkernel as EK
-from .flight import DEFAULT_SETTINGS, _hermite_extremes
+from .flight import DEFAULT_SETTINGS, HermiteSteps, _hermite_extremes
 
 __all__ = ["EndFlight", "EndPiece", "circuit_end_flight"]
 
 
-class EndPiece:
+class EndPiece(HermiteSteps):
     """The circuit over one interval of a blow: the integrator's steps and a cubic Hermite
     interpolant between them (as :class:`~impactbar.drives.circuit.flight.CircuitPiece`).
 
@@ -41,22 +41,12 @@ class EndPiece:
         ``(w, p_f, p_r, p_s, x_v, I, E_0..E_7)`` at the steps, ``I`` and the energies from 0 at ``t0``.
     """
 
-    __slots__ = ("t0", "t_end", "t", "y", "f", "alpha", "_spline")
+    __slots__ = ("alpha",)
 
     def __init__(self, t, y, f, alpha):
         self.t, self.y, self.f, self.alpha = t, y, f, alpha
         self.t0, self.t_end = float(t[0]), float(t[-1])
         self._spline = None
-
-    def _at(self, t):
-        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
-        if self.t.size < 2:
-            return np.repeat(self.y[:1].T, t.size, axis=1)
-        if self._spline is None:
-            from scipy.interpolate import CubicHermiteSpline
-
-            self._spline = CubicHermiteSpline(self.t, self.y, self.f, axis=0)
-        return self._spline(t).T
 
     def drive_state(self, t):
         """``(p_f, p_r, p_s, x_v)`` at times ``t``, shape ``(4, T)``."""

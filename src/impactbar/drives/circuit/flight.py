@@ -63,7 +63,25 @@ def _hermite_extremes(t, x, dxdt) -> tuple[float, float]:
     return float(np.min(vals)), float(np.max(vals))
 
 
-class CircuitPiece:
+class HermiteSteps:
+    """An integrator's steps ``t``, its states ``y`` and their rates ``f`` there, with the cubic
+    Hermite interpolant between the steps (built on first use; times clipped to ``[t0, t_end]``):
+    what the circuit's pieces of a flight and of a blow share."""
+
+    __slots__ = ("t0", "t_end", "t", "y", "f", "_spline")
+
+    def _at(self, t):
+        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
+        if self.t.size < 2:
+            return np.repeat(self.y[:1].T, t.size, axis=1)
+        if self._spline is None:
+            from scipy.interpolate import CubicHermiteSpline
+
+            self._spline = CubicHermiteSpline(self.t, self.y, self.f, axis=0)
+        return self._spline(t).T
+
+
+class CircuitPiece(HermiteSteps):
     """A flight of the circuit: the steps of the integration (exact to the integrator's tolerance
     at each step) and a cubic Hermite interpolant between them (the vector field at each step).
 
@@ -76,7 +94,7 @@ class CircuitPiece:
         The state and the energy quadratures (from 0 at ``t0``) at each step.
     """
 
-    __slots__ = ("t0", "t_end", "t", "y", "f", "M", "c", "alpha", "_spline")
+    __slots__ = ("M", "c", "alpha")
 
     def __init__(self, t, y, par, M, c, alpha):
         self.t, self.y = t, y
@@ -86,16 +104,6 @@ class CircuitPiece:
         K.field_at(np.ascontiguousarray(y), par, f)
         self.f = f
         self._spline = None
-
-    def _at(self, t):
-        t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
-        if self.t.size < 2:
-            return np.repeat(self.y[:1].T, t.size, axis=1)
-        if self._spline is None:
-            from scipy.interpolate import CubicHermiteSpline
-
-            self._spline = CubicHermiteSpline(self.t, self.y, self.f, axis=0)
-        return self._spline(t).T
 
     def modal(self, t):
         """``(q, v)`` at times ``t``, shape ``(N + 1, T)`` each."""
