@@ -223,6 +223,23 @@ def driven_blow(model, drive, state, t, q, v, settings=None):
     return res, after
 
 
+def fly_and_switch(model, drive, loop, t_end: float, settings):
+    """One flight of a drive's run from ``loop``'s state (:func:`impactbar.drives.flight.fly`): its
+    piece logged, the run moved to its end, and at a drive event the drive's jumps applied and the
+    switch logged; returns the flight (its ``end`` says how it ended)."""
+    mode = loop.state.mode
+    fl = fly(model, drive, loop.state, loop.t, loop.q, loop.v, t_end, settings)
+    loop.blocks.append(("py", fl.piece))
+    loop.t, loop.q, loop.v = fl.t, fl.q, fl.v
+    loop.state = DriveState(mode, fl.z)
+    if fl.end == EVENT:
+        new = loop.state
+        for e in fl.events:
+            new = drive.jump(new.mode, new.z, e, fl.t, fl.q, fl.v)
+        loop.switch(new, fl.t)
+    return fl
+
+
 def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, new_run):
     """:func:`~impactbar.simulation.switched.run_stateful` under a law whose contact takes time:
     flights by :func:`impactbar.drives.flight.fly`, each arrival a blow of :func:`driven_blow` (a
@@ -245,7 +262,6 @@ def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, ne
     loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
     pressed = 0
     while loop.t < t_end and not loop.done:
-        mode, z = loop.state
         on_stop = float(c @ loop.q) >= -1e-14 * max(1.0, float(np.abs(c) @ np.abs(loop.q))) \
             and float(c @ loop.v) > 0.0
         if on_stop:  # pressed on the stop at the end of a blow (or started there): it arrives at once
@@ -256,17 +272,10 @@ def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, ne
             t_arr, q_arr, v_arr = loop.t, loop.q.copy(), loop.v.copy()
         else:
             pressed = 0
-            fl = fly(model, drive, loop.state, loop.t, loop.q, loop.v, t_end, settings)
-            loop.blocks.append(("py", fl.piece))
-            loop.t, loop.q, loop.v = fl.t, fl.q, fl.v
-            loop.state = DriveState(mode, fl.z)
+            fl = fly_and_switch(model, drive, loop, t_end, settings)
             if fl.end == END:
                 break
             if fl.end == EVENT:
-                new = loop.state
-                for e in fl.events:
-                    new = drive.jump(new.mode, new.z, e, fl.t, fl.q, fl.v)
-                loop.switch(new, fl.t)
                 continue
             t_arr, q_arr, v_arr = fl.t, fl.q, fl.v
         res, after = driven_blow(model, drive, loop.state, t_arr, q_arr, v_arr, settings)

@@ -35,10 +35,10 @@ import numpy as np
 
 from .._shared.status import RunStatus
 from ..drives.base import DriveState, FlightKernel, KernelRun
-from ..drives.flight import END, EVENT, QuadratureRestPiece, RestPiece, fly
+from ..drives.flight import END, EVENT, QuadratureRestPiece, RestPiece
 from ..dynamics.implementations import use_fast
 from ..model import BarModel
-from .blows import BlowPiece, check_coupling, run_coupled
+from .blows import BlowPiece, check_coupling, fly_and_switch, run_coupled
 from .trajectory import EnergyAccount, Trajectory
 
 __all__ = ["SwitchedTrajectory", "Driver", "run_drive", "run_stateful"]
@@ -676,18 +676,10 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
     recent: list[float] = []
     while loop.t < t_end and not loop.done:
-        mode, z = loop.state
-        fl = fly(model, drive, loop.state, loop.t, loop.q, loop.v, t_end, settings)
-        loop.blocks.append(("py", fl.piece))
-        loop.t, loop.q, loop.v = fl.t, fl.q, fl.v
-        loop.state = DriveState(mode, fl.z)
+        fl = fly_and_switch(model, drive, loop, t_end, settings)
         if fl.end == END:
             break
         if fl.end == EVENT:
-            new = loop.state
-            for e in fl.events:
-                new = drive.jump(new.mode, new.z, e, fl.t, fl.q, fl.v)
-            loop.switch(new, fl.t)
             continue
         # an arrival: the paper's law, then the drive's map
         arrival = float(c @ fl.v)
