@@ -19,7 +19,8 @@ def _tasks():
     """``(label, call)`` pairs, each a small first call of one kind of computation; the kernels take
     one signature each, so these compile what later calls of those kinds reach, whatever their
     parameters, loads and sizes (``tests/cli/test_warmup.py`` checks both laws, 0 to 48 modes, both
-    loads, the drive, the rock and the chunks)."""
+    loads, the drive, the rock's blows and orbits, exact and on the lattice, the chunks, and with
+    pint the oil circuit, alone and on a rod and rock, and the piston's optimiser)."""
     import numpy as np
 
     from .. import (
@@ -44,6 +45,15 @@ def _tasks():
     piston, drive = BarModel(20.0, 0.0, 0.215, 0), PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
     n = 4  # (the compiled loop at any size; a sweep takes it from COMPILED_CLOSED_FORMS_FROM points)
     law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)], rock=BilinearRock(k=2.5, k_u=25.0))
+    short = RodRock(segments=[RodSegment(length=2.0, impedance=2.0)], rock=BilinearRock(k=20.0, k_u=200.0))
+    on_rock = BarModel(10.0, 0.3, 0.0, 2, impact=short)
+    on_grid = on_rock.with_(impact=RodRock(segments=short.segments, rock=short.rock, method="lattice"))
+
+    def rock_orbit(model):  # two blows in two periods from a settled run (Newton on the blow's tangents)
+        gentle = CosineLoad(0.3, 1.0)
+        run = simulate(model, gentle, InitialState.rigid(-0.1, 0.0, 2), 60.0)
+        return find_orbit(model, gentle, impacts=2, periods=2, guess=run)
+
     return (
         ("periodic orbits, flexible bar", lambda: periodic_orbits(flex, cos)),
         ("periodic orbits, 40 modes and more", lambda: periodic_orbits(flex.with_(n_modes=40), cos)),
@@ -54,10 +64,46 @@ def _tasks():
         ("position-switched drive", lambda: (find_orbit(piston, drive),
                                              simulate(piston, drive, InitialState.rigid(-0.5, 0.0), 50.0))),
         ("rod and rock", lambda: single_blow(BarModel(2.0, 0.0, 0.0, 0, impact=law), 1.0, t_max=39.0)),
+        ("rod and rock orbits, exact blows", lambda: rock_orbit(on_rock)),
+        ("rod and rock orbits, lattice", lambda: rock_orbit(on_grid)),
         ("rigid sweep chunks", lambda: (rigid_cosine_orbits(np.full(n, 0.1), np.full(n, 0.5), np.full(n, 0.6),
                                                             np.ones(n), 1),
                                         rigid_square_orbits(np.full(n, 0.1), np.full(n, 0.5), np.ones(n),
                                                             np.full(n, 1.2)))),
+    ) + _physical_tasks()
+
+
+def _physical_tasks():
+    """The first calls of :mod:`impactbar.physical` that reach kernels of their own: the oil circuit
+    (its flights' C callbacks and variational flights), the circuit on a rod and rock (the coupled
+    blow), the piston's optimiser (the lattice blow's tangent); none where pint (the ``units``
+    extra), which that layer needs, is missing."""
+    try:
+        import pint  # noqa: F401
+    except ImportError:
+        return ()
+    import math
+
+    from ..physical import CIRCUIT_PRESETS, CircuitDrifter, circuit_preset, optimize_piston
+    from ..physical.rock import RodPiece
+
+    # the preset on a drill string and rock (examples/circuit_drifter_rock.toml's, the stop left out)
+    cfg = {k: v for k, v in CIRCUIT_PRESETS["circuit-drifter"].items() if k != "stop"}
+    cfg.update(rod={"segments": [{"length": "0.4 m", "diameter": "45 mm"}, {"length": "1.2 m",
+                                                                              "diameter": "32 mm"}]},
+               bit={"mass": "1.5 kg"}, rock={"k": "470 kN/mm", "k_u": "4700 kN/mm", "feed": "2 kN",
+                                              "cells_per_piston": 8})
+    rod = [RodPiece(length_m=6.0, area_m2=1e-3, E_Pa=2.1e11, density_kg_m3=7850.0)]
+
+    def circuit(drifter):
+        return drifter.orbit(), drifter.simulate(0.03)
+
+    return (
+        ("oil circuit", lambda: circuit(circuit_preset("circuit-drifter"))),
+        ("oil circuit on rod and rock", lambda: circuit(CircuitDrifter.from_config(cfg))),
+        ("piston optimiser", lambda: optimize_piston(rod, (1e8, 1e9), mass=2.4, length=0.3,
+                                                     max_stress=math.inf, impact_velocity=10.0, segments=2,
+                                                     max_evaluations=3)),
     )
 
 
@@ -94,13 +140,30 @@ def run(args) -> int:
         total = 0.0
         tasks = _tasks()
         w = max(len(label) for label, _ in tasks)
+        callbacks = 0
         for label, call in tasks:
             before, t0 = Count.n, time.process_time()
             call()
             dt = time.process_time() - t0
             total += dt
-            print(f"{label:<{w}}  {dt:6.1f} s CPU  {Count.n - before:3d} kernels compiled", flush=True)
+            new = _callbacks_compiled() - callbacks
+            callbacks += new
+            print(f"{label:<{w}}  {dt:6.1f} s CPU  {Count.n - before + new:3d} kernels compiled", flush=True)
     finally:
         event.unregister("numba:compile", counter)
-    print(f"\n{Count.n} kernels compiled in {total:.1f} s of CPU time; cached for later processes")
+    n = Count.n + callbacks
+    print(f"\n{n} kernels compiled in {total:.1f} s of CPU time; cached for later processes")
     return 0
+
+
+def _callbacks_compiled() -> int:
+    """How many of the oil circuit's C callbacks (``numba.cfunc``, compiled or loaded from the cache
+    when their module is imported, without numba's compile event) this process compiled."""
+    import sys
+
+    module = sys.modules.get("impactbar.drives.circuit._cvode")
+    if module is None:
+        return 0
+    from numba.core.ccallback import CFunc
+
+    return sum(1 for v in vars(module).values() if isinstance(v, CFunc) and v.cache_hits == 0)
