@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -533,10 +534,14 @@ class CircuitDrifterOrbit(DrifterOrbit):
     def _more(self) -> str:
         return f", mean supply {self.mean_supply_pressure_Pa / 1e6:.4g} MPa"
 
-    def _energies(self) -> np.ndarray:
+    @cached_property
+    def _pieces(self) -> list:
+        """The orbit's flights and blows over one period, integrated once for every output."""
         problem = self.orbit.problem
-        return np.sum([p.energies() for p in problem.flights(problem.unknowns(self.orbit))
-                       if hasattr(p, "energies")], axis=0)
+        return problem.flights(problem.unknowns(self.orbit))
+
+    def _energies(self) -> np.ndarray:
+        return np.sum([p.energies() for p in self._pieces if hasattr(p, "energies")], axis=0)
 
     @property
     def energy_account(self) -> dict:
@@ -574,8 +579,7 @@ class CircuitDrifterOrbit(DrifterOrbit):
         ``supply`` (from the flights' Hermite interpolants). The model has no cavitation: where one
         falls below the oil's vapour pressure (a few kPa; :attr:`cavitates` flags below 0) the
         motion it computes is not the machine's."""
-        problem = self.orbit.problem
-        return _least_pressures(problem.flights(problem.unknowns(self.orbit)))
+        return _least_pressures(self._pieces)
 
     @property
     def cavitates(self) -> bool:
@@ -608,8 +612,7 @@ class CircuitDrifterOrbit(DrifterOrbit):
         ``V_r_m3`` at ``points`` times."""
         points = check_int("points", points, lo=2)
         d, o = self.drifter, self.orbit
-        problem = o.problem
-        pieces = problem.flights(problem.unknowns(o))
+        pieces = self._pieces
         t0 = pieces[0].t0
         t = np.linspace(t0, pieces[-1].t_end, points)
         z = np.empty((4, points))
@@ -678,14 +681,14 @@ class CircuitDrifterOrbit(DrifterOrbit):
         return plot_circuit_orbit(self, axes=axes, points=points)
 
     def _summary(self) -> dict:
-        return {"blow_frequency_Hz": self.blow_frequency_Hz, "period_ms": 1e3 * self.period_s,
-                "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
+        base = super()._summary()
+        return {**{k: base[k] for k in ("blow_frequency_Hz", "period_ms", "impact_velocity_m_s",
+                                        "impact_energy_J")},
                 "mean_supply_pressure_MPa": self.mean_supply_pressure_Pa / 1e6,
                 "pump_power_kW": self.pump_power_kW, "impact_power_kW": self.impact_power_kW,
-                "hydraulic_efficiency": self.hydraulic_efficiency, "stable": self.stable,
+                "hydraulic_efficiency": self.hydraulic_efficiency, "stable": base["stable"],
                 "minimum_pressure_MPa": min(self.minimum_pressures_Pa.values()) / 1e6,
-                "cavitates": self.cavitates,
-                "multiplier": float(abs(complex(self.multipliers[0]))) if self.multipliers.size else 0.0}
+                "cavitates": self.cavitates, "multiplier": base["multiplier"]}
 
 
 #: Presets of drifters with their oil circuit.
