@@ -14,6 +14,7 @@ import numpy as np
 from .. import physical
 from ..physical.circuit import SI_PARAMETERS
 from ..physical.config import config_kind, read_toml
+from ..physical.units import to_si
 from ._common import json_ready, print_json, require
 
 __all__ = ["add_parser", "drifter_from_args", "run_drifter_orbits", "run_drifter_simulate",
@@ -318,16 +319,13 @@ def _circuit_outputs(point) -> tuple:
 
 def _user_unit(name: str, to):
     """The unit the user gave ``--to`` in (``"L/min"`` for ``"100 L/min"``), else the key's SI unit,
-    and the conversion of an SI value into it."""
+    and the conversion of an SI value into it (the unit read as every config value is)."""
     si_unit = SI_PARAMETERS[name][1]
-    if isinstance(to, str) and si_unit:
-        from ..physical.units import registry
-
-        ureg = registry()
-        written = to.strip().split(None, 1)[-1] if len(to.split()) > 1 else ""  # as the user wrote it
-        given = ureg.Quantity(to).units
-        if written and given != ureg.Quantity(1.0, si_unit).units:
-            return written, lambda x: ureg.Quantity(x, si_unit).to(given).magnitude
+    written = to.split(None, 1)[1].strip() if isinstance(to, str) and len(to.split(None, 1)) > 1 else ""
+    if si_unit and written:
+        factor = to_si(f"--to {to!r}", f"1 {written}", si_unit, SI_PARAMETERS[name][2])  # SI per given unit
+        if factor != 1.0:
+            return written, lambda x: x / factor
     return si_unit.replace("**", "^"), float
 
 
