@@ -85,8 +85,12 @@ from .hammer import Scales as Scales
 from .hammer import load_config as load_config
 from .hammer import preset as preset
 from .hydraulics import flow_coefficient as flow_coefficient
+from .loader import build as build
 from .loader import config_keys as config_keys
+from .loader import config_value as config_value
 from .loader import load as load
+from .loader import read_config as read_config
+from .loader import with_values as with_values
 from .piston import OptimalPiston as OptimalPiston
 from .piston import optimize_piston as optimize_piston
 
@@ -130,6 +134,10 @@ __all__ = [
     "load",
     "load_config",
     "config_keys",
+    "read_config",
+    "build",
+    "with_values",
+    "config_value",
     "orbits",
     "simulate",
     "Drifter",
