@@ -1,0 +1,236 @@
+"""A fingerprint of the library's results: orbits, runs, branches, a sweep and SI tables, every
+number at full precision, to show that a refactoring changed no result (to the bit) or which changed
+and by how much.
+
+Run: ``python benchmarks/fingerprint.py [--out FILE.json]`` writes the numbers (JSON, floats as
+``repr``) and prints one sha256 per group; ``--against REF`` also runs this script on the tree of the
+git ref ``REF`` (exported to a fixed folder under the temporary directory, so that its numba cache
+survives between runs) in a subprocess, and prints, group by group, "same" or the largest relative
+difference and where. ``--only GROUP ...`` restricts the groups.
+
+The groups: ``orbits`` (``periodic_orbits`` under a cosine and a square-wave load, the wave law;
+phases, impact velocities, multipliers), ``find_orbit`` (the valve drive, the oil circuit rigid and
+with 2 modes, the rod-rock law's orbit), ``simulate`` (a cosine-loaded run, a valve drifter's run, the
+circuit's run: impact times and velocities, energy accounts), ``continuation`` (a branch in ``p0`` and
+one of the circuit in its pre-charge), ``sweep`` (the orbits task on a 3x2 grid), ``si`` (summaries of
+the presets and examples in SI).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+GROUPS = ("orbits", "find_orbit", "simulate", "continuation", "sweep", "si")
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _flat(x):
+    """Numbers of a result as a flat list of floats (complex as two)."""
+    if isinstance(x, dict):
+        return [v for k in sorted(x) for v in _flat(x[k])]
+    if isinstance(x, (list, tuple)):
+        return [v for e in x for v in _flat(e)]
+    if isinstance(x, np.ndarray):
+        return _flat(x.tolist())
+    if isinstance(x, (bool, np.bool_)):
+        return [float(x)]
+    if isinstance(x, (int, float, np.integer, np.floating)):
+        return [float(x)]
+    if isinstance(x, (complex, np.complexfloating)):
+        return [float(x.real), float(x.imag)]
+    return []  # text (statuses, names) is not a number
+
+
+def _orbit_numbers(o):
+    return {"phase": o.phase, "v": o.impact_velocity, "mult": np.asarray(o.multipliers)}
+
+
+def group_orbits():
+    import impactbar as ib
+
+    out = {}
+    bar = ib.BarModel(s=5.0, d=0.1, R=0.5, n_modes=8)
+    out["cosine"] = [_orbit_numbers(o) for o in ib.periodic_orbits(bar, ib.CosineLoad(p0=0.6, pk=1.0))]
+    out["square"] = [_orbit_numbers(o) for o in ib.periodic_orbits(bar, ib.SquareWaveLoad(q=0.6, kappa=1.5))]
+    wave = ib.BarModel(s=5.0, d=0.1, R=0.5, n_modes=8, impact="wave")
+    out["wave"] = [_orbit_numbers(o) for o in ib.periodic_orbits(wave, ib.CosineLoad(p0=0.6, pk=1.0))]
+    return out
+
+
+def group_find_orbit():
+    import impactbar as ib
+    from impactbar.physical import circuit_preset, drifter_preset, load
+
+    out = {}
+    d = drifter_preset("hydraulic-drifter").orbit()
+    out["valve"] = [d.period_s, d.impact_velocity_m_s, np.asarray(d.multipliers)]
+    c = circuit_preset("circuit-drifter")
+    o = c.orbit()
+    out["circuit_rigid"] = [o.period_s, o.impact_velocity_m_s, np.asarray(o.multipliers),
+                            o.mean_supply_pressure_Pa, o.hydraulic_efficiency]
+    m = ib.find_orbit(c.model().with_(n_modes=2), c.drive())
+    out["circuit_2_modes"] = [m.period, m.impact_velocity, np.asarray(m.multipliers)]
+    r = load(ROOT / "examples" / "drifter_rock.toml").orbit()
+    out["valve_rock"] = [r.period_s, r.impact_velocity_m_s, np.asarray(r.multipliers)]
+    return out
+
+
+def _run_numbers(run):
+    return {"t": np.asarray(run.impact_times), "v": np.asarray(run.impact_velocities),
+            "energy": [run.energy.work, run.energy.final, run.energy.impact_loss,
+                                                          run.energy.damping_loss]}
+
+
+def _si_run(x):
+    if hasattr(x, "impact_times"):
+        return _run_numbers(x)
+    if isinstance(x, dict):
+        return {k: v for k, v in x.items() if isinstance(v, (np.ndarray, float))}
+    return x if isinstance(x, (float, np.ndarray)) else []
+
+
+def group_simulate():
+    import impactbar as ib
+    from impactbar.physical import circuit_preset, drifter_preset
+
+    out = {}
+    bar = ib.BarModel(s=5.0, d=0.1, R=0.5, n_modes=8)
+    run = ib.simulate(bar, ib.CosineLoad(p0=0.6, pk=1.0), ib.InitialState.rigid(-0.1, 0.0, n_modes=8), 60.0)
+    out["cosine"] = _run_numbers(run)
+    d = drifter_preset("hydraulic-drifter")
+    out["valve"] = [_si_run(x) for x in d.simulate(0.2)]
+    c = circuit_preset("circuit-drifter")
+    out["circuit"] = [_si_run(x) for x in c.simulate(0.1)]
+    return out
+
+
+def group_continuation():
+    import impactbar as ib
+    from impactbar.physical import circuit_preset, continue_circuit
+
+    out = {}
+    bar = ib.BarModel(s=5.0, d=0.1, R=0.5, n_modes=8)
+    start = ib.periodic_orbits(bar, ib.CosineLoad(p0=0.6, pk=1.0))[0]
+    br = ib.continue_orbit(start, "p0", 0.8, max_points=30)
+    out["p0"] = [np.asarray(br.phases), np.asarray(br.impact_velocities), np.asarray(br.multipliers)]
+    cb = continue_circuit(circuit_preset("circuit-drifter"), "accumulator.precharge", "11 MPa", max_points=8)
+    out["precharge"] = [np.asarray(cb.values)]
+    return out
+
+
+def group_sweep():
+    from impactbar.sweeps import compute_chunk, parse_spec
+
+    spec = parse_spec({"task": "orbits", "model": {"s": 5.0, "d": 0.1, "R": 0.5, "n_modes": 8},
+                       "load": {"kind": "cosine", "p0": 0.6, "pk": 1.0, "k": 1},
+                       "axes": {"p0": {"start": 0.4, "stop": 0.8, "num": 3}, "R": {"values": [0.3, 0.5]}}})
+    return {str(c): {k: np.asarray(v) for k, v in compute_chunk(spec, c).items()
+                     if np.asarray(v).dtype.kind in "fcib"} for c in range(spec.n_chunks)}
+
+
+def group_si():
+    from impactbar.physical import circuit_preset, drifter_preset, load, orbits, preset
+
+    out = {"hammer": [o.to_dict() for o in orbits(preset("pneumatic-drill"))]}
+    out["drifter"] = drifter_preset("hydraulic-drifter").orbit().summary()
+    out["circuit"] = circuit_preset("circuit-drifter").orbit().summary()
+    out["circuit_rock"] = load(ROOT / "examples" / "circuit_drifter_rock.toml").orbit().summary()
+    return out
+
+
+def fingerprint(groups):
+    """``{group: (list of floats, seconds)}`` of the named groups."""
+    import warnings
+
+    out = {}
+    for g in groups:
+        t = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            try:
+                numbers = _flat(globals()[f"group_{g}"]())
+            except Exception as exc:  # noqa: BLE001 - reported as the group's outcome
+                numbers = [f"{type(exc).__name__}: {exc}"]
+        out[g] = (numbers, time.perf_counter() - t)
+    return out
+
+
+def _digest(numbers) -> str:
+    return hashlib.sha256(json.dumps([repr(x) for x in numbers]).encode()).hexdigest()[:16]
+
+
+def _compare(a, b) -> str:
+    if len(a) != len(b):
+        return f"DIFFERENT COUNT {len(a)} vs {len(b)}"
+    if any(isinstance(x, str) for x in (*a, *b)):
+        return "same" if a == b else f"ERROR here {a[:1]} / there {b[:1]}"
+    worst, where = 0.0, -1
+    for i, (x, y) in enumerate(zip(a, b, strict=True)):
+        if x == y or (math.isnan(x) and math.isnan(y)):
+            continue
+        rel = abs(x - y) / max(abs(x), abs(y), 1e-300)
+        if rel > worst:
+            worst, where = rel, i
+    return "same (bitwise)" if where < 0 else f"differs: largest relative {worst:.2e} at number {where}"
+
+
+def _export(ref: str) -> Path:
+    """The tree of ``ref`` under a fixed folder (its numba cache kept between runs)."""
+    sha = subprocess.run(["git", "rev-parse", ref], cwd=ROOT, capture_output=True, text=True,
+                         check=True).stdout.strip()
+    dest = Path(tempfile.gettempdir()) / "impactbar-against"
+    stamp = dest / ".ref"
+    if not (stamp.exists() and stamp.read_text() == sha):
+        dest.mkdir(exist_ok=True)
+        archive = subprocess.run(["git", "archive", sha], cwd=ROOT, capture_output=True, check=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
+        stamp.write_text(sha)
+    return dest
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", help="write the numbers as JSON")
+    ap.add_argument("--against", metavar="REF", help="compare with the tree of this git ref")
+    ap.add_argument("--only", nargs="+", choices=GROUPS, default=list(GROUPS))
+    args = ap.parse_args(argv)
+    expect = os.environ.get("FINGERPRINT_TREE")
+    if expect:  # the child of --against: its library must be that tree's
+        import impactbar
+
+        if not Path(impactbar.__file__).resolve().is_relative_to(Path(expect).resolve()):
+            raise SystemExit(f"imported {impactbar.__file__}, not the tree at {expect}")
+    mine = fingerprint(args.only)
+    if args.out:
+        Path(args.out).write_text(json.dumps({g: [repr(x) for x in n] for g, (n, _) in mine.items()}))
+    theirs = None
+    if args.against:
+        tree = _export(args.against)
+        with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as f:
+            path = f.name
+        env = dict(os.environ, PYTHONPATH=str(tree / "src"), FINGERPRINT_TREE=str(tree))
+        subprocess.run([sys.executable, str(Path(__file__).resolve()), "--out", path, "--only", *args.only],
+                       env=env, check=True, stdout=subprocess.DEVNULL)
+        theirs = {g: [float(x) if not x.startswith("'") else x for x in v]
+                  for g, v in json.loads(Path(path).read_text()).items()}
+    for g, (numbers, secs) in mine.items():
+        line = f"{g:14s} {len(numbers):6d} numbers  {_digest(numbers)}  ({secs:.1f} s)"
+        if theirs is not None:
+            line += f"  against {args.against}: {_compare(numbers, theirs[g])}"
+        print(line)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
