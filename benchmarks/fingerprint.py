@@ -186,16 +186,29 @@ def _compare(a, b) -> str:
 
 
 def _export(ref: str) -> Path:
-    """The tree of ``ref`` under a fixed folder (its numba cache kept between runs)."""
+    """The tree of ``ref`` under a fixed folder, files whose content is unchanged left as they are
+    (numba keys its cache on a source file's time and size: a new ref recompiles only what
+    changed)."""
     sha = subprocess.run(["git", "rev-parse", ref], cwd=ROOT, capture_output=True, text=True,
                          check=True).stdout.strip()
     dest = Path(tempfile.gettempdir()) / "impactbar-against"
     stamp = dest / ".ref"
-    if not (stamp.exists() and stamp.read_text() == sha):
-        dest.mkdir(exist_ok=True)
+    if stamp.exists() and stamp.read_text() == sha:
+        return dest
+    dest.mkdir(exist_ok=True)
+    with tempfile.TemporaryDirectory() as tmp:
         archive = subprocess.run(["git", "archive", sha], cwd=ROOT, capture_output=True, check=True).stdout
-        subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
-        stamp.write_text(sha)
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive, check=True)
+        new = {p.relative_to(tmp) for p in Path(tmp).rglob("*") if p.is_file()}
+        for rel in new:
+            data = (Path(tmp) / rel).read_bytes()
+            target = dest / rel
+            if not (target.is_file() and target.read_bytes() == data):
+                target.parent.mkdir(parents=True, exist_ok=True)
+                target.write_bytes(data)
+        for old in [p for p in dest.rglob("*.py") if p.relative_to(dest) not in new]:
+            old.unlink()
+    stamp.write_text(sha)
     return dest
 
 
