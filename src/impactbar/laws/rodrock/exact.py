@@ -552,7 +552,9 @@ class _Drive:
         self.value = (starts, pieces)
         self.exponents = [e for x in pieces for e in x[0]]
         spans = np.diff(np.append(starts, starts[-1] + 1.0))
-        self.bound = max(float(np.sum(np.abs(c) * np.maximum(L, 1.0) ** d))
+        # (the sup of sum c tau^d over a piece's span: a polynomial's pieces are short, and their
+        # monomials' coefficients large; the forces' scale must not take them as its size)
+        self.bound = max(float(np.sum(np.abs(c) * L ** d))
                          for (_, d, c), L in zip(pieces, spans, strict=True))
 
 

@@ -354,16 +354,23 @@ class RodRock(ContactLaw):
         return rec.q_after.copy(), rec.v_after.copy(), float(t) + rec.duration, rec
 
     def driven_contact(self, model, drive, state, t, q_minus, v_minus, *, settings=None):
-        """The contact step with a drive that has state (the oil circuit), the lattice's blow and the
-        drive's state solved together by a method of steps
-        (:func:`impactbar.laws.rodrock.coupled.driven_rock_contact`; theory §11, "The coupled
-        blow").
+        """The contact step with a drive that has state (the oil circuit), the blow and the drive's
+        state solved together (theory §11, "The coupled blow"): on the lattice by a method of steps
+        (:func:`impactbar.laws.rodrock.coupled.driven_rock_contact`); with ``method="exact"`` the
+        exact blow with the drive's force iterated to its fixed point
+        (:func:`impactbar.laws.rodrock.coupled_exact.driven_exact_contact`; ``"auto"`` keeps the
+        lattice under a drive with state: the exact coupled blow costs seconds).
 
         Returns
         -------
         DrivenContact
-            Its record a :class:`~impactbar.laws.rodrock.contact.RockContact`.
+            Its record a :class:`~impactbar.laws.rodrock.contact.RockContact` (an
+            :class:`~impactbar.laws.rodrock.exactmap.ExactRockContact` for the exact blow).
         """
+        if self.method == "exact":
+            from .coupled_exact import driven_exact_contact
+
+            return driven_exact_contact(model, drive, state, float(t), q_minus, v_minus, settings)
         from .coupled import driven_rock_contact
 
         return driven_rock_contact(model, drive, state, float(t), q_minus, v_minus, settings)

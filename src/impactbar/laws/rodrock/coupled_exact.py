@@ -1,0 +1,265 @@
+r"""The rod-rock law's blow with a drive that has state, on the exact scheme (theory §11, "The
+coupled blow"; §4d): every wave of the piston and the rod carried exactly
+(:func:`~impactbar.laws.rodrock.exact.exact_blow`), the drive's force on the piston's far end
+iterated to the drive's own accuracy.
+
+**The wave the drive meets.** At the piston's driven end (segment 0, impedance :math:`Z_0`, travel
+time :math:`T_0`) the force is the drive's, :math:`N(0, t) = F + G = p(t)`, and the end moves at
+:math:`u_t(0, t) = (F - G)/Z_0 = a(t) + p(t)/Z_0` with :math:`a = -2 G_0 / Z_0`, :math:`G_0(t)`
+the left-going wave arriving there. It left the far end of segment 0 (the first step of a stepped
+piston, else the struck end) :math:`T_0` earlier, where the force :math:`N_1` is the exact blow's
+recorded junction force and the right-going wave arriving there is the one the driven end sent
+:math:`T_0` before:
+
+.. math::
+
+    G_0(t) = N_1(t - T_0) - p(t - 2T_0) + G_0(t - 2T_0) \quad (t \ge T_0),
+
+and, for :math:`t < T_0` and the right-going wave before :math:`T_0`, the piston's waves at impact
+(:func:`~impactbar.laws.rodrock.exactmap.initial_waves`). :math:`a` over :math:`[0, t]` depends on
+:math:`p` over :math:`[0, t - 2T_0]` only.
+
+**The iteration.** Start from the force held at its value at impact; solve the exact blow with it;
+integrate the drive over the blow with the driven end moved by that blow's :math:`a`
+(:meth:`~impactbar.Drive.end_flight`); take the force it gives as the next blow's, as polynomial
+pieces of the exact solver (Chebyshev interpolants on pieces of at most :math:`T_0 / 2`, to
+:data:`FIT_TOL` of the force's size); repeat until the force changes by less than :data:`FORCE_TOL`
+of its size. By causality the :math:`k`-th iterate is right over :math:`[0, 2kT_0]` whatever the
+coupling, so the iteration ends after at most ``duration / (2 T_0) + 1`` steps; the blow's
+dependence on the drive is weak (the force changes by a few percent during a blow), so it ends
+after three to five. What is left is the integrator's tolerance and :data:`FORCE_TOL`: nothing is
+averaged over cells and the rod's lengths are as they are.
+
+The blow lasts the law's window (:meth:`~impactbar.RodRock.window`), as the simulator's blows under
+a load on the exact scheme do; the rock is loaded by the feed at each blow and the piston returns to
+the modal flight with the state the exact solution projects (theory §11 says what these choices
+assume).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..base import DrivenContact, LawNotSupported
+
+__all__ = ["driven_exact_contact", "FORCE_TOL", "FIT_TOL", "MAX_ITERATIONS"]
+
+#: The iteration ends when the force changes by less than this fraction of its size.
+FORCE_TOL = 1e-9
+#: The polynomial pieces of the force meet it to this fraction of its size.
+FIT_TOL = 1e-12
+#: The most iterations beyond the causal bound (``duration / (2 T_0) + 1``).
+MAX_ITERATIONS = 64
+#: Samples of the arriving wave per travel time of the piston's first segment.
+SAMPLES = 400
+
+
+def _piece_value(piece, tau):
+    """An exact piece ``Re sum c tau^d e^{lam tau}`` at ``tau`` (array)."""
+    exps, degs, coefs = piece
+    tau = np.asarray(tau, dtype=float)[..., None]
+    return np.real(np.sum(np.asarray(coefs) * tau ** np.asarray(degs) * np.exp(np.asarray(exps) * tau),
+                          axis=-1))
+
+
+class _Force:
+    """The drive's force over the blow (time from the impact): held at its value at impact before a
+    first iterate, then the cubic pieces of an :meth:`end_flight`'s steps (its integrator's Hermite
+    interpolant, exactly: ``p = p_r - alpha p_f``, each state a cubic between two steps)."""
+
+    def __init__(self, p0, pieces=(), t0=0.0):
+        self.p0 = float(p0)
+        starts, coefs = [0.0], [np.array([0.0, 0.0, 0.0, self.p0])]
+        if pieces:
+            starts, coefs = [], []
+            for piece in pieces:
+                if piece.t.size < 2:
+                    continue
+                piece._at(piece.t0)  # (the spline, built on first use)
+                c = piece._spline.c  # shape (4, intervals, state): (x - x_i)^3 first
+                coefs.append(c[:, :, 2].T - piece.alpha * c[:, :, 1].T)
+                starts.append(piece.t[:-1] - float(t0))
+            starts, coefs = np.concatenate(starts), np.concatenate(coefs)
+        self.starts = np.atleast_1d(np.asarray(starts, dtype=float))
+        self.coefs = np.atleast_2d(np.asarray(coefs, dtype=float))
+
+    def __call__(self, t):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        j = np.clip(np.searchsorted(self.starts, t, side="right") - 1, 0, self.starts.size - 1)
+        x = np.maximum(t - self.starts[j], 0.0)
+        c = self.coefs[j]
+        out = ((c[:, 0] * x + c[:, 1]) * x + c[:, 2]) * x + c[:, 3]
+        return np.where(t < 0.0, self.p0, out)
+
+    def pieces(self, lead, horizon):
+        """The force as the exact solver's ``drive``: a piece held at the force at impact from
+        ``-lead`` (at least the chain's shortest travel time), one cubic per step (steps shorter
+        than ``1e-9`` of the horizon merged into the one before), and the force at ``horizon``
+        held after it."""
+        keep = np.concatenate(([True], np.diff(self.starts) > 1e-9 * horizon)) & (self.starts < horizon)
+        starts = np.concatenate(([-lead], self.starts[keep], [horizon]))
+        degs, zero = np.arange(4), np.zeros(1, dtype=np.int64)
+        held = (np.zeros(1), zero, np.array([self.p0], dtype=complex))
+        cubics = [(np.zeros(4), degs, c[::-1].astype(complex)) for c in self.coefs[keep]]
+        last = (np.zeros(1), zero, np.array([float(self(horizon)[0])], dtype=complex))
+        return starts, [held, *cubics, last]
+
+
+class _Incoming:
+    """``a(t) = -2 G_0(t) / Z_0`` of an exact blow (module docstring), ``t`` the model time."""
+
+    def __init__(self, ex, waves, force, T0, Z0, t0):
+        self.ex, self.F, self.G = ex, waves[0], waves[1]
+        self.force, self.T0, self.Z0, self.t0 = force, T0, Z0, t0
+
+    def arriving(self, t):
+        """``G_0`` at times ``t`` from the impact (array)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        out = np.zeros(t.shape)
+        T0 = self.T0
+        cur = t.copy()
+        live = np.ones(t.shape, dtype=bool)
+        while np.any(live):
+            early = live & (cur < T0)
+            out[early] += _piece_value(self.G, np.maximum(cur[early], 0.0))
+            live &= ~early
+            if not np.any(live):
+                break
+            idx = np.flatnonzero(live)
+            s = cur[idx] - T0  # when G_0 left the far end of segment 0
+            n1 = self.ex.junction_force(1, s)
+            # the right-going wave arriving there at s: the start's, or F(0, s - T0) = p - G_0
+            first = s < T0
+            f_in = np.where(first, _piece_value(self.F, np.minimum(s, T0)), self.force(s - T0))
+            out[idx] += n1 - f_in
+            live[:] = False
+            live[idx[~first]] = True  # G_0(s - T0) enters with a plus sign: on with it
+            cur[idx[~first]] -= 2.0 * T0
+        return out
+
+    def callables(self, breaks):
+        """``a`` on each interval of ``breaks`` (model times, where ``a`` may jump) as a callable of
+        the model time: a cubic spline through its exact values ``T_0 / SAMPLES`` apart (its error
+        ``O(h^4)`` where ``a`` is smooth, ``O(h)`` over a step at a kink: ``O(h^2)`` in what the
+        drive integrates)."""
+        from scipy.interpolate import CubicSpline
+
+        out = []
+        for a, b in zip(breaks[:-1], breaks[1:], strict=True):
+            x = np.linspace(a - self.t0, b - self.t0, max(8, math.ceil((b - a) * SAMPLES / self.T0)) + 1)
+            spline = CubicSpline(x, -2.0 * self.arriving(x) / self.Z0)
+            out.append(lambda t, c=spline, t0=self.t0: float(c(t - t0)))
+        return out
+
+
+def _breaks(ex, T0, D, t0):
+    """Where ``a`` may jump: the multiples of ``T0`` (the start's waves end) and the far
+    junction's jumps (a contact resumed) carried to the driven end (``T0`` later, and every
+    ``2 T0`` after)."""
+    cuts = list(np.arange(0.0, D, T0))
+    b = ex.junction_breaks(1)
+    b = b[(b > 0.0) & (b < D)]
+    if b.size:
+        eps = 1e-9 * T0
+        jump = np.abs(ex.junction_force(1, b + eps) - ex.junction_force(1, b - eps))
+        size = max(float(np.max(np.abs(ex.junction_force(1, np.linspace(0.0, D, 65))))), 1e-300)
+        for c in b[jump > 1e-6 * size] + T0:
+            while c < D:
+                cuts.append(c)
+                c += 2.0 * T0
+    cuts = np.unique(np.append(np.asarray(cuts), D))
+    keep = np.concatenate(([True], np.diff(cuts) > 1e-9 * T0))
+    return t0 + cuts[keep]
+
+
+def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:
+    """The blow of a piston arriving at the shank in modal state ``(q, q')`` at ``t0`` with the drive
+    in ``state``, on the exact scheme, the drive's force iterated (module docstring; theory §11,
+    "The coupled blow").
+
+    Parameters
+    ----------
+    model : BarModel
+        Under :class:`~impactbar.RodRock` with exact blows (:meth:`~impactbar.RodRock.blow_method`).
+    drive : Drive
+        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+    state : DriveState
+        The drive's state at the arrival.
+    t0 : float
+        Time of the arrival (model units).
+    q, v : array_like, shape (N + 1,)
+        Modal state at arrival, positions from the shank (``u(1) = 0``).
+    settings : FlightSettings, optional
+        The drive's integrator (default the drive's).
+
+    Returns
+    -------
+    DrivenContact
+        Its ``record`` an :class:`~impactbar.laws.rodrock.exactmap.ExactRockContact` whose blow took
+        the drive's force as the last iterate gave it.
+
+    Raises
+    ------
+    ValueError
+        A drive that cannot follow a blow, the drive's integration failing, or the iteration not
+        settling within its bound (the force's change then named).
+    """
+    from ...loads import FourierLoad
+    from .exactmap import ExactBlowMap, ExactRockContact, initial_waves
+
+    q = np.array(q, dtype=float)
+    v = np.array(v, dtype=float)
+    t0 = float(t0)
+    p0 = float(drive.force(state.mode, state.z, q, v))
+    bmap = ExactBlowMap(model, FourierLoad(p0, []), t0)
+    basis = bmap.basis
+    T0, Z0 = float(basis.travel[0]), float(basis.impedance[0])
+    D = bmap.duration
+    waves = initial_waves(basis, q, v, p0)
+    w0 = -float(model.drive_weights @ q)
+    scale = max(abs(p0), 1e-300)
+    force = _Force(p0)
+    bound = math.ceil(D / (2.0 * T0)) + 1 + MAX_ITERATIONS
+    change = math.inf
+    for _ in range(bound):
+        ex = bmap.solve(q, v, record=True)
+        breaks = _breaks(ex, T0, D, t0)
+        incoming = _Incoming(ex, waves, force, T0, Z0, t0).callables(breaks)
+        fl = drive.end_flight(model, state, breaks, w0, incoming, Z0, settings)
+        if fl is None:
+            raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
+                                  "(Drive.end_flight); it runs under an instantaneous impact law only")
+        new = _Force(p0, fl.pieces, t0)
+        grid = np.union1d(new.starts, np.linspace(0.0, D, 257))
+        scale = max(scale, float(np.max(np.abs(new(grid)))))
+        change = float(np.max(np.abs(new(grid) - force(grid))))
+        force = new
+        bmap.drive = force.pieces(T0, D)
+        if change <= FORCE_TOL * scale:
+            break
+    else:
+        raise ValueError(f"the coupled exact blow at t = {t0:.6g} did not settle: the drive's force still "
+                         f"changed by {change / scale:.2e} of its size after {bound} iterations")
+    ex = bmap.solve(q, v, record=True)
+    q_after, v_after = bmap.state_after(ex)
+    rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
+    work = float(sum(float(p.energies()[1]) for p in fl.pieces))
+    gaps = _rigid_gaps(ex, force, q, v, t0, breaks.size - 1)
+    return DrivenContact(q_after.copy(), v_after.copy(), t0 + ex.duration, rec, fl.state, fl.pieces,
+                         fl.events, work, gaps)
+
+
+def _rigid_gaps(ex, force, q, v, t0, n):
+    """The piston's rigid coordinate ``-q_0`` during the blow (mass 1: ``q_0'' = p - N_c``, ``N_c``
+    the shank's force), by the trapezoidal rule on the contact junction's breaks and a grid of
+    ``64 n`` steps (where the drive's position switches would be crossed; the positions to the
+    grid's second order)."""
+    D = ex.duration
+    t = np.union1d(np.linspace(0.0, D, 64 * n + 1), np.clip(ex.junction_breaks(ex.contact_junction), 0.0, D))
+    acc = force(t) - ex.shank_force(t)
+    dt = np.diff(t)
+    vel = float(v[0]) + np.concatenate(([0.0], np.cumsum(0.5 * dt * (acc[:-1] + acc[1:]))))
+    pos = float(q[0]) + np.concatenate(([0.0], np.cumsum(0.5 * dt * (vel[:-1] + vel[1:]))))
+    return np.vstack((t0 + t, -pos))
