@@ -15,6 +15,8 @@ from typing import Any, ClassVar, NamedTuple, Protocol
 
 import numpy as np
 
+from .._shared.parameters import Parameter
+
 __all__ = ["ContactLaw", "LawNotSupported", "OrbitState", "DrivenContact", "BarModelLike"]
 
 
@@ -471,6 +473,37 @@ class ContactLaw:
             solved (the message says why).
         """
         raise LawNotSupported(self._missing("driven_contact"))
+
+    def parameter_table(self, model=None) -> tuple[Parameter, ...]:
+        """The law's own parameters as records (:func:`impactbar.parameters.parameters` lists them
+        beside the bar's): by default one unbounded record for each of :attr:`parameters`, with its
+        :meth:`parameter_value`, continuable unless :meth:`check_continuable` refuses it. A law
+        with bounds, units or descriptions to give overrides this, its one declaration.
+
+        Parameters
+        ----------
+        model : BarModel, optional
+            The model under this law.
+
+        Returns
+        -------
+        tuple of Parameter
+
+        Examples
+        --------
+        >>> from impactbar.laws import get_law
+        >>> get_law("paper").parameter_table()
+        ()
+        """
+        out = []
+        for name in self.parameters:
+            try:
+                self.check_continuable(name, model)
+                smooth, why = True, ""
+            except ValueError as exc:
+                smooth, why = False, str(exc)
+            out.append(Parameter(name, self.parameter_value(name), continuable=smooth, description=why))
+        return tuple(out)
 
     def has_parameter(self, name: str) -> bool:
         """Whether ``name`` is one of the law's own continuation parameters (:attr:`parameters`).

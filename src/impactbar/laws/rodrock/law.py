@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._shared.parameters import Parameter
 from ..._shared.validate import check_int, check_real
 from ..base import ContactLaw
 from ._choice import (  # noqa: F401  (the choices' bounds, as before)
@@ -367,6 +368,45 @@ class RodRock(ContactLaw):
         from .coupled import driven_rock_contact
 
         return driven_rock_contact(model, drive, state, float(t), q_minus, v_minus, settings)
+
+    def parameter_table(self, model=None) -> tuple[Parameter, ...]:
+        """The law's parameters, in its units (:attr:`parameters`), for
+        :func:`impactbar.parameters.parameters`: a segment's length is not continuable where the blows
+        are the lattice's (:meth:`check_continuable`).
+
+        Parameters
+        ----------
+        model : BarModel, optional
+            The model under this law (which blows it takes: :meth:`blow_method`).
+
+        Returns
+        -------
+        tuple of Parameter
+            ``rock.k``, ``rock.k_u``, ``bit_mass``, ``feed``, ``segment0.length``, ...
+
+        Examples
+        --------
+        >>> law = RodRock(segments=[RodSegment(length=2.0, impedance=2.0)],
+        ...               rock=BilinearRock(k=20.0, k_u=200.0))
+        >>> [(p.name, p.value) for p in law.parameter_table()][:2]
+        [('rock.k', 20.0), ('rock.k_u', 200.0)]
+        """
+        exact = self.method == "exact" if model is None else self.blow_method(model) == "exact"
+        lattice = ("" if exact else "; on the lattice its cell grid rounds the segments' travel times to "
+                   "whole cells, so the orbit changes in steps with a length: use RodRock(method='exact' "
+                   "or 'auto', without cells_per_piston), or follow it with simulated_diagram or "
+                   "find_orbit at each length")
+        return (
+            Parameter("rock.k", float(self.rock.k), low=0.0, low_open=True,
+                      description="rock loading stiffness (at most rock.k_u)"),
+            Parameter("rock.k_u", float(self.rock.k_u), low=float(self.rock.k),
+                      description="rock unloading stiffness (at least rock.k)"),
+            Parameter("bit_mass", float(self.bit_mass), low=0.0, description="mass of the bit"),
+            Parameter("feed", float(self.feed), low=0.0, description="feed force"),
+            *(Parameter(f"segment{i}.length", float(g.length), low=0.0, low_open=True, continuable=exact,
+                        description=f"length of the rod's segment {i} (0 at the shank){lattice}")
+              for i, g in enumerate(self.segments)),
+        )
 
     @classmethod
     def has_parameter(cls, name: str) -> bool:
