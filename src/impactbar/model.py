@@ -19,15 +19,14 @@ __all__ = ["BarModel"]
 #: Largest number of flexible modes accepted; beyond it the modal sums gain nothing in double precision.
 MAX_MODES = 4096
 
-#: The bar's parameters (eq. 2), declared once: :meth:`BarModel.parameter_table` fills in the values.
-_MODEL_PARAMETERS = (
-    Parameter("s", None, low=0.0, low_open=True, description="wave-speed ratio C/(L Omega), eq. 2"),
-    Parameter("d", None, low=0.0, description="damping D/(M Omega), eq. 2"),
-    Parameter("R", None, low=0.0, high=1.0, description="restitution coefficient"),
-    Parameter("n_modes", None, low=0, high=MAX_MODES, integer=True, continuable=False,
-              description="flexible modes kept (an integer: the problem is not smooth in it)"),
-)
-_MODEL_NAMES = tuple(p.name for p in _MODEL_PARAMETERS)
+#: The ranges of the bar's parameters (eq. 2; their names and long names: :attr:`BarModel.parameters`),
+#: the records of :meth:`BarModel.parameter_table`; the constructor checks them again.
+_MODEL_RANGES = {
+    "s": {"low": 0.0, "low_open": True},
+    "d": {"low": 0.0},
+    "R": {"low": 0.0, "high": 1.0},
+    "n_modes": {"low": 0, "high": MAX_MODES, "continuable": False},
+}
 #: Largest ``s * n_modes`` with flexible modes: the highest mode's phase over a period,
 #: ``2 pi^2 s n``, must stay well inside double precision.
 MAX_STIFFNESS = 1e12
@@ -253,7 +252,9 @@ class BarModel:
         >>> [p.name for p in BarModel(s=10.0, d=0.0, R=0.5, n_modes=2).parameter_table()]
         ['s', 'd', 'R', 'n_modes']
         """
-        own = tuple(p.at(getattr(self, p.name)) for p in _MODEL_PARAMETERS)
+        own = tuple(Parameter(f.name, getattr(self, f.name), description=f.long_name,
+                              integer=f.dtype.startswith("i"), **_MODEL_RANGES[f.name])
+                    for f in self.parameters)
         return own + tuple(table_of(self._law, self).values())
 
     def with_parameter(self, name: str, value) -> BarModel:
@@ -274,7 +275,7 @@ class BarModel:
         ValueError
             For another name (the allowed ones listed) or a value a constructor refuses.
         """
-        if name in _MODEL_NAMES:
+        if name in _MODEL_RANGES:
             return self.with_(**{name: value})
         if name in table_of(self._law, self):
             return self.with_(impact=self._law.with_parameter(name, float(value)))

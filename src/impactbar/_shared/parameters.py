@@ -61,6 +61,8 @@ class Parameter:
         (``False`` for an integer, or a rod segment's length on the lattice's cell grid).
     integer : bool, optional
         Whether it takes integer values (``n_modes``, a cosine load's order ``k``).
+    reason : str, optional
+        Why it is not continuable (the message of :func:`check_continuable`).
 
     Examples
     --------
@@ -81,6 +83,7 @@ class Parameter:
     description: str = ""
     continuable: bool = True
     integer: bool = False
+    reason: str = ""
 
     @property
     def range_text(self) -> str:
@@ -304,10 +307,11 @@ def check_continuable(model, forcing, name: str) -> Parameter:
     Raises
     ------
     ValueError
-        For an unknown name, or one declared not continuable (the message gives its description).
+        For an unknown name, or one declared not continuable (the message gives the reason).
     """
     _, p = _find(model, forcing, name)
     if not p.continuable:
-        raise ValueError(f"parameter {name!r} cannot be continued: {p.description}")
+        why = p.reason or ("it takes integer values" if p.integer else "the problem is not smooth in it")
+        raise ValueError(f"parameter {name!r} ({p.description}) cannot be continued: {why}")
     return p
 

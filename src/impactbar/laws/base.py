@@ -502,7 +502,7 @@ class ContactLaw:
                 smooth, why = True, ""
             except ValueError as exc:
                 smooth, why = False, str(exc)
-            out.append(Parameter(name, self.parameter_value(name), continuable=smooth, description=why))
+            out.append(Parameter(name, self.parameter_value(name), continuable=smooth, reason=why))
         return tuple(out)
 
     def has_parameter(self, name: str) -> bool:

@@ -226,6 +226,16 @@ class SweepSpec:
             return self.options["keep"]
         return len(motion_classes())
 
+    def parameters(self) -> dict:
+        """The parameters of the spec's base bar and load (:func:`impactbar.parameters.parameters`):
+        every name an axis may take, with its record (value at the base, range, description).
+
+        Returns
+        -------
+        dict of str to Parameter
+        """
+        return parameters(*_base(self.model, self.load, self.rock))
+
     def point(self, index) -> tuple:
         """The bar and the load at a grid point.
 

@@ -392,19 +392,19 @@ class RodRock(ContactLaw):
         [('rock.k', 20.0), ('rock.k_u', 200.0)]
         """
         exact = self.method == "exact" if model is None else self.blow_method(model) == "exact"
-        lattice = ("" if exact else "; on the lattice its cell grid rounds the segments' travel times to "
-                   "whole cells, so the orbit changes in steps with a length: use RodRock(method='exact' "
-                   "or 'auto', without cells_per_piston), or follow it with simulated_diagram or "
-                   "find_orbit at each length")
+        lattice = ("" if exact else "on the lattice its cell grid rounds the segments' travel times to whole "
+                   "cells, so the orbit changes in steps with a length: use RodRock(method='exact' or "
+                   "'auto', without cells_per_piston), or follow it with simulated_diagram or find_orbit "
+                   "at each length")
         return (
             Parameter("rock.k", float(self.rock.k), low=0.0, low_open=True,
-                      description="rock loading stiffness (at most rock.k_u)"),
+                      description="rock loading stiffness"),
             Parameter("rock.k_u", float(self.rock.k_u), low=float(self.rock.k),
-                      description="rock unloading stiffness (at least rock.k)"),
-            Parameter("bit_mass", float(self.bit_mass), low=0.0, description="mass of the bit"),
+                      description="rock unloading stiffness"),
+            Parameter("bit_mass", float(self.bit_mass), low=0.0, description="bit mass (piston masses)"),
             Parameter("feed", float(self.feed), low=0.0, description="feed force"),
             *(Parameter(f"segment{i}.length", float(g.length), low=0.0, low_open=True, continuable=exact,
-                        description=f"length of the rod's segment {i} (0 at the shank){lattice}")
+                        description=f"length of rod segment {i} (piston lengths)", reason=lattice)
               for i, g in enumerate(self.segments)),
         )
 
