@@ -181,3 +181,17 @@ def test_the_continuation_views_are_the_protocol():
     assert wp(MODEL, LOAD, "ratio", 2.0) == with_parameter(MODEL, LOAD, "ratio", 2.0)
     with pytest.raises(ValueError, match="parameter must be one of"):
         pv(MODEL, LOAD, "k")  # an integer: swept, not continued
+
+
+def test_the_command_line_takes_any_parameter_the_parts_declare(tmp_path, capsys):
+    """``impactbar continue --parameter`` has no list of its own: a name no part declares is refused
+    with the protocol's list, before any orbit is sought; an integer one is refused as not
+    continuable."""
+    from impactbar.cli import main
+
+    out = str(tmp_path / "c")
+    assert main(["continue", "--parameter", "stroke", "--to", "0.8", "--out", out]) == 2
+    err = capsys.readouterr().err
+    assert "--parameter stroke: parameter must be one of ('s', 'd', 'R', 'n_modes', 'p0', 'pk', 'k')" in err
+    assert main(["continue", "--parameter", "n_modes", "--to", "3", "--out", out]) == 2
+    assert "'n_modes' (flexible modes kept) cannot be continued" in capsys.readouterr().err
