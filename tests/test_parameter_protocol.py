@@ -157,6 +157,8 @@ def test_refusals_name_the_parameter():
         with_parameter(MODEL, LOAD, "phase", 1.0)
     with pytest.raises(ValueError, match="got 'phase'"):
         parameter_value(MODEL, LOAD, "phase")
+    with pytest.raises(ValueError, match="None is not a part of a problem"):
+        parameters(MODEL, None)
     with pytest.raises(ValueError, match=r"ratio must be in \(0, inf\); got 0"):
         with_parameter(MODEL, LOAD, "ratio", 0.0)
     with pytest.raises(ValueError, match=r"R must be in \[0, 1\]; got 1.5"):
@@ -195,3 +197,25 @@ def test_the_command_line_takes_any_parameter_the_parts_declare(tmp_path, capsys
     assert "--parameter stroke: parameter must be one of ('s', 'd', 'R', 'n_modes', 'p0', 'pk', 'k')" in err
     assert main(["continue", "--parameter", "n_modes", "--to", "3", "--out", out]) == 2
     assert "'n_modes' (flexible modes kept) cannot be continued" in capsys.readouterr().err
+
+
+def test_the_si_names_map_onto_the_circuit_drives_parameters():
+    """Each config key in SI (:data:`impactbar.physical.circuit.SI_PARAMETERS`, the one table from SI
+    names to dimensionless ones) names a parameter the circuit drive declares, and the protocol sets
+    the value :meth:`CircuitDrifter.to_dimensionless` gives (the rock's keys need a drill string)."""
+    pytest.importorskip("pint")
+    from impactbar.physical.circuit import ROCK_SI_PARAMETERS, SI_PARAMETERS, circuit_preset
+
+    drifter = circuit_preset("circuit-drifter")
+    model, drive = drifter.model(), drifter.drive()
+    table = parameters(model, drive)
+    for key, (name, _unit, example) in SI_PARAMETERS.items():
+        if key in ROCK_SI_PARAMETERS:
+            continue
+        assert name in table, key
+        parameter, value = drifter.to_dimensionless(key, example.strip("'"))
+        assert parameter == name
+        if table[name].value is None or key == "chambers.front_area":
+            continue  # (a field the preset leaves unset; the front area sets a ratio of areas)
+        _, changed = with_parameter(model, drive, name, value)
+        assert parameter_value(model, changed, name) == pytest.approx(value, rel=1e-12)

@@ -123,8 +123,7 @@ class Parameter:
 
 
 def table_of(part, *args) -> dict[str, Parameter]:
-    """The parameters a part declares (its ``parameter_table(*args)``), by name; none for a part
-    without one.
+    """The parameters a part declares (its ``parameter_table(*args)``), by name.
 
     Parameters
     ----------
@@ -140,11 +139,15 @@ def table_of(part, *args) -> dict[str, Parameter]:
     Raises
     ------
     ValueError
-        Where the part declares a name twice.
+        For an object that declares no parameters (no ``parameter_table``: not a part), or a name
+        declared twice.
     """
     declare = getattr(part, "parameter_table", None)
+    if declare is None:
+        raise ValueError(f"{part!r} is not a part of a problem (a model, a load, a drive or an impact "
+                         "law): it declares no parameter_table()")
     out: dict[str, Parameter] = {}
-    for p in (declare(*args) if declare is not None else ()):
+    for p in declare(*args):
         if p.name in out:
             raise ValueError(f"{type(part).__name__} declares the parameter {p.name!r} twice")
         out[p.name] = p
