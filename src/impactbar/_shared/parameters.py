@@ -188,10 +188,17 @@ def parameters(model, forcing) -> dict[str, Parameter]:
     return {name: p for name, (_, p) in _owners(model, forcing).items()}
 
 
+def unknown(model, forcing, names, name: str) -> ValueError:
+    """The error for a name that is not one of ``names``, the parameters of the problem: it lists
+    them and names the parts' types."""
+    return ValueError(f"parameter must be one of {tuple(names)} (of the {type(model).__name__} and the "
+                      f"{type(forcing).__name__}); got {name!r}")
+
+
 def _find(model, forcing, name: str) -> tuple[int, Parameter]:
     owners = _owners(model, forcing)
     if name not in owners:
-        raise ValueError(f"parameter must be one of {tuple(owners)}; got {name!r}")
+        raise unknown(model, forcing, owners, name)
     return owners[name]
 
 
@@ -286,9 +293,9 @@ def with_parameters(model, forcing, changes: dict):
         As :func:`with_parameter`, for the first change refused.
     """
     order = list(_owners(model, forcing))
-    unknown = [n for n in changes if n not in order]
-    if unknown:
-        raise ValueError(f"parameter must be one of {tuple(order)}; got {unknown[0]!r}")
+    bad = [n for n in changes if n not in order]
+    if bad:
+        raise unknown(model, forcing, order, bad[0])
     for name in sorted(changes, key=order.index):
         model, forcing = with_parameter(model, forcing, name, changes[name])
     return model, forcing

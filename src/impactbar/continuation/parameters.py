@@ -36,8 +36,7 @@ def _real(model, forcing, name):
     table = protocol.parameters(model, forcing)
     p = table.get(name)
     if p is None or p.integer:
-        raise ValueError(f"parameter must be one of {tuple(n for n, q in table.items() if not q.integer)}; "
-                         f"got {name!r}")
+        raise protocol.unknown(model, forcing, (n for n, q in table.items() if not q.integer), name)
     return p
 
 
