@@ -153,7 +153,8 @@ def _fields(law):
 
 def test_refusals_name_the_parameter():
     with pytest.raises(ValueError, match=r"parameter must be one of \('s', 'd', 'R', 'n_modes', 'p0', "
-                                         r"'ratio', 'k'\) \(of the BarModel and the RatioCosineLoad\); got 'phase'"):
+                                         r"'ratio', 'k'\) \(of the BarModel and the RatioCosineLoad\); "
+                                         r"got 'phase'"):
         with_parameter(MODEL, LOAD, "phase", 1.0)
     with pytest.raises(ValueError, match="got 'phase'"):
         parameter_value(MODEL, LOAD, "phase")
