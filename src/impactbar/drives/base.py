@@ -320,6 +320,8 @@ class Drive(ABC):
     ``state_size``                      ``k``, size of the continuous state ``z`` (0: a force constant
                                         between events)
     ``parameters``                      names of the fields :func:`~impactbar.continue_orbit` may follow
+    ``parameter_ranges``                optional: their ranges and descriptions (the records of
+                                        :meth:`parameter_table`, :mod:`impactbar.parameters`)
     :meth:`with_`                       a copy with new parameter values (validated again)
     :meth:`start`                       the state at the start of a run, from the bar's
     :meth:`force`                       ``p`` on the piston, from the state (and the bar's, ``k > 0``)

@@ -57,8 +57,10 @@ class Load(ABC):
     load class with a :attr:`kind` is an entry of the table :data:`LOADS`):
 
     - :attr:`kind`, :attr:`description`, :attr:`parameters` (its constructor's, with long names
-      and dtypes) and :attr:`continuation_parameters`; :meth:`to_record`, :meth:`from_record` and
-      :meth:`with_` (a copy with parameters changed);
+      and dtypes), :attr:`continuation_parameters` and :attr:`parameter_ranges` (its parameter
+      records, :meth:`parameter_table`, changed by :meth:`with_parameter`: the parameter protocol
+      of :mod:`impactbar.parameters`); :meth:`to_record`, :meth:`from_record` and :meth:`with_` (a
+      copy with parameters changed);
     - :attr:`period` (its fundamental period), :attr:`max_one_impact_orbits` (a bound of the roots
       of the phase equation, eq. 14);
     - the forms a special solver recognises: :meth:`cosine_form` (the rigid closed forms,
