@@ -30,8 +30,8 @@ from dataclasses import dataclass, replace
 
 from .validate import check_int, check_real
 
-__all__ = ["Parameter", "parameters", "parameter_value", "with_parameter", "with_parameters",
-           "check_continuable", "table_of"]
+__all__ = ["Parameter", "NamedParameters", "parameters", "parameter_value", "with_parameter",
+           "with_parameters", "check_continuable", "table_of"]
 
 
 @dataclass(frozen=True)
@@ -120,6 +120,36 @@ class Parameter:
     def at(self, value) -> Parameter:
         """The record with its current value (a part's table built from a class-level declaration)."""
         return replace(self, value=value)
+
+
+class NamedParameters:
+    """A part whose parameters are attributes named in its class body (a drive's): ``parameters``
+    (the names), ``parameter_ranges`` (name -> keyword arguments of :class:`Parameter`: ``low``,
+    ``high``, ``description``, ...; the constructor checks them again), and ``with_(**changes)``, a
+    validated copy; each value is the attribute of that name (``None`` where the part has none now).
+
+    Examples
+    --------
+    >>> from impactbar import PositionSwitchedDrive
+    >>> [p.name for p in PositionSwitchedDrive(1.0, 1.0, 1.0).parameter_table()][:3]
+    ['stroke', 'ret', 'switch_out']
+    """
+
+    parameters: tuple = ()
+    parameter_ranges: dict = {}
+
+    def parameter_table(self) -> tuple[Parameter, ...]:
+        """The records of :attr:`parameters` (:func:`parameters`)."""
+        return tuple(Parameter(name, self._parameter_value(name), **self.parameter_ranges.get(name, {}))
+                     for name in self.parameters)
+
+    def _parameter_value(self, name: str) -> float | None:
+        value = getattr(self, name)
+        return None if value is None else float(value)
+
+    def with_parameter(self, name: str, value):
+        """A copy with one of :attr:`parameters` changed (``with_``, validated again)."""
+        return self.with_(**{name: value})
 
 
 def table_of(part, *args) -> dict[str, Parameter]:

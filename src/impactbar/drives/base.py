@@ -57,7 +57,7 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
-from .._shared.parameters import Parameter
+from .._shared.parameters import NamedParameters
 
 __all__ = ["Drive", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
            "SurfaceEvent", "FlightKernel", "KernelRun", "OrbitData", "OrbitProblem", "OrbitSearch",
@@ -304,7 +304,7 @@ class KernelRun(NamedTuple):
 # --------------------------------------------------------------------------------------------------
 # the drive
 # --------------------------------------------------------------------------------------------------
-class Drive(ABC):
+class Drive(NamedParameters, ABC):
     r"""A drive of the piston that is not a function of time: autonomous, with state of its own
     (theory §10). A base class: subclasses declare the force, the events and their maps.
 
@@ -382,55 +382,9 @@ class Drive(ABC):
     state_size: ClassVar[int] = 0
     state_names: ClassVar[tuple[str, ...]] = ()
     parameters: ClassVar[tuple[str, ...]] = ()
-    #: the ranges, units and descriptions of :attr:`parameters`, where a record
-    #: (:meth:`parameter_table`) should state them: name -> keyword arguments of
-    #: :class:`~impactbar.parameters.Parameter`; the constructor checks them again
-    parameter_ranges: ClassVar[dict[str, dict]] = {}
+    # (their records, changed by with_parameter: NamedParameters, the parameter protocol)
 
     # -- parameters -------------------------------------------------------------------------------
-    def parameter_table(self) -> tuple[Parameter, ...]:
-        """The drive's parameters as records (:func:`impactbar.parameters.parameters`), declared in
-        the class body: :attr:`parameters` with :attr:`parameter_ranges`; each value read as the
-        attribute of that name (``None`` where the drive has none now).
-
-        Returns
-        -------
-        tuple of Parameter
-
-        Examples
-        --------
-        >>> from impactbar import PositionSwitchedDrive
-        >>> [p.name for p in PositionSwitchedDrive(1.0, 1.0, 1.0).parameter_table()][:3]
-        ['stroke', 'ret', 'switch_out']
-        """
-        return tuple(Parameter(name, self._parameter_value(name), **self.parameter_ranges.get(name, {}))
-                     for name in self.parameters)
-
-    def _parameter_value(self, name: str) -> float | None:
-        value = getattr(self, name)
-        return None if value is None else float(value)
-
-    def with_parameter(self, name: str, value) -> Drive:
-        """A copy with one of :attr:`parameters` changed (:meth:`with_`, validated again).
-
-        Parameters
-        ----------
-        name : str
-            One of :attr:`parameters`.
-        value : float
-            Its new value.
-
-        Returns
-        -------
-        Drive
-
-        Raises
-        ------
-        ValueError
-            For a name not in :attr:`parameters` (named) or a value the constructor refuses.
-        """
-        return self.with_(**{name: value})
-
     def with_(self, **changes) -> Drive:
         """A copy with the given parameters changed (validated again by the constructor).
 

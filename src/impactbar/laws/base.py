@@ -476,9 +476,9 @@ class ContactLaw:
 
     def parameter_table(self, model=None) -> tuple[Parameter, ...]:
         """The law's own parameters as records (:func:`impactbar.parameters.parameters` lists them
-        beside the bar's): by default one unbounded record for each of :attr:`parameters`, with its
-        :meth:`parameter_value`, continuable unless :meth:`check_continuable` refuses it. A law
-        with bounds, units or descriptions to give overrides this, its one declaration.
+        beside the bar's): by default one unbounded, continuable record for each of
+        :attr:`parameters`, with its :meth:`parameter_value`. A law with bounds, units,
+        descriptions or a parameter it is not smooth in overrides this, its one declaration.
 
         Parameters
         ----------
@@ -495,15 +495,7 @@ class ContactLaw:
         >>> get_law("paper").parameter_table()
         ()
         """
-        out = []
-        for name in self.parameters:
-            try:
-                self.check_continuable(name, model)
-                smooth, why = True, ""
-            except ValueError as exc:
-                smooth, why = False, str(exc)
-            out.append(Parameter(name, self.parameter_value(name), continuable=smooth, reason=why))
-        return tuple(out)
+        return tuple(Parameter(name, self.parameter_value(name)) for name in self.parameters)
 
     def has_parameter(self, name: str) -> bool:
         """Whether ``name`` is one of the law's own continuation parameters (:attr:`parameters`).
@@ -564,8 +556,8 @@ class ContactLaw:
 
     def check_continuable(self, name: str, model=None) -> None:
         """Refuse a parameter in which the law's impact map is not smooth, so that a branch cannot
-        be continued in it (:func:`~impactbar.continue_orbit`); every parameter is accepted by
-        default.
+        be continued in it (:func:`~impactbar.continue_orbit`): one whose record in
+        :meth:`parameter_table` is not ``continuable`` (its ``reason`` given).
 
         Parameters
         ----------
@@ -579,6 +571,10 @@ class ContactLaw:
         ValueError
             Saying why the parameter cannot be continued.
         """
+        self._check_parameter(name)
+        for p in self.parameter_table(model):
+            if p.name == name and not p.continuable:
+                raise ValueError(f"parameter {name!r} cannot be continued: {p.reason}")
 
     def _check_parameter(self, name: str) -> None:
         if not self.has_parameter(name):

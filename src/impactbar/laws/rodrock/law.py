@@ -191,7 +191,7 @@ class RodRock(ContactLaw):
     #: (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's mass, the feed force, and
     #: ``"segment<i>.length"`` (``i`` from 0 at the shank; the default ``blow_time`` follows the
     #: lengths), continued on the exact blows only (the lattice's cell grid rounds them to whole
-    #: cells: :meth:`check_continuable`)
+    #: cells: :meth:`parameter_table`)
     parameters = ("rock.k", "rock.k_u", "bit_mass", "feed", "segment<i>.length")
 
     def __post_init__(self) -> None:
@@ -372,7 +372,7 @@ class RodRock(ContactLaw):
     def parameter_table(self, model=None) -> tuple[Parameter, ...]:
         """The law's parameters, in its units (:attr:`parameters`), for
         :func:`impactbar.parameters.parameters`: a segment's length is not continuable where the blows
-        are the lattice's (:meth:`check_continuable`).
+        are the lattice's (its cell grid rounds them to whole cells).
 
         Parameters
         ----------
@@ -474,31 +474,6 @@ class RodRock(ContactLaw):
             segs[i] = dataclasses.replace(segs[i], length=value)
             return dataclasses.replace(self, segments=segs)
         return dataclasses.replace(self, **{name: value})
-
-    def check_continuable(self, name: str, model=None) -> None:
-        """Refuse a segment's length where the blows are the lattice's (:meth:`blow_method`; without
-        ``model``, unless ``method="exact"``): its cell grid rounds the segments' travel times to
-        whole cells, so the orbit changes in steps with a length. The exact blows carry each segment
-        as a delay line of its own travel time, smooth in it.
-
-        Parameters
-        ----------
-        name : str
-        model : BarModel, optional
-            The model under this law.
-
-        Raises
-        ------
-        ValueError
-            For ``"segment<i>.length"`` on the lattice.
-        """
-        exact = self.method == "exact" if model is None else self.blow_method(model) == "exact"
-        if _SEGMENT.fullmatch(str(name)) and not exact:
-            raise ValueError(f"parameter {name!r} cannot be continued on the lattice: its cell grid rounds "
-                             "the segments' travel times to whole cells, so the orbit changes in steps "
-                             "with a length; use RodRock(method='exact' or 'auto', without "
-                             "cells_per_piston), or follow it with simulated_diagram or find_orbit at each "
-                             "length")
 
     def _check_parameter(self, name: str) -> None:
         if not self.has_parameter(name):
