@@ -220,3 +220,9 @@ def test_the_si_names_map_onto_the_circuit_drives_parameters():
             continue  # (a field the preset leaves unset; the front area sets a ratio of areas)
         _, changed = with_parameter(model, drive, name, value)
         assert parameter_value(model, changed, name) == pytest.approx(value, rel=1e-12)
+    # a relief valve that never opens: an infinite cracking pressure passes the record's check and
+    # the supply's constructor takes it
+    _, no_relief = with_parameter(model, drive, "relief_pressure", math.inf)
+    assert parameter_value(model, no_relief, "relief_pressure") == math.inf
+    with pytest.raises(ValueError, match="precharge must be"):
+        with_parameter(model, drive, "precharge", math.inf)

@@ -110,6 +110,9 @@ class Parameter:
         """
         lo = None if self.low == -math.inf else self.low
         hi = None if self.high == math.inf else self.high
+        if hi is None and not self.high_open and not self.integer and isinstance(value, float) \
+                and value == math.inf:
+            return value  # (unbounded above and closed: the constructor decides, e.g. no relief valve)
         if self.integer:
             v = check_int(self.name, value, lo=None if lo is None else math.ceil(lo),
                           hi=None if hi is None else math.floor(hi))
