@@ -21,6 +21,7 @@ The import contract (``[tool.importlinter]`` in ``pyproject.toml``) keeps it so.
 
 import importlib
 
+from ._shared.parameters import Parameter as Parameter
 from ._shared.status import Admissibility as Admissibility
 from ._shared.status import BranchStatus as BranchStatus
 from ._shared.status import CurveKind as CurveKind
@@ -73,8 +74,8 @@ _LAZY = {
 }
 
 #: subpackages reachable as attributes (``impactbar.physical``) without an explicit import
-_SUBPACKAGES = ("drives", "physical", "orbits", "simulation", "continuation", "sweeps", "dynamics", "cli",
-                "paper", "plotting")
+_SUBPACKAGES = ("parameters", "drives", "physical", "orbits", "simulation", "continuation", "sweeps",
+                "dynamics", "cli", "paper", "plotting")
 
 
 def __getattr__(name: str):
@@ -94,6 +95,7 @@ def __dir__():
 
 __all__ = [
     "BarModel",
+    "Parameter",
     "Load",
     "CosineLoad",
     "SquareWaveLoad",

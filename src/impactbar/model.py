@@ -8,6 +8,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from ._shared.parameters import Parameter, table_of
 from ._shared.schema import Field, Schema
 from ._shared.validate import check_int, check_real
 from .dynamics.stepped import SteppedPiston
@@ -17,6 +18,15 @@ __all__ = ["BarModel"]
 
 #: Largest number of flexible modes accepted; beyond it the modal sums gain nothing in double precision.
 MAX_MODES = 4096
+
+#: The ranges of the bar's parameters (eq. 2; their names and long names: :attr:`BarModel.parameters`),
+#: the records of :meth:`BarModel.parameter_table`; the constructor checks them again.
+_MODEL_RANGES = {
+    "s": {"low": 0.0, "low_open": True},
+    "d": {"low": 0.0},
+    "R": {"low": 0.0, "high": 1.0},
+    "n_modes": {"low": 0, "high": MAX_MODES, "continuable": False},
+}
 #: Largest ``s * n_modes`` with flexible modes: the highest mode's phase over a period,
 #: ``2 pi^2 s n``, must stay well inside double precision.
 MAX_STIFFNESS = 1e12
@@ -227,6 +237,50 @@ class BarModel:
         phi = 2.0 * np.cos(np.pi * x[..., None] * n)
         phi[..., 0] = 1.0
         return phi
+
+    def parameter_table(self) -> tuple[Parameter, ...]:
+        """The bar's parameters (eq. 2) and its impact law's own
+        (:meth:`~impactbar.laws.ContactLaw.parameter_table`), for :func:`impactbar.parameters.parameters`.
+
+        Returns
+        -------
+        tuple of Parameter
+            ``s``, ``d``, ``R``, ``n_modes`` (an integer: not continuable), then the law's.
+
+        Examples
+        --------
+        >>> [p.name for p in BarModel(s=10.0, d=0.0, R=0.5, n_modes=2).parameter_table()]
+        ['s', 'd', 'R', 'n_modes']
+        """
+        own = tuple(Parameter(f.name, getattr(self, f.name), description=f.long_name,
+                              integer=f.dtype.startswith("i"), **_MODEL_RANGES[f.name])
+                    for f in self.parameters)
+        return own + tuple(table_of(self._law, self).values())
+
+    def with_parameter(self, name: str, value) -> BarModel:
+        """A copy with one parameter of :meth:`parameter_table` changed (validated again): a field
+        of the bar, or one of its impact law's own.
+
+        Parameters
+        ----------
+        name : str
+        value : float or int
+
+        Returns
+        -------
+        BarModel
+
+        Raises
+        ------
+        ValueError
+            For another name (the allowed ones listed) or a value a constructor refuses.
+        """
+        if name in _MODEL_RANGES:
+            return self.with_(**{name: value})
+        if name in table_of(self._law, self):
+            return self.with_(impact=self._law.with_parameter(name, float(value)))
+        raise ValueError(f"parameter must be one of {tuple(p.name for p in self.parameter_table())}; "
+                         f"got {name!r}")
 
     def with_(self, **changes) -> BarModel:
         """A copy with some fields changed (validated again)."""

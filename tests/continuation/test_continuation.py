@@ -228,7 +228,7 @@ def test_parameters():
         parameter_value(model, load, "n_modes")
     with pytest.raises(ValueError, match="R must be"):
         with_parameter(model, load, "R", 1.5)
-    with pytest.raises(ValueError, match="not a field of CosineLoad"):
+    with pytest.raises(ValueError, match=r"\(of the BarModel and the CosineLoad\); got 'kappa'"):
         with_parameter(model, load, "kappa", 1.5)
     with pytest.raises(ValueError, match="kappa must be"):
         with_parameter(model, SquareWaveLoad(1.0, 1.5), "kappa", 2.5)

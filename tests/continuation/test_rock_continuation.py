@@ -99,9 +99,9 @@ def test_rock_parameter_names_are_checked(case):
     assert with_parameter(model, load, "feed", 0.1)[0].law.feed == 0.1
     assert with_parameter(model, load, "segment0.length", 3.0)[0].law.window(model) == pytest.approx(
         4 / 10 + 2 * 3.0 / 10)
-    with pytest.raises(ValueError, match="segment0 to segment0"):
+    with pytest.raises(ValueError, match=r"parameter must be one of .*'segment0.length'.*got 'segment1"):
         parameter_value(model, load, "segment1.length")
-    with pytest.raises(ValueError, match="rod-rock"):
+    with pytest.raises(ValueError, match=r"parameter must be one of \('s', 'd', 'R', 'p0', 'pk'\)"):
         parameter_value(model.with_(impact="paper"), load, "rock.k")
     with pytest.raises(ValueError, match="k_u"):
         with_parameter(model, load, "rock.k", 300.0)

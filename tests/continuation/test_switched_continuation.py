@@ -76,7 +76,8 @@ def test_folds_in_the_switch_position_of_a_flexible_bar():
 
 def test_switched_continuation_refuses_a_load_parameter():
     o = find_orbit(BarModel(s=10.0, d=0.0, R=0.3, n_modes=0), PositionSwitchedDrive(1.0, 1.0, 1.0))
-    with pytest.raises(ValueError, match="switched orbit"):
+    with pytest.raises(ValueError, match=r"parameter must be one of .*'switch_out'.* \(of the BarModel and "
+                                         r"the PositionSwitchedDrive\); got 'q'"):
         continue_orbit(o, "q", to=2.0)
     with pytest.raises(ValueError, match="to must differ"):
         continue_orbit(o, "delay", to=0.0)

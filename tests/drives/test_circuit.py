@@ -213,8 +213,8 @@ def test_continuation_locates_the_accumulator_emptying():
             for p in problem.flights(problem.unknowns(ev.orbit))]
     assert min(lows) == pytest.approx(ev.value, abs=1e-6)
     # the multipliers jump there: the accumulator's compliance leaves the supply node for a while
-    before = [o for o in branch.orbits if o.drive.precharge < ev.value]
-    after = [o for o in branch.orbits if o.drive.precharge > ev.value + 2e-3]
+    before = [o for o in branch.orbits if o.drive.value("precharge") < ev.value]
+    after = [o for o in branch.orbits if o.drive.value("precharge") > ev.value + 2e-3]
     assert abs(before[-1].multipliers[0]) > 0.95 > 0.93 > abs(after[0].multipliers[0])
 
 
@@ -258,5 +258,5 @@ def test_continuation_locates_the_relief_opening():
              for p in problem.flights(problem.unknowns(ev.orbit))]
     assert max(highs) == pytest.approx(1.25, abs=1e-6)
     # the relief flow stiffens the supply node: the slow multiplier drops (0.913 -> below 0.6)
-    after = [o for o in branch.orbits if o.drive.pump_flow > ev.value + 1e-3]
+    after = [o for o in branch.orbits if o.drive.value("pump_flow") > ev.value + 1e-3]
     assert abs(after[0].multipliers[0]) < 0.8 < 0.9 < abs(ev.orbit.multipliers[0])

@@ -28,19 +28,14 @@ def add_parser(sub) -> None:
     )
     add_bar_and_load_arguments(p)
     cg = p.add_argument_group("continuation")
-    from ..physical.circuit import CIRCUIT_PARAMETERS, SI_PARAMETERS
-
-    cg.add_argument("--parameter", required=True,
-                    choices=tuple(dict.fromkeys(("p0", "pk", "R", "d", "s", "q", "kappa", "stroke", "ret",
-                                                 "switch_out", "delay", "delay_out", "delay_in",
-                                                 *CIRCUIT_PARAMETERS, *SI_PARAMETERS))),
-                    metavar="PARAMETER",
-                    help="the parameter that varies: p0, pk, R, d, s, q, kappa (bar and load); stroke, "
-                    "ret, switch_out, delay, delay_out, delay_in (a drifter's valve); a drifter's oil "
-                    "circuit by its config key in SI (accumulator.precharge, supply.pump_flow, "
+    cg.add_argument("--parameter", required=True, metavar="PARAMETER",
+                    help="the parameter that varies: any real parameter of the bar, its impact law, the "
+                    "load or the drive (impactbar.parameters.parameters: p0, pk, R, d, s, q, kappa; a "
+                    "drifter's valve stroke, ret, switch_out, delay, delay_out, delay_in; its oil "
+                    "circuit's dimensionless precharge, pump_flow, ...: pressures in 10 MPa) or a "
+                    "drifter's config key in SI (accumulator.precharge, supply.pump_flow, "
                     "valve.switching_time, oil.bulk_modulus, ...; on a drill string rock.k, rock.k_u, "
-                    "rock.feed, bit.mass; --to with its unit, '12 MPa') or "
-                    "dimensionless (precharge, pump_flow, ...: pressures in 10 MPa)")
+                    "rock.feed, bit.mass; --to with its unit, '12 MPa')")
     cg.add_argument("--to", type=_number_or_quantity, required=True,
                     help="its target value (with its unit for a config key: '12 MPa', '80 L/min')")
     cg.add_argument("--impacts", type=int, default=1, help="impacts m per period of the motion (default 1)")
@@ -122,6 +117,19 @@ def _start(model, load, args):
     return find_orbit(model, load, args.impacts, args.load_periods, guess=tr)
 
 
+def _check_parameter(model, load, name: str) -> None:
+    """Refuse a ``--parameter`` the bar and load cannot be continued in, before any orbit is sought
+    (:func:`impactbar.parameters.check_continuable`: the message lists the parameters there are)."""
+    from ..parameters import check_continuable
+
+    try:
+        check_continuable(model, load, name)
+    except ValueError as exc:
+        hint = ("; a config key in SI needs a drifter config with its oil circuit ([chambers] section) "
+                "or the preset circuit-drifter" if "." in name else "")
+        raise ValueError(f"--parameter {name}: {exc}{hint}") from None
+
+
 def check_options(args) -> None:
     """Refuse the options the chosen mode ignores: the dimensionless inputs with a hammer in SI,
     the other load's options with ``--load``, ``--orbit`` when the start is found from a simulation
@@ -149,13 +157,11 @@ def run(args) -> int:
         drifter = drifter_from_args(args)  # a valve switched on the piston's position (theory §10)
         if drifter is not None:
             return run_drifter_continue(args, drifter, out)
-    if "." in args.parameter:
-        raise ValueError(f"--parameter {args.parameter} (a config key in SI) needs a drifter config "
-                         "with its oil circuit ([chambers] section) or the preset circuit-drifter")
     if isinstance(args.to, str):
         raise ValueError(f"--to must be a number for --parameter {args.parameter} (dimensionless); "
                          f"got {args.to!r}")
     model, load = _model_and_load(args)
+    _check_parameter(model, load, args.parameter)
     if args.doublings < 0:
         raise ValueError(f"--doublings must be >= 0; got {args.doublings}")
     if args.brute < 0:

@@ -1,9 +1,10 @@
-"""Continuation parameters: the fields of :class:`BarModel` and of the loads (paper eqs. 2, 33, 34),
-and the impact law's own (:attr:`~impactbar.laws.ContactLaw.parameters`: the rod-rock law's,
-theory §4d)."""
+"""Continuation parameters: thin views of the parameter protocol (:mod:`impactbar.parameters`) for a
+branch of orbits: the real parameters of the bar (eq. 2), of the load (eqs. 33, 34) or drive, and of
+the impact law (the rod-rock law's, theory §4d), each declared by its part alone."""
 
 from __future__ import annotations
 
+from .._shared import parameters as protocol
 from .._shared.validate import check_real
 from ..laws import RodRock
 from ..loads import LOADS, Load
@@ -14,7 +15,8 @@ __all__ = ["PARAMETERS", "ROCK_PARAMETERS", "parameter_value", "with_parameter"]
 #: The BarModel fields a branch can be continued in.
 MODEL_PARAMETERS = ("R", "d", "s")
 #: Parameters a branch can be continued in: BarModel fields and the loads' continuation parameters
-#: (:attr:`impactbar.Load.continuation_parameters` of the table of loads).
+#: (:attr:`impactbar.Load.continuation_parameters` of the table of loads), as listed by their classes;
+#: the parameters of one problem: :func:`impactbar.parameters.parameters`.
 PARAMETERS = tuple(dict.fromkeys((*MODEL_PARAMETERS,
                                   *(p for cls in LOADS.values() for p in cls.continuation_parameters))))
 
@@ -22,9 +24,21 @@ PARAMETERS = tuple(dict.fromkeys((*MODEL_PARAMETERS,
 #: loading and unloading stiffnesses (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's
 #: mass, the feed force, and ``"segment<i>.length"`` (``i`` from 0 at the shank; the default
 #: ``blow_time`` follows the lengths). :func:`~impactbar.continue_orbit` takes all but the lengths
-#: (the blow's cell grid rounds them to whole cells: the orbit changes in steps with a length);
-#: :func:`~impactbar.continuation.simulated_diagram` takes them all (:attr:`RodRock.parameters`).
+#: on the lattice (the blow's cell grid rounds them to whole cells: the orbit changes in steps with
+#: a length); :func:`~impactbar.continuation.simulated_diagram` takes them all
+#: (:meth:`RodRock.parameter_table`; kept as the law's list of names).
 ROCK_PARAMETERS = RodRock.parameters
+
+
+def _real(model, forcing, name):
+    """The record of a real parameter of the problem (a ``ValueError`` listing them for any other
+    name: an integer parameter such as ``n_modes`` is swept, not continued)."""
+    table = protocol.parameters(model, forcing)
+    p = table.get(name)
+    if p is None or p.integer:
+        raise protocol.unknown(model, forcing, (n for n, q in table.items() if not q.integer), name)
+    return p
+
 
 def parameter_value(model: BarModel, load: Load, name: str) -> float:
     """Current value of a continuation parameter.
@@ -37,7 +51,8 @@ def parameter_value(model: BarModel, load: Load, name: str) -> float:
         ``"s"``, ``"d"``, ``"R"`` (eqs. 2, 10), ``"p0"``, ``"pk"`` (a :class:`CosineLoad`, eq. 33;
         ``"p0"`` also of a :class:`FourierLoad`), ``"q"``, ``"kappa"`` (a :class:`SquareWaveLoad`,
         eq. 34); under the rod-rock law also ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``,
-        ``"feed"``, ``"segment0.length"``, ... (:data:`ROCK_PARAMETERS`).
+        ``"feed"``, ``"segment0.length"``, ... (:data:`ROCK_PARAMETERS`); any real parameter a part
+        of the problem declares (:func:`impactbar.parameters.parameters`).
 
     Returns
     -------
@@ -47,7 +62,7 @@ def parameter_value(model: BarModel, load: Load, name: str) -> float:
     Raises
     ------
     ValueError
-        For a name outside :data:`PARAMETERS` or one the load does not have.
+        For a name that is not a real parameter of the model and load (the message lists them).
 
     Examples
     --------
@@ -59,12 +74,8 @@ def parameter_value(model: BarModel, load: Load, name: str) -> float:
     >>> parameter_value(model, load, "rock.k"), parameter_value(model, load, "segment0.length")
     (20.0, 2.0)
     """
-    if _is_law_parameter(model, name):
-        return model.law.parameter_value(name)
-    _check_parameter(model, load, name)
-    if name in MODEL_PARAMETERS:
-        return float(getattr(model, name))
-    return float(getattr(load, name))
+    value = _real(model, load, name).value
+    return None if value is None else float(value)
 
 
 def with_parameter(model: BarModel, load: Load, name: str, value: float):
@@ -100,47 +111,17 @@ def with_parameter(model: BarModel, load: Load, name: str, value: float):
     >>> model.law.rock
     BilinearRock(k=30.0, k_u=200.0)
     """
-    if _is_law_parameter(model, name):
-        return model.with_(impact=model.law.with_parameter(name, float(value))), load
-    _check_parameter(model, load, name)
-    if name in MODEL_PARAMETERS:
-        return model.with_(**{name: value}), load
-    return model, load.with_(**{name: value})
-
-
-def _is_law_parameter(model, name) -> bool:
-    """Whether ``name`` is one of the model's impact law's own parameters
-    (:meth:`~impactbar.laws.ContactLaw.has_parameter`; a ``ValueError`` for a segment the rod does not
-    have, and for one of the rod-rock law's names under another law, naming it)."""
-    if name in PARAMETERS:
-        return False
-    law = getattr(model, "law", None)
-    if law is not None and law.has_parameter(name):
-        law.parameter_value(name)  # a ValueError for a parameter the law does not have (a segment)
-        return True
-    if RodRock.has_parameter(name):
-        raise ValueError(f"parameter {name!r} is one of the rod-rock law's {ROCK_PARAMETERS}; the model "
-                         f"has impact={getattr(model, 'impact', None)!r}")
-    return False
+    _real(model, load, name)
+    return protocol.with_parameter(model, load, name, value)
 
 
 def _check_parameter(model, load, name, *, continuation=False):
-    """Whether ``name`` is a parameter of the model and load; for ``continuation`` also that the
-    problem is smooth in it (not a segment length on the lattice: its cell grid rounds the segments
-    to whole cells, so the blow changes in steps with a length: the law's
-    :meth:`~impactbar.laws.ContactLaw.check_continuable`)."""
-    if _is_law_parameter(model, name):
-        if continuation:
-            model.law.check_continuable(name, model)
-        return
-    if name not in PARAMETERS:
-        raise ValueError(f"parameter must be one of {PARAMETERS}; got {name!r}")
-    if name in MODEL_PARAMETERS:
-        return
-    names = getattr(load, "continuation_parameters", ())
-    if name not in names:
-        raise ValueError(f"parameter {name!r} is not a field of {type(load).__name__} that can be "
-                         f"continued; use one of {(*names, *MODEL_PARAMETERS)}")
+    """Whether ``name`` is a real parameter of the model and load; for ``continuation`` also that
+    the problem is smooth in it (its record's ``continuable``: not a segment length on the lattice,
+    whose cell grid rounds the segments to whole cells, so the blow changes in steps with a length)."""
+    _real(model, load, name)
+    if continuation:
+        protocol.check_continuable(model, load, name)
 
 
 def _target(parameter, start, to, model=None, load=None):

@@ -3,12 +3,13 @@
 The augmented problem for the engine (:mod:`impactbar.continuation.engine`) is the drive's
 periodic-orbit problem (:func:`impactbar.orbits.switched.orbit_problem`: the drive's own, e.g. the
 valve's segment problem, unknowns the state after the impact and the free flight times ``h1``,
-``h3``; or the generic shooting problem) with the continued parameter appended: one of the drive's
-:attr:`~impactbar.Drive.parameters` (the valve's ``stroke``, ``ret``, ``switch_out``, ``delay``) or
-of the bar (``R``, ``d``, ``s``). The events are those of :func:`impactbar.continue_orbit` (fold,
-period doubling, Neimark-Sacker, an impact velocity through 0, a change of admissibility), confirmed
-by the multipliers of the autonomous map (the trivial one along the flow set apart), and the grazing
-of a switching surface: the gap's rate at a switch crossing going through 0.
+``h3``; or the generic shooting problem) with the continued parameter appended: any continuable
+parameter of the problem (:func:`impactbar.parameters.parameters`: the drive's, the valve's
+``stroke``, ``ret``, ``switch_out``, ``delay``; the bar's ``R``, ``d``, ``s``; its impact law's).
+The events are those of :func:`impactbar.continue_orbit` (fold, period doubling, Neimark-Sacker, an
+impact velocity through 0, a change of admissibility), confirmed by the multipliers of the
+autonomous map (the trivial one along the flow set apart), and the grazing of a switching surface:
+the gap's rate at a switch crossing going through 0.
 """
 
 from __future__ import annotations
@@ -19,54 +20,17 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
+from .._shared.parameters import check_continuable, parameter_value, with_parameter
 from .._shared.status import BranchStatus, EventKind
 from .._shared.validate import check_real
-from ..model import BarModel
 from ..orbits.switched import SwitchedOrbit, orbit_of, orbit_problem
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _target
 
-__all__ = ["SWITCHED_PARAMETERS", "continue_switched"]
+__all__ = ["continue_switched"]
 
 EVENT_KINDS = tuple(EventKind)
-
-#: Parameters of the bar a switched orbit can be continued in (besides the drive's own,
-#: :attr:`~impactbar.Drive.parameters`).
-MODEL_PARAMETERS = ("R", "d", "s")
-#: Parameters a valve's orbit can be continued in: the drive's fields and the bar's.
-SWITCHED_PARAMETERS = ("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in", *MODEL_PARAMETERS)
-
-
-def parameters_of(drive, model=None) -> tuple:
-    """The parameters an orbit under ``drive`` can be continued in: the drive's, the bar's and, given
-    the ``model``, its impact law's own (:attr:`~impactbar.laws.ContactLaw.parameters`: the rod-rock
-    law's ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"``, ``"segment<i>.length"``)."""
-    law = getattr(model, "law", None)
-    return (*drive.parameters, *MODEL_PARAMETERS, *(getattr(law, "parameters", ()) or ()))
-
-
-def _is_law_parameter(model, drive, name: str) -> bool:
-    """Whether ``name`` is the impact law's (not the drive's nor the bar's)."""
-    return name not in drive.parameters and name not in MODEL_PARAMETERS and \
-        getattr(model, "law", None) is not None and model.law.has_parameter(name)
-
-
-def _value(model: BarModel, drive, name: str):
-    """The parameter's value (``None`` for a valve's delay where its two delays differ)."""
-    if _is_law_parameter(model, drive, name):
-        return model.law.parameter_value(name)
-    return getattr(model if name in MODEL_PARAMETERS else drive, name)
-
-
-def _with(model: BarModel, drive, name: str, value: float):
-    """The model and drive with one parameter changed (validated again by their constructors)."""
-    if _is_law_parameter(model, drive, name):
-        return model.with_(impact=model.law.with_parameter(name, float(value))), drive
-    if name in MODEL_PARAMETERS:
-        return model.with_(**{name: value}), drive
-    return model, drive.with_(**{name: value})
-
 
 class _SwitchedProblem:
     """The periodic-orbit problem of a drive in ``U = (X, lambda)``, for the engine.
@@ -84,13 +48,13 @@ class _SwitchedProblem:
         self.m, self.doubled, self.base = impacts, doubled, base
         self.pair = functools.lru_cache(maxsize=16)(self._pair)
         self._chord = None  # the last orbit's F_u, for the next corrector's first step
-        start = self.pair(float(_value(model, drive, name)))[2]
+        start = self.pair(float(parameter_value(model, drive, name)))[2]
         self.flights = start.positive
         self.W = np.append(np.full(start.size, 1.0 / start.size), 1.0)
 
     def _pair(self, lam: float):
         """The model, drive and orbit problem at the parameter value ``lam``."""
-        model, drive = _with(self.model0, self.drive0, self.name, lam)
+        model, drive = with_parameter(self.model0, self.drive0, self.name, lam)
         problem = orbit_problem(model, drive, self.m)
         if self.base is not None:
             problem.adopt(self.base)
@@ -384,13 +348,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
             raise ValueError(f"parameter must be the doubling's own, {orbit.parameter!r}; got {parameter!r}")
         switch, orbit = orbit, orbit.orbit
     model, drive = orbit.model, orbit.drive
-    allowed = parameters_of(drive, model)
-    if parameter not in allowed and not _is_law_parameter(model, drive, parameter):
-        raise ValueError(f"parameter must be one of {allowed} for a switched orbit; got {parameter!r}")
-    if _is_law_parameter(model, drive, parameter):
-        model.law.parameter_value(parameter)  # a segment the rod does not have: a ValueError
-        model.law.check_continuable(parameter, model)
-    lam0 = _value(model, drive, parameter)
+    check_continuable(model, drive, parameter)  # an unknown name (the allowed listed), a non-smooth one
+    lam0 = parameter_value(model, drive, parameter)
     if lam0 is None:  # the valve's delay where its two delays differ
         raise ValueError(f"parameter {parameter!r} has no value on this drive ({drive!r}): follow one of "
                          f"its own, e.g. 'delay_out' or 'delay_in'")

@@ -57,6 +57,8 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
+from .._shared.parameters import NamedParameters
+
 __all__ = ["Drive", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
            "SurfaceEvent", "FlightKernel", "KernelRun", "OrbitData", "OrbitProblem", "OrbitSearch",
            "newton", "split_multipliers"]
@@ -302,7 +304,7 @@ class KernelRun(NamedTuple):
 # --------------------------------------------------------------------------------------------------
 # the drive
 # --------------------------------------------------------------------------------------------------
-class Drive(ABC):
+class Drive(NamedParameters, ABC):
     r"""A drive of the piston that is not a function of time: autonomous, with state of its own
     (theory §10). A base class: subclasses declare the force, the events and their maps.
 
@@ -318,6 +320,8 @@ class Drive(ABC):
     ``state_size``                      ``k``, size of the continuous state ``z`` (0: a force constant
                                         between events)
     ``parameters``                      names of the fields :func:`~impactbar.continue_orbit` may follow
+    ``parameter_ranges``                optional: their ranges and descriptions (the records of
+                                        :meth:`parameter_table`, :mod:`impactbar.parameters`)
     :meth:`with_`                       a copy with new parameter values (validated again)
     :meth:`start`                       the state at the start of a run, from the bar's
     :meth:`force`                       ``p`` on the piston, from the state (and the bar's, ``k > 0``)
@@ -378,6 +382,7 @@ class Drive(ABC):
     state_size: ClassVar[int] = 0
     state_names: ClassVar[tuple[str, ...]] = ()
     parameters: ClassVar[tuple[str, ...]] = ()
+    # (their records, changed by with_parameter: NamedParameters, the parameter protocol)
 
     # -- parameters -------------------------------------------------------------------------------
     def with_(self, **changes) -> Drive:

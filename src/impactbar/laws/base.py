@@ -15,6 +15,8 @@ from typing import Any, ClassVar, NamedTuple, Protocol
 
 import numpy as np
 
+from .._shared.parameters import Parameter
+
 __all__ = ["ContactLaw", "LawNotSupported", "OrbitState", "DrivenContact", "BarModelLike"]
 
 
@@ -472,6 +474,29 @@ class ContactLaw:
         """
         raise LawNotSupported(self._missing("driven_contact"))
 
+    def parameter_table(self, model=None) -> tuple[Parameter, ...]:
+        """The law's own parameters as records (:func:`impactbar.parameters.parameters` lists them
+        beside the bar's): by default one unbounded, continuable record for each of
+        :attr:`parameters`, with its :meth:`parameter_value`. A law with bounds, units,
+        descriptions or a parameter it is not smooth in overrides this, its one declaration.
+
+        Parameters
+        ----------
+        model : BarModel, optional
+            The model under this law.
+
+        Returns
+        -------
+        tuple of Parameter
+
+        Examples
+        --------
+        >>> from impactbar.laws import get_law
+        >>> get_law("paper").parameter_table()
+        ()
+        """
+        return tuple(Parameter(name, self.parameter_value(name)) for name in self.parameters)
+
     def has_parameter(self, name: str) -> bool:
         """Whether ``name`` is one of the law's own continuation parameters (:attr:`parameters`).
 
@@ -531,8 +556,8 @@ class ContactLaw:
 
     def check_continuable(self, name: str, model=None) -> None:
         """Refuse a parameter in which the law's impact map is not smooth, so that a branch cannot
-        be continued in it (:func:`~impactbar.continue_orbit`); every parameter is accepted by
-        default.
+        be continued in it (:func:`~impactbar.continue_orbit`): one whose record in
+        :meth:`parameter_table` is not ``continuable`` (its ``reason`` given).
 
         Parameters
         ----------
@@ -546,6 +571,10 @@ class ContactLaw:
         ValueError
             Saying why the parameter cannot be continued.
         """
+        self._check_parameter(name)
+        for p in self.parameter_table(model):
+            if p.name == name and not p.continuable:
+                raise ValueError(f"parameter {name!r} cannot be continued: {p.reason}")
 
     def _check_parameter(self, name: str) -> None:
         if not self.has_parameter(name):

@@ -7,11 +7,12 @@ sees ``p(t + phase)`` (eq. 7). Each load also knows the exact motion of a modal 
 
 from __future__ import annotations
 
-from .base import LOADS, Load
+from .base import LOADS, Load, register_load
 from .fourier import CosineLoad, FourierLoad
 from .piecewise import PiecewiseConstantLoad, SquareWaveLoad
 
-__all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad", "LOADS"]
+__all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad", "LOADS",
+           "register_load"]
 
 
 # the table of loads (kind -> class), in the order the CLI and the sweep spec list them

@@ -10,11 +10,12 @@ from typing import ClassVar
 
 import numpy as np
 
+from .._shared.parameters import Parameter
 from .._shared.schema import Schema
 from ..dynamics.kernelview import LoadKernelView
 from ..dynamics.modal import fundamental
 
-__all__ = ["Load", "LOADS"]
+__all__ = ["Load", "LOADS", "register_load"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -56,8 +57,10 @@ class Load(ABC):
     load class with a :attr:`kind` is an entry of the table :data:`LOADS`):
 
     - :attr:`kind`, :attr:`description`, :attr:`parameters` (its constructor's, with long names
-      and dtypes) and :attr:`continuation_parameters`; :meth:`to_record`, :meth:`from_record` and
-      :meth:`with_` (a copy with parameters changed);
+      and dtypes), :attr:`continuation_parameters` and :attr:`parameter_ranges` (its parameter
+      records, :meth:`parameter_table`, changed by :meth:`with_parameter`: the parameter protocol
+      of :mod:`impactbar.parameters`); :meth:`to_record`, :meth:`from_record` and :meth:`with_` (a
+      copy with parameters changed);
     - :attr:`period` (its fundamental period), :attr:`max_one_impact_orbits` (a bound of the roots
       of the phase equation, eq. 14);
     - the forms a special solver recognises: :meth:`cosine_form` (the rigid closed forms,
@@ -91,6 +94,10 @@ class Load(ABC):
     parameters: ClassVar[Schema] = Schema()
     #: the parameters a branch of orbits can be continued in (:func:`impactbar.continue_orbit`)
     continuation_parameters: ClassVar[tuple[str, ...]] = ()
+    #: the ranges of its numbers, where a record (:meth:`parameter_table`) should state them: name ->
+    #: keyword arguments of :class:`~impactbar.parameters.Parameter` (``low``, ``high``, ``low_open``,
+    #: ...); the constructor checks them again
+    parameter_ranges: ClassVar[dict[str, dict]] = {}
     #: the ``kind`` of the :attr:`kernel_view` the class declares (``None``: it declares none)
     kernel_kind: ClassVar[int | None] = None
     #: the forcing family, by which each entry point chooses its solver once (a drive's is
@@ -313,6 +320,54 @@ class Load(ABC):
             args[f.name] = v
         return cls(**args)
 
+    def parameter_table(self) -> tuple[Parameter, ...]:
+        """The load's numbers as parameter records (:func:`impactbar.parameters.parameters`), from
+        its declaration in the class body: the scalar fields of :attr:`parameters` (their long names
+        the descriptions, an integer dtype an integer parameter), continuable where named in
+        :attr:`continuation_parameters`, with the ranges of :attr:`parameter_ranges`.
+
+        Returns
+        -------
+        tuple of Parameter
+
+        Examples
+        --------
+        >>> from impactbar import CosineLoad
+        >>> [(p.name, p.value, p.continuable) for p in CosineLoad(0.3, 1.0).parameter_table()]
+        [('p0', 0.3, True), ('pk', 1.0, True), ('k', 1, False)]
+        """
+        out = []
+        for f in self.parameters:
+            if f.per is not None:
+                continue
+            integer = f.dtype.startswith("i")
+            value = getattr(self, f.name)
+            out.append(Parameter(f.name, int(value) if integer else float(value), description=f.long_name,
+                                 continuable=f.name in self.continuation_parameters, integer=integer,
+                                 **self.parameter_ranges.get(f.name, {})))
+        return tuple(out)
+
+    def with_parameter(self, name: str, value) -> Load:
+        """A copy with one of :meth:`parameter_table` changed (validated again by the constructor).
+
+        Parameters
+        ----------
+        name : str
+            One of the names of :meth:`parameter_table`.
+        value : float or int
+            Its new value (an int for an integer field).
+
+        Returns
+        -------
+        Load
+
+        Raises
+        ------
+        ValueError
+            For a name that is not a parameter of this load, or a value out of its range.
+        """
+        return self.with_(**{name: value})
+
     def with_(self, **changes) -> Load:
         """A copy with some :attr:`parameters` changed (validated again by the constructor).
 
@@ -382,3 +437,41 @@ class Load(ABC):
 
     def _repr_args(self) -> str:  # pragma: no cover - overridden
         return ""
+
+
+def register_load(cls: type[Load]) -> type[Load]:
+    """Enter a load class in the table :data:`LOADS` by its :attr:`~Load.kind`, so that a sweep
+    spec's ``[load] kind``, :meth:`Load.from_record` and the sweeps' axes know it (usable as a class
+    decorator).
+
+    Parameters
+    ----------
+    cls : type
+        A subclass of :class:`Load` with a non-empty ``kind``.
+
+    Returns
+    -------
+    type
+        ``cls``.
+
+    Raises
+    ------
+    ValueError
+        For a class that is not a load, without a ``kind``, or whose ``kind`` another class holds.
+
+    Examples
+    --------
+    >>> from impactbar.loads import CosineLoad, register_load
+    >>> register_load(CosineLoad) is CosineLoad  # already there: registering again changes nothing
+    True
+    """
+    if not (isinstance(cls, type) and issubclass(cls, Load)):
+        raise ValueError(f"cls must be a subclass of Load; got {cls!r}")
+    kind = cls.kind
+    if not isinstance(kind, str) or not kind:
+        raise ValueError(f"cls.kind must be a non-empty string (the load's name in LOADS); got {kind!r}")
+    held = LOADS.get(kind)
+    if held is not None and held is not cls:
+        raise ValueError(f"kind {kind!r} is already the load {held.__name__}; choose another kind")
+    LOADS[kind] = cls
+    return cls

@@ -303,6 +303,7 @@ class CosineLoad(FourierLoad):
     parameters = Schema(Field("p0", "mean load"), Field("pk", "amplitude of the harmonic"),
                         Field("k", "order of the harmonic, >= 1", "", dtype="i8"))
     continuation_parameters = ("p0", "pk")
+    parameter_ranges = {"k": {"low": 1, "high": 4096}}
 
     def __init__(self, p0, pk, k=1):
         self._set(p0=check_real("p0", p0), pk=check_real("pk", pk), k=check_int("k", k, lo=1, hi=4096))

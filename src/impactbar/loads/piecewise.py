@@ -280,6 +280,7 @@ class SquareWaveLoad(PiecewiseConstantLoad):
     parameters = Schema(Field("q", "level of the square wave, > 0"),
                         Field("kappa", "fraction of the period at +q times 2, in [1, 2]"))
     continuation_parameters = ("q", "kappa")
+    parameter_ranges = {"q": {"low": 0.0, "low_open": True}, "kappa": {"low": 1.0, "high": 2.0}}
 
     def __init__(self, q, kappa):
         q = check_real("q", q, lo=0.0, lo_open=True)

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._shared.parameters import parameter_value, parameters, with_parameters
 from .._shared.validate import check_int, check_real
 from ..laws import get_law
 from ..loads import LOADS, Load
@@ -57,9 +58,6 @@ _TOP_KEYS = ("task", "model", "load", "axes", "rock", "chunk_points", *TASKS)
 #: each of its ``segments``
 ROCK_KEYS = ("k", "k_u", "bit_mass", "feed", "blow_time", "cells_per_piston", "segments")
 SEGMENT_KEYS = ("length", "impedance", "wave_speed")
-#: axes a spec with ``[rock]`` may also sweep (the names of :data:`impactbar.continuation.ROCK_PARAMETERS`;
-#: ``segment<i>.length`` for each segment ``i``)
-ROCK_AXES = ("rock.k", "rock.k_u", "bit_mass", "feed")
 #: grid points per chunk of an ``orbits`` sweep under the rod-rock law (Newton on a numerical blow
 #: map: some 0.1 s a point)
 DEFAULT_ROCK_CHUNK_POINTS = 16
@@ -121,11 +119,11 @@ class SweepSpec:
         ``p0, coefficients`` (:class:`impactbar.FourierLoad`; ``coefficients`` as ``[[re, im],
         ...]`` or real numbers), ``breaks, levels`` (:class:`impactbar.PiecewiseConstantLoad`).
     axes : tuple of Axis
-        At least one; each names a field present in ``model`` or ``load`` (its value there is the
-        base, replaced along the axis), or with ``rock`` one of ``"rock.k"``, ``"rock.k_u"``,
-        ``"bit_mass"``, ``"feed"``, ``"segment<i>.length"`` (the names of
-        :func:`impactbar.continuation.with_parameter`). The grid is their outer product, first axis
-        slowest.
+        At least one; each names a parameter of the bar, the load or the impact law
+        (:func:`impactbar.parameters.parameters` of the spec's bar and load: a field present in
+        ``model`` or ``load``, its value there the base, replaced along the axis; with ``rock``
+        also ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"``, ``"segment<i>.length"``).
+        The grid is their outer product, first axis slowest.
     options : dict
         The task's options, defaults filled in. ``orbits``: ``max_orbits`` (length of the
         ``orbit`` dimension; default the most one-impact orbits the load can have: ``2 k`` for a
@@ -227,6 +225,16 @@ class SweepSpec:
         if self.task == "bifurcation":
             return self.options["keep"]
         return len(motion_classes())
+
+    def parameters(self) -> dict:
+        """The parameters of the spec's base bar and load (:func:`impactbar.parameters.parameters`):
+        every name an axis may take, with its record (value at the base, range, description).
+
+        Returns
+        -------
+        dict of str to Parameter
+        """
+        return parameters(*_base(self.model, self.load, self.rock))
 
     def point(self, index) -> tuple:
         """The bar and the load at a grid point.
@@ -450,13 +458,6 @@ def _rock_law(rock: dict):
                    blow_time=rock.get("blow_time"), cells_per_piston=rock.get("cells_per_piston"))
 
 
-def _rock_axes(rock) -> list:
-    """The rod-rock parameters a spec with this ``[rock]`` may sweep."""
-    if rock is None:
-        return []
-    return [*ROCK_AXES, *(f"segment{i}.length" for i in range(len(rock["segments"])))]
-
-
 def _lists(v):
     """Tuples (nested) as lists, for JSON."""
     return [_lists(x) for x in v] if isinstance(v, tuple | list) else v
@@ -490,9 +491,11 @@ def _check_load(load) -> dict:
 
 
 def _check_axes(axes, model, load, rock=None) -> tuple:
+    """The axes, each a parameter of the spec's bar, load or impact law
+    (:func:`impactbar.parameters.parameters`), its values checked by building the point."""
     if not isinstance(axes, tuple | list) or not axes:
         raise ValueError("[axes] must name at least one field to sweep")
-    sweepable = [*MODEL_FIELDS, *_load_numbers(load), *_rock_axes(rock)]
+    sweepable = list(parameters(*_base(model, load, rock)))
     seen = set()
     out = []
     for ax in axes:
@@ -511,14 +514,7 @@ def _check_axes(axes, model, load, rock=None) -> tuple:
                 m, ld = _build(model, load, {ax.name: v}, rock)
             except ValueError as exc:
                 raise ValueError(f"[axes] {ax.name} = {v!r}: {exc}") from None
-            if ax.name in MODEL_FIELDS:
-                values.append(getattr(m, ax.name))
-            elif ax.name in _load_numbers(load):
-                values.append(getattr(ld, ax.name))
-            else:
-                from ..continuation.parameters import parameter_value
-
-                values.append(parameter_value(m, ld, ax.name))
+            values.append(parameter_value(m, ld, ax.name))
         if len(set(values)) != len(values):
             raise ValueError(f"[axes] {ax.name}: values must be distinct; got {values}")
         out.append(Axis(ax.name, tuple(values)))
@@ -582,21 +578,21 @@ def _make_load(load: dict):
     return Load.from_record(load)
 
 
-def _build(model: dict, load: dict, changes: dict, rock: dict | None = None):
+def _base(model: dict, load: dict, rock: dict | None = None):
+    """The spec's bar (under the rod-rock law of its ``[rock]`` table, if any) and load."""
     from ..model import BarModel
 
-    m = {k: changes.get(k, v) for k, v in model.items()}
-    ld = {k: changes.get(k, v) for k, v in load.items()}
-    if rock is None:
-        return BarModel(**m), _make_load(ld)
-    from ..continuation.parameters import with_parameter
+    m = dict(model)
+    if rock is not None:
+        m["impact"] = _rock_law(rock)
+    return BarModel(**m), _make_load(load)
 
-    m["impact"] = _rock_law(rock)
-    bar, load_ = BarModel(**m), _make_load(ld)
-    for name in _rock_axes(rock):
-        if name in changes:
-            bar, load_ = with_parameter(bar, load_, name, changes[name])
-    return bar, load_
+
+def _build(model: dict, load: dict, changes: dict, rock: dict | None = None):
+    """The bar and load at a grid point: the spec's, with the axes' parameters changed
+    (:func:`impactbar.parameters.with_parameters`)."""
+    bar, load_ = _base(model, load, rock)
+    return with_parameters(bar, load_, changes)
 
 def motion_classes() -> tuple[str, ...]:
     """The ``motion`` coordinate of a ``montecarlo`` store: the classes of

@@ -13,8 +13,6 @@ from pathlib import Path
 import numpy as np
 
 from ..dynamics.implementations import use_fast
-from ..loads import LOADS
-from ..model import BarModel
 from .spec import _ATTR_SPEC, _ATTR_VERSION, _DONE, _EXTRA_DIM, _SUM, SweepSpec, motion_classes, parse_spec
 from .tasks import _variables, chunk_slices
 
@@ -28,23 +26,9 @@ UNITS = {  # (the variables' own are declared with them: impactbar.sweeps.tasks.
     _DONE: "",
 }
 
-#: long names of the grid axes (model and load parameters, eq. 2 and theory §3; the loads' from
-#: the table of loads)
-AXIS_NAMES = {
-    **{f.name: f.long_name for f in BarModel.parameters},
-    **{f.name: f.long_name for cls in LOADS.values() for f in cls.parameters if f.per is None},
-    "rock.k": "rock loading stiffness",
-    "rock.k_u": "rock unloading stiffness",
-    "bit_mass": "bit mass (piston masses)",
-    "feed": "feed force",
-}
-
-
-def _axis_name(name: str) -> str:
-    """The long name of a grid axis (``segment<i>.length`` for every segment ``i``)."""
-    if name.startswith("segment") and name.endswith(".length"):
-        return f"length of rod segment {name[7:-7]} (piston lengths)"
-    return AXIS_NAMES.get(name, name)
+def _axis_name(spec: SweepSpec, name: str) -> str:
+    """The long name of a grid axis: its parameter's description (:meth:`SweepSpec.parameters`)."""
+    return spec.parameters()[name].description
 
 
 def _var_attrs(name: str, description: str, units: str | None = None) -> dict:
@@ -79,7 +63,7 @@ def _template(spec: SweepSpec):
                                   attrs=_var_attrs(_SUM, "CRC-32 of the work chunk's data "
                                                          "(-1 before it is stored)"))
     coords = {a.name: xr.Variable((a.name,), np.asarray(a.values),
-                                  attrs={"long_name": _axis_name(a.name),
+                                  attrs={"long_name": _axis_name(spec, a.name),
                                          "units": UNITS.get(a.name, "1")})
               for a in spec.axes}
     if spec.task == "montecarlo":
@@ -136,7 +120,7 @@ def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
         values = np.asarray(a.values)
         arrays.append((a.name, values, values.dtype, values.shape, values.shape,
                        np.nan if values.dtype.kind == "f" else 0, (a.name,),
-                       attrs({"long_name": _axis_name(a.name), "units": UNITS.get(a.name, "1")},
+                       attrs({"long_name": _axis_name(spec, a.name), "units": UNITS.get(a.name, "1")},
                              values.dtype, np.nan)))
     if spec.task == "montecarlo":
         classes = np.asarray(motion_classes(), dtype=object)

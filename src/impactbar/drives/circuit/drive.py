@@ -38,6 +38,36 @@ PARAMETERS = {
     "bulk_modulus": ("oil", "bulk_modulus"), "transition_pressure": ("oil", "transition_pressure"),
 }
 
+#: The ranges and descriptions of :data:`PARAMETERS` (their records:
+#: :meth:`HydraulicCircuitDrive.parameter_table`); the parts' constructors check them again, with
+#: the ranges that depend on another parameter (a held supply pressure above the tank's, ``switch_in``
+#: below ``switch_out``, the pre-charge below the relief pressure).
+_RANGES = {
+    "pump_flow": {"low": 0.0, "low_open": True, "description": "the pump's flow"},
+    "supply_pressure": {"low": 0.0, "description": "pressure of a supply held at a pressure"},
+    "hose_volume": {"low": 0.0, "low_open": True, "description": "the supply hose's oil volume"},
+    "front_coefficient": {"low": 0.0, "low_open": True,
+                          "description": "flow coefficient of the supply to the front chamber"},
+    "tank_pressure": {"low": 0.0, "description": "the tank's pressure"},
+    "relief_pressure": {"low": 0.0, "low_open": True,
+                        "description": "the relief valve's cracking pressure (inf: no relief valve)"},
+    "relief_coefficient": {"low": 0.0, "description": "the relief valve's flow coefficient"},
+    "precharge": {"low": 0.0, "low_open": True, "description": "the accumulator's gas pre-charge"},
+    "accumulator_volume": {"low": 0.0, "description": "the accumulator's gas volume"},
+    "polytropic_exponent": {"low": 1.0, "high": 2.0, "description": "the gas's polytropic exponent"},
+    "switch_out": {"low": 0.0, "low_open": True, "description": "gap whose rising crossing opens the valve"},
+    "switch_in": {"low": 0.0, "low_open": True, "description": "gap whose falling crossing closes the valve"},
+    "switching_time": {"low": 0.0, "description": "a full stroke of the valve's spool"},
+    "valve_coefficient": {"low": 0.0, "low_open": True, "description": "the valve's flow coefficient"},
+    "area_ratio": {"low": 0.0, "high": 1.0, "low_open": True, "high_open": True,
+                   "description": "area of the front annulus over the rear's"},
+    "rear_volume": {"low": 0.0, "low_open": True, "description": "the rear chamber's dead volume"},
+    "front_volume": {"low": 0.0, "low_open": True, "description": "the front chamber's dead volume"},
+    "bulk_modulus": {"low": 0.0, "low_open": True, "description": "the oil's bulk modulus"},
+    "transition_pressure": {"low": 0.0, "low_open": True,
+                            "description": "transition pressure of the orifices' smoothed law"},
+}
+
 _SWITCH_OUT = "switch_out"
 _SWITCH_IN = "switch_in"
 _RAMP = "ramp_end"
@@ -143,6 +173,7 @@ class HydraulicCircuitDrive(Drive):
     state_size = 4
     state_names = ("p_f", "p_r", "p_s", "x_v")
     parameters = tuple(PARAMETERS)
+    parameter_ranges = _RANGES
     integrator = FlightSettings(method="CVODE", rtol=1e-10, atol=1e-12)
     variational = True
 
@@ -199,16 +230,12 @@ class HydraulicCircuitDrive(Drive):
         part, field = PARAMETERS[name]
         return float(getattr(getattr(self, part), field))
 
-    def __getattr__(self, name: str):
-        # the parameters read by name as attributes (``drive.precharge``), as the generic
-        # continuation reads a drive's parameters (only called where the ordinary lookup fails)
-        if name in PARAMETERS:
-            part, field = PARAMETERS[name]
-            holder = self.__dict__.get(part)
-            if holder is not None:
-                value = getattr(holder, field)
-                return float(value) if value is not None else None
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+    def _parameter_value(self, name: str) -> float | None:
+        # (a record's value: None for a part the circuit does not have, or a field it leaves unset)
+        part, field = PARAMETERS[name]
+        holder = getattr(self, part)
+        value = None if holder is None else getattr(holder, field)
+        return None if value is None else float(value)
 
     # -- compiled data ----------------------------------------------------------------------------
     def _par(self, model, mode, variational=False) -> np.ndarray:

@@ -115,6 +115,15 @@ class PositionSwitchedDrive(Drive):
     delay_in: float | None = None
 
     parameters = ("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in")
+    parameter_ranges = {
+        "stroke": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True, "description": "force of the stroke"},
+        "ret": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True, "description": "force of the return"},
+        "switch_out": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True,
+                       "description": "gap at which the valve switches to the return"},
+        "delay": {"low": 0.0, "description": "both switching delays (None where they differ)"},
+        "delay_out": {"low": 0.0, "description": "delay of the switch to the return"},
+        "delay_in": {"low": 0.0, "description": "delay of the switch to the stroke"},
+    }
 
     def __post_init__(self) -> None:
         # (at most 1e100: the motion's squares, energies and forces stay inside the float range)

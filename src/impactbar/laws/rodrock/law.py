@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..._shared.parameters import Parameter
 from ..._shared.validate import check_int, check_real
 from ..base import ContactLaw
 from ._choice import (  # noqa: F401  (the choices' bounds, as before)
@@ -190,7 +191,7 @@ class RodRock(ContactLaw):
     #: (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's mass, the feed force, and
     #: ``"segment<i>.length"`` (``i`` from 0 at the shank; the default ``blow_time`` follows the
     #: lengths), continued on the exact blows only (the lattice's cell grid rounds them to whole
-    #: cells: :meth:`check_continuable`)
+    #: cells: :meth:`parameter_table`)
     parameters = ("rock.k", "rock.k_u", "bit_mass", "feed", "segment<i>.length")
 
     def __post_init__(self) -> None:
@@ -375,6 +376,45 @@ class RodRock(ContactLaw):
 
         return driven_rock_contact(model, drive, state, float(t), q_minus, v_minus, settings)
 
+    def parameter_table(self, model=None) -> tuple[Parameter, ...]:
+        """The law's parameters, in its units (:attr:`parameters`), for
+        :func:`impactbar.parameters.parameters`: a segment's length is not continuable where the blows
+        are the lattice's (its cell grid rounds them to whole cells).
+
+        Parameters
+        ----------
+        model : BarModel, optional
+            The model under this law (which blows it takes: :meth:`blow_method`).
+
+        Returns
+        -------
+        tuple of Parameter
+            ``rock.k``, ``rock.k_u``, ``bit_mass``, ``feed``, ``segment0.length``, ...
+
+        Examples
+        --------
+        >>> law = RodRock(segments=[RodSegment(length=2.0, impedance=2.0)],
+        ...               rock=BilinearRock(k=20.0, k_u=200.0))
+        >>> [(p.name, p.value) for p in law.parameter_table()][:2]
+        [('rock.k', 20.0), ('rock.k_u', 200.0)]
+        """
+        exact = self.method == "exact" if model is None else self.blow_method(model) == "exact"
+        lattice = ("" if exact else "on the lattice its cell grid rounds the segments' travel times to whole "
+                   "cells, so the orbit changes in steps with a length: use RodRock(method='exact' or "
+                   "'auto', without cells_per_piston), or follow it with simulated_diagram or find_orbit "
+                   "at each length")
+        return (
+            Parameter("rock.k", float(self.rock.k), low=0.0, low_open=True,
+                      description="rock loading stiffness"),
+            Parameter("rock.k_u", float(self.rock.k_u), low=float(self.rock.k),
+                      description="rock unloading stiffness"),
+            Parameter("bit_mass", float(self.bit_mass), low=0.0, description="bit mass (piston masses)"),
+            Parameter("feed", float(self.feed), low=0.0, description="feed force"),
+            *(Parameter(f"segment{i}.length", float(g.length), low=0.0, low_open=True, continuable=exact,
+                        description=f"length of rod segment {i} (piston lengths)", reason=lattice)
+              for i, g in enumerate(self.segments)),
+        )
+
     @classmethod
     def has_parameter(cls, name: str) -> bool:
         """Whether ``name`` is one of :attr:`parameters` (``"segment<i>.length"`` for any ``i``).
@@ -441,31 +481,6 @@ class RodRock(ContactLaw):
             segs[i] = dataclasses.replace(segs[i], length=value)
             return dataclasses.replace(self, segments=segs)
         return dataclasses.replace(self, **{name: value})
-
-    def check_continuable(self, name: str, model=None) -> None:
-        """Refuse a segment's length where the blows are the lattice's (:meth:`blow_method`; without
-        ``model``, unless ``method="exact"``): its cell grid rounds the segments' travel times to
-        whole cells, so the orbit changes in steps with a length. The exact blows carry each segment
-        as a delay line of its own travel time, smooth in it.
-
-        Parameters
-        ----------
-        name : str
-        model : BarModel, optional
-            The model under this law.
-
-        Raises
-        ------
-        ValueError
-            For ``"segment<i>.length"`` on the lattice.
-        """
-        exact = self.method == "exact" if model is None else self.blow_method(model) == "exact"
-        if _SEGMENT.fullmatch(str(name)) and not exact:
-            raise ValueError(f"parameter {name!r} cannot be continued on the lattice: its cell grid rounds "
-                             "the segments' travel times to whole cells, so the orbit changes in steps "
-                             "with a length; use RodRock(method='exact' or 'auto', without "
-                             "cells_per_piston), or follow it with simulated_diagram or find_orbit at each "
-                             "length")
 
     def _check_parameter(self, name: str) -> None:
         if not self.has_parameter(name):
