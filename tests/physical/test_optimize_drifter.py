@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -193,6 +194,11 @@ def test_rock_problem_one_variable_reevaluated_fresh():
         rock["drilling_rate_m_min"] / o.pump_power_kW, rel=1e-9)
     assert rock["peak_rod_stress_Pa"] <= 260e6
     assert np.max(np.abs(o.multipliers)) <= 0.95 and not o.cavitates
+    # the stress wave the report draws peaks at the peak incident stress it reports
+    wave = res.optimum["shank_stress"]
+    assert max(wave["stress_Pa"]) == pytest.approx(rock["peak_rod_stress_Pa"], rel=1e-9)
+    pytest.importorskip("matplotlib")
+    assert len(res.plot()[1].lines) == 2
 
 
 # -- the command line ---------------------------------------------------------------------------------
@@ -212,3 +218,71 @@ def test_cli_optimize_writes_json_and_refuses_bad_input_in_one_line(tmp_path, ca
         assert main(["optimize", "circuit-drifter", "--objective", "impact_power", *argv]) == 2
         err = capsys.readouterr().err
         assert match in err and err.count("\n") == 1
+
+
+# -- the docs page's numbers, recomputed ------------------------------------------------------------
+DOCS = ROOT / "docs" / "optimising_a_drifter.md"
+
+#: the table's rows: the figure of a fresh operating point each one prints
+_ROWS = {
+    "drilling rate (m/min)": lambda d, o: o.rock()["drilling_rate_m_min"],
+    "drilling rate per kW (m/min/kW)": lambda d, o: o.rock()["drilling_rate_m_min"] / o.pump_power_kW,
+    "work on rock per blow (J)": lambda d, o: o.rock()["work_on_rock_J"],
+    "impact power (kW)": lambda d, o: o.impact_power_kW,
+    "blow frequency (Hz)": lambda d, o: o.blow_frequency_Hz,
+    "pump power (kW)": lambda d, o: o.pump_power_kW,
+    "peak incident stress (MPa)": lambda d, o: o.rock()["peak_rod_stress_Pa"] / 1e6,
+    "largest multiplier modulus": lambda d, o: float(np.max(np.abs(o.multipliers))),
+    "mean supply pressure (MPa)": lambda d, o: o.mean_supply_pressure_Pa / 1e6,
+    "piston mass (kg)": lambda d, o: d.bar.mass_kg,
+}
+
+
+def _docs_designs():
+    """The designs the page reports (its ``changes`` blocks, in the table's column order) and its
+    table's rows."""
+    text = DOCS.read_text()
+    blocks = [json.loads(b) for b in re.findall(r"```json\n(\{.*?\})\n```", text, flags=re.S)]
+    table = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if cells and cells[0] in _ROWS:
+            table[cells[0]] = [float(c) for c in cells[1:]]
+    return blocks, table
+
+
+@pytest.mark.slow
+def test_docs_numbers_recomputed_by_fresh_orbits():
+    """Every number of the page's table, for the baseline and each optimum it reports, from a fresh
+    ``orbit()`` of the design rebuilt from the changes the page prints (4 significant digits)."""
+    blocks, table = _docs_designs()
+    assert blocks and set(table) == set(_ROWS)
+    config = read_config(PISTON_EXAMPLE)[0]
+    for column, changes in enumerate([{}, *blocks]):
+        d = build(with_values(config, changes))
+        o = d.orbit()
+        for name, fn in _ROWS.items():
+            assert fn(d, o) == pytest.approx(table[name][column], rel=6e-4), (name, column)
+        if changes:  # each optimum meets the constraints the page states
+            assert o.rock()["peak_rod_stress_Pa"] <= 250e6 and np.max(np.abs(o.multipliers)) <= 0.95
+            assert not o.cavitates and o.mean_supply_pressure_Pa <= d.si["relief_pressure_Pa"]
+
+
+@pytest.mark.slow
+def test_full_example_problem_reproduces_the_docs_optimum(tmp_path):
+    """The benchmark's problem (six variables, 30 designs; about 20 minutes on a loaded 2-core
+    machine): the optimum the page reports, re-evaluated fresh, every constraint met."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("bench", ROOT / "benchmarks" / "bench_optimize_drifter.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    res = optimize_drifter(PISTON_EXAMPLE, bench.VARY, constraints=bench.CONSTRAINTS, max_evaluations=30,
+                           progress=False)
+    blocks, table = _docs_designs()
+    assert res.optimum["changes"] == blocks[-1]
+    d, o = _fresh_figures(read_config(PISTON_EXAMPLE)[0], res.optimum["changes"])
+    assert res.optimum["objectives"]["drilling_rate_per_kW"] == pytest.approx(
+        o.rock()["drilling_rate_m_min"] / o.pump_power_kW, rel=1e-9)
+    assert all(c["margin"] >= 0 for c in res.optimum["constraints"].values())
+    assert o.rock()["drilling_rate_m_min"] >= 2.5
