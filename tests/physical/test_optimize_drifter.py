@@ -235,6 +235,11 @@ _ROWS = {
     "largest multiplier modulus": lambda d, o: float(np.max(np.abs(o.multipliers))),
     "mean supply pressure (MPa)": lambda d, o: o.mean_supply_pressure_Pa / 1e6,
     "piston mass (kg)": lambda d, o: d.bar.mass_kg,
+    "impact energy (J)": lambda d, o: o.impact_energy_J,
+    "hydraulic efficiency": lambda d, o: o.hydraulic_efficiency,
+    "least absolute pressure (MPa)": lambda d, o: min(o.minimum_pressures_Pa.values()) / 1e6,
+    "smallest chamber volume (L)": lambda d, o: min(o.histories(200)["V_f_m3"].min(),
+                                                    o.histories(200)["V_r_m3"].min()) * 1e3,
 }
 
 
