@@ -291,3 +291,21 @@ def test_full_example_problem_reproduces_the_docs_optimum(tmp_path):
         o.rock()["drilling_rate_m_min"] / o.pump_power_kW, rel=1e-9)
     assert all(c["margin"] >= 0 for c in res.optimum["constraints"].values())
     assert o.rock()["drilling_rate_m_min"] >= 2.5
+
+
+def test_readme_quotes_the_docs_table():
+    """README's figures of the optimised drifter are the docs page's (which the slow test recomputes)."""
+    _, table = _docs_designs()
+    text = re.sub(r"\s+", " ", (ROOT / "README.md").read_text())
+    m = re.search(r"gives ([0-9.]+) against ([0-9.]+) m/min/kW, \+([0-9.]+) % per kilowatt at the same "
+                  r"([0-9.]+) m/min", text)
+    assert m is not None
+    per_kw = table["drilling rate per kW (m/min/kW)"]
+    assert (float(m[1]), float(m[2])) == (per_kw[2], per_kw[0])
+    assert float(m[3]) == pytest.approx(100 * (per_kw[2] / per_kw[0] - 1), abs=0.1)
+    assert float(m[4]) == pytest.approx(table["drilling rate (m/min)"][2], abs=0.01)
+    m = re.search(r"drills ([0-9]+) % slower at a third of the power \(\+([0-9]+) % per kW\)", text)
+    rate, power = table["drilling rate (m/min)"], table["pump power (kW)"]
+    assert float(m[1]) == pytest.approx(100 * (1 - rate[1] / rate[0]), abs=0.5)
+    assert power[1] / power[0] == pytest.approx(1 / 3, abs=0.05)
+    assert float(m[2]) == pytest.approx(100 * (per_kw[1] / per_kw[0] - 1), abs=0.5)
