@@ -309,3 +309,22 @@ def test_readme_quotes_the_docs_table():
     assert float(m[1]) == pytest.approx(100 * (1 - rate[1] / rate[0]), abs=0.5)
     assert power[1] / power[0] == pytest.approx(1 / 3, abs=0.05)
     assert float(m[2]) == pytest.approx(100 * (per_kw[1] / per_kw[0] - 1), abs=0.5)
+
+
+def test_a_stopped_run_resumes_from_its_cache(tmp_path):
+    """A run cut short (4 designs) and started again with a larger budget reads the designs it stored
+    and evaluates only the rest; the designs it reads are the ones the short run evaluated."""
+    cache = tmp_path / "cache.json"
+    vary = {"valve.switch_out": ("19 mm", "24 mm"), "accumulator.precharge": ("8 MPa", "12 MPa")}
+    short = optimize_drifter("circuit-drifter", vary, objective="impact_power", max_evaluations=4,
+                             cache=cache, progress=False)
+    stored = json.loads(cache.read_text())["evaluations"]
+    assert len(stored) == short.evaluations == len(short.history)
+    full = optimize_drifter("circuit-drifter", vary, objective="impact_power", max_evaluations=8, cache=cache,
+                            progress=False)
+    assert full.cached == len(stored) and full.evaluations == len(full.history) - len(stored)
+    assert [r["values"] for r in full.history[:len(stored)]] == [r["values"] for r in short.history]
+    # another problem (another constraint) does not reuse the cache
+    other = optimize_drifter("circuit-drifter", vary, objective="impact_power", max_evaluations=4,
+                             cache=cache, constraints={"max_multiplier": 0.99}, progress=False)
+    assert other.cached == 0

@@ -380,8 +380,11 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         re-evaluation).
     cache : str or os.PathLike, optional
         A JSON file of the designs evaluated: read first (a run stopped part-way resumes from it, the
-        search visiting the same designs), written after every evaluation. Keyed by the problem, so
-        a cache of another problem is not reused.
+        search visiting the same designs), written after every evaluation. Keyed by the problem (the
+        config, the variables and bounds, the objective, the constraints): a cache of another
+        problem is not reused, and is overwritten. Designs read from it carry no orbit, so the first
+        new design after them starts from the default chain (the figures then differ from an
+        uninterrupted run's in the last digits, about 1e-10).
     progress : bool
         A progress bar (tqdm) on stderr.
     rhobeg, tol : float
