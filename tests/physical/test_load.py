@@ -17,6 +17,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 KINDS = {
     "circuit_drifter.toml": CircuitDrifter,
     "circuit_drifter_rock.toml": CircuitDrifter,
+    "circuit_drifter_rock_piston.toml": CircuitDrifter,
     "drifter_rock.toml": Drifter,
     "stepped_drifter.toml": Drifter,
     "stepped_drifter_rock.toml": Drifter,

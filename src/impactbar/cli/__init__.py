@@ -20,7 +20,8 @@ from ._compiling import compile_note
 __all__ = ["main"]
 
 #: subcommand modules, in the order ``--help`` lists them
-SUBCOMMANDS = ("paper", "orbits", "drifter", "continue_", "experiment", "simulate", "sweep", "plot", "warmup")
+SUBCOMMANDS = ("paper", "orbits", "drifter", "continue_", "optimize", "experiment", "simulate", "sweep",
+               "plot", "warmup")
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -91,6 +91,8 @@ from .loader import config_value as config_value
 from .loader import load as load
 from .loader import read_config as read_config
 from .loader import with_values as with_values
+from .optimize_drifter import DrifterOptimum as DrifterOptimum
+from .optimize_drifter import optimize_drifter as optimize_drifter
 from .piston import OptimalPiston as OptimalPiston
 from .piston import optimize_piston as optimize_piston
 
@@ -153,5 +155,7 @@ __all__ = [
     "drifter_preset",
     "OptimalPiston",
     "optimize_piston",
+    "DrifterOptimum",
+    "optimize_drifter",
 ]
 

@@ -12,6 +12,10 @@ Configuration keys (a nested ``dict`` or TOML, as :meth:`CircuitDrifter.from_con
 
     name = "..."                                   # optional
     [bar]         E, density, length, diameter | area        # the piston
+    [piston]      E, density, rear_rod_diameter, rear_rod_length, collar_diameter, collar_length,
+                  front_rod_diameter, front_rod_length, end_diameters, end_lengths
+                  # or: the piston's shape, in place of [bar] and the chamber areas
+                  # (impactbar.physical.geometry: A_r = pi/4 (D_c^2 - d_r^2), A_f = pi/4 (D_c^2 - d_f^2))
     [stop]        restitution | area
     [damping]     coefficient                                # optional (N s/m)
     [model]       n_modes                                    # optional, default 0 (rigid)
@@ -46,6 +50,7 @@ from ._circuit_checks import check_circuit_si, shown
 from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
 from .drifter import DrifterOrbit
+from .geometry import PISTON_KEYS, expand_piston
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
 from .units import to_si
 
@@ -105,6 +110,7 @@ _KEYS = {
                "relief_coefficient"},
     "accumulator": {"precharge", "volume", "polytropic_exponent"},
     "oil": {"bulk_modulus", "transition_pressure"},
+    "piston": PISTON_KEYS,  # the piston's shape, in place of [bar] and the chamber areas
 }
 _REQUIRED = {
     "bar": ("E", "density", "length"),
@@ -312,6 +318,15 @@ class CircuitDrifter:
         with the circuit: from rest on the stop, the motion followed until it settles, then Newton
         with the variational equations' Jacobian).
 
+        Parameters
+        ----------
+        guess : CircuitDrifterOrbit, SwitchedOrbit or run, optional
+            Where Newton starts: an orbit of this drifter, or the operating point of another design
+            (other piston, chambers, valve or circuit values, the same number of modes): its
+            unknowns (the state after the impact, the pressures, the flights' times) are taken as
+            they are, in the model's units, and its flights' modes adopted (as a continuation step
+            does); without one, the default chain below.
+
         Raises
         ------
         ValueError
@@ -324,8 +339,11 @@ class CircuitDrifter:
         """
         from ..orbits import find_orbit
 
-        g = guess.orbit if isinstance(guess, CircuitDrifterOrbit) else guess
-        orbit = find_orbit(self.model(), self.drive(), guess=g)
+        if isinstance(guess, CircuitDrifterOrbit) and guess.drifter != self:
+            orbit = _continued(self.model(), self.drive(), guess.orbit)
+        else:
+            g = guess.orbit if isinstance(guess, CircuitDrifterOrbit) else guess
+            orbit = find_orbit(self.model(), self.drive(), guess=g)
         if self.drill is None:  # (a blow with the rock restarts inside its contact: not checked here)
             _check_repeats(orbit)
         point = CircuitDrifterOrbit(self, orbit)
@@ -385,6 +403,8 @@ class CircuitDrifter:
         """
         if not isinstance(config, dict):
             raise ValueError(f"config must be a dict; got {type(config).__name__}")
+        if "piston" in config:  # the piston's shape: the stepped [bar] and the chamber areas it implies
+            config = expand_piston(config)
         extra = sorted(set(config) - set(_KEYS) - set(ROCK_SECTIONS) - {"name"})
         if extra:
             raise ValueError(f"unknown section [{extra[0]}]; allowed: "
@@ -463,6 +483,22 @@ class CircuitDrifter:
                    damping_N_s_m=damping,
                    n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
                    name=str(config.get("name", "")), drill=drill)
+
+
+def _continued(model, drive, previous):
+    """The one-impact orbit of ``model`` and ``drive`` by Newton from the orbit ``previous`` of
+    another design: its unknowns as the start, its blocks' modes adopted (:meth:`ShootingProblem.adopt`,
+    as a continuation step)."""
+    from ..orbits.switched import orbit_of, orbit_problem
+    from ..orbits.switched_search import _motion, _solve
+
+    problem = orbit_problem(model, drive, 1)
+    X0 = np.asarray(previous._unknowns, dtype=float).copy()
+    if previous.impacts != 1 or previous._problem is None or X0.size != problem.size:
+        raise ValueError("guess: an orbit of another kind of problem (impacts or unknowns); orbit() without "
+                         "a guess follows the default chain")
+    problem.adopt(previous._problem)
+    return _motion(orbit_of(problem, _solve(problem, X0, 1e-13, 50)))
 
 
 #: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over

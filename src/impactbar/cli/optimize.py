@@ -1,0 +1,113 @@
+"""``impactbar optimize CONFIG --vary KEY=LOW:HIGH ... --objective drilling_rate_per_kW``: the design of a
+drifter with its oil circuit (piston shape, chambers, valve, circuit) that maximises an objective under
+the designer's constraints (:func:`impactbar.physical.optimize_drifter`)."""
+
+from __future__ import annotations
+
+from ._common import add_quiet_argument, output_file, print_json
+
+__all__ = ["add_parser", "parse_vary", "parse_constraint"]
+
+
+def add_parser(sub) -> None:
+    """Register ``impactbar optimize``."""
+    from ..physical.optimize_drifter import DEFAULT_CONSTRAINTS, OBJECTIVES
+
+    p = sub.add_parser(
+        "optimize",
+        help="optimise a drifter with its oil circuit (piston shape, chambers, valve, circuit) for "
+             "drilling rate per kW or another objective, under constraints",
+        description="Search the design of a drifter with its oil circuit that maximises an objective, "
+                    "each design's operating point on the rod and rock solved (theory section 11). "
+                    "Prints the baseline and the optimum side by side: every variable, objective and "
+                    "constraint with its margin.")
+    p.add_argument("config", help="a drifter with its oil circuit: a TOML file (a [chambers] section; a "
+                                  "[piston] section makes its diameters variables) or a preset's name")
+    p.add_argument("--vary", action="append", required=True, metavar="KEY=LOW:HIGH",
+                   help="a variable and its bounds with units, e.g. piston.collar_diameter=47mm:52mm or "
+                        "'accumulator.precharge=8 MPa:14 MPa' (repeat for each variable)")
+    p.add_argument("--objective", default="drilling_rate_per_kW", choices=list(OBJECTIVES),
+                   help="what is maximised (default drilling_rate_per_kW)")
+    p.add_argument("--constraint", action="append", default=[], metavar="NAME=VALUE",
+                   help="a constraint's limit with its unit, e.g. 'peak_incident_stress=250 MPa' or "
+                        "max_multiplier=0.9, or NAME=none to drop one; names: "
+                        f"{', '.join(DEFAULT_CONSTRAINTS)}")
+    p.add_argument("--max-evaluations", type=int, default=60,
+                   help="the most designs the search evaluates (default 60)")
+    p.add_argument("--cache", default=None, metavar="FILE.json",
+                   help="the designs evaluated, read first and written after each: a stopped run resumes")
+    p.add_argument("--out", default=None, metavar="FILE.json", help="write the result as JSON")
+    p.add_argument("--json", action="store_true", help="print the result as JSON instead of the table")
+    add_quiet_argument(p)
+    p.set_defaults(func=_run)
+
+
+def parse_vary(items) -> dict:
+    """``["KEY=LOW:HIGH", ...]`` as ``{KEY: (LOW, HIGH)}``.
+
+    Raises
+    ------
+    ValueError
+        An item not of that form, or a key given twice.
+
+    Examples
+    --------
+    >>> from impactbar.cli.optimize import parse_vary
+    >>> parse_vary(["valve.switch_out=20mm:23 mm"])
+    {'valve.switch_out': ('20mm', '23 mm')}
+    """
+    out = {}
+    for item in items:
+        key, eq, rng = item.partition("=")
+        low, colon, high = rng.partition(":")
+        if not (eq and colon and key.strip() and low.strip() and high.strip()):
+            raise ValueError(f"--vary must be KEY=LOW:HIGH with units, e.g. valve.switch_out=20mm:23mm; got "
+                             f"{item!r}")
+        if key.strip() in out:
+            raise ValueError(f"--vary: {key.strip()} given twice")
+        out[key.strip()] = (low.strip(), high.strip())
+    return out
+
+
+def parse_constraint(items) -> dict:
+    """``["NAME=VALUE", ...]`` as ``{NAME: VALUE}`` (``none``: dropped; a bare number a float).
+
+    Raises
+    ------
+    ValueError
+        An item not of that form.
+    """
+    out = {}
+    for item in items:
+        name, eq, value = item.partition("=")
+        if not (eq and name.strip() and value.strip()):
+            raise ValueError("--constraint must be NAME=VALUE, e.g. 'peak_incident_stress=250 MPa'; got "
+                             f"{item!r}")
+        v = value.strip()
+        try:
+            v = float(v)
+        except ValueError:
+            v = None if v.lower() == "none" else v
+        out[name.strip()] = v
+    return out
+
+
+def _run(args) -> int:
+    from ..physical.optimize_drifter import optimize_drifter
+
+    vary = parse_vary(args.vary)
+    constraints = parse_constraint(args.constraint)
+    if args.max_evaluations < 1:
+        raise ValueError(f"--max-evaluations must be at least 1; got {args.max_evaluations}")
+    out = output_file(args.out) if args.out else None
+    res = optimize_drifter(args.config, vary, objective=args.objective, constraints=constraints,
+                           max_evaluations=args.max_evaluations, cache=args.cache, progress=not args.quiet)
+    if out is not None:
+        res.to_json(out)
+    if args.json:
+        import json
+
+        print_json(json.loads(res.to_json()))
+    else:
+        print(res.table())
+    return 0

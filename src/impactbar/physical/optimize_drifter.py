@@ -1,0 +1,582 @@
+r"""The whole drifter optimised: piston shape, chambers, valve and circuit together, for drilling rate
+per hydraulic kilowatt (or drilling rate, work on rock per blow, impact power) under the designer's
+constraints (theory §11, "Optimising a drifter").
+
+Each evaluation is the circuit's operating point on the rod and rock: :meth:`CircuitDrifter.orbit`
+continued from the nearest design evaluated so far (Newton from its orbit) where that converges, else
+the default chain. The search is derivative-free (COBYLA, :func:`scipy.optimize.minimize`) over the
+variables scaled to :math:`[0, 1]` by their bounds: an operating point changes pattern (the valve's
+switch before or after the impact, the relief opening or not) at borders where it is not smooth, and
+an evaluation can fail (no orbit, cavitation), which a penalty, not a finite difference, handles.
+The reported optimum is the best feasible design evaluated, re-evaluated by a fresh ``orbit()``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .circuit import SI_PARAMETERS, CircuitDrifter
+from .geometry import PISTON_KEYS
+from .loader import build, config_value, read_config, with_values
+from .units import to_si
+
+__all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "optimize_drifter", "evaluate_design", "DrifterOptimum"]
+
+#: The objectives (all maximised): name to (the figure, its unit, what it is).
+OBJECTIVES = {
+    "drilling_rate": ("drilling_rate_m_min", "m/min", "penetration per blow times the blow frequency"),
+    "drilling_rate_per_kW": ("drilling_rate_per_kW", "m/min/kW", "drilling rate over the pump's power"),
+    "work_on_rock_per_blow": ("work_on_rock_J", "J", "work on the rock per blow"),
+    "impact_power": ("impact_power_kW", "kW", "kinetic energy at impact times the blow frequency"),
+}
+
+#: The constraints and their default limits (SI): ``peak_incident_stress`` (Pa, the largest stress in
+#: the shank adapter during the blow; ``None``: not constrained), ``max_multiplier`` (the largest
+#: Floquet multiplier's modulus), ``min_pressure`` (Pa absolute: no cavitation at 0),
+#: ``mean_supply_pressure`` (Pa; ``"relief"``: the relief valve's setting), ``peak_supply_pressure``
+#: (Pa; ``None``: not constrained), ``min_chamber_volume`` (m^3, the smallest volume of either chamber
+#: over the period must lie above it), ``min_drilling_rate`` (m/min; ``None``: not constrained; a
+#: design that drills per kilowatt more by drilling slower is then kept from the optimum).
+DEFAULT_CONSTRAINTS = {"peak_incident_stress": None, "max_multiplier": 0.95, "min_pressure": 0.0,
+                       "mean_supply_pressure": "relief", "peak_supply_pressure": None,
+                       "min_chamber_volume": 0.0, "min_drilling_rate": None}
+
+#: Each constraint's unit, its sense (+1: the value at most the limit; -1: at least) and the scale of
+#: its normalised margin for the search.
+_CONSTRAINT_UNITS = {"peak_incident_stress": ("Pa", 1, None), "max_multiplier": ("", 1, 1.0),
+                     "min_pressure": ("Pa", -1, 1e6), "mean_supply_pressure": ("Pa", 1, None),
+                     "peak_supply_pressure": ("Pa", 1, None), "min_chamber_volume": ("m**3", -1, 1e-4),
+                     "min_drilling_rate": ("m/min", -1, None)}
+
+
+def _key_unit(key: str) -> str:
+    """The SI unit of a variable's dotted key, or a one-line refusal."""
+    parts = key.split(".") if isinstance(key, str) else []
+    if len(parts) == 2 and parts[0] == "piston" and parts[1] in PISTON_KEYS - {"E", "density", "end_lengths",
+                                                                               "end_diameters"}:
+        return "m"
+    if isinstance(key, str) and key in SI_PARAMETERS and key != "chambers.front_area":
+        return SI_PARAMETERS[key][1]
+    allowed = sorted({f"piston.{k}" for k in PISTON_KEYS - {"E", "density", "end_lengths", "end_diameters"}}
+                     | set(SI_PARAMETERS) - {"chambers.front_area"})
+    raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies; one of {', '.join(allowed)}")
+
+
+def _quantity(x: float, unit: str):
+    """An SI value as a config value (exact: the float's repr with its unit)."""
+    return float(x) if unit == "" else f"{float(x)!r} {unit}"
+
+
+def _fingerprint(config: dict, vary: dict, objective: str, constraints: dict) -> str:
+    text = json.dumps([config, {k: list(v) for k, v in vary.items()}, objective, constraints], sort_keys=True,
+                      default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def evaluate_design(drifter: CircuitDrifter, constraints: dict | None = None,
+                    guess=None) -> tuple[dict, object]:
+    """A design's figures: its operating point's objectives and constraints with their margins.
+
+    Parameters
+    ----------
+    drifter : CircuitDrifter
+        With a drill string and the rock (``[rock]``) for the drilling figures.
+    constraints : dict, optional
+        Limits by name (:data:`DEFAULT_CONSTRAINTS`, SI or with units); the defaults where left out.
+    guess : CircuitDrifterOrbit, optional
+        The operating point of a nearby design: Newton starts there; where it does not converge the
+        default chain (``orbit()``) is used.
+
+    Returns
+    -------
+    record : dict
+        ``objectives`` (:data:`OBJECTIVES`' figures), ``constraints`` (name to ``value``, ``limit``,
+        ``margin`` in the value's unit, positive where met, and ``scaled`` margin), ``feasible``,
+        ``continued`` (whether Newton from ``guess`` converged), ``seconds``.
+    orbit : CircuitDrifterOrbit
+
+    Raises
+    ------
+    ValueError
+        No operating point (the default chain's reason).
+    """
+    limits = _limits(constraints, drifter)
+    t0 = time.perf_counter()
+    continued = False
+    orbit = None
+    if guess is not None:
+        try:
+            orbit = drifter.orbit(guess=guess)
+            continued = True
+        except (ValueError, np.linalg.LinAlgError, ArithmeticError):
+            orbit = None
+    if orbit is None:
+        orbit = drifter.orbit()
+    rec = _figures(orbit, limits)
+    rec["continued"] = continued
+    rec["seconds"] = time.perf_counter() - t0
+    return rec, orbit
+
+
+def _limits(constraints, drifter) -> dict:
+    given = dict(constraints or {})
+    unknown = sorted(set(given) - set(DEFAULT_CONSTRAINTS))
+    if unknown:
+        raise ValueError(f"constraints: unknown constraint {unknown[0]!r}; one of "
+                         f"{', '.join(DEFAULT_CONSTRAINTS)}")
+    out = {}
+    for name, default in DEFAULT_CONSTRAINTS.items():
+        v = given.get(name, default)
+        if v is None:
+            continue
+        if v == "relief":
+            v = drifter.si["relief_pressure_Pa"]
+            if not math.isfinite(v):
+                continue
+        unit = _CONSTRAINT_UNITS[name][0]
+        if isinstance(v, int | float) and not isinstance(v, bool):  # a bare number: SI
+            out[name] = float(v)
+            continue
+        out[name] = to_si(f"constraints[{name!r}]", v, unit, "'400 MPa'" if unit == "Pa" else "0.95")
+    return out
+
+
+def _figures(orbit, limits: dict) -> dict:
+    rock = orbit.rock()
+    pump = orbit.pump_power_kW
+    obj = {"impact_power_kW": orbit.impact_power_kW, "impact_energy_J": orbit.impact_energy_J,
+           "blow_frequency_Hz": orbit.blow_frequency_Hz, "pump_power_kW": pump,
+           "hydraulic_efficiency": orbit.hydraulic_efficiency}
+    if rock:
+        obj.update(drilling_rate_m_min=rock["drilling_rate_m_min"], work_on_rock_J=rock["work_on_rock_J"],
+                   drilling_rate_per_kW=rock["drilling_rate_m_min"] / pump)
+    h = orbit.histories(200)
+    values = {"peak_incident_stress": rock.get("peak_rod_stress_Pa", math.nan),
+              "max_multiplier": float(np.max(np.abs(orbit.multipliers))),
+              "min_pressure": float(min(orbit.minimum_pressures_Pa.values())),
+              "mean_supply_pressure": orbit.mean_supply_pressure_Pa,
+              "peak_supply_pressure": float(np.max(h["p_s_Pa"])),
+              "min_chamber_volume": float(min(np.min(h["V_f_m3"]), np.min(h["V_r_m3"]))),
+              "min_drilling_rate": rock.get("drilling_rate_m_min", math.nan)}
+    cons = {}
+    for name, limit in limits.items():
+        unit, sense, scale = _CONSTRAINT_UNITS[name]
+        value = values[name]
+        margin = (limit - value) if sense > 0 else (value - limit)
+        scale = scale if scale is not None else abs(limit) or 1.0
+        cons[name] = {"value": value, "limit": limit, "margin": margin, "unit": unit,
+                      "scaled": margin / scale if math.isfinite(margin) else -1.0}
+    feasible = all(c["scaled"] >= 0.0 for c in cons.values())
+    return {"ok": True, "objectives": obj, "constraints": cons, "feasible": feasible,
+            "figures": {k: v for k, v in values.items()}}
+
+
+@dataclass
+class DrifterOptimum:
+    """The result of :func:`optimize_drifter`: the baseline and the optimum side by side.
+
+    Attributes
+    ----------
+    objective : str
+        The objective maximised (a key of :data:`OBJECTIVES`).
+    vary : dict
+        Dotted key to its ``(low, high)`` bounds in SI and ``unit``.
+    baseline, optimum : dict
+        Each design's record (:func:`evaluate_design`) with ``values`` (dotted key to SI value) and
+        ``changes`` (dotted key to the config value, for :func:`~impactbar.physical.with_values`).
+        The optimum is the best feasible design evaluated, re-evaluated by a fresh ``orbit()``
+        (``continued_vs_fresh``: the largest relative difference of its figures from the search's).
+    evaluations : int
+        Designs evaluated by this run (not counting those read from the cache).
+    cached : int
+        Designs read from the cache file.
+    seconds : float
+        Wall time of the run (s).
+    history : list of dict
+        Every design's record in the order evaluated.
+    message : str
+        The optimiser's.
+    """
+
+    objective: str
+    vary: dict
+    baseline: dict
+    optimum: dict
+    evaluations: int
+    cached: int
+    seconds: float
+    history: list = field(repr=False)
+    message: str = ""
+    config: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def gain(self) -> float:
+        """The objective at the optimum over the baseline's, less 1."""
+        key = OBJECTIVES[self.objective][0]
+        return self.optimum["objectives"][key] / self.baseline["objectives"][key] - 1.0
+
+    def to_dict(self) -> dict:
+        """The result as plain data (JSON-ready)."""
+        return {"objective": self.objective, "vary": self.vary, "baseline": self.baseline,
+                "optimum": self.optimum, "gain": self.gain, "evaluations": self.evaluations,
+                "cached": self.cached, "seconds": self.seconds, "message": self.message,
+                "history": self.history}
+
+    def to_json(self, path=None) -> str:
+        """The result as JSON (non-finite numbers as null); written to ``path`` if given."""
+        text = _dumps(self.to_dict())
+        if path is not None:
+            Path(path).write_text(text)
+        return text
+
+    def table(self) -> str:
+        """Baseline and optimum side by side: the variables, every objective, every constraint with
+        its limit and margin."""
+        rows = [f"{'':34s}{'baseline':>14s}{'optimum':>14s}"]
+        for key, b in self.vary.items():
+            scale, unit = _show_unit(b["unit"])
+            rows.append(f"{key:34s}{self.baseline['values'][key] * scale:14.5g}"
+                        f"{self.optimum['values'][key] * scale:14.5g} {unit}")
+        for name, (key, unit, _) in OBJECTIVES.items():
+            if key in self.baseline["objectives"]:
+                mark = " *" if name == self.objective else ""
+                rows.append(f"{name + mark:34s}{self.baseline['objectives'][key]:14.5g}"
+                            f"{self.optimum['objectives'][key]:14.5g} {unit}")
+        for key in ("blow_frequency_Hz", "impact_energy_J", "pump_power_kW", "hydraulic_efficiency"):
+            rows.append(f"{key:34s}{self.baseline['objectives'][key]:14.5g}{self.optimum['objectives'][key]:14.5g}")
+        for name, c in self.baseline["constraints"].items():
+            o = self.optimum["constraints"][name]
+            scale, unit = _show_unit(c["unit"])
+            label = f"{name} (limit {c['limit'] * scale:.4g})"
+            rows.append(f"{label:34s}"
+                        f"{c['value'] * scale:14.5g}{o['value'] * scale:14.5g} {unit}"
+                        f"  margin {c['margin'] * scale:.4g} -> {o['margin'] * scale:.4g}")
+        rows.append(f"gain in {self.objective}: {self.gain * 100:+.2f} % after {self.evaluations} "
+                    "evaluations "
+                    f"({self.cached} from the cache) in {self.seconds:.0f} s")
+        return "\n".join(rows)
+
+    def plot(self, axes=None):
+        """The piston drawn to scale before and after, the shank's stress over the blow (where the
+        orbit gives it) and the multipliers in the unit circle (matplotlib imported on this call).
+
+        Returns
+        -------
+        numpy.ndarray of matplotlib.axes.Axes, shape (3,)
+        """
+        import matplotlib.pyplot as plt
+
+        if axes is None:
+            _, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+        axes = np.asarray(axes).ravel()
+        ax = axes[0]
+        for y0, rec, colour in ((0.0, self.baseline, "0.6"), (-0.1, self.optimum, "C0")):
+            x = 0.0
+            for le, d in zip(rec["piston"]["lengths_m"], rec["piston"]["diameters_m"], strict=True):
+                ax.add_patch(plt.Rectangle((x * 1e3, (y0 - d / 2) * 1e3), le * 1e3, d * 1e3, fc=colour,
+                                           ec="k"))
+                x += le
+        ax.set_xlim(-10, 1e3 * max(sum(r["piston"]["lengths_m"]) for r in (self.baseline, self.optimum)) + 10)
+        ax.set_ylim(-160, 50)
+        ax.set_aspect("equal")
+        ax.set_xlabel("mm (driven end left; baseline grey, optimum blue)")
+        ax.set_title("piston to scale")
+        ax = axes[1]
+        for rec, colour, label in ((self.baseline, "0.5", "baseline"), (self.optimum, "C0", "optimum")):
+            wave = rec.get("shank_stress")
+            if wave is not None:  # the stress in the shank over the blow
+                ax.step(np.asarray(wave["t_s"]) * 1e6, np.asarray(wave["stress_Pa"]) / 1e6, where="post",
+                        color=colour, label=label)
+            else:  # no rock: the objective
+                ax.bar(label, rec["objectives"].get(OBJECTIVES[self.objective][0], np.nan), color=colour)
+        if self.baseline.get("shank_stress") is not None:
+            ax.set_xlabel("time from impact (us)")
+            ax.set_ylabel("shank stress (MPa)")
+            ax.legend()
+        else:
+            ax.set_ylabel(f"{self.objective} ({OBJECTIVES[self.objective][1]})")
+        ax = axes[2]
+        t = np.linspace(0, 2 * np.pi, 200)
+        ax.plot(np.cos(t), np.sin(t), "k", lw=0.8)
+        for rec, colour, label in ((self.baseline, "0.5", "baseline"), (self.optimum, "C0", "optimum")):
+            mu = np.asarray(rec["multipliers_re"]) + 1j * np.asarray(rec["multipliers_im"])
+            ax.plot(mu.real, mu.imag, "o", color=colour, label=label, mfc="none")
+        ax.set_aspect("equal")
+        ax.legend(loc="lower left")
+        ax.set_title("Floquet multipliers")
+        return axes
+
+
+def _show_unit(unit: str) -> tuple[float, str]:
+    return {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"),
+            "s": (1e3, "ms")}.get(unit, (1.0, unit.replace("**", "^")))
+
+
+def _parse_vary(config: dict, vary: dict, folder) -> dict:
+    if not isinstance(vary, dict) or not vary:
+        raise ValueError("vary must be a non-empty dict of dotted key to (low, high)")
+    out = {}
+    for key, bounds in vary.items():
+        unit = _key_unit(key)
+        try:
+            config_value(config, key)
+        except ValueError as exc:
+            raise ValueError(f"vary: {exc}") from exc
+        if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
+            raise ValueError(f"vary[{key!r}] must be (low, high); got {bounds!r}")
+        example = {"m": "'20 mm'", "Pa": "'12 MPa'", "m**3": "'0.1 L'"}.get(unit, "'1 ...'")
+        lo, hi = (to_si(f"vary[{key!r}] {side}", b, unit, example) for side, b in zip(("low", "high"), bounds,
+                                                                                        strict=True))
+        if not lo < hi:
+            raise ValueError(f"vary[{key!r}]: low must be below high; got {bounds[0]!r} and {bounds[1]!r}")
+        for side, b in (("low", lo), ("high", hi)):
+            try:
+                build(with_values(config, {key: _quantity(b, unit)}), folder)
+            except ValueError as exc:
+                raise ValueError(f"vary[{key!r}]: the {side} bound {bounds[0 if side == 'low' else 1]!r} is "
+                                 f"outside the key's range: {str(exc).split(': ', 2)[-1]}") from exc
+        start = to_si(key, config_value(config, key), unit, example)
+        if not lo <= start <= hi:
+            raise ValueError(f"vary[{key!r}]: the start {config_value(config, key)!r} lies outside the "
+                             "bounds "
+                             f"{bounds[0]!r} to {bounds[1]!r}")
+        out[key] = {"low": lo, "high": hi, "unit": unit, "start": start}
+    return out
+
+
+def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW",
+                     constraints: dict | None = None,
+                     *, max_evaluations: int = 60, cache=None, progress: bool = True, rhobeg: float = 0.2,
+                     tol: float = 2e-3) -> DrifterOptimum:
+    r"""The design of a drifter with its oil circuit that maximises ``objective`` under
+    ``constraints``, the variables any of its dotted config keys within bounds.
+
+    Parameters
+    ----------
+    config : str, os.PathLike or dict
+        A drifter with its oil circuit (``[chambers]``), on a drill string and the rock for the
+        drilling objectives: a TOML file, a preset's name or the config itself
+        (:func:`~impactbar.physical.read_config`).
+    vary : dict
+        Dotted key (``"piston.collar_diameter"``, ``"chambers.rear_volume"``, ``"valve.switch_out"``,
+        ``"accumulator.precharge"``, any key of :data:`~impactbar.physical.circuit.SI_PARAMETERS`
+        or of the piston's shape) to ``(low, high)`` with units (``("46 mm", "52 mm")``); the
+        config's own value, the start, must lie within.
+    objective : str
+        One of :data:`OBJECTIVES` (maximised): ``"drilling_rate_per_kW"`` (default),
+        ``"drilling_rate"``, ``"work_on_rock_per_blow"``, ``"impact_power"``.
+    constraints : dict, optional
+        Limits of :data:`DEFAULT_CONSTRAINTS` (with units or SI; ``None`` drops one), e.g.
+        ``{"peak_incident_stress": "260 MPa"}``.
+    max_evaluations : int
+        The most designs the search evaluates (besides the baseline's and the optimum's fresh
+        re-evaluation).
+    cache : str or os.PathLike, optional
+        A JSON file of the designs evaluated: read first (a run stopped part-way resumes from it, the
+        search visiting the same designs), written after every evaluation. Keyed by the problem (the
+        config, the variables and bounds, the objective, the constraints): a cache of another
+        problem is not reused, and is overwritten. Designs read from it carry no orbit, so the first
+        new design after them starts from the default chain (the figures then differ from an
+        uninterrupted run's in the last digits, about 1e-10).
+    progress : bool
+        A progress bar (tqdm) on stderr.
+    rhobeg, tol : float
+        COBYLA's first and last step in the scaled variables (each bound's span is 1).
+
+    Returns
+    -------
+    DrifterOptimum
+
+    Raises
+    ------
+    ValueError
+        A variable that is not a parameter or not in the config, bounds of the wrong unit or outside
+        the key's range, a start outside its bounds, an unknown objective or constraint, an
+        objective the config cannot give (no ``[rock]``), a start without an operating point or an
+        infeasible start (the constraint named, with how far it is missed): each in one line.
+
+    Examples
+    --------
+    >>> from impactbar.physical import optimize_drifter
+    >>> optimize_drifter("circuit-drifter", {"valve.switch_out": ("20 mm", "23 mm")}, objective="speed")
+    Traceback (most recent call last):
+    ...
+    ValueError: objective must be one of drilling_rate, drilling_rate_per_kW, work_on_rock_per_blow,
+    impact_power; got 'speed'
+    """
+    from scipy.optimize import minimize
+
+    t_start = time.perf_counter()
+    if objective not in OBJECTIVES:
+        raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}; got {objective!r}")
+    cfg, folder = read_config(config)
+    base = build(cfg, folder)
+    if not isinstance(base, CircuitDrifter):
+        raise ValueError("config must describe a drifter with its oil circuit (a [chambers] section)")
+    if base.drill is None and objective != "impact_power":
+        raise ValueError(f"objective {objective!r} needs the drill string and the rock ([rock] in the "
+                         "config); "
+                         "without them only 'impact_power'")
+    limits = _limits(constraints, base)
+    spec = _parse_vary(cfg, vary, folder)
+    keys = list(spec)
+    if not (isinstance(max_evaluations, int) and max_evaluations >= len(keys) + 2):
+        raise ValueError(f"max_evaluations must be an integer of at least the variables' number + 2 "
+                         f"({len(keys) + 2}); got {max_evaluations!r}")
+    lo = np.array([spec[k]["low"] for k in keys])
+    span = np.array([spec[k]["high"] - spec[k]["low"] for k in keys])
+    fkey = OBJECTIVES[objective][0]
+    tag = _fingerprint(cfg, {k: (spec[k]["low"], spec[k]["high"]) for k in keys}, objective, limits)
+
+    store: dict[str, dict] = {}
+    cache_path = Path(cache) if cache is not None else None
+    if cache_path is not None and cache_path.exists():
+        try:
+            doc = json.loads(cache_path.read_text())
+        except (OSError, ValueError) as exc:
+            raise ValueError(f"cache {str(cache_path)!r} is not a readable JSON file: {exc}") from exc
+        if doc.get("problem") == tag:
+            store = {r["id"]: r for r in doc.get("evaluations", [])}
+    n_cached = 0
+    orbits: list[tuple[np.ndarray, object]] = []
+    history: list[dict] = []
+    counter = {"new": 0}
+
+    def changes_of(values: dict) -> dict:
+        return {k: _quantity(values[k], spec[k]["unit"]) for k in keys}
+
+    def evaluate(u: np.ndarray) -> dict:
+        nonlocal n_cached
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        x = np.where(u == u0, start, lo + span * u)  # the start exactly as the config gives it
+        values = {k: float(v) for k, v in zip(keys, x, strict=True)}
+        rid = json.dumps([repr(values[k]) for k in keys])
+        if rid in store:
+            rec = store[rid]
+            if not any(r is rec for r in history):
+                n_cached += 1
+                history.append(rec)
+            return rec
+        changes = changes_of(values)
+        changes.update({k: config_value(cfg, k) for k, at in zip(keys, u == u0, strict=True) if at})
+        try:
+            drifter = build(with_values(cfg, changes), folder)
+            guess = min(orbits, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if orbits else None
+            rec, orbit = evaluate_design(drifter, limits, guess)
+            orbits.append((u.copy(), orbit))
+            rec.update(_piston_and_multipliers(drifter, orbit))
+        except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
+            rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
+        rec.update(id=rid, values=values, changes=changes)
+        store[rid] = rec
+        history.append(rec)
+        counter["new"] += 1
+        if cache_path is not None:
+            _write_cache(cache_path, tag, store)
+        bar.update(1)
+        return rec
+
+    from tqdm import tqdm
+
+    bar = tqdm(total=max_evaluations + 1, desc="optimize_drifter", unit="design", disable=not progress)
+    start = np.array([spec[k]["start"] for k in keys])
+    u0 = (start - lo) / span
+    try:
+        first = evaluate(u0)
+        if not first["ok"]:
+            raise ValueError(f"the start has no operating point: {first['error']}")
+        if not first["feasible"]:
+            name, c = min(first["constraints"].items(), key=lambda kv: kv[1]["scaled"])
+            scale, unit = _show_unit(c["unit"])
+            u = f" {unit}" if unit else ""
+            raise ValueError(f"infeasible start: constraint {name} = {c['value'] * scale:.6g}{u} misses its "
+                             f"limit {c['limit'] * scale:.6g}{u} by {-c['margin'] * scale:.4g}{u}")
+        ref = abs(first["objectives"][fkey]) or 1.0
+
+        def f(u):
+            rec = evaluate(u)
+            return -rec["objectives"][fkey] / ref if rec["ok"] else 1.0
+
+        def g(u):
+            rec = evaluate(u)
+            if not rec["ok"]:
+                return -np.ones(len(limits))
+            return np.array([c["scaled"] for c in rec["constraints"].values()])
+
+        res = minimize(f, u0, method="COBYLA", constraints=[{"type": "ineq", "fun": g}],
+                       bounds=[(0.0, 1.0)] * len(keys),
+                       options={"rhobeg": rhobeg, "tol": tol, "maxiter": max_evaluations})
+        message = str(res.message)
+    finally:
+        bar.close()
+    feasible = [r for r in history if r.get("feasible")]
+    best = max(feasible, key=lambda r: r["objectives"][fkey])
+    # the reported optimum (and the baseline) by a fresh orbit(): no continuation, no cache
+    fresh = {}
+    for name, rec in (("baseline", first), ("optimum", best)):
+        drifter = build(with_values(cfg, rec["changes"]), folder)
+        out, orbit = evaluate_design(drifter, limits)
+        out.update(_piston_and_multipliers(drifter, orbit), values=rec["values"], changes=rec["changes"],
+                   shank_stress=_shank_stress(drifter, orbit))
+        out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
+                                        for k in rec["objectives"] if rec["objectives"][k] != 0.0)
+        fresh[name] = out
+    return DrifterOptimum(objective=objective,
+                          vary={k: {"low": spec[k]["low"], "high": spec[k]["high"], "unit": spec[k]["unit"]}
+                                for k in keys},
+                          baseline=fresh["baseline"], optimum=fresh["optimum"], evaluations=counter["new"],
+                          cached=n_cached, seconds=time.perf_counter() - t_start, history=history,
+                          message=message, config=with_values(cfg, best["changes"]))
+
+
+def _piston_and_multipliers(drifter, orbit) -> dict:
+    bar = drifter.bar
+    lengths = list(getattr(bar, "lengths_m", [bar.length_m]))
+    diameters = list(getattr(bar, "diameters_m", [bar.diameter_m]))
+    mu = np.asarray(orbit.multipliers, dtype=complex)
+    return {"piston": {"lengths_m": [float(x) for x in lengths], "diameters_m": [float(x) for x in diameters],
+                       "mass_kg": bar.mass_kg, "rear_area_m2": drifter.si["rear_area_m2"],
+                       "front_area_m2": drifter.si["front_area_m2"]},
+            "multipliers_re": mu.real.tolist(), "multipliers_im": mu.imag.tolist()}
+
+
+def _shank_stress(drifter, orbit) -> dict | None:
+    """The stress in the shank adapter over the first blow (``t_s``, ``stress_Pa``): the incident wave
+    and what the rod and rock return, as the peak incident stress reads it; ``None`` without a rock."""
+    if drifter.drill is None:
+        return None
+    blow = orbit.orbit.contacts[0]
+    sc = drifter.scales
+    return {"t_s": (np.asarray(blow.times[:-1], dtype=float) * sc.time_s).tolist(),
+            "stress_Pa": (np.asarray(blow.shank_forces, dtype=float) * sc.force_N
+                          / drifter.drill.segments[0].area_m2).tolist()}
+
+
+def _write_cache(path: Path, tag: str, store: dict) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(_dumps({"problem": tag, "evaluations": list(store.values())}))
+    tmp.replace(path)
+
+
+def _plain(obj):
+    """``obj`` as strict-JSON data: non-finite floats as ``None``, numpy values as Python's."""
+    if isinstance(obj, dict):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_plain(v) for v in obj]
+    if hasattr(obj, "tolist") and not isinstance(obj, str):
+        return _plain(obj.tolist())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def _dumps(doc) -> str:
+    return json.dumps(_plain(doc), indent=1, allow_nan=False)
