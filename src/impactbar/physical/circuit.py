@@ -307,7 +307,7 @@ class CircuitDrifter:
             acc)
 
     # -- results -----------------------------------------------------------------------------------
-    def orbit(self, guess=None) -> CircuitDrifterOrbit:
+    def orbit(self, guess=None, *, allow_cavitation: bool = False) -> CircuitDrifterOrbit:
         """The one-impact periodic motion, its operating point in SI (:func:`impactbar.find_orbit`
         with the circuit: from rest on the stop, the motion followed until it settles, then Newton
         with the variational equations' Jacobian).
@@ -320,7 +320,9 @@ class CircuitDrifter:
             away: no orbit with a blow), or a chamber empties; or where the orbit found does not
             repeat when :func:`impactbar.simulate` restarts it (checked over two periods to
             ``REPEAT_TOL``, without a drill string), or where an absolute pressure of the orbit
-            falls below 0 (the oil would cavitate: :attr:`CircuitDrifterOrbit.cavitates`).
+            falls below 0 (the oil would cavitate: :attr:`CircuitDrifterOrbit.cavitates`), unless
+            ``allow_cavitation`` (then the orbit is returned with ``cavitates`` set: a design map
+            draws the region).
         """
         from ..orbits import find_orbit
 
@@ -329,7 +331,9 @@ class CircuitDrifter:
         if self.drill is None:  # (a blow with the rock restarts inside its contact: not checked here)
             _check_repeats(orbit)
         point = CircuitDrifterOrbit(self, orbit)
-        _refuse_cavitation(point.minimum_pressures_Pa, f"the orbit (period {point.period_s * 1e3:.5g} ms)")
+        if not allow_cavitation:
+            _refuse_cavitation(point.minimum_pressures_Pa,
+                               f"the orbit (period {point.period_s * 1e3:.5g} ms)")
         return point
 
     def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
