@@ -147,7 +147,7 @@ def _write_api() -> None:
 
 #: pages the index lists itself; every other page in docs/ goes under "Guides", in this order first
 INDEX_PAGES = {"index", "getting_started", "theory", "changelog", "guides"}
-GUIDE_ORDER = ("physical", "sweep", "experiments")
+GUIDE_ORDER = ("physical", "sweep", "design_maps", "experiments")
 
 
 def _write_guides() -> None:
