@@ -180,3 +180,20 @@ def test_the_relief_edge_refined_agrees_with_the_continuation(tmp_path):
     events = [e["value"] for e in branch.events if "relief" in e["kind"]]
     assert len(events) == 1
     assert math.isclose(events[0], q, rel_tol=1e-5)
+
+
+def test_a_map_of_the_valve_drifter_equals_its_fresh_orbits():
+    """The valve drifter (no oil circuit: no pressures stored) over its supply pressure and switch."""
+    spec = parse_spec({"task": "operating_point", "config": "hydraulic-drifter",
+                       "axes": {"valve.supply_pressure": {"values": ["15 MPa", "20 MPa"]},
+                                "valve.switch_out": {"start": "15 mm", "stop": "25 mm", "num": 3}}})
+    assert spec.kind == "drifter" and "mean_supply_pressure" not in spec.variables().names
+    got = _chunks(spec)
+    assert np.all(got["status"] == 0)
+    config = read_config("hydraulic-drifter")[0]
+    for i, p in enumerate(("15 MPa", "20 MPa")):
+        for j, x in enumerate(("15 mm", "20 mm", "25 mm")):
+            want = point_values(build(with_values(config, {"valve.supply_pressure": p,
+                                                           "valve.switch_out": x})).orbit(), "drifter", False)
+            for name, w in want.items():
+                assert got[name][i, j] == pytest.approx(w, rel=1e-9), (name, i, j)

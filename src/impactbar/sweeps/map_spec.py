@@ -120,7 +120,7 @@ def map_variables(kind: str, rock: bool) -> Schema:
 
     Examples
     --------
-    >>> from impactbar.sweeps.drifter import map_variables
+    >>> from impactbar.sweeps.map_spec import map_variables
     >>> "hydraulic_efficiency" in map_variables("circuit", False).names
     True
     """
@@ -287,7 +287,7 @@ def parse_map_spec(doc: dict, folder=None) -> DrifterMapSpec:
 
     Examples
     --------
-    >>> from impactbar.sweeps.drifter import parse_map_spec
+    >>> from impactbar.sweeps.map_spec import parse_map_spec
     >>> spec = parse_map_spec({"task": "operating_point", "config": "circuit-drifter",
     ...                        "axes": {"supply.pump_flow": {"start": "60 L/min", "stop": "80 L/min",
     ...                                                      "num": 3}}})

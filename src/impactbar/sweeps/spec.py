@@ -286,7 +286,7 @@ def parse_spec(doc) -> SweepSpec:
     """
     if not isinstance(doc, dict):
         raise ValueError(f"spec must be a table; got {type(doc).__name__}")
-    if "config" in doc:  # a drifter map (impactbar.sweeps.drifter): config keys in SI
+    if "config" in doc:  # a drifter map (impactbar.sweeps.map_spec): config keys in SI
         from .map_spec import parse_map_spec
 
         return parse_map_spec(doc)

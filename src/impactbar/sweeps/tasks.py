@@ -76,7 +76,7 @@ def _variables(spec: SweepSpec) -> Schema:
     """The task's variables, each a :class:`~impactbar._shared.schema.Field` (dtype, fill, long name,
     units); ``per`` names the extra dimension of those along it. An ``orbits`` sweep stores the
     orbit's fields in the view ``"sweep"`` (:data:`impactbar.orbits.orbit.ORBIT_FIELDS`) along
-    ``orbit``. A drifter map (:mod:`impactbar.sweeps.drifter`) names its own."""
+    ``orbit``. A drifter map (:mod:`impactbar.sweeps.map_spec`) names its own."""
     if isinstance(spec, DrifterMapSpec):
         return spec.variables()
     if spec.task == "orbits":
