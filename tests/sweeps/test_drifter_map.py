@@ -152,6 +152,14 @@ def test_a_resumed_map_is_bitwise_the_uninterrupted_one(tmp_path):
         assert a[name].dtype == b[name].dtype and a[name].tobytes() == b[name].tobytes(), name
     ds = open_sweep(part)
     assert ds["impact_energy"].attrs["units"] == "J" and ds["supply.pump_flow"].attrs["units"] == "m3/s"
+    # drawn: two axes as filled contours, one (the other fixed) as a line; an unknown variable refused
+    pytest.importorskip("matplotlib")
+    from impactbar.sweeps import plot_sweep
+
+    assert plot_sweep(part, tmp_path / "map.png", variable="hydraulic_efficiency").stat().st_size > 0
+    assert plot_sweep(part, tmp_path / "line.png", select={"accumulator.precharge": 6e6}).stat().st_size > 0
+    with pytest.raises(ValueError, match="no_such"):
+        plot_sweep(part, tmp_path / "x.png", variable="no_such")
 
 
 @pytest.mark.slow
