@@ -205,3 +205,28 @@ def test_a_map_of_the_valve_drifter_equals_its_fresh_orbits():
                                                            "valve.switch_out": x})).orbit(), "drifter", False)
             for name, w in want.items():
                 assert got[name][i, j] == pytest.approx(w, rel=1e-9), (name, i, j)
+
+
+def test_the_cavitation_edge_refined_is_the_root_of_the_least_front_pressure(tmp_path):
+    """A front opening 30 times narrower than the preset's starves the front chamber: at 2e-7
+    m^3/s/Pa^0.5 its least absolute pressure is below 0 (the orbit kept, ``cavitates`` set), at
+    3e-7 above. The bisected edge is where that pressure, a smooth function of the coefficient, is 0:
+    Brent's method on it (fresh orbits, no bisection) finds the same coefficient."""
+    from scipy.optimize import brentq
+
+    key = "supply.front_flow_coefficient"
+    spec = parse_spec({"task": "operating_point", "config": "circuit-drifter",
+                       "axes": {key: {"values": ["2e-7 m^3/s/Pa^0.5", "3e-7 m^3/s/Pa^0.5"]}}})
+    run_map(spec, tmp_path / "m.zarr", executor="threads", n_workers=1, progress=False)
+    ds = open_sweep(tmp_path / "m.zarr")
+    assert list(ds["cavitates"].values) == [True, False] and list(ds["status"].values) == [0, 0]
+    edges = map_edges(tmp_path / "m.zarr", refine=True)
+    assert [e["flag"] for e in edges] == ["cavitates"]
+    config = read_config("circuit-drifter")[0]
+
+    def least_front(k):
+        machine = build(with_values(config, {key: f"{k!r} m^3/s/Pa^0.5"}))
+        return machine.orbit(allow_cavitation=True).minimum_pressures_Pa["front"]
+
+    root = brentq(least_front, 2e-7, 3e-7, xtol=1e-15, rtol=1e-10)
+    assert math.isclose(edges[0]["value"], root, rel_tol=2e-6)
