@@ -144,6 +144,8 @@ def test_a_resumed_map_is_bitwise_the_uninterrupted_one(tmp_path):
     for f in (part / "blow_frequency" / "c").rglob("*"):
         if f.is_file() and f.parts[-2:] == ("2", "0"):
             f.unlink()
+    with pytest.raises(ValueError, match="not stored yet"):
+        map_edges(part)
     res = run_map(spec, part, executor="threads", n_workers=1, progress=False)
     assert (res.already_done, res.computed) == (1, 2)
     a, b = _store_arrays(whole), _store_arrays(part)

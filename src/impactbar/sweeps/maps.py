@@ -54,11 +54,22 @@ def map_edges(store, *, refine: bool = False) -> list:
     list of dict
         ``axis`` (the key), ``index`` (the lower point), ``flag``, ``low``, ``high`` (the grid values
         around it, SI) and ``value`` (the refined one, or NaN).
+
+    Raises
+    ------
+    ValueError
+        A store that is not a drifter map, or one with chunks left to compute.
     """
     from .store import open_sweep, stored_spec
 
     ds = open_sweep(store)
     spec = stored_spec(ds)
+    if not isinstance(spec, DrifterMapSpec):
+        raise ValueError(f"{store} is not a drifter map (task {spec.task}); edges are a map's")
+    done = np.asarray(ds["chunk_done"].values)
+    if not np.all(done == 1):
+        raise ValueError(f"{store}: {int(np.sum(done != 1))} of {done.size} chunks are not stored yet; rerun "
+                         "the sweep to finish it before its edges are found")
     names = [f for f in EDGE_FLAGS if f in ds]
     data = {n: ds[n].values for n in (*names, "status")}
     edges = []
