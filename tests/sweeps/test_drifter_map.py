@@ -232,3 +232,26 @@ def test_the_cavitation_edge_refined_is_the_root_of_the_least_front_pressure(tmp
 
     root = brentq(least_front, 2e-7, 3e-7, xtol=1e-15, rtol=1e-10)
     assert math.isclose(edges[0]["value"], root, rel_tol=2e-6)
+
+
+@pytest.mark.slow
+def test_a_map_on_the_rock_stores_the_rock_figures_of_fresh_orbits():
+    """The circuit drifter on its drill string and rock (examples/circuit_drifter_rock.toml, read
+    relative to the spec's folder): the rock's figures in SI beside the circuit's, each point the
+    fresh orbit's (the second continued from the first, to the integrator's accuracy)."""
+    from pathlib import Path
+
+    examples = Path(__file__).parents[2] / "examples"
+    spec = parse_spec({"task": "operating_point", "config": str(examples / "circuit_drifter_rock.toml"),
+                       "axes": {"supply.pump_flow": {"values": ["70 L/min", "75 L/min"]}}})
+    got = _chunks(spec)
+    assert list(got["status"]) == [0, 0] and list(got["origin"]) == [0, 1]
+    config = read_config(examples / "circuit_drifter_rock.toml")[0]
+    for i, flow in enumerate(("70 L/min", "75 L/min")):
+        want = point_values(build(with_values(config, {"supply.pump_flow": flow})).orbit(), "circuit", True)
+        assert want["work_on_rock"] > 0 and want["drilling_rate"] > 0
+        for name, w in want.items():
+            if isinstance(w, bool):
+                assert bool(got[name][i]) == w, name
+            elif not name.endswith("_margin"):
+                assert got[name][i] == pytest.approx(w, rel=1e-7), (name, i)

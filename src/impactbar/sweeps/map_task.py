@@ -50,7 +50,9 @@ def _relief_open_fraction(point) -> float:
         if not hasattr(p, "drive_state") or not hasattr(p, "t"):
             continue
         t = np.asarray(p.t, dtype=float)
-        ps = np.asarray(p.y[:, 2 * p.M + 2], dtype=float) - p_rel
+        if t.size < 2:
+            continue
+        ps = np.asarray(p.drive_state(t)[2], dtype=float) - p_rel  # (a flight's or a blow's steps)
         total += t[-1] - t[0]
         dt = np.diff(t)
         a, b = ps[:-1], ps[1:]
