@@ -255,3 +255,26 @@ def test_a_map_on_the_rock_stores_the_rock_figures_of_fresh_orbits():
                 assert bool(got[name][i]) == w, name
             elif not name.endswith("_margin"):
                 assert got[name][i] == pytest.approx(w, rel=1e-7), (name, i)
+
+
+def test_the_command_line_refuses_a_bad_axis_in_one_line_before_any_work(tmp_path, capsys):
+    """A spec whose config is a file beside it (read relative to the spec's folder); an axis in the
+    wrong unit: exit status 2, one line naming the key, no store made."""
+    from pathlib import Path
+
+    from impactbar.cli import main
+    from impactbar.sweeps import load_spec
+
+    examples = Path(__file__).parents[2] / "examples"
+    (tmp_path / "mine.toml").write_text((examples / "circuit_drifter.toml").read_text())
+    good = tmp_path / "good.toml"
+    good.write_text('task = "operating_point"\nconfig = "mine.toml"\n[axes]\n'
+                    '"chambers.front_area" = { start = "2.6 cm^2", stop = "3 cm^2", num = 3 }\n')
+    spec = load_spec(good)
+    assert spec.axes[0].unit == "m**2" and spec.axes[0].values == pytest.approx([2.6e-4, 2.8e-4, 3e-4])
+    bad = tmp_path / "bad.toml"
+    bad.write_text(good.read_text().replace('stop = "3 cm^2"', 'stop = "3 cm"'))
+    assert main(["sweep", str(bad), "--out", str(tmp_path / "m.zarr")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "chambers.front_area" in err[0]
+    assert not (tmp_path / "m.zarr").exists()
