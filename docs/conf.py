@@ -147,7 +147,7 @@ def _write_api() -> None:
 
 #: pages the index lists itself; every other page in docs/ goes under "Guides", in this order first
 INDEX_PAGES = {"index", "getting_started", "theory", "changelog", "guides"}
-GUIDE_ORDER = ("physical", "sweep", "experiments")
+GUIDE_ORDER = ("physical", "sweep", "design_maps", "experiments")
 
 
 def _write_guides() -> None:
@@ -197,7 +197,7 @@ nitpick_ignore_regex = [
     ("py:.*", r"(numpy|scipy|pandas|xarray|pint|dask|distributed|zarr|matplotlib|dataclasses|"
               r"enum|collections|concurrent)(\..*)?"),
     ("py:.*", r"impactbar\.(dynamics|orbits\.(rigid|one_impact|multi_impact|phase|stability)|"
-              r"laws\.(base|paper|wave|rodrock)|_shared|sweeps\.(spec|run|store|tasks)|"
+              r"laws\.(base|paper|wave|rodrock)|_shared|sweeps\.(spec|run|store|tasks|grid|map_spec|map_task|maps)|"
               r"continuation\.(engine|core))(\..*)?"),
 ]
 # Short names in the first line of a docstring, which the API tables show outside their class or

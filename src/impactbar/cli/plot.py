@@ -7,7 +7,7 @@ from __future__ import annotations
 def add_parser(sub) -> None:
     p = sub.add_parser(
         "plot",
-        help="draw a stored sweep: stability chart, fraction maps or bifurcation diagram",
+        help="draw a stored sweep: stability chart, fraction maps, bifurcation diagram or design map",
         description="Read a store written by 'impactbar sweep' and draw it: a stability chart for "
         "task orbits, maps of the motion fractions for montecarlo, a bifurcation diagram for "
         "bifurcation. Chunks not yet computed show as blank.",
@@ -17,6 +17,9 @@ def add_parser(sub) -> None:
     p.add_argument("--select", action="append", default=[], metavar="AXIS=VALUE",
                    help="fix an axis at the grid value nearest VALUE (repeatable); the chart uses "
                    "at most two remaining axes")
+    p.add_argument("--variable", default=None, metavar="NAME",
+                   help="for a drifter's design map (impactbar sweep of a spec with config): the "
+                   "variable drawn, e.g. hydraulic_efficiency (default blow_frequency)")
     p.add_argument("--dpi", type=int, default=150,
                    help="resolution of raster output, 1 to 1200 (default 150)")
     p.set_defaults(func=run)
@@ -43,6 +46,7 @@ def run(args) -> int:
     output_file(args.out)
     from ..sweeps.plot import plot_sweep
 
-    path = plot_sweep(args.store, args.out, select=_selection(args.select), dpi=args.dpi)
+    path = plot_sweep(args.store, args.out, select=_selection(args.select), dpi=args.dpi,
+                      variable=args.variable)
     print(f"wrote {path}")
     return 0

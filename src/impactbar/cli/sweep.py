@@ -13,7 +13,9 @@ def add_parser(sub) -> None:
     p = sub.add_parser(
         "sweep",
         help="parameter sweep / Monte Carlo on dask.distributed into a resumable zarr store",
-        description="Compute the task of SPEC.toml (orbits, montecarlo or bifurcation) at every "
+        description="Compute the task of SPEC.toml (orbits, montecarlo or bifurcation; "
+        "operating_point for a design map of a drifter, a spec with config = a drifter's TOML or preset, "
+        "its edges recorded after it) at every "
         "point of its grid on a dask.distributed cluster (a sweep in the rigid bar's closed forms: "
         "in threads of this process, which is faster than starting a cluster) and store each chunk "
         "in RESULTS.zarr as it finishes. Rerunning the same command resumes: finished chunks are "
@@ -71,4 +73,14 @@ def run(args) -> int:
             if res.computed and res.seconds > 0 else "")
     print(f"{args.out}: {res.already_done + res.computed}/{res.n_chunks} chunks stored "
           f"({res.already_done} found, {res.computed} computed in {res.seconds:.1f} s{rate})")
+    from ..sweeps import DrifterMapSpec
+
+    if isinstance(spec, DrifterMapSpec) and res.complete:  # a design map: its edges, refined on request
+        from ..sweeps import map_edges
+
+        edges = map_edges(args.out, refine=spec.refine_edges)
+        for e in edges:
+            where = f", refined to {e['value']:.7g}" if e["value"] == e["value"] else ""
+            print(f"edge: {e['flag']} changes along {e['axis']} between {e['low']:.6g} and "
+                  f"{e['high']:.6g}{where} (at grid index {list(e['index'])})")
     return 0

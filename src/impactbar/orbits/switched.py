@@ -543,16 +543,18 @@ class ShootingProblem(OrbitProblem):
     # -- the problem --------------------------------------------------------------------------------
     def initial(self, guess, tol, max_iter):
         """The blocks' start times, modes and states: from a :class:`SwitchedOrbit` of the same drive
-        (its states, the drive's states, its impact times), from a run of :func:`impactbar.simulate`
+        or of the same kind at other parameter values (its states, the drive's states, its impact
+        times; the modes made again by this drive), from a run of :func:`impactbar.simulate`
         (continued from its end) or, without one, from rest on the stop (the rigid bar; a flexible bar
         from the rigid bar's orbit), the motion followed impact after impact until the impact
         velocities settle (at most ``SETTLE_IMPACTS``)."""
         model, drive, m, M = self.model, self.drive, self.impacts, self.M
         if isinstance(guess, SwitchedOrbit):
             problem = guess._problem
-            if isinstance(problem, ShootingProblem) and problem.drive == drive and problem.impacts == m \
-                    and problem.blocks:
-                self.adopt(problem)
+            if isinstance(problem, ShootingProblem) and problem.impacts == m and problem.blocks and (
+                    problem.drive == drive or (type(problem.drive) is type(drive) and problem.M == M
+                                               and problem.coupled == self.coupled)):
+                self.adopt(problem)  # (a neighbour's orbit, at other parameter values: its unknowns)
                 return np.asarray(guess._unknowns, dtype=float).copy()
             if guess.impacts == 1 and m > 1 and isinstance(problem, ShootingProblem) and problem.blocks:
                 tau, mode = problem.blocks[0]

@@ -313,7 +313,7 @@ class CircuitDrifter:
             acc)
 
     # -- results -----------------------------------------------------------------------------------
-    def orbit(self, guess=None) -> CircuitDrifterOrbit:
+    def orbit(self, guess=None, *, allow_cavitation: bool = False) -> CircuitDrifterOrbit:
         """The one-impact periodic motion, its operating point in SI (:func:`impactbar.find_orbit`
         with the circuit: from rest on the stop, the motion followed until it settles, then Newton
         with the variational equations' Jacobian).
@@ -335,19 +335,20 @@ class CircuitDrifter:
             away: no orbit with a blow), or a chamber empties; or where the orbit found does not
             repeat when :func:`impactbar.simulate` restarts it (checked over two periods to
             ``REPEAT_TOL``, without a drill string), or where an absolute pressure of the orbit
-            falls below 0 (the oil would cavitate: :attr:`CircuitDrifterOrbit.cavitates`).
+            falls below 0 (the oil would cavitate: :attr:`CircuitDrifterOrbit.cavitates`), unless
+            ``allow_cavitation`` (then the orbit is returned with ``cavitates`` set: a design map
+            draws the region).
         """
         from ..orbits import find_orbit
 
-        if isinstance(guess, CircuitDrifterOrbit) and guess.drifter != self:
-            orbit = _continued(self.model(), self.drive(), guess.orbit)
-        else:
-            g = guess.orbit if isinstance(guess, CircuitDrifterOrbit) else guess
-            orbit = find_orbit(self.model(), self.drive(), guess=g)
+        g = guess.orbit if isinstance(guess, CircuitDrifterOrbit) else guess
+        orbit = find_orbit(self.model(), self.drive(), guess=g)  # (another design's: its unknowns)
         if self.drill is None:  # (a blow with the rock restarts inside its contact: not checked here)
             _check_repeats(orbit)
         point = CircuitDrifterOrbit(self, orbit)
-        _refuse_cavitation(point.minimum_pressures_Pa, f"the orbit (period {point.period_s * 1e3:.5g} ms)")
+        if not allow_cavitation:
+            _refuse_cavitation(point.minimum_pressures_Pa,
+                               f"the orbit (period {point.period_s * 1e3:.5g} ms)")
         return point
 
     def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
@@ -483,22 +484,6 @@ class CircuitDrifter:
                    damping_N_s_m=damping,
                    n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
                    name=str(config.get("name", "")), drill=drill)
-
-
-def _continued(model, drive, previous):
-    """The one-impact orbit of ``model`` and ``drive`` by Newton from the orbit ``previous`` of
-    another design: its unknowns as the start, its blocks' modes adopted (:meth:`ShootingProblem.adopt`,
-    as a continuation step)."""
-    from ..orbits.switched import orbit_of, orbit_problem
-    from ..orbits.switched_search import _motion, _solve
-
-    problem = orbit_problem(model, drive, 1)
-    X0 = np.asarray(previous._unknowns, dtype=float).copy()
-    if previous.impacts != 1 or previous._problem is None or X0.size != problem.size:
-        raise ValueError("guess: an orbit of another kind of problem (impacts or unknowns); orbit() without "
-                         "a guess follows the default chain")
-    problem.adopt(previous._problem)
-    return _motion(orbit_of(problem, _solve(problem, X0, 1e-13, 50)))
 
 
 #: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over

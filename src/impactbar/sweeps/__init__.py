@@ -38,6 +38,13 @@ lock file next to the store keeps a second driver out. Every random start is see
 ``seed`` and the point's flat index in the grid (``numpy.random.SeedSequence([seed, index])``),
 never from the chunk order or the worker, so a resumed sweep equals an uninterrupted one.
 
+Design maps of a drifter
+------------------------
+A spec with a top-level ``config`` (a drifter's TOML file or preset) is a design map over 1 to 3 of its
+SI config keys (:mod:`impactbar.sweeps.map_spec`), task ``operating_point``: the operating point at
+every point, each continued from its neighbour, stored in SI through the same store and driver;
+:func:`run_map` then records the edges (:func:`map_edges`).
+
 Layout: ``spec`` (schema and validation), ``tasks`` (one chunk's work), ``store`` (zarr layout, done
 flags), ``run`` (the driver: dask, or threads), ``plot`` (figures from a finished store; the only module that
 imports matplotlib). This layer sits on the core and imports dask, xarray and zarr lazily; the core
@@ -46,6 +53,10 @@ never imports it.
 
 from __future__ import annotations
 
+from .map_spec import DrifterMapSpec as DrifterMapSpec
+from .map_spec import parse_map_spec as parse_map_spec
+from .maps import map_edges as map_edges
+from .maps import run_map as run_map
 from .plot import plot_sweep as plot_sweep
 from .run import NoWorkersError as NoWorkersError
 from .run import SweepRun as SweepRun
@@ -82,4 +93,8 @@ __all__ = [
     "stored_spec",
     "sweep_progress",
     "plot_sweep",
+    "DrifterMapSpec",
+    "parse_map_spec",
+    "run_map",
+    "map_edges",
 ]

@@ -65,9 +65,12 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
     return ds, dims
 
 
-def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Path:
+def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
+               variable: str | None = None) -> Path:
     """Draw a sweep store into a file: a stability chart (``orbits``), fraction maps
-    (``montecarlo``) or a bifurcation diagram (``bifurcation``).
+    (``montecarlo``), a bifurcation diagram (``bifurcation``) or a drifter's design map
+    (``operating_point``: ``variable`` as a line or filled contours, its edges drawn over,
+    :func:`impactbar.plotting.maps.plot_operating_map`).
 
     Parameters
     ----------
@@ -78,6 +81,8 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Pat
     select : dict of str to float, optional
         Fix axes at the nearest grid value, down to two.
     dpi : int, optional
+    variable : str, optional
+        The variable of a design map to draw (default the blow frequency); only for one.
 
     Returns
     -------
@@ -105,6 +110,9 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Pat
 
     ds = open_sweep(store)
     task = ds.attrs["task"]
+    if variable is not None and task != "operating_point":
+        raise ValueError(f"--variable is for a drifter's design map (task operating_point); this store's "
+                         f"task is {task}")
     out = Path(out)
     try:
         red, dims = reduce_axes(ds, select, 2)
@@ -122,6 +130,10 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150) -> Pat
         fig = plot_stability_chart(red, dims).figure
     elif task == "montecarlo":
         fig = plot_fraction_maps(red, dims)
+    elif task == "operating_point":
+        from ..plotting.maps import plot_operating_map
+
+        fig = plot_operating_map(red, dims, variable).figure
     else:
         fig = plot_bifurcation(red, dims).figure
     fig.savefig(out, dpi=dpi)

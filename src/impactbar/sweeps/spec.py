@@ -14,6 +14,7 @@ from .._shared.parameters import parameter_value, parameters, with_parameters
 from .._shared.validate import check_int, check_real
 from ..laws import get_law
 from ..loads import LOADS, Load
+from .grid import ChunkedGrid
 
 TASKS = ("orbits", "montecarlo", "bifurcation")
 
@@ -98,7 +99,7 @@ class Axis:
 
 
 @dataclass(frozen=True)
-class SweepSpec:
+class SweepSpec(ChunkedGrid):
     """A validated sweep: task, base bar and load, axes, task options and chunk size.
 
     Build it with :func:`load_spec` (a TOML file) or :func:`parse_spec` (a mapping of the same
@@ -186,37 +187,7 @@ class SweepSpec:
         object.__setattr__(self, "chunk_points", check_int("chunk_points", cp, lo=1))
         _check_chunk_size(self)
 
-    # -- the grid ----------------------------------------------------------------------------
-    @property
-    def shape(self) -> tuple[int, ...]:
-        """Grid shape, one entry per axis."""
-        return tuple(a.size for a in self.axes)
-
-    @property
-    def n_points(self) -> int:
-        return math.prod(self.shape)
-
-    @property
-    def chunk_shape(self) -> tuple[int, ...]:
-        """Shape of a work chunk (and of the zarr chunks along the axes): the last axes are filled
-        first, up to ``chunk_points`` points."""
-        left = self.chunk_points
-        out = []
-        for n in reversed(self.shape):
-            c = max(1, min(n, left))
-            out.append(c)
-            left = max(1, left // c)
-        return tuple(reversed(out))
-
-    @property
-    def chunk_grid(self) -> tuple[int, ...]:
-        """Number of chunks along each axis."""
-        return tuple(-(-n // c) for n, c in zip(self.shape, self.chunk_shape, strict=True))
-
-    @property
-    def n_chunks(self) -> int:
-        return math.prod(self.chunk_grid)
-
+    # -- the grid (shape, chunks: ChunkedGrid) --------------------------------------------------
     @property
     def extra_size(self) -> int:
         """Length of the task's extra dimension (``orbit``, ``motion`` or ``impact``)."""
@@ -303,6 +274,10 @@ def load_spec(path) -> SweepSpec:
         raise ValueError(f"{path}: arrays or tables nested too deeply for a sweep spec") from exc
     except OSError as exc:
         raise ValueError(f"cannot read spec {path}: {exc}") from exc
+    if isinstance(doc, dict) and "config" in doc:  # a drifter map: config keys in SI
+        from .map_spec import parse_map_spec
+
+        return parse_map_spec(doc, path.parent)
     return parse_spec(doc)
 
 
@@ -319,6 +294,10 @@ def parse_spec(doc) -> SweepSpec:
     """
     if not isinstance(doc, dict):
         raise ValueError(f"spec must be a table; got {type(doc).__name__}")
+    if "config" in doc:  # a drifter map (impactbar.sweeps.map_spec): config keys in SI
+        from .map_spec import parse_map_spec
+
+        return parse_map_spec(doc)
     unknown = [k for k in doc if k not in _TOP_KEYS]
     if unknown:
         raise ValueError(f"unknown top-level key(s) {unknown}; allowed: {list(_TOP_KEYS)}")

@@ -31,6 +31,13 @@ def _axis_name(spec: SweepSpec, name: str) -> str:
     return spec.parameters()[name].description
 
 
+def _axis_attrs(spec, name: str) -> dict:
+    """``long_name`` and ``units`` of a grid axis (a drifter map's: its config key and SI unit)."""
+    if hasattr(spec, "axis_attrs"):
+        return spec.axis_attrs(name)
+    return {"long_name": _axis_name(spec, name), "units": UNITS.get(name, "1")}
+
+
 def _var_attrs(name: str, description: str, units: str | None = None) -> dict:
     """``long_name``, ``units`` and ``description`` of a stored variable."""
     units = UNITS.get(name, "1") if units is None else units
@@ -45,7 +52,7 @@ def _template(spec: SweepSpec):
     from .._version import __version__
 
     dims = tuple(a.name for a in spec.axes)
-    extra_dim = _EXTRA_DIM[spec.task]
+    extra_dim = _EXTRA_DIM.get(spec.task)
     chunks = spec.chunk_shape
     data_vars = {}
     for f in _variables(spec):
@@ -62,9 +69,7 @@ def _template(spec: SweepSpec):
                                                       chunks=spec.n_chunks),
                                   attrs=_var_attrs(_SUM, "CRC-32 of the work chunk's data "
                                                          "(-1 before it is stored)"))
-    coords = {a.name: xr.Variable((a.name,), np.asarray(a.values),
-                                  attrs={"long_name": _axis_name(spec, a.name),
-                                         "units": UNITS.get(a.name, "1")})
+    coords = {a.name: xr.Variable((a.name,), np.asarray(a.values), attrs=_axis_attrs(spec, a.name))
               for a in spec.axes}
     if spec.task == "montecarlo":
         coords["motion"] = xr.Variable(("motion",), np.asarray(motion_classes(), dtype=object),
@@ -104,7 +109,7 @@ def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
         _ATTR_SPEC: spec.to_json(), _ATTR_VERSION: __version__, "task": spec.task,
         "chunk_shape": list(spec.chunk_shape)})
     dims = tuple(a.name for a in spec.axes)
-    extra_dim = _EXTRA_DIM[spec.task]
+    extra_dim = _EXTRA_DIM.get(spec.task)
     arrays = []  # name, values or None, dtype, shape, chunks, fill, dimension names, attributes
     for f in _variables(spec):
         extra, dtype = f.per is not None, np.dtype(f.dtype)
@@ -120,8 +125,7 @@ def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
         values = np.asarray(a.values)
         arrays.append((a.name, values, values.dtype, values.shape, values.shape,
                        np.nan if values.dtype.kind == "f" else 0, (a.name,),
-                       attrs({"long_name": _axis_name(spec, a.name), "units": UNITS.get(a.name, "1")},
-                             values.dtype, np.nan)))
+                       attrs(_axis_attrs(spec, a.name), values.dtype, np.nan)))
     if spec.task == "montecarlo":
         classes = np.asarray(motion_classes(), dtype=object)
         arrays.append(("motion", classes, str, classes.shape, classes.shape, "", ("motion",),
@@ -159,6 +163,8 @@ def _create_store(spec: SweepSpec, path: Path) -> None:
     try:
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
+            # text variables (a drifter map's failure reasons): fixed-length UTF-32, read back by zarr
+            warnings.filterwarnings("ignore", message=".*does not have a Zarr V3 specification.*")
             if not use_fast("sweeps.create_store"):
                 _template(spec).to_zarr(tmp, mode="w-", compute=False, zarr_format=3, consolidated=True)
             else:

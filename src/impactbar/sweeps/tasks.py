@@ -13,6 +13,8 @@ from .._shared.schema import Field, Schema
 from .._shared.validate import check_int
 from ..dynamics.implementations import implementation
 from ..laws import get_law
+from .map_spec import DrifterMapSpec
+from .map_task import compute_map_chunk
 from .spec import SweepSpec, motion_classes
 
 #: a sweep in the rigid closed forms with fewer grid points than this takes the numpy closed forms
@@ -32,10 +34,7 @@ def chunk_slices(spec: SweepSpec, chunk: int) -> tuple[slice, ...]:
     -------
     tuple of slice, shape (n_axes,)
     """
-    chunk = check_int("chunk", chunk, lo=0, hi=spec.n_chunks - 1)
-    idx = np.unravel_index(chunk, spec.chunk_grid)
-    return tuple(slice(int(i) * c, min((int(i) + 1) * c, n))
-                 for i, c, n in zip(idx, spec.chunk_shape, spec.shape, strict=True))
+    return spec.block(check_int("chunk", chunk, lo=0, hi=spec.n_chunks - 1))
 
 
 
@@ -77,7 +76,9 @@ def _variables(spec: SweepSpec) -> Schema:
     """The task's variables, each a :class:`~impactbar._shared.schema.Field` (dtype, fill, long name,
     units); ``per`` names the extra dimension of those along it. An ``orbits`` sweep stores the
     orbit's fields in the view ``"sweep"`` (:data:`impactbar.orbits.orbit.ORBIT_FIELDS`) along
-    ``orbit``."""
+    ``orbit``. A drifter map (:mod:`impactbar.sweeps.map_spec`) names its own."""
+    if isinstance(spec, DrifterMapSpec):
+        return spec.variables()
     if spec.task == "orbits":
         from ..orbits.orbit import ORBIT_FIELDS
 
@@ -111,6 +112,8 @@ def compute_chunk(spec: SweepSpec, chunk: int) -> dict[str, np.ndarray]:
     """
     from .._shared.threads import single_threaded_blas
 
+    if isinstance(spec, DrifterMapSpec):  # a drifter map: its own task
+        return compute_map_chunk(spec, chunk)
     slices = chunk_slices(spec, chunk)
     block = tuple(s.stop - s.start for s in slices)
     out = {}

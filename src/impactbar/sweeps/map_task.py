@@ -1,0 +1,281 @@
+"""A drifter map's work: the operating point at each point of a chunk, each continued from its
+neighbour (:mod:`impactbar.sweeps.map_spec`), and the bisection of an edge between two points."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .map_spec import _ROCK, REASON_CHARS, DrifterMapSpec, _one_line
+
+#: largest relative change of the period or the impact velocity from the neighbour a continued
+#: orbit may show; beyond it the point is found again by the default chain (another branch)
+JUMP = 0.25
+#: relative width to which :func:`refine_edge` bisects an edge
+EDGE_RTOL = 1e-6
+#: the flags whose changes along an axis are edges
+EDGE_FLAGS = ("stable", "cavitates", "relief_opens", "accumulator_empties")
+
+
+# ------------------------------------------------------------------------------------------------
+def operating_point(machine, guess=None):
+    """The machine's operating point: the default chain (``guess=None``) or continued from a
+    neighbour's orbit; a circuit drifter's cavitating orbit is returned with ``cavitates`` set.
+
+    Returns
+    -------
+    DrifterOrbit or CircuitDrifterOrbit
+
+    Raises
+    ------
+    ValueError
+        Where there is no orbit (the machine's ``orbit()`` says why).
+    """
+    from ..physical.circuit import CircuitDrifter
+
+    if isinstance(machine, CircuitDrifter):
+        return machine.orbit(guess, allow_cavitation=True)
+    return machine.orbit(None if guess is None else guess.orbit)
+
+
+def _relief_open_fraction(point) -> float:
+    """Fraction of the period in which the supply pressure is above the relief's setting (the
+    integrator's steps, linear between them)."""
+    sup = point.orbit.drive.supply
+    if not sup.has_relief or sup.held:
+        return 0.0
+    p_rel, total, open_ = sup.relief_pressure, 0.0, 0.0
+    for p in point._pieces:
+        if not hasattr(p, "drive_state") or not hasattr(p, "t"):
+            continue
+        t = np.asarray(p.t, dtype=float)
+        if t.size < 2:
+            continue
+        ps = np.asarray(p.drive_state(t)[2], dtype=float) - p_rel  # (a flight's or a blow's steps)
+        total += t[-1] - t[0]
+        dt = np.diff(t)
+        a, b = ps[:-1], ps[1:]
+        both = (a > 0) & (b > 0)
+        open_ += float(np.sum(dt[both]))
+        cross = (a > 0) != (b > 0)
+        frac = np.where(cross, np.where(a > 0, a, b) / np.where(cross, np.abs(a - b), 1.0), 0.0)
+        open_ += float(np.sum(dt[cross] * frac[cross]))
+    return open_ / total if total > 0 else 0.0
+
+
+def point_values(point, kind: str, rock: bool) -> dict:
+    """The stored values of one operating point, in SI (the names of :func:`map_variables`).
+
+    Parameters
+    ----------
+    point : DrifterOrbit or CircuitDrifterOrbit
+    kind : {"drifter", "circuit"}
+    rock : bool
+
+    Returns
+    -------
+    dict of str to float or bool
+    """
+    mult = np.abs(np.asarray(point.multipliers))
+    out = {"blow_frequency": point.blow_frequency_Hz, "period": point.period_s,
+           "impact_velocity": point.impact_velocity_m_s, "impact_energy": point.impact_energy_J,
+           "max_abs_multiplier": float(mult.max()) if mult.size else 0.0, "stable": point.stable}
+    if kind == "circuit":
+        from ..physical.circuit import PRESSURE_SCALE
+
+        low = point.minimum_pressures_Pa
+        border = point.orbit.drive.border_tests(point._pieces)
+        frac = _relief_open_fraction(point)
+        out.update({"mean_supply_pressure": point.mean_supply_pressure_Pa,
+                    "pump_power": point.pump_power_kW * 1e3,
+                    "hydraulic_efficiency": point.hydraulic_efficiency,
+                    "min_rear_pressure": low.get("rear", math.nan),
+                    "min_front_pressure": low.get("front", math.nan),
+                    "min_supply_pressure": low.get("supply", math.nan),
+                    "cavitates": bool(min(low.values()) < 0.0) if low else False,
+                    "relief_open_fraction": frac,
+                    "relief_margin": border.get("relief", math.inf) * PRESSURE_SCALE,
+                    "relief_opens": bool(border.get("relief", math.inf) < 0.0),
+                    "accumulator_margin": border.get("accumulator", math.inf) * PRESSURE_SCALE,
+                    "accumulator_empties": bool(border.get("accumulator", math.inf) < 0.0)})
+    if rock:
+        figures = point.rock()
+        for key, name, factor, _, _ in _ROCK:
+            out[name] = figures.get(key, math.nan) * factor
+    return out
+
+
+def _snake(block: tuple) -> list:
+    """The local indices of a block in snake order: each index a neighbour of the one before."""
+    order = [()]
+    for n in block:
+        new = []
+        for j, head in enumerate(order):
+            rng = range(n) if j % 2 == 0 else range(n - 1, -1, -1)
+            new.extend((*head, i) for i in rng)
+        order = new
+    # (the order above runs the first axis slowest, turning at each end of the faster ones)
+    return order
+
+
+def _origin(prev: tuple, here: tuple) -> int:
+    for k, (a, b) in enumerate(zip(prev, here, strict=True)):
+        if a != b:
+            return k + 1 if a < b else -(k + 1)
+    return 0  # pragma: no cover - consecutive points differ
+
+
+def _landed_elsewhere(point, prev) -> bool:
+    for a, b in ((point.period_s, prev.period_s), (point.impact_velocity_m_s, prev.impact_velocity_m_s)):
+        if not abs(a - b) <= JUMP * abs(b):
+            return True
+    return False
+
+
+def compute_map_chunk(spec: DrifterMapSpec, chunk: int) -> dict:
+    """One work chunk of a drifter map (what :func:`impactbar.sweeps.compute_chunk` runs for one).
+
+    Parameters
+    ----------
+    spec : DrifterMapSpec
+    chunk : int
+        ``0 <= chunk < spec.n_chunks``.
+
+    Returns
+    -------
+    dict of str to numpy.ndarray
+        Every variable of :meth:`DrifterMapSpec.variables`, each of the chunk's block's shape.
+    """
+    from .._shared.threads import single_threaded_blas
+
+    slices = spec.block(chunk)
+    block = tuple(s.stop - s.start for s in slices)
+    variables = spec.variables()
+    out = {f.name: np.full(block, f.fill, dtype=f.dtype) for f in variables}
+    prev, prev_local = None, None
+    with single_threaded_blas():
+        for local in _snake(block):
+            index = tuple(s.start + i for s, i in zip(slices, local, strict=True))
+            point, origin, reason, status = None, 0, "", 0
+            try:
+                machine = spec.machine(index)
+                if prev is not None and spec.chain == "continue":
+                    try:
+                        point = operating_point(machine, prev)
+                        origin = _origin(prev_local, local)
+                        if _landed_elsewhere(point, prev):
+                            point, origin = None, 0
+                    except ValueError:
+                        point = None
+                if point is None:
+                    point = operating_point(machine)
+                values = point_values(point, spec.kind, spec.rock)
+            except ValueError as exc:
+                point, status, reason = None, 1, _one_line(exc)
+            except Exception as exc:  # noqa: BLE001 - one point's failure is kept, the map goes on
+                point, status, reason = None, 2, f"{type(exc).__name__}: {_one_line(exc)}"
+            if point is None:
+                out["status"][local] = status
+                out["failure"][local] = reason[:REASON_CHARS]
+                prev = None  # the next point starts again from the default chain
+                continue
+            for name, v in values.items():
+                out[name][local] = v
+            out["origin"][local] = origin
+            prev, prev_local = point, local
+    return out
+
+
+def find_edges(ds, flags=EDGE_FLAGS) -> list:
+    """The edges of a map: along each axis, the neighbouring points (both with an orbit) where a
+    flag changes.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset or dict of numpy.ndarray
+        The map's variables (``status`` and the flags).
+    flags : sequence of str
+        The flags looked at (those the store has).
+
+    Returns
+    -------
+    list of tuple
+        ``(axis, index, flag)``: the axis number, the lower point's index (a tuple) and the flag's name;
+        the upper point is one step up the axis.
+    """
+    status = np.asarray(ds["status"])
+    ok = status == 0
+    out = []
+    for name in flags:
+        if name not in ds:
+            continue
+        f = np.asarray(ds[name], dtype=bool)
+        for axis in range(f.ndim):
+            lo = [slice(None)] * f.ndim
+            hi = [slice(None)] * f.ndim
+            lo[axis], hi[axis] = slice(0, -1), slice(1, None)
+            lo, hi = tuple(lo), tuple(hi)
+            change = (f[lo] != f[hi]) & ok[lo] & ok[hi]
+            for idx in zip(*np.nonzero(change), strict=True):
+                out.append((axis, tuple(int(i) for i in idx), name))
+    out.sort()
+    return out
+
+
+def refine_edge(spec: DrifterMapSpec, axis: int, index: tuple, flag: str, *, rtol: float = EDGE_RTOL):
+    """Locate an edge by bisection on the axis' parameter, the other keys at the point's values.
+
+    Parameters
+    ----------
+    spec : DrifterMapSpec
+    axis : int
+        The axis along which the flag changes.
+    index : tuple of int
+        The lower grid point (the upper one is a step up ``axis``).
+    flag : str
+        One of :data:`EDGE_FLAGS`.
+    rtol : float
+        Bisect until the bracket is narrower than ``rtol`` times its larger end.
+
+    Returns
+    -------
+    low, high : float
+        The bracket (SI, in the axis' unit): the flag as at the lower point at ``low``, as at the upper
+        one at ``high``.
+
+    Raises
+    ------
+    ValueError
+        Where an orbit is missing at an end.
+    """
+    ax = spec.axes[axis]
+    a, b = float(ax.values[index[axis]]), float(ax.values[index[axis] + 1])
+    others = {x.name: x.values[i] for k, (x, i) in enumerate(zip(spec.axes, index, strict=True)) if k != axis}
+
+    def at(value, guess=None):
+        machine = spec.machine(values={**others, ax.name: value})
+        point = None
+        if guess is not None:
+            try:
+                point = operating_point(machine, guess)
+                if _landed_elsewhere(point, guess):
+                    point = None
+            except ValueError:
+                point = None
+        if point is None:
+            point = operating_point(machine)
+        return point, bool(point_values(point, spec.kind, False)[flag])
+
+    pa, fa = at(a)
+    _, fb = at(b, pa)
+    if fa == fb:
+        raise ValueError(f"{flag} does not change between {a!r} and {b!r} along {ax.name}")
+    while abs(b - a) > rtol * max(abs(a), abs(b)):
+        m = 0.5 * (a + b)
+        pm, fm = at(m, pa)
+        if fm == fa:
+            a, pa = m, pm
+        else:
+            b = m
+    return a, b
