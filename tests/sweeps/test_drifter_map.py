@@ -278,3 +278,22 @@ def test_the_command_line_refuses_a_bad_axis_in_one_line_before_any_work(tmp_pat
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "chambers.front_area" in err[0]
     assert not (tmp_path / "m.zarr").exists()
+
+
+def test_the_readme_map_prints_what_the_readme_shows(tmp_path, monkeypatch, capsys):
+    """The README's design-map example, run as it stands, prints the lines the README quotes."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "README.md").read_text()
+    section = text[text.index("### Design maps of a drifter"):]
+    code = re.search(r"```python\n(.*?)```", section, flags=re.S).group(1)
+    shown = re.search(r"```text\n(.*?)```", section, flags=re.S).group(1)
+    monkeypatch.chdir(tmp_path)
+    exec(compile(code, "README.md, design map", "exec"), {"__name__": "__readme__"})
+    assert capsys.readouterr().out == shown
+    # edges found again without refining keep the refined value the run stored
+    from impactbar.sweeps import map_edges
+
+    again = map_edges(tmp_path / "map.zarr")
+    assert len(again) == 1 and f"{again[0]['value'] * 6e4:.2f}" in shown

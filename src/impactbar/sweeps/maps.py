@@ -48,6 +48,8 @@ def map_edges(store, *, refine: bool = False) -> list:
     store : path-like
         A complete drifter map store.
     refine : bool
+        Bisect each edge to :data:`EDGE_RTOL`; without it, an edge refined by an earlier call keeps
+        its refined value.
 
     Returns
     -------
@@ -72,11 +74,16 @@ def map_edges(store, *, refine: bool = False) -> list:
                          "the sweep to finish it before its edges are found")
     names = [f for f in EDGE_FLAGS if f in ds]
     data = {n: ds[n].values for n in (*names, "status")}
+    kept = {}  # edges refined before keep their values where they are found again without refining
+    if "edge_value" in ds and ds["edge_value"].size:
+        for a, i, f, v in zip(ds["edge_axis"].values, ds["edge_index"].values, ds["edge_flag"].values,
+                              ds["edge_value"].values, strict=True):
+            kept[(int(a), tuple(int(x) for x in np.atleast_1d(i)), str(f))] = float(v)
     edges = []
     for axis, index, flag in find_edges(data, names):
         ax = spec.axes[axis]
         low, high = float(ax.values[index[axis]]), float(ax.values[index[axis] + 1])
-        value = math.nan
+        value = kept.get((axis, tuple(int(x) for x in index), flag), math.nan)
         if refine:
             try:
                 a, b = refine_edge(spec, axis, index, flag)
@@ -89,7 +96,7 @@ def map_edges(store, *, refine: bool = False) -> list:
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*does not have a Zarr V3 specification.*")
         warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
-        _write_edges(str(store), edges, n, d, refine, tuple(a.name for a in spec.axes))
+        _write_edges(str(store), edges, n, d, refine or bool(kept), tuple(a.name for a in spec.axes))
     return edges
 
 
