@@ -25,16 +25,16 @@ def median_time(fn, repeat: int) -> float:
     return float(np.median(ts))
 
 
-def fresh_runs(script, src, rounds: int = 3) -> dict:
-    """``script --json`` (its last line of output a JSON object) on the package tree ``src`` and on
-    this one, in fresh processes, alternately: ``{"baseline": [...], "new": [...]}``, ``rounds``
-    objects each."""
+def fresh_runs(script, src, rounds: int = 3, args=()) -> dict:
+    """``script --json`` (its last line of output a JSON object; ``args`` after it) on the package
+    tree ``src`` and on this one, in fresh processes, alternately: ``{"baseline": [...], "new":
+    [...]}``, ``rounds`` objects each."""
     script = Path(script).resolve()
     runs = {"baseline": [], "new": []}
     for _ in range(rounds):
         for name, path in (("baseline", str(src)), ("new", str(script.parents[1] / "src"))):
             env = dict(os.environ, PYTHONPATH=path + os.pathsep + str(script.parent))
-            out = subprocess.run([sys.executable, str(script), "--json"], env=env, check=True,
+            out = subprocess.run([sys.executable, str(script), "--json", *args], env=env, check=True,
                                  capture_output=True, text=True).stdout
             runs[name].append(json.loads(out.strip().splitlines()[-1]))
     return runs

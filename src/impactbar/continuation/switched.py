@@ -32,13 +32,18 @@ __all__ = ["continue_switched"]
 
 EVENT_KINDS = tuple(EventKind)
 
+#: the chord steps of a corrector (``chord="all"``) before the Jacobian is taken again at the iterate
+CHORD_STEPS = 6
+
+
 class _SwitchedProblem:
     """The periodic-orbit problem of a drive in ``U = (X, lambda)``, for the engine.
 
     Where the flights are integrated: ``forward_lambda``, ``F_lam`` a forward difference (else the
     central difference of before); ``chord``, the first corrector step after an orbit with that
-    orbit's Jacobian (a chord step; else the full Newton step of before). Both ``True`` by default
-    (:func:`continue_switched`)."""
+    orbit's Jacobian (a chord step; else the full Newton step of before), or with ``"all"`` every
+    step (the residuals by plain flights; the Jacobian taken again after ``CHORD_STEPS`` steps
+    without a new orbit). Set by :func:`continue_switched`."""
 
     def __init__(self, model, drive, name, detect, *, events=True, stop_on=(), xtol=1e-10, impacts=1,
                  doubled=False, base=None, forward_lambda=True, chord=True):
@@ -48,6 +53,7 @@ class _SwitchedProblem:
         self.m, self.doubled, self.base = impacts, doubled, base
         self.pair = functools.lru_cache(maxsize=16)(self._pair)
         self._chord = None  # the last orbit's F_u, for the next corrector's first step
+        self._uses = 0  # the chord steps since it was taken
         start = self.pair(float(parameter_value(model, drive, name)))[2]
         self.flights = start.positive
         self.W = np.append(np.full(start.size, 1.0 / start.size), 1.0)
@@ -72,11 +78,17 @@ class _SwitchedProblem:
         error ``O(h)``, ``h = 1e-6``, only slows the corrector's convergence, whose residual is
         exact, and tilts the predictor's tangent by as much)."""
         problem = self.pair(float(U[-1]))[2]
-        chord, self._chord = self._chord, None
-        if chord is not None and F_lam is None:  # the last orbit's Jacobian: a chord step
-            F, DF = problem.value(U[:-1]), chord
+        every = self.chord == "all"
+        chord = self._chord
+        if not every:
+            self._chord = None
+        if chord is not None and (F_lam is None or every) and self._uses < CHORD_STEPS:
+            F, DF = problem.value(U[:-1]), chord  # the last orbit's Jacobian: a chord step
+            self._uses += 1
         else:
             F, DF = problem.residual(U[:-1])
+            if every and getattr(problem, "variational", False):
+                self._chord, self._uses = DF, 0
         if F_lam is None:
             h = 1e-6 * max(1.0, abs(U[-1]))
             sides = []
@@ -108,6 +120,7 @@ class _SwitchedProblem:
                 self._chord = problem.residual(U[:-1])[1]
             except ValueError:
                 self._chord = None
+            self._uses = 0
         return ob
 
     def acceptable(self, U):
@@ -282,7 +295,7 @@ def doubled_first_points(engine, U0, w, steps, gap):
 
 def continue_switched(orbit, parameter: str, to: float, detect, *,
                       settings: ContinuationSettings | None = None, events: bool = True, stop_on=(),
-                      xtol: float = 1e-10, forward_lambda: bool = True, chord: bool = True) -> Branch:
+                      xtol: float = 1e-10, forward_lambda: bool = True, chord: bool | str = True) -> Branch:
     """Follow a periodic motion under a drive as one parameter changes, by pseudo-arclength
     continuation (theory §7, §10). Called by :func:`impactbar.continue_orbit` when its start is a
     :class:`~impactbar.SwitchedOrbit`, or a ``"period-doubling"`` :class:`BranchEvent` of a branch of
@@ -321,11 +334,17 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         Event kinds at which to stop.
     xtol : float
         Tolerance of the event location along the chord.
-    forward_lambda, chord : bool
+    forward_lambda : bool
         Where the flights are integrated (the oil circuit): the Jacobian's parameter column by a
-        forward difference (one flight a point instead of two), and each corrector's first step a
-        chord step with the last orbit's Jacobian; ``False``: the central difference and the full
-        Newton step of before (a benchmark's baseline). Ignored for closed-form flights.
+        forward difference (one flight a point instead of two); ``False``: the central difference
+        of before (a benchmark's baseline). Ignored for closed-form flights.
+    chord : bool or "all"
+        Where the flights are integrated: each corrector's first step a chord step with the last
+        orbit's Jacobian (``True``, the default), every step (``"all"``: the residuals by plain
+        flights, the orbit's own variational flight the only one a point, about half the cost; the
+        points are then the plain flights' roots, 3e-8 from the variational ones'), or none
+        (``False``: the full Newton steps of before, a benchmark's baseline). Ignored for closed-form
+        flights.
 
     Returns
     -------
@@ -339,6 +358,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         For a bad argument (named), a start that is not a solution, or a period doubling from
         which no two-impact branch leaves.
     """
+    if not (chord is True or chord is False or chord == "all"):
+        raise ValueError(f"chord must be True, False or 'all'; got {chord!r}")
     switch = None
     if isinstance(orbit, BranchEvent):
         if orbit.kind != EventKind.PERIOD_DOUBLING or orbit.orbit.impacts != 1:

@@ -61,7 +61,7 @@ from .._shared.parameters import NamedParameters
 
 __all__ = ["Drive", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
            "SurfaceEvent", "FlightKernel", "KernelRun", "OrbitData", "OrbitProblem", "OrbitSearch",
-           "newton", "split_multipliers"]
+           "newton", "chord", "split_multipliers"]
 
 
 class DriveState(NamedTuple):
@@ -697,6 +697,12 @@ class OrbitProblem(ABC):
         :class:`~impactbar.Admissibility`), the contacts apart."""
 
 
+#: what :func:`newton` and :func:`chord` say of a singular Jacobian
+_SINGULAR = ("find_orbit: the Jacobian of the periodic-orbit problem is singular at the guess (the motion it "
+             "starts from does not repeat: e.g. a drive too weak to bring the piston back to the stop); give "
+             "a guess, or check the drive's parameters with simulate")
+
+
 def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
     """Newton's method on ``residual(X) -> (r, J)`` from ``X``, damped while the unknowns at
     ``positive`` (flight times) would change by more than a half. It stops when a step is below
@@ -719,35 +725,81 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
         try:
             step = np.linalg.solve(Jac, -r)
         except np.linalg.LinAlgError:
-            raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at the "
-                             "guess (the motion it starts from does not repeat: e.g. a drive too weak to "
-                             "bring the piston back to the stop); give a guess, or check the drive's "
-                             "parameters with simulate") from None
-        big = float(np.max(np.abs(step[hi]) / np.abs(X[hi]))) if hi.size else 0.0
-        if big > 0.5:  # damped while far: the flight times change by at most a half
-            step *= 0.5 / big
-        X = X + step
-        if np.any(X[hi] <= 0.0):
-            raise ValueError("Newton left the region of positive flight times: give a guess closer "
-                             "to the orbit (e.g. from simulate)")
-        # the step relative to the states' and the times' own sizes (relative to
-        # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
-        times = _relative(step, X, hi)
-        size = max(_relative(step, X, lo), times)
-        # states that vanish at the orbit (R = 0: at rest on the stop): a rounding step of 1e-33 in
-        # them read as a relative change of 1; they are converged when their step is below tol
-        # times how much they change with the flight times (|dr/dt| |t|, scaling as they do)
-        if lo.size and hi.size and times <= tol and float(np.max(np.abs(step[lo]))) \
-                <= tol * float(np.max(np.abs(Jac[:, hi]))) * float(np.max(np.abs(X[hi]))):
-            return X
-        if size <= tol or (big <= 0.5 and math.isfinite(last) and size < 1e-4 * last
-                           and size * size <= tol * last):
+            raise ValueError(_SINGULAR) from None
+        X, size, done = _advance(X, step, hi, lo, Jac, tol, last, 1e-4)
+        if done:
             return X
         if size < 1e-9 and size > 0.25 * last:  # no more progress: the rounding floor of a
             return X  # poorly conditioned orbit (multipliers near 1), reached
         last = size
     raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
                      f"{np.max(np.abs(step)):.2e})")
+
+
+def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None) -> np.ndarray:
+    """The chord method (a simplified Newton's method) on ``value(X) -> r`` from ``X``: every step
+    with one Jacobian, ``first`` (``jacobian(X)`` where not given) factorised once, the residuals by
+    ``value`` alone; the Jacobian taken again (``jacobian``, at the iterate) only where the steps stop
+    shrinking by at least half. Damped and stopped as :func:`newton` is, the next step predicted from
+    the steps' linear convergence (:math:`|s_k|^2 / |s_{k-1}|`, the same test).
+
+    For residuals whose Jacobian costs much more than the residual itself (the variational
+    equations of an integrated drive: ``n^2`` more unknowns than the flight): the Jacobian only
+    steers the iteration, so ``first`` may be rougher than the residual (from a flight at a looser
+    tolerance); the root is the residual's. Raises as :func:`newton` does.
+    """
+    import scipy.linalg as sl
+
+    hi, lo = positive, np.setdiff1d(np.arange(np.size(X)), positive)
+    Jac, lu, last, step = (jacobian(X) if first is None else first), None, math.inf, np.zeros(0)
+    fresh = first is None
+    for _ in range(max_iter):
+        if lu is None:
+            if not np.all(np.isfinite(Jac)):
+                raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is not finite")
+            with np.errstate(all="ignore"):
+                lu = sl.lu_factor(Jac, check_finite=False)
+            if np.any(np.diag(lu[0]) == 0.0):
+                raise ValueError(_SINGULAR)
+        step = sl.lu_solve(lu, -value(X), check_finite=False)
+        X, size, done = _advance(X, step, hi, lo, Jac, tol, last, 0.25)
+        if done:
+            return X
+        if size < 1e-9 and size > 0.25 * last and fresh:  # the rounding floor, reached (as newton's)
+            return X
+        fresh = False  # (whether the next step's Jacobian is at its own start: a Newton step)
+        if math.isfinite(last) and size > 0.5 * last:  # no longer contracting: the Jacobian again
+            Jac, lu, fresh = jacobian(X), None, True
+        last = size
+    raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
+                     f"{np.max(np.abs(step)):.2e})")
+
+
+def _advance(X, step, hi, lo, Jac, tol: float, last: float, rate: float):
+    """One step of :func:`newton` or :func:`chord`: ``(X + step, its size, converged)``, the step
+    damped while far (the flight times at ``hi`` change by at most a half), converged when the step,
+    or the next one predicted from the last two (where they shrink by ``rate`` at least), is below
+    ``tol``."""
+    big = float(np.max(np.abs(step[hi]) / np.abs(X[hi]))) if hi.size else 0.0
+    if big > 0.5:  # damped while far: the flight times change by at most a half
+        step = step * (0.5 / big)
+    X = X + step
+    if np.any(X[hi] <= 0.0):
+        raise ValueError("Newton left the region of positive flight times: give a guess closer "
+                         "to the orbit (e.g. from simulate)")
+    # the step relative to the states' and the times' own sizes (relative to
+    # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
+    times = _relative(step, X, hi)
+    size = max(_relative(step, X, lo), times)
+    # states that vanish at the orbit (R = 0: at rest on the stop): a rounding step of 1e-33 in
+    # them read as a relative change of 1; they are converged when their step is below tol
+    # times how much they change with the flight times (|dr/dt| |t|, scaling as they do)
+    if lo.size and hi.size and times <= tol and float(np.max(np.abs(step[lo]))) \
+            <= tol * float(np.max(np.abs(Jac[:, hi]))) * float(np.max(np.abs(X[hi]))):
+        return X, size, True
+    done = size <= tol or (big <= 0.5 and math.isfinite(last) and size < rate * last
+                           and size * size <= tol * last)
+    return X, size, done
 
 
 def _relative(step, X, index) -> float:

@@ -38,7 +38,7 @@ import numpy as np
 
 from .._shared.status import Admissibility
 from .._shared.validate import check_int
-from ..drives.base import DriveState, OrbitData, OrbitProblem, newton, sorted_multipliers
+from ..drives.base import DriveState, OrbitData, OrbitProblem, chord, newton, sorted_multipliers
 from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..model import BarModel
 from ._settling import dominant_limit, surfaces_ahead
@@ -275,11 +275,12 @@ def check_orbit(orbit, name: str = "orbit") -> PeriodicOrbit:
 
 
 def orbit_problem(model: BarModel, drive, impacts: int = 1,
-                  settings: FlightSettings | None = None) -> OrbitProblem:
+                  settings: FlightSettings | None = None, *, newton: str = "chord") -> OrbitProblem:
     """The periodic-orbit problem of ``drive`` on ``model`` with ``impacts`` impacts per period: the
-    drive's own (:meth:`~impactbar.Drive.orbit_problem`) or the generic :class:`ShootingProblem`."""
+    drive's own (:meth:`~impactbar.Drive.orbit_problem`) or the generic :class:`ShootingProblem`
+    (``newton``: its iteration where the flights integrate the variational equations, as there)."""
     problem = drive.orbit_problem(model, impacts, _constant_load)
-    return problem if problem is not None else ShootingProblem(model, drive, impacts, settings)
+    return problem if problem is not None else ShootingProblem(model, drive, impacts, settings, newton=newton)
 
 
 def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
@@ -360,13 +361,25 @@ class ShootingProblem(OrbitProblem):
     impacts : int
     settings : FlightSettings, optional
         The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
+    newton : {"chord", "full"}, optional
+        Where the drive's flights integrate the variational equations (the oil circuit), how
+        :meth:`solve` iterates: ``"chord"`` (default), the Jacobian of one variational flight at a
+        looser tolerance (``SETTLE_RTOL``) at the start, the residuals by plain flights (a fraction
+        of the cost: the variational flight carries ``n^2`` more unknowns and takes about four times
+        the steps), the Jacobian taken again only where the steps stop shrinking
+        (:func:`~impactbar.drives.base.chord`); ``"full"``, Newton's method with a variational
+        flight at every step (the way before). The orbit's multipliers come from one variational
+        flight at the root either way (:meth:`orbit`).
     """
 
     default_start = "the motion from rest on the stop, followed until its impacts settle"
     starts_from_rest = True
 
-    def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None):
-        self.model, self.drive = model, drive
+    def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None,
+                 *, newton: str = "chord"):
+        if newton not in ("chord", "full"):
+            raise ValueError(f"newton must be 'chord' or 'full'; got {newton!r}")
+        self.model, self.drive, self.newton = model, drive, newton
         self.impacts = check_int("impacts", impacts, lo=1)
         self.settings = settings if settings is not None else drive.integrator
         law = model.law
@@ -606,10 +619,7 @@ class ShootingProblem(OrbitProblem):
         iterates = 1  # consecutive iterates of the map at the end of hist
         # the motion is followed only to hand Newton a start: where Newton's flights are the
         # variational ones, at a looser tolerance (SETTLE_RTOL; Newton's own flights keep the drive's)
-        loose = (dataclasses.replace(self.settings, rtol=max(self.settings.rtol, SETTLE_RTOL),
-                                     atol=max(self.settings.atol, SETTLE_RTOL * self.settings.atol
-                                              / self.settings.rtol))
-                 if self.variational else None)
+        loose = self._loose() if self.variational else None
         for _ in range(n_max):
             y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=loose)
             source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
@@ -633,10 +643,10 @@ class ShootingProblem(OrbitProblem):
         self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
         return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
 
-    def residual(self, X):
+    def residual(self, X, settings=None):
         """The shooting residual and its Jacobian: from the variational equations where the drive's
-        flights integrate them (:attr:`~impactbar.Drive.variational`, :meth:`_through`), else by
-        central differences."""
+        flights integrate them (:attr:`~impactbar.Drive.variational`, :meth:`_through`; ``settings``
+        their integrator, default the problem's), else by central differences."""
         n, m = self.n, self.impacts
         r = np.empty(X.size)
         J = np.zeros((X.size, X.size))
@@ -646,7 +656,7 @@ class ShootingProblem(OrbitProblem):
             nxt = ((k + 1) % m) * n
             if self.variational:
                 tau, mode = self.blocks[k]
-                out = self._flight(tau, mode, y, variational=True)
+                out = self._flight(tau, mode, y, variational=True, settings=settings)
                 r[k * n:(k + 1) * n] = out[0] - X[nxt:nxt + n]
                 J[k * n:(k + 1) * n, k * n:(k + 1) * n] = out[6]
                 J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
@@ -672,8 +682,30 @@ class ShootingProblem(OrbitProblem):
 
     def solve(self, X, tol, max_iter):
         """Newton's method (:func:`~impactbar.drives.base.newton`), the tolerance no finer than the
-        flights' accuracy."""
-        return newton(self.residual, X, self.positive, max(tol, self.accuracy), max_iter)
+        flights' accuracy; where the flights integrate the variational equations and ``newton`` is
+        ``"chord"``, the chord method (:func:`~impactbar.drives.base.chord`) from the Jacobian of a
+        variational flight at ``SETTLE_RTOL``, the residuals by plain flights."""
+        tol = max(tol, self.accuracy)
+        if not (self.variational and self.newton == "chord"):
+            return newton(self.residual, X, self.positive, tol, max_iter)
+        X = chord(self.value, lambda XX: self.residual(XX)[1], X, self.positive, tol, max_iter,
+                  first=self.residual(X, settings=self._loose())[1])
+        # the root of the plain flights is not the variational flights' (their steps differ: the
+        # integrator's error, 4e-8 in the residual of the 4-mode circuit); one Newton step with the
+        # variational flight moves it there, where Newton's method of before converges
+        r, J = self.residual(X)
+        try:
+            return X + np.linalg.solve(J, -r)
+        except np.linalg.LinAlgError:
+            raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at its "
+                             "root") from None
+
+    def _loose(self) -> FlightSettings:
+        """The integrator at ``SETTLE_RTOL`` (its ``atol`` scaled as much): the flights that only lead
+        to Newton's start or steer it."""
+        s = self.settings
+        return dataclasses.replace(s, rtol=max(s.rtol, SETTLE_RTOL),
+                                   atol=max(s.atol, SETTLE_RTOL * s.atol / s.rtol))
 
     def unknowns(self, orbit):
         """The unknowns of a found orbit of this problem."""

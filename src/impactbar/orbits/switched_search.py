@@ -27,7 +27,7 @@ __all__ = ["find_switched_orbit", "drive_orbits", "default_orbit", "SETTLE_RUN_I
 
 
 def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *, tol: float = 1e-13,
-                        max_iter: int = 50) -> SwitchedOrbit:
+                        max_iter: int = 50, newton: str = "chord") -> SwitchedOrbit:
     """The periodic motion with ``m`` impacts per period under a drive (theory §10).
 
     Called by :func:`impactbar.find_orbit` when its load is a :class:`~impactbar.Drive`. Between
@@ -63,6 +63,14 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
         integrator's ``rtol``).
     max_iter : int
         Largest number of Newton steps.
+    newton : {"chord", "full"}
+        Where the drive's flights integrate the variational equations (the oil circuit): ``"chord"``
+        (default), the residuals by plain flights with the Jacobian of one variational flight at a
+        looser tolerance, then one Newton step with the variational flight at the drive's tolerance;
+        ``"full"``, a variational flight at every Newton step (the way before, several times the
+        cost). The same orbit (to about 1e-12 of the unknowns) and multipliers (to their own noise,
+        about 1e-7: the variational flight's steps move with the unknowns) either way
+        (:class:`~impactbar.orbits.switched.ShootingProblem`).
 
     Returns
     -------
@@ -96,7 +104,7 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     m = check_int("impacts", impacts, lo=1)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
-    problem = orbit_problem(model, drive, m)
+    problem = orbit_problem(model, drive, m, newton=newton)
     if guess is None and m == 1:  # the default chain (the rigid orbit, a run from rest, the search)
         return default_orbit(model, drive, problem, tol, max_iter)
     return _motion(orbit_of(problem, _solve(problem, problem.initial(guess, tol, max_iter), tol, max_iter)))
