@@ -9,7 +9,9 @@
   positive period and a finite blow frequency, ``summary()``; a refusal at ``build`` one line naming
   the mutated key (``section.key``).
 - ``exact_blow``: ``single_blow(method="exact")`` with a bit mass and a feed (and without), with and
-  without a ``t_max``: the account closing, no NaN, an end (``ended_by``) at a finite time.
+  without a ``t_max``: the account closing, no NaN, an end (``ended_by``; an uncertain one,
+  ``"budget"``, ``"rings"``, ``"may_yield"`` or ``"t_max"``, with a finite ``uncertainty``) within
+  the case's time limit.
 - ``stepped``: stepped pistons (``SteppedBar`` configs of the hammer, the drifter and the circuit)
   and ``optimize_piston`` with random valid and invalid inputs.
 """
@@ -249,8 +251,11 @@ def exact_blow_calls(rng, n, slow, case):
             out = []
             if not b.energy_error <= 1e-9:
                 out.append(f"BAD exact blow's account ({b.energy_error:.2g})")
-            if b.ended_by in ("failed", "budget"):
-                out.append(f"BAD no end ({b.ended_by})")
+            if b.ended_by == "failed":
+                out.append("BAD no end (failed)")
+            if b.ended_by in ("budget", "rings", "may_yield", "t_max") and not (
+                    math.isfinite(b.uncertainty) and b.uncertainty >= 0.0):
+                out.append(f"BAD {b.ended_by} without a finite uncertainty")
             if not -1e-9 <= b.efficiency <= 1.0 + 1e-9:
                 out.append("BAD efficiency outside [0, 1]")
             return out or [f"ok ({b.ended_by})"]
@@ -353,8 +358,17 @@ def warm_up():
     """Compile (or load) the circuit's and the exact blow's kernels once in the parent, so that the
     forked cases do not each do it."""
     from impactbar import physical as ph
+    from impactbar.physical.rock import RodPiece
 
     ph.circuit_preset("circuit-drifter").orbit()
+    stepped = {"bar.length": ["150 mm", "298.54236 mm"], "bar.diameter": ["56 mm", "38.3 mm"],
+               "model.n_modes": 2}
+    ph.build(ph.with_values(ph.read_config("hydraulic-drifter")[0], stepped)).orbit()
+    stepped["bar.length"] = ["150 mm", "300 mm"]
+    ph.orbits(ph.build(ph.with_values(ph.read_config("hydraulic-drill")[0], stepped)))
+    ph.optimize_piston([RodPiece(length_m=3.0, area_m2=1e-3, E_Pa=2.1e11, density_kg_m3=7850.0)], (3e8, 3e9),
+                       mass=2.355, length=0.3, max_stress=2.5e8, impact_velocity=10.0, segments=2,
+                       max_evaluations=4, cells=16)
     law = ib.RodRock(segments=[ib.RodSegment(4.0, 1.0)], rock=ib.BilinearRock(k=2.0, k_u=20.0), bit_mass=0.3,
                      feed=0.05)
     ib.single_blow(ib.BarModel(2.0, 0.0, 0.0, 0, impact=law), 1.0, method="exact")
