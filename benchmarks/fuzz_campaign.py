@@ -50,6 +50,8 @@ WEIRD = [0, -1, 1, 0.5, 5e-324, 1e-300, 1e308, 10**400, -(10**400), math.nan, ma
 
 #: Whether ``case`` notes a case that took more than a third of its limit (``--note-slow``).
 SLOW_NOTE = False
+#: A file to which ``case`` appends each bad case's arguments in full (``--bad-log``).
+BAD_LOG = None
 
 
 def _child(fn, conn):
@@ -87,6 +89,9 @@ def case(counter, fn, limit):
         counter[lab] += 1
     if any(lab.startswith("BAD") for lab in labels):  # the reproducer: the case's bound arguments
         print(f"  {labels[-1]}: {fn.__defaults__!r}"[:600], file=sys.stderr, flush=True)
+        if BAD_LOG:  # (in full)
+            with open(BAD_LOG, "a") as fh:
+                fh.write(f"{labels[-1]}\t{fn.__defaults__!r}\n")
     return labels
 
 
@@ -813,10 +818,11 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--slow", type=float, default=60.0, help="seconds after which a case counts as a hang")
     ap.add_argument("--only", nargs="*", default=list(CATEGORIES), choices=list(CATEGORIES))
+    ap.add_argument("--bad-log", default=None, help="a file to append each bad case's arguments to, in full")
     ap.add_argument("--note-slow", action="store_true", help="note the cases past a third of their limit")
     args = ap.parse_args(argv)
-    global SLOW_NOTE
-    SLOW_NOTE = args.note_slow
+    global SLOW_NOTE, BAD_LOG
+    SLOW_NOTE, BAD_LOG = args.note_slow, args.bad_log
     print(f"impactbar {ib.__version__} from {Path(ib.__file__).parent}")
     # compile the kernels once here, so the forked cases do not each compile them
     ib.simulate(ib.BarModel(5, 0.1, 0.5, 1), ib.CosineLoad(1.2, 1), ib.InitialState.rigid(-0.1, 0, 1), 5)
