@@ -36,3 +36,24 @@ def test_an_exact_blow_under_a_feed_without_t_max_ends_at_its_cost_bound(monkeyp
     assert bt.ended_by == "t_max" and bt.times[-1] == pytest.approx(b.times[-1] * 0.5)
     assert bt.work_on_rock <= b.work_on_rock * (1 + 1e-9)
 
+
+
+def test_the_pools_refusal_of_a_blow_with_a_t_max_asks_for_a_shorter_one(monkeypatch):
+    """Three incommensurate segments, a light bit, ``t_max = 19.5``: the waves broke into 1.85 million
+    pieces and the pool's refusal asked to "give a t_max", which the call had given; now it names the
+    time its pieces reached (the pool's bound lowered here to keep the test short)."""
+    from impactbar.laws.rodrock import exact
+    from impactbar.laws.rodrock.exact import PoolOverflow
+
+    monkeypatch.setattr(exact, "MAX_POOL_BYTES", 2 ** 20)
+    segs = [(0.7806521685020155, 0.7393413669078837), (3.1717029552752005, 1.5156220863708707),
+            (13.809263981861763, 0.6437097575698593)]
+    rod = ib.RodRock(segments=[ib.RodSegment(*g) for g in segs],
+                     rock=ib.BilinearRock(k=2.708526063854057, k_u=68.66993173237992),
+                     bit_mass=0.04994323955548905)
+    m = ib.BarModel(7.254635737432778, 0.0, 0.0, 0, impact=rod)
+    with pytest.raises(PoolOverflow, match=r"give a t_max below [0-9.]+, or use method='lattice'") as info:
+        ib.single_blow(m, 0.706128330565426, method="exact", t_max=19.5315858826025)
+    assert "\n" not in str(info.value)
+    below = float(str(info.value).split("give a t_max below ")[1].split(",")[0])
+    assert 0.0 < below < 19.5
