@@ -9,7 +9,8 @@ and stiff bars), ``find_orbit`` with bad and extreme sizes, guesses, ``tol`` and
 ``continue_orbit`` with bad parameters and settings, sweep specs with bad values in every key,
 every CLI subcommand with bad options and output locations (in-process: a traceback escaping
 ``main`` or an exit status other than 0, 1, 2 is bad), the rod-rock law and ``single_blow``, and
-the position-switched drive.
+the position-switched drive; and (``fuzz_circuit.py``) the oil circuit's configs, the exact blow
+with a bit mass and a feed, stepped pistons and ``optimize_piston``.
 
 Usage: ``python benchmarks/fuzz_campaign.py [--scale 1.0] [--seed 0] [--only CATEGORY ...]``.
 A count of "bad" outcomes per category is printed; ``--scale`` multiplies the number of cases.
@@ -38,10 +39,19 @@ import numpy as np
 
 import impactbar as ib
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+import fuzz_circuit as fz  # noqa: E402
+
 TWO_PI = 2.0 * math.pi
 WEIRD = [0, -1, 1, 0.5, 5e-324, 1e-300, 1e308, 10**400, -(10**400), math.nan, math.inf, -math.inf,
          True, "1", None, 2**63, 4096, 4097, 10**14, 1.999999, 2.0, 1e-12, 1e12, np.float32(0.3),
          np.int64(3), [1.0], 1 + 1j]
+
+
+#: Whether ``case`` notes a case that took more than a third of its limit (``--note-slow``).
+SLOW_NOTE = False
+#: A file to which ``case`` appends each bad case's arguments in full (``--bad-log``).
+BAD_LOG = None
 
 
 def _child(fn, conn):
@@ -63,6 +73,7 @@ def case(counter, fn, limit):
     ctx = mp.get_context("fork")
     r, w = ctx.Pipe(duplex=False)
     p = ctx.Process(target=_child, args=(fn, w))
+    t0 = time.perf_counter()
     p.start()
     w.close()
     try:
@@ -71,10 +82,16 @@ def case(counter, fn, limit):
         labels = ["BAD child died"]
     p.kill()
     p.join()
+    if SLOW_NOTE and time.perf_counter() - t0 > limit / 3 and not labels[-1].startswith("BAD"):
+        print(f"  slow ({time.perf_counter() - t0:.1f} s, {labels[-1][:40]}): {fn.__defaults__!r}"[:300],
+              file=sys.stderr, flush=True)
     for lab in labels:
         counter[lab] += 1
     if any(lab.startswith("BAD") for lab in labels):  # the reproducer: the case's bound arguments
         print(f"  {labels[-1]}: {fn.__defaults__!r}"[:600], file=sys.stderr, flush=True)
+        if BAD_LOG:  # (in full)
+            with open(BAD_LOG, "a") as fh:
+                fh.write(f"{labels[-1]}\t{fn.__defaults__!r}\n")
     return labels
 
 
@@ -786,7 +803,13 @@ CATEGORIES = {"constructors": (constructors, 400), "orbits": (orbits_calls, 150)
               "continuation": (continuation_calls, 40), "specs": (spec_values, 150),
               "cli": (cli_calls, 60), "rodrock": (rodrock_calls, 60), "drive": (drive_calls, 60),
               "rock42": (rock_invariants, 1000), "drive42": (drive_invariants, 600),
-              "sustained42": (sustained_invariants, 400)}
+              "sustained42": (sustained_invariants, 400),
+              # the oil circuit, the exact blow under a bit and a feed, stepped pistons (fuzz_circuit.py)
+              "circuit": (lambda rng, n, slow: fz.circuit_calls(rng, n, slow, case), 1000),
+              "exact_blow": (lambda rng, n, slow: fz.exact_blow_calls(rng, n, slow, case), 500),
+              "stepped": (lambda rng, n, slow: fz.stepped_calls(rng, n, slow, case), 200)}
+#: Each category's time limit per case (s) where it is not ``--slow``'s.
+LIMITS = {"circuit": 40.0, "exact_blow": 20.0, "stepped": 40.0}
 
 
 def main(argv=None):
@@ -795,18 +818,24 @@ def main(argv=None):
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--slow", type=float, default=60.0, help="seconds after which a case counts as a hang")
     ap.add_argument("--only", nargs="*", default=list(CATEGORIES), choices=list(CATEGORIES))
+    ap.add_argument("--bad-log", default=None, help="a file to append each bad case's arguments to, in full")
+    ap.add_argument("--note-slow", action="store_true", help="note the cases past a third of their limit")
     args = ap.parse_args(argv)
+    global SLOW_NOTE, BAD_LOG
+    SLOW_NOTE, BAD_LOG = args.note_slow, args.bad_log
     print(f"impactbar {ib.__version__} from {Path(ib.__file__).parent}")
     # compile the kernels once here, so the forked cases do not each compile them
     ib.simulate(ib.BarModel(5, 0.1, 0.5, 1), ib.CosineLoad(1.2, 1), ib.InitialState.rigid(-0.1, 0, 1), 5)
     ib.simulate(ib.BarModel(5, 0.1, 0.5, 1), ib.SquareWaveLoad(1, 1.5), ib.InitialState.rigid(-0.1, 0, 1), 5)
+    if set(args.only) & set(LIMITS):
+        fz.warm_up()
     total_bad = 0
     for name in args.only:
         fn, n = CATEGORIES[name]
         rng = np.random.default_rng([args.seed, list(CATEGORIES).index(name)])
         n = max(1, round(n * args.scale))
         t = time.perf_counter()
-        c = fn(rng, n, args.slow)
+        c = fn(rng, n, min(args.slow, LIMITS.get(name, args.slow)))
         bad = sum(v for k, v in c.items() if k.startswith("BAD"))
         total_bad += bad
         detail = ", ".join(f"{k}: {v}" for k, v in sorted(c.items()))

@@ -531,7 +531,9 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
                 f"into more pieces than that by t = {ws[S.WS_CT][S.CT_T]:.6g}: {npc} pieces of {per:.3g} "
                 "terms on average; each sum of the segments' travel times is a break point, so that many or "
                 "incommensurate segments multiply them, and exponents close together, a bit's mass or a soft "
-                "rock, lengthen their series); give a t_max, or use method='lattice'")
+                "rock, lengthen their series); "
+                + ("give a t_max" if t_max is None else f"give a t_max below {ws[S.WS_CT][S.CT_T]:.6g}")
+                + ", or use method='lattice'")
     if lean:
         return ws, scale
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)

@@ -523,7 +523,9 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     may load it again at any later time; the loading episodes so far in ``Blow.loadings`` and
     ``uncertainty`` bounding the rock work still possible are the answer there: the efficiency's
     denominator holds the feed's work up to that instant, which the ringing rod moves either way),
-    unless a ``t_max`` asks to go on. By
+    unless a ``t_max`` asks to go on. Without a ``t_max`` the cost of ``method="exact"`` is bounded by
+    ``EXACT_MAX_PIECES`` (1e5) wave pieces, past which the blow ends as ``"budget"`` (``uncertainty``
+    bounding the rock work still possible); a ``t_max`` is the caller's horizon. By
     default, with a feed or a ``cells_per_piston``, the lattice of
     :mod:`impactbar.laws.rodrock.blow` (``method="lattice"``: first order in the cell time,
     the bit's reflected wave stored as cell averages; to
@@ -650,7 +652,8 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         try:
             blow = _exact_single_blow(model, law, impact_velocity, t_max, cells_per_piston, record_field,
                                       semi_infinite, 0.0 if massless else law.bit_mass,
-                                      AUTO_MAX_PIECES if auto else None, piston,
+                                      AUTO_MAX_PIECES if auto else
+                                      (EXACT_MAX_PIECES if t_max is None else None), piston,
                                       AUTO_MAX_POOL_BYTES if auto else None)
         except PoolOverflow:
             if not auto:
@@ -714,6 +717,13 @@ MIN_BIT_MASS = 1e-100
 #: 1e-15; past this its answer is not taken (``method="auto"``: the lattice's instead) or is warned
 #: of (``method="exact"``)
 EXACT_ACCOUNT_TOLERANCE = 1e-9
+
+#: The most wave pieces ``method="exact"`` stores without a ``t_max`` (some seconds): incommensurate
+#: segments under a soft rock break the waves into ever more pieces, each of a longer series (a blow
+#: under a feed that waits for the piston to go for good ran to 2 million pieces in a minute, or to
+#: the pool's 2 GiB); past this the blow ends as ``"budget"``, its ``uncertainty`` bounding what the
+#: rock could still take
+EXACT_MAX_PIECES = 100_000
 
 #: The most wave pieces ``method="auto"`` lets the exact solver store (about a second; the blows
 #: tried need 60 to 700) before it gives the blow to the lattice: incommensurate segments and a slow,
