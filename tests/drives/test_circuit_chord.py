@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from impactbar import find_orbit
-from impactbar.drives.base import chord
+from impactbar.drives.orbitproblem import chord
 from impactbar.orbits import find_switched_orbit
 from impactbar.orbits.switched import ShootingProblem, orbit_of
 from impactbar.physical import circuit_preset

@@ -147,7 +147,7 @@ def test_rigid_fixed_point_is_the_orbit(d, delay, R):
     """The rigid start of find_orbit (secant on the map of arrival velocities) is the orbit: the
     closed form of theory §10 without damping and delay, and Newton's fixed point (one step, below
     the tolerance) with them; the non-trivial multiplier of the 2x2 shortcut is the QR split's."""
-    from impactbar.drives.base import split_multipliers as _split_multipliers
+    from impactbar.drives.orbitproblem import split_multipliers as _split_multipliers
 
     drive = PositionSwitchedDrive(stroke=1.2, ret=0.8, switch_out=0.9, delay=delay)
     v, h1, h3 = SK.rigid_orbit_start(d, R, tuple(drive.kernel_view), 1.0)

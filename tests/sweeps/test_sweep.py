@@ -380,12 +380,12 @@ def _sigkill_after(n_done: int, out: Path, spec_file: Path, *options) -> int:
 
 
 def _slow_doc():
-    """An 800-point rigid orbits sweep in 40 chunks whose every point has p0 = 0 (the end arrives
-    at rest): the closed form leaves those to the general path (about 0.5 ms a point; 0.85 ms
-    before the rigid flights' clearance in closed form, issue 20, when 400 points sufficed), so
-    that a run lasts long enough to be killed midway."""
+    """A 3,200-point rigid orbits sweep in 160 chunks whose every point has p0 = 0 (the end arrives
+    at rest): the closed form leaves those to the general path (about 0.5 ms a point), so that a
+    run lasts long enough to be killed midway (800 points in 40 chunks were all stored before the
+    driver could be killed on a quiet machine)."""
     doc = base_doc(chunk_points=20, axes={"R": {"start": 0.05, "stop": 0.95, "num": 40},
-                                          "d": {"start": 0.0, "stop": 0.2, "num": 20}})
+                                          "d": {"start": 0.0, "stop": 0.2, "num": 80}})
     doc["load"]["p0"] = 0.0
     return doc
 
@@ -397,7 +397,7 @@ def test_sigkill_midway_then_resume_equals_uninterrupted(client, tmp_path):
     spec_file = tmp_path / "spec.toml"
     spec_file.write_text(toml_text(doc))
     spec = load_spec(spec_file)
-    assert spec.n_chunks == 40
+    assert spec.n_chunks == 160
     addr = client.scheduler.address
     out = tmp_path / "killed.zarr"
     killed_at = _sigkill_after(5, out, spec_file, "--scheduler", addr)
@@ -586,7 +586,7 @@ def test_threads_executor_sigkill_midway_then_resume_equals_uninterrupted(tmp_pa
     spec_file = tmp_path / "spec.toml"
     spec_file.write_text(toml_text(doc))
     spec = load_spec(spec_file)
-    assert spec.n_chunks == 40
+    assert spec.n_chunks == 160
     out = tmp_path / "killed.zarr"
     killed_at = _sigkill_after(3, out, spec_file, "--workers", "1")
     assert 3 <= killed_at < spec.n_chunks, "killed too late to test resumption; enlarge the grid"

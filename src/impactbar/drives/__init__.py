@@ -16,12 +16,12 @@ from .base import DriveEvent as DriveEvent
 from .base import DriveState as DriveState
 from .base import FlightSettings as FlightSettings
 from .base import GapCrossing as GapCrossing
-from .base import OrbitData as OrbitData
-from .base import OrbitProblem as OrbitProblem
-from .base import OrbitSearch as OrbitSearch
 from .base import RateCrossing as RateCrossing
 from .base import SurfaceEvent as SurfaceEvent
 from .base import TimedEvent as TimedEvent
+from .orbitproblem import OrbitData as OrbitData
+from .orbitproblem import OrbitProblem as OrbitProblem
+from .orbitproblem import OrbitSearch as OrbitSearch
 from .switched import PositionSwitchedDrive as PositionSwitchedDrive
 
 __all__ = ["Drive", "DriveState", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent", "SurfaceEvent",

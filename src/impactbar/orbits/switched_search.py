@@ -17,7 +17,7 @@ import numpy as np
 
 from .._shared.forcing import check_family
 from .._shared.validate import check_int, check_real
-from ..drives.base import OrbitProblem
+from ..drives.orbitproblem import OrbitProblem
 from ..model import BarModel
 from ._settling import surfaces_ahead
 from .one_impact import OrbitList

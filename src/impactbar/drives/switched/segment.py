@@ -42,7 +42,7 @@ import numpy as np
 from ..._shared.status import Admissibility
 from ...dynamics.modal import step_constant
 from .._crossing import first_rising_crossing, rate_zero, rigid_flight
-from ..base import OrbitData, OrbitProblem, OrbitSearch, sorted_multipliers, split_multipliers
+from ..orbitproblem import OrbitData, OrbitProblem, OrbitSearch, sorted_multipliers, split_multipliers
 from ._flow import _affine, _apply, _blocks, _compose, _field, _fund, _matrix, _w2
 from ._kernel import end_max_sampled, rigid_orbit_start
 from ._state import RETURN, STROKE

@@ -355,18 +355,14 @@ class RodRock(ContactLaw):
         return rec.q_after.copy(), rec.v_after.copy(), float(t) + rec.duration, rec
 
     def driven_contact(self, model, drive, state, t, q_minus, v_minus, *, settings=None):
-        """The contact step with a drive that has state (the oil circuit), the blow and the drive's
-        state solved together (theory §11, "The coupled blow"): on the lattice by a method of steps
-        (:func:`impactbar.laws.rodrock.coupled.driven_rock_contact`); with ``method="exact"`` the
-        exact blow with the drive's force iterated to its fixed point
-        (:func:`impactbar.laws.rodrock.coupled_exact.driven_exact_contact`; ``"auto"`` keeps the
-        lattice under a drive with state: the exact coupled blow costs seconds).
+        """The contact step with a drive that has state (theory §11, "The coupled blow"): the
+        lattice's blow by a method of steps (:func:`~impactbar.laws.rodrock.coupled.driven_rock_contact`),
+        or with ``method="exact"`` (not ``"auto"``) the exact blow, the drive's force iterated
+        (:func:`~impactbar.laws.rodrock.coupled_exact.driven_exact_contact`).
 
         Returns
         -------
         DrivenContact
-            Its record a :class:`~impactbar.laws.rodrock.contact.RockContact` (an
-            :class:`~impactbar.laws.rodrock.exactmap.ExactRockContact` for the exact blow).
         """
         if self.method == "exact":
             from .coupled_exact import driven_exact_contact
@@ -718,11 +714,9 @@ MIN_BIT_MASS = 1e-100
 #: of (``method="exact"``)
 EXACT_ACCOUNT_TOLERANCE = 1e-9
 
-#: The most wave pieces ``method="exact"`` stores without a ``t_max`` (some seconds): incommensurate
-#: segments under a soft rock break the waves into ever more pieces, each of a longer series (a blow
-#: under a feed that waits for the piston to go for good ran to 2 million pieces in a minute, or to
-#: the pool's 2 GiB); past this the blow ends as ``"budget"``, its ``uncertainty`` bounding what the
-#: rock could still take
+#: The most wave pieces ``method="exact"`` stores without a ``t_max`` (some seconds; a blow under a
+#: feed waiting for the piston to go for good ran to 2 million in a minute); past it the blow ends as
+#: ``"budget"``, its ``uncertainty`` bounding what the rock could still take
 EXACT_MAX_PIECES = 100_000
 
 #: The most wave pieces ``method="auto"`` lets the exact solver store (about a second; the blows

@@ -1,0 +1,324 @@
+"""Periodic orbits of a drive: the problem a solver of :func:`impactbar.find_orbit` asks a drive for
+(:class:`OrbitProblem`, what a solution gives, :class:`OrbitData`), Newton's method and the chord
+method that solve it, and the multipliers' split off the flow's own (theory §10, §11)."""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from typing import TYPE_CHECKING, Any, NamedTuple
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from .base import Drive
+
+__all__ = ["OrbitData", "OrbitProblem", "OrbitSearch", "newton", "chord", "split_multipliers",
+           "sorted_multipliers"]
+
+
+class OrbitData(NamedTuple):
+    """What an :class:`OrbitProblem` gives of a solution: the fields of
+    :class:`~impactbar.SwitchedOrbit` the orbit solver does not compute itself.
+
+    Attributes
+    ----------
+    period : float
+    durations : numpy.ndarray
+        The flights between consecutive events of the period, in order from the first impact (or
+        the end of its contact).
+    states_after, states_before : numpy.ndarray, shape (m, 2 N + 2)
+        The bar's state just after each impact (where its contact ends) and on arrival at the next
+        impact, in order (the last arrival leads to ``states_after[0]``).
+    impact_velocities : numpy.ndarray, shape (m,)
+        The struck end's velocity at each of those arrivals.
+    impact_times : numpy.ndarray, shape (m,)
+        Their times after the first state of ``states_after``.
+    drive_states : numpy.ndarray, shape (m, k)
+        The drive's continuous state just after each impact.
+    multipliers : numpy.ndarray
+        The non-trivial Floquet multipliers, largest modulus first.
+    trivial_multiplier : float
+    switch_times : numpy.ndarray
+        Times after the first impact at which the drive switched.
+    switch_velocity : float
+        The smallest rate of the gap at the drive's position crossings (0 where a switching surface
+        is grazed), ``nan`` where the drive has none.
+    contact_time : float
+        The law's window (0 under the paper's law).
+    contact_forces : numpy.ndarray, shape (m,)
+        The drive's force held during each contact.
+    monodromy : numpy.ndarray or None
+    """
+
+    period: float
+    durations: np.ndarray
+    states_after: np.ndarray
+    states_before: np.ndarray
+    impact_velocities: np.ndarray
+    impact_times: np.ndarray
+    drive_states: np.ndarray
+    multipliers: np.ndarray
+    trivial_multiplier: float
+    switch_times: np.ndarray
+    switch_velocity: float
+    contact_time: float
+    contact_forces: np.ndarray
+    monodromy: np.ndarray | None
+
+
+class OrbitSearch(NamedTuple):
+    """What an :class:`OrbitProblem` gives of a systematic search of its solutions
+    (:meth:`OrbitProblem.search`): the starts of Newton's method, one per solution, and what is
+    certified of them.
+
+    Attributes
+    ----------
+    starts : list of numpy.ndarray
+        The unknowns of each solution found (to be polished by :meth:`OrbitProblem.solve`).
+    certified : numpy.ndarray of bool
+        Per start: the solution is proved unique in a box around it, and the search proved that
+        the window holds no solution outside those boxes and :attr:`unresolved`.
+    window : (float, float)
+        The periods searched.
+    unresolved : tuple of (float, float, str)
+        Period intervals the search could not decide, with the reason.
+    method : str
+        One line: how the starts were found (for the result's record).
+    """
+
+    starts: list
+    certified: np.ndarray
+    window: tuple
+    unresolved: tuple
+    method: str
+
+
+class OrbitProblem(ABC):
+    """The periodic-orbit problem of a drive (unknown period, theory §10): unknowns ``X``, a residual
+    with its Jacobian, Newton's start from a guess and the orbit of a solution. The valve's
+    (:class:`~impactbar.drives.switched.segment.ValveProblem`) and the generic shooting problem
+    (:class:`~impactbar.orbits.switched.ShootingProblem`) implement it; :func:`impactbar.find_orbit`
+    and :func:`impactbar.continue_orbit` call only these members.
+
+    Attributes
+    ----------
+    model, drive, impacts
+        The bar, the drive and the impacts per period ``m``.
+    size : int
+        The number of unknowns.
+    positive : numpy.ndarray of int
+        Indices of the unknowns that must stay positive (flight times): Newton's step is damped so
+        that they change by at most a half.
+    default_start : str
+        What :meth:`initial` starts from without a guess, in words (the error of
+        :func:`impactbar.find_orbit` lists it among the starts it tried).
+    starts_from_rest : bool
+        Whether that start already is the motion from rest on the stop followed until it settles
+        (the default guess chain of :func:`impactbar.find_orbit` then skips its own run from rest).
+    """
+
+    model: Any
+    drive: Drive
+    impacts: int
+    size: int
+    positive: np.ndarray
+    default_start: str = "the drive's default start"
+    starts_from_rest: bool = False
+
+    @abstractmethod
+    def initial(self, guess, tol: float, max_iter: int) -> np.ndarray:
+        """Newton's start from ``guess`` (``None``: the drive's default)."""
+
+    @abstractmethod
+    def residual(self, X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The residual and its Jacobian at ``X``."""
+
+    def value(self, X: np.ndarray) -> np.ndarray:
+        """The residual alone at ``X`` (a problem whose Jacobian costs more than its residual, as the
+        variational flights of a drive with state, computes only this)."""
+        return self.residual(X)[0]
+
+    def solve(self, X: np.ndarray, tol: float, max_iter: int) -> np.ndarray:
+        """Newton's method from ``X`` (:func:`newton`)."""
+        return newton(self.residual, X, self.positive, tol, max_iter)
+
+    def adopt(self, other: OrbitProblem) -> OrbitProblem:
+        """Take from ``other``, the problem of a nearby solution (another parameter value, or the
+        one-impact problem of a doubled branch), what this one needs besides the unknowns (the
+        generic shooting's start times and modes); returns ``self``."""
+        return self
+
+    @abstractmethod
+    def unknowns(self, orbit) -> np.ndarray:
+        """The unknowns of a found orbit (a :class:`~impactbar.SwitchedOrbit` of this problem)."""
+
+    @abstractmethod
+    def orbit(self, X: np.ndarray) -> OrbitData:
+        """The orbit of a solution ``X``."""
+
+    def search(self, window: tuple[float, float] | None) -> OrbitSearch | None:
+        """A systematic search of every solution with a period in ``window`` (``None``: the
+        problem's default window), or ``None`` where the problem has none (the solvers then take
+        their non-certified search from guesses)."""
+        return None
+
+    @abstractmethod
+    def pieces(self, X: np.ndarray) -> list:
+        r"""The flights of the period as ``(t0, t1, f)``: ``f(t)`` gives the modal state ``(q, v)``,
+        shapes ``(N + 1, T)``, at orbit times :math:`t_0 \le t \le t_1` from the first state of the unknowns
+        (the contacts' windows lie between the flights)."""
+
+    @abstractmethod
+    def admissibility(self, X: np.ndarray, k: int):
+        """The admissibility of the flights after impact ``k`` (an
+        :class:`~impactbar.Admissibility`), the contacts apart."""
+
+
+#: what :func:`newton` and :func:`chord` say of a singular Jacobian
+_SINGULAR = ("find_orbit: the Jacobian of the periodic-orbit problem is singular at the guess (the motion it "
+             "starts from does not repeat: e.g. a drive too weak to bring the piston back to the stop); give "
+             "a guess, or check the drive's parameters with simulate")
+
+
+def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
+    """Newton's method on ``residual(X) -> (r, J)`` from ``X``, damped while the unknowns at
+    ``positive`` (flight times) would change by more than a half. It stops when a step is below
+    ``tol`` (relative), or when the next step, predicted from quadratic convergence
+    (:math:`|s_k|^2 / |s_{k-1}|`), would be: that saves the last residual, whose only use would be to
+    see the step vanish.
+
+    Raises
+    ------
+    ValueError
+        When a flight time turns non-positive, the Jacobian is singular or ``max_iter`` steps do not
+        converge.
+    """
+    hi = positive
+    lo = np.setdiff1d(np.arange(np.size(X)), hi)  # the states (positions and velocities)
+    last = math.inf
+    step = np.zeros(0)
+    for _ in range(max_iter):
+        r, Jac = residual(X)
+        try:
+            step = np.linalg.solve(Jac, -r)
+        except np.linalg.LinAlgError:
+            raise ValueError(_SINGULAR) from None
+        X, size, done = _advance(X, step, hi, lo, Jac, tol, last, 1e-4)
+        if done:
+            return X
+        if size < 1e-9 and size > 0.25 * last:  # no more progress: the rounding floor of a
+            return X  # poorly conditioned orbit (multipliers near 1), reached
+        last = size
+    raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
+                     f"{np.max(np.abs(step)):.2e})")
+
+
+def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None) -> np.ndarray:
+    """The chord method (a simplified Newton's method) on ``value(X) -> r`` from ``X``: every step
+    with one Jacobian, ``first`` (``jacobian(X)`` where not given) factorised once, the residuals by
+    ``value`` alone; the Jacobian taken again (``jacobian``, at the iterate) only where the steps stop
+    shrinking by at least half. Damped and stopped as :func:`newton` is, the next step predicted from
+    the steps' linear convergence (:math:`|s_k|^2 / |s_{k-1}|`, the same test).
+
+    For residuals whose Jacobian costs much more than the residual itself (the variational
+    equations of an integrated drive: n squared more unknowns than the flight): the Jacobian only
+    steers the iteration, so ``first`` may be rougher than the residual (from a flight at a looser
+    tolerance); the root is the residual's. Raises as :func:`newton` does.
+    """
+    import scipy.linalg as sl
+
+    hi, lo = positive, np.setdiff1d(np.arange(np.size(X)), positive)
+    Jac, lu, last, step = (jacobian(X) if first is None else first), None, math.inf, np.zeros(0)
+    fresh = first is None
+    for _ in range(max_iter):
+        if lu is None:
+            if not np.all(np.isfinite(Jac)):
+                raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is not finite")
+            with np.errstate(all="ignore"):
+                lu = sl.lu_factor(Jac, check_finite=False)
+            if np.any(np.diag(lu[0]) == 0.0):
+                raise ValueError(_SINGULAR)
+        step = sl.lu_solve(lu, -value(X), check_finite=False)
+        X, size, done = _advance(X, step, hi, lo, Jac, tol, last, 0.25)
+        if done:
+            return X
+        if size < 1e-9 and size > 0.25 * last and fresh:  # the rounding floor, reached (as newton's)
+            return X
+        fresh = False  # (whether the next step's Jacobian is at its own start: a Newton step)
+        if math.isfinite(last) and size > 0.5 * last:  # no longer contracting: the Jacobian again
+            Jac, lu, fresh = jacobian(X), None, True
+        last = size
+    raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
+                     f"{np.max(np.abs(step)):.2e})")
+
+
+def _advance(X, step, hi, lo, Jac, tol: float, last: float, rate: float):
+    """One step of :func:`newton` or :func:`chord`: ``(X + step, its size, converged)``, the step
+    damped while far (the flight times at ``hi`` change by at most a half), converged when the step,
+    or the next one predicted from the last two (where they shrink by ``rate`` at least), is below
+    ``tol``."""
+    big = float(np.max(np.abs(step[hi]) / np.abs(X[hi]))) if hi.size else 0.0
+    if big > 0.5:  # damped while far: the flight times change by at most a half
+        step = step * (0.5 / big)
+    X = X + step
+    if np.any(X[hi] <= 0.0):
+        raise ValueError("Newton left the region of positive flight times: give a guess closer "
+                         "to the orbit (e.g. from simulate)")
+    # the step relative to the states' and the times' own sizes (relative to
+    # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
+    times = _relative(step, X, hi)
+    size = max(_relative(step, X, lo), times)
+    # states that vanish at the orbit (R = 0: at rest on the stop): a rounding step of 1e-33 in
+    # them read as a relative change of 1; they are converged when their step is below tol
+    # times how much they change with the flight times (|dr/dt| |t|, scaling as they do)
+    if lo.size and hi.size and times <= tol and float(np.max(np.abs(step[lo]))) \
+            <= tol * float(np.max(np.abs(Jac[:, hi]))) * float(np.max(np.abs(X[hi]))):
+        return X, size, True
+    done = size <= tol or (big <= 0.5 and math.isfinite(last) and size < rate * last
+                           and size * size <= tol * last)
+    return X, size, done
+
+
+def _relative(step, X, index) -> float:
+    """``max |step|`` over ``index`` relative to ``max |X|`` there (0 for an empty index)."""
+    if not np.size(index):
+        return 0.0
+    ref = float(np.max(np.abs(X[index])))
+    size = float(np.max(np.abs(step[index])))
+    return size / ref if ref > 0.0 else size
+
+
+def split_multipliers(Phi: np.ndarray, f: np.ndarray) -> tuple[float, np.ndarray]:
+    """The trivial multiplier along the vector field ``f`` and the others (theory §10): ``Phi`` in
+    the orthonormal basis ``(f/|f|, B)`` is block upper triangular (``Phi f = f``).
+
+    Returns
+    -------
+    trivial : float
+    multipliers : numpy.ndarray
+        The others, largest modulus first (real where every imaginary part is rounding).
+    """
+    n = f.size
+    fhat = f / np.linalg.norm(f)
+    if n == 2:  # the rigid bar: P = Q^T Phi Q is triangular, so mu = trace - P[0, 0]
+        trivial = float(fhat @ Phi @ fhat)
+        return trivial, np.array([float(np.trace(Phi)) - trivial])
+    Q, _ = np.linalg.qr(np.column_stack((fhat, np.eye(n))))
+    Q = Q[:, :n]
+    Q[:, 0] = fhat
+    Q, _ = np.linalg.qr(Q)
+    if Q[:, 0] @ fhat < 0:
+        Q[:, 0] = -Q[:, 0]
+    P = Q.T @ Phi @ Q
+    mu = np.linalg.eigvals(P[1:, 1:]) if n > 1 else np.array([])
+    return float(P[0, 0]), sorted_multipliers(mu)
+
+
+def sorted_multipliers(mu: np.ndarray) -> np.ndarray:
+    """Multipliers by decreasing modulus (stable order), real where every imaginary part is
+    rounding."""
+    mu = mu[np.argsort(-np.abs(mu), kind="stable")]
+    if np.all(np.abs(mu.imag) <= 1e-14 * np.maximum(1.0, np.abs(mu))):
+        mu = mu.real
+    return mu
