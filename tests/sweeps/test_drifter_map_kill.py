@@ -38,9 +38,10 @@ def _done(path: Path) -> int:
 
 def _start(spec_file: Path, out: Path) -> subprocess.Popen:
     env = dict(os.environ, PYTHONPATH=str(SRC))
-    return subprocess.Popen([sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out", str(out),
-                             "--workers", "1", "--no-progress"], env=env, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.PIPE, start_new_session=True)
+    cmd = [sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out", str(out), "--workers",
+           "1", "--no-progress"]
+    return subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            start_new_session=True)
 
 
 def _wait_for(proc, out: Path, n_done: int) -> None:
@@ -101,7 +102,8 @@ def test_a_driver_killed_midway_resumes_to_the_uninterrupted_store(spec_and_refe
 
 
 def test_a_worker_killed_midway_loses_nothing(spec_and_reference, tmp_path):
-    """The worker process SIGKILLed once a chunk is stored: its nanny starts another, the lost chunk is computed again, and the driver finishes the same store."""
+    """The worker process SIGKILLed once a chunk is stored: its nanny starts another, the lost
+    chunk is computed again, and the driver finishes the same store."""
     spec_file, ref = spec_and_reference
     out = tmp_path / "worker.zarr"
     proc = _start(spec_file, out)
