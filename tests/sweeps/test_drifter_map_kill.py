@@ -39,7 +39,7 @@ def _done(path: Path) -> int:
 def _start(spec_file: Path, out: Path) -> subprocess.Popen:
     env = dict(os.environ, PYTHONPATH=str(SRC))
     cmd = [sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out", str(out), "--workers",
-           "1", "--no-progress"]
+           "1", "--quiet"]
     return subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             start_new_session=True)
 
@@ -93,7 +93,7 @@ def test_a_driver_killed_midway_resumes_to_the_uninterrupted_store(spec_and_refe
     killed_at = _done(out)
     assert 1 <= killed_at < 3, "killed too late to test resumption"
     res = subprocess.run([sys.executable, "-m", "impactbar.cli", "sweep", str(spec_file), "--out", str(out),
-                          "--workers", "1", "--no-progress"], env=dict(os.environ, PYTHONPATH=str(SRC)),
+                          "--workers", "1", "--quiet"], env=dict(os.environ, PYTHONPATH=str(SRC)),
                          capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
     assert int(res.stdout.split("(")[1].split(" found")[0]) == killed_at

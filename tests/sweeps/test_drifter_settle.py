@@ -96,7 +96,7 @@ def test_period_one_points_blow_at_the_operating_points_frequency(settled):
 
 def test_a_settle_store_has_si_units_and_its_options(tmp_path):
     spec = parse_spec({"task": "settle", "config": "circuit-drifter", "settle": {"blows": 12},
-                       "axes": {"supply.pump_flow": {"values": ["100 L/min"]}}})
+                       "axes": {"supply.pump_flow": {"values": ["90 L/min", "120 L/min"]}}})
     assert spec.settle == {**SETTLE_DEFAULTS, "blows": 12}
     assert parse_spec(json.loads(spec.to_json())) == spec
     run_map(spec, tmp_path / "s.zarr", executor="threads", n_workers=1, progress=False)
@@ -107,10 +107,14 @@ def test_a_settle_store_has_si_units_and_its_options(tmp_path):
     assert units == {"blow_frequency": "Hz", "blow_frequency_spread": "Hz", "impact_velocity": "m/s",
                      "impact_velocity_spread": "m/s", "simulated_time": "s", "chatter_per_blow": "1"}
     assert "settled motion in blows" in ds["period_blows"].attrs["long_name"]
-    assert int(ds["status"][0]) == 0 and int(ds["n_blows"][0]) == 12
+    assert list(ds["status"].values) == [0, 0] and list(ds["n_blows"].values) == [12, 12]
     for name, values in compute_map_chunk(spec, 0).items():  # (12 blows from rest: not yet settled)
         assert np.asarray(ds[name].values).tobytes() == values.tobytes(), name
     assert json.loads(ds.attrs["impactbar_sweep_spec"])["settle"]["blows"] == 12
+    pytest.importorskip("matplotlib")
+    from impactbar.sweeps import plot_sweep
+
+    assert plot_sweep(tmp_path / "s.zarr", tmp_path / "s.png", variable="period_blows").stat().st_size > 0
 
 
 def test_the_defaults_are_the_librarys_and_an_operating_point_spec_is_unchanged():
