@@ -24,6 +24,12 @@ from 1; ``-k`` from the one a step up). Every variable is stored in SI
 with its ``units`` and ``long_name`` (:func:`map_variables`). The chunks are written by the sweep
 machinery of :mod:`impactbar.sweeps` (stored as they finish, a rerun resumes, checksums checked).
 
+Task ``settle`` (options in ``[settle]``: ``blows = 40``, ``blow_fraction``, ``settle_tolerance``,
+:func:`settle_options`): each point simulated from rest up to its ``blows``-th blow and classified
+by :meth:`impactbar.physical.SimulationResult.blow_statistics`
+(:func:`impactbar.sweeps.map_task.settle_point`): ``period_blows`` (0 not settled), ``settled``,
+``chatter_per_blow`` and the mean and spread of the last period's impact velocity and blow frequency.
+
 Edges (:func:`impactbar.sweeps.maps.map_edges`): along each axis, between two neighbouring points
 with an orbit where ``stable``, ``cavitates``, ``relief_opens`` or ``accumulator_empties`` changes;
 stored in the store
@@ -44,9 +50,14 @@ from .._shared.schema import Field, Schema
 from .._shared.validate import check_int
 from .grid import ChunkedGrid
 
-DRIFTER_TASKS = ("operating_point",)
+DRIFTER_TASKS = ("operating_point", "settle")
 #: the top-level keys of a drifter map's spec
-TOP_KEYS = ("task", "config", "axes", "chunk_points", "refine_edges", "chain")
+TOP_KEYS = ("task", "config", "axes", "chunk_points", "refine_edges", "chain", "settle")
+#: the ``[settle]`` options of the ``settle`` task and their defaults: the blows simulated from rest,
+#: and the thresholds of :meth:`impactbar.physical.SimulationResult.blow_statistics`
+SETTLE_DEFAULTS = {"blows": 40, "blow_fraction": 0.25, "settle_tolerance": 0.01}
+#: most blows a settle may simulate per point
+MAX_SETTLE_BLOWS = 100_000
 #: how the points of a chunk are found: "continue" (each from its neighbour, the default) or
 #: "default" (each by the default chain from rest, as a fresh ``orbit()``)
 CHAINS = ("continue", "default")
@@ -89,6 +100,27 @@ _ROCK = (
     ("rod_energy_J", "rod_energy", 1.0, "J", "energy of the incident wave in the rod"),
     ("efficiency", "rock_efficiency", 1.0, "1", "work on rock over the energy of the blow"),
 )
+#: the variables of the ``settle`` task (before its status and failure)
+_SETTLE = (
+    Field("period_blows", "period of the settled motion in blows (0: not settled)", "", dtype="i2"),
+    Field("settled", "the blows repeat a cycle (period_blows > 0)", "", dtype="b1"),
+    Field("chatter_per_blow", "chatter impacts per blow over the last period (settled) or the second "
+                              "half's blows (not settled)", "1"),
+    Field("impact_velocity", "mean piston velocity at the blows of the last period (settled) or of the "
+                             "second half (not settled)", "m/s"),
+    Field("impact_velocity_spread", "standard deviation of those blows' impact velocities", "m/s"),
+    Field("blow_frequency", "blows per unit time over the last period (settled) or between the second "
+                            "half's blows (not settled)", "Hz"),
+    Field("blow_frequency_spread", "standard deviation of the inverse intervals between those blows",
+          "Hz"),
+    Field("n_blows", "blows of the run (impacts at least blow_fraction of the hardest)", "", dtype="i4"),
+    Field("n_impacts", "impacts of the run, blows and chatter", "", dtype="i4"),
+    Field("simulated_time", "time simulated from rest, to the last blow counted", "s"),
+)
+_SETTLE_TAIL = (
+    Field("status", "0 simulated, 1 refused (ValueError), 2 failed (another error)", "", dtype="i1"),
+    Field("failure", "why the point has no motion", "", dtype=f"U{REASON_CHARS}"),
+)
 _TAIL = (
     Field("origin", "where the orbit came from: 0 the default chain, +k / -k continued from the "
                     "neighbour a step down / up axis k (from 1)", "", dtype="i1"),
@@ -103,7 +135,7 @@ def _kind(config: dict) -> str:
     return config_kind(config)
 
 
-def map_variables(kind: str, rock: bool) -> Schema:
+def map_variables(kind: str, rock: bool, task: str = "operating_point") -> Schema:
     """The variables a map stores for a machine.
 
     Parameters
@@ -112,6 +144,8 @@ def map_variables(kind: str, rock: bool) -> Schema:
         The valve drifter or the drifter with its oil circuit.
     rock : bool
         Whether the config has a drill string and rock.
+    task : {"operating_point", "settle"}
+        The map's task (``settle`` stores the same variables for every machine).
 
     Returns
     -------
@@ -123,7 +157,11 @@ def map_variables(kind: str, rock: bool) -> Schema:
     >>> from impactbar.sweeps.map_spec import map_variables
     >>> "hydraulic_efficiency" in map_variables("circuit", False).names
     True
+    >>> map_variables("circuit", False, "settle").names[:3]
+    ('period_blows', 'settled', 'chatter_per_blow')
     """
+    if task == "settle":
+        return Schema(*_SETTLE, *_SETTLE_TAIL)
     fields = list(_BASE)
     if kind == "circuit":
         fields += _CIRCUIT
@@ -171,7 +209,7 @@ class DrifterMapSpec(ChunkedGrid):
 
     Parameters
     ----------
-    task : {"operating_point"}
+    task : {"operating_point", "settle"}
     config : dict
         The machine's configuration (sections of keys with units), read and copied.
     axes : tuple of MapAxis
@@ -181,7 +219,9 @@ class DrifterMapSpec(ChunkedGrid):
     refine_edges : bool
         Whether :func:`run_map` refines each edge by bisection.
     chain : {"continue", "default"}
-        Each point from its neighbour (default) or each by the default chain.
+        Each point from its neighbour (default) or each by the default chain (``operating_point``).
+    settle : dict, optional
+        The ``settle`` task's options (:data:`SETTLE_DEFAULTS` filled in); only with that task.
     """
 
     task: str
@@ -190,6 +230,7 @@ class DrifterMapSpec(ChunkedGrid):
     chunk_points: int | None = None
     refine_edges: bool = False
     chain: str = "continue"
+    settle: dict | None = None
     kind: str = field(default="", compare=False)
 
     def __post_init__(self) -> None:
@@ -205,6 +246,10 @@ class DrifterMapSpec(ChunkedGrid):
             raise ValueError("config must describe a drifter (a [valve] section) or a drifter with its "
                              f"oil circuit ([chambers]); it reads as a {kind}")
         object.__setattr__(self, "kind", kind)
+        if self.task == "settle":
+            object.__setattr__(self, "settle", settle_options(self.settle))
+        elif self.settle is not None:
+            raise ValueError(f"[settle] gives the settle task's options; task is {self.task!r}")
         if not 1 <= len(self.axes) <= 3:
             raise ValueError(f"[axes] must name 1 to 3 config keys; got {len(self.axes)}")
         cp = self.shape[-1] if self.chunk_points is None else self.chunk_points
@@ -221,7 +266,7 @@ class DrifterMapSpec(ChunkedGrid):
 
     def variables(self) -> Schema:
         """The stored variables (:func:`map_variables`)."""
-        return map_variables(self.kind, self.rock)
+        return map_variables(self.kind, self.rock, self.task)
 
     def axis_attrs(self, name: str) -> dict:
         """``long_name`` and ``units`` of an axis' coordinate."""
@@ -241,13 +286,60 @@ class DrifterMapSpec(ChunkedGrid):
 
     # -- serialisation -----------------------------------------------------------------------------
     def to_dict(self) -> dict:
-        return {"task": self.task, "config": self.config,
-                "axes": {a.name: {"values": list(a.values), "unit": a.unit} for a in self.axes},
-                "chunk_points": self.chunk_points, "refine_edges": self.refine_edges,
-                "chain": self.chain}
+        out = {"task": self.task, "config": self.config,
+               "axes": {a.name: {"values": list(a.values), "unit": a.unit} for a in self.axes},
+               "chunk_points": self.chunk_points, "refine_edges": self.refine_edges,
+               "chain": self.chain}
+        if self.settle is not None:
+            out["settle"] = dict(self.settle)
+        return out
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), sort_keys=False, separators=(",", ":"))
+
+
+def settle_options(table) -> dict:
+    """The ``settle`` task's options, checked, with :data:`SETTLE_DEFAULTS` filled in.
+
+    Parameters
+    ----------
+    table : dict or None
+        ``blows`` (blows simulated from rest, an integer in ``[8, MAX_SETTLE_BLOWS]``),
+        ``blow_fraction`` (in ``(0, 1]``) and ``settle_tolerance`` (in ``(0, 1)``), each optional.
+
+    Returns
+    -------
+    dict
+
+    Raises
+    ------
+    ValueError
+        One line naming the option: an unknown one, or a value outside its range.
+
+    Examples
+    --------
+    >>> from impactbar.sweeps.map_spec import settle_options
+    >>> settle_options({"blows": 80})
+    {'blows': 80, 'blow_fraction': 0.25, 'settle_tolerance': 0.01}
+    >>> settle_options({"blows": 2})
+    Traceback (most recent call last):
+    ...
+    ValueError: [settle] blows must be an integer in [8, 100000]; got 2
+    """
+    from .._shared.validate import check_real
+
+    table = {} if table is None else table
+    if not isinstance(table, dict):
+        raise ValueError(f"[settle] must be a table of options {list(SETTLE_DEFAULTS)}; got {table!r}")
+    unknown = sorted(set(table) - set(SETTLE_DEFAULTS))
+    if unknown:
+        raise ValueError(f"unknown [settle] option(s) {unknown}; allowed: {list(SETTLE_DEFAULTS)}")
+    opts = {**SETTLE_DEFAULTS, **table}
+    return {"blows": check_int("[settle] blows", opts["blows"], lo=8, hi=MAX_SETTLE_BLOWS),
+            "blow_fraction": check_real("[settle] blow_fraction", opts["blow_fraction"], lo=0.0, hi=1.0,
+                                        lo_open=True),
+            "settle_tolerance": check_real("[settle] settle_tolerance", opts["settle_tolerance"], lo=0.0,
+                                           hi=1.0, lo_open=True, hi_open=True)}
 
 
 def _cf_unit(unit: str) -> str:
@@ -270,7 +362,7 @@ def parse_map_spec(doc: dict, folder=None) -> DrifterMapSpec:
         itself as a table), ``[axes]`` (dotted key to ``{start, stop, num}`` or ``{values}``, each
         value a quantity with a unit, ``"80 L/min"``, or a number for a dimensionless key; a stored
         spec gives ``{values, unit}`` in SI), and optionally ``chunk_points``, ``refine_edges``,
-        ``chain``.
+        ``chain``; with task ``settle``, the table ``[settle]`` (:func:`settle_options`).
     folder : path-like, optional
         The spec's folder, against which a relative config path is read.
 
@@ -324,7 +416,8 @@ def parse_map_spec(doc: dict, folder=None) -> DrifterMapSpec:
         raise ValueError(f"[axes] must name 1 to 3 config keys; got {len(axes_doc)}")
     axes = tuple(_axis(config, name, table) for name, table in axes_doc.items())
     spec = DrifterMapSpec(task=doc["task"], config=config, axes=axes, chunk_points=doc.get("chunk_points"),
-                          refine_edges=doc.get("refine_edges", False), chain=doc.get("chain", "continue"))
+                          refine_edges=doc.get("refine_edges", False), chain=doc.get("chain", "continue"),
+                          settle=doc.get("settle"))
     for a in axes:  # the machine at each end of each axis, the other keys at the config's values
         for v in {a.values[0], a.values[-1]}:
             try:

@@ -69,7 +69,7 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
                variable: str | None = None) -> Path:
     """Draw a sweep store into a file: a stability chart (``orbits``), fraction maps
     (``montecarlo``), a bifurcation diagram (``bifurcation``) or a drifter's design map
-    (``operating_point``: ``variable`` as a line or filled contours, its edges drawn over,
+    (``operating_point`` and ``settle``: ``variable`` as a line or filled contours, its edges drawn over,
     :func:`impactbar.plotting.maps.plot_operating_map`).
 
     Parameters
@@ -110,9 +110,9 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
 
     ds = open_sweep(store)
     task = ds.attrs["task"]
-    if variable is not None and task != "operating_point":
-        raise ValueError(f"--variable is for a drifter's design map (task operating_point); this store's "
-                         f"task is {task}")
+    if variable is not None and task not in ("operating_point", "settle"):
+        raise ValueError(f"--variable is for a drifter's design map (task operating_point or settle); this "
+                         f"store's task is {task}")
     out = Path(out)
     try:
         red, dims = reduce_axes(ds, select, 2)
@@ -130,7 +130,7 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
         fig = plot_stability_chart(red, dims).figure
     elif task == "montecarlo":
         fig = plot_fraction_maps(red, dims)
-    elif task == "operating_point":
+    elif task in ("operating_point", "settle"):
         from ..plotting.maps import plot_operating_map
 
         fig = plot_operating_map(red, dims, variable).figure

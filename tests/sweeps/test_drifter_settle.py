@@ -1,0 +1,140 @@
+"""The ``settle`` task of a drifter map: each point against a direct simulation from rest classified by
+``SimulationResult.blow_statistics``, the period-1 points against the operating point's blow
+frequency, the stored units, and the refusals of bad ``[settle]`` options."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("zarr")
+pytest.importorskip("xarray")
+pytest.importorskip("pint")
+
+from impactbar.physical.loader import build, read_config, with_values  # noqa: E402
+from impactbar.physical.results import BLOW_FRACTION, SETTLE_TOLERANCE, SimulationResult  # noqa: E402
+from impactbar.sweeps import open_sweep, parse_spec, run_map  # noqa: E402
+from impactbar.sweeps.map_spec import SETTLE_DEFAULTS  # noqa: E402
+from impactbar.sweeps.map_task import compute_map_chunk  # noqa: E402
+
+pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
+
+# points whose largest multiplier is at most 0.41: 60 blows from rest settle far below 1e-6
+FLOWS = ["80 L/min", "100 L/min", "120 L/min"]
+PRECHARGES = ["3 MPa", "6 MPa"]
+BLOWS = 60
+
+
+def _doc(task="settle", **more):
+    return {"task": task, "config": "circuit-drifter",
+            "axes": {"supply.pump_flow": {"values": FLOWS}, "accumulator.precharge": {"values": PRECHARGES}},
+            **more}
+
+
+def _chunks(spec):
+    out = {f.name: np.full(spec.shape, f.fill, dtype=f.dtype) for f in spec.variables()}
+    for c in range(spec.n_chunks):
+        for name, values in compute_map_chunk(spec, c).items():
+            out[name][spec.block(c)] = values
+    return out
+
+
+@pytest.fixture(scope="module")
+def settled():
+    return _chunks(parse_spec(_doc(settle={"blows": BLOWS})))
+
+
+def _direct(flow, precharge):
+    """The machine at the values simulated from rest for a fixed 2 s (over 90 blows), cut at its
+    60th blow, and classified by SimulationResult.blow_statistics."""
+    machine = build(with_values(read_config("circuit-drifter")[0], {"supply.pump_flow": flow,
+                                                                    "accumulator.precharge": precharge}))
+    run = machine.simulate(2.0)
+    t, v = run["impact_times_s"], run["impact_velocities_m_s"]
+    blow = v >= BLOW_FRACTION * v.max()
+    assert blow.sum() > BLOWS
+    end = t[np.flatnonzero(blow)[BLOWS - 1]]
+    t, v = t[t <= end], v[t <= end]
+    res = SimulationResult(None, None, end, t, v, 0.5 * machine.bar.mass_kg * v * v)
+    stats = res.blow_statistics()
+    m = stats.blows_per_cycle
+    assert m >= 1  # (these points settle; the not-settled branch is the map's own)
+    blows = np.flatnonzero(res.is_blow())[-m - 1:]
+    dt = np.diff(t[blows])
+    return {"period_blows": m, "settled": True, "n_blows": stats.n_blows, "n_impacts": stats.n_impacts,
+            "simulated_time": end, "chatter_per_blow": (blows[-1] - blows[0] - m) / m,
+            "impact_velocity": v[blows[1:]].mean(), "impact_velocity_spread": v[blows[1:]].std(),
+            "blow_frequency": m / dt.sum(), "blow_frequency_spread": (1 / dt).std()}
+
+
+def test_each_point_is_the_direct_simulation_classified(settled):
+    assert np.all(settled["status"] == 0), settled["failure"]
+    for i, q in enumerate(FLOWS):
+        for j, p in enumerate(PRECHARGES):
+            want = _direct(q, p)
+            for name, w in want.items():
+                g = settled[name][i, j]
+                if isinstance(w, bool | int | np.integer):
+                    assert g == w, (name, i, j, g, w)
+                else:  # the same run to the integrator's accuracy (a 2 s run against a shorter one)
+                    assert g == pytest.approx(w, rel=1e-9, abs=1e-9), (name, i, j, g, w)
+    assert settled["n_blows"].min() == BLOWS
+
+
+def test_period_one_points_blow_at_the_operating_points_frequency(settled):
+    """Settled into one blow per cycle, the last period's blow frequency and impact velocity are the
+    orbit's (the default chain's, found by Newton, not by simulation) to 1e-6 relative."""
+    orbit = _chunks(parse_spec(_doc("operating_point", chain="default")))
+    one = settled["period_blows"] == 1
+    assert one.all()
+    np.testing.assert_allclose(settled["blow_frequency"][one], orbit["blow_frequency"][one], rtol=1e-6)
+    np.testing.assert_allclose(settled["impact_velocity"][one], orbit["impact_velocity"][one], rtol=1e-6)
+    assert np.all(settled["blow_frequency_spread"][one] <= 1e-6 * settled["blow_frequency"][one])
+
+
+def test_a_settle_store_has_si_units_and_its_options(tmp_path):
+    spec = parse_spec({"task": "settle", "config": "circuit-drifter", "settle": {"blows": 12},
+                       "axes": {"supply.pump_flow": {"values": ["90 L/min", "120 L/min"]}}})
+    assert spec.settle == {**SETTLE_DEFAULTS, "blows": 12}
+    assert parse_spec(json.loads(spec.to_json())) == spec
+    run_map(spec, tmp_path / "s.zarr", executor="threads", n_workers=1, progress=False)
+    ds = open_sweep(tmp_path / "s.zarr")
+    units = {n: ds[n].attrs["units"] for n in ("blow_frequency", "blow_frequency_spread", "impact_velocity",
+                                                "impact_velocity_spread", "simulated_time",
+                                                "chatter_per_blow")}
+    assert units == {"blow_frequency": "Hz", "blow_frequency_spread": "Hz", "impact_velocity": "m/s",
+                     "impact_velocity_spread": "m/s", "simulated_time": "s", "chatter_per_blow": "1"}
+    assert "settled motion in blows" in ds["period_blows"].attrs["long_name"]
+    assert list(ds["status"].values) == [0, 0] and list(ds["n_blows"].values) == [12, 12]
+    for name, values in compute_map_chunk(spec, 0).items():  # (12 blows from rest: not yet settled)
+        assert np.asarray(ds[name].values).tobytes() == values.tobytes(), name
+    assert json.loads(ds.attrs["impactbar_sweep_spec"])["settle"]["blows"] == 12
+    pytest.importorskip("matplotlib")
+    from impactbar.sweeps import plot_sweep
+
+    assert plot_sweep(tmp_path / "s.zarr", tmp_path / "s.png", variable="period_blows").stat().st_size > 0
+
+
+def test_the_defaults_are_the_librarys_and_an_operating_point_spec_is_unchanged():
+    assert SETTLE_DEFAULTS["blow_fraction"] == BLOW_FRACTION
+    assert SETTLE_DEFAULTS["settle_tolerance"] == SETTLE_TOLERANCE
+    assert parse_spec(_doc(settle=None)).settle["blows"] == 40
+    assert "settle" not in parse_spec(_doc("operating_point")).to_dict()
+
+
+@pytest.mark.parametrize("doc, key", [
+    ({"settle": {"blows": 2}}, "[settle] blows"),
+    ({"settle": {"blows": 40.5}}, "[settle] blows"),
+    ({"settle": {"blows": "40"}}, "[settle] blows"),
+    ({"settle": {"blow_fraction": 0.0}}, "[settle] blow_fraction"),
+    ({"settle": {"settle_tolerance": 1.0}}, "[settle] settle_tolerance"),
+    ({"settle": {"blow": 40}}, "[settle] option(s) ['blow']"),
+    ({"settle": [40]}, "[settle] must be a table"),
+    ({"task": "operating_point", "settle": {"blows": 40}}, "[settle]"),
+])
+def test_bad_settle_options_are_refused_in_one_line(doc, key):
+    with pytest.raises(ValueError) as err:
+        parse_spec({**_doc(), **doc})
+    assert key in str(err.value) and "\n" not in str(err.value)
