@@ -15,7 +15,7 @@ pytest.importorskip("xarray")
 pytest.importorskip("pint")
 
 from impactbar.physical.loader import build, read_config, with_values  # noqa: E402
-from impactbar.sweeps import DrifterMapSpec, map_edges, open_sweep, parse_spec, run_map  # noqa: E402
+from impactbar.sweeps import DrifterMapSpec, load_spec, map_edges, open_sweep, parse_spec, run_map  # noqa: E402
 from impactbar.sweeps.map_task import compute_map_chunk, point_values  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
@@ -162,6 +162,19 @@ def test_a_resumed_map_is_bitwise_the_uninterrupted_one(tmp_path):
     assert plot_sweep(part, tmp_path / "line.png", select={"accumulator.precharge": 6e6}).stat().st_size > 0
     with pytest.raises(ValueError, match="no_such"):
         plot_sweep(part, tmp_path / "x.png", variable="no_such")
+    # the axes in a designer's units, the store's SI values scaled on the ticks
+    import matplotlib.pyplot as plt
+
+    from impactbar.plotting.maps import plot_operating_map
+
+    y_dim, x_dim = ds["status"].dims
+    ax = plot_operating_map(ds.load(), (y_dim, x_dim), variable="mean_supply_pressure")
+    shown = {"supply.pump_flow": ("L/min", 6e4), "accumulator.precharge": ("MPa", 1e-6)}
+    assert ax.get_xlabel() == f"{x_dim} [{shown[x_dim][0]}]"
+    assert ax.get_ylabel() == f"{y_dim} [{shown[y_dim][0]}]"
+    value = float(ds[x_dim][0])
+    assert ax.xaxis.get_major_formatter()(value, 0) == f"{value * shown[x_dim][1]:.6g}"
+    plt.close(ax.figure)
 
 
 @pytest.mark.slow
@@ -297,3 +310,34 @@ def test_the_readme_map_prints_what_the_readme_shows(tmp_path, monkeypatch, caps
 
     again = map_edges(tmp_path / "map.zarr")
     assert len(again) == 1 and f"{again[0]['value'] * 6e4:.2f}" in shown
+
+
+@pytest.mark.slow
+def test_the_docs_example_map(tmp_path):
+    """The numbers the page "Design maps" quotes of ``examples/sweep_map_circuit_drifter.toml``'s map
+    (441 points, about a minute of CPU time)."""
+    from pathlib import Path
+
+    spec = load_spec(Path(__file__).resolve().parents[2] / "examples" / "sweep_map_circuit_drifter.toml")
+    run_map(spec, tmp_path / "map.zarr", executor="threads", n_workers=1, progress=False)
+    ds = open_sweep(tmp_path / "map.zarr")
+    assert ds["status"].dims == ("accumulator.precharge", "supply.pump_flow")
+    assert bool(ds["stable"].values.all()) and not bool(ds["cavitates"].values.any())
+    flags = list(ds["edge_flag"].values)
+    assert len(flags) == 26 and set(flags) == {"relief_opens", "accumulator_empties"}
+    q = ds["supply.pump_flow"].values * 6e4
+    eff, freq = ds["hydraulic_efficiency"].values, ds["blow_frequency"].values
+    pre = ds["accumulator.precharge"].values
+    relief = (ds["edge_flag"].values == "relief_opens") & (ds["edge_axis"].values == 1)  # along the flow
+    for i, low in zip(ds["edge_index"].values[relief], ds["edge_low"].values[relief] * 6e4, strict=True):
+        assert low == pytest.approx(70.0 if pre[i[0]] <= 7.2e6 + 1.0 else 75.0, rel=1e-12)
+    assert relief.sum() == pre.size  # one edge at every pre-charge
+    assert np.all((eff[:, q < 70] > 0.49) & (eff[:, q < 70] < 0.6))  # "about 0.5 to 0.6"
+    assert np.all((eff[:, -1] > 0.25) & (eff[:, -1] < 0.26))
+    assert 47.5 < freq[:, q >= 75].min() and freq[:, q >= 75].max() < 51.5
+    acc = ds["edge_flag"].values == "accumulator_empties"
+    axis = ds["edge_axis"].values[acc]
+    index = ds["edge_index"].values[acc]
+    at_50 = [i for a, i in zip(axis, index, strict=True) if a == 0 and i[1] == 0]  # along the pre-charge
+    assert len(at_50) == 1
+    assert pre[at_50[0][0]] < 13.3e6 < pre[at_50[0][0] + 1]

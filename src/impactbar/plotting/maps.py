@@ -1,6 +1,7 @@
 """A drifter's design map (:func:`impactbar.sweeps.run_map`, reduced to one or two axes): one variable
 as a line or filled contours, the stability edge, the border-collision edges and the cavitation
-region drawn over it, the axes labelled in SI. Nothing is computed again."""
+region drawn over it, the axes labelled in a designer's units (L/min, MPa, L, mm, ms, kW: the store
+keeps SI). Nothing is computed again."""
 
 from __future__ import annotations
 
@@ -16,10 +17,28 @@ _FLAGS = (("stable", "red", "stability edge (a multiplier crosses the unit circl
           ("accumulator_empties", "orange", "accumulator starts to empty"))
 
 
+#: the units a designer reads a map's SI values in (the store keeps SI): SI unit -> (shown, factor)
+DISPLAY_UNITS = {"m3/s": ("L/min", 6e4), "m^3/s": ("L/min", 6e4), "m**3/s": ("L/min", 6e4),
+                 "Pa": ("MPa", 1e-6), "m3": ("L", 1e3), "m^3": ("L", 1e3), "m**3": ("L", 1e3),
+                 "m": ("mm", 1e3), "s": ("ms", 1e3), "W": ("kW", 1e-3), "m2": ("cm^2", 1e4),
+                 "m^2": ("cm^2", 1e4), "m**2": ("cm^2", 1e4)}
+
+
 def _label(ds, name: str) -> str:
-    """``name [units]`` (SI, from the store's attributes; no unit for a pure number)."""
+    """``name [units]`` in the units of :data:`DISPLAY_UNITS` (else SI, from the store's
+    attributes; no unit for a pure number)."""
     units = ds[name].attrs.get("units", "")
+    units = DISPLAY_UNITS.get(units, (units, 1.0))[0]
     return name if units in ("", "1") else f"{name} [{units}]"
+
+
+def _shown(ds, name: str, axis) -> None:
+    """Ticks of ``axis`` (an x or y axis, or a colour bar's) in the units of :func:`_label`."""
+    from matplotlib.ticker import FuncFormatter
+
+    factor = DISPLAY_UNITS.get(ds[name].attrs.get("units", ""), ("", 1.0))[1]
+    if factor != 1.0:
+        axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v * factor:.6g}"))
 
 
 def plot_operating_map(ds, dims, variable: str | None = None, ax=None):
@@ -75,6 +94,8 @@ def plot_operating_map(ds, dims, variable: str | None = None, ax=None):
                 ax.plot(x[cav], z[cav], "ks", mfc="none", label="cavitates")
         ax.set_xlabel(_label(ds, dims[0]))
         ax.set_ylabel(_label(ds, name))
+        _shown(ds, dims[0], ax.xaxis)
+        _shown(ds, name, ax.yaxis)
         if ax.get_legend_handles_labels()[0]:
             ax.legend(fontsize="small")
         return ax
@@ -86,7 +107,8 @@ def plot_operating_map(ds, dims, variable: str | None = None, ax=None):
         filled = ax.contourf(X, Y, np.ma.masked_invalid(z), levels=14, cmap="viridis")
     else:
         filled = ax.pcolormesh(X, Y, np.ma.masked_invalid(z), cmap="viridis", shading="nearest")
-    ax.figure.colorbar(filled, ax=ax, label=_label(ds, name))
+    bar = ax.figure.colorbar(filled, ax=ax, label=_label(ds, name))
+    _shown(ds, name, bar.ax.yaxis)
     handles = []
     for flag, colour, text in _FLAGS:
         if flag not in ds:
@@ -122,6 +144,8 @@ def plot_operating_map(ds, dims, variable: str | None = None, ax=None):
     ax.set_title(ds[name].attrs.get("long_name", name), fontsize="medium")
     ax.set_xlabel(_label(ds, x_dim))
     ax.set_ylabel(_label(ds, y_dim))
+    _shown(ds, x_dim, ax.xaxis)
+    _shown(ds, y_dim, ax.yaxis)
     if handles:
         ax.legend(handles=handles, fontsize="small", loc="upper left", bbox_to_anchor=(0.0, -0.14),
                   ncols=2, frameon=False)
