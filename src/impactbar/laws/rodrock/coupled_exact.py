@@ -21,14 +21,14 @@ and, for :math:`t < T_0` and the right-going wave before :math:`T_0`, the piston
 
 **The iteration.** Start from the force held at its value at impact; solve the exact blow with it;
 integrate the drive over the blow with the driven end moved by that blow's :math:`a`
-(:meth:`~impactbar.Drive.end_flight`); take the force it gives as the next blow's, as polynomial
-pieces of the exact solver (Chebyshev interpolants on pieces of at most :math:`T_0 / 2`, to
-:data:`FIT_TOL` of the force's size); repeat until the force changes by less than :data:`FORCE_TOL`
-of its size. By causality the :math:`k`-th iterate is right over :math:`[0, 2kT_0]` whatever the
-coupling, so the iteration ends after at most ``duration / (2 T_0) + 1`` steps; the blow's
-dependence on the drive is weak (the force changes by a few percent during a blow), so it ends
-after three to five. What is left is the integrator's tolerance and :data:`FORCE_TOL`: nothing is
-averaged over cells and the rod's lengths are as they are.
+(:meth:`~impactbar.Drive.end_flight`; :math:`a` as a cubic spline through its exact values
+``T_0 / SAMPLES`` apart, cut where the far end's force jumps); take the force it gives, its
+integrator's cubic Hermite pieces exactly, as the next blow's drive; repeat until the force changes
+by less than :data:`FORCE_TOL` of its size. By causality the :math:`k`-th iterate is right over
+:math:`[0, 2kT_0]` whatever the coupling, so the iteration ends after at most
+``duration / (2 T_0) + 1`` steps (six to eight rounds on the example). What is left is the
+integrator's tolerance, the spline's and :data:`FORCE_TOL`: nothing is averaged over cells and the
+rod's lengths are as they are.
 
 The blow lasts the law's window (:meth:`~impactbar.RodRock.window`), as the simulator's blows under
 a load on the exact scheme do; the rock is loaded by the feed at each blow and the piston returns to
@@ -44,12 +44,10 @@ import numpy as np
 
 from ..base import DrivenContact, LawNotSupported
 
-__all__ = ["driven_exact_contact", "FORCE_TOL", "FIT_TOL", "MAX_ITERATIONS"]
+__all__ = ["driven_exact_contact", "FORCE_TOL", "MAX_ITERATIONS", "SAMPLES"]
 
 #: The iteration ends when the force changes by less than this fraction of its size.
 FORCE_TOL = 1e-9
-#: The polynomial pieces of the force meet it to this fraction of its size.
-FIT_TOL = 1e-12
 #: The most iterations beyond the causal bound (``duration / (2 T_0) + 1``).
 MAX_ITERATIONS = 64
 #: Samples of the arriving wave per travel time of the piston's first segment.
