@@ -60,8 +60,10 @@ _TOP_KEYS = ("task", "model", "load", "axes", "rock", "chunk_points", *TASKS)
 ROCK_KEYS = ("k", "k_u", "bit_mass", "feed", "blow_time", "cells_per_piston", "segments")
 SEGMENT_KEYS = ("length", "impedance", "wave_speed")
 #: grid points per chunk of an ``orbits`` sweep under the rod-rock law (Newton on a numerical blow
-#: map: some 0.1 s a point)
-DEFAULT_ROCK_CHUNK_POINTS = 16
+#: map: 0.1 to 0.7 s a point): small chunks, since the points' costs differ by up to 8 times and a
+#: chunk's cost dwarfs its scheduling and writing (``benchmarks/bench_sweep_scale.py``: on 1,024
+#: points, 16 workers were busy 94 % of the sweep's time in chunks of 4 against 88 % in chunks of 16)
+DEFAULT_ROCK_CHUNK_POINTS = 4
 
 #: names of the extra dimension of each task
 _EXTRA_DIM = {"orbits": "orbit", "montecarlo": "motion", "bifurcation": "impact"}
