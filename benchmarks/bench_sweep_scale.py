@@ -92,7 +92,8 @@ def run_one(spec, workers: int, folder: Path) -> dict:
         warm = list(client.run(warm_worker, spec).values())
         warm_wall = time.perf_counter() - t1
         with get_task_stream(client) as stream:
-            run = run_sweep(spec, folder / f"rock-{workers}-{spec.chunk_points}.zarr", client=client, progress=False)
+            store = folder / f"rock-{workers}-{spec.chunk_points}.zarr"
+            run = run_sweep(spec, store, client=client, progress=False)
         total = time.perf_counter() - t0
     assert run.complete
     chunk_s = {int(rec["key"].rsplit("-", 1)[1]): sum(s["stop"] - s["start"] for s in rec["startstops"]
@@ -137,17 +138,17 @@ def main() -> None:
     spec = rock_spec(args.points, None)
     print(f"cores: {os.cpu_count()}, load average at start: {os.getloadavg()[0]:.2f}; "
           f"{spec.n_points} points, the spec's default chunks of {spec.chunk_points}")
-    print("| workers | chunk points | start (s) | warm-up per worker (s, median / max) | sweep (s) | compute (s) | "
-          "busy, from the sweep's start | busy, from the cluster's start |")
+    print("| workers | chunk points | start (s) | warm-up per worker (s, median / max) | sweep (s) | "
+          "compute (s) | busy, from the sweep's start | busy, from the cluster's start |")
     print("|---|---|---|---|---|---|---|---|")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for cp, w in ((cp, w) for cp in args.chunk_points for w in args.workers):
             r = run_one(rock_spec(args.points, cp), w, Path(tmp))
             rows.append(r)
-            print(f"| {w} | {r['chunk_points']} | {r['start_s']:.2f} | {statistics.median(r['warm_s']):.2f} / {max(r['warm_s']):.2f} | "
-                  f"{r['sweep_s']:.2f} | {r['compute_s']:.1f} | {r['busy']:.0%} | {r['busy_from_start']:.0%} |",
-                  flush=True)
+            warm = f"{statistics.median(r['warm_s']):.2f} / {max(r['warm_s']):.2f}"
+            print(f"| {w} | {r['chunk_points']} | {r['start_s']:.2f} | {warm} | {r['sweep_s']:.2f} | "
+                  f"{r['compute_s']:.1f} | {r['busy']:.0%} | {r['busy_from_start']:.0%} |", flush=True)
     # the model's per-point costs: from the run with the smallest chunks and, of those, the least
     # compute time (the quietest machine)
     base = min(rows, key=lambda r: (r["chunk_points"], r["compute_s"]))
@@ -157,7 +158,8 @@ def main() -> None:
           f"{1e3 * cost.max():.0f}; from the run of {base['workers']} workers in chunks of "
           f"{base['chunk_points']}), F = {fixed:.2f} s (start + slowest warm-up)")
     sizes = sorted({spec.chunk_points, 1, 4, 16, 64})
-    print("| workers | " + " | ".join(f"chunks of {s}: T(N) s, busy from start / sweep" for s in sizes) + " |")
+    print("| workers | " + " | ".join(f"chunks of {s}: T(N) s, busy from start / sweep" for s in sizes)
+          + " |")
     print("|---|" + "---|" * len(sizes))
     for n in (1, 2, 4, 8, 16, 32):
         cells = []
