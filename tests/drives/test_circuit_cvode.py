@@ -24,6 +24,7 @@ from impactbar.drives.circuit import (
     _sundials,
 )
 from impactbar.drives.circuit import flight as F
+from impactbar.drives.circuit.drive import _rate_model
 from impactbar.drives.flight import ARRIVAL, EVENT
 
 RIGID = BarModel(s=52, d=0, R=0.215, n_modes=0)
@@ -272,3 +273,39 @@ def test_an_unwritable_numba_cache_compiles_the_circuit_in_memory():
     period, compiled = r.stdout.split()[-2:]
     assert float(period) == pytest.approx(1.0262627571, rel=1e-8)
     assert compiled == str(_sundials.available())
+
+
+def test_the_circuit_during_a_blow_is_the_bindings_to_the_bit(monkeypatch):
+    """The circuit over a stretch of a blow (the lattice's steps: the arriving wave constant on each
+    interval) by the compiled driver against scikit-sundae's interface: the same steps, events and
+    impulses, to the bit; a wave that varies within an interval goes through the binding."""
+    if not _sundials.available():
+        pytest.skip(_sundials.reason())
+    from impactbar.drives.circuit import endflight as EF
+
+    drive = pumped()
+    state = DriveState((1, 1, 1, 0), np.array([0.9, 0.9, 0.9, 0.3]))  # the valve's ramp: an event inside
+    breaks = np.linspace(0.0, 0.4, 9)
+    waves = [0.3, -0.2, 0.1, 0.0, 0.2, -0.1, 0.05, 0.0]
+
+    calls, original = [], EF._solver
+    monkeypatch.setattr(EF, "_solver", lambda *args: calls.append(1) or original(*args))
+
+    def stretch(compiled):
+        d = dataclasses.replace(drive, compiled=compiled)
+        calls.clear()
+        out = EF.circuit_end_flight(d, RIGID, state, breaks, 0.0, waves, 52.0, one_mode=_rate_model(1))
+        return out, len(calls)
+
+    (a, through_a), (b, through_b) = both(stretch)
+    assert through_a == 0 and through_b > 0  # the compiled driver, then the binding
+    assert a.events and [(t, e.name, m) for t, e, m in a.events] == [(t, e.name, m) for t, e, m in b.events]
+    assert len(a.pieces) == len(b.pieces) > breaks.size - 1
+    assert all(np.array_equal(p.t, q.t) and np.array_equal(p.y, q.y) for p, q in zip(a.pieces, b.pieces,
+                                                                                      strict=True))
+    assert np.array_equal(a.impulses, b.impulses) and a.w == b.w and np.array_equal(a.state.z, b.state.z)
+    calls.clear()
+    smooth = EF.circuit_end_flight(drive, RIGID, state, breaks[:2], 0.0, [lambda t: 0.3 + 0.0 * t], 52.0,
+                                   one_mode=_rate_model(1))
+    assert calls and np.array_equal(smooth.pieces[0].y, b.pieces[0].y)
+

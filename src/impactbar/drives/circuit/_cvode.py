@@ -208,11 +208,12 @@ def _free(ctx, mem, y, A, LS):
 
 class Workspace:
     """One CVODE memory for systems of size ``N``: BDF, Newton's method with the dense direct solver
-    and :func:`_jac_c` or, with ``band`` (the variational flights: ``N = n + 8 + n^2``), the band solver
-    of half-bandwidths ``n - 1`` and :func:`_jac_band_c` (``n^2`` times fewer operations a
+    and :func:`_jac_c` or, with ``band`` (the variational flights: ``N = n + 8 + n^2``), the band
+    solver of half-bandwidths ``n - 1`` and :func:`_jac_band_c` (``n^2`` times fewer operations a
     factorisation than the dense one), the six event functions :func:`_events_c`, SUNDIALS' error
     messages silenced (a failure's reason reaches the caller as its return flag). Freed when
-    collected.
+    collected. ``callbacks``, ``(rhs, jac, events, number of events)``, replace the flight's vector
+    field, dense Jacobian and events (the circuit during a blow: :mod:`._endcvode`).
 
     Attributes
     ----------
@@ -220,7 +221,7 @@ class Workspace:
         The addresses :func:`fly` takes.
     """
 
-    def __init__(self, N: int, band: int = 0):
+    def __init__(self, N: int, band: int = 0, callbacks=None):
         f = S.function
         ctx = ctypes.c_void_p()
         if f("SUNContext_Create")(0, ctypes.byref(ctx)) != 0:
@@ -242,12 +243,13 @@ class Workspace:
             smu = f("SUNBandMatrix_StoredUpperBandwidth")(A) & _LOW32
             if smu != min(N - 1, 2 * band) or f("SUNBandMatrix_LDim")(A) & _LOW32 != smu + band + 1:
                 raise RuntimeError("SUNDIALS' band matrix is not stored as documented")
-        jac = _jac_band_c if band else _jac_c
-        ok = (f("CVodeInit")(mem, _rhs_c.address, 0.0, y) == 0
+        rhs, jac, events, n_events = callbacks or (_rhs_c, _jac_band_c if band else _jac_c, _events_c,
+                                                   K.N_EVENTS)
+        ok = (f("CVodeInit")(mem, rhs.address, 0.0, y) == 0
               and f("CVodeSStolerances")(mem, 1e-10, 1e-12) == 0
               and f("CVodeSetLinearSolver")(mem, LS, A) == 0
               and f("CVodeSetJacFn")(mem, jac.address) == 0
-              and f("CVodeRootInit")(mem, K.N_EVENTS, _events_c.address) == 0)
+              and f("CVodeRootInit")(mem, n_events, events.address) == 0)
         if not ok:
             raise RuntimeError("CVODE's set-up failed")
 
@@ -271,15 +273,18 @@ class Workspace:
 _LOCAL = threading.local()
 
 
-def workspace(N: int, band: int = 0) -> Workspace:
+def workspace(N: int, band: int = 0, callbacks=None) -> Workspace:
     """This thread's workspace for systems of size ``N`` (with the band solver of half-bandwidths
-    ``band``, or dense for 0), made on first use."""
+    ``band``, or dense for 0), made on first use; ``callbacks``: ``(rhs, jac, events, number of
+    events)`` as compiled C callbacks in place of the flight's (the circuit during a blow:
+    :mod:`._endcvode`)."""
     spaces = getattr(_LOCAL, "spaces", None)
     if spaces is None:
         spaces = _LOCAL.spaces = {}
-    ws = spaces.get((N, band))
+    key = (N, band, None if callbacks is None else callbacks[0].address)
+    ws = spaces.get(key)
     if ws is None:
-        ws = spaces[(N, band)] = Workspace(N, band)
+        ws = spaces[key] = Workspace(N, band, callbacks)
     _LOCAL.last = ws
     return ws
 

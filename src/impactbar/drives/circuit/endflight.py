@@ -24,7 +24,7 @@ import numpy as np
 
 from ..base import DriveState, FlightSettings
 from . import _endkernel as EK
-from .flight import DEFAULT_SETTINGS, HermiteSteps, _hermite_extremes
+from .flight import _MAX_STEPS, DEFAULT_SETTINGS, HermiteSteps, _compiled_driver, _hermite_extremes, _message
 
 __all__ = ["EndFlight", "EndPiece", "circuit_end_flight"]
 
@@ -181,28 +181,44 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     impulses = np.zeros(n)
     pieces: list = []
     fired_log: list = []
+    compiled = _compiled_end(drive)
     for k in range(n):
         a = incoming[k]
         t, t1 = float(breaks[k]), float(breaks[k + 1])
         while t < t1:
-            key = mode
-            if key not in solvers:
-                solvers[key] = _solver(drive, mode, settings, ext, model1, drive.state_size)
-            solver, par, ext_fn = solvers[key]
-            if callable(a):
-                ext_fn[0] = a
-            else:
-                ext_fn[0] = None
-                ext[0] = float(a)
             y0 = np.zeros(EK.N_STATE)
             y0[0], y0[1:5] = w, z
-            with contextlib.redirect_stdout(io.StringIO()):  # (CVODE's errors are in sol.message)
-                sol = solver.solve(np.array([t, t1]), y0)
-            if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
-                raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be integrated "
-                                 f"({sol.message})")
-            ts = np.asarray(sol.t, dtype=float)
-            Y = np.asarray(sol.y, dtype=float)
+            if compiled is not None and not callable(a):  # no Python between the stretch's ends
+                if mode not in solvers:
+                    solvers[mode] = (drive._par(model1, mode),
+                                     [drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS])
+                par, directions = solvers[mode]
+                flag, ts, Y, _, roots = compiled.fly(t, y0, t1, float(settings.rtol), float(settings.atol),
+                                                     directions, compiled.user_data(par, a, impedance),
+                                                     _MAX_STEPS)
+                if flag < 0 or not np.all(np.isfinite(Y[-1])):
+                    raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be "
+                                     f"integrated ({_message(flag)})")
+                ext[0] = float(a)
+                status, hit = int(flag), list(np.flatnonzero(roots))
+            else:
+                if mode not in solvers:
+                    solvers[mode] = _solver(drive, mode, settings, ext, model1, drive.state_size)
+                solver, par, ext_fn = solvers[mode]
+                if callable(a):
+                    ext_fn[0] = a
+                else:
+                    ext_fn[0] = None
+                    ext[0] = float(a)
+                with contextlib.redirect_stdout(io.StringIO()):  # (CVODE's errors are in sol.message)
+                    sol = solver.solve(np.array([t, t1]), y0)
+                if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
+                    raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be "
+                                     f"integrated ({sol.message})")
+                ts, Y, status = sol.t, sol.y, int(sol.status)
+                hit = [] if sol.i_events is None else list(np.flatnonzero(np.atleast_2d(sol.i_events)[-1]))
+            ts = np.asarray(ts, dtype=float)
+            Y = np.asarray(Y, dtype=float)
             keep = np.concatenate(([True], np.diff(ts) > 0.0))
             ts, Y = ts[keep], np.ascontiguousarray(Y[keep])
             exts = np.empty((ts.size, 2))
@@ -216,15 +232,23 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             impulses[k] += Y[-1, 5]
             w, z = float(Y[-1, 0]), Y[-1, 1:5].copy()
             te = float(ts[-1])
-            if sol.status == 2 and sol.i_events is not None:
-                hit = [EK.FLIGHT_EVENTS[i] for i in np.flatnonzero(np.atleast_2d(sol.i_events)[-1])]
+            if status == 2 and hit:
                 st = DriveState(mode, z)
-                for e in drive._fired(mode, hit):
+                for e in drive._fired(mode, [EK.FLIGHT_EVENTS[i] for i in hit]):
                     st = drive.jump(st.mode, st.z, e, te, None, None)
                     fired_log.append((te, e, st.mode))
                 mode, z = st.mode, np.array(st.z, dtype=float)
             t = te if te < t1 else t1
     return EndFlight(DriveState(mode, z), w, impulses, pieces, fired_log)
+
+
+def _compiled_end(drive):
+    """:mod:`._endcvode` where the drive flies compiled and the SUNDIALS libraries bind, else None."""
+    if _compiled_driver(getattr(drive, "compiled", True)) is None:
+        return None
+    from . import _endcvode
+
+    return _endcvode
 
 
 def _check_volumes(drive, w, t) -> None:
