@@ -64,8 +64,7 @@ def user_data(par: np.ndarray, a: float, impedance: float) -> np.ndarray:
 
 def fly(t0: float, y0: np.ndarray, t_end: float, rtol: float, atol: float, directions, data: np.ndarray,
         max_steps: int):
-    """One stretch from ``y0`` at ``t0`` to the first event in ``directions`` or ``t_end``: what
-    :func:`._cvode.fly` returns, every component kept."""
+    """One stretch from ``y0`` at ``t0`` to the first event in ``directions`` (int32, one per event)
+    or ``t_end``: what :func:`._cvode.fly` returns, every component kept."""
     ws = CV.workspace(EK.N_STATE, 0, CALLBACKS)
-    return CV.fly(ws.mem, ws.y, t0, y0, t_end, rtol, atol, np.asarray(directions, dtype=np.int32), data,
-                  EK.N_STATE, max_steps)
+    return CV.fly(ws.mem, ws.y, t0, y0, t_end, rtol, atol, directions, data, EK.N_STATE, max_steps)

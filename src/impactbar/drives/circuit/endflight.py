@@ -190,12 +190,13 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             y0[0], y0[1:5] = w, z
             if compiled is not None and not callable(a):  # no Python between the stretch's ends
                 if mode not in solvers:
-                    solvers[mode] = (drive._par(model1, mode),
-                                     [drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS])
-                par, directions = solvers[mode]
+                    par = drive._par(model1, mode)
+                    solvers[mode] = (par, np.array([drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS],
+                                                   dtype=np.int32), compiled.user_data(par, 0.0, impedance))
+                par, directions, data = solvers[mode]
+                data[1] = a
                 flag, ts, Y, _, roots = compiled.fly(t, y0, t1, float(settings.rtol), float(settings.atol),
-                                                     directions, compiled.user_data(par, a, impedance),
-                                                     _MAX_STEPS)
+                                                     directions, data, _MAX_STEPS)
                 if flag < 0 or not np.all(np.isfinite(Y[-1])):
                     raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be "
                                      f"integrated ({_message(flag)})")
@@ -253,7 +254,8 @@ def _compiled_end(drive):
 
 def _check_volumes(drive, w, t) -> None:
     ch = drive.chambers
-    if np.min(ch.rear_volume - w) <= 0.0 or np.min(ch.front_volume + ch.area_ratio * w) <= 0.0:
-        which = "rear" if np.min(ch.rear_volume - w) <= 0.0 else "front"
+    rear, front = ch.rear_volume - float(w.max()), ch.front_volume + ch.area_ratio * float(w.min())
+    if rear <= 0.0 or front <= 0.0:
+        which = "rear" if rear <= 0.0 else "front"
         raise ValueError(f"the {which} chamber empties (V <= 0) during the blow near t = {t:.6g}: give a "
                          f"larger {which}_volume (now {getattr(ch, which + '_volume'):g})")
