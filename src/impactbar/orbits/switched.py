@@ -605,6 +605,21 @@ class ShootingProblem(OrbitProblem):
             out += self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[4]
         return out
 
+    def event_pattern(self, X) -> tuple:
+        """The period's sequence of the drive's discrete states: per block its start mode, then
+        each event's name and the mode after it, in order. Two solutions (or two flights from
+        nearby unknowns) with the same pattern lie on one smooth piece of the problem; a changed
+        pattern is a border collision (a switch changing order, a relief valve opening, an
+        accumulator emptying)."""
+        n = self.n
+        out = []
+        for k in range(self.impacts):
+            tau, mode = self.blocks[k]
+            out.append(("start", mode))
+            events = self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[5]
+            out += [(e.name, after) for _, e, after, _ in events]
+        return tuple(out)
+
     def pieces(self, X):
         """The flights of the period as ``(t0, t1, f)``, ``f(t) -> (q, v)`` at orbit times."""
         n, m = self.n, self.impacts

@@ -1,0 +1,102 @@
+"""``operating_point_sensitivities``: the implicit function theorem's derivatives of the rigid circuit
+drifter's operating point against central differences of fresh orbits (each solved from rest, no
+shared state with the derivatives but the config), the first-order distance to the relief border
+against the border the flights meet, and the bad inputs one line each."""
+
+from __future__ import annotations
+
+import pytest
+
+from impactbar.physical import build, operating_point_sensitivities, read_config, with_values
+from impactbar.physical.sensitivity import RESIDUAL_STEP, _figures
+
+pytest.importorskip("pint")
+
+#: The relative error of a fresh orbit's figures: Newton stops at steps of 10 rtol = 1e-9 of the
+#: circuit's integrator; a fresh orbit and one continued from a neighbour differ by up to 2.3e-9 of
+#: each figure on the preset. With four times that, the central difference of two fresh orbits at
+#: p +- h carries up to NOISE |F| / h of noise; the truncation, O(h^2) = 1e-6 relative at
+#: h = 1e-3 |p|, gets TRUNCATION. (Measured: the differences are at most 2.4e-9 |F| / h.)
+NOISE = 1e-8
+TRUNCATION = 1e-5
+
+
+@pytest.fixture(scope="module")
+def preset():
+    cfg, _ = read_config("circuit-drifter")
+    return cfg, build(cfg).orbit()
+
+
+@pytest.mark.parametrize("key, unit, value", [("accumulator.precharge", "Pa", 10e6),
+                                              ("valve.switch_out", "m", 21.5e-3),
+                                              ("chambers.rear_volume", "m**3", 1e-4)])
+def test_derivatives_match_central_differences_of_fresh_orbits(preset, key, unit, value):
+    cfg, orbit = preset
+    s = operating_point_sensitivities(cfg, [key], orbit=orbit)
+    assert s.values[key] == pytest.approx(value, rel=1e-14)
+    h = RESIDUAL_STEP * value
+    assert s.steps[key] == pytest.approx(h, rel=1e-14)
+    plus, minus = (_figures(build(with_values(cfg, {key: f"{value + sign * h!r} {unit}"})).orbit())
+                   for sign in (1.0, -1.0))
+    assert set(plus) == set(s.derivatives)
+    for name, F in s.figures.items():
+        cd = (plus[name] - minus[name]) / (2.0 * h)
+        tol = TRUNCATION * abs(cd) + NOISE * abs(F) / h
+        assert abs(s.derivatives[name][key] - cd) <= tol, (name, s.derivatives[name][key], cd, tol)
+
+
+def test_figures_and_state_are_the_orbits(preset):
+    cfg, orbit = preset
+    s = operating_point_sensitivities(cfg, ["valve.switch_out", "accumulator.precharge"], orbit=orbit)
+    assert s.figures["blow_frequency_Hz"] == orbit.blow_frequency_Hz
+    assert s.figures["mean_supply_pressure_Pa"] == orbit.mean_supply_pressure_Pa
+    assert s.state.shape == (6, 2)
+    assert s.flights == 8
+    # the valve's opening at the impact is 1 whatever the key: its derivative vanishes
+    assert abs(s.state[5, 0]) < 1e-12
+    # a longer stroke, a slower blow; the elasticity of the frequency about -0.47 (the table's)
+    assert s.elasticities()["blow_frequency_Hz"]["valve.switch_out"] == pytest.approx(-0.4688, abs=2e-3)
+    assert "valve.switch_out" in s.table()
+
+
+def test_relief_border_is_met_where_its_first_order_distance_says(preset):
+    """The relief valve starts opening at about 75.5 L/min (the design map's edge between 70 and 75
+    L/min up to 7.2 MPa of pre-charge, 75 to 80 above): a step to 0.8 of the predicted distance is
+    still smooth, one to 1.2 of it crosses the border and is refused."""
+    cfg, orbit = preset
+    key = "supply.pump_flow"
+    s = operating_point_sensitivities(cfg, [key], orbit=orbit)
+    dist = s.distance_to_border()["relief"][key]
+    assert 4.5 / 6e4 < dist < 6.5 / 6e4
+    assert s.distance_to_border()["accumulator"][key] < 0.0  # more flow raises the least supply pressure
+    fraction = dist / s.values[key]
+    operating_point_sensitivities(cfg, [key], orbit=orbit, relative_step=0.8 * fraction)
+    with pytest.raises(ValueError, match=r"^supply.pump_flow does not enter smoothly here: .*relief"):
+        operating_point_sensitivities(cfg, [key], orbit=orbit, relative_step=1.2 * fraction)
+
+
+@pytest.mark.parametrize("keys, kwargs, message", [
+    (["valve.switch_in"], {}, r"valve.switch_in is not given in the config"),
+    (["oil.colour"], {}, r"not a parameter the optimiser varies"),
+    ("valve.switch_out", {}, r"keys must be a non-empty sequence"),
+    (["valve.switch_out", "valve.switch_out"], {}, r"keys must be distinct"),
+    (["valve.switch_out"], {"relative_step": 0.5}, r"relative_step must be in \(0, 0.1\]"),
+    (["accumulator.precharge"], {"relative_step": 0.1, "config": {"accumulator": {"precharge": "24 MPa"}}},
+     r"accumulator.precharge at .* is out of its range"),
+])
+def test_bad_inputs_one_line_each(preset, keys, kwargs, message):
+    cfg, orbit = preset
+    changes = kwargs.pop("config", None)
+    if changes is not None:
+        cfg = with_values(cfg, {f"{sec}.{k}": v for sec, d in changes.items() for k, v in d.items()})
+        orbit = None
+    with pytest.raises(ValueError, match=message) as err:
+        operating_point_sensitivities(cfg, keys, orbit=orbit, **kwargs)
+    assert "\n" not in str(err.value)
+
+
+def test_an_orbit_of_another_design_is_refused(preset):
+    cfg, orbit = preset
+    with pytest.raises(ValueError, match="orbit must be the config's own operating point"):
+        operating_point_sensitivities(with_values(cfg, {"valve.switch_out": "22 mm"}), ["valve.switch_out"],
+                                      orbit=orbit)
