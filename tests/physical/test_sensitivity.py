@@ -100,3 +100,15 @@ def test_an_orbit_of_another_design_is_refused(preset):
     with pytest.raises(ValueError, match="orbit must be the config's own operating point"):
         operating_point_sensitivities(with_values(cfg, {"valve.switch_out": "22 mm"}), ["valve.switch_out"],
                                       orbit=orbit)
+
+
+def test_without_multipliers_the_same_derivatives_less_the_multipliers(preset):
+    cfg, orbit = preset
+    keys = ["valve.switch_out", "accumulator.precharge"]
+    full = operating_point_sensitivities(cfg, keys, orbit=orbit)
+    part = operating_point_sensitivities(cfg, keys, orbit=orbit, multipliers=False)
+    assert set(full.figures) - set(part.figures) == {"max_multiplier"}
+    for name, F in part.figures.items():
+        for key in keys:  # the figures read off plain flights instead of variational ones: their noise
+            tol = NOISE * abs(F) / full.steps[key]
+            assert abs(part.derivatives[name][key] - full.derivatives[name][key]) <= tol, (name, key)

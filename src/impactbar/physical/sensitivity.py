@@ -152,10 +152,12 @@ def _figures(point: CircuitDrifterOrbit) -> dict:
            "impact_energy_J": point.impact_energy_J, "mean_supply_pressure_Pa": point.mean_supply_pressure_Pa,
            "pump_power_kW": point.pump_power_kW, "impact_power_kW": point.impact_power_kW,
            "hydraulic_efficiency": point.hydraulic_efficiency,
-           "max_multiplier": float(np.max(np.abs(point.multipliers))) if point.multipliers.size else 0.0,
            "rebound_velocity_m_s": -float(o.model.end_weights @ after[M:]) * sc.velocity_m_s,
            "front_pressure_at_impact_Pa": float(z[0]), "rear_pressure_at_impact_Pa": float(z[1]),
            "supply_pressure_at_impact_Pa": float(z[2])}
+    mu = np.abs(np.asarray(point.multipliers))
+    if not np.any(np.isnan(mu)):  # (left out where the figures were read without the multipliers)
+        out["max_multiplier"] = float(np.max(mu)) if mu.size else 0.0
     rock = point.rock()
     if rock:
         out.update(drilling_rate_m_min=rock["drilling_rate_m_min"], work_on_rock_J=rock["work_on_rock_J"],
@@ -169,7 +171,8 @@ def _borders(point: CircuitDrifterOrbit) -> dict:
 
 
 def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | None = None,
-                                  relative_step: float = RESIDUAL_STEP) -> OperatingPointSensitivities:
+                                  relative_step: float = RESIDUAL_STEP,
+                                  multipliers: bool = True) -> OperatingPointSensitivities:
     r"""The derivatives of a drifter's operating point (its orbit and the designer's figures) with
     respect to design keys, by the implicit function theorem on the orbit's shooting system
     (module docstring).
@@ -179,9 +182,13 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
     10^{-9}` the flights' relative accuracy), one linear solve with the orbit's own :math:`J_X`
     (exact to the variational flight's accuracy), then the figures at
     :math:`(X^* \pm h\,dX^*/dp,\ p \pm h)` (another central difference, the same orders; each a
-    flight with its variational equations, for the multipliers). No orbit is solved for the keys:
+    flight with its variational equations where ``multipliers``). No orbit is solved for the keys:
     four flights each, against two solves of an orbit (each tens of flights from rest, a few
-    continued from a neighbour) for central differences of fresh orbits.
+    continued from a neighbour) for central differences of orbits. On the rigid preset 0.09 s per
+    key (0.04 s without ``multipliers``) against 0.5 s for two fresh orbits (0.28 s for two
+    continued); on the example drifter on the rock (``examples/circuit_drifter_rock_piston.toml``),
+    whose blows' Jacobians are central differences, 4.5 s per key (0.7 s without ``multipliers``)
+    against 12 to 16 s for two continued orbits (``benchmarks/bench_sensitivity.py``).
 
     Parameters
     ----------
@@ -197,6 +204,10 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
         The config's operating point, if already solved (else :meth:`CircuitDrifter.orbit`).
     relative_step : float
         :math:`h / |p|`, in ``(0, 0.1]`` (:data:`RESIDUAL_STEP`).
+    multipliers : bool
+        Whether to differentiate the largest multiplier's modulus (``max_multiplier``): a flight with
+        its variational equations at each of the figures' two points, most of the cost where the
+        blows are coupled to the rock.
 
     Returns
     -------
@@ -223,6 +234,8 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
     -1.0
     """
     t0 = time.perf_counter()
+    if not isinstance(multipliers, bool):
+        raise ValueError(f"multipliers must be True or False; got {multipliers!r}")
     if not (isinstance(relative_step, float | int) and 0.0 < relative_step <= 0.1):
         raise ValueError(f"relative_step must be in (0, 0.1]; got {relative_step!r}")
     if isinstance(keys, str) or not keys:
@@ -255,6 +268,8 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
                          "a fold of the operating point): its derivatives do not exist")
     pattern = problem.event_pattern(X)
     F0, B0 = _figures(point), _borders(point)
+    if not multipliers:
+        F0.pop("max_multiplier", None)
     state = np.empty((X.size, len(keys)))
     derivatives: dict = {name: {} for name in F0}
     borders = {name: {"margin_Pa": m, "derivatives": {}} for name, m in B0.items()}
@@ -280,7 +295,7 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
         for (d, pr, _), s in zip(sides, (1.0, -1.0), strict=True):
             Xs = X + s * h * Xp
             _same_pattern(pr, Xs, pattern, key, s * h, unit)
-            pt = _point(d, pr, Xs)
+            pt = _point(d, pr, Xs, multipliers)
             F.append(_figures(pt))
             B.append(_borders(pt))
         for name in F0:
@@ -299,11 +314,11 @@ def _problem(drifter: CircuitDrifter, near):
     return orbit_problem(drifter.model(), drifter.drive(), near.impacts).adopt(near)
 
 
-def _point(drifter: CircuitDrifter, problem, X) -> CircuitDrifterOrbit:
+def _point(drifter: CircuitDrifter, problem, X, multipliers: bool) -> CircuitDrifterOrbit:
     """The operating point read at unknowns ``X`` (not necessarily a root) of ``problem``."""
     from ..orbits.switched import orbit_of
 
-    return CircuitDrifterOrbit(drifter, orbit_of(problem, X))
+    return CircuitDrifterOrbit(drifter, orbit_of(problem, X, multipliers=multipliers))
 
 
 def _same_pattern(problem, X, pattern: tuple, key: str, step: float, unit: str) -> None:
