@@ -34,9 +34,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .circuit import PRESSURE_SCALE, CircuitDrifter, CircuitDrifterOrbit
+from .circuit import PRESSURE_SCALE, SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
+from .geometry import PISTON_KEYS
 from .loader import build, config_value, read_config, with_values
-from .optimize_drifter import _key_unit, _quantity, _show_unit
 from .units import to_si
 
 __all__ = ["operating_point_sensitivities", "OperatingPointSensitivities", "RESIDUAL_STEP", "FIGURE_UNITS"]
@@ -57,6 +57,30 @@ FIGURE_UNITS = {
     "supply_pressure_at_impact_Pa": "Pa",
     "drilling_rate_m_min": "m/min", "work_on_rock_J": "J", "drilling_rate_per_kW": "m/min/kW",
 }
+
+
+def _key_unit(key: str) -> str:
+    """The SI unit of a variable's dotted key, or a one-line refusal."""
+    parts = key.split(".") if isinstance(key, str) else []
+    if len(parts) == 2 and parts[0] == "piston" and parts[1] in PISTON_KEYS - {"E", "density", "end_lengths",
+                                                                               "end_diameters"}:
+        return "m"
+    if isinstance(key, str) and key in SI_PARAMETERS and key != "chambers.front_area":
+        return SI_PARAMETERS[key][1]
+    allowed = sorted({f"piston.{k}" for k in PISTON_KEYS - {"E", "density", "end_lengths", "end_diameters"}}
+                     | set(SI_PARAMETERS) - {"chambers.front_area"})
+    raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies; one of {', '.join(allowed)}")
+
+
+def _quantity(x: float, unit: str):
+    """An SI value as a config value (exact: the float's repr with its unit)."""
+    return float(x) if unit == "" else f"{float(x)!r} {unit}"
+
+
+def _show_unit(unit: str) -> tuple[float, str]:
+    return {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"),
+            "s": (1e3, "ms")}.get(unit, (1.0, unit.replace("**", "^")))
+
 
 
 @dataclass(frozen=True)
@@ -257,6 +281,42 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
     if not isinstance(point, CircuitDrifterOrbit) or point.drifter != drifter:
         raise ValueError("orbit must be the config's own operating point (a CircuitDrifterOrbit of the "
                          "drifter the config builds)")
+    def read(pt):
+        return {**_figures(pt), **{f"border.{k}": v for k, v in _borders(pt).items()}}
+
+    F0, B0 = _figures(point), _borders(point)
+    if not multipliers:
+        F0.pop("max_multiplier", None)
+    state, steps, der = tangent_derivatives(cfg, folder, point, keys, values, units, relative_step,
+                                            multipliers, read)
+    derivatives = {name: der[name] for name in F0}
+    borders = {name: {"margin_Pa": m, "derivatives": der[f"border.{name}"]} for name, m in B0.items()}
+    return OperatingPointSensitivities(keys=keys, units=units, values=values, steps=steps, figures=F0,
+                                       derivatives=derivatives, state=state, borders=borders, orbit=point,
+                                       flights=4 * len(keys), seconds=time.perf_counter() - t0)
+
+
+def tangent_derivatives(cfg: dict, folder, point: CircuitDrifterOrbit, keys, values: dict, units: dict,
+                        relative_step: float, multipliers: bool, read) -> tuple:
+    r"""The implicit function theorem's derivatives of any smooth function ``read`` of an operating
+    point (a :class:`CircuitDrifterOrbit` to a dict of floats): :math:`dX^*/dp = -J_X^{-1} J_p`
+    per key, then ``read`` at :math:`(X^* \pm h\,dX^*/dp, p \pm h)` (:func:`operating_point_sensitivities`
+    with its checks done; for :func:`~impactbar.physical.optimize_drifter`'s gradients).
+
+    Returns
+    -------
+    state : numpy.ndarray, shape (n, len(keys))
+    steps : dict
+        Key to ``h`` (SI).
+    derivatives : dict
+        Each name ``read`` gives to ``{key: derivative}``.
+
+    Raises
+    ------
+    ValueError
+        As :func:`operating_point_sensitivities` (a singular Jacobian, a step out of a key's range, a
+        border collision within the step).
+    """
     so = point.orbit
     problem = so.problem
     X = problem.unknowns(so)
@@ -267,12 +327,8 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
         raise ValueError(f"the orbit's Newton Jacobian is singular (condition {cond:.3g}: a multiplier at 1, "
                          "a fold of the operating point): its derivatives do not exist")
     pattern = problem.event_pattern(X)
-    F0, B0 = _figures(point), _borders(point)
-    if not multipliers:
-        F0.pop("max_multiplier", None)
     state = np.empty((X.size, len(keys)))
-    derivatives: dict = {name: {} for name in F0}
-    borders = {name: {"margin_Pa": m, "derivatives": {}} for name, m in B0.items()}
+    derivatives: dict = {}
     steps = {}
     for j, key in enumerate(keys):
         p, unit = values[key], units[key]
@@ -291,20 +347,14 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
         Jp = (sides[0][2] - sides[1][2]) / (2.0 * h)
         Xp = -np.linalg.solve(Jx, Jp)
         state[:, j] = Xp
-        F, B = [], []
+        F = []
         for (d, pr, _), s in zip(sides, (1.0, -1.0), strict=True):
             Xs = X + s * h * Xp
             _same_pattern(pr, Xs, pattern, key, s * h, unit)
-            pt = _point(d, pr, Xs, multipliers)
-            F.append(_figures(pt))
-            B.append(_borders(pt))
-        for name in F0:
-            derivatives[name][key] = (F[0][name] - F[1][name]) / (2.0 * h)
-        for name in borders:
-            borders[name]["derivatives"][key] = (B[0][name] - B[1][name]) / (2.0 * h)
-    return OperatingPointSensitivities(keys=keys, units=units, values=values, steps=steps, figures=F0,
-                                       derivatives=derivatives, state=state, borders=borders, orbit=point,
-                                       flights=4 * len(keys), seconds=time.perf_counter() - t0)
+            F.append(read(_point(d, pr, Xs, multipliers)))
+        for name in F[0]:
+            derivatives.setdefault(name, {})[key] = (F[0][name] - F[1][name]) / (2.0 * h)
+    return state, steps, derivatives
 
 
 def _problem(drifter: CircuitDrifter, near):
