@@ -217,7 +217,8 @@ class DrifterOptimum:
         """The result as plain data (JSON-ready)."""
         return {"objective": self.objective, "vary": self.vary, "baseline": self.baseline,
                 "optimum": self.optimum, "gain": self.gain, "evaluations": self.evaluations,
-                "cached": self.cached, "seconds": self.seconds, "message": self.message,
+                "cached": self.cached, "gradients": self.gradients, "seconds": self.seconds,
+                "message": self.message,
                 "history": self.history}
 
     def to_json(self, path=None) -> str:
@@ -249,8 +250,9 @@ class DrifterOptimum:
             rows.append(f"{label:34s}"
                         f"{c['value'] * scale:14.5g}{o['value'] * scale:14.5g} {unit}"
                         f"  margin {c['margin'] * scale:.4g} -> {o['margin'] * scale:.4g}")
+        grads = f" and {self.gradients} gradients" if self.gradients else ""
         rows.append(f"gain in {self.objective}: {self.gain * 100:+.2f} % after {self.evaluations} "
-                    "evaluations "
+                    f"evaluations{grads} "
                     f"({self.cached} from the cache) in {self.seconds:.0f} s")
         return "\n".join(rows)
 
