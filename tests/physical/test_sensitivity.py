@@ -5,6 +5,8 @@ against the border the flights meet, and the bad inputs one line each."""
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from impactbar.physical import build, operating_point_sensitivities, read_config, with_values
@@ -143,3 +145,15 @@ def test_optimize_drifter_refuses_an_unknown_method():
     with pytest.raises(ValueError, match=r"^method must be 'cobyla' or 'slsqp'; got 'bfgs'$"):
         optimize_drifter("circuit-drifter", {"valve.switch_out": ("20 mm", "23 mm")},
                          objective="impact_power", method="bfgs")
+
+
+def test_cli_optimize_with_slsqp_counts_its_gradients(tmp_path, capsys):
+    from impactbar.cli import main
+
+    out = tmp_path / "result.json"
+    assert main(["optimize", "circuit-drifter", "--vary", "valve.switch_out=20mm:23 mm", "--objective",
+                 "impact_power", "--method", "slsqp", "--max-evaluations", "3", "--quiet", "--out",
+                 str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["gradients"] >= 1 and doc["gain"] > 0.0
+    assert "gradients" in capsys.readouterr().out
