@@ -1,5 +1,5 @@
 """Benchmark: ``operating_point_sensitivities`` (the implicit function theorem on the orbit's shooting
-system) against central differences of orbits at p +- h, h = 1e-3 |p|: fresh ``orbit()`` calls (from
+system) against central differences of orbits at p +- h (h its own step): fresh ``orbit()`` calls (from
 rest) and orbits continued from the design's (``orbit(guess=...)``), on the rigid circuit drifter
 preset and, with ``--rock``, on the example drifter on the rock with its piston given by its shape.
 
@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 from impactbar.physical import build, operating_point_sensitivities, read_config, with_values
-from impactbar.physical.sensitivity import RESIDUAL_STEP, _figures
+from impactbar.physical.sensitivity import _figures
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBLEMS = {
@@ -43,7 +43,7 @@ def _compare(name: str, source, keys: list[str], fresh: bool) -> None:
     s = operating_point_sensitivities(cfg, keys, orbit=orbit)
     for key in keys:
         p, unit = s.values[key], s.units[key]
-        h = RESIDUAL_STEP * abs(p)
+        h = s.steps[key]
         ways = {"continued": lambda d: d.orbit(guess=orbit)}
         if fresh:
             ways["fresh"] = lambda d: d.orbit()

@@ -29,7 +29,7 @@ import numpy as np
 
 from .circuit import CircuitDrifter
 from .loader import build, config_value, read_config, with_values
-from .sensitivity import RESIDUAL_STEP, _key_unit, _quantity, _show_unit, tangent_derivatives
+from .sensitivity import _key_unit, _quantity, _show_unit, default_step, tangent_derivatives
 from .units import to_si
 
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "optimize_drifter", "evaluate_design", "DrifterOptimum"]
@@ -569,13 +569,14 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
 
     if orbit is None:
         orbit = build(design, folder).orbit()
+    step = default_step(orbit.drifter)
     for j, key in enumerate(keys):
         try:
             col = {n: d[key] for n, d in tangent_derivatives(design, folder, orbit, [key], values, units,
-                                                             RESIDUAL_STEP, "max_multiplier" in limits,
+                                                             step, "max_multiplier" in limits,
                                                              read)[2].items()}
         except ValueError:  # a border within the step: the secant of two continued orbits
-            h = RESIDUAL_STEP * abs(values[key])
+            h = step * abs(values[key])
             try:
                 ends = [read(build(with_values(design, {key: _quantity(values[key] + s * h, units[key])}),
                                    folder).orbit(guess=orbit)) for s in (1.0, -1.0)]
