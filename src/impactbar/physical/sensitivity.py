@@ -45,15 +45,16 @@ __all__ = ["operating_point_sensitivities", "OperatingPointSensitivities", "RESI
 #: The relative step ``h / |p|`` of both central differences: their error is
 #: :math:`O(h^2)` (truncation) plus :math:`O(\epsilon / h)` (the flights' noise, :math:`\epsilon
 #: \approx 10^{-9}` relative at the circuit's ``rtol = 1e-10``), balanced near
-#: :math:`h \approx \epsilon^{1/3} = 10^{-3}`; on the preset the derivatives at ``1e-2``, ``1e-3`` and
-#: ``1e-4`` agree to 5e-5, 5e-7 and 2e-6.
+#: :math:`h \approx \epsilon^{1/3} = 10^{-3}`; on the preset the blow frequency's derivative by
+#: the switch point is off by 5e-5, 2e-7 and 2e-6 (relative) at ``1e-2``, ``1e-3`` and ``1e-4``.
 RESIDUAL_STEP = 1e-3
 
 #: The relative step with a flexible piston (``model.n_modes`` above 0): the modes ring, so the end's
 #: velocity at impact curves fast with a key and the truncation grows (with two modes on the preset, the
 #: impact velocity's derivative by the switch point is 3 % off at ``1e-3``, 0.4 % at ``3e-4``, against
 #: central differences of continued orbits that agree with themselves from ``3e-4`` to ``1e-5``), while
-#: below ``1e-4`` the flights' noise grows (the rear volume's: 2 % off at ``1e-4``, 11 % at ``1e-5``).
+#: below ``1e-4`` the flights' noise, larger with the modes (about 1e-8), grows (the rear volume's:
+#: 2 % off at ``1e-4``, 11 % at ``1e-5``).
 FLEXIBLE_STEP = 3e-4
 
 
