@@ -34,6 +34,9 @@ def add_parser(sub) -> None:
                         f"{', '.join(DEFAULT_CONSTRAINTS)}")
     p.add_argument("--max-evaluations", type=int, default=60,
                    help="the most designs the search evaluates (default 60)")
+    p.add_argument("--method", default="cobyla", choices=["cobyla", "slsqp"],
+                   help="the search: derivative-free COBYLA (default), or SLSQP with gradients by the "
+                        "implicit function theorem on each design's orbit")
     p.add_argument("--cache", default=None, metavar="FILE.json",
                    help="the designs evaluated, read first and written after each: a stopped run resumes")
     p.add_argument("--out", default=None, metavar="FILE.json", help="write the result as JSON")
@@ -101,7 +104,8 @@ def _run(args) -> int:
         raise ValueError(f"--max-evaluations must be at least 1; got {args.max_evaluations}")
     out = output_file(args.out) if args.out else None
     res = optimize_drifter(args.config, vary, objective=args.objective, constraints=constraints,
-                           max_evaluations=args.max_evaluations, cache=args.cache, progress=not args.quiet)
+                           max_evaluations=args.max_evaluations, cache=args.cache, progress=not args.quiet,
+                           method=args.method)
     if out is not None:
         res.to_json(out)
     if args.json:

@@ -69,16 +69,18 @@ def orbit_problem(model: BarModel, drive, impacts: int = 1,
     return problem if problem is not None else ShootingProblem(model, drive, impacts, settings, newton=newton)
 
 
-def orbit_of(problem: OrbitProblem, X) -> SwitchedOrbit:
+def orbit_of(problem: OrbitProblem, X, *, multipliers: bool = True) -> SwitchedOrbit:
     """The :class:`SwitchedOrbit` of a solution ``X`` of ``problem``: its data
     (:meth:`OrbitProblem.orbit`), the admissibility of the flights (:meth:`OrbitProblem.admissibility`)
     and, under a law whose contact takes time, of the contacts (held for their whole window: the wave
     law's ``separates`` and ``sticks``, theory §4b). Used by :func:`find_switched_orbit` and by the
-    continuation of switched orbits."""
+    continuation of switched orbits. ``multipliers=False`` (a :class:`ShootingProblem` only) leaves
+    the multipliers ``nan`` and the monodromy out, for the figures alone at a fraction of the cost
+    (no variational flight: a coupled blow's Jacobian is most of an orbit's cost)."""
     model = problem.model
     m = problem.impacts
     X = np.asarray(X, dtype=float)
-    data: OrbitData = problem.orbit(X)
+    data: OrbitData = problem.orbit(X) if multipliers else problem.orbit(X, multipliers=False)
     law = model.law
     adm = Admissibility.ADMISSIBLE
     records = getattr(problem, "blow_records", None)
@@ -536,13 +538,17 @@ class ShootingProblem(OrbitProblem):
             return Admissibility.STICKS
         return Admissibility.ADMISSIBLE
 
-    def orbit(self, X) -> OrbitData:
+    def orbit(self, X, multipliers: bool = True) -> OrbitData:
         """The period, durations, states, switches and the multipliers of the return map on the
         section after the impacts (the product of the blocks' Jacobians projected on ``c . q = 0``
-        times the drive's states)."""
+        times the drive's states); without ``multipliers``, ``nan`` in their place and no
+        monodromy (no Jacobian computed)."""
         model, drive, n, m, M = self.model, self.drive, self.n, self.impacts, self.M
         c = model.end_weights
-        if self.variational and m == 1:  # one flight gives the Jacobian and (kept) the data below
+        Phi = None
+        if not multipliers:
+            mu = np.full(n - 1, math.nan)
+        elif self.variational and m == 1:  # one flight gives the Jacobian and (kept) the data below
             tau, mode = self.blocks[0]
             Phi = self._flight(tau, mode, X[:n], keep=True, variational=True)[6]
         else:
@@ -550,10 +556,11 @@ class ShootingProblem(OrbitProblem):
             Phi = np.eye(n)
             for k in range(m):  # the blocks' Jacobians (their diagonal blocks; with m = 1, J = DP - I)
                 Phi = (J[k * n:(k + 1) * n, k * n:(k + 1) * n] + (np.eye(n) if m == 1 else 0.0)) @ Phi
-        a = np.concatenate((c, np.zeros(M + self.k)))
-        Q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(n))))
-        B = Q[:, 1:n]
-        mu = sorted_multipliers(np.linalg.eigvals(B.T @ Phi @ B))
+        if Phi is not None:
+            a = np.concatenate((c, np.zeros(M + self.k)))
+            Q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(n))))
+            B = Q[:, 1:n]
+            mu = sorted_multipliers(np.linalg.eigvals(B.T @ Phi @ B))
         before, velocities, times, durations, switch_t, crossings, forces = [], [], [], [], [], [], []
         shift = 0.0
         window = 0.0 if model.law.instantaneous else float(model.law.window(model))
@@ -604,6 +611,21 @@ class ShootingProblem(OrbitProblem):
             tau, mode = self.blocks[k]
             out += self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[4]
         return out
+
+    def event_pattern(self, X) -> tuple:
+        """The period's sequence of the drive's discrete states: per block its start mode, then
+        each event's name and the mode after it, in order. Two solutions (or two flights from
+        nearby unknowns) with the same pattern lie on one smooth piece of the problem; a changed
+        pattern is a border collision (a switch changing order, a relief valve opening, an
+        accumulator emptying)."""
+        n = self.n
+        out = []
+        for k in range(self.impacts):
+            tau, mode = self.blocks[k]
+            out.append(("start", mode))
+            events = self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[5]
+            out += [(e.name, after) for _, e, after, _ in events]
+        return tuple(out)
 
     def pieces(self, X):
         """The flights of the period as ``(t0, t1, f)``, ``f(t) -> (q, v)`` at orbit times."""

@@ -55,7 +55,8 @@ theory §10: supply pressure, piston areas, switch position, valve delay; its pr
 (:func:`load`: any of these machines from its TOML file, told apart by its sections), ``results``
 (orbits and simulations in SI), ``rock`` (the drill string and the rock: the rod-rock law in SI and
 the drilling outputs per blow), ``piston`` (the stepped piston of most work on rock per blow,
-theory §12). This layer sits on
+theory §12), ``sensitivity`` (a drifter's operating point differentiated by its design keys, by the
+implicit function theorem). This layer sits on
 the core (``impactbar.model``, ``loads``, ``orbits``, ``simulation``) and may import pint; the core
 never imports it.
 """
@@ -95,6 +96,8 @@ from .optimize_drifter import DrifterOptimum as DrifterOptimum
 from .optimize_drifter import optimize_drifter as optimize_drifter
 from .piston import OptimalPiston as OptimalPiston
 from .piston import optimize_piston as optimize_piston
+from .sensitivity import OperatingPointSensitivities as OperatingPointSensitivities
+from .sensitivity import operating_point_sensitivities as operating_point_sensitivities
 
 #: names from ``results`` (which needs the orbit solver and the compiled simulator), imported on
 #: first use (PEP 562) so that importing this layer, and the command line, stays fast
@@ -157,5 +160,7 @@ __all__ = [
     "optimize_piston",
     "DrifterOptimum",
     "optimize_drifter",
+    "OperatingPointSensitivities",
+    "operating_point_sensitivities",
 ]
 

@@ -4,10 +4,15 @@ constraints (theory §11, "Optimising a drifter").
 
 Each evaluation is the circuit's operating point on the rod and rock: :meth:`CircuitDrifter.orbit`
 continued from the nearest design evaluated so far (Newton from its orbit) where that converges, else
-the default chain. The search is derivative-free (COBYLA, :func:`scipy.optimize.minimize`) over the
-variables scaled to :math:`[0, 1]` by their bounds: an operating point changes pattern (the valve's
-switch before or after the impact, the relief opening or not) at borders where it is not smooth, and
-an evaluation can fail (no orbit, cavitation), which a penalty, not a finite difference, handles.
+the default chain. The search is derivative-free by default (COBYLA, :func:`scipy.optimize.minimize`)
+over the variables scaled to :math:`[0, 1]` by their bounds: an operating point changes pattern (the
+valve's switch before or after the impact, the relief opening or not) at borders where it is not
+smooth, and an evaluation can fail (no orbit, cavitation), which a penalty, not a finite difference,
+handles. With ``method="slsqp"`` the search is SLSQP's with the gradients of the objective and of
+the constraints by the implicit function theorem on each design's orbit
+(:func:`~impactbar.physical.sensitivity.tangent_derivatives`: four flights per variable, no orbit
+solved), a key across a border within the step by central differences of orbits continued from the
+design's instead.
 The reported optimum is the best feasible design evaluated, re-evaluated by a fresh ``orbit()``.
 """
 
@@ -22,9 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .circuit import SI_PARAMETERS, CircuitDrifter
-from .geometry import PISTON_KEYS
+from .circuit import CircuitDrifter
 from .loader import build, config_value, read_config, with_values
+from .sensitivity import _key_unit, _quantity, _show_unit, default_step, tangent_derivatives
 from .units import to_si
 
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "optimize_drifter", "evaluate_design", "DrifterOptimum"]
@@ -54,24 +59,6 @@ _CONSTRAINT_UNITS = {"peak_incident_stress": ("Pa", 1, None), "max_multiplier": 
                      "min_pressure": ("Pa", -1, 1e6), "mean_supply_pressure": ("Pa", 1, None),
                      "peak_supply_pressure": ("Pa", 1, None), "min_chamber_volume": ("m**3", -1, 1e-4),
                      "min_drilling_rate": ("m/min", -1, None)}
-
-
-def _key_unit(key: str) -> str:
-    """The SI unit of a variable's dotted key, or a one-line refusal."""
-    parts = key.split(".") if isinstance(key, str) else []
-    if len(parts) == 2 and parts[0] == "piston" and parts[1] in PISTON_KEYS - {"E", "density", "end_lengths",
-                                                                               "end_diameters"}:
-        return "m"
-    if isinstance(key, str) and key in SI_PARAMETERS and key != "chambers.front_area":
-        return SI_PARAMETERS[key][1]
-    allowed = sorted({f"piston.{k}" for k in PISTON_KEYS - {"E", "density", "end_lengths", "end_diameters"}}
-                     | set(SI_PARAMETERS) - {"chambers.front_area"})
-    raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies; one of {', '.join(allowed)}")
-
-
-def _quantity(x: float, unit: str):
-    """An SI value as a config value (exact: the float's repr with its unit)."""
-    return float(x) if unit == "" else f"{float(x)!r} {unit}"
 
 
 def _fingerprint(config: dict, vary: dict, objective: str, constraints: dict) -> str:
@@ -197,6 +184,9 @@ class DrifterOptimum:
         Designs evaluated by this run (not counting those read from the cache).
     cached : int
         Designs read from the cache file.
+    gradients : int
+        Gradients computed (``method="slsqp"``; each four flights per variable, or two continued
+        orbits for a variable whose step meets a border).
     seconds : float
         Wall time of the run (s).
     history : list of dict
@@ -214,6 +204,7 @@ class DrifterOptimum:
     seconds: float
     history: list = field(repr=False)
     message: str = ""
+    gradients: int = 0
     config: dict = field(default_factory=dict, repr=False)
 
     @property
@@ -226,7 +217,8 @@ class DrifterOptimum:
         """The result as plain data (JSON-ready)."""
         return {"objective": self.objective, "vary": self.vary, "baseline": self.baseline,
                 "optimum": self.optimum, "gain": self.gain, "evaluations": self.evaluations,
-                "cached": self.cached, "seconds": self.seconds, "message": self.message,
+                "cached": self.cached, "gradients": self.gradients, "seconds": self.seconds,
+                "message": self.message,
                 "history": self.history}
 
     def to_json(self, path=None) -> str:
@@ -258,8 +250,9 @@ class DrifterOptimum:
             rows.append(f"{label:34s}"
                         f"{c['value'] * scale:14.5g}{o['value'] * scale:14.5g} {unit}"
                         f"  margin {c['margin'] * scale:.4g} -> {o['margin'] * scale:.4g}")
+        grads = f" and {self.gradients} gradients" if self.gradients else ""
         rows.append(f"gain in {self.objective}: {self.gain * 100:+.2f} % after {self.evaluations} "
-                    "evaluations "
+                    f"evaluations{grads} "
                     f"({self.cached} from the cache) in {self.seconds:.0f} s")
         return "\n".join(rows)
 
@@ -314,11 +307,6 @@ class DrifterOptimum:
         return axes
 
 
-def _show_unit(unit: str) -> tuple[float, str]:
-    return {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"),
-            "s": (1e3, "ms")}.get(unit, (1.0, unit.replace("**", "^")))
-
-
 def _parse_vary(config: dict, vary: dict, folder) -> dict:
     if not isinstance(vary, dict) or not vary:
         raise ValueError("vary must be a non-empty dict of dotted key to (low, high)")
@@ -354,7 +342,7 @@ def _parse_vary(config: dict, vary: dict, folder) -> dict:
 def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW",
                      constraints: dict | None = None,
                      *, max_evaluations: int = 60, cache=None, progress: bool = True, rhobeg: float = 0.2,
-                     tol: float = 2e-3) -> DrifterOptimum:
+                     tol: float = 2e-3, method: str = "cobyla") -> DrifterOptimum:
     r"""The design of a drifter with its oil circuit that maximises ``objective`` under
     ``constraints``, the variables any of its dotted config keys within bounds.
 
@@ -388,7 +376,12 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     progress : bool
         A progress bar (tqdm) on stderr.
     rhobeg, tol : float
-        COBYLA's first and last step in the scaled variables (each bound's span is 1).
+        COBYLA's first and last step in the scaled variables (each bound's span is 1); for SLSQP
+        its ``ftol`` is ``tol ** 3`` (on the objective over the start's: 8e-9 by default, above
+        the orbits' own accuracy, about 1e-9) and ``rhobeg`` is not used.
+    method : {"cobyla", "slsqp"}
+        The search: derivative-free (COBYLA), or SLSQP with the implicit function theorem's
+        gradients (module docstring; ``max_evaluations`` then bounds its iterations).
 
     Returns
     -------
@@ -424,6 +417,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         raise ValueError(f"objective {objective!r} needs the drill string and the rock ([rock] in the "
                          "config); "
                          "without them only 'impact_power'")
+    if method not in ("cobyla", "slsqp"):
+        raise ValueError(f"method must be 'cobyla' or 'slsqp'; got {method!r}")
     limits = _limits(constraints, base)
     spec = _parse_vary(cfg, vary, folder)
     keys = list(spec)
@@ -447,7 +442,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     n_cached = 0
     orbits: list[tuple[np.ndarray, object]] = []
     history: list[dict] = []
-    counter = {"new": 0}
+    counter = {"new": 0, "gradients": 0}
+    orbit_of: dict[str, object] = {}  # each new design's orbit, by its id (the gradients start there)
+    gradients: dict[str, tuple] = {}
 
     def changes_of(values: dict) -> dict:
         return {k: _quantity(values[k], spec[k]["unit"]) for k in keys}
@@ -471,6 +468,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             guess = min(orbits, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if orbits else None
             rec, orbit = evaluate_design(drifter, limits, guess)
             orbits.append((u.copy(), orbit))
+            orbit_of[rid] = orbit
             rec.update(_piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
             rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
@@ -510,9 +508,23 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 return -np.ones(len(limits))
             return np.array([c["scaled"] for c in rec["constraints"].values()])
 
-        res = minimize(f, u0, method="COBYLA", constraints=[{"type": "ineq", "fun": g}],
-                       bounds=[(0.0, 1.0)] * len(keys),
-                       options={"rhobeg": rhobeg, "tol": tol, "maxiter": max_evaluations})
+        def derivative(u):
+            rec = evaluate(u)
+            if rec["id"] not in gradients:
+                gradients[rec["id"]] = _design_gradient(cfg, folder, rec, orbit_of.get(rec["id"]), spec,
+                                                        limits, fkey, span)
+                counter["gradients"] += 1
+            return gradients[rec["id"]]
+
+        if method == "cobyla":
+            res = minimize(f, u0, method="COBYLA", constraints=[{"type": "ineq", "fun": g}],
+                           bounds=[(0.0, 1.0)] * len(keys),
+                           options={"rhobeg": rhobeg, "tol": tol, "maxiter": max_evaluations})
+        else:
+            res = minimize(f, u0, jac=lambda u: -derivative(u)[0] / ref, method="SLSQP",
+                           constraints=[{"type": "ineq", "fun": g, "jac": lambda u: derivative(u)[1]}],
+                           bounds=[(0.0, 1.0)] * len(keys),
+                           options={"ftol": tol ** 3, "maxiter": max_evaluations})
         message = str(res.message)
     finally:
         bar.close()
@@ -533,7 +545,47 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                                 for k in keys},
                           baseline=fresh["baseline"], optimum=fresh["optimum"], evaluations=counter["new"],
                           cached=n_cached, seconds=time.perf_counter() - t_start, history=history,
-                          message=message, config=with_values(cfg, best["changes"]))
+                          message=message, config=with_values(cfg, best["changes"]),
+                          gradients=counter["gradients"])
+
+
+def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: dict, fkey: str,
+                     span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The gradients of a design's objective and of its constraints' scaled margins in the scaled
+    variables: per variable by :func:`~impactbar.physical.sensitivity.tangent_derivatives` from the
+    design's orbit, or where its step meets a border (or a design read from the cache, without its
+    orbit) by central differences of orbits continued from the design's; zeros for a design
+    without an orbit."""
+    keys, names = list(spec), list(limits)
+    dobj, dcon = np.zeros(len(keys)), np.zeros((len(names), len(keys)))
+    if not rec["ok"]:
+        return dobj, dcon
+    design = with_values(cfg, rec["changes"])
+    values, units = rec["values"], {k: spec[k]["unit"] for k in keys}
+
+    def read(point) -> dict:
+        r = _figures(point, limits)
+        return {"objective": r["objectives"][fkey], **{n: r["constraints"][n]["scaled"] for n in names}}
+
+    if orbit is None:
+        orbit = build(design, folder).orbit()
+    step = default_step(orbit.drifter)
+    for j, key in enumerate(keys):
+        try:
+            col = {n: d[key] for n, d in tangent_derivatives(design, folder, orbit, [key], values, units,
+                                                             step, "max_multiplier" in limits,
+                                                             read)[2].items()}
+        except ValueError:  # a border within the step: the secant of two continued orbits
+            h = step * abs(values[key])
+            try:
+                ends = [read(build(with_values(design, {key: _quantity(values[key] + s * h, units[key])}),
+                                   folder).orbit(guess=orbit)) for s in (1.0, -1.0)]
+            except (ValueError, np.linalg.LinAlgError, ArithmeticError):
+                continue
+            col = {n: (ends[0][n] - ends[1][n]) / (2.0 * h) for n in ends[0]}
+        dobj[j] = col["objective"] * span[j]
+        dcon[:, j] = [col[n] * span[j] for n in names]
+    return dobj, dcon
 
 
 def _piston_and_multipliers(drifter, orbit) -> dict:
