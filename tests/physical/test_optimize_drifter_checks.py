@@ -1,17 +1,27 @@
-"""Checks of ``optimize_drifter`` that do not trust the optimiser: an active constraint, relaxed, lets
-the optimum improve by what the constraint's sensitivity (by fresh orbits) predicts; every reported
-design meets its constraints by a fresh orbit, its figures of the right sign and size."""
+"""Checks of ``optimize_drifter`` that do not trust the optimiser: in the circuit's ideal limit (the
+piston delivered at a held impact velocity) its optimum piston is ``optimize_piston``'s; an active
+constraint, relaxed, lets the optimum improve by what the constraint's sensitivity (by fresh orbits)
+predicts; every reported design meets its constraints by a fresh orbit, its figures of the right sign
+and size."""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from impactbar.physical import build, optimize_drifter, read_config, with_values
+from impactbar.laws.rodrock import lundberg_efficiency
+from impactbar.physical import build, optimize_drifter, optimize_piston, read_config, with_values
+from impactbar.physical.optimize_drifter import evaluate_blow
+from impactbar.physical.piston import piston_blow
+from impactbar.physical.rock import RodPiece
 
 pytest.importorskip("pint")
+
+ROOT = Path(__file__).resolve().parents[2]
+PISTON_EXAMPLE = ROOT / "examples" / "circuit_drifter_rock_piston.toml"
 
 #: a small problem on the rigid piston without rock (an evaluation about 0.3 s): impact power over
 #: the pump's flow and the valve's switch point, the mean supply pressure capped
@@ -88,3 +98,116 @@ def test_every_reported_figure_has_its_sign_and_size():
         # the multipliers reported are the fresh orbit's (the largest modulus is the constraint's value)
         mu = np.hypot(rec["multipliers_re"], rec["multipliers_im"])
         assert mu.max() == pytest.approx(rec["constraints"]["max_multiplier"]["value"], rel=1e-12)
+
+
+@pytest.mark.parametrize("name", ["peak_incident_stress", "min_drilling_rate"])
+def test_a_rock_constraint_without_rock_is_refused_in_one_line(name):
+    """Without a drill string the rock's figures are not computed: a limit on one is refused up front
+    (it was reported as an infeasible start missing its limit by nan)."""
+    match = f"constraints: '{name}' needs the drill string and the rock"
+    with pytest.raises(ValueError, match=match) as info:
+        optimize_drifter("circuit-drifter", {"valve.switch_out": ("20 mm", "23 mm")},
+                         objective="impact_power", constraints={name: 1.0}, progress=False)
+    assert "\n" not in str(info.value)
+
+
+# -- the circuit's ideal limit: the blow alone at a held impact velocity ------------------------------
+#: the example's drill string (a 45 mm shank adapter of 0.4 m, a 32 mm rod of 1.2 m), its bit and
+#: rock without the feed (so that every blow is exact), the example piston's mass and length, 10 m/s
+STEEL = {"E_Pa": 2.1e11, "density_kg_m3": 7850.0}
+ROD = [RodPiece(length_m=0.4, area_m2=math.pi / 4 * 0.045 ** 2, **STEEL),
+       RodPiece(length_m=1.2, area_m2=math.pi / 4 * 0.032 ** 2, **STEEL)]
+ROCK = (4.7e8, 4.7e9)
+MASS, LENGTH, V = 5.6, 0.44854236, 10.0
+
+
+def _ideal_drifter_config(lengths, diameters=(25e-3, 48e-3, 30e-3)):
+    keys = ("rear_rod", "collar", "front_rod")
+    changes = {f"piston.{k}_length": f"{float(x)!r} m" for k, x in zip(keys, lengths, strict=True)}
+    changes.update({f"piston.{k}_diameter": f"{float(x)!r} m" for k, x in zip(keys, diameters, strict=True)})
+    changes["rock.feed"] = "0 N"
+    return with_values(read_config(PISTON_EXAMPLE)[0], changes)
+
+
+def test_ideal_limit_optimum_is_optimize_pistons():
+    """The drifter's piston (rear rod, collar, front rod) at ``optimize_piston``'s lengths, its three
+    diameters searched by ``optimize_drifter`` in the ideal limit (the work on the rock per blow at
+    10 m/s, the mass at most the example's 5.6 kg): the optimum has the mass at its limit and the
+    shape and work of ``optimize_piston``'s three segments. Tolerances: ``optimize_piston`` finds
+    the masses on the lattice's blow (the bit's cell averages at 48 cells) and scores them by the
+    exact blow, which the drifter's search maximises directly: the works agree to 1e-5, the
+    segments' masses to 0.2 % of the piston's; the rear rod, 3.5 % of the mass where the work is
+    flattest, to 4 % of its own mass (3.0 %)."""
+    best = optimize_piston(ROD, ROCK, mass=MASS, length=LENGTH, max_stress=math.inf, impact_velocity=V,
+                           segments=3, bit_mass=1.5)
+    d_r, d_c, d_f = best.diameters_m
+    assert d_r < d_f < d_c  # a drifter's piston: the bore (the collar) above both rods, the rear the thinnest
+    cfg = _ideal_drifter_config(best.lengths_m)
+    vary = {"piston.rear_rod_diameter": ("20 mm", "27 mm"), "piston.collar_diameter": ("44 mm", "54 mm"),
+            "piston.front_rod_diameter": ("27.5 mm", "33 mm")}
+    res = optimize_drifter(cfg, vary, objective="work_on_rock_per_blow", constraints={"piston_mass": MASS},
+                           impact_velocity=V, max_evaluations=150, tol=1e-5, progress=False)
+    opt = res.optimum
+    # the mass constraint is active: met, to its tolerance
+    assert 0.0 <= opt["constraints"]["piston_mass"]["margin"] < 1e-6 * MASS
+    work = opt["objectives"]["work_on_rock_J"]
+    assert work == pytest.approx(best.work_on_rock_J, rel=1e-5)
+    # the same blow: the reported design's, evaluated again, is optimize_piston's scorer's
+    lengths = opt["piston"]["lengths_m"]
+    areas = [math.pi / 4 * x ** 2 for x in opt["piston"]["diameters_m"]]
+    again = piston_blow(ROD, ROCK, lengths=lengths, areas=areas, impact_velocity=V, bit_mass=1.5)
+    assert again["work_on_rock_J"] == pytest.approx(work, rel=1e-12)
+    np.testing.assert_allclose(lengths, best.lengths_m, rtol=1e-12)
+    masses = 7850.0 * np.asarray(lengths) * np.asarray(areas)
+    masses_p = 7850.0 * best.lengths_m * best.areas_m2
+    np.testing.assert_allclose(masses, masses_p, atol=2e-3 * MASS)
+    assert masses[0] == pytest.approx(masses_p[0], rel=0.04)
+    np.testing.assert_allclose(opt["piston"]["diameters_m"][1:], best.diameters_m[1:], rtol=2e-3)
+    print(f"diameters {np.round(np.asarray(opt['piston']['diameters_m']) * 1e3, 3)} mm against "
+          f"{np.round(best.diameters_m * 1e3, 3)} mm; work {work:.6f} against {best.work_on_rock_J:.6f} J")
+    # relaxing the active mass limit by 0.1 kg: more work, about the efficiency's share of the energy added
+    heavier = optimize_drifter(cfg, vary, objective="work_on_rock_per_blow",
+                               constraints={"piston_mass": MASS + 0.1}, impact_velocity=V,
+                               max_evaluations=150,
+                               tol=1e-5, progress=False)
+    gain = heavier.optimum["objectives"]["work_on_rock_J"] - work
+    assert gain == pytest.approx(opt["objectives"]["blow_efficiency"] * 0.1 * V * V / 2, rel=0.2)
+    print(f"work {work:.4f} -> {work + gain:.4f} J at 5.7 kg")
+
+
+def test_ideal_limit_blow_of_one_segment_is_lundbergs():
+    """One segment: the uniform piston's blow as the ideal limit scores it is ``optimize_piston``'s
+    uniform piston's, and on Lundberg's rock (a long rod of the piston's impedance, a massless bit,
+    loading only) Lundberg's closed form, at its optimum alpha 1.2564312 his 0.8145288."""
+    area = MASS / (7850.0 * LENGTH)
+    uniform = piston_blow(ROD, ROCK, lengths=[LENGTH], areas=[area], impact_velocity=V, bit_mass=1.5)
+    best = optimize_piston(ROD, ROCK, mass=MASS, length=LENGTH, max_stress=math.inf, impact_velocity=V,
+                           segments=1, bit_mass=1.5)
+    assert uniform["work_on_rock_J"] == pytest.approx(best.uniform_work_on_rock_J, rel=1e-12)
+    assert uniform["work_on_rock_J"] == pytest.approx(best.work_on_rock_J, rel=1e-12)
+    c = math.sqrt(2.1e11 / 7850.0)
+    alpha = 1.2564312
+    K = alpha * 7850.0 * c * area / (2 * LENGTH / c)  # alpha = K (2 L / c) / Z
+    long_rod = [RodPiece(length_m=40 * LENGTH, area_m2=area, **STEEL)]
+    b = piston_blow(long_rod, (K, 1e6 * K), lengths=[LENGTH], areas=[area], impact_velocity=V)
+    assert b["efficiency"] == pytest.approx(lundberg_efficiency(alpha, 1e6), abs=1e-9)
+    assert lundberg_efficiency(alpha, math.inf) == pytest.approx(0.8145288, abs=1e-7)
+
+
+def test_ideal_limit_refuses_what_it_does_not_compute():
+    """In the ideal limit the circuit's constraints and objectives are refused in one line; the
+    record of a design holds the blow's figures only."""
+    cfg = _ideal_drifter_config([0.1, 0.1, 0.24854236])
+    vary = {"piston.collar_diameter": ("47 mm", "52 mm")}
+    for kwargs, match in (({"objective": "drilling_rate"}, "the objective is 'work_on_rock_per_blow'"),
+                          ({"constraints": {"max_multiplier": 0.9}}, "'max_multiplier' is the circuit's"),
+                          ({"impact_velocity": "-3 m/s"}, "impact_velocity must be a positive speed")):
+        args = {"objective": "work_on_rock_per_blow", "impact_velocity": V, **kwargs}
+        with pytest.raises(ValueError, match=match) as info:
+            optimize_drifter(cfg, vary, progress=False, **args)
+        assert "\n" not in str(info.value)
+    rec = evaluate_blow(build(cfg), V, {"peak_incident_stress": "300 MPa"})
+    assert set(rec["constraints"]) == {"peak_incident_stress"}
+    assert 0.0 < rec["objectives"]["blow_efficiency"] < 1.0
+    energy = 0.5 * build(cfg).bar.mass_kg * V * V
+    assert rec["objectives"]["impact_energy_J"] == pytest.approx(energy, rel=1e-12)
