@@ -6,6 +6,7 @@ and size."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -211,3 +212,25 @@ def test_ideal_limit_refuses_what_it_does_not_compute():
     assert 0.0 < rec["objectives"]["blow_efficiency"] < 1.0
     energy = 0.5 * build(cfg).bar.mass_kg * V * V
     assert rec["objectives"]["impact_energy_J"] == pytest.approx(energy, rel=1e-12)
+
+
+def test_cli_ideal_limit(tmp_path, capsys):
+    """``impactbar optimize --impact-velocity``: the ideal limit from the command line, its optimum the
+    function's."""
+    from impactbar.cli import main
+
+    toml = tmp_path / "ideal.toml"  # the example without its feed
+    text = PISTON_EXAMPLE.read_text()
+    assert 'feed = "2 kN"' in text
+    toml.write_text(text.replace('feed = "2 kN"', 'feed = "0 N"'))
+    argv = ["optimize", str(toml), "--vary", "piston.collar_diameter=47mm:52mm", "--objective",
+            "work_on_rock_per_blow", "--impact-velocity", "10 m/s", "--constraint", "piston_mass=5.7 kg",
+            "--max-evaluations", "8", "--quiet", "--out", str(tmp_path / "r.json")]
+    assert main(argv) == 0
+    assert "gain in work_on_rock_per_blow" in capsys.readouterr().out
+    res = optimize_drifter(toml, {"piston.collar_diameter": ("47 mm", "52 mm")},
+                           objective="work_on_rock_per_blow", impact_velocity="10 m/s",
+                           constraints={"piston_mass": "5.7 kg"}, max_evaluations=8, progress=False)
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert doc["optimum"]["values"] == res.optimum["values"]
+    assert doc["optimum"]["constraints"]["piston_mass"]["margin"] >= 0.0
