@@ -23,6 +23,18 @@ pytest.importorskip("pint")
 
 ROOT = Path(__file__).resolve().parents[2]
 PISTON_EXAMPLE = ROOT / "examples" / "circuit_drifter_rock_piston.toml"
+DOCS = ROOT / "docs" / "optimising_a_drifter.md"
+
+
+def _docs_say(*phrases):
+    """The docs page states each of ``phrases`` (its numbers are these tests')."""
+    text = " ".join(DOCS.read_text().split())
+    for phrase in phrases:
+        assert phrase in text, phrase
+
+
+def _mm(xs):
+    return "{:.2f}, {:.2f} and {:.2f} mm".format(*(1e3 * np.asarray(xs)))
 
 #: a small problem on the rigid piston without rock (an evaluation about 0.3 s): impact power over
 #: the pump's flow and the valve's switch point, the mean supply pressure capped
@@ -73,7 +85,9 @@ def test_relaxing_the_active_constraint_improves_the_optimum():
     # the cap's multiplier: the power bought per pascal along the active cap
     predicted = dpower / dpress * 0.5e6
     assert p_loose - p_tight == pytest.approx(predicted, rel=0.1)
-    print(f"impact power {p_tight:.6g} -> {p_loose:.6g} kW, predicted gain {predicted:.4g} kW")
+    _docs_say("capped at 23 MPa", "active: its margin under 1e-3 of the cap", f"{p_tight:.3f} kW",
+              f"the optimum gives {p_loose:.3f} kW: {p_loose - p_tight:.3f} kW more",
+              f"predicts {predicted:.3f} kW")
     # and just above the tight optimum's flow the cap is broken: the optimum is the cap's, not a stall
     assert up.mean_supply_pressure_Pa > 23.0e6
 
@@ -164,8 +178,9 @@ def test_ideal_limit_optimum_is_optimize_pistons():
     np.testing.assert_allclose(masses, masses_p, atol=2e-3 * MASS)
     assert masses[0] == pytest.approx(masses_p[0], rel=0.04)
     np.testing.assert_allclose(opt["piston"]["diameters_m"][1:], best.diameters_m[1:], rtol=2e-3)
-    print(f"diameters {np.round(np.asarray(opt['piston']['diameters_m']) * 1e3, 3)} mm against "
-          f"{np.round(best.diameters_m * 1e3, 3)} mm; work {work:.6f} against {best.work_on_rock_J:.6f} J")
+    _docs_say(f"three segments gives {_mm(best.lengths_m)} of {_mm(best.diameters_m)}",
+              f"({best.work_on_rock_J:.3f} J; the uniform piston {best.uniform_work_on_rock_J:.2f} J)",
+              f"mass at its limit and {_mm(opt['piston']['diameters_m'])} ({work:.3f} J)")
     # relaxing the active mass limit by 0.1 kg: more work, about the efficiency's share of the energy added
     heavier = optimize_drifter(cfg, vary, objective="work_on_rock_per_blow",
                                constraints={"piston_mass": MASS + 0.1}, impact_velocity=V,
@@ -173,7 +188,9 @@ def test_ideal_limit_optimum_is_optimize_pistons():
                                tol=1e-5, progress=False)
     gain = heavier.optimum["objectives"]["work_on_rock_J"] - work
     assert gain == pytest.approx(opt["objectives"]["blow_efficiency"] * 0.1 * V * V / 2, rel=0.2)
-    print(f"work {work:.4f} -> {work + gain:.4f} J at 5.7 kg")
+    predicted = opt["objectives"]["blow_efficiency"] * 0.1 * V * V / 2
+    _docs_say(f"0.1 kg more of mass gives {gain:.2f} J more work per blow",
+              f"of the energy added, {predicted:.2f} J, within 20 %")
 
 
 def test_ideal_limit_blow_of_one_segment_is_lundbergs():

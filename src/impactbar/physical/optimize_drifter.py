@@ -167,6 +167,15 @@ def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: 
     ------
     ValueError
         No drill string, a constraint of the circuit, ``impact_velocity`` not positive.
+
+    Examples
+    --------
+    >>> from impactbar.physical import build, read_config
+    >>> from impactbar.physical.optimize_drifter import evaluate_blow
+    >>> evaluate_blow(build(read_config("circuit-drifter")[0]), 10.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: the ideal limit (impact_velocity) needs the drill string and the rock ([rock] in the config)
     """
     from .piston import piston_blow
 
