@@ -98,6 +98,7 @@ def test_every_reported_figure_has_its_sign_and_size():
     say, the efficiency in (0, 1), the impact power the impact energy times the frequency, the
     pump's power above the impact power."""
     res = _relaxed_run(23.0e6)
+    assert res.optimum["feasible"] and res.baseline["feasible"]  # both met, by their fresh orbits
     for rec in (res.baseline, res.optimum):
         sides = {"max_multiplier": 1, "min_pressure": -1, "mean_supply_pressure": 1, "min_chamber_volume": -1}
         for name, c in rec["constraints"].items():
