@@ -32,6 +32,10 @@ def add_parser(sub) -> None:
                    help="a constraint's limit with its unit, e.g. 'peak_incident_stress=250 MPa' or "
                         "max_multiplier=0.9, or NAME=none to drop one; names: "
                         f"{', '.join(DEFAULT_CONSTRAINTS)}")
+    p.add_argument("--impact-velocity", default=None, metavar="SPEED",
+                   help="the circuit's ideal limit: each design its piston's blow on the rod and rock at "
+                        "this impact velocity, e.g. '10 m/s' (objective work_on_rock_per_blow; constraints "
+                        "peak_incident_stress and piston_mass)")
     p.add_argument("--max-evaluations", type=int, default=60,
                    help="the most designs the search evaluates (default 60)")
     p.add_argument("--method", default="cobyla", choices=["cobyla", "slsqp"],
@@ -105,7 +109,7 @@ def _run(args) -> int:
     out = output_file(args.out) if args.out else None
     res = optimize_drifter(args.config, vary, objective=args.objective, constraints=constraints,
                            max_evaluations=args.max_evaluations, cache=args.cache, progress=not args.quiet,
-                           method=args.method)
+                           method=args.method, impact_velocity=args.impact_velocity)
     if out is not None:
         res.to_json(out)
     if args.json:

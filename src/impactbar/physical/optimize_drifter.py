@@ -14,6 +14,14 @@ the constraints by the implicit function theorem on each design's orbit
 solved), a key across a border within the step by central differences of orbits continued from the
 design's instead.
 The reported optimum is the best feasible design evaluated, re-evaluated by a fresh ``orbit()``.
+
+The circuit's ideal limit (``impact_velocity=``): each design is its piston's single blow on the rod
+and rock at a given impact velocity, the circuit taken to deliver the piston at it and to cost
+nothing, scored as :func:`~impactbar.physical.piston.optimize_piston` scores its designs
+(:func:`~impactbar.physical.piston.piston_blow`); the objective the work on the rock per blow, the
+constraints the peak incident stress and the piston's mass. Over the piston's diameters, its
+lengths and mass held, the optimum is then :func:`~impactbar.physical.optimize_piston`'s (a check
+of the search that does not trust it: ``tests/physical/test_optimize_drifter_checks.py``).
 """
 
 from __future__ import annotations
@@ -32,7 +40,8 @@ from .loader import build, config_value, read_config, with_values
 from .sensitivity import _key_unit, _quantity, _show_unit, default_step, tangent_derivatives
 from .units import to_si
 
-__all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "optimize_drifter", "evaluate_design", "DrifterOptimum"]
+__all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "optimize_drifter", "evaluate_design",
+           "evaluate_blow", "DrifterOptimum"]
 
 #: The objectives (all maximised): name to (the figure, its unit, what it is).
 OBJECTIVES = {
@@ -48,17 +57,26 @@ OBJECTIVES = {
 #: ``mean_supply_pressure`` (Pa; ``"relief"``: the relief valve's setting), ``peak_supply_pressure``
 #: (Pa; ``None``: not constrained), ``min_chamber_volume`` (m^3, the smallest volume of either chamber
 #: over the period must lie above it), ``min_drilling_rate`` (m/min; ``None``: not constrained; a
-#: design that drills per kilowatt more by drilling slower is then kept from the optimum).
+#: design that drills per kilowatt more by drilling slower is then kept from the optimum),
+#: ``piston_mass`` (kg, the piston's mass at most; ``None``: not constrained).
 DEFAULT_CONSTRAINTS = {"peak_incident_stress": None, "max_multiplier": 0.95, "min_pressure": 0.0,
                        "mean_supply_pressure": "relief", "peak_supply_pressure": None,
-                       "min_chamber_volume": 0.0, "min_drilling_rate": None}
+                       "min_chamber_volume": 0.0, "min_drilling_rate": None, "piston_mass": None}
+
+#: The constraints of the circuit's ideal limit (``optimize_drifter(..., impact_velocity=...)``): the
+#: blow's and the piston's.
+IDEAL_CONSTRAINTS = ("peak_incident_stress", "piston_mass")
 
 #: Each constraint's unit, its sense (+1: the value at most the limit; -1: at least) and the scale of
 #: its normalised margin for the search.
 _CONSTRAINT_UNITS = {"peak_incident_stress": ("Pa", 1, None), "max_multiplier": ("", 1, 1.0),
                      "min_pressure": ("Pa", -1, 1e6), "mean_supply_pressure": ("Pa", 1, None),
                      "peak_supply_pressure": ("Pa", 1, None), "min_chamber_volume": ("m**3", -1, 1e-4),
-                     "min_drilling_rate": ("m/min", -1, None)}
+                     "min_drilling_rate": ("m/min", -1, None), "piston_mass": ("kg", 1, None)}
+
+
+#: The constraints that need the drill string and the rock.
+_ROCK_CONSTRAINTS = ("peak_incident_stress", "min_drilling_rate")
 
 
 def _fingerprint(config: dict, vary: dict, objective: str, constraints: dict) -> str:
@@ -106,23 +124,86 @@ def evaluate_design(drifter: CircuitDrifter, constraints: dict | None = None,
             orbit = None
     if orbit is None:
         orbit = drifter.orbit()
-    rec = _figures(orbit, limits)
+    rec = _figures(orbit, limits, drifter.bar.mass_kg)
     rec["continued"] = continued
     rec["seconds"] = time.perf_counter() - t0
     return rec, orbit
 
 
-def _limits(constraints, drifter) -> dict:
+def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: dict | None = None) -> dict:
+    """A design in the circuit's ideal limit: its piston's blow on the rod and rock at
+    ``impact_velocity`` (:func:`~impactbar.physical.piston.piston_blow`), the circuit taken to
+    deliver the piston at it and to cost nothing.
+
+    Parameters
+    ----------
+    drifter : CircuitDrifter
+        With a drill string and the rock (``[rock]``).
+    impact_velocity : float
+        The piston's velocity at impact (m/s), ``> 0``.
+    constraints : dict, optional
+        Limits of :data:`IDEAL_CONSTRAINTS` (SI or with units); the others are the circuit's.
+
+    Returns
+    -------
+    dict
+        As :func:`evaluate_design`'s: ``objectives`` (``work_on_rock_J``, ``impact_energy_J``,
+        ``blow_efficiency``), ``constraints``, ``feasible``, ``seconds``.
+
+    Raises
+    ------
+    ValueError
+        No drill string, a constraint of the circuit, ``impact_velocity`` not positive.
+
+    Examples
+    --------
+    >>> from impactbar.physical import build, read_config
+    >>> from impactbar.physical.optimize_drifter import evaluate_blow
+    >>> evaluate_blow(build(read_config("circuit-drifter")[0]), 10.0)
+    Traceback (most recent call last):
+    ...
+    ValueError: the ideal limit (impact_velocity) needs the drill string and the rock ([rock] in the config)
+    """
+    from .piston import piston_blow
+
+    if drifter.drill is None:
+        raise ValueError("the ideal limit (impact_velocity) needs the drill string and the rock ([rock] in "
+                         "the config)")
+    limits = _limits(constraints, drifter, ideal=True)
+    t0 = time.perf_counter()
+    bar, drill = drifter.bar, drifter.drill
+    blow = piston_blow(drill.segments, (drill.rock_k_N_m, drill.rock_k_u_N_m),
+                       lengths=list(getattr(bar, "lengths_m", [bar.length_m])),
+                       areas=list(getattr(bar, "areas_m2", [bar.area_m2])), impact_velocity=impact_velocity,
+                       E=bar.E_Pa, density=bar.density_kg_m3, bit_mass=drill.bit_mass_kg, feed=drill.feed_N)
+    obj = {"work_on_rock_J": blow["work_on_rock_J"], "impact_energy_J": blow["impact_energy_J"],
+           "blow_efficiency": blow["efficiency"]}
+    values = {"peak_incident_stress": blow["peak_stress_Pa"], "piston_mass": bar.mass_kg}
+    rec = _constrained(obj, values, limits)
+    rec["seconds"] = time.perf_counter() - t0
+    return rec
+
+
+def _limits(constraints, drifter, ideal: bool = False) -> dict:
     given = dict(constraints or {})
     unknown = sorted(set(given) - set(DEFAULT_CONSTRAINTS))
     if unknown:
         raise ValueError(f"constraints: unknown constraint {unknown[0]!r}; one of "
                          f"{', '.join(DEFAULT_CONSTRAINTS)}")
+    circuit = sorted(set(given) - set(IDEAL_CONSTRAINTS)) if ideal else []
+    if circuit:
+        raise ValueError(f"constraints: {circuit[0]!r} is the circuit's; in its ideal limit "
+                         f"(impact_velocity) only {', '.join(IDEAL_CONSTRAINTS)}")
     out = {}
     for name, default in DEFAULT_CONSTRAINTS.items():
+        if ideal and name not in IDEAL_CONSTRAINTS:
+            continue
         v = given.get(name, default)
         if v is None:
             continue
+        if name in _ROCK_CONSTRAINTS and drifter.drill is None:
+            raise ValueError(f"constraints: {name!r} needs the drill string and the rock ([rock] in the "
+                             "config)")
         if v == "relief":
             v = drifter.si["relief_pressure_Pa"]
             if not math.isfinite(v):
@@ -131,11 +212,12 @@ def _limits(constraints, drifter) -> dict:
         if isinstance(v, int | float) and not isinstance(v, bool):  # a bare number: SI
             out[name] = float(v)
             continue
-        out[name] = to_si(f"constraints[{name!r}]", v, unit, "'400 MPa'" if unit == "Pa" else "0.95")
+        example = {"Pa": "'400 MPa'", "kg": "'5.6 kg'"}.get(unit, "0.95")
+        out[name] = to_si(f"constraints[{name!r}]", v, unit, example)
     return out
 
 
-def _figures(orbit, limits: dict) -> dict:
+def _figures(orbit, limits: dict, mass_kg: float) -> dict:
     rock = orbit.rock()
     pump = orbit.pump_power_kW
     obj = {"impact_power_kW": orbit.impact_power_kW, "impact_energy_J": orbit.impact_energy_J,
@@ -151,7 +233,12 @@ def _figures(orbit, limits: dict) -> dict:
               "mean_supply_pressure": orbit.mean_supply_pressure_Pa,
               "peak_supply_pressure": float(np.max(h["p_s_Pa"])),
               "min_chamber_volume": float(min(np.min(h["V_f_m3"]), np.min(h["V_r_m3"]))),
-              "min_drilling_rate": rock.get("drilling_rate_m_min", math.nan)}
+              "min_drilling_rate": rock.get("drilling_rate_m_min", math.nan), "piston_mass": mass_kg}
+    return _constrained(obj, values, limits)
+
+
+def _constrained(obj: dict, values: dict, limits: dict) -> dict:
+    """A design's record: its objectives ``obj`` and the constraints' ``values`` against ``limits``."""
     cons = {}
     for name, limit in limits.items():
         unit, sense, scale = _CONSTRAINT_UNITS[name]
@@ -241,8 +328,11 @@ class DrifterOptimum:
                 mark = " *" if name == self.objective else ""
                 rows.append(f"{name + mark:34s}{self.baseline['objectives'][key]:14.5g}"
                             f"{self.optimum['objectives'][key]:14.5g} {unit}")
-        for key in ("blow_frequency_Hz", "impact_energy_J", "pump_power_kW", "hydraulic_efficiency"):
-            rows.append(f"{key:34s}{self.baseline['objectives'][key]:14.5g}{self.optimum['objectives'][key]:14.5g}")
+        for key in ("blow_frequency_Hz", "impact_energy_J", "pump_power_kW", "hydraulic_efficiency",
+                    "blow_efficiency"):
+            if key in self.baseline["objectives"]:
+                rows.append(f"{key:34s}{self.baseline['objectives'][key]:14.5g}"
+                            f"{self.optimum['objectives'][key]:14.5g}")
         for name, c in self.baseline["constraints"].items():
             o = self.optimum["constraints"][name]
             scale, unit = _show_unit(c["unit"])
@@ -342,7 +432,7 @@ def _parse_vary(config: dict, vary: dict, folder) -> dict:
 def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW",
                      constraints: dict | None = None,
                      *, max_evaluations: int = 60, cache=None, progress: bool = True, rhobeg: float = 0.2,
-                     tol: float = 2e-3, method: str = "cobyla") -> DrifterOptimum:
+                     tol: float = 2e-3, method: str = "cobyla", impact_velocity=None) -> DrifterOptimum:
     r"""The design of a drifter with its oil circuit that maximises ``objective`` under
     ``constraints``, the variables any of its dotted config keys within bounds.
 
@@ -382,6 +472,13 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     method : {"cobyla", "slsqp"}
         The search: derivative-free (COBYLA), or SLSQP with the implicit function theorem's
         gradients (module docstring; ``max_evaluations`` then bounds its iterations).
+    impact_velocity : float or str, optional
+        The circuit's ideal limit (m/s, or with units, ``> 0``): each design is its piston's blow on
+        the rod and rock at this impact velocity alone (:func:`evaluate_blow`), the circuit taken to
+        deliver the piston at it; the objective ``"work_on_rock_per_blow"``, the constraints those of
+        :data:`IDEAL_CONSTRAINTS` (the circuit's are not computed), the method COBYLA. Over the
+        piston's diameters at held lengths and mass (``{"piston_mass": ...}``, active at the
+        optimum: more mass, more work) its optimum is :func:`~impactbar.physical.optimize_piston`'s.
 
     Returns
     -------
@@ -419,7 +516,21 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                          "without them only 'impact_power'")
     if method not in ("cobyla", "slsqp"):
         raise ValueError(f"method must be 'cobyla' or 'slsqp'; got {method!r}")
-    limits = _limits(constraints, base)
+    ideal = impact_velocity is not None
+    if ideal:
+        V = (float(impact_velocity) if isinstance(impact_velocity, int | float)
+             and not isinstance(impact_velocity, bool) else
+             to_si("impact_velocity", impact_velocity, "m/s", "'10 m/s'"))
+        if not (math.isfinite(V) and V > 0.0):
+            raise ValueError(f"impact_velocity must be a positive speed, e.g. '10 m/s'; got "
+                             f"{impact_velocity!r}")
+        if objective != "work_on_rock_per_blow":
+            raise ValueError(f"in the circuit's ideal limit (impact_velocity) the objective is "
+                             f"'work_on_rock_per_blow'; got {objective!r}")
+        if method != "cobyla":
+            raise ValueError("in the circuit's ideal limit (impact_velocity) the method is 'cobyla' (SLSQP's "
+                             f"gradients come from the circuit's orbits); got {method!r}")
+    limits = _limits(constraints, base, ideal=ideal)
     spec = _parse_vary(cfg, vary, folder)
     keys = list(spec)
     if not (isinstance(max_evaluations, int) and max_evaluations >= len(keys) + 2):
@@ -428,7 +539,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     lo = np.array([spec[k]["low"] for k in keys])
     span = np.array([spec[k]["high"] - spec[k]["low"] for k in keys])
     fkey = OBJECTIVES[objective][0]
-    tag = _fingerprint(cfg, {k: (spec[k]["low"], spec[k]["high"]) for k in keys}, objective, limits)
+    tag = _fingerprint(cfg, {k: (spec[k]["low"], spec[k]["high"]) for k in keys}, objective,
+                       dict(limits, impact_velocity=V) if ideal else limits)
 
     store: dict[str, dict] = {}
     cache_path = Path(cache) if cache is not None else None
@@ -465,10 +577,13 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         changes.update({k: config_value(cfg, k) for k, at in zip(keys, u == u0, strict=True) if at})
         try:
             drifter = build(with_values(cfg, changes), folder)
-            guess = min(orbits, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if orbits else None
-            rec, orbit = evaluate_design(drifter, limits, guess)
-            orbits.append((u.copy(), orbit))
-            orbit_of[rid] = orbit
+            if ideal:
+                rec, orbit = evaluate_blow(drifter, V, limits), None
+            else:
+                guess = min(orbits, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if orbits else None
+                rec, orbit = evaluate_design(drifter, limits, guess)
+                orbits.append((u.copy(), orbit))
+                orbit_of[rid] = orbit
             rec.update(_piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
             rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
@@ -534,9 +649,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     fresh = {}
     for name, rec in (("baseline", first), ("optimum", best)):
         drifter = build(with_values(cfg, rec["changes"]), folder)
-        out, orbit = evaluate_design(drifter, limits)
+        out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, limits)
         out.update(_piston_and_multipliers(drifter, orbit), values=rec["values"], changes=rec["changes"],
-                   shank_stress=_shank_stress(drifter, orbit))
+                   shank_stress=None if ideal else _shank_stress(drifter, orbit))
         out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
                                         for k in rec["objectives"] if rec["objectives"][k] != 0.0)
         fresh[name] = out
@@ -564,7 +679,7 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
     values, units = rec["values"], {k: spec[k]["unit"] for k in keys}
 
     def read(point) -> dict:
-        r = _figures(point, limits)
+        r = _figures(point, limits, point.drifter.bar.mass_kg)
         return {"objective": r["objectives"][fkey], **{n: r["constraints"][n]["scaled"] for n in names}}
 
     if orbit is None:
@@ -592,7 +707,7 @@ def _piston_and_multipliers(drifter, orbit) -> dict:
     bar = drifter.bar
     lengths = list(getattr(bar, "lengths_m", [bar.length_m]))
     diameters = list(getattr(bar, "diameters_m", [bar.diameter_m]))
-    mu = np.asarray(orbit.multipliers, dtype=complex)
+    mu = np.asarray([] if orbit is None else orbit.multipliers, dtype=complex)
     return {"piston": {"lengths_m": [float(x) for x in lengths], "diameters_m": [float(x) for x in diameters],
                        "mass_kg": bar.mass_kg, "rear_area_m2": drifter.si["rear_area_m2"],
                        "front_area_m2": drifter.si["front_area_m2"]},

@@ -45,7 +45,7 @@ import numpy as np
 from .._shared.validate import check_int, check_real
 from .rock import RodPiece
 
-__all__ = ["OptimalPiston", "optimize_piston"]
+__all__ = ["OptimalPiston", "optimize_piston", "piston_blow"]
 
 #: the free numbers of the softmax are kept in [-BOUND, BOUND]: segments' masses or lengths at most
 #: e^(2 BOUND) apart (the stepped piston accepts impedances 1e6 apart)
@@ -250,15 +250,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     N = check_int("cells", cells, lo=8, hi=1024)
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(map(repr, METHODS))}; got method={method!r}")
-    c = math.sqrt(E / rho)
-    # the model's units: length L, time L/c (s = 1), mass m; force m c^2/L, energy m c^2
-    force_N, energy_J, time_s = m * c * c / L, m * c * c, L / c
-    Zu = m * c / L  # a uniform piston's impedance
-    seg = ([g.length_m / L for g in pieces], [g.impedance_kg_s / Zu for g in pieces],
-           [g.wave_speed_m_s / c for g in pieces])
-    k, k_u = K * L * L / (m * c * c), K_u * L * L / (m * c * c)
-    travel = sum(le / sp for le, sp in zip(seg[0], seg[2], strict=True))
-    T = 4.0 + 2.0 * travel if t_max is None else check_real("t_max", t_max, lo=0.0, lo_open=True) / time_s
+    c, force_N, energy_J, time_s, seg, k, k_u, T = _model_units(pieces, K, K_u, m, L, E, rho, t_max)
     scale = force_N / (pieces[0].area_m2 * sigma) if math.isfinite(sigma) else 0.0  # stress / limit per force
     v = V / c
 
@@ -341,6 +333,98 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         incident_force_N=shaped.shank_forces[:steps] * force_N,
         uniform_incident_force_N=uniform.shank_forces[:steps] * force_N, blow=shaped, uniform_blow=uniform,
         max_stress_Pa=sigma, mass_kg=m, length_m=L, impact_velocity_m_s=V, E_Pa=E, density_kg_m3=rho)
+
+
+def _model_units(pieces, K, K_u, m, L, E, rho, t_max):
+    """The blow's units (length ``L``, time ``L/c``, mass ``m``: force ``m c^2/L``, energy ``m c^2``)
+    and the rod and rock in them: ``(c, force_N, energy_J, time_s, seg, k, k_u, T)``, ``seg`` the
+    rod's lengths, impedances (over a uniform piston's, ``m c / L``) and wave speeds, ``T`` the
+    window (default the contact of ``4 L/c`` and a wave's round trip through the rod after it)."""
+    c = math.sqrt(E / rho)
+    force_N, energy_J, time_s = m * c * c / L, m * c * c, L / c
+    Zu = m * c / L  # a uniform piston's impedance
+    seg = ([g.length_m / L for g in pieces], [g.impedance_kg_s / Zu for g in pieces],
+           [g.wave_speed_m_s / c for g in pieces])
+    k, k_u = K * L * L / (m * c * c), K_u * L * L / (m * c * c)
+    travel = sum(le / sp for le, sp in zip(seg[0], seg[2], strict=True))
+    T = 4.0 + 2.0 * travel if t_max is None else check_real("t_max", t_max, lo=0.0, lo_open=True) / time_s
+    return c, force_N, energy_J, time_s, seg, k, k_u, T
+
+
+def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=None, bit_mass=0.0, feed=0.0,
+                cells=48, t_max=None) -> dict:
+    r"""The blow of a given stepped piston on the rod and rock, as :func:`optimize_piston` scores its
+    designs (theory §12; SI in and out): the work on the rock of one blow in the same window, every
+    wave exact (where the exact solver's bounds allow, and not both a feed and a bit mass; else the
+    lattice's blow, its boundaries rounded to whole cells of ``L / cells``).
+
+    Parameters
+    ----------
+    rod, rock, impact_velocity, E, density, bit_mass, feed, cells, t_max
+        As :func:`optimize_piston`'s.
+    lengths, areas : sequence of float, shape (n,)
+        The segments' lengths (m) and cross-sections (m^2), driven end first, each ``> 0``
+        (:attr:`OptimalPiston.lengths_m` and ``areas_m2``; one segment: the uniform piston).
+
+    Returns
+    -------
+    dict
+        ``work_on_rock_J``, ``efficiency`` (the work over the impact energy, plus the feed's),
+        ``impact_energy_J`` (:math:`m V^2/2`), ``peak_stress_Pa`` (the exact peak of the
+        piston-shank force over the rod's first area), ``mass_kg``, ``length_m``, ``method``
+        (``"exact"`` or ``"lattice"``) and ``blow`` (the :class:`~impactbar.laws.rodrock.Blow`, in
+        the units of piston mass, length and wave speed 1).
+
+    Raises
+    ------
+    ValueError
+        A parameter out of its range (named); ``lengths`` and ``areas`` not of one length ``1`` to
+        ``8``.
+
+    Examples
+    --------
+    >>> from impactbar.physical.piston import piston_blow
+    >>> from impactbar.physical.rock import RodPiece
+    >>> rod = [RodPiece(length_m=6.0, area_m2=1.0e-3, E_Pa=2.1e11, density_kg_m3=7850.0)]
+    >>> b = piston_blow(rod, (3.0e8, 3.0e9), lengths=[0.3], areas=[1.0e-3], impact_velocity=10.0)
+    >>> round(b["efficiency"], 4), b["method"]  # the uniform piston of optimize_piston's example
+    (0.6958, 'exact')
+    """
+    pieces = _pieces(rod)
+    K, K_u = _rock(rock)
+    try:
+        lengths, areas = (np.asarray([check_real(f"{name}[{j}]", x, lo=0.0, lo_open=True)
+                                      for j, x in enumerate(xs)])
+                          for name, xs in (("lengths", lengths), ("areas", areas)))
+    except TypeError:
+        raise ValueError("lengths and areas must be sequences of numbers") from None
+    if not 1 <= lengths.size <= 8 or areas.size != lengths.size:
+        raise ValueError(f"lengths and areas must be of one length, 1 to 8; got {lengths.size} and "
+                         f"{areas.size}")
+    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
+    E = pieces[0].E_Pa if E is None else check_real("E", E, lo=0.0, lo_open=True)
+    rho = pieces[0].density_kg_m3 if density is None else check_real("density", density, lo=0.0, lo_open=True)
+    mb = check_real("bit_mass", bit_mass, lo=0.0)
+    f = check_real("feed", feed, lo=0.0)
+    N = check_int("cells", cells, lo=8, hi=1024)
+    L = float(lengths.sum())
+    m = rho * float(np.sum(lengths * areas))
+    c, force_N, energy_J, _, seg, k, k_u, T = _model_units(pieces, K, K_u, m, L, E, rho, t_max)
+    from ..dynamics.stepped import SteppedPiston
+    from ..laws.rodrock.blow import rod_rock_blow
+
+    lf, mf = lengths / L, rho * lengths * areas / m
+    b = None
+    if f == 0.0 or mb == 0.0:
+        b = _exact_blow(V / c, seg, k, k_u, mb / m, f / force_N, T, N,
+                        SteppedPiston(lf, mf / lf) if lf.size > 1 else None)
+    if b is None:
+        lf = _whole_cells(lf, N) / N
+        b = rod_rock_blow(1.0, V / c, *seg, k, k_u, mb / m, f / force_N, cells_per_piston=N, t_max=T,
+                          piston=SteppedPiston(lf, mf / lf) if lf.size > 1 else None)
+    return {"work_on_rock_J": b.work_on_rock * energy_J, "efficiency": b.efficiency,
+            "impact_energy_J": 0.5 * m * V * V, "peak_stress_Pa": _peak(b) * force_N / pieces[0].area_m2,
+            "mass_kg": m, "length_m": L, "method": b.method, "blow": b}
 
 
 def _better(a, b):
