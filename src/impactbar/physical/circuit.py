@@ -188,6 +188,9 @@ class CircuitDrifter(_ScaledDrifter):
         """``P A_r`` (N)."""
         return PRESSURE_SCALE * self.si["rear_area_m2"]
 
+    # (the base's, named here so that the class's page lists them)
+    omega_rad_s, scales, model = _ScaledDrifter.omega_rad_s, _ScaledDrifter.scales, _ScaledDrifter.model
+
     @property
     def volume_scale_m3(self) -> float:
         """``A_r L`` (m^3)."""

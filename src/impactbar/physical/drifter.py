@@ -238,6 +238,9 @@ class Drifter(_ScaledDrifter):
         """The stroke force ``p A_s`` (N): the stroke force is 1."""
         return self.stroke_force_N
 
+    # (the base's, named here so that the class's page lists them)
+    omega_rad_s, scales, model = _ScaledDrifter.omega_rad_s, _ScaledDrifter.scales, _ScaledDrifter.model
+
     def drive(self):
         """The dimensionless valve: :class:`~impactbar.PositionSwitchedDrive`."""
         from ..drives import PositionSwitchedDrive
