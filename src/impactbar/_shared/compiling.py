@@ -122,10 +122,9 @@ def watch_compiles(prog: str = "impactbar", *, after: float = 2.0) -> None:
 
     Parameters
     ----------
-    prog : str
-        The name the line starts with.
-    after : float
-        Seconds of compiling before the note, > 0.
+    prog, after : str, float
+        As for :func:`compile_note`: the program's name that starts the line, and the seconds of
+        compiling before the note.
 
     Raises
     ------

@@ -108,6 +108,15 @@ def drifter_from_args(args):
     return None if kind == "hammer" else physical.load(config)
 
 
+def _what_is_struck(d) -> str:
+    """The header's words on what the piston strikes: the stop (its restitution) or the drill string
+    on the rock; a line's end."""
+    if d.drill is None:
+        return f"R = {d.restitution:.4g}\n"
+    return (f"a drill string of {len(d.drill.segments)} segment(s) on rock "
+            f"(k = {d.drill.rock_k_N_m / 1e6:.4g} kN/mm)\n")
+
+
 def _circuit_header(d: physical.CircuitDrifter) -> str:
     m, dr = d.model(), d.drive()
     si = d.si
@@ -117,9 +126,7 @@ def _circuit_header(d: physical.CircuitDrifter) -> str:
     return (f"drifter {d.name or '(unnamed)'} with its oil circuit: piston {d.bar.mass_kg:.4g} kg{shape}, "
             f"areas {si['rear_area_m2'] * 1e4:.4g} / {si['front_area_m2'] * 1e4:.4g} cm^2, pump "
             f"{si['pump_flow_m3_s'] * 6e4:.4g} L/min, {acc}, "
-            + (f"R = {d.restitution:.4g}\n" if d.drill is None else
-               f"a drill string of {len(d.drill.segments)} segment(s) on rock "
-               f"(k = {d.drill.rock_k_N_m / 1e6:.4g} kN/mm)\n")
+            + _what_is_struck(d)
             + f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
             f"precharge = {dr.value('precharge') if dr.accumulator is not None else float('nan'):.5g}, "
             f"pump_flow = {dr.value('pump_flow'):.5g}, switch_out = {dr.value('switch_out'):.5g}")
@@ -128,19 +135,30 @@ def _circuit_header(d: physical.CircuitDrifter) -> str:
 def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
     """``impactbar orbits CONFIG`` with a ``[chambers]`` section: the operating point of the drifter
     with its oil circuit (theory §11) in SI."""
+    return _print_orbit(args, drifter, _circuit_header, _circuit_line)
+
+
+def _circuit_line(s: dict) -> str:
+    return (f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
+            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, mean supply "
+            f"pressure {s['mean_supply_pressure_MPa']:.4g} MPa, pump power {s['pump_power_kW']:.4g} kW, "
+            f"hydraulic efficiency {s['hydraulic_efficiency']:.3f}, least pressure "
+            f"{s['minimum_pressure_MPa']:.4g} MPa"
+            + (" (cavitates)" if s["cavitates"] else "")
+            + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+
+
+def _print_orbit(args, drifter, header, line) -> int:
+    """The orbit's summary as JSON (``--json``), else the drifter's ``header``, the orbit's ``line``
+    and, with a drill string and rock (theory §4d), the blow's figures (solved with the circuit
+    where there is one)."""
     s = drifter.orbit().summary()
     if getattr(args, "json", False):
         print_json({"drifter": drifter.name, "orbit": s})
         return 0
-    print(_circuit_header(drifter))
-    print(f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
-          f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, mean supply "
-          f"pressure {s['mean_supply_pressure_MPa']:.4g} MPa, pump power {s['pump_power_kW']:.4g} kW, "
-          f"hydraulic efficiency {s['hydraulic_efficiency']:.3f}, least pressure "
-          f"{s['minimum_pressure_MPa']:.4g} MPa"
-          + (" (cavitates)" if s["cavitates"] else "")
-          + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
-    if "rock" in s:  # a drill string and rock (theory section 4d): the blow, solved with the circuit
+    print(header(drifter))
+    print(line(s))
+    if "rock" in s:
         _print_rock(s["rock"])
     return 0
 
@@ -158,9 +176,7 @@ def _header(d: physical.Drifter) -> str:
     return (f"drifter {d.name or '(unnamed)'}: piston {d.bar.mass_kg:.4g} kg, {shape}; "
             f"stroke {d.stroke_force_N:.4g} N, return {d.return_force_N:.4g} N, switch at "
             f"{d.switch_out_m * 1e3:.4g} mm, delay {d.delay_s * 1e3:.4g} ms, "
-            + (f"R = {d.restitution:.4g}\n" if d.drill is None else
-               f"a drill string of {len(d.drill.segments)} segment(s) on rock "
-               f"(k = {d.drill.rock_k_N_m / 1e6:.4g} kN/mm)\n")
+            + _what_is_struck(d)
             + f"  dimensionless: s = {m.s:.5g}, d = {m.d:.5g}, N = {m.n_modes}, ret = {dr.ret:.5g}, "
             f"switch_out = {dr.switch_out:.5g}, delay = {dr.delay:.5g}")
 
@@ -170,19 +186,14 @@ def run_drifter_orbits(args, drifter: physical.Drifter) -> int:
     (unknown period) with its SI figures."""
     if isinstance(drifter, physical.CircuitDrifter):
         return run_circuit_orbits(args, drifter)
-    o = drifter.orbit()
-    s = o.summary()
-    if getattr(args, "json", False):
-        print_json({"drifter": drifter.name, "orbit": s})
-        return 0
-    print(_header(drifter))
-    print(f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
-          f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, "
-          f"percussive power {s['percussive_power_kW']:.4g} kW, {s['admissibility']}, "
-          f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
-    if "rock" in s:  # a drill string and rock (theory section 4d): the blow on the rock
-        _print_rock(s["rock"])
-    return 0
+    return _print_orbit(args, drifter, _header, _line)
+
+
+def _line(s: dict) -> str:
+    return (f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
+            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, "
+            f"percussive power {s['percussive_power_kW']:.4g} kW, {s['admissibility']}, "
+            f"{'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
 
 
 def run_drifter_simulate(args, drifter: physical.Drifter, out: Path, gap_m: float) -> int:

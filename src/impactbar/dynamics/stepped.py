@@ -367,7 +367,7 @@ class SteppedPiston:
         Parameters
         ----------
         n_modes : int
-            :math:`N`, :math:`0 \le N \le 4096`.
+            :math:`N` of each kind, :math:`0 \le N \le 4096`.
 
         Returns
         -------

@@ -225,7 +225,7 @@ class ContactLaw:
         Parameters
         ----------
         model : BarModel
-            A bar under this law.
+            The model to coarsen (under this law).
 
         Returns
         -------
@@ -239,6 +239,7 @@ class ContactLaw:
         Parameters
         ----------
         model : BarModel
+            The bar that strikes (its wave speed ``s`` sets a window's length).
 
         Returns
         -------
@@ -375,8 +376,8 @@ class ContactLaw:
 
         Parameters
         ----------
-        model : BarModel
-        load : Load
+        model, load : BarModel, Load
+            The orbit's bar and load.
         t : float
             Load time of the arrival.
         y_minus : numpy.ndarray, shape (2 N + 2,)
@@ -414,7 +415,7 @@ class ContactLaw:
         model : BarModel
         load : Load
         t : float
-            Load time of the arrival.
+            Load time of the arrival at the stop.
         q_minus, v_minus : numpy.ndarray, shape (N + 1,)
             Free-free modal state at arrival, the end exactly on the stop (``c . q = 0``).
         kernel : object, optional
@@ -503,6 +504,7 @@ class ContactLaw:
         Parameters
         ----------
         name : str
+            A parameter's name, as a continuation's ``parameter`` names it.
 
         Returns
         -------
@@ -620,6 +622,7 @@ def get_law(spec) -> ContactLaw:
     Returns
     -------
     ContactLaw
+        The law object given, or the one registered under the name.
 
     Raises
     ------

@@ -142,10 +142,8 @@ class SteppedBar(_Figures):
 
     Parameters
     ----------
-    E_Pa : float
-        Young's modulus (Pa), ``> 0``.
-    density_kg_m3 : float
-        Density (kg/m^3), ``> 0``.
+    E_Pa, density_kg_m3 : float
+        Young's modulus (Pa) and density (kg/m^3) of the one material, each ``> 0``.
     lengths_m : array_like, shape (n,)
         The segments' lengths (m), each :math:`> 0`, from the driven end to the struck end; :math:`n \ge 2`.
     areas_m2 : array_like, shape (n,)

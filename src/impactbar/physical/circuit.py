@@ -45,13 +45,19 @@ from functools import cached_property
 
 import numpy as np
 
-from .._shared.validate import check_int, check_real
+from .._shared.validate import check_int
 from ._circuit_checks import check_circuit_si, shown
-from .bar import Bar, SteppedBar, check_piston, piston_from_units
-from .config import _section
-from .drifter import DrifterOrbit
+from .bar import Bar, SteppedBar
+from .drifter import (
+    DrifterOrbit,
+    _config_sections,
+    _piston_drill_restitution,
+    _preset_config,
+    _rigid_start,
+    _ScaledDrifter,
+)
 from .geometry import PISTON_KEYS, expand_piston
-from .rock import ROCK_SECTIONS, DrillString, rock_from_config
+from .rock import DrillString
 from .units import to_si
 
 __all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_preset", "PRESSURE_SCALE",
@@ -122,15 +128,14 @@ _REQUIRED = {
 
 
 @dataclass(frozen=True)
-class CircuitDrifter:
+class CircuitDrifter(_ScaledDrifter):
     """A hydraulic drifter with its oil circuit (theory §11), in SI units; built by
     :meth:`from_config` (the keys in the module's docstring).
 
     Parameters
     ----------
     bar : Bar or SteppedBar
-        The piston: uniform, or of uniform segments (theory §12; ``[bar]`` with lists of lengths
-        and diameters or areas, driven end first).
+        The piston, as for :class:`~impactbar.physical.Drifter` (stepped: theory §12).
     restitution : float
         ``R`` of the impact (eq. 10), ``[0, 1)``.
     si : dict
@@ -169,14 +174,7 @@ class CircuitDrifter:
     name: str = ""
     drill: DrillString | None = None
 
-    def __post_init__(self) -> None:
-        check_piston(self.bar, True)
-        if self.drill is not None and not isinstance(self.drill, DrillString):
-            raise ValueError(f"drill must be a DrillString; got {type(self.drill).__name__}")
-        object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
-                                                           hi=1.0, hi_open=True))
-        object.__setattr__(self, "damping_N_s_m", check_real("damping_N_s_m", self.damping_N_s_m, lo=0.0))
-        object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=1024))
+    def _check_own(self) -> None:
         si = self.si
         if si["front_area_m2"] >= si["rear_area_m2"]:
             raise ValueError(f"chambers.front_area must be below chambers.rear_area "
@@ -186,20 +184,12 @@ class CircuitDrifter:
 
     # -- scales ------------------------------------------------------------------------------------
     @property
-    def omega_rad_s(self) -> float:
-        r"""The time scale :math:`\Omega = \sqrt{P A_r / (m L)}` (1/s)."""
-        return math.sqrt(PRESSURE_SCALE * self.si["rear_area_m2"] / (self.bar.mass_kg * self.bar.length_m))
+    def _force_scale_N(self) -> float:
+        """``P A_r`` (N)."""
+        return PRESSURE_SCALE * self.si["rear_area_m2"]
 
-    @property
-    def scales(self):
-        r"""The units of the dimensionless model (:class:`~impactbar.physical.Scales`): time
-        :math:`1/\Omega`, length :math:`L`, force :math:`P A_r = m L \Omega^2`."""
-        from .hammer import Scales
-
-        om, bar = self.omega_rad_s, self.bar
-        return Scales(omega_rad_s=om, time_s=1.0 / om, length_m=bar.length_m, velocity_m_s=bar.length_m * om,
-                      force_N=PRESSURE_SCALE * self.si["rear_area_m2"],
-                      damping_N_s_m2=bar.mass_kg / bar.length_m * om)
+    # (the base's, named here so that the class's page lists them)
+    omega_rad_s, scales, model = _ScaledDrifter.omega_rad_s, _ScaledDrifter.scales, _ScaledDrifter.model
 
     @property
     def volume_scale_m3(self) -> float:
@@ -278,15 +268,6 @@ class CircuitDrifter:
             An unknown key.
         """
         return float(value) / self._si_factor(name)
-
-    def model(self):
-        """The dimensionless bar (eq. 2): :class:`~impactbar.BarModel`."""
-        from ..model import BarModel
-
-        om, bar = self.omega_rad_s, self.bar
-        impact = "paper" if self.drill is None else self.drill.law(bar, self.scales)
-        return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om), d=self.damping_N_s_m / (bar.mass_kg * om),
-                        R=self.restitution, n_modes=self.n_modes, piston=self.bar.piston, impact=impact)
 
     def drive(self):
         """The dimensionless circuit: :class:`~impactbar.drives.circuit.HydraulicCircuitDrive`."""
@@ -368,12 +349,9 @@ class CircuitDrifter:
         ValueError
             Where an absolute pressure falls below 0 during the run (the oil would cavitate).
         """
-        from ..simulation import InitialState, simulate
+        from ..simulation import simulate
 
-        dur = check_real("duration_s", duration_s, lo=0.0, lo_open=True)
-        L, om = self.bar.length_m, self.omega_rad_s
-        start = InitialState.rigid(-check_real("start_gap_m", start_gap_m, lo=0.0) / L,
-                                   start_velocity_m_s / (L * om), self.n_modes)
+        dur, L, om, start = _rigid_start(self, duration_s, start_gap_m, start_velocity_m_s)
         drive = self.drive()
         run = simulate(self.model(), drive, start, dur * om)
         _refuse_cavitation(_least_pressures(run.pieces), f"the run of {dur:g} s")
@@ -402,36 +380,10 @@ class CircuitDrifter:
             An unknown section or key, a missing key, a value with the wrong unit or out of range
             (each named).
         """
-        if not isinstance(config, dict):
-            raise ValueError(f"config must be a dict; got {type(config).__name__}")
-        if "piston" in config:  # the piston's shape: the stepped [bar] and the chamber areas it implies
-            config = expand_piston(config)
-        extra = sorted(set(config) - set(_KEYS) - set(ROCK_SECTIONS) - {"name"})
-        if extra:
-            raise ValueError(f"unknown section [{extra[0]}]; allowed: "
-                             f"{', '.join(sorted((*_KEYS, *ROCK_SECTIONS)))}")
-        sec = {name: _section(config, name, keys) for name, keys in _KEYS.items()}
-        for name, keys in _REQUIRED.items():
-            for key in keys:
-                if key not in sec[name]:
-                    raise ValueError(f"missing key {name}.{key}")
-        b, st = sec["bar"], sec["stop"]
-        bar = piston_from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
-                                area=b.get("area"))
-        drill = rock_from_config(config, bar)  # [rod], [bit], [rock]: the rod-rock law
-        if drill is not None and not st:
-            R = 0.0  # the rod and the rock replace the stop
-        elif ("restitution" in st) == ("area" in st):
-            raise ValueError("give exactly one of stop.restitution and stop.area")
-        elif "restitution" in st:
-            R = to_si("stop.restitution", st["restitution"], "", "0.215")
-        else:
-            a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
-            if not a_s >= bar.area_m2:
-                raise ValueError(f"stop.area must be at least the piston's area ({bar.area_m2 * 1e4:.4g} "
-                                 f"cm^2: the restitution (A_s - A) / (A_s + A) in [0, 1)); got "
-                                 f"{shown(st['area'], a_s, 'm^2')}")
-            R = (a_s - bar.area_m2) / (a_s + bar.area_m2)
+        if isinstance(config, dict) and "piston" in config:  # the piston's shape: the stepped [bar] and
+            config = expand_piston(config)  # the chamber areas it implies
+        sec = _config_sections(config, _KEYS, _REQUIRED)
+        bar, drill, R = _piston_drill_restitution(config, sec, stop_area_check=True)
 
         def q(section, key, unit, example, what, default=None):
             name = f"{section}.{key}"
@@ -750,9 +702,4 @@ def circuit_preset(name: str, **changes) -> CircuitDrifter:
     ValueError
         An unknown preset name, or a change that makes the config invalid (the key named).
     """
-    if name not in CIRCUIT_PRESETS:
-        raise ValueError(f"unknown circuit preset {name!r}; known: {', '.join(CIRCUIT_PRESETS)}")
-    cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in CIRCUIT_PRESETS[name].items()}
-    for sec, keys in changes.items():
-        cfg.setdefault(sec, {}).update(keys)
-    return CircuitDrifter.from_config(cfg)
+    return CircuitDrifter.from_config(_preset_config(CIRCUIT_PRESETS, "circuit", name, changes))

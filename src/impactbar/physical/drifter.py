@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._shared.validate import check_int, check_real
+from ._circuit_checks import shown
 from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
@@ -53,10 +54,117 @@ _KEYS = {
     "valve": {"supply_pressure", "stroke_area", "return_area", "switch_out", "delay"},
     "model": {"n_modes"},
 }
+_REQUIRED = {
+    "bar": ("E", "density", "length"),
+    "valve": ("supply_pressure", "stroke_area", "return_area", "switch_out"),
+}
+
+
+def _config_sections(config: dict, keys: dict, required: dict) -> dict:
+    """A drifter's config checked section by section: a dict of sections (each a dict, ``{}`` where
+    left out), unknown sections and keys and missing ``required`` keys refused (:class:`ValueError`,
+    naming them); the rock's sections (:data:`~impactbar.physical.rock.ROCK_SECTIONS`) allowed."""
+    if not isinstance(config, dict):
+        raise ValueError(f"config must be a dict; got {type(config).__name__}")
+    extra = sorted(set(config) - set(keys) - set(ROCK_SECTIONS) - {"name"})
+    if extra:
+        raise ValueError(f"unknown section [{extra[0]}]; allowed: "
+                         f"{', '.join(sorted((*keys, *ROCK_SECTIONS)))}")
+    sec = {name: _section(config, name, allowed) for name, allowed in keys.items()}
+    for name, names in required.items():
+        for key in names:
+            if key not in sec[name]:
+                raise ValueError(f"missing key {name}.{key}")
+    return sec
+
+
+def _piston_drill_restitution(config: dict, sec: dict, *, stop_area_check: bool = False):
+    """A drifter's piston (``[bar]``), its drill string (``[rod]``, ``[bit]``, ``[rock]``, or
+    ``None``) and the restitution of its stop (``[stop]``: ``restitution`` or ``area``, 0 where the
+    drill string replaces the stop), from the sections ``sec`` of ``config``. With
+    ``stop_area_check`` a stop area smaller than the piston's is refused here, naming the key (else
+    the restitution's own range check refuses it)."""
+    b, st = sec["bar"], sec["stop"]
+    bar = piston_from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
+                            area=b.get("area"))
+    drill = rock_from_config(config, bar)  # [rod], [bit], [rock]: the rod-rock law
+    if drill is not None and not st:
+        R = 0.0  # the rod and the rock replace the stop
+    elif ("restitution" in st) == ("area" in st):
+        raise ValueError("give exactly one of stop.restitution and stop.area")
+    elif "restitution" in st:
+        R = to_si("stop.restitution", st["restitution"], "", "0.215")
+    else:
+        a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
+        if stop_area_check and not a_s >= bar.area_m2:
+            raise ValueError(f"stop.area must be at least the piston's area ({bar.area_m2 * 1e4:.4g} "
+                             f"cm^2: the restitution (A_s - A) / (A_s + A) in [0, 1)); got "
+                             f"{shown(st['area'], a_s, 'm^2')}")
+        R = (a_s - bar.area_m2) / (a_s + bar.area_m2)
+    return bar, drill, R
+
+
+def _rigid_start(drifter, duration_s: float, start_gap_m: float, start_velocity_m_s: float):
+    """The checked duration of a drifter's run (s), its piston's length (m), its time scale (1/s)
+    and the rigid start (:class:`~impactbar.InitialState`) from a gap and a velocity in SI."""
+    from ..simulation import InitialState
+
+    dur = check_real("duration_s", duration_s, lo=0.0, lo_open=True)
+    L, om = drifter.bar.length_m, drifter.omega_rad_s
+    start = InitialState.rigid(-check_real("start_gap_m", start_gap_m, lo=0.0) / L,
+                               start_velocity_m_s / (L * om), drifter.n_modes)
+    return dur, L, om, start
+
+
+class _ScaledDrifter:
+    """What a drifter in SI units (:class:`Drifter`, :class:`~impactbar.physical.CircuitDrifter`)
+    takes from its force scale ``_force_scale_N`` (N), its ``bar``, ``restitution``,
+    ``damping_N_s_m``, ``n_modes`` and ``drill``: their checks, the time scale, the scales and the
+    dimensionless bar."""
+
+    def __post_init__(self) -> None:
+        """Check (and convert) the fields both drifters have: the piston, the drill string, the
+        restitution, the damping and the number of modes (:class:`ValueError` naming the field);
+        then the drifter's own (``_check_own``)."""
+        check_piston(self.bar, True)
+        if self.drill is not None and not isinstance(self.drill, DrillString):
+            raise ValueError(f"drill must be a DrillString; got {type(self.drill).__name__}")
+        object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
+                                                           hi=1.0, hi_open=True))
+        object.__setattr__(self, "damping_N_s_m", check_real("damping_N_s_m", self.damping_N_s_m, lo=0.0))
+        object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=1024))
+        self._check_own()
+
+    @property
+    def omega_rad_s(self) -> float:
+        r"""The time scale :math:`\Omega = \sqrt{F / (m L)}` (1/s), :math:`F` the force scale: the
+        stroke force :math:`p A_s` of a valve drifter, :math:`P A_r` with the oil circuit."""
+        return math.sqrt(self._force_scale_N / (self.bar.mass_kg * self.bar.length_m))
+
+    @property
+    def scales(self):
+        r"""The units of the dimensionless model (:class:`~impactbar.physical.Scales`): time
+        :math:`1/\Omega`, length :math:`L`, force :math:`F = m L \Omega^2` (:attr:`omega_rad_s`)."""
+        from .hammer import Scales
+
+        om, bar = self.omega_rad_s, self.bar
+        return Scales(omega_rad_s=om, time_s=1.0 / om, length_m=bar.length_m,
+                      velocity_m_s=bar.length_m * om, force_N=self._force_scale_N,
+                      damping_N_s_m2=bar.mass_kg / bar.length_m * om)
+
+    def model(self):
+        """The dimensionless bar (eq. 2): :class:`~impactbar.BarModel`."""
+        from ..model import BarModel
+
+        om, bar = self.omega_rad_s, self.bar
+        impact = "paper" if self.drill is None else self.drill.law(bar, self.scales)
+        return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om),
+                        d=self.damping_N_s_m / (bar.mass_kg * om), R=self.restitution,
+                        n_modes=self.n_modes, impact=impact, piston=self.bar.piston)
 
 
 @dataclass(frozen=True)
-class Drifter:
+class Drifter(_ScaledDrifter):
     r"""A hydraulic drifter: piston, stop, valve (theory §10), in SI units.
 
     Parameters
@@ -109,17 +217,10 @@ class Drifter:
     name: str = ""
     drill: DrillString | None = None
 
-    def __post_init__(self) -> None:
-        check_piston(self.bar, True)
+    def _check_own(self) -> None:
         for f in ("supply_pressure_Pa", "stroke_area_m2", "return_area_m2", "switch_out_m"):
             object.__setattr__(self, f, check_real(f, getattr(self, f), lo=0.0, lo_open=True))
-        object.__setattr__(self, "restitution", check_real("restitution", self.restitution, lo=0.0,
-                                                           hi=1.0, hi_open=True))
         object.__setattr__(self, "delay_s", check_real("delay_s", self.delay_s, lo=0.0))
-        object.__setattr__(self, "damping_N_s_m", check_real("damping_N_s_m", self.damping_N_s_m, lo=0.0))
-        object.__setattr__(self, "n_modes", check_int("n_modes", self.n_modes, lo=0, hi=1024))
-        if self.drill is not None and not isinstance(self.drill, DrillString):
-            raise ValueError(f"drill must be a DrillString; got {type(self.drill).__name__}")
 
     # -- scales -----------------------------------------------------------------------------
     @property
@@ -133,30 +234,12 @@ class Drifter:
         return self.supply_pressure_Pa * self.return_area_m2
 
     @property
-    def omega_rad_s(self) -> float:
-        r"""The time scale :math:`\Omega = \sqrt{p A_s / (m L)}` (1/s): the stroke force is 1."""
-        return math.sqrt(self.stroke_force_N / (self.bar.mass_kg * self.bar.length_m))
+    def _force_scale_N(self) -> float:
+        """The stroke force ``p A_s`` (N): the stroke force is 1."""
+        return self.stroke_force_N
 
-    def model(self):
-        """The dimensionless bar (eq. 2): :class:`~impactbar.BarModel`."""
-        from ..model import BarModel
-
-        om, bar = self.omega_rad_s, self.bar
-        impact = "paper" if self.drill is None else self.drill.law(bar, self.scales)
-        return BarModel(s=bar.wave_speed_m_s / (bar.length_m * om),
-                        d=self.damping_N_s_m / (bar.mass_kg * om), R=self.restitution,
-                        n_modes=self.n_modes, impact=impact, piston=self.bar.piston)
-
-    @property
-    def scales(self):
-        """The units of the dimensionless model (:class:`~impactbar.physical.Scales`): time
-        ``1/Omega``, length ``L``, force ``p A_s`` (the stroke force is 1)."""
-        from .hammer import Scales
-
-        om, bar = self.omega_rad_s, self.bar
-        return Scales(omega_rad_s=om, time_s=1.0 / om, length_m=bar.length_m,
-                      velocity_m_s=bar.length_m * om, force_N=self.stroke_force_N,
-                      damping_N_s_m2=bar.mass_kg / bar.length_m * om)
+    # (the base's, named here so that the class's page lists them)
+    omega_rad_s, scales, model = _ScaledDrifter.omega_rad_s, _ScaledDrifter.scales, _ScaledDrifter.model
 
     def drive(self):
         """The dimensionless valve: :class:`~impactbar.PositionSwitchedDrive`."""
@@ -181,12 +264,9 @@ class Drifter:
         mode's arrival), ``percussive_power_kW``; with a drill string also the means per blow of
         ``work_on_rock_J``, ``penetration_mm`` and ``efficiency``, and ``drilling_rate_m_min``
         (the mean penetration times the blow frequency)."""
-        from ..simulation import InitialState, simulate
+        from ..simulation import simulate
 
-        dur = check_real("duration_s", duration_s, lo=0.0, lo_open=True)
-        L, om = self.bar.length_m, self.omega_rad_s
-        start = InitialState.rigid(-check_real("start_gap_m", start_gap_m, lo=0.0) / L,
-                                   start_velocity_m_s / (L * om), self.n_modes)
+        dur, L, om, start = _rigid_start(self, duration_s, start_gap_m, start_velocity_m_s)
         tr = simulate(self.model(), self.drive(), start, dur * om)
         t = tr.impact_times / om
         late = t >= 0.5 * dur
@@ -216,32 +296,9 @@ class Drifter:
     def from_config(cls, config: dict) -> Drifter:
         """A drifter from a nested dict of inputs with units (the keys in the module's docstring;
         unknown keys refused, naming them)."""
-        if not isinstance(config, dict):
-            raise ValueError(f"config must be a dict; got {type(config).__name__}")
-        extra = sorted(set(config) - set(_KEYS) - set(ROCK_SECTIONS) - {"name"})
-        if extra:
-            raise ValueError(f"unknown section [{extra[0]}]; allowed: "
-                             f"{', '.join(sorted((*_KEYS, *ROCK_SECTIONS)))}")
-        sec = {}
-        for name, keys in _KEYS.items():
-            sec[name] = _section(config, name, keys)
-        for name, key in (("bar", "E"), ("bar", "density"), ("bar", "length"), ("valve", "supply_pressure"),
-                          ("valve", "stroke_area"), ("valve", "return_area"), ("valve", "switch_out")):
-            if key not in sec[name]:
-                raise ValueError(f"missing key {name}.{key}")
-        b, v, st = sec["bar"], sec["valve"], sec["stop"]
-        bar = piston_from_units(b["E"], b["density"], b["length"], diameter=b.get("diameter"),
-                                area=b.get("area"))
-        drill = rock_from_config(config, bar)  # [rod], [bit], [rock]: the rod-rock law
-        if drill is not None and not st:
-            R = 0.0  # the rod and the rock replace the stop
-        elif ("restitution" in st) == ("area" in st):
-            raise ValueError("give exactly one of stop.restitution and stop.area")
-        elif "restitution" in st:
-            R = to_si("stop.restitution", st["restitution"], "", "0.215")
-        else:
-            a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
-            R = (a_s - bar.area_m2) / (a_s + bar.area_m2)
+        sec = _config_sections(config, _KEYS, _REQUIRED)
+        v = sec["valve"]
+        bar, drill, R = _piston_drill_restitution(config, sec)
 
         def area(key):
             return to_si(f"valve.{key}", v[key], "m**2", "'2.8 cm^2'", what="an area")
@@ -386,9 +443,16 @@ def drifter_preset(name: str, **changes) -> Drifter:
     ValueError
         An unknown preset name, or a change that makes the config invalid (the key named).
     """
-    if name not in DRIFTER_PRESETS:
-        raise ValueError(f"unknown drifter preset {name!r}; known: {', '.join(DRIFTER_PRESETS)}")
-    cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in DRIFTER_PRESETS[name].items()}
+    return Drifter.from_config(_preset_config(DRIFTER_PRESETS, "drifter", name, changes))
+
+
+def _preset_config(presets: dict, kind: str, name: str, changes: dict) -> dict:
+    """A copy of the config ``presets[name]`` with ``changes`` (section: keys) merged into its
+    sections; an unknown name refused (:class:`ValueError`, naming the ``kind`` of preset and the
+    known ones)."""
+    if name not in presets:
+        raise ValueError(f"unknown {kind} preset {name!r}; known: {', '.join(presets)}")
+    cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in presets[name].items()}
     for sec, keys in changes.items():
         cfg.setdefault(sec, {}).update(keys)
-    return Drifter.from_config(cfg)
+    return cfg

@@ -178,6 +178,7 @@ def build(config: dict, folder=None, *, where="config") -> Hammer | Drifter | Ci
     Returns
     -------
     Hammer, Drifter or CircuitDrifter
+        Built by the kind's own reader (its ``from_config``, or :func:`load_config`).
 
     Raises
     ------

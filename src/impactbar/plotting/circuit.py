@@ -235,6 +235,7 @@ def plot_circuit_schematic(drifter=None, ax=None):
     Returns
     -------
     matplotlib.axes.Axes
+        The axes the diagram is drawn on.
 
     Raises
     ------

@@ -55,10 +55,12 @@ def plot_operating_map(ds, dims, variable: str | None = None, ax=None):
     variable : str, optional
         A stored variable (default :data:`DEFAULT_MAP_VARIABLE`).
     ax : matplotlib.axes.Axes, optional
+        Where to draw; by default on a new figure of 7.2 x 4.8 inches.
 
     Returns
     -------
     matplotlib.axes.Axes
+        The map's axes (its colour bar, for two axes, on the same figure).
 
     Raises
     ------

@@ -121,6 +121,7 @@ def plot_efficiency_map(ds, dims, ax=None):
     dims : sequence of str
         One or two axes (two: the first is the chart's rows).
     ax : matplotlib.axes.Axes, optional
+        Default: a new figure, 6.4 x 4.8 inches.
 
     Returns
     -------

@@ -60,19 +60,8 @@ def phase_residual(model: BarModelLike, load: Load, phase) -> np.ndarray:
 def phase_roots(model: BarModelLike, load: Load, *, closed_form: bool = True) -> list[tuple[float, int]]:
     """Every root of the phase equation in ``[0, 2 pi)``, with its multiplicity (1, or 2 at a fold):
     :func:`impactbar.orbits.phase_roots` without its check of the inputs (the solvers check them
-    once). Certified: see there.
-
-    Parameters
-    ----------
-    model : BarModel
-    load : Load
-    closed_form : bool
-        Use the closed form for a load with a single harmonic (default).
-
-    Returns
-    -------
-    list of (float, int)
-        ``(phase, multiplicity)`` sorted by phase.
+    once). Certified: see there, for the parameters and the ``(phase, multiplicity)`` pairs returned,
+    sorted by phase.
 
     Raises
     ------

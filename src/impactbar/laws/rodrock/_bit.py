@@ -12,6 +12,30 @@ import numpy as np
 _LOAD, _ELASTIC, _FREE = 0, 1, 2
 
 
+def damped_flow(b, m, half, tau):
+    """The bit's flow on a rock branch, ``m p'' + Z p' + b p = 0`` (``half = -Z/(2m)``, ``b > 0``),
+    after ``tau``: ``(C, S, delta)`` with ``e^{A tau} = C I + S (A - half I)``, ``delta`` the
+    eigenvalues' half-distance where real (else 0). Plain Python: :class:`_Bit` calls it as it is,
+    the compiled blow (:mod:`impactbar.laws.rodrock._rockkernel`) compiles it."""
+    disc = half * half - b / m
+    delta = 0.0
+    if disc >= 0.0:
+        delta = math.sqrt(disc)
+        e2 = math.exp((half - delta) * tau)
+        if delta * tau > 1.0:  # a stiff bit (small mass): e2 underflows, expm1 overflows
+            # lam_1 = half + delta without the cancellation of a stiff bit's two near-opposite terms:
+            # lam_1 lam_2 = b/m (with the cancellation, bit masses 1e-100 .. 1e-16 lost the rock's load)
+            S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
+        else:
+            S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
+        C = e2 + delta * S
+    else:
+        om = math.sqrt(-disc)
+        e = math.exp(half * tau)
+        C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
+    return C, S, delta
+
+
 class _Bit:
     """The bit and the rock at the rod's end: exact per-cell solution of
     ``m p'' + Z p' + R(p) = 2 F + f`` on the branches of the bilinear law."""
@@ -118,24 +142,7 @@ class _Bit:
         p_eq = ref + E / b
         x0, w0 = self.p - p_eq, self.w
         half = -Z / (2.0 * m)
-        disc = half * half - b / m
-        delta = 0.0
-        if disc >= 0.0:
-            delta = math.sqrt(disc)
-            lam2 = half - delta
-            e2 = math.exp(lam2 * tau)
-            if delta * tau > 1.0:  # a stiff bit (small mass): e2 underflows, expm1 overflows
-                # lam_1 = half + delta without the cancellation of a stiff bit's two near-opposite terms:
-                # lam_1 lam_2 = b/m (with the cancellation, bit masses 1e-100 .. 1e-16 lost the rock's
-                # load)
-                S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
-            else:
-                S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
-            C = e2 + delta * S
-        else:
-            om = math.sqrt(-disc)
-            e = math.exp(half * tau)
-            C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
+        C, S, delta = damped_flow(b, m, half, tau)
         # A - half I = [[-half, 1], [-b/m, half]]
         if delta > 0.5 * abs(half):
             # overdamped: p - p0 = g/(m 2 delta) (expm1(lam_1 t)/lam_1 - expm1(lam_2 t)/lam_2) + S w0 with

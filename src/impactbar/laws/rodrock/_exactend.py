@@ -159,6 +159,22 @@ def _momentum(ws, t, first, last):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _bit_rock_energy(PR, BS, BI):
+    """The terms of ``Psi`` besides the rod's waves: the bit's kinetic energy and the two potential
+    terms of the rock and the feed above the static state under the feed (the second 0 with the bit
+    on the rock), which :func:`account` and :func:`may_end` add in this order."""
+    m = PR[PR_MASS]
+    w = BS[BS_W]
+    ku = PR[PR_KU]
+    f = PR[PR_FEED]
+    br = BI[BI_BRANCH]
+    if br == FREE:
+        return 0.5 * m * w * w, f * (BS[BS_PPERM] - BS[BS_P]), f * f / (2.0 * ku)
+    R = PR[PR_K] * BS[BS_X] if br == LOAD else ku * BS[BS_X]
+    return 0.5 * m * w * w, (R - f) * (R - f) / (2.0 * ku), 0.0
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def account(ws, t):
     """Momenta and wave energies of the piston and the rod at ``t`` (into ``CT[CT_PP:CT_ER + 1]``),
     and ``Psi``, the energy of rod, bit and rock above the static state under the feed
@@ -182,17 +198,11 @@ def account(ws, t):
         else:
             Pr += m1 - m2
             Er += e1 + e2
-    m = PR[PR_MASS]
-    w = BS[BS_W]
-    Pr += m * w
+    Pr += PR[PR_MASS] * BS[BS_W]
     ku = PR[PR_KU]
     f = PR[PR_FEED]
-    br = BI[BI_BRANCH]
-    if br == FREE:
-        psi = Er + 0.5 * m * w * w + f * (BS[BS_PPERM] - BS[BS_P]) + f * f / (2.0 * ku)
-    else:
-        R = PR[PR_K] * BS[BS_X] if br == LOAD else ku * BS[BS_X]
-        psi = Er + 0.5 * m * w * w + (R - f) * (R - f) / (2.0 * ku)
+    kin, pot, pot_feed = _bit_rock_energy(PR, BS, BI)
+    psi = Er + kin + pot + pot_feed
     CT[CT_PP] = Pp
     CT[CT_EP] = Ep
     CT[CT_PR] = Pr
@@ -216,16 +226,9 @@ def may_end(ws, t):
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
     n_p = int(PR[PR_NP])
-    m = PR[PR_MASS]
-    w = BS[BS_W]
-    ku = PR[PR_KU]
-    f = PR[PR_FEED]
-    br = BI[BI_BRANCH]
-    if br == FREE:
-        psi = 0.5 * m * w * w + f * (BS[BS_PPERM] - BS[BS_P]) + f * f / (2.0 * ku)
-    else:
-        R = PR[PR_K] * BS[BS_X] if br == LOAD else ku * BS[BS_X]
-        psi = 0.5 * m * w * w + (R - f) * (R - f) / (2.0 * ku)
+    kin, pot, pot_feed = _bit_rock_energy(PR, BS, BI)
+    psi = kin + pot + pot_feed
+    m, w, ku, f, br = PR[PR_MASS], BS[BS_W], PR[PR_KU], PR[PR_FEED], BI[BI_BRANCH]
     # what certify's ends need besides Psi: the piston out of contact and not moving on (its
     # momentum), and without a feed whether the rod may fly free of the rock (the rod's momentum)
     gone = False

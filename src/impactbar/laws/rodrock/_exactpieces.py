@@ -93,9 +93,7 @@ def blk_trim(B, N):
 @numba.njit(cache=CACHE, nogil=True)
 def blk_eval(B, N, lam, tau):
     """Value, first and second derivative (real parts) at ``tau``."""
-    f0 = 0.0
-    f1 = 0.0
-    f2 = 0.0
+    f0 = f1 = f2 = 0.0
     for e in range(N.size):
         n = N[e]
         if n == 0:
@@ -136,9 +134,7 @@ def cabs(z):
 def blk_abs(B, N, lam, tau):
     """Sums of the absolute values of the terms of the value and of its first two derivatives at
     ``tau`` (their rounding scales)."""
-    a0 = 0.0
-    a1 = 0.0
-    a2 = 0.0
+    a0 = a1 = a2 = 0.0
     for e in range(N.size):
         n = N[e]
         if n == 0:
@@ -664,6 +660,24 @@ def _same(B, N, S, NS, tol):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def _fill_piece(B, N, TK, TC, CNT, PF, PI, k, valid, ref, flag):
+    """Write the terms of ``B`` into the pool and piece ``k``'s fields but its start and its
+    successor (``valid``, ``ref``, ``flag``, its integrals NaN until computed); False (nothing
+    written to the piece) where the pool of terms is full."""
+    st, nt = _write_terms(B, N, TK, TC, CNT)
+    if st < 0:
+        return False
+    PI[k, 1] = st
+    PI[k, 2] = nt
+    PI[k, 3] = flag
+    PF[k, 1] = valid
+    PF[k, 2] = ref
+    PF[k, 3] = math.nan
+    PF[k, 4] = math.nan
+    return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     """Emit on channel ``c`` the piece ``B`` from emission time ``a`` (``B`` is pruned in place). A
     piece equal to the continuation of the open one (exact, the same flag) is not emitted; one
@@ -676,17 +690,7 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     if tail >= 0:
         t0 = PF[tail, 0]
         if t0 == a:  # replace (nobody has received it yet)
-            st, nt = _write_terms(B, N, TK, TC, CNT)
-            if st < 0:
-                return False
-            PI[tail, 1] = st
-            PI[tail, 2] = nt
-            PI[tail, 3] = flag
-            PF[tail, 1] = valid
-            PF[tail, 2] = ref
-            PF[tail, 3] = math.nan
-            PF[tail, 4] = math.nan
-            return True
+            return _fill_piece(B, N, TK, TC, CNT, PF, PI, tail, valid, ref, flag)
         if PF[tail, 1] == INF and PI[tail, 3] == flag and valid == INF and PF[tail, 2] == ref:
             if PI[tail, 2] == 0:
                 if blk_is_zero(N):
@@ -699,18 +703,10 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     if npc >= PF.shape[0]:
         CNT[CNT_FULL] = 1
         return False
-    st, nt = _write_terms(B, N, TK, TC, CNT)
-    if st < 0:
+    if not _fill_piece(B, N, TK, TC, CNT, PF, PI, npc, valid, ref, flag):
         return False
     PF[npc, 0] = a
-    PF[npc, 1] = valid
-    PF[npc, 2] = ref
-    PF[npc, 3] = math.nan
-    PF[npc, 4] = math.nan
     PI[npc, 0] = -1
-    PI[npc, 1] = st
-    PI[npc, 2] = nt
-    PI[npc, 3] = flag
     CNT[CNT_PIECES] = npc + 1
     if tail >= 0:
         PI[tail, 0] = npc

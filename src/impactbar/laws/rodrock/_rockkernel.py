@@ -14,6 +14,7 @@ import numba
 import numpy as np
 
 from ...dynamics.kernels import CACHE
+from ._bit import damped_flow
 
 _LOAD, _ELASTIC, _FREE = 0.0, 1.0, 2.0
 
@@ -104,28 +105,8 @@ def _massless(bs, bp, E, T):
     return tau
 
 
-@numba.njit(cache=CACHE, nogil=True)
-def _damped(b, m, half, tau):
-    """The bit's flow on a rock branch, ``m p'' + Z p' + b p = 0`` (``half = -Z/(2m)``, ``b > 0``),
-    after ``tau``: ``(C, S, delta)`` with ``e^{A tau} = C I + S (A - half I)``, ``delta`` the
-    eigenvalues' half-distance where real (else 0)."""
-    disc = half * half - b / m
-    delta = 0.0
-    if disc >= 0.0:
-        delta = math.sqrt(disc)
-        e2 = math.exp((half - delta) * tau)
-        if delta * tau > 1.0:  # a stiff bit (small mass): e2 underflows, expm1 overflows
-            # lam_1 = half + delta without the cancellation of a stiff bit's two near-opposite terms:
-            # lam_1 lam_2 = b/m (with the cancellation, bit masses 1e-100 .. 1e-16 lost the rock's load)
-            S = (math.exp(b / m / (half - delta) * tau) - e2) / (2.0 * delta)
-        else:
-            S = e2 * (math.expm1(2.0 * delta * tau) / (2.0 * delta) if delta * tau > 1e-300 else tau)
-        C = e2 + delta * S
-    else:
-        om = math.sqrt(-disc)
-        e = math.exp(half * tau)
-        C, S = e * math.cos(om * tau), e * math.sin(om * tau) / om
-    return C, S, delta
+#: The bit's flow on a rock branch (:func:`impactbar.laws.rodrock._bit.damped_flow`, compiled).
+_damped = numba.njit(cache=CACHE, nogil=True)(damped_flow)
 
 
 @numba.njit(cache=CACHE, nogil=True)

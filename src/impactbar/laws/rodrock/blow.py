@@ -143,8 +143,7 @@ class Blow:
     Examples
     --------
     >>> from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
-    >>> law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)],
-    ...               rock=BilinearRock(k=2.5, k_u=25.0))
+    >>> law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)], rock=BilinearRock(k=2.5, k_u=25.0))
     >>> blow = single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0, t_max=39.0)
     >>> round(blow.work_on_rock / blow.energy_at_impact, 6) == round(blow.efficiency, 6)
     True

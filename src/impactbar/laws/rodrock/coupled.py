@@ -91,15 +91,15 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     model : BarModel
         Under :class:`~impactbar.RodRock` (its grid, rock, bit and feed; damping neglected in the
         blow, as in the law's own).
-    drive : Drive
-        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
-    state : DriveState
+    drive, state : Drive, DriveState
+        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`), and its state
+        as the piston arrives.
     t0 : float
         Time of the arrival (model units).
     q, v : array_like, shape (N + 1,)
-        Modal state at arrival, positions from the shank (``u(1) = 0``).
+        Modal positions (from the shank, ``u(1) = 0``) and velocities at arrival.
     settings : FlightSettings, optional
-        The drive's integrator (default the drive's).
+        How the drive is integrated over the blow's steps (default the drive's own settings).
 
     Returns
     -------

@@ -185,12 +185,11 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None) ->
         A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
     state : DriveState
         The drive's state at the arrival.
-    t0 : float
-        Time of the arrival (model units).
-    q, v : array_like, shape (N + 1,)
-        Modal state at arrival, positions from the shank (``u(1) = 0``).
+    t0, q, v : float, array_like
+        The arrival: its time (model units) and the piston's modal state, each of shape
+        ``(N + 1,)``, positions from the shank (``u(1) = 0``).
     settings : FlightSettings, optional
-        The drive's integrator (default the drive's).
+        The integrator of the drive's flight beside each iterate (default the drive's).
 
     Returns
     -------

@@ -244,7 +244,7 @@ class RodRock(ContactLaw):
         Parameters
         ----------
         model : BarModel
-            A bar under this law.
+            A bar under the rod-rock law.
 
         Returns
         -------
@@ -435,6 +435,7 @@ class RodRock(ContactLaw):
         Returns
         -------
         float
+            In the model's units.
 
         Raises
         ------
@@ -579,15 +580,14 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
     Raises
     ------
     ValueError
-        Before any array is built: ``model`` not a ``BarModel`` under ``RodRock``;
-        ``impact_velocity`` not finite and ``> 0`` or its wave force ``s V`` outside
-        ``[1e-100, 1e100]``; the law's ``feed`` above ``1e100`` or its ``bit_mass`` in
-        ``(0, 1e-100)`` (the wave energies would overflow); ``t_max`` not finite and ``> 0``;
-        ``cells_per_piston`` not an integer ``>= 1``; a grid of more than ``5e9`` cell updates (a rod
-        far longer, in travel time, than the piston, or too fine a grid); a bit ringing on the rock
-        more than ``1e6`` radians a lattice step; ``piston`` neither None
-        nor a ``SteppedPiston``; ``method`` not
-        one of those above; ``semi_infinite`` not a bool, or with the lattice.
+        Before any array is built: ``model`` not a ``BarModel`` under ``RodRock``; ``impact_velocity``
+        not finite and ``> 0`` or its wave force ``s V`` outside ``[1e-100, 1e100]``; the law's
+        ``feed`` above ``1e100`` or its ``bit_mass`` in ``(0, 1e-100)`` (the wave energies would
+        overflow); ``t_max`` not finite and ``> 0``; ``cells_per_piston`` not an integer ``>= 1``; a
+        grid of more than ``5e9`` cell updates (a rod far longer, in travel time, than the piston, or
+        too fine a grid); a bit ringing on the rock more than ``1e6`` radians a lattice step; ``piston``
+        neither None nor a ``SteppedPiston``; ``method`` not one of those above; ``semi_infinite`` not
+        a bool, or with the lattice.
 
     Examples
     --------

@@ -455,6 +455,7 @@ def wave_existence_edge(model: BarModelLike, k: int = 1) -> float:
     Parameters
     ----------
     model : BarModel
+        Under the wave law.
     k : int
         Order of the harmonic, ``>= 1``.
 

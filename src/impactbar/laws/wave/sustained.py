@@ -44,6 +44,7 @@ def rod_impedance(model) -> float:
     Parameters
     ----------
     model : BarModel
+        Its ``s`` and ``R`` (the rod's area ratio, ``A_s/A = (1 + R)/(1 - R)``).
 
     Returns
     -------
