@@ -167,3 +167,24 @@ def test_the_laws_parameter_is_swept(registered, tmp_path):
         parse_spec({**doc, "law": {"kind": "linear-restitution", "slope": 1.0}})
     with pytest.raises(ValueError, match=r"impact = 'wave' but \[law\] kind = 'linear-restitution'"):
         parse_spec({**doc, "model": {**doc["model"], "impact": "wave"}})
+
+
+def test_the_command_line_reads_a_law_table(registered, tmp_path, capsys):
+    """``impactbar sweep SPEC.toml`` reads the same ``[law]`` table (the TOML), and refuses an
+    unknown kind in one line before any work (exit status 2)."""
+    pytest.importorskip("xarray")
+    from impactbar.cli import main
+    from impactbar.sweeps import load_spec, parse_spec
+
+    lines = ['task = "orbits"', "[model]", "s = 10.0", "d = 0.05", "R = 0.35", "n_modes = 2",
+             "[law]", 'kind = "linear-restitution"', "c = 0.02",
+             "[load]", 'kind = "cosine"', "p0 = 0.5", "pk = 1.0", "k = 1",
+             "[axes]", "c = { values = [0.0, 0.01] }"]
+    path = tmp_path / "law.toml"
+    path.write_text("\n".join(lines) + "\n")
+    spec = load_spec(path)
+    assert spec == parse_spec(spec.to_dict()) and spec.law == {"kind": "linear-restitution", "c": 0.02}
+    path.write_text("\n".join(lines).replace('"linear-restitution"', '"nope"') + "\n")
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out.zarr")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "[law] kind must be one of" in err[0] and "got 'nope'" in err[0]
