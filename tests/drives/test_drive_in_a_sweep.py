@@ -183,3 +183,22 @@ def test_register_drive_refuses_a_taken_kind_and_a_non_drive():
         register_drive(Other)
     with pytest.raises(ValueError, match="subclass of Drive"):
         register_drive(int)
+
+
+def test_the_valve_is_swept_by_its_kind(tmp_path):
+    """The valve is in the table as ``"position-switched"``: a ``[drive]`` table sweeps its
+    ``switch_out``; on the rigid undamped piston each point's orbit is the closed form of energy and
+    restitution (theory §10), ``v^2 (1 - R^2) = 2 x1 (stroke + ret)``."""
+    pytest.importorskip("xarray")
+    pytest.importorskip("zarr")
+    from impactbar.sweeps import open_sweep, parse_spec, run_sweep
+
+    spec = parse_spec({"task": "orbits", "model": {"s": 10.0, "d": 0.0, "R": 0.215, "n_modes": 0},
+                       "drive": {"kind": "position-switched", "stroke": 1.0, "ret": 1.0, "switch_out": 1.0},
+                       "axes": {"switch_out": {"values": [0.5, 1.0]}}})
+    run_sweep(spec, tmp_path / "valve.zarr", executor="threads", n_workers=1, progress=False)
+    ds = open_sweep(tmp_path / "valve.zarr")
+    for i, x1 in enumerate((0.5, 1.0)):
+        assert int(ds["n_orbits"].values[i]) == 1 and bool(ds["stable"].values[i, 0])
+        v = np.sqrt(2.0 * x1 * 2.0 / (1.0 - 0.215**2))
+        assert ds["impact_velocity"].values[i, 0] == pytest.approx(v, rel=1e-12)
