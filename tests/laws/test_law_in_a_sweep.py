@@ -167,6 +167,9 @@ def test_the_laws_parameter_is_swept(registered, tmp_path):
         parse_spec({**doc, "law": {"kind": "linear-restitution", "slope": 1.0}})
     with pytest.raises(ValueError, match=r"impact = 'wave' but \[law\] kind = 'linear-restitution'"):
         parse_spec({**doc, "model": {**doc["model"], "impact": "wave"}})
+    rock = {"k": 60.0, "k_u": 600.0, "segments": [{"length": 10.0, "impedance": 1.0}]}
+    with pytest.raises(ValueError, match=r"^\[law\] and \[rock\] both name the impact law: give one$"):
+        parse_spec({**doc, "rock": rock})
 
 
 def test_the_command_line_reads_a_law_table(registered, tmp_path, capsys):
