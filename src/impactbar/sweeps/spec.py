@@ -114,12 +114,13 @@ class SweepSpec(ChunkedGrid):
         ``s``, ``d``, ``R``, ``n_modes`` of :class:`impactbar.BarModel`, all required, and
         optionally its ``impact`` law (``"paper"`` or ``"wave"``; ``"rodrock"`` with ``rock``; not
         an axis).
-    load : dict
+    load : dict or None
         ``kind`` (a key of the table of loads, :data:`impactbar.loads.LOADS`) and that load's
         :attr:`~impactbar.Load.parameters`, all required: ``p0, pk, k``
         (:class:`impactbar.CosineLoad`), ``q, kappa`` (:class:`impactbar.SquareWaveLoad`),
         ``p0, coefficients`` (:class:`impactbar.FourierLoad`; ``coefficients`` as ``[[re, im],
         ...]`` or real numbers), ``breaks, levels`` (:class:`impactbar.PiecewiseConstantLoad`).
+        ``None`` where ``drive`` is given.
     axes : tuple of Axis
         At least one; each names a parameter of the bar, the load or the impact law
         (:func:`impactbar.parameters.parameters` of the spec's bar and load: a field present in
