@@ -11,6 +11,7 @@ drive with state between impacts, by scipy's ``solve_ivp``), ``switched`` (the v
 imports only ``impactbar.model``, ``impactbar.dynamics`` and ``impactbar._shared``.
 """
 
+from .base import DRIVES as DRIVES
 from .base import Drive as Drive
 from .base import DriveEvent as DriveEvent
 from .base import DriveState as DriveState
@@ -19,10 +20,14 @@ from .base import GapCrossing as GapCrossing
 from .base import RateCrossing as RateCrossing
 from .base import SurfaceEvent as SurfaceEvent
 from .base import TimedEvent as TimedEvent
+from .base import register_drive as register_drive
 from .orbitproblem import OrbitData as OrbitData
 from .orbitproblem import OrbitProblem as OrbitProblem
 from .orbitproblem import OrbitSearch as OrbitSearch
 from .switched import PositionSwitchedDrive as PositionSwitchedDrive
 
 __all__ = ["Drive", "DriveState", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent", "SurfaceEvent",
-           "FlightSettings", "OrbitProblem", "OrbitData", "OrbitSearch", "PositionSwitchedDrive"]
+           "FlightSettings", "OrbitProblem", "OrbitData", "OrbitSearch", "PositionSwitchedDrive", "DRIVES",
+           "register_drive"]
+
+DRIVES[PositionSwitchedDrive.kind] = PositionSwitchedDrive

@@ -58,6 +58,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 import numpy as np
 
 from .._shared.parameters import NamedParameters
+from .._shared.registry import register
 
 if TYPE_CHECKING:
     from .orbitproblem import OrbitProblem
@@ -380,6 +381,8 @@ class Drive(NamedParameters, ABC):
     """
 
     family: ClassVar[str] = "drive"
+    #: the drive's name in :data:`DRIVES` (a sweep spec's ``[drive] kind``, :func:`register_drive`)
+    kind: ClassVar[str] = ""
     integrator: ClassVar[FlightSettings] = FlightSettings()
     state_size: ClassVar[int] = 0
     state_names: ClassVar[tuple[str, ...]] = ()
@@ -536,3 +539,36 @@ class Drive(NamedParameters, ABC):
         for the generic shooting problem of :mod:`impactbar.orbits.switched`. ``constant_load(p)``
         gives the load of a constant force ``p`` (for a contact law's map)."""
         return None
+
+
+#: The table of drives by :attr:`~Drive.kind`, as :data:`impactbar.loads.LOADS` is of the loads: a
+#: sweep spec's ``[drive] kind`` names one, its other keys the constructor's arguments.
+DRIVES: dict[str, type[Drive]] = {}
+
+
+def register_drive(cls: type[Drive]) -> type[Drive]:
+    """Enter a drive class in the table :data:`DRIVES` by its :attr:`~Drive.kind`, so that a sweep
+    spec's ``[drive] kind`` knows it (usable as a class decorator).
+
+    Parameters
+    ----------
+    cls : type
+        A subclass of :class:`Drive` with a non-empty ``kind``.
+
+    Returns
+    -------
+    type
+        ``cls``.
+
+    Raises
+    ------
+    ValueError
+        For a class that is not a drive, without a ``kind``, or whose ``kind`` another class holds.
+
+    Examples
+    --------
+    >>> from impactbar.drives import PositionSwitchedDrive, register_drive
+    >>> register_drive(PositionSwitchedDrive) is PositionSwitchedDrive  # already there
+    True
+    """
+    return register(DRIVES, cls, Drive, "kind", "drive")

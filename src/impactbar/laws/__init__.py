@@ -22,6 +22,7 @@ from .base import ContactLaw as ContactLaw
 from .base import LawNotSupported as LawNotSupported
 from .base import OrbitState as OrbitState
 from .base import get_law as get_law
+from .base import register_law as register_law
 from .paper import InstantImpact as InstantImpact
 from .paper import PaperLaw as PaperLaw
 from .rodrock import BilinearRock as BilinearRock
@@ -33,8 +34,8 @@ from .wave import PressedContact as PressedContact
 from .wave import WaveLaw as WaveLaw
 
 __all__ = ["ContactLaw", "OrbitState", "LawNotSupported", "PaperLaw", "WaveLaw", "PressedContact",
-           "InstantImpact", "LAWS", "get_law", "RodRock", "RodSegment", "BilinearRock", "single_blow",
-           "SteppedLongRod", "piston_law"]
+           "InstantImpact", "LAWS", "get_law", "register_law", "RodRock", "RodSegment", "BilinearRock",
+           "single_blow", "SteppedLongRod", "piston_law"]
 
 
 def piston_law(law: ContactLaw, stepped: bool) -> ContactLaw:

@@ -16,8 +16,9 @@ from typing import Any, ClassVar, NamedTuple, Protocol
 import numpy as np
 
 from .._shared.parameters import Parameter
+from .._shared.registry import register
 
-__all__ = ["ContactLaw", "LawNotSupported", "OrbitState", "DrivenContact", "BarModelLike"]
+__all__ = ["ContactLaw", "LawNotSupported", "OrbitState", "DrivenContact", "BarModelLike", "register_law"]
 
 
 class BarModelLike(Protocol):
@@ -640,3 +641,43 @@ def get_law(spec) -> ContactLaw:
         raise ValueError(f"the impact law {spec!r} has required parameters: "
                          f"pass impact={PARAMETERISED[spec]}")
     raise ValueError(f"impact must be one of {list(LAWS)} or a ContactLaw; got impact={spec!r}")
+
+
+def register_law(cls: type[ContactLaw]) -> type[ContactLaw]:
+    """Enter a law class in the table :data:`LAWS` by its :attr:`~ContactLaw.name`, so that
+    ``BarModel(impact=name)`` and a sweep spec's ``[law] kind`` know it (usable as a class
+    decorator). Its fields (the dataclass's) are then the ``[law]`` table's other keys.
+
+    Parameters
+    ----------
+    cls : type
+        A subclass of :class:`ContactLaw` with a non-empty ``name`` whose fields all have defaults
+        (the name alone builds it).
+
+    Returns
+    -------
+    type
+        ``cls``.
+
+    Raises
+    ------
+    ValueError
+        For a class that is not a law, without a ``name``, whose ``name`` another class holds (or
+        a law with required parameters, :data:`PARAMETERISED`), or that its name alone cannot build.
+
+    Examples
+    --------
+    >>> from impactbar.laws import PaperLaw, register_law
+    >>> register_law(PaperLaw) is PaperLaw  # already there: registering again changes nothing
+    True
+    """
+    if isinstance(cls, type) and issubclass(cls, ContactLaw) and cls.name in PARAMETERISED:
+        raise ValueError(f"name {cls.name!r} is already the impact law {PARAMETERISED[cls.name]}; choose "
+                         "another name")
+    if isinstance(cls, type) and issubclass(cls, ContactLaw) and cls.name not in LAWS:
+        try:
+            cls()
+        except TypeError as exc:
+            raise ValueError(f"the impact law {cls.__name__} must be built by its name alone (every "
+                             f"field with a default): {exc}") from None
+    return register(LAWS, cls, ContactLaw, "name", "impact law")

@@ -11,6 +11,7 @@ from typing import ClassVar
 import numpy as np
 
 from .._shared.parameters import Parameter
+from .._shared.registry import register
 from .._shared.schema import Schema
 from ..dynamics.kernelview import LoadKernelView
 from ..dynamics.modal import fundamental
@@ -465,13 +466,4 @@ def register_load(cls: type[Load]) -> type[Load]:
     >>> register_load(CosineLoad) is CosineLoad  # already there: registering again changes nothing
     True
     """
-    if not (isinstance(cls, type) and issubclass(cls, Load)):
-        raise ValueError(f"cls must be a subclass of Load; got {cls!r}")
-    kind = cls.kind
-    if not isinstance(kind, str) or not kind:
-        raise ValueError(f"cls.kind must be a non-empty string (the load's name in LOADS); got {kind!r}")
-    held = LOADS.get(kind)
-    if held is not None and held is not cls:
-        raise ValueError(f"kind {kind!r} is already the load {held.__name__}; choose another kind")
-    LOADS[kind] = cls
-    return cls
+    return register(LOADS, cls, Load, "kind", "load")

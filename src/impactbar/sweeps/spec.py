@@ -15,6 +15,7 @@ from .._shared.validate import check_int, check_real
 from ..laws import get_law
 from ..loads import LOADS, Load
 from .grid import ChunkedGrid
+from .parts import DRIVE_MAX_ORBITS, drive_table, law_table
 
 TASKS = ("orbits", "montecarlo", "bifurcation")
 
@@ -53,7 +54,7 @@ DEFAULT_CHUNK_POINTS = {"orbits": 400, "montecarlo": 4, "bifurcation": 32}
 #: sweep is not bound by the store's writes (one file per variable and chunk)
 DEFAULT_CLOSED_FORM_CHUNK_POINTS = 32768
 
-_TOP_KEYS = ("task", "model", "load", "axes", "rock", "chunk_points", *TASKS)
+_TOP_KEYS = ("task", "model", "load", "drive", "law", "axes", "rock", "chunk_points", *TASKS)
 
 #: keys of the optional ``[rock]`` table (the rod-rock law, :class:`impactbar.RodRock`) and of
 #: each of its ``segments``
@@ -115,12 +116,13 @@ class SweepSpec(ChunkedGrid):
         ``s``, ``d``, ``R``, ``n_modes`` of :class:`impactbar.BarModel`, all required, and
         optionally its ``impact`` law (``"paper"`` or ``"wave"``; ``"rodrock"`` with ``rock``; not
         an axis).
-    load : dict
+    load : dict or None
         ``kind`` (a key of the table of loads, :data:`impactbar.loads.LOADS`) and that load's
         :attr:`~impactbar.Load.parameters`, all required: ``p0, pk, k``
         (:class:`impactbar.CosineLoad`), ``q, kappa`` (:class:`impactbar.SquareWaveLoad`),
         ``p0, coefficients`` (:class:`impactbar.FourierLoad`; ``coefficients`` as ``[[re, im],
         ...]`` or real numbers), ``breaks, levels`` (:class:`impactbar.PiecewiseConstantLoad`).
+        ``None`` where ``drive`` is given.
     axes : tuple of Axis
         At least one; each names a parameter of the bar, the load or the impact law
         (:func:`impactbar.parameters.parameters` of the spec's bar and load: a field present in
@@ -150,6 +152,15 @@ class SweepSpec(ChunkedGrid):
         ``efficiency`` and ``efficiency_with_rebound`` (:class:`impactbar.Blow`). Its orbits come
         from Newton's method from guesses (:func:`impactbar.orbits.rock_periodic_orbits`), not a
         certified search.
+    law : dict, optional
+        A registered impact law (:func:`impactbar.laws.register_law`): ``kind``, its name in
+        :data:`impactbar.laws.LAWS`, and its fields (``[model] impact`` absent or the same name);
+        its parameters are then axes too. Not with ``rock``.
+    drive : dict, optional
+        A registered drive in place of ``load`` (:func:`impactbar.drives.register_drive`):
+        ``kind``, its key in :data:`impactbar.drives.DRIVES`, and its constructor's arguments; its
+        parameters are then axes. The ``orbits`` task only; its orbits are
+        :func:`impactbar.periodic_orbits`'s under the drive, ``max_orbits`` 8 unless given.
 
     Examples
     --------
@@ -165,20 +176,33 @@ class SweepSpec(ChunkedGrid):
 
     task: str
     model: dict
-    load: dict
+    load: dict | None
     axes: tuple
     options: dict = field(default_factory=dict)
     chunk_points: int | None = None
     rock: dict | None = None
+    law: dict | None = None
+    drive: dict | None = None
 
     def __post_init__(self) -> None:
         if self.task not in TASKS:
             raise ValueError(f"task must be one of {list(TASKS)}; got {self.task!r}")
         if self.rock is not None:
             object.__setattr__(self, "rock", _check_rock(self.rock))
-        object.__setattr__(self, "model", _check_model(self.model, self.rock))
-        object.__setattr__(self, "load", _check_load(self.load))
-        object.__setattr__(self, "axes", _check_axes(self.axes, self.model, self.load, self.rock))
+        if self.law is not None:
+            if self.rock is not None:
+                raise ValueError("[law] and [rock] both name the impact law: give one")
+            object.__setattr__(self, "law", law_table(self.law)[1])
+        object.__setattr__(self, "model", _check_model(self.model, self.rock, self.law))
+        if (self.load is None) == (self.drive is None):
+            raise ValueError("give [load] or [drive] (the forcing), not both nor neither")
+        if self.drive is not None:
+            if self.task != "orbits":
+                raise ValueError(f"task = {self.task!r}: a [drive] sweeps the 'orbits' task only")
+            object.__setattr__(self, "drive", drive_table(self.drive)[1])
+        else:
+            object.__setattr__(self, "load", _check_load(self.load))
+        object.__setattr__(self, "axes", _check_axes(self.axes, self))
         object.__setattr__(self, "options", _check_options(self.task, self.options, self))
         cp = self.chunk_points
         if cp is None:
@@ -207,7 +231,7 @@ class SweepSpec(ChunkedGrid):
         -------
         dict of str to Parameter
         """
-        return parameters(*_base(self.model, self.load, self.rock))
+        return parameters(*_base(self))
 
     def point(self, index) -> tuple:
         """The bar and the load at a grid point.
@@ -218,21 +242,22 @@ class SweepSpec(ChunkedGrid):
 
         Returns
         -------
-        BarModel, Load
+        BarModel, Load or Drive
         """
         changes = {a.name: a.values[i] for a, i in zip(self.axes, index, strict=True)}
-        return _build(self.model, self.load, changes, self.rock)
+        return _build(self, changes)
 
     # -- serialisation ------------------------------------------------------------------------
     def to_dict(self) -> dict:
         """The spec as plain JSON-able data of the TOML's shape, defaults filled in."""
-        d = {
-            "task": self.task,
-            "model": dict(self.model),
-            "load": {k: _lists(v) for k, v in self.load.items()},
-            "axes": {a.name: {"values": list(a.values)} for a in self.axes},
-            "chunk_points": self.chunk_points,
-        }
+        d = {"task": self.task, "model": dict(self.model)}
+        if self.load is not None:
+            d["load"] = {k: _lists(v) for k, v in self.load.items()}
+        for name in ("drive", "law"):  # (only where given: a spec without them keeps its JSON)
+            if getattr(self, name) is not None:
+                d[name] = dict(getattr(self, name))
+        d["axes"] = {a.name: {"values": list(a.values)} for a in self.axes}
+        d["chunk_points"] = self.chunk_points
         if self.rock is not None:
             d["rock"] = {k: ([dict(g) for g in v] if k == "segments" else v) for k, v in self.rock.items()}
         d[self.task] = dict(self.options)
@@ -303,7 +328,7 @@ def parse_spec(doc) -> SweepSpec:
     unknown = [k for k in doc if k not in _TOP_KEYS]
     if unknown:
         raise ValueError(f"unknown top-level key(s) {unknown}; allowed: {list(_TOP_KEYS)}")
-    for key in ("task", "model", "load", "axes"):
+    for key in ("task", "model", "load" if "drive" not in doc else "drive", "axes"):
         if key not in doc:
             raise ValueError(f"missing top-level key {key!r}")
     task = doc["task"]
@@ -312,17 +337,18 @@ def parse_spec(doc) -> SweepSpec:
     for other in TASKS:
         if other != task and other in doc:
             raise ValueError(f"[{other}] is given but task = {task!r}; use [{task}] for its options")
-    for key in ("model", "load", "axes", task):
+    for key in ("model", "load", "drive", "law", "axes", task):
         if key in doc and not isinstance(doc[key], dict):
             raise ValueError(f"[{key}] must be a table; got {doc[key]!r}")
     axes_doc = doc["axes"]
     axes = tuple(Axis(name, _axis_values(name, table)) for name, table in axes_doc.items())
-    load = dict(doc["load"])
+    load = dict(doc["load"]) if "load" in doc else None
     rock = doc.get("rock")
     if rock is not None and not isinstance(rock, dict):
         raise ValueError(f"[rock] must be a table; got {rock!r}")
     return SweepSpec(task=task, model=dict(doc["model"]), load=load, axes=axes,
-                     options=dict(doc.get(task, {})), chunk_points=doc.get("chunk_points"), rock=rock)
+                     options=dict(doc.get(task, {})), chunk_points=doc.get("chunk_points"), rock=rock,
+                     law=doc.get("law"), drive=doc.get("drive"))
 
 
 def _axis_values(name, table) -> tuple:
@@ -361,7 +387,7 @@ def _complex_pairs(name, seq) -> tuple:
     return tuple(out)
 
 
-def _check_model(model, rock=None) -> dict:
+def _check_model(model, rock=None, law=None) -> dict:
     if not isinstance(model, dict):
         raise ValueError(f"[model] must be a table; got {model!r}")
     unknown = [k for k in model if k not in (*MODEL_FIELDS, "impact")]
@@ -378,6 +404,11 @@ def _check_model(model, rock=None) -> dict:
             raise ValueError(f"[model] impact = {impact!r} but the spec has a [rock] table (the rod-rock "
                              "law): drop impact or set it to 'rodrock'")
         impact = _rock_law(rock)
+    elif law is not None:
+        if "impact" in model and impact != law["kind"]:
+            raise ValueError(f"[model] impact = {impact!r} but [law] kind = {law['kind']!r}: drop impact "
+                             "or make them the same")
+        impact = law_table(law)[0]
     elif impact == "rodrock":
         raise ValueError("[model] impact = 'rodrock' needs a [rock] table: k, k_u and segments")
     try:
@@ -385,8 +416,8 @@ def _check_model(model, rock=None) -> dict:
     except ValueError as exc:
         raise ValueError(f"[model] {exc}") from None
     out = {"s": m.s, "d": m.d, "R": m.R, "n_modes": m.n_modes}
-    if "impact" in model or rock is not None:  # the impact law: "paper" (eq. 10, default), "wave"
-        out["impact"] = m.impact                # or "rodrock" (with [rock])
+    if "impact" in model or rock is not None or law is not None:  # the impact law: "paper" (eq. 10,
+        out["impact"] = m.impact                # default), "wave", "rodrock" (with [rock]) or [law]'s
     return out
 
 
@@ -471,20 +502,22 @@ def _check_load(load) -> dict:
     return out
 
 
-def _check_axes(axes, model, load, rock=None) -> tuple:
-    """The axes, each a parameter of the spec's bar, load or impact law
+def _check_axes(axes, spec) -> tuple:
+    """The axes, each a parameter of the spec's bar, load (or drive) or impact law
     (:func:`impactbar.parameters.parameters`), its values checked by building the point."""
     if not isinstance(axes, tuple | list) or not axes:
         raise ValueError("[axes] must name at least one field to sweep")
-    sweepable = list(parameters(*_base(model, load, rock)))
+    sweepable = list(parameters(*_base(spec)))
+    forcing = (f"[load] (kind = {spec.load['kind']!r})" if spec.load is not None
+               else f"[drive] (kind = {spec.drive['kind']!r})")
     seen = set()
     out = []
     for ax in axes:
         if not isinstance(ax, Axis):
             raise ValueError(f"[axes] entries must be Axis; got {ax!r}")
         if ax.name not in sweepable:
-            raise ValueError(f"[axes] {ax.name!r} is not a field of [model] or of this [load] "
-                             f"(kind = {load['kind']!r}){' or [rock]' if rock else ''}; "
+            raise ValueError(f"[axes] {ax.name!r} is not a field of [model] or of this {forcing}"
+                             f"{' or [rock]' if spec.rock else ''}{' or [law]' if spec.law else ''}; "
                              f"sweepable: {sweepable}")
         if ax.name in seen:
             raise ValueError(f"[axes] {ax.name!r} is given twice")
@@ -492,7 +525,7 @@ def _check_axes(axes, model, load, rock=None) -> tuple:
         values = []
         for v in ax.values:
             try:
-                m, ld = _build(model, load, {ax.name: v}, rock)
+                m, ld = _build(spec, {ax.name: v})
             except ValueError as exc:
                 raise ValueError(f"[axes] {ax.name} = {v!r}: {exc}") from None
             values.append(parameter_value(m, ld, ax.name))
@@ -549,6 +582,8 @@ def _max_orbits_bound(spec) -> int:
     """Most one-impact orbits the load admits (:attr:`impactbar.Load.max_one_impact_orbits`) over
     the base load and every value of the load's axes (the bound of each load depends on one of its
     parameters at most: the order ``k`` of a cosine)."""
+    if spec.drive is not None:
+        return DRIVE_MAX_ORBITS
     extra = 1 if spec.rock is not None else 0  # the rod-rock law's guess from a settled run
     loads = [_make_load(spec.load)] + [_make_load({**spec.load, a.name: v}) for a in spec.axes
                                        if a.name in _load_numbers(spec.load) for v in a.values]
@@ -559,21 +594,24 @@ def _make_load(load: dict):
     return Load.from_record(load)
 
 
-def _base(model: dict, load: dict, rock: dict | None = None):
-    """The spec's bar (under the rod-rock law of its ``[rock]`` table, if any) and load."""
+def _base(spec):
+    """The spec's bar (under the law of its ``[rock]`` or ``[law]`` table, if any) and its load or
+    drive (the spec's tables, read before the spec is whole: its ``model``, ``load``, ``rock``,
+    ``law`` and ``drive`` checked)."""
     from ..model import BarModel
 
-    m = dict(model)
-    if rock is not None:
-        m["impact"] = _rock_law(rock)
-    return BarModel(**m), _make_load(load)
+    m = dict(spec.model)
+    if spec.rock is not None:
+        m["impact"] = _rock_law(spec.rock)
+    elif spec.law is not None:
+        m["impact"] = law_table(spec.law)[0]
+    return BarModel(**m), (drive_table(spec.drive)[0] if spec.drive is not None else _make_load(spec.load))
 
 
-def _build(model: dict, load: dict, changes: dict, rock: dict | None = None):
-    """The bar and load at a grid point: the spec's, with the axes' parameters changed
+def _build(spec, changes: dict):
+    """The bar and load (or drive) at a grid point: the spec's, with the axes' parameters changed
     (:func:`impactbar.parameters.with_parameters`)."""
-    bar, load_ = _base(model, load, rock)
-    return with_parameters(bar, load_, changes)
+    return with_parameters(*_base(spec), changes)
 
 def motion_classes() -> tuple[str, ...]:
     """The ``motion`` coordinate of a ``montecarlo`` store: the classes of
@@ -593,7 +631,8 @@ def closed_form_task(spec) -> bool:
     the spec gives ``chunk_points``."""
     from ..orbits.rigid import CLOSED_FORM_KINDS
 
-    if spec.task != "orbits" or spec.load["kind"] not in CLOSED_FORM_KINDS or spec.rock is not None:
+    if spec.task != "orbits" or spec.load is None or spec.load["kind"] not in CLOSED_FORM_KINDS \
+            or spec.rock is not None or spec.law is not None:
         return False
     if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
         return False

@@ -159,7 +159,8 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     from ..orbits.orbit import ORBIT_FIELDS
     from ..orbits.rigid import CLOSED_FORM_KINDS, closed_form_groups
 
-    if spec.rock is not None or spec.load["kind"] not in CLOSED_FORM_KINDS:
+    if spec.rock is not None or spec.law is not None or spec.load is None \
+            or spec.load["kind"] not in CLOSED_FORM_KINDS:
         return None
     if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
         return None

@@ -114,6 +114,7 @@ class PositionSwitchedDrive(Drive):
     delay_out: float | None = None
     delay_in: float | None = None
 
+    kind = "position-switched"
     parameters = ("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in")
     parameter_ranges = {
         "stroke": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True, "description": "force of the stroke"},
