@@ -558,7 +558,7 @@ def register_drive(cls: type[Drive]) -> type[Drive]:
     Returns
     -------
     type
-        ``cls``.
+        The drive class, unchanged (a decorator returns it).
 
     Raises
     ------

@@ -657,7 +657,7 @@ def register_law(cls: type[ContactLaw]) -> type[ContactLaw]:
     Returns
     -------
     type
-        ``cls``.
+        The law class itself, as a decorator returns it.
 
     Raises
     ------

@@ -45,6 +45,7 @@ def law_table(table):
     Parameters
     ----------
     table : dict
+        ``{"kind": name, field: value, ...}`` as the spec's TOML gives it.
 
     Returns
     -------
