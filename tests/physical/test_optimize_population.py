@@ -127,3 +127,13 @@ def test_a_given_client_gives_the_same_search(serial):
         par = optimize_drifter("circuit-drifter", VARY, workers=client, **KW)
         assert client.status == "running"  # left open
     assert [_record(r) for r in par.history] == [_record(r) for r in res.history]
+
+
+@pytest.mark.parametrize("method", ["cobyla", "differential_evolution"])
+def test_a_dropped_constraint_stays_dropped(method):
+    budget = 10 if method == "differential_evolution" else 3
+    res = optimize_drifter("circuit-drifter", {"valve.switch_out": ("20 mm", "23 mm")},
+                           objective="impact_power", constraints={"max_multiplier": None}, method=method,
+                           popsize=2, max_evaluations=budget, progress=False)
+    assert all("max_multiplier" not in r["constraints"] for r in [*res.history, res.optimum, res.baseline])
+    assert "min_pressure" in res.optimum["constraints"]

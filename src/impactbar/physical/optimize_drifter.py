@@ -546,6 +546,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             raise ValueError("in the circuit's ideal limit (impact_velocity) the method is 'cobyla' (SLSQP's "
                              f"gradients come from the circuit's orbits); got {method!r}")
     limits = _limits(constraints, base, ideal=ideal)
+    kept = dict.fromkeys(DEFAULT_CONSTRAINTS) | limits  # for evaluate_design: a dropped one stays dropped
     spec = _parse_vary(cfg, vary, folder)
     keys = list(spec)
     if not (isinstance(max_evaluations, int) and max_evaluations >= len(keys) + 2):
@@ -605,7 +606,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     rec, orbit = evaluate_blow(drifter, V, limits), None
                 else:
                     guess = min(orbits, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if orbits else None
-                    rec, orbit = evaluate_design(drifter, limits, guess)
+                    rec, orbit = evaluate_design(drifter, kept, guess)
                     orbits.append((u.copy(), orbit))
                     orbit_of[rid] = orbit
                 rec.update(_piston_and_multipliers(drifter, orbit))
@@ -658,7 +659,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         if method == "differential_evolution":
             res = population_search(lambda u: penalised(evaluate(u), fkey, ref),
                                     lambda u: design_of(u)[::2], store, evaluate, _design_record,
-                                    {"config": cfg, "folder": folder, "limits": limits}, u0, popsize=popsize,
+                                    {"config": cfg, "folder": folder, "limits": kept}, u0, popsize=popsize,
                                     maxiter=maxiter, seed=seed, workers=workers, atol=tol ** 2)
         elif method == "cobyla":
             res = minimize(f, u0, method="COBYLA", constraints=[{"type": "ineq", "fun": g}],
@@ -678,7 +679,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     fresh = {}
     for name, rec in (("baseline", first), ("optimum", best)):
         drifter = build(with_values(cfg, rec["changes"]), folder)
-        out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, limits)
+        out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, kept)
         out.update(_piston_and_multipliers(drifter, orbit), values=rec["values"], changes=rec["changes"],
                    shank_stress=None if ideal else _shank_stress(drifter, orbit))
         out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
