@@ -480,10 +480,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         ``max_evaluations`` bounds its generations, at least two).
     workers : None, int or distributed.Client
         Where a population's designs are evaluated (``method="differential_evolution"`` only):
-        ``None`` this process, an integer ``>= 1`` a local dask cluster of that many processes
+        ``None`` this process, an integer (at least 1) a local dask cluster of that many processes
         (started and closed by the call), or a client's cluster; the same records either way.
     popsize, seed : int
-        The population per variable (``>= 2``) and the random seed (``>= 0``) of
+        The population per variable (at least 2) and the random seed (at least 0) of
         ``method="differential_evolution"``.
     impact_velocity : float or str, optional
         The circuit's ideal limit (m/s, or with units, ``> 0``): each design is its piston's blow on

@@ -35,11 +35,11 @@ def check_population(workers, popsize, seed, max_evaluations: int, n_variables: 
     Parameters
     ----------
     workers : None, int or distributed.Client
-        ``None``: this process; an integer ``>= 1``: a local cluster of that many processes; a client.
+        ``None``: this process; an integer (at least 1): a local cluster of that many processes; a client.
     popsize : int
-        Members per variable (``>= 2``; the population ``max(5, popsize * n_variables)``).
+        Members per variable (at least 2; the population ``max(5, popsize * n_variables)``).
     seed : int
-        The search's random seed (``>= 0``).
+        The search's random seed (at least 0).
     max_evaluations : int
         The most designs evaluated: at least two generations' (``2 * population``).
     n_variables : int
