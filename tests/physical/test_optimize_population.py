@@ -71,6 +71,16 @@ def test_the_optimum_is_a_fresh_orbits_feasible_and_beats_the_first_generation(s
     assert again.evaluations == 0 and again.cached == 18
     assert again.optimum["values"] == res.optimum["values"]
     assert "gain in impact_power" in res.table()
+    # a run stopped part-way resumes on the same path, its new designs the same to the bit (each a
+    # fresh orbit, none continued from a design read from the cache; the history lists a generation's
+    # new designs before those it read)
+    doc = json.loads(cache.read_text())
+    doc["evaluations"] = doc["evaluations"][:8]
+    cache.write_text(json.dumps(doc))
+    resumed = optimize_drifter("circuit-drifter", VARY, cache=cache, **KW)
+    assert resumed.cached == 8 and resumed.evaluations == 10
+    assert {r["id"]: _record(r) for r in resumed.history} == {r["id"]: _record(r) for r in res.history}
+    assert resumed.optimum["values"] == res.optimum["values"]
 
 
 def test_the_score_penalises_the_margins_missed():

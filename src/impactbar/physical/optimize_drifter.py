@@ -464,7 +464,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         config, the variables and bounds, the objective, the constraints): a cache of another
         problem is not reused, and is overwritten. Designs read from it carry no orbit, so the first
         new design after them starts from the default chain (the figures then differ from an
-        uninterrupted run's in the last digits, about 1e-10).
+        uninterrupted run's in the last digits, about 1e-10; the population search's are the same to
+        the bit, each a fresh orbit).
     progress : bool
         A progress bar (tqdm) on stderr.
     rhobeg, tol : float
@@ -623,7 +624,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
 
     from tqdm import tqdm
 
-    bar = tqdm(total=max_evaluations + 1, desc="optimize_drifter", unit="design", disable=not progress)
+    bar = tqdm(total=max_evaluations + (method != "differential_evolution"), desc="optimize_drifter",
+               unit="design", disable=not progress)
     start = np.array([spec[k]["start"] for k in keys])
     u0 = (start - lo) / span
     try:
