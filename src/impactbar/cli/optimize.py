@@ -38,9 +38,17 @@ def add_parser(sub) -> None:
                         "peak_incident_stress and piston_mass)")
     p.add_argument("--max-evaluations", type=int, default=60,
                    help="the most designs the search evaluates (default 60)")
-    p.add_argument("--method", default="cobyla", choices=["cobyla", "slsqp"],
-                   help="the search: derivative-free COBYLA (default), or SLSQP with gradients by the "
-                        "implicit function theorem on each design's orbit")
+    p.add_argument("--method", default="cobyla", choices=["cobyla", "slsqp", "differential_evolution"],
+                   help="the search: derivative-free COBYLA (default), SLSQP with gradients by the "
+                        "implicit function theorem on each design's orbit, or differential evolution "
+                        "(a population, each generation's designs evaluated together, see --workers)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="differential_evolution: evaluate each generation on a local dask cluster of N "
+                        "worker processes (default: in this process, one design after another)")
+    p.add_argument("--popsize", type=int, default=5,
+                   help="differential_evolution: the population per variable (default 5)")
+    p.add_argument("--seed", type=int, default=0,
+                   help="differential_evolution: the random seed (default 0)")
     p.add_argument("--cache", default=None, metavar="FILE.json",
                    help="the designs evaluated, read first and written after each: a stopped run resumes")
     p.add_argument("--out", default=None, metavar="FILE.json", help="write the result as JSON")
@@ -109,7 +117,8 @@ def _run(args) -> int:
     out = output_file(args.out) if args.out else None
     res = optimize_drifter(args.config, vary, objective=args.objective, constraints=constraints,
                            max_evaluations=args.max_evaluations, cache=args.cache, progress=not args.quiet,
-                           method=args.method, impact_velocity=args.impact_velocity)
+                           method=args.method, impact_velocity=args.impact_velocity, workers=args.workers,
+                           popsize=args.popsize, seed=args.seed)
     if out is not None:
         res.to_json(out)
     if args.json:

@@ -56,7 +56,9 @@ theory §10: supply pressure, piston areas, switch position, valve delay; its pr
 (orbits and simulations in SI), ``rock`` (the drill string and the rock: the rod-rock law in SI and
 the drilling outputs per blow), ``piston`` (the stepped piston of most work on rock per blow,
 theory §12), ``sensitivity`` (a drifter's operating point differentiated by its design keys, by the
-implicit function theorem). This layer sits on
+implicit function theorem), ``optimize_drifter`` (the whole drifter optimised under constraints) and
+``optimize_population`` (its population search, each generation's designs evaluated together on dask).
+This layer sits on
 the core (``impactbar.model``, ``loads``, ``orbits``, ``simulation``) and may import pint; the core
 never imports it.
 """

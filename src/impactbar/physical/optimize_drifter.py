@@ -37,6 +37,7 @@ import numpy as np
 
 from .circuit import CircuitDrifter
 from .loader import build, config_value, read_config, with_values
+from .optimize_population import check_population, penalised, population_search
 from .sensitivity import _key_unit, _quantity, _show_unit, default_step, tangent_derivatives
 from .units import to_si
 
@@ -432,7 +433,8 @@ def _parse_vary(config: dict, vary: dict, folder) -> dict:
 def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW",
                      constraints: dict | None = None,
                      *, max_evaluations: int = 60, cache=None, progress: bool = True, rhobeg: float = 0.2,
-                     tol: float = 2e-3, method: str = "cobyla", impact_velocity=None) -> DrifterOptimum:
+                     tol: float = 2e-3, method: str = "cobyla", impact_velocity=None, workers=None,
+                     popsize: int = 5, seed: int = 0) -> DrifterOptimum:
     r"""The design of a drifter with its oil circuit that maximises ``objective`` under
     ``constraints``, the variables any of its dotted config keys within bounds.
 
@@ -462,16 +464,28 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         config, the variables and bounds, the objective, the constraints): a cache of another
         problem is not reused, and is overwritten. Designs read from it carry no orbit, so the first
         new design after them starts from the default chain (the figures then differ from an
-        uninterrupted run's in the last digits, about 1e-10).
+        uninterrupted run's in the last digits, about 1e-10; the population search's are the same to
+        the bit, each a fresh orbit).
     progress : bool
         A progress bar (tqdm) on stderr.
     rhobeg, tol : float
         COBYLA's first and last step in the scaled variables (each bound's span is 1); for SLSQP
         its ``ftol`` is ``tol ** 3`` (on the objective over the start's: 8e-9 by default, above
-        the orbits' own accuracy, about 1e-9) and ``rhobeg`` is not used.
-    method : {"cobyla", "slsqp"}
-        The search: derivative-free (COBYLA), or SLSQP with the implicit function theorem's
-        gradients (module docstring; ``max_evaluations`` then bounds its iterations).
+        the orbits' own accuracy, about 1e-9) and ``rhobeg`` is not used; a population stops once
+        its scores spread below ``tol ** 2``.
+    method : {"cobyla", "slsqp", "differential_evolution"}
+        The search: derivative-free (COBYLA), SLSQP with the implicit function theorem's
+        gradients (module docstring; ``max_evaluations`` then bounds its iterations), or a
+        population's (:mod:`~impactbar.physical.optimize_population`: the constraints a penalty, each
+        generation's designs evaluated together on ``workers``, each by a fresh ``orbit()``;
+        ``max_evaluations`` bounds its generations, at least two).
+    workers : None, int or distributed.Client
+        Where a population's designs are evaluated (``method="differential_evolution"`` only):
+        ``None`` this process, an integer (at least 1) a local dask cluster of that many processes
+        (started and closed by the call), or a client's cluster; the same records either way.
+    popsize, seed : int
+        The population per variable (at least 2) and the random seed (at least 0) of
+        ``method="differential_evolution"``.
     impact_velocity : float or str, optional
         The circuit's ideal limit (m/s, or with units, ``> 0``): each design is its piston's blow on
         the rod and rock at this impact velocity alone (:func:`evaluate_blow`), the circuit taken to
@@ -514,8 +528,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         raise ValueError(f"objective {objective!r} needs the drill string and the rock ([rock] in the "
                          "config); "
                          "without them only 'impact_power'")
-    if method not in ("cobyla", "slsqp"):
-        raise ValueError(f"method must be 'cobyla' or 'slsqp'; got {method!r}")
+    if method not in ("cobyla", "slsqp", "differential_evolution"):
+        raise ValueError(f"method must be 'cobyla', 'slsqp' or 'differential_evolution'; got {method!r}")
+    if workers is not None and method != "differential_evolution":
+        raise ValueError(f"workers: only with method='differential_evolution'; got method {method!r}")
     ideal = impact_velocity is not None
     if ideal:
         V = (float(impact_velocity) if isinstance(impact_velocity, int | float)
@@ -531,11 +547,14 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             raise ValueError("in the circuit's ideal limit (impact_velocity) the method is 'cobyla' (SLSQP's "
                              f"gradients come from the circuit's orbits); got {method!r}")
     limits = _limits(constraints, base, ideal=ideal)
+    kept = dict.fromkeys(DEFAULT_CONSTRAINTS) | limits  # for evaluate_design: a dropped one stays dropped
     spec = _parse_vary(cfg, vary, folder)
     keys = list(spec)
     if not (isinstance(max_evaluations, int) and max_evaluations >= len(keys) + 2):
         raise ValueError(f"max_evaluations must be an integer of at least the variables' number + 2 "
                          f"({len(keys) + 2}); got {max_evaluations!r}")
+    if method == "differential_evolution":
+        maxiter = check_population(workers, popsize, seed, max_evaluations, len(keys))
     lo = np.array([spec[k]["low"] for k in keys])
     span = np.array([spec[k]["high"] - spec[k]["low"] for k in keys])
     fkey = OBJECTIVES[objective][0]
@@ -561,30 +580,37 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     def changes_of(values: dict) -> dict:
         return {k: _quantity(values[k], spec[k]["unit"]) for k in keys}
 
-    def evaluate(u: np.ndarray) -> dict:
-        nonlocal n_cached
+    def design_of(u: np.ndarray) -> tuple[str, dict, dict]:
         u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
         x = np.where(u == u0, start, lo + span * u)  # the start exactly as the config gives it
         values = {k: float(v) for k, v in zip(keys, x, strict=True)}
-        rid = json.dumps([repr(values[k]) for k in keys])
+        changes = changes_of(values)
+        changes.update({k: config_value(cfg, k) for k, at in zip(keys, u == u0, strict=True) if at})
+        return json.dumps([repr(values[k]) for k in keys]), values, changes
+
+    def evaluate(u: np.ndarray, done: dict | None = None) -> dict:
+        nonlocal n_cached
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        rid, values, changes = design_of(u)
         if rid in store:
             rec = store[rid]
             if not any(r is rec for r in history):
                 n_cached += 1
                 history.append(rec)
             return rec
-        changes = changes_of(values)
-        changes.update({k: config_value(cfg, k) for k, at in zip(keys, u == u0, strict=True) if at})
         try:
-            drifter = build(with_values(cfg, changes), folder)
-            if ideal:
-                rec, orbit = evaluate_blow(drifter, V, limits), None
+            if done is not None:  # computed by the population's map
+                rec = done
             else:
-                guess = min(orbits, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if orbits else None
-                rec, orbit = evaluate_design(drifter, limits, guess)
-                orbits.append((u.copy(), orbit))
-                orbit_of[rid] = orbit
-            rec.update(_piston_and_multipliers(drifter, orbit))
+                drifter = build(with_values(cfg, changes), folder)
+                if ideal:
+                    rec, orbit = evaluate_blow(drifter, V, limits), None
+                else:
+                    guess = min(orbits, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if orbits else None
+                    rec, orbit = evaluate_design(drifter, kept, guess)
+                    orbits.append((u.copy(), orbit))
+                    orbit_of[rid] = orbit
+                rec.update(_piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
             rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
         rec.update(id=rid, values=values, changes=changes)
@@ -598,7 +624,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
 
     from tqdm import tqdm
 
-    bar = tqdm(total=max_evaluations + 1, desc="optimize_drifter", unit="design", disable=not progress)
+    bar = tqdm(total=max_evaluations + (method != "differential_evolution"), desc="optimize_drifter",
+               unit="design", disable=not progress)
     start = np.array([spec[k]["start"] for k in keys])
     u0 = (start - lo) / span
     try:
@@ -631,7 +658,12 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 counter["gradients"] += 1
             return gradients[rec["id"]]
 
-        if method == "cobyla":
+        if method == "differential_evolution":
+            res = population_search(lambda u: penalised(evaluate(u), fkey, ref),
+                                    lambda u: design_of(u)[::2], store, evaluate, _design_record,
+                                    {"config": cfg, "folder": folder, "limits": kept}, u0, popsize=popsize,
+                                    maxiter=maxiter, seed=seed, workers=workers, atol=tol ** 2)
+        elif method == "cobyla":
             res = minimize(f, u0, method="COBYLA", constraints=[{"type": "ineq", "fun": g}],
                            bounds=[(0.0, 1.0)] * len(keys),
                            options={"rhobeg": rhobeg, "tol": tol, "maxiter": max_evaluations})
@@ -649,7 +681,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     fresh = {}
     for name, rec in (("baseline", first), ("optimum", best)):
         drifter = build(with_values(cfg, rec["changes"]), folder)
-        out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, limits)
+        out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, kept)
         out.update(_piston_and_multipliers(drifter, orbit), values=rec["values"], changes=rec["changes"],
                    shank_stress=None if ideal else _shank_stress(drifter, orbit))
         out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
@@ -662,6 +694,17 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                           cached=n_cached, seconds=time.perf_counter() - t_start, history=history,
                           message=message, config=with_values(cfg, best["changes"]),
                           gradients=counter["gradients"])
+
+
+def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
+    """A design's record by a fresh ``orbit()`` (a worker's task in the population search)."""
+    try:
+        drifter = build(with_values(config, changes), folder)
+        rec, orbit = evaluate_design(drifter, limits)
+        rec.update(_piston_and_multipliers(drifter, orbit))
+    except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
+        rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
+    return rec
 
 
 def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: dict, fkey: str,
