@@ -142,7 +142,8 @@ def test_slsqp_with_these_gradients_reaches_an_optimum_that_fresh_orbits_confirm
 def test_optimize_drifter_refuses_an_unknown_method():
     from impactbar.physical import optimize_drifter
 
-    with pytest.raises(ValueError, match=r"^method must be 'cobyla' or 'slsqp'; got 'bfgs'$"):
+    with pytest.raises(ValueError,
+                       match=r"^method must be 'cobyla', 'slsqp' or 'differential_evolution'; got 'bfgs'$"):
         optimize_drifter("circuit-drifter", {"valve.switch_out": ("20 mm", "23 mm")},
                          objective="impact_power", method="bfgs")
 
