@@ -175,7 +175,8 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     n = breaks.size - 1
     model1 = one_mode
     ext = np.array([0.0, 1.0 / float(impedance)])
-    solvers: dict = {}
+    solvers: dict = {}  # by mode: scikit-sundae's solver (a wave that varies within a stretch)
+    flown: dict = {}  # by mode: the compiled driver's parameters, event directions and user data
     mode, z = state.mode, np.array(state.z, dtype=float)
     w = float(w0)
     impulses = np.zeros(n)
@@ -189,18 +190,17 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             y0 = np.zeros(EK.N_STATE)
             y0[0], y0[1:5] = w, z
             if compiled is not None and not callable(a):  # no Python between the stretch's ends
-                if mode not in solvers:
+                if mode not in flown:
                     par = drive._par(model1, mode)
-                    solvers[mode] = (par, np.array([drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS],
-                                                   dtype=np.int32), compiled.user_data(par, 0.0, impedance))
-                par, directions, data = solvers[mode]
+                    flown[mode] = (par, np.array([drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS],
+                                                 dtype=np.int32), compiled.user_data(par, 0.0, impedance))
+                par, directions, data = flown[mode]
                 data[1] = a
                 flag, ts, Y, _, roots = compiled.fly(t, y0, t1, float(settings.rtol), float(settings.atol),
                                                      directions, data, _MAX_STEPS)
                 if flag < 0 or not np.all(np.isfinite(Y[-1])):
                     raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be "
                                      f"integrated ({_message(flag)})")
-                ext[0] = float(a)
                 status, hit = int(flag), list(np.flatnonzero(roots))
             else:
                 if mode not in solvers:
