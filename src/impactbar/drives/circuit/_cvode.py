@@ -7,7 +7,9 @@ its Jacobian and the event functions of :mod:`._kernel` as compiled C callbacks
 scikit-sundae's defaults (BDF of orders 1 to 5, Newton's method with a direct solver and the
 analytic Jacobian, at most 3 Newton iterations a step, 10 convergence failures), so that a flight
 takes the same steps as through scikit-sundae's interface, to the bit (a test); the variational
-flights take the band solver where scikit-sundae's takes the dense one, the same to rounding.
+flights take the band solver where scikit-sundae's takes the dense one, the same to rounding, its
+LU and solve taken on the Newton matrix's blocks (:class:`Workspace`'s ``blocks``: the band
+solver's operations on each block, the same steps to the bit).
 
 Each thread keeps one CVODE workspace per system size and solver (:func:`workspace`),
 re-initialised at each flight (``CVodeReInit``) rather than built anew.

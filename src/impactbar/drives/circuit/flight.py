@@ -17,11 +17,12 @@ iterations, 7 Jacobians: the steps are those BDF's error control asks at this to
 pressures' fast transients after each switch and impact, the valve's ramp; measured over 20 periods,
 ``rtol = 1e-8`` took a quarter fewer steps for errors a hundred times larger), not failures. The
 variational flights' Newton systems (:math:`n + 8 + n^2` unknowns) are solved by the band solver
-(``band=True``, the default; ``Phi`` stored by columns). Its events (the arrival
-``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply pressure through the
-pre-charge and the relief pressure) are located by CVODE's root finding to the integrator's
-tolerance (the ramp's end, linear in time, to rounding). Each flight is integrated in its own time,
-from 0 (the vector field does not depend on ``t``).
+(``band=True``, the default; ``Phi`` stored by columns), its LU taken once on the state's
+``n x n`` block and applied to each column of ``Phi``'s (``blocks=True``, the default). Its
+events (the arrival ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply
+pressure through the pre-charge and the relief pressure) are located by CVODE's root finding to
+the integrator's tolerance (the ramp's end, linear in time, to rounding). Each flight is integrated
+in its own time, from 0 (the vector field does not depend on ``t``).
 
 Each flight starts its energy quadratures at 0; with ``variational=True`` it integrates the
 fundamental matrix ``Phi`` of the first ``2 N + 6`` components beside them (the variational
