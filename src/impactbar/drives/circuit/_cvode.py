@@ -7,7 +7,9 @@ its Jacobian and the event functions of :mod:`._kernel` as compiled C callbacks
 scikit-sundae's defaults (BDF of orders 1 to 5, Newton's method with a direct solver and the
 analytic Jacobian, at most 3 Newton iterations a step, 10 convergence failures), so that a flight
 takes the same steps as through scikit-sundae's interface, to the bit (a test); the variational
-flights take the band solver where scikit-sundae's takes the dense one, the same to rounding.
+flights take the band solver where scikit-sundae's takes the dense one, the same to rounding, its
+LU and solve taken on the Newton matrix's blocks (:class:`Workspace`'s ``blocks``: the band
+solver's operations on each block, the same steps to the bit).
 
 Each thread keeps one CVODE workspace per system size and solver (:func:`workspace`),
 re-initialised at each flight (``CVodeReInit``) rather than built anew.
@@ -49,6 +51,8 @@ _dense_data = _ext("SUNDenseMatrix_Data", _dp(_p))
 _band_data = _ext("SUNBandMatrix_Data", _dp(_p))
 _band_ldim = _ext("SUNBandMatrix_LDim", types.int64(_p))
 _band_smu = _ext("SUNBandMatrix_StoredUpperBandwidth", types.int64(_p))
+_band_ml = _ext("SUNBandMatrix_LowerBandwidth", types.int64(_p))
+_band_cols = _ext("SUNBandMatrix_Columns", types.int64(_p))
 _reinit = _ext("CVodeReInit", _c(_p, _d, _p))
 _tolerances = _ext("CVodeSStolerances", _c(_p, _d, _d))
 _user_data = _ext("CVodeSetUserData", _c(_p, _p))
@@ -109,6 +113,114 @@ def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
             col = (base + j) * ldim + smu - j
             for i in range(n):
                 data[col + i] = A[i, j]
+    return 0
+
+
+@nb.njit(cache=CACHE, nogil=True)
+def _block_factor(data, n, ldim, smu):
+    """SUNDIALS' band LU (``SUNDlsMat_bandGBTRF``: partial pivoting, the multipliers stored negated)
+    of the leading ``n x n`` block of the band matrix ``data`` (element ``(i, j)`` at
+    ``data[j ldim + smu + i - j]``), in place, its pivots kept (as numbers) in the storage of column
+    ``n`` above its band; 0, or ``k + 1`` at a zero pivot in column ``k``. On the variational
+    flights' block-diagonal Newton matrix (the state's block, the energies' identity, each column of
+    ``Phi``'s block equal to the state's) the band LU of the whole matrix takes on each block the
+    operations taken here, in the same order, the entries outside the blocks staying zero."""
+    piv = n * ldim
+    for k in range(n):
+        ck = k * ldim + smu - k  # (i, k) at ck + i
+        l = k
+        big = abs(data[ck + k])
+        for i in range(k + 1, n):
+            if abs(data[ck + i]) > big:
+                l = i
+                big = abs(data[ck + i])
+        data[piv + k] = l
+        if data[ck + l] == 0.0:
+            return k + 1
+        if k == n - 1:
+            break
+        if l != k:
+            tmp = data[ck + l]
+            data[ck + l] = data[ck + k]
+            data[ck + k] = tmp
+        mult = -1.0 / data[ck + k]
+        for i in range(k + 1, n):
+            data[ck + i] *= mult
+        for j in range(k + 1, n):
+            cj = j * ldim + smu - j
+            a_kj = data[cj + l]
+            if l != k:
+                data[cj + l] = data[cj + k]
+                data[cj + k] = a_kj
+            if a_kj != 0.0:
+                for i in range(k + 1, n):
+                    data[cj + i] += a_kj * data[ck + i]
+    return 0
+
+
+@nb.njit(cache=CACHE, nogil=True)
+def _block_solve(data, n, ldim, smu, x):
+    """SUNDIALS' band solve (``SUNDlsMat_bandGBTRS``) with :func:`_block_factor`'s LU on the state's
+    ``n`` components of ``x`` and each column of ``Phi``'s (from ``n + 8``), in place: the ``n + 1``
+    right-hand sides side by side (each row's contiguous), each component given the band solve's
+    operations in its order (the same products, the same sums)."""
+    m = n + 1
+    B = np.empty((n, m))
+    for c in range(m):
+        start = 0 if c == 0 else n + K.N_ENERGY + (c - 1) * n
+        for i in range(n):
+            B[i, c] = x[start + i]
+    piv = n * ldim
+    for k in range(n - 1):
+        l = int(data[piv + k])
+        if l != k:
+            for c in range(m):
+                tmp = B[l, c]
+                B[l, c] = B[k, c]
+                B[k, c] = tmp
+        ck = k * ldim + smu - k
+        for i in range(k + 1, n):
+            lik = data[ck + i]
+            for c in range(m):
+                B[i, c] += B[k, c] * lik
+    for k in range(n - 1, -1, -1):
+        ck = k * ldim + smu - k
+        ukk = data[ck + k]
+        for c in range(m):
+            B[k, c] /= ukk
+        for i in range(k):
+            uik = data[ck + i]
+            for c in range(m):
+                B[i, c] += (-B[k, c]) * uik
+    for c in range(m):
+        start = 0 if c == 0 else n + K.N_ENERGY + (c - 1) * n
+        for i in range(n):
+            x[start + i] = B[i, c]
+
+
+@nb.cfunc(_c(_p, _p), cache=CACHE)
+def _block_setup_c(S, A):
+    """``SUNLinearSolver``'s ``setup`` for the variational flights' band matrix: :func:`_block_factor`
+    of its state's block (half-bandwidths ``n - 1``); positive at a zero pivot (recoverable, as the
+    band solver's failure)."""
+    ldim = _band_ldim(A) & _LOW32
+    n = (_band_ml(A) & _LOW32) + 1
+    data = nb.carray(_band_data(A), (_band_cols(A) & _LOW32) * ldim)
+    return 8 if _block_factor(data, n, ldim, _band_smu(A) & _LOW32) else 0  # (SUNLS_LUFACT_FAIL)
+
+
+@nb.cfunc(_c(_p, _p, _p, _p, _d), cache=CACHE)
+def _block_solve_c(S, A, x, b, tol):
+    """``SUNLinearSolver``'s ``solve``: ``x`` from ``b`` by :func:`_block_solve` on the state's block
+    and each column of ``Phi``'s (the energies' rows: the identity's)."""
+    N = _band_cols(A) & _LOW32
+    ldim = _band_ldim(A) & _LOW32
+    smu = _band_smu(A) & _LOW32
+    n = (_band_ml(A) & _LOW32) + 1
+    data = nb.carray(_band_data(A), N * ldim)
+    xx = nb.carray(_nv_data(x), N)
+    xx[:] = nb.carray(_nv_data(b), N)
+    _block_solve(data, n, ldim, smu, xx)
     return 0
 
 
@@ -197,6 +309,29 @@ def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
     return flag, T[:k].copy(), Y[:k].copy(), y.copy(), roots
 
 
+def _swap_ops(LS, ctx) -> bool:
+    """Replace the band solver ``LS``'s setup and solve by :func:`_block_setup_c` and
+    :func:`_block_solve_c` in its operations table, where that table is found as SUNDIALS 7 lays it
+    out (the structure's field before its context ``ctx``: ``(content, ops, sunctx)`` in 7.0,
+    ``(content, python, ops, sunctx)`` later; in it SUNDIALS' band setup followed by its solve,
+    looked for from the start): else nothing changes. Whether they were replaced."""
+    vp = ctypes.POINTER(ctypes.c_void_p)
+    fields = ctypes.cast(LS, vp)
+    at = next((i for i in (2, 3) if fields[i] == ctx), None)
+    if at is None or not fields[at - 1]:
+        return False
+    table = ctypes.cast(fields[at - 1], vp)
+    setup, solve = (ctypes.cast(S.function(name), ctypes.c_void_p).value
+                    for name in ("SUNLinSolSetup_Band", "SUNLinSolSolve_Band"))
+    for i in range(16):  # (stops at the first match: never read past the table)
+        if table[i] == setup:
+            if table[i + 1] != solve:
+                return False
+            table[i], table[i + 1] = _block_setup_c.address, _block_solve_c.address
+            return True
+    return False
+
+
 def _free(ctx, mem, y, A, LS):
     f = S.function
     f("CVodeFree")(ctypes.byref(ctypes.c_void_p(mem)))
@@ -211,7 +346,13 @@ class Workspace:
     and :func:`_jac_c` or, with ``band`` (the variational flights: ``N = n + 8 + n^2``), the band
     solver of half-bandwidths ``n - 1`` and :func:`_jac_band_c` (``n^2`` times fewer operations a
     factorisation than the dense one), the six event functions :func:`_events_c`, SUNDIALS' error
-    messages silenced (a failure's reason reaches the caller as its return flag). Freed when
+    messages silenced (a failure's reason reaches the caller as its return flag). With ``blocks``
+    (the variational flights: the Newton matrix block-diagonal, the state's block repeated for each
+    column of ``Phi``), the band solver's setup and solve are replaced by :func:`_block_setup_c` and
+    :func:`_block_solve_c`: one LU of the ``n x n`` block, applied to each block, the band LU's
+    operations on each block in its order (the same steps, to the bit) for about ``n`` times fewer
+    a factorisation and three times fewer a solve; ``blocks`` says whether they were (the band
+    solver's table as SUNDIALS 7 lays it out, checked, else the band solver's own). Freed when
     collected. ``callbacks``, ``(rhs, jac, events, number of events)``, replace the flight's vector
     field, dense Jacobian and events (the circuit during a blow: :mod:`._endcvode`).
 
@@ -221,7 +362,7 @@ class Workspace:
         The addresses :func:`fly` takes.
     """
 
-    def __init__(self, N: int, band: int = 0, callbacks=None):
+    def __init__(self, N: int, band: int = 0, callbacks=None, blocks: bool = False):
         f = S.function
         ctx = ctypes.c_void_p()
         if f("SUNContext_Create")(0, ctypes.byref(ctx)) != 0:
@@ -243,6 +384,7 @@ class Workspace:
             smu = f("SUNBandMatrix_StoredUpperBandwidth")(A) & _LOW32
             if smu != min(N - 1, 2 * band) or f("SUNBandMatrix_LDim")(A) & _LOW32 != smu + band + 1:
                 raise RuntimeError("SUNDIALS' band matrix is not stored as documented")
+        self.blocks = bool(blocks and band and _swap_ops(LS, ctx.value))
         rhs, jac, events, n_events = callbacks or (_rhs_c, _jac_band_c if band else _jac_c, _events_c,
                                                    K.N_EVENTS)
         ok = (f("CVodeInit")(mem, rhs.address, 0.0, y) == 0
@@ -273,18 +415,18 @@ class Workspace:
 _LOCAL = threading.local()
 
 
-def workspace(N: int, band: int = 0, callbacks=None) -> Workspace:
+def workspace(N: int, band: int = 0, callbacks=None, blocks: bool = False) -> Workspace:
     """This thread's workspace for systems of size ``N`` (with the band solver of half-bandwidths
-    ``band``, or dense for 0), made on first use; ``callbacks``: ``(rhs, jac, events, number of
-    events)`` as compiled C callbacks in place of the flight's (the circuit during a blow:
-    :mod:`._endcvode`)."""
+    ``band``, or dense for 0; with ``blocks``, its setup and solve on the blocks, :class:`Workspace`),
+    made on first use; ``callbacks``: ``(rhs, jac, events, number of events)`` as compiled C
+    callbacks in place of the flight's (the circuit during a blow: :mod:`._endcvode`)."""
     spaces = getattr(_LOCAL, "spaces", None)
     if spaces is None:
         spaces = _LOCAL.spaces = {}
-    key = (N, band, None if callbacks is None else callbacks[0].address)
+    key = (N, band, None if callbacks is None else callbacks[0].address, bool(blocks and band))
     ws = spaces.get(key)
     if ws is None:
-        ws = spaces[key] = Workspace(N, band, callbacks)
+        ws = spaces[key] = Workspace(N, band, callbacks, blocks)
     _LOCAL.last = ws
     return ws
 

@@ -161,16 +161,37 @@ def rhs(t, y, yp, par):
     if par[VAR] > 0.5:
         A = np.empty((n, n))
         jac_base(y, par, M, A)
+        # A's nonzeros by rows (some 9 M + 10 of n^2), each row's in increasing column, and Phi by
+        # rows: each entry of A Phi is the sum over the row's nonzeros, from 0 in increasing column (its
+        # zeros skipped), the sums of n entries side by side (each row's contiguous)
+        cols = np.empty(n * n, np.int64)
+        vals = np.empty(n * n)
+        rows = np.empty(n + 1, np.int64)
+        nz = 0
+        for i in range(n):
+            rows[i] = nz
+            for k in range(n):
+                a = A[i, k]
+                if a != 0.0:
+                    cols[nz] = k
+                    vals[nz] = a
+                    nz += 1
+        rows[n] = nz
         off = n + N_ENERGY
+        P = np.empty((n, n))
         for j in range(n):  # column j of Phi at off + j n
-            c = off + j * n
+            for k in range(n):
+                P[k, j] = y[off + j * n + k]
+        out = np.zeros((n, n))
+        for i in range(n):
+            for p in range(rows[i], rows[i + 1]):
+                a = vals[p]
+                k = cols[p]
+                for j in range(n):
+                    out[i, j] += a * P[k, j]
+        for j in range(n):
             for i in range(n):
-                s = 0.0
-                for k in range(n):
-                    a = A[i, k]
-                    if a != 0.0:
-                        s += a * y[c + k]
-                yp[c + i] = s
+                yp[off + j * n + i] = out[i, j]
 
 
 @nb.njit(**_JIT)

@@ -132,11 +132,13 @@ class HydraulicCircuitDrive(Drive):
         pressure, the valve at the position the start's gap commands (with ``x_v`` given and away
         from it, the spool starts ramping there: an orbit's state after an impact, restarted).
         Each pressure in ``[0, beta)``, ``beta`` the oil's bulk modulus.
-    compiled, band : bool, optional
+    compiled, band, blocks : bool, optional
         How the flights are integrated, not what they are (keywords, default ``True``, left out of
-        the drive's repr): CVODE driven from compiled code, and the variational flights' Newton
-        systems by the band solver; ``False``: through scikit-sundae's Python interface (the same
-        steps to the bit), and by the dense solver (the same to rounding). The baselines of
+        the drive's repr): CVODE driven from compiled code, the variational flights' Newton
+        systems by the band solver, and that solver's LU taken on the systems' blocks (one ``n x n``
+        block for the state and each column of ``Phi``); ``False``: through scikit-sundae's Python
+        interface (the same steps to the bit), by the dense solver (the same to rounding), and by the
+        band solver's own LU (the same steps to the bit). The baselines of
         ``benchmarks/bench_circuit.py`` (``impactbar.drives.circuit.flight.circuit_flight``).
 
     Raises
@@ -169,6 +171,7 @@ class HydraulicCircuitDrive(Drive):
     start_pressures: tuple | None = None
     compiled: bool = dataclasses.field(default=True, repr=False, kw_only=True)
     band: bool = dataclasses.field(default=True, repr=False, kw_only=True)
+    blocks: bool = dataclasses.field(default=True, repr=False, kw_only=True)
 
     state_size = 4
     state_names = ("p_f", "p_r", "p_s", "x_v")
@@ -181,7 +184,7 @@ class HydraulicCircuitDrive(Drive):
         for name, cls in (("chambers", Chambers), ("valve", Valve), ("supply", Supply), ("oil", Oil)):
             if not isinstance(getattr(self, name), cls):
                 raise ValueError(f"{name} must be a {cls.__name__}; got {type(getattr(self, name)).__name__}")
-        for name in ("compiled", "band"):
+        for name in ("compiled", "band", "blocks"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be True or False; got {getattr(self, name)!r}")
         acc = self.accumulator
@@ -401,7 +404,7 @@ class HydraulicCircuitDrive(Drive):
         from .flight import circuit_flight
 
         return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational,
-                              compiled=self.compiled, band=self.band)
+                              compiled=self.compiled, band=self.band, blocks=self.blocks)
 
     def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
         """The circuit over a stretch of a blow with the driven end moved by the law's waves

@@ -17,11 +17,12 @@ iterations, 7 Jacobians: the steps are those BDF's error control asks at this to
 pressures' fast transients after each switch and impact, the valve's ramp; measured over 20 periods,
 ``rtol = 1e-8`` took a quarter fewer steps for errors a hundred times larger), not failures. The
 variational flights' Newton systems (:math:`n + 8 + n^2` unknowns) are solved by the band solver
-(``band=True``, the default; ``Phi`` stored by columns). Its events (the arrival
-``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply pressure through the
-pre-charge and the relief pressure) are located by CVODE's root finding to the integrator's
-tolerance (the ramp's end, linear in time, to rounding). Each flight is integrated in its own time,
-from 0 (the vector field does not depend on ``t``).
+(``band=True``, the default; ``Phi`` stored by columns), its LU taken once on the state's
+``n x n`` block and applied to each column of ``Phi``'s (``blocks=True``, the default). Its
+events (the arrival ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply
+pressure through the pre-charge and the relief pressure) are located by CVODE's root finding to
+the integrator's tolerance (the ramp's end, linear in time, to rounding). Each flight is integrated
+in its own time, from 0 (the vector field does not depend on ``t``).
 
 Each flight starts its energy quadratures at 0; with ``variational=True`` it integrates the
 fundamental matrix ``Phi`` of the first ``2 N + 6`` components beside them (the variational
@@ -163,11 +164,13 @@ def _message(flag) -> str:
     return CVMESSAGES.get(int(flag), f"CVODE's flag {int(flag)}")
 
 
-def _integrate_compiled(cv, band, par, settings, directions, y0, t, end, keep):
+def _integrate_compiled(cv, band, blocks, par, settings, directions, y0, t, end, keep):
     """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly` (``band``: the
-    variational flights' Newton systems by the band solver, else the dense one)."""
+    variational flights' Newton systems by the band solver, else the dense one; ``blocks``: the band
+    solver's setup and solve on the blocks, :class:`._cvode.Workspace`)."""
     n = keep - K.N_ENERGY
-    ws = cv.workspace(y0.size, n - 1 if band and y0.size > keep else 0)  # variational: the band solver
+    var = band and y0.size > keep  # variational: the band solver
+    ws = cv.workspace(y0.size, n - 1 if var else 0, None, blocks and var)
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
@@ -204,7 +207,7 @@ def _integrate_binding(par, settings, directions, y0, t, end, keep):
 
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
                    settings: FlightSettings | None = None, variational: bool = False, *,
-                   compiled: bool = True, band: bool = True) -> Flight:
+                   compiled: bool = True, band: bool = True, blocks: bool = True) -> Flight:
     """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
     stop, the circuit's next event or ``t_stop`` (module docstring).
 
@@ -222,6 +225,12 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         ``Phi`` is stored by columns, each column's equations coupling only its own components);
         ``False``: the dense solver (the way before; ``benchmarks/bench_circuit.py``'s baseline for
         the flexible piston). Only with ``compiled``.
+    blocks : bool, optional
+        With ``band``, the band solver's factorisation and solve taken on the Newton matrix's
+        blocks (it is block-diagonal: the state's ``n x n`` block, repeated for each column of
+        ``Phi``): one LU of the block (``n`` times fewer operations than the band LU) applied to each,
+        the same operations on each block as the band solver's, in its order (the same steps, to the
+        bit; :class:`._cvode.Workspace`); ``False``: the band solver's own (the way before).
 
     Returns
     -------
@@ -255,7 +264,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
     integrate = _integrate_binding if (cv := _compiled_driver(compiled)) is None else \
-        functools.partial(_integrate_compiled, cv, band)
+        functools.partial(_integrate_compiled, cv, band, blocks)
     status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0, end - t,
                                                   keep)
     if status < 0 or not np.all(np.isfinite(yend)):

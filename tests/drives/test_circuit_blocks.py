@@ -1,0 +1,89 @@
+"""The variational flights' Newton systems by one LU of the state's block (``blocks=True``, the
+default: ``_cvode._block_setup_c``, ``_cvode._block_solve_c`` in place of the band solver's setup and
+solve) against SUNDIALS' band solver itself (``blocks=False``, the way before): the same steps, the
+same flights and the same orbit and multipliers of the preset drifter with a flexible piston.
+
+The block solver repeats the band LU's operations on each block in their order, so on this machine
+the two agree to the bit; the orbits are compared to 1e-8 (a SUNDIALS built with fused multiply-adds
+would round its band solve otherwise)."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from impactbar import find_orbit
+from impactbar.drives import DriveState
+from impactbar.drives.circuit import HydraulicCircuitDrive, _sundials
+from impactbar.drives.circuit import flight as F
+from impactbar.physical import circuit_preset
+
+pytestmark = pytest.mark.skipif(not _sundials.available(), reason="CVODE not bound here")
+
+
+@pytest.fixture(scope="module")
+def drifter():
+    return circuit_preset("circuit-drifter")
+
+
+def _engaged():
+    from impactbar.drives.circuit import _cvode
+
+    ws = _cvode.last_workspace()
+    return ws is not None and ws.band > 0 and ws.blocks
+
+
+def _same_orbits(fast, band):
+    assert abs(fast.period - band.period) <= 1e-8 * band.period
+    assert np.allclose(fast.impact_velocities, band.impact_velocities, rtol=1e-8, atol=0.0)
+    assert np.allclose(fast._unknowns, band._unknowns, rtol=1e-8, atol=1e-12)
+    assert np.max(np.abs(fast.multipliers - band.multipliers)) <= 1e-8
+    assert fast.stable == band.stable
+
+
+def test_a_variational_flight_takes_the_band_solvers_steps(drifter):
+    """Four modes, a stroke flight from rest with the valve open: the same steps and the same
+    fundamental matrix, CVODE's counters equal."""
+    from impactbar.drives.circuit import _cvode
+
+    model = drifter.model().with_(n_modes=4)
+    drive = drifter.drive()
+    M = model.n_modes + 1
+    q, v = np.zeros(M), np.zeros(M)
+    q[0] = -0.02
+    state = drive.start(model, q, v)
+    out = {}
+    for blocks in (True, False):
+        fl = F.circuit_flight(drive, model, DriveState(state.mode, state.z), 0.0, q, v, 50.0,
+                              variational=True, blocks=blocks)
+        out[blocks] = (fl, _cvode.last_workspace().statistics(), _cvode.last_workspace().blocks)
+    (fast, s_fast, engaged), (band, s_band, off) = out[True], out[False]
+    assert engaged and not off  # (SUNDIALS 7's table found here: else the band solver both times)
+    assert s_fast["steps"] == s_band["steps"] > 100 and s_fast["setups"] == s_band["setups"]
+    assert np.allclose(fast.piece.t, band.piece.t, rtol=1e-12, atol=0.0)
+    scale = np.max(np.abs(band.sensitivity))
+    assert np.allclose(fast.sensitivity, band.sensitivity, rtol=1e-10, atol=1e-12 * scale)
+    assert np.allclose(np.concatenate((fast.q, fast.v, fast.z)), np.concatenate((band.q, band.v, band.z)),
+                       rtol=1e-12, atol=1e-14)
+
+
+def test_the_four_mode_orbit_is_the_band_solvers(drifter):
+    model = drifter.model().with_(n_modes=4)
+    fast = find_orbit(model, drifter.drive())
+    assert _engaged()
+    band = find_orbit(model, dataclasses.replace(drifter.drive(), blocks=False))
+    _same_orbits(fast, band)
+
+
+@pytest.mark.slow  # some 40 s of CPU time (80 s of wall time on the shared machine)
+def test_the_eight_mode_orbit_is_the_band_solvers(drifter):
+    model = drifter.model().with_(n_modes=8)
+    fast = find_orbit(model, drifter.drive())
+    band = find_orbit(model, dataclasses.replace(drifter.drive(), blocks=False))
+    _same_orbits(fast, band)
+
+
+def test_blocks_must_be_a_bool(drifter):
+    with pytest.raises(ValueError, match="blocks must be True or False"):
+        dataclasses.replace(drifter.drive(), blocks=1)
+    assert isinstance(drifter.drive(), HydraulicCircuitDrive) and drifter.drive().blocks is True
