@@ -422,7 +422,8 @@ class ExactBlowMap:
         ``log`` rows of its switch log (:mod:`~impactbar.laws.rodrock.exactjac`); without
         ``energies`` its energies (and those derived from them) NaN, not accounted (the histories
         alone wanted: the coupled blow's iterates)."""
-        from .exact import _Drive, exact_blow
+        from ._exactdata import _Drive
+        from .exact import exact_blow
 
         init = initial_waves(self.basis, q, v, self.p_end)
         horizon = self.duration if t_max is None else float(t_max)
