@@ -268,9 +268,9 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
         upto = min(reach + 2.0 * T0, D) if march else D
         whole = upto >= D and reach >= D  # (the iterate over the whole blow: its change decides)
         # (the blow is needed to upto - T0 only, but over the whole of it where its change decides)
-        ex = bmap.solve(q, v, record=True, t_max=None if whole or not march else upto - T0,
-                        energies=whole or not march)
-        breaks = _breaks(ex, T0, D, t0, None if whole or not march else upto)
+        cut = march and not whole
+        ex = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else None, energies=not cut)
+        breaks = _breaks(ex, T0, D, t0, upto if cut else None)
         incoming = _Incoming(ex, waves, force, T0, Z0, t0).callables(breaks)
         fl = drive.end_flight(model, state, breaks, w0, incoming, Z0, settings)
         if fl is None:
