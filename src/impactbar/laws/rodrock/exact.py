@@ -78,6 +78,7 @@ from . import _exactkernel as K
 from . import _exactpieces as P
 from . import _records as S
 from ._bit import feed_gain
+from ._exactdata import _Data
 
 __all__ = ["CERTIFIED", "ExactBlow", "PoolOverflow", "exact_blow"]
 
@@ -355,7 +356,8 @@ def _check_chain(name, times, imps):
 def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k, k_u, bit_mass=0.0,
                feed=0.0, impact_velocity=None, semi_infinite=False, t_max=None, record=True,
                max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, max_pool_bytes=None, initial=None,
-               drive=None, fixed_horizon=False, lean=False, _trusted=False, _log=0) -> ExactBlow:
+               drive=None, fixed_horizon=False, lean=False, _trusted=False, _log=0, _pool=None,
+               _energies=True) -> ExactBlow:
     r"""The blow of a rigidly moving, unstressed piston (or of a piston in any state given by its
     waves, under a drive) on a rod resting on the rock under the feed, every wave exact (theory §4d;
     the module's text says what is exact and how the end is decided).
@@ -506,14 +508,16 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     # 4 MB, of which a blow touches what it uses (a pool too small runs the blow again, larger); the
     # simulator's blows (data given, a fixed horizon of a few round trips) need tens of pieces: 40 kB
     pcap, tcap, ecap = (16384, 131072, 256) if data is None else (256, 2048, 64)
+    if _pool is not None:  # (the pool a like blow filled: no runs again to grow it)
+        pcap, tcap, ecap = max(pcap, int(_pool[0])), max(tcap, int(_pool[1])), max(ecap, int(_pool[2]))
     while pcap > 1024 and _pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     while True:
         RD[S.RD_HEAD] = 0.0  # (a run again with a larger pool logs afresh)
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
                         None if data is None else data.terms(lam, scale), reuse=not lean)
-        if data is not None and not lean:  # the piston's energy at impact: its waves' (kinetic and
-            K.account(ws, 0.0)  # strain)
+        if data is not None and not lean and _energies:  # the piston's energy at impact: its waves'
+            K.account(ws, 0.0)  # (kinetic and strain)
             PR[S.PR_E0] = ws[S.WS_CT][S.CT_EP]
         K.run(ws)
         if ws[S.WS_CI][S.CI_STATUS] == 0:
@@ -524,6 +528,14 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         full_p, full_e = npc >= ws[S.WS_PF].shape[0], int(ws[S.WS_BI][S.BI_NEP]) > ws[S.WS_EP].shape[0]
         pcap, ecap = 4 * pcap if full_p else pcap, 4 * ecap if full_e else ecap
         tcap = tcap if full_p or full_e else 4 * tcap
+        reached = float(ws[S.WS_CT][S.CT_T])
+        if fixed_horizon and 0.0 < reached < t_max:  # as many pieces to the horizon as the square of
+            # the time gives (the waves' breaks multiply), terms as its cube (each piece's terms grow
+            # too): one run again, not one per 4-fold growth
+            grow = t_max / reached
+            more = max(pcap, int(1.25 * grow ** 2 * npc)), max(tcap, int(1.25 * grow ** 3 * nterms))
+            if _pool_bytes(*more) <= bound:
+                pcap, tcap = more
         if _pool_bytes(pcap, tcap) > bound:
             per = nterms / max(npc, 1)
             raise PoolOverflow(
@@ -536,80 +548,11 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
                 + ", or use method='lattice'")
     if lean:
         return ws, scale
+    if not _energies:  # (a fixed horizon's run reads no energy: its pieces are the same without them)
+        PR[S.PR_E0] = math.nan
+        ws[S.WS_CT][[S.CT_PP, S.CT_EP, S.CT_PR, S.CT_ER, S.CT_PSI]] = math.nan
+        ws[S.WS_CT][S.CT_TACC] = ws[S.WS_CT][S.CT_T]
     return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
-
-
-class _Drive:
-    """The drive of :func:`exact_blow` checked, with its exponents and the bound of its values
-    (made once for the many blows of one :class:`~impactbar.laws.rodrock.exactmap.ExactBlowMap`)."""
-
-    def __init__(self, drive):
-        starts, pieces = drive
-        starts = np.asarray(starts, dtype=float)
-        pieces = [_Data._piece("drive", x) for x in pieces]
-        if starts.ndim != 1 or starts.size != len(pieces) or starts.size == 0 or \
-                not np.all(np.isfinite(starts)) or starts[0] > 0.0 or np.any(np.diff(starts) <= 0.0):
-            raise ValueError("drive must be (starts, pieces): increasing finite starts, the first "
-                             "<= 0, one piece each")
-        self.value = (starts, pieces)
-        self.exponents = [e for x in pieces for e in x[0]]
-        spans = np.diff(np.append(starts, starts[-1] + 1.0))
-        # (the sup of sum c tau^d over a piece's span: a polynomial's pieces are short, and their
-        # monomials' coefficients large; the forces' scale must not take them as its size)
-        self.bound = max(float(np.sum(np.abs(c) * L ** d))
-                         for (_, d, c), L in zip(pieces, spans, strict=True))
-
-
-class _Data:
-    """The piston's waves at impact and the drive of :func:`exact_blow`, checked, with their
-    exponents and scale."""
-
-    def __init__(self, initial, drive, Tp, *, trusted=False):
-        init = list(initial)
-        if len(init) != 2 * Tp.size:
-            raise ValueError(f"initial must hold 2 pieces per piston segment ({2 * Tp.size}); got "
-                             f"{len(init)}")
-        # trusted: the pieces of initial_waves (arrays of the right types, finite where the modal
-        # state is: checked by the caller), and a drive already checked (a _Drive)
-        self.initial = init if trusted else [self._piece("initial", x) for x in init]
-        exps = [e for x in self.initial for e in x[0]]
-        bound = 0.0
-        for (_e, d, c), T in zip(self.initial, np.repeat(Tp, 2), strict=True):
-            bound = max(bound, float(np.sum(np.abs(c) * np.maximum(T, 1.0) ** d)))
-        if drive is not None and not isinstance(drive, _Drive):
-            drive = _Drive(drive)
-        self.drive = None if drive is None else drive.value
-        if drive is not None:
-            exps += drive.exponents
-            bound = max(bound, drive.bound)
-        self.exponents = list(dict.fromkeys(complex(e) for e in exps))
-        self.scale = bound
-
-    @staticmethod
-    def _piece(name, x):
-        e, d, c = (np.atleast_1d(np.asarray(a)) for a in x)
-        e, c = e.astype(complex), c.astype(complex)
-        d = d.astype(np.int64)
-        if not (e.shape == d.shape == c.shape and e.ndim == 1):
-            raise ValueError(f"{name}: each piece is (exps, degs, coefs), arrays of one length")
-        if not (np.all(np.isfinite(e)) and np.all(np.isfinite(c)) and np.all((d >= 0) & (d < P.DC))):
-            raise ValueError(f"{name}: exponents and coefficients must be finite, degrees in "
-                             f"[0, {P.DC})")
-        return e, d, c
-
-    def terms(self, lam, scale):
-        """The pieces as the pool's terms: ``(keys, coefs)`` per initial channel, and
-        ``(starts, [(keys, coefs), ...])`` of the drive (coefficients over ``scale``)."""
-        index = {complex(x): i for i, x in enumerate(lam)}
-
-        def conv(piece):
-            e, d, c = piece
-            keys = np.array([index[complex(x)] * P.DC for x in e], dtype=np.int64) + d
-            return keys, c / scale
-
-        init = [conv(x) for x in self.initial]
-        drv = None if self.drive is None else (self.drive[0], [conv(x) for x in self.drive[1]])
-        return init, drv
 
 
 @functools.cache
@@ -651,11 +594,12 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     J = T.size
     nch = 3 * J + 2
     init, drive = (None, None) if data is None else data
-    ndrive = 0 if drive is None else len(drive[1])
+    ndrive = 0 if drive is None else drive[0].size
     extra = 0
     if init is not None:
-        extra = sum(x[0].size for x in init) + (0 if drive is None else sum(x[0].size for x in drive[1]))
-    PF, PI, TK, TC = _pool_arrays(max(pcap, 2 * J + 1 + ndrive + 16), tcap + extra, reuse)
+        extra = sum(x[0].size for x in init) + (0 if drive is None else drive[1].size)
+    PF, PI, TK, TC = _pool_arrays(pcap + 2 * J + 1 + ndrive + 16, tcap + extra, reuse)  # (room for the
+    # data's pieces besides the pieces the run adds)
     CNT = np.zeros(S.CNT_SIZE, dtype=np.int64)
     CHI = np.full((nch, 2), -1, dtype=np.int64)
     CH_T = np.zeros(nch)
@@ -665,14 +609,11 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     nt = 0
 
     def put(n, nt, keys, coefs):
-        PI[n, 1] = nt
-        for key, cf in zip(keys, coefs, strict=True):
-            if cf != 0.0:
-                TK[nt] = key
-                TC[nt] = cf
-                nt += 1
-        PI[n, 2] = nt - PI[n, 1]
-        return nt
+        nz = coefs != 0.0
+        count = int(np.count_nonzero(nz))
+        TK[nt:nt + count], TC[nt:nt + count] = keys[nz], coefs[nz]
+        PI[n, 1], PI[n, 2] = nt, count
+        return nt + count
 
     for i in range(1, J + 1):
         for side, (c, val) in enumerate(((2 * (i - 1), 0.5 * Z[i - 1] * Vn),
@@ -690,17 +631,28 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
             CHI[c, 0] = n
             CHI[c, 1] = n
             n += 1
-    # the drive channel (no drive: one empty piece)
+    # the drive channel (no drive: one empty piece), its pieces linked in order, their nonzero terms
     c = 2 * J
-    CHI[c, 1] = n
-    starts = [-1.0] if drive is None else drive[0]
-    for j, t0 in enumerate(starts):
-        PF[n] = (t0, math.inf, 0.0, math.nan, math.nan)
-        PI[n] = (-1 if j == len(starts) - 1 else n + 1, nt, 0, 0)
-        if drive is not None:
-            nt = put(n, nt, *drive[1][j])
-        CHI[c, 0] = n
-        n += 1
+    starts = np.array([-1.0]) if drive is None else np.asarray(drive[0], dtype=float)
+    m = starts.size
+    rows = slice(n, n + m)
+    PF[rows, 0], PF[rows, 1], PF[rows, 2], PF[rows, 3:] = starts, math.inf, 0.0, math.nan
+    PI[rows, 0] = np.arange(n + 1, n + m + 1)
+    PI[n + m - 1, 0] = -1
+    PI[rows, 1:] = 0
+    PI[rows, 1] = nt
+    if drive is not None:
+        _, keys, coefs, sizes = drive
+        nz = coefs != 0.0
+        count = int(np.count_nonzero(nz))
+        TK[nt:nt + count], TC[nt:nt + count] = keys[nz], coefs[nz]
+        before = np.concatenate(([0], np.cumsum(nz)))  # nonzero terms before each term
+        ends = np.cumsum(sizes)
+        PI[rows, 1] = nt + before[ends - sizes]
+        PI[rows, 2] = before[ends] - before[ends - sizes]
+        nt += count
+    CHI[c, 1], CHI[c, 0] = n, n + m - 1
+    n += m
     CNT[S.CNT_PIECES], CNT[S.CNT_TERMS] = n, nt
     BIN = _binomials()
     WB = np.zeros((S.BLOCKS, lam.size, P.DC), dtype=complex)

@@ -132,7 +132,8 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
 
     None where the schedule cannot be held.
     """
-    from .exact import _Data, _workspace
+    from ._exactdata import _Data
+    from .exact import _workspace
     from .exactmap import modal_state
 
     basis = bmap.basis

@@ -46,9 +46,14 @@ import numpy as np
 from ._exactmodal import piston_integrals
 from ._piston import piston_segments
 from ._records import (  # the records' slots
+    BI_NEP,
     BS_PPERM,
+    CNT_PIECES,
+    CNT_TERMS,
     CT_T,
+    WS_BI,
     WS_BS,
+    WS_CNT,
     WS_CT,
     WS_NSF,
 )
@@ -410,14 +415,18 @@ class ExactBlowMap:
         h = float(min(self.basis.travel.min(), self.rod_times.min()))
         self.drive = drive_pieces(load, self.t0, self.duration, lead=h)
 
-    def solve(self, q, v, *, t_max=None, record=False, lean=False, log=0):
+    def solve(self, q, v, *, t_max=None, record=False, lean=False, log=0, energies=True):
         """The :class:`~impactbar.laws.rodrock.exact.ExactBlow` of an arrival in state ``(q, q')``
         (the end on the shank), run to ``t_max`` (default the blow's duration); with ``lean`` only
         the solver's workspace and scale (:func:`~impactbar.laws.rodrock.exact.exact_blow`), with
-        ``log`` rows of its switch log (:mod:`~impactbar.laws.rodrock.exactjac`)."""
-        from .exact import _Drive, exact_blow
+        ``log`` rows of its switch log (:mod:`~impactbar.laws.rodrock.exactjac`); without
+        ``energies`` its energies (and those derived from them) NaN, not accounted (the histories
+        alone wanted: the coupled blow's iterates)."""
+        from ._exactdata import _Drive
+        from .exact import exact_blow
 
         init = initial_waves(self.basis, q, v, self.p_end)
+        horizon = self.duration if t_max is None else float(t_max)
         # the drive checked once per map (its many blows: a Jacobian's, the chord method's), the
         # waves of a finite state trusted (a state that is not finite: checked, and refused, there)
         trusted = bool(np.all(np.isfinite(q)) and np.all(np.isfinite(v)) and math.isfinite(self.p_end))
@@ -428,11 +437,29 @@ class ExactBlowMap:
                 cached = (drive, _Drive(drive))
                 self._checked_drive = cached
             drive = cached[1]
-        return exact_blow(self.basis.travel, self.basis.impedance, self.rod_times, self.rod_impedances,
-                          initial=init, drive=drive, fixed_horizon=True,
-                          t_max=self.duration if t_max is None else float(t_max), record=record,
-                          lean=lean, semi_infinite=self.rod.semi_infinite, _trusted=trusted, _log=log,
-                          **self.params)
+        out = exact_blow(self.basis.travel, self.basis.impedance, self.rod_times, self.rod_impedances,
+                         initial=init, drive=drive, fixed_horizon=True,
+                         t_max=horizon, record=record,
+                         lean=lean, semi_infinite=self.rod.semi_infinite, _trusted=trusted, _log=log,
+                         _pool=self._pool_for(horizon), _energies=energies, **self.params)
+        # the pool this blow filled, for the map's next (its many blows alike: a first one grows its
+        # pool, run again, and the next start there)
+        if lean:
+            used = (out[0][WS_CNT][CNT_PIECES], out[0][WS_CNT][CNT_TERMS], out[0][WS_BI][BI_NEP])
+        else:
+            used = (out.pieces, out.diagnostics["terms"], out.loadings.shape[0])
+        self._pool = (*(int(x) for x in used), horizon)
+        return out
+
+    def _pool_for(self, t_max):
+        """The pool to start a blow to ``t_max`` on: twice what the last blow filled, its pieces
+        grown as the square of the horizon, its terms as the cube (the waves' breaks multiply, and
+        each piece's terms), where this one runs longer."""
+        last = getattr(self, "_pool", None)
+        if last is None:
+            return None
+        grow = max(t_max / last[3], 1.0)
+        return 2 * last[0] * grow ** 2 + 16, 2 * last[1] * grow ** 3 + 16, 2 * last[2] * grow + 16
 
     def _end(self, shank, gap, permanent):
         """The struck end's position after the blow from the stop of the next flight: the shank's

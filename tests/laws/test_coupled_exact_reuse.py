@@ -1,0 +1,98 @@
+"""What makes the coupled exact blow cheap changes none of its numbers: a map's blow started on the
+pool its last blow filled is the blow started on the default pool (grown by runs again), to the
+bit; the arriving wave's scalar callable is scipy's cubic spline, to the bit; the marching
+iteration's blow is the plain fixed-point iteration's, within the iteration's tolerance."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+import test_coupled_exact_blow as blow_tests
+from scipy.interpolate import CubicSpline
+
+from impactbar.laws.rodrock.coupled_exact import _Force, _spline_callable
+from impactbar.laws.rodrock.exactmap import ExactBlowMap
+from impactbar.loads import FourierLoad
+from impactbar.physical import build, read_config
+
+arrival = blow_tests.arrival  # (the fixture: the drifter's second arrival, on a rod of whole piston lengths)
+
+
+@pytest.fixture(scope="module")
+def driven_map():
+    """The drifter's exact map under a drive of 600 cubic pieces (a circuit's force, as the coupled
+    blow's iterates give it), and an arrival ``(q, v)``."""
+    cfg, _ = read_config("examples/circuit_drifter_rock.toml")
+    del cfg["rock"]["cells_per_piston"]
+    model = build(cfg).model()
+    model = model.with_(impact=dataclasses.replace(model.law, method="exact"))
+    p0 = 0.3
+    bmap = ExactBlowMap(model, FourierLoad(p0, []), 0.0)
+    T0, D = float(bmap.basis.travel[0]), bmap.duration
+    force = _Force(p0)
+    force.starts = np.linspace(0.0, D, 601)[:-1]
+    x = force.starts / D
+    slope = 0.2 * np.cos(7.0 * x)
+    force.coefs = np.column_stack((0.01 * np.sin(x), -0.05 * x, slope, p0 * (1.0 + 0.3 * np.sin(7.0 * x))))
+    bmap.drive = force.pieces(T0, D)
+    q = np.zeros(model.n_modes + 1)
+    v = np.zeros(model.n_modes + 1)
+    v[0] = 0.8
+    return bmap, q, v
+
+
+def _numbers(ex):
+    return (ex.work_on_rock, ex.duration, ex.pieces, ex.diagnostics["terms"], ex.shank_displacement, ex.gap,
+            ex.drive_work, ex.piston_energy, ex.permanent_penetration, ex.loadings.tobytes())
+
+
+def test_a_blow_on_the_last_blows_pool_is_the_blow_on_a_grown_one(driven_map):
+    bmap, q, v = driven_map
+    bmap._pool = None
+    first = bmap.solve(q, v, record=True)
+    assert first.pieces > 256  # (the default pool's: the first blow grew it, running again)
+    kept = bmap._pool
+    hint = bmap._pool_for(bmap.duration)
+    assert hint[0] > first.pieces and hint[1] > first.diagnostics["terms"]
+    again = bmap.solve(q, v, record=True)
+    assert _numbers(again) == _numbers(first)
+    assert np.array_equal(np.concatenate(bmap.state_after(again)), np.concatenate(bmap.state_after(first)))
+    t = np.linspace(0.0, first.duration, 97)
+    assert np.array_equal(again.shank_force(t), first.shank_force(t))
+    # the lean blow (the impact map's) on the same pool
+    bmap._pool = None
+    ws_default, _ = bmap.solve(q, v, lean=True)
+    bmap._pool = kept
+    ws_hinted, _ = bmap.solve(q, v, lean=True)
+    for a, b in zip(ws_default, ws_hinted, strict=True):
+        if isinstance(a, np.ndarray) and a.ndim <= 1 and a.size < 64:  # the counts and the state
+            assert np.array_equal(a, b, equal_nan=True)
+
+
+def test_the_scalar_spline_is_scipys_to_the_bit():
+    rng = np.random.default_rng(3)
+    x = np.sort(rng.uniform(0.2, 3.0, 30))
+    spline = CubicSpline(x, np.sin(4.0 * x) + rng.normal(size=30))
+    t0 = 1.7
+    a = _spline_callable(spline, t0)
+    ts = t0 + np.concatenate((rng.uniform(-0.5, 3.5, 500), x))  # (outside: the end pieces extended)
+    assert [a(float(t)) for t in ts] == [float(spline(t - t0)) for t in ts]
+
+
+def test_marching_gives_the_plain_iterations_blow(arrival):
+    """The iterates over the part of the blow each can be right on, then over the whole until the
+    force settles, give the blow of the plain iteration (every iterate over the whole blow, the blow
+    solved once more with the last force): within the iteration's tolerance (measured: to the bit)."""
+    from impactbar.laws.rodrock.coupled_exact import FORCE_TOL, driven_exact_contact
+
+    fast = driven_exact_contact(*arrival)
+    plain = driven_exact_contact(*arrival, march=False)
+    assert fast.t_release == plain.t_release
+    for a, b in ((fast.v_after, plain.v_after), (fast.q_after, plain.q_after),
+                 (fast.drive_state.z, plain.drive_state.z),
+                 ([fast.record.work_on_rock, fast.drive_work],
+                  [plain.record.work_on_rock, plain.drive_work])):
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        assert np.all(np.abs(a - b) <= FORCE_TOL * np.maximum(np.abs(b), np.max(np.abs(b)) * 1e-3)), (a, b)
+    assert fast.drive_state.mode == plain.drive_state.mode
+    assert np.allclose(fast.gaps, plain.gaps, rtol=FORCE_TOL, atol=0.0)
