@@ -11,6 +11,7 @@ import math
 
 import numba
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
     ELASTIC,
@@ -375,3 +376,6 @@ def certify(ws, t):
     if gone and f > 0.0 and br != LOAD and PR[PR_TMAX] == INF:  # the rock may yield to the ringing rod
         return MAY_YIELD                                      # for ever (a caller's t_max: on to it)
     return GOING
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)

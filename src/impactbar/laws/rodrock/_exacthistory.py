@@ -6,6 +6,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 from ._exactintegrals import blk_integral
 from ._exactpieces import (
@@ -217,3 +218,6 @@ def history_integral(PF, PI, TK, TC, lam, head, t_end):
             break
         p = nx
     return total
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)

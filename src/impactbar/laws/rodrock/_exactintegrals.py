@@ -9,6 +9,7 @@ import math
 import numba
 import numpy as np
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 
 
@@ -221,3 +222,6 @@ def blk_integral_exp(B, N, lam, shift, a, b):
             s += B[e, d] * sc * mom[d]
             sc *= b
     return s * b
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)

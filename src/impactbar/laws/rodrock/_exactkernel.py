@@ -41,6 +41,7 @@ import math
 
 import numba
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 from ._exactend import account, certify
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
@@ -724,3 +725,6 @@ def run(ws):
             CI[CI_END] = code
             CI[CI_STATUS] = 0
             return
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)

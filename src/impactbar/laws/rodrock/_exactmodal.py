@@ -10,6 +10,7 @@ import cmath
 import numba
 import numpy as np
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 from ._exactintegrals import blk_integral_exp
 from ._exactpieces import DC, piece_span, pool_load
@@ -49,3 +50,6 @@ def piston_integrals(pool, heads, travel, t, om, out):
                 if tend >= t:
                     break
                 p = nx
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)

@@ -10,6 +10,7 @@ import math
 import numba
 import numpy as np
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
 from ._records import (  # the records' slots
@@ -746,3 +747,6 @@ def load_input(B, N, c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN):
     pool_load(B, N, piece, a - arr, lam, BIN, PI, TK, TC)
     v = PF[piece, 1]
     return v + CH_T[c] if v < INF else INF
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)

@@ -45,6 +45,7 @@ import math
 
 import numba
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 from ._exactkernel import (
     LOG_BIT,
@@ -555,3 +556,6 @@ def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
         ends[d, 3] = TCUR[TCUR_SEPS]
         ends[d, 4] = TCUR[TCUR_UNLOADS]
     return coefs.shape[0], 0
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
