@@ -240,19 +240,21 @@ def events(t, y, g, par):
         g[RAMP_EV] = 1.0
     g[ACC_EV] = y[F + 2] - par[P0] if par[HASACC] > 0.5 else 1.0
     g[REL_EV] = y[F + 2] - par[PREL] if par[HASREL] > 0.5 else 1.0
-    if t == 0.0:  # a flight that starts on a pressure's level (the event that just ended the last one)
-        g[ACC_EV] = _off_level(g[ACC_EV], par[ACC], par[P0])
-        g[REL_EV] = _off_level(g[REL_EV], par[REL], par[PREL])
+    g[ACC_EV] = _off_level(g[ACC_EV], par[ACC], par[P0])
+    g[REL_EV] = _off_level(g[REL_EV], par[REL], par[PREL])
 
 
 @nb.njit(**_JIT)
 def _off_level(g, above, level):
-    """An event function ``p - level`` exactly 0 at a flight's start, moved by one unit in the last
-    place of ``level`` to the side the mode's flag says the pressure is on (``above`` 1: at or above
-    the level, watched for falling through it), so that CVODE watches it from the start: a zero
-    there makes CVODE leave the event unwatched until the pressure moves off the level by more than
-    the rounding of its step's first increment, and a pressure that turns back through the level at
-    once would be missed (CVODE warns that a root function stayed identically 0)."""
+    """An event function ``p - level`` exactly 0 moved by one unit in the last place of ``level`` to
+    the side the mode's flag says the pressure is on (``above`` 1: at or above the level, watched
+    for falling through it): the level is crossed where the pressure passes it, not where it
+    touches it. A flight starts on the level where its event ended the last flight, and over the
+    first steps the pressure's change can be below the rounding of the level: CVODE leaves an event
+    function that is 0 at the start unwatched until it moves off 0 (a pressure that turns back
+    through the level at once was missed, and CVODE warned that a root function stayed identically
+    0), and takes a 0 after a step for a root (the accumulator would empty at once where the pump
+    fills it)."""
     if g != 0.0:
         return g
     u = np.spacing(abs(level))
