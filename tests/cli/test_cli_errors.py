@@ -159,12 +159,19 @@ def test_ctrl_c_inside_a_c_callback_is_not_reported(monkeypatch):
         raise RuntimeError("a real error in a callback")
 
     interrupting, failing = callback_type(interrupt), callback_type(fail)
-    with cli._CtrlC() as ctrl_c:
-        assert ctrl_c._hook is not None  # installed (pytest's main thread, Python's SIGINT handler)
-        interrupting()  # before any Ctrl-C: reported
-        ctrl_c.pressed = True  # as the handler sets it
-        interrupting()  # dropped
-        failing()
+    # (Python's own SIGINT handler, as in a terminal: a test run started in the background of a
+    # non-interactive shell ignores SIGINT, and the command then leaves Ctrl-C alone)
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with cli._CtrlC() as ctrl_c:
+            assert ctrl_c._hook is not None  # installed (pytest's main thread, Python's SIGINT handler)
+            interrupting()  # before any Ctrl-C: reported
+            ctrl_c.pressed = True  # as the handler sets it
+            interrupting()  # dropped
+            failing()
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # restored
+    finally:
+        signal.signal(signal.SIGINT, before)
     interrupting()  # outside a command: reported
     assert reported == ["KeyboardInterrupt", "RuntimeError", "KeyboardInterrupt"]
 
