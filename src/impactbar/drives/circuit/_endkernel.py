@@ -92,14 +92,7 @@ def jac(y, JJ, par, ext):
 def events(y, g, par):
     """The event functions during a blow (their zeros; inactive ones held at 1): the ramp's end, the
     supply pressure through the pre-charge and through the relief pressure (as :func:`._kernel.events`)."""
-    if par[K.OPEN] > 0.5:
-        g[0] = y[4] - 1.0
-    elif par[K.OPEN] < -0.5:
-        g[0] = y[4]
-    else:
-        g[0] = 1.0
-    g[1] = y[3] - par[K.P0] if par[K.HASACC] > 0.5 else 1.0
-    g[2] = y[3] - par[K.PREL] if par[K.HASREL] > 0.5 else 1.0
+    K.circuit_events(y[4], y[3], par, g, 0)
 
 
 @nb.njit(**_JIT)

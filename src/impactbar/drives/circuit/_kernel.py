@@ -232,16 +232,23 @@ def events(t, y, g, par):
     g[ARRIVAL_EV] = s
     g[OUT_EV] = -y[0] - par[XOUT] if par[ARMO] > 0.5 else 1.0
     g[IN_EV] = -y[0] - par[XIN] if par[ARMI] > 0.5 else 1.0
+    circuit_events(y[F + 3], y[F + 2], par, g, RAMP_EV)
+
+
+@nb.njit(**_JIT)
+def circuit_events(xv, ps, par, g, first):
+    """The circuit's own event functions into ``g[first:first + 3]``, from the spool's position
+    ``xv`` and the supply pressure ``ps`` (inactive ones held at 1): the ramp's end, the supply
+    through the pre-charge and through the relief pressure (each pressure's :func:`_off_level`);
+    the flights' (:func:`events`) and the blows' (``_endkernel.events``)."""
     if par[OPEN] > 0.5:
-        g[RAMP_EV] = y[F + 3] - 1.0
+        g[first] = xv - 1.0
     elif par[OPEN] < -0.5:
-        g[RAMP_EV] = y[F + 3]
+        g[first] = xv
     else:
-        g[RAMP_EV] = 1.0
-    g[ACC_EV] = y[F + 2] - par[P0] if par[HASACC] > 0.5 else 1.0
-    g[REL_EV] = y[F + 2] - par[PREL] if par[HASREL] > 0.5 else 1.0
-    g[ACC_EV] = _off_level(g[ACC_EV], par[ACC], par[P0])
-    g[REL_EV] = _off_level(g[REL_EV], par[REL], par[PREL])
+        g[first] = 1.0
+    g[first + 1] = _off_level(ps - par[P0], par[ACC], par[P0]) if par[HASACC] > 0.5 else 1.0
+    g[first + 2] = _off_level(ps - par[PREL], par[REL], par[PREL]) if par[HASREL] > 0.5 else 1.0
 
 
 @nb.njit(**_JIT)
