@@ -292,6 +292,17 @@ def test_a_constant_push_drops_the_piston_by_energy_and_restitution():
         Push(1.0).with_(q=2.0)
 
 
+def test_the_push_implements_the_required_members_alone():
+    """``Drive.REQUIRED_HOOKS`` are what ``Push`` (run above) defines; the other drives here define
+    only members the base lists."""
+    assert {n for n, v in vars(Push).items() if callable(v) and not n.startswith("_")} == \
+        set(Drive.REQUIRED_HOOKS)
+    listed = set(Drive.REQUIRED_HOOKS) | set(Drive.OPTIONAL_HOOKS)
+    for cls in (TwoLevel, Delayed, Lag):
+        own = {n for n, v in vars(cls).items() if callable(v) and not n.startswith("_")} - {"level"}
+        assert own <= listed, cls
+
+
 # -- a drive with state ----------------------------------------------------------------------------
 @pytest.mark.parametrize("d, R", [(0.0, 0.215), (0.3, 0.5)])
 def test_simulate_lag_against_an_independent_integration(d, R):

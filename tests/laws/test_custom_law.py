@@ -101,6 +101,18 @@ def test_what_the_law_leaves_out_is_refused_by_name():
         model.law.phase_roots(model, CosineLoad(0.3, 1.0))
 
 
+def test_the_law_implements_the_required_hooks_and_declarations_alone():
+    """``ContactLaw.REQUIRED_HOOKS`` are the methods this law defines, and everything else it sets is
+    a declaration the base lists among its optional hooks; the solvers see it through its hooks."""
+    methods = {n for n, v in vars(VelocityRestitution).items() if callable(v) and not n.startswith("_")}
+    assert methods == set(ContactLaw.REQUIRED_HOOKS)
+    declared = {n for n in vars(VelocityRestitution) if not n.startswith("_")} - methods - {"w_ref"}
+    assert declared <= set(ContactLaw.OPTIONAL_HOOKS)
+    model = BarModel(s=10.0, d=0.0, R=0.7, n_modes=0, impact=VelocityRestitution())
+    law = model.law
+    assert not law.restitution_in_kernel(model) and law.has_blow_records(model) and law.window(model) == 0.0
+
+
 def _closed_form(law, model, p0, pk):
     """The rigid bar's one-impact orbits at ``d = 0`` under the law, independently of the solvers:
     the period's momentum ``2 pi p0`` is what the impact takes, ``(1 + e(V)) V`` with

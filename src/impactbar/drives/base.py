@@ -380,6 +380,18 @@ class Drive(NamedParameters, ABC):
     [2.0, 1.0, 0.5]
     """
 
+    #: The members a drive must implement (abstract here): with them alone it runs in
+    #: :func:`~impactbar.simulate` and :func:`~impactbar.find_orbit` (``tests/drives/test_new_drive.py``).
+    REQUIRED_HOOKS: ClassVar[tuple[str, ...]] = ("start", "force", "events", "jump", "impact")
+    #: Every other member the solvers call: declarations and hooks with a default (``rate`` is needed
+    #: with ``state_size > 0``, ``end_flight`` for a drive with state under a law whose contact takes
+    #: time).
+    OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
+        "family", "kind", "integrator", "state_size", "state_names", "parameters", "parameter_ranges",
+        "n_quadratures", "variational", "with_", "parameter_table", "with_parameter", "mode_name", "rate",
+        "quadratures", "piecewise_constant", "levels", "compiled_loop", "flight", "end_flight",
+        "border_tests", "orbit_problem")
+
     family: ClassVar[str] = "drive"
     #: the drive's name in :data:`DRIVES` (a sweep spec's ``[drive] kind``, :func:`register_drive`)
     kind: ClassVar[str] = ""

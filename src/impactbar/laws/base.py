@@ -141,9 +141,11 @@ class ContactLaw:
     name : str
         The law's name in :data:`~impactbar.laws.LAWS` and in ``BarModel.impact``.
     instantaneous : bool
-        The impact takes no time and is applied by :meth:`kernel_restitution` inside the compiled
-        free-flight kernel (with chatter and sustained contact handled by the simulator). Otherwise
-        the kernel stops at each arrival and the simulator calls :meth:`contact`.
+        The law's own declaration, read inside the laws only: the impact takes no time and is the
+        velocity map that :meth:`kernel_restitution` gives, applied by the compiled free-flight
+        kernel (with chatter and sustained contact handled by the simulator). The defaults of
+        :meth:`restitution_in_kernel` and :meth:`has_blow_records` follow from it; the solvers ask
+        those (and :meth:`window` for the impact's duration), never this flag.
     rigid_closed_forms : bool
         The rigid bar's closed forms (:mod:`impactbar.orbits.rigid`, eq. 14 with eq. 10) give this
         law's orbits.
@@ -175,6 +177,21 @@ class ContactLaw:
         The law's own continuation parameters (:func:`~impactbar.continue_orbit`, the sweeps' axes),
         read by :meth:`parameter_value` and changed by :meth:`with_parameter`; none by default.
     """
+
+    #: The hooks a law must implement (the base raises :class:`LawNotSupported`): with them alone it
+    #: runs in :func:`~impactbar.simulate`, :func:`~impactbar.find_orbit`, the continuation and the
+    #: sweeps (``tests/laws/test_custom_law.py``'s ``VelocityRestitution``).
+    REQUIRED_HOOKS: ClassVar[tuple[str, ...]] = ("window", "impact_map", "contact")
+    #: Every other member the solvers call: declarations and hooks with a default, or whose absence
+    #: (:class:`LawNotSupported`) refuses only the computation that needs them (the phase equation's,
+    #: the charts', the coupled blow's).
+    OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
+        "name", "instantaneous", "rigid_closed_forms", "supports_schur", "open_ended",
+        "flight_starts_on_stop", "uses_restitution", "has_phase_equation", "stepped_piston", "parameters",
+        "restitution_in_kernel", "kernel_restitution", "has_blow_records", "blow", "impact_state",
+        "paper_equivalent", "check_model", "coarse_model", "phase_roots", "phase_families", "orbit_state",
+        "multipliers", "existence_edge", "driven_contact", "parameter_table", "has_parameter",
+        "parameter_value", "with_parameter", "check_continuable")
 
     name: ClassVar[str] = ""
     instantaneous: ClassVar[bool] = True
@@ -406,7 +423,60 @@ class ContactLaw:
             ``R`` for an instantaneous law that the kernel applies itself (eq. 10); ``-1``
             (``v -> v``, nothing applied) for a law the simulator resolves by :meth:`contact`.
         """
-        return model.R if self.instantaneous else -1.0
+        return model.R if self.restitution_in_kernel(model) else -1.0
+
+    def restitution_in_kernel(self, model) -> bool:
+        """Whether the impact is the velocity map ``v -> -r v`` at the arrival's instant, ``r =``
+        :meth:`kernel_restitution`, which the solvers apply themselves: the compiled flight kernel
+        (chatter and sustained contact the simulator's), the drives' loops, the closed forms of eq. 10
+        of the position-switched orbits. ``False``: they call the law's :meth:`contact`,
+        :meth:`impact_map` and :meth:`driven_contact` at each arrival instead (a contact that takes
+        time, or one of no duration whose map the kernel cannot apply). By default the law's
+        declaration :attr:`instantaneous`.
+
+        Parameters
+        ----------
+        model : BarModel
+
+        Returns
+        -------
+        bool
+
+        Examples
+        --------
+        >>> from impactbar import BarModel
+        >>> paper = BarModel(s=10.0, d=0.0, R=0.5, n_modes=0)
+        >>> wave = paper.with_(impact="wave")
+        >>> paper.law.restitution_in_kernel(paper), wave.law.restitution_in_kernel(wave)
+        (True, False)
+        """
+        return self.instantaneous
+
+    def has_blow_records(self, model) -> bool:
+        """Whether the law's contact step leaves a blow with a record of its own (a force history,
+        the rod's energy, the contact's separations: :class:`~impactbar.WaveImpact`, a rock's
+        blow), which a periodic orbit lists as its ``contacts`` (:meth:`blow`), checks for
+        separation, and the SI results read per impact. ``False``: an impact with nothing to add
+        (eq. 10's :class:`~impactbar.laws.InstantImpact`). By default ``not`` :attr:`instantaneous`.
+
+        Parameters
+        ----------
+        model : BarModel
+            The bar under this law.
+
+        Returns
+        -------
+        bool
+            ``True`` where :meth:`blow` and :meth:`contact` give such a record.
+
+        Examples
+        --------
+        >>> from impactbar import BarModel
+        >>> models = [BarModel(s=10.0, d=0.0, R=0.5, n_modes=0, impact=name) for name in ("paper", "wave")]
+        >>> [m.law.has_blow_records(m) for m in models]
+        [False, True]
+        """
+        return not self.instantaneous
 
     def contact(self, model, load, t: float, q_minus, v_minus, *, kernel=None):
         """The simulator's contact step: from the arrival at the stop to the start of the next flight.

@@ -86,6 +86,18 @@ class Load(ABC):
 
     p0: float
 
+    #: The members a load must implement (abstract here, besides ``p0`` and ``_key``): with them alone
+    #: it runs through the numpy reference paths (``tests/laws/test_law_hooks.py``'s minimal load);
+    #: the simulator and the compiled searches need :attr:`kernel_view` too.
+    REQUIRED_HOOKS: ClassVar[tuple[str, ...]] = (
+        "__call__", "harmonics", "sup_abs", "sup_oscillation", "variation", "propagate", "rigid_velocity")
+    #: Every other member the solvers call: declarations and members with a default.
+    OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
+        "kind", "description", "parameters", "continuation_parameters", "parameter_ranges", "kernel_kind",
+        "family", "kernel_view", "left_limit", "flow", "periodic_state", "to_record", "from_record",
+        "parameter_table", "with_parameter", "with_", "period", "max_one_impact_orbits", "cosine_form",
+        "square_form", "pieces", "compiled_kind")
+
     #: the load's name in the table :data:`LOADS`: a sweep spec's ``[load] kind``, the CLI's
     #: ``--load``, the ``"kind"`` of :meth:`to_record` (empty for a load not in the table)
     kind: ClassVar[str] = ""

@@ -89,7 +89,7 @@ def orbit_of(problem: OrbitProblem, X, *, multipliers: bool = True) -> SwitchedO
         if adm != Admissibility.ADMISSIBLE:
             break
         adm = problem.admissibility(X, k)
-        if not law.instantaneous and data.impact_velocities[k] > 0.0:
+        if law.has_blow_records(model) and data.impact_velocities[k] > 0.0:
             rec = coupled[k] if coupled is not None else \
                 law.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
             separates = bool(getattr(rec, "separations", ()))
@@ -173,12 +173,12 @@ class ShootingProblem(OrbitProblem):
         law = model.law
         #: a drive with state under a law whose contact takes time: each impact a blow solved with
         #: the drive's state (theory §11, "The coupled blow"), its Jacobian by central differences
-        self.coupled = not drive.piecewise_constant and not law.instantaneous
+        self.coupled = not drive.piecewise_constant and not law.restitution_in_kernel(model)
         if self.coupled:
             from ..simulation.blows import check_coupling
 
             check_coupling(model, drive)
-        if law.instantaneous and model.R >= 1.0:
+        if law.restitution_in_kernel(model) and model.R >= 1.0:
             raise ValueError("model.R must be < 1 for a periodic motion under a drive (with R = 1 no "
                              "energy leaves at the impacts)")
         self.M = model.n_modes + 1
@@ -261,7 +261,7 @@ class ShootingProblem(OrbitProblem):
                 D = blow_jacobian(model, drive, t, q, v, state, settings or self.settings) @ D
                 return out, t_after, after.mode, arrival, pieces, events, D
             return out, t_after, after.mode, arrival, pieces, events
-        if law.instantaneous:
+        if law.restitution_in_kernel(model):
             qa, va = q, -law.kernel_restitution(model) * v
             t_after = t
         else:
@@ -534,7 +534,8 @@ class ShootingProblem(OrbitProblem):
         y_after, _, _, arrival, _, _ = self._flight(tau, mode, y)
         if float(c @ arrival[2]) <= 0.0:
             return Admissibility.BACKWARD_IMPACT
-        if c @ y_after[M:2 * M] >= 0.0 and self.model.R > 0.0 and self.model.law.instantaneous:
+        if c @ y_after[M:2 * M] >= 0.0 and self.model.R > 0.0 and \
+                self.model.law.restitution_in_kernel(self.model):
             return Admissibility.STICKS
         return Admissibility.ADMISSIBLE
 
@@ -563,7 +564,7 @@ class ShootingProblem(OrbitProblem):
             mu = sorted_multipliers(np.linalg.eigvals(B.T @ Phi @ B))
         before, velocities, times, durations, switch_t, crossings, forces = [], [], [], [], [], [], []
         shift = 0.0
-        window = 0.0 if model.law.instantaneous else float(model.law.window(model))
+        window = float(model.law.window(model))
         for k in range(m):
             tau, mode = self.blocks[k]
             y = X[k * n:(k + 1) * n]

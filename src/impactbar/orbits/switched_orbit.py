@@ -182,7 +182,7 @@ class SwitchedOrbit(PeriodicOrbit):
         return total / self.impacts
 
     def _blows(self) -> tuple:
-        if self.model.law.instantaneous:
+        if not self.model.law.has_blow_records(self.model):
             return ()
         records = getattr(self._problem, "blow_records", None)
         coupled = records(self._unknowns) if records is not None else None

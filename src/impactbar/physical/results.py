@@ -431,7 +431,8 @@ class SimulationResult:
         ValueError
             Under eq. 10 (an instant impact has no force history), or for a bad index.
         """
-        impacts = () if self.hammer.model.law.instantaneous else self.trajectory.impacts
+        model = self.hammer.model
+        impacts = self.trajectory.impacts if model.law.has_blow_records(model) else ()
         if not impacts:
             raise ValueError("force waves need the wave impact law (Hammer(impact='wave'))")
         if not -len(impacts) <= i < len(impacts):
@@ -629,7 +630,8 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
     v = np.asarray(traj.impact_velocities, dtype=float) * sc.velocity_m_s
     # the records of a law with a contact (the wave law's rod outputs); an instant impact has none
     # (the rod-rock law's per-blow outputs: impactbar.physical.rock.rock_blows)
-    impacts = () if hammer.model.law.instantaneous or hammer.drill is not None else traj.impacts
+    model = hammer.model
+    impacts = traj.impacts if model.law.has_blow_records(model) and hammer.drill is None else ()
     rod = np.full(v.size, np.nan)
     stress = np.full(v.size, np.nan)
     eff = np.full(v.size, np.nan)

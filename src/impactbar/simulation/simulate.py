@@ -210,7 +210,7 @@ class _Core:
         self.kappa = kappa
         self.sticking = sticking
         self.free_args = (tuple(self.data), tuple(self.free.view), self.R, self.c)  # built once
-        self.instant = model.law.instantaneous
+        self.instant = model.law.restitution_in_kernel(model)
         # the kernel for a flight of this bar, compiled without the other kind's search
         self.kernel = K.run_free_rigid if self.N == 0 else K.run_free
         self._entry = None

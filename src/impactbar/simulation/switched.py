@@ -556,7 +556,7 @@ def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: in
     from ..loads import FourierLoad
 
     law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
-    rigid = model.n_modes == 0 and law.instantaneous and use_fast("simulate.switched_rigid")
+    rigid = model.n_modes == 0 and law.restitution_in_kernel(model) and use_fast("simulate.switched_rigid")
     cores: dict = {}
 
     def core_of(level):
@@ -576,7 +576,7 @@ def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: in
             return driver.run(core, q, v, t, t_stop, 1)
 
     levels = drive.levels
-    if levels is None or not law.instantaneous or not use_fast("simulate.switched_kernel"):
+    if levels is None or not law.restitution_in_kernel(model) or not use_fast("simulate.switched_kernel"):
         return run_pieces(model, drive, q, v, t0, t_end, max_imp, piece, driver.make_state)
     level_cores = tuple(core_of(lv) for lv in levels)
     first = level_cores[0]
@@ -665,7 +665,7 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
         flexible bar would be held on the stop.
     """
     law = model.law
-    if not law.instantaneous:
+    if not law.restitution_in_kernel(model):
         check_coupling(model, drive)
         return run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, _Run)
     R = law.kernel_restitution(model)

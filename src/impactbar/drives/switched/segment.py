@@ -104,7 +104,7 @@ def _constants(model, drive=None, constant_load=None):
     time (the wave law, the rod-rock law) ``Jv`` is the contact's map instead
     (:class:`ContactMap`, needs the ``drive`` and ``constant_load``)."""
     M = model.n_modes + 1
-    if not model.law.instantaneous:
+    if not model.law.restitution_in_kernel(model):
         if drive is None or constant_load is None:
             raise ValueError("the contact map of a law whose contact takes time needs the drive")
         return _w2(model), model.end_weights, ContactMap(model, drive, constant_load)
@@ -387,7 +387,7 @@ class ValveProblem(OrbitProblem):
         self.model, self.drive, self.constant_load = model, drive, constant_load
         self.impacts = m = impacts  # (validated by the solvers that ask for the problem)
         law = model.law
-        if model.R >= 1.0 and (law.instantaneous or law.uses_restitution):
+        if model.R >= 1.0 and (law.restitution_in_kernel(model) or law.uses_restitution):
             raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
                              "(with R = 1 no energy leaves and the blows grow without bound)")
         self.M = model.n_modes + 1
@@ -422,7 +422,7 @@ class ValveProblem(OrbitProblem):
         if guess is None and m > 1:
             raise ValueError(f"impacts={m} needs a guess (an orbit, a simulated run or a tuple): without "
                              f"one Newton would find the one-impact orbit traversed {m} times")
-        if not model.law.instantaneous:  # the wave law, the rod-rock law: the contact's map
+        if not model.law.restitution_in_kernel(model):  # the wave law, the rod-rock law: the contact's map
             if guess is not None:
                 if hasattr(guess, "switch_kinds") and hasattr(guess, "impact_times"):
                     raise ValueError("a simulated run as a guess is read under the paper's law only; under "
@@ -454,7 +454,7 @@ class ValveProblem(OrbitProblem):
         from .search import default_window
 
         model = self.model
-        if not model.n_modes or not model.law.instantaneous:
+        if not model.n_modes or not model.law.restitution_in_kernel(model):
             return 0.0
         lo, hi = default_window(model, self.drive) if window is None else window
         return (float(hi) - float(lo)) * model.s * model.n_modes * (model.n_modes + 1) / 4.0
@@ -467,7 +467,7 @@ class ValveProblem(OrbitProblem):
         from .search import OneImpactEquations, default_window, search_one_impact
 
         model, drive = self.model, self.drive
-        if self.impacts != 1 or not model.law.instantaneous or \
+        if self.impacts != 1 or not model.law.restitution_in_kernel(model) or \
                 (model.n_modes and not model.s * math.pi > 0.5 * model.d):
             return None
         tau = drive.delay_in + drive.delay_out
@@ -509,7 +509,7 @@ class ValveProblem(OrbitProblem):
         state after the first impact; the contacts' windows between them)."""
         model, drive, M = self.model, self.drive, self.M
         w2, d = _w2(model), model.d
-        window = 0.0 if model.law.instantaneous else float(model.law.window(model))
+        window = float(model.law.window(model))
         ps, pr = drive.level(STROKE), drive.level(RETURN)
         out, t = [], 0.0
         for k in range(self.impacts):
@@ -531,7 +531,7 @@ class ValveProblem(OrbitProblem):
     def orbit(self, X) -> OrbitData:
         """Multipliers from the monodromy matrix (the paper's law) or of the return map on the
         arrival surface (a contact that takes time), the states, durations and switches."""
-        if not self.model.law.instantaneous:
+        if not self.model.law.restitution_in_kernel(self.model):
             return self.return_map_orbit(X)
         model, drive, m, M = self.model, self.drive, self.impacts, self.M
         X = np.asarray(X, dtype=float)
