@@ -3,9 +3,10 @@ vector field, Jacobian and events of :mod:`._endkernel` as compiled C callbacks,
 :func:`._cvode.fly` stretch after stretch in one compiled loop (:func:`fly_intervals`), so that no
 Python runs between the circuit's events.
 
-CVODE's user data is one array ``(len(par), a, 1/Z, par...)``: the wave ``a`` arriving at the driven
-end, constant over the stretch (the lattice's steps), the driven end's admittance ``1/Z`` and the
-kernels' parameters. Where ``a`` varies within an interval (a callable), the stretches go through
+CVODE's user data is one array ``(len(par), a, 1/Z, par..., work...)``: the wave ``a`` arriving at
+the driven end, constant over the stretch (the lattice's steps), the driven end's admittance ``1/Z``,
+the kernels' parameters and the callbacks' room for their intermediate values (no allocation a
+call). Where ``a`` varies within an interval (a callable), the stretches go through
 scikit-sundae's Python interface instead (:func:`.endflight.circuit_end_flight`). The options are those of
 :class:`._cvode.Workspace` (scikit-sundae's defaults), so either way takes the same steps.
 """
@@ -29,9 +30,9 @@ _HEAD = 3  # len(par), a, 1/Z
 def _rhs_c(t, y, yp, user_data):
     """CVODE's ``CVRhsFn``: :func:`._endkernel.rhs`."""
     n = int(nb.carray(user_data, 1)[0])
-    ud = nb.carray(user_data, _HEAD + n)
-    EK.rhs(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(CV._nv_data(yp), EK.N_STATE), ud[_HEAD:],
-           ud[1:_HEAD])
+    ud = nb.carray(user_data, _HEAD + n + EK.SCRATCH)
+    EK.rhs_in(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(CV._nv_data(yp), EK.N_STATE),
+              ud[_HEAD:_HEAD + n], ud[1:_HEAD], ud[_HEAD + n:])
     return 0
 
 
@@ -39,9 +40,9 @@ def _rhs_c(t, y, yp, user_data):
 def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     """CVODE's ``CVLsJacFn``: :func:`._endkernel.jac` into the dense matrix (stored by columns)."""
     n = int(nb.carray(user_data, 1)[0])
-    ud = nb.carray(user_data, _HEAD + n)
+    ud = nb.carray(user_data, _HEAD + n + EK.SCRATCH)
     JJ = nb.carray(CV._dense_data(J), (EK.N_STATE, EK.N_STATE)).T
-    EK.jac(nb.carray(CV._nv_data(y), EK.N_STATE), JJ, ud[_HEAD:], ud[1:_HEAD])
+    EK.jac_in(nb.carray(CV._nv_data(y), EK.N_STATE), JJ, ud[_HEAD:_HEAD + n], ud[1:_HEAD], ud[_HEAD + n:])
     return 0
 
 
@@ -50,7 +51,7 @@ def _events_c(t, y, g, user_data):
     """CVODE's ``CVRootFn``: :func:`._endkernel.events`."""
     n = int(nb.carray(user_data, 1)[0])
     ud = nb.carray(user_data, _HEAD + n)
-    EK.events(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(g, EK.N_EVENTS), ud[_HEAD:])
+    EK.events(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(g, EK.N_EVENTS), ud[_HEAD:_HEAD + n])
     return 0
 
 
@@ -59,8 +60,10 @@ CALLBACKS = (_rhs_c, _jac_c, _events_c, EK.N_EVENTS)
 
 
 def user_data(par: np.ndarray, a: float, impedance: float) -> np.ndarray:
-    """The user data of the callbacks: ``(len(par), a, 1/Z, par...)``, shape ``(3 + len(par),)``."""
-    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par))
+    """The user data of the callbacks: ``(len(par), a, 1/Z, par..., work...)``, shape
+    ``(3 + len(par) + SCRATCH,)``, the last ``SCRATCH`` the callbacks' room for their intermediate
+    values (:func:`._endkernel.rhs_in`)."""
+    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par, np.zeros(EK.SCRATCH)))
 
 
 #: :func:`fly_intervals`' returns besides CVODE's flags: a state not finite at a stretch's end, a
@@ -135,7 +138,9 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
     flag = 1
     roots = np.zeros(EK.N_EVENTS, np.int32)
     y0 = np.zeros(N)
-    par = data[_HEAD:]
+    npar = int(data[0])
+    par = data[_HEAD:_HEAD + npar]
+    work = data[_HEAD + npar:]
     while k < n:
         t1 = breaks[k + 1]
         if not t < t1:
@@ -161,7 +166,7 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
                 Y[S] = ys[i]
                 S += 1
         for i in range(s0, S):
-            EK.rhs(Y[i], F[i], par, data[1:_HEAD])
+            EK.rhs_in(Y[i], F[i], par, data[1:_HEAD], work)
         if P + 1 == starts.size:
             st2 = np.zeros(2 * starts.size, np.int64)
             st2[:P + 1] = starts[:P + 1]
