@@ -8,6 +8,8 @@ import json
 import os
 import subprocess
 import sys
+import tarfile
+import tempfile
 import time
 from pathlib import Path
 
@@ -23,6 +25,19 @@ def median_time(fn, repeat: int) -> float:
         fn()
         ts.append(time.perf_counter() - t0)
     return float(np.median(ts))
+
+
+def ref_tree(ref: str) -> str:
+    """The ``src`` of the git ref ``ref`` of this repository, exported by ``git archive`` to a
+    temporary folder (the scripts' ``--against REF``)."""
+    root = Path(__file__).resolve().parents[1]
+    dest = Path(tempfile.mkdtemp(prefix="impactbar-ref-"))
+    tar = dest / "src.tar"
+    with tar.open("wb") as fh:
+        subprocess.run(["git", "-C", str(root), "archive", ref, "src"], stdout=fh, check=True)
+    with tarfile.open(tar) as tf:
+        tf.extractall(dest, filter="data")
+    return str(dest / "src")
 
 
 def fresh_runs(script, src, rounds: int = 3, args=()) -> dict:

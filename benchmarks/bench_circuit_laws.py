@@ -8,19 +8,26 @@ cells per piston) at its operating point's arrival: one blow solved with the cir
 lattice) against the same blow with the force held at the arrival's (``RodRock.contact``), and the
 same under the wave law (the window with one integration of the circuit against the held window);
 then ``find_orbit`` of the circuit on the rock against the ideal valve's at the circuit's mean supply
-pressure on the same rock (``PositionSwitchedDrive``), and ``simulate`` over 20 blows of each. The
-best of a few repetitions (the machine's other load only adds); compilation is done before the clock
-starts.
+pressure on the same rock (``PositionSwitchedDrive``), and ``simulate`` over 20 blows of each. CPU
+seconds, the best of a few repetitions (the machine's other load only adds); compilation is done
+before the clock starts. The circuit's ``find_orbit`` on the rock has the goal <= 0.3 s.
+
+``--against REF`` runs the same cases on the git ref ``REF`` too (its ``src`` exported by ``git
+archive`` to a temporary folder), in fresh processes, alternately, and prints both side by side (the
+best of ``--rounds`` processes each).
 """
 
 from __future__ import annotations
 
 import argparse
+import json
+import sys
 import time
 import tomllib
 from pathlib import Path
 
 import numpy as np
+from _timing import fresh_runs, ref_tree  # this folder's shared runner
 
 from impactbar import InitialState, PositionSwitchedDrive, find_orbit, simulate
 from impactbar.loads import FourierLoad
@@ -30,11 +37,12 @@ EXAMPLE = Path(__file__).parents[1] / "examples" / "circuit_drifter_rock.toml"
 
 
 def best(fn, reps):
+    """The least CPU seconds of ``reps`` calls of ``fn()``."""
     out = float("inf")
     for _ in range(reps):
-        t = time.perf_counter()
+        t = time.process_time()
         fn()
-        out = min(out, time.perf_counter() - t)
+        out = min(out, time.process_time() - t)
     return out
 
 
@@ -49,7 +57,8 @@ def blows(model, drive, state, q, v, reps=3):
             best(lambda: law.contact(model, held, 0.0, q, v), reps))
 
 
-def main(quick=False):
+def cases(quick=False) -> dict:
+    """``{case: CPU seconds}`` (module docstring)."""
     with open(EXAMPLE, "rb") as f:
         d = CircuitDrifter.from_config(tomllib.load(f))
     model, drive = d.model(), d.drive()
@@ -61,26 +70,48 @@ def main(quick=False):
     rock = blows(model, drive, state, q, v)
     wave = model.with_(impact="wave", R=0.215)
     window = blows(wave, drive, state, q, v)
-    print(f"{'one blow, s':>24} {'coupled':>9} {'held':>9}")
-    print(f"{'rod-rock (8 cells)':>24} {rock[0]:>9.4f} {rock[1]:>9.4f}")
-    print(f"{'wave law window':>24} {window[0]:>9.4f} {window[1]:>9.4f}")
+    out = {"blow rod-rock coupled": rock[0], "blow rod-rock held": rock[1],
+           "blow wave window coupled": window[0], "blow wave window held": window[1]}
     if quick:
-        return
+        return out
     ps = o.drive_states[0][2]
     a = drive.chambers.area_ratio
     ideal = PositionSwitchedDrive(stroke=ps * (1 - a), ret=a * ps - drive.supply.tank_pressure,
                                   switch_out=drive.valve.switch_out)
     oi = find_orbit(model, ideal)
     start = InitialState.rigid(-drive.valve.switch_out, 0.0)
-    t_orbit = (best(lambda: find_orbit(model, drive), 1), best(lambda: find_orbit(model, ideal), 3))
-    t_sim = (best(lambda: simulate(model, drive, start, 20.5 * o.period), 1),
-             best(lambda: simulate(model, ideal, start, 20.5 * oi.period), 3))
-    print(f"{'on the rock, s':>24} {'circuit':>9} {'ideal':>9}")
-    print(f"{'find_orbit':>24} {t_orbit[0]:>9.3f} {t_orbit[1]:>9.3f}")
-    print(f"{'simulate, 20 blows':>24} {t_sim[0]:>9.3f} {t_sim[1]:>9.3f}")
+    out["find_orbit circuit"] = best(lambda: find_orbit(model, drive), 3)
+    out["find_orbit ideal"] = best(lambda: find_orbit(model, ideal), 3)
+    out["simulate 20 blows circuit"] = best(lambda: simulate(model, drive, start, 20.5 * o.period), 1)
+    out["simulate 20 blows ideal"] = best(lambda: simulate(model, ideal, start, 20.5 * oi.period), 3)
+    return out
+
+
+def against(ref: str, rounds: int, quick: bool) -> None:
+    runs = fresh_runs(__file__, ref_tree(ref), rounds, ["--quick"] if quick else [])
+    print(f"{'case (CPU s, best of ' + str(rounds) + ')':30s} {ref[:10]:>10s} {'this tree':>10s}")
+    for case in runs["new"][0]:
+        b = min(r[case] for r in runs["baseline"])
+        n = min(r[case] for r in runs["new"])
+        print(f"{case:30s} {b:10.4f} {n:10.4f}   ({b / n:.2f}x)")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--quick", action="store_true", help="the blows only")
+    parser.add_argument("--against", metavar="REF", help="compare with the git ref REF (e.g. main)")
+    parser.add_argument("--rounds", type=int, default=1, help="processes each with --against")
+    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
+    args = parser.parse_args(argv)
+    if args.json:
+        print(json.dumps(cases(args.quick)))
+        return
+    if args.against:
+        against(args.against, args.rounds, args.quick)
+        return
+    for case, sec in cases(args.quick).items():
+        print(f"{case:30s} {sec:10.4f}")
 
 
 if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--quick", action="store_true", help="the blows only")
-    main(**vars(parser.parse_args()))
+    sys.exit(main())

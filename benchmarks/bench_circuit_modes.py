@@ -16,14 +16,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
-import tarfile
-import tempfile
 import time
-from pathlib import Path
 
-from _timing import fresh_runs  # this folder's shared runner
+from _timing import fresh_runs, ref_tree  # this folder's shared runner
 
 GOALS = {"rigid orbit": 0.5, "4 modes orbit": 0.2, "8 modes orbit": 0.5, "16 modes orbit": 2.0,
          "8 modes continuation point": 0.1}
@@ -65,18 +61,6 @@ def cases(modes=(4, 8, 16)) -> dict:
     return out
 
 
-def _tree(ref: str) -> str:
-    """The ``src`` of the git ref ``ref``, exported to a temporary folder."""
-    root = Path(__file__).resolve().parents[1]
-    dest = Path(tempfile.mkdtemp(prefix="impactbar-ref-"))
-    tar = dest / "src.tar"
-    with tar.open("wb") as fh:
-        subprocess.run(["git", "-C", str(root), "archive", ref, "src"], stdout=fh, check=True)
-    with tarfile.open(tar) as tf:
-        tf.extractall(dest, filter="data")
-    return str(dest / "src")
-
-
 def _row(case, secs) -> str:
     goal = GOALS.get(case)
     cells = " ".join(f"{s:10.3f}" for s in secs)
@@ -85,7 +69,7 @@ def _row(case, secs) -> str:
 
 
 def against(ref: str, rounds: int, modes) -> None:
-    runs = fresh_runs(__file__, _tree(ref), rounds, ["--modes", *(str(m) for m in modes)])
+    runs = fresh_runs(__file__, ref_tree(ref), rounds, ["--modes", *(str(m) for m in modes)])
     print(f"{'case (CPU s, best of ' + str(rounds) + ')':28s} {ref[:10]:>10s} {'this tree':>10s}   goal")
     for case in runs["new"][0]:
         b = min(r[case] for r in runs["baseline"])

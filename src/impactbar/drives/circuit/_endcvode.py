@@ -1,11 +1,13 @@
 r"""The circuit during a blow driven by CVODE from compiled code (theory §11, "The coupled blow"): the
 vector field, Jacobian and events of :mod:`._endkernel` as compiled C callbacks, flown by
-:func:`._cvode.fly`, so that no Python runs between a stretch's start and its end.
+:func:`._cvode.fly` stretch after stretch in one compiled loop (:func:`fly_intervals`), so that no
+Python runs between the circuit's events.
 
-CVODE's user data is one array ``(len(par), a, 1/Z, par...)``: the wave ``a`` arriving at the driven
-end, constant over the stretch (the lattice's steps), the driven end's admittance ``1/Z`` and the
-kernels' parameters. A stretch whose ``a`` varies within it (a callable) goes through scikit-sundae's
-Python interface instead (:func:`.endflight.circuit_end_flight`). The options are those of
+CVODE's user data is one array ``(len(par), a, 1/Z, par..., work...)``: the wave ``a`` arriving at
+the driven end, constant over the stretch (the lattice's steps), the driven end's admittance ``1/Z``,
+the kernels' parameters and the callbacks' room for their intermediate values (no allocation a
+call). Where ``a`` varies within an interval (a callable), the stretches go through
+scikit-sundae's Python interface instead (:func:`.endflight.circuit_end_flight`). The options are those of
 :class:`._cvode.Workspace` (scikit-sundae's defaults), so either way takes the same steps.
 """
 
@@ -19,7 +21,7 @@ from . import _cvode as CV
 from . import _endkernel as EK
 from ._cvode import _c, _d, _dp, _p
 
-__all__ = ["CALLBACKS", "user_data", "fly"]
+__all__ = ["CALLBACKS", "user_data", "fly_intervals"]
 
 _HEAD = 3  # len(par), a, 1/Z
 
@@ -28,9 +30,9 @@ _HEAD = 3  # len(par), a, 1/Z
 def _rhs_c(t, y, yp, user_data):
     """CVODE's ``CVRhsFn``: :func:`._endkernel.rhs`."""
     n = int(nb.carray(user_data, 1)[0])
-    ud = nb.carray(user_data, _HEAD + n)
-    EK.rhs(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(CV._nv_data(yp), EK.N_STATE), ud[_HEAD:],
-           ud[1:_HEAD])
+    ud = nb.carray(user_data, _HEAD + n + EK.SCRATCH)
+    EK.rhs_in(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(CV._nv_data(yp), EK.N_STATE),
+              ud[_HEAD:_HEAD + n], ud[1:_HEAD], ud[_HEAD + n:])
     return 0
 
 
@@ -38,9 +40,9 @@ def _rhs_c(t, y, yp, user_data):
 def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     """CVODE's ``CVLsJacFn``: :func:`._endkernel.jac` into the dense matrix (stored by columns)."""
     n = int(nb.carray(user_data, 1)[0])
-    ud = nb.carray(user_data, _HEAD + n)
+    ud = nb.carray(user_data, _HEAD + n + EK.SCRATCH)
     JJ = nb.carray(CV._dense_data(J), (EK.N_STATE, EK.N_STATE)).T
-    EK.jac(nb.carray(CV._nv_data(y), EK.N_STATE), JJ, ud[_HEAD:], ud[1:_HEAD])
+    EK.jac_in(nb.carray(CV._nv_data(y), EK.N_STATE), JJ, ud[_HEAD:_HEAD + n], ud[1:_HEAD], ud[_HEAD + n:])
     return 0
 
 
@@ -49,7 +51,7 @@ def _events_c(t, y, g, user_data):
     """CVODE's ``CVRootFn``: :func:`._endkernel.events`."""
     n = int(nb.carray(user_data, 1)[0])
     ud = nb.carray(user_data, _HEAD + n)
-    EK.events(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(g, EK.N_EVENTS), ud[_HEAD:])
+    EK.events(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(g, EK.N_EVENTS), ud[_HEAD:_HEAD + n])
     return 0
 
 
@@ -58,13 +60,137 @@ CALLBACKS = (_rhs_c, _jac_c, _events_c, EK.N_EVENTS)
 
 
 def user_data(par: np.ndarray, a: float, impedance: float) -> np.ndarray:
-    """The user data of the callbacks: ``(len(par), a, 1/Z, par...)``, shape ``(3 + len(par),)``."""
-    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par))
+    """The user data of the callbacks: ``(len(par), a, 1/Z, par..., work...)``, shape
+    ``(3 + len(par) + SCRATCH,)``, the last ``SCRATCH`` the callbacks' room for their intermediate
+    values (:func:`._endkernel.rhs_in`)."""
+    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par, np.zeros(EK.SCRATCH)))
 
 
-def fly(t0: float, y0: np.ndarray, t_end: float, rtol: float, atol: float, directions, data: np.ndarray,
-        max_steps: int):
-    """One stretch from ``y0`` at ``t0`` to the first event in ``directions`` (int32, one per event)
-    or ``t_end``: what :func:`._cvode.fly` returns, every component kept."""
-    ws = CV.workspace(EK.N_STATE, 0, CALLBACKS)
-    return CV.fly(ws.mem, ws.y, t0, y0, t_end, rtol, atol, directions, data, EK.N_STATE, max_steps)
+#: :func:`fly_intervals`' returns besides CVODE's flags: a state not finite at a stretch's end, a
+#: chamber emptied (``V <= 0``) in the stretch
+NOT_FINITE, REAR_EMPTY, FRONT_EMPTY = -1000, -1001, -1002
+
+
+@nb.njit(cache=CACHE, nogil=True)
+def _grow(T, Y, F, k, need):
+    """``T, Y, F`` with room for ``need`` rows (doubled), their first ``k`` rows kept."""
+    cap = T.size
+    if need <= cap:
+        return T, Y, F
+    while cap < need:
+        cap *= 2
+    T2, Y2, F2 = np.empty(cap), np.empty((cap, Y.shape[1])), np.empty((cap, Y.shape[1]))
+    T2[:k], Y2[:k], F2[:k] = T[:k], Y[:k], F[:k]
+    return T2, Y2, F2
+
+
+@nb.njit(cache=CACHE, nogil=True)
+def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, directions, data, max_steps,
+                  volumes, impulses):
+    r"""The stretches of :func:`.endflight.circuit_end_flight` from interval ``k`` at ``t`` (the
+    driven end at ``w``, the circuit at ``z``) on through the intervals of ``breaks``, each a call of
+    :func:`._cvode.fly` (CVODE re-initialised at each interval's start, the same steps), until the
+    last break, a root of an event in ``directions`` (the caller jumps the circuit's mode and calls
+    again), a failure or a chamber emptying.
+
+    Parameters
+    ----------
+    mem, yvec : int
+        The workspace of :data:`CALLBACKS` (:func:`._cvode.workspace`).
+    breaks : numpy.ndarray, shape (n + 1,)
+    k : int
+        The interval to start in.
+    t, w : float
+    z : numpy.ndarray, shape (4,)
+    incoming : numpy.ndarray, shape (n,)
+        The wave ``a`` on each interval (written into ``data[1]`` in turn).
+    rtol, atol : float
+    directions : numpy.ndarray of int32, shape (3,)
+    data : numpy.ndarray
+        :func:`user_data` of the mode.
+    max_steps : int
+    volumes : numpy.ndarray, shape (3,)
+        The rear and the front chamber's volumes and the area ratio.
+    impulses : numpy.ndarray, shape (n,)
+        ``int p dt`` over each interval, added to in place.
+
+    Returns
+    -------
+    flag : int
+        1 the last break reached, 2 a root, CVODE's negative flag, or :data:`NOT_FINITE`,
+        :data:`REAR_EMPTY`, :data:`FRONT_EMPTY`.
+    k : int
+        The interval where it stopped (``n`` at the last break).
+    t : float
+        The time there (the failing stretch's start where ``flag < 0``).
+    T, Y, F : numpy.ndarray, shapes (S,), (S, 14), (S, 14)
+        The pieces' steps, states and rates, one after the other (the repeated times dropped).
+    starts : numpy.ndarray of int64, shape (P + 1,)
+        Piece ``i`` at rows ``starts[i]:starts[i + 1]``.
+    roots : numpy.ndarray of int32, shape (3,)
+        CVODE's root information at a root.
+    """
+    n = breaks.size - 1
+    N = EK.N_STATE
+    T, Y, F = np.empty(256), np.empty((256, N)), np.empty((256, N))
+    starts = np.zeros(n + 1, np.int64)
+    P, S = 0, 0
+    flag = 1
+    roots = np.zeros(EK.N_EVENTS, np.int32)
+    y0 = np.zeros(N)
+    npar = int(data[0])
+    par = data[_HEAD:_HEAD + npar]
+    work = data[_HEAD + npar:]
+    while k < n:
+        t1 = breaks[k + 1]
+        if not t < t1:
+            k += 1
+            continue
+        data[1] = incoming[k]
+        y0[:] = 0.0
+        y0[0] = w
+        y0[1:5] = z
+        flag, ts, ys, _, roots = CV.fly(mem, yvec, t, y0, t1, rtol, atol, directions, data, N, max_steps)
+        ok = flag >= 0
+        if ok:
+            for j in range(N):
+                if not np.isfinite(ys[ys.shape[0] - 1, j]):
+                    ok = False
+        if not ok:
+            return flag if flag < 0 else NOT_FINITE, k, t, T[:S], Y[:S], F[:S], starts[:P + 1], roots
+        T, Y, F = _grow(T, Y, F, S, S + ts.size)
+        s0 = S
+        for i in range(ts.size):
+            if i == 0 or ts[i] - ts[i - 1] > 0.0:
+                T[S] = ts[i]
+                Y[S] = ys[i]
+                S += 1
+        for i in range(s0, S):
+            EK.rhs_in(Y[i], F[i], par, data[1:_HEAD], work)
+        if P + 1 == starts.size:
+            st2 = np.zeros(2 * starts.size, np.int64)
+            st2[:P + 1] = starts[:P + 1]
+            starts = st2
+        P += 1
+        starts[P] = S
+        wmax, wmin = Y[s0, 0], Y[s0, 0]
+        for i in range(s0 + 1, S):
+            wmax = max(wmax, Y[i, 0])
+            wmin = min(wmin, Y[i, 0])
+        if volumes[0] - wmax <= 0.0:
+            return REAR_EMPTY, k, t, T[:S], Y[:S], F[:S], starts[:P + 1], roots
+        if volumes[1] + volumes[2] * wmin <= 0.0:
+            return FRONT_EMPTY, k, t, T[:S], Y[:S], F[:S], starts[:P + 1], roots
+        impulses[k] += Y[S - 1, 5]
+        w = Y[S - 1, 0]
+        z = Y[S - 1, 1:5].copy()
+        te = T[S - 1]
+        t = te if te < t1 else t1
+        if flag == CV.CV_ROOT_RETURN:
+            hit = False
+            for i in range(EK.N_EVENTS):
+                if roots[i] != 0:
+                    hit = True
+            if hit:
+                return flag, k, t, T[:S], Y[:S], F[:S], starts[:P + 1], roots
+    return 1, k, t, T[:S], Y[:S], F[:S], starts[:P + 1], roots

@@ -28,6 +28,8 @@ N_STATE = 6 + K.N_ENERGY
 N_EVENTS = 3
 #: their indices among the flight kernel's events (``_kernel.RAMP_EV``, ``ACC_EV``, ``REL_EV``)
 FLIGHT_EVENTS = (K.RAMP_EV, K.ACC_EV, K.REL_EV)
+#: the room :func:`rhs_in` and :func:`jac_in` take for their intermediate values
+SCRATCH = 6 + K.N_ENERGY + 40
 
 _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
@@ -50,8 +52,15 @@ def _one_mode(y, par, ext, buf):
 @nb.njit(**_JIT)
 def rhs(y, yp, par, ext):
     """``yp = f(y)`` of the state during a blow (module docstring)."""
-    buf = np.empty(6 + K.N_ENERGY)
-    out = np.empty(6 + K.N_ENERGY)
+    rhs_in(y, yp, par, ext, np.empty(SCRATCH))
+
+
+@nb.njit(**_JIT)
+def rhs_in(y, yp, par, ext, work):
+    """:func:`rhs` with its intermediate values in ``work`` (shape ``(SCRATCH,)``: the compiled
+    callbacks' user data, no allocation a call)."""
+    buf = work[:6 + K.N_ENERGY]
+    out = work[6 + K.N_ENERGY:2 * (6 + K.N_ENERGY)]
     ut = _one_mode(y, par, ext, buf)
     K._base(buf, par, 1, out)
     yp[0] = -ut
@@ -66,18 +75,26 @@ def rhs(y, yp, par, ext):
 def jac(y, JJ, par, ext):
     """The Jacobian of :func:`rhs` (the energies' rows zero: they feed nothing back), by the chain
     rule from :func:`._kernel.jac_base` on the one-mode bar."""
+    jac_in(y, JJ, par, ext, np.empty(SCRATCH))
+
+
+@nb.njit(**_JIT)
+def jac_in(y, JJ, par, ext, work):
+    """:func:`jac` with its intermediate values in ``work`` (as :func:`rhs_in`)."""
     n = JJ.shape[0]
     for i in range(n):
         for j in range(n):
             JJ[i, j] = 0.0
-    buf = np.empty(6 + K.N_ENERGY)
+    buf = work[:6 + K.N_ENERGY]
     _one_mode(y, par, ext, buf)
-    A = np.empty((6, 6))
+    A = work[6 + K.N_ENERGY:6 + K.N_ENERGY + 36].reshape((6, 6))
     K.jac_base(buf, par, 1, A)
     alpha, iz = par[K.ALPHA], ext[1]
-    dut = np.zeros(4)  # d u_t(0) / d(p_f, p_r, p_s, x_v)
+    dut = work[6 + K.N_ENERGY + 36:6 + K.N_ENERGY + 40]  # d u_t(0) / d(p_f, p_r, p_s, x_v)
     dut[0] = -alpha * iz
     dut[1] = iz
+    dut[2] = 0.0
+    dut[3] = 0.0
     for i in range(4):
         JJ[1 + i, 0] = -A[2 + i, 0]  # q_0 = -w
         for j in range(4):

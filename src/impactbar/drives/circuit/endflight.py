@@ -176,48 +176,36 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     model1 = one_mode
     ext = np.array([0.0, 1.0 / float(impedance)])
     solvers: dict = {}  # by mode: scikit-sundae's solver (a wave that varies within a stretch)
-    flown: dict = {}  # by mode: the compiled driver's parameters, event directions and user data
     mode, z = state.mode, np.array(state.z, dtype=float)
     w = float(w0)
     impulses = np.zeros(n)
     pieces: list = []
     fired_log: list = []
     compiled = _compiled_end(drive)
+    if compiled is not None and not any(callable(a) for a in incoming):  # no Python between events
+        return _compiled_stretches(compiled, drive, model1, state, breaks, w,
+                                   np.asarray(incoming, dtype=float), impedance, settings)
     for k in range(n):
         a = incoming[k]
         t, t1 = float(breaks[k]), float(breaks[k + 1])
         while t < t1:
             y0 = np.zeros(EK.N_STATE)
             y0[0], y0[1:5] = w, z
-            if compiled is not None and not callable(a):  # no Python between the stretch's ends
-                if mode not in flown:
-                    par = drive._par(model1, mode)
-                    flown[mode] = (par, np.array([drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS],
-                                                 dtype=np.int32), compiled.user_data(par, 0.0, impedance))
-                par, directions, data = flown[mode]
-                data[1] = a
-                flag, ts, Y, _, roots = compiled.fly(t, y0, t1, float(settings.rtol), float(settings.atol),
-                                                     directions, data, _MAX_STEPS)
-                if flag < 0 or not np.all(np.isfinite(Y[-1])):
-                    raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be "
-                                     f"integrated ({_message(flag)})")
-                status, hit = int(flag), list(np.flatnonzero(roots))
+            if mode not in solvers:
+                solvers[mode] = _solver(drive, mode, settings, ext, model1, drive.state_size)
+            solver, par, ext_fn = solvers[mode]
+            if callable(a):
+                ext_fn[0] = a
             else:
-                if mode not in solvers:
-                    solvers[mode] = _solver(drive, mode, settings, ext, model1, drive.state_size)
-                solver, par, ext_fn = solvers[mode]
-                if callable(a):
-                    ext_fn[0] = a
-                else:
-                    ext_fn[0] = None
-                    ext[0] = float(a)
-                with contextlib.redirect_stdout(io.StringIO()):  # (CVODE's errors are in sol.message)
-                    sol = solver.solve(np.array([t, t1]), y0)
-                if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
-                    raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be "
-                                     f"integrated ({sol.message})")
-                ts, Y, status = sol.t, sol.y, int(sol.status)
-                hit = [] if sol.i_events is None else list(np.flatnonzero(np.atleast_2d(sol.i_events)[-1]))
+                ext_fn[0] = None
+                ext[0] = float(a)
+            with contextlib.redirect_stdout(io.StringIO()):  # (CVODE's errors are in sol.message)
+                sol = solver.solve(np.array([t, t1]), y0)
+            if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
+                raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be "
+                                 f"integrated ({sol.message})")
+            ts, Y, status = sol.t, sol.y, int(sol.status)
+            hit = [] if sol.i_events is None else list(np.flatnonzero(np.atleast_2d(sol.i_events)[-1]))
             ts = np.asarray(ts, dtype=float)
             Y = np.asarray(Y, dtype=float)
             keep = np.concatenate(([True], np.diff(ts) > 0.0))
@@ -240,6 +228,54 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
                     fired_log.append((te, e, st.mode))
                 mode, z = st.mode, np.array(st.z, dtype=float)
             t = te if te < t1 else t1
+    return EndFlight(DriveState(mode, z), w, impulses, pieces, fired_log)
+
+
+def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, impedance, settings):
+    """:func:`circuit_end_flight` with a constant ``a`` on each interval: the stretches between the
+    circuit's events in one compiled call each (:func:`._endcvode.fly_intervals`, the same steps as
+    one :func:`._endcvode.fly` a stretch), Python only at the events."""
+    from . import _cvode as CV
+
+    n = breaks.size - 1
+    ws = CV.workspace(EK.N_STATE, 0, compiled.CALLBACKS)
+    ch = drive.chambers
+    volumes = np.array([ch.rear_volume, ch.front_volume, ch.area_ratio])
+    alpha = ch.area_ratio
+    impulses = np.zeros(n)
+    pieces: list = []
+    fired_log: list = []
+    mode, z = state.mode, np.array(state.z, dtype=float)
+    k, t = 0, float(breaks[0])
+    rtol, atol = float(settings.rtol), float(settings.atol)
+    while True:
+        par = drive._par(model1, mode)
+        directions = np.array([drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS], dtype=np.int32)
+        data = compiled.user_data(par, 0.0, impedance)
+        flag, k, t, T, Y, F, starts, roots = compiled.fly_intervals(
+            ws.mem, ws.y, breaks, k, t, w, z, incoming, rtol, atol, directions, data, _MAX_STEPS, volumes,
+            impulses)
+        for i in range(starts.size - 1):
+            a, b = starts[i], starts[i + 1]
+            pieces.append(EndPiece(T[a:b], Y[a:b], F[a:b], alpha))
+        if flag in (compiled.REAR_EMPTY, compiled.FRONT_EMPTY):
+            which = "rear" if flag == compiled.REAR_EMPTY else "front"
+            raise ValueError(f"the {which} chamber empties (V <= 0) during the blow near t = {t:.6g}: give a "
+                             f"larger {which}_volume (now {getattr(ch, which + '_volume'):g})")
+        if flag < 0:
+            why = "a state not finite" if flag == compiled.NOT_FINITE else _message(flag)
+            raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be integrated "
+                             f"({why})")
+        if starts.size > 1:
+            w, z = float(Y[-1, 0]), Y[-1, 1:5].copy()
+        if flag != 2:
+            break
+        te = float(T[-1])
+        st = DriveState(mode, z)
+        for e in drive._fired(mode, [EK.FLIGHT_EVENTS[i] for i in np.flatnonzero(roots)]):
+            st = drive.jump(st.mode, st.z, e, te, None, None)
+            fired_log.append((te, e, st.mode))
+        mode, z = st.mode, np.array(st.z, dtype=float)
     return EndFlight(DriveState(mode, z), w, impulses, pieces, fired_log)
 
 
