@@ -87,8 +87,9 @@ _DEFAULTS = {"work_energy": -1.0, "compression_energy": -1.0, "work_sign": 1.0, 
              "event": -1.0}
 
 # the rows of the nodes' scratch
-_SP, _SNU, _SNET, _SF, _SC, _SDC, _SNAC, _SCH, _SDP = range(9)
-_NSCRATCH = 9
+# (columns: the nodes; ``_SCA``, an accumulator's compliance, by record)
+_SP, _SNU, _SNET, _SF, _SC, _SDC, _SNAC, _SCH, _SDP, _SCA = range(10)
+_NSCRATCH = 10
 
 _JIT = dict(cache=CACHE, nogil=True, error_model="numpy")
 
@@ -217,10 +218,10 @@ def _pressure(par, R0, y, F, ns, j):
 
 
 @nb.njit(**_JIT)
-def _prepare(y, par, M, S, en, dp):
+def _prepare(y, par, M, S, en, dp, energies):
     """The nodes' pressures, volumes, net inflows, capacitances and rates into the scratch ``S``,
-    ``p'`` of the nodes with a state into ``dp``, the energy integrands into ``en``; returns
-    ``(force, w')``."""
+    ``p'`` of the nodes with a state into ``dp``, with ``energies`` the energy integrands into ``en``;
+    returns ``(force, w', x_v')``."""
     F = 2 * M
     net0 = HEAD + 3 * M
     nrec = int(par[net0 + NW_NREC])
@@ -234,18 +235,24 @@ def _prepare(y, par, M, S, en, dp):
         w -= e * y[i]
         wd -= e * y[M + i]
     xv = y[F + ns]
-    for k in range(en.shape[0]):
-        en[k] = -0.0
+    if energies:
+        for k in range(en.shape[0]):
+            en[k] = -0.0
     for j in range(nn):
         r = R0 + j * REC_SIZE
-        S[_SP, j] = _pressure(par, R0, y, F, ns, j)
+        S[_SP, j] = y[F + j] if j < ns else par[r + N_P]
         S[_SNU, j] = par[r + N_V]
         S[_SNET, j] = -0.0
         S[_SF, j] = 1.0
         S[_SDC, j] = 0.0
         S[_SNAC, j] = 0.0
         S[_SCH, j] = 0.0
-    # the flows, in the records' order
+    # one pass in the records' order (the kinds' order): the flows, then the chambers (their volumes,
+    # their inflow from the piston's motion, the force on the bar), then the accumulators (their
+    # compliance; each node's capacitance V / beta first)
+    force = -0.0
+    rate = 0.0
+    capacitance = False
     for k in range(nn, nrec):
         r = R0 + k * REC_SIZE
         kind = int(par[r + KIND])
@@ -253,7 +260,7 @@ def _prepare(y, par, M, S, en, dp):
             a = int(par[r + P_NODE])
             q = par[r + P_FLOW]
             S[_SNET, a] += q
-            if par[r + P_E] >= 0:
+            if energies and par[r + P_E] >= 0:
                 en[int(par[r + P_E])] += S[_SP, a] * q
         elif kind == ORIFICE:
             a, b = int(par[r + O_FROM]), int(par[r + O_TO])
@@ -261,18 +268,19 @@ def _prepare(y, par, M, S, en, dp):
             q = par[r + O_K] * phi(dpab, par[r + O_PTR2])
             S[_SNET, a] -= q
             S[_SNET, b] += q
-            if par[r + O_E] >= 0:
+            if energies and par[r + O_E] >= 0:
                 en[int(par[r + O_E])] += q * dpab
         elif kind == VALVE:
             P, A, T = int(par[r + V_P]), int(par[r + V_A]), int(par[r + V_T])
             kv, ptr2 = par[r + V_K], par[r + V_PTR2]
+            rate = par[r + V_RATE]
             qin = kv * xv * phi(S[_SP, P] - S[_SP, A], ptr2)
             qout = kv * (1.0 - xv) * phi(S[_SP, A] - S[_SP, T], ptr2)
             S[_SNET, P] -= qin
             S[_SNET, A] += qin
             S[_SNET, A] -= qout
             S[_SNET, T] += qout
-            if par[r + V_E] >= 0:
+            if energies and par[r + V_E] >= 0:
                 ie = int(par[r + V_E])
                 en[ie] += qin * (S[_SP, P] - S[_SP, A])
                 en[ie] += qout * (S[_SP, A] - S[_SP, T])
@@ -281,59 +289,68 @@ def _prepare(y, par, M, S, en, dp):
             q = par[r + R_K] * (S[_SP, a] - par[r + R_SET]) if par[r + R_OPEN] > 0.5 else 0.0
             S[_SNET, a] -= q
             S[_SNET, b] += q
-            if par[r + R_E] >= 0:
+            if energies and par[r + R_E] >= 0:
                 en[int(par[r + R_E])] += q * (S[_SP, a] - S[_SP, b])
-    # the chambers: their volumes, their inflow from the piston's motion, the force on the bar
-    force = -0.0
-    for k in range(nn, nrec):
-        r = R0 + k * REC_SIZE
-        if int(par[r + KIND]) == CHAMBER:
+        elif kind == CHAMBER:
             a = int(par[r + C_NODE])
             area = par[r + C_AREA]
             S[_SNU, a] = S[_SNU, a] + area * w
             S[_SNET, a] += -area * wd
             S[_SCH, a] = 1.0
             force += -area * S[_SP, a]
-    # the capacitances
-    for j in range(nn):
-        S[_SC, j] = S[_SNU, j] / par[R0 + j * REC_SIZE + N_BETA]
-    for k in range(nn, nrec):
-        r = R0 + k * REC_SIZE
-        if int(par[r + KIND]) == ACCUM and par[r + A_ON] > 0.5:
-            a = int(par[r + A_NODE])
-            ca = _compliance(par, r, S[_SP, a])
-            S[_SC, a] = S[_SC, a] + ca
-            dc = ca * (-1.0 / par[r + A_N] - 1.0) / S[_SP, a]
-            S[_SDC, a] = dc if S[_SNAC, a] == 0.0 else S[_SDC, a] + dc
-            S[_SNAC, a] += 1.0
+        elif kind == ACCUM:
+            if not capacitance:
+                _capacitances(par, R0, nn, S)
+                capacitance = True
+            S[_SCA, k] = 0.0
+            if par[r + A_ON] > 0.5:
+                a = int(par[r + A_NODE])
+                ca = _compliance(par, r, S[_SP, a])
+                S[_SCA, k] = ca
+                S[_SC, a] = S[_SC, a] + ca
+                dc = ca * (-1.0 / par[r + A_N] - 1.0) / S[_SP, a]
+                S[_SDC, a] = dc if S[_SNAC, a] == 0.0 else S[_SDC, a] + dc
+                S[_SNAC, a] += 1.0
+    if not capacitance:
+        _capacitances(par, R0, nn, S)
     # the rates and the nodes' energies
-    for j in range(nn):
+    for j in range(ns):
         r = R0 + j * REC_SIZE
-        held = j >= ns or par[r + N_HELD] > 0.5
+        held = par[r + N_HELD] > 0.5
         if held:
             S[_SDP, j] = 0.0
-            if par[r + N_EWORK] >= 0:
-                en[int(par[r + N_EWORK])] += S[_SP, j] * (par[r + N_ESIGN] * S[_SNET, j])
         elif S[_SCH, j] > 0.5:
             S[_SF, j] = par[r + N_BETA] / S[_SNU, j]
             S[_SDP, j] = S[_SF, j] * S[_SNET, j]
         else:
             S[_SDP, j] = S[_SNET, j] / S[_SC, j]
-        if j < ns:
-            dp[j] = S[_SDP, j]
-            if par[r + N_ECOMP] >= 0:
-                en[int(par[r + N_ECOMP])] += 0.0 if held else \
-                    S[_SNU, j] * S[_SP, j] * S[_SDP, j] / par[r + N_BETA]
+        dp[j] = S[_SDP, j]
+    if not energies:
+        return force, wd, rate
+    for j in range(nn):
+        r = R0 + j * REC_SIZE
+        held = j >= ns or par[r + N_HELD] > 0.5
+        if held and par[r + N_EWORK] >= 0:
+            en[int(par[r + N_EWORK])] += S[_SP, j] * (par[r + N_ESIGN] * S[_SNET, j])
+        if j < ns and par[r + N_ECOMP] >= 0:
+            en[int(par[r + N_ECOMP])] += 0.0 if held else \
+                S[_SNU, j] * S[_SP, j] * S[_SDP, j] / par[r + N_BETA]
     for k in range(nn, nrec):
         r = R0 + k * REC_SIZE
         if int(par[r + KIND]) == ACCUM and par[r + A_E] >= 0:
             a = int(par[r + A_NODE])
             held = a >= ns or par[R0 + a * REC_SIZE + N_HELD] > 0.5
-            ca = _compliance(par, r, S[_SP, a]) if par[r + A_ON] > 0.5 else 0.0
-            en[int(par[r + A_E])] += 0.0 if held else S[_SP, a] * ca * S[_SDP, a]
+            en[int(par[r + A_E])] += 0.0 if held else S[_SP, a] * S[_SCA, k] * S[_SDP, a]
     ep = int(par[net0 + NW_EPISTON])
     en[ep] += -force * wd
-    return force, wd
+    return force, wd, rate
+
+
+@nb.njit(**_JIT)
+def _capacitances(par, R0, nn, S):
+    """Each node's ``V / beta`` into ``S`` (its volume's with the chambers' change)."""
+    for j in range(nn):
+        S[_SC, j] = S[_SNU, j] / par[R0 + j * REC_SIZE + N_BETA]
 
 
 @nb.njit(**_JIT)
@@ -352,30 +369,25 @@ def sizes(par, M):
 
 
 @nb.njit(**_JIT)
+def _columns(par, M):
+    """The scratch's columns: one a record (the nodes' first)."""
+    return int(par[HEAD + 3 * M + NW_NREC])
+
+
+@nb.njit(**_JIT)
 def base(y, par, M, out):
     """The vector field of ``(q, q', p_0..p_{S-1}, x_v)`` and the energy integrands into ``out``
     (``2 M + S + 1 + K`` entries)."""
     F = 2 * M
     nn, ns, nen, _ = sizes(par, M)
-    S = np.empty((_NSCRATCH, nn))
+    S = np.empty((_NSCRATCH, _columns(par, M)))
     E = F + ns + 1
-    force, wd = _prepare(y, par, M, S, out[E:E + nen], out[F:F + ns])
+    force, wd, rate = _prepare(y, par, M, S, out[E:E + nen], out[F:F + ns], True)
     d = par[DAMP]
     for i in range(M):
         out[i] = y[M + i]
         out[M + i] = force - d * y[M + i] - par[HEAD + M + i] * y[i]
-    out[F + ns] = _valve_rate(par, M, nn)
-
-
-@nb.njit(**_JIT)
-def _valve_rate(par, M, nn):
-    R0 = HEAD + 3 * M + NW_SIZE
-    nrec = int(par[HEAD + 3 * M + NW_NREC])
-    for k in range(nn, nrec):
-        r = R0 + k * REC_SIZE
-        if int(par[r + KIND]) == VALVE:
-            return par[r + V_RATE]
-    return 0.0
+    out[F + ns] = rate
 
 
 @nb.njit(**_JIT)
@@ -383,16 +395,14 @@ def jac_base(y, par, M, A):
     """The Jacobian ``A`` (``n x n``, ``n = 2 M + S + 1``) of :func:`base`'s vector field of
     ``(q, q', p_0..p_{S-1}, x_v)``."""
     F = 2 * M
-    nn, ns, nen, _ = sizes(par, M)
+    nn, ns, _, _ = sizes(par, M)
     n = F + ns + 1
     X = F + ns
     for i in range(n):
         for j in range(n):
             A[i, j] = 0.0
-    S = np.empty((_NSCRATCH, nn))
-    en = np.empty(nen)
-    dp = np.empty(ns)
-    _prepare(y, par, M, S, en, dp)
+    S = np.empty((_NSCRATCH + 1, _columns(par, M)))
+    _prepare(y, par, M, S, S[_NSCRATCH], S[_NSCRATCH], False)
     R0 = HEAD + 3 * M + NW_SIZE
     nrec = int(par[HEAD + 3 * M + NW_NREC])
     xv = y[X]
