@@ -19,6 +19,7 @@ import numpy as np
 
 from ..base import Drive, DriveState, FlightSettings, GapCrossing, SurfaceEvent
 from . import _kernel as K
+from . import _network as NW
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
@@ -67,6 +68,12 @@ _RANGES = {
     "transition_pressure": {"low": 0.0, "low_open": True,
                             "description": "transition pressure of the orifices' smoothed law"},
 }
+
+#: the preset layout's energy integrands (:class:`CircuitEnergy`) and nodes (the states ``p_f, p_r, p_s``,
+#: then the tank held at its pressure) in the network of part records (:mod:`._network`)
+_ENERGY_SLOTS = {"pump": 0, "piston": 1, "orifices": 2, "tank": 3, "front": 4, "rear": 5, "supply": 6,
+                 "gas": 7}
+_FRONT, _REAR, _SUPPLY, _TANK = range(4)
 
 _SWITCH_OUT = "switch_out"
 _SWITCH_IN = "switch_in"
@@ -253,6 +260,36 @@ class HydraulicCircuitDrive(Drive):
         par[K.ARMI] = 1.0 if (target == 1 and self.valve.switch_in is not None) else 0.0
         par[K.VAR] = 1.0 if variational else 0.0
         return par
+
+    def _network(self, mode) -> np.ndarray:
+        """The circuit as a network of part records (:mod:`._network`, header and records) in the
+        mode ``mode``: the preset layout (the states ``p_f, p_r, p_s``, the eight energy integrands
+        of :class:`CircuitEnergy`, the three events of ``_kernel.circuit_events``), each part's
+        records from its own ``records`` (an accumulator of no volume where there is none, as the
+        compiled kernel has)."""
+        target, moving, acc, rel = mode
+        ch, va, su, oil, ac = self.chambers, self.valve, self.supply, self.oil, self.accumulator
+        en = _ENERGY_SLOTS
+        tau = va.switching_time
+        recs = ch.records(_FRONT, _REAR, oil.bulk_modulus, front_energy=en["front"], rear_energy=en["rear"])
+        recs += su.records(_SUPPLY, _TANK, _FRONT, oil, relief_open=bool(rel),
+                           energies={k: en[k if k != "compression" else "supply"]
+                                     for k in ("pump", "orifices", "tank", "compression")},
+                           relief_event=K.REL_EV - K.RAMP_EV)
+        recs += va.records(_SUPPLY, _REAR, _TANK, oil.transition_pressure,
+                           rate=(1.0 if target else -1.0) / tau if moving else 0.0,
+                           opening=(1 if target else -1) if moving else 0, energy=en["orifices"], event=0)
+        has_acc = ac is not None and ac.volume > 0 and not su.held
+        gas = Accumulator(precharge=ac.precharge if ac is not None else 1.0,
+                          volume=ac.volume if has_acc else 0.0,
+                          polytropic_exponent=ac.polytropic_exponent if ac is not None else 1.4)
+        recs += gas.records(_SUPPLY, holding=bool(acc), watched=has_acc, energy=en["gas"],
+                            event=K.ACC_EV - K.RAMP_EV)
+        return NW.compose(recs, 3, K.N_ENERGY, 3, en["piston"])
+
+    def _network_par(self, model, mode, variational=False) -> np.ndarray:
+        """:meth:`_par` with the circuit's network of part records (:meth:`_network`) after it."""
+        return np.concatenate((self._par(model, mode, variational), self._network(mode)))
 
     def _directions(self, mode):
         target, moving, acc, rel = mode

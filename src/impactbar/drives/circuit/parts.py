@@ -30,6 +30,7 @@ import math
 from dataclasses import dataclass
 
 from ..._shared.validate import check_real
+from . import _network as NW
 
 __all__ = ["Chambers", "Valve", "Supply", "Accumulator", "Oil"]
 
@@ -74,6 +75,37 @@ class Chambers:
                                                           lo_open=True, hi_open=True))
         _positive(self, "rear_volume", "front_volume")
 
+    def records(self, front: int, rear: int, bulk_modulus: float, front_energy: int = -1,
+                rear_energy: int = -1) -> list:
+        """The chambers as network records (:mod:`._network`): the front and rear nodes (their dead
+        volumes) and one chamber on each (the rear's first: the force ``p_r - alpha p_f`` summed in
+        that order).
+
+        Parameters
+        ----------
+        front, rear : int
+            The nodes' numbers (each with a pressure state).
+        bulk_modulus : float
+            The oil's ``beta``.
+        front_energy, rear_energy : int, optional
+            The slots of their compression work (-1: none).
+
+        Returns
+        -------
+        list of numpy.ndarray
+
+        Examples
+        --------
+        >>> len(Chambers(0.5, 0.4, 0.2).records(0, 1, 100.0))
+        4
+        """
+        return [NW.record(NW.NODE, id=front, volume=self.front_volume, beta=bulk_modulus,
+                          compression_energy=front_energy),
+                NW.record(NW.NODE, id=rear, volume=self.rear_volume, beta=bulk_modulus,
+                          compression_energy=rear_energy),
+                NW.record(NW.CHAMBER, node=rear, area=-1.0),
+                NW.record(NW.CHAMBER, node=front, area=self.area_ratio)]
+
 
 @dataclass(frozen=True)
 class Valve:
@@ -111,6 +143,37 @@ class Valve:
         if self.switch_in is not None:
             object.__setattr__(self, "switch_in", check_real("switch_in", self.switch_in, lo=0.0,
                                                              hi=self.switch_out, lo_open=True, hi_open=True))
+
+    def records(self, pressure_port: int, work_port: int, return_port: int, transition_pressure: float,
+                rate: float = 0.0, opening: int = 0, energy: int = -1, event: int = -1) -> list:
+        """The valve as a network record (:mod:`._network`): the spool between the pressure port, the
+        work port (the rear chamber) and the return port.
+
+        Parameters
+        ----------
+        pressure_port, work_port, return_port : int
+            The nodes' numbers.
+        transition_pressure : float
+            The oil's ``p_tr``.
+        rate : float, optional
+            The spool's ``x_v'`` (0: at rest).
+        opening : int, optional
+            +1: ramping to 1, -1: to 0, 0: at rest (the ramp's end watched while it ramps).
+        energy, event : int, optional
+            The slots of the openings' losses and of the ramp's end (-1: none).
+
+        Returns
+        -------
+        list of numpy.ndarray
+
+        Examples
+        --------
+        >>> len(Valve(0.05, 2.0).records(2, 1, 3, 0.01))
+        1
+        """
+        return [NW.record(NW.VALVE, pressure_port=pressure_port, work_port=work_port,
+                          return_port=return_port, coefficient=self.coefficient,
+                          ptr2=transition_pressure ** 2, rate=rate, open=opening, energy=energy, event=event)]
 
 
 @dataclass(frozen=True)
@@ -178,6 +241,53 @@ class Supply:
         """A relief valve that can open (finite pressure, positive coefficient)."""
         return math.isfinite(self.relief_pressure) and self.relief_coefficient > 0.0
 
+    def records(self, node: int, tank: int, front: int, oil, relief_open: bool = False,
+                energies: dict | None = None, relief_event: int = -1) -> list:
+        """The supply as network records (:mod:`._network`): its node (the hose; held at its
+        pressure for a held supply), the tank's node, the pump, the front chamber's feed and the
+        relief valve (always there, as in the compiled kernel: infinitely high without one, and its
+        event watched only where it can open).
+
+        Parameters
+        ----------
+        node, tank, front : int
+            The supply's node (a state), the tank's (held at ``tank_pressure``) and the front
+            chamber's.
+        oil : Oil
+        relief_open : bool, optional
+            The relief valve's mode.
+        energies : dict, optional
+            Slots by name: ``"pump"`` (the pump's work, or a held supply's ``p_s`` times its outflow),
+            ``"orifices"``, ``"tank"``, ``"compression"``; those left out: none.
+        relief_event : int, optional
+            The slot of the relief's event (-1: none).
+
+        Returns
+        -------
+        list of numpy.ndarray
+
+        Examples
+        --------
+        >>> s = Supply(pump_flow=0.5, hose_volume=1.0, front_coefficient=2.0, tank_pressure=0.03)
+        >>> len(s.records(2, 3, 0, Oil(100.0, 0.01)))
+        5
+        """
+        en = {"pump": -1, "orifices": -1, "tank": -1, "compression": -1, **(energies or {})}
+        beta, ptr2 = oil.bulk_modulus, oil.transition_pressure ** 2
+        out = [NW.record(NW.NODE, id=node, volume=self.hose_volume, beta=beta, held=float(self.held),
+                         work_energy=en["pump"], work_sign=-1.0, compression_energy=en["compression"]),
+               NW.record(NW.NODE, id=tank, pressure=self.tank_pressure, beta=beta, work_energy=en["tank"])]
+        if not self.held:
+            out.append(NW.record(NW.PUMP, node=node, flow=self.pump_flow, energy=en["pump"]))
+        out.append(NW.record(NW.ORIFICE, source=node, target=front, coefficient=self.front_coefficient,
+                             ptr2=ptr2, energy=en["orifices"]))
+        setting = self.relief_pressure if math.isfinite(self.relief_pressure) else 1e300
+        out.append(NW.record(NW.RELIEF, source=node, target=tank, coefficient=self.relief_coefficient,
+                             setting=setting, open=float(relief_open),
+                             watched=float(self.has_relief and not self.held), event=relief_event,
+                             energy=en["orifices"]))
+        return out
+
 
 @dataclass(frozen=True)
 class Accumulator:
@@ -210,6 +320,34 @@ class Accumulator:
         _non_negative(self, "volume")
         object.__setattr__(self, "polytropic_exponent", check_real(
             "polytropic_exponent", self.polytropic_exponent, lo=1.0, hi=2.0))
+
+    def records(self, node: int, holding: bool = False, watched: bool = True, energy: int = -1,
+                event: int = -1) -> list:
+        """The accumulator as a network record (:mod:`._network`) on the node ``node``.
+
+        Parameters
+        ----------
+        node : int
+            The node's number (a state without a chamber).
+        holding : bool, optional
+            Whether it holds oil (its mode: the node's pressure above the pre-charge).
+        watched : bool, optional
+            Whether its event (the pressure through the pre-charge) is watched.
+        energy, event : int, optional
+            The slots of its gas work and of its event (-1: none).
+
+        Returns
+        -------
+        list of numpy.ndarray
+
+        Examples
+        --------
+        >>> len(Accumulator(1.0, 0.5).records(2, holding=True))
+        1
+        """
+        return [NW.record(NW.ACCUM, node=node, volume=self.volume, precharge=self.precharge,
+                          exponent=self.polytropic_exponent, on=float(holding), watched=float(watched),
+                          energy=energy, event=event)]
 
 
 @dataclass(frozen=True)

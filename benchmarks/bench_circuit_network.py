@@ -1,0 +1,68 @@
+"""The oil circuit's network of part records (``impactbar.drives.circuit._network``) against the
+circuit's hand-written kernel (``_kernel._base``, ``jac_base``), in the same run: the time of one
+call of the vector field and of its Jacobian at the preset drifter's state, rigid and with four
+flexible modes (the two give the same numbers to the bit: ``tests/drives/test_circuit_network.py``).
+
+Run: ``python benchmarks/bench_circuit_network.py [--mode 1110]``. Each call repeated in a compiled
+loop (so that the Python call is not timed), the best of a few repetitions of CPU time, the two
+alternately.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numba as nb
+import numpy as np
+
+from impactbar.drives.circuit import _kernel as K
+from impactbar.drives.circuit import _network as NW
+from impactbar.physical import circuit_preset
+
+
+@nb.njit
+def _loop(f, y, par, M, out, n):
+    for _ in range(n):
+        f(y, par, M, out)
+
+
+def per_call(f, y, par, M, out, n=200_000, reps=5):
+    """The best time of one call (ns)."""
+    _loop(f, y, par, M, out, 10)
+    best = np.inf
+    for _ in range(reps):
+        t = time.process_time()
+        _loop(f, y, par, M, out, n)
+        best = min(best, (time.process_time() - t) / n * 1e9)
+    return best
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--mode", default="1110", help="the circuit's mode (target, moving, acc, relief): four "
+                    "digits 0 or 1 (default 1110: stroke, the spool ramping, the accumulator holding oil)")
+    mode = tuple(int(x) for x in ap.parse_args().mode)
+    if len(mode) != 4 or not set(mode) <= {0, 1}:
+        raise ValueError(f"--mode must be four digits 0 or 1; got {mode}")
+    c = circuit_preset("circuit-drifter")
+    drive = c.drive()
+    print(f"{'modes':>5} {'':>9} {'kernel ns':>10} {'network ns':>11} {'ratio':>6}")
+    for n_modes in (0, 4):
+        model = c.model().with_(n_modes=n_modes)
+        M = n_modes + 1
+        n = 2 * M + 4
+        par = drive._par(model, mode)
+        net = drive._network_par(model, mode)
+        y = np.concatenate((np.full(2 * M, 0.01), [0.5, 1.0, 1.5, 0.3], np.zeros(K.N_ENERGY)))
+        out, A = np.empty(n + K.N_ENERGY), np.empty((n, n))
+        for name, fk, fn, arg in (("field", K._base, NW.base, out), ("Jacobian", K.jac_base, NW.jac_base, A)):
+            tk, tn = np.inf, np.inf
+            for _ in range(2):
+                tk = min(tk, per_call(fk, y, par, M, arg))
+                tn = min(tn, per_call(fn, y, net, M, arg))
+            print(f"{n_modes:>5} {name:>9} {tk:>10.0f} {tn:>11.0f} {tn / tk:>6.2f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,230 @@
+"""The oil circuit as a network of part records (``impactbar.drives.circuit._network``): each part
+describes itself as records, the drive composes them, and one compiled vector field, Jacobian and set
+of event functions serves every topology.
+
+- The preset drifter's records against the circuit's own kernel (``_kernel._base``, ``jac_base``,
+  ``circuit_events``): the same numbers to the bit (the sign of a zero included) at random states, in
+  every mode, rigid and with four flexible modes, with a pump and with a held supply, with and without
+  an accumulator and a relief valve.
+- A circuit the kernel cannot describe, a return-line accumulator (a node between the valve's
+  return port and the tank, with a gas accumulator and an orifice to the tank), defined here alone:
+  its vector field against the same equations written out with numpy, its energy account closing
+  (the pump's work is the sum of the other terms) and its Jacobian against central differences.
+"""
+
+import dataclasses
+import itertools
+
+import numpy as np
+import pytest
+
+from impactbar.drives.circuit import Accumulator, Oil, Supply
+from impactbar.drives.circuit import _kernel as K
+from impactbar.drives.circuit import _network as NW
+from impactbar.physical import circuit_preset
+
+N_STATES = 40  # random states per mode
+
+
+@pytest.fixture(scope="module")
+def drifter():
+    return circuit_preset("circuit-drifter")
+
+
+def _variants(drive):
+    """The preset's drive and the same circuit with its supply held, without an accumulator and
+    without a relief valve (each with the modes its flags can take)."""
+    su = drive.supply
+    held = dataclasses.replace(drive, supply=dataclasses.replace(su, pump_flow=None, pressure=1.5))
+    return {"preset": drive, "held": held, "no accumulator": dataclasses.replace(drive, accumulator=None),
+            "no relief": dataclasses.replace(drive, supply=dataclasses.replace(su, relief_pressure=np.inf))}
+
+
+def _random_state(rng, M, n_energy):
+    xv = rng.choice([0.0, 1.0, rng.uniform()])
+    return np.concatenate((rng.normal(0.0, 0.02, 2 * M), rng.uniform(0.05, 2.0, 3), [xv],
+                           np.zeros(n_energy)))
+
+
+def _bits(a):
+    return np.asarray(a, dtype=float).view(np.int64)
+
+
+@pytest.mark.parametrize("n_modes", [0, 4])
+@pytest.mark.parametrize("variant", ["preset", "held", "no accumulator", "no relief"])
+def test_the_drifters_records_give_the_kernels_numbers_to_the_bit(drifter, n_modes, variant):
+    """Every mode ``(target, moving, acc, relief)``: 16 (a held supply's relief valve never opens,
+    its mode keeps ``relief`` 0: 8), each at ``N_STATES`` random states (pressures in (0.05, 2), the
+    spool at 0, 1 or between, small modal displacements and velocities)."""
+    drive = _variants(drifter.drive())[variant]
+    model = drifter.model().with_(n_modes=n_modes)
+    M = n_modes + 1
+    n = 2 * M + 4
+    rng = np.random.default_rng(7 + n_modes)
+    checked = 0
+    for mode in itertools.product((0, 1), (0, 1), (0, 1), (0, 1)):
+        if drive.supply.held and mode[3]:
+            continue  # the kernel's held supply's work leaves out a relief flow that cannot be there
+        par = drive._par(model, mode)
+        net = drive._network_par(model, mode)
+        assert NW.sizes(net, M) == (4, 3, K.N_ENERGY, 3)
+        for _ in range(N_STATES):
+            y = _random_state(rng, M, K.N_ENERGY)
+            want, got = np.empty(n + K.N_ENERGY), np.full(n + K.N_ENERGY, np.nan)
+            K._base(y, par, M, want)
+            NW.base(y, net, M, got)
+            A, B = np.empty((n, n)), np.full((n, n), np.nan)
+            K.jac_base(y, par, M, A)
+            NW.jac_base(y, net, M, B)
+            g, h = np.empty(3), np.full(3, np.nan)
+            K.circuit_events(y[2 * M + 3], y[2 * M + 2], par, g, 0)
+            NW.events(y[2 * M:], net, M, h, 0)
+            assert np.array_equal(_bits(got), _bits(want)), (mode, got - want)
+            assert np.array_equal(_bits(B), _bits(A)), (mode, np.argwhere(_bits(B) != _bits(A)))
+            assert np.array_equal(_bits(h), _bits(g)), (mode, h, g)
+            checked += 1
+    assert checked == N_STATES * (8 if drive.supply.held else 16)
+
+
+def test_the_composition_refuses_a_network_it_cannot_integrate():
+    oil = Oil(100.0, 0.01)
+    sup = Supply(pump_flow=0.1, hose_volume=1.0, front_coefficient=1.0, tank_pressure=0.03)
+    recs = sup.records(0, 1, 0, oil)
+    with pytest.raises(ValueError, match="exactly one valve"):
+        NW.compose(recs, 1, 4, 1, 0)
+    valve = NW.record(NW.VALVE, pressure_port=0, work_port=0, return_port=5, coefficient=1.0, ptr2=1e-4)
+    with pytest.raises(ValueError, match="names node 5"):
+        NW.compose(recs + [valve], 1, 4, 1, 0)
+    with pytest.raises(ValueError, match="a chamber needs a node"):
+        NW.compose(recs + Accumulator(0.5, 1.0).records(0) + [NW.record(NW.CHAMBER, node=0, area=-1.0)],
+                   1, 4, 1, 0)
+    with pytest.raises(ValueError, match="fields are"):
+        NW.record(NW.PUMP, nod=0)
+
+
+# -- a part the kernel does not have: a return-line accumulator ------------------------------------
+
+#: the return network's nodes (states first, the tank held) and energy slots
+FRONT, REAR, SUPPLY, RETURN, TANK = range(5)
+E_PUMP, E_PISTON, E_ORIF, E_TANK, E_FRONT, E_REAR, E_SUPPLY, E_GAS, E_RET, E_RETGAS = range(10)
+N_EN, N_EV = 10, 4
+RAMP, ACC, REL, RETACC = range(4)
+
+
+@dataclasses.dataclass(frozen=True)
+class ReturnAccumulator:
+    """A return line between the valve's return port and the tank: a volume of oil with a gas
+    accumulator on it, drained to the tank through an orifice (records only: no kernel edited)."""
+
+    volume: float
+    gas: Accumulator
+    coefficient: float
+
+    def records(self, node, tank, oil, holding):
+        return [NW.record(NW.NODE, id=node, volume=self.volume, beta=oil.bulk_modulus,
+                          compression_energy=E_RET),
+                *self.gas.records(node, holding=holding, energy=E_RETGAS, event=RETACC),
+                NW.record(NW.ORIFICE, source=node, target=tank, coefficient=self.coefficient,
+                          ptr2=oil.transition_pressure ** 2, energy=E_ORIF)]
+
+
+def _return_network(drive, model, mode, line):
+    """``par`` of the drifter with its valve's return port on the return line."""
+    target, moving, acc, rel, racc = mode
+    ch, va, su, oil = drive.chambers, drive.valve, drive.supply, drive.oil
+    recs = ch.records(FRONT, REAR, oil.bulk_modulus, front_energy=E_FRONT, rear_energy=E_REAR)
+    recs += su.records(SUPPLY, TANK, FRONT, oil, relief_open=bool(rel),
+                       energies={"pump": E_PUMP, "orifices": E_ORIF, "tank": E_TANK, "compression": E_SUPPLY},
+                       relief_event=REL)
+    tau = va.switching_time
+    recs += va.records(SUPPLY, REAR, RETURN, oil.transition_pressure,
+                       rate=(1.0 if target else -1.0) / tau if moving else 0.0,
+                       opening=(1 if target else -1) if moving else 0, energy=E_ORIF, event=RAMP)
+    recs += drive.accumulator.records(SUPPLY, holding=bool(acc), energy=E_GAS, event=ACC)
+    recs += line.records(RETURN, TANK, oil, bool(racc))
+    net = NW.compose(recs, 4, N_EN, N_EV, E_PISTON)
+    return np.concatenate((drive._par(model, mode[:4]), net))
+
+
+def _numpy_field(drive, model, mode, line, y):
+    """The return network's equations written out: ``(y', events)``."""
+    target, moving, acc, rel, racc = mode
+    ch, va, su, oil, ac = drive.chambers, drive.valve, drive.supply, drive.oil, drive.accumulator
+    M = model.n_modes + 1
+    q, qd = y[:M], y[M:2 * M]
+    pf, pr, ps, pt_, xv = y[2 * M:2 * M + 5]
+    beta, ptr2, pt = oil.bulk_modulus, oil.transition_pressure ** 2, su.tank_pressure
+    w, wd = -model.drive_weights @ q, -model.drive_weights @ qd
+
+    def phi(x):
+        return x * (x * x + ptr2) ** -0.25
+
+    def compliance(gas, p, on):
+        n = gas.polytropic_exponent
+        return gas.volume / n * gas.precharge ** (1 / n) * p ** (-1 / n - 1) if on else 0.0
+
+    qf = su.front_coefficient * phi(ps - pf)
+    qin = va.coefficient * xv * phi(ps - pr)
+    qout = va.coefficient * (1 - xv) * phi(pr - pt_)
+    qrel = su.relief_coefficient * (ps - su.relief_pressure) if rel else 0.0
+    qt = line.coefficient * phi(pt_ - pt)
+    a = ch.area_ratio
+    vf, vr = ch.front_volume + a * w, ch.rear_volume - w
+    cs = su.hose_volume / beta + compliance(ac, ps, acc)
+    cr = line.volume / beta + compliance(line.gas, pt_, racc)
+    dpf = beta / vf * (qf - a * wd)
+    dpr = beta / vr * (qin - qout + wd)
+    dps = (su.pump_flow - qf - qin - qrel) / cs
+    dpt = (qout - qt) / cr
+    force = pr - a * pf
+    qdd = force - model.d * qd - model.frequencies ** 2 * q
+    rate = ((1.0 if target else -1.0) / va.switching_time) if moving else 0.0
+    E = [ps * su.pump_flow, -force * wd,
+         qf * (ps - pf) + qin * (ps - pr) + qout * (pr - pt_) + qrel * (ps - pt) + qt * (pt_ - pt),
+         pt * (qrel + qt), vf * pf * dpf / beta, vr * pr * dpr / beta, su.hose_volume * ps * dps / beta,
+         ps * compliance(ac, ps, acc) * dps, line.volume * pt_ * dpt / beta,
+         pt_ * compliance(line.gas, pt_, racc) * dpt]
+    ev = [xv - 1.0 if (moving and target) else (xv if moving else 1.0), ps - ac.precharge,
+          ps - su.relief_pressure, pt_ - line.gas.precharge]
+    return np.concatenate((qd, qdd, [dpf, dpr, dps, dpt, rate], E)), np.array(ev)
+
+
+@pytest.mark.parametrize("n_modes", [0, 4])
+def test_a_return_line_accumulator_is_a_new_part_of_records_only(drifter, n_modes):
+    drive = drifter.drive()
+    model = drifter.model().with_(n_modes=n_modes)
+    line = ReturnAccumulator(volume=0.3, gas=Accumulator(precharge=0.08, volume=0.5, polytropic_exponent=1.3),
+                             coefficient=1.2)
+    M = n_modes + 1
+    n = 2 * M + 5
+    rng = np.random.default_rng(11)
+    for mode in itertools.product((0, 1), (0, 1), (0, 1), (0, 1), (0, 1)):
+        par = _return_network(drive, model, mode, line)
+        assert NW.sizes(par, M) == (5, 4, N_EN, N_EV)
+        for _ in range(10):
+            y = np.concatenate((rng.normal(0.0, 0.02, 2 * M), rng.uniform(0.05, 2.0, 4),
+                                [rng.choice([0.0, 1.0, rng.uniform()])], np.zeros(N_EN)))
+            out = np.empty(n + N_EN)
+            NW.base(y, par, M, out)
+            want, ev = _numpy_field(drive, model, mode, line, y)
+            assert np.allclose(out, want, rtol=1e-13, atol=1e-13 * np.max(np.abs(want))), mode
+            # the account closes: the pump's work goes to the piston, the openings, the tank, the
+            # oil's compression and the gas
+            assert abs(out[n + E_PUMP] - np.sum(out[n + 1:])) <= 1e-12 * np.sum(np.abs(out[n:]))
+            g = np.empty(N_EV)
+            NW.events(y[2 * M:n], par, M, g, 0)
+            assert np.allclose(g, ev, rtol=0.0, atol=1e-15)
+            A = np.empty((n, n))
+            NW.jac_base(y, par, M, A)
+            fd = np.empty((n, n))
+            for j in range(n):
+                h = 1e-6 * max(1.0, abs(y[j]))
+                up, dn = y.copy(), y.copy()
+                up[j] += h
+                dn[j] -= h
+                fu, fl = np.empty(n + N_EN), np.empty(n + N_EN)
+                NW.base(up, par, M, fu)
+                NW.base(dn, par, M, fl)
+                fd[:, j] = (fu[:n] - fl[:n]) / (2 * h)
+            scale = np.max(np.abs(A), axis=1, keepdims=True)
+            assert np.allclose(A, fd, rtol=1e-6, atol=1e-7 * scale), (mode, np.max(np.abs(A - fd)))
