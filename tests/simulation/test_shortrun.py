@@ -87,6 +87,26 @@ def test_a_run_at_t_end_ends_in_the_flows_state():
         assert np.array_equal(v[:, 0], run.final_state.modal_velocity)
 
 
+def test_a_short_runs_impacts_state_and_log_are_made_when_first_read():
+    """The short path leaves a run's impacts, final state and log to be made on first read
+    (``Trajectory._deferred``): one read makes them all, kept (read again: the same arrays), to the
+    general driver's bits; a name that is no field is still an AttributeError."""
+    for j in (1, 9):  # ended by max_impacts and by t_end
+        model, load, start, span, k = CASES[j]
+        short = simulate(model, load, start, 0.3 + span, t0=0.3, max_impacts=k)
+        with use_reference("simulate.short_run"):
+            general = simulate(model, load, start, 0.3 + span, t0=0.3, max_impacts=k)
+        assert "_rows" in vars(short)
+        assert not {"impact_times", "impact_velocities", "final_state", "_segments"} & vars(short).keys()
+        state = short.final_state
+        assert "_rows" not in vars(short) and vars(short).keys() == vars(general).keys()
+        assert short.final_state is state and short.impact_times is short.impact_times
+        assert not state.modal_displacement.flags.writeable
+        _same(short, general)
+        with pytest.raises(AttributeError, match="no_such_field"):
+            short.no_such_field  # noqa: B018
+
+
 def test_trajectory_constructor_takes_the_fields_in_their_order():
     """``Trajectory.__init__`` is written out (a frozen dataclass's generated one cost 4 us): its
     parameters must stay the dataclass's fields, in their order, with their defaults."""

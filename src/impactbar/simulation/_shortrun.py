@@ -138,13 +138,32 @@ def run_short(core, q, v, t0, t_end, max_imp, state) -> tuple[Trajectory | None,
         qv = b.QV[:, :k].copy()
         return None, FirstBlock(n, st, tn, tv[0, 1:], tv[1, 1:], qv[0], qv[1])
     # the rows used, copied (both states in one copy, and no unpacking: iterating a numpy array costs
-    # 2 us; a compiled copy returning the arrays costs more than these, 0.5 us per array returned)
-    qv = b.QV[:, :k].copy()
-    tv = TV[:, :k].copy()
-    basis, entry = _KINDS[n]
-    segs = _Segments(M - 1, tv[0], basis, entry, qv[0], qv[1], {})
-    return Trajectory(core.model, core.load, t0, t, TV[0, 1:k].copy(), tv[1, 1:], _NO_CONTACTS,
-                      state(q, v), status, core, segs, 0), None
+    # 2 us; a compiled copy returning the arrays costs more than these, 0.5 us per array returned);
+    # the result's arrays are made from them when first read
+    rows = _Rows(n, TV[:, :k].copy(), b.QV[:, :k].copy(), q, v, state)
+    return Trajectory._deferred(core.model, core.load, t0, t, _NO_CONTACTS, status, core, rows), None
+
+
+class _Rows(NamedTuple):
+    """A short run's kernel output, copied out of the buffers: ``tv`` the pieces' times and the
+    impacts' arrival velocities (as ``_Block.TV``), ``qv`` the pieces' start states (as
+    ``_Block.QV``), ``q, v`` the final state, ``state`` what makes it an ``InitialState``."""
+
+    n: int
+    tv: np.ndarray
+    qv: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    state: object
+
+    def fields(self) -> dict:
+        """The :class:`~impactbar.Trajectory` fields made from the rows (``Trajectory._deferred``)."""
+        tv, qv = self.tv, self.qv
+        basis, entry = _KINDS[self.n]
+        return {"impact_times": tv[0, 1:].copy(),  # (not a view of the log's times)
+                "impact_velocities": tv[1, 1:],
+                "final_state": self.state(self.q, self.v),
+                "_segments": _Segments(qv.shape[2] - 1, tv[0], basis, entry, qv[0], qv[1], {})}
 
 
 _NO_CONTACTS = np.zeros((0, 2))

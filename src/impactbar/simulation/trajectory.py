@@ -32,6 +32,8 @@ TWO_PI = 2.0 * math.pi
 MAX_ENERGY_WORK = 3e8
 
 _FREE, _CONTACT, _WINDOW = 0, 1, 2  # _WINDOW: a law's contact step (its record holds the motion)
+#: the fields of a :class:`Trajectory` that :meth:`Trajectory._deferred` makes on first access
+_DEFERRED = frozenset({"impact_times", "impact_velocities", "final_state", "_segments"})
 
 
 # --------------------------------------------------------------------------------------------------
@@ -289,6 +291,30 @@ class Trajectory:
                              impact_velocities=impact_velocities, contact_intervals=contact_intervals,
                              final_state=final_state, status=status, _core=_core, _segments=_segments,
                              n_release_retries=n_release_retries)
+
+    @classmethod
+    def _deferred(cls, model: BarModel, load: Load, t0: float, t_end: float, contact_intervals: np.ndarray,
+                  status: str, _core: _Core, rows) -> Trajectory:
+        """A run whose impacts, final state and log (:data:`_DEFERRED`) are made on first access, by
+        ``rows.fields()`` (a short run's kernel output, :mod:`._shortrun`): a run whose caller reads
+        only its status or end does not pay for them (2 us, a sixth of a 1-impact run's cost)."""
+        self = object.__new__(cls)
+        self.__dict__.update(model=model, load=load, t0=t0, t_end=t_end, contact_intervals=contact_intervals,
+                             status=status, _core=_core, n_release_retries=0, _rows=rows)
+        return self
+
+    def __getattr__(self, name: str):
+        """A field of :data:`_DEFERRED` not made yet: all of them made, stored, and ``name``'s
+        returned (called only for names the instance and its class lack)."""
+        d = self.__dict__
+        rows = d.get("_rows")
+        if rows is not None and name in _DEFERRED:
+            for key, value in rows.fields().items():
+                d.setdefault(key, value)  # (a thread that made them first keeps its arrays)
+            d.pop("_rows", None)
+        if name in _DEFERRED and name in d:
+            return d[name]
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def __repr__(self) -> str:
         """One line: model, load, time span, impacts, status (not the arrays)."""
