@@ -296,8 +296,9 @@ class Trajectory:
     def _deferred(cls, model: BarModel, load: Load, t0: float, t_end: float, contact_intervals: np.ndarray,
                   status: str, _core: _Core, rows) -> Trajectory:
         """A run whose impacts, final state and log (:data:`_DEFERRED`) are made on first access, by
-        ``rows.fields()`` (a short run's kernel output, :mod:`._shortrun`): a run whose caller reads
-        only its status or end does not pay for them (2 us, a sixth of a 1-impact run's cost)."""
+        ``rows[0](*rows[1:])`` (from a short run's kernel output, :mod:`._shortrun`): a run whose
+        caller reads only its status or end does not pay for them (2 us, a sixth of a 1-impact
+        run's cost)."""
         self = object.__new__(cls)
         self.__dict__.update(model=model, load=load, t0=t0, t_end=t_end, contact_intervals=contact_intervals,
                              status=status, _core=_core, n_release_retries=0, _rows=rows)
@@ -309,7 +310,7 @@ class Trajectory:
         d = self.__dict__
         rows = d.get("_rows")
         if rows is not None and name in _DEFERRED:
-            for key, value in rows.fields().items():
+            for key, value in rows[0](*rows[1:]).items():
                 d.setdefault(key, value)  # (a thread that made them first keeps its arrays)
             d.pop("_rows", None)
         if name in _DEFERRED and name in d:
