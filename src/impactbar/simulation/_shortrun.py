@@ -150,21 +150,24 @@ def run_short(core, q, v, t0, t_end, max_imp, state) -> tuple[Trajectory | None,
     # 2 us; a compiled copy returning the arrays costs more than these, 0.5 us per array returned);
     # the result's arrays are made from them when first read
     tv, qv = b.first(k)
-    rows = (_fields, n, tv.copy(), qv.copy(), q, v, state)  # (a tuple: a NamedTuple costs 0.3 us)
+    rows = (_field, n, tv.copy(), qv.copy(), q, v, state)  # (a tuple: a NamedTuple costs 0.3 us)
     return Trajectory._deferred(core.model, core.load, t0, t, _NO_CONTACTS, status, core, rows), None
 
 
-def _fields(n, tv, qv, q, v, state) -> dict:
-    """The :class:`~impactbar.Trajectory` fields a short run leaves to its first read
+def _field(name, n, tv, qv, q, v, state):
+    """The :class:`~impactbar.Trajectory` field ``name`` a short run leaves to its first read
     (``Trajectory._deferred``), from the kernel's output copied out of the buffers: ``tv`` the
     pieces' times and the ``n`` impacts' arrival velocities (as ``_Block.TV``), ``qv`` the pieces'
     start states (as ``_Block.QV``), ``q, v`` the final state, ``state`` what makes it an
     ``InitialState``."""
+    if name == "impact_times":
+        return tv[0, 1:].copy()  # (not a view of the log's times)
+    if name == "impact_velocities":
+        return tv[1, 1:]
+    if name == "final_state":
+        return state(q, v)
     basis, entry = _KINDS[n]
-    return {"impact_times": tv[0, 1:].copy(),  # (not a view of the log's times)
-            "impact_velocities": tv[1, 1:],
-            "final_state": state(q, v),
-            "_segments": _Segments(qv.shape[2] - 1, tv[0], basis, entry, qv[0], qv[1], {})}
+    return _Segments(qv.shape[2] - 1, tv[0], basis, entry, qv[0], qv[1], {})
 
 
 _NO_CONTACTS = np.zeros((0, 2))

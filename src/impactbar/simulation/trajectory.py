@@ -295,27 +295,14 @@ class Trajectory:
     @classmethod
     def _deferred(cls, model: BarModel, load: Load, t0: float, t_end: float, contact_intervals: np.ndarray,
                   status: str, _core: _Core, rows) -> Trajectory:
-        """A run whose impacts, final state and log (:data:`_DEFERRED`) are made on first access, by
-        ``rows[0](*rows[1:])`` (from a short run's kernel output, :mod:`._shortrun`): a run whose
-        caller reads only its status or end does not pay for them (2 us, a sixth of a 1-impact
-        run's cost)."""
+        """A run whose impacts, final state and log (:data:`_DEFERRED`) are each made on its first
+        read, by ``rows[0](name, *rows[1:])`` (from a short run's kernel output, :mod:`._shortrun`;
+        see :class:`_Deferred`): a run whose caller reads only its status or end does not pay for
+        them (2 us, a sixth of a 1-impact run's cost), one that reads its final state only for it."""
         self = object.__new__(cls)
         self.__dict__.update(model=model, load=load, t0=t0, t_end=t_end, contact_intervals=contact_intervals,
                              status=status, _core=_core, n_release_retries=0, _rows=rows)
         return self
-
-    def __getattr__(self, name: str):
-        """A field of :data:`_DEFERRED` not made yet: all of them made, stored, and ``name``'s
-        returned (called only for names the instance and its class lack)."""
-        d = self.__dict__
-        rows = d.get("_rows")
-        if rows is not None and name in _DEFERRED:
-            for key, value in rows[0](*rows[1:]).items():
-                d.setdefault(key, value)  # (a thread that made them first keeps its arrays)
-            d.pop("_rows", None)
-        if name in _DEFERRED and name in d:
-            return d[name]
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def __repr__(self) -> str:
         """One line: model, load, time span, impacts, status (not the arrays)."""
@@ -552,6 +539,29 @@ class Trajectory:
 # --------------------------------------------------------------------------------------------------
 # energy account by quadrature
 # --------------------------------------------------------------------------------------------------
+
+
+class _Deferred:
+    """A field of :class:`Trajectory` that :meth:`Trajectory._deferred` leaves to its first read,
+    like :func:`functools.cached_property`: a non-data descriptor, so the value in the instance's
+    ``__dict__`` (every run's, once made) is found first; the first read makes it from the
+    instance's ``_rows`` (``rows[0](name, *rows[1:])``) and stores it."""
+
+    def __init__(self, name: str):
+        self.name = name
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        d = obj.__dict__
+        rows = d.get("_rows")
+        if rows is None:
+            raise AttributeError(f"{type(obj).__name__!r} object has no attribute {self.name!r}")
+        return d.setdefault(self.name, rows[0](self.name, *rows[1:]))  # (a thread's first keeps it)
+
+
+for _name in sorted(_DEFERRED):  # (set on the class after the dataclass: not fields' defaults)
+    setattr(Trajectory, _name, _Deferred(_name))
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 
 
