@@ -32,6 +32,8 @@ TWO_PI = 2.0 * math.pi
 MAX_ENERGY_WORK = 3e8
 
 _FREE, _CONTACT, _WINDOW = 0, 1, 2  # _WINDOW: a law's contact step (its record holds the motion)
+#: the fields of a :class:`Trajectory` that :meth:`Trajectory._deferred` makes on first access
+_DEFERRED = frozenset({"impact_times", "impact_velocities", "final_state", "_segments"})
 
 
 # --------------------------------------------------------------------------------------------------
@@ -290,6 +292,18 @@ class Trajectory:
                              final_state=final_state, status=status, _core=_core, _segments=_segments,
                              n_release_retries=n_release_retries)
 
+    @classmethod
+    def _deferred(cls, model: BarModel, load: Load, t0: float, t_end: float, contact_intervals: np.ndarray,
+                  status: str, _core: _Core, rows) -> Trajectory:
+        """A run whose impacts, final state and log (:data:`_DEFERRED`) are each made on its first
+        read, by ``rows[0](name, *rows[1:])`` (from a short run's kernel output, :mod:`._shortrun`;
+        see :class:`_Deferred`): a run whose caller reads only its status or end does not pay for
+        them (2 us, a sixth of a 1-impact run's cost), one that reads its final state only for it."""
+        self = object.__new__(cls)
+        self.__dict__.update(model=model, load=load, t0=t0, t_end=t_end, contact_intervals=contact_intervals,
+                             status=status, _core=_core, n_release_retries=0, _rows=rows)
+        return self
+
     def __repr__(self) -> str:
         """One line: model, load, time span, impacts, status (not the arrays)."""
         return f"{type(self).__name__}({', '.join(self._repr_items())})"
@@ -525,6 +539,29 @@ class Trajectory:
 # --------------------------------------------------------------------------------------------------
 # energy account by quadrature
 # --------------------------------------------------------------------------------------------------
+
+
+class _Deferred:
+    """A field of :class:`Trajectory` that :meth:`Trajectory._deferred` leaves to its first read,
+    like :func:`functools.cached_property`: a non-data descriptor, so the value in the instance's
+    ``__dict__`` (every run's, once made) is found first; the first read makes it from the
+    instance's ``_rows`` (``rows[0](name, *rows[1:])``) and stores it."""
+
+    def __init__(self, name: str):
+        self.name = name
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        d = obj.__dict__
+        rows = d.get("_rows")
+        if rows is None:
+            raise AttributeError(f"{type(obj).__name__!r} object has no attribute {self.name!r}")
+        return d.setdefault(self.name, rows[0](self.name, *rows[1:]))  # (a thread's first keeps it)
+
+
+for _name in sorted(_DEFERRED):  # (set on the class after the dataclass: not fields' defaults)
+    setattr(Trajectory, _name, _Deferred(_name))
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 
 
