@@ -5,11 +5,16 @@ of event functions serves every topology.
 - The preset drifter's records against the circuit's own kernel (``_kernel._base``, ``jac_base``,
   ``circuit_events``): the same numbers to the bit (the sign of a zero included) at random states, in
   every mode, rigid and with four flexible modes, with a pump and with a held supply, with and without
-  an accumulator and a relief valve.
+  an accumulator and a relief valve; and the code generated for the network's topology
+  (``_netgen.generate``) the same numbers again.
 - A circuit the kernel cannot describe, a return-line accumulator (a node between the valve's
   return port and the tank, with a gas accumulator and an orifice to the tank), defined here alone:
   its vector field against the same equations written out with numpy, its energy account closing
-  (the pump's work is the sum of the other terms) and its Jacobian against central differences.
+  (the pump's work is the sum of the other terms) and its Jacobian against central differences; the
+  code generated for it gives the network's numbers to the bit.
+- The generated source depends on the topology only: the same for every mode and value of a network,
+  another for another network; written once to its folder, compiled in memory where that cannot be
+  written.
 """
 
 import dataclasses
@@ -20,6 +25,7 @@ import pytest
 
 from impactbar.drives.circuit import Accumulator, Oil, Supply
 from impactbar.drives.circuit import _kernel as K
+from impactbar.drives.circuit import _netgen as NG
 from impactbar.drives.circuit import _network as NW
 from impactbar.physical import circuit_preset
 
@@ -68,6 +74,7 @@ def test_the_drifters_records_give_the_kernels_numbers_to_the_bit(drifter, n_mod
         par = drive._par(model, mode)
         net = drive._network_par(model, mode)
         assert NW.sizes(net, M) == (4, 3, K.N_ENERGY, 3)
+        gen = NG.generate(net[K.HEAD + 3 * M:])
         for _ in range(N_STATES):
             y = _random_state(rng, M, K.N_ENERGY)
             want, got = np.empty(n + K.N_ENERGY), np.full(n + K.N_ENERGY, np.nan)
@@ -82,6 +89,13 @@ def test_the_drifters_records_give_the_kernels_numbers_to_the_bit(drifter, n_mod
             assert np.array_equal(_bits(got), _bits(want)), (mode, got - want)
             assert np.array_equal(_bits(B), _bits(A)), (mode, np.argwhere(_bits(B) != _bits(A)))
             assert np.array_equal(_bits(h), _bits(g)), (mode, h, g)
+            got2, B2, h2 = np.full_like(got, np.nan), np.full_like(B, np.nan), np.full_like(h, np.nan)
+            gen.base(y, net, M, got2)
+            gen.jac_base(y, net, M, B2)
+            gen.events(y[2 * M:], net, M, h2, 0)
+            assert np.array_equal(_bits(got2), _bits(want)), (mode, got2 - want)
+            assert np.array_equal(_bits(B2), _bits(A)), (mode, np.argwhere(_bits(B2) != _bits(A)))
+            assert np.array_equal(_bits(h2), _bits(g)), (mode, h2, g)
             checked += 1
     assert checked == N_STATES * (8 if drive.supply.held else 16)
 
@@ -201,6 +215,7 @@ def test_a_return_line_accumulator_is_a_new_part_of_records_only(drifter, n_mode
     for mode in itertools.product((0, 1), (0, 1), (0, 1), (0, 1), (0, 1)):
         par = _return_network(drive, model, mode, line)
         assert NW.sizes(par, M) == (5, 4, N_EN, N_EV)
+        gen = NG.generate(par[K.HEAD + 3 * M:])
         for _ in range(10):
             y = np.concatenate((rng.normal(0.0, 0.02, 2 * M), rng.uniform(0.05, 2.0, 4),
                                 [rng.choice([0.0, 1.0, rng.uniform()])], np.zeros(N_EN)))
@@ -214,8 +229,15 @@ def test_a_return_line_accumulator_is_a_new_part_of_records_only(drifter, n_mode
             g = np.empty(N_EV)
             NW.events(y[2 * M:n], par, M, g, 0)
             assert np.allclose(g, ev, rtol=0.0, atol=1e-15)
+            out2, g2, A2 = np.full_like(out, np.nan), np.full_like(g, np.nan), np.full((n, n), np.nan)
+            gen.base(y, par, M, out2)
+            gen.events(y[2 * M:n], par, M, g2, 0)
+            assert np.array_equal(_bits(out2), _bits(out)), (mode, out2 - out)
+            assert np.array_equal(_bits(g2), _bits(g)), (mode, g2, g)
             A = np.empty((n, n))
             NW.jac_base(y, par, M, A)
+            gen.jac_base(y, par, M, A2)
+            assert np.array_equal(_bits(A2), _bits(A)), (mode, np.argwhere(_bits(A2) != _bits(A)))
             fd = np.empty((n, n))
             for j in range(n):
                 h = 1e-6 * max(1.0, abs(y[j]))
@@ -228,3 +250,50 @@ def test_a_return_line_accumulator_is_a_new_part_of_records_only(drifter, n_mode
                 fd[:, j] = (fu[:n] - fl[:n]) / (2 * h)
             scale = np.max(np.abs(A), axis=1, keepdims=True)
             assert np.allclose(A, fd, rtol=1e-6, atol=1e-7 * scale), (mode, np.max(np.abs(A - fd)))
+
+
+# -- the generated code's source and its cache --------------------------------------------------------
+
+
+def test_the_generated_source_is_one_per_topology(drifter):
+    """Every mode and every parameter value of the drifter give one source (the values are read from
+    ``par``); the return line, another topology, another source; the source names no value."""
+    drive = drifter.drive()
+    model = drifter.model()
+    M = model.n_modes + 1
+    sources = {NG.emit(drive._network_par(model, mode)[K.HEAD + 3 * M:])
+               for mode in itertools.product((0, 1), repeat=4)}
+    oil = dataclasses.replace(drive.oil, bulk_modulus=2 * drive.oil.bulk_modulus)
+    other = dataclasses.replace(drive, oil=oil)
+    sources.add(NG.emit(other._network_par(model, (1, 1, 1, 0))[K.HEAD + 3 * M:]))
+    assert len(sources) == 1
+    line = ReturnAccumulator(volume=0.3, gas=Accumulator(precharge=0.08, volume=0.5), coefficient=1.2)
+    ret = NG.emit(_return_network(drive, model, (1, 1, 1, 0, 1), line)[K.HEAD + 3 * M:])
+    assert ret not in sources
+    assert repr(drive.oil.bulk_modulus) not in sources.pop()
+    with pytest.raises(ValueError, match="composed network"):
+        NG.emit(np.zeros(NW.NW_SIZE + 3))
+
+
+def test_the_generated_module_is_written_once_and_compiled_in_memory_where_it_cannot_be(tmp_path):
+    recs = [NW.record(NW.NODE, id=0, volume=1.0, beta=100.0, compression_energy=0),
+            NW.record(NW.NODE, id=1, pressure=0.0),
+            NW.record(NW.VALVE, pressure_port=0, work_port=1, return_port=1, coefficient=1.0, ptr2=1e-4,
+                      rate=0.5, open=1, event=0)]
+    net = NW.compose(recs, 1, 2, 1, 1)
+    gen = NG.generate(net, folder=tmp_path)
+    assert gen.path.parent == tmp_path and gen.path.read_text() == gen.source
+    stamp = gen.path.stat().st_mtime_ns
+    NG._MEMO.clear()
+    assert NG.generate(net, folder=tmp_path).path.stat().st_mtime_ns == stamp
+    blocked = tmp_path / "a file"
+    blocked.write_text("")
+    mem = NG.generate(net, folder=blocked)
+    assert mem.path is None
+    par = np.concatenate((np.zeros(K.HEAD + 3), net))
+    y = np.array([0.0, 0.0, 0.7, 0.4, 0.0, 0.0])
+    for g in (gen, mem):
+        out, want = np.empty(6), np.empty(6)
+        NW.base(y, par, 1, want)
+        g.base(y, par, 1, out)
+        assert np.array_equal(_bits(out), _bits(want))
