@@ -94,8 +94,20 @@ class CircuitEnergy(dict):
 
     @classmethod
     def from_terms(cls, E, layout=None) -> CircuitEnergy:
-        """The account from the energy integrands' integrals ``E`` (shape ``(n_energy,)``, in the order of
-        ``layout.energies``; default: the preset's, :data:`~impactbar.drives.circuit.layout.PRESET`)."""
+        """The account from the energy integrands' integrals.
+
+        Parameters
+        ----------
+        E : array_like, shape (n_energy,)
+            The integrals in the order of ``layout.energies`` (model energy units).
+        layout : CircuitLayout, optional
+            Default: the preset's, :data:`~impactbar.drives.circuit.layout.PRESET`
+            (:attr:`HydraulicCircuitDrive.layout`).
+
+        Returns
+        -------
+        CircuitEnergy
+        """
         E = np.asarray(E, dtype=float)
         at = (layout if layout is not None else PRESET).energy
         pump = float(E[at["pump"]])

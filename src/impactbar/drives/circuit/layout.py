@@ -100,7 +100,18 @@ class CircuitLayout:
                 from None
 
     def size(self, M: int) -> int:
-        """The integrated state's size without the energies, ``2 M + n_states``, for ``M`` modes."""
+        """The integrated state's size without the energies.
+
+        Parameters
+        ----------
+        M : int
+            The bar's modal coordinates (``n_modes + 1``).
+
+        Returns
+        -------
+        int
+            ``2 M + n_states``: ``q``, ``q'`` and the circuit's states; the energies start there.
+        """
         return 2 * M + self.n_states
 
 
