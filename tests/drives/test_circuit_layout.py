@@ -7,6 +7,7 @@ the piston's ``-p w'``), evaluated at a state whose components all differ; and t
 searched for the literal indices they read the layout by before.
 """
 
+import dataclasses
 import pathlib
 import re
 
@@ -124,3 +125,15 @@ def test_layout_refuses_bad_names():
         CircuitLayout(("a", "b"), ("x",), ("e",))
     with pytest.raises(KeyError, match="no state 'gas'"):
         PRESET["gas"]
+
+
+def test_start_pressures_in_the_layouts_order():
+    L = PRESET
+    drive = dataclasses.replace(pumped(), start_pressures=(0.31, 0.77, 1.13, 0.4))
+    st = drive.start(None, np.array([-0.08]), np.zeros(1))  # out past the switch: the valve opening
+    assert st.mode[:2] == (1, 1)  # ramping from 0.4 towards open
+    assert [st.z[L[k]] for k in ("p_f", "p_r", "p_s", "x_v")] == [0.31, 0.77, 1.13, 0.4]
+    assert drive.force(st.mode, st.z, None, None) == 0.77 - 0.5 * 0.31
+    for bad in ((0.31, 0.77, 1.13, 1.5), (0.31, 0.77), (0.31, 0.77, 1.13, 0.4, 0.0), (0.31, 80.0, 1.0)):
+        with pytest.raises(ValueError, match="start_pressures must"):
+            dataclasses.replace(pumped(), start_pressures=bad)

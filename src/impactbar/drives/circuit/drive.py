@@ -227,8 +227,11 @@ class HydraulicCircuitDrive(Drive):
         if self.start_pressures is not None:
             sp = tuple(float(x) for x in self.start_pressures)
             beta = self.oil.bulk_modulus
-            if len(sp) not in (3, 4) or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
-                    or (len(sp) == 4 and sp[3] > 1.0) or not all(x < beta for x in sp[:3]):
+            L = self.layout  # (the pressures, then optionally the spool's opening)
+            if len(sp) not in (L.n_states - 1, L.n_states) \
+                    or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
+                    or (len(sp) == L.n_states and sp[L["spool"]] > 1.0) \
+                    or not all(sp[L[k]] < beta for k in ("front", "rear", "supply")):
                 raise ValueError(f"start_pressures must be three finite pressures >= 0 (p_f, p_r, p_s), "
                                  f"each below the oil's bulk modulus {beta:g} (past it the oil's "
                                  f"compressibility law means nothing), optionally with the valve opening "
