@@ -476,8 +476,8 @@ def _least_pressures(pieces) -> dict:
     pieces = [p for p in pieces if hasattr(p, "extremes")]
     if not pieces:
         return {}
-    return {name: min(p.extremes(k)[0] for p in pieces) * PRESSURE_SCALE
-            for k, name in ((0, "front"), (1, "rear"), (2, "supply"))}
+    return {name: min(p.extremes(name)[0] for p in pieces) * PRESSURE_SCALE
+            for name in ("front", "rear", "supply")}
 
 
 def _refuse_cavitation(low: dict, what: str) -> None:
@@ -522,7 +522,7 @@ class CircuitDrifterOrbit(DrifterOrbit):
         :class:`~impactbar.drives.circuit.CircuitEnergy` in SI."""
         from ..drives.circuit import CircuitEnergy
 
-        acc = CircuitEnergy.from_terms(self._energies())
+        acc = CircuitEnergy.from_terms(self._energies(), self.orbit.drive.layout)
         scale = self.drifter.energy_scale_J
         return {k: (v if k == "relative_residual" else v * scale) for k, v in acc.items()}
 
@@ -533,13 +533,14 @@ class CircuitDrifterOrbit(DrifterOrbit):
         sup = self.orbit.drive.supply
         if sup.held:
             return sup.pressure * PRESSURE_SCALE
-        return float(self._energies()[0] / (sup.pump_flow * self.orbit.period)) * PRESSURE_SCALE
+        pump = self._energies()[self.orbit.drive.layout.energy["pump"]]
+        return float(pump / (sup.pump_flow * self.orbit.period)) * PRESSURE_SCALE
 
     @property
     def pump_power_kW(self) -> float:
         """The pump's mean power ``Q_p (p_s - p_t)`` over the period (kW)."""
         sup = self.orbit.drive.supply
-        E = self._energies()[0]
+        E = self._energies()[self.orbit.drive.layout.energy["pump"]]
         if sup.held:
             used = E * (1.0 - sup.tank_pressure / sup.pressure)
         else:
@@ -588,9 +589,10 @@ class CircuitDrifterOrbit(DrifterOrbit):
         pieces = self._pieces
         t0 = pieces[0].t0
         t = np.linspace(t0, pieces[-1].t_end, points)
-        z = np.empty((4, points))
-        q0 = np.empty(points)
         dr = o.drive
+        L = dr.layout
+        z = np.empty((L.n_states, points))
+        q0 = np.empty(points)
         M = o.model.n_modes + 1
         w = np.zeros(points)
         for p in pieces:
@@ -603,8 +605,8 @@ class CircuitDrifterOrbit(DrifterOrbit):
                 w[sel] = p.displacement(t[sel]) if hasattr(p, "displacement") else \
                     -(o.model.drive_weights[:M] @ q)
         P, V = PRESSURE_SCALE, d.volume_scale_m3
-        return {"t_s": (t - t0) / d.omega_rad_s, "p_f_Pa": z[0] * P, "p_r_Pa": z[1] * P, "p_s_Pa": z[2] * P,
-                "x_v": z[3], "gap_m": -q0 * d.bar.length_m,
+        return {"t_s": (t - t0) / d.omega_rad_s, "p_f_Pa": z[L["p_f"]] * P, "p_r_Pa": z[L["p_r"]] * P,
+                "p_s_Pa": z[L["p_s"]] * P, "x_v": z[L["x_v"]], "gap_m": -q0 * d.bar.length_m,
                 "V_f_m3": (dr.chambers.front_volume + dr.chambers.area_ratio * w) * V,
                 "V_r_m3": (dr.chambers.rear_volume - w) * V}
 

@@ -192,8 +192,8 @@ def _figures(point: CircuitDrifterOrbit) -> dict:
            "pump_power_kW": point.pump_power_kW, "impact_power_kW": point.impact_power_kW,
            "hydraulic_efficiency": point.hydraulic_efficiency,
            "rebound_velocity_m_s": -float(o.model.end_weights @ after[M:]) * sc.velocity_m_s,
-           "front_pressure_at_impact_Pa": float(z[0]), "rear_pressure_at_impact_Pa": float(z[1]),
-           "supply_pressure_at_impact_Pa": float(z[2])}
+           **{f"{name}_pressure_at_impact_Pa": float(z[o.drive.layout[name]])
+              for name in ("front", "rear", "supply")}}
     mu = np.abs(np.asarray(point.multipliers))
     if not np.any(np.isnan(mu)):  # (left out where the figures were read without the multipliers)
         out["max_multiplier"] = float(np.max(mu)) if mu.size else 0.0

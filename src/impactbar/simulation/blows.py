@@ -94,15 +94,15 @@ class BlowPiece:
                 total = total + p.energies_at(self.t_end)
         return total
 
-    def extremes(self, k: int) -> tuple[float, float]:
-        """The least and the greatest value of the drive's state component ``k`` over the blow (its
-        pieces' :meth:`extremes`)."""
+    def extremes(self, k: int | str) -> tuple[float, float]:
+        """The least and the greatest value of the drive's state component ``k`` (an index or a name of
+        its layout) over the blow (its pieces' :meth:`extremes`)."""
         lo, hi = zip(*(p.extremes(k) for p in self.drive_pieces), strict=True)
         return float(min(lo)), float(max(hi))
 
     def supply_extremes(self) -> tuple[float, float]:
         """The least and the greatest supply pressure over the blow (an oil circuit's)."""
-        return self.extremes(2)
+        return self.extremes("supply")
 
     def account(self):
         """``(drive work, the law's drive work, energy out, field energy, q, v)`` to :attr:`t_end`:

@@ -52,13 +52,14 @@ def _relief_open_fraction(point) -> float:
     if not sup.has_relief or sup.held:
         return 0.0
     p_rel, total, open_ = sup.relief_pressure, 0.0, 0.0
+    supply = point.orbit.drive.layout.supply
     for p in point._pieces:
         if not hasattr(p, "drive_state") or not hasattr(p, "t"):
             continue
         t = np.asarray(p.t, dtype=float)
         if t.size < 2:
             continue
-        ps = np.asarray(p.drive_state(t)[2], dtype=float) - p_rel  # (a flight's or a blow's steps)
+        ps = np.asarray(p.drive_state(t)[supply], dtype=float) - p_rel  # (a flight's or a blow's steps)
         total += t[-1] - t[0]
         dt = np.diff(t)
         a, b = ps[:-1], ps[1:]

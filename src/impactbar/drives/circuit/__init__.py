@@ -3,7 +3,8 @@ with pump, gas accumulator and relief valve, and its numerics.
 
 Layout: ``parts`` (the frozen parts: :class:`Chambers`, :class:`Valve`, :class:`Supply`,
 :class:`Accumulator`, :class:`Oil`), ``drive`` (:class:`HydraulicCircuitDrive`, the
-:class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``flight`` (one
+:class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``layout``
+(where the circuit keeps its states and energy terms, read by name), ``flight`` (one
 flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_kernel`` (the
 compiled vector field, Jacobian and event functions), ``_sundials`` and ``_cvode`` (CVODE driven from
 compiled code, on the SUNDIALS libraries that scikit-sundae ships).

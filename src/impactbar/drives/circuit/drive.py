@@ -20,6 +20,7 @@ import numpy as np
 from ..base import Drive, DriveState, FlightSettings, GapCrossing, SurfaceEvent
 from . import _kernel as K
 from . import _network as NW
+from .layout import PRESET
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
@@ -71,8 +72,7 @@ _RANGES = {
 
 #: the preset layout's energy integrands (:class:`CircuitEnergy`) and nodes (the states ``p_f, p_r, p_s``,
 #: then the tank held at its pressure) in the network of part records (:mod:`._network`)
-_ENERGY_SLOTS = {"pump": 0, "piston": 1, "orifices": 2, "tank": 3, "front": 4, "rear": 5, "supply": 6,
-                 "gas": 7}
+_ENERGY_SLOTS = PRESET.energy
 _FRONT, _REAR, _SUPPLY, _TANK = range(4)
 
 _SWITCH_OUT = "switch_out"
@@ -93,12 +93,30 @@ class CircuitEnergy(dict):
     (over the pump's work)."""
 
     @classmethod
-    def from_terms(cls, E) -> CircuitEnergy:
+    def from_terms(cls, E, layout=None) -> CircuitEnergy:
+        """The account from the energy integrands' integrals.
+
+        Parameters
+        ----------
+        E : array_like, shape (n_energy,)
+            The integrals in the order of ``layout.energies`` (model energy units).
+        layout : CircuitLayout, optional
+            Default: the preset's, :data:`~impactbar.drives.circuit.layout.PRESET`
+            (:attr:`HydraulicCircuitDrive.layout`).
+
+        Returns
+        -------
+        CircuitEnergy
+        """
         E = np.asarray(E, dtype=float)
-        out = cls(pump=float(E[0]), piston=float(E[1]), orifices=float(E[2]), tank=float(E[3]),
-                  compression=float(E[4] + E[5] + E[6]), accumulator=float(E[7]))
-        out["residual"] = float(E[0] - np.sum(E[1:]))
-        out["relative_residual"] = out["residual"] / max(abs(float(E[0])), 1e-300)
+        at = (layout if layout is not None else PRESET).energy
+        pump = float(E[at["pump"]])
+        out = cls(pump=pump, piston=float(E[at["piston"]]), orifices=float(E[at["orifices"]]),
+                  tank=float(E[at["tank"]]),
+                  compression=float(E[at["front"]] + E[at["rear"]] + E[at["supply"]]),
+                  accumulator=float(E[at["gas"]]))
+        out["residual"] = float(pump - np.sum(np.delete(E, at["pump"])))
+        out["relative_residual"] = out["residual"] / max(abs(pump), 1e-300)
         return out
 
 
@@ -180,8 +198,11 @@ class HydraulicCircuitDrive(Drive):
     band: bool = dataclasses.field(default=True, repr=False, kw_only=True)
     blocks: bool = dataclasses.field(default=True, repr=False, kw_only=True)
 
-    state_size = 4
-    state_names = ("p_f", "p_r", "p_s", "x_v")
+    #: where the circuit keeps its states and energy terms (:class:`~.layout.CircuitLayout`: ``z``'s
+    #: indices by name, ``layout["supply"]``, and the energy integrands' ``layout.energy["pump"]``)
+    layout = PRESET
+    state_size = PRESET.n_states
+    state_names = PRESET.state_names
     parameters = tuple(PARAMETERS)
     parameter_ranges = _RANGES
     integrator = FlightSettings(method="CVODE", rtol=1e-10, atol=1e-12)
@@ -206,8 +227,11 @@ class HydraulicCircuitDrive(Drive):
         if self.start_pressures is not None:
             sp = tuple(float(x) for x in self.start_pressures)
             beta = self.oil.bulk_modulus
-            if len(sp) not in (3, 4) or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
-                    or (len(sp) == 4 and sp[3] > 1.0) or not all(x < beta for x in sp[:3]):
+            L = self.layout  # (the pressures, then optionally the spool's opening)
+            if len(sp) not in (L.n_states - 1, L.n_states) \
+                    or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
+                    or (len(sp) == L.n_states and sp[L["spool"]] > 1.0) \
+                    or not all(sp[L[k]] < beta for k in ("front", "rear", "supply")):
                 raise ValueError(f"start_pressures must be three finite pressures >= 0 (p_f, p_r, p_s), "
                                  f"each below the oil's bulk modulus {beta:g} (past it the oil's "
                                  f"compressibility law means nothing), optionally with the valve opening "
@@ -285,7 +309,7 @@ class HydraulicCircuitDrive(Drive):
                           polytropic_exponent=ac.polytropic_exponent if ac is not None else 1.4)
         recs += gas.records(_SUPPLY, holding=bool(acc), watched=has_acc, energy=en["gas"],
                             event=K.ACC_EV - K.RAMP_EV)
-        return NW.compose(recs, 3, K.N_ENERGY, 3, en["piston"])
+        return NW.compose(recs, 3, self.layout.n_energy, 3, en["piston"])
 
     def _network_par(self, model, mode, variational=False) -> np.ndarray:
         """:meth:`_par` with the circuit's network of part records (:meth:`_network`) after it."""
@@ -320,11 +344,12 @@ class HydraulicCircuitDrive(Drive):
     # -- the Drive interface ----------------------------------------------------------------------
     def start(self, model, q, v) -> DriveState:
         sup, acc = self.supply, self.accumulator
-        xv = None
-        if self.start_pressures is not None:
-            pf, pr, ps = self.start_pressures[:3]
-            if len(self.start_pressures) == 4:
-                xv = self.start_pressures[3]
+        xv, L = None, self.layout
+        if self.start_pressures is not None:  # (in the layout's order, the spool's opening optional)
+            sp = self.start_pressures
+            pf, pr, ps = sp[L["front"]], sp[L["rear"]], sp[L["supply"]]
+            if len(sp) == L.n_states:
+                xv = sp[L["spool"]]
         else:
             if sup.held:
                 ps = sup.pressure
@@ -337,9 +362,10 @@ class HydraulicCircuitDrive(Drive):
             ps = sup.pressure
         gap = -float(np.asarray(q)[0])
         target = 1 if gap >= self.valve.switch_out else 0
-        z = np.array([pf, pr, ps, float(target)])
+        z = np.empty(L.n_states)
+        z[L["front"]], z[L["rear"]], z[L["supply"]], z[L["spool"]] = pf, pr, ps, float(target)
         if xv is not None and xv != float(target):
-            z[3] = xv
+            z[L["spool"]] = xv
             return self._toward(self._mode(1 - target, 0, ps), z, target)
         return DriveState(self._mode(target, 0, ps), z)
 
@@ -354,31 +380,35 @@ class HydraulicCircuitDrive(Drive):
         return "stroke" if mode[0] == 1 else "return"
 
     def force(self, mode, z, q, v) -> float:
-        return float(z[1] - self.chambers.area_ratio * z[0])
+        L = self.layout
+        return float(z[L["rear"]] - self.chambers.area_ratio * z[L["front"]])
 
-    n_quadratures = K.N_ENERGY
+    n_quadratures = PRESET.n_energy
 
     def _field(self, mode, z, q, v, model):
-        """The compiled vector field at one state: ``(M, out)``, ``out`` of shape ``(2 M + 4 + 8,)``."""
+        """The compiled vector field at one state: ``(M, out)``, ``out`` of shape ``(2 M + n_states +
+        n_energy,)`` (:attr:`layout`)."""
+        L = self.layout
         q = np.asarray(q, dtype=float)
         M = q.size
         par = self._par(_rate_model(M) if model is None else model, mode)
-        y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)[:4]))
-        out = np.empty(2 * M + 4 + K.N_ENERGY)
-        K.field_at(np.concatenate((y, np.zeros(K.N_ENERGY)))[None, :], par, out[None, :])
+        y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)[:L.n_states]))
+        out = np.empty(L.size(M) + L.n_energy)
+        K.field_at(np.concatenate((y, np.zeros(L.n_energy)))[None, :], par, out[None, :])
         return M, out
 
     def rate(self, mode, z, q, v, model=None) -> np.ndarray:
         M, out = self._field(mode, z, q, v, model)
-        return out[2 * M:2 * M + 4].copy()
+        return out[2 * M:self.layout.size(M)].copy()
 
     def quadratures(self, mode, z, q, v, model=None) -> np.ndarray:
         """The integrands of the eight terms of the energy account (:class:`CircuitEnergy`)."""
         M, out = self._field(mode, z, q, v, model)
-        return out[2 * M + 4:].copy()
+        return out[self.layout.size(M):].copy()
 
     def events(self, mode):
         target, moving, acc, rel = mode
+        sp, ps = self.layout["spool"], self.layout.supply
         out = []
         if target == 0:
             out.append(GapCrossing(_SWITCH_OUT, level=self.valve.switch_out, direction=1))
@@ -387,15 +417,15 @@ class HydraulicCircuitDrive(Drive):
         if moving:
             lvl = float(target)
             out.append(SurfaceEvent(_RAMP, direction=1 if target else -1,
-                                    function=lambda t, q, v, z, lvl=lvl: float(z[3]) - lvl))
+                                    function=lambda t, q, v, z, lvl=lvl, i=sp: float(z[i]) - lvl))
         if self.accumulator is not None and self.accumulator.volume > 0 and not self.supply.held:
             p0 = self.accumulator.precharge
             out.append(SurfaceEvent(_ACC, direction=-1 if acc else 1,
-                                    function=lambda t, q, v, z, p0=p0: float(z[2]) - p0))
+                                    function=lambda t, q, v, z, p0=p0, i=ps: float(z[i]) - p0))
         if self.supply.has_relief and not self.supply.held:
             pr = self.supply.relief_pressure
             out.append(SurfaceEvent(_REL, direction=-1 if rel else 1,
-                                    function=lambda t, q, v, z, pr=pr: float(z[2]) - pr))
+                                    function=lambda t, q, v, z, pr=pr, i=ps: float(z[i]) - pr))
         return tuple(out)
 
     def _held(self, z) -> np.ndarray:
@@ -403,15 +433,16 @@ class HydraulicCircuitDrive(Drive):
         the return map's Jacobian has no unit multiplier along ``p_s``, so Newton's is regular)."""
         z = np.array(z, dtype=float)
         if self.supply.held:
-            z[2] = self.supply.pressure
+            z[self.layout.supply] = self.supply.pressure
         return z
 
     def _toward(self, mode, z, target):
         z = self._held(z)
         _, _, acc, rel = mode
         tau = self.valve.switching_time
-        if tau <= 0.0 or z[3] == float(target):
-            z[3] = float(target)
+        sp = self.layout["spool"]
+        if tau <= 0.0 or z[sp] == float(target):
+            z[sp] = float(target)
             return DriveState((target, 0, acc, rel), z)
         return DriveState((target, 1, acc, rel), z)
 
@@ -424,7 +455,7 @@ class HydraulicCircuitDrive(Drive):
             return self._toward(mode, z, 0)
         z = self._held(z)
         if name == _RAMP:
-            z[3] = float(target)
+            z[self.layout["spool"]] = float(target)
             return DriveState((target, 0, acc, rel), z)
         if name == _ACC:
             return DriveState((target, moving, 1 - acc, rel), z)
@@ -494,12 +525,12 @@ class HydraulicCircuitDrive(Drive):
         -------
         CircuitEnergy
         """
-        total = np.zeros(K.N_ENERGY)
+        total = np.zeros(self.layout.n_energy)
         for j in range(len(run.pieces)):
             piece = run.pieces[j]
             if hasattr(piece, "energies"):
                 total += piece.energies()
-        return CircuitEnergy.from_terms(total)
+        return CircuitEnergy.from_terms(total, self.layout)
 
     def histories(self, run, t=None) -> dict:
         """The circuit's time histories over a run: ``t`` (the integrator's steps, or the given
@@ -524,7 +555,7 @@ class HydraulicCircuitDrive(Drive):
                 sel = (t > p.t0) & (t < p.t_end)
                 if np.any(sel):
                     w[sel] = p.displacement(t[sel])
-        return {"t": t, "p_f": z[0], "p_r": z[1], "p_s": z[2], "x_v": z[3], "y": -q[0],
+        return {"t": t, **{name: z[i] for i, name in enumerate(self.layout.state_names)}, "y": -q[0],
                 "V_f": self.chambers.front_volume + self.chambers.area_ratio * w,
                 "V_r": self.chambers.rear_volume - w}
 

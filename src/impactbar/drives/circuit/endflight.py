@@ -37,25 +37,28 @@ class EndPiece(HermiteSteps):
     ----------
     t0, t_end : float
     t : numpy.ndarray, shape (S,)
-    y : numpy.ndarray, shape (S, 14)
-        ``(w, p_f, p_r, p_s, x_v, I, E_0..E_7)`` at the steps, ``I`` and the energies from 0 at ``t0``.
+    y : numpy.ndarray, shape (S, 2 + n_states + n_energy)
+        ``(w, z, I, E)`` at the steps (``z`` the circuit's states, ``p_f, p_r, p_s, x_v`` for the
+        preset), ``I`` and the energies from 0 at ``t0``.
+    layout : CircuitLayout
+        Where the circuit keeps its states and energy terms (:attr:`HydraulicCircuitDrive.layout`).
     """
 
-    __slots__ = ("alpha",)
+    __slots__ = ("alpha", "layout")
 
-    def __init__(self, t, y, f, alpha):
-        self.t, self.y, self.f, self.alpha = t, y, f, alpha
+    def __init__(self, t, y, f, alpha, layout):
+        self.t, self.y, self.f, self.alpha, self.layout = t, y, f, alpha, layout
         self.t0, self.t_end = float(t[0]), float(t[-1])
         self._spline = None
 
     def drive_state(self, t):
-        """``(p_f, p_r, p_s, x_v)`` at times ``t``, shape ``(4, T)``."""
-        return self._at(t)[1:5]
+        """The circuit's states ``z`` at times ``t``, shape ``(n_states, T)``."""
+        return self._at(t)[1:1 + self.layout.n_states]
 
     def force(self, t):
         """The force on the piston, ``p_r - alpha p_f``, at times ``t``, shape ``(T,)``."""
-        Y = self._at(t)
-        return Y[2] - self.alpha * Y[1]
+        Y, L = self._at(t), self.layout
+        return Y[1 + L["rear"]] - self.alpha * Y[1 + L["front"]]
 
     def displacement(self, t):
         """The driven end's displacement ``w = -u(0, t)`` at times ``t``, shape ``(T,)``."""
@@ -63,26 +66,26 @@ class EndPiece(HermiteSteps):
 
     def impulse_at(self, t):
         """``int p dt`` from ``t0`` to the times ``t``, shape ``(T,)``."""
-        return self._at(t)[5]
+        return self._at(t)[1 + self.layout.n_states]
 
     def energies(self):
-        """The eight energy quadratures over the piece (theory §11)."""
-        return self.y[-1, 6:].copy()
+        """The energy quadratures over the piece (theory §11; ``layout.energies``)."""
+        return self.y[-1, 2 + self.layout.n_states:].copy()
 
     def energies_at(self, t: float):
         """The energy quadratures from ``t0`` to ``t`` (interpolated)."""
-        return self._at([t])[6:, 0]
+        return self._at([t])[2 + self.layout.n_states:, 0]
 
-    def extremes(self, k: int) -> tuple[float, float]:
-        """The least and the greatest value of the circuit's state component ``k`` (0 ``p_f``, 1
-        ``p_r``, 2 ``p_s``, 3 ``x_v``) over the piece (its steps and the interpolant's stationary
-        points)."""
-        j = 1 + k
+    def extremes(self, k: int | str) -> tuple[float, float]:
+        """The least and the greatest value of the circuit's state component ``k`` (an index of ``z``,
+        or a name of ``layout``: ``"p_s"``, ``"supply"``) over the piece (its steps and the interpolant's
+        stationary points)."""
+        j = 1 + (self.layout[k] if isinstance(k, str) else k)
         return _hermite_extremes(self.t, self.y[:, j], self.f[:, j])
 
     def supply_extremes(self) -> tuple[float, float]:
         """The least and the greatest supply pressure over the piece."""
-        return self.extremes(2)
+        return self.extremes(self.layout.supply)
 
 
 class EndFlight(NamedTuple):
@@ -177,6 +180,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     ext = np.array([0.0, 1.0 / float(impedance)])
     solvers: dict = {}  # by mode: scikit-sundae's solver (a wave that varies within a stretch)
     mode, z = state.mode, np.array(state.z, dtype=float)
+    ns = drive.layout.n_states
     w = float(w0)
     impulses = np.zeros(n)
     pieces: list = []
@@ -190,7 +194,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
         t, t1 = float(breaks[k]), float(breaks[k + 1])
         while t < t1:
             y0 = np.zeros(EK.N_STATE)
-            y0[0], y0[1:5] = w, z
+            y0[0], y0[1:1 + ns] = w, z
             if mode not in solvers:
                 solvers[mode] = _solver(drive, mode, settings, ext, model1, drive.state_size)
             solver, par, ext_fn = solvers[mode]
@@ -215,11 +219,11 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             exts[:, 0] = [a(tt) for tt in ts] if callable(a) else float(a)
             f = np.empty_like(Y)
             EK.field_at(Y, par, exts, f)
-            piece = EndPiece(ts, Y, f, drive.chambers.area_ratio)
+            piece = EndPiece(ts, Y, f, drive.chambers.area_ratio, drive.layout)
             pieces.append(piece)
             _check_volumes(drive, Y[:, 0], t)
-            impulses[k] += Y[-1, 5]
-            w, z = float(Y[-1, 0]), Y[-1, 1:5].copy()
+            impulses[k] += Y[-1, 1 + ns]
+            w, z = float(Y[-1, 0]), Y[-1, 1:1 + ns].copy()
             te = float(ts[-1])
             if status == 2 and hit:
                 st = DriveState(mode, z)
@@ -257,7 +261,7 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
             impulses)
         for i in range(starts.size - 1):
             a, b = starts[i], starts[i + 1]
-            pieces.append(EndPiece(T[a:b], Y[a:b], F[a:b], alpha))
+            pieces.append(EndPiece(T[a:b], Y[a:b], F[a:b], alpha, drive.layout))
         if flag in (compiled.REAR_EMPTY, compiled.FRONT_EMPTY):
             which = "rear" if flag == compiled.REAR_EMPTY else "front"
             raise ValueError(f"the {which} chamber empties (V <= 0) during the blow near t = {t:.6g}: give a "
@@ -267,7 +271,7 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
             raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be integrated "
                              f"({why})")
         if starts.size > 1:
-            w, z = float(Y[-1, 0]), Y[-1, 1:5].copy()
+            w, z = float(Y[-1, 0]), Y[-1, 1:1 + drive.layout.n_states].copy()
         if flag != 2:
             break
         te = float(T[-1])

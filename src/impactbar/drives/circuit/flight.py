@@ -91,16 +91,18 @@ class CircuitPiece(HermiteSteps):
     t0, t_end : float
     t : numpy.ndarray, shape (S,)
         The integrator's steps.
-    y : numpy.ndarray, shape (S, 2 N + 6 + 8)
+    y : numpy.ndarray, shape (S, 2 N + 2 + n_states + n_energy)
         The state and the energy quadratures (from 0 at ``t0``) at each step.
+    layout : CircuitLayout
+        Where the circuit keeps its states and energy terms (:attr:`HydraulicCircuitDrive.layout`).
     """
 
-    __slots__ = ("M", "c", "alpha")
+    __slots__ = ("M", "c", "alpha", "layout")
 
-    def __init__(self, t, y, par, M, c, alpha):
+    def __init__(self, t, y, par, M, c, alpha, layout):
         self.t, self.y = t, y
         self.t0, self.t_end = float(t[0]), float(t[-1])
-        self.M, self.c, self.alpha = M, c, alpha
+        self.M, self.c, self.alpha, self.layout = M, c, alpha, layout
         f = np.empty_like(y)
         K.field_at(np.ascontiguousarray(y), par, f)
         self.f = f
@@ -112,28 +114,29 @@ class CircuitPiece(HermiteSteps):
         return Y[:self.M], Y[self.M:2 * self.M]
 
     def drive_state(self, t):
-        """``(p_f, p_r, p_s, x_v)`` at times ``t``, shape ``(4, T)``."""
-        return self._at(t)[2 * self.M:2 * self.M + 4]
+        """The circuit's states ``z`` (``layout.state_names``) at times ``t``, shape ``(n_states, T)``."""
+        return self._at(t)[2 * self.M:self.layout.size(self.M)]
 
     def force(self, t):
         """The force on the piston, ``p_r - alpha p_f``."""
-        z = self.drive_state(t)
-        return z[1] - self.alpha * z[0]
+        z, L = self.drive_state(t), self.layout
+        return z[L["rear"]] - self.alpha * z[L["front"]]
 
-    def extremes(self, k: int) -> tuple[float, float]:
-        """The least and the greatest value of the drive's state component ``k`` (0 ``p_f``, 1
-        ``p_r``, 2 ``p_s``, 3 ``x_v``) over the piece: its steps and the stationary points of its
-        cubic Hermite interpolant."""
-        j = 2 * self.M + k
+    def extremes(self, k: int | str) -> tuple[float, float]:
+        """The least and the greatest value of the drive's state component ``k`` (an index of ``z``, or
+        a name of ``layout``: ``"p_s"``, ``"supply"``) over the piece: its steps and the stationary points
+        of its cubic Hermite interpolant."""
+        j = 2 * self.M + (self.layout[k] if isinstance(k, str) else k)
         return _hermite_extremes(self.t, self.y[:, j], self.f[:, j])
 
     def supply_extremes(self) -> tuple[float, float]:
         """The least and the greatest supply pressure over the piece (:meth:`extremes`)."""
-        return self.extremes(2)
+        return self.extremes(self.layout.supply)
 
     def energies(self):
-        """The eight energy quadratures over the piece (theory §11)."""
-        return self.y[-1, 2 * self.M + 4:2 * self.M + 4 + K.N_ENERGY].copy()
+        """The energy quadratures over the piece (theory §11; ``layout.energies``)."""
+        start = self.layout.size(self.M)
+        return self.y[-1, start:start + self.layout.n_energy].copy()
 
     def end_displacement(self, t):
         return np.minimum(self.c @ self.modal(t)[0], 0.0)
@@ -164,11 +167,12 @@ def _message(flag) -> str:
     return CVMESSAGES.get(int(flag), f"CVODE's flag {int(flag)}")
 
 
-def _integrate_compiled(cv, band, blocks, par, settings, directions, y0, t, end, keep):
+def _integrate_compiled(cv, band, blocks, n_energy, par, settings, directions, y0, t, end, keep):
     """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly` (``band``: the
     variational flights' Newton systems by the band solver, else the dense one; ``blocks``: the band
-    solver's setup and solve on the blocks, :class:`._cvode.Workspace`)."""
-    n = keep - K.N_ENERGY
+    solver's setup and solve on the blocks, :class:`._cvode.Workspace`; ``n_energy`` the energy
+    integrands after the ``n`` states)."""
+    n = keep - n_energy
     var = band and y0.size > keep  # variational: the band solver
     ws = cv.workspace(y0.size, n - 1 if var else 0, None, blocks and var)
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
@@ -249,22 +253,23 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     M = q.size
-    n = 2 * M + 4
+    L = drive.layout
+    n, n_energy = L.size(M), L.n_energy
     par = drive._par(model, mode, variational)
-    y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(K.N_ENERGY)))
+    y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(n_energy)))
     if variational:
         y0 = np.concatenate((y0, np.eye(n).ravel()))
     end = t_stop if math.isfinite(t_stop) else t + 1e4
     if end <= t:
-        piece = CircuitPiece(np.array([t]), y0[None, :n + K.N_ENERGY], par, M, model.end_weights,
-                             drive.chambers.area_ratio)
+        piece = CircuitPiece(np.array([t]), y0[None, :n + n_energy], par, M, model.end_weights,
+                             drive.chambers.area_ratio, L)
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
                       np.eye(n) if variational else None)
-    keep = n + K.N_ENERGY
+    keep = n + n_energy
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
     integrate = _integrate_binding if (cv := _compiled_driver(compiled)) is None else \
-        functools.partial(_integrate_compiled, cv, band, blocks)
+        functools.partial(_integrate_compiled, cv, band, blocks, n_energy)
     status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0, end - t,
                                                   keep)
     if status < 0 or not np.all(np.isfinite(yend)):
@@ -272,11 +277,12 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     ts = ts + t
     keep_t = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
     ts, Y = ts[keep_t], Y[keep_t]
-    piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio)
+    piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio,
+                         L)
     drive._check_volumes(model, piece, t)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
-    Phi = yend[n + K.N_ENERGY:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
+    Phi = yend[n + n_energy:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
     if status == 2:
         if K.ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop
