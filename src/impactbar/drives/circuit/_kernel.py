@@ -48,15 +48,23 @@ def dphi(dp, ptr2):
 
 
 @nb.njit(**_JIT)
-def _flows(y, par, M):
-    """The flows and the chambers' volumes at ``y``: ``(w, w', q_f, q_in, q_out, q_rel, nu_f, nu_r, c_a,
-    C)``."""
+def end_motion(y, par, M):
+    """The piston's driven end at ``y``: its displacement ``w`` away from where it is on the stop and
+    its rate ``w'``, ``-sum e_i q_i`` and ``-sum e_i q_i'`` with the driven end's weights ``e``."""
     w = 0.0
     wd = 0.0
     for i in range(M):
         e = par[HEAD + 2 * M + i]
         w -= e * y[i]
         wd -= e * y[M + i]
+    return w, wd
+
+
+@nb.njit(**_JIT)
+def _flows(y, par, M):
+    """The flows and the chambers' volumes at ``y``: ``(w, w', q_f, q_in, q_out, q_rel, nu_f, nu_r, c_a,
+    C)``."""
+    w, wd = end_motion(y, par, M)
     F = 2 * M
     pf, pr, ps, xv = y[F], y[F + 1], y[F + 2], y[F + 3]
     ptr2 = par[PTR2]

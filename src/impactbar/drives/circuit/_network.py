@@ -48,7 +48,7 @@ import numba as nb
 import numpy as np
 
 from ...dynamics.kernels import CACHE
-from ._kernel import DAMP, HEAD, _off_level, dphi, phi
+from ._kernel import DAMP, HEAD, _off_level, dphi, end_motion, phi
 
 # the network's header (after the bar's entries of ``par``)
 NW_NREC, NW_NNODE, NW_NSTATE, NW_NEN, NW_NEV, NW_EPISTON = range(6)
@@ -228,12 +228,7 @@ def _prepare(y, par, M, S, en, dp, energies):
     nn = int(par[net0 + NW_NNODE])
     ns = int(par[net0 + NW_NSTATE])
     R0 = net0 + NW_SIZE
-    w = 0.0
-    wd = 0.0
-    for i in range(M):
-        e = par[HEAD + 2 * M + i]
-        w -= e * y[i]
-        wd -= e * y[M + i]
+    w, wd = end_motion(y, par, M)
     xv = y[F + ns]
     if energies:
         for k in range(en.shape[0]):
