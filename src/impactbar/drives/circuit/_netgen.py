@@ -275,16 +275,13 @@ def _jac(t):
                 if T < ns:
                     B.append(f"A[F + {Q}, F + {T}] += {f(Q)} * kv * (1.0 - xv) * dgout")
                 B.append(f"A[F + {Q}, X] += {f(Q)} * kv * (gin + gout)")
-            if P < ns:
-                B.append(f"A[F + {P}, F + {P}] += -({f(P)} * kv * xv * dgin)")
-                if Q < ns:
-                    B.append(f"A[F + {P}, F + {Q}] += {f(P)} * kv * xv * dgin")
-                B.append(f"A[F + {P}, X] += -({f(P)} * kv * gin)")
-            if T < ns:
-                B.append(f"A[F + {T}, F + {T}] += -({f(T)} * kv * (1.0 - xv) * dgout)")
-                if Q < ns:
-                    B.append(f"A[F + {T}, F + {Q}] += {f(T)} * kv * (1.0 - xv) * dgout")
-                B.append(f"A[F + {T}, X] += -({f(T)} * kv * gout)")
+            # the pressure port (gated by x_v) and the return port (by 1 - x_v), each losing its flow
+            for port, gate, dg, g in ((P, "xv", "dgin", "gin"), (T, "(1.0 - xv)", "dgout", "gout")):
+                if port < ns:
+                    B.append(f"A[F + {port}, F + {port}] += -({f(port)} * kv * {gate} * {dg})")
+                    if Q < ns:
+                        B.append(f"A[F + {port}, F + {Q}] += {f(port)} * kv * {gate} * {dg}")
+                    B.append(f"A[F + {port}, X] += -({f(port)} * kv * {g})")
         elif kind == RELIEF:
             a, b = int(r[R_FROM]), int(r[R_TO])
             inner = []
