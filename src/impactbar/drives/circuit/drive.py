@@ -392,15 +392,17 @@ class HydraulicCircuitDrive(Drive):
     n_quadratures = PRESET.n_energy
 
     def _field(self, mode, z, q, v, model):
-        """The compiled vector field at one state: ``(M, out)``, ``out`` of shape ``(2 M + n_states +
-        n_energy,)`` (:attr:`layout`)."""
+        """The compiled vector field at one state (the code generated for the network's topology,
+        :meth:`_compiled_network`): ``(M, out)``, ``out`` of shape ``(2 M + n_states + n_energy,)``
+        (:attr:`layout`)."""
         L = self.layout
         q = np.asarray(q, dtype=float)
         M = q.size
-        par = self._par(_rate_model(M) if model is None else model, mode)
+        net, code = self._compiled_network(mode)
+        par = np.concatenate((self._par(_rate_model(M) if model is None else model, mode), net))
         y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)[:L.n_states]))
         out = np.empty(L.size(M) + L.n_energy)
-        K.field_at(np.concatenate((y, np.zeros(L.n_energy)))[None, :], par, out[None, :])
+        code.field_at(np.concatenate((y, np.zeros(L.n_energy)))[None, :], par, out[None, :])
         return M, out
 
     def rate(self, mode, z, q, v, model=None) -> np.ndarray:
