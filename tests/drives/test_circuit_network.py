@@ -297,3 +297,40 @@ def test_the_generated_module_is_written_once_and_compiled_in_memory_where_it_ca
         NW.base(y, par, 1, want)
         g.base(y, par, 1, out)
         assert np.array_equal(_bits(out), _bits(want))
+
+
+# -- the flights through the generated code --------------------------------------------------------------
+
+
+@pytest.mark.parametrize("variational", [False, True], ids=["plain", "variational"])
+@pytest.mark.parametrize("modes", [0, 2])
+@pytest.mark.parametrize("variant", ["preset", "held"])
+def test_a_flight_through_the_generated_code_is_the_kernels_to_the_bit(drifter, variant, variational, modes):
+    """``circuit_flight(generated=True)`` (the flight's kernels and CVODE's C callbacks generated for
+    the network's topology, the network read from ``par``) against ``generated=False`` (the preset's
+    hand-written kernels and callbacks): the same steps, states, rates and fundamental matrix, to the
+    bit, by the compiled driver and (plain) through scikit-sundae's interface."""
+    from impactbar.drives import DriveState
+    from impactbar.drives.circuit import _sundials
+    from impactbar.drives.circuit import flight as F
+
+    if not _sundials.available():
+        pytest.skip(_sundials.reason())
+    drive = _variants(drifter.drive())[variant]
+    model = drifter.model().with_(n_modes=modes)
+    M = modes + 1
+    q, v = np.zeros(M), np.zeros(M)
+    q[0] = -0.08
+    state = DriveState((1, 1, 1, 0), np.array([0.9, 0.9, 0.9, 0.3]))
+    for compiled in (True, False) if not variational else (True,):
+        a, b = (F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, variational=variational,
+                                 compiled=compiled, generated=g) for g in (True, False))
+        assert a.end == b.end and a.t == b.t and a.piece.t.size > 50
+        for x, y in ((a.piece.t, b.piece.t), (a.piece.y, b.piece.y), (a.piece.f, b.piece.f), (a.q, b.q),
+                     (a.v, b.v), (a.z, b.z)):
+            assert np.array_equal(x, y)
+        if variational:
+            assert np.array_equal(a.sensitivity, b.sensitivity)
+    net, code = drive._compiled_network((1, 1, 1, 0))
+    assert code.CALLBACKS is not None and code.CALLBACKS[-1] == K.N_EVENTS
+    assert np.array_equal(net, drive._network((1, 1, 1, 0)))

@@ -93,6 +93,23 @@ def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
 _LOW32 = 0xFFFFFFFF  # a sunindextype result: the low 32 bits hold it whether it is int or int64_t
 
 
+@nb.njit(inline="always")
+def band_blocks(A, J, N, n_energy):
+    """The band matrix ``J`` (``N x N``) zero but ``A`` (``n x n``) on the state's block and on each
+    column of ``Phi``'s (from ``n + n_energy``), element ``(i, j)`` at ``data[j ldim + smu + i - j]``."""
+    n = A.shape[0]
+    ldim = _band_ldim(J) & _LOW32
+    smu = _band_smu(J) & _LOW32
+    data = nb.carray(_band_data(J), N * ldim)
+    data[:] = 0.0
+    for blk in range(n + 1):  # the state, then each column of Phi
+        base = 0 if blk == 0 else n + n_energy + (blk - 1) * n
+        for j in range(n):
+            col = (base + j) * ldim + smu - j
+            for i in range(n):
+                data[col + i] = A[i, j]
+
+
 @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
 def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     """CVODE's ``CVLsJacFn`` for the variational flights: the same matrix as :func:`._kernel.jac` in
@@ -103,16 +120,7 @@ def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     n = 2 * M + 4
     A = np.empty((n, n))
     K.jac_base(nb.carray(_nv_data(y), N), par, M, A)
-    ldim = _band_ldim(J) & _LOW32
-    smu = _band_smu(J) & _LOW32
-    data = nb.carray(_band_data(J), N * ldim)
-    data[:] = 0.0
-    for blk in range(n + 1):  # the state, then each column of Phi
-        base = 0 if blk == 0 else n + K.N_ENERGY + (blk - 1) * n
-        for j in range(n):
-            col = (base + j) * ldim + smu - j
-            for i in range(n):
-                data[col + i] = A[i, j]
+    band_blocks(A, J, N, K.N_ENERGY)
     return 0
 
 
@@ -159,15 +167,16 @@ def _block_factor(data, n, ldim, smu):
 
 
 @nb.njit(cache=CACHE, nogil=True)
-def _block_solve(data, n, ldim, smu, x):
+def _block_solve(data, n, ldim, smu, x, n_energy):
     """SUNDIALS' band solve (``SUNDlsMat_bandGBTRS``) with :func:`_block_factor`'s LU on the state's
     ``n`` components of ``x`` and each column of ``Phi``'s (from ``n + 8``), in place: the ``n + 1``
     right-hand sides side by side (each row's contiguous), each component given the band solve's
-    operations in its order (the same products, the same sums)."""
+    operations in its order (the same products, the same sums); ``n_energy`` the energies' rows between
+    the state and ``Phi``."""
     m = n + 1
     B = np.empty((n, m))
     for c in range(m):
-        start = 0 if c == 0 else n + K.N_ENERGY + (c - 1) * n
+        start = 0 if c == 0 else n + n_energy + (c - 1) * n
         for i in range(n):
             B[i, c] = x[start + i]
     piv = n * ldim
@@ -193,7 +202,7 @@ def _block_solve(data, n, ldim, smu, x):
             for c in range(m):
                 B[i, c] += (-B[k, c]) * uik
     for c in range(m):
-        start = 0 if c == 0 else n + K.N_ENERGY + (c - 1) * n
+        start = 0 if c == 0 else n + n_energy + (c - 1) * n
         for i in range(n):
             x[start + i] = B[i, c]
 
@@ -220,7 +229,7 @@ def _block_solve_c(S, A, x, b, tol):
     data = nb.carray(_band_data(A), N * ldim)
     xx = nb.carray(_nv_data(x), N)
     xx[:] = nb.carray(_nv_data(b), N)
-    _block_solve(data, n, ldim, smu, xx)
+    _block_solve(data, n, ldim, smu, xx, N - n - n * n)
     return 0
 
 
@@ -245,8 +254,8 @@ def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
     t0, t_end : float
     y0 : numpy.ndarray, shape (N,)
     rtol, atol : float
-    directions : numpy.ndarray of int32, shape (6,)
-        Each event's direction (CVODE's root directions).
+    directions : numpy.ndarray of int32, shape (E,)
+        Each event's direction (CVODE's root directions; as many as the workspace's events).
     par : numpy.ndarray
         The kernels' parameters (:mod:`._kernel`).
     keep : int
@@ -260,13 +269,13 @@ def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
     t : numpy.ndarray, shape (S,)
     y : numpy.ndarray, shape (S, keep)
     y_end : numpy.ndarray, shape (N,)
-    roots : numpy.ndarray of int32, shape (6,)
+    roots : numpy.ndarray of int32, shape (E,)
         CVODE's root information at a root (nonzero where an event function crossed), else 0.
     """
     N = y0.size
     y = nb.carray(_nv_data(yvec), N)
     y[:] = y0
-    roots = np.zeros(K.N_EVENTS, np.int32)
+    roots = np.zeros(directions.size, np.int32)
     flag = _reinit(mem, t0, yvec)
     if flag == 0:
         flag = _tolerances(mem, rtol, atol)

@@ -169,37 +169,44 @@ def rhs(t, y, yp, par):
     if par[VAR] > 0.5:
         A = np.empty((n, n))
         jac_base(y, par, M, A)
-        # A's nonzeros by rows (some 9 M + 10 of n^2), each row's in increasing column, and Phi by
-        # rows: each entry of A Phi is the sum over the row's nonzeros, from 0 in increasing column (its
-        # zeros skipped), the sums of n entries side by side (each row's contiguous)
-        cols = np.empty(n * n, np.int64)
-        vals = np.empty(n * n)
-        rows = np.empty(n + 1, np.int64)
-        nz = 0
+        phi_rate(A, y, yp, n + N_ENERGY)
+
+
+@nb.njit(**_JIT)
+def phi_rate(A, y, yp, off):
+    """``Phi' = A Phi`` into ``yp`` from ``Phi`` in ``y``, stored by columns from ``off`` (``n`` the
+    order of ``A``)."""
+    n = A.shape[0]
+    # A's nonzeros by rows (some 9 M + 10 of n^2), each row's in increasing column, and Phi by
+    # rows: each entry of A Phi is the sum over the row's nonzeros, from 0 in increasing column (its
+    # zeros skipped), the sums of n entries side by side (each row's contiguous)
+    cols = np.empty(n * n, np.int64)
+    vals = np.empty(n * n)
+    rows = np.empty(n + 1, np.int64)
+    nz = 0
+    for i in range(n):
+        rows[i] = nz
+        for k in range(n):
+            a = A[i, k]
+            if a != 0.0:
+                cols[nz] = k
+                vals[nz] = a
+                nz += 1
+    rows[n] = nz
+    P = np.empty((n, n))
+    for j in range(n):  # column j of Phi at off + j n
+        for k in range(n):
+            P[k, j] = y[off + j * n + k]
+    out = np.zeros((n, n))
+    for i in range(n):
+        for p in range(rows[i], rows[i + 1]):
+            a = vals[p]
+            k = cols[p]
+            for j in range(n):
+                out[i, j] += a * P[k, j]
+    for j in range(n):
         for i in range(n):
-            rows[i] = nz
-            for k in range(n):
-                a = A[i, k]
-                if a != 0.0:
-                    cols[nz] = k
-                    vals[nz] = a
-                    nz += 1
-        rows[n] = nz
-        off = n + N_ENERGY
-        P = np.empty((n, n))
-        for j in range(n):  # column j of Phi at off + j n
-            for k in range(n):
-                P[k, j] = y[off + j * n + k]
-        out = np.zeros((n, n))
-        for i in range(n):
-            for p in range(rows[i], rows[i + 1]):
-                a = vals[p]
-                k = cols[p]
-                for j in range(n):
-                    out[i, j] += a * P[k, j]
-        for j in range(n):
-            for i in range(n):
-                yp[off + j * n + i] = out[i, j]
+            yp[off + j * n + i] = out[i, j]
 
 
 @nb.njit(**_JIT)
@@ -209,17 +216,24 @@ def jac(t, y, yp, JJ, par):
     not be exact), zero rows for the energy quadratures (they feed nothing back)."""
     M = int(par[NM])
     n = 2 * M + 4
+    A = np.empty((n, n))
+    jac_base(y, par, M, A)
+    jac_blocks(A, JJ, n + N_ENERGY if par[VAR] > 0.5 else -1)
+
+
+@nb.njit(**_JIT)
+def jac_blocks(A, JJ, off):
+    """``JJ`` zero but ``A`` in its leading block and, where ``off >= 0``, into the block of each column of
+    ``Phi`` (stored by columns from ``off``)."""
     N = JJ.shape[0]
     for i in range(N):
         for j in range(N):
             JJ[i, j] = 0.0
-    A = np.empty((n, n))
-    jac_base(y, par, M, A)
+    n = A.shape[0]
     for i in range(n):
         for j in range(n):
             JJ[i, j] = A[i, j]
-    if par[VAR] > 0.5:
-        off = n + N_ENERGY
+    if off >= 0:
         for col in range(n):  # Phi[:, col] at off + col n
             c = off + col * n
             for i in range(n):
@@ -234,13 +248,20 @@ def events(t, y, g, par):
     through the pre-charge and through the relief pressure."""
     M = int(par[NM])
     F = 2 * M
+    bar_events(y, par, M, g)
+    circuit_events(y[F + 3], y[F + 2], par, g, RAMP_EV)
+
+
+@nb.njit(**_JIT)
+def bar_events(y, par, M, g):
+    """The bar's and the valve's switches' event functions into ``g[:RAMP_EV]``: the arrival at the
+    stop ``c . q``, the gap through ``switch_out`` and ``switch_in`` (where armed, else 1)."""
     s = 0.0
     for i in range(M):
         s += par[HEAD + i] * y[i]
     g[ARRIVAL_EV] = s
     g[OUT_EV] = -y[0] - par[XOUT] if par[ARMO] > 0.5 else 1.0
     g[IN_EV] = -y[0] - par[XIN] if par[ARMI] > 0.5 else 1.0
-    circuit_events(y[F + 3], y[F + 2], par, g, RAMP_EV)
 
 
 @nb.njit(**_JIT)

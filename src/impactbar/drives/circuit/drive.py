@@ -315,6 +315,12 @@ class HydraulicCircuitDrive(Drive):
         """:meth:`_par` with the circuit's network of part records (:meth:`_network`) after it."""
         return np.concatenate((self._par(model, mode, variational), self._network(mode)))
 
+    def _compiled_network(self, mode):
+        """``(net, code)``: the circuit's network in the mode ``mode`` (:meth:`_network`) and the code
+        generated for its topology (:func:`._netgen.generate`: its flight's kernels and CVODE's C
+        callbacks), made once per drive and mode."""
+        return _network_code(self, tuple(mode))
+
     def _directions(self, mode):
         target, moving, acc, rel = mode
         return (1, 1, -1, 1 if target else -1, -1 if acc else 1, -1 if rel else 1)
@@ -386,15 +392,17 @@ class HydraulicCircuitDrive(Drive):
     n_quadratures = PRESET.n_energy
 
     def _field(self, mode, z, q, v, model):
-        """The compiled vector field at one state: ``(M, out)``, ``out`` of shape ``(2 M + n_states +
-        n_energy,)`` (:attr:`layout`)."""
+        """The compiled vector field at one state (the code generated for the network's topology,
+        :meth:`_compiled_network`): ``(M, out)``, ``out`` of shape ``(2 M + n_states + n_energy,)``
+        (:attr:`layout`)."""
         L = self.layout
         q = np.asarray(q, dtype=float)
         M = q.size
-        par = self._par(_rate_model(M) if model is None else model, mode)
+        net, code = self._compiled_network(mode)
+        par = np.concatenate((self._par(_rate_model(M) if model is None else model, mode), net))
         y = np.concatenate((q, np.asarray(v, dtype=float), np.asarray(z, dtype=float)[:L.n_states]))
         out = np.empty(L.size(M) + L.n_energy)
-        K.field_at(np.concatenate((y, np.zeros(L.n_energy)))[None, :], par, out[None, :])
+        code.field_at(np.concatenate((y, np.zeros(L.n_energy)))[None, :], par, out[None, :])
         return M, out
 
     def rate(self, mode, z, q, v, model=None) -> np.ndarray:
@@ -578,6 +586,16 @@ class _RateModel:
         self.end_weights = np.where(n == 0, 1.0, 2.0 * (-1.0) ** n)
         self.frequencies = np.pi * n
         self.drive_weights = np.where(n == 0, 1.0, 2.0)
+
+
+@functools.lru_cache(maxsize=64)
+def _network_code(drive: HydraulicCircuitDrive, mode: tuple):
+    """:meth:`HydraulicCircuitDrive._compiled_network`, kept (the network's composition and the
+    generated module's look-up take some 100 microseconds, against a flight's milliseconds)."""
+    from . import _netgen
+
+    net = drive._network(mode)
+    return net, _netgen.generate(net)
 
 
 @functools.lru_cache(maxsize=16)

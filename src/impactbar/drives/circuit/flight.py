@@ -95,16 +95,19 @@ class CircuitPiece(HermiteSteps):
         The state and the energy quadratures (from 0 at ``t0``) at each step.
     layout : CircuitLayout
         Where the circuit keeps its states and energy terms (:attr:`HydraulicCircuitDrive.layout`).
+
+    The vector field at the steps is ``field_at(y, par, f)`` (a compiled ``field_at``: the code
+    generated for the circuit's topology, :mod:`._netgen`, or by default :func:`._kernel.field_at`).
     """
 
     __slots__ = ("M", "c", "alpha", "layout")
 
-    def __init__(self, t, y, par, M, c, alpha, layout):
+    def __init__(self, t, y, par, M, c, alpha, layout, field_at=None):
         self.t, self.y = t, y
         self.t0, self.t_end = float(t[0]), float(t[-1])
         self.M, self.c, self.alpha, self.layout = M, c, alpha, layout
         f = np.empty_like(y)
-        K.field_at(np.ascontiguousarray(y), par, f)
+        (K.field_at if field_at is None else field_at)(np.ascontiguousarray(y), par, f)
         self.f = f
         self._spline = None
 
@@ -167,25 +170,33 @@ def _message(flag) -> str:
     return CVMESSAGES.get(int(flag), f"CVODE's flag {int(flag)}")
 
 
-def _integrate_compiled(cv, band, blocks, n_energy, par, settings, directions, y0, t, end, keep):
+def _integrate_compiled(cv, band, blocks, n_energy, code, par, settings, directions, y0, t, end, keep):
     """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly` (``band``: the
     variational flights' Newton systems by the band solver, else the dense one; ``blocks``: the band
     solver's setup and solve on the blocks, :class:`._cvode.Workspace`; ``n_energy`` the energy
-    integrands after the ``n`` states)."""
+    integrands after the ``n`` states; ``code``: the generated module whose C callbacks CVODE calls,
+    :mod:`._netgen`, or None for :mod:`._cvode`'s own)."""
     n = keep - n_energy
     var = band and y0.size > keep  # variational: the band solver
-    ws = cv.workspace(y0.size, n - 1 if var else 0, None, blocks and var)
+    callbacks = None
+    if code is not None:
+        rhs, jac, jac_band, events, n_events = code.CALLBACKS
+        callbacks = (rhs, jac_band if var else jac, events, n_events)
+    ws = cv.workspace(y0.size, n - 1 if var else 0, callbacks, blocks and var)
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
     return int(flag), _message(flag), ts, Y, yend, np.flatnonzero(roots)
 
 
-def _integrate_binding(par, settings, directions, y0, t, end, keep):
+def _integrate_binding(code, par, settings, directions, y0, t, end, keep):
     """The same through scikit-sundae's ``CVODE`` (its Python interface)."""
     from sksundae.cvode import CVODE
 
     rhs, jac, events = K.rhs, K.jac, K.events
+    if code is not None:
+        rhs, jac, events = code.flight_rhs, code.flight_jac, code.flight_events
+    n_events = len(directions)
 
     def f(t, y, yp):
         rhs(t, y, yp, par)
@@ -196,10 +207,10 @@ def _integrate_binding(par, settings, directions, y0, t, end, keep):
     def ev(t, y, g):
         events(t, y, g, par)
 
-    ev.terminal = [True] * K.N_EVENTS
+    ev.terminal = [True] * n_events
     ev.direction = list(directions)
     solver = CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
-                   num_events=K.N_EVENTS, max_num_steps=_MAX_STEPS)
+                   num_events=n_events, max_num_steps=_MAX_STEPS)
     with contextlib.redirect_stdout(io.StringIO()):  # scikit-sundae prints CVODE's errors: in sol.message
         sol = solver.solve(np.array([t, end]), y0)
     Y = np.asarray(sol.y, dtype=float)
@@ -211,7 +222,8 @@ def _integrate_binding(par, settings, directions, y0, t, end, keep):
 
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
                    settings: FlightSettings | None = None, variational: bool = False, *,
-                   compiled: bool = True, band: bool = True, blocks: bool = True) -> Flight:
+                   compiled: bool = True, band: bool = True, blocks: bool = True,
+                   generated: bool = True) -> Flight:
     """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
     stop, the circuit's next event or ``t_stop`` (module docstring).
 
@@ -235,6 +247,12 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         ``Phi``): one LU of the block (``n`` times fewer operations than the band LU) applied to each,
         the same operations on each block as the band solver's, in its order (the same steps, to the
         bit; :class:`._cvode.Workspace`); ``False``: the band solver's own (the way before).
+    generated : bool, optional
+        The vector field, its Jacobian, the events and CVODE's C callbacks of the code generated for
+        the circuit's network of part records (:meth:`HydraulicCircuitDrive._compiled_network`,
+        :mod:`._netgen`: one module per topology, the values read from ``par`` with the network after
+        the bar's entries); ``False``: the preset's hand-written kernels (:mod:`._kernel`,
+        :mod:`._cvode`'s callbacks; the way before). The same steps either way, to the bit.
 
     Returns
     -------
@@ -256,20 +274,24 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     L = drive.layout
     n, n_energy = L.size(M), L.n_energy
     par = drive._par(model, mode, variational)
+    code = field_at = None
+    if generated:
+        net, code = drive._compiled_network(mode)
+        par, field_at = np.concatenate((par, net)), code.field_at
     y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(n_energy)))
     if variational:
         y0 = np.concatenate((y0, np.eye(n).ravel()))
     end = t_stop if math.isfinite(t_stop) else t + 1e4
     if end <= t:
         piece = CircuitPiece(np.array([t]), y0[None, :n + n_energy], par, M, model.end_weights,
-                             drive.chambers.area_ratio, L)
+                             drive.chambers.area_ratio, L, field_at)
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
                       np.eye(n) if variational else None)
     keep = n + n_energy
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
-    integrate = _integrate_binding if (cv := _compiled_driver(compiled)) is None else \
-        functools.partial(_integrate_compiled, cv, band, blocks, n_energy)
+    integrate = functools.partial(_integrate_binding, code) if (cv := _compiled_driver(compiled)) is None \
+        else functools.partial(_integrate_compiled, cv, band, blocks, n_energy, code)
     status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0, end - t,
                                                   keep)
     if status < 0 or not np.all(np.isfinite(yend)):
@@ -278,7 +300,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     keep_t = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
     ts, Y = ts[keep_t], Y[keep_t]
     piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio,
-                         L)
+                         L, field_at)
     drive._check_volumes(model, piece, t)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
