@@ -201,6 +201,20 @@ def test_a_failure_is_reported_not_printed(capfd):
     assert "CVODE" not in out + err and "cvHandleFailure" not in out + err
 
 
+def test_a_flight_past_its_step_bound_says_so(monkeypatch):
+    """A flight that runs out of steps is named as that (the bound and the modes), not as a chamber
+    or a pump that cannot move the piston; the same flight with the bound restored arrives. (Compiled:
+    scikit-sundae's interface steps CVODE one step a call, so its bound is a call's.)"""
+    compiled = True
+    state = DriveState((1, 0, 1, 0), np.array([0.9, 0.9, 0.9, 1.0]))
+    args = (pumped(), RIGID, state, 0.0, np.array([-0.08]), np.array([0.0]), 50.0)
+    assert F.circuit_flight(*args, compiled=compiled).end == ARRIVAL
+    monkeypatch.setattr(F, "_MAX_STEPS", 20)
+    with pytest.raises(ValueError, match="took more than 20 steps without an event .*0 modes") as err:
+        F.circuit_flight(*args, compiled=compiled)
+    assert "rear_volume" not in str(err.value)
+
+
 def test_a_stroke_flights_steps_are_the_error_controls_not_failures():
     """Theory §11's counts: on a stroke flight of the preset (from rest 60 mm out, the supply at
     22 MPa) CVODE takes about 380 steps, fewer than 5 % rejected by the error test, with 1.3 Newton

@@ -331,6 +331,12 @@ class HydraulicCircuitDrive(Drive):
         return tuple(e for e in self.events(mode) if e.name in wanted)
 
     def _failure(self, model, message, t) -> str:
+        if "max_num_steps" in message:  # (CVODE's CV_TOO_MUCH_WORK: the flight, not the circuit)
+            from .flight import _MAX_STEPS
+
+            return (f"the oil circuit's flight from t = {t:.6g} took more than {_MAX_STEPS} steps without an "
+                    f"event ({message}): a flight that long at the flight's tolerance with {model.n_modes} "
+                    "modes of the piston; fewer modes or a looser integrator tolerance shorten it")
         return (f"the oil circuit's flight from t = {t:.6g} could not be integrated ({message}): "
                 "check that the chambers keep a positive volume (rear_volume against the stroke) and that "
                 "the pump flow and the areas can move the piston")

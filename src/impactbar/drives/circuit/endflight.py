@@ -134,7 +134,7 @@ def _solver(drive, mode, settings, ext, model1, state_size):
     ev.terminal = [True] * EK.N_EVENTS
     ev.direction = [drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS]
     solver = CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
-                   num_events=EK.N_EVENTS, max_num_steps=200000)
+                   num_events=EK.N_EVENTS, max_num_steps=_MAX_STEPS)
     return solver, par, ext_fn
 
 

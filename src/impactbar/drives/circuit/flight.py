@@ -148,7 +148,10 @@ class CircuitPiece(HermiteSteps):
         return self.c @ self.modal(t)[1]
 
 
-_MAX_STEPS = 200000
+#: The most steps of one flight (CVODE's ``max_num_steps``). A settling flight of a piston of 16 modes
+#: takes over 200,000 steps at ``SETTLE_RTOL`` and its variational periods some 320,000; the stored
+#: steps grow as they are taken, so the bound costs nothing until a flight needs it.
+_MAX_STEPS = 2_000_000
 
 
 def _compiled_driver(compiled: bool = True):
