@@ -78,6 +78,16 @@ def _settled(c, x, tol):
     return abs(c) <= tol * max(1.0, abs(x))
 
 
+# compiled with the kernel's own flags (it does real arithmetic only): inlined there, its sums
+# reassociate as the kernel's own did, to the same bits
+@numba.njit(cache=CACHE, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "arcp"})
+def _add_mode(sr, si, dr, di, xj, wr, wi, vr, vi):
+    """One mode's term of a sum ``s_m`` and of its derivative: ``(sr + i si, dr + i di)`` plus
+    ``xj (W, dW)`` with ``xj = X[m, n]``, ``W = wr + i wi``, ``dW = vr + i vi``, as real and
+    imaginary parts."""
+    return sr + wr * xj, si + wi * xj, dr + vr * xj, di + vi * xj
+
+
 # x / 0 gives inf (checked below); reassociation lets the sums over the modes run in SIMD lanes
 @numba.njit(cache=CACHE, nogil=True, error_model="numpy", fastmath={"reassoc", "contract", "arcp"})
 def aberth_iterate(x, tr, dt, X, ut, iters, tol):
@@ -130,26 +140,10 @@ def aberth_iterate(x, tr, dt, X, ut, iters, tol):
                 ai = -2.0 * xm
                 vr = ar * w2r - ai * w2i
                 vi = ar * w2i + ai * w2r
-                xj = X[0, n]
-                s0r += wr * xj
-                s0i += wi * xj
-                d0r += vr * xj
-                d0i += vi * xj
-                xj = X[1, n]
-                s1r += wr * xj
-                s1i += wi * xj
-                d1r += vr * xj
-                d1i += vi * xj
-                xj = X[2, n]
-                s2r += wr * xj
-                s2i += wi * xj
-                d2r += vr * xj
-                d2i += vi * xj
-                xj = X[3, n]
-                s3r += wr * xj
-                s3i += wi * xj
-                d3r += vr * xj
-                d3i += vi * xj
+                s0r, s0i, d0r, d0i = _add_mode(s0r, s0i, d0r, d0i, X[0, n], wr, wi, vr, vi)
+                s1r, s1i, d1r, d1i = _add_mode(s1r, s1i, d1r, d1i, X[1, n], wr, wi, vr, vi)
+                s2r, s2i, d2r, d2i = _add_mode(s2r, s2i, d2r, d2i, X[2, n], wr, wi, vr, vi)
+                s3r, s3i, d3r, d3i = _add_mode(s3r, s3i, d3r, d3i, X[3, n], wr, wi, vr, vi)
                 s8r += wr
                 s8i += wi
                 s9r += wr * t

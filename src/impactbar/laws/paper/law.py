@@ -106,8 +106,9 @@ class PaperLaw(ContactLaw):
     simulator's, theory §8); the rigid bar's closed forms and the paper's Schur criterion belong to it.
     """
 
+    # the declarations where the law differs from ContactLaw's defaults (it is instantaneous, as
+    # they are)
     name = "paper"
-    instantaneous = True
     rigid_closed_forms = True
     supports_schur = True
     stepped_piston = True

@@ -176,10 +176,9 @@ class RodRock(ContactLaw):
     cells_per_piston: int | None = None
     method: str = "auto"
 
+    # the declarations where the law differs from ContactLaw's defaults
     name = "rodrock"
     instantaneous = False
-    rigid_closed_forms = False
-    supports_schur = False
     flight_starts_on_stop = False
     uses_restitution = False
     has_phase_equation = False

@@ -46,13 +46,11 @@ class SteppedLongRod(ContactLaw):
     ('SteppedLongRod', 'wave', 0.2)
     """
 
+    # the declarations where the law differs from ContactLaw's defaults (its contact ends with its
+    # window: not open-ended, unlike the wave law it stands in for)
     name = "wave"
     instantaneous = False
-    rigid_closed_forms = False
-    supports_schur = False
-    open_ended = False
     flight_starts_on_stop = False
-    uses_restitution = True
     has_phase_equation = False
     stepped_piston = True
 

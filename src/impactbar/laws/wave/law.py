@@ -29,10 +29,9 @@ class WaveLaw(ContactLaw):
     :class:`~impactbar.WaveImpact` (force wave, rod energy, peak stresses, efficiency, advance).
     """
 
+    # the declarations where the law differs from ContactLaw's defaults
     name = "wave"
     instantaneous = False
-    rigid_closed_forms = False
-    supports_schur = False
     open_ended = True
 
     def window(self, model) -> float:
