@@ -388,9 +388,9 @@ class Drive(NamedParameters, ABC):
     #: time).
     OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
         "family", "kind", "integrator", "state_size", "state_names", "parameters", "parameter_ranges",
-        "n_quadratures", "variational", "with_", "parameter_table", "with_parameter", "mode_name", "rate",
-        "quadratures", "piecewise_constant", "levels", "compiled_loop", "flight", "end_flight",
-        "border_tests", "orbit_problem")
+        "n_quadratures", "piston_work_quadrature", "variational", "with_", "parameter_table",
+        "with_parameter", "mode_name", "rate", "quadratures", "piecewise_constant", "levels",
+        "compiled_loop", "flight", "end_flight", "border_tests", "orbit_problem")
 
     family: ClassVar[str] = "drive"
     #: the drive's name in :data:`DRIVES` (a sweep spec's ``[drive] kind``, :func:`register_drive`)
@@ -442,6 +442,11 @@ class Drive(NamedParameters, ABC):
     #: The number of quadratures the drive keeps of its own along a run (the oil circuit's energy
     #: account: 8), whose integrands :meth:`quadratures` gives; 0: none.
     n_quadratures: ClassVar[int] = 0
+    #: Which of the drive's quadratures (an index into :meth:`quadratures`) is its work on the piston,
+    #: ``int p u_t(0, t) dt`` (the oil circuit's: its layout's ``energy["piston"]``); ``None``: none
+    #: (the solvers then integrate the force against the driven end's velocity). The pieces of a run
+    #: give it over their span as ``piston_work()``; no solver reads a quadrature by its index.
+    piston_work_quadrature: ClassVar[int | None] = None
 
     def quadratures(self, mode, z: np.ndarray, q: np.ndarray, v: np.ndarray, model=None) -> np.ndarray:
         """The integrands of the drive's own quadratures, shape ``(n_quadratures,)`` (the oil circuit's
@@ -532,8 +537,10 @@ class Drive(NamedParameters, ABC):
         object or None
             With ``state`` (the :class:`DriveState` at ``breaks[-1]``), ``w``, ``impulses`` (``int p
             dt`` over each interval, shape ``(n,)``), ``pieces`` (with ``drive_state(t)``,
-            ``force(t)``, ``energies()``) and ``events`` (``(t, event, mode after)``): the oil
-            circuit's ``EndFlight`` (``impactbar.drives.circuit.endflight``).
+            ``force(t)``, ``energies()``, ``piston_work()``, the drive's work on the piston over the
+            piece, and ``piston_work_at(t)``, that work to the time ``t`` in it) and ``events``
+            (``(t, event, mode after)``): the oil circuit's ``EndFlight``
+            (``impactbar.drives.circuit.endflight``).
         """
         return None
 

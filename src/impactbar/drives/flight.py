@@ -141,17 +141,40 @@ class RestPiece:
 class QuadratureRestPiece(RestPiece):
     """A :class:`RestPiece` of a drive that keeps quadratures of its own
     (:attr:`~impactbar.drives.Drive.n_quadratures`, the oil circuit's energy account): ``sol``
-    carries them after ``z``, from 0 at ``t0``; ``totals`` are their values at ``t_end``."""
+    carries them after ``z``, from 0 at ``t0``; ``totals`` are their values at ``t_end``; ``work``
+    the index of the drive's work on the piston among them
+    (:attr:`~impactbar.drives.Drive.piston_work_quadrature`, ``None``: none of them).
 
-    __slots__ = ("totals",)
+    Raises
+    ------
+    ValueError
+        For a ``work`` that is not ``None`` or an index of ``totals``.
+    """
 
-    def __init__(self, t0, t_end, sol, z, M, c, totals):
+    __slots__ = ("totals", "work")
+
+    def __init__(self, t0, t_end, sol, z, M, c, totals, work=None):
         super().__init__(t0, t_end, sol, z, M, c)
         self.totals = np.asarray(totals, dtype=float)
+        if work is not None and not (isinstance(work, (int, np.integer)) and 0 <= work < self.totals.size):
+            raise ValueError(f"piston_work_quadrature must be None or an integer in [0, "
+                             f"{self.totals.size}) (the drive's n_quadratures); got {work!r}")
+        self.work = work
 
     def energies(self):
         """The drive's quadratures over the rest (the oil circuit's eight energy terms)."""
         return self.totals.copy()
+
+    def piston_work(self) -> float:
+        """The drive's work on the piston over the rest: its quadrature ``work``, or 0 without one (the
+        piston does not move).
+
+        Returns
+        -------
+        float
+            In model energy units.
+        """
+        return 0.0 if self.work is None else float(self.totals[self.work])
 
 
 class Flight(NamedTuple):

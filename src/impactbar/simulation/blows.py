@@ -86,12 +86,28 @@ class BlowPiece:
     def energies(self):
         """The drive's energy quadratures over the piece (:meth:`HydraulicCircuitDrive.energy`
         sums them): to :attr:`t_end`."""
+        return self._to_end("energies", "energies_at")
+
+    def piston_work(self) -> float:
+        """The drive's work on the piston over the piece to :attr:`t_end`, its pieces' ``piston_work``
+        (:attr:`~impactbar.drives.Drive.piston_work_quadrature`).
+
+        Returns
+        -------
+        float
+            In model energy units.
+        """
+        return float(self._to_end("piston_work", "piston_work_at"))
+
+    def _to_end(self, whole, cut):
+        """The sum over the drive pieces to :attr:`t_end` of their method ``whole`` (over a piece)
+        or, for the piece that :attr:`t_end` cuts, ``cut`` (to a time)."""
         total = 0.0
         for p in self.drive_pieces:
             if p.t_end <= self.t_end:
-                total = total + p.energies()
+                total = total + getattr(p, whole)()
             elif p.t0 < self.t_end:
-                total = total + p.energies_at(self.t_end)
+                total = total + getattr(p, cut)(self.t_end)
         return total
 
     def extremes(self, k: int | str) -> tuple[float, float]:
@@ -110,7 +126,7 @@ class BlowPiece:
         (``energy_before + law's work = field + out``) and the modal state there."""
         tau = min(self.t_end - self.t0, self.record.duration)
         w_law, out, field_energy = self.record.account(tau)
-        w_drive = float(self.energies()[1])
+        w_drive = self.piston_work()
         q, v = self.modal_end()
         return w_drive, w_law, out, field_energy, q, v
 

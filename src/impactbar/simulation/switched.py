@@ -280,8 +280,8 @@ def _drive_energy(tr: SwitchedTrajectory) -> EnergyAccount:
                 nodes = (half[:, None] * (_GL_X[None, :] + 1.0) + edges[:-1, None]).ravel()
                 weights = (half[:, None] * _GL_W[None, :]).ravel()
                 _, v = piece.modal(nodes)
-                if hasattr(piece, "energies"):  # the drive's own quadrature along its integration
-                    work += float(piece.energies()[1])
+                if hasattr(piece, "piston_work"):  # the drive's own quadrature along its integration
+                    work += piece.piston_work()
                 else:
                     work += float(np.sum(weights * piece.force(nodes) * (kappa @ v)))
                 damp += d * float(np.sum(weights * (kappa @ (v * v))))
@@ -757,7 +757,7 @@ def _rest(model, drive, loop, t_end, settings) -> None:
         z_end, dense = z, None
         hit = [i + 1 for i, tt in enumerate(times) if tt == te]
     piece = RestPiece(t, te, dense, z, 1, model.end_weights) if not nq else \
-        QuadratureRestPiece(t, te, dense, z, 1, model.end_weights, totals)
+        QuadratureRestPiece(t, te, dense, z, 1, model.end_weights, totals, drive.piston_work_quadrature)
     loop.blocks.append(("py", piece))
     loop.rests.append((t, te))
     loop.t, loop.q, loop.v = te, q0.copy(), v0.copy()

@@ -396,6 +396,7 @@ class HydraulicCircuitDrive(Drive):
         return float(z[L["rear"]] - self.chambers.area_ratio * z[L["front"]])
 
     n_quadratures = PRESET.n_energy
+    piston_work_quadrature = PRESET.energy["piston"]
 
     def _field(self, mode, z, q, v, model):
         """The compiled vector field at one state (the code generated for the network's topology,

@@ -76,6 +76,26 @@ class EndPiece(HermiteSteps):
         """The energy quadratures from ``t0`` to ``t`` (interpolated)."""
         return self._at([t])[2 + self.layout.n_states:, 0]
 
+    @property
+    def _energy_start(self):
+        """Where the energy terms start in a row of ``y`` (after ``w, z, I``)."""
+        return 2 + self.layout.n_states
+
+    def piston_work_at(self, t: float) -> float:
+        """The circuit's work on the piston from ``t0`` to ``t`` (interpolated, as :meth:`energies_at`).
+
+        Parameters
+        ----------
+        t : float
+            A time in the piece (model units; clipped to ``[t0, t_end]``).
+
+        Returns
+        -------
+        float
+            In model energy units.
+        """
+        return float(self._at([t])[self._energy_start + self.layout.energy["piston"], 0])
+
     def extremes(self, k: int | str) -> tuple[float, float]:
         """The least and the greatest value of the circuit's state component ``k`` (an index of ``z``,
         or a name of ``layout``: ``"p_s"``, ``"supply"``) over the piece (its steps and the interpolant's

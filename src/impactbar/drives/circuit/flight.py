@@ -81,6 +81,17 @@ class HermiteSteps:
             self._spline = CubicHermiteSpline(self.t, self.y, self.f, axis=0)
         return self._spline(t).T
 
+    def piston_work(self) -> float:
+        """The circuit's work on the piston over the piece, its layout's ``"piston"`` energy term
+        (:attr:`HydraulicCircuitDrive.piston_work_quadrature`).
+
+        Returns
+        -------
+        float
+            In model energy units.
+        """
+        return float(self.y[-1, self._energy_start + self.layout.energy["piston"]])
+
 
 class CircuitPiece(HermiteSteps):
     """A flight of the circuit: the steps of the integration (exact to the integrator's tolerance
@@ -140,6 +151,11 @@ class CircuitPiece(HermiteSteps):
         """The energy quadratures over the piece (theory §11; ``layout.energies``)."""
         start = self.layout.size(self.M)
         return self.y[-1, start:start + self.layout.n_energy].copy()
+
+    @property
+    def _energy_start(self):
+        """Where the energy terms start in a row of ``y`` (after ``q, v, z``)."""
+        return self.layout.size(self.M)
 
     def end_displacement(self, t):
         return np.minimum(self.c @ self.modal(t)[0], 0.0)

@@ -159,7 +159,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     rec = bm.contact(q, v)
     if not (np.array_equal(rec._F0, F0) and np.array_equal(rec._G0, G0)):  # pragma: no cover - defensive
         raise RuntimeError("the blow's fields at impact changed between its chunks and its record")
-    work = float(sum(float(p.energies()[1]) for p in pieces))
+    work = float(sum(p.piston_work() for p in pieces))
     gaps = _rigid_gaps(model, q, v, rec.blow, averages, t0)
     return DrivenContact(rec.q_after.copy(), rec.v_after.copy(), float(t0) + rec.duration, rec, st, pieces,
                          events, work, gaps)

@@ -293,7 +293,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
         ex = bmap.solve(q, v, record=True)
     q_after, v_after = bmap.state_after(ex)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
-    work = float(sum(float(p.energies()[1]) for p in fl.pieces))
+    work = float(sum(p.piston_work() for p in fl.pieces))
     gaps = _rigid_gaps(ex, force, q, v, t0, breaks.size - 1)
     return DrivenContact(q_after.copy(), v_after.copy(), t0 + ex.duration, rec, fl.state, fl.pieces,
                          fl.events, work, gaps)

@@ -143,7 +143,7 @@ def driven_wave_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         raise ValueError(f"the wave law's window from t = {t0:.6g} ends with the struck end still moving "
                          "into the rod under the drive: the sustained contact that follows is not coupled "
                          "to a drive with state (use the paper's or the rod-rock law, or R > 0)")
-    work = float(sum(float(p.energies()[1]) for p in fl.pieces))
+    work = float(sum(p.piston_work() for p in fl.pieces))
     gaps = _rigid_gaps(rec, history, q, v, t0, s)
     return DrivenContact(qa, va, t0 + 2.0 / s, rec, fl.state, fl.pieces, fl.events, work, gaps)
 
