@@ -445,9 +445,8 @@ class HydraulicCircuitDrive(Drive):
         gap = -float(np.asarray(q)[0])
         target = 1 if gap >= self.valve.switch_out else 0
         z = np.empty(L.n_states)
-        if self.extra_parts:  # (the extra parts' nodes at the tank's pressure, or as given)
-            z[3:L.n_states - 1] = sup.tank_pressure if self.start_pressures is None \
-                else self.start_pressures[3:L.n_states - 1]
+        for name in L.states[L["supply"] + 1:L["spool"]]:  # (the extra parts' nodes: the tank's pressure)
+            z[L[name]] = sup.tank_pressure if self.start_pressures is None else self.start_pressures[L[name]]
         z[L["front"]], z[L["rear"]], z[L["supply"]], z[L["spool"]] = pf, pr, ps, float(target)
         if xv is not None and xv != float(target):
             z[L["spool"]] = xv
