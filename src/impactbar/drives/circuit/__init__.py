@@ -4,12 +4,15 @@ with pump, gas accumulator and relief valve, and its numerics.
 Layout: ``parts`` (the frozen parts: :class:`Chambers`, :class:`Valve`, :class:`Supply`,
 :class:`Accumulator`, :class:`Oil`), ``drive`` (:class:`HydraulicCircuitDrive`, the
 :class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``layout``
-(where the circuit keeps its states and energy terms, read by name), ``flight`` (one
+(where the circuit keeps its states and energy terms, read by name), ``composition`` (parts added to
+the circuit, :class:`CircuitPart`, and the numbering of its nodes, energy and event slots), ``flight`` (one
 flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_kernel`` (the
 compiled vector field, Jacobian and event functions), ``_sundials`` and ``_cvode`` (CVODE driven from
 compiled code, on the SUNDIALS libraries that scikit-sundae ships).
 """
 
+from .composition import CircuitPart as CircuitPart
+from .composition import PartSlots as PartSlots
 from .drive import PARAMETERS as PARAMETERS
 from .drive import CircuitEnergy as CircuitEnergy
 from .drive import HydraulicCircuitDrive as HydraulicCircuitDrive
@@ -20,4 +23,4 @@ from .parts import Supply as Supply
 from .parts import Valve as Valve
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS", "Chambers", "Valve", "Supply",
-           "Accumulator", "Oil"]
+           "Accumulator", "Oil", "CircuitPart", "PartSlots"]

@@ -20,6 +20,7 @@ import numpy as np
 from ..base import Drive, DriveState, FlightSettings, GapCrossing, SurfaceEvent
 from . import _kernel as K
 from . import _network as NW
+from .composition import compose_parts
 from .layout import PRESET
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 
@@ -70,10 +71,9 @@ _RANGES = {
                             "description": "transition pressure of the orifices' smoothed law"},
 }
 
-#: the preset layout's energy integrands (:class:`CircuitEnergy`) and nodes (the states ``p_f, p_r, p_s``,
-#: then the tank held at its pressure) in the network of part records (:mod:`._network`)
-_ENERGY_SLOTS = PRESET.energy
-_FRONT, _REAR, _SUPPLY, _TANK = range(4)
+#: the preset's nodes with a state (``p_f, p_r, p_s``) in the network of part records (:mod:`._network`;
+#: then the extra parts' and the tank held at its pressure, :func:`.composition.compose_parts`)
+_FRONT, _REAR, _SUPPLY = range(3)
 
 _SWITCH_OUT = "switch_out"
 _SWITCH_IN = "switch_in"
@@ -102,19 +102,23 @@ class CircuitEnergy(dict):
             The integrals in the order of ``layout.energies`` (model energy units).
         layout : CircuitLayout, optional
             Default: the preset's, :data:`~impactbar.drives.circuit.layout.PRESET`
-            (:attr:`HydraulicCircuitDrive.layout`).
+            (:attr:`HydraulicCircuitDrive.layout`); each integrand added to its term
+            (``layout.terms``: an extra part's compression and gas work too).
 
         Returns
         -------
         CircuitEnergy
         """
         E = np.asarray(E, dtype=float)
-        at = (layout if layout is not None else PRESET).energy
+        layout = layout if layout is not None else PRESET
+        at = layout.energy
         pump = float(E[at["pump"]])
-        out = cls(pump=pump, piston=float(E[at["piston"]]), orifices=float(E[at["orifices"]]),
-                  tank=float(E[at["tank"]]),
-                  compression=float(E[at["front"]] + E[at["rear"]] + E[at["supply"]]),
-                  accumulator=float(E[at["gas"]]))
+        sums: dict = {}
+        for k, term in enumerate(layout.terms):  # (each term's integrands in their order, one by one)
+            sums[term] = E[k] if term not in sums else sums[term] + E[k]
+        out = cls(pump=pump, piston=float(sums["piston"]), orifices=float(sums["orifices"]),
+                  tank=float(sums["tank"]), compression=float(sums["compression"]),
+                  accumulator=float(sums["accumulator"]))
         out["residual"] = float(pump - np.sum(np.delete(E, at["pump"])))
         out["relative_residual"] = out["residual"] / max(abs(pump), 1e-300)
         return out
@@ -165,11 +169,22 @@ class HydraulicCircuitDrive(Drive):
         interface (the same steps to the bit), by the dense solver (the same to rounding), and by the
         band solver's own LU (the same steps to the bit). The baselines of
         ``benchmarks/bench_circuit.py`` (``impactbar.drives.circuit.flight.circuit_flight``).
+    extra_parts : tuple of CircuitPart, optional
+        Parts added to the circuit (keyword, left out of the repr;
+        :class:`~impactbar.drives.circuit.composition.CircuitPart`): their nodes' pressures are
+        states after ``p_s`` (starting at the tank pressure unless ``start_pressures`` gives them),
+        their energy integrands follow the preset's, each watched event of theirs is a flag of the
+        mode after ``relief``, and a part may take over the valve's return port. The :attr:`layout`
+        then comes from the composition (:func:`~impactbar.drives.circuit.composition.compose_parts`)
+        and the flights run the code generated for the network (:mod:`._netgen`); the coupled blows
+        (:meth:`end_flight`, the rod-rock and the wave laws) are the preset circuit's only. Default:
+        none (the preset circuit).
 
     Raises
     ------
     ValueError
-        A part of the wrong type, a pre-charge above the relief pressure, start pressures out of range.
+        A part of the wrong type, a pre-charge above the relief pressure, start pressures out of range,
+        extra parts that do not compose (:func:`~impactbar.drives.circuit.composition.compose_parts`).
 
     Examples
     --------
@@ -197,6 +212,7 @@ class HydraulicCircuitDrive(Drive):
     compiled: bool = dataclasses.field(default=True, repr=False, kw_only=True)
     band: bool = dataclasses.field(default=True, repr=False, kw_only=True)
     blocks: bool = dataclasses.field(default=True, repr=False, kw_only=True)
+    extra_parts: tuple = dataclasses.field(default=(), repr=False, kw_only=True)
 
     #: where the circuit keeps its states and energy terms (:class:`~.layout.CircuitLayout`: ``z``'s
     #: indices by name, ``layout["supply"]``, and the energy integrands' ``layout.energy["pump"]``)
@@ -207,6 +223,13 @@ class HydraulicCircuitDrive(Drive):
     parameter_ranges = _RANGES
     integrator = FlightSettings(method="CVODE", rtol=1e-10, atol=1e-12)
     variational = True
+
+    def __repr__(self) -> str:
+        # (the dataclass's repr, with the extra parts where there are any)
+        shown = [f"{f.name}={getattr(self, f.name)!r}" for f in dataclasses.fields(self) if f.repr]
+        if self.extra_parts:
+            shown.append(f"extra_parts={self.extra_parts!r}")
+        return f"{type(self).__name__}({', '.join(shown)})"
 
     def __post_init__(self) -> None:
         for name, cls in (("chambers", Chambers), ("valve", Valve), ("supply", Supply), ("oil", Oil)):
@@ -224,6 +247,17 @@ class HydraulicCircuitDrive(Drive):
             raise ValueError(f"accumulator.precharge must be below the relief pressure "
                              f"{sup.relief_pressure:g}; got {acc.precharge:g} (the accumulator would never "
                              "take oil)")
+        if self.extra_parts:
+            parts = tuple(self.extra_parts)
+            comp = compose_parts(parts)
+            object.__setattr__(self, "extra_parts", parts)
+            names = tuple(PARAMETERS) + tuple(n for p in parts for n in p.parameters)
+            ranges = {**_RANGES, **{n: r for p in parts for n, r in p.parameter_ranges.items()}}
+            L = comp.layout
+            for name, value in (("layout", L), ("state_size", L.n_states), ("state_names", L.state_names),
+                                ("n_quadratures", L.n_energy), ("parameters", names),
+                                ("parameter_ranges", ranges)):
+                object.__setattr__(self, name, value)
         if self.start_pressures is not None:
             sp = tuple(float(x) for x in self.start_pressures)
             beta = self.oil.bulk_modulus
@@ -231,8 +265,9 @@ class HydraulicCircuitDrive(Drive):
             if len(sp) not in (L.n_states - 1, L.n_states) \
                     or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
                     or (len(sp) == L.n_states and sp[L["spool"]] > 1.0) \
-                    or not all(sp[L[k]] < beta for k in ("front", "rear", "supply")):
-                raise ValueError(f"start_pressures must be three finite pressures >= 0 (p_f, p_r, p_s), "
+                    or not all(sp[i] < beta for i in range(L.n_states - 1)):
+                raise ValueError(f"start_pressures must be the {L.n_states - 1} finite pressures >= 0 "
+                                 f"{L.state_names[:-1]}, "
                                  f"each below the oil's bulk modulus {beta:g} (past it the oil's "
                                  f"compressibility law means nothing), optionally with the valve opening "
                                  f"x_v in [0, 1]; got {self.start_pressures!r}")
@@ -249,6 +284,12 @@ class HydraulicCircuitDrive(Drive):
             An unknown name (the allowed ones listed) or a value a part refuses.
         """
         parts: dict = {}
+        extra = list(self.extra_parts)
+        for name, value in list(changes.items()):
+            for i, p in enumerate(extra):  # (an extra part's parameter: its field)
+                if name in p.parameters:
+                    extra[i] = dataclasses.replace(extra[i], **{p.parameters[name]: value})
+                    del changes[name]
         for name, value in changes.items():
             if name not in PARAMETERS:
                 raise ValueError(f"parameter must be one of {self.parameters}; got {name!r}")
@@ -257,15 +298,22 @@ class HydraulicCircuitDrive(Drive):
                 raise ValueError(f"{name}: the circuit has no {part}")
             parts.setdefault(part, {})[field] = value
         new = {p: dataclasses.replace(getattr(self, p), **f) for p, f in parts.items()}
+        if self.extra_parts:
+            new["extra_parts"] = tuple(extra)
         return dataclasses.replace(self, **new)
 
     def value(self, name: str) -> float:
-        """The value of a parameter by name (:data:`PARAMETERS`)."""
+        """The value of a parameter by name (:data:`PARAMETERS`, an extra part's ``parameters``)."""
+        for p in self.extra_parts:
+            if name in p.parameters:
+                return float(getattr(p, p.parameters[name]))
         part, field = PARAMETERS[name]
         return float(getattr(getattr(self, part), field))
 
     def _parameter_value(self, name: str) -> float | None:
         # (a record's value: None for a part the circuit does not have, or a field it leaves unset)
+        if name not in PARAMETERS:
+            return self.value(name)
         part, field = PARAMETERS[name]
         holder = getattr(self, part)
         value = None if holder is None else getattr(holder, field)
@@ -274,7 +322,7 @@ class HydraulicCircuitDrive(Drive):
     # -- compiled data ----------------------------------------------------------------------------
     def _par(self, model, mode, variational=False) -> np.ndarray:
         par = _par_base(self, model).copy()
-        target, moving, acc, rel = mode
+        target, moving, acc, rel = mode[:4]  # (the hand-written kernels' flags; the bar's head)
         par[K.ACC] = float(acc)
         par[K.REL] = float(rel)
         tau = self.valve.switching_time
@@ -291,16 +339,18 @@ class HydraulicCircuitDrive(Drive):
         of :class:`CircuitEnergy`, the three events of ``_kernel.circuit_events``), each part's
         records from its own ``records`` (an accumulator of no volume where there is none, as the
         compiled kernel has)."""
-        target, moving, acc, rel = mode
+        target, moving, acc, rel = mode[:4]
         ch, va, su, oil, ac = self.chambers, self.valve, self.supply, self.oil, self.accumulator
-        en = _ENERGY_SLOTS
+        comp = self._composition
+        en = self.layout.energy
+        tank = comp.nodes["tank"]
         tau = va.switching_time
         recs = ch.records(_FRONT, _REAR, oil.bulk_modulus, front_energy=en["front"], rear_energy=en["rear"])
-        recs += su.records(_SUPPLY, _TANK, _FRONT, oil, relief_open=bool(rel),
+        recs += su.records(_SUPPLY, tank, _FRONT, oil, relief_open=bool(rel),
                            energies={k: en[k if k != "compression" else "supply"]
                                      for k in ("pump", "orifices", "tank", "compression")},
                            relief_event=K.REL_EV - K.RAMP_EV)
-        recs += va.records(_SUPPLY, _REAR, _TANK, oil.transition_pressure,
+        recs += va.records(_SUPPLY, _REAR, comp.ports["valve_return"], oil.transition_pressure,
                            rate=(1.0 if target else -1.0) / tau if moving else 0.0,
                            opening=(1 if target else -1) if moving else 0, energy=en["orifices"], event=0)
         has_acc = ac is not None and ac.volume > 0 and not su.held
@@ -309,7 +359,32 @@ class HydraulicCircuitDrive(Drive):
                           polytropic_exponent=ac.polytropic_exponent if ac is not None else 1.4)
         recs += gas.records(_SUPPLY, holding=bool(acc), watched=has_acc, energy=en["gas"],
                             event=K.ACC_EV - K.RAMP_EV)
-        return NW.compose(recs, 3, self.layout.n_energy, 3, en["piston"])
+        for part in self.extra_parts:
+            recs += part.records(comp.slots(part, mode), oil)
+        return NW.compose(recs, comp.n_states, self.layout.n_energy, 1 + len(comp.events), en["piston"])
+
+    @functools.cached_property
+    def _composition(self):
+        """The numbering of the circuit's nodes, energy and event slots with its extra parts
+        (:func:`.composition.compose_parts`)."""
+        return compose_parts(self.extra_parts)
+
+    @functools.cached_property
+    def _watched(self) -> tuple:
+        """The extra parts' watched events read from the network: ``(name, slot, state index,
+        level, kind)``, ``kind`` :data:`._network.ACCUM` (its flag: at or above the level) or
+        :data:`._network.RELIEF` (above it)."""
+        comp = self._composition
+        net = self._network((0, 0) + (0,) * len(comp.events))
+        out = []
+        for r in net[NW.NW_SIZE:].reshape(-1, NW.REC_SIZE):
+            kind = int(r[NW.KIND])
+            if kind == NW.ACCUM and r[NW.A_WATCH] > 0.5 and r[NW.A_EV] >= 3:
+                out.append((int(r[NW.A_EV]), int(r[NW.A_NODE]), float(r[NW.A_P0]), kind))
+            elif kind == NW.RELIEF and r[NW.R_WATCH] > 0.5 and r[NW.R_EV] >= 3:
+                out.append((int(r[NW.R_EV]), int(r[NW.R_FROM]), float(r[NW.R_SET]), kind))
+        return tuple((comp.events[slot - 1], slot, node, level, kind)
+                     for slot, node, level, kind in sorted(out))
 
     def _network_par(self, model, mode, variational=False) -> np.ndarray:
         """:meth:`_par` with the circuit's network of part records (:meth:`_network`) after it."""
@@ -322,11 +397,12 @@ class HydraulicCircuitDrive(Drive):
         return _network_code(self, tuple(mode))
 
     def _directions(self, mode):
-        target, moving, acc, rel = mode
-        return (1, 1, -1, 1 if target else -1, -1 if acc else 1, -1 if rel else 1)
+        # (the bar's, the ramp's end, then one a flag of the mode: the network's event slots 1..)
+        return (1, 1, -1, 1 if mode[0] else -1) + tuple(-1 if f else 1 for f in mode[2:])
 
     def _fired(self, mode, hit):
-        names = {K.OUT_EV: _SWITCH_OUT, K.IN_EV: _SWITCH_IN, K.RAMP_EV: _RAMP, K.ACC_EV: _ACC, K.REL_EV: _REL}
+        names = {K.OUT_EV: _SWITCH_OUT, K.IN_EV: _SWITCH_IN, K.RAMP_EV: _RAMP}
+        names.update((K.RAMP_EV + 1 + i, name) for i, name in enumerate(self._composition.events))
         wanted = {names[i] for i in hit if i in names}
         return tuple(e for e in self.events(mode) if e.name in wanted)
 
@@ -375,18 +451,23 @@ class HydraulicCircuitDrive(Drive):
         gap = -float(np.asarray(q)[0])
         target = 1 if gap >= self.valve.switch_out else 0
         z = np.empty(L.n_states)
+        for name in L.states[L["supply"] + 1:L["spool"]]:  # (the extra parts' nodes: the tank's pressure)
+            z[L[name]] = sup.tank_pressure if self.start_pressures is None else self.start_pressures[L[name]]
         z[L["front"]], z[L["rear"]], z[L["supply"]], z[L["spool"]] = pf, pr, ps, float(target)
         if xv is not None and xv != float(target):
             z[L["spool"]] = xv
-            return self._toward(self._mode(1 - target, 0, ps), z, target)
-        return DriveState(self._mode(target, 0, ps), z)
+            return self._toward(self._mode(1 - target, 0, ps, z), z, target)
+        return DriveState(self._mode(target, 0, ps, z), z)
 
-    def _mode(self, target, moving, ps):
+    def _mode(self, target, moving, ps, z):
         acc = self.accumulator
         has_acc = acc is not None and acc.volume > 0 and not self.supply.held
         a = 1 if has_acc and ps >= acc.precharge else 0
         r = 1 if self.supply.has_relief and not self.supply.held and ps > self.supply.relief_pressure else 0
-        return (target, moving, a, r)
+        flags = [0] * (len(self._composition.events) - 2)
+        for _, slot, node, level, kind in self._watched:  # (an accumulator holds oil at its level)
+            flags[slot - 3] = int(z[node] >= level if kind == NW.ACCUM else z[node] > level)
+        return (target, moving, a, r, *flags)
 
     def mode_name(self, mode) -> str:
         return "stroke" if mode[0] == 1 else "return"
@@ -422,7 +503,7 @@ class HydraulicCircuitDrive(Drive):
         return out[self.layout.size(M):].copy()
 
     def events(self, mode):
-        target, moving, acc, rel = mode
+        target, moving, acc, rel = mode[:4]
         sp, ps = self.layout["spool"], self.layout.supply
         out = []
         if target == 0:
@@ -441,6 +522,9 @@ class HydraulicCircuitDrive(Drive):
             pr = self.supply.relief_pressure
             out.append(SurfaceEvent(_REL, direction=-1 if rel else 1,
                                     function=lambda t, q, v, z, pr=pr, i=ps: float(z[i]) - pr))
+        for name, slot, node, level, _ in self._watched:  # (the extra parts')
+            out.append(SurfaceEvent(name, direction=-1 if mode[1 + slot] else 1,
+                                    function=lambda t, q, v, z, lvl=level, i=node: float(z[i]) - lvl))
         return tuple(out)
 
     def _held(self, z) -> np.ndarray:
@@ -453,16 +537,16 @@ class HydraulicCircuitDrive(Drive):
 
     def _toward(self, mode, z, target):
         z = self._held(z)
-        _, _, acc, rel = mode
+        flags = tuple(mode[2:])  # (acc, rel, and the extra parts' flags)
         tau = self.valve.switching_time
         sp = self.layout["spool"]
         if tau <= 0.0 or z[sp] == float(target):
             z[sp] = float(target)
-            return DriveState((target, 0, acc, rel), z)
-        return DriveState((target, 1, acc, rel), z)
+            return DriveState((target, 0, *flags), z)
+        return DriveState((target, 1, *flags), z)
 
     def jump(self, mode, z, event, t, q, v) -> DriveState:
-        target, moving, acc, rel = mode
+        target, moving, acc, rel = mode[:4]
         name = event.name
         if name == _SWITCH_OUT:
             return self._toward(mode, z, 1)
@@ -471,11 +555,10 @@ class HydraulicCircuitDrive(Drive):
         z = self._held(z)
         if name == _RAMP:
             z[self.layout["spool"]] = float(target)
-            return DriveState((target, 0, acc, rel), z)
-        if name == _ACC:
-            return DriveState((target, moving, 1 - acc, rel), z)
-        if name == _REL:
-            return DriveState((target, moving, acc, 1 - rel), z)
+            return DriveState((target, 0, *mode[2:]), z)
+        if name in self._composition.events:  # (its flag toggled: acc, rel, an extra part's)
+            i = 2 + self._composition.events.index(name)
+            return DriveState((*mode[:i], 1 - mode[i], *mode[i + 1:]), z)
         raise ValueError(f"unknown event {name!r} of the oil circuit")  # pragma: no cover
 
     def impact(self, mode, z, t, q, v) -> DriveState:
@@ -500,6 +583,11 @@ class HydraulicCircuitDrive(Drive):
         """
         from .endflight import circuit_end_flight
 
+        if self.extra_parts:
+            raise ValueError("end_flight: the coupled blow (the rod-rock and the wave laws) runs the preset "
+                             "circuit's hand-written kernels only; a drive with extra_parts "
+                             f"({', '.join(type(p).__name__ for p in self.extra_parts)}) is not supported "
+                             "there: use a law with instantaneous impacts")
         return circuit_end_flight(self, model, state, breaks, w0, incoming, impedance, settings,
                                   _rate_model(1))
 
@@ -508,7 +596,9 @@ class HydraulicCircuitDrive(Drive):
         least supply pressure less the pre-charge (through 0 where the accumulator starts emptying
         during the cycle), and ``"relief"``, the relief pressure less the greatest supply pressure
         (through 0 where the relief valve starts opening); each extreme from the flights' cubic
-        Hermite interpolants (the integrator's accuracy). A held supply has neither.
+        Hermite interpolants (the integrator's accuracy). A held supply has neither. Each watched
+        event of an extra part the same way, by its name (its node's least pressure less an
+        accumulator's pre-charge, a relief's setting less the greatest).
 
         Returns
         -------
@@ -516,6 +606,11 @@ class HydraulicCircuitDrive(Drive):
         """
         sup, acc = self.supply, self.accumulator
         out: dict = {}
+        for name, _, node, level, kind in self._watched:
+            ext = [p.extremes(node) for p in pieces if hasattr(p, "extremes")]
+            if ext:
+                lo, hi = min(e[0] for e in ext), max(e[1] for e in ext)
+                out[name] = lo - level if kind == NW.ACCUM else level - hi
         has_acc = acc is not None and acc.volume > 0 and not sup.held
         if not (has_acc or (sup.has_relief and not sup.held)):
             return out

@@ -15,6 +15,12 @@ from dataclasses import dataclass
 
 __all__ = ["CircuitLayout", "PRESET"]
 
+#: the terms of the energy account (:class:`~impactbar.drives.circuit.CircuitEnergy`), and the
+#: preset integrands' by name
+_TERMS = ("pump", "piston", "orifices", "tank", "compression", "accumulator")
+_PRESET_TERMS = {"pump": "pump", "piston": "piston", "orifices": "orifices", "tank": "tank",
+                 "front": "compression", "rear": "compression", "supply": "compression", "gas": "accumulator"}
+
 
 @dataclass(frozen=True)
 class CircuitLayout:
@@ -29,11 +35,17 @@ class CircuitLayout:
         The same states' symbols (``"p_f"``, ...), in the same order: the keys of the histories.
     energies : tuple of str
         The energy integrands' names in the kernel's order (:class:`~impactbar.drives.circuit.CircuitEnergy`).
+    terms : tuple of str, optional
+        The term of the energy account each integrand adds to (``"pump"``, ``"piston"``,
+        ``"orifices"``, ``"tank"``, ``"compression"``, ``"accumulator"``), in the same order;
+        default: the preset's by name (``front``, ``rear``, ``supply``: ``compression``; ``gas``:
+        ``accumulator``; the others their own).
 
     Raises
     ------
     ValueError
-        Names repeated, or ``state_names`` not as many as ``states``.
+        Names repeated, ``state_names`` not as many as ``states``, ``terms`` not one of the account's
+        for each energy integrand.
 
     Examples
     --------
@@ -47,6 +59,7 @@ class CircuitLayout:
     states: tuple
     state_names: tuple
     energies: tuple
+    terms: tuple = ()
 
     def __post_init__(self) -> None:
         for name in ("states", "state_names", "energies"):
@@ -57,6 +70,11 @@ class CircuitLayout:
         if len(self.state_names) != len(self.states):
             raise ValueError(f"state_names must name the {len(self.states)} states {self.states}; got "
                              f"{self.state_names!r}")
+        terms = tuple(self.terms) if self.terms else tuple(_PRESET_TERMS.get(e) for e in self.energies)
+        if len(terms) != len(self.energies) or not set(terms) <= set(_TERMS):
+            raise ValueError(f"terms must give each of the energies {self.energies} one of {_TERMS}; got "
+                             f"{self.terms!r}")
+        object.__setattr__(self, "terms", terms)
 
     @property
     def n_states(self) -> int:

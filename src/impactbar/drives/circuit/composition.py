@@ -1,0 +1,228 @@
+r"""Parts added to the drifter's oil circuit (theory §11): the protocol of an extra part and the
+composition of the circuit's nodes, energy and event slots and layout from the preset's parts and
+the extra ones.
+
+The preset circuit (:class:`~impactbar.drives.circuit.HydraulicCircuitDrive` without extra parts)
+has the nodes ``front``, ``rear``, ``supply`` (pressure states, in that order) and ``tank`` (held at
+its pressure), the eight energy integrands of :data:`~impactbar.drives.circuit.layout.PRESET` and
+the events ``ramp_end``, ``accumulator``, ``relief`` of the network's slots 0, 1, 2. An extra part
+(:class:`CircuitPart`) names the nodes it adds (each with a pressure state), its energy integrands
+(each with the term of the account it belongs to), its watched events and the preset's ports it
+takes over; :func:`compose_parts` numbers them after the preset's (the states in the order of the
+parts, then the tank), and the part's :meth:`CircuitPart.records` writes its network records
+(:mod:`._network`) with those numbers. Nothing here names a part's kind: a part made of the
+network's kinds needs no edit of the drive or of a kernel.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .layout import _TERMS, PRESET, CircuitLayout
+
+__all__ = ["CircuitPart", "PartSlots", "Composition", "compose_parts", "PORTS", "TERMS"]
+
+#: the preset's ports an extra part may take over, and the node each joins without one: the valve's
+#: return port (the tank)
+PORTS = {"valve_return": "tank"}
+
+#: the terms of the energy account (:class:`~impactbar.drives.circuit.CircuitEnergy`) an energy
+#: integrand can belong to
+TERMS = _TERMS
+
+#: the preset's nodes with a pressure state, in their order (then the extra parts' and the tank)
+_PRESET_NODES = ("front", "rear", "supply")
+#: the preset's events after the ramp's end (the network's event slots 1, 2)
+_PRESET_EVENTS = ("accumulator", "relief")
+
+
+class CircuitPart:
+    r"""The protocol of a part added to the oil circuit (``HydraulicCircuitDrive(...,
+    extra_parts=(part, ...))``): a frozen dataclass (hashable: the drive's caches are keyed by it)
+    with these class attributes and :meth:`records`.
+
+    Attributes
+    ----------
+    nodes : tuple of str
+        Its nodes, each with a pressure state (the names of the drive's layout; distinct from the
+        preset's ``front``, ``rear``, ``supply``, ``spool``, ``tank`` and the other parts').
+    symbols : tuple of str
+        The nodes' symbols (``"p_ret"``), the keys of the histories.
+    energies : tuple of (str, str)
+        Its energy integrands: ``(name, term)`` pairs, ``term`` one of :data:`TERMS` (the term of
+        the account each adds to: ``"compression"`` for an oil volume's, ``"accumulator"`` for a
+        gas's). It may also add to the preset's integrands by name (``"orifices"``, ``"tank"``).
+    events : tuple of str
+        Its watched events (each an accumulator's or a relief's pressure through its level), one
+        flag of the drive's mode each.
+    ports : dict
+        The preset's ports it takes over (:data:`PORTS`), each to one of its nodes by name:
+        ``{"valve_return": "return"}`` joins the valve's return port to its node ``return``
+        instead of the tank.
+    parameters : dict
+        Its continuation parameters: the drive's parameter name to the part's field
+        (``{"return_volume": "volume"}``); ``parameter_ranges`` their ranges as
+        :data:`~impactbar.drives.circuit.drive.PARAMETERS`' (optional).
+
+    Examples
+    --------
+    >>> from dataclasses import dataclass
+    >>> from impactbar.drives.circuit import _network as NW
+    >>> @dataclass(frozen=True)
+    ... class Bleed(CircuitPart):
+    ...     coefficient: float
+    ...     def records(self, slots, oil):
+    ...         return [NW.record(NW.ORIFICE, source=slots.nodes["supply"], target=slots.nodes["tank"],
+    ...                           coefficient=self.coefficient, ptr2=oil.transition_pressure ** 2,
+    ...                           energy=slots.energy["orifices"])]
+    >>> compose_parts((Bleed(0.1),)).layout == PRESET
+    True
+    """
+
+    nodes: tuple = ()
+    symbols: tuple = ()
+    energies: tuple = ()
+    events: tuple = ()
+    ports: dict = {}
+    parameters: dict = {}
+    parameter_ranges: dict = {}
+
+    def records(self, slots: PartSlots, oil) -> list:
+        """The part's network records (:func:`._network.record`).
+
+        Parameters
+        ----------
+        slots : PartSlots
+            The numbers of the nodes (the preset's and its own), the energy slots and its events'
+            slots, by name, and its events' flags in the drive's mode.
+        oil : Oil
+            The circuit's oil (its bulk modulus and transition pressure).
+
+        Returns
+        -------
+        list of numpy.ndarray
+        """
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class PartSlots:
+    """What :meth:`CircuitPart.records` writes its records with.
+
+    Attributes
+    ----------
+    nodes : dict
+        Every node's number by name (the preset's ``front``, ``rear``, ``supply``, ``tank``, the
+        extra parts' nodes).
+    energy : dict
+        Every energy integrand's slot by name.
+    events : dict
+        The part's events' slots in the network (after the ramp's end, slot 0) by name.
+    flags : dict
+        The part's events' flags in the drive's mode by name (``True``: an accumulator holds oil, a
+        relief is open).
+    """
+
+    nodes: dict
+    energy: dict
+    events: dict
+    flags: dict
+
+
+@dataclass(frozen=True)
+class Composition:
+    """The circuit's numbering with its extra parts (:func:`compose_parts`).
+
+    Attributes
+    ----------
+    layout : CircuitLayout
+        States in node order then ``spool``, the preset's energy integrands then the parts'.
+    nodes : dict
+        Every node's number by name (the ``n_states`` nodes with a state first, then ``tank``).
+    n_states : int
+        The nodes with a pressure state.
+    events : tuple of str
+        The network's events after the ramp's end, in slot order (slot ``1 + i``: the mode's flag
+        ``2 + i``).
+    ports : dict
+        The preset's ports (:data:`PORTS`) to node numbers.
+    """
+
+    layout: CircuitLayout
+    nodes: dict
+    n_states: int
+    events: tuple
+    ports: dict
+
+    def slots(self, part: CircuitPart, mode) -> PartSlots:
+        """The :class:`PartSlots` of ``part`` in the drive's mode ``mode`` (``(target, moving,
+        flags...)``)."""
+        ev = {name: self.events.index(name) + 1 for name in part.events}
+        return PartSlots(nodes=self.nodes, energy=self.layout.energy, events=ev,
+                         flags={name: bool(mode[1 + slot]) for name, slot in ev.items()})
+
+
+def compose_parts(parts) -> Composition:
+    """The circuit's nodes, energy and event slots and layout with the extra ``parts``.
+
+    Parameters
+    ----------
+    parts : tuple of CircuitPart
+
+    Returns
+    -------
+    Composition
+        With no parts, the preset's: :data:`~impactbar.drives.circuit.layout.PRESET`, the tank node 3.
+
+    Raises
+    ------
+    ValueError
+        A part that is not a :class:`CircuitPart`, a name repeated, an energy term or a port that is
+        not known, a port given to a node that is not the part's.
+
+    Examples
+    --------
+    >>> c = compose_parts(())
+    >>> c.layout is PRESET, c.nodes["tank"], c.events
+    (True, 3, ('accumulator', 'relief'))
+    """
+    parts = tuple(parts)
+    for p in parts:
+        if not isinstance(p, CircuitPart):
+            raise ValueError(f"extra_parts must be CircuitPart instances; got {type(p).__name__}")
+    if not parts:
+        return Composition(PRESET, {**{n: i for i, n in enumerate(_PRESET_NODES)}, "tank": 3}, 3,
+                           _PRESET_EVENTS, {"valve_return": 3})
+    nodes = list(_PRESET_NODES)
+    symbols = list(PRESET.state_names[:3])
+    energies = list(PRESET.energies)
+    terms = list(PRESET.terms)
+    events = list(_PRESET_EVENTS)
+    ports: dict = {}
+    for p in parts:
+        if len(p.symbols) != len(p.nodes):
+            raise ValueError(f"a {type(p).__name__}'s symbols must name its nodes {p.nodes}; got {p.symbols}")
+        nodes += p.nodes
+        symbols += p.symbols
+        for name, term in p.energies:
+            if term not in TERMS:
+                raise ValueError(f"a {type(p).__name__}'s energy {name!r} must belong to one of {TERMS}; "
+                                 f"got {term!r}")
+            energies.append(name)
+            terms.append(term)
+        events += p.events
+        for port, node in p.ports.items():
+            if port not in PORTS or port in ports or node not in p.nodes:
+                raise ValueError(f"a {type(p).__name__} takes a port of {tuple(PORTS)} (one part each) to "
+                                 f"one of its nodes {p.nodes}; got {port!r} to {node!r}")
+            ports[port] = node
+    names = nodes + ["spool", "tank"]
+    if len(set(names)) != len(names) or len(set(events)) != len(events) or "ramp_end" in events:
+        raise ValueError(f"the parts' nodes and events must have names of their own; got nodes {nodes}, "
+                         f"events {events}")
+    layout = CircuitLayout(states=(*nodes, "spool"), state_names=(*symbols, "x_v"), energies=tuple(energies),
+                           terms=tuple(terms))
+    number = {n: i for i, n in enumerate(nodes)}
+    number["tank"] = len(nodes)
+    return Composition(layout, number, len(nodes), tuple(events),
+                       {port: number[ports.get(port, default)] for port, default in PORTS.items()})
