@@ -147,6 +147,53 @@ def magnus_phi(t, y, f, par, M, n, grid, jac_base, d):
     return Phi
 
 
+@nb.njit(cache=True)
+def magnus_phi_adaptive(t, y, f, par, M, n, theta, jac_base, d):
+    """:func:`magnus_phi` on its own steps: each as long as ``theta / ||D^-1 A D||_1`` (``A`` at the
+    previous step's second Gauss point, the first step's at ``t[0]``), the piece's end the last; the
+    count of steps with it."""
+    Phi = np.eye(n)
+    A1 = np.empty((n, n))
+    A2 = np.empty((n, n))
+    ys = np.empty(y.shape[1])
+    c1 = 0.5 - math.sqrt(3.0) / 6.0
+    c2 = 0.5 + math.sqrt(3.0) / 6.0
+    r3 = math.sqrt(3.0) / 12.0
+    jac_base(y[0], par, M, A2)
+    t0, tend, k, steps = t[0], t[-1], 0, 0
+    while t0 < tend:
+        nrm = 0.0
+        for j in range(n):
+            s = 0.0
+            for i in range(n):
+                s += abs(A2[i, j]) * d[j] / d[i]
+            nrm = max(nrm, s)
+        hs = theta / nrm if nrm > 0.0 else tend - t0
+        if t0 + 1.25 * hs >= tend:
+            hs = tend - t0
+        tau = t0 + c1 * hs
+        while k < t.size - 2 and t[k + 1] < tau:
+            k += 1
+        _state_at(t, y, f, tau, k, ys)
+        jac_base(ys, par, M, A1)
+        tau = t0 + c2 * hs
+        while k < t.size - 2 and t[k + 1] < tau:
+            k += 1
+        _state_at(t, y, f, tau, k, ys)
+        jac_base(ys, par, M, A2)
+        Om = 0.5 * hs * (A1 + A2) + (r3 * hs * hs) * (A2 @ A1 - A1 @ A2)
+        for i in range(n):
+            for j in range(n):
+                Om[i, j] *= d[j] / d[i]
+        Phi = expm(Om) @ Phi
+        t0 = tend if hs == tend - t0 else t0 + hs
+        steps += 1
+    for i in range(n):
+        for j in range(n):
+            Phi[i, j] *= d[i] / d[j]
+    return Phi, steps
+
+
 def magnus_grid(t, sub):
     """The Magnus steps: each integrator step split in ``sub`` (an integer >= 1), or with ``sub = 1/G``
     (``G`` an integer) every ``G`` integrator steps taken as one (the last step the remainder)."""
@@ -174,8 +221,10 @@ def piece_phi(drive, model, mode, piece, sub=1, balance=True):
         A = np.empty((n, n))
         code.jac_base(np.ascontiguousarray(piece.y[piece.t.size // 2]), par, M, A)
         d = matrix_balance(A, permute=False, separate=True)[1][0]
-    return magnus_phi(piece.t, piece.y, np.ascontiguousarray(piece.f), par, M, n, magnus_grid(piece.t, sub),
-                      code.jac_base, d)
+    f = np.ascontiguousarray(piece.f)
+    if isinstance(sub, str):  # "a<theta>": the adaptive steps
+        return magnus_phi_adaptive(piece.t, piece.y, f, par, M, n, float(sub[1:]), code.jac_base, d)[0]
+    return magnus_phi(piece.t, piece.y, f, par, M, n, magnus_grid(piece.t, float(sub)), code.jac_base, d)
 
 
 def cpu_best(fn, rounds=3):
@@ -261,11 +310,11 @@ def case(modes, subs, rounds):
     ta, D_a = cpu_best(lambda: period(), 1)
     mu_a = multipliers(problem, X, D_a)
     rows = [("CVODE variational rtol 1e-10", ta, D_a, mu_a)]
-    for s, bal in [(1, False)] + [(s, True) for s in subs]:
+    for s, bal in [(1.0, False)] + [(s, True) for s in subs]:
         period(magnus=s, balance=bal)  # (compile)
         starts.clear()
         tb, D_b = cpu_best(lambda s=s, bal=bal: period(magnus=s, balance=bal), 1)
-        rows.append((f"plain + Magnus-4, sub {s:g}" + ("" if bal else " unbal."), tb, D_b,
+        rows.append((f"plain + Magnus-4, sub {s}" + ("" if bal else " unbal."), tb, D_b,
                      multipliers(problem, X, D_b)))
     print(f"period: |mu| largest (ref) {np.abs(mu_ref[:3])}")
     print(f"{'period Jacobian by':32s} {'CPU s':>8s} {'D rel err':>10s} {'mu abs err':>11s}")
@@ -275,7 +324,7 @@ def case(modes, subs, rounds):
     seen = list(starts)  # (the flights of the last Magnus period)
     print(f"pieces of the period: {len(seen)}")
     print(f"{'piece':>5s} {'steps a/plain/ref':>22s} {'a: CPU ms':>10s} {'a: rel':>9s} {'a: eig':>9s}"
-          + "".join(f" {f'b{s:g}: CPU ms':>11s} {f'b{s:g}: rel':>9s} {f'b{s:g}: eig':>9s}" for s in subs))
+          + "".join(f" {f'b{s}: CPU ms':>11s} {f'b{s}: rel':>9s} {f'b{s}: eig':>9s}" for s in subs))
     totals = np.zeros(1 + len(subs))
     for i, start in enumerate(seen):
         state, t, q, v, t_stop = start
@@ -293,18 +342,19 @@ def case(modes, subs, rounds):
             line += f" {1e3 * tb:11.2f} {rel(Pb, fr.sensitivity):9.1e} {eig_err(Pb, fr.sensitivity):9.1e}"
         print(line + f"   (t {fr.t - t:.3e}, ends {fa.end})")
     print("sum of the pieces' CPU (s): a " + f"{totals[0]:.3f}"
-          + "".join(f", b sub {s:g} {totals[1 + j]:.3f}" for j, s in enumerate(subs)))
+          + "".join(f", b sub {s} {totals[1 + j]:.3f}" for j, s in enumerate(subs)))
 
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--modes", type=int, nargs="+", default=[0, 4, 8])
-    p.add_argument("--sub", type=float, nargs="+", default=[1, 2],
-                   help="Magnus steps a plain step (0.5: one Magnus step per two plain steps)")
+    p.add_argument("--sub", nargs="+", default=["1", "0.5", "a0.5"],
+                   help="Magnus steps a plain step (0.5: one Magnus step per two plain steps); aTHETA: "
+                        "Magnus' own steps, each h ||D^-1 A D||_1 = THETA")
     p.add_argument("--rounds", type=int, default=3, help="best of ROUNDS for each piece's CPU time")
     args = p.parse_args(argv)
     for m in args.modes:
-        case(m, args.sub, args.rounds)
+        case(m, [x if x.startswith("a") else float(x) for x in args.sub], args.rounds)
 
 
 if __name__ == "__main__":
