@@ -110,6 +110,35 @@ def _state_at(t, y, f, tau, k, out):
 
 
 @nb.njit(cache=True)
+def _step(t, y, f, par, M, t0, hs, k, jac_base, d, A1, A2, ys):
+    """``exp(D^-1 Omega D)`` of the Magnus step ``[t0, t0 + hs]`` (``A`` at its Gauss points into ``A1``,
+    ``A2``) and the integrator's step ``k`` that holds its second Gauss point (searched from ``k``)."""
+    c1 = 0.5 - math.sqrt(3.0) / 6.0
+    for c, A in ((c1, A1), (1.0 - c1, A2)):
+        tau = t0 + c * hs
+        while k < t.size - 2 and t[k + 1] < tau:
+            k += 1
+        _state_at(t, y, f, tau, k, ys)
+        jac_base(ys, par, M, A)
+    Om = 0.5 * hs * (A1 + A2) + (math.sqrt(3.0) / 12.0 * hs * hs) * (A2 @ A1 - A1 @ A2)
+    n = Om.shape[0]
+    for i in range(n):
+        for j in range(n):
+            Om[i, j] *= d[j] / d[i]
+    return expm(Om), k
+
+
+@nb.njit(cache=True)
+def _unscaled(Phi, d):
+    """``D Phi D^-1`` in place."""
+    n = Phi.shape[0]
+    for i in range(n):
+        for j in range(n):
+            Phi[i, j] *= d[i] / d[j]
+    return Phi
+
+
+@nb.njit(cache=True)
 def magnus_phi(t, y, f, par, M, n, grid, jac_base, d):
     """``Phi`` over the Magnus steps ``grid`` (times within ``[t[0], t[-1]]``, ``t``'s first and last
     included) by Magnus of order 4, ``A`` at the Gauss points from the Hermite interpolant of the
@@ -120,31 +149,11 @@ def magnus_phi(t, y, f, par, M, n, grid, jac_base, d):
     A1 = np.empty((n, n))
     A2 = np.empty((n, n))
     ys = np.empty(y.shape[1])
-    c1 = 0.5 - math.sqrt(3.0) / 6.0
-    c2 = 0.5 + math.sqrt(3.0) / 6.0
-    r3 = math.sqrt(3.0) / 12.0
     k = 0
     for m in range(grid.size - 1):
-        hs = grid[m + 1] - grid[m]
-        tau = grid[m] + c1 * hs
-        while k < t.size - 2 and t[k + 1] < tau:
-            k += 1
-        _state_at(t, y, f, tau, k, ys)
-        jac_base(ys, par, M, A1)
-        tau = grid[m] + c2 * hs
-        while k < t.size - 2 and t[k + 1] < tau:
-            k += 1
-        _state_at(t, y, f, tau, k, ys)
-        jac_base(ys, par, M, A2)
-        Om = 0.5 * hs * (A1 + A2) + (r3 * hs * hs) * (A2 @ A1 - A1 @ A2)
-        for i in range(n):
-            for j in range(n):
-                Om[i, j] *= d[j] / d[i]
-        Phi = expm(Om) @ Phi
-    for i in range(n):
-        for j in range(n):
-            Phi[i, j] *= d[i] / d[j]
-    return Phi
+        E, k = _step(t, y, f, par, M, grid[m], grid[m + 1] - grid[m], k, jac_base, d, A1, A2, ys)
+        Phi = E @ Phi
+    return _unscaled(Phi, d)
 
 
 @nb.njit(cache=True)
@@ -156,9 +165,6 @@ def magnus_phi_adaptive(t, y, f, par, M, n, theta, jac_base, d):
     A1 = np.empty((n, n))
     A2 = np.empty((n, n))
     ys = np.empty(y.shape[1])
-    c1 = 0.5 - math.sqrt(3.0) / 6.0
-    c2 = 0.5 + math.sqrt(3.0) / 6.0
-    r3 = math.sqrt(3.0) / 12.0
     jac_base(y[0], par, M, A2)
     t0, tend, k, steps = t[0], t[-1], 0, 0
     while t0 < tend:
@@ -169,29 +175,14 @@ def magnus_phi_adaptive(t, y, f, par, M, n, theta, jac_base, d):
                 s += abs(A2[i, j]) * d[j] / d[i]
             nrm = max(nrm, s)
         hs = theta / nrm if nrm > 0.0 else tend - t0
-        if t0 + 1.25 * hs >= tend:
+        last = t0 + 1.25 * hs >= tend
+        if last:
             hs = tend - t0
-        tau = t0 + c1 * hs
-        while k < t.size - 2 and t[k + 1] < tau:
-            k += 1
-        _state_at(t, y, f, tau, k, ys)
-        jac_base(ys, par, M, A1)
-        tau = t0 + c2 * hs
-        while k < t.size - 2 and t[k + 1] < tau:
-            k += 1
-        _state_at(t, y, f, tau, k, ys)
-        jac_base(ys, par, M, A2)
-        Om = 0.5 * hs * (A1 + A2) + (r3 * hs * hs) * (A2 @ A1 - A1 @ A2)
-        for i in range(n):
-            for j in range(n):
-                Om[i, j] *= d[j] / d[i]
-        Phi = expm(Om) @ Phi
-        t0 = tend if hs == tend - t0 else t0 + hs
+        E, k = _step(t, y, f, par, M, t0, hs, k, jac_base, d, A1, A2, ys)
+        Phi = E @ Phi
+        t0 = tend if last else t0 + hs
         steps += 1
-    for i in range(n):
-        for j in range(n):
-            Phi[i, j] *= d[i] / d[j]
-    return Phi, steps
+    return _unscaled(Phi, d), steps
 
 
 def magnus_grid(t, sub):
