@@ -10,8 +10,11 @@ generated ``jac_base`` of the drive's network, the one the variational flight ca
           \Phi_{k+1} = e^{\Omega_k} \Phi_k
 
 (Magnus of order 4), ``expm`` compiled here (Higham 2005: Pade 3, 5, 7, 9 or 13 with scaling and
-squaring). ``--sub S`` splits each plain step in ``S`` equal Magnus steps (``--sub 0.5``: one Magnus step over
-two plain steps).
+squaring), each ``Omega`` in the coordinates that balance ``A`` (``scipy.linalg.matrix_balance`` once a
+flight: the modes' ``q' = v, v' = -w^2 q`` make ``||h A||`` some 275 at the plain steps, balanced 0.2).
+``--sub S`` splits each plain step in ``S`` equal Magnus steps (``--sub 0.25``: one Magnus step over
+four plain steps); ``--sub aTHETA`` takes Magnus' own steps, ``h ||D^-1 A D||_1 = THETA``. The period's
+table has the unbalanced Magnus on the plain steps too.
 
 Two comparisons on the preset ``circuit-drifter``'s orbit (rigid, 4 and 8 modes):
 
@@ -22,8 +25,10 @@ Two comparisons on the preset ``circuit-drifter``'s orbit (rigid, 4 and 8 modes)
   ``ShootingProblem._fly(..., variational=True)``, saltation matrices included) with each flight's
   ``Phi`` from (a), (b) and the reference.
 
-Run: ``python benchmarks/probes/monodromy_magnus.py --modes 0 4 8`` (``--sub 1 2``). Library
-behaviour is not changed: the Magnus flight is swapped in for ``circuit_flight`` inside this process.
+Run: ``python benchmarks/probes/monodromy_magnus.py --modes 8 4 --sub 1 0.25 a0.5 a1 --rounds 1``
+(some 15 minutes on the 2-core machine, most of it the reference flights; numbers in
+``benchmarks/HISTORY.md``). Library behaviour is not changed: the Magnus flight is swapped in for
+``circuit_flight`` (and ``_MAX_STEPS`` raised for the reference) inside this process only.
 """
 
 from __future__ import annotations
