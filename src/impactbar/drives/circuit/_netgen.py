@@ -500,10 +500,11 @@ def generate(net, folder=None) -> SimpleNamespace:
 
     Examples
     --------
-    >>> from impactbar.drives.circuit import _network as NW
-    >>> recs = [NW.record(NW.NODE, id=0, volume=1.0, beta=100.0), NW.record(NW.NODE, id=1, pressure=0.0),
-    ...         NW.record(NW.VALVE, pressure_port=0, work_port=1, return_port=1, coefficient=1.0, ptr2=1e-4)]
-    >>> g = generate(NW.compose(recs, 1, 1, 1, 0))
+    A node, the tank and a valve from its part (:class:`.parts.Valve`):
+
+    >>> from impactbar.drives.circuit import Valve, _network as NW
+    >>> nodes = [NW.record(NW.NODE, id=0, volume=1.0, beta=100.0), NW.record(NW.NODE, id=1, pressure=0.0)]
+    >>> g = generate(NW.compose(nodes + Valve(0.05, 1.0).records(0, 1, 1, 0.01), 1, 1, 1, 0))
     >>> sorted(k for k in vars(g) if not k.startswith("_"))  # doctest: +NORMALIZE_WHITESPACE
     ['CALLBACKS', 'base', 'events', 'field_at', 'flight_events', 'flight_jac', 'flight_rhs', 'jac_base',
      'path', 'source']

@@ -218,6 +218,13 @@ def _pressure(par, R0, y, F, ns, j):
 
 
 @nb.njit(**_JIT)
+def _record(par, R0, k):
+    """Record ``k``'s offset in ``par`` and its kind (the records from ``R0``)."""
+    r = R0 + k * REC_SIZE
+    return r, int(par[r + KIND])
+
+
+@nb.njit(**_JIT)
 def _prepare(y, par, M, S, en, dp, energies):
     """The nodes' pressures, volumes, net inflows, capacitances and rates into the scratch ``S``,
     ``p'`` of the nodes with a state into ``dp``, with ``energies`` the energy integrands into ``en``;
@@ -249,8 +256,7 @@ def _prepare(y, par, M, S, en, dp, energies):
     rate = 0.0
     capacitance = False
     for k in range(nn, nrec):
-        r = R0 + k * REC_SIZE
-        kind = int(par[r + KIND])
+        r, kind = _record(par, R0, k)
         if kind == PUMP:
             a = int(par[r + P_NODE])
             q = par[r + P_FLOW]
@@ -331,8 +337,8 @@ def _prepare(y, par, M, S, en, dp, energies):
             en[int(par[r + N_ECOMP])] += 0.0 if held else \
                 S[_SNU, j] * S[_SP, j] * S[_SDP, j] / par[r + N_BETA]
     for k in range(nn, nrec):
-        r = R0 + k * REC_SIZE
-        if int(par[r + KIND]) == ACCUM and par[r + A_E] >= 0:
+        r, kind = _record(par, R0, k)
+        if kind == ACCUM and par[r + A_E] >= 0:
             a = int(par[r + A_NODE])
             held = a >= ns or par[R0 + a * REC_SIZE + N_HELD] > 0.5
             en[int(par[r + A_E])] += 0.0 if held else S[_SP, a] * S[_SCA, k] * S[_SDP, a]
@@ -407,8 +413,7 @@ def jac_base(y, par, M, A):
         A[M + i, i] = -par[HEAD + M + i]
         A[M + i, M + i] = -d
     for k in range(nn, nrec):
-        r = R0 + k * REC_SIZE
-        kind = int(par[r + KIND])
+        r, kind = _record(par, R0, k)
         if kind == CHAMBER:
             a = int(par[r + C_NODE])
             area = par[r + C_AREA]
@@ -490,16 +495,15 @@ def events(z, par, M, g, first):
         g[first + k] = 1.0
     xv = z[ns]
     for k in range(nn, nrec):
-        r = R0 + k * REC_SIZE
-        kind = int(par[r + KIND])
+        r, kind = _record(par, R0, k)
         if kind == VALVE and par[r + V_EV] >= 0:
             o = par[r + V_OPEN]
             g[first + int(par[r + V_EV])] = xv - 1.0 if o > 0.5 else (xv if o < -0.5 else 1.0)
         elif kind == RELIEF and par[r + R_EV] >= 0 and par[r + R_WATCH] > 0.5:
             a = int(par[r + R_FROM])
-            p = z[a] if a < ns else par[R0 + a * REC_SIZE + N_P]
+            p = _pressure(par, R0, z, 0, ns, a)
             g[first + int(par[r + R_EV])] = _off_level(p - par[r + R_SET], par[r + R_OPEN], par[r + R_SET])
         elif kind == ACCUM and par[r + A_EV] >= 0 and par[r + A_WATCH] > 0.5:
             a = int(par[r + A_NODE])
-            p = z[a] if a < ns else par[R0 + a * REC_SIZE + N_P]
+            p = _pressure(par, R0, z, 0, ns, a)
             g[first + int(par[r + A_EV])] = _off_level(p - par[r + A_P0], par[r + A_ON], par[r + A_P0])

@@ -93,6 +93,7 @@ class Chambers:
         Returns
         -------
         list of numpy.ndarray
+            The front's node, the rear's, the rear's chamber and the front's (:func:`._network.record`).
 
         Examples
         --------
@@ -165,6 +166,7 @@ class Valve:
         Returns
         -------
         list of numpy.ndarray
+            One record: its ports, ``K_v``, ``p_tr^2``, the spool's rate and mode, its slots.
 
         Examples
         --------
@@ -265,6 +267,8 @@ class Supply:
         Returns
         -------
         list of numpy.ndarray
+            The supply's node, the tank's, the pump (none for a held supply), the front chamber's feed and
+            the relief valve.
 
         Examples
         --------
@@ -339,6 +343,7 @@ class Accumulator:
         Returns
         -------
         list of numpy.ndarray
+            One record, on ``node``.
 
         Examples
         --------
