@@ -16,6 +16,9 @@ records only (no edit of the drive or of a kernel).
   preset's, at first order in the orifice's ``1/K``.
 - ``continue_orbit`` along the line's coefficient against ``find_orbit`` at the branch's end, and a
   small sweep of the line's volume.
+- ``run_sweep`` over the line's volume (a ``[drive]`` table naming a factory of the drifter with the
+  line, entered by ``register_drive(factory, kind=...)``): each point's orbit against a fresh
+  ``find_orbit``.
 - The coupled blows (the wave and the rod-rock laws) refuse a drive with extra parts.
 """
 
@@ -27,6 +30,7 @@ from scipy.integrate import solve_ivp
 from test_circuit_network import _numpy_field as numpy_return_field  # (the line's equations, with numpy)
 
 from impactbar import BilinearRock, InitialState, RodRock, RodSegment, continue_orbit, find_orbit, simulate
+from impactbar.drives import DRIVES, register_drive
 from impactbar.drives.circuit import Accumulator, CircuitPart
 from impactbar.drives.circuit import _network as NW
 from impactbar.drives.circuit.composition import compose_parts
@@ -243,3 +247,73 @@ def test_the_coupled_blows_refuse_extra_parts(model, drive):
     for law in ("wave", rock):
         with pytest.raises(ValueError, match="extra_parts"):
             simulate(model.with_(impact=law), drive, InitialState.rigid(-0.06, 0.0), 20.0)
+
+
+def drifter_with_line(volume=LINE.volume, coefficient=LINE.coefficient):
+    """The preset drifter with the return line (``LINE``'s gas), its volume and coefficient given: a
+    factory of the table of drives (its arguments a ``[drive]`` table's numbers)."""
+    line = dataclasses.replace(LINE, volume=volume, coefficient=coefficient)
+    return dataclasses.replace(circuit_preset("circuit-drifter").drive(), extra_parts=(line,))
+
+
+@pytest.fixture
+def factory_registered():
+    register_drive(drifter_with_line, kind="drifter-return-line")
+    yield
+    DRIVES.pop("drifter-return-line", None)
+
+
+def test_a_sweep_of_the_lines_volume(factory_registered, model, tmp_path):
+    """A ``[drive]`` table naming the factory, an axis over the line's own parameter
+    ``return_volume`` (the drive's ``with_``, not the factory's argument): each point's stored orbit
+    against a fresh ``find_orbit`` of the drive built here."""
+    pytest.importorskip("xarray")
+    pytest.importorskip("zarr")
+    from impactbar.sweeps import open_sweep, parse_spec, run_sweep
+
+    volumes = (0.1, 1.0)
+    doc = {"task": "orbits", "model": {"s": model.s, "d": model.d, "R": model.R, "n_modes": 0},
+           "drive": {"kind": "drifter-return-line", "coefficient": 1.2},
+           "axes": {"return_volume": {"values": list(volumes)}}, "orbits": {"max_orbits": 2}}
+    spec = parse_spec(doc)
+    assert parse_spec(spec.to_dict()) == spec
+    assert spec.point((1,)) == (model, drifter_with_line(volume=1.0, coefficient=1.2))
+    run_sweep(spec, tmp_path / "line.zarr", executor="threads", n_workers=1, progress=False)
+    ds = open_sweep(tmp_path / "line.zarr")
+    assert ds["return_volume"].values.tolist() == list(volumes) and not ds["failed"].values.any()
+    for i, volume in enumerate(volumes):
+        ref = find_orbit(model, drifter_with_line(volume=volume))
+        assert int(ds["n_orbits"].values[i]) == 1
+        assert ds["impact_velocity"].values[i, 0] == pytest.approx(ref.impact_velocity, rel=1e-8)
+        assert bool(ds["stable"].values[i, 0]) == ref.stable
+        assert bool(ds["admissible"].values[i, 0]) == ref.admissible
+    # (the two volumes give orbits apart: the axis reached the line)
+    assert abs(ds["impact_velocity"].values[0, 0] / ds["impact_velocity"].values[1, 0] - 1) > 1e-7
+
+    # (the factory's argument is not a parameter of the drive: the axis takes the drive's names)
+    with pytest.raises(ValueError, match=r"\[axes\] 'volume' is not a field .*'return_coefficient'"):
+        parse_spec({**doc, "axes": {"volume": {"values": [0.5]}}})
+    with pytest.raises(ValueError, match=r"^\[drive\] the drive 'drifter-return-line' takes keys of "
+                                         r"drifter_with_line: .*'gas'"):
+        parse_spec({**doc, "drive": {**doc["drive"], "gas": 0.5}})
+
+
+def test_register_drive_checks_a_factory():
+    with pytest.raises(ValueError, match="kind must be a non-empty string"):
+        register_drive(drifter_with_line, kind="")
+    with pytest.raises(ValueError, match="cls must be a function returning a Drive"):
+        register_drive(ReturnLine, kind="x")
+    with pytest.raises(ValueError, match="kind 'position-switched' is already the drive PositionSwitched"):
+        register_drive(drifter_with_line, kind="position-switched")
+    def the_line(volume):
+        return dataclasses.replace(LINE, volume=volume)
+
+    register_drive(the_line, kind="not-a-drive")
+    try:
+        from impactbar.sweeps.parts import drive_table
+
+        with pytest.raises(ValueError, match=r"^\[drive\] kind 'not-a-drive': the_line must return a Drive; "
+                                             r"got ReturnLine$"):
+            drive_table({"kind": "not-a-drive", "volume": 0.5})
+    finally:
+        DRIVES.pop("not-a-drive")

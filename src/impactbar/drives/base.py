@@ -561,33 +561,63 @@ class Drive(NamedParameters, ABC):
 
 
 #: The table of drives by :attr:`~Drive.kind`, as :data:`impactbar.loads.LOADS` is of the loads: a
-#: sweep spec's ``[drive] kind`` names one, its other keys the constructor's arguments.
-DRIVES: dict[str, type[Drive]] = {}
+#: sweep spec's ``[drive] kind`` names one, its other keys the constructor's (or the factory's)
+#: arguments. A value is a drive class or a function returning a drive (:func:`register_drive`).
+DRIVES: dict[str, Callable[..., Drive]] = {}
 
 
-def register_drive(cls: type[Drive]) -> type[Drive]:
+def register_drive(cls: type[Drive] | Callable[..., Drive], *, kind: str | None = None):
     """Enter a drive class in the table :data:`DRIVES` by its :attr:`~Drive.kind`, so that a sweep
-    spec's ``[drive] kind`` knows it (usable as a class decorator).
+    spec's ``[drive] kind`` knows it (usable as a class decorator); or, with ``kind`` given, a
+    factory: a function whose keyword arguments are the table's keys and that returns a drive (a drive
+    whose constructor takes objects rather than a table's numbers, such as
+    :class:`~impactbar.drives.circuit.HydraulicCircuitDrive` with its ``extra_parts``). An axis of
+    the sweep then takes any of the built drive's :attr:`~Drive.parameters` (changed by its
+    ``with_``), not only the factory's arguments.
 
     Parameters
     ----------
-    cls : type
-        A subclass of :class:`Drive` with a non-empty ``kind``.
+    cls : type or callable
+        A subclass of :class:`Drive` with a non-empty ``kind`` (``kind`` not given); or a function,
+        not a class, returning a :class:`Drive` (``kind`` given).
+    kind : str, optional
+        The factory's name in :data:`DRIVES`; ``None`` (default): a class, entered by its own
+        ``kind``.
 
     Returns
     -------
-    type
-        The drive class, unchanged (a decorator returns it).
+    type or callable
+        ``cls``, unchanged (a decorator returns it).
 
     Raises
     ------
     ValueError
-        For a class that is not a drive, without a ``kind``, or whose ``kind`` another class holds.
+        For a class that is not a drive, without a ``kind``, or whose ``kind`` another class holds;
+        with ``kind`` given, for a ``kind`` that is not a non-empty string or that another drive or
+        factory holds, or a ``cls`` that is a class or not callable.
 
     Examples
     --------
-    >>> from impactbar.drives import PositionSwitchedDrive, register_drive
+    >>> from impactbar.drives import DRIVES, PositionSwitchedDrive, register_drive
     >>> register_drive(PositionSwitchedDrive) is PositionSwitchedDrive  # already there
     True
+    >>> def valve(x1):  # a factory: the valve at equal forces, its switching gap an argument
+    ...     return PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=x1)
+    >>> register_drive(valve, kind="equal-valve") is valve
+    True
+    >>> DRIVES.pop("equal-valve") is valve
+    True
     """
-    return register(DRIVES, cls, Drive, "kind", "drive")
+    if kind is None:
+        return register(DRIVES, cls, Drive, "kind", "drive")
+    if not isinstance(kind, str) or not kind:
+        raise ValueError(f"kind must be a non-empty string (the factory's name in DRIVES); got {kind!r}")
+    if isinstance(cls, type) or not callable(cls):
+        raise ValueError(f"cls must be a function returning a Drive where kind is given (a drive class "
+                         f"registers by its own kind); got {cls!r}")
+    held = DRIVES.get(kind)
+    if held is not None and held is not cls:
+        raise ValueError(f"kind {kind!r} is already the drive {getattr(held, '__name__', repr(held))}; "
+                         "choose another kind")
+    DRIVES[kind] = cls
+    return cls

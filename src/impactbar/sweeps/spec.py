@@ -158,9 +158,10 @@ class SweepSpec(ChunkedGrid):
         its parameters are then axes too. Not with ``rock``.
     drive : dict, optional
         A registered drive in place of ``load`` (:func:`impactbar.drives.register_drive`):
-        ``kind``, its key in :data:`impactbar.drives.DRIVES`, and its constructor's arguments; its
-        parameters are then axes. The ``orbits`` task only; its orbits are
-        :func:`impactbar.periodic_orbits`'s under the drive, ``max_orbits`` 8 unless given.
+        ``kind``, its key in :data:`impactbar.drives.DRIVES`, and its constructor's (or its
+        registered factory's) arguments; the built drive's parameters are then axes. The ``orbits``
+        task only; its orbits are :func:`impactbar.periodic_orbits`'s under the drive,
+        ``max_orbits`` 8 unless given.
 
     Examples
     --------
