@@ -142,20 +142,19 @@ def chan_closed_sq(c, t, CH_T, pool, B, N, exact):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def piece_momentum(ws, c, t):
+def piece_momentum(CH_T, pool, WB, WN, c, t):
     """``int f`` over the wave now in channel ``c``'s segment."""
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
-    return _chan_sums(c, t, CH_T, (PF, PI, TK, TC, CNT, CHI, lam, BIN), WB[B_AUX], WN[B_AUX], False)[0]
+    return _chan_sums(c, t, CH_T, pool, WB[B_AUX], WN[B_AUX], False)[0]
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _momentum(ws, t, first, last):
+def _momentum(CH_T, pool, WB, WN, t, first, last):
     """The momentum of segments ``first`` to ``last`` (1-based) at ``t``: ``int (f - g)`` over
     their waves (:func:`piece_momentum`)."""
     P = 0.0
     for i in range(first, last + 1):
-        P += piece_momentum(ws, 2 * (i - 1), t) - piece_momentum(ws, 2 * i - 1, t)
+        P += (piece_momentum(CH_T, pool, WB, WN, 2 * (i - 1), t)
+              - piece_momentum(CH_T, pool, WB, WN, 2 * i - 1, t))
     return P
 
 
@@ -225,6 +224,7 @@ def may_end(ws, t):
     two in step."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
     J = SZ.size
     n_p = int(PR[PR_NP])
     kin, pot, pot_feed = _bit_rock_energy(PR, BS, BI)
@@ -236,27 +236,26 @@ def may_end(ws, t):
     vp = 0.0
     Pr = 1.0  # (> 0: the rod cannot fly free)
     if NSI[n_p, 3] != 1:
-        Pq = _momentum(ws, t, 1, n_p)
+        Pq = _momentum(CH_T, pool, WB, WN, t, 1, n_p)
         gone = Pq <= 0.0
         vp = Pq / PR[PR_MP]
         if gone and f == 0.0 and br == FREE and BS[BS_P] < BS[BS_PPERM]:
-            Pr = _momentum(ws, t, n_p + 1, J) + m * w
+            Pr = _momentum(CH_T, pool, WB, WN, t, n_p + 1, J) + m * w
     xs = NSF[n_p, 1]
     avail = PR[PR_E0] + f * xs + f * f * (PR[PR_CROD] * 0.5 + 0.5 / ku)
-    if not _could_end(psi, ws, avail, gone, vp, Pr):
+    if not _could_end(psi, PR, BS, BI, NSF, avail, gone, vp, Pr):
         return False
-    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
     for exact in (False, True):  # the cheap bound of the pieces' energies first
         er = 0.0
         for c in range(2 * n_p, 2 * J):
             er += chan_closed_sq(c, t, CH_T, pool, WB[B_AUX], WN[B_AUX], exact) / SZ[c // 2]
-            if not _could_end(psi + er, ws, avail, gone, vp, Pr):
+            if not _could_end(psi + er, PR, BS, BI, NSF, avail, gone, vp, Pr):
                 return False
     return True
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _could_end(psi, ws, avail, gone, vp, Pr):
+def _could_end(psi, PR, BS, BI, NSF, avail, gone, vp, Pr):
     """Whether :func:`certify` could end the blow were ``Psi`` at least ``psi`` (less 1e-9 of it),
     its tests with that bound: ``SPENT`` needs ``Psi`` below twice the spent fraction of ``avail``;
     ``SEPARATED``, ``LIFTED`` and ``MAY_YIELD`` the piston out of contact and not moving on
@@ -266,8 +265,6 @@ def _could_end(psi, ws, avail, gone, vp, Pr):
     of the piston (``vp <= Pr / M_r``), or the piston's mean velocity ``vp`` at most
     ``-sqrt(2 Psi / M_r)``, and its struck end behind the shank's lowest reach. Non-increasing in
     ``psi``."""
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
     if not math.isfinite(psi):
         return True  # (overflowed pieces: certify's pass says so)
     psi = max(psi * (1.0 - 1e-9), 0.0)
@@ -308,13 +305,14 @@ def certify(ws, t):
     stays above ``-sqrt(2 Psi / M_r)``, or is constant once the rod flies free of the rock."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
     n_p = int(PR[PR_NP])
     # the energies cost a pass over every piece in flight: only when the piston may have gone, or
     # every 16 windows for the spent energy
     if CI[CI_WIN] % 16 != 0:
         if NSI[n_p, 3] == 1:
             return GOING
-        if _momentum(ws, t, 1, n_p) > 0.0:
+        if _momentum(CH_T, pool, WB, WN, t, 1, n_p) > 0.0:
             return GOING
     if not may_end(ws, t):  # no end possible whatever the energies in flight: no energy pass
         return GOING

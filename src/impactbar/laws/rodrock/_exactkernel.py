@@ -195,25 +195,18 @@ def _log_recontact(RD, t, f, g, gd, ZL, ZR):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _emit(ws, c, a, blk, valid, flag, ref):
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
-    return emit(c, a, WB[blk], WN[blk], valid, flag, ref, (PF, PI, TK, TC, CNT, CHI, lam, BIN), WB[B_EMIT],
-                WN[B_EMIT], CH_TOL[c], PR[PR_LB])
+def _emit(pool, CH_TOL, WB, WN, Lb, c, a, blk, valid, flag, ref):
+    """Emit block ``blk`` into channel ``c`` from ``a`` (:func:`emit`, its scratch the block
+    ``B_EMIT``, pruned on the time scale ``Lb``): whether it found room."""
+    return emit(c, a, WB[blk], WN[blk], valid, flag, ref, pool, WB[B_EMIT], WN[B_EMIT], CH_TOL[c], Lb)
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _load(ws, blk, c, piece, a):
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
+def _load(pool, CH_T, WB, WN, blk, c, piece, a):
+    """Load piece ``piece`` of channel ``c``, shifted to ``a``, into block ``blk``
+    (:func:`load_input`): its validity."""
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     return load_input(WB[blk], WN[blk], c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN)
-
-
-@numba.njit(cache=CACHE, nogil=True)
-def _advance(ws, c, a):
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
-    return advance(c, a, CHI, CH_T, PF, PI)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -221,23 +214,25 @@ def node_end(ws, t, t1):
     """The piston's far end: ``N = p(t)`` (the drive, or 0): ``f_out = p - g_in``."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+    Lb = PR[PR_LB]
     J = SZ.size
     driven = PR[PR_DRIVEN] != 0.0
     a = t
     while True:
-        cg, nb = _advance(ws, CH_FAR_IN, a)
+        cg, nb = advance(CH_FAR_IN, a, CHI, CH_T, PF, PI)
         cd = -1
         nbd = INF
         if driven:
-            cd, nbd = _advance(ws, 2 * J, a)
+            cd, nbd = advance(2 * J, a, CHI, CH_T, PF, PI)
         if cg != NSI[0, 0] or cd != NSI[0, 2]:
-            valid = _load(ws, B_IN2, CH_FAR_IN, cg, a)
+            valid = _load(pool, CH_T, WB, WN, B_IN2, CH_FAR_IN, cg, a)
             blk_clear(WB[B_OUT], WN[B_OUT])
             blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
             if driven:
-                valid = min(valid, _load(ws, B_IN, 2 * J, cd, a))
+                valid = min(valid, _load(pool, CH_T, WB, WN, B_IN, 2 * J, cd, a))
                 blk_axpy(WB[B_OUT], WN[B_OUT], 1.0, WB[B_IN], WN[B_IN])
-            if not _emit(ws, CH_FAR_OUT, a, B_OUT, valid, 0, 0.0):
+            if not _emit(pool, CH_TOL, WB, WN, Lb, CH_FAR_OUT, a, B_OUT, valid, 0, 0.0):
                 return False
             NSI[0, 0] = cg
             NSI[0, 2] = cd
@@ -245,8 +240,8 @@ def node_end(ws, t, t1):
         if driven and PR[PR_NODW] == 0.0:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end
             L = min(b, t1) - a
             if L > 0.0:
-                _load(ws, B_IN, 2 * J, cd, a)
-                _load(ws, B_IN2, CH_FAR_IN, cg, a)
+                _load(pool, CH_T, WB, WN, B_IN, 2 * J, cd, a)
+                _load(pool, CH_T, WB, WN, B_IN2, CH_FAR_IN, cg, a)
                 pp = blk_integral_sq(WB[B_IN], WN[B_IN], lam, 0.0, L)
                 blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_IN], WN[B_IN], 1.0, WB[B_IN2], WN[B_IN2])
                 sp = blk_integral_sq(WB[B_OUT2], WN[B_OUT2], lam, 0.0, L)
@@ -264,6 +259,8 @@ def node_junction(ws, j, t, t1):
     ``f_out = N - g_in``, ``g_out = N - f_in``."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+    Lb = PR[PR_LB]
     J = SZ.size
     fch = 2 * (j - 1)
     gch = 2 * j + 1
@@ -273,21 +270,22 @@ def node_junction(ws, j, t, t1):
     record = PR[PR_RECORD] != 0.0
     a = t
     while True:
-        cf, nbf = _advance(ws, fch, a)
-        cg, nbg = _advance(ws, gch, a)
+        cf, nbf = advance(fch, a, CHI, CH_T, PF, PI)
+        cg, nbg = advance(gch, a, CHI, CH_T, PF, PI)
         if cf != NSI[j, 0] or cg != NSI[j, 1]:
-            valid = min(_load(ws, B_IN, fch, cf, a), _load(ws, B_IN2, gch, cg, a))
+            valid = min(_load(pool, CH_T, WB, WN, B_IN, fch, cf, a),
+                        _load(pool, CH_T, WB, WN, B_IN2, gch, cg, a))
             blk_set_comb(WB[B_OUT], WN[B_OUT], 2.0 * ZR / s, WB[B_IN], WN[B_IN], (ZL - ZR) / s, WB[B_IN2],
                          WN[B_IN2])
             blk_set_comb(WB[B_OUT2], WN[B_OUT2], (ZR - ZL) / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
                          WN[B_IN2])
             if record:
                 blk_set_comb(WB[B_N], WN[B_N], 1.0, WB[B_IN], WN[B_IN], 1.0, WB[B_OUT2], WN[B_OUT2])
-                if not _emit(ws, 2 * J + 1 + j, a, B_N, valid, 0, 0.0):
+                if not _emit(pool, CH_TOL, WB, WN, Lb, 2 * J + 1 + j, a, B_N, valid, 0, 0.0):
                     return False
-            if not _emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0):
+            if not _emit(pool, CH_TOL, WB, WN, Lb, 2 * j, a, B_OUT, valid, 0, 0.0):
                 return False
-            if not _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0):
+            if not _emit(pool, CH_TOL, WB, WN, Lb, 2 * j - 1, a, B_OUT2, valid, 0, 0.0):
                 return False
             NSI[j, 0] = cf
             NSI[j, 1] = cg
@@ -298,11 +296,9 @@ def node_junction(ws, j, t, t1):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _crossing(ws, blk, L, a):
+def _crossing(WB, WN, lam, BIN, STK, CI, blk, L, a):
     """Where block ``blk`` first turns negative in ``[0, L]`` (:func:`first_negative`, the clock at
     ``a``; -1: nowhere), a search given up (-2) counted in ``CI[CI_GIVEUP]`` and read as none."""
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
     SCR = (WB[B_SCR1], WN[B_SCR1], WB[B_SCR2], WN[B_SCR2], WB[B_SCR3], WN[B_SCR3])
     tc = first_negative(WB[blk], WN[blk], lam, BIN, L, STK, SCR, a)
     if tc == -2.0:
@@ -312,11 +308,11 @@ def _crossing(ws, blk, L, a):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _contact_switch(ws, blk, L, a, flips):
+def _contact_switch(WB, WN, lam, BIN, STK, CI, blk, L, a, flips):
     """The contact's next switch: :func:`_crossing` of block ``blk`` (the weld's force, or the gap),
     at once (0) where below the clock's resolution (else no progress), none (-1) where it would be
     the third switch at once in a row (a chatter)."""
-    tc = _crossing(ws, blk, L, a)
+    tc = _crossing(WB, WN, lam, BIN, STK, CI, blk, L, a)
     if tc > 0.0 and a + tc == a:  # below the clock's resolution: at once (else no progress)
         tc = 0.0
     if tc == 0.0 and flips >= 2:
@@ -336,14 +332,12 @@ def contact_node(PR, SZ):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def contact_emit(ws, j, a, valid, welded, record, valid_n):
+def contact_emit(pool, CH_TOL, WB, WN, Lb, j, hch, a, valid, welded, record, valid_n):
     """The waves the piston-shank node ``j`` sends from ``a`` on, from those arriving (``B_IN`` from
     the piston, ``B_IN2`` from the shank): welded, ``N - g_in`` into the shank and ``N - f_in`` into
     the piston with the force ``N`` in ``B_N``; apart, ``-g_in`` and ``-f_in``. With ``record`` the
     force ``B_N`` first into the node's history channel (valid to ``valid_n``). Returns whether
     every emission found room (:func:`_emit`)."""
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
     if welded:
         blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN2], WN[B_IN2])
         blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_N], WN[B_N], -1.0, WB[B_IN], WN[B_IN])
@@ -352,18 +346,17 @@ def contact_emit(ws, j, a, valid, welded, record, valid_n):
         blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
         blk_clear(WB[B_OUT2], WN[B_OUT2])
         blk_axpy(WB[B_OUT2], WN[B_OUT2], -1.0, WB[B_IN], WN[B_IN])
-    if record and not _emit(ws, 2 * SZ.size + 1 + j, a, B_N, valid_n, 0, 0.0):
+    if record and not _emit(pool, CH_TOL, WB, WN, Lb, hch, a, B_N, valid_n, 0, 0.0):
         return False
-    return _emit(ws, 2 * j, a, B_OUT, valid, 0, 0.0) and _emit(ws, 2 * j - 1, a, B_OUT2, valid, 0, 0.0)
+    return (_emit(pool, CH_TOL, WB, WN, Lb, 2 * j, a, B_OUT, valid, 0, 0.0)
+            and _emit(pool, CH_TOL, WB, WN, Lb, 2 * j - 1, a, B_OUT2, valid, 0, 0.0))
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _contact_flip(ws, j, a, welded):
+def _contact_flip(NSF, NSI, CI, CT, j, a, welded):
     """The piston-shank node ``j`` switching at ``a``: welded again (a re-contact, counted in
     ``CI[CI_RECON]``) or apart (a separation, counted in ``CI[CI_SEP]``, its time in
     ``CT[CT_TSEP]``), the gap set to 0."""
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
     NSI[j, 3] = 1 if welded else 0
     NSF[j, 0] = 0.0
     if welded:
@@ -380,42 +373,46 @@ def node_contact(ws, t, t1):
     resumes where the gap closes."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+    Lb = PR[PR_LB]
     j, fch, gch, ZL, ZR, s = contact_node(PR, SZ)
+    hch = 2 * SZ.size + 1 + j  # the node's force history
     record = PR[PR_RECORD] != 0.0
     a = t
     dirty = False
     flips = 0
     while True:
-        cf, nbf = _advance(ws, fch, a)
-        cg, nbg = _advance(ws, gch, a)
+        cf, nbf = advance(fch, a, CHI, CH_T, PF, PI)
+        cg, nbg = advance(gch, a, CHI, CH_T, PF, PI)
         if cf != NSI[j, 0] or cg != NSI[j, 1]:
             dirty = True
             flips = 0
         b = min(nbf, nbg, t1)
-        valid = min(_load(ws, B_IN, fch, cf, a), _load(ws, B_IN2, gch, cg, a))
+        valid = min(_load(pool, CH_T, WB, WN, B_IN, fch, cf, a),
+                    _load(pool, CH_T, WB, WN, B_IN2, gch, cg, a))
         L = b - a
         welded = NSI[j, 3] == 1
         if welded:  # in contact
             blk_set_comb(WB[B_N], WN[B_N], 2.0 * ZR / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
                          WN[B_IN2])
-            ts = _contact_switch(ws, B_N, L, a, flips)
+            ts = _contact_switch(WB, WN, lam, BIN, STK, CI, B_N, L, a, flips)
             if ts == 0.0:
-                _contact_flip(ws, j, a, False)
+                _contact_flip(NSF, NSI, CI, CT, j, a, False)
                 dirty = True
                 flips += 1
                 if RD.shape[0] > 1:  # the waves arriving just before (the pieces before a, if new)
                     fm = blk_value(WB[B_IN], WN[B_IN], lam, 0.0)
                     gm = blk_value(WB[B_IN2], WN[B_IN2], lam, 0.0)
                     if cf != NSI[j, 0] and NSI[j, 0] >= 0:
-                        _load(ws, B_AUX, fch, NSI[j, 0], a)
+                        _load(pool, CH_T, WB, WN, B_AUX, fch, NSI[j, 0], a)
                         fm = blk_value(WB[B_AUX], WN[B_AUX], lam, 0.0)
                     if cg != NSI[j, 1] and NSI[j, 1] >= 0:
-                        _load(ws, B_AUX, gch, NSI[j, 1], a)
+                        _load(pool, CH_T, WB, WN, B_AUX, gch, NSI[j, 1], a)
                         gm = blk_value(WB[B_AUX], WN[B_AUX], lam, 0.0)
                     _log(RD, a, LOG_SEP, fm, gm, 0.0)
                 continue
             if dirty:
-                if not contact_emit(ws, j, a, valid, True, record, valid):
+                if not contact_emit(pool, CH_TOL, WB, WN, Lb, j, hch, a, valid, True, record, valid):
                     return False
                 dirty = False
             te = L if ts < 0.0 else ts
@@ -430,9 +427,9 @@ def node_contact(ws, t, t1):
                                 NSF[j, 0] + 0.0j, L)
             if st != 0:
                 CI[CI_DEG] += 1
-            ts = _contact_switch(ws, B_ZERO, L, a, flips)
+            ts = _contact_switch(WB, WN, lam, BIN, STK, CI, B_ZERO, L, a, flips)
             if ts == 0.0:
-                _contact_flip(ws, j, a, True)
+                _contact_flip(NSF, NSI, CI, CT, j, a, True)
                 dirty = True
                 flips += 1
                 if RD.shape[0] > 1:
@@ -443,7 +440,7 @@ def node_contact(ws, t, t1):
                 continue
             if dirty:
                 blk_clear(WB[B_N], WN[B_N])  # (apart: no force; the outputs do not read it)
-                if not contact_emit(ws, j, a, valid, False, record, INF):
+                if not contact_emit(pool, CH_TOL, WB, WN, Lb, j, hch, a, valid, False, record, INF):
                     return False
                 dirty = False
             te = L if ts < 0.0 else ts
@@ -457,7 +454,7 @@ def node_contact(ws, t, t1):
                 else:
                     _log_recontact(RD, a + ts, fv, gv, blk_value(WB[B_RATE], WN[B_RATE], lam, ts), ZL, ZR)
             a += ts
-            _contact_flip(ws, j, a, not welded)
+            _contact_flip(NSF, NSI, CI, CT, j, a, not welded)
             dirty = True
             flips = 1
             NSI[j, 0] = cf
@@ -473,13 +470,11 @@ def node_contact(ws, t, t1):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def bit_solve(ws, br, x0, w0, L):
+def bit_solve(WB, WN, lam, PR, RT, RC, CI, br, x0, w0, L):
     """The bit's motion on branch ``br`` over ``[0, L]`` under the forcing ``E`` (block 6), from
     ``(x0, w0)``: ``x`` in block 7 and ``x'`` in block 8 (``Z x' + b x = E`` for a massless bit,
     ``m x'' + Z x' + b x = E`` else, ``b`` the branch's stiffness); returns whether a series was cut
     (the pieces then hold only on ``[0, L]``)."""
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
     m = PR[PR_MASS]
     if m == 0.0:
         blk_clear(WB[B_RATE], WN[B_RATE])
@@ -502,9 +497,9 @@ def bit_solve(ws, br, x0, w0, L):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _episode_end(ws, t, p):
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
+def _episode_end(EP, BS, BI, PR, CNT, CT, t, p):
+    """The loading episode ending at ``t`` at the penetration ``p`` into ``EP`` (``CNT[CNT_FULL]``
+    set where it has no room), counted in ``BI[BI_NEP]``."""
     n = BI[BI_NEP]
     if n < EP.shape[0]:
         EP[n, 0] = BS[BS_EPT]
@@ -520,15 +515,13 @@ def _episode_end(ws, t, p):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def bit_input(ws, a, t1):
+def bit_input(pool, CH_T, WB, WN, PR, NSI, J, a, t1):
     """The wave ``F`` arriving at the bit from ``a`` (block 0) and its forcing ``E = 2 F + f`` (block
     6): the end of that piece (at most ``t1``) and its validity."""
-    (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
-     RT, RC, RD, EP, CI, CT) = ws
-    J = SZ.size
+    PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     fch = 2 * (J - 1)
-    cf, nb = _advance(ws, fch, a)
-    vf = _load(ws, B_IN, fch, cf, a)
+    cf, nb = advance(fch, a, CHI, CH_T, PF, PI)
+    vf = _load(pool, CH_T, WB, WN, B_IN, fch, cf, a)
     NSI[J, 0] = cf
     blk_clear(WB[B_E], WN[B_E])
     blk_axpy(WB[B_E], WN[B_E], 2.0, WB[B_IN], WN[B_IN])
@@ -542,6 +535,8 @@ def node_bit(ws, t, t1):
     the reflected wave ``G = F - Z p'`` (absorbed on a semi-infinite rod)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+    Lb = PR[PR_LB]
     J = SZ.size
     goch = 2 * J - 1
     hch = 3 * J + 1
@@ -552,7 +547,7 @@ def node_bit(ws, t, t1):
     record = PR[PR_RECORD] != 0.0
     a = t
     while True:
-        b, vf = bit_input(ws, a, t1)
+        b, vf = bit_input(pool, CH_T, WB, WN, PR, NSI, J, a, t1)
         stall = 0  # switches at one instant (a chatter of the branches: given up past 64)
         switches = 0  # switches in this arrival interval: a bit ringing on a stiff rock bounces
         # thousands of times (2 switches a bounce; the bound only keeps a call's cost finite)
@@ -562,7 +557,7 @@ def node_bit(ws, t, t1):
             x0 = BS[BS_X]
             w0 = BS[BS_W]
             L = b - a
-            series = bit_solve(ws, br, x0, w0, L)
+            series = bit_solve(WB, WN, lam, PR, RT, RC, CI, br, x0, w0, L)
             valid = min(vf, a + L) if series else vf
             ref = 0.0 if br == LOAD else BS[BS_PPERM]
             # the first switch
@@ -578,7 +573,7 @@ def node_bit(ws, t, t1):
                 blk_clear(WB[B_ZERO], WN[B_ZERO])
                 blk_axpy(WB[B_ZERO], WN[B_ZERO], 1.0, WB[B_XD], WN[B_XD])
                 blk_add_const(WB[B_ZERO], WN[B_ZERO], tolv)
-                te = _crossing(ws, B_ZERO, L, a)
+                te = _crossing(WB, WN, lam, BIN, STK, CI, B_ZERO, L, a)
             elif br == ELASTIC:
                 blk_clear(WB[B_ZERO], WN[B_ZERO])
                 blk_axpy(WB[B_ZERO], WN[B_ZERO], -1.0, WB[B_X], WN[B_X])
@@ -587,8 +582,8 @@ def node_bit(ws, t, t1):
                     # zero there, has rounding-level signs on the two branches (they chattered)
                     xtop += 4096.0 * EPS * abs(xtop)
                 blk_add_const(WB[B_ZERO], WN[B_ZERO], xtop)
-                t1a = _crossing(ws, B_ZERO, L, a)
-                t2a = _crossing(ws, B_X, t1a if t1a >= 0.0 else L, a)
+                t1a = _crossing(WB, WN, lam, BIN, STK, CI, B_ZERO, L, a)
+                t2a = _crossing(WB, WN, lam, BIN, STK, CI, B_X, t1a if t1a >= 0.0 else L, a)
                 nxt = -1
                 if t2a >= 0.0 and (t1a < 0.0 or t2a <= t1a):
                     te = t2a
@@ -599,7 +594,7 @@ def node_bit(ws, t, t1):
             else:
                 blk_clear(WB[B_ZERO], WN[B_ZERO])
                 blk_axpy(WB[B_ZERO], WN[B_ZERO], -1.0, WB[B_X], WN[B_X])
-                te = _crossing(ws, B_ZERO, L, a)
+                te = _crossing(WB, WN, lam, BIN, STK, CI, B_ZERO, L, a)
             # the reflected wave and the history
             if semi:
                 blk_set_comb(WB[B_OUT2], WN[B_OUT2], 1.0, WB[B_IN], WN[B_IN], -Z, WB[B_XD], WN[B_XD])
@@ -608,12 +603,12 @@ def node_bit(ws, t, t1):
             else:
                 blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_IN], WN[B_IN], -Z, WB[B_XD], WN[B_XD])
             if te != 0.0:
-                if not _emit(ws, goch, a, B_OUT, valid, 0, 0.0):
+                if not _emit(pool, CH_TOL, WB, WN, Lb, goch, a, B_OUT, valid, 0, 0.0):
                     return False
                 if record:
                     blk_clear(WB[B_N], WN[B_N])
                     blk_axpy(WB[B_N], WN[B_N], 1.0, WB[B_X], WN[B_X])
-                    if not _emit(ws, hch, a, B_N, valid, br, ref):
+                    if not _emit(pool, CH_TOL, WB, WN, Lb, hch, a, B_N, valid, br, ref):
                         return False
             tt = L if te < 0.0 else te
             x1, w1, _ = blk_eval(WB[B_X], WN[B_X], lam, tt)
@@ -647,7 +642,7 @@ def node_bit(ws, t, t1):
             pm = BS[BS_W]  # (a massless bit's: p' at the end of the last piece, logged)
             if br == LOAD:  # unloading from p_max (an episode that did not advance is none)
                 if x1 > BS[BS_EPP]:
-                    _episode_end(ws, a, x1)
+                    _episode_end(EP, BS, BI, PR, CNT, CT, a, x1)
                 BI[BI_BRANCH] = ELASTIC
                 BS[BS_X] = BS[BS_RMAX] / ku
                 BS[BS_W] = 0.0  # the turning point (w1 is zero to rounding)

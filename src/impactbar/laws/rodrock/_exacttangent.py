@@ -50,7 +50,6 @@ from ...dynamics.kernels import CACHE
 from ._exactkernel import (
     LOG_BIT,
     LOG_SEP,
-    _advance,
     _emit,
     _load,
     bit_input,
@@ -66,6 +65,7 @@ from ._exactpieces import (
     FREE,
     INF,
     LOAD,
+    advance,
     blk_clear,
     blk_eval,
     blk_integral,
@@ -95,6 +95,7 @@ from ._records import (  # the records' slots
     CT_T,
     PR_K,
     PR_KU,
+    PR_LB,
     PR_MASS,
     PR_NP,
     PR_SEMI,
@@ -229,13 +230,16 @@ def t_node_contact(ws, tg, t, t1):
     gap and the shank's position carried, a re-contact's impulses emitted (the module's text)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+    Lb = PR[PR_LB]
     TCUR = tg[5]
     j, fch, gch, ZL, ZR, s = contact_node(PR, SZ)
+    hch = 2 * SZ.size + 1 + j  # the node's force history (not recorded here)
     a = t
     dirty = False
     while True:
-        cf, nbf = _advance(ws, fch, a)
-        cg, nbg = _advance(ws, gch, a)
+        cf, nbf = advance(fch, a, CHI, CH_T, PF, PI)
+        cg, nbg = advance(gch, a, CHI, CH_T, PF, PI)
         if cf != NSI[j, 0] or cg != NSI[j, 1]:
             dirty = True
         b = min(nbf, nbg, t1)
@@ -244,13 +248,13 @@ def t_node_contact(ws, tg, t, t1):
         ts = RD[k, 0].real if k >= 0 else INF
         ti = min(imp_arrival(tg, fch, CH_T[fch]), imp_arrival(tg, gch, CH_T[gch]))
         e = max(min(b, ts, ti), a)
-        valid = min(_load(ws, B_IN, fch, cf, a), _load(ws, B_IN2, gch, cg, a))
+        valid = min(_load(pool, CH_T, WB, WN, B_IN, fch, cf, a), _load(pool, CH_T, WB, WN, B_IN2, gch, cg, a))
         L = e - a
         if NSI[j, 3] == 1:
             blk_set_comb(WB[B_N], WN[B_N], 2.0 * ZR / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
                          WN[B_IN2])
             if dirty:
-                if not contact_emit(ws, j, a, valid, True, False, 0.0):
+                if not contact_emit(pool, CH_TOL, WB, WN, Lb, j, hch, a, valid, True, False, 0.0):
                     return False
                 dirty = False
             if L > 0.0:
@@ -259,7 +263,7 @@ def t_node_contact(ws, tg, t, t1):
                 NSF[j, 1] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, L)
         else:
             if dirty:
-                if not contact_emit(ws, j, a, valid, False, False, 0.0):
+                if not contact_emit(pool, CH_TOL, WB, WN, Lb, j, hch, a, valid, False, False, 0.0):
                     return False
                 dirty = False
             if L > 0.0:
@@ -338,6 +342,8 @@ def t_node_bit(ws, tg, t, t1):
     ``p_max`` and ``p_perm`` carried, arriving impulses taken (the module's text)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
+    Lb = PR[PR_LB]
     TCUR = tg[5]
     J = SZ.size
     fch = 2 * (J - 1)
@@ -349,7 +355,7 @@ def t_node_bit(ws, tg, t, t1):
     semi = PR[PR_SEMI] != 0.0
     a = t
     while True:
-        b, vf = bit_input(ws, a, t1)  # (no feed in the tangent: E = 2 F)
+        b, vf = bit_input(pool, CH_T, WB, WN, PR, NSI, J, a, t1)  # (no feed in the tangent: E = 2 F)
         while True:
             br = BI[BI_BRANCH]
             ev = _next_event(RD, TCUR[TCUR_BIT], True)
@@ -359,13 +365,13 @@ def t_node_bit(ws, tg, t, t1):
             e = max(min(b, ts, ti), a)
             L = e - a
             if L > 0.0:
-                series = bit_solve(ws, br, BS[BS_X], BS[BS_W], L)
+                series = bit_solve(WB, WN, lam, PR, RT, RC, CI, br, BS[BS_X], BS[BS_W], L)
                 valid = min(vf, a + L) if series else vf
                 if semi:
                     blk_clear(WB[B_OUT], WN[B_OUT])
                 else:
                     blk_set_comb(WB[B_OUT], WN[B_OUT], 1.0, WB[B_IN], WN[B_IN], -Z, WB[B_XD], WN[B_XD])
-                if not _emit(ws, goch, a, B_OUT, valid, 0, 0.0):
+                if not _emit(pool, CH_TOL, WB, WN, Lb, goch, a, B_OUT, valid, 0, 0.0):
                     return False
                 x1, w1, _ = blk_eval(WB[B_X], WN[B_X], lam, L)
                 blk_shift(WB[B_IN], WN[B_IN], L, lam, BIN)
