@@ -1,5 +1,5 @@
 """The parameter protocol (:mod:`impactbar.parameters`): a load with a parameter declared in this file
-alone is listed, continued and swept with no line in continuation/, sweeps/ or cli/; a drive's and an
+alone is listed, its orbit found and simulated, continued and swept with no line in continuation/, sweeps/ or cli/; a drive's and an
 impact law's parameters go through the same functions; refusals name the parameter."""
 
 import math
@@ -63,6 +63,25 @@ def test_the_new_parameter_is_listed_with_its_declaration():
     model, load = with_parameter(MODEL, LOAD, "ratio", 2.0)
     assert model is MODEL and type(load) is RatioCosineLoad
     assert load.ratio == 2.0 and load.pk == pytest.approx(0.6)
+
+
+def test_the_new_load_is_simulated_and_its_orbit_found():
+    """``find_orbit`` under the new load lands on an orbit :func:`impactbar.periodic_orbits` lists;
+    ``simulate`` from it repeats it, and runs as under the cosine load of the same numbers, to the
+    bit."""
+    o = ib.find_orbit(MODEL, LOAD)
+    ref = _nearest(ib.periodic_orbits(MODEL, LOAD), o.phase)
+    assert o.phase == pytest.approx(ref.phase, abs=1e-8)
+    assert o.impact_velocity == pytest.approx(ref.impact_velocity, abs=1e-8)
+    t0 = float(o.impact_times[0])
+    start = ib.InitialState(*o.modal_state_after_impact)
+    run = ib.simulate(MODEL, LOAD, start, t0 + 3.5 * o.period, t0=t0)
+    assert run.n_impacts == 3
+    np.testing.assert_allclose(run.impact_times, t0 + o.period * np.arange(1, 4), rtol=0, atol=1e-7)
+    np.testing.assert_allclose(run.impact_velocities, o.impact_velocity, rtol=1e-7)
+    plain = ib.simulate(MODEL, CosineLoad(LOAD.p0, LOAD.pk, LOAD.k), start, t0 + 3.5 * o.period, t0=t0)
+    assert np.array_equal(plain.impact_times, run.impact_times)
+    assert np.array_equal(plain.impact_velocities, run.impact_velocities)
 
 
 def test_the_new_parameter_is_continued():
