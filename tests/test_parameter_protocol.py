@@ -1,6 +1,7 @@
 """The parameter protocol (:mod:`impactbar.parameters`): a load with a parameter declared in this file
-alone is listed, its orbit found and simulated, continued and swept with no line in continuation/, sweeps/ or cli/; a drive's and an
-impact law's parameters go through the same functions; refusals name the parameter."""
+alone is listed, its orbit found and simulated, continued and swept with no line in continuation/,
+sweeps/ or cli/; a drive's and an impact law's parameters go through the same functions; refusals
+name the parameter."""
 
 import math
 
