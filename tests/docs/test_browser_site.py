@@ -1,5 +1,5 @@
 """Every page of the built documentation, as a reader's browser shows it (issue 43): each page is
-opened in headless Chromium, offline, with enough virtual time for MathJax to typeset it, and the
+opened in headless Chromium (one browser, a tab per page), offline, until MathJax has typeset it, and the
 rendered page must show
 
 - no MathJax error (a "Math input error", an ``merror`` node) and every formula typeset;
@@ -17,11 +17,13 @@ Runs on a built site (``docs/_build/html``, where .ci/run builds it, or the fold
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import shutil
 import subprocess
 import tempfile
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from html.parser import HTMLParser
 from pathlib import Path
@@ -35,7 +37,7 @@ CHROMIUM = os.environ.get("IMPACTBAR_CHROMIUM") or next(
     (p for p in map(shutil.which, ("chromium", "chromium-browser", "google-chrome")) if p), None)
 
 pytestmark = [
-    pytest.mark.slow,  # a browser per page: minutes (.ci/run runs it with --runslow)
+    pytest.mark.slow,  # every page rendered: minutes (.ci/run runs it with --runslow)
     pytest.mark.timeout(3600),  # the rendering of every page is the first test's fixture
     pytest.mark.skipif(not (SITE / "index.html").is_file(), reason=f"no built documentation at {SITE}"),
     pytest.mark.skipif(CHROMIUM is None, reason="no chromium (Debian: apt-get install chromium)"),
@@ -44,7 +46,8 @@ pytestmark = [
 #: a headless browser that reaches nothing but the files it is given
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--disable-extensions",
-         "--virtual-time-budget=30000", "--dump-dom")
+         "--disable-background-timer-throttling", "--disable-renderer-backgrounding",
+         "--disable-backgrounding-occluded-windows")
 #: control characters: everything below 0x20 but TAB, LF and CR in HTML, everything but LF in the
 #: Markdown and Python sources (a TAB there is an eaten ``\t``: ``\to``, ``\tau``, ``\theta``)
 CONTROL_HTML = re.compile(r"[\x00-\x08\x0b\x0c\x0e-\x1f\x7f]")
@@ -125,21 +128,122 @@ class _Page(HTMLParser):
             self.text.append(data)
 
 
-def _render(page: Path) -> str:
-    """The DOM of ``page`` once its scripts (MathJax) have run, from a fresh headless Chromium."""
-    with tempfile.TemporaryDirectory(prefix="impactbar-chromium-") as profile:
-        out = subprocess.run([CHROMIUM, *FLAGS, f"--user-data-dir={profile}", page.as_uri()],
-                             capture_output=True, text=True, timeout=180, check=False)
-    assert out.stdout.strip(), f"chromium rendered nothing for {page}: {out.stderr[-2000:]}"
-    return out.stdout
+#: run in a page once it has navigated: the page's DOM (as ``--dump-dom`` serialises it) once the load
+#: event has fired and MathJax, where the page has it, has typeset every formula
+_SETTLED = r"""new Promise(resolve => {
+  const dom = () => (document.doctype ? new XMLSerializer().serializeToString(document.doctype) + '\n' : '')
+                    + document.documentElement.outerHTML;
+  const settle = () => setTimeout(() => resolve(dom()), 0);
+  const typeset = () => {
+    if (!window.MathJax) return settle();
+    const started = Date.now();
+    const poll = () => {  // the MathJax script sets MathJax.startup when it runs
+      if (MathJax.startup && MathJax.startup.promise) MathJax.startup.promise.then(settle, settle);
+      else if (Date.now() - started > 60000) settle();  // never started: its formulas show untypeset
+      else setTimeout(poll, 20);
+    };
+    poll();
+  };
+  if (document.readyState === 'complete') typeset(); else addEventListener('load', typeset, {once: true});
+})"""
+
+
+class _Browser:
+    """One headless Chromium for every page, driven over the DevTools protocol on a pipe (its file
+    descriptors 3 and 4, messages ended by a NUL byte): each page is rendered in a tab of its own,
+    several at a time, instead of a browser started per page."""
+
+    def __init__(self, profile: str):
+        to_child, self._to_browser = os.pipe()
+        self._from_browser, from_child = os.pipe()
+
+        def pipes():  # in the child: its fd 3 reads the commands, its fd 4 writes the answers
+            a, b = os.dup(to_child), os.dup(from_child)  # above 4, so that the dup2s clobber nothing
+            os.dup2(a, 3)
+            os.dup2(b, 4)
+
+        self.proc = subprocess.Popen(
+            [CHROMIUM, *FLAGS, "--remote-debugging-pipe", f"--user-data-dir={profile}", "about:blank"],
+            preexec_fn=pipes, pass_fds=(3, 4), stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        os.close(to_child)
+        os.close(from_child)
+        self._send_lock = threading.Lock()
+        self._done = threading.Condition()
+        self._answers: dict[int, dict] = {}
+        self._closed = False
+        self._id = 0
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        buffer = b""
+        with os.fdopen(self._from_browser, "rb", buffering=0) as pipe:
+            while chunk := pipe.read(1 << 20):
+                buffer += chunk
+                *messages, buffer = buffer.split(b"\0")
+                answers = [m for m in map(json.loads, messages) if "id" in m]  # (events are not used)
+                with self._done:
+                    self._answers.update((m["id"], m) for m in answers)
+                    self._done.notify_all()
+        with self._done:
+            self._closed = True
+            self._done.notify_all()
+
+    def call(self, method: str, params: dict | None = None, session: str | None = None,
+             timeout: float = 180.0) -> dict:
+        """Send one command (to the tab of ``session``) and return its result."""
+        with self._send_lock:
+            self._id += 1
+            key = self._id
+            message = {"id": key, "method": method, "params": params or {}}
+            if session is not None:
+                message["sessionId"] = session
+            os.write(self._to_browser, json.dumps(message).encode() + b"\0")
+        with self._done:
+            answered = self._done.wait_for(lambda: key in self._answers or self._closed, timeout)
+            assert answered and key in self._answers, f"chromium did not answer {method}"
+            answer = self._answers.pop(key)
+        assert "error" not in answer, f"{method}: {answer['error']}"
+        return answer["result"]
+
+    def render(self, page: Path) -> str:
+        """The DOM of ``page`` once its scripts (MathJax) have run, from a tab of its own."""
+        tab = self.call("Target.createTarget", {"url": "about:blank"})["targetId"]
+        try:
+            session = self.call("Target.attachToTarget", {"targetId": tab, "flatten": True})["sessionId"]
+            opened = self.call("Page.navigate", {"url": page.as_uri()}, session)
+            assert "errorText" not in opened, f"chromium could not open {page}: {opened['errorText']}"
+            dom = self.call("Runtime.evaluate", {"expression": _SETTLED, "returnByValue": True,
+                                                 "awaitPromise": True}, session)
+            assert "exceptionDetails" not in dom, f"{page}: {dom['exceptionDetails']}"
+        finally:
+            self.call("Target.closeTarget", {"targetId": tab})
+        assert dom["result"]["value"].strip(), f"chromium rendered nothing for {page}"
+        return dom["result"]["value"]
+
+    def close(self) -> None:
+        try:
+            self.call("Browser.close", timeout=30)
+        except AssertionError:
+            pass
+        try:
+            self.proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        os.close(self._to_browser)
 
 
 @pytest.fixture(scope="module")
 def site() -> dict[str, _Page]:
     """Every page of the site, rendered and parsed, by its path relative to the site."""
     pages = sorted(SITE.rglob("*.html"))
-    with ThreadPoolExecutor(max_workers=min(8, 2 * (os.cpu_count() or 1))) as pool:
-        doms = list(pool.map(_render, pages))
+    with tempfile.TemporaryDirectory(prefix="impactbar-chromium-") as profile:
+        browser = _Browser(profile)
+        try:
+            with ThreadPoolExecutor(max_workers=min(8, 2 * (os.cpu_count() or 1))) as pool:
+                doms = list(pool.map(browser.render, pages))
+        finally:
+            browser.close()
     out = {}
     for page, dom in zip(pages, doms, strict=True):
         parsed = _Page()
