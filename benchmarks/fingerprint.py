@@ -186,12 +186,14 @@ def _compare(a, b) -> str:
 
 
 def _export(ref: str) -> Path:
-    """The tree of ``ref`` under a fixed folder, files whose content is unchanged left as they are
-    (numba keys its cache on a source file's time and size: a new ref recompiles only what
-    changed)."""
+    """The tree of ``ref`` under a fixed folder of this checkout's own (named by its path's hash, so
+    that two worktrees or sessions never export into one folder at once), files whose content is
+    unchanged left as they are (numba keys its cache on a source file's time and size: a new ref
+    recompiles only what changed)."""
     sha = subprocess.run(["git", "rev-parse", ref], cwd=ROOT, capture_output=True, text=True,
                          check=True).stdout.strip()
-    dest = Path(tempfile.gettempdir()) / "impactbar-against"
+    owner = hashlib.sha256(str(ROOT.resolve()).encode()).hexdigest()[:12]
+    dest = Path(tempfile.gettempdir()) / f"impactbar-against-{owner}"
     stamp = dest / ".ref"
     if stamp.exists() and stamp.read_text() == sha:
         return dest
