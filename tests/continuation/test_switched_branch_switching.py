@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, InitialState, PositionSwitchedDrive, continue_orbit, find_orbit, simulate
-from impactbar.drives.switched.segment import _legs
+from impactbar.orbits.valve_segment import _legs
 
 MODEL = BarModel(s=1.0, d=0.05, R=0.3, n_modes=2)
 

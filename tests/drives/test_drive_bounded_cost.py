@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, PositionSwitchedDrive, find_orbit
-from impactbar.drives.switched import segment
 from impactbar.dynamics.modal import step_constant
+from impactbar.orbits import valve_segment as segment
 
 
 @pytest.fixture

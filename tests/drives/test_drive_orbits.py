@@ -201,12 +201,12 @@ def test_orbit_list_tables():
                                                          PositionSwitchedDrive(1, 1, 0.3, delay_out=0.1,
                                                                                delay_in=0.02))])
 def test_reduced_equations_are_the_segment_problem(model, drive, rng):
-    # the search's two equations in (T, h3) (drives/switched/search.py) against the segment
-    # residual (drives/switched/segment.py): the state they build satisfies every periodicity row
+    # the search's two equations in (T, h3) (orbits/valve_search.py) against the segment
+    # residual (orbits/valve_segment.py): the state they build satisfies every periodicity row
     # but the rigid position's, whose misfit is F1, and the switch row is F2; their Jacobian
     # against central differences; their interval enclosure over a box holds sampled Jacobians
-    from impactbar.drives.switched.search import OneImpactEquations
-    from impactbar.drives.switched.segment import _residual
+    from impactbar.orbits.valve_search import OneImpactEquations
+    from impactbar.orbits.valve_segment import _residual
 
     eq = OneImpactEquations(model, drive)
     M = model.n_modes + 1
@@ -259,3 +259,28 @@ def test_the_default_chain_skips_a_search_it_cannot_afford(monkeypatch):
     assert calls == [] and np.isfinite(orbit.period)
     model, drive = ISSUE_CASES[1]
     assert find_orbit(model, drive).stable and calls == [1]
+
+
+def test_the_orbit_solvers_choose_the_valve_problem_from_their_table():
+    """The valve's segment problem is the orbit solvers' (``orbits.switched.ORBIT_PROBLEMS``), not
+    the drive's: the drive brings no ``orbit_problem`` of its own; a subclass that brings one keeps
+    it, one that does not gets the table's; a drive outside the table gets the generic shooting."""
+    from impactbar.orbits.switched import ORBIT_PROBLEMS, ShootingProblem, orbit_problem
+    from impactbar.orbits.valve_segment import ValveProblem
+
+    assert "orbit_problem" not in vars(PositionSwitchedDrive)
+    assert ORBIT_PROBLEMS[PositionSwitchedDrive] is ValveProblem
+    model, drive = ISSUE_CASES[1]
+    assert type(orbit_problem(model, drive, 2)) is ValveProblem
+
+    class Plain(PositionSwitchedDrive):
+        pass
+
+    class Own(PositionSwitchedDrive):
+        def orbit_problem(self, model, impacts, constant_load):
+            return ShootingProblem(model, self, impacts)
+
+    args = dict(stroke=2.0, ret=1.0, switch_out=0.2, delay=0.05)
+    assert type(orbit_problem(model, Plain(**args), 1)) is ValveProblem
+    assert type(orbit_problem(model, Own(**args), 1)) is ShootingProblem
+    assert type(orbit_problem(model, Push(0.5), 1)) is ShootingProblem

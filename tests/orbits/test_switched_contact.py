@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import impactbar as ib
-from impactbar.drives.switched.segment import ValveProblem
+from impactbar.orbits.valve_segment import ValveProblem
 
 DRIVE = ib.PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0)
 ROCK = ib.RodRock(segments=[ib.RodSegment(length=10.0, impedance=1.0)],

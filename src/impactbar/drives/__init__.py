@@ -7,7 +7,8 @@ Layout: ``base`` (:class:`Drive`, :class:`DriveState`, the events :class:`DriveE
 periodic-orbit problem a drive may bring, :class:`OrbitProblem`), ``_crossing`` (the rigid
 coordinate's crossings under a constant force in closed form, compiled), ``flight`` (the flight of a
 drive with state between impacts, by scipy's ``solve_ivp``), ``switched`` (the valve,
-:class:`PositionSwitchedDrive`, with its compiled loop and its segment problem). Below the solvers:
+:class:`PositionSwitchedDrive`, with its compiled loop; the numerics of its periodic orbits sit with
+the orbit solvers, :mod:`impactbar.orbits.valve_segment`). Below the solvers:
 imports only ``impactbar.model``, ``impactbar.dynamics`` and ``impactbar._shared``.
 """
 

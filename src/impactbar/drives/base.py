@@ -25,9 +25,10 @@ the simulator's certified event search, and its events in closed form where they
 the piston's position or velocity or scheduled times (:meth:`DriveEvent.first_time`). A drive with
 state is integrated with scipy's ``solve_ivp`` (stiff methods) and its events located to the
 integrator's tolerance. A drive may add numerics of its own where they pay: a compiled event loop
-(:meth:`Drive.compiled_loop`) and a closed-form periodic-orbit problem with an exact Jacobian
-(:meth:`Drive.orbit_problem`), as the valve of :class:`~impactbar.PositionSwitchedDrive` does;
-otherwise the generic paths run.
+(:meth:`Drive.compiled_loop`), as the valve of :class:`~impactbar.PositionSwitchedDrive` does, and
+a closed-form periodic-orbit problem with an exact Jacobian (:meth:`Drive.orbit_problem`; the
+valve's sits with the orbit solvers, :data:`impactbar.orbits.switched.ORBIT_PROBLEMS`); otherwise
+the generic paths run.
 
 The design follows three well-kept codes: the event functions of scipy's ``solve_ivp`` (a scalar
 function of the state whose zero is crossed in a ``direction``, +1 rising, -1 falling, 0 either, and

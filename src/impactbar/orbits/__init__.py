@@ -12,12 +12,14 @@ on the segment problem, one segment per flight, whose parts the continuation use
 under every law: from the phase equation, or by Newton's method from guesses for a law without one,
 :func:`periodic_orbits_by_newton`), ``charts`` (existence, stability
 and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits with an unknown period under a
-position-switched drive, theory §10).
+drive, theory §10; the problem of each built-in drive from its table ``ORBIT_PROBLEMS``),
+``valve_segment`` and ``valve_search`` (the valve's segment problem with the exact Jacobian and its
+certified search of every one-impact orbit).
 
 Each law's own numerics (its phase equation, the states of its orbits, the exact Jacobian of its
 impact map and its Floquet multipliers) are in :mod:`impactbar.laws`; the solvers here reach them
 through ``model.law`` and build the results. Part of the core: imports only ``impactbar.laws``,
-``impactbar.model``, ``impactbar.loads``, ``impactbar.dynamics``, the simulator
+``impactbar.model``, ``impactbar.loads``, ``impactbar.drives``, ``impactbar.dynamics``, the simulator
 (``impactbar.simulation``, whose runs are guesses), numpy and scipy.
 """
 

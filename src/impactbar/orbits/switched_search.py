@@ -250,7 +250,7 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
     r"""Every one-impact periodic orbit of a drive with a period in a window (theory §10):
     :func:`impactbar.periodic_orbits` with a :class:`~impactbar.Drive` in place of the load.
 
-    The drive's periodic-orbit problem (:meth:`~impactbar.Drive.orbit_problem`) searches its own
+    The drive's periodic-orbit problem (:func:`~impactbar.orbits.switched.orbit_problem`) searches its own
     solutions (:meth:`~impactbar.drives.OrbitProblem.search`); each is polished by Newton's method
     on the full problem (:func:`find_switched_orbit`'s) and becomes a :class:`SwitchedOrbit` with
     its admissibility, multipliers and stability; orbits found twice (periods within ``1e-9``
@@ -259,7 +259,7 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
     For the valve of :class:`~impactbar.PositionSwitchedDrive` under the paper's impact law (eq. 10)
     with every flexible mode underdamped, a one-impact orbit is, for given flight times, the
     solution of linear equations mode by mode, and two equations remain in the period ``T`` and the
-    stroke's flight ``h3`` (:mod:`impactbar.drives.switched.search`). Their roots are searched on
+    stroke's flight ``h3`` (:mod:`impactbar.orbits.valve_search`). Their roots are searched on
     ``T`` in ``window`` times ``0 < h3 < T - delay_in - delay_out`` by bisection with exclusion by
     bounds of the Jacobian (interval arithmetic on the closed forms, the mean-value theorem) and
     each root is certified by the Krawczyk test, unique in a box around it.

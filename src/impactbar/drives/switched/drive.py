@@ -48,9 +48,10 @@ class PositionSwitchedDrive(Drive):
     pair ``(valve, pending)``, the valve's state and the switches triggered but not yet in effect
     (``(time, state)`` pairs, sorted); its events are the gap's rising crossing of ``switch_out``
     (a :class:`~impactbar.drives.GapCrossing`, in return with no switch to stroke pending) and the
-    first pending switch (a :class:`~impactbar.drives.TimedEvent`). It brings numerics of its own:
-    a compiled event loop (:mod:`impactbar.drives.switched.loop`) and the closed-form segment problem
-    of its periodic orbits with the exact Jacobian (:mod:`impactbar.drives.switched.segment`).
+    first pending switch (a :class:`~impactbar.drives.TimedEvent`). It brings a compiled event loop
+    of its own (:mod:`impactbar.drives.switched.loop`); the orbit solvers hold the closed-form segment
+    problem of its periodic orbits with the exact Jacobian (:mod:`impactbar.orbits.valve_segment`,
+    chosen by :data:`impactbar.orbits.switched.ORBIT_PROBLEMS`).
 
     Rigid piston, no damping, no delay (the check of theory §10): with accelerations :math:`a_s` = ``stroke``,
     :math:`a_r` = ``ret`` and :math:`x_1` = ``switch_out`` the period-1 orbit has the impact velocity
@@ -222,13 +223,6 @@ class PositionSwitchedDrive(Drive):
         from .loop import ValveLoop
 
         return ValveLoop(self, kernel)
-
-    def orbit_problem(self, model, impacts, constant_load):
-        """The valve's segment problem (:class:`~impactbar.drives.switched.segment.ValveProblem`):
-        closed-form flights, the exact Jacobian, the multipliers from the monodromy matrix."""
-        from .segment import ValveProblem
-
-        return ValveProblem(model, self, impacts, constant_load)
 
     def rigid_orbit(self, R: float) -> dict:
         r"""The rigid, undamped, undelayed period-1 orbit in closed form (theory §10).

@@ -1,7 +1,7 @@
 """The flexible bar's flow between impacts under a constant force, mode by mode (eq. 8, theory
 §10): each mode's 2x2 fundamental block ``(a, b, c, e)`` and the affine part of the flow, in closed
 form for the rigid mode and the underdamped flexible ones. The building blocks of the valve's orbit
-problem (:mod:`.segment`) and of its search of every orbit (:mod:`.search`)."""
+problem (:mod:`.valve_segment`) and of its search of every orbit (:mod:`.valve_search`)."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ...dynamics.modal import fundamental
+from ..dynamics.modal import fundamental
 
 if TYPE_CHECKING:
-    from ...model import BarModel
+    from ..model import BarModel
 
 
 def _w2(model: BarModel) -> np.ndarray:

@@ -39,16 +39,21 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..._shared.status import Admissibility
-from ...dynamics.modal import step_constant
-from .._crossing import first_rising_crossing, rate_zero, rigid_flight
-from ..orbitproblem import OrbitData, OrbitProblem, OrbitSearch, sorted_multipliers, split_multipliers
-from ._flow import _affine, _apply, _blocks, _compose, _field, _fund, _matrix, _w2
-from ._kernel import end_max_sampled, rigid_orbit_start
-from ._state import RETURN, STROKE
+from .._shared.status import Admissibility
+from ..drives.orbitproblem import OrbitData, OrbitProblem, OrbitSearch, sorted_multipliers, split_multipliers
+from ..drives.switched import RETURN, STROKE
+from ..drives.switched.kernels import (
+    end_max_sampled,
+    first_rising_crossing,
+    rate_zero,
+    rigid_flight,
+    rigid_orbit_start,
+)
+from ..dynamics.modal import step_constant
+from ._valve_flow import _affine, _apply, _blocks, _compose, _field, _fund, _matrix, _w2
 
-if TYPE_CHECKING:  # annotations only: the drives sit below the model
-    from ...model import BarModel
+if TYPE_CHECKING:
+    from ..model import BarModel
 
 
 class ContactMap:
@@ -451,7 +456,7 @@ class ValveProblem(OrbitProblem):
         (default: the search's default window); 0 for the rigid bar. The search's cost grows with
         them; 0 too where the search does not apply (:meth:`search`: a law whose contact takes
         time)."""
-        from .search import default_window
+        from .valve_search import default_window
 
         model = self.model
         if not model.n_modes or not model.law.restitution_in_kernel(model):
@@ -461,10 +466,10 @@ class ValveProblem(OrbitProblem):
 
     def search(self, window):
         r"""Every one-impact orbit with a period in ``window`` under the paper's law, certified
-        (:func:`~impactbar.drives.switched.search.search_one_impact`: exclusion by bounds from the
+        (:func:`~impactbar.orbits.valve_search.search_one_impact`: exclusion by bounds from the
         closed forms, the Krawczyk test on each root); ``None`` (the solvers' non-certified search)
         for :math:`m \ge 2`, under a law whose contact takes time, or with an overdamped mode."""
-        from .search import OneImpactEquations, default_window, search_one_impact
+        from .valve_search import OneImpactEquations, default_window, search_one_impact
 
         model, drive = self.model, self.drive
         if self.impacts != 1 or not model.law.restitution_in_kernel(model) or \
@@ -636,7 +641,7 @@ def _surface_basis(c: np.ndarray) -> np.ndarray:
 
 def _rigid_guess(model, drive):
     """Start of Newton for the rigid bar: the fixed point of the rigid piston's map of arrival
-    velocities (compiled closed forms, :func:`impactbar.drives.switched._kernel.rigid_fixed_point`),
+    velocities (compiled closed forms, :func:`impactbar.drives.switched.kernels.rigid_orbit_start`),
     from the undamped undelayed orbit in closed form (theory §10), which is the start itself where
     the map's iteration fails."""
     M = model.n_modes + 1
