@@ -12,6 +12,7 @@ import importlib
 import inspect
 import pkgutil
 import re
+from types import SimpleNamespace
 
 import pytest
 
@@ -19,6 +20,8 @@ import impactbar as ib
 import impactbar.drives
 import impactbar.physical
 from impactbar.laws.paper.stability import floquet_multipliers
+from impactbar.orbits import valve_search
+from impactbar.orbits.valve_segment import ValveProblem
 
 #: a double-backquoted span, ``...``, taken pair by pair (the text between two spans is no span)
 SPAN = re.compile(r"``(.+?)``", re.S)
@@ -84,9 +87,11 @@ CORE = [ib.BarModel, ib.BarModel.frequencies, ib.BarModel.end_weights, ib.BarMod
         floquet_multipliers]
 #: what must have a docstring: the core list and what the two packages export
 DOCUMENTED = CORE + _public_api(impactbar.physical, impactbar.drives)
+#: the valve drive's orbit numerics (in orbits/, beside the load's): their problem and its search
+VALVE_ORBITS = _public_api(valve_search, SimpleNamespace(__all__=["ValveProblem"], ValveProblem=ValveProblem))
 #: what is checked for formulas: also the public helpers of the packages' public modules (some,
-#: the flights' accessors, have no docstring of their own)
-CENTRAL = CORE + _public_api(impactbar.physical, impactbar.drives, modules=True)
+#: the flights' accessors, have no docstring of their own), and the valve's orbit numerics
+CENTRAL = CORE + _public_api(impactbar.physical, impactbar.drives, modules=True) + VALVE_ORBITS
 #: the modules of the two packages, whose docstrings the site renders above their objects
 MODULES = _public_modules(impactbar.physical, impactbar.drives)
 

@@ -166,7 +166,8 @@ class Valve:
         Returns
         -------
         list of numpy.ndarray
-            One record: its ports, ``K_v``, ``p_tr^2``, the spool's rate and mode, its slots.
+            One record: its ports, ``K_v``, the square of the transition pressure, the spool's rate and
+            mode, its slots.
 
         Examples
         --------
