@@ -70,11 +70,11 @@ class EndPiece(HermiteSteps):
 
     def energies(self):
         """The energy quadratures over the piece (theory §11; ``layout.energies``)."""
-        return self.y[-1, 2 + self.layout.n_states:].copy()
+        return self.y[-1, self._energy_start:].copy()
 
     def energies_at(self, t: float):
         """The energy quadratures from ``t0`` to ``t`` (interpolated)."""
-        return self._at([t])[2 + self.layout.n_states:, 0]
+        return self._at([t])[self._energy_start:, 0]
 
     @property
     def _energy_start(self):

@@ -149,7 +149,7 @@ class CircuitPiece(HermiteSteps):
 
     def energies(self):
         """The energy quadratures over the piece (theory §11; ``layout.energies``)."""
-        start = self.layout.size(self.M)
+        start = self._energy_start
         return self.y[-1, start:start + self.layout.n_energy].copy()
 
     @property
