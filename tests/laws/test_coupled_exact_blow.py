@@ -8,28 +8,17 @@ import dataclasses
 
 import numpy as np
 import pytest
+from coupled_reference import WHOLE_CELLS, drifter_arrival
 
 import impactbar as ib
 from impactbar.laws.rodrock.coupled import driven_rock_contact
-from impactbar.physical import build, read_config, with_values
 
 
 @pytest.fixture(scope="module")
 def arrival():
     """The oil-circuit drifter on a rod of whole piston lengths (448.54 mm and three times that), its
     second arrival at the shank from a run on the lattice: model, drive, state, time, q, v."""
-    cfg, _ = read_config("examples/circuit_drifter_rock.toml")
-    del cfg["rock"]["cells_per_piston"]
-    cfg = with_values(cfg, {"rod.segments.0.length": "448.54236 mm",
-                            "rod.segments.1.length": "1345.62708 mm"})
-    drifter = build(cfg)
-    model, drive = drifter.model(), drifter.drive()
-    exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
-    lattice = model.with_(impact=dataclasses.replace(model.law, method="lattice", cells_per_piston=16))
-    start = ib.InitialState.rigid(-0.05, 0.0, n_modes=model.n_modes)
-    blow = ib.simulate(lattice, drive, start, 7.0).impacts[1]
-    state = ib.simulate(lattice, drive, start, blow.t0 - 1e-12)._final_drive
-    return exact, drive, state, blow.t0, blow.q_before, blow.v_before
+    return drifter_arrival(WHOLE_CELLS)
 
 
 @pytest.fixture(scope="module")

@@ -62,6 +62,9 @@ FORCE_TOL = 1e-9
 MAX_ITERATIONS = 64
 #: Samples of the arriving wave per travel time of the piston's first segment.
 SAMPLES = 400
+#: How far inside its interval (in ``T_0``) the spline's end values are taken: beyond the model time's
+#: rounding of a break (``1e-13`` of ``T_0`` on the example), within what moves a value by rounding.
+INSIDE = 1e-10
 
 
 def _piece_value(piece, tau):
@@ -158,7 +161,13 @@ class _Incoming:
         out = []
         for a, b in zip(breaks[:-1], breaks[1:], strict=True):
             x = np.linspace(a - self.t0, b - self.t0, max(8, math.ceil((b - a) * SAMPLES / self.T0)) + 1)
-            out.append(_spline_callable(CubicSpline(x, -2.0 * self.arriving(x) / self.Z0), self.t0))
+            # the ends' values a hair inside (INSIDE of T_0): the break, rounded through the model time,
+            # may fall on the far side of the jump it marks, and a spline through the value beyond a
+            # jump is wrong over a whole sample
+            xv = x.copy()
+            xv[0] += INSIDE * self.T0
+            xv[-1] -= INSIDE * self.T0
+            out.append(_spline_callable(CubicSpline(x, -2.0 * self.arriving(xv) / self.Z0), self.t0))
         return out
 
 
