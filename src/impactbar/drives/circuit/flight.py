@@ -286,7 +286,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         How a variational flight's fundamental matrix is taken: ``"magnus"``, the plain flight
         integrated and ``Phi`` over its steps by Magnus' method of order 4 (:mod:`._magnus`, with
         ``generated`` only); ``"cvode"``, the variational equations integrated beside the state by
-        CVODE (``n + n_energy + n^2`` unknowns); ``"auto"`` (default), Magnus where the piston has
+        CVODE (:math:`n^2` more unknowns); ``"auto"`` (default), Magnus where the piston has
         modes and CVODE for the rigid piston (whose six unknowns CVODE takes cheaply, to the drive's
         tolerance). The flight's states are the plain flight's either way with ``"magnus"``; its
         ``Phi`` agrees with a variational flight at a 100 times finer tolerance to some ``1e-6``
