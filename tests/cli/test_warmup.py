@@ -71,6 +71,7 @@ from impactbar.physical.rock import RodPiece
 drifter = circuit_preset("circuit-drifter", supply={"pump_flow": "75 L/min"})
 drifter.orbit()
 drifter.simulate(0.02)
+find_orbit(drifter.model().with_(n_modes=3), drifter.drive())  # (a flexible piston: Magnus' Phi)
 with open(sys.argv[1], "rb") as f:
     on_rock = CircuitDrifter.from_config(tomllib.load(f))
 on_rock.orbit()

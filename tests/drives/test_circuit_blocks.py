@@ -55,7 +55,7 @@ def test_a_variational_flight_takes_the_band_solvers_steps(drifter):
     out = {}
     for blocks in (True, False):
         fl = F.circuit_flight(drive, model, DriveState(state.mode, state.z), 0.0, q, v, 50.0,
-                              variational=True, blocks=blocks)
+                              variational=True, blocks=blocks, sensitivity="cvode")
         out[blocks] = (fl, _cvode.last_workspace().statistics(), _cvode.last_workspace().blocks)
     (fast, s_fast, engaged), (band, s_band, off) = out[True], out[False]
     assert engaged and not off  # (SUNDIALS 7's table found here: else the band solver both times)
@@ -69,17 +69,17 @@ def test_a_variational_flight_takes_the_band_solvers_steps(drifter):
 
 def test_the_four_mode_orbit_is_the_band_solvers(drifter):
     model = drifter.model().with_(n_modes=4)
-    fast = find_orbit(model, drifter.drive())
+    fast = find_orbit(model, dataclasses.replace(drifter.drive(), sensitivity="cvode"))
     assert _engaged()
-    band = find_orbit(model, dataclasses.replace(drifter.drive(), blocks=False))
+    band = find_orbit(model, dataclasses.replace(drifter.drive(), blocks=False, sensitivity="cvode"))
     _same_orbits(fast, band)
 
 
 @pytest.mark.slow  # some 40 s of CPU time (80 s of wall time on the shared machine)
 def test_the_eight_mode_orbit_is_the_band_solvers(drifter):
     model = drifter.model().with_(n_modes=8)
-    fast = find_orbit(model, drifter.drive())
-    band = find_orbit(model, dataclasses.replace(drifter.drive(), blocks=False))
+    fast = find_orbit(model, dataclasses.replace(drifter.drive(), sensitivity="cvode"))
+    band = find_orbit(model, dataclasses.replace(drifter.drive(), blocks=False, sensitivity="cvode"))
     _same_orbits(fast, band)
 
 

@@ -93,7 +93,7 @@ def test_a_variational_flight_by_the_band_solver_is_the_dense_ones(model):
     drive = pumped()
     q, v, state = start(model)
     fl, ref = both(lambda c: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, variational=True,
-                                              compiled=c))
+                                              compiled=c, sensitivity="cvode"))
     from impactbar.drives.circuit import _cvode
 
     assert _cvode.last_workspace() is not None and _cvode.last_workspace().band == 2 * model.n_modes + 5

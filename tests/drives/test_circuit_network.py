@@ -324,7 +324,7 @@ def test_a_flight_through_the_generated_code_is_the_kernels_to_the_bit(drifter, 
     state = DriveState((1, 1, 1, 0), np.array([0.9, 0.9, 0.9, 0.3]))
     for compiled in (True, False) if not variational else (True,):
         a, b = (F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, variational=variational,
-                                 compiled=compiled, generated=g) for g in (True, False))
+                                 compiled=compiled, generated=g, sensitivity="cvode") for g in (True, False))
         assert a.end == b.end and a.t == b.t and a.piece.t.size > 50
         for x, y in ((a.piece.t, b.piece.t), (a.piece.y, b.piece.y), (a.piece.f, b.piece.f), (a.q, b.q),
                      (a.v, b.v), (a.z, b.z)):

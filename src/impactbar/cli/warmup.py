@@ -95,11 +95,16 @@ def _physical_tasks():
                                               "cells_per_piston": 8})
     rod = [RodPiece(length_m=6.0, area_m2=1e-3, E_Pa=2.1e11, density_kg_m3=7850.0)]
 
-    def circuit(drifter):
-        return drifter.orbit(), drifter.simulate(0.03)
+    def circuit(drifter, flexible=False):
+        from .. import find_orbit
+
+        out = drifter.orbit(), drifter.simulate(0.03)
+        if flexible:  # (a flexible piston's variational flights: Magnus' Phi, generated with the network)
+            out += (find_orbit(drifter.model().with_(n_modes=1), drifter.drive()),)
+        return out
 
     return (
-        ("oil circuit", lambda: circuit(circuit_preset("circuit-drifter"))),
+        ("oil circuit", lambda: circuit(circuit_preset("circuit-drifter"), flexible=True)),
         ("oil circuit on rod and rock", lambda: circuit(CircuitDrifter.from_config(cfg))),
         ("piston optimiser", lambda: optimize_piston(rod, (1e8, 1e9), mass=2.4, length=0.3,
                                                      max_stress=math.inf, impact_velocity=10.0, segments=2,

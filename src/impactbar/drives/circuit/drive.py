@@ -169,6 +169,13 @@ class HydraulicCircuitDrive(Drive):
         interface (the same steps to the bit), by the dense solver (the same to rounding), and by the
         band solver's own LU (the same steps to the bit). The baselines of
         ``benchmarks/bench_circuit.py`` (``impactbar.drives.circuit.flight.circuit_flight``).
+    sensitivity : {"auto", "magnus", "cvode"}, optional
+        How the variational flights (the Jacobians of Newton's method and the Floquet multipliers)
+        take the fundamental matrix (keyword, left out of the repr): ``"magnus"``, over the plain
+        flight's steps by Magnus' method of order 4; ``"cvode"``, the variational equations
+        integrated beside the state by CVODE (the way before); ``"auto"`` (default), Magnus where
+        the piston has modes, CVODE for the rigid piston
+        (:func:`~impactbar.drives.circuit.flight.circuit_flight`, theory §11).
     extra_parts : tuple of CircuitPart, optional
         Parts added to the circuit (keyword, left out of the repr;
         :class:`~impactbar.drives.circuit.composition.CircuitPart`): their nodes' pressures are
@@ -213,6 +220,7 @@ class HydraulicCircuitDrive(Drive):
     band: bool = dataclasses.field(default=True, repr=False, kw_only=True)
     blocks: bool = dataclasses.field(default=True, repr=False, kw_only=True)
     extra_parts: tuple = dataclasses.field(default=(), repr=False, kw_only=True)
+    sensitivity: str = dataclasses.field(default="auto", repr=False, kw_only=True)
 
     #: where the circuit keeps its states and energy terms (:class:`~.layout.CircuitLayout`: ``z``'s
     #: indices by name, ``layout["supply"]``, and the energy integrands' ``layout.energy["pump"]``)
@@ -238,6 +246,8 @@ class HydraulicCircuitDrive(Drive):
         for name in ("compiled", "band", "blocks"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be True or False; got {getattr(self, name)!r}")
+        if self.sensitivity not in ("auto", "magnus", "cvode"):
+            raise ValueError(f"sensitivity must be 'auto', 'magnus' or 'cvode'; got {self.sensitivity!r}")
         acc = self.accumulator
         if acc is not None and not isinstance(acc, Accumulator):
             raise ValueError(f"accumulator must be an Accumulator or None; got {type(acc).__name__}")
@@ -570,7 +580,8 @@ class HydraulicCircuitDrive(Drive):
         from .flight import circuit_flight
 
         return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational,
-                              compiled=self.compiled, band=self.band, blocks=self.blocks)
+                              compiled=self.compiled, band=self.band, blocks=self.blocks,
+                              sensitivity=self.sensitivity)
 
     def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
         """The circuit over a stretch of a blow with the driven end moved by the law's waves

@@ -33,6 +33,7 @@ apply the saltation there, Hiskens & Pai 2000).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import io
 import math
@@ -42,6 +43,7 @@ import numpy as np
 from ..base import DriveState, FlightSettings
 from ..flight import ARRIVAL, END, EVENT, Flight
 from . import _kernel as K
+from . import _magnus
 
 __all__ = ["CircuitPiece", "circuit_flight", "DEFAULT_SETTINGS"]
 
@@ -170,6 +172,14 @@ class CircuitPiece(HermiteSteps):
 _MAX_STEPS = 2_000_000
 
 
+#: The tolerances of a variational flight's state under Magnus, relative to the flight's own: without
+#: ``Phi``'s ``n^2`` components in CVODE's error test the plain flight takes some three times fewer
+#: steps and its state is the less accurate (on the preset's orbit with 4 modes the impact velocity
+#: 1.3e-6 off at the drive's tolerance); a thousand times finer, the orbit is the variational flights'
+#: to 1e-10 (theory §11, "Sensitivities").
+MAGNUS_STATE_TOLERANCE = 1e-3
+
+
 def _compiled_driver(compiled: bool = True):
     """:mod:`._cvode` where ``compiled`` and the libraries bind, else None."""
     if not compiled:
@@ -242,7 +252,7 @@ def _integrate_binding(code, par, settings, directions, y0, t, end, keep):
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
                    settings: FlightSettings | None = None, variational: bool = False, *,
                    compiled: bool = True, band: bool = True, blocks: bool = True,
-                   generated: bool = True) -> Flight:
+                   generated: bool = True, sensitivity: str = "auto") -> Flight:
     """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
     stop, the circuit's next event or ``t_stop`` (module docstring).
 
@@ -272,6 +282,15 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         :mod:`._netgen`: one module per topology, the values read from ``par`` with the network after
         the bar's entries); ``False``: the preset's hand-written kernels (:mod:`._kernel`,
         :mod:`._cvode`'s callbacks; the way before). The same steps either way, to the bit.
+    sensitivity : {"auto", "magnus", "cvode"}, optional
+        How a variational flight's fundamental matrix is taken: ``"magnus"``, the plain flight
+        integrated and ``Phi`` over its steps by Magnus' method of order 4 (:mod:`._magnus`, with
+        ``generated`` only); ``"cvode"``, the variational equations integrated beside the state by
+        CVODE (:math:`n^2` more unknowns); ``"auto"`` (default), Magnus where the piston has
+        modes and CVODE for the rigid piston (whose six unknowns CVODE takes cheaply, to the drive's
+        tolerance). The flight's states are the plain flight's either way with ``"magnus"``; its
+        ``Phi`` agrees with a variational flight at a 100 times finer tolerance to some ``1e-6``
+        with 8 modes, where CVODE's at the drive's tolerance is some ``1e-5`` off (theory §11).
 
     Returns
     -------
@@ -286,10 +305,17 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         Where CVODE fails (the message says why: a chamber emptied, a pressure out of range).
     """
     settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
+    if sensitivity not in ("auto", "magnus", "cvode"):
+        raise ValueError(f"sensitivity must be 'auto', 'magnus' or 'cvode'; got {sensitivity!r}")
     mode, z = state
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     M = q.size
+    magnus = variational and generated and (sensitivity == "magnus" or (sensitivity == "auto" and M > 1))
+    if magnus:  # the plain flight, its state as accurate as the variational flight's, then Phi over its steps
+        variational = False
+        rtol = max(settings.rtol * MAGNUS_STATE_TOLERANCE, 1e-13)  # (CVODE's floor: some 100 roundings)
+        settings = dataclasses.replace(settings, rtol=rtol, atol=settings.atol * rtol / settings.rtol)
     L = drive.layout
     n, n_energy = L.size(M), L.n_energy
     par = drive._par(model, mode, variational)
@@ -305,7 +331,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         piece = CircuitPiece(np.array([t]), y0[None, :n + n_energy], par, M, model.end_weights,
                              drive.chambers.area_ratio, L, field_at)
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
-                      np.eye(n) if variational else None)
+                      np.eye(n) if variational or magnus else None)
     keep = n + n_energy
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
@@ -315,15 +341,20 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
                                                   keep)
     if status < 0 or not np.all(np.isfinite(yend)):
         raise ValueError(drive._failure(model, message, t))
+    own = ts  # (the flight's own time, from 0)
     ts = ts + t
     keep_t = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
-    ts, Y = ts[keep_t], Y[keep_t]
+    ts, Y, own = ts[keep_t], Y[keep_t], own[keep_t]
     piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio,
                          L, field_at)
     drive._check_volumes(model, piece, t)
     te = float(ts[-1])
     qe, ve, ze = yend[:M].copy(), yend[M:2 * M].copy(), yend[2 * M:n].copy()
     Phi = yend[n + n_energy:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
+    if magnus:
+        d = _magnus.balance(code.jac_base, piece.y[piece.t.size // 2], par, M, n)
+        Phi = code.magnus_phi(np.ascontiguousarray(own), piece.y, piece.f, par, M, _magnus.DEFAULT_THETA,
+                              d)[0]
     if status == 2:
         if K.ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop

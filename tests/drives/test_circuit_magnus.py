@@ -1,0 +1,114 @@
+"""The circuit's fundamental matrix by Magnus' method over the plain flight's steps (the default for a
+flexible piston) against CVODE's variational flights: a flight's ``Phi`` against a variational flight
+at a hundred times finer tolerance, the method's order, its exponential against scipy's, and the
+orbit it gives against the orbit of the variational flights."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy.linalg import expm as scipy_expm
+
+from impactbar import find_orbit
+from impactbar.drives.base import DriveState, FlightSettings
+from impactbar.drives.circuit import _magnus
+from impactbar.physical import circuit_preset
+
+FINE = FlightSettings(method="CVODE", rtol=1e-12, atol=1e-14)
+
+
+@pytest.fixture(scope="module")
+def case():
+    """The preset's drive, its model with 4 modes, the orbit (Magnus, the default) and the start of
+    its first flight ``(state, t, q, v)``."""
+    d = circuit_preset("circuit-drifter")
+    model, drive = d.model().with_(n_modes=4), d.drive()
+    orbit = find_orbit(model, drive)
+    problem, X = orbit._problem, np.asarray(orbit._unknowns, dtype=float)
+    M, n = problem.M, problem.n
+    tau, mode = problem.blocks[0]
+    y = X[:n]
+    return drive, model, orbit, (DriveState(mode, y[2 * M:]), tau, y[:M], y[M:2 * M])
+
+
+@pytest.mark.parametrize("size", [0.01, 0.2, 0.9, 2.0, 30.0])
+def test_the_exponential_is_scipys(size):
+    """Each of the Pade degrees (3 to 13, with squarings at the last) by the norm it is chosen for."""
+    A = np.random.default_rng(7).standard_normal((22, 22))
+    A *= size / np.max(np.sum(np.abs(A), axis=0))
+    E, ref = _magnus.expm(A), scipy_expm(A)
+    assert np.max(np.abs(E - ref)) <= 1e-13 * max(1.0, np.max(np.abs(ref)))
+
+
+def test_a_flights_phi_is_the_fine_variational_flights(case):
+    """Magnus' ``Phi`` over the orbit's first flight against CVODE's variational flight at rtol 1e-12
+    (measured 4.6e-8 of its largest entry; CVODE's variational flight at the drive's tolerance 1.2e-7),
+    the flight's end state the same to the integrators' tolerances."""
+    drive, model, _, start = case
+    ref = dataclasses.replace(drive, sensitivity="cvode").flight(model, *start, math.inf, FINE, True)
+    fl = drive.flight(model, *start, math.inf, None, True)
+    assert fl.t == pytest.approx(ref.t, rel=1e-11)
+    assert np.max(np.abs(fl.q - ref.q)) <= 1e-10
+    err = np.max(np.abs(fl.sensitivity - ref.sensitivity)) / np.max(np.abs(ref.sensitivity))
+    assert err <= 2e-7, err
+
+
+def test_magnus_is_of_order_four(case):
+    """Over the same steps, ``theta`` 1, 1/2 and 1/4 against 1/16: the error falls some 16 times a
+    halving (measured 13 and 14)."""
+    drive, model, _, start = case
+    fl = dataclasses.replace(drive, sensitivity="cvode").flight(
+        model, *start, math.inf, FlightSettings(method="CVODE", rtol=1e-13, atol=1e-15), False)
+    piece, (state, *_) = fl.piece, start
+    net, code = drive._compiled_network(state.mode)
+    par = np.concatenate((drive._par(model, state.mode, False), net))
+    n = piece.layout.size(piece.M)
+    d = _magnus.balance(code.jac_base, piece.y[piece.t.size // 2], par, piece.M, n)
+    own = piece.t - piece.t[0]
+    ref = code.magnus_phi(own, piece.y, piece.f, par, piece.M, 1.0 / 16, d)[0]
+    errors = [np.max(np.abs(code.magnus_phi(own, piece.y, piece.f, par, piece.M, th, d)[0] - ref))
+              for th in (1.0, 0.5, 0.25)]
+    ratios = np.array(errors[:-1]) / np.array(errors[1:])
+    assert np.all((ratios > 10.0) & (ratios < 22.0)), (errors, ratios)
+
+
+def test_the_orbit_is_the_variational_flights(case):
+    """The orbit with Magnus' ``Phi`` against the orbit of CVODE's variational flights (the way
+    before): the same period and impact velocity to 1e-9 (measured 1e-11 and 3e-11), the multipliers
+    within the variational flights' own error at the drive's tolerance (2.9e-6 against a flight at
+    rtol 1e-12; Magnus' 4e-7)."""
+    drive, model, orbit, _ = case
+    before = find_orbit(model, dataclasses.replace(drive, sensitivity="cvode"))
+    assert orbit.period == pytest.approx(before.period, rel=1e-9)
+    assert orbit.impact_velocity == pytest.approx(before.impact_velocity, rel=1e-9)
+    assert np.max(np.abs(orbit.multipliers - before.multipliers)) <= 1e-5
+    assert orbit.stable and before.stable
+
+
+@pytest.mark.slow  # about 30 s: the orbit's period of flights at rtol 1e-12
+def test_the_multipliers_are_nearer_the_fine_flights_than_cvodes(case):
+    """The multipliers against the orbit's at rtol 1e-12 (CVODE's variational flights): Magnus' within
+    1e-6 (measured 4e-7), and nearer than the variational flights' at the drive's tolerance."""
+    drive, model, orbit, _ = case
+    fine = dataclasses.replace(drive, sensitivity="cvode")
+    object.__setattr__(fine, "integrator", FINE)
+    ref = find_orbit(model, fine)
+    before = find_orbit(model, dataclasses.replace(drive, sensitivity="cvode"))
+    err_magnus = np.max(np.abs(orbit.multipliers - ref.multipliers))
+    err_cvode = np.max(np.abs(before.multipliers - ref.multipliers))
+    assert err_magnus <= 1e-6 and err_magnus < err_cvode, (err_magnus, err_cvode)
+
+
+def test_the_rigid_piston_keeps_cvodes_flights(case):
+    drive, model, _, _ = case
+    rigid = model.with_(n_modes=0)
+    a = find_orbit(rigid, drive)
+    b = find_orbit(rigid, dataclasses.replace(drive, sensitivity="cvode"))
+    assert a.period == b.period and np.array_equal(a.multipliers, b.multipliers)
+
+
+def test_sensitivity_must_be_named(case):
+    drive, _, _, _ = case
+    with pytest.raises(ValueError, match="sensitivity must be"):
+        dataclasses.replace(drive, sensitivity="exact")
