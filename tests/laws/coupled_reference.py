@@ -146,7 +146,7 @@ class ReferenceBlow:
     Attributes
     ----------
     duration : float
-        The window ``4/s + 2 sum T_i``.
+        The blow's length (default the window ``4/s + 2 sum T_i``).
     v_after : float
         The piston's mean velocity at the end (its momentum: mass 1), from the waves in it.
     v_balance : float
@@ -194,7 +194,7 @@ class ReferenceBlow:
     waves: tuple = ()
 
 
-def reference_blow(model, drive, state, q, v, *, rtol=1e-12, fit_tol=1e-14):
+def reference_blow(model, drive, state, q, v, *, rtol=1e-12, fit_tol=1e-14, duration=None):
     r"""The coupled blow of a rigid, uniform piston arriving on the shank in state ``(q, q')`` with
     the oil circuit in ``state``, solved as a delay-differential system (module docstring).
 
@@ -213,6 +213,10 @@ def reference_blow(model, drive, state, q, v, *, rtol=1e-12, fit_tol=1e-14):
         The integrator's relative tolerance (absolute: ``rtol`` times each state's scale).
     fit_tol : float
         The Chebyshev fits' tolerance, relative to the impact's wave ``Z_0 v_0``.
+    duration : float, optional
+        How long the blow lasts (model time from the impact; default the law's window
+        ``4/s + 2 sum T_i``): the library's blow ends when it is certified over, and is compared over
+        its own duration.
 
     Returns
     -------
@@ -242,7 +246,7 @@ def reference_blow(model, drive, state, q, v, *, rtol=1e-12, fit_tol=1e-14):
     Z = [s] + [float(g.impedance) * s for g in law.segments]
     T = [1.0 / s] + [float(g.travel_time(model)) for g in law.segments]
     mb, k, ku, f = float(law.bit_mass), float(law.rock.k), float(law.rock.k_u), float(law.feed)
-    D = 4.0 / s + 2.0 * sum(T[1:])
+    D = 4.0 / s + 2.0 * sum(T[1:]) if duration is None else float(duration)
     Tmin = min(T)
     v0 = float(np.asarray(v, dtype=float)[0])
     mode = state.mode

@@ -37,10 +37,12 @@ def test_the_lattice_converges_to_it_at_second_order(arrival, exact_blow):
         blow = driven_rock_contact(model.with_(impact=law), drive, state, t0, q, v)
         assert blow.t_release == pytest.approx(exact_blow.t_release, rel=1e-14)
         errors.append(abs(float(blow.record.work_on_rock) - work) / work)
-    # measured: 2.4e-5, 5.9e-6, 1.4e-6 of the work: four times closer per doubling of the cells
+    # measured: 1.1e-4, 2.9e-5, 7.3e-6 of the work: four times closer per doubling of the cells (the
+    # blow, ended when certified over, takes in the piston's second touch of the shank, which the
+    # lattice resolves less well than the first: 2.4e-5, 5.9e-6, 1.4e-6 at the former fixed window)
     ratios = np.array(errors[:-1]) / np.array(errors[1:])
     assert np.all((ratios > 3.0) & (ratios < 5.5)), (errors, ratios)
-    assert errors[-1] < 3e-6
+    assert errors[-1] < 1e-5
 
 
 def test_the_piston_momentum_balance(arrival, exact_blow):
@@ -69,20 +71,26 @@ def test_the_drive_follows_the_blow(arrival, exact_blow):
 def test_a_circuit_that_holds_its_force_gives_the_force_held_blow(arrival):
     """With the oil's bulk modulus divided by ``k`` every pressure's rate is ``k`` times smaller, so
     over the blow the circuit holds its force at the arrival's: the coupled exact blow tends to the
-    exact blow under that force held (another path: ``RodRock.contact`` under a constant load, no
-    drive and no iteration)."""
+    exact blow under that force held (another path: ``RodRock.contact`` under a constant load over
+    the coupled blow's duration, no drive and no iteration), and ends where that blow is certified
+    over (the exact map's blow under the load, its certificate on)."""
+    from impactbar.laws.rodrock.exactmap import ExactBlowMap
+
     model, drive, state, t0, q, v = arrival
-    q_held, v_held, t_held, held = model.law.contact(
-        model, ib.loads.FourierLoad(drive.force(state.mode, state.z, q, v), []), t0, q, v)
+    load = ib.loads.FourierLoad(drive.force(state.mode, state.z, q, v), [])
+    bmap = ExactBlowMap(model, load, t0, duration=2.0 * model.law.window(model))
+    end = bmap.solve(np.array(q, dtype=float), np.array(v, dtype=float), certified=True).duration
     errors = []
     for k in (1e2, 1e4, 1e8):
         blow = model.law.driven_contact(model, drive.with_(bulk_modulus=drive.oil.bulk_modulus / k),
                                         state, t0, q, v)
-        assert blow.t_release == pytest.approx(t_held, rel=1e-14)
-        assert np.array_equal(blow.q_after, q_held)  # (from the advanced shank, both)
+        assert blow.t_release - t0 == pytest.approx(end, rel=1e-12)
+        law = dataclasses.replace(model.law, blow_time=blow.t_release - t0)
+        q_held, v_held, _, held = law.contact(model.with_(impact=law), load, t0, q, v)
         errors.append(max(np.max(np.abs(blow.v_after - v_held)) / abs(v[0]),
+                          np.max(np.abs(blow.q_after - q_held)) / abs(v[0] * end),
                           abs(float(blow.record.work_on_rock) / float(held.work_on_rock) - 1.0)))
-    # measured: 3.5e-3, 4.4e-5, 5.8e-7 (of the impact velocity; the work on rock 2.5e-7 at the
+    # measured: 1.2e-3, 1.2e-5, 4.4e-7 (of the impact velocity; the work on rock 3.0e-7 at the
     # last): about 1/k, to the two paths' own accuracy at the last (the circuit's force carried as
     # its integrator's pieces and the arriving wave as a spline, against a constant)
     assert errors[0] > 1e-3 and errors[1] < errors[0] / 30.0, errors

@@ -82,7 +82,7 @@ def test_the_scalar_spline_is_scipys_to_the_bit():
 def test_marching_gives_the_plain_iterations_blow(arrival):
     """The iterates over the part of the blow each can be right on, then over the whole until the
     force settles, give the blow of the plain iteration (every iterate over the whole blow, the blow
-    solved once more with the last force): within the iteration's tolerance (measured: to the bit)."""
+    solved once more with the last force): within the iteration's tolerance."""
     from impactbar.laws.rodrock.coupled_exact import FORCE_TOL, driven_exact_contact
 
     fast = driven_exact_contact(*arrival)
@@ -95,4 +95,7 @@ def test_marching_gives_the_plain_iterations_blow(arrival):
         a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
         assert np.all(np.abs(a - b) <= FORCE_TOL * np.maximum(np.abs(b), np.max(np.abs(b)) * 1e-3)), (a, b)
     assert fast.drive_state.mode == plain.drive_state.mode
-    assert np.allclose(fast.gaps, plain.gaps, rtol=FORCE_TOL, atol=0.0)
+    # the gap's history: its samples 1.5e-8 apart at most (measured; the same to the bit while the blow
+    # ended at the law's window and the arriving wave's spline took its ends on the breaks: the two
+    # iterations now restart the drive's integration at other breaks)
+    assert np.allclose(fast.gaps, plain.gaps, rtol=1e-7, atol=0.0)

@@ -49,6 +49,7 @@ from ._records import (  # the records' slots
     PR_CP,
     PR_CROD,
     PR_CSHANK,
+    PR_DRIVEN,
     PR_E0,
     PR_FEED,
     PR_K,
@@ -276,7 +277,7 @@ def _could_end(psi, PR, BS, BI, NSF, avail, gone, vp, Pr):
     br = BI[BI_BRANCH]
     thr = (BS[BS_RMAX] - f) * (BS[BS_RMAX] - f) / (2.0 * PR[PR_KU])
     if f > 0.0:
-        return br != LOAD and (psi < thr or PR[PR_TMAX] == INF)
+        return br != LOAD and (psi < thr or PR[PR_TMAX] == INF or PR[PR_DRIVEN] != 0.0)
     n_p = int(PR[PR_NP])
     xs = NSF[n_p, 1]
     xp = xs - NSF[n_p, 0]
@@ -290,6 +291,8 @@ def _could_end(psi, PR, BS, BI, NSF, avail, gone, vp, Pr):
                 return True
     if not ((br != LOAD and psi < thr) or rod_free):
         return False
+    if PR[PR_DRIVEN] != 0.0:  # under a drive: the piston gone once out of contact and moving back
+        return True
     return vp <= -math.sqrt(2.0 * psi / Mr) and xp < xs - 2.0 * math.sqrt(2.0 * PR[PR_CSHANK] * psi)
 
 
@@ -365,14 +368,18 @@ def certify(ws, t):
                 vmax = math.sqrt(2.0 * psi / Mr)
                 if vp <= -vmax and xp + dp < xs - 2.0 * math.sqrt(2.0 * PR[PR_CSHANK] * psi):
                     gone = True
+    if PR[PR_DRIVEN] != 0.0 and not contact and vp <= 0.0:  # under a drive: what the piston does next
+        gone = True  # is the drive's (its flight's), whatever the rod's waves could reach
     frozen = (br != LOAD and psi < thr) or rod_free
     if gone and frozen:
         return LIFTED if rod_free else SEPARATED
     rem = psi if gone else psi + Ep
     if rem <= PR[PR_SPENT] * avail:
         return SPENT
-    if gone and f > 0.0 and br != LOAD and PR[PR_TMAX] == INF:  # the rock may yield to the ringing rod
-        return MAY_YIELD                                      # for ever (a caller's t_max: on to it)
+    # the rock may yield to the ringing rod for ever (a caller's t_max: on to it, but under a drive the
+    # piston's next touch is a new blow's, and the rod's ringing is dropped with it: an end)
+    if gone and f > 0.0 and br != LOAD and (PR[PR_TMAX] == INF or PR[PR_DRIVEN] != 0.0):
+        return MAY_YIELD
     return GOING
 
 

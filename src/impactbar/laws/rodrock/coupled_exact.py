@@ -40,10 +40,26 @@ with one force: about half the plain iteration's work, the same blow (on the exa
 drive's integration restarts at every break, and the exact solver is causal, so that an iterate's
 early part is its predecessor's). ``march=False`` runs the plain iteration.
 
-The blow lasts the law's window (:meth:`~impactbar.RodRock.window`), as the simulator's blows under
-a load on the exact scheme do; the rock is loaded by the feed at each blow and the piston returns to
-the modal flight with the state the exact solution projects (theory §11 says what these choices
-assume).
+**When the blow ends.** Not at the law's window (:meth:`~impactbar.RodRock.window`, where the
+simulator's blows under a load on the exact scheme end) but when it is certified over, as a single
+exact blow is (:mod:`~impactbar.laws.rodrock.exact`, "when the blow ends";
+:func:`~impactbar.laws.rodrock._exactend.certify`), so that its numbers do not depend on a window.
+Under a drive the piston's driven end is pushed on after the contact opens, and no bound on the
+piston's later course holds without the drive's own; the blow is over at the first of the solver's
+windows where the contact piston-shank is open and the piston's mean velocity is ``<= 0`` (moving
+back, or standing), the rod unable to make the rock yield again (``"separated"``; ``"lifted"``
+where the rod has left the rock for good; ``"spent"``), or with a feed the rock merely not loading
+(``"may_yield"``: the record's ``uncertainty`` bounds what a ringing rod could still make the rock
+take). From then on the piston's course is the drive's: it returns to the modal flight under the
+drive, whose arrival event catches a later touch of the shank as a new impact, not as part of this
+blow. While the piston still moves towards the shank, the blow goes on (a touch then is the exact
+solver's re-contact). The iteration marches to the end of the last iterate's blow (each blow solved
+with the certificate on, to its end or the part the iterate is right on) and goes on whole over it
+until the force settles; the blow's history before its end depends on the force before it only, so
+the end moves only while that force does. A blow not certified over within :data:`HORIZONS` of
+the law's window ends there (``ended_by = "t_max"``, the former fixed window). The rock is loaded by
+the feed at each blow and the piston returns to the modal flight with the state the exact solution
+projects (theory §11 says what these choices assume).
 """
 
 from __future__ import annotations
@@ -54,12 +70,17 @@ import numpy as np
 
 from ..base import DrivenContact, LawNotSupported
 
-__all__ = ["driven_exact_contact", "FORCE_TOL", "MAX_ITERATIONS", "SAMPLES"]
+__all__ = ["driven_exact_contact", "FORCE_TOL", "HORIZONS", "MAX_ITERATIONS", "SAMPLES"]
 
 #: The iteration ends when the force changes by less than this fraction of its size.
 FORCE_TOL = 1e-9
 #: The most iterations beyond the causal bound (``duration / (2 T_0) + 1``).
 MAX_ITERATIONS = 64
+#: The end is searched for up to this many of the law's window (:meth:`~impactbar.RodRock.window`);
+#: a blow not certified over by then ends there.
+HORIZONS = 2.0
+#: The solver's ends that certify the coupled blow over (module docstring).
+ENDS = ("separated", "lifted", "spent", "may_yield")
 #: Samples of the arriving wave per travel time of the piston's first segment.
 SAMPLES = 400
 #: How far inside its interval (in ``T_0``) the spline's end values are taken: beyond the model time's
@@ -265,21 +286,27 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     bmap = ExactBlowMap(model, FourierLoad(p0, []), t0)
     basis = bmap.basis
     T0, Z0 = float(basis.travel[0]), float(basis.impedance[0])
-    D = bmap.duration
+    cap = HORIZONS * bmap.duration  # (the law's window: the end searched for up to HORIZONS of it)
+    D = cap  # the blow's end: the certified end of the last blow solved past it, else the cap
     waves = initial_waves(basis, q, v, p0)
     w0 = -float(model.drive_weights @ q)
     scale = max(abs(p0), 1e-300)
     force = _Force(p0)
-    bound = math.ceil(D / (2.0 * T0)) + 1 + MAX_ITERATIONS
+    bound = math.ceil(cap / (2.0 * T0)) + 1 + MAX_ITERATIONS
     change = math.inf
     reach = 0.0  # marching: the iterate is right on [0, reach]
     for _ in range(bound):
         upto = min(reach + 2.0 * T0, D) if march else D
+        # (the blow is needed to upto - T0 only, but to its end where its change decides)
+        cut = march and not (upto >= D and reach >= D)
+        ex = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else cap, certified=True)
+        if ex.ended_by in ENDS:  # certified over at ex.duration with this force
+            D = float(ex.duration)
+            upto = min(upto, D)
+        elif not cut:
+            D = cap
         whole = upto >= D and reach >= D  # (the iterate over the whole blow: its change decides)
-        # (the blow is needed to upto - T0 only, but over the whole of it where its change decides)
-        cut = march and not whole
-        ex = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else None, energies=not cut)
-        breaks = _breaks(ex, T0, D, t0, upto if cut else None)
+        breaks = _breaks(ex, T0, D, t0, upto if not whole else None)
         incoming = _Incoming(ex, waves, force, T0, Z0, t0).callables(breaks)
         fl = drive.end_flight(model, state, breaks, w0, incoming, Z0, settings)
         if fl is None:
@@ -299,7 +326,8 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
         raise ValueError(f"the coupled exact blow at t = {t0:.6g} did not settle: the drive's force still "
                          f"changed by {change / scale:.2e} of its size after {bound} iterations")
     if not march:
-        ex = bmap.solve(q, v, record=True)
+        ex = bmap.solve(q, v, record=True, t_max=cap, certified=True)
+    bmap.duration = float(ex.duration)
     q_after, v_after = bmap.state_after(ex)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
     work = float(sum(p.piston_work() for p in fl.pieces))

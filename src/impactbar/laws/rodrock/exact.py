@@ -53,6 +53,10 @@ force scale on its time scale are dropped.
   ``1 - f / R_max`` of the dissipation, so the rock can still take at most
   ``Psi R_max / (R_max - f)``. The efficiency is that of the instant the blow ended: its
   denominator holds the feed's work to then, which the ringing rod moves either way (theory §4d);
+- under a drive (``drive`` given, no ``fixed_horizon``) the piston counts as gone once out of
+  contact with its mean velocity ``<= 0`` (what it does next is the drive's: the coupled blow's end,
+  :mod:`~impactbar.laws.rodrock.coupled_exact`), and ``"may_yield"`` ends the blow with a ``t_max``
+  too;
 - ``"t_max"``: the horizon the caller gave;
 - ``"rings"``: the cost bound reached with the rock unable to yield but the piston's return not
   excluded (a lossless rod and piston touching again and again);
@@ -402,7 +406,8 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         the next start.
     fixed_horizon : bool
         Run to ``t_max`` (required) without deciding the end (a drive can bring the piston back):
-        the simulator's blow of a fixed duration.
+        the simulator's blow of a fixed duration. Without it under a drive the end is decided as
+        the module's text says for a drive (the coupled blow's).
     lean : bool
         Return only ``(ws, scale)``, the solver's workspace after the run and the forces' scale,
         without the energies (the impact map's many blows: :mod:`~impactbar.laws.rodrock.exactmap`).

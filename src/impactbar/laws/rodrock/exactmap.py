@@ -415,9 +415,11 @@ class ExactBlowMap:
         h = float(min(self.basis.travel.min(), self.rod_times.min()))
         self.drive = drive_pieces(load, self.t0, self.duration, lead=h)
 
-    def solve(self, q, v, *, t_max=None, record=False, lean=False, log=0, energies=True):
+    def solve(self, q, v, *, t_max=None, record=False, lean=False, log=0, energies=True, certified=False):
         """The :class:`~impactbar.laws.rodrock.exact.ExactBlow` of an arrival in state ``(q, q')``
-        (the end on the shank), run to ``t_max`` (default the blow's duration); with ``lean`` only
+        (the end on the shank), run to ``t_max`` (default the blow's duration), with ``certified``
+        only until its end is certified (the solver's certificate under a drive: the coupled blow's,
+        :mod:`~impactbar.laws.rodrock.coupled_exact`) if that comes first; with ``lean`` only
         the solver's workspace and scale (:func:`~impactbar.laws.rodrock.exact.exact_blow`), with
         ``log`` rows of its switch log (:mod:`~impactbar.laws.rodrock.exactjac`); without
         ``energies`` its energies (and those derived from them) NaN, not accounted (the histories
@@ -438,7 +440,7 @@ class ExactBlowMap:
                 self._checked_drive = cached
             drive = cached[1]
         out = exact_blow(self.basis.travel, self.basis.impedance, self.rod_times, self.rod_impedances,
-                         initial=init, drive=drive, fixed_horizon=True,
+                         initial=init, drive=drive, fixed_horizon=not certified,
                          t_max=horizon, record=record,
                          lean=lean, semi_infinite=self.rod.semi_infinite, _trusted=trusted, _log=log,
                          _pool=self._pool_for(horizon), _energies=energies, **self.params)
