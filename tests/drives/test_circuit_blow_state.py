@@ -4,30 +4,21 @@ lattice's blow map with the drive's averages left to its caller, the same record
 blow once they are filled in."""
 
 import numpy as np
+import test_circuit_laws as laws_tests  # this folder's: the pump-fed drifter and the rod on rock
 
-from impactbar import BarModel, BilinearRock, RodRock, RodSegment
+from impactbar import BarModel
 from impactbar.drives import DriveState
-from impactbar.drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve
 from impactbar.laws.rodrock.contact import BlowMap
 from impactbar.loads import FourierLoad
 from impactbar.orbits.coupled import blow_state, coupled_blow
 
-S = 52.0
-
 
 def _model():
-    law = RodRock(segments=[RodSegment(length=2.0, impedance=1.0)],
-                  rock=BilinearRock(k=0.63 * S * S, k_u=6.3 * S * S), feed=0.05, cells_per_piston=8)
-    return BarModel(s=S, d=0, R=0.0, n_modes=0, impact=law)
+    return BarModel(s=laws_tests.S, d=0, R=0.0, n_modes=0, impact=laws_tests.rock(2.0, cells=8))
 
 
 def _drive():
-    return HydraulicCircuitDrive(
-        Chambers(area_ratio=0.5, rear_volume=0.4, front_volume=0.2),
-        Valve(switch_out=0.048, coefficient=2.0, switching_time=0.05),
-        Supply(pump_flow=0.07, hose_volume=1.0, front_coefficient=2.0, tank_pressure=0.03),
-        Oil(bulk_modulus=70.0, transition_pressure=0.01),
-        Accumulator(precharge=0.5, volume=2.0))
+    return laws_tests.pumped()
 
 
 def test_the_blow_without_its_piece_is_the_kept_blow_and_the_laws():
