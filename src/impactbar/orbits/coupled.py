@@ -46,6 +46,21 @@ def blow_state(model, drive, t, q, v, state, settings=None):
     """The coupled blow of :func:`coupled_blow` without its piece (the blows whose pieces nobody keeps:
     the Jacobian's, the settling's, the residuals').
 
+    Parameters
+    ----------
+    model : BarModel
+        Under a law whose contact takes time (:meth:`~impactbar.laws.ContactLaw.driven_contact`).
+    drive : Drive
+        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+    t : float
+        Time of the arrival (model units).
+    q, v : array_like, shape (N + 1,)
+        Modal positions and velocities at the arrival (the end moved onto the stop first).
+    state : DriveState
+        The drive's state as the piston arrives.
+    settings : FlightSettings, optional
+        The drive's integrator over the blow (default the drive's own).
+
     Returns
     -------
     y : numpy.ndarray, shape (2 N + 2 + k,)
