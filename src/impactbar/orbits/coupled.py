@@ -8,7 +8,7 @@ import numpy as np
 
 from ..drives.base import DriveState
 
-__all__ = ["coupled_blow", "blow_jacobian", "FD_STEP_BLOW"]
+__all__ = ["coupled_blow", "blow_state", "blow_jacobian", "FD_STEP_BLOW"]
 
 #: central-difference step of the coupled blow's Jacobian, relative to the modal and the drive's
 #: components' largest sizes: the blow is integrated at rtol 1e-10 (noise / step ~1e-5) and its
@@ -31,16 +31,49 @@ def coupled_blow(model, drive, t, q, v, state, settings=None):
     blow : BlowPiece
         The blow as a piece of the period (:class:`~impactbar.simulation.blows.BlowPiece`).
     """
-    from ..simulation.blows import BlowPiece, driven_blow
+    from ..simulation.blows import BlowPiece
 
-    res, after = driven_blow(model, drive, state, t, q, v, settings)
-    out = np.concatenate((res.q_after, res.v_after, after.z))
+    out, res, after = blow_state(model, drive, t, q, v, state, settings)
     c = model.end_weights
     qa = np.array(q, dtype=float)
     qa[0] -= float(c @ qa)
     blow = BlowPiece(t, res.t_release, res.record, (qa, np.array(v, dtype=float)), res.pieces, c,
                      (res.q_after.copy(), res.v_after.copy()))
     return out, res.t_release, after, blow
+
+
+def blow_state(model, drive, t, q, v, state, settings=None):
+    """The coupled blow of :func:`coupled_blow` without its piece (the blows whose pieces nobody keeps:
+    the Jacobian's, the settling's, the residuals').
+
+    Parameters
+    ----------
+    model : BarModel
+        Under a law whose contact takes time (:meth:`~impactbar.laws.ContactLaw.driven_contact`).
+    drive : Drive
+        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+    t : float
+        Time of the arrival (model units).
+    q, v : array_like, shape (N + 1,)
+        Modal positions and velocities at the arrival (the end moved onto the stop first).
+    state : DriveState
+        The drive's state as the piston arrives.
+    settings : FlightSettings, optional
+        The drive's integrator over the blow (default the drive's own).
+
+    Returns
+    -------
+    y : numpy.ndarray, shape (2 N + 2 + k,)
+        ``(q, q', z)`` after the blow and the drive's map at its end.
+    res : DrivenContact
+        The law's blow (:meth:`~impactbar.laws.ContactLaw.driven_contact`).
+    after : DriveState
+        The drive's state after the map.
+    """
+    from ..simulation.blows import driven_blow
+
+    res, after = driven_blow(model, drive, state, t, q, v, settings)
+    return np.concatenate((res.q_after, res.v_after, after.z)), res, after
 
 
 def blow_jacobian(model, drive, t, q, v, state, settings=None) -> np.ndarray:
@@ -64,7 +97,7 @@ def blow_jacobian(model, drive, t, q, v, state, settings=None) -> np.ndarray:
 
     def blow(yy):
         st = DriveState(state.mode, yy[2 * M:].copy())
-        return coupled_blow(model, drive, t, yy[:M], yy[M:2 * M], st, settings)[0]
+        return blow_state(model, drive, t, yy[:M], yy[M:2 * M], st, settings)[0]
 
     for j in range(n):
         if j == 0 and float(model.end_weights[0]) == 1.0:  # q_0 along the section: no effect

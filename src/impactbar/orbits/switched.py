@@ -280,13 +280,17 @@ class ShootingProblem(OrbitProblem):
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
         if self.coupled:  # the blow and the drive's state together, the drive's map at its end
-            from .coupled import blow_jacobian, coupled_blow
+            from .coupled import blow_jacobian, blow_state, coupled_blow
 
-            out, t_after, after, blow = coupled_blow(model, drive, t, q, v, state, settings or self.settings)
+            blow_settings = settings or self.settings
             if keep:
+                out, t_after, after, blow = coupled_blow(model, drive, t, q, v, state, blow_settings)
                 pieces.append(blow)
+            else:  # (no piece to keep: not made)
+                out, res, after = blow_state(model, drive, t, q, v, state, blow_settings)
+                t_after = res.t_release
             if variational:
-                D = blow_jacobian(model, drive, t, q, v, state, settings or self.settings) @ D
+                D = blow_jacobian(model, drive, t, q, v, state, blow_settings) @ D
                 return out, t_after, after.mode, arrival, pieces, events, D
             return out, t_after, after.mode, arrival, pieces, events
         if law.restitution_in_kernel(model):

@@ -279,9 +279,10 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
         flag, k, t, T, Y, F, starts, roots = compiled.fly_intervals(
             ws.mem, ws.y, breaks, k, t, w, z, incoming, rtol, atol, directions, data, _MAX_STEPS, volumes,
             impulses)
-        for i in range(starts.size - 1):
-            a, b = starts[i], starts[i + 1]
-            pieces.append(EndPiece(T[a:b], Y[a:b], F[a:b], alpha, drive.layout))
+        rows = starts.tolist()
+        layout = drive.layout
+        for a, b in zip(rows[:-1], rows[1:], strict=True):
+            pieces.append(EndPiece(T[a:b], Y[a:b], F[a:b], alpha, layout))
         if flag in (compiled.REAR_EMPTY, compiled.FRONT_EMPTY):
             which = "rear" if flag == compiled.REAR_EMPTY else "front"
             raise ValueError(f"the {which} chamber empties (V <= 0) during the blow near t = {t:.6g}: give a "

@@ -373,9 +373,13 @@ class BlowMap:
     ----------
     model, load, t0, cells_per_piston, duration
         As :func:`rock_contact`.
+    averaged : bool, optional
+        Whether the drive's step averages are the load's (default); ``False``: zeros, of shape
+        ``(n_max,)``, for the caller to fill in place before :meth:`contact` (the coupled blow,
+        whose averages come from the drive's state step by step, not from ``load``).
     """
 
-    def __init__(self, model, load, t0, *, cells_per_piston=None, duration=None):
+    def __init__(self, model, load, t0, *, cells_per_piston=None, duration=None, averaged=True):
         law = model.law
         self.model, self.load, self.t0 = model, load, float(t0)
         self.s = s = float(model.s)
@@ -389,7 +393,7 @@ class BlowMap:
         if duration is None:
             duration = law.window(model)
         self.n_max = whole_steps(duration, dt)
-        self.drive = _drive_averages(load, self.t0, dt, self.n_max)
+        self.drive = _drive_averages(load, self.t0, dt, self.n_max) if averaged else np.zeros(self.n_max)
         self.params = (law.rock.k, law.rock.k_u, law.bit_mass, law.feed)
         self._c = model.end_weights
 

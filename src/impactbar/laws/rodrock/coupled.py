@@ -64,20 +64,22 @@ def _bit_arrays(grid, law):
     return bs, bp
 
 
-def _steps(grid, F, G, bs, bp, gap, drive, record):
+def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     """``drive.size`` steps of the blow's compiled loop from the waves ``F, G`` and the bit ``bs``
     (updated in place); returns the gap after them and, with ``record``, the force in every cell at
-    the start of each step."""
+    the start of each step. ``bounds``: ``grid.bounds`` as int64 where the caller has it (a blow's
+    chunks share it)."""
     from ._rockkernel import blow_loop
 
     L = drive.size
-    junc = np.zeros((L, grid.bounds.size))
+    if bounds is None:
+        bounds = grid.bounds.astype(np.int64)
+    junc = np.zeros((L, bounds.size))
     bitrec = np.zeros((L + 1, 2))
     field = np.zeros((L if record else 0, F.size))
     acc = np.zeros(6)
     ctrl = np.array([grid.cell_time, -1.0, 0.0, gap])
-    blow_loop(F, G, grid.Z, grid.bounds.astype(np.int64), bs, bp, ctrl, np.ascontiguousarray(drive), junc,
-              bitrec, field, acc)
+    blow_loop(F, G, grid.Z, bounds, bs, bp, ctrl, np.ascontiguousarray(drive), junc, bitrec, field, acc)
     return float(acc[4]), field
 
 
@@ -120,7 +122,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     q = np.array(q, dtype=float)
     v = np.array(v, dtype=float)
     p0 = float(drive.force(state.mode, state.z, q, v))
-    bm = BlowMap(model, FourierLoad(p0, []), t0)
+    bm = BlowMap(model, FourierLoad(p0, []), t0, averaged=False)  # (the drive's averages: set below)
     grid = bm.grid
     n_p, dt, n_max = grid.piston_cells, grid.cell_time, bm.n_max
     Z0 = float(grid.Z[0])
@@ -129,7 +131,8 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     bs, bp = _bit_arrays(grid, law)
     gap = 0.0
     m = causal_cells(grid.Z, n_p)
-    averages = np.zeros(n_max)
+    averages = bm.drive
+    bounds = np.ascontiguousarray(grid.bounds, dtype=np.int64)
     w = -float(model.drive_weights @ q)
     st = state
     pieces, events = [], []
@@ -137,11 +140,10 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     while k < n_max:
         L = min(2 * m, n_max - k)
         # 1. the waves arriving at the driven end over the chunk (not caused by its drive)
-        _, field = _steps(grid, F.copy(), G.copy(), bs.copy(), bp, gap, np.zeros(L), True)
-        arriving = np.empty(L)
-        arriving[0] = G[0]
-        for j in range(1, L):  # F[0] = 0 - G[0] after a step without drive
-            arriving[j] = field[j, 0] + arriving[j - 1]
+        _, field = _steps(grid, F.copy(), G.copy(), bs.copy(), bp, gap, np.zeros(L), True, bounds)
+        column = field[:, 0].copy()
+        column[0] = G[0]
+        arriving = np.add.accumulate(column)  # F[0] = 0 - G[0] after a step without drive
         # 2. the drive over the chunk, the driven end at u_t(0) = (p - 2 G_k) / Z_0
         breaks = t0 + dt * np.arange(k, k + L + 1)
         fl = drive.end_flight(model, st, breaks, w, list(-2.0 * arriving / Z0), Z0, settings)
@@ -153,9 +155,8 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         pieces += fl.pieces
         events += fl.events
         # 3. the lattice on over the chunk with the drive's averages
-        gap, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False)
+        gap, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
         k += L
-    bm.drive = averages
     rec = bm.contact(q, v)
     if not (np.array_equal(rec._F0, F0) and np.array_equal(rec._G0, G0)):  # pragma: no cover - defensive
         raise RuntimeError("the blow's fields at impact changed between its chunks and its record")
