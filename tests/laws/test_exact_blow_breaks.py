@@ -72,3 +72,36 @@ def test_an_overflow_says_how_many_pieces_and_terms():
                    impact_velocity=1.0, max_pool_bytes=2 ** 19)
     assert "light bit" not in str(err.value)
     assert math.isfinite(float(str(err.value).split("by t = ")[1].split(":")[0]))
+
+
+def test_a_jump_under_a_large_cubic_is_a_new_piece():
+    """A piece emitted where the open one (a drive's cubic over a step of 1e-6 of a travel time: its
+    cubic coefficient 4.6e20, its value 0.4) has its value 0.396 lower is a new piece; the open piece
+    continued is none. (The continuation test weighed every coefficient against the largest: the jump
+    passed for rounding, and the coupled exact blow on a rod of whole piston lengths was 1.7e-6 off.)"""
+    from impactbar.laws.rodrock import _exactpieces as P
+    from impactbar.laws.rodrock import _records as S
+    from impactbar.laws.rodrock.exact import _binomials
+
+    lam = np.zeros(1, dtype=complex)
+    PF, PI = np.zeros((8, 5)), np.zeros((8, 4), dtype=np.int64)
+    TK, TC = np.zeros(64, dtype=np.int64), np.zeros(64, dtype=complex)
+    CNT, CHI = np.zeros(S.CNT_SIZE, dtype=np.int64), np.full((1, 2), -1, dtype=np.int64)
+    pool = (PF, PI, TK, TC, CNT, CHI, lam, _binomials())
+    cubic = np.array([0.4005844830041129, 2.310113533041259, -448309225.5409106, 4.63976562664008e20])
+
+    def emit(a, coefs):
+        B, N = np.zeros((1, P.DC), dtype=complex), np.array([4])
+        B[0, :4] = coefs
+        Sc, NS = np.zeros((1, P.DC), dtype=complex), np.zeros(1, dtype=np.int64)
+        assert P.emit(0, a, B, N, math.inf, 0, 0.0, pool, Sc, NS, 1e-19, 0.04)
+        return int(CNT[S.CNT_PIECES])
+
+    t0 = 0.004094745475215822
+    delta = (t0 + 5e-18) - t0
+    assert emit(t0, cubic) == 1
+    shifted = np.array([sum(cubic[d] * math.comb(d, k) * delta ** (d - k) for d in range(k, 4))
+                        for k in range(4)])
+    assert emit(t0 + delta, shifted) == 1  # (the open piece continued: none)
+    jump = shifted - np.array([0.3956, 0.0, 0.0, 0.0])
+    assert emit(t0 + delta, jump) == 2

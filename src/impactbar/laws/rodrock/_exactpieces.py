@@ -26,6 +26,9 @@ EPS = 2.220446049250313e-16
 SERIES_TOL = 1e-18
 #: arrivals closer than this (relative to the time) are one break point (rounding's slivers)
 SNAP = 64.0 * EPS
+#: a piece is the open one continued where each coefficient agrees to this fraction of its own size
+#: (or of its rounding in the shift), besides 1e-13 of the largest of them
+SLOT_REL = 1e-10
 
 # ------------------------------------------------------------------------------------------------
 # blocks
@@ -642,8 +645,30 @@ def _write_terms(B, N, TK, TC, CNT):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _same(B, N, S, NS, tol):
-    """Whether two blocks agree to rounding (``tol`` absolute, besides a relative 1e-13)."""
+def _shift_scale(e, k, tail, delta, dt, lam, BIN, PI, TK, TC):
+    """The rounding scale of coefficient ``(e, k)`` of piece ``tail`` shifted by ``delta``
+    (:func:`blk_shift`), ``delta`` known to ``dt`` (the clock's rounding): ``|e^{lam_e delta}|
+    sum_{d >= k} |c_ed| binom(d, k) (|delta|^(d - k) + (d - k) |delta|^(d - k - 1) dt)``."""
+    ad = abs(delta)
+    r = 0.0
+    ts = PI[tail, 1]
+    for i in range(ts, ts + PI[tail, 2]):
+        ei = TK[i] // DC
+        d = TK[i] - ei * DC
+        if ei == e and d >= k:
+            slope = (d - k) * ad ** (d - k - 1) * dt if d > k else 0.0
+            r += cabs(TC[i]) * BIN[d, k] * (ad ** (d - k) + slope)
+    return r * math.exp(lam[e].real * delta)
+
+
+@numba.njit(cache=CACHE, nogil=True)
+def _same(B, N, S, NS, tol, tail, t0, delta, lam, BIN, PI, TK, TC):
+    """Whether block ``B`` is the open piece ``tail`` continued (``S``, ``NS``: it shifted by
+    ``delta`` from its start ``t0``) to rounding: each coefficient within ``tol`` (absolute) besides
+    a relative 1e-13 of the largest, and within ``SLOT_REL`` of its own size or of its rounding scale
+    in the shift (:func:`_shift_scale`, the clock's rounding ``8 eps |t0 + delta|``). (The largest
+    alone hid a jump: a drive's cubic over a step of 1e-6 of a travel time, its cubic coefficient
+    1e20, let a change of the value by its whole size pass.)"""
     top = 0.0
     for e in range(N.size):
         for d in range(max(N[e], NS[e])):
@@ -655,8 +680,13 @@ def _same(B, N, S, NS, tol):
         for d in range(max(N[e], NS[e])):
             x = B[e, d] if d < N[e] else 0.0j
             y = S[e, d] if d < NS[e] else 0.0j
-            if cabs(x - y) > lim:
+            diff = cabs(x - y)
+            if diff > lim:
                 return False
+            if diff > SLOT_REL * max(cabs(x), cabs(y)) + tol:  # (rare: the slot's scale decides)
+                dt = 8.0 * EPS * (abs(t0) + abs(delta))
+                if diff > SLOT_REL * _shift_scale(e, d, tail, delta, dt, lam, BIN, PI, TK, TC) + tol:
+                    return False
     return True
 
 
@@ -698,7 +728,7 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
                     return True
             else:
                 pool_load(S, NS, tail, a - t0, lam, BIN, PI, TK, TC)
-                if _same(B, N, S, NS, tol):
+                if _same(B, N, S, NS, tol, tail, t0, a - t0, lam, BIN, PI, TK, TC):
                     return True
     npc = CNT[CNT_PIECES]
     if npc >= PF.shape[0]:
