@@ -9,9 +9,9 @@ generated ``jac_base`` of the drive's network, the one the variational flight ca
 .. math:: \Omega_k = \tfrac h2 (A_1 + A_2) + \tfrac{\sqrt 3 h^2}{12} [A_2, A_1], \qquad
           \Phi_{k+1} = e^{\Omega_k} \Phi_k
 
-(Magnus of order 4), ``expm`` compiled here (Higham 2005: Pade 3, 5, 7, 9 or 13 with scaling and
-squaring), each ``Omega`` in the coordinates that balance ``A`` (``scipy.linalg.matrix_balance`` once a
-flight: the modes' ``q' = v, v' = -w^2 q`` make ``||h A||`` some 275 at the plain steps, balanced 0.2).
+(Magnus of order 4), ``expm`` the library's (``_magnus.expm``, Higham 2005: Pade 3, 5, 7, 9 or 13
+with scaling and squaring), each ``Omega`` in the coordinates that balance ``A``
+(``scipy.linalg.matrix_balance`` once a flight: the modes' ``q' = v, v' = -w^2 q`` make ``||h A||`` some 275 at the plain steps, balanced 0.2).
 ``--sub S`` splits each plain step in ``S`` equal Magnus steps (``--sub 0.25``: one Magnus step over
 four plain steps); ``--sub aTHETA`` takes Magnus' own steps, ``h ||D^-1 A D||_1 = THETA``. The period's
 table has the unbalanced Magnus on the plain steps too.
@@ -40,58 +40,7 @@ import time
 import numba as nb
 import numpy as np
 
-THETA = (1.495585217958292e-2, 2.539398330063230e-1, 9.504178996162932e-1, 2.097847961257068,
-         5.371920351148152)
-B3 = (120., 60., 12., 1.)
-B5 = (30240., 15120., 3360., 420., 30., 1.)
-B7 = (17297280., 8648640., 1995840., 277200., 25200., 1512., 56., 1.)
-B9 = (17643225600., 8821612800., 2075673600., 302702400., 30270240., 2162160., 110880., 3960., 90., 1.)
-B13 = (64764752532480000., 32382376266240000., 7771770303897600., 1187353796428800., 129060195264000.,
-       10559470521600., 670442572800., 33522128640., 1323241920., 40840800., 960960., 16380., 182., 1.)
-
-
-@nb.njit(cache=True)
-def expm(A):
-    """``exp(A)`` (Higham 2005, the 1-norm's degree table, no balancing)."""
-    n = A.shape[0]
-    eye = np.eye(n)
-    nrm = 0.0
-    for j in range(n):
-        s = 0.0
-        for i in range(n):
-            s += abs(A[i, j])
-        nrm = max(nrm, s)
-    A2 = A @ A
-    if nrm <= THETA[0]:
-        U = A @ (B3[3] * A2 + B3[1] * eye)
-        V = B3[2] * A2 + B3[0] * eye
-        return np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    A4 = A2 @ A2
-    if nrm <= THETA[1]:
-        U = A @ (B5[5] * A4 + B5[3] * A2 + B5[1] * eye)
-        V = B5[4] * A4 + B5[2] * A2 + B5[0] * eye
-        return np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    A6 = A4 @ A2
-    if nrm <= THETA[2]:
-        U = A @ (B7[7] * A6 + B7[5] * A4 + B7[3] * A2 + B7[1] * eye)
-        V = B7[6] * A6 + B7[4] * A4 + B7[2] * A2 + B7[0] * eye
-        return np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    if nrm <= THETA[3]:
-        A8 = A4 @ A4
-        U = A @ (B9[9] * A8 + B9[7] * A6 + B9[5] * A4 + B9[3] * A2 + B9[1] * eye)
-        V = B9[8] * A8 + B9[6] * A6 + B9[4] * A4 + B9[2] * A2 + B9[0] * eye
-        return np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    s = max(0, int(math.ceil(math.log2(nrm / THETA[4]))))
-    sc = 2.0 ** -s
-    B, B2, B4, B6 = A * sc, A2 * sc**2, A4 * sc**4, A6 * sc**6
-    U = B @ (B6 @ (B13[13] * B6 + B13[11] * B4 + B13[9] * B2) + B13[7] * B6 + B13[5] * B4 + B13[3] * B2
-             + B13[1] * eye)
-    V = B6 @ (B13[12] * B6 + B13[10] * B4 + B13[8] * B2) + B13[6] * B6 + B13[4] * B4 + B13[2] * B2 \
-        + B13[0] * eye
-    E = np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    for _ in range(s):
-        E = E @ E
-    return E
+from impactbar.drives.circuit._magnus import expm, unscale  # (the library's, since it takes Phi so)
 
 
 @nb.njit(cache=True)
@@ -134,16 +83,6 @@ def _step(t, y, f, par, M, t0, hs, k, jac_base, d, A1, A2, ys):
 
 
 @nb.njit(cache=True)
-def _unscaled(Phi, d):
-    """``D Phi D^-1`` in place."""
-    n = Phi.shape[0]
-    for i in range(n):
-        for j in range(n):
-            Phi[i, j] *= d[i] / d[j]
-    return Phi
-
-
-@nb.njit(cache=True)
 def magnus_phi(t, y, f, par, M, n, grid, jac_base, d):
     """``Phi`` over the Magnus steps ``grid`` (times within ``[t[0], t[-1]]``, ``t``'s first and last
     included) by Magnus of order 4, ``A`` at the Gauss points from the Hermite interpolant of the
@@ -158,7 +97,7 @@ def magnus_phi(t, y, f, par, M, n, grid, jac_base, d):
     for m in range(grid.size - 1):
         E, k = _step(t, y, f, par, M, grid[m], grid[m + 1] - grid[m], k, jac_base, d, A1, A2, ys)
         Phi = E @ Phi
-    return _unscaled(Phi, d)
+    return unscale(Phi, d)
 
 
 @nb.njit(cache=True)
@@ -187,7 +126,7 @@ def magnus_phi_adaptive(t, y, f, par, M, n, theta, jac_base, d):
         Phi = E @ Phi
         t0 = tend if last else t0 + hs
         steps += 1
-    return _unscaled(Phi, d), steps
+    return unscale(Phi, d), steps
 
 
 def magnus_grid(t, sub):
