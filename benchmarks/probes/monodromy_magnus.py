@@ -11,7 +11,8 @@ generated ``jac_base`` of the drive's network, the one the variational flight ca
 
 (Magnus of order 4), ``expm`` the library's (``_magnus.expm``, Higham 2005: Pade 3, 5, 7, 9 or 13
 with scaling and squaring), each ``Omega`` in the coordinates that balance ``A``
-(``scipy.linalg.matrix_balance`` once a flight: the modes' ``q' = v, v' = -w^2 q`` make ``||h A||`` some 275 at the plain steps, balanced 0.2).
+(``scipy.linalg.matrix_balance`` once a flight: the modes' ``q' = v, v' = -w^2 q`` make ``||h A||``
+some 275 at the plain steps, balanced 0.2).
 ``--sub S`` splits each plain step in ``S`` equal Magnus steps (``--sub 0.25``: one Magnus step over
 four plain steps); ``--sub aTHETA`` takes Magnus' own steps, ``h ||D^-1 A D||_1 = THETA``. The period's
 table has the unbalanced Magnus on the plain steps too.
