@@ -662,13 +662,14 @@ def _shift_scale(e, k, tail, delta, dt, lam, BIN, PI, TK, TC):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def _same(B, N, S, NS, tol, tail, t0, delta, lam, BIN, PI, TK, TC):
+def _same(B, N, S, NS, tol, tail, t0, delta, pool):
     """Whether block ``B`` is the open piece ``tail`` continued (``S``, ``NS``: it shifted by
-    ``delta`` from its start ``t0``) to rounding: each coefficient within ``tol`` (absolute) besides
-    a relative 1e-13 of the largest, and within ``SLOT_REL`` of its own size or of its rounding scale
-    in the shift (:func:`_shift_scale`, the clock's rounding ``8 eps |t0 + delta|``). (The largest
-    alone hid a jump: a drive's cubic over a step of 1e-6 of a travel time, its cubic coefficient
-    1e20, let a change of the value by its whole size pass.)"""
+    ``delta`` from its start ``t0``; ``pool`` as :func:`emit`'s) to rounding: each coefficient
+    within ``tol`` (absolute) besides a relative 1e-13 of the largest, and within ``SLOT_REL`` of its
+    own size or of its rounding scale in the shift (:func:`_shift_scale`, the clock's rounding
+    ``8 eps |t0 + delta|``). (The largest alone hid a jump: a drive's cubic over a step of 1e-6 of a
+    travel time, its cubic coefficient 1e20, let a change of the value by its whole size pass.)"""
+    _, PI, TK, TC, _, _, lam, BIN = pool
     top = 0.0
     for e in range(N.size):
         for d in range(max(N[e], NS[e])):
@@ -728,7 +729,7 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
                     return True
             else:
                 pool_load(S, NS, tail, a - t0, lam, BIN, PI, TK, TC)
-                if _same(B, N, S, NS, tol, tail, t0, a - t0, lam, BIN, PI, TK, TC):
+                if _same(B, N, S, NS, tol, tail, t0, a - t0, pool):
                     return True
     npc = CNT[CNT_PIECES]
     if npc >= PF.shape[0]:
