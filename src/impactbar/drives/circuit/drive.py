@@ -246,8 +246,10 @@ class HydraulicCircuitDrive(Drive):
         for name in ("compiled", "band", "blocks"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be True or False; got {getattr(self, name)!r}")
-        if self.sensitivity not in ("auto", "magnus", "cvode"):
-            raise ValueError(f"sensitivity must be 'auto', 'magnus' or 'cvode'; got {self.sensitivity!r}")
+        from .flight import SENSITIVITIES
+
+        if self.sensitivity not in SENSITIVITIES:
+            raise ValueError(f"sensitivity must be one of {SENSITIVITIES}; got {self.sensitivity!r}")
         acc = self.accumulator
         if acc is not None and not isinstance(acc, Accumulator):
             raise ValueError(f"accumulator must be an Accumulator or None; got {type(acc).__name__}")

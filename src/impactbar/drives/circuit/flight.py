@@ -179,6 +179,9 @@ _MAX_STEPS = 2_000_000
 #: to 1e-10 (theory §11, "Sensitivities").
 MAGNUS_STATE_TOLERANCE = 1e-3
 
+#: How a variational flight may take its fundamental matrix (:func:`circuit_flight`'s ``sensitivity``).
+SENSITIVITIES = ("auto", "magnus", "cvode")
+
 
 def _compiled_driver(compiled: bool = True):
     """:mod:`._cvode` where ``compiled`` and the libraries bind, else None."""
@@ -305,8 +308,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         Where CVODE fails (the message says why: a chamber emptied, a pressure out of range).
     """
     settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
-    if sensitivity not in ("auto", "magnus", "cvode"):
-        raise ValueError(f"sensitivity must be 'auto', 'magnus' or 'cvode'; got {sensitivity!r}")
+    if sensitivity not in SENSITIVITIES:
+        raise ValueError(f"sensitivity must be one of {SENSITIVITIES}; got {sensitivity!r}")
     mode, z = state
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
