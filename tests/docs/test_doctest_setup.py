@@ -1,5 +1,6 @@
-"""Every docstring example runs as a doctest under the README's test command (``python -m pytest``):
-the configuration collects the package's modules, and the examples that exist are collected."""
+"""Every docstring example runs as a doctest under the README's test command
+(``python -m pytest -n auto``): the configuration collects the package's modules, and the examples
+that exist are collected."""
 
 import subprocess
 import sys

@@ -62,7 +62,7 @@ def test_the_readme_opens_with_a_paragraph_and_a_figure_then_the_user_s_and_the_
     user, dev = bash[0].strip(), bash[1].strip()
     assert "\n" not in user and 'pip install ".[all]"' in user and "impactbar paper" in user
     assert "pytest" not in user and "ruff" not in user
-    assert "\n" not in dev and 'pip install -e ".[test]"' in dev and dev.endswith("python -m pytest")
+    assert "\n" not in dev and 'pip install -e ".[test]"' in dev and dev.endswith("python -m pytest -n auto")
     images = re.findall(r"!\[[^\]]*\]\(([^)\s]+)\)", text)
     assert images and all((README.parent / i).is_file() for i in images)
     assert text.index(images[0]) < text.index("```bash")
