@@ -510,7 +510,9 @@ class ShootingProblem(OrbitProblem):
         flights' accuracy; where the flights integrate the variational equations and ``newton`` is
         ``"chord"``, the chord method (:func:`~impactbar.drives.orbitproblem.chord`) from the Jacobian of a
         variational flight at ``SETTLE_RTOL``, the residuals by plain flights (where it fails,
-        Newton's method from the same start)."""
+        Newton's method from the same start), then one Newton step with a variational flight; the
+        Jacobians of the chord and of that step only steer, and take Magnus' coarser steps
+        (``STEER_THETA``)."""
         tol = max(tol, self.accuracy)
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
