@@ -220,12 +220,28 @@ class FlightSettings:
         event times are accurate to about these.
     max_step : float
         Largest step (default ``inf``).
+    magnus_theta : float or None
+        The size of the Magnus steps of a variational flight that takes its fundamental matrix over
+        the plain flight's steps (the oil circuit's flexible piston,
+        :mod:`impactbar.drives.circuit._magnus`: ``h ||A|| = theta``); ``None`` (default): the
+        drive's own (0.5). A coarser one serves a Jacobian that only steers Newton's method.
+
+    Raises
+    ------
+    ValueError
+        ``magnus_theta`` neither ``None`` nor positive and finite.
     """
 
     method: str = "LSODA"
     rtol: float = 1e-10
     atol: float = 1e-12
     max_step: float = math.inf
+    magnus_theta: float | None = None
+
+    def __post_init__(self) -> None:
+        t = self.magnus_theta
+        if t is not None and not (math.isfinite(t) and t > 0.0):
+            raise ValueError(f"magnus_theta must be None or positive and finite; got {t!r}")
 
 
 # --------------------------------------------------------------------------------------------------

@@ -153,6 +153,11 @@ SETTLE_IMPACTS = 400
 #: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
 #: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance)
 SETTLE_RTOL = 1e-7
+#: the Magnus steps (``h ||A|| = theta``, :attr:`FlightSettings.magnus_theta`) of the variational
+#: flights whose Jacobian only steers Newton's method (the chord's, its closing step): four times the
+#: drive's own, some three times fewer steps, the Jacobian some 256 times less accurate (order 4),
+#: some 1e-6 where a step of 1e-7 then leaves 1e-13; the multipliers' keep the drive's
+STEER_THETA = 2.0
 #: longest flight between two impacts (model time units) before a flight counts as never arriving
 HORIZON = 1e4
 
@@ -505,25 +510,35 @@ class ShootingProblem(OrbitProblem):
         flights' accuracy; where the flights integrate the variational equations and ``newton`` is
         ``"chord"``, the chord method (:func:`~impactbar.drives.orbitproblem.chord`) from the Jacobian of a
         variational flight at ``SETTLE_RTOL``, the residuals by plain flights (where it fails,
-        Newton's method from the same start)."""
+        Newton's method from the same start), then one Newton step with a variational flight; the
+        Jacobians of the chord and of that step only steer, and take Magnus' coarser steps
+        (``STEER_THETA``)."""
         tol = max(tol, self.accuracy)
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
         X0 = X
+        steer = self._steer(self.settings)
         try:
-            X = chord(self.value, lambda XX: self.residual(XX)[1], X, self.positive, tol, max_iter,
-                      first=self.residual(X, settings=self._loose())[1])
+            X = chord(self.value, lambda XX: self.residual(XX, settings=steer)[1], X, self.positive, tol,
+                      max_iter, first=self.residual(X, settings=self._steer(self._loose()))[1])
         except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
             return newton(self.residual, X0, self.positive, tol, max_iter)  # before, and its verdict)
         # the root of the plain flights is not the variational flights' (their steps differ: the
         # integrator's error, 4e-8 in the residual of the 4-mode circuit); one Newton step with the
         # variational flight moves it there, where Newton's method of before converges
-        r, J = self.residual(X)
+        r, J = self.residual(X, settings=steer)  # (its residual is the variational flight's all the same)
         try:
             return X + np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:
             raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at its "
                              "root") from None
+
+    @staticmethod
+    def _steer(settings: FlightSettings) -> FlightSettings:
+        """``settings`` with the Magnus steps of a Jacobian that only steers Newton's method
+        (``STEER_THETA``; a drive whose variational flights integrate ``Phi`` beside the state, the
+        rigid piston's CVODE, reads none)."""
+        return dataclasses.replace(settings, magnus_theta=STEER_THETA)
 
     def _loose(self) -> FlightSettings:
         """The integrator at ``SETTLE_RTOL`` (its ``atol`` scaled as much): the flights that only lead

@@ -356,8 +356,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     Phi = yend[n + n_energy:].reshape(n, n).T.copy() if variational else None  # (stored by columns)
     if magnus:
         d = _magnus.balance(code.jac_base, piece.y[piece.t.size // 2], par, M, n)
-        Phi = code.magnus_phi(np.ascontiguousarray(own), piece.y, piece.f, par, M, _magnus.DEFAULT_THETA,
-                              d)[0]
+        theta = _magnus.DEFAULT_THETA if settings.magnus_theta is None else settings.magnus_theta
+        Phi = code.magnus_phi(np.ascontiguousarray(own), piece.y, piece.f, par, M, theta, d)[0]
     if status == 2:
         if K.ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop
