@@ -1,6 +1,7 @@
-"""The benchmarks' shared timer: the median wall time of a call after one warm-up call (numba's
-compilation, caches), and the runs of a script on two package trees in fresh processes (the scripts'
-``--against SRC``). Imported by the scripts of this folder (run as ``python benchmarks/...``)."""
+"""The benchmarks' shared timers: the median wall time or the least CPU time of a call after one
+warm-up call (numba's compilation, caches), and the runs of a script on two package trees in fresh
+processes (the scripts' ``--against SRC``). Imported by the scripts of this folder (run as
+``python benchmarks/...``)."""
 
 from __future__ import annotations
 
@@ -16,15 +17,25 @@ from pathlib import Path
 import numpy as np
 
 
-def median_time(fn, repeat: int) -> float:
-    """Median of ``repeat`` timed calls of ``fn()`` (seconds), after one untimed call."""
+def _times(fn, repeat: int, clock) -> list:
+    """``repeat`` timed calls of ``fn()`` by ``clock`` (seconds each), after one untimed call."""
     fn()
     ts = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        ts.append(time.perf_counter() - t0)
-    return float(np.median(ts))
+        ts.append(clock() - t0)
+    return ts
+
+
+def median_time(fn, repeat: int) -> float:
+    """Median of ``repeat`` timed calls of ``fn()`` (wall seconds), after one untimed call."""
+    return float(np.median(_times(fn, repeat, time.perf_counter)))
+
+
+def best_cpu(fn, repeat: int) -> float:
+    """The least CPU seconds of ``repeat`` calls of ``fn()``, after one untimed call."""
+    return min(_times(fn, repeat, time.process_time))
 
 
 def ref_tree(ref: str) -> str:

@@ -15,8 +15,9 @@ state,
     \Omega = \frac h2 (A_1 + A_2) + \frac{\sqrt 3\, h^2}{12} [A_2, A_1], \qquad
     \Phi \leftarrow e^{\Omega} \Phi .
 
-The exponential is computed by the scaling-and-squaring Pade method (Higham 2005, the degree
-chosen from :math:`\|\Omega\|_1`), each :math:`\Omega` in coordinates :math:`D^{-1} \Omega D`
+The exponential is computed by scaling and squaring with the Taylor polynomials of Bader, Blanes
+& Casas (2019; at the steps' :math:`\|\Omega\|_1 \approx \theta` the degree 18 in five products, no
+squaring and no solve), each :math:`\Omega` in coordinates :math:`D^{-1} \Omega D`
 that balance :math:`A` (:func:`scipy.linalg.matrix_balance` once a flight, ``D`` powers of two:
 exact), where the modes' :math:`q' = v, v' = -\omega^2 q` are of one size. A constant :math:`A`
 over a step is taken exactly: the piston's fast modes, which a BDF step over the variational
@@ -46,15 +47,39 @@ DEFAULT_THETA = 0.5
 
 _JIT = dict(cache=CACHE, nogil=True, error_model="numpy")
 
-# Higham (2005), Table 2.3: the largest 1-norms for the Pade degrees 3, 5, 7, 9, 13 in double precision
-_THETA = (1.495585217958292e-2, 2.539398330063230e-1, 9.504178996162932e-1, 2.097847961257068,
-          5.371920351148152)
-_B3 = (120., 60., 12., 1.)
-_B5 = (30240., 15120., 3360., 420., 30., 1.)
-_B7 = (17297280., 8648640., 1995840., 277200., 25200., 1512., 56., 1.)
-_B9 = (17643225600., 8821612800., 2075673600., 302702400., 30270240., 2162160., 110880., 3960., 90., 1.)
-_B13 = (64764752532480000., 32382376266240000., 7771770303897600., 1187353796428800., 129060195264000.,
-        10559470521600., 670442572800., 33522128640., 1323241920., 40840800., 960960., 16380., 182., 1.)
+# Bader, Blanes & Casas (2019), "Computing the matrix exponential with an optimized Taylor polynomial
+# approximation", Mathematics 7, 1174: the Taylor polynomials of degree 4, 8, 12 and 18 in 2, 3, 4 and 5
+# products (theirs, (2.2), (2.6)-(2.8), (2.13)-(2.16); the degree-12 one is theirs with a_{02} = 4.6), each
+# with the largest 1-norm at which its backward error is below the unit roundoff (their Table 2)
+_THETA4, _THETA8, _THETA12, _THETA18 = (3.397168839976962e-4, 4.991228871115323e-2, 2.996158913811580e-1,
+                                        1.090863719290036)
+_S177 = math.sqrt(177.0)
+_X3 = 2.0 / 3.0
+_T8_A = ((1.0 + _S177) / 88.0 * _X3, (1.0 + _S177) / 352.0 * _X3)
+_T8_U2 = (857.0 - 58.0 * _S177) / 630.0
+_T8_C = ((-271.0 + 29.0 * _S177) / (315.0 * _X3), 11.0 * (-1.0 + _S177) / (1260.0 * _X3),
+         11.0 * (-9.0 + _S177) / (5040.0 * _X3), -(-89.0 + _S177) / (5040.0 * _X3 ** 2))
+# degree 12: the factors' coefficients of I, A, A^2, A^3
+_T12 = ((-0.0186023205146205532243437300433, -0.00500702322573317730979741843919,
+         -0.573420122960522263905952420789, -0.133399693943892059700768926983),
+        (4.6, 0.992875103538486836140479571505, -0.132445561052799638845074997454, 0.0017299),
+        (0.211693118299809442949323323336, 0.158224384715726725371768893252,
+         0.165635169436727415011171668419, 0.0107862779315792425026320640108),
+        (0.0, -0.131810610138301840156819349464, -0.0202785554058925907933568229945,
+         -0.00675951846863086359778560766482))
+# degree 18: the factors' coefficients of I, A, A^2, A^3, A^6
+_T18 = ((0.0, -0.100365581030144620014614939405, -0.00802924648241156960116919515244,
+         -0.000892138498045729955685466128049, 0.0),
+        (0.0, 0.39784974949964507614519612771028, 1.3678377846041171992252370687822,
+         0.49828962252538267755685881726227, -0.00063789819459472330924155005649193),
+        (-10.967639605296206259351746267537, 1.6801581387890619718278540172481,
+         0.057177984647886551270287171322525, -0.0069821012248805208429046648380155,
+         0.000033497501708607053831336734066844),
+        (-0.090431683239081056197146887701835, -0.067640451907138190756007990037971,
+         0.067596130177045964608279919507894, 0.029555257042931552742606918224223,
+         -0.000013918025751606070112473997934374),
+        (0.0, 0.0, -0.0923364619367118592764570775143, -0.0169364939002081717191385115723,
+         -0.0000140086798182036159794363205726))
 _C1 = 0.5 - math.sqrt(3.0) / 6.0  # the first Gauss-Legendre point of [0, 1]
 _COMM = math.sqrt(3.0) / 12.0
 
@@ -72,9 +97,56 @@ def _norm1(A):
 
 
 @nb.njit(**_JIT)
+def _comb(c, A, A2, A3, A6, out):
+    """``out = c_0 I + c_1 A + c_2 A^2 + c_3 A^3 + c_4 A^6`` (``c`` of 5), returned."""
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(n):
+            out[i, j] = c[1] * A[i, j] + c[2] * A2[i, j] + c[3] * A3[i, j] + c[4] * A6[i, j]
+        out[i, i] += c[0]
+    return out
+
+
+@nb.njit(**_JIT)
+def _taylor(A, nrm):
+    """The Taylor polynomial of ``e^A`` of the least degree of 4, 8, 12, 18 whose backward error at the
+    1-norm ``nrm`` (at most ``_THETA18``) is below the unit roundoff."""
+    n = A.shape[0]
+    A2 = A @ A
+    zero = np.zeros((n, n))
+    if nrm <= _THETA4:  # I + A + A^2 (I/2 + A/6 + A^2/24)
+        E = _comb((1.0, 1.0, 0.0, 0.0, 0.0), A, A2, zero, zero, np.empty((n, n)))
+        E += A2 @ _comb((0.5, 1.0 / 6.0, 1.0 / 24.0, 0.0, 0.0), A, A2, zero, zero, np.empty((n, n)))
+        return E
+    if nrm <= _THETA8:
+        A4 = A2 @ _comb((0.0, _T8_A[0], _T8_A[1], 0.0, 0.0), A, A2, zero, zero, np.empty((n, n)))
+        c = _T8_C
+        E = _comb((0.0, 0.0, _X3, 0.0, 1.0), A, A2, zero, A4, np.empty((n, n))) \
+            @ _comb((c[0], c[1], c[2], 0.0, c[3]), A, A2, zero, A4, np.empty((n, n)))
+        E += _comb((1.0, 1.0, _T8_U2, 0.0, 0.0), A, A2, zero, zero, np.empty((n, n)))
+        return E
+    A3 = A2 @ A
+    if nrm <= _THETA12:
+        q = [_comb((c[0], c[1], c[2], c[3], 0.0), A, A2, A3, zero, np.empty((n, n))) for c in _T12]
+        q6 = q[2] + q[3] @ q[3]
+        E = (q[1] + q6) @ q6
+        E += q[0]
+        return E
+    A6 = A3 @ A3
+    q = [_comb(c, A, A2, A3, A6, np.empty((n, n))) for c in _T18]
+    q9 = q[0] @ q[4]
+    q9 += q[3]
+    E = (q[2] + q9) @ q9
+    E += q[1]
+    return E
+
+
+@nb.njit(**_JIT)
 def expm(A):
-    r"""The matrix exponential :math:`e^A` by scaling and squaring with Pade approximants (Higham
-    2005, Algorithm 2.3, without its balancing: the caller balances).
+    r"""The matrix exponential :math:`e^A` by scaling and squaring with the Taylor polynomials of Bader,
+    Blanes & Casas (2019; degrees 4 to 18 in 2 to 5 products, chosen by :math:`\|A\|_1`: at the
+    Magnus steps' :math:`\|A\|_1 \approx 1/2` the polynomial of degree 18, no squaring, no solve).
+    Without balancing: the caller balances.
 
     Parameters
     ----------
@@ -83,7 +155,7 @@ def expm(A):
     Returns
     -------
     numpy.ndarray, shape (n, n)
-        To about ``1e-15`` relative (scipy's ``expm`` is the same algorithm).
+        To about ``1e-15`` relative (the polynomials' backward error below the unit roundoff).
 
     Examples
     --------
@@ -93,37 +165,11 @@ def expm(A):
     >>> bool(np.allclose(expm(A), scipy_expm(A), rtol=1e-13, atol=1e-14))
     True
     """
-    n = A.shape[0]
-    eye = np.eye(n)
     nrm = _norm1(A)
-    A2 = A @ A
-    if nrm <= _THETA[0]:
-        U = A @ (_B3[3] * A2 + _B3[1] * eye)
-        V = _B3[2] * A2 + _B3[0] * eye
-        return np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    A4 = A2 @ A2
-    if nrm <= _THETA[1]:
-        U = A @ (_B5[5] * A4 + _B5[3] * A2 + _B5[1] * eye)
-        V = _B5[4] * A4 + _B5[2] * A2 + _B5[0] * eye
-        return np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    A6 = A4 @ A2
-    if nrm <= _THETA[2]:
-        U = A @ (_B7[7] * A6 + _B7[5] * A4 + _B7[3] * A2 + _B7[1] * eye)
-        V = _B7[6] * A6 + _B7[4] * A4 + _B7[2] * A2 + _B7[0] * eye
-        return np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    if nrm <= _THETA[3]:
-        A8 = A4 @ A4
-        U = A @ (_B9[9] * A8 + _B9[7] * A6 + _B9[5] * A4 + _B9[3] * A2 + _B9[1] * eye)
-        V = _B9[8] * A8 + _B9[6] * A6 + _B9[4] * A4 + _B9[2] * A2 + _B9[0] * eye
-        return np.ascontiguousarray(np.linalg.solve(V - U, V + U))
-    s = max(0, int(math.ceil(math.log2(nrm / _THETA[4]))))
-    sc = 2.0 ** -s
-    B, B2, B4, B6 = A * sc, A2 * sc ** 2, A4 * sc ** 4, A6 * sc ** 6
-    U = B @ (B6 @ (_B13[13] * B6 + _B13[11] * B4 + _B13[9] * B2) + _B13[7] * B6 + _B13[5] * B4
-             + _B13[3] * B2 + _B13[1] * eye)
-    V = B6 @ (_B13[12] * B6 + _B13[10] * B4 + _B13[8] * B2) + _B13[6] * B6 + _B13[4] * B4 \
-        + _B13[2] * B2 + _B13[0] * eye
-    E = np.ascontiguousarray(np.linalg.solve(V - U, V + U))
+    s = 0
+    if nrm > _THETA18:
+        s = max(0, int(math.ceil(math.log2(nrm / _THETA18))))
+    E = _taylor(A * 2.0 ** -s, nrm * 2.0 ** -s)
     for _ in range(s):
         E = E @ E
     return E
@@ -172,13 +218,24 @@ def magnus_step(A, d, theta, left):
 @nb.njit(**_JIT)
 def magnus_exp(A1, A2, h, d):
     r"""``exp(D^-1 Omega D)`` of a Magnus step of length ``h`` with the Jacobians ``A1``, ``A2`` at
-    its Gauss points (module docstring)."""
-    Om = (0.5 * h) * (A1 + A2) + (_COMM * h * h) * (A2 @ A1 - A1 @ A2)
-    n = Om.shape[0]
+    its Gauss points (module docstring); the commutator's products skip the Jacobians' zeros (most of
+    their entries: the modes' blocks)."""
+    n = A1.shape[0]
+    C = np.zeros((n, n))
+    for i in range(n):
+        for k in range(n):
+            a, b = A2[i, k], A1[i, k]
+            if a != 0.0:
+                for j in range(n):
+                    C[i, j] += a * A1[k, j]
+            if b != 0.0:
+                for j in range(n):
+                    C[i, j] -= b * A2[k, j]
+    half, comm = 0.5 * h, _COMM * h * h
     for i in range(n):
         for j in range(n):
-            Om[i, j] *= d[j] / d[i]
-    return expm(Om)
+            C[i, j] = (half * (A1[i, j] + A2[i, j]) + comm * C[i, j]) * (d[j] / d[i])
+    return expm(C)
 
 
 @nb.njit(**_JIT)
