@@ -11,9 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from impactbar import find_orbit
+from impactbar import continue_orbit, find_orbit
 from impactbar.drives.base import DriveState, FlightSettings
 from impactbar.drives.circuit.flight import MAGNUS_STATE_TOLERANCE
+from impactbar.orbits import switched
 from impactbar.orbits.switched import STEER_THETA, ShootingProblem, orbit_of
 from impactbar.physical import circuit_preset
 
@@ -120,3 +121,53 @@ def test_the_rigid_pistons_jacobian_ignores_the_steering_steps():
     problem._last = None
     rs, Js = problem.residual(X, settings=dataclasses.replace(problem.settings, magnus_theta=STEER_THETA))
     assert np.array_equal(r, rs) and np.array_equal(J, Js)
+
+
+@pytest.fixture(scope="module")
+def branches():
+    """A short continuation in the pre-charge of the 2-mode orbit, the correctors' Jacobians steered,
+    and the same with the drive's own steps throughout (``STEER_THETA`` the drive's: the way before)."""
+    d = circuit_preset("circuit-drifter")
+    drive = d.drive()
+    orbit = find_orbit(d.model().with_(n_modes=2), drive)
+    kw = dict(to=drive.accumulator.precharge * 1.05, max_points=4, events=False)
+    steered = continue_orbit(orbit, "precharge", **kw)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(switched, "STEER_THETA", drive.integrator.magnus_theta)
+        own = continue_orbit(orbit, "precharge", **kw)
+    return steered, own
+
+
+def test_the_steered_correctors_branch_is_the_drives_own_steps(branches):
+    """Against the branch whose correctors take the drive's own steps: the parameter values within 1e-8
+    (the tangents, from the correctors' last Jacobians, tilt by the steering's error and the points
+    slide along the branch by as much: measured 8.6e-10), the orbits within 1e-10 of their size and the
+    multipliers within 1e-8 (measured 1.9e-12, 1.8e-9; those of a steering Jacobian are some 1e-6
+    off)."""
+    steered, own = branches
+    assert len(steered.orbits) == len(own.orbits) == 4
+    np.testing.assert_allclose(steered.values, own.values, rtol=1e-8)
+    for ob, ref in zip(steered.orbits, own.orbits, strict=True):
+        X, Xr = np.asarray(ob._unknowns), np.asarray(ref._unknowns)
+        assert np.max(np.abs(X - Xr)) <= 1e-10 * np.max(np.abs(Xr))
+        np.testing.assert_allclose(ob.multipliers, ref.multipliers, rtol=0, atol=1e-8)
+
+
+def test_the_continuations_variational_periods_but_the_orbits_steer(monkeypatch):
+    """In the continuation, the variational flights at the drive's own steps are the orbits' (one
+    each: their multipliers, the next corrector's chord); the correctors' take the steering steps."""
+    d = circuit_preset("circuit-drifter")
+    drive = d.drive()
+    orbit = find_orbit(d.model().with_(n_modes=2), drive)
+    seen = []
+    fly = ShootingProblem._fly
+
+    def spy(self, tau, mode, y, keep, variational, settings):
+        if variational:
+            seen.append((settings or self.settings).magnus_theta)
+        return fly(self, tau, mode, y, keep, variational, settings)
+
+    monkeypatch.setattr(ShootingProblem, "_fly", spy)
+    b = continue_orbit(orbit, "precharge", to=drive.accumulator.precharge * 1.05, max_points=3, events=False)
+    assert seen.count(drive.integrator.magnus_theta) == len(b.orbits), seen
+    assert seen.count(STEER_THETA) == len(seen) - len(b.orbits) >= 2, seen

@@ -70,8 +70,10 @@ class _SwitchedProblem:
         return self.pair(float(U[-1]))[2].value(U[:-1])
 
     def FJ(self, U, F_lam=None):
-        """Residual, the Jacobian ``[F_u, F_lam]`` (``F_u`` the problem's, ``F_lam`` by central
-        differences unless given, one-sided at the edge of the parameter's range) and ``F_lam``.
+        """Residual, the Jacobian ``[F_u, F_lam]`` (``F_u`` the problem's, one that only steers the
+        corrector where the problem has one: ``ShootingProblem.steering_residual``, Magnus' coarser
+        steps; ``F_lam`` by central differences unless given, one-sided at the edge of the
+        parameter's range) and ``F_lam``.
 
         Where the flights are integrated (a drive whose flights carry the variational equations,
         the oil circuit) ``F_lam`` is a forward difference from ``F`` (one flight instead of two; its
@@ -86,7 +88,8 @@ class _SwitchedProblem:
             F, DF = problem.value(U[:-1]), chord  # the last orbit's Jacobian: a chord step
             self._uses += 1
         else:
-            F, DF = problem.residual(U[:-1])
+            # (a Jacobian that only steers: Magnus' coarser steps where the flights are integrated)
+            F, DF = getattr(problem, "steering_residual", problem.residual)(U[:-1])
             if every and getattr(problem, "variational", False):
                 self._chord, self._uses = DF, 0
         if F_lam is None:
@@ -111,8 +114,9 @@ class _SwitchedProblem:
     def orbit(self, U, admissibility=True):
         """The orbit at ``U``. Where the flights are integrated, the Jacobian of its residual (from
         the variational flight the orbit's data came from, remembered by the problem: no flight
-        more) is kept for the first step of the next corrector (a chord step: the residual by a
-        plain flight, ``F_u`` the last orbit's), which the full Jacobian's steps then finish."""
+        more; the drive's own steps, as the multipliers') is kept for the first step of the next
+        corrector (a chord step: the residual by a plain flight, ``F_u`` the last orbit's), which the
+        steering Jacobian's steps then finish."""
         problem = self.pair(float(U[-1]))[2]
         ob = orbit_of(problem, U[:-1])
         if self.chord and getattr(problem, "variational", False):

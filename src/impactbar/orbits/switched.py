@@ -533,6 +533,24 @@ class ShootingProblem(OrbitProblem):
             raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at its "
                              "root") from None
 
+    def steering_residual(self, X):
+        """The shooting residual and a Jacobian that only steers Newton's method (a corrector's
+        step, not the multipliers'): where the drive's flights integrate the variational equations,
+        with Magnus' coarser steps (``STEER_THETA``; the residual the same flights'); else
+        :meth:`residual`'s.
+
+        Parameters
+        ----------
+        X : numpy.ndarray, shape (m n,)
+            The unknowns.
+
+        Returns
+        -------
+        r : numpy.ndarray, shape (m n,)
+        J : numpy.ndarray, shape (m n, m n)
+        """
+        return self.residual(X, settings=self._steer(self.settings) if self.variational else None)
+
     @staticmethod
     def _steer(settings: FlightSettings) -> FlightSettings:
         """``settings`` with the Magnus steps of a Jacobian that only steers Newton's method
