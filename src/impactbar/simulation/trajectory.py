@@ -583,8 +583,7 @@ def _segment_integrals(core: _Core, seg: _Segment, tb: float):
     hmax = 1.5 / (wmax + kmax + 1.0)
     nodes, weights = [], []
     for a, b in zip(edges[:-1], edges[1:], strict=True):
-        n = max(1, math.ceil((b - a) / hmax))
-        e = np.linspace(a, b, n + 1)
+        e = _panels(a, b, hmax, core.d)
         half = 0.5 * (e[1:] - e[:-1])
         nodes.append((half[:, None] * (_GL_X[None, :] + 1.0) + e[:-1, None]).ravel())
         weights.append((half[:, None] * _GL_W[None, :]).ravel())
@@ -608,13 +607,30 @@ def _segment_integrals(core: _Core, seg: _Segment, tb: float):
     return work, damp, qe[:, 0], ve[:, 0]
 
 
+def _panels(a: float, b: float, hmax: float, d: float) -> np.ndarray:
+    """The quadrature panels' edges on ``[a, b]``: width ``hmax`` (the modes' and the load's fastest
+    oscillation), and where the damping's decay is faster (``d > 1.5 / hmax``: the transient that a
+    jump of the state or the load at ``a`` starts falls as ``exp(-d (t - a))``) widths from
+    ``1.5 / d`` doubling up to ``hmax`` first, so that each 16-point Gauss panel sees at most a few
+    e-folds of a transient not yet negligible (``hmax`` alone left a relative error of 2e-8 in the
+    damping loss of a rigid bar at ``d = 30``)."""
+    head = [a]
+    h = 1.5 / d if d > 0.0 else math.inf
+    while h < hmax and head[-1] + h < b:
+        head.append(head[-1] + h)
+        h *= 2.0
+    n = max(1, math.ceil((b - head[-1]) / hmax))
+    return np.concatenate((head[:-1], np.linspace(head[-1], b, n + 1)))
+
+
 def _energy_nodes(core: _Core, span: float, n_segments: int) -> float:
     """An upper bound of the quadrature nodes :func:`_segment_integrals` uses over a run."""
     w2 = np.concatenate((core.free.w2, core.contact.w2))
     wmax = math.sqrt(float(np.max(w2))) if w2.size else 0.0
     kmax = float(np.max(core.data.ks)) if core.data.ks.size else 0.0
     jumps = core.data.breaks.size * (span / TWO_PI + 1.0) if core.data.kind == 1 else 0.0
-    return _GL_X.size * (span * (wmax + kmax + 1.0) / 1.5 + n_segments + jumps)
+    graded = math.log2(max(1.0, core.d / (wmax + kmax + 1.0))) + 1.0  # (_panels' doubling widths)
+    return _GL_X.size * (span * (wmax + kmax + 1.0) / 1.5 + (n_segments + jumps) * graded)
 
 
 def _energy_account(tr: Trajectory) -> EnergyAccount:
