@@ -517,16 +517,15 @@ class ShootingProblem(OrbitProblem):
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
         X0 = X
-        steer = self._steer(self.settings)
         try:
-            X = chord(self.value, lambda XX: self.residual(XX, settings=steer)[1], X, self.positive, tol,
+            X = chord(self.value, lambda XX: self.steering_residual(XX)[1], X, self.positive, tol,
                       max_iter, first=self.residual(X, settings=self._steer(self._loose()))[1])
         except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
             return newton(self.residual, X0, self.positive, tol, max_iter)  # before, and its verdict)
         # the root of the plain flights is not the variational flights' (their steps differ: the
         # integrator's error, 4e-8 in the residual of the 4-mode circuit); one Newton step with the
         # variational flight moves it there, where Newton's method of before converges
-        r, J = self.residual(X, settings=steer)  # (its residual is the variational flight's all the same)
+        r, J = self.steering_residual(X)  # (its residual is the variational flight's all the same)
         try:
             return X + np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:

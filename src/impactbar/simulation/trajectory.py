@@ -629,7 +629,8 @@ def _energy_nodes(core: _Core, span: float, n_segments: int) -> float:
     wmax = math.sqrt(float(np.max(w2))) if w2.size else 0.0
     kmax = float(np.max(core.data.ks)) if core.data.ks.size else 0.0
     jumps = core.data.breaks.size * (span / TWO_PI + 1.0) if core.data.kind == 1 else 0.0
-    graded = math.log2(max(1.0, core.d / (wmax + kmax + 1.0))) + 1.0  # (_panels' doubling widths)
+    ratio = core.d / (wmax + kmax + 1.0)  # (_panels' doubling widths: at most ceil(log2 ratio) an interval)
+    graded = 1.0 + (math.ceil(math.log2(ratio)) if ratio > 1.0 else 0.0)
     return _GL_X.size * (span * (wmax + kmax + 1.0) / 1.5 + (n_segments + jumps) * graded)
 
 
