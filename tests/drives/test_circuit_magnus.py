@@ -87,23 +87,26 @@ def test_the_magnus_steps_are_the_formula(case):
 
 def test_a_flights_phi_is_the_fine_variational_flights(case):
     """Magnus' ``Phi`` over the orbit's first flight against CVODE's variational flight at rtol 1e-12
-    (measured 4.6e-8 of its largest entry, and allowed no more than 1.5 times that; CVODE's variational
-    flight at the drive's tolerance 1.2e-7), the flight's end state the same to the integrators'
-    tolerances."""
+    (measured 7.7e-8 of its largest entry over the Adams-Moulton flight's states, 4.6e-8 over BDF's,
+    and allowed no more than 1.3 times the first; CVODE's variational flight at the drive's tolerance
+    1.2e-7; the reference converged: 3e-9 from the same at rtol 1e-13), the flight's end state the same
+    to the integrators' tolerances."""
     drive, model, _, start = case
     ref = dataclasses.replace(drive, sensitivity="cvode").flight(model, *start, math.inf, FINE, True)
     fl = drive.flight(model, *start, math.inf, None, True)
     assert fl.t == pytest.approx(ref.t, rel=1e-11)
     assert np.max(np.abs(fl.q - ref.q)) <= 1e-10
     err = np.max(np.abs(fl.sensitivity - ref.sensitivity)) / np.max(np.abs(ref.sensitivity))
-    assert err <= 7e-8, err
+    assert err <= 1e-7, err
 
 
 def test_magnus_is_of_order_four(case):
     """Over the same steps, ``theta`` 1, 1/2 and 1/4 against 1/16: the error falls some 16 times a
-    halving (measured 13 and 14)."""
+    halving (measured 13 and 14). The steps are BDF's: over Adams-Moulton's, two to three times as
+    long, the state's cubic Hermite interpolant (continuous in its first derivative only) has kinks
+    that Magnus' steps resolve as they shrink, and the ratios scatter (9.7 and 25)."""
     drive, model, _, start = case
-    fl = dataclasses.replace(drive, sensitivity="cvode").flight(
+    fl = dataclasses.replace(drive, sensitivity="cvode", multistep="bdf").flight(
         model, *start, math.inf, FlightSettings(method="CVODE", rtol=1e-13, atol=1e-15), False)
     piece, (state, *_) = fl.piece, start
     net, code = drive._compiled_network(state.mode)
@@ -120,13 +123,15 @@ def test_magnus_is_of_order_four(case):
 
 def test_the_orbit_is_the_variational_flights(case):
     """The orbit with Magnus' ``Phi`` against the orbit of CVODE's variational flights (the way
-    before): the same period and impact velocity to 1e-9 (measured 1e-11 and 3e-11), the multipliers
-    within the variational flights' own error at the drive's tolerance (2.9e-6 against a flight at
-    rtol 1e-12; Magnus' 4e-7)."""
+    before): the same period and impact velocity to 1e-8 (measured 2e-11 and 3.0e-9: the variational
+    flights' error at the drive's tolerance, their state among CVODE's ``n^2 + n`` unknowns; the orbit
+    over Adams-Moulton's plain flights is 4e-11 from the flights at rtol 1e-12, the slow test), the
+    multipliers within the variational flights' own error at the drive's tolerance (2.9e-6 against a
+    flight at rtol 1e-12; Magnus' 4e-7)."""
     drive, model, orbit, _ = case
     before = find_orbit(model, dataclasses.replace(drive, sensitivity="cvode"))
-    assert orbit.period == pytest.approx(before.period, rel=1e-9)
-    assert orbit.impact_velocity == pytest.approx(before.impact_velocity, rel=1e-9)
+    assert orbit.period == pytest.approx(before.period, rel=1e-8)
+    assert orbit.impact_velocity == pytest.approx(before.impact_velocity, rel=1e-8)
     assert np.max(np.abs(orbit.multipliers - before.multipliers)) <= 1e-5
     assert orbit.stable and before.stable
 
@@ -134,7 +139,8 @@ def test_the_orbit_is_the_variational_flights(case):
 @pytest.mark.slow  # about 30 s: the orbit's period of flights at rtol 1e-12
 def test_the_multipliers_are_nearer_the_fine_flights_than_cvodes(case):
     """The multipliers against the orbit's at rtol 1e-12 (CVODE's variational flights): Magnus' within
-    1e-6 (measured 4e-7), and nearer than the variational flights' at the drive's tolerance."""
+    1e-6 (measured 6.7e-8), and nearer than the variational flights' at the drive's tolerance; the
+    orbit's impact velocity within 1e-9 of its (measured 3.8e-11; over BDF's plain flights 1.3e-9)."""
     drive, model, orbit, _ = case
     fine = dataclasses.replace(drive, sensitivity="cvode")
     object.__setattr__(fine, "integrator", FINE)
@@ -143,6 +149,7 @@ def test_the_multipliers_are_nearer_the_fine_flights_than_cvodes(case):
     err_magnus = np.max(np.abs(orbit.multipliers - ref.multipliers))
     err_cvode = np.max(np.abs(before.multipliers - ref.multipliers))
     assert err_magnus <= 1e-6 and err_magnus < err_cvode, (err_magnus, err_cvode)
+    assert abs(orbit.impact_velocity - ref.impact_velocity) <= 1e-9
 
 
 def test_the_rigid_piston_keeps_cvodes_flights(case):

@@ -35,7 +35,7 @@ if not S.bind():  # pragma: no cover - imported only where available (flight.py)
 __all__ = ["fly", "workspace", "last_workspace", "Workspace", "CV_ROOT_RETURN", "CV_TSTOP_RETURN",
            "CV_TOO_MUCH_WORK"]
 
-CV_BDF, CV_ONE_STEP = 2, 2
+CV_ADAMS, CV_BDF, CV_ONE_STEP = 1, 2, 2
 CV_SUCCESS, CV_TSTOP_RETURN, CV_ROOT_RETURN, CV_TOO_MUCH_WORK = 0, 1, 2, -1
 
 _p, _c, _d = types.intp, types.intc, types.double  # pointers as integers of their size
@@ -351,7 +351,8 @@ def _free(ctx, mem, y, A, LS):
 
 
 class Workspace:
-    """One CVODE memory for systems of size ``N``: BDF, Newton's method with the dense direct solver
+    """One CVODE memory for systems of size ``N``: BDF (or, with ``adams``, Adams-Moulton of orders
+    1 to 12), Newton's method with the dense direct solver
     and :func:`_jac_c` or, with ``band`` (the variational flights: ``N = n + 8 + n^2``), the band
     solver of half-bandwidths ``n - 1`` and :func:`_jac_band_c` (``n^2`` times fewer operations a
     factorisation than the dense one), the six event functions :func:`_events_c`, SUNDIALS' error
@@ -371,7 +372,7 @@ class Workspace:
         The addresses :func:`fly` takes.
     """
 
-    def __init__(self, N: int, band: int = 0, callbacks=None, blocks: bool = False):
+    def __init__(self, N: int, band: int = 0, callbacks=None, blocks: bool = False, adams: bool = False):
         f = S.function
         ctx = ctypes.c_void_p()
         if f("SUNContext_Create")(0, ctypes.byref(ctx)) != 0:
@@ -384,8 +385,8 @@ class Workspace:
         else:
             A = f("SUNDenseMatrix")(N, N, ctx)
             LS = f("SUNLinSol_Dense")(y, A, ctx) if y and A else None
-        mem = f("CVodeCreate")(CV_BDF, ctx)
-        self.ctx, self.mem, self.y, self.N, self.band = ctx.value, mem, y, N, band
+        mem = f("CVodeCreate")(CV_ADAMS if adams else CV_BDF, ctx)
+        self.ctx, self.mem, self.y, self.N, self.band, self.adams = ctx.value, mem, y, N, band, bool(adams)
         self._finalizer = weakref.finalize(self, _free, ctx.value, mem, y, A, LS)
         if not (y and A and LS and mem):
             raise MemoryError("SUNDIALS could not allocate a CVODE workspace")
@@ -424,18 +425,19 @@ class Workspace:
 _LOCAL = threading.local()
 
 
-def workspace(N: int, band: int = 0, callbacks=None, blocks: bool = False) -> Workspace:
+def workspace(N: int, band: int = 0, callbacks=None, blocks: bool = False, adams: bool = False) -> Workspace:
     """This thread's workspace for systems of size ``N`` (with the band solver of half-bandwidths
-    ``band``, or dense for 0; with ``blocks``, its setup and solve on the blocks, :class:`Workspace`),
+    ``band``, or dense for 0; with ``blocks``, its setup and solve on the blocks; with ``adams``,
+    Adams-Moulton's method instead of BDF; :class:`Workspace`),
     made on first use; ``callbacks``: ``(rhs, jac, events, number of events)`` as compiled C
     callbacks in place of the flight's (the circuit during a blow: :mod:`._endcvode`)."""
     spaces = getattr(_LOCAL, "spaces", None)
     if spaces is None:
         spaces = _LOCAL.spaces = {}
-    key = (N, band, None if callbacks is None else callbacks[0].address, bool(blocks and band))
+    key = (N, band, None if callbacks is None else callbacks[0].address, bool(blocks and band), bool(adams))
     ws = spaces.get(key)
     if ws is None:
-        ws = spaces[key] = Workspace(N, band, callbacks, blocks)
+        ws = spaces[key] = Workspace(N, band, callbacks, blocks, adams)
     _LOCAL.last = ws
     return ws
 

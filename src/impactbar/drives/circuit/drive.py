@@ -176,6 +176,12 @@ class HydraulicCircuitDrive(Drive):
         integrated beside the state by CVODE (the way before); ``"auto"`` (default), Magnus where
         the piston has modes, CVODE for the rigid piston
         (:func:`~impactbar.drives.circuit.flight.circuit_flight`, theory §11).
+    multistep : {"auto", "adams", "bdf"}, optional
+        CVODE's linear multistep method (keyword, left out of the repr): ``"auto"`` (default),
+        Adams-Moulton (orders 1 to 12) for the plain flights of a piston with modes, whose steps
+        follow the modes' oscillations, and BDF (orders 1 to 5) for the rigid piston, whose steps
+        follow the oil's stiffness; ``"adams"`` or ``"bdf"`` for every flight (theory §11,
+        *The integrator*).
     extra_parts : tuple of CircuitPart, optional
         Parts added to the circuit (keyword, left out of the repr;
         :class:`~impactbar.drives.circuit.composition.CircuitPart`): their nodes' pressures are
@@ -221,6 +227,7 @@ class HydraulicCircuitDrive(Drive):
     blocks: bool = dataclasses.field(default=True, repr=False, kw_only=True)
     extra_parts: tuple = dataclasses.field(default=(), repr=False, kw_only=True)
     sensitivity: str = dataclasses.field(default="auto", repr=False, kw_only=True)
+    multistep: str = dataclasses.field(default="auto", repr=False, kw_only=True)
 
     #: where the circuit keeps its states and energy terms (:class:`~.layout.CircuitLayout`: ``z``'s
     #: indices by name, ``layout["supply"]``, and the energy integrands' ``layout.energy["pump"]``)
@@ -246,10 +253,12 @@ class HydraulicCircuitDrive(Drive):
         for name in ("compiled", "band", "blocks"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be True or False; got {getattr(self, name)!r}")
-        from .flight import SENSITIVITIES
+        from .flight import MULTISTEPS, SENSITIVITIES
 
         if self.sensitivity not in SENSITIVITIES:
             raise ValueError(f"sensitivity must be one of {SENSITIVITIES}; got {self.sensitivity!r}")
+        if self.multistep not in MULTISTEPS:
+            raise ValueError(f"multistep must be one of {MULTISTEPS}; got {self.multistep!r}")
         acc = self.accumulator
         if acc is not None and not isinstance(acc, Accumulator):
             raise ValueError(f"accumulator must be an Accumulator or None; got {type(acc).__name__}")
@@ -583,7 +592,7 @@ class HydraulicCircuitDrive(Drive):
 
         return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational,
                               compiled=self.compiled, band=self.band, blocks=self.blocks,
-                              sensitivity=self.sensitivity)
+                              sensitivity=self.sensitivity, multistep=self.multistep)
 
     def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
         """The circuit over a stretch of a blow with the driven end moved by the law's waves

@@ -15,7 +15,11 @@ those calls is a call of Python, the same flight took 8.5 ms (``compiled=False``
 bit). CVODE's counters on it: 380 steps, 498 right-hand sides, 17 error-test failures, 497 Newton
 iterations, 7 Jacobians: the steps are those BDF's error control asks at this tolerance (the
 pressures' fast transients after each switch and impact, the valve's ramp; measured over 20 periods,
-``rtol = 1e-8`` took a quarter fewer steps for errors a hundred times larger), not failures. The
+``rtol = 1e-8`` took a quarter fewer steps for errors a hundred times larger), not failures. With a
+flexible piston the steps follow the modes' oscillations, which the pressures carry, more than the
+oil's stiffness, and the plain flights take CVODE's Adams-Moulton method (orders 1 to 12) instead:
+a stroke of the preset's piston with 4 modes in 5,025 steps against BDF's 11,344, nearer an
+independent integration (``multistep``; theory §11, *The integrator*). The
 variational flights' Newton systems (:math:`n + 8 + n^2` unknowns) are solved by the band solver
 (``band=True``, the default; ``Phi`` stored by columns), its LU taken once on the state's
 ``n x n`` block and applied to each column of ``Phi``'s (``blocks=True``, the default). Its
@@ -182,6 +186,9 @@ MAGNUS_STATE_TOLERANCE = 1e-3
 #: How a variational flight may take its fundamental matrix (:func:`circuit_flight`'s ``sensitivity``).
 SENSITIVITIES = ("auto", "magnus", "cvode")
 
+#: CVODE's linear multistep methods a flight may take (:func:`circuit_flight`'s ``multistep``).
+MULTISTEPS = ("auto", "adams", "bdf")
+
 
 def _compiled_driver(compiled: bool = True):
     """:mod:`._cvode` where ``compiled`` and the libraries bind, else None."""
@@ -202,26 +209,28 @@ def _message(flag) -> str:
     return CVMESSAGES.get(int(flag), f"CVODE's flag {int(flag)}")
 
 
-def _integrate_compiled(cv, band, blocks, n_energy, code, par, settings, directions, y0, t, end, keep):
+def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, directions, y0, t, end,
+                        keep):
     """``(flag, message, t, y[:, :keep], y_end, events hit)`` by :func:`._cvode.fly` (``band``: the
     variational flights' Newton systems by the band solver, else the dense one; ``blocks``: the band
-    solver's setup and solve on the blocks, :class:`._cvode.Workspace`; ``n_energy`` the energy
-    integrands after the ``n`` states; ``code``: the generated module whose C callbacks CVODE calls,
-    :mod:`._netgen`, or None for :mod:`._cvode`'s own)."""
+    solver's setup and solve on the blocks, :class:`._cvode.Workspace`; ``adams``: Adams-Moulton's
+    method, else BDF; ``n_energy`` the energy integrands after the ``n`` states; ``code``: the
+    generated module whose C callbacks CVODE calls, :mod:`._netgen`, or None for :mod:`._cvode`'s
+    own)."""
     n = keep - n_energy
     var = band and y0.size > keep  # variational: the band solver
     callbacks = None
     if code is not None:
         rhs, jac, jac_band, events, n_events = code.CALLBACKS
         callbacks = (rhs, jac_band if var else jac, events, n_events)
-    ws = cv.workspace(y0.size, n - 1 if var else 0, callbacks, blocks and var)
+    ws = cv.workspace(y0.size, n - 1 if var else 0, callbacks, blocks and var, adams)
     flag, ts, Y, yend, roots = cv.fly(ws.mem, ws.y, float(t), y0, float(end), float(settings.rtol),
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
     return int(flag), _message(flag), ts, Y, yend, np.flatnonzero(roots)
 
 
-def _integrate_binding(code, par, settings, directions, y0, t, end, keep):
+def _integrate_binding(adams, code, par, settings, directions, y0, t, end, keep):
     """The same through scikit-sundae's ``CVODE`` (its Python interface)."""
     from sksundae.cvode import CVODE
 
@@ -241,8 +250,8 @@ def _integrate_binding(code, par, settings, directions, y0, t, end, keep):
 
     ev.terminal = [True] * n_events
     ev.direction = list(directions)
-    solver = CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
-                   num_events=n_events, max_num_steps=_MAX_STEPS)
+    solver = CVODE(f, method="Adams" if adams else "BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf,
+                   eventsfn=ev, num_events=n_events, max_num_steps=_MAX_STEPS)
     with contextlib.redirect_stdout(io.StringIO()):  # scikit-sundae prints CVODE's errors: in sol.message
         sol = solver.solve(np.array([t, end]), y0)
     Y = np.asarray(sol.y, dtype=float)
@@ -255,7 +264,7 @@ def _integrate_binding(code, par, settings, directions, y0, t, end, keep):
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
                    settings: FlightSettings | None = None, variational: bool = False, *,
                    compiled: bool = True, band: bool = True, blocks: bool = True,
-                   generated: bool = True, sensitivity: str = "auto") -> Flight:
+                   generated: bool = True, sensitivity: str = "auto", multistep: str = "auto") -> Flight:
     """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
     stop, the circuit's next event or ``t_stop`` (module docstring).
 
@@ -295,6 +304,13 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         ``Phi`` agrees with a variational flight at a 100 times finer tolerance to some ``1e-6``
         with 8 modes, where CVODE's at the drive's tolerance is some ``1e-5`` off (theory §11).
 
+    multistep : {"auto", "adams", "bdf"}, optional
+        CVODE's linear multistep method: ``"bdf"``, the backward differentiation formulas of orders
+        1 to 5; ``"adams"``, Adams-Moulton of orders 1 to 12 (Newton's iterations with the same
+        Jacobian either way); ``"auto"`` (default), Adams-Moulton for the plain flights of a piston
+        with modes (those of a variational flight by Magnus among them), BDF for the rigid piston and
+        for CVODE's variational flights (module docstring).
+
     Returns
     -------
     Flight
@@ -310,6 +326,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
     if sensitivity not in SENSITIVITIES:
         raise ValueError(f"sensitivity must be one of {SENSITIVITIES}; got {sensitivity!r}")
+    if multistep not in MULTISTEPS:
+        raise ValueError(f"multistep must be one of {MULTISTEPS}; got {multistep!r}")
     mode, z = state
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
@@ -338,8 +356,10 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     keep = n + n_energy
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
-    integrate = functools.partial(_integrate_binding, code) if (cv := _compiled_driver(compiled)) is None \
-        else functools.partial(_integrate_compiled, cv, band, blocks, n_energy, code)
+    adams = multistep == "adams" or (multistep == "auto" and M > 1 and not variational)
+    cv = _compiled_driver(compiled)
+    integrate = functools.partial(_integrate_binding, adams, code) if cv is None \
+        else functools.partial(_integrate_compiled, cv, band, blocks, adams, n_energy, code)
     status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0, end - t,
                                                   keep)
     if status < 0 or not np.all(np.isfinite(yend)):
