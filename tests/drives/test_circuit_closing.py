@@ -99,6 +99,22 @@ def test_the_orbit_is_full_newtons_and_the_variational_flights(case):
     np.testing.assert_array_equal(problem.orbit(X).multipliers, orbit.multipliers)
 
 
+@pytest.mark.slow  # about 15 s: the orbit with 16 modes twice
+def test_the_16_mode_orbit_is_full_newtons():
+    """With 16 modes, where the closing step's steering Jacobian is the least accurate: the orbit
+    against full Newton's within 1e-10 in its unknowns, its impact velocity within 1e-9 and its
+    multipliers within 1e-8 (measured 7.1e-12, 1.4e-10, 1.6e-9; over BDF's plain flights it was
+    4.9e-10, 1.4e-8 and 1.2e-7)."""
+    d = circuit_preset("circuit-drifter")
+    model, drive = d.model().with_(n_modes=16), d.drive()
+    orbit = find_orbit(model, drive)
+    full = ShootingProblem(model, drive, newton="full")
+    ref = orbit_of(full, full.solve(full.initial(None, 1e-13, 50), 1e-13, 50))
+    assert np.max(np.abs(np.asarray(orbit._unknowns) - np.asarray(ref._unknowns))) <= 1e-10
+    assert abs(orbit.impact_velocity - ref.impact_velocity) <= 1e-9
+    np.testing.assert_allclose(orbit.multipliers, ref.multipliers, rtol=0, atol=1e-8)
+
+
 def _tight_residual(problem, X, settings):
     """The shooting residual by plain flights with ``settings``."""
     n, m = problem.n, problem.impacts
