@@ -23,6 +23,12 @@ def case():
     return d.drive(), d.model().with_(n_modes=4)
 
 
+def _stiffer(drive, k):
+    """``drive`` with its oil's bulk modulus times ``k``."""
+    oil = dataclasses.replace(drive.oil, bulk_modulus=k * drive.oil.bulk_modulus)
+    return dataclasses.replace(drive, oil=oil)
+
+
 def _dop853(rtol):
     """A stand-in for the flights' integrators (:func:`.flight._integrate_compiled` and
     ``_integrate_binding``, whose last eight arguments it takes): scipy's DOP853 on the generated
@@ -114,6 +120,26 @@ def test_each_flight_takes_the_method_asked(case):
     assert method(rigid, variational=True) == "bdf"
     assert method(model, "bdf") == "bdf"
     assert method(rigid, "adams") == "adams"
+    # oil a hundred times stiffer: its decay 260 times the highest mode's frequency, BDF
+    stiff = _stiffer(drive, 100.0)
+    assert F.stiffness_ratio(stiff, model) > F.ADAMS_STIFFNESS
+    drive = stiff
+    assert method(model) == "bdf"
+    assert method(model, "adams") == "adams"
+
+
+@pytest.mark.parametrize("n_modes", [4, 8, 16])
+@pytest.mark.parametrize("k", [1.0, 100.0])
+def test_the_stiffness_ratio_is_the_front_chambers_decay_over_the_highest_mode(case, n_modes, k):
+    """Against closed forms: the front chamber's relaxation behind its opening at equal pressures,
+    ``beta K_f / (V_f sqrt(p_tr))``, over the uniform piston's highest mode ``N pi s`` (measured within
+    1e-3: the chamber's coupling to the piston and the supply)."""
+    drive, model = case
+    drive = _stiffer(drive, k)
+    model = model.with_(n_modes=n_modes)
+    decay = drive.oil.bulk_modulus * drive.supply.front_coefficient / (
+        drive.chambers.front_volume * np.sqrt(drive.oil.transition_pressure))
+    assert F.stiffness_ratio(drive, model) == pytest.approx(decay / (n_modes * np.pi * model.s), rel=2e-3)
 
 
 def test_a_stroke_by_either_method_is_dop853s(case, monkeypatch):

@@ -178,10 +178,11 @@ class HydraulicCircuitDrive(Drive):
         (:func:`~impactbar.drives.circuit.flight.circuit_flight`, theory §11).
     multistep : {"auto", "adams", "bdf"}, optional
         CVODE's linear multistep method (keyword, left out of the repr): ``"auto"`` (default),
-        Adams-Moulton (orders 1 to 12) for the plain flights of a piston with modes, whose steps
-        follow the modes' oscillations, and BDF (orders 1 to 5) for the rigid piston, whose steps
-        follow the oil's stiffness; ``"adams"`` or ``"bdf"`` for every flight (theory §11,
-        *The integrator*).
+        Adams-Moulton (orders 1 to 12) for the plain flights of a piston with modes where their
+        steps follow the modes' oscillations (the oil's fastest decay at most 15 times the highest
+        mode's frequency, :func:`~impactbar.drives.circuit.flight.stiffness_ratio`), and BDF (orders
+        1 to 5) where they follow the oil's stiffness: a stiffer oil, the rigid piston; ``"adams"``
+        or ``"bdf"`` for every flight (theory §11, *The integrator*).
     extra_parts : tuple of CircuitPart, optional
         Parts added to the circuit (keyword, left out of the repr;
         :class:`~impactbar.drives.circuit.composition.CircuitPart`): their nodes' pressures are

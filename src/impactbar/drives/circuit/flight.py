@@ -49,7 +49,7 @@ from ..flight import ARRIVAL, END, EVENT, Flight
 from . import _kernel as K
 from . import _magnus
 
-__all__ = ["CircuitPiece", "circuit_flight", "DEFAULT_SETTINGS"]
+__all__ = ["CircuitPiece", "circuit_flight", "stiffness_ratio", "DEFAULT_SETTINGS", "ADAMS_STIFFNESS"]
 
 #: The circuit's integrator: CVODE's BDF at these tolerances (``atol`` relative to the states'
 #: scale, 1 in the units of theory §11).
@@ -189,6 +189,59 @@ SENSITIVITIES = ("auto", "magnus", "cvode")
 #: CVODE's linear multistep methods a flight may take (:func:`circuit_flight`'s ``multistep``).
 MULTISTEPS = ("auto", "adams", "bdf")
 
+#: The stiffness ratio (:func:`stiffness_ratio`) up to which ``multistep="auto"`` takes Adams-Moulton
+#: for a flexible piston's plain flights. Measured on the preset ``circuit-drifter`` with its oil's bulk
+#: modulus scaled (CPU time of 3 periods of ``simulate``, BDF's over Adams'): with 8 modes 2.6 at a
+#: ratio of 1.3, 1.7 at 3.9, 1.4 at 13, 0.47 at 39, 0.25 at 130; with 4 modes 1.0 at 7.8 and 0.39 at
+#: 78; with 16 modes 1.9 at 1.9 and 0.70 at 19. Periodic orbits, whose flights take the finer state
+#: tolerance of the variational flights, favour Adams more (8 modes: 1.2 at 13, 0.8 at 130).
+ADAMS_STIFFNESS = 15.0
+
+
+@functools.lru_cache(maxsize=64)
+def stiffness_ratio(drive, model) -> float:
+    r"""How much stiffer the oil is than the piston's modes: the fastest decay of the circuit's vector
+    field over its fastest oscillation, :math:`\max(-\operatorname{Re}\lambda) /
+    \max|\operatorname{Im}\lambda|` over the eigenvalues of its Jacobian at the drive's start (the
+    piston at rest on the stop, :meth:`HydraulicCircuitDrive.start`); ``inf`` without an oscillation.
+
+    The decay is an oil volume's relaxation behind its openings (on the preset ``circuit-drifter``
+    the front chamber's, :math:`\beta K_f / (V_f \sqrt{p_{tr}})`); the oscillation the piston's
+    highest mode (:math:`N \pi s` for a uniform piston of ``N`` modes). Adams-Moulton's steps follow the
+    oscillation while the ratio is small, and shrink to the decay's as it grows, where BDF's do
+    not (:data:`ADAMS_STIFFNESS`; theory §11, *The integrator*).
+
+    Parameters
+    ----------
+    drive : HydraulicCircuitDrive
+    model : BarModel
+
+    Returns
+    -------
+    float
+        Dimensionless, ``>= 0``.
+
+    Examples
+    --------
+    >>> from impactbar.physical import circuit_preset
+    >>> d = circuit_preset("circuit-drifter")
+    >>> round(stiffness_ratio(d.drive(), d.model().with_(n_modes=8)), 2)
+    1.3
+    """
+    M = model.n_modes + 1
+    zeros = np.zeros(M)
+    start = drive.start(model, zeros, zeros)
+    net, code = drive._compiled_network(start.mode)
+    par = np.concatenate((drive._par(model, start.mode, False), net))
+    n = drive.layout.size(M)
+    y = np.zeros(n + drive.layout.n_energy)
+    y[2 * M:n] = start.z
+    A = np.empty((n, n))
+    code.jac_base(y, par, M, A)
+    lam = np.linalg.eigvals(A)
+    decay, oscillation = max(float(np.max(-lam.real)), 0.0), float(np.max(np.abs(lam.imag)))
+    return decay / oscillation if oscillation > 0.0 else math.inf
+
 
 def _compiled_driver(compiled: bool = True):
     """:mod:`._cvode` where ``compiled`` and the libraries bind, else None."""
@@ -308,8 +361,9 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         CVODE's linear multistep method: ``"bdf"``, the backward differentiation formulas of orders
         1 to 5; ``"adams"``, Adams-Moulton of orders 1 to 12 (Newton's iterations with the same
         Jacobian either way); ``"auto"`` (default), Adams-Moulton for the plain flights of a piston
-        with modes (those of a variational flight by Magnus among them), BDF for the rigid piston and
-        for CVODE's variational flights (module docstring).
+        with modes (those of a variational flight by Magnus among them) where the oil is not much
+        stiffer than the modes (:func:`stiffness_ratio` at most :data:`ADAMS_STIFFNESS`), BDF for
+        the rest, the rigid piston and CVODE's variational flights (module docstring).
 
     Returns
     -------
@@ -356,7 +410,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     keep = n + n_energy
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
-    adams = multistep == "adams" or (multistep == "auto" and M > 1 and not variational)
+    adams = multistep == "adams" or (multistep == "auto" and M > 1 and not variational
+                                     and stiffness_ratio(drive, model) <= ADAMS_STIFFNESS)
     cv = _compiled_driver(compiled)
     integrate = functools.partial(_integrate_binding, adams, code) if cv is None \
         else functools.partial(_integrate_compiled, cv, band, blocks, adams, n_energy, code)
