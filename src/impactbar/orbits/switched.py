@@ -451,7 +451,8 @@ class ShootingProblem(OrbitProblem):
         # impacts to settle to 1e-11
         settle = SETTLE_HANDOVER if self.variational else 1e-11
         # and where one real multiplier is left (the supply's), its mode is extrapolated away (Aitken's
-        # delta-squared on the map's iterates, as in Steffensen's method) instead of followed
+        # delta-squared on the map's iterates, as in Steffensen's method; the quadratic's fixed point
+        # where the steps' multiple still falls: dominant_limit) instead of followed
         accelerate = self.variational and m == 1 and n_max > m
         hist = [(tau, mode, y, source)]
         speeds = []
