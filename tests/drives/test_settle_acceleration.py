@@ -78,3 +78,40 @@ def test_the_accelerated_start_finds_the_same_operating_point_in_fewer_flights(m
     assert fast.impact_velocity == pytest.approx(slow.impact_velocity, rel=1e-8)
     np.testing.assert_allclose(fast.drive_states[0], slow.drive_states[0], rtol=1e-8, atol=1e-10)
     assert n_fast < count[0] / 2
+
+
+def _curved(kappa, n, x_star=2.26, rho_star=0.92, x0=1.0):
+    """``n + 1`` iterates of a map whose slow coordinate ``x`` contracts by ``rho_star + kappa |x -
+    x_star|`` toward ``x_star`` (``kappa > 0``: the multiple of the steps falls as they near it, as the
+    oil circuit's supply pressure from rest; ``kappa < 0``: it grows), a fast mode spent by 1e-3 a step."""
+    ys, x, fast = [], x0, 0.3
+    for _ in range(n + 1):
+        ys.append(np.array([x, 0.5 * x + fast, 0.2 * x - fast]))
+        e = x - x_star
+        x = x_star + e * (rho_star + kappa * abs(e))
+        fast *= 1e-3
+    return ys, np.array([x_star, 0.5 * x_star, 0.2 * x_star])
+
+
+def test_a_falling_multiple_takes_the_quadratics_fixed_point_not_aitkens():
+    """The steps' multiple 0.988 then 0.985 (too far apart for Aitken's limit): the fixed point of the
+    quadratic through the steps, within 1e-3 of the map's own (measured 2e-4; the quadratic is the map
+    along ``x`` once the fast mode is spent), where Aitken's limit from the last two steps lands twice
+    the remaining distance past it."""
+    ys, fixed = _curved(0.03, 5)
+    star = settling.dominant_limit(*ys[-4:])
+    assert star is not None
+    off = np.linalg.norm(ys[-1] - fixed)
+    assert np.linalg.norm(star - fixed) <= 1e-3 * off
+    d2, d3 = ys[-2] - ys[-3], ys[-1] - ys[-2]
+    rho = settling._ratio(d2, d3)
+    aitken = ys[-1] + rho / (1.0 - rho) * d3
+    assert np.linalg.norm(aitken - fixed) > 2.0 * off
+    assert settling.falling_limit(*ys[-4:]) is not None
+
+
+def test_a_growing_multiple_is_not_extrapolated():
+    """The steps' multiple 0.79 then 0.81 (the contraction weakening toward the fixed point): nothing
+    (the quadratic's fixed point would lie beyond Aitken's)."""
+    ys, _ = _curved(-0.1, 5, rho_star=0.95)
+    assert settling.dominant_limit(*ys[-4:]) is None

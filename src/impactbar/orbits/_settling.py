@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["dominant_limit"]
+__all__ = ["dominant_limit", "falling_limit"]
 
 #: the dominant-mode extrapolation of :func:`dominant_limit` is taken where each of the last two
 #: steps is a multiple ``rho`` of the one before to this fraction of its size, the two multiples
@@ -41,15 +41,65 @@ def dominant_limit(y0, y1, y2, y3):
         ``y3 + rho / (1 - rho) (y3 - y2)`` (Aitken's delta-squared in vector form, as in
         Steffensen's method) where each of the last two steps is one multiple ``rho`` of the step
         before (:data:`DOMINANT_FIT`, :data:`DOMINANT_AGREE`, ``|rho| <`` :data:`DOMINANT_RHO`);
+        where the multiple falls from one step to the next (the map not yet linear, its steps
+        shrinking faster as they near its fixed point, where Aitken's limit overshoots), the fixed
+        point of the quadratic through the three steps along the last (:func:`falling_limit`);
         ``None`` where they do not fit one multiplier (a complex pair, two modes of one size, a
-        map still far from linear).
+        multiple that grows) or that quadratic has no fixed point short of Aitken's.
     """
     d1, d2, d3 = y1 - y0, y2 - y1, y3 - y2
     r1, r2 = _ratio(d1, d2), _ratio(d2, d3)
-    if r1 is None or r2 is None or not abs(r2) < DOMINANT_RHO or \
-            abs(r2 - r1) > DOMINANT_AGREE * (1.0 - r2):
+    if r1 is None or r2 is None or not abs(r2) < DOMINANT_RHO:
         return None
-    return y3 + r2 / (1.0 - r2) * d3
+    if abs(r2 - r1) <= DOMINANT_AGREE * (1.0 - r2):
+        return y3 + r2 / (1.0 - r2) * d3
+    if 0.0 < r2 < r1:
+        return falling_limit(y0, y1, y2, y3)
+    return None
+
+
+def falling_limit(y0, y1, y2, y3):
+    """The fixed point of the quadratic through the map's three steps of four iterates, along the last
+    step: where the steps' multiple falls as the iterates near the map's fixed point (the oil
+    circuit's supply pressure from rest: 0.998, 0.994, 0.991, ... on to 0.92 at the orbit), Aitken's
+    limit from the last two steps overshoots, by a factor near 1.5 there.
+
+    With ``u`` the last step's direction and ``s_k = u . y_k``, the map along ``u`` is taken as the
+    quadratic ``g`` with ``g(s_k) = s_(k+1)``, ``k = 0, 1, 2``; its fixed point nearest ahead of
+    ``s_3`` is the limit, where it lies no farther than Aitken's (the multiple ``rho`` of the last
+    step) and the quadratic's slope there is below 1 in size (a fixed point that attracts).
+
+    Parameters
+    ----------
+    y0, y1, y2, y3 : numpy.ndarray, shape (n,)
+        Consecutive iterates whose steps are each a multiple of the one before (as
+        :func:`dominant_limit` checks).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,), or None
+        ``y3 + e u``; ``None`` where the quadratic has no such fixed point.
+    """
+    d3 = y3 - y2
+    size = float(np.linalg.norm(d3))
+    if not size > 0.0:
+        return None
+    u = d3 / size
+    s = np.array([float(u @ y) for y in (y0, y1, y2, y3)]) - float(u @ y3)
+    x, g = s[:3], s[1:]  # G(x) = g(s_3 + x) - s_3 through (x_k, G(x_k)), k = 0, 1, 2
+    if not (x[0] < x[1] < x[2] < 0.0):  # (the iterates must advance along u)
+        return None
+    a, b, c = np.polyfit(x, g, 2)
+    rho = _ratio(y2 - y1, d3)
+    if rho is None or not 0.0 < rho < 1.0:
+        return None
+    reach = rho / (1.0 - rho) * size  # Aitken's
+    roots = np.roots([a, b - 1.0, c])
+    ahead = [float(r.real) for r in roots if abs(r.imag) <= 1e-12 * max(1.0, abs(r.real))
+             and 0.0 < r.real <= reach and abs(2.0 * a * r.real + b) < 1.0]
+    if not ahead:
+        return None
+    return y3 + min(ahead) * u
 
 
 def surfaces_ahead(drive, mode, y, M: int, tol: float = 0.0) -> bool:

@@ -150,6 +150,9 @@ FD_STEP_CLOSED = 1e-6
 FD_STEP_ODE = 1e-4
 #: impacts followed from rest (or from a run's end) before Newton starts, at most
 SETTLE_IMPACTS = 400
+#: how closely the impact velocities of the motion followed to a start agree, impact after impact,
+#: before Newton's method takes over (a drive whose flights integrate the variational equations)
+SETTLE_HANDOVER = 1e-4
 #: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
 #: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance)
 SETTLE_RTOL = 1e-7
@@ -158,6 +161,9 @@ SETTLE_RTOL = 1e-7
 #: drive's own, some three times fewer steps, the Jacobian some 256 times less accurate (order 4),
 #: some 1e-6 where a step of 1e-7 then leaves 1e-13; the multipliers' keep the drive's
 STEER_THETA = 2.0
+#: the Jacobians a flight can carry (:meth:`ShootingProblem._flight`'s ``variational``), by how much
+#: each holds: a remembered flight answers a request for as much or less
+_JACOBIAN_LEVEL = {False: 0, "state": 1, "steer": 2, True: 3}
 #: longest flight between two impacts (model time units) before a flight counts as never arriving
 HORIZON = 1e4
 
@@ -225,7 +231,7 @@ class ShootingProblem(OrbitProblem):
         self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
         self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
         self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
-        self._last = None  # the last flight: (its start, keep, variational, its result)
+        self._last = None  # the last flight: (its start, keep, its Jacobian's level, its result)
 
     # -- flights ------------------------------------------------------------------------------------
     def _flight(self, tau, mode, y, keep=False, variational=False, settings=None):
@@ -233,20 +239,25 @@ class ShootingProblem(OrbitProblem):
         state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
         the drive's events ``(time, event, mode after)``; with ``variational`` (a drive whose flights
         integrate the variational equations, :attr:`~impactbar.Drive.variational`) also the
-        Jacobian of the state after the impact with respect to ``y`` (:meth:`_through`). The last
-        flight is remembered: the same start asked again (an orbit's data, then its admissibility)
-        is not flown again."""
+        Jacobian of the state after the impact with respect to ``y`` (:meth:`_through`):
+        ``True`` the multipliers' (a coupled blow's by central differences), ``"steer"`` one that
+        only steers Newton's method (a coupled blow's by forward differences, half the blows),
+        ``"state"`` the variational flights' state, the Jacobian not wanted (a coupled blow's not
+        taken: ``None`` in its place). The
+        last flight is remembered: the same start asked again (an orbit's data, then its
+        admissibility) is not flown again, nor one whose Jacobian is at least as good."""
         try:
             key = (float(tau), mode, np.asarray(y, dtype=float).tobytes(), settings)
             hash(key)
         except TypeError:  # a mode that cannot be a key
             key = None
         last = self._last
+        level = _JACOBIAN_LEVEL[variational]
         if key is not None and last is not None and last[0] == key and (last[1] or not keep) and \
-                (last[2] or not variational):
-            return last[3] if variational else last[3][:6]
+                last[2] >= level:
+            return last[3] if level else last[3][:6]
         out = self._fly(tau, mode, y, keep, variational, settings)
-        self._last = None if key is None else (key, keep, variational, out)
+        self._last = None if key is None else (key, keep, level, out)
         return out
 
     def _fly(self, tau, mode, y, keep, variational, settings):
@@ -263,7 +274,7 @@ class ShootingProblem(OrbitProblem):
             D = np.eye(self.n)
             D[0, :M] -= c
         while True:
-            fl = fly(model, drive, state, t, q, v, end, settings or self.settings, variational)
+            fl = fly(model, drive, state, t, q, v, end, settings or self.settings, bool(variational))
             if keep:
                 pieces.append(fl.piece)
             t, q, v = fl.t, fl.q, fl.v
@@ -294,9 +305,12 @@ class ShootingProblem(OrbitProblem):
             else:  # (no piece to keep: not made)
                 out, res, after = blow_state(model, drive, t, q, v, state, blow_settings)
                 t_after = res.t_release
+            if variational == "state":
+                return out, t_after, after.mode, arrival, pieces, events, None
             if variational:
-                D = blow_jacobian(model, drive, t, q, v, state, blow_settings) @ D
-                return out, t_after, after.mode, arrival, pieces, events, D
+                G = blow_jacobian(model, drive, t, q, v, state, blow_settings,
+                                  forward=out if variational == "steer" else None)
+                return out, t_after, after.mode, arrival, pieces, events, G @ D
             return out, t_after, after.mode, arrival, pieces, events
         if law.restitution_in_kernel(model):
             qa, va = q, -law.kernel_restitution(model) * v
@@ -435,9 +449,10 @@ class ShootingProblem(OrbitProblem):
         # over once the impacts agree to 1e-4: Newton's quadratic convergence does the rest, where
         # a slow mode (the oil circuit's supply pressure, multiplier ~0.9) would take hundreds of
         # impacts to settle to 1e-11
-        settle = 1e-4 if self.variational else 1e-11
+        settle = SETTLE_HANDOVER if self.variational else 1e-11
         # and where one real multiplier is left (the supply's), its mode is extrapolated away (Aitken's
-        # delta-squared on the map's iterates, as in Steffensen's method) instead of followed
+        # delta-squared on the map's iterates, as in Steffensen's method; the quadratic's fixed point
+        # where the steps' multiple still falls: dominant_limit) instead of followed
         accelerate = self.variational and m == 1 and n_max > m
         hist = [(tau, mode, y, source)]
         speeds = []
@@ -468,10 +483,11 @@ class ShootingProblem(OrbitProblem):
         self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
         return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
 
-    def residual(self, X, settings=None):
+    def residual(self, X, settings=None, *, steer: bool = False):
         """The shooting residual and its Jacobian: from the variational equations where the drive's
         flights integrate them (:attr:`~impactbar.Drive.variational`, :meth:`_through`; ``settings``
-        their integrator, default the problem's), else by central differences."""
+        their integrator, default the problem's; with ``steer``, a Jacobian that only steers
+        Newton's method: a coupled blow's by forward differences), else by central differences."""
         n, m = self.n, self.impacts
         r = np.empty(X.size)
         J = np.zeros((X.size, X.size))
@@ -481,7 +497,7 @@ class ShootingProblem(OrbitProblem):
             nxt = ((k + 1) % m) * n
             if self.variational:
                 tau, mode = self.blocks[k]
-                out = self._flight(tau, mode, y, variational=True, settings=settings)
+                out = self._flight(tau, mode, y, variational="steer" if steer else True, settings=settings)
                 r[k * n:(k + 1) * n] = out[0] - X[nxt:nxt + n]
                 J[k * n:(k + 1) * n, k * n:(k + 1) * n] = out[6]
                 J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
@@ -512,31 +528,55 @@ class ShootingProblem(OrbitProblem):
         variational flight at ``SETTLE_RTOL``, the residuals by plain flights (where it fails,
         Newton's method from the same start), then one Newton step with a variational flight; the
         Jacobians of the chord and of that step only steer, and take Magnus' coarser steps
-        (``STEER_THETA``)."""
+        (``STEER_THETA``) and a coupled blow's forward differences; with coupled blows that step
+        takes the chord's last Jacobian (a fresh one would cost a blow a column)."""
         tol = max(tol, self.accuracy)
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
         X0 = X
+        used = [self.residual(X, settings=self._steer(self._loose()), steer=True)[1]]
+
+        def jacobian(XX):  # (the chord's Jacobian taken again: the last one kept)
+            used[0] = self.steering_residual(XX)[1]
+            return used[0]
+
         try:
-            X = chord(self.value, lambda XX: self.steering_residual(XX)[1], X, self.positive, tol,
-                      max_iter, first=self.residual(X, settings=self._steer(self._loose()))[1])
+            X = chord(self.value, jacobian, X, self.positive, tol, max_iter, first=used[0])
         except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
             return newton(self.residual, X0, self.positive, tol, max_iter)  # before, and its verdict)
         # the root of the plain flights is not the variational flights' (their steps differ: the
         # integrator's error, 4e-8 in the residual of the 4-mode circuit); one Newton step with the
-        # variational flight moves it there, where Newton's method of before converges
-        r, J = self.steering_residual(X)  # (its residual is the variational flight's all the same)
+        # variational flight moves it there, where Newton's method of before converges. The step
+        # is that small (3e-10 of the unknowns on the rod and rock): a Jacobian off by 1e-2 leaves
+        # 3e-12, so that with coupled blows (a column of the blow's Jacobian a blow) it is the
+        # chord's, and the flight's only its state's (its residual the variational flight's all the same)
+        if self.coupled:
+            r, J = self._variational_value(X, self._steer(self.settings)), used[0]
+        else:
+            r, J = self.steering_residual(X)
         try:
             return X + np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:
             raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at its "
                              "root") from None
 
+    def _variational_value(self, X, settings):
+        """The shooting residual by the variational flights with ``settings`` (their state, which is
+        not the plain flights': its Jacobian not taken)."""
+        n, m = self.n, self.impacts
+        r = np.empty(X.size)
+        for k in range(m):
+            tau, mode = self.blocks[k]
+            nxt = ((k + 1) % m) * n
+            r[k * n:(k + 1) * n] = self._flight(tau, mode, X[k * n:(k + 1) * n], variational="state",
+                                                settings=settings)[0] - X[nxt:nxt + n]
+        return r
+
     def steering_residual(self, X):
         """The shooting residual and a Jacobian that only steers Newton's method (a corrector's
         step, not the multipliers'): where the drive's flights integrate the variational equations,
-        with Magnus' coarser steps (``STEER_THETA``; the residual the same flights'); else
-        :meth:`residual`'s.
+        with Magnus' coarser steps (``STEER_THETA``; the residual the same flights') and a coupled
+        blow's Jacobian by forward differences; else :meth:`residual`'s.
 
         Parameters
         ----------
@@ -548,7 +588,9 @@ class ShootingProblem(OrbitProblem):
         r : numpy.ndarray, shape (m n,)
         J : numpy.ndarray, shape (m n, m n)
         """
-        return self.residual(X, settings=self._steer(self.settings) if self.variational else None)
+        if not self.variational:
+            return self.residual(X)
+        return self.residual(X, settings=self._steer(self.settings), steer=True)
 
     @staticmethod
     def _steer(settings: FlightSettings) -> FlightSettings:

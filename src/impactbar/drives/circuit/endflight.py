@@ -17,6 +17,7 @@ returns the force's integral over each interval, the driven end's displacement a
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 from typing import NamedTuple
 
@@ -80,6 +81,18 @@ class EndPiece(HermiteSteps):
     def _energy_start(self):
         """Where the energy terms start in a row of ``y`` (after ``w, z, I``)."""
         return 2 + self.layout.n_states
+
+    def piston_work(self) -> float:
+        """The circuit's work on the piston over the piece, its layout's ``"piston"`` energy term
+        (:attr:`HydraulicCircuitDrive.piston_work_quadrature`; its column looked up once a layout: a
+        blow sums some hundred pieces).
+
+        Returns
+        -------
+        float
+            In model energy units.
+        """
+        return float(self.y[-1, _work_column(self.layout)])
 
     def piston_work_at(self, t: float) -> float:
         """The circuit's work on the piston from ``t0`` to ``t`` (interpolated, as :meth:`energies_at`).
@@ -206,7 +219,10 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     pieces: list = []
     fired_log: list = []
     compiled = _compiled_end(drive)
-    if compiled is not None and not any(callable(a) for a in incoming):  # no Python between events
+    # (an array of floats holds no callable: the coupled blow's waves, not looked through)
+    values = isinstance(incoming, np.ndarray) and incoming.dtype == np.float64
+    # no Python between the events where each interval's wave is a value
+    if compiled is not None and (values or not any(callable(a) for a in incoming)):
         return _compiled_stretches(compiled, drive, model1, state, breaks, w,
                                    np.asarray(incoming, dtype=float), impedance, settings)
     for k in range(n):
@@ -259,13 +275,12 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
     """:func:`circuit_end_flight` with a constant ``a`` on each interval: the stretches between the
     circuit's events in one compiled call each (:func:`._endcvode.fly_intervals`, the same steps as
     one :func:`._endcvode.fly` a stretch), Python only at the events."""
-    from . import _cvode as CV
-
     n = breaks.size - 1
-    ws = CV.workspace(EK.N_STATE, 0, compiled.CALLBACKS)
+    ws = compiled.CV.workspace(EK.N_STATE, 0, compiled.CALLBACKS)
     ch = drive.chambers
     volumes = np.array([ch.rear_volume, ch.front_volume, ch.area_ratio])
     alpha = ch.area_ratio
+    layout = drive.layout
     impulses = np.zeros(n)
     pieces: list = []
     fired_log: list = []
@@ -273,14 +288,12 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
     k, t = 0, float(breaks[0])
     rtol, atol = float(settings.rtol), float(settings.atol)
     while True:
-        par = drive._par(model1, mode)
-        directions = np.array([drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS], dtype=np.int32)
-        data = compiled.user_data(par, 0.0, impedance)
+        directions, data = _mode_data(compiled, drive, model1, mode, float(impedance))
+        data = data.copy()  # (the callbacks write their scratch into it: one a call, threads apart)
         flag, k, t, T, Y, F, starts, roots = compiled.fly_intervals(
             ws.mem, ws.y, breaks, k, t, w, z, incoming, rtol, atol, directions, data, _MAX_STEPS, volumes,
             impulses)
         rows = starts.tolist()
-        layout = drive.layout
         for a, b in zip(rows[:-1], rows[1:], strict=True):
             pieces.append(EndPiece(T[a:b], Y[a:b], F[a:b], alpha, layout))
         if flag in (compiled.REAR_EMPTY, compiled.FRONT_EMPTY):
@@ -304,13 +317,38 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
     return EndFlight(DriveState(mode, z), w, impulses, pieces, fired_log)
 
 
+@functools.lru_cache(maxsize=16)
+def _work_column(layout) -> int:
+    """The column of the piston's work in a row of :class:`EndPiece`'s ``y``."""
+    return 2 + layout.n_states + layout.energy["piston"]
+
+
 def _compiled_end(drive):
     """:mod:`._endcvode` where the drive flies compiled and the SUNDIALS libraries bind, else None."""
-    if _compiled_driver(getattr(drive, "compiled", True)) is None:
+    return _end_module(bool(getattr(drive, "compiled", True)))
+
+
+@functools.lru_cache(maxsize=2)
+def _end_module(compiled: bool):
+    """:func:`_compiled_end` by the drive's flag (looked up once: a blow asks at each stretch)."""
+    if _compiled_driver(compiled) is None:
         return None
     from . import _endcvode
 
     return _endcvode
+
+
+@functools.lru_cache(maxsize=256)
+def _mode_data(compiled, drive, model1, mode, impedance: float):
+    """The root directions and the callbacks' user data (:func:`._endcvode.user_data`, the wave
+    ``a`` 0) of the circuit in ``mode`` during a blow, kept by drive, mode and impedance (a blow
+    asks at each stretch, the same few modes): the directions shared (:func:`._endcvode.fly_intervals`
+    only reads them), the data read-only, for a copy a call."""
+    par = drive._par(model1, mode)
+    directions = np.array([drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS], dtype=np.int32)
+    data = compiled.user_data(par, 0.0, impedance)
+    data.flags.writeable = False
+    return directions, data
 
 
 def _check_volumes(drive, w, t) -> None:

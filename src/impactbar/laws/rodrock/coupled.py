@@ -146,7 +146,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         arriving = np.add.accumulate(column)  # F[0] = 0 - G[0] after a step without drive
         # 2. the drive over the chunk, the driven end at u_t(0) = (p - 2 G_k) / Z_0
         breaks = t0 + dt * np.arange(k, k + L + 1)
-        fl = drive.end_flight(model, st, breaks, w, list(-2.0 * arriving / Z0), Z0, settings)
+        fl = drive.end_flight(model, st, breaks, w, -2.0 * arriving / Z0, Z0, settings)
         if fl is None:
             raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
                                   "(Drive.end_flight); it runs under an instantaneous impact law only")

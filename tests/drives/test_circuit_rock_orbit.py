@@ -1,0 +1,100 @@
+"""The circuit's orbit on the rod and rock (``examples/circuit_drifter_rock.toml``): the Jacobians that
+only steer Newton's method take the coupled blow's forward differences (the chord's first, the chord's
+again) or none at all (the closing step takes the chord's), the multipliers' Jacobian the central
+differences at the found orbit. Checked against Newton's method with the multipliers' Jacobian at
+every step (``newton="full"``) and against the central differences themselves."""
+
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from impactbar import find_orbit
+from impactbar.orbits import find_switched_orbit
+from impactbar.orbits.coupled import blow_jacobian, blow_state
+from impactbar.orbits.switched import ShootingProblem, orbit_of
+from impactbar.physical import CircuitDrifter
+
+EXAMPLE = Path(__file__).parents[2] / "examples" / "circuit_drifter_rock.toml"
+
+
+@pytest.fixture(scope="module")
+def drifter():
+    with open(EXAMPLE, "rb") as f:
+        d = CircuitDrifter.from_config(tomllib.load(f))
+    return d.model(), d.drive()
+
+
+@pytest.fixture(scope="module")
+def both(drifter):
+    """Newton's method with the multipliers' Jacobian at every step, and ``find_orbit``'s chord."""
+    model, drive = drifter
+    return find_switched_orbit(model, drive, newton="full"), find_orbit(model, drive)
+
+
+def test_the_rock_orbit_is_full_newtons_to_the_multipliers_own_noise(both):
+    """The unknowns, the period and the impact velocity to 1e-9 (measured 1.2e-10, 1.4e-11, 1.1e-10: the
+    variational flights' root is itself no finer, Newton's steps there stay near 1e-10). The
+    multipliers are central differences of blows integrated by CVODE at the unknowns, whose steps
+    move with them: a change of 1e-11 in one pressure moves them by 6e-9 (shown here; the gap
+    measured 6.7e-9), so the two ways agree to that noise, not to rounding."""
+    full, fast = both
+    assert full.problem.newton == "full" and fast.problem.newton == "chord" and fast.problem.coupled
+    X, Xr = np.asarray(fast._unknowns), np.asarray(full._unknowns)
+    assert np.max(np.abs(X - Xr)) <= 1e-9 * np.max(np.abs(Xr))
+    assert fast.period == pytest.approx(full.period, rel=1e-9)
+    np.testing.assert_allclose(fast.impact_velocities, full.impact_velocities, rtol=1e-9)
+    problem = full.problem
+    problem._last = None
+    nudged = Xr.copy()
+    nudged[2] *= 1.0 + 1e-11
+    noise = np.max(np.abs(orbit_of(problem, nudged).multipliers - full.multipliers))
+    gap = np.max(np.abs(fast.multipliers - full.multipliers))
+    assert noise < 1e-6
+    assert gap <= max(10.0 * noise, 3e-8), (gap, noise)
+    assert fast.stable == full.stable and fast.admissible == full.admissible
+
+
+def test_the_multipliers_are_the_central_differences_at_the_orbit(both):
+    """The orbit's multipliers are those of the central differences of the blow at its unknowns (the
+    Jacobian asked again, with no flight remembered), to the bit."""
+    _, fast = both
+    problem = fast.problem
+    problem._last = None
+    np.testing.assert_array_equal(problem.orbit(np.asarray(fast._unknowns)).multipliers, fast.multipliers)
+
+
+def test_find_orbit_takes_one_central_blow_jacobian(drifter, monkeypatch):
+    """The Jacobians that only steer take the forward differences; the closing step takes none (the
+    variational flights' state only); the multipliers' alone the central differences, once."""
+    model, drive = drifter
+    seen = []
+    fly = ShootingProblem._fly
+
+    def spy(self, tau, mode, y, keep, variational, settings):
+        if variational:
+            seen.append(variational)
+        return fly(self, tau, mode, y, keep, variational, settings)
+
+    monkeypatch.setattr(ShootingProblem, "_fly", spy)
+    find_orbit(model, drive)
+    assert seen[-2:] == ["state", True], seen
+    assert seen[:-2] and set(seen[:-2]) == {"steer"}, seen
+
+
+def test_forward_differences_of_the_blow_are_the_central_ones_to_their_step(both):
+    """At the orbit's arrival: the forward differences (from the blow itself) within 1e-4 of the
+    largest entry of the central ones (measured 8.6e-6: their error ``O(h)``, ``h = 1e-5``), and not the
+    same."""
+    _, fast = both
+    model, drive, problem = fast.model, fast.drive, fast.problem
+    tau, mode = problem.blocks[0]
+    _, _, _, (t, q, v, state), _, _ = problem._flight(tau, mode, np.asarray(fast._unknowns))
+    y = blow_state(model, drive, t, q, v, state)[0]
+    central = blow_jacobian(model, drive, t, q, v, state)
+    forward = blow_jacobian(model, drive, t, q, v, state, forward=y)
+    err = np.max(np.abs(forward - central)) / np.max(np.abs(central))
+    assert 0.0 < err <= 1e-4, err
+    with pytest.raises(ValueError, match="forward"):
+        blow_jacobian(model, drive, t, q, v, state, forward=y[:-1])
