@@ -42,6 +42,7 @@ import math
 import numba
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactend import account, certify
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
@@ -723,3 +724,5 @@ def run(ws):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
+# the kernels Python calls keep their wrapper and cache entry; the others are link-only (for kernels)
+internal_kernels(globals(), python=("run",))
