@@ -385,5 +385,4 @@ def certify(ws, t):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
-# the kernels Python calls keep their wrapper and cache entry; the others are link-only (for kernels)
-internal_kernels(globals(), python=("account",))
+internal_kernels(globals())  # kernels call them all (Python calls account through run): link-only

@@ -673,10 +673,14 @@ def node_bit(ws, t, t1):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def run(ws):
+def run(ws, t_account):
     """Window after window of length ``h`` (every node's inputs over a window left their source
     before it began) until the blow ends, ``t_max``, or the budget. ``CI[CI_STATUS]``: 0 done, 1 the pool is
-    full (start again with a larger one)."""
+    full (start again with a larger one). With ``t_account >= 0`` only :func:`account` at that time
+    (Python's call of it: its machine code is ``run``'s, its kernel link-only); ``-1`` for the run."""
+    if t_account >= 0.0:
+        account(ws, t_account)
+        return
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
