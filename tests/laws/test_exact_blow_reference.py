@@ -13,12 +13,19 @@ the faults this comparison exposed, each with the test that failed before its fi
 
 import math
 
+import numba
 import numpy as np
 import pytest
 from _reference_blow import reference_blow
 
 from impactbar.laws.rodrock import _exactpieces as P
 from impactbar.laws.rodrock.exact import _binomials, exact_blow
+
+
+@numba.njit
+def _first_negative(B, N, lam, BIN, L, stack, D, t0):
+    """``first_negative``, called from a kernel (it has no Python wrapper of its own)."""
+    return P.first_negative(B, N, lam, BIN, L, stack, D, t0)
 
 #: (piston times, piston impedances, rod times, rod impedances, k, k_u, bit mass): the exact
 #: solver's units, the piston of impedance 1 and crossing time 1 unless stepped
@@ -173,7 +180,7 @@ def test_a_piece_rising_from_zero_and_bending_back_crosses_it(coefs):
     curvature were 0 when it was clearly negative: the interval it excluded reached past the zero
     (a re-contact, a landing missed: -1 returned for the first two)."""
     B, N, lam, D = _block(coefs)
-    t = P.first_negative(B, N, lam, _binomials(), 2.0, np.zeros((256, 4)), D, 0.0)
+    t = _first_negative(B, N, lam, _binomials(), 2.0, np.zeros((256, 4)), D, 0.0)
     roots = np.polynomial.polynomial.polyroots(coefs[1:])
     exact = min(x.real for x in roots if abs(x.imag) < 1e-12 and x.real > 0.0)
     assert t == pytest.approx(exact, rel=1e-12)

@@ -10,11 +10,19 @@ import os
 import subprocess
 import sys
 
+import numba
 import numpy as np
 import pytest
 
 import impactbar as ib
+from impactbar.laws.rodrock import _exactintegrals
 from impactbar.laws.rodrock.law import lundberg_efficiency
+
+
+@numba.njit
+def moments(mu, a, b, K, out):
+    """``_exactintegrals.moments``, called from a kernel (it has no Python wrapper of its own)."""
+    _exactintegrals.moments(mu, a, b, K, out)
 
 
 def _model(segs, k, k_u, s=1.0, bit_mass=0.0, feed=0.0):
@@ -219,8 +227,6 @@ def test_the_moments_are_stable_for_a_fast_root():
     """``int_0^1 u^k e^{mu u}`` for ``mu = -20.7`` (a fast root over a short series piece) beyond
     ``k = |mu|``: the alternating series lost ``e^{20.7}``; now to rounding (against the positive
     series ``k! e^mu sum_j (-mu)^j/(j + k + 1)!``)."""
-    from impactbar.laws.rodrock._exactintegrals import moments
-
     mu = -20.7
     out = np.zeros(64, dtype=complex)
     moments(complex(mu), 0.0, 1.0, 64, out)
@@ -236,8 +242,6 @@ def test_the_moments_of_a_slow_exponent_by_the_downward_recursion(mu, a):
     """``int_a^1 u^k e^{mu u}`` for ``|mu| <= 1``, now by the downward recursion (it replaced a power
     series in ``mu`` per ``k``, eight times slower), against that series summed term by term with
     ``math.fsum`` (its terms shrink like ``|mu|^j/j!``: no cancellation), to 1e-14 of ``int_a^1 u^k``."""
-    from impactbar.laws.rodrock._exactintegrals import moments
-
     out = np.zeros(48, dtype=complex)
     moments(complex(mu), a, 1.0, 48, out)
     for k in range(48):

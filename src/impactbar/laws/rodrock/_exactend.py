@@ -12,6 +12,7 @@ import math
 import numba
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
     ELASTIC,
@@ -384,3 +385,4 @@ def certify(ws, t):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
+internal_kernels(globals())  # kernels call them all (Python calls account through run): link-only

@@ -7,6 +7,7 @@ import numba
 import numpy as np
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactintegrals import blk_integral
 from ._exactpieces import (
@@ -221,3 +222,6 @@ def history_integral(PF, PI, TK, TC, lam, head, t_end):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
+# the kernels Python calls keep their wrapper and cache entry; the others are link-only (for kernels)
+internal_kernels(globals(), python=("eval_history", "eval_histories", "eval_bit", "history_max",
+                                     "history_integral"))

@@ -10,6 +10,7 @@ import numba
 import numpy as np
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 
 
@@ -225,3 +226,4 @@ def blk_integral_exp(B, N, lam, shift, a, b):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
+internal_kernels(globals())  # kernels call them all, Python none: link-only (their callers hold their code)

@@ -42,6 +42,7 @@ import math
 import numba
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactend import account, certify
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
@@ -672,10 +673,14 @@ def node_bit(ws, t, t1):
 
 
 @numba.njit(cache=CACHE, nogil=True)
-def run(ws):
+def run(ws, t_account):
     """Window after window of length ``h`` (every node's inputs over a window left their source
     before it began) until the blow ends, ``t_max``, or the budget. ``CI[CI_STATUS]``: 0 done, 1 the pool is
-    full (start again with a larger one)."""
+    full (start again with a larger one). With ``t_account >= 0`` only :func:`account` at that time
+    (Python's call of it: its machine code is ``run``'s, its kernel link-only); ``-1`` for the run."""
+    if t_account >= 0.0:
+        account(ws, t_account)
+        return
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
@@ -723,3 +728,5 @@ def run(ws):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
+# the kernels Python calls keep their wrapper and cache entry; the others are link-only (for kernels)
+internal_kernels(globals(), python=("run",))

@@ -11,6 +11,7 @@ import numba
 import numpy as np
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactintegrals import blk_integral_exp
 from ._exactpieces import DC, piece_span, pool_load
@@ -53,3 +54,5 @@ def piston_integrals(pool, heads, travel, t, om, out):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
+# the kernels Python calls keep their wrapper and cache entry; the others are link-only (for kernels)
+internal_kernels(globals(), python=("piston_integrals",))

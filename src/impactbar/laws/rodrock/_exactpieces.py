@@ -11,6 +11,7 @@ import numba
 import numpy as np
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
 from ._records import (  # the records' slots
@@ -781,3 +782,4 @@ def load_input(B, N, c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
+internal_kernels(globals())  # kernels call them all, Python none: link-only (their callers hold their code)

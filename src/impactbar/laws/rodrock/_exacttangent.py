@@ -46,6 +46,7 @@ import math
 import numba
 
 from ..._shared.literals import plain_literals
+from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactkernel import (
     LOG_BIT,
@@ -565,3 +566,5 @@ def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
 
 
 plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
+# the kernels Python calls keep their wrapper and cache entry; the others are link-only (for kernels)
+internal_kernels(globals(), python=("t_batch",))

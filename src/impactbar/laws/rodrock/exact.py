@@ -522,9 +522,9 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
                         None if data is None else data.terms(lam, scale), reuse=not lean)
         if data is not None and not lean and _energies:  # the piston's energy at impact: its waves'
-            K.account(ws, 0.0)  # (kinetic and strain)
+            K.run(ws, 0.0)  # (kinetic and strain: account, through run)
             PR[S.PR_E0] = ws[S.WS_CT][S.CT_EP]
-        K.run(ws)
+        K.run(ws, -1.0)
         if ws[S.WS_CI][S.CI_STATUS] == 0:
             break
         # what overflowed grows 4-fold: the pieces, the loading episodes, or else the terms (the
@@ -690,7 +690,7 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     n_p = Tp.size
     t_end = float(CT[S.CT_T])
     if CT[S.CT_TACC] != t_end:  # (the energies at the end, unless the run's last pass was there)
-        K.account(ws, t_end)
+        K.run(ws, t_end)  # (account, through run)
     Pp, Ep, Er = CT[S.CT_PP], CT[S.CT_EP], CT[S.CT_ER]
     br = int(BI[S.BI_BRANCH])
     p = BS[S.BS_P]

@@ -1,0 +1,153 @@
+"""numba kernels that only other kernels call: compiled into their callers, with no code of their own.
+
+numba compiles every kernel into a library of its own: its LLVM module, with the modules of the
+kernels it calls linked in, optimised as a whole and turned into machine code; and, with it, two
+wrappers (one that Python calls, unboxing the arguments, and a C one). A caller's library holds the
+machine code of all its callees again, so that a kernel deep in a tree of calls was optimised and
+turned into machine code once for itself and once for each kernel above it: the exact blow's kernels
+spent about half of their compile there (the wrappers included), for machine code that only the top
+kernel's library runs. :func:`internal_kernels` compiles a module's kernels that only kernels call
+*link-only*: their LLVM module (optimised function by function) is kept for their callers, which
+optimise it with their own and make its machine code; they get no machine code, no wrappers and no
+cache entry of their own (a cached caller holds their machine code; a caller compiled later compiles
+them again). The kernels Python calls keep their Python wrapper and their cache entry. A link-only
+kernel cannot be called from Python: such a call raises :class:`TypeError`.
+"""
+
+from __future__ import annotations
+
+__all__ = ["internal_kernels"]
+
+_GUARDED: dict = {}
+_CLASSES: dict = {}
+
+
+def _guarded_class(cls):
+    """A subclass of the dispatcher class ``cls`` whose instances refuse a call from Python."""
+    if cls not in _GUARDED:
+        def __call__(self, *args, **kwargs):
+            raise TypeError(f"{self.py_func.__module__}.{self.py_func.__name__} is a numba kernel "
+                            "compiled without its Python wrapper: call it from another kernel")
+
+        _GUARDED[cls] = type("Internal" + cls.__name__, (cls,), {"__call__": __call__,
+                                                                  "__module__": __name__})
+    return _GUARDED[cls]
+
+
+class _NoEnv:
+    """A kernel's code generator, less the setting of the kernel's environment in machine code it
+    does not have (a link-only library's ``codegen``)."""
+
+    def __init__(self, codegen):
+        self._codegen = codegen
+
+    def set_env(self, env_name, env):
+        pass
+
+    def __getattr__(self, name):
+        return getattr(self._codegen, name)
+
+
+def _link_only_classes():
+    """The compiler pipeline that gives a kernel a link-only library, and that library's class
+    (numba's JIT library that keeps its LLVM module for its callers and makes no machine code)."""
+    if not _CLASSES:
+        from numba.core.codegen import JITCodeLibrary
+        from numba.core.compiler import Compiler
+
+        class LinkOnlyLibrary(JITCodeLibrary):
+            """The LLVM module of a kernel that only other kernels call: linked into theirs, which
+            optimise it with their own and make its machine code; none of its own."""
+
+            def _optimize_final_module(self):
+                pass  # (each caller optimises it with its own module)
+
+            def _finalize_final_module(self):
+                self._finalize_dynamic_globals()
+                self._verify_declare_only_symbols()
+                self._finalized = True  # (not added to the JIT engine: no machine code)
+
+            def get_pointer_to_function(self, name):
+                self._ensure_finalized()
+                return 0
+
+            @property
+            def codegen(self):
+                return _NoEnv(self._codegen)
+
+        class LinkOnlyCompiler(Compiler):
+            """numba's compiler, its kernel's library a :class:`LinkOnlyLibrary`."""
+
+            def __init__(self, typingctx, targetctx, library, args, return_type, flags, locals):
+                if library is None:
+                    library = targetctx.codegen().create_library(self.__module__)
+                    library.__class__ = LinkOnlyLibrary
+                super().__init__(typingctx, targetctx, library, args, return_type, flags, locals)
+
+        _CLASSES.update(library=LinkOnlyLibrary, compiler=LinkOnlyCompiler)
+    return _CLASSES
+
+
+def internal_kernels(namespace: dict, python=()) -> int:
+    """Compile a module's numba kernels that only kernels call link-only, the others without a C wrapper.
+
+    Parameters
+    ----------
+    namespace : dict
+        The module's ``globals()``; the kernels (numba dispatchers) whose Python function was defined
+        in that module are changed, those it imported are not. Call it before any of them compiles.
+    python : iterable of str, optional
+        The names of the module's kernels that Python calls: they keep their Python wrapper, machine
+        code and cache entry. The others are link-only (no machine code, wrappers or cache entry of
+        their own), and a call of one from Python raises :class:`TypeError`.
+
+    Returns
+    -------
+    int
+        How many kernels were made link-only.
+
+    Raises
+    ------
+    ValueError
+        If ``python`` names something that is not one of the module's kernels.
+
+    Examples
+    --------
+    >>> import numba
+    >>> @numba.njit
+    ... def twice(x):
+    ...     return 2 * x
+    >>> @numba.njit
+    ... def caller(x):
+    ...     return twice(x) + 1
+    >>> internal_kernels({"__name__": twice.py_func.__module__, "twice": twice, "caller": caller},
+    ...                  python=("caller",))
+    1
+    >>> caller(3)
+    7
+    >>> twice(3)
+    Traceback (most recent call last):
+    ...
+    TypeError: ... is a numba kernel compiled without its Python wrapper: call it from another kernel
+    """
+    from numba.core.caching import NullCache
+    from numba.core.dispatcher import Dispatcher
+
+    name = namespace.get("__name__")
+    ours = {k: v for k, v in namespace.items()
+            if isinstance(v, Dispatcher) and getattr(v.py_func, "__module__", None) == name}
+    python = set(python)
+    unknown = python - set(ours)
+    if unknown:
+        raise ValueError(f"python names no kernel of {name}: {sorted(unknown)}")
+    compiler = _link_only_classes()["compiler"]
+    n = 0
+    for k, disp in ours.items():
+        disp.targetoptions["no_cfunc_wrapper"] = True
+        if k not in python:
+            disp.targetoptions["no_cpython_wrapper"] = True
+            disp._compiler.pipeline_class = compiler
+            disp._cache = NullCache()
+            disp.__class__ = _guarded_class(type(disp))
+            n += 1
+    return n

@@ -1,0 +1,115 @@
+"""Kernels compiled for other kernels only (:func:`impactbar._shared.wrappers.internal_kernels`)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import textwrap
+
+import numba
+import numpy as np
+import pytest
+
+from impactbar._shared.wrappers import internal_kernels
+
+
+def _kernels():
+    """A module's namespace: ``root_sum`` (called from Python) and its callee ``norm2``."""
+
+    @numba.njit
+    def norm2(x):
+        s = 0.0
+        for v in x:
+            s += v * v
+        return s
+
+    @numba.njit
+    def root_sum(ws):
+        a, b = ws
+        return math.sqrt(norm2(a) + norm2(b))
+
+    return {"__name__": norm2.py_func.__module__, "norm2": norm2, "root_sum": root_sum}
+
+
+def test_an_internal_kernel_computes_for_its_caller_and_refuses_python():
+    ns = _kernels()
+    assert internal_kernels(ns, python=("root_sum",)) == 1
+    a, b = np.array([3.0, 1.0, 2.0]), np.array([0.5, -4.0])
+    assert ns["root_sum"]((a, b)) == math.sqrt(np.dot(a, a) + np.dot(b, b))
+    with pytest.raises(TypeError, match="without its Python wrapper"):
+        ns["norm2"](a)
+    # norm2 made no machine code of its own (its LLVM module went into root_sum's, which made some)
+    (own,) = ns["norm2"].overloads.values()
+    (caller,) = ns["root_sum"].overloads.values()
+    jit = caller.library.codegen._engine._ee  # (llvmlite's execution engine: the modules it compiles)
+    assert caller.library._final_module in jit._modules
+    assert own.library._final_module not in jit._modules
+
+
+def test_internal_kernels_names_only_the_modules_kernels():
+    with pytest.raises(ValueError, match="python"):
+        internal_kernels(_kernels(), python=("root_sum", "nothing"))
+
+
+_MODULE = '''
+import math
+import numba
+from impactbar._shared.wrappers import internal_kernels
+
+
+@numba.njit(cache=True)
+def norm2(x):
+    s = 0.0
+    for v in x:
+        s += v * v
+    return s
+
+
+@numba.njit(cache=True)
+def root_sum(ws):
+    a, b = ws
+    return math.sqrt(norm2(a) + norm2(b))
+
+
+internal_kernels(globals(), python=("root_sum",))
+'''
+
+_RUN = '''
+import json
+import numpy as np
+from numba.core import event
+import kernels_mod
+
+compiled = []
+
+
+class Count(event.Listener):
+    def on_start(self, ev):
+        compiled.append(ev.data["dispatcher"].py_func.__name__)
+
+    def on_end(self, ev):
+        pass
+
+
+event.register("numba:compile", Count())
+r = kernels_mod.root_sum((np.array([3.0, 1.0, 2.0]), np.array([0.5, -4.0])))
+print(json.dumps({"r": r.hex(), "compiled": compiled}))
+'''
+
+
+def test_a_cached_caller_needs_no_compile_of_its_internal_callees(tmp_path):
+    """The caller's cache holds the callee's machine code: a second process compiles nothing."""
+    (tmp_path / "kernels_mod.py").write_text(textwrap.dedent(_MODULE))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path)] + sys.path),
+               NUMBA_CACHE_DIR=str(tmp_path / "cache"))
+    runs = [json.loads(subprocess.run([sys.executable, "-c", _RUN], env=env, check=True, capture_output=True,
+                                      text=True).stdout.strip().splitlines()[-1]) for _ in range(2)]
+    assert sorted(runs[0]["compiled"]) == ["norm2", "root_sum"]
+    assert runs[1]["compiled"] == []
+    cached = [f.name for f in (tmp_path / "cache").rglob("*.nbi")]  # (the index files: one per kernel)
+    assert any("root_sum" in f for f in cached) and not any("norm2" in f for f in cached)
+    expected = math.sqrt(3.0**2 + 1.0 + 2.0**2 + 0.25 + 16.0)
+    assert float.fromhex(runs[0]["r"]) == float.fromhex(runs[1]["r"]) == pytest.approx(expected, rel=1e-15)
