@@ -13,7 +13,17 @@ from __future__ import annotations
 
 import types as _pytypes
 
-__all__ = ["plain_literals"]
+__all__ = ["plain_literals", "module_kernels"]
+
+
+def module_kernels(namespace: dict) -> dict:
+    """The numba kernels (dispatchers) of a module's ``globals()`` whose Python function was defined
+    in that module (not those it imported), by name."""
+    from numba.core.dispatcher import Dispatcher
+
+    name = namespace.get("__name__")
+    return {k: v for k, v in namespace.items()
+            if isinstance(v, Dispatcher) and getattr(v.py_func, "__module__", None) == name}
 
 
 def _get_call_template(self, args, kws):
@@ -60,12 +70,7 @@ def plain_literals(namespace: dict) -> int:
     >>> len(twice.signatures)  # one machine code for both constants (without: two)
     1
     """
-    from numba.core.dispatcher import Dispatcher
-
-    name = namespace.get("__name__")
-    n = 0
-    for obj in list(namespace.values()):
-        if isinstance(obj, Dispatcher) and getattr(obj.py_func, "__module__", None) == name:
-            obj.get_call_template = _pytypes.MethodType(_get_call_template, obj)
-            n += 1
-    return n
+    kernels = module_kernels(namespace)
+    for obj in kernels.values():
+        obj.get_call_template = _pytypes.MethodType(_get_call_template, obj)
+    return len(kernels)

@@ -16,6 +16,8 @@ kernel cannot be called from Python: such a call raises :class:`TypeError`.
 
 from __future__ import annotations
 
+from .literals import module_kernels
+
 __all__ = ["internal_kernels"]
 
 _GUARDED: dict = {}
@@ -131,11 +133,9 @@ def internal_kernels(namespace: dict, python=()) -> int:
     TypeError: ... is a numba kernel compiled without its Python wrapper: call it from another kernel
     """
     from numba.core.caching import NullCache
-    from numba.core.dispatcher import Dispatcher
 
     name = namespace.get("__name__")
-    ours = {k: v for k, v in namespace.items()
-            if isinstance(v, Dispatcher) and getattr(v.py_func, "__module__", None) == name}
+    ours = module_kernels(namespace)
     python = set(python)
     unknown = python - set(ours)
     if unknown:
