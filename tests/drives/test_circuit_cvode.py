@@ -201,6 +201,20 @@ def test_a_failure_is_reported_not_printed(capfd):
     assert "CVODE" not in out + err and "cvHandleFailure" not in out + err
 
 
+def test_a_step_that_collapses_is_not_printed(capfd):
+    """Where CVODE's step falls below the rounding of its time (``t + h = t``: a piston of 0.135 mm
+    diameter, 1/3000 of the preset's area, whose oil is far stiffer than its mass) SUNDIALS would print
+    a warning line per step (ten a flight); the library's answer is the refusal, and nothing is
+    printed (``CVodeSetMaxHnilWarns(-1)`` in the compiled driver's workspace)."""
+    from impactbar import physical as ph
+
+    cfg = ph.with_values(ph.read_config("circuit-drifter")[0], {"bar.diameter": "0.135 mm"})
+    with pytest.raises(ValueError, match="no periodic orbit"):
+        ph.build(cfg).orbit()
+    out, err = capfd.readouterr()
+    assert "WARNING" not in out + err and "t + h = t" not in out + err
+
+
 def test_a_flight_past_its_step_bound_says_so(monkeypatch):
     """A flight that runs out of steps is named as that (the bound and the modes), not as a chamber
     or a pump that cannot move the piston; the same flight with the bound restored arrives. (Compiled:

@@ -401,6 +401,7 @@ class Workspace:
               and f("CVodeSStolerances")(mem, 1e-10, 1e-12) == 0
               and f("CVodeSetLinearSolver")(mem, LS, A) == 0
               and f("CVodeSetJacFn")(mem, jac.address) == 0
+              and f("CVodeSetMaxHnilWarns")(mem, -1) == 0  # ("t + h = t": the refusal says it)
               and f("CVodeRootInit")(mem, n_events, events.address) == 0)
         if not ok:
             raise RuntimeError("CVODE's set-up failed")

@@ -71,6 +71,7 @@ FUNCTIONS = {
     "CVodeSetRootDirection": ("sundials_cvode", _int, (_vp, _vp)),
     "CVodeSetUserData": ("sundials_cvode", _int, (_vp, _vp)),
     "CVodeSetMaxNumSteps": ("sundials_cvode", _int, (_vp, _long)),
+    "CVodeSetMaxHnilWarns": ("sundials_cvode", _int, (_vp, _int)),
     "CVodeSetStopTime": ("sundials_cvode", _int, (_vp, _dbl)),
     "CVodeClearStopTime": ("sundials_cvode", _int, (_vp,)),
     "CVode": ("sundials_cvode", _int, (_vp, _dbl, _vp, ctypes.POINTER(_dbl), _int)),
