@@ -1,0 +1,127 @@
+"""What the coupled blow under the oil circuit assumes (theory §11, "What the coupled blow assumes"):
+each number the page quotes, recomputed at the arrival of ``examples/circuit_drifter_rock.toml``'s
+operating point, and the choices' effects checked against what they are (the unstressed piston's
+blow differs only through the static correction's term; the energies dropped are the blow's own
+account)."""
+
+import dataclasses
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import impactbar as ib
+import impactbar.laws.rodrock.exactmap as EM
+from impactbar.physical import build, read_config
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _paragraph() -> str:
+    text = re.sub(r"\s+", " ", (ROOT / "docs" / "theory.md").read_text())
+    start = text.index("**What the coupled blow assumes.**")
+    return text[start:text.index("(`tests/laws/test_coupled_blow_assumptions.py`", start)]
+
+
+def _quoted(pattern: str) -> str:
+    m = re.search(pattern, _paragraph())
+    assert m is not None, f"the quote {pattern!r} is gone from theory §11; update this test with the text"
+    return m.group(1)
+
+
+def _agrees(quoted: str, value: float) -> bool:
+    """``quoted`` (a number as printed, ``1.4\\times10^{-5}`` too) is ``value`` to its digits."""
+    m = re.fullmatch(r"([0-9.]+)(?:\\times10\^\{(-?[0-9]+)\})?", quoted)
+    mant, exp = m.group(1), int(m.group(2) or 0)
+    decimals = len(mant.split(".")[1]) if "." in mant else 0
+    return abs(float(mant) * 10.0**exp - value) <= 0.5 * 10.0 ** (exp - decimals) * (1 + 1e-9)
+
+
+@pytest.fixture(scope="module")
+def arrival():
+    """The operating point on the lattice (the example as shipped), the exact model, and the circuit's
+    state and the piston's at the orbit's arrival."""
+    cfg, _ = read_config(str(ROOT / "examples" / "circuit_drifter_rock.toml"))
+    lattice = build(cfg)
+    lmodel, drive = lattice.model(), lattice.drive()
+    orbit = ib.find_orbit(lmodel, drive)
+    del cfg["rock"]["cells_per_piston"]
+    m = build(cfg).model()
+    exact = m.with_(impact=dataclasses.replace(m.law, method="exact"))
+    M = lmodel.n_modes + 1
+    y = np.asarray(orbit.state, dtype=float)
+    held = dataclasses.replace(drive, start_pressures=tuple(orbit.drive_states[0]))
+    t0 = float(orbit.impact_times[0])
+    run = ib.simulate(lmodel, held, ib.InitialState(y[:M], y[M:]), t0 - 1e-12)
+    assert run.n_impacts == 0
+    before = np.asarray(orbit.states_before_impact[0], dtype=float)
+    return orbit, exact, held, run._final_drive, t0, before[:M], before[M:]
+
+
+def _blow(arrival):
+    _, exact, drive, state, t0, q, v = arrival
+    return exact.law.driven_contact(exact, drive, state, t0, q, v)
+
+
+@pytest.fixture(scope="module")
+def blows(arrival):
+    """The coupled exact blow, and the same with the piston unstressed at arrival (the static
+    correction's force set to 0 in its waves; the drive's force itself unchanged)."""
+    blow = _blow(arrival)
+    real = EM.initial_waves
+    EM.initial_waves = lambda basis, q, v, p: real(basis, q, v, 0.0 * np.asarray(p))
+    try:
+        unstressed = _blow(arrival)
+    finally:
+        EM.initial_waves = real
+    return blow, unstressed
+
+
+def test_the_stress_at_arrival(arrival, blows):
+    blow, unstressed = blows
+    work = float(unstressed.record.work_on_rock) / float(blow.record.work_on_rock) - 1.0
+    speed = float(unstressed.v_after[0]) / float(blow.v_after[0]) - 1.0
+    assert work > 0.0 and speed > 0.0  # (the page says "more work" and "faster")
+    assert _agrees(_quoted(r"does ([0-9.]+) % more work on the rock and rebounds"), 100 * work)
+    assert _agrees(_quoted(r"rebounds ([0-9.]+) % faster"), 100 * speed)
+
+
+def test_the_rock_fresh_at_every_blow(arrival, blows):
+    _, exact, *_rest = arrival
+    law = exact.law
+    v = arrival[-1]
+    preload = law.feed**2 / (2.0 * law.rock.k) / (0.5 * float(v[0]) ** 2)
+    assert _agrees(_quoted(r"The preload holds \$([0-9.]+\\times10\^\{-?[0-9]+\})\$ of the impact energy"),
+                   preload)
+
+
+def test_the_energies_dropped_at_the_end(arrival, blows):
+    blow, _ = blows
+    ex = blow.record.exact
+    assert ex.ended_by == "may_yield"
+    E0 = 0.5 * float(arrival[-1][0]) ** 2
+    assert _agrees(_quoted(r"The rod still rings then, with ([0-9.]+) % of the impact energy"),
+                   100 * float(ex.rod_energy) / E0)
+    assert _agrees(_quoted(r"at most ([0-9.]+) % of the available energy"), 100 * float(ex.uncertainty))
+    inner = float(ex.piston_energy) - 0.5 * float(blow.v_after[0]) ** 2
+    assert inner > 0.0
+    assert _agrees(_quoted(r"the rest of the energy in its waves, ([0-9.]+) % of the impact energy"),
+                   100 * inner / E0)
+    # the blow's own account: what the rock took and what piston and rod hold at the end are the
+    # energy available less what the drive's and the feed's flows did not yet deliver (to rounding)
+    assert float(ex.energy_error) < 1e-9
+
+
+def test_the_lattice_at_the_same_arrival(arrival, blows):
+    orbit = arrival[0]
+    blow, _ = blows
+    short = 1.0 - float(orbit.contacts[0].work_on_rock) / float(blow.record.work_on_rock)
+    assert short > 0.0
+    assert _agrees(_quoted(r"does ([0-9.]+) % less work on the rock"), 100 * short)
+
+
+def test_a_wrong_quote_fails():
+    """The check can fail: a number off in its last digit is not the computed one."""
+    assert _agrees("0.19", 0.0019 * 100) and not _agrees("0.18", 0.0019 * 100)
+    assert _agrees("1.4\\times10^{-5}", 1.415e-5) and not _agrees("1.5\\times10^{-5}", 1.415e-5)
