@@ -533,17 +533,58 @@ class ShootingProblem(OrbitProblem):
         tol = max(tol, self.accuracy)
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
-        X0 = X
-        used = [self.residual(X, settings=self._steer(self._loose()), steer=True)[1]]
+        first = self.residual(X, settings=self._steer(self._loose()), steer=True)[1]
+        try:
+            root, J = self._chord(X, first, tol, max_iter)
+        except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
+            return newton(self.residual, X, self.positive, tol, max_iter)  # before, and its verdict)
+        return self._close(root, J)
+
+    def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
+        """The root of this problem from ``rough``, the orbit of a cheaper model of the same motion
+        (:meth:`~impactbar.laws.ContactLaw.coarse_model`: a coupled blow on the lattice where this
+        problem's are exact; theory §11, "The coupled blow"): its unknowns and blocks the start, the
+        Jacobian of its residual there the chord's (within the coarse blow's error of this one's:
+        some 1e-2 on the example, so each step gains some two digits), the residuals this problem's.
+
+        Parameters
+        ----------
+        rough : SwitchedOrbit
+            An orbit of the same drive and impacts under the coarse model.
+        tol : float
+            Relative tolerance of the steps (no finer than the flights' accuracy).
+        max_iter : int
+            Largest number of chord steps.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m n,)
+            The unknowns.
+
+        Raises
+        ------
+        ValueError
+            Where the chord steps do not converge (the caller then solves this problem from its
+            own start).
+        """
+        X = self.initial(rough, tol, max_iter)
+        first = rough._problem.steering_residual(np.asarray(rough._unknowns, dtype=float))[1]
+        return self._close(*self._chord(X, first, max(tol, self.accuracy), max_iter))
+
+    def _chord(self, X, first, tol: float, max_iter: int):
+        """:meth:`solve`'s chord method from ``X`` with the Jacobian ``first`` (taken again, steering,
+        where its steps stop shrinking): the plain flights' root and the last Jacobian."""
+        used = [first]
 
         def jacobian(XX):  # (the chord's Jacobian taken again: the last one kept)
             used[0] = self.steering_residual(XX)[1]
             return used[0]
 
-        try:
-            X = chord(self.value, jacobian, X, self.positive, tol, max_iter, first=used[0])
-        except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
-            return newton(self.residual, X0, self.positive, tol, max_iter)  # before, and its verdict)
+        return chord(self.value, jacobian, X, self.positive, tol, max_iter, first=first), used[0]
+
+    def _close(self, X, last):
+        """:meth:`solve`'s closing step from the plain flights' root ``X``, ``last`` the chord's last
+        Jacobian."""
         # the root of the plain flights is not the variational flights' (their steps differ: the
         # integrator's error, 4e-8 in the residual of the 4-mode circuit); one Newton step with the
         # variational flight moves it there, where Newton's method of before converges. The step
@@ -551,7 +592,7 @@ class ShootingProblem(OrbitProblem):
         # 3e-12, so that with coupled blows (a column of the blow's Jacobian a blow) it is the
         # chord's, and the flight's only its state's (its residual the variational flight's all the same)
         if self.coupled:
-            r, J = self._variational_value(X, self._steer(self.settings)), used[0]
+            r, J = self._variational_value(X, self._steer(self.settings)), last
         else:
             r, J = self.steering_residual(X)
         try:

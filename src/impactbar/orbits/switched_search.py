@@ -44,7 +44,9 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
         time, the wave law (theory §4b) or the rod-rock law (§4d), held under the drive's force
         (theory §10; the orbit's ``state`` is then where the contact ends, and ``contacts`` holds
         the blows). A drive with state (the oil circuit) takes these laws with each blow solved together
-        with its state (theory §11, "The coupled blow"), the blow's Jacobian by central differences.
+        with its state (theory §11, "The coupled blow"), the blow's Jacobian by central differences;
+        with the rod-rock law's exact blows, the orbit without a guess is found on the lattice and
+        polished on the exact blows (:meth:`~impactbar.orbits.switched.ShootingProblem.polish`).
     drive : Drive
     impacts : int
         Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed for the valve.
@@ -106,8 +108,27 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     max_iter = check_int("max_iter", max_iter, lo=1)
     problem = orbit_problem(model, drive, m, newton=newton)
     if guess is None and m == 1:  # the default chain (the rigid orbit, a run from rest, the search)
-        return default_orbit(model, drive, problem, tol, max_iter)
+        polished = _from_coarse(model, drive, problem, tol, max_iter, newton)
+        return polished if polished is not None else default_orbit(model, drive, problem, tol, max_iter)
     return _motion(orbit_of(problem, _solve(problem, problem.initial(guess, tol, max_iter), tol, max_iter)))
+
+
+def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, newton: str):
+    """Where each impact is a blow coupled to the drive's state and the law has a cheaper model of
+    the same motion (:meth:`~impactbar.laws.ContactLaw.coarse_model`: the rod-rock law's exact blows
+    under the oil circuit, whose lattice costs some 1 % of a blow), the orbit found on that model
+    (the default chain, every settling flight's blow its) and polished on this one
+    (:meth:`~impactbar.orbits.switched.ShootingProblem.polish`); ``None`` where there is no such
+    model, or no orbit on it, or the polish does not converge (the default chain on this model then
+    answers)."""
+    coarse = model.law.coarse_model(model) if getattr(problem, "coupled", False) else None
+    if coarse is None or not hasattr(problem, "polish"):
+        return None
+    try:
+        rough = find_switched_orbit(coarse, drive, 1, None, tol=tol, max_iter=max_iter, newton=newton)
+        return _motion(orbit_of(problem, problem.polish(rough, tol, max_iter)))
+    except ValueError:
+        return None
 
 
 #: The slowest arrival at the stop that is a blow (the simulator's ``REST_SPEED``: a slower rebound
