@@ -14,6 +14,16 @@ own counters for it. Without ``--quick``, ``find_orbit`` with flexible pistons: 
 the way before; about four minutes). Issue 38's goals on this 2-core machine: the rigid orbit
 <= 0.5 s, with 8 modes <= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a
 few repetitions (the machine's other load only adds); compilation is done before the clock starts.
+
+``--goals REF`` instead runs, one after the other, the benchmarks that measure each goal of the
+elastic piston's circuit work against the git ref ``REF`` (e.g. ``main``), each in fresh processes
+on both trees in the same run, and prints each goal above its script's table: the circuit's orbits
+rigid and with 4, 8 and 16 modes and a continuation point with 8 modes
+(``bench_circuit_modes.py``), the circuit on rock (``bench_circuit_laws.py``), the exact blow under
+the circuit (``bench_coupled_exact.py``), the wave law's blow under the circuit
+(``bench_wave_states.py``), the first exact blow with an empty numba cache (``bench_first_call.py``)
+and the rigid bar's fixed cost against a compiled minimal loop (``bench_fast_paths.py``). Some
+twenty minutes on the 2-core machine.
 """
 
 from __future__ import annotations
@@ -165,7 +175,47 @@ def main(quick=False):
                   f"(before: {what})")
 
 
+#: (goal, script, its arguments; ``{ref}`` the git ref, ``{src}`` its exported package tree)
+GOALS = (
+    ("the circuit's orbit: rigid <= 0.5 s, 4 modes <= 0.2 s, 8 modes <= 0.5 s, 16 modes <= 2 s; a "
+     "continuation point with 8 modes <= 0.1 s (CPU s)", "bench_circuit_modes.py",
+     ("--against", "{ref}", "--rounds", "2")),
+    ("the circuit on rock (examples/circuit_drifter_rock.toml) <= 0.3 s an orbit (CPU s)",
+     "bench_circuit_laws.py", ("--against", "{ref}", "--rounds", "2")),
+    ("the exact blow under the circuit (method='exact'; the lattice's orbit 80 times cheaper a blow)",
+     "bench_coupled_exact.py", ("--against", "{src}")),
+    ("the wave law's blow under the circuit >= 5x faster", "bench_wave_states.py", ("--against", "{src}")),
+    ("the first exact blow with an empty numba cache <= 15 s of CPU", "bench_first_call.py",
+     ("--against", "{src}", "--rounds", "2")),
+    ("the rigid bar's short run <= 2x a compiled minimal loop", "bench_fast_paths.py",
+     ("--quick", "--against", "{src}")),
+)
+
+
+def goals(ref: str) -> None:
+    """Each goal, then its script's table against the git ref ``ref`` (module docstring)."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from _timing import ref_tree
+
+    here = Path(__file__).resolve().parent
+    src = ref_tree(ref)
+    for goal, script, args in GOALS:
+        shown = " ".join(args).format(ref=ref, src=f"<{ref}>/src")
+        print(f"\n## {goal}\n   python benchmarks/{script} {shown}", flush=True)
+        argv = [a.format(ref=ref, src=src) for a in args]
+        run = subprocess.run([sys.executable, str(here / script), *argv], capture_output=True, text=True)
+        print(run.stdout.rstrip() or run.stderr.rstrip()[-2000:], flush=True)
+
+
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--quick", action="store_true")
-    main(parser.parse_args().quick)
+    parser.add_argument("--goals", metavar="REF", help="every goal's benchmark against the git ref REF")
+    a = parser.parse_args()
+    if a.goals:
+        goals(a.goals)
+    else:
+        main(a.quick)
