@@ -299,7 +299,8 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
         upto = min(reach + 2.0 * T0, D) if march else D
         # (the blow is needed to upto - T0 only, but to its end where its change decides)
         cut = march and not (upto >= D and reach >= D)
-        ex = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else cap, certified=True)
+        ex, finish = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else cap,
+                                certified=True, defer=True)  # (the last one's energies and copies: finish)
         if ex.ended_by in ENDS:  # certified over at ex.duration with this force
             D = float(ex.duration)
             upto = min(upto, D)
@@ -327,6 +328,8 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
                          f"changed by {change / scale:.2e} of its size after {bound} iterations")
     if not march:
         ex = bmap.solve(q, v, record=True, t_max=cap, certified=True)
+    else:
+        ex = finish()
     bmap.duration = float(ex.duration)
     q_after, v_after = bmap.state_after(ex)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)

@@ -361,7 +361,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
                feed=0.0, impact_velocity=None, semi_infinite=False, t_max=None, record=True,
                max_pieces=MAX_PIECES, max_windows=MAX_WINDOWS, max_pool_bytes=None, initial=None,
                drive=None, fixed_horizon=False, lean=False, _trusted=False, _log=0, _pool=None,
-               _energies=True) -> ExactBlow:
+               _energies=True, _defer=False) -> ExactBlow:
     r"""The blow of a rigidly moving, unstressed piston (or of a piston in any state given by its
     waves, under a drive) on a rod resting on the rock under the feed, every wave exact (theory §4d;
     the module's text says what is exact and how the end is decided).
@@ -557,7 +557,11 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
         PR[S.PR_E0] = math.nan
         ws[S.WS_CT][[S.CT_PP, S.CT_EP, S.CT_PR, S.CT_ER, S.CT_PSI]] = math.nan
         ws[S.WS_CT][S.CT_TACC] = ws[S.WS_CT][S.CT_T]
-    return _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
+    args = (ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record)
+    if _defer:  # (the histories now, without the energies at the end and on the pool's arrays; the
+        # whole blow, its energies and copies, from the second: until this thread's next blow)
+        return _result(*args, final=False), functools.partial(_result, *args)
+    return _result(*args)
 
 
 @functools.cache
@@ -683,13 +687,17 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
             RT, RC, RD, EP, CI, CT)
 
 
-def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record):
+def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record, final=True):
+    """The :class:`ExactBlow` of a run's workspace ``ws``; ``final=False``: its histories alone (the
+    energies those of the last account, not the end's; the histories on the pool's own arrays, not
+    copies: valid until the thread's next blow reuses them), for a blow read only through its
+    histories (the coupled blow's iterates, :mod:`~impactbar.laws.rodrock.coupled_exact`)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
     J = SZ.size
     n_p = Tp.size
     t_end = float(CT[S.CT_T])
-    if CT[S.CT_TACC] != t_end:  # (the energies at the end, unless the run's last pass was there)
+    if final and CT[S.CT_TACC] != t_end:  # (the energies at the end, unless the run's last pass was there)
         K.run(ws, t_end)  # (account, through run)
     Pp, Ep, Er = CT[S.CT_PP], CT[S.CT_EP], CT[S.CT_ER]
     br = int(BI[S.BI_BRANCH])
@@ -725,7 +733,8 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     lamk = np.array([k, k_u, 0.0])
     # the pieces kept, not the pool's capacity (megabytes)
     npc, nt = int(CNT[S.CNT_PIECES]), int(CNT[S.CNT_TERMS])
-    hist = (scale, (PF[:npc].copy(), PI[:npc].copy(), TK[:nt].copy(), TC[:nt].copy(), CHI, lam, lamk), J,
+    keep = (lambda x: x.copy()) if final else (lambda x: x)
+    hist = (scale, (keep(PF[:npc]), keep(PI[:npc]), keep(TK[:nt]), keep(TC[:nt]), CHI, lam, lamk), J,
             n_p)  # (the junctions' only with record)
     return ExactBlow(
         efficiency=dissipated / available,
