@@ -96,6 +96,18 @@ def _piece_value(piece, tau):
                           axis=-1))
 
 
+def _hermite(piece, j):
+    """The cubic Hermite interpolant of column ``j`` of a piece's steps (``y``, rates ``f`` at the
+    times ``t``), shape ``(intervals, 4)``, ``(x - x_i)^3`` first: the coefficients of scipy's
+    ``CubicHermiteSpline(t, y, f).c[:, :, j].T`` by its own arithmetic (to the bit), without the
+    spline of all the columns."""
+    t, y, f = piece.t, piece.y[:, j], piece.f[:, j]
+    dx = np.diff(t)
+    slope = np.diff(y) / dx
+    tt = (f[:-1] + f[1:] - 2 * slope) / dx
+    return np.stack((tt / dx, (slope - f[:-1]) / dx - tt, f[:-1], y[:-1]), axis=1)
+
+
 class _Force:
     """The drive's force over the blow (time from the impact): held at its value at impact before a
     first iterate, then the cubic pieces of an :meth:`end_flight`'s steps (its integrator's Hermite
@@ -109,9 +121,7 @@ class _Force:
             for piece in pieces:
                 if piece.t.size < 2:
                     continue
-                piece._at(piece.t0)  # (the spline, built on first use)
-                c = piece._spline.c  # shape (4, intervals, state): (x - x_i)^3 first
-                coefs.append(c[:, :, 2].T - piece.alpha * c[:, :, 1].T)
+                coefs.append(_hermite(piece, 2) - piece.alpha * _hermite(piece, 1))
                 starts.append(piece.t[:-1] - float(t0))
             starts, coefs = np.concatenate(starts), np.concatenate(coefs)
         self.starts = np.atleast_1d(np.asarray(starts, dtype=float))
@@ -295,12 +305,17 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     bound = math.ceil(cap / (2.0 * T0)) + 1 + MAX_ITERATIONS
     change = math.inf
     reach = 0.0  # marching: the iterate is right on [0, reach]
+    keep: dict = {}  # marching: the blow's snapshots (module docstring, "Marching")
     for _ in range(bound):
         upto = min(reach + 2.0 * T0, D) if march else D
         # (the blow is needed to upto - T0 only, but to its end where its change decides)
         cut = march and not (upto >= D and reach >= D)
+        if march:  # (snapshots where the next force may part from this one: the breaks T0 apart
+            # up to where this force is held; the next blow goes on from the last it shares)
+            keep = {"resume": keep.get("snapshots"), "stops": T0 * np.arange(1, math.floor(reach / T0) + 2)}
         ex, finish = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else cap,
-                                certified=True, defer=True)  # (the last one's energies and copies: finish)
+                                certified=True, defer=True, keep=keep if march else None)
+        # (the last one's energies and copies: finish)
         if ex.ended_by in ENDS:  # certified over at ex.duration with this force
             D = float(ex.duration)
             upto = min(upto, D)
