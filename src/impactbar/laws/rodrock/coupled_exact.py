@@ -38,7 +38,11 @@ the last of them is the answer (its force within :data:`FORCE_TOL` of the one it
 and the drive's flights before the drive's force matters are the shorter, and no blow is solved twice
 with one force: about half the plain iteration's work, the same blow (on the example to the bit: the
 drive's integration restarts at every break, and the exact solver is causal, so that an iterate's
-early part is its predecessor's). ``march=False`` runs the plain iteration.
+early part is its predecessor's). So each blow goes on from a snapshot of its predecessor's solver
+(its state at the last window before where their forces part; the snapshots taken a travel time
+apart up to where the predecessor's force is held), not from the impact: the same blow to the bit,
+its windows before there not solved again (:func:`~impactbar.laws.rodrock.exact.exact_blow`'s
+``_keep``). ``march=False`` runs the plain iteration.
 
 **When the blow ends.** Not at the law's window (:meth:`~impactbar.RodRock.window`, where the
 simulator's blows under a load on the exact scheme end) but when it is certified over, as a single
