@@ -524,13 +524,18 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     snaps: list = []
     ws = None
     if _keep is not None and _keep.get("resume") and data is not None and data.drive is not None:
-        ws = _resumed(_keep["resume"], data.terms(lam, scale)[1], scale, lam, PR, pcap, tcap)
-        if ws is not None:
+        drive_terms = data.terms(lam, scale)[1]
+        rows, terms, larger = pcap, tcap, False
+        for _ in range(3):  # (the pool full: on from the snapshot again, on a pool 4 times larger)
+            ws = _resumed(_keep["resume"], drive_terms, scale, lam, PR, rows, terms, larger)
+            if ws is None:
+                break
             _run(ws, t_max, stops, h, snaps, scale)
-            if ws[S.WS_CI][S.CI_STATUS] != 0:  # (the pool full: the blow from its start)
-                ws, snaps = None, []
-            else:
+            if ws[S.WS_CI][S.CI_STATUS] == 0:
                 PR, RD = ws[S.WS_PR], ws[S.WS_RD]
+                break
+            rows, terms, larger = 4 * ws[S.WS_PF].shape[0], 4 * ws[S.WS_TK].size, True
+            ws, snaps = None, []
     while ws is None:
         RD[S.RD_HEAD] = 0.0  # (a run again with a larger pool logs afresh)
         ws = _workspace(T, Z, Tp.size, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap, h, Lb, Zb,
@@ -616,7 +621,26 @@ def _take(ws, scale):
     return ws[:4], tuple(x.copy() for x in ws[4:]), tails, PF[tails].copy(), PI[tails].copy(), scale
 
 
-def _resumed(snaps, drive, scale, lam, PR, pcap, tcap):
+def _chain(PI, first, last, most):
+    """The rows of a channel's pieces from ``first`` to ``last`` along their links (runs of rows one
+    after another, each found at once), or ``None`` where ``last`` is not within ``most`` of them."""
+    parts, r, n = [], first, 0
+    while n < most:
+        stop = min(PI.shape[0], r + most - n)
+        off = np.flatnonzero(PI[r:stop, 0] != np.arange(r + 1, stop + 1))
+        end = r + (int(off[0]) if off.size else stop - r - 1)  # (the run's last row)
+        if r <= last <= end:
+            parts.append(np.arange(r, last + 1))
+            return np.concatenate(parts)
+        parts.append(np.arange(r, end + 1))
+        n += end + 1 - r
+        r = int(PI[end, 0])
+        if r < 0:
+            return None
+    return None
+
+
+def _resumed(snaps, drive, scale, lam, PR, pcap, tcap, force_new=False):
     """A workspace going on from the latest of the snapshots ``snaps`` (:func:`_take`) whose run read
     the same drive as ``drive`` (:meth:`_Data.terms`' ``(starts, keys, coefs, sizes)``: the pieces up
     to the one it was in, and the next one's start, equal to the bit) under the same parameters
@@ -639,14 +663,11 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap):
             continue
         c = 2 * small[S.WS_SZ - 4].size  # the drive's channel, its first piece row c (_workspace)
         cur = int(CHI0[c, 1])  # the drive's piece the run was in, and the chain up to the next one
-        chain = [c]
-        while chain[-1] != cur and len(chain) <= starts.size:
-            chain.append(int(PI0[chain[-1], 0]))
-        i = len(chain) - 1
+        rows = _chain(PI0, c, cur, starts.size)
         nxt = int(PI0[cur, 0]) if cur not in tails else -1
-        if chain[-1] != cur or nxt < 0 or i + 1 >= starts.size:
+        if rows is None or nxt < 0 or rows.size >= starts.size:
             continue
-        rows = np.array(chain)
+        i = rows.size - 1
         n_old = PI0[rows, 2]
         at = np.repeat(PI0[rows, 1] - np.concatenate(([0], np.cumsum(n_old)[:-1])), n_old) + \
             np.arange(int(n_old.sum()))
@@ -656,10 +677,16 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap):
             continue
         npc, nt = int(CNT0[S.CNT_PIECES]), int(CNT0[S.CNT_TERMS])
         new, new_t = starts.size - (i + 1), int(before[-1] - before[i + 1])
+        # the pool in place where it holds half the hint ``pcap, tcap`` (the map's, from its last blow:
+        # twice what that took, grown with the horizon) and twice what it has (a pool that fills: the
+        # caller goes on from the snapshot again on a larger one), else one of twice the hint (the
+        # next blows on in place; the pages not written not taken)
         rows, terms = max(pcap, 2 * (npc + new)), max(tcap, 2 * (nt + new_t))
-        if PF0.shape[0] >= max(pcap // 2, 2 * (npc + new)) and TK0.size >= max(tcap // 2, 2 * (nt + new_t)):
+        if PF0.shape[0] >= rows // 2 and TK0.size >= terms // 2 and not force_new:
             PF, PI, TK, TC = PF0, PI0, TK0, TC0
         else:
+            if _pool_bytes(2 * rows, 2 * terms) <= MAX_POOL_BYTES:
+                rows, terms = 2 * rows, 2 * terms
             PF, PI = np.empty((rows, 5)), np.empty((rows, 4), dtype=np.int64)
             TK, TC = np.empty(terms, dtype=np.int64), np.empty(terms, dtype=complex)
             PF[:npc], PI[:npc], TK[:nt], TC[:nt] = PF0[:npc], PI0[:npc], TK0[:nt], TC0[:nt]
