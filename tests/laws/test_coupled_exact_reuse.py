@@ -139,6 +139,32 @@ def test_the_scalar_spline_is_scipys_to_the_bit():
     assert [a(float(t)) for t in ts] == [float(spline(t - t0)) for t in ts]
 
 
+def test_the_compiled_flights_are_scikit_sundaes_to_the_bit(arrival, monkeypatch):
+    """The circuit under the arriving wave's splines flown by the compiled CVODE loop (the splines in
+    its callbacks' data) takes scikit-sundae's Python interface's steps: the same blow to the bit."""
+    import impactbar.drives.circuit.endflight as EF
+    from impactbar.laws.rodrock.coupled_exact import driven_exact_contact
+
+    if EF._compiled_end(arrival[1]) is None:
+        pytest.skip("no compiled CVODE here")
+    flights = []
+    real = EF._compiled_stretches
+    monkeypatch.setattr(EF, "_compiled_stretches", lambda *a: flights.append(len(a)) or real(*a))
+    fast = driven_exact_contact(*arrival)
+    assert flights and min(flights) == 10  # (every flight compiled, with its splines)
+    compiled = len(flights)
+    monkeypatch.setattr(EF, "_compiled_end", lambda drive: None)
+    python = driven_exact_contact(*arrival)
+    assert len(flights) == compiled  # (scikit-sundae's: none compiled)
+    assert fast.t_release == python.t_release and fast.drive_state.mode == python.drive_state.mode
+    for a, b in ((fast.v_after, python.v_after), (fast.q_after, python.q_after),
+                 (fast.drive_state.z, python.drive_state.z), (fast.gaps, python.gaps)):
+        assert np.array_equal(np.asarray(a), np.asarray(b))
+    assert fast.record.work_on_rock == python.record.work_on_rock and fast.drive_work == python.drive_work
+    for x, y in zip(fast.pieces, python.pieces, strict=True):
+        assert np.array_equal(x.t, y.t) and np.array_equal(x.y, y.y) and np.array_equal(x.f, y.f)
+
+
 def test_marching_gives_the_plain_iterations_blow(arrival):
     """The iterates over the part of the blow each can be right on, then over the whole until the
     force settles, give the blow of the plain iteration (every iterate over the whole blow, the blow

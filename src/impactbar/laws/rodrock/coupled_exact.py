@@ -209,7 +209,8 @@ class _Incoming:
 def _spline_callable(spline, t0):
     """``spline(t - t0)`` as a float, for the integrator's many scalar calls: the spline's interval
     and its power sum in scipy's own order (its values to the last bit), without the array call's
-    overhead."""
+    overhead; its ``spline`` attribute ``(x, c, t0)``, which the circuit's compiled flight evaluates
+    the same way (:mod:`impactbar.drives.circuit._endcvode`)."""
     from bisect import bisect_right
 
     xs = spline.x.tolist()
@@ -223,6 +224,7 @@ def _spline_callable(spline, t0):
         s2 = s * s
         return ((k0[i] + k1[i] * s) + k2[i] * s2) + k3[i] * (s2 * s)
 
+    a.spline = (np.asarray(spline.x, dtype=float), np.asarray(spline.c, dtype=float), float(t0))
     return a
 
 
