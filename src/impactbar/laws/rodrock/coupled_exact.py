@@ -193,7 +193,7 @@ class _Incoming:
         drive integrates)."""
         from scipy.interpolate import CubicSpline
 
-        out = []
+        xs, xvs = [], []
         for a, b in zip(breaks[:-1], breaks[1:], strict=True):
             x = np.linspace(a - self.t0, b - self.t0, max(8, math.ceil((b - a) * SAMPLES / self.T0)) + 1)
             # the ends' values a hair inside (INSIDE of T_0): the break, rounded through the model time,
@@ -202,8 +202,12 @@ class _Incoming:
             xv = x.copy()
             xv[0] += INSIDE * self.T0
             xv[-1] -= INSIDE * self.T0
-            out.append(_spline_callable(CubicSpline(x, -2.0 * self.arriving(xv) / self.Z0), self.t0))
-        return out
+            xs.append(x)
+            xvs.append(xv)
+        # (the wave at all the samples at once: each value the one it has alone)
+        values = np.split(-2.0 * self.arriving(np.concatenate(xvs)) / self.Z0,
+                          np.cumsum([x.size for x in xs])[:-1])
+        return [_spline_callable(CubicSpline(x, y), self.t0) for x, y in zip(xs, values, strict=True)]
 
 
 def _spline_callable(spline, t0):
