@@ -117,7 +117,8 @@ def user_data(par: np.ndarray, a: float, impedance: float, room: int = 0) -> np.
     """The user data of the callbacks: ``(len(par), a, 1/Z, par..., work...)``, shape
     ``(3 + len(par) + SCRATCH + room,)``, ``SCRATCH`` the callbacks' room for their intermediate
     values (:func:`._endkernel.rhs_in`), ``room`` that of an interval's spline (:func:`fly_intervals`)."""
-    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par, np.zeros(EK.SCRATCH + room)))
+    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par,
+                           np.zeros(EK.SCRATCH + room)))
 
 
 #: :func:`fly_intervals`' returns besides CVODE's flags: a state not finite at a stretch's end, a
