@@ -680,13 +680,15 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap, force_new=False):
         # the pool in place where it holds half the hint ``pcap, tcap`` (the map's, from its last blow:
         # twice what that took, grown with the horizon) and twice what it has (a pool that fills: the
         # caller goes on from the snapshot again on a larger one), else one of twice the hint (the
-        # next blows on in place; the pages not written not taken)
+        # next blows on in place; the pages not written not taken), at most 8 times what it has where
+        # that is more than the hint (a hint for a far horizon: the coupled blow's last rounds)
         rows, terms = max(pcap, 2 * (npc + new)), max(tcap, 2 * (nt + new_t))
         if PF0.shape[0] >= rows // 2 and TK0.size >= terms // 2 and not force_new:
             PF, PI, TK, TC = PF0, PI0, TK0, TC0
         else:
-            if _pool_bytes(2 * rows, 2 * terms) <= MAX_POOL_BYTES:
-                rows, terms = 2 * rows, 2 * terms
+            more = (min(2 * rows, max(rows, 8 * (npc + new))), min(2 * terms, max(terms, 8 * (nt + new_t))))
+            if _pool_bytes(*more) <= MAX_POOL_BYTES:
+                rows, terms = more
             PF, PI = np.empty((rows, 5)), np.empty((rows, 4), dtype=np.int64)
             TK, TC = np.empty(terms, dtype=np.int64), np.empty(terms, dtype=complex)
             PF[:npc], PI[:npc], TK[:nt], TC[:nt] = PF0[:npc], PI0[:npc], TK0[:nt], TC0[:nt]
