@@ -677,11 +677,11 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap, force_new=False):
             continue
         npc, nt = int(CNT0[S.CNT_PIECES]), int(CNT0[S.CNT_TERMS])
         new, new_t = starts.size - (i + 1), int(before[-1] - before[i + 1])
-        # the pool in place where it holds half the hint ``pcap, tcap`` (the map's, from its last blow:
-        # twice what that took, grown with the horizon) and twice what it has (a pool that fills: the
-        # caller goes on from the snapshot again on a larger one), else one of twice the hint (the
-        # next blows on in place; the pages not written not taken), at most 8 times what it has where
-        # that is more than the hint (a hint for a far horizon: the coupled blow's last rounds)
+        # the pool in place where it holds half of the hint ``pcap, tcap`` (the map's, from its last
+        # blow: twice what that took, grown with the horizon) or of twice what it has, the larger (a
+        # pool that fills: the caller goes on from the snapshot again on a larger one), else one of
+        # twice that (the next rounds on in place; the pages not written not taken), at most 8 times
+        # what it has where that is more (a hint for a far horizon: the coupled blow's last rounds)
         rows, terms = max(pcap, 2 * (npc + new)), max(tcap, 2 * (nt + new_t))
         if PF0.shape[0] >= rows // 2 and TK0.size >= terms // 2 and not force_new:
             PF, PI, TK, TC = PF0, PI0, TK0, TC0
