@@ -1,7 +1,9 @@
 """What makes the coupled exact blow cheap changes none of its numbers: a map's blow started on the
 pool its last blow filled is the blow started on the default pool (grown by runs again), to the
-bit; the arriving wave's scalar callable is scipy's cubic spline, to the bit; the marching
-iteration's blow is the plain fixed-point iteration's, within the iteration's tolerance."""
+bit; a blow gone on from the snapshot of one whose drive was the same up to there is the blow from
+its start, to the bit; the force's cubics are scipy's Hermite spline's, to the bit; the arriving
+wave's scalar callable is scipy's cubic spline, to the bit; the marching iteration's blow is the
+plain fixed-point iteration's, within the iteration's tolerance."""
 
 import dataclasses
 
@@ -69,6 +71,64 @@ def test_a_blow_on_the_last_blows_pool_is_the_blow_on_a_grown_one(driven_map):
             assert np.array_equal(a, b, equal_nan=True)
 
 
+def _same_blow(a, b, bmap):
+    """The two blows' numbers and histories, to the bit (but the pool's counts: a blow gone on from a
+    snapshot keeps the drive's pieces it no longer reads)."""
+    assert _numbers(a)[:2] == _numbers(b)[:2] and _numbers(a)[4:] == _numbers(b)[4:]
+    assert a.ended_by == b.ended_by and a.energy_error == b.energy_error
+    assert np.array_equal(np.concatenate(bmap.state_after(a)), np.concatenate(bmap.state_after(b)))
+    t = np.linspace(0.0, a.duration, 197)
+    for j in range(1, a._hist[2]):  # (the interfaces)
+        assert np.array_equal(a.junction_force(j, t), b.junction_force(j, t))
+    assert np.array_equal(a.shank_force(t), b.shank_force(t))
+
+
+@pytest.mark.parametrize("part", [0.5, 0.02])
+def test_a_blow_gone_on_from_a_snapshot_is_the_blow_from_its_start(driven_map, monkeypatch, part):
+    """The force held from half the blow, then the whole force: the second blow goes on from the
+    first one's last snapshot before half the blow. A force changed near the start: no snapshot
+    shares it, and the blow is solved from its start."""
+    import impactbar.laws.rodrock.exact as E
+
+    bmap, q, v = driven_map
+    T0, D = float(bmap.basis.travel[0]), bmap.duration
+    full = bmap.drive
+    force = _Force(0.3)
+    force.starts, force.coefs = np.array(full[0][1:-1]), np.array([c[::-1].real for _, _, c in full[1][1:-1]])
+    if part < 0.1:  # (a force parting from the first one's before its first snapshot)
+        force.coefs = force.coefs.copy()
+        force.coefs[3, 3] *= 1.0 + 1e-12
+    resumed = []
+    real = E._resumed
+    monkeypatch.setattr(E, "_resumed", lambda *a: resumed.append(real(*a)) or resumed[-1])
+    keep = {"stops": T0 * np.arange(1, 9)}
+    held = _Force(0.3)
+    held.starts, held.coefs = np.array(full[0][1:-1]), np.array([c[::-1].real for _, _, c in full[1][1:-1]])
+    bmap.drive = held.pieces(T0, 0.5 * D)
+    bmap.solve(q, v, record=True, keep=keep)
+    assert len(keep["snapshots"]) >= 2
+    bmap.drive = force.pieces(T0, D)
+    keep = {"resume": keep["snapshots"]}
+    on = bmap.solve(q, v, record=True, keep=keep)
+    assert (resumed[-1] is not None) == (part > 0.1)
+    fresh = bmap.solve(q, v, record=True)
+    _same_blow(on, fresh, bmap)
+    bmap.drive = full
+
+
+def test_the_forces_cubics_are_scipys_hermite_spline_to_the_bit():
+    from scipy.interpolate import CubicHermiteSpline
+
+    from impactbar.laws.rodrock.coupled_exact import _hermite
+
+    rng = np.random.default_rng(5)
+    t = np.sort(rng.uniform(0.0, 2.0, 40))
+    piece = type("Steps", (), {"t": t, "y": rng.normal(size=(40, 4)), "f": rng.normal(size=(40, 4))})()
+    c = CubicHermiteSpline(piece.t, piece.y, piece.f, axis=0).c
+    for j in range(4):
+        assert np.array_equal(_hermite(piece, j), c[:, :, j].T)
+
+
 def test_the_scalar_spline_is_scipys_to_the_bit():
     rng = np.random.default_rng(3)
     x = np.sort(rng.uniform(0.2, 3.0, 30))
@@ -77,6 +137,32 @@ def test_the_scalar_spline_is_scipys_to_the_bit():
     a = _spline_callable(spline, t0)
     ts = t0 + np.concatenate((rng.uniform(-0.5, 3.5, 500), x))  # (outside: the end pieces extended)
     assert [a(float(t)) for t in ts] == [float(spline(t - t0)) for t in ts]
+
+
+def test_the_compiled_flights_are_scikit_sundaes_to_the_bit(arrival, monkeypatch):
+    """The circuit under the arriving wave's splines flown by the compiled CVODE loop (the splines in
+    its callbacks' data) takes scikit-sundae's Python interface's steps: the same blow to the bit."""
+    import impactbar.drives.circuit.endflight as EF
+    from impactbar.laws.rodrock.coupled_exact import driven_exact_contact
+
+    if EF._compiled_end(arrival[1]) is None:
+        pytest.skip("no compiled CVODE here")
+    flights = []
+    real = EF._compiled_stretches
+    monkeypatch.setattr(EF, "_compiled_stretches", lambda *a: flights.append(len(a)) or real(*a))
+    fast = driven_exact_contact(*arrival)
+    assert flights and min(flights) == 10  # (every flight compiled, with its splines)
+    compiled = len(flights)
+    monkeypatch.setattr(EF, "_compiled_end", lambda drive: None)
+    python = driven_exact_contact(*arrival)
+    assert len(flights) == compiled  # (scikit-sundae's: none compiled)
+    assert fast.t_release == python.t_release and fast.drive_state.mode == python.drive_state.mode
+    for a, b in ((fast.v_after, python.v_after), (fast.q_after, python.q_after),
+                 (fast.drive_state.z, python.drive_state.z), (fast.gaps, python.gaps)):
+        assert np.array_equal(np.asarray(a), np.asarray(b))
+    assert fast.record.work_on_rock == python.record.work_on_rock and fast.drive_work == python.drive_work
+    for x, y in zip(fast.pieces, python.pieces, strict=True):
+        assert np.array_equal(x.t, y.t) and np.array_equal(x.y, y.y) and np.array_equal(x.f, y.f)
 
 
 def test_marching_gives_the_plain_iterations_blow(arrival):

@@ -6,9 +6,14 @@ Python runs between the circuit's events.
 CVODE's user data is one array ``(len(par), a, 1/Z, par..., work...)``: the wave ``a`` arriving at
 the driven end, constant over the stretch (the lattice's steps), the driven end's admittance ``1/Z``,
 the kernels' parameters and the callbacks' room for their intermediate values (no allocation a
-call). Where ``a`` varies within an interval (a callable), the stretches go through
-scikit-sundae's Python interface instead (:func:`.endflight.circuit_end_flight`). The options are those of
-:class:`._cvode.Workspace` (scikit-sundae's defaults), so either way takes the same steps.
+call). Where ``a`` varies within an interval as a cubic spline (the coupled exact blow's callables,
+which carry it as their ``spline``), the spline of the interval follows the callbacks' room in the
+user data (its knots and its coefficients, :func:`spline_data`) and :data:`SPLINE_CALLBACKS`' vector
+field sets ``a`` from it at each call, by the Python callable's own arithmetic (:func:`spline_at`);
+another callable goes
+through scikit-sundae's Python interface instead (:func:`.endflight.circuit_end_flight`). The options
+are those of :class:`._cvode.Workspace` (scikit-sundae's defaults), so either way takes the same
+steps.
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ from . import _cvode as CV
 from . import _endkernel as EK
 from ._cvode import _c, _d, _dp, _p
 
-__all__ = ["CALLBACKS", "user_data", "fly_intervals"]
+__all__ = ["CALLBACKS", "SPLINE_CALLBACKS", "fly_intervals", "spline_data", "user_data"]
 
 _HEAD = 3  # len(par), a, 1/Z
 
@@ -59,11 +64,61 @@ def _events_c(t, y, g, user_data):
 CALLBACKS = (_rhs_c, _jac_c, _events_c, EK.N_EVENTS)
 
 
-def user_data(par: np.ndarray, a: float, impedance: float) -> np.ndarray:
+@nb.njit(cache=CACHE, nogil=True)
+def spline_at(ud, base, t):
+    """The wave ``a`` at the time ``t`` from the spline at ``ud[base:]`` (:func:`spline_data`):
+    the Python callable's arithmetic (:func:`impactbar.laws.rodrock.coupled_exact._spline_callable`: its
+    interval as ``bisect_right``'s, the end ones extended)."""
+    m = int(ud[base])
+    t0 = ud[base + 1]
+    xs = ud[base + 2:base + 2 + m]
+    c = base + 2 + m
+    n = m - 1
+    tt = t - t0
+    i = min(max(np.searchsorted(xs, tt, side="right") - 1, 0), n - 1)
+    s = tt - xs[i]
+    s2 = s * s
+    return ((ud[c + 3 * n + i] + ud[c + 2 * n + i] * s) + ud[c + n + i] * s2) + ud[c + i] * (s2 * s)
+
+
+@nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
+def _rhs_spline_c(t, y, yp, user_data):
+    """CVODE's ``CVRhsFn`` with ``a`` from the interval's spline: :func:`._endkernel.rhs`."""
+    n = int(nb.carray(user_data, 1)[0])
+    base = _HEAD + n + EK.SCRATCH
+    m = int(nb.carray(user_data, base + 1)[base])
+    ud = nb.carray(user_data, base + 2 + m + 4 * (m - 1))
+    ud[1] = spline_at(ud, base, t)
+    EK.rhs_in(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(CV._nv_data(yp), EK.N_STATE),
+              ud[_HEAD:_HEAD + n], ud[1:_HEAD], ud[_HEAD + n:base])
+    return 0
+
+
+#: the callbacks of :func:`._cvode.workspace` for the circuit during a blow, ``a`` a spline an interval
+#: (the Jacobian's ``a`` the vector field's last, as scikit-sundae's Python callbacks share it)
+SPLINE_CALLBACKS = (_rhs_spline_c, _jac_c, _events_c, EK.N_EVENTS)
+
+
+def spline_data(incoming):
+    """The splines of the callables ``incoming`` (one an interval, each with its ``spline``: knots ``x``,
+    scipy's coefficients ``c`` of shape ``(4, m - 1)``, ``(x - x_i)^3`` first, and the time ``t0`` it
+    is shifted by: :func:`impactbar.laws.rodrock.coupled_exact._spline_callable`'s) as one array and
+    each one's offset in it (shape ``(n + 1,)``): a spline's block ``(m, t0, x..., c[0]..., c[1]...,
+    c[2]..., c[3]...)``."""
+    blocks = []
+    for a in incoming:
+        x, c, t0 = a.spline
+        blocks.append(np.concatenate(([float(x.size), t0], x, c.ravel())))
+    offsets = np.concatenate(([0], np.cumsum([b.size for b in blocks]))).astype(np.int64)
+    return np.concatenate(blocks), offsets
+
+
+def user_data(par: np.ndarray, a: float, impedance: float, room: int = 0) -> np.ndarray:
     """The user data of the callbacks: ``(len(par), a, 1/Z, par..., work...)``, shape
-    ``(3 + len(par) + SCRATCH,)``, the last ``SCRATCH`` the callbacks' room for their intermediate
-    values (:func:`._endkernel.rhs_in`)."""
-    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par, np.zeros(EK.SCRATCH)))
+    ``(3 + len(par) + SCRATCH + room,)``, ``SCRATCH`` the callbacks' room for their intermediate
+    values (:func:`._endkernel.rhs_in`), ``room`` that of an interval's spline (:func:`fly_intervals`)."""
+    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par,
+                           np.zeros(EK.SCRATCH + room)))
 
 
 #: :func:`fly_intervals`' returns besides CVODE's flags: a state not finite at a stretch's end, a
@@ -86,7 +141,7 @@ def _grow(T, Y, F, k, need):
 
 @nb.njit(cache=CACHE, nogil=True)
 def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, directions, data, max_steps,
-                  volumes, impulses):
+                  volumes, impulses, splines, offsets):
     r"""The stretches of :func:`.endflight.circuit_end_flight` from interval ``k`` at ``t`` (the
     driven end at ``w``, the circuit at ``z``) on through the intervals of ``breaks``, each a call of
     :func:`._cvode.fly` (CVODE re-initialised at each interval's start, the same steps), until the
@@ -113,6 +168,11 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
         The rear and the front chamber's volumes and the area ratio.
     impulses : numpy.ndarray, shape (n,)
         ``int p dt`` over each interval, added to in place.
+    splines, offsets : numpy.ndarray
+        :func:`spline_data` (``offsets`` of size ``n + 1``): ``a`` on interval ``k`` the spline of
+        block ``k``, copied after the callbacks' room in ``data`` (large enough: :func:`user_data`'s
+        ``room``; the workspace's callbacks :data:`SPLINE_CALLBACKS`), ``incoming`` not read. Empty:
+        ``a`` from ``incoming``.
 
     Returns
     -------
@@ -140,13 +200,19 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
     y0 = np.zeros(N)
     npar = int(data[0])
     par = data[_HEAD:_HEAD + npar]
-    work = data[_HEAD + npar:]
+    base = _HEAD + npar + EK.SCRATCH
+    work = data[_HEAD + npar:base]
+    spline = offsets.size > 0
     while k < n:
         t1 = breaks[k + 1]
         if not t < t1:
             k += 1
             continue
-        data[1] = incoming[k]
+        if spline:
+            size = offsets[k + 1] - offsets[k]
+            data[base:base + size] = splines[offsets[k]:offsets[k + 1]]
+        else:
+            data[1] = incoming[k]
         y0[:] = 0.0
         y0[0] = w
         y0[1:5] = z
@@ -166,6 +232,8 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
                 Y[S] = ys[i]
                 S += 1
         for i in range(s0, S):
+            if spline:
+                data[1] = spline_at(data, base, T[i])
             EK.rhs_in(Y[i], F[i], par, data[1:_HEAD], work)
         if P + 1 == starts.size:
             st2 = np.zeros(2 * starts.size, np.int64)

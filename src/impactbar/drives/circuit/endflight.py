@@ -225,6 +225,10 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     if compiled is not None and (values or not any(callable(a) for a in incoming)):
         return _compiled_stretches(compiled, drive, model1, state, breaks, w,
                                    np.asarray(incoming, dtype=float), impedance, settings)
+    if compiled is not None and n and all(hasattr(a, "spline") for a in incoming):  # (the coupled
+        # exact blow's splines: compiled, the same steps)
+        return _compiled_stretches(compiled, drive, model1, state, breaks, w, np.zeros(n), impedance,
+                                   settings, compiled.spline_data(incoming))
     for k in range(n):
         a = incoming[k]
         t, t1 = float(breaks[k]), float(breaks[k + 1])
@@ -271,12 +275,19 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     return EndFlight(DriveState(mode, z), w, impulses, pieces, fired_log)
 
 
-def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, impedance, settings):
-    """:func:`circuit_end_flight` with a constant ``a`` on each interval: the stretches between the
-    circuit's events in one compiled call each (:func:`._endcvode.fly_intervals`, the same steps as
-    one :func:`._endcvode.fly` a stretch), Python only at the events."""
+def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, impedance, settings,
+                        splines=None):
+    """:func:`circuit_end_flight` with a constant ``a`` on each interval, or with ``splines``
+    (:func:`._endcvode.spline_data`) a spline on each: the stretches between the circuit's events in
+    one compiled call each (:func:`._endcvode.fly_intervals`, the same steps as one
+    :func:`._endcvode.fly` a stretch), Python only at the events."""
     n = breaks.size - 1
-    ws = compiled.CV.workspace(EK.N_STATE, 0, compiled.CALLBACKS)
+    if splines is None:
+        splines, room = (np.empty(0), np.empty(0, dtype=np.int64)), 0
+        ws = compiled.CV.workspace(EK.N_STATE, 0, compiled.CALLBACKS)
+    else:
+        room = int(np.max(np.diff(splines[1])))
+        ws = compiled.CV.workspace(EK.N_STATE, 0, compiled.SPLINE_CALLBACKS)
     ch = drive.chambers
     volumes = np.array([ch.rear_volume, ch.front_volume, ch.area_ratio])
     alpha = ch.area_ratio
@@ -289,10 +300,11 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
     rtol, atol = float(settings.rtol), float(settings.atol)
     while True:
         directions, data = _mode_data(compiled, drive, model1, mode, float(impedance))
-        data = data.copy()  # (the callbacks write their scratch into it: one a call, threads apart)
+        # (the callbacks write their scratch into it: one a call, threads apart; a spline's room)
+        data = np.concatenate((data, np.zeros(room))) if room else data.copy()
         flag, k, t, T, Y, F, starts, roots = compiled.fly_intervals(
             ws.mem, ws.y, breaks, k, t, w, z, incoming, rtol, atol, directions, data, _MAX_STEPS, volumes,
-            impulses)
+            impulses, *splines)
         rows = starts.tolist()
         for a, b in zip(rows[:-1], rows[1:], strict=True):
             pieces.append(EndPiece(T[a:b], Y[a:b], F[a:b], alpha, layout))

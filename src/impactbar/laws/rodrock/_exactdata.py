@@ -23,7 +23,9 @@ class _Drive:
     def __init__(self, drive):
         starts, pieces = drive
         starts = np.asarray(starts, dtype=float)
-        parts = [x if all(type(a) is np.ndarray and a.ndim == 1 for a in x)  # (arrays as they come)
+        nd = np.ndarray
+        parts = [x if len(x) == 3 and type(x[0]) is nd and type(x[1]) is nd and type(x[2]) is nd
+                 and x[0].ndim == x[1].ndim == x[2].ndim == 1  # (arrays as they come)
                  else tuple(np.atleast_1d(np.asarray(a)) for a in x) for x in pieces]
         if not all(e.ndim == 1 and e.shape == d.shape == c.shape for e, d, c in parts):
             raise ValueError("drive: each piece is (exps, degs, coefs), arrays of one length")
@@ -38,7 +40,8 @@ class _Drive:
         sizes = np.array([x[0].size for x in parts], dtype=np.int64)
         self.flat = (e, d, c, sizes)
         self.starts = starts
-        self.exponents = e.tolist()
+        first = np.unique(e, return_index=True)[1]  # (its exponents once each, in the order they come)
+        self.exponents = e[np.sort(first)].tolist()
         # (the sup of sum c tau^d over a piece's span: a polynomial's pieces are short, and their
         # monomials' coefficients large; the forces' scale must not take them as its size)
         spans = np.diff(np.append(starts, starts[-1] + 1.0))

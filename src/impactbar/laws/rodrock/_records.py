@@ -10,7 +10,9 @@ values into the kernels that read them: a change here wants the package's ``__py
 
 # -- the workspace tuple ``ws`` (its order: the kernels unpack it whole) ----------------------------
 WS_PF = 0  # PF, the pieces' floats (the pool: its rows its capacity)
+WS_TK = 2  # TK, the terms' keys (the pool's terms: its size their capacity)
 WS_CNT = 4  # CNT, the pool's counts
+WS_CHI = 5  # CHI, the channels' last pieces and receivers' cursors
 WS_LAM = 8  # lam, the exponent table
 WS_PR = 13  # PR, the blow's parameters
 WS_SZ = 14  # SZ, the segments' impedances

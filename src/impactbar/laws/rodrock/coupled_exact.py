@@ -38,7 +38,11 @@ the last of them is the answer (its force within :data:`FORCE_TOL` of the one it
 and the drive's flights before the drive's force matters are the shorter, and no blow is solved twice
 with one force: about half the plain iteration's work, the same blow (on the example to the bit: the
 drive's integration restarts at every break, and the exact solver is causal, so that an iterate's
-early part is its predecessor's). ``march=False`` runs the plain iteration.
+early part is its predecessor's). So each blow goes on from a snapshot of its predecessor's solver
+(its state at the last window before where their forces part; the snapshots taken a travel time
+apart up to where the predecessor's force is held), not from the impact: the same blow to the bit,
+its windows before there not solved again (:func:`~impactbar.laws.rodrock.exact.exact_blow`'s
+``_keep``). ``march=False`` runs the plain iteration.
 
 **When the blow ends.** Not at the law's window (:meth:`~impactbar.RodRock.window`, where the
 simulator's blows under a load on the exact scheme end) but when it is certified over, as a single
@@ -96,6 +100,18 @@ def _piece_value(piece, tau):
                           axis=-1))
 
 
+def _hermite(piece, j):
+    """The cubic Hermite interpolant of column ``j`` of a piece's steps (``y``, rates ``f`` at the
+    times ``t``), shape ``(intervals, 4)``, ``(x - x_i)^3`` first: the coefficients of scipy's
+    ``CubicHermiteSpline(t, y, f).c[:, :, j].T`` by its own arithmetic (to the bit), without the
+    spline of all the columns."""
+    t, y, f = piece.t, piece.y[:, j], piece.f[:, j]
+    dx = np.diff(t)
+    slope = np.diff(y) / dx
+    tt = (f[:-1] + f[1:] - 2 * slope) / dx
+    return np.stack((tt / dx, (slope - f[:-1]) / dx - tt, f[:-1], y[:-1]), axis=1)
+
+
 class _Force:
     """The drive's force over the blow (time from the impact): held at its value at impact before a
     first iterate, then the cubic pieces of an :meth:`end_flight`'s steps (its integrator's Hermite
@@ -109,9 +125,7 @@ class _Force:
             for piece in pieces:
                 if piece.t.size < 2:
                     continue
-                piece._at(piece.t0)  # (the spline, built on first use)
-                c = piece._spline.c  # shape (4, intervals, state): (x - x_i)^3 first
-                coefs.append(c[:, :, 2].T - piece.alpha * c[:, :, 1].T)
+                coefs.append(_hermite(piece, 2) - piece.alpha * _hermite(piece, 1))
                 starts.append(piece.t[:-1] - float(t0))
             starts, coefs = np.concatenate(starts), np.concatenate(coefs)
         self.starts = np.atleast_1d(np.asarray(starts, dtype=float))
@@ -179,7 +193,7 @@ class _Incoming:
         drive integrates)."""
         from scipy.interpolate import CubicSpline
 
-        out = []
+        xs, xvs = [], []
         for a, b in zip(breaks[:-1], breaks[1:], strict=True):
             x = np.linspace(a - self.t0, b - self.t0, max(8, math.ceil((b - a) * SAMPLES / self.T0)) + 1)
             # the ends' values a hair inside (INSIDE of T_0): the break, rounded through the model time,
@@ -188,14 +202,19 @@ class _Incoming:
             xv = x.copy()
             xv[0] += INSIDE * self.T0
             xv[-1] -= INSIDE * self.T0
-            out.append(_spline_callable(CubicSpline(x, -2.0 * self.arriving(xv) / self.Z0), self.t0))
-        return out
+            xs.append(x)
+            xvs.append(xv)
+        # (the wave at all the samples at once: each value the one it has alone)
+        values = np.split(-2.0 * self.arriving(np.concatenate(xvs)) / self.Z0,
+                          np.cumsum([x.size for x in xs])[:-1])
+        return [_spline_callable(CubicSpline(x, y), self.t0) for x, y in zip(xs, values, strict=True)]
 
 
 def _spline_callable(spline, t0):
     """``spline(t - t0)`` as a float, for the integrator's many scalar calls: the spline's interval
     and its power sum in scipy's own order (its values to the last bit), without the array call's
-    overhead."""
+    overhead; its ``spline`` attribute ``(x, c, t0)``, which the circuit's compiled flight evaluates
+    the same way (:mod:`impactbar.drives.circuit._endcvode`)."""
     from bisect import bisect_right
 
     xs = spline.x.tolist()
@@ -209,6 +228,7 @@ def _spline_callable(spline, t0):
         s2 = s * s
         return ((k0[i] + k1[i] * s) + k2[i] * s2) + k3[i] * (s2 * s)
 
+    a.spline = (np.asarray(spline.x, dtype=float), np.asarray(spline.c, dtype=float), float(t0))
     return a
 
 
@@ -295,11 +315,17 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     bound = math.ceil(cap / (2.0 * T0)) + 1 + MAX_ITERATIONS
     change = math.inf
     reach = 0.0  # marching: the iterate is right on [0, reach]
+    keep: dict = {}  # marching: the blow's snapshots (module docstring, "Marching")
     for _ in range(bound):
         upto = min(reach + 2.0 * T0, D) if march else D
         # (the blow is needed to upto - T0 only, but to its end where its change decides)
         cut = march and not (upto >= D and reach >= D)
-        ex = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else cap, certified=True)
+        if march:  # (snapshots where the next force may part from this one: the breaks T0 apart
+            # up to where this force is held; the next blow goes on from the last it shares)
+            keep = {"resume": keep.get("snapshots"), "stops": T0 * np.arange(1, math.floor(reach / T0) + 2)}
+        ex, finish = bmap.solve(q, v, record=True, t_max=upto - T0 if cut and upto > T0 else cap,
+                                certified=True, defer=True, keep=keep if march else None)
+        # (the last one's energies and copies: finish)
         if ex.ended_by in ENDS:  # certified over at ex.duration with this force
             D = float(ex.duration)
             upto = min(upto, D)
@@ -327,6 +353,8 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
                          f"changed by {change / scale:.2e} of its size after {bound} iterations")
     if not march:
         ex = bmap.solve(q, v, record=True, t_max=cap, certified=True)
+    else:
+        ex = finish()
     bmap.duration = float(ex.duration)
     q_after, v_after = bmap.state_after(ex)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)

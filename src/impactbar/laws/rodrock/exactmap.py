@@ -415,7 +415,8 @@ class ExactBlowMap:
         h = float(min(self.basis.travel.min(), self.rod_times.min()))
         self.drive = drive_pieces(load, self.t0, self.duration, lead=h)
 
-    def solve(self, q, v, *, t_max=None, record=False, lean=False, log=0, energies=True, certified=False):
+    def solve(self, q, v, *, t_max=None, record=False, lean=False, log=0, energies=True, certified=False,
+              defer=False, keep=None):
         """The :class:`~impactbar.laws.rodrock.exact.ExactBlow` of an arrival in state ``(q, q')``
         (the end on the shank), run to ``t_max`` (default the blow's duration), with ``certified``
         only until its end is certified (the solver's certificate under a drive: the coupled blow's,
@@ -423,7 +424,12 @@ class ExactBlowMap:
         the solver's workspace and scale (:func:`~impactbar.laws.rodrock.exact.exact_blow`), with
         ``log`` rows of its switch log (:mod:`~impactbar.laws.rodrock.exactjac`); without
         ``energies`` its energies (and those derived from them) NaN, not accounted (the histories
-        alone wanted: the coupled blow's iterates)."""
+        alone wanted); with ``defer`` a pair: the blow's histories alone (its energies not those of
+        its end, its pieces on the solver's arrays until this thread's next blow) and a callable
+        giving the whole blow (the coupled blow's iterates, of which the last is kept); ``keep``: the
+        snapshots a blow goes on from and takes (:func:`~impactbar.laws.rodrock.exact.exact_blow`'s
+        ``_keep``: the coupled blow's iterates, each the same as the last up to where their drives
+        part)."""
         from ._exactdata import _Drive
         from .exact import exact_blow
 
@@ -443,13 +449,15 @@ class ExactBlowMap:
                          initial=init, drive=drive, fixed_horizon=not certified,
                          t_max=horizon, record=record,
                          lean=lean, semi_infinite=self.rod.semi_infinite, _trusted=trusted, _log=log,
-                         _pool=self._pool_for(horizon), _energies=energies, **self.params)
+                         _pool=self._pool_for(horizon), _energies=energies, _defer=defer, _keep=keep,
+                         **self.params)
         # the pool this blow filled, for the map's next (its many blows alike: a first one grows its
         # pool, run again, and the next start there)
         if lean:
             used = (out[0][WS_CNT][CNT_PIECES], out[0][WS_CNT][CNT_TERMS], out[0][WS_BI][BI_NEP])
         else:
-            used = (out.pieces, out.diagnostics["terms"], out.loadings.shape[0])
+            ex = out[0] if defer else out
+            used = (ex.pieces, ex.diagnostics["terms"], ex.loadings.shape[0])
         self._pool = (*(int(x) for x in used), horizon)
         return out
 
