@@ -43,41 +43,57 @@ def _ours(ev) -> bool:
     return getattr(func, "__module__", "").startswith("impactbar")
 
 
-class _Watch:
-    """numba compile-event listener: a timer runs while the outermost compile of one of
-    impactbar's kernels is in progress, and prints the note when it fires."""
+class _Outermost:
+    """numba compile-event listener: :meth:`_begin` when the outermost compile of one of impactbar's
+    kernels starts, :meth:`_finish` when it ends (both under ``self.lock``)."""
 
-    def __init__(self, prog, after, stream, deferring):
-        self.prog, self.after, self.stream = prog, after, stream
-        self.deferring = deferring  # the process-wide watch: silent while a compile_note block runs
+    def __init__(self):
         self.depth = 0
-        self.spent = 0.0  # seconds spent compiling so far (outermost compiles)
-        self.since = 0.0
-        self.timer = None
         self.lock = threading.Lock()
 
-    # numba.core.event.Listener's methods (mixed in with it when the note is wanted, so that this
-    # module imports numba only then)
+    # numba.core.event.Listener's methods (mixed in with it when wanted, so that this module imports
+    # numba only then)
     def on_start(self, ev=None):
         if ev is not None and not _ours(ev):
             return
         with self.lock:
             self.depth += 1
-            if self.depth == 1 and not _STATE["said"]:
-                self.since = time.perf_counter()
-                self.timer = threading.Timer(max(self.after - self.spent, 0.0), self._say)
-                self.timer.daemon = True
-                self.timer.start()
+            if self.depth == 1:
+                self._begin()
 
     def on_end(self, ev=None):
         if ev is not None and not _ours(ev):
             return
         with self.lock:
             self.depth = max(self.depth - 1, 0)
-            if self.depth == 0 and self.timer is not None:
-                self.timer.cancel()
-                self.timer = None
-                self.spent += time.perf_counter() - self.since
+            if self.depth == 0:
+                self._finish()
+
+
+class _Watch(_Outermost):
+    """numba compile-event listener: a timer runs while the outermost compile of one of
+    impactbar's kernels is in progress, and prints the note when it fires."""
+
+    def __init__(self, prog, after, stream, deferring):
+        super().__init__()
+        self.prog, self.after, self.stream = prog, after, stream
+        self.deferring = deferring  # the process-wide watch: silent while a compile_note block runs
+        self.spent = 0.0  # seconds spent compiling so far (outermost compiles)
+        self.since = 0.0
+        self.timer = None
+
+    def _begin(self):
+        if not _STATE["said"]:
+            self.since = time.perf_counter()
+            self.timer = threading.Timer(max(self.after - self.spent, 0.0), self._say)
+            self.timer.daemon = True
+            self.timer.start()
+
+    def _finish(self):
+        if self.timer is not None:
+            self.timer.cancel()
+            self.timer = None
+            self.spent += time.perf_counter() - self.since
 
     def _say(self):
         with self.lock:
@@ -96,32 +112,23 @@ class _Watch:
                 self.timer = None
 
 
-class _GcPause:
+class _GcPause(_Outermost):
     """numba compile-event listener: Python's cyclic garbage collector off while the outermost
     compile of one of impactbar's kernels runs (if it was on), on again when it ends."""
 
     def __init__(self):
-        self.depth = 0
+        super().__init__()
         self.paused = False
-        self.lock = threading.Lock()
 
-    def on_start(self, ev=None):
-        if ev is not None and not _ours(ev):
-            return
-        with self.lock:
-            self.depth += 1
-            if self.depth == 1 and gc.isenabled():
-                gc.disable()
-                self.paused = True
+    def _begin(self):
+        if gc.isenabled():
+            gc.disable()
+            self.paused = True
 
-    def on_end(self, ev=None):
-        if ev is not None and not _ours(ev):
-            return
-        with self.lock:
-            self.depth = max(self.depth - 1, 0)
-            if self.depth == 0 and self.paused:
-                self.paused = False
-                gc.enable()
+    def _finish(self):
+        if self.paused:
+            self.paused = False
+            gc.enable()
 
 
 def _write(line: str, stream) -> None:

@@ -19,7 +19,7 @@ each one (an array's pointers, sizes, shape and strides), to call the runtime on
 memory block; for the exact blow's workspace, a tuple of 26 arrays, some 300 LLVM instructions per
 count, about a third of its kernels' LLVM IR, all dead (LLVM deletes them). The lean lowering reads
 only the fields that hold a memory block, on the same path: the same calls to the runtime, in the
-same order, so the same machine code, from less IR to build, print, parse and optimise.
+same order, from less IR to build, print, parse and optimise.
 """
 
 from __future__ import annotations
