@@ -139,3 +139,39 @@ def test_a_first_call_in_python_prints_the_note_before_a_long_compile(tmp_path):
     again = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True,
                            check=True)
     assert again.stderr == ""
+
+
+def test_the_garbage_collector_pauses_while_a_kernel_compiles(fresh):
+    """Off while one of impactbar's kernels compiles (the collector's state seen from inside the
+    compile, by the kernel's compile-time callee), on again after, and left off where the program
+    had turned it off."""
+    import gc
+
+    from numba.core import event
+
+    seen = []
+
+    class Probe(event.Listener):
+        def on_start(self, ev):
+            seen.append(gc.isenabled())
+
+        def on_end(self, ev):
+            pass
+
+    pause = type("Pause", (compiling._GcPause, event.Listener), {})()
+    probe = Probe()
+    event.register("numba:compile", pause)
+    event.register("numba:compile", probe)  # (after the pause: sees its state)
+    was = gc.isenabled()
+    try:
+        gc.enable()
+        _fresh_kernel()(__import__("numpy").ones(3))
+        assert seen == [False] and gc.isenabled()
+        gc.disable()
+        _fresh_kernel()(__import__("numpy").ones(3))
+        assert seen == [False, False] and not gc.isenabled()
+    finally:
+        event.unregister("numba:compile", probe)
+        event.unregister("numba:compile", pause)
+        if was:
+            gc.enable()

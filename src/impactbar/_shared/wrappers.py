@@ -12,6 +12,14 @@ optimise it with their own and make its machine code; they get no machine code, 
 cache entry of their own (a cached caller holds their machine code; a caller compiled later compiles
 them again). The kernels Python calls keep their Python wrapper and their cache entry. A link-only
 kernel cannot be called from Python: such a call raises :class:`TypeError`.
+
+All of a module's kernels also count references *leanly*: numba increments and decrements the
+reference counts of an array, a tuple of arrays, ... by walking every field of the value and reading
+each one (an array's pointers, sizes, shape and strides), to call the runtime on the few that hold a
+memory block; for the exact blow's workspace, a tuple of 26 arrays, some 300 LLVM instructions per
+count, about a third of its kernels' LLVM IR, all dead (LLVM deletes them). The lean lowering reads
+only the fields that hold a memory block, on the same path: the same calls to the runtime, in the
+same order, from less IR to build, print, parse and optimise.
 """
 
 from __future__ import annotations
@@ -50,12 +58,75 @@ class _NoEnv:
         return getattr(self._codegen, name)
 
 
+def _lean_compiler():
+    """numba's compiler with the lean counting of references: its lowering pass's lowering reads
+    only the fields of a value that hold a memory block to increment or decrement their counts."""
+    import contextlib
+
+    from numba.core import debuginfo, lowering, typed_passes
+    from numba.core.compiler import Compiler
+    from numba.core.compiler_machinery import register_pass
+    from numba.core.runtime.context import NRTContext
+
+    suspend = getattr(debuginfo, "suspend_emission", lambda builder: contextlib.nullcontext())
+
+    class LeanNRT(NRTContext):
+        """numba's runtime calls, the memory blocks inside a value found without reading its other
+        fields."""
+
+        def get_meminfos(self, builder, ty, val):
+            dmm = self._context.data_model_manager
+            model = dmm[ty]
+            found = [(ty, model.get_nrt_meminfo(builder, val))] if model.has_nrt_meminfo() else []
+            for mty, getter in model.traverse(builder):
+                if dmm[mty].contains_nrt_meminfo():  # (the others: no block, nothing to read)
+                    found.extend(self.get_meminfos(builder, mty, getter(val)))
+            return found
+
+    class LeanLower(lowering.Lower):
+        """numba's lowering, its reference counts through :class:`LeanNRT`."""
+
+        def incref(self, typ, val):
+            if self.context.enable_nrt:
+                LeanNRT(self.context, True).incref(self.builder, typ, val)
+
+        def decref(self, typ, val):
+            if self.context.enable_nrt:
+                with suspend(self.builder):  # (as numba's: no line of its own for a decref)
+                    LeanNRT(self.context, True).decref(self.builder, typ, val)
+
+    @register_pass(mutates_CFG=True, analysis_only=False)
+    class LeanNativeLowering(typed_passes.NativeLowering):
+        """numba's lowering pass with :class:`LeanLower`."""
+
+        _name = "impactbar_lean_native_lowering"
+
+        @property
+        def lowering_class(self):
+            return LeanLower
+
+    class LeanCompiler(Compiler):
+        """numba's compiler, its lowering pass :class:`LeanNativeLowering`."""
+
+        def define_pipelines(self):
+            pms = super().define_pipelines()
+            for pm in pms:
+                pm.passes = [(LeanNativeLowering if p is typed_passes.NativeLowering else p, d)
+                             for p, d in pm.passes]
+                pm.finalize()
+            return pms
+
+    return LeanCompiler
+
+
 def _link_only_classes():
-    """The compiler pipeline that gives a kernel a link-only library, and that library's class
-    (numba's JIT library that keeps its LLVM module for its callers and makes no machine code)."""
+    """The compiler pipelines of a module's kernels: the lean one (:func:`_lean_compiler`), and the
+    one that gives a kernel a link-only library, with that library's class (numba's JIT library that
+    keeps its LLVM module for its callers and makes no machine code)."""
     if not _CLASSES:
         from numba.core.codegen import JITCodeLibrary
-        from numba.core.compiler import Compiler
+
+        Compiler = _lean_compiler()
 
         class LinkOnlyLibrary(JITCodeLibrary):
             """The LLVM module of a kernel that only other kernels call: linked into theirs, which
@@ -86,12 +157,13 @@ def _link_only_classes():
                     library.__class__ = LinkOnlyLibrary
                 super().__init__(typingctx, targetctx, library, args, return_type, flags, locals)
 
-        _CLASSES.update(library=LinkOnlyLibrary, compiler=LinkOnlyCompiler)
+        _CLASSES.update(library=LinkOnlyLibrary, compiler=LinkOnlyCompiler, lean=Compiler)
     return _CLASSES
 
 
 def internal_kernels(namespace: dict, python=()) -> int:
-    """Compile a module's numba kernels that only kernels call link-only, the others without a C wrapper.
+    """Compile a module's numba kernels that only kernels call link-only, the others without a C wrapper,
+    all with the lean counting of references.
 
     Parameters
     ----------
@@ -140,10 +212,12 @@ def internal_kernels(namespace: dict, python=()) -> int:
     unknown = python - set(ours)
     if unknown:
         raise ValueError(f"python names no kernel of {name}: {sorted(unknown)}")
-    compiler = _link_only_classes()["compiler"]
+    classes = _link_only_classes()
+    compiler = classes["compiler"]
     n = 0
     for k, disp in ours.items():
         disp.targetoptions["no_cfunc_wrapper"] = True
+        disp._compiler.pipeline_class = classes["lean"]
         if k not in python:
             disp.targetoptions["no_cpython_wrapper"] = True
             disp._compiler.pipeline_class = compiler
