@@ -405,7 +405,8 @@ class Drive(NamedParameters, ABC):
     #: time).
     OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
         "family", "kind", "integrator", "state_size", "state_names", "parameters", "parameter_ranges",
-        "n_quadratures", "piston_work_quadrature", "variational", "with_", "parameter_table",
+        "n_quadratures", "piston_work_quadrature", "variational", "variational_state_settings", "with_",
+        "parameter_table",
         "with_parameter", "mode_name", "rate", "quadratures", "piecewise_constant", "levels",
         "compiled_loop", "flight", "end_flight", "border_tests", "orbit_problem")
 
