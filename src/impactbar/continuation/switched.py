@@ -239,15 +239,18 @@ class _SwitchedProblem:
         ``CHORD_RATE`` at first) says that the iterate is within ``EXACT_FACTOR`` of the tolerance,
         its residual is taken by the orbit's own variational flight instead: where its step is then
         within as much, the iterate is the point (its orbit, its multipliers and the next chord's
-        ``F_u`` from that flight), else the step is a Newton step with the new ``F_u`` and the chord
-        goes on. A chord that stalls (its steps shrink by less than ``CHORD_STALL``) takes the
-        Jacobian again so.
+        ``F_u`` from that flight), else the step is a Newton step with the new ``F_u`` and ``F_lam``
+        measured there (:meth:`_column`), and the chord goes on. A chord that stalls (its steps
+        shrink by less than ``CHORD_STALL``) takes the Jacobian again so.
 
         Returns
         -------
         U : numpy.ndarray or None
             The point, or ``None`` where the corrector failed.
         iterations : int
+            For the engine's step control, which counts Newton's iterations: those that Newton's
+            method would take from the same predictor (:func:`_newton_iterations`), and one more for
+            each Jacobian taken again, at most the iterations taken.
         J : numpy.ndarray or None
             ``[F_u, F_lam]`` at ``U`` (the tangent's), ``None`` with a failure.
         """
@@ -258,7 +261,8 @@ class _SwitchedProblem:
             and self._lams[-1][1].size == n
         J = np.column_stack((self._along(self._fus, U), self._along(self._lams, U))) if known else None
         exact, fresh = not known, False  # (fresh: the chord's F_u taken at an iterate of this corrector)
-        prev = None
+        prev = first = None
+        again = 0  # the variational flights at iterates that were not the point
         for it in range(1, max_iter + 1):
             problem = self.pair(float(U[-1]))[2]
             try:
@@ -277,6 +281,15 @@ class _SwitchedProblem:
                 return None, it, None
             step, scale = float(np.max(np.abs(dU))), max(1.0, float(np.max(np.abs(U - dU))))
             target = EXACT_FACTOR * engine.tol * scale
+            first = step if first is None else first
+            if exact and step > target:  # (not the point: a Newton step, F_lam taken here too)
+                again += 1
+                try:
+                    J = np.column_stack((J[:, :-1], self._column(U, F)))
+                    dU = np.linalg.solve(np.vstack((J, normal)), np.append(F, normal @ (U - anchor)))
+                except (ValueError, np.linalg.LinAlgError):
+                    return None, it, None
+                step = float(np.max(np.abs(dU)))
             if prev is not None and prev > target and not fresh:
                 # (the chord's rate, the last step's noise aside: the flights' ~1e-12 of the unknowns)
                 rate = max(step, 1e-2 * target) / prev
@@ -284,9 +297,10 @@ class _SwitchedProblem:
                     self._rate = min(max(rate, 1e-6), CHORD_STALL)
             if exact and step <= target:  # the orbit's flight at U: the point
                 try:
-                    return U, it, self._record(U, F, J[:, :-1])
+                    J = self._record(U, F, J[:, :-1])
                 except ValueError:
                     return None, it, None
+                return U, min(it, _newton_iterations(first, target, scale) + again), J
             rate = self._rate if prev is None else step / prev
             if exact:
                 fresh, rate = True, min(rate, CHORD_RATE)
@@ -338,6 +352,19 @@ class _SwitchedProblem:
 
     def corner(self, engine, U, index):
         return None
+
+
+def _newton_iterations(first: float, target: float, scale: float) -> int:
+    """The iterations that Newton's method would take from a predictor whose first step is
+    ``first`` to a step within ``target`` (its error squared each step, relative to ``scale``;
+    the step below ``target`` predicted, not taken, as the engine's corrector does): what a
+    corrector of chord steps reports to the engine's step control, which counts Newton's."""
+    e, t = first / scale, target / scale
+    if not e > t:
+        return 1
+    if e >= 1.0:
+        return 10
+    return 1 + math.ceil(math.log2(math.log(t) / math.log(e)))
 
 
 def first_chord_tests(tests: list, doubled: bool, points: int) -> list:
