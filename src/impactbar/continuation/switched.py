@@ -42,6 +42,10 @@ CHORD_RATE = 0.1
 #: a chord whose steps shrink by less than this factor takes the Jacobian again (``chord="orbit"``)
 CHORD_STALL = 0.5
 
+#: a chord whose rate leaves more steps than this to the tolerance takes the Jacobian again
+#: (``chord="orbit"``: a variational period and ``F_lam``'s flight cost some four plain periods)
+CHORD_STEPS_LEFT = 4.0
+
 #: the corrector's last iterate, whose residual the orbit's variational flight takes, is the first
 #: whose estimated error is below this fraction of the tolerance, and the point where that flight's
 #: step is (``chord="orbit"``: the point is then within it, not a step below it)
@@ -241,7 +245,8 @@ class _SwitchedProblem:
         within as much, the iterate is the point (its orbit, its multipliers and the next chord's
         ``F_u`` from that flight), else the step is a Newton step with the new ``F_u`` and ``F_lam``
         measured there (:meth:`_column`), and the chord goes on. A chord that stalls (its steps
-        shrink by less than ``CHORD_STALL``) takes the Jacobian again so.
+        shrink by less than ``CHORD_STALL``), or whose rate leaves more than ``CHORD_STEPS_LEFT`` steps
+        to the tolerance, takes the Jacobian again so.
 
         Returns
         -------
@@ -308,6 +313,9 @@ class _SwitchedProblem:
                 if fresh and rate > 1.0:
                     return None, it, None  # (diverging with a Jacobian of its own)
                 rate = 1.0  # stalled: the next iterate's F_u taken again (exact)
+            elif prev is not None and step > target and \
+                    math.log(target / step) / math.log(max(rate, 1e-300)) > CHORD_STEPS_LEFT:
+                rate = 1.0  # slow: the Jacobian taken again costs fewer flights than the chord's steps
             U = U - dU
             exact = rate >= 1.0 or rate * step <= target
             prev = step
