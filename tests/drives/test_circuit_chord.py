@@ -93,5 +93,113 @@ def test_a_branch_with_chord_steps_throughout_is_the_branch_of_before(drifter):
     for a, b in zip(before.orbits, now.orbits, strict=True):
         assert abs(a.period - b.period) <= 1e-9 * a.period
         assert np.allclose(a._unknowns, b._unknowns, rtol=0, atol=3e-8 * np.max(np.abs(a._unknowns)))
-    with pytest.raises(ValueError, match="chord must be True, False or 'all'"):
+    with pytest.raises(ValueError, match="chord must be True, False, 'all' or 'orbit'"):
         continue_switched(o, "precharge", to, _detect, chord="every")
+
+
+def _branch(orbit, chord, max_points):
+    """The continuation in the pre-charge, 5 % up, without events, with the corrector ``chord``."""
+    from impactbar.continuation.core import _detect
+    from impactbar.continuation.engine import _settings
+    from impactbar.continuation.switched import continue_switched
+
+    to = orbit.drive.accumulator.precharge * 1.05
+    return continue_switched(orbit, "precharge", to, _detect, events=False, chord=chord,
+                             settings=_settings(None, max_points=max_points))
+
+
+@pytest.mark.parametrize("n_modes", [2, 8])
+def test_the_orbit_corrector_reaches_the_orbits_of_before(drifter, n_modes):
+    """The default corrector (``chord="orbit"``: chord steps with the Jacobian the last points
+    predict, the residuals by plain flights at the variational flights' tolerance, the last iterate's
+    by the orbit's own variational flight) against the correctors of before (``chord=True``) and
+    against ``find_orbit`` at each point's parameter value (from the point's orbit): the same steps
+    (the values within 1e-7), and at each point the unknowns within 1e-9 of their size, the period
+    within 1e-10 and the multipliers within 5e-8 of ``find_orbit``'s (measured with 8 modes 1.6e-10,
+    6.4e-12, 1.4e-8: the point within ``EXACT_FACTOR`` of the corrector's tolerance, and the
+    multipliers' own noise, some 100 times a change in the unknowns; the correctors of before
+    1.1e-11, 1.2e-12, 2.8e-9), and the stability the same."""
+    drive = drifter.drive()
+    orbit = find_orbit(drifter.model().with_(n_modes=n_modes), drive)
+    now, before = _branch(orbit, "orbit", 4), _branch(orbit, True, 4)
+    assert len(now.orbits) == len(before.orbits) == 4
+    np.testing.assert_allclose(now.values, before.values, rtol=1e-7)
+    for ob in now.orbits[1:]:
+        ref = find_orbit(ob.model, ob.drive, guess=ob)
+        X, Xr = np.asarray(ob._unknowns), np.asarray(ref._unknowns)
+        assert np.max(np.abs(X - Xr)) <= 1e-9 * np.max(np.abs(Xr))
+        assert abs(ob.period - ref.period) <= 1e-10 * ref.period
+        np.testing.assert_allclose(ob.multipliers, ref.multipliers, rtol=0, atol=5e-8)
+        assert ob.stable == ref.stable
+
+
+def test_a_continuation_point_takes_one_variational_period(drifter, monkeypatch):
+    """With 4 modes, each new point of the default corrector takes one variational period (its
+    orbit's, at the drive's own Magnus steps: the multipliers, the next points' chord), none with the
+    steering steps, and at most two plain periods (the chord's; the start one more, for ``F_lam``);
+    the start's orbit is ``find_orbit``'s flight, not flown again. The correctors of before took two
+    steering variational periods and two plain ones a point."""
+    from impactbar.orbits.switched import STEER_THETA
+
+    drive = drifter.drive()
+    orbit = find_orbit(drifter.model().with_(n_modes=4), drive)
+    seen = []
+    fly = ShootingProblem._fly
+
+    def spy(self, tau, mode, y, keep, variational, settings):
+        seen.append((settings or self.settings).magnus_theta if variational else "plain")
+        return fly(self, tau, mode, y, keep, variational, settings)
+
+    monkeypatch.setattr(ShootingProblem, "_fly", spy)
+    b = _branch(orbit, "orbit", 4)
+    points = len(b.orbits) - 1
+    assert points == 3
+    assert seen.count(drive.integrator.magnus_theta) == points, seen
+    assert STEER_THETA not in seen
+    assert seen.count("plain") <= 2 * points + 1, seen
+
+
+def test_the_plain_flight_at_the_variational_tolerance_is_its_state(drifter):
+    """``ShootingProblem.root_value``: with a flexible piston (Magnus' fundamental matrix over a plain
+    flight) the plain flight at the variational flights' tolerance, the residual of the variational
+    flight to the bit; the rigid piston's variational flights are CVODE's (their state their own):
+    the variational flight itself."""
+    for n_modes, cheap in ((2, True), (0, False)):
+        orbit = find_orbit(drifter.model().with_(n_modes=n_modes), drifter.drive())
+        problem, X = orbit._problem, np.asarray(orbit._unknowns, dtype=float) * (1.0 + 1e-7)
+        assert problem.state_flights is cheap
+        r = problem.root_value(X)
+        problem._last = None
+        assert np.array_equal(r, problem.residual(X)[0])
+        if cheap:  # (and not a plain flight at the drive's tolerance)
+            problem._last = None
+            assert not np.array_equal(r, problem.value(X))
+
+
+def test_the_jacobian_along_the_branch_is_lagranges(drifter):
+    """The corrector's predicted Jacobian (``_SwitchedProblem._along``): exact for a quantity
+    quadratic along a straight branch from three points, linear from two, constant from one, in
+    whatever order the points came (the events' location corrects points between the last two)."""
+    from impactbar.continuation.core import _detect
+    from impactbar.continuation.switched import _SwitchedProblem
+
+    model = drifter.model().with_(n_modes=1)
+    p = _SwitchedProblem(model, drifter.drive(), "precharge", _detect, chord="orbit")
+    rng = np.random.default_rng(1)
+    a, d = rng.standard_normal(p.W.size), rng.standard_normal(p.W.size)
+    A, B, C = (rng.standard_normal((3, 3)) for _ in range(3))
+
+    def value(s):
+        return A + s * B + s * s * C
+
+    at = a + 1.7 * d
+    for ss in ([0.0, 1.0, 0.4], [0.3, 1.0, 0.0], [0.0, 0.5, 1.0]):
+        records = [(a + s * d, value(s)) for s in ss]
+        np.testing.assert_allclose(p._along(records, at), value(1.7), rtol=1e-12, atol=1e-12)
+    linear = [(a + s * d, A + s * B) for s in (0.2, 0.9)]
+    np.testing.assert_allclose(p._along(linear, at), A + 1.7 * B, rtol=1e-12, atol=1e-12)
+    np.testing.assert_array_equal(p._along([(a, A)], at), A)
+    # a point that the others do not set apart is left out (the older): linear from the other two
+    records = [(a, value(0.0)), (a + 1e-9 * d, value(1e-9)), (a + d, value(1.0))]
+    lin = value(1e-9) + (1.7 - 1e-9) / (1.0 - 1e-9) * (value(1.0) - value(1e-9))
+    np.testing.assert_allclose(p._along(records, at), lin, rtol=1e-9, atol=1e-9)

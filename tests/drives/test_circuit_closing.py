@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from impactbar import continue_orbit, find_orbit
+from impactbar import find_orbit
 from impactbar.drives.base import DriveState, FlightSettings
 from impactbar.drives.circuit.flight import MAGNUS_STATE_TOLERANCE
 from impactbar.orbits import switched
@@ -139,18 +139,30 @@ def test_the_rigid_pistons_jacobian_ignores_the_steering_steps():
     assert np.array_equal(r, rs) and np.array_equal(J, Js)
 
 
+def _continued(orbit, chord, max_points):
+    """The continuation in the pre-charge, 5 % up, without events, by ``continue_switched`` with the
+    corrector ``chord``."""
+    from impactbar.continuation.core import _detect
+    from impactbar.continuation.engine import _settings
+    from impactbar.continuation.switched import continue_switched
+
+    to = orbit.drive.accumulator.precharge * 1.05
+    return continue_switched(orbit, "precharge", to, _detect, events=False, chord=chord,
+                             settings=_settings(None, max_points=max_points))
+
+
 @pytest.fixture(scope="module")
 def branches():
-    """A short continuation in the pre-charge of the 2-mode orbit, the correctors' Jacobians steered,
-    and the same with the drive's own steps throughout (``STEER_THETA`` the drive's: the way before)."""
+    """A short continuation in the pre-charge of the 2-mode orbit by the correctors of before
+    (``chord=True``: a chord step, then Newton's steps with the steering Jacobians), and the same with
+    the drive's own steps throughout (``STEER_THETA`` the drive's)."""
     d = circuit_preset("circuit-drifter")
     drive = d.drive()
     orbit = find_orbit(d.model().with_(n_modes=2), drive)
-    kw = dict(to=drive.accumulator.precharge * 1.05, max_points=4, events=False)
-    steered = continue_orbit(orbit, "precharge", **kw)
+    steered = _continued(orbit, True, 4)
     with pytest.MonkeyPatch.context() as mp:
         mp.setattr(switched, "STEER_THETA", drive.integrator.magnus_theta)
-        own = continue_orbit(orbit, "precharge", **kw)
+        own = _continued(orbit, True, 4)
     return steered, own
 
 
@@ -169,9 +181,10 @@ def test_the_steered_correctors_branch_is_the_drives_own_steps(branches):
         np.testing.assert_allclose(ob.multipliers, ref.multipliers, rtol=0, atol=1e-8)
 
 
-def test_the_continuations_variational_periods_but_the_orbits_steer(monkeypatch):
-    """In the continuation, the variational flights at the drive's own steps are the orbits' (one
-    each: their multipliers, the next corrector's chord); the correctors' take the steering steps."""
+def test_the_steered_continuations_variational_periods(monkeypatch):
+    """In the continuation by the correctors of before (``chord=True``), the variational flights at the
+    drive's own steps are the orbits' (one each: their multipliers, the next corrector's chord); the
+    correctors' take the steering steps."""
     d = circuit_preset("circuit-drifter")
     drive = d.drive()
     orbit = find_orbit(d.model().with_(n_modes=2), drive)
@@ -184,6 +197,6 @@ def test_the_continuations_variational_periods_but_the_orbits_steer(monkeypatch)
         return fly(self, tau, mode, y, keep, variational, settings)
 
     monkeypatch.setattr(ShootingProblem, "_fly", spy)
-    b = continue_orbit(orbit, "precharge", to=drive.accumulator.precharge * 1.05, max_points=3, events=False)
+    b = _continued(orbit, True, 3)
     assert seen.count(drive.integrator.magnus_theta) == len(b.orbits), seen
     assert seen.count(STEER_THETA) == len(seen) - len(b.orbits) >= 2, seen

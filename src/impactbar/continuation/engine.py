@@ -13,7 +13,9 @@ or where the problem says so (its events).
 An augmented problem provides ``W`` (the weights of the arclength norm), ``FJ(U, frozen)``
 (residual, Jacobian, and the columns it may reuse within one correction), ``orbit(U)``,
 ``acceptable(U)``, ``after_point(engine, points, tangents, orbits)`` (events, and a status to stop
-with) and ``corner(engine, U, index)`` (an event explaining a failed step, or ``None``).
+with) and ``corner(engine, U, index)`` (an event explaining a failed step, or ``None``); and may
+provide ``corrector``, ``None`` or a corrector of its own in place of Newton's
+(``corrector(engine, U_pred, normal, anchor, max_iter) -> (U or None, iterations, Jacobian at U)``).
 """
 
 from __future__ import annotations
@@ -141,6 +143,10 @@ class _Engine:
         """Newton on ``G(U) = 0``, ``<normal, U - anchor> = 0`` (weighted). Returns
         ``(U, iterations)`` or ``(None, iterations)``; the last Jacobian is kept in ``last_J`` (for
         the tangent at the new point: the last step is below the tolerance)."""
+        own = getattr(self.problem, "corrector", None)
+        if own is not None:  # the problem's own corrector (its Jacobian kept in last_J all the same)
+            U, it, self.last_J = own(self, U_pred, normal, anchor, max_iter)
+            return U, it
         U = np.array(U_pred, dtype=float)
         self.last_J = None
         normal = self.W * normal

@@ -35,6 +35,34 @@ EVENT_KINDS = tuple(EventKind)
 #: the chord steps of a corrector (``chord="all"``) before the Jacobian is taken again at the iterate
 CHORD_STEPS = 6
 
+#: the chord's rate of convergence assumed for a corrector's first step (``chord="orbit"``: the
+#: last orbit's Jacobian; the observed rate of the corrector before replaces it)
+CHORD_RATE = 0.1
+
+#: a chord whose steps shrink by less than this factor takes the Jacobian again (``chord="orbit"``)
+CHORD_STALL = 0.5
+
+#: a chord whose rate leaves more steps than this to the tolerance takes the Jacobian again
+#: (``chord="orbit"``: a variational period and ``F_lam``'s flight cost some four plain periods)
+CHORD_STEPS_LEFT = 4.0
+
+#: the corrector's last iterate, whose residual the orbit's variational flight takes, is the first
+#: whose estimated error is below this fraction of the tolerance, and the point where that flight's
+#: step is (``chord="orbit"``: the point is then within it, not a step below it)
+EXACT_FACTOR = 0.3
+
+#: ``F_lam`` from the chord between two points (``chord="orbit"``, :meth:`_SwitchedProblem._record`)
+#: where the parameter moves by this fraction of its length (and a thousandth of its size) at least
+SECANT_SLOPE = 0.1
+
+#: the points after which ``F_lam`` is measured by a flight where the chords gave none
+#: (``chord="orbit"``, :meth:`_SwitchedProblem._record`)
+STALE = 3
+
+#: how far, in their spread, the corrector's Jacobian is extrapolated from the last points'
+#: (``chord="orbit"``, :meth:`_SwitchedProblem._along`)
+REACH = 3.0
+
 
 class _SwitchedProblem:
     """The periodic-orbit problem of a drive in ``U = (X, lambda)``, for the engine.
@@ -43,7 +71,9 @@ class _SwitchedProblem:
     central difference of before); ``chord``, the first corrector step after an orbit with that
     orbit's Jacobian (a chord step; else the full Newton step of before), or with ``"all"`` every
     step (the residuals by plain flights; the Jacobian taken again after ``CHORD_STEPS`` steps
-    without a new orbit). Set by :func:`continue_switched`."""
+    without a new orbit), or with ``"orbit"`` the problem's own corrector (:meth:`_correct`, where
+    the variational flights' state has a plain flight of its own: ``ShootingProblem.state_flights``;
+    elsewhere as ``True``). Set by :func:`continue_switched`."""
 
     def __init__(self, model, drive, name, detect, *, events=True, stop_on=(), xtol=1e-10, impacts=1,
                  doubled=False, base=None, forward_lambda=True, chord=True):
@@ -54,9 +84,17 @@ class _SwitchedProblem:
         self.pair = functools.lru_cache(maxsize=16)(self._pair)
         self._chord = None  # the last orbit's F_u, for the next corrector's first step
         self._uses = 0  # the chord steps since it was taken
+        self._rate = CHORD_RATE  # the last corrector's rate of convergence (chord="orbit")
+        self._fus, self._lams = [], []  # the last (U, F_u) and (U, F_lam) (chord="orbit": _record)
+        self._age = 0  # the points recorded since the last F_lam
         start = self.pair(float(parameter_value(model, drive, name)))[2]
         self.flights = start.positive
         self.W = np.append(np.full(start.size, 1.0 / start.size), 1.0)
+        #: the problem's own corrector (chord="orbit" where the flights allow it), else None: Newton's
+        own = chord == "orbit" and getattr(start, "state_flights", False)
+        self.corrector = self._correct if own else None
+        if self.corrector is None and chord == "orbit":
+            self.chord = True  # (the chord's first step, the steering Jacobian's after it)
 
     def _pair(self, lam: float):
         """The model, drive and orbit problem at the parameter value ``lam``."""
@@ -80,6 +118,12 @@ class _SwitchedProblem:
         error ``O(h)``, ``h = 1e-6``, only slows the corrector's convergence, whose residual is
         exact, and tilts the predictor's tangent by as much)."""
         problem = self.pair(float(U[-1]))[2]
+        if self.corrector is not None:  # (outside the own corrector: the orbit's Jacobian and F_lam)
+            F, DF = self._exact(problem, U)
+            if F_lam is None:
+                F_lam = self._column(U, F)
+                self._record(U, F, DF, F_lam)
+            return F, np.column_stack((DF, F_lam)), F_lam
         every = self.chord == "all"
         chord = self._chord
         if not every:
@@ -110,6 +154,172 @@ class _SwitchedProblem:
             F_lam = ((up if up is not None else F) - (down if down is not None else F)) / (
                 h * ((up is not None) + (down is not None)))
         return F, np.column_stack((DF, F_lam)), F_lam
+
+    def _exact(self, problem, U):
+        """The residual at ``U`` and the multipliers' Jacobian ``F_u``, by the variational flights at
+        the drive's own steps, kept whole (the orbit at ``U`` takes them: no flight more); ``F_u``
+        kept for the chord."""
+        F, self._chord = problem.residual(U[:-1], keep=True)
+        return F, self._chord
+
+    def _column(self, U, F):
+        """``F_lam`` at ``U`` by a forward difference (backward at the edge of the parameter's range)
+        of the residual whose root the orbit is (``ShootingProblem.root_value``, ``F`` its value at
+        ``U``): one flight of the variational flights' state."""
+        h = 1e-6 * max(1.0, abs(U[-1]))
+        for sign in (1.0, -1.0):
+            try:
+                return sign * (self.pair(float(U[-1] + sign * h))[2].root_value(U[:-1]) - F) / h
+            except ValueError:
+                continue
+        raise ValueError(f"{self.name}: no admissible value within {h:g} of {U[-1]}")
+
+    def _along(self, records, U):
+        """The value at ``U`` of a quantity that ``records`` holds at points of the branch
+        ``[(U_i, value_i)]``: Lagrange's polynomial through the last three of one shape (two, one)
+        in their coordinate along the branch (the projection on the chord between the first and
+        the last of them, in the arclength's weights), ``U`` within ``REACH`` times their spread of
+        them (their values carry the flights' noise, which a polynomial magnifies as far); else,
+        and for a point that the others' spread does not set apart, the older left out. One record:
+        its value."""
+        last = records[-1][1]
+        pts = [r for r in records[-3:] if r[1].shape == last.shape]
+        while len(pts) > 1:
+            d = self.W * (pts[-1][0] - pts[0][0])
+            x = [float(Ui @ d) for Ui, _ in pts]
+            xu = float(U @ d)
+            gaps = [abs(a - b) for i, a in enumerate(x) for b in x[i + 1:]]
+            spread = max(gaps)
+            if min(gaps) > 0.05 * spread and min(x) - REACH * spread <= xu <= max(x) + REACH * spread:
+                break
+            pts = pts[1:]
+        if len(pts) < 2:
+            return pts[-1][1]
+        out = np.zeros_like(last)
+        for i, (_, v) in enumerate(pts):
+            w = 1.0
+            for j in range(len(pts)):
+                if j != i:
+                    w *= (xu - x[j]) / (x[i] - x[j])
+            out += w * v
+        return out
+
+    def _record(self, U, F, Fu, F_lam=None):
+        """Keep ``F_u`` at the point ``U`` (of the branch, or a point the events' location corrected;
+        ``F`` the residual there) and ``F_lam``: given, or else from the chord from the point before
+        (the residual is 0 at both, so that ``(J_a + J_b) / 2 (U_b - U_a) = O(h^3)``, the
+        trapezoidal rule along the chord, gives ``F_lam`` in its middle from the two ``F_u``) where
+        the chord moves the parameter (``SECANT_SLOPE`` of its length and of the parameter's size at
+        least: the points' own errors, divided by the move, are ``F_lam``'s); else the records of
+        before, unless there are none or they are ``STALE`` points old: then measured by a flight
+        (:meth:`_column`). Returns ``[F_u, F_lam]`` at ``U``."""
+        same = [r for r in self._fus if r[1].shape == Fu.shape]
+        if F_lam is None and same:
+            Ua, Fa = same[-1]
+            d = U - Ua
+            norm = math.sqrt(float(d @ (self.W * d)))
+            if abs(d[-1]) >= SECANT_SLOPE * max(norm, 1e-3 * max(1.0, abs(U[-1]))):
+                self._lams = (self._lams + [(0.5 * (U + Ua), -0.5 * (Fa + Fu) @ d[:-1] / d[-1])])[-2:]
+                self._age = 0
+                F_lam = False
+            elif self._lams and self._lams[-1][1].size == F.size and self._age < STALE:
+                self._age += 1
+                F_lam = False
+        if F_lam is None:
+            F_lam = self._column(U, F)
+        if F_lam is not False:
+            self._lams = (self._lams + [(U.copy(), F_lam)])[-2:]
+            self._age = 0
+        self._fus = (self._fus + [(U.copy(), Fu)])[-3:]
+        return np.column_stack((Fu, self._along(self._lams, U)))
+
+    def _correct(self, engine, U_pred, normal, anchor, max_iter):
+        """The corrector (``chord="orbit"``): Newton's iteration on ``F(U) = 0``,
+        ``<normal, U - anchor> = 0`` with the Jacobian that the last points predict (the variational
+        flights' ``F_u``, the multipliers', quadratic along the branch from the last three, and
+        ``F_lam`` linear from the last two: :meth:`_record`, :meth:`_along`), the residuals by plain
+        flights at the variational flights' tolerance (their state: the orbits are the roots of
+        the same residual as Newton's of before). Once the chord's rate (the last corrector's,
+        ``CHORD_RATE`` at first) says that the iterate is within ``EXACT_FACTOR`` of the tolerance,
+        its residual is taken by the orbit's own variational flight instead: where its step is then
+        within as much, the iterate is the point (its orbit, its multipliers and the next chord's
+        ``F_u`` from that flight), else the step is a Newton step with the new ``F_u`` and ``F_lam``
+        measured there (:meth:`_column`), and the chord goes on. A chord that stalls (its steps
+        shrink by less than ``CHORD_STALL``), or whose rate leaves more than ``CHORD_STEPS_LEFT`` steps
+        to the tolerance, takes the Jacobian again so.
+
+        Returns
+        -------
+        U : numpy.ndarray or None
+            The point, or ``None`` where the corrector failed.
+        iterations : int
+            For the engine's step control, which counts Newton's iterations: those that Newton's
+            method would take from the same predictor (:func:`_newton_iterations`), and one more for
+            each Jacobian taken again, at most the iterations taken.
+        J : numpy.ndarray or None
+            ``[F_u, F_lam]`` at ``U`` (the tangent's), ``None`` with a failure.
+        """
+        U = np.array(U_pred, dtype=float)
+        normal = engine.W * normal
+        n = U.size - 1
+        known = bool(self._fus) and self._fus[-1][1].shape[0] == n and bool(self._lams) \
+            and self._lams[-1][1].size == n
+        J = np.column_stack((self._along(self._fus, U), self._along(self._lams, U))) if known else None
+        exact, fresh = not known, False  # (fresh: the chord's F_u taken at an iterate of this corrector)
+        prev = first = None
+        again = 0  # the variational flights at iterates that were not the point
+        for it in range(1, max_iter + 1):
+            problem = self.pair(float(U[-1]))[2]
+            try:
+                if exact:
+                    F, Fu = self._exact(problem, U)
+                    J = np.column_stack((Fu, J[:, -1] if J is not None else self._column(U, F)))
+                else:
+                    F = problem.root_value(U[:-1])
+            except ValueError:
+                return None, it, None
+            if not (np.all(np.isfinite(F)) and np.all(np.isfinite(J))):
+                return None, it, None
+            try:
+                dU = np.linalg.solve(np.vstack((J, normal)), np.append(F, normal @ (U - anchor)))
+            except np.linalg.LinAlgError:
+                return None, it, None
+            step, scale = float(np.max(np.abs(dU))), max(1.0, float(np.max(np.abs(U - dU))))
+            target = EXACT_FACTOR * engine.tol * scale
+            first = step if first is None else first
+            if exact and step > target:  # (not the point: a Newton step, F_lam taken here too)
+                again += 1
+                try:
+                    J = np.column_stack((J[:, :-1], self._column(U, F)))
+                    dU = np.linalg.solve(np.vstack((J, normal)), np.append(F, normal @ (U - anchor)))
+                except (ValueError, np.linalg.LinAlgError):
+                    return None, it, None
+                step = float(np.max(np.abs(dU)))
+            if prev is not None and prev > target and not fresh:
+                # (the chord's rate, the last step's noise aside: the flights' ~1e-12 of the unknowns)
+                rate = max(step, 1e-2 * target) / prev
+                if it == 2:
+                    self._rate = min(max(rate, 1e-6), CHORD_STALL)
+            if exact and step <= target:  # the orbit's flight at U: the point
+                try:
+                    J = self._record(U, F, J[:, :-1])
+                except ValueError:
+                    return None, it, None
+                return U, min(it, _newton_iterations(first, target, scale) + again), J
+            rate = self._rate if prev is None else step / prev
+            if exact:
+                fresh, rate = True, min(rate, CHORD_RATE)
+            elif prev is not None and rate > CHORD_STALL:
+                if fresh and rate > 1.0:
+                    return None, it, None  # (diverging with a Jacobian of its own)
+                rate = 1.0  # stalled: the next iterate's F_u taken again (exact)
+            elif prev is not None and step > target and \
+                    math.log(target / step) / math.log(max(rate, 1e-300)) > CHORD_STEPS_LEFT:
+                rate = 1.0  # slow: the Jacobian taken again costs fewer flights than the chord's steps
+            U = U - dU
+            exact = rate >= 1.0 or rate * step <= target
+            prev = step
+        return None, max_iter, None
 
     def orbit(self, U, admissibility=True):
         """The orbit at ``U``. Where the flights are integrated, the Jacobian of its residual (from
@@ -150,6 +360,19 @@ class _SwitchedProblem:
 
     def corner(self, engine, U, index):
         return None
+
+
+def _newton_iterations(first: float, target: float, scale: float) -> int:
+    """The iterations that Newton's method would take from a predictor whose first step is
+    ``first`` to a step within ``target`` (its error squared each step, relative to ``scale``;
+    the step below ``target`` predicted, not taken, as the engine's corrector does): what a
+    corrector of chord steps reports to the engine's step control, which counts Newton's."""
+    e, t = first / scale, target / scale
+    if not e > t:
+        return 1
+    if e >= 1.0:
+        return 10
+    return 1 + math.ceil(math.log2(math.log(t) / math.log(e)))
 
 
 def first_chord_tests(tests: list, doubled: bool, points: int) -> list:
@@ -299,7 +522,8 @@ def doubled_first_points(engine, U0, w, steps, gap):
 
 def continue_switched(orbit, parameter: str, to: float, detect, *,
                       settings: ContinuationSettings | None = None, events: bool = True, stop_on=(),
-                      xtol: float = 1e-10, forward_lambda: bool = True, chord: bool | str = True) -> Branch:
+                      xtol: float = 1e-10, forward_lambda: bool = True,
+                      chord: bool | str = "orbit") -> Branch:
     """Follow a periodic motion under a drive as one parameter changes, by pseudo-arclength
     continuation (theory §7, §10). Called by :func:`impactbar.continue_orbit` when its start is a
     :class:`~impactbar.SwitchedOrbit`, or a ``"period-doubling"`` :class:`BranchEvent` of a branch of
@@ -342,13 +566,21 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         Where the flights are integrated (the oil circuit): the Jacobian's parameter column by a
         forward difference (one flight a point instead of two); ``False``: the central difference
         of before (a benchmark's baseline). Ignored for closed-form flights.
-    chord : bool or "all"
-        Where the flights are integrated: each corrector's first step a chord step with the last
-        orbit's Jacobian (``True``, the default), every step (``"all"``: the residuals by plain
-        flights, the orbit's own variational flight the only one a point, about half the cost; the
-        points are then the plain flights' roots, 3e-8 from the variational ones'), or none
-        (``False``: the full Newton steps of before, a benchmark's baseline). Ignored for closed-form
-        flights.
+    chord : bool, "all" or "orbit"
+        Where the flights are integrated: ``"orbit"`` (the default), where the variational flights'
+        state is a plain flight's at their tolerance (the oil circuit's flexible piston, Magnus'
+        fundamental matrix), every corrector step a chord step with the Jacobian that the last points
+        predict (their orbits' ``F_u``, quadratic along the branch; ``F_lam`` from the chords between
+        them), the residuals by those plain flights, and the last iterate's by the orbit's own
+        variational flight, which is then the point's: one variational period a point, against three
+        before (the 8-mode point 0.47 s of CPU against 0.97 s; the points within ``EXACT_FACTOR`` of
+        the corrector's tolerance, not a step below it: with 8 modes their unknowns 2e-10 of their
+        size from ``find_orbit``'s at their parameter values, the multipliers 2e-8), elsewhere as
+        ``True``; ``True``, each corrector's first step a chord step with the last orbit's Jacobian,
+        then Newton's steps with a steering Jacobian (the way before); every step (``"all"``: the
+        residuals by plain flights, the Jacobian taken again after ``CHORD_STEPS``; the points are
+        then the plain flights' roots, 3e-8 from the variational ones'); or none (``False``: the full
+        Newton steps of before, a benchmark's baseline). Ignored for closed-form flights.
 
     Returns
     -------
@@ -362,8 +594,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         For a bad argument (named), a start that is not a solution, or a period doubling from
         which no two-impact branch leaves.
     """
-    if not (chord is True or chord is False or chord == "all"):
-        raise ValueError(f"chord must be True, False or 'all'; got {chord!r}")
+    if not (chord is True or chord is False or chord in ("all", "orbit")):
+        raise ValueError(f"chord must be True, False, 'all' or 'orbit'; got {chord!r}")
     switch = None
     if isinstance(orbit, BranchEvent):
         if orbit.kind != EventKind.PERIOD_DOUBLING or orbit.orbit.impacts != 1:

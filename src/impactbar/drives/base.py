@@ -405,7 +405,8 @@ class Drive(NamedParameters, ABC):
     #: time).
     OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
         "family", "kind", "integrator", "state_size", "state_names", "parameters", "parameter_ranges",
-        "n_quadratures", "piston_work_quadrature", "variational", "with_", "parameter_table",
+        "n_quadratures", "piston_work_quadrature", "variational", "variational_state_settings", "with_",
+        "parameter_table",
         "with_parameter", "mode_name", "rate", "quadratures", "piecewise_constant", "levels",
         "compiled_loop", "flight", "end_flight", "border_tests", "orbit_problem")
 
@@ -523,6 +524,25 @@ class Drive(NamedParameters, ABC):
     #: Whether :meth:`flight` integrates the variational equations when asked (the generic
     #: periodic orbits then take the shooting Jacobian and the multipliers from them).
     variational: ClassVar[bool] = False
+
+    def variational_state_settings(self, model, settings: FlightSettings | None = None):
+        """The integrator of a plain flight (:meth:`flight` without ``variational``) whose state is
+        that of the variational flight with ``settings``, bit for bit, where the drive has one (a
+        variational flight that integrates the plain flight and then takes its fundamental matrix
+        over its steps, the oil circuit's flexible piston); ``None`` where the variational flight's
+        state is its own (the default).
+
+        Parameters
+        ----------
+        model : BarModel
+        settings : FlightSettings, optional
+            The variational flight's integrator (default: the drive's, :attr:`integrator`).
+
+        Returns
+        -------
+        FlightSettings or None
+        """
+        return None
 
     def end_flight(self, model, state: DriveState, breaks, w0: float, incoming, impedance: float,
                    settings: FlightSettings | None = None):

@@ -168,6 +168,16 @@ _JACOBIAN_LEVEL = {False: 0, "state": 1, "steer": 2, True: 3}
 HORIZON = 1e4
 
 
+def _same_problem(a, b) -> bool:
+    """Whether the shooting problems ``a`` and ``b`` fly the same flights: one class, the same model,
+    drive, integrator, impacts and blocks (``False`` where they cannot be compared)."""
+    try:
+        return bool(type(a) is type(b) and a.impacts == b.impacts and a.model == b.model
+                    and a.drive == b.drive and a.settings == b.settings and list(a.blocks) == list(b.blocks))
+    except (TypeError, ValueError):  # (an array among them)
+        return False
+
+
 class ShootingProblem(OrbitProblem):
     """The generic periodic-orbit problem of a drive (module docstring): multiple shooting over the
     ``m`` intervals between impacts, with the drive's flights (:func:`impactbar.drives.flight.fly`),
@@ -256,9 +266,28 @@ class ShootingProblem(OrbitProblem):
         if key is not None and last is not None and last[0] == key and (last[1] or not keep) and \
                 last[2] >= level:
             return last[3] if level else last[3][:6]
-        out = self._fly(tau, mode, y, keep, variational, settings)
+        plain = self._state_settings(settings) if variational == "state" else None
+        if plain is not None:  # the variational flight's state by its plain flight: no Jacobian taken
+            out = self._fly(tau, mode, y, keep, False, plain)
+        else:
+            out = self._fly(tau, mode, y, keep, variational, settings)
         self._last = None if key is None else (key, keep, level, out)
         return out
+
+    def _state_settings(self, settings=None):
+        """The integrator of the plain flight whose state is the variational flight's with
+        ``settings`` (:meth:`~impactbar.Drive.variational_state_settings`; not with coupled blows,
+        whose ``"state"`` flights skip only the blow's Jacobian), or ``None``."""
+        if self.coupled or not self.variational:
+            return None
+        return self.drive.variational_state_settings(self.model, settings or self.settings)
+
+    @property
+    def state_flights(self) -> bool:
+        """Whether the variational flights' state comes from a plain flight at its own tolerance
+        (:meth:`_state_settings`: the oil circuit's flexible piston), so that :meth:`root_value`
+        costs a fraction of :meth:`residual`."""
+        return self._state_settings() is not None
 
     def _fly(self, tau, mode, y, keep, variational, settings):
         """:meth:`_flight`, flown."""
@@ -483,11 +512,13 @@ class ShootingProblem(OrbitProblem):
         self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
         return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
 
-    def residual(self, X, settings=None, *, steer: bool = False):
+    def residual(self, X, settings=None, *, steer: bool = False, keep: bool = False):
         """The shooting residual and its Jacobian: from the variational equations where the drive's
         flights integrate them (:attr:`~impactbar.Drive.variational`, :meth:`_through`; ``settings``
         their integrator, default the problem's; with ``steer``, a Jacobian that only steers
-        Newton's method: a coupled blow's by forward differences), else by central differences."""
+        Newton's method: a coupled blow's by forward differences; with ``keep``, the flights kept
+        whole, so that the orbit's data at ``X`` (:meth:`orbit`, one impact) takes the last one
+        without flying it again), else by central differences."""
         n, m = self.n, self.impacts
         r = np.empty(X.size)
         J = np.zeros((X.size, X.size))
@@ -497,7 +528,8 @@ class ShootingProblem(OrbitProblem):
             nxt = ((k + 1) % m) * n
             if self.variational:
                 tau, mode = self.blocks[k]
-                out = self._flight(tau, mode, y, variational="steer" if steer else True, settings=settings)
+                out = self._flight(tau, mode, y, keep=keep, variational="steer" if steer else True,
+                                   settings=settings)
                 r[k * n:(k + 1) * n] = out[0] - X[nxt:nxt + n]
                 J[k * n:(k + 1) * n, k * n:(k + 1) * n] = out[6]
                 J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
@@ -601,6 +633,25 @@ class ShootingProblem(OrbitProblem):
             raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at its "
                              "root") from None
 
+    def root_value(self, X):
+        """The shooting residual whose root the orbit is: by the variational flights' state where the
+        drive's flights integrate the variational equations (Newton's last steps and the orbit's
+        multipliers take those flights; by a plain flight at their tolerance where the drive has one,
+        :attr:`state_flights`, else by the variational flights themselves), else :meth:`value`.
+
+        Parameters
+        ----------
+        X : numpy.ndarray, shape (m n,)
+            The unknowns.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m n,)
+        """
+        if not self.variational:
+            return self.value(X)
+        return self._variational_value(X, None)
+
     def _variational_value(self, X, settings):
         """The shooting residual by the variational flights with ``settings`` (their state, which is
         not the plain flights': its Jacobian not taken)."""
@@ -668,6 +719,8 @@ class ShootingProblem(OrbitProblem):
                 mode = self.drive.impact(arr_mode, z, tau, q, v).mode
                 self.sources.append(source)
             self.blocks.append((tau, mode))
+        if _same_problem(self, other):  # its last flight is ours too
+            self._last = other._last
         return self
 
     def admissibility(self, X, k):

@@ -595,6 +595,18 @@ class HydraulicCircuitDrive(Drive):
                               compiled=self.compiled, band=self.band, blocks=self.blocks,
                               sensitivity=self.sensitivity, multistep=self.multistep)
 
+    def variational_state_settings(self, model, settings=None):
+        """Where the variational flights take their fundamental matrix by Magnus' method (a piston
+        with modes, :attr:`sensitivity`), the integrator of the plain flight under them
+        (:func:`~impactbar.drives.circuit.flight.magnus_state_settings`: the variational flight's
+        state, bit for bit, without the fundamental matrix); ``None`` otherwise (CVODE's
+        variational flights of the rigid piston)."""
+        from .flight import magnus_state_settings, uses_magnus
+
+        if not uses_magnus(self.sensitivity, model):
+            return None
+        return magnus_state_settings(settings if settings is not None else self.integrator)
+
     def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
         """The circuit over a stretch of a blow with the driven end moved by the law's waves
         (``impactbar.drives.circuit.endflight.circuit_end_flight``, theory §11, "The coupled

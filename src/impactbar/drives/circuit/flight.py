@@ -49,7 +49,8 @@ from ..flight import ARRIVAL, END, EVENT, Flight
 from . import _kernel as K
 from . import _magnus
 
-__all__ = ["CircuitPiece", "circuit_flight", "stiffness_ratio", "DEFAULT_SETTINGS", "ADAMS_STIFFNESS"]
+__all__ = ["CircuitPiece", "circuit_flight", "stiffness_ratio", "DEFAULT_SETTINGS", "ADAMS_STIFFNESS",
+           "magnus_state_settings", "uses_magnus"]
 
 #: The circuit's integrator: CVODE's BDF at these tolerances (``atol`` relative to the states'
 #: scale, 1 in the units of theory §11).
@@ -243,6 +244,31 @@ def stiffness_ratio(drive, model) -> float:
     return decay / oscillation if oscillation > 0.0 else math.inf
 
 
+def uses_magnus(sensitivity: str, model, generated: bool = True) -> bool:
+    """Whether a variational flight of the piston of ``model`` takes its fundamental matrix by
+    Magnus' method over the steps of a plain flight (:func:`circuit_flight`'s ``sensitivity``)."""
+    return generated and (sensitivity == "magnus" or (sensitivity == "auto" and model.n_modes > 0))
+
+
+def magnus_state_settings(settings: FlightSettings | None) -> FlightSettings:
+    """The integrator of the plain flight under a variational flight by Magnus' method with
+    ``settings`` (default, or not CVODE: :data:`DEFAULT_SETTINGS`): its tolerances
+    :data:`MAGNUS_STATE_TOLERANCE` times finer (CVODE's floor ``1e-13`` on ``rtol``), ``atol`` scaled
+    as much. A plain flight with these settings is the variational flight's state, bit for bit.
+
+    Parameters
+    ----------
+    settings : FlightSettings or None
+
+    Returns
+    -------
+    FlightSettings
+    """
+    settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
+    rtol = max(settings.rtol * MAGNUS_STATE_TOLERANCE, 1e-13)  # (CVODE's floor: some 100 roundings)
+    return dataclasses.replace(settings, rtol=rtol, atol=settings.atol * rtol / settings.rtol)
+
+
 def _compiled_driver(compiled: bool = True):
     """:mod:`._cvode` where ``compiled`` and the libraries bind, else None."""
     if not compiled:
@@ -386,11 +412,10 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
     M = q.size
-    magnus = variational and generated and (sensitivity == "magnus" or (sensitivity == "auto" and M > 1))
+    magnus = variational and uses_magnus(sensitivity, model, generated)
     if magnus:  # the plain flight, its state as accurate as the variational flight's, then Phi over its steps
         variational = False
-        rtol = max(settings.rtol * MAGNUS_STATE_TOLERANCE, 1e-13)  # (CVODE's floor: some 100 roundings)
-        settings = dataclasses.replace(settings, rtol=rtol, atol=settings.atol * rtol / settings.rtol)
+        settings = magnus_state_settings(settings)
     L = drive.layout
     n, n_energy = L.size(M), L.n_energy
     par = drive._par(model, mode, variational)
