@@ -142,5 +142,6 @@ def test_a_stiff_unloadings_spike_is_read_from_its_own_start(case):
         assert stiff.junction_force(j, times[j - 1]) == pytest.approx(values[j - 1], rel=1e-14)
     if case == "two-segment rod":  # (the stepped piston's long rod takes the reference minutes)
         ref = reference_blow(*chain, k=k, k_u=1e6 * k, impact_velocity=1.0, t_end=soft.duration)
-        np.testing.assert_allclose(soft.peak_forces()[0], ref.peak_values, rtol=1e-8)  # (its clock: eps t k_u/Z)
+        # (its clock: eps t k_u/Z)
+        np.testing.assert_allclose(soft.peak_forces()[0], ref.peak_values, rtol=1e-8)
         np.testing.assert_allclose(values, ref.peak_values, rtol=1e-6)
