@@ -100,7 +100,7 @@ def test_a_blow_gone_on_from_a_snapshot_is_the_blow_from_its_start(driven_map, m
         force.coefs[3, 3] *= 1.0 + 1e-12
     resumed = []
     real = E._resumed
-    monkeypatch.setattr(E, "_resumed", lambda *a: resumed.append(real(*a)) or resumed[-1])
+    monkeypatch.setattr(E, "_resumed", lambda *a, **k: resumed.append(real(*a, **k)) or resumed[-1])
     keep = {"stops": T0 * np.arange(1, 9)}
     held = _Force(0.3)
     held.starts, held.coefs = np.array(full[0][1:-1]), np.array([c[::-1].real for _, _, c in full[1][1:-1]])

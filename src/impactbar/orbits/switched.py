@@ -44,6 +44,7 @@ from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
 from ..drives.orbitproblem import OrbitData, OrbitProblem, chord, newton, sorted_multipliers
 from ..drives.switched import PositionSwitchedDrive
 from ..model import BarModel
+from ._saltation import map_jacobian, through
 from ._settling import dominant_limit, surfaces_ahead
 from .admissibility import _window_departure
 from .orbit import PeriodicOrbit
@@ -249,7 +250,7 @@ class ShootingProblem(OrbitProblem):
         state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
         the drive's events ``(time, event, mode after)``; with ``variational`` (a drive whose flights
         integrate the variational equations, :attr:`~impactbar.Drive.variational`) also the
-        Jacobian of the state after the impact with respect to ``y`` (:meth:`_through`):
+        Jacobian of the state after the impact with respect to ``y`` (``_saltation.through``):
         ``True`` the multipliers' (a coupled blow's by central differences), ``"steer"`` one that
         only steers Newton's method (a coupled blow's by forward differences, half the blows),
         ``"state"`` the variational flights' state, the Jacobian not wanted (a coupled blow's not
@@ -311,7 +312,7 @@ class ShootingProblem(OrbitProblem):
             state = DriveState(state.mode, fl.z)
             if fl.end == ARRIVAL:
                 if variational:
-                    D = self._through(before, fl, None, D)
+                    D = through(model, drive, self.k, before, fl, None, D)
                 break
             if fl.end != EVENT:
                 raise ValueError(f"no impact within {HORIZON:g} of t = {tau:.6g} under the drive: the "
@@ -321,7 +322,7 @@ class ShootingProblem(OrbitProblem):
                 if keep:
                     events.append((t, e, state.mode, e.crossing_speed(q, v)))
             if variational:
-                D = self._through(before, fl, fl.events, D)
+                D = through(model, drive, self.k, before, fl, fl.events, D)
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
         if self.coupled:  # the blow and the drive's state together, the drive's map at its end
@@ -353,69 +354,13 @@ class ShootingProblem(OrbitProblem):
         if variational:  # the impact law (eq. 10) and the drive's map at the impact
             G = np.eye(self.n)
             G[M:2 * M, M:2 * M] *= -law.kernel_restitution(model)
-            G[2 * M:, 2 * M:] = self._map_jacobian(lambda zz: drive.impact(state.mode, zz, t_after, qa, va).z,
+            G[2 * M:, 2 * M:] = map_jacobian(lambda zz: drive.impact(state.mode, zz, t_after, qa, va).z,
                                                    state.z)
             D = G @ D
         out = np.concatenate((qa, va, after.z))
         if variational:
             return out, t_after, after.mode, arrival, pieces, events, D
         return out, t_after, after.mode, arrival, pieces, events
-
-    def _through(self, mode, fl, fired, D):
-        """The Jacobian through the end of a flight (Hiskens & Pai 2000): the flight's fundamental
-        matrix ``Phi`` (``fl.sensitivity``), the event's time moved by the perturbation,
-        ``Phi - f^- (grad h . Phi) / (grad h . f^-)`` (``h`` the arrival ``c . q`` or the fired
-        event's function, ``f^-`` the vector field in the mode before), then the drive's map at the
-        event (its Jacobian by central differences: the maps are affine or constant in the state);
-        composed with ``D``, the Jacobian so far."""
-        model, drive, M, n = self.model, self.drive, self.M, self.n
-        from ..drives.flight import vector_field
-
-        y = np.concatenate((fl.q, fl.v, fl.z))
-        f = vector_field(model, drive, mode)(fl.t, y)
-        if fired is None:
-            grad = np.concatenate((model.end_weights, np.zeros(M + self.k)))
-        else:
-            e = fired[0]
-
-            def h(yy):
-                return e.value(fl.t, yy[:M], yy[M:2 * M], yy[2 * M:])
-
-            grad = np.empty(n)
-            for j in range(n):
-                step = 1e-7 * max(1.0, abs(y[j]))
-                yp, ym = y.copy(), y.copy()
-                yp[j] += step
-                ym[j] -= step
-                grad[j] = (h(yp) - h(ym)) / (2.0 * step)
-        Phi = fl.sensitivity
-        rate = float(grad @ f)
-        Dt = Phi - np.outer(f, grad @ Phi) / rate
-        if fired:
-            def z_after(zz):
-                st = DriveState(mode, zz)
-                for e in fired:
-                    st = drive.jump(st.mode, st.z, e, fl.t, fl.q, fl.v)
-                return st.z
-
-            G = np.eye(n)
-            G[2 * M:, 2 * M:] = self._map_jacobian(z_after, fl.z)
-            Dt = G @ Dt
-        return Dt @ D
-
-    @staticmethod
-    def _map_jacobian(fn, z):
-        """The Jacobian of a drive's map ``z -> fn(z)`` by central differences."""
-        z = np.asarray(z, dtype=float)
-        k = z.size
-        out = np.empty((k, k))
-        for j in range(k):
-            step = 1e-7 * max(1.0, abs(z[j]))
-            zp, zm = z.copy(), z.copy()
-            zp[j] += step
-            zm[j] -= step
-            out[:, j] = (np.asarray(fn(zp), dtype=float) - np.asarray(fn(zm), dtype=float)) / (2.0 * step)
-        return out
 
     def _map(self, k, y):
         tau, mode = self.blocks[k]
@@ -514,7 +459,7 @@ class ShootingProblem(OrbitProblem):
 
     def residual(self, X, settings=None, *, steer: bool = False, keep: bool = False):
         """The shooting residual and its Jacobian: from the variational equations where the drive's
-        flights integrate them (:attr:`~impactbar.Drive.variational`, :meth:`_through`; ``settings``
+        flights integrate them (:attr:`~impactbar.Drive.variational`, ``_saltation.through``; ``settings``
         their integrator, default the problem's; with ``steer``, a Jacobian that only steers
         Newton's method: a coupled blow's by forward differences; with ``keep``, the flights kept
         whole, so that the orbit's data at ``X`` (:meth:`orbit`, one impact) takes the last one

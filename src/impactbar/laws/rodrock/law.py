@@ -146,14 +146,10 @@ class RodRock(ContactLaw):
         Default: the smallest count making the piston's and every segment's travel times whole
         numbers of cells, at least 8 (else 64, the lengths rounded). The lattice's error is of first
         order in the cell time at most (the bit's exponential response stored as cell averages,
-        switches inside a cell); on segments of whole cells a run with twice the cells estimates it
-        (on a soft rock with one loading a blow, an orbit's impact velocities: 1.6e-5 at the default 8
-        cells, four times less per doubling; theory §4d). Where a segment is rounded to whole cells
-        (``Blow.length_error``), the rounding changes with the count and sets the error, which then
-        does not shrink steadily as the cells double (on the circuit's rock example the orbit's work
-        on the rock moves up and down as they do, and the lattice's blow does 0.9 % less work than
-        the exact blow at the same arrival, theory §11): ``method="exact"`` has no such error.
-        :func:`single_blow` takes its own ``cells_per_piston``.
+        switches inside a cell); on whole cells twice the cells estimates it (theory §4d), but a
+        segment rounded to whole cells (``Blow.length_error``) sets an error that does not shrink as
+        the cells double (theory §11: 0.9 % of the work on the circuit's rock example); ``"exact"``
+        has none. :func:`single_blow` takes its own ``cells_per_piston``.
     method : {"auto", "exact", "lattice"}
         The simulator's blows (``simulate``, ``find_orbit``, ``continue_orbit``): ``"exact"`` every
         wave of piston and rod carried exactly, the piston's modal state and the drive as exact

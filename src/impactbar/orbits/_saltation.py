@@ -1,0 +1,101 @@
+"""The Jacobian of a drive's flight through its end and the drive's maps (Hiskens & Pai, "Trajectory
+sensitivity analysis of hybrid systems", IEEE Trans. Circuits Syst. I 47 (2000) 204-220): the
+saltation of the fundamental matrix at an event, for the shooting problem of
+:mod:`impactbar.orbits.switched` (theory §10)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..drives.base import DriveState
+
+__all__ = ["through", "map_jacobian"]
+
+
+def through(model, drive, k: int, mode, fl, fired, D):
+    """The Jacobian through the end of a flight: the flight's fundamental matrix ``Phi``
+    (``fl.sensitivity``), the event's time moved by the perturbation,
+    ``Phi - f^- (grad h . Phi) / (grad h . f^-)`` (``h`` the arrival ``c . q`` or the fired event's
+    function, ``f^-`` the vector field in the mode before), then the drive's map at the event (its
+    Jacobian by central differences: the maps are affine or constant in the state); composed with
+    ``D``, the Jacobian so far.
+
+    Parameters
+    ----------
+    model : BarModel
+    drive : Drive
+    k : int
+        The drive's state size.
+    mode : hashable
+        The drive's mode during the flight.
+    fl : Flight
+        The flight (with its ``sensitivity``).
+    fired : sequence of events or None
+        The drive's events that ended it, ``None`` for the arrival at the stop.
+    D : numpy.ndarray, shape (n, n)
+        The Jacobian so far, ``n = 2 (N + 1) + k``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n)
+    """
+    from ..drives.flight import vector_field
+
+    M = model.n_modes + 1
+    n = 2 * M + k
+    y = np.concatenate((fl.q, fl.v, fl.z))
+    f = vector_field(model, drive, mode)(fl.t, y)
+    if fired is None:
+        grad = np.concatenate((model.end_weights, np.zeros(M + k)))
+    else:
+        e = fired[0]
+
+        def h(yy):
+            return e.value(fl.t, yy[:M], yy[M:2 * M], yy[2 * M:])
+
+        grad = np.empty(n)
+        for j in range(n):
+            step = 1e-7 * max(1.0, abs(y[j]))
+            yp, ym = y.copy(), y.copy()
+            yp[j] += step
+            ym[j] -= step
+            grad[j] = (h(yp) - h(ym)) / (2.0 * step)
+    Phi = fl.sensitivity
+    rate = float(grad @ f)
+    Dt = Phi - np.outer(f, grad @ Phi) / rate
+    if fired:
+        def z_after(zz):
+            st = DriveState(mode, zz)
+            for e in fired:
+                st = drive.jump(st.mode, st.z, e, fl.t, fl.q, fl.v)
+            return st.z
+
+        G = np.eye(n)
+        G[2 * M:, 2 * M:] = map_jacobian(z_after, fl.z)
+        Dt = G @ Dt
+    return Dt @ D
+
+
+def map_jacobian(fn, z):
+    """The Jacobian of a drive's map ``z -> fn(z)`` by central differences.
+
+    Parameters
+    ----------
+    fn : callable
+        ``z -> z'``, arrays of shape ``(k,)``.
+    z : array_like, shape (k,)
+
+    Returns
+    -------
+    numpy.ndarray, shape (k, k)
+    """
+    z = np.asarray(z, dtype=float)
+    k = z.size
+    out = np.empty((k, k))
+    for j in range(k):
+        step = 1e-7 * max(1.0, abs(z[j]))
+        zp, zm = z.copy(), z.copy()
+        zp[j] += step
+        zm[j] -= step
+        out[:, j] = (np.asarray(fn(zp), dtype=float) - np.asarray(fn(zm), dtype=float)) / (2.0 * step)
+    return out
