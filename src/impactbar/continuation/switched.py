@@ -18,6 +18,7 @@ import functools
 import math
 
 import numpy as np
+from scipy.interpolate import BarycentricInterpolator
 from scipy.optimize import brentq
 
 from .._shared.parameters import check_continuable, parameter_value, with_parameter
@@ -195,14 +196,7 @@ class _SwitchedProblem:
             pts = pts[1:]
         if len(pts) < 2:
             return pts[-1][1]
-        out = np.zeros_like(last)
-        for i, (_, v) in enumerate(pts):
-            w = 1.0
-            for j in range(len(pts)):
-                if j != i:
-                    w *= (xu - x[j]) / (x[i] - x[j])
-            out += w * v
-        return out
+        return BarycentricInterpolator(x, np.stack([v for _, v in pts]))(xu)
 
     def _record(self, U, F, Fu, F_lam=None):
         """Keep ``F_u`` at the point ``U`` (of the branch, or a point the events' location corrected;

@@ -104,9 +104,6 @@ class PoolOverflow(ValueError):
     such a blow."""
 
 
-_pool_bytes = pool_bytes  # (of :func:`_workspace`'s pool)
-
-
 def _roots(m, Z, b):
     """Roots of ``m r^2 + Z r + b`` (fast first), or of ``Z r + b`` for ``m = 0``; without
     cancellation."""
@@ -513,7 +510,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     pcap, tcap, ecap = (16384, 131072, 256) if data is None else (256, 2048, 64)
     if _pool is not None:  # (the pool a like blow filled: no runs again to grow it)
         pcap, tcap, ecap = max(pcap, int(_pool[0])), max(tcap, int(_pool[1])), max(ecap, int(_pool[2]))
-    while pcap > 1024 and _pool_bytes(pcap, tcap) > bound:
+    while pcap > 1024 and pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     # (_keep: the coupled blow's iterates, each going on from where the last one's drive was its own:
     # _keep["resume"] the last run's snapshots, _keep["stops"] the times this one takes its own at,
@@ -558,9 +555,9 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
             # too): one run again, not one per 4-fold growth
             grow = t_max / reached
             more = max(pcap, int(1.25 * grow ** 2 * npc)), max(tcap, int(1.25 * grow ** 3 * nterms))
-            if _pool_bytes(*more) <= bound:
+            if pool_bytes(*more) <= bound:
                 pcap, tcap = more
-        if _pool_bytes(pcap, tcap) > bound:
+        if pool_bytes(pcap, tcap) > bound:
             per = nterms / max(npc, 1)
             raise PoolOverflow(
                 f"the exact blow needs more than {bound / 2 ** 30:.3g} GiB of wave pieces (the waves broke "
@@ -615,7 +612,7 @@ def _pool_arrays(rows, terms, reuse):
             return kept
     arrays = (np.empty((rows, 5)), np.empty((rows, 4), dtype=np.int64), np.empty(terms, dtype=np.int64),
               np.empty(terms, dtype=complex))
-    if reuse and _pool_bytes(rows, terms) <= _REUSED_POOL_BYTES:
+    if reuse and pool_bytes(rows, terms) <= _REUSED_POOL_BYTES:
         _POOLS.arrays = arrays
     return arrays
 
