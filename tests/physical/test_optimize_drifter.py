@@ -194,9 +194,15 @@ def test_rock_problem_one_variable_reevaluated_fresh():
         rock["drilling_rate_m_min"] / o.pump_power_kW, rel=1e-9)
     assert rock["peak_rod_stress_Pa"] <= 260e6
     assert np.max(np.abs(o.multipliers)) <= 0.95 and not o.cavitates
-    # the stress wave the report draws peaks at the peak incident stress it reports
+    # the stress wave the report draws peaks at the peak incident stress it reports, before the rock's
+    # first reflection is back at the shank (the drill string's round trip) or the piston's first
+    # contact ends, whichever is later
     wave = res.optimum["shank_stress"]
-    assert max(wave["stress_Pa"]) == pytest.approx(rock["peak_rod_stress_Pa"], rel=1e-9)
+    back = 2.0 * sum(g.length_m / g.wave_speed_m_s for g in d.drill.segments)
+    end = max(back, o.orbit.contacts[0].blow.first_separation * d.scales.time_s)
+    incident = np.asarray(wave["stress_Pa"])[np.asarray(wave["t_s"]) < end]
+    assert incident.max() == pytest.approx(rock["peak_rod_stress_Pa"], rel=1e-9)
+    assert max(wave["stress_Pa"]) >= incident.max()
     pytest.importorskip("matplotlib")
     assert len(res.plot()[1].lines) == 2
 

@@ -62,9 +62,17 @@ def _check_design(best, limit, K):
         again = ib.single_blow(model, V / C, piston=piston, t_max=44.0, cells_per_piston=48)
     expect = best.work_on_rock_J / (0.5 * MASS * V * V)
     assert again.work_on_rock / again.energy_at_impact == pytest.approx(expect, rel=1e-12)
-    # the peak stress: the exact maximum of the piston-shank force over the rod's area
-    assert best.peak_stress_Pa == pytest.approx(again.peak_forces()[0][0] * MASS * C * C / LENGTH / AREA,
-                                                rel=1e-12)
+    # the peak stress: the exact maximum of the piston-shank force over the rod's area before the
+    # rock's first reflection is back at the shank (the rod's round trip, 40), against the force
+    # sampled there (the incident wave: the piston's steps, constant between them); the whole blow's
+    # peak (re-contacts on what the rock sends back included) at least that
+    to_Pa = MASS * C * C / LENGTH / AREA
+    incident = again.peak_shank_force(40.0)[0]
+    assert best.peak_stress_Pa == pytest.approx(incident * to_Pa, rel=1e-12)
+    sampled = again.shank_force(np.linspace(0.0, 40.0, 80001)[:-1]).max()
+    assert incident * (1 - 1e-3) <= sampled <= incident * (1 + 1e-12)
+    assert best.blow_peak_stress_Pa == pytest.approx(again.peak_shank_force()[0] * to_Pa, rel=1e-12)
+    assert best.blow_peak_stress_Pa >= best.peak_stress_Pa * (1 - 1e-12)
     # the design as an SI piston: its mass and length, and the impedances it was solved with
     bar = best.bar
     assert bar.mass_kg == pytest.approx(MASS, rel=1e-13) and bar.length_m == pytest.approx(LENGTH, rel=1e-14)
@@ -96,6 +104,29 @@ def test_three_segments_at_least_as_good_as_two(alpha):
     _check_design(three, limit, K)
     two = optimize_piston(ROD, (K, K_u), segments=2, **kw)
     assert three.work_on_rock_J >= two.work_on_rock_J * (1 - 2e-3)
+
+
+def test_what_the_rock_sends_back_is_reported_not_limited():
+    """The limit bounds the incident wave, not the re-contact on the rock's reflection: on a stiff
+    rock (alpha = 3) the uniform piston's incident wave is the rectangle rho c V/2 (closed form) and
+    meets a limit of 1.3 times it, while the piston strikes the shank again at t = 2 (20 L)/c + 2 L/c
+    on the compressive wave the rock returned, the shank's force there 1.9 times the incident wave's
+    peak. Its height is set by the waves' steps, not by the unloading stiffness: the same for K_u/K =
+    1e12 as for 1e6."""
+    limit = 1.3 * RHO * C * V / 2
+    peaks = []
+    for gamma in (1e12, 1e6):
+        best = optimize_piston(ROD, _rock(3.0, gamma), mass=MASS, length=LENGTH, max_stress=limit,
+                               impact_velocity=V, segments=1)
+        assert best.feasible and best.blow.method == "exact"
+        assert best.peak_stress_Pa == pytest.approx(RHO * C * V / 2, rel=1e-13)
+        assert best.blow.first_separation < 40.0  # the first contact over before the rock's return
+        value, when = best.blow.peak_shank_force()
+        assert when == pytest.approx(42.0, rel=1e-12)  # theory §12 quotes the ratio, 1.9
+        assert best.blow_peak_stress_Pa / best.peak_stress_Pa == pytest.approx(1.9, abs=0.005)
+        assert value * MASS * C * C / LENGTH / AREA == pytest.approx(best.blow_peak_stress_Pa, rel=1e-13)
+        peaks.append(best.blow_peak_stress_Pa)
+    assert peaks[0] == pytest.approx(peaks[1], rel=1e-6)
 
 
 def test_an_unreachable_stress_limit_is_reported():
@@ -231,6 +262,9 @@ def test_on_whole_cells_the_lattice_is_the_exact_blow():
     t = lattice.times[:-1] + 0.5 * lattice.cell_time
     np.testing.assert_allclose(lattice.shank_forces, exact.shank_force(t), rtol=0,
                                atol=1e-12 * lattice.shank_forces.max())
+    # and so the incident wave's peak (the rod's round trip 40) and the first contact's end
+    assert lattice.incident_peak_force(40.0) == pytest.approx(exact.incident_peak_force(40.0), rel=1e-12)
+    assert lattice.first_separation == pytest.approx(exact.first_separation, abs=lattice.cell_time)
 
 
 def test_across_cells_the_lattices_work_is_rippled():

@@ -53,8 +53,10 @@ OBJECTIVES = {
 }
 
 #: The constraints and their default limits (SI): ``peak_incident_stress`` (Pa, the largest stress in
-#: the shank adapter during the blow; ``None``: not constrained), ``max_multiplier`` (the largest
-#: Floquet multiplier's modulus), ``min_pressure`` (Pa absolute: no cavitation at 0),
+#: the shank adapter before the rock's first reflection is back at it, or over the piston's first
+#: contact where that lasts longer: the peak of the incident wave; ``None``: not constrained),
+#: ``max_multiplier`` (the largest Floquet multiplier's modulus), ``min_pressure`` (Pa absolute: no
+#: cavitation at 0),
 #: ``mean_supply_pressure`` (Pa; ``"relief"``: the relief valve's setting), ``peak_supply_pressure``
 #: (Pa; ``None``: not constrained), ``min_chamber_volume`` (m^3, the smallest volume of either chamber
 #: over the period must lie above it), ``min_drilling_rate`` (m/min; ``None``: not constrained; a
@@ -761,8 +763,8 @@ def _piston_and_multipliers(drifter, orbit) -> dict:
 
 
 def _shank_stress(drifter, orbit) -> dict | None:
-    """The stress in the shank adapter over the first blow (``t_s``, ``stress_Pa``): the incident wave
-    and what the rod and rock return, as the peak incident stress reads it; ``None`` without a rock."""
+    """The stress in the shank adapter over the first blow (``t_s``, ``stress_Pa``): the incident wave,
+    whose peak the peak incident stress is, and what the rod and rock return; ``None`` without a rock."""
     if drifter.drill is None:
         return None
     blow = orbit.orbit.contacts[0]

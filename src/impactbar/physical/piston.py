@@ -70,9 +70,17 @@ class OptimalPiston:
         The segments' lengths (m) and cross-sections (m^2), from the driven end to the struck end.
     work_on_rock_J, efficiency, peak_stress_Pa : float
         Of its blow: the work on the rock (J), that over the impact energy :math:`m V^2/2` (plus the
-        feed's), and the peak of the incident stress wave in the rod's first piece (Pa).
+        feed's), and the peak of the incident stress wave in the rod's first piece (Pa): the
+        largest piston-shank force over the first piece's area before the wave the rock reflects
+        first is back at the shank, or over the piston's first contact where that lasts longer (the
+        stepped piston's own re-strikes included, what the rock sends back not).
     uniform_work_on_rock_J, uniform_efficiency, uniform_peak_stress_Pa : float
         The same of the uniform piston of the same mass and length.
+    blow_peak_stress_Pa : float
+        The largest piston-shank stress of the whole blow (Pa), the piston's re-contacts on what the
+        rock sends back included. Not limited: on a stiff rock's unloading the bit reflects a spike
+        of width :math:`Z/K_u` (the exact blow resolves it, the lattice averages it over a cell)
+        that a re-contact can carry above the incident wave's peak.
     feasible : bool
         Whether the peak stress is within the limit (if neither this shape nor the uniform piston
         meets it, the one closest to it).
@@ -102,6 +110,7 @@ class OptimalPiston:
     uniform_work_on_rock_J: float
     uniform_efficiency: float
     uniform_peak_stress_Pa: float
+    blow_peak_stress_Pa: float
     feasible: bool
     evaluations: int
     cell_time_s: float
@@ -177,7 +186,8 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         The piston's length (m), ``> 0``.
     max_stress : float
         The largest compressive stress (Pa, ``> 0``) allowed in the incident wave: the peak
-        piston-shank force over the first rod piece's area (``math.inf``: no limit).
+        piston-shank force over the first rod piece's area before the rock's first reflection is
+        back at the shank (:attr:`OptimalPiston.peak_stress_Pa`; ``math.inf``: no limit).
     impact_velocity : float
         The piston's velocity at impact (m/s), ``> 0``; moving rigidly and unstressed.
     segments : int
@@ -250,7 +260,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     N = check_int("cells", cells, lo=8, hi=1024)
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(map(repr, METHODS))}; got method={method!r}")
-    c, force_N, energy_J, time_s, seg, k, k_u, T = _model_units(pieces, K, K_u, m, L, E, rho, t_max)
+    c, force_N, energy_J, time_s, seg, k, k_u, T, back = _model_units(pieces, K, K_u, m, L, E, rho, t_max)
     scale = force_N / (pieces[0].area_m2 * sigma) if math.isfinite(sigma) else 0.0  # stress / limit per force
     v = V / c
 
@@ -263,7 +273,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
 
     def merit(b):
         """Work (in impact energies) less the penalty; the relative excess stress."""
-        excess = max(0.0, _peak(b) * scale - 1.0)
+        excess = max(0.0, _peak(b, back) * scale - 1.0)
         return b.work_on_rock / b.energy_at_impact - PENALTY * excess, excess
 
     uniform = blow(None)
@@ -321,14 +331,15 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         lf = mf = np.full(n, 1.0 / n)
     lengths = lf * L
     areas = mf * m / (rho * lengths)
-    stress = _peak(shaped) * force_N / pieces[0].area_m2
-    u_stress = _peak(uniform) * force_N / pieces[0].area_m2
+    stress = _peak(shaped, back) * force_N / pieces[0].area_m2
+    u_stress = _peak(uniform, back) * force_N / pieces[0].area_m2
     steps = min(shaped.shank_forces.size, uniform.shank_forces.size)
     return OptimalPiston(
         lengths_m=lengths, areas_m2=areas, work_on_rock_J=shaped.work_on_rock * energy_J,
         efficiency=shaped.efficiency, peak_stress_Pa=stress,
         uniform_work_on_rock_J=uniform.work_on_rock * energy_J, uniform_efficiency=uniform.efficiency,
-        uniform_peak_stress_Pa=u_stress, feasible=x_s == 0.0, evaluations=count[0],
+        uniform_peak_stress_Pa=u_stress, blow_peak_stress_Pa=shaped.peak_shank_force()[0] * force_N
+        / pieces[0].area_m2, feasible=x_s == 0.0, evaluations=count[0],
         cell_time_s=shaped.cell_time * time_s, times_s=shaped.times[:steps + 1] * time_s,
         incident_force_N=shaped.shank_forces[:steps] * force_N,
         uniform_incident_force_N=uniform.shank_forces[:steps] * force_N, blow=shaped, uniform_blow=uniform,
@@ -339,7 +350,8 @@ def _model_units(pieces, K, K_u, m, L, E, rho, t_max):
     """The blow's units (length ``L``, time ``L/c``, mass ``m``: force ``m c^2/L``, energy ``m c^2``)
     and the rod and rock in them: ``(c, force_N, energy_J, time_s, seg, k, k_u, T)``, ``seg`` the
     rod's lengths, impedances (over a uniform piston's, ``m c / L``) and wave speeds, ``T`` the
-    window (default the contact of ``4 L/c`` and a wave's round trip through the rod after it)."""
+    window (default the contact of ``4 L/c`` and a wave's round trip through the rod after it),
+    ``back`` that round trip (when the rock's first reflection is back at the shank)."""
     c = math.sqrt(E / rho)
     force_N, energy_J, time_s = m * c * c / L, m * c * c, L / c
     Zu = m * c / L  # a uniform piston's impedance
@@ -348,7 +360,7 @@ def _model_units(pieces, K, K_u, m, L, E, rho, t_max):
     k, k_u = K * L * L / (m * c * c), K_u * L * L / (m * c * c)
     travel = sum(le / sp for le, sp in zip(seg[0], seg[2], strict=True))
     T = 4.0 + 2.0 * travel if t_max is None else check_real("t_max", t_max, lo=0.0, lo_open=True) / time_s
-    return c, force_N, energy_J, time_s, seg, k, k_u, T
+    return c, force_N, energy_J, time_s, seg, k, k_u, T, 2.0 * travel
 
 
 def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=None, bit_mass=0.0, feed=0.0,
@@ -371,7 +383,9 @@ def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=N
     dict
         ``work_on_rock_J``, ``efficiency`` (the work over the impact energy, plus the feed's),
         ``impact_energy_J`` (:math:`m V^2/2`), ``peak_stress_Pa`` (the exact peak of the
-        piston-shank force over the rod's first area), ``mass_kg``, ``length_m``, ``method``
+        incident wave, the piston-shank force over the rod's first area as
+        :attr:`OptimalPiston.peak_stress_Pa` reads it), ``blow_peak_stress_Pa`` (of the whole
+        blow, re-contacts included), ``mass_kg``, ``length_m``, ``method``
         (``"exact"`` or ``"lattice"``) and ``blow`` (the :class:`~impactbar.laws.rodrock.Blow`, in
         the units of piston mass, length and wave speed 1).
 
@@ -409,7 +423,7 @@ def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=N
     N = check_int("cells", cells, lo=8, hi=1024)
     L = float(lengths.sum())
     m = rho * float(np.sum(lengths * areas))
-    c, force_N, energy_J, _, seg, k, k_u, T = _model_units(pieces, K, K_u, m, L, E, rho, t_max)
+    c, force_N, energy_J, _, seg, k, k_u, T, back = _model_units(pieces, K, K_u, m, L, E, rho, t_max)
     from ..dynamics.stepped import SteppedPiston
     from ..laws.rodrock.blow import rod_rock_blow
 
@@ -422,8 +436,10 @@ def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=N
         lf = _whole_cells(lf, N) / N
         b = rod_rock_blow(1.0, V / c, *seg, k, k_u, mb / m, f / force_N, cells_per_piston=N, t_max=T,
                           piston=SteppedPiston(lf, mf / lf) if lf.size > 1 else None)
+    to_Pa = force_N / pieces[0].area_m2
     return {"work_on_rock_J": b.work_on_rock * energy_J, "efficiency": b.efficiency,
-            "impact_energy_J": 0.5 * m * V * V, "peak_stress_Pa": _peak(b) * force_N / pieces[0].area_m2,
+            "impact_energy_J": 0.5 * m * V * V, "peak_stress_Pa": _peak(b, back) * to_Pa,
+            "blow_peak_stress_Pa": b.peak_shank_force()[0] * to_Pa,
             "mass_kg": m, "length_m": L, "method": b.method, "blow": b}
 
 
@@ -435,9 +451,9 @@ def _better(a, b):
     return a[0] > b[0] if a[1] == 0.0 else a[1] < b[1]
 
 
-def _peak(b):
-    """The largest piston-shank force of a blow (exact: the maximum of its pieces)."""
-    return float(b.peak_forces()[0][0])
+def _peak(b, back):
+    """The peak of the incident wave, the rock's first reflection back at the shank at ``back``."""
+    return b.incident_peak_force(back)
 
 
 def _exact_blow(v, seg, k, k_u, bit_mass, feed, T, samples, piston):

@@ -294,7 +294,9 @@ def rock_orbit_figures(orbit, hammer) -> dict:
     -------
     dict
         ``rod_energy_J`` (the energy the piston gave the rod and rock, J), ``peak_rod_stress_Pa``
-        (the largest shank force over the first segment's area, Pa), ``efficiency`` and
+        (the peak of the incident wave, Pa: the largest shank force over the first segment's area
+        before the rock's first reflection is back at the shank,
+        :meth:`~impactbar.laws.rodrock.Blow.incident_peak_force`), ``efficiency`` and
         ``efficiency_with_rebound`` (work on rock over the energy available to the blow),
         ``rod_advance_m`` and ``penetration_mm`` (the permanent penetration, m and mm),
         ``work_on_rock_J`` (J) and ``drilling_rate_m_min`` (penetration times the blow frequency
@@ -302,9 +304,10 @@ def rock_orbit_figures(orbit, hammer) -> dict:
     """
     sc = hammer.scales
     b = orbit.contacts[0]
+    back = 2.0 * sum(g.length_m / g.wave_speed_m_s for g in hammer.drill.segments) / sc.time_s
     pen_m = float(b.permanent_penetration) * sc.length_m
     return {"rod_energy_J": float(b.energy_out) * sc.force_N * sc.length_m,
-            "peak_rod_stress_Pa": float(np.max(b.shank_forces)) * sc.force_N
+            "peak_rod_stress_Pa": b.blow.incident_peak_force(back) * sc.force_N
             / hammer.drill.segments[0].area_m2,
             "efficiency": float(b.efficiency), "rod_advance_m": pen_m,
             "work_on_rock_J": float(b.work_on_rock) * sc.force_N * sc.length_m,

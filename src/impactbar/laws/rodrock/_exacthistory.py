@@ -176,8 +176,8 @@ def history_max(PF, PI, TK, TC, lam, head, t_end, res):
     p = head
     while p >= 0:
         nx = PI[p, 0]
-        L = (PF[nx, 0] if nx >= 0 else t_end) - PF[p, 0]
-        if L < 0.0:
+        L = min(PF[nx, 0] if nx >= 0 else t_end, t_end) - PF[p, 0]
+        if L < 0.0:  # (the pieces from t_end on)
             break
         if L <= 1e-11 * max(1.0, abs(PF[p, 0])) and nx >= 0:
             # a sliver between two arrivals that rounding set apart (incommensurate segments): its

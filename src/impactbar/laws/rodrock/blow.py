@@ -315,6 +315,34 @@ class Blow:
                 np.append(self.times[i], self.times[jb]))
 
 
+    @property
+    def first_separation(self) -> float:
+        """When the piston first left the shank (exact method: the start of the shank force's first
+        zero piece; lattice: the first step without force); ``duration`` where it never did."""
+        if self.exact is not None:
+            return self.exact.first_separation
+        off = np.flatnonzero(self.shank_forces[1:] <= 0.0)
+        return float(self.times[off[0] + 1]) if off.size else self.duration
+
+    def peak_shank_force(self, t_end: float | None = None) -> tuple[float, float]:
+        """The largest piston-shank force up to ``t_end`` (default: over the whole blow) and when
+        first reached: ``value, time`` (exact method: the maximum of its pieces; lattice: of the
+        steps that start before ``t_end``)."""
+        t_end = self.duration if t_end is None else min(float(t_end), self.duration)
+        if self.exact is not None:
+            return self.exact.shank_peak(t_end)
+        n = max(1, int(np.searchsorted(self.times[:-1], t_end, side="left")))
+        i = int(np.argmax(self.shank_forces[:n]))
+        return float(self.shank_forces[i]), float(self.times[i])
+
+    def incident_peak_force(self, round_trip: float) -> float:
+        """The peak of the incident wave (theory §12): the largest piston-shank force before the
+        wave the rock reflects first is back at the shank, at ``round_trip`` (the rod's, shank to
+        bit and back, model time), or over the piston's first contact where that lasts longer (a
+        stepped piston's own re-strikes are part of its incident wave; what the rock sends back is
+        not, nor a re-contact on it)."""
+        return self.peak_shank_force(max(float(round_trip), self.first_separation))[0]
+
     def _steps(self, values, t):
         t = np.asarray(t, dtype=float)
         i = np.floor(t / self.cell_time).astype(int)

@@ -288,6 +288,25 @@ class ExactBlow:
         """The piston-shank force at times ``t``."""
         return self.junction_force(self.contact_junction, t)
 
+    def shank_peak(self, t_end: float) -> tuple[float, float]:
+        """The largest piston-shank force up to ``t_end`` and when first reached (exact)."""
+        nodes = self._hist[2]
+        v, t = _channel_max(self._hist[1], 2 * nodes + 1 + self.contact_junction, min(t_end, self.duration))
+        return self._hist[0] * v, t
+
+    @property
+    def first_separation(self) -> float:
+        """When the piston first left the shank (the start of the shank force's first zero
+        piece); ``duration`` where it never did."""
+        pools, nodes = self._hist[1], self._hist[2]
+        PF, PI, CHI = pools[0], pools[1], pools[4]
+        p = int(CHI[2 * nodes + 1 + self.contact_junction, 1])
+        while p >= 0 and PF[p, 0] < self.duration:
+            if PI[p, 2] == 0 and PF[p, 0] > 0.0:
+                return float(PF[p, 0])
+            p = int(PI[p, 0])
+        return self.duration
+
     def penetration(self, t) -> np.ndarray:
         """The bit's penetration at times ``t``."""
         scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
