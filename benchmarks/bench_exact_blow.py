@@ -1,4 +1,4 @@
-"""Benchmark for issue 39: the exact blow against the lattice, same cases, same run.
+"""Benchmark of the exact blow: the exact blow against the lattice, same cases, same run.
 
 For each of the issue's rods (uniform piston, massless bit unless said, no feed): the exact blow
 (``single_blow``'s default, run until its end is certified), the lattice at its defaults (8 cells

@@ -1,4 +1,4 @@
-"""Issue 40: a flexible bar's orbit under the valve from what a user has. A settled run of
+"""A flexible bar's orbit under the valve from what a user has. A settled run of
 ``simulate`` is read as the guess (its flights' modal states after the impacts; it was refused, "read
 for the rigid bar only"), and the default guess goes on from the rigid orbit lifted to the modes to
 a run from rest when Newton fails there (it did not converge in 50 steps on the issue's first case)

@@ -205,7 +205,7 @@ def test_slow_to_compile_finds_a_planted_use():
 
 def test_no_compiled_kernel_uses_what_is_slow_to_compile():
     """A first run compiles every kernel it calls; numba's own np.sort, np.max, np.min and array
-    slice assignment add seconds to it (issue 20), so the kernels write those few loops out."""
+    slice assignment add seconds to it, so the kernels write those few loops out."""
     found = {name: _slow_to_compile(d.py_func) for name, d in _dispatchers()}
     assert {name: lines for name, lines in found.items() if lines} == {}
 

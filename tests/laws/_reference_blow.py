@@ -1,4 +1,4 @@
-"""An independent solution of the rod-rock blow (issue 39), to check the package's exact solver.
+"""An independent solution of the rod-rock blow, to check the package's exact solver.
 
 It shares no code with :mod:`impactbar.laws.rodrock.exact` and its kernels, and is built otherwise:
 

@@ -1,4 +1,4 @@
-"""The exact blow (issue 39) against an independent solution of the same blow.
+"""The exact blow against an independent solution of the same blow.
 
 ``tests/laws/_reference_blow.py`` shares no code with :mod:`impactbar.laws.rodrock.exact`: its waves
 are piecewise Chebyshev interpolants carried by delay lines, the bit's equation is solved by

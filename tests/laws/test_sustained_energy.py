@@ -1,4 +1,4 @@
-"""The wave law's sustained contact: its energy integrals in closed form (issue 42) against an
+"""The wave law's sustained contact: its energy integrals in closed form against an
 independent Gauss-Legendre quadrature of the same motion, and the run's account closing.
 
 Before, the integrals were the quadrature below on panels as fine as the fastest transient: 12 s per

@@ -1,5 +1,5 @@
 """Sticking contacts of the rigid bar under the square-wave load end at the load's switch, to
-rounding, and the flights after them follow the exact solution (issue 41).
+rounding, and the flights after them follow the exact solution.
 
 The reference is independent of the package: the rigid bar ``x'' = p(t)`` (``d = 0``) between
 impacts is a parabola on each piece of the load, solved in 50-digit decimal arithmetic with the
