@@ -158,8 +158,8 @@ def test_continue_shows_stages_and_simulate_a_bar_on_a_terminal_only(monkeypatch
     tty.buf = type(tty.buf)()
     assert main([*argv, "--quiet"]) == 0
     assert tty.buf.getvalue() == ""
-    # simulate's bar counts load periods with an estimate (the library's progress callback, issue
-    # 24), with the run shortened
+    # simulate's bar counts load periods with an estimate (the library's progress callback),
+    # with the run shortened
     import impactbar.physical as ph
 
     real = ph.simulate

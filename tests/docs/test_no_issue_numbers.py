@@ -9,8 +9,9 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-#: "issue" after anything but a letter ("tissue 3" is no citation; "test_x_issue_19" is one)
-ISSUE = re.compile(r"(?<![a-z])issues?[ \t_#-]*\d+", flags=re.I)
+#: "issue" after anything but a letter ("tissue 3" is no citation; "test_x_issue_19" is one), its
+#: number after spaces, line breaks, "#", "_" or "-" (a comment's "issue\n    # 24")
+ISSUE = re.compile(r"(?<![a-z])issues?[\s_#-]*\d+", flags=re.I)
 
 #: what the documentation's build writes (``.gitignore``): copies of the sources scanned here
 GENERATED = {"_build", "api", "gallery", "tutorials", "api.rst", "sg_execution_times.rst", "guides.md"}
@@ -49,8 +50,9 @@ def test_the_scan_covers_what_a_user_reads():
 
 def test_the_pattern_finds_each_way_of_writing_an_issue_number():
     found = ISSUE.findall("(issue 38) Issue #5, issues 20, 41; the issue-40 cases; drifter-issue19;"
-                          " def test_example_of_issue_19(); VALVE_ISSUE_7")
-    assert found == ["issue 38", "Issue #5", "issues 20", "issue-40", "issue19", "issue_19", "ISSUE_7"]
+                          " def test_example_of_issue_19(); VALVE_ISSUE_7; callback, issue\n    # 24)")
+    assert found == ["issue 38", "Issue #5", "issues 20", "issue-40", "issue19", "issue_19", "ISSUE_7",
+                     "issue\n    # 24"]
     assert ISSUE.findall("the issue of the valve's delay, tissue 3, TISSUE_4, the issue's 2 cases") == []
 
 

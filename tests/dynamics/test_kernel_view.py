@@ -89,8 +89,8 @@ def test_load_arrays_are_read_only(cls):
             a[...] = 0.0
 
 
-def test_issue_reproducer_pk_assignment_refused_and_each_load_simulated_as_itself():
-    """The issue's case: ``l.pk = 3.0`` was accepted while the simulator kept integrating pk = 1 (a
+def test_pk_assignment_refused_and_each_load_simulated_as_itself():
+    """A reported case: ``l.pk = 3.0`` was accepted while the simulator kept integrating pk = 1 (a
     cache keyed by ``id(load)``). It is refused now, and a fresh CosineLoad(0.5, 3.0) simulated after
     CosineLoad(0.5, 1.0) gets its own answer, equal to a run in a clean cache."""
     S = importlib.import_module("impactbar.simulation.simulate")

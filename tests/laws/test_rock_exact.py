@@ -31,7 +31,7 @@ def _model(segs, k, k_u, s=1.0, bit_mass=0.0, feed=0.0):
     return ib.BarModel(s=s, d=0.0, R=0.0, n_modes=0, impact=law)
 
 
-#: the issue's cases (uniform piston, no feed): re-contacts, lift-off, second loadings
+#: rods on rock (uniform piston, no feed): re-contacts, lift-off, second loadings
 CASES = {
     "uniform rod of the piston's length, alpha 2, gamma 5": _model([(1.0, 1.0)], 1.0, 5.0),
     "4-long rod of impedance 0.4, alpha 0.8, gamma 1e6": _model([(4.0, 0.4)], 0.4, 4e5),
@@ -93,7 +93,7 @@ def test_the_exact_blow_is_the_limit_of_the_refined_lattice(name):
 
 
 def test_the_defaults_were_off_by_the_lattices_first_order_error():
-    """The issue's measure: the default lattice (8 cells per piston) is 6e-3 off on the efficiency
+    """The measure: the default lattice (8 cells per piston) is 6e-3 off on the efficiency
     of a uniform rod of the piston's length; the default is now exact (within 1e-6 of a 1024-cell
     lattice)."""
     model = CASES["uniform rod of the piston's length, alpha 2, gamma 5"]
