@@ -1,4 +1,4 @@
-"""Hand-written peers the benchmarks time impactbar against (issue 20).
+"""Hand-written peers the benchmarks time impactbar against.
 
 :func:`minimal_loop_rigid` is the compiled minimal loop a user would write for a short run of the
 rigid bar under ``p(t) = p0 + pk cos t``: the flight in closed form, the impact found by steps of

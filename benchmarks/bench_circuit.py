@@ -11,7 +11,7 @@ of the vector field, its Jacobian and the events through Python, as before). One
 CVODE both ways and by scipy's Radau on the same compiled right-hand side and Jacobian, with CVODE's
 own counters for it. Without ``--quick``, ``find_orbit`` with flexible pistons: 1 mode both ways,
 8 modes with the variational flights' band solver against the dense one (the drive's ``band=False``,
-the way before; about four minutes). Issue 38's goals on this 2-core machine: the rigid orbit
+the way before; about four minutes). The goals on this 2-core machine: the rigid orbit
 <= 0.5 s, with 8 modes <= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a
 few repetitions (the machine's other load only adds); compilation is done before the clock starts.
 

@@ -1,4 +1,4 @@
-"""Benchmark for issue 10: continuation of periodic motions, against the baselines a user would
+"""Benchmark of the continuation of periodic motions, against the baselines a user would
 otherwise write in the same run.
 
 1. A one-impact branch of the 8-mode bar (pneumatic load, ``p0`` from 0.3 through the period
@@ -48,7 +48,7 @@ def main():
     ap.add_argument("--quick", action="store_true")
     a = ap.parse_args()
     rep = 1 if a.quick else 5
-    print("impactbar benchmark (issue 10): continuation of periodic motions")
+    print("impactbar benchmark: continuation of periodic motions")
     print(f"{'case':<58} {'median s':>9} {'min s':>7}  result")
 
     # 1. one-impact branch of the 8-mode bar

@@ -6,7 +6,7 @@ modes, impacts per second of ``simulate`` under ``PositionSwitchedDrive(1, 1, 1)
 ``d = 0.05``, ``s = 10``), and of the same run without switching: the time-periodic square wave that
 carries the same motion (theory §10, the limiting case: time rescaled by ``k = 2 pi / T``, so the
 model's ``s/k``, ``d/k`` and the level ``1/k^2``, ``kappa = 2 h3 / T``), which the compiled driver
-follows alone. Issue 19's goal: a ratio of at least 0.5. The square wave's one-impact orbit is
+follows alone. The goal: a ratio of at least 0.5. The square wave's one-impact orbit is
 unstable (eq. 41), so from the same start its run chatters (many small impacts per period, each
 cheap): the table also gives the impacts per period of both runs and the ratio of periods (blows)
 per second. Then the cost of ``find_orbit`` with the drive (goal: rigid <= 1 ms, 8 modes <= 5 ms).

@@ -1,15 +1,15 @@
-"""Every one-impact orbit of the position-switched drive (issue 40): the cost of
+"""Every one-impact orbit of the position-switched drive: the cost of
 ``periodic_orbits(model, drive)`` beside the old ``find_orbit`` from the rigid piston's orbit.
 
-Run: ``python benchmarks/bench_drive_orbits.py`` (``--quick`` for fewer repetitions). For the issue's
-two cases and the drive benchmark's (``bench_drive.py``), at 8 flexible modes (and 32 for the
-latter): the best of five wall times of
+Run: ``python benchmarks/bench_drive_orbits.py`` (``--quick`` for fewer repetitions). For the two
+valve cases of ``tests/drives/test_drive_orbits.py`` and the drive benchmark's (``bench_drive.py``),
+at 8 flexible modes (and 32 for the latter): the best of five wall times of
 
 - ``periodic_orbits(model, drive)``: the certified search over its default window of periods, each
-  root polished by Newton's method and its admissibility and multipliers computed (issue 40's goal:
+  root polished by Newton's method and its admissibility and multipliers computed (the goal:
   <= 0.5 s at 8 modes);
 - the baseline: Newton's method from the rigid piston's orbit (``find_orbit``'s only start before
-  issue 40), with whether it converged and to what;
+  the search of every orbit), with whether it converged and to what;
 - ``find_orbit(model, drive)`` now (the default chain: the rigid orbit, a run from rest, the search).
 
 Numba's compilation and the first imports are done before the clock starts.
@@ -25,8 +25,8 @@ from impactbar import BarModel, PositionSwitchedDrive, find_orbit, periodic_orbi
 from impactbar.orbits.switched import orbit_of, orbit_problem
 
 CASES = [
-    ("issue 40 case 1", BarModel(3, 0.1, 0.6, 6), PositionSwitchedDrive(1, 0.5, 0.15)),
-    ("issue 40 case 2", BarModel(10, 0.02, 0.3, 8), PositionSwitchedDrive(2, 1, 0.2, delay=0.05)),
+    ("valve case 1", BarModel(3, 0.1, 0.6, 6), PositionSwitchedDrive(1, 0.5, 0.15)),
+    ("valve case 2", BarModel(10, 0.02, 0.3, 8), PositionSwitchedDrive(2, 1, 0.2, delay=0.05)),
     ("bench_drive", BarModel(10, 0.05, 0.215, 8), PositionSwitchedDrive(1, 1, 1)),
     ("bench_drive", BarModel(10, 0.05, 0.215, 32), PositionSwitchedDrive(1, 1, 1)),
 ]

@@ -1,4 +1,4 @@
-"""Benchmark for issue 42: the energy account of a run under the wave law with a pressing load
+"""Benchmark of the energy account of a run under the wave law with a pressing load
 (s = 50, 40 modes, two load periods), side by side in the same process with the simulation itself
 and with the quadrature the account used before (Gauss-Legendre, 16 nodes a panel, panels doubling
 from the fastest decay up to the fastest oscillation's scale, then on the load's), which the

@@ -1,11 +1,11 @@
-"""Benchmark for issue 39: the exact blow against the lattice, same cases, same run.
+"""Benchmark of the exact blow: the exact blow against the lattice, same cases, same run.
 
-For each of the issue's rods (uniform piston, massless bit unless said, no feed): the exact blow
-(``single_blow``'s default, run until its end is certified), the lattice at its defaults (8 cells
-per piston, ``t_max`` 20 travel times: the baseline) and the lattice refined to 1024 cells
-per piston (128 for the 40-long rod: the lattice's size bound) up to the exact blow's end; their
-times (median) and the relative errors of the efficiency and of the rebound velocity against the
-exact blow.
+For each rod (those of ``tests/laws/test_rock_exact.py`` and Lundberg's 40-long one; uniform
+piston, massless bit unless said, no feed): the exact blow (``single_blow``'s default, run until its
+end is certified), the lattice at its defaults (8 cells per piston, ``t_max`` 20 travel times: the
+baseline) and the lattice refined to 1024 cells per piston (128 for the 40-long rod: the lattice's
+size bound) up to the exact blow's end; their times (median) and the relative errors of the
+efficiency and of the rebound velocity against the exact blow.
 
 Run: ``python benchmarks/bench_exact_blow.py [--quick]``. Prints a table; nothing is asserted.
 

@@ -1,6 +1,6 @@
-"""Benchmark for issue 11: each fast path against the path it replaces, in the same run.
+"""Benchmark of the fast paths: each fast path against the path it replaces, in the same run.
 
-Rows (baseline | new | ratio | the issue's goal):
+Rows (baseline | new | ratio | the goal):
 
 - rigid bar, cosine load, one grid point: ``periodic_orbits`` by the general path (certified
   searches, dense Jacobian) against the closed forms; the closed forms on 1-element numpy arrays
@@ -20,7 +20,7 @@ Rows (baseline | new | ratio | the issue's goal):
   ``"simulate.impact_search"``)
   against the specialised ones (rigid bar in scalars, flexible modes in folded form), and a
   100-impact run, with the kernel data rebuilt on every call (as before) against the cached core;
-  the rigid bar's 1-impact run against a compiled minimal loop for it (``_peers.py``, issue 20).
+  the rigid bar's 1-impact run against a compiled minimal loop for it (``_peers.py``).
 
 Times are medians of repeated runs of CPU time (``time.process_time``) for the in-process rows and
 of wall time for the fresh processes, so that other load on a shared machine weighs less. BLAS runs
@@ -29,8 +29,8 @@ on one thread (``OMP_NUM_THREADS`` etc. default to 1 here), since CPU time count
 Run: ``python benchmarks/bench_fast_paths.py [--quick]``. Prints a table; nothing is asserted.
 
 ``--against SRC`` instead times the same user-level calls (``periodic_orbits``, ``simulate``, and the
-rigid bar's 2-per-2 ``continue_orbit`` branch per point, issue 20; ``periodic_orbits`` from 64 to
-1024 modes and the exponent of its growth; issue 41: the rigid bar's ``simulate`` over one load
+rigid bar's 2-per-2 ``continue_orbit`` branch per point; ``periodic_orbits`` from 64 to
+1024 modes and the exponent of its growth; the rigid bar's ``simulate`` over one load
 period asked by ``t_end`` (one impact in it), with ``max_impacts=10`` too, and by ``max_impacts=1``,
 each beside the compiled minimal loop of ``_peers.py`` for the same run, alternated in the same
 process, and the ratio; over 2e5 load periods beside the same loop and beside the event kernel
@@ -38,7 +38,7 @@ alone, into arrays made beforehand) in
 fresh processes on the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x -C /tmp/old``
 then ``--against /tmp/old/src``) and on this one, alternately, and prints both side by side.
 
-``--cold [--against SRC] [--kernels]`` (issue 20) times the first call of each entry point
+``--cold [--against SRC] [--kernels]`` times the first call of each entry point
 (``periodic_orbits`` and ``simulate``: rigid bar, 8 and 64 modes, the wave law) in a fresh process
 with an empty numba cache (``NUMBA_CACHE_DIR`` set to a new folder), as on a new machine: CPU time
 of the call, and with ``--kernels`` the slowest kernels to compile (each without its callees'
@@ -136,7 +136,7 @@ def bench_chunk(quick):
     n = 400 * len(chunks)
     row("sweep orbits task, rigid: compute_chunk", n / base, n / new, "points/s", ">= 100,000 /s per core",
         higher_is_better=True)
-    # issue 20: 4,000-point chunks over the whole 200 x 200 grid (its ten chunks: the points without
+    # 4,000-point chunks over the whole 200 x 200 grid (its ten chunks: the points without
     # an orbit are cheap, so one chunk alone flatters), the numpy closed forms (the reference of
     # "orbits.rigid_arrays", what a sweep below 100,000 points takes) against the compiled loop over
     # the points (what a larger sweep takes), at d = 0 and d = 0.05
@@ -161,7 +161,7 @@ def bench_chunk(quick):
             tasks.COMPILED_CLOSED_FORMS_FROM = small
         n = spec.n_points
         row(f"compute_chunk, 4,000 points, d = {d}: numpy vs compiled", n / base, n / new, "points/s",
-            ">= 1,000,000 /s (issue 20)", higher_is_better=True)
+            ">= 1,000,000 /s", higher_is_better=True)
 
 
 def bench_modes(rep):
@@ -243,7 +243,7 @@ def bench_simulate(quick):
         finally:
             sim._core_for = fresh
         row(f"simulate, {n_modes} modes, one harmonic", base, n / new, "impacts/s",
-            ">= 2 M/s rigid, 2x at 8, 64" if n_modes == 0 else ">= 2x the issue's baseline",
+            ">= 2 M/s rigid, 2x at 8, 64" if n_modes == 0 else ">= 2x the baseline",
             higher_is_better=True)
         row(f"simulate, {n_modes} modes, a 100-impact run", base100 * 1e6, new100 * 1e6, "us",
             "fixed cost <= 50 us")
@@ -252,7 +252,7 @@ def bench_simulate(quick):
             peer1 = cpu_median(lambda q=q, v=v, t0=t0: minimal_loop_rigid(q[0], v[0], t0, t0 + 1e7, 1, 1.2,
                                                                           1.0, 0.02, 0.8), 201)
             row("simulate, rigid, a 1-impact run: vs a minimal loop", peer1 * 1e6, new1 * 1e6, "us",
-                "<= 2x the peer (issue 20)")
+                "<= 2x the peer")
 
 
 _USER_LEVEL = r"""
@@ -300,7 +300,7 @@ for N, n in ((0, 20000), (8, 5000), (64, 1000)):
         peer = lambda k: minimal_loop_rigid(q[0], v[0], o.phase, o.phase + 1e7, k, 1.2, 1.0, 0.02, 0.8)
         out["peer: compiled minimal loop, rigid, 1-impact run (us)"] = cpu(lambda: peer(1), 101) * 1e6
         out["peer: compiled minimal loop, rigid, 100-impact run (us)"] = cpu(lambda: peer(100), 51) * 1e6
-        # issue 41: a run over one load period asked by t_end (from mid-flight: one impact in it), with
+        # a run over one load period asked by t_end (from mid-flight: one impact in it), with
         # and without max_impacts; a run over 2e5 periods; each beside its peer in this process
         t1 = o.phase + np.pi
         mid = simulate(model, load, st, t1, t0=o.phase).final_state
@@ -359,13 +359,13 @@ print(json.dumps(out))
 """
 
 
-#: the goals of issue 41 the --against table marks (each ratio taken in one process, both calls
-#: alternated)
+#: the goals for simulate's short runs that the --against table marks (each ratio taken in one
+#: process, both calls alternated)
 GOALS = {
-    "simulate / peer, rigid, one load period by t_end (x)": "<= 2 (issue 41)",
-    "simulate / peer, rigid, one load period by t_end, max_impacts=10 (x)": "<= 2 (issue 41)",
-    "simulate / peer, rigid, 1-impact run by max_impacts=1 (x)": "<= 2 (issues 20, 41)",
-    "simulate / peer, rigid, 2e5 load periods (x impacts/s)": ">= 1 (issue 41)",
+    "simulate / peer, rigid, one load period by t_end (x)": "<= 2",
+    "simulate / peer, rigid, one load period by t_end, max_impacts=10 (x)": "<= 2",
+    "simulate / peer, rigid, 1-impact run by max_impacts=1 (x)": "<= 2",
+    "simulate / peer, rigid, 2e5 load periods (x impacts/s)": ">= 1",
     "simulate / kernel alone, rigid, 2e5 load periods (x impacts/s)": "(the driver's share)",
 }
 
@@ -500,7 +500,7 @@ def main(argv=None):
         against(a.against)
         return 0
     rep = 5 if a.quick else 21
-    print(f"{'task':<52} {'baseline':>12} {'new':>12} {'unit':<9} {'gain':>9}   goal (issue 11)")
+    print(f"{'task':<52} {'baseline':>12} {'new':>12} {'unit':<9} {'gain':>9}   goal")
     print("-" * 120)
     bench_rigid(rep)
     bench_chunk(a.quick)

@@ -1,4 +1,4 @@
-"""Benchmark for issue 2: ``periodic_orbits`` and the Fig. 5 boundary set, against the baseline a
+"""Benchmark of ``periodic_orbits`` and the Fig. 5 boundary set, against the baseline a
 user would otherwise write (``solve_ivp`` with impact events, run until the impact interval
 settles).
 
@@ -82,7 +82,7 @@ def main():
     a = ap.parse_args()
     rep = 5 if a.quick else 21
     load = CosineLoad(0.6, 1.0)
-    print("impactbar benchmark (issue 2): periodic_orbits with exact multipliers")
+    print("impactbar benchmark: periodic_orbits with exact multipliers")
     print(f"{'case':<44} {'median ms':>10} {'min ms':>8}")
     for n in (0, 8, 64):
         model = BarModel(5.0, 0.1, 0.5, n)

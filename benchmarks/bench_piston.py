@@ -1,4 +1,4 @@
-"""Benchmark for issue 44: the stepped piston's exact free-free modes (64 of them, goal <= 10 ms),
+"""Benchmark of the stepped piston's exact free-free modes (64 of them, goal <= 10 ms),
 side by side in the same process with the uniform piston's closed form (``BarModel.frequencies`` and
 its cosine shapes) and with the same routine on one segment, and a finite-element solution of the
 same stepped bar at the accuracy the exact one has (an independent method, for scale); and
@@ -70,7 +70,7 @@ def main():
     print(f"{'task (median CPU time)':<80} {'ms':>8}   goal")
     for name, fn in rows:
         ms = median_cpu(fn, args.repeat) * 1e3
-        goal = "<= 10 ms (issue 44)" if name.startswith("stepped piston, 3") else ""
+        goal = "<= 10 ms" if name.startswith("stepped piston, 3") else ""
         print(f"{name:<80} {ms:>8.3f}   {goal}")
     blow_rows(max(1, args.repeat // 3))
     design_rows(max(1, args.repeat // 7))
@@ -126,7 +126,7 @@ def design_rows(repeat):
             b = best[-1]
             label = (f"alpha {alpha:.4g}, {n} segment(s), {method if n > 1 else 'uniform'}: {b.evaluations} "
                      f"blows, efficiency {b.efficiency:.7f}")
-            goal = "<= 10 s (issue 44)" if n == 3 and method == "slsqp" else "baseline" if n == 1 else ""
+            goal = "<= 10 s" if n == 3 and method == "slsqp" else "baseline" if n == 1 else ""
             print(f"{label:<80} {s:>8.3f}   {goal}")
 
 

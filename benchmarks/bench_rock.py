@@ -1,16 +1,16 @@
-"""Benchmark for issue 18.
+"""Benchmark of the rod-rock law.
 
 1. One blow on a 3-segment rod with 400 cells (:func:`impactbar.single_blow`, the rod-and-rock law),
    against elwaspatid's Bacon-method characteristics on the same rod, grid and number of steps (its
    far end anechoic, no rock), the baseline, in the same run, and against the numpy loop (the
    reference of ``"rock.blow"``). Goal: <= 1 ms.
 2. A periodic orbit under the rod-rock law (``find_orbit``, 2 blows in 2 load periods, 4 modes, a rod
-   of impedance 2 on a soft rock, from a simulation), its blows exact (the default since issue 39)
+   of impedance 2 on a soft rock, from a simulation), its blows exact (the default)
    and on the lattice (``method="lattice"``, the baseline), against the wave law's orbit of the same
    bar with the same rod's restitution ``R = 1/3`` (``find_orbit``, 2 impacts in 2 periods, from a
-   simulation), the simulations outside the timing. Goals: <= 10x the wave law's; issue 39's, a rock
+   simulation), the simulations outside the timing. Goals: <= 10x the wave law's; with exact blows, a rock
    orbit with 4 modes <= 20 ms.
-3. A stepped piston under the rod-rock law (issue 44): one contact step, ``simulate`` over 100 time
+3. A stepped piston under the rod-rock law: one contact step, ``simulate`` over 100 time
    units and ``find_orbit`` (1 blow a period, from a settled simulation) of a heavy-headed piston
    (sections 1 and 2, ``SteppedPiston([0.6, 0.4], [1, 2])``), against the uniform piston of the same
    mass, exact and on the lattice, in the same run.

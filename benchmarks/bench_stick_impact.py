@@ -1,4 +1,4 @@
-"""Benchmark for issue 13: a 4-mode stick-impact run (chatter, contact, undone releases) must cost
+"""Benchmark of stick-impact runs: a 4-mode stick-impact run (chatter, contact, undone releases) must cost
 time linear in its length. Baseline in the same run: the previous ``_SegmentLog.truncate``, which
 rescanned every stored chatter state on each undone release (quadratic in the run's length).
 

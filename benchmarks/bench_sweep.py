@@ -1,4 +1,4 @@
-"""Benchmark for issue 4: grid points per second of ``impactbar sweep`` on a local
+"""Benchmark of the grid points per second of ``impactbar sweep`` on a local
 ``dask.distributed`` cluster of 1 and of 2 worker processes, side by side.
 
 - ``orbits``: the rigid bar (``n_modes = 0``) under ``p0 + cos t``, a 200 x 200 grid over ``R`` and
@@ -19,7 +19,7 @@ or threads, store creation, every chunk, exit) at the grid sizes of ``--grids`` 
 632, about 40,000 and 400,000 points), with the spec's 400-point chunks and with the default
 chunking; with ``--against SRC`` the package tree ``SRC`` (e.g. ``git archive <commit> src | tar -x
 -C /tmp/old``) is timed alternately with this one, in the same run. Each cell's runs alternate with
-the vectorised peer's (issue 20): a fresh process that computes the same grid by the numpy closed
+the vectorised peer's: a fresh process that computes the same grid by the numpy closed
 forms (the reference of ``"orbits.rigid_arrays"``) in one call over all its points and saves the
 sweep's variables with ``np.savez``; the last column is the peer's wall time over this tree's.
 """
@@ -94,7 +94,7 @@ def process_seconds(spec_file: Path, out: Path, src: str, workers: int) -> float
     return time.perf_counter() - t
 
 
-#: the vectorised peer (issue 20): one process that computes the same grid's orbits by the numpy
+#: the vectorised peer: one process that computes the same grid's orbits by the numpy
 #: closed forms in one call over all its points and saves the sweep's variables with ``np.savez``
 _PEER = """
 import sys

@@ -1,4 +1,4 @@
-"""Benchmark for issue 9: ``periodic_orbits`` and ``simulate`` under the wave impact law
+"""Benchmark of ``periodic_orbits`` and ``simulate`` under the wave impact law
 (``BarModel(impact="wave")``, the contact with a long rod solved by characteristics) against the
 paper's law (eq. 10), the baseline, in the same run. Goal: within 2x.
 

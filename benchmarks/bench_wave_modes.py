@@ -1,4 +1,4 @@
-"""Benchmark for issue 24: ``periodic_orbits`` under the wave law against the paper's law at
+"""Benchmark of ``periodic_orbits`` under the wave law against the paper's law at
 ``n_modes`` from 8 to 1024, side by side in the same process (goal: the wave law within 2x the
 paper law at every ``n_modes``), and on the two presets.
 

@@ -1,9 +1,9 @@
-"""Rerun of the fuzzing campaign of issue 13, scaled down: every category, with counts.
+"""Rerun of the fuzzing campaign, scaled down: every category, with counts.
 
 Categories: constructor inputs, ``periodic_orbits`` calls (NaN, non-ValueError, the rigid-mode
 impact velocity ``2 pi p0 / (1 + R)``, scale invariance of every verdict under ``load * L``),
 ``simulate`` runs (energy balance, penetration, non-ValueError, time), grazing runs against scipy,
-SIGKILL and damage trials of sweeps, physical configurations and unit strings; and (issue 24) the
+SIGKILL and damage trials of sweeps, physical configurations and unit strings; and the
 newer paths: the wave law (``periodic_orbits``, ``find_orbit``, ``simulate`` from 0 to 256 modes
 and stiff bars), ``find_orbit`` with bad and extreme sizes, guesses, ``tol`` and ``max_iter``,
 ``continue_orbit`` with bad parameters and settings, sweep specs with bad values in every key,
@@ -601,7 +601,7 @@ def drive_calls(rng, n, slow):
 
 
 # --------------------------------------------------------------------------------------------------
-# issue 42: the newer paths with invariants that do not trust the library
+# the rod-rock blow, the valve and sustained contact, with invariants that do not trust the library
 # --------------------------------------------------------------------------------------------------
 def _one_line(fn):
     """``fn`` with a refusal that spans lines counted as bad (an error is one line)."""

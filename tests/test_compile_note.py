@@ -1,4 +1,4 @@
-"""The one-line note on stderr while numba compiles impactbar's kernels (issue 43):
+"""The one-line note on stderr while numba compiles impactbar's kernels:
 ``impactbar._shared.compiling``. The command line prints it under the subcommand's name
 (``compile_note``), the Python API through the process-wide watch the kernels' module starts
 (``watch_compiles``); one line per process, only while kernels compile, never breaking a tqdm

@@ -1,4 +1,4 @@
-"""The guarantees of issue 13 (no wrong answer, no crash, no silent loss), each against an independent
+"""The package's guarantees (no wrong answer, no crash, no silent loss), each against an independent
 reference: scipy ``solve_ivp`` (tests/modal_reference.py), the rigid-mode impact velocity
 ``2 pi p0 / (1 + R)`` (theory §4), closed forms, and the model's linearity in the load (every verdict
 is invariant under ``load * L``). The property-based part (hypothesis) states them for random inputs

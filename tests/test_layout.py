@@ -91,7 +91,7 @@ SOLVERS = ("impactbar.orbits", "impactbar.simulation", "impactbar.continuation")
 
 
 def test_laws_and_the_model_import_no_solver():
-    """Each contact law is a package below the solvers (issue 37): no module of ``impactbar.laws``,
+    """Each contact law is a package below the solvers: no module of ``impactbar.laws``,
     nor ``impactbar.model`` (which holds a law), reaches the orbit solvers, the simulator or the
     continuation, directly or through another module; so following a model through
     ``periodic_orbits`` never climbs back up a layer."""

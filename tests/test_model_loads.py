@@ -133,7 +133,7 @@ def test_b_integral_at_denormal_damping(d):
 @pytest.mark.parametrize("impact", ["paper", "wave"])
 def test_scales_that_overflow_are_refused_at_the_boundary(impact):
     """s with s pi (the rigid bar's scale) not finite, or d with d**2 not finite, is refused with a
-    ValueError naming the parameter; the largest accepted values give finite orbits (issue 21.6)."""
+    ValueError naming the parameter; the largest accepted values give finite orbits."""
     from impactbar import CosineLoad, periodic_orbits
 
     top = float(np.finfo(float).max)

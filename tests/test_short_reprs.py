@@ -1,4 +1,4 @@
-"""Short reprs of every result type (issue 43): the kind, the key numbers and the stability in one
+"""Short reprs of every result type: the kind, the key numbers and the stability in one
 or a few lines that do not grow with the data; the arrays on request (``to_dict`` and the
 attributes)."""
 

@@ -104,12 +104,12 @@ def test_drifter_command_prints_the_operating_point(source, tmp_path, capsys):
 
 
 def test_drifter_command_takes_only_the_documented_presets(capsys):
-    """The preset's former, undocumented name is not a choice of ``--preset``."""
+    """An undocumented preset name (an old one, say) is not a choice of ``--preset``."""
     with pytest.raises(SystemExit) as exc:
-        main(["drifter", "--preset", "drifter-issue19"])
+        main(["drifter", "--preset", "drifter-old"])
     assert exc.value.code == 2
     err = capsys.readouterr().err
-    assert "invalid choice: 'drifter-issue19'" in err and "hydraulic-drifter" in err
+    assert "invalid choice: 'drifter-old'" in err and "hydraulic-drifter" in err
 
 
 def _help(capsys) -> str:

@@ -1,4 +1,4 @@
-"""One-line errors from every subcommand, checked before any computing (issues 21.7 and 24): output
+"""One-line errors from every subcommand, checked before any computing: output
 locations that cannot be written, sizes too large to draw, missing extras, Ctrl-C, a closed or full
 stdout, unhashable values in a sweep spec. Exit status 2 for bad input, 1 for a failed write or a
 missing extra, 141 for a closed pipe, 130 for Ctrl-C."""
@@ -254,7 +254,7 @@ def test_paper_writes_the_format_and_dpi_asked(tmp_path, monkeypatch, capsys):
 
 def test_simulate_drives_a_progress_bar_on_a_terminal_only(monkeypatch, capsys, tmp_path):
     """``impactbar simulate`` hands the library a progress callback (a bar on stderr with an
-    estimate) only on a terminal and without --quiet (issue 24)."""
+    estimate) only on a terminal and without --quiet."""
     seen = {}
 
     def fake(hammer, *, periods, gap_m, progress=None):

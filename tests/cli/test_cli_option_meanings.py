@@ -1,5 +1,5 @@
 """One meaning and one default per option name across the subcommands, the old spellings kept with
-a warning, and the table of the CLI page that documents them (issue 21 item 13)."""
+a warning, and the table of the CLI page that documents them."""
 
 import argparse
 import re
@@ -141,7 +141,7 @@ class _Tty:
 
 
 def test_continue_shows_stages_and_simulate_a_bar_on_a_terminal_only(monkeypatch, tmp_path, capsys):
-    """Issue 21 item 14: ``continue`` and ``simulate`` name the stage running and the time elapsed
+    """``continue`` and ``simulate`` name the stage running and the time elapsed
     on a terminal's stderr; nothing with ``--quiet`` or off a terminal."""
     import sys
 
@@ -158,8 +158,8 @@ def test_continue_shows_stages_and_simulate_a_bar_on_a_terminal_only(monkeypatch
     tty.buf = type(tty.buf)()
     assert main([*argv, "--quiet"]) == 0
     assert tty.buf.getvalue() == ""
-    # simulate's bar counts load periods with an estimate (the library's progress callback, issue
-    # 24), with the run shortened
+    # simulate's bar counts load periods with an estimate (the library's progress callback),
+    # with the run shortened
     import impactbar.physical as ph
 
     real = ph.simulate

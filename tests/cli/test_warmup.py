@@ -1,4 +1,4 @@
-"""``impactbar warmup`` (issue 20): after it, a new process's first calls compile nothing."""
+"""``impactbar warmup``: after it, a new process's first calls compile nothing."""
 
 import os
 import subprocess

@@ -1,4 +1,4 @@
-"""Issue 23, cases 1 and 2: no event where no multiplier crosses its critical value (a sign change
+"""No event where no multiplier crosses its critical value (a sign change
 of det(I -+ P) through the pole of the saltation term at a grazing impact), and branch switching
 at a period doubling that returns a doubled branch, never the one-impact orbit traversed twice."""
 
@@ -128,7 +128,7 @@ def test_events_are_critical_and_scale_free(s, R, n_modes, impact):
 
 @pytest.mark.parametrize("path", ["fast", "reference"])
 def test_no_branch_point_at_the_start_of_a_doubled_branch(path):
-    """Issue 20: the branch born at a period doubling starts on the parent's doubling, where the
+    """The branch born at a period doubling starts on the parent's doubling, where the
     doubled orbit's multiplier is (-1)^2 = +1 and det(I - P) is zero up to rounding; its sign there
     is no crossing. Before the fix, the rigid bar's float path (same orbits to 1e-14) reported a
     branch point at the start, p0 = 0.75684712062, where the general path's corrector failed by

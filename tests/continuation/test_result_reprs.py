@@ -1,4 +1,4 @@
-"""Short reprs of the big results and a notebook view of a branch (issue 21 item 14)."""
+"""Short reprs of the big results and a notebook view of a branch."""
 
 import math
 

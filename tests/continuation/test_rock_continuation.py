@@ -115,7 +115,7 @@ def test_rock_parameter_names_are_checked(case):
 
 def test_continuation_in_a_segments_length_on_the_exact_blows(case):
     """The exact blows carry each segment as a delay line of its own travel time, so an orbit is
-    followed in a segment's length (issue 39); the branch's end is the orbit found afresh at that
+    followed in a segment's length; the branch's end is the orbit found afresh at that
     length (1e-8), the rod's length changed alone."""
     branch = ib.continue_orbit(case, "segment0.length", 2.37, max_points=40)
     assert branch.status == "reached"

@@ -1,5 +1,5 @@
 """Every public function and class of the top-level ``impactbar`` namespace shows an example that
-runs (issue 21 item 10; the examples run as doctests with the suite)."""
+runs (the examples run as doctests with the suite)."""
 
 import inspect
 

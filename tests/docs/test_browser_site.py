@@ -1,4 +1,4 @@
-"""Every page of the built documentation, as a reader's browser shows it (issue 43): each page is
+"""Every page of the built documentation, as a reader's browser shows it: each page is
 opened in headless Chromium (one browser, a tab per page), offline, until MathJax has typeset it, and the
 rendered page must show
 

@@ -1,6 +1,6 @@
-"""The built documentation works without a network (issue 21.9): no page loads a script, a style
+"""The built documentation works without a network: no page loads a script, a style
 sheet or a font from another host, and the equations are typeset by the MathJax shipped in the site;
-and what the pages show is whole (issue 21.11): API summaries not cut at "(eq.", no stray
+and what the pages show is whole: API summaries not cut at "(eq.", no stray
 ``<Axes ...>`` outputs in the gallery.
 
 Runs on a built site: ``docs/_build/html`` (where .ci/run builds it) or the folder named by the

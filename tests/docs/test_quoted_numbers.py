@@ -1,6 +1,6 @@
 """The headline numbers README.md and the theory page quote ("What we found", "Findings against the
 paper") are recomputed from the library: each quoted figure must be the computed one to the digits
-quoted (issue 21.3: Fig. 6's edges were once quoted at the grid point R = 0.5087 instead of R = 0.5)."""
+quoted (Fig. 6's edges were once quoted at the grid point R = 0.5087 instead of R = 0.5)."""
 
 import math
 import re

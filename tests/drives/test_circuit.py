@@ -1,4 +1,4 @@
-"""The drifter's oil circuit as a drive with state (issue 38): ``HydraulicCircuitDrive``.
+"""The drifter's oil circuit as a drive with state: ``HydraulicCircuitDrive``.
 
 Checked against independent numbers:
 

@@ -1,5 +1,5 @@
 """A period doubling of the oil-circuit drifter and branch switching onto its period-2 motions
-(issue 38, theory §11).
+(theory §11).
 
 The preset ``circuit-drifter``'s circuit unchanged, its piston flexible (two modes), undamped, on a
 stop of restitution 0.8, followed in the wave-speed ratio ``s``: the most negative multiplier passes

@@ -1,4 +1,4 @@
-"""The oil circuit under the wave and the rod-rock laws (issue 38): each blow solved with the circuit's
+"""The oil circuit under the wave and the rod-rock laws: each blow solved with the circuit's
 state (theory §11, "The coupled blow").
 
 Checked against independent numbers:

@@ -1,4 +1,4 @@
-"""Bounded cost of a flexible bar's orbit under the position-switched drive (issue 42): the
+"""Bounded cost of a flexible bar's orbit under the position-switched drive: the
 admissibility of a very long flight (a drive force or switch far from the bar's scale) is checked by
 an energy bound that skips the spans where the end cannot reach the stop, and samples only the rest.
 Before, ``find_orbit`` sampled every flight at ``8 s N T`` points: 1.5e9 for ``stroke = 1e-5``,

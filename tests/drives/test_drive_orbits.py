@@ -1,4 +1,4 @@
-"""Every one-impact orbit of the valve (issue 40): ``periodic_orbits(model, drive)`` against a
+"""Every one-impact orbit of the valve: ``periodic_orbits(model, drive)`` against a
 brute-force scan of an independent formulation, the default guess chain of ``find_orbit`` and a
 simulated run of the flexible bar as a guess.
 
@@ -25,7 +25,8 @@ from impactbar import (
     simulate,
 )
 
-ISSUE_CASES = [(BarModel(3, 0.1, 0.6, 6), PositionSwitchedDrive(1, 0.5, 0.15)),
+#: two cases of the valve: 6 modes without a delay, 8 modes with one
+VALVE_CASES = [(BarModel(3, 0.1, 0.6, 6), PositionSwitchedDrive(1, 0.5, 0.15)),
                (BarModel(10, 0.02, 0.3, 8), PositionSwitchedDrive(2, 1, 0.2, delay=0.05))]
 
 
@@ -131,7 +132,7 @@ def test_every_orbit_is_listed_against_a_brute_force_scan(model, drive, window, 
     assert [o.period for o in orbits] == sorted(o.period for o in orbits)
 
 
-@pytest.mark.parametrize("model, drive", ISSUE_CASES)
+@pytest.mark.parametrize("model, drive", VALVE_CASES)
 def test_the_stable_orbit_from_the_default_and_from_a_run(model, drive):
     orbits = periodic_orbits(model, drive)
     stable = [o for o in orbits if o.stable]
@@ -156,9 +157,9 @@ def test_the_stable_orbit_from_the_default_and_from_a_run(model, drive):
 
 
 def test_a_flexible_run_from_rest_is_a_guess():
-    # issue 40, case 1: the run from rest settles on the stable orbit (its multiplier ~ -0.95); on
+    # the first of VALVE_CASES: the run from rest settles on the stable orbit (its multiplier ~ -0.95); on
     # the previous main a flexible run was refused ("read for the rigid bar only")
-    model, drive = ISSUE_CASES[0]
+    model, drive = VALVE_CASES[0]
     run = simulate(model, drive, InitialState.rigid(0.0, 0.0, n_modes=model.n_modes), 60.0)
     orbit = find_orbit(model, drive, guess=run)
     assert orbit.stable and orbit.period == pytest.approx(1.6092428304821, abs=1e-12)
@@ -171,17 +172,17 @@ def test_the_default_chain_says_what_it_tried():
     with pytest.raises(ValueError, match=r"found no periodic orbit.*tried the motion from rest on the stop.*"
                                          r"the search of every orbit: none for this drive"):
         find_orbit(BarModel(10, 0.1, 0.5, 0), Push(-1.0))  # away from the stop: no orbit
-    # the valve's first start, the rigid piston's orbit, fails on the issue's first case (the
+    # the valve's first start, the rigid piston's orbit, fails on the first of VALVE_CASES (the
     # default found its orbit above by the chain's next start, the run from rest)
     from impactbar.orbits.switched import orbit_problem
 
-    problem = orbit_problem(*ISSUE_CASES[0])
+    problem = orbit_problem(*VALVE_CASES[0])
     with pytest.raises(ValueError, match="did not converge"):
         problem.solve(problem.initial(None, 1e-13, 50), 1e-13, 50)
 
 
 def test_window_is_checked():
-    model, drive = ISSUE_CASES[0]
+    model, drive = VALVE_CASES[0]
     for bad in [(2.0, 1.0), (0.0, 1.0), (1.0, np.inf), "wide", (1.0,)]:
         with pytest.raises(ValueError, match="window"):
             periodic_orbits(model, drive, window=bad)
@@ -192,12 +193,12 @@ def test_window_is_checked():
 
 
 def test_orbit_list_tables():
-    model, drive = ISSUE_CASES[0]
+    model, drive = VALVE_CASES[0]
     frame = periodic_orbits(model, drive).to_dataframe()
     assert len(frame) == 7 and frame["stable"].sum() == 1
 
 
-@pytest.mark.parametrize("model, drive", [*ISSUE_CASES, (BarModel(5, 0.05, 0.4, 4),
+@pytest.mark.parametrize("model, drive", [*VALVE_CASES, (BarModel(5, 0.05, 0.4, 4),
                                                          PositionSwitchedDrive(1, 1, 0.3, delay_out=0.1,
                                                                                delay_in=0.02))])
 def test_reduced_equations_are_the_segment_problem(model, drive, rng):
@@ -243,11 +244,11 @@ def test_undamped_resonances_are_reported():
 
 
 def test_the_default_chain_skips_a_search_it_cannot_afford(monkeypatch):
-    """A fuzz case (issue 42's harness): strokes of 0.03 against a return of 732, a period near
+    """A fuzz case (``benchmarks/fuzz_campaign.py``): strokes of 0.03 against a return of 732, a period near
     2000, and one mode at s = 8.3: the default window held about 74,000 resonances and the chain's
     last step, the search of every orbit, took minutes. Past ``MAX_DEFAULT_RESONANCES`` it is
-    skipped (find_orbit answers from its first steps or says what it tried); the issue's second
-    case (2,340 in its window) still reaches the search."""
+    skipped (find_orbit answers from its first steps or says what it tried); the second of
+    ``VALVE_CASES`` (2,340 in its window) still reaches the search."""
     import impactbar.orbits.switched_search as ss
 
     calls = []
@@ -257,7 +258,7 @@ def test_the_default_chain_skips_a_search_it_cannot_afford(monkeypatch):
     drive = PositionSwitchedDrive(0.03426521879195014, 731.6706397390018, 1.63858368445898)
     orbit = find_orbit(model, drive)
     assert calls == [] and np.isfinite(orbit.period)
-    model, drive = ISSUE_CASES[1]
+    model, drive = VALVE_CASES[1]
     assert find_orbit(model, drive).stable and calls == [1]
 
 
@@ -270,7 +271,7 @@ def test_the_orbit_solvers_choose_the_valve_problem_from_their_table():
 
     assert "orbit_problem" not in vars(PositionSwitchedDrive)
     assert ORBIT_PROBLEMS[PositionSwitchedDrive] is ValveProblem
-    model, drive = ISSUE_CASES[1]
+    model, drive = VALVE_CASES[1]
     assert type(orbit_problem(model, drive, 2)) is ValveProblem
 
     class Plain(PositionSwitchedDrive):

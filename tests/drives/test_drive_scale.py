@@ -1,4 +1,4 @@
-"""The position-switched drive's orbits do not depend on its scale (issue 42's fuzzing): every force
+"""The position-switched drive's orbits do not depend on its scale (a fuzz case): every force
 and switch position scaled by a power of two (exact in floating point) gives the same period and
 admissibility and velocities scaled by it. Newton's stopping test was relative to max(1, |X|), the
 states scaling and the flight times not; the admissibility threshold was 1e-12 max(1, |z|); and a

@@ -1,8 +1,9 @@
-"""Issue 40: a flexible bar's orbit under the valve from what a user has. A settled run of
+"""A flexible bar's orbit under the valve from what a user has. A settled run of
 ``simulate`` is read as the guess (its flights' modal states after the impacts; it was refused, "read
 for the rigid bar only"), and the default guess goes on from the rigid orbit lifted to the modes to
-a run from rest when Newton fails there (it did not converge in 50 steps on the issue's first case)
-or reaches an orbit that is not stable (then the search of every orbit: tests/drives/test_drive_orbits.py)."""
+a run from rest when Newton fails there (it did not converge in 50 steps on the first of the valve
+cases of tests/drives/test_drive_orbits.py) or reaches an orbit that is not stable (then the search
+of every orbit: tests/drives/test_drive_orbits.py)."""
 
 import numpy as np
 import pytest

@@ -1,4 +1,4 @@
-"""A new drive needs nothing but the :class:`impactbar.Drive` interface (issue 37's "done when"): two
+"""A new drive needs nothing but the :class:`impactbar.Drive` interface: two
 drives are defined in this file alone, and simulate, find_orbit and continue_orbit take them.
 
 - ``TwoLevel``: a force constant between events (no state of its own), ``+stroke`` until an impact,

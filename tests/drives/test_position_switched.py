@@ -2,7 +2,7 @@
 position, an autonomous system whose period is an output.
 
 Independent checks: the rigid piston's orbit in closed form (stroke and return accelerations, switch
-out at x1, switch to return at impact), the SI drifter example of issue 19 done by hand, simulate
+out at x1, switch to return at impact), the SI drifter example done by hand, simulate
 (the compiled event search plus the valve's closed-form crossings) against find_orbit (Newton on the
 segment problem), the multipliers against finite differences of the simulated Poincare map, and the
 time-periodic square wave recovered when the switch instants are those of the square wave.
@@ -30,7 +30,7 @@ from impactbar.simulation import InitialState
 
 
 def _closed_form(a_s, a_r, x1, R):
-    """Issue 19's rigid piston: impact velocity, period, multiplier (undamped, no delay)."""
+    """The rigid piston: impact velocity, period, multiplier (undamped, no delay)."""
     v = math.sqrt(2 * x1 * (a_s + a_r) / (1 - R * R))
     u1 = math.sqrt(R * R * v * v + 2 * a_r * x1)
     return v, (u1 - R * v) / a_r + (u1 + v) / a_s, R * R
@@ -54,7 +54,7 @@ def test_drive_is_frozen_and_refused_by_the_time_periodic_machinery():
     with pytest.raises(AttributeError):
         drive.stroke = 2.0
     model = BarModel(s=10.0, d=0.0, R=0.5, n_modes=0)
-    listed = periodic_orbits(model, drive)  # every one-impact orbit in a window of periods (issue 40)
+    listed = periodic_orbits(model, drive)  # every one-impact orbit in a window of periods
     assert any(abs(o.period - find_orbit(model, drive).period) < 1e-12 for o in listed)
     assert not hasattr(drive, "harmonics")  # not a function of time: the loads' solvers never see it
     with pytest.raises(ValueError, match="not periodic in time"):
@@ -102,7 +102,7 @@ def test_rigid_orbit_matches_the_closed_form(a_s, a_r, x1, R):
     assert o.impact_energy == pytest.approx(0.5 * v * v, rel=1e-10)
 
 
-def test_si_drifter_example_of_issue_19():
+def test_si_drifter_example_by_hand():
     """5.6 kg piston, 5.6 kN each way, switch at 21.5 mm, R = 0.215. Scales: length L = 21.5 mm (so
     x1 = 1), mass m = 5.6 kg, time 1/Omega = sqrt(L m / F) (so stroke = ret = F / (m L Omega^2) = 1)."""
     m, F, L, R = 5.6, 5.6e3, 0.0215, 0.215

@@ -1,4 +1,4 @@
-"""The start of Newton for a drive with state (issue 38's speed): the motion from rest followed at a
+"""The start of Newton for a drive with state: the motion from rest followed at a
 loose tolerance, and the slow supply mode extrapolated away (Aitken's delta-squared on the Poincare
 map's iterates) instead of followed for a hundred impacts."""
 

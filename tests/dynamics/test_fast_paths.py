@@ -1,4 +1,4 @@
-"""The fast paths of issue 11 against the general paths they replace (same orbits, flags and
+"""The fast paths against the general paths they replace (same orbits, flags and
 multipliers to 1e-10 on random parameters): the rigid bar's closed forms, the structured eigenvalue
 method for the multipliers, the vectorised sweep chunk."""
 

@@ -58,7 +58,7 @@ def test_reference_uniform_piston_closed_form():
 
 
 # ---------------------------------------------------------------- stable orbits vs the reference --
-CASES = {  # the stable orbits (d = 0: the reference has no damping)
+CASES = {  # stable orbits (d = 0: the reference has no damping)
     "s10": (10.0, 0.5, CosineLoad(0.8, 1.0)),
     "s3": (3.0, 0.3, CosineLoad(0.55, 1.0)),
 }

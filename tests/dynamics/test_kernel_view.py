@@ -89,8 +89,8 @@ def test_load_arrays_are_read_only(cls):
             a[...] = 0.0
 
 
-def test_issue_reproducer_pk_assignment_refused_and_each_load_simulated_as_itself():
-    """The issue's case: ``l.pk = 3.0`` was accepted while the simulator kept integrating pk = 1 (a
+def test_pk_assignment_refused_and_each_load_simulated_as_itself():
+    """A reported case: ``l.pk = 3.0`` was accepted while the simulator kept integrating pk = 1 (a
     cache keyed by ``id(load)``). It is refused now, and a fresh CosineLoad(0.5, 3.0) simulated after
     CosineLoad(0.5, 1.0) gets its own answer, equal to a run in a clean cache."""
     S = importlib.import_module("impactbar.simulation.simulate")
@@ -205,7 +205,7 @@ def test_slow_to_compile_finds_a_planted_use():
 
 def test_no_compiled_kernel_uses_what_is_slow_to_compile():
     """A first run compiles every kernel it calls; numba's own np.sort, np.max, np.min and array
-    slice assignment add seconds to it (issue 20), so the kernels write those few loops out."""
+    slice assignment add seconds to it, so the kernels write those few loops out."""
     found = {name: _slow_to_compile(d.py_func) for name, d in _dispatchers()}
     assert {name: lines for name, lines in found.items() if lines} == {}
 

@@ -1,4 +1,4 @@
-"""Tiered first calls (issue 41, ``impactbar.dynamics._tiers``): with an empty numba cache a first
+"""Tiered first calls (``impactbar.dynamics._tiers``): with an empty numba cache a first
 call runs the kernels' Python source while a child process compiles them, and gives the machine
 code's results to the bit; later calls take the machine code; functions not of impactbar's are
 numba's as before; a twin that meets an overflow Python refuses hands the call to the machine code

@@ -1,4 +1,4 @@
-"""The wave law's window at many modes (issue 24): the drive's moments in closed form against the
+"""The wave law's window at many modes: the drive's moments in closed form against the
 compiled moments they replace from 48 modes on (Gauss-Legendre quadrature, or for a
 piecewise-constant load the kernel's own closed form in product form, also checked against quad),
 the contact scan by type-I DCT/DST against the dense modal sums, and the admissibility search's

@@ -1,4 +1,4 @@
-"""An independent solution of the rod-rock blow (issue 39), to check the package's exact solver.
+"""An independent solution of the rod-rock blow, to check the package's exact solver.
 
 It shares no code with :mod:`impactbar.laws.rodrock.exact` and its kernels, and is built otherwise:
 
@@ -28,7 +28,7 @@ It shares no code with :mod:`impactbar.laws.rodrock.exact` and its kernels, and 
 
 Units are the exact solver's: travel times, impedances, the rock's stiffnesses, the bit's mass and the
 feed as :func:`impactbar.laws.rodrock.exact.exact_blow` takes them, a rigid unstressed piston at ``V``.
-:func:`reference_blow` returns a :class:`Reference` with the quantities the issue names, measured as
+:func:`reference_blow` returns a :class:`Reference` with the blow's quantities the tests compare, measured as
 the exact solver measures them (its conventions with a feed: ``advance`` from ``p = f/k``, the
 loading episodes from there, a rod junction's force above the feed's static ``f``, the bit's force
 total).

@@ -1,7 +1,7 @@
 """The developer page's worked example (docs/developers.md includes ``VelocityRestitution`` from
 this file): a law added as one class plus one table entry runs through the simulator, the orbit
 solvers (``find_orbit``, and ``periodic_orbits`` by Newton's method from guesses), the continuation
-and the sweeps, checked against closed forms of the rigid bar (issue 37: nothing outside this file
+and the sweeps, checked against closed forms of the rigid bar (nothing outside this file
 changes for it)."""
 
 import math
@@ -128,7 +128,7 @@ def _closed_form(law, model, p0, pk):
 
 
 def test_a_law_added_in_this_file_reaches_the_orbits_continuation_and_sweeps(monkeypatch, tmp_path):
-    """Issue 37: the law above, registered by name and nothing else changed, reaches
+    """The law above, registered by name and nothing else changed, reaches
     ``periodic_orbits`` (by Newton's method from guesses: it has no phase equation),
     ``continue_orbit`` (in the load's ``p0`` and in its own ``w_ref``) and a sweep, each checked
     against the rigid bar's closed form (:func:`_closed_form`)."""

@@ -1,4 +1,4 @@
-"""The exact blow's break points and its pool (issue 39): arrivals equal but for rounding are one
+"""The exact blow's break points and its pool: arrivals equal but for rounding are one
 break point, and a blow whose pieces outgrow their memory bound says what it measured.
 
 A wave that reaches a junction along two paths whose travel times were summed in different orders

@@ -1,9 +1,9 @@
-"""The exact blow (issue 39) against an independent solution of the same blow.
+"""The exact blow against an independent solution of the same blow.
 
 ``tests/laws/_reference_blow.py`` shares no code with :mod:`impactbar.laws.rodrock.exact`: its waves
 are piecewise Chebyshev interpolants carried by delay lines, the bit's equation is solved by
 Duhamel's integral on graded Gauss-Legendre panels, its switches are roots of colleague matrices.
-The two agree to 1e-14 on the issue's rods (efficiency, work on the rock, penetrations, rebound
+The two agree to 1e-14 on the rods of ``CASES`` (efficiency, work on the rock, penetrations, rebound
 velocity, the peak forces at every junction and at the bit and their times, the loading episodes);
 the tests ask 1e-9. With a feed force the reference carries the total waves (the rod statically
 compressed, the feed acting on the shank) where the exact solver carries the waves above the static
@@ -30,7 +30,7 @@ def _first_negative(B, N, lam, BIN, L, stack, D, t0):
 #: (piston times, piston impedances, rod times, rod impedances, k, k_u, bit mass): the exact
 #: solver's units, the piston of impedance 1 and crossing time 1 unless stepped
 CASES = {
-    # the issue's rods: alpha = 2 k T_p / Z_p (Lundberg's, the piston's round trip), gamma = k_u / k
+    # rods on rock: alpha = 2 k T_p / Z_p (Lundberg's, the piston's round trip), gamma = k_u / k
     "uniform rod of the piston's length, alpha 2, gamma 5": ([1.0], [1.0], [1.0], [1.0], 1.0, 5.0, 0.0),
     "three segments, alpha 1, gamma 2": ([1.0], [1.0], [1.0, 0.5, 2.0], [1.0, 0.5, 1.0], 0.5, 1.0, 0.0),
     "incommensurate segments": ([1.0], [1.0], [math.sqrt(2), math.pi / 2], [0.8, 1.3], 0.7, 7.0, 0.0),
@@ -151,7 +151,7 @@ def test_past_may_yield_a_stepped_piston_blow_yields_again_within_the_bound():
 
 
 def test_a_stiff_unloading_on_a_long_soft_rod_is_the_independent_solution():
-    """The issue's 4-long rod of impedance 0.4 (alpha 0.8, gamma 1e6): two loadings, a spike of
+    """A 4-long rod of impedance 0.4 (alpha 0.8, gamma 1e6): two loadings, a spike of
     width ``Z/k_u = 1e-6`` at each unloading. The reference resolves time on the blow's absolute
     clock, so a value on the spike is known to its slope times a few ulps of ``t`` (``16 eps t k_u/Z``:
     2e-9 at ``t = 10``): the shank's peak, the spike's top, agrees to 8e-10, the rest to 1e-13."""

@@ -1,4 +1,4 @@
-"""The exact blow map's Jacobian (issue 39; theory §4d, "the exact blow's Jacobian"): tangent runs of
+"""The exact blow map's Jacobian (theory §4d, "the exact blow's Jacobian"): tangent runs of
 the exact solver against central differences of the exact blows themselves.
 
 Central differences of the map (steps ``h`` and ``h/2`` in each state component and the impact time,

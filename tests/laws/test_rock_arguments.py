@@ -1,6 +1,6 @@
 """Every argument of :func:`impactbar.single_blow` is checked at the call, before any array is built:
 a one-line ``ValueError`` naming the parameter and its range, never another exception type, a NaN or
-an answer that silently rounds the input (issue 42)."""
+an answer that silently rounds the input."""
 
 import math
 import time
@@ -84,7 +84,7 @@ def test_a_rod_too_long_is_refused_before_its_grid_is_built():
 @pytest.mark.parametrize("name", ["impedance", "wave_speed"])
 @pytest.mark.parametrize("value", [1e308, 1e101, 9e-101, 5e-324])
 def test_segment_impedance_and_wave_speed_in_range(name, value):
-    """An impedance of 1e308 or 5e-324 gave a NaN efficiency (issue 42's fuzzing): refused by name;
+    """An impedance of 1e308 or 5e-324 gave a NaN efficiency (a fuzz case): refused by name;
     the impedance range's ends answer with finite numbers."""
     kw = {"length": 1.0, "impedance": 1.0, name: value}
     with pytest.raises(ValueError, match=rf"{name} must be in \[1e-100, 1e\+100\]"):
@@ -99,7 +99,7 @@ def test_segment_impedance_and_wave_speed_in_range(name, value):
 
 def test_a_rod_far_stiffer_than_the_piston_credits_no_rebound():
     """Impedance 2^63: the piston takes back all its energy, and the efficiency with the rebound
-    credited was 0/0, a ZeroDivisionError (issue 42's fuzzing, this very case); now 0."""
+    credited was 0/0, a ZeroDivisionError (a fuzz case, this very one); now 0."""
     law = ib.RodRock(segments=[ib.RodSegment(1.8400366552848355, 2.0**63)],
                      rock=ib.BilinearRock(k=0.10724390519846495, k_u=1.5415866541763654),
                      bit_mass=0.6983524061366733)

@@ -1,4 +1,4 @@
-"""Reproducers of the fuzz campaign (issue 24, benchmarks/fuzz_campaign.py, category rodrock): a
+"""Reproducers of the fuzz campaign (benchmarks/fuzz_campaign.py, category rodrock): a
 blow whose characteristics grid would take hours is refused up front, naming the bound."""
 
 import time

@@ -1,4 +1,4 @@
-"""The exact blow (issue 39): every wave carried as exact pieces, the end certified.
+"""The exact blow: every wave carried as exact pieces, the end certified.
 
 Checked against Lundberg's closed forms (a semi-infinite rod, or a finite one before the far end's
 reflection returns: 1e-12), against the lattice of :mod:`impactbar.laws.rodrock.blow` refined to
@@ -31,7 +31,7 @@ def _model(segs, k, k_u, s=1.0, bit_mass=0.0, feed=0.0):
     return ib.BarModel(s=s, d=0.0, R=0.0, n_modes=0, impact=law)
 
 
-#: the issue's cases (uniform piston, no feed): re-contacts, lift-off, second loadings
+#: rods on rock (uniform piston, no feed): re-contacts, lift-off, second loadings
 CASES = {
     "uniform rod of the piston's length, alpha 2, gamma 5": _model([(1.0, 1.0)], 1.0, 5.0),
     "4-long rod of impedance 0.4, alpha 0.8, gamma 1e6": _model([(4.0, 0.4)], 0.4, 4e5),
@@ -93,7 +93,7 @@ def test_the_exact_blow_is_the_limit_of_the_refined_lattice(name):
 
 
 def test_the_defaults_were_off_by_the_lattices_first_order_error():
-    """The issue's measure: the default lattice (8 cells per piston) is 6e-3 off on the efficiency
+    """The measure: the default lattice (8 cells per piston) is 6e-3 off on the efficiency
     of a uniform rod of the piston's length; the default is now exact (within 1e-6 of a 1024-cell
     lattice)."""
     model = CASES["uniform rod of the piston's length, alpha 2, gamma 5"]
@@ -204,7 +204,7 @@ def test_a_blow_gone_wrong_never_reports_an_account_that_closes():
     end = ib.single_blow(model, 1.0, method="exact")  # its certified end, before the fault
     assert end.ended_by == "may_yield" and end.energy_error < 1e-11
 
-#: random cases with a bit mass whose energy account did not close before issue 39's second part
+#: random cases with a bit mass whose energy account once did not close, for two faults since mended
 #: (a crossing search given up on a bit resting near the rock: 1.4e-5, 1.5e-9; the moments' series
 #: of a fast root: 4e-6 on a longer blow, not kept here for its cost)
 MASS_CASES = [
@@ -366,7 +366,7 @@ def test_auto_gives_a_blow_of_too_many_pieces_to_the_lattice(monkeypatch):
 
 
 def test_a_turning_point_at_rounding_level_does_not_chatter(monkeypatch):
-    """A fuzz case (issue 42's harness): the bit's velocity vanishes at p_max with rounding-level
+    """A fuzz case: the bit's velocity vanishes at p_max with rounding-level
     signs on the loading and the elastic branch, which switched back and forth at one instant (31
     empty loadings at t = 4.199) until the solver gave the window up and lost 1.6 % of the energy.
     Now its account closes, it has one loading there, and it lies within the lattice's own
@@ -393,7 +393,7 @@ def test_a_turning_point_at_rounding_level_does_not_chatter(monkeypatch):
 
 
 def test_a_switch_below_the_clocks_resolution_makes_progress():
-    """A fuzz case (issue 42's harness) hung for ever: the piston-shank contact found its separation
+    """A fuzz case hung for ever: the piston-shank contact found its separation
     a few 1e-17 after ``t ~ 13`` (below the clock's resolution, so ``t + ts == t``), the gap closed
     at once, and the two alternated without time advancing. Run in a child with a time limit so that
     a regression fails instead of hanging the suite."""

@@ -1,4 +1,4 @@
-"""The rod-rock blow's limits are continuous (issue 42): a bit mass tending to 0 gives the massless
+"""The rod-rock blow's limits are continuous: a bit mass tending to 0 gives the massless
 bit's efficiency (Lundberg's 0.733069 on this example) at every small mass, and a rock stiffness
 tending to 0 the soft limit (the bit runs free: penetration 1 in the example's units, efficiency k),
 in the compiled kernel and in its Python reference alike. Before, bit masses 1e-100 .. 1e-16 gave

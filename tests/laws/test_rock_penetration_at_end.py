@@ -1,5 +1,5 @@
 """A blow whose window ends while the bit still advances into the rock reports the penetration it
-reached (issue 42): the largest penetration is the last one, and the permanent one is what the
+reached: the largest penetration is the last one, and the permanent one is what the
 unloading line from there would leave, p (1 - k/k_u); they were those of the last unloading (0 on a
 first loading)."""
 

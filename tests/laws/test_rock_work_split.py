@@ -1,4 +1,4 @@
-"""Work on rock split into what the rock keeps and what it stores (issue 42): a blow window cut
+"""Work on rock split into what the rock keeps and what it stores: a blow window cut
 while the bit still loads reports, in ``work_on_rock``, elastic energy that a longer window gives
 back (0.262 at t_max = 5 against 0.155 for the whole blow below), so the work is also given as
 ``rock_dissipated`` (never decreasing with the window) and ``rock_stored_energy`` (``R^2/(2 k_u)`` of
@@ -59,7 +59,7 @@ def test_the_simulators_blows_report_both():
 
 @pytest.mark.parametrize("t_max", [2.5, 5.0, None])
 def test_the_exact_and_lattice_blows_split_the_work_alike(t_max):
-    """The exact solver (issue 39) reports the work as the lattice does: the rock's dissipated work
+    """The exact solver reports the work as the lattice does: the rock's dissipated work
     (the sum over its loadings) plus its elastic energy at the end; a fine lattice (first order,
     1024 cells) agrees to its refinement error, and the energy account closes."""
     model = _model()

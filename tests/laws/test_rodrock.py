@@ -109,7 +109,7 @@ def test_striker_on_a_long_rod(ratio):
     np.testing.assert_allclose(blow.shank_force(t), want, rtol=1e-14, atol=0)
 
 
-def test_si_numbers_of_the_issue():
+def test_si_numbers_of_a_steel_striker():
     """A 20 mm x 1 m steel striker (E = 201 GPa, rho = 7800 kg/m^3) at 5 m/s on a 30 mm rod:
     43,059.04 N for 393.98 us; the reverse, the staircase with ratio 0.384615."""
     Ey, rho, V, L = 201e9, 7800.0, 5.0, 1.0

@@ -1,4 +1,4 @@
-"""The blow of a stepped piston under the rod-rock law (issue 44, theory §12), on the lattice and by
+"""The blow of a stepped piston under the rod-rock law (theory §12), on the lattice and by
 the exact solver: the uniform piston as one segment to the bit, and a two-segment piston on a long
 rod of its head's impedance against the characteristics' closed form (the staircase ``Z_h V/2``,
 then ``(1 + R) R^k`` of it, the transmitted and reflected steps at the neck), with the energy

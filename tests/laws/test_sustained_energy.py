@@ -1,4 +1,4 @@
-"""The wave law's sustained contact: its energy integrals in closed form (issue 42) against an
+"""The wave law's sustained contact: its energy integrals in closed form against an
 independent Gauss-Legendre quadrature of the same motion, and the run's account closing.
 
 Before, the integrals were the quadrature below on panels as fine as the fastest transient: 12 s per
@@ -53,9 +53,10 @@ def test_closed_form_integrals_match_quadrature(load, s, d, R, N):
 
 
 def test_energy_account_closes_at_large_s_fast(monkeypatch):
-    """The issue's case (s = 50, 40 modes, a pressing load): the account closes to rounding and
-    the sustained contacts' integrals need no quadrature (the closed form is O(N^2) a piece): the
-    states are evaluated at a handful of times (the quadrature asked for 160,000 a load period)."""
+    """The case of ``benchmarks/bench_energy.py`` (s = 50, 40 modes, a pressing load): the account
+    closes to rounding and the sustained contacts' integrals need no quadrature (the closed form is
+    O(N^2) a piece): the states are evaluated at a handful of times (the quadrature asked for
+    160,000 a load period)."""
     from impactbar.laws.wave import sustained
 
     times = []

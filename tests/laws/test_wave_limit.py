@@ -1,4 +1,4 @@
-"""Limits that agree (issue 24; issue 21 item 1): as ``s -> infinity`` the wave law's window
+"""Limits that agree: as ``s -> infinity`` the wave law's window
 ``2/s`` shrinks to the paper law's instant, so the rigid piston's orbits, their verdicts and their
 multipliers go to the paper law's; at ``R = 0`` an orbit whose end is still driven into the rod
 when its window closes ``sticks`` under both laws (before: ``penetrates`` under the wave law)."""
@@ -19,7 +19,7 @@ LIMIT = settings(max_examples=20, deadline=None, derandomize=True,
 
 @pytest.mark.parametrize("s", [10.0, 1e2, 1e4, 1e10])
 def test_sticks_at_r0_under_both_laws(s):
-    """Issue 21's reproducer: ``SquareWaveLoad(1, 1.2)``, ``R = 0``: the paper law's verdicts,
+    """A reported case: ``SquareWaveLoad(1, 1.2)``, ``R = 0``: the paper law's verdicts,
     ``sticks`` for the orbit arriving while the drive presses, ``admissible`` for the other."""
     load = SquareWaveLoad(1.0, 1.2)
     paper = periodic_orbits(BarModel(s, 0.0, 0.0, 0), load)

@@ -1,4 +1,4 @@
-"""Bounded cost of find_orbit (issue 24): a problem too large for the dense Newton Jacobian is
+"""Bounded cost of find_orbit: a problem too large for the dense Newton Jacobian is
 refused before anything is allocated, absurd iteration counts are refused, and a wandering Newton
 stops on stagnation."""
 
@@ -51,7 +51,7 @@ def test_newton_stops_on_stagnation():
 
 def test_stiff_one_mode_bar_under_the_wave_law_finishes():
     """``BarModel(1e4, 0.01, 0.5, 1, impact="wave")`` under ``CosineLoad(0.6, 1)`` ran past 120 s
-    (issue 24; not reproduced on db27a24, kept as a regression test): its orbits, Newton from one
+    (a reported case; not reproduced on db27a24, kept as a regression test): its orbits, Newton from one
     of them (the same phase) and a run of 20 periods take seconds."""
     from impactbar import InitialState, simulate
 

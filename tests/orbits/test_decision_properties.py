@@ -1,4 +1,4 @@
-"""Issue 23, item 4: every verdict decided by a sign or a threshold (admissibility, grazing,
+"""Every verdict decided by a sign or a threshold (admissibility, grazing,
 separation under the wave law, sticking, the degenerate-family test, the simulator's impact and
 stick detection) is the same at every load scale (the model is linear in the load, so each verdict
 must be) and does not flip under a perturbation of the parameters far below the verdict's own

@@ -1,4 +1,4 @@
-"""Issue 20: the rigid bar's multi-impact segment problem in plain floats ("orbits.rigid_segments")
+"""The rigid bar's multi-impact segment problem in plain floats ("orbits.rigid_segments")
 and its flights' clearance under a cosine load from the zeros of the velocity
 ("admissibility.rigid_cosine"), each against its reference (the general numpy evaluation, the
 certified search) and against an independent check (central differences, a dense sampling)."""

@@ -97,7 +97,7 @@ def test_orbits_do_not_depend_on_the_scale_of_the_load(case):
     ``c`` from 1e-9 to 1e9 it has the same orbits, phases and multipliers, with states times ``c``.
     The impact map's finite-difference step was ``1e-6 max(1, |y|)``, a thousand times the state at
     ``c = 1e-9``: there the stable orbit (3.5461) was lost and an unstable one (2.4454) came with the
-    multiplier -2.437 instead of -1.562 on the lattice (issue 42); on the exact blows (the default)
+    multiplier -2.437 instead of -1.562 on the lattice; on the exact blows (the default)
     that orbit's phase is 2.4454631 and its flip multiplier -1.5991074 at every scale."""
     model, load, orbits = case
     ref = [(o.phase, o.stable, o.impact_velocity) for o in orbits]

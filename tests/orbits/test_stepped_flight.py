@@ -1,4 +1,4 @@
-"""A stepped piston's modes in the flight solvers (issue: a stepped piston; theory §12).
+"""A stepped piston's modes in the flight solvers (theory §12).
 
 Independent references: the uniform bar's own code paths (a piston of two segments of equal
 impedance goes through every stepped path and must give the uniform bar's numbers), scipy's

@@ -1,4 +1,4 @@
-"""Periodic orbits under a position-switched drive when the contact takes time (issue 19 under the
+"""Periodic orbits under a position-switched drive when the contact takes time (the
 wave law and the rod-rock law): checked against simulate (an independent time integration), the
 paper law's monodromy, finite differences of simulated runs and the laws' limits."""
 

@@ -1,4 +1,4 @@
-"""Issue 23, case 3: under the wave law a phase residual that vanishes on a whole interval is one
+"""Under the wave law a phase residual that vanishes on a whole interval is one
 degenerate family of orbits, not its rounding noise's sign changes (143, 166 and 197 "orbits" at
 q = 1e-12, 1 and 1e12 before), and identically so at every load scale (the model is linear in
 the load)."""

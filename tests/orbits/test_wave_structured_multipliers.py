@@ -1,6 +1,6 @@
 """The wave law's structured Floquet multipliers (rank-2 correction of a block-diagonal map,
 Aberth-Ehrlich iteration) against the eigenvalues of the dense Jacobian, which the finite-difference
-tests check (issue 24: the dense eigenvalue problem made periodic_orbits at 1024 modes take minutes)."""
+tests check (the dense eigenvalue problem made periodic_orbits at 1024 modes take minutes)."""
 
 import numpy as np
 import pytest

@@ -1,5 +1,5 @@
 """Blows apart from chatter in the SI simulation summary, the efficiency over the energy available
-to the blow, and the settled-motion verdict (issue 21 item 4)."""
+to the blow, and the settled-motion verdict."""
 
 import json
 
@@ -87,7 +87,7 @@ def test_wave_efficiency_is_over_the_energy_available_with_the_drive():
 
 
 def test_cli_hydraulic_drill_wave_reports_blows_and_warns(tmp_path, capsys):
-    """Issue 21's reproducer: the hydraulic drill under the wave law (blows of about 30 m/s with
+    """A reported case: the hydraulic drill under the wave law (blows of about 30 m/s with
     chatter below 4 m/s between them, a motion that has not settled in 40 impact periods)."""
     out = tmp_path / "run"
     assert main(["simulate", "--preset", "hydraulic-drill", "--impact", "wave", "--out",

@@ -1,4 +1,4 @@
-"""The drifter with its oil circuit in SI (issue 38): ``impactbar.physical.circuit``.
+"""The drifter with its oil circuit in SI: ``impactbar.physical.circuit``.
 
 The operating point of the preset against numbers computed here independently of the SI layer: the
 SI outputs against the dimensionless orbit times the scales written out here, the oil's work on the

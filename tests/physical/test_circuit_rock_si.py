@@ -1,4 +1,4 @@
-"""A drifter with its oil circuit on a drill string and rock (issue 38): the SI figures of its blow,
+"""A drifter with its oil circuit on a drill string and rock: the SI figures of its blow,
 solved with the circuit's state (theory §11, "The coupled blow"), and the drilling rate
 (``examples/circuit_drifter_rock.toml``)."""
 

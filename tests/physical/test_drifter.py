@@ -92,10 +92,11 @@ def test_physical_page_quotes_the_preset_as_computed():
 
 
 def test_only_the_documented_presets_are_taken():
-    """The preset's former, undocumented name is gone: refused by name, as any unknown preset."""
+    """The documented preset alone: an undocumented name (an old one, say) is refused by name, as any
+    unknown preset."""
     assert list(DRIFTER_PRESETS) == ["hydraulic-drifter"]
-    with pytest.raises(ValueError, match="unknown drifter preset 'drifter-issue19'; known: hydraulic-"):
-        drifter_preset("drifter-issue19")
+    with pytest.raises(ValueError, match="unknown drifter preset 'drifter-old'; known: hydraulic-"):
+        drifter_preset("drifter-old")
 
 
 def test_one_si_orbit_class_for_drifters_and_its_blow_frequency_counts_the_impacts():

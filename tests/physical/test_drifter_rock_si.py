@@ -1,4 +1,4 @@
-"""A drifter on a drill string and rock (issues 18 and 19): the SI figures of its blow, the drilling
+"""A drifter on a drill string and rock: the SI figures of its blow, the drilling
 rate, and the command line."""
 
 import os

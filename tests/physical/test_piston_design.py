@@ -1,4 +1,4 @@
-"""optimize_piston (issue 44, theory §12): one segment recovers Lundberg's uniform optimum, more
+"""optimize_piston (theory §12): one segment recovers Lundberg's uniform optimum, more
 segments never do worse than the uniform piston and respect the stress limit, the SI result is the
 blow of the piston it reports, the gradient search does at least as well as Nelder-Mead with fewer
 blows, its premises hold (on whole cells the lattice is the exact blow, across cells its work is

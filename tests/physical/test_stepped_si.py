@@ -1,4 +1,4 @@
-"""A stepped piston in SI (issue 44): ``[bar]`` with lists of segments, :class:`SteppedBar`, and the
+"""A stepped piston in SI: ``[bar]`` with lists of segments, :class:`SteppedBar`, and the
 hammer, the drifter and the circuit drifter on its exact modes."""
 
 import copy

@@ -1,4 +1,4 @@
-"""Plots that show the answer (issue 21 item 5): a branch's default ordinate separates the two
+"""Plots that show the answer: a branch's default ordinate separates the two
 sides of a fold; the wave-law force plot has no offset axis and one legend entry per distinct wave."""
 
 import dataclasses

@@ -1,4 +1,4 @@
-"""Long simulate runs (issue 24): a progress callback with the fraction done, and Ctrl-C that
+"""Long simulate runs: a progress callback with the fraction done, and Ctrl-C that
 keeps what the run computed (SimulationInterrupted carries the trajectory up to its last finished
 block of impacts, identical to a run that ends there)."""
 

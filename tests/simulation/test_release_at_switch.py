@@ -1,5 +1,5 @@
 """Sticking contacts of the rigid bar under the square-wave load end at the load's switch, to
-rounding, and the flights after them follow the exact solution (issue 41).
+rounding, and the flights after them follow the exact solution.
 
 The reference is independent of the package: the rigid bar ``x'' = p(t)`` (``d = 0``) between
 impacts is a parabola on each piece of the load, solved in 50-digit decimal arithmetic with the
@@ -88,7 +88,7 @@ def _ulp(t):
 
 
 def test_second_sticking_contact_released_at_the_switch():
-    """The issue's case: two sticking contacts, each released at ``2 pi n + 1.5 pi`` to rounding
+    """A reported case: two sticking contacts, each released at ``2 pi n + 1.5 pi`` to rounding
     (the second was released at ``86.39379797 + 1.0e-9``). The second contact's start, the
     accumulation point of a chatter after an irregular stretch of impacts, is as exact as its
     sensitivity to the first release (1.5e6, from the reference) allows."""

@@ -1,4 +1,4 @@
-"""The short-run path of ``simulate`` (issues 20, 41) gives the general driver's result to the bit:
+"""The short-run path of ``simulate`` gives the general driver's result to the bit:
 runs it ends (at ``max_impacts`` or ``t_end``) and runs whose first block it hands over (chatter,
 sustained contact, more impacts than the block holds)."""
 
@@ -28,7 +28,7 @@ CASES = [  # model, load, start, t_end, max_impacts
     # chatter and sustained contact: the general driver takes over
     (BarModel(1.0, 0.02, 0.5, 0), CosineLoad(0.8, 1.0), InitialState.rigid(-0.3, 0.0), 60.0, 100),
     (BarModel(3.3, 0.05, 0.5, 8), CosineLoad(0.8, 1.0), InitialState.rigid(-0.3, 0.0, 8), 30.0, 50),
-    # runs to t_end, any number of impacts (issue 41): none, one, a few, more than the first block
+    # runs to t_end, any number of impacts: none, one, a few, more than the first block
     (_RIGID, _PNEU, InitialState.rigid(-0.1, 0.0), 0.7, None),
     (_RIGID, _PNEU, InitialState.rigid(-0.1, 0.0), 2 * math.pi, None),
     (_RIGID, _PNEU, InitialState.rigid(-0.1, 0.0), 300.0, None),

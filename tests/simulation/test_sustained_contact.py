@@ -1,4 +1,4 @@
-"""The wave law's sustained contact (theory §4b, issue 21 item 1): after a window that ends with
+"""The wave law's sustained contact (theory §4b): after a window that ends with
 the struck end still moving into the rod, the piston pushes a rod that acts on it as a dashpot of
 impedance ``Z = s (1 + R)/(1 - R)`` until the interface force would turn tensile."""
 
@@ -116,7 +116,7 @@ def test_energy_account_closes(n_modes, R, d):
 
 
 def test_cost_does_not_grow_with_s():
-    """Issue 21's reproducer: s = 1e6 over one load period, 850,000 windows before; now the same
+    """A reported case: s = 1e6 over one load period, 850,000 windows before; now the same
     few pieces at every s, and fast."""
     counts = []
     for s in (1e2, 1e4, 1e6):

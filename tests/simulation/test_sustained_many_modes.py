@@ -1,4 +1,4 @@
-"""Reproducer of the fuzz campaign (issue 24, category wave): a sustained contact under the wave law
+"""Reproducer of the fuzz campaign (category wave): a sustained contact under the wave law
 at 256 modes took minutes (every sample of the end's velocity built the whole state, O(N^2) per
 time); the end's velocity alone is O(N). Checked against the whole state."""
 

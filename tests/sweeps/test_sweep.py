@@ -1,4 +1,4 @@
-"""Sweeps on dask.distributed into zarr (issue 4): spec validation, chunking, seeds, the store,
+"""Sweeps on dask.distributed into zarr: spec validation, chunking, seeds, the store,
 resumption after SIGKILL, the CLI and the plots.
 
 The cluster tests share one real ``LocalCluster`` of 2 worker processes on loopback.

@@ -1,5 +1,5 @@
 """A sweep spec whose extra dimension would make huge work chunks is refused when it is parsed,
-naming the key and the bound (issue 24: ``max_orbits = 1000000000`` allocated 7.45 GiB)."""
+naming the key and the bound (``max_orbits = 1000000000`` once allocated 7.45 GiB)."""
 
 import time
 

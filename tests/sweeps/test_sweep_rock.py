@@ -1,4 +1,4 @@
-"""Sweeps under the rod-rock law (issue 18): a ``[rock]`` table in the spec, rock and rod axes, the
+"""Sweeps under the rod-rock law: a ``[rock]`` table in the spec, rock and rod axes, the
 drilling outputs stored per orbit, the store, the chart and the command line."""
 
 import json

@@ -1,5 +1,5 @@
 """A distributed sweep whose workers are all gone says so after a stated time, then waits or stops
-as asked (issue 21 item 8)."""
+as asked."""
 
 import io
 import logging
