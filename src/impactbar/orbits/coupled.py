@@ -8,12 +8,18 @@ import numpy as np
 
 from ..drives.base import DriveState
 
-__all__ = ["coupled_blow", "blow_state", "blow_jacobian", "FD_STEP_BLOW"]
+__all__ = ["coupled_blow", "blow_state", "blow_jacobian", "FD_STEP_BLOW", "FD_STEP_EXACT_BLOW"]
 
 #: central-difference step of the coupled blow's Jacobian, relative to the modal and the drive's
 #: components' largest sizes: the blow is integrated at rtol 1e-10 (noise / step ~1e-5) and its
 #: truncation is O(step^2)
 FD_STEP_BLOW = 1e-5
+#: the central-difference step where the blows are exact (``RodRock``'s exact blows under a drive):
+#: their noise is some 1e-11 of the state (the force's splines, the flights' tolerance), 1e-6 in the
+#: multipliers at ``FD_STEP_BLOW``; at 1e-3 the noise is some 1e-8 and the truncation as small (on
+#: the circuit on rock the multipliers at steps 1e-4, 3e-4 and 1e-3 agree to 1e-7, at 1e-5 they are
+#: 1.1e-6 off; the lattice's blows, smooth to 1e-9 at 1e-5, keep ``FD_STEP_BLOW``)
+FD_STEP_EXACT_BLOW = 1e-3
 
 
 def coupled_blow(model, drive, t, q, v, state, settings=None):
@@ -78,8 +84,9 @@ def blow_state(model, drive, t, q, v, state, settings=None):
 
 def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None) -> np.ndarray:
     """The Jacobian of the coupled blow's map ``(q, q', z)`` at arrival ``->`` after it, by central
-    differences (steps ``FD_STEP_BLOW`` times the largest modal and drive components, each group by
-    its own scale; the map puts ``q_0`` on the stop first, so its column is 0): the blow is
+    differences (steps ``FD_STEP_BLOW``, or ``FD_STEP_EXACT_BLOW`` where the law's blows are exact,
+    times the largest modal and drive components, each group by its own scale; the map puts ``q_0``
+    on the stop first, so its column is 0): the blow is
     autonomous (the drive's force follows its state), so it has no time derivative. ``4 N + 12 +
     2 (k - 4)`` blows; with ``forward``, by forward differences from it, half as many.
 
@@ -110,10 +117,13 @@ def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None) 
         st = DriveState(state.mode, yy[2 * M:].copy())
         return blow_state(model, drive, t, yy[:M], yy[M:2 * M], st, settings)[0]
 
+    blow_method = getattr(model.law, "blow_method", None)
+    exact = forward is None and blow_method is not None and blow_method(model) == "exact"
+    step = FD_STEP_EXACT_BLOW if exact else FD_STEP_BLOW
     for j in range(n):
         if j == 0 and float(model.end_weights[0]) == 1.0:  # q_0 along the section: no effect
             continue
-        h = FD_STEP_BLOW * scale[j]
+        h = step * scale[j]
         yp = y.copy()
         yp[j] += h
         if forward is not None:
