@@ -166,9 +166,10 @@ def test_the_compiled_flights_are_scikit_sundaes_to_the_bit(arrival, monkeypatch
 
 
 def test_marching_gives_the_plain_iterations_blow(arrival):
-    """The iterates over the part of the blow each can be right on, then over the whole until the
-    force settles, give the blow of the plain iteration (every iterate over the whole blow, the blow
-    solved once more with the last force): within the iteration's tolerance."""
+    """The iterates over the part of the blow each can be right on, the first over the whole of it
+    the answer, give the blow of the plain iteration (every iterate over the whole blow until the
+    force settles, the blow solved once more with the last force): within the iteration's tolerance
+    (the flights' noise, which the answer's force carries, 1.4e-9 of its size)."""
     from impactbar.laws.rodrock.coupled_exact import FORCE_TOL, driven_exact_contact
 
     fast = driven_exact_contact(*arrival)

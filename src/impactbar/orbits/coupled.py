@@ -18,7 +18,7 @@ FD_STEP_BLOW = 1e-5
 #: their noise is some 1e-11 of the state (the force's splines, the flights' tolerance), 1e-6 in the
 #: multipliers at ``FD_STEP_BLOW``; at 1e-3 the noise is some 1e-8 and the truncation as small (on
 #: the circuit on rock the multipliers at steps 1e-4, 3e-4 and 1e-3 agree to 1e-7, at 1e-5 they are
-#: 1.1e-6 off; the lattice's blows, smooth to 1e-9 at 1e-5, keep ``FD_STEP_BLOW``)
+#: 5e-7 to 1.1e-6 off; the lattice's blows, smooth to 1e-9 at 1e-5, keep ``FD_STEP_BLOW``)
 FD_STEP_EXACT_BLOW = 1e-3
 
 
