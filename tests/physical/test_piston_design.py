@@ -320,3 +320,13 @@ def test_the_search_gradient_in_the_masses_is_the_exact_blows():
     assert dwork[0] == pytest.approx((4 * fd[1] - fd[0]) / 3, rel=1e-7)
     # the constraints: 1 - (shank force per unit limit) on every step, 0 force after the blow's end
     assert c.size == whole_steps(44.0, 1.0 / 48) and np.all(c <= 1.0) and dc.shape == (c.size, 1)
+    # the limit's steps are the incident wave's: before the rock's first reflection is back (t = 40,
+    # step 1920); the uniform piston's re-contact on it after (at t = 41.06) unconstrained
+    def constraints(back):
+        return _whole_cell_blow(
+            lambda Z, dZ: rod_rock_blow_tangent(1.0, v, *rod, k, k_u, 0.0, 0.0, Z, dZ, t_max=44.0),
+            np.array([24]), np.zeros(1), 48, 1.0, whole_steps(44.0, 1.0 / 48), back=back)[2:]
+
+    (c, dc), (c_w, dc_w) = constraints(np.inf), constraints(40.0)
+    assert np.array_equal(c_w[:1920], c[:1920]) and np.array_equal(dc_w[:1920], dc[:1920])
+    assert np.all(c_w[1920:] == 1.0) and np.all(dc_w[1920:] == 0.0) and np.any(c[1920:] < 1.0)

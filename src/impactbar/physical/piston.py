@@ -291,7 +291,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
 
         maxfev = 200 * (2 * n - 2) if max_evaluations is None else max_evaluations
         edges, mf, refined, count[0] = _gradient_search(blow_tangent, n, N, scale, whole_steps(T, 1.0 / N),
-                                                        maxfev)
+                                                        maxfev, back)
         lf = np.diff(np.concatenate(([0.0], edges, [1.0])))
     elif n > 1:
         from scipy.optimize import minimize
@@ -495,14 +495,15 @@ class _Budget(Exception):
     """The search's blows are spent."""
 
 
-def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
+def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev, back=math.inf):
     """The gradient search (theory §12): the segments' boundaries on whole cells ``B`` (shape
     ``(n - 1,)``), where a stepped piston's lattice blow has its waves constant on cells; for each
     ``B`` the segments' masses (a softmax of ``n - 1`` free numbers ``y``, bounded) by
     SLSQP on the work per impact energy with its exact gradient (``blow_tangent(Z, dZ)``,
     :func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent`) and, with ``scale > 0``, one
-    constraint ``scale N_i <= 1`` per step ``i`` of the ``n_steps`` (the peak stress's limit, every
-    step's force its own constraint: no maximum differentiated); over ``B`` two pattern searches
+    constraint ``scale N_i <= 1`` per step ``i`` of the incident wave (the peak stress's limit, every
+    step's force its own constraint: no maximum differentiated; ``back`` the rock's first
+    reflection back at the shank, :func:`_whole_cell_blow`); over ``B`` two pattern searches
     from the uniform piston (each boundary, and each inner segment whole, moved by half and by a
     quarter of a uniform segment's cells, on in a direction while the design gains, the moves
     halved down to one cell), the better kept. At most ``maxfev`` blows (each with its
@@ -522,7 +523,7 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
         if count[0] >= maxfev:
             raise _Budget
         count[0] += 1
-        work, dwork, c, dc = _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps)
+        work, dwork, c, dc = _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps, back)
         excess = max(0.0, -float(c.min()))
         return (int(excess > 0.0), excess, -work), -work, -dwork, c, dc
 
@@ -617,12 +618,14 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev):
     return B / N, _softmax_jacobian(y)[0], refined, count[0]
 
 
-def _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps):
+def _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps, back=math.inf):
     """The gradient search's blow: the segments' boundaries on the whole cells ``B`` (int, shape
     ``(n - 1,)``, increasing in ``(0, N)``), their masses ``softmax([0, y])``. Returns the work per
     impact energy and its gradient in ``y`` (shape ``(n - 1,)``), and the constraints
-    ``c = 1 - scale N_i`` on the ``n_steps`` steps (0 force after the blow's end) and their
-    Jacobian ``(n_steps, n - 1)``; ``blow_tangent(Z, dZ)`` runs
+    ``c = 1 - scale N_i`` on the ``n_steps`` steps and their Jacobian ``(n_steps, n - 1)``: on the
+    incident wave's steps (those that start before ``back``, the rock's first reflection back at the
+    shank, or within the piston's first contact: :meth:`~impactbar.laws.rodrock.Blow.incident_peak_force`),
+    ``c = 1`` and no gradient on the others (0 force after the blow's end); ``blow_tangent(Z, dZ)`` runs
     :func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent` on the cells' impedances ``Z``
     (``N`` times the mass per length) along the directions ``dZ``."""
     mf, J_m = _softmax_jacobian(y)
@@ -633,8 +636,12 @@ def _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps):
     E0, W = tb.energy_at_impact, tb.work_on_rock
     c = np.ones(n_steps)
     dc = np.zeros((n_steps, n - 1))
-    c[:tb.shank_forces.size] -= scale * tb.shank_forces
-    dc[:tb.shank_forces.size] = -scale * tb.shank_tangents
+    f = tb.shank_forces
+    off = np.flatnonzero(f[1:] <= 0.0)  # (the first step without force after the first)
+    m = max(int(np.searchsorted(tb.cell_time * np.arange(f.size), back, side="left")),
+            int(off[0]) + 1 if off.size else f.size)
+    c[:m] -= scale * f[:m]
+    dc[:m] = -scale * tb.shank_tangents[:m]
     return W / E0, tb.work_tangent / E0 - W * tb.energy_tangent / (E0 * E0), c, dc
 
 
