@@ -249,7 +249,7 @@ def magnus_exp(A1, A2, A3, h, S):
     (module docstring), each of two products (the entry-by-entry loops over the flattened arrays)."""
     n = A1.shape[0]
     W = np.empty((7, n, n))
-    a1, a2, a3, P, Q, X, Z = W[0], W[1], W[2], W[3], W[4], W[5], W[6]
+    a1, a2, P, Q, X, Z = W[0], W[1], W[3], W[4], W[5], W[6]  # (W[2]: alpha_3, by f[2] only)
     f = W.reshape(7, n * n)
     b1, b2, b3, s = A1.reshape(n * n), A2.reshape(n * n), A3.reshape(n * n), S.reshape(n * n)
     w2, w3 = _S15 / 3.0 * h, 10.0 / 3.0 * h
