@@ -1,7 +1,8 @@
-"""The Magnus step of the flexible piston's variational flight: microseconds per step of the
-generated ``magnus_phi`` over the first flight of the ``circuit-drifter`` preset's orbit with 4 and
-8 modes (the plain flight's steps, the flight's balance, ``theta`` the default), and the parts of a
-step (the Jacobian at an interpolated state, the exponential, the product ``E Phi``) with 8 modes.
+"""The Magnus step of the flexible piston's variational flight: the steps, the milliseconds and the
+microseconds per step of the generated ``magnus_phi`` over the first flight of the
+``circuit-drifter`` preset's orbit with 4 and 8 modes (the plain flight's steps, the flight's
+balance, ``theta`` the default), and the parts of a step (the Jacobian at an interpolated state, the
+exponential, the step's ``exp(Omega)``, the product ``E Phi``) with 8 modes.
 
 The least CPU time of repeated calls after a warm-up (numba's compilation; the machine's other
 sessions move wall time more than CPU time). Run:
@@ -54,8 +55,10 @@ def cases(modes=(4, 8)) -> dict:
     for m in modes:
         code, args, n = _flight(m)
         steps = code.magnus_phi(*args)[1]
-        out[f"{m} modes: us per step ({steps} steps, n {n})"] = \
-            1e6 * best_cpu(lambda c=code, a=args: c.magnus_phi(*a), 7) / steps
+        sec = best_cpu(lambda c=code, a=args: c.magnus_phi(*a), 7)
+        out[f"{m} modes: Magnus steps (n {n})"] = steps
+        out[f"{m} modes: the flight (ms)"] = 1e3 * sec
+        out[f"{m} modes: us per step"] = 1e6 * sec / steps
     own, y, f, par, M, _, d = args
     A1, A2, ys = np.empty((n, n)), np.empty((n, n)), np.empty(y.shape[1])
     rng = np.random.default_rng(1)
@@ -71,8 +74,14 @@ def cases(modes=(4, 8)) -> dict:
     out[f"{modes[-1]} modes: jac_base (us)"] = loop(lambda: code.jac_base(ys, par, M, A1))
     out[f"{modes[-1]} modes: state_at (us)"] = loop(lambda: _magnus.state_at(own, y, f, own[1], 0, ys))
     out[f"{modes[-1]} modes: expm, norm 0.5 (us)"] = loop(lambda: _magnus.expm(Om))
-    h = 0.5 / np.max(np.sum(np.abs(A1), axis=0))
-    out[f"{modes[-1]} modes: magnus_exp (us)"] = loop(lambda: _magnus.magnus_exp(A1, A2, h, d))
+    out[f"{modes[-1]} modes: expm, norm 1 (us)"] = loop(lambda: _magnus.expm(2.0 * Om))
+    h = _magnus.DEFAULT_THETA / np.max(np.sum(np.abs(A1), axis=0))
+    if hasattr(_magnus, "scales"):  # (order 6: the Jacobians at three Gauss points, the balance's ratios)
+        A3, S = np.empty((n, n)), _magnus.scales(d)
+        code.jac_base(y[2], par, M, A3)
+        out[f"{modes[-1]} modes: magnus_exp (us)"] = loop(lambda: _magnus.magnus_exp(A1, A2, A3, h, S))
+    else:  # (order 4, two Gauss points: the way before)
+        out[f"{modes[-1]} modes: magnus_exp (us)"] = loop(lambda: _magnus.magnus_exp(A1, A2, h, d))
     out[f"{modes[-1]} modes: product (us)"] = loop(lambda: Om @ A1)
     return out
 

@@ -20,11 +20,14 @@ table has the unbalanced Magnus on the plain steps too.
 Two comparisons on the preset ``circuit-drifter``'s orbit (rigid, 4 and 8 modes):
 
 * per flight (each smooth piece of the period, between two events, the same start state): ``Phi`` of
-  (a) CVODE's variational flight at the drive's ``rtol = 1e-10``, (b) the plain flight + Magnus, each
-  against a reference variational flight at ``rtol = 1e-12``; CPU time of (a) and (b);
+  (a) CVODE's variational flight at the drive's ``rtol = 1e-10`` (``sensitivity="cvode"``), (lib) the
+  library's own (the drive's default: Magnus of order 6 over a plain flight at a thousand times the
+  drive's tolerance, :mod:`impactbar.drives.circuit._magnus`), (b) the same plain flight + this
+  probe's Magnus of order 4 on the steps asked for, each against a reference variational flight of
+  CVODE at ``rtol = 1e-12``; CPU time of each;
 * per period: the orbit's multipliers (the problem's own composition across the events and the blow,
   ``ShootingProblem._fly(..., variational=True)``, saltation matrices included) with each flight's
-  ``Phi`` from (a), (b) and the reference.
+  ``Phi`` from (a), (lib), (b) and the reference.
 
 Run: ``python benchmarks/probes/monodromy_magnus.py --modes 8 4 --sub 1 0.25 a0.5 a1 --rounds 1``
 (some 15 minutes on the 2-core machine, most of it the reference flights; numbers in
@@ -222,30 +225,40 @@ def case(modes, subs, rounds):
     starts = []
     sub_now = [1, True]  # (Magnus steps a plain step, balanced)
 
+    def cvode_flight(*args, **kw):  # (CVODE's variational flights: the drive's default is Magnus)
+        kw["sensitivity"] = "cvode"
+        return orig(*args, **kw)
+
     def magnus_flight(drive, model, state, t, q, v, t_stop, settings=None, variational=False, **kw):
         if variational:
             starts.append((state, t, np.array(q), np.array(v), t_stop))
-        fl = orig(drive, model, state, t, q, v, t_stop, settings, False, **kw)
+        # (the state of the library's Magnus flights: a thousand times the drive's tolerance)
+        fl = orig(drive, model, state, t, q, v, t_stop, drive.variational_state_settings(model, settings),
+                  False, **kw)
         if not variational:
             return fl
         return fl._replace(sensitivity=piece_phi(drive, model, state.mode, fl.piece, *sub_now))
 
-    def period(settings=None, magnus=None, balance=True):
+    def period(settings=None, magnus=None, balance=True, cvode=False):
         problem._last = None
         if magnus is not None:
             sub_now[:] = magnus, balance
             FM.circuit_flight = magnus_flight
+        elif cvode:
+            FM.circuit_flight = cvode_flight
         try:
             return problem._fly(tau, mode0, X[:problem.n], False, True, settings)[6]
         finally:
             FM.circuit_flight = orig
 
     # -- per period: the multipliers --------------------------------------------------------------
-    D_ref = period(ref_set)
+    D_ref = period(ref_set, cvode=True)
     mu_ref = multipliers(problem, X, D_ref)
-    ta, D_a = cpu_best(lambda: period(), 1)
+    ta, D_a = cpu_best(lambda: period(cvode=True), 1)
     mu_a = multipliers(problem, X, D_a)
-    rows = [("CVODE variational rtol 1e-10", ta, D_a, mu_a)]
+    tl, D_l = cpu_best(lambda: period(), 1)
+    rows = [("CVODE variational rtol 1e-10", ta, D_a, mu_a),
+            ("the library's Magnus (default)", tl, D_l, multipliers(problem, X, D_l))]
     for s, bal in [(1.0, False)] + [(s, True) for s in subs]:
         period(magnus=s, balance=bal)  # (compile)
         starts.clear()
@@ -260,25 +273,30 @@ def case(modes, subs, rounds):
     seen = list(starts)  # (the flights of the last Magnus period)
     print(f"pieces of the period: {len(seen)}")
     print(f"{'piece':>5s} {'steps a/plain/ref':>22s} {'a: CPU ms':>10s} {'a: rel':>9s} {'a: eig':>9s}"
+          f" {'lib: CPU ms':>11s} {'lib: rel':>9s} {'lib: eig':>9s}"
           + "".join(f" {f'b{s}: CPU ms':>11s} {f'b{s}: rel':>9s} {f'b{s}: eig':>9s}" for s in subs))
-    totals = np.zeros(1 + len(subs))
+    totals = np.zeros(2 + len(subs))
+    state_set = drive.variational_state_settings(model)
     for i, start in enumerate(seen):
         state, t, q, v, t_stop = start
-        fr = orig(drive, model, *start, ref_set, True)
-        ta, fa = cpu_best(lambda start=start: orig(drive, model, *start, None, True), rounds)
+        fr = cvode_flight(drive, model, *start, ref_set, True)
+        ta, fa = cpu_best(lambda start=start: cvode_flight(drive, model, *start, None, True), rounds)
+        tl, fl = cpu_best(lambda start=start: orig(drive, model, *start, None, True), rounds)
         fp = orig(drive, model, *start, None, False)
         line = f"{i:5d} {fa.piece.t.size - 1:7d}/{fp.piece.t.size - 1:6d}/{fr.piece.t.size - 1:7d} " \
                f"{1e3 * ta:10.2f} {rel(fa.sensitivity, fr.sensitivity):9.1e} " \
                f"{eig_err(fa.sensitivity, fr.sensitivity):9.1e}"
-        totals[0] += ta
+        line += f" {1e3 * tl:11.2f} {rel(fl.sensitivity, fr.sensitivity):9.1e} " \
+                f"{eig_err(fl.sensitivity, fr.sensitivity):9.1e}"
+        totals[:2] += ta, tl
         for j, s in enumerate(subs):
             tb, Pb = cpu_best(lambda s=s, start=start: piece_phi(
-                drive, model, start[0].mode, orig(drive, model, *start, None, False).piece, s), rounds)
-            totals[1 + j] += tb
+                drive, model, start[0].mode, orig(drive, model, *start, state_set, False).piece, s), rounds)
+            totals[2 + j] += tb
             line += f" {1e3 * tb:11.2f} {rel(Pb, fr.sensitivity):9.1e} {eig_err(Pb, fr.sensitivity):9.1e}"
         print(line + f"   (t {fr.t - t:.3e}, ends {fa.end})")
-    print("sum of the pieces' CPU (s): a " + f"{totals[0]:.3f}"
-          + "".join(f", b sub {s} {totals[1 + j]:.3f}" for j, s in enumerate(subs)))
+    print("sum of the pieces' CPU (s): a " + f"{totals[0]:.3f}, lib {totals[1]:.3f}"
+          + "".join(f", b sub {s} {totals[2 + j]:.3f}" for j, s in enumerate(subs)))
 
 
 def main(argv=None):

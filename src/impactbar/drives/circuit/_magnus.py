@@ -1,31 +1,40 @@
-r"""The fundamental matrix of a circuit's flight from its plain steps, by Magnus' method of order 4
+r"""The fundamental matrix of a circuit's flight from its plain steps, by Magnus' method of order 6
 (theory §11, "Sensitivities").
 
 A flight of the circuit with a flexible piston is integrated by CVODE at the drive's tolerance; its
 steps ``t_k``, states ``y_k`` and rates ``f_k`` give the cubic Hermite interpolant of the state
 between the steps. The variational equations :math:`\Phi' = A(y(t)) \Phi` are linear, so rather
 than integrating their ``n^2`` unknowns beside the state in CVODE's Newton systems, ``Phi`` is
-taken over the same flight by the fourth-order Magnus integrator (Iserles & Norsett 1999; Blanes,
-Casas, Oteo & Ros 2009, eq. (4.3)): on a step :math:`[t_0, t_0 + h]`, with :math:`A_1, A_2` the
-Jacobian at the two Gauss-Legendre points :math:`t_0 + (1/2 \mp \sqrt 3 / 6) h` of the interpolated
-state,
+taken over the same flight by the sixth-order Magnus integrator of Blanes, Casas & Ros (2000,
+BIT 40, 434; Blanes, Casas, Oteo & Ros 2009, Phys. Rep. 470, 151): on a step
+:math:`[t_0, t_0 + h]`, with :math:`A_1, A_2, A_3` the Jacobian of the interpolated state at the
+three Gauss-Legendre points :math:`t_0 + (1/2 - \sqrt{15}/10) h`, :math:`t_0 + h/2`,
+:math:`t_0 + (1/2 + \sqrt{15}/10) h`,
 
 .. math::
 
-    \Omega = \frac h2 (A_1 + A_2) + \frac{\sqrt 3\, h^2}{12} [A_2, A_1], \qquad
-    \Phi \leftarrow e^{\Omega} \Phi .
+    \alpha_1 = h A_2, \quad \alpha_2 = \frac{\sqrt{15}\, h}{3} (A_3 - A_1), \quad
+    \alpha_3 = \frac{10 h}{3} (A_3 - 2 A_2 + A_1), \\
+    C_1 = [\alpha_1, \alpha_2], \quad C_2 = -\frac1{60} [\alpha_1, 2 \alpha_3 + C_1], \\
+    \Omega = \alpha_1 + \frac{\alpha_3}{12}
+             + \frac1{240} [-20 \alpha_1 - \alpha_3 + C_1, \alpha_2 + C_2], \qquad
+    \Phi \leftarrow e^{\Omega} \Phi
 
-The exponential is computed by scaling and squaring with the Taylor polynomials of Bader, Blanes
-& Casas (2019; at the steps' :math:`\|\Omega\|_1 \approx \theta` the degree 18 in five products, no
-squaring and no solve), each :math:`\Omega` in coordinates :math:`D^{-1} \Omega D`
-that balance :math:`A` (:func:`scipy.linalg.matrix_balance` once a flight, ``D`` powers of two:
-exact), where the modes' :math:`q' = v, v' = -\omega^2 q` are of one size. A constant :math:`A`
-over a step is taken exactly: the piston's fast modes, which a BDF step over the variational
-equations smooths, are carried by the exponential. The Magnus steps are the method's own, each
-:math:`h \|D^{-1} A D\|_1 = \theta` (``A`` at the previous step's second Gauss point); the error
-is of order 4 in ``theta`` (halving it divides the error by about 16), and at the default the
-fundamental matrix is limited by the state's own accuracy (the drive's tolerance), not by Magnus
-(``benchmarks/probes/monodromy_magnus.py``).
+(three commutators, six products). The exponential is computed by scaling and squaring with the
+Taylor polynomials of Bader, Blanes & Casas (2019; at the steps' :math:`\|\Omega\|_1 \approx
+\theta = 1` the degree 18 in five products, a squaring where the norm passes 1.09, no solve), each
+:math:`\Omega` in coordinates :math:`D^{-1} \Omega D` that balance :math:`A`
+(:func:`scipy.linalg.matrix_balance` once a flight, ``D`` powers of two: exact), where the modes'
+:math:`q' = v, v' = -\omega^2 q` are of one size. A constant :math:`A` over a step is taken
+exactly: the piston's fast modes, which a BDF step over the variational equations smooths, are
+carried by the exponential. The Magnus steps are the method's own, each
+:math:`h \|D^{-1} A D\|_1 = \theta` (``A`` at the previous step's last Gauss point); the error is of
+order 6 in ``theta`` (halving it divides the error by about 64 where the Jacobian is smooth; the
+state's interpolant has kinks that scatter it). At the default ``theta = 1`` each flight's ``Phi``
+of the preset ``circuit-drifter``'s orbit with 4, 8 and 16 modes is nearer a converged Magnus
+``Phi`` than the fourth-order method's at ``theta = 1/2`` (the way before, twice the steps), and
+the fundamental matrix is limited by the state's own accuracy (the drive's tolerance), not by
+Magnus (``benchmarks/probes/monodromy_magnus.py``).
 
 The loop that calls the network's Jacobian is generated with the network's other kernels
 (:mod:`._netgen`'s ``magnus_phi``); this module holds what it calls.
@@ -40,10 +49,10 @@ import numpy as np
 
 from ...dynamics.kernels import CACHE
 
-__all__ = ["expm", "magnus_exp", "magnus_step", "state_at", "unscale", "DEFAULT_THETA", "balance"]
+__all__ = ["expm", "magnus_exp", "magnus_step", "scales", "state_at", "unscale", "DEFAULT_THETA", "balance"]
 
-#: The Magnus steps' size, ``h ||D^-1 A D||_1`` (order 4: the error falls some 16 times a halving).
-DEFAULT_THETA = 0.5
+#: The Magnus steps' size, ``h ||D^-1 A D||_1`` (order 6: the error falls some 64 times a halving).
+DEFAULT_THETA = 1.0
 
 _JIT = dict(cache=CACHE, nogil=True, error_model="numpy")
 
@@ -80,8 +89,8 @@ _T18 = ((0.0, -0.100365581030144620014614939405, -0.0080292464824115696011691951
          -0.000013918025751606070112473997934374),
         (0.0, 0.0, -0.0923364619367118592764570775143, -0.0169364939002081717191385115723,
          -0.0000140086798182036159794363205726))
-_C1 = 0.5 - math.sqrt(3.0) / 6.0  # the first Gauss-Legendre point of [0, 1]
-_COMM = math.sqrt(3.0) / 12.0
+_S15 = math.sqrt(15.0)
+_G1 = 0.5 - _S15 / 10.0  # the first of the three Gauss-Legendre points of [0, 1] (then 1/2, 1 - _G1)
 
 
 @nb.njit(**_JIT)
@@ -98,11 +107,13 @@ def _norm1(A):
 
 @nb.njit(**_JIT)
 def _comb(c, A, A2, A3, A6, out):
-    """``out = c_0 I + c_1 A + c_2 A^2 + c_3 A^3 + c_4 A^6`` (``c`` of 5), returned."""
-    n = A.shape[0]
-    for i in range(n):
-        for j in range(n):
-            out[i, j] = c[1] * A[i, j] + c[2] * A2[i, j] + c[3] * A3[i, j] + c[4] * A6[i, j]
+    """``out = c_0 I + c_1 A + c_2 A^2 + c_3 A^3 + c_4 A^6`` (``c`` of 5; contiguous arrays, taken flat:
+    the loop vectorises), returned."""
+    m = A.size
+    a, a2, a3, a6, o = A.reshape(m), A2.reshape(m), A3.reshape(m), A6.reshape(m), out.reshape(m)
+    for k in range(m):
+        o[k] = c[1] * a[k] + c[2] * a2[k] + c[3] * a3[k] + c[4] * a6[k]
+    for i in range(A.shape[0]):
         out[i, i] += c[0]
     return out
 
@@ -133,11 +144,14 @@ def _taylor(A, nrm):
         E += q[0]
         return E
     A6 = A3 @ A3
-    q = [_comb(c, A, A2, A3, A6, np.empty((n, n))) for c in _T18]
-    q9 = q[0] @ q[4]
-    q9 += q[3]
-    E = (q[2] + q9) @ q9
-    E += q[1]
+    q0 = _comb(_T18[0], A, A2, A3, A6, np.empty((n, n)))
+    q1 = _comb(_T18[1], A, A2, A3, A6, np.empty((n, n)))
+    q2 = _comb(_T18[2], A, A2, A3, A6, np.empty((n, n)))
+    q9 = _comb(_T18[3], A, A2, A3, A6, np.empty((n, n)))
+    q9 += q0 @ _comb(_T18[4], A, A2, A3, A6, A2)  # (over A^2: each entry read before it is written)
+    q2 += q9
+    E = np.dot(q2, q9, A3)
+    E += q1
     return E
 
 
@@ -145,7 +159,7 @@ def _taylor(A, nrm):
 def expm(A):
     r"""The matrix exponential :math:`e^A` by scaling and squaring with the Taylor polynomials of Bader,
     Blanes & Casas (2019; degrees 4 to 18 in 2 to 5 products, chosen by :math:`\|A\|_1`: at the
-    Magnus steps' :math:`\|A\|_1 \approx 1/2` the polynomial of degree 18, no squaring, no solve).
+    Magnus steps' :math:`\|A\|_1 \approx 1` the polynomial of degree 18, at most a squaring, no solve).
     Without balancing: the caller balances.
 
     Parameters
@@ -198,16 +212,28 @@ def state_at(t, y, f, tau, k, out):
 
 
 @nb.njit(**_JIT)
-def magnus_step(A, d, theta, left):
-    """The next Magnus step: ``theta / ||D^-1 A D||_1`` (``D = diag(d)``), the rest of the flight
-    ``left`` where that is within a quarter of it (no sliver of a last step); and whether it is the
-    last."""
+def scales(d):
+    """``S[i, j] = d[j] / d[i]``: the balanced ``D^-1 A D`` (``D = diag(d)``) is ``A * S`` entry by
+    entry."""
+    n = d.size
+    S = np.empty((n, n))
+    for i in range(n):
+        for j in range(n):
+            S[i, j] = d[j] / d[i]
+    return S
+
+
+@nb.njit(**_JIT)
+def magnus_step(A, S, theta, left):
+    """The next Magnus step: ``theta / ||A * S||_1`` (the balanced ``A``, :func:`scales`), the rest of
+    the flight ``left`` where that is within a quarter of it (no sliver of a last step); and whether it
+    is the last."""
     n = A.shape[0]
     nrm = 0.0
     for j in range(n):
         s = 0.0
         for i in range(n):
-            s += abs(A[i, j]) * d[j] / d[i]
+            s += abs(A[i, j]) * S[i, j]
         nrm = max(nrm, s)
     h = theta / nrm if nrm > 0.0 else left
     if 1.25 * h >= left:
@@ -216,26 +242,36 @@ def magnus_step(A, d, theta, left):
 
 
 @nb.njit(**_JIT)
-def magnus_exp(A1, A2, h, d):
-    r"""``exp(D^-1 Omega D)`` of a Magnus step of length ``h`` with the Jacobians ``A1``, ``A2`` at
-    its Gauss points (module docstring); the commutator's products skip the Jacobians' zeros (most of
-    their entries: the modes' blocks)."""
+def magnus_exp(A1, A2, A3, h, S):
+    r"""``exp(Omega)`` of a Magnus step of length ``h`` in the balanced coordinates (``A * S``,
+    :func:`scales`; a similarity, so the commutators are the same there) with the Jacobians ``A1``,
+    ``A2``, ``A3`` at its three Gauss points: Blanes, Casas & Ros' sixth order in three commutators
+    (module docstring), each of two products (the entry-by-entry loops over the flattened arrays)."""
     n = A1.shape[0]
-    C = np.zeros((n, n))
-    for i in range(n):
-        for k in range(n):
-            a, b = A2[i, k], A1[i, k]
-            if a != 0.0:
-                for j in range(n):
-                    C[i, j] += a * A1[k, j]
-            if b != 0.0:
-                for j in range(n):
-                    C[i, j] -= b * A2[k, j]
-    half, comm = 0.5 * h, _COMM * h * h
-    for i in range(n):
-        for j in range(n):
-            C[i, j] = (half * (A1[i, j] + A2[i, j]) + comm * C[i, j]) * (d[j] / d[i])
-    return expm(C)
+    W = np.empty((7, n, n))
+    a1, a2, P, Q, X, Z = W[0], W[1], W[3], W[4], W[5], W[6]  # (W[2]: alpha_3, by f[2] only)
+    f = W.reshape(7, n * n)
+    b1, b2, b3, s = A1.reshape(n * n), A2.reshape(n * n), A3.reshape(n * n), S.reshape(n * n)
+    w2, w3 = _S15 / 3.0 * h, 10.0 / 3.0 * h
+    for k in range(n * n):
+        f[0, k] = h * b2[k] * s[k]  # alpha_1
+        f[1, k] = w2 * (b3[k] - b1[k]) * s[k]  # alpha_2
+        f[2, k] = w3 * ((b3[k] - b2[k]) - (b2[k] - b1[k])) * s[k]  # alpha_3
+    np.dot(a1, a2, P)
+    np.dot(a2, a1, Q)
+    for k in range(n * n):
+        c1 = f[3, k] - f[4, k]  # C_1 = [alpha_1, alpha_2]
+        f[5, k] = c1 - 20.0 * f[0, k] - f[2, k]  # -20 alpha_1 - alpha_3 + C_1
+        f[6, k] = 2.0 * f[2, k] + c1
+    np.dot(a1, Z, P)
+    np.dot(Z, a1, Q)
+    for k in range(n * n):
+        f[6, k] = f[1, k] - (f[3, k] - f[4, k]) / 60.0  # alpha_2 + C_2
+    np.dot(X, Z, P)
+    np.dot(Z, X, Q)
+    for k in range(n * n):
+        f[0, k] += f[2, k] / 12.0 + (f[3, k] - f[4, k]) / 240.0
+    return expm(a1)
 
 
 @nb.njit(**_JIT)
@@ -260,4 +296,4 @@ def balance(jac_base, y, par, M, n) -> np.ndarray:
     return np.ascontiguousarray(matrix_balance(A, permute=False, separate=True)[1][0])
 
 
-GAUSS1 = _C1
+GAUSS1 = _G1

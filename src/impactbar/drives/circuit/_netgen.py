@@ -100,7 +100,7 @@ import numpy as np
 
 from impactbar.drives.circuit._kernel import (DAMP, HEAD, NM, RAMP_EV, VAR, _off_level, bar_events, dphi,
                                                end_motion, jac_blocks, phi, phi_rate)
-from impactbar.drives.circuit._magnus import GAUSS1, magnus_exp, magnus_step, state_at, unscale
+from impactbar.drives.circuit._magnus import GAUSS1, magnus_exp, magnus_step, scales, state_at, unscale
 from impactbar.dynamics.kernels import CACHE
 
 _JIT = dict(cache=CACHE and not globals().get("_IN_MEMORY", False), nogil=True, error_model="numpy")
@@ -157,25 +157,31 @@ def field_at(ys, par, out):
 @nb.njit(**_JIT)
 def magnus_phi(t, y, f, par, M, theta, d):
     """The fundamental matrix over a flight's steps ``t`` (states ``y``, rates ``f``) by Magnus of
-    order 4 on its own steps (``_magnus``: each ``h ||D^-1 A D||_1 = theta``, ``D = diag(d)``), and
-    the number of its steps."""
+    order 6 on its own steps (``_magnus``: the Jacobian at three Gauss points of each step, each
+    ``h ||D^-1 A D||_1 = theta``, ``D = diag(d)``), and the number of its steps."""
     n = 2 * M + NS + 1
     Phi = np.eye(n)
     if t.size < 2:
         return Phi, 0
     A1 = np.empty((n, n))
     A2 = np.empty((n, n))
+    A3 = np.empty((n, n))
+    S = scales(d)
+    Psi = np.empty((n, n))
     ys = np.empty(y.shape[1])
-    jac_base(y[0], par, M, A2)
+    jac_base(y[0], par, M, A3)
     t0, tend, k, steps = t[0], t[-1], 0, 0
     last = False
     while not last:
-        h, last = magnus_step(A2, d, theta, tend - t0)
+        h, last = magnus_step(A3, S, theta, tend - t0)
         k = state_at(t, y, f, t0 + GAUSS1 * h, k, ys)
         jac_base(ys, par, M, A1)
-        k = state_at(t, y, f, t0 + (1.0 - GAUSS1) * h, k, ys)
+        k = state_at(t, y, f, t0 + 0.5 * h, k, ys)
         jac_base(ys, par, M, A2)
-        Phi = magnus_exp(A1, A2, h, d) @ Phi
+        k = state_at(t, y, f, t0 + (1.0 - GAUSS1) * h, k, ys)
+        jac_base(ys, par, M, A3)
+        np.dot(magnus_exp(A1, A2, A3, h, S), Phi, Psi)
+        Phi, Psi = Psi, Phi
         t0 += h
         steps += 1
     return unscale(Phi, d), steps

@@ -172,7 +172,7 @@ class HydraulicCircuitDrive(Drive):
     sensitivity : {"auto", "magnus", "cvode"}, optional
         How the variational flights (the Jacobians of Newton's method and the Floquet multipliers)
         take the fundamental matrix (keyword, left out of the repr): ``"magnus"``, over the plain
-        flight's steps by Magnus' method of order 4; ``"cvode"``, the variational equations
+        flight's steps by Magnus' method of order 6; ``"cvode"``, the variational equations
         integrated beside the state by CVODE (the way before); ``"auto"`` (default), Magnus where
         the piston has modes, CVODE for the rigid piston
         (:func:`~impactbar.drives.circuit.flight.circuit_flight`, theory §11).

@@ -375,13 +375,14 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         :mod:`._cvode`'s callbacks; the way before). The same steps either way, to the bit.
     sensitivity : {"auto", "magnus", "cvode"}, optional
         How a variational flight's fundamental matrix is taken: ``"magnus"``, the plain flight
-        integrated and ``Phi`` over its steps by Magnus' method of order 4 (:mod:`._magnus`, with
+        integrated and ``Phi`` over its steps by Magnus' method of order 6 (:mod:`._magnus`, with
         ``generated`` only); ``"cvode"``, the variational equations integrated beside the state by
         CVODE (:math:`n^2` more unknowns); ``"auto"`` (default), Magnus where the piston has
         modes and CVODE for the rigid piston (whose six unknowns CVODE takes cheaply, to the drive's
         tolerance). The flight's states are the plain flight's either way with ``"magnus"``; its
-        ``Phi`` agrees with a variational flight at a 100 times finer tolerance to some ``1e-6``
-        with 8 modes, where CVODE's at the drive's tolerance is some ``1e-5`` off (theory §11).
+        ``Phi`` agrees with a variational flight at a 100 times finer tolerance to some ``1e-7``
+        with 8 modes (the state's error; ``benchmarks/probes/monodromy_magnus.py``), where CVODE's at
+        the drive's tolerance is some ``1e-5`` off (theory §11).
 
     multistep : {"auto", "adams", "bdf"}, optional
         CVODE's linear multistep method: ``"bdf"``, the backward differentiation formulas of orders
