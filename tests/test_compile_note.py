@@ -175,3 +175,32 @@ def test_the_garbage_collector_pauses_while_a_kernel_compiles(fresh):
         event.unregister("numba:compile", pause)
         if was:
             gc.enable()
+
+
+def test_numbas_flags_hash_and_compare_as_numba_defines_them():
+    """The quick hash and equality of numba's compile flags (``_quick_flags``, installed with the
+    process-wide watch) give numba's own: the hash of the sorted option names, and equality of every
+    option's value (set or default), here on flags that differ in set options, defaults set
+    explicitly, and options of other kinds."""
+    from numba.core.compiler import Flags
+    from numba.core.targetconfig import TargetConfig
+
+    compiling._quick_flags()
+    assert TargetConfig._impactbar_quick
+
+    def made(**kw):
+        f = Flags()
+        for k, v in kw.items():
+            setattr(f, k, v)
+        return f
+
+    cases = [made(), made(nrt=True), made(nrt=False), made(nrt=True, no_cpython_wrapper=True),
+             made(no_cpython_wrapper=False), made(error_model="numpy"), made(error_model="python"),
+             made(nrt=True, error_model="numpy", no_cfunc_wrapper=True), made(boundscheck=False)]
+    for f in cases:
+        assert hash(f) == hash(tuple(sorted(f.values())))
+        for g in cases:
+            assert (f == g) == (f.values() == g.values()), (f, g)
+            assert (f != g) == (f.values() != g.values())
+    assert made(nrt=True) != made(nrt=False) and made(no_cpython_wrapper=False) == made()
+    assert (made() == 1) is False

@@ -19,6 +19,7 @@ import threading
 import numba
 import numpy as np
 
+from .._shared.wrappers import internal_kernels
 from ..dynamics.kernels import CACHE, bound_column, fourier_column, piecewise_column
 from ..dynamics.kernelview import LoadKernelView
 
@@ -660,3 +661,7 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
             best = top
             err = max(err, top - _low(gm, upper))
     return 0, best, err
+
+
+# Python calls the search alone: its helpers are link-only (its library holds their machine code)
+internal_kernels(globals(), python=("admissibility_search",))
