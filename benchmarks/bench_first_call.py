@@ -1,4 +1,4 @@
-"""The first exact rod-rock blow (and orbit) with an empty numba cache: its compile time, here and on another tree.
+"""The first exact rod-rock blow and rock orbit, empty numba cache: the compile, here and on another tree.
 
 Run: ``python benchmarks/bench_first_call.py [--rock-orbit] [--against SRC] [--rounds N] [--kernels K]``.
 Each cell is a fresh process with a new, empty numba cache (``NUMBA_CACHE_DIR``) that makes the README's
