@@ -204,3 +204,57 @@ def test_numbas_flags_hash_and_compare_as_numba_defines_them():
             assert (f != g) == (f.values() != g.values())
     assert made(nrt=True) != made(nrt=False) and made(no_cpython_wrapper=False) == made()
     assert (made() == 1) is False
+
+
+def test_overloads_are_shared_by_kernels_that_differ_in_what_they_do_not_hand_on():
+    """numba's overloaded functions compiled once for kernels whose flags differ only in options the
+    implementation does not inherit (``_shared_overloads``: a kernel with its Python wrapper and a
+    link-only one), and again for one that differs in an inherited option (``error_model``); the
+    inherited options are those numba's CPU target hands on."""
+    import inspect
+    import re
+
+    import numpy as np
+    from numba.core import event
+    from numba.core.cpu import CPUTargetOptions
+
+    from impactbar._shared.wrappers import internal_kernels
+
+    inherits = re.findall(r'inherit_if_not_set\("(\w+)"', inspect.getsource(CPUTargetOptions.finalize))
+    assert tuple(inherits) == compiling._INHERITED
+    compiling._shared_overloads()
+
+    def full8(n):  # (np.full with this shape and dtype: an overload no other test compiles)
+        return np.full((n, 2, 2, 2), 7, dtype=np.uint16).sum()
+
+    plain = numba.njit(full8)
+    numpy_errors = numba.njit(error_model="numpy")(full8)
+    inner = numba.njit(full8)
+
+    def caller(n):
+        return inner(n) + 1
+
+    linked = numba.njit(caller)
+    internal_kernels({"__name__": inner.py_func.__module__, "inner": inner, "linked": linked},
+                     python=("linked",))
+
+    compiled = []
+
+    class Count(event.Listener):
+        def on_start(self, ev):
+            pass
+
+        def on_end(self, ev):
+            compiled.append(ev.data["dispatcher"].py_func.__module__)
+
+    listener = Count()
+    event.register("numba:compile", listener)
+    try:
+        assert plain(3) == 7 * 3 * 8
+        compiled.clear()
+        assert linked(3) == 7 * 3 * 8 + 1
+        assert not [m for m in compiled if m.startswith("numba")]  # np.full's implementation shared
+        assert numpy_errors(3) == 7 * 3 * 8
+        assert [m for m in compiled if m.startswith("numba")]  # (error_model inherited: its own)
+    finally:
+        event.unregister("numba:compile", listener)

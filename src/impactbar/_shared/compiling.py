@@ -180,6 +180,56 @@ def _quick_flags() -> None:
     TargetConfig._impactbar_quick = True
 
 
+#: the options of a calling kernel's flags that numba's CPU target hands on to the implementation of
+#: an overloaded function it calls (``CPUTargetOptions.finalize``'s ``inherit_if_not_set``)
+_INHERITED = ("nrt", "fastmath", "error_model", "forceinline")
+
+
+class _InheritedFlags:
+    """A calling kernel's flags as the key of an overloaded function's implementation: equal where
+    the options the implementation inherits (:data:`_INHERITED`) are."""
+
+    __slots__ = ("flags",)
+
+    def __init__(self, flags):
+        self.flags = flags
+
+    def __hash__(self):
+        return 0  # (numba's flags hash to a constant too: the names of their options)
+
+    def __eq__(self, other):
+        if not isinstance(other, _InheritedFlags):
+            return NotImplemented
+        a, b = self.flags, other.flags
+        return a is b or all(getattr(a, n) == getattr(b, n) for n in _INHERITED)
+
+
+def _shared_overloads() -> None:
+    """numba's overloaded functions (``np.empty``, ``min``, ...) compiled once for the kernels that
+    differ only in options their implementation does not inherit (a kernel with a C wrapper and one
+    without, a link-only kernel and one Python calls): numba keys an implementation on the calling
+    kernel's whole flags, here on :data:`_INHERITED` alone, which are all the implementation's
+    compile reads of them. Idempotent."""
+    from numba.core import targetconfig
+    from numba.core.typing.templates import _OverloadFunctionTemplate
+
+    if getattr(_OverloadFunctionTemplate, "_impactbar_shared", False):
+        return
+
+    def _get_impl(self, args, kws):
+        flags = targetconfig.ConfigStack.top_or_none()
+        key = None if flags is None else _InheritedFlags(flags)
+        cache_key = self.context, tuple(args), tuple(kws.items()), key
+        try:
+            return self._impl_cache[cache_key]
+        except KeyError:
+            pass
+        return self._build_impl(cache_key, args, kws)
+
+    _OverloadFunctionTemplate._get_impl = _get_impl
+    _OverloadFunctionTemplate._impactbar_shared = True
+
+
 def _write(line: str, stream) -> None:
     """``line`` on ``stream``, through tqdm's ``write`` when tqdm is loaded (its bars cleared and
     drawn again around it)."""
@@ -231,6 +281,7 @@ def watch_compiles(prog: str = "impactbar", *, after: float = 2.0) -> None:
     from numba.core import event
 
     _quick_flags()
+    _shared_overloads()
     event.register("numba:compile", _listener(prog, after, None, True))
     event.register("numba:compile", type("CompileGcPause", (_GcPause, event.Listener), {})())
 
