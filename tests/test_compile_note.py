@@ -238,23 +238,14 @@ def test_overloads_are_shared_by_kernels_that_differ_in_what_they_do_not_hand_on
     internal_kernels({"__name__": inner.py_func.__module__, "inner": inner, "linked": linked},
                      python=("linked",))
 
-    compiled = []
+    def numba_compiles(call):  # (numba's own overloads compiled by the call)
+        with event.install_recorder("numba:compile") as rec:
+            call()
+        return [ev for _, ev in rec.buffer
+                if ev.is_end and ev.data["dispatcher"].py_func.__module__.startswith("numba")]
 
-    class Count(event.Listener):
-        def on_start(self, ev):
-            pass
-
-        def on_end(self, ev):
-            compiled.append(ev.data["dispatcher"].py_func.__module__)
-
-    listener = Count()
-    event.register("numba:compile", listener)
-    try:
-        assert plain(3) == 7 * 3 * 8
-        compiled.clear()
-        assert linked(3) == 7 * 3 * 8 + 1
-        assert not [m for m in compiled if m.startswith("numba")]  # np.full's implementation shared
-        assert numpy_errors(3) == 7 * 3 * 8
-        assert [m for m in compiled if m.startswith("numba")]  # (error_model inherited: its own)
-    finally:
-        event.unregister("numba:compile", listener)
+    assert plain(3) == 7 * 3 * 8
+    assert not numba_compiles(lambda: linked(3))  # np.full's implementation shared
+    assert linked(3) == 7 * 3 * 8 + 1
+    assert numba_compiles(lambda: numpy_errors(3))  # (error_model inherited: its own)
+    assert numpy_errors(3) == 7 * 3 * 8
