@@ -211,9 +211,10 @@ def _shared_overloads() -> None:
     kernel's whole flags, here on :data:`_INHERITED` alone, which are all the implementation's
     compile reads of them. Idempotent."""
     from numba.core import targetconfig
-    from numba.core.typing.templates import _OverloadFunctionTemplate
+    from numba.core.typing import templates
 
-    if getattr(_OverloadFunctionTemplate, "_impactbar_shared", False):
+    template = templates._OverloadFunctionTemplate  # (the template class of every @overload)
+    if getattr(template, "_impactbar_shared", False):
         return
 
     def _get_impl(self, args, kws):
@@ -226,8 +227,8 @@ def _shared_overloads() -> None:
             pass
         return self._build_impl(cache_key, args, kws)
 
-    _OverloadFunctionTemplate._get_impl = _get_impl
-    _OverloadFunctionTemplate._impactbar_shared = True
+    template._get_impl = _get_impl
+    template._impactbar_shared = True
 
 
 def _write(line: str, stream) -> None:
