@@ -16,12 +16,6 @@ compile (:class:`_GcPause`): numba's compiler makes millions of objects, most of
 compile ends, and the collector walked them again and again, some 12 % of the first exact blow's
 compile. The collector runs again once the outermost compile ends (its garbage then collected as
 usual), and is left alone where the program had turned it off.
-
-It also makes numba's compile flags quicker to hash and compare (:func:`_quick_flags`): numba looks up
-each overloaded function's implementation (``np.empty``, ``min``, ...) in a table keyed on the
-calling kernel's flags, some 80 000 times in the first rock orbit's compile, and each lookup read
-every one of the flags' 40-odd options to hash them and again to compare them, about 2 % of that
-compile. The hash and the equality are the same as numba's, found from fewer reads.
 """
 
 from __future__ import annotations
@@ -137,100 +131,6 @@ class _GcPause(_Outermost):
             gc.enable()
 
 
-_FLAG_HASHES: dict = {}
-
-
-def _quick_flags() -> None:
-    """numba's compile flags (``numba.core.targetconfig.TargetConfig`` and its subclasses, such as
-    ``Flags``) hashed and compared with fewer reads, to the same results: numba hashes the sorted
-    names of the class's options (a constant of the class: hashed once here), and two flags are
-    equal when every option's value (the value set, else the option's default) is, which only the
-    options set in either can break. Idempotent."""
-    from numba.core.targetconfig import TargetConfig
-
-    if getattr(TargetConfig, "_impactbar_quick", False):
-        return
-    numba_eq = TargetConfig.__eq__
-
-    def __hash__(self):
-        cls = type(self)
-        h = _FLAG_HASHES.get(cls)
-        if h is None:  # (numba's: hash(tuple(sorted(self.values()))), the sorted names of the options)
-            h = _FLAG_HASHES[cls] = hash(tuple(sorted(cls.options)))
-        return h
-
-    def __eq__(self, other):
-        if self is other:
-            return True
-        if type(self) is not type(other):
-            return numba_eq(self, other)
-        a, b = self._values, other._values
-        if a == b:
-            return True
-        options = type(self).options
-        for name in a.keys() | b.keys():  # (an option set in neither is its default in both)
-            default = options[name].default
-            x, y = a.get(name, default), b.get(name, default)
-            if not (x is y or x == y):
-                return False
-        return True
-
-    TargetConfig.__hash__ = __hash__
-    TargetConfig.__eq__ = __eq__
-    TargetConfig._impactbar_quick = True
-
-
-#: the options of a calling kernel's flags that numba's CPU target hands on to the implementation of
-#: an overloaded function it calls (``CPUTargetOptions.finalize``'s ``inherit_if_not_set``)
-_INHERITED = ("nrt", "fastmath", "error_model", "forceinline")
-
-
-class _InheritedFlags:
-    """A calling kernel's flags as the key of an overloaded function's implementation: equal where
-    the options the implementation inherits (:data:`_INHERITED`) are."""
-
-    __slots__ = ("flags",)
-
-    def __init__(self, flags):
-        self.flags = flags
-
-    def __hash__(self):
-        return 0  # (numba's flags hash to a constant too: the names of their options)
-
-    def __eq__(self, other):
-        if not isinstance(other, _InheritedFlags):
-            return NotImplemented
-        a, b = self.flags, other.flags
-        return a is b or all(getattr(a, n) == getattr(b, n) for n in _INHERITED)
-
-
-def _shared_overloads() -> None:
-    """numba's overloaded functions (``np.empty``, ``min``, ...) compiled once for the kernels that
-    differ only in options their implementation does not inherit (a kernel with a C wrapper and one
-    without, a link-only kernel and one Python calls): numba keys an implementation on the calling
-    kernel's whole flags, here on :data:`_INHERITED` alone, which are all the implementation's
-    compile reads of them. Idempotent."""
-    from numba.core import targetconfig
-    from numba.core.typing import templates
-
-    template = templates._OverloadFunctionTemplate  # (the template class of every @overload)
-    if getattr(template, "_impactbar_shared", False):
-        return
-
-    def _get_impl(self, args, kws):
-        flags = targetconfig.ConfigStack.top_or_none()
-        key = None if flags is None else _InheritedFlags(flags)
-        cache_key = self.context, tuple(args), tuple(kws.items()), key
-        try:
-            return self._impl_cache[cache_key]
-        except KeyError:
-            pass
-        return self._build_impl(cache_key, args, kws)
-
-    template._get_impl = _get_impl
-    template._impactbar_shared = True
-
-
 def _write(line: str, stream) -> None:
     """``line`` on ``stream``, through tqdm's ``write`` when tqdm is loaded (its bars cleared and
     drawn again around it)."""
@@ -260,8 +160,7 @@ def watch_compiles(prog: str = "impactbar", *, after: float = 2.0) -> None:
     """Listen, for the rest of the process, to numba's compiles of impactbar's kernels, and print
     ``"<prog>: compiling numba kernels (...)"`` on stderr once they have run for ``after`` seconds
     (wall time), once per process; Python's cyclic garbage collector pauses while they compile
-    (:class:`_GcPause`), and numba's compile flags hash and compare quickly (:func:`_quick_flags`).
-    Called when the kernels are first imported; a second call does nothing.
+    (:class:`_GcPause`). Called when the kernels are first imported; a second call does nothing.
 
     Parameters
     ----------
@@ -281,8 +180,6 @@ def watch_compiles(prog: str = "impactbar", *, after: float = 2.0) -> None:
         _STATE["watching"] = True
     from numba.core import event
 
-    _quick_flags()
-    _shared_overloads()
     event.register("numba:compile", _listener(prog, after, None, True))
     event.register("numba:compile", type("CompileGcPause", (_GcPause, event.Listener), {})())
 
