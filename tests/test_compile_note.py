@@ -175,3 +175,4 @@ def test_the_garbage_collector_pauses_while_a_kernel_compiles(fresh):
         event.unregister("numba:compile", pause)
         if was:
             gc.enable()
+

@@ -13,6 +13,7 @@ import numba
 import numpy as np
 
 from .._shared.compiling import watch_compiles
+from .._shared.wrappers import internal_kernels
 
 TWO_PI = 2.0 * math.pi
 
@@ -417,3 +418,6 @@ def next_piece(load, B, level, ta, te, m, j, anchor, state):
     return te, m, j, level
 
 
+# the kernels Python may call (those of impactbar.dynamics.kernels, and _bc) keep their wrapper and
+# cache entry; the others are link-only (their callers' libraries hold their machine code)
+internal_kernels(globals(), python=("load_value", "piece_of", "sort_head", "_bc"))

@@ -17,6 +17,7 @@ import math
 import numba
 import numpy as np
 
+from .._shared.wrappers import internal_kernels
 from ._flightkernel import CACHE, _bc
 
 
@@ -159,3 +160,9 @@ def bound_column(c, absc, w2, d, psup, q, v, j, center, delta, h):
             b = psup + d * ((abs(vn) + psup * h) * grow)
         ls += absc[n] * b
     return gs, ls
+
+
+# all of them callable from Python (impactbar.dynamics.kernels): none link-only, all counting
+# references leanly and without a C wrapper
+internal_kernels(globals(), python=("fourier_flow", "piecewise_flow", "fourier_column", "piecewise_column",
+                                    "bound_column", "end_velocity_bound"))

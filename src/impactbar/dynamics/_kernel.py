@@ -34,6 +34,7 @@ import math
 import numba
 import numpy as np
 
+from .._shared.wrappers import internal_kernels
 from ._flightkernel import (  # the closed-form flight and the certified step, below this module
     CACHE,
     TWO_PI,
@@ -763,3 +764,8 @@ def _propagate(load_t, B_t, ta, qa, va, ts, out_q, out_v):
 propagate_many = numba.njit(cache=CACHE, nogil=True)(_propagate)
 #: :func:`_propagate` called from compiled code (``load`` and ``B`` as the views)
 _propagate_many = numba.njit(cache=CACHE, nogil=True)(_propagate)
+
+# the kernels Python calls keep their wrapper and cache entry; the others (the event search's steps,
+# the folded search, the flow's scratch, propagate_views) are link-only, for kernels
+internal_kernels(globals(), python=("run_free", "run_free_rigid", "find_crossing", "modal_crossing",
+                                    "rigid1_crossing", "propagate_many"))

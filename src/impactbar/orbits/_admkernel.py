@@ -19,6 +19,7 @@ import threading
 import numba
 import numpy as np
 
+from .._shared.wrappers import internal_kernels
 from ..dynamics.kernels import CACHE, bound_column, fourier_column, piecewise_column
 from ..dynamics.kernelview import LoadKernelView
 
@@ -301,7 +302,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src, phases):
     return lo, hi, True, best
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
+@numba.njit(cache=CACHE, nogil=True)
 def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src, phases):
     """``certified.enclose_zeros`` continued from the intervals ``[lo, hi]``, each split into ``n0``
     pieces, down to a 64th of the widest, dropping on the way the pieces where ``g`` stays below
@@ -328,7 +329,7 @@ def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src, phases):
     return _enclose(phase, a, b, mids[:m].copy(), half, limits, best, prob, work, src, phases)
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
+@numba.njit(cache=CACHE, nogil=True)
 def _newton(phase, lo, hi, prob, work, src):
     """``admissibility._newton_stationary``: the same iteration, element by element (an element
     leaves it once converged or out of its interval)."""
@@ -412,7 +413,7 @@ def _sample_bound(mid, gm, g1, atol, floor):
     return top - atol
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
+@numba.njit(cache=CACHE, nogil=True)
 def _single(phase, ts, lo, hi, prob, work, src):
     """``admissibility._numpy_search``'s ``single_zero``: ``|g''(ts)| > L3 r``, so that ``ts`` is
     the only zero of ``g'`` on ``[lo, hi]``."""
@@ -451,7 +452,7 @@ def _single(phase, ts, lo, hi, prob, work, src):
     return abs(g2) > L3 * max(ts - lo, hi - ts)
 
 
-@numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
+@numba.njit(cache=CACHE, nogil=True)
 def _top(x, k):
     """Indices of the ``k`` largest ``x``, largest first, the first of equal ones first (as
     ``np.argsort(-x, kind="mergesort")[:k]``)."""
@@ -660,3 +661,7 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
             best = top
             err = max(err, top - _low(gm, upper))
     return 0, best, err
+
+
+# Python calls the search alone: its helpers are link-only (its library holds their machine code)
+internal_kernels(globals(), python=("admissibility_search",))
