@@ -71,6 +71,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     emit,
     first_negative,
     load_input,
+    window_break,
 )
 from ._records import (  # the records' slots
     B_AUX,
@@ -237,7 +238,7 @@ def node_end(ws, t, t1):
                 return False
             NSI[0, 0] = cg
             NSI[0, 2] = cd
-        b = min(nb, nbd)
+        b = window_break(min(nb, nbd), t1)
         if driven and PR[PR_NODW] == 0.0:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end
             L = min(b, t1) - a
             if L > 0.0:
@@ -290,7 +291,7 @@ def node_junction(ws, j, t, t1):
                 return False
             NSI[j, 0] = cf
             NSI[j, 1] = cg
-        b = min(nbf, nbg)
+        b = window_break(min(nbf, nbg), t1)
         if b >= t1:
             return True
         a = b
@@ -388,7 +389,7 @@ def node_contact(ws, t, t1):
         if cf != NSI[j, 0] or cg != NSI[j, 1]:
             dirty = True
             flips = 0
-        b = min(nbf, nbg, t1)
+        b = window_break(min(nbf, nbg), t1)
         valid = min(_load(pool, CH_T, WB, WN, B_IN, fch, cf, a),
                     _load(pool, CH_T, WB, WN, B_IN2, gch, cg, a))
         L = b - a
@@ -527,7 +528,7 @@ def bit_input(pool, CH_T, WB, WN, PR, NSI, J, a, t1):
     blk_clear(WB[B_E], WN[B_E])
     blk_axpy(WB[B_E], WN[B_E], 2.0, WB[B_IN], WN[B_IN])
     blk_add_const(WB[B_E], WN[B_E], PR[PR_FEED])
-    return min(nb, t1), vf
+    return window_break(nb, t1), vf
 
 
 @numba.njit(cache=CACHE, nogil=True)
