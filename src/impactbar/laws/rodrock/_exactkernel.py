@@ -20,8 +20,10 @@ initial-value problem, which divides by nothing: the particular solution's
 ``(e^{lam tau} - e^{r tau}) / (lam - r)`` never appears as two large cancelling terms. (Written that
 way, a transient reflected at the bit again and again grows in its coefficients though not in its
 value, and rounding grows with it: measured, the energy account of a ringing rod lost 1e-2 in 20
-time units.) A series cut below rounding holds on ``[0, L]`` only: such pieces are marked valid up
-to ``L`` and are never extended.
+time units.) A pair whose series would pass ``SERIES_MAX`` (a stiff rock's exponent on a
+piece of a few ``Z/k_u``) is solved by back-substitution: its coefficients, divided by
+``|lam_e - r|``, are small (:func:`series_fits`). A series cut below rounding holds on ``[0, L]``
+only: such pieces are marked valid up to ``L`` and are never extended.
 
 **Blocks.** Pieces are computed in dense scratch blocks ``B[e, d]`` with ``N[e]`` the used count
 of coefficients of exponent ``e`` (entries past ``N[e]`` are zero) and stored, pruned of terms below

@@ -26,8 +26,9 @@ NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor rec
 EPS = 2.220446049250313e-16
 SERIES_TOL = 1e-18
 #: the largest coefficient a series of ``e^{delta tau}`` may reach (:func:`series_fits`): a piece's
-#: derivatives (three in :func:`first_negative`) and the waves it reflects multiply it by the
-#: exponents again, and those must stay within the float range
+#: derivatives (three in :func:`first_negative`), the waves it reflects and the series solved on
+#: them again multiply it by the exponents, and those must stay within the float range (1e240
+#: still overflowed at ``k_u/Z = 2e11``, a spike's second pass through the bit)
 SERIES_MAX = 1e150
 #: arrivals closer than this (relative to the time) are one break point (rounding's slivers)
 SNAP = 64.0 * EPS
@@ -328,7 +329,8 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     ``Q(0) = 0``, ``delta = r - lam_e``, in slot ``e``, or ``e^{r tau}`` times the integral of the
     series of ``e^{(lam_e - r) s} P(s)``, in slot ``rc``; for ``delta = 0`` exact, one degree more;
     else a series cut below ``SERIES_TOL`` on ``[0, L]``), a farther one by back-substitution of
-    ``(D + lam_e - r) Q = P`` (contracting there); the homogeneous ``C e^{r tau}`` exact. Returns
+    ``(D + lam_e - r) Q = P`` (contracting there; also a near one whose series would not fit,
+    :func:`series_fits`); the homogeneous ``C e^{r tau}`` exact. Returns
     ``(status, series)``: status 1 when the degree limit was reached; ``series`` whether a series
     was cut (the piece then holds only on ``[0, L]``)."""
     blk_clear(Y, NY)
