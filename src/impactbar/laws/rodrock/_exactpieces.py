@@ -302,10 +302,10 @@ def series_fits(delta, L):
     x = ad * L
     if x > NEAR:
         return False
-    if ad <= 1.0:  # (coefficients that do not grow)
+    lim = math.log(SERIES_MAX)
+    if ad <= lim:  # (|delta|^k / k! <= e^|delta| <= SERIES_MAX: no term-by-term check)
         return True
     lg = math.log(ad)
-    lim = math.log(SERIES_MAX)
     term = 1.0  # x^k / k!
     top = 1.0
     lf = 0.0  # log k!
