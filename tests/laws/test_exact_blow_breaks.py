@@ -162,7 +162,8 @@ def test_a_stiff_unloadings_spike_ends_certified_with_its_peak(case):
     spike's pieces (5e-13 long) were skipped by the largest force as slivers (below 1e-11 of the
     time), and a spike that began an ulp before a window's end reached the next junction decayed by
     that ulp (9e-4 low). Now they end certified, their peak forces those of ``gamma = 1e6`` to 1e-6
-    (the spike's width) and the independent reference's there to 1e-8, their energy accounts closed."""
+    (the spike's width), their energy accounts closed; at ``gamma = 1e6`` the independent reference's
+    efficiency to 1e-8 and its peak forces to 1e-7 (its clock's resolution of the spike)."""
     chain, k = _STIFF[case]
     t_max = 4.0 * sum(chain[2]) + 4.0
     soft = exact_blow(*chain, k=k, k_u=1e6 * k, impact_velocity=1.0, record=True)
