@@ -145,3 +145,40 @@ def test_a_stiff_unloadings_spike_is_read_from_its_own_start(case):
         # (its clock: eps t k_u/Z)
         np.testing.assert_allclose(soft.peak_forces()[0], ref.peak_values, rtol=1e-8)
         np.testing.assert_allclose(values, ref.peak_values, rtol=1e-6)
+
+
+#: a two-segment piston on a uniform rod, and a uniform piston on a three-segment rod; massless bits
+_STIFF = {
+    "two-segment piston": (([0.5, 0.5], [0.5, 1.5], [3.0], [1.0]), 1.5),
+    "three-segment rod": (([1.0], [1.0], [0.1, 0.2, 0.3], [1.0, 0.5, 1.0]), 2.0),
+}
+
+
+@pytest.mark.parametrize("case", sorted(_STIFF))
+def test_a_stiff_unloadings_spike_ends_certified_with_its_peak(case):
+    """At ``gamma = 1e12`` both blows ended ``"failed"``: the bit solved on a piece a few spike widths
+    ``Z/k_u`` long, the stiff exponent within ``NEAR / L`` of the slow ones, by a series whose
+    coefficients ``(k_u/Z)^d / d!`` overflowed (7e292 at degree 26; its derivatives infinite); the
+    spike's pieces (5e-13 long) were skipped by the largest force as slivers (below 1e-11 of the
+    time), and a spike that began an ulp before a window's end reached the next junction decayed by
+    that ulp (9e-4 low). Now they end certified, their peak forces those of ``gamma = 1e6`` to 1e-6
+    (the spike's width), their energy accounts closed; at ``gamma = 1e6`` the independent reference's
+    efficiency to 1e-8 and its peak forces to 1e-7 (its clock's resolution of the spike)."""
+    chain, k = _STIFF[case]
+    t_max = 4.0 * sum(chain[2]) + 4.0
+    soft = exact_blow(*chain, k=k, k_u=1e6 * k, impact_velocity=1.0, record=True)
+    assert soft.ended_by == "lifted"
+    for gamma in (1e12, 1e8):
+        stiff = exact_blow(*chain, k=k, k_u=gamma * k, impact_velocity=1.0, record=True)
+        assert stiff.ended_by == "lifted", gamma
+        assert stiff.energy_error < 1e-13
+        np.testing.assert_allclose(stiff.peak_forces()[0], soft.peak_forces()[0], rtol=1e-6)
+        np.testing.assert_allclose(stiff.peak_forces()[1], soft.peak_forces()[1], rtol=1e-6)
+        assert stiff.efficiency == pytest.approx(soft.efficiency, rel=1e-5)
+        horizon = exact_blow(*chain, k=k, k_u=gamma * k, impact_velocity=1.0, t_max=t_max, record=True)
+        assert horizon.ended_by in ("lifted", "t_max") and horizon.energy_error < 1e-13
+        np.testing.assert_allclose(horizon.peak_forces()[0], soft.peak_forces()[0], rtol=1e-6)
+    ref = reference_blow(*chain, k=k, k_u=1e6 * k, impact_velocity=1.0, t_end=soft.duration)
+    # (the reference's clock steps through the spike: its peak at the piston's step 0.54 + 3.7e-8)
+    np.testing.assert_allclose(soft.peak_forces()[0], ref.peak_values, rtol=1e-7)
+    assert soft.efficiency == pytest.approx(ref.efficiency, rel=1e-8)

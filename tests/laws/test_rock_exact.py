@@ -331,10 +331,15 @@ def test_a_negligible_bit_is_the_massless_bit():
     heavier = ib.single_blow(_model(segs, 0.5, 1.0, bit_mass=1e-3), 1.0)
     assert heavier.method == "exact" and heavier.rebound_velocity != none.rebound_velocity
     # overdamped on the rock is part of the rule: the same mass on a rock stiff enough to ring
-    # (4 m k_u > Z_b^2) is the lattice's, which refuses a bit ringing 1e6 radians a step (it was
-    # a MemoryError)
+    # (4 m k_u > Z_b^2) is carried with its mass, by the exact solver (whose stiff series overflowed
+    # there: auto fell back to the lattice, which refuses a bit ringing 1e6 radians a step; it was
+    # a MemoryError), its blow the massless bit's to 1e-9
+    ringing = ib.single_blow(_model(segs, 0.5, 1e12, bit_mass=1e-12), 1.0)
+    assert ringing.method == "exact" and ringing.exact.ended_by == "lifted"
+    stiff = ib.single_blow(_model(segs, 0.5, 1e12), 1.0)
+    assert ringing.efficiency == pytest.approx(stiff.efficiency, rel=1e-9)
     with pytest.raises(ValueError, match="bit_mass = 1e-12 on k_u = 1e\\+12 rings"):
-        ib.single_blow(_model(segs, 0.5, 1e12, bit_mass=1e-12), 1.0)
+        ib.single_blow(_model(segs, 0.5, 1e12, bit_mass=1e-12), 1.0, method="lattice")
 
 
 def test_auto_bounds_the_exact_solvers_cost():

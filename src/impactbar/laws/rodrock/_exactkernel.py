@@ -20,8 +20,10 @@ initial-value problem, which divides by nothing: the particular solution's
 ``(e^{lam tau} - e^{r tau}) / (lam - r)`` never appears as two large cancelling terms. (Written that
 way, a transient reflected at the bit again and again grows in its coefficients though not in its
 value, and rounding grows with it: measured, the energy account of a ringing rod lost 1e-2 in 20
-time units.) A series cut below rounding holds on ``[0, L]`` only: such pieces are marked valid up
-to ``L`` and are never extended.
+time units.) A pair whose series would pass ``SERIES_MAX`` (a stiff rock's exponent on a
+piece of a few ``Z/k_u``) is solved by back-substitution: its coefficients, divided by
+``|lam_e - r|``, are small (:func:`series_fits`). A series cut below rounding holds on ``[0, L]``
+only: such pieces are marked valid up to ``L`` and are never extended.
 
 **Blocks.** Pieces are computed in dense scratch blocks ``B[e, d]`` with ``N[e]`` the used count
 of coefficients of exponent ``e`` (entries past ``N[e]`` are zero) and stored, pruned of terms below
@@ -71,6 +73,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     emit,
     first_negative,
     load_input,
+    window_break,
 )
 from ._records import (  # the records' slots
     B_AUX,
@@ -237,7 +240,7 @@ def node_end(ws, t, t1):
                 return False
             NSI[0, 0] = cg
             NSI[0, 2] = cd
-        b = min(nb, nbd)
+        b = window_break(min(nb, nbd), t1)
         if driven and PR[PR_NODW] == 0.0:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end
             L = min(b, t1) - a
             if L > 0.0:
@@ -290,7 +293,7 @@ def node_junction(ws, j, t, t1):
                 return False
             NSI[j, 0] = cf
             NSI[j, 1] = cg
-        b = min(nbf, nbg)
+        b = window_break(min(nbf, nbg), t1)
         if b >= t1:
             return True
         a = b
@@ -388,7 +391,7 @@ def node_contact(ws, t, t1):
         if cf != NSI[j, 0] or cg != NSI[j, 1]:
             dirty = True
             flips = 0
-        b = min(nbf, nbg, t1)
+        b = window_break(min(nbf, nbg), t1)
         valid = min(_load(pool, CH_T, WB, WN, B_IN, fch, cf, a),
                     _load(pool, CH_T, WB, WN, B_IN2, gch, cg, a))
         L = b - a
@@ -527,7 +530,7 @@ def bit_input(pool, CH_T, WB, WN, PR, NSI, J, a, t1):
     blk_clear(WB[B_E], WN[B_E])
     blk_axpy(WB[B_E], WN[B_E], 2.0, WB[B_IN], WN[B_IN])
     blk_add_const(WB[B_E], WN[B_E], PR[PR_FEED])
-    return min(nb, t1), vf
+    return window_break(nb, t1), vf
 
 
 @numba.njit(cache=CACHE, nogil=True)

@@ -25,6 +25,11 @@ DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
 NEAR = 4.0  # |lam_e - r| L below which y' = r y + g is solved by its Taylor recursion (~30 terms)
 EPS = 2.220446049250313e-16
 SERIES_TOL = 1e-18
+#: the largest coefficient a series of ``e^{delta tau}`` may reach (:func:`series_fits`): a piece's
+#: derivatives (three in :func:`first_negative`), the waves it reflects and the series solved on
+#: them again multiply it by the exponents, and those must stay within the float range (1e240
+#: still overflowed at ``k_u/Z = 2e11``, a spike's second pass through the bit)
+SERIES_MAX = 1e150
 #: arrivals closer than this (relative to the time) are one break point (rounding's slivers)
 SNAP = 64.0 * EPS
 #: a piece is the open one continued where each coefficient agrees to this fraction of its own size
@@ -284,6 +289,38 @@ def _ode1_series(Y, NY, row, G, e, n, delta, grows, ex, L):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def series_fits(delta, L):
+    """Whether the exponents ``delta`` apart are solved (:func:`blk_ode1`) and folded
+    (:func:`blk_fold`) on ``[0, L]`` as one, by a series: they are within ``NEAR / L`` and the series
+    of ``e^{delta tau}``, cut below ``SERIES_TOL`` on ``[0, L]`` as the solver cuts it, keeps its
+    coefficients ``|delta|^k / k!`` below ``SERIES_MAX``. Past it (a stiff exponent ``delta`` on a
+    piece of a few ``1 / |delta|``: a stiff rock's unloading spike, ``k_u / Z = 2e12``, its series
+    reached 7e292 at degree 26 and its derivatives overflowed) the exponents are apart on ``[0, L]``
+    in the only sense that matters: the particular solution's back-substitution divides by
+    ``|delta|``, each step shrinking the coefficients, so no large terms cancel."""
+    ad = abs(delta)
+    x = ad * L
+    if x > NEAR:
+        return False
+    lim = math.log(SERIES_MAX)
+    if ad <= lim:  # (|delta|^k / k! <= e^|delta| <= SERIES_MAX: no term-by-term check)
+        return True
+    lg = math.log(ad)
+    term = 1.0  # x^k / k!
+    top = 1.0
+    lf = 0.0  # log k!
+    for kk in range(1, DC):
+        lf += math.log(kk)
+        if kk * lg - lf > lim:
+            return False
+        term *= x / kk
+        top = max(top, term)
+        if term <= SERIES_TOL * top:
+            return True
+    return True
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     """``Y`` = the solution of ``y' - r y = g`` with ``y(0) = y0`` on ``[0, L]`` (``G`` the block of
     ``g``; ``r = lam[rc]``), without cancellation: a forcing exponent ``lam_e`` within ``NEAR / L`` of
@@ -292,7 +329,8 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     ``Q(0) = 0``, ``delta = r - lam_e``, in slot ``e``, or ``e^{r tau}`` times the integral of the
     series of ``e^{(lam_e - r) s} P(s)``, in slot ``rc``; for ``delta = 0`` exact, one degree more;
     else a series cut below ``SERIES_TOL`` on ``[0, L]``), a farther one by back-substitution of
-    ``(D + lam_e - r) Q = P`` (contracting there); the homogeneous ``C e^{r tau}`` exact. Returns
+    ``(D + lam_e - r) Q = P`` (contracting there; also a near one whose series would not fit,
+    :func:`series_fits`); the homogeneous ``C e^{r tau}`` exact. Returns
     ``(status, series)``: status 1 when the degree limit was reached; ``series`` whether a series
     was cut (the piece then holds only on ``[0, L]``)."""
     blk_clear(Y, NY)
@@ -300,7 +338,7 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     series = False
     near = False  # a forcing exponent near r: a series, or a fold (their coefficients in ex)
     for e in range(NG.size):
-        if NG[e] > 0 and e != rc and abs(r - lam[e]) * L <= NEAR:
+        if NG[e] > 0 and e != rc and series_fits(r - lam[e], L):
             near = True
     ex = np.empty(DC if near else 1, dtype=np.complex128)
     for e in range(NG.size):
@@ -308,12 +346,12 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
         if n == 0:
             continue
         delta = r - lam[e]
-        if e != rc and abs(delta) * L <= NEAR and lam[e].real > r.real:
+        if e != rc and series_fits(delta, L) and lam[e].real > r.real:
             # e^{r tau} int_0^tau e^{(lam_e - r) s} P(s) ds: the series of e^{(lam_e - r) s} grows
             series = True
             if _ode1_series(Y, NY, rc, G, e, n, delta, True, ex, L):
                 status = 1
-        elif e == rc or abs(delta) * L <= NEAR:
+        elif e == rc or series_fits(delta, L):
             if e != rc:
                 series = True
             if _ode1_series(Y, NY, e, G, e, n, delta, False, ex, L):
@@ -344,10 +382,10 @@ def blk_ode1(Y, NY, G, NG, lam, rc, r, y0, L):
     # whose coefficients cancel where its value does
     c = rc
     for e in range(NY.size):
-        if NY[e] > 0 and abs(lam[e] - r) * L <= NEAR and lam[e].real < lam[c].real:
+        if NY[e] > 0 and series_fits(lam[e] - r, L) and lam[e].real < lam[c].real:
             c = e
     for e in range(NY.size):
-        if e != c and NY[e] > 0 and abs(lam[e] - r) * L <= NEAR:
+        if e != c and NY[e] > 0 and series_fits(lam[e] - r, L):
             if blk_fold(Y, NY, e, c, lam, L, ex) != 0:
                 status = 1
             series = True
@@ -772,14 +810,33 @@ def advance(c, a, CHI, CH_T, PF, PI):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def window_break(b, t1):
+    """A node's next break point: its next arrival ``b`` within the window that ends at ``t1``, or
+    ``t1``. An arrival within ``SNAP`` before ``t1`` is taken at ``t1`` (:func:`load_input` reads it
+    from its start there): one break point but for rounding (an arrival summed from travel times,
+    ``2.5999999999999996``, and the window's end ``26 h = 2.6``), where it was a sliver of an ulp,
+    the sliver's piece holding a stiff unloading's spike from its start and the next piece the
+    spike an ulp later: downstream the two arrive as one, read from the later (the spike's top
+    decayed by ``e^{-k_u/Z * 1 ulp}``, 9e-4 for ``k_u/Z = 2e12``)."""
+    if b >= t1 - SNAP * abs(t1):
+        return t1
+    return b
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def load_input(B, N, c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN):
     """The piece of channel ``c`` arriving at ``a``, from origin ``a``; returns its validity (arrival
-    time). A piece is never read before its own start: one arriving within ``SNAP`` after ``a``
-    (:func:`advance`: the same break point but for rounding) starts at ``a``. (Shifted back to ``a``,
-    a stiff unloading's term ``e^{-k_u tau/Z}``, ``k_u/Z = 1.5e12``, grew by ``e^{1.5e12 * 1.35e-13}``:
-    the spike it reflects from the bit reached the shank 22 % too high, its peak force 17 % high.)"""
+    time). A piece arriving within ``SNAP`` of ``a`` (:func:`advance`, :func:`window_break`: the same
+    break point but for rounding) starts at ``a``, and is never read before its own start. (Shifted
+    back to ``a``, a stiff unloading's term ``e^{-k_u tau/Z}``, ``k_u/Z = 1.5e12``, grew by
+    ``e^{1.5e12 * 1.35e-13}``: the spike it reflects from the bit reached the shank 22 % too high, its
+    peak force 17 % high. Shifted on by the ulp between an arrival and the window's end it was taken
+    at, ``k_u/Z = 2e12``, the spike's top decayed by ``e^{-2e12 * 4.4e-16}``: 9e-4 low.)"""
     arr = PF[piece, 0] + CH_T[c]
-    pool_load(B, N, piece, max(a - arr, 0.0), lam, BIN, PI, TK, TC)
+    delta = a - arr
+    if delta <= SNAP * abs(a):
+        delta = 0.0
+    pool_load(B, N, piece, delta, lam, BIN, PI, TK, TC)
     v = PF[piece, 1]
     return v + CH_T[c] if v < INF else INF
 

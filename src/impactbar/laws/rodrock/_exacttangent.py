@@ -72,6 +72,7 @@ from ._exactpieces import (
     blk_integral,
     blk_set_comb,
     blk_shift,
+    window_break,
 )
 from ._records import (  # the records' slots
     B_E,
@@ -243,7 +244,7 @@ def t_node_contact(ws, tg, t, t1):
         cg, nbg = advance(gch, a, CHI, CH_T, PF, PI)
         if cf != NSI[j, 0] or cg != NSI[j, 1]:
             dirty = True
-        b = min(nbf, nbg, t1)
+        b = window_break(min(nbf, nbg), t1)
         k = _next_event(RD, TCUR[TCUR_CONTACT], False)
         TCUR[TCUR_CONTACT] = k if k >= 0 else int(RD[RD_HEAD, 0].real) + 1
         ts = RD[k, 0].real if k >= 0 else INF
