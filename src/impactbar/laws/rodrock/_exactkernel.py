@@ -47,6 +47,7 @@ from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactend import account, certify
+from ._exactode import blk_ode1
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
     BUDGET,
     ELASTIC,
@@ -66,7 +67,6 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     blk_eval,
     blk_integral,
     blk_integral_sq,
-    blk_ode1,
     blk_set_comb,
     blk_shift,
     blk_value,
