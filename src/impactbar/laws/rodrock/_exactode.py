@@ -11,6 +11,7 @@ import math
 import numba
 import numpy as np
 
+from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.kernels import CACHE
 from ._exactpieces import DC, EPS, NEAR, SERIES_MAX, SERIES_TOL, blk_clear, blk_trim, cabs
@@ -197,4 +198,5 @@ def blk_fold(Y, NY, e, c, lam, L, ex):
     NY[e] = 0
     return status
 
+plain_literals(globals())  # one machine code per kernel for all constant arguments (a shorter compile)
 internal_kernels(globals())  # kernels call them all, Python none: link-only (their callers hold their code)
