@@ -273,7 +273,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
 
     def merit(b):
         """Work (in impact energies) less the penalty; the relative excess stress."""
-        excess = max(0.0, _peak(b, back) * scale - 1.0)
+        excess = max(0.0, b.incident_peak_force(back) * scale - 1.0)
         return b.work_on_rock / b.energy_at_impact - PENALTY * excess, excess
 
     uniform = blow(None)
@@ -331,8 +331,8 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         lf = mf = np.full(n, 1.0 / n)
     lengths = lf * L
     areas = mf * m / (rho * lengths)
-    stress = _peak(shaped, back) * force_N / pieces[0].area_m2
-    u_stress = _peak(uniform, back) * force_N / pieces[0].area_m2
+    stress = shaped.incident_peak_force(back) * force_N / pieces[0].area_m2
+    u_stress = uniform.incident_peak_force(back) * force_N / pieces[0].area_m2
     steps = min(shaped.shank_forces.size, uniform.shank_forces.size)
     return OptimalPiston(
         lengths_m=lengths, areas_m2=areas, work_on_rock_J=shaped.work_on_rock * energy_J,
@@ -438,7 +438,7 @@ def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=N
                           piston=SteppedPiston(lf, mf / lf) if lf.size > 1 else None)
     to_Pa = force_N / pieces[0].area_m2
     return {"work_on_rock_J": b.work_on_rock * energy_J, "efficiency": b.efficiency,
-            "impact_energy_J": 0.5 * m * V * V, "peak_stress_Pa": _peak(b, back) * to_Pa,
+            "impact_energy_J": 0.5 * m * V * V, "peak_stress_Pa": b.incident_peak_force(back) * to_Pa,
             "blow_peak_stress_Pa": b.peak_shank_force()[0] * to_Pa,
             "mass_kg": m, "length_m": L, "method": b.method, "blow": b}
 
@@ -449,11 +449,6 @@ def _better(a, b):
     if (a[1] > 0.0) != (b[1] > 0.0):
         return b[1] > 0.0
     return a[0] > b[0] if a[1] == 0.0 else a[1] < b[1]
-
-
-def _peak(b, back):
-    """The peak of the incident wave, the rock's first reflection back at the shank at ``back``."""
-    return b.incident_peak_force(back)
 
 
 def _exact_blow(v, seg, k, k_u, bit_mass, feed, T, samples, piston):
@@ -628,6 +623,8 @@ def _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps, back=math.inf):
     ``c = 1`` and no gradient on the others (0 force after the blow's end); ``blow_tangent(Z, dZ)`` runs
     :func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent` on the cells' impedances ``Z``
     (``N`` times the mass per length) along the directions ``dZ``."""
+    from ..laws.rodrock.blow import incident_steps
+
     mf, J_m = _softmax_jacobian(y)
     n = mf.size
     cells = np.diff(np.concatenate(([0], B, [N])))
@@ -637,9 +634,7 @@ def _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps, back=math.inf):
     c = np.ones(n_steps)
     dc = np.zeros((n_steps, n - 1))
     f = tb.shank_forces
-    off = np.flatnonzero(f[1:] <= 0.0)  # (the first step without force after the first)
-    m = max(int(np.searchsorted(tb.cell_time * np.arange(f.size), back, side="left")),
-            int(off[0]) + 1 if off.size else f.size)
+    m = incident_steps(f, tb.cell_time * np.arange(f.size), back)
     c[:m] -= scale * f[:m]
     dc[:m] = -scale * tb.shank_tangents[:m]
     return W / E0, tb.work_tangent / E0 - W * tb.energy_tangent / (E0 * E0), c, dc

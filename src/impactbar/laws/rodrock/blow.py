@@ -340,8 +340,11 @@ class Blow:
         wave the rock reflects first is back at the shank, at ``round_trip`` (the rod's, shank to
         bit and back, model time), or over the piston's first contact where that lasts longer (a
         stepped piston's own re-strikes are part of its incident wave; what the rock sends back is
-        not, nor a re-contact on it)."""
-        return self.peak_shank_force(max(float(round_trip), self.first_separation))[0]
+        not, nor a re-contact on it). Lattice: over the steps that ``incident_steps`` counts."""
+        if self.exact is not None:
+            return self.peak_shank_force(max(float(round_trip), self.first_separation))[0]
+        n = incident_steps(self.shank_forces, self.times[:-1], round_trip)
+        return float(np.max(self.shank_forces[:n]))
 
     def _steps(self, values, t):
         t = np.asarray(t, dtype=float)
@@ -540,6 +543,16 @@ def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None
     return BlowGrid(s=float(s), cell_time=dt, piston_cells=n_p, segment_cells=tuple(seg_cells), Z=Z,
                     bounds=bounds.astype(np.int64), edges=edges, travel=travel, static=static,
                     piston_segment_cells=tuple(int(n) for n in p_cells), piston_travel=p_travel)
+
+
+def incident_steps(shank_forces, starts, round_trip: float) -> int:
+    """How many of a lattice blow's first steps carry its incident wave (``Blow.incident_peak_force``,
+    the gradient search of ``optimize_piston``): those that start (``starts``, shape ``(n,)``, of
+    the ``shank_forces``' steps) before ``round_trip``, or before the first step after the first
+    without force (the piston's first separation), whichever are more; at least one."""
+    off = np.flatnonzero(np.asarray(shank_forces)[1:] <= 0.0)
+    first = int(off[0]) + 1 if off.size else len(shank_forces)
+    return max(1, first, int(np.searchsorted(starts, round_trip, side="left")))
 
 
 def whole_steps(duration: float, dt: float) -> int:
