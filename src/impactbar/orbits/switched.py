@@ -155,7 +155,8 @@ SETTLE_IMPACTS = 400
 #: before Newton's method takes over (a drive whose flights integrate the variational equations)
 SETTLE_HANDOVER = 1e-4
 #: impacts followed from the rigid piston's orbit, its modes at rest, before a flexible piston's
-#: Newton start (:meth:`ShootingProblem.initial`)
+#: Newton start where the drive's flights integrate the variational equations
+#: (:meth:`ShootingProblem.initial`; the others' flights, closed forms, settle as from rest)
 SETTLE_LIFTED = 3
 #: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
 #: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance)
@@ -379,7 +380,7 @@ class ShootingProblem(OrbitProblem):
         (continued from its end) or, without one, from rest on the stop (the rigid bar; a flexible bar
         from the rigid bar's orbit, its modes at rest), the motion followed impact after impact until
         the impact velocities settle (at most ``SETTLE_IMPACTS``; from the rigid bar's orbit
-        ``SETTLE_LIFTED``)."""
+        ``SETTLE_LIFTED`` where the drive's flights are variational)."""
         model, drive, m, M = self.model, self.drive, self.impacts, self.M
         if isinstance(guess, SwitchedOrbit):
             problem = guess._problem
@@ -405,7 +406,7 @@ class ShootingProblem(OrbitProblem):
             # them the blows' excitation, and the impact velocities agree to 2e-3, where the eight
             # impacts that the agreement to SETTLE_HANDOVER took on the preset's 8-mode orbit led
             # to the same chord steps)
-            return self._settle(tau, mode, y, SETTLE_LIFTED)
+            return self._settle(tau, mode, y, SETTLE_LIFTED if self.variational else SETTLE_IMPACTS)
         if guess is None:
             q, v = np.zeros(M), np.zeros(M)
             state = drive.start(model, q, v)
