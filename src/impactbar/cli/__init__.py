@@ -124,7 +124,10 @@ class _CtrlC:
     handler, in the main thread. A KeyboardInterrupt raised inside a C callback (numba's compiler
     caching an object through llvmlite's ctypes callback) cannot propagate: CPython reports it as
     "Exception ignored ..." with a traceback; after a Ctrl-C that report is dropped (the command
-    ends as interrupted), any other goes to the hook as before."""
+    ends as interrupted), any other goes to the hook as before. So is, after a Ctrl-C and until
+    the process ends, the failure of a ``__del__`` (an object whose construction the interrupt cut
+    short, collected later: pyparsing's ``Forward`` while matplotlib imports, at the interpreter's
+    exit)."""
 
     def __init__(self):
         self.pressed = False
@@ -136,7 +139,7 @@ class _CtrlC:
         raise KeyboardInterrupt
 
     def _unraisable(self, unraisable):
-        if self.pressed and isinstance(unraisable.exc_value, KeyboardInterrupt):
+        if self.pressed and (isinstance(unraisable.exc_value, KeyboardInterrupt) or _in_del(unraisable)):
             return
         self._hook(unraisable)
 
@@ -155,8 +158,16 @@ class _CtrlC:
             import signal
 
             signal.signal(signal.SIGINT, self._old)
-            sys.unraisablehook = self._hook
+            hook = self._hook
+            # (after a Ctrl-C, the half-built objects' __del__ failures are dropped to the end)
+            sys.unraisablehook = hook if not self.pressed else \
+                (lambda u: None if _in_del(u) else hook(u))
         return False
+
+
+def _in_del(unraisable) -> bool:
+    """Whether ``sys.unraisablehook``'s report is of an exception in a ``__del__``."""
+    return getattr(unraisable.object, "__name__", None) == "__del__"
 
 
 class _ClosedStdout:

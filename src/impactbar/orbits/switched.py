@@ -154,9 +154,8 @@ SETTLE_IMPACTS = 400
 #: how closely the impact velocities of the motion followed to a start agree, impact after impact,
 #: before Newton's method takes over (a drive whose flights integrate the variational equations)
 SETTLE_HANDOVER = 1e-4
-#: impacts followed from the rigid piston's orbit, its modes at rest, before a flexible piston's
-#: Newton start where the drive's flights integrate the variational equations
-#: (:meth:`ShootingProblem.initial`; the others' flights, closed forms, settle as from rest)
+#: impacts followed from the rigid piston's orbit, its modes at rest, to a flexible piston's Newton
+#: start where the drive's flights are variational (others settle as from rest; :meth:`initial`)
 SETTLE_LIFTED = 3
 #: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
 #: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance)
