@@ -1,14 +1,15 @@
 r"""Probe: the circuit's plain flights by the compiled DOP853 (``_dop853``, the generated ``dop853_fly``)
 against CVODE's Adams-Moulton (``_cvode.fly``), on one period of the preset ``circuit-drifter``'s orbit.
 
-For each number of modes the orbit is found (the library's default path), then its period's "state"
+For each number of modes the orbit is found (by CVODE's Adams-Moulton flights), then its period's "state"
 flights (``ShootingProblem._flight`` at the drive's variational-state tolerance, ``rtol = 1e-13``,
 ``atol = 1e-15``: the plain flights under Magnus' ``Phi``) are captured (their code, parameters,
 start, end and event directions, by wrapping ``flight._integrate_compiled``) and each flown again:
 
 * CVODE at ``rtol = 1e-13`` (today's state flights: every step kept);
 * DOP853 at ``rtol = 1e-12`` and ``1e-13`` (``atol`` a hundredth of ``rtol``), its kept points at
-  most ``flight.keep_spacing`` apart (dense-output samples inside its steps);
+  most ``flight.keep_spacing`` apart at CVODE's (first) tolerance (dense-output samples inside its
+  steps);
 
 other tolerances by ``--cvode`` and ``--dop853``.
 
@@ -20,15 +21,20 @@ points' error (the same norm, at every kept point), (d) the cubic Hermite interp
 points (rates by the generated ``field_at``, as ``CircuitPiece``) at the middle of each kept
 interval against the reference's dense output, same norm.
 
-Run: ``python benchmarks/probes/explicit_flight.py --modes 4 8 16 --rounds 3``. Library behaviour is
-not changed.
+With ``--stiffer K ...``: instead, the CPU time of 3 periods of ``simulate`` from rest with the oil's
+bulk modulus times each ``K``, Adams-Moulton, DOP853 and BDF (``multistep``), beside the stiffness
+ratio (``flight.EXPLICIT_STIFFNESS``'s measurement).
+
+Run: ``python benchmarks/probes/explicit_flight.py --modes 4 8 16 --rounds 3`` and
+``... --modes 4 8 16 --rounds 2 --stiffer 1 3 10 30 100``. Library behaviour is not changed.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
-import time
+import sys
+from pathlib import Path
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -38,12 +44,17 @@ from impactbar.drives.circuit import _cvode
 from impactbar.drives.circuit import flight as F
 from impactbar.physical import circuit_preset
 
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from _timing import best_cpu  # noqa: E402  (benchmarks/_timing.py)
+
 
 def _capture(n_modes):
     """The orbit's period of state flights: ``(drive, model, flights)``, each flight
     ``(code, par, y0, end, directions, keep, n_energy, t_end, y_end)`` as CVODE flew it."""
     d = circuit_preset("circuit-drifter")
     drive, model = d.drive(), d.model().with_(n_modes=n_modes)
+    if "dop853" in getattr(F, "MULTISTEPS", ()):  # (the flights captured are CVODE's)
+        drive = dataclasses.replace(drive, multistep="adams")
     orbit = find_orbit(model, drive)
     p = orbit._problem
     X = np.asarray(orbit._unknowns, dtype=float)
@@ -68,12 +79,8 @@ def _capture(n_modes):
 
 
 def _best(call, rounds):
-    best, out = np.inf, None
-    for _ in range(rounds):
-        t0 = time.process_time()
-        out = call()
-        best = min(best, time.process_time() - t0)
-    return best, out
+    """``(best CPU s of rounds calls, the result of one more)``."""
+    return best_cpu(call, rounds), call()
 
 
 def _hermite_error(code, par, ts, Y, ref):
@@ -120,7 +127,7 @@ def _reference(flight):
 
 def run(n_modes, rounds, cvode=(1e-13,), dop853=(1e-12, 1e-13)):
     drive, model, settings, cap = _capture(n_modes)
-    spacing = F.keep_spacing(drive, model)
+    spacing = F.keep_spacing(drive, model, *cvode[:1])
     methods = [f"cvode {r:g}" for r in cvode] + [f"dop853 {r:g}" for r in dop853]
     tot = {m: dict(cpu=0.0, steps=0, rhs=0, kept=0, err=0.0, dt=0.0, pts=0.0, herm=0.0) for m in methods}
     for flight in cap:
@@ -150,15 +157,52 @@ def run(n_modes, rounds, cvode=(1e-13,), dop853=(1e-12, 1e-13)):
               f"{T['dt']:10.1e}{T['pts']:10.1e}{T['herm']:10.1e}")
 
 
+def stiffness(n_modes, ks, rounds, periods=3.0):
+    """CPU s of ``periods`` periods of ``simulate`` from rest on the stop with the oil's bulk modulus
+    times each ``k``: the plain flights by Adams-Moulton, DOP853 and BDF (``multistep``), beside the
+    stiffness ratio (how :data:`flight.EXPLICIT_STIFFNESS` was chosen, as ``ADAMS_STIFFNESS`` was),
+    and the largest difference of the impact velocities from Adams'."""
+    from impactbar import InitialState, simulate
+
+    d = circuit_preset("circuit-drifter")
+    base, model = d.drive(), d.model().with_(n_modes=n_modes)
+    names = ("adams", "dop853", "bdf")
+    print(f"\n{n_modes} modes, {periods:g} periods of simulate, CPU s (best of {rounds})")
+    print(f"{'k':>6}{'ratio':>8}" + "".join(f"{m:>9}" for m in names) + f"{'adams/dop':>11}{'impacts':>9}"
+          f"{'dv dop':>10}{'dv bdf':>10}")
+    for k in ks:
+        oil = dataclasses.replace(base.oil, bulk_modulus=k * base.oil.bulk_modulus)
+        row, v = [], []
+        for method in names:
+            drive = dataclasses.replace(base, oil=oil, multistep=method)
+            start = InitialState.rigid(0.0, 0.0, n_modes)
+            simulate(model, drive, start, 0.05)  # (the network's code, compiled or loaded)
+            cpu, tr = _best(lambda drive=drive, start=start: simulate(model, drive, start, periods), rounds)
+            row.append(cpu)
+            v.append(np.asarray(tr.impact_velocities, dtype=float))
+
+        def dv(a, b):
+            return float(np.nanmax(np.abs(a - b))) if a.size == b.size and a.size else float("nan")
+
+        ratio = F.stiffness_ratio(dataclasses.replace(base, oil=oil), model)
+        print(f"{k:6g}{ratio:8.2f}" + "".join(f"{c:9.3f}" for c in row) + f"{row[0] / row[1]:11.2f}"
+              f"{v[0].size:9d}{dv(v[1], v[0]):10.1e}{dv(v[2], v[0]):10.1e}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--modes", type=int, nargs="+", default=[4, 8, 16])
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--cvode", type=float, nargs="+", default=[1e-13], help="CVODE's rtol (Adams)")
     ap.add_argument("--dop853", type=float, nargs="+", default=[1e-12, 1e-13], help="DOP853's rtol")
+    ap.add_argument("--stiffer", type=float, nargs="*", default=None,
+                    help="instead: simulate CPU, the bulk modulus times each value")
     args = ap.parse_args()
     for n in args.modes:
-        run(n, args.rounds, args.cvode, args.dop853)
+        if args.stiffer is not None:
+            stiffness(n, args.stiffer, args.rounds)
+        else:
+            run(n, args.rounds, args.cvode, args.dop853)
 
 
 if __name__ == "__main__":
