@@ -129,6 +129,23 @@ def test_an_event_zero_at_the_start_is_not_a_root(oscillator):
     assert flag == DP.DOP853_ROOT and roots[0] == -1 and t[-1] == pytest.approx(np.sqrt(2e-9 / W2), rel=1e-3)
 
 
+def test_the_events_are_checked_at_each_kept_point(oscillator):
+    """The level ``y = -0.92`` just above the first minimum (-0.924), crossed down and back up within
+    0.093, inside one step at ``rtol = 1e-6`` (1.31 to 1.83): missed where the events are checked at
+    the steps only (``spacing = 0``, as CVODE checks them at its own), found with samples 0.01 apart,
+    at the closed form's crossing within the tolerance's error (measured 4e-6)."""
+    from scipy.optimize import brentq
+
+    par = np.array([W2, DAMP, -0.92, 10.0])
+    flag, t, _, _, roots, _ = _fly(oscillator, [1.0, 0.0], 20.0, 1e-6, par, directions=(-1, 1))
+    assert flag == DP.DOP853_TSTOP and not roots.any() and np.any((t[:-1] < 1.47) & (t[1:] > 1.57))
+    flag, t, y, y_end, roots, _ = _fly(oscillator, [1.0, 0.0], 20.0, 1e-6, par, directions=(-1, 1),
+                                       spacing=0.01)
+    assert flag == DP.DOP853_ROOT and roots[0] == -1 and abs(y_end[0] + 0.92) < 1e-15
+    exact = brentq(lambda s: _exact(s)[0] + 0.92, 1.3, 1.57, xtol=1e-15)
+    assert t[-1] == pytest.approx(exact, abs=2e-5)
+
+
 def test_the_samples_are_the_dense_output(oscillator):
     """With ``spacing`` the kept points at most that apart, the samples within a step the closed form
     to the tolerance, and the steps those without samples, to the bit."""

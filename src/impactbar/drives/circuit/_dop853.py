@@ -8,13 +8,15 @@ method as one compiled loop: scipy's own coefficients
 step), so that on the same problem it takes scipy's steps, to rounding (``tests/drives``' check on
 a damped oscillator and on a circuit flight).
 
-Events are located as CVODE's root finding locates them (``cvRcheck1``, ``cvRootfind``: the event
-functions checked at each step's end, the first crossing of any in its direction found by the
-Illinois method, a function zero at the start set aside until it leaves zero), here on the
-step's 7th-order dense output and to :data:`ROOT_ULPS` roundings of the time instead of CVODE's
-hundred. The flight keeps each step's end and, inside each step, dense-output samples at most
-``spacing`` apart, so that the cubic Hermite interpolant the circuit's pieces take between kept
-points (:class:`.flight.CircuitPiece`, Magnus' ``state_at``) is as fine as over CVODE's steps.
+The flight keeps each step's end and, inside each step, dense-output samples at most ``spacing``
+apart, so that the cubic Hermite interpolant the circuit's pieces take between kept points
+(:class:`.flight.CircuitPiece`, Magnus' ``state_at``) is as fine as over CVODE's steps. Events are
+located as CVODE's root finding locates them (``cvRcheck1``, ``cvRootfind``: the event functions
+checked at each of its steps, the first crossing of any in its direction found by the Illinois
+method, a function zero at the start set aside until it leaves zero), here checked at each kept
+point (an explicit step spans several of CVODE's: a function that crosses and crosses back within
+one is then found where CVODE would find it), located on the step's 7th-order dense output to
+:data:`ROOT_ULPS` roundings of the time instead of CVODE's hundred.
 
 The driver calls the vector field and the event functions of a network's generated module, so its
 source is compiled with that module (:mod:`._netgen`: numba caches a function only where the
@@ -263,7 +265,9 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
     y = y0.copy()
     y_new = np.empty(N)
     ys = np.empty(N)
+    ym = np.empty(N)
     glo = np.empty(E)
+    gend = np.empty(E)
     ghi = np.empty(E)
     gmid = np.empty(E)
     active = np.ones(E, np.bool_)
@@ -328,67 +332,74 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
         if flag != 0:
             break
         counts[0] += 1
-        flight_events(t_new, y_new, ghi, par)
-        counts[3] += 1
-        imax, zero = DP.crossing(glo, ghi, active, directions)
         m = 1
         if spacing > 0.0:
             m = max(1, min(int(math.ceil(h / spacing)), 4096))
-        if imax >= 0 or zero or m > 1:  # the dense output: three more stages
+        flight_events(t_new, y_new, gend, par)
+        counts[3] += 1
+        imax, zero = DP.crossing(glo, gend, active, directions)
+        if m > 1 or imax >= 0 or zero:  # the dense output: three more stages
 @EXTRA@
             counts[2] += 3
             dop853_dense(K, h, y, y_new, F)
-        t_hi = t_new
-        if imax >= 0 or zero:  # CVODE's Illinois search on (t, t_new]
-            tlo = t
-            side = 0
-            sideprev = -1
-            alpha = 1.0
-            ttol = (abs(t_new) + h_abs) * DP.ROOT_ULPS * 2.220446049250313e-16
-            while imax >= 0 and abs(t_hi - tlo) > ttol:
-                if sideprev == side:
-                    alpha = alpha * 2.0 if side == 2 else alpha * 0.5
-                else:
-                    alpha = 1.0
-                tmid = DP.illinois_next(tlo, t_hi, glo[imax], ghi[imax], alpha, ttol)
-                DP.dense_at(F, y, (tmid - t) / h, ys)
-                flight_events(tmid, ys, gmid, par)
+        # the samples and the step's end, each a point of the events' check (CVODE's, at its steps)
+        tlo = t
+        for j in range(1, m + 1):
+            if j < m:
+                t_hi = t + (j / m) * h
+                DP.dense_at(F, y, j / m, ys)
+                flight_events(t_hi, ys, ghi, par)
                 counts[3] += 1
-                sideprev = side
-                imid, zmid = DP.crossing(glo, gmid, active, directions)
-                if imid >= 0 or zmid:
-                    t_hi = tmid
-                    ghi[:] = gmid
-                    side = 1
-                    imax = imid
-                    continue
-                tlo = tmid
-                glo[:] = gmid
-                side = 2
-            DP.mark_roots(glo, ghi, active, directions, roots)
-            flag = DP.DOP853_ROOT
-        for j in range(1, m):  # the samples inside the step (before the root)
-            x = j / m
-            if t + x * h >= t_hi:
+            else:
+                t_hi = t_new
+                ys[:] = y_new
+                ghi[:] = gend
+            imax, zero = DP.crossing(glo, ghi, active, directions)
+            if imax >= 0 or zero:  # CVODE's Illinois search on (tlo, t_hi]
+                moved = False
+                side = 0
+                sideprev = -1
+                alpha = 1.0
+                ttol = (abs(t_new) + h_abs) * DP.ROOT_ULPS * 2.220446049250313e-16
+                while imax >= 0 and abs(t_hi - tlo) > ttol:
+                    if sideprev == side:
+                        alpha = alpha * 2.0 if side == 2 else alpha * 0.5
+                    else:
+                        alpha = 1.0
+                    tmid = DP.illinois_next(tlo, t_hi, glo[imax], ghi[imax], alpha, ttol)
+                    DP.dense_at(F, y, (tmid - t) / h, ym)
+                    flight_events(tmid, ym, gmid, par)
+                    counts[3] += 1
+                    sideprev = side
+                    imid, zmid = DP.crossing(glo, gmid, active, directions)
+                    if imid >= 0 or zmid:
+                        t_hi = tmid
+                        ghi[:] = gmid
+                        moved = True
+                        side = 1
+                        imax = imid
+                        continue
+                    tlo = tmid
+                    glo[:] = gmid
+                    side = 2
+                DP.mark_roots(glo, ghi, active, directions, roots)
+                if moved:
+                    DP.dense_at(F, y, (t_hi - t) / h, ys)
+                flag = DP.DOP853_ROOT
+            T, Y = DP.keep_row(T, Y, k, t_hi, ys)
+            k += 1
+            if flag == DP.DOP853_ROOT:
                 break
-            DP.dense_at(F, y, x, ys)
-            T, Y = DP.keep_row(T, Y, k, t + x * h, ys)
-            k += 1
+            for i in range(E):
+                if not active[i] and ghi[i] != 0.0:
+                    active[i] = True
+            glo[:] = ghi
+            tlo = t_hi
         if flag == DP.DOP853_ROOT:
-            if t_hi != t_new:
-                DP.dense_at(F, y, (t_hi - t) / h, y_new)
-            T, Y = DP.keep_row(T, Y, k, t_hi, y_new)
-            k += 1
-            y[:] = y_new
+            y[:] = ys
             break
-        T, Y = DP.keep_row(T, Y, k, t_new, y_new)
-        k += 1
         y, y_new = y_new, y
         K[0] = K[12]
-        for i in range(E):
-            if not active[i] and ghi[i] != 0.0:
-                active[i] = True
-        glo[:] = ghi
         t = t_new
         if t_new == t_end:
             flag = DP.DOP853_TSTOP
