@@ -1,10 +1,11 @@
 r"""Probe: the circuit's plain flights by the compiled DOP853 (``_dop853``, the generated ``dop853_fly``)
 against CVODE's Adams-Moulton (``_cvode.fly``), on one period of the preset ``circuit-drifter``'s orbit.
 
-For each number of modes the orbit is found (by CVODE's Adams-Moulton flights), then its period's "state"
-flights (``ShootingProblem._flight`` at the drive's variational-state tolerance, ``rtol = 1e-13``,
-``atol = 1e-15``: the plain flights under Magnus' ``Phi``) are captured (their code, parameters,
-start, end and event directions, by wrapping ``flight._integrate_compiled``) and each flown again:
+For each number of modes the orbit is found (by CVODE's flights, ``multistep="cvode"``), then its
+period's "state" flights (``ShootingProblem._flight`` at the drive's variational-state tolerance,
+``rtol = 1e-13``, ``atol = 1e-15``: the plain flights under Magnus' ``Phi``) are captured (their code,
+parameters, start, end and event directions, by wrapping ``flight._integrate_compiled``) and each
+flown again:
 
 * CVODE at ``rtol = 1e-13`` (today's state flights: every step kept);
 * DOP853 at ``rtol = 1e-12`` and ``1e-13`` (``atol`` a hundredth of ``rtol``), its kept points at
@@ -53,8 +54,8 @@ def _capture(n_modes):
     ``(code, par, y0, end, directions, keep, n_energy, t_end, y_end)`` as CVODE flew it."""
     d = circuit_preset("circuit-drifter")
     drive, model = d.drive(), d.model().with_(n_modes=n_modes)
-    if "dop853" in getattr(F, "MULTISTEPS", ()):  # (the flights captured are CVODE's)
-        drive = dataclasses.replace(drive, multistep="adams")
+    if "cvode" in getattr(F, "MULTISTEPS", ()):  # (the flights captured are CVODE's, as before DOP853)
+        drive = dataclasses.replace(drive, multistep="cvode")
     orbit = find_orbit(model, drive)
     p = orbit._problem
     X = np.asarray(orbit._unknowns, dtype=float)

@@ -111,8 +111,8 @@ def test_the_flexible_orbit_is_an_independent_integrations(case, monkeypatch):
 def test_each_flight_takes_the_method_asked(case):
     """``"auto"``: the compiled DOP853 for the flexible piston's plain flights (those under Magnus'
     ``Phi`` too) where the oil is not stiff against its steps, Adams-Moulton where stiffer, BDF
-    stiffer still, for the rigid piston's and for CVODE's variational flights; ``"adams"``, ``"bdf"``:
-    every flight; ``"dop853"``: every plain flight."""
+    stiffer still, for the rigid piston's and for CVODE's variational flights; ``"cvode"``: the same
+    without DOP853; ``"adams"``, ``"bdf"``: every flight; ``"dop853"``: every plain flight."""
     drive, model = case
     rigid = model.with_(n_modes=0)
 
@@ -135,6 +135,9 @@ def test_each_flight_takes_the_method_asked(case):
     assert method(model, "adams") == "adams"
     assert method(model, "bdf") == "bdf"
     assert method(rigid, "adams") == "adams"
+    assert method(model, "cvode") == "adams"  # (the way before DOP853)
+    assert method(model, "cvode", variational=True) == "adams"
+    assert method(rigid, "cvode") == "bdf"
     with pytest.raises(ValueError, match="generated"):
         method(model, "dop853", generated=False)
     # oil stiffer: Adams between the thresholds, BDF beyond
@@ -144,6 +147,7 @@ def test_each_flight_takes_the_method_asked(case):
         assert (F.EXPLICIT_STIFFNESS < ratio <= F.ADAMS_STIFFNESS) == (want == "adams")
         drive = stiff
         assert method(model) == want
+        assert method(model, "cvode") == want
         assert method(model, "adams") == "adams"
         assert method(model, "dop853") == "dop853"
 

@@ -195,7 +195,7 @@ SENSITIVITIES = ("auto", "magnus", "cvode")
 
 #: The integrators a plain flight may take (:func:`circuit_flight`'s ``multistep``): CVODE's linear
 #: multistep methods, or the explicit Dormand-Prince 8(5,3) (:mod:`._dop853`).
-MULTISTEPS = ("auto", "adams", "bdf", "dop853")
+MULTISTEPS = ("auto", "cvode", "adams", "bdf", "dop853")
 
 #: DOP853's tolerances (``rtol`` and ``atol``) over the CVODE settings a flight is given: on the
 #: preset ``circuit-drifter``'s orbit (one period of the plain flights under Magnus' ``Phi``) DOP853
@@ -432,7 +432,7 @@ def uses_dop853(multistep: str, drive, model, generated: bool = True) -> bool:
 
     Parameters
     ----------
-    multistep : {"auto", "adams", "bdf", "dop853"}
+    multistep : {"auto", "cvode", "adams", "bdf", "dop853"}
     drive : HydraulicCircuitDrive
     model : BarModel
     generated : bool, optional
@@ -529,20 +529,21 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         with 8 modes (the state's error; ``benchmarks/probes/monodromy_magnus.py``), where CVODE's at
         the drive's tolerance is some ``1e-5`` off (theory §11).
 
-    multistep : {"auto", "adams", "bdf", "dop853"}, optional
+    multistep : {"auto", "cvode", "adams", "bdf", "dop853"}, optional
         The plain flights' integrator: CVODE's linear multistep method, ``"bdf"``, the backward
         differentiation formulas of orders 1 to 5, or ``"adams"``, Adams-Moulton of orders 1 to 12
-        (Newton's iterations with the same Jacobian either way); ``"dop853"``, the explicit
-        Dormand-Prince 8(5,3) compiled with the generated code (:mod:`._dop853`: scipy's method and
-        step control, at :data:`EXPLICIT_TOLERANCE` times the tolerances of ``settings``, the events
-        found on its dense output, its kept points at most :func:`keep_spacing` apart; ``ValueError``
-        without ``generated``); ``"auto"`` (default), for the plain flights of a piston with modes
-        (those of a variational flight by Magnus among them) DOP853 where the oil is not stiff
-        against its steps (:func:`stiffness_ratio` at most :data:`EXPLICIT_STIFFNESS`), else
-        Adams-Moulton where the oil is not much stiffer than the modes (at most
-        :data:`ADAMS_STIFFNESS`), BDF for the rest, the rigid piston and CVODE's variational flights
-        (which ``"dop853"`` leaves to ``"auto"``'s CVODE method; module docstring). ``"adams"`` is
-        the way before.
+        (Newton's iterations with the same Jacobian either way), for every flight; ``"dop853"``, the
+        explicit Dormand-Prince 8(5,3) compiled with the generated code for every plain flight
+        (:mod:`._dop853`: scipy's method and step control, at :data:`EXPLICIT_TOLERANCE` times the
+        tolerances of ``settings``, the events found on its dense output, its kept points at most
+        :func:`keep_spacing` apart; ``ValueError`` without ``generated``); ``"auto"`` (default), for
+        the plain flights of a piston with modes (those of a variational flight by Magnus among them)
+        DOP853 where the oil is not stiff against its steps (:func:`stiffness_ratio` at most
+        :data:`EXPLICIT_STIFFNESS`), else Adams-Moulton where the oil is not much stiffer than the
+        modes (at most :data:`ADAMS_STIFFNESS`), BDF for the rest, the rigid piston and CVODE's
+        variational flights (which ``"dop853"`` leaves to these CVODE methods too; module
+        docstring); ``"cvode"``, ``"auto"``'s choice among CVODE's methods only, no DOP853 (the way
+        before it, the baseline).
 
     Returns
     -------
@@ -596,7 +597,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
                                                                 y0, end - t, keep,
                                                                 keep_spacing(drive, model, settings.rtol))
     else:
-        adams = multistep == "adams" or (multistep in ("auto", "dop853") and M > 1 and not variational
+        adams = multistep == "adams" or (multistep != "bdf" and M > 1 and not variational
                                          and stiffness_ratio(drive, model) <= ADAMS_STIFFNESS)
         cv = _compiled_driver(compiled)
         integrate = functools.partial(_integrate_binding, adams, code) if cv is None \
