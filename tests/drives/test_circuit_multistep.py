@@ -63,6 +63,15 @@ def _dop853(rtol):
     return integrate
 
 
+def _patch(m, rtol):
+    """Every plain flight by scipy's DOP853 at ``rtol`` (CVODE's and the compiled DOP853's)."""
+    integrate = _dop853(rtol)
+    m.setattr(F, "_integrate_compiled", integrate)
+    m.setattr(F, "_integrate_binding", integrate)
+    m.setattr(F, "_integrate_explicit", lambda code, par, settings, directions, y0, end, keep, spacing:
+              integrate(code, par, settings, directions, y0, 0.0, end, keep))
+
+
 def _reference(orbit, monkeypatch, rtol=1e-13):
     """The orbit's unknowns moved by one Newton step on the shooting residual of DOP853's flights
     (the Jacobian the drive's own: its error moves the step only to second order)."""
@@ -70,8 +79,7 @@ def _reference(orbit, monkeypatch, rtol=1e-13):
     X = np.asarray(orbit._unknowns, dtype=float).copy()
     _, J = problem.residual(X)
     with monkeypatch.context() as m:
-        m.setattr(F, "_integrate_compiled", _dop853(rtol))
-        m.setattr(F, "_integrate_binding", _dop853(rtol))
+        _patch(m, rtol)
         problem._last = None  # (not the flight remembered)
         r = problem.value(X)
     problem._last = None
@@ -79,29 +87,32 @@ def _reference(orbit, monkeypatch, rtol=1e-13):
 
 
 def test_the_flexible_orbit_is_an_independent_integrations(case, monkeypatch):
-    """Adams-Moulton's orbit within 1e-10 of DOP853's (measured 1.3e-12); BDF's, the orbit before,
-    within 1e-8 of both (measured 6.9e-10 from DOP853's): Adams' is the more accurate."""
+    """Adams-Moulton's orbit and the compiled DOP853's (the default) within 1e-10 of scipy's DOP853's
+    (measured 1.3e-12 and 6.7e-13); BDF's, the orbit before Adams, within 1e-8 of all (measured 6.9e-10
+    from scipy's): Adams' and the compiled DOP853's the more accurate; DOP853's multipliers Adams'
+    within 1e-7 (measured 1.3e-10)."""
     drive, model = case
-    adams = find_orbit(model, drive)
+    adams = find_orbit(model, dataclasses.replace(drive, multistep="adams"))
     bdf = find_orbit(model, dataclasses.replace(drive, multistep="bdf"))
+    dop = find_orbit(model, drive)
     ref = _reference(adams, monkeypatch)
-    Xa, Xb = (np.asarray(o._unknowns, dtype=float) for o in (adams, bdf))
+    Xa, Xb, Xd = (np.asarray(o._unknowns, dtype=float) for o in (adams, bdf, dop))
     assert np.max(np.abs(Xa - ref)) <= 1e-10
+    assert np.max(np.abs(Xd - ref)) <= 1e-10
     assert np.max(np.abs(Xb - ref)) <= 1e-8
     assert np.max(np.abs(Xa - ref)) < 0.1 * np.max(np.abs(Xb - ref))
+    assert np.max(np.abs(Xd - ref)) < 0.1 * np.max(np.abs(Xb - ref))
     assert adams.period == pytest.approx(bdf.period, rel=1e-9)
     assert adams.impact_velocity == pytest.approx(bdf.impact_velocity, rel=1e-8)
     np.testing.assert_allclose(adams.multipliers, bdf.multipliers, rtol=0, atol=1e-7)
+    np.testing.assert_allclose(dop.multipliers, adams.multipliers, rtol=0, atol=1e-7)
 
 
 def test_each_flight_takes_the_method_asked(case):
-    """``"auto"``: Adams for the flexible piston's plain flights (those under Magnus' ``Phi`` too),
-    BDF for the rigid piston's and for CVODE's variational flights; ``"adams"``, ``"bdf"``: every
-    flight."""
-    if F._compiled_driver() is None:
-        pytest.skip("CVODE is not driven from compiled code here")
-    from impactbar.drives.circuit import _cvode
-
+    """``"auto"``: the compiled DOP853 for the flexible piston's plain flights (those under Magnus'
+    ``Phi`` too) where the oil is not stiff against its steps, Adams-Moulton where stiffer, BDF
+    stiffer still, for the rigid piston's and for CVODE's variational flights; ``"cvode"``: the same
+    without DOP853; ``"adams"``, ``"bdf"``: every flight; ``"dop853"``: every plain flight."""
     drive, model = case
     rigid = model.with_(n_modes=0)
 
@@ -111,21 +122,34 @@ def test_each_flight_takes_the_method_asked(case):
         fl = F.circuit_flight(d, m, state, 0.0, np.zeros(m.n_modes + 1), np.zeros(m.n_modes + 1), 0.05,
                               multistep=multistep, **kw)
         assert fl.piece.t.size > 3
-        return "adams" if _cvode.last_workspace().adams else "bdf"
+        return F.last_integrator()
 
-    assert method(model) == "adams"
-    assert method(model, variational=True) == "adams"  # (the plain flight under Magnus' Phi)
+    assert F.stiffness_ratio(drive, model) <= F.EXPLICIT_STIFFNESS
+    assert method(model) == "dop853"
+    assert method(model, variational=True) == "dop853"  # (the plain flight under Magnus' Phi)
     assert method(model, variational=True, sensitivity="cvode") == "bdf"
+    assert method(model, "dop853", variational=True, sensitivity="cvode") == "bdf"
     assert method(rigid) == "bdf"
+    assert method(rigid, "dop853") == "dop853"
     assert method(rigid, variational=True) == "bdf"
+    assert method(model, "adams") == "adams"
     assert method(model, "bdf") == "bdf"
     assert method(rigid, "adams") == "adams"
-    # oil a hundred times stiffer: its decay 260 times the highest mode's frequency, BDF
-    stiff = _stiffer(drive, 100.0)
-    assert F.stiffness_ratio(stiff, model) > F.ADAMS_STIFFNESS
-    drive = stiff
-    assert method(model) == "bdf"
-    assert method(model, "adams") == "adams"
+    assert method(model, "cvode") == "adams"  # (the way before DOP853)
+    assert method(model, "cvode", variational=True) == "adams"
+    assert method(rigid, "cvode") == "bdf"
+    with pytest.raises(ValueError, match="generated"):
+        method(model, "dop853", generated=False)
+    # oil stiffer: Adams between the thresholds, BDF beyond
+    for k, want in ((5.0, "adams"), (100.0, "bdf")):
+        stiff = _stiffer(case[0], k)
+        ratio = F.stiffness_ratio(stiff, model)
+        assert (F.EXPLICIT_STIFFNESS < ratio <= F.ADAMS_STIFFNESS) == (want == "adams")
+        drive = stiff
+        assert method(model) == want
+        assert method(model, "cvode") == want
+        assert method(model, "adams") == "adams"
+        assert method(model, "dop853") == "dop853"
 
 
 @pytest.mark.parametrize("n_modes", [4, 8, 16])
@@ -143,19 +167,20 @@ def test_the_stiffness_ratio_is_the_front_chambers_decay_over_the_highest_mode(c
 
 
 def test_a_stroke_by_either_method_is_dop853s(case, monkeypatch):
-    """One stroke of the flexible piston from the stop to the valve's switch, by Adams, by BDF and
-    by DOP853 at ``rtol = 1e-13``: the end time within 1e-12, the modal velocities within 1e-7 and
-    the pressures within 3e-8 of DOP853's either way (measured: Adams 2.8e-14, 1.1e-8, 1.6e-9;
-    BDF 5.6e-13, 6.4e-8, 1.0e-8), Adams the nearer, in fewer than half BDF's steps (measured 5,025
-    against 11,344)."""
+    """One stroke of the flexible piston from the stop to the valve's switch, by Adams, by BDF, by
+    the compiled DOP853 and by scipy's DOP853 at ``rtol = 1e-13``: the end time within 1e-12, the
+    modal velocities within 1e-7 and the pressures within 3e-8 of scipy's each way (measured: Adams
+    2.8e-14, 1.1e-8, 1.6e-9; BDF 5.6e-13, 6.4e-8, 1.0e-8; the compiled DOP853 4.5e-15, 4.5e-10,
+    1.4e-10), Adams and the compiled DOP853 the nearer, Adams in fewer than half BDF's steps
+    (measured 5,025 against 11,344)."""
     drive, model = case
     q, v = np.zeros(model.n_modes + 1), np.zeros(model.n_modes + 1)
     v[0] = -0.1
     state = drive.start(model, q, v)
-    ends = {m: F.circuit_flight(drive, model, state, 0.0, q, v, 5.0, multistep=m) for m in ("adams", "bdf")}
+    ends = {m: F.circuit_flight(drive, model, state, 0.0, q, v, 5.0, multistep=m)
+            for m in ("adams", "bdf", "dop853")}
     with monkeypatch.context() as m:
-        m.setattr(F, "_integrate_compiled", _dop853(1e-13))
-        m.setattr(F, "_integrate_binding", _dop853(1e-13))
+        _patch(m, 1e-13)
         ref = F.circuit_flight(drive, model, state, 0.0, q, v, 5.0)
     errors = {}
     for name, fl in ends.items():
@@ -163,6 +188,7 @@ def test_a_stroke_by_either_method_is_dop853s(case, monkeypatch):
         errors[name] = (abs(fl.t - ref.t), np.max(np.abs(fl.v - ref.v)), np.max(np.abs(fl.z - ref.z)))
         assert np.all(np.array(errors[name]) <= (1e-12, 1e-7, 3e-8)), (name, errors[name])
     assert np.all(np.array(errors["adams"]) < np.array(errors["bdf"])), errors
+    assert np.all(np.array(errors["dop853"]) < np.array(errors["bdf"])), errors
     assert ends["adams"].piece.t.size < 0.5 * ends["bdf"].piece.t.size
 
 

@@ -176,13 +176,17 @@ class HydraulicCircuitDrive(Drive):
         integrated beside the state by CVODE (the way before); ``"auto"`` (default), Magnus where
         the piston has modes, CVODE for the rigid piston
         (:func:`~impactbar.drives.circuit.flight.circuit_flight`, theory §11).
-    multistep : {"auto", "adams", "bdf"}, optional
-        CVODE's linear multistep method (keyword, left out of the repr): ``"auto"`` (default),
-        Adams-Moulton (orders 1 to 12) for the plain flights of a piston with modes where their
-        steps follow the modes' oscillations (the oil's fastest decay at most 15 times the highest
-        mode's frequency, :func:`~impactbar.drives.circuit.flight.stiffness_ratio`), and BDF (orders
-        1 to 5) where they follow the oil's stiffness: a stiffer oil, the rigid piston; ``"adams"``
-        or ``"bdf"`` for every flight (theory §11, *The integrator*).
+    multistep : {"auto", "cvode", "adams", "bdf", "dop853"}, optional
+        The plain flights' integrator (keyword, left out of the repr): ``"auto"`` (default), for a
+        piston with modes the explicit Dormand-Prince 8(5,3) compiled with the network's code
+        where the oil is not stiff against its steps
+        (:data:`~impactbar.drives.circuit.flight.EXPLICIT_STIFFNESS`), else CVODE's Adams-Moulton
+        (orders 1 to 12) where the steps follow the modes' oscillations (the oil's fastest decay at
+        most 15 times the highest mode's frequency,
+        :func:`~impactbar.drives.circuit.flight.stiffness_ratio`), and BDF (orders 1 to 5) where
+        they follow the oil's stiffness: a stiffer oil, the rigid piston; ``"cvode"``, that choice
+        among CVODE's methods only (the way before DOP853); ``"adams"`` or ``"bdf"`` for every
+        flight, ``"dop853"`` for every plain flight (theory §11, *The integrator*).
     extra_parts : tuple of CircuitPart, optional
         Parts added to the circuit (keyword, left out of the repr;
         :class:`~impactbar.drives.circuit.composition.CircuitPart`): their nodes' pressures are

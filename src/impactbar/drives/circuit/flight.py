@@ -19,7 +19,11 @@ pressures' fast transients after each switch and impact, the valve's ramp; measu
 flexible piston the steps follow the modes' oscillations, which the pressures carry, more than the
 oil's stiffness, and the plain flights take CVODE's Adams-Moulton method (orders 1 to 12) instead:
 a stroke of the preset's piston with 4 modes in 5,025 steps against BDF's 11,344, nearer an
-independent integration (``multistep``; theory §11, *The integrator*). The
+independent integration (``multistep``; theory §11, *The integrator*). Where the oil is not stiff
+against the modes (:data:`EXPLICIT_STIFFNESS`) those plain flights take the explicit DOP853 instead,
+compiled with the network's code (:mod:`._dop853`: scipy's method, CVODE's root finding on its dense
+output; about half Adams' CPU time at equal or better accuracy, at :data:`EXPLICIT_TOLERANCE` times
+its tolerance). The
 variational flights' Newton systems (:math:`n + 8 + n^2` unknowns) are solved by the band solver
 (``band=True``, the default; ``Phi`` stored by columns), its LU taken once on the state's
 ``n x n`` block and applied to each column of ``Phi``'s (``blocks=True``, the default). Its
@@ -41,6 +45,7 @@ import dataclasses
 import functools
 import io
 import math
+import threading
 
 import numpy as np
 
@@ -50,7 +55,8 @@ from . import _kernel as K
 from . import _magnus
 
 __all__ = ["CircuitPiece", "circuit_flight", "stiffness_ratio", "DEFAULT_SETTINGS", "ADAMS_STIFFNESS",
-           "magnus_state_settings", "uses_magnus"]
+           "EXPLICIT_STIFFNESS", "EXPLICIT_TOLERANCE", "magnus_state_settings", "uses_magnus", "uses_dop853",
+           "spectrum", "keep_spacing", "last_integrator"]
 
 #: The circuit's integrator: CVODE's BDF at these tolerances (``atol`` relative to the states'
 #: scale, 1 in the units of theory §11).
@@ -187,8 +193,19 @@ MAGNUS_STATE_TOLERANCE = 1e-3
 #: How a variational flight may take its fundamental matrix (:func:`circuit_flight`'s ``sensitivity``).
 SENSITIVITIES = ("auto", "magnus", "cvode")
 
-#: CVODE's linear multistep methods a flight may take (:func:`circuit_flight`'s ``multistep``).
-MULTISTEPS = ("auto", "adams", "bdf")
+#: The integrators a plain flight may take (:func:`circuit_flight`'s ``multistep``): CVODE's linear
+#: multistep methods, or the explicit Dormand-Prince 8(5,3) (:mod:`._dop853`).
+MULTISTEPS = ("auto", "cvode", "adams", "bdf", "dop853")
+
+#: DOP853's tolerances (``rtol`` and ``atol``) over the CVODE settings a flight is given: on the
+#: preset ``circuit-drifter``'s orbit (one period of the plain flights under Magnus' ``Phi``) DOP853
+#: at three times CVODE's ``rtol = 1e-13`` ends each flight nearer a reference (scipy's DOP853 at
+#: ``rtol = 2.3e-14``) than Adams-Moulton does: with 4, 8 and 16 modes 1.7e-9, 3.1e-9 and 2.0e-8
+#: against 1.4e-8, 1.6e-8 and 2.6e-8, in 0.59, 0.53 and 0.39 of its CPU time (at ten times, 5.7e-9,
+#: 1.1e-8 and 6.2e-8: worse with 16 modes); at ``rtol = 1e-10`` (the drive's own) 1.7e-6, 3.1e-6 and
+#: 1.3e-5 against 1.5e-5, 2.0e-5 and 3.1e-5, in 0.54, 0.33 and 0.32 of its CPU time
+#: (``benchmarks/probes/explicit_flight.py``).
+EXPLICIT_TOLERANCE = 3.0
 
 #: The stiffness ratio (:func:`stiffness_ratio`) up to which ``multistep="auto"`` takes Adams-Moulton
 #: for a flexible piston's plain flights. Measured on the preset ``circuit-drifter`` with its oil's bulk
@@ -197,6 +214,18 @@ MULTISTEPS = ("auto", "adams", "bdf")
 #: 78; with 16 modes 1.9 at 1.9 and 0.70 at 19. Periodic orbits, whose flights take the finer state
 #: tolerance of the variational flights, favour Adams more (8 modes: 1.2 at 13, 0.8 at 130).
 ADAMS_STIFFNESS = 15.0
+
+#: The stiffness ratio (:func:`stiffness_ratio`) up to which ``multistep="auto"`` takes the explicit
+#: DOP853 (:mod:`._dop853`) for a flexible piston's plain flights, instead of Adams-Moulton: its steps
+#: follow the modes while the oil's decay is not much faster than they are, and shrink to the decay's
+#: (explicit: ``h |lambda|`` bounded) as it grows. Measured on the preset ``circuit-drifter`` with its
+#: oil's bulk modulus scaled (CPU time of 3 periods of ``simulate``, Adams' over DOP853's, BDF's
+#: beside): with 8 modes 2.7 at a ratio of 1.3, 1.2 at 10.4 and at 15.6 (BDF there as fast as
+#: DOP853), 0.99 at 20.7, 0.68 at 31; with 4 modes 1.8 at 10.4, 1.5 at 15.6, 0.90 at 20.7; with 16
+#: modes 3.2 at 0.65, 1.2 at 10.4 (DOP853 the fastest of the three), 1.15 at 15.6 (BDF the fastest)
+#: (``benchmarks/probes/explicit_flight.py --stiffer``). Periodic orbits, whose flights take the finer
+#: state tolerance, favour DOP853 more.
+EXPLICIT_STIFFNESS = 12.0
 
 
 @functools.lru_cache(maxsize=64)
@@ -229,6 +258,28 @@ def stiffness_ratio(drive, model) -> float:
     >>> round(stiffness_ratio(d.drive(), d.model().with_(n_modes=8)), 2)
     1.3
     """
+    decay, oscillation, _ = spectrum(drive, model)
+    return decay / oscillation if oscillation > 0.0 else math.inf
+
+
+@functools.lru_cache(maxsize=64)
+def spectrum(drive, model) -> tuple[float, float, float]:
+    r"""The circuit's fastest rates at the drive's start (the piston at rest on the stop,
+    :meth:`HydraulicCircuitDrive.start`), from the eigenvalues :math:`\lambda` of its vector field's
+    Jacobian there: the fastest decay :math:`\max(-\operatorname{Re}\lambda, 0)`, the fastest
+    oscillation :math:`\max|\operatorname{Im}\lambda|` and the largest :math:`|\lambda|`
+    (:func:`stiffness_ratio`; the spacing of an explicit flight's kept points, :func:`keep_spacing`).
+
+    Parameters
+    ----------
+    drive : HydraulicCircuitDrive
+    model : BarModel
+
+    Returns
+    -------
+    tuple of float
+        ``(decay, oscillation, modulus)``, in the model's inverse time units.
+    """
     M = model.n_modes + 1
     zeros = np.zeros(M)
     start = drive.start(model, zeros, zeros)
@@ -240,8 +291,44 @@ def stiffness_ratio(drive, model) -> float:
     A = np.empty((n, n))
     code.jac_base(y, par, M, A)
     lam = np.linalg.eigvals(A)
-    decay, oscillation = max(float(np.max(-lam.real)), 0.0), float(np.max(np.abs(lam.imag)))
-    return decay / oscillation if oscillation > 0.0 else math.inf
+    return (max(float(np.max(-lam.real)), 0.0), float(np.max(np.abs(lam.imag))),
+            float(np.max(np.abs(lam))))
+
+
+#: The kept points of an explicit flight at the tolerance :data:`KEEP_RTOL` (:func:`keep_spacing`) at
+#: most this over the circuit's largest rate apart: CVODE's Adams steps on the preset
+#: ``circuit-drifter`` with 8 modes at that tolerance, which the flights kept before, are 0.2 over its
+#: largest rate (the oil's decay 7964, the highest mode 6138 rad/s, the step 2.55e-5) apart.
+KEEP_PHASE = 0.2
+
+#: The CVODE tolerance at which an explicit flight's kept points are :data:`KEEP_PHASE` apart (the
+#: plain flights under Magnus' ``Phi``); at a looser ``rtol`` their spacing grows as
+#: ``(rtol / KEEP_RTOL) ** (1/5)``, the cubic Hermite interpolant's error (of order 4 in the spacing)
+#: staying below the points' own as the tolerance loosens: on the preset's orbit with 8 modes at
+#: ``rtol = 1e-10`` 2e-5 from a reference, CVODE's over its steps 2.9e-5
+#: (``benchmarks/probes/explicit_flight.py``).
+KEEP_RTOL = 1e-13
+
+
+def keep_spacing(drive, model, rtol: float = KEEP_RTOL) -> float:
+    r"""The largest spacing of an explicit flight's kept points: :data:`KEEP_PHASE` over the largest
+    :math:`|\lambda|` of :func:`spectrum`, times ``(rtol / KEEP_RTOL) ** (1/5)`` at a looser
+    tolerance (``inf`` where the rate is 0), the cubic Hermite interpolant between them as fine as
+    over CVODE's steps at ``rtol``.
+
+    Parameters
+    ----------
+    drive : HydraulicCircuitDrive
+    model : BarModel
+    rtol : float, optional
+        The flight's CVODE tolerance (before :data:`EXPLICIT_TOLERANCE`).
+
+    Returns
+    -------
+    float
+    """
+    rate = spectrum(drive, model)[2]
+    return KEEP_PHASE * max(rtol / KEEP_RTOL, 1.0) ** 0.2 / rate if rate > 0.0 else math.inf
 
 
 def uses_magnus(sensitivity: str, model, generated: bool = True) -> bool:
@@ -267,6 +354,9 @@ def magnus_state_settings(settings: FlightSettings | None) -> FlightSettings:
     settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
     rtol = max(settings.rtol * MAGNUS_STATE_TOLERANCE, 1e-13)  # (CVODE's floor: some 100 roundings)
     return dataclasses.replace(settings, rtol=rtol, atol=settings.atol * rtol / settings.rtol)
+
+
+_LAST = threading.local()
 
 
 def _compiled_driver(compiled: bool = True):
@@ -307,6 +397,61 @@ def _integrate_compiled(cv, band, blocks, adams, n_energy, code, par, settings, 
                                       float(settings.atol), np.asarray(directions, dtype=np.int32), par,
                                       keep, _MAX_STEPS)
     return int(flag), _message(flag), ts, Y, yend, np.flatnonzero(roots)
+
+
+def _integrate_explicit(code, par, settings, directions, y0, end, keep, spacing):
+    """``(flag, message, t, y[:, :keep], y_end, events hit)`` by the generated module's DOP853
+    (``code.dop853_fly``, :mod:`._dop853`) from 0 to ``end``, at :data:`EXPLICIT_TOLERANCE` times
+    ``settings``' tolerances, its kept points at most ``spacing`` apart."""
+    from ._dop853 import MESSAGES
+
+    rtol, atol = float(settings.rtol * EXPLICIT_TOLERANCE), float(settings.atol * EXPLICIT_TOLERANCE)
+    flag, ts, Y, yend, roots, counts = code.dop853_fly(0.0, y0, float(end), rtol, atol,
+                                                       np.asarray(directions, dtype=np.int32), par, keep,
+                                                       _MAX_STEPS, float(spacing))
+    _LAST.method, _LAST.counts = "dop853", counts
+    return int(flag), MESSAGES.get(int(flag), ""), ts, Y, yend, np.flatnonzero(roots)
+
+
+def last_integrator() -> str | None:
+    """The integrator of this thread's last flight: ``"dop853"``, ``"adams"`` or ``"bdf"`` (None
+    before the first).
+
+    Returns
+    -------
+    str or None
+    """
+    return getattr(_LAST, "method", None)
+
+
+def uses_dop853(multistep: str, drive, model, generated: bool = True) -> bool:
+    """Whether a plain flight of the piston of ``model`` takes the explicit DOP853 (:mod:`._dop853`;
+    :func:`circuit_flight`'s ``multistep``): asked (``"dop853"``), or by ``"auto"`` for a piston with
+    modes where the oil is not stiff against DOP853's steps (:func:`stiffness_ratio` at most
+    :data:`EXPLICIT_STIFFNESS`); only with the generated code.
+
+    Parameters
+    ----------
+    multistep : {"auto", "cvode", "adams", "bdf", "dop853"}
+    drive : HydraulicCircuitDrive
+    model : BarModel
+    generated : bool, optional
+
+    Returns
+    -------
+    bool
+
+    Raises
+    ------
+    ValueError
+        ``"dop853"`` without the generated code.
+    """
+    if multistep == "dop853":
+        if not generated:
+            raise ValueError("multistep='dop853' runs on the code generated for the network (generated=True)")
+        return True
+    return multistep == "auto" and generated and model.n_modes > 0 and \
+        stiffness_ratio(drive, model) <= EXPLICIT_STIFFNESS
 
 
 def _integrate_binding(adams, code, par, settings, directions, y0, t, end, keep):
@@ -384,13 +529,21 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         with 8 modes (the state's error; ``benchmarks/probes/monodromy_magnus.py``), where CVODE's at
         the drive's tolerance is some ``1e-5`` off (theory §11).
 
-    multistep : {"auto", "adams", "bdf"}, optional
-        CVODE's linear multistep method: ``"bdf"``, the backward differentiation formulas of orders
-        1 to 5; ``"adams"``, Adams-Moulton of orders 1 to 12 (Newton's iterations with the same
-        Jacobian either way); ``"auto"`` (default), Adams-Moulton for the plain flights of a piston
-        with modes (those of a variational flight by Magnus among them) where the oil is not much
-        stiffer than the modes (:func:`stiffness_ratio` at most :data:`ADAMS_STIFFNESS`), BDF for
-        the rest, the rigid piston and CVODE's variational flights (module docstring).
+    multistep : {"auto", "cvode", "adams", "bdf", "dop853"}, optional
+        The plain flights' integrator: CVODE's linear multistep method, ``"bdf"``, the backward
+        differentiation formulas of orders 1 to 5, or ``"adams"``, Adams-Moulton of orders 1 to 12
+        (Newton's iterations with the same Jacobian either way), for every flight; ``"dop853"``, the
+        explicit Dormand-Prince 8(5,3) compiled with the generated code for every plain flight
+        (:mod:`._dop853`: scipy's method and step control, at :data:`EXPLICIT_TOLERANCE` times the
+        tolerances of ``settings``, the events found on its dense output, its kept points at most
+        :func:`keep_spacing` apart; ``ValueError`` without ``generated``); ``"auto"`` (default), for
+        the plain flights of a piston with modes (those of a variational flight by Magnus among them)
+        DOP853 where the oil is not stiff against its steps (:func:`stiffness_ratio` at most
+        :data:`EXPLICIT_STIFFNESS`), else Adams-Moulton where the oil is not much stiffer than the
+        modes (at most :data:`ADAMS_STIFFNESS`), BDF for the rest, the rigid piston and CVODE's
+        variational flights (which ``"dop853"`` leaves to these CVODE methods too; module
+        docstring); ``"cvode"``, ``"auto"``'s choice among CVODE's methods only, no DOP853 (the way
+        before it, the baseline).
 
     Returns
     -------
@@ -402,7 +555,9 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     Raises
     ------
     ValueError
-        Where CVODE fails (the message says why: a chamber emptied, a pressure out of range).
+        Where CVODE or DOP853 fails (the message says why: a chamber emptied, a pressure out of
+        range); ``multistep="dop853"`` without ``generated``; an unknown ``sensitivity`` or
+        ``multistep``.
     """
     settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
     if sensitivity not in SENSITIVITIES:
@@ -436,13 +591,20 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     keep = n + n_energy
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
-    adams = multistep == "adams" or (multistep == "auto" and M > 1 and not variational
-                                     and stiffness_ratio(drive, model) <= ADAMS_STIFFNESS)
-    cv = _compiled_driver(compiled)
-    integrate = functools.partial(_integrate_binding, adams, code) if cv is None \
-        else functools.partial(_integrate_compiled, cv, band, blocks, adams, n_energy, code)
-    status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0, end - t,
-                                                  keep)
+    explicit = not variational and uses_dop853(multistep, drive, model, generated)
+    if explicit:
+        status, message, ts, Y, yend, hit = _integrate_explicit(code, par, settings, drive._directions(mode),
+                                                                y0, end - t, keep,
+                                                                keep_spacing(drive, model, settings.rtol))
+    else:
+        adams = multistep == "adams" or (multistep != "bdf" and M > 1 and not variational
+                                         and stiffness_ratio(drive, model) <= ADAMS_STIFFNESS)
+        cv = _compiled_driver(compiled)
+        integrate = functools.partial(_integrate_binding, adams, code) if cv is None \
+            else functools.partial(_integrate_compiled, cv, band, blocks, adams, n_energy, code)
+        status, message, ts, Y, yend, hit = integrate(par, settings, drive._directions(mode), y0, 0.0,
+                                                      end - t, keep)
+        _LAST.method = "adams" if adams else "bdf"
     if status < 0 or not np.all(np.isfinite(yend)):
         raise ValueError(drive._failure(model, message, t))
     own = ts  # (the flight's own time, from 0)
