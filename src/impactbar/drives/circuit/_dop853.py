@@ -415,7 +415,7 @@ def dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spac
 SOURCE = _source()
 
 
-def compile_driver(rhs, events, cache: bool = False):
+def compile_driver(rhs, events):
     """:data:`SOURCE`'s ``dop853_fly`` compiled on a vector field ``rhs(t, y, yp, par)`` and event
     functions ``events(t, y, g, par)`` (numba functions), uncached: what the tests check against
     scipy on closed forms (a network's flights take the driver compiled with its generated module,
@@ -426,22 +426,13 @@ def compile_driver(rhs, events, cache: bool = False):
     rhs, events : numba.core.registry.CPUDispatcher
         Compiled with ``numba.njit``; ``events`` writes as many values as the driver's
         ``directions`` has.
-    cache : bool, optional
-        Must be False: a driver compiled here is not cached (its callees are no module's globals).
 
     Returns
     -------
     types.SimpleNamespace
         ``dop853_fly(t0, y0, t_end, rtol, atol, directions, par, keep, max_steps, spacing)``,
         ``dop853_error_norm(K, h, y, y_new, rtol, atol)`` and ``dop853_dense(K, h, y, y_new, F)``.
-
-    Raises
-    ------
-    ValueError
-        ``cache`` asked.
     """
-    if cache:
-        raise ValueError("a driver compiled by compile_driver is not cached")
     import sys
 
     ns = {"__name__": f"{__name__}_driver", "nb": nb, "np": np, "math": math, "DP": sys.modules[__name__],
