@@ -182,7 +182,7 @@ GOALS = (
      ("--against", "{ref}", "--rounds", "2")),
     ("the circuit on rock (examples/circuit_drifter_rock.toml) <= 0.3 s an orbit (CPU s)",
      "bench_circuit_laws.py", ("--against", "{ref}", "--rounds", "2")),
-    ("the exact blow under the circuit (method='exact'; the lattice's orbit 80 times cheaper a blow)",
+    ("the exact blow under the circuit (method='exact'; the lattice's orbit some 65 times cheaper a blow)",
      "bench_coupled_exact.py", ("--against", "{src}")),
     ("the wave law's blow under the circuit >= 5x faster", "bench_wave_states.py", ("--against", "{src}")),
     ("the first exact blow with an empty numba cache <= 15 s of CPU", "bench_first_call.py",
