@@ -161,12 +161,12 @@ SETTLE_LIFTED = 3
 #: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance)
 SETTLE_RTOL = 1e-7
 #: the Magnus steps (``h ||A|| = theta``, :attr:`FlightSettings.magnus_theta`) of the variational
-#: flights whose Jacobian only steers Newton's method (the chord's, its closing step): twice the
-#: drive's own, half the steps, the Jacobian some 64 times less accurate (order 6; on the preset's
-#: orbit with 8 modes some 1e-6 of its largest entry, a twentieth of the fourth-order method's at the
-#: same steps, the way before), where a step of 1e-7 then leaves 1e-13; the multipliers' keep the
-#: drive's
-STEER_THETA = 2.0
+#: flights whose Jacobian only steers Newton's method (the chord's, its closing step): four times the
+#: drive's own, a quarter of the steps (two squarings more each), the preset's first flight's Jacobian
+#: within 1.5e-5, 4.9e-5 and 2.1e-6 of its largest entry with 4, 8 and 16 modes (at twice the drive's
+#: steps 2.4e-7, 1.1e-6, 6.7e-8), so that a closing step of 5e-8 leaves some 2e-12; the preset's
+#: orbits the same to 2e-13 and some 10 % cheaper than at twice; the multipliers' keep the drive's
+STEER_THETA = 4.0
 #: the Jacobians a flight can carry (:meth:`ShootingProblem._flight`'s ``variational``), by how much
 #: each holds: a remembered flight answers a request for as much or less
 _JACOBIAN_LEVEL = {False: 0, "state": 1, "steer": 2, True: 3}
