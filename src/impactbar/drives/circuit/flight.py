@@ -228,7 +228,6 @@ ADAMS_STIFFNESS = 15.0
 EXPLICIT_STIFFNESS = 12.0
 
 
-@functools.lru_cache(maxsize=64)
 def stiffness_ratio(drive, model) -> float:
     r"""How much stiffer the oil is than the piston's modes: the fastest decay of the circuit's vector
     field over its fastest oscillation, :math:`\max(-\operatorname{Re}\lambda) /
@@ -406,10 +405,10 @@ def _integrate_explicit(code, par, settings, directions, y0, end, keep, spacing)
     from ._dop853 import MESSAGES
 
     rtol, atol = float(settings.rtol * EXPLICIT_TOLERANCE), float(settings.atol * EXPLICIT_TOLERANCE)
-    flag, ts, Y, yend, roots, counts = code.dop853_fly(0.0, y0, float(end), rtol, atol,
-                                                       np.asarray(directions, dtype=np.int32), par, keep,
-                                                       _MAX_STEPS, float(spacing))
-    _LAST.method, _LAST.counts = "dop853", counts
+    flag, ts, Y, yend, roots, _ = code.dop853_fly(0.0, y0, float(end), rtol, atol,
+                                                  np.asarray(directions, dtype=np.int32), par, keep,
+                                                  _MAX_STEPS, float(spacing))
+    _LAST.method = "dop853"
     return int(flag), MESSAGES.get(int(flag), ""), ts, Y, yend, np.flatnonzero(roots)
 
 

@@ -314,15 +314,14 @@ class Blow:
         return (np.append(self.junction_forces[i, np.arange(i.size)], self.bit_forces[jb]),
                 np.append(self.times[i], self.times[jb]))
 
-
     @property
     def first_separation(self) -> float:
         """When the piston first left the shank (exact method: the start of the shank force's first
         zero piece; lattice: the first step without force); ``duration`` where it never did."""
         if self.exact is not None:
             return self.exact.first_separation
-        off = np.flatnonzero(self.shank_forces[1:] <= 0.0)
-        return float(self.times[off[0] + 1]) if off.size else self.duration
+        i = first_free_step(self.shank_forces)
+        return float(self.times[i]) if i < self.shank_forces.size else self.duration
 
     def peak_shank_force(self, t_end: float | None = None) -> tuple[float, float]:
         """The largest piston-shank force up to ``t_end`` (default: over the whole blow) and when
@@ -550,9 +549,14 @@ def incident_steps(shank_forces, starts, round_trip: float) -> int:
     the gradient search of ``optimize_piston``): those that start (``starts``, shape ``(n,)``, of
     the ``shank_forces``' steps) before ``round_trip``, or before the first step after the first
     without force (the piston's first separation), whichever are more; at least one."""
+    return max(1, first_free_step(shank_forces), int(np.searchsorted(starts, round_trip, side="left")))
+
+
+def first_free_step(shank_forces) -> int:
+    """The index of a lattice blow's first step without piston-shank force, the first step aside
+    (the piston's first separation; ``len(shank_forces)`` where there is none)."""
     off = np.flatnonzero(np.asarray(shank_forces)[1:] <= 0.0)
-    first = int(off[0]) + 1 if off.size else len(shank_forces)
-    return max(1, first, int(np.searchsorted(starts, round_trip, side="left")))
+    return int(off[0]) + 1 if off.size else len(shank_forces)
 
 
 def whole_steps(duration: float, dt: float) -> int:
