@@ -115,3 +115,32 @@ def test_a_growing_multiple_is_not_extrapolated():
     (the quadratic's fixed point would lie beyond Aitken's)."""
     ys, _ = _curved(-0.1, 5, rho_star=0.95)
     assert settling.dominant_limit(*ys[-4:]) is None
+
+
+def test_a_flexible_orbit_starts_three_impacts_after_the_rigid_orbit(monkeypatch):
+    """A flexible piston's default start follows the rigid orbit, its modes at rest, for
+    ``SETTLE_LIFTED`` (3) impacts at the loose tolerance, not until the impact velocities agree to
+    ``SETTLE_HANDOVER`` (on the preset with 4 modes they ring by some 1e-3 and took 9): the same
+    orbit as from that longer start, to 1e-9 of the unknowns' size and 1e-8 in the multipliers."""
+    d = circuit_preset("circuit-drifter")
+    model, drive = d.model().with_(n_modes=4), d.drive()
+    loose = []
+    fly = S.ShootingProblem._flight
+
+    def spy(self, tau, mode, y, **kw):
+        s = kw.get("settings")
+        if self.M > 1 and s is not None and s.rtol == S.SETTLE_RTOL and not kw.get("variational"):
+            loose.append(tau)
+        return fly(self, tau, mode, y, **kw)
+
+    monkeypatch.setattr(S.ShootingProblem, "_flight", spy)
+    short = find_orbit(model, drive)
+    assert len(loose) == S.SETTLE_LIFTED == 3
+    loose.clear()
+    monkeypatch.setattr(S, "SETTLE_LIFTED", S.SETTLE_IMPACTS)
+    long = find_orbit(model, drive)
+    assert len(loose) > 3, loose  # (the agreement to SETTLE_HANDOVER: 9 measured)
+    X, Xl = np.asarray(short._unknowns), np.asarray(long._unknowns)
+    assert np.max(np.abs(X - Xl)) <= 1e-9 * np.max(np.abs(Xl))
+    np.testing.assert_allclose(short.multipliers, long.multipliers, rtol=0, atol=1e-8)
+    assert short.stable and long.stable
