@@ -248,7 +248,7 @@ def stiffness_ratio(drive, model) -> float:
     Returns
     -------
     float
-        Dimensionless, ``>= 0``.
+        Dimensionless, :math:`\ge 0`.
 
     Examples
     --------
