@@ -214,7 +214,8 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
                      f"{np.max(np.abs(step)):.2e})")
 
 
-def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None) -> np.ndarray:
+def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None, first_value=None,
+          handover: float = 0.0, first_here: bool = False) -> np.ndarray:
     """The chord method (a simplified Newton's method) on ``value(X) -> r`` from ``X``: every step
     with one Jacobian, ``first`` (``jacobian(X)`` where not given) factorised once, the residuals by
     ``value`` alone; the Jacobian taken again (``jacobian``, at the iterate) only where the steps stop
@@ -224,13 +225,19 @@ def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None) -
     For residuals whose Jacobian costs much more than the residual itself (the variational
     equations of an integrated drive: n squared more unknowns than the flight): the Jacobian only
     steers the iteration, so ``first`` may be rougher than the residual (from a flight at a looser
-    tolerance); the root is the residual's. Raises as :func:`newton` does.
+    tolerance); the root is the residual's. ``first_here``: ``first`` is the Jacobian at ``X`` (the
+    first step a Newton step); ``first_value``, where given, is ``value(X)`` (from the flight that
+    gave ``first``: no flight more). With ``handover > 0``, a Newton step (its Jacobian taken at its
+    own start) of relative size at most ``handover`` ends the iteration: the iterate's error is then
+    of order the step's square, and the caller finishes with a Newton step of its own instead of
+    the chord's steps. Raises as :func:`newton` does.
     """
     import scipy.linalg as sl
 
     hi, lo = positive, np.setdiff1d(np.arange(np.size(X)), positive)
     Jac, lu, last, step = (jacobian(X) if first is None else first), None, math.inf, np.zeros(0)
-    fresh = first is None
+    fresh = first is None or first_here
+    r = first_value
     for _ in range(max_iter):
         if lu is None:
             if not np.all(np.isfinite(Jac)):
@@ -239,9 +246,10 @@ def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None) -
                 lu = sl.lu_factor(Jac, check_finite=False)
             if np.any(np.diag(lu[0]) == 0.0):
                 raise ValueError(_SINGULAR)
-        step = sl.lu_solve(lu, -value(X), check_finite=False)
+        step = sl.lu_solve(lu, -(value(X) if r is None else r), check_finite=False)
+        r = None
         X, size, done = _advance(X, step, hi, lo, Jac, tol, last, 0.25)
-        if done:
+        if done or (fresh and size <= handover):
             return X
         if size < 1e-9 and size > 0.25 * last and fresh:  # the rounding floor, reached (as newton's)
             return X
@@ -268,7 +276,7 @@ def _advance(X, step, hi, lo, Jac, tol: float, last: float, rate: float):
     # the step relative to the states' and the times' own sizes (relative to
     # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
     times = _relative(step, X, hi)
-    size = max(_relative(step, X, lo), times)
+    size = step_size(step, X, hi, lo)
     # states that vanish at the orbit (R = 0: at rest on the stop): a rounding step of 1e-33 in
     # them read as a relative change of 1; they are converged when their step is below tol
     # times how much they change with the flight times (|dr/dt| |t|, scaling as they do)
@@ -278,6 +286,27 @@ def _advance(X, step, hi, lo, Jac, tol: float, last: float, rate: float):
     done = size <= tol or (big <= 0.5 and math.isfinite(last) and size < rate * last
                            and size * size <= tol * last)
     return X, size, done
+
+
+def step_size(step, X, positive, states=None) -> float:
+    """The size of a Newton step as :func:`newton` measures it: ``max |step|`` relative to ``max |X|``
+    over the flight times (``positive``) and over the states (``states``; default, the rest),
+    the larger.
+
+    Parameters
+    ----------
+    step, X : numpy.ndarray, shape (n,)
+    positive : numpy.ndarray of int
+        Where ``X`` holds flight times.
+    states : numpy.ndarray of int, optional
+
+    Returns
+    -------
+    float
+    """
+    if states is None:
+        states = np.setdiff1d(np.arange(np.size(X)), positive)
+    return max(_relative(step, X, states), _relative(step, X, positive))
 
 
 def _relative(step, X, index) -> float:

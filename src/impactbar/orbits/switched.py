@@ -41,11 +41,12 @@ from .._shared.status import Admissibility
 from .._shared.validate import check_int
 from ..drives.base import DriveState
 from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
-from ..drives.orbitproblem import OrbitData, OrbitProblem, chord, newton, sorted_multipliers
+from ..drives.orbitproblem import OrbitData, OrbitProblem, chord, newton, step_size
 from ..drives.switched import PositionSwitchedDrive
 from ..model import BarModel
 from ._saltation import map_jacobian, through
 from ._settling import dominant_limit, surfaces_ahead
+from ._shooting_data import orbit_data
 from .admissibility import _window_departure
 from .orbit import PeriodicOrbit
 from .switched_orbit import SwitchedOrbit, _constant_load
@@ -167,6 +168,15 @@ SETTLE_RTOL = 1e-7
 #: steps 2.4e-7, 1.1e-6, 6.7e-8), so that a closing step of 5e-8 leaves some 2e-12; the preset's
 #: orbits the same to 2e-13 and some 10 % cheaper than at twice; the multipliers' keep the drive's
 STEER_THETA = 4.0
+#: the size of a Newton step (relative, as Newton's steps are measured) at which the chord hands a
+#: one-impact orbit over to its closing step
+CLOSING_HANDOVER = 2e-4
+#: the same for the rigid piston's orbit that a flexible piston's start lifts
+LIFTED_HANDOVER = 1e-3
+#: the largest Newton step, in the tolerance (``1e-10`` at the drive's own), that the multipliers'
+#: flight may find at a root before another Newton step is taken (the preset's orbits with 4, 8 and
+#: 16 modes: 4e-13, 6e-12 and 1.2e-11 after a chord handed over at 7.2e-5, 7.8e-5 and 7.7e-5)
+CLOSING_CHECK = 0.1
 #: the Jacobians a flight can carry (:meth:`ShootingProblem._flight`'s ``variational``), by how much
 #: each holds: a remembered flight answers a request for as much or less
 _JACOBIAN_LEVEL = {False: 0, "state": 1, "steer": 2, True: 3}
@@ -396,7 +406,11 @@ class ShootingProblem(OrbitProblem):
                              "simulate under the drive")
         if guess is None and M > 1:  # the rigid bar's orbit, lifted, then followed
             rigid = ShootingProblem(model.with_(n_modes=0), drive, m, self.settings)
-            Xr = rigid.solve(rigid.initial(None, tol, max_iter), tol, max_iter)
+            Xr = rigid.initial(None, tol, max_iter)
+            if rigid.variational and rigid.newton == "chord":  # (a start: its first Newton steps)
+                Xr = rigid._steered_chord(Xr, max(tol, rigid.accuracy), max_iter, LIFTED_HANDOVER)[0]
+            else:
+                Xr = rigid.solve(Xr, tol, max_iter)
             y = np.zeros(self.n)
             y[0], y[M], y[2 * M:] = Xr[0], Xr[1], Xr[2:self.n - 2 * M + 2]
             tau, mode = rigid.blocks[0]
@@ -521,12 +535,44 @@ class ShootingProblem(OrbitProblem):
         tol = max(tol, self.accuracy)
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
-        first = self.residual(X, settings=self._steer(self._loose()), steer=True)[1]
+        checked = self.impacts == 1 and self.state_flights  # (the multipliers' flight checks the root)
         try:
-            root, J = self._chord(X, first, tol, max_iter)
+            root, J = self._steered_chord(X, tol, max_iter, CLOSING_HANDOVER if checked else 0.0)
         except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
             return newton(self.residual, X, self.positive, tol, max_iter)  # before, and its verdict)
-        return self._close(root, J)
+        X = self._close(root, J)
+        return self._checked(X, tol, max_iter) if checked else X
+
+    def _steered_chord(self, X, tol: float, max_iter: int, handover: float = 0.0):
+        """:meth:`solve`'s chord from ``X``: the steering Jacobian of a variational flight at
+        ``SETTLE_RTOL`` (its residual the chord's first where that flight's state is the plain
+        flights', as the preset's tolerances make it), the plain flights' root (or, with
+        ``handover``, the iterate after a Newton step of at most that size) and the last Jacobian."""
+        steer = self._steer(self._loose())
+        r, first = self.residual(X, settings=steer, steer=True)
+        plain = self._state_settings(steer)
+        own = plain is not None and (plain.method, plain.rtol, plain.atol, plain.max_step) == (
+            self.settings.method, self.settings.rtol, self.settings.atol, self.settings.max_step)
+        return self._chord(X, first, tol, max_iter, r if own else None, handover)
+
+    def _checked(self, X, tol: float, max_iter: int):
+        """``X`` where the multipliers' flight from it (kept: the orbit's data take it) gives a
+        Newton step of at most ``CLOSING_CHECK`` times ``tol`` (relative to the unknowns' sizes, as
+        Newton's steps), else that step taken and checked again (Newton's method with the exact
+        Jacobian)."""
+        tau, mode = self.blocks[0]
+        for _ in range(max_iter):
+            out = self._flight(tau, mode, X, keep=True, variational=True)
+            J = out[6] - np.eye(self.n)
+            try:
+                step = np.linalg.solve(J, X - out[0])
+            except np.linalg.LinAlgError:
+                raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at "
+                                 "its root") from None
+            if step_size(step, X, self.positive) <= CLOSING_CHECK * tol:
+                return X
+            X = X + step
+        raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps after the chord")
 
     def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
         """The root of this problem from ``rough``, the orbit of a cheaper model of the same motion
@@ -559,16 +605,20 @@ class ShootingProblem(OrbitProblem):
         first = rough._problem.steering_residual(np.asarray(rough._unknowns, dtype=float))[1]
         return self._close(*self._chord(X, first, max(tol, self.accuracy), max_iter))
 
-    def _chord(self, X, first, tol: float, max_iter: int):
+    def _chord(self, X, first, tol: float, max_iter: int, first_value=None, handover: float = 0.0):
         """:meth:`solve`'s chord method from ``X`` with the Jacobian ``first`` (taken again, steering,
-        where its steps stop shrinking): the plain flights' root and the last Jacobian."""
+        where its steps stop shrinking; ``first_value`` the residual at ``X`` where the flight that
+        gave ``first`` there gave it, ``handover`` :func:`~impactbar.drives.orbitproblem.chord`'s): the
+        plain flights' root and the last Jacobian."""
         used = [first]
 
         def jacobian(XX):  # (the chord's Jacobian taken again: the last one kept)
             used[0] = self.steering_residual(XX)[1]
             return used[0]
 
-        return chord(self.value, jacobian, X, self.positive, tol, max_iter, first=first), used[0]
+        return chord(self.value, jacobian, X, self.positive, tol, max_iter, first=first,
+                     first_value=first_value, handover=handover, first_here=first_value is not None
+                     or handover > 0.0), used[0]
 
     def _close(self, X, last):
         """:meth:`solve`'s closing step from the plain flights' root ``X``, ``last`` the chord's last
@@ -699,58 +749,8 @@ class ShootingProblem(OrbitProblem):
         """The period, durations, states, switches and the multipliers of the return map on the
         section after the impacts (the product of the blocks' Jacobians projected on ``c . q = 0``
         times the drive's states); without ``multipliers``, ``nan`` in their place and no
-        monodromy (no Jacobian computed)."""
-        model, drive, n, m, M = self.model, self.drive, self.n, self.impacts, self.M
-        c = model.end_weights
-        Phi = None
-        if not multipliers:
-            mu = np.full(n - 1, math.nan)
-        elif self.variational and m == 1:  # one flight gives the Jacobian and (kept) the data below
-            tau, mode = self.blocks[0]
-            Phi = self._flight(tau, mode, X[:n], keep=True, variational=True)[6]
-        else:
-            _, J = self.residual(X)
-            Phi = np.eye(n)
-            for k in range(m):  # the blocks' Jacobians (their diagonal blocks; with m = 1, J = DP - I)
-                Phi = (J[k * n:(k + 1) * n, k * n:(k + 1) * n] + (np.eye(n) if m == 1 else 0.0)) @ Phi
-        if Phi is not None:
-            a = np.concatenate((c, np.zeros(M + self.k)))
-            Q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(n))))
-            B = Q[:, 1:n]
-            mu = sorted_multipliers(np.linalg.eigvals(B.T @ Phi @ B))
-        before, velocities, times, durations, switch_t, crossings, forces = [], [], [], [], [], [], []
-        shift = 0.0
-        window = float(model.law.window(model))
-        for k in range(m):
-            tau, mode = self.blocks[k]
-            y = X[k * n:(k + 1) * n]
-            y_after, t_after, _, arrival, _, events = self._flight(tau, mode, y, keep=True)
-            t_arr, qa, va, st = arrival
-            before.append(np.concatenate((qa, va)))
-            velocities.append(float(c @ va))
-            times.append(float(shift + t_arr - tau))
-            forces.append(float(drive.force(st.mode, st.z, qa, va)))
-            last = tau
-            prev_name = drive.mode_name(mode)
-            for te, _, mode_after, speed in events:
-                durations.append(te - last)
-                last = te
-                name = drive.mode_name(mode_after)
-                if name != prev_name:
-                    switch_t.append(shift + te - tau)
-                prev_name = name
-                if not math.isnan(speed):
-                    crossings.append(speed)
-            durations.append(t_arr - last)
-            shift += t_after - tau
-        blocks = X.reshape(m, n)
-        return OrbitData(period=float(shift), durations=np.array(durations),
-                         states_after=blocks[:, :2 * M].copy(),
-                         states_before=np.array(before), impact_velocities=np.array(velocities),
-                         impact_times=np.array(times), drive_states=blocks[:, 2 * M:].copy(), multipliers=mu,
-                         trivial_multiplier=1.0, switch_times=np.array(switch_t),
-                         switch_velocity=min(crossings) if crossings else math.nan, contact_time=window,
-                         contact_forces=np.array(forces), monodromy=Phi)
+        monodromy (no Jacobian computed): :func:`._shooting_data.orbit_data`."""
+        return orbit_data(self, X, multipliers)
 
     def blow_records(self, X):
         """The records of the period's blows in order (a drive with state under a law whose contact

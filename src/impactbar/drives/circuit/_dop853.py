@@ -121,12 +121,17 @@ def step_factor(err, rejected):
 
 @nb.njit(**_JIT)
 def dense_at(F, y, x, out):
-    """The dense output at ``x = (t - t_old) / h`` (scipy's ``Dop853DenseOutput``)."""
+    """The dense output at ``x = (t - t_old) / h`` (scipy's ``Dop853DenseOutput``: its Horner
+    scheme in ``x`` and ``1 - x``, written out in its order)."""
+    u = 1.0 - x
     for i in range(y.size):
-        v = 0.0
-        for r in range(N_DENSE - 1, -1, -1):
-            v += F[r, i]
-            v *= x if (N_DENSE - 1 - r) % 2 == 0 else 1.0 - x
+        v = F[6, i] * x
+        v = (v + F[5, i]) * u
+        v = (v + F[4, i]) * x
+        v = (v + F[3, i]) * u
+        v = (v + F[2, i]) * x
+        v = (v + F[1, i]) * u
+        v = (v + F[0, i]) * x
         out[i] = v + y[i]
 
 

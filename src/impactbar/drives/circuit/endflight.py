@@ -45,7 +45,7 @@ class EndPiece(HermiteSteps):
         Where the circuit keeps its states and energy terms (:attr:`HydraulicCircuitDrive.layout`).
     """
 
-    __slots__ = ("alpha", "layout")
+    __slots__ = ("f", "alpha", "layout")
 
     def __init__(self, t, y, f, alpha, layout):
         self.t, self.y, self.f, self.alpha, self.layout = t, y, f, alpha, layout

@@ -82,7 +82,7 @@ class HermiteSteps:
     Hermite interpolant between the steps (built on first use; times clipped to ``[t0, t_end]``):
     what the circuit's pieces of a flight and of a blow share."""
 
-    __slots__ = ("t0", "t_end", "t", "y", "f", "_spline")
+    __slots__ = ("t0", "t_end", "t", "y", "_spline")
 
     def _at(self, t):
         t = np.clip(np.atleast_1d(np.asarray(t, dtype=float)), self.t0, self.t_end)
@@ -119,21 +119,30 @@ class CircuitPiece(HermiteSteps):
         The state and the energy quadratures (from 0 at ``t0``) at each step.
     layout : CircuitLayout
         Where the circuit keeps its states and energy terms (:attr:`HydraulicCircuitDrive.layout`).
-
-    The vector field at the steps is ``field_at(y, par, f)`` (a compiled ``field_at``: the code
-    generated for the circuit's topology, :mod:`._netgen`, or by default :func:`._kernel.field_at`).
+    f : numpy.ndarray, shape (S, 2 N + 2 + n_states + n_energy)
+        The vector field at the steps, ``field_at(y, par, f)`` (a compiled ``field_at``: the code
+        generated for the circuit's topology, :mod:`._netgen`, or by default
+        :func:`._kernel.field_at`), evaluated on first use (a flight whose end alone is wanted, as
+        Newton's residuals, never needs it).
     """
 
-    __slots__ = ("M", "c", "alpha", "layout")
+    __slots__ = ("M", "c", "alpha", "layout", "_f", "_par", "_field_at")
 
     def __init__(self, t, y, par, M, c, alpha, layout, field_at=None):
         self.t, self.y = t, y
         self.t0, self.t_end = float(t[0]), float(t[-1])
         self.M, self.c, self.alpha, self.layout = M, c, alpha, layout
-        f = np.empty_like(y)
-        (K.field_at if field_at is None else field_at)(np.ascontiguousarray(y), par, f)
-        self.f = f
+        self._f, self._par, self._field_at = None, par, field_at
         self._spline = None
+
+    @property
+    def f(self) -> np.ndarray:
+        """The vector field at the steps (class docstring)."""
+        if self._f is None:
+            f = np.empty_like(self.y)
+            (K.field_at if self._field_at is None else self._field_at)(np.ascontiguousarray(self.y), self._par, f)
+            self._f, self._par, self._field_at = f, None, None
+        return self._f
 
     def modal(self, t):
         """``(q, v)`` at times ``t``, shape ``(N + 1, T)`` each."""
@@ -609,7 +618,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     own = ts  # (the flight's own time, from 0)
     ts = ts + t
     keep_t = np.concatenate(([True], np.diff(ts) > 0.0))  # (a repeated point at an event)
-    ts, Y, own = ts[keep_t], Y[keep_t], own[keep_t]
+    if not keep_t.all():  # (else no copy: the kept points of a period are megabytes)
+        ts, Y, own = ts[keep_t], Y[keep_t], own[keep_t]
     piece = CircuitPiece(ts, np.ascontiguousarray(Y), par, M, model.end_weights, drive.chambers.area_ratio,
                          L, field_at)
     drive._check_volumes(model, piece, t)

@@ -1,0 +1,82 @@
+"""The data of a periodic orbit of the shooting problem (:class:`.switched.ShootingProblem`): its
+period, flights, impacts, switches and multipliers, from its unknowns (theory §10)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..drives.orbitproblem import OrbitData, sorted_multipliers
+
+__all__ = ["orbit_data"]
+
+
+def orbit_data(problem, X, multipliers: bool = True) -> OrbitData:
+    """The period, durations, states, switches and the multipliers of the return map on the section
+    after the impacts (the product of the blocks' Jacobians projected on ``c . q = 0`` times the
+    drive's states) of the solution ``X`` of ``problem``.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    X : numpy.ndarray, shape (m n,)
+        The unknowns: the states after each of the ``m`` impacts.
+    multipliers : bool, optional
+        Without them, ``nan`` in their place and no monodromy (no Jacobian computed).
+
+    Returns
+    -------
+    OrbitData
+    """
+    model, drive, n, m, M = problem.model, problem.drive, problem.n, problem.impacts, problem.M
+    c = model.end_weights
+    Phi = None
+    if not multipliers:
+        mu = np.full(n - 1, math.nan)
+    elif problem.variational and m == 1:  # one flight gives the Jacobian and (kept) the data below
+        tau, mode = problem.blocks[0]
+        Phi = problem._flight(tau, mode, X[:n], keep=True, variational=True)[6]
+    else:
+        _, J = problem.residual(X)
+        Phi = np.eye(n)
+        for k in range(m):  # the blocks' Jacobians (their diagonal blocks; with m = 1, J = DP - I)
+            Phi = (J[k * n:(k + 1) * n, k * n:(k + 1) * n] + (np.eye(n) if m == 1 else 0.0)) @ Phi
+    if Phi is not None:
+        a = np.concatenate((c, np.zeros(M + problem.k)))
+        Q, _ = np.linalg.qr(np.column_stack((a / np.linalg.norm(a), np.eye(n))))
+        B = Q[:, 1:n]
+        mu = sorted_multipliers(np.linalg.eigvals(B.T @ Phi @ B))
+    before, velocities, times, durations, switch_t, crossings, forces = [], [], [], [], [], [], []
+    shift = 0.0
+    window = float(model.law.window(model))
+    for k in range(m):
+        tau, mode = problem.blocks[k]
+        y = X[k * n:(k + 1) * n]
+        y_after, t_after, _, arrival, _, events = problem._flight(tau, mode, y, keep=True)
+        t_arr, qa, va, st = arrival
+        before.append(np.concatenate((qa, va)))
+        velocities.append(float(c @ va))
+        times.append(float(shift + t_arr - tau))
+        forces.append(float(drive.force(st.mode, st.z, qa, va)))
+        last = tau
+        prev_name = drive.mode_name(mode)
+        for te, _, mode_after, speed in events:
+            durations.append(te - last)
+            last = te
+            name = drive.mode_name(mode_after)
+            if name != prev_name:
+                switch_t.append(shift + te - tau)
+            prev_name = name
+            if not math.isnan(speed):
+                crossings.append(speed)
+        durations.append(t_arr - last)
+        shift += t_after - tau
+    blocks = X.reshape(m, n)
+    return OrbitData(period=float(shift), durations=np.array(durations),
+                     states_after=blocks[:, :2 * M].copy(),
+                     states_before=np.array(before), impact_velocities=np.array(velocities),
+                     impact_times=np.array(times), drive_states=blocks[:, 2 * M:].copy(), multipliers=mu,
+                     trivial_multiplier=1.0, switch_times=np.array(switch_t),
+                     switch_velocity=min(crossings) if crossings else math.nan, contact_time=window,
+                     contact_forces=np.array(forces), monodromy=Phi)

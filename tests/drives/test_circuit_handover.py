@@ -1,0 +1,142 @@
+"""How the oil circuit's flexible orbit is closed: the steering flight's residual is the chord's first
+(its state is the plain flight's, bit for bit), the chord hands over to the closing step after a
+Newton step of at most ``CLOSING_HANDOVER``, and the multipliers' flight checks the root it is flown
+from (another Newton step where it is not within ``CLOSING_CHECK`` of the tolerance). Checked against
+the chord run to its own root, against a root pushed off on purpose, and on the chord alone on a
+closed-form system."""
+
+import math
+
+import numpy as np
+import pytest
+
+from impactbar import find_orbit
+from impactbar.drives.base import DriveState
+from impactbar.drives.orbitproblem import chord, step_size
+from impactbar.orbits import switched as S
+from impactbar.physical import circuit_preset
+
+
+def _system():
+    """``x^2 = 2, x y = 3``: its residual, Jacobian and root."""
+    def value(X):
+        return np.array([X[0] ** 2 - 2.0, X[0] * X[1] - 3.0])
+
+    def jac(X):
+        return np.array([[2.0 * X[0], 0.0], [X[1], X[0]]])
+
+    return value, jac, np.array([math.sqrt(2.0), 3.0 / math.sqrt(2.0)])
+
+
+def test_the_chord_takes_its_first_residual_and_hands_over_after_a_small_newton_step():
+    """Given the residual at the start, the chord asks none there; with ``handover``, a Newton step
+    (the Jacobian at its start) no larger than it ends the iteration at the Newton iterate, whose
+    error is of order the step's square; a step larger goes on to the root."""
+    value, jac, root = _system()
+    asked = []
+
+    def counted(X):
+        asked.append(X.copy())
+        return value(X)
+
+    X0 = np.array([1.42, 2.1])
+    none = np.zeros(0, dtype=np.int64)
+    newton = X0 - np.linalg.solve(jac(X0), value(X0))
+    X = chord(counted, jac, X0, none, 1e-14, 60, first=jac(X0), first_value=value(X0), handover=0.05,
+              first_here=True)
+    assert asked == [] and np.array_equal(X, newton)
+    assert np.max(np.abs(X - root)) <= 10.0 * step_size(newton - X0, X0, none) ** 2 * np.max(np.abs(root))
+    X = chord(counted, jac, X0, none, 1e-14, 60, first=jac(X0), first_value=value(X0), handover=1e-5,
+              first_here=True)  # (the first step some 1e-2: the chord's steps to the root)
+    assert len(asked) >= 2 and np.allclose(X, root, rtol=1e-13)
+    asked.clear()  # a Jacobian not at the start (first_here False): no handover, however small the step
+    X = chord(counted, jac, X0, none, 1e-14, 60, first=jac(root), handover=1.0)
+    assert len(asked) >= 2 and np.allclose(X, root, rtol=1e-13)
+
+
+@pytest.fixture(scope="module")
+def drifter():
+    d = circuit_preset("circuit-drifter")
+    return d.model().with_(n_modes=4), d.drive()
+
+
+def _spied(monkeypatch):
+    """Record each flight of a flexible piston flown by ``ShootingProblem._fly``: ``(variational,
+    rtol, magnus_theta)``."""
+    seen = []
+    fly = S.ShootingProblem._fly
+
+    def spy(self, tau, mode, y, keep, variational, settings):
+        if self.M > 1:
+            s = settings or self.settings
+            seen.append((variational, s.rtol, s.magnus_theta))
+        return fly(self, tau, mode, y, keep, variational, settings)
+
+    monkeypatch.setattr(S.ShootingProblem, "_fly", spy)
+    return seen
+
+
+def test_the_preset_orbit_takes_no_plain_flight_at_the_drives_tolerance(drifter, monkeypatch):
+    """With 4 modes: the three settling flights, the steering flight (its residual the chord's first
+    step's), the closing step's and the multipliers' (which the orbit's data take): no plain flight
+    at the drive's own tolerance (the chord's first Newton step is 7e-5, below ``CLOSING_HANDOVER``).
+    The orbit is the one the chord reaches when run to its own root first (``CLOSING_HANDOVER = 0``,
+    the way before) to 1e-10 of the unknowns' size, its multipliers to 1e-8."""
+    model, drive = drifter
+    seen = _spied(monkeypatch)
+    orbit = find_orbit(model, drive)
+    rtol = drive.integrator.rtol
+    assert [v for v, r, _ in seen if not v and r == rtol] == []
+    assert [v for v, _, _ in seen] == [False] * S.SETTLE_LIFTED + ["steer", "steer", True], seen
+    seen.clear()
+    monkeypatch.setattr(S, "CLOSING_HANDOVER", 0.0)
+    before = find_orbit(model, drive)
+    assert [v for v, r, _ in seen if not v and r == rtol] != []  # (the chord's plain flights)
+    X, Xb = np.asarray(orbit._unknowns), np.asarray(before._unknowns)
+    assert np.max(np.abs(X - Xb)) <= 1e-10 * np.max(np.abs(Xb))
+    np.testing.assert_allclose(orbit.multipliers, before.multipliers, rtol=0, atol=1e-8)
+
+
+def test_the_multipliers_flight_checks_the_root(drifter, monkeypatch):
+    """The root returned gives, by the multipliers' flight from it, a Newton step within
+    ``CLOSING_CHECK`` of the tolerance; a closing step pushed off by 1e-7 is caught and mended by
+    Newton steps with that flight's exact Jacobian, to the same orbit (1e-10 of the unknowns, the
+    multipliers to 1e-8), at the cost of a variational flight more each."""
+    model, drive = drifter
+    orbit = find_orbit(model, drive)
+    problem, X = orbit._problem, np.asarray(orbit._unknowns, dtype=float)
+    tau, mode = problem.blocks[0]
+    out = problem._flight(tau, mode, X, keep=True, variational=True)
+    step = np.linalg.solve(out[6] - np.eye(problem.n), X - out[0])
+    assert step_size(step, X, problem.positive) <= S.CLOSING_CHECK * problem.accuracy
+    close = S.ShootingProblem._close
+
+    def off(self, root, J):
+        return close(self, root, J) * (1.0 + 1e-7)
+
+    monkeypatch.setattr(S.ShootingProblem, "_close", off)
+    seen = _spied(monkeypatch)
+    mended = find_orbit(model, drive)
+    assert [v for v, _, _ in seen].count(True) >= 2, seen
+    Xm = np.asarray(mended._unknowns)
+    assert np.max(np.abs(Xm - X)) <= 1e-10 * np.max(np.abs(X))
+    np.testing.assert_allclose(mended.multipliers, orbit.multipliers, rtol=0, atol=1e-8)
+
+
+def test_a_piece_takes_its_vector_field_on_first_use(drifter):
+    """A flight's piece evaluates the vector field at its steps only when asked (Newton's residuals
+    read the flight's end alone), then as the compiled ``field_at`` gives it, once."""
+    model, drive = drifter
+    orbit = find_orbit(model, drive)
+    problem, X = orbit._problem, np.asarray(orbit._unknowns, dtype=float)
+    tau, mode = problem.blocks[0]
+    M = problem.M
+    fl = drive.flight(model, DriveState(mode, X[2 * M:]), tau, X[:M], X[M:2 * M], math.inf)
+    piece = fl.piece
+    assert piece._f is None
+    net, code = drive._compiled_network(mode)
+    par = np.concatenate((drive._par(model, mode, False), net))
+    want = np.empty_like(piece.y)
+    code.field_at(np.ascontiguousarray(piece.y), par, want)
+    assert np.array_equal(piece.f, want) and piece.f is piece.f
+    assert piece._par is None  # (what it was evaluated from, let go)
