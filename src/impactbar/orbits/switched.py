@@ -168,8 +168,7 @@ SETTLE_RTOL = 1e-7
 #: steps 2.4e-7, 1.1e-6, 6.7e-8), so that a closing step of 5e-8 leaves some 2e-12; the preset's
 #: orbits the same to 2e-13 and some 10 % cheaper than at twice; the multipliers' keep the drive's
 STEER_THETA = 4.0
-#: the size of a Newton step (relative, as Newton's steps are measured) at which the chord hands a
-#: one-impact orbit over to its closing step
+#: the size of a Newton step (relative) at which the chord hands a one-impact orbit to its closing step
 CLOSING_HANDOVER = 2e-4
 #: the same for the rigid piston's orbit that a flexible piston's start lifts
 LIFTED_HANDOVER = 1e-3
@@ -531,7 +530,9 @@ class ShootingProblem(OrbitProblem):
         Newton's method from the same start), then one Newton step with a variational flight; the
         Jacobians of the chord and of that step only steer, and take Magnus' coarser steps
         (``STEER_THETA``) and a coupled blow's forward differences; with coupled blows that step
-        takes the chord's last Jacobian (a fresh one would cost a blow a column)."""
+        takes the chord's last Jacobian (a fresh one would cost a blow a column). A one-impact orbit
+        whose variational flights' state is a plain flight's hands over to that step after a Newton
+        step below ``CLOSING_HANDOVER``, and its multipliers' flight checks the root (:meth:`_checked`)."""
         tol = max(tol, self.accuracy)
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
@@ -540,8 +541,7 @@ class ShootingProblem(OrbitProblem):
             root, J = self._steered_chord(X, tol, max_iter, CLOSING_HANDOVER if checked else 0.0)
         except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
             return newton(self.residual, X, self.positive, tol, max_iter)  # before, and its verdict)
-        X = self._close(root, J)
-        return self._checked(X, tol, max_iter) if checked else X
+        return self._checked(self._close(root, J), tol, max_iter) if checked else self._close(root, J)
 
     def _steered_chord(self, X, tol: float, max_iter: int, handover: float = 0.0):
         """:meth:`solve`'s chord from ``X``: the steering Jacobian of a variational flight at

@@ -139,8 +139,8 @@ class CircuitPiece(HermiteSteps):
     def f(self) -> np.ndarray:
         """The vector field at the steps (class docstring)."""
         if self._f is None:
-            f = np.empty_like(self.y)
-            (K.field_at if self._field_at is None else self._field_at)(np.ascontiguousarray(self.y), self._par, f)
+            f, field_at = np.empty_like(self.y), K.field_at if self._field_at is None else self._field_at
+            field_at(np.ascontiguousarray(self.y), self._par, f)
             self._f, self._par, self._field_at = f, None, None
         return self._f
 
