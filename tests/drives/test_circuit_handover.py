@@ -140,3 +140,17 @@ def test_a_piece_takes_its_vector_field_on_first_use(drifter):
     code.field_at(np.ascontiguousarray(piece.y), par, want)
     assert np.array_equal(piece.f, want) and piece.f is piece.f
     assert piece._par is None  # (what it was evaluated from, let go)
+
+
+def test_the_check_stops_at_the_rounding_floor(drifter, monkeypatch):
+    """Where no step is small enough (``CLOSING_CHECK = 0``: nothing passes) the check's Newton steps
+    stop where they no longer shrink (the flights' noise), as Newton's method does, with the same
+    orbit, rather than running out of iterations."""
+    model, drive = drifter
+    orbit = find_orbit(model, drive)
+    monkeypatch.setattr(S, "CLOSING_CHECK", 0.0)
+    seen = _spied(monkeypatch)
+    floor = find_orbit(model, drive)
+    assert 2 <= [v for v, _, _ in seen].count(True) <= 6, seen
+    X = np.asarray(orbit._unknowns)
+    assert np.max(np.abs(np.asarray(floor._unknowns) - X)) <= 1e-10 * np.max(np.abs(X))

@@ -545,33 +545,33 @@ class ShootingProblem(OrbitProblem):
 
     def _steered_chord(self, X, tol: float, max_iter: int, handover: float = 0.0):
         """:meth:`solve`'s chord from ``X``: the steering Jacobian of a variational flight at
-        ``SETTLE_RTOL`` (its residual the chord's first where that flight's state is the plain
-        flights', as the preset's tolerances make it), the plain flights' root (or, with
-        ``handover``, the iterate after a Newton step of at most that size) and the last Jacobian."""
-        steer = self._steer(self._loose())
+        ``SETTLE_RTOL`` (its residual the chord's first where that flight's state is the plain flights',
+        as the preset's tolerances make it), the plain flights' root (with ``handover``, the iterate
+        after a Newton step of at most that size) and the last Jacobian."""
+        steer, key = self._steer(self._loose()), lambda s: s and (s.method, s.rtol, s.atol, s.max_step)
         r, first = self.residual(X, settings=steer, steer=True)
-        plain = self._state_settings(steer)
-        own = plain is not None and (plain.method, plain.rtol, plain.atol, plain.max_step) == (
-            self.settings.method, self.settings.rtol, self.settings.atol, self.settings.max_step)
+        own = key(self._state_settings(steer)) == key(self.settings)
         return self._chord(X, first, tol, max_iter, r if own else None, handover)
 
     def _checked(self, X, tol: float, max_iter: int):
         """``X`` where the multipliers' flight from it (kept: the orbit's data take it) gives a
         Newton step of at most ``CLOSING_CHECK`` times ``tol`` (relative to the unknowns' sizes, as
         Newton's steps), else that step taken and checked again (Newton's method with the exact
-        Jacobian)."""
+        Jacobian; stopped as :func:`~impactbar.drives.orbitproblem.newton` stops at the rounding floor
+        of a poorly conditioned orbit, a step below 1e-9 that shrinks by less than a quarter)."""
         tau, mode = self.blocks[0]
+        last = math.inf
         for _ in range(max_iter):
             out = self._flight(tau, mode, X, keep=True, variational=True)
-            J = out[6] - np.eye(self.n)
             try:
-                step = np.linalg.solve(J, X - out[0])
+                step = np.linalg.solve(out[6] - np.eye(self.n), X - out[0])
             except np.linalg.LinAlgError:
                 raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at "
                                  "its root") from None
-            if step_size(step, X, self.positive) <= CLOSING_CHECK * tol:
+            size = step_size(step, X, self.positive)
+            if size <= CLOSING_CHECK * tol or 0.25 * last < size < 1e-9:
                 return X
-            X = X + step
+            X, last = X + step, size
         raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps after the chord")
 
     def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
