@@ -13,6 +13,7 @@ import pytest
 from impactbar import find_orbit
 from impactbar.drives.base import DriveState
 from impactbar.drives.orbitproblem import chord, step_size
+from impactbar.orbits import _closing as C
 from impactbar.orbits import switched as S
 from impactbar.physical import circuit_preset
 
@@ -89,7 +90,7 @@ def test_the_preset_orbit_takes_no_plain_flight_at_the_drives_tolerance(drifter,
     assert [v for v, r, _ in seen if not v and r == rtol] == []
     assert [v for v, _, _ in seen] == [False] * S.SETTLE_LIFTED + ["steer", "steer", True], seen
     seen.clear()
-    monkeypatch.setattr(S, "CLOSING_HANDOVER", 0.0)
+    monkeypatch.setattr(C, "CLOSING_HANDOVER", 0.0)
     before = find_orbit(model, drive)
     assert [v for v, r, _ in seen if not v and r == rtol] != []  # (the chord's plain flights)
     X, Xb = np.asarray(orbit._unknowns), np.asarray(before._unknowns)
@@ -108,11 +109,11 @@ def test_the_multipliers_flight_checks_the_root(drifter, monkeypatch):
     tau, mode = problem.blocks[0]
     out = problem._flight(tau, mode, X, keep=True, variational=True)
     step = np.linalg.solve(out[6] - np.eye(problem.n), X - out[0])
-    assert step_size(step, X, problem.positive) <= S.CLOSING_CHECK * problem.accuracy
+    assert step_size(step, X, problem.positive) <= C.CLOSING_CHECK * problem.accuracy
     close = S.ShootingProblem._close
 
-    def off(self, root, J):
-        return close(self, root, J) * (1.0 + 1e-7)
+    def off(self, root, J, tol=0.0):
+        return close(self, root, J, tol) * (1.0 + 1e-7)
 
     monkeypatch.setattr(S.ShootingProblem, "_close", off)
     seen = _spied(monkeypatch)
@@ -148,9 +149,37 @@ def test_the_check_stops_at_the_rounding_floor(drifter, monkeypatch):
     orbit, rather than running out of iterations."""
     model, drive = drifter
     orbit = find_orbit(model, drive)
-    monkeypatch.setattr(S, "CLOSING_CHECK", 0.0)
+    monkeypatch.setattr(C, "CLOSING_CHECK", 0.0)
     seen = _spied(monkeypatch)
     floor = find_orbit(model, drive)
     assert 2 <= [v for v, _, _ in seen].count(True) <= 6, seen
     X = np.asarray(orbit._unknowns)
     assert np.max(np.abs(np.asarray(floor._unknowns) - X)) <= 1e-10 * np.max(np.abs(X))
+
+
+def test_a_large_closing_step_is_followed_by_chord_steps_not_by_a_failed_check(drifter, monkeypatch):
+    """With the pump's flow at 0.7 of the preset's (8 modes) the chord hands over with its iterate some
+    4e-6 from the root (its first Jacobian, at the loose tolerance, some 6 % off there): the closing
+    step's Jacobian, off by some 1e-4, leaves 5e-10, more than the check allows. One chord step with
+    it on the variational flights' state (a plain flight at their tolerance) follows, and the
+    multipliers' flight is flown once; without those steps (``STEER_ERROR = 0``) the check finds the
+    root off and flies it twice. Both give the orbit of the chord run to its root first (1e-10 of the
+    unknowns' size, the multipliers to 1e-8)."""
+    model, drive = drifter
+    model, drive = model.with_(n_modes=8), drive.with_parameter("pump_flow", 0.7 * drive.value("pump_flow"))
+    fine = drive.variational_state_settings(model).rtol
+    seen = _spied(monkeypatch)
+    orbit = find_orbit(model, drive)
+    kinds = [v if v else r for v, r, _ in seen]
+    assert kinds.count(fine) == 1 and kinds.count(True) == 1, seen
+    seen.clear()
+    monkeypatch.setattr(C, "STEER_ERROR", 0.0)
+    twice = find_orbit(model, drive)
+    kinds = [v if v else r for v, r, _ in seen]
+    assert kinds.count(fine) == 0 and kinds.count(True) == 2, seen
+    monkeypatch.setattr(C, "CLOSING_HANDOVER", 0.0)
+    ref = find_orbit(model, drive)
+    Xr = np.asarray(ref._unknowns)
+    for o in (orbit, twice):
+        assert np.max(np.abs(np.asarray(o._unknowns) - Xr)) <= 1e-10 * np.max(np.abs(Xr))
+        np.testing.assert_allclose(o.multipliers, ref.multipliers, rtol=0, atol=1e-8)

@@ -41,9 +41,11 @@ from .._shared.status import Admissibility
 from .._shared.validate import check_int
 from ..drives.base import DriveState
 from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
-from ..drives.orbitproblem import OrbitData, OrbitProblem, chord, newton, step_size
+from ..drives.orbitproblem import OrbitData, OrbitProblem, chord, newton
 from ..drives.switched import PositionSwitchedDrive
 from ..model import BarModel
+from . import _closing as C
+from ._closing import checked_root, close
 from ._saltation import map_jacobian, through
 from ._settling import dominant_limit, surfaces_ahead
 from ._shooting_data import orbit_data
@@ -168,14 +170,6 @@ SETTLE_RTOL = 1e-7
 #: steps 2.4e-7, 1.1e-6, 6.7e-8), so that a closing step of 5e-8 leaves some 2e-12; the preset's
 #: orbits the same to 2e-13 and some 10 % cheaper than at twice; the multipliers' keep the drive's
 STEER_THETA = 4.0
-#: the size of a Newton step (relative) at which the chord hands a one-impact orbit to its closing step
-CLOSING_HANDOVER = 2e-4
-#: the same for the rigid piston's orbit that a flexible piston's start lifts
-LIFTED_HANDOVER = 1e-3
-#: the largest Newton step, in the tolerance (``1e-10`` at the drive's own), that the multipliers'
-#: flight may find at a root before another Newton step is taken (the preset's orbits with 4, 8 and
-#: 16 modes: 4e-13, 6e-12 and 1.2e-11 after a chord handed over at 7.2e-5, 7.8e-5 and 7.7e-5)
-CLOSING_CHECK = 0.1
 #: the Jacobians a flight can carry (:meth:`ShootingProblem._flight`'s ``variational``), by how much
 #: each holds: a remembered flight answers a request for as much or less
 _JACOBIAN_LEVEL = {False: 0, "state": 1, "steer": 2, True: 3}
@@ -407,7 +401,7 @@ class ShootingProblem(OrbitProblem):
             rigid = ShootingProblem(model.with_(n_modes=0), drive, m, self.settings)
             Xr = rigid.initial(None, tol, max_iter)
             if rigid.variational and rigid.newton == "chord":  # (a start: its first Newton steps)
-                Xr = rigid._steered_chord(Xr, max(tol, rigid.accuracy), max_iter, LIFTED_HANDOVER)[0]
+                Xr = rigid._steered_chord(Xr, max(tol, rigid.accuracy), max_iter, C.LIFTED_HANDOVER)[0]
             else:
                 Xr = rigid.solve(Xr, tol, max_iter)
             y = np.zeros(self.n)
@@ -532,16 +526,18 @@ class ShootingProblem(OrbitProblem):
         (``STEER_THETA``) and a coupled blow's forward differences; with coupled blows that step
         takes the chord's last Jacobian (a fresh one would cost a blow a column). A one-impact orbit
         whose variational flights' state is a plain flight's hands over to that step after a Newton
-        step below ``CLOSING_HANDOVER``, and its multipliers' flight checks the root (:meth:`_checked`)."""
+        step below ``CLOSING_HANDOVER``, and its multipliers' flight checks the root (:mod:`._closing`)."""
         tol = max(tol, self.accuracy)
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
         checked = self.impacts == 1 and self.state_flights  # (the multipliers' flight checks the root)
         try:
-            root, J = self._steered_chord(X, tol, max_iter, CLOSING_HANDOVER if checked else 0.0)
+            root, J = self._steered_chord(X, tol, max_iter, C.CLOSING_HANDOVER if checked else 0.0)
         except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
             return newton(self.residual, X, self.positive, tol, max_iter)  # before, and its verdict)
-        return self._checked(self._close(root, J), tol, max_iter) if checked else self._close(root, J)
+        if not checked:
+            return self._close(root, J)
+        return checked_root(self, self._close(root, J, tol), tol, max_iter)
 
     def _steered_chord(self, X, tol: float, max_iter: int, handover: float = 0.0):
         """:meth:`solve`'s chord from ``X``: the steering Jacobian of a variational flight at
@@ -552,27 +548,6 @@ class ShootingProblem(OrbitProblem):
         r, first = self.residual(X, settings=steer, steer=True)
         own = key(self._state_settings(steer)) == key(self.settings)
         return self._chord(X, first, tol, max_iter, r if own else None, handover)
-
-    def _checked(self, X, tol: float, max_iter: int):
-        """``X`` where the multipliers' flight from it (kept: the orbit's data take it) gives a
-        Newton step of at most ``CLOSING_CHECK`` times ``tol`` (relative to the unknowns' sizes, as
-        Newton's steps), else that step taken and checked again (Newton's method with the exact
-        Jacobian; stopped as :func:`~impactbar.drives.orbitproblem.newton` stops at the rounding floor
-        of a poorly conditioned orbit, a step below 1e-9 that shrinks by less than a quarter)."""
-        tau, mode = self.blocks[0]
-        last = math.inf
-        for _ in range(max_iter):
-            out = self._flight(tau, mode, X, keep=True, variational=True)
-            try:
-                step = np.linalg.solve(out[6] - np.eye(self.n), X - out[0])
-            except np.linalg.LinAlgError:
-                raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at "
-                                 "its root") from None
-            size = step_size(step, X, self.positive)
-            if size <= CLOSING_CHECK * tol or 0.25 * last < size < 1e-9:
-                return X
-            X, last = X + step, size
-        raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps after the chord")
 
     def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
         """The root of this problem from ``rough``, the orbit of a cheaper model of the same motion
@@ -620,24 +595,10 @@ class ShootingProblem(OrbitProblem):
                      first_value=first_value, handover=handover, first_here=first_value is not None
                      or handover > 0.0), used[0]
 
-    def _close(self, X, last):
+    def _close(self, X, last, tol: float = 0.0):
         """:meth:`solve`'s closing step from the plain flights' root ``X``, ``last`` the chord's last
-        Jacobian."""
-        # the root of the plain flights is not the variational flights' (their steps differ: the
-        # integrator's error, 4e-8 in the residual of the 4-mode circuit); one Newton step with the
-        # variational flight moves it there, where Newton's method of before converges. The step
-        # is that small (3e-10 of the unknowns on the rod and rock): a Jacobian off by 1e-2 leaves
-        # 3e-12, so that with coupled blows (a column of the blow's Jacobian a blow) it is the
-        # chord's, and the flight's only its state's (its residual the variational flight's all the same)
-        if self.coupled:
-            r, J = self._variational_value(X, self._steer(self.settings)), last
-        else:
-            r, J = self.steering_residual(X)
-        try:
-            return X + np.linalg.solve(J, -r)
-        except np.linalg.LinAlgError:
-            raise ValueError("find_orbit: the Jacobian of the periodic-orbit problem is singular at its "
-                             "root") from None
+        Jacobian; with ``tol``, the steps after it that the check asks (:func:`._closing.close`)."""
+        return close(self, X, last, tol)
 
     def root_value(self, X):
         """The shooting residual whose root the orbit is: by the variational flights' state where the

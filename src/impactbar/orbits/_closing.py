@@ -1,0 +1,135 @@
+"""The last Newton steps of a periodic orbit of the shooting problem whose flights integrate the
+variational equations (:class:`.switched.ShootingProblem`, the oil circuit; theory §11): the closing
+step from the chord's root and, where the flights' state is a plain flight of its own, the check of
+the root by the multipliers' flight.
+
+The chord (:func:`~impactbar.drives.orbitproblem.chord`) takes plain flights at the drive's
+tolerance and Jacobians that only steer (Magnus' coarser steps, ``STEER_THETA``). The orbit is the
+root of the variational flights, whose state is integrated a thousand times finer: the closing step
+is one Newton step with a steering flight there, and for a one-impact orbit the chord hands over
+to it already after a Newton step below :data:`CLOSING_HANDOVER` (that iterate's error of the order
+of the step's square). The multipliers' flight from the root then gives Newton's next step with
+the exact Jacobian; it must be below :data:`CLOSING_CHECK` times the tolerance, else it is taken
+and the flight flown again, so that the orbit returned is the root its own multipliers' flight
+confirms.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..drives.orbitproblem import step_size
+
+__all__ = ["CLOSING_HANDOVER", "LIFTED_HANDOVER", "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "close",
+           "checked_root"]
+
+#: The size of a Newton step (relative to the unknowns, as Newton's steps are measured) after which
+#: the chord hands a one-impact orbit over to its closing step (the preset ``circuit-drifter``'s first
+#: steps with 4, 8 and 16 modes: 7.2e-5, 7.8e-5 and 7.7e-5, the iterates then some 3e-8 and 4e-8
+#: from the root).
+CLOSING_HANDOVER = 2e-4
+#: The same for the rigid piston's orbit that a flexible piston's start lifts (a start only: followed
+#: three impacts at the loose tolerance after).
+LIFTED_HANDOVER = 1e-3
+#: The largest Newton step, in the tolerance (``1e-10`` at the drive's own), that the multipliers'
+#: flight may find at a root before another Newton step is taken (the preset's orbits with 4, 8 and
+#: 16 modes: 4e-13, 6e-12 and 1.2e-11 after the chord handed over).
+CLOSING_CHECK = 0.1
+#: A bound on the steering Jacobians' error relative to their largest entry (measured at most 4.9e-5:
+#: ``STEER_THETA``): after the closing step, chord steps with its Jacobian follow while this times
+#: the last step could exceed what the check allows, at most :data:`CLOSING_STEPS` of them.
+STEER_ERROR = 1e-4
+CLOSING_STEPS = 4
+
+_SINGULAR = "find_orbit: the Jacobian of the periodic-orbit problem is singular at its root"
+
+
+def close(problem, X, last, tol: float = 0.0) -> np.ndarray:
+    """The closing step from the chord's iterate ``X`` (``last`` the chord's last Jacobian): one Newton
+    step with a steering flight at the drive's tolerance (with coupled blows, the chord's Jacobian and
+    the variational flights' state); with ``tol`` (a root that :func:`checked_root` checks), chord
+    steps with that Jacobian on the variational flights' state (``problem.root_value``, one plain
+    flight each) after it while :data:`STEER_ERROR` times the last step exceeds :data:`CLOSING_CHECK`
+    times ``tol``, as long as the steps shrink by half.
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+    X : numpy.ndarray, shape (m n,)
+        The chord's last iterate.
+    last : numpy.ndarray, shape (m n, m n)
+        The chord's last Jacobian.
+    tol : float, optional
+        The tolerance of the check (0: the closing step alone).
+
+    Returns
+    -------
+    numpy.ndarray, shape (m n,)
+
+    Raises
+    ------
+    ValueError
+        Where the Jacobian is singular, or a flight fails.
+    """
+    # the root of the plain flights is not the variational flights' (their steps differ: the
+    # integrator's error, 4e-8 in the residual of the 4-mode circuit); one Newton step with the
+    # variational flight moves it there. The step is that small with coupled blows (3e-10 of the
+    # unknowns on the rod and rock) that a Jacobian off by 1e-2 leaves 3e-12: the chord's then (a
+    # column of the blow's Jacobian costs a blow), and the flight's only its state's
+    if problem.coupled:
+        r, J = problem._variational_value(X, problem._steer(problem.settings)), last
+    else:
+        r, J = problem.steering_residual(X)
+    before = math.inf
+    for _ in range(CLOSING_STEPS):
+        try:
+            step = np.linalg.solve(J, -r)
+        except np.linalg.LinAlgError:
+            raise ValueError(_SINGULAR) from None
+        X, size = X + step, step_size(step, X, problem.positive)
+        if not tol or STEER_ERROR * size <= CLOSING_CHECK * tol or size > 0.5 * before:
+            return X
+        r, before = problem.root_value(X), size
+    return X
+
+
+def checked_root(problem, X, tol: float, max_iter: int) -> np.ndarray:
+    """``X`` where the multipliers' flight from it (kept: the orbit's data take it) gives a Newton
+    step of at most :data:`CLOSING_CHECK` times ``tol`` (relative to the unknowns' sizes, as Newton's
+    steps), else that step taken and checked again (Newton's method with the exact Jacobian), stopped
+    as :func:`~impactbar.drives.orbitproblem.newton` stops at the rounding floor of a poorly
+    conditioned orbit (a step below 1e-9 that shrinks by less than a quarter).
+
+    Parameters
+    ----------
+    problem : ShootingProblem
+        A one-impact problem.
+    X : numpy.ndarray, shape (n,)
+    tol : float
+        Relative tolerance of Newton's steps.
+    max_iter : int
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+
+    Raises
+    ------
+    ValueError
+        Where the Jacobian is singular, a flight fails or ``max_iter`` steps do not converge.
+    """
+    tau, mode = problem.blocks[0]
+    last = math.inf
+    for _ in range(max_iter):
+        out = problem._flight(tau, mode, X, keep=True, variational=True)
+        try:
+            step = np.linalg.solve(out[6] - np.eye(problem.n), X - out[0])
+        except np.linalg.LinAlgError:
+            raise ValueError(_SINGULAR) from None
+        size = step_size(step, X, problem.positive)
+        if size <= CLOSING_CHECK * tol or 0.25 * last < size < 1e-9:
+            return X
+        X, last = X + step, size
+    raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps after the chord")
