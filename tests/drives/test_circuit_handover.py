@@ -160,7 +160,7 @@ def test_the_check_stops_at_the_rounding_floor(drifter, monkeypatch):
 def test_a_large_closing_step_is_followed_by_chord_steps_not_by_a_failed_check(drifter, monkeypatch):
     """With the pump's flow at 0.7 of the preset's (8 modes) the chord hands over with its iterate some
     4e-6 from the root (its first Jacobian, at the loose tolerance, some 6 % off there): the closing
-    step's Jacobian, off by some 1e-4, leaves 5e-10, more than the check allows. One chord step with
+    step's Jacobian, off by some 1e-4 there, leaves 5e-10, more than the check allows. One chord step with
     it on the variational flights' state (a plain flight at their tolerance) follows, and the
     multipliers' flight is flown once; without those steps (``STEER_ERROR = 0``) the check finds the
     root off and flies it twice. Both give the orbit of the chord run to its root first (1e-10 of the
