@@ -183,3 +183,24 @@ def test_a_large_closing_step_is_followed_by_chord_steps_not_by_a_failed_check(d
     for o in (orbit, twice):
         assert np.max(np.abs(np.asarray(o._unknowns) - Xr)) <= 1e-10 * np.max(np.abs(Xr))
         np.testing.assert_allclose(o.multipliers, ref.multipliers, rtol=0, atol=1e-8)
+
+
+@pytest.mark.slow  # about 10 s: ten orbits with 8 modes
+@pytest.mark.parametrize("name, factor", [("pump_flow", 0.7), ("pump_flow", 1.3), ("precharge", 0.8),
+                                          ("precharge", 1.2), ("switch_out", 0.85), ("switch_out", 1.15),
+                                          ("front_volume", 2.0), ("bulk_modulus", 0.5),
+                                          ("valve_coefficient", 0.6), ("switching_time", 2.0)])
+def test_the_check_passes_at_once_across_the_presets_parameters(drifter, monkeypatch, name, factor):
+    """With 8 modes and one of the preset's parameters changed (where the steering Jacobian's error,
+    as the closing step meets it, ranges from 1.7e-6 to 2.4e-3): the multipliers' flight is flown once,
+    and the multipliers' flight's own Newton step at the root is within the check."""
+    model, drive = drifter
+    model, drive = model.with_(n_modes=8), drive.with_parameter(name, factor * drive.value(name))
+    seen = _spied(monkeypatch)
+    orbit = find_orbit(model, drive)
+    assert [v for v, _, _ in seen].count(True) == 1, seen
+    problem, X = orbit._problem, np.asarray(orbit._unknowns, dtype=float)
+    tau, mode = problem.blocks[0]
+    out = problem._flight(tau, mode, X, keep=True, variational=True)
+    step = np.linalg.solve(out[6] - np.eye(problem.n), X - out[0])
+    assert step_size(step, X, problem.positive) <= C.CLOSING_CHECK * problem.accuracy
