@@ -547,7 +547,7 @@ class ShootingProblem(OrbitProblem):
         steer, key = self._steer(self._loose()), lambda s: s and (s.method, s.rtol, s.atol, s.max_step)
         r, first = self.residual(X, settings=steer, steer=True)
         own = key(self._state_settings(steer)) == key(self.settings)
-        return self._chord(X, first, tol, max_iter, r if own else None, handover)
+        return self._chord(X, first, tol, max_iter, r if own else None, handover, first_here=True)
 
     def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
         """The root of this problem from ``rough``, the orbit of a cheaper model of the same motion
@@ -580,11 +580,11 @@ class ShootingProblem(OrbitProblem):
         first = rough._problem.steering_residual(np.asarray(rough._unknowns, dtype=float))[1]
         return self._close(*self._chord(X, first, max(tol, self.accuracy), max_iter))
 
-    def _chord(self, X, first, tol: float, max_iter: int, first_value=None, handover: float = 0.0):
+    def _chord(self, X, first, tol: float, max_iter: int, first_value=None, handover: float = 0.0,
+               first_here: bool = False):
         """:meth:`solve`'s chord method from ``X`` with the Jacobian ``first`` (taken again, steering,
-        where its steps stop shrinking; ``first_value`` the residual at ``X`` where the flight that
-        gave ``first`` there gave it, ``handover`` :func:`~impactbar.drives.orbitproblem.chord`'s): the
-        plain flights' root and the last Jacobian."""
+        where its steps stop shrinking; ``first_value``, ``handover`` and ``first_here``
+        :func:`~impactbar.drives.orbitproblem.chord`'s): the plain flights' root and the last Jacobian."""
         used = [first]
 
         def jacobian(XX):  # (the chord's Jacobian taken again: the last one kept)
@@ -592,8 +592,7 @@ class ShootingProblem(OrbitProblem):
             return used[0]
 
         return chord(self.value, jacobian, X, self.positive, tol, max_iter, first=first,
-                     first_value=first_value, handover=handover, first_here=first_value is not None
-                     or handover > 0.0), used[0]
+                     first_value=first_value, handover=handover, first_here=first_here), used[0]
 
     def _close(self, X, last, tol: float = 0.0):
         """:meth:`solve`'s closing step from the plain flights' root ``X``, ``last`` the chord's last
