@@ -167,8 +167,9 @@ SETTLE_RTOL = 1e-7
 #: flights whose Jacobian only steers Newton's method (the chord's, its closing step): four times the
 #: drive's own, a quarter of the steps (two squarings more each), the preset's first flight's Jacobian
 #: within 1.5e-5, 4.9e-5 and 2.1e-6 of its largest entry with 4, 8 and 16 modes (at twice the drive's
-#: steps 2.4e-7, 1.1e-6, 6.7e-8), so that a closing step of 5e-8 leaves some 2e-12; the preset's
-#: orbits the same to 2e-13 and some 10 % cheaper than at twice; the multipliers' keep the drive's
+#: steps 2.4e-7, 1.1e-6, 6.7e-8); the preset's orbits the same to 2e-13 and some 10 % cheaper than at
+#: twice; the multipliers' keep the drive's. As a closing step meets it, that error reaches 6e-3 when
+#: the preset's parameters change (``_closing.STEER_ERROR``: chord steps follow a large closing step)
 STEER_THETA = 4.0
 #: the Jacobians a flight can carry (:meth:`ShootingProblem._flight`'s ``variational``), by how much
 #: each holds: a remembered flight answers a request for as much or less
