@@ -207,7 +207,7 @@ def newton(residual, X, positive, tol: float, max_iter: int) -> np.ndarray:
         X, size, done = _advance(X, step, hi, lo, Jac, tol, last, 1e-4)
         if done:
             return X
-        if size < 1e-9 and size > 0.25 * last:  # no more progress: the rounding floor of a
+        if at_rounding_floor(size, last):  # no more progress: the rounding floor of a
             return X  # poorly conditioned orbit (multipliers near 1), reached
         last = size
     raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps (last step "
@@ -251,7 +251,7 @@ def chord(value, jacobian, X, positive, tol: float, max_iter: int, first=None, f
         X, size, done = _advance(X, step, hi, lo, Jac, tol, last, 0.25)
         if done or (fresh and size <= handover):
             return X
-        if size < 1e-9 and size > 0.25 * last and fresh:  # the rounding floor, reached (as newton's)
+        if fresh and at_rounding_floor(size, last):  # the rounding floor, reached (as newton's)
             return X
         fresh = False  # (whether the next step's Jacobian is at its own start: a Newton step)
         if math.isfinite(last) and size > 0.5 * last:  # no longer contracting: the Jacobian again
@@ -276,7 +276,7 @@ def _advance(X, step, hi, lo, Jac, tol: float, last: float, rate: float):
     # the step relative to the states' and the times' own sizes (relative to
     # max(1, |X|) it depended on the drive's scale, states scaling with it and times not)
     times = _relative(step, X, hi)
-    size = step_size(step, X, hi, lo)
+    size = max(_relative(step, X, lo), times)
     # states that vanish at the orbit (R = 0: at rest on the stop): a rounding step of 1e-33 in
     # them read as a relative change of 1; they are converged when their step is below tol
     # times how much they change with the flight times (|dr/dt| |t|, scaling as they do)
@@ -286,6 +286,22 @@ def _advance(X, step, hi, lo, Jac, tol: float, last: float, rate: float):
     done = size <= tol or (big <= 0.5 and math.isfinite(last) and size < rate * last
                            and size * size <= tol * last)
     return X, size, done
+
+
+def at_rounding_floor(size: float, last: float) -> bool:
+    """Whether Newton's steps have reached the rounding floor of a poorly conditioned orbit
+    (multipliers near 1): a step ``size`` below 1e-9 (relative, :func:`step_size`) that shrank by
+    less than a quarter from the step before, ``last``.
+
+    Parameters
+    ----------
+    size, last : float
+
+    Returns
+    -------
+    bool
+    """
+    return 0.25 * last < size < 1e-9
 
 
 def step_size(step, X, positive, states=None) -> float:

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..drives.orbitproblem import step_size
+from ..drives.orbitproblem import at_rounding_floor, step_size
 
 __all__ = ["CLOSING_HANDOVER", "LIFTED_HANDOVER", "CLOSING_CHECK", "STEER_ERROR", "CLOSING_STEPS", "close",
            "checked_root"]
@@ -135,7 +135,7 @@ def checked_root(problem, X, tol: float, max_iter: int) -> np.ndarray:
         except np.linalg.LinAlgError:
             raise ValueError(_SINGULAR) from None
         size = step_size(step, X, problem.positive)
-        if size <= CLOSING_CHECK * tol or 0.25 * last < size < 1e-9:
+        if size <= CLOSING_CHECK * tol or at_rounding_floor(size, last):
             return X
         X, last = X + step, size
     raise ValueError(f"find_orbit did not converge in {max_iter} Newton steps after the chord")

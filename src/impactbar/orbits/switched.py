@@ -545,9 +545,11 @@ class ShootingProblem(OrbitProblem):
         ``SETTLE_RTOL`` (its residual the chord's first where that flight's state is the plain flights',
         as the preset's tolerances make it), the plain flights' root (with ``handover``, the iterate
         after a Newton step of at most that size) and the last Jacobian."""
-        steer, key = self._steer(self._loose()), lambda s: s and (s.method, s.rtol, s.atol, s.max_step)
+        steer = self._steer(self._loose())
         r, first = self.residual(X, settings=steer, steer=True)
-        own = key(self._state_settings(steer)) == key(self.settings)
+        plain = self._state_settings(steer)  # (a plain flight reads no Magnus step)
+        own = plain is not None and dataclasses.replace(plain, magnus_theta=None) == \
+            dataclasses.replace(self.settings, magnus_theta=None)
         return self._chord(X, first, tol, max_iter, r if own else None, handover, first_here=True)
 
     def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
