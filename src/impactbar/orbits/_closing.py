@@ -43,7 +43,7 @@ CLOSING_CHECK = 0.1
 #: follow while this times the last step could exceed what the check allows, at most
 #: :data:`CLOSING_STEPS` of them. Measured on the preset with one of ten parameters changed (pump
 #: flow, pre-charge, switch-out, front volume, bulk modulus, valve coefficient, switching time) and 2
-#: to 16 modes: from 2e-6 to 6e-3 (1.6e-5, 1.4e-4 and 2.6e-4 on the preset with 4, 8 and 16 modes);
+#: to 16 modes: from 1e-6 to 6e-3 (1.7e-5, 1.4e-4 and 2.7e-4 on the preset with 4, 8 and 16 modes);
 #: with 1e-3 none of those 40 orbits flew the multipliers' flight twice, where without the chord
 #: steps 12 did, and the preset's orbits take none of them (closing steps of 3e-8 to 5e-8).
 STEER_ERROR = 1e-3
