@@ -159,6 +159,50 @@ def test_a_continuation_point_takes_one_variational_period(drifter, monkeypatch)
     assert seen.count("plain") <= 2 * points + 1, seen
 
 
+def _longer_branch(drifter, monkeypatch, rule):
+    """The branch of eight points (the pre-charge 20 % up, 8 modes) with the corrector's rate
+    predicted by ``rule``: the branch, the kinds of its flights and the chords' ratios."""
+    import impactbar.continuation.switched as SW
+    from impactbar import continue_orbit
+
+    drive = drifter.drive()
+    orbit = find_orbit(drifter.model().with_(n_modes=8), drive)
+    seen, chords = [], []
+    fly = ShootingProblem._fly
+
+    def spy(self, tau, mode, y, keep, variational, settings):
+        seen.append("variational" if variational else "plain")
+        return fly(self, tau, mode, y, keep, variational, settings)
+
+    def predicted(ratios):
+        chords.append(list(ratios))
+        return rule(ratios)
+
+    monkeypatch.setattr(ShootingProblem, "_fly", spy)
+    monkeypatch.setattr(SW, "predicted_rate", predicted)
+    b = continue_orbit(orbit, "precharge", to=drive.accumulator.precharge * 1.2, max_points=8, events=False)
+    monkeypatch.undo()
+    return b, seen, chords
+
+
+def test_a_longer_branch_takes_one_variational_period_a_point(drifter, monkeypatch):
+    """On a branch of eight points with 8 modes, each new point takes one variational period: the
+    corrector flies the orbit's variational flight where the largest ratio of its chord's steps (at
+    least ``CHORD_RATE`` on one ratio alone) puts the next iterate within the target. Predicted from
+    the chord's last ratio alone (the rule of before), three of the seven points flew it twice, a
+    chord's first ratio underestimating its rate, each such flight with its ``F_lam`` flight some
+    four plain periods, where the rule takes one chord step more; the same points."""
+    from impactbar.continuation.switched import predicted_rate
+
+    now, seen, _ = _longer_branch(drifter, monkeypatch, predicted_rate)
+    before, seen_before, _ = _longer_branch(drifter, monkeypatch, lambda ratios: ratios[-1])
+    points = len(now.orbits) - 1
+    assert points == len(before.orbits) - 1 == 7
+    assert seen.count("variational") == points, seen
+    assert seen_before.count("variational") == points + 3, seen_before
+    np.testing.assert_allclose(now.values, before.values, rtol=0, atol=1e-9)
+
+
 def test_the_plain_flight_at_the_variational_tolerance_is_its_state(drifter):
     """``ShootingProblem.root_value``: with a flexible piston (Magnus' fundamental matrix over a plain
     flight) the plain flight at the variational flights' tolerance, the residual of the variational

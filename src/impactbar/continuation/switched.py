@@ -47,6 +47,15 @@ CHORD_STALL = 0.5
 #: (``chord="orbit"``: a variational period and ``F_lam``'s flight cost some four plain periods)
 CHORD_STEPS_LEFT = 4.0
 
+#: the ratios of successive chord steps (one Jacobian) that predict the next step by their largest
+#: (``chord="orbit"``): with fewer, the prediction takes ``CHORD_RATE`` at least. A chord's first
+#: ratio underestimates its rate (the predictor's error lies mostly where the predicted Jacobian is
+#: right; on the preset's branch of eight points with 8 modes three points flew the variational flight
+#: twice where the last ratio alone predicted the next step), and a variational
+#: flight at an iterate that is not the point costs some four plain periods (itself and ``F_lam``'s
+#: flight), one chord step more one
+RATIOS_KNOWN = 2
+
 #: the corrector's last iterate, whose residual the orbit's variational flight takes, is the first
 #: whose estimated error is below this fraction of the tolerance, and the point where that flight's
 #: step is (``chord="orbit"``: the point is then within it, not a step below it)
@@ -234,7 +243,9 @@ class _SwitchedProblem:
         ``F_lam`` linear from the last two: :meth:`_record`, :meth:`_along`), the residuals by plain
         flights at the variational flights' tolerance (their state: the orbits are the roots of
         the same residual as Newton's of before). Once the chord's rate (the last corrector's,
-        ``CHORD_RATE`` at first) says that the iterate is within ``EXACT_FACTOR`` of the tolerance,
+        ``CHORD_RATE`` at first, before this chord's steps; then the largest ratio of its steps, at
+        least ``CHORD_RATE`` on fewer than ``RATIOS_KNOWN`` ratios) says that the iterate is within
+        ``EXACT_FACTOR`` of the tolerance,
         its residual is taken by the orbit's own variational flight instead: where its step is then
         within as much, the iterate is the point (its orbit, its multipliers and the next chord's
         ``F_u`` from that flight), else the step is a Newton step with the new ``F_u`` and ``F_lam``
@@ -261,6 +272,7 @@ class _SwitchedProblem:
         J = np.column_stack((self._along(self._fus, U), self._along(self._lams, U))) if known else None
         exact, fresh = not known, False  # (fresh: the chord's F_u taken at an iterate of this corrector)
         prev = first = None
+        ratios = []  # the ratios of successive steps of this chord (one Jacobian)
         again = 0  # the variational flights at iterates that were not the point
         for it in range(1, max_iter + 1):
             problem = self.pair(float(U[-1]))[2]
@@ -310,6 +322,9 @@ class _SwitchedProblem:
             elif prev is not None and step > target and \
                     math.log(target / step) / math.log(max(rate, 1e-300)) > CHORD_STEPS_LEFT:
                 rate = 1.0  # slow: the Jacobian taken again costs fewer flights than the chord's steps
+            elif prev is not None and not fresh:
+                ratios.append(rate)
+                rate = predicted_rate(ratios)
             U = U - dU
             exact = rate >= 1.0 or rate * step <= target
             prev = step
@@ -354,6 +369,31 @@ class _SwitchedProblem:
 
     def corner(self, engine, U, index):
         return None
+
+
+def predicted_rate(ratios: list) -> float:
+    """The rate at which a corrector's chord (``chord="orbit"``) is expected to go on: the largest
+    ratio of successive steps it has shown with one Jacobian, and at least :data:`CHORD_RATE` while
+    it has shown fewer than :data:`RATIOS_KNOWN` (a chord's first ratio underestimates its rate).
+
+    Parameters
+    ----------
+    ratios : list of float
+        The ratios of the chord's successive steps so far (at least one), each positive.
+
+    Returns
+    -------
+    float
+        The rate that predicts the next step (that step's size over the last one's).
+
+    Examples
+    --------
+    >>> predicted_rate([0.008])
+    0.1
+    >>> predicted_rate([0.008, 0.06])
+    0.06
+    """
+    return max(max(ratios), CHORD_RATE if len(ratios) < RATIOS_KNOWN else 0.0)
 
 
 def _newton_iterations(first: float, target: float, scale: float) -> int:
