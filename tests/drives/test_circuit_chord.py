@@ -247,3 +247,50 @@ def test_the_jacobian_along_the_branch_is_lagranges(drifter):
     records = [(a, value(0.0)), (a + 1e-9 * d, value(1e-9)), (a + d, value(1.0))]
     lin = value(1e-9) + (1.7 - 1e-9) / (1.0 - 1e-9) * (value(1.0) - value(1e-9))
     np.testing.assert_allclose(p._along(records, at), lin, rtol=1e-9, atol=1e-9)
+
+
+def test_an_iterate_outside_the_parameters_range_shortens_the_step(drifter):
+    """With 4 modes the pre-set's valve coefficient taken down: the first predictor's chord
+    diverges (two real multipliers near 0.92 about to meet, the Jacobian changing fast along the
+    branch) and its Newton step puts the coefficient at -486, outside its range. That iterate is a
+    failed corrector (the step then shortened), not the drive's refusal of the value raised to the
+    caller, who asked for nothing out of range; the points are orbits."""
+    drive = drifter.drive()
+    orbit = find_orbit(drifter.model().with_(n_modes=4), drive)
+    from impactbar import continue_orbit
+
+    b = continue_orbit(orbit, "valve_coefficient", to=0.8 * drive.valve.coefficient, max_points=3,
+                       events=False)
+    assert len(b.orbits) == 3 and b.values[-1] < b.values[0]
+    last = b.orbits[-1]
+    ref = find_orbit(last.model, last.drive)
+    assert abs(ref.period - last.period) <= 1e-9 * ref.period
+    np.testing.assert_allclose(np.sort_complex(ref.multipliers), np.sort_complex(last.multipliers), rtol=0,
+                               atol=1e-7)
+
+
+def test_in_the_pumps_flow_the_predicted_jacobian_stalls(drifter, monkeypatch):
+    """What theory §11 says of the corrector off the pre-charge: in the pump's flow (4 modes, 20 %
+    up) the chord with the Jacobian the last points predict stalls, so that points take more than
+    one variational period (the Jacobian taken again at an iterate), and the branch's steps stay
+    short; the points are orbits all the same."""
+    from impactbar import continue_orbit
+
+    drive = drifter.drive()
+    orbit = find_orbit(drifter.model().with_(n_modes=4), drive)
+    seen = []
+    fly = ShootingProblem._fly
+
+    def spy(self, tau, mode, y, keep, variational, settings):
+        seen.append("variational" if variational else "plain")
+        return fly(self, tau, mode, y, keep, variational, settings)
+
+    monkeypatch.setattr(ShootingProblem, "_fly", spy)
+    b = continue_orbit(orbit, "pump_flow", to=1.2 * drive.supply.pump_flow, max_points=4, events=False)
+    monkeypatch.undo()
+    points = len(b.orbits) - 1
+    assert points == 3
+    assert seen.count("variational") > points, seen
+    last = b.orbits[-1]
+    ref = find_orbit(last.model, last.drive)
+    assert abs(ref.period - last.period) <= 1e-9 * ref.period

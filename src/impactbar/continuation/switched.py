@@ -275,8 +275,8 @@ class _SwitchedProblem:
         ratios = []  # the ratios of successive steps of this chord (one Jacobian)
         again = 0  # the variational flights at iterates that were not the point
         for it in range(1, max_iter + 1):
-            problem = self.pair(float(U[-1]))[2]
-            try:
+            try:  # (an iterate may leave the parameter's range: a failure, the step then shortened)
+                problem = self.pair(float(U[-1]))[2]
                 if exact:
                     F, Fu = self._exact(problem, U)
                     J = np.column_stack((Fu, J[:, -1] if J is not None else self._column(U, F)))
