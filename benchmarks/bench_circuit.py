@@ -186,8 +186,9 @@ WHY_CONTINUATION = (
     "propagator of the constant modal block would not lengthen them). Under 0.1 s a point needs a "
     "sensitivity method other than the variational equations' integration")
 WHY_ROCK_COMPILE = (
-    "some 170 kernels typed, lowered and compiled once each (numba's type inference, lowering and "
-    "LLVM in about equal parts); the first exact blow's own compile is most of 15 s, and the "
+    "some 170 kernels typed, lowered and compiled once each (numba's own passes, typing and "
+    "lowering among them, about half, LLVM's the other half); the first exact blow's own compile is "
+    "most of 15 s, and the "
     "orbit's kernels (flights, admissibility search, tangents) add the rest. What is left is compiling "
     "each kernel once: smaller kernels cost more compiles, inlining more typing (HISTORY.md)")
 
@@ -213,8 +214,9 @@ GOALS = (
      (("find_orbit circuit", 0.3, ""),)),
     ("the exact blow under the circuit (method='exact'; the lattice's orbit some 65 times cheaper a blow)",
      "bench_coupled_exact.py", ("--against", "{src}"), (WHY_LATTICE,)),
-    ("the wave law's blow under the circuit >= 5x faster (met at an earlier stop: 0.098 -> 0.019 s)",
-     "bench_wave_states.py", ("--against", "{src}"), ()),
+    ("the wave law's blow under the circuit >= 5x faster (met at an earlier stop, against d617828: a "
+     "blow and 300 states through it 13x, a run of 4 blows and the circuit's histories 6.8x; "
+     "HISTORY.md)", "bench_wave_states.py", ("--against", "{src}"), ()),
     ("the first exact blow with an empty numba cache <= 15 s of CPU", "bench_first_call.py",
      ("--against", "{src}", "--rounds", "2"),
      (("CPU time (s)", 15.0, "its compile is typing and lowering each of its kernels once (HISTORY.md); "
