@@ -159,30 +159,33 @@ def test_a_continuation_point_takes_one_variational_period(drifter, monkeypatch)
     assert seen.count("plain") <= 2 * points + 1, seen
 
 
-def _longer_branch(drifter, monkeypatch, rule):
-    """The branch of eight points (the pre-charge 20 % up, 8 modes) with the corrector's rate
-    predicted by ``rule``: the branch, the kinds of its flights and the chords' ratios."""
-    import impactbar.continuation.switched as SW
-    from impactbar import continue_orbit
-
-    drive = drifter.drive()
-    orbit = find_orbit(drifter.model().with_(n_modes=8), drive)
-    seen, chords = [], []
+def _flights(monkeypatch) -> list:
+    """The kinds of the shooting problem's flights from now on (``"variational"`` or ``"plain"``),
+    in a list that fills as they are flown."""
+    seen = []
     fly = ShootingProblem._fly
 
     def spy(self, tau, mode, y, keep, variational, settings):
         seen.append("variational" if variational else "plain")
         return fly(self, tau, mode, y, keep, variational, settings)
 
-    def predicted(ratios):
-        chords.append(list(ratios))
-        return rule(ratios)
-
     monkeypatch.setattr(ShootingProblem, "_fly", spy)
-    monkeypatch.setattr(SW, "predicted_rate", predicted)
+    return seen
+
+
+def _longer_branch(drifter, monkeypatch, rule):
+    """The branch of eight points (the pre-charge 20 % up, 8 modes) with the corrector's rate
+    predicted by ``rule``: the branch and the kinds of its flights."""
+    import impactbar.continuation.switched as SW
+    from impactbar import continue_orbit
+
+    drive = drifter.drive()
+    orbit = find_orbit(drifter.model().with_(n_modes=8), drive)
+    seen = _flights(monkeypatch)
+    monkeypatch.setattr(SW, "predicted_rate", rule)
     b = continue_orbit(orbit, "precharge", to=drive.accumulator.precharge * 1.2, max_points=8, events=False)
     monkeypatch.undo()
-    return b, seen, chords
+    return b, seen
 
 
 def test_a_longer_branch_takes_one_variational_period_a_point(drifter, monkeypatch):
@@ -194,8 +197,8 @@ def test_a_longer_branch_takes_one_variational_period_a_point(drifter, monkeypat
     four plain periods, where the rule takes one chord step more; the same points."""
     from impactbar.continuation.switched import predicted_rate
 
-    now, seen, _ = _longer_branch(drifter, monkeypatch, predicted_rate)
-    before, seen_before, _ = _longer_branch(drifter, monkeypatch, lambda ratios: ratios[-1])
+    now, seen = _longer_branch(drifter, monkeypatch, predicted_rate)
+    before, seen_before = _longer_branch(drifter, monkeypatch, lambda ratios: ratios[-1])
     points = len(now.orbits) - 1
     assert points == len(before.orbits) - 1 == 7
     assert seen.count("variational") == points, seen
@@ -278,14 +281,7 @@ def test_in_the_pumps_flow_the_predicted_jacobian_stalls(drifter, monkeypatch):
 
     drive = drifter.drive()
     orbit = find_orbit(drifter.model().with_(n_modes=4), drive)
-    seen = []
-    fly = ShootingProblem._fly
-
-    def spy(self, tau, mode, y, keep, variational, settings):
-        seen.append("variational" if variational else "plain")
-        return fly(self, tau, mode, y, keep, variational, settings)
-
-    monkeypatch.setattr(ShootingProblem, "_fly", spy)
+    seen = _flights(monkeypatch)
     b = continue_orbit(orbit, "pump_flow", to=1.2 * drive.supply.pump_flow, max_points=4, events=False)
     monkeypatch.undo()
     points = len(b.orbits) - 1

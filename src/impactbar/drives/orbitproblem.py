@@ -304,24 +304,21 @@ def at_rounding_floor(size: float, last: float) -> bool:
     return 0.25 * last < size < 1e-9
 
 
-def step_size(step, X, positive, states=None) -> float:
+def step_size(step, X, positive) -> float:
     """The size of a Newton step as :func:`newton` measures it: ``max |step|`` relative to ``max |X|``
-    over the flight times (``positive``) and over the states (``states``; default, the rest),
-    the larger.
+    over the flight times (``positive``) and over the states (the rest), the larger.
 
     Parameters
     ----------
     step, X : numpy.ndarray, shape (n,)
     positive : numpy.ndarray of int
         Where ``X`` holds flight times.
-    states : numpy.ndarray of int, optional
 
     Returns
     -------
     float
     """
-    if states is None:
-        states = np.setdiff1d(np.arange(np.size(X)), positive)
+    states = np.setdiff1d(np.arange(np.size(X)), positive)
     return max(_relative(step, X, states), _relative(step, X, positive))
 
 
