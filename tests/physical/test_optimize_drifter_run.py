@@ -197,31 +197,33 @@ def test_slsqp_keeps_its_better_design_along_an_active_cap():
 
 
 # -- a stopped run resumed -----------------------------------------------------------------------------
-def test_a_run_stopped_part_way_resumes_to_the_same_designs_bit_for_bit(tmp_path, monkeypatch):
-    """A run interrupted at its fifth new design and started again on its cache visits the designs of
-    a run never stopped, with the same figures, to the bit."""
+@pytest.mark.parametrize(("method", "budget", "stop"), [
+    ("cobyla", 9, 5), pytest.param("slsqp", 4, 4, marks=pytest.mark.slow)])
+def test_a_run_stopped_part_way_resumes_to_the_same_designs_bit_for_bit(tmp_path, monkeypatch, method, budget,
+                                                                         stop):
+    """A run interrupted at a new design (COBYLA's fifth, SLSQP's fourth: its gradients start from the
+    designs' orbits too) and started again on its cache visits the designs of a run never stopped,
+    with the same figures, to the bit."""
     od = sys.modules["impactbar.physical.optimize_drifter"]
-    whole = optimize_drifter("circuit-drifter", VARY, objective="impact_power", max_evaluations=9,
-                             progress=False)
+    kwargs = {"objective": "impact_power", "max_evaluations": budget, "method": method, "progress": False}
+    whole = optimize_drifter("circuit-drifter", VARY, **kwargs)
     cache = tmp_path / "cache.json"
     calls = {"n": 0}
     original = od.evaluate_design
 
-    def stop_at_the_fifth(*args, **kwargs):
+    def stop_there(*args, **kw):
         calls["n"] += 1
-        if calls["n"] == 5:
+        if calls["n"] == stop:
             raise KeyboardInterrupt
-        return original(*args, **kwargs)
+        return original(*args, **kw)
 
-    monkeypatch.setattr(od, "evaluate_design", stop_at_the_fifth)
+    monkeypatch.setattr(od, "evaluate_design", stop_there)
     with pytest.raises(KeyboardInterrupt):
-        optimize_drifter("circuit-drifter", VARY, objective="impact_power", max_evaluations=9, cache=cache,
-                         progress=False)
+        optimize_drifter("circuit-drifter", VARY, cache=cache, **kwargs)
     monkeypatch.setattr(od, "evaluate_design", original)
-    assert len(json.loads(cache.read_text())["evaluations"]) == 4
-    resumed = optimize_drifter("circuit-drifter", VARY, objective="impact_power", max_evaluations=9,
-                               cache=cache, progress=False)
-    assert resumed.cached == 4 and resumed.evaluations == len(whole.history) - 4
+    assert len(json.loads(cache.read_text())["evaluations"]) == stop - 1
+    resumed = optimize_drifter("circuit-drifter", VARY, cache=cache, **kwargs)
+    assert resumed.cached == stop - 1 and resumed.evaluations == len(whole.history) - stop + 1
     assert [r["values"] for r in resumed.history] == [r["values"] for r in whole.history]
     assert [r["objectives"] for r in resumed.history] == [r["objectives"] for r in whole.history]
     assert resumed.optimum["values"] == whole.optimum["values"]
