@@ -15,7 +15,7 @@ import pytest
 
 from impactbar.laws.rodrock import lundberg_efficiency
 from impactbar.physical import build, optimize_drifter, optimize_piston, read_config, with_values
-from impactbar.physical.optimize_drifter import evaluate_blow
+from impactbar.physical.optimize_drifter import FEASIBILITY_TOLERANCE, evaluate_blow
 from impactbar.physical.piston import piston_blow
 from impactbar.physical.rock import RodPiece
 
@@ -62,12 +62,12 @@ def test_relaxing_the_active_constraint_improves_the_optimum():
     for res, limit in ((tight, 23.0e6), (loose, 23.5e6)):
         c = res.optimum["constraints"]["mean_supply_pressure"]
         assert c["limit"] == limit
-        # active: met, to within COBYLA's tolerance of the limit (scaled by the limit)
-        assert 0.0 <= c["scaled"] < 1e-3
+        # active: met (to the orbit's accuracy), to within COBYLA's tolerance of the limit (scaled by it)
+        assert -FEASIBILITY_TOLERANCE <= c["scaled"] < 1e-3
         # the fresh orbit of the reported design: the same pressure, under the cap
         d, o = _fresh(res.optimum["changes"])
         assert o.mean_supply_pressure_Pa == pytest.approx(c["value"], rel=1e-9)
-        assert o.mean_supply_pressure_Pa <= limit
+        assert o.mean_supply_pressure_Pa <= limit * (1.0 + FEASIBILITY_TOLERANCE)
         # the switch point runs to its upper bound, the flow stops inside its bounds
         assert res.optimum["values"]["valve.switch_out"] == pytest.approx(0.024, abs=1e-5)
         assert 60 / 6e4 < res.optimum["values"]["supply.pump_flow"] < 90 / 6e4
@@ -104,7 +104,8 @@ def test_every_reported_figure_has_its_sign_and_size():
         for name, c in rec["constraints"].items():
             assert c["margin"] == pytest.approx(sides[name] * (c["limit"] - c["value"]), rel=1e-12)
             assert (c["scaled"] >= 0) == (c["margin"] >= 0)
-        assert rec["feasible"] == all(c["margin"] >= 0 for c in rec["constraints"].values())
+        met = [c["scaled"] >= -FEASIBILITY_TOLERANCE for c in rec["constraints"].values()]
+        assert rec["feasible"] == all(met)
         obj = rec["objectives"]
         assert 0.0 < obj["hydraulic_efficiency"] < 1.0
         power = obj["impact_energy_J"] * obj["blow_frequency_Hz"] / 1e3

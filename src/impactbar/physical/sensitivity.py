@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .circuit import PRESSURE_SCALE, SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
+from .design_keys import config_quantity as _quantity
 from .geometry import PISTON_KEYS
 from .loader import build, config_value, read_config, with_values
 from .units import to_si
@@ -87,14 +88,11 @@ def _key_unit(key: str) -> str:
     raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies; one of {', '.join(allowed)}")
 
 
-def _quantity(x: float, unit: str):
-    """An SI value as a config value (exact: the float's repr with its unit)."""
-    return float(x) if unit == "" else f"{float(x)!r} {unit}"
 
 
 def _show_unit(unit: str) -> tuple[float, str]:
     return {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"),
-            "s": (1e3, "ms")}.get(unit, (1.0, unit.replace("**", "^")))
+            "m**2": (1e4, "cm^2"), "s": (1e3, "ms")}.get(unit, (1.0, unit.replace("**", "^")))
 
 
 

@@ -197,7 +197,9 @@ class MapAxis:
 
     def config_value(self, value):
         """The value as a config takes it: a number with this unit, or a bare number."""
-        return float(value) if self.unit == "" else f"{float(value)!r} {self.unit}"
+        from ..physical.design_keys import config_quantity
+
+        return config_quantity(value, self.unit)
 
 
 @dataclass(frozen=True)
@@ -480,30 +482,23 @@ def _number(name, v) -> float:
 
 
 def _si_unit(name: str, base) -> str:
-    """The SI unit of a key: the one :data:`~impactbar.physical.circuit.SI_PARAMETERS` names, else
-    the base units of the config's value (``""`` for a bare number)."""
-    from ..physical.circuit import SI_PARAMETERS
-    from ..physical.units import registry
+    """The SI unit of a key (:func:`~impactbar.physical.design_keys.key_unit`: the one
+    :data:`~impactbar.physical.circuit.SI_PARAMETERS` names, else the base units of the config's
+    value, ``""`` for a bare number)."""
+    from ..physical.design_keys import key_unit
 
-    if not isinstance(base, str):
-        return ""
-    if name in SI_PARAMETERS:
-        return SI_PARAMETERS[name][1]
     try:
-        q = registry().Quantity(base)
-    except Exception as exc:  # pint raises several kinds
-        raise ValueError(f"[axes] {name}: the config's value {base!r} is not a quantity: {exc}") from None
-    return "" if q.dimensionless else f"{q.to_base_units().units:~}".replace(" ", "")
+        return key_unit(name, base)
+    except ValueError as exc:
+        raise ValueError(f"[axes] {exc}") from None
 
 
 def _in_unit(name: str, value, unit: str, base) -> float:
-    """``value`` (a quantity string, or a number for a dimensionless key) in ``unit``."""
-    from ..physical.units import to_si
+    """``value`` (a quantity string, or a number for a dimensionless key) in ``unit``
+    (:func:`~impactbar.physical.design_keys.key_value`)."""
+    from ..physical.design_keys import key_value
 
     try:
-        return to_si(f"[axes] {name}", value, unit, repr(base),
-                     what=f"in {unit or 'no unit'} as the config's {base!r}")
+        return key_value(f"[axes] {name}", value, unit, base)
     except ValueError as exc:
         raise ValueError(_one_line(exc)) from None
-
-
