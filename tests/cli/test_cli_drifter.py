@@ -148,9 +148,20 @@ def test_drifter_help_follows_the_tables(capsys, monkeypatch):
 
 
 def test_drifter_command_refuses_a_hammer(capsys):
-    assert main(["drifter", "--preset", "pneumatic-drill"]) == 2
+    """A hammer's file is refused in one line that says what the file is; the hammers' presets are
+    not offered (the help lists the drifters' only, and argparse refuses the others)."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "pneumatic_drill.toml"
+    assert main(["drifter", str(path)]) == 2
     err = capsys.readouterr().err.strip()
     assert "needs a drifter" in err and "circuit-drifter" in err and "\n" not in err
+    assert "pneumatic_drill.toml is a hammer under a periodic force" in err
+    for hammer in ("pneumatic-drill", "hydraulic-drill"):
+        with pytest.raises(SystemExit) as exit_:
+            main(["drifter", "--preset", hammer])
+        assert exit_.value.code == 2 and "invalid choice" in capsys.readouterr().err
+    assert "hydraulic-drill" not in _help(capsys) and "pneumatic-drill" not in _help(capsys)
 
 
 def test_circuit_si_parameters_are_the_drive_parameters():

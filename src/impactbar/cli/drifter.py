@@ -42,7 +42,7 @@ def add_parser(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     add_physical_arguments(p, config_help="a drifter in SI units: a TOML file with a [valve] section "
                            "(the valve switched on the piston's position) or a [chambers] section (with "
-                           "its oil circuit); the keys of each are listed below")
+                           "its oil circuit); the keys of each are listed below", hammers=False)
     p.add_argument("--json", action="store_true",
                    help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
     p.set_defaults(func=_run_drifter)
@@ -76,8 +76,10 @@ def drifter_keys_help(width: int = 78) -> str:
 def _run_drifter(args) -> int:
     drifter = drifter_from_args(args)
     if drifter is None:
-        what = f"preset {args.preset!r}" if getattr(args, "preset", None) else (
-            f"{args.config}" if getattr(args, "config", None) else "no input")
+        from ..physical.config import CONFIG_KINDS
+
+        what = (f"{args.config} is {CONFIG_KINDS['hammer'][1]}" if getattr(args, "config", None)
+                else "no input")
         presets = ", ".join(sorted({*physical.DRIFTER_PRESETS, *physical.CIRCUIT_PRESETS}))
         raise ValueError(f"impactbar drifter needs a drifter: a CONFIG.toml with a [valve] or [chambers] "
                          f"section, or --preset {presets}; got {what}")
@@ -86,14 +88,18 @@ def _run_drifter(args) -> int:
 
 def drifter_from_args(args):
     """The drifter named by ``args.preset`` or ``args.config`` (a TOML file with a ``[valve]`` or a
-    ``[chambers]`` section, read by :func:`impactbar.physical.load`), else ``None`` (a hammer, or no
-    SI input).
+    ``[chambers]`` section, read by :func:`impactbar.physical.load`), else ``None`` (a hammer's
+    preset or file, or no SI input).
 
     Raises
     ------
     ValueError
-        An unreadable file, or an invalid drifter config (the key named).
+        Both a config and a preset; a missing or unreadable file, invalid TOML (its line), a sweep
+        spec, or an invalid drifter config (the key named).
     """
+    from .physical import check_one_source
+
+    check_one_source(args)
     name, config = getattr(args, "preset", None), getattr(args, "config", None)
     if name is not None and name in physical.DRIFTER_PRESETS:
         return physical.drifter_preset(name)
@@ -101,11 +107,7 @@ def drifter_from_args(args):
         return physical.circuit_preset(name)
     if config is None:
         return None
-    try:
-        kind = config_kind(read_toml(config))
-    except ValueError:
-        return None  # an unreadable file, a sweep spec: the hammer's reader reports it
-    return None if kind == "hammer" else physical.load(config)
+    return None if config_kind(read_toml(config)) == "hammer" else physical.load(config)
 
 
 def _what_is_struck(d) -> str:

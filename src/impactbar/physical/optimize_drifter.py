@@ -526,7 +526,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}; got {objective!r}")
     cfg, folder = read_config(config)
-    base = build(cfg, folder)
+    base = build(cfg, folder, where="config" if folder is None else str(config))  # (the file named)
     if not isinstance(base, CircuitDrifter):
         raise ValueError("config must describe a drifter with its oil circuit (a [chambers] section)")
     if base.drill is None and objective != "impact_power":
