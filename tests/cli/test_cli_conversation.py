@@ -163,3 +163,61 @@ def test_a_value_without_its_unit_or_in_the_wrong_one(command, value, says, tmp_
     assert case["key"] in line and says in line
     if command != "sweep":
         assert "my.toml" in line
+
+
+# --------------------------------------------------------------------------------------------
+# the optimiser's variables and limits, read as every other quantity is
+# --------------------------------------------------------------------------------------------
+def _optimize(tmp_path, *extra):
+    path = _write(tmp_path, "optimize", CIRCUIT)
+    return ["optimize", path, "--objective", "impact_power", "--quiet", *extra]
+
+
+def test_a_bare_number_limit_is_refused_naming_the_constraint(tmp_path, capsys):
+    """``mean_supply_pressure=18`` was read as 18 Pa; a bare number for a quantity with a unit is
+    refused, as in a config; a dimensionless limit takes one."""
+    vary = ["--vary", "supply.pump_flow=60 L/min:90 L/min"]
+    assert main(_optimize(tmp_path, *vary, "--constraint", "mean_supply_pressure=18")) == 2
+    line = _one_line(capsys, "optimize")
+    assert "mean_supply_pressure" in line and "needs a unit" in line and "'18'" in line
+    assert main(_optimize(tmp_path, *vary, "--constraint", "min_chamber_volume=0")) == 2
+    line = _one_line(capsys, "optimize")
+    assert "min_chamber_volume" in line and "needs a unit" in line and "e.g. '0.01 L'" in line
+    from impactbar.cli.optimize import parse_constraint
+
+    assert parse_constraint(["max_multiplier=0.9"]) == {"max_multiplier": "0.9"}
+
+
+@pytest.mark.parametrize("limit", ["max_multiplier=inf", "max_multiplier=nan", "max_multiplier=-Infinity",
+                                   "peak_supply_pressure=inf MPa", "max_multiplier=1e400"])
+def test_a_limit_that_is_not_finite_is_refused_as_the_command_line_is_read(limit, tmp_path, capsys,
+                                                                           monkeypatch):
+    import sys
+
+    import impactbar.physical.optimize_drifter  # noqa: F401 (the module, which the package's name hides)
+
+    # refused before the optimiser is reached
+    monkeypatch.setattr(sys.modules["impactbar.physical.optimize_drifter"], "optimize_drifter", _never)
+    vary = ["--vary", "supply.pump_flow=60 L/min:90 L/min"]
+    assert main(_optimize(tmp_path, *vary, "--constraint", limit)) == 2
+    line = _one_line(capsys, "optimize")
+    assert f"--constraint {limit}: the limit must be finite" in line
+
+
+@pytest.mark.parametrize("bounds, example", [("supply.pump_flow=70:100", "'80 L/min'"),
+                                             ("accumulator.precharge=8 MPa:14", "'12 MPa'"),
+                                             ("piston.collar_diameter=47:52mm", "'50 mm'")])
+def test_a_bare_number_bound_is_refused_with_a_whole_example(bounds, example, tmp_path, capsys):
+    assert main(_optimize(tmp_path, "--vary", bounds)) == 2
+    line = _one_line(capsys, "optimize")
+    assert f"--vary {bounds}: " in line and "needs a unit" in line and f"e.g. {example};" in line
+    assert "..." not in line
+
+
+@pytest.mark.parametrize("path", [3, None, ["a"], 2.5])
+def test_load_refuses_what_is_no_path_in_one_line(path):
+    from impactbar.physical import load
+
+    with pytest.raises(ValueError, match="path must be a TOML file's path") as exc:
+        load(path)
+    assert "\n" not in str(exc.value)

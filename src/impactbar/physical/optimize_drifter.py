@@ -215,7 +215,8 @@ def _limits(constraints, drifter, ideal: bool = False) -> dict:
         if isinstance(v, int | float) and not isinstance(v, bool):  # a bare number: SI
             out[name] = float(v)
             continue
-        example = {"Pa": "'400 MPa'", "kg": "'5.6 kg'"}.get(unit, "0.95")
+        example = {"Pa": "'400 MPa'", "kg": "'5.6 kg'", "m**3": "'0.01 L'",
+                   "m/min": "'2 m/min'"}.get(unit, "0.95")
         out[name] = to_si(f"constraints[{name!r}]", v, unit, example)
     return out
 
