@@ -221,3 +221,13 @@ def test_load_refuses_what_is_no_path_in_one_line(path):
     with pytest.raises(ValueError, match="path must be a TOML file's path") as exc:
         load(path)
     assert "\n" not in str(exc.value)
+
+
+def test_a_key_the_config_leaves_out_is_named_once(tmp_path, capsys):
+    """A design map over a key the drifter's config does not give: the key once, then why."""
+    (tmp_path / "circuit.toml").write_text(CIRCUIT)
+    path = _write(tmp_path, "sweep", 'task = "operating_point"\nconfig = "circuit.toml"\n[axes]\n'
+                  '"damping.coefficient" = { start = "1 N*s/m", stop = "2 N*s/m", num = 2 }\n')
+    assert main(COMMANDS["sweep"]["argv"](path, tmp_path)) == 2
+    line = _one_line(capsys, "sweep")
+    assert line.count("damping.coefficient") == 1 and "the config has no [damping] section" in line

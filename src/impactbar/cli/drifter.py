@@ -142,12 +142,36 @@ def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
 
 def _circuit_line(s: dict) -> str:
     return (f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
-            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, mean supply "
-            f"pressure {s['mean_supply_pressure_MPa']:.4g} MPa, pump power {s['pump_power_kW']:.4g} kW, "
-            f"hydraulic efficiency {s['hydraulic_efficiency']:.3f}, least pressure "
-            f"{s['minimum_pressure_MPa']:.4g} MPa"
+            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, impact power "
+            f"{s['impact_power_kW']:.4g} kW, mean supply pressure {s['mean_supply_pressure_MPa']:.4g} MPa, "
+            f"pump power {s['pump_power_kW']:.4g} kW, hydraulic efficiency {s['hydraulic_efficiency']:.3f} "
+            "(the energy the blows deliver, the impact's less the rebound's, over the pump's work), least "
+            f"pressure {s['minimum_pressure_MPa']:.4g} MPa"
             + (" (cavitates)" if s["cavitates"] else "")
-            + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+            + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})\n"
+            + f"  {_borders_line(s)}")
+
+
+def _borders_line(s: dict) -> str:
+    """The relief valve's opening and the accumulator's emptying over the period, from the orbit's
+    border margins (MPa; infinite where the circuit has no such part)."""
+    relief, acc = s["relief_margin_MPa"], s["accumulator_margin_MPa"]
+    if relief == float("inf"):
+        words = ["no relief valve"]
+    elif relief < 0.0:
+        words = [f"the relief valve opens (the supply pressure reaches {-relief:.4g} MPa above its setting)"]
+    else:
+        words = [f"the relief valve stays shut (the supply pressure peaks {relief:.4g} MPa below its "
+                 "setting)"]
+    if acc == float("inf"):
+        words.append("no accumulator")
+    elif acc < 0.0:
+        words.append(f"the accumulator empties (the supply pressure falls {-acc:.4g} MPa below its "
+                     "pre-charge)")
+    else:
+        words.append(f"the accumulator never empties (the supply pressure stays {acc:.4g} MPa above its "
+                     "pre-charge)")
+    return "; ".join(words)
 
 
 def _print_orbit(args, drifter, header, line) -> int:

@@ -563,6 +563,15 @@ class CircuitDrifterOrbit(DrifterOrbit):
         return min(self.minimum_pressures_Pa.values()) < 0.0
 
     @property
+    def border_margins_Pa(self) -> dict:
+        """How far the orbit stays from the circuit's borders over the period (Pa), from its flights
+        (:meth:`~impactbar.drives.circuit.HydraulicCircuitDrive.border_tests`): ``relief``, the
+        relief's setting less the greatest supply pressure (below 0: the relief valve opens), and
+        ``accumulator``, the least supply pressure less the pre-charge (below 0: the accumulator
+        empties); a border the circuit does not have (no relief, no accumulator) is left out."""
+        return {k: float(v) * PRESSURE_SCALE for k, v in self.orbit.drive.border_tests(self._pieces).items()}
+
+    @property
     def impact_power_kW(self) -> float:
         """The kinetic energy at impact times the blow frequency (kW): :attr:`percussive_power_kW`."""
         return self.percussive_power_kW
@@ -656,14 +665,15 @@ class CircuitDrifterOrbit(DrifterOrbit):
         return plot_circuit_orbit(self, axes=axes, points=points)
 
     def _summary(self) -> dict:
-        base = super()._summary()
+        base, border = super()._summary(), self.border_margins_Pa
         return {**{k: base[k] for k in ("blow_frequency_Hz", "period_ms", "impact_velocity_m_s",
                                         "impact_energy_J")},
                 "mean_supply_pressure_MPa": self.mean_supply_pressure_Pa / 1e6,
                 "pump_power_kW": self.pump_power_kW, "impact_power_kW": self.impact_power_kW,
                 "hydraulic_efficiency": self.hydraulic_efficiency, "stable": base["stable"],
                 "minimum_pressure_MPa": min(self.minimum_pressures_Pa.values()) / 1e6,
-                "cavitates": self.cavitates, "multiplier": base["multiplier"]}
+                "cavitates": self.cavitates, "multiplier": base["multiplier"],
+                **{f"{k}_margin_MPa": border.get(k, math.inf) / 1e6 for k in ("relief", "accumulator")}}
 
 
 #: Presets of drifters with their oil circuit.
