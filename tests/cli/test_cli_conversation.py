@@ -231,3 +231,14 @@ def test_a_key_the_config_leaves_out_is_named_once(tmp_path, capsys):
     assert main(COMMANDS["sweep"]["argv"](path, tmp_path)) == 2
     line = _one_line(capsys, "sweep")
     assert line.count("damping.coefficient") == 1 and "the config has no [damping] section" in line
+
+
+def test_a_parameter_of_a_part_the_drifter_lacks_is_refused_for_that(tmp_path, capsys):
+    """``continue --parameter accumulator.precharge`` on a drifter without an accumulator says so
+    before any solve (it solved the orbit, then named a valve's parameters of another drive)."""
+    text = re.sub(r"\[accumulator\].*?\n\n", "", CIRCUIT, flags=re.S)
+    assert "[accumulator]" not in text
+    path = _write(tmp_path, "continue", text)
+    assert main(COMMANDS["continue"]["argv"](path, tmp_path)) == 2
+    line = _one_line(capsys, "continue")
+    assert "accumulator.precharge is the accumulator's: the drifter has none" in line

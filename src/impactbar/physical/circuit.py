@@ -214,6 +214,9 @@ class CircuitDrifter(_ScaledDrifter):
         if name in ROCK_SI_PARAMETERS and self.drill is None:
             raise ValueError(f"parameter {name} is the drill string's and the rock's: the drifter has no "
                              "[rock] section")
+        if name.startswith("accumulator.") and not self.si["accumulator_volume_m3"] > 0.0:
+            raise ValueError(f"parameter {name} is the accumulator's: the drifter has none (no [accumulator] "
+                             "section, or its volume 0)")
         P, L, V, Q = PRESSURE_SCALE, self.bar.length_m, self.volume_scale_m3, self.flow_scale_m3_s
         m, force = self.bar.mass_kg, self.scales.force_N
         return {"Pa": 1.0 / P, "m**3": 1.0 / V, "m**3/s": 1.0 / Q, "m**3/s/Pa**0.5": math.sqrt(P) / Q,
@@ -246,7 +249,8 @@ class CircuitDrifter(_ScaledDrifter):
         ------
         ValueError
             An unknown key, or a value without its unit, of the wrong dimension or not finite; a
-            rock's key for a drifter without a ``[rock]`` section.
+            rock's key for a drifter without a ``[rock]`` section, an accumulator's for one without
+            an accumulator.
 
         Examples
         --------
