@@ -32,8 +32,10 @@ def add_parser(sub) -> None:
         "The periodic motion of a hydraulic drifter in SI units: its valve switched on the "
         "piston's position (a config with a [valve] section, theory section 10) or with its oil "
         "circuit (a [chambers] section: chambers, pump, accumulator, relief, theory section 11). "
-        "Prints the blow frequency, impact velocity and energy, and, with the circuit, the mean "
-        "supply pressure, pump power, hydraulic efficiency, least pressure and the stability. "
+        "Prints the blow frequency, impact velocity and energy, and, with the circuit, the impact "
+        "power, mean supply pressure, pump power, hydraulic efficiency (the energy the blows deliver "
+        "over the pump's work), least pressure, stability, and whether the relief valve opens and the "
+        "accumulator empties. "
         "'impactbar continue CONFIG --parameter accumulator.precharge --to \"12 MPa\"' follows it.")
     p = sub.add_parser(
         "drifter",
