@@ -242,3 +242,20 @@ def test_a_parameter_of_a_part_the_drifter_lacks_is_refused_for_that(tmp_path, c
     assert main(COMMANDS["continue"]["argv"](path, tmp_path)) == 2
     line = _one_line(capsys, "continue")
     assert "accumulator.precharge is the accumulator's: the drifter has none" in line
+
+
+@pytest.mark.parametrize("argv, says", [
+    (["drifter", "--preset", "hydraulic-drill"], "argument --preset: invalid choice: 'hydraulic-drill'"),
+    (["sweep", "spec.toml", "--out", "s.zarr", "--workers", "2", "--scheduler", "tcp://host:8786"],
+     "argument --scheduler: not allowed with argument --workers"),
+    (["optimize", "circuit-drifter"], "the following arguments are required: --vary"),
+])
+def test_what_the_parser_refuses_is_one_line_too(argv, says, capsys):
+    """Options that conflict in the parser itself (a mutually exclusive group), an invalid choice, a
+    required option left out: one line and exit status 2, as every other bad input (argparse's
+    usage above it made several)."""
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 2
+    line = _one_line(capsys, argv[0])
+    assert says in line and line.endswith(f"see 'impactbar {argv[0]} --help'")

@@ -160,7 +160,8 @@ def test_drifter_command_refuses_a_hammer(capsys):
     for hammer in ("pneumatic-drill", "hydraulic-drill"):
         with pytest.raises(SystemExit) as exit_:
             main(["drifter", "--preset", hammer])
-        assert exit_.value.code == 2 and "invalid choice" in capsys.readouterr().err
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and "invalid choice" in err and err.count("\n") == 1
     assert "hydraulic-drill" not in _help(capsys) and "pneumatic-drill" not in _help(capsys)
 
 
