@@ -148,9 +148,21 @@ def test_drifter_help_follows_the_tables(capsys, monkeypatch):
 
 
 def test_drifter_command_refuses_a_hammer(capsys):
-    assert main(["drifter", "--preset", "pneumatic-drill"]) == 2
+    """A hammer's file is refused in one line that says what the file is; the hammers' presets are
+    not offered (the help lists the drifters' only, and argparse refuses the others)."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "pneumatic_drill.toml"
+    assert main(["drifter", str(path)]) == 2
     err = capsys.readouterr().err.strip()
     assert "needs a drifter" in err and "circuit-drifter" in err and "\n" not in err
+    assert "pneumatic_drill.toml is a hammer under a periodic force" in err
+    for hammer in ("pneumatic-drill", "hydraulic-drill"):
+        with pytest.raises(SystemExit) as exit_:
+            main(["drifter", "--preset", hammer])
+        err = capsys.readouterr().err
+        assert exit_.value.code == 2 and "invalid choice" in err and err.count("\n") == 1
+    assert "hydraulic-drill" not in _help(capsys) and "pneumatic-drill" not in _help(capsys)
 
 
 def test_circuit_si_parameters_are_the_drive_parameters():
@@ -269,3 +281,40 @@ def test_the_readme_quotes_the_drifter_command_as_it_prints(capsys):
     assert quoted is not None, "the README's drifter example is gone; update this test with it"
     assert main(["drifter", "--preset", "hydraulic-drifter"]) == 0
     assert capsys.readouterr().out == quoted.group(1)
+
+
+def test_drifter_text_says_the_impact_power_and_the_circuits_borders(capsys):
+    """The text has what the JSON has: the impact power, and the relief valve and the accumulator
+    over the period, checked against the orbit's pressure history sampled apart (its extremes
+    against the relief's 25 MPa and the pre-charge's 10 MPa), and the efficiency says what it is."""
+    assert main(["drifter", "--preset", "circuit-drifter"]) == 0
+    text = capsys.readouterr().out
+    point = physical.circuit_preset("circuit-drifter").orbit()
+    v, f = point.impact_velocity_m_s, point.blow_frequency_Hz
+    shown = float(re.search(r"impact power ([0-9.]+) kW", text).group(1))
+    assert shown == pytest.approx(0.5 * 5.6 * v * v * f / 1e3, rel=1e-3)
+    p_s = point.histories(4000)["p_s_Pa"] / 1e6
+    relief = float(re.search(r"relief valve stays shut \(the supply pressure peaks ([0-9.]+) MPa below", text)
+                   .group(1))
+    acc = float(re.search(r"accumulator never empties \(the supply pressure stays ([0-9.]+) MPa above",
+                          text).group(1))
+    assert relief == pytest.approx(25.0 - p_s.max(), rel=1e-3, abs=1e-3)  # (four digits shown)
+    assert acc == pytest.approx(p_s.min() - 10.0, rel=1e-3, abs=1e-3)
+    eta = f"hydraulic efficiency {point.hydraulic_efficiency:.3f} (the energy the blows deliver"
+    assert eta in text
+
+
+def test_drifter_text_says_the_relief_opens_and_the_accumulator_empties(tmp_path, capsys):
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter.toml").read_text()
+    opens = tmp_path / "opens.toml"
+    opens.write_text(text.replace('pump_flow = "70 L/min"', 'pump_flow = "100 L/min"')
+                     .replace('volume = "0.5 L"', 'volume = "0 L"'))
+    assert main(["drifter", str(opens)]) == 0
+    out = capsys.readouterr().out
+    assert "the relief valve opens (the supply pressure reaches" in out and "; no accumulator" in out
+    empties = tmp_path / "empties.toml"
+    empties.write_text(text.replace('precharge = "10 MPa"', 'precharge = "24 MPa"'))
+    assert main(["drifter", str(empties)]) == 0
+    assert "the accumulator empties (the supply pressure falls" in capsys.readouterr().out

@@ -116,6 +116,26 @@ def test_the_cli_page_table_lists_every_shared_option_with_its_default():
         f"{defaults[o]:g}" for o in ("--s", "--d", "--R", "--n-modes"))
 
 
+def test_the_cli_page_table_lists_every_command_that_takes_each_option():
+    """Each option's rows name every command that takes it (``drifter --json`` and ``optimize
+    --quiet`` were left out); the page's command table names every command."""
+    text = DOCS.read_text(encoding="utf-8")
+    table = text[text.index("### One meaning per option"):]
+    subs = _subparsers()
+    listed = {}
+    for row in (r for r in table.splitlines() if r.startswith("| `--")):
+        cells = row.split("|")
+        for option in re.findall(r"`(--[A-Za-z0-9-]+)`", cells[1]):
+            listed.setdefault(option, set()).update(set(re.findall(r"`([a-z]+)`", cells[4])) & set(subs))
+    for name, sub in subs.items():
+        for a in sub._actions:
+            option = a.option_strings[0] if a.option_strings else None
+            if option in listed and a.help != argparse.SUPPRESS:  # (an old spelling: hidden)
+                assert name in listed[option], (option, name)
+    commands = text[text.index("## The command line"):text.index("### One meaning per option")]
+    assert set(subs) <= set(re.findall(r"`impactbar ([a-z]+)`", commands)), set(subs)
+
+
 @pytest.mark.parametrize("command", ["orbits", "continue"])
 def test_help_states_the_shared_defaults(command):
     text = _subparsers()[command].format_help()

@@ -137,3 +137,16 @@ def test_the_wave_law_s_multipliers_on_the_pneumatic_preset_are_quoted_as_comput
     assert len(largest["paper"]) == len(largest["wave"]) == 1
     assert _agrees(paper_q, largest["paper"][0]) and _agrees(wave_q, largest["wave"][0])
     assert _agrees(wave_q, h.R * math.exp(-math.pi * h.d))
+
+
+def test_the_warmup_cost_is_quoted_as_the_performance_page_measured_it():
+    """Getting started quotes ``impactbar warmup``'s cost as the performance page's table gives it
+    (the benchmark's figure, which the README quotes too), not an older measurement."""
+    perf = (ROOT / "docs" / "performance.md").read_text()
+    row = next(r for r in perf.splitlines() if r.startswith("| `impactbar warmup`"))
+    kernels, seconds = re.search(r"\(([0-9]+) kernels.*?\| ([0-9]+) s of CPU time idle", row).groups()
+    for page in ("docs/getting_started.md", "README.md"):
+        text = re.sub(r"\s+", " ", (ROOT / page).read_text())
+        quote = re.search(r"`impactbar warmup` compiles every kernel at once "
+                          r"\(([0-9]+) kernels in ([0-9]+) s of CPU time", text)
+        assert quote is not None and quote.groups() == (kernels, seconds), (page, kernels, seconds)

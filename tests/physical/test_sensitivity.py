@@ -58,7 +58,11 @@ def test_figures_and_state_are_the_orbits(preset):
     assert abs(s.state[5, 0]) < 1e-12
     # a longer stroke, a slower blow; the elasticity of the frequency about -0.47 (the table's)
     assert s.elasticities()["blow_frequency_Hz"]["valve.switch_out"] == pytest.approx(-0.4688, abs=2e-3)
-    assert "valve.switch_out" in s.table()
+    table = s.table()
+    assert "valve.switch_out" in table
+    # every row: its name (one word: the borders' too, "accumulator_margin_Pa"), the value, a derivative a key
+    assert all(len(row.split()) == 2 + len(s.keys) for row in table.splitlines()[1:]), table
+    assert "accumulator_margin_Pa" in table
 
 
 def test_relief_border_is_met_where_its_first_order_distance_says(preset):

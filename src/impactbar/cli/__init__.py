@@ -24,11 +24,21 @@ SUBCOMMANDS = ("paper", "orbits", "drifter", "continue_", "optimize", "experimen
                "plot", "warmup")
 
 
+class _OneLineParser(argparse.ArgumentParser):
+    """A parser whose refusals (an unknown option, an invalid choice, options of a mutually
+    exclusive group together, a required one missing) are one line on stderr with exit status 2,
+    as every other bad input's, and say where the usage is; its subcommands' parsers are of this
+    class too (``add_subparsers`` makes them so)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message}; see '{self.prog} --help'\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The top-level parser with every available subcommand registered."""
     from .._version import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = _OneLineParser(
         prog="impactbar",
         description="Impact vibration of an elastic bar (Bjorkenstam 1977): periodic impacting "
         "motions, their stability, simulation from any start.",

@@ -32,8 +32,10 @@ def add_parser(sub) -> None:
         "The periodic motion of a hydraulic drifter in SI units: its valve switched on the "
         "piston's position (a config with a [valve] section, theory section 10) or with its oil "
         "circuit (a [chambers] section: chambers, pump, accumulator, relief, theory section 11). "
-        "Prints the blow frequency, impact velocity and energy, and, with the circuit, the mean "
-        "supply pressure, pump power, hydraulic efficiency, least pressure and the stability. "
+        "Prints the blow frequency, impact velocity and energy, and, with the circuit, the impact "
+        "power, mean supply pressure, pump power, hydraulic efficiency (the energy the blows deliver "
+        "over the pump's work), least pressure, stability, and whether the relief valve opens and the "
+        "accumulator empties. "
         "'impactbar continue CONFIG --parameter accumulator.precharge --to \"12 MPa\"' follows it.")
     p = sub.add_parser(
         "drifter",
@@ -42,7 +44,7 @@ def add_parser(sub) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter)
     add_physical_arguments(p, config_help="a drifter in SI units: a TOML file with a [valve] section "
                            "(the valve switched on the piston's position) or a [chambers] section (with "
-                           "its oil circuit); the keys of each are listed below")
+                           "its oil circuit); the keys of each are listed below", hammers=False)
     p.add_argument("--json", action="store_true",
                    help="print JSON instead of a table (strict JSON: non-finite numbers as null)")
     p.set_defaults(func=_run_drifter)
@@ -76,8 +78,10 @@ def drifter_keys_help(width: int = 78) -> str:
 def _run_drifter(args) -> int:
     drifter = drifter_from_args(args)
     if drifter is None:
-        what = f"preset {args.preset!r}" if getattr(args, "preset", None) else (
-            f"{args.config}" if getattr(args, "config", None) else "no input")
+        from ..physical.config import CONFIG_KINDS
+
+        what = (f"{args.config} is {CONFIG_KINDS['hammer'][1]}" if getattr(args, "config", None)
+                else "no input")
         presets = ", ".join(sorted({*physical.DRIFTER_PRESETS, *physical.CIRCUIT_PRESETS}))
         raise ValueError(f"impactbar drifter needs a drifter: a CONFIG.toml with a [valve] or [chambers] "
                          f"section, or --preset {presets}; got {what}")
@@ -86,14 +90,18 @@ def _run_drifter(args) -> int:
 
 def drifter_from_args(args):
     """The drifter named by ``args.preset`` or ``args.config`` (a TOML file with a ``[valve]`` or a
-    ``[chambers]`` section, read by :func:`impactbar.physical.load`), else ``None`` (a hammer, or no
-    SI input).
+    ``[chambers]`` section, read by :func:`impactbar.physical.load`), else ``None`` (a hammer's
+    preset or file, or no SI input).
 
     Raises
     ------
     ValueError
-        An unreadable file, or an invalid drifter config (the key named).
+        Both a config and a preset; a missing or unreadable file, invalid TOML (its line), a sweep
+        spec, or an invalid drifter config (the key named).
     """
+    from .physical import check_one_source
+
+    check_one_source(args)
     name, config = getattr(args, "preset", None), getattr(args, "config", None)
     if name is not None and name in physical.DRIFTER_PRESETS:
         return physical.drifter_preset(name)
@@ -101,11 +109,7 @@ def drifter_from_args(args):
         return physical.circuit_preset(name)
     if config is None:
         return None
-    try:
-        kind = config_kind(read_toml(config))
-    except ValueError:
-        return None  # an unreadable file, a sweep spec: the hammer's reader reports it
-    return None if kind == "hammer" else physical.load(config)
+    return None if config_kind(read_toml(config)) == "hammer" else physical.load(config)
 
 
 def _what_is_struck(d) -> str:
@@ -140,12 +144,36 @@ def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:
 
 def _circuit_line(s: dict) -> str:
     return (f"  blow frequency {s['blow_frequency_Hz']:.4g} Hz, impact velocity "
-            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, mean supply "
-            f"pressure {s['mean_supply_pressure_MPa']:.4g} MPa, pump power {s['pump_power_kW']:.4g} kW, "
-            f"hydraulic efficiency {s['hydraulic_efficiency']:.3f}, least pressure "
-            f"{s['minimum_pressure_MPa']:.4g} MPa"
+            f"{s['impact_velocity_m_s']:.4g} m/s, impact energy {s['impact_energy_J']:.4g} J, impact power "
+            f"{s['impact_power_kW']:.4g} kW, mean supply pressure {s['mean_supply_pressure_MPa']:.4g} MPa, "
+            f"pump power {s['pump_power_kW']:.4g} kW, hydraulic efficiency {s['hydraulic_efficiency']:.3f} "
+            "(the energy the blows deliver, the impact's less the rebound's, over the pump's work), least "
+            f"pressure {s['minimum_pressure_MPa']:.4g} MPa"
             + (" (cavitates)" if s["cavitates"] else "")
-            + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})")
+            + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})\n"
+            + f"  {_borders_line(s)}")
+
+
+def _borders_line(s: dict) -> str:
+    """The relief valve's opening and the accumulator's emptying over the period, from the orbit's
+    border margins (MPa; infinite where the circuit has no such part)."""
+    relief, acc = s["relief_margin_MPa"], s["accumulator_margin_MPa"]
+    if relief == float("inf"):
+        words = ["no relief valve"]
+    elif relief < 0.0:
+        words = [f"the relief valve opens (the supply pressure reaches {-relief:.4g} MPa above its setting)"]
+    else:
+        words = [f"the relief valve stays shut (the supply pressure peaks {relief:.4g} MPa below its "
+                 "setting)"]
+    if acc == float("inf"):
+        words.append("no accumulator")
+    elif acc < 0.0:
+        words.append(f"the accumulator empties (the supply pressure falls {-acc:.4g} MPa below its "
+                     "pre-charge)")
+    else:
+        words.append(f"the accumulator never empties (the supply pressure stays {acc:.4g} MPa above its "
+                     "pre-charge)")
+    return "; ".join(words)
 
 
 def _print_orbit(args, drifter, header, line) -> int:

@@ -58,19 +58,29 @@ def add_parser(sub) -> None:
 
 
 def parse_vary(items) -> dict:
-    """``["KEY=LOW:HIGH", ...]`` as ``{KEY: (LOW, HIGH)}``.
+    """``["KEY=LOW:HIGH", ...]`` as ``{KEY: (LOW, HIGH)}``, each bound checked against the key's
+    unit where the optimiser knows it (a bare number refused for a key with a unit, the key's
+    example given; a wrong unit; a bound that is not finite).
 
     Raises
     ------
     ValueError
-        An item not of that form, or a key given twice.
+        An item not of that form, a key given twice, or a bound that is not a finite quantity in
+        the key's unit.
 
     Examples
     --------
     >>> from impactbar.cli.optimize import parse_vary
     >>> parse_vary(["valve.switch_out=20mm:23 mm"])
     {'valve.switch_out': ('20mm', '23 mm')}
+    >>> parse_vary(["supply.pump_flow=70:100"])
+    Traceback (most recent call last):
+    ...
+    ValueError: --vary supply.pump_flow=70:100: LOW needs a unit: it must be a quantity in m**3/s,
+    e.g. '80 L/min'; got the bare number '70'
     """
+    from ..physical.units import to_si
+
     out = {}
     for item in items:
         key, eq, rng = item.partition("=")
@@ -78,32 +88,64 @@ def parse_vary(items) -> dict:
         if not (eq and colon and key.strip() and low.strip() and high.strip()):
             raise ValueError(f"--vary must be KEY=LOW:HIGH with units, e.g. valve.switch_out=20mm:23mm; got "
                              f"{item!r}")
-        if key.strip() in out:
-            raise ValueError(f"--vary: {key.strip()} given twice")
-        out[key.strip()] = (low.strip(), high.strip())
+        key = key.strip()
+        if key in out:
+            raise ValueError(f"--vary: {key} given twice")
+        unit, example = _vary_unit(key)
+        for side, bound in (("LOW", low.strip()), ("HIGH", high.strip())):
+            if unit is not None:  # (a key the optimiser does not know: its own message)
+                to_si(f"--vary {item.strip()}: {side}", bound, unit, example)
+        out[key] = (low.strip(), high.strip())
     return out
 
 
+def _vary_unit(key: str) -> tuple[str | None, str]:
+    """The SI unit of a variable's key and an example value: the circuit's key table's
+    (:data:`~impactbar.physical.circuit.SI_PARAMETERS`), a length for the piston's shape; ``None``
+    for another key (the optimiser's own message)."""
+    from ..physical.circuit import SI_PARAMETERS
+
+    if key in SI_PARAMETERS:
+        return SI_PARAMETERS[key][1], SI_PARAMETERS[key][2]
+    if key.startswith("piston.") and key.endswith(("_diameter", "_length")):
+        return "m", "'50 mm'"
+    return None, ""
+
+
 def parse_constraint(items) -> dict:
-    """``["NAME=VALUE", ...]`` as ``{NAME: VALUE}`` (``none``: dropped; a bare number a float).
+    """``["NAME=VALUE", ...]`` as ``{NAME: VALUE}`` (``none``: dropped; the limit as given, which
+    the optimiser reads in the constraint's unit, a bare number refused for a constraint with a
+    unit as everywhere else).
 
     Raises
     ------
     ValueError
-        An item not of that form.
+        An item not of that form, or a limit that is not finite (``inf``, ``nan``).
+
+    Examples
+    --------
+    >>> from impactbar.cli.optimize import parse_constraint
+    >>> parse_constraint(["max_multiplier=0.9", "mean_supply_pressure=18 MPa", "piston_mass=none"])
+    {'max_multiplier': '0.9', 'mean_supply_pressure': '18 MPa', 'piston_mass': None}
+    >>> parse_constraint(["max_multiplier=inf"])
+    Traceback (most recent call last):
+    ...
+    ValueError: --constraint max_multiplier=inf: the limit must be finite
     """
+    import math
+    import re
+
     out = {}
     for item in items:
         name, eq, value = item.partition("=")
-        if not (eq and name.strip() and value.strip()):
+        name, v = name.strip(), value.strip()
+        if not (eq and name and v):
             raise ValueError("--constraint must be NAME=VALUE, e.g. 'peak_incident_stress=250 MPa'; got "
                              f"{item!r}")
-        v = value.strip()
-        try:
-            v = float(v)
-        except ValueError:
-            v = None if v.lower() == "none" else v
-        out[name.strip()] = v
+        number = re.match(r"[+-]?(?:inf(?:inity)?|nan|(?:\d+\.?\d*|\.\d+)(?:e[+-]?\d+)?)", v, re.IGNORECASE)
+        if number is not None and not math.isfinite(float(number.group(0))):
+            raise ValueError(f"--constraint {name}={v}: the limit must be finite")
+        out[name] = None if v.lower() == "none" else v
     return out
 
 

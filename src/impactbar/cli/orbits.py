@@ -74,8 +74,8 @@ def load_from_args(args) -> Load:
 
 
 def check_options(args) -> None:
-    """Refuse the options the chosen mode ignores: the dimensionless inputs with a hammer in SI,
-    the other load's options with ``--load``.
+    """Refuse the options the chosen mode ignores or that conflict: a CONFIG.toml with ``--preset``,
+    the dimensionless inputs with a hammer in SI, the other load's options with ``--load``.
 
     Raises
     ------
@@ -83,6 +83,9 @@ def check_options(args) -> None:
     """
     hammer = getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None
     if hammer:
+        from .physical import check_one_source
+
+        check_one_source(args)
         refuse(args, DIMENSIONLESS, because="with a hammer in SI units (CONFIG.toml or --preset), "
                "which sets the bar, the load and R itself")
         return

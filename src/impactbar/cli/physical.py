@@ -9,15 +9,18 @@ import warnings
 
 from .. import physical
 from ..laws import LAWS
-from ._common import docs_page, json_ready, print_json
+from ._common import UsageError, docs_page, json_ready, print_json
 
 __all__ = ["add_physical_arguments", "add_impact_argument", "wants_physical", "hammer_from_args",
-           "run_physical_orbits", "json_ready"]
+           "run_physical_orbits", "json_ready", "check_one_source"]
 
 
-def add_physical_arguments(parser, config_help: str | None = None) -> None:
+def add_physical_arguments(parser, config_help: str | None = None, *, hammers: bool = True) -> None:
     """Add an optional positional ``config`` (a TOML file; ``config_help`` its help, by default a
-    hammer's keys) and ``--preset NAME`` to ``parser``."""
+    hammer's keys) and ``--preset NAME`` to ``parser``; ``hammers``: whether the hammers' presets
+    are among its choices (``impactbar drifter`` takes the drifters' only)."""
+    hammer_presets = sorted(physical.PRESETS) if hammers else []
+    hammer_help = f"a preset hammer in SI units: {', '.join(hammer_presets)}; or " if hammers else ""
     parser.add_argument(
         "config", nargs="?", default=None, metavar="CONFIG.toml",
         help=config_help or "a hammer in SI units (keys: [bar] E, density, length, diameter|area; "
@@ -26,10 +29,8 @@ def add_physical_arguments(parser, config_help: str | None = None) -> None:
              f"{docs_page('Real hammers in SI units')}")
     parser.add_argument(
         "--preset", default=None, metavar="NAME",
-        choices=[*sorted(physical.PRESETS), *sorted(physical.DRIFTER_PRESETS),
-                 *sorted(physical.CIRCUIT_PRESETS)],
-        help=f"a preset hammer in SI units: {', '.join(sorted(physical.PRESETS))}; or a drifter whose "
-             f"valve switches on the piston's position (theory section 10): "
+        choices=[*hammer_presets, *sorted(physical.DRIFTER_PRESETS), *sorted(physical.CIRCUIT_PRESETS)],
+        help=f"{hammer_help}a drifter whose valve switches on the piston's position (theory section 10): "
              f"{', '.join(sorted(physical.DRIFTER_PRESETS))} (a config with a [valve] section is one too); "
              f"or a drifter with its oil circuit (theory section 11): "
              f"{', '.join(sorted(physical.CIRCUIT_PRESETS))} (a config with a [chambers] section)")
@@ -49,6 +50,18 @@ def wants_physical(args) -> bool:
     return getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None
 
 
+def check_one_source(args) -> None:
+    """Refuse a CONFIG.toml and ``--preset`` given together: each names a whole machine.
+
+    Raises
+    ------
+    UsageError
+    """
+    if getattr(args, "config", None) is not None and getattr(args, "preset", None) is not None:
+        raise UsageError("CONFIG.toml and --preset cannot be used together: each names the whole "
+                         "machine; give one")
+
+
 def hammer_from_args(args) -> physical.Hammer:
     """The hammer named by ``args.config`` or ``args.preset`` (exactly one).
 
@@ -57,9 +70,10 @@ def hammer_from_args(args) -> physical.Hammer:
     ValueError
         Neither or both given, or an invalid config.
     """
+    check_one_source(args)
     config, name = getattr(args, "config", None), getattr(args, "preset", None)
-    if (config is None) == (name is None):
-        raise ValueError("give exactly one of CONFIG.toml and --preset NAME")
+    if config is None and name is None:
+        raise ValueError("give one of CONFIG.toml and --preset NAME")
     hammer = physical.preset(name) if name is not None else physical.load_config(config)
     impact = getattr(args, "impact", None)  # --impact overrides the config's [model] impact
     return hammer if impact is None else dataclasses.replace(hammer, impact=impact)

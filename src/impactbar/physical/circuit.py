@@ -214,6 +214,9 @@ class CircuitDrifter(_ScaledDrifter):
         if name in ROCK_SI_PARAMETERS and self.drill is None:
             raise ValueError(f"parameter {name} is the drill string's and the rock's: the drifter has no "
                              "[rock] section")
+        if name.startswith("accumulator.") and not self.si["accumulator_volume_m3"] > 0.0:
+            raise ValueError(f"parameter {name} is the accumulator's: the drifter has none (no [accumulator] "
+                             "section, or its volume 0)")
         P, L, V, Q = PRESSURE_SCALE, self.bar.length_m, self.volume_scale_m3, self.flow_scale_m3_s
         m, force = self.bar.mass_kg, self.scales.force_N
         return {"Pa": 1.0 / P, "m**3": 1.0 / V, "m**3/s": 1.0 / Q, "m**3/s/Pa**0.5": math.sqrt(P) / Q,
@@ -246,7 +249,8 @@ class CircuitDrifter(_ScaledDrifter):
         ------
         ValueError
             An unknown key, or a value without its unit, of the wrong dimension or not finite; a
-            rock's key for a drifter without a ``[rock]`` section.
+            rock's key for a drifter without a ``[rock]`` section, an accumulator's for one without
+            an accumulator.
 
         Examples
         --------
@@ -563,6 +567,15 @@ class CircuitDrifterOrbit(DrifterOrbit):
         return min(self.minimum_pressures_Pa.values()) < 0.0
 
     @property
+    def border_margins_Pa(self) -> dict:
+        """How far the orbit stays from the circuit's borders over the period (Pa), from its flights
+        (:meth:`~impactbar.drives.circuit.HydraulicCircuitDrive.border_tests`): ``relief``, the
+        relief's setting less the greatest supply pressure (below 0: the relief valve opens), and
+        ``accumulator``, the least supply pressure less the pre-charge (below 0: the accumulator
+        empties); a border the circuit does not have (no relief, no accumulator) is left out."""
+        return {k: float(v) * PRESSURE_SCALE for k, v in self.orbit.drive.border_tests(self._pieces).items()}
+
+    @property
     def impact_power_kW(self) -> float:
         """The kinetic energy at impact times the blow frequency (kW): :attr:`percussive_power_kW`."""
         return self.percussive_power_kW
@@ -656,14 +669,15 @@ class CircuitDrifterOrbit(DrifterOrbit):
         return plot_circuit_orbit(self, axes=axes, points=points)
 
     def _summary(self) -> dict:
-        base = super()._summary()
+        base, border = super()._summary(), self.border_margins_Pa
         return {**{k: base[k] for k in ("blow_frequency_Hz", "period_ms", "impact_velocity_m_s",
                                         "impact_energy_J")},
                 "mean_supply_pressure_MPa": self.mean_supply_pressure_Pa / 1e6,
                 "pump_power_kW": self.pump_power_kW, "impact_power_kW": self.impact_power_kW,
                 "hydraulic_efficiency": self.hydraulic_efficiency, "stable": base["stable"],
                 "minimum_pressure_MPa": min(self.minimum_pressures_Pa.values()) / 1e6,
-                "cavitates": self.cavitates, "multiplier": base["multiplier"]}
+                "cavitates": self.cavitates, "multiplier": base["multiplier"],
+                **{f"{k}_margin_MPa": border.get(k, math.inf) / 1e6 for k in ("relief", "accumulator")}}
 
 
 #: Presets of drifters with their oil circuit.

@@ -5,6 +5,7 @@ drifter with its oil circuit that it describes out, told apart by their sections
 from __future__ import annotations
 
 import copy
+import os
 from pathlib import Path
 
 from .circuit import _KEYS as _CIRCUIT_KEYS
@@ -80,7 +81,7 @@ def load(path) -> Hammer | Drifter | CircuitDrifter:
     Raises
     ------
     ValueError
-        A missing or malformed file; a sweep spec (``impactbar sweep`` reads those); an unknown or
+        Not a path; a missing or malformed file; a sweep spec (``impactbar sweep`` reads those); an unknown or
         missing key or a value out of range, named, after the file and the kind of machine it was
         read as (a misspelt section can change the kind: the message says which keys were expected).
 
@@ -115,6 +116,9 @@ def load(path) -> Hammer | Drifter | CircuitDrifter:
     (it has a [valve] section and no [chambers]; theory §10): unknown key valve.switch_at; allowed in
     [valve]: delay, return_area, stroke_area, supply_pressure, switch_out
     """
+    if not isinstance(path, str | os.PathLike):
+        raise ValueError(f"path must be a TOML file's path (a str or os.PathLike); got {path!r} "
+                         f"({type(path).__name__})")
     path = Path(path)
     return build(read_toml(path), path.parent, where=str(path))
 

@@ -243,7 +243,8 @@ def _limits(constraints, drifter, ideal: bool = False) -> dict:
         if isinstance(v, int | float) and not isinstance(v, bool):  # a bare number: SI
             out[name] = float(v)
             continue
-        example = {"Pa": "'400 MPa'", "kg": "'5.6 kg'"}.get(unit, "0.95")
+        example = {"Pa": "'400 MPa'", "kg": "'5.6 kg'", "m**3": "'0.01 L'",
+                   "m/min": "'2 m/min'"}.get(unit, "0.95")
         out[name] = to_si(f"constraints[{name!r}]", v, unit, example)
     return out
 
@@ -529,7 +530,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}; got {objective!r}")
     cfg, folder = read_config(config)
-    base = build(cfg, folder)
+    base = build(cfg, folder, where="config" if folder is None else str(config))  # (the file named)
     if not isinstance(base, CircuitDrifter):
         raise ValueError("config must describe a drifter with its oil circuit (a [chambers] section)")
     if base.drill is None and objective != "impact_power":

@@ -173,7 +173,7 @@ class OperatingPointSensitivities:
             rows.append(f"{name:30s}{value:13.6g}" + "".join(
                 f"{self.derivatives[name][k] / shown[k][0]:36.6g}" for k in self.keys))
         for name, b in self.borders.items():
-            rows.append(f"{name + ' margin_Pa':30s}{b['margin_Pa']:13.6g}" + "".join(
+            rows.append(f"{name + '_margin_Pa':30s}{b['margin_Pa']:13.6g}" + "".join(
                 f"{b['derivatives'][k] / shown[k][0]:36.6g}" for k in self.keys))
         return "\n".join(rows)
 
@@ -204,7 +204,7 @@ def _figures(point: CircuitDrifterOrbit) -> dict:
 
 def _borders(point: CircuitDrifterOrbit) -> dict:
     """The circuit's border margins of an operating point (Pa)."""
-    return {k: float(v) * PRESSURE_SCALE for k, v in point.orbit.drive.border_tests(point._pieces).items()}
+    return point.border_margins_Pa
 
 
 def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | None = None,

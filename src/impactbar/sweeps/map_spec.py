@@ -448,7 +448,7 @@ def _axis(config: dict, name: str, table) -> MapAxis:
     try:
         base = config_value(config, name)
     except ValueError as exc:
-        raise ValueError(f"[axes] {name}: {_one_line(exc)}") from None
+        raise ValueError(f"[axes] {_one_line(exc)}") from None  # (the message names the key)
     unit = _si_unit(name, base)
     if not isinstance(table, dict):
         raise ValueError(f"[axes] {name} must be a table {{start, stop, num}} or {{values}}; got {table!r}")
