@@ -354,9 +354,9 @@ def _eval_channel(pools, c, t, kind, head=None):
 
 def _channel_max(pools, c, t_end):
     PF, PI, TK, TC, CHI, lam, lamk = pools
-    res = np.zeros(2)
+    res = np.zeros(S.HMAX_SIZE)
     H.history_max(PF, PI, TK, TC, lam, int(CHI[c, 1]), float(t_end), res)
-    return res[0], res[1]
+    return res[S.HMAX_V], res[S.HMAX_T]
 
 
 def _check_chain(name, times, imps):
