@@ -8,9 +8,11 @@ integer literal, ``PR[3]``, ``bs[3]``, ``CNT0[1]``, ``_hist[0]``, in code (comme
 prose). Single-letter names are the package's mathematical arrays, where ``[0]`` and ``[-1]`` are
 the first and last entries (``Z[-1]`` the last segment's impedance, ``U[-1]`` the continuation's
 parameter, ``q[0]`` the rigid mode); ``shape`` is never a record; ``NOT_RECORDS`` lists, module by
-module, the longer names that are no records either, ``PYTHON_TUPLES`` the tuples of named values
-in Python code no kernel runs, and ``KERNEL_RECORDS_LEFT`` the kernels' records still read by number
-(each a debt: the list is to shrink)."""
+module, the longer names that are no records either, and ``PYTHON_TUPLES`` the tuples of named
+values in Python code no kernel runs. A record of a kernel is named where it is made: the rock
+blow's in ``_records``, the others beside their kernel (``_admkernel``'s ``PB_*``, ``SRC_*``,
+``WK_*``, ``_rigidkernel``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave
+window's ``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
 
 import io
 import re
@@ -47,7 +49,7 @@ NOT_RECORDS = {
     "drives/circuit/_sundials.py": {"hits"},  # the first root found
     "drives/circuit/endflight.py": {"breaks", "ts", "y0", "ext_fn"},  # sequences' ends; a one-slot box
     "drives/circuit/flight.py": {"qe", "ts"},  # the rigid mode; the last time
-    "drives/flight.py": {"gs", "qa", "qe", "ts"},  # the rigid mode; sequences' last entries
+    "drives/flight.py": {"gs", "out_q", "out_t", "out_v", "qa", "qe", "ts"},  # the rigid mode; first rows
     "drives/orbitproblem.py": {"lu"},  # scipy's LU factor (lu, piv)
     "drives/switched/_kernel.py": {"out_t", "pend_k", "pend_t", "qs", "ts", "vs"},  # queues' heads
     "dynamics/_aberthkernel.py": {"ds", "s89", "ut"},  # sums over the modes as real and imaginary parts
@@ -84,7 +86,7 @@ NOT_RECORDS = {
     "laws/wave/sustained.py": {"below", "nxt", "start"},  # sequences' first and last entries
     "loads/fourier.py": {"_k", "_pk", "ks", "pks", "rows", "tau"},  # harmonics' first and last
     "model.py": {"ends", "kappa"},  # the mode shapes at the two ends (rows of one array); the rigid mode's
-    "orbits/_admkernel.py": {"gm", "upper"},  # the first bound
+    "orbits/_admkernel.py": {"bufs", "gm", "upper"},  # the first of four like buffers; the first bound
     "orbits/_closing.py": {"blocks"},  # the first block
     "orbits/_rigid_scalar.py": {"phases"},  # the two phases
     "orbits/_rigidkernel.py": {"bounds", "phs"},  # the first bound; the two phases
@@ -136,7 +138,6 @@ PYTHON_TUPLES = {
     "continuation/two_parameter.py": {"key"},  # the cache's key, the two parameters' values
     "drives/circuit/drive.py": {"mode"},  # the mode (valve, ..., checks)
     "drives/switched/drive.py": {"mode"},  # the mode (valve, ...)
-    "drives/flight.py": {"out"},  # run_free's output rows (times, ..., q, v)
     "dynamics/modal.py": {"out"},  # the flow's four coefficient arrays
     "laws/rodrock/_bit.py": {"nxt"},  # (branch, p)
     "laws/rodrock/coupled_exact.py": {"waves"},  # (F, G)
@@ -160,19 +161,6 @@ PYTHON_TUPLES = {
     "simulation/initial.py": {"out"},  # (q, v)
     "simulation/simulate.py": {"last"},  # the cache (model, load, value)
 }
-#: module -> kernels' records still read by number there (a debt: name their slots in the module
-#: that owns the record, then strike them here)
-KERNEL_RECORDS_LEFT = {
-    "drives/circuit/_endcvode.py": {"data", "ud"},  # the user data's header (npar, the inputs)
-    "drives/circuit/_endkernel.py": {"ext"},  # the inputs (a, 1/Z)
-    "drives/circuit/endflight.py": {"ext"},  # the inputs (a, 1/Z)
-    "dynamics/_flightkernel.py": {"state"},  # (q, v, qp, vp)
-    "dynamics/_flowkernel.py": {"flow"},  # the flow's arrays
-    "dynamics/_kernel.py": {"blk", "fold", "kblk", "mblk", "work"},  # a block's arrays, the scratch
-    "laws/wave/_wavekernel.py": {"win"},  # the window (load, t0, s, jw, nj, lw, ew, cw)
-    "orbits/_admkernel.py": {"bufs", "prob", "src", "work"},  # the problem's, the load's arrays, the scratch
-    "orbits/_rigidkernel.py": {"orbit", "out"},  # an orbit's numbers, the outputs' arrays
-}
 _PROSE = {tokenize.COMMENT, tokenize.STRING} | {getattr(tokenize, "FSTRING_MIDDLE", tokenize.STRING)}
 
 
@@ -194,8 +182,7 @@ def _code(text):
 def slots_by_number(text, module=""):
     """``(line, match)`` of every record slot indexed by a number in the source ``text`` of
     ``module``, those its lists let pass left out."""
-    passed = ANYWHERE.union(*(names.get(module, ()) for names in (NOT_RECORDS, PYTHON_TUPLES,
-                                                                     KERNEL_RECORDS_LEFT)))
+    passed = ANYWHERE.union(*(names.get(module, ()) for names in (NOT_RECORDS, PYTHON_TUPLES)))
     out = []
     for i, line in enumerate(_code(text), start=1):
         for m in SLOT.finditer(line):
@@ -233,11 +220,9 @@ def test_the_lists_are_disjoint_and_name_modules_that_exist():
     """A name is listed once per module, in one list, and each listed module exists and still
     indexes that name by a number (a list that outlives its reason would hide a new record)."""
     top = Path(impactbar.__file__).parent
-    lists = (NOT_RECORDS, PYTHON_TUPLES, KERNEL_RECORDS_LEFT)
-    for a in range(3):
-        for b in range(a + 1, 3):
-            for module in lists[a].keys() & lists[b].keys():
-                assert not lists[a][module] & lists[b][module], module
+    lists = (NOT_RECORDS, PYTHON_TUPLES)
+    for module in NOT_RECORDS.keys() & PYTHON_TUPLES.keys():
+        assert not NOT_RECORDS[module] & PYTHON_TUPLES[module], module
     for names in lists:
         for module, listed in names.items():
             text = (top / module).read_text()

@@ -1,5 +1,6 @@
 """The slots of the exact blow's records (:mod:`impactbar.laws.rodrock._exactkernel`'s workspace, made by
-:func:`impactbar.laws.rodrock.exact._workspace`; the tangent run's ``TCUR``): one name per slot, read
+:func:`impactbar.laws.rodrock.exact._workspace`; the tangent run's ``TCUR``) and of the lattice
+blow's (:mod:`impactbar.laws.rodrock._rockkernel`, ``_rocktangent``): one name per slot, read
 by the compiled kernels as compile-time constants (numba freezes a module's integer globals), so
 that a slot is found by its name and never by its number.
 
