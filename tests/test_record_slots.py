@@ -141,10 +141,9 @@ PYTHON_TUPLES = {
     "dynamics/modal.py": {"out"},  # the flow's four coefficient arrays
     "laws/rodrock/_bit.py": {"nxt"},  # (branch, p)
     "laws/rodrock/coupled_exact.py": {"waves"},  # (F, G)
-    "laws/rodrock/exact.py": {"_hist", "_pool", "drive", "kept", "pools"},  # a blow's history, pool
+    "laws/rodrock/exact.py": {"drive", "kept"},  # (starts, pieces); the kept pool
     "laws/rodrock/exactjac.py": {"drive", "res", "waves"},  # (starts, pieces), the run's results
-    "laws/rodrock/exactmap.py": {"cached", "hist", "last", "out"},  # the cache, the pool's sizes, results
-    "laws/rodrock/exactrecord.py": {"_hist"},  # the blow's history
+    "laws/rodrock/exactmap.py": {"out"},  # the run's results
     "laws/wave/_jumps.py": {"best", "found"},  # (residual, value)
     "model.py": {"_modal"},  # (w, c, modes, kappa, sticking)
     "orbits/_closing.py": {"out"},  # the flight's results
