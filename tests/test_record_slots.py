@@ -139,7 +139,6 @@ PYTHON_TUPLES = {
     "drives/circuit/drive.py": {"mode"},  # the mode (valve, ..., checks)
     "drives/switched/drive.py": {"mode"},  # the mode (valve, ...)
     "dynamics/modal.py": {"out"},  # the flow's four coefficient arrays
-    "laws/rodrock/_bit.py": {"nxt"},  # (branch, p)
     "laws/rodrock/coupled_exact.py": {"waves"},  # (F, G)
     "laws/rodrock/exact.py": {"drive", "kept"},  # (starts, pieces); the kept pool
     "laws/rodrock/exactjac.py": {"drive", "res", "waves"},  # (starts, pieces), the run's results
