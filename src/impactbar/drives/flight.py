@@ -294,14 +294,15 @@ def arrival(model, p: float, t: float, q, v, t_stop: float):
     c = np.ascontiguousarray(model.end_weights)
     load = tuple(LoadKernelView.fourier(p, [], []))
     basis = tuple(ModalBasisView.unforced(w2, d))
-    out = (np.empty(1), np.empty(1), np.empty((1, q.size)), np.empty((1, q.size)))
+    out_t, out_vel, out_q, out_v = np.empty(1), np.empty(1), np.empty((1, q.size)), np.empty((1, q.size))
+    out = (out_t, out_vel, out_q, out_v)  # the arrival's time, speed and modal state (_run_free)
     qk, vk = q.copy(), v.copy()
     horizon = t_stop if math.isfinite(t_stop) else t + 1e8
     n, st, tn = K.run_free(load, basis, -1.0, c, (float(t), qk, vk), float(horizon), 1, 1e-9, out, None, True)
     if n:  # an arrival with speed (R = -1: the kernel changes nothing and stops)
-        qa, va = out[2][0].copy(), out[3][0].copy()
+        qa, va = out_q[0].copy(), out_v[0].copy()
         qa[0] -= float(c @ qa)  # exactly on the stop
-        return float(out[0][0]), qa, va, True
+        return float(out_t[0]), qa, va, True
     if st == K.CONTACT:  # a touch at zero speed: the arrival, tangential
         qe, ve = step_constant(w2, d, p, q, v, float(tn) - t)
         qe[0] -= float(c @ qe)

@@ -403,7 +403,7 @@ def next_piece(load, B, level, ta, te, m, j, anchor, state):
     state ``qpa, vpa`` (``anchor = (qa, va, qpa, vpa)``). Returns the new ``ta, m, j, level``;
     ``state = (q, v, qp, vp)`` holds the state at ``te``."""
     qa, va, qpa, vpa = anchor
-    q, v = state[0], state[1]
+    q, v, _, _ = state
     breaks, levels, w2 = load.breaks, load.levels, B.w2
     advance(load, B, level, ta, anchor, te, state)
     for n in range(w2.size):

@@ -73,8 +73,9 @@ def fourier_flow(t, flow):
     the free part ``dq, dv`` of the rigid mode (``kind[n]`` 2; 0: the particular solution alone).
     Three arrays where there were fourteen: every kernel call counts a reference to each array it
     is passed, and the certified search passes these once per evaluation."""
-    M = flow[4].shape[1]
-    K = flow[3].size
+    _, _, _, k, H, _, _ = flow
+    M = H.shape[1]
+    K = k.size
     T = t.size
     q = np.empty((M, T))
     v = np.empty((M, T))

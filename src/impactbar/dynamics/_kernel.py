@@ -78,11 +78,11 @@ def flow_scratch(qa, va):
     a short run's fixed cost): copies of ``qa, va``, then ``qp, vp, qpa, vpa`` and two more of the
     same length (``q, v`` of a flow evaluated apart from its start), uninitialised."""
     M = qa.size
-    blk = np.empty((8, M))
+    q, v, qp, vp, qpa, vpa, qe, ve = np.empty((8, M))  # its rows
     for n in range(M):
-        blk[0, n] = qa[n]
-        blk[1, n] = va[n]
-    return blk[0], blk[1], blk[2], blk[3], blk[4], blk[5], blk[6], blk[7]
+        q[n] = qa[n]
+        v[n] = va[n]
+    return q, v, qp, vp, qpa, vpa, qe, ve
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -362,9 +362,9 @@ def _modal_eval(load, B, fold, flight, work, t):
     rigid mode's free velocity ``v_0 - v_p0``."""
     p0, ks, pr, pim = load.p0, load.ks, load.pr, load.pim
     w2, d = B.w2, B.d
-    lam, hcr, hci, hwr, hwi = fold[0], fold[2], fold[3], fold[4], fold[5]
+    lam, _, hcr, hci, hwr, hwi, _, _ = fold
     ta, c0, r0, dv0, csum, sq0, sw0 = flight
-    ca, cb, cva, cvb = work[2], work[3], work[4], work[5]
+    _, _, ca, cb, cva, cvb = work
     tau = t - ta
     b, c = _bc(d, tau)
     ed = math.exp(-d * tau)
@@ -601,10 +601,8 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
     if modal_fast is not None:
         modal = modal_fast and kind == 0 and M > 1 and w2[0] == 0.0
         K = ks.size
-        mblk = np.empty((6, M))  # (one allocation: a short run's fixed cost)
-        lam, wsq, ca, cb, cva, cvb = mblk[0], mblk[1], mblk[2], mblk[3], mblk[4], mblk[5]
-        kblk = np.zeros((4, K))
-        hcr, hci, hwr, hwi = kblk[0], kblk[1], kblk[2], kblk[3]
+        lam, wsq, ca, cb, cva, cvb = np.empty((6, M))  # (one allocation: a short run's fixed cost)
+        hcr, hci, hwr, hwi = np.zeros((4, K))
         nq0 = 0.0
         nv0 = 0.0
         for i in range(M):

@@ -25,6 +25,13 @@ from ..dynamics.kernelview import LoadKernelView
 
 TWO_PI = 2.0 * math.pi
 _MAXF = np.finfo(np.float64).max
+#: the places in :func:`admissibility_search`'s tuples: ``prob = (c, absc, w2, d, psup)``,
+#: ``src = (load, F, P)`` and its scratch ``work``: the modal state's columns ``q, v``, the load's
+#: ``ck, sk``, the frequencies ``W``, ``_upper``'s ``eb, above, vabove``, two rows of the folded
+#: modes' phases (the first ``_upper``'s ``l3``)
+PB_C, PB_ABSC, PB_W2, PB_D, PB_PSUP = range(5)
+SRC_LOAD, SRC_F, SRC_P = range(3)
+WK_Q, WK_V, WK_CK, WK_SK, WK_W, WK_EB, WK_ABOVE, WK_VABOVE, WK_PH1, WK_PH2 = range(10)
 #: the most entries (intervals times modes) of the folded modes' phases that the bisection keeps
 #: to step them by rotations (four arrays of 8 MiB at most, ``phase_buffers``); a level with more
 #: evaluates them directly
@@ -42,8 +49,8 @@ def _right(a, x):
 
 @numba.njit(cache=CACHE, nogil=True, inline="always")
 def _load(t, load):
-    """The load ``p(t)`` at the absolute time ``t`` (``load``: the load's kernel view, ``src[0]`` of
-    :func:`admissibility_search`). Inlined, and given the view alone: a kernel call counts a
+    """The load ``p(t)`` at the absolute time ``t`` (``load``: the load's kernel view, ``src[SRC_LOAD]``
+    of :func:`admissibility_search`). Inlined, and given the view alone: a kernel call counts a
     reference to every array it is passed, and ``src`` holds some twenty."""
     if load.kind == 0:
         k, pr, pim, p0 = load.ks, load.pr, load.pim, load.p0
@@ -82,11 +89,11 @@ def _variation(mid, half, load):
 @numba.njit(cache=CACHE, nogil=True)
 def _state(t, work, src):
     """The modal state at the absolute time ``t`` into column 0 of ``q, v`` (shape ``(M, 1)``)."""
-    q, v, ck, sk = work[0], work[1], work[2], work[3]
+    q, v, ck, sk = work[WK_Q], work[WK_V], work[WK_CK], work[WK_SK]
     load, F, P = src
     if load.kind == 0:
         # (a literal 0 or True would compile it again)
-        fourier_column(t, q, v, np.int64(0), ck, sk, F, work[8], work[9], np.bool_(False))
+        fourier_column(t, q, v, np.int64(0), ck, sk, F, work[WK_PH1], work[WK_PH2], np.bool_(False))
         return
     w2, d, nodes, levels, qn, vn = P
     j = _right(nodes, t) - 1
@@ -105,7 +112,7 @@ def _dot(c, x):
 @numba.njit(cache=CACHE, nogil=True, inline="always")  # one caller: inlined
 def _g(phase, t, c, work, src):
     """``g(t) = c . q(phase + t)``."""
-    q = work[0]
+    q = work[WK_Q]
     _state(phase + t, work, src)
     return _dot(c, q)
 
@@ -115,10 +122,10 @@ def _joint(phase, mid, half, prob, work, src):
     """``(g(mid), g'(mid), L)``: the end's displacement and velocity, and the bound of ``|g''|`` on
     ``[mid - half, mid + half]`` (``gprime_and_bound`` of the numpy path)."""
     c, absc, w2, d, psup = prob
-    q, v = work[0], work[1]
+    q, v = work[WK_Q], work[WK_V]
     ta = phase + mid
     _state(ta, work, src)
-    center, delta = _variation(ta, half, src[0])
+    center, delta = _variation(ta, half, src[SRC_LOAD])
     g1, L = bound_column(c, absc, w2, d, psup, q, v, 0, center, delta, half)
     return _dot(c, q), g1, L
 
@@ -145,7 +152,8 @@ def _upper(ta, half, prob, work, load):
     where the end rests nearly still (the plateaus that a contact window of the wave law leaves,
     where ``|g'|`` stays below ``L h`` down to tiny ``h``)."""
     c, absc, w2, d, psup = prob
-    q, v, W, eb, above, vabove = work[0], work[1], work[4], work[5], work[6], work[7]
+    q, v, W = work[WK_Q], work[WK_V], work[WK_W]
+    eb, above, vabove = work[WK_EB], work[WK_ABOVE], work[WK_VABOVE]
     w, iw, iw2 = W[0], W[1], W[2]
     center, delta = _variation(ta, half, load)
     M = c.size
@@ -158,7 +166,7 @@ def _upper(ta, half, prob, work, load):
     ac = abs(center)
     dh = delta * half
     slope = load.p1 if load.kind == 0 else 0.0
-    l3 = work[8]  # (the scratch of _state's phases, free here)
+    l3 = work[WK_PH1]  # (the scratch of _state's phases, free here)
     for n in range(M):
         vn = v[n, 0]
         flex = w2[n] > 0.0
@@ -213,11 +221,11 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src, phases):
     floor)``, all floats (``prune`` 1.0 or 0.0), so that every caller shares one compilation.
     ``phases``: the four buffers of :func:`admissibility_search`."""
     min_width, max_intervals, atol, prune, floor = limits
-    q, v, ck, sk = work[0], work[1], work[2], work[3]
-    F = src[1]
+    q, v, ck, sk = work[WK_Q], work[WK_V], work[WK_CK], work[WK_SK]
+    F = src[SRC_F]
     t0, lam = F[0], F[5][1]
     M = q.shape[0]
-    rotate = src[0].kind == 0  # a Fourier load: the folded modes' phases stepped by rotations
+    rotate = src[SRC_LOAD].kind == 0  # a Fourier load: the folded modes' phases stepped by rotations
     # the phases cos, sin(lam (t - t0)) at the kept intervals' midpoints (rows parent[i] of C, S)
     # (two pairs of buffers, swapped between levels; given by the caller, who keeps them from one
     # search to the next: fresh arrays cost their page faults at every search)
@@ -255,7 +263,7 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src, phases):
                 fourier_column(ta, q, v, np.int64(0), ck, sk, F, ci, si, np.bool_(True))
             else:
                 _state(ta, work, src)
-            gs[i], fs[i], ls[i], us[i], xs[i] = _upper(ta, half, prob, work, src[0])
+            gs[i], fs[i], ls[i], us[i], xs[i] = _upper(ta, half, prob, work, src[SRC_LOAD])
         if prune:
             best = max(best, _sample_bound(mids, gs, fs, atol, floor))
         keep = np.empty(n, dtype=np.bool_)
@@ -333,8 +341,8 @@ def _enclose_in(phase, a, b, lo, hi, n0, bounds, best, prob, work, src, phases):
 def _newton(phase, lo, hi, prob, work, src):
     """``admissibility._newton_stationary``: the same iteration, element by element (an element
     leaves it once converged or out of its interval)."""
-    c, w2, d = prob[0], prob[2], prob[3]
-    q, v = work[0], work[1]
+    c, w2, d = prob[PB_C], prob[PB_W2], prob[PB_D]
+    q, v = work[WK_Q], work[WK_V]
     n = lo.size
     t = np.empty(n)
     ok = np.zeros(n, dtype=np.bool_)
@@ -350,7 +358,7 @@ def _newton(phase, lo, hi, prob, work, src):
                 continue
             ta = phase + t[i]
             _state(ta, work, src)
-            p = _load(ta, src[0])
+            p = _load(ta, src[SRC_LOAD])
             g1 = 0.0
             g2 = 0.0
             for k in range(M):
@@ -388,7 +396,7 @@ def _value_bounds(phase, lo, hi, prob, work, src):
         mid = 0.5 * (lo[i] + hi[i])
         half = 0.5 * (hi[i] - lo[i])
         _state(phase + mid, work, src)
-        gm[i], g1[i], L2, ut, _ = _upper(phase + mid, half, prob, work, src[0])
+        gm[i], g1[i], L2, ut, _ = _upper(phase + mid, half, prob, work, src[SRC_LOAD])
         upper[i] = min(gm[i] + (abs(g1[i]) + 0.5 * L2 * half) * half, ut)
     return gm, upper, g1
 
@@ -418,14 +426,14 @@ def _single(phase, ts, lo, hi, prob, work, src):
     """``admissibility._numpy_search``'s ``single_zero``: ``|g''(ts)| > L3 r``, so that ``ts`` is
     the only zero of ``g'`` on ``[lo, hi]``."""
     c, absc, w2, d, psup = prob
-    q, v = work[0], work[1]
+    q, v = work[WK_Q], work[WK_V]
     mid = 0.5 * (lo + hi)
     half = 0.5 * (hi - lo)
     ta = phase + mid
     _state(ta, work, src)
-    center, delta = _variation(ta, half, src[0])
-    if src[0].kind == 0:
-        slope = src[0].p1
+    center, delta = _variation(ta, half, src[SRC_LOAD])
+    if src[SRC_LOAD].kind == 0:
+        slope = src[SRC_LOAD].p1
     else:
         if delta != 0.0:  # a jump of the load inside: no certificate
             return False
@@ -445,7 +453,7 @@ def _single(phase, ts, lo, hi, prob, work, src):
         L3 += absc[n] * t3
     ta = phase + ts
     _state(ta, work, src)
-    p = _load(ta, src[0])
+    p = _load(ta, src[SRC_LOAD])
     g2 = 0.0
     for n in range(M):
         g2 += c[n] * (p - d * v[n, 0] - w2[n] * q[n, 0])
@@ -539,10 +547,10 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
     err : float
         As ``_stationary_values``'s ``err``.
     """
-    src = (LoadKernelView(*src_tuples[0]), src_tuples[1], src_tuples[2])
-    c = prob[0]
+    src = (LoadKernelView(*src_tuples[SRC_LOAD]), src_tuples[SRC_F], src_tuples[SRC_P])
+    c = prob[PB_C]
     M = c.size
-    K = src[0].ks.size
+    K = src[SRC_LOAD].ks.size
     q = np.empty((M, 1))
     v = np.empty((M, 1))
     ck = np.empty(K)
@@ -552,10 +560,10 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
     # and the tails' bounds) and of fourier_column (the folded modes' phases; _upper's terms of L3)
     W = np.ones((3, M))
     for n in range(M):
-        if prob[2][n] > 0.0:
-            W[0, n] = math.sqrt(prob[2][n])
+        if prob[PB_W2][n] > 0.0:
+            W[0, n] = math.sqrt(prob[PB_W2][n])
             W[1, n] = 1.0 / W[0, n]
-            W[2, n] = 1.0 / prob[2][n]
+            W[2, n] = 1.0 / prob[PB_W2][n]
     work = (q, v, ck, sk, W, np.empty(M), np.empty(M), np.empty(M), np.empty(M), np.empty(M))
     n0 = 64
     half0 = 0.5 * horizon / n0

@@ -58,25 +58,32 @@ _copies = _compiled(_rigid_scalar.SHARED)
     "_b", "_sign", "_verdict", "_cosine_roots", "_cosine_flight", "_crossing", "_velocity", "_displacement",
     "_exp_level_time", "_square_wave", "_square_impact", "_square_flight"))
 
+#: the places in ``out``, the fields of ``RigidOrbits`` in order
+(O_N, O_PHASE, O_MULT, O_VMINUS, O_VPLUS, O_QMINUS, O_STATUS, O_CLEAR, O_CLEARERR, O_MULTS, O_SCHUR,
+ O_SCHUROK, O_STABLE, O_FALLBACK) = range(14)
+#: the place of the admissible flag in ``_verdict``'s orbit
+V_OK = 0
+
 
 @numba.njit(inline="always", **_JIT)
 def _store(out, i, j, phase, mult, v_minus, v_plus, q_minus, orbit):
     """Write orbit ``j`` of point ``i`` (``orbit``, from :func:`_verdict`) into ``out``, the fields
     of ``RigidOrbits`` in order (straight-line code: inlined, its references cost nothing)."""
-    out[1][i, j] = phase
-    out[2][i, j] = mult
-    out[3][i, j] = v_minus
-    out[4][i, j] = v_plus
-    out[5][i, j] = q_minus
-    out[6][i, j] = orbit[1]
-    out[7][i, j] = orbit[2]
-    out[8][i, j] = orbit[3]
-    out[9][i, j, 0] = orbit[4]
-    out[9][i, j, 1] = orbit[5]
-    out[10][i, j, 0] = orbit[6]
-    out[10][i, j, 1] = orbit[7]
-    out[11][i, j] = orbit[8]
-    out[12][i, j] = orbit[9]
+    _, status, clearance, err, mu0, mu1, s0, s1, schur_ok, stable = orbit
+    out[O_PHASE][i, j] = phase
+    out[O_MULT][i, j] = mult
+    out[O_VMINUS][i, j] = v_minus
+    out[O_VPLUS][i, j] = v_plus
+    out[O_QMINUS][i, j] = q_minus
+    out[O_STATUS][i, j] = status
+    out[O_CLEAR][i, j] = clearance
+    out[O_CLEARERR][i, j] = err
+    out[O_MULTS][i, j, 0] = mu0
+    out[O_MULTS][i, j, 1] = mu1
+    out[O_SCHUR][i, j, 0] = s0
+    out[O_SCHUR][i, j, 1] = s1
+    out[O_SCHUROK][i, j] = schur_ok
+    out[O_STABLE][i, j] = stable
 
 
 # ------------------------------------------------------------------------------------------------
@@ -122,7 +129,7 @@ def cosine_orbits(d, R, p0, pk, k, out):
 
     ``d``, ``R``, ``p0``, ``pk``: float arrays of shape (P,); ``k``: the harmonic's order (int).
     """
-    n_orbits, fallback = out[0], out[13]
+    n_orbits, fallback = out[O_N], out[O_FALLBACK]
     K2 = 2 * k
     phs = np.empty(K2)
     zs = np.empty(K2)
@@ -200,7 +207,7 @@ def cosine_orbits(d, R, p0, pk, k, out):
             x = kf * ph
             orbit = _verdict(di, Ri, p0i, psup, v_plus, v_minus, p_plus, p_plus,
                              ca * math.cos(x) + cb * math.sin(x), ng, gmax)
-            if not orbit[0]:
+            if not orbit[V_OK]:
                 fallback[i] = True
                 break
             _store(out, i, m, ph, mult, v_minus, v_plus, q_minus, orbit)
@@ -214,7 +221,7 @@ def square_orbits(d, R, q, kappa, out):
     """Every one-impact orbit of the rigid bar under the square wave (eq. 34) at each point,
     written into ``out`` as :func:`cosine_orbits`; none where ``kappa >= 2`` (a constant load,
     which the callers leave to the general path)."""
-    n_orbits, fallback = out[0], out[13]
+    n_orbits, fallback = out[O_N], out[O_FALLBACK]
     phs = np.empty(2)
     for i in range(d.size):
         di, Ri, qi = d[i], R[i], q[i]
@@ -243,7 +250,7 @@ def square_orbits(d, R, q, kappa, out):
             V_phase, p_plus, p_minus = _square_impact(ph, a, qi, di, V0, V1, al0, al1)
             qs, vs, ng, gmax = _square_flight(ph, a, qi, di, v_plus, Ri == 0.0)
             orbit = _verdict(di, Ri, p0, qi, v_plus, vs, p_plus, p_minus, V_phase, ng, gmax)
-            if not orbit[0]:
+            if not orbit[V_OK]:
                 fallback[i] = True
                 break
             _store(out, i, m, ph, mult, vs, v_plus, qs, orbit)

@@ -28,33 +28,36 @@ from ._cvode import _c, _d, _dp, _p
 
 __all__ = ["CALLBACKS", "SPLINE_CALLBACKS", "fly_intervals", "spline_data", "user_data"]
 
-_HEAD = 3  # len(par), a, 1/Z
+#: the user data's header: ``len(par)``, then ``ext`` (:mod:`._endkernel`: ``a, 1/Z``)
+HD_NPAR, HD_EXT = 0, 1
+_HEAD = HD_EXT + EK.EXT_SIZE
 
 
 @nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
 def _rhs_c(t, y, yp, user_data):
     """CVODE's ``CVRhsFn``: :func:`._endkernel.rhs`."""
-    n = int(nb.carray(user_data, 1)[0])
+    n = int(nb.carray(user_data, 1)[HD_NPAR])
     ud = nb.carray(user_data, _HEAD + n + EK.SCRATCH)
     EK.rhs_in(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(CV._nv_data(yp), EK.N_STATE),
-              ud[_HEAD:_HEAD + n], ud[1:_HEAD], ud[_HEAD + n:])
+              ud[_HEAD:_HEAD + n], ud[HD_EXT:_HEAD], ud[_HEAD + n:])
     return 0
 
 
 @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
 def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
     """CVODE's ``CVLsJacFn``: :func:`._endkernel.jac` into the dense matrix (stored by columns)."""
-    n = int(nb.carray(user_data, 1)[0])
+    n = int(nb.carray(user_data, 1)[HD_NPAR])
     ud = nb.carray(user_data, _HEAD + n + EK.SCRATCH)
     JJ = nb.carray(CV._dense_data(J), (EK.N_STATE, EK.N_STATE)).T
-    EK.jac_in(nb.carray(CV._nv_data(y), EK.N_STATE), JJ, ud[_HEAD:_HEAD + n], ud[1:_HEAD], ud[_HEAD + n:])
+    EK.jac_in(nb.carray(CV._nv_data(y), EK.N_STATE), JJ, ud[_HEAD:_HEAD + n], ud[HD_EXT:_HEAD],
+              ud[_HEAD + n:])
     return 0
 
 
 @nb.cfunc(_c(_d, _p, _dp, _dp), cache=CACHE)
 def _events_c(t, y, g, user_data):
     """CVODE's ``CVRootFn``: :func:`._endkernel.events`."""
-    n = int(nb.carray(user_data, 1)[0])
+    n = int(nb.carray(user_data, 1)[HD_NPAR])
     ud = nb.carray(user_data, _HEAD + n)
     EK.events(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(g, EK.N_EVENTS), ud[_HEAD:_HEAD + n])
     return 0
@@ -84,13 +87,13 @@ def spline_at(ud, base, t):
 @nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
 def _rhs_spline_c(t, y, yp, user_data):
     """CVODE's ``CVRhsFn`` with ``a`` from the interval's spline: :func:`._endkernel.rhs`."""
-    n = int(nb.carray(user_data, 1)[0])
+    n = int(nb.carray(user_data, 1)[HD_NPAR])
     base = _HEAD + n + EK.SCRATCH
     m = int(nb.carray(user_data, base + 1)[base])
     ud = nb.carray(user_data, base + 2 + m + 4 * (m - 1))
-    ud[1] = spline_at(ud, base, t)
+    ud[HD_EXT + EK.EXT_A] = spline_at(ud, base, t)
     EK.rhs_in(nb.carray(CV._nv_data(y), EK.N_STATE), nb.carray(CV._nv_data(yp), EK.N_STATE),
-              ud[_HEAD:_HEAD + n], ud[1:_HEAD], ud[_HEAD + n:base])
+              ud[_HEAD:_HEAD + n], ud[HD_EXT:_HEAD], ud[_HEAD + n:base])
     return 0
 
 
@@ -117,8 +120,9 @@ def user_data(par: np.ndarray, a: float, impedance: float, room: int = 0) -> np.
     """The user data of the callbacks: ``(len(par), a, 1/Z, par..., work...)``, shape
     ``(3 + len(par) + SCRATCH + room,)``, ``SCRATCH`` the callbacks' room for their intermediate
     values (:func:`._endkernel.rhs_in`), ``room`` that of an interval's spline (:func:`fly_intervals`)."""
-    return np.concatenate(([float(par.size), float(a), 1.0 / float(impedance)], par,
-                           np.zeros(EK.SCRATCH + room)))
+    head = np.empty(_HEAD)
+    head[HD_NPAR], head[HD_EXT + EK.EXT_A], head[HD_EXT + EK.EXT_IZ] = par.size, a, 1.0 / float(impedance)
+    return np.concatenate((head, par, np.zeros(EK.SCRATCH + room)))
 
 
 #: :func:`fly_intervals`' returns besides CVODE's flags: a state not finite at a stretch's end, a
@@ -158,7 +162,7 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
     t, w : float
     z : numpy.ndarray, shape (4,)
     incoming : numpy.ndarray, shape (n,)
-        The wave ``a`` on each interval (written into ``data[1]`` in turn).
+        The wave ``a`` on each interval (written into the header's ``a`` in turn).
     rtol, atol : float
     directions : numpy.ndarray of int32, shape (3,)
     data : numpy.ndarray
@@ -198,7 +202,7 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
     flag = 1
     roots = np.zeros(EK.N_EVENTS, np.int32)
     y0 = np.zeros(N)
-    npar = int(data[0])
+    npar = int(data[HD_NPAR])
     par = data[_HEAD:_HEAD + npar]
     base = _HEAD + npar + EK.SCRATCH
     work = data[_HEAD + npar:base]
@@ -212,7 +216,7 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
             size = offsets[k + 1] - offsets[k]
             data[base:base + size] = splines[offsets[k]:offsets[k + 1]]
         else:
-            data[1] = incoming[k]
+            data[HD_EXT + EK.EXT_A] = incoming[k]
         y0[:] = 0.0
         y0[0] = w
         y0[1:5] = z
@@ -233,8 +237,8 @@ def fly_intervals(mem, yvec, breaks, k, t, w, z, incoming, rtol, atol, direction
                 S += 1
         for i in range(s0, S):
             if spline:
-                data[1] = spline_at(data, base, T[i])
-            EK.rhs_in(Y[i], F[i], par, data[1:_HEAD], work)
+                data[HD_EXT + EK.EXT_A] = spline_at(data, base, T[i])
+            EK.rhs_in(Y[i], F[i], par, data[HD_EXT:_HEAD], work)
         if P + 1 == starts.size:
             st2 = np.zeros(2 * starts.size, np.int64)
             st2[:P + 1] = starts[:P + 1]

@@ -28,6 +28,9 @@ N_STATE = 6 + K.N_ENERGY
 N_EVENTS = 3
 #: their indices among the flight kernel's events (``_kernel.RAMP_EV``, ``ACC_EV``, ``REL_EV``)
 FLIGHT_EVENTS = (K.RAMP_EV, K.ACC_EV, K.REL_EV)
+#: the slots of ``ext``: the incoming wave ``a``, the reciprocal impedance ``1/Z``
+EXT_A, EXT_IZ = range(2)
+EXT_SIZE = 2
 #: the room :func:`rhs_in` and :func:`jac_in` take for their intermediate values
 SCRATCH = 6 + K.N_ENERGY + 40
 
@@ -39,7 +42,7 @@ def _one_mode(y, par, ext, buf):
     """The one-mode bar state of :func:`._kernel._base` for ``y``: ``(q_0, q_0', p_f, p_r, p_s, x_v)``
     with ``q_0 = -w``, ``q_0' = u_t(0) = a + p / Z``; returns ``u_t(0)``."""
     p = y[2] - par[K.ALPHA] * y[1]
-    ut = ext[0] + p * ext[1]
+    ut = ext[EXT_A] + p * ext[EXT_IZ]
     buf[0] = -y[0]
     buf[1] = ut
     for i in range(4):
@@ -89,7 +92,7 @@ def jac_in(y, JJ, par, ext, work):
     _one_mode(y, par, ext, buf)
     A = work[6 + K.N_ENERGY:6 + K.N_ENERGY + 36].reshape((6, 6))
     K.jac_base(buf, par, 1, A)
-    alpha, iz = par[K.ALPHA], ext[1]
+    alpha, iz = par[K.ALPHA], ext[EXT_IZ]
     dut = work[6 + K.N_ENERGY + 36:6 + K.N_ENERGY + 40]  # d u_t(0) / d(p_f, p_r, p_s, x_v)
     dut[0] = -alpha * iz
     dut[1] = iz

@@ -154,7 +154,7 @@ def _solver(drive, mode, settings, ext, model1, state_size):
     def f(t, y, yp):
         fn = ext_fn[0]
         if fn is not None:
-            ext[0] = fn(t)
+            ext[EK.EXT_A] = fn(t)
         rhs(y, yp, par, ext)
 
     def jf(t, y, yp, JJ):
@@ -210,7 +210,8 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     breaks = np.asarray(breaks, dtype=float)
     n = breaks.size - 1
     model1 = one_mode
-    ext = np.array([0.0, 1.0 / float(impedance)])
+    ext = np.zeros(EK.EXT_SIZE)
+    ext[EK.EXT_IZ] = 1.0 / float(impedance)
     solvers: dict = {}  # by mode: scikit-sundae's solver (a wave that varies within a stretch)
     mode, z = state.mode, np.array(state.z, dtype=float)
     ns = drive.layout.n_states
@@ -242,7 +243,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
                 ext_fn[0] = a
             else:
                 ext_fn[0] = None
-                ext[0] = float(a)
+                ext[EK.EXT_A] = float(a)
             with contextlib.redirect_stdout(io.StringIO()):  # (CVODE's errors are in sol.message)
                 sol = solver.solve(np.array([t, t1]), y0)
             if sol.status < 0 or not np.all(np.isfinite(sol.y[-1])):
@@ -254,9 +255,9 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             Y = np.asarray(Y, dtype=float)
             keep = np.concatenate(([True], np.diff(ts) > 0.0))
             ts, Y = ts[keep], np.ascontiguousarray(Y[keep])
-            exts = np.empty((ts.size, 2))
-            exts[:, 1] = ext[1]
-            exts[:, 0] = [a(tt) for tt in ts] if callable(a) else float(a)
+            exts = np.empty((ts.size, EK.EXT_SIZE))
+            exts[:, EK.EXT_IZ] = ext[EK.EXT_IZ]
+            exts[:, EK.EXT_A] = [a(tt) for tt in ts] if callable(a) else float(a)
             f = np.empty_like(Y)
             EK.field_at(Y, par, exts, f)
             piece = EndPiece(ts, Y, f, drive.chambers.area_ratio, drive.layout)

@@ -41,10 +41,16 @@ MAX_IMPACTS = 1  # max_impacts reached
 FULL = 2  # a log is full: Python empties it and calls again
 PYTHON = 3  # the next piece is Python's (a touch, a start through the stop, a full pending list)
 
-# integer slots of the valve's state array
-_VALVE, _NPEND, _NIMP, _MAXIMP, _RIGID, _FAST = range(6)
-# counters of the logs
-_LI, _LS, _LP = range(3)
+# integer slots of the valve's state array ``ints``: the valve, the switches pending, the impacts
+# done and the most, the rigid bar's closed forms (1: run them), the fast impact search (1)
+INT_VALVE, INT_NPEND, INT_NIMP, INT_MAXIMP, INT_RIGID, INT_FAST = range(6)
+INT_SIZE = 6
+# counters of the logs (``logs[-1]``): impacts, switches, pieces logged
+CNT_IMP, CNT_SW, CNT_PC = range(3)
+CNT_SIZE = 3
+# the clock's slots: the time reached, the end, the tail (the impacts' search's)
+CLK_T, CLK_END, CLK_TAIL = range(3)
+CLK_SIZE = 3
 # a rebound shorter than this fraction of the time is rest on the stop (the Python loop's test)
 _REST = 1e-13
 
@@ -185,7 +191,7 @@ def _push(pend_t, pend_k, n, t, k):
 
 @numba.njit(cache=CACHE, nogil=True)
 def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
-    """The valve's loop (theory §10), piece by piece, from ``clock[0]`` to ``clock[1]``.
+    """The valve's loop (theory §10), piece by piece, from ``clock[CLK_T]`` to ``clock[CLK_END]``.
 
     ``loads`` are the plain tuples of the views of the two one-piece loads ``(+stroke, -ret)``, ``B`` that of
     the free-free basis (plain tuples: the flexible flights call the dispatcher
@@ -199,7 +205,7 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     Returns
     -------
     int
-        :data:`DONE`, :data:`MAX_IMPACTS`, :data:`FULL` or :data:`PYTHON`; ``clock[0]`` is where the
+        :data:`DONE`, :data:`MAX_IMPACTS`, :data:`FULL` or :data:`PYTHON`; ``clock[CLK_T]`` is where the
         loop stopped.
     """
     q, v = state
@@ -209,9 +215,9 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     B_t = B
     B = ModalBasisView(*B_t)
     d = B.d
-    rigid = ints[_RIGID] != 0
-    fast = ints[_FAST] != 0
-    tail = clock[2]
+    rigid = ints[INT_RIGID] != 0
+    fast = ints[INT_FAST] != 0
+    tail = clock[CLK_TAIL]
     qs = np.empty(M)
     vs = np.empty(M)
     out_t = np.empty(1)
@@ -222,15 +228,15 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
     ts = np.empty(1)
     eq = np.empty((M, 1))
     ev = np.empty((M, 1))
-    t = clock[0]
-    t_end = clock[1]
+    t = clock[CLK_T]
+    t_end = clock[CLK_END]
     while t < t_end:
-        n_pend = ints[_NPEND]
+        n_pend = ints[INT_NPEND]
         if n_pend + 2 > pend_t.size:
             return PYTHON
-        if cnt[_LI] >= imp_t.size or cnt[_LP] >= pc_t0.size or cnt[_LS] + n_pend + 2 > sw_t.size:
+        if cnt[CNT_IMP] >= imp_t.size or cnt[CNT_PC] >= pc_t0.size or cnt[CNT_SW] + n_pend + 2 > sw_t.size:
             return FULL
-        valve = ints[_VALVE]
+        valve = ints[INT_VALVE]
         # the next rising crossing of switch_out while the valve is (and stays) in return
         t_next = t_end
         if n_pend:
@@ -249,8 +255,8 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
         if rigid:
             t1, impacted, vm, q0, v0, rest = _rigid_piece(d, R, level, q[0], v[0], t, t_next)
             if impacted:
-                imp_t[cnt[_LI]] = t1
-                imp_v[cnt[_LI]] = vm
+                imp_t[cnt[CNT_IMP]] = t1
+                imp_v[cnt[CNT_IMP]] = vm
             qs[0] = q[0]
             vs[0] = v[0]
             q[0] = q0
@@ -274,8 +280,8 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
             if st == MAXIMP:
                 impacted = True
                 t1 = tn
-                imp_t[cnt[_LI]] = out_t[0]
-                imp_v[cnt[_LI]] = out_vel[0]
+                imp_t[cnt[CNT_IMP]] = out_t[0]
+                imp_v[cnt[CNT_IMP]] = out_vel[0]
                 for i in range(M):
                     q[i] = out_q[0, i]
                     v[i] = out_v[0, i]
@@ -290,42 +296,42 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
                 for i in range(M):
                     q[i] = qs[i]
                     v[i] = vs[i]
-                clock[0] = t
+                clock[CLK_T] = t
                 return PYTHON
-        k = cnt[_LP]
+        k = cnt[CNT_PC]
         pc_t0[k] = t
         pc_t1[k] = t1
         pc_lv[k] = valve + (2 if rigid and rest else 0)  # + 2: the piston rests on the stop
         for i in range(M):
             pc_q[k, i] = qs[i]
             pc_v[k, i] = vs[i]
-        cnt[_LP] = k + 1
+        cnt[CNT_PC] = k + 1
         t = t1
-        clock[0] = t
+        clock[CLK_T] = t
         if impacted:
-            cnt[_LI] += 1
-            ints[_NIMP] += 1
-            ints[_NPEND] = _push(pend_t, pend_k, ints[_NPEND], t + drive.delay_in, RETURN)
-            if ints[_NIMP] >= ints[_MAXIMP]:
+            cnt[CNT_IMP] += 1
+            ints[INT_NIMP] += 1
+            ints[INT_NPEND] = _push(pend_t, pend_k, ints[INT_NPEND], t + drive.delay_in, RETURN)
+            if ints[INT_NIMP] >= ints[INT_MAXIMP]:
                 return MAX_IMPACTS
         elif t >= t_end:
             break
         elif t == cross:  # the gap rose through switch_out: the switch to stroke is triggered
-            ints[_NPEND] = _push(pend_t, pend_k, ints[_NPEND], cross + drive.delay_out, STROKE)
-        while ints[_NPEND] and pend_t[0] <= t:  # the switches due now take effect
+            ints[INT_NPEND] = _push(pend_t, pend_k, ints[INT_NPEND], cross + drive.delay_out, STROKE)
+        while ints[INT_NPEND] and pend_t[0] <= t:  # the switches due now take effect
             kk = pend_k[0]
-            n_pend = ints[_NPEND] - 1
+            n_pend = ints[INT_NPEND] - 1
             for i in range(n_pend):
                 pend_t[i] = pend_t[i + 1]
                 pend_k[i] = pend_k[i + 1]
-            ints[_NPEND] = n_pend
-            if kk != ints[_VALVE]:
-                ints[_VALVE] = kk
-                sw_t[cnt[_LS]] = t
-                sw_y[cnt[_LS]] = -q[0]
-                sw_k[cnt[_LS]] = kk
-                cnt[_LS] += 1
-    clock[0] = t
+            ints[INT_NPEND] = n_pend
+            if kk != ints[INT_VALVE]:
+                ints[INT_VALVE] = kk
+                sw_t[cnt[CNT_SW]] = t
+                sw_y[cnt[CNT_SW]] = -q[0]
+                sw_k[cnt[CNT_SW]] = kk
+                cnt[CNT_SW] += 1
+    clock[CLK_T] = t
     return DONE
 
 

@@ -46,8 +46,9 @@ class ValveLoop:
         self.B = kernel.basis
         self.R, self.c = kernel.R, kernel.c
         self.dview = tuple(drive.kernel_view)
-        self.clock = np.array([0.0, 0.0, kernel.tail])
-        self.ints = np.zeros(6, dtype=np.int64)
+        self.clock = np.zeros(SK.CLK_SIZE)
+        self.clock[SK.CLK_TAIL] = kernel.tail
+        self.ints = np.zeros(SK.INT_SIZE, dtype=np.int64)
         self.flags = (int(kernel.rigid), int(kernel.fast_search))
         self.pend_t = np.empty(_PEND_CAP)
         self.pend_k = np.empty(_PEND_CAP, dtype=np.int64)
@@ -61,34 +62,37 @@ class ValveLoop:
         imp_t, imp_v, sw_t, sw_y, sw_k, blocks = [], [], [], [], [], []
         status = KernelRun.PYTHON
         clock, ints, pend_t, pend_k = self.clock, self.ints, self.pend_t, self.pend_k
-        clock[1] = t_end
+        clock[SK.CLK_END] = t_end
         M = q.size
         while t < t_end and len(pending) + 2 <= _PEND_CAP:
             left = max_imp - n_imp
             n_i = max(1, min(self.cap, left))
             n_p = 4 * n_i + 8
-            logs = (np.empty(n_i), np.empty(n_i), np.empty(n_p + _PEND_CAP), np.empty(n_p + _PEND_CAP),
-                    np.empty(n_p + _PEND_CAP, dtype=np.int64), np.empty(n_p), np.empty(n_p),
-                    np.empty(n_p, dtype=np.int64), np.empty((n_p, M)), np.empty((n_p, M)),
-                    np.zeros(3, dtype=np.int64))
+            li_t, li_v = np.empty(n_i), np.empty(n_i)
+            ls_t, ls_y, ls_k = np.empty(n_p + _PEND_CAP), np.empty(n_p + _PEND_CAP), \
+                np.empty(n_p + _PEND_CAP, dtype=np.int64)
+            lp_t0, lp_t1, lp_lv = np.empty(n_p), np.empty(n_p), np.empty(n_p, dtype=np.int64)
+            lp_q, lp_v, cnt = np.empty((n_p, M)), np.empty((n_p, M)), np.zeros(SK.CNT_SIZE, dtype=np.int64)
+            logs = (li_t, li_v, ls_t, ls_y, ls_k, lp_t0, lp_t1, lp_lv, lp_q, lp_v, cnt)
             self.cap = min(2 * self.cap, 1 << 16)
             for i, (tp, kp) in enumerate(pending):
                 pend_t[i], pend_k[i] = tp, kp
-            ints[:] = (valve, len(pending), n_imp, max_imp, *self.flags)
-            clock[0] = t
+            ints[SK.INT_VALVE], ints[SK.INT_NPEND], ints[SK.INT_NIMP] = valve, len(pending), n_imp
+            ints[SK.INT_MAXIMP], (ints[SK.INT_RIGID], ints[SK.INT_FAST]) = max_imp, self.flags
+            clock[SK.CLK_T] = t
             st = SK.run_switched(self.views, self.B, self.dview, self.R, self.c, clock, (q, v), ints,
                                  (pend_t, pend_k), logs)
-            ni, ns, npc = (int(x) for x in logs[-1])
-            imp_t.append(logs[0][:ni])
-            imp_v.append(logs[1][:ni])
-            sw_t.append(logs[2][:ns])
-            sw_y.append(logs[3][:ns])
-            sw_k.extend(map(_NAMES.__getitem__, logs[4][:ns].tolist()))
+            ni, ns, npc = int(cnt[SK.CNT_IMP]), int(cnt[SK.CNT_SW]), int(cnt[SK.CNT_PC])
+            imp_t.append(li_t[:ni])
+            imp_v.append(li_v[:ni])
+            sw_t.append(ls_t[:ns])
+            sw_y.append(ls_y[:ns])
+            sw_k.extend(map(_NAMES.__getitem__, ls_k[:ns].tolist()))
             if npc:
-                blocks.append((logs[5][:npc], logs[6][:npc], logs[7][:npc], logs[8][:npc], logs[9][:npc]))
-            valve, n_imp = int(ints[0]), int(ints[2])
-            pending = tuple((float(pend_t[i]), int(pend_k[i])) for i in range(int(ints[1])))
-            t = float(clock[0])
+                blocks.append((lp_t0[:npc], lp_t1[:npc], lp_lv[:npc], lp_q[:npc], lp_v[:npc]))
+            valve, n_imp = int(ints[SK.INT_VALVE]), int(ints[SK.INT_NIMP])
+            pending = tuple((float(pend_t[i]), int(pend_k[i])) for i in range(int(ints[SK.INT_NPEND])))
+            t = float(clock[SK.CLK_T])
             if st == SK.MAX_IMPACTS:
                 status = KernelRun.MAX_IMPACTS
                 break

@@ -118,12 +118,12 @@ class _Bit:
         if nxt is None:
             p1 = p0 + g / Z * (-math.expm1(-lam * tau)) / lam
         else:
-            p1 = nxt[1]
+            branch, p1 = nxt
         self.work += self._work(p0, p1)
         self.p = p1
         self.w = (E - b * (p1 - ref)) / Z
         if nxt is not None:
-            self.branch = nxt[0]
+            self.branch = branch
         return tau
 
     # -- bit with mass: exact 2x2 linear flow ---------------------------------------------------------

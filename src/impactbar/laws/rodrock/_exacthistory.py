@@ -22,6 +22,7 @@ from ._exactpieces import (
     pool_load,
     pool_unpack,
 )
+from ._records import HMAX_T, HMAX_V  # the result's slots
 
 NOBIN = np.zeros((1, 1))
 
@@ -162,7 +163,7 @@ def piece_max(B, N, lam, BIN, L, stack):
 @numba.njit(cache=CACHE, nogil=True)
 def history_max(PF, PI, TK, TC, lam, head, t_end, res):
     """The largest value of a history channel up to ``t_end`` and the time it is first reached
-    (``res``: value, time)."""
+    (``res``: value, time, at ``HMAX_V``, ``HMAX_T``)."""
     E = lam.size
     B = np.zeros((E, DC), dtype=np.complex128)
     N = np.zeros(E, dtype=np.int64)
@@ -199,8 +200,8 @@ def history_max(PF, PI, TK, TC, lam, head, t_end, res):
             best = v
             tb = tv
         p = nx
-    res[0] = best
-    res[1] = tb
+    res[HMAX_V] = best
+    res[HMAX_T] = tb
 
 
 @numba.njit(cache=CACHE, nogil=True)

@@ -50,7 +50,7 @@ def _take(ws, scale):
     where a run with a drive the same up to there goes on from (:func:`_resumed`). The pool's other
     pieces stay as they are (a piece once followed by another is only read on, its whole integrals
     cached once), so that the snapshot holds while the pool's arrays are this blow's alone."""
-    PF, PI = ws[0], ws[1]
+    PF, PI = ws[S.WS_PF], ws[S.WS_PI]
     tails = ws[S.WS_CHI][:, 0].copy()
     tails = tails[tails >= 0]
     return ws[:4], tuple(x.copy() for x in ws[4:]), tails, PF[tails].copy(), PI[tails].copy(), scale
@@ -92,7 +92,7 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap, force_new=False, *, bound
     same[[S.PR_TMAX, S.PR_E0]] = False
     for pool, small, tails, tail_f, tail_i, s_scale in reversed(snaps):
         PF0, PI0, TK0, TC0 = pool
-        CNT0, CHI0 = small[0], small[1]
+        CNT0, CHI0 = small[S.WS_CNT - 4], small[S.WS_CHI - 4]
         if s_scale != scale or not np.array_equal(small[S.WS_LAM - 4], lam) or \
                 not np.array_equal(small[S.WS_PR - 4][same], PR[same]):
             continue

@@ -112,6 +112,7 @@ from ._records import (  # the records' slots
     TCUR_N,
     TCUR_SEPS,
     TCUR_UNLOADS,
+    TG_TCUR,
 )
 
 
@@ -234,7 +235,7 @@ def t_node_contact(ws, tg, t, t1):
      RT, RC, RD, EP, CI, CT) = ws
     pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
     Lb = PR[PR_LB]
-    TCUR = tg[5]
+    TCUR = tg[TG_TCUR]
     j, fch, gch, ZL, ZR, s = contact_node(PR, SZ)
     hch = 2 * SZ.size + 1 + j  # the node's force history (not recorded here)
     a = t
@@ -346,7 +347,7 @@ def t_node_bit(ws, tg, t, t1):
      RT, RC, RD, EP, CI, CT) = ws
     pool = (PF, PI, TK, TC, CNT, CHI, lam, BIN)
     Lb = PR[PR_LB]
-    TCUR = tg[5]
+    TCUR = tg[TG_TCUR]
     J = SZ.size
     fch = 2 * (J - 1)
     goch = 2 * J - 1
@@ -439,7 +440,7 @@ def t_run(ws, tg):
     followed (``tg``'s failure code)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
      RT, RC, RD, EP, CI, CT) = ws
-    TCUR = tg[5]
+    TCUR = tg[TG_TCUR]
     J = SZ.size
     n_p = int(PR[PR_NP])
     h = PR[PR_WINDOW]

@@ -1,5 +1,6 @@
 """The slots of the exact blow's records (:mod:`impactbar.laws.rodrock._exactkernel`'s workspace, made by
-:func:`impactbar.laws.rodrock.exact._workspace`; the tangent run's ``TCUR``): one name per slot, read
+:func:`impactbar.laws.rodrock.exact._workspace`; the tangent run's ``TCUR``) and of the lattice
+blow's (:mod:`impactbar.laws.rodrock._rockkernel`, ``_rocktangent``): one name per slot, read
 by the compiled kernels as compile-time constants (numba freezes a module's integer globals), so
 that a slot is found by its name and never by its number.
 
@@ -10,7 +11,9 @@ values into the kernels that read them: a change here wants the package's ``__py
 
 # -- the workspace tuple ``ws`` (its order: the kernels unpack it whole) ----------------------------
 WS_PF = 0  # PF, the pieces' floats (the pool: its rows its capacity)
+WS_PI = 1  # PI, the pieces' links and term ranges
 WS_TK = 2  # TK, the terms' keys (the pool's terms: its size their capacity)
+WS_TC = 3  # TC, the terms' coefficients
 WS_CNT = 4  # CNT, the pool's counts
 WS_CHI = 5  # CHI, the channels' last pieces and receivers' cursors
 WS_LAM = 8  # lam, the exponent table
@@ -27,6 +30,19 @@ WS_RD = 22  # RD, the switch log
 WS_EP = 23  # EP, the loading episodes
 WS_CI = 24  # CI, the run's status and counters
 WS_CT = 25  # CT, the run's times and energies
+
+# -- the tangent run's tuple ``tg`` (its order: the kernels unpack it whole) ---------------------
+TG_IT = 0  # IT, the impulses' times
+TG_IW = 1  # IW, their weights
+TG_IJ = 2  # IJ, their jumps
+TG_IN = 3  # IN, their links
+TG_ICH = 4  # ICH, the channels' first and last impulses
+TG_TCUR = 5  # TCUR, the store's counts and the schedule's cursors
+
+# -- HMAX: a history's largest value (``_exacthistory.history_max``'s ``res``, float64) ------------
+HMAX_SIZE = 2
+HMAX_V = 0  # the largest value
+HMAX_T = 1  # when first reached
 
 # -- PR: the blow's parameters (float64) ---------------------------------------------------------
 PR_SIZE = 32
@@ -145,3 +161,53 @@ SEG_FAR = 0  # the piston's driven-end segment (SZ, ST count from the piston's f
 CH_FAR_OUT = 0  # the channel of the wave leaving the piston's far end (f of segment 1)
 CH_FAR_IN = 1  # the channel of the wave arriving there (g of segment 1)
 E_CONST = 0  # the exponent table's first entry: 0, the constants'
+
+# == the lattice blow's records (:mod:`impactbar.laws.rodrock._rockkernel`, ``_rocktangent``) =======
+# not the exact blow's: its bit (``BIT``) keeps the branch among its floats and no ``x`` (``BS``)
+
+# -- BIT: the bit's and the rock's state ``bs`` (float64; the tangent's ``dbs`` rows alike) ---------
+BIT_SIZE = 7
+BIT_P = 0  # p, the bit's penetration
+BIT_W = 1  # w = p', the bit's velocity
+BIT_BRANCH = 2  # the rock's branch (LOAD, ELASTIC, FREE of _rockkernel, as floats; no tangent)
+BIT_PMAX = 3  # p_max, the largest penetration
+BIT_RMAX = 4  # R_max = k p_max
+BIT_PPERM = 5  # p_perm = p_max - R_max/k_u
+BIT_WORK = 6  # the work done on the rock
+
+# -- BITP: the bit's parameters ``bp`` (float64) ------------------------------------------------------
+BITP_SIZE = 5
+BITP_Z = 0  # the impedance at the bit (the rod's last cell's)
+BITP_K = 1  # the rock's loading stiffness k
+BITP_KU = 2  # its unloading stiffness k_u
+BITP_MASS = 3  # the bit's mass m (0: the massless bit)
+BITP_FEED = 4  # the feed force f
+
+# -- CTRL: the loop's controls ``ctrl`` (float64; the tangent's loop reads the first two) ------------
+CTRL_SIZE = 4
+CTRL_DT = 0  # the step, the cells' travel time
+CTRL_STOP = 1  # the energy below which a separated blow ends
+CTRL_QUIET = 2  # steps separated after which the blow ends (0: never)
+CTRL_GAP = 3  # the piston-shank gap at the start
+
+# -- ACC: the loop's accounts ``acc`` (float64, written by the loop) ----------------------------------
+ACC_SIZE = 6
+ACC_USHANK = 0  # the shank's displacement
+ACC_LOSS = 1  # the energy the grid lost (the bit's average against its exact step)
+ACC_STEPS = 2  # the steps run
+ACC_ENDED = 3  # how the blow ended: 0 t_max, 1 the energy, 2 separated
+ACC_GAP = 4  # the piston-shank gap at the end
+ACC_WORK = 5  # the drive's work on the piston
+
+# -- TSCR: the bit's tangent step's scratch rows (``bit_step_tangent``'s ``scratch``, (5, nv)) -------
+TSCR_SIZE = 5
+TSCR_LEFT = 0  # the tangent of the step's time left
+TSCR_TAU = 1  # the tangent of the sub-step's length
+TSCR_P0 = 2  # the tangent of p at the sub-step's start
+TSCR_REF = 3  # the tangent of the branch's reference p_ref
+
+# -- CELL: the rows of the tangent loop's piston cells ``P`` (3, n_p) and their tangents ``dP`` -------
+CELL_SIZE = 3
+CELL_F = 0  # F, the waves running toward the shank
+CELL_G = 1  # G, the waves running back
+CELL_Z = 2  # Z, the cells' impedances (dP's: the directions)

@@ -2,8 +2,9 @@
 :func:`impactbar.laws.rodrock.blow.rod_rock_blow` with its bit (``_Bit``), step for step the same
 arithmetic (the reference is the Python loop, ``use_reference("rock.blow")``).
 
-Bit state ``bs`` (float64, 7): ``p, w, branch, p_max, R_max, p_perm, work``; parameters ``bp`` (5):
-``Z, k, k_u, m, feed``.
+Bit state ``bs`` (float64, ``BIT_SIZE``): ``p, w, branch, p_max, R_max, p_perm, work``; parameters
+``bp`` (``BITP_SIZE``): ``Z, k, k_u, m, feed``; the slots named ``BIT_*``, ``BITP_*`` (and the loop's
+``CTRL_*``, ``ACC_*``) in :mod:`impactbar.laws.rodrock._records`.
 """
 
 from __future__ import annotations
@@ -15,16 +16,40 @@ import numpy as np
 
 from ...dynamics.kernels import CACHE
 from ._bit import damped_flow
+from ._records import (
+    ACC_ENDED,
+    ACC_GAP,
+    ACC_LOSS,
+    ACC_STEPS,
+    ACC_USHANK,
+    ACC_WORK,
+    BIT_BRANCH,
+    BIT_P,
+    BIT_PMAX,
+    BIT_PPERM,
+    BIT_RMAX,
+    BIT_W,
+    BIT_WORK,
+    BITP_FEED,
+    BITP_K,
+    BITP_KU,
+    BITP_MASS,
+    BITP_Z,
+    CTRL_DT,
+    CTRL_GAP,
+    CTRL_QUIET,
+    CTRL_STOP,
+)
 
 _LOAD, _ELASTIC, _FREE = 0.0, 1.0, 2.0
 
 
 @numba.njit(cache=CACHE, nogil=True)
 def _coeffs(bs, bp):
-    if bs[2] == _LOAD:
-        return bp[1], 0.0
-    if bs[2] == _ELASTIC:
-        return bp[2], bs[5]
+    if bs[BIT_BRANCH] == _LOAD:
+        return bp[BITP_K], 0.0
+    if bs[BIT_BRANCH] == _ELASTIC:
+        return bp[BITP_KU], bs[BIT_PPERM]
     return 0.0, 0.0
 
 
@@ -36,10 +61,10 @@ def _work(bs, bp, p0, p1):
 
 @numba.njit(cache=CACHE, nogil=True)
 def _unload(bs, bp):
-    bs[3] = bs[0]
-    bs[4] = bp[1] * bs[0]
-    bs[5] = bs[3] - bs[4] / bp[2]
-    bs[2] = _ELASTIC
+    bs[BIT_PMAX] = bs[BIT_P]
+    bs[BIT_RMAX] = bp[BITP_K] * bs[BIT_P]
+    bs[BIT_PPERM] = bs[BIT_PMAX] - bs[BIT_RMAX] / bp[BITP_KU]
+    bs[BIT_BRANCH] = _ELASTIC
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -47,7 +72,7 @@ def _lift_off(bs, E, Z, T, p0):
     """A massless bit off the rock (``p' = E/Z``): ``(rate, t_hit, tau)``, ``t_hit`` its return to
     ``p_perm`` (inf: none), ``tau`` the sub-step's end, the earlier of ``T`` and ``t_hit``."""
     rate = E / Z
-    t_hit = (bs[5] - p0) / rate if rate > 0.0 and p0 + rate * T >= bs[5] else math.inf
+    t_hit = (bs[BIT_PPERM] - p0) / rate if rate > 0.0 and p0 + rate * T >= bs[BIT_PPERM] else math.inf
     return rate, t_hit, min(T, t_hit)
 
 
@@ -56,7 +81,7 @@ def _massless_switch(bs, b, ref, E, Z, T, p0):
     """A massless bit on a rock branch (``Z p' = E - b (p - p_ref)``, ``b > 0``): the sub-step's end
     ``tau`` and the branch there, ``(tau, nxt, p_nxt, which, g, lam)``: ``nxt`` the next branch
     (-1: none before ``T``), ``p_nxt`` the penetration of the switch, ``which`` its row of ``bs``
-    (3: ``p_max``, 5: ``p_perm``), ``g = Z p'(0)`` and ``lam = b/Z``."""
+    (``BIT_PMAX`` or ``BIT_PPERM``), ``g = Z p'(0)`` and ``lam = b/Z``."""
     p_inf = E / b + ref
     lam = b / Z
     tau = T
@@ -64,44 +89,44 @@ def _massless_switch(bs, b, ref, E, Z, T, p0):
     # g = b (p_inf - p0), Z times the rate at p0: the forms below lose nothing to a soft rock's huge
     # p_inf (with p_inf itself, a rock of k = 1e-16 was read as a rigid wall)
     g = E - b * (p0 - ref)
-    if bs[2] == _ELASTIC:
-        if p_inf > bs[3] >= p0:
-            tau_h = -math.log1p(-(bs[3] - p0) * b / g) / lam
+    if bs[BIT_BRANCH] == _ELASTIC:
+        if p_inf > bs[BIT_PMAX] >= p0:
+            tau_h = -math.log1p(-(bs[BIT_PMAX] - p0) * b / g) / lam
             if tau_h < T:
-                tau, nxt, p_nxt, which = tau_h, _LOAD, bs[3], 3
-        elif p_inf < bs[5] <= p0:
-            tau_h = -math.log1p(-(bs[5] - p0) * b / g) / lam
+                tau, nxt, p_nxt, which = tau_h, _LOAD, bs[BIT_PMAX], BIT_PMAX
+        elif p_inf < bs[BIT_PPERM] <= p0:
+            tau_h = -math.log1p(-(bs[BIT_PPERM] - p0) * b / g) / lam
             if tau_h < T:
-                tau, nxt, p_nxt, which = tau_h, _FREE, bs[5], 5
+                tau, nxt, p_nxt, which = tau_h, _FREE, bs[BIT_PPERM], BIT_PPERM
     return tau, nxt, p_nxt, which, g, lam
 
 
 @numba.njit(cache=CACHE, nogil=True)
 def _massless(bs, bp, E, T):
-    Z = bp[0]
+    Z = bp[BITP_Z]
     b, ref = _coeffs(bs, bp)
-    p0 = bs[0]
-    if bs[2] == _LOAD and E - b * p0 < 0.0:
+    p0 = bs[BIT_P]
+    if bs[BIT_BRANCH] == _LOAD and E - b * p0 < 0.0:
         _unload(bs, bp)
         return 0.0
     if b == 0.0:
         rate, t_hit, tau = _lift_off(bs, E, Z, T, p0)
-        p1 = bs[5] if tau == t_hit else p0 + rate * tau
-        bs[0] = p1
+        p1 = bs[BIT_PPERM] if tau == t_hit else p0 + rate * tau
+        bs[BIT_P] = p1
         if tau == t_hit:
-            bs[2] = _ELASTIC
-        bs[1] = rate
+            bs[BIT_BRANCH] = _ELASTIC
+        bs[BIT_W] = rate
         return tau
     tau, nxt, p_nxt, _, g, lam = _massless_switch(bs, b, ref, E, Z, T, p0)
     if nxt < 0.0:
         p1 = p0 + g / Z * (-math.expm1(-lam * tau)) / lam
     else:
         p1 = p_nxt
-    bs[6] += _work(bs, bp, p0, p1)
-    bs[0] = p1
-    bs[1] = (E - b * (p1 - ref)) / Z
+    bs[BIT_WORK] += _work(bs, bp, p0, p1)
+    bs[BIT_P] = p1
+    bs[BIT_W] = (E - b * (p1 - ref)) / Z
     if nxt >= 0.0:
-        bs[2] = nxt
+        bs[BIT_BRANCH] = nxt
     return tau
 
 
@@ -121,23 +146,23 @@ def _overdamped(b, m, half, delta, tau):
 @numba.njit(cache=CACHE, nogil=True)
 def _flow(bs, bp, E, tau):
     b, ref = _coeffs(bs, bp)
-    Z, m = bp[0], bp[3]
+    Z, m = bp[BITP_Z], bp[BITP_MASS]
     if b == 0.0:
         w_inf = E / Z
         decay = math.exp(-Z * tau / m)
-        p = bs[0] + w_inf * tau + (bs[1] - w_inf) * (m / Z) * (-math.expm1(-Z * tau / m))
-        return p, w_inf + (bs[1] - w_inf) * decay
+        p = bs[BIT_P] + w_inf * tau + (bs[BIT_W] - w_inf) * (m / Z) * (-math.expm1(-Z * tau / m))
+        return p, w_inf + (bs[BIT_W] - w_inf) * decay
     p_eq = ref + E / b
-    x0, w0 = bs[0] - p_eq, bs[1]
+    x0, w0 = bs[BIT_P] - p_eq, bs[BIT_W]
     half = -Z / (2.0 * m)
     C, S, delta = _damped(b, m, half, tau)
     if delta > 0.5 * abs(half):
         # overdamped: p - p0 = g/(m 2 delta) (expm1(lam_1 t)/lam_1 - expm1(lam_2 t)/lam_2) + S w0 with
         # g = E - b (p0 - p_ref), without p_eq, which a soft rock makes huge (with it, a rock of
         # k = 1e-16 was read as a rigid wall)
-        g = E - b * (bs[0] - ref)
+        g = E - b * (bs[BIT_P] - ref)
         f1, f2 = _overdamped(b, m, half, delta, tau)
-        return bs[0] + g / m * (f1 - f2) / (2.0 * delta) + S * w0, C * w0 + S * (g / m + half * w0)
+        return bs[BIT_P] + g / m * (f1 - f2) / (2.0 * delta) + S * w0, C * w0 + S * (g / m + half * w0)
     x = C * x0 + S * (-half * x0 + w0)
     w = C * w0 + S * (-b / m * x0 + half * w0)
     return p_eq + x, w
@@ -145,11 +170,11 @@ def _flow(bs, bp, E, tau):
 
 @numba.njit(cache=CACHE, nogil=True)
 def _event(bs, p, w):
-    if bs[2] == _LOAD:
+    if bs[BIT_BRANCH] == _LOAD:
         return w
-    if bs[2] == _ELASTIC:
-        return min(bs[3] - p, p - bs[5])
-    return bs[5] - p
+    if bs[BIT_BRANCH] == _ELASTIC:
+        return min(bs[BIT_PMAX] - p, p - bs[BIT_PPERM])
+    return bs[BIT_PPERM] - p
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -158,8 +183,8 @@ def _switch_time(bs, bp, E, T):
     (``_event`` turning negative; ``hit``) bracketed on samples that catch every one (4 for a
     non-oscillating flow, more per half period otherwise) and bisected to rounding, else ``T``."""
     b, _ = _coeffs(bs, bp)
-    half = bp[0] / (2.0 * bp[3])
-    disc = half * half - b / bp[3]
+    half = bp[BITP_Z] / (2.0 * bp[BITP_MASS])
+    disc = half * half - b / bp[BITP_MASS]
     n = 4 if disc >= 0.0 else 4 + math.ceil(4.0 * math.sqrt(-disc) * T / math.pi)
     taus = np.linspace(0.0, T, n + 1)
     prev = 0.0
@@ -184,27 +209,27 @@ def _switch_time(bs, bp, E, T):
 def _branch_after(bs, p1):
     """The branch a bit with mass enters from a rock branch other than loading at its switch at
     ``p1``: loading again past ``p_max``, else off the rock; off it, onto the elastic branch."""
-    if bs[2] == _ELASTIC:
-        bs[2] = _LOAD if p1 >= bs[3] else _FREE
+    if bs[BIT_BRANCH] == _ELASTIC:
+        bs[BIT_BRANCH] = _LOAD if p1 >= bs[BIT_PMAX] else _FREE
     else:
-        bs[2] = _ELASTIC
+        bs[BIT_BRANCH] = _ELASTIC
 
 
 @numba.njit(cache=CACHE, nogil=True)
 def _with_mass(bs, bp, E, T):
-    if bs[2] == _LOAD and bs[1] < 0.0:
+    if bs[BIT_BRANCH] == _LOAD and bs[BIT_W] < 0.0:
         _unload(bs, bp)
         return 0.0
-    if bs[2] == _ELASTIC and bs[0] >= bs[3] and bs[1] > 0.0:
-        bs[2] = _LOAD
+    if bs[BIT_BRANCH] == _ELASTIC and bs[BIT_P] >= bs[BIT_PMAX] and bs[BIT_W] > 0.0:
+        bs[BIT_BRANCH] = _LOAD
         return 0.0
-    p0 = bs[0]
+    p0 = bs[BIT_P]
     tau, hit = _switch_time(bs, bp, E, T)
     p1, w1 = _flow(bs, bp, E, tau)
-    bs[6] += _work(bs, bp, p0, p1)
-    bs[0], bs[1] = p1, w1
+    bs[BIT_WORK] += _work(bs, bp, p0, p1)
+    bs[BIT_P], bs[BIT_W] = p1, w1
     if hit:
-        if bs[2] == _LOAD:
+        if bs[BIT_BRANCH] == _LOAD:
             _unload(bs, bp)
         else:
             _branch_after(bs, p1)
@@ -218,7 +243,7 @@ def bit_step(bs, bp, E, dt):
     for _ in range(64):
         if left <= 0.0:
             break
-        if bp[3] == 0.0:
+        if bp[BITP_MASS] == 0.0:
             left -= _massless(bs, bp, E, left)
         else:
             left -= _with_mass(bs, bp, E, left)
@@ -233,13 +258,13 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     boundaries per step; ``bitrec`` (n_max + 1, 2): rock force and penetration; ``field``
     (n_max, cells) or (0, cells); ``acc`` out: ``u_shank, grid_loss, steps, ended, gap,
     drive_work``. Returns nothing; ``F``, ``G`` hold the final waves."""
-    dt, stop, quiet = ctrl[0], ctrl[1], ctrl[2]
+    dt, stop, quiet = ctrl[CTRL_DT], ctrl[CTRL_STOP], ctrl[CTRL_QUIET]
     n_cells = F.size
     n_p = bounds[0]
     jc = n_p - 1
-    feed, m = bp[4], bp[3]
+    feed, m = bp[BITP_FEED], bp[BITP_MASS]
     Zl = Z[n_cells - 1]
-    gap = ctrl[3]
+    gap = ctrl[CTRL_GAP]
     contact = gap <= 0.0
     last = 0 if contact else -1  # the last step in contact (-1: none yet; no end before a contact)
     u_shank, grid_loss, work = 0.0, 0.0, 0.0
@@ -247,8 +272,8 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     Fn = np.empty(n_cells)
     Gn = np.empty(n_cells)
     b0, _ = _coeffs(bs, bp)
-    bitrec[0, 0] = b0 * bs[0]
-    bitrec[0, 1] = bs[0]
+    bitrec[0, 0] = b0 * bs[BIT_P]
+    bitrec[0, 1] = bs[BIT_P]
     n_max = junc.shape[0]
     steps, ended = n_max, 0.0
     for step in range(n_max):
@@ -269,18 +294,18 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
         Fn[0] = pd - G[0]  # the driven far end: N = p
         work += pd * (pd - 2.0 * G[0]) / Z[0] * dt
         Fi = F[n_cells - 1]
-        p0, work0, ke0 = bs[0], bs[6], 0.5 * m * bs[1] * bs[1]
+        p0, work0, ke0 = bs[BIT_P], bs[BIT_WORK], 0.5 * m * bs[BIT_W] * bs[BIT_W]
         bit_step(bs, bp, 2.0 * Fi + feed, dt)
-        g_avg = Fi - Zl * (bs[0] - p0) / dt
+        g_avg = Fi - Zl * (bs[BIT_P] - p0) / dt
         Gn[n_cells - 1] = g_avg
-        e_in = (bs[6] - work0) - feed * (bs[0] - p0) + 0.5 * m * bs[1] * bs[1] - ke0
+        e_in = (bs[BIT_WORK] - work0) - feed * (bs[BIT_P] - p0) + 0.5 * m * bs[BIT_W] * bs[BIT_W] - ke0
         grid_loss += (Fi * Fi - g_avg * g_avg) * dt / Zl - e_in
         u_shank += (Fn[jc + 1] - G[jc + 1]) / Z[jc + 1] * dt
         for i in range(bounds.size):
             junc[step, i] = N[bounds[i] - 1]
         b, ref = _coeffs(bs, bp)
-        bitrec[step + 1, 0] = max(b * (bs[0] - ref), 0.0)
-        bitrec[step + 1, 1] = bs[0]
+        bitrec[step + 1, 0] = max(b * (bs[BIT_P] - ref), 0.0)
+        bitrec[step + 1, 1] = bs[BIT_P]
         if field.shape[0] > 0:
             for j in range(n_cells):
                 field[step, j] = F[j] + G[j]
@@ -298,7 +323,8 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
             rod_e = 0.0
             for j in range(n_p, n_cells):
                 rod_e += (F[j] * F[j] + G[j] * G[j]) / Z[j]
-            if rod_e * dt + 0.5 * m * bs[1] * bs[1] < stop:
+            if rod_e * dt + 0.5 * m * bs[BIT_W] * bs[BIT_W] < stop:
                 steps, ended = step + 1, 1.0
                 break
-    acc[0], acc[1], acc[2], acc[3], acc[4], acc[5] = u_shank, grid_loss, steps, ended, gap, work
+    acc[ACC_USHANK], acc[ACC_LOSS], acc[ACC_STEPS] = u_shank, grid_loss, steps
+    acc[ACC_ENDED], acc[ACC_GAP], acc[ACC_WORK] = ended, gap, work

@@ -16,8 +16,8 @@ the state at the step's end only at second order. The derivative returned is thu
 lattice's work and shank forces as functions of the impedances on every piece where the schedule is
 constant (the lattice's blow is piecewise smooth: kinks where the schedule changes).
 
-Tangent bit state ``dbs`` (float64, (7, nv)): the rows of ``bs`` (``p, w, -, p_max, R_max, p_perm,
-work``; the branch row unused).
+Tangent bit state ``dbs`` (float64, (``BIT_SIZE``, nv)): the rows of ``bs`` (``p, w, -, p_max, R_max,
+p_perm, work``, named ``BIT_*`` in :mod:`impactbar.laws.rodrock._records`; the branch row unused).
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ import numba
 import numpy as np
 
 from ...dynamics.kernels import CACHE
+from . import _records as RS
 from ._rockkernel import (
     _ELASTIC,
     _LOAD,
@@ -47,18 +48,18 @@ from ._rockkernel import (
 def _t_unload(bs, bp, dbs):
     _unload(bs, bp)
     for a in range(dbs.shape[1]):
-        dbs[3, a] = dbs[0, a]
-        dbs[4, a] = bp[1] * dbs[0, a]
-        dbs[5, a] = dbs[3, a] - dbs[4, a] / bp[2]
+        dbs[RS.BIT_PMAX, a] = dbs[RS.BIT_P, a]
+        dbs[RS.BIT_RMAX, a] = bp[RS.BITP_K] * dbs[RS.BIT_P, a]
+        dbs[RS.BIT_PPERM, a] = dbs[RS.BIT_PMAX, a] - dbs[RS.BIT_RMAX, a] / bp[RS.BITP_KU]
 
 
 @numba.njit(cache=CACHE, nogil=True)
 def _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dp1):
     """``work += b (p1 - p0)(0.5 (p0 + p1) - ref)`` and its tangent."""
     mid = 0.5 * (p0 + p1) - ref
-    bs[6] += b * (p1 - p0) * mid
+    bs[RS.BIT_WORK] += b * (p1 - p0) * mid
     for a in range(dbs.shape[1]):
-        dbs[6, a] += b * ((dp1[a] - dp0[a]) * mid + (p1 - p0) * (0.5 * (dp0[a] + dp1[a]) - dref[a]))
+        dbs[RS.BIT_WORK, a] += b * ((dp1[a] - dp0[a]) * mid + (p1 - p0) * (0.5 * (dp0[a] + dp1[a]) - dref[a]))
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -66,10 +67,10 @@ def _t_start(bs, bp, dbs, dp0, dref):
     """A sub-step's start: the branch's ``(b, p_ref)`` (``_coeffs``), and the tangents of ``p`` and
     of ``p_ref`` into ``dp0``, ``dref`` (nv,)."""
     b, ref = _coeffs(bs, bp)
-    elastic = bs[2] == _ELASTIC
+    elastic = bs[RS.BIT_BRANCH] == _ELASTIC
     for a in range(dbs.shape[1]):
-        dp0[a] = dbs[0, a]
-        dref[a] = dbs[5, a] if elastic else 0.0
+        dp0[a] = dbs[RS.BIT_P, a]
+        dref[a] = dbs[RS.BIT_PPERM, a] if elastic else 0.0
     return b, ref
 
 
@@ -77,31 +78,31 @@ def _t_start(bs, bp, dbs, dp0, dref):
 def _t_massless(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref):
     """``_rockkernel._massless`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``)."""
     nv = dbs.shape[1]
-    Z = bp[0]
+    Z = bp[RS.BITP_Z]
     b, ref = _t_start(bs, bp, dbs, dp0, dref)
-    p0 = bs[0]
-    if bs[2] == _LOAD and E - b * p0 < 0.0:
+    p0 = bs[RS.BIT_P]
+    if bs[RS.BIT_BRANCH] == _LOAD and E - b * p0 < 0.0:
         _t_unload(bs, bp, dbs)
         dtau[:] = 0.0
         return 0.0
     if b == 0.0:
         rate, t_hit, tau = _lift_off(bs, E, Z, T, p0)
         if tau == t_hit:
-            p1 = bs[5]
+            p1 = bs[RS.BIT_PPERM]
             for a in range(nv):
-                dtau[a] = (dbs[5, a] - dp0[a]) / rate - t_hit * dE[a] / Z / rate
-                dbs[0, a] = dbs[5, a]
+                dtau[a] = (dbs[RS.BIT_PPERM, a] - dp0[a]) / rate - t_hit * dE[a] / Z / rate
+                dbs[RS.BIT_P, a] = dbs[RS.BIT_PPERM, a]
         else:
             p1 = p0 + rate * tau
             for a in range(nv):
                 dtau[a] = dT[a]
-                dbs[0, a] = dp0[a] + dE[a] / Z * tau + rate * dT[a]
-        bs[0] = p1
+                dbs[RS.BIT_P, a] = dp0[a] + dE[a] / Z * tau + rate * dT[a]
+        bs[RS.BIT_P] = p1
         if tau == t_hit:
-            bs[2] = _ELASTIC
-        bs[1] = rate
+            bs[RS.BIT_BRANCH] = _ELASTIC
+        bs[RS.BIT_W] = rate
         for a in range(nv):
-            dbs[1, a] = dE[a] / Z
+            dbs[RS.BIT_W, a] = dE[a] / Z
         return tau
     tau, nxt, p_nxt, which, g, lam = _massless_switch(bs, b, ref, E, Z, T, p0)
     if nxt < 0.0:
@@ -111,7 +112,7 @@ def _t_massless(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref):
         for a in range(nv):
             dg = dE[a] - b * (dp0[a] - dref[a])
             dtau[a] = dT[a]
-            dbs[0, a] = dp0[a] + dg / Z * e / lam + g / Z * decay * dT[a]
+            dbs[RS.BIT_P, a] = dp0[a] + dg / Z * e / lam + g / Z * decay * dT[a]
     else:
         p1 = p_nxt
         q = (p_nxt - p0) * b / g  # tau_h = -log1p(-q) / lam
@@ -119,14 +120,14 @@ def _t_massless(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref):
             dg = dE[a] - b * (dp0[a] - dref[a])
             dq = b * (dbs[which, a] - dp0[a]) / g - q * dg / g
             dtau[a] = dq / ((1.0 - q) * lam)
-            dbs[0, a] = dbs[which, a]
-    _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dbs[0])
-    bs[0] = p1
-    bs[1] = (E - b * (p1 - ref)) / Z
+            dbs[RS.BIT_P, a] = dbs[which, a]
+    _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dbs[RS.BIT_P])
+    bs[RS.BIT_P] = p1
+    bs[RS.BIT_W] = (E - b * (p1 - ref)) / Z
     for a in range(nv):
-        dbs[1, a] = (dE[a] - b * (dbs[0, a] - dref[a])) / Z
+        dbs[RS.BIT_W, a] = (dE[a] - b * (dbs[RS.BIT_P, a] - dref[a])) / Z
     if nxt >= 0.0:
-        bs[2] = nxt
+        bs[RS.BIT_BRANCH] = nxt
     return tau
 
 
@@ -136,7 +137,7 @@ def _flow_partials(bs, bp, E, tau, out):
     ``(p0, w0, E, p_ref)`` at fixed ``tau``, into ``out`` (2, 4): the flow is affine in them, its
     matrix from the same ``C``, ``S`` (``dp/dE = int_0^tau S / m``)."""
     b, ref = _coeffs(bs, bp)
-    Z, m = bp[0], bp[3]
+    Z, m = bp[RS.BITP_Z], bp[RS.BITP_MASS]
     if b == 0.0:
         decay = math.exp(-Z * tau / m)
         Sf = (m / Z) * (-math.expm1(-Z * tau / m))
@@ -158,35 +159,35 @@ def _flow_partials(bs, bp, E, tau, out):
 def _t_with_mass(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref, J):
     """``_rockkernel._with_mass`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``, ``J``)."""
     nv = dbs.shape[1]
-    if bs[2] == _LOAD and bs[1] < 0.0:
+    if bs[RS.BIT_BRANCH] == _LOAD and bs[RS.BIT_W] < 0.0:
         _t_unload(bs, bp, dbs)
         dtau[:] = 0.0
         return 0.0
-    if bs[2] == _ELASTIC and bs[0] >= bs[3] and bs[1] > 0.0:
-        bs[2] = _LOAD
+    if bs[RS.BIT_BRANCH] == _ELASTIC and bs[RS.BIT_P] >= bs[RS.BIT_PMAX] and bs[RS.BIT_W] > 0.0:
+        bs[RS.BIT_BRANCH] = _LOAD
         dtau[:] = 0.0
         return 0.0
-    p0 = bs[0]
+    p0 = bs[RS.BIT_P]
     b, ref = _t_start(bs, bp, dbs, dp0, dref)
     tau, hit = _switch_time(bs, bp, E, T)
     p1, w1 = _flow(bs, bp, E, tau)
     _flow_partials(bs, bp, E, tau, J)
-    acc = (E - bp[0] * w1 - b * (p1 - ref)) / bp[3]  # w' at tau on this branch
+    acc = (E - bp[RS.BITP_Z] * w1 - b * (p1 - ref)) / bp[RS.BITP_MASS]  # w' at tau on this branch
     # a switch's time is held: the flow is continuous across it (the rock force is, on the state the
     # primal keeps consistent: p_perm = p_max - R_max/k_u), so the switch's moving with the state
     # changes the state at the step's end only at second order; the step's end time moves with the
     # remaining time (the earlier switches of a massless bit)
     for a in range(nv):
-        dpf = J[0, 0] * dp0[a] + J[0, 1] * dbs[1, a] + J[0, 2] * dE[a] + J[0, 3] * dref[a]
-        dwf = J[1, 0] * dp0[a] + J[1, 1] * dbs[1, a] + J[1, 2] * dE[a] + J[1, 3] * dref[a]
+        dpf = J[0, 0] * dp0[a] + J[0, 1] * dbs[RS.BIT_W, a] + J[0, 2] * dE[a] + J[0, 3] * dref[a]
+        dwf = J[1, 0] * dp0[a] + J[1, 1] * dbs[RS.BIT_W, a] + J[1, 2] * dE[a] + J[1, 3] * dref[a]
         dt_a = 0.0 if hit else dT[a]
         dtau[a] = dt_a
-        dbs[0, a] = dpf + w1 * dt_a
-        dbs[1, a] = dwf + acc * dt_a
-    _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dbs[0])
-    bs[0], bs[1] = p1, w1
+        dbs[RS.BIT_P, a] = dpf + w1 * dt_a
+        dbs[RS.BIT_W, a] = dwf + acc * dt_a
+    _t_work(bs, dbs, b, ref, dref, p0, p1, dp0, dbs[RS.BIT_P])
+    bs[RS.BIT_P], bs[RS.BIT_W] = p1, w1
     if hit:
-        if bs[2] == _LOAD:
+        if bs[RS.BIT_BRANCH] == _LOAD:
             _t_unload(bs, bp, dbs)
         else:
             _branch_after(bs, p1)
@@ -195,14 +196,15 @@ def _t_with_mass(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref, J):
 
 @numba.njit(cache=CACHE, nogil=True)
 def bit_step_tangent(bs, bp, dbs, E, dE, dt, scratch, J):
-    """``_rockkernel.bit_step`` and its tangent: ``dE`` (nv,) the input's; ``scratch`` (5, nv)."""
+    """``_rockkernel.bit_step`` and its tangent: ``dE`` (nv,) the input's; ``scratch`` (``TSCR_SIZE``, nv)."""
     left = dt
-    dleft, dtau, dp0, dref = scratch[0], scratch[1], scratch[2], scratch[3]
+    dleft, dtau = scratch[RS.TSCR_LEFT], scratch[RS.TSCR_TAU]
+    dp0, dref = scratch[RS.TSCR_P0], scratch[RS.TSCR_REF]
     dleft[:] = 0.0
     for _ in range(64):
         if left <= 0.0:
             break
-        if bp[3] == 0.0:
+        if bp[RS.BITP_MASS] == 0.0:
             tau = _t_massless(bs, bp, dbs, E, dE, left, dleft, dtau, dp0, dref)
         else:
             tau = _t_with_mass(bs, bp, dbs, E, dE, left, dleft, dtau, dp0, dref, J)
@@ -214,16 +216,16 @@ def bit_step_tangent(bs, bp, dbs, E, dE, dt, scratch, J):
 @numba.njit(cache=CACHE, nogil=True)
 def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, acc):
     """The blow's loop (``_rockkernel.blow_loop`` with no drive, the piston touching the shank at the
-    start, the rod at rest) with its tangents. The piston's cells ``P = (F, G, Z)`` (3, n_p) and
-    their tangents ``dP`` (3, nv, n_p); the rod's uniform segments of ``seg_len`` cells and
+    start, the rod at rest) with its tangents. The piston's cells ``P = (F, G, Z)`` (3, n_p; rows ``CELL_*``)
+    and their tangents ``dP`` (3, nv, n_p); the rod's uniform segments of ``seg_len`` cells and
     impedances ``seg_z`` (S,), each a delay line: inside a uniform segment the junction passes the
     waves on (``N = F + G``), so that its cells are a ring buffer shifted by the step and only the
     segments' ends meet junctions (the same blow to rounding). ``ctrl``: ``dt, energy_stop``;
     ``shank``, ``dshank`` out (n_max,), (n_max, nv): the piston-shank force per step and its tangent;
-    ``acc`` out: ``steps, ended``."""
-    dt, stop = ctrl[0], ctrl[1]
-    Fp, Gp, Zp = P[0].copy(), P[1].copy(), P[2]
-    dFp, dGp, dZp = dP[0].copy(), dP[1].copy(), dP[2]
+    ``acc`` out (``ACC_SIZE``,): its ``ACC_STEPS``, ``ACC_ENDED``."""
+    dt, stop = ctrl[RS.CTRL_DT], ctrl[RS.CTRL_STOP]
+    Fp, Gp, Zp = P[RS.CELL_F].copy(), P[RS.CELL_G].copy(), P[RS.CELL_Z]
+    dFp, dGp, dZp = dP[RS.CELL_F].copy(), dP[RS.CELL_G].copy(), dP[RS.CELL_Z]
     n_p = Zp.size
     nv = dZp.shape[0]
     S = seg_len.size
@@ -235,7 +237,7 @@ def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, a
     dFr = np.zeros((nv, off[S]))
     dGr = np.zeros((nv, off[S]))
     jc = n_p - 1
-    feed, m = bp[4], bp[3]
+    feed, m = bp[RS.BITP_FEED], bp[RS.BITP_MASS]
     Zl = seg_z[S - 1]
     contact = True
     gap = 0.0
@@ -252,7 +254,7 @@ def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, a
     dNc = np.empty(nv)
     dE = np.empty(nv)
     dp0 = np.empty(nv)
-    scratch = np.zeros((5, nv))
+    scratch = np.zeros((RS.TSCR_SIZE, nv))
     J = np.zeros((2, 4))
     n_max = shank.size
     steps, ended = n_max, 0.0
@@ -306,12 +308,12 @@ def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, a
             dGna[jc] = dNc[a] - dFa[jc]
         # the bit and the rock
         Fi = Fl[S - 1]
-        p0 = bs[0]
+        p0 = bs[RS.BIT_P]
         for a in range(nv):
             dE[a] = 2.0 * dFl[a, S - 1]
-            dp0[a] = dbs[0, a]
+            dp0[a] = dbs[RS.BIT_P, a]
         bit_step_tangent(bs, bp, dbs, 2.0 * Fi + feed, dE, dt, scratch, J)
-        g_end = Fi - Zl * (bs[0] - p0) / dt
+        g_end = Fi - Zl * (bs[RS.BIT_P] - p0) / dt
         # the segments' ends at the next step: F enters at the first cell (the slot of the last's
         # F, read above), G at the last (the slot of the first's)
         for q in range(S):
@@ -323,7 +325,7 @@ def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, a
             for a in range(nv):
                 dFr[a, i0] = (dNc[a] - dGf[a, 0]) if q == 0 else (dNs[a, q - 1] - dGf[a, q])
                 dGr[a, g1] = ((dNs[a, q] - dFl[a, q]) if q < S - 1
-                              else (dFl[a, q] - Zl * (dbs[0, a] - dp0[a]) / dt))
+                              else (dFl[a, q] - Zl * (dbs[RS.BIT_P, a] - dp0[a]) / dt))
         shank[step] = Nc
         for a in range(nv):
             dshank[step, a] = dNc[a]
@@ -338,7 +340,7 @@ def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, a
             for q in range(S):
                 for i in range(off[q], off[q + 1]):
                     rod_e += (Fr[i] * Fr[i] + Gr[i] * Gr[i]) / seg_z[q]
-            if rod_e * dt + 0.5 * m * bs[1] * bs[1] < stop:
+            if rod_e * dt + 0.5 * m * bs[RS.BIT_W] * bs[RS.BIT_W] < stop:
                 steps, ended = step + 1, 1.0
                 break
-    acc[0], acc[1] = steps, ended
+    acc[RS.ACC_STEPS], acc[RS.ACC_ENDED] = steps, ended

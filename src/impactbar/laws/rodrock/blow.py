@@ -47,6 +47,7 @@ from typing import ClassVar
 import numpy as np
 
 from ..._shared.schema import Field, Schema
+from . import _records as S
 from ._bit import _FREE, _LOAD, _Bit, _python_loop, feed_gain
 from ._piston import piston_cells, piston_segments
 
@@ -676,9 +677,9 @@ def blow_end(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, n_steps: int):
     as the :class:`Blow` of ``solve_blow(..., n_steps=n_steps)``."""
     n_p = grid.piston_cells
     bit = _start_bit(grid.Z, k, k_u, bit_mass, feed, None)
-    F, G, *_, acc = _run(grid, np.array(F, dtype=float), np.array(G, dtype=float), drive, bit,
-                         max(1, int(n_steps)), -1.0, None, 0.0, False)
-    return F[:n_p], G[:n_p], acc[3], acc[0], bit.p_perm
+    F, G, *_, (u_shank, _, _, gap, _) = _run(grid, np.array(F, dtype=float), np.array(G, dtype=float), drive,
+                                             bit, max(1, int(n_steps)), -1.0, None, 0.0, False)
+    return F[:n_p], G[:n_p], gap, u_shank, bit.p_perm
 
 
 def _rock_stored(R, k_u) -> float:
@@ -692,17 +693,45 @@ def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, re
     from ._rockkernel import blow_loop
 
     F, G = F.copy(), G.copy()
-    bs = np.array([bit.p, bit.w, float(bit.branch), bit.p_max, bit.R_max, bit.p_perm, bit.work])
-    bp = np.array([bit.Z, bit.k, bit.k_u, bit.m, bit.f])
+    bs, bp = _bit_records(bit)
     junc = np.zeros((n_max, bounds.size))
     bitrec = np.zeros((n_max + 1, 2))
     field = np.zeros((n_max if record_field else 0, F.size))
-    acc = np.zeros(6)
-    ctrl = np.array([dt, stop, float(quiet), gap0])
+    acc = np.zeros(S.ACC_SIZE)
+    ctrl = _loop_controls(dt, stop, quiet, gap0)
     blow_loop(F, G, Z, bounds.astype(np.int64), bs, bp, ctrl, drive, junc, bitrec, field, acc)
-    bit.p, bit.w, bit.branch, bit.p_max, bit.R_max, bit.p_perm, bit.work = \
-        bs[0], bs[1], int(bs[2]), bs[3], bs[4], bs[5], bs[6]
-    n = int(acc[2])
+    bit.p, bit.w, bit.branch = bs[S.BIT_P], bs[S.BIT_W], int(bs[S.BIT_BRANCH])
+    bit.p_max, bit.R_max = bs[S.BIT_PMAX], bs[S.BIT_RMAX]
+    bit.p_perm, bit.work = bs[S.BIT_PPERM], bs[S.BIT_WORK]
+    n = int(acc[S.ACC_STEPS])
+    ended = ("t_max", "energy", "separated")[int(acc[S.ACC_ENDED])]
     return (F, G, junc[:n], bitrec[:n + 1, 0], bitrec[:n + 1, 1], field[:n],
-            (float(acc[0]), float(acc[1]), ("t_max", "energy", "separated")[int(acc[3])], float(acc[4]),
-             float(acc[5])))
+            (float(acc[S.ACC_USHANK]), float(acc[S.ACC_LOSS]), ended, float(acc[S.ACC_GAP]),
+             float(acc[S.ACC_WORK])))
+
+
+def _bit_records(bit):
+    """The compiled loop's records of the bit ``bit``: its state ``bs`` and parameters ``bp``
+    (their slots ``BIT_*``, ``BITP_*`` of :mod:`impactbar.laws.rodrock._records`)."""
+    bs = np.empty(S.BIT_SIZE)
+    bs[S.BIT_P], bs[S.BIT_W], bs[S.BIT_BRANCH] = bit.p, bit.w, float(bit.branch)
+    bs[S.BIT_PMAX], bs[S.BIT_RMAX] = bit.p_max, bit.R_max
+    bs[S.BIT_PPERM], bs[S.BIT_WORK] = bit.p_perm, bit.work
+    return bs, _bit_params(bit.Z, bit.k, bit.k_u, bit.m, bit.f)
+
+
+def _bit_params(Z, k, k_u, m, feed):
+    """The compiled loop's bit parameters ``bp`` (slots ``BITP_*``): the impedance ``Z`` at the bit,
+    the rock's stiffnesses ``k``, ``k_u``, the bit's mass ``m`` and the feed force."""
+    bp = np.empty(S.BITP_SIZE)
+    bp[S.BITP_Z], bp[S.BITP_K], bp[S.BITP_KU], bp[S.BITP_MASS], bp[S.BITP_FEED] = Z, k, k_u, m, feed
+    return bp
+
+
+def _loop_controls(dt, stop, quiet, gap):
+    """The compiled loop's controls ``ctrl`` (slots ``CTRL_*``): its step ``dt``, the energy ``stop``
+    that ends a separated blow, the separated steps ``quiet`` that end it (0: none) and the
+    piston-shank ``gap`` at the start."""
+    ctrl = np.empty(S.CTRL_SIZE)
+    ctrl[S.CTRL_DT], ctrl[S.CTRL_STOP], ctrl[S.CTRL_QUIET], ctrl[S.CTRL_GAP] = dt, stop, float(quiet), gap
+    return ctrl

@@ -27,6 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..base import DrivenContact, LawNotSupported
+from . import _records as S
 
 __all__ = ["driven_rock_contact", "causal_cells"]
 
@@ -56,12 +57,9 @@ def causal_cells(Z, n_p: int) -> int:
 
 
 def _bit_arrays(grid, law):
-    from .blow import _start_bit
+    from .blow import _bit_records, _start_bit
 
-    bit = _start_bit(grid.Z, law.rock.k, law.rock.k_u, law.bit_mass, law.feed, None)
-    bs = np.array([bit.p, bit.w, float(bit.branch), bit.p_max, bit.R_max, bit.p_perm, bit.work])
-    bp = np.array([bit.Z, bit.k, bit.k_u, bit.m, bit.f])
-    return bs, bp
+    return _bit_records(_start_bit(grid.Z, law.rock.k, law.rock.k_u, law.bit_mass, law.feed, None))
 
 
 def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
@@ -70,6 +68,7 @@ def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     the start of each step. ``bounds``: ``grid.bounds`` as int64 where the caller has it (a blow's
     chunks share it)."""
     from ._rockkernel import blow_loop
+    from .blow import _loop_controls
 
     L = drive.size
     if bounds is None:
@@ -77,10 +76,10 @@ def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     junc = np.zeros((L, bounds.size))
     bitrec = np.zeros((L + 1, 2))
     field = np.zeros((L if record else 0, F.size))
-    acc = np.zeros(6)
-    ctrl = np.array([grid.cell_time, -1.0, 0.0, gap])
+    acc = np.zeros(S.ACC_SIZE)
+    ctrl = _loop_controls(grid.cell_time, -1.0, 0, gap)
     blow_loop(F, G, grid.Z, bounds, bs, bp, ctrl, np.ascontiguousarray(drive), junc, bitrec, field, acc)
-    return float(acc[4]), field
+    return float(acc[S.ACC_GAP]), field
 
 
 def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:

@@ -244,7 +244,7 @@ class ExactBlow:
     def junction_force(self, j: int, t) -> np.ndarray:
         """Force at junction ``j`` at times ``t`` (``j`` counts the interfaces from the piston's far
         end: 1 .. J - 1; the shank is ``contact_junction``), 0 before the blow."""
-        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        scale, pools, nodes, _ = self._hist
         if not 1 <= j < nodes:
             raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
         return scale * _eval_channel(pools, 2 * nodes + 1 + j, t, kind=0)
@@ -259,10 +259,10 @@ class ExactBlow:
         numpy.ndarray, shape (n,)
             Sorted, with 0 and ``duration``.
         """
-        pools, nodes = self._hist[1], self._hist[2]
+        _, pools, nodes, _ = self._hist
         if not 1 <= j < nodes:
             raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
-        PF, PI, CHI = pools[0], pools[1], pools[4]
+        PF, PI, _, _, CHI, _, _ = pools
         p, out = int(CHI[2 * nodes + 1 + j, 1]), [0.0, self.duration]
         while p >= 0:
             out.append(float(PF[p, 0]))
@@ -272,7 +272,7 @@ class ExactBlow:
     def junction_impulse(self, j: int) -> float:
         """The impulse ``int N dt`` of junction ``j``'s force (numbered as in :meth:`junction_force`)
         over the blow, in closed form piece by piece (the blow kept with ``record=True``)."""
-        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        scale, pools, nodes, _ = self._hist
         if not 1 <= j < nodes:
             raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
         PF, PI, TK, TC, CHI, lam = pools[:6]
@@ -282,7 +282,8 @@ class ExactBlow:
     @property
     def contact_junction(self) -> int:
         """The index of the piston-shank interface among the junctions."""
-        return self._hist[3]
+        *_, junction = self._hist  # (scale, pools, nodes, junction)
+        return junction
 
     def shank_force(self, t) -> np.ndarray:
         """The piston-shank force at times ``t``."""
@@ -290,16 +291,16 @@ class ExactBlow:
 
     def shank_peak(self, t_end: float) -> tuple[float, float]:
         """The largest piston-shank force up to ``t_end`` and when first reached (exact)."""
-        nodes = self._hist[2]
-        v, t = _channel_max(self._hist[1], 2 * nodes + 1 + self.contact_junction, min(t_end, self.duration))
-        return self._hist[0] * v, t
+        scale, pools, nodes, junction = self._hist
+        v, t = _channel_max(pools, 2 * nodes + 1 + junction, min(t_end, self.duration))
+        return scale * v, t
 
     @property
     def first_separation(self) -> float:
         """When the piston first left the shank (the start of the shank force's first zero
         piece); ``duration`` where it never did."""
-        pools, nodes = self._hist[1], self._hist[2]
-        PF, PI, CHI = pools[0], pools[1], pools[4]
+        _, pools, nodes, _ = self._hist
+        PF, PI, _, _, CHI, _, _ = pools
         p = int(CHI[2 * nodes + 1 + self.contact_junction, 1])
         while p >= 0 and PF[p, 0] < self.duration:
             if PI[p, 2] == 0 and PF[p, 0] > 0.0:
@@ -309,12 +310,12 @@ class ExactBlow:
 
     def penetration(self, t) -> np.ndarray:
         """The bit's penetration at times ``t``."""
-        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        scale, pools, nodes, _ = self._hist
         return scale * _eval_channel(pools, 3 * nodes + 1, t, kind=1)
 
     def bit_force(self, t) -> np.ndarray:
         """The rock's force on the bit at times ``t``."""
-        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        scale, pools, nodes, _ = self._hist
         return scale * _eval_channel(pools, 3 * nodes + 1, t, kind=2)
 
     def peak_forces(self):
@@ -326,7 +327,7 @@ class ExactBlow:
         values, times : numpy.ndarray, shape (J,)
             Junctions ``1 .. J - 1`` then the bit (its ``R_max``).
         """
-        scale, pools, nodes = self._hist[0], self._hist[1], self._hist[2]
+        scale, pools, nodes, _ = self._hist
         vals, times = [], []
         for j in range(1, nodes):
             v, t = _channel_max(pools, 2 * nodes + 1 + j, self.duration)
@@ -354,9 +355,9 @@ def _eval_channel(pools, c, t, kind, head=None):
 
 def _channel_max(pools, c, t_end):
     PF, PI, TK, TC, CHI, lam, lamk = pools
-    res = np.zeros(2)
+    res = np.zeros(S.HMAX_SIZE)
     H.history_max(PF, PI, TK, TC, lam, int(CHI[c, 1]), float(t_end), res)
-    return res[0], res[1]
+    return res[S.HMAX_V], res[S.HMAX_T]
 
 
 def _check_chain(name, times, imps):
@@ -528,7 +529,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     # simulator's blows (data given, a fixed horizon of a few round trips) need tens of pieces: 40 kB
     pcap, tcap, ecap = (16384, 131072, 256) if data is None else (256, 2048, 64)
     if _pool is not None:  # (the pool a like blow filled: no runs again to grow it)
-        pcap, tcap, ecap = max(pcap, int(_pool[0])), max(tcap, int(_pool[1])), max(ecap, int(_pool[2]))
+        pcap, tcap, ecap = (max(c, int(u)) for c, u in zip((pcap, tcap, ecap), _pool[:3], strict=True))
     while pcap > 1024 and pool_bytes(pcap, tcap) > bound:
         pcap, tcap, ecap = pcap // 4, tcap // 4, ecap // 4
     # (_keep: the coupled blow's iterates, each going on from where the last one's drive was its own:

@@ -292,7 +292,7 @@ def project(basis: ModalBasis, hist, t: float, end_position: float, heads=None):
     -------
     q, v : numpy.ndarray, shape (N + 1,)
     """
-    scale, pools = hist[0], hist[1]
+    scale, pools, *_ = hist
     PF, PI, TK, TC, CHI, lam, _ = pools
     P = basis.travel.size
     if heads is None:
@@ -440,11 +440,11 @@ class ExactBlowMap:
         trusted = bool(np.all(np.isfinite(q)) and np.all(np.isfinite(v)) and math.isfinite(self.p_end))
         drive = self.drive
         if trusted and drive is not None:
-            cached = getattr(self, "_checked_drive", None)
-            if cached is None or cached[0] is not drive:
-                cached = (drive, _Drive(drive))
-                self._checked_drive = cached
-            drive = cached[1]
+            checked, wrapped = getattr(self, "_checked_drive", (None, None))
+            if checked is not drive:
+                wrapped = _Drive(drive)
+                self._checked_drive = (drive, wrapped)
+            drive = wrapped
         out = exact_blow(self.basis.travel, self.basis.impedance, self.rod_times, self.rod_impedances,
                          initial=init, drive=drive, fixed_horizon=not certified,
                          t_max=horizon, record=record,
@@ -468,8 +468,9 @@ class ExactBlowMap:
         last = getattr(self, "_pool", None)
         if last is None:
             return None
-        grow = max(t_max / last[3], 1.0)
-        return 2 * last[0] * grow ** 2 + 16, 2 * last[1] * grow ** 3 + 16, 2 * last[2] * grow + 16
+        pieces, terms, episodes, horizon = last
+        grow = max(t_max / horizon, 1.0)
+        return 2 * pieces * grow ** 2 + 16, 2 * terms * grow ** 3 + 16, 2 * episodes * grow + 16
 
     def _end(self, shank, gap, permanent):
         """The struck end's position after the blow from the stop of the next flight: the shank's

@@ -180,7 +180,7 @@ def _field(ex, travel, lengths, cells, t):
     """The force ``F + G`` at the centres of ``cells[i]`` cells of every segment (piston first) at
     the times ``t``: the right-going wave that left the segment's left end ``u T`` earlier and the
     left-going one that left its right end ``(1 - u) T`` earlier (``u`` the cell's fraction)."""
-    scale, pools = ex._hist[0], ex._hist[1]
+    scale, pools, *_ = ex._hist
     cols, edges = [], [np.array([-1.0])]
     x0 = -1.0
     for i, (Ti, Li, n) in enumerate(zip(travel, lengths, cells, strict=True)):

@@ -26,8 +26,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..._shared.validate import check_real
+from . import _records as S
 from ._bit import _LOAD
-from .blow import _check_blow_size, blow_grid, whole_steps
+from .blow import _bit_params, _check_blow_size, _loop_controls, blow_grid, whole_steps
 
 __all__ = ["BlowTangent", "rod_rock_blow_tangent"]
 
@@ -171,21 +172,25 @@ def rod_rock_blow_tangent(s, V, lengths, impedances, speeds, k, k_u, bit_mass, f
     dE0 = 0.5 * V * V * dt * D.sum(axis=0)
     seg_len = np.array(grid.segment_cells, dtype=np.int64)
     seg_z = Z[n_p + np.concatenate(([0], np.cumsum(seg_len)[:-1]))]
-    bs = np.zeros(7)  # fresh rock loaded to the feed (blow._Bit)
-    bs[0] = feed / k
-    bs[2] = float(_LOAD)
-    bs[3], bs[4] = bs[0], feed
-    bs[5] = bs[3] - bs[4] / k_u
-    bp = np.array([Z[-1], k, k_u, bit_mass, feed], dtype=float)
-    dbs = np.zeros((7, nv))
+    bs = np.zeros(S.BIT_SIZE)  # fresh rock loaded to the feed (blow._Bit)
+    bs[S.BIT_P] = feed / k
+    bs[S.BIT_BRANCH] = float(_LOAD)
+    bs[S.BIT_PMAX], bs[S.BIT_RMAX] = bs[S.BIT_P], feed
+    bs[S.BIT_PPERM] = bs[S.BIT_PMAX] - bs[S.BIT_RMAX] / k_u
+    bp = _bit_params(Z[-1], k, k_u, bit_mass, feed)
+    dbs = np.zeros((S.BIT_SIZE, nv))
     shank = np.zeros(n_max)
     dshank = np.zeros((n_max, nv))
-    acc = np.zeros(2)
-    blow_loop_tangent(np.array([Fp, Gp, Zp]), np.array([dFp, dGp, dZ]), seg_len, seg_z, bs, dbs, bp,
-                      np.array([dt, energy_fraction * E0]), shank, dshank, acc)
-    n = int(acc[0])
+    acc = np.zeros(S.ACC_SIZE)
+    P = np.empty((S.CELL_SIZE, n_p))
+    P[S.CELL_F], P[S.CELL_G], P[S.CELL_Z] = Fp, Gp, Zp
+    dP = np.empty((S.CELL_SIZE, nv, n_p))
+    dP[S.CELL_F], dP[S.CELL_G], dP[S.CELL_Z] = dFp, dGp, dZ
+    blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, _loop_controls(dt, energy_fraction * E0, 0, 0.0),
+                      shank, dshank, acc)
+    n = int(acc[S.ACC_STEPS])
     rock0 = feed * feed / (2.0 * k_u)
-    return BlowTangent(work_on_rock=float(bs[6] + rock0), work_tangent=dbs[6].copy(),
+    return BlowTangent(work_on_rock=float(bs[S.BIT_WORK] + rock0), work_tangent=dbs[S.BIT_WORK].copy(),
                        energy_at_impact=E0, energy_tangent=dE0, shank_forces=shank[:n],
                        shank_tangents=dshank[:n], cell_time=dt,
-                       ended_by=("t_max", "energy")[int(acc[1])])
+                       ended_by=("t_max", "energy")[int(acc[S.ACC_ENDED])])

@@ -52,6 +52,10 @@ def _trig_int(a, b, npi, x, sgn):
         acc_c += (math.cos(arg) - 1.0) * (b[n] / npi[n])
     return a[0] * x + acc_s + sgn * acc_c
 
+#: the places in the window ``win`` (:func:`_p`): the load view, the window's start, the wave
+#: speed, the jumps, their number, the pieces' levels, their edges, the load's integral at them
+W_LOAD, W_T0, W_S, W_JW, W_NJ, W_LW, W_EW, W_CW = range(8)
+
 
 @numba.njit(cache=CACHE, nogil=True)
 def _p(win, u, left):
@@ -60,7 +64,7 @@ def _p(win, u, left):
     ``win = (load, t0, s, jw, nj, lw, ew, cw)``: the load view, the window's start and wave speed,
     its jumps (theta), their number, the levels of its pieces, their edges (time since ``t0``) and
     the running integral of the load at them."""
-    load, t0, s, jw, nj, lw = win[0], win[1], win[2], win[3], win[4], win[5]
+    load, t0, s, jw, nj, lw = win[W_LOAD], win[W_T0], win[W_S], win[W_JW], win[W_NJ], win[W_LW]
     kind = load.kind
     if kind == 1:
         j = 0
@@ -78,7 +82,7 @@ def _p(win, u, left):
 @numba.njit(cache=CACHE, nogil=True)
 def _p_int(win, u):
     """``int_0^u P dtheta'``, exact (closed form, or piece by piece); ``win`` as in :func:`_p`."""
-    load, t0, s, nj, lw, ew, cw = win[0], win[1], win[2], win[4], win[5], win[6], win[7]
+    load, t0, s, nj, lw, ew, cw = win[W_LOAD], win[W_T0], win[W_S], win[W_NJ], win[W_LW], win[W_EW], win[W_CW]
     kind, p0, ks, pr, pim = load.kind, load.p0, load.ks, load.pr, load.pim
     tau = u / s
     if kind == 1:
@@ -101,7 +105,7 @@ def _p_int(win, u):
 @numba.njit(cache=CACHE, nogil=True)
 def _A(a, b, npi, win, th, left):
     """The invariant arriving at the rod end at ``th``."""
-    s = win[2]
+    s = win[W_S]
     if th < 1.0 or (left and th == 1.0):
         return _trig(a, b, npi, 1.0 - th, -1.0)
     u = th - 1.0
@@ -111,7 +115,7 @@ def _A(a, b, npi, win, th, left):
 @numba.njit(cache=CACHE, nogil=True)
 def _Acum(a, b, npi, win, acum1, th):
     """``int_0^th A``."""
-    s = win[2]
+    s = win[W_S]
     if th <= 1.0:
         return acum1 - _trig_int(a, b, npi, 1.0 - th, 1.0)
     u = th - 1.0
@@ -199,7 +203,7 @@ def _project_free(a, b, npi, win, R, lo, hi, incoming, h, gl, dv, dse):
     (``cos``) and ``dse`` (``sin``): the alpha that left the end free (``incoming``, ``x = 1 - theta``,
     no breaks) or the beta (``x = theta - 1``, panels split at the load's jumps); ``win`` as in
     :func:`_p`, ``gl = (gl_x, gl_w)`` the Gauss-Legendre nodes and weights."""
-    s, jw, nj = win[2], win[3], win[4]
+    s, jw, nj = win[W_S], win[W_JW], win[W_NJ]
     gl_x, gl_w = gl
     M = a.size
     seg_lo = lo
