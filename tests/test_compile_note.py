@@ -20,7 +20,7 @@ from impactbar._shared.compiling import NOTE, compile_note
 def fresh(monkeypatch):
     """This process as if it had printed no note yet, and the test's own kernels counted as
     impactbar's (the watch ignores a user's numba code)."""
-    monkeypatch.setitem(compiling._STATE, "said", False)
+    monkeypatch.setattr(compiling._PROCESS, "said", False)
     monkeypatch.setattr(compiling, "_ours", lambda ev: True)
 
 
@@ -65,7 +65,7 @@ def test_no_compile_or_a_short_one_prints_nothing(fresh):
 def test_a_user_s_own_numba_code_prints_nothing(monkeypatch):
     import numpy as np
 
-    monkeypatch.setitem(compiling._STATE, "said", False)
+    monkeypatch.setattr(compiling._PROCESS, "said", False)
     out = io.StringIO()
     with compile_note(after=1e-4, stream=out):
         _fresh_kernel()(np.ones(3))  # this module's kernel, not impactbar's
@@ -98,7 +98,7 @@ def test_after_must_be_positive():
 def test_the_kernels_start_the_process_wide_watch():
     import impactbar.dynamics._kernel  # noqa: F401  (any kernel module; imported by every solver)
 
-    assert compiling._STATE["watching"]
+    assert compiling._PROCESS.watching
 
 
 #: a first call in a fresh process: the watch started with a short threshold before the kernels'

@@ -95,6 +95,160 @@ def test_no_solver_asks_the_family_again():
     assert bad == []
 
 
+def _forcing_classes() -> set[str]:
+    """The names of Load, Drive and every subclass of theirs the package defines (every module of it
+    imported, so that the walk of ``__subclasses__`` sees them all)."""
+    import importlib
+    import pkgutil
+
+    for info in pkgutil.walk_packages(impactbar.__path__, "impactbar."):
+        if not info.name.endswith("__main__"):
+            importlib.import_module(info.name)
+
+    def walk(cls):
+        return {cls}.union(*(walk(sub) for sub in cls.__subclasses__()))
+
+    return {c.__name__ for c in walk(impactbar.Load) | walk(impactbar.Drive)
+            if c.__module__.startswith("impactbar.")}
+
+
+#: the names a forcing goes by in the package (a class's test on a value of that name is a decision
+#: on the forcing, whatever the class)
+FORCING_NAMES = {"load", "drive", "forcing"}
+
+
+def _class_of(node) -> bool:
+    """Whether ``node`` is ``type(x)`` or ``x.__class__``."""
+    return (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "type"
+            and len(node.args) == 1) or (isinstance(node, ast.Attribute) and node.attr == "__class__")
+
+
+def _a_forcing(node) -> bool:
+    """Whether ``node`` names a forcing by the package's names for one (``load``, ``self.drive``)."""
+    name = node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else None
+    return name in FORCING_NAMES
+
+
+def _class_decisions(tree, classes: set[str]) -> list[str]:
+    """The decisions on a forcing's class in ``tree``: ``isinstance``/``issubclass`` against any of
+    ``classes`` (the forcing classes, under their own names or an alias they were imported as);
+    ``type(x)`` or ``x.__class__`` as a table's key (``T[type(x)]``, ``T.get(type(x))``,
+    ``type(x) in T``) whatever ``x``; ``type(x)`` or ``x.__class__`` compared with a forcing class, or
+    with anything where ``x`` is a forcing by name; and a forcing class's name compared as a string.
+    ``"line: code"`` each."""
+    names = set(classes)
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Import, ast.ImportFrom)):
+            names |= {a.asname for a in node.names if a.asname and a.name.rpartition(".")[2] in classes}
+    pattern = re.compile(r"\b({})\b".format("|".join(sorted(names))))
+
+    def names_one(node):
+        return bool(pattern.search(ast.unparse(node)))
+
+    out = []
+    for node in ast.walk(tree):
+        bad = False
+        if isinstance(node, ast.Call) and _callee(node) in ("isinstance", "issubclass") \
+                and len(node.args) == 2:
+            bad = names_one(node.args[1])
+        elif isinstance(node, ast.Subscript):
+            bad = _class_of(node.slice)
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.args:
+            bad = node.func.attr in ("get", "setdefault", "pop") and _class_of(node.args[0])
+        elif isinstance(node, ast.Compare):
+            sides = [node.left, *node.comparators]
+            bad = any(isinstance(s, ast.Constant) and s.value in names for s in sides)  # a class's name
+            for i, side in enumerate(sides):
+                if not _class_of(side):
+                    continue
+                others = sides[:i] + sides[i + 1:]
+                x = side.args[0] if isinstance(side, ast.Call) else side.value
+                bad = bad or _a_forcing(x) or any(isinstance(op, (ast.In, ast.NotIn)) for op in node.ops) \
+                    or any(names_one(o) or _class_of(o) and _a_forcing(o.args[0] if isinstance(o, ast.Call)
+                                                                          else o.value) for o in others)
+        if bad:
+            out.append(f"{node.lineno}: {ast.unparse(node)}")
+    return out
+
+
+def test_nothing_outside_the_dispatch_asks_a_forcing_s_class():
+    """No module but the dispatch's tests a forcing's class: not by ``isinstance`` or ``issubclass``
+    against Load, Drive or any of their subclasses, not by ``type(x)`` in a table keyed by class, not
+    by comparing a forcing's ``type``. What a caller needs of a forcing, the forcing declares (an
+    attribute of its base: ``kind``, ``compiled_kind``, ``kernel_view``), or the dispatch says
+    (:func:`~impactbar._shared.forcing.of_family`, :func:`~impactbar._shared.forcing.alike`)."""
+    classes = _forcing_classes()
+    assert {"Load", "Drive", "CosineLoad", "SquareWaveLoad", "FourierLoad", "PiecewiseConstantLoad",
+            "PositionSwitchedDrive", "HydraulicCircuitDrive"} <= classes
+    bad = [f"{path.relative_to(SRC)}:{found}" for path, tree in _modules() if path != HOME
+           for found in _class_decisions(tree, classes)]
+    assert bad == []
+
+
+def test_the_class_scan_sees_planted_decisions():
+    """Each form the scan above reports, planted, is seen; a type test that is no decision on a
+    forcing (a value's own ``__eq__``, a float's type) is not."""
+    planted = ("from ..loads import SquareWaveLoad as _Sq\n"
+               "def f(load, drive, x, other):\n"
+               "    a = isinstance(load, CosineLoad)\n"
+               "    b = issubclass(type(x), (int, PositionSwitchedDrive))\n"
+               "    c = isinstance(x, _Sq)\n"
+               "    d = SOLVERS[type(x)]\n"
+               "    e = TABLE.get(drive.__class__)\n"
+               "    g = type(load) is FourierLoad\n"
+               "    h = type(self.drive) is type(drive)\n"
+               "    i = type(x).__name__ == 'Load'\n"
+               "    j = type(x) in KNOWN\n"
+               "    k = type(other) is not type(self)\n"
+               "    m = type(x) is float\n"
+               "    n = isinstance(x, _Drive)\n")
+    found = _class_decisions(ast.parse(planted), {"Load", "Drive", "CosineLoad", "FourierLoad",
+                                                  "SquareWaveLoad", "PositionSwitchedDrive"})
+    assert [f.partition(":")[0] for f in found] == [str(n) for n in range(3, 12)], found
+
+
+def _probes(tree, declared) -> list[str]:
+    """``hasattr(x, "name")`` and ``getattr(x, "name", default)`` on a forcing by name (``load``,
+    ``self.drive``) where ``name`` is not in ``declared[x's name]`` (what its family's base
+    declares): a probe for what one class has stands in for a test of the class. ``"line: code"``
+    each."""
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Call) and _callee(node) in ("hasattr", "getattr") and len(node.args) >= 2 \
+                and _a_forcing(node.args[0]) and isinstance(node.args[1], ast.Constant):
+            x = node.args[0]
+            if node.args[1].value not in declared[x.id if isinstance(x, ast.Name) else x.attr]:
+                out.append(f"{node.lineno}: {ast.unparse(node)}")
+    return out
+
+
+def _declared() -> dict[str, set[str]]:
+    """What a forcing of each name is asked for: a load what :class:`~impactbar.Load` declares, a
+    drive what :class:`~impactbar.Drive` declares, a forcing of either family what both do."""
+    load, drive = set(dir(impactbar.Load)), set(dir(impactbar.Drive))
+    return {"load": load, "drive": drive, "forcing": load & drive}
+
+
+def test_no_probe_stands_in_for_a_forcing_s_class():
+    """Outside the dispatch, what code asks of a forcing by ``hasattr``/``getattr`` is declared on
+    its base (:class:`~impactbar.Load` or :class:`~impactbar.Drive`, with a default there): a
+    Fourier load's ``orders`` or a piecewise one's jumps are asked of every load, never probed to
+    tell the classes apart."""
+    bad = [f"{path.relative_to(SRC)}:{found}" for path, tree in _modules() if path != HOME
+           for found in _probes(tree, _declared())]
+    assert bad == []
+
+
+def test_the_probe_scan_sees_planted_probes():
+    planted = ("def f(load, self, x):\n"
+               "    a = getattr(load, 'breaks', None)\n"
+               "    b = hasattr(self.load, 'levels')\n"
+               "    c = getattr(self.drive, 'compiled', True)\n"
+               "    d = getattr(load, 'kind', '')\n"
+               "    e = hasattr(x, 'levels')\n")
+    assert [f.partition(":")[0] for f in _probes(ast.parse(planted), _declared())] == ["2", "3", "4"]
+
+
 def test_the_scan_sees_a_planted_decision():
     """The scans above can fail: a planted ``forcing_family`` call in a solver is seen, with the
     function it sits in."""

@@ -324,3 +324,110 @@ def test_few_private_names_cross_a_package():
 
     found = _private_imports(Path(impactbar.__file__).parent)
     assert len(found) <= MAX_PRIVATE_IMPORTS, "\n".join(found)
+
+
+def _root_imports(top: Path) -> list[str]:
+    """Each import by a module under ``top`` (the package's folder) of a name through the package's
+    root ``__init__.py`` (every import, :func:`_imports`): ``from .. import X`` resolving to the
+    package, ``from pkg import X``, ``import pkg``, where ``X`` is no module of the package (``from ..
+    import physical`` imports the module itself). The root and the subpackages' ``__init__.py``
+    (which re-export) and ``__main__`` modules are not counted. ``"importer:line <- pkg.X"`` each."""
+    out = []
+    for importer, mod, name, line in _imports(top):
+        package = (top.joinpath(*importer[1:]) / "__init__.py").exists()
+        if mod != [top.name] or importer[-1] == "__main__" or package:
+            continue
+        if name is not None and ((top / f"{name}.py").exists() or (top / name / "__init__.py").exists()):
+            continue
+        out.append(f"{'.'.join(importer)}:{line} <- {'.'.join(mod + ([name] if name else []))}")
+    return out
+
+
+def test_the_root_import_scan_sees_each_form(tmp_path):
+    pkg = tmp_path / "pkg"
+    for folder in ("a", "b"):
+        (pkg / folder).mkdir(parents=True)
+        (pkg / folder / "__init__.py").write_text("from .. import f\n")  # a re-export: not counted
+    (pkg / "__init__.py").write_text("from .a.x import f\n")
+    (pkg / "m.py").write_text("")
+    (pkg / "__main__.py").write_text("from . import f\n")
+    (pkg / "a" / "x.py").write_text(
+        "from .. import f, b, m\nfrom . import y\nimport pkg\nfrom pkg import g\nfrom pkg.b import h\n"
+        "def k():\n    from .. import late\n")
+    assert _root_imports(pkg) == ["pkg.a.x:1 <- pkg.f", "pkg.a.x:3 <- pkg", "pkg.a.x:4 <- pkg.g",
+                                  "pkg.a.x:7 <- pkg.late"]
+
+
+def test_no_module_imports_through_the_package_root():
+    """No module inside the package takes a name from the package's root ``impactbar/__init__.py``
+    (``from .. import continue_orbit``, ``from impactbar import X``, ``import impactbar``): the root
+    gathers the public names for users, and a module that imports through it depends on everything
+    the root imports, hiding which package it reaches (the graphs above would not see it). A module
+    imports from the package that defines the name."""
+    import impactbar
+
+    assert _root_imports(Path(impactbar.__file__).parent) == []
+
+
+def _dict_switches(source: str) -> list[str]:
+    """The switches held in a module-level dict of ``source``: inside a function, a ``True`` or
+    ``False`` stored under a constant string key of a dict the module binds at its top level
+    (``D["on"] = False``, ``D.update(on=False)``, ``D.setdefault("on", True)``): ``"line: D['on']"``
+    each. A dict keyed by fixed names is a set of module globals in disguise, undeclared (a misspelt
+    key is a new entry) and patched by tests with ``setitem``; tables keyed by computed keys (caches)
+    and stores of other values are not counted."""
+    import ast
+
+    tree = ast.parse(source)
+    dicts = set()
+    for node in _module_statements(tree.body):
+        value = getattr(node, "value", None)
+        targets = node.targets if isinstance(node, ast.Assign) else [getattr(node, "target", None)]
+        if isinstance(value, ast.Dict) or (isinstance(value, ast.Call) and isinstance(value.func, ast.Name)
+                                           and value.func.id in ("dict", "defaultdict")):
+            dicts |= {t.id for t in targets if isinstance(t, ast.Name)}
+
+    def boolean(v):
+        return isinstance(v, ast.Constant) and isinstance(v.value, bool)
+
+    out = []
+    for fn in ast.walk(tree):
+        if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            continue
+        for node in ast.walk(fn):
+            if isinstance(node, ast.Assign) and boolean(node.value):
+                out += [f"{node.lineno}: {t.value.id}[{t.slice.value!r}]" for t in node.targets
+                        if isinstance(t, ast.Subscript) and isinstance(t.value, ast.Name)
+                        and t.value.id in dicts and isinstance(t.slice, ast.Constant)
+                        and isinstance(t.slice.value, str)]
+            elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) \
+                    and isinstance(node.func.value, ast.Name) and node.func.value.id in dicts:
+                d = node.func.value.id
+                if node.func.attr == "update":
+                    out += [f"{node.lineno}: {d}[{k.arg!r}]" for k in node.keywords if boolean(k.value)]
+                elif node.func.attr == "setdefault" and len(node.args) == 2 and boolean(node.args[1]) \
+                        and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str):
+                    out.append(f"{node.lineno}: {d}[{node.args[0].value!r}]")
+    return sorted(set(out), key=lambda s: int(s.partition(":")[0]))
+
+
+def test_the_dict_switch_finder_finds_planted_switches():
+    src = ("_STATE = {'on': None, 'n': 0}\nCACHE: dict = {}\nT = dict()\nnot_a_dict = []\n"
+           "def f(key):\n    _STATE['on'] = False\n    _STATE['n'] = 3\n    CACHE[key] = True\n"
+           "    T.update(ok=True, reason='')\n    CACHE.setdefault('said', False)\n"
+           "    local = {}\n    local['on'] = True\n    not_a_dict[0] = True\n"
+           "class C:\n    def g(self):\n        _STATE['on'] = True\n")
+    assert _dict_switches(src) == ["6: _STATE['on']", "9: T['ok']", "10: CACHE['said']", "16: _STATE['on']"]
+
+
+def test_no_switch_is_held_in_a_module_level_dict():
+    """No module keeps a switch (a ``True``/``False`` a function sets) in a module-level dict under a
+    fixed key, which :func:`test_no_module_level_switches` would not see: the state a process keeps
+    (the compile tier's, the compile note's) is an object of a class that declares and documents
+    each field, and a fact found once (the SUNDIALS binding) a frozen value."""
+    import impactbar
+
+    top = Path(impactbar.__file__).parent
+    found = {str(p.relative_to(top)): s for p in sorted(top.rglob("*.py"))
+             if (s := _dict_switches(p.read_text(encoding="utf-8")))}
+    assert found == {}

@@ -183,7 +183,7 @@ def test_without_the_libraries_the_flights_go_through_the_binding(monkeypatch):
     drive = pumped()
     state = DriveState((1, 0, 1, 0), np.array([0.9, 0.9, 0.9, 1.0]))
     fl = F.circuit_flight(drive, RIGID, state, 0.0, np.array([-0.08]), np.array([0.0]), 50.0)
-    monkeypatch.setattr(_sundials, "_STATE", {})
+    monkeypatch.setattr(_sundials, "_BINDING", None)
     monkeypatch.setattr(_sundials, "_paths", lambda: None)
     assert not _sundials.available() and "not found" in _sundials.reason()
     assert F._compiled_driver() is None

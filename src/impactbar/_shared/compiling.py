@@ -33,7 +33,20 @@ NOTE = ("compiling numba kernels (first run with this cache, often 10-60 s of CP
         "later runs load them from the cache)...")
 
 _LOCK = threading.Lock()
-_STATE = {"said": False, "blocks": 0, "watching": False}
+
+
+class _Process:
+    """The note in this process, one instance (:data:`_PROCESS`), written under :data:`_LOCK`:
+    ``said`` (the note printed: one line per process), ``blocks`` (the :func:`compile_note` blocks
+    running) and ``watching`` (:func:`watch_compiles` registered)."""
+
+    __slots__ = ("said", "blocks", "watching")
+
+    def __init__(self):
+        self.said, self.blocks, self.watching = False, 0, False
+
+
+_PROCESS = _Process()
 
 
 def _ours(ev) -> bool:
@@ -83,7 +96,7 @@ class _Watch(_Outermost):
         self.timer = None
 
     def _begin(self):
-        if not _STATE["said"]:
+        if not _PROCESS.said:
             self.since = time.perf_counter()
             self.timer = threading.Timer(max(self.after - self.spent, 0.0), self._say)
             self.timer.daemon = True
@@ -100,9 +113,9 @@ class _Watch(_Outermost):
             if self.depth == 0:
                 return
         with _LOCK:
-            if _STATE["said"] or (self.deferring and _STATE["blocks"]):
+            if _PROCESS.said or (self.deferring and _PROCESS.blocks):
                 return
-            _STATE["said"] = True
+            _PROCESS.said = True
         _write(f"{self.prog}: {NOTE}", self.stream if self.stream is not None else sys.stderr)
 
     def stop(self):
@@ -175,9 +188,9 @@ def watch_compiles(prog: str = "impactbar", *, after: float = 2.0) -> None:
     """
     _check_after(after)
     with _LOCK:
-        if _STATE["watching"]:
+        if _PROCESS.watching:
             return
-        _STATE["watching"] = True
+        _PROCESS.watching = True
     from numba.core import event
 
     event.register("numba:compile", _listener(prog, after, None, True))
@@ -222,11 +235,11 @@ def compile_note(prog: str = "impactbar", *, after: float = 2.0, stream=None):
     watch = _listener(prog, after, stream, False)
     event.register("numba:compile", watch)
     with _LOCK:
-        _STATE["blocks"] += 1
+        _PROCESS.blocks += 1
     try:
         yield
     finally:
         event.unregister("numba:compile", watch)
         watch.stop()
         with _LOCK:
-            _STATE["blocks"] -= 1
+            _PROCESS.blocks -= 1

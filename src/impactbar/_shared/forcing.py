@@ -5,16 +5,18 @@ Each entry point (:func:`impactbar.periodic_orbits`, :func:`impactbar.find_orbit
 :func:`impactbar.simulate`, :func:`impactbar.continue_orbit`) holds a table from a forcing family to
 the solver of that family, as scipy's ``solve_ivp`` holds ``METHODS``, and calls :func:`dispatch`
 on it once; no solver asks again. A solver that takes one family alone says so by
-:func:`check_family`. A forcing declares its family by the class attribute ``family``
-(:class:`~impactbar.Load`: ``"load"``, :class:`~impactbar.Drive`: ``"drive"``): nothing here tests
-a class.
+:func:`check_family`; code that takes what a family declares asks :func:`of_family`, and code that
+reuses one forcing's work for another asks :func:`alike`. A forcing declares its family by the
+class attribute ``family`` (:class:`~impactbar.Load`: ``"load"``, :class:`~impactbar.Drive`:
+``"drive"``): nothing here tests a class against Load or Drive. Nothing outside this module asks a
+forcing's class at all (``tests/test_dispatch.py`` holds the package to it).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
-__all__ = ["FAMILIES", "forcing_family", "dispatch", "check_family"]
+__all__ = ["FAMILIES", "forcing_family", "dispatch", "check_family", "of_family", "alike"]
 
 #: the forcing families and what each is, for the messages
 FAMILIES = {
@@ -105,5 +107,52 @@ def check_family(forcing, family: str, name: str = "load", hint: str = "") -> No
     ValueError
         Where ``forcing`` is not of ``family``.
     """
-    if getattr(type(forcing), "family", None) != family:
+    if not of_family(forcing, family):
         raise ValueError(f"{name} must be {FAMILIES[family]}; got {type(forcing).__name__}{hint}")
+
+
+def of_family(forcing, family: str) -> bool:
+    """Whether ``forcing`` declares ``family`` (``False`` for what declares none).
+
+    Parameters
+    ----------
+    forcing : object
+        What may force the bar.
+    family : str
+        A key of :data:`FAMILIES`.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> from impactbar import CosineLoad
+    >>> load = CosineLoad(0.3, 1.0)
+    >>> of_family(load, "load"), of_family(load, "drive"), of_family(1.0, "load")
+    (True, False, False)
+    """
+    return getattr(type(forcing), "family", None) == family
+
+
+def alike(a, b) -> bool:
+    """Whether forcings ``a`` and ``b`` are of one class (two values of one kind of drive or load, whose
+    states and unknowns have the same layout), so that work done for one may start the other's.
+
+    Parameters
+    ----------
+    a, b : Load or Drive
+        The two forcings.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> from impactbar import CosineLoad, FourierLoad
+    >>> load = CosineLoad(0.3, 1.0)
+    >>> alike(load, CosineLoad(0.5, 1.0)), alike(load, FourierLoad(0.3, [1.0]))
+    (True, False)
+    """
+    return type(a) is type(b)

@@ -80,7 +80,7 @@ def _number_or_quantity(text: str):
 
 
 def _model_and_load(args):
-    from .. import BarModel
+    from ..model import BarModel
 
     if getattr(args, "config", None) is not None or getattr(args, "preset", None) is not None:
         from .physical import hammer_from_args
@@ -94,7 +94,8 @@ def _model_and_load(args):
 
 def _start(model, load, args):
     """The orbit the first branch starts from."""
-    from .. import InitialState, find_orbit, periodic_orbits, simulate
+    from ..orbits import find_orbit, periodic_orbits
+    from ..simulation import InitialState, simulate
 
     if args.impacts < 1 or args.load_periods < 1:
         raise ValueError(f"--impacts and --load-periods must be >= 1; got {args.impacts}, "
@@ -236,7 +237,7 @@ def _branches(start, model, load, args, out, bar):
         values = np.linspace(lam0, args.to, args.brute)
         values = values[(values >= lo) & (values <= hi)] if values.size > 1 else values
         q, v = start.modal_state_after_impact
-        from .. import InitialState
+        from ..simulation import InitialState
 
         # the flight starts after the impact (under the wave law: at the end of its window 2/s)
         t0 = float(start.impact_times[0]) if hasattr(start, "impact_times") else start.phase

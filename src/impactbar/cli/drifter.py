@@ -374,7 +374,7 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     writes ``branch.csv`` (parameter, period, impact velocity, largest |multiplier|, stable; a config
     key's value first, in the unit ``--to`` was given in; for a circuit then
     :data:`CIRCUIT_BRANCH_COLUMNS` in SI) and ``events.csv``."""
-    from .. import continue_orbit
+    from ..continuation import continue_orbit
 
     name, to = args.parameter, args.to
     si = "." in name  # a config key in SI: accumulator.precharge, supply.pump_flow, ...

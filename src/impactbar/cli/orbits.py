@@ -105,7 +105,8 @@ def run(args) -> int:
             return run_drifter_orbits(args, drifter)
 
         return run_physical_orbits(args)
-    from .. import BarModel, PeriodicOrbit, periodic_orbits
+    from ..model import BarModel
+    from ..orbits import PeriodicOrbit, periodic_orbits
 
     model = BarModel(s=args.s, d=args.d, R=args.R, n_modes=args.n_modes,
                      impact=getattr(args, "impact", None) or "paper")

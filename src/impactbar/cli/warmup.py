@@ -23,21 +23,13 @@ def _tasks():
     pint the oil circuit, alone and on a rod and rock, and the piston's optimiser)."""
     import numpy as np
 
-    from .. import (
-        BarModel,
-        BilinearRock,
-        CosineLoad,
-        InitialState,
-        PositionSwitchedDrive,
-        RodRock,
-        RodSegment,
-        SquareWaveLoad,
-        find_orbit,
-        periodic_orbits,
-        simulate,
-        single_blow,
-    )
+    from ..drives import PositionSwitchedDrive
+    from ..laws.rodrock import BilinearRock, RodRock, RodSegment, single_blow
+    from ..loads import CosineLoad, SquareWaveLoad
+    from ..model import BarModel
+    from ..orbits import find_orbit, periodic_orbits
     from ..orbits.rigid import rigid_cosine_orbits, rigid_square_orbits
+    from ..simulation import InitialState, simulate
 
     cos, square = CosineLoad(0.6, 1.0), SquareWaveLoad(1.0, 1.2)
     rigid, flex = BarModel(5.0, 0.1, 0.5, 0), BarModel(5.0, 0.1, 0.5, 8)
@@ -96,7 +88,7 @@ def _physical_tasks():
     rod = [RodPiece(length_m=6.0, area_m2=1e-3, E_Pa=2.1e11, density_kg_m3=7850.0)]
 
     def circuit(drifter, flexible=False):
-        from .. import find_orbit
+        from ..orbits import find_orbit
 
         out = drifter.orbit(), drifter.simulate(0.03)
         if flexible:  # (a flexible piston's variational flights: Magnus' Phi, generated with the network)

@@ -63,7 +63,34 @@ BUDGET = 1.0
 ENV = "IMPACTBAR_TIERED"
 
 _LOCK = threading.RLock()
-_STATE: dict = {"on": None, "child": None, "spent": 0.0, "next_id": 0}
+
+
+class _Process:
+    """The tier in this process, one instance (:data:`_PROCESS`), written under :data:`_LOCK`.
+
+    Attributes
+    ----------
+    on : bool or None
+        Whether the tier runs: ``None`` until first asked (:func:`enabled` decides then, from
+        :func:`requested` and the process), ``False`` for good once switched off (:func:`disable`,
+        the budget spent, the child not started, a fork).
+    cache : bool or None
+        Whether numba caches to disk (given by :func:`install`; ``None`` before).
+    child : subprocess.Popen or None
+        The child that compiles, once started.
+    spent : float
+        CPU seconds spent in twins.
+    next_id : int
+        The id of the next request to the child.
+    """
+
+    __slots__ = ("on", "cache", "child", "spent", "next_id")
+
+    def __init__(self):
+        self.on, self.cache, self.child, self.spent, self.next_id = None, None, None, 0.0, 0
+
+
+_PROCESS = _Process()
 _REQUESTED: dict = {}  # (dispatcher, signature) -> request id
 _DONE: dict = {}  # request id -> threading.Event, set when the child has answered
 _FAILED: set = set()  # request ids the child could not compile
@@ -75,18 +102,24 @@ _ORIGINAL = None  # numba's Dispatcher._compile_for_args
 
 def enabled() -> bool:
     """Whether first calls of uncompiled kernels run interpreted here while a child compiles."""
-    if _STATE["on"] is None:
-        _STATE["on"] = _decide()
-    return _STATE["on"]
+    if _PROCESS.on is None:
+        _PROCESS.on = _decide()
+    return _PROCESS.on
 
 
 def disable() -> None:
     """Switch the tier off in this process (``impactbar warmup``: it compiles every kernel here)."""
-    _STATE["on"] = False
+    _PROCESS.on = False
+
+
+def requested() -> bool:
+    """Whether the environment asks for the tier (:data:`ENV` is ``"1"``), read when asked; the tier
+    then runs where the process allows it (:func:`enabled`)."""
+    return os.environ.get(ENV, "0") == "1"
 
 
 def _decide() -> bool:
-    if os.environ.get(ENV, "0") != "1":
+    if not requested():
         return False
     import multiprocessing
 
@@ -94,7 +127,7 @@ def _decide() -> bool:
         return False
     from numba.core import config
 
-    if not _STATE.get("cache") or config.DISABLE_JIT:
+    if not _PROCESS.cache or config.DISABLE_JIT:
         return False
     try:
         cpus = len(os.sched_getaffinity(0))
@@ -107,7 +140,8 @@ def install(cache: bool) -> None:
     """Put the hook on numba's dispatcher (once; a no-op where the tier is off, or where ``cache``
     says numba has no disk cache to compile into)."""
     global _ORIGINAL
-    _STATE.setdefault("cache", cache)
+    if _PROCESS.cache is None:
+        _PROCESS.cache = cache
     if _ORIGINAL is not None or not enabled():
         return
     from numba.core.dispatcher import Dispatcher
@@ -131,7 +165,7 @@ def _compile_for_args(self, *args, **kws):
     except Exception:  # pragma: no cover - an unexpected numba: its own path
         return _ORIGINAL(self, *args)
     if not _DONE[rid].is_set():
-        if _STATE["spent"] < BUDGET:
+        if _PROCESS.spent < BUDGET:
             return _Twin(self)
         _give_up()  # a long computation: this process compiles what the child has not, as before
     return _ORIGINAL(self, *args)
@@ -161,7 +195,7 @@ class _Twin:
             return _numba(self.disp, args)(*args)
         finally:
             with _LOCK:
-                _STATE["spent"] += time.process_time() - t
+                _PROCESS.spent += time.process_time() - t
 
 
 def _arrays(x, out: list) -> list:
@@ -275,8 +309,8 @@ def _request(disp, sig) -> int:
         if rid is not None:
             return rid
         child = _child()
-        rid = _STATE["next_id"]
-        _STATE["next_id"] += 1
+        rid = _PROCESS.next_id
+        _PROCESS.next_id += 1
         _REQUESTED[key] = rid
         _DONE[rid] = threading.Event()
         module = sys.modules[disp.py_func.__module__]
@@ -294,7 +328,7 @@ def _request(disp, sig) -> int:
 def _child():
     """The child process that compiles, started on the first request (the same interpreter and
     import path, so that it compiles these very kernels into the same cache)."""
-    child = _STATE["child"]
+    child = _PROCESS.child
     if child is None:
         path = os.pathsep.join(p for p in sys.path if p)
         env = dict(os.environ, **{ENV: "0", "PYTHONPATH": path})
@@ -303,9 +337,9 @@ def _child():
                 [sys.executable, "-m", __name__], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
                 stderr=subprocess.DEVNULL, text=True, bufsize=1, env=env)
         except OSError:  # no interpreter to start: numba compiles here, as before
-            _STATE["on"] = False
+            _PROCESS.on = False
             raise
-        _STATE["child"] = child
+        _PROCESS.child = child
         threading.Thread(target=_listen, args=(child,), daemon=True, name="impactbar-compile").start()
         atexit.register(_stop, child)
     return child
@@ -314,15 +348,15 @@ def _child():
 def _give_up() -> None:
     """Stop the child and the tier: from here on numba compiles in this process."""
     with _LOCK:
-        _STATE["on"] = False
-        child = _STATE["child"]
+        _PROCESS.on = False
+        child = _PROCESS.child
     if child is not None:
         _stop(child)
 
 
 def _forget_after_fork() -> None:
     """A forked process shares neither the child nor its answers: it compiles for itself."""
-    _STATE.update(on=False, child=None)
+    _PROCESS.on, _PROCESS.child = False, None
 
 
 if hasattr(os, "register_at_fork"):

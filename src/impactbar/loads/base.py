@@ -66,7 +66,8 @@ class Load(ABC):
       of the phase equation, eq. 14);
     - the forms a special solver recognises: :meth:`cosine_form` (the rigid closed forms,
       pneumatic), :meth:`square_form` (the rigid closed forms, hydraulic), :meth:`pieces` (the
-      jumps of a piecewise-constant load);
+      jumps of a piecewise-constant load), :attr:`orders` (the harmonics of a load of finitely
+      many) and ``_boundaries`` (the jumps in a window, where the wave law's quadratures split);
     - :attr:`kernel_kind` and :meth:`compiled_kind`: the kind of its kernel view, where compiled
       code may stand for the load's methods.
 
@@ -96,7 +97,7 @@ class Load(ABC):
         "kind", "description", "parameters", "continuation_parameters", "parameter_ranges", "kernel_kind",
         "family", "kernel_view", "left_limit", "flow", "periodic_state", "to_record", "from_record",
         "parameter_table", "with_parameter", "with_", "period", "max_one_impact_orbits", "cosine_form",
-        "square_form", "pieces", "compiled_kind")
+        "square_form", "pieces", "orders", "compiled_kind")
 
     #: the load's name in the table :data:`LOADS`: a sweep spec's ``[load] kind``, the CLI's
     #: ``--load``, the ``"kind"`` of :meth:`to_record` (empty for a load not in the table)
@@ -427,6 +428,17 @@ class Load(ABC):
         """``(breaks, levels)`` where the load is constant on pieces (its jumps at ``breaks``, shape
         ``(J,)``); ``None`` for a continuous load."""
         return None
+
+    @property
+    def orders(self) -> np.ndarray | None:
+        """Orders ``k`` of the non-zero harmonics where the load has finitely many (a Fourier load's,
+        shape ``(K',)``, with its ``amplitudes``); ``None`` otherwise."""
+        return None
+
+    def _boundaries(self, t0: float, t1: float) -> np.ndarray:
+        """Absolute times of the load's jumps in ``(t0, t1)``, sorted, shape ``(J,)``: none here (a
+        piecewise-constant load has its own)."""
+        return np.empty(0)
 
     def compiled_kind(self, *methods: str) -> int | None:
         """The kind of :attr:`kernel_view` (:data:`~impactbar.dynamics.kernelview.FOURIER` or

@@ -82,10 +82,11 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
         acc0 = float(c @ (float(load(phase)) - d * v0 - w2 * q0))
     # (a rigid flight that starts pressed on the stop sticks: the searches' clearances differ there
     # only in what the departure's neighbourhood counts, and the certified search's is the one kept)
-    # (fast-path guard: the rigid cosine flight's closed form, for CosineLoad itself only, whose
-    # clearance it fixes to the last bit; a subclass or another load takes the certified search)
-    if (M == 1 and type(load) is CosineLoad and q0[0] == 0.0 and not (at_rest and not acc0 < 0.0)
-            and use_fast("admissibility.rigid_cosine")):
+    # (fast-path guard: the rigid cosine flight's closed form, for a load that declares itself the
+    # cosine (its kind) and evaluates as CosineLoad does, whose clearance it fixes to the last bit;
+    # a subclass with its own evaluation or another load takes the certified search)
+    if (M == 1 and load.kind == CosineLoad.kind and load.compiled_kind("__call__") == FOURIER
+            and q0[0] == 0.0 and not (at_rest and not acc0 < 0.0) and use_fast("admissibility.rigid_cosine")):
         found = (cosine_clearance(float(d), load.p0, load.pk, load.k, float(phase), float(v0[0]),
                                   float(horizon), bool(at_rest)), 0.0)
     if found is None and use_fast("admissibility.search"):

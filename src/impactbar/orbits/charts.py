@@ -117,7 +117,7 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
     pieces = load.pieces()
     if pieces is not None:  # V is monotone on each piece: the largest residual is at a jump
         return float(np.max(phase_residual(model, load, pieces[0])))
-    orders = getattr(load, "orders", None)
+    orders = load.orders
     if orders is not None and len(orders) == 1:
         k = int(orders[0])
         amp = (1.0 + model.R) * abs(load.amplitudes[0]) / math.hypot(model.d, k)

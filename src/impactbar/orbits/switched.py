@@ -37,6 +37,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .._shared.forcing import alike
 from .._shared.status import Admissibility
 from .._shared.validate import check_int
 from ..drives.base import DriveState
@@ -388,7 +389,7 @@ class ShootingProblem(OrbitProblem):
         if isinstance(guess, SwitchedOrbit):
             problem = guess._problem
             if isinstance(problem, ShootingProblem) and problem.impacts == m and problem.blocks and (
-                    problem.drive == drive or (type(problem.drive) is type(drive) and problem.M == M
+                    problem.drive == drive or (alike(problem.drive, drive) and problem.M == M
                                                and problem.coupled == self.coupled)):
                 self.adopt(problem)  # (a neighbour's orbit, at other parameter values: its unknowns)
                 return np.asarray(guess._unknowns, dtype=float).copy()

@@ -44,7 +44,7 @@ def continue_circuit(drifter: CircuitDrifter, parameter: str, to, *, step=None, 
         An unknown parameter, ``to`` without its unit for a config key (or with one for a
         dimensionless name); as :func:`~impactbar.continue_orbit`.
     """
-    from .. import continue_orbit
+    from ..continuation import continue_orbit
 
     if not isinstance(drifter, CircuitDrifter):
         raise ValueError(f"drifter must be a CircuitDrifter; got {type(drifter).__name__}")

@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from .._shared.forcing import dispatch
+from .._shared.forcing import dispatch, of_family
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
 from ..drives.base import Drive
@@ -130,7 +130,7 @@ class _Basis:
 def _load_view(load: Load) -> LoadKernelView:
     """The load's one kernel view (:attr:`impactbar.Load.kernel_view`); a load the kernels do not
     know is refused."""
-    view = load.kernel_view if isinstance(load, Load) else None
+    view = load.kernel_view if of_family(load, "load") else None
     if view is None:
         raise ValueError(
             f"load must be a FourierLoad (CosineLoad) or a PiecewiseConstantLoad "

@@ -22,6 +22,7 @@ import ctypes.util
 import glob
 import os
 import threading
+from typing import NamedTuple
 
 __all__ = ["available", "reason", "bind", "function", "PREFIX"]
 
@@ -88,7 +89,21 @@ FUNCTIONS = {
 }
 
 _LOCK = threading.Lock()
-_STATE: dict = {}
+
+
+class _Binding(NamedTuple):
+    """What :func:`bind` found, once per process: ``ok`` whether the libraries are bound, their
+    ``paths``, ``libs`` and ctypes ``funcs`` (empty where not), and ``reason`` why not."""
+
+    ok: bool
+    paths: object = None
+    libs: object = None
+    funcs: dict | None = None
+    reason: str = ""
+
+
+#: the binding, once :func:`bind` has run (``None`` before)
+_BINDING: _Binding | None = None
 
 
 def _candidates():
@@ -161,18 +176,19 @@ def _load():
 def bind() -> bool:
     """Load and check the libraries once and register their functions with numba's linker (as
     ``impactbar_<name>``); whether that succeeded (:func:`reason` says why not)."""
+    global _BINDING
     with _LOCK:
-        if "ok" not in _STATE:
+        if _BINDING is None:
             try:
                 paths, libs, funcs = _load()
                 import llvmlite.binding as llvm
 
                 for name, f in funcs.items():
                     llvm.add_symbol(PREFIX + name, ctypes.cast(f, _vp).value)
-                _STATE.update(ok=True, paths=paths, libs=libs, funcs=funcs, reason="")
+                _BINDING = _Binding(True, paths, libs, funcs)
             except (OSError, AttributeError) as err:  # not found, a symbol missing, another version
-                _STATE.update(ok=False, reason=str(err))
-        return _STATE["ok"]
+                _BINDING = _Binding(False, reason=str(err))
+        return _BINDING.ok
 
 
 def available() -> bool:
@@ -183,9 +199,9 @@ def available() -> bool:
 def reason() -> str:
     """Why :func:`available` is ``False`` (empty where it is ``True``)."""
     bind()
-    return _STATE["reason"]
+    return _BINDING.reason
 
 
 def function(name: str):
     """The ctypes function ``name`` of :data:`FUNCTIONS` (after a successful :func:`bind`)."""
-    return _STATE["funcs"][name]
+    return _BINDING.funcs[name]

@@ -338,7 +338,7 @@ def _work_column(layout) -> int:
 
 def _compiled_end(drive):
     """:mod:`._endcvode` where the drive flies compiled and the SUNDIALS libraries bind, else None."""
-    return _end_module(bool(getattr(drive, "compiled", True)))
+    return _end_module(bool(drive.compiled))
 
 
 @functools.lru_cache(maxsize=2)

@@ -117,7 +117,7 @@ def _single_harmonic_roots(model, load):
     ``F = A cos(k phase + theta) - B`` with ``A e^{i theta} = (1 + R) p_k / (d + i k)``; the roots are
     ``k phase = -theta +- arccos(B / A) (mod 2 pi)``, ``2k`` of them, a double one at ``|B| = A``.
     """
-    orders = getattr(load, "orders", None)
+    orders = load.orders
     if orders is None or len(orders) != 1:
         return None
     k = int(orders[0])

@@ -80,11 +80,10 @@ class _WindowLoad:
     def __init__(self, load, s: float, t0: float):
         self.load, self.s, self.t0 = load, s, t0
         t1 = t0 + 2.0 / s
-        bounds = getattr(load, "_boundaries", None)
-        tj = np.asarray(bounds(t0, t1), dtype=float) if bounds is not None else np.empty(0)
+        tj = np.asarray(load._boundaries(t0, t1), dtype=float)
         self.t_edges = np.concatenate(([t0], tj, [t1]))
         self.jumps = s * (tj - t0)  # in theta, inside (0, 2)
-        orders = getattr(load, "orders", None)
+        orders = load.orders
         self.rate = float(np.max(orders)) / s if orders is not None and len(orders) else 0.0
 
     def __call__(self, theta, left: bool = False) -> np.ndarray:
@@ -108,7 +107,7 @@ class _WindowLoad:
     @cached_property
     def _pieces(self):
         """``(levels, cum, edges)`` of a piecewise-constant load over the window (None otherwise)."""
-        if not hasattr(self.load, "levels") or getattr(self.load, "orders", None) is not None:
+        if self.load.pieces() is None or self.load.orders is not None:
             return None
         edges = self.t_edges - self.t0
         levels = self(self.s * 0.5 * (edges[:-1] + edges[1:]))
@@ -130,13 +129,13 @@ class _WindowLoad:
         piece by piece for a piecewise-constant one, else the load's own rigid-mode integral."""
         theta = np.atleast_1d(np.asarray(theta, dtype=float))
         tau = theta / self.s
-        orders = getattr(self.load, "orders", None)
+        orders = self.load.orders
         if orders is not None:  # p0 tau + Re sum p_k (e^{ik(t0 + tau)} - e^{ik t0}) / (ik)
             k = np.asarray(orders, dtype=float)
             ck = self.load.amplitudes * np.exp(1j * k * self.t0) / (1j * k)
             osc = (np.expm1(1j * np.multiply.outer(tau, k)) @ ck).real
             return self.s * (self.load.p0 * tau + osc)
-        if hasattr(self.load, "levels"):  # constant between the jumps located at set-up
+        if self._pieces is not None:  # constant between the jumps located at set-up
             levels, cum, edges = self._pieces
             j = np.clip(np.searchsorted(edges, tau, side="right") - 1, 0, levels.size - 1)
             return self.s * (cum[j] + levels[j] * (tau - edges[j]))

@@ -24,9 +24,15 @@ __all__ = ["driven_wave_contact", "DriveHistory"]
 class DriveHistory:
     """The drive's force over a window, from its pieces, as the window's solver takes a load: its
     values (``__call__``), its integral (``propagate``'s rigid velocity), a bound (``sup_abs``) and
-    the pieces' steps as the points where the solver's quadratures split (``_boundaries``)."""
+    the pieces' steps as the points where the solver's quadratures split (``_boundaries``); neither
+    a load of harmonics (``orders``) nor one of constant pieces (``pieces``)."""
 
     kernel_view = None
+    orders = None
+
+    @staticmethod
+    def pieces():
+        return None
 
     def __init__(self, pieces):
         self.pieces = list(pieces)
