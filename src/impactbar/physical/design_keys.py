@@ -163,11 +163,12 @@ def design_bounds(config: dict, vary, folder=None) -> dict:
             raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies: {exc}") from None
         if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
             raise ValueError(f"vary[{key!r}] must be (low, high); got {bounds!r}")
+        low, high = bounds
         lo, hi = (key_value(f"vary[{key!r}] {side}", b, unit, base)
-                  for side, b in zip(("low", "high"), bounds, strict=True))
+                  for side, b in (("low", low), ("high", high)))
         if not lo < hi:
-            raise ValueError(f"vary[{key!r}]: low must be below high; got {bounds[0]!r} and {bounds[1]!r}")
-        for side, b, given in (("low", lo, bounds[0]), ("high", hi, bounds[1])):
+            raise ValueError(f"vary[{key!r}]: low must be below high; got {low!r} and {high!r}")
+        for side, b, given in (("low", lo, low), ("high", hi, high)):
             try:
                 build(with_values(config, {key: config_quantity(b, unit)}), folder)
             except ValueError as exc:

@@ -98,7 +98,7 @@ class OrbitChain:
 
     def orbit(self, rid: str):
         """The orbit of design ``rid``: held, or solved again along its chain of guesses."""
-        todo = []
+        asked, todo = rid, []
         while rid is not None and rid not in self.orbits:
             todo.append(rid)
             rid = self.store[rid].get("guess")
@@ -107,4 +107,4 @@ class OrbitChain:
             guess = None if guess is None else self.orbits[guess]
             self.orbits[r] = self.solve(self.store[r]["changes"], guess)
             self.solved += 1
-        return self.orbits[todo[0]] if todo else self.orbits[rid]
+        return self.orbits[asked]

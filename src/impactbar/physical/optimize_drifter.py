@@ -106,8 +106,8 @@ def _better_missed(history: list, best: dict, fkey: str) -> str:
               best["objectives"][fkey]]
     if not better:
         return ""
-    name, c = max((min(r["constraints"].items(), key=lambda kv: kv[1]["scaled"]) for r in better),
-                  key=lambda nc: nc[1]["scaled"])
+    nearest = [min(r["constraints"].items(), key=lambda kv: kv[1]["scaled"]) for r in better]
+    name, c = max(nearest, key=lambda kv: kv[1]["scaled"])
     scale, unit = _show_unit(c["unit"])
     return (f"; {len(better)} design(s) of a larger objective missed a constraint, the nearest {name} by "
             f"{-c['margin'] * scale:.4g}{' ' + unit if unit else ''} ({-c['scaled']:.2g} of its scale, "
