@@ -39,8 +39,9 @@ Pressures are absolute ("0.3 MPa" of tank pressure is 0.2 MPa gauge), flow coeff
 
 from __future__ import annotations
 
+import copy
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -152,6 +153,9 @@ class CircuitDrifter(_ScaledDrifter):
         The drill string and the rock (``impactbar.physical.rock``, theory §4d): the model's law is
         then the rod-rock law (``restitution`` plays no part), each blow solved with the circuit's
         state (theory §11, "The coupled blow").
+    config : dict, optional
+        The configuration :meth:`from_config` read it from (not compared): what
+        :func:`~impactbar.physical.operating_point_sensitivities` changes by key.
 
     Raises
     ------
@@ -173,6 +177,7 @@ class CircuitDrifter(_ScaledDrifter):
     n_modes: int = 0
     name: str = ""
     drill: DrillString | None = None
+    config: dict | None = field(default=None, compare=False, repr=False)
 
     def _check_own(self) -> None:
         si = self.si
@@ -380,6 +385,7 @@ class CircuitDrifter(_ScaledDrifter):
             An unknown section or key, a missing key, a value with the wrong unit or out of range
             (each named).
         """
+        given = copy.deepcopy(config)
         if isinstance(config, dict) and "piston" in config:  # the piston's shape: the stepped [bar] and
             config = expand_piston(config)  # the chamber areas it implies
         sec = _config_sections(config, _KEYS, _REQUIRED)
@@ -435,7 +441,7 @@ class CircuitDrifter(_ScaledDrifter):
         return cls(bar=bar, restitution=R, si=si,
                    damping_N_s_m=damping,
                    n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
-                   name=str(config.get("name", "")), drill=drill)
+                   name=str(config.get("name", "")), drill=drill, config=given)
 
 
 #: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over
