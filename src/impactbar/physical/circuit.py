@@ -471,6 +471,14 @@ def _check_repeats(orbit) -> None:
     if times.size < 2 or np.max(np.abs(times - T * np.arange(1, 3))) > REPEAT_TOL * T * 2 \
             or np.max(np.abs(speeds - v)) > REPEAT_TOL * abs(v):
         first = f"{times[0] / T:.6g}" if times.size else "none"
+        rest = [b - a for a, b in np.asarray(run.contact_intervals).reshape(-1, 2)
+                if times.size and abs(a - times[0]) <= REPEAT_TOL * T and b > a]
+        if orbit.model.R == 0.0 and rest:  # (theory: at R = 0 the load must pull the end away at once)
+            raise ValueError(f"find_orbit's orbit (period {T:.6g}) leaves the stop at once after its "
+                             "plastic impact (stop.restitution = 0), but the net force then pushes the "
+                             f"piston on the stop: simulate rests it there {rest[0] / T:.3g} periods, so the "
+                             "orbit passes through the stop, not a motion of the circuit (an orbit with a "
+                             "rest on the stop is not solved: give stop.restitution > 0)")
         raise ValueError(f"find_orbit's orbit (period {T:.6g}) does not repeat when simulate restarts it "
                          f"from its state after the impact (the first interval {first} periods): not a "
                          "motion of the circuit")
