@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import re
 import warnings
 from dataclasses import dataclass
 
@@ -41,10 +40,9 @@ from ._choice import (  # noqa: F401  (the choices' bounds, as before)
     _bit_is_negligible,
     _exact_is_cheap,
 )
+from ._parameters import _SEGMENT, changed
 
 __all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
-
-_SEGMENT = re.compile(r"segment(\d+)\.length")
 
 
 @dataclass(frozen=True)
@@ -471,33 +469,9 @@ class RodRock(ContactLaw):
         return self.with_parameters({name: value})
 
     def with_parameters(self, changes: dict) -> RodRock:
-        """A copy with several of :attr:`parameters` changed at once: ``changes`` (dict of name to
-        float) applied together, the result validated once whatever their order (``rock.k`` and
-        ``rock.k_u`` may be raised together; a ``ValueError`` as :meth:`with_parameter`).
-
-        Examples
-        --------
-        >>> law = RodRock(segments=[RodSegment(length=2.0, impedance=2.0)],
-        ...               rock=BilinearRock(k=20.0, k_u=200.0))
-        >>> law.with_parameters({"rock.k": 400.0, "rock.k_u": 800.0}).rock
-        BilinearRock(k=400.0, k_u=800.0)
-        """
-        rock, segs, own = {}, list(self.segments), {}
-        for name, value in changes.items():
-            self._check_parameter(name)
-            match = _SEGMENT.fullmatch(name)
-            if name.startswith("rock."):
-                rock[name[5:]] = value
-            elif match:
-                i = int(match.group(1))
-                segs[i] = dataclasses.replace(segs[i], length=value)
-            else:
-                own[name] = value
-        if rock:
-            own["rock"] = dataclasses.replace(self.rock, **rock)
-        if segs != list(self.segments):
-            own["segments"] = segs
-        return dataclasses.replace(self, **own)
+        """A copy with several of :attr:`parameters` changed at once, the result validated once
+        whatever their order (``impactbar.laws.rodrock._parameters.changed``)."""
+        return changed(self, changes)
 
     def _check_parameter(self, name: str) -> None:
         if not self.has_parameter(name):
