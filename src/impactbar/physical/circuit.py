@@ -58,6 +58,7 @@ from .drifter import (
     _ScaledDrifter,
 )
 from .geometry import PISTON_KEYS, expand_piston
+from .plausibility import warn_implausible
 from .rock import DrillString
 from .units import to_si
 
@@ -438,10 +439,11 @@ class CircuitDrifter(_ScaledDrifter):
         if not damping >= 0.0:
             raise ValueError(f"damping.coefficient must be 0 or above; got "
                              f"{shown(sec['damping']['coefficient'], damping, 'N*s/m')}")
-        return cls(bar=bar, restitution=R, si=si,
-                   damping_N_s_m=damping,
-                   n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
-                   name=str(config.get("name", "")), drill=drill, config=given)
+        out = cls(bar=bar, restitution=R, si=si, damping_N_s_m=damping,
+                  n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
+                  name=str(config.get("name", "")), drill=drill, config=given)
+        warn_implausible(given)  # (values far outside their typical ranges: warned of, then run)
+        return out
 
 
 #: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over
