@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import impactbar as ib
 from impactbar import BarModel, CosineLoad, Parameter, PositionSwitchedDrive
@@ -246,3 +248,97 @@ def test_the_si_names_map_onto_the_circuit_drives_parameters():
     assert parameter_value(model, no_relief, "relief_pressure") == math.inf
     with pytest.raises(ValueError, match="precharge must be"):
         with_parameter(model, drive, "precharge", math.inf)
+
+
+ROD = ib.RodRock(segments=[ib.RodSegment(length=2.0, impedance=2.0),
+                           ib.RodSegment(length=1.0, impedance=1.0)], rock=ib.BilinearRock(k=20.0, k_u=200.0))
+
+
+def test_a_set_of_changes_is_checked_as_a_set():
+    """:func:`with_parameters` applies every change, then validates the result once: the order of
+    the changes does not matter, and a set whose result is refused is refused whatever its order."""
+    from impactbar.parameters import with_parameters
+
+    rock = MODEL.with_(impact=ROD)
+    for changes in ({"rock.k": 400.0, "rock.k_u": 800.0}, {"rock.k_u": 800.0, "rock.k": 400.0}):
+        model, load = with_parameters(rock, LOAD, changes)
+        assert model.law.rock == ib.BilinearRock(k=400.0, k_u=800.0) and load is LOAD
+    for changes in ({"rock.k": 5.0, "rock.k_u": 10.0}, {"rock.k_u": 10.0, "rock.k": 5.0}):
+        assert with_parameters(rock, LOAD, changes)[0].law.rock == ib.BilinearRock(k=5.0, k_u=10.0)
+    for changes in ({"rock.k": 400.0, "rock.k_u": 300.0}, {"rock.k_u": 300.0, "rock.k": 400.0}):
+        with pytest.raises(ValueError, match="k_u"):
+            with_parameters(rock, LOAD, changes)
+    # the bar's fields and the law's together, and a part's static range still refused at once
+    model, _ = with_parameters(rock, LOAD, {"segment1.length": 3.0, "R": 0.25, "rock.k": 30.0})
+    assert (model.R, model.law.segments[1].length, model.law.rock.k) == (0.25, 3.0, 30.0)
+    with pytest.raises(ValueError, match=r"R must be in \[0, 1\]; got 2"):
+        with_parameters(rock, LOAD, {"rock.k": 30.0, "R": 2.0})
+
+
+def test_a_circuits_relief_and_pre_charge_change_together():
+    """The pre-charge must stay below the relief pressure: both lowered at once is accepted in
+    either order (the relief was checked alone against the old pre-charge)."""
+    pytest.importorskip("pint")
+    from impactbar.parameters import with_parameters
+    from impactbar.physical.circuit import circuit_preset
+
+    drifter = circuit_preset("circuit-drifter")
+    model, drive = drifter.model(), drifter.drive()
+    assert parameter_value(model, drive, "precharge") > 0.5
+    for changes in ({"relief_pressure": 0.5, "precharge": 0.25}, {"precharge": 0.25, "relief_pressure": 0.5}):
+        _, changed = with_parameters(model, drive, changes)
+        assert (parameter_value(model, changed, "relief_pressure"),
+                parameter_value(model, changed, "precharge")) == (0.5, 0.25)
+    with pytest.raises(ValueError, match="precharge must be below the relief pressure 0.5; got 0.6"):
+        with_parameters(model, drive, {"precharge": 0.6, "relief_pressure": 0.5})
+
+
+def _problems():
+    from impactbar.physical.circuit import circuit_preset
+
+    drifter = circuit_preset("circuit-drifter")
+    return [(MODEL, LOAD), (MODEL.with_(impact=ROD), ib.SquareWaveLoad(0.5, 1.5)),
+            (MODEL, PositionSwitchedDrive(stroke=1.0, ret=0.5, switch_out=1.0)),
+            (drifter.model(), drifter.drive())]
+
+
+_EXTREME = (5e-324, -5e-324, 1e-310, 1e-300, 1e-160, 1e-100, 1e-20, 0.0, -0.0, 1e100, 1e300,
+            1.7976931348623157e308, -1.7976931348623157e308, math.inf, -math.inf, math.nan)
+
+
+def _set_and_read_back(model, forcing, name, value):
+    """Either the changed problem's parameters read back, or a one-line ``ValueError``."""
+    try:
+        changed = with_parameter(model, forcing, name, value)
+    except ValueError as exc:
+        assert "\n" not in str(exc), str(exc)
+        return
+    table = parameters(*changed)
+    assert table[name].value == value or table[name].value == pytest.approx(value, rel=1e-12)
+    assert parameter_value(*changed, name) == table[name].value
+
+
+def test_extreme_values_give_a_problem_or_a_one_line_error():
+    """Every parameter of four problems set to each extreme float gives either a problem whose
+    parameters read back, or a one-line ``ValueError`` (a rod segment of 5e-324 piston lengths,
+    accepted, made reading the table back divide by zero)."""
+    pytest.importorskip("pint")
+    for model, forcing in _problems():
+        for name, p in parameters(model, forcing).items():
+            for value in _EXTREME:
+                _set_and_read_back(model, forcing, name, int(value) if p.integer and math.isfinite(value)
+                                   else value)
+    with pytest.raises(ValueError, match=r"segment0.length must be in \[1e-100, 1e\+100\]; got 5e-324"):
+        with_parameter(MODEL.with_(impact=ROD), LOAD, "segment0.length", 5e-324)
+    with pytest.raises(ValueError, match=r"^s must be in \(0, inf\), not subnormal .*; got 5e-324$"):
+        with_parameter(MODEL, LOAD, "s", 5e-324)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(problem=st.integers(0, 3), index=st.integers(0, 64), value=st.floats())
+def test_any_float_gives_a_problem_or_a_one_line_error(problem, index, value):
+    """As above for any float (hypothesis)."""
+    pytest.importorskip("pint")
+    model, forcing = _problems()[problem]
+    names = [n for n, p in parameters(model, forcing).items() if not p.integer]
+    _set_and_read_back(model, forcing, names[index % len(names)], value)

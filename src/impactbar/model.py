@@ -275,12 +275,22 @@ class BarModel:
         ValueError
             For another name (the allowed ones listed) or a value a constructor refuses.
         """
-        if name in _MODEL_RANGES:
-            return self.with_(**{name: value})
-        if name in table_of(self._law, self):
-            return self.with_(impact=self._law.with_parameter(name, float(value)))
-        raise ValueError(f"parameter must be one of {tuple(p.name for p in self.parameter_table())}; "
-                         f"got {name!r}")
+        return self.with_parameters({name: value})
+
+    def with_parameters(self, changes: dict) -> BarModel:
+        """A copy with several parameters of :meth:`parameter_table` changed at once: ``changes``
+        (dict of name to value) applied together, the result validated once whatever their order
+        (a ``ValueError`` as :meth:`with_parameter`)."""
+        own = {k: v for k, v in changes.items() if k in _MODEL_RANGES}
+        law = {k: v for k, v in changes.items() if k not in _MODEL_RANGES}
+        if law:
+            names = table_of(self._law, self)
+            bad = [k for k in law if k not in names]
+            if bad:
+                raise ValueError(f"parameter must be one of "
+                                 f"{tuple(p.name for p in self.parameter_table())}; got {bad[0]!r}")
+            own["impact"] = self._law.with_parameters({k: float(v) for k, v in law.items()})
+        return self.with_(**own)
 
     def with_(self, **changes) -> BarModel:
         """A copy with some fields changed (validated again)."""

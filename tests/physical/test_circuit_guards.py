@@ -183,3 +183,33 @@ def test_a_branch_ends_on_its_target_where_the_corrector_would_pass_it():
     assert b.values[-1] * 6e4 == pytest.approx(75.0, rel=1e-12)
     assert np.all(b.values * 6e4 <= 75.0 * (1 + 1e-12))
     assert [e["kind"] for e in b.events] == ["border-collision relief"]
+
+
+def test_a_plastic_impact_orbit_that_leaves_the_stop_at_once_is_refused_saying_why(monkeypatch):
+    """At ``stop.restitution = 0`` find_orbit's one-impact orbit leaves the stop at once after the
+    impact, but there the oil presses the piston on the stop (the rear force above the front's:
+    MODEL's admissibility at R = 0 needs the load to pull the end away), so the orbit passes through
+    the stop: restarted alone in simulate its struck end goes past the stop, while simulate's own
+    plastic impact rests the piston there. The restart check refuses it, and says so (it said the
+    orbit did not repeat, its first interval 1 period)."""
+    import dataclasses
+
+    from impactbar import InitialState, simulate
+    from impactbar.physical import circuit, load
+
+    drifter = load("examples/circuit_drifter.toml")
+    drifter = dataclasses.replace(drifter, restitution=0.0)
+    seen = []
+    check = circuit._check_repeats
+    monkeypatch.setattr(circuit, "_check_repeats", lambda orbit: (seen.append(orbit), check(orbit)))
+    with pytest.raises(ValueError, match=r"leaves the stop at once after its plastic impact .*simulate rests "
+                                         r"it there 0\.0\d+ periods, so the orbit passes through the stop"):
+        drifter.orbit()
+    o = seen[0]
+    z = o.drive_states[0]
+    assert z[1] - o.drive.chambers.area_ratio * z[0] > 0.0  # the oil presses the piston on the stop
+    y = np.asarray(o.states_after_impact[0], dtype=float)
+    M = o.model.n_modes + 1
+    restart = dataclasses.replace(o.drive, start_pressures=tuple(z))
+    run = simulate(o.model, restart, InitialState(y[:M], y[M:]), 0.02)
+    assert np.all(run.displacement(1.0, np.linspace(0.005, 0.02, 4)) > 0.0)  # past the stop

@@ -44,3 +44,28 @@ def test_a_wrong_value_is_named_when_built():
 def test_unknown_source():
     with pytest.raises(ValueError, match="neither a file nor a preset"):
         read_config("no-such-preset")
+
+
+@pytest.mark.parametrize("source, key, value, named", [
+    ("examples/stepped_drifter_rock.toml", "rod.segments.1.diameter", "-32 mm",
+     r"rod\.segments\[1\]\.diameter"),
+    ("examples/circuit_drifter_rock.toml", "rod.segments.0.diameter", "-45 mm",
+     r"rod\.segments\[0\]\.diameter"),
+    ("examples/circuit_drifter_rock.toml", "rod.segments.1.length", "0 m", r"rod\.segments\[1\]\.length"),
+    ("examples/circuit_drifter_rock.toml", "rod.segments.1.E", "-210 GPa", r"rod\.segments\[1\]\.E"),
+    ("examples/circuit_drifter_rock.toml", "rod.segments.1.density", "0 kg/m^3",
+     r"rod\.segments\[1\]\.density"),
+    ("examples/circuit_drifter_rock_piston.toml", "piston.E", "-210 GPa", r"piston\.E"),
+    ("examples/circuit_drifter_rock_piston.toml", "piston.density", "-7850 kg/m^3", r"piston\.density"),
+    ("examples/circuit_drifter_rock.toml", "bar.diameter", "-45 mm", r"bar\.diameter"),
+    ("examples/circuit_drifter_rock.toml", "chambers.rear_volume", "-0.15 L", r"chambers\.rear_volume"),
+])
+def test_a_non_positive_size_is_refused_naming_the_key_and_the_range(source, key, value, named):
+    """A length, diameter, area, modulus or density at or below 0 is refused in one line naming the
+    key, its range and the value as written (a rod's diameter of -32 mm was squared into +32 mm)."""
+    config, folder = read_config(source)
+    with pytest.raises(ValueError, match=named + r" must be (in \(0, inf\)|positive)") as err:
+        build(with_values(config, {key: value}), folder)
+    assert "\n" not in str(err.value)
+    if key.startswith(("rod", "piston")):
+        assert str(err.value).endswith(f"got {value!r}")

@@ -226,3 +226,21 @@ def test_the_gradients_slsqp_receives_match_central_differences_of_what_it_evalu
     for got, want in ((seen["jac"], seen["cd_f"]), (seen["cjac"], seen["cd_g"])):
         # (the largest multiplier's modulus by the rear volume agrees to 1.1e-3; the others to 1e-4)
         assert np.allclose(got, want, rtol=3e-3, atol=1e-4 * np.max(np.abs(want))), (got, want)
+
+
+def test_a_circuit_drifter_gives_its_configs_numbers():
+    """The :class:`CircuitDrifter` that ``continue_circuit`` takes is accepted as the config it was
+    read from, with the same numbers to the bit; one changed after it was read is refused."""
+    import dataclasses
+
+    from impactbar.physical.circuit import circuit_preset
+
+    keys = ["valve.switch_out", "supply.pump_flow"]
+    drifter = circuit_preset("circuit-drifter")
+    a = operating_point_sensitivities("circuit-drifter", keys, multipliers=False)
+    b = operating_point_sensitivities(drifter, keys, multipliers=False)
+    assert a.figures == b.figures and a.derivatives == b.derivatives and a.steps == b.steps
+    assert a.derivatives["blow_frequency_Hz"]["valve.switch_out"] != 0.0
+    changed = dataclasses.replace(drifter, n_modes=2)
+    with pytest.raises(ValueError, match="changed after"):
+        operating_point_sensitivities(changed, keys)

@@ -26,6 +26,7 @@ Examples
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass, replace
 
 from .validate import check_int, check_real
@@ -106,7 +107,9 @@ class Parameter:
         Raises
         ------
         ValueError
-            Naming the parameter and its range, for a value outside it or not a finite number.
+            Naming the parameter and its range, for a value outside it, not a finite number, or a
+        subnormal float (nonzero and below 2.2e-308 in magnitude: it keeps too few digits, and the
+        model's products of it underflow to 0, a division by zero later).
         """
         lo = None if self.low == -math.inf else self.low
         hi = None if self.high == math.inf else self.high
@@ -118,6 +121,9 @@ class Parameter:
                           hi=None if hi is None else math.floor(hi))
         else:
             v = check_real(self.name, value, lo=lo, hi=hi, lo_open=self.low_open, hi_open=self.high_open)
+            if v != 0.0 and abs(v) < sys.float_info.min:
+                raise ValueError(f"{self.name} must be in {self.range_text}, not subnormal (nonzero "
+                                 f"below {sys.float_info.min:.3g} in magnitude: too few digits); got {v}")
         return v
 
     def at(self, value) -> Parameter:
@@ -153,6 +159,11 @@ class NamedParameters:
     def with_parameter(self, name: str, value):
         """A copy with one of :attr:`parameters` changed (``with_``, validated again)."""
         return self.with_(**{name: value})
+
+    def with_parameters(self, changes: dict):
+        """A copy with several of :attr:`parameters` changed at once (``with_``, the result validated
+        once)."""
+        return self.with_(**changes)
 
 
 def table_of(part, *args) -> dict[str, Parameter]:
@@ -307,8 +318,14 @@ def with_parameter(model, forcing, name: str, value):
 
 
 def with_parameters(model, forcing, changes: dict):
-    """The problem with several parameters changed, applied one by one in the parts' declaration
-    order (:func:`parameters`), each as :func:`with_parameter`.
+    """The problem with several parameters changed as a set: every change applied, then the result
+    validated once, so that the order of ``changes`` does not matter (``rock.k`` and ``rock.k_u``
+    raised together past the old ``rock.k_u``, a circuit's relief pressure lowered with its
+    pre-charge).
+
+    Each value is first checked against its parameter's range as declared now; a value outside a
+    range is still accepted where the range depends on another parameter changed with it (the
+    bound of ``rock.k_u`` is ``rock.k``) and the changed problem's ranges hold it.
 
     Parameters
     ----------
@@ -323,15 +340,66 @@ def with_parameters(model, forcing, changes: dict):
     Raises
     ------
     ValueError
-        As :func:`with_parameter`, for the first change refused.
+        As :func:`with_parameter`: an unknown name, a value that is not a finite number, or a
+        changed problem that a constructor refuses or whose ranges do not hold the new values.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel, BilinearRock, CosineLoad, RodRock, RodSegment
+    >>> law = RodRock(segments=[RodSegment(length=2.0, impedance=2.0)], rock=BilinearRock(k=20.0, k_u=200.0))
+    >>> model, load = BarModel(s=10.0, d=0.3, R=0.0, n_modes=4, impact=law), CosineLoad(0.3, 1.0)
+    >>> with_parameters(model, load, {"rock.k": 400.0, "rock.k_u": 800.0})[0].law.rock
+    BilinearRock(k=400.0, k_u=800.0)
     """
-    order = list(_owners(model, forcing))
-    bad = [n for n in changes if n not in order]
+    owners = _owners(model, forcing)
+    bad = [n for n in changes if n not in owners]
     if bad:
-        raise unknown(model, forcing, order, bad[0])
-    for name in sorted(changes, key=order.index):
-        model, forcing = with_parameter(model, forcing, name, changes[name])
-    return model, forcing
+        raise unknown(model, forcing, owners, bad[0])
+    if len(changes) == 1:
+        ((name, value),) = changes.items()
+        return with_parameter(model, forcing, name, value)
+    refused = [e for e in (_refusal(owners[n][1], v) for n, v in changes.items()) if e is not None]
+    by_part: tuple[dict, dict] = ({}, {})
+    for name in owners:  # (the parts' declaration order)
+        if name in changes:
+            by_part[owners[name][0]][name] = changes[name]
+    try:
+        new = (_changed(model, by_part[0]), _changed(forcing, by_part[1]))
+    except (ValueError, TypeError, ArithmeticError):
+        if refused:
+            raise refused[0] from None
+        raise
+    if refused:  # (a range that depends on another changed parameter: the changed problem's ranges)
+        ranges = _owners(*new)
+        for name, value in changes.items():
+            ranges[name][1].check(value)
+    return new
+
+
+def _refusal(p: Parameter, value) -> ValueError | None:
+    """The error of ``p.check(value)``, or ``None``; raised at once where it is not about the range
+    (not a finite real number, subnormal, an integer's range), which no other change can lift."""
+    try:
+        p.check(value)
+    except ValueError as exc:
+        if p.integer:
+            raise
+        replace(p, low=-math.inf, high=math.inf, low_open=False, high_open=False).check(value)
+        return exc
+    return None
+
+
+def _changed(part, changes: dict):
+    """The part with ``changes`` applied at once (its ``with_parameters``; one by one through
+    ``with_parameter`` for a part that declares no such method)."""
+    if not changes:
+        return part
+    several = getattr(part, "with_parameters", None)
+    if several is not None:
+        return several(changes)
+    for name, value in changes.items():
+        part = part.with_parameter(name, value)
+    return part
 
 
 def check_continuable(model, forcing, name: str) -> Parameter:

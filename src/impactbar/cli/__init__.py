@@ -90,7 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         try:
             if sub is not None:
                 _common.resolve_deprecated(sub, args, args.command)
-            with ctrl_c, compile_note(f"impactbar {args.command}"):  # (a note while numba compiles)
+            from ..physical.plausibility import warnings_once  # (an implausible value: one line, once)
+            with ctrl_c, compile_note(name := f"impactbar {args.command}"), warnings_once(name):
                 status = int(args.func(args) or 0)
             if ctrl_c.pressed:  # an interrupt that a library's compiled code swallowed
                 raise KeyboardInterrupt

@@ -406,8 +406,8 @@ class Drive(NamedParameters, ABC):
     OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
         "family", "kind", "integrator", "state_size", "state_names", "parameters", "parameter_ranges",
         "n_quadratures", "piston_work_quadrature", "variational", "variational_state_settings", "with_",
-        "parameter_table",
-        "with_parameter", "mode_name", "rate", "quadratures", "piecewise_constant", "levels",
+        "parameter_table", "with_parameter", "with_parameters",
+        "mode_name", "rate", "quadratures", "piecewise_constant", "levels",
         "compiled_loop", "flight", "end_flight", "border_tests", "orbit_problem")
 
     family: ClassVar[str] = "drive"

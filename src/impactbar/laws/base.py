@@ -191,7 +191,7 @@ class ContactLaw:
         "restitution_in_kernel", "kernel_restitution", "has_blow_records", "blow", "impact_state",
         "paper_equivalent", "check_model", "coarse_model", "phase_roots", "phase_families", "orbit_state",
         "multipliers", "existence_edge", "driven_contact", "parameter_table", "has_parameter",
-        "parameter_value", "with_parameter", "check_continuable")
+        "parameter_value", "with_parameter", "with_parameters", "check_continuable")
 
     name: ClassVar[str] = ""
     instantaneous: ClassVar[bool] = True
@@ -622,10 +622,17 @@ class ContactLaw:
         ValueError
             For a name that is not one of the law's parameters, or a value the law refuses.
         """
+        return self.with_parameters({name: value})
+
+    def with_parameters(self, changes: dict) -> ContactLaw:
+        """A copy of the law with several of its own continuation parameters changed at once:
+        ``changes`` (dict of name to float) applied together, the result validated once by the
+        constructor whatever their order (a ``ValueError`` as :meth:`with_parameter`)."""
         import dataclasses
 
-        self._check_parameter(name)
-        return dataclasses.replace(self, **{name: value})
+        for name in changes:
+            self._check_parameter(name)
+        return dataclasses.replace(self, **changes)
 
     def check_continuable(self, name: str, model=None) -> None:
         """Refuse a parameter in which the law's impact map is not smooth, so that a branch cannot

@@ -96,8 +96,8 @@ class Load(ABC):
     OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
         "kind", "description", "parameters", "continuation_parameters", "parameter_ranges", "kernel_kind",
         "family", "kernel_view", "left_limit", "flow", "periodic_state", "to_record", "from_record",
-        "parameter_table", "with_parameter", "with_", "period", "max_one_impact_orbits", "cosine_form",
-        "square_form", "pieces", "orders", "compiled_kind")
+        "parameter_table", "with_parameter", "with_parameters", "with_", "period", "max_one_impact_orbits",
+        "cosine_form", "square_form", "pieces", "orders", "compiled_kind")
 
     #: the load's name in the table :data:`LOADS`: a sweep spec's ``[load] kind``, the CLI's
     #: ``--load``, the ``"kind"`` of :meth:`to_record` (empty for a load not in the table)
@@ -381,6 +381,11 @@ class Load(ABC):
             For a name that is not a parameter of this load, or a value out of its range.
         """
         return self.with_(**{name: value})
+
+    def with_parameters(self, changes: dict) -> Load:
+        """A copy with several of :meth:`parameter_table` changed at once (:meth:`with_`, the result
+        validated once)."""
+        return self.with_(**changes)
 
     def with_(self, **changes) -> Load:
         """A copy with some :attr:`parameters` changed (validated again by the constructor).

@@ -65,7 +65,12 @@ class PiecewiseConstantLoad(Load):
         if not np.all(np.isfinite(lv)):
             raise ValueError("levels must be finite")
         T = np.diff(np.append(b, TWO_PI))
-        self._set(_b=_readonly(b), _lv=_readonly(lv), _T=_readonly(T), p0=float(np.dot(lv, T) / TWO_PI))
+        with np.errstate(over="ignore", invalid="ignore"):
+            p0 = float(np.dot(lv, T) / TWO_PI)
+        if not math.isfinite(p0):
+            raise ValueError(f"levels must be finite and small enough for their mean over the period to "
+                             f"be (|levels| below about 1e307); got a largest of {np.abs(lv).max():g}")
+        self._set(_b=_readonly(b), _lv=_readonly(lv), _T=_readonly(T), p0=p0)
         self._setup_rigid()
 
     def _key(self):

@@ -98,6 +98,7 @@ from .optimize_drifter import DrifterOptimum as DrifterOptimum
 from .optimize_drifter import optimize_drifter as optimize_drifter
 from .piston import OptimalPiston as OptimalPiston
 from .piston import optimize_piston as optimize_piston
+from .plausibility import ImplausibleValueWarning as ImplausibleValueWarning
 from .sensitivity import OperatingPointSensitivities as OperatingPointSensitivities
 from .sensitivity import operating_point_sensitivities as operating_point_sensitivities
 
@@ -135,6 +136,7 @@ __all__ = [
     "SimulationResult",
     "BlowStatistics",
     "ImpactDurationWarning",
+    "ImplausibleValueWarning",
     "SHORT_IMPACT_LIMIT",
     "PRESETS",
     "preset",

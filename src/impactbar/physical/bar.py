@@ -322,21 +322,32 @@ def check_piston(bar, stepped_ok: bool, law: str = "") -> None:
             f"wave and the rod-rock laws; got {law or 'another law'}")
 
 
-def _positive(name, v):
-    return check_real(name, v, lo=0.0, lo_open=True)
+def _positive(name, v, given=None):
+    """``v`` where positive, else a ``ValueError`` naming ``name``, the range and the value as
+    ``given`` in the config (``"-32 mm"``; default ``v``)."""
+    if given is None:
+        return check_real(name, v, lo=0.0, lo_open=True)
+    if not v > 0.0:
+        raise ValueError(f"{name} must be in (0, inf); got {given!r}")
+    return v
+
+
+def _positive_si(name, value, unit, example, what) -> float:
+    """A positive quantity in ``unit`` from an input with units (:func:`to_si`), named ``name``."""
+    return _positive(name, to_si(name, value, unit, example, what=what), value)
 
 
 def _length(name, value) -> float:
     """A positive length (m) from an input with units, named ``name`` in errors."""
-    return _positive(name, to_si(name, value, "m", "'0.2 m'", what="a length"))
+    return _positive_si(name, value, "m", "'0.2 m'", "a length")
 
 
 def _section_area(name, key, value) -> float:
     """A positive cross-section (m^2) from a ``"diameter"`` (circular) or an ``"area"`` with units,
-    named ``name`` in errors."""
+    named ``name`` in errors (a diameter's sign is checked before it is squared)."""
     if key == "diameter":
-        dia = _positive(name, to_si(name, value, "m", "'40 mm'", what="a length"))
+        dia = _positive_si(name, value, "m", "'40 mm'", "a length")
         return math.pi * dia * dia / 4.0
-    return _positive(name, to_si(name, value, "m**2", "'12.6 cm^2'", what="an area"))
+    return _positive_si(name, value, "m**2", "'12.6 cm^2'", "an area")
 
 

@@ -39,8 +39,9 @@ Pressures are absolute ("0.3 MPa" of tank pressure is 0.2 MPa gauge), flow coeff
 
 from __future__ import annotations
 
+import copy
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
@@ -57,6 +58,7 @@ from .drifter import (
     _ScaledDrifter,
 )
 from .geometry import PISTON_KEYS, expand_piston
+from .plausibility import warn_implausible
 from .rock import DrillString
 from .units import to_si
 
@@ -152,6 +154,9 @@ class CircuitDrifter(_ScaledDrifter):
         The drill string and the rock (``impactbar.physical.rock``, theory §4d): the model's law is
         then the rod-rock law (``restitution`` plays no part), each blow solved with the circuit's
         state (theory §11, "The coupled blow").
+    config : dict, optional
+        The configuration :meth:`from_config` read it from (not compared): what
+        :func:`~impactbar.physical.operating_point_sensitivities` changes by key.
 
     Raises
     ------
@@ -173,6 +178,7 @@ class CircuitDrifter(_ScaledDrifter):
     n_modes: int = 0
     name: str = ""
     drill: DrillString | None = None
+    config: dict | None = field(default=None, compare=False, repr=False)
 
     def _check_own(self) -> None:
         si = self.si
@@ -384,6 +390,7 @@ class CircuitDrifter(_ScaledDrifter):
             An unknown section or key, a missing key, a value with the wrong unit or out of range
             (each named).
         """
+        given = copy.deepcopy(config)
         if isinstance(config, dict) and "piston" in config:  # the piston's shape: the stepped [bar] and
             config = expand_piston(config)  # the chamber areas it implies
         sec = _config_sections(config, _KEYS, _REQUIRED)
@@ -436,10 +443,11 @@ class CircuitDrifter(_ScaledDrifter):
         if not damping >= 0.0:
             raise ValueError(f"damping.coefficient must be 0 or above; got "
                              f"{shown(sec['damping']['coefficient'], damping, 'N*s/m')}")
-        return cls(bar=bar, restitution=R, si=si,
-                   damping_N_s_m=damping,
-                   n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
-                   name=str(config.get("name", "")), drill=drill)
+        out = cls(bar=bar, restitution=R, si=si, damping_N_s_m=damping,
+                  n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
+                  name=str(config.get("name", "")), drill=drill, config=given)
+        warn_implausible(given)  # (values far outside their typical ranges: warned of, then run)
+        return out
 
 
 #: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over
@@ -469,6 +477,14 @@ def _check_repeats(orbit) -> None:
     if times.size < 2 or np.max(np.abs(times - T * np.arange(1, 3))) > REPEAT_TOL * T * 2 \
             or np.max(np.abs(speeds - v)) > REPEAT_TOL * abs(v):
         first = f"{times[0] / T:.6g}" if times.size else "none"
+        rest = [b - a for a, b in np.asarray(run.contact_intervals).reshape(-1, 2)
+                if times.size and abs(a - times[0]) <= REPEAT_TOL * T and b > a]
+        if orbit.model.R == 0.0 and rest:  # (theory: at R = 0 the load must pull the end away at once)
+            raise ValueError(f"find_orbit's orbit (period {T:.6g}) leaves the stop at once after its "
+                             "plastic impact (stop.restitution = 0), but the net force then pushes the "
+                             f"piston on the stop: simulate rests it there {rest[0] / T:.3g} periods, so the "
+                             "orbit passes through the stop, not a motion of the circuit (an orbit with a "
+                             "rest on the stop is not solved: give stop.restitution > 0)")
         raise ValueError(f"find_orbit's orbit (period {T:.6g}) does not repeat when simulate restarts it "
                          f"from its state after the impact (the first interval {first} periods): not a "
                          "motion of the circuit")

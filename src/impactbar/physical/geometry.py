@@ -85,8 +85,8 @@ def piston_geometry(section: dict) -> dict:
     ValueError: piston: the rear chamber's area pi/4 (collar_diameter^2 - rear_rod_diameter^2) must be
     above 0; got 0 cm^2 (piston.collar_diameter 40 mm, piston.rear_rod_diameter 40 mm)
     """
+    from .bar import _positive_si
     from .config import _section
-    from .units import to_si
 
     section = _section({"piston": section}, "piston", PISTON_KEYS)  # a table, its keys known
     for key in _REQUIRED:
@@ -113,7 +113,9 @@ def piston_geometry(section: dict) -> dict:
         raise ValueError("piston.front_rod_diameter must be above piston.rear_rod_diameter (the rear area "
                          "above the front one, for the stroke to push toward the rod); got "
                          f"{d['front_rod_diameter'] * 1e3:.4g} mm and {d['rear_rod_diameter'] * 1e3:.4g} mm")
-    rho = to_si("piston.density", section["density"], "kg/m**3", "'7850 kg/m^3'", what="a density")
+    # (named here: the [bar] that expand_piston writes would name bar.E, bar.density)
+    _positive_si("piston.E", section["E"], "Pa", "'210 GPa'", "a pressure")
+    rho = _positive_si("piston.density", section["density"], "kg/m**3", "'7850 kg/m^3'", "a density")
     mass = rho * sum(math.pi / 4.0 * dia ** 2 * le for dia, le in zip(diameters, lengths, strict=True))
     return {"lengths_m": lengths, "diameters_m": diameters, "rear_area_m2": areas["rear"],
             "front_area_m2": areas["front"], "mass_kg": mass}

@@ -20,6 +20,7 @@ import numpy as np
 
 from .._shared.validate import check_int, check_real
 from ..laws.rodrock import BilinearRock, RodRock, RodSegment
+from .bar import _length, _positive_si, _section_area
 from .config import _section
 from .units import to_si
 
@@ -174,14 +175,12 @@ def rock_from_config(config: dict, bar) -> DrillString | None:
             raise ValueError(f"give exactly one of {where}.diameter and {where}.area")
         if "length" not in g:
             raise ValueError(f"missing key {where}.length")
-        length = to_si(f"{where}.length", g["length"], "m", "'1.2 m'", what="a length")
-        if "area" in g:
-            area = to_si(f"{where}.area", g["area"], "m**2", "'7 cm^2'", what="an area")
-        else:
-            dia = to_si(f"{where}.diameter", g["diameter"], "m", "'32 mm'", what="a length")
-            area = math.pi / 4.0 * dia * dia
-        E = to_si(f"{where}.E", g["E"], "Pa", "'210 GPa'", what="a pressure") if "E" in g else bar.E_Pa
-        rho = (to_si(f"{where}.density", g["density"], "kg/m**3", "'7850 kg/m^3'", what="a density")
+        # (each positive, named: a diameter of -32 mm was squared into the area of +32 mm)
+        length = _length(f"{where}.length", g["length"])
+        shape = "area" if "area" in g else "diameter"
+        area = _section_area(f"{where}.{shape}", shape, g[shape])
+        E = _positive_si(f"{where}.E", g["E"], "Pa", "'210 GPa'", "a pressure") if "E" in g else bar.E_Pa
+        rho = (_positive_si(f"{where}.density", g["density"], "kg/m**3", "'7850 kg/m^3'", "a density")
                if "density" in g else bar.density_kg_m3)
         pieces.append(RodPiece(length_m=length, area_m2=area, E_Pa=E, density_kg_m3=rho))
     for key in ("k", "k_u"):

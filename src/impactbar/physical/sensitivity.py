@@ -88,6 +88,13 @@ def _key_unit(key: str) -> str:
     raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies; one of {', '.join(allowed)}")
 
 
+def _config_of(drifter: CircuitDrifter) -> dict:
+    """The configuration a drifter was read from, where it builds that drifter again."""
+    if drifter.config is None or build(drifter.config) != drifter:
+        raise ValueError("config: this CircuitDrifter was not read from a configuration, or was changed "
+                         "after (dataclasses.replace): give its configuration, whose keys the derivatives "
+                         "change")
+    return drifter.config
 
 
 def _show_unit(unit: str) -> tuple[float, str]:
@@ -229,10 +236,12 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
 
     Parameters
     ----------
-    config : str, os.PathLike or dict
+    config : str, os.PathLike, dict or CircuitDrifter
         A drifter with its oil circuit (``[chambers]``): a TOML file, a preset's name or the
-        config itself (:func:`~impactbar.physical.read_config`); with ``[rock]`` also the drilling
-        figures.
+        config itself (:func:`~impactbar.physical.read_config`), or the
+        :class:`~impactbar.physical.CircuitDrifter` built from one (as
+        :func:`~impactbar.physical.continue_circuit` takes it: the same as its config); with
+        ``[rock]`` also the drilling figures.
     keys : sequence of str
         Dotted keys the config gives, each a key of
         :data:`~impactbar.physical.circuit.SI_PARAMETERS` (not ``chambers.front_area``) or of the
@@ -283,7 +292,7 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
     keys = tuple(keys)
     if len(set(keys)) != len(keys):
         raise ValueError(f"keys must be distinct; got {keys!r}")
-    cfg, folder = read_config(config)
+    cfg, folder = read_config(_config_of(config) if isinstance(config, CircuitDrifter) else config)
     drifter = build(cfg, folder)
     if not isinstance(drifter, CircuitDrifter):
         raise ValueError("config must describe a drifter with its oil circuit (a [chambers] section)")

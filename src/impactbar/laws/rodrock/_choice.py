@@ -43,6 +43,8 @@ def _exact_is_cheap(model, law, piston=None) -> bool:
         travel = np.array(own + [g.travel_time(model) for g in law.segments])
         shortest = float(travel.min())
         rate = law.rock.k / (s * law.segments[-1].impedance) * shortest
+    if not shortest > 0.0:  # (a travel time that underflowed: no window to count in)
+        return False
     ratio = 2.0 * float(travel.sum()) / shortest
     return (bool(np.isfinite(travel).all()) and ratio <= MAX_EXACT_PASS_WINDOWS
             and rate <= MAX_EXACT_LOADING_EXPONENT)

@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import re
 import warnings
 from dataclasses import dataclass
 
@@ -41,10 +40,9 @@ from ._choice import (  # noqa: F401  (the choices' bounds, as before)
     _bit_is_negligible,
     _exact_is_cheap,
 )
+from ._parameters import _SEGMENT, changed
 
 __all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
-
-_SEGMENT = re.compile(r"segment(\d+)\.length")
 
 
 @dataclass(frozen=True)
@@ -54,7 +52,7 @@ class RodSegment:
     Parameters
     ----------
     length : float
-        In piston lengths, ``> 0``.
+        In piston lengths, in ``[1e-100, 1e100]``.
     impedance : float
         ``E A / C`` relative to the piston's, in ``[1e-100, 1e100]`` (beyond, the waves' energies
         ``F^2/Z`` leave the float range).
@@ -78,8 +76,8 @@ class RodSegment:
     wave_speed: float = 1.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "length", check_real("length", self.length, lo=0.0, lo_open=True))
-        for name in ("impedance", "wave_speed"):  # (bounded: 1e308 and 5e-324 gave a NaN efficiency)
+        for name in ("length", "impedance", "wave_speed"):  # (bounded: 1e308 and 5e-324 gave a NaN
+            # efficiency, a length of 5e-324 a travel time of 0)
             object.__setattr__(self, name, check_real(name, getattr(self, name), lo=1e-100, hi=1e100))
 
     def travel_time(self, model) -> float:
@@ -406,7 +404,7 @@ class RodRock(ContactLaw):
                       description="rock unloading stiffness"),
             Parameter("bit_mass", float(self.bit_mass), low=0.0, description="bit mass (piston masses)"),
             Parameter("feed", float(self.feed), low=0.0, description="feed force"),
-            *(Parameter(f"segment{i}.length", float(g.length), low=0.0, low_open=True, continuable=exact,
+            *(Parameter(f"segment{i}.length", float(g.length), low=1e-100, high=1e100, continuable=exact,
                         description=f"length of rod segment {i} (piston lengths)", reason=lattice)
               for i, g in enumerate(self.segments)),
         )
@@ -468,16 +466,12 @@ class RodRock(ContactLaw):
             For another name, a segment the rod does not have, or a value the constructors refuse
             (for example ``rock.k`` above ``rock.k_u``).
         """
-        self._check_parameter(name)
-        if name.startswith("rock."):
-            return dataclasses.replace(self, rock=dataclasses.replace(self.rock, **{name[5:]: value}))
-        match = _SEGMENT.fullmatch(name)
-        if match:
-            i = int(match.group(1))
-            segs = list(self.segments)
-            segs[i] = dataclasses.replace(segs[i], length=value)
-            return dataclasses.replace(self, segments=segs)
-        return dataclasses.replace(self, **{name: value})
+        return self.with_parameters({name: value})
+
+    def with_parameters(self, changes: dict) -> RodRock:
+        """A copy with several of :attr:`parameters` changed at once, the result validated once
+        whatever their order (``impactbar.laws.rodrock._parameters.changed``)."""
+        return changed(self, changes)
 
     def _check_parameter(self, name: str) -> None:
         if not self.has_parameter(name):
