@@ -476,9 +476,10 @@ def _check_repeats(orbit) -> None:
     v = orbit.impact_velocity
     if times.size < 2 or np.max(np.abs(times - T * np.arange(1, 3))) > REPEAT_TOL * T * 2 \
             or np.max(np.abs(speeds - v)) > REPEAT_TOL * abs(v):
-        first = f"{times[0] / T:.6g}" if times.size else "none"
+        t1 = times.min() if times.size else math.nan  # (the first impact's time)
+        first = f"{t1 / T:.6g}" if times.size else "none"
         rest = [b - a for a, b in np.asarray(run.contact_intervals).reshape(-1, 2)
-                if times.size and abs(a - times[0]) <= REPEAT_TOL * T and b > a]
+                if times.size and abs(a - t1) <= REPEAT_TOL * T and b > a]
         if orbit.model.R == 0.0 and rest:  # (theory: at R = 0 the load must pull the end away at once)
             raise ValueError(f"find_orbit's orbit (period {T:.6g}) leaves the stop at once after its "
                              "plastic impact (stop.restitution = 0), but the net force then pushes the "
