@@ -18,35 +18,19 @@ from __future__ import annotations
 
 import math
 import shutil
+import sys
 import tempfile
 from collections import Counter
 from pathlib import Path
 
 import numpy as np
 
-#: the cheapest map: the rigid valve drifter, 2 x 2 points in 2 chunks
-MAP_AXES = {"valve.supply_pressure": {"values": ["18 MPa", "20 MPa"]},
-            "valve.delay": {"values": ["0 ms", "0.1 ms"]}}
+# the cheapest map (the rigid valve drifter, 2 x 2 points in 2 chunks), run and read as its tests do
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "sweeps"))
+from test_map_store import _arrays, _run  # noqa: E402
+from test_map_store import _spec as _map_spec  # noqa: E402
+
 _STATE = {}
-
-
-def _map_spec(axes=None):
-    from impactbar.sweeps import parse_spec
-
-    return parse_spec({"task": "operating_point", "config": "hydraulic-drifter", "axes": axes or MAP_AXES})
-
-
-def _run(spec, store):
-    from impactbar.sweeps import run_map
-
-    return run_map(spec, store, executor="threads", n_workers=1, progress=False)
-
-
-def _arrays(path) -> dict:
-    import zarr
-
-    g = zarr.open_group(str(path), mode="r", use_consolidated=False)
-    return {name: np.asarray(a[...]) for name, a in g.arrays()}
 
 
 def _reference() -> Path:
