@@ -10,7 +10,8 @@ and stiff bars), ``find_orbit`` with bad and extreme sizes, guesses, ``tol`` and
 every CLI subcommand with bad options and output locations (in-process: a traceback escaping
 ``main`` or an exit status other than 0, 1, 2 is bad), the rod-rock law and ``single_blow``, and
 the position-switched drive; and (``fuzz_circuit.py``) the oil circuit's configs, the exact blow
-with a bit mass and a feed, stepped pistons and ``optimize_piston``.
+with a bit mass and a feed, stepped pistons and ``optimize_piston``; and (``fuzz_maps.py``) design
+maps' stores damaged and resumed, integer axes and grid sizes.
 
 Usage: ``python benchmarks/fuzz_campaign.py [--scale 1.0] [--seed 0] [--only CATEGORY ...]``.
 A count of "bad" outcomes per category is printed; ``--scale`` multiplies the number of cases.
@@ -41,6 +42,7 @@ import impactbar as ib
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import fuzz_circuit as fz  # noqa: E402
+import fuzz_maps as fm  # noqa: E402
 
 TWO_PI = 2.0 * math.pi
 WEIRD = [0, -1, 1, 0.5, 5e-324, 1e-300, 1e308, 10**400, -(10**400), math.nan, math.inf, -math.inf,
@@ -807,7 +809,11 @@ CATEGORIES = {"constructors": (constructors, 400), "orbits": (orbits_calls, 150)
               # the oil circuit, the exact blow under a bit and a feed, stepped pistons (fuzz_circuit.py)
               "circuit": (lambda rng, n, slow: fz.circuit_calls(rng, n, slow, case), 1000),
               "exact_blow": (lambda rng, n, slow: fz.exact_blow_calls(rng, n, slow, case), 500),
-              "stepped": (lambda rng, n, slow: fz.stepped_calls(rng, n, slow, case), 200)}
+              "stepped": (lambda rng, n, slow: fz.stepped_calls(rng, n, slow, case), 200),
+              # design maps: damaged stores resumed, integer axes, grid sizes (fuzz_maps.py)
+              "map_stores": (lambda rng, n, slow: fm.map_store_calls(rng, n, slow, case), 40),
+              "map_axes": (lambda rng, n, slow: fm.map_axis_calls(rng, n, slow, case), 100),
+              "grid_size": (lambda rng, n, slow: fm.grid_size_calls(rng, n, slow, case), 100)}
 #: Each category's time limit per case (s) where it is not ``--slow``'s.
 LIMITS = {"circuit": 40.0, "exact_blow": 20.0, "stepped": 40.0}
 

@@ -15,8 +15,9 @@ def add_parser(sub) -> None:
     p.add_argument("store", help="the zarr store written by 'impactbar sweep'")
     p.add_argument("--out", required=True, help="the figure file (PNG, PDF, SVG, ...)")
     p.add_argument("--select", action="append", default=[], metavar="AXIS=VALUE",
-                   help="fix an axis at the grid value nearest VALUE (repeatable); the chart uses "
-                   "at most two remaining axes")
+                   help="fix an axis at the grid value nearest VALUE (repeatable): a number, or for a "
+                   "drifter's design map a quantity with its unit ('85 L/min'; a bare number is "
+                   "in the axis' SI unit); the chart uses at most two remaining axes")
     p.add_argument("--variable", default=None, metavar="NAME",
                    help="for a drifter's design map (impactbar sweep of a spec with config): the "
                    "variable drawn, e.g. hydraulic_efficiency (default blow_frequency)")
@@ -33,8 +34,8 @@ def _selection(items) -> dict:
             raise ValueError(f"--select must be AXIS=VALUE; got {item!r}")
         try:
             sel[name.strip()] = float(value)
-        except ValueError:
-            raise ValueError(f"--select {name}: VALUE must be a number; got {value!r}") from None
+        except ValueError:  # a quantity with its unit ("85 L/min"): the store's axis converts it
+            sel[name.strip()] = value.strip()
     return sel
 
 

@@ -8,6 +8,13 @@ import math
 
 import numpy as np
 
+#: most grid points a sweep or a map may have: the driver, the edges and the plots read whole
+#: variables of the grid (800 MB a float64 variable at this size), and a point costs from a
+#: microsecond (the rigid closed forms) to a second (a drifter's orbit)
+MAX_GRID_POINTS = 10**8
+#: most work chunks: each is a task on the cluster, and its flag and checksum are held in memory
+MAX_CHUNKS = 10**6
+
 
 class ChunkedGrid:
     """The outer product of ``axes`` (each with a ``size``), first axis slowest, cut into blocks of
@@ -42,6 +49,18 @@ class ChunkedGrid:
     @property
     def n_chunks(self) -> int:
         return math.prod(self.chunk_grid)
+
+    def check_grid(self) -> None:
+        """Refuse a grid of more than :data:`MAX_GRID_POINTS` points or :data:`MAX_CHUNKS` work
+        chunks (a ``ValueError`` naming the axes and their product), before anything is created."""
+        sizes = " x ".join(f"{a.name} ({a.size})" for a in self.axes)
+        if self.n_points > MAX_GRID_POINTS:
+            raise ValueError(f"[axes] {sizes} make {self.n_points} grid points; the limit is "
+                             f"{MAX_GRID_POINTS}: fewer values along an axis")
+        if self.n_chunks > MAX_CHUNKS:
+            raise ValueError(f"chunk_points = {self.chunk_points}: the {self.n_points} grid points of "
+                             f"[axes] {sizes} make {self.n_chunks} work chunks; the limit is "
+                             f"{MAX_CHUNKS}: raise chunk_points")
 
     def block(self, chunk: int) -> tuple[slice, ...]:
         """The block of the grid covered by work chunk ``chunk`` (C order over :attr:`chunk_grid`;

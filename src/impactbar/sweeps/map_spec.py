@@ -63,6 +63,8 @@ MAX_SETTLE_BLOWS = 100_000
 CHAINS = ("continue", "default")
 #: longest failure message kept per point (characters)
 REASON_CHARS = 200
+#: the config keys that take integers: an axis over one takes integer values, stored as integers
+INTEGER_KEYS = ("model.n_modes", "rock.cells_per_piston", "force.k", "force.max_harmonics")
 
 #: the status codes of a point
 STATUS = {0: "orbit found", 1: "no orbit (ValueError)", 2: "failed (another error)"}
@@ -181,8 +183,8 @@ class MapAxis:
     ----------
     name : str
         The dotted key (``"supply.pump_flow"``, ``"rod.segments.0.length"``).
-    values : tuple of float
-        Distinct values in ``unit``.
+    values : tuple of float or tuple of int
+        Distinct values in ``unit`` (integers for a key of :data:`INTEGER_KEYS`).
     unit : str
         The SI unit (pint's spelling, ``"m**3/s"``), ``""`` for a dimensionless key.
     """
@@ -196,9 +198,12 @@ class MapAxis:
         return len(self.values)
 
     def config_value(self, value):
-        """The value as a config takes it: a number with this unit, or a bare number."""
+        """The value as a config takes it: a number with this unit, or a bare number (an integer
+        for an integer axis)."""
         from ..physical.design_keys import config_quantity
 
+        if self.unit == "" and self.name in INTEGER_KEYS:
+            return int(value)
         return config_quantity(value, self.unit)
 
 
@@ -256,6 +261,7 @@ class DrifterMapSpec(ChunkedGrid):
             raise ValueError(f"[axes] must name 1 to 3 config keys; got {len(self.axes)}")
         cp = self.shape[-1] if self.chunk_points is None else self.chunk_points
         object.__setattr__(self, "chunk_points", check_int("chunk_points", cp, lo=1))
+        self.check_grid()
 
     # -- the grid (the interface of impactbar.sweeps.SweepSpec the store and the driver use) ---------
     @property
@@ -470,9 +476,18 @@ def _axis(config: dict, name: str, table) -> MapAxis:
         values = [float(v) for v in np.linspace(start, stop, num)]
     else:
         raise ValueError(f"[axes] {name} must have keys start, stop, num or just values; got {sorted(keys)}")
+    if name in INTEGER_KEYS:
+        values = [_integer(name, v) for v in values]
     if len(set(values)) != len(values):
         raise ValueError(f"[axes] {name}: values must be distinct; got {values}")
     return MapAxis(name, tuple(values), unit)
+
+
+def _integer(name: str, v: float) -> int:
+    """An integer key's value: an integer-valued number, as an int."""
+    if not float(v).is_integer():
+        raise ValueError(f"[axes] {name} takes integers (the config key is an integer); got {v!r}")
+    return int(v)
 
 
 def _number(name, v) -> float:

@@ -29,8 +29,9 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
     ----------
     ds : xarray.Dataset
         A sweep store (:func:`impactbar.sweeps.open_sweep`).
-    select : dict of str to float, optional
-        Axis name -> value.
+    select : dict of str to float or str, optional
+        Axis name -> value: a number (in the axis' SI unit for a drifter's design map), or for a
+        design map's axis a quantity with its unit (``"85 L/min"``), converted to the axis' unit.
     max_dims : int
         Most axes allowed to remain.
 
@@ -51,11 +52,18 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
     spec = stored_spec(ds)
     axes = [a.name for a in spec.axes]
     ds = ds.assign(point_done=point_done(ds))
+    units = {a.name: getattr(a, "unit", None) for a in spec.axes}  # a design map's: SI, pint's spelling
     for name, value in (select or {}).items():
         if name not in axes:
             raise ValueError(f"--select {name}: not an axis of this sweep; axes: {axes}")
+        if isinstance(value, str) and units[name] is not None:
+            from ..physical.units import to_si
+
+            value = to_si(f"--select {name}", value, units[name], repr(f"1 {units[name]}"),
+                          what=f"in {units[name] or 'no unit'} as the axis")
         if not isinstance(value, int | float | np.integer | np.floating) or not np.isfinite(value):
-            raise ValueError(f"--select {name}: VALUE must be a finite number; got {value!r}")
+            hint = "" if units[name] is None else f" or a quantity in {units[name] or 'no unit'}"
+            raise ValueError(f"--select {name}: VALUE must be a finite number{hint}; got {value!r}")
         ds = ds.sel({name: value}, method="nearest")
     dims = tuple(a for a in axes if a in ds.dims and ds.sizes[a] > 1)
     ds = ds.squeeze([a for a in axes if a in ds.dims and ds.sizes[a] == 1], drop=False)
@@ -63,6 +71,32 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
         raise ValueError(f"this chart shows at most {max_dims} axes; the sweep has {list(dims)}: fix "
                          "the others with --select AXIS=VALUE")
     return ds, dims
+
+
+def held_axes(ds, names, dims) -> str:
+    """Where the axes fixed by a selection are held: ``"held at NAME = VALUE UNIT, ..."``, or ``""``.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A reduced sweep store (:func:`reduce_axes`): a fixed axis is a scalar coordinate.
+    names : sequence of str
+        The sweep's axes, in spec order.
+    dims : tuple of str
+        The axes the chart shows.
+
+    Returns
+    -------
+    str
+    """
+    parts = []
+    for name in names:
+        if name in dims or name not in ds.coords or ds[name].ndim != 0:
+            continue
+        units = ds[name].attrs.get("units", "")
+        units = "" if units in ("", "1") else f" {units}"
+        parts.append(f"{name} = {ds[name].values.item():.6g}{units}")
+    return "held at " + ", ".join(parts) if parts else ""
 
 
 def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
@@ -106,7 +140,7 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
     matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    from .store import open_sweep
+    from .store import open_sweep, stored_spec
 
     ds = open_sweep(store)
     task = ds.attrs["task"]
@@ -136,6 +170,11 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
         fig = plot_operating_map(red, dims, variable).figure
     else:
         fig = plot_bifurcation(red, dims).figure
+    held = held_axes(red, [a.name for a in stored_spec(ds).axes], dims)
+    if held:  # in the first panel's title, under any title it has
+        ax = fig.axes[0]
+        title = ax.get_title()
+        ax.set_title(f"{title}\n{held}" if title else held, fontsize="small" if title else None)
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out

@@ -212,6 +212,7 @@ class SweepSpec(ChunkedGrid):
             if self.rock is not None and self.task == "orbits":
                 cp = DEFAULT_ROCK_CHUNK_POINTS
         object.__setattr__(self, "chunk_points", check_int("chunk_points", cp, lo=1))
+        self.check_grid()
         _check_chunk_size(self)
 
     # -- the grid (shape, chunks: ChunkedGrid) --------------------------------------------------

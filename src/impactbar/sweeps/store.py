@@ -89,15 +89,12 @@ def _template(spec: SweepSpec):
 # test checks that both give identical stores
 
 
-def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
-    """The store of :func:`_template` as xarray's ``to_zarr(compute=False, zarr_format=3,
-    consolidated=True)`` writes it (the same ``zarr.json`` documents, coordinates and the
-    ``_FillValue`` attribute of floating-point variables), with zarr alone."""
+def _store_arrays(spec: SweepSpec) -> list:
+    """Every array of the store of :func:`_template` as xarray's ``to_zarr(compute=False,
+    zarr_format=3, consolidated=True)`` writes it (the same ``zarr.json`` documents, coordinates and
+    the ``_FillValue`` attribute of floating-point variables): ``(name, values or None, dtype,
+    shape, chunks, fill, dimension names, attributes)`` each, ``values`` given for the coordinates."""
     import base64
-
-    import zarr
-
-    from .._version import __version__
 
     def attrs(desc_attrs: dict, dtype, fill) -> dict:
         out = dict(desc_attrs)
@@ -105,12 +102,9 @@ def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
             out["_FillValue"] = base64.standard_b64encode(np.asarray(fill, dtype="<f8").tobytes()).decode()
         return out
 
-    root = zarr.create_group(store=str(folder), zarr_format=3, attributes={
-        _ATTR_SPEC: spec.to_json(), _ATTR_VERSION: __version__, "task": spec.task,
-        "chunk_shape": list(spec.chunk_shape)})
     dims = tuple(a.name for a in spec.axes)
     extra_dim = _EXTRA_DIM.get(spec.task)
-    arrays = []  # name, values or None, dtype, shape, chunks, fill, dimension names, attributes
+    arrays = []
     for f in _variables(spec):
         extra, dtype = f.per is not None, np.dtype(f.dtype)
         tail = (spec.extra_size,) if extra else ()
@@ -130,12 +124,76 @@ def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
         classes = np.asarray(motion_classes(), dtype=object)
         arrays.append(("motion", classes, str, classes.shape, classes.shape, "", ("motion",),
                        {"long_name": "long-run motion", "units": ""}))
+    return arrays
+
+
+def _create_arrays(root, arrays, overwrite: bool = False) -> None:
+    """Create ``arrays`` (:func:`_store_arrays`) in a zarr group, writing the coordinates' values."""
     for name, values, dtype, shape, chunks, fill, dim_names, attributes in arrays:
         arr = root.create_array(name, shape=shape, dtype=dtype, chunks=chunks, fill_value=fill,
-                                dimension_names=dim_names, attributes=attributes)
+                                dimension_names=dim_names, attributes=attributes, overwrite=overwrite)
         if values is not None:
             arr[...] = values
+
+
+def _create_with_zarr(spec: SweepSpec, folder: Path) -> None:
+    """The store of :func:`_template`, with zarr alone (:func:`_store_arrays`)."""
+    import zarr
+
+    from .._version import __version__
+
+    root = zarr.create_group(store=str(folder), zarr_format=3, attributes={
+        _ATTR_SPEC: spec.to_json(), _ATTR_VERSION: __version__, "task": spec.task,
+        "chunk_shape": list(spec.chunk_shape)})
+    _create_arrays(root, _store_arrays(spec))
     zarr.consolidate_metadata(str(folder))
+
+
+def _metadata_doc(arr) -> str:
+    return json.dumps(arr.metadata.to_dict(), sort_keys=True, default=str)
+
+
+def _repair_store(spec: SweepSpec, path: Path) -> list:
+    """Check every array of a store against its spec before a resume: recreate each whose metadata
+    (``NAME/zarr.json``) is missing, unreadable or not what the spec makes (its chunks are then
+    recomputed: their checksums no longer match), write the coordinates from the spec again, and
+    consolidate the metadata afresh (the root's copy may list arrays that are gone).
+
+    Returns
+    -------
+    list of str
+        The arrays recreated.
+
+    Raises
+    ------
+    ValueError
+        A store that cannot be written (one line: how to recover).
+    """
+    import zarr
+
+    arrays = _store_arrays(spec)
+    reference = zarr.create_group(store=zarr.storage.MemoryStore(), zarr_format=3)
+    _create_arrays(reference, [(n, None, *rest) for n, _, *rest in arrays])
+    repaired = []
+    try:
+        root = zarr.open_group(store=str(path), mode="r+", use_consolidated=False)
+        for item in arrays:
+            name, values = item[0], item[1]
+            try:
+                ok = (_metadata_doc(zarr.open_array(store=str(path), path=name, mode="r"))
+                      == _metadata_doc(reference[name]))
+            except Exception:  # a missing or damaged zarr.json (zarr and json raise many kinds)
+                ok = False
+            if not ok:
+                _create_arrays(root, [item], overwrite=True)
+                repaired.append(name)
+            elif values is not None:  # a coordinate: from the spec, whatever the store holds
+                root[name][...] = values
+        zarr.consolidate_metadata(str(path))
+    except OSError as exc:
+        raise ValueError(f"--out {path} is damaged and cannot be repaired ({exc.strerror or exc}); "
+                         "use --overwrite to recompute it") from None
+    return repaired
 
 
 def _is_sweep_store(path: Path) -> bool:
@@ -199,9 +257,10 @@ def _prepare_store(spec: SweepSpec, path: Path, overwrite: bool):
             if attrs.get(_ATTR_VERSION) != __version__:
                 raise ValueError(f"--out {path} was computed by impactbar {attrs.get(_ATTR_VERSION)}, "
                                  f"this is {__version__}; use --overwrite to recompute it")
-            if not (path / _SUM / "zarr.json").is_file():
-                raise ValueError(f"--out {path} was written without chunk checksums (an older "
-                                 "impactbar); use --overwrite to recompute it")
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", message=".*[Cc]onsolidated metadata.*")
+                warnings.filterwarnings("ignore", message=".*does not have a Zarr V3 specification.*")
+                _repair_store(spec, path)  # every array as the spec makes it, the coordinates rewritten
             done, sums, flags = _verified_done(spec, path)
             if flags is None or not np.array_equal(done, flags):
                 _write_done(path, done, sums)  # repair the flags before any work starts
@@ -257,7 +316,7 @@ def _verified_done(spec: SweepSpec, path: Path):
     if sums is None or sums.shape != (n,):  # no checksums to trust: recompute everything
         return done, np.full(n, -1, dtype=np.int64), flags
     candidates = np.flatnonzero((sums >= 0) & (flags != 0 if flags is not None else True))
-    group = zarr.open_group(store=str(path), mode="r")
+    group = zarr.open_group(store=str(path), mode="r", use_consolidated=False)
     for i in candidates:
         try:
             ok = _stored_checksum(spec, group, int(i)) == int(sums[i])
