@@ -146,7 +146,7 @@ def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simul
     import dataclasses
 
     from impactbar import InitialState, simulate
-    from impactbar.orbits import switched, switched_search
+    from impactbar.orbits import shooting, switched_search
 
     d = circuit_preset("circuit-drifter", oil={"transition_pressure": "50 MPa"})
     o = d.orbit().orbit
@@ -158,7 +158,7 @@ def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simul
     assert np.allclose(np.diff(np.concatenate(([0.0], run.impact_times))), o.period, rtol=1e-6, atol=0)
     assert np.allclose(run.impact_velocities, o.impact_velocity, rtol=1e-6, atol=0)
     # the extrapolation allowed to jump the surface again: each guard refuses what it gives
-    monkeypatch.setattr(switched, "surfaces_ahead", lambda *a, **k: True)
+    monkeypatch.setattr(shooting, "surfaces_ahead", lambda *a, **k: True)
     with pytest.raises(ValueError, match="drive's mode at an impact is not the one its state gives"):
         d.orbit()
     monkeypatch.setattr(switched_search, "surfaces_ahead", lambda *a, **k: True)

@@ -13,8 +13,9 @@ under every law: from the phase equation, or by Newton's method from guesses for
 :func:`periodic_orbits_by_newton`), ``charts`` (existence, stability
 and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits with an unknown period under a
 drive, theory §10; the problem of each built-in drive from its table ``ORBIT_PROBLEMS``),
-``valve_segment`` and ``valve_search`` (the valve's segment problem with the exact Jacobian and its
-certified search of every one-impact orbit).
+``shooting`` (the generic problem of a drive's orbits, by multiple shooting), ``valve_segment`` and
+``valve_search`` (the valve's segment problem with the exact Jacobian and its certified search of
+every one-impact orbit; the admissibility of its flights in ``valve_admissibility``).
 
 Each law's own numerics (its phase equation, the states of its orbits, the exact Jacobian of its
 impact map and its Floquet multipliers) are in :mod:`impactbar.laws`; the solvers here reach them
