@@ -142,15 +142,15 @@ def _before():
     """find_orbit as it was before the exact Jacobian: Newton on the lattice first, the chord
     method, the multipliers' Jacobian by central differences of the exact blows."""
     from impactbar.laws.rodrock import exactjac
-    from impactbar.orbits import multi_impact
+    from impactbar.orbits import find
 
-    direct, exact = multi_impact.DIRECT_ITERATIONS, exactjac.exact_impact_map
-    multi_impact.DIRECT_ITERATIONS = 0
+    direct, exact = find.DIRECT_ITERATIONS, exactjac.exact_impact_map
+    find.DIRECT_ITERATIONS = 0
     exactjac.exact_impact_map = lambda *args: None
     try:
         yield
     finally:
-        multi_impact.DIRECT_ITERATIONS, exactjac.exact_impact_map = direct, exact
+        find.DIRECT_ITERATIONS, exactjac.exact_impact_map = direct, exact
 
 
 if __name__ == "__main__":

@@ -53,7 +53,8 @@ NOT_RECORDS = {
     "drives/orbitproblem.py": {"lu"},  # scipy's LU factor (lu, piv)
     "drives/switched/_kernel.py": {"out_t", "pend_k", "pend_t", "qs", "ts", "vs"},  # queues' heads
     "dynamics/_aberthkernel.py": {"ds", "s89", "ut"},  # sums over the modes as real and imaginary parts
-    "dynamics/_kernel.py": {"anchor", "ks", "pim", "pr", "qa", "qpa", "va", "vpa", "vpb", "w2"},  # modal
+    "dynamics/_crossing.py": {"qa", "qpa", "va", "vpa", "vpb"},  # modal components
+    "dynamics/_kernel.py": {"anchor", "ks", "pim", "pr", "qa", "va", "w2"},  # modal
     # components and a load's first harmonic; anchor[0]: a one-slot box
     "dynamics/certified.py": {"hi", "lo"},  # the first interval's ends
     "dynamics/monodromy.py": {"p11", "p21", "vt"},  # modal components
@@ -96,14 +97,16 @@ NOT_RECORDS = {
     "orbits/admissibility.py": {"cl", "found", "neg", "pos", "q0", "v0"},  # sequences' ends; a one-slot box
     "orbits/charts.py": {"edges", "hs", "kinds", "orders", "pieces", "roots", "xs"},  # sequences' ends
     "orbits/coupled.py": {"qa"},  # the rigid mode
-    "orbits/multi_impact.py": {"maps", "pert", "ti"},  # sequences' first and last entries
+    "orbits/find.py": {"ti"},  # the last impact time
+    "orbits/multi_impact.py": {"maps", "pert"},  # sequences' first and last entries
     "orbits/orbit.py": {"phases"},  # the first phase
     "orbits/rigid.py": {"args"},  # the first argument array
-    "orbits/switched.py": {"Xr", "blocks", "hist", "speeds", "used"},  # sequences' ends, components; a box
+    "orbits/shooting.py": {"Xr", "blocks", "hist", "speeds", "used"},  # sequences' ends, components; a box
     "orbits/switched_orbit.py": {"states"},  # the first state
     "orbits/switched_search.py": {"found", "same", "vi"},  # sequences' first and last entries
+    "orbits/valve_admissibility.py": {"w2", "za"},  # modal components
     "orbits/valve_search.py": {"gX", "v0", "wq", "wv"},  # modal components and a gradient's
-    "orbits/valve_segment.py": {"Eb", "Ed", "dtc", "states", "stroke", "w2", "za", "zb"},  # modal components
+    "orbits/valve_segment.py": {"Eb", "Ed", "dtc", "states", "stroke", "zb"},  # modal components
     "paper.py": {"ax", "bad", "keys", "orbits", "rows"},  # sequences' first and last entries
     "physical/bar.py": {"secs"},  # the first section
     "physical/circuit.py": {"pieces"},  # the first and last piece
@@ -124,10 +127,12 @@ NOT_RECORDS = {
     "simulation/_shortrun.py": {"_ENTRY", "qv", "tv"},  # a one-slot box; rows of times and states
     "simulation/blows.py": {"gaps", "q_arr"},  # the second row; the rigid mode
     "simulation/simulate.py": {"aq", "av", "blocks", "ot", "qm", "vm"},  # first entries, rigid mode
-    "simulation/switched.py": {"_ends", "pieces"},  # the last end and piece
+    "simulation/switched.py": {"_ends"},  # the last end
+    "simulation/switched_trajectory.py": {"pieces"},  # the last piece
     "simulation/trajectory.py": {"head", "out", "rows", "segs"},  # sequences' first and last entries
     "sweeps/map_spec.py": {"values"},  # the first and last value
     "sweeps/map_task.py": {"last"},  # the first and last impact times
+    "sweeps/plot.py": {"axes"},  # the figure's first axes
     "sweeps/run.py": {"left"},  # a one-slot box
 }
 #: module -> tuples of named values in Python code that no kernel runs (a function's results, a
@@ -147,9 +152,9 @@ PYTHON_TUPLES = {
     "model.py": {"_modal"},  # (w, c, modes, kappa, sticking)
     "orbits/_closing.py": {"out"},  # the flight's results
     "orbits/admissibility.py": {"slope"},  # (slope, smooth)
-    "orbits/multi_impact.py": {"guess"},  # (times, states)
+    "orbits/find.py": {"guess"},  # (times, states)
     "orbits/one_impact.py": {"form"},  # the load's closed form's parameters
-    "orbits/switched.py": {"last", "out"},  # the cache; the flight's results
+    "orbits/shooting.py": {"last", "out"},  # the cache; the flight's results
     "orbits/valve_search.py": {"window"},  # (lo, hi)
     "orbits/valve_segment.py": {"_last", "window"},  # the cache; (lo, hi)
     "physical/forces.py": {"header"},  # the header's (time, force)

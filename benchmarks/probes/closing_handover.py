@@ -39,7 +39,7 @@ def main(argv=None) -> None:
 
     from impactbar import find_orbit
     from impactbar.orbits import _closing as C
-    from impactbar.orbits import switched as S
+    from impactbar.orbits import shooting as S
     from impactbar.physical import circuit_preset
 
     d = circuit_preset("circuit-drifter")

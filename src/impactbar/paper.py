@@ -32,7 +32,7 @@ from .orbits.charts import (
     pneumatic_existence_edge,
     pneumatic_stability_curve,
 )
-from .orbits.multi_impact import periodic_orbits
+from .orbits.find import periodic_orbits
 from .orbits.orbit import PeriodicOrbit
 from .plotting.paper import (
     R_CURVES,

@@ -14,8 +14,9 @@ import pytest
 from impactbar import find_orbit
 from impactbar.drives.base import DriveState, FlightSettings
 from impactbar.drives.circuit.flight import MAGNUS_STATE_TOLERANCE
-from impactbar.orbits import switched
-from impactbar.orbits.switched import STEER_THETA, ShootingProblem, orbit_of
+from impactbar.orbits import shooting
+from impactbar.orbits.shooting import STEER_THETA, ShootingProblem
+from impactbar.orbits.switched import orbit_of
 from impactbar.physical import circuit_preset
 
 
@@ -162,7 +163,7 @@ def branches():
     orbit = find_orbit(d.model().with_(n_modes=2), drive)
     steered = _continued(orbit, True, 4)
     with pytest.MonkeyPatch.context() as mp:
-        mp.setattr(switched, "STEER_THETA", drive.integrator.magnus_theta)
+        mp.setattr(shooting, "STEER_THETA", drive.integrator.magnus_theta)
         own = _continued(orbit, True, 4)
     return steered, own
 

@@ -16,7 +16,7 @@ from impactbar.drives import orbitproblem as OP
 from impactbar.drives.base import DriveState
 from impactbar.drives.orbitproblem import chord, step_size
 from impactbar.orbits import _closing as C
-from impactbar.orbits import switched as S
+from impactbar.orbits import shooting as S
 from impactbar.physical import circuit_preset
 
 

@@ -11,7 +11,7 @@ import pytest
 
 from impactbar import BarModel, PositionSwitchedDrive, find_orbit
 from impactbar.dynamics.modal import step_constant
-from impactbar.orbits import valve_segment as segment
+from impactbar.orbits import valve_admissibility as segment
 
 
 @pytest.fixture

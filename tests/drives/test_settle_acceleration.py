@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import impactbar.orbits._settling as settling
-import impactbar.orbits.switched as S
+import impactbar.orbits.shooting as S
 from impactbar import find_orbit
 from impactbar.physical import circuit_preset
 

@@ -537,7 +537,7 @@ def test_kernel_compiles_in_memory_without_a_cache_folder():
     _run_python(
         "import numba.core.caching as c\n"
         "(getattr(c, 'CacheImpl', None) or c._CacheImpl)._locator_classes = []\n"
-        "from impactbar.dynamics import _kernel as K\n"
+        "from impactbar.dynamics import _crossing as K\n"
         "assert K.CACHE is False\n"
         "b, cc = K._bc(0.0, 2.0)\n"
         "assert (b, cc) == (2.0, 2.0)\n"
@@ -613,7 +613,7 @@ def test_rigid_one_harmonic_impact_search_equals_general_search(rng):
     same status, the impact time to 1e-12 (relative to 1 + |t|) wherever the arrival is not grazing
     (``|u_t| >= 1e-3``), and below that to the rounding of the end's displacement (the time of
     a grazing arrival is only defined to ``noise / |u_t|``)."""
-    from impactbar.dynamics import _kernel as K
+    from impactbar.dynamics import _crossing as K
 
     n_flights = n_slow = 0
     for _ in range(40):
@@ -704,7 +704,7 @@ def test_modal_impact_search_equals_general_search(rng, n_modes):
     import importlib
 
     from impactbar import InitialState, simulate
-    from impactbar.dynamics import _kernel as K
+    from impactbar.dynamics import _crossing as K
 
     sim_module = importlib.import_module("impactbar.simulation.simulate")
     n_flights = n_slow = 0

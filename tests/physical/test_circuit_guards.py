@@ -134,8 +134,9 @@ def test_no_orbit_of_period_zero(sec, key, was, value, tmp_path, capsys):
     err = capsys.readouterr().err
     # the implausible value is warned of in a line of its own, then the error in one line
     warning, error = err.splitlines()
-    assert warning.startswith(f"impactbar orbits: warning: {sec}.{key} = '{value}'") and "Traceback" not in err
-    assert error.startswith("impactbar orbits: error: find_orbit found no periodic orbit") and "period 0" in error
+    assert warning.startswith(f"impactbar orbits: warning: {sec}.{key} = '{value}'")
+    assert "Traceback" not in err and "period 0" in error
+    assert error.startswith("impactbar orbits: error: find_orbit found no periodic orbit")
 
 
 def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simulate(monkeypatch):
@@ -148,7 +149,7 @@ def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simul
     import dataclasses
 
     from impactbar import InitialState, simulate
-    from impactbar.orbits import switched, switched_search
+    from impactbar.orbits import shooting, switched_search
 
     d = circuit_preset("circuit-drifter", oil={"transition_pressure": "50 MPa"})
     o = d.orbit().orbit
@@ -160,7 +161,7 @@ def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simul
     assert np.allclose(np.diff(np.concatenate(([0.0], run.impact_times))), o.period, rtol=1e-6, atol=0)
     assert np.allclose(run.impact_velocities, o.impact_velocity, rtol=1e-6, atol=0)
     # the extrapolation allowed to jump the surface again: each guard refuses what it gives
-    monkeypatch.setattr(switched, "surfaces_ahead", lambda *a, **k: True)
+    monkeypatch.setattr(shooting, "surfaces_ahead", lambda *a, **k: True)
     with pytest.raises(ValueError, match="drive's mode at an impact is not the one its state gives"):
         d.orbit()
     monkeypatch.setattr(switched_search, "surfaces_ahead", lambda *a, **k: True)

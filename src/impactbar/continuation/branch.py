@@ -14,8 +14,8 @@ import numpy as np
 
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_real
-from ..orbits.multi_impact import MultiImpactOrbit, find_orbit
-from ..orbits.orbit import ORBIT_FIELDS
+from ..orbits.find import find_orbit
+from ..orbits.orbit import ORBIT_FIELDS, MultiImpactOrbit
 from .parameters import with_parameter
 
 __all__ = ["Branch", "BranchEvent", "orbit_columns"]

@@ -1,6 +1,6 @@
 """The compiled building blocks of the dynamics that the other packages build on: the interface
-between the dynamics' private kernels (``_flightkernel``: the closed-form flight; ``_kernel``: the
-certified event search and the event loop; ``_flowkernel``: the loads' flows and the admissibility
+between the dynamics' private kernels (``_flightkernel``: the closed-form flight; ``_crossing``: the
+certified event search; ``_kernel``: the event loop; ``_flowkernel``: the loads' flows and the admissibility
 bounds; ``_tiers``: the first calls run while a child compiles) and the compiled code of the laws,
 the drives, the loads and the orbit solvers, and the simulator's drivers. What another package uses
 of those kernels it imports from here, by these names; the private modules behind them may change.
@@ -25,6 +25,10 @@ views of :mod:`impactbar.dynamics.kernelview`), callable from Python and from co
   (``impactbar warmup``).
 """
 
+from ._crossing import CROSS as CROSS
+from ._crossing import FAIL as FAIL
+from ._crossing import NONE as NONE
+from ._crossing import find_crossing as find_crossing
 from ._flightkernel import CACHE as CACHE
 from ._flightkernel import TWO_PI as TWO_PI
 from ._flightkernel import load_value as load_value
@@ -38,15 +42,11 @@ from ._flowkernel import piecewise_column as piecewise_column
 from ._flowkernel import piecewise_flow as piecewise_flow
 from ._kernel import CHATTER as CHATTER
 from ._kernel import CONTACT as CONTACT
-from ._kernel import CROSS as CROSS
 from ._kernel import END as END
-from ._kernel import FAIL as FAIL
 from ._kernel import FAILED as FAILED
 from ._kernel import FULL as FULL
 from ._kernel import MAXIMP as MAXIMP
-from ._kernel import NONE as NONE
 from ._kernel import _propagate_many as propagate_views
-from ._kernel import find_crossing as find_crossing
 from ._kernel import propagate_many as propagate_many
 from ._kernel import run_free as run_free
 from ._kernel import run_free_rigid as run_free_rigid

@@ -16,15 +16,15 @@ build their results from. Adding a law is one :class:`ContactLaw` subclass and o
 
 from __future__ import annotations
 
-from .base import LAWS as LAWS
-from .base import PARAMETERISED as PARAMETERISED
 from .base import ContactLaw as ContactLaw
 from .base import LawNotSupported as LawNotSupported
 from .base import OrbitState as OrbitState
-from .base import get_law as get_law
-from .base import register_law as register_law
 from .paper import InstantImpact as InstantImpact
 from .paper import PaperLaw as PaperLaw
+from .registry import LAWS as LAWS
+from .registry import PARAMETERISED as PARAMETERISED
+from .registry import get_law as get_law
+from .registry import register_law as register_law
 from .rodrock import BilinearRock as BilinearRock
 from .rodrock import RodRock as RodRock
 from .rodrock import RodSegment as RodSegment

@@ -6,15 +6,16 @@ check of their inputs), ``admissibility`` (does the struck end stay off the stop
 ``rigid`` (the rigid bar in closed form, vectorised over parameter arrays), ``orbit``
 (:class:`PeriodicOrbit`, the one result type: ``m`` impacts in ``n`` load periods;
 ``MultiImpactOrbit`` is another name for it), ``one_impact`` (the one-impact orbits from the law's
-phase equation), ``multi_impact`` (:func:`find_orbit`: ``m`` impacts in ``n`` load periods by Newton
-on the segment problem, one segment per flight, whose parts the continuation uses through
-``segments``; and :func:`periodic_orbits`, the one-impact orbits
+phase equation), ``multi_impact`` (the segment problem of ``m`` impacts in ``n`` load periods, one segment
+per flight, whose parts the continuation uses through ``segments``), ``find`` (:func:`find_orbit`:
+Newton on that problem from a guess; and :func:`periodic_orbits`, the one-impact orbits
 under every law: from the phase equation, or by Newton's method from guesses for a law without one,
 :func:`periodic_orbits_by_newton`), ``charts`` (existence, stability
 and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits with an unknown period under a
 drive, theory §10; the problem of each built-in drive from its table ``ORBIT_PROBLEMS``),
-``valve_segment`` and ``valve_search`` (the valve's segment problem with the exact Jacobian and its
-certified search of every one-impact orbit).
+``shooting`` (the generic problem of a drive's orbits, by multiple shooting), ``valve_segment`` and
+``valve_search`` (the valve's segment problem with the exact Jacobian and its certified search of
+every one-impact orbit; the admissibility of its flights in ``valve_admissibility``).
 
 Each law's own numerics (its phase equation, the states of its orbits, the exact Jacobian of its
 impact map and its Floquet multipliers) are in :mod:`impactbar.laws`; the solvers here reach them
@@ -28,14 +29,14 @@ import importlib
 #: where each public name lives (PEP 562: a submodule is imported on first use, so the rigid closed
 #: forms, e.g. a sweep's chunks, do not load the wave law's scipy.optimize and numba)
 _HOME = {
-    "MultiImpactOrbit": "orbit", "find_orbit": "multi_impact", "impact_law": "multi_impact",
+    "MultiImpactOrbit": "orbit", "find_orbit": "find", "impact_law": "multi_impact",
     "OrbitList": "one_impact", "PeriodicOrbit": "orbit", "orbit_multipliers": "one_impact",
-    "periodic_orbits": "multi_impact",
+    "periodic_orbits": "find",
     "phase_G": "phase", "phase_residual": "phase", "phase_roots": "phase",
     "RigidOrbits": "rigid", "rigid_cosine_orbits": "rigid", "rigid_square_orbits": "rigid",
     "floquet_multipliers": "stability", "impact_map_jacobian": "stability",
     "SwitchedOrbit": "switched", "find_switched_orbit": "switched_search", "drive_orbits": "switched_search",
-    "periodic_orbits_by_newton": "multi_impact", "rock_periodic_orbits": "multi_impact",
+    "periodic_orbits_by_newton": "find", "rock_periodic_orbits": "find",
 }
 
 __all__ = [

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..drives.switched import RETURN, STROKE
 from ..dynamics.modal import fundamental
 
 if TYPE_CHECKING:
@@ -114,3 +115,17 @@ def _matrix(E):
     i = np.arange(M)
     out[i, i], out[i, M + i], out[M + i, i], out[M + i, M + i] = a, b, c, e
     return out
+
+
+def _legs(model, drive, z0, durations):
+    """States at the ends of the four flights from ``z0`` (after the impact)."""
+    w2, d = _w2(model), model.d
+    ps, pr = drive.level(STROKE), drive.level(RETURN)
+    out = []
+    z = z0
+    for p, h in zip((ps, pr, pr, ps), durations, strict=True):
+        if h:
+            E = _blocks(w2, d, h)
+            z = _apply(E, _affine(w2, d, p, h, E), z)
+        out.append(z)
+    return tuple(out)

@@ -19,7 +19,7 @@ from scipy.optimize import brentq
 from ..laws.paper.phase import pneumatic_existence_edge as pneumatic_existence_edge
 from ..loads import CosineLoad, Load, SquareWaveLoad
 from ..model import BarModel
-from .multi_impact import periodic_orbits
+from .find import periodic_orbits
 from .one_impact import orbit_multipliers
 from .phase import phase_G, phase_residual
 

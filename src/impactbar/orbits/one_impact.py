@@ -3,7 +3,7 @@
 ``phase_equation_orbits(model, load)`` finds every root ``phase`` of the law's phase equation
 (eq. 14 under the paper's law), takes the orbit's modal states and exact Floquet multipliers from
 the law, decides admissibility rigorously, and adds the paper's Schur criterion.
-:func:`~impactbar.periodic_orbits` (:mod:`impactbar.orbits.multi_impact`) calls it for a law with a
+:func:`~impactbar.periodic_orbits` (:mod:`impactbar.orbits.find`) calls it for a law with a
 phase equation, and Newton's method from guesses for one without.
 """
 

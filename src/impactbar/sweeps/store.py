@@ -178,7 +178,7 @@ def _repair_store(spec: SweepSpec, path: Path) -> list:
     try:
         root = zarr.open_group(store=str(path), mode="r+", use_consolidated=False)
         for item in arrays:
-            name, values = item[0], item[1]
+            name, values, *_ = item
             try:
                 ok = (_metadata_doc(zarr.open_array(store=str(path), path=name, mode="r"))
                       == _metadata_doc(reference[name]))

@@ -9,7 +9,8 @@ import math
 
 import numpy as np
 
-from .exact import MAX_PIECES, MAX_WINDOWS, _eval_channel, exact_blow
+from .exact import MAX_PIECES, MAX_WINDOWS, exact_blow
+from .exactresult import _eval_channel
 
 __all__ = ["blow_from_exact", "exact_rod_rock_blow"]
 

@@ -41,82 +41,11 @@ from ._choice import (  # noqa: F401  (the choices' bounds, as before)
     _exact_is_cheap,
 )
 from ._parameters import _SEGMENT, changed
+from .checks import _check_blow_call, _check_force_scale
+from .rod import BilinearRock as BilinearRock
+from .rod import RodSegment as RodSegment
 
 __all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
-
-
-@dataclass(frozen=True)
-class RodSegment:
-    """A uniform piece of the rod (theory §4d).
-
-    Parameters
-    ----------
-    length : float
-        In piston lengths, in ``[1e-100, 1e100]``.
-    impedance : float
-        ``E A / C`` relative to the piston's, in ``[1e-100, 1e100]`` (beyond, the waves' energies
-        ``F^2/Z`` leave the float range).
-    wave_speed : float
-        Relative to the piston's, in ``[1e-100, 1e100]``; default 1 (the same material).
-
-    Raises
-    ------
-    ValueError
-        A value that is not a finite real number in its range (named).
-
-    Examples
-    --------
-    >>> from impactbar import RodSegment
-    >>> RodSegment(length=40.0, impedance=1.0)  # the wave speed defaults to the piston's
-    RodSegment(length=40.0, impedance=1.0, wave_speed=1.0)
-    """
-
-    length: float
-    impedance: float
-    wave_speed: float = 1.0
-
-    def __post_init__(self) -> None:
-        for name in ("length", "impedance", "wave_speed"):  # (bounded: 1e308 and 5e-324 gave a NaN
-            # efficiency, a length of 5e-324 a travel time of 0)
-            object.__setattr__(self, name, check_real(name, getattr(self, name), lo=1e-100, hi=1e100))
-
-    def travel_time(self, model) -> float:
-        """Time a wave takes to cross the segment (model time): ``length / (wave_speed s)``."""
-        return self.length / (self.wave_speed * model.s)
-
-
-@dataclass(frozen=True)
-class BilinearRock:
-    """Lundberg's bilinear bit-rock law (Lundberg 1982; Karlsson, Lundberg and Sundin 1989): the force
-    grows as ``k p`` with the penetration ``p`` while it grows past its largest value, and follows
-    ``k_u (p - p_perm)`` on unloading and reloading below it, with ``p_perm = p_max - R_max / k_u``;
-    the force is compressive only (the bit lifts off for ``p < p_perm``).
-
-    Parameters
-    ----------
-    k : float
-        Loading stiffness (model units of force per length, ``K / (m Omega^2)``), ``> 0``.
-    k_u : float
-        Unloading stiffness, ``k_u >= k`` (``gamma = k_u / k``).
-
-    Examples
-    --------
-    >>> from impactbar import BilinearRock
-    >>> BilinearRock(k=2.5, k_u=25.0)
-    BilinearRock(k=2.5, k_u=25.0)
-    """
-
-    k: float
-    k_u: float
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "k", check_real("k", self.k, lo=0.0, lo_open=True))
-        object.__setattr__(self, "k_u", check_real("k_u", self.k_u, lo=self.k))
-
-    @property
-    def gamma(self) -> float:
-        """``k_u / k >= 1``."""
-        return self.k_u / self.k
 
 
 @dataclass(frozen=True)
@@ -697,12 +626,6 @@ def _exact_single_blow(model, law, impact_velocity, t_max, samples, record_field
                                piston=piston, max_pool_bytes=max_pool_bytes)
 
 
-#: The largest force scale (``s V``, the feed) and the smallest nonzero bit mass a blow accepts: the
-#: wave energies are sums of squared forces, which beyond these would overflow or underflow.
-MAX_FORCE = 1e100
-MIN_BIT_MASS = 1e-100
-
-
 #: The exact blow's energy account (relative to the available energy) closes to rounding, about
 #: 1e-15; past this its answer is not taken (``method="auto"``: the lattice's instead) or is warned
 #: of (``method="exact"``)
@@ -725,61 +648,6 @@ AUTO_MAX_PIECES = 100_000
 #: about the terms 64 MiB holds now.)
 AUTO_MAX_POOL_BYTES = 2 ** 26
 
-def _check_force_scale(model, law, impact_velocity) -> float:
-    """The checked impact velocity: its wave force ``s V`` and the feed within ``MAX_FORCE``, the
-    bit's mass 0 or at least ``MIN_BIT_MASS``."""
-    V = check_real("impact_velocity", impact_velocity, lo=0.0, lo_open=True)
-    if not 1.0 / MAX_FORCE <= model.s * V <= MAX_FORCE:
-        raise ValueError(f"impact_velocity must give a wave force s V in [{1 / MAX_FORCE:g}, {MAX_FORCE:g}] "
-                         f"(s = {model.s:g}); got impact_velocity = {V:g}, whose wave energies would "
-                         "overflow or underflow")
-    if law.feed > MAX_FORCE:
-        raise ValueError(f"feed must be in [0, {MAX_FORCE:g}] for a blow (its static energy would "
-                         f"overflow); got feed = {law.feed:g}")
-    if 0.0 < law.bit_mass < MIN_BIT_MASS:
-        raise ValueError(f"bit_mass must be 0 (a massless bit) or in [{MIN_BIT_MASS:g}, inf) for a blow; "
-                         f"got bit_mass = {law.bit_mass:g}")
-    return V
-
-
-def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, record_field, piston=None):
-    """The checked ``(V, t_max, cells_per_piston)`` of :func:`single_blow`, refused (``ValueError``
-    naming the parameter and its range) before any array is built."""
-    from ._piston import piston_segments
-    from .blow import _check_blow_size, commensurate_cells
-
-    p_len, _ = piston_segments(piston)
-    s = model.s
-    V = _check_force_scale(model, law, impact_velocity)
-    travel = [g.travel_time(model) for g in law.segments]
-    if not all(math.isfinite(T) for T in travel):  # a wave speed near 0: refused as the grid would be
-        _check_blow_size(math.inf, math.inf, False)
-    if t_max is None:
-        t_max = 20.0 * (1.0 / s + sum(travel))
-    else:
-        t_max = check_real("t_max", t_max, lo=0.0, lo_open=True)
-    if cells_per_piston is not None:
-        cells_per_piston = check_int("cells_per_piston", cells_per_piston, lo=1)
-        n_p = cells_per_piston
-    else:  # the default grid of rod_rock_blow (at least 8 cells)
-        n0 = commensurate_cells(np.concatenate(([1.0 / s], p_len / s, travel)))
-        n_p = 64 if n0 is None else n0 * math.ceil(8 / n0)
-    dt = 1.0 / (s * n_p)
-    _check_blow_size(n_p + sum(travel) / dt, t_max / dt, record_field)
-    m, Zb = law.bit_mass, s * law.segments[-1].impedance
-    if m > 0.0:  # the lattice samples an underdamped bit's ringing on the rock within each step
-        ring = math.sqrt(max(law.rock.k_u / m - (Zb / (2.0 * m)) ** 2, 0.0)) * dt
-        if ring > MAX_BIT_RINGS:
-            raise ValueError(f"bit_mass = {m:g} on k_u = {law.rock.k_u:g} rings {ring:.3g} radians a lattice "
-                             f"step (more than {MAX_BIT_RINGS:g}): give a heavier bit, a bit_mass of 0, or "
-                             "a finer grid (cells_per_piston)")
-    return V, float(t_max), cells_per_piston
-
-
-#: The most radians an underdamped bit may ring on the rock within one lattice step (its events are
-#: sampled a quarter period apart there).
-MAX_BIT_RINGS = 1e6
-
 
 def lundberg_efficiency(alpha: float, gamma: float) -> float:
     """Lundberg's efficiency of a rectangular incident wave on a massless bit and bilinear rock:
@@ -792,3 +660,4 @@ def _equivalent_restitution(model) -> float:
     clipped to ``[0, 0.95]``: the restitution of the paper-law guesses."""
     blow = single_blow(model, 1.0)
     return min(0.95, max(0.0, -float(blow.rebound_velocity)))
+

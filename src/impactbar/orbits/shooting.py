@@ -1,0 +1,650 @@
+"""The generic periodic-orbit problem of a drive (theory §10, §11): :class:`ShootingProblem`,
+multiple shooting over the ``m`` impacts of the period, for any drive without a problem of its own
+(:func:`~impactbar.orbits.switched.orbit_problem` chooses; the module docstring of
+:mod:`impactbar.orbits.switched` gives the unknowns, the residual and the measured errors of its
+finite-difference Jacobian). Its module constants set the differences' steps (``FD_STEP_CLOSED``,
+``FD_STEP_ODE``), how a start for Newton is settled (``SETTLE_*``) and the steering Jacobians'
+Magnus steps (``STEER_THETA``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .._shared.forcing import alike
+from .._shared.status import Admissibility
+from .._shared.validate import check_int
+from ..drives.base import DriveState
+from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
+from ..drives.orbitproblem import OrbitData, OrbitProblem, chord, newton
+from ..model import BarModel
+from . import _closing as C
+from ._closing import checked_root, close
+from ._saltation import map_jacobian, through
+from ._settling import dominant_limit, surfaces_ahead
+from ._shooting_data import orbit_data
+from .switched_orbit import SwitchedOrbit, _constant_load
+
+__all__ = ["ShootingProblem"]
+
+TWO_PI = 2.0 * math.pi
+
+
+#: central-difference steps of the shooting Jacobian (relative to ``max(1, |X_j|)``): closed-form
+#: flights (rounding ~1e-16; the measured errors are in the module docstring: smaller steps meet the
+#: rounding, larger ones the truncation) and integrated ones (rtol 1e-10: noise / step ~1e-6 at most)
+FD_STEP_CLOSED = 1e-6
+FD_STEP_ODE = 1e-4
+#: impacts followed from rest (or from a run's end) before Newton starts, at most
+SETTLE_IMPACTS = 400
+#: how closely the impact velocities of the motion followed to a start agree, impact after impact,
+#: before Newton's method takes over (a drive whose flights integrate the variational equations)
+SETTLE_HANDOVER = 1e-4
+#: impacts followed from the rigid piston's orbit, its modes at rest, to a flexible piston's Newton
+#: start where the drive's flights are variational (others settle as from rest; :meth:`initial`)
+SETTLE_LIFTED = 3
+#: the integrator's relative tolerance while the motion is followed to a start for Newton (a drive
+#: whose flights integrate the variational equations: Newton's flights keep the drive's tolerance)
+SETTLE_RTOL = 1e-7
+#: the Magnus steps (``h ||A|| = theta``, :attr:`FlightSettings.magnus_theta`) of the variational
+#: flights whose Jacobian only steers Newton's method (the chord's, its closing step): four times the
+#: drive's own, a quarter of the steps (two squarings more each), the preset's first flight's Jacobian
+#: within 1.5e-5, 4.9e-5 and 2.1e-6 of its largest entry with 4, 8 and 16 modes (at twice the drive's
+#: steps 2.4e-7, 1.1e-6, 6.7e-8); the preset's orbits the same to 2e-13 and some 10 % cheaper than at
+#: twice; the multipliers' keep the drive's. As a closing step meets it, that error reaches 6e-3 when
+#: the preset's parameters change (``_closing.STEER_ERROR``: chord steps follow a large closing step)
+STEER_THETA = 4.0
+#: the Jacobians a flight can carry (:meth:`ShootingProblem._flight`'s ``variational``), by how much
+#: each holds: a remembered flight answers a request for as much or less
+_JACOBIAN_LEVEL = {False: 0, "state": 1, "steer": 2, True: 3}
+#: longest flight between two impacts (model time units) before a flight counts as never arriving
+HORIZON = 1e4
+
+
+def _same_problem(a, b) -> bool:
+    """Whether the shooting problems ``a`` and ``b`` fly the same flights: one class, the same model,
+    drive, integrator, impacts and blocks (``False`` where they cannot be compared)."""
+    try:
+        return bool(type(a) is type(b) and a.impacts == b.impacts and a.model == b.model
+                    and a.drive == b.drive and a.settings == b.settings and list(a.blocks) == list(b.blocks))
+    except (TypeError, ValueError):  # (an array among them)
+        return False
+
+
+class ShootingProblem(OrbitProblem):
+    """The generic periodic-orbit problem of a drive (module docstring): multiple shooting over the
+    ``m`` intervals between impacts, with the drive's flights (:func:`impactbar.drives.flight.fly`),
+    the impact law and the drive's maps.
+
+    Unknowns: ``m`` blocks ``(q, q', z)`` just after each impact (where its contact ends), each
+    flown from its projection on the section ``c . q = 0`` (``q_0`` shifted: a perturbation of the
+    unknowns must not start a flight through the stop). Each block starts at a fixed time ``tau_k``
+    in a fixed mode (those of the guess: the system is autonomous, the mode's scheduled events are
+    counted from ``tau_k``). Residual: the block's flight to its impact, the impact law (eq. 10, or
+    the law's contact under the drive's force) and the drive's map at the impact, minus the next
+    block. Jacobian: central differences.
+
+    Parameters
+    ----------
+    model : BarModel
+    drive : Drive
+    impacts : int
+    settings : FlightSettings, optional
+        The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
+    newton : {"chord", "full"}, optional
+        Where the drive's flights integrate the variational equations (the oil circuit), how
+        :meth:`solve` iterates: ``"chord"`` (default), the Jacobian of one variational flight at a
+        looser tolerance (``SETTLE_RTOL``) at the start, the residuals by plain flights (a fraction
+        of the cost: the variational flight carries ``n^2`` more unknowns and takes about four times
+        the steps), the Jacobian taken again only where the steps stop shrinking
+        (:func:`~impactbar.drives.orbitproblem.chord`); ``"full"``, Newton's method with a variational
+        flight at every step (the way before). The orbit's multipliers come from one variational
+        flight at the root either way (:meth:`orbit`).
+    """
+
+    default_start = "the motion from rest on the stop, followed until its impacts settle"
+    starts_from_rest = True
+
+    def __init__(self, model: BarModel, drive, impacts: int = 1, settings: FlightSettings | None = None,
+                 *, newton: str = "chord"):
+        if newton not in ("chord", "full"):
+            raise ValueError(f"newton must be 'chord' or 'full'; got {newton!r}")
+        self.model, self.drive, self.newton = model, drive, newton
+        self.impacts = check_int("impacts", impacts, lo=1)
+        self.settings = settings if settings is not None else drive.integrator
+        law = model.law
+        #: a drive with state under a law whose contact takes time: each impact a blow solved with
+        #: the drive's state (theory §11, "The coupled blow"), its Jacobian by central differences
+        self.coupled = not drive.piecewise_constant and not law.restitution_in_kernel(model)
+        if self.coupled:
+            from ..simulation.blows import check_coupling
+
+            check_coupling(model, drive)
+        if law.restitution_in_kernel(model) and model.R >= 1.0:
+            raise ValueError("model.R must be < 1 for a periodic motion under a drive (with R = 1 no "
+                             "energy leaves at the impacts)")
+        self.M = model.n_modes + 1
+        self.k = drive.state_size
+        self.n = 2 * self.M + self.k
+        self.size = self.impacts * self.n
+        self.positive = np.zeros(0, dtype=np.int64)
+        self.closed = drive.piecewise_constant
+        #: the Jacobian from the variational equations (a drive whose flights integrate them)
+        self.variational = bool(getattr(drive, "variational", False)) and not self.closed
+        self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
+        self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
+        self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
+        self._last = None  # the last flight: (its start, keep, its Jacobian's level, its result)
+
+    # -- flights ------------------------------------------------------------------------------------
+    def _flight(self, tau, mode, y, keep=False, variational=False, settings=None):
+        """From ``y = (q, q', z)`` in ``mode`` at ``tau`` to the next impact and through it: the
+        state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
+        the drive's events ``(time, event, mode after)``; with ``variational`` (a drive whose flights
+        integrate the variational equations, :attr:`~impactbar.Drive.variational`) also the
+        Jacobian of the state after the impact with respect to ``y`` (``_saltation.through``):
+        ``True`` the multipliers' (a coupled blow's by central differences), ``"steer"`` one that
+        only steers Newton's method (a coupled blow's by forward differences, half the blows),
+        ``"state"`` the variational flights' state, the Jacobian not wanted (a coupled blow's not
+        taken: ``None`` in its place). The
+        last flight is remembered: the same start asked again (an orbit's data, then its
+        admissibility) is not flown again, nor one whose Jacobian is at least as good."""
+        try:
+            key = (float(tau), mode, np.asarray(y, dtype=float).tobytes(), settings)
+            hash(key)
+        except TypeError:  # a mode that cannot be a key
+            key = None
+        last = self._last
+        level = _JACOBIAN_LEVEL[variational]
+        if key is not None and last is not None and last[0] == key and (last[1] or not keep) and \
+                last[2] >= level:
+            return last[3] if level else last[3][:6]
+        plain = self._state_settings(settings) if variational == "state" else None
+        if plain is not None:  # the variational flight's state by its plain flight: no Jacobian taken
+            out = self._fly(tau, mode, y, keep, False, plain)
+        else:
+            out = self._fly(tau, mode, y, keep, variational, settings)
+        self._last = None if key is None else (key, keep, level, out)
+        return out
+
+    def _state_settings(self, settings=None):
+        """The integrator of the plain flight whose state is the variational flight's with
+        ``settings`` (:meth:`~impactbar.Drive.variational_state_settings`; not with coupled blows,
+        whose ``"state"`` flights skip only the blow's Jacobian), or ``None``."""
+        if self.coupled or not self.variational:
+            return None
+        return self.drive.variational_state_settings(self.model, settings or self.settings)
+
+    @property
+    def state_flights(self) -> bool:
+        """Whether the variational flights' state comes from a plain flight at its own tolerance
+        (:meth:`_state_settings`: the oil circuit's flexible piston), so that :meth:`root_value`
+        costs a fraction of :meth:`residual`."""
+        return self._state_settings() is not None
+
+    def _fly(self, tau, mode, y, keep, variational, settings):
+        """:meth:`_flight`, flown."""
+        model, drive, M = self.model, self.drive, self.M
+        c = model.end_weights
+        t, q, v, z = tau, np.array(y[:M], dtype=float), y[M:2 * M], y[2 * M:]
+        q[0] -= float(c @ q)  # on the section c . q = 0 (the unknowns' perturbations leave it)
+        state = DriveState(mode, np.array(z, dtype=float))
+        pieces, events = [], []
+        end = tau + HORIZON
+        D = None
+        if variational:  # the projection on the section
+            D = np.eye(self.n)
+            D[0, :M] -= c
+        while True:
+            fl = fly(model, drive, state, t, q, v, end, settings or self.settings, bool(variational))
+            if keep:
+                pieces.append(fl.piece)
+            t, q, v = fl.t, fl.q, fl.v
+            before = state.mode
+            state = DriveState(state.mode, fl.z)
+            if fl.end == ARRIVAL:
+                if variational:
+                    D = through(model, drive, self.k, before, fl, None, D)
+                break
+            if fl.end != EVENT:
+                raise ValueError(f"no impact within {HORIZON:g} of t = {tau:.6g} under the drive: the "
+                                 "piston does not come back to the stop")
+            for e in fl.events:
+                state = drive.jump(state.mode, state.z, e, t, q, v)
+                if keep:
+                    events.append((t, e, state.mode, e.crossing_speed(q, v)))
+            if variational:
+                D = through(model, drive, self.k, before, fl, fl.events, D)
+        arrival = (t, q.copy(), v.copy(), state)
+        law = model.law
+        if self.coupled:  # the blow and the drive's state together, the drive's map at its end
+            from .coupled import blow_jacobian, blow_state, coupled_blow
+
+            blow_settings = settings or self.settings
+            if keep:
+                out, t_after, after, blow = coupled_blow(model, drive, t, q, v, state, blow_settings)
+                pieces.append(blow)
+            else:  # (no piece to keep: not made)
+                out, res, after = blow_state(model, drive, t, q, v, state, blow_settings)
+                t_after = res.t_release
+            if variational == "state":
+                return out, t_after, after.mode, arrival, pieces, events, None
+            if variational:
+                G = blow_jacobian(model, drive, t, q, v, state, blow_settings,
+                                  forward=out if variational == "steer" else None)
+                return out, t_after, after.mode, arrival, pieces, events, G @ D
+            return out, t_after, after.mode, arrival, pieces, events
+        if law.restitution_in_kernel(model):
+            qa, va = q, -law.kernel_restitution(model) * v
+            t_after = t
+        else:
+            p = drive.force(state.mode, state.z, q, v)
+            ya, _, _ = law.impact_map(model, _constant_load(float(p)), 0.0, np.concatenate((q, v)))
+            qa, va = np.asarray(ya[:M], dtype=float), np.asarray(ya[M:], dtype=float)
+            t_after = t + float(law.window(model))
+        after = drive.impact(state.mode, state.z, t_after, qa, va)
+        if variational:  # the impact law (eq. 10) and the drive's map at the impact
+            G = np.eye(self.n)
+            G[M:2 * M, M:2 * M] *= -law.kernel_restitution(model)
+            G[2 * M:, 2 * M:] = map_jacobian(lambda zz: drive.impact(state.mode, zz, t_after, qa, va).z,
+                                                   state.z)
+            D = G @ D
+        out = np.concatenate((qa, va, after.z))
+        if variational:
+            return out, t_after, after.mode, arrival, pieces, events, D
+        return out, t_after, after.mode, arrival, pieces, events
+
+    def _map(self, k, y):
+        tau, mode = self.blocks[k]
+        return self._flight(tau, mode, y)[0]
+
+    # -- the problem --------------------------------------------------------------------------------
+    def initial(self, guess, tol, max_iter):
+        """The blocks' start times, modes and states: from a :class:`SwitchedOrbit` of the same drive
+        or of the same kind at other parameter values (its states, the drive's states, its impact
+        times; the modes made again by this drive), from a run of :func:`impactbar.simulate`
+        (continued from its end) or, without one, from rest on the stop (the rigid bar; a flexible bar
+        from the rigid bar's orbit, its modes at rest), the motion followed impact after impact until
+        the impact velocities settle (at most ``SETTLE_IMPACTS``; from the rigid bar's orbit
+        ``SETTLE_LIFTED`` where the drive's flights are variational)."""
+        model, drive, m, M = self.model, self.drive, self.impacts, self.M
+        if isinstance(guess, SwitchedOrbit):
+            problem = guess._problem
+            if isinstance(problem, ShootingProblem) and problem.impacts == m and problem.blocks and (
+                    problem.drive == drive or (alike(problem.drive, drive) and problem.M == M
+                                               and problem.coupled == self.coupled)):
+                self.adopt(problem)  # (a neighbour's orbit, at other parameter values: its unknowns)
+                return np.asarray(guess._unknowns, dtype=float).copy()
+            if guess.impacts == 1 and m > 1 and isinstance(problem, ShootingProblem) and problem.blocks:
+                tau, mode = problem.blocks[0]
+                source = problem.sources[0] if problem.sources else None
+                return self._settle(tau, mode, np.asarray(guess._unknowns, dtype=float), m - 1, source)
+            raise ValueError("guess: an orbit of another problem (drive or impacts); give a run of "
+                             "simulate under the drive")
+        if guess is None and M > 1:  # the rigid bar's orbit, lifted, then followed
+            rigid = ShootingProblem(model.with_(n_modes=0), drive, m, self.settings)
+            Xr = rigid.initial(None, tol, max_iter)
+            if rigid.variational and rigid.newton == "chord":  # (a start: its first Newton steps)
+                Xr = rigid._steered_chord(Xr, max(tol, rigid.accuracy), max_iter, C.LIFTED_HANDOVER)[0]
+            else:
+                Xr = rigid.solve(Xr, tol, max_iter)
+            y = np.zeros(self.n)
+            y[0], y[M], y[2 * M:] = Xr[0], Xr[1], Xr[2:self.n - 2 * M + 2]
+            tau, mode = rigid.blocks[0]
+            # (the drive's state already periodic, only the modes start off it, at rest: what they
+            # do after is linear and decays, which the chord's Jacobian carries; a few impacts give
+            # them the blows' excitation, and the impact velocities agree to 2e-3, where the eight
+            # impacts that the agreement to SETTLE_HANDOVER took on the preset's 8-mode orbit led
+            # to the same chord steps)
+            return self._settle(tau, mode, y, SETTLE_LIFTED if self.variational else SETTLE_IMPACTS)
+        if guess is None:
+            q, v = np.zeros(M), np.zeros(M)
+            state = drive.start(model, q, v)
+            return self._settle(0.0, state.mode, np.concatenate((q, v, state.z)), SETTLE_IMPACTS)
+        if hasattr(guess, "final_state") and hasattr(guess, "switch_kinds"):  # a run under the drive
+            fin = guess.final_state
+            q = np.asarray(fin.modal_displacement, dtype=float)
+            v = np.asarray(fin.modal_velocity, dtype=float)
+            if q.size != M:
+                raise ValueError("guess: the run's model has another number of modes")
+            final = guess._final_drive
+            if final is None or guess.load != drive:
+                raise ValueError("guess: a run under another drive")
+            y = np.concatenate((q, v, final.z))
+            return self._settle(float(guess.t_end), final.mode, y, SETTLE_IMPACTS)
+        raise ValueError("guess must be a SwitchedOrbit of the drive, a run of simulate under it or None")
+
+    def _settle(self, tau, mode, y, n_max, source=None):
+        """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
+        impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``, or
+        ``1e-4`` for a drive with variational flights), and take the starts of the last ``m``
+        intervals as the blocks (with the impacts before them)."""
+        m, M = self.impacts, self.M
+        c = self.model.end_weights
+        # a drive whose flights give Newton the exact Jacobian (variational equations) is handed
+        # over once the impacts agree to 1e-4: Newton's quadratic convergence does the rest, where
+        # a slow mode (the oil circuit's supply pressure, multiplier ~0.9) would take hundreds of
+        # impacts to settle to 1e-11
+        settle = SETTLE_HANDOVER if self.variational else 1e-11
+        # and where one real multiplier is left (the supply's), its mode is extrapolated away (Aitken's
+        # delta-squared on the map's iterates, as in Steffensen's method; the quadratic's fixed point
+        # where the steps' multiple still falls: dominant_limit) instead of followed
+        accelerate = self.variational and m == 1 and n_max > m
+        hist = [(tau, mode, y, source)]
+        speeds = []
+        iterates = 1  # consecutive iterates of the map at the end of hist
+        # the motion is followed only to hand Newton a start: where Newton's flights are the
+        # variational ones, at a looser tolerance (SETTLE_RTOL; Newton's own flights keep the drive's)
+        loose = self._loose() if self.variational else None
+        for _ in range(n_max):
+            y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=loose)
+            source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
+            hist.append((tau, mode, y, source))
+            iterates += 1
+            speeds.append(float(c @ arrival[2]))
+            if speeds[-1] <= 0.0:
+                raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
+                                 "without one) does not strike the stop: give a guess")
+            if n_max > m and len(speeds) > 2 * m + 2 and \
+                    abs(speeds[-1] - speeds[-1 - m]) <= settle * max(1.0, abs(speeds[-1])):
+                break
+            if accelerate and iterates >= 4 and mode == hist[-2][1] == hist[-3][1] == hist[-4][1]:
+                star = dominant_limit(hist[-4][2], hist[-3][2], hist[-2][2], y)
+                if star is not None and surfaces_ahead(self.drive, mode, star, M):  # (none jumped over)
+                    y = star
+                    hist[-1] = (tau, mode, y, source)
+                    iterates = 1
+        blocks = hist[-m:]
+        self.blocks = [(b[0], b[1]) for b in blocks]
+        self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
+        return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
+
+    def residual(self, X, settings=None, *, steer: bool = False, keep: bool = False):
+        """The shooting residual and its Jacobian: from the variational equations where the drive's
+        flights integrate them (:attr:`~impactbar.Drive.variational`, ``_saltation.through``; ``settings``
+        their integrator, default the problem's; with ``steer``, a Jacobian that only steers
+        Newton's method: a coupled blow's by forward differences; with ``keep``, the flights kept
+        whole, so that the orbit's data at ``X`` (:meth:`orbit`, one impact) takes the last one
+        without flying it again), else by central differences."""
+        n, m = self.n, self.impacts
+        r = np.empty(X.size)
+        J = np.zeros((X.size, X.size))
+        step = FD_STEP_CLOSED if self.closed else FD_STEP_ODE
+        for k in range(m):
+            y = X[k * n:(k + 1) * n]
+            nxt = ((k + 1) % m) * n
+            if self.variational:
+                tau, mode = self.blocks[k]
+                out = self._flight(tau, mode, y, keep=keep, variational="steer" if steer else True,
+                                   settings=settings)
+                r[k * n:(k + 1) * n] = out[0] - X[nxt:nxt + n]
+                J[k * n:(k + 1) * n, k * n:(k + 1) * n] = out[6]
+                J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
+                continue
+            r[k * n:(k + 1) * n] = self._map(k, y) - X[nxt:nxt + n]
+            for j in range(n):
+                h = step * max(1.0, abs(y[j]))
+                yp, ym = y.copy(), y.copy()
+                yp[j] += h
+                ym[j] -= h
+                J[k * n:(k + 1) * n, k * n + j] = (self._map(k, yp) - self._map(k, ym)) / (2.0 * h)
+            J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
+        return r, J
+
+    def value(self, X):
+        """The shooting residual alone: the flights without their variational equations."""
+        n, m = self.n, self.impacts
+        r = np.empty(X.size)
+        for k in range(m):
+            nxt = ((k + 1) % m) * n
+            r[k * n:(k + 1) * n] = self._map(k, X[k * n:(k + 1) * n]) - X[nxt:nxt + n]
+        return r
+
+    def solve(self, X, tol, max_iter):
+        """Newton's method (:func:`~impactbar.drives.orbitproblem.newton`), the tolerance no finer than the
+        flights' accuracy; where the flights integrate the variational equations and ``newton`` is
+        ``"chord"``, the chord method (:func:`~impactbar.drives.orbitproblem.chord`) from the Jacobian of a
+        variational flight at ``SETTLE_RTOL``, the residuals by plain flights (where it fails,
+        Newton's method from the same start), then one Newton step with a variational flight; the
+        Jacobians of the chord and of that step only steer, and take Magnus' coarser steps
+        (``STEER_THETA``) and a coupled blow's forward differences; with coupled blows that step
+        takes the chord's last Jacobian (a fresh one would cost a blow a column). A one-impact orbit
+        whose variational flights' state is a plain flight's hands over to that step after a Newton
+        step below ``CLOSING_HANDOVER``, and its multipliers' flight checks the root (:mod:`._closing`)."""
+        tol = max(tol, self.accuracy)
+        if not (self.variational and self.newton == "chord"):
+            return newton(self.residual, X, self.positive, tol, max_iter)
+        checked = self.impacts == 1 and self.state_flights  # (the multipliers' flight checks the root)
+        try:
+            root, J = self._steered_chord(X, tol, max_iter, C.CLOSING_HANDOVER if checked else 0.0)
+        except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
+            return newton(self.residual, X, self.positive, tol, max_iter)  # before, and its verdict)
+        if not checked:
+            return self._close(root, J)
+        return checked_root(self, self._close(root, J, tol), tol, max_iter)
+
+    def _steered_chord(self, X, tol: float, max_iter: int, handover: float = 0.0):
+        """:meth:`solve`'s chord from ``X``: the steering Jacobian of a variational flight at
+        ``SETTLE_RTOL`` (its residual the chord's first where that flight's state is the plain flights',
+        as the preset's tolerances make it), the plain flights' root (with ``handover``, the iterate
+        after a Newton step of at most that size) and the last Jacobian."""
+        steer = self._steer(self._loose())
+        r, first = self.residual(X, settings=steer, steer=True)
+        plain = self._state_settings(steer)  # (a plain flight reads no Magnus step)
+        own = plain is not None and dataclasses.replace(plain, magnus_theta=None) == \
+            dataclasses.replace(self.settings, magnus_theta=None)
+        return self._chord(X, first, tol, max_iter, r if own else None, handover, first_here=True)
+
+    def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
+        """The root of this problem from ``rough``, the orbit of a cheaper model of the same motion
+        (:meth:`~impactbar.laws.ContactLaw.coarse_model`: a coupled blow on the lattice where this
+        problem's are exact; theory §11, "The coupled blow"): its unknowns and blocks the start, the
+        Jacobian of its residual there the chord's (within the coarse blow's error of this one's:
+        some 1e-2 on the example, so each step gains some two digits), the residuals this problem's.
+
+        Parameters
+        ----------
+        rough : SwitchedOrbit
+            An orbit of the same drive and impacts under the coarse model.
+        tol : float
+            Relative tolerance of the steps (no finer than the flights' accuracy).
+        max_iter : int
+            Largest number of chord steps.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m n,)
+            The unknowns.
+
+        Raises
+        ------
+        ValueError
+            Where the chord steps do not converge (the caller then solves this problem from its
+            own start).
+        """
+        X = self.initial(rough, tol, max_iter)
+        first = rough._problem.steering_residual(np.asarray(rough._unknowns, dtype=float))[1]
+        return self._close(*self._chord(X, first, max(tol, self.accuracy), max_iter))
+
+    def _chord(self, X, first, tol: float, max_iter: int, first_value=None, handover: float = 0.0,
+               first_here: bool = False):
+        """:meth:`solve`'s chord method from ``X`` with the Jacobian ``first`` (taken again, steering,
+        where its steps stop shrinking; ``first_value``, ``handover`` and ``first_here``
+        :func:`~impactbar.drives.orbitproblem.chord`'s): the plain flights' root and the last Jacobian."""
+        used = [first]
+
+        def jacobian(XX):  # (the chord's Jacobian taken again: the last one kept)
+            used[0] = self.steering_residual(XX)[1]
+            return used[0]
+
+        return chord(self.value, jacobian, X, self.positive, tol, max_iter, first=first,
+                     first_value=first_value, handover=handover, first_here=first_here), used[0]
+
+    def _close(self, X, last, tol: float = 0.0):
+        """:meth:`solve`'s closing step from the plain flights' root ``X``, ``last`` the chord's last
+        Jacobian; with ``tol``, the steps after it that the check asks (:func:`._closing.close`)."""
+        return close(self, X, last, tol)
+
+    def root_value(self, X):
+        """The shooting residual whose root the orbit is: by the variational flights' state where the
+        drive's flights integrate the variational equations (Newton's last steps and the orbit's
+        multipliers take those flights; by a plain flight at their tolerance where the drive has one,
+        :attr:`state_flights`, else by the variational flights themselves), else :meth:`value`.
+
+        Parameters
+        ----------
+        X : numpy.ndarray, shape (m n,)
+            The unknowns.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m n,)
+        """
+        if not self.variational:
+            return self.value(X)
+        return self._variational_value(X, None)
+
+    def _variational_value(self, X, settings):
+        """The shooting residual by the variational flights with ``settings`` (their state, which is
+        not the plain flights': its Jacobian not taken)."""
+        n, m = self.n, self.impacts
+        r = np.empty(X.size)
+        for k in range(m):
+            tau, mode = self.blocks[k]
+            nxt = ((k + 1) % m) * n
+            r[k * n:(k + 1) * n] = self._flight(tau, mode, X[k * n:(k + 1) * n], variational="state",
+                                                settings=settings)[0] - X[nxt:nxt + n]
+        return r
+
+    def steering_residual(self, X):
+        """The shooting residual and a Jacobian that only steers Newton's method (a corrector's
+        step, not the multipliers'): where the drive's flights integrate the variational equations,
+        with Magnus' coarser steps (``STEER_THETA``; the residual the same flights') and a coupled
+        blow's Jacobian by forward differences; else :meth:`residual`'s.
+
+        Parameters
+        ----------
+        X : numpy.ndarray, shape (m n,)
+            The unknowns.
+
+        Returns
+        -------
+        r : numpy.ndarray, shape (m n,)
+        J : numpy.ndarray, shape (m n, m n)
+        """
+        if not self.variational:
+            return self.residual(X)
+        return self.residual(X, settings=self._steer(self.settings), steer=True)
+
+    @staticmethod
+    def _steer(settings: FlightSettings) -> FlightSettings:
+        """``settings`` with the Magnus steps of a Jacobian that only steers Newton's method
+        (``STEER_THETA``; a drive whose variational flights integrate ``Phi`` beside the state, the
+        rigid piston's CVODE, reads none)."""
+        return dataclasses.replace(settings, magnus_theta=STEER_THETA)
+
+    def _loose(self) -> FlightSettings:
+        """The integrator at ``SETTLE_RTOL`` (its ``atol`` scaled as much): the flights that only lead
+        to Newton's start or steer it."""
+        s = self.settings
+        return dataclasses.replace(s, rtol=max(s.rtol, SETTLE_RTOL),
+                                   atol=max(s.atol, SETTLE_RTOL * s.atol / s.rtol))
+
+    def unknowns(self, orbit):
+        """The unknowns of a found orbit of this problem."""
+        return np.asarray(orbit._unknowns, dtype=float).copy()
+
+    def adopt(self, other: OrbitProblem) -> ShootingProblem:
+        """The blocks' start times and modes of ``other`` (each of its blocks for each of ours, in
+        turn: a doubled branch repeats the one-impact orbit's), each mode made again by this drive's
+        map at the impact before the block (its scheduled events follow this drive's parameters)."""
+        blocks = getattr(other, "blocks", None)
+        if not blocks:
+            return self
+        sources = getattr(other, "sources", None) or []
+        self.blocks, self.sources = [], []
+        for k in range(self.impacts):
+            tau, mode = blocks[k % len(blocks)]
+            if sources and not self.coupled:  # (a coupled blow's mode is the one at its end: kept)
+                source = sources[k % len(sources)]
+                arr_mode, z, _, q, v = source
+                mode = self.drive.impact(arr_mode, z, tau, q, v).mode
+                self.sources.append(source)
+            self.blocks.append((tau, mode))
+        if _same_problem(self, other):  # its last flight is ours too
+            self._last = other._last
+        return self
+
+    def admissibility(self, X, k):
+        """By construction each flight ends at its first arrival and each event is its first
+        crossing; an arrival must come forward (``"backward impact"``), and the end must leave the
+        stop after it (``"sticks"``)."""
+        n, M = self.n, self.M
+        c = self.model.end_weights
+        y = X[k * n:(k + 1) * n]
+        tau, mode = self.blocks[k]
+        y_after, _, _, arrival, _, _ = self._flight(tau, mode, y)
+        if float(c @ arrival[2]) <= 0.0:
+            return Admissibility.BACKWARD_IMPACT
+        if c @ y_after[M:2 * M] >= 0.0 and self.model.R > 0.0 and \
+                self.model.law.restitution_in_kernel(self.model):
+            return Admissibility.STICKS
+        return Admissibility.ADMISSIBLE
+
+    def orbit(self, X, multipliers: bool = True) -> OrbitData:
+        """The period, durations, states, switches and the multipliers of the return map on the
+        section after the impacts (the product of the blocks' Jacobians projected on ``c . q = 0``
+        times the drive's states); without ``multipliers``, ``nan`` in their place and no
+        monodromy (no Jacobian computed): :func:`._shooting_data.orbit_data`."""
+        return orbit_data(self, X, multipliers)
+
+    def blow_records(self, X):
+        """The records of the period's blows in order (a drive with state under a law whose contact
+        takes time: each blow solved with the drive's state), ``None`` otherwise."""
+        if not self.coupled:
+            return None
+        return [p.record for p in self.flights(X) if hasattr(p, "record")]
+
+    def flights(self, X) -> list:
+        """The period's flights as the drive's flights give them (their own times: each block
+        from its start ``tau_k``), e.g. for the drive's :meth:`~impactbar.Drive.border_tests`."""
+        n = self.n
+        out = []
+        for k in range(self.impacts):
+            tau, mode = self.blocks[k]
+            out += self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[4]
+        return out
+
+    def event_pattern(self, X) -> tuple:
+        """The period's sequence of the drive's discrete states: per block its start mode, then
+        each event's name and the mode after it, in order. Two solutions (or two flights from
+        nearby unknowns) with the same pattern lie on one smooth piece of the problem; a changed
+        pattern is a border collision (a switch changing order, a relief valve opening, an
+        accumulator emptying)."""
+        n = self.n
+        out = []
+        for k in range(self.impacts):
+            tau, mode = self.blocks[k]
+            out.append(("start", mode))
+            events = self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[5]
+            out += [(e.name, after) for _, e, after, _ in events]
+        return tuple(out)
+
+    def pieces(self, X):
+        """The flights of the period as ``(t0, t1, f)``, ``f(t) -> (q, v)`` at orbit times."""
+        n, m = self.n, self.impacts
+        out = []
+        shift = 0.0
+        for k in range(m):
+            tau, mode = self.blocks[k]
+            y = X[k * n:(k + 1) * n]
+            _, t_after, _, _, pieces, _ = self._flight(tau, mode, y, keep=True)
+            for p in pieces:
+                off = shift - tau
+                out.append((p.t0 + off, p.t_end + off, lambda tt, p=p, off=off: p.modal(tt - off)))
+            shift += t_after - tau
+        return out
+
