@@ -152,9 +152,10 @@ def central_gradients(point, u, step: float = DIFFERENCE_STEP) -> tuple:
         up[j], down[j] = min(u[j] + step, 1.0), max(u[j] - step, 0.0)
         cols.append((np.asarray(point(up), dtype=float) - np.asarray(point(down), dtype=float))
                     / (up[j] - down[j]))
-    jac = np.array(cols).T
-    return jac[0], jac[1:], (f"central differences of fresh evaluations, step {step:g} in the scaled "
-                             "variables (error O(step**2); one-sided O(step) at a bound)")
+    objective, *constraints = np.array(cols).T
+    method = (f"central differences of fresh evaluations, step {step:g} in the scaled variables (error "
+              "O(step**2); one-sided O(step) at a bound)")
+    return objective, np.array(constraints).reshape(-1, u.size), method
 
 
 def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, method: str,
@@ -211,8 +212,9 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
     else:
         lam, rnorm = np.zeros(len(cols)), norm
     residual = rnorm / norm if norm > 0.0 else 0.0
-    border = min(((float(np.linalg.norm(np.asarray(v) - u)), e) for v, e in failed), default=(math.inf, ""))
-    border = border[1] if border[0] <= reach else ""
+    distance, error = min(((float(np.linalg.norm(np.asarray(v) - u)), e) for v, e in failed),
+                          default=(math.inf, ""))
+    border = error if distance <= reach else ""
     verdict = ("converged" if residual <= KKT_TOLERANCE else "stopped at a budget" if budget
                else "stopped at a border" if border else "not stationary")
     return OptimalityCertificate(verdict=verdict, residual=float(residual), objective_gradient=g.tolist(),
