@@ -19,8 +19,9 @@ def add_parser(sub) -> None:
              "drilling rate per kW or another objective, under constraints",
         description="Search the design of a drifter with its oil circuit that maximises an objective, "
                     "each design's operating point on the rod and rock solved (theory section 11). "
-                    "Prints the baseline and the optimum side by side: every variable, objective and "
-                    "constraint with its margin.")
+                    "Prints the baseline and the best design found side by side: every variable, "
+                    "objective and constraint with its margin, and the design's first-order (KKT) "
+                    "certificate; it is called the optimum only where that says converged.")
     p.add_argument("config", help="a drifter with its oil circuit: a TOML file (a [chambers] section; a "
                                   "[piston] section makes its diameters variables) or a preset's name")
     p.add_argument("--vary", action="append", required=True, metavar="KEY=LOW:HIGH",

@@ -38,6 +38,7 @@ import numpy as np
 from .circuit import CircuitDrifter
 from .design_keys import design_bounds
 from .loader import build, config_value, read_config, with_values
+from .optimality import certify_search
 from .optimize_cache import OrbitChain, dumps, read_cache, write_cache
 from .optimize_population import check_population, penalised, population_search
 from .optimize_progress import DesignProgress
@@ -312,6 +313,9 @@ class DrifterOptimum:
         Every design's record in the order evaluated.
     message : str
         The optimiser's.
+    certificate : OptimalityCertificate
+        The optimum's first-order (KKT) certificate (:mod:`~impactbar.physical.optimality`); the table
+        says "optimum" only where it is ``"converged"``.
     """
 
     objective: str
@@ -325,6 +329,7 @@ class DrifterOptimum:
     message: str = ""
     gradients: int = 0
     config: dict = field(default_factory=dict, repr=False)
+    certificate: object = None  #: the optimum's OptimalityCertificate (first-order, KKT)
 
     @property
     def gain(self) -> float:
@@ -337,7 +342,7 @@ class DrifterOptimum:
         return {"objective": self.objective, "vary": self.vary, "baseline": self.baseline,
                 "optimum": self.optimum, "gain": self.gain, "evaluations": self.evaluations,
                 "cached": self.cached, "gradients": self.gradients, "seconds": self.seconds,
-                "message": self.message,
+                "message": self.message, "certificate": self.certificate and self.certificate.to_dict(),
                 "history": self.history}
 
     def to_json(self, path=None) -> str:
@@ -350,7 +355,8 @@ class DrifterOptimum:
     def table(self) -> str:
         """Baseline and optimum side by side: the variables, every objective, every constraint with
         its limit and margin."""
-        rows = [f"{'':34s}{'baseline':>14s}{'optimum':>14s}"]
+        word = "optimum" if self.certificate is not None and self.certificate.converged else "best found"
+        rows = [f"{'':34s}{'baseline':>14s}{word:>14s}"]
         for key, b in self.vary.items():
             scale, unit = _show_unit(b["unit"])
             rows.append(f"{key:34s}{self.baseline['values'][key] * scale:14.5g}"
@@ -377,6 +383,8 @@ class DrifterOptimum:
         rows.append(f"gain in {self.objective}: {self.gain * 100:+.2f} % after {self.evaluations} "
                     f"evaluations{grads} ({self.cached} from the cache) in {self.seconds:.0f} s, the "
                     f"slowest design {slowest:.1f} s")
+        if self.certificate is not None:
+            rows.append(f"{word}: {self.certificate}")
         return "\n".join(rows)
 
     def plot(self, axes=None):
@@ -707,13 +715,16 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             message += "; the best design's fresh orbit missed a constraint, the next best kept"
         fresh[name] = out
     message += _better_missed(history, best, fkey)
+    certificate = certify_search(fresh["optimum"], history, keys, (lo, span), res, tol, fkey, (lambda v: (
+        evaluate_blow(build(with_values(cfg, design_of(v)[2]), folder), V, limits))) if ideal else None,
+        lambda: _design_gradient(cfg, folder, fresh["optimum"], None, spec, limits, fkey, span))
     return DrifterOptimum(objective=objective,
                           vary={k: {"low": spec[k]["low"], "high": spec[k]["high"], "unit": spec[k]["unit"]}
                                 for k in keys},
                           baseline=fresh["baseline"], optimum=fresh["optimum"], evaluations=counter["new"],
                           cached=n_cached, seconds=time.perf_counter() - t_start, history=history,
                           message=message, config=with_values(cfg, best["changes"]),
-                          gradients=counter["gradients"])
+                          gradients=counter["gradients"], certificate=certificate)
 
 
 def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
