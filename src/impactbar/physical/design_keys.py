@@ -16,7 +16,11 @@ from __future__ import annotations
 from .loader import config_value
 from .units import to_si
 
-__all__ = ["design_key", "key_unit", "key_value", "config_quantity", "design_bounds"]
+__all__ = ["INTEGER_KEYS", "design_key", "key_unit", "key_value", "config_quantity", "design_bounds"]
+
+#: the config keys that take integers: a design map's axis over one takes integer values (stored as
+#: integers); the optimiser's search, continuous, does not vary them
+INTEGER_KEYS = ("model.n_modes", "rock.cells_per_piston", "force.k", "force.max_harmonics")
 
 
 def key_unit(key: str, base) -> str:
@@ -163,6 +167,9 @@ def design_bounds(config: dict, vary, folder=None) -> dict:
             raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies: {exc}") from None
         if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
             raise ValueError(f"vary[{key!r}] must be (low, high); got {bounds!r}")
+        if key in INTEGER_KEYS:
+            raise ValueError(f"vary: {key!r} takes integers, and the search varies its keys continuously: "
+                             "give it in the config (a design map takes it as an axis)")
         low, high = bounds
         lo, hi = (key_value(f"vary[{key!r}] {side}", b, unit, base)
                   for side, b in (("low", low), ("high", high)))

@@ -48,6 +48,7 @@ import numpy as np
 
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_int
+from ..physical.design_keys import INTEGER_KEYS
 from .grid import ChunkedGrid
 
 DRIFTER_TASKS = ("operating_point", "settle")
@@ -64,7 +65,6 @@ CHAINS = ("continue", "default")
 #: longest failure message kept per point (characters)
 REASON_CHARS = 200
 #: the config keys that take integers: an axis over one takes integer values, stored as integers
-INTEGER_KEYS = ("model.n_modes", "rock.cells_per_piston", "force.k", "force.max_harmonics")
 
 #: the status codes of a point
 STATUS = {0: "orbit found", 1: "no orbit (ValueError)", 2: "failed (another error)"}
