@@ -1,0 +1,28 @@
+"""Contour labels a reader can tell apart: distinct, upright and inside the axes."""
+
+import numpy as np
+import pytest
+
+
+def test_contour_labels_are_distinct_upright_and_inside():
+    pytest.importorskip("matplotlib")
+    import matplotlib.pyplot as plt
+
+    from impactbar.plotting import label_contours
+
+    # levels 45.6, 45.9, 46.2, ...: "%.0f" reads two of them as "46"
+    x, y = np.linspace(60.0, 80.0, 5), np.linspace(6.0, 14.0, 5)
+    X, Y = np.meshgrid(x, y)
+    f = 45.0 + 0.1 * (X - 60.0) + 0.1 * np.sin(Y)
+    fig, ax = plt.subplots(figsize=(6.4, 4.4))
+    lines = ax.contour(x, y, f, levels=np.arange(45.3, 47.2, 0.3))
+    texts = label_contours(ax, lines, "Hz")
+    labels = [t.get_text() for t in texts]
+    assert labels and len(set(labels)) == len(labels) and all(s.endswith(" Hz") for s in labels)
+    assert all(-90.0 <= ((t.get_rotation() + 180.0) % 360.0) - 180.0 <= 90.0 for t in texts)
+    fig.canvas.draw()
+    frame = ax.get_window_extent()
+    for t in texts:
+        box = t.get_window_extent()
+        assert frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0 and box.y1 <= frame.y1
+    plt.close(fig)
