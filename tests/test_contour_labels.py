@@ -26,3 +26,22 @@ def test_contour_labels_are_distinct_upright_and_inside():
         box = t.get_window_extent()
         assert frame.x0 <= box.x0 and box.x1 <= frame.x1 and frame.y0 <= box.y0 and box.y1 <= frame.y1
     plt.close(fig)
+
+
+def test_circuit_branch_diagram_marks_the_branch_points():
+    pytest.importorskip("matplotlib")
+    from types import SimpleNamespace
+
+    import matplotlib.pyplot as plt
+
+    from impactbar.plotting import plot_circuit_branch
+
+    branch = SimpleNamespace(values=np.array([1e-3, 1.1e-3, 1.2e-3]), unit="m**3/s",
+                             parameter="supply.pump_flow", stable=np.array([True, True, False]),
+                             blow_frequency_Hz=np.array([40.0, 42.0, 44.0]),
+                             impact_energy_J=np.array([100.0, 110.0, 120.0]), events=[])
+    axes = plot_circuit_branch(branch)
+    for ax in axes:
+        data = [ln for ln in ax.get_lines() if ln.get_label() in ("stable", "unstable")]
+        assert data and all(ln.get_marker() not in ("None", "", None) for ln in data)
+    plt.close(axes[0].figure)

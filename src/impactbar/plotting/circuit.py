@@ -94,7 +94,8 @@ def plot_circuit_branch(branch, axes=None):
                          (ax_e, branch.impact_energy_J, "impact energy (J)")):
         for flag, style, name in ((True, "-", "stable"), (False, "--", "unstable")):
             if np.any(stable == flag):
-                ax.plot(x, np.where(stable == flag, y, np.nan), "C0" + style, label=name)
+                ax.plot(x, np.where(stable == flag, y, np.nan), "C0" + style, marker="o", ms=3,
+                        label=name)  # the branch's points marked
         for i, e in enumerate(branch.events):
             ax.axvline(e["value"] * scale, color=f"C{1 + i % 8}", lw=0.8, ls=":",
                        label=e["kind"] if ax is ax_f else None)
