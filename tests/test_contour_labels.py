@@ -45,3 +45,27 @@ def test_circuit_branch_diagram_marks_the_branch_points():
         data = [ln for ln in ax.get_lines() if ln.get_label() in ("stable", "unstable")]
         assert data and all(ln.get_marker() not in ("None", "", None) for ln in data)
     plt.close(axes[0].figure)
+
+
+def test_circuit_run_valve_as_a_band_and_its_legend_outside_the_data():
+    pytest.importorskip("matplotlib")
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+
+    from impactbar.plotting import plot_circuit_run
+
+    t = np.linspace(0.0, 2.0, 20001)  # 100 periods of 20 ms
+    run = {"histories": {"t_s": t, "p_f_Pa": 1e7 + 0 * t, "p_r_Pa": 8e6 + 0 * t, "p_s_Pa": 1.2e7 + 0 * t,
+                         "gap_m": 0.01 * np.abs(np.sin(np.pi * 50 * t)),
+                         "x_v": ((t * 50) % 1 > 0.5).astype(float)},
+           "impact_times_s": np.arange(0.0, 2.0, 0.02), "impact_velocities_m_s": np.full(100, 10.0)}
+    axes = plot_circuit_run(run)
+    fig = axes[0].figure
+    twin = [a for a in fig.axes if a not in list(axes)]
+    assert twin and any(isinstance(c, PolyCollection) for c in twin[0].collections)
+    assert not [ln for ln in twin[0].get_lines()]  # no valve line over the panel
+    fig.canvas.draw()
+    legend = axes[1].get_legend()
+    assert legend.get_window_extent().y0 >= axes[1].get_window_extent().y1 - 1.0
+    assert "valve opening" in [t.get_text() for t in legend.get_texts()]
+    plt.close(fig)
