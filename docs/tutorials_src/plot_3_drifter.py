@@ -25,7 +25,7 @@ The piston is rigid (``n_modes = 0``, the default), which is what the circuit's 
 import matplotlib.pyplot as plt
 
 from impactbar import physical
-from impactbar.plotting import plot_circuit_schematic
+from impactbar.plotting import label_contours, plot_circuit_schematic
 
 plot_circuit_schematic()
 plt.show()
@@ -216,7 +216,7 @@ fig, ax = plt.subplots(figsize=(6.4, 4.4))
 filled = ax.contourf(flows, precharges, efficiency, levels=12, cmap="viridis")
 fig.colorbar(filled, ax=ax, label="hydraulic efficiency")
 lines = ax.contour(flows, precharges, frequency, colors="white", linewidths=0.8)
-ax.clabel(lines, fmt="%.0f Hz")
+label_contours(ax, lines, "Hz")  # decimals from the levels' spacing, upright, inside
 Q, P = np.meshgrid(flows, precharges)
 ax.plot(Q[~stable], P[~stable], "rx")  # (none where every point is stable)
 ax.set_xlabel("supply.pump_flow (L/min)")

@@ -98,7 +98,7 @@ def test_a_branch_in_the_precharge_in_si(point):
     assert b.blow_frequency_Hz[-1] == pytest.approx(end.blow_frequency_Hz, rel=1e-8)
     assert b.impact_energy_J[-1] == pytest.approx(end.impact_energy_J, rel=1e-8)
     assert b.stable.all() and np.all(b.max_abs_multiplier < 1.0) and b.events == []
-    assert "accumulator.precharge from 1e+07 to 1.04e+07 Pa" in repr(b)
+    assert "accumulator.precharge from 10 MPa to 10.4 MPa" in repr(b)
     axes = b.plot()
     line = axes[1].get_lines()[0]
     assert line.get_xdata() == pytest.approx(b.values / 1e6)

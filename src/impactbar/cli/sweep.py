@@ -76,11 +76,20 @@ def run(args) -> int:
     from ..sweeps import DrifterMapSpec
 
     if isinstance(spec, DrifterMapSpec) and res.complete:  # a design map: its edges, refined on request
+        from ..physical.display_units import format_si
+        from ..physical.loader import config_value
         from ..sweeps import map_edges
 
         edges = map_edges(args.out, refine=spec.refine_edges)
-        for e in edges:
-            where = f", refined to {e['value']:.7g}" if e["value"] == e["value"] else ""
-            print(f"edge: {e['flag']} changes along {e['axis']} between {e['low']:.6g} and "
-                  f"{e['high']:.6g}{where} (at grid index {list(e['index'])})")
+        axes = {a.name: a for a in spec.axes}
+        for e in edges:  # in the unit the config writes the key in (the store keeps SI)
+            unit = axes[e["axis"]].unit
+            try:
+                wrote = config_value(spec.config, e["axis"])
+            except ValueError:  # a key the config leaves out: the key table's display unit
+                wrote = None
+            where = (f", refined to {format_si(e['value'], unit, wrote, 7)}" if e["value"] == e["value"]
+                     else "")
+            print(f"edge: {e['flag']} changes along {e['axis']} between {format_si(e['low'], unit, wrote)} "
+                  f"and {format_si(e['high'], unit, wrote)}{where} (at grid index {list(e['index'])})")
     return 0

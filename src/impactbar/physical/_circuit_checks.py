@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import math
 
+from .display_units import display_unit, format_si, written_unit
+
 #: The circuit's keys with a range of their own: the SI value's name, its unit and the rule
 #: (``"positive"``: above 0; ``"non_negative"``: 0 or above, with what 0 means).
 _RANGES = (
@@ -30,10 +32,12 @@ _RANGES = (
 
 
 def shown(value, si: float, unit: str) -> str:
-    """A config value as the user wrote it (a string), else its SI value with ``unit``."""
-    if isinstance(value, str):
+    """A config value as the user wrote it (a string in a unit of their own), else its SI value in the
+    key table's display unit (a value the package wrote in SI, e.g. along a branch, reads in L, MPa)."""
+    si_unit, wrote = unit.replace("^", "**"), written_unit(value)
+    if wrote is not None and (wrote.replace("^", "**") != si_unit or display_unit(si_unit)[1] == unit):
         return value.strip()
-    return f"{si:g} {unit}".strip()
+    return format_si(si, si_unit)
 
 
 def check_circuit_si(sec: dict, si: dict, restitution: float) -> None:

@@ -9,6 +9,7 @@ from functools import cached_property
 import numpy as np
 
 from .circuit import SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
+from .display_units import format_si
 
 __all__ = ["CircuitBranch", "continue_circuit"]
 
@@ -84,8 +85,8 @@ class CircuitBranch:
 
     def __repr__(self) -> str:
         v = self.values
-        unit = f" {self.unit}" if self.unit else ""
-        return (f"CircuitBranch({self.parameter} from {v[0]:.6g} to {v[-1]:.6g}{unit}, "
+        return (f"CircuitBranch({self.parameter} from {format_si(v[0], self.unit)} to "
+                f"{format_si(v[-1], self.unit)}, "
                 f"{len(v)} points, {len(self.events)} events, {self.branch.status})")
 
     def __len__(self) -> int:

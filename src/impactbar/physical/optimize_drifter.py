@@ -37,6 +37,7 @@ import numpy as np
 
 from .circuit import CircuitDrifter
 from .design_keys import design_bounds
+from .display_units import written_quantity
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_cache import OrbitChain, dumps, read_cache, write_cache
@@ -596,7 +597,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     gradients: dict[str, tuple] = {}
 
     def changes_of(values: dict) -> dict:
-        return {k: _quantity(values[k], spec[k]["unit"]) for k in keys}
+        return {k: written_quantity(values[k], spec[k]["unit"], config_value(cfg, k)) for k in keys}
 
     def design_of(u: np.ndarray) -> tuple[str, dict, dict]:
         u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)

@@ -36,6 +36,7 @@ import numpy as np
 
 from .circuit import PRESSURE_SCALE, SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
 from .design_keys import config_quantity as _quantity
+from .display_units import display_unit
 from .geometry import PISTON_KEYS
 from .loader import build, config_value, read_config, with_values
 from .units import to_si
@@ -97,9 +98,7 @@ def _config_of(drifter: CircuitDrifter) -> dict:
     return drifter.config
 
 
-def _show_unit(unit: str) -> tuple[float, str]:
-    return {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"),
-            "m**2": (1e4, "cm^2"), "s": (1e3, "ms")}.get(unit, (1.0, unit.replace("**", "^")))
+_show_unit = display_unit
 
 
 

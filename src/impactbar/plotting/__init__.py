@@ -17,6 +17,7 @@ that plot themselves (``PeriodicOrbit.plot``, ``Trajectory.plot``, ``Branch.plot
   schematic (its parts, their connections and the valve's switch points).
 """
 
+from ._common import label_contours as label_contours
 from .circuit import plot_circuit_branch as plot_circuit_branch
 from .circuit import plot_circuit_orbit as plot_circuit_orbit
 from .circuit import plot_circuit_run as plot_circuit_run
@@ -41,7 +42,8 @@ from .sweeps import plot_efficiency_map as plot_efficiency_map
 from .sweeps import plot_fraction_maps as plot_fraction_maps
 from .sweeps import plot_stability_chart as plot_stability_chart
 
-__all__ = ["plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_trajectory", "plot_end_displacement",
+__all__ = ["label_contours",
+           "plot_orbit", "plot_orbit_field", "plot_multipliers", "plot_trajectory", "plot_end_displacement",
            "plot_impact_map", "plot_intervals", "plot_experiment", "plot_branch", "plot_bifurcation_curve",
            "plot_motion", "plot_blows", "plot_force_waves", "plot_stability_chart", "plot_fraction_maps",
            "plot_bifurcation", "plot_lagrange", "plot_force_penetration", "plot_efficiency_map",

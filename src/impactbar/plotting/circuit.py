@@ -94,7 +94,8 @@ def plot_circuit_branch(branch, axes=None):
                          (ax_e, branch.impact_energy_J, "impact energy (J)")):
         for flag, style, name in ((True, "-", "stable"), (False, "--", "unstable")):
             if np.any(stable == flag):
-                ax.plot(x, np.where(stable == flag, y, np.nan), "C0" + style, label=name)
+                ax.plot(x, np.where(stable == flag, y, np.nan), "C0" + style, marker="o", ms=3,
+                        label=name)  # the branch's points marked
         for i, e in enumerate(branch.events):
             ax.axvline(e["value"] * scale, color=f"C{1 + i % 8}", lw=0.8, ls=":",
                        label=e["kind"] if ax is ax_f else None)
@@ -145,10 +146,17 @@ def plot_circuit_run(run, axes=None, *, mass_kg: float | None = None):
     axes[1].plot(run["impact_times_s"] * 1e3, np.zeros(len(run["impact_times_s"])), "k|", ms=8,
                  label="impacts")
     axes[1].set_ylabel("gap (mm)")
+    # the valve as a shaded band under the gap (a line over many periods fills the panel), the
+    # legend above the panel, outside the data
     ax_v = axes[1].twinx()
-    ax_v.plot(t, h["x_v"], color="C3", lw=0.6, alpha=0.6)
+    ax_v.fill_between(t, 0.0, h["x_v"], color="C3", alpha=0.2, lw=0, label="valve opening")
+    ax_v.set_ylim(0.0, max(1.0, float(np.max(h["x_v"], initial=0.0))) * 1.05)
     ax_v.set_ylabel("valve opening", color="C3")
-    axes[1].legend(loc="upper left", fontsize="small")
+    axes[1].set_zorder(ax_v.get_zorder() + 1)  # the gap drawn over the band
+    axes[1].patch.set_visible(False)
+    handles = axes[1].get_legend_handles_labels()[0] + ax_v.get_legend_handles_labels()[0]
+    axes[1].legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3,
+                   fontsize="small", frameon=False)
     if mass_kg is not None:
         v = np.asarray(run["impact_velocities_m_s"])
         axes[2].plot(run["impact_times_s"] * 1e3, 0.5 * mass_kg * v * v, "o", ms=3)

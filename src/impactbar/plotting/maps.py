@@ -140,7 +140,8 @@ def plot_operating_map(ds, dims, variable: str | None = None, ax=None):
                 if o is not None:
                     pts.append((v, o) if names[int(k)] == x_dim else (o, v))
         if pts:
-            ax.plot(*np.transpose(pts), "wD", mec="k", ms=4)
+            # on the map's border half a diamond would be clipped: drawn whole, over the frame
+            ax.plot(*np.transpose(pts), "wD", mec="k", ms=4, clip_on=False, zorder=5)
             handles.append(plt.Line2D([], [], color="w", mec="k", marker="D", ls="", ms=4,
                                       label="edge refined by bisection"))
     ax.set_title(ds[name].attrs.get("long_name", name), fontsize="medium")
