@@ -6,17 +6,18 @@ A key is any one that :func:`~impactbar.physical.loader.config_value` finds in t
 sections' keys, ``rod.segments.<i>.<key>``); its SI unit is the one
 :data:`~impactbar.physical.circuit.SI_PARAMETERS` names, else the base units of the config's own
 value (``""`` for a bare number); a value is written back as its float's repr with that unit
-(:func:`config_quantity`), and whether the machine takes it is what
+(:func:`~impactbar.physical.display_units.config_quantity`), and whether the machine takes it is what
 :func:`~impactbar.physical.loader.build` of :func:`~impactbar.physical.loader.with_values` says.
 No table of its own decides which keys may vary.
 """
 
 from __future__ import annotations
 
+from .display_units import config_quantity
 from .loader import config_value
 from .units import to_si
 
-__all__ = ["INTEGER_KEYS", "design_key", "key_unit", "key_value", "config_quantity", "design_bounds"]
+__all__ = ["INTEGER_KEYS", "design_key", "key_unit", "key_value", "design_bounds"]
 
 #: the config keys that take integers: a design map's axis over one takes integer values (stored as
 #: integers); the optimiser's search, continuous, does not vary them
@@ -96,19 +97,6 @@ def key_value(name: str, value, unit: str, base) -> float:
     90.0
     """
     return to_si(name, value, unit, repr(base), what=f"in {unit or 'no unit'} as the config's {base!r}")
-
-
-def config_quantity(x: float, unit: str):
-    """An SI value as a config takes it: the float's repr with its unit (exact), a bare float for a
-    dimensionless key.
-
-    Examples
-    --------
-    >>> from impactbar.physical.design_keys import config_quantity
-    >>> config_quantity(0.0215, "m"), config_quantity(0.2, "")
-    ('0.0215 m', 0.2)
-    """
-    return float(x) if unit == "" else f"{float(x)!r} {unit}"
 
 
 def design_key(config: dict, key: str) -> tuple[str, object]:

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import re
 
-__all__ = ["display_unit", "written_unit", "format_si", "written_quantity"]
+__all__ = ["display_unit", "written_unit", "format_si", "config_quantity", "written_quantity"]
 
 #: The key table's display unit of each SI unit: ``SI unit -> (factor from SI, display unit)``.
 DISPLAY_UNITS = {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"),
@@ -85,6 +85,19 @@ def format_si(value: float, unit: str, written=None, digits: int = 6) -> str:
     return f"{value * factor:.{digits}g} {wrote}"
 
 
+def config_quantity(x: float, unit: str):
+    """An SI value as a config takes it: the float's repr with its unit (exact), a bare float for a
+    dimensionless key.
+
+    Examples
+    --------
+    >>> from impactbar.physical.display_units import config_quantity
+    >>> config_quantity(0.0215, "m"), config_quantity(0.2, "")
+    ('0.0215 m', 0.2)
+    """
+    return float(x) if unit == "" else f"{float(x)!r} {unit}"
+
+
 def written_quantity(value: float, unit: str, written):
     """A SI ``value`` as a config value in the unit of ``written`` (the config's own value of the key),
     written so that reading it back gives ``value`` exactly; else its SI repr
@@ -100,7 +113,6 @@ def written_quantity(value: float, unit: str, written):
 
     A value that no string in the written unit reads back to exactly (rare) stays in SI.
     """
-    from .design_keys import config_quantity
     from .units import to_si
 
     wrote = written_unit(written)
@@ -111,9 +123,11 @@ def written_quantity(value: float, unit: str, written):
         y = value * factor
         # the shortest that reads back exactly, then the floats a few ulps either side
         texts = [f"{y:.{digits}g} {wrote}" for digits in range(6, 18)]
+        lo = hi = y
         near = [y]
         for _ in range(4):
-            near = [float(np.nextafter(near[0], -math.inf)), *near, float(np.nextafter(near[-1], math.inf))]
+            lo, hi = float(np.nextafter(lo, -math.inf)), float(np.nextafter(hi, math.inf))
+            near = [lo, *near, hi]
         texts += [f"{v!r} {wrote}" for v in near]
         for text in texts:
             if to_si("value", text, unit, "") == value:

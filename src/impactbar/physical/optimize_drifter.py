@@ -41,6 +41,7 @@ from .display_units import written_quantity
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_cache import OrbitChain, dumps, read_cache, write_cache
+from .optimize_outputs import piston_and_multipliers, shank_stress
 from .optimize_population import check_population, penalised, population_search
 from .optimize_progress import DesignProgress
 from .sensitivity import _quantity, _show_unit, default_step, tangent_derivatives
@@ -633,7 +634,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     rec.update(guess=guess, u=u.tolist())
                     near.append((u.copy(), rid))
                     chain.add(rid, orbit)
-                rec.update(_piston_and_multipliers(drifter, orbit))
+                rec.update(piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
             rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
         rec.update(id=rid, values=values, changes=changes)
@@ -708,8 +709,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         best = rec
         drifter = build(with_values(cfg, rec["changes"]), folder)
         out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, kept)
-        out.update(_piston_and_multipliers(drifter, orbit), values=rec["values"], changes=rec["changes"],
-                   shank_stress=None if ideal else _shank_stress(drifter, orbit))
+        out.update(piston_and_multipliers(drifter, orbit), values=rec["values"], changes=rec["changes"],
+                   shank_stress=None if ideal else shank_stress(drifter, orbit))
         out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
                                         for k in rec["objectives"] if rec["objectives"][k] != 0.0)
         if name == "optimum" and "optimum" in fresh:
@@ -733,7 +734,7 @@ def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
     try:
         drifter = build(with_values(config, changes), folder)
         rec, orbit = evaluate_design(drifter, limits)
-        rec.update(_piston_and_multipliers(drifter, orbit))
+        rec.update(piston_and_multipliers(drifter, orbit))
     except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
         rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
     return rec
@@ -777,25 +778,3 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
         dcon[:, j] = [col[n] * span[j] for n in names]
     return dobj, dcon
 
-
-def _piston_and_multipliers(drifter, orbit) -> dict:
-    bar = drifter.bar
-    lengths = list(getattr(bar, "lengths_m", [bar.length_m]))
-    diameters = list(getattr(bar, "diameters_m", [bar.diameter_m]))
-    mu = np.asarray([] if orbit is None else orbit.multipliers, dtype=complex)
-    return {"piston": {"lengths_m": [float(x) for x in lengths], "diameters_m": [float(x) for x in diameters],
-                       "mass_kg": bar.mass_kg, "rear_area_m2": drifter.si["rear_area_m2"],
-                       "front_area_m2": drifter.si["front_area_m2"]},
-            "multipliers_re": mu.real.tolist(), "multipliers_im": mu.imag.tolist()}
-
-
-def _shank_stress(drifter, orbit) -> dict | None:
-    """The stress in the shank adapter over the first blow (``t_s``, ``stress_Pa``): the incident wave,
-    whose peak the peak incident stress is, and what the rod and rock return; ``None`` without a rock."""
-    if drifter.drill is None:
-        return None
-    blow = orbit.orbit.contacts[0]
-    sc = drifter.scales
-    return {"t_s": (np.asarray(blow.times[:-1], dtype=float) * sc.time_s).tolist(),
-            "stress_Pa": (np.asarray(blow.shank_forces, dtype=float) * sc.force_N
-                          / drifter.drill.segments[0].area_m2).tolist()}

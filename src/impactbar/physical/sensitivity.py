@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .circuit import PRESSURE_SCALE, SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
-from .design_keys import config_quantity as _quantity
+from .display_units import config_quantity as _quantity
 from .display_units import display_unit
 from .geometry import PISTON_KEYS
 from .loader import build, config_value, read_config, with_values

@@ -200,7 +200,7 @@ class MapAxis:
     def config_value(self, value):
         """The value as a config takes it: a number with this unit, or a bare number (an integer
         for an integer axis)."""
-        from ..physical.design_keys import config_quantity
+        from ..physical.display_units import config_quantity
 
         if self.unit == "" and self.name in INTEGER_KEYS:
             return int(value)
