@@ -80,7 +80,8 @@ class _WindowLoad:
     def __init__(self, load, s: float, t0: float):
         self.load, self.s, self.t0 = load, s, t0
         t1 = t0 + 2.0 / s
-        tj = np.asarray(load._boundaries(t0, t1), dtype=float)
+        bounds = getattr(load, "_boundaries", None)  # (a load's jumps; a drive's history has none)
+        tj = np.asarray(bounds(t0, t1), dtype=float) if bounds is not None else np.empty(0)
         self.t_edges = np.concatenate(([t0], tj, [t1]))
         self.jumps = s * (tj - t0)  # in theta, inside (0, 2)
         orders = load.orders

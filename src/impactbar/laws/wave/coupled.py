@@ -25,7 +25,8 @@ class DriveHistory:
     """The drive's force over a window, from its pieces, as the window's solver takes a load: its
     values (``__call__``), its integral (``propagate``'s rigid velocity), a bound (``sup_abs``) and
     the pieces' steps as the points where the solver's quadratures split (``_boundaries``); neither
-    a load of harmonics (``orders``) nor one of constant pieces (``pieces``)."""
+    a load of harmonics (``orders``) nor one of constant pieces (``pieces``). The drive's pieces
+    are ``flights``."""
 
     kernel_view = None
     orders = None
@@ -35,15 +36,15 @@ class DriveHistory:
         return None
 
     def __init__(self, pieces):
-        self.pieces = list(pieces)
-        self.starts = np.array([p.t0 for p in self.pieces])
-        self.steps = np.unique(np.concatenate([p.t for p in self.pieces]))
-        impulses = [p.impulse_at([p.t_end])[0] for p in self.pieces]
+        self.flights = list(pieces)
+        self.starts = np.array([p.t0 for p in self.flights])
+        self.steps = np.unique(np.concatenate([p.t for p in self.flights]))
+        impulses = [p.impulse_at([p.t_end])[0] for p in self.flights]
         self.cumulative = np.concatenate(([0.0], np.cumsum(impulses)))
-        self.sup_abs = float(max(np.max(np.abs(p.force(p.t))) for p in self.pieces))
+        self.sup_abs = float(max(np.max(np.abs(p.force(p.t))) for p in self.flights))
 
     def _index(self, t):
-        return np.clip(np.searchsorted(self.starts, t, side="right") - 1, 0, len(self.pieces) - 1)
+        return np.clip(np.searchsorted(self.starts, t, side="right") - 1, 0, len(self.flights) - 1)
 
     def __call__(self, t):
         shape = np.shape(t)
@@ -52,7 +53,7 @@ class DriveHistory:
         out = np.empty(t.shape)
         for j in np.unique(idx):
             sel = idx == j
-            out[sel] = self.pieces[j].force(t[sel])
+            out[sel] = self.flights[j].force(t[sel])
         return out.reshape(shape)
 
     def integral(self, t):
@@ -62,7 +63,7 @@ class DriveHistory:
         out = np.empty(t.shape)
         for j in np.unique(idx):
             sel = idx == j
-            out[sel] = self.cumulative[j] + self.pieces[j].impulse_at(t[sel])
+            out[sel] = self.cumulative[j] + self.flights[j].impulse_at(t[sel])
         return out
 
     def _boundaries(self, t0, t1):
