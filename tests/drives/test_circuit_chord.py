@@ -139,7 +139,7 @@ def test_a_continuation_point_takes_one_variational_period(drifter, monkeypatch)
     steering steps, and at most two plain periods (the chord's; the start one more, for ``F_lam``);
     the start's orbit is ``find_orbit``'s flight, not flown again. The correctors of before took two
     steering variational periods and two plain ones a point."""
-    from impactbar.orbits.switched import STEER_THETA
+    from impactbar.orbits.shooting import STEER_THETA
 
     drive = drifter.drive()
     orbit = find_orbit(drifter.model().with_(n_modes=4), drive)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, FourierLoad, PositionSwitchedDrive, simulate
-from impactbar.dynamics import _kernel as K
+from impactbar.dynamics import _crossing as K
 from impactbar.simulation import InitialState
 
 sim_module = importlib.import_module("impactbar.simulation.simulate")  # (the name is the function's)
