@@ -104,7 +104,7 @@ def test_the_preset_orbit_takes_no_plain_flight_at_the_drives_tolerance(drifter,
     """With 4 modes: the three settling flights, the steering flight (its residual the chord's first
     step's), the closing step's and the multipliers' (which the orbit's data take): no plain flight
     at the drive's own tolerance (the chord's first Newton step is 7e-5, below ``CLOSING_HANDOVER``,
-    and leaves 3e-8: the closing step, whose Jacobian's error as it meets it, 1.7e-5, leaves the
+    and leaves 3e-8: the closing step, whose Jacobian's error as it meets it, 1.4e-5 to 1.7e-5, leaves the
     check 4e-13; theory §11 quotes these). The orbit is the one the chord reaches when run to its
     own root first (``CLOSING_HANDOVER = 0``, the way before) to 1e-10 of the unknowns' size, its
     multipliers to 1e-8."""
@@ -117,7 +117,9 @@ def test_the_preset_orbit_takes_no_plain_flight_at_the_drives_tolerance(drifter,
     assert [v for v, _, _ in seen] == [False] * S.SETTLE_LIFTED + ["steer", "steer", True], seen
     assert chord_steps[-1] == pytest.approx(7e-5, rel=0.1) and len(closing) == 2, (chord_steps, closing)
     assert closing[0] == pytest.approx(3e-8, rel=0.2) and closing[1] == pytest.approx(4e-13, rel=0.2)
-    assert closing[1] / closing[0] == pytest.approx(1.7e-5, rel=0.05)
+    # (the check's step lies near the rounding floor of the unknowns: 1.7e-5 on one machine, 1.45e-5
+    # on another with the same packages, so the ratio is held to 15 %)
+    assert closing[1] / closing[0] == pytest.approx(1.6e-5, rel=0.15)
     seen.clear()
     monkeypatch.setattr(C, "CLOSING_HANDOVER", 0.0)
     before = find_orbit(model, drive)
