@@ -44,7 +44,7 @@ _VERDICTS = ("converged", "stopped at a budget", "stopped at a border", "not sta
 
 @dataclass(frozen=True)
 class OptimalityCertificate:
-    """The first-order (KKT) certificate of a reported design.
+    r"""The first-order (KKT) certificate of a reported design.
 
     Attributes
     ----------
@@ -66,7 +66,7 @@ class OptimalityCertificate:
         Variable (dotted key) at a bound to ``"low"`` or ``"high"``.
     multipliers : dict
         Name (an active constraint, or ``"<key> low"``/``"<key> high"`` of a bound) to its Lagrange
-        multiplier (the objective's unit per unit scaled margin), each ``>= 0``.
+        multiplier (the objective's unit per unit scaled margin), each :math:`\ge 0`.
     method : str
         How the gradients were computed.
     budget : bool
