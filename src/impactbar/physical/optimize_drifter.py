@@ -37,14 +37,14 @@ import numpy as np
 
 from .circuit import CircuitDrifter
 from .design_keys import design_bounds
-from .display_units import written_quantity
+from .display_units import config_quantity, display_unit, written_quantity
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_cache import OrbitChain, dumps, read_cache, write_cache
 from .optimize_outputs import piston_and_multipliers, shank_stress
 from .optimize_population import check_population, penalised, population_search
 from .optimize_progress import DesignProgress
-from .sensitivity import _quantity, _show_unit, default_step, tangent_derivatives
+from .sensitivity import default_step, tangent_derivatives
 from .units import to_si
 
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE",
@@ -111,7 +111,7 @@ def _better_missed(history: list, best: dict, fkey: str) -> str:
         return ""
     nearest = [min(r["constraints"].items(), key=lambda kv: kv[1]["scaled"]) for r in better]
     name, c = max(nearest, key=lambda kv: kv[1]["scaled"])
-    scale, unit = _show_unit(c["unit"])
+    scale, unit = display_unit(c["unit"])
     return (f"; {len(better)} design(s) of a larger objective missed a constraint, the nearest {name} by "
             f"{-c['margin'] * scale:.4g}{' ' + unit if unit else ''} ({-c['scaled']:.2g} of its scale, "
             f"above the tolerance {FEASIBILITY_TOLERANCE:g})")
@@ -360,7 +360,7 @@ class DrifterOptimum:
         word = "optimum" if self.certificate is not None and self.certificate.converged else "best found"
         rows = [f"{'':34s}{'baseline':>14s}{word:>14s}"]
         for key, b in self.vary.items():
-            scale, unit = _show_unit(b["unit"])
+            scale, unit = display_unit(b["unit"])
             rows.append(f"{key:34s}{self.baseline['values'][key] * scale:14.5g}"
                         f"{self.optimum['values'][key] * scale:14.5g} {unit}")
         for name, (key, unit, _) in OBJECTIVES.items():
@@ -375,7 +375,7 @@ class DrifterOptimum:
                             f"{self.optimum['objectives'][key]:14.5g}")
         for name, c in self.baseline["constraints"].items():
             o = self.optimum["constraints"][name]
-            scale, unit = _show_unit(c["unit"])
+            scale, unit = display_unit(c["unit"])
             label = f"{name} (limit {c['limit'] * scale:.4g})"
             rows.append(f"{label:34s}"
                         f"{c['value'] * scale:14.5g}{o['value'] * scale:14.5g} {unit}"
@@ -656,7 +656,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             raise ValueError(f"the start has no operating point: {first['error']}")
         if not first["feasible"]:
             name, c = min(first["constraints"].items(), key=lambda kv: kv[1]["scaled"])
-            scale, unit = _show_unit(c["unit"])
+            scale, unit = display_unit(c["unit"])
             u = f" {unit}" if unit else ""
             raise ValueError(f"infeasible start: constraint {name} = {c['value'] * scale:.6g}{u} misses its "
                              f"limit {c['limit'] * scale:.6g}{u} by {-c['margin'] * scale:.4g}{u}")
@@ -769,7 +769,8 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
         except ValueError:  # a border within the step: the secant of two continued orbits
             h = step * abs(values[key])
             try:
-                ends = [read(build(with_values(design, {key: _quantity(values[key] + s * h, units[key])}),
+                ends = [read(build(with_values(design, {key: config_quantity(values[key] + s * h,
+                                                                             units[key])}),
                                    folder).orbit(guess=orbit)) for s in (1.0, -1.0)]
             except (ValueError, np.linalg.LinAlgError, ArithmeticError):
                 continue

@@ -35,8 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .circuit import PRESSURE_SCALE, SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
-from .display_units import config_quantity as _quantity
-from .display_units import display_unit
+from .display_units import config_quantity, display_unit
 from .geometry import PISTON_KEYS
 from .loader import build, config_value, read_config, with_values
 from .units import to_si
@@ -96,9 +95,6 @@ def _config_of(drifter: CircuitDrifter) -> dict:
                          "after (dataclasses.replace): give its configuration, whose keys the derivatives "
                          "change")
     return drifter.config
-
-
-_show_unit = display_unit
 
 
 
@@ -172,7 +168,7 @@ class OperatingPointSensitivities:
     def table(self) -> str:
         """The figures and their derivatives, one row per figure, in a designer's units per key
         (MPa, mm, L, ... of the key: the figure's change per unit of the key as the table shows it)."""
-        shown = {k: _show_unit(u) for k, u in self.units.items()}
+        shown = {k: display_unit(u) for k, u in self.units.items()}
         head = f"{'':30s}{'value':>13s}" + "".join(f"{f'd/d {k} [{shown[k][1]}]':>36s}" for k in self.keys)
         rows = [head]
         for name, value in self.figures.items():
@@ -206,11 +202,6 @@ def _figures(point: CircuitDrifterOrbit) -> dict:
         out.update(drilling_rate_m_min=rock["drilling_rate_m_min"], work_on_rock_J=rock["work_on_rock_J"],
                    drilling_rate_per_kW=rock["drilling_rate_m_min"] / out["pump_power_kW"])
     return {k: float(v) for k, v in out.items()}
-
-
-def _borders(point: CircuitDrifterOrbit) -> dict:
-    """The circuit's border margins of an operating point (Pa)."""
-    return point.border_margins_Pa
 
 
 def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | None = None,
@@ -308,9 +299,9 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
         raise ValueError("orbit must be the config's own operating point (a CircuitDrifterOrbit of the "
                          "drifter the config builds)")
     def read(pt):
-        return {**_figures(pt), **{f"border.{k}": v for k, v in _borders(pt).items()}}
+        return {**_figures(pt), **{f"border.{k}": v for k, v in pt.border_margins_Pa.items()}}
 
-    F0, B0 = _figures(point), _borders(point)
+    F0, B0 = _figures(point), point.border_margins_Pa
     if not multipliers:
         F0.pop("max_multiplier", None)
     state, steps, der = tangent_derivatives(cfg, folder, point, keys, values, units, relative_step,
@@ -363,7 +354,7 @@ def tangent_derivatives(cfg: dict, folder, point: CircuitDrifterOrbit, keys, val
         sides = []
         for s in (1.0, -1.0):
             try:
-                d = build(with_values(cfg, {key: _quantity(p + s * h, unit)}), folder)
+                d = build(with_values(cfg, {key: config_quantity(p + s * h, unit)}), folder)
             except ValueError as exc:
                 raise ValueError(f"{key} at {p + s * h:.6g} {unit} (the step {relative_step:g} of its value) "
                                  f"is out of its range: {str(exc).splitlines()[0]}") from exc
