@@ -21,7 +21,6 @@ import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
-from scipy.optimize import nnls
 
 __all__ = ["KKT_TOLERANCE", "ACTIVE_TOLERANCE", "DIFFERENCE_STEP", "OptimalityCertificate", "certify",
            "central_gradients", "stopped_at_budget", "certify_search"]
@@ -208,6 +207,8 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
     if not (math.isfinite(norm) and np.all(np.isfinite(G))):
         raise ValueError("objective_gradient, constraint_gradients: must be finite")
     if cols and norm > 0.0:
+        from scipy.optimize import nnls  # scipy.optimize loads on first use, not on import
+
         lam, rnorm = nnls(np.array(cols).T, -g)
     else:
         lam, rnorm = np.zeros(len(cols)), norm
