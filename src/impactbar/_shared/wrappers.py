@@ -187,19 +187,17 @@ def internal_kernels(namespace: dict, python=()) -> int:
 
     Examples
     --------
-    >>> import numba
-    >>> @numba.njit
-    ... def twice(x):
-    ...     return 2 * x
-    >>> @numba.njit
-    ... def caller(x):
-    ...     return twice(x) + 1
-    >>> internal_kernels({"__name__": twice.py_func.__module__, "twice": twice, "caller": caller},
-    ...                  python=("caller",))
+    A helper ``square`` kept only for the kernel ``area`` that calls it:
+
+    >>> from numba import njit
+    >>> square = njit(lambda x: x * x)
+    >>> area = njit(lambda a, b: square(a) + square(b))
+    >>> internal_kernels({"__name__": square.py_func.__module__, "square": square, "area": area},
+    ...                  python=("area",))
     1
-    >>> caller(3)
-    7
-    >>> twice(3)
+    >>> area(3, 4)
+    25
+    >>> square(3)
     Traceback (most recent call last):
     ...
     TypeError: ... is a numba kernel compiled without its Python wrapper: call it from another kernel

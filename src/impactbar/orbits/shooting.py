@@ -497,11 +497,12 @@ class ShootingProblem(OrbitProblem):
         Parameters
         ----------
         X : numpy.ndarray, shape (m n,)
-            The unknowns.
+            The unknowns: the state after each of the ``m`` impacts, stacked.
 
         Returns
         -------
-        numpy.ndarray, shape (m n,)
+        residual : numpy.ndarray, shape (m n,)
+            Zero at the orbit.
         """
         if not self.variational:
             return self.value(X)

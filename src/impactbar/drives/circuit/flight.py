@@ -252,7 +252,9 @@ def stiffness_ratio(drive, model) -> float:
     Parameters
     ----------
     drive : HydraulicCircuitDrive
+        The circuit, its pressures in units of its pressure scale.
     model : BarModel
+        The piston; its ``n_modes`` sets the highest mode's frequency.
 
     Returns
     -------
