@@ -87,7 +87,7 @@ sphinx_gallery_conf = {
 PUBLIC_MODULES = ("impactbar.drives", "impactbar.drives.circuit", "impactbar.orbits",
                   "impactbar.orbits.charts", "impactbar.simulation", "impactbar.simulation.experiments",
                   "impactbar.physical", "impactbar.sweeps", "impactbar.paper", "impactbar.plotting",
-                  "impactbar.laws")
+                  "impactbar.laws", "impactbar.measure")
 
 
 def _public_names(module, documented: set[int]) -> list[str]:

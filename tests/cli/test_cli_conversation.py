@@ -27,6 +27,7 @@ NO_CONFIG = {
     "experiment": "the paper's Section 5 experiments, dimensionless options only",
     "plot": "draws a sweep's finished zarr store, not a configuration",
     "warmup": "compiles the kernels on built-in inputs",
+    "measure": "reads a recording and its measurement spec (bars, gauges, specimen), not a machine's",
 }
 
 

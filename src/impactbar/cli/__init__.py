@@ -21,7 +21,7 @@ __all__ = ["main"]
 
 #: subcommand modules, in the order ``--help`` lists them
 SUBCOMMANDS = ("paper", "orbits", "drifter", "continue_", "optimize", "experiment", "simulate", "sweep",
-               "plot", "warmup")
+               "plot", "measure", "warmup")
 
 
 class _OneLineParser(argparse.ArgumentParser):

@@ -1,0 +1,25 @@
+"""Measurements in: strain-gauge recordings to waves, end forces, energies and a Kolsky bar's specimen.
+
+The recording and its bridges (:mod:`~impactbar.measure.recording`), the waves separated at one or
+two gauges (:mod:`~impactbar.measure.waves`), the results at a bar's end
+(:mod:`~impactbar.measure.results`), a split-Hopkinson test from raw channels to the stress-strain
+curve (:mod:`~impactbar.measure.kolsky`) and its TOML spec (:mod:`~impactbar.measure.spec`).
+"""
+
+from .kolsky import KolskyTest, analyse_kolsky
+from .recording import BRIDGES, Bar, Gauge, Recording, read_tektronix_csv
+from .results import (
+    EndHistory,
+    SpecimenResponse,
+    end_history,
+    impact_velocity,
+    specimen_response,
+    wave_energy,
+)
+from .spec import read_spec, run_spec
+from .waves import Waves, Window, find_pulses, noise_level, separate_one_point, separate_two_point, shift
+
+__all__ = ["BRIDGES", "Bar", "EndHistory", "Gauge", "KolskyTest", "Recording", "SpecimenResponse", "Waves",
+           "Window", "analyse_kolsky", "end_history", "find_pulses", "impact_velocity", "noise_level",
+           "read_spec", "read_tektronix_csv", "run_spec", "separate_one_point", "separate_two_point", "shift",
+           "specimen_response", "wave_energy"]

@@ -1,0 +1,148 @@
+"""A measurement's TOML spec: its files, channels, bars and specimen, read and run.
+
+::
+
+    [recording]
+    file = "data/shpb_pmma13.npz"         # relative to the spec; or files = {ch1 = "a.csv", ...}
+                                          # (Tektronix CSVs), or file = "x.csv" with time = "t"
+                                          # (plain columns, read by pandas)
+    baseline_us = [-30.0, -5.0]           # the quiet samples (default: the first tenth)
+
+    [bars.incident]                       # and [bars.transmitted]
+    young_modulus = 71.7e9                # Pa
+    density = 2810.0                      # kg/m^3
+    area = 4.4521e-6                      # m^2
+    # wave_speed = 5051.3                 # m/s, default sqrt(E / density)
+
+    [channels.ch1]                        # one table a channel
+    bar = "incident"
+    station = 0.10202                     # m from the specimen's face
+    bridge = "half"                       # quarter, half, half-poisson, full, full-poisson
+    gauge_factor = 2.1
+    excitation = 10.0                     # V
+    gain = 100.0
+
+    [specimen]
+    length = 1.47e-3                      # m
+    area = 1.862e-6                       # m^2
+
+    [striker]                             # optional
+    length = 0.0254                       # m (material and section: the incident bar's)
+
+    [detection]                           # optional
+    threshold = 10.0                      # noise standard deviations
+    cutoff_hz = 1.0e6                     # the detection's low-pass
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .kolsky import KolskyTest, analyse_kolsky
+from .recording import Bar, Gauge, Recording
+
+__all__ = ["read_spec", "run_spec"]
+
+_SECTIONS = {"recording", "bars", "channels", "specimen", "striker", "detection"}
+
+
+def read_spec(path) -> dict:
+    """The spec's tables (``tomllib``), the unknown ones refused."""
+    import tomllib
+
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            spec = tomllib.load(fh)
+    except FileNotFoundError:
+        raise ValueError(f"spec: no such file {str(path)!r}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"spec {path}: not valid TOML: {exc}") from None
+    unknown = set(spec) - _SECTIONS
+    if unknown:
+        raise ValueError(f"spec {path}: unknown table(s) {sorted(unknown)}; allowed {sorted(_SECTIONS)}")
+    for needed in ("recording", "bars", "channels", "specimen"):
+        if needed not in spec:
+            raise ValueError(f"spec {path}: the table [{needed}] is missing")
+    spec["_folder"] = path.parent
+    return spec
+
+
+def _table(spec: dict, dotted: str, allowed: set, required: set) -> dict:
+    table = spec
+    for key in dotted.split("."):
+        table = table.get(key, {}) if isinstance(table, dict) else {}
+    if not isinstance(table, dict):
+        raise ValueError(f"{dotted} must be a table")
+    unknown = set(table) - allowed
+    if unknown:
+        raise ValueError(f"{dotted}: unknown key(s) {sorted(unknown)}; allowed {sorted(allowed)}")
+    missing = required - set(table)
+    if missing:
+        raise ValueError(f"{dotted}.{sorted(missing)[0]} is missing")
+    return table
+
+
+def _recording(spec: dict) -> tuple[Recording, slice | None]:
+    rec = _table(spec, "recording", {"file", "files", "time", "baseline_us", "full_scale"}, set())
+    folder = spec["_folder"]
+    full_scale = rec.get("full_scale")
+    if "files" in rec:
+        files = {k: folder / v for k, v in rec["files"].items()}
+        recording = Recording.from_tektronix(files, full_scale=full_scale)
+    elif "file" in rec:
+        path = folder / rec["file"]
+        if not path.exists():
+            raise ValueError(f"recording.file: no such file {str(path)!r}")
+        if path.suffix == ".npz":
+            recording = Recording.from_npz(path, full_scale=full_scale)
+        else:
+            import pandas as pd
+
+            recording = Recording.from_frame(pd.read_csv(path), time=rec.get("time", "time"),
+                                             full_scale=full_scale)
+    else:
+        raise ValueError("recording.file (an .npz or a CSV of columns) or recording.files (Tektronix CSVs) "
+                         "is missing")
+    baseline = None
+    if "baseline_us" in rec:
+        t0, t1 = (1e-6 * float(x) for x in rec["baseline_us"])
+        k0, k1 = np.searchsorted(recording.time, [t0, t1])
+        if k1 - k0 < 8:
+            raise ValueError(f"recording.baseline_us must span >= 8 samples of the record, got "
+                             f"{rec['baseline_us']}")
+        baseline = slice(int(k0), int(k1))
+    return recording, baseline
+
+
+def run_spec(spec: dict | str | Path) -> KolskyTest:
+    """Run a Kolsky-bar spec (a path or :func:`read_spec`'s dict).
+
+    Raises
+    ------
+    ValueError
+        A missing or unknown key (named by its dotted path), and every refusal of
+        :func:`~impactbar.measure.analyse_kolsky`.
+    """
+    if not isinstance(spec, dict):
+        spec = read_spec(spec)
+    recording, baseline = _recording(spec)
+    bar_keys = {"young_modulus", "density", "area", "wave_speed"}
+    bars = {}
+    for name in ("incident", "transmitted"):
+        bars[name] = Bar(**_table(spec, f"bars.{name}", bar_keys, {"young_modulus", "density", "area"}))
+    gauges = {}
+    gauge_keys = {"bar", "station", "bridge", "gauge_factor", "excitation", "gain", "poisson", "polarity"}
+    for channel in spec["channels"]:
+        gauges[channel] = Gauge(**_table(spec, f"channels.{channel}", gauge_keys, {"bar", "station"}))
+    specimen = _table(spec, "specimen", {"length", "area"}, {"length", "area"})
+    striker = _table(spec, "striker", bar_keys | {"length"}, set())
+    material = {k: v for k, v in striker.items() if k != "length"}
+    striker_bar = Bar(**material) if material else None
+    detection = _table(spec, "detection", {"threshold", "cutoff_hz"}, set())
+    return analyse_kolsky(recording, gauges, bars["incident"], bars["transmitted"], float(specimen["length"]),
+                          float(specimen["area"]), striker_length=striker.get("length"), striker=striker_bar,
+                          threshold=float(detection.get("threshold", 10.0)),
+                          cutoff=detection.get("cutoff_hz", 1e6), baseline=baseline)
