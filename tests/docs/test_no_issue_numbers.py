@@ -19,7 +19,7 @@ GENERATED = {"_build", "api", "gallery", "tutorials", "api.rst", "sg_execution_t
 def _scanned() -> list[Path]:
     docs = [p for p in (ROOT / "docs").rglob("*")
             if p.suffix in (".md", ".py", ".rst") and not GENERATED & set(p.relative_to(ROOT / "docs").parts)]
-    examples = [p for p in (ROOT / "examples").rglob("*") if p.is_file() and p.suffix != ".csv"]
+    examples = [p for p in (ROOT / "examples").rglob("*") if p.is_file() and p.suffix not in (".csv", ".npz")]
     code = list((ROOT / "src" / "impactbar").rglob("*.py"))
     tests = [p for p in (ROOT / "tests").rglob("*.py") if p != Path(__file__).resolve()]
     benchmarks = [p for p in (ROOT / "benchmarks").rglob("*")

@@ -1,0 +1,77 @@
+"""The measurements page: its console output is what ``impactbar measure`` prints, its Python runs,
+and every number its prose quotes from the PMMA-13 test is recomputed."""
+
+import contextlib
+import io
+import os
+import re
+from pathlib import Path
+
+import pytest
+
+from impactbar.cli import main
+from impactbar.measure import run_spec
+
+ROOT = Path(__file__).resolve().parents[2]
+PAGE = (ROOT / "docs" / "measurements.md").read_text()
+TEXT = re.sub(r"\s+", " ", PAGE)
+
+
+@pytest.fixture(scope="module")
+def report():
+    return run_spec(ROOT / "examples" / "shpb_pmma13.toml").report
+
+
+def test_the_console_block_is_what_the_command_prints():
+    block = re.search(r"```console\n\$ impactbar measure (\S+)\n(.*?)```", PAGE, re.S)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["measure", str(ROOT / block.group(1))]) == 0
+    assert out.getvalue() == block.group(2)
+
+
+def test_the_python_blocks_run(monkeypatch):
+    monkeypatch.chdir(ROOT)
+    for code in re.findall(r"```python\n(.*?)```", PAGE, re.S):
+        with contextlib.redirect_stdout(io.StringIO()):
+            exec(compile(code, "measurements.md", "exec"), {})
+
+
+def _quoted(pattern: str) -> float:
+    m = re.search(pattern, TEXT)
+    assert m is not None, f"the quote {pattern!r} is gone from the page; update this test with the text"
+    return float(m.group(1))
+
+
+def test_the_prose_numbers(report):
+    w, a, v, e = report["windows"], report["arrivals"], report["impact_velocity"], report["energies_J"]
+    assert _quoted(r"The incident window lasts ([0-9.]+) us") == round(
+        w["incident"]["stop_us"] - w["incident"]["start_us"], 1)
+    assert _quoted(r"one's foot \(([0-9.]+) us with") == round(a["reflected_computed_us"], 2)
+    assert _quoted(r"its foot comes ([0-9.]+) us earlier") == round(a["reflected_early_us"], 2)
+    assert _quoted(r"that would be ([0-9]+) m/s") == round(a["incident_bar_wave_speed_from_reflection"])
+    assert _quoted(r"plateau's scatter \(([0-9.]+) m/s\)") == round(v["velocity_std"], 2)
+    assert _quoted(r"two gauges' difference \(([0-9.]+) m/s\)") == round(
+        0.5 * (max(v["per_gauge"]) - min(v["per_gauge"])), 2)
+    assert _quoted(r"kinetic energy \$[^$]+\$ is ([0-9.]+) mJ") == round(1e3 * e["striker_kinetic"], 2)
+    assert _quoted(r"the incident wave carries ([0-9.]+) mJ") == round(1e3 * e["incident"], 2)
+    assert _quoted(r"mJ \(([0-9]+) %\)") == round(100 * e["incident"] / e["striker_kinetic"])
+    into = e["force_velocity_at_specimen"]
+    assert _quoted(r"\(([0-9.]+) mJ into the specimen's face") == round(1e3 * into, 2)
+    g = report["diagnostics"]["gauges"]
+    assert _quoted(r"they differ by ([0-9.]+) %") == round(100 * (g["incident"]["scale"] - 1), 1)
+    second = round(100 * (g["transmitted"]["scale"] - 1), 1)
+    assert _quoted(r"they differ by [0-9.]+ % and ([0-9.]+) %") == second
+    for bar in g.values():
+        assert _quoted(r"in scale, ([0-9]+) % of the peak") == round(100 * bar["rms_difference"])
+    balance = report["diagnostics"]["force_balance"]["median_abs"]
+    assert _quoted(r"peak: ([0-9]+) % at the median") == round(100 * balance)
+    s = report["stress_strain"]
+    assert _quoted(r"two-wave stresses \(([0-9]+) and") == round(s["1"]["peak_stress_MPa"])
+    assert _quoted(r"two-wave stresses \([0-9]+ and ([0-9]+) MPa\)") == round(s["2"]["peak_stress_MPa"])
+    assert min(s["1"]["peak_stress_MPa"], s["2"]["peak_stress_MPa"]) < s["3"]["peak_stress_MPa"] \
+        < max(s["1"]["peak_stress_MPa"], s["2"]["peak_stress_MPa"])
+    lines = {n["frequency_MHz"] for n in report["diagnostics"]["noise_lines"].values()}
+    assert lines == {_quoted(r"one line, at ([0-9.]+) MHz on every channel")}
+    size = os.path.getsize(ROOT / "examples" / "data" / "shpb_pmma13.npz")
+    assert size // 1000 == _quoted(r"\(`examples/data/shpb_pmma13.npz`, ([0-9]+) kB\)")
