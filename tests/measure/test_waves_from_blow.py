@@ -49,3 +49,26 @@ def test_the_bits_force_from_two_gauges_with_one_percent_noise(blow):
         w = separate_two_point(t, near, far, 0.1, 0.2, ROD, cutoff=0.8 / (2 * 0.1))
         force = b.bit_force(w.time)
         assert np.max(np.abs(end_history(w, ROD).force - force)) < 0.15 * force.max()
+
+
+def test_the_rocks_stiffnesses_fitted_from_the_separated_waves():
+    """The bit's force and velocity from two gauges, sampled at 1e-4: the rock's k = 3 and k_u = 6
+    that made the blow come back within 1e-6 (the trapezoid's bias, 1e-8 relative at this step;
+    1e-5 at 1e-3)."""
+    from impactbar.measure import fit_bilinear_rock
+
+    b = exact_blow([1.0], [1.0], [0.3, 1.5, 0.1, 0.1], [1.2, Z, Z, Z], k=3.0, k_u=6.0, impact_velocity=1.0)
+    dt = 1e-4
+    t = (np.arange(int(round(b.duration / dt))) + 0.5) * dt
+    w = separate_two_point(t, -b.junction_force(4, t) / Z, -b.junction_force(3, t) / Z, 0.1, 0.2, ROD)
+    bit = end_history(w, ROD)
+    fit = fit_bilinear_rock(bit.force, bit.velocity, dt)
+    assert abs(fit["k"] - 3.0) < 1e-6 and abs(fit["k_u"] - 6.0) < 1e-6
+    assert fit["loading_steps"] > 1000 and fit["unloading_steps"] > 1000
+
+
+def test_the_fit_refuses_a_curve_without_unloading():
+    from impactbar.measure import fit_bilinear_rock
+
+    with pytest.raises(ValueError, match="0 unloading steps"):
+        fit_bilinear_rock(np.linspace(0.1, 1.0, 50), np.ones(50), 1e-3)

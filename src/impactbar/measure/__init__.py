@@ -2,7 +2,8 @@
 
 The recording and its bridges (:mod:`~impactbar.measure.recording`), the waves separated at one or
 two gauges (:mod:`~impactbar.measure.waves`), the results at a bar's end
-(:mod:`~impactbar.measure.results`), a split-Hopkinson test from raw channels to the stress-strain
+(:mod:`~impactbar.measure.results`), a rock's stiffnesses fitted from the bit's force and velocity
+(:mod:`~impactbar.measure.rock`), a split-Hopkinson test from raw channels to the stress-strain
 curve (:mod:`~impactbar.measure.kolsky`) and its TOML spec (:mod:`~impactbar.measure.spec`).
 """
 
@@ -16,10 +17,11 @@ from .results import (
     specimen_response,
     wave_energy,
 )
+from .rock import fit_bilinear_rock
 from .spec import read_spec, run_spec
 from .waves import Waves, Window, find_pulses, noise_level, separate_one_point, separate_two_point, shift
 
 __all__ = ["BRIDGES", "Bar", "EndHistory", "Gauge", "KolskyTest", "Recording", "SpecimenResponse", "Waves",
-           "Window", "analyse_kolsky", "end_history", "find_pulses", "impact_velocity", "noise_level",
-           "read_spec", "read_tektronix_csv", "run_spec", "separate_one_point", "separate_two_point", "shift",
-           "specimen_response", "wave_energy"]
+           "Window", "analyse_kolsky", "end_history", "find_pulses", "fit_bilinear_rock", "impact_velocity",
+           "noise_level", "read_spec", "read_tektronix_csv", "run_spec", "separate_one_point",
+           "separate_two_point", "shift", "specimen_response", "wave_energy"]
