@@ -5,7 +5,7 @@ summary and the diagnostics (the gauges of a bar compared, the force balance, th
 
 from __future__ import annotations
 
-from ._common import output_folder, print_json
+from ._common import docs_page, output_folder, print_json
 
 
 def add_parser(sub) -> None:
@@ -16,7 +16,7 @@ def add_parser(sub) -> None:
         "convert them to strain by their bridges, find the incident, reflected and transmitted pulses "
         "where the bars leave their noise band, shift them to the specimen and print the windows, the "
         "striker's impact velocity, the wave energies, the one-, two- and three-wave stress-strain "
-        "summary and the diagnostics. See docs/measurements.md.",
+        f"summary and the diagnostics (see {docs_page('Measurements')}).",
     )
     p.add_argument("measurement", metavar="SPEC.toml",
                    help="the measurement's TOML spec: its files, channels, bars, specimen (e.g. "
