@@ -70,6 +70,7 @@ def test_the_cli_prints_the_report_as_json_and_writes_csv(tmp_path, capsys):
                            "diagnostics"}
     waves = np.loadtxt(tmp_path / "waves.csv", delimiter=",", skiprows=1)
     assert waves.shape[1] == 4 and (tmp_path / "stress_strain.csv").exists()
+    assert (tmp_path / "kolsky.png").read_bytes()[:4] == b"\x89PNG"
 
 
 def _spec(tmp_path, npz, edit=lambda s: s):

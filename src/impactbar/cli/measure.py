@@ -1,7 +1,7 @@
 """``impactbar measure SPEC.toml``: a split-Hopkinson (Kolsky) bar recording from its raw channels to
 the pulses' windows, the striker's impact velocity, the waves' energies, the specimen's stress-strain
 summary and the diagnostics (the gauges of a bar compared, the force balance, the noise's lines);
-``--out`` writes the waves at the specimen and its stress-strain curves as CSV."""
+``--out`` writes the waves at the specimen and its stress-strain curves as CSV, and the figure."""
 
 from __future__ import annotations
 
@@ -23,7 +23,8 @@ def add_parser(sub) -> None:
                         "examples/shpb_pmma13.toml)")
     p.add_argument("--json", action="store_true", help="print the whole report as JSON")
     p.add_argument("--out", default=None,
-                   help="folder for waves.csv (the strains at the specimen's faces) and stress_strain.csv")
+                   help="folder for waves.csv (the strains at the specimen's faces), stress_strain.csv and "
+                        "kolsky.png (the bars' strains with the windows found, the waves, the curves)")
     p.set_defaults(func=run)
 
 
@@ -34,6 +35,7 @@ def run(args) -> int:
     test = run_spec(args.measurement)
     if out is not None:
         _write_csv(out, test)
+        test.plot(out / "kolsky.png")
     if args.json:
         print_json(test.report)
     else:

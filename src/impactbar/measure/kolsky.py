@@ -30,7 +30,8 @@ SIGNIFICANT = 0.25
 class KolskyTest:
     """What :func:`analyse_kolsky` found: ``report`` (a dict of plain numbers, JSON-ready), the
     waves at the specimen's faces (``time`` (s) from the incident wave's arrival, strains tension
-    positive) and the specimen's response."""
+    positive), the specimen's response, and the bars' strains on the record's time base
+    (``record_time``, ``bar_strain`` by bar) with the pulses' ``windows``."""
 
     report: dict
     time: np.ndarray
@@ -38,6 +39,16 @@ class KolskyTest:
     reflected: np.ndarray
     transmitted: np.ndarray
     specimen: object
+    record_time: np.ndarray
+    bar_strain: dict
+    windows: dict
+
+    def plot(self, path=None):
+        """The bars' strains with the windows found, the waves at the specimen and the stress-strain
+        curves (:func:`~impactbar.measure.figures.plot_kolsky`)."""
+        from .figures import plot_kolsky
+
+        return plot_kolsky(self, path)
 
 
 def _bar_strains(recording: Recording, gauges: dict, bars: dict, baseline: slice) -> dict:
@@ -219,4 +230,5 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
             "wave_speeds": {"incident": ci, "transmitted": ct},
         },
     }
-    return KolskyTest(report, resp.time, eI, eR, eT, resp)
+    return KolskyTest(report, resp.time, eI, eR, eT, resp, time, strain,
+                      {"incident": w_inc, "reflected": w_ref, "transmitted": w_tra})
