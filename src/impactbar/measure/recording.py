@@ -1,18 +1,18 @@
-"""Recordings in: oscilloscope channels, their bridges and the bars they sit on.
+r"""Recordings in: oscilloscope channels, their bridges and the bars they sit on.
 
 A strain-gauge channel records the output voltage of a Wheatstone bridge, amplified. With the
 bridge's excitation :math:`V_{ex}`, the amplifier's gain :math:`G` and the gauges' gauge factor
-:math:`GF`, the bridge ratio :math:`V_r = V_{out} / (G\\,V_{ex})` gives the axial strain
+:math:`GF`, the bridge ratio :math:`V_r = V_{out} / (G\,V_{ex})` gives the axial strain
 
-.. math:: \\varepsilon = \\frac{4\\,V_r}{GF\\,n},
+.. math:: \varepsilon = \frac{4\,V_r}{GF\,n},
 
 where :math:`n` counts the bridge's active arms: 1 for a quarter bridge, 2 for a half bridge of two
-axial gauges (on opposite faces, in opposite arms, which cancels bending), :math:`1 + \\nu` for a half
+axial gauges (on opposite faces, in opposite arms, which cancels bending), :math:`1 + \nu` for a half
 bridge of one axial and one transverse (Poisson) gauge, 4 for a full bridge of four axial gauges and
-:math:`2 (1 + \\nu)` for a full bridge of two axial and two transverse gauges (Vishay Precision Group,
+:math:`2 (1 + \nu)` for a full bridge of two axial and two transverse gauges (Vishay Precision Group,
 *Tech Note TN-514*, "Shunt calibration of strain gage instrumentation", and *TN-507*, "Errors due to
 Wheatstone bridge nonlinearity"). The linear form drops the quarter bridge's nonlinearity, a relative
-error of about :math:`2 V_r` (:math:`3 \\times 10^{-3}` at a strain of :math:`1.3 \\times 10^{-3}`). The
+error of about :math:`2 V_r` (:math:`3 \times 10^{-3}` at a strain of :math:`1.3 \times 10^{-3}`). The
 half-bridge form is HopPyBar's (LANL), ``strain = V (2 / GF) / (gain excitation)``.
 """
 
@@ -45,18 +45,18 @@ def _positive(name: str, value) -> float:
 
 @dataclass(frozen=True)
 class Bar:
-    """An elastic bar (or rod) of one cross-section, as the gauges see it.
+    r"""An elastic bar (or rod) of one cross-section, as the gauges see it.
 
     Parameters
     ----------
     young_modulus : float (Pa)
         Young's modulus :math:`E`.
     density : float (kg/m^3)
-        Density :math:`\\rho`.
+        Density :math:`\rho`.
     area : float (m^2)
         Cross-section :math:`A`.
     wave_speed : float (m/s), optional
-        The bar wave speed :math:`c`; by default :math:`\\sqrt{E/\\rho}` (a measured one, from a
+        The bar wave speed :math:`c`; by default :math:`\sqrt{E/\rho}` (a measured one, from a
         reflection time, may be given instead).
 
     Examples
@@ -146,7 +146,7 @@ class Gauge:
 
     @property
     def strain_per_volt(self) -> float:
-        """:math:`4 / (G\\,V_{ex}\\,GF\\,n)`, the strain of one volt at the recorder."""
+        r""":math:`4 / (G\,V_{ex}\,GF\,n)`, the strain of one volt at the recorder."""
         arms = BRIDGES[self.bridge](float(self.poisson))
         return self.polarity * 4.0 / (self.gain * self.excitation * self.gauge_factor * arms)
 

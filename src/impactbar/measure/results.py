@@ -1,17 +1,17 @@
-"""Results at a bar's end: force, particle velocity, displacement, energy; a Kolsky bar's specimen.
+r"""Results at a bar's end: force, particle velocity, displacement, energy; a Kolsky bar's specimen.
 
 With the two strain waves at the end, :math:`a` toward it and :math:`b` away from it (tension
 positive, :mod:`impactbar.measure.waves`), a bar of stiffness :math:`EA`, wave speed :math:`c` and
 impedance :math:`Z = EA/c` gives at the end
 
-.. math:: F = -EA\\,(a + b), \\qquad v = c\\,(b - a), \\qquad u(t) = \\int_0^t v\\,dt',
+.. math:: F = -EA\,(a + b), \qquad v = c\,(b - a), \qquad u(t) = \int_0^t v\,dt',
 
 the force compression positive (what the end pushes on: a specimen, a bit's rock) and the velocity
 positive toward the end. The energy that passes the section toward the end is the force-velocity
 integral of ASTM D4633 ("Standard test method for energy measurement for dynamic penetrometers"),
-:math:`E_{FV}(t) = \\int_0^t F\\,v\\,dt' = EA\\,c \\int_0^t (a^2 - b^2)\\,dt'`; its force-squared form
-:math:`E_{F2}(t) = \\int_0^t F^2/Z\\,dt'` equals it only while one wave passes (ASTM D4633 takes it up to
-the first return, :math:`2L/c`). A single wave :math:`w` carries :math:`EA\\,c \\int w^2\\,dt`.
+:math:`E_{FV}(t) = \int_0^t F\,v\,dt' = EA\,c \int_0^t (a^2 - b^2)\,dt'`; its force-squared form
+:math:`E_{F2}(t) = \int_0^t F^2/Z\,dt'` equals it only while one wave passes (ASTM D4633 takes it up to
+the first return, :math:`2L/c`). A single wave :math:`w` carries :math:`EA\,c \int w^2\,dt`.
 """
 
 from __future__ import annotations
@@ -37,9 +37,9 @@ def _cumulative(y, dt: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class EndHistory:
-    """Force (N, compression positive), particle velocity (m/s, toward the end), displacement (m)
+    r"""Force (N, compression positive), particle velocity (m/s, toward the end), displacement (m)
     and the energies that passed toward the end (J): ``energy_fv`` (force-velocity integral) and
-    ``energy_f2`` (:math:`\\int F^2/Z`), on ``time`` (s)."""
+    ``energy_f2`` (:math:`\int F^2/Z`), on ``time`` (s)."""
 
     time: np.ndarray
     force: np.ndarray
@@ -71,7 +71,7 @@ def end_history(waves: Waves, bar: Bar) -> EndHistory:
 
 
 def wave_energy(strain, dt: float, bar: Bar) -> float:
-    """The energy (J) one wave carries: :math:`EA\\,c \\int \\varepsilon^2\\,dt`.
+    r"""The energy (J) one wave carries: :math:`EA\,c \int \varepsilon^2\,dt`.
 
     >>> round(wave_energy(np.full(50, 1e-4), 1e-6, Bar(200e9, 8000.0, 1e-3)), 6)  # 2e8 5000 1e-8 50e-6
     0.5
@@ -80,14 +80,14 @@ def wave_energy(strain, dt: float, bar: Bar) -> float:
 
 
 def impact_velocity(strain, bar: Bar, *, striker: Bar | None = None, fraction: float = 0.85) -> dict:
-    """The striker's impact velocity from an incident pulse's plateau.
+    r"""The striker's impact velocity from an incident pulse's plateau.
 
     A striker of impedance :math:`Z_s` hitting a bar of impedance :math:`Z` at :math:`V` sends a
     pulse of particle velocity :math:`v_p = V Z_s / (Z_s + Z)` (the contact face's velocity), so
-    :math:`V = v_p (1 + Z / Z_s)` with :math:`v_p = c\\,|\\bar\\varepsilon|`; for a striker of the bar's
-    material and section, :math:`V = 2 c\\,|\\bar\\varepsilon|` (HopPyBar's relation). The plateau is
+    :math:`V = v_p (1 + Z / Z_s)` with :math:`v_p = c\,|\bar\varepsilon|`; for a striker of the bar's
+    material and section, :math:`V = 2 c\,|\bar\varepsilon|` (HopPyBar's relation). The plateau is
     the samples beyond ``fraction`` of the pulse's peak (HopPyBar's 85 %); its mean is
-    :math:`\\bar\\varepsilon`.
+    :math:`\bar\varepsilon`.
 
     Returns
     -------
@@ -128,19 +128,19 @@ class SpecimenResponse:
 
 def specimen_response(incident, reflected, transmitted, dt: float, incident_bar: Bar, transmitted_bar: Bar,
                       length: float, area: float) -> SpecimenResponse:
-    """The specimen's stress, strain and strain rate from the three waves at its faces.
+    r"""The specimen's stress, strain and strain rate from the three waves at its faces.
 
     ``incident``, ``reflected`` and ``transmitted`` are the strains (tension positive) at the
     specimen's faces on one time base (the incident and reflected at the incident bar's end, the
-    transmitted at the transmitted bar's). The faces' forces are :math:`F_1 = -E_iA_i(\\varepsilon_I +
-    \\varepsilon_R)` and :math:`F_2 = -E_tA_t\\,\\varepsilon_T`, their velocities :math:`v_1 = c_i
-    (\\varepsilon_R - \\varepsilon_I)` and :math:`v_2 = -c_t\\,\\varepsilon_T`. Following Gray (2000,
+    transmitted at the transmitted bar's). The faces' forces are :math:`F_1 = -E_iA_i(\varepsilon_I +
+    \varepsilon_R)` and :math:`F_2 = -E_tA_t\,\varepsilon_T`, their velocities :math:`v_1 = c_i
+    (\varepsilon_R - \varepsilon_I)` and :math:`v_2 = -c_t\,\varepsilon_T`. Following Gray (2000,
     "Classic split-Hopkinson pressure bar testing", *ASM Handbook* 8, 462-476) and Chen and Song
     (2011, *Split Hopkinson (Kolsky) Bar*, ch. 1):
 
     - one-wave: stress :math:`F_2/A_s` (the transmitted wave), strain rate :math:`2 c_i
-      \\varepsilon_R / L_s` (the reflected wave, equilibrium assumed);
-    - two-wave: stress :math:`F_1/A_s` (the front face), strain rate :math:`2 c_i \\varepsilon_R / L_s`;
+      \varepsilon_R / L_s` (the reflected wave, equilibrium assumed);
+    - two-wave: stress :math:`F_1/A_s` (the front face), strain rate :math:`2 c_i \varepsilon_R / L_s`;
     - three-wave: stress :math:`(F_1 + F_2)/(2 A_s)`, strain rate :math:`(v_1 - v_2)/L_s`;
 
     the strain the strain rate's time integral.

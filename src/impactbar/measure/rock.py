@@ -1,15 +1,15 @@
-"""A rock's loading and unloading stiffness fitted from the force and velocity at a bit.
+r"""A rock's loading and unloading stiffness fitted from the force and velocity at a bit.
 
 The bilinear rock of Lundberg (1982, "Microcomputer simulation of stress wave energy transfer to
 rock in percussive drilling", *Int. J. Rock Mech. Min. Sci.* 19, 229-239; Karlsson, Lundberg and
-Sundin 1989) pushes back on the bit with a force that grows as :math:`dF = k\\,du` while the bit
-penetrates further than ever (the virgin loading) and as :math:`dF = k_u\\,du` on unloading and
-reloading below it. Over one sample interval :math:`\\Delta F = \\kappa\\,\\Delta u` with
-:math:`\\Delta u = \\int v\\,dt` (the trapezoid of the bit's velocity), so each stiffness is the
+Sundin 1989) pushes back on the bit with a force that grows as :math:`dF = k\,du` while the bit
+penetrates further than ever (the virgin loading) and as :math:`dF = k_u\,du` on unloading and
+reloading below it. Over one sample interval :math:`\Delta F = \kappa\,\Delta u` with
+:math:`\Delta u = \int v\,dt` (the trapezoid of the bit's velocity), so each stiffness is the
 least-squares slope of the steps of its kind, a linear least squares whose residuals give the
 standard error. A step is virgin loading where the force passes its running maximum; steps where a
 wave front passes (their slopes beyond ``outlier`` median absolute deviations from the median
-slope) are left out. The trapezoid biases the slopes by a relative :math:`O(\\Delta t^2)` (the
+slope) are left out. The trapezoid biases the slopes by a relative :math:`O(\Delta t^2)` (the
 velocity's curvature within a step), which the standard errors do not count.
 """
 

@@ -1,9 +1,9 @@
-"""Waves from gauges: pulses found in a channel, and the two waves of a bar separated.
+r"""Waves from gauges: pulses found in a channel, and the two waves of a bar separated.
 
 In a bar of wave speed :math:`c`, with the station :math:`x` measured from the end of interest into
 the bar, the axial strain is the sum of a wave travelling toward the end and one travelling away,
 
-.. math:: \\varepsilon(x, t) = a(t + x/c) + b(t - x/c),
+.. math:: \varepsilon(x, t) = a(t + x/c) + b(t - x/c),
 
 :math:`a(t)` and :math:`b(t)` being the two waves at the end (:math:`x = 0`). A gauge at :math:`x`
 sees the wave toward the end :math:`x/c` before the end does, and the wave away from it :math:`x/c`
@@ -13,20 +13,20 @@ after.
 incident and reflected pulses of a Kolsky bar, Kolsky 1949) and shifts it to the end. *Two-point
 separation* (Lundberg and Henchoz 1977, "Analysis of elastic waves from two-point strain
 measurement", *Experimental Mechanics* 17, 213-218) needs no such window: from two gauges at
-:math:`x_A < x_B`, :math:`\\tau = (x_B - x_A)/c` apart, the wave toward the end at :math:`A`,
+:math:`x_A < x_B`, :math:`\tau = (x_B - x_A)/c` apart, the wave toward the end at :math:`A`,
 :math:`p(t) = a(t + x_A/c)`, obeys
 
-.. math:: p(t) = \\varepsilon_B(t - \\tau) - \\varepsilon_A(t - 2\\tau) + p(t - 2\\tau),
+.. math:: p(t) = \varepsilon_B(t - \tau) - \varepsilon_A(t - 2\tau) + p(t - 2\tau),
 
 marched from a quiet start (:math:`p = 0` before the first wave), and the other is
-:math:`q = \\varepsilon_A - p`. Its frequency-domain form :math:`P = (E_B - E_A e^{-i\\omega\\tau}) /
-(2 i \\sin\\omega\\tau)` (Yanagihara 1978; Park and Zhou 1999) shows the method's ill-conditioning: at
+:math:`q = \varepsilon_A - p`. Its frequency-domain form :math:`P = (E_B - E_A e^{-i\omega\tau}) /
+(2 i \sin\omega\tau)` (Yanagihara 1978; Park and Zhou 1999) shows the method's ill-conditioning: at
 the frequencies :math:`f = n c / (2 (x_B - x_A))` (the spacing a multiple of half a wavelength,
 :math:`n = 0` the mean included) the two gauges see the same thing and the waves cannot be told apart.
 In the recursion these are its poles: an offset of the channels grows linearly, noise at those
-frequencies as a random walk, :math:`\\sqrt{t / 2\\tau}`. It is handled by removing each channel's
-pre-trigger mean and, optionally, by a leak :math:`\\lambda < 1` in :math:`\\lambda\\,p(t - 2\\tau)`,
-which bounds the gain at the poles by :math:`1/(1 - \\lambda)` and biases the waves' slowest parts.
+frequencies as a random walk, :math:`\sqrt{t / 2\tau}`. It is handled by removing each channel's
+pre-trigger mean and, optionally, by a leak :math:`\lambda < 1` in :math:`\lambda\,p(t - 2\tau)`,
+which bounds the gain at the poles by :math:`1/(1 - \lambda)` and biases the waves' slowest parts.
 """
 
 from __future__ import annotations
@@ -217,7 +217,7 @@ def separate_one_point(time, strain, toward: Window, away: Window, station: floa
 def separate_two_point(time, near, far, station_near: float, station_far: float, bar: Bar, *,
                        leak: float = 1.0, baseline: slice | None = None, cutoff: float | None = None
                        ) -> Waves:
-    """The waves at a bar's end from two gauges (Lundberg and Henchoz 1977), pulses overlapping or not.
+    r"""The waves at a bar's end from two gauges (Lundberg and Henchoz 1977), pulses overlapping or not.
 
     Parameters
     ----------
@@ -229,8 +229,8 @@ def separate_two_point(time, near, far, station_near: float, station_far: float,
         Their distances from the end, ``station_far - station_near`` at least one sample's travel.
     bar : Bar
     leak : float
-        :math:`\\lambda` in (0, 1]: 1 is the exact recursion; below 1 it bounds the gain at the
-        frequencies where the method fails by :math:`1/(1-\\lambda)` (see the module).
+        :math:`\lambda` in (0, 1]: 1 is the exact recursion; below 1 it bounds the gain at the
+        frequencies where the method fails by :math:`1/(1-\lambda)` (see the module).
     baseline : slice, optional
         The quiet samples whose median is removed from each channel; None removes nothing.
     cutoff : float (Hz), optional

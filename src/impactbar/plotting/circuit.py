@@ -180,7 +180,7 @@ def _schematic_labels(drifter) -> dict:
             "accumulator": "gas accumulator\n$p_0$, $V_0$, $n$",
             "relief": "relief valve\n$p_{rel}$, $K_{rel}$",
             "tank": "tank, $p_t$", "front_orifice": "front orifice\n$K_f$",
-            "valve": "main valve\n$K_v$, $\\tau_v$", "rear": "rear (stroke)\nchamber\n$A_r$, $V_{r0}$",
+            "valve": "main valve\n$K_v$, " r"$\tau_v$", "rear": "rear (stroke)\nchamber\n$A_r$, $V_{r0}$",
             "front": "front (return)\nchamber\n$A_f$, $V_{f0}$", "piston": "piston",
             "switch_out": "switch_out", "switch_in": "switch_in", "impact": "impact position\n(stop / shank)"}
     si = getattr(drifter, "si", None)
@@ -207,7 +207,7 @@ def _schematic_labels(drifter) -> dict:
         "tank": f"tank, $p_t$ = {g(si['tank_pressure_Pa'] / 1e6)} MPa",
         "front_orifice": f"front orifice\n$K_f$ = {g(si['front_coefficient'])}\nm³/s/Pa$^{{1/2}}$",
         "valve": (f"main valve\n$K_v$ = {g(si['valve_coefficient'])}\nm³/s/Pa$^{{1/2}}$\n"
-                  f"$\\tau_v$ = {g(si['switching_time_s'] * 1e3)} ms"),
+                  rf"$\tau_v$ = {g(si['switching_time_s'] * 1e3)} ms"),
         "rear": (f"rear (stroke)\nchamber\n$A_r$ = {g(si['rear_area_m2'] * 1e4)} cm²\n"
                  f"$V_{{r0}}$ = {g(si['rear_volume_m3'] * 1e3)} L"),
         "front": (f"front (return) chamber\n$A_f$ = {g(si['front_area_m2'] * 1e4)} cm²\n"
