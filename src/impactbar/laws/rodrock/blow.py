@@ -41,7 +41,7 @@ Sci. 37 (2000) 599-613; Song et al. (2018); Bacon's method as in the elwaspatid 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import ClassVar
 
 import numpy as np
@@ -93,7 +93,13 @@ class Blow:
     rock_dissipated : float
         ``work_on_rock - rock_stored_energy``: the work the rock has taken for good (crushing), which
         a longer window can only increase; ``work_on_rock`` of a window cut while the bit still
-        loads includes elastic energy a longer one gives back.
+        loads includes elastic energy a longer one gives back. A blow under a drive with state
+        (``stored_apart``) reports the dissipated work as ``work_on_rock``.
+    stored_apart : bool
+        Whether ``rock_stored_energy`` is a term of its own in the energy account and
+        ``work_on_rock`` the dissipated work (a blow under a drive with state, theory §11: what
+        the rock stores at the blow's end goes back to the bit, not into the rock), rather than
+        part of ``work_on_rock`` (the law's blows, the simulator's under a load).
     piston_energy : float
         Energy returned to the piston (its wave energy at the end).
     rebound_velocity : float
@@ -104,7 +110,8 @@ class Blow:
         Energy removed by storing the bit's reflected wave as cell averages (0 for a massless bit
         and a rock force constant on cells; ``O(dt^2)``).
     energy_error : float
-        ``|available - (work_on_rock + piston_energy + rod_energy + grid_loss)| / available``.
+        ``|available - (work_on_rock + piston_energy + rod_energy + grid_loss)| / available`` (with
+        ``stored_apart``, ``rock_stored_energy`` added to the sum).
     max_penetration, permanent_penetration, advance : float
         Largest penetration; the penetration where the rock force vanishes on the last unloading
         line (``p_max - R_max/k_u``); the bit's displacement over the blow.
@@ -232,6 +239,7 @@ class Blow:
     loadings: np.ndarray | None = None
     radiated: float = 0.0
     exact: object = field(default=None, repr=False)
+    stored_apart: bool = False
 
     def __post_init__(self) -> None:
         # the scalars as plain floats (the solver hands numpy scalars), like every other result
@@ -247,13 +255,24 @@ class Blow:
         """Relative mismatch of the energy account (rounding only; ``inf`` where the available
         energy is not positive, a blow gone wrong)."""
         total = self.work_on_rock + self.piston_energy + self.rod_energy + self.grid_loss
+        if self.stored_apart:
+            total += self.rock_stored_energy
         err = abs(self.available_energy - total) / abs(self.available_energy)
         return err if self.available_energy > 0.0 and err == err else math.inf
 
     @property
     def rock_dissipated(self) -> float:
-        """``work_on_rock - rock_stored_energy``: the work the rock keeps (theory §4d)."""
-        return self.work_on_rock - self.rock_stored_energy
+        """``work_on_rock - rock_stored_energy``: the work the rock keeps (theory §4d;
+        ``work_on_rock`` itself with ``stored_apart``)."""
+        return self.work_on_rock if self.stored_apart else self.work_on_rock - self.rock_stored_energy
+
+    def with_stored_apart(self) -> Blow:
+        """This blow with the rock's elastic energy at its end a term of its own in the energy
+        account, ``work_on_rock`` the work dissipated in the rock (``stored_apart``; the blows under
+        a drive with state, theory §11); itself if it is so already."""
+        if self.stored_apart:
+            return self
+        return replace(self, work_on_rock=self.rock_dissipated, stored_apart=True)
 
     @property
     def energy_into_rod(self) -> float:

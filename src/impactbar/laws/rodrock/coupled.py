@@ -157,6 +157,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         gap, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
         k += L
     rec = bm.contact(q, v)
+    rec.blow = rec.blow.with_stored_apart()  # the work on rock the dissipated work (theory §11)
     if not (np.array_equal(rec._F0, F0) and np.array_equal(rec._G0, G0)):  # pragma: no cover - defensive
         raise RuntimeError("the blow's fields at impact changed between its chunks and its record")
     work = float(sum(p.piston_work() for p in pieces))

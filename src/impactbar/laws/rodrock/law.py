@@ -75,7 +75,7 @@ class RodRock(ContactLaw):
         order in the cell time at most (the bit's exponential response stored as cell averages,
         switches inside a cell); on whole cells twice the cells estimates it (theory §4d), but a
         segment rounded to whole cells (``Blow.length_error``) sets an error that does not shrink as
-        the cells double (theory §11: 0.9 % of the work on the circuit's rock example); ``"exact"``
+        the cells double (theory §11: 2.2e-6 of the work on the circuit's rock example); ``"exact"``
         has none. :func:`single_blow` takes its own ``cells_per_piston``.
     method : {"auto", "exact", "lattice"}
         The simulator's blows (``simulate``, ``find_orbit``, ``continue_orbit``): ``"exact"`` every
