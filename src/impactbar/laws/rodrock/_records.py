@@ -184,11 +184,12 @@ BITP_MASS = 3  # the bit's mass m (0: the massless bit)
 BITP_FEED = 4  # the feed force f
 
 # -- CTRL: the loop's controls ``ctrl`` (float64; the tangent's loop reads the first two) ------------
-CTRL_SIZE = 4
+CTRL_SIZE = 5
 CTRL_DT = 0  # the step, the cells' travel time
 CTRL_STOP = 1  # the energy below which a separated blow ends
 CTRL_QUIET = 2  # steps separated after which the blow ends (0: never)
 CTRL_GAP = 3  # the piston-shank gap at the start
+CTRL_FREE = 4  # 1: end where the piston is free for good (under a drive, theory §11); 0: never
 
 # -- ACC: the loop's accounts ``acc`` (float64, written by the loop) ----------------------------------
 ACC_SIZE = 6

@@ -36,6 +36,7 @@ from ._records import (
     BITP_MASS,
     BITP_Z,
     CTRL_DT,
+    CTRL_FREE,
     CTRL_GAP,
     CTRL_QUIET,
     CTRL_STOP,
@@ -250,10 +251,37 @@ def bit_step(bs, bp, E, dt):
 
 
 @numba.njit(cache=CACHE, nogil=True)
+def piston_free(F, G, Z, n_p, bs, bp, dt):
+    """Whether the blow under a drive is over after a step out of contact (theory §11, "when the
+    coupled blow ends"; the exact blow's certificate under a drive): the piston's momentum
+    ``sum (F - G) / (s n_p)`` over its cells ``<= 0`` (from then on its course is the drive's), and
+    the rock not loading: with a feed that is all (the exact blow's ``"may_yield"``), without one
+    the energy of rod, bit and rock ``Psi`` below ``R_max^2 / (2 k_u)``, which it would need to
+    yield again."""
+    if bs[BIT_BRANCH] == _LOAD:
+        return False
+    momentum = 0.0
+    for j in range(n_p):
+        momentum += F[j] - G[j]
+    if momentum > 0.0:
+        return False
+    f, ku = bp[BITP_FEED], bp[BITP_KU]
+    if f > 0.0:
+        return True
+    b, ref = _coeffs(bs, bp)
+    R = max(b * (bs[BIT_P] - ref), 0.0)
+    psi = 0.5 * bp[BITP_MASS] * bs[BIT_W] * bs[BIT_W] + R * R / (2.0 * ku)
+    for j in range(n_p, F.size):
+        psi += (F[j] * F[j] + G[j] * G[j]) / Z[j] * dt
+    return psi < bs[BIT_RMAX] * bs[BIT_RMAX] / (2.0 * ku)
+
+
+@numba.njit(cache=CACHE, nogil=True)
 def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     """The blow's loop (``rod_rock_blow``). ``bounds`` (int): the cell right of each segment
     boundary, the shank first; ``ctrl``: ``dt, energy_stop, quiet, gap`` (end once separated for
-    ``quiet`` steps, 0: never; the piston-shank gap at the start); ``drive`` (n_max,): the drive's
+    ``quiet`` steps, 0: never; the piston-shank gap at the start; 1: end where the piston is free
+    for good, :func:`piston_free`, ``ended`` 2); ``drive`` (n_max,): the drive's
     force on the piston's far end, averaged over each step; ``junc`` (n_max, J): forces at the
     boundaries per step; ``bitrec`` (n_max + 1, 2): rock force and penetration; ``field``
     (n_max, cells) or (0, cells); ``acc`` out: ``u_shank, grid_loss, steps, ended, gap,
@@ -266,7 +294,8 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     Zl = Z[n_cells - 1]
     gap = ctrl[CTRL_GAP]
     contact = gap <= 0.0
-    last = 0 if contact else -1  # the last step in contact (-1: none yet; no end before a contact)
+    free = ctrl[CTRL_FREE] > 0.0  # (a driven blow's stretch: its contact was before it)
+    last = 0 if contact or free else -1  # the last step in contact (-1: none yet; no end before one)
     u_shank, grid_loss, work = 0.0, 0.0, 0.0
     N = np.empty(n_cells - 1)
     Fn = np.empty(n_cells)
@@ -317,6 +346,9 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
         elif last < 0:
             pass
         elif quiet > 0.0 and step - last >= quiet:
+            steps, ended = step + 1, 2.0
+            break
+        elif free and piston_free(F, G, Z, n_p, bs, bp, dt):
             steps, ended = step + 1, 2.0
             break
         if not contact and last >= 0 and step % 8 == 0:

@@ -41,7 +41,7 @@ Sci. 37 (2000) 599-613; Song et al. (2018); Bacon's method as in the elwaspatid 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import ClassVar
 
 import numpy as np
@@ -93,7 +93,10 @@ class Blow:
     rock_dissipated : float
         ``work_on_rock - rock_stored_energy``: the work the rock has taken for good (crushing), which
         a longer window can only increase; ``work_on_rock`` of a window cut while the bit still
-        loads includes elastic energy a longer one gives back.
+        loads includes elastic energy a longer one gives back (``work_on_rock`` with ``stored_apart``).
+    stored_apart : bool
+        ``rock_stored_energy`` apart in the energy account, ``work_on_rock`` the dissipated work
+        (the blows under a drive with state, theory §11).
     piston_energy : float
         Energy returned to the piston (its wave energy at the end).
     rebound_velocity : float
@@ -104,7 +107,8 @@ class Blow:
         Energy removed by storing the bit's reflected wave as cell averages (0 for a massless bit
         and a rock force constant on cells; ``O(dt^2)``).
     energy_error : float
-        ``|available - (work_on_rock + piston_energy + rod_energy + grid_loss)| / available``.
+        ``|available - (work_on_rock + piston_energy + rod_energy + grid_loss)| / available`` (with
+        ``stored_apart`` also ``rock_stored_energy``).
     max_penetration, permanent_penetration, advance : float
         Largest penetration; the penetration where the rock force vanishes on the last unloading
         line (``p_max - R_max/k_u``); the bit's displacement over the blow.
@@ -232,6 +236,7 @@ class Blow:
     loadings: np.ndarray | None = None
     radiated: float = 0.0
     exact: object = field(default=None, repr=False)
+    stored_apart: bool = False
 
     def __post_init__(self) -> None:
         # the scalars as plain floats (the solver hands numpy scalars), like every other result
@@ -246,14 +251,20 @@ class Blow:
     def energy_error(self) -> float:
         """Relative mismatch of the energy account (rounding only; ``inf`` where the available
         energy is not positive, a blow gone wrong)."""
-        total = self.work_on_rock + self.piston_energy + self.rod_energy + self.grid_loss
+        total = (self.work_on_rock + self.piston_energy + self.rod_energy + self.grid_loss
+                 + (self.rock_stored_energy if self.stored_apart else 0.0))
         err = abs(self.available_energy - total) / abs(self.available_energy)
         return err if self.available_energy > 0.0 and err == err else math.inf
 
     @property
     def rock_dissipated(self) -> float:
-        """``work_on_rock - rock_stored_energy``: the work the rock keeps (theory §4d)."""
-        return self.work_on_rock - self.rock_stored_energy
+        """The work the rock keeps (theory §4d): ``work_on_rock`` less any ``rock_stored_energy`` in it."""
+        return self.work_on_rock if self.stored_apart else self.work_on_rock - self.rock_stored_energy
+
+    def with_stored_apart(self) -> Blow:
+        """This blow with ``stored_apart``: ``work_on_rock`` the work dissipated in the rock."""
+        return self if self.stored_apart else replace(self, work_on_rock=self.rock_dissipated,
+                                                      stored_apart=True)
 
     @property
     def energy_into_rod(self) -> float:
@@ -728,10 +739,11 @@ def _bit_params(Z, k, k_u, m, feed):
     return bp
 
 
-def _loop_controls(dt, stop, quiet, gap):
+def _loop_controls(dt, stop, quiet, gap, free=False):
     """The compiled loop's controls ``ctrl`` (slots ``CTRL_*``): its step ``dt``, the energy ``stop``
-    that ends a separated blow, the separated steps ``quiet`` that end it (0: none) and the
-    piston-shank ``gap`` at the start."""
+    that ends a separated blow, the separated steps ``quiet`` that end it (0: none), the piston-shank
+    ``gap`` at the start and ``free``: end where the piston is free for good (under a drive)."""
     ctrl = np.empty(S.CTRL_SIZE)
     ctrl[S.CTRL_DT], ctrl[S.CTRL_STOP], ctrl[S.CTRL_QUIET], ctrl[S.CTRL_GAP] = dt, stop, float(quiet), gap
+    ctrl[S.CTRL_FREE] = 1.0 if free else 0.0
     return ctrl

@@ -24,12 +24,18 @@ work on the piston, ``int p u_t(0) dt``, exceeds the lattice's ``sum p_k (p_k - 
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from ..base import DrivenContact, LawNotSupported
 from . import _records as S
 
-__all__ = ["driven_rock_contact", "causal_cells"]
+__all__ = ["driven_rock_contact", "causal_cells", "END_DELAY"]
+
+#: The blow's end moved this fraction of the law's window past where the piston is free for good
+#: (0, the default: there; the orbit's sensitivity to the end, theory §11).
+END_DELAY = 0.0
 
 
 def causal_cells(Z, n_p: int) -> int:
@@ -62,11 +68,13 @@ def _bit_arrays(grid, law):
     return _bit_records(_start_bit(grid.Z, law.rock.k, law.rock.k_u, law.bit_mass, law.feed, None))
 
 
-def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
+def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None, free=False):
     """``drive.size`` steps of the blow's compiled loop from the waves ``F, G`` and the bit ``bs``
-    (updated in place); returns the gap after them and, with ``record``, the force in every cell at
-    the start of each step. ``bounds``: ``grid.bounds`` as int64 where the caller has it (a blow's
-    chunks share it)."""
+    (updated in place), or fewer with ``free``: to where the piston is free for good
+    (:func:`~impactbar.laws.rodrock._rockkernel.piston_free`); returns the gap after them, with
+    ``record`` the force in every cell at the start of each step, and the steps after which the piston
+    was free (-1: not within them). ``bounds``:
+    ``grid.bounds`` as int64 where the caller has it (a blow's chunks share it)."""
     from ._rockkernel import blow_loop
     from .blow import _loop_controls
 
@@ -77,9 +85,10 @@ def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     bitrec = np.zeros((L + 1, 2))
     field = np.zeros((L if record else 0, F.size))
     acc = np.zeros(S.ACC_SIZE)
-    ctrl = _loop_controls(grid.cell_time, -1.0, 0, gap)
+    ctrl = _loop_controls(grid.cell_time, -1.0, 0, gap, free)
     blow_loop(F, G, grid.Z, bounds, bs, bp, ctrl, np.ascontiguousarray(drive), junc, bitrec, field, acc)
-    return float(acc[S.ACC_GAP]), field
+    free_after = int(acc[S.ACC_STEPS]) if free and acc[S.ACC_ENDED] == 2.0 else -1
+    return float(acc[S.ACC_GAP]), field, free_after
 
 
 def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:
@@ -115,15 +124,21 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         the drive's integration failing.
     """
     from ...loads import FourierLoad
+    from .blow import whole_steps
     from .contact import BlowMap
+    from .coupled_exact import HORIZONS
 
     law = model.law
     q = np.array(q, dtype=float)
     v = np.array(v, dtype=float)
     p0 = float(drive.force(state.mode, state.z, q, v))
-    bm = BlowMap(model, FourierLoad(p0, []), t0, averaged=False)  # (the drive's averages: set below)
+    free = law.driven_end == "free"  # (the end where the piston is free for good, else the window)
+    window = law.window(model)
+    bm = BlowMap(model, FourierLoad(p0, []), t0, averaged=False,  # (the drive's averages: set below)
+                 duration=HORIZONS * window if free else None)
     grid = bm.grid
     n_p, dt, n_max = grid.piston_cells, grid.cell_time, bm.n_max
+    later = whole_steps(END_DELAY * window, dt) if END_DELAY > 0.0 else 0
     Z0 = float(grid.Z[0])
     F, G = bm.fields(q, v)
     F0, G0 = F.copy(), G.copy()
@@ -135,11 +150,11 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     w = -float(model.drive_weights @ q)
     st = state
     pieces, events = [], []
-    k = 0
-    while k < n_max:
-        L = min(2 * m, n_max - k)
+    k, end, ended = 0, n_max, False
+    while k < end:
+        L = min(2 * m, end - k)
         # 1. the waves arriving at the driven end over the chunk (not caused by its drive)
-        _, field = _steps(grid, F.copy(), G.copy(), bs.copy(), bp, gap, np.zeros(L), True, bounds)
+        _, field, _ = _steps(grid, F.copy(), G.copy(), bs.copy(), bp, gap, np.zeros(L), True, bounds)
         column = field[:, 0].copy()
         column[0] = G[0]
         arriving = np.add.accumulate(column)  # F[0] = 0 - G[0] after a step without drive
@@ -150,13 +165,29 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
             raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
                                   "(Drive.end_flight); it runs under an instantaneous impact law only")
         averages[k:k + L] = fl.impulses / dt
+        # 3. the lattice on over the chunk with the drive's averages (to the piston free for good)
+        start = (F.copy(), G.copy(), bs.copy(), gap)
+        gap, _, ran = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds, free and not ended)
+        if ran >= 0:  # free for good after `ran` steps: the blow ends there (or `later` on)
+            ended, end = True, min(k + ran + later, n_max)
+        if end - k < L:  # the drive and the lattice again over the chunk's part up to the end
+            L = end - k
+            F[:], G[:], bs[:], gap = start
+            fl = drive.end_flight(model, st, breaks[:L + 1], w, -2.0 * arriving[:L] / Z0, Z0, settings)
+            averages[k:k + L] = fl.impulses / dt
+            gap, _, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
+        elif 0 <= ran < L:  # the end moved on past the chunk: the whole chunk without the end's test
+            F[:], G[:], bs[:], gap = start
+            gap, _, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
         st, w = fl.state, fl.w
         pieces += fl.pieces
         events += fl.events
-        # 3. the lattice on over the chunk with the drive's averages
-        gap, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
         k += L
+    bm.n_max = k
     rec = bm.contact(q, v)
+    if ended:
+        rec.blow = dataclasses.replace(rec.blow, ended_by="separated")  # (the piston free for good)
+    rec.blow = rec.blow.with_stored_apart()  # the work on rock the dissipated work (theory §11)
     if not (np.array_equal(rec._F0, F0) and np.array_equal(rec._G0, G0)):  # pragma: no cover - defensive
         raise RuntimeError("the blow's fields at impact changed between its chunks and its record")
     work = float(sum(p.piston_work() for p in pieces))

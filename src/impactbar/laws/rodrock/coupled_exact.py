@@ -364,6 +364,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     bmap.duration = float(ex.duration)
     q_after, v_after = bmap.state_after(ex)
     rec = ExactRockContact(bmap, q, v, ex, q_after, v_after)
+    rec.blow = rec.blow.with_stored_apart()  # the work on rock the dissipated work (theory §11)
     work = float(sum(p.piston_work() for p in fl.pieces))
     gaps = _rigid_gaps(ex, force, q, v, t0, breaks.size - 1)
     return DrivenContact(q_after.copy(), v_after.copy(), t0 + ex.duration, rec, fl.state, fl.pieces,

@@ -66,7 +66,10 @@ class RodRock(ContactLaw):
         Duration of the blow in the simulator and in periodic orbits (model time, ``> 0``; the next
         flight starts this long after the impact, :meth:`window`). Default
         ``4/s + 2 sum of the segments' travel times``: the piston's contact of ``2/s`` and a round
-        trip of a wave through piston and rod after it.
+        trip of a wave through piston and rod after it. Under a drive with state the exact blow
+        ends where the piston is free for good instead (theory §11, "The coupled blow"; searched
+        for up to twice the window), at the first of its solver's windows so; the lattice's with
+        ``driven_end``.
     cells_per_piston : int, optional
         Cells along the piston of the simulator's blows on the lattice (``method="lattice"``, or
         ``"auto"`` with this given: :mod:`impactbar.laws.rodrock.blow`), ``1 <= n <= 4096``.
@@ -75,7 +78,7 @@ class RodRock(ContactLaw):
         order in the cell time at most (the bit's exponential response stored as cell averages,
         switches inside a cell); on whole cells twice the cells estimates it (theory §4d), but a
         segment rounded to whole cells (``Blow.length_error``) sets an error that does not shrink as
-        the cells double (theory §11: 0.9 % of the work on the circuit's rock example); ``"exact"``
+        the cells double (theory §11: 2.2e-6 of the work on the circuit's rock example); ``"exact"``
         has none. :func:`single_blow` takes its own ``cells_per_piston``.
     method : {"auto", "exact", "lattice"}
         The simulator's blows (``simulate``, ``find_orbit``, ``continue_orbit``): ``"exact"`` every
@@ -83,6 +86,11 @@ class RodRock(ContactLaw):
         pieces, the state after the blow projected on the modes in closed form
         (:mod:`impactbar.laws.rodrock.exactmap`); ``"lattice"`` the cell grid; ``"auto"`` (default)
         exact unless ``cells_per_piston`` is given.
+    driven_end : {"window", "free"}
+        Where the lattice's blow under a drive with state ends: ``"window"`` (default) at
+        :meth:`window`; ``"free"`` at the first step after which the piston is free for good (out of
+        contact, its momentum ``<= 0``, the rock not loading: the exact blow's argument under a
+        drive, theory §11), searched for up to twice the window.
 
     Examples
     --------
@@ -103,6 +111,7 @@ class RodRock(ContactLaw):
     blow_time: float | None = None
     cells_per_piston: int | None = None
     method: str = "auto"
+    driven_end: str = "window"
 
     # the declarations where the law differs from ContactLaw's defaults
     name = "rodrock"
@@ -131,6 +140,8 @@ class RodRock(ContactLaw):
             raise ValueError(f"rock must be a BilinearRock; got rock={self.rock!r}")
         object.__setattr__(self, "bit_mass", check_real("bit_mass", self.bit_mass, lo=0.0))
         object.__setattr__(self, "feed", check_real("feed", self.feed, lo=0.0))
+        if self.driven_end not in ("window", "free"):
+            raise ValueError(f"driven_end must be 'window' or 'free'; got driven_end={self.driven_end!r}")
         if self.blow_time is not None:
             object.__setattr__(self, "blow_time",
                                check_real("blow_time", self.blow_time, lo=0.0, lo_open=True))
@@ -478,6 +489,11 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         grid (boundaries rounded to whole cells, ``length_error``). The rod's impedances stay
         relative to ``s`` (a uniform piston of the same mass and length). Default None: the uniform
         piston, whose results a one-segment ``SteppedPiston`` reproduces to the bit.
+    driven_end : {"window", "free"}
+        Where the lattice's blow under a drive with state ends: ``"window"`` (default) at
+        :meth:`window`; ``"free"`` at the first step after which the piston is free for good (out of
+        contact, its momentum ``<= 0``, the rock not loading: the exact blow's argument under a
+        drive, theory §11), searched for up to twice the window.
     method : {"auto", "exact", "lattice"}
         ``"auto"``: exact for a uniform or stepped piston, a bit with or without mass, no feed and
         no ``cells_per_piston`` (and
