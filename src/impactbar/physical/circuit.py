@@ -525,6 +525,8 @@ class CircuitDrifterOrbit(DrifterOrbit):
         The dimensionless orbit (its state includes the pressures and the valve opening).
     """
 
+    _kind = "circuit"
+
     def _more(self) -> str:
         return f", mean supply {self.mean_supply_pressure_Pa / 1e6:.4g} MPa"
 
@@ -684,17 +686,6 @@ class CircuitDrifterOrbit(DrifterOrbit):
         from ..plotting.circuit import plot_circuit_orbit
 
         return plot_circuit_orbit(self, axes=axes, points=points)
-
-    def _summary(self) -> dict:
-        base, border = super()._summary(), self.border_margins_Pa
-        return {**{k: base[k] for k in ("blow_frequency_Hz", "period_ms", "impact_velocity_m_s",
-                                        "impact_energy_J")},
-                "mean_supply_pressure_MPa": self.mean_supply_pressure_Pa / 1e6,
-                "pump_power_kW": self.pump_power_kW, "impact_power_kW": self.impact_power_kW,
-                "hydraulic_efficiency": self.hydraulic_efficiency, "stable": base["stable"],
-                "minimum_pressure_MPa": min(self.minimum_pressures_Pa.values()) / 1e6,
-                "cavitates": self.cavitates, "multiplier": base["multiplier"],
-                **{f"{k}_margin_MPa": border.get(k, math.inf) / 1e6 for k in ("relief", "accumulator")}}
 
 
 #: Presets of drifters with their oil circuit.
