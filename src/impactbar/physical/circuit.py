@@ -595,6 +595,14 @@ class CircuitDrifterOrbit(DrifterOrbit):
         return {k: float(v) * PRESSURE_SCALE for k, v in self.orbit.drive.border_tests(self._pieces).items()}
 
     @property
+    def pressures_at_impact_Pa(self) -> dict:
+        """The absolute pressure of each oil volume at the impact (Pa): ``front``, ``rear``,
+        ``supply``."""
+        o = self.orbit
+        z = np.asarray(o.drive_states[0], dtype=float) * PRESSURE_SCALE
+        return {name: float(z[o.drive.layout[name]]) for name in ("front", "rear", "supply")}
+
+    @property
     def impact_power_kW(self) -> float:
         """The kinetic energy at impact times the blow frequency (kW): :attr:`percussive_power_kW`."""
         return self.percussive_power_kW

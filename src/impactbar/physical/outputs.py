@@ -227,12 +227,7 @@ def _rebound(r: Reading) -> float:
 
 
 def _at_impact(name: str) -> Callable:
-    def of(r: Reading) -> float:
-        from .circuit import PRESSURE_SCALE
-
-        o = r.point.orbit
-        return float((np.asarray(o.drive_states[0], dtype=float) * PRESSURE_SCALE)[o.drive.layout[name]])
-    return of
+    return lambda r: r.point.pressures_at_impact_Pa[name]
 
 
 def _least(volume: str) -> Callable:
