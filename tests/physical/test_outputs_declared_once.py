@@ -90,3 +90,17 @@ def test_a_planted_hand_list_is_found():
     found = hand_lists(planted, _names())
     assert [(line, where) for line, where, _ in found] == [(1, "COLUMNS"), (3, "f"), (6, "g")]
     assert not hand_lists('ONE = ("blow_frequency_Hz", "speed")\n', _names())
+
+
+def test_a_second_declaration_is_refused():
+    from impactbar.physical.outputs import Output, register_output, unregister_output
+
+    with pytest.raises(ValueError, match="'pump_power' .* registered already"):
+        register_output(Output("pump_power", "kW", "again", lambda r: 0.0))
+    # another name, the same key
+    with pytest.raises(ValueError, match="'mean_supply_pressure_Pa'.*registered already"):
+        register_output(Output("x", "Pa", "again", lambda r: 0.0, key="mean_supply_pressure_Pa"))
+    with pytest.raises(ValueError, match="not an output added by register_output"):
+        unregister_output("blow_frequency")
+    with pytest.raises(ValueError, match="give of="):
+        Output("x", "m", "no way to compute it", views={"store"})

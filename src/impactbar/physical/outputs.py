@@ -118,6 +118,12 @@ class Output:
         if not self.machines or not self.machines <= MACHINES:
             raise ValueError(f"Output {self.name}: machines must be among {sorted(MACHINES)}; got "
                              f"{sorted(self.machines)}")
+        if self.of is None and self.views - {"record"}:
+            raise ValueError(f"Output {self.name}: views {sorted(self.views - {'record'})} read it from an "
+                             "operating point; give of=")
+        if self.dtype not in ("f8", "b1", "U") or ("store" in self.views and self.dtype == "U"):
+            raise ValueError(f"Output {self.name}: dtype must be 'f8', 'b1' or 'U' (text, not stored); got "
+                             f"{self.dtype!r}")
         if self.key is None:
             object.__setattr__(self, "key", _named(self.name, self.unit))
 
