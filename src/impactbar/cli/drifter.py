@@ -151,7 +151,18 @@ def _circuit_line(s: dict) -> str:
             f"pressure {s['minimum_pressure_MPa']:.4g} MPa"
             + (" (cavitates)" if s["cavitates"] else "")
             + f", {'stable' if s['stable'] else 'unstable'} (|mu| = {s['multiplier']:.4g})\n"
-            + f"  {_borders_line(s)}")
+            + f"  {_borders_line(s)}" + _added_line(s))
+
+
+def _added_line(s: dict) -> str:
+    """The summary's outputs added by :func:`~impactbar.physical.outputs.register_output`, each with
+    its long name and display unit (``""`` where there are none)."""
+    from ..physical.outputs import added_outputs
+
+    shown = [o for o in added_outputs("summary") if o.shown_key in s]
+    return "".join(f"\n  {o.long_name}: " + (f"{s[o.shown_key]}" if o.dtype == "b1" else
+                                             f"{s[o.shown_key]:.6g} {o.shown_unit}".rstrip())
+                   for o in shown)
 
 
 def _borders_line(s: dict) -> str:
@@ -345,15 +356,20 @@ def _drifter_figures(drifter: physical.Drifter, run, out: Path) -> str:
     return written
 
 
-#: what branch.csv adds for a drifter with its oil circuit: what a designer reads, in SI
-CIRCUIT_BRANCH_COLUMNS = ("blow_frequency_Hz", "impact_energy_J", "mean_supply_pressure_MPa", "pump_power_kW",
-                          "hydraulic_efficiency")
+def _branch_outputs() -> list:
+    """What branch.csv adds for a drifter with its oil circuit: the outputs of the view ``"branch"``
+    (:mod:`~impactbar.physical.outputs`), each in its display unit."""
+    from ..physical.outputs import outputs
+
+    return outputs("branch", "circuit", rock=False)
 
 
-def _circuit_outputs(point) -> tuple:
-    """The values of :data:`CIRCUIT_BRANCH_COLUMNS` at one point of a circuit's branch."""
-    return (point.blow_frequency_Hz, point.impact_energy_J, point.mean_supply_pressure_Pa / 1e6,
-            point.pump_power_kW, point.hydraulic_efficiency)
+def _circuit_outputs(point, columns) -> tuple:
+    """The values of the ``columns`` (outputs) at one point of a circuit's branch, in display units."""
+    from ..physical.outputs import output_values
+
+    values = output_values(point, columns)
+    return tuple(o.shown(values[o.name]) for o in columns)
 
 
 def _user_unit(name: str, to):
@@ -373,7 +389,7 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     continued in a dimensionless parameter (theory §10), or an oil circuit's in a config key in SI;
     writes ``branch.csv`` (parameter, period, impact velocity, largest |multiplier|, stable; a config
     key's value first, in the unit ``--to`` was given in; for a circuit then
-    :data:`CIRCUIT_BRANCH_COLUMNS` in SI) and ``events.csv``."""
+    the outputs of the view ``"branch"`` in display units) and ``events.csv``."""
     from ..continuation import continue_orbit
 
     name, to = args.parameter, args.to
@@ -407,13 +423,15 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
                            max_points=args.max_points)
     head = f"{name} ({unit})," if si else ""
     circuit = isinstance(drifter, physical.CircuitDrifter)
+    columns = _branch_outputs() if circuit else []
     rows = [f"{head}parameter,period,impact_velocity,max_abs_multiplier,stable"
-            + (f",{','.join(CIRCUIT_BRANCH_COLUMNS)}" if circuit else "")]
+            + "".join(f",{o.shown_key}" for o in columns)]
     for i, (lam, o) in enumerate(zip(b.values, b.orbits, strict=True)):
         mu = max(abs(complex(m)) for m in o.multipliers) if o.multipliers.size else 0.0
         rows.append((f"{shown(lam):.12g}," if si else "")
                     + f"{lam:.12g},{o.period:.12g},{o.impact_velocity:.12g},{mu:.12g},{o.stable}"
-                    + ("".join(f",{x:.12g}" for x in _circuit_outputs(sib.points[i])) if circuit else ""))
+                    + ("".join(f",{x:.12g}" for x in _circuit_outputs(sib.points[i], columns)) if circuit
+                       else ""))
     (out / "branch.csv").write_text("\n".join(rows) + "\n")
     ev = ["kind,value,multiplier_re,multiplier_im" + (f",{name} ({unit})" if si else "")]
     ev += [f"{e.kind}{' ' + e.surface if e.surface else ''},{e.value:.12g},{e.multiplier.real:.12g},"

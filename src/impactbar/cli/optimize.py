@@ -32,7 +32,8 @@ def add_parser(sub) -> None:
     p.add_argument("--constraint", action="append", default=[], metavar="NAME=VALUE",
                    help="a constraint's limit with its unit, e.g. 'peak_incident_stress=250 MPa' or "
                         "max_multiplier=0.9, or NAME=none to drop one; names: "
-                        f"{', '.join(DEFAULT_CONSTRAINTS)}")
+                        f"{', '.join(DEFAULT_CONSTRAINTS)}, or any output's name (at most the limit; "
+                        "min_NAME: at least), e.g. 'min_blow_frequency=50 Hz'")
     p.add_argument("--impact-velocity", default=None, metavar="SPEED",
                    help="the circuit's ideal limit: each design its piston's blow on the rod and rock at "
                         "this impact velocity, e.g. '10 m/s' (objective work_on_rock_per_blow; constraints "

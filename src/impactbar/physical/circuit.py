@@ -525,6 +525,8 @@ class CircuitDrifterOrbit(DrifterOrbit):
         The dimensionless orbit (its state includes the pressures and the valve opening).
     """
 
+    _kind = "circuit"
+
     def _more(self) -> str:
         return f", mean supply {self.mean_supply_pressure_Pa / 1e6:.4g} MPa"
 
@@ -591,6 +593,14 @@ class CircuitDrifterOrbit(DrifterOrbit):
         ``accumulator``, the least supply pressure less the pre-charge (below 0: the accumulator
         empties); a border the circuit does not have (no relief, no accumulator) is left out."""
         return {k: float(v) * PRESSURE_SCALE for k, v in self.orbit.drive.border_tests(self._pieces).items()}
+
+    @property
+    def pressures_at_impact_Pa(self) -> dict:
+        """The absolute pressure of each oil volume at the impact (Pa): ``front``, ``rear``,
+        ``supply``."""
+        o = self.orbit
+        z = np.asarray(o.drive_states[0], dtype=float) * PRESSURE_SCALE
+        return {name: float(z[o.drive.layout[name]]) for name in ("front", "rear", "supply")}
 
     @property
     def impact_power_kW(self) -> float:
@@ -684,17 +694,6 @@ class CircuitDrifterOrbit(DrifterOrbit):
         from ..plotting.circuit import plot_circuit_orbit
 
         return plot_circuit_orbit(self, axes=axes, points=points)
-
-    def _summary(self) -> dict:
-        base, border = super()._summary(), self.border_margins_Pa
-        return {**{k: base[k] for k in ("blow_frequency_Hz", "period_ms", "impact_velocity_m_s",
-                                        "impact_energy_J")},
-                "mean_supply_pressure_MPa": self.mean_supply_pressure_Pa / 1e6,
-                "pump_power_kW": self.pump_power_kW, "impact_power_kW": self.impact_power_kW,
-                "hydraulic_efficiency": self.hydraulic_efficiency, "stable": base["stable"],
-                "minimum_pressure_MPa": min(self.minimum_pressures_Pa.values()) / 1e6,
-                "cavitates": self.cavitates, "multiplier": base["multiplier"],
-                **{f"{k}_margin_MPa": border.get(k, math.inf) / 1e6 for k in ("relief", "accumulator")}}
 
 
 #: Presets of drifters with their oil circuit.

@@ -330,6 +330,7 @@ class DrifterOrbit:
 
     drifter: Drifter
     orbit: object
+    _kind = "drifter"  #: the machine whose outputs it reports (:mod:`~impactbar.physical.outputs`)
 
     def __repr__(self) -> str:
         return (f"{type(self).__name__}({self.drifter.name or 'drifter'}: {self.blow_frequency_Hz:.4g} Hz, "
@@ -407,12 +408,13 @@ class DrifterOrbit:
         return out
 
     def _summary(self) -> dict:
-        """The SI outputs without the rock's."""
-        return {"blow_frequency_Hz": float(self.blow_frequency_Hz), "period_ms": 1e3 * self.period_s,
-                "impact_velocity_m_s": self.impact_velocity_m_s, "impact_energy_J": self.impact_energy_J,
-                "percussive_power_kW": self.percussive_power_kW, "stable": self.stable,
-                "admissibility": str(self.orbit.admissibility),
-                "multiplier": abs(complex(self.multipliers[0])) if self.multipliers.size else 0.0}
+        """The SI outputs without the rock's: those of the view ``"summary"`` the machine has
+        (:mod:`~impactbar.physical.outputs`), in their display units."""
+        from .outputs import output_values, outputs
+
+        shown = outputs("summary", self._kind, rock=False)
+        values = output_values(self, shown)
+        return {o.shown_key: o.shown(values[o.name]) for o in shown}
 
 
 #: Drifter presets, from documented numbers.

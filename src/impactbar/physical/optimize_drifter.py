@@ -41,22 +41,19 @@ from .display_units import config_quantity, display_unit, written_quantity
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_cache import OrbitChain, dumps, read_cache, write_cache
-from .optimize_outputs import piston_and_multipliers, shank_stress
+from .optimize_outputs import constraint_output, piston_and_multipliers, shank_stress
 from .optimize_population import check_population, penalised, population_search
 from .optimize_progress import DesignProgress
+from .outputs import Reading, outputs
 from .sensitivity import default_step, tangent_derivatives
 from .units import to_si
 
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE",
            "optimize_drifter", "evaluate_design", "evaluate_blow", "DrifterOptimum"]
 
-#: The objectives (all maximised): name to (the figure, its unit, what it is).
-OBJECTIVES = {
-    "drilling_rate": ("drilling_rate_m_min", "m/min", "penetration per blow times the blow frequency"),
-    "drilling_rate_per_kW": ("drilling_rate_per_kW", "m/min/kW", "drilling rate over the pump's power"),
-    "work_on_rock_per_blow": ("work_on_rock_J", "J", "work on the rock per blow"),
-    "impact_power": ("impact_power_kW", "kW", "kinetic energy at impact times the blow frequency"),
-}
+#: The objectives (all maximised): name to (the figure, its unit, what it is), the outputs that name
+#: an objective (:attr:`~impactbar.physical.outputs.Output.objective`).
+OBJECTIVES = {o.objective: (o.key, o.unit, o.long_name) for o in outputs() if o.objective}
 
 #: The constraints and their default limits (SI): ``peak_incident_stress`` (Pa, the largest stress in
 #: the shank adapter before the rock's first reflection is back at it, or over the piston's first
@@ -76,14 +73,6 @@ DEFAULT_CONSTRAINTS = {"peak_incident_stress": None, "max_multiplier": 0.95, "mi
 #: blow's and the piston's.
 IDEAL_CONSTRAINTS = ("peak_incident_stress", "piston_mass")
 
-#: Each constraint's unit, its sense (+1: the value at most the limit; -1: at least) and the scale of
-#: its normalised margin for the search.
-_CONSTRAINT_UNITS = {"peak_incident_stress": ("Pa", 1, None), "max_multiplier": ("", 1, 1.0),
-                     "min_pressure": ("Pa", -1, 1e6), "mean_supply_pressure": ("Pa", 1, None),
-                     "peak_supply_pressure": ("Pa", 1, None), "min_chamber_volume": ("m**3", -1, 1e-4),
-                     "min_drilling_rate": ("m/min", -1, None), "piston_mass": ("kg", 1, None)}
-
-
 #: How far a constraint may be missed and count as met, relative to its scale (the limit, or where
 #: the limit is 0 the margin's fixed scale: 1 MPa of pressure, 0.1 L of volume): the operating
 #: point's own accuracy, its periodic orbit to 1e-8 (the circuit's flights at ``rtol = 1e-10``,
@@ -92,8 +81,7 @@ _CONSTRAINT_UNITS = {"peak_incident_stress": ("Pa", 1, None), "max_multiplier": 
 #: limit at about that distance from it. The reported optimum's fresh orbit meets it too.
 FEASIBILITY_TOLERANCE = 1e-8
 
-#: The constraints that need the drill string and the rock.
-_ROCK_CONSTRAINTS = ("peak_incident_stress", "min_drilling_rate")
+
 
 
 def _fingerprint(config: dict, vary: dict, objective: str, constraints: dict) -> str:
@@ -147,7 +135,7 @@ def evaluate_design(drifter: CircuitDrifter, constraints: dict | None = None,
     limits = _limits(constraints, drifter)
     t0 = time.perf_counter()
     orbit, continued = _operating_point(drifter, guess)
-    rec = _figures(orbit, limits, drifter.bar.mass_kg)
+    rec = _figures(orbit, limits)
     rec["continued"] = continued
     rec["seconds"] = time.perf_counter() - t0
     return rec, orbit
@@ -210,9 +198,9 @@ def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: 
                        lengths=list(getattr(bar, "lengths_m", [bar.length_m])),
                        areas=list(getattr(bar, "areas_m2", [bar.area_m2])), impact_velocity=impact_velocity,
                        E=bar.E_Pa, density=bar.density_kg_m3, bit_mass=drill.bit_mass_kg, feed=drill.feed_N)
-    obj = {"work_on_rock_J": blow["work_on_rock_J"], "impact_energy_J": blow["impact_energy_J"],
-           "blow_efficiency": blow["efficiency"]}
-    values = {"peak_incident_stress": blow["peak_stress_Pa"], "piston_mass": bar.mass_kg}
+    blow = dict(blow, piston_mass_kg=bar.mass_kg)
+    obj = {o.key: o.blow(blow) for o in outputs("record") if o.blow is not None}
+    values = {name: constraint_output(name)[0].blow(blow) for name in IDEAL_CONSTRAINTS}
     rec = _constrained(obj, values, limits)
     rec["seconds"] = time.perf_counter() - t0
     return rec
@@ -220,29 +208,30 @@ def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: 
 
 def _limits(constraints, drifter, ideal: bool = False) -> dict:
     given = dict(constraints or {})
-    unknown = sorted(set(given) - set(DEFAULT_CONSTRAINTS))
+    unknown = sorted(k for k in given if not isinstance(k, str) or constraint_output(k) is None)
     if unknown:
         raise ValueError(f"constraints: unknown constraint {unknown[0]!r}; one of "
-                         f"{', '.join(DEFAULT_CONSTRAINTS)}")
+                         f"{', '.join(DEFAULT_CONSTRAINTS)}, or an output's name (at most the limit; "
+                         "min_<name>: at least)")
     circuit = sorted(set(given) - set(IDEAL_CONSTRAINTS)) if ideal else []
     if circuit:
         raise ValueError(f"constraints: {circuit[0]!r} is the circuit's; in its ideal limit "
                          f"(impact_velocity) only {', '.join(IDEAL_CONSTRAINTS)}")
     out = {}
-    for name, default in DEFAULT_CONSTRAINTS.items():
+    for name, default in {**DEFAULT_CONSTRAINTS, **given}.items():
         if ideal and name not in IDEAL_CONSTRAINTS:
             continue
         v = given.get(name, default)
         if v is None:
             continue
-        if name in _ROCK_CONSTRAINTS and drifter.drill is None:
+        if constraint_output(name)[0].rock and drifter.drill is None:
             raise ValueError(f"constraints: {name!r} needs the drill string and the rock ([rock] in the "
                              "config)")
         if v == "relief":
             v = drifter.si["relief_pressure_Pa"]
             if not math.isfinite(v):
                 continue
-        unit = _CONSTRAINT_UNITS[name][0]
+        unit = constraint_output(name)[3]
         if isinstance(v, int | float) and not isinstance(v, bool):  # a bare number: SI
             out[name] = float(v)
             continue
@@ -252,23 +241,13 @@ def _limits(constraints, drifter, ideal: bool = False) -> dict:
     return out
 
 
-def _figures(orbit, limits: dict, mass_kg: float) -> dict:
-    rock = orbit.rock()
-    pump = orbit.pump_power_kW
-    obj = {"impact_power_kW": orbit.impact_power_kW, "impact_energy_J": orbit.impact_energy_J,
-           "blow_frequency_Hz": orbit.blow_frequency_Hz, "pump_power_kW": pump,
-           "hydraulic_efficiency": orbit.hydraulic_efficiency}
-    if rock:
-        obj.update(drilling_rate_m_min=rock["drilling_rate_m_min"], work_on_rock_J=rock["work_on_rock_J"],
-                   drilling_rate_per_kW=rock["drilling_rate_m_min"] / pump)
-    h = orbit.histories(200)
-    values = {"peak_incident_stress": rock.get("peak_rod_stress_Pa", math.nan),
-              "max_multiplier": float(np.max(np.abs(orbit.multipliers))),
-              "min_pressure": float(min(orbit.minimum_pressures_Pa.values())),
-              "mean_supply_pressure": orbit.mean_supply_pressure_Pa,
-              "peak_supply_pressure": float(np.max(h["p_s_Pa"])),
-              "min_chamber_volume": float(min(np.min(h["V_f_m3"]), np.min(h["V_r_m3"]))),
-              "min_drilling_rate": rock.get("drilling_rate_m_min", math.nan), "piston_mass": mass_kg}
+def _figures(orbit, limits: dict) -> dict:
+    """An operating point's record: the outputs of the view ``"record"`` (by key) and the value of
+    every constraint, the defaults' and those of ``limits``."""
+    r = Reading(orbit)
+    obj = {o.key: o.of(r) for o in outputs("record", "circuit", rock=orbit.drifter.drill is not None)
+           if o.of is not None}
+    values = {name: float(constraint_output(name)[0].of(r)) for name in {**DEFAULT_CONSTRAINTS, **limits}}
     return _constrained(obj, values, limits)
 
 
@@ -276,7 +255,7 @@ def _constrained(obj: dict, values: dict, limits: dict) -> dict:
     """A design's record: its objectives ``obj`` and the constraints' ``values`` against ``limits``."""
     cons = {}
     for name, limit in limits.items():
-        unit, sense, scale = _CONSTRAINT_UNITS[name]
+        _, sense, scale, unit = constraint_output(name)
         value = values[name]
         margin = (limit - value) if sense > 0 else (value - limit)
         scale = scale if scale is not None else abs(limit) or 1.0
@@ -368,9 +347,8 @@ class DrifterOptimum:
                 mark = " *" if name == self.objective else ""
                 rows.append(f"{name + mark:34s}{self.baseline['objectives'][key]:14.5g}"
                             f"{self.optimum['objectives'][key]:14.5g} {unit}")
-        for key in ("blow_frequency_Hz", "impact_energy_J", "pump_power_kW", "hydraulic_efficiency",
-                    "blow_efficiency"):
-            if key in self.baseline["objectives"]:
+        for key in self.baseline["objectives"]:
+            if key not in {k for k, _, _ in OBJECTIVES.values()}:
                 rows.append(f"{key:34s}{self.baseline['objectives'][key]:14.5g}"
                             f"{self.optimum['objectives'][key]:14.5g}")
         for name, c in self.baseline["constraints"].items():
@@ -531,8 +509,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     >>> optimize_drifter("circuit-drifter", {"valve.switch_out": ("20 mm", "23 mm")}, objective="speed")
     Traceback (most recent call last):
     ...
-    ValueError: objective must be one of drilling_rate, drilling_rate_per_kW, work_on_rock_per_blow,
-    impact_power; got 'speed'
+    ValueError: objective must be one of impact_power, work_on_rock_per_blow, drilling_rate,
+    drilling_rate_per_kW; got 'speed'
     """
     from scipy.optimize import minimize
 
@@ -755,7 +733,7 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
     values, units = rec["values"], {k: spec[k]["unit"] for k in keys}
 
     def read(point) -> dict:
-        r = _figures(point, limits, point.drifter.bar.mass_kg)
+        r = _figures(point, limits)
         return {"objective": r["objectives"][fkey], **{n: r["constraints"][n]["scaled"] for n in names}}
 
     if orbit is None:

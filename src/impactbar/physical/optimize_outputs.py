@@ -1,12 +1,51 @@
-"""What a design's record of the whole-drifter optimiser reports besides its figures: the piston's
-shape and the orbit's Floquet multipliers, and the stress wave the blow sends into the shank
+"""What a design's record of the whole-drifter optimiser reports: the output each constraint limits
+(:mod:`~impactbar.physical.outputs`), and besides its figures the piston's shape and the orbit's
+Floquet multipliers, and the stress wave the blow sends into the shank
 (:func:`~impactbar.physical.optimize_drifter`)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["piston_and_multipliers", "shank_stress"]
+from .outputs import OUTPUTS
+
+__all__ = ["constraint_output", "piston_and_multipliers", "shank_stress"]
+
+#: Each constraint: the output it limits (:mod:`~impactbar.physical.outputs`, its unit the
+#: constraint's), its sense (+1: the value at most the limit; -1: at least) and the scale of its
+#: normalised margin for the search (``None``: the limit's size). Any other output is a constraint
+#: too: by its name at most the limit, ``min_<name>`` at least (:func:`constraint_output`).
+_CONSTRAINTS = {"peak_incident_stress": ("peak_incident_stress", 1, None),
+                "max_multiplier": ("max_abs_multiplier", 1, 1.0),
+                "min_pressure": ("minimum_pressure", -1, 1e6),
+                "mean_supply_pressure": ("mean_supply_pressure", 1, None),
+                "peak_supply_pressure": ("peak_supply_pressure", 1, None),
+                "min_chamber_volume": ("min_chamber_volume", -1, 1e-4),
+                "min_drilling_rate": ("drilling_rate", -1, None), "piston_mass": ("piston_mass", 1, None)}
+
+
+def constraint_output(name: str):
+    """The output a constraint limits, its sense (+1: at most the limit; -1: at least), the scale of
+    its margin (``None``: the limit's) and its unit; ``None`` for no constraint of that name.
+
+    Examples
+    --------
+    >>> from impactbar.physical.optimize_outputs import constraint_output
+    >>> o, sense, scale, unit = constraint_output("min_drilling_rate")
+    >>> o.name, sense, unit
+    ('drilling_rate', -1, 'm/min')
+    >>> constraint_output("min_impact_velocity")[0].name, constraint_output("speed")
+    ('impact_velocity', None)
+    """
+    if name in _CONSTRAINTS:
+        out, sense, scale = _CONSTRAINTS[name]
+    else:
+        out, sense, scale = (name, 1, None) if name in OUTPUTS or not name.startswith("min_") else \
+            (name[4:], -1, None)
+    o = OUTPUTS.get(out)
+    if o is None or o.of is None or "circuit" not in o.machines or o.dtype != "f8":
+        return None
+    return o, sense, scale, "" if o.unit == "1" else o.unit
 
 
 def piston_and_multipliers(drifter, orbit) -> dict:

@@ -34,14 +34,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .circuit import PRESSURE_SCALE, SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
+from .circuit import SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
 from .display_units import config_quantity, display_unit
 from .geometry import PISTON_KEYS
 from .loader import build, config_value, read_config, with_values
+from .outputs import output_values, outputs
 from .units import to_si
 
 __all__ = ["operating_point_sensitivities", "OperatingPointSensitivities", "RESIDUAL_STEP", "FLEXIBLE_STEP",
            "default_step", "FIGURE_UNITS"]
+
 
 #: The relative step ``h / |p|`` of both central differences: their error is
 #: :math:`O(h^2)` (truncation) plus :math:`O(\epsilon / h)` (the flights' noise, :math:`\epsilon
@@ -64,15 +66,11 @@ def default_step(drifter: CircuitDrifter) -> float:
     piston, :data:`FLEXIBLE_STEP` for a flexible one."""
     return RESIDUAL_STEP if drifter.n_modes == 0 else FLEXIBLE_STEP
 
-#: The figures differentiated and their units (those of the rock with a ``[rock]`` section only).
-FIGURE_UNITS = {
-    "blow_frequency_Hz": "Hz", "impact_velocity_m_s": "m/s", "impact_energy_J": "J",
-    "mean_supply_pressure_Pa": "Pa", "pump_power_kW": "kW", "impact_power_kW": "kW",
-    "hydraulic_efficiency": "", "max_multiplier": "", "rebound_velocity_m_s": "m/s",
-    "front_pressure_at_impact_Pa": "Pa", "rear_pressure_at_impact_Pa": "Pa",
-    "supply_pressure_at_impact_Pa": "Pa",
-    "drilling_rate_m_min": "m/min", "work_on_rock_J": "J", "drilling_rate_per_kW": "m/min/kW",
-}
+#: The figures differentiated and their units (those of the rock with a ``[rock]`` section only):
+#: the outputs of the view ``"figure"`` (:mod:`~impactbar.physical.outputs`) by key, as the library
+#: declares them (an output added by :func:`~impactbar.physical.outputs.register_output` is
+#: differentiated too).
+FIGURE_UNITS = {o.key: o.unit for o in outputs("figure", "circuit")}
 
 
 def _key_unit(key: str) -> str:
@@ -181,27 +179,12 @@ class OperatingPointSensitivities:
 
 
 def _figures(point: CircuitDrifterOrbit) -> dict:
-    """The designer's figures of an operating point (:data:`FIGURE_UNITS`)."""
-    d, o = point.drifter, point.orbit
-    M = o.model.n_modes + 1
-    after = np.asarray(o.states_after_impact[0], dtype=float)
-    z = np.asarray(o.drive_states[0], dtype=float) * PRESSURE_SCALE
-    sc = d.scales
-    out = {"blow_frequency_Hz": point.blow_frequency_Hz, "impact_velocity_m_s": point.impact_velocity_m_s,
-           "impact_energy_J": point.impact_energy_J, "mean_supply_pressure_Pa": point.mean_supply_pressure_Pa,
-           "pump_power_kW": point.pump_power_kW, "impact_power_kW": point.impact_power_kW,
-           "hydraulic_efficiency": point.hydraulic_efficiency,
-           "rebound_velocity_m_s": -float(o.model.end_weights @ after[M:]) * sc.velocity_m_s,
-           **{f"{name}_pressure_at_impact_Pa": float(z[o.drive.layout[name]])
-              for name in ("front", "rear", "supply")}}
-    mu = np.abs(np.asarray(point.multipliers))
-    if not np.any(np.isnan(mu)):  # (left out where the figures were read without the multipliers)
-        out["max_multiplier"] = float(np.max(mu)) if mu.size else 0.0
-    rock = point.rock()
-    if rock:
-        out.update(drilling_rate_m_min=rock["drilling_rate_m_min"], work_on_rock_J=rock["work_on_rock_J"],
-                   drilling_rate_per_kW=rock["drilling_rate_m_min"] / out["pump_power_kW"])
-    return {k: float(v) for k, v in out.items()}
+    """The designer's figures of an operating point (:data:`FIGURE_UNITS`: the outputs of the view
+    ``"figure"``, the rock's where the drifter has one; an optional one left out where NaN)."""
+    shown = outputs("figure", "circuit", rock=point.drifter.drill is not None)
+    values = output_values(point, shown)
+    return {o.key: float(values[o.name]) for o in shown
+            if not (o.optional and math.isnan(values[o.name]))}
 
 
 def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | None = None,

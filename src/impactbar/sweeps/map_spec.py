@@ -69,39 +69,6 @@ REASON_CHARS = 200
 #: the status codes of a point
 STATUS = {0: "orbit found", 1: "no orbit (ValueError)", 2: "failed (another error)"}
 
-_BASE = (
-    Field("blow_frequency", "blow frequency", "Hz"),
-    Field("period", "period of the operating point", "s"),
-    Field("impact_velocity", "piston velocity at impact", "m/s"),
-    Field("impact_energy", "piston kinetic energy at impact", "J"),
-    Field("max_abs_multiplier", "largest modulus of the non-trivial Floquet multipliers", "1"),
-    Field("stable", "every non-trivial multiplier inside the unit circle", "", dtype="b1"),
-)
-_CIRCUIT = (
-    Field("mean_supply_pressure", "supply pressure averaged over the period (absolute)", "Pa"),
-    Field("pump_power", "pump power Q_p (p_s - p_t) over the period", "W"),
-    Field("hydraulic_efficiency", "energy the blows deliver over the pump's work", "1"),
-    Field("min_rear_pressure", "least rear chamber pressure over the period (absolute)", "Pa"),
-    Field("min_front_pressure", "least front chamber pressure over the period (absolute)", "Pa"),
-    Field("min_supply_pressure", "least supply pressure over the period (absolute)", "Pa"),
-    Field("cavitates", "an absolute pressure falls below 0 during the period", "", dtype="b1"),
-    Field("relief_open_fraction", "fraction of the period the relief valve is open", "1"),
-    Field("relief_opens", "the relief valve opens during the period", "", dtype="b1"),
-    Field("relief_margin", "relief pressure less the greatest supply pressure", "Pa"),
-    Field("accumulator_empties", "the supply pressure falls below the pre-charge during the period "
-                                 "(the accumulator empties)", "", dtype="b1"),
-    Field("accumulator_margin", "least supply pressure less the accumulator pre-charge", "Pa"),
-)
-#: the rock's figures (``orbit.rock()``): key there, stored name, SI factor, units, long name
-_ROCK = (
-    ("work_on_rock_J", "work_on_rock", 1.0, "J", "work done on the rock per blow"),
-    ("penetration_mm", "penetration", 1e-3, "m", "permanent penetration per blow"),
-    ("drilling_rate_m_min", "drilling_rate", 1.0 / 60.0, "m/s", "drilling rate"),
-    ("peak_rod_stress_Pa", "peak_incident_stress", 1.0, "Pa", "peak stress of the incident wave "
-                                                              "in the shank"),
-    ("rod_energy_J", "rod_energy", 1.0, "J", "energy of the incident wave in the rod"),
-    ("efficiency", "rock_efficiency", 1.0, "1", "work on rock over the energy of the blow"),
-)
 #: the variables of the ``settle`` task (before its status and failure)
 _SETTLE = (
     Field("period_blows", "period of the settled motion in blows (0: not settled)", "", dtype="i2"),
@@ -152,7 +119,8 @@ def map_variables(kind: str, rock: bool, task: str = "operating_point") -> Schem
     Returns
     -------
     Schema
-        Its fields (name, long name, SI units, dtype).
+        Its fields (name, long name, SI units, dtype): the outputs of the view ``"store"``
+        (:mod:`impactbar.physical.outputs`) the machine has, then ``origin``, ``status``, ``failure``.
 
     Examples
     --------
@@ -162,14 +130,12 @@ def map_variables(kind: str, rock: bool, task: str = "operating_point") -> Schem
     >>> map_variables("circuit", False, "settle").names[:3]
     ('period_blows', 'settled', 'chatter_per_blow')
     """
+    from ..physical.outputs import outputs
+
     if task == "settle":
         return Schema(*_SETTLE, *_SETTLE_TAIL)
-    fields = list(_BASE)
-    if kind == "circuit":
-        fields += _CIRCUIT
-    if rock:
-        fields += [Field(name, long, units) for _, name, _, units, long in _ROCK]
-    return Schema(*fields, *_TAIL)
+    return Schema(*(Field(o.name, o.long_name, _cf_output_unit(o.si_unit), dtype=o.dtype)
+                    for o in outputs("store", kind, rock)), *_TAIL)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -353,6 +319,11 @@ def settle_options(table) -> dict:
 def _cf_unit(unit: str) -> str:
     """A pint unit as a CF ``units`` string (``"m**3/s"`` -> ``"m3/s"``; dimensionless ``"1"``)."""
     return "1" if unit == "" else unit.replace("**", "").replace(" ", "")
+
+
+def _cf_output_unit(unit: str) -> str:
+    """An output's SI unit as a CF ``units`` string (a flag's ``""`` stays)."""
+    return unit.replace("**", "").replace(" ", "")
 
 
 def is_map_spec(doc) -> bool:

@@ -8,15 +8,17 @@ import math
 
 import numpy as np
 
-from .map_spec import _ROCK, REASON_CHARS, DrifterMapSpec, _one_line
+from ..physical.outputs import outputs as _outputs
+from .map_spec import REASON_CHARS, DrifterMapSpec, _one_line
 
 #: largest relative change of the period or the impact velocity from the neighbour a continued
 #: orbit may show; beyond it the point is found again by the default chain (another branch)
 JUMP = 0.25
 #: relative width to which :func:`refine_edge` bisects an edge
 EDGE_RTOL = 1e-6
-#: the flags whose changes along an axis are edges
-EDGE_FLAGS = ("stable", "cavitates", "relief_opens", "accumulator_empties")
+#: the flags whose changes along an axis are edges (the outputs declared with ``edge``,
+#: :mod:`impactbar.physical.outputs`)
+EDGE_FLAGS = tuple(o.name for o in _outputs("store") if o.edge)
 #: a settle's first run lasts its blows at this blow frequency (Hz); a run holding fewer blows is
 #: followed by a longer one, from rest again
 SETTLE_FIRST_HZ = 40.0
@@ -45,32 +47,6 @@ def operating_point(machine, guess=None):
     return machine.orbit(None if guess is None else guess.orbit)
 
 
-def _relief_open_fraction(point) -> float:
-    """Fraction of the period in which the supply pressure is above the relief's setting (the
-    integrator's steps, linear between them)."""
-    sup = point.orbit.drive.supply
-    if not sup.has_relief or sup.held:
-        return 0.0
-    p_rel, total, open_ = sup.relief_pressure, 0.0, 0.0
-    supply = point.orbit.drive.layout.supply
-    for p in point._pieces:
-        if not hasattr(p, "drive_state") or not hasattr(p, "t"):
-            continue
-        t = np.asarray(p.t, dtype=float)
-        if t.size < 2:
-            continue
-        ps = np.asarray(p.drive_state(t)[supply], dtype=float) - p_rel  # (a flight's or a blow's steps)
-        total += t[-1] - t[0]
-        dt = np.diff(t)
-        a, b = ps[:-1], ps[1:]
-        both = (a > 0) & (b > 0)
-        open_ += float(np.sum(dt[both]))
-        cross = (a > 0) != (b > 0)
-        frac = np.where(cross, np.where(a > 0, a, b) / np.where(cross, np.abs(a - b), 1.0), 0.0)
-        open_ += float(np.sum(dt[cross] * frac[cross]))
-    return open_ / total if total > 0 else 0.0
-
-
 def point_values(point, kind: str, rock: bool) -> dict:
     """The stored values of one operating point, in SI (the names of :func:`map_variables`).
 
@@ -84,33 +60,11 @@ def point_values(point, kind: str, rock: bool) -> dict:
     -------
     dict of str to float or bool
     """
-    mult = np.abs(np.asarray(point.multipliers))
-    out = {"blow_frequency": point.blow_frequency_Hz, "period": point.period_s,
-           "impact_velocity": point.impact_velocity_m_s, "impact_energy": point.impact_energy_J,
-           "max_abs_multiplier": float(mult.max()) if mult.size else 0.0, "stable": point.stable}
-    if kind == "circuit":
-        from ..physical.circuit import PRESSURE_SCALE
+    from ..physical.outputs import output_values
 
-        low = point.minimum_pressures_Pa
-        border = point.orbit.drive.border_tests(point._pieces)
-        frac = _relief_open_fraction(point)
-        out.update({"mean_supply_pressure": point.mean_supply_pressure_Pa,
-                    "pump_power": point.pump_power_kW * 1e3,
-                    "hydraulic_efficiency": point.hydraulic_efficiency,
-                    "min_rear_pressure": low.get("rear", math.nan),
-                    "min_front_pressure": low.get("front", math.nan),
-                    "min_supply_pressure": low.get("supply", math.nan),
-                    "cavitates": bool(min(low.values()) < 0.0) if low else False,
-                    "relief_open_fraction": frac,
-                    "relief_margin": border.get("relief", math.inf) * PRESSURE_SCALE,
-                    "relief_opens": bool(border.get("relief", math.inf) < 0.0),
-                    "accumulator_margin": border.get("accumulator", math.inf) * PRESSURE_SCALE,
-                    "accumulator_empties": bool(border.get("accumulator", math.inf) < 0.0)})
-    if rock:
-        figures = point.rock()
-        for key, name, factor, _, _ in _ROCK:
-            out[name] = figures.get(key, math.nan) * factor
-    return out
+    stored = _outputs("store", kind, rock)
+    values = output_values(point, stored)
+    return {o.name: o.to_si(values[o.name]) for o in stored}
 
 
 def _snake(block: tuple) -> list:

@@ -1,0 +1,426 @@
+"""The outputs of a drifter, each declared once: its name, the unit its value comes in, its long name,
+how it is read from an operating point (an orbit in SI, :class:`~impactbar.physical.DrifterOrbit`)
+or from a blow (:func:`~impactbar.physical.piston.piston_blow`'s figures), and where it is shown.
+
+Every tool reads this registry: the summaries of an operating point
+(:meth:`~impactbar.physical.CircuitDrifterOrbit.summary`, the CLI's ``impactbar drifter``), the
+stored variables of a design map (:func:`~impactbar.sweeps.map_spec.map_variables`), the
+sensitivities (:data:`~impactbar.physical.sensitivity.FIGURE_UNITS`), the optimiser's objectives and
+constraints (:mod:`~impactbar.physical.optimize_drifter`) and the continuation's ``branch.csv``. An
+output added by :func:`register_output` appears in each of them.
+
+Names. An output's :attr:`Output.name` is its stored variable's; its :attr:`Output.key`, the name
+with the unit its value comes in (``pump_power_kW``, ``mean_supply_pressure_Pa``), is the key of the
+sensitivities' and the optimiser's figures; its :attr:`Output.shown_key`, the name with its display
+unit (``mean_supply_pressure_MPa``, :func:`~impactbar.physical.display_units.display_unit`), the key
+of the summaries. A store holds the SI value (:attr:`Output.si_unit`: kW as W, mm as m, m/min as
+m/s).
+
+Views (:attr:`Output.views`): ``"store"`` a design map's variable, ``"summary"`` the operating
+point's summary and the CLI, ``"figure"`` a figure the sensitivities differentiate and the
+optimiser's records carry (``"record"`` those its records carry), ``"branch"`` a column of a
+circuit's ``branch.csv``; :attr:`Output.objective` names one the optimiser can maximise. Any
+output of a number can be a constraint of the optimiser (its value at most the limit;
+``min_<name>`` at least).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from .display_units import display_unit
+
+__all__ = ["Output", "OUTPUTS", "register_output", "unregister_output", "outputs", "added_outputs",
+           "Reading", "output_values", "output_by_key"]
+
+#: The unit an output's value comes in that is not SI, to the SI unit a store holds and the factor
+#: (the value times it).
+_TO_SI = {"kW": ("W", 1e3), "mm": ("m", 1e-3), "m/min": ("m/s", 1.0 / 60.0)}
+
+VIEWS = frozenset({"store", "summary", "figure", "record", "branch"})
+MACHINES = frozenset({"drifter", "circuit"})
+
+
+def _suffix(unit: str) -> str:
+    """A unit as a key's suffix (``"m/s"`` -> ``"m_s"``, ``"m**3"`` -> ``"m3"``), ``""`` for none."""
+    return "" if unit in ("", "1") else unit.replace("**", "").replace("/", "_").replace("^", "")
+
+
+def _named(name: str, unit: str) -> str:
+    s = _suffix(unit)
+    return f"{name}_{s}" if s else name
+
+
+@dataclass(frozen=True)
+class Output:
+    """One output of a drifter.
+
+    Attributes
+    ----------
+    name : str
+        Its name (a design map's variable).
+    unit : str
+        The unit :attr:`of` gives its value in (``"Pa"``, ``"kW"``, ``"m/min"``; ``"1"`` for a
+        dimensionless number, ``""`` for a flag).
+    long_name : str
+        What it is, in words (a stored variable's ``long_name``).
+    of : callable, optional
+        ``of(reading)``: its value at an operating point (:class:`Reading`), in :attr:`unit`.
+    blow : callable, optional
+        ``blow(figures)``: its value from a single blow's figures
+        (:func:`~impactbar.physical.piston.piston_blow`), in :attr:`unit`.
+    views : frozenset of str
+        Where it is shown (module docstring).
+    machines : frozenset of str
+        ``"drifter"`` (the valve drifter) and/or ``"circuit"`` (with its oil circuit).
+    rock : bool
+        Whether it needs the drill string and the rock.
+    dtype : str
+        ``"f8"``, ``"b1"`` (a flag) or ``"U"`` (text, not stored).
+    key : str, optional
+        Its figures' key; the name with :attr:`unit` by default.
+    optional : bool
+        Left out of the figures where its value is NaN (not computed).
+    objective : str, optional
+        The name the optimiser maximises it by (:data:`~impactbar.physical.optimize_drifter.OBJECTIVES`).
+    edge : bool
+        A flag whose change between neighbouring points of a design map is an edge
+        (:func:`~impactbar.sweeps.map_task.find_edges`).
+    """
+
+    name: str
+    unit: str
+    long_name: str
+    of: Callable | None = field(default=None, compare=False)
+    blow: Callable | None = field(default=None, compare=False)
+    views: frozenset = frozenset()
+    machines: frozenset = frozenset({"circuit"})
+    rock: bool = False
+    dtype: str = "f8"
+    key: str | None = None
+    optional: bool = False
+    objective: str | None = None
+    edge: bool = False
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.name, str) and self.name.isidentifier()):
+            raise ValueError(f"Output name must be an identifier; got {self.name!r}")
+        object.__setattr__(self, "views", frozenset(self.views))
+        object.__setattr__(self, "machines", frozenset(self.machines))
+        if not self.views <= VIEWS:
+            raise ValueError(f"Output {self.name}: views must be among {sorted(VIEWS)}; got "
+                             f"{sorted(self.views)}")
+        if not self.machines or not self.machines <= MACHINES:
+            raise ValueError(f"Output {self.name}: machines must be among {sorted(MACHINES)}; got "
+                             f"{sorted(self.machines)}")
+        if self.of is None and self.views - {"record"}:
+            raise ValueError(f"Output {self.name}: views {sorted(self.views - {'record'})} read it from an "
+                             "operating point; give of=")
+        if self.dtype not in ("f8", "b1", "U") or ("store" in self.views and self.dtype == "U"):
+            raise ValueError(f"Output {self.name}: dtype must be 'f8', 'b1' or 'U' (text, not stored); got "
+                             f"{self.dtype!r}")
+        if self.key is None:
+            object.__setattr__(self, "key", _named(self.name, self.unit))
+
+    @property
+    def si_unit(self) -> str:
+        """The SI unit a store holds it in (CF spelling: ``"1"`` dimensionless, ``""`` a flag)."""
+        return _TO_SI.get(self.unit, (self.unit, 1.0))[0]
+
+    def to_si(self, value):
+        """A value in :attr:`unit` in :attr:`si_unit`."""
+        factor = _TO_SI.get(self.unit, (self.unit, 1.0))[1]
+        return value * factor if factor != 1.0 else value
+
+    @property
+    def shown_unit(self) -> str:
+        """The unit a person reads it in (:func:`~impactbar.physical.display_units.display_unit`)."""
+        return display_unit(self.unit)[1] if self.unit not in ("", "1") else self.unit
+
+    @property
+    def shown_key(self) -> str:
+        """Its key in the summaries: the name with :attr:`shown_unit`."""
+        return _named(self.name, self.shown_unit) if self.key == _named(self.name, self.unit) else self.key
+
+    def shown(self, value):
+        """A value in :attr:`unit` in :attr:`shown_unit` (a factor below 1 as a division by its
+        inverse: ``Pa / 1e6``)."""
+        if self.unit in ("", "1") or self.dtype != "f8":
+            return value
+        factor = display_unit(self.unit)[0]
+        if factor == 1.0:
+            return value
+        return value * factor if factor > 1.0 else value / round(1.0 / factor)
+
+    def applies(self, kind: str, rock: bool) -> bool:
+        """Whether a machine of ``kind`` (with the rock or not) has it."""
+        return kind in self.machines and (rock or not self.rock)
+
+
+class Reading:
+    """An operating point read for its outputs: what several outputs use computed once.
+
+    Attributes
+    ----------
+    point : DrifterOrbit or CircuitDrifterOrbit
+    """
+
+    def __init__(self, point) -> None:
+        self.point = point
+
+    @cached_property
+    def rock(self) -> dict:
+        """The point's rock figures (:meth:`~impactbar.physical.DrifterOrbit.rock`)."""
+        return self.point.rock()
+
+    @cached_property
+    def histories(self) -> dict:
+        """The circuit's histories at 200 points over the period."""
+        return self.point.histories(200)
+
+    @cached_property
+    def borders(self) -> dict:
+        """The circuit's border margins (Pa)."""
+        return self.point.border_margins_Pa
+
+    @cached_property
+    def least(self) -> dict:
+        """The least absolute pressure of each oil volume (Pa)."""
+        return self.point.minimum_pressures_Pa
+
+    @cached_property
+    def max_multiplier(self) -> float:
+        mult = np.abs(np.asarray(self.point.multipliers))
+        return float(mult.max()) if mult.size else 0.0
+
+
+def relief_open_fraction(point) -> float:
+    """Fraction of the period in which the supply pressure is above the relief's setting (the
+    integrator's steps, linear between them)."""
+    sup = point.orbit.drive.supply
+    if not sup.has_relief or sup.held:
+        return 0.0
+    p_rel, total, open_ = sup.relief_pressure, 0.0, 0.0
+    supply = point.orbit.drive.layout.supply
+    for p in point._pieces:
+        if not hasattr(p, "drive_state") or not hasattr(p, "t"):
+            continue
+        t = np.asarray(p.t, dtype=float)
+        if t.size < 2:
+            continue
+        ps = np.asarray(p.drive_state(t)[supply], dtype=float) - p_rel  # (a flight's or a blow's steps)
+        total += t[-1] - t[0]
+        dt = np.diff(t)
+        a, b = ps[:-1], ps[1:]
+        both = (a > 0) & (b > 0)
+        open_ += float(np.sum(dt[both]))
+        cross = (a > 0) != (b > 0)
+        frac = np.where(cross, np.where(a > 0, a, b) / np.where(cross, np.abs(a - b), 1.0), 0.0)
+        open_ += float(np.sum(dt[cross] * frac[cross]))
+    return open_ / total if total > 0 else 0.0
+
+
+def _rebound(r: Reading) -> float:
+    o = r.point.orbit
+    M = o.model.n_modes + 1
+    after = np.asarray(o.states_after_impact[0], dtype=float)
+    return -float(o.model.end_weights @ after[M:]) * r.point.drifter.scales.velocity_m_s
+
+
+def _at_impact(name: str) -> Callable:
+    return lambda r: r.point.pressures_at_impact_Pa[name]
+
+
+def _least(volume: str) -> Callable:
+    return lambda r: r.least.get(volume, math.nan)
+
+
+def _rock(key: str) -> Callable:
+    return lambda r: r.rock.get(key, math.nan)
+
+
+_BOTH = frozenset(MACHINES)
+
+#: The outputs by name, in the order every view lists them.
+OUTPUTS: dict[str, Output] = {o.name: o for o in (
+    Output("blow_frequency", "Hz", "blow frequency", lambda r: r.point.blow_frequency_Hz,
+           views={"store", "summary", "figure", "record", "branch"}, machines=_BOTH),
+    Output("period", "s", "period of the operating point", lambda r: r.point.period_s,
+           views={"store", "summary"}, machines=_BOTH),
+    Output("impact_velocity", "m/s", "piston velocity at impact", lambda r: r.point.impact_velocity_m_s,
+           views={"store", "summary", "figure"}, machines=_BOTH),
+    Output("impact_energy", "J", "piston kinetic energy at impact", lambda r: r.point.impact_energy_J,
+           blow=lambda b: b["impact_energy_J"], views={"store", "summary", "figure", "record", "branch"},
+           machines=_BOTH),
+    Output("max_abs_multiplier", "1", "largest modulus of the non-trivial Floquet multipliers",
+           lambda r: r.max_multiplier, views={"store", "figure"}, machines=_BOTH, key="max_multiplier",
+           optional=True),
+    Output("mean_supply_pressure", "Pa", "supply pressure averaged over the period (absolute)",
+           lambda r: r.point.mean_supply_pressure_Pa, views={"store", "summary", "figure", "branch"}),
+    Output("pump_power", "kW", "pump power Q_p (p_s - p_t) over the period", lambda r: r.point.pump_power_kW,
+           views={"store", "summary", "figure", "record", "branch"}),
+    Output("impact_power", "kW", "kinetic energy at impact times the blow frequency",
+           lambda r: r.point.impact_power_kW, views={"summary", "figure", "record"},
+           objective="impact_power"),
+    Output("percussive_power", "kW", "impact energy times blow frequency",
+           lambda r: r.point.percussive_power_kW, views={"summary"}, machines={"drifter"}),
+    Output("hydraulic_efficiency", "1", "energy the blows deliver over the pump's work",
+           lambda r: r.point.hydraulic_efficiency, views={"store", "summary", "figure", "record", "branch"}),
+    Output("stable", "", "every non-trivial multiplier inside the unit circle", lambda r: r.point.stable,
+           views={"store", "summary"}, machines=_BOTH, dtype="b1", edge=True),
+    *(Output(f"min_{v}_pressure", "Pa", f"least {what} pressure over the period (absolute)",
+             _least(v), views={"store"})
+      for v, what in (("rear", "rear chamber"), ("front", "front chamber"), ("supply", "supply"))),
+    Output("minimum_pressure", "Pa", "least absolute pressure of the oil over the period",
+           lambda r: min(r.least.values()), views={"summary"}),
+    Output("cavitates", "", "an absolute pressure falls below 0 during the period",
+           lambda r: bool(min(r.least.values()) < 0.0) if r.least else False, views={"store", "summary"},
+           dtype="b1", edge=True),
+    Output("admissibility", "", "whether the orbit is admissible, or why not",
+           lambda r: str(r.point.orbit.admissibility), views={"summary"}, machines={"drifter"}, dtype="U"),
+    Output("multiplier", "1", "modulus of the first non-trivial Floquet multiplier",
+           lambda r: abs(complex(r.point.multipliers[0])) if r.point.multipliers.size else 0.0,
+           views={"summary"}, machines=_BOTH),
+    Output("relief_open_fraction", "1", "fraction of the period the relief valve is open",
+           lambda r: relief_open_fraction(r.point), views={"store"}),
+    Output("relief_opens", "", "the relief valve opens during the period",
+           lambda r: bool(r.borders.get("relief", math.inf) < 0.0), views={"store"}, dtype="b1",
+           edge=True),
+    Output("relief_margin", "Pa", "relief pressure less the greatest supply pressure",
+           lambda r: r.borders.get("relief", math.inf), views={"store", "summary"}),
+    Output("accumulator_empties", "", "the supply pressure falls below the pre-charge during the period "
+                                      "(the accumulator empties)",
+           lambda r: bool(r.borders.get("accumulator", math.inf) < 0.0), views={"store"}, dtype="b1",
+           edge=True),
+    Output("accumulator_margin", "Pa", "least supply pressure less the accumulator pre-charge",
+           lambda r: r.borders.get("accumulator", math.inf), views={"store", "summary"}),
+    Output("rebound_velocity", "m/s", "the struck end's velocity leaving the stop", _rebound,
+           views={"figure"}),
+    *(Output(f"{v}_pressure_at_impact", "Pa", f"{v} pressure at the impact", _at_impact(v), views={"figure"})
+      for v in ("front", "rear", "supply")),
+    Output("work_on_rock", "J", "work done on the rock per blow", _rock("work_on_rock_J"),
+           blow=lambda b: b["work_on_rock_J"], views={"store", "figure", "record"}, machines=_BOTH,
+           rock=True, objective="work_on_rock_per_blow"),
+    Output("penetration", "mm", "permanent penetration per blow", _rock("penetration_mm"),
+           views={"store"}, machines=_BOTH, rock=True),
+    Output("drilling_rate", "m/min", "drilling rate", _rock("drilling_rate_m_min"),
+           views={"store", "figure", "record"}, machines=_BOTH, rock=True, objective="drilling_rate"),
+    Output("peak_incident_stress", "Pa", "peak stress of the incident wave in the shank",
+           _rock("peak_rod_stress_Pa"), blow=lambda b: b["peak_stress_Pa"], views={"store"}, machines=_BOTH,
+           rock=True),
+    Output("rod_energy", "J", "energy of the incident wave in the rod", _rock("rod_energy_J"),
+           views={"store"}, machines=_BOTH, rock=True),
+    Output("rock_efficiency", "1", "work on rock over the energy of the blow", _rock("efficiency"),
+           views={"store"}, machines=_BOTH, rock=True),
+    Output("drilling_rate_per_kW", "m/min/kW", "drilling rate over the pump's power",
+           lambda r: r.rock["drilling_rate_m_min"] / r.point.pump_power_kW, views={"figure", "record"},
+           rock=True, key="drilling_rate_per_kW", objective="drilling_rate_per_kW"),
+    Output("peak_supply_pressure", "Pa", "greatest supply pressure over the period (absolute)",
+           lambda r: float(np.max(r.histories["p_s_Pa"]))),
+    Output("min_chamber_volume", "m**3", "smallest volume of either chamber over the period",
+           lambda r: float(min(np.min(r.histories["V_f_m3"]), np.min(r.histories["V_r_m3"])))),
+    Output("piston_mass", "kg", "the piston's mass", lambda r: r.point.drifter.bar.mass_kg,
+           blow=lambda b: b["piston_mass_kg"], machines=_BOTH),
+    Output("blow_efficiency", "1", "work on the rock over the piston's kinetic energy at impact",
+           blow=lambda b: b["efficiency"], views={"record"}, machines=_BOTH, rock=True),
+)}
+
+_BUILTIN = frozenset(OUTPUTS)
+
+
+def register_output(output: Output) -> Output:
+    """Add an output to :data:`OUTPUTS`: the summaries, design maps, sensitivities and optimiser show
+    it as the views it names say.
+
+    Parameters
+    ----------
+    output : Output
+
+    Returns
+    -------
+    Output
+
+    Raises
+    ------
+    ValueError
+        An output of that name or key already registered.
+
+    Examples
+    --------
+    >>> from impactbar.physical.outputs import Output, register_output, unregister_output
+    >>> o = register_output(Output("stroke", "m", "the piston's travel from the stop, at most",
+    ...                            lambda r: max(r.point.histories()["gap_m"]), views={"summary"}))
+    >>> o.key, o.shown_key, o.shown(0.0215)
+    ('stroke_m', 'stroke_mm', 21.5)
+    >>> unregister_output("stroke")
+    """
+    if not isinstance(output, Output):
+        raise ValueError(f"output must be an Output; got {type(output).__name__}")
+    taken = {n for o in OUTPUTS.values() for n in (o.name, o.key)}
+    if output.name in taken or output.key in taken:
+        raise ValueError(f"output {output.name!r} (key {output.key!r}): the name or key is registered "
+                         "already")
+    OUTPUTS[output.name] = output
+    return output
+
+
+def unregister_output(name: str) -> None:
+    """Remove an output added by :func:`register_output` (the library's own stay).
+
+    Raises
+    ------
+    ValueError
+        An unknown name, or one of the library's outputs.
+    """
+    if name in _BUILTIN or name not in OUTPUTS:
+        raise ValueError(f"unregister_output: {name!r} is not an output added by register_output")
+    del OUTPUTS[name]
+
+
+def outputs(view: str | None = None, kind: str | None = None, rock: bool = True) -> list[Output]:
+    """The registered outputs in order, those of ``view`` (all where ``None``) that a machine of
+    ``kind`` (any where ``None``) has, with or without the rock."""
+    return [o for o in OUTPUTS.values() if (view is None or view in o.views)
+            and (kind is None or o.applies(kind, rock))]
+
+
+def added_outputs(view: str | None = None) -> list[Output]:
+    """The outputs added by :func:`register_output`, of ``view``."""
+    return [o for o in outputs(view) if o.name not in _BUILTIN]
+
+
+def output_by_key(key: str) -> Output:
+    """The output whose name or :attr:`~Output.key` is ``key``.
+
+    Raises
+    ------
+    ValueError
+        No such output.
+    """
+    for o in OUTPUTS.values():
+        if key in (o.name, o.key):
+            return o
+    raise ValueError(f"unknown output {key!r}; one of {', '.join(OUTPUTS)}")
+
+
+def output_values(point, selected, reading: Reading | None = None) -> dict:
+    """The values of the ``selected`` outputs at an operating point, by name, in their units.
+
+    Parameters
+    ----------
+    point : DrifterOrbit or CircuitDrifterOrbit
+    selected : iterable of Output
+    reading : Reading, optional
+        A reading of ``point`` to share (its rock figures and histories computed once).
+
+    Returns
+    -------
+    dict
+    """
+    r = Reading(point) if reading is None else reading
+    return {o.name: o.of(r) for o in selected}
