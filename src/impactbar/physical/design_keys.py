@@ -4,7 +4,7 @@ way that every caller varying a config uses (the design maps of ``impactbar swee
 
 A key is any one that :func:`~impactbar.physical.loader.config_value` finds in the config (its
 sections' keys, ``rod.segments.<i>.<key>``); its SI unit is the one
-:data:`~impactbar.physical.circuit.SI_PARAMETERS` names, else the base units of the config's own
+:data:`~impactbar.physical.tree.FIELDS` declares, else the base units of the config's own
 value (``""`` for a bare number); a value is written back as its float's repr with that unit
 (:func:`~impactbar.physical.display_units.config_quantity`), and whether the machine takes it is what
 :func:`~impactbar.physical.loader.build` of :func:`~impactbar.physical.loader.with_values` says.
@@ -15,13 +15,15 @@ from __future__ import annotations
 
 from .display_units import config_quantity
 from .loader import config_value
+from .tree import FIELDS, integer_keys
 from .units import to_si
 
 __all__ = ["INTEGER_KEYS", "design_key", "key_unit", "key_value", "design_bounds"]
 
-#: the config keys that take integers: a design map's axis over one takes integer values (stored as
-#: integers); the optimiser's search, continuous, does not vary them
-INTEGER_KEYS = ("model.n_modes", "rock.cells_per_piston", "force.k", "force.max_harmonics")
+#: the config keys that take integers (declared so in :mod:`impactbar.physical.tree`): a design map's
+#: axis over one takes integer values (stored as integers); the optimiser's search, continuous, does
+#: not vary them
+INTEGER_KEYS = integer_keys()
 
 
 def key_unit(key: str, base) -> str:
@@ -52,13 +54,12 @@ def key_unit(key: str, base) -> str:
     >>> key_unit("supply.pump_flow", "70 L/min")
     'm**3/s'
     """
-    from .circuit import SI_PARAMETERS
     from .units import registry
 
     if not isinstance(base, str):
         return ""
-    if key in SI_PARAMETERS:
-        return SI_PARAMETERS[key][1]
+    if key in FIELDS:
+        return FIELDS[key].unit
     try:
         q = registry().Quantity(base)
     except Exception as exc:  # pint raises several kinds
@@ -155,7 +156,7 @@ def design_bounds(config: dict, vary, folder=None) -> dict:
             raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies: {exc}") from None
         if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
             raise ValueError(f"vary[{key!r}] must be (low, high); got {bounds!r}")
-        if key in INTEGER_KEYS:
+        if key in FIELDS and FIELDS[key].integer:
             raise ValueError(f"vary: {key!r} takes integers, and the search varies its keys continuously: "
                              "give it in the config (a design map takes it as an axis)")
         low, high = bounds
