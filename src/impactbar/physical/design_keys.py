@@ -27,7 +27,9 @@ INTEGER_KEYS = integer_keys()
 
 
 def key_unit(key: str, base) -> str:
-    """The SI unit of a dotted key whose config value is ``base``.
+    """The SI unit of a dotted key whose config value is ``base``: the one the parameter tree
+    declares (:data:`~impactbar.physical.tree.FIELDS`) where the value has its dimension, else the
+    value's own base units.
 
     Parameters
     ----------
@@ -53,17 +55,19 @@ def key_unit(key: str, base) -> str:
     ('m**2', '')
     >>> key_unit("supply.pump_flow", "70 L/min")
     'm**3/s'
+    >>> key_unit("damping.coefficient", "9 N*s/m"), key_unit("damping.coefficient", "20 N*s/m^2")
+    ('N*s/m', 'kg/m/s')
     """
     from .units import registry
 
     if not isinstance(base, str):
         return ""
-    if key in FIELDS:
-        return FIELDS[key].unit
     try:
         q = registry().Quantity(base)
     except Exception as exc:  # pint raises several kinds
         raise ValueError(f"{key}: the config's value {base!r} is not a quantity: {exc}") from None
+    if key in FIELDS and FIELDS[key].unit and q.is_compatible_with(FIELDS[key].unit):
+        return FIELDS[key].unit  # (a hammer's damping per unit length is another quantity: its own)
     return "" if q.dimensionless else f"{q.to_base_units().units:~}".replace(" ", "")
 
 
