@@ -147,7 +147,7 @@ _BAR = (Field("bar.E", "Pa", "'210 GPa'", required=True, reason=SCALE_REASON),
 _LIST_REASON = "is a list of values: vary its elements' lengths and diameters one by one in the config"
 _PISTON = (Field("piston.E", "Pa", "'210 GPa'", required=True, reason=SCALE_REASON),
            Field("piston.density", "kg/m**3", "'7850 kg/m^3'", required=True, reason=SCALE_REASON),
-           *(Field(f"piston.{part}_{what}", "m", "'45 mm'", required=True, reason=SCALE_REASON)
+           *(Field(f"piston.{part}_{what}", "m", "'50 mm'", required=True, reason=SCALE_REASON)
              for part in ("rear_rod", "collar", "front_rod") for what in ("diameter", "length")),
            Field("piston.end_diameters", "m", "['40 mm']", reason=_LIST_REASON, many=True),
            Field("piston.end_lengths", "m", "['50 mm']", reason=_LIST_REASON, many=True))
