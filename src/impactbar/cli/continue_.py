@@ -34,7 +34,8 @@ def add_parser(sub) -> None:
                     "drifter's valve stroke, ret, switch_out, delay, delay_out, delay_in; its oil "
                     "circuit's dimensionless precharge, pump_flow, ...: pressures in 10 MPa) or a "
                     "drifter's config key in SI (accumulator.precharge, supply.pump_flow, "
-                    "valve.switching_time, oil.bulk_modulus, ...; on a drill string rock.k, rock.k_u, "
+                    "valve.switching_time, oil.bulk_modulus, stop.restitution, ...: every key "
+                    "impactbar.physical.tree declares continuable; on a drill string rock.k, rock.k_u, "
                     "rock.feed, bit.mass; --to with its unit, '12 MPa')")
     cg.add_argument("--to", type=_number_or_quantity, required=True,
                     help="its target value (with its unit for a config key: '12 MPa', '80 L/min')")
@@ -122,12 +123,13 @@ def _check_parameter(model, load, name: str) -> None:
     """Refuse a ``--parameter`` the bar and load cannot be continued in, before any orbit is sought
     (:func:`impactbar.parameters.check_continuable`: the message lists the parameters there are)."""
     from ..parameters import check_continuable
+    from ..physical.tree import FIELDS
 
     try:
         check_continuable(model, load, name)
     except ValueError as exc:
         hint = ("; a config key in SI needs a drifter config with its oil circuit ([chambers] section) "
-                "or the preset circuit-drifter" if "." in name else "")
+                "or the preset circuit-drifter" if name in FIELDS else "")
         raise ValueError(f"--parameter {name}: {exc}{hint}") from None
 
 

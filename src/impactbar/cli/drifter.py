@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 
 from .. import physical
-from ..physical.circuit import SI_PARAMETERS
 from ..physical.config import config_kind, read_toml
+from ..physical.tree import FIELDS
 from ..physical.units import to_si
 from ._common import json_ready, print_json, require
 
@@ -375,10 +375,10 @@ def _circuit_outputs(point, columns) -> tuple:
 def _user_unit(name: str, to):
     """The unit the user gave ``--to`` in (``"L/min"`` for ``"100 L/min"``), else the key's SI unit,
     and the conversion of an SI value into it (the unit read as every config value is)."""
-    si_unit = SI_PARAMETERS[name][1]
+    si_unit = FIELDS[name].unit
     written = to.split(None, 1)[1].strip() if isinstance(to, str) and len(to.split(None, 1)) > 1 else ""
     if si_unit and written:
-        factor = to_si(f"--to {to!r}", f"1 {written}", si_unit, SI_PARAMETERS[name][2])  # SI per given unit
+        factor = to_si(f"--to {to!r}", f"1 {written}", si_unit, FIELDS[name].example)  # SI per given unit
         if factor != 1.0:
             return written, lambda x: x / factor
     return si_unit.replace("**", "^"), float
@@ -393,7 +393,7 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     from ..continuation import continue_orbit
 
     name, to = args.parameter, args.to
-    si = "." in name  # a config key in SI: accumulator.precharge, supply.pump_flow, ...
+    si = name in FIELDS  # a config key in SI: accumulator.precharge, supply.pump_flow, ...
     if si and not isinstance(drifter, physical.CircuitDrifter):
         raise ValueError(f"--parameter {name} (a config key in SI) is a parameter of a drifter with its "
                          "oil circuit; this drifter's valve takes stroke, ret, switch_out, delay, "

@@ -102,16 +102,13 @@ def parse_vary(items) -> dict:
 
 
 def _vary_unit(key: str) -> tuple[str | None, str]:
-    """The SI unit of a variable's key and an example value: the circuit's key table's
-    (:data:`~impactbar.physical.circuit.SI_PARAMETERS`), a length for the piston's shape; ``None``
-    for another key (the optimiser's own message)."""
-    from ..physical.circuit import SI_PARAMETERS
+    """The SI unit of a variable's key and an example value, as the parameter tree declares them
+    (:data:`~impactbar.physical.tree.FIELDS`); ``None`` for another key (the optimiser's own
+    message)."""
+    from ..physical.tree import FIELDS
 
-    if key in SI_PARAMETERS:
-        return SI_PARAMETERS[key][1], SI_PARAMETERS[key][2]
-    if key.startswith("piston.") and key.endswith(("_diameter", "_length")):
-        return "m", "'50 mm'"
-    return None, ""
+    f = FIELDS.get(key)
+    return (None, "") if f is None or f.integer or f.many else (f.unit, f.example)
 
 
 def parse_constraint(items) -> dict:

@@ -12,8 +12,9 @@ from ..model import BarModel
 
 __all__ = ["PARAMETERS", "ROCK_PARAMETERS", "parameter_value", "with_parameter"]
 
-#: The BarModel fields a branch can be continued in.
-MODEL_PARAMETERS = ("R", "d", "s")
+#: The BarModel fields a branch can be continued in: its declared real numbers (``s``, ``d``, ``R``
+#: of :attr:`BarModel.parameters`; ``n_modes``, an integer, is swept, not continued).
+MODEL_PARAMETERS = tuple(f.name for f in BarModel.parameters if not f.dtype.startswith("i"))
 #: Parameters a branch can be continued in: BarModel fields and the loads' continuation parameters
 #: (:attr:`impactbar.Load.continuation_parameters` of the table of loads), as listed by their classes;
 #: the parameters of one problem: :func:`impactbar.parameters.parameters`.

@@ -47,6 +47,7 @@ from functools import cached_property
 import numpy as np
 
 from .._shared.validate import check_int
+from . import tree
 from ._circuit_checks import check_circuit_si, shown
 from .bar import Bar, SteppedBar
 from .drifter import (
@@ -66,7 +67,7 @@ __all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_
            "CIRCUIT_PARAMETERS", "ROCK_SI_PARAMETERS", "SI_PARAMETERS"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
-PRESSURE_SCALE = 1.0e7
+PRESSURE_SCALE = tree.PRESSURE_SCALE
 
 #: The circuit's continuation parameters (dimensionless; those of
 #: :data:`impactbar.drives.circuit.PARAMETERS`, named here so that the command line need not load
@@ -76,57 +77,18 @@ CIRCUIT_PARAMETERS = ("pump_flow", "supply_pressure", "hose_volume", "front_coef
                       "polytropic_exponent", "switch_out", "switch_in", "switching_time", "valve_coefficient",
                       "area_ratio", "rear_volume", "front_volume", "bulk_modulus", "transition_pressure")
 
-#: The circuit's continuation parameters by their config names (``section.key``), in SI: the
-#: dimensionless parameter each one sets, its unit and an example value.
-SI_PARAMETERS = {
-    "accumulator.precharge": ("precharge", "Pa", "'12 MPa'"),
-    "accumulator.volume": ("accumulator_volume", "m**3", "'0.5 L'"),
-    "accumulator.polytropic_exponent": ("polytropic_exponent", "", "1.4"),
-    "supply.pump_flow": ("pump_flow", "m**3/s", "'80 L/min'"),
-    "supply.hose_volume": ("hose_volume", "m**3", "'1 L'"),
-    "supply.front_flow_coefficient": ("front_coefficient", "m**3/s/Pa**0.5", "'7.5e-6 m^3/s/Pa^0.5'"),
-    "supply.tank_pressure": ("tank_pressure", "Pa", "'0.3 MPa'"),
-    "supply.relief_pressure": ("relief_pressure", "Pa", "'25 MPa'"),
-    "supply.relief_coefficient": ("relief_coefficient", "m**3/s/Pa", "'5e-10 m^3/s/Pa'"),
-    "valve.switch_out": ("switch_out", "m", "'21.5 mm'"),
-    "valve.switch_in": ("switch_in", "m", "'10 mm'"),
-    "valve.switching_time": ("switching_time", "s", "'1 ms'"),
-    "valve.flow_coefficient": ("valve_coefficient", "m**3/s/Pa**0.5", "'7.5e-6 m^3/s/Pa^0.5'"),
-    "chambers.front_area": ("area_ratio", "m**2", "'5.6 cm^2'"),
-    "chambers.rear_volume": ("rear_volume", "m**3", "'0.15 L'"),
-    "chambers.front_volume": ("front_volume", "m**3", "'0.1 L'"),
-    "oil.bulk_modulus": ("bulk_modulus", "Pa", "'1.4 GPa'"),
-    "oil.transition_pressure": ("transition_pressure", "Pa", "'0.5 MPa'"),
-    # a drifter on the drill string and the rock: the rod-rock law's own (theory §4d)
-    "rock.k": ("rock.k", "N/m", "'250 kN/mm'"),
-    "rock.k_u": ("rock.k_u", "N/m", "'2500 kN/mm'"),
-    "rock.feed": ("feed", "N", "'5 kN'"),
-    "bit.mass": ("bit_mass", "kg", "'1.5 kg'"),
-}
+#: The circuit's and the rock's parameters by their config names (``section.key``), in SI: the
+#: dimensionless parameter each one sets, its unit and an example value (a view of
+#: :data:`impactbar.physical.tree.FIELDS`: those set in the drive or the impact law).
+SI_PARAMETERS = {k: (f.parameter, f.unit, f.example) for k, f in tree.FIELDS.items()
+                 if f.holder in ("drive", "law")}
 
 #: The keys of :data:`SI_PARAMETERS` that need a drill string (a ``[rock]`` section).
-ROCK_SI_PARAMETERS = ("rock.k", "rock.k_u", "rock.feed", "bit.mass")
+ROCK_SI_PARAMETERS = tuple(k for k in SI_PARAMETERS if tree.FIELDS[k].needs == "rock")
 
-_KEYS = {
-    "bar": {"E", "density", "length", "diameter", "area"},
-    "stop": {"restitution", "area"},
-    "damping": {"coefficient"},
-    "model": {"n_modes"},
-    "chambers": {"rear_area", "front_area", "rear_volume", "front_volume"},
-    "valve": {"switch_out", "switch_in", "switching_time", "flow_coefficient"},
-    "supply": {"pump_flow", "hose_volume", "front_flow_coefficient", "tank_pressure", "relief_pressure",
-               "relief_coefficient"},
-    "accumulator": {"precharge", "volume", "polytropic_exponent"},
-    "oil": {"bulk_modulus", "transition_pressure"},
-    "piston": PISTON_KEYS,  # the piston's shape, in place of [bar] and the chamber areas
-}
-_REQUIRED = {
-    "bar": ("E", "density", "length"),
-    "chambers": ("rear_area", "front_area", "rear_volume", "front_volume"),
-    "valve": ("switch_out", "switching_time", "flow_coefficient"),
-    "supply": ("pump_flow", "hose_volume", "front_flow_coefficient", "tank_pressure"),
-    "oil": ("bulk_modulus", "transition_pressure"),
-}
+# the sections' keys and the required ones, from the tree (the piston's shape: its own section)
+_KEYS = {**tree.section_keys(), "piston": PISTON_KEYS}
+_REQUIRED = tree.required_keys()
 
 
 @dataclass(frozen=True)
@@ -213,22 +175,9 @@ class CircuitDrifter(_ScaledDrifter):
         return self.bar.mass_kg * (self.bar.length_m * self.omega_rad_s) ** 2
 
     def _si_factor(self, name: str) -> float:
-        """The factor from the SI value of the config key ``name`` to its dimensionless parameter."""
-        if name not in SI_PARAMETERS:
-            raise ValueError(f"parameter must be one of {', '.join(SI_PARAMETERS)} (a config key); "
-                             f"got {name!r}")
-        if name in ROCK_SI_PARAMETERS and self.drill is None:
-            raise ValueError(f"parameter {name} is the drill string's and the rock's: the drifter has no "
-                             "[rock] section")
-        if name.startswith("accumulator.") and not self.si["accumulator_volume_m3"] > 0.0:
-            raise ValueError(f"parameter {name} is the accumulator's: the drifter has none (no [accumulator] "
-                             "section, or its volume 0)")
-        P, L, V, Q = PRESSURE_SCALE, self.bar.length_m, self.volume_scale_m3, self.flow_scale_m3_s
-        m, force = self.bar.mass_kg, self.scales.force_N
-        return {"Pa": 1.0 / P, "m**3": 1.0 / V, "m**3/s": 1.0 / Q, "m**3/s/Pa**0.5": math.sqrt(P) / Q,
-                "m**3/s/Pa": P / Q, "m": 1.0 / L, "s": self.omega_rad_s, "": 1.0,
-                "m**2": 1.0 / self.si["rear_area_m2"], "N/m": L / force, "N": 1.0 / force,
-                "kg": 1.0 / m}[SI_PARAMETERS[name][1]]
+        """The factor from the SI value of the config key ``name`` to its dimensionless parameter
+        (its declared scale: :func:`~impactbar.physical.tree.dimensionless_factor`)."""
+        return tree.dimensionless_factor(self, name)
 
     def to_dimensionless(self, name: str, value) -> tuple[str, float]:
         r"""The dimensionless circuit parameter (theory §11) that the config key ``name`` sets, and
@@ -238,7 +187,8 @@ class CircuitDrifter(_ScaledDrifter):
         Parameters
         ----------
         name : str
-            A key of :data:`SI_PARAMETERS` (``"accumulator.precharge"``, ``"supply.pump_flow"``, ...).
+            A continuable key of :data:`impactbar.physical.tree.FIELDS` (``"accumulator.precharge"``,
+            ``"supply.pump_flow"``, ``"stop.restitution"``, ...).
         value : str, pint.Quantity or float
 
         Returns
@@ -254,9 +204,9 @@ class CircuitDrifter(_ScaledDrifter):
         Raises
         ------
         ValueError
-            An unknown key, or a value without its unit, of the wrong dimension or not finite; a
-            rock's key for a drifter without a ``[rock]`` section, an accumulator's for one without
-            an accumulator.
+            An unknown key, one that cannot be continued (its declared reason), or a value without
+            its unit, of the wrong dimension or not finite; a rock's key for a drifter without a
+            ``[rock]`` section, an accumulator's for one without an accumulator.
 
         Examples
         --------
@@ -265,11 +215,11 @@ class CircuitDrifter(_ScaledDrifter):
         ('precharge', 1.2)
         """
         factor = self._si_factor(name)
-        parameter, unit, example = SI_PARAMETERS[name]
-        return parameter, to_si(name, value, unit, example) * factor
+        f = tree.FIELDS[name]
+        return f.parameter, to_si(name, value, f.unit, f.example) * factor
 
     def from_dimensionless(self, name: str, value: float) -> float:
-        """The SI value (in the unit of :data:`SI_PARAMETERS`) of the config key ``name`` whose
+        """The SI value (in its declared unit) of the config key ``name`` whose
         dimensionless parameter has ``value``: the inverse of :meth:`to_dimensionless`.
 
         Raises
@@ -396,47 +346,10 @@ class CircuitDrifter(_ScaledDrifter):
         sec = _config_sections(config, _KEYS, _REQUIRED)
         bar, drill, R = _piston_drill_restitution(config, sec, stop_area_check=True)
 
-        def q(section, key, unit, example, what, default=None):
-            name = f"{section}.{key}"
-            if key not in sec[section]:  # an optional key left out
-                return None if default is None else to_si(name, default, unit, example, what=what)
-            value = sec[section][key]
-            if value is None:
-                what = what if "(" in what else f"{what} in {unit.replace('**', '^')}"
-                raise ValueError(f"{name} must be {what}, e.g. {example}; got None (leave an optional key "
-                                 "out)")
-            return to_si(name, value, unit, example, what=what)
-
-        area, vol, press = ("m**2", "'5.6 cm^2'", "an area"), ("m**3", "'0.1 L'", "a volume"), \
-            ("Pa", "'20 MPa'", "a pressure")
-        orifice = ("m**3/s/Pa**0.5", "'7.5e-6 m^3/s/Pa^0.5'", "a flow coefficient (m^3/s/Pa^0.5)")
         acc = sec["accumulator"]
         if acc and not {"precharge", "volume"} <= set(acc):
             raise ValueError("[accumulator] needs precharge and volume")
-        si = {
-            "rear_area_m2": q("chambers", "rear_area", *area),
-            "front_area_m2": q("chambers", "front_area", *area),
-            "rear_volume_m3": q("chambers", "rear_volume", *vol),
-            "front_volume_m3": q("chambers", "front_volume", *vol),
-            "switch_out_m": q("valve", "switch_out", "m", "'21.5 mm'", "a length"),
-            "switch_in_m": q("valve", "switch_in", "m", "'10 mm'", "a length"),
-            "switching_time_s": q("valve", "switching_time", "s", "'1 ms'", "a time"),
-            "valve_coefficient": q("valve", "flow_coefficient", *orifice),
-            "pump_flow_m3_s": q("supply", "pump_flow", "m**3/s", "'70 L/min'", "a flow"),
-            "hose_volume_m3": q("supply", "hose_volume", *vol),
-            "front_coefficient": q("supply", "front_flow_coefficient", *orifice),
-            "tank_pressure_Pa": q("supply", "tank_pressure", *press),
-            "relief_pressure_Pa": q("supply", "relief_pressure", *press) if "relief_pressure" in sec["supply"]
-            else math.inf,
-            "relief_coefficient": q("supply", "relief_coefficient", "m**3/s/Pa", "'5e-10 m^3/s/Pa'",
-                                    "a flow coefficient (m^3/s/Pa)", "0 m**3/s/Pa"),
-            "precharge_Pa": q("accumulator", "precharge", *press) if acc else PRESSURE_SCALE,
-            "accumulator_volume_m3": q("accumulator", "volume", *vol) if acc else 0.0,
-            "polytropic_exponent": to_si("accumulator.polytropic_exponent",
-                                         acc.get("polytropic_exponent", 1.4), "", "1.4"),
-            "bulk_modulus_Pa": q("oil", "bulk_modulus", *press),
-            "transition_pressure_Pa": q("oil", "transition_pressure", *press),
-        }
+        si = {f.si: _read_field(f, sec[f.section]) for f in tree.in_sections() if f.si}
         check_circuit_si(sec, si, R)
         damping = to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"), "N*s/m",
                         "'9 N*s/m'", what="a damping coefficient")
@@ -448,6 +361,19 @@ class CircuitDrifter(_ScaledDrifter):
                   name=str(config.get("name", "")), drill=drill, config=given)
         warn_implausible(given)  # (values far outside their typical ranges: warned of, then run)
         return out
+
+
+def _read_field(f, section: dict):
+    """A declared field's SI value from its section (its default where the section leaves it out)."""
+    if f.name not in section:  # an optional key left out
+        d = f.default
+        return to_si(f.key, d, f.unit, f.example, what=tree.WORDS.get(f.unit)) if isinstance(d, str) else d
+    value, what = section[f.name], tree.WORDS.get(f.unit)
+    if value is None:
+        what = what if what is None or "(" in what else f"{what} in {f.unit.replace('**', '^')}"
+        raise ValueError(f"{f.key} must be {what or 'a number'}, e.g. {f.example}; got None (leave an "
+                         "optional key out)")
+    return to_si(f.key, value, f.unit, f.example, what=what)
 
 
 #: How closely an orbit restarted in :func:`impactbar.simulate` must repeat itself (relative, over

@@ -8,8 +8,9 @@ from functools import cached_property
 
 import numpy as np
 
-from .circuit import SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
+from .circuit import CircuitDrifter, CircuitDrifterOrbit
 from .display_units import format_si
+from .tree import FIELDS
 
 __all__ = ["CircuitBranch", "continue_circuit"]
 
@@ -25,9 +26,11 @@ def continue_circuit(drifter: CircuitDrifter, parameter: str, to, *, step=None, 
     ----------
     drifter : CircuitDrifter
     parameter : str
-        A config key in SI (``"accumulator.precharge"``; :data:`SI_PARAMETERS`), ``to`` then a
-        quantity with its unit (``"12 MPa"``), or a dimensionless name of the circuit
-        (``"precharge"``, pressures in 10 MPa), ``to`` then a number.
+        A dotted SI name of the parameter tree (``"accumulator.precharge"``,
+        ``"stop.restitution"``; :data:`~impactbar.physical.tree.FIELDS`, refused with its declared
+        reason where it cannot be continued), ``to`` then a quantity with its unit (``"12 MPa"``),
+        or a dimensionless name of the problem (``"precharge"``, pressures in 10 MPa), ``to`` then a
+        number.
     to : str, pint.Quantity or float
         The value to reach.
     step, max_step : float, optional
@@ -49,9 +52,9 @@ def continue_circuit(drifter: CircuitDrifter, parameter: str, to, *, step=None, 
 
     if not isinstance(drifter, CircuitDrifter):
         raise ValueError(f"drifter must be a CircuitDrifter; got {type(drifter).__name__}")
-    if "." in parameter:
+    if parameter in FIELDS:
         name, value = drifter.to_dimensionless(parameter, to)
-        unit = SI_PARAMETERS[parameter][1]
+        unit = FIELDS[parameter].unit
     else:
         if isinstance(to, str) or hasattr(to, "magnitude"):
             raise ValueError(f"to must be a number for the dimensionless parameter {parameter}; got {to!r} "
@@ -93,7 +96,8 @@ class CircuitBranch:
         return len(self.branch.values)
 
     def _si(self, x: float) -> float:
-        return self.drifter.from_dimensionless(self.parameter, x) if "." in self.parameter else float(x)
+        return self.drifter.from_dimensionless(self.parameter, x) if self.parameter in FIELDS \
+            else float(x)
 
     @cached_property
     def points(self) -> tuple:

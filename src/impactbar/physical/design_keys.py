@@ -4,7 +4,7 @@ way that every caller varying a config uses (the design maps of ``impactbar swee
 
 A key is any one that :func:`~impactbar.physical.loader.config_value` finds in the config (its
 sections' keys, ``rod.segments.<i>.<key>``); its SI unit is the one
-:data:`~impactbar.physical.circuit.SI_PARAMETERS` names, else the base units of the config's own
+:data:`~impactbar.physical.tree.FIELDS` declares, else the base units of the config's own
 value (``""`` for a bare number); a value is written back as its float's repr with that unit
 (:func:`~impactbar.physical.display_units.config_quantity`), and whether the machine takes it is what
 :func:`~impactbar.physical.loader.build` of :func:`~impactbar.physical.loader.with_values` says.
@@ -15,17 +15,21 @@ from __future__ import annotations
 
 from .display_units import config_quantity
 from .loader import config_value
+from .tree import FIELDS, integer_keys
 from .units import to_si
 
 __all__ = ["INTEGER_KEYS", "design_key", "key_unit", "key_value", "design_bounds"]
 
-#: the config keys that take integers: a design map's axis over one takes integer values (stored as
-#: integers); the optimiser's search, continuous, does not vary them
-INTEGER_KEYS = ("model.n_modes", "rock.cells_per_piston", "force.k", "force.max_harmonics")
+#: the config keys that take integers (declared so in :mod:`impactbar.physical.tree`): a design map's
+#: axis over one takes integer values (stored as integers); the optimiser's search, continuous, does
+#: not vary them
+INTEGER_KEYS = integer_keys()
 
 
 def key_unit(key: str, base) -> str:
-    """The SI unit of a dotted key whose config value is ``base``.
+    """The SI unit of a dotted key whose config value is ``base``: the one the parameter tree
+    declares (:data:`~impactbar.physical.tree.FIELDS`) where the value has its dimension, else the
+    value's own base units.
 
     Parameters
     ----------
@@ -51,18 +55,19 @@ def key_unit(key: str, base) -> str:
     ('m**2', '')
     >>> key_unit("supply.pump_flow", "70 L/min")
     'm**3/s'
+    >>> key_unit("damping.coefficient", "9 N*s/m"), key_unit("damping.coefficient", "20 N*s/m^2")
+    ('N*s/m', 'kg/m/s')
     """
-    from .circuit import SI_PARAMETERS
     from .units import registry
 
     if not isinstance(base, str):
         return ""
-    if key in SI_PARAMETERS:
-        return SI_PARAMETERS[key][1]
     try:
         q = registry().Quantity(base)
     except Exception as exc:  # pint raises several kinds
         raise ValueError(f"{key}: the config's value {base!r} is not a quantity: {exc}") from None
+    if key in FIELDS and FIELDS[key].unit and q.is_compatible_with(FIELDS[key].unit):
+        return FIELDS[key].unit  # (a hammer's damping per unit length is another quantity: its own)
     return "" if q.dimensionless else f"{q.to_base_units().units:~}".replace(" ", "")
 
 
@@ -155,7 +160,7 @@ def design_bounds(config: dict, vary, folder=None) -> dict:
             raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies: {exc}") from None
         if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
             raise ValueError(f"vary[{key!r}] must be (low, high); got {bounds!r}")
-        if key in INTEGER_KEYS:
+        if key in FIELDS and FIELDS[key].integer:
             raise ValueError(f"vary: {key!r} takes integers, and the search varies its keys continuously: "
                              "give it in the config (a design map takes it as an axis)")
         low, high = bounds

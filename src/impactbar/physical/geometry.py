@@ -28,14 +28,14 @@ from __future__ import annotations
 import copy
 import math
 
+from .tree import required_keys, section_keys
+
 __all__ = ["PISTON_KEYS", "piston_geometry", "expand_piston"]
 
-#: The keys of a ``[piston]`` section.
-PISTON_KEYS = {"E", "density", "rear_rod_diameter", "rear_rod_length", "collar_diameter", "collar_length",
-               "front_rod_diameter", "front_rod_length", "end_diameters", "end_lengths"}
+#: The keys of a ``[piston]`` section (declared in :mod:`impactbar.physical.tree`).
+PISTON_KEYS = section_keys(("piston",))["piston"]
 
-_REQUIRED = ("E", "density", "rear_rod_diameter", "rear_rod_length", "collar_diameter", "collar_length",
-             "front_rod_diameter", "front_rod_length")
+_REQUIRED = required_keys(("piston",))["piston"]
 
 
 def _length(key: str, value) -> float:

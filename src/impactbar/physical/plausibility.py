@@ -14,6 +14,7 @@ import contextlib
 import sys
 import warnings
 
+from .tree import typical_ranges
 from .units import to_si
 
 __all__ = ["ImplausibleValueWarning", "FAR", "TYPICAL", "implausible", "warn_implausible",
@@ -22,27 +23,10 @@ __all__ = ["ImplausibleValueWarning", "FAR", "TYPICAL", "implausible", "warn_imp
 #: How far outside its typical range a value is implausible: by more than this factor.
 FAR = 4.0
 
-_MPA, _L = ("MPa", 1e-6), ("L", 1e3)
-
-#: Key: (low, high, SI unit, shown unit, factor from SI to the shown unit), from the documentation's
-#: table of the circuit's keys (the pre-charge: 0.4 to 0.9 of a working pressure of 15 to 25 MPa).
-TYPICAL = {
-    "chambers.rear_area": (4e-4, 15e-4, "m**2", "cm^2", 1e4),
-    "valve.switch_out": (15e-3, 60e-3, "m", "mm", 1e3),
-    "valve.switching_time": (0.5e-3, 3e-3, "s", "ms", 1e3),
-    "valve.flow_coefficient": (3e-6, 2e-5, "m**3/s/Pa**0.5", "m^3/s/Pa^0.5", 1.0),
-    "supply.pump_flow": (40.0 / 6e4, 150.0 / 6e4, "m**3/s", "L/min", 6e4),
-    "supply.hose_volume": (0.1e-3, 2e-3, "m**3", *_L),
-    "supply.front_flow_coefficient": (3e-6, 2e-5, "m**3/s/Pa**0.5", "m^3/s/Pa^0.5", 1.0),
-    "supply.tank_pressure": (0.2e6, 1e6, "Pa", *_MPA),
-    "supply.relief_pressure": (17e6, 30e6, "Pa", *_MPA),
-    "supply.relief_coefficient": (1e-10, 1e-9, "m**3/s/Pa", "m^3/s/Pa", 1.0),
-    "accumulator.precharge": (6e6, 22.5e6, "Pa", *_MPA),
-    "accumulator.volume": (0.2e-3, 1e-3, "m**3", *_L),
-    "oil.bulk_modulus": (0.8e9, 1.8e9, "Pa", "GPa", 1e-9),
-    "oil.transition_pressure": (0.05e6, 0.5e6, "Pa", *_MPA),
-    "damping.coefficient": (0.0, 50.0, "N*s/m", "N s/m", 1.0),
-}
+#: Key: (low, high, SI unit, shown unit, factor from SI to the shown unit): the typical ranges the
+#: parameter tree declares (:func:`impactbar.physical.tree.typical_ranges`; the documentation's
+#: table of the circuit's keys, the pre-charge 0.4 to 0.9 of a working pressure of 15 to 25 MPa).
+TYPICAL = typical_ranges()
 
 
 class ImplausibleValueWarning(UserWarning):

@@ -34,11 +34,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .circuit import SI_PARAMETERS, CircuitDrifter, CircuitDrifterOrbit
+from .circuit import CircuitDrifter, CircuitDrifterOrbit
 from .display_units import config_quantity, display_unit
-from .geometry import PISTON_KEYS
 from .loader import build, config_value, read_config, with_values
 from .outputs import output_values, outputs
+from .tree import FIELDS, real_keys
 from .units import to_si
 
 __all__ = ["operating_point_sensitivities", "OperatingPointSensitivities", "RESIDUAL_STEP", "FLEXIBLE_STEP",
@@ -74,16 +74,13 @@ FIGURE_UNITS = {o.key: o.unit for o in outputs("figure", "circuit")}
 
 
 def _key_unit(key: str) -> str:
-    """The SI unit of a variable's dotted key, or a one-line refusal."""
-    parts = key.split(".") if isinstance(key, str) else []
-    if len(parts) == 2 and parts[0] == "piston" and parts[1] in PISTON_KEYS - {"E", "density", "end_lengths",
-                                                                               "end_diameters"}:
-        return "m"
-    if isinstance(key, str) and key in SI_PARAMETERS and key != "chambers.front_area":
-        return SI_PARAMETERS[key][1]
-    allowed = sorted({f"piston.{k}" for k in PISTON_KEYS - {"E", "density", "end_lengths", "end_diameters"}}
-                     | set(SI_PARAMETERS) - {"chambers.front_area"})
-    raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies; one of {', '.join(allowed)}")
+    """The SI unit of a variable's dotted key (a real key of the parameter tree,
+    :func:`~impactbar.physical.tree.real_keys`), or a one-line refusal."""
+    real = real_keys()
+    if isinstance(key, str) and key in real:
+        return FIELDS[key].unit
+    raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies; one of "
+                     f"{', '.join(sorted(real))}")
 
 
 def _config_of(drifter: CircuitDrifter) -> dict:
@@ -216,9 +213,9 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
         :func:`~impactbar.physical.continue_circuit` takes it: the same as its config); with
         ``[rock]`` also the drilling figures.
     keys : sequence of str
-        Dotted keys the config gives, each a key of
-        :data:`~impactbar.physical.circuit.SI_PARAMETERS` (not ``chambers.front_area``) or of the
-        piston's shape (``piston.collar_diameter``, ...), with a value other than 0.
+        Dotted keys the config gives, each a real key of the parameter tree
+        (:func:`~impactbar.physical.tree.real_keys`: the circuit's, the piston's shape
+        ``piston.collar_diameter``, ...), with a value other than 0.
     orbit : CircuitDrifterOrbit, optional
         The config's operating point, if already solved (else :meth:`CircuitDrifter.orbit`).
     relative_step : float, optional

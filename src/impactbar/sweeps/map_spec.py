@@ -469,7 +469,7 @@ def _number(name, v) -> float:
 
 def _si_unit(name: str, base) -> str:
     """The SI unit of a key (:func:`~impactbar.physical.design_keys.key_unit`: the one
-    :data:`~impactbar.physical.circuit.SI_PARAMETERS` names, else the base units of the config's
+    :mod:`~impactbar.physical.tree` declares, else the base units of the config's
     value, ``""`` for a bare number)."""
     from ..physical.design_keys import key_unit
 

@@ -1,0 +1,351 @@
+r"""One tree of parameters: each part of a drifter with its oil circuit declares its fields once, by
+their dotted SI name (``supply.pump_flow``, ``rock.k``, ``chambers.rear_area``), with the SI unit,
+an example, the scale that makes the field dimensionless (theory §11, eq. 2), the dimensionless
+parameter it sets, its typical range, and whether it can be continued (and why not).
+
+Every tool reads this one declaration: the configuration's reader (the sections' keys, the required
+ones, the values it converts), :meth:`~impactbar.physical.CircuitDrifter.to_dimensionless`,
+:func:`~impactbar.physical.continue_circuit`, the design maps' and the optimiser's units and integer
+keys, the sensitivities, the plausibility warnings and the command line. A field declared here is
+therefore set, swept, continued and optimised by its dotted name with no line elsewhere; the old
+tables (``SI_PARAMETERS``, ``TYPICAL``, ``INTEGER_KEYS``, the circuit's ``_KEYS``) are views of it.
+
+Scales (theory §11, eq. 2): :math:`P` = 10 MPa, :math:`A_r` the rear area, :math:`L` and :math:`m`
+the piston's length and mass, :math:`\Omega = \sqrt{P A_r / (m L)}`, volumes in :math:`A_r L`, flows
+in :math:`A_r L \Omega`, forces in :math:`P A_r` (:data:`SCALES`).
+
+Examples
+--------
+>>> from impactbar.physical.tree import field
+>>> f = field("supply.pump_flow")
+>>> f.unit, f.scale, f.parameter, f.continuable
+('m**3/s', 'flow', 'pump_flow', True)
+>>> field("model.n_modes").why_not
+'takes integers: a design map takes it as an axis, continuation and the optimiser vary real values'
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+__all__ = ["Field", "FIELDS", "SCALES", "field", "fields", "section_keys", "required_keys", "integer_keys",
+           "continuable_keys", "real_keys", "in_sections", "typical_ranges", "dimensionless_factor",
+           "refuse_continuation", "markdown_table"]
+
+#: The pressure scale ``P`` of the dimensionless circuit (Pa).
+PRESSURE_SCALE = 1.0e7
+
+#: Why a key that sets the model's scales is not continued (a design map and the optimiser vary it).
+SCALE_REASON = ("sets the model's scales (the piston's mass, length or rear area), so every dimensionless "
+                "parameter moves with it: a design map, the optimiser and the sensitivities vary it, "
+                "continuation follows one dimensionless parameter")
+#: Why an integer key is not continued.
+INTEGER_REASON = ("takes integers: a design map takes it as an axis, continuation and the optimiser vary "
+                  "real values")
+
+
+@dataclass(frozen=True)
+class Field:
+    """One field of a part, declared once.
+
+    Parameters
+    ----------
+    key : str
+        Its dotted SI name (``"supply.pump_flow"``): the TOML section and key.
+    unit : str
+        Its SI unit in pint's spelling (``"m**3/s"``; ``""`` for a bare number).
+    example : str
+        An example value as a config writes it (``"'80 L/min'"``), shown in messages.
+    scale : str or callable, optional
+        The name of its scale in :data:`SCALES` (or a function of the drifter giving the factor
+        from SI to dimensionless); ``""`` where it sets no dimensionless parameter.
+    parameter : str, optional
+        The dimensionless parameter it sets (a drive's, the impact law's or the bar model's), ``""``
+        for none.
+    holder : {"drive", "law", "model", ""}
+        Which part of the dimensionless problem holds ``parameter``.
+    si : str, optional
+        Its name in :attr:`CircuitDrifter.si <impactbar.physical.CircuitDrifter>` (``""``: not there).
+    required : bool
+        Whether the section must give it.
+    default : str or float or None
+        The value of an optional field left out (read as the config's; ``None``: none).
+    typical : tuple, optional
+        ``(low, high, shown unit, factor from SI to the shown unit)``: its typical range.
+    integer : bool
+        Whether it takes integers.
+    needs : str, optional
+        What the drifter must have for it to count: ``"rock"`` (a ``[rock]`` section),
+        ``"accumulator"``, ``"stop"`` (no ``[rock]``).
+    reason : str, optional
+        Why it is not continued (``""``: it is, where it sets a parameter).
+    many : bool
+        Whether it is a list of values (the piston's ``end_lengths``): a tool varies a list's
+        element by its index, never the list.
+    """
+
+    key: str
+    unit: str
+    example: str
+    scale: str | Callable = ""
+    parameter: str = ""
+    holder: str = ""
+    si: str = ""
+    required: bool = False
+    default: str | float | None = None
+    typical: tuple = ()
+    integer: bool = False
+    needs: str = ""
+    reason: str = ""
+    many: bool = False
+
+    @property
+    def section(self) -> str:
+        """The section (``"supply"``)."""
+        return self.key.rsplit(".", 1)[0]
+
+    @property
+    def name(self) -> str:
+        """The key within its section (``"pump_flow"``)."""
+        return self.key.rsplit(".", 1)[1]
+
+    @property
+    def continuable(self) -> bool:
+        """Whether a branch of orbits can be followed in it: it sets one dimensionless parameter."""
+        return bool(self.parameter) and not self.reason and not self.integer
+
+    @property
+    def why_not(self) -> str:
+        """Why it is not continued (``""`` where it is)."""
+        if self.continuable:
+            return ""
+        return self.reason or (INTEGER_REASON if self.integer else
+                               "sets no dimensionless parameter of the circuit (none is declared for it)")
+
+
+def _declare(*parts: tuple[Field, ...]) -> dict[str, Field]:
+    out = {}
+    for part in parts:
+        for f in part:
+            if f.key in out:
+                raise ValueError(f"{f.key} is declared twice")
+            out[f.key] = f
+    return out
+
+
+_MPA, _L, _ORIFICE, _RELIEF = ("MPa", 1e-6), ("L", 1e3), "m**3/s/Pa**0.5", "m**3/s/Pa"
+
+# -- the parts ----------------------------------------------------------------------------------------
+_BAR = (Field("bar.E", "Pa", "'210 GPa'", required=True, reason=SCALE_REASON),
+        Field("bar.density", "kg/m**3", "'7850 kg/m^3'", required=True, reason=SCALE_REASON),
+        Field("bar.length", "m", "'0.6 m'", required=True, reason=SCALE_REASON),
+        Field("bar.diameter", "m", "'60 mm'", reason=SCALE_REASON),
+        Field("bar.area", "m**2", "'28 cm^2'", reason=SCALE_REASON))
+# the piston's shape, in place of [bar] and the chamber areas (impactbar.physical.geometry)
+_LIST_REASON = "is a list of values: vary its elements' lengths and diameters one by one in the config"
+_PISTON = (Field("piston.E", "Pa", "'210 GPa'", required=True, reason=SCALE_REASON),
+           Field("piston.density", "kg/m**3", "'7850 kg/m^3'", required=True, reason=SCALE_REASON),
+           *(Field(f"piston.{part}_{what}", "m", "'50 mm'", required=True, reason=SCALE_REASON)
+             for part in ("rear_rod", "collar", "front_rod") for what in ("diameter", "length")),
+           Field("piston.end_diameters", "m", "['40 mm']", reason=_LIST_REASON, many=True),
+           Field("piston.end_lengths", "m", "['50 mm']", reason=_LIST_REASON, many=True))
+_STOP = (Field("stop.restitution", "", "0.215", "one", "R", "model", needs="stop"),
+         Field("stop.area", "m**2", "'30 cm^2'",
+               reason="sets the restitution through the impedances (eq. 10): continue stop.restitution"))
+_DAMPING = (Field("damping.coefficient", "N*s/m", "'9 N*s/m'", typical=(0.0, 50.0, "N s/m", 1.0)),)
+_MODEL = (Field("model.n_modes", "", "4", integer=True),)
+_CHAMBERS = (
+    Field("chambers.rear_area", "m**2", "'5.6 cm^2'", si="rear_area_m2", required=True, reason=SCALE_REASON,
+          typical=(4e-4, 15e-4, "cm^2", 1e4)),
+    Field("chambers.front_area", "m**2", "'5.6 cm^2'", "area", "area_ratio", "drive", "front_area_m2", True),
+    Field("chambers.rear_volume", "m**3", "'0.15 L'", "volume", "rear_volume", "drive", "rear_volume_m3",
+          True),
+    Field("chambers.front_volume", "m**3", "'0.1 L'", "volume", "front_volume", "drive", "front_volume_m3",
+          True))
+_VALVE = (
+    Field("valve.switch_out", "m", "'21.5 mm'", "length", "switch_out", "drive", "switch_out_m", True,
+          typical=(15e-3, 60e-3, "mm", 1e3)),
+    Field("valve.switch_in", "m", "'10 mm'", "length", "switch_in", "drive", "switch_in_m"),
+    Field("valve.switching_time", "s", "'1 ms'", "time", "switching_time", "drive", "switching_time_s", True,
+          typical=(0.5e-3, 3e-3, "ms", 1e3)),
+    Field("valve.flow_coefficient", _ORIFICE, "'7.5e-6 m^3/s/Pa^0.5'", "orifice", "valve_coefficient",
+          "drive", "valve_coefficient", True, typical=(3e-6, 2e-5, "m^3/s/Pa^0.5", 1.0)))
+_SUPPLY = (
+    Field("supply.pump_flow", "m**3/s", "'80 L/min'", "flow", "pump_flow", "drive", "pump_flow_m3_s", True,
+          typical=(40.0 / 6e4, 150.0 / 6e4, "L/min", 6e4)),
+    Field("supply.hose_volume", "m**3", "'1 L'", "volume", "hose_volume", "drive", "hose_volume_m3", True,
+          typical=(0.1e-3, 2e-3, *_L)),
+    Field("supply.front_flow_coefficient", _ORIFICE, "'7.5e-6 m^3/s/Pa^0.5'", "orifice", "front_coefficient",
+          "drive", "front_coefficient", True, typical=(3e-6, 2e-5, "m^3/s/Pa^0.5", 1.0)),
+    Field("supply.tank_pressure", "Pa", "'0.3 MPa'", "pressure", "tank_pressure", "drive", "tank_pressure_Pa",
+          True, typical=(0.2e6, 1e6, *_MPA)),
+    Field("supply.relief_pressure", "Pa", "'25 MPa'", "pressure", "relief_pressure", "drive",
+          "relief_pressure_Pa", default=math.inf, typical=(17e6, 30e6, *_MPA)),
+    Field("supply.relief_coefficient", _RELIEF, "'5e-10 m^3/s/Pa'", "relief", "relief_coefficient", "drive",
+          "relief_coefficient", default="0 m**3/s/Pa", typical=(1e-10, 1e-9, "m^3/s/Pa", 1.0)))
+_ACCUMULATOR = (
+    Field("accumulator.precharge", "Pa", "'12 MPa'", "pressure", "precharge", "drive", "precharge_Pa",
+          default=PRESSURE_SCALE, typical=(6e6, 22.5e6, *_MPA), needs="accumulator"),
+    Field("accumulator.volume", "m**3", "'0.5 L'", "volume", "accumulator_volume", "drive",
+          "accumulator_volume_m3", default=0.0, typical=(0.2e-3, 1e-3, *_L), needs="accumulator"),
+    Field("accumulator.polytropic_exponent", "", "1.4", "one", "polytropic_exponent", "drive",
+          "polytropic_exponent", default=1.4, needs="accumulator"))
+_OIL = (
+    Field("oil.bulk_modulus", "Pa", "'1.4 GPa'", "pressure", "bulk_modulus", "drive", "bulk_modulus_Pa", True,
+          typical=(0.8e9, 1.8e9, "GPa", 1e-9)),
+    Field("oil.transition_pressure", "Pa", "'0.5 MPa'", "pressure", "transition_pressure", "drive",
+          "transition_pressure_Pa", True, typical=(0.05e6, 0.5e6, *_MPA)))
+# a drifter on the drill string and the rock: the rod-rock law's own (theory §4d)
+_ROCK = (Field("rock.k", "N/m", "'250 kN/mm'", "stiffness", "rock.k", "law", needs="rock"),
+         Field("rock.k_u", "N/m", "'2500 kN/mm'", "stiffness", "rock.k_u", "law", needs="rock"),
+         Field("rock.feed", "N", "'5 kN'", "force", "feed", "law", needs="rock"),
+         Field("rock.cells_per_piston", "", "64", integer=True))
+_BIT = (Field("bit.mass", "kg", "'1.5 kg'", "mass", "bit_mass", "law", needs="rock"),)
+# a hammer's periodic force (impactbar.physical.config): its integer keys
+_FORCE = (Field("force.k", "", "1", integer=True), Field("force.max_harmonics", "", "40", integer=True))
+
+#: Every declared field by its dotted SI name, in the order the parts are declared.
+FIELDS: dict[str, Field] = _declare(_ACCUMULATOR, _SUPPLY, _VALVE, _CHAMBERS, _OIL, _ROCK, _BIT, _BAR,
+                                    _PISTON, _STOP, _DAMPING, _MODEL, _FORCE)
+
+#: The sections of a drifter with its oil circuit whose keys the tree declares in full.
+CIRCUIT_SECTIONS = ("bar", "stop", "damping", "model", "chambers", "valve", "supply", "accumulator", "oil")
+
+#: A unit in words, for a message (``"a pressure"``).
+WORDS = {"m**2": "an area", "m**3": "a volume", "Pa": "a pressure", "m": "a length", "s": "a time",
+         "m**3/s": "a flow", _ORIFICE: "a flow coefficient (m^3/s/Pa^0.5)",
+         _RELIEF: "a flow coefficient (m^3/s/Pa)"}
+
+#: Each scale's factor from SI to dimensionless, a function of the drifter (theory §11, eq. 2).
+SCALES: dict[str, Callable] = {
+    "pressure": lambda d: 1.0 / PRESSURE_SCALE,
+    "volume": lambda d: 1.0 / d.volume_scale_m3,
+    "flow": lambda d: 1.0 / d.flow_scale_m3_s,
+    "orifice": lambda d: math.sqrt(PRESSURE_SCALE) / d.flow_scale_m3_s,
+    "relief": lambda d: PRESSURE_SCALE / d.flow_scale_m3_s,
+    "length": lambda d: 1.0 / d.bar.length_m,
+    "time": lambda d: d.omega_rad_s,
+    "one": lambda d: 1.0,
+    "area": lambda d: 1.0 / d.si["rear_area_m2"],
+    "stiffness": lambda d: d.bar.length_m / d.scales.force_N,
+    "force": lambda d: 1.0 / d.scales.force_N,
+    "mass": lambda d: 1.0 / d.bar.mass_kg,
+}
+
+
+def fields() -> dict[str, Field]:
+    """Every declared field by its dotted SI name (:data:`FIELDS`)."""
+    return FIELDS
+
+
+def field(key: str) -> Field:
+    """The declaration of a dotted SI name.
+
+    Raises
+    ------
+    ValueError
+        A name the tree does not declare (the declared ones listed).
+    """
+    f = FIELDS.get(key) if isinstance(key, str) else None
+    if f is None:
+        raise ValueError(f"parameter must be one of {', '.join(FIELDS)} (a config key); got {key!r}")
+    return f
+
+
+def in_sections(sections=CIRCUIT_SECTIONS) -> tuple[Field, ...]:
+    """The declared fields of ``sections``, section by section in their order."""
+    return tuple(f for s in sections for f in FIELDS.values() if f.section == s)
+
+
+def section_keys(sections=CIRCUIT_SECTIONS) -> dict[str, set]:
+    """Each section's keys (a drifter with its oil circuit's by default)."""
+    return {s: {f.name for f in FIELDS.values() if f.section == s} for s in sections}
+
+
+def required_keys(sections=CIRCUIT_SECTIONS) -> dict[str, tuple]:
+    """Each section's required keys, in declaration order (sections with none left out)."""
+    out = {s: tuple(f.name for f in FIELDS.values() if f.section == s and f.required) for s in sections}
+    return {s: keys for s, keys in out.items() if keys}
+
+
+def real_keys() -> tuple[str, ...]:
+    """The keys of one real value (not an integer, not a list): what a tool differentiates."""
+    return tuple(k for k, f in FIELDS.items() if not f.integer and not f.many)
+
+
+def integer_keys() -> tuple[str, ...]:
+    """The keys that take integers."""
+    return tuple(k for k, f in FIELDS.items() if f.integer)
+
+
+def continuable_keys() -> tuple[str, ...]:
+    """The keys a branch of orbits can be followed in."""
+    return tuple(k for k, f in FIELDS.items() if f.continuable)
+
+
+def typical_ranges() -> dict[str, tuple]:
+    """Key to ``(low, high, SI unit, shown unit, factor)`` for the fields with a typical range."""
+    return {k: (f.typical[0], f.typical[1], f.unit, *f.typical[2:]) for k, f in FIELDS.items() if f.typical}
+
+
+def markdown_table() -> str:
+    """The declared fields as a Markdown table (the documentation's list of keys is this text).
+
+    Returns
+    -------
+    str
+        One row per field: the dotted name, its SI unit, its scale, the dimensionless parameter
+        it sets, and whether it is continued (or why not).
+    """
+    rows = ["| key | SI unit | scale | dimensionless parameter | continued |",
+            "| --- | --- | --- | --- | --- |"]
+    for k, f in FIELDS.items():
+        scale = f.scale if isinstance(f.scale, str) else "(a function)"
+        parameter = f"`{f.parameter}`" if f.parameter else "-"
+        rows.append(f"| `{k}` | {f.unit.replace('**', '^') or '1'} | {scale or '-'} | {parameter} | "
+                    f"{'yes' if f.continuable else 'no: ' + f.why_not} |")
+    return "\n".join(rows) + "\n"
+
+
+def refuse_continuation(key: str) -> Field:
+    """The declaration of ``key``, refused with its reason where it cannot be continued.
+
+    Raises
+    ------
+    ValueError
+        An undeclared key, or one whose declaration says why it is not continued.
+
+    Examples
+    --------
+    >>> refuse_continuation("bar.diameter")
+    Traceback (most recent call last):
+    ...
+    ValueError: parameter bar.diameter cannot be continued: it sets the model's scales (the piston's mass, ...
+    """
+    f = field(key)
+    if not f.continuable:
+        raise ValueError(f"parameter {key} cannot be continued: it {f.why_not}")
+    return f
+
+
+def dimensionless_factor(drifter, key: str) -> float:
+    """The factor from the SI value of ``key`` to its dimensionless parameter, for ``drifter``.
+
+    Raises
+    ------
+    ValueError
+        As :func:`refuse_continuation`; a key whose part the drifter lacks (a rock's without a
+        ``[rock]`` section, an accumulator's without an accumulator, the stop's on the rock).
+    """
+    f = refuse_continuation(key)
+    if f.needs == "rock" and drifter.drill is None:
+        raise ValueError(f"parameter {key} is the drill string's and the rock's: the drifter has no [rock] "
+                         "section")
+    if f.needs == "accumulator" and not drifter.si["accumulator_volume_m3"] > 0.0:
+        raise ValueError(f"parameter {key} is the accumulator's: the drifter has none (no [accumulator] "
+                         "section, or its volume 0)")
+    if f.needs == "stop" and drifter.drill is not None:
+        raise ValueError(f"parameter {key} is the stop's: on the rock the rod-rock law sets the impact")
+    return (SCALES[f.scale] if isinstance(f.scale, str) else f.scale)(drifter)

@@ -1,0 +1,115 @@
+"""One tree of parameters: each field of a drifter with its oil circuit is declared once
+(:mod:`impactbar.physical.tree`), and every table that joins its dotted SI name to another name (a
+unit, a dimensionless parameter, a typical range, the sections' keys) is a view of the declaration."""
+
+from __future__ import annotations
+
+import ast
+import math
+from pathlib import Path
+
+import pytest
+
+from impactbar.physical import tree
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "impactbar"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+
+
+def hand_tables(source: str, fields) -> list[int]:
+    """The lines of the literal tables (dict, set, tuple, list) in ``source`` that name two or more
+    of the declared dotted keys as plain strings: a table written by hand beside the declaration.
+    (A key that is also its own dimensionless name, the rod-rock law's ``rock.k``, is the law's to
+    list among its parameters.)"""
+    keys = {k for k, f in fields.items() if f.parameter != k}
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        elts = node.keys if isinstance(node, ast.Dict) else \
+            node.elts if isinstance(node, ast.Tuple | ast.Set | ast.List) else ()
+        named = [e.value for e in elts if isinstance(e, ast.Constant) and e.value in keys]
+        if len(named) >= 2:
+            found.append(node.lineno)
+    return found
+
+
+def test_the_scan_finds_a_planted_hand_table():
+    """The scan can fail: the old hand table of SI names and a planted one are found, a view is not."""
+    planted = ('SI = {"supply.pump_flow": ("pump_flow", "m**3/s"), "valve.switch_out": ("switch_out", "m")}\n'
+               'INTEGER_KEYS = ("model.n_modes", "rock.cells_per_piston")\n'
+               'VIEW = {k: f.unit for k, f in FIELDS.items()}\n')
+    assert hand_tables(planted, tree.FIELDS) == [1, 2]
+
+
+def test_no_module_writes_a_table_of_the_declared_names():
+    """Hand tables joining parameter names: 0 (every module of the package but the tree itself)."""
+    tables = {str(p.relative_to(SRC)): lines for p in sorted(SRC.rglob("*.py"))
+              if p.name != "tree.py" and (lines := hand_tables(p.read_text(), tree.FIELDS))}
+    assert tables == {}
+
+
+def test_the_old_tables_are_views_of_the_tree():
+    """Each public table the tools read is what the declarations give."""
+    from impactbar.continuation.parameters import MODEL_PARAMETERS
+    from impactbar.physical import circuit, design_keys, geometry, plausibility
+
+    declared = tree.FIELDS
+    assert circuit.SI_PARAMETERS == {k: (f.parameter, f.unit, f.example) for k, f in declared.items()
+                                     if f.holder in ("drive", "law")}
+    rock = {k for k in circuit.SI_PARAMETERS if declared[k].needs == "rock"}
+    assert set(circuit.ROCK_SI_PARAMETERS) == rock
+    assert set(design_keys.INTEGER_KEYS) == {k for k, f in declared.items() if f.integer}
+    assert plausibility.TYPICAL == tree.typical_ranges()
+    for section, keys in circuit._KEYS.items():
+        assert keys == {f.name for f in declared.values() if f.section == section}, section
+    assert geometry.PISTON_KEYS == {k.split(".")[1] for k in declared if k.startswith("piston.")}
+    assert MODEL_PARAMETERS == ("s", "d", "R")
+
+
+def test_every_declared_field_is_complete():
+    """A unit pint reads, an example in that unit, a scale known for every parameter set, and for a
+    field that cannot be continued a reason the tools show."""
+    from impactbar.physical.units import to_si
+
+    for key, f in tree.FIELDS.items():
+        if f.parameter:
+            assert isinstance(f.scale, str) and f.scale in tree.SCALES, key
+            assert f.holder in ("drive", "law", "model"), key
+        if not f.many:
+            assert math.isfinite(to_si(key, f.example.strip("'") if f.unit else float(f.example), f.unit,
+                                       f.example)), key
+        assert f.continuable or f.why_not, key
+        if f.typical:
+            assert f.typical[0] <= f.typical[1], key
+
+
+@pytest.mark.parametrize("key", ["bar.diameter", "chambers.rear_area", "model.n_modes", "piston.end_lengths"])
+def test_continuation_refuses_a_key_with_its_declared_reason(key):
+    """A key a design map varies but that continuation cannot follow is refused with the reason its
+    declaration gives, by every tool that continues."""
+    from impactbar.physical import circuit_preset
+
+    with pytest.raises(ValueError, match=f"parameter {key} cannot be continued: it "):
+        circuit_preset("circuit-drifter").to_dimensionless(key, "1 m")
+
+
+def test_the_docs_list_every_key_of_the_circuit():
+    """docs/physical.md names every declared key of the circuit's sections and the piston's shape."""
+    text = (DOCS / "physical.md").read_text()
+    missing = [k for k, f in tree.FIELDS.items()
+               if f.section in (*tree.CIRCUIT_SECTIONS, "piston") and f"`{k}`" not in text]
+    assert missing == []
+
+
+def test_the_docs_table_of_keys_is_the_trees():
+    """docs/physical.md holds the table generated from the declarations, as it is now."""
+    assert tree.markdown_table() in (DOCS / "physical.md").read_text()
+
+
+def test_a_key_the_maps_vary_is_continued_where_it_sets_one_parameter():
+    """``stop.restitution``, swept by the design maps and varied by the optimiser, is continued too:
+    its declaration sets the bar model's ``R``."""
+    from impactbar.physical import circuit_preset, continue_circuit
+
+    b = continue_circuit(circuit_preset("circuit-drifter"), "stop.restitution", 0.25, max_points=3)
+    assert b.unit == "" and b.values[0] == 0.215 and len(b) == 3
+    assert b.branch.values[0] == 0.215 and b.values[-1] > 0.215
