@@ -100,13 +100,15 @@ def format_key(value: float, unit: str, config: dict, key: str, digits: int = 6)
     >>> format_key(5e-4, "m**3", config, "accumulator.volume")  # left out: the display unit
     '0.5 L'
     """
-    from .loader import config_value
-
-    try:
-        written = config_value(config, key)
-    except ValueError:  # a key the config leaves out
-        written = None
-    return format_si(value, unit, written, digits)
+    written = config
+    for part in key.split("."):  # (the dotted key's value as written; None where the config leaves it out)
+        if isinstance(written, dict):
+            written = written.get(part)
+        elif isinstance(written, list) and part.isdigit() and int(part) < len(written):
+            written = written[int(part)]
+        else:
+            written = None
+    return format_si(value, unit, written if isinstance(written, str | int | float) else None, digits)
 
 
 def config_quantity(x: float, unit: str):
