@@ -11,7 +11,8 @@ every CLI subcommand with bad options and output locations (in-process: a traceb
 ``main`` or an exit status other than 0, 1, 2 is bad), the rod-rock law and ``single_blow``, and
 the position-switched drive; and (``fuzz_circuit.py``) the oil circuit's configs, the exact blow
 with a bit mass and a feed, stepped pistons and ``optimize_piston``; and (``fuzz_maps.py``) design
-maps' stores damaged and resumed, integer axes and grid sizes.
+maps' stores damaged and resumed, integer axes and grid sizes; and (``fuzz_design.py``) sets of
+parameter changes in either order and the optimiser's arguments.
 
 Usage: ``python benchmarks/fuzz_campaign.py [--scale 1.0] [--seed 0] [--only CATEGORY ...]``.
 A count of "bad" outcomes per category is printed; ``--scale`` multiplies the number of cases.
@@ -42,6 +43,7 @@ import impactbar as ib
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import fuzz_circuit as fz  # noqa: E402
+import fuzz_design as fd  # noqa: E402
 import fuzz_maps as fm  # noqa: E402
 
 TWO_PI = 2.0 * math.pi
@@ -813,7 +815,10 @@ CATEGORIES = {"constructors": (constructors, 400), "orbits": (orbits_calls, 150)
               # design maps: damaged stores resumed, integer axes, grid sizes (fuzz_maps.py)
               "map_stores": (lambda rng, n, slow: fm.map_store_calls(rng, n, slow, case), 40),
               "map_axes": (lambda rng, n, slow: fm.map_axis_calls(rng, n, slow, case), 100),
-              "grid_size": (lambda rng, n, slow: fm.grid_size_calls(rng, n, slow, case), 100)}
+              "grid_size": (lambda rng, n, slow: fm.grid_size_calls(rng, n, slow, case), 100),
+              # a designer's sets of changes and the optimiser's arguments (fuzz_design.py)
+              "change_sets": (lambda rng, n, slow: fd.change_set_calls(rng, n, slow, case), 1200),
+              "optimizer_args": (lambda rng, n, slow: fd.optimizer_calls(rng, n, slow, case), 120)}
 #: Each category's time limit per case (s) where it is not ``--slow``'s.
 LIMITS = {"circuit": 40.0, "exact_blow": 20.0, "stepped": 40.0}
 

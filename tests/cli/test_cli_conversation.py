@@ -166,6 +166,18 @@ def test_a_value_without_its_unit_or_in_the_wrong_one(command, value, says, tmp_
         assert "my.toml" in line
 
 
+@pytest.mark.parametrize("command", [c for c, case in COMMANDS.items() if case["text"] is CIRCUIT])
+def test_a_switch_point_in_metres_meant_as_millimetres_names_the_cause(command, tmp_path, capsys):
+    """``switch_out = "24 m"`` (meant mm): the run from rest solved, then failed with the rear chamber
+    emptying "near t = 1.64831" with "rear_volume (now 0.398115)", in the model's units."""
+    path = _write(tmp_path, command, CIRCUIT.replace('switch_out = "21.5 mm"', 'switch_out = "24 m"'))
+    assert main(COMMANDS[command]["argv"](path, tmp_path)) == 2
+    line = _one_line(capsys, command)
+    assert "my.toml" in line and "valve.switch_out must be in (0, 178.571 mm): below the rear chamber's " \
+        "length, chambers.rear_volume / chambers.rear_area (0.1 L / 5.6 cm^2)" in line
+    assert line.endswith("got 24000 mm")
+
+
 # --------------------------------------------------------------------------------------------
 # the optimiser's variables and limits, read as every other quantity is
 # --------------------------------------------------------------------------------------------

@@ -103,6 +103,35 @@ def test_range_errors_speak_si(changes, expected):
     assert _refused(**changes) == expected
 
 
+_BEYOND = "below the rear chamber's length, chambers.rear_volume / chambers.rear_area ({vol} / 5.6 " \
+    "cm^2), where the piston, still retracting, empties the rear chamber before it reaches the switch " \
+    "point; got {got}"
+
+
+@pytest.mark.parametrize(("switch_out", "rear_volume", "limit", "got"), [
+    ("24 m", "0.1 L", "178.571 mm", "24000 mm"),  # meant mm: SI is shown in the display unit
+    ("20 cm", "0.1 L", "17.8571 cm", "20 cm"),  # the unit the config wrote
+    ("21.5 mm", "0.012 L", "21.4286 mm", "21.5 mm"),  # a rear chamber too short for the preset's switch
+])
+def test_a_switch_point_beyond_the_rear_chamber_is_refused_naming_the_cause(switch_out, rear_volume, limit,
+                                                                           got):
+    """``switch_out = "24 m"`` (meant mm) was taken, then the run from rest failed with "the rear
+    chamber empties (V <= 0) near t = 1.64831 ... give a larger rear_volume (now 0.398115)": numbers
+    in the model's units and not the cause, a switch point the piston cannot reach before its
+    retraction empties the rear chamber (at ``rear_volume / rear_area``: 0.1 L / 5.6 cm^2 = 178.571 mm)."""
+    message = _refused(valve={"switch_out": switch_out}, chambers={"rear_volume": rear_volume})
+    assert message == (f"valve.switch_out must be in (0, {limit}): "
+                       + _BEYOND.format(vol=rear_volume, got=got))
+    # the limit itself: the rear chamber's volume over its area
+    assert float(limit.split()[0]) == pytest.approx(
+        float(rear_volume.split()[0]) * 1e-3 / 5.6e-4 * {"mm": 1e3, "cm": 1e2}[limit.split()[1]], rel=1e-5)
+
+
+def test_a_switch_point_just_inside_the_rear_chamber_is_taken():
+    d = circuit_preset("circuit-drifter", chambers={"rear_volume": "0.0121 L"})
+    assert d.si["switch_out_m"] == pytest.approx(0.0215, rel=1e-15)
+
+
 def test_an_accumulator_of_no_volume_is_still_none():
     d = circuit_preset("circuit-drifter", accumulator={"volume": "0 L"})
     assert d.drive().accumulator is None

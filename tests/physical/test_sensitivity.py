@@ -81,6 +81,27 @@ def test_relief_border_is_met_where_its_first_order_distance_says(preset):
         operating_point_sensitivities(cfg, [key], orbit=orbit, relative_step=1.2 * fraction)
 
 
+def test_the_distance_to_a_border_reads_in_the_unit_the_config_wrote(preset):
+    """``distance_to_border()`` gave only SI (``7.9e-05`` m^3/s for some 4.7 L/min); ``shown=True``
+    gives it in the config's unit of each key (``"70 L/min"``: L/min), else the display unit."""
+    import dataclasses
+
+    cfg, orbit = preset
+    keys = ["supply.pump_flow", "accumulator.precharge"]
+    s = operating_point_sensitivities(cfg, keys, orbit=orbit)
+    si, shown = s.distance_to_border(), s.distance_to_border(shown=True)
+    flow, pre = si["relief"]["supply.pump_flow"], si["accumulator"]["accumulator.precharge"]
+    assert 4.5 < flow * 6e4 < 6.5
+    assert shown["relief"]["supply.pump_flow"] == f"{flow * 6e4:+.4g} L/min"
+    assert shown["accumulator"]["accumulator.precharge"] == f"{pre / 1e6:+.4g} MPa"
+    # a config in other units: the figures in those units (bar, L/s), the same distances
+    wrote = with_values(cfg, {"supply.pump_flow": "1.1666666666666667 L/s",
+                              "accumulator.precharge": "100 bar"})
+    other = dataclasses.replace(s, config=wrote).distance_to_border(shown=True)
+    assert other["relief"]["supply.pump_flow"] == f"{flow * 1e3:+.4g} L/s"
+    assert other["accumulator"]["accumulator.precharge"] == f"{pre / 1e5:+.4g} bar"
+
+
 @pytest.mark.parametrize("keys, kwargs, message", [
     (["valve.switch_in"], {}, r"valve.switch_in is not given in the config"),
     (["oil.colour"], {}, r"not a parameter the optimiser varies"),

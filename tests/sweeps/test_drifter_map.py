@@ -177,6 +177,18 @@ def test_a_resumed_map_is_bitwise_the_uninterrupted_one(tmp_path):
     plt.close(ax.figure)
 
 
+def test_an_edge_that_is_not_there_is_refused_in_the_unit_the_config_wrote():
+    """Bisection asked for an edge its two ends do not straddle said "between 0.001 and
+    0.00108333": SI where the config and the axis wrote L/min."""
+    from impactbar.sweeps.map_task import refine_edge
+
+    spec = parse_spec({"task": "operating_point", "config": "circuit-drifter",
+                       "axes": {"supply.pump_flow": {"values": ["60 L/min", "65 L/min"]}}})
+    with pytest.raises(ValueError, match=r"^relief_opens does not change between 60 L/min and 65 L/min along "
+                                         r"supply.pump_flow$"):
+        refine_edge(spec, 0, (0,), "relief_opens")
+
+
 @pytest.mark.slow
 def test_the_relief_edge_refined_agrees_with_the_continuation(tmp_path):
     """Between 70 and 80 L/min the supply's peak reaches the relief's 25 MPa: the map records the

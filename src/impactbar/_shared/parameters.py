@@ -116,6 +116,8 @@ class Parameter:
         if hi is None and not self.high_open and not self.integer and isinstance(value, float) \
                 and value == math.inf:
             return value  # (unbounded above and closed: the constructor decides, e.g. no relief valve)
+        if isinstance(value, float) and math.isinf(value) and not self.integer:  # (where no bound says so)
+            raise ValueError(f"{self.name} must be a finite real number in {self.range_text}; got {value}")
         if self.integer:
             v = check_int(self.name, value, lo=None if lo is None else math.ceil(lo),
                           hi=None if hi is None else math.floor(hi))
@@ -384,7 +386,10 @@ def _refusal(p: Parameter, value) -> ValueError | None:
     except ValueError as exc:
         if p.integer:
             raise
-        replace(p, low=-math.inf, high=math.inf, low_open=False, high_open=False).check(value)
+        try:
+            replace(p, low=-math.inf, high=math.inf, low_open=True, high_open=True).check(value)
+        except ValueError:
+            raise exc from None
         return exc
     return None
 

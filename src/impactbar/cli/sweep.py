@@ -76,20 +76,15 @@ def run(args) -> int:
     from ..sweeps import DrifterMapSpec
 
     if isinstance(spec, DrifterMapSpec) and res.complete:  # a design map: its edges, refined on request
-        from ..physical.display_units import format_si
-        from ..physical.loader import config_value
+        from ..physical.display_units import format_key
         from ..sweeps import map_edges
 
         edges = map_edges(args.out, refine=spec.refine_edges)
         axes = {a.name: a for a in spec.axes}
         for e in edges:  # in the unit the config writes the key in (the store keeps SI)
-            unit = axes[e["axis"]].unit
-            try:
-                wrote = config_value(spec.config, e["axis"])
-            except ValueError:  # a key the config leaves out: the key table's display unit
-                wrote = None
-            where = (f", refined to {format_si(e['value'], unit, wrote, 7)}" if e["value"] == e["value"]
-                     else "")
-            print(f"edge: {e['flag']} changes along {e['axis']} between {format_si(e['low'], unit, wrote)} "
-                  f"and {format_si(e['high'], unit, wrote)}{where} (at grid index {list(e['index'])})")
+            low, high, value = (format_key(e[k], axes[e["axis"]].unit, spec.config, e["axis"], digits)
+                                for k, digits in (("low", 6), ("high", 6), ("value", 7)))
+            where = f", refined to {value}" if e["value"] == e["value"] else ""
+            print(f"edge: {e['flag']} changes along {e['axis']} between {low} and {high}{where} "
+                  f"(at grid index {list(e['index'])})")
     return 0

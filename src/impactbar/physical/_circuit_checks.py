@@ -79,6 +79,14 @@ def check_circuit_si(sec: dict, si: dict, restitution: float) -> None:
         fail("chambers.front_area", "front_area_m2", "m^2",
              f"below chambers.rear_area ({shown(ch['rear_area'], si['rear_area_m2'], 'm^2')}) for the "
              "stroke to push toward the stop")
+    stroke = si["rear_volume_m3"] / si["rear_area_m2"]  # where the retracting piston empties the rear chamber
+    if given("valve.switch_out") and not si["switch_out_m"] < stroke:
+        vol = shown(ch["rear_volume"], si["rear_volume_m3"], "m^3")
+        area = shown(ch["rear_area"], si["rear_area_m2"], "m^2")
+        fail("valve.switch_out", "switch_out_m", "m",
+             f"in (0, {format_si(stroke, 'm', sec['valve']['switch_out'])}): below the rear chamber's "
+             f"length, chambers.rear_volume / chambers.rear_area ({vol} / {area}), where the piston, still "
+             "retracting, empties the rear chamber before it reaches the switch point")
     if given("valve.switch_in") and not 0.0 < si["switch_in_m"] < si["switch_out_m"]:
         out = shown(sec["valve"]["switch_out"], si["switch_out_m"], "m")
         fail("valve.switch_in", "switch_in_m", "m", f"above 0 and below valve.switch_out ({out})")

@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 import re
 
-__all__ = ["display_unit", "written_unit", "format_si", "config_quantity", "written_quantity"]
+__all__ = ["display_unit", "written_unit", "format_si", "format_key", "config_quantity", "written_quantity"]
 
 #: The key table's display unit of each SI unit: ``SI unit -> (factor from SI, display unit)``.
 DISPLAY_UNITS = {"m": (1e3, "mm"), "Pa": (1e-6, "MPa"), "m**3": (1e3, "L"), "m**3/s": (6e4, "L/min"),
@@ -83,6 +83,32 @@ def format_si(value: float, unit: str, written=None, digits: int = 6) -> str:
     if factor is None:
         factor, wrote = display_unit(unit)
     return f"{value * factor:.{digits}g} {wrote}"
+
+
+def format_key(value: float, unit: str, config: dict, key: str, digits: int = 6) -> str:
+    """A SI ``value`` of the dotted ``key`` as a person reads it: :func:`format_si` in the unit the
+    ``config`` writes the key in, in the key table's display unit where the config leaves it out.
+
+    Examples
+    --------
+    >>> from impactbar.physical.display_units import format_key
+    >>> config = {"chambers": {}, "supply": {"pump_flow": "1.2 L/s", "relief_pressure": "250 bar"}}
+    >>> format_key(0.00125, "m**3/s", config, "supply.pump_flow")
+    '1.25 L/s'
+    >>> format_key(2.4e7, "Pa", config, "supply.relief_pressure")
+    '240 bar'
+    >>> format_key(5e-4, "m**3", config, "accumulator.volume")  # left out: the display unit
+    '0.5 L'
+    """
+    written = config
+    for part in key.split("."):  # (the dotted key's value as written; None where the config leaves it out)
+        if isinstance(written, dict):
+            written = written.get(part)
+        elif isinstance(written, list) and part.isdigit() and int(part) < len(written):
+            written = written[int(part)]
+        else:
+            written = None
+    return format_si(value, unit, written if isinstance(written, str | int | float) else None, digits)
 
 
 def config_quantity(x: float, unit: str):

@@ -207,6 +207,8 @@ def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: 
 
 
 def _limits(constraints, drifter, ideal: bool = False) -> dict:
+    if constraints is not None and not isinstance(constraints, dict):
+        raise ValueError(f"constraints must be a dict of limits or None; got {constraints!r}")
     given = dict(constraints or {})
     unknown = sorted(k for k in given if not isinstance(k, str) or constraint_output(k) is None)
     if unknown:
@@ -515,7 +517,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     from scipy.optimize import minimize
 
     t_start = time.perf_counter()
-    if objective not in OBJECTIVES:
+    if not isinstance(objective, str) or objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}; got {objective!r}")
     cfg, folder = read_config(config)
     base = build(cfg, folder, where="config" if folder is None else str(config))  # (the file named)

@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .circuit import CircuitDrifter, CircuitDrifterOrbit
-from .display_units import config_quantity, display_unit
+from .display_units import config_quantity, display_unit, format_key
 from .loader import build, config_value, read_config, with_values
 from .outputs import output_values, outputs
 from .tree import FIELDS, real_keys
@@ -122,6 +122,9 @@ class OperatingPointSensitivities:
         Flights flown besides the orbit's own (four per key).
     seconds : float
         Wall time (s), the orbit's solve included where it was not given.
+    config : dict
+        The configuration the keys were read from (their values as written: the units
+        :meth:`distance_to_border` shows with ``shown=True``).
     """
 
     keys: tuple
@@ -135,6 +138,7 @@ class OperatingPointSensitivities:
     orbit: CircuitDrifterOrbit = field(repr=False)
     flights: int = 0
     seconds: float = 0.0
+    config: dict = field(default_factory=dict, repr=False, compare=False)
 
     def elasticities(self) -> dict:
         r"""The relative derivatives :math:`(p / F)\,dF/dp`: the figure's change in per cent per per
@@ -148,17 +152,28 @@ class OperatingPointSensitivities:
         return {name: {k: (d * self.values[k] / self.figures[name] if self.figures[name] != 0.0 else math.nan)
                        for k, d in der.items()} for name, der in self.derivatives.items()}
 
-    def distance_to_border(self) -> dict:
-        """The change of each key (SI) that brings each border's margin to 0, to first order
+    def distance_to_border(self, shown: bool = False) -> dict:
+        """The change of each key that brings each border's margin to 0, to first order
         (``-margin / (d margin / dp)``; ``inf`` where the margin does not move with the key).
+
+        Parameters
+        ----------
+        shown : bool
+            ``False``: the changes in SI (floats); ``True``: as a person reads them, strings in
+            the unit the config writes the key in, else the key table's display unit
+            (``'+5.48 L/min'``).
 
         Returns
         -------
         dict
             Border to ``{key: change}``.
         """
-        return {name: {k: (-b["margin_Pa"] / d if d != 0.0 else math.inf)
-                       for k, d in b["derivatives"].items()} for name, b in self.borders.items()}
+        out = {name: {k: (-b["margin_Pa"] / d if d != 0.0 else math.inf)
+                      for k, d in b["derivatives"].items()} for name, b in self.borders.items()}
+        if shown:
+            out = {name: {k: ("+" if v > 0.0 else "") + format_key(v, self.units[k], self.config, k, 4)
+                          for k, v in change.items()} for name, change in out.items()}
+        return out
 
     def table(self) -> str:
         """The figures and their derivatives, one row per figure, in a designer's units per key
@@ -290,7 +305,7 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
     borders = {name: {"margin_Pa": m, "derivatives": der[f"border.{name}"]} for name, m in B0.items()}
     return OperatingPointSensitivities(keys=keys, units=units, values=values, steps=steps, figures=F0,
                                        derivatives=derivatives, state=state, borders=borders, orbit=point,
-                                       flights=4 * len(keys), seconds=time.perf_counter() - t0)
+                                       flights=4 * len(keys), seconds=time.perf_counter() - t0, config=cfg)
 
 
 def tangent_derivatives(cfg: dict, folder, point: CircuitDrifterOrbit, keys, values: dict, units: dict,

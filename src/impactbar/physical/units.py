@@ -43,7 +43,10 @@ def _parse(name: str, value):
     if isinstance(value, bool) or value is None:
         raise ValueError(f"{name} must be a number or a quantity with a unit; got {value!r}")
     if isinstance(value, numbers.Real | np.floating | np.integer):
-        return ureg.Quantity(float(value), ""), True
+        try:
+            return ureg.Quantity(float(value), ""), True
+        except OverflowError:  # an int past the floats' range
+            raise ValueError(f"{name} must be a number within the floats' range; got {value!r}") from None
     if hasattr(value, "magnitude") and hasattr(value, "units"):  # pint, maybe another registry
         try:
             return ureg.Quantity(float(value.magnitude), str(value.units)), False

@@ -243,7 +243,10 @@ def refine_edge(spec: DrifterMapSpec, axis: int, index: tuple, flag: str, *, rto
     pa, fa = at(a)
     _, fb = at(b, pa)
     if fa == fb:
-        raise ValueError(f"{flag} does not change between {a!r} and {b!r} along {ax.name}")
+        from ..physical.display_units import format_key
+
+        raise ValueError(f"{flag} does not change between {format_key(a, ax.unit, spec.config, ax.name)} and "
+                         f"{format_key(b, ax.unit, spec.config, ax.name)} along {ax.name}")
     while abs(b - a) > rtol * max(abs(a), abs(b)):
         m = 0.5 * (a + b)
         pm, fm = at(m, pa)

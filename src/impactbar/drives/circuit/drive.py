@@ -70,6 +70,9 @@ _RANGES = {
     "transition_pressure": {"low": 0.0, "low_open": True,
                             "description": "transition pressure of the orifices' smoothed law"},
 }
+for _name, _range in _RANGES.items():  # finite above, but the relief pressure (inf: none)
+    if "high" not in _range and _name != "relief_pressure":
+        _range["high_open"] = True
 
 #: the preset's nodes with a state (``p_f, p_r, p_s``) in the network of part records (:mod:`._network`;
 #: then the extra parts' and the tank held at its pressure, :func:`.composition.compose_parts`)
@@ -272,7 +275,7 @@ class HydraulicCircuitDrive(Drive):
                 and acc.precharge >= sup.relief_pressure:
             raise ValueError(f"accumulator.precharge must be below the relief pressure "
                              f"{sup.relief_pressure:g}; got {acc.precharge:g} (the accumulator would never "
-                             "take oil)")
+                             "take oil: a lower precharge or a higher relief_pressure)")
         if self.extra_parts:
             parts = tuple(self.extra_parts)
             comp = compose_parts(parts)

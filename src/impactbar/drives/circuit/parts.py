@@ -221,7 +221,7 @@ class Supply:
     def __post_init__(self) -> None:
         if (self.pump_flow is None) == (self.pressure is None):
             raise ValueError("give exactly one of pump_flow (a pump) and pressure (a supply held at a "
-                             "pressure)")
+                             "pressure; the drive's supply_pressure)")
         _positive(self, "hose_volume", "front_coefficient")
         _non_negative(self, "tank_pressure", "relief_coefficient")
         if self.pump_flow is not None:
@@ -231,8 +231,11 @@ class Supply:
                                                             lo=self.tank_pressure, lo_open=True))
         if not (isinstance(self.relief_pressure, float) and math.isinf(self.relief_pressure)
                 and self.relief_pressure > 0):
-            object.__setattr__(self, "relief_pressure", check_real(
-                "relief_pressure", self.relief_pressure, lo=self.tank_pressure, lo_open=True))
+            relief = check_real("relief_pressure", self.relief_pressure)
+            if not relief > self.tank_pressure:  # (either may be the one changed: name both)
+                raise ValueError(f"relief_pressure must be above tank_pressure ({self.tank_pressure:g}); got "
+                                 f"{relief:g}")
+            object.__setattr__(self, "relief_pressure", relief)
 
     @property
     def held(self) -> bool:
