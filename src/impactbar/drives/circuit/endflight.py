@@ -282,8 +282,8 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
                         splines=None):
     """:func:`circuit_end_flight` with a constant ``a`` on each interval, or with ``splines``
     (:func:`._endcvode.spline_data`) a spline on each: the stretches between the circuit's events in
-    one compiled call each (:func:`._endcvode.fly_intervals`, the same steps as one
-    :func:`._endcvode.fly` a stretch), Python only at the events."""
+    one compiled call each (the generated ``fly_intervals``, :mod:`._endgen`, the same steps as one
+    :func:`._cvode.fly` a stretch), Python only at the events."""
     n = breaks.size - 1
     code = _end_code(drive)
     if splines is None:
