@@ -13,6 +13,7 @@ blow, run on the code generated for the composed network).
   over that period the circuit's energy account closes with the leak's loss in the orifices' term,
   and the leak's own integrand is its loss ``K phi(p_f - p_t) (p_f - p_t)`` computed here from the
   histories by the trapezoidal rule (``phi`` written out here).
+- Its blows by the compiled driver and through scikit-sundae's interface: the same run to the bit.
 """
 
 from dataclasses import dataclass, replace
@@ -88,3 +89,20 @@ def test_a_leak_on_rock_repeats_and_its_loss_is_accounted(drifter, preset):  # n
     dp = leaky.histories(run, t)["p_f"] - leaky.supply.tank_pressure
     flow = K * dp * (dp * dp + leaky.oil.transition_pressure ** 2) ** -0.25
     assert loss == pytest.approx(np.trapezoid(flow * dp, t), rel=1e-9)  # (measured 9e-12)
+
+
+def test_the_leaks_blows_are_the_bindings_to_the_bit(drifter):  # noqa: F811
+    """A run on the rock with the leak by the compiled driver and through scikit-sundae's interface
+    (``compiled=False``: the generated blow's Python-called functions against its C callbacks and
+    compiled loop): the same impacts, blows and account to the bit."""
+    from impactbar.drives.circuit import _sundials
+
+    if not _sundials.available():
+        pytest.skip(_sundials.reason())
+    model, drive = drifter
+    drives = [replace(drive, extra_parts=(Leak(0.02),), compiled=c) for c in (True, False)]
+    runs = [simulate(model, d, InitialState.rigid(-0.02, 0.0), 3.0) for d in drives]
+    assert runs[0].n_impacts >= 2
+    assert np.array_equal(runs[0].impact_times, runs[1].impact_times)
+    assert np.array_equal(runs[0].impact_velocities, runs[1].impact_velocities)
+    assert drives[0].energy(runs[0]) == drives[1].energy(runs[1])
