@@ -43,7 +43,6 @@ NOT_RECORDS = {
                                  "tests"},  # sequences' first and last entries
     "continuation/two_parameter.py": {"e2", "names", "points", "vt"},  # the two parameters, a unit vector
     "drives/circuit/_cvode.py": {"tret"},  # CVODE's one-slot return time
-    "drives/circuit/_endcvode.py": {"y0"},  # the state's first component, w
     "drives/circuit/_endkernel.py": {"buf", "dut", "yp"},  # the bar state and its derivative's components
     "drives/circuit/_magnus.py": {"_T18", "_T8_A"},  # the Taylor scheme's coefficient rows
     "drives/circuit/_sundials.py": {"hits"},  # the first root found

@@ -364,7 +364,7 @@ class Workspace:
     a factorisation and three times fewer a solve; ``blocks`` says whether they were (the band
     solver's table as SUNDIALS 7 lays it out, checked, else the band solver's own). Freed when
     collected. ``callbacks``, ``(rhs, jac, events, number of events)``, replace the flight's vector
-    field, dense Jacobian and events (the circuit during a blow: :mod:`._endcvode`).
+    field, dense Jacobian and events (the circuit during a blow: :mod:`._endgen`).
 
     Attributes
     ----------
@@ -431,7 +431,7 @@ def workspace(N: int, band: int = 0, callbacks=None, blocks: bool = False, adams
     ``band``, or dense for 0; with ``blocks``, its setup and solve on the blocks; with ``adams``,
     Adams-Moulton's method instead of BDF; :class:`Workspace`),
     made on first use; ``callbacks``: ``(rhs, jac, events, number of events)`` as compiled C
-    callbacks in place of the flight's (the circuit during a blow: :mod:`._endcvode`)."""
+    callbacks in place of the flight's (the circuit during a blow: :mod:`._endgen`)."""
     spaces = getattr(_LOCAL, "spaces", None)
     if spaces is None:
         spaces = _LOCAL.spaces = {}

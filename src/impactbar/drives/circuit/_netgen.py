@@ -530,8 +530,8 @@ def generate(net, folder=None) -> SimpleNamespace:
     -------
     types.SimpleNamespace
         ``base(y, par, M, out)``, ``jac_base(y, par, M, A)``, ``events(z, par, M, g, first)`` (the
-        signatures of :mod:`._network`'s, ``par`` with the network after the bar's entries), ``source``
-        and ``path`` (``None`` in memory).
+        signatures of :mod:`._network`'s, ``par`` with the network after the bar's entries), ``source``,
+        ``path`` (``None`` in memory) and ``module`` (the module's name).
 
     Raises
     ------
@@ -547,15 +547,40 @@ def generate(net, folder=None) -> SimpleNamespace:
     >>> g = generate(NW.compose(nodes + Valve(0.05, 1.0).records(0, 1, 1, 0.01), 1, 1, 1, 0))
     >>> sorted(k for k in vars(g) if not k.startswith("_"))  # doctest: +NORMALIZE_WHITESPACE
     ['CALLBACKS', 'base', 'dop853_fly', 'events', 'field_at', 'flight_events', 'flight_jac', 'flight_rhs',
-     'jac_base', 'magnus_phi', 'path', 'source']
+     'jac_base', 'magnus_phi', 'module', 'path', 'source']
     """
-    source = emit(net)
+    return load(emit(net), folder, "impactbar_netgen", _NAMES)
+
+
+def load(source: str, folder=None, prefix: str = "impactbar_netgen", names=_NAMES,
+         given=None) -> SimpleNamespace:
+    """The generated ``source`` as a module written once to ``folder`` (:func:`generate`) and imported
+    as ``<prefix>_<hash of the source>``, or compiled in memory where ``folder`` cannot be written.
+
+    Parameters
+    ----------
+    source : str
+    folder : str or pathlib.Path, optional
+        As :func:`generate`'s.
+    prefix : str, optional
+        The module's name before its hash.
+    names : tuple of str, optional
+        The module's names returned.
+    given : dict, optional
+        Names set in the module before its source runs where it is compiled in memory (what it would
+        import from another generated module, which is then not importable by name).
+
+    Returns
+    -------
+    types.SimpleNamespace
+        ``names``, ``source``, ``path`` (``None`` in memory) and ``module`` (the module's name).
+    """
     digest = hashlib.sha256(source.encode()).hexdigest()[:20]
     folder = Path(folder) if folder is not None else _folder()
     key = (digest, str(folder))
     if key in _MEMO:
         return _MEMO[key]
-    name = f"impactbar_netgen_{digest}"
+    name = f"{prefix}_{digest}"
     path = folder / f"{digest}.py"
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -570,8 +595,8 @@ def generate(net, folder=None) -> SimpleNamespace:
         ns = vars(module)
     except OSError:
         path = None
-        ns = {"__name__": name, "_IN_MEMORY": True}
+        ns = {"__name__": name, "_IN_MEMORY": True, **(given or {})}
         exec(compile(source, f"<{name}>", "exec"), ns)
-    out = SimpleNamespace(source=source, path=path, **{k: ns[k] for k in _NAMES})
+    out = SimpleNamespace(source=source, path=path, module=name, **{k: ns[k] for k in names})
     _MEMO[key] = out
     return out

@@ -104,7 +104,16 @@ def record(kind: int, **fields) -> np.ndarray:
         One of :data:`NODE`, :data:`PUMP`, :data:`ORIFICE`, :data:`VALVE`, :data:`RELIEF`,
         :data:`CHAMBER`, :data:`ACCUM`.
     **fields : float
-        The kind's fields (``_FIELDS``); energy and event slots left out are none (-1).
+        The kind's fields (node numbers, energy and event slots as numbers, flags 0 or 1; the
+        equations in the module docstring); energy and event slots left out are none (-1).
+        ``NODE``: ``id``, ``volume``, ``beta``, ``held``, ``pressure``, ``work_energy``,
+        ``work_sign``, ``compression_energy``; ``PUMP``: ``node``, ``flow``, ``energy``;
+        ``ORIFICE``: ``source``, ``target``, ``coefficient``, ``ptr2`` (the transition pressure
+        squared), ``energy``; ``VALVE``: ``pressure_port``, ``work_port``, ``return_port``,
+        ``coefficient``, ``ptr2``, ``energy``, ``rate``, ``open``, ``event``; ``RELIEF``:
+        ``source``, ``target``, ``coefficient``, ``setting``, ``open``, ``watched``, ``event``,
+        ``energy``; ``CHAMBER``: ``node``, ``area``; ``ACCUM``: ``node``, ``volume``,
+        ``precharge``, ``exponent``, ``on``, ``watched``, ``event``, ``energy``.
 
     Returns
     -------

@@ -39,7 +39,14 @@ _PRESET_EVENTS = ("accumulator", "relief")
 class CircuitPart:
     r"""The protocol of a part added to the oil circuit (``HydraulicCircuitDrive(...,
     extra_parts=(part, ...))``): a frozen dataclass (hashable: the drive's caches are keyed by it)
-    with these class attributes and :meth:`records`.
+    with these class attributes and :meth:`records`. A part is written in the user's own file, of
+    the network's kinds (:func:`~impactbar.drives.circuit.record`): a node of oil (``NODE``: its
+    volume and bulk modulus, a pressure state), a pump (``PUMP``), a turbulent orifice (``ORIFICE``:
+    ``q = K phi(p_source - p_target)``, ``phi`` the orifice law smoothed below the oil's transition
+    pressure), a relief valve (``RELIEF``), a chamber on the piston (``CHAMBER``), a gas accumulator
+    (``ACCUM``); the drive composes it with the preset's parts, and the code generated for the
+    composed network (its flights, their variational equations, the coupled blows on the rod and
+    rock) runs it with no edit of the drive or of a kernel.
 
     Attributes
     ----------
@@ -51,7 +58,8 @@ class CircuitPart:
     energies : tuple of (str, str)
         Its energy integrands: ``(name, term)`` pairs, ``term`` one of :data:`TERMS` (the term of
         the account each adds to: ``"compression"`` for an oil volume's, ``"accumulator"`` for a
-        gas's). It may also add to the preset's integrands by name (``"orifices"``, ``"tank"``).
+        gas's, ``"orifices"`` for an orifice's loss). It may also add to the preset's integrands by
+        name (``"orifices"``, ``"tank"``).
     events : tuple of str
         Its watched events (each an accumulator's or a relief's pressure through its level), one
         flag of the drive's mode each.
@@ -64,19 +72,33 @@ class CircuitPart:
         (``{"return_volume": "volume"}``); ``parameter_ranges`` their ranges as
         :data:`~impactbar.drives.circuit.drive.PARAMETERS`' (optional).
 
+    See Also
+    --------
+    impactbar.drives.circuit.record : a part's network record, by kind and fields.
+    impactbar.drives.circuit.PartSlots : the numbers a part writes its records with.
+
     Examples
     --------
-    >>> from dataclasses import dataclass
-    >>> from impactbar.drives.circuit import _network as NW
+    A leak from the front chamber to the tank through an orifice of coefficient ``K`` (model units,
+    :mod:`~impactbar.drives.circuit.parts`), its loss an energy integrand of its own:
+
+    >>> from dataclasses import dataclass, replace
+    >>> from impactbar.drives.circuit import ORIFICE, CircuitPart, record
     >>> @dataclass(frozen=True)
-    ... class Bleed(CircuitPart):
+    ... class Leak(CircuitPart):
     ...     coefficient: float
+    ...     energies = (("leak", "orifices"),)
+    ...     parameters = {"leak_coefficient": "coefficient"}
     ...     def records(self, slots, oil):
-    ...         return [NW.record(NW.ORIFICE, source=slots.nodes["supply"], target=slots.nodes["tank"],
-    ...                           coefficient=self.coefficient, ptr2=oil.transition_pressure ** 2,
-    ...                           energy=slots.energy["orifices"])]
-    >>> compose_parts((Bleed(0.1),)).layout == PRESET
-    True
+    ...         return [record(ORIFICE, source=slots.nodes["front"], target=slots.nodes["tank"],
+    ...                        coefficient=self.coefficient, ptr2=oil.transition_pressure ** 2,
+    ...                        energy=slots.energy["leak"])]
+    >>> compose_parts((Leak(0.1),)).layout.energies[-1]
+    'leak'
+    >>> from impactbar.physical import circuit_preset
+    >>> drive = replace(circuit_preset("circuit-drifter").drive(), extra_parts=(Leak(0.1),))
+    >>> drive.with_(leak_coefficient=0.2).value("leak_coefficient")
+    0.2
     """
 
     nodes: tuple = ()

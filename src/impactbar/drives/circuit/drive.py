@@ -197,9 +197,9 @@ class HydraulicCircuitDrive(Drive):
         their energy integrands follow the preset's, each watched event of theirs is a flag of the
         mode after ``relief``, and a part may take over the valve's return port. The :attr:`layout`
         then comes from the composition (:func:`~impactbar.drives.circuit.composition.compose_parts`)
-        and the flights run the code generated for the network (:mod:`._netgen`); the coupled blows
-        (:meth:`end_flight`, the rod-rock and the wave laws) are the preset circuit's only. Default:
-        none (the preset circuit).
+        and the flights, like the coupled blows (:meth:`end_flight`, the rod-rock and the wave laws),
+        run the code generated for the network (:mod:`._netgen`, :mod:`._endgen`). Default: none (the
+        preset circuit).
 
     Raises
     ------
@@ -625,11 +625,6 @@ class HydraulicCircuitDrive(Drive):
         """
         from .endflight import circuit_end_flight
 
-        if self.extra_parts:
-            raise ValueError("end_flight: the coupled blow (the rod-rock and the wave laws) runs the preset "
-                             "circuit's hand-written kernels only; a drive with extra_parts "
-                             f"({', '.join(type(p).__name__ for p in self.extra_parts)}) is not supported "
-                             "there: use a law with instantaneous impacts")
         return circuit_end_flight(self, model, state, breaks, w0, incoming, impedance, settings,
                                   _rate_model(1))
 

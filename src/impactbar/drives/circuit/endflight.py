@@ -25,6 +25,7 @@ import numpy as np
 
 from ..base import DriveState, FlightSettings
 from . import _endkernel as EK
+from ._kernel import RAMP_EV
 from .flight import _MAX_STEPS, DEFAULT_SETTINGS, HermiteSteps, _compiled_driver, _hermite_extremes, _message
 
 __all__ = ["EndFlight", "EndPiece", "circuit_end_flight"]
@@ -148,8 +149,9 @@ class EndFlight(NamedTuple):
 def _solver(drive, mode, settings, ext, model1, state_size):
     from sksundae.cvode import CVODE
 
-    par = drive._par(model1, mode)
-    rhs, jac, events = EK.rhs, EK.jac, EK.events
+    par = drive._network_par(model1, mode)
+    code = _end_code(drive)
+    rhs, jac, events = code.end_rhs, code.end_jac, code.end_events
 
     def f(t, y, yp):
         fn = ext_fn[0]
@@ -164,10 +166,10 @@ def _solver(drive, mode, settings, ext, model1, state_size):
         events(y, g, par)
 
     ext_fn = [None]
-    ev.terminal = [True] * EK.N_EVENTS
-    ev.direction = [drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS]
+    ev.terminal = [True] * code.NEV
+    ev.direction = list(_end_directions(drive, mode))
     solver = CVODE(f, method="BDF", rtol=settings.rtol, atol=settings.atol, jacfn=jf, eventsfn=ev,
-                   num_events=EK.N_EVENTS, max_num_steps=_MAX_STEPS)
+                   num_events=code.NEV, max_num_steps=_MAX_STEPS)
     return solver, par, ext_fn
 
 
@@ -234,7 +236,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
         a = incoming[k]
         t, t1 = float(breaks[k]), float(breaks[k + 1])
         while t < t1:
-            y0 = np.zeros(EK.N_STATE)
+            y0 = np.zeros(_end_code(drive).NE)
             y0[0], y0[1:1 + ns] = w, z
             if mode not in solvers:
                 solvers[mode] = _solver(drive, mode, settings, ext, model1, drive.state_size)
@@ -259,7 +261,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             exts[:, EK.EXT_IZ] = ext[EK.EXT_IZ]
             exts[:, EK.EXT_A] = [a(tt) for tt in ts] if callable(a) else float(a)
             f = np.empty_like(Y)
-            EK.field_at(Y, par, exts, f)
+            _end_code(drive).end_field_at(Y, par, exts, f)
             piece = EndPiece(ts, Y, f, drive.chambers.area_ratio, drive.layout)
             pieces.append(piece)
             _check_volumes(drive, Y[:, 0], t)
@@ -268,7 +270,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             te = float(ts[-1])
             if status == 2 and hit:
                 st = DriveState(mode, z)
-                for e in drive._fired(mode, [EK.FLIGHT_EVENTS[i] for i in hit]):
+                for e in drive._fired(mode, [RAMP_EV + i for i in hit]):
                     st = drive.jump(st.mode, st.z, e, te, None, None)
                     fired_log.append((te, e, st.mode))
                 mode, z = st.mode, np.array(st.z, dtype=float)
@@ -280,15 +282,16 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
                         splines=None):
     """:func:`circuit_end_flight` with a constant ``a`` on each interval, or with ``splines``
     (:func:`._endcvode.spline_data`) a spline on each: the stretches between the circuit's events in
-    one compiled call each (:func:`._endcvode.fly_intervals`, the same steps as one
-    :func:`._endcvode.fly` a stretch), Python only at the events."""
+    one compiled call each (the generated ``fly_intervals``, :mod:`._endgen`, the same steps as one
+    :func:`._cvode.fly` a stretch), Python only at the events."""
     n = breaks.size - 1
+    code = _end_code(drive)
     if splines is None:
         splines, room = (np.empty(0), np.empty(0, dtype=np.int64)), 0
-        ws = compiled.CV.workspace(EK.N_STATE, 0, compiled.CALLBACKS)
+        ws = compiled.CV.workspace(code.NE, 0, code.CALLBACKS)
     else:
         room = int(np.max(np.diff(splines[1])))
-        ws = compiled.CV.workspace(EK.N_STATE, 0, compiled.SPLINE_CALLBACKS)
+        ws = compiled.CV.workspace(code.NE, 0, code.SPLINE_CALLBACKS)
     ch = drive.chambers
     volumes = np.array([ch.rear_volume, ch.front_volume, ch.area_ratio])
     alpha = ch.area_ratio
@@ -303,7 +306,7 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
         directions, data = _mode_data(compiled, drive, model1, mode, float(impedance))
         # (the callbacks write their scratch into it: one a call, threads apart; a spline's room)
         data = np.concatenate((data, np.zeros(room))) if room else data.copy()
-        flag, k, t, T, Y, F, starts, roots = compiled.fly_intervals(
+        flag, k, t, T, Y, F, starts, roots = code.fly_intervals(
             ws.mem, ws.y, breaks, k, t, w, z, incoming, rtol, atol, directions, data, _MAX_STEPS, volumes,
             impulses, *splines)
         rows = starts.tolist()
@@ -323,7 +326,7 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
             break
         te = float(T[-1])
         st = DriveState(mode, z)
-        for e in drive._fired(mode, [EK.FLIGHT_EVENTS[i] for i in np.flatnonzero(roots)]):
+        for e in drive._fired(mode, [RAMP_EV + i for i in np.flatnonzero(roots)]):
             st = drive.jump(st.mode, st.z, e, te, None, None)
             fired_log.append((te, e, st.mode))
         mode, z = st.mode, np.array(st.z, dtype=float)
@@ -357,11 +360,26 @@ def _mode_data(compiled, drive, model1, mode, impedance: float):
     ``a`` 0) of the circuit in ``mode`` during a blow, kept by drive, mode and impedance (a blow
     asks at each stretch, the same few modes): the directions shared (:func:`._endcvode.fly_intervals`
     only reads them), the data read-only, for a copy a call."""
-    par = drive._par(model1, mode)
-    directions = np.array([drive._directions(mode)[i] for i in EK.FLIGHT_EVENTS], dtype=np.int32)
-    data = compiled.user_data(par, 0.0, impedance)
+    par = drive._network_par(model1, mode)
+    directions = np.array(_end_directions(drive, mode), dtype=np.int32)
+    data = compiled.user_data(par, 0.0, impedance, scratch=_end_code(drive).SCRATCH)
     data.flags.writeable = False
     return directions, data
+
+
+@functools.lru_cache(maxsize=64)
+def _end_code(drive):
+    """The coupled blow's code generated for the drive's circuit (:func:`._endgen.generate`: one
+    module a topology, every mode's flags values of ``par``), kept by drive."""
+    from . import _endgen
+
+    return _endgen.generate(drive, (0, 0) + (0,) * len(drive._composition.events))
+
+
+def _end_directions(drive, mode) -> tuple:
+    """The root directions of the network's events during a blow (the ramp's end, then one a flag of
+    the mode), as the flight's from its ramp's end on."""
+    return drive._directions(mode)[RAMP_EV:]
 
 
 def _check_volumes(drive, w, t) -> None:

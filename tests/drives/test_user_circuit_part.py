@@ -1,0 +1,108 @@
+"""A circuit part written in this file, as a user writes one in their own (the public protocol of
+``impactbar.drives.circuit``: ``CircuitPart``, ``record`` and the record kinds): a leak from the front
+chamber to the tank through an orifice, added to the drifter on the drill string and the rock
+(``examples/circuit_drifter_rock.toml``), whose blows the circuit's pressures take part in (the coupled
+blow, run on the code generated for the composed network).
+
+- A leak of no coefficient carries nothing: ``find_orbit`` on the rock gives the preset's orbit (its
+  loss written into the preset's ``orifices`` integrand, so that the integrated state is the preset's
+  size and CVODE's error norm the same: measured 0 apart).
+- A leak of a coefficient: ``find_orbit`` on the rock gives another admissible orbit (a longer
+  period: the leak drains the return chamber; 19 % longer at ``K = 0.02``), which a run of one period
+  from its state repeats (to 5e-9);
+  over that period the circuit's energy account closes with the leak's loss in the orifices' term,
+  and the leak's own integrand is its loss ``K phi(p_f - p_t) (p_f - p_t)`` computed here from the
+  histories by the trapezoidal rule (``phi`` written out here).
+- Its blows by the compiled driver and through scikit-sundae's interface: the same run to the bit.
+"""
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+import pytest
+from test_circuit_rock_orbit import drifter  # noqa: F401  (the fixture: the example's model and drive)
+
+from impactbar import InitialState, find_orbit, simulate
+from impactbar.drives.circuit import ORIFICE, CircuitPart, record
+
+
+@dataclass(frozen=True)
+class Leak(CircuitPart):
+    """An orifice of ``coefficient`` (model units) from the front chamber to the tank, its loss an
+    energy integrand of its own (in the account's ``orifices`` term)."""
+
+    coefficient: float
+
+    energies = (("leak", "orifices"),)
+    parameters = {"leak_coefficient": "coefficient"}
+
+    def loss_slot(self, slots):
+        return slots.energy["leak"]
+
+    def records(self, slots, oil):
+        return [record(ORIFICE, source=slots.nodes["front"], target=slots.nodes["tank"],
+                       coefficient=self.coefficient, ptr2=oil.transition_pressure ** 2,
+                       energy=self.loss_slot(slots))]
+
+
+@dataclass(frozen=True)
+class PooledLeak(Leak):
+    """:class:`Leak` with its loss in the preset's ``orifices`` integrand (no integrand of its own)."""
+
+    energies = ()
+
+    def loss_slot(self, slots):
+        return slots.energy["orifices"]
+
+
+@pytest.fixture(scope="module")
+def preset(drifter):  # noqa: F811
+    return find_orbit(*drifter)
+
+
+def test_a_leak_of_no_coefficient_gives_the_presets_orbit_on_rock(drifter, preset):  # noqa: F811
+    model, drive = drifter
+    orbit = find_orbit(model, replace(drive, extra_parts=(PooledLeak(0.0),)))
+    assert orbit.drive.layout == drive.layout
+    assert orbit.period == pytest.approx(preset.period, rel=1e-12, abs=0.0)
+    assert orbit.impact_velocity == pytest.approx(preset.impact_velocity, rel=1e-12, abs=0.0)
+    assert np.allclose(orbit.drive_states[0], preset.drive_states[0], rtol=1e-12, atol=0.0)
+    assert np.allclose(orbit.multipliers, preset.multipliers, rtol=0.0, atol=1e-10)
+
+
+def test_a_leak_on_rock_repeats_and_its_loss_is_accounted(drifter, preset):  # noqa: F811
+    model, drive = drifter
+    K = 0.02
+    orbit = find_orbit(model, replace(drive, extra_parts=(Leak(K),)))
+    assert orbit.admissible and orbit.period > 1.01 * preset.period
+    z, y = orbit.drive_states[0], np.asarray(orbit.states_after_impact[0])
+    M = model.n_modes + 1
+    leaky = replace(orbit.drive, start_pressures=tuple(z))
+    run = simulate(model, leaky, InitialState(y[:M], y[M:]), orbit.period)
+    assert run.n_impacts == 1
+    assert np.allclose(run.drive_state(np.array([orbit.period]))[:, 0], z, rtol=0.0, atol=1e-7)
+    account = leaky.energy(run)
+    assert abs(account["relative_residual"]) < 1e-12
+    loss = sum(p.energies() for p in run.pieces if hasattr(p, "energies"))[leaky.layout.energy["leak"]]
+    assert 0.05 * account["orifices"] < loss < account["orifices"]
+    t = np.linspace(0.0, orbit.period, 400_001)
+    dp = leaky.histories(run, t)["p_f"] - leaky.supply.tank_pressure
+    flow = K * dp * (dp * dp + leaky.oil.transition_pressure ** 2) ** -0.25
+    assert loss == pytest.approx(np.trapezoid(flow * dp, t), rel=1e-9)  # (measured 9e-12)
+
+
+def test_the_leaks_blows_are_the_bindings_to_the_bit(drifter):  # noqa: F811
+    """A run on the rock with the leak by the compiled driver and through scikit-sundae's interface
+    (``compiled=False``: the generated blow's Python-called functions against its C callbacks and
+    compiled loop): the same impacts, blows and account to the bit."""
+    from impactbar.drives.circuit import _sundials
+
+    if not _sundials.available():
+        pytest.skip(_sundials.reason())
+    model, drive = drifter
+    drives = [replace(drive, extra_parts=(Leak(0.02),), compiled=c) for c in (True, False)]
+    runs = [simulate(model, d, InitialState.rigid(-0.02, 0.0), 3.0) for d in drives]
+    assert runs[0].n_impacts >= 2
+    assert np.array_equal(runs[0].impact_times, runs[1].impact_times)
+    assert np.array_equal(runs[0].impact_velocities, runs[1].impact_velocities)
+    assert drives[0].energy(runs[0]) == drives[1].energy(runs[1])
