@@ -109,6 +109,10 @@ NOT_RECORDS = {
     "paper.py": {"ax", "bad", "keys", "orbits", "rows"},  # sequences' first and last entries
     "physical/bar.py": {"secs"},  # the first section
     "physical/circuit.py": {"pieces"},  # the first and last piece
+    "measure/kolsky.py": {"band", "chans", "later", "time"},  # a band's ends; first channel, pulse, sample
+    "measure/recording.py": {"time"},  # the first and last sample times
+    "measure/results.py": {"time"},  # the first two sample times (the step)
+    "measure/waves.py": {"after", "before", "parts", "time"},  # samples' ends; a window's two pieces
     "physical/forces.py": {"rows"},  # the first row
     "physical/hammer.py": {"breaks", "levels", "pieces"},  # a square wave's two levels and breaks
     "physical/loader.py": {"parts"},  # a dotted name's parts
@@ -116,7 +120,7 @@ NOT_RECORDS = {
     "physical/piston.py": {"count", "edges", "pieces"},  # a one-slot box; sequences' ends
     "physical/results.py": {"tl"},  # the first and last time
     "physical/rock.py": {"tl"},  # the first and last time
-    "physical/sensitivity.py": {"parts", "sides"},  # a dotted name's parts; the two sides of a difference
+    "physical/sensitivity.py": {"sides"},  # the two sides of a difference
     "plotting/circuit.py": {"axes"},  # the figure's axes
     "plotting/continuation.py": {"yy"},  # the first value
     "plotting/maps.py": {"dims"},  # the first dimension
