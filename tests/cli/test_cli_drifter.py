@@ -318,3 +318,19 @@ def test_drifter_text_says_the_relief_opens_and_the_accumulator_empties(tmp_path
     empties.write_text(text.replace('precharge = "10 MPa"', 'precharge = "24 MPa"'))
     assert main(["drifter", str(empties)]) == 0
     assert "the accumulator empties (the supply pressure falls" in capsys.readouterr().out
+
+
+def test_the_circuit_header_speaks_the_units_the_config_wrote(tmp_path, capsys):
+    """The pump's flow, the accumulator's volume and its pre-charge in the header are in the units the
+    config wrote them in (bar, L/s), not in MPa and L/min whatever the config said."""
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "examples" / "circuit_drifter.toml").read_text()
+    mine = text.replace('precharge = "10 MPa"', 'precharge = "100 bar"').replace(
+        'pump_flow = "70 L/min"', 'pump_flow = "1.2 L/s"')
+    assert mine != text
+    config = tmp_path / "my.toml"
+    config.write_text(mine)
+    assert main(["drifter", str(config)]) == 0
+    header = capsys.readouterr().out.splitlines()[0]
+    assert "pump 1.2 L/s, accumulator 0.5 L at 100 bar," in header, header

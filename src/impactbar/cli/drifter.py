@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import physical
 from ..physical.config import config_kind, read_toml
+from ..physical.display_units import format_key
 from ..physical.tree import FIELDS
 from ..physical.units import to_si
 from ._common import json_ready, print_json, require
@@ -124,12 +125,16 @@ def _what_is_struck(d) -> str:
 def _circuit_header(d: physical.CircuitDrifter) -> str:
     m, dr = d.model(), d.drive()
     si = d.si
-    acc = (f"accumulator {si['accumulator_volume_m3'] * 1e3:.4g} L at {si['precharge_Pa'] / 1e6:.4g} MPa"
+    def shown(value, unit, key):  # in the unit the config wrote the key in, else the display unit
+        return format_key(value, unit, d.config or {}, key, 4)
+
+    acc = (f"accumulator {shown(si['accumulator_volume_m3'], 'm**3', 'accumulator.volume')} at "
+           f"{shown(si['precharge_Pa'], 'Pa', 'accumulator.precharge')}"
            if si["accumulator_volume_m3"] > 0 else "no accumulator")
     shape = "" if isinstance(d.bar, physical.Bar) else f" ({d.bar.describe()})"
     return (f"drifter {d.name or '(unnamed)'} with its oil circuit: piston {d.bar.mass_kg:.4g} kg{shape}, "
             f"areas {si['rear_area_m2'] * 1e4:.4g} / {si['front_area_m2'] * 1e4:.4g} cm^2, pump "
-            f"{si['pump_flow_m3_s'] * 6e4:.4g} L/min, {acc}, "
+            f"{shown(si['pump_flow_m3_s'], 'm**3/s', 'supply.pump_flow')}, {acc}, "
             + _what_is_struck(d)
             + f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
             f"precharge = {dr.value('precharge') if dr.accumulator is not None else float('nan'):.5g}, "
