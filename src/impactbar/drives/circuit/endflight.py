@@ -358,7 +358,7 @@ def _end_module(compiled: bool):
 def _mode_data(compiled, drive, model1, mode, impedance: float):
     """The root directions and the callbacks' user data (:func:`._endcvode.user_data`, the wave
     ``a`` 0) of the circuit in ``mode`` during a blow, kept by drive, mode and impedance (a blow
-    asks at each stretch, the same few modes): the directions shared (:func:`._endcvode.fly_intervals`
+    asks at each stretch, the same few modes): the directions shared (the generated ``fly_intervals``
     only reads them), the data read-only, for a copy a call."""
     par = drive._network_par(model1, mode)
     directions = np.array(_end_directions(drive, mode), dtype=np.int32)
