@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["dominant_limit", "falling_limit"]
+__all__ = ["dominant_limit", "falling_limit", "drifting", "SETTLE_DRIFT_IMPACTS", "DRIFT_AHEAD"]
 
 #: the dominant-mode extrapolation of :func:`dominant_limit` is taken where each of the last two
 #: steps is a multiple ``rho`` of the one before to this fraction of its size, the two multiples
@@ -14,6 +14,54 @@ __all__ = ["dominant_limit", "falling_limit"]
 DOMINANT_FIT = 0.02
 DOMINANT_AGREE = 0.1
 DOMINANT_RHO = 0.995
+
+
+#: the most impacts the motion to Newton's start is followed while the drive's state drifts
+#: (:func:`drifting`): the oil circuit's supply pressure charging a large accumulator toward its relief
+#: valve's setting, some 4e-4 of the pressure scale an impact on a 50 L accumulator
+SETTLE_DRIFT_IMPACTS = 20000
+#: impacts of the drift's last step ahead of the state where a surface of its mode must not lie for
+#: Newton to take over (the supply pressure charging toward the relief valve's setting: Newton's
+#: root in the relief's closed mode lies past it)
+DRIFT_AHEAD = 10.0
+
+
+def drifting(y0, y1, y2, tol: float) -> bool:
+    """Whether three iterates of a map (every ``m``-th state after an impact) still drift: the last
+    step is above ``tol`` of the state (relative, at least 1) and not shrinking, a multiple of at
+    least :data:`DOMINANT_RHO` of the step before.
+
+    Such a drift is a mode of multiplier near (or above) 1 far from the orbit: the oil circuit's
+    supply pressure charging a large accumulator from its pre-charge, its steps growing as the gas
+    stiffens, toward the relief valve's setting where it stops. The impact velocities may repeat to
+    ``tol`` meanwhile (the blow barely feels the supply pressure's slow rise), but Newton's linear
+    model of that mode cannot see the relief's kink some MPa away: its step goes the other way, to
+    negative pressures. The motion is followed on instead (theory §11).
+
+    Parameters
+    ----------
+    y0, y1, y2 : numpy.ndarray, shape (n,)
+        Consecutive iterates (dimensionless).
+    tol : float
+        Relative size of a step that counts as settled.
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> drifting(np.array([1.0]), np.array([1.001]), np.array([1.002001]), 1e-4)
+    True
+    >>> drifting(np.array([1.0]), np.array([1.001]), np.array([1.0019]), 1e-4)
+    False
+    """
+    d2 = y2 - y1
+    if not float(np.linalg.norm(d2)) > tol * max(1.0, float(np.linalg.norm(y2))):
+        return False
+    rho = _ratio(y1 - y0, d2)
+    return rho is not None and rho >= DOMINANT_RHO
 
 
 def _ratio(d1, d2):

@@ -24,7 +24,7 @@ from ..model import BarModel
 from . import _closing as C
 from ._closing import checked_root, close
 from ._saltation import map_jacobian, through
-from ._settling import dominant_limit, surfaces_ahead
+from ._settling import DRIFT_AHEAD, SETTLE_DRIFT_IMPACTS, dominant_limit, drifting, surfaces_ahead
 from ._shooting_data import orbit_data
 from .switched_orbit import SwitchedOrbit, _constant_load
 
@@ -339,7 +339,9 @@ class ShootingProblem(OrbitProblem):
         # the motion is followed only to hand Newton a start: where Newton's flights are the
         # variational ones, at a looser tolerance (SETTLE_RTOL; Newton's own flights keep the drive's)
         loose = self._loose() if self.variational else None
-        for _ in range(n_max):
+        budget, count = n_max, 0
+        while count < budget:  # (more impacts only while the drive's state drifts: SETTLE_DRIFT_IMPACTS)
+            count += 1
             y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=loose)
             source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
             hist.append((tau, mode, y, source))
@@ -350,7 +352,11 @@ class ShootingProblem(OrbitProblem):
                                  "without one) does not strike the stop: give a guess")
             if n_max > m and len(speeds) > 2 * m + 2 and \
                     abs(speeds[-1] - speeds[-1 - m]) <= settle * max(1.0, abs(speeds[-1])):
-                break
+                ahead = y + DRIFT_AHEAD * (y - hist[-1 - m][2])  # (where the drift takes it next)
+                if not (self.variational and (drifting(hist[-1 - 2 * m][2], hist[-1 - m][2], y, settle)
+                                              or not surfaces_ahead(self.drive, mode, ahead, M))):
+                    break
+                budget = max(budget, SETTLE_DRIFT_IMPACTS)
             if accelerate and iterates >= 4 and mode == hist[-2][1] == hist[-3][1] == hist[-4][1]:
                 star = dominant_limit(hist[-4][2], hist[-3][2], hist[-2][2], y)
                 if star is not None and surfaces_ahead(self.drive, mode, star, M):  # (none jumped over)
