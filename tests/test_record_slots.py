@@ -110,6 +110,7 @@ NOT_RECORDS = {
     "physical/bar.py": {"secs"},  # the first section
     "physical/circuit.py": {"pieces"},  # the first and last piece
     "measure/kolsky.py": {"band", "chans", "later", "time"},  # a band's ends; first channel, pulse, sample
+    "measure/model.py": {"count", "ends", "pieces"},  # a counter; the rod's end; its first piece's material
     "measure/recording.py": {"time"},  # the first and last sample times
     "measure/results.py": {"time"},  # the first two sample times (the step)
     "measure/waves.py": {"after", "before", "parts", "time"},  # samples' ends; a window's two pieces

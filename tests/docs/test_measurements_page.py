@@ -75,3 +75,12 @@ def test_the_prose_numbers(report):
     assert lines == {_quoted(r"one line, at ([0-9.]+) MHz on every channel")}
     size = os.path.getsize(ROOT / "examples" / "data" / "shpb_pmma13.npz")
     assert size // 1000 == _quoted(r"\(`examples/data/shpb_pmma13.npz`, ([0-9]+) kB\)")
+
+
+def test_the_fit_blocks_output_is_what_it_prints():
+    code = re.search(r"## The model beside the measurement.*?```python\n(.*?)```", PAGE, re.S).group(1)
+    shown = re.search(r"## The model beside the measurement.*?```text\n(.*?)```", PAGE, re.S).group(1)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(code.replace("fit.comparisons[1.0].plot()", ""), "measurements.md", "exec"), {})
+    assert out.getvalue() == shown

@@ -4,10 +4,12 @@ The recording and its bridges (:mod:`~impactbar.measure.recording`), the waves s
 two gauges (:mod:`~impactbar.measure.waves`), the results at a bar's end
 (:mod:`~impactbar.measure.results`), a rock's stiffnesses fitted from the bit's force and velocity
 (:mod:`~impactbar.measure.rock`), a split-Hopkinson test from raw channels to the stress-strain
-curve (:mod:`~impactbar.measure.kolsky`) and its TOML spec (:mod:`~impactbar.measure.spec`).
+curve (:mod:`~impactbar.measure.kolsky`) and its TOML spec (:mod:`~impactbar.measure.spec`), and the
+model's blow beside a recording, with its parameters fitted to it (:mod:`~impactbar.measure.model`).
 """
 
 from .kolsky import KolskyTest, analyse_kolsky
+from .model import FIT_PARAMETERS, BlowFit, Comparison, compare, fit_blow, gauge_strains
 from .recording import BRIDGES, Bar, Gauge, Recording, read_tektronix_csv
 from .results import (
     EndHistory,
@@ -21,7 +23,8 @@ from .rock import fit_bilinear_rock
 from .spec import read_spec, run_spec
 from .waves import Waves, Window, find_pulses, noise_level, separate_one_point, separate_two_point, shift
 
-__all__ = ["BRIDGES", "Bar", "EndHistory", "Gauge", "KolskyTest", "Recording", "SpecimenResponse", "Waves",
+__all__ = ["BRIDGES", "Bar", "BlowFit", "Comparison", "FIT_PARAMETERS", "compare", "fit_blow",
+           "gauge_strains", "EndHistory", "Gauge", "KolskyTest", "Recording", "SpecimenResponse", "Waves",
            "Window", "analyse_kolsky", "end_history", "find_pulses", "fit_bilinear_rock", "impact_velocity",
            "noise_level", "read_spec", "read_tektronix_csv", "run_spec", "separate_one_point",
            "separate_two_point", "shift", "specimen_response", "wave_energy"]
