@@ -141,13 +141,6 @@ def test_readme_numbers_and_the_example_config(point):
         assert CircuitDrifter.from_config(tomllib.load(f)) == point.drifter  # the preset's numbers
 
 
-def test_cli_names_the_circuit_parameters():
-    from impactbar.drives.circuit import PARAMETERS
-    from impactbar.physical.circuit import CIRCUIT_PARAMETERS
-
-    assert CIRCUIT_PARAMETERS == tuple(PARAMETERS)
-
-
 def test_cli_orbits_prints_the_operating_point(point, capsys):
     from impactbar.cli import main
 

@@ -64,18 +64,10 @@ from .rock import DrillString
 from .units import to_si
 
 __all__ = ["CircuitDrifter", "CircuitDrifterOrbit", "CIRCUIT_PRESETS", "circuit_preset", "PRESSURE_SCALE",
-           "CIRCUIT_PARAMETERS", "ROCK_SI_PARAMETERS", "SI_PARAMETERS"]
+           "ROCK_SI_PARAMETERS", "SI_PARAMETERS"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
 PRESSURE_SCALE = tree.PRESSURE_SCALE
-
-#: The circuit's continuation parameters (dimensionless; those of
-#: :data:`impactbar.drives.circuit.PARAMETERS`, named here so that the command line need not load
-#: the compiled circuit to list them).
-CIRCUIT_PARAMETERS = ("pump_flow", "supply_pressure", "hose_volume", "front_coefficient", "tank_pressure",
-                      "relief_pressure", "relief_coefficient", "precharge", "accumulator_volume",
-                      "polytropic_exponent", "switch_out", "switch_in", "switching_time", "valve_coefficient",
-                      "area_ratio", "rear_volume", "front_volume", "bulk_modulus", "transition_pressure")
 
 #: The circuit's and the rock's parameters by their config names (``section.key``), in SI: the
 #: dimensionless parameter each one sets, its unit and an example value (a view of
