@@ -28,12 +28,16 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._shared.validate import check_real
+from ..physical import tree
 
 __all__ = ["gauge_strains", "Comparison", "compare", "BlowFit", "fit_blow", "FIT_PARAMETERS"]
 
-#: the blow's parameters a fit can vary, by the configuration's dotted names, each with its unit
-FIT_PARAMETERS = {"impact_velocity": "m/s", "rock.k": "N/m", "rock.k_u": "N/m", "bit.mass": "kg",
-                  "rock.feed": "N"}
+#: the blow's parameters a fit can vary, each with its SI unit: the impact velocity, and the rock's and
+#: the bit's keys of the configuration (:data:`impactbar.physical.tree.FIELDS`, those of a drill string)
+FIT_PARAMETERS = {"impact_velocity": "m/s", **{k: f.unit for k, f in tree.FIELDS.items()
+                                             if f.needs == "rock" and f.holder == "law"}}
+#: the parameters a blow cannot go without (the others are 0 where not given: no bit mass, no feed)
+_REQUIRED = ("impact_velocity", "rock.k", "rock.k_u")
 
 
 def _split(pieces, stations):
@@ -141,14 +145,14 @@ def _values(values) -> dict:
     if not isinstance(values, dict):
         raise ValueError(f"values must be a dict of {', '.join(FIT_PARAMETERS)}; got {values!r}")
     unknown = sorted(set(values) - set(FIT_PARAMETERS))
-    missing = [k for k in ("impact_velocity", "rock.k", "rock.k_u") if k not in values]
+    missing = [k for k in _REQUIRED if k not in values]
     if unknown or missing:
         names = ", ".join(FIT_PARAMETERS)
         raise ValueError(f"values: unknown parameter {unknown[0]!r}; the blow's are {names}"
                          if unknown else f"values needs {missing[0]!r} ({FIT_PARAMETERS[missing[0]]})")
-    out = {"bit.mass": 0.0, "rock.feed": 0.0}
+    out = dict.fromkeys(FIT_PARAMETERS, 0.0)
     for k, x in values.items():
-        out[k] = check_real(k, x, lo=0.0, lo_open=k in ("impact_velocity", "rock.k", "rock.k_u"))
+        out[k] = check_real(k, x, lo=0.0, lo_open=k in _REQUIRED)
     if out["rock.k_u"] < out["rock.k"]:
         raise ValueError(f"rock.k_u must be at least rock.k ({out['rock.k']:g} N/m); got {out['rock.k_u']:g}")
     return out
@@ -384,8 +388,7 @@ def fit_blow(time, strains: dict, rod, *, piston_lengths, piston_areas, values: 
         eps = strains_of(z)
         return np.concatenate([eps[x] - data[x] for x in stations]) / scale
 
-    lower = np.array([0.0 if (ratio and n == "rock.k_u") or n in ("bit.mass", "rock.feed") else 1e-9
-                      for n in names])
+    lower = np.array([0.0 if (ratio and n == "rock.k_u") or n not in _REQUIRED else 1e-9 for n in names])
     res = least_squares(residual, x0 / typ, bounds=(lower, np.inf), x_scale="jac", xtol=1e-12, ftol=1e-12,
                         gtol=1e-12)
     best = unpack(res.x)
