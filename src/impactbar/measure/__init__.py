@@ -5,9 +5,11 @@ two gauges (:mod:`~impactbar.measure.waves`), the results at a bar's end
 (:mod:`~impactbar.measure.results`), a rock's stiffnesses fitted from the bit's force and velocity
 (:mod:`~impactbar.measure.rock`), a split-Hopkinson test from raw channels to the stress-strain
 curve (:mod:`~impactbar.measure.kolsky`) and its TOML spec (:mod:`~impactbar.measure.spec`), and the
-model's blow beside a recording, with its parameters fitted to it (:mod:`~impactbar.measure.model`).
+model's blow beside a recording, with its parameters fitted to it (:mod:`~impactbar.measure.model`), and
+a round bar's dispersion (:mod:`~impactbar.measure.dispersion`).
 """
 
+from .dispersion import disperse, phase_velocity
 from .kolsky import KolskyTest, analyse_kolsky
 from .model import FIT_PARAMETERS, BlowFit, Comparison, compare, fit_blow, gauge_strains
 from .recording import BRIDGES, Bar, Gauge, Recording, read_tektronix_csv
@@ -24,7 +26,8 @@ from .spec import read_spec, run_spec
 from .waves import Waves, Window, find_pulses, noise_level, separate_one_point, separate_two_point, shift
 
 __all__ = ["BRIDGES", "Bar", "BlowFit", "Comparison", "FIT_PARAMETERS", "compare", "fit_blow",
-           "gauge_strains", "EndHistory", "Gauge", "KolskyTest", "Recording", "SpecimenResponse", "Waves",
-           "Window", "analyse_kolsky", "end_history", "find_pulses", "fit_bilinear_rock", "impact_velocity",
-           "noise_level", "read_spec", "read_tektronix_csv", "run_spec", "separate_one_point",
-           "separate_two_point", "shift", "specimen_response", "wave_energy"]
+           "gauge_strains", "disperse", "phase_velocity", "EndHistory", "Gauge", "KolskyTest", "Recording",
+           "SpecimenResponse", "Waves", "Window", "analyse_kolsky", "end_history", "find_pulses",
+           "fit_bilinear_rock", "impact_velocity", "noise_level", "read_spec", "read_tektronix_csv",
+           "run_spec", "separate_one_point", "separate_two_point", "shift", "specimen_response",
+           "wave_energy"]
