@@ -297,11 +297,14 @@ def markdown_table() -> str:
     -------
     str
         One row per field: the dotted name, its SI unit, its scale, the dimensionless parameter
-        it sets, and whether it is continued (or why not).
+        it sets, and whether it is continued (or why not); then the fields of the library's part
+        kinds, ``parts.<name>.<field>`` (:mod:`~impactbar.physical.circuit_parts`).
     """
+    from .circuit_parts import library_fields
+
     rows = ["| key | SI unit | scale | dimensionless parameter | continued |",
             "| --- | --- | --- | --- | --- |"]
-    for k, f in FIELDS.items():
+    for k, f in (*FIELDS.items(), *((f.key, f) for f in library_fields())):
         scale = f.scale if isinstance(f.scale, str) else "(a function)"
         parameter = f"`{f.parameter}`" if f.parameter else "-"
         rows.append(f"| `{k}` | {f.unit.replace('**', '^') or '1'} | {scale or '-'} | {parameter} | "
