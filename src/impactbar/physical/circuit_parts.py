@@ -20,6 +20,7 @@ classes are imported only where a config has parts.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import inspect
 from dataclasses import dataclass
@@ -28,7 +29,7 @@ from . import tree
 from .units import to_si
 
 __all__ = ["register_part", "part_kinds", "PartSpec", "read_parts", "part_field", "part_keys",
-           "declared_unit", "library_fields"]
+           "declared_unit", "library_fields", "split_key", "markdown_table"]
 
 #: the kinds that come with the library: ``kind -> "module:class"``, imported on first use
 _BUILTIN = {"return_accumulator": "impactbar.drives.circuit.return_line:ReturnAccumulator",
@@ -50,7 +51,8 @@ def register_part(kind: str, cls: type) -> type:
         A frozen dataclass subclass of :class:`~impactbar.drives.circuit.CircuitPart` with a field
         ``name`` (its node's and parameters' name), one field per entry of its ``si_fields``
         (:class:`~impactbar.drives.circuit.PartField`, dimensionless values) and one per entry of its
-        ``connections`` (``{field: ("node" | "port", default)}``, a node's or port's name). Where
+        ``connections`` (``{field: ("node" | "port", default)}``, a node's or port's name; a default
+        ``None`` takes the dataclass field's, if it has one). Where
         its ``nodes`` is a property, the part has one node, named after it, that other parts may
         connect to.
 
@@ -71,8 +73,6 @@ def register_part(kind: str, cls: type) -> type:
     >>> register_part("leak", Leak) is Leak  # already there: registering again changes nothing
     True
     """
-    import dataclasses
-
     from ..drives.circuit import CircuitPart
 
     if not (isinstance(kind, str) and kind.isidentifier()):
@@ -164,32 +164,44 @@ def library_fields() -> tuple[tree.Field, ...]:
     return tuple(_tree_field(f"<{kind}>", f) for kind in _BUILTIN for f in part_kinds()[kind].si_fields)
 
 
+def markdown_table() -> str:
+    """The parameter tree's table of keys (:func:`~impactbar.physical.tree.markdown_table`) with the
+    fields of the library's part kinds after it (:func:`library_fields`): the documentation's list of
+    keys is this text."""
+    return tree.markdown_table(library_fields())
+
+
 def _has_node(cls) -> bool:
     """Whether a kind's part has a node of its own, named after it (its ``nodes`` a property)."""
     return isinstance(inspect.getattr_static(cls, "nodes"), property)
 
 
+def split_key(key) -> tuple[str, str] | None:
+    """``(name, field)`` of a key ``parts.<name>.<field>``; ``None`` for a key of another form."""
+    head, _, rest = key.partition(".") if isinstance(key, str) else ("", "", "")
+    name, dot, field = rest.partition(".")
+    return (name, field) if head == "parts" and dot and name and field and "." not in field else None
+
+
 def part_field(parts, key: str) -> tree.Field | None:
     """The declaration of ``parts.<name>.<field>`` among ``parts`` (:class:`PartSpec`), ``None`` for
     a key of another form or a part they do not have."""
-    bits = key.split(".") if isinstance(key, str) else ()
-    if len(bits) != 3 or bits[0] != "parts":
-        return None
+    name, field = split_key(key) or ("", "")
     for p in parts:
-        if p.name == bits[1] and bits[2] in dict(p.values):
-            return p.field(bits[2])
+        if p.name == name and field in dict(p.values):
+            return p.field(field)
     return None
 
 
 def declared_unit(config: dict, key: str) -> str | None:
     """The SI unit a part's kind declares for ``parts.<name>.<field>`` of ``config`` (``None``: not a
     part's field the config has)."""
-    bits = key.split(".") if isinstance(key, str) else ()
-    table = config.get("parts", {}).get(bits[1]) if len(bits) == 3 and bits[0] == "parts" \
-        and isinstance(config.get("parts"), dict) else None
-    cls = part_kinds().get(table.get("kind")) if isinstance(table, dict) else None
-    f = next((f for f in cls.si_fields if f.name == bits[2]), None) if cls is not None else None
-    return None if f is None else f.unit
+    (name, field), tables = split_key(key) or ("", ""), config.get("parts")
+    if not isinstance(tables, dict) or not isinstance(tables.get(name), dict):
+        return None
+    cls = part_kinds().get(tables[name].get("kind"))
+    units = {f.name: f.unit for f in cls.si_fields} if cls is not None else {}
+    return units.get(field)
 
 
 def read_parts(tables) -> tuple[PartSpec, ...]:
@@ -252,7 +264,10 @@ def read_parts(tables) -> tuple[PartSpec, ...]:
     for name, table in tables.items():
         cls = kinds[name]
         connections = []
+        defaults = {f.name: f.default for f in dataclasses.fields(cls)}
         for c, (what, default) in cls.connections.items():
+            default = defaults.get(c, default) if default is None else default
+            default = None if default is dataclasses.MISSING else default
             value = table.get(c, default)
             allowed = nodes if what == "node" else tuple(PORTS)
             if value is None:

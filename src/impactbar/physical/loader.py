@@ -231,18 +231,16 @@ def _locate(config: dict, key: str, *, create: bool):
 
 def _locate_part(config: dict, key: str):
     """The table of a part added to the circuit (``parts.<name>.<key>``) and the key."""
-    from .circuit_parts import part_keys
+    from .circuit_parts import part_keys, split_key
 
-    bits = key.split(".")
-    tables = config.get("parts", {})
-    if len(bits) != 3 or not isinstance(tables, dict) or not isinstance(tables.get(bits[1]), dict):
+    (name, field), tables = split_key(key) or ("", ""), config.get("parts", {})
+    if not name or not isinstance(tables, dict) or not isinstance(tables.get(name), dict):
         raise ValueError(f"{key}: a part's key is parts.<name>.<key>, of a part [parts.<name>] the config "
                          f"has ({', '.join(tables) if isinstance(tables, dict) and tables else 'none'})")
-    table = tables[bits[1]]
-    allowed = part_keys(table.get("kind"))[1:]  # (its kind is not changed)
-    if bits[2] not in allowed:
-        raise ValueError(f"unknown key {key}; allowed in [parts.{bits[1]}]: {', '.join(allowed)}")
-    return table, bits[2]
+    allowed = part_keys(tables[name].get("kind"))[1:]  # (its kind is not changed)
+    if field not in allowed:
+        raise ValueError(f"unknown key {key}; allowed in [parts.{name}]: {', '.join(allowed)}")
+    return tables[name], field
 
 
 def config_value(config: dict, key: str):
