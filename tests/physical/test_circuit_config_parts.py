@@ -121,6 +121,19 @@ def test_with_values_and_continuation_take_a_part_s_key(example):
     assert branch.points[-1].period_s == pytest.approx(changed.orbit().period_s, rel=1e-8)
 
 
+def test_the_sensitivities_take_a_part_s_key(example):
+    """d(blow frequency)/d(gas volume) by the implicit function theorem against a central difference
+    of two fresh orbits (1 % either side: the difference's error is second order, some 1e-4)."""
+    from impactbar.physical import operating_point_sensitivities
+
+    key = "parts.return_line.gas_volume"
+    s = operating_point_sensitivities(EXAMPLE, [key], orbit=example)
+    assert s.units[key] == "m**3"
+    cfg = read_config(EXAMPLE)[0]
+    f = [build(with_values(cfg, {key: f"{v!r} L"})).orbit().blow_frequency_Hz for v in (0.495, 0.505)]
+    assert s.derivatives["blow_frequency_Hz"][key] == pytest.approx((f[1] - f[0]) / 0.01e-3, rel=1e-3)
+
+
 def test_a_design_map_sweeps_a_part_s_key():
     from impactbar.sweeps.map_spec import parse_map_spec
     from impactbar.sweeps.map_task import compute_map_chunk, point_values
