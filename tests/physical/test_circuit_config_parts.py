@@ -91,6 +91,11 @@ def _restart(orbit, periods):
 def test_the_example_s_orbit_repeats_and_its_account_closes(example):
     o = example.orbit
     assert o.drive.layout.states == ("front", "rear", "supply", "return_line", "spool")
+    # the line's least pressure over the period, among the oil's: at its least the line's inflow (from
+    # the rear chamber, above it) is its outflow to the tank, so it lies between the two
+    least = example.minimum_pressures_Pa
+    assert set(least) == {"front", "rear", "supply", "return_line"}
+    assert 0.3e6 < least["return_line"] < least["rear"] and not example.cavitates
     run = _restart(o, 20.5)
     assert run.n_impacts == 20
     assert np.allclose(np.diff(run.impact_times), o.period, rtol=1e-6, atol=0.0)

@@ -437,13 +437,15 @@ def _check_repeats(orbit) -> None:
 
 
 def _least_pressures(pieces) -> dict:
-    """The least absolute pressure (Pa) of ``front``, ``rear`` and ``supply`` over the circuit's
-    pieces among ``pieces`` (their Hermite interpolants' extremes)."""
+    """The least absolute pressure (Pa) of ``front``, ``rear``, ``supply`` and the extra parts' nodes
+    (``[parts]``, by name) over the circuit's pieces among ``pieces`` (their Hermite interpolants'
+    extremes)."""
     pieces = [p for p in pieces if hasattr(p, "extremes")]
     if not pieces:
         return {}
+    extra = pieces[0].layout.states[3:-1]  # (after front, rear, supply; before the spool)
     return {name: min(p.extremes(name)[0] for p in pieces) * PRESSURE_SCALE
-            for name in ("front", "rear", "supply")}
+            for name in ("front", "rear", "supply", *extra)}
 
 
 def _refuse_cavitation(low: dict, what: str) -> None:
@@ -518,9 +520,9 @@ class CircuitDrifterOrbit(DrifterOrbit):
     @property
     def minimum_pressures_Pa(self) -> dict:
         """The least absolute pressure of each oil volume over the period (Pa): ``front``, ``rear``,
-        ``supply`` (from the flights' Hermite interpolants). The model has no cavitation: where one
-        falls below the oil's vapour pressure (a few kPa; :attr:`cavitates` flags below 0) the
-        motion it computes is not the machine's."""
+        ``supply`` and the extra parts' nodes by name (from the flights' Hermite interpolants). The
+        model has no cavitation: where one falls below the oil's vapour pressure (a few kPa;
+        :attr:`cavitates` flags below 0) the motion it computes is not the machine's."""
         return _least_pressures(self._pieces)
 
     @property
