@@ -76,6 +76,12 @@ class CircuitPart:
         Its continuation parameters: the drive's parameter name to the part's field
         (``{"return_volume": "volume"}``); ``parameter_ranges`` their ranges as
         :data:`~impactbar.drives.circuit.drive.PARAMETERS`' (optional).
+    si_fields : tuple of PartField
+        Its fields as a configuration gives them in SI (optional: for a kind a config's
+        ``[parts.<name>]`` builds, :func:`impactbar.physical.register_part`).
+    connections : dict
+        Its fields that name a node or a port, each to ``("node" | "port", default)`` (optional, as
+        ``si_fields``).
 
     See Also
     --------
