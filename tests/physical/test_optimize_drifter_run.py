@@ -26,7 +26,8 @@ pytest.importorskip("pint")
 ROOT = Path(__file__).resolve().parents[2]
 #: the example configs ``impactbar optimize`` takes: the drifters with their oil circuit (the valve
 #: drifters and the hammers have no circuit to optimise, the sweep specs are no machine)
-CIRCUIT_EXAMPLES = ("circuit_drifter.toml", "circuit_drifter_rock.toml", "circuit_drifter_rock_piston.toml")
+CIRCUIT_EXAMPLES = ("circuit_drifter.toml", "circuit_drifter_return_line.toml", "circuit_drifter_rock.toml",
+                    "circuit_drifter_rock_piston.toml")
 
 
 def test_the_circuit_examples_are_the_ones_optimize_takes():
@@ -51,6 +52,7 @@ def _keys(cfg: dict) -> list[str]:
             if section != "rod.segments" for name in names]
     keys += [f"rod.segments.{i}.{name}" for i, seg in enumerate(cfg.get("rod", {}).get("segments", []))
              for name in seg]
+    keys += [f"parts.{part}.{name}" for part, table in cfg.get("parts", {}).items() for name in table]
     out = []
     for key in keys:
         try:
@@ -104,6 +106,9 @@ def test_optimize_takes_every_key_a_design_map_sweeps(name):
         assert {"chambers.rear_area", "bar.diameter", "stop.restitution"} <= set(swept)
     if name == "circuit_drifter_rock.toml":
         assert {"rod.segments.1.length", "bit.mass", "rock.k"} <= set(swept)
+    if name == "circuit_drifter_return_line.toml":  # (a part's fields, its connections not)
+        fields = ("volume", "flow_coefficient", "precharge", "gas_volume", "polytropic_exponent")
+        assert {f"parts.return_line.{k}" for k in fields} | {"parts.seal_leak.flow_coefficient"} <= set(swept)
 
 
 def test_a_short_search_over_a_chamber_area_and_the_restitution():

@@ -377,13 +377,14 @@ def _circuit_outputs(point, columns) -> tuple:
     return tuple(o.shown(values[o.name]) for o in columns)
 
 
-def _user_unit(name: str, to):
-    """The unit the user gave ``--to`` in (``"L/min"`` for ``"100 L/min"``), else the key's SI unit,
-    and the conversion of an SI value into it (the unit read as every config value is)."""
-    si_unit = FIELDS[name].unit
+def _user_unit(field, to):
+    """The unit the user gave ``--to`` in (``"L/min"`` for ``"100 L/min"``), else the SI unit of the
+    key's declaration ``field``, and the conversion of an SI value into it (the unit read as every
+    config value is)."""
+    si_unit = field.unit
     written = to.split(None, 1)[1].strip() if isinstance(to, str) and len(to.split(None, 1)) > 1 else ""
     if si_unit and written:
-        factor = to_si(f"--to {to!r}", f"1 {written}", si_unit, FIELDS[name].example)  # SI per given unit
+        factor = to_si(f"--to {to!r}", f"1 {written}", si_unit, field.example)  # SI per given unit
         if factor != 1.0:
             return written, lambda x: x / factor
     return si_unit.replace("**", "^"), float
@@ -398,14 +399,14 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
     from ..continuation import continue_orbit
 
     name, to = args.parameter, args.to
-    si = name in FIELDS  # a config key in SI: accumulator.precharge, supply.pump_flow, ...
+    si = name in FIELDS or name.startswith("parts.")  # a config key in SI: supply.pump_flow, a part's, ...
     if si and not isinstance(drifter, physical.CircuitDrifter):
         raise ValueError(f"--parameter {name} (a config key in SI) is a parameter of a drifter with its "
                          "oil circuit; this drifter's valve takes stroke, ret, switch_out, delay, "
                          "delay_out, delay_in")
     if si:
         parameter, to = drifter.to_dimensionless(name, to)
-        unit, convert = _user_unit(name, args.to)
+        unit, convert = _user_unit(drifter.key_field(name), args.to)
 
         def shown(x):
             return convert(drifter.from_dimensionless(name, x))

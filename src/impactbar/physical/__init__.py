@@ -74,6 +74,8 @@ from .circuit import CircuitDrifterOrbit as CircuitDrifterOrbit
 from .circuit import circuit_preset as circuit_preset
 from .circuit_branch import CircuitBranch as CircuitBranch
 from .circuit_branch import continue_circuit as continue_circuit
+from .circuit_parts import part_kinds as part_kinds
+from .circuit_parts import register_part as register_part
 from .config import PRESETS as PRESETS
 from .drifter import DRIFTER_PRESETS as DRIFTER_PRESETS
 from .drifter import Drifter as Drifter
@@ -156,6 +158,8 @@ __all__ = [
     "circuit_preset",
     "CircuitBranch",
     "continue_circuit",
+    "register_part",
+    "part_kinds",
     "flow_coefficient",
     "DrifterOrbit",
     "DRIFTER_PRESETS",

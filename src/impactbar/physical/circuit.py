@@ -25,6 +25,8 @@ Configuration keys (a nested ``dict`` or TOML, as :meth:`CircuitDrifter.from_con
                   relief_pressure, relief_coefficient        # the relief optional
     [accumulator] precharge, volume, polytropic_exponent     # optional section
     [oil]         bulk_modulus, transition_pressure
+    [parts.<name>] kind, its connections and fields          # optional: parts added to the circuit
+                                                             # (impactbar.physical.circuit_parts)
     [[rod.segments]], [bit], [rock]                          # optional: the drill string and the rock
                                                              # (impactbar.physical.rock, theory §4d)
 
@@ -50,6 +52,7 @@ from .._shared.validate import check_int
 from . import tree
 from ._circuit_checks import check_circuit_si, shown
 from .bar import Bar, SteppedBar
+from .circuit_parts import part_field, read_parts
 from .drifter import (
     DrifterOrbit,
     _config_sections,
@@ -111,6 +114,9 @@ class CircuitDrifter(_ScaledDrifter):
     config : dict, optional
         The configuration :meth:`from_config` read it from (not compared): what
         :func:`~impactbar.physical.operating_point_sensitivities` changes by key.
+    parts : tuple of PartSpec, optional
+        Parts added to the circuit (``[parts.<name>]``, :func:`~impactbar.physical.circuit_parts.read_parts`),
+        each field a key ``parts.<name>.<field>``.
 
     Raises
     ------
@@ -133,6 +139,7 @@ class CircuitDrifter(_ScaledDrifter):
     name: str = ""
     drill: DrillString | None = None
     config: dict | None = field(default=None, compare=False, repr=False)
+    parts: tuple = ()
 
     def _check_own(self) -> None:
         si = self.si
@@ -166,10 +173,20 @@ class CircuitDrifter(_ScaledDrifter):
         r"""The energy scale :math:`m L^2 \Omega^2` (J)."""
         return self.bar.mass_kg * (self.bar.length_m * self.omega_rad_s) ** 2
 
+    def key_field(self, name: str) -> tree.Field | None:
+        """The declaration of the config key ``name``: the parameter tree's
+        (:data:`~impactbar.physical.tree.FIELDS`) or a part's (``parts.<name>.<field>``,
+        :func:`~impactbar.physical.circuit_parts.part_field`); ``None`` for neither."""
+        return tree.FIELDS.get(name) if isinstance(name, str) and name in tree.FIELDS else \
+            part_field(self.parts, name)
+
     def _si_factor(self, name: str) -> float:
         """The factor from the SI value of the config key ``name`` to its dimensionless parameter
         (its declared scale: :func:`~impactbar.physical.tree.dimensionless_factor`)."""
-        return tree.dimensionless_factor(self, name)
+        f = part_field(self.parts, name)
+        if f is None:
+            return tree.dimensionless_factor(self, name)
+        return tree.SCALES[f.scale](self)
 
     def to_dimensionless(self, name: str, value) -> tuple[str, float]:
         r"""The dimensionless circuit parameter (theory §11) that the config key ``name`` sets, and
@@ -207,7 +224,7 @@ class CircuitDrifter(_ScaledDrifter):
         ('precharge', 1.2)
         """
         factor = self._si_factor(name)
-        f = tree.FIELDS[name]
+        f = self.key_field(name)
         return f.parameter, to_si(name, value, f.unit, f.example) * factor
 
     def from_dimensionless(self, name: str, value: float) -> float:
@@ -243,7 +260,7 @@ class CircuitDrifter(_ScaledDrifter):
                    relief_pressure=si["relief_pressure_Pa"] / P,
                    relief_coefficient=si["relief_coefficient"] * P / Q),
             Oil(bulk_modulus=si["bulk_modulus_Pa"] / P, transition_pressure=si["transition_pressure_Pa"] / P),
-            acc)
+            acc, extra_parts=tuple(p.build(self) for p in self.parts))
 
     # -- results -----------------------------------------------------------------------------------
     def orbit(self, guess=None, *, allow_cavitation: bool = False) -> CircuitDrifterOrbit:
@@ -335,7 +352,9 @@ class CircuitDrifter(_ScaledDrifter):
         given = copy.deepcopy(config)
         if isinstance(config, dict) and "piston" in config:  # the piston's shape: the stepped [bar] and
             config = expand_piston(config)  # the chamber areas it implies
-        sec = _config_sections(config, _KEYS, _REQUIRED)
+        parts = read_parts(config.get("parts")) if isinstance(config, dict) else ()
+        sec = _config_sections({k: v for k, v in config.items() if k != "parts"}
+                               if isinstance(config, dict) else config, _KEYS, _REQUIRED)
         bar, drill, R = _piston_drill_restitution(config, sec, stop_area_check=True)
 
         acc = sec["accumulator"]
@@ -350,7 +369,7 @@ class CircuitDrifter(_ScaledDrifter):
                              f"{shown(sec['damping']['coefficient'], damping, 'N*s/m')}")
         out = cls(bar=bar, restitution=R, si=si, damping_N_s_m=damping,
                   n_modes=check_int("model.n_modes", sec["model"].get("n_modes", 0), lo=0, hi=1024),
-                  name=str(config.get("name", "")), drill=drill, config=given)
+                  name=str(config.get("name", "")), drill=drill, config=given, parts=parts)
         warn_implausible(given)  # (values far outside their typical ranges: warned of, then run)
         return out
 
@@ -410,13 +429,15 @@ def _check_repeats(orbit) -> None:
 
 
 def _least_pressures(pieces) -> dict:
-    """The least absolute pressure (Pa) of ``front``, ``rear`` and ``supply`` over the circuit's
-    pieces among ``pieces`` (their Hermite interpolants' extremes)."""
+    """The least absolute pressure (Pa) of ``front``, ``rear``, ``supply`` and the extra parts' nodes
+    (``[parts]``, by name) over the circuit's pieces among ``pieces`` (their Hermite interpolants'
+    extremes)."""
     pieces = [p for p in pieces if hasattr(p, "extremes")]
     if not pieces:
         return {}
+    extra = pieces[0].layout.states[3:-1]  # (after front, rear, supply; before the spool)
     return {name: min(p.extremes(name)[0] for p in pieces) * PRESSURE_SCALE
-            for name in ("front", "rear", "supply")}
+            for name in ("front", "rear", "supply", *extra)}
 
 
 def _refuse_cavitation(low: dict, what: str) -> None:
@@ -491,9 +512,9 @@ class CircuitDrifterOrbit(DrifterOrbit):
     @property
     def minimum_pressures_Pa(self) -> dict:
         """The least absolute pressure of each oil volume over the period (Pa): ``front``, ``rear``,
-        ``supply`` (from the flights' Hermite interpolants). The model has no cavitation: where one
-        falls below the oil's vapour pressure (a few kPa; :attr:`cavitates` flags below 0) the
-        motion it computes is not the machine's."""
+        ``supply`` and the extra parts' nodes by name (from the flights' Hermite interpolants). The
+        model has no cavitation: where one falls below the oil's vapour pressure (a few kPa;
+        :attr:`cavitates` flags below 0) the motion it computes is not the machine's."""
         return _least_pressures(self._pieces)
 
     @property

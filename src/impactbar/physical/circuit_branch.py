@@ -10,7 +10,6 @@ import numpy as np
 
 from .circuit import CircuitDrifter, CircuitDrifterOrbit
 from .display_units import format_si
-from .tree import FIELDS
 
 __all__ = ["CircuitBranch", "continue_circuit"]
 
@@ -28,9 +27,9 @@ def continue_circuit(drifter: CircuitDrifter, parameter: str, to, *, step=None, 
     parameter : str
         A dotted SI name of the parameter tree (``"accumulator.precharge"``,
         ``"stop.restitution"``; :data:`~impactbar.physical.tree.FIELDS`, refused with its declared
-        reason where it cannot be continued), ``to`` then a quantity with its unit (``"12 MPa"``),
-        or a dimensionless name of the problem (``"precharge"``, pressures in 10 MPa), ``to`` then a
-        number.
+        reason where it cannot be continued; a part's ``"parts.<name>.<field>"``), ``to`` then a
+        quantity with its unit (``"12 MPa"``), or a dimensionless name of the problem
+        (``"precharge"``, pressures in 10 MPa), ``to`` then a number.
     to : str, pint.Quantity or float
         The value to reach.
     step, max_step : float, optional
@@ -52,9 +51,9 @@ def continue_circuit(drifter: CircuitDrifter, parameter: str, to, *, step=None, 
 
     if not isinstance(drifter, CircuitDrifter):
         raise ValueError(f"drifter must be a CircuitDrifter; got {type(drifter).__name__}")
-    if parameter in FIELDS:
+    if drifter.key_field(parameter) is not None:  # (the tree's key, or a part's)
         name, value = drifter.to_dimensionless(parameter, to)
-        unit = FIELDS[parameter].unit
+        unit = drifter.key_field(parameter).unit
     else:
         if isinstance(to, str) or hasattr(to, "magnitude"):
             raise ValueError(f"to must be a number for the dimensionless parameter {parameter}; got {to!r} "
@@ -96,8 +95,8 @@ class CircuitBranch:
         return len(self.branch.values)
 
     def _si(self, x: float) -> float:
-        return self.drifter.from_dimensionless(self.parameter, x) if self.parameter in FIELDS \
-            else float(x)
+        return self.drifter.from_dimensionless(self.parameter, x) \
+            if self.drifter.key_field(self.parameter) is not None else float(x)
 
     @cached_property
     def points(self) -> tuple:

@@ -26,7 +26,7 @@ __all__ = ["INTEGER_KEYS", "design_key", "key_unit", "key_value", "design_bounds
 INTEGER_KEYS = integer_keys()
 
 
-def key_unit(key: str, base) -> str:
+def key_unit(key: str, base, declared: str | None = None) -> str:
     """The SI unit of a dotted key whose config value is ``base``: the one the parameter tree
     declares (:data:`~impactbar.physical.tree.FIELDS`) where the value has its dimension, else the
     value's own base units.
@@ -37,6 +37,9 @@ def key_unit(key: str, base) -> str:
         The dotted key (``"supply.pump_flow"``, ``"stop.restitution"``).
     base : str, float or list
         The config's own value of the key (:func:`~impactbar.physical.loader.config_value`).
+    declared : str, optional
+        The unit declared for a key the tree does not hold (a part's,
+        :func:`~impactbar.physical.circuit_parts.declared_unit`).
 
     Returns
     -------
@@ -66,8 +69,9 @@ def key_unit(key: str, base) -> str:
         q = registry().Quantity(base)
     except Exception as exc:  # pint raises several kinds
         raise ValueError(f"{key}: the config's value {base!r} is not a quantity: {exc}") from None
-    if key in FIELDS and FIELDS[key].unit and q.is_compatible_with(FIELDS[key].unit):
-        return FIELDS[key].unit  # (a hammer's damping per unit length is another quantity: its own)
+    declared = FIELDS[key].unit if key in FIELDS else declared
+    if declared and q.is_compatible_with(declared):
+        return declared  # (a hammer's damping per unit length is another quantity: its own)
     return "" if q.dimensionless else f"{q.to_base_units().units:~}".replace(" ", "")
 
 
@@ -112,8 +116,10 @@ def design_key(config: dict, key: str) -> tuple[str, object]:
     ValueError
         An unknown key, one the config leaves out, or a value that is not a quantity.
     """
+    from .circuit_parts import declared_unit
+
     base = config_value(config, key)
-    return key_unit(key, base), base
+    return key_unit(key, base, None if key in FIELDS else declared_unit(config, key)), base
 
 
 def design_bounds(config: dict, vary, folder=None) -> dict:

@@ -215,6 +215,8 @@ def _locate(config: dict, key: str, *, create: bool):
         if parts[3] not in allowed:
             raise ValueError(f"unknown key {key}; a rod segment takes {', '.join(allowed)}")
         return segs[int(parts[2])], parts[3]
+    if parts[0] == "parts" and kind == "circuit":
+        return _locate_part(config, key)
     if len(parts) != 2 or parts[0] not in sections:
         raise ValueError(f"unknown key {key!r} of {kind!r} config; sections: {', '.join(sorted(sections))}")
     section, name = parts
@@ -225,6 +227,20 @@ def _locate(config: dict, key: str, *, create: bool):
             raise ValueError(f"{key}: the config has no [{section}] section")
         config[section] = {}
     return config[section], name
+
+
+def _locate_part(config: dict, key: str):
+    """The table of a part added to the circuit (``parts.<name>.<key>``) and the key."""
+    from .circuit_parts import part_keys, split_key
+
+    (name, field), tables = split_key(key) or ("", ""), config.get("parts", {})
+    if not name or not isinstance(tables, dict) or not isinstance(tables.get(name), dict):
+        raise ValueError(f"{key}: a part's key is parts.<name>.<key>, of a part [parts.<name>] the config "
+                         f"has ({', '.join(tables) if isinstance(tables, dict) and tables else 'none'})")
+    allowed = part_keys(tables[name].get("kind"))[1:]  # (its kind is not changed)
+    if field not in allowed:
+        raise ValueError(f"unknown key {key}; allowed in [parts.{name}]: {', '.join(allowed)}")
+    return tables[name], field
 
 
 def config_value(config: dict, key: str):
@@ -255,7 +271,8 @@ def with_values(config: dict, changes: dict) -> dict:
     config : dict
         Sections of keys with units.
     changes : dict
-        Dotted key (``"section.key"``, or ``"rod.segments.<i>.<key>"``) to its new value with its
+        Dotted key (``"section.key"``, ``"rod.segments.<i>.<key>"``, or a part's
+        ``"parts.<name>.<key>"``) to its new value with its
         unit (``"80 L/min"``, a pint quantity, or a number where the key is dimensionless).
 
     Returns

@@ -73,12 +73,15 @@ def default_step(drifter: CircuitDrifter) -> float:
 FIGURE_UNITS = {o.key: o.unit for o in outputs("figure", "circuit")}
 
 
-def _key_unit(key: str) -> str:
+def _key_unit(key: str, drifter: CircuitDrifter) -> str:
     """The SI unit of a variable's dotted key (a real key of the parameter tree,
-    :func:`~impactbar.physical.tree.real_keys`), or a one-line refusal."""
+    :func:`~impactbar.physical.tree.real_keys`, or a field of a part the drifter has), or a
+    one-line refusal."""
     real = real_keys()
     if isinstance(key, str) and key in real:
         return FIELDS[key].unit
+    if drifter.key_field(key) is not None:  # (a part's, parts.<name>.<field>)
+        return drifter.key_field(key).unit
     raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies; one of "
                      f"{', '.join(sorted(real))}")
 
@@ -285,7 +288,7 @@ def operating_point_sensitivities(config, keys, *, orbit: CircuitDrifterOrbit | 
         relative_step = default_step(drifter)
     units, values = {}, {}
     for key in keys:
-        units[key] = _key_unit(key)
+        units[key] = _key_unit(key, drifter)
         values[key] = to_si(key, config_value(cfg, key), units[key], "'1 ...'")
         if values[key] == 0.0:
             raise ValueError(f"{key} is 0 in the config: its step is relative, give a value other than 0")

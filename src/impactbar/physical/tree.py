@@ -290,18 +290,24 @@ def typical_ranges() -> dict[str, tuple]:
     return {k: (f.typical[0], f.typical[1], f.unit, *f.typical[2:]) for k, f in FIELDS.items() if f.typical}
 
 
-def markdown_table() -> str:
+def markdown_table(extra=()) -> str:
     """The declared fields as a Markdown table (the documentation's list of keys is this text).
+
+    Parameters
+    ----------
+    extra : tuple of Field, optional
+        Fields to list after the tree's (the library's part kinds':
+        :func:`impactbar.physical.circuit_parts.markdown_table`).
 
     Returns
     -------
     str
         One row per field: the dotted name, its SI unit, its scale, the dimensionless parameter
-        it sets, and whether it is continued (or why not).
+        it sets, and whether it is continued (or why not); then those of ``extra``.
     """
     rows = ["| key | SI unit | scale | dimensionless parameter | continued |",
             "| --- | --- | --- | --- | --- |"]
-    for k, f in FIELDS.items():
+    for k, f in (*FIELDS.items(), *((f.key, f) for f in extra)):
         scale = f.scale if isinstance(f.scale, str) else "(a function)"
         parameter = f"`{f.parameter}`" if f.parameter else "-"
         rows.append(f"| `{k}` | {f.unit.replace('**', '^') or '1'} | {scale or '-'} | {parameter} | "

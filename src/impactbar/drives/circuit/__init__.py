@@ -5,7 +5,9 @@ Layout: ``parts`` (the frozen parts: :class:`Chambers`, :class:`Valve`, :class:`
 :class:`Accumulator`, :class:`Oil`), ``drive`` (:class:`HydraulicCircuitDrive`, the
 :class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``layout``
 (where the circuit keeps its states and energy terms, read by name), ``composition`` (parts added to
-the circuit, :class:`CircuitPart`, and the numbering of its nodes, energy and event slots), ``_network``
+the circuit, :class:`CircuitPart`, :class:`PartField`, and the numbering of its nodes, energy and
+event slots), ``return_line`` and ``leak`` (two parts of the network's kinds:
+:class:`ReturnAccumulator`, :class:`Leak`), ``_network``
 (the part records a part writes, :func:`record`, of the kinds :data:`NODE`, :data:`PUMP`,
 :data:`ORIFICE`, :data:`VALVE`, :data:`RELIEF`, :data:`CHAMBER`, :data:`ACCUM`), ``flight`` (one
 flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_kernel`` (the
@@ -24,16 +26,21 @@ from ._network import record as record
 from .composition import PORTS as PORTS
 from .composition import TERMS as TERMS
 from .composition import CircuitPart as CircuitPart
+from .composition import NamedPart as NamedPart
+from .composition import PartField as PartField
 from .composition import PartSlots as PartSlots
 from .drive import PARAMETERS as PARAMETERS
 from .drive import CircuitEnergy as CircuitEnergy
 from .drive import HydraulicCircuitDrive as HydraulicCircuitDrive
+from .leak import Leak as Leak
 from .parts import Accumulator as Accumulator
 from .parts import Chambers as Chambers
 from .parts import Oil as Oil
 from .parts import Supply as Supply
 from .parts import Valve as Valve
+from .return_line import ReturnAccumulator as ReturnAccumulator
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS", "Chambers", "Valve", "Supply",
-           "Accumulator", "Oil", "CircuitPart", "PartSlots", "PORTS", "TERMS", "record", "NODE", "PUMP",
-           "ORIFICE", "VALVE", "RELIEF", "CHAMBER", "ACCUM"]
+           "Accumulator", "Oil", "CircuitPart", "NamedPart", "PartField", "PartSlots", "ReturnAccumulator",
+           "Leak", "PORTS", "TERMS", "record", "NODE", "PUMP", "ORIFICE", "VALVE", "RELIEF", "CHAMBER",
+           "ACCUM"]

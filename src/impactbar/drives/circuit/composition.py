@@ -16,11 +16,14 @@ network's kinds needs no edit of the drive or of a kernel.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+from ..._shared.validate import check_real
 from .layout import _TERMS, PRESET, CircuitLayout
 
-__all__ = ["CircuitPart", "PartSlots", "Composition", "compose_parts", "PORTS", "TERMS"]
+__all__ = ["CircuitPart", "PartField", "PartSlots", "Composition", "compose_parts", "PORTS", "TERMS",
+           "PRESET_NODES", "NamedPart", "check_part", "node_of"]
 
 #: the preset's ports an extra part may take over, and the node each joins without one: the valve's
 #: return port (the tank)
@@ -32,6 +35,8 @@ TERMS = _TERMS
 
 #: the preset's nodes with a pressure state, in their order (then the extra parts' and the tank)
 _PRESET_NODES = ("front", "rear", "supply")
+#: the preset's nodes a part may connect to by name (the tank held at its pressure)
+PRESET_NODES = (*_PRESET_NODES, "tank")
 #: the preset's events after the ramp's end (the network's event slots 1, 2)
 _PRESET_EVENTS = ("accumulator", "relief")
 
@@ -71,6 +76,12 @@ class CircuitPart:
         Its continuation parameters: the drive's parameter name to the part's field
         (``{"return_volume": "volume"}``); ``parameter_ranges`` their ranges as
         :data:`~impactbar.drives.circuit.drive.PARAMETERS`' (optional).
+    si_fields : tuple of PartField
+        Its fields as a configuration gives them in SI (optional: for a kind a config's
+        ``[parts.<name>]`` builds, :func:`impactbar.physical.register_part`).
+    connections : dict
+        Its fields that name a node or a port, each to ``("node" | "port", default)`` (optional, as
+        ``si_fields``).
 
     See Also
     --------
@@ -108,6 +119,12 @@ class CircuitPart:
     ports: dict = {}
     parameters: dict = {}
     parameter_ranges: dict = {}
+    #: its fields a configuration gives in SI (:class:`PartField`; read where the part's kind is
+    #: registered, :func:`impactbar.physical.register_part`)
+    si_fields: tuple = ()
+    #: its fields that name a node or a port: field to ``("node" | "port", default)`` (``None``:
+    #: required)
+    connections: dict = {}
 
     def records(self, slots: PartSlots, oil) -> list:
         """The part's network records (:func:`._network.record`).
@@ -125,6 +142,124 @@ class CircuitPart:
         list of numpy.ndarray
         """
         raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class PartField:
+    """One of a part's fields as a configuration gives it in SI: its unit, the scale that makes it
+    dimensionless and its range, declared once with the part's class (in the terms of
+    :class:`impactbar.physical.tree.Field`; plain strings here, the units read on the SI side).
+
+    Parameters
+    ----------
+    name : str
+        The part's dataclass field and the config's key (``"volume"``).
+    unit : str
+        Its SI unit in pint's spelling (``"m**3"``; ``""`` for a bare number).
+    example : str
+        An example value as a config writes it (``"'0.2 L'"``).
+    scale : str
+        The name of its scale in :data:`impactbar.physical.tree.SCALES` (``"volume"``, ``"orifice"``,
+        ``"pressure"``, ``"one"``, ...).
+    low, high : float, optional
+        Its range (default: above 0). The scales are positive factors, so a range of 0 and ``inf``
+        holds for the SI value and the dimensionless one alike; any other bound needs the scale
+        ``"one"``.
+    low_open, high_open : bool, optional
+        Whether the bound is excluded (default: both).
+    default : str or float or None, optional
+        The value of a key left out (as a config writes it); ``None``: required.
+    description : str, optional
+        What it is, in a few words (the parameter table's).
+
+    Raises
+    ------
+    ValueError
+        A bound other than 0 or ``inf`` on a scale other than ``"one"``.
+    """
+
+    name: str
+    unit: str
+    example: str
+    scale: str
+    low: float = 0.0
+    high: float = math.inf
+    low_open: bool = True
+    high_open: bool = True
+    default: str | float | None = None
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if self.scale != "one" and (self.low not in (0.0, -math.inf) or self.high != math.inf):
+            raise ValueError(f"the field {self.name}'s range ({self.low}, {self.high}) must be 0 to inf on "
+                             f"the scale {self.scale!r} (a bound moves with the scale): give it the scale "
+                             "'one'")
+
+    @property
+    def range(self) -> dict:
+        """Its range as the drive's ``parameter_ranges`` give one."""
+        out = {"low": self.low, "low_open": self.low_open, "description": self.description}
+        if math.isfinite(self.high):
+            out["high"] = self.high
+        out["high_open"] = self.high_open
+        return out
+
+    def check(self, label: str, value) -> float:
+        """``value`` as a float in the field's range, else a :class:`ValueError` naming ``label``."""
+        return check_real(label, value, lo=self.low if math.isfinite(self.low) else None,
+                          hi=self.high if math.isfinite(self.high) else None, lo_open=self.low_open,
+                          hi_open=self.high_open)
+
+
+def check_part(part: CircuitPart) -> None:
+    """Check a part's :attr:`~CircuitPart.si_fields` against their ranges (in place, as floats) and its
+    name: the ``__post_init__`` of a part made of them.
+
+    Raises
+    ------
+    ValueError
+        A value out of its range, or a name that is not an identifier (each named).
+    """
+    name = getattr(part, "name", "")
+    if not (isinstance(name, str) and name.isidentifier()):
+        raise ValueError(f"a {type(part).__name__}'s name must be an identifier (its node's and its "
+                         f"parameters'); got {name!r}")
+    for f in part.si_fields:
+        object.__setattr__(part, f.name, f.check(f"{name}.{f.name}", getattr(part, f.name)))
+
+
+class NamedPart(CircuitPart):
+    """A :class:`CircuitPart` with a ``name`` field and :attr:`~CircuitPart.si_fields`: its
+    parameters are ``<name>.<field>`` (each field's range), checked on construction
+    (:func:`check_part`). A base for a part's frozen dataclass."""
+
+    def __post_init__(self) -> None:
+        check_part(self)
+
+    @property
+    def parameters(self) -> dict:
+        """``<name>.<field>`` to its field, for each of :attr:`~CircuitPart.si_fields`."""
+        return {f"{self.name}.{f.name}": f.name for f in self.si_fields}
+
+    @property
+    def parameter_ranges(self) -> dict:
+        """The ranges of :attr:`parameters`."""
+        return {f"{self.name}.{f.name}": f.range for f in self.si_fields}
+
+
+def node_of(slots: PartSlots, part: CircuitPart, connection: str) -> int:
+    """The number of the node a part's ``connection`` field names.
+
+    Raises
+    ------
+    ValueError
+        A node the circuit does not have (the nodes listed).
+    """
+    node = getattr(part, connection)
+    if node not in slots.nodes:
+        raise ValueError(f"{part.name}.{connection} must be one of the circuit's nodes {tuple(slots.nodes)}; "
+                         f"got {node!r}")
+    return slots.nodes[node]
 
 
 @dataclass(frozen=True)
