@@ -20,6 +20,7 @@ import numpy as np
 from ..base import Drive, DriveState, FlightSettings, GapCrossing, SurfaceEvent
 from . import _kernel as K
 from . import _network as NW
+from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .layout import PRESET
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
@@ -507,6 +508,9 @@ class HydraulicCircuitDrive(Drive):
 
     n_quadratures = PRESET.n_energy
     piston_work_quadrature = PRESET.energy["piston"]
+    traits = functools.cached_property(circuit_traits)
+    params = property(circuit_params)
+    abilities = property(circuit_abilities)
 
     def _field(self, mode, z, q, v, model):
         """The compiled vector field at one state (the code generated for the network's topology,
