@@ -118,7 +118,7 @@ def _check_against_the_map(orbit):
 def registered():
     register_drive(Lag)
     yield
-    DRIVES.pop(Lag.kind, None)
+    DRIVES.pop(Lag.traits.kind, None)
 
 
 def test_simulate_from_the_orbit_repeats_it():
