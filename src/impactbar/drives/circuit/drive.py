@@ -43,7 +43,7 @@ PARAMETERS = {
 }
 
 #: The ranges and descriptions of :data:`PARAMETERS` (their records:
-#: :meth:`HydraulicCircuitDrive.parameter_table`); the parts' constructors check them again, with
+#: ``drive.params.parameter_table()``); the parts' constructors check them again, with
 #: the ranges that depend on another parameter (a held supply pressure above the tank's, ``switch_in``
 #: below ``switch_out``, the pre-charge below the relief pressure).
 _RANGES = {
