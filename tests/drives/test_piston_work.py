@@ -1,7 +1,7 @@
-"""The drive's work on the piston is the quadrature the drive names
-(``piston_work`` of its ability :class:`~impactbar.drives.Quadratures`), wherever it keeps it among its own quadratures: the
-pieces of a run give it as ``piston_work()``, and no solver reads a drive's quadratures by a literal
-index (the oil circuit keeps it second, a drive of its own may keep it anywhere).
+"""The drive's work on the piston is the quadrature the drive names (``piston_work`` of its ability
+:class:`~impactbar.drives.Quadratures`), wherever it keeps it among its own quadratures: the pieces of
+a run give it as ``piston_work()``, and no solver reads a drive's quadratures by a literal index (the
+oil circuit keeps it second, a drive of its own may keep it anywhere).
 
 - ``Metered``: a first-order lag of the force toward the level of its mode (``Lag`` of
   ``test_new_drive.py``) that keeps quadratures in the order it declares, one of them its work on the
