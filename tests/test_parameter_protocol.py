@@ -142,7 +142,7 @@ def test_register_load_refuses_a_taken_kind_and_a_non_load():
 def test_a_drive_and_a_law_go_through_the_same_functions():
     valve = PositionSwitchedDrive(stroke=1.0, ret=0.5, switch_out=1.0)
     table = parameters(MODEL, valve)
-    assert [n for n in table if n not in ("s", "d", "R", "n_modes")] == list(valve.parameters)
+    assert [n for n in table if n not in ("s", "d", "R", "n_modes")] == list(valve.traits.parameters)
     assert parameter_value(MODEL, valve, "switch_out") == 1.0
     model, drive = with_parameter(MODEL, valve, "switch_out", 0.5)
     assert model is MODEL and drive == PositionSwitchedDrive(stroke=1.0, ret=0.5, switch_out=0.5)

@@ -65,7 +65,7 @@ def main(argv=None) -> None:
     print(f"STEER_ERROR = {C.STEER_ERROR:g}")
     print(f"{'case':26s} {'modes':>5s} {'CPU s':>7s} {'closing':>9s} {'error':>9s} {'checks':>6s}  flights")
     for name, factor in (("preset", 1.0),) + VARIATIONS:
-        drive = drive0 if name == "preset" else drive0.with_parameter(name, drive0.value(name) * factor)
+        drive = drive0 if name == "preset" else drive0.with_(**{name: drive0.value(name) * factor})
         for n in args.modes:
             sizes.clear()
             flights.clear()

@@ -30,6 +30,7 @@ from ._shared.status import RunStatus as RunStatus
 from ._version import __version__ as __version__
 from .drives import Drive as Drive
 from .drives import DriveState as DriveState
+from .drives import DriveTraits as DriveTraits
 from .drives import PositionSwitchedDrive as PositionSwitchedDrive
 from .loads import CosineLoad as CosineLoad
 from .loads import FourierLoad as FourierLoad
@@ -103,6 +104,7 @@ __all__ = [
     "PiecewiseConstantLoad",
     "Drive",
     "DriveState",
+    "DriveTraits",
     "PositionSwitchedDrive",
     "PeriodicOrbit",
     "periodic_orbits",

@@ -197,7 +197,8 @@ def test_a_large_closing_step_is_followed_by_chord_steps_not_by_a_failed_check(d
     root off and flies it twice. Both give the orbit of the chord run to its root first (1e-10 of the
     unknowns' size, the multipliers to 1e-8)."""
     model, drive = drifter
-    model, drive = model.with_(n_modes=8), drive.with_parameter("pump_flow", 0.7 * drive.value("pump_flow"))
+    model = model.with_(n_modes=8)
+    drive = drive.params.with_parameter("pump_flow", 0.7 * drive.value("pump_flow"))
     fine = drive.variational_state_settings(model).rtol
     seen = _spied(monkeypatch)
     orbit = find_orbit(model, drive)
@@ -239,7 +240,7 @@ def test_the_check_passes_at_once_across_the_presets_parameters(drifter, monkeyp
     def run(name, factor, n):
         seen.clear()
         closing.clear()
-        drive = drive0 if name is None else drive0.with_parameter(name, factor * drive0.value(name))
+        drive = drive0 if name is None else drive0.params.with_parameter(name, factor * drive0.value(name))
         orbit = find_orbit(model0.with_(n_modes=n), drive)
         kinds = [v if v else r for v, r, _ in seen]
         return orbit, kinds.count(True), kinds.count(fine), list(closing)

@@ -17,7 +17,16 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from impactbar import BarModel, Drive, DriveState, InitialState, continue_orbit, find_orbit, simulate
+from impactbar import (
+    BarModel,
+    Drive,
+    DriveState,
+    DriveTraits,
+    InitialState,
+    continue_orbit,
+    find_orbit,
+    simulate,
+)
 from impactbar.drives import DRIVES, GapCrossing, register_drive
 
 STROKE, RETURN = 0, 1
@@ -34,10 +43,9 @@ class Lag(Drive):
     lag: float = 0.2
     z0: float | None = field(default=None, compare=False, repr=False)
 
-    kind = "lag"
-    parameters = ("stroke", "ret", "x1", "lag")
-    parameter_ranges = {"lag": {"low": 0.0, "low_open": True, "description": "time constant of the force"}}
-    state_size = 1
+    traits = DriveTraits(kind="lag", parameters=("stroke", "ret", "x1", "lag"), state_size=1,
+                         parameter_ranges={"lag": {"low": 0.0, "low_open": True,
+                                                   "description": "time constant of the force"}})
 
     def __post_init__(self):
         if not self.lag > 0.0:
@@ -110,7 +118,7 @@ def _check_against_the_map(orbit):
 def registered():
     register_drive(Lag)
     yield
-    DRIVES.pop(Lag.kind, None)
+    DRIVES.pop(Lag.traits.kind, None)
 
 
 def test_simulate_from_the_orbit_repeats_it():
@@ -177,7 +185,7 @@ def test_the_drives_parameter_is_swept(registered, tmp_path):
 
 def test_register_drive_refuses_a_taken_kind_and_a_non_drive():
     class Other(Lag):
-        kind = "position-switched"
+        traits = dataclasses.replace(Lag.traits, kind="position-switched")
 
     with pytest.raises(ValueError, match="kind .position-switched. is already the drive PositionSwitched"):
         register_drive(Other)

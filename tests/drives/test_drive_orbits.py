@@ -264,22 +264,25 @@ def test_the_default_chain_skips_a_search_it_cannot_afford(monkeypatch):
 
 def test_the_orbit_solvers_choose_the_valve_problem_from_their_table():
     """The valve's segment problem is the orbit solvers' (``orbits.switched.ORBIT_PROBLEMS``), not
-    the drive's: the drive brings no ``orbit_problem`` of its own; a subclass that brings one keeps
-    it, one that does not gets the table's; a drive outside the table gets the generic shooting."""
+    the drive's: the drive brings no ``orbit_problem`` among its abilities; a subclass that brings
+    one keeps it, one that does not gets the table's; a drive outside the table gets the generic
+    shooting."""
+    from impactbar.drives import DriveAbilities
     from impactbar.orbits.switched import ORBIT_PROBLEMS, ShootingProblem, orbit_problem
     from impactbar.orbits.valve_segment import ValveProblem
 
-    assert "orbit_problem" not in vars(PositionSwitchedDrive)
-    assert ORBIT_PROBLEMS[PositionSwitchedDrive] is ValveProblem
     model, drive = VALVE_CASES[1]
+    assert drive.abilities.orbit_problem is None
+    assert ORBIT_PROBLEMS[PositionSwitchedDrive] is ValveProblem
     assert type(orbit_problem(model, drive, 2)) is ValveProblem
 
     class Plain(PositionSwitchedDrive):
         pass
 
     class Own(PositionSwitchedDrive):
-        def orbit_problem(self, model, impacts, constant_load):
-            return ShootingProblem(model, self, impacts)
+        @property
+        def abilities(self):
+            return DriveAbilities(orbit_problem=lambda model, m, load: ShootingProblem(model, self, m))
 
     args = dict(stroke=2.0, ret=1.0, switch_out=0.2, delay=0.05)
     assert type(orbit_problem(model, Plain(**args), 1)) is ValveProblem

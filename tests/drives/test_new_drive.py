@@ -25,6 +25,7 @@ from impactbar import (
     BarModel,
     Drive,
     DriveState,
+    DriveTraits,
     InitialState,
     PeriodicOrbit,
     PositionSwitchedDrive,
@@ -48,7 +49,7 @@ class TwoLevel(Drive):
     ret: float
     x1: float
 
-    parameters = ("stroke", "ret", "x1")
+    traits = DriveTraits(parameters=("stroke", "ret", "x1"))
 
     def start(self, model, q, v):
         return DriveState(RETURN if -q[0] < self.x1 else STROKE, np.zeros(0))
@@ -80,7 +81,7 @@ class Delayed(Drive):
     x1: float
     delay: float
 
-    parameters = ("stroke", "ret", "x1", "delay")
+    traits = DriveTraits(parameters=("stroke", "ret", "x1", "delay"))
 
     def start(self, model, q, v):
         return DriveState((RETURN if -q[0] < self.x1 else STROKE, ()), np.zeros(0))
@@ -123,7 +124,7 @@ class Push(Drive):
 
     p: float
 
-    parameters = ("p",)
+    traits = DriveTraits(parameters=("p",))
 
     def start(self, model, q, v):
         return DriveState(0, np.zeros(0))
@@ -148,8 +149,7 @@ class Lag(TwoLevel):
 
     lag: float = 0.2
 
-    parameters = ("stroke", "ret", "x1", "lag")
-    state_size = 1
+    traits = DriveTraits(parameters=("stroke", "ret", "x1", "lag"), state_size=1)
 
     def level(self, mode):
         return self.stroke if mode == STROKE else -self.ret
@@ -293,14 +293,13 @@ def test_a_constant_push_drops_the_piston_by_energy_and_restitution():
 
 
 def test_the_push_implements_the_required_members_alone():
-    """``Drive.REQUIRED_HOOKS`` are what ``Push`` (run above) defines; the other drives here define
-    only members the base lists."""
+    """The abstract members of ``Drive`` are what ``Push`` (run above) defines; the other drives here
+    define only members of the base."""
     assert {n for n, v in vars(Push).items() if callable(v) and not n.startswith("_")} == \
-        set(Drive.REQUIRED_HOOKS)
-    listed = set(Drive.REQUIRED_HOOKS) | set(Drive.OPTIONAL_HOOKS)
+        set(Drive.__abstractmethods__) == {"start", "force", "events", "jump", "impact"}
     for cls in (TwoLevel, Delayed, Lag):
         own = {n for n, v in vars(cls).items() if callable(v) and not n.startswith("_")} - {"level"}
-        assert own <= listed, cls
+        assert own <= set(dir(Drive)), cls
 
 
 # -- a drive with state ----------------------------------------------------------------------------
@@ -413,7 +412,7 @@ def test_the_energy_account_of_a_drives_run_closes():
         assert account.impact_loss == pytest.approx(lost, rel=1e-9)
         records = run.impacts  # one per impact, as a Trajectory's
         assert [r.impact_velocity for r in records] == pytest.approx(list(run.impact_velocities), rel=1e-12)
-        assert account.relative_residual < (1e-12 if drive.piecewise_constant else 1e-9)
+        assert account.relative_residual < (1e-12 if drive.traits.piecewise_constant else 1e-9)
     flexible = simulate(model.with_(n_modes=3), PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0),
                         InitialState.rigid(-0.5, 0.3, 3), 40.0)
     assert flexible.energy.relative_residual < 1e-12

@@ -1,7 +1,7 @@
-"""The drive's work on the piston is the quadrature the drive names
-(:attr:`impactbar.Drive.piston_work_quadrature`), wherever it keeps it among its own quadratures: the
-pieces of a run give it as ``piston_work()``, and no solver reads a drive's quadratures by a literal
-index (the oil circuit keeps it second, a drive of its own may keep it anywhere).
+"""The drive's work on the piston is the quadrature the drive names (``piston_work`` of its ability
+:class:`~impactbar.drives.Quadratures`), wherever it keeps it among its own quadratures: the pieces of
+a run give it as ``piston_work()``, and no solver reads a drive's quadratures by a literal index (the
+oil circuit keeps it second, a drive of its own may keep it anywhere).
 
 - ``Metered``: a first-order lag of the force toward the level of its mode (``Lag`` of
   ``test_new_drive.py``) that keeps quadratures in the order it declares, one of them its work on the
@@ -23,6 +23,7 @@ from test_new_drive import Lag  # (the test's directory is on the path, as pytes
 
 import impactbar
 from impactbar import BarModel, InitialState, simulate
+from impactbar.drives import DriveAbilities, Quadratures
 from impactbar.drives.flight import QuadratureRestPiece
 from impactbar.simulation.blows import BlowPiece
 
@@ -37,14 +38,11 @@ class Metered(Lag):
     names: tuple = ()
 
     @property
-    def n_quadratures(self):
-        return len(self.names)
+    def abilities(self):
+        work = self.names.index("piston") if "piston" in self.names else None
+        return DriveAbilities(quadratures=Quadratures(len(self.names), self._integrands, work))
 
-    @property
-    def piston_work_quadrature(self):
-        return self.names.index("piston") if "piston" in self.names else None
-
-    def quadratures(self, mode, z, q, v, model=None):
+    def _integrands(self, mode, z, q, v, model=None):
         terms = {"piston": float(z[0]) * float(v[0]), "clock": 1.0, "square": float(z[0]) ** 2}
         return np.array([terms[n] for n in self.names])
 
@@ -68,7 +66,7 @@ def test_the_rests_add_the_drives_work_on_the_piston_not_another_quadrature(name
 
 
 def test_a_piston_work_quadrature_outside_the_drives_quadratures_is_refused():
-    with pytest.raises(ValueError, match=r"piston_work_quadrature must be None or an integer in \[0, 2\)"):
+    with pytest.raises(ValueError, match=r"piston_work must be None or an integer in \[0, 2\)"):
         QuadratureRestPiece(0.0, 1.0, None, np.zeros(1), 1, np.ones(1), [1.0, 2.0], 2)
 
 

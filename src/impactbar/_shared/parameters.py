@@ -31,7 +31,7 @@ from dataclasses import dataclass, replace
 
 from .validate import check_int, check_real
 
-__all__ = ["Parameter", "NamedParameters", "parameters", "parameter_value", "with_parameter",
+__all__ = ["Parameter", "parameters", "parameter_value", "with_parameter",
            "with_parameters", "check_continuable", "table_of"]
 
 
@@ -133,39 +133,10 @@ class Parameter:
         return replace(self, value=value)
 
 
-class NamedParameters:
-    """A part whose parameters are attributes named in its class body (a drive's): ``parameters``
-    (the names), ``parameter_ranges`` (name -> keyword arguments of :class:`Parameter`: ``low``,
-    ``high``, ``description``, ...; the constructor checks them again), and ``with_(**changes)``, a
-    validated copy; each value is the attribute of that name (``None`` where the part has none now).
-
-    Examples
-    --------
-    >>> from impactbar import PositionSwitchedDrive
-    >>> [p.name for p in PositionSwitchedDrive(1.0, 1.0, 1.0).parameter_table()][:3]
-    ['stroke', 'ret', 'switch_out']
-    """
-
-    parameters: tuple = ()
-    parameter_ranges: dict = {}
-
-    def parameter_table(self) -> tuple[Parameter, ...]:
-        """The records of :attr:`parameters` (:func:`parameters`)."""
-        return tuple(Parameter(name, self._parameter_value(name), **self.parameter_ranges.get(name, {}))
-                     for name in self.parameters)
-
-    def _parameter_value(self, name: str) -> float | None:
-        value = getattr(self, name)
-        return None if value is None else float(value)
-
-    def with_parameter(self, name: str, value):
-        """A copy with one of :attr:`parameters` changed (``with_``, validated again)."""
-        return self.with_(**{name: value})
-
-    def with_parameters(self, changes: dict):
-        """A copy with several of :attr:`parameters` changed at once (``with_``, the result validated
-        once)."""
-        return self.with_(**changes)
+def _declarer(part):
+    """What holds ``part``'s ``parameter_table`` and ``with_parameter(s)``: its ``params`` object
+    where it has one (a load, a drive), else the part itself."""
+    return getattr(part, "params", None) or part
 
 
 def table_of(part, *args) -> dict[str, Parameter]:
@@ -188,7 +159,7 @@ def table_of(part, *args) -> dict[str, Parameter]:
         For an object that declares no parameters (no ``parameter_table``: not a part), or a name
         declared twice.
     """
-    declare = getattr(part, "parameter_table", None)
+    declare = getattr(_declarer(part), "parameter_table", None)
     if declare is None:
         raise ValueError(f"{part!r} is not a part of a problem (a model, a load, a drive or an impact "
                          "law): it declares no parameter_table()")
@@ -316,7 +287,7 @@ def with_parameter(model, forcing, name: str, value):
     p.check(value)
     if i == 0:
         return model.with_parameter(name, value), forcing
-    return model, forcing.with_parameter(name, value)
+    return model, _declarer(forcing).with_parameter(name, value)
 
 
 def with_parameters(model, forcing, changes: dict):
@@ -399,11 +370,11 @@ def _changed(part, changes: dict):
     ``with_parameter`` for a part that declares no such method)."""
     if not changes:
         return part
-    several = getattr(part, "with_parameters", None)
+    several = getattr(_declarer(part), "with_parameters", None)
     if several is not None:
         return several(changes)
     for name, value in changes.items():
-        part = part.with_parameter(name, value)
+        part = _declarer(part).with_parameter(name, value)
     return part
 
 

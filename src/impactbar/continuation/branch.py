@@ -60,7 +60,7 @@ class BranchEvent:
         end touches the stop between impacts, or an impact velocity goes through 0) or
         ``"admissibility"`` (another change of admissibility, e.g. sticking at ``R = 0``) or, under
         a drive with state, ``"border-collision"`` (its state touches one of its switching surfaces
-        during the period: :meth:`~impactbar.Drive.border_tests`; which one in ``surface``).
+        during the period: its ability ``border_tests``; which one in ``surface``).
     parameter : str
         Name of the continuation parameter.
     value : float

@@ -476,12 +476,13 @@ def _switch_grazing(engine, points, tangents, orbits, xtol):
 
 
 def border_tests(o) -> dict:
-    """The drive's border-collision tests at a switched orbit (:meth:`~impactbar.Drive.border_tests`
-    over the flights of its period); ``{}`` for a drive without them."""
-    problem = o.problem
-    if not hasattr(problem, "flights"):
+    """The drive's border-collision tests at a switched orbit (its ability ``border_tests``,
+    :attr:`~impactbar.Drive.abilities`, over the flights of its period); ``{}`` for a drive without
+    them."""
+    problem, tests = o.problem, o.drive.abilities.border_tests
+    if tests is None or not hasattr(problem, "flights"):
         return {}
-    return o.drive.border_tests(problem.flights(problem.unknowns(o)))
+    return tests(problem.flights(problem.unknowns(o)))
 
 
 def _borders(engine, points, tangents, orbits, xtol) -> list:
@@ -572,7 +573,7 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         vector, whose halves are opposite, both ways tried), while the parameter stays within
         ``|to - doubling|`` of the doubling, on whichever side it bifurcates.
     parameter : str
-        One of the drive's :attr:`~impactbar.Drive.parameters` (the valve's ``"stroke"``, ``"ret"``:
+        One of the drive's parameters, ``traits.parameters`` (the valve's ``"stroke"``, ``"ret"``:
         force levels, dimensionless, eq. 2; ``"switch_out"``: bar lengths; ``"delay"`` (both delays),
         ``"delay_out"``, ``"delay_in"``: dimensionless time; the oil circuit's in its units, theory
         §11), ``"R"``, ``"d"``, ``"s"``, or the impact law's own (under the rod-rock law
@@ -591,7 +592,7 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         Detect and locate events: ``"fold"``, ``"period-doubling"``, ``"neimark-sacker"`` (from the
         non-trivial multipliers), ``"grazing"`` (an impact velocity, or the gap's rate at the switch
         crossing, through 0), ``"admissibility"``, ``"border-collision"`` (the drive's state touching
-        one of its switching surfaces: :meth:`~impactbar.Drive.border_tests`).
+        one of its switching surfaces: its ability ``border_tests``).
     stop_on : iterable of str
         Event kinds at which to stop.
     xtol : float

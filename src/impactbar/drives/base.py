@@ -6,7 +6,7 @@ the bar's motion. The bar and the drive together are autonomous (the blow freque
 Each drive is a hybrid system (a *switched* system) with
 
 - a discrete ``mode`` (any hashable value: the valve's position, pending delayed switches, ...) and a
-  continuous state ``z`` of ``state_size`` numbers (empty for a force that is piecewise constant; the
+  continuous state ``z`` of ``traits.state_size`` numbers (empty for a force that is piecewise constant; the
   chamber pressures of an oil circuit), together a :class:`DriveState`;
 - between events, the force :meth:`Drive.force` on the piston and the rate :meth:`Drive.rate` of
   ``z``, coupled to the modes of the bar, :math:`q_n'' + d q_n' + (s n \pi)^2 q_n = p` (eq. 6);
@@ -14,21 +14,24 @@ Each drive is a hybrid system (a *switched* system) with
   (a valve's delay, a ramp's end) or any surface ``g(t, q, q', z) = 0`` crossed in a direction
   (:class:`DriveEvent`), each with its map :meth:`Drive.jump`, and the map at an impact,
   :meth:`Drive.impact`;
-- its parameters for continuation, :attr:`Drive.parameters`, and their copies :meth:`Drive.with_`.
+- what its class declares, :attr:`Drive.traits` (a :class:`DriveTraits`: its parameters for
+  continuation, its state's size, its integrator), and copies with new parameter values,
+  :meth:`Drive.with_`.
 
 The solvers dispatch on this interface, never on a drive's class: :func:`impactbar.simulate`
 (:mod:`impactbar.simulation.switched`), :func:`impactbar.find_orbit`
 (:mod:`impactbar.orbits.switched`) and :func:`impactbar.continue_orbit`
-(:mod:`impactbar.continuation.switched`). A drive without state (``state_size == 0``) has a force
+(:mod:`impactbar.continuation.switched`). A drive without state (``traits.state_size == 0``) has a force
 that is constant between events: its flights are the closed-form flights of the modes (eq. 8), run by
 the simulator's certified event search, and its events in closed form where they are crossings of
 the piston's position or velocity or scheduled times (:meth:`DriveEvent.first_time`). A drive with
 state is integrated with scipy's ``solve_ivp`` (stiff methods) and its events located to the
-integrator's tolerance. A drive may add numerics of its own where they pay: a compiled event loop
-(:meth:`Drive.compiled_loop`), as the valve of :class:`~impactbar.PositionSwitchedDrive` does, and
-a closed-form periodic-orbit problem with an exact Jacobian (:meth:`Drive.orbit_problem`; the
-valve's sits with the orbit solvers, :data:`impactbar.orbits.switched.ORBIT_PROBLEMS`); otherwise
-the generic paths run.
+integrator's tolerance. A drive may add numerics of its own where they pay, as abilities
+(:attr:`Drive.abilities`, :mod:`impactbar.drives.abilities`, each asked once where a solver
+dispatches on it): a compiled event loop, as the valve of :class:`~impactbar.PositionSwitchedDrive`
+has, its own flights, as the oil circuit's, or a periodic-orbit problem of its own (the valve's
+closed-form problem sits with the orbit solvers, :data:`impactbar.orbits.switched.ORBIT_PROBLEMS`);
+otherwise the generic paths run.
 
 The design follows three well-kept codes: the event functions of scipy's ``solve_ivp`` (a scalar
 function of the state whose zero is crossed in a ``direction``, +1 rising, -1 falling, 0 either, and
@@ -36,7 +39,7 @@ that ends the step: :class:`DriveEvent`), Siconos' event-driven simulation of no
 systems (a vector field between events, ``computeF``, and a map at each event, its non-smooth law:
 :meth:`Drive.rate` and :meth:`Drive.jump`; scheduled events beside state events), and Hopsan's
 components (parameters registered by name, read by the solver and copied with new values:
-:attr:`Drive.parameters`, :meth:`Drive.with_`). The saltation matrices of the multipliers follow
+:attr:`Drive.traits`, :meth:`Drive.with_`). The saltation matrices of the multipliers follow
 Hiskens and Pai (2000).
 
 References
@@ -52,20 +55,18 @@ from __future__ import annotations
 import dataclasses
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
-from .._shared.parameters import NamedParameters
 from .._shared.registry import register
+from .abilities import NONE, DriveAbilities
+from .params import DriveParameters
 
-if TYPE_CHECKING:
-    from .orbitproblem import OrbitProblem
-
-__all__ = ["Drive", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent",
-           "SurfaceEvent", "FlightKernel", "KernelRun"]
+__all__ = ["Drive", "DriveTraits", "DriveState", "FlightSettings", "DriveEvent", "GapCrossing",
+           "RateCrossing", "TimedEvent", "SurfaceEvent", "FlightKernel", "KernelRun"]
 
 
 class DriveState(NamedTuple):
@@ -76,7 +77,7 @@ class DriveState(NamedTuple):
     mode : hashable
         The drive's discrete state (chosen by the drive; the solvers only hand it back).
     z : numpy.ndarray, shape (k,)
-        The continuous state, ``k = Drive.state_size`` (shape ``(0,)`` for a drive without state).
+        The continuous state, ``k = traits.state_size`` (shape ``(0,)`` for a drive without state).
 
     Examples
     --------
@@ -207,7 +208,7 @@ class SurfaceEvent(DriveEvent):
 @dataclass(frozen=True)
 class FlightSettings:
     """The integrator of the flights of a drive with state (scipy's ``solve_ivp``), chosen by the
-    drive (:attr:`Drive.integrator`).
+    drive (its ``traits.integrator``, :class:`DriveTraits`).
 
     Attributes
     ----------
@@ -248,8 +249,9 @@ class FlightSettings:
 # optional compiled event loop
 # --------------------------------------------------------------------------------------------------
 class FlightKernel(NamedTuple):
-    """What the simulator hands a drive's compiled event loop (:meth:`Drive.compiled_loop`): the
-    compiled driver's data for the constant forces :attr:`Drive.levels`.
+    """What the simulator hands a drive's compiled event loop (its ability
+    :class:`~impactbar.drives.abilities.CompiledLoop`): the compiled driver's data for the loop's
+    constant forces, ``levels``.
 
     Attributes
     ----------
@@ -300,7 +302,7 @@ class KernelRun(NamedTuple):
         The name of the mode entered at each switch (:meth:`Drive.mode_name`).
     pieces : tuple or None
         The flights of this call: ``(starts, ends, codes, q, v)``, ``codes`` the index of the level
-        in :attr:`Drive.levels` plus ``len(levels)`` where the rigid piston rests on the stop.
+        in the loop's ``levels`` plus ``len(levels)`` where the rigid piston rests on the stop.
     """
 
     status: int
@@ -321,71 +323,147 @@ class KernelRun(NamedTuple):
     PYTHON = 3
 
 
+@dataclass(frozen=True)
+class DriveTraits:
+    """What a drive class declares once, in its body (``traits = DriveTraits(...)``): its entry in the
+    table of drives, its parameters, its continuous state and the integrator of its flights; read by
+    the solvers, the sweeps and the parameter protocol (:attr:`Drive.params`).
+
+    Parameters
+    ----------
+    kind : str, optional
+        Its name in the table :data:`DRIVES` (a sweep spec's ``[drive] kind``,
+        :func:`register_drive`); empty (default) for a drive not in the table.
+    parameters : tuple of str, optional
+        The names of the drive's attributes that :func:`~impactbar.continue_orbit` and the sweeps
+        may change (each a float), copies made by :meth:`Drive.with_`.
+    parameter_ranges : mapping, optional
+        Name -> keyword arguments of :class:`~impactbar.parameters.Parameter` (``low``, ``high``,
+        ``low_open``, ``description``, ...), the ranges the parameters' records state; the
+        constructor checks them again.
+    state_size : int, optional
+        ``k``, the size of the continuous state ``z`` (default 0: a force constant between events,
+        whose flights are closed forms).
+    state_names : tuple of str, optional
+        The names of the ``k`` variables (logged with a run's drive state).
+    integrator : FlightSettings, optional
+        ``solve_ivp``'s method and tolerances for the flights of a drive with state.
+
+    Raises
+    ------
+    ValueError
+        A ``kind`` that is not a string, names that are not strings, a negative ``state_size``, or
+        ``state_names`` neither empty nor ``state_size`` of them.
+
+    Examples
+    --------
+    >>> from impactbar import PositionSwitchedDrive
+    >>> traits = PositionSwitchedDrive.traits
+    >>> traits.kind, traits.parameters[:3], traits.piecewise_constant
+    ('position-switched', ('stroke', 'ret', 'switch_out'), True)
+    """
+
+    kind: str = ""
+    parameters: tuple[str, ...] = ()
+    parameter_ranges: Mapping[str, dict] = dataclasses.field(default_factory=dict)
+    state_size: int = 0
+    state_names: tuple[str, ...] = ()
+    integrator: FlightSettings = FlightSettings()
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.kind, str):
+            raise ValueError(f"kind must be a string (the drive's name in DRIVES); got {self.kind!r}")
+        for name in ("parameters", "state_names"):
+            names = getattr(self, name)
+            if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+                raise ValueError(f"{name} must be a sequence of strings; got {names!r}")
+            object.__setattr__(self, name, tuple(names))
+        size = self.state_size
+        if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0:
+            raise ValueError(f"state_size must be an integer >= 0; got {size!r}")
+        if self.state_names and len(self.state_names) != size:
+            raise ValueError(f"state_names must name the {size} states (or none); got {self.state_names!r}")
+
+    @property
+    def piecewise_constant(self) -> bool:
+        """Whether the force is constant between events (no continuous state): flights in closed
+        form."""
+        return self.state_size == 0
+
+
+#: What a drive declared in its class body before its traits, params and abilities: a class that
+#: declares one of them with no ``traits`` (or ``params``, ``abilities``) of its own is refused, since
+#: no solver would read it.
+_MOVED = {
+    **dict.fromkeys(("kind", "parameters", "parameter_ranges", "state_size", "state_names", "integrator"),
+                    "traits"),
+    **dict.fromkeys(("parameter_table", "with_parameter", "with_parameters", "_parameter_value"), "params"),
+    **dict.fromkeys(("levels", "compiled_loop", "flight", "variational", "variational_state_settings",
+                     "n_quadratures", "piston_work_quadrature", "quadratures", "end_flight", "border_tests",
+                     "orbit_problem"), "abilities"),
+}
+_HOMES = {"traits": "traits = DriveTraits(...)", "params": "a params property returning DriveParameters",
+          "abilities": "an abilities property returning DriveAbilities"}
+
+
 # --------------------------------------------------------------------------------------------------
 # the drive
 # --------------------------------------------------------------------------------------------------
-class Drive(NamedParameters, ABC):
+class Drive(ABC):
     r"""A drive of the piston that is not a function of time: autonomous, with state of its own
     (theory §10). A base class: subclasses declare the force, the events and their maps.
 
     The solvers (:func:`impactbar.simulate`, :func:`impactbar.find_orbit`,
     :func:`impactbar.continue_orbit`) take a drive wherever they take a load and call only the
-    members below; a new drive needs nothing else (``tests/drives/test_new_drive.py`` defines two in
+    members below; a new drive needs nothing else (``tests/drives/test_new_drive.py`` defines some in
     the test file alone). Subclasses are frozen dataclasses (validated once, hashable, compared by
     value).
 
     ==================================  ===============================================================
     member                              what it gives
     ==================================  ===============================================================
-    ``state_size``                      ``k``, size of the continuous state ``z`` (0: a force constant
-                                        between events)
-    ``parameters``                      names of the fields :func:`~impactbar.continue_orbit` may follow
-    ``parameter_ranges``                optional: their ranges and descriptions (the records of
-                                        :meth:`parameter_table`, :mod:`impactbar.parameters`)
-    :meth:`with_`                       a copy with new parameter values (validated again)
     :meth:`start`                       the state at the start of a run, from the bar's
     :meth:`force`                       ``p`` on the piston, from the state (and the bar's, ``k > 0``)
-    :meth:`rate`                        ``z'`` between events (``k > 0``)
     :meth:`events`                      the events that can end a flight in a mode
     :meth:`jump`                        the state after an event
     :meth:`impact`                      the state after an impact
+    :meth:`rate`                        ``z'`` between events (``k > 0``)
     :meth:`mode_name`                   a mode's name, logged at each switch
-    ``integrator``                      ``solve_ivp``'s method and tolerances for ``z``
-    ``levels``, :meth:`compiled_loop`   optional: a compiled event loop
-    :meth:`orbit_problem`               optional: a periodic-orbit problem of the drive's own
+    :meth:`with_`                       a copy with new parameter values (validated again)
+    :attr:`traits`                      what the class declares (:class:`DriveTraits`): its ``kind``,
+                                        ``parameters`` and their ranges, ``state_size`` ``k`` (0: a
+                                        force constant between events), ``integrator``
+    :attr:`params`                      its parameters' records and copies (the parameter protocol,
+                                        :class:`~impactbar.drives.params.DriveParameters`)
+    :attr:`abilities`                   optional numerics of its own
+                                        (:class:`~impactbar.drives.abilities.DriveAbilities`): a
+                                        compiled event loop, its own flights, quadratures, coupled
+                                        blows, border tests, a periodic-orbit problem
+    :attr:`family`                      ``"drive"``: the forcing family, by which each entry point
+                                        chooses its solver once (``impactbar._shared.forcing``)
     ==================================  ===============================================================
 
-    Attributes
-    ----------
-    family : str
-        ``"drive"``: the forcing family, by which each entry point chooses its solver once
-        (``impactbar._shared.forcing``).
-    state_size : int
-        ``k``, the number of continuous state variables ``z`` (0 for a force that is constant between
-        events, whose flights are then closed forms).
-    state_names : tuple of str
-        Names of the ``k`` variables (logged with the run's drive state).
-    integrator : FlightSettings
-        The integrator of a drive with state (method and tolerances of ``solve_ivp``).
-    parameters : tuple of str
-        The fields :func:`impactbar.continue_orbit` can follow (each a float).
-    levels : tuple of float or None
-        For a drive with a compiled event loop, the constant forces it takes (the valve:
-        ``(+stroke, -ret)``); ``None`` otherwise.
-
-    The example below is a force of constant size pushing the piston onto the stop (no event, no
-    state): the bounces of a rigid piston dropped from the gap :math:`y_0` arrive at
+    The first five are abstract: with them alone (and ``traits`` for parameters or state) a drive runs
+    in every solver. The example below is a force of constant size pushing the piston onto the stop
+    (no event, no state): the bounces of a rigid piston dropped from the gap :math:`y_0` arrive at
     :math:`v_1 = \sqrt{2 p y_0}`, then :math:`R v_1`, :math:`R^2 v_1` (eq. 10, energy).
+
+    Raises
+    ------
+    ValueError
+        On defining a subclass that declares in its body a member that now lives in ``traits``,
+        ``params`` or ``abilities`` (``state_size``, ``parameters``, ``compiled_loop``, ...) without
+        declaring that home.
 
     Examples
     --------
     >>> from dataclasses import dataclass
-    >>> from impactbar import BarModel, Drive, DriveState, InitialState, simulate
+    >>> from impactbar import BarModel, Drive, DriveState, DriveTraits, InitialState, simulate
     >>> import numpy as np
     >>> @dataclass(frozen=True)
     ... class Push(Drive):
     ...     p: float
-    ...     parameters = ("p",)
+    ...     traits = DriveTraits(parameters=("p",))
     ...     def start(self, model, q, v): return DriveState(0, np.zeros(0))
     ...     def force(self, mode, z, q, v): return self.p
     ...     def events(self, mode): return ()
@@ -395,43 +473,45 @@ class Drive(NamedParameters, ABC):
     ...                5.0, max_impacts=3)
     >>> [round(float(v), 12) for v in run.impact_velocities]
     [2.0, 1.0, 0.5]
+    >>> Push(2.0).with_(p=3.0), Push(2.0).abilities.compiled_loop
+    (Push(p=3.0), None)
     """
 
-    #: The members a drive must implement (abstract here): with them alone it runs in
-    #: :func:`~impactbar.simulate` and :func:`~impactbar.find_orbit` (``tests/drives/test_new_drive.py``).
-    REQUIRED_HOOKS: ClassVar[tuple[str, ...]] = ("start", "force", "events", "jump", "impact")
-    #: Every other member the solvers call: declarations and hooks with a default (``rate`` is needed
-    #: with ``state_size > 0``, ``end_flight`` for a drive with state under a law whose contact takes
-    #: time).
-    OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
-        "family", "kind", "integrator", "state_size", "state_names", "parameters", "parameter_ranges",
-        "n_quadratures", "piston_work_quadrature", "variational", "variational_state_settings", "with_",
-        "parameter_table", "with_parameter", "with_parameters",
-        "mode_name", "rate", "quadratures", "piecewise_constant", "levels",
-        "compiled_loop", "flight", "end_flight", "border_tests", "orbit_problem")
-
+    #: the forcing family, by which each entry point chooses its solver once (a load's is ``"load"``)
     family: ClassVar[str] = "drive"
-    #: the drive's name in :data:`DRIVES` (a sweep spec's ``[drive] kind``, :func:`register_drive`)
-    kind: ClassVar[str] = ""
-    integrator: ClassVar[FlightSettings] = FlightSettings()
-    state_size: ClassVar[int] = 0
-    state_names: ClassVar[tuple[str, ...]] = ()
-    parameters: ClassVar[tuple[str, ...]] = ()
-    # (their records, changed by with_parameter: NamedParameters, the parameter protocol)
+    #: what the class declares: its kind, parameters, continuous state and integrator
+    traits: ClassVar[DriveTraits] = DriveTraits()
 
-    # -- parameters -------------------------------------------------------------------------------
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        for name, home in _MOVED.items():
+            if name in vars(cls) and getattr(cls, home) is getattr(Drive, home):
+                raise ValueError(f"{cls.__name__}.{name}: a drive declares it in {_HOMES[home]} now "
+                                 f"(impactbar.Drive), not as a member of its own")
+
+    @property
+    def abilities(self) -> DriveAbilities:
+        """What the drive can do beyond its required hooks (:class:`DriveAbilities`): none here."""
+        return NONE
+
+    @property
+    def params(self) -> DriveParameters:
+        """The drive's parameters, their records and copies with some changed, from its
+        :attr:`traits` (:class:`~impactbar.drives.params.DriveParameters`)."""
+        return DriveParameters(self)
+
     def with_(self, **changes) -> Drive:
         """A copy with the given parameters changed (validated again by the constructor).
 
         Raises
         ------
         ValueError
-            For a name not in :attr:`parameters` (named) or a value the constructor refuses.
+            For a name not in ``traits.parameters`` (named) or a value the constructor refuses.
         """
-        bad = sorted(set(changes) - set(self.parameters))
+        names = self.traits.parameters
+        bad = sorted(set(changes) - set(names))
         if bad:
-            raise ValueError(f"parameter must be one of {self.parameters} for a {type(self).__name__}; "
-                             f"got {bad[0]!r}")
+            raise ValueError(f"parameter must be one of {names} for a {type(self).__name__}; got {bad[0]!r}")
         return dataclasses.replace(self, **changes)
 
     # -- state ------------------------------------------------------------------------------------
@@ -457,26 +537,6 @@ class Drive(NamedParameters, ABC):
         a drive written without the argument serves uniform bars)."""
         return np.zeros(0)
 
-    #: The number of quadratures the drive keeps of its own along a run (the oil circuit's energy
-    #: account: 8), whose integrands :meth:`quadratures` gives; 0: none.
-    n_quadratures: ClassVar[int] = 0
-    #: Which of the drive's quadratures (an index into :meth:`quadratures`) is its work on the piston,
-    #: ``int p u_t(0, t) dt`` (the oil circuit's: its layout's ``energy["piston"]``); ``None``: none
-    #: (the solvers then integrate the force against the driven end's velocity). The pieces of a run
-    #: give it over their span as ``piston_work()``; no solver reads a quadrature by its index.
-    piston_work_quadrature: ClassVar[int | None] = None
-
-    def quadratures(self, mode, z: np.ndarray, q: np.ndarray, v: np.ndarray, model=None) -> np.ndarray:
-        """The integrands of the drive's own quadratures, shape ``(n_quadratures,)`` (the oil circuit's
-        energy terms), for the rigid piston resting on the stop; ``model`` as in :meth:`rate`."""
-        return np.zeros(0)
-
-    @property
-    def piecewise_constant(self) -> bool:
-        """Whether the force is constant between events (no continuous state): flights in closed
-        form."""
-        return self.state_size == 0
-
     # -- events -----------------------------------------------------------------------------------
     @abstractmethod
     def events(self, mode) -> tuple[DriveEvent, ...]:
@@ -494,132 +554,30 @@ class Drive(NamedParameters, ABC):
         """The drive's state after an impact, ``(q, q')`` the bar's state just after it (after the
         impact law; under a law whose contact takes time, where the contact ends, at ``t``)."""
 
-    # -- optional numerics of the drive's own ----------------------------------------------------
-    @property
-    def levels(self) -> tuple[float, ...] | None:
-        """The constant forces of a compiled event loop (:meth:`compiled_loop`), ``None`` without
-        one."""
-        return None
 
-    def compiled_loop(self, model, kernel: FlightKernel):
-        """A compiled event loop for a run (``None``: the simulator's loop in Python).
-
-        Returns an object whose ``run(state, t, q, v, t_end, n_impacts, max_impacts)`` follows the
-        drive through many flights and returns a :class:`KernelRun`; ``piece(t0, t1, code, q, v)``
-        is then asked for nothing (the simulator builds the flights from the codes)."""
-        return None
-
-    def flight(self, model, state: DriveState, t: float, q: np.ndarray, v: np.ndarray, t_stop: float,
-               settings: FlightSettings | None = None, variational: bool = False):
-        """The drive's own integration of one flight (``None``: the generic flight of
-        :func:`impactbar.drives.flight.fly`, ``solve_ivp`` over :meth:`force` and :meth:`rate`).
-
-        A drive with stiff state of its own (the oil circuit) integrates its flights with its own
-        compiled vector field; it returns a :class:`~impactbar.drives.flight.Flight` ending at the
-        first of the arrival at the stop, one of its :meth:`events` or ``t_stop``, and with
-        ``variational`` (when :attr:`variational` is true) the flight's fundamental matrix of
-        ``(q, q', z)`` in ``Flight.sensitivity``."""
-        return None
-
-    #: Whether :meth:`flight` integrates the variational equations when asked (the generic
-    #: periodic orbits then take the shooting Jacobian and the multipliers from them).
-    variational: ClassVar[bool] = False
-
-    def variational_state_settings(self, model, settings: FlightSettings | None = None):
-        """The integrator of a plain flight (:meth:`flight` without ``variational``) whose state is
-        that of the variational flight with ``settings``, bit for bit, where the drive has one (a
-        variational flight that integrates the plain flight and then takes its fundamental matrix
-        over its steps, the oil circuit's flexible piston); ``None`` where the variational flight's
-        state is its own (the default).
-
-        Parameters
-        ----------
-        model : BarModel
-        settings : FlightSettings, optional
-            The variational flight's integrator (default: the drive's, :attr:`integrator`).
-
-        Returns
-        -------
-        FlightSettings or None
-        """
-        return None
-
-    def end_flight(self, model, state: DriveState, breaks, w0: float, incoming, impedance: float,
-                   settings: FlightSettings | None = None):
-        r"""The drive's state over a stretch of a blow under a law whose contact takes time (theory
-        §11, "The coupled blow"), or ``None`` where the drive cannot follow one (a drive with state
-        is then refused under such a law; a drive without state needs none: its force is held).
-
-        Over the stretch the law gives the wave ``a(t)`` arriving at the piston's driven end from
-        inside it, and the driven end answers the drive's force ``p`` as a semi-infinite bar of
-        impedance ``Z``: :math:`u_t(0, t) = a(t) + p/Z`, ``w = -u(0, t)``.
-
-        Parameters
-        ----------
-        model : BarModel
-        state : DriveState
-            At ``breaks[0]``.
-        breaks : numpy.ndarray, shape (n + 1,)
-            Increasing times (model units); ``a`` is constant or smooth between them.
-        w0 : float
-            ``w`` at ``breaks[0]`` (bar lengths, from the stop where it was at impact).
-        incoming : sequence, length n
-            ``a`` on each interval: a float, or a callable of the time.
-        impedance : float
-            ``Z`` (model units: ``s`` for a uniform piston).
-        settings : FlightSettings, optional
-
-        Returns
-        -------
-        object or None
-            With ``state`` (the :class:`DriveState` at ``breaks[-1]``), ``w``, ``impulses`` (``int p
-            dt`` over each interval, shape ``(n,)``), ``pieces`` (with ``drive_state(t)``,
-            ``force(t)``, ``energies()``, ``piston_work()``, the drive's work on the piston over the
-            piece, and ``piston_work_at(t)``, that work to the time ``t`` in it) and ``events``
-            (``(t, event, mode after)``): the oil circuit's ``EndFlight``
-            (``impactbar.drives.circuit.endflight``).
-        """
-        return None
-
-    def border_tests(self, pieces) -> dict:
-        """Test functions of the drive's own border collisions over one period of an orbit
-        (``{surface: value}``, each changing sign where the drive's state touches that switching
-        surface during the period: the return map changes its formula there); ``pieces`` are the
-        period's flights as the drive's :meth:`flight` gives them. The continuation of switched
-        orbits locates each change of sign as a ``"border-collision"`` event. Default: none."""
-        return {}
-
-    def orbit_problem(self, model, impacts: int,
-                      constant_load: Callable[[float], Any]) -> OrbitProblem | None:
-        """The drive's own periodic-orbit problem (closed-form flights, exact Jacobian), or ``None``
-        for the generic shooting problem of :mod:`impactbar.orbits.switched`. ``constant_load(p)``
-        gives the load of a constant force ``p`` (for a contact law's map)."""
-        return None
-
-
-#: The table of drives by :attr:`~Drive.kind`, as :data:`impactbar.loads.LOADS` is of the loads: a
+#: The table of drives by their ``traits.kind``, as :data:`impactbar.loads.LOADS` is of the loads: a
 #: sweep spec's ``[drive] kind`` names one, its other keys the constructor's (or the factory's)
 #: arguments. A value is a drive class or a function returning a drive (:func:`register_drive`).
 DRIVES: dict[str, Callable[..., Drive]] = {}
 
 
 def register_drive(cls: type[Drive] | Callable[..., Drive], *, kind: str | None = None):
-    """Enter a drive class in the table :data:`DRIVES` by its :attr:`~Drive.kind`, so that a sweep
+    """Enter a drive class in the table :data:`DRIVES` by its ``traits.kind``, so that a sweep
     spec's ``[drive] kind`` knows it (usable as a class decorator); or, with ``kind`` given, a
     factory: a function whose keyword arguments are the table's keys and that returns a drive (a drive
     whose constructor takes objects rather than a table's numbers, such as
     :class:`~impactbar.drives.circuit.HydraulicCircuitDrive` with its ``extra_parts``). An axis of
-    the sweep then takes any of the built drive's :attr:`~Drive.parameters` (changed by its
+    the sweep then takes any of the built drive's ``traits.parameters`` (changed by its
     ``with_``), not only the factory's arguments.
 
     Parameters
     ----------
     cls : type or callable
-        A subclass of :class:`Drive` with a non-empty ``kind`` (``kind`` not given); or a function,
+        A subclass of :class:`Drive` with a non-empty ``traits.kind`` (``kind`` not given); or a function,
         not a class, returning a :class:`Drive` (``kind`` given).
     kind : str, optional
         The factory's name in :data:`DRIVES`; ``None`` (default): a class, entered by its own
-        ``kind``.
+        ``traits.kind``.
 
     Returns
     -------
@@ -646,7 +604,7 @@ def register_drive(cls: type[Drive] | Callable[..., Drive], *, kind: str | None 
     True
     """
     if kind is None:
-        return register(DRIVES, cls, Drive, "kind", "drive")
+        return register(DRIVES, cls, Drive, "traits.kind", "drive")
     if not isinstance(kind, str) or not kind:
         raise ValueError(f"kind must be a non-empty string (the factory's name in DRIVES); got {kind!r}")
     if isinstance(cls, type) or not callable(cls):

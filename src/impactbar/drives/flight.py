@@ -5,7 +5,7 @@ state (:mod:`impactbar.simulation.switched`).
 
 Two kinds of flight, by the drive:
 
-- **a force constant between events** (``Drive.piecewise_constant``, no continuous state): every
+- **a force constant between events** (``traits.piecewise_constant``, no continuous state): every
   mode moves in closed form (eq. 8, :func:`~impactbar.dynamics.modal.step_constant`); the arrival is
   found by the compiled certified impact search (:func:`impactbar.dynamics._kernel.run_free`, or
   the rigid coordinate's closed form), the drive's events in closed form
@@ -19,7 +19,7 @@ Two kinds of flight, by the drive:
   problem is stiff, as an oil column against the piston's inertia is)
   with the arrival ``c . q = 0`` (rising) and the drive's events as terminal event functions,
   located by scipy to the integrator's tolerance (``rtol``, ``atol`` of the drive's
-  :attr:`~impactbar.Drive.integrator`, a :class:`~impactbar.drives.base.FlightSettings`).
+  ``traits.integrator``, a :class:`~impactbar.drives.base.FlightSettings`).
 """
 
 from __future__ import annotations
@@ -140,10 +140,10 @@ class RestPiece:
 
 class QuadratureRestPiece(RestPiece):
     """A :class:`RestPiece` of a drive that keeps quadratures of its own
-    (:attr:`~impactbar.drives.Drive.n_quadratures`, the oil circuit's energy account): ``sol``
+    (:class:`~impactbar.drives.abilities.Quadratures`, the oil circuit's energy account): ``sol``
     carries them after ``z``, from 0 at ``t0``; ``totals`` are their values at ``t_end``; ``work``
     the index of the drive's work on the piston among them
-    (:attr:`~impactbar.drives.Drive.piston_work_quadrature`, ``None``: none of them).
+    (the ability's ``piston_work``, ``None``: none of them).
 
     Raises
     ------
@@ -157,8 +157,8 @@ class QuadratureRestPiece(RestPiece):
         super().__init__(t0, t_end, sol, z, M, c)
         self.totals = np.asarray(totals, dtype=float)
         if work is not None and not (isinstance(work, (int, np.integer)) and 0 <= work < self.totals.size):
-            raise ValueError(f"piston_work_quadrature must be None or an integer in [0, "
-                             f"{self.totals.size}) (the drive's n_quadratures); got {work!r}")
+            raise ValueError(f"piston_work must be None or an integer in [0, "
+                             f"{self.totals.size}) (the drive's quadratures' count); got {work!r}")
         self.work = work
 
     def energies(self):
@@ -195,9 +195,10 @@ class Flight(NamedTuple):
     piece : ClosedPiece or OdePiece
         The flight, to evaluate it at any time in it.
     sensitivity : numpy.ndarray or None
-        From a drive's own flight with the variational equations (:meth:`Drive.flight` with
-        ``variational=True``): the fundamental matrix of ``(q, q', z)`` from the start to the end
-        (before the map of the event that ends it); ``None`` otherwise.
+        From a drive's own flight with the variational equations (its ability
+        :class:`~impactbar.drives.abilities.OwnFlight` with ``variational=True``): the fundamental
+        matrix of ``(q, q', z)`` from the start to the end (before the map of the event that ends
+        it); ``None`` otherwise.
     """
 
     t: float
@@ -225,25 +226,26 @@ def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
         Off the stop, or on it leaving (:math:`c \cdot q \le 0`).
     t_stop : float
     settings : FlightSettings, optional
-        The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
+        The integrator of a drive with state (default: the drive's, ``traits.integrator``).
     variational : bool, optional
-        Ask a drive's own flight (:meth:`Drive.flight`) for the fundamental matrix of the flight
-        (``Flight.sensitivity``).
+        Ask a drive's own flight (its ability :class:`~impactbar.drives.abilities.OwnFlight`) for
+        the fundamental matrix of the flight (``Flight.sensitivity``).
 
     Returns
     -------
     Flight
-        A drive that integrates its flights itself (:meth:`Drive.flight`, e.g. the oil circuit's
+        A drive that integrates its flights itself (its ability ``flight``, e.g. the oil circuit's
         CVODE) gives its own.
     """
     q = np.array(q, dtype=float)
     v = np.array(v, dtype=float)
-    own = drive.flight(model, state, t, q, v, t_stop, settings, variational)
+    own = drive.abilities.flight
     if own is not None:
-        return own
-    if drive.piecewise_constant:
+        return own.fly(model, state, t, q, v, t_stop, settings, variational)
+    traits = drive.traits
+    if traits.piecewise_constant:
         return _closed(model, drive, state, t, q, v, t_stop)
-    return _ode(model, drive, state, t, q, v, t_stop, settings if settings is not None else drive.integrator)
+    return _ode(model, drive, state, t, q, v, t_stop, settings if settings is not None else traits.integrator)
 
 
 # --------------------------------------------------------------------------------------------------

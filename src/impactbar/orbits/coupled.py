@@ -57,7 +57,7 @@ def blow_state(model, drive, t, q, v, state, settings=None):
     model : BarModel
         Under a law whose contact takes time (:meth:`~impactbar.laws.ContactLaw.driven_contact`).
     drive : Drive
-        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+        A drive with state that follows a blow (its ability ``end_flight``).
     t : float
         Time of the arrival (model units).
     q, v : array_like, shape (N + 1,)

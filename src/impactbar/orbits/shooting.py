@@ -93,7 +93,7 @@ class ShootingProblem(OrbitProblem):
     drive : Drive
     impacts : int
     settings : FlightSettings, optional
-        The integrator of a drive with state (default: the drive's, :attr:`Drive.integrator`).
+        The integrator of a drive with state (default: the drive's, ``traits.integrator``).
     newton : {"chord", "full"}, optional
         Where the drive's flights integrate the variational equations (the oil circuit), how
         :meth:`solve` iterates: ``"chord"`` (default), the Jacobian of one variational flight at a
@@ -114,11 +114,12 @@ class ShootingProblem(OrbitProblem):
             raise ValueError(f"newton must be 'chord' or 'full'; got {newton!r}")
         self.model, self.drive, self.newton = model, drive, newton
         self.impacts = check_int("impacts", impacts, lo=1)
-        self.settings = settings if settings is not None else drive.integrator
+        traits, own = drive.traits, drive.abilities.flight
+        self.settings = settings if settings is not None else traits.integrator
         law = model.law
         #: a drive with state under a law whose contact takes time: each impact a blow solved with
         #: the drive's state (theory §11, "The coupled blow"), its Jacobian by central differences
-        self.coupled = not drive.piecewise_constant and not law.restitution_in_kernel(model)
+        self.coupled = not traits.piecewise_constant and not law.restitution_in_kernel(model)
         if self.coupled:
             from ..simulation.blows import check_coupling
 
@@ -127,13 +128,13 @@ class ShootingProblem(OrbitProblem):
             raise ValueError("model.R must be < 1 for a periodic motion under a drive (with R = 1 no "
                              "energy leaves at the impacts)")
         self.M = model.n_modes + 1
-        self.k = drive.state_size
+        self.k = traits.state_size
         self.n = 2 * self.M + self.k
         self.size = self.impacts * self.n
         self.positive = np.zeros(0, dtype=np.int64)
-        self.closed = drive.piecewise_constant
-        #: the Jacobian from the variational equations (a drive whose flights integrate them)
-        self.variational = bool(getattr(drive, "variational", False)) and not self.closed
+        self.closed = traits.piecewise_constant
+        #: the Jacobian from the variational equations (a drive whose own flights integrate them)
+        self.variational = own is not None and own.variational and not self.closed
         self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
         self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
         self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
@@ -144,7 +145,7 @@ class ShootingProblem(OrbitProblem):
         """From ``y = (q, q', z)`` in ``mode`` at ``tau`` to the next impact and through it: the
         state after it, the time it ends, the mode at the arrival and, with ``keep``, the pieces and
         the drive's events ``(time, event, mode after)``; with ``variational`` (a drive whose flights
-        integrate the variational equations, :attr:`~impactbar.Drive.variational`) also the
+        integrate the variational equations, ``OwnFlight.variational``) also the
         Jacobian of the state after the impact with respect to ``y`` (``_saltation.through``):
         ``True`` the multipliers' (a coupled blow's by central differences), ``"steer"`` one that
         only steers Newton's method (a coupled blow's by forward differences, half the blows),
@@ -172,11 +173,12 @@ class ShootingProblem(OrbitProblem):
 
     def _state_settings(self, settings=None):
         """The integrator of the plain flight whose state is the variational flight's with
-        ``settings`` (:meth:`~impactbar.Drive.variational_state_settings`; not with coupled blows,
-        whose ``"state"`` flights skip only the blow's Jacobian), or ``None``."""
-        if self.coupled or not self.variational:
+        ``settings`` (``OwnFlight.state_settings``; not with coupled blows, whose ``"state"``
+        flights skip only the blow's Jacobian), or ``None``."""
+        own = self.drive.abilities.flight
+        if self.coupled or not self.variational or own.state_settings is None:
             return None
-        return self.drive.variational_state_settings(self.model, settings or self.settings)
+        return own.state_settings(self.model, settings or self.settings)
 
     @property
     def state_flights(self) -> bool:
@@ -370,7 +372,7 @@ class ShootingProblem(OrbitProblem):
 
     def residual(self, X, settings=None, *, steer: bool = False, keep: bool = False):
         """The shooting residual and its Jacobian: from the variational equations where the drive's
-        flights integrate them (:attr:`~impactbar.Drive.variational`, ``_saltation.through``; ``settings``
+        flights integrate them (``OwnFlight.variational``, ``_saltation.through``; ``settings``
         their integrator, default the problem's; with ``steer``, a Jacobian that only steers
         Newton's method: a coupled blow's by forward differences; with ``keep``, the flights kept
         whole, so that the orbit's data at ``X`` (:meth:`orbit`, one impact) takes the last one
@@ -617,7 +619,7 @@ class ShootingProblem(OrbitProblem):
 
     def flights(self, X) -> list:
         """The period's flights as the drive's flights give them (their own times: each block
-        from its start ``tau_k``), e.g. for the drive's :meth:`~impactbar.Drive.border_tests`."""
+        from its start ``tau_k``), e.g. for the drive's ``border_tests`` (its abilities)."""
         n = self.n
         out = []
         for k in range(self.impacts):

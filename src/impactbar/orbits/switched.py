@@ -5,10 +5,11 @@ r"""Periodic motions under a drive: autonomous, with an unknown period (theory Â
 :class:`~impactbar.drives.OrbitProblem`, by Newton's method and returns a :class:`SwitchedOrbit`,
 which is a :class:`~impactbar.PeriodicOrbit`. It calls only the interface:
 
+- a drive that brings a problem of its own (its ability ``orbit_problem``,
+  :attr:`~impactbar.Drive.abilities`) with it;
 - a drive whose class has a problem in the table :data:`ORBIT_PROBLEMS` is solved with it: the
   valve of :class:`~impactbar.PositionSwitchedDrive` has closed-form flights and the exact Jacobian
   (:mod:`impactbar.orbits.valve_segment`);
-- a drive that brings a problem of its own (:meth:`~impactbar.Drive.orbit_problem`) with it;
 - any other drive with the generic shooting problem :class:`ShootingProblem`: the unknowns are the
   bar's and the drive's states just after each of the ``m`` impacts of the period, the residual the
   flight from each to the next impact (:func:`impactbar.drives.flight.fly`: closed forms for a force
@@ -62,8 +63,8 @@ def check_orbit(orbit, name: str = "orbit") -> PeriodicOrbit:
 
 
 #: The orbit solvers' own periodic-orbit problems, by drive class: ``ORBIT_PROBLEMS[cls](model, drive,
-#: impacts, constant_load)`` is the problem of a drive of class ``cls`` (or of a subclass that does not
-#: bring its own :meth:`~impactbar.Drive.orbit_problem`), consulted before the drive's hook. The drives
+#: impacts, constant_load)`` is the problem of a drive of class ``cls`` or of a subclass, where the
+#: drive brings no problem of its own (its ability ``orbit_problem``). The drives
 #: hold the models only (no contact law, no restitution); the numerics of their orbits sit here, as
 #: the loads' do: the valve of :class:`~impactbar.PositionSwitchedDrive` has closed-form flights and
 #: the exact Jacobian (:class:`~impactbar.orbits.valve_segment.ValveProblem`).
@@ -72,26 +73,27 @@ ORBIT_PROBLEMS: dict[type, Callable[..., OrbitProblem]] = {PositionSwitchedDrive
 
 def _table_problem(drive) -> Callable[..., OrbitProblem] | None:
     """The entry of :data:`ORBIT_PROBLEMS` for ``drive``: that of the first class of its MRO in the
-    table, unless a class before it brings its own :meth:`~impactbar.Drive.orbit_problem`."""
+    table."""
     for cls in type(drive).__mro__:
         if cls in ORBIT_PROBLEMS:
             return ORBIT_PROBLEMS[cls]
-        if "orbit_problem" in vars(cls):
-            return None
     return None
 
 
 def orbit_problem(model: BarModel, drive, impacts: int = 1,
                   settings: FlightSettings | None = None, *, newton: str = "chord") -> OrbitProblem:
     """The periodic-orbit problem of ``drive`` on ``model`` with ``impacts`` impacts per period: the
-    orbit solvers' own for its class (:data:`ORBIT_PROBLEMS`), else the drive's own
-    (:meth:`~impactbar.Drive.orbit_problem`), else the generic :class:`ShootingProblem` (``newton``:
-    its iteration where the flights integrate the variational equations, as there)."""
+    drive's own (its ability ``orbit_problem``, :attr:`~impactbar.Drive.abilities`), else the orbit
+    solvers' own for its class (:data:`ORBIT_PROBLEMS`), else the generic :class:`ShootingProblem`
+    (``newton``: its iteration where the flights integrate the variational equations, as there)."""
+    own = drive.abilities.orbit_problem
+    problem = own(model, impacts, _constant_load) if own is not None else None
+    if problem is not None:
+        return problem
     table = _table_problem(drive)
     if table is not None:
         return table(model, drive, impacts, _constant_load)
-    problem = drive.orbit_problem(model, impacts, _constant_load)
-    return problem if problem is not None else ShootingProblem(model, drive, impacts, settings, newton=newton)
+    return ShootingProblem(model, drive, impacts, settings, newton=newton)
 
 
 def orbit_of(problem: OrbitProblem, X, *, multipliers: bool = True) -> SwitchedOrbit:

@@ -90,7 +90,7 @@ class BlowPiece:
 
     def piston_work(self) -> float:
         """The drive's work on the piston over the piece to :attr:`t_end`, its pieces' ``piston_work``
-        (:attr:`~impactbar.drives.Drive.piston_work_quadrature`).
+        (the drive's ``Quadratures.piston_work``).
 
         Returns
         -------
@@ -166,13 +166,12 @@ PRESSED_BLOWS = 1000
 def check_coupling(model, drive) -> None:
     """Refuse, in one line, a drive with state under a law whose contact takes time where the law
     has no coupled blow (:meth:`~impactbar.laws.ContactLaw.driven_contact`) or the drive cannot
-    follow one (:meth:`~impactbar.Drive.end_flight`).
+    follow one (its ability ``end_flight``, :class:`~impactbar.drives.abilities.DriveAbilities`).
 
     Raises
     ------
     ValueError
         Naming what is missing."""
-    from ..drives.base import Drive
     from ..laws.base import ContactLaw
 
     law = model.law
@@ -180,9 +179,10 @@ def check_coupling(model, drive) -> None:
         raise ValueError(f"a drive with state ({type(drive).__name__}) under impact={model.impact!r}: the "
                          "law has no blow solved with a drive's state (ContactLaw.driven_contact); use the "
                          "paper's, the wave or the rod-rock law")
-    if type(drive).end_flight is Drive.end_flight:
+    if drive.abilities.end_flight is None:
         raise ValueError(f"a drive with state ({type(drive).__name__}) runs under an instantaneous impact "
-                         f"law only: it cannot follow a blow (Drive.end_flight); got impact={model.impact!r}")
+                         f"law only: it cannot follow a blow (no end_flight in its abilities); got "
+                         f"impact={model.impact!r}")
 
 
 def check_blow_switches(drive, modes, gaps) -> None:
@@ -273,7 +273,7 @@ def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, ne
         From a blow (:func:`driven_blow`), or the piston pressed on the stop through
         ``PRESSED_BLOWS`` blows."""
     c = model.end_weights
-    settings = settings if settings is not None else drive.integrator
+    settings = settings if settings is not None else drive.traits.integrator
     loop = new_run(model, drive, q, v, t0, t_end, max_imp)
     loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
     pressed = 0

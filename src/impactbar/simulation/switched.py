@@ -10,7 +10,7 @@ The run calls only the drive's interface (:mod:`impactbar.drives.base`):
   closed form (:meth:`~impactbar.drives.DriveEvent.first_time`: no crossing is missed, each is
   refined to rounding) or, for an event surface without one, by bracketing on the closed-form
   flight; at the event the drive's map acts, at each impact :meth:`~impactbar.Drive.impact`. A drive
-  with a compiled event loop (:meth:`~impactbar.Drive.compiled_loop`) runs there under an
+  with a compiled event loop (:attr:`~impactbar.Drive.abilities`) runs there under an
   instantaneous law, handing back the pieces it does not resolve (the same pieces, impacts and
   switches; switch ``simulate.switched_kernel``).
 - **a drive with state** ``z``: the bar's modes and ``z`` are integrated together by scipy's
@@ -314,10 +314,10 @@ def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: in
               driver: Driver) -> SwitchedTrajectory:
     """A drive's run (module docstring): a drive with state by ``solve_ivp``'s flights
     (:func:`run_stateful`); a force constant between events over pieces of the ordinary driver under
-    that force (``driver``), with the drive's compiled loop where it has one
-    (:meth:`~impactbar.Drive.compiled_loop`, switch ``simulate.switched_kernel``, an instantaneous
+    that force (``driver``), with the drive's compiled loop where it has one (its ability
+    :class:`~impactbar.drives.abilities.CompiledLoop`, switch ``simulate.switched_kernel``, an instantaneous
     law), in Python piece by piece otherwise (:func:`run_pieces`)."""
-    if not drive.piecewise_constant:
+    if not drive.traits.piecewise_constant:
         return run_stateful(model, drive, q, v, t0, t_end, max_imp, driver.make_state)
     from ..loads import FourierLoad
 
@@ -341,31 +341,32 @@ def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: in
             driver.push_off(core.c, q)
             return driver.run(core, q, v, t, t_stop, 1)
 
-    levels = drive.levels
-    if levels is None or not law.restitution_in_kernel(model) or not use_fast("simulate.switched_kernel"):
+    loop = drive.abilities.compiled_loop
+    if loop is None or not law.restitution_in_kernel(model) or not use_fast("simulate.switched_kernel"):
         return run_pieces(model, drive, q, v, t0, t_end, max_imp, piece, driver.make_state)
-    level_cores = tuple(core_of(lv) for lv in levels)
+    level_cores = tuple(core_of(lv) for lv in loop.levels)
     first = level_cores[0]
     kernel = FlightKernel(loads=tuple(tuple(core.data) for core in level_cores), basis=tuple(first.free.view),
                           R=first.R, c=first.c, tail=driver.tail, rigid=rigid,
                           fast_search=use_fast("simulate.impact_search"))
-    return run_pieces(model, drive, q, v, t0, t_end, max_imp, piece, driver.make_state, kernel, level_cores)
+    return run_pieces(model, drive, q, v, t0, t_end, max_imp, piece, driver.make_state, kernel, level_cores,
+                      loop)
 
 
 def run_pieces(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int, piece, make_state,
-               kernel: FlightKernel | None = None, cores=None) -> SwitchedTrajectory:
+               kernel: FlightKernel | None = None, cores=None, compiled=None) -> SwitchedTrajectory:
     """The event-driven run of a drive whose force is constant between events (module docstring).
 
     ``piece(level, q, v, t, t_stop)`` runs the ordinary driver under the constant force ``level``
     from ``(q, v)`` at ``t`` until ``t_stop`` or its first impact, and returns its
     :class:`~impactbar.Trajectory` (or a :func:`rigid_piece` flight); ``make_state(q, v)`` makes the
-    final :class:`~impactbar.InitialState`. With ``kernel`` (the driver's data of the drive's
-    ``levels``, ``cores`` their driver objects) the drive's compiled loop
-    (:meth:`~impactbar.Drive.compiled_loop`) runs the flights it resolves, and this loop the
-    others, one at a time.
+    final :class:`~impactbar.InitialState`. With ``compiled``, the drive's compiled loop (its ability
+    :class:`~impactbar.drives.abilities.CompiledLoop`), and ``kernel`` (the driver's data of its
+    ``levels``, ``cores`` their driver objects) that loop runs the flights it resolves, and this loop
+    the others, one at a time.
     """
     loop = _Run(model, drive, q, v, t0, t_end, max_imp)
-    runner = drive.compiled_loop(model, kernel) if kernel is not None else None
+    runner = compiled.build(model, kernel) if compiled is not None and kernel is not None else None
     if runner is not None:
         loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
     while loop.t < t_end and not loop.done:
@@ -383,7 +384,7 @@ def run_pieces(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: i
         loop.step(piece)
     make_piece = None
     if runner is not None:
-        levels = drive.levels
+        levels = compiled.levels
         L = len(levels)
         if kernel.rigid:
             d = model.d
@@ -437,7 +438,7 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     R = law.kernel_restitution(model)
     c = model.end_weights
     M = model.n_modes + 1
-    settings = settings if settings is not None else drive.integrator
+    settings = settings if settings is not None else drive.traits.integrator
     loop = _Run(model, drive, q, v, t0, t_end, max_imp)
     loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
     recent: list[float] = []
@@ -476,16 +477,17 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
 def _rest(model, drive, loop, t_end, settings) -> None:
     """The rigid piston at rest on the stop while the drive presses it: ``z`` integrated with
     ``q = q' = 0`` until the force turns (falls through 0), a drive event or ``t_end``; with it the
-    drive's own quadratures (:attr:`~impactbar.drives.Drive.n_quadratures`: the oil circuit's energy
-    account), from 0. A drive whose flights have an integrator of their own (the circuit's CVODE)
-    rests under scipy's ``Radau`` at its tolerances."""
+    drive's own quadratures (its ability :class:`~impactbar.drives.abilities.Quadratures`: the oil
+    circuit's energy account), from 0. A drive whose flights have an integrator of their own (the
+    circuit's CVODE) rests under scipy's ``Radau`` at its tolerances."""
     from scipy.integrate import solve_ivp
 
     mode, z = loop.state
     q0, v0 = np.zeros(1), np.zeros(1)
     t = loop.t
     events = drive.events(mode)
-    k, nq = len(z), int(drive.n_quadratures) if len(z) else 0
+    own = drive.abilities.quadratures
+    k, nq = len(z), int(own.count) if len(z) and own is not None else 0
 
     def push(tt, y):
         return drive.force(mode, y[:k], q0, v0)
@@ -505,7 +507,7 @@ def _rest(model, drive, loop, t_end, settings) -> None:
         def f(tt, y):
             zz = y[:k]
             rate = drive.rate(mode, zz, q0, v0, **extra)
-            return np.concatenate((rate, drive.quadratures(mode, zz, q0, v0, **extra))) if nq else rate
+            return np.concatenate((rate, own.integrands(mode, zz, q0, v0, **extra))) if nq else rate
 
         method = settings.method if settings.method in _SCIPY_METHODS else "Radau"
         sol = solve_ivp(f, (t, t_end), np.concatenate((np.asarray(z, dtype=float), np.zeros(nq))),
@@ -523,7 +525,7 @@ def _rest(model, drive, loop, t_end, settings) -> None:
         z_end, dense = z, None
         hit = [i + 1 for i, tt in enumerate(times) if tt == te]
     piece = RestPiece(t, te, dense, z, 1, model.end_weights) if not nq else \
-        QuadratureRestPiece(t, te, dense, z, 1, model.end_weights, totals, drive.piston_work_quadrature)
+        QuadratureRestPiece(t, te, dense, z, 1, model.end_weights, totals, own.piston_work)
     loop.blocks.append(("py", piece))
     loop.rests.append((t, te))
     loop.t, loop.q, loop.v = te, q0.copy(), v0.copy()

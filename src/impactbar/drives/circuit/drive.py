@@ -20,6 +20,7 @@ import numpy as np
 from ..base import Drive, DriveState, FlightSettings, GapCrossing, SurfaceEvent
 from . import _kernel as K
 from . import _network as NW
+from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .layout import PRESET
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
@@ -42,7 +43,7 @@ PARAMETERS = {
 }
 
 #: The ranges and descriptions of :data:`PARAMETERS` (their records:
-#: :meth:`HydraulicCircuitDrive.parameter_table`); the parts' constructors check them again, with
+#: ``drive.params.parameter_table()``); the parts' constructors check them again, with
 #: the ranges that depend on another parameter (a held supply pressure above the tank's, ``switch_in``
 #: below ``switch_out``, the pre-charge below the relief pressure).
 _RANGES = {
@@ -507,6 +508,9 @@ class HydraulicCircuitDrive(Drive):
 
     n_quadratures = PRESET.n_energy
     piston_work_quadrature = PRESET.energy["piston"]
+    traits = functools.cached_property(circuit_traits)
+    params = property(circuit_params)
+    abilities = property(circuit_abilities)
 
     def _field(self, mode, z, q, v, model):
         """The compiled vector field at one state (the code generated for the network's topology,

@@ -18,7 +18,8 @@ from dataclasses import dataclass
 from functools import cached_property
 
 from ..._shared.validate import check_real
-from ..base import Drive, DriveState, GapCrossing, TimedEvent
+from ..abilities import CompiledLoop, DriveAbilities
+from ..base import Drive, DriveState, DriveTraits, GapCrossing, TimedEvent
 from ._state import _NO_STATE, KIND, RETURN, STROKE, DriveKernelView, _due, initial_valve
 
 _MAX_LEVEL = 1e100  # the largest stroke, ret and switch_out
@@ -44,14 +45,14 @@ class PositionSwitchedDrive(Drive):
     :func:`impactbar.continue_orbit`; the time-periodic machinery (harmonics,
     :func:`impactbar.periodic_orbits`, sweeps) refuses it.
 
-    As a :class:`~impactbar.Drive` it has no continuous state (``state_size = 0``): its mode is the
+    As a :class:`~impactbar.Drive` it has no continuous state (``traits.state_size = 0``): its mode is the
     pair ``(valve, pending)``, the valve's state and the switches triggered but not yet in effect
     (``(time, state)`` pairs, sorted); its events are the gap's rising crossing of ``switch_out``
     (a :class:`~impactbar.drives.GapCrossing`, in return with no switch to stroke pending) and the
     first pending switch (a :class:`~impactbar.drives.TimedEvent`). It brings a compiled event loop
-    of its own (:mod:`impactbar.drives.switched.loop`); the orbit solvers hold the closed-form segment
-    problem of its periodic orbits with the exact Jacobian (:mod:`impactbar.orbits.valve_segment`,
-    chosen by :data:`impactbar.orbits.switched.ORBIT_PROBLEMS`).
+    of its own (its :attr:`abilities`, :mod:`impactbar.drives.switched.loop`); the orbit solvers
+    hold the closed-form segment problem of its periodic orbits with the exact Jacobian
+    (:mod:`impactbar.orbits.valve_segment`, chosen by :data:`impactbar.orbits.switched.ORBIT_PROBLEMS`).
 
     Rigid piston, no damping, no delay (the check of theory §10): with accelerations :math:`a_s` = ``stroke``,
     :math:`a_r` = ``ret`` and :math:`x_1` = ``switch_out`` the period-1 orbit has the impact velocity
@@ -115,17 +116,19 @@ class PositionSwitchedDrive(Drive):
     delay_out: float | None = None
     delay_in: float | None = None
 
-    kind = "position-switched"
-    parameters = ("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in")
-    parameter_ranges = {
-        "stroke": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True, "description": "force of the stroke"},
-        "ret": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True, "description": "force of the return"},
-        "switch_out": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True,
-                       "description": "gap at which the valve switches to the return"},
-        "delay": {"low": 0.0, "description": "both switching delays (None where they differ)"},
-        "delay_out": {"low": 0.0, "description": "delay of the switch to the return"},
-        "delay_in": {"low": 0.0, "description": "delay of the switch to the stroke"},
-    }
+    traits = DriveTraits(
+        kind="position-switched",
+        parameters=("stroke", "ret", "switch_out", "delay", "delay_out", "delay_in"),
+        parameter_ranges={
+            "stroke": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True,
+                       "description": "force of the stroke"},
+            "ret": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True, "description": "force of the return"},
+            "switch_out": {"low": 0.0, "high": _MAX_LEVEL, "low_open": True,
+                           "description": "gap at which the valve switches to the return"},
+            "delay": {"low": 0.0, "description": "both switching delays (None where they differ)"},
+            "delay_out": {"low": 0.0, "description": "delay of the switch to the return"},
+            "delay_in": {"low": 0.0, "description": "delay of the switch to the stroke"},
+        })
 
     def __post_init__(self) -> None:
         # (at most 1e100: the motion's squares, energies and forces stay inside the float range)
@@ -146,11 +149,12 @@ class PositionSwitchedDrive(Drive):
         Raises
         ------
         ValueError
-            For a name not in :attr:`parameters` or a value the constructor refuses.
+            For a name not in ``traits.parameters`` or a value the constructor refuses.
         """
-        bad = sorted(set(changes) - set(self.parameters))
+        names = self.traits.parameters
+        bad = sorted(set(changes) - set(names))
         if bad:
-            raise ValueError(f"parameter must be one of {self.parameters} for a PositionSwitchedDrive; "
+            raise ValueError(f"parameter must be one of {names} for a PositionSwitchedDrive; "
                              f"got {bad[0]!r}")
         kw = {"stroke": self.stroke, "ret": self.ret, "switch_out": self.switch_out,
               "delay_out": self.delay_out, "delay_in": self.delay_in}
@@ -211,6 +215,11 @@ class PositionSwitchedDrive(Drive):
         valve, pending = mode
         pending = tuple(sorted(pending + ((t + self.delay_in, RETURN),)))
         return DriveState(_due(valve, pending, t), z)
+
+    @property
+    def abilities(self) -> DriveAbilities:
+        """Its compiled event loop (:meth:`compiled_loop` over the forces :attr:`levels`)."""
+        return DriveAbilities(compiled_loop=CompiledLoop(self.levels, self.compiled_loop))
 
     @property
     def levels(self) -> tuple[float, float]:

@@ -10,7 +10,7 @@ does not depend on the drive from ``K`` on. Chunk by chunk of ``2 m`` steps:
 
 1. ``G_k`` of the chunk from the lattice run on with no drive (a probe: the same waves);
 2. the drive's state over the chunk, step by step, with the driven end at
-   ``u_t(0, t) = -2 G_k / Z_0 + p(t) / Z_0`` (:meth:`~impactbar.Drive.end_flight`: the oil circuit
+   ``u_t(0, t) = -2 G_k / Z_0 + p(t) / Z_0`` (its ability ``end_flight``: the oil circuit
    by CVODE), which gives each step's force average ``p_k = int p dt / dt``;
 3. the lattice run on over the chunk with those averages.
 
@@ -102,7 +102,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         Under :class:`~impactbar.RodRock` (its grid, rock, bit and feed; damping neglected in the
         blow, as in the law's own).
     drive, state : Drive, DriveState
-        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`), and its state
+        A drive with state that follows a blow (its ability ``end_flight``), and its state
         as the piston arrives.
     t0 : float
         Time of the arrival (model units).
@@ -120,7 +120,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     Raises
     ------
     ValueError
-        A drive that cannot follow a blow (:meth:`~impactbar.Drive.end_flight` gives ``None``), or
+        A drive that cannot follow a blow (no ``end_flight`` in its abilities), or
         the drive's integration failing.
     """
     from ...loads import FourierLoad
@@ -149,6 +149,11 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     bounds = np.ascontiguousarray(grid.bounds, dtype=np.int64)
     w = -float(model.drive_weights @ q)
     st = state
+    follow = drive.abilities.end_flight
+    if follow is None:
+        raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
+                              "(no end_flight in its abilities); it runs under an instantaneous impact "
+                              "law only")
     pieces, events = [], []
     k, end, ended = 0, n_max, False
     while k < end:
@@ -160,10 +165,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         arriving = np.add.accumulate(column)  # F[0] = 0 - G[0] after a step without drive
         # 2. the drive over the chunk, the driven end at u_t(0) = (p - 2 G_k) / Z_0
         breaks = t0 + dt * np.arange(k, k + L + 1)
-        fl = drive.end_flight(model, st, breaks, w, -2.0 * arriving / Z0, Z0, settings)
-        if fl is None:
-            raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
-                                  "(Drive.end_flight); it runs under an instantaneous impact law only")
+        fl = follow(model, st, breaks, w, -2.0 * arriving / Z0, Z0, settings)
         averages[k:k + L] = fl.impulses / dt
         # 3. the lattice on over the chunk with the drive's averages (to the piston free for good)
         start = (F.copy(), G.copy(), bs.copy(), gap)
@@ -173,7 +175,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         if end - k < L:  # the drive and the lattice again over the chunk's part up to the end
             L = end - k
             F[:], G[:], bs[:], gap = start
-            fl = drive.end_flight(model, st, breaks[:L + 1], w, -2.0 * arriving[:L] / Z0, Z0, settings)
+            fl = follow(model, st, breaks[:L + 1], w, -2.0 * arriving[:L] / Z0, Z0, settings)
             averages[k:k + L] = fl.impulses / dt
             gap, _, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
         elif 0 <= ran < L:  # the end moved on past the chunk: the whole chunk without the end's test

@@ -21,7 +21,7 @@ and, for :math:`t < T_0` and the right-going wave before :math:`T_0`, the piston
 
 **The iteration.** Start from the force held at its value at impact; solve the exact blow with it;
 integrate the drive over the blow with the driven end moved by that blow's :math:`a`
-(:meth:`~impactbar.Drive.end_flight`; :math:`a` as a cubic spline through its exact values
+(its ability ``end_flight``; :math:`a` as a cubic spline through its exact values
 ``T_0 / SAMPLES`` apart, cut where the far end's force jumps); take the force it gives, its
 integrator's cubic Hermite pieces exactly, as the next blow's drive; repeat until the force changes
 by less than :data:`FORCE_TOL` of its size. By causality the :math:`k`-th iterate is right over
@@ -271,7 +271,7 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
     model : BarModel
         Under :class:`~impactbar.RodRock` with exact blows (:meth:`~impactbar.RodRock.blow_method`).
     drive : Drive
-        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+        A drive with state that follows a blow (its ability ``end_flight``).
     state : DriveState
         The drive's state at the arrival.
     t0, q, v : float, array_like
@@ -340,10 +340,12 @@ def driven_exact_contact(model, drive, state, t0: float, q, v, settings=None, *,
         whole = upto >= D and reach >= D  # (the iterate over the whole blow: its change decides)
         breaks = _breaks(ex, T0, D, t0, upto if not whole else None)
         incoming = _Incoming(ex, waves, force, T0, Z0, t0).callables(breaks)
-        fl = drive.end_flight(model, state, breaks, w0, incoming, Z0, settings)
-        if fl is None:
+        follow = drive.abilities.end_flight
+        if follow is None:
             raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
-                                  "(Drive.end_flight); it runs under an instantaneous impact law only")
+                                  "(no end_flight in its abilities); it runs under an instantaneous impact "
+                                  "law only")
+        fl = follow(model, state, breaks, w0, incoming, Z0, settings)
         new = _Force(p0, fl.pieces, t0)
         grid = np.union1d(new.starts, np.linspace(0.0, upto, 257))
         scale = max(scale, float(np.max(np.abs(new(grid)))))

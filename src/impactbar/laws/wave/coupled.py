@@ -6,7 +6,7 @@ end sent back at ``theta - 1 < 1``, which the drive's waves (entering at ``x = 0
 ``theta >= 1``) have not touched. The driven end therefore moves at ``u_t(0) = beta(0, theta) + p/s``
 with ``beta(0, .)`` known in advance (from the piston's state and the drive's force at impact, the
 static correction of theory §4c): the drive's state over the whole window is one integration
-(:meth:`~impactbar.Drive.end_flight`), exact to the integrator's tolerance, without iteration; the
+(its ability ``end_flight``), exact to the integrator's tolerance, without iteration; the
 window is then solved by characteristics (:func:`~impactbar.laws.wave.impact.wave_impact`) with that
 force, its cubic Hermite interpolant between the integrator's steps (whose steps the window's
 quadratures split at: exact for the interpolant).
@@ -103,7 +103,7 @@ def driven_wave_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     model : BarModel
         Under the wave law (its ``s``, ``R`` and modes; damping neglected in the window).
     drive : Drive
-        A drive with state that follows a blow (:meth:`~impactbar.Drive.end_flight`).
+        A drive with state that follows a blow (its ability ``end_flight``).
     state : DriveState
     t0 : float
         Time of the arrival (model units).
@@ -137,10 +137,12 @@ def driven_wave_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     breaks = t0 + theta / s
     beta = _incoming(probe, s)
     w = -float(model.drive_weights @ q)
-    fl = drive.end_flight(model, state, breaks, w, [beta] * (breaks.size - 1), s, settings)
-    if fl is None:
+    follow = drive.abilities.end_flight
+    if follow is None:
         raise LawNotSupported(f"the drive {type(drive).__name__} has state but cannot follow a blow "
-                              "(Drive.end_flight); it runs under an instantaneous impact law only")
+                              "(no end_flight in its abilities); it runs under an instantaneous impact law "
+                              "only")
+    fl = follow(model, state, breaks, w, [beta] * (breaks.size - 1), s, settings)
     history = DriveHistory(fl.pieces)
     rec = wave_impact(model, history, t0, q, v)
     c = model.end_weights
