@@ -150,6 +150,24 @@ class PartSlots:
     events: dict
     flags: dict
 
+    def node(self, name: str, part) -> int:
+        """The number of the node ``name`` that ``part`` names (a clear error where there is none).
+
+        Raises
+        ------
+        ValueError
+            No node of that name in the circuit.
+        """
+        if name not in self.nodes:
+            raise ValueError(f"a {type(part).__name__} names the node {name!r}; the circuit's nodes are "
+                             f"{tuple(self.nodes)}")
+        return self.nodes[name]
+
+    def loss(self, name: str) -> int:
+        """The energy slot of the loss integrand ``name``, or the preset's ``orifices`` where the part
+        declares none of its own."""
+        return self.energy.get(name, self.energy["orifices"])
+
 
 @dataclass(frozen=True)
 class Composition:
