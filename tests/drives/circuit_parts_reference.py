@@ -11,8 +11,44 @@ import dataclasses
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from impactbar import InitialState, simulate
+from impactbar import InitialState, find_orbit, simulate
 from impactbar.drives.circuit import CheckValve, Cushion, LaminarLeak
+from impactbar.physical import circuit_preset
+
+
+def preset_orbit():
+    """``(model, drive, orbit)``: the preset drifter's rigid piston, its circuit and its orbit."""
+    d = circuit_preset("circuit-drifter")
+    model, drive = d.model().with_(n_modes=0), d.drive()
+    return model, drive, find_orbit(model, drive)
+
+
+def check_orbit(orbit):
+    """The orbit repeats when ``simulate`` restarts it (20 periods, to 1e-6), its energy account
+    closes over a period (1e-8 of the pump's work) and the numpy equations reproduce that period (the
+    circuit's state and the parts' losses, 1e-6); returns the run of one period."""
+    assert orbit.admissible
+    run = restart(orbit, 20.5)
+    assert run.n_impacts == 20
+    assert np.allclose(np.diff(run.impact_times), orbit.period, rtol=1e-6, atol=0.0)
+    assert np.allclose(run.impact_velocities, orbit.impact_velocity, rtol=1e-6, atol=0.0)
+    one = restart(orbit, 1.0)
+    assert abs(orbit.drive.energy(one)["relative_residual"]) < 1e-8
+    z, want_z, losses, want_losses = one_period(orbit)
+    assert np.allclose(z, want_z, rtol=1e-6, atol=1e-8), z - want_z
+    assert np.allclose(losses, want_losses, rtol=1e-6), (losses, want_losses)
+    return one
+
+
+def check_rock(model, drive, part):
+    """``find_orbit`` on the drill string and rock with ``part``: admissible, one blow a period
+    when restarted, its account closing over it; returns the orbit."""
+    orbit = find_orbit(model, dataclasses.replace(drive, extra_parts=(part,)))
+    assert orbit.admissible
+    run = restart(orbit, 1.0)
+    assert run.n_impacts == 1
+    assert abs(orbit.drive.energy(run)["relative_residual"]) < 1e-8
+    return orbit
 
 
 def restart(orbit, periods, **changes):

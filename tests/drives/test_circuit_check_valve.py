@@ -17,7 +17,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from circuit_parts_reference import one_period, restart
+from circuit_parts_reference import check_orbit, check_rock, preset_orbit
 from test_circuit_rock_orbit import drifter as rock_drifter  # noqa: F401  (the fixture)
 
 from impactbar import find_orbit
@@ -28,11 +28,7 @@ VALVE = CheckValve("front", "supply", coefficient=1.0, cracking_pressure=0.005, 
 
 @pytest.fixture(scope="module")
 def preset():
-    from impactbar.physical import circuit_preset
-
-    d = circuit_preset("circuit-drifter")
-    model, drive = d.model().with_(n_modes=0), d.drive()
-    return model, drive, find_orbit(model, drive)
+    return preset_orbit()
 
 
 @pytest.fixture(scope="module")
@@ -52,31 +48,17 @@ def test_a_shut_check_valve_gives_the_presets_orbit(preset):
 
 def test_a_check_valves_orbit_repeats_its_account_closes_and_numpy_reproduces_it(preset, orbit):
     _, _, want = preset
-    assert orbit.admissible and orbit.period != pytest.approx(want.period, rel=1e-4)
-    run = restart(orbit, 20.5)
-    assert run.n_impacts == 20
-    assert np.allclose(np.diff(run.impact_times), orbit.period, rtol=1e-6, atol=0.0)
-    assert np.allclose(run.impact_velocities, orbit.impact_velocity, rtol=1e-6, atol=0.0)
-    one = restart(orbit, 1.0)
+    assert orbit.impact_velocity != pytest.approx(want.impact_velocity, rel=1e-4)
+    one = check_orbit(orbit)
     h = orbit.drive.histories(one, np.linspace(0.0, orbit.period, 4001))
     dp = h["p_f"] - h["p_s"]
     assert dp.max() > VALVE.cracking_pressure + VALVE.opening_span  # (both kinks crossed)
-    account = orbit.drive.energy(one)
-    assert abs(account["relative_residual"]) < 1e-8
     total = sum(p.energies() for p in one.pieces if hasattr(p, "energies"))
     assert total[orbit.drive.layout.energy["check"]] > 0.0
-    z, want_z, losses, want_losses = one_period(orbit)
-    assert np.allclose(z, want_z, rtol=1e-6, atol=1e-8), z - want_z
-    assert np.allclose(losses, want_losses, rtol=1e-6), (losses, want_losses)
 
 
 def test_a_check_valve_on_the_rock(rock_drifter):  # noqa: F811
-    model, drive = rock_drifter
-    orbit = find_orbit(model, dataclasses.replace(drive, extra_parts=(VALVE,)))
-    assert orbit.admissible
-    run = restart(orbit, 1.0)
-    assert run.n_impacts == 1
-    assert abs(orbit.drive.energy(run)["relative_residual"]) < 1e-8
+    check_rock(*rock_drifter, VALVE)
 
 
 def test_a_check_valve_refuses_bad_input():

@@ -5,8 +5,10 @@ part of its own (:class:`~impactbar.drives.circuit.CircuitPart`), its equations 
 References
 ----------
 Hopsan's component library, ``componentLibraries/defaultLibrary/Hydraulic``:
-``Valves/HydraulicCheckValve.hpp`` (a turbulent orifice open one way),
-``Valves/HydraulicPressureControlledValve.hpp`` (an opening that rises with the pressure over a span).
+``Restrictors/HydraulicCheckValve.hpp`` (a turbulent orifice open one way),
+``Restrictors/HydraulicCheckValvePreLoaded.hpp`` (with a cracking pressure),
+``Valves/PressureControlValves/HydraulicPressureControlledValve.hpp`` (an opening that rises with the
+pressure over a span).
 """
 
 from __future__ import annotations

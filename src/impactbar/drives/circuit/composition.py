@@ -46,9 +46,9 @@ class CircuitPart:
     pressure), a relief valve (``RELIEF``), a chamber on the piston (``CHAMBER``), a gas accumulator
     (``ACCUM``), and the kinds written each in a module of its own (:mod:`.kinds`: laminar leakage
     ``LEAK``, a position-controlled orifice ``CUSHION``, a check valve ``CHECK``, a watched level of
-    the piston's gap or of a pressure drop ``LEVEL``); the drive composes it with the preset's parts, and the code generated for the
-    composed network (its flights, their variational equations, the coupled blows on the rod and
-    rock) runs it with no edit of the drive or of a kernel.
+    the piston's gap or of a pressure drop ``LEVEL``); the drive composes it with the preset's parts,
+    and the code generated for the composed network (its flights, their variational equations, the
+    coupled blows on the rod and rock) runs it with no edit of the drive or of a kernel.
 
     Attributes
     ----------

@@ -1,10 +1,10 @@
 r"""A check valve (theory §11, *Parts of a drill's circuit*): ``q = K_cv o(dp) phi(dp)``,
 ``dp = p_source - p_target``, its opening ``o = clip((dp - p_crack) / dp_open, 0, 1)`` (Hopsan's
-``HydraulicCheckValve`` with a cracking pressure and an opening span, as its pressure-controlled
-valves). A record holds the piece of ``o`` the mode says the drop is on, ``o = intercept + slope dp``
-(the part writes it from its flags: the kinks at ``p_crack`` and ``p_crack + dp_open`` are events,
-:mod:`.level`), so that the vector field is smooth between events. Its loss ``q dp`` goes to its
-energy slot.
+``HydraulicCheckValvePreLoaded``, a check valve with a cracking pressure, its opening rising over a
+span as its ``HydraulicPressureControlledValve``'s). A record holds the piece of ``o`` the mode says
+the drop is on, ``o = intercept + slope dp`` (the part writes it from its flags: the kinks at
+``p_crack`` and ``p_crack + dp_open`` are events, :mod:`.level`), so that the vector field is smooth
+between events. Its loss ``q dp`` goes to its energy slot.
 
 The record: as a cushion's (:data:`._flow.PIECEWISE`), ``K_cv`` its coefficient.
 """

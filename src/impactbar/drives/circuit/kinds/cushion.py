@@ -1,7 +1,7 @@
 r"""A position-controlled orifice (theory §11, *Parts of a drill's circuit*): a port that the piston
 opens and shuts, a cushion, ``q = K_max g(y) phi(p_source - p_target)`` with ``g`` piecewise linear in
-the piston's gap ``y`` (Hopsan's ``HydraulicTurbulentOrifice`` with its area a function of a position,
-as its cylinder-controlled ports). A record holds the piece of ``g`` the mode says the gap is on,
+the piston's gap ``y`` (Hopsan's ``HydraulicTurbulentOrifice`` with its area a function of the
+piston's position). A record holds the piece of ``g`` the mode says the gap is on,
 ``g = intercept + slope y`` (the part writes it from its flags: the kinks are events,
 :mod:`.level`), so that the vector field is smooth between events. Its loss ``q (p_source -
 p_target)`` goes to its energy slot.
