@@ -9,7 +9,10 @@ the circuit, :class:`CircuitPart`, :class:`PartField`, and the numbering of its 
 event slots), ``return_line`` and ``leak`` (two parts of the network's kinds:
 :class:`ReturnAccumulator`, :class:`Leak`), ``_network``
 (the part records a part writes, :func:`record`, of the kinds :data:`NODE`, :data:`PUMP`,
-:data:`ORIFICE`, :data:`VALVE`, :data:`RELIEF`, :data:`CHAMBER`, :data:`ACCUM`), ``flight`` (one
+:data:`ORIFICE`, :data:`VALVE`, :data:`RELIEF`, :data:`CHAMBER`, :data:`ACCUM`, and those written
+each in a module of its own, ``kinds``: :data:`LEAK`, :data:`CUSHION`, :data:`CHECK`, :data:`LEVEL`),
+``leakage``, ``cushion``, ``check_valve`` (:class:`LaminarLeak`, :class:`Cushion`,
+:class:`CheckValve`: parts of a drill's circuit), ``flight`` (one
 flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_kernel`` (the
 compiled vector field, Jacobian and event functions), ``_sundials`` and ``_cvode`` (CVODE driven from
 compiled code, on the SUNDIALS libraries that scikit-sundae ships).
@@ -17,22 +20,29 @@ compiled code, on the SUNDIALS libraries that scikit-sundae ships).
 
 from ._network import ACCUM as ACCUM
 from ._network import CHAMBER as CHAMBER
+from ._network import CHECK as CHECK
+from ._network import CUSHION as CUSHION
+from ._network import LEAK as LEAK
+from ._network import LEVEL as LEVEL
 from ._network import NODE as NODE
 from ._network import ORIFICE as ORIFICE
 from ._network import PUMP as PUMP
 from ._network import RELIEF as RELIEF
 from ._network import VALVE as VALVE
 from ._network import record as record
+from .check_valve import CheckValve as CheckValve
 from .composition import PORTS as PORTS
 from .composition import TERMS as TERMS
 from .composition import CircuitPart as CircuitPart
 from .composition import NamedPart as NamedPart
 from .composition import PartField as PartField
 from .composition import PartSlots as PartSlots
+from .cushion import Cushion as Cushion
 from .drive import PARAMETERS as PARAMETERS
 from .drive import CircuitEnergy as CircuitEnergy
 from .drive import HydraulicCircuitDrive as HydraulicCircuitDrive
 from .leak import Leak as Leak
+from .leakage import LaminarLeak as LaminarLeak
 from .parts import Accumulator as Accumulator
 from .parts import Chambers as Chambers
 from .parts import Oil as Oil
@@ -43,4 +53,4 @@ from .return_line import ReturnAccumulator as ReturnAccumulator
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS", "Chambers", "Valve", "Supply",
            "Accumulator", "Oil", "CircuitPart", "NamedPart", "PartField", "PartSlots", "ReturnAccumulator",
            "Leak", "PORTS", "TERMS", "record", "NODE", "PUMP", "ORIFICE", "VALVE", "RELIEF", "CHAMBER",
-           "ACCUM"]
+           "ACCUM", "LEAK", "CUSHION", "CHECK", "LEVEL", "LaminarLeak", "Cushion", "CheckValve"]

@@ -123,7 +123,7 @@ def end_jac(y, JJ, par, ext):
 @nb.njit(**_JIT)
 def end_events(y, g, par):
     """The network's events during a blow (the ramp's end, then its watched pressures)."""
-    events(y[1:1 + NZ], par, 1, g, 0)
+    events(y[1:1 + NZ], par, 1, g, 0, y[0])  # (the one-mode bar's gap -q_0 = w)
 
 
 @nb.njit(**_JIT)

@@ -36,6 +36,11 @@ displacement away from the stop, ``phi`` the smoothed orifice law of :func:`._ke
 - ``ACCUM``: a gas accumulator on ``A_NODE``: while it holds oil (``A_ON``) the compliance
   ``C_a = (V_0 / n) p_0^{1/n} p^{-1/n - 1}``; energy ``p C_a p'`` into ``A_E``; watched
   (``A_WATCH``): the event ``p - p_0``.
+- ``LEAK``, ``CUSHION``, ``CHECK``: a flow from ``F_FROM`` to ``F_TO`` whose law and derivatives
+  are written in a module of its own (:mod:`.kinds`: laminar leakage, a position-controlled orifice,
+  a check valve), added to the nodes' balances, its loss ``q (p_from - p_to)`` into ``F_E``.
+- ``LEVEL``: a watched level (:mod:`.kinds.level`): the event of the piston's gap ``y = -q_0`` or a
+  pressure drop through a level.
 
 The sums run in the order of the records, from ``-0.0`` (so that a sum's first term is that term,
 sign of a zero included): the preset drifter's records reproduce :mod:`._kernel`'s arithmetic to the
@@ -48,6 +53,7 @@ import numba as nb
 import numpy as np
 
 from ...dynamics.kernels import CACHE
+from . import kinds as KD
 from ._kernel import DAMP, HEAD, _off_level, dphi, end_motion, phi
 
 # the network's header (after the bar's entries of ``par``)
@@ -58,7 +64,13 @@ NW_SIZE = 6
 REC_SIZE = 10
 KIND = 0
 NODE, PUMP, ORIFICE, VALVE, RELIEF, CHAMBER, ACCUM = range(7)
-KINDS = ("node", "pump", "orifice", "valve", "relief", "chamber", "accumulator")
+# the kinds written in modules of their own (:mod:`.kinds`: their equations there)
+LEAK, CUSHION, CHECK, LEVEL = KD.leak.CODE, KD.cushion.CODE, KD.check.CODE, KD.level.CODE
+KINDS = ("node", "pump", "orifice", "valve", "relief", "chamber", "accumulator") + tuple(
+    KD.MODULES[k].NAME for k in sorted(KD.MODULES))
+# a flow kind's nodes and energy slot (:mod:`.kinds._flow`), a level's event slot
+F_FROM, F_TO, F_E = KD.leak.SOURCE, KD.leak.TARGET, KD.leak.ENERGY
+LV_EV = KD.level.EVENT
 
 # the fields of each kind
 N_ID, N_V, N_BETA, N_HELD, N_P, N_EWORK, N_ESIGN, N_ECOMP = range(1, 9)
@@ -81,6 +93,7 @@ _FIELDS = {
     CHAMBER: {"node": C_NODE, "area": C_AREA},
     ACCUM: {"node": A_NODE, "volume": A_V, "precharge": A_P0, "exponent": A_N, "on": A_ON,
             "watched": A_WATCH, "event": A_EV, "energy": A_E},
+    **{code: m.FIELDS for code, m in KD.MODULES.items()},
 }
 #: a field left out of :func:`record` (an energy or an event slot: -1, none)
 _DEFAULTS = {"work_energy": -1.0, "compression_energy": -1.0, "work_sign": 1.0, "energy": -1.0,
@@ -189,11 +202,12 @@ def compose(records, n_states: int, n_energy: int, n_events: int, piston_energy:
         raise ValueError(f"the nodes must be numbered 0..{n_nodes - 1} and n_states in [1, {n_nodes}]; "
                          f"got ids {[int(r[N_ID]) for r in nodes]} and n_states={n_states}")
     others = sorted((r for r in recs if int(r[KIND]) != NODE), key=lambda r: int(r[KIND]))
+    own = KD.MODULES.items()  # (the kinds of .kinds declare their slots)
     node_fields = {PUMP: (P_NODE,), ORIFICE: (O_FROM, O_TO), VALVE: (V_P, V_A, V_T), RELIEF: (R_FROM, R_TO),
-                   CHAMBER: (C_NODE,), ACCUM: (A_NODE,)}
+                   CHAMBER: (C_NODE,), ACCUM: (A_NODE,), **{k: m.NODES for k, m in own}}
     energy_fields = {NODE: (N_EWORK, N_ECOMP), PUMP: (P_E,), ORIFICE: (O_E,), VALVE: (V_E,),
-                     RELIEF: (R_E,), CHAMBER: (), ACCUM: (A_E,)}
-    event_fields = {VALVE: (V_EV,), RELIEF: (R_EV,), ACCUM: (A_EV,)}
+                     RELIEF: (R_E,), CHAMBER: (), ACCUM: (A_E,), **{k: m.ENERGIES for k, m in own}}
+    event_fields = {VALVE: (V_EV,), RELIEF: (R_EV,), ACCUM: (A_EV,), **{k: m.EVENTS for k, m in own}}
     for r in nodes + others:
         k = int(r[KIND])
         for f in node_fields.get(k, ()):
@@ -245,6 +259,7 @@ def _prepare(y, par, M, S, en, dp, energies):
     ns = int(par[net0 + NW_NSTATE])
     R0 = net0 + NW_SIZE
     w, wd = end_motion(y, par, M)
+    gap = -y[0]
     xv = y[F + ns]
     if energies:
         for k in range(en.shape[0]):
@@ -321,6 +336,13 @@ def _prepare(y, par, M, S, en, dp, energies):
                 dc = ca * (-1.0 / par[r + A_N] - 1.0) / S[_SP, a]
                 S[_SDC, a] = dc if S[_SNAC, a] == 0.0 else S[_SDC, a] + dc
                 S[_SNAC, a] += 1.0
+        elif kind == LEAK or kind == CUSHION or kind == CHECK:  # (a kind of .kinds: its flow there)
+            a, b = int(par[r + F_FROM]), int(par[r + F_TO])
+            q = KD.law(kind, par, r, S[_SP, a], S[_SP, b], gap)[0]
+            S[_SNET, a] -= q
+            S[_SNET, b] += q
+            if energies and par[r + F_E] >= 0:
+                en[int(par[r + F_E])] += q * (S[_SP, a] - S[_SP, b])
     if not capacitance:
         _capacitances(par, R0, nn, S)
     # the rates and the nodes' energies
@@ -476,6 +498,20 @@ def jac_base(y, par, M, A):
                 A[F + a, F + a] += -(S[_SF, a] * par[r + R_K])
             if b2 < ns:
                 A[F + b2, F + a] += S[_SF, b2] * par[r + R_K]
+        elif kind == LEAK or kind == CUSHION or kind == CHECK:
+            a, b2 = int(par[r + F_FROM]), int(par[r + F_TO])
+            _, da, db, dg = KD.law(kind, par, r, S[_SP, a], S[_SP, b2], -y[0])
+            # the source loses q, the target gains it; the gap y = -q_0
+            if a < ns:
+                A[F + a, F + a] += -(S[_SF, a] * da)
+                if b2 < ns:
+                    A[F + a, F + b2] += -(S[_SF, a] * db)
+                A[F + a, 0] += S[_SF, a] * dg if S[_SCH, a] > 0.5 else dg / S[_SC, a]
+            if b2 < ns:
+                if a < ns:
+                    A[F + b2, F + a] += S[_SF, b2] * da
+                A[F + b2, F + b2] += S[_SF, b2] * db
+                A[F + b2, 0] += S[_SF, b2] * -dg if S[_SCH, b2] > 0.5 else -dg / S[_SC, b2]
     # the nodes without a chamber: the sums over C, less net C' / C^2; the held ones: zero rows
     for j in range(ns):
         row = F + j
@@ -490,10 +526,12 @@ def jac_base(y, par, M, A):
 
 
 @nb.njit(**_JIT)
-def events(z, par, M, g, first):
+def events(z, par, M, g, first, gap):
     """The network's event functions into ``g[first:first + n_events]`` from the circuit's state
-    ``z = (p_0..p_{S-1}, x_v)`` (the inactive ones held at 1): each valve's ramp end, each watched
-    accumulator's and relief's pressure level (:func:`._kernel._off_level`)."""
+    ``z = (p_0..p_{S-1}, x_v)`` and the piston's gap ``gap`` (the inactive ones held at 1): each
+    valve's ramp end, each watched accumulator's and relief's pressure level
+    (:func:`._kernel._off_level`), each watched level of the gap or of a pressure drop
+    (:mod:`.kinds.level`)."""
     net0 = HEAD + 3 * M
     nrec = int(par[net0 + NW_NREC])
     nn = int(par[net0 + NW_NNODE])
@@ -516,3 +554,7 @@ def events(z, par, M, g, first):
             a = int(par[r + A_NODE])
             p = _pressure(par, R0, z, 0, ns, a)
             g[first + int(par[r + A_EV])] = _off_level(p - par[r + A_P0], par[r + A_ON], par[r + A_P0])
+        elif kind == LEVEL and par[r + LV_EV] >= 0:
+            pa = _pressure(par, R0, z, 0, ns, int(par[r + F_FROM]))
+            pb = _pressure(par, R0, z, 0, ns, int(par[r + F_TO]))
+            g[first + int(par[r + LV_EV])] = KD.level.value(par, r, pa, pb, gap)

@@ -49,9 +49,11 @@ class CircuitPart:
     volume and bulk modulus, a pressure state), a pump (``PUMP``), a turbulent orifice (``ORIFICE``:
     ``q = K phi(p_source - p_target)``, ``phi`` the orifice law smoothed below the oil's transition
     pressure), a relief valve (``RELIEF``), a chamber on the piston (``CHAMBER``), a gas accumulator
-    (``ACCUM``); the drive composes it with the preset's parts, and the code generated for the
-    composed network (its flights, their variational equations, the coupled blows on the rod and
-    rock) runs it with no edit of the drive or of a kernel.
+    (``ACCUM``), and the kinds written each in a module of its own (:mod:`.kinds`: laminar leakage
+    ``LEAK``, a position-controlled orifice ``CUSHION``, a check valve ``CHECK``, a watched level of
+    the piston's gap or of a pressure drop ``LEVEL``); the drive composes it with the preset's parts,
+    and the code generated for the composed network (its flights, their variational equations, the
+    coupled blows on the rod and rock) runs it with no edit of the drive or of a kernel.
 
     Attributes
     ----------
@@ -66,8 +68,9 @@ class CircuitPart:
         gas's, ``"orifices"`` for an orifice's loss). It may also add to the preset's integrands by
         name (``"orifices"``, ``"tank"``).
     events : tuple of str
-        Its watched events (each an accumulator's or a relief's pressure through its level), one
-        flag of the drive's mode each.
+        Its watched events (each an accumulator's or a relief's pressure through its level, or a
+        ``LEVEL`` record's gap or pressure drop through its level), one flag of the drive's mode
+        each.
     ports : dict
         The preset's ports it takes over (:data:`PORTS`), each to one of its nodes by name:
         ``{"valve_return": "return"}`` joins the valve's return port to its node ``return``
@@ -284,6 +287,24 @@ class PartSlots:
     energy: dict
     events: dict
     flags: dict
+
+    def node(self, name: str, part) -> int:
+        """The number of the node ``name`` that ``part`` names (a clear error where there is none).
+
+        Raises
+        ------
+        ValueError
+            No node of that name in the circuit.
+        """
+        if name not in self.nodes:
+            raise ValueError(f"a {type(part).__name__} names the node {name!r}; the circuit's nodes are "
+                             f"{tuple(self.nodes)}")
+        return self.nodes[name]
+
+    def loss(self, name: str) -> int:
+        """The energy slot of the loss integrand ``name``, or the preset's ``orifices`` where the part
+        declares none of its own."""
+        return self.energy.get(name, self.energy["orifices"])
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .layout import PRESET
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
+from .watch import watched
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
 
@@ -401,20 +402,9 @@ class HydraulicCircuitDrive(Drive):
 
     @functools.cached_property
     def _watched(self) -> tuple:
-        """The extra parts' watched events read from the network: ``(name, slot, state index,
-        level, kind)``, ``kind`` :data:`._network.ACCUM` (its flag: at or above the level) or
-        :data:`._network.RELIEF` (above it)."""
+        """The extra parts' watched events read from the network (:func:`.watch.watched`)."""
         comp = self._composition
-        net = self._network((0, 0) + (0,) * len(comp.events))
-        out = []
-        for r in net[NW.NW_SIZE:].reshape(-1, NW.REC_SIZE):
-            kind = int(r[NW.KIND])
-            if kind == NW.ACCUM and r[NW.A_WATCH] > 0.5 and r[NW.A_EV] >= 3:
-                out.append((int(r[NW.A_EV]), int(r[NW.A_NODE]), float(r[NW.A_P0]), kind))
-            elif kind == NW.RELIEF and r[NW.R_WATCH] > 0.5 and r[NW.R_EV] >= 3:
-                out.append((int(r[NW.R_EV]), int(r[NW.R_FROM]), float(r[NW.R_SET]), kind))
-        return tuple((comp.events[slot - 1], slot, node, level, kind)
-                     for slot, node, level, kind in sorted(out))
+        return watched(self._network((0, 0) + (0,) * len(comp.events)), comp.events)
 
     def _network_par(self, model, mode, variational=False) -> np.ndarray:
         """:meth:`_par` with the circuit's network of part records (:meth:`_network`) after it."""
@@ -486,17 +476,17 @@ class HydraulicCircuitDrive(Drive):
         z[L["front"]], z[L["rear"]], z[L["supply"]], z[L["spool"]] = pf, pr, ps, float(target)
         if xv is not None and xv != float(target):
             z[L["spool"]] = xv
-            return self._toward(self._mode(1 - target, 0, ps, z), z, target)
-        return DriveState(self._mode(target, 0, ps, z), z)
+            return self._toward(self._mode(1 - target, 0, ps, z, q), z, target)
+        return DriveState(self._mode(target, 0, ps, z, q), z)
 
-    def _mode(self, target, moving, ps, z):
+    def _mode(self, target, moving, ps, z, q):
         acc = self.accumulator
         has_acc = acc is not None and acc.volume > 0 and not self.supply.held
         a = 1 if has_acc and ps >= acc.precharge else 0
         r = 1 if self.supply.has_relief and not self.supply.held and ps > self.supply.relief_pressure else 0
         flags = [0] * (len(self._composition.events) - 2)
-        for _, slot, node, level, kind in self._watched:  # (an accumulator holds oil at its level)
-            flags[slot - 3] = int(z[node] >= level if kind == NW.ACCUM else z[node] > level)
+        for w in self._watched:  # (an accumulator holds oil at its level)
+            flags[w.slot - 3] = w.flag(q, z)
         return (target, moving, a, r, *flags)
 
     def mode_name(self, mode) -> str:
@@ -555,9 +545,9 @@ class HydraulicCircuitDrive(Drive):
             pr = self.supply.relief_pressure
             out.append(SurfaceEvent(_REL, direction=-1 if rel else 1,
                                     function=lambda t, q, v, z, pr=pr, i=ps: float(z[i]) - pr))
-        for name, slot, node, level, _ in self._watched:  # (the extra parts')
-            out.append(SurfaceEvent(name, direction=-1 if mode[1 + slot] else 1,
-                                    function=lambda t, q, v, z, lvl=level, i=node: float(z[i]) - lvl))
+        for w in self._watched:  # (the extra parts')
+            out.append(SurfaceEvent(w.name, direction=-1 if mode[1 + w.slot] else 1,
+                                    function=lambda t, q, v, z, w=w: w.quantity(q, z) - w.level))
         return tuple(out)
 
     def _held(self, z) -> np.ndarray:
@@ -647,11 +637,11 @@ class HydraulicCircuitDrive(Drive):
         """
         sup, acc = self.supply, self.accumulator
         out: dict = {}
-        for name, _, node, level, kind in self._watched:
-            ext = [p.extremes(node) for p in pieces if hasattr(p, "extremes")]
+        for w in self._watched:
+            ext = [p.extremes(w.node) for p in pieces if hasattr(p, "extremes") and w.node is not None]
             if ext:
                 lo, hi = min(e[0] for e in ext), max(e[1] for e in ext)
-                out[name] = lo - level if kind == NW.ACCUM else level - hi
+                out[w.name] = lo - w.level if w.kind == NW.ACCUM else w.level - hi
         has_acc = acc is not None and acc.volume > 0 and not sup.held
         if not (has_acc or (sup.has_relief and not sup.held)):
             return out

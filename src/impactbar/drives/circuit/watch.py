@@ -1,0 +1,82 @@
+"""The watched events of a circuit's extra parts, read from its network (:mod:`._network`): an
+accumulator's pre-charge, a relief's setting (a node's pressure through a level), and the levels of
+the kinds of :mod:`.kinds` (the piston's gap or a pressure drop through a level: a cushion's or a
+check valve's kinks), each a flag of the drive's mode."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import _network as NW
+from .kinds import level as LV
+
+__all__ = ["Watch", "watched"]
+
+
+@dataclass(frozen=True)
+class Watch:
+    """One watched event of an extra part.
+
+    Attributes
+    ----------
+    name : str
+        The event's name (the part's).
+    slot : int
+        Its slot in the network's events (its flag is the mode's ``1 + slot``).
+    level : float
+        The level its quantity passes.
+    kind : int
+        The record's kind: :data:`._network.ACCUM`, :data:`._network.RELIEF` or :data:`._network.LEVEL`.
+    node : int or None
+        The node whose pressure is watched (an accumulator's, a relief's), else ``None``.
+    quantity : callable
+        ``quantity(q, z)``: the watched quantity at the modal displacements ``q`` and the circuit's
+        state ``z``.
+    """
+
+    name: str
+    slot: int
+    level: float
+    kind: int
+    node: int | None
+    quantity: Callable
+
+    def flag(self, q, z) -> int:
+        """The mode's flag at ``(q, z)``: at or above the level (above it for a relief)."""
+        x = self.quantity(q, z)
+        return int(x > self.level if self.kind == NW.RELIEF else x >= self.level)
+
+
+def _level(record, pressure):
+    """A watched level's ``quantity(q, z)`` (the gap ``-q_0`` or a pressure drop)."""
+    return lambda q, z: LV.quantity(record, lambda j: pressure(z, j), -float(q[0]))
+
+
+def watched(net, events) -> tuple:
+    """The extra parts' :class:`Watch` es of the composed network ``net`` (:func:`._network.compose`),
+    in slot order; ``events`` the network's event names after the ramp's end (slot ``1 + i``). The
+    preset's own (slots 1, 2) are left out."""
+    head, recs = net[:NW.NW_SIZE], np.asarray(net[NW.NW_SIZE:]).reshape(-1, NW.REC_SIZE)
+    ns = int(head[NW.NW_NSTATE])
+
+    def pressure(z, j):
+        return float(z[j]) if j < ns else float(recs[j][NW.N_P])
+
+    out = []
+    for r in recs:
+        kind = int(r[NW.KIND])
+        if kind == NW.ACCUM and r[NW.A_WATCH] > 0.5 and r[NW.A_EV] >= 3:
+            node = int(r[NW.A_NODE])
+            out.append((int(r[NW.A_EV]), float(r[NW.A_P0]), kind, node,
+                        lambda q, z, j=node: pressure(z, j)))
+        elif kind == NW.RELIEF and r[NW.R_WATCH] > 0.5 and r[NW.R_EV] >= 3:
+            node = int(r[NW.R_FROM])
+            out.append((int(r[NW.R_EV]), float(r[NW.R_SET]), kind, node,
+                        lambda q, z, j=node: pressure(z, j)))
+        elif kind == NW.LEVEL and r[NW.LV_EV] >= 3:
+            out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _level(r.copy(), pressure)))
+    return tuple(Watch(events[slot - 1], slot, level, kind, node, f)
+                 for slot, level, kind, node, f in sorted(out, key=lambda e: e[0]))
