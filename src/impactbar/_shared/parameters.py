@@ -4,11 +4,13 @@ impact law, the load or the drive.
 Each part declares its own parameters in one place, its method ``parameter_table()``, as
 :class:`Parameter` records (a dotted name, the current value, its unit, bounds, a description and
 whether the problem is smooth in it), and changes one by ``with_parameter(name, value)``, a copy
-validated again by the constructors. The functions here work on a ``(model, forcing)`` pair alone
-(the model holds its impact law and lists the law's parameters beside its own), with no case for
-any particular law, load or drive: continuation (:func:`~impactbar.continue_orbit`), sweeps and the
-command line reach every part's parameters through them, so a parameter a part declares is
-continuable, sweepable and settable with no line elsewhere.
+validated again by the constructors; a part may hold these methods in an object of its own,
+``params`` (a load's :class:`~impactbar.loads.params.LoadParameters`). The functions here work on a
+``(model, forcing)`` pair alone (the model holds its impact law and lists the law's parameters
+beside its own), with no case for any particular law, load or drive: continuation
+(:func:`~impactbar.continue_orbit`), sweeps and the command line reach every part's parameters
+through them, so a parameter a part declares is continuable, sweepable and settable with no line
+elsewhere.
 
 Examples
 --------
@@ -168,6 +170,12 @@ class NamedParameters:
         return self.with_(**changes)
 
 
+def _declarer(part):
+    """What holds ``part``'s ``parameter_table`` and ``with_parameter(s)``: its ``params`` object
+    where it has one (a load), else the part itself."""
+    return getattr(part, "params", None) or part
+
+
 def table_of(part, *args) -> dict[str, Parameter]:
     """The parameters a part declares (its ``parameter_table(*args)``), by name.
 
@@ -188,7 +196,7 @@ def table_of(part, *args) -> dict[str, Parameter]:
         For an object that declares no parameters (no ``parameter_table``: not a part), or a name
         declared twice.
     """
-    declare = getattr(part, "parameter_table", None)
+    declare = getattr(_declarer(part), "parameter_table", None)
     if declare is None:
         raise ValueError(f"{part!r} is not a part of a problem (a model, a load, a drive or an impact "
                          "law): it declares no parameter_table()")
@@ -316,7 +324,7 @@ def with_parameter(model, forcing, name: str, value):
     p.check(value)
     if i == 0:
         return model.with_parameter(name, value), forcing
-    return model, forcing.with_parameter(name, value)
+    return model, _declarer(forcing).with_parameter(name, value)
 
 
 def with_parameters(model, forcing, changes: dict):
@@ -399,11 +407,11 @@ def _changed(part, changes: dict):
     ``with_parameter`` for a part that declares no such method)."""
     if not changes:
         return part
-    several = getattr(part, "with_parameters", None)
+    several = getattr(_declarer(part), "with_parameters", None)
     if several is not None:
         return several(changes)
     for name, value in changes.items():
-        part = part.with_parameter(name, value)
+        part = _declarer(part).with_parameter(name, value)
     return part
 
 

@@ -4,6 +4,8 @@ refused."""
 
 from __future__ import annotations
 
+from operator import attrgetter
+
 
 def register(table: dict, cls, base: type, attr: str, what: str):
     """Enter ``cls`` in ``table`` by its class attribute ``attr`` (``kind`` or ``name``).
@@ -18,7 +20,8 @@ def register(table: dict, cls, base: type, attr: str, what: str):
         The parts' base class (:class:`~impactbar.Load`, :class:`~impactbar.laws.ContactLaw`,
         :class:`~impactbar.Drive`).
     attr : str
-        The class attribute that holds the name.
+        The class attribute that holds the name (dotted for one of its attributes:
+        ``"traits.kind"``).
     what : str
         What a part is called in the messages (``"load"``, ``"impact law"``, ``"drive"``).
 
@@ -43,7 +46,7 @@ def register(table: dict, cls, base: type, attr: str, what: str):
     """
     if not (isinstance(cls, type) and issubclass(cls, base)):
         raise ValueError(f"cls must be a subclass of {base.__name__}; got {cls!r}")
-    key = getattr(cls, attr)
+    key = attrgetter(attr)(cls)
     if not isinstance(key, str) or not key:
         raise ValueError(f"cls.{attr} must be a non-empty string (the {what}'s name in its table); "
                          f"got {key!r}")
