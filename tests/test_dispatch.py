@@ -175,7 +175,7 @@ def test_nothing_outside_the_dispatch_asks_a_forcing_s_class():
     """No module but the dispatch's tests a forcing's class: not by ``isinstance`` or ``issubclass``
     against Load, Drive or any of their subclasses, not by ``type(x)`` in a table keyed by class, not
     by comparing a forcing's ``type``. What a caller needs of a forcing, the forcing declares (an
-    attribute of its base: ``kind``, ``compiled_kind``, ``kernel_view``), or the dispatch says
+    attribute of its base: ``traits``, ``abilities``), or the dispatch says
     (:func:`~impactbar._shared.forcing.of_family`, :func:`~impactbar._shared.forcing.alike`)."""
     classes = _forcing_classes()
     assert {"Load", "Drive", "CosineLoad", "SquareWaveLoad", "FourierLoad", "PiecewiseConstantLoad",
@@ -233,7 +233,7 @@ def test_no_probe_stands_in_for_a_forcing_s_class():
     """Outside the dispatch, what code asks of a forcing by ``hasattr``/``getattr`` is declared on
     its base (:class:`~impactbar.Load` or :class:`~impactbar.Drive`, with a default there): a
     Fourier load's ``orders`` or a piecewise one's jumps are asked of every load, never probed to
-    tell the classes apart."""
+    tell the classes apart (a load's are in its ``abilities``)."""
     bad = [f"{path.relative_to(SRC)}:{found}" for path, tree in _modules() if path != HOME
            for found in _probes(tree, _declared())]
     assert bad == []
@@ -244,7 +244,7 @@ def test_the_probe_scan_sees_planted_probes():
                "    a = getattr(load, 'breaks', None)\n"
                "    b = hasattr(self.load, 'levels')\n"
                "    c = getattr(self.drive, 'compiled', True)\n"
-               "    d = getattr(load, 'kind', '')\n"
+               "    d = getattr(load, 'traits', None)\n"
                "    e = hasattr(x, 'levels')\n")
     assert [f.partition(":")[0] for f in _probes(ast.parse(planted), _declared())] == ["2", "3", "4"]
 

@@ -14,7 +14,7 @@ import impactbar as ib
 from impactbar import BarModel, CosineLoad, Parameter, PositionSwitchedDrive
 from impactbar._shared.schema import Field, Schema
 from impactbar._shared.validate import check_real
-from impactbar.loads import LOADS, register_load
+from impactbar.loads import LOADS, LoadTraits, register_load
 from impactbar.parameters import check_continuable, parameter_value, parameters, with_parameter
 
 TWO_PI = 2.0 * math.pi
@@ -24,20 +24,17 @@ class RatioCosineLoad(CosineLoad):
     """``p0 (1 + ratio cos(k t))``: a cosine load whose amplitude is given relative to its mean, a
     parameter, ``ratio``, that no other part of the package declares."""
 
-    kind = "ratio-cosine"
-    description = "p0 (1 + ratio cos(k t))"
-    parameters = Schema(Field("p0", "mean load"), Field("ratio", "amplitude over mean load"),
-                        Field("k", "order of the harmonic, >= 1", "", dtype="i8"))
-    continuation_parameters = ("p0", "ratio")
-    parameter_ranges = {"ratio": {"low": 0.0, "low_open": True}, "k": {"low": 1, "high": 4096}}
+    traits = LoadTraits(
+        kind="ratio-cosine", description="p0 (1 + ratio cos(k t))",
+        parameters=Schema(Field("p0", "mean load"), Field("ratio", "amplitude over mean load"),
+                          Field("k", "order of the harmonic, >= 1", "", dtype="i8")),
+        continuation_parameters=("p0", "ratio"),
+        parameter_ranges={"ratio": {"low": 0.0, "low_open": True}, "k": {"low": 1, "high": 4096}})
 
     def __init__(self, p0, ratio, k=1):
         ratio = check_real("ratio", ratio, lo=0.0, lo_open=True)
         super().__init__(p0, p0 * ratio, k)
         self._set(ratio=ratio)
-
-    def _repr_args(self):
-        return f"p0={self.p0!r}, ratio={self.ratio!r}, k={self.k!r}"
 
 
 MODEL = BarModel(s=10.0, d=0.05, R=0.5, n_modes=4)
@@ -131,7 +128,7 @@ def test_the_new_parameter_is_swept(tmp_path):
 
 def test_register_load_refuses_a_taken_kind_and_a_non_load():
     class Other(RatioCosineLoad):
-        kind = "cosine"
+        traits = LoadTraits(kind="cosine")
 
     with pytest.raises(ValueError, match="kind 'cosine' is already the load CosineLoad"):
         register_load(Other)

@@ -61,7 +61,7 @@ def _orbit_rows(model, load, x, R):
     rows = []
     orbits = periodic_orbits(model, load)
     for i, o in enumerate(orbits):
-        cosine = load.cosine_form()
+        cosine = load.abilities.cosine
         if cosine is not None:  # branch 0: load falling through its mean at impact
             _, pk, k = cosine
             branch = 0 if math.cos(k * o.phase) * pk < 0 else 1

@@ -11,6 +11,7 @@ from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, periodi
 from impactbar.dynamics.implementations import implementation, use_reference
 from impactbar.dynamics.modal import fundamental
 from impactbar.laws.paper.periodic import _impact_states
+from impactbar.loads.abilities import left_limit
 from impactbar.orbits import impact_map_jacobian
 from impactbar.orbits.one_impact import _periodic_orbits_general, orbit_multipliers
 from impactbar.orbits.rigid import STATUS, rigid_cosine_orbits, rigid_multipliers
@@ -283,7 +284,7 @@ def test_rigid_multipliers_equal_jacobian_eigenvalues(rng):
             for o in periodic_orbits(model, load):
                 yp, ym = _impact_states(model, load, o.phase)
                 dense = np.linalg.eigvals(impact_map_jacobian(model, load, o.phase, yp, ym))
-                mu = rigid_multipliers(0.05, R, float(load(o.phase)), float(load.left_limit(o.phase)),
+                mu = rigid_multipliers(0.05, R, float(load(o.phase)), float(left_limit(load, o.phase)),
                                        yp[1], ym[1])
                 assert _set_distance(mu, dense) < 1e-10
                 assert _set_distance(orbit_multipliers(model, load, o.phase), dense) < 1e-10

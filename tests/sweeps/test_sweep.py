@@ -661,15 +661,15 @@ def test_spec_dataclass_is_frozen_and_validates():
 
 
 def test_every_load_of_the_table_sweeps():
-    """The spec takes every kind of the table of loads (``Load.to_record``): a piecewise-constant
+    """The spec takes every kind of the table of loads (``load.params.record()``): a piecewise-constant
     load's arrays too, its orbits those of periodic_orbits."""
     from impactbar import PiecewiseConstantLoad
 
     load = PiecewiseConstantLoad([0.0, 2.0], [1.0, -0.5])
-    doc = base_doc(model={"s": 10.0, "d": 0.05, "R": 0.5, "n_modes": 1}, load=load.to_record(),
+    doc = base_doc(model={"s": 10.0, "d": 0.05, "R": 0.5, "n_modes": 1}, load=load.params.record(),
                    axes={"R": {"values": [0.3, 0.5]}})
     spec = parse_spec(doc)
-    assert json.loads(spec.to_json())["load"] == load.to_record()
+    assert json.loads(spec.to_json())["load"] == load.params.record()
     assert spec.point((1,))[1] == load
     out = compute_chunk(spec, 0)
     for i, R in enumerate((0.3, 0.5)):

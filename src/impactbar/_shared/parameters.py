@@ -4,11 +4,13 @@ impact law, the load or the drive.
 Each part declares its own parameters in one place, its method ``parameter_table()``, as
 :class:`Parameter` records (a dotted name, the current value, its unit, bounds, a description and
 whether the problem is smooth in it), and changes one by ``with_parameter(name, value)``, a copy
-validated again by the constructors. The functions here work on a ``(model, forcing)`` pair alone
-(the model holds its impact law and lists the law's parameters beside its own), with no case for
-any particular law, load or drive: continuation (:func:`~impactbar.continue_orbit`), sweeps and the
-command line reach every part's parameters through them, so a parameter a part declares is
-continuable, sweepable and settable with no line elsewhere.
+validated again by the constructors; a part may hold these methods in an object of its own,
+``params`` (a load's :class:`~impactbar.loads.params.LoadParameters`). The functions here work on a
+``(model, forcing)`` pair alone (the model holds its impact law and lists the law's parameters
+beside its own), with no case for any particular law, load or drive: continuation
+(:func:`~impactbar.continue_orbit`), sweeps and the command line reach every part's parameters
+through them, so a parameter a part declares is continuable, sweepable and settable with no line
+elsewhere.
 
 Examples
 --------
@@ -136,6 +138,12 @@ class Parameter:
 def _declarer(part):
     """What holds ``part``'s ``parameter_table`` and ``with_parameter(s)``: its ``params`` object
     where it has one (a load, a drive), else the part itself."""
+    return getattr(part, "params", None) or part
+
+
+def _declarer(part):
+    """What holds ``part``'s ``parameter_table`` and ``with_parameter(s)``: its ``params`` object
+    where it has one (a load), else the part itself."""
     return getattr(part, "params", None) or part
 
 

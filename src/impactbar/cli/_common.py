@@ -188,7 +188,7 @@ def json_ready(obj):
 
 
 def load_record(load) -> dict:
-    """A load as JSON-ready structured data: its :meth:`~impactbar.Load.to_record`, ``{"kind": ...,
+    """A load as JSON-ready structured data: its record (``load.params.record()``), ``{"kind": ...,
     <its constructor's parameters>}``, the kinds and field names of a sweep spec's ``[load]``; for
     an object the table of loads does not know, its class name as ``kind`` and its ``repr``.
 
@@ -196,11 +196,11 @@ def load_record(load) -> dict:
     --------
     >>> from impactbar import SquareWaveLoad
     >>> from impactbar.cli._common import load_record
-    >>> load_record(SquareWaveLoad(1.0, 1.2)) == SquareWaveLoad(1.0, 1.2).to_record()
+    >>> load_record(SquareWaveLoad(1.0, 1.2)) == SquareWaveLoad(1.0, 1.2).params.record()
     True
     """
-    if getattr(load, "kind", ""):
-        return json_ready(load.to_record())
+    if getattr(load, "traits", None) is not None and load.traits.kind:
+        return json_ready(load.params.record())
     return {"kind": type(load).__name__, "repr": repr(load)}
 
 

@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 from ..laws import LAWS
-from ..loads import LOADS, Load
+from ..loads import LOADS, Load, load_from_record
 from ._common import load_record, print_json, refuse
 
 #: the options of each load kind: the loads of the table whose parameters are all numbers
-LOAD_OPTIONS = {kind: cls.parameters.names for kind, cls in LOADS.items()
-                if all(f.per is None for f in cls.parameters)}
+LOAD_OPTIONS = {kind: cls.traits.parameters.names for kind, cls in LOADS.items()
+                if all(f.per is None for f in cls.traits.parameters)}
 #: the dimensionless inputs, which a hammer in SI (CONFIG.toml or --preset) sets itself
 DIMENSIONLESS = ("s", "d", "R", "n_modes", "load",
                  *dict.fromkeys(p for options in LOAD_OPTIONS.values() for p in options))
@@ -36,9 +36,9 @@ def add_bar_and_load_arguments(p) -> None:
     lg = p.add_argument_group("load")
     kinds = tuple(LOAD_OPTIONS)
     lg.add_argument("--load", choices=kinds, default=kinds[0],
-                    help="; ".join(f"{k}: {LOADS[k].description}" for k in kinds))
+                    help="; ".join(f"{k}: {LOADS[k].traits.description}" for k in kinds))
     for kind in kinds:  # each load's parameters, from the table of loads
-        for f in LOADS[kind].parameters:
+        for f in LOADS[kind].traits.parameters:
             lg.add_argument(f"--{f.name}", type=int if f.dtype.startswith("i") else float,
                             default=DEFAULTS[f.name],
                             help=f"{kind}: {f.long_name} (default {DEFAULTS[f.name]:g})")
@@ -70,7 +70,7 @@ def add_parser(sub) -> None:
 
 def load_from_args(args) -> Load:
     """The load ``--load`` names, from its options (the table of loads)."""
-    return Load.from_record({"kind": args.load, **{n: getattr(args, n) for n in LOAD_OPTIONS[args.load]}})
+    return load_from_record({"kind": args.load, **{n: getattr(args, n) for n in LOAD_OPTIONS[args.load]}})
 
 
 def check_options(args) -> None:

@@ -403,7 +403,7 @@ def _load_jump(problem, U, index):
     differentiable there, and the branch has a corner, e.g. the hydraulic existence edge, Fig. 8):
     Newton on ``F(u, lambda) = 0`` with the impact time nearest a jump pinned to it. Returns a
     ``"load-jump"`` event, or None when no impact is near a jump or Newton fails."""
-    pieces = problem.segments(U[-1]).load.pieces()
+    pieces = problem.segments(U[-1]).load.abilities.pieces
     if pieces is None:  # a continuous load: no jump
         return None
     K = problem.segments(U[-1]).B  # unknowns per impact
@@ -418,7 +418,7 @@ def _load_jump(problem, U, index):
 
     def pinned(V):  # the impact time held on the jump, which moves with the parameter
         V = np.array(V, dtype=float)
-        V[K * j] = problem.segments(V[-1]).load.pieces()[0][b] + shift
+        V[K * j] = problem.segments(V[-1]).load.abilities.pieces[0][b] + shift
         return V
 
     keep = np.ones(U.size, dtype=bool)

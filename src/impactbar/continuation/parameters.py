@@ -16,10 +16,10 @@ __all__ = ["PARAMETERS", "ROCK_PARAMETERS", "parameter_value", "with_parameter"]
 #: of :attr:`BarModel.parameters`; ``n_modes``, an integer, is swept, not continued).
 MODEL_PARAMETERS = tuple(f.name for f in BarModel.parameters if not f.dtype.startswith("i"))
 #: Parameters a branch can be continued in: BarModel fields and the loads' continuation parameters
-#: (:attr:`impactbar.Load.continuation_parameters` of the table of loads), as listed by their classes;
+#: (the ``traits.continuation_parameters`` of the table of loads), as listed by their classes;
 #: the parameters of one problem: :func:`impactbar.parameters.parameters`.
-PARAMETERS = tuple(dict.fromkeys((*MODEL_PARAMETERS,
-                                  *(p for cls in LOADS.values() for p in cls.continuation_parameters))))
+PARAMETERS = tuple(dict.fromkeys((*MODEL_PARAMETERS, *(p for cls in LOADS.values()
+                                                       for p in cls.traits.continuation_parameters))))
 
 #: Parameters of a model with ``impact=RodRock(...)`` (theory §4d), in the law's units: the rock's
 #: loading and unloading stiffnesses (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's

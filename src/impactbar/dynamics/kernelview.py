@@ -2,7 +2,7 @@
 
 Every compiled kernel (:mod:`impactbar.dynamics._kernel`, ``_flowkernel``, ``_wavekernel``,
 :mod:`impactbar.orbits._admkernel`) gets a load as one :class:`LoadKernelView`, built once by the
-frozen load itself (:attr:`impactbar.Load.kernel_view`). The dtypes of its fields never change, so
+frozen load itself (its abilities' ``kernel``). The dtypes of its fields never change, so
 numba compiles each kernel once for every load of both kinds.
 """
 

@@ -9,7 +9,7 @@ of a flight, with the saltation term ``-(c . dq)/(c . q')`` of the arrival time)
 iteration compiled in :mod:`impactbar.dynamics._aberthkernel`). A law composes them with its own
 impact map: the paper's ``J_R = diag(I, -R I)`` (:mod:`impactbar.laws.paper.stability`), the wave
 law's window (:mod:`impactbar.laws.wave.periodic`). The model and the load are read through their
-attributes and methods (``frequencies``, ``d``, ``end_weights``; ``load(t)``, ``load.left_limit``):
+attributes and methods (``frequencies``, ``d``, ``end_weights``; ``load(t)``, ``load.abilities.left_limit``):
 like the rest of :mod:`impactbar.dynamics`, this module imports no other impactbar subpackage."""
 
 from __future__ import annotations
@@ -74,7 +74,9 @@ def impact_fields(model, load, phase: float, y_plus, y_minus, t_arrive=None):
     if not abs(v_imp) > 1e-14 * float(np.max(np.abs(ym))):  # relative: invariant under load -> L load
         raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")
     f0 = (vp, float(load(phase)) - d * vp - w2 * qp)
-    f1 = (vm, float(load.left_limit(phase if t_arrive is None else t_arrive)) - d * vm - w2 * qm)
+    t1 = phase if t_arrive is None else t_arrive
+    left = load.abilities.left_limit  # (p(t-) where the load has jumps, else p(t))
+    f1 = (vm, float(left(t1) if left is not None else load(t1)) - d * vm - w2 * qm)
     return v_imp, f0, f1
 
 

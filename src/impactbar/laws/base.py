@@ -74,7 +74,7 @@ class OrbitState:
         Contact is lost inside the law's window (theory §4b): the orbit is not admissible as a held
         contact.
     flow : callable, optional
-        The flight's flow from ``state_after_impact`` (``load.flow(...)``), where the law built it:
+        The flight's flow from ``state_after_impact`` (the load's own exact flow), where the law built it:
         the admissibility search reuses it.
     """
 

@@ -7,13 +7,15 @@ sees ``p(t + phase)`` (eq. 7). Each load also knows the exact motion of a modal 
 
 from __future__ import annotations
 
-from .base import LOADS, Load, register_load
+from .abilities import LoadAbilities, LoadKernel, LoadTraits
+from .base import LOADS, Load, load_from_record, register_load
 from .fourier import CosineLoad, FourierLoad
 from .piecewise import PiecewiseConstantLoad, SquareWaveLoad
 
 __all__ = ["Load", "FourierLoad", "CosineLoad", "PiecewiseConstantLoad", "SquareWaveLoad", "LOADS",
-           "register_load"]
+           "register_load", "load_from_record", "LoadTraits", "LoadAbilities", "LoadKernel"]
 
 
 # the table of loads (kind -> class), in the order the CLI and the sweep spec list them
-LOADS.update({cls.kind: cls for cls in (CosineLoad, SquareWaveLoad, FourierLoad, PiecewiseConstantLoad)})
+LOADS.update({cls.traits.kind: cls
+              for cls in (CosineLoad, SquareWaveLoad, FourierLoad, PiecewiseConstantLoad)})

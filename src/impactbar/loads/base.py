@@ -6,17 +6,16 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from dataclasses import FrozenInstanceError
+from functools import cached_property
 from typing import ClassVar
 
 import numpy as np
 
-from .._shared.parameters import Parameter
 from .._shared.registry import register
-from .._shared.schema import Schema
-from ..dynamics.kernelview import LoadKernelView
-from ..dynamics.modal import fundamental
+from .abilities import NONE, LoadAbilities, LoadTraits
+from .params import LoadParameters
 
-__all__ = ["Load", "LOADS", "register_load"]
+__all__ = ["Load", "LOADS", "register_load", "load_from_record"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -40,36 +39,25 @@ class Load(ABC):
     ``AttributeError``), so that everything computed from a load (the simulator's cached kernel
     data, the compiled flows) stays valid. Loads compare and hash by value.
 
-    What a drive must provide (a new drive, e.g. a position-switched one, implements these):
+    The members, and no more (a solver asks nothing else of a load):
 
-    - ``p0`` (the mean load) and :meth:`__call__` (the load at given times), :meth:`left_limit` at
-      jumps, and :meth:`harmonics` (the complex ``p_k`` of eq. 7);
-    - the bounds used by the certified searches: :attr:`sup_abs`, :attr:`sup_oscillation`,
-      :meth:`variation`;
-    - the exact modal response: :meth:`propagate` (and optionally a faster :meth:`flow`),
-      :meth:`rigid_velocity`, :meth:`periodic_state`;
-    - :attr:`kernel_view`: the one :class:`~impactbar.dynamics.kernelview.LoadKernelView` the
-      compiled code reads (the only path from a load into compiled code), or ``None`` for a drive
-      the kernels do not know; the simulator and the compiled searches then need a view, the
-      numpy reference paths only the methods above;
-    - :meth:`_key`: the values that identify it (equality, hashing, caches).
-
-    What the solvers, sweeps, the SI layer and the CLI ask of a load, declared by each class (a
-    load class with a :attr:`kind` is an entry of the table :data:`LOADS`):
-
-    - :attr:`kind`, :attr:`description`, :attr:`parameters` (its constructor's, with long names
-      and dtypes), :attr:`continuation_parameters` and :attr:`parameter_ranges` (its parameter
-      records, :meth:`parameter_table`, changed by :meth:`with_parameter`: the parameter protocol
-      of :mod:`impactbar.parameters`); :meth:`to_record`, :meth:`from_record` and :meth:`with_` (a
-      copy with parameters changed);
-    - :attr:`period` (its fundamental period), :attr:`max_one_impact_orbits` (a bound of the roots
-      of the phase equation, eq. 14);
-    - the forms a special solver recognises: :meth:`cosine_form` (the rigid closed forms,
-      pneumatic), :meth:`square_form` (the rigid closed forms, hydraulic), :meth:`pieces` (the
-      jumps of a piecewise-constant load), :attr:`orders` (the harmonics of a load of finitely
-      many) and ``_boundaries`` (the jumps in a window, where the wave law's quadratures split);
-    - :attr:`kernel_kind` and :meth:`compiled_kind`: the kind of its kernel view, where compiled
-      code may stand for the load's methods.
+    - what every load implements (abstract here, besides ``p0``): :meth:`__call__` (the load at
+      given times), :meth:`harmonics` (the complex ``p_k`` of eq. 7), the bounds used by the
+      certified searches (:attr:`sup_abs`, :attr:`sup_oscillation`, :meth:`variation`), and the
+      exact modal response (:meth:`propagate`, :meth:`rigid_velocity`); with these alone a load
+      runs on the numpy reference paths;
+    - :attr:`abilities`: what it can do beyond them (a
+      :class:`~impactbar.loads.abilities.LoadAbilities`, built once): its period, the forms a
+      special solver has closed forms for, a :class:`~impactbar.loads.abilities.LoadKernel` (the
+      view compiled code reads, which the simulator and the compiled searches need), a faster
+      exact flow; none by default;
+    - :attr:`traits`: what its class declares (a
+      :class:`~impactbar.loads.abilities.LoadTraits`: its ``kind`` in the table :data:`LOADS`, its
+      parameters), and :attr:`params`, its parameters and record read from them (the parameter
+      protocol of :mod:`impactbar.parameters`);
+    - :attr:`family` (``"load"``), by which each entry point chooses its solver once;
+    - :meth:`_key` (the values that identify it: equality, hashing, caches) and :meth:`_set` (the
+      constructor's writes).
 
     Attributes
     ----------
@@ -78,42 +66,18 @@ class Load(ABC):
 
     Examples
     --------
-    >>> from impactbar import CosineLoad, Load
-    >>> isinstance(CosineLoad(0.3, 1.0), Load)
-    True
-    >>> CosineLoad(0.3, 1.0) == CosineLoad(0.3, 1.0)  # loads compare by value
-    True
+    >>> from impactbar.loads import LOADS, Load
+    >>> cosine = LOADS["cosine"]
+    >>> isinstance(cosine(0.3, 1.0), Load), cosine(0.3, 1.0) == cosine(0.3, 1.0)  # compared by value
+    (True, True)
+    >>> cosine(0.3, 1.0).abilities.cosine, cosine(0.3, 1.0).abilities.square
+    ((0.3, 1.0, 1), None)
     """
 
     p0: float
 
-    #: The members a load must implement (abstract here, besides ``p0`` and ``_key``): with them alone
-    #: it runs through the numpy reference paths (``tests/laws/test_law_hooks.py``'s minimal load);
-    #: the simulator and the compiled searches need :attr:`kernel_view` too.
-    REQUIRED_HOOKS: ClassVar[tuple[str, ...]] = (
-        "__call__", "harmonics", "sup_abs", "sup_oscillation", "variation", "propagate", "rigid_velocity")
-    #: Every other member the solvers call: declarations and members with a default.
-    OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
-        "kind", "description", "parameters", "continuation_parameters", "parameter_ranges", "kernel_kind",
-        "family", "kernel_view", "left_limit", "flow", "periodic_state", "to_record", "from_record",
-        "parameter_table", "with_parameter", "with_parameters", "with_", "period", "max_one_impact_orbits",
-        "cosine_form", "square_form", "pieces", "orders", "compiled_kind")
-
-    #: the load's name in the table :data:`LOADS`: a sweep spec's ``[load] kind``, the CLI's
-    #: ``--load``, the ``"kind"`` of :meth:`to_record` (empty for a load not in the table)
-    kind: ClassVar[str] = ""
-    #: what the load is, in a few words (the CLI's help)
-    description: ClassVar[str] = ""
-    #: the constructor's parameters, in order, each with its long name and dtype
-    parameters: ClassVar[Schema] = Schema()
-    #: the parameters a branch of orbits can be continued in (:func:`impactbar.continue_orbit`)
-    continuation_parameters: ClassVar[tuple[str, ...]] = ()
-    #: the ranges of its numbers, where a record (:meth:`parameter_table`) should state them: name ->
-    #: keyword arguments of :class:`~impactbar.parameters.Parameter` (``low``, ``high``, ``low_open``,
-    #: ...); the constructor checks them again
-    parameter_ranges: ClassVar[dict[str, dict]] = {}
-    #: the ``kind`` of the :attr:`kernel_view` the class declares (``None``: it declares none)
-    kernel_kind: ClassVar[int | None] = None
+    #: what the class declares: its kind in the table :data:`LOADS`, its description and parameters
+    traits: ClassVar[LoadTraits] = LoadTraits()
     #: the forcing family, by which each entry point chooses its solver once (a drive's is
     #: ``"drive"``)
     family: ClassVar[str] = "load"
@@ -148,14 +112,24 @@ class Load(ABC):
         return h
 
     def __getstate__(self):
-        # the cached hash is not carried to another process (hashes of bytes differ between them)
-        return {k: v for k, v in self.__dict__.items() if k != "_hash"}
+        # the cached hash is not carried to another process (hashes of bytes differ between them),
+        # nor the abilities (built again there: they hold the load's own methods)
+        return {k: v for k, v in self.__dict__.items() if k not in ("_hash", "abilities")}
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{f.name}={_plain(getattr(self, f.name))!r}" for f in self.traits.parameters)
+        return f"{type(self).__name__}({args})"
+
+    @cached_property
+    def abilities(self) -> LoadAbilities:
+        """What the load can do beyond its required hooks (none here), built once."""
+        return NONE
 
     @property
-    def kernel_view(self) -> LoadKernelView | None:
-        """The load as compiled code reads it (built once), or ``None`` for a load the kernels do not
-        know (the numpy reference paths then evaluate it through its methods)."""
-        return None
+    def params(self) -> LoadParameters:
+        """The load's parameters, its copies with some changed and its record, from its
+        :attr:`traits` (:class:`~impactbar.loads.params.LoadParameters`)."""
+        return LoadParameters(self)
 
     # -- evaluation -------------------------------------------------------------------------
     @abstractmethod
@@ -171,10 +145,6 @@ class Load(ABC):
         -------
         numpy.ndarray, shape (...)
         """
-
-    def left_limit(self, t) -> np.ndarray:
-        """``p(t-)``; equal to ``p(t)`` for a continuous load."""
-        return self(t)
 
     @abstractmethod
     def harmonics(self, n: int | None = None) -> np.ndarray:
@@ -227,17 +197,6 @@ class Load(ABC):
             At an undamped resonance ``w2 = k^2`` of a harmonic the load contains (eq. 16).
         """
 
-    def flow(self, w2, d: float, t0: float, q0, v0):
-        """The exact flow from one state, as a callable ``flow(t) -> (q, v)`` of shape ``(M, T)``.
-
-        Equivalent to ``propagate(w2, d, t0, q0, v0, t)``; subclasses precompute what does not depend
-        on ``t`` so that repeated evaluations (root searches along one orbit) are cheap.
-        """
-        w2 = np.asarray(w2, dtype=float)
-        q0 = np.asarray(q0, dtype=float)
-        v0 = np.asarray(v0, dtype=float)
-        return lambda t: self.propagate(w2, d, t0, q0, v0, t)
-
     @abstractmethod
     def rigid_velocity(self, d: float, t) -> np.ndarray:
         """``V(t)``: the periodic, zero-mean solution of ``V' + d V = p(t) - p0``.
@@ -246,238 +205,61 @@ class Load(ABC):
         ``(1 + R) V(phase) = p0 G(d, R)``.
         """
 
-    def periodic_state(self, w2, d: float, t):
-        """The ``2 pi``-periodic response ``(q, v)`` of oscillators with ``w2 > 0`` at times ``t``
-        (the particular solution ``sum_k H_nk p_k exp(i k t)`` of eq. 8).
 
-        Parameters
-        ----------
-        w2 : array_like, shape (M,)
-            Squared frequencies, ``> 0``.
-        d : float
-            Damping.
-        t : array_like, shape (T,)
+def _plain(value):
+    """A parameter's value as its record shows it (an array as a list)."""
+    return value.tolist() if isinstance(value, np.ndarray) else value
 
-        Returns
-        -------
-        q, v : numpy.ndarray, shape (M, T)
-        """
-        w2 = np.asarray(w2, dtype=float)
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        zeros = np.zeros_like(w2)
-        qz = np.empty((w2.size, t.size))
-        vz = np.empty_like(qz)
-        for j, tj in enumerate(t):
-            q1, v1 = self.propagate(w2, d, tj, zeros, zeros, [tj + TWO_PI])
-            qz[:, j], vz[:, j] = q1[:, 0], v1[:, 0]
-        p11, p12, p21, p22 = fundamental(w2[:, None], d, TWO_PI)
-        a11, a12, a21, a22 = 1.0 - p11, -p12, -p21, 1.0 - p22
-        det = a11 * a22 - a12 * a21
-        if np.any(np.abs(det) < 1e-13):
-            raise ValueError("undamped resonance: a mode frequency s*n*pi equals a load harmonic k")
-        q = (a22 * qz - a12 * vz) / det
-        v = (-a21 * qz + a11 * vz) / det
-        return q, v
 
-    # -- what the solvers, sweeps, the SI layer and the CLI ask of a load ------------------------
-    def to_record(self) -> dict:
-        """The load as JSON-ready data, ``{"kind": ..., <each of its parameters>}`` (a sweep spec's
-        ``[load]`` table); :meth:`from_record` reads it back.
+def load_from_record(record: Mapping) -> Load:
+    """The load of a record ``{"kind": ..., <parameters>}`` (:meth:`LoadParameters.record
+    <impactbar.loads.params.LoadParameters.record>`); complex parameters as ``[re, im]`` pairs,
+    complex or real numbers.
 
-        Raises
-        ------
-        ValueError
-            For a load that is not in the table :data:`LOADS` (no :attr:`kind`).
+    Raises
+    ------
+    ValueError
+        Naming the missing or unknown key, an unknown kind, or a parameter out of its range.
 
-        Examples
-        --------
-        >>> from impactbar import CosineLoad, Load
-        >>> CosineLoad(0.3, 1.0).to_record()
-        {'kind': 'cosine', 'p0': 0.3, 'pk': 1.0, 'k': 1}
-        >>> Load.from_record({'kind': 'square', 'q': 1.0, 'kappa': 1.2})
-        SquareWaveLoad(q=1.0, kappa=1.2)
-        """
-        if not self.kind:
-            raise ValueError(f"a {type(self).__name__} has no kind: it is not in the table of loads")
-        return {"kind": self.kind, **self.parameters.record(self)}
-
-    @staticmethod
-    def from_record(record: Mapping) -> Load:
-        """The load of a record ``{"kind": ..., <parameters>}`` (:meth:`to_record`); complex
-        parameters as ``[re, im]`` pairs, complex or real numbers.
-
-        Raises
-        ------
-        ValueError
-            Naming the missing or unknown key, an unknown kind, or a parameter out of its range.
-        """
-        if not isinstance(record, Mapping):
-            raise ValueError(f"a load record must be a mapping; got {record!r}")
-        if "kind" not in record:
-            raise ValueError(f"missing key 'kind' (one of {list(LOADS)})")
-        kind = record["kind"]
-        if not isinstance(kind, str) or kind not in LOADS:
-            raise ValueError(f"kind must be one of {list(LOADS)}; got {kind!r}")
-        cls = LOADS[kind]
-        names = cls.parameters.names
-        unknown = [k for k in record if k != "kind" and k not in names]
-        if unknown:
-            raise ValueError(f"unknown key(s) {unknown} for kind = {kind!r}; allowed: {list(names)}")
-        missing = [k for k in names if k not in record]
-        if missing:
-            raise ValueError(f"missing key(s) {missing} for kind = {kind!r}")
-        args = {}
-        for f in cls.parameters:
-            v = record[f.name]
-            if f.dtype == "c16" and isinstance(v, list | tuple):
-                v = [complex(*c) if isinstance(c, list | tuple) else c for c in v]
-            args[f.name] = v
-        return cls(**args)
-
-    def parameter_table(self) -> tuple[Parameter, ...]:
-        """The load's numbers as parameter records (:func:`impactbar.parameters.parameters`), from
-        its declaration in the class body: the scalar fields of :attr:`parameters` (their long names
-        the descriptions, an integer dtype an integer parameter), continuable where named in
-        :attr:`continuation_parameters`, with the ranges of :attr:`parameter_ranges`.
-
-        Returns
-        -------
-        tuple of Parameter
-
-        Examples
-        --------
-        >>> from impactbar import CosineLoad
-        >>> [(p.name, p.value, p.continuable) for p in CosineLoad(0.3, 1.0).parameter_table()]
-        [('p0', 0.3, True), ('pk', 1.0, True), ('k', 1, False)]
-        """
-        out = []
-        for f in self.parameters:
-            if f.per is not None:
-                continue
-            integer = f.dtype.startswith("i")
-            value = getattr(self, f.name)
-            out.append(Parameter(f.name, int(value) if integer else float(value), description=f.long_name,
-                                 continuable=f.name in self.continuation_parameters, integer=integer,
-                                 **self.parameter_ranges.get(f.name, {})))
-        return tuple(out)
-
-    def with_parameter(self, name: str, value) -> Load:
-        """A copy with one of :meth:`parameter_table` changed (validated again by the constructor).
-
-        Parameters
-        ----------
-        name : str
-            One of the names of :meth:`parameter_table`.
-        value : float or int
-            Its new value (an int for an integer field).
-
-        Returns
-        -------
-        Load
-
-        Raises
-        ------
-        ValueError
-            For a name that is not a parameter of this load, or a value out of its range.
-        """
-        return self.with_(**{name: value})
-
-    def with_parameters(self, changes: dict) -> Load:
-        """A copy with several of :meth:`parameter_table` changed at once (:meth:`with_`, the result
-        validated once)."""
-        return self.with_(**changes)
-
-    def with_(self, **changes) -> Load:
-        """A copy with some :attr:`parameters` changed (validated again by the constructor).
-
-        Raises
-        ------
-        ValueError
-            For a name that is not a parameter of this load, or a value out of its range.
-
-        Examples
-        --------
-        >>> from impactbar import CosineLoad
-        >>> CosineLoad(0.3, 1.0).with_(pk=2.0)
-        CosineLoad(p0=0.3, pk=2.0, k=1)
-        """
-        names = self.parameters.names
-        if not names or not all(k in names for k in changes):
-            unknown = [k for k in changes if k not in names] or list(changes)
-            raise ValueError(f"{unknown} not parameter(s) of {type(self).__name__}; it has {list(names)}")
-        return type(self)(**{n: changes[n] if n in changes else getattr(self, n) for n in names})
-
-    @property
-    def period(self) -> float:
-        """The load's fundamental period (dimensionless time): ``2 pi``, or ``2 pi / g`` for a load
-        of harmonics whose orders have the greatest common divisor ``g``."""
-        return TWO_PI
-
-    @property
-    def max_one_impact_orbits(self) -> int:
-        """A bound of the one-impact orbits the load admits (the roots of the phase equation,
-        eq. 14, in a period); the default is a sweep's width of 2."""
-        return 2
-
-    def cosine_form(self) -> tuple[float, float, int] | None:
-        """``(p0, pk, k)`` where the load is ``p0 + pk cos(k t)`` with real ``pk`` (eq. 33), the
-        form of the pneumatic closed forms; ``None`` otherwise."""
-        return None
-
-    def square_form(self) -> tuple[float, float] | None:
-        """``(q, kappa)`` where the load is the square wave of eq. 34, the form of the hydraulic
-        closed forms; ``None`` otherwise."""
-        return None
-
-    def pieces(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """``(breaks, levels)`` where the load is constant on pieces (its jumps at ``breaks``, shape
-        ``(J,)``); ``None`` for a continuous load."""
-        return None
-
-    @property
-    def orders(self) -> np.ndarray | None:
-        """Orders ``k`` of the non-zero harmonics where the load has finitely many (a Fourier load's,
-        shape ``(K',)``, with its ``amplitudes``); ``None`` otherwise."""
-        return None
-
-    def _boundaries(self, t0: float, t1: float) -> np.ndarray:
-        """Absolute times of the load's jumps in ``(t0, t1)``, sorted, shape ``(J,)``: none here (a
-        piecewise-constant load has its own)."""
-        return np.empty(0)
-
-    def compiled_kind(self, *methods: str) -> int | None:
-        """The kind of :attr:`kernel_view` (:data:`~impactbar.dynamics.kernelview.FOURIER` or
-        ``PIECEWISE``) where compiled code may stand for the load's ``methods``: they are those of
-        the class that declares the view. A subclass that redefines one of them (its own
-        evaluation) gets ``None``, and the numpy paths evaluate it through its methods. The view
-        itself is not built.
-
-        Parameters
-        ----------
-        *methods : str
-            Names of the methods the compiled code replaces (``"__call__"``, ``"flow"``, ...).
-        """
-        owner = next((c for c in type(self).__mro__ if "kernel_view" in c.__dict__), Load)
-        if owner is Load or any(getattr(type(self), m) is not getattr(owner, m) for m in methods):
-            return None
-        return owner.kernel_kind
-
-    def __repr__(self) -> str:
-        return f"{type(self).__name__}({self._repr_args()})"
-
-    def _repr_args(self) -> str:  # pragma: no cover - overridden
-        return ""
+    Examples
+    --------
+    >>> load = load_from_record({'kind': 'square', 'q': 1.0, 'kappa': 1.2})
+    >>> load.params.record(), load.abilities.square
+    ({'kind': 'square', 'q': 1.0, 'kappa': 1.2}, (1.0, 1.2))
+    """
+    if not isinstance(record, Mapping):
+        raise ValueError(f"a load record must be a mapping; got {record!r}")
+    if "kind" not in record:
+        raise ValueError(f"missing key 'kind' (one of {list(LOADS)})")
+    kind = record["kind"]
+    if not isinstance(kind, str) or kind not in LOADS:
+        raise ValueError(f"kind must be one of {list(LOADS)}; got {kind!r}")
+    cls = LOADS[kind]
+    names = cls.traits.parameters.names
+    unknown = [k for k in record if k != "kind" and k not in names]
+    if unknown:
+        raise ValueError(f"unknown key(s) {unknown} for kind = {kind!r}; allowed: {list(names)}")
+    missing = [k for k in names if k not in record]
+    if missing:
+        raise ValueError(f"missing key(s) {missing} for kind = {kind!r}")
+    args = {}
+    for f in cls.traits.parameters:
+        v = record[f.name]
+        if f.dtype == "c16" and isinstance(v, list | tuple):
+            v = [complex(*c) if isinstance(c, list | tuple) else c for c in v]
+        args[f.name] = v
+    return cls(**args)
 
 
 def register_load(cls: type[Load]) -> type[Load]:
-    """Enter a load class in the table :data:`LOADS` by its :attr:`~Load.kind`, so that a sweep
-    spec's ``[load] kind``, :meth:`Load.from_record` and the sweeps' axes know it (usable as a class
-    decorator).
+    """Enter a load class in the table :data:`LOADS` by its ``traits.kind``, so that a sweep
+    spec's ``[load] kind``, :func:`load_from_record` and the sweeps' axes know it (usable as a
+    class decorator).
 
     Parameters
     ----------
     cls : type
-        A subclass of :class:`Load` with a non-empty ``kind``.
+        A subclass of :class:`Load` whose ``traits`` has a non-empty ``kind``.
 
     Returns
     -------
@@ -491,8 +273,8 @@ def register_load(cls: type[Load]) -> type[Load]:
 
     Examples
     --------
-    >>> from impactbar.loads import CosineLoad, register_load
-    >>> register_load(CosineLoad) is CosineLoad  # already there: registering again changes nothing
+    >>> from impactbar.loads import LOADS, register_load
+    >>> register_load(LOADS["cosine"]) is LOADS["cosine"]  # already there: registering again changes nothing
     True
     """
-    return register(LOADS, cls, Load, "kind", "load")
+    return register(LOADS, cls, Load, "traits.kind", "load")

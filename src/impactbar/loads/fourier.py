@@ -12,6 +12,7 @@ from .._shared.validate import check_complex_array, check_int, check_real
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import FOURIER, LoadKernelView
 from ..dynamics.modal import b_integral, c_integral, fundamental
+from .abilities import LoadAbilities, LoadKernel, LoadTraits
 from .base import TWO_PI, Load
 
 __all__ = ["FourierLoad", "CosineLoad"]
@@ -42,13 +43,12 @@ class FourierLoad(Load):
     0.7
     """
 
-    kind = "fourier"
-    description = "p0 + Re sum_k p_k exp(i k t), finitely many harmonics (eq. 7)"
-    parameters = Schema(Field("p0", "mean load"),
-                        Field("coefficients", "complex harmonics p_1, p_2, ... (eq. 7)", dtype="c16",
-                              per="harmonic"))
-    continuation_parameters = ("p0",)
-    kernel_kind = FOURIER
+    traits = LoadTraits(
+        kind="fourier", description="p0 + Re sum_k p_k exp(i k t), finitely many harmonics (eq. 7)",
+        parameters=Schema(Field("p0", "mean load"),
+                          Field("coefficients", "complex harmonics p_1, p_2, ... (eq. 7)", dtype="c16",
+                                per="harmonic")),
+        continuation_parameters=("p0",))
 
     def __init__(self, p0, coefficients):
         self._set(p0=check_real("p0", p0))
@@ -72,6 +72,21 @@ class FourierLoad(Load):
         """The harmonics as the compiled kernels read them (kind 0), built once."""
         return LoadKernelView.fourier(self.p0, self._k, self._pk)
 
+    @cached_property
+    def abilities(self) -> LoadAbilities:
+        """Its period ``2 pi / gcd(orders)``, at most ``2 K`` one-impact orbits (the phase equation,
+        eq. 14, is a trigonometric polynomial of degree ``K``), its cosine form (eq. 33), its
+        harmonics, the compiled kernel (:data:`~impactbar.dynamics.kernelview.FOURIER`) and its
+        closed-form flow and periodic response."""
+        g = 0
+        for k in self.orders.tolist():
+            g = math.gcd(g, k)
+        return LoadAbilities(
+            period=TWO_PI / g if g else TWO_PI, max_one_impact_orbits=max(2, 2 * self._kmax),
+            cosine=self._cosine_form(), orders=self.orders, amplitudes=self.amplitudes,
+            kernel=LoadKernel.declared(self, FourierLoad, FOURIER, self.kernel_view),
+            flow=self.flow, periodic_state=self.periodic_state)
+
     @property
     def orders(self) -> np.ndarray:
         """Orders ``k`` of the non-zero harmonics, shape ``(K',)``."""
@@ -88,20 +103,8 @@ class FourierLoad(Load):
         ``(K,)``."""
         return self.harmonics()
 
-    @property
-    def period(self) -> float:
-        g = 0
-        for k in self.orders.tolist():
-            g = math.gcd(g, k)
-        return TWO_PI / g if g else TWO_PI
-
-    @property
-    def max_one_impact_orbits(self) -> int:
-        """``2 K``: the phase equation (eq. 14) is a trigonometric polynomial of degree ``K`` (at
-        least 2)."""
-        return max(2, 2 * self._kmax)
-
-    def cosine_form(self):
+    def _cosine_form(self):
+        """``(p0, pk, k)`` where the load is ``p0 + pk cos(k t)`` with real ``pk``, else ``None``."""
         if self._k.size != 1 or self._pk[0].imag != 0.0:
             return None
         return self.p0, float(self._pk[0].real), int(self._k[0])
@@ -262,9 +265,6 @@ class FourierLoad(Load):
         e = np.exp(1j * np.multiply.outer(t, self._k))
         return (e @ (self._pk / (d + 1j * self._k))).real
 
-    def _repr_args(self):
-        return f"p0={self.p0!r}, coefficients={self.harmonics().tolist()!r}"
-
 
 class CosineLoad(FourierLoad):
     r"""Pneumatic-hammer load (eq. 33): one harmonic of order ``k`` on a mean load.
@@ -298,12 +298,11 @@ class CosineLoad(FourierLoad):
     1.3
     """
 
-    kind = "cosine"
-    description = "pneumatic p0 + pk cos(k t) (eq. 33)"
-    parameters = Schema(Field("p0", "mean load"), Field("pk", "amplitude of the harmonic"),
-                        Field("k", "order of the harmonic, >= 1", "", dtype="i8"))
-    continuation_parameters = ("p0", "pk")
-    parameter_ranges = {"k": {"low": 1, "high": 4096}}
+    traits = LoadTraits(
+        kind="cosine", description="pneumatic p0 + pk cos(k t) (eq. 33)",
+        parameters=Schema(Field("p0", "mean load"), Field("pk", "amplitude of the harmonic"),
+                          Field("k", "order of the harmonic, >= 1", "", dtype="i8")),
+        continuation_parameters=("p0", "pk"), parameter_ranges={"k": {"low": 1, "high": 4096}})
 
     def __init__(self, p0, pk, k=1):
         self._set(p0=check_real("p0", p0), pk=check_real("pk", pk), k=check_int("k", k, lo=1, hi=4096))
@@ -316,8 +315,5 @@ class CosineLoad(FourierLoad):
         """``k p0 / pk`` (eq. 38), ``inf`` for ``pk = 0``."""
         return self.k * self.p0 / self.pk if self.pk != 0 else math.inf
 
-    def cosine_form(self):
+    def _cosine_form(self):
         return self.p0, self.pk, self.k
-
-    def _repr_args(self):
-        return f"p0={self.p0!r}, pk={self.pk!r}, k={self.k!r}"

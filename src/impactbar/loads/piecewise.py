@@ -13,6 +13,7 @@ from .._shared.validate import check_int, check_real
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import PIECEWISE, LoadKernelView
 from ..dynamics.modal import b_integral, c_integral, step_constant
+from .abilities import LoadAbilities, LoadKernel, LoadTraits
 from .base import TWO_PI, Load, _readonly
 
 __all__ = ["PiecewiseConstantLoad", "SquareWaveLoad"]
@@ -45,11 +46,10 @@ class PiecewiseConstantLoad(Load):
     -0.022535
     """
 
-    kind = "piecewise"
-    description = "constant on pieces of the period"
-    parameters = Schema(Field("breaks", "start times of the pieces in [0, 2 pi)", per="piece"),
-                        Field("levels", "load on each piece", per="piece"))
-    kernel_kind = PIECEWISE
+    traits = LoadTraits(
+        kind="piecewise", description="constant on pieces of the period",
+        parameters=Schema(Field("breaks", "start times of the pieces in [0, 2 pi)", per="piece"),
+                          Field("levels", "load on each piece", per="piece")))
 
     def __init__(self, breaks, levels):
         try:
@@ -91,13 +91,20 @@ class PiecewiseConstantLoad(Load):
         """Load on each piece, shape ``(J,)``."""
         return self._lv.copy()
 
-    @property
-    def max_one_impact_orbits(self) -> int:
-        """``J`` (at least 2): the rigid velocity of eq. 14 is monotone on each piece."""
-        return max(2, self._b.size)
+    @cached_property
+    def abilities(self) -> LoadAbilities:
+        """At most ``J`` one-impact orbits (the rigid velocity of eq. 14 is monotone on each piece,
+        at least 2), its pieces and their jumps, its left limits, the compiled kernel
+        (:data:`~impactbar.dynamics.kernelview.PIECEWISE`) and its flow piece by piece."""
+        return LoadAbilities(
+            max_one_impact_orbits=max(2, self._b.size), square=self._square_form(),
+            pieces=(self.breaks, self.levels),
+            kernel=LoadKernel.declared(self, PiecewiseConstantLoad, PIECEWISE, self.kernel_view),
+            flow=self.flow, left_limit=self.left_limit, jumps=self._boundaries)
 
-    def pieces(self):
-        return self.breaks, self.levels
+    def _square_form(self):
+        """``(q, kappa)`` where the load is the square wave of eq. 34, else ``None``."""
+        return None
 
     def _index(self, t, left=False):
         tm = np.mod(np.asarray(t, dtype=float), TWO_PI)
@@ -245,9 +252,6 @@ class PiecewiseConstantLoad(Load):
         tau = tm - self._b[j]
         return Vj[j] * np.exp(-d * tau) + alpha[j] * b_integral(d, tau)
 
-    def _repr_args(self):
-        return f"breaks={self._b.tolist()!r}, levels={self._lv.tolist()!r}"
-
 
 class SquareWaveLoad(PiecewiseConstantLoad):
     r"""Hydraulic-hammer load (eq. 34): a square wave, evaluated exactly.
@@ -280,12 +284,12 @@ class SquareWaveLoad(PiecewiseConstantLoad):
     0.2
     """
 
-    kind = "square"
-    description = "hydraulic square wave, +q then -q (eq. 34)"
-    parameters = Schema(Field("q", "level of the square wave, > 0"),
-                        Field("kappa", "fraction of the period at +q times 2, in [1, 2]"))
-    continuation_parameters = ("q", "kappa")
-    parameter_ranges = {"q": {"low": 0.0, "low_open": True}, "kappa": {"low": 1.0, "high": 2.0}}
+    traits = LoadTraits(
+        kind="square", description="hydraulic square wave, +q then -q (eq. 34)",
+        parameters=Schema(Field("q", "level of the square wave, > 0"),
+                          Field("kappa", "fraction of the period at +q times 2, in [1, 2]")),
+        continuation_parameters=("q", "kappa"),
+        parameter_ranges={"q": {"low": 0.0, "low_open": True}, "kappa": {"low": 1.0, "high": 2.0}})
 
     def __init__(self, q, kappa):
         q = check_real("q", q, lo=0.0, lo_open=True)
@@ -302,7 +306,7 @@ class SquareWaveLoad(PiecewiseConstantLoad):
         """``kappa`` (Section 4 of the paper)."""
         return self.kappa
 
-    def square_form(self):
+    def _square_form(self):
         return self.q, self.kappa
 
     def harmonics(self, n: int | None = None) -> np.ndarray:
@@ -312,6 +316,3 @@ class SquareWaveLoad(PiecewiseConstantLoad):
         k = np.arange(1, n + 1, dtype=float)
         a = k * self.kappa * math.pi
         return (2.0 * self.q / (math.pi * k)) * (np.sin(a) + 1j * (np.cos(a) - 1.0))
-
-    def _repr_args(self):
-        return f"q={self.q!r}, kappa={self.kappa!r}"

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..dynamics.kernelview import FOURIER
 from ..laws.paper.stability import trace_det
+from ..loads.abilities import compiled_kind, left_limit
 from .stability import MARGINAL
 
 TWO_PI = 2.0 * math.pi
@@ -447,11 +448,11 @@ class RigidFlight:
         self.d, self.load = float(d), load
         self.terms = self.numpy_terms = None
         # a subclass that redefines the load flies by its own propagate
-        if load.compiled_kind("__call__", "propagate", "flow") != FOURIER:
+        if compiled_kind(load, "__call__", "propagate", "flow") != FOURIER:
             self.p0 = None
             return
         self.p0 = float(load.p0)
-        k, pk = load.orders.astype(float), load.amplitudes
+        k, pk = load.abilities.orders.astype(float), load.abilities.amplitudes
         hp = pk / (1j * k * self.d - k * k)  # the rigid mode's transfer terms (FourierLoad._transfer)
         hv = hp * (1j * k)
         if k.size <= SCALAR_HARMONICS:
@@ -479,7 +480,7 @@ class RigidFlight:
         if self.p0 is None:
             load = self.load
             q, v = load.propagate(_RIGID_W2, self.d, t0, [q0], [v0], [t1])
-            return (float(q[0, 0]), float(v[0, 0]), float(load(t0)), float(load.left_limit(t1)))
+            return (float(q[0, 0]), float(v[0, 0]), float(load(t0)), float(left_limit(load, t1)))
         d = self.d
         qp0, vp0, p_start = self._periodic(t0)
         qp1, vp1, p_end = self._periodic(t1)

@@ -12,6 +12,7 @@ from ..dynamics.certified import enclose_zeros
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import FOURIER
 from ..loads import CosineLoad
+from ..loads.abilities import compiled_kind, exact_flow
 from ._rigid_scalar import cosine_clearance
 
 TWO_PI = 2.0 * math.pi
@@ -62,7 +63,7 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
 
     ``duration`` is the flight time after the impact at load time ``phase`` (``2 pi`` for a
     one-impact orbit; the flights of a multi-impact motion differ). ``flow``, if given, is
-    ``load.flow(w2, d, phase, q0, v0)`` of this flight, already built by the caller.
+    ``exact_flow(load, w2, d, phase, q0, v0)`` of this flight, already built by the caller.
     """
     M = model.n_modes + 1
     w2 = model.frequencies**2
@@ -85,9 +86,10 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
     # (fast-path guard: the rigid cosine flight's closed form, for a load that declares itself the
     # cosine (its kind) and evaluates as CosineLoad does, whose clearance it fixes to the last bit;
     # a subclass with its own evaluation or another load takes the certified search)
-    if (M == 1 and load.kind == CosineLoad.kind and load.compiled_kind("__call__") == FOURIER
+    if (M == 1 and load.traits.kind == CosineLoad.traits.kind and compiled_kind(load, "__call__") == FOURIER
             and q0[0] == 0.0 and not (at_rest and not acc0 < 0.0) and use_fast("admissibility.rigid_cosine")):
-        found = (cosine_clearance(float(d), load.p0, load.pk, load.k, float(phase), float(v0[0]),
+        p0, pk, k = load.abilities.cosine
+        found = (cosine_clearance(float(d), p0, pk, k, float(phase), float(v0[0]),
                                   float(horizon), bool(at_rest)), 0.0)
     if found is None and use_fast("admissibility.search"):
         found = _compiled_search(load, w2, float(d), float(phase), q0, v0, c, absc, float(psup),
@@ -116,12 +118,13 @@ def _admissibility(model, load, phase, y_plus, v_imp, horizon=TWO_PI, at_rest=No
 def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest, atol, flow=None):
     """``(clearance, err)`` of :func:`_numpy_search` by the compiled kernel, or
     ``None`` where it does not apply (a load or flow it does not know: the numpy path then runs)."""
-    kind = load.compiled_kind("__call__", "variation", "flow")
+    kind = compiled_kind(load, "__call__", "variation", "flow")
     if kind is None:
         return None
+    own = load.abilities
     if kind == FOURIER:
         if flow is None:
-            flow = load.flow(w2, d, phase, q0, v0)
+            flow = own.flow(w2, d, phase, q0, v0)
         args = getattr(flow, "kernel_args", None)
         if args is None:
             return None
@@ -129,7 +132,7 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         P = _NO_PIECES
     else:  # piecewise constant
         # one period and a margin: a midpoint of the search may fall just past the flight's end
-        pieces = getattr(load.flow(w2, d, phase, q0, v0, horizon=TWO_PI + 1.0), "pieces", None)
+        pieces = getattr(own.flow(w2, d, phase, q0, v0, horizon=TWO_PI + 1.0), "pieces", None)
         if pieces is None:
             return None
         nodes, levels, qn, vn = pieces
@@ -139,7 +142,7 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
 
     code, v_max, err = admissibility_search(phase, horizon, at_rest, atol, SEEDS, RETRY_PIECES,
                                             _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
-                                            phase_buffers(c.size), (tuple(load.kernel_view), F, P))
+                                            phase_buffers(c.size), (tuple(own.kernel.view), F, P))
     if code:
         raise RuntimeError("zero search did not converge (Lipschitz bound too loose)")
     return float(v_max), float(err)
@@ -155,7 +158,7 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
     value of ``g = u(1, t)`` over the flight (``-inf`` without one) and the bound on its error (see
     :func:`_stationary_values`)."""
     if flow is None:
-        flow = load.flow(w2, d, phase, q0, v0)
+        flow = exact_flow(load, w2, d, phase, q0, v0)
 
     def states(t):
         return flow(phase + np.asarray(t, dtype=float))
@@ -232,10 +235,10 @@ def _load_slope(load):
     """``(bound of |p'|, only without a jump)`` where the load is smooth between its jumps: a
     Fourier load's ``sum k |p_k|``; 0 for a piecewise-constant load, on an interval without a jump;
     ``None`` for another load (no certificate of a single zero)."""
-    kind = load.compiled_kind("__call__", "variation")
+    kind = compiled_kind(load, "__call__", "variation")
     if kind is None:
         return None
-    return (load.kernel_view.p1, False) if kind == FOURIER else (0.0, True)
+    return (load.abilities.kernel.view.p1, False) if kind == FOURIER else (0.0, True)
 
 
 def _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, slope):

@@ -114,13 +114,13 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
     if not model.law.supports_schur:
         raise ValueError("max_phase_residual is eq. 14's, the paper's impact law; model.impact must "
                          f"be 'paper' (got {model.impact!r})")
-    pieces = load.pieces()
-    if pieces is not None:  # V is monotone on each piece: the largest residual is at a jump
-        return float(np.max(phase_residual(model, load, pieces[0])))
-    orders = load.orders
+    own = load.abilities
+    if own.pieces is not None:  # V is monotone on each piece: the largest residual is at a jump
+        return float(np.max(phase_residual(model, load, own.pieces[0])))
+    orders = own.orders
     if orders is not None and len(orders) == 1:
         k = int(orders[0])
-        amp = (1.0 + model.R) * abs(load.amplitudes[0]) / math.hypot(model.d, k)
+        amp = (1.0 + model.R) * abs(own.amplitudes[0]) / math.hypot(model.d, k)
         return amp - load.p0 * phase_G(model.d, model.R)
     t = np.linspace(0.0, TWO_PI, 4097)
     F = phase_residual(model, load, t)

@@ -32,6 +32,7 @@ import numpy as np
 from ..dynamics.implementations import use_fast
 from ..dynamics.modal import fundamental
 from ..loads import Load
+from ..loads.abilities import left_limit
 from ..model import BarModel
 from ._rigid_scalar import RigidFlight
 from ._rigid_scalar import _b as _scalar_b
@@ -142,7 +143,7 @@ class _Segments:
     def f(self, t, y, left=False):
         """Vector field ``(q', p(t) - d q' - w2 q)`` (eq. 6); ``left`` takes ``p(t-)``."""
         M = self.M
-        p = float(self.load.left_limit(t) if left else self.load(t))
+        p = float(left_limit(self.load, t) if left else self.load(t))
         return np.concatenate((y[M:], p - self.d * y[M:] - self.w2 * y[:M]))
 
     def flight(self, t0, y0, t1):

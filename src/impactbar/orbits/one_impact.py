@@ -199,13 +199,13 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     load, a degenerate orbit)."""
     if model.n_modes != 0 or not model.law.rigid_closed_forms:
         return None
-    form = load.square_form()
+    form = load.abilities.square
     if form is not None:
         if not form[1] < 2.0:  # kappa = 2: a constant load, the general path
             return None
         args, square = (model.d, model.R, *form), True
     else:
-        form = load.cosine_form()
+        form = load.abilities.cosine
         if form is None or form[1] == 0.0:  # pk = 0: a constant load, the general path
             return None
         args, square = (model.d, model.R, *form), False

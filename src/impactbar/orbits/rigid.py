@@ -40,7 +40,7 @@ STATUS = (Admissibility.ADMISSIBLE, Admissibility.PENETRATES, Admissibility.GRAZ
 
 #: the kinds of load (the table of loads, :data:`impactbar.loads.LOADS`) whose one-impact orbits of
 #: the rigid bar have closed forms here
-CLOSED_FORM_KINDS = (CosineLoad.kind, SquareWaveLoad.kind)
+CLOSED_FORM_KINDS = (CosineLoad.traits.kind, SquareWaveLoad.traits.kind)
 
 
 def closed_form_groups(kind: str, par):
@@ -61,7 +61,7 @@ def closed_form_groups(kind: str, par):
         ``kappa = 2``, a constant load) take the general path. ``None`` for a kind without closed
         forms.
     """
-    if kind == CosineLoad.kind:
+    if kind == CosineLoad.traits.kind:
         ks = par["k"].astype(int)
         groups = []
         for k in np.unique(ks):
@@ -69,7 +69,7 @@ def closed_form_groups(kind: str, par):
             groups.append((sel, rigid_cosine_orbits,
                            (*(par[n][sel].astype(float) for n in ("d", "R", "p0", "pk")), int(k))))
         return groups
-    if kind == SquareWaveLoad.kind:
+    if kind == SquareWaveLoad.traits.kind:
         sel = np.nonzero(par["kappa"].astype(float) < 2.0)[0]  # kappa = 2: a constant load, the general path
         return [(sel, rigid_square_orbits, tuple(par[n][sel].astype(float)
                                                  for n in ("d", "R", "q", "kappa")))]

@@ -15,6 +15,7 @@ from ..dynamics.monodromy import sort_multipliers as sort_multipliers
 from ..laws.paper.stability import floquet_multipliers as floquet_multipliers
 from ..laws.paper.stability import impact_map_jacobian as impact_map_jacobian
 from ..loads import Load
+from ..loads.abilities import periodic_state
 from ..model import BarModel
 
 __all__ = ["impact_map_jacobian", "floquet_multipliers", "period_fundamental", "sort_multipliers",
@@ -52,7 +53,7 @@ def schur_blocks(model: BarModel, load: Load, phase: float) -> np.ndarray:
     e2 = math.exp(-TWO_PI * d)
     if N > 0:
         w2 = model.frequencies[1:] ** 2
-        _, vper = load.periodic_state(w2, d, [phase])
+        _, vper = periodic_state(load, w2, d, [phase])
         if model.piston is None:
             sig = float(np.sum((-1.0) ** np.arange(1, N + 1) * vper[:, 0])) / math.pi
         else:  # (c_n / 2 for the stepped piston's (-1)^n, theory §12)

@@ -371,7 +371,8 @@ class Hammer:
             raise ValueError(f"bar: the model's piston is {model.piston!r}, the bar's {bar.piston!r}")
         omega = bar.wave_speed_m_s / (bar.length_m * model.s)
         fscale = bar.mass_kg * bar.length_m * omega**2
-        cosine, square, pieces = load.cosine_form(), load.square_form(), load.pieces()
+        own = load.abilities
+        cosine, square, pieces = own.cosine, own.square, own.pieces
         if cosine is not None:
             p0, pk, k = cosine
             force = PneumaticForce(p0 * fscale, pk * fscale, k)

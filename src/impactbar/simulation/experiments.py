@@ -80,7 +80,7 @@ def load_period(load: Load) -> float:
     """The fundamental period of the load (dimensionless time): ``2 pi / k`` for a
     :class:`CosineLoad` of order ``k``, ``2 pi / gcd(orders)`` for a :class:`FourierLoad`, ``2 pi``
     otherwise."""
-    return load.period
+    return load.abilities.period
 
 
 def classify(tr: Trajectory, *, window: float = 0.25, tol: float = 1e-4,

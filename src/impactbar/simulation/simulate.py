@@ -128,9 +128,10 @@ class _Basis:
 
 
 def _load_view(load: Load) -> LoadKernelView:
-    """The load's one kernel view (:attr:`impactbar.Load.kernel_view`); a load the kernels do not
-    know is refused."""
-    view = load.kernel_view if of_family(load, "load") else None
+    """The load's one kernel view (its abilities' :class:`~impactbar.loads.LoadKernel`); a load the
+    kernels do not know is refused."""
+    kernel = load.abilities.kernel if of_family(load, "load") else None
+    view = kernel.view if kernel is not None else None
     if view is None:
         raise ValueError(
             f"load must be a FourierLoad (CosineLoad) or a PiecewiseConstantLoad "

@@ -130,7 +130,8 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
     >>> from impactbar.sweeps import parse_spec
     >>> folder = pathlib.Path(tempfile.mkdtemp())
     >>> spec = parse_spec({"task": "orbits", "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
-    ...                    "load": CosineLoad(0.5, 1.0).to_record(), "axes": {"R": {"values": [0.2, 0.9]}}})
+    ...                    "load": CosineLoad(0.5, 1.0).params.record(),
+    ...                    "axes": {"R": {"values": [0.2, 0.9]}}})
     >>> _ = run_sweep(spec, folder / "r.zarr", progress=False)
     >>> plot_sweep(folder / "r.zarr", folder / "chart.png").name
     'chart.png'

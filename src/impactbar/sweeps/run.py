@@ -141,7 +141,7 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
     >>> from impactbar import CosineLoad, run_sweep  # a zarr store: needs xarray and zarr (extra distributed)
     >>> from impactbar.sweeps import parse_spec
     >>> load = CosineLoad(p0=0.5, pk=1.0, k=1)
-    >>> spec = parse_spec({"task": "orbits", "load": load.to_record(),
+    >>> spec = parse_spec({"task": "orbits", "load": load.params.record(),
     ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
     ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
     >>> run = run_sweep(spec, pathlib.Path(tempfile.mkdtemp()) / "r.zarr", progress=False)

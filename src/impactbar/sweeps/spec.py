@@ -13,18 +13,18 @@ import numpy as np
 from .._shared.parameters import parameter_value, parameters, with_parameters
 from .._shared.validate import check_int, check_real
 from ..laws import get_law
-from ..loads import LOADS, Load
+from ..loads import LOADS, load_from_record
 from .grid import ChunkedGrid
 from .parts import DRIVE_MAX_ORBITS, drive_table, law_table
 
 TASKS = ("orbits", "montecarlo", "bifurcation")
 
 #: the fields of each load kind, in constructor order (the table of loads)
-LOAD_KINDS = {kind: cls.parameters.names for kind, cls in LOADS.items()}
+LOAD_KINDS = {kind: cls.traits.parameters.names for kind, cls in LOADS.items()}
 
 MODEL_FIELDS = ("s", "d", "R", "n_modes")
 #: the integer fields (an axis of them holds integers)
-INT_FIELDS = frozenset({"n_modes", *(f.name for cls in LOADS.values() for f in cls.parameters
+INT_FIELDS = frozenset({"n_modes", *(f.name for cls in LOADS.values() for f in cls.traits.parameters
                                      if f.dtype.startswith("i"))})
 
 #: task options: name -> (default, kind, lower bound, lower bound open, upper bound)
@@ -118,7 +118,7 @@ class SweepSpec(ChunkedGrid):
         an axis).
     load : dict or None
         ``kind`` (a key of the table of loads, :data:`impactbar.loads.LOADS`) and that load's
-        :attr:`~impactbar.Load.parameters`, all required: ``p0, pk, k``
+        parameters (its ``traits.parameters``), all required: ``p0, pk, k``
         (:class:`impactbar.CosineLoad`), ``q, kappa`` (:class:`impactbar.SquareWaveLoad`),
         ``p0, coefficients`` (:class:`impactbar.FourierLoad`; ``coefficients`` as ``[[re, im],
         ...]`` or real numbers), ``breaks, levels`` (:class:`impactbar.PiecewiseConstantLoad`).
@@ -169,7 +169,7 @@ class SweepSpec(ChunkedGrid):
     >>> from impactbar.sweeps import parse_spec
     >>> spec = parse_spec({"task": "orbits",
     ...                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
-    ...                    "load": CosineLoad(p0=0.5, pk=1.0, k=1).to_record(),
+    ...                    "load": CosineLoad(p0=0.5, pk=1.0, k=1).params.record(),
     ...                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 10}}})
     >>> spec.task, spec.shape, spec.n_chunks
     ('orbits', (10,), 1)
@@ -284,7 +284,7 @@ def load_spec(path) -> SweepSpec:
     >>> import pathlib, tempfile
     >>> from impactbar import CosineLoad, load_spec
     >>> path = pathlib.Path(tempfile.mkdtemp()) / "spec.toml"
-    >>> load = CosineLoad(p0=0.5, pk=1.0, k=1).to_record()  # the [load] table's keys and values
+    >>> load = CosineLoad(p0=0.5, pk=1.0, k=1).params.record()  # the [load] table's keys and values
     >>> with open(path, "w") as f:
     ...     for line in ['task = "orbits"', "[model]", "s = 100.0", "d = 0.0", "R = 0.5", "n_modes = 0",
     ...                  "[load]", *(f"{key} = {value!r}" for key, value in load.items()),
@@ -485,7 +485,7 @@ def _check_load(load) -> dict:
     out = dict(load)
     kind = out.get("kind")
     cls = LOADS.get(kind) if isinstance(kind, str) else None
-    for f in cls.parameters if cls is not None else ():
+    for f in cls.traits.parameters if cls is not None else ():
         v = out.get(f.name)
         if f.per is not None and isinstance(v, list | tuple):  # arrays as tuples
             if f.dtype == "c16":
@@ -495,10 +495,10 @@ def _check_load(load) -> dict:
                 v = tuple(check_real(f"[load] {f.name}[{j}]", x) for j, x in enumerate(v))
             out[f.name] = v
     try:
-        ld = Load.from_record(out)
+        ld = load_from_record(out)
     except ValueError as exc:
         raise ValueError(f"[load] {exc}") from None
-    for f in ld.parameters:  # normalised numbers (floats, ints)
+    for f in ld.traits.parameters:  # normalised numbers (floats, ints)
         if f.per is None:
             out[f.name] = getattr(ld, f.name)
     return out
@@ -577,11 +577,11 @@ def _check_chunk_size(spec) -> None:
 
 def _load_numbers(load: dict) -> tuple[str, ...]:
     """The numbers of the spec's load (its parameters an axis may sweep)."""
-    return tuple(f.name for f in LOADS[load["kind"]].parameters if f.per is None)
+    return tuple(f.name for f in LOADS[load["kind"]].traits.parameters if f.per is None)
 
 
 def _max_orbits_bound(spec) -> int:
-    """Most one-impact orbits the load admits (:attr:`impactbar.Load.max_one_impact_orbits`) over
+    """Most one-impact orbits the load admits (its abilities' ``max_one_impact_orbits``) over
     the base load and every value of the load's axes (the bound of each load depends on one of its
     parameters at most: the order ``k`` of a cosine)."""
     if spec.drive is not None:
@@ -589,11 +589,11 @@ def _max_orbits_bound(spec) -> int:
     extra = 1 if spec.rock is not None else 0  # the rod-rock law's guess from a settled run
     loads = [_make_load(spec.load)] + [_make_load({**spec.load, a.name: v}) for a in spec.axes
                                        if a.name in _load_numbers(spec.load) for v in a.values]
-    return max(ld.max_one_impact_orbits for ld in loads) + extra
+    return max(ld.abilities.max_one_impact_orbits for ld in loads) + extra
 
 
 def _make_load(load: dict):
-    return Load.from_record(load)
+    return load_from_record(load)
 
 
 def _base(spec):

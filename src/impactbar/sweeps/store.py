@@ -422,7 +422,7 @@ def open_sweep(path):
     >>> from impactbar import CosineLoad, open_sweep, run_sweep  # needs xarray and zarr (extra distributed)
     >>> from impactbar.sweeps import Axis, SweepSpec
     >>> spec = SweepSpec(task="orbits", model={"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
-    ...                  load=CosineLoad(0.5, 1.0).to_record(), axes=(Axis("R", (0.0, 0.45, 0.9)),))
+    ...                  load=CosineLoad(0.5, 1.0).params.record(), axes=(Axis("R", (0.0, 0.45, 0.9)),))
     >>> store = pathlib.Path(tempfile.mkdtemp()) / "r.zarr"
     >>> _ = run_sweep(spec, store, progress=False)
     >>> ds = open_sweep(store)

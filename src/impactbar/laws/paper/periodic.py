@@ -13,6 +13,7 @@ import numpy as np
 from ..._shared.threads import single_threaded_blas
 from ...dynamics.kernelview import FOURIER
 from ...dynamics.monodromy import period_fundamental
+from ...loads.abilities import compiled_kind, left_limit
 from ..base import BarModelLike, OrbitState
 from .stability import floquet_multipliers, rigid_multipliers
 
@@ -33,11 +34,11 @@ def _start_state(model: BarModelLike, load: Load, phase: float) -> np.ndarray:
     if N > 0:
         w2 = model.frequencies[1:] ** 2
         p11, p12, p21, p22 = (a[1:] for a in period_fundamental(model))
-        if load.kernel_kind == FOURIER:  # fast path: a Fourier load's closed-form periodic response
+        if compiled_kind(load) == FOURIER:  # fast path: a Fourier load's closed-form periodic response
             # the response from rest over one period, (I - Phi(2 pi)) y_p(phase) with y_p the
             # periodic response (what the flow from rest computes, without building it; it also
             # fixes the orbit's last bits, which the general path's propagation would change)
-            qp, vp = load.periodic_state(w2, d, [phase])
+            qp, vp = load.abilities.periodic_state(w2, d, [phase])
             qp, vp = qp[:, 0], vp[:, 0]
             fq = qp - (p11 * qp + p12 * vp)
             fv = vp - (p21 * qp + p22 * vp)
@@ -64,14 +65,14 @@ def _start_state(model: BarModelLike, load: Load, phase: float) -> np.ndarray:
 
 def _impact_states(model: BarModelLike, load: Load, phase: float, return_flow: bool = False):
     """Modal states just after (``t = 0+``) and just before (``t = 2 pi-``) the orbit's impact;
-    with ``return_flow``, also the flight's flow (``load.flow`` from ``y_plus``) where it is the
+    with ``return_flow``, also the flight's flow (the load's own from ``y_plus``) where it is the
     one that gave ``y_minus`` (a Fourier load; else ``None``), for the admissibility search."""
     M = model.n_modes + 1
     y_plus = _start_state(model, load, phase)
     w2 = model.frequencies**2
     flow = None
-    if load.kernel_kind == FOURIER:  # fast path: its propagate is this flow, built once, used twice
-        flow = load.flow(w2, model.d, phase, y_plus[:M], y_plus[M:])
+    if compiled_kind(load) == FOURIER:  # fast path: its propagate is this flow, built once, used twice
+        flow = load.abilities.flow(w2, model.d, phase, y_plus[:M], y_plus[M:])
         qm, vm = flow([phase + TWO_PI])
     else:
         qm, vm = load.propagate(w2, model.d, phase, y_plus[:M], y_plus[M:], [phase + TWO_PI])
@@ -109,7 +110,7 @@ def multipliers(model: BarModelLike, load: Load, phase: float) -> np.ndarray:
     """
     y_plus, y_minus = _impact_states(model, load, phase)
     if model.n_modes == 0:  # the 2 x 2 Jacobian in closed form
-        mu = rigid_multipliers(model.d, model.R, float(load(phase)), float(load.left_limit(phase)),
+        mu = rigid_multipliers(model.d, model.R, float(load(phase)), float(left_limit(load, phase)),
                                y_plus[1], y_minus[1])
         if not np.all(np.isfinite(mu)):
             raise ValueError("grazing impact (zero arrival velocity): the saltation term is infinite")

@@ -117,11 +117,12 @@ def _single_harmonic_roots(model, load):
     ``F = A cos(k phase + theta) - B`` with ``A e^{i theta} = (1 + R) p_k / (d + i k)``; the roots are
     ``k phase = -theta +- arccos(B / A) (mod 2 pi)``, ``2k`` of them, a double one at ``|B| = A``.
     """
-    orders = load.orders
+    own = load.abilities
+    orders = own.orders
     if orders is None or len(orders) != 1:
         return None
     k = int(orders[0])
-    z = (1.0 + model.R) * load.amplitudes[0] / (model.d + 1j * k)
+    z = (1.0 + model.R) * own.amplitudes[0] / (model.d + 1j * k)
     A, theta = abs(z), math.atan2(z.imag, z.real)
     B = load.p0 * phase_G(model.d, model.R)
     return cosine_roots(A, theta, B, k)

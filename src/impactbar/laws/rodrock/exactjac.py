@@ -202,8 +202,9 @@ def _time_direction(bmap):
     """The impact time's direction of the drive: ``(drive pieces or None, impulses, p'(t0))``, or
     None for a load of no known form (central differences then)."""
     from ...dynamics.kernelview import FOURIER, PIECEWISE
+    from ...loads.abilities import compiled_kind
 
-    kind = bmap.load.compiled_kind("__call__")
+    kind = compiled_kind(bmap.load, "__call__")
     starts, pieces = bmap.drive
     if kind == FOURIER:
         exps, degs, coefs = pieces[0]

@@ -212,17 +212,19 @@ def drive_pieces(load, t0: float, horizon: float, lead: float):
         A load of no known form that is not smooth enough for its polynomial pieces.
     """
     from ...dynamics.kernelview import FOURIER, PIECEWISE
+    from ...loads.abilities import compiled_kind
 
-    kind = load.compiled_kind("__call__")
+    abilities = load.abilities
+    kind = compiled_kind(load, "__call__")
     s0 = -float(lead)
     if kind == FOURIER:
-        ks = np.asarray(load.orders, dtype=float)
-        pk = np.asarray(load.amplitudes, dtype=complex) * np.exp(1j * ks * (t0 + s0))
+        ks = np.asarray(abilities.orders, dtype=float)
+        pk = np.asarray(abilities.amplitudes, dtype=complex) * np.exp(1j * ks * (t0 + s0))
         exps = np.concatenate(([0.0], 1j * ks, -1j * ks))
         coefs = np.concatenate(([load.p0], 0.5 * pk, 0.5 * np.conj(pk)))
         return np.array([s0]), [(exps, np.zeros(exps.size, dtype=np.int64), coefs)]
     if kind == PIECEWISE:
-        breaks, levels = load.pieces()
+        breaks, levels = abilities.pieces
         two_pi = 2.0 * math.pi
         lo, hi = t0 + s0, t0 + horizon
         m0 = math.floor(lo / two_pi) - 1

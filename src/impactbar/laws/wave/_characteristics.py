@@ -16,6 +16,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from ...dynamics.invariants import PistonInvariants
+from ...loads.abilities import jumps
 from . import _windowkernel as KW
 from ._jumps import _bernoulli, _singular_coefficients, locate_jumps
 
@@ -80,11 +81,10 @@ class _WindowLoad:
     def __init__(self, load, s: float, t0: float):
         self.load, self.s, self.t0 = load, s, t0
         t1 = t0 + 2.0 / s
-        bounds = getattr(load, "_boundaries", None)  # (a load's jumps; a drive's history has none)
-        tj = np.asarray(bounds(t0, t1), dtype=float) if bounds is not None else np.empty(0)
+        tj = np.asarray(jumps(load, t0, t1), dtype=float)  # (a load's jumps, a drive history's steps)
         self.t_edges = np.concatenate(([t0], tj, [t1]))
         self.jumps = s * (tj - t0)  # in theta, inside (0, 2)
-        orders = load.orders
+        orders = load.abilities.orders
         self.rate = float(np.max(orders)) / s if orders is not None and len(orders) else 0.0
 
     def __call__(self, theta, left: bool = False) -> np.ndarray:
@@ -108,7 +108,8 @@ class _WindowLoad:
     @cached_property
     def _pieces(self):
         """``(levels, cum, edges)`` of a piecewise-constant load over the window (None otherwise)."""
-        if self.load.pieces() is None or self.load.orders is not None:
+        own = self.load.abilities
+        if own.pieces is None or own.orders is not None:
             return None
         edges = self.t_edges - self.t0
         levels = self(self.s * 0.5 * (edges[:-1] + edges[1:]))
@@ -130,10 +131,11 @@ class _WindowLoad:
         piece by piece for a piecewise-constant one, else the load's own rigid-mode integral."""
         theta = np.atleast_1d(np.asarray(theta, dtype=float))
         tau = theta / self.s
-        orders = self.load.orders
+        own = self.load.abilities
+        orders = own.orders
         if orders is not None:  # p0 tau + Re sum p_k (e^{ik(t0 + tau)} - e^{ik t0}) / (ik)
             k = np.asarray(orders, dtype=float)
-            ck = self.load.amplitudes * np.exp(1j * k * self.t0) / (1j * k)
+            ck = own.amplitudes * np.exp(1j * k * self.t0) / (1j * k)
             osc = (np.expm1(1j * np.multiply.outer(tau, k)) @ ck).real
             return self.s * (self.load.p0 * tau + osc)
         if self._pieces is not None:  # constant between the jumps located at set-up

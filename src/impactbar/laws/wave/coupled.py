@@ -14,8 +14,11 @@ quadratures split at: exact for the interpolant).
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 
+from ...loads.abilities import LoadAbilities
 from ..base import DrivenContact, LawNotSupported
 
 __all__ = ["driven_wave_contact", "DriveHistory"]
@@ -24,16 +27,9 @@ __all__ = ["driven_wave_contact", "DriveHistory"]
 class DriveHistory:
     """The drive's force over a window, from its pieces, as the window's solver takes a load: its
     values (``__call__``), its integral (``propagate``'s rigid velocity), a bound (``sup_abs``) and
-    the pieces' steps as the points where the solver's quadratures split (``_boundaries``); neither
-    a load of harmonics (``orders``) nor one of constant pieces (``pieces``). The drive's pieces
-    are ``flights``."""
-
-    kernel_view = None
-    orders = None
-
-    @staticmethod
-    def pieces():
-        return None
+    the pieces' steps as the points where the solver's quadratures split (its abilities' ``jumps``,
+    :func:`impactbar.loads.abilities.jumps`); neither a load of harmonics nor one of constant pieces,
+    nor one compiled code knows. The drive's pieces are ``flights``."""
 
     def __init__(self, pieces):
         self.flights = list(pieces)
@@ -66,8 +62,10 @@ class DriveHistory:
             out[sel] = self.cumulative[j] + self.flights[j].impulse_at(t[sel])
         return out
 
-    def _boundaries(self, t0, t1):
-        return self.steps[(self.steps > t0) & (self.steps < t1)]
+    @cached_property
+    def abilities(self) -> LoadAbilities:
+        """Its steps, where the window's quadratures split (nothing else a load may declare)."""
+        return LoadAbilities(jumps=lambda t0, t1: self.steps[(self.steps > t0) & (self.steps < t1)])
 
     def propagate(self, w2, d, t0, q0, v0, t):
         """The rigid mode's velocity ``int_{t0}^t p`` (what the window's solver asks of a load

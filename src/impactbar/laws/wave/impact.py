@@ -74,7 +74,8 @@ def window_drive(s: float, R: float, n_modes: int, load, t0: float, derivative: 
     """
     wl = _WindowLoad(load, s, t0)
     npi = math.pi * np.arange(n_modes + 1)
-    view = getattr(load, "kernel_view", None)
+    kernel = load.abilities.kernel
+    view = kernel.view if kernel is not None else None
     exact = _exact_moments(view, wl, npi) if n_modes >= _CLOSED_FROM else None
     if exact is not None:  # closed forms, O(N K): the same moments to rounding
         (ca, cb), (sa, sb) = exact

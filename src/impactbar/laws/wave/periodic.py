@@ -42,6 +42,7 @@ from ...dynamics.kernelview import FOURIER, PIECEWISE, ModalBasisView
 from ...dynamics.modal import fundamental
 from ...dynamics.monodromy import aberth, arrival_derivative, impact_fields, sort_multipliers
 from ...loads import FourierLoad, Load, PiecewiseConstantLoad
+from ...loads.abilities import compiled_kind
 from ..base import BarModelLike, OrbitState
 from .impact import _wave_impact, window_drive
 
@@ -81,10 +82,10 @@ def _forced_flight(model: BarModelLike, load: Load, t0: float, t1: float):
     w2 = model.frequencies**2
     M = w2.size
     zeros = np.zeros(M)
-    if load.kernel_kind == PIECEWISE:  # fast path: the compiled flow of a piecewise-constant load
+    if compiled_kind(load) == PIECEWISE:  # fast path: the compiled flow of a piecewise-constant load
         q, v = np.empty((M, 1)), np.empty((M, 1))
-        K.propagate_many(tuple(load.kernel_view), tuple(ModalBasisView.unforced(w2, model.d)), float(t0),
-                         zeros, zeros, np.array([float(t1)]), q, v)
+        K.propagate_many(tuple(load.abilities.kernel.view), tuple(ModalBasisView.unforced(w2, model.d)),
+                         float(t0), zeros, zeros, np.array([float(t1)]), q, v)
     else:
         q, v = load.propagate(w2, model.d, t0, zeros, zeros, [t1])
     return q[:, 0], v[:, 0]
@@ -152,7 +153,7 @@ def _has_series(model: BarModelLike, load: Load) -> bool:
     """Whether the states are a trigonometric polynomial of the phase (:func:`wave_orbit_states`'
     notes): a load of finitely many harmonics whose evaluation is :class:`FourierLoad`'s own, and a
     window shorter than the period."""
-    return (load.compiled_kind("__call__", "propagate", "flow") == FOURIER and load.orders.size > 0
+    return (compiled_kind(load, "__call__", "propagate", "flow") == FOURIER and load.abilities.orders.size > 0
             and _window(model)[1] > 0.0)
 
 
@@ -164,7 +165,7 @@ def _state_series(model: BarModelLike, load: FourierLoad) -> np.ndarray:
     ``K`` (any :class:`FourierLoad`: the phase scan reads the residual's coefficients from it even
     where :func:`_has_series` leaves the states to :func:`_direct_states`). Computed once per model
     and load (both immutable), read-only."""
-    K = int(np.max(load.orders))
+    K = int(np.max(load.abilities.orders))
     Ms = 2 * K + 1
     phases = TWO_PI * np.arange(Ms) / Ms
     N = model.n_modes
@@ -221,12 +222,12 @@ def _forced_flights(model: BarModelLike, load: Load, phases):
     matrix, as in :func:`_periodic_solve`). Other loads take one flight per phase."""
     T, _ = _window(model)
     phases = np.asarray(phases, dtype=float)
-    if load.compiled_kind("flow") != FOURIER:  # (a flow that is not FourierLoad's closed form)
+    if compiled_kind(load, "flow") != FOURIER:  # (a flow that is not FourierLoad's closed form)
         return tuple(np.array(a) for a in zip(*(_forced_flight(model, load, float(p) + T, float(p) + TWO_PI)
                                                for p in phases), strict=True))
     w2 = model.frequencies**2
     zeros = np.zeros(w2.size)
-    X = load.flow(w2, model.d, float(phases[0]) + T, zeros, zeros)
+    X = load.abilities.flow(w2, model.d, float(phases[0]) + T, zeros, zeros)
     q, v = X(np.concatenate((phases + T, phases + TWO_PI)))
     P = phases.size
     q0, v0, q1, v1 = q[:, :P].T, v[:, :P].T, q[:, P:].T, v[:, P:].T
@@ -262,7 +263,7 @@ def wave_phase_residual(model: BarModelLike, load: Load, phase) -> np.ndarray:
     """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
     ``phase``."""
     ph = np.asarray(phase, dtype=float)
-    if use_fast("wave.residual") and load.kernel_kind == PIECEWISE and _window(model)[1] > 0.0:
+    if use_fast("wave.residual") and compiled_kind(load) == PIECEWISE and _window(model)[1] > 0.0:
         return _square_wave_residuals(model, load, ph)
     out = np.array([_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
     return out.reshape(ph.shape)
@@ -280,7 +281,7 @@ def _square_wave_residuals(model: BarModelLike, load: PiecewiseConstantLoad, ph:
     phases = np.ascontiguousarray(ph, dtype=float).ravel()
     out = np.empty(phases.size)
     basis = ModalBasisView.unforced(model.frequencies**2, model.d)
-    WK.square_wave_residuals(tuple(load.kernel_view), tuple(basis), float(model.s), float(R),
+    WK.square_wave_residuals(tuple(load.abilities.kernel.view), tuple(basis), float(model.s), float(R),
                              np.ascontiguousarray(model.end_weights, dtype=float), (p11, p12, p21, p22),
                              _GL_X, _GL_W, phases, out)
     return out.reshape(ph.shape)
@@ -350,16 +351,17 @@ def _phase_scan(model: BarModelLike, load: Load) -> tuple[tuple, tuple]:
     if F <= 0.0:
         return (), ()
     families = ()
-    if load.kernel_kind == FOURIER:  # finitely many harmonics: the residual's own series
-        K = int(np.max(load.orders)) if load.orders.size else 0
+    if compiled_kind(load) == FOURIER:  # finitely many harmonics: the residual's own series
+        orders = load.abilities.orders
+        K = int(np.max(orders)) if orders.size else 0
         if K == 0:
             return (), ()
         # r = c0 + 2 Re sum_k c_k e^{i k phi}: the residual's coefficients from the states' series
         M = model.n_modes + 1
         coef = _state_series(model, load)[:, 2 * M:3 * M] @ model.end_weights
         c0 = coef[0].real
-        if load.orders.size == 1:
-            k = int(load.orders[0])
+        if orders.size == 1:
+            k = int(orders[0])
             ck = 2.0 * coef[k]  # r = c0 + |ck| cos(k phase + arg ck)
             if ck == 0.0:
                 return (), ()

@@ -116,7 +116,7 @@ class SustainedContact:
         self.Vinv = np.linalg.inv(self.V)
         self.fv = (np.concatenate((np.zeros(N), self.c)) @ self.V)  # c . q' of each eigenvector
         self.kappa = np.where(np.arange(M) == 0, 1.0, 2.0)
-        data = load.kernel_view
+        data = load.abilities.kernel.view
         self._data = data
         if data.kind == 0:
             ks = np.concatenate(([0.0], data.ks))
