@@ -591,7 +591,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         nonlocal n_cached
         u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
         rid, values, changes = design_of(u)
-        t0 = time.perf_counter()
+        t0, drifter = time.perf_counter(), None
         if rid in store:
             rec = store[rid]
             if not any(r is rec for r in history):
@@ -615,7 +615,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     chain.add(rid, orbit)
                 rec.update(piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
-            rec = failed_record(exc, time.perf_counter() - t0)
+            rec = failed_record(exc, time.perf_counter() - t0, None if ideal else drifter)
         rec.update(id=rid, values=values, changes=changes)
         store[rid] = rec
         history.append(rec)
@@ -710,13 +710,13 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
 
 def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
     """A design's record by a fresh ``orbit()`` (a worker's task in the population search)."""
-    t0 = time.perf_counter()
+    t0, drifter = time.perf_counter(), None
     try:
         drifter = build(with_values(config, changes), folder)
         rec, orbit = evaluate_design(drifter, limits)
         rec.update(piston_and_multipliers(drifter, orbit))
     except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
-        rec = failed_record(exc, time.perf_counter() - t0)
+        rec = failed_record(exc, time.perf_counter() - t0, drifter)
     return rec
 
 
