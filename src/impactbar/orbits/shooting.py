@@ -19,7 +19,7 @@ from .._shared.status import Admissibility
 from .._shared.validate import check_int
 from ..drives.base import DriveState
 from ..drives.flight import ARRIVAL, EVENT, FlightSettings, fly
-from ..drives.orbitproblem import OrbitData, OrbitProblem, chord, newton
+from ..drives.orbitproblem import OrbitData, OrbitProblem, StalledIteration, chord, newton
 from ..model import BarModel
 from . import _closing as C
 from ._closing import checked_root, close
@@ -421,15 +421,19 @@ class ShootingProblem(OrbitProblem):
         (``STEER_THETA``) and a coupled blow's forward differences; with coupled blows that step
         takes the chord's last Jacobian (a fresh one would cost a blow a column). A one-impact orbit
         whose variational flights' state is a plain flight's hands over to that step after a Newton
-        step below ``CLOSING_HANDOVER``, and its multipliers' flight checks the root (:mod:`._closing`)."""
+        step below ``CLOSING_HANDOVER``, and its multipliers' flight checks the root (:mod:`._closing`).
+        A chord whose Newton steps stall (:class:`~impactbar.drives.orbitproblem.StalledIteration`)
+        ends it: no root near ``X``."""
         tol = max(tol, self.accuracy)
         if not (self.variational and self.newton == "chord"):
             return newton(self.residual, X, self.positive, tol, max_iter)
         checked = self.impacts == 1 and self.state_flights  # (the multipliers' flight checks the root)
         try:
             root, J = self._steered_chord(X, tol, max_iter, C.CLOSING_HANDOVER if checked else 0.0)
-        except ValueError:  # (a plain flight off the way, a chord that stalls: Newton's method of
-            return newton(self.residual, X, self.positive, tol, max_iter)  # before, and its verdict)
+        except StalledIteration:  # (its Newton steps circled: Newton's method from X circles alike,
+            raise  # at some 1.5 times the cost of each step)
+        except ValueError:  # (a plain flight off the way, a chord that does not converge: Newton's
+            return newton(self.residual, X, self.positive, tol, max_iter)  # method of before, its verdict)
         if not checked:
             return self._close(root, J)
         return checked_root(self, self._close(root, J, tol), tol, max_iter)

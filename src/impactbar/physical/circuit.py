@@ -301,7 +301,8 @@ class CircuitDrifter(_ScaledDrifter):
                                f"the orbit (period {point.period_s * 1e3:.5g} ms)")
         return point
 
-    def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
+    def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0,
+                 histories: bool = True):
         """Simulate from the piston at rest on the stop (or a given gap and velocity), the circuit at
         its start pressures, for ``duration_s`` (:func:`impactbar.simulate`).
 
@@ -310,8 +311,10 @@ class CircuitDrifter(_ScaledDrifter):
         dict
             ``impact_times_s``, ``impact_velocities_m_s`` (arrays), ``histories`` (``t_s`` and the
             pressures ``p_f_Pa``, ``p_r_Pa``, ``p_s_Pa``, the valve opening ``x_v``, the gap
-            ``gap_m``) and ``run`` (the dimensionless :class:`~impactbar.SwitchedTrajectory`); with a
-            drill string also ``work_on_rock_J`` and ``penetration_mm`` (arrays, per blow).
+            ``gap_m``; ``None`` with ``histories=False``, which saves most of the time a run of the
+            drifter on the rock takes) and ``run`` (the dimensionless
+            :class:`~impactbar.SwitchedTrajectory`); with a drill string also ``work_on_rock_J`` and
+            ``penetration_mm`` (arrays, per blow).
 
         Raises
         ------
@@ -324,10 +327,12 @@ class CircuitDrifter(_ScaledDrifter):
         drive = self.drive()
         run = simulate(self.model(), drive, start, dur * om)
         _refuse_cavitation(_least_pressures(run.pieces), f"the run of {dur:g} s")
-        h = drive.histories(run)
-        P = PRESSURE_SCALE
-        hist = {"t_s": h["t"] / om, "p_f_Pa": h["p_f"] * P, "p_r_Pa": h["p_r"] * P, "p_s_Pa": h["p_s"] * P,
-                "x_v": h["x_v"], "gap_m": h["y"] * L}
+        hist = None
+        if histories:
+            h = drive.histories(run)
+            P = PRESSURE_SCALE
+            hist = {"t_s": h["t"] / om, "p_f_Pa": h["p_f"] * P, "p_r_Pa": h["p_r"] * P,
+                    "p_s_Pa": h["p_s"] * P, "x_v": h["x_v"], "gap_m": h["y"] * L}
         out = {"impact_times_s": np.asarray(run.impact_times) / om,
                "impact_velocities_m_s": np.asarray(run.impact_velocities) * L * om, "histories": hist,
                "run": run}

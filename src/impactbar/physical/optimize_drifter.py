@@ -41,6 +41,7 @@ from .display_units import config_quantity, display_unit, written_quantity
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_cache import OrbitChain, dumps, read_cache, write_cache
+from .optimize_failures import failed_record
 from .optimize_outputs import constraint_output, piston_and_multipliers, shank_stress
 from .optimize_population import check_population, penalised, population_search
 from .optimize_progress import DesignProgress
@@ -80,8 +81,6 @@ IDEAL_CONSTRAINTS = ("peak_incident_stress", "piston_mass")
 #: some 1e-9 (the mean supply pressure on the preset by up to 4e-9); SLSQP walks along an active
 #: limit at about that distance from it. The reported optimum's fresh orbit meets it too.
 FEASIBILITY_TOLERANCE = 1e-8
-
-
 
 
 def _fingerprint(config: dict, vary: dict, objective: str, constraints: dict) -> str:
@@ -592,7 +591,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         nonlocal n_cached
         u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
         rid, values, changes = design_of(u)
-        t0 = time.perf_counter()
+        t0, drifter = time.perf_counter(), None
         if rid in store:
             rec = store[rid]
             if not any(r is rec for r in history):
@@ -616,14 +615,14 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                     chain.add(rid, orbit)
                 rec.update(piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
-            rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
+            rec = failed_record(exc, time.perf_counter() - t0, None if ideal else drifter)
         rec.update(id=rid, values=values, changes=changes)
         store[rid] = rec
         history.append(rec)
         counter["new"] += 1
         if cache_path is not None:
             write_cache(cache_path, tag, store)
-        bar.design(rec.get("seconds", time.perf_counter() - t0))
+        bar.design(rec["seconds"])
         return rec
 
     # COBYLA's budget counts its designs, the start among them; SLSQP's its iterations
@@ -711,12 +710,13 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
 
 def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
     """A design's record by a fresh ``orbit()`` (a worker's task in the population search)."""
+    t0, drifter = time.perf_counter(), None
     try:
         drifter = build(with_values(config, changes), folder)
         rec, orbit = evaluate_design(drifter, limits)
         rec.update(piston_and_multipliers(drifter, orbit))
     except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
-        rec = {"ok": False, "error": str(exc).splitlines()[0][:300], "feasible": False}
+        rec = failed_record(exc, time.perf_counter() - t0, drifter)
     return rec
 
 

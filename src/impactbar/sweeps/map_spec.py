@@ -27,7 +27,7 @@ machinery of :mod:`impactbar.sweeps` (stored as they finish, a rerun resumes, ch
 Task ``settle`` (options in ``[settle]``: ``blows = 40``, ``blow_fraction``, ``settle_tolerance``,
 :func:`settle_options`): each point simulated from rest up to its ``blows``-th blow and classified
 by :meth:`impactbar.physical.SimulationResult.blow_statistics`
-(:func:`impactbar.sweeps.map_task.settle_point`): ``period_blows`` (0 not settled), ``settled``,
+(:func:`impactbar.physical.settle.settle_point`): ``period_blows`` (0 not settled), ``settled``,
 ``chatter_per_blow`` and the mean and spread of the last period's impact velocity and blow frequency.
 
 Edges (:func:`impactbar.sweeps.maps.map_edges`): along each axis, between two neighbouring points

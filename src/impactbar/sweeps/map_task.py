@@ -1,14 +1,14 @@
 """A drifter map's work: the operating point at each point of a chunk, each continued from its
 neighbour (:mod:`impactbar.sweeps.map_spec`), and the bisection of an edge between two points; or,
-task ``settle``, the motion from rest at each point, classified (:func:`settle_point`)."""
+task ``settle``, the motion from rest at each point, classified
+(:func:`~impactbar.physical.settle.settle_point`)."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
 from ..physical.outputs import outputs as _outputs
+from ..physical.settle import settle_point
 from .map_spec import REASON_CHARS, DrifterMapSpec, _one_line
 
 #: largest relative change of the period or the impact velocity from the neighbour a continued
@@ -19,11 +19,6 @@ EDGE_RTOL = 1e-6
 #: the flags whose changes along an axis are edges (the outputs declared with ``edge``,
 #: :mod:`impactbar.physical.outputs`)
 EDGE_FLAGS = tuple(o.name for o in _outputs("store") if o.edge)
-#: a settle's first run lasts its blows at this blow frequency (Hz); a run holding fewer blows is
-#: followed by a longer one, from rest again
-SETTLE_FIRST_HZ = 40.0
-#: most runs a settle makes before it classifies what the last one holds
-SETTLE_RUNS = 8
 
 
 # ------------------------------------------------------------------------------------------------
@@ -260,122 +255,6 @@ def refine_edge(spec: DrifterMapSpec, axis: int, index: tuple, flag: str, *, rto
 # ------------------------------------------------------------------------------------------------
 # the settle task
 # ------------------------------------------------------------------------------------------------
-def _impacts(machine, duration_s: float):
-    """The impact times (s) and velocities (m/s) of ``machine.simulate(duration_s)`` from rest."""
-    from ..physical.circuit import CircuitDrifter
-
-    if isinstance(machine, CircuitDrifter):
-        run = machine.simulate(duration_s)
-        return np.asarray(run["impact_times_s"], float), np.asarray(run["impact_velocities_m_s"], float)
-    tr, _ = machine.simulate(duration_s)
-    om, length = machine.omega_rad_s, machine.bar.length_m
-    return np.asarray(tr.impact_times, float) / om, np.asarray(tr.impact_velocities, float) * length * om
-
-
-def settle_run(machine, blows: int, blow_fraction: float = 0.25):
-    """The impacts of the machine from rest up to its ``blows``-th blow.
-
-    The first run lasts ``blows / SETTLE_FIRST_HZ`` seconds; where it holds fewer blows (impacts at
-    least ``blow_fraction`` of its hardest) a longer one follows, from rest again, up to
-    :data:`SETTLE_RUNS` runs. The impacts after the ``blows``-th blow are dropped.
-
-    Parameters
-    ----------
-    machine : Drifter or CircuitDrifter
-    blows : int
-        Blows wanted, at least 1.
-    blow_fraction : float
-        Threshold between blows and chatter (:meth:`impactbar.physical.SimulationResult.is_blow`).
-
-    Returns
-    -------
-    times_s, velocities_m_s : numpy.ndarray
-        The impacts kept (s, m/s).
-    t_end_s : float
-        The ``blows``-th blow's time, or the last run's duration where no run held that many.
-
-    Raises
-    ------
-    ValueError
-        Where the machine's ``simulate`` refuses (a circuit's oil cavitates during the run).
-    """
-    ran, duration = 0.0, blows / SETTLE_FIRST_HZ
-    for _ in range(SETTLE_RUNS):
-        t, v = _impacts(machine, duration)
-        ran = duration
-        top = float(np.max(v)) if v.size else 0.0
-        where = np.flatnonzero(v >= blow_fraction * top) if top > 0 else np.zeros(0, int)
-        if where.size >= blows:
-            end = float(t[where[blows - 1]])
-            keep = t <= end
-            return t[keep], v[keep], end
-        # long enough for the blows at the rate seen and a tenth more
-        duration *= max(1.1, 1.1 * blows / where.size) if where.size else 4.0
-    return t, v, ran
-
-
-def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolerance: float = 0.01) -> dict:
-    r"""The motion of a machine from rest over ``blows`` blows (:func:`settle_run`), classified by
-    :meth:`impactbar.physical.SimulationResult.blow_statistics`.
-
-    Settled into a cycle of ``m`` blows, the figures are over its last cycle: the ``m`` last blows
-    and the ``m`` intervals before them; not settled, over the blows of the run's second half.
-    ``blow_frequency`` is the number of intervals over their sum (for ``m = 1`` the inverse period),
-    its spread the standard deviation of the inverse intervals; ``chatter_per_blow`` counts the
-    chatter impacts between those blows per interval.
-
-    Parameters
-    ----------
-    machine : Drifter or CircuitDrifter
-    blows : int
-        Blows simulated from rest, at least 8.
-    blow_fraction, settle_tolerance : float
-        As :meth:`~impactbar.physical.SimulationResult.blow_statistics` takes them.
-
-    Returns
-    -------
-    dict
-        The ``settle`` task's variables in SI (:func:`impactbar.sweeps.map_spec.map_variables`,
-        without ``status`` and ``failure``).
-
-    Raises
-    ------
-    ValueError
-        Where the machine's ``simulate`` refuses.
-
-    Examples
-    --------
-    >>> from impactbar.physical.loader import build, read_config
-    >>> from impactbar.sweeps.map_task import settle_point
-    >>> s = settle_point(build(read_config("hydraulic-drifter")[0]), 20)
-    >>> s["period_blows"], s["settled"], round(s["blow_frequency"], 2)
-    (1, True, 47.19)
-    """
-    from ..physical.results import SimulationResult
-
-    t, v, end = settle_run(machine, blows, blow_fraction)
-    res = SimulationResult(hammer=None, trajectory=None, t_end_s=end, impact_times_s=t,
-                           impact_velocities_m_s=v, blow_energies_J=0.5 * machine.bar.mass_kg * v * v)
-    stats = res.blow_statistics(blow_fraction=blow_fraction, settle_tolerance=settle_tolerance)
-    blow = res.is_blow(blow_fraction)
-    idx = np.flatnonzero(blow & (t >= 0.5 * end))  # the second half's blows (as blow_statistics has them)
-    m = stats.blows_per_cycle
-    k = m if m else idx.size - 1  # intervals looked at
-    out = {"period_blows": m, "settled": m > 0, "n_blows": stats.n_blows, "n_impacts": stats.n_impacts,
-           "simulated_time": end}
-    if k >= 1:
-        last = idx[-k - 1:]
-        dt = np.diff(t[last])
-        vb = v[last[1:]]
-        out.update(chatter_per_blow=float(last[-1] - last[0] - k) / k,
-                   impact_velocity=float(np.mean(vb)), impact_velocity_spread=float(np.std(vb)),
-                   blow_frequency=k / float(np.sum(dt)), blow_frequency_spread=float(np.std(1.0 / dt)))
-    else:
-        out.update(chatter_per_blow=math.nan, impact_velocity=math.nan, impact_velocity_spread=math.nan,
-                   blow_frequency=math.nan, blow_frequency_spread=math.nan)
-    return out
-
-
 def _settle_chunk(spec: DrifterMapSpec, chunk: int) -> dict:
     """:func:`compute_map_chunk` of a ``settle`` map: :func:`settle_point` at each point."""
     from .._shared.threads import single_threaded_blas

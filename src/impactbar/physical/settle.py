@@ -1,0 +1,133 @@
+"""The motion of a machine from rest, classified: the ``settle`` task of a design map
+(:mod:`impactbar.sweeps.map_spec`) at each point, and what the whole-drifter optimiser records of a
+design without a one-impact orbit (:mod:`~impactbar.physical.optimize_failures`)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = ["SETTLE_FIRST_HZ", "SETTLE_RUNS", "settle_run", "settle_point"]
+
+#: a settle's first run lasts its blows at this blow frequency (Hz); a run holding fewer blows is
+#: followed by a longer one, from rest again
+SETTLE_FIRST_HZ = 40.0
+#: most runs a settle makes before it classifies what the last one holds
+SETTLE_RUNS = 8
+
+
+def _impacts(machine, duration_s: float):
+    """The impact times (s) and velocities (m/s) of ``machine.simulate(duration_s)`` from rest."""
+    from .circuit import CircuitDrifter
+
+    if isinstance(machine, CircuitDrifter):
+        run = machine.simulate(duration_s, histories=False)  # (the impacts alone)
+        return np.asarray(run["impact_times_s"], float), np.asarray(run["impact_velocities_m_s"], float)
+    tr, _ = machine.simulate(duration_s)
+    om, length = machine.omega_rad_s, machine.bar.length_m
+    return np.asarray(tr.impact_times, float) / om, np.asarray(tr.impact_velocities, float) * length * om
+
+
+def settle_run(machine, blows: int, blow_fraction: float = 0.25):
+    """The impacts of the machine from rest up to its ``blows``-th blow.
+
+    The first run lasts ``blows / SETTLE_FIRST_HZ`` seconds; where it holds fewer blows (impacts at
+    least ``blow_fraction`` of its hardest) a longer one follows, from rest again, up to
+    :data:`SETTLE_RUNS` runs. The impacts after the ``blows``-th blow are dropped.
+
+    Parameters
+    ----------
+    machine : Drifter or CircuitDrifter
+    blows : int
+        Blows wanted, at least 1.
+    blow_fraction : float
+        Threshold between blows and chatter (:meth:`impactbar.physical.SimulationResult.is_blow`).
+
+    Returns
+    -------
+    times_s, velocities_m_s : numpy.ndarray
+        The impacts kept (s, m/s).
+    t_end_s : float
+        The ``blows``-th blow's time, or the last run's duration where no run held that many.
+
+    Raises
+    ------
+    ValueError
+        Where the machine's ``simulate`` refuses (a circuit's oil cavitates during the run).
+    """
+    ran, duration = 0.0, blows / SETTLE_FIRST_HZ
+    for _ in range(SETTLE_RUNS):
+        t, v = _impacts(machine, duration)
+        ran = duration
+        top = float(np.max(v)) if v.size else 0.0
+        where = np.flatnonzero(v >= blow_fraction * top) if top > 0 else np.zeros(0, int)
+        if where.size >= blows:
+            end = float(t[where[blows - 1]])
+            keep = t <= end
+            return t[keep], v[keep], end
+        # long enough for the blows at the rate seen and a tenth more
+        duration *= max(1.1, 1.1 * blows / where.size) if where.size else 4.0
+    return t, v, ran
+
+
+def settle_point(machine, blows: int, blow_fraction: float = 0.25, settle_tolerance: float = 0.01) -> dict:
+    r"""The motion of a machine from rest over ``blows`` blows (:func:`settle_run`), classified by
+    :meth:`impactbar.physical.SimulationResult.blow_statistics`.
+
+    Settled into a cycle of ``m`` blows, the figures are over its last cycle: the ``m`` last blows
+    and the ``m`` intervals before them; not settled, over the blows of the run's second half.
+    ``blow_frequency`` is the number of intervals over their sum (for ``m = 1`` the inverse period),
+    its spread the standard deviation of the inverse intervals; ``chatter_per_blow`` counts the
+    chatter impacts between those blows per interval.
+
+    Parameters
+    ----------
+    machine : Drifter or CircuitDrifter
+    blows : int
+        Blows simulated from rest, at least 8.
+    blow_fraction, settle_tolerance : float
+        As :meth:`~impactbar.physical.SimulationResult.blow_statistics` takes them.
+
+    Returns
+    -------
+    dict
+        The ``settle`` task's variables in SI (:func:`impactbar.sweeps.map_spec.map_variables`,
+        without ``status`` and ``failure``).
+
+    Raises
+    ------
+    ValueError
+        Where the machine's ``simulate`` refuses.
+
+    Examples
+    --------
+    >>> from impactbar.physical.loader import build, read_config
+    >>> from impactbar.physical.settle import settle_point
+    >>> s = settle_point(build(read_config("hydraulic-drifter")[0]), 20)
+    >>> s["period_blows"], s["settled"], round(s["blow_frequency"], 2)
+    (1, True, 47.19)
+    """
+    from .results import SimulationResult
+
+    t, v, end = settle_run(machine, blows, blow_fraction)
+    res = SimulationResult(hammer=None, trajectory=None, t_end_s=end, impact_times_s=t,
+                           impact_velocities_m_s=v, blow_energies_J=0.5 * machine.bar.mass_kg * v * v)
+    stats = res.blow_statistics(blow_fraction=blow_fraction, settle_tolerance=settle_tolerance)
+    blow = res.is_blow(blow_fraction)
+    idx = np.flatnonzero(blow & (t >= 0.5 * end))  # the second half's blows (as blow_statistics has them)
+    m = stats.blows_per_cycle
+    k = m if m else idx.size - 1  # intervals looked at
+    out = {"period_blows": m, "settled": m > 0, "n_blows": stats.n_blows, "n_impacts": stats.n_impacts,
+           "simulated_time": end}
+    if k >= 1:
+        last = idx[-k - 1:]
+        dt = np.diff(t[last])
+        vb = v[last[1:]]
+        out.update(chatter_per_blow=float(last[-1] - last[0] - k) / k,
+                   impact_velocity=float(np.mean(vb)), impact_velocity_spread=float(np.std(vb)),
+                   blow_frequency=k / float(np.sum(dt)), blow_frequency_spread=float(np.std(1.0 / dt)))
+    else:
+        out.update(chatter_per_blow=math.nan, impact_velocity=math.nan, impact_velocity_spread=math.nan,
+                   blow_frequency=math.nan, blow_frequency_spread=math.nan)
+    return out
