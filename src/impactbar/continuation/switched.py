@@ -107,9 +107,10 @@ class _SwitchedProblem:
             self.chord = True  # (the chord's first step, the steering Jacobian's after it)
 
     def _pair(self, lam: float):
-        """The model, drive and orbit problem at the parameter value ``lam``."""
+        """The model, drive and orbit problem at the parameter value ``lam`` (its flights by the
+        start's, its problem's ``settings``: the oil circuit's solver options follow the branch)."""
         model, drive = with_parameter(self.model0, self.drive0, self.name, lam)
-        problem = orbit_problem(model, drive, self.m)
+        problem = orbit_problem(model, drive, self.m, getattr(self.base, "settings", None))
         if self.base is not None:
             problem.adopt(self.base)
         return model, drive, problem

@@ -16,7 +16,7 @@ import numpy as np
 from .._shared.forcing import dispatch
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
-from ..drives.base import Drive
+from ..drives.base import Drive, FlightSettings
 from ..loads import Load
 from ..model import BarModel
 from ._assemble import _build
@@ -80,7 +80,8 @@ def _guesses(problem: _Segments, guess):
 
 
 def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: int = 1, guess=None, *,
-               tol: float = 1e-12, max_iter: int = 40) -> PeriodicOrbit:
+               tol: float = 1e-12, max_iter: int = 40,
+               settings: FlightSettings | None = None) -> PeriodicOrbit:
     r"""A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
     the exact impact map (eqs. 8, 10, 11; theory §4, §5, §7).
 
@@ -123,6 +124,12 @@ def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: i
     max_iter : int
         Newton iterations per start, from 1 to 1000; a start stops earlier when the residual has not
         halved in 40 iterations.
+    settings : FlightSettings, optional
+        With a :class:`~impactbar.Drive` whose state is integrated, how its flights are
+        (:class:`~impactbar.drives.FlightSettings`; the oil circuit's
+        :class:`~impactbar.drives.circuit.CircuitFlightSettings`, its tolerances and options);
+        default the drive's :attr:`~impactbar.Drive.integrator`. The orbit keeps them (its
+        continuation follows them). Not with a load (its flights are closed forms).
 
     Returns
     -------
@@ -151,15 +158,22 @@ def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: i
     :func:`~impactbar.orbits.find_switched_orbit`.
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
-    return dispatch(FIND_ORBIT, load)(model, load, impacts, periods, guess, tol, max_iter)
+    solver = dispatch(FIND_ORBIT, load)
+    if settings is None:
+        return solver(model, load, impacts, periods, guess, tol, max_iter)
+    if solver is not _drive_orbit:
+        raise ValueError("settings: the integrator of a drive's flights; give it only with a Drive (a "
+                         f"load's flights are closed forms); got a {type(load).__name__}")
+    return solver(model, load, impacts, periods, guess, tol, max_iter, settings)
 
 
-def _drive_orbit(model, drive, impacts, periods, guess, tol, max_iter) -> PeriodicOrbit:
+def _drive_orbit(model, drive, impacts, periods, guess, tol, max_iter, settings=None) -> PeriodicOrbit:
     """:func:`find_orbit` under a drive: an autonomous orbit of unknown period (theory §10;
-    ``periods`` has no meaning there)."""
+    ``periods`` has no meaning there), its flights by ``settings``."""
     from .switched_search import find_switched_orbit  # (the drives' machinery, loaded on first use)
 
-    return find_switched_orbit(model, drive, impacts, guess, tol=min(tol, 1e-13), max_iter=max(max_iter, 50))
+    return find_switched_orbit(model, drive, impacts, guess, tol=min(tol, 1e-13), max_iter=max(max_iter, 50),
+                               settings=settings)
 
 
 def _load_orbit(model, load, impacts, periods, guess, tol, max_iter) -> PeriodicOrbit:

@@ -4,7 +4,8 @@ with pump, gas accumulator and relief valve, and its numerics.
 Layout: ``parts`` (the frozen parts: :class:`Chambers`, :class:`Valve`, :class:`Supply`,
 :class:`Accumulator`, :class:`Oil`), ``drive`` (:class:`HydraulicCircuitDrive`, the
 :class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``layout``
-(where the circuit keeps its states and energy terms, read by name), ``composition`` (parts added to
+(where the circuit keeps its states and energy terms, read by name), ``settings`` (how its flights
+are integrated: :class:`CircuitFlightSettings`, handed to the solvers), ``composition`` (parts added to
 the circuit, :class:`CircuitPart`, and the numbering of its nodes, energy and event slots), ``_network``
 (the part records a part writes, :func:`record`, of the kinds :data:`NODE`, :data:`PUMP`,
 :data:`ORIFICE`, :data:`VALVE`, :data:`RELIEF`, :data:`CHAMBER`, :data:`ACCUM`), ``flight`` (one
@@ -33,7 +34,8 @@ from .parts import Chambers as Chambers
 from .parts import Oil as Oil
 from .parts import Supply as Supply
 from .parts import Valve as Valve
+from .settings import CircuitFlightSettings as CircuitFlightSettings
 
-__all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS", "Chambers", "Valve", "Supply",
-           "Accumulator", "Oil", "CircuitPart", "PartSlots", "PORTS", "TERMS", "record", "NODE", "PUMP",
-           "ORIFICE", "VALVE", "RELIEF", "CHAMBER", "ACCUM"]
+__all__ = ["HydraulicCircuitDrive", "CircuitFlightSettings", "CircuitEnergy", "PARAMETERS", "Chambers",
+           "Valve", "Supply", "Accumulator", "Oil", "CircuitPart", "PartSlots", "PORTS", "TERMS", "record",
+           "NODE", "PUMP", "ORIFICE", "VALVE", "RELIEF", "CHAMBER", "ACCUM"]
