@@ -11,7 +11,15 @@ import numpy as np
 import pytest
 from test_circuit_cvode import RIGID, pumped
 
-from impactbar import BarModel, CosineLoad, InitialState, continue_orbit, find_orbit, simulate
+from impactbar import (
+    BarModel,
+    CosineLoad,
+    InitialState,
+    continue_orbit,
+    find_orbit,
+    periodic_orbits,
+    simulate,
+)
 from impactbar.drives import FlightSettings
 from impactbar.drives.circuit import CircuitFlightSettings
 from impactbar.drives.circuit.settings import DEFAULT_SETTINGS, circuit_settings
@@ -70,10 +78,14 @@ def test_settings_go_with_a_drive_only():
         simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0), 1.0, settings=DEFAULT_SETTINGS)
     with pytest.raises(ValueError, match="settings: .* only with a Drive"):
         find_orbit(model, CosineLoad(0.1, 1.0), settings=DEFAULT_SETTINGS)
+    with pytest.raises(ValueError, match="settings: .* only with a Drive"):
+        periodic_orbits(model, CosineLoad(0.1, 1.0), settings=DEFAULT_SETTINGS)
     with pytest.raises(ValueError, match="settings must be a FlightSettings"):
         simulate(RIGID, pumped(), InitialState.rigid(0.0, 0.0), 1.0, settings={"compiled": False})
     with pytest.raises(ValueError, match="settings must be a FlightSettings"):
         find_orbit(RIGID, pumped(), settings="cvode")
+    with pytest.raises(ValueError, match="settings must be a FlightSettings"):
+        periodic_orbits(RIGID, pumped(), settings=1e-10)
 
 
 def test_equal_drives_solved_with_other_settings_differ_only_as_the_settings_say():
@@ -107,6 +119,9 @@ def test_equal_drives_solved_with_other_settings_differ_only_as_the_settings_say
     assert again.problem.settings == magnus
     assert again.period == pytest.approx(om.period, rel=1e-10)
     assert np.max(np.abs(again.multipliers - om.multipliers)) <= 1e-8
+    # every orbit of the drive's search is its settings'
+    listed = periodic_orbits(RIGID, a, settings=cvode)
+    assert len(listed) == 1 and listed[0].problem.settings == cvode and listed[0].period == oc.period
     # the continuation's problems keep the start's settings
     branch = continue_orbit(oc, "pump_flow", to=0.0702, max_points=3, events=False)
     assert len(branch.orbits) >= 2

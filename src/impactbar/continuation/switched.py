@@ -567,7 +567,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     Parameters
     ----------
     orbit : SwitchedOrbit or BranchEvent
-        The start (from :func:`impactbar.find_orbit` with the drive), ``m`` impacts per period; or
+        The start (from :func:`impactbar.find_orbit` with the drive; its problem's flight
+        ``settings``, the oil circuit's solver options, are every point's), ``m`` impacts per period; or
         a period doubling of a one-impact branch: the two-impact branch that bifurcates there is
         followed (branch switching: its first point is taken along the doubled problem's null
         vector, whose halves are opposite, both ways tried), while the parameter stays within

@@ -17,6 +17,7 @@ from .._shared.forcing import dispatch
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
 from ..drives.base import Drive, FlightSettings
+from ..drives.flight import solver_settings
 from ..loads import Load
 from ..model import BarModel
 from ._assemble import _build
@@ -159,12 +160,8 @@ def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: i
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
     solver = dispatch(FIND_ORBIT, load)
-    if settings is None:
-        return solver(model, load, impacts, periods, guess, tol, max_iter)
-    if solver is not _drive_orbit:
-        raise ValueError("settings: the integrator of a drive's flights; give it only with a Drive (a "
-                         f"load's flights are closed forms); got a {type(load).__name__}")
-    return solver(model, load, impacts, periods, guess, tol, max_iter, settings)
+    return solver(model, load, impacts, periods, guess, tol, max_iter,
+                  **solver_settings(settings, load, solver is _drive_orbit))
 
 
 def _drive_orbit(model, drive, impacts, periods, guess, tol, max_iter, settings=None) -> PeriodicOrbit:
@@ -235,7 +232,8 @@ DIRECT_ITERATIONS = 8
 # the one-impact orbits of every law (find_orbit's default guess): from the law's phase equation, or
 # by Newton's method from guesses where it has none (both here, since each calls the other)
 # ------------------------------------------------------------------------------------------------
-def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None) -> OrbitList:
+def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None,
+                    settings: FlightSettings | None = None) -> OrbitList:
     r"""Every one-impact-per-period steady state of the bar under the load (paper Section 2).
 
     Each root ``phase`` of the phase equation (eq. 14) in :math:`[0, 2\pi)` gives one orbit: the flexible
@@ -256,6 +254,8 @@ def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None) -> Orbi
         ``window`` (:func:`~impactbar.orbits.drive_orbits`).
     window : (float, float), optional
         Under a drive only: the periods searched.
+    settings : FlightSettings, optional
+        Under a drive with state only: how its flights are integrated (:func:`find_orbit`).
 
     Returns
     -------
@@ -277,15 +277,16 @@ def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None) -> Orbi
     >>> [round(o.phase, 4) for o in orbits]
     [0.5511, 2.5905]
     """
-    return dispatch(PERIODIC_ORBITS, load)(model, load, window)
+    solver = dispatch(PERIODIC_ORBITS, load)
+    return solver(model, load, window, **solver_settings(settings, load, solver is _drive_orbits))
 
 
-def _drive_orbits(model, drive, window) -> OrbitList:
+def _drive_orbits(model, drive, window, settings=None) -> OrbitList:
     """:func:`periodic_orbits` under a drive: every one-impact orbit in a window of periods (theory
-    §10)."""
+    §10), its flights by ``settings``."""
     from .switched_search import drive_orbits  # (the drives' machinery, loaded on first use)
 
-    return drive_orbits(model, drive, window)
+    return drive_orbits(model, drive, window, settings=settings)
 
 
 def _load_orbits(model, load, window) -> OrbitList:

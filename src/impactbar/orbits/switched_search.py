@@ -18,6 +18,7 @@ import numpy as np
 from .._shared.forcing import check_family
 from .._shared.validate import check_int, check_real
 from ..drives.base import FlightSettings
+from ..drives.flight import solver_settings
 from ..drives.orbitproblem import OrbitProblem
 from ..model import BarModel
 from ._settling import surfaces_ahead
@@ -113,9 +114,7 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     m = check_int("impacts", impacts, lo=1)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
-    if settings is not None and not isinstance(settings, FlightSettings):
-        raise ValueError(f"settings must be a FlightSettings (the oil circuit's: CircuitFlightSettings) or "
-                         f"None; got {type(settings).__name__}")
+    solver_settings(settings, drive, True)  # (a FlightSettings or None)
     problem = orbit_problem(model, drive, m, settings, newton=newton)
     if guess is None and m == 1:  # the default chain (the rigid orbit, a run from rest, the search)
         polished = _from_coarse(model, drive, problem, tol, max_iter, newton, settings)
@@ -278,7 +277,8 @@ def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max
 MAX_DEFAULT_RESONANCES = 10_000
 
 
-def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max_iter: int = 20):
+def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max_iter: int = 20,
+                 settings: FlightSettings | None = None):
     r"""Every one-impact periodic orbit of a drive with a period in a window (theory §10):
     :func:`impactbar.periodic_orbits` with a :class:`~impactbar.Drive` in place of the load.
 
@@ -319,6 +319,8 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
         Relative tolerance of the polishing Newton steps.
     max_iter : int
         Most Newton steps per orbit.
+    settings : FlightSettings, optional
+        How a drive's flights with state are integrated (:func:`find_switched_orbit`).
 
     Returns
     -------
@@ -354,10 +356,12 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
         window = (lo, hi)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
-    problem = orbit_problem(model, drive, 1)
+    solver_settings(settings, drive, True)
+    problem = orbit_problem(model, drive, 1, settings)
     out = _searched(problem, window, tol, max_iter)
     if out is None:  # no search of the drive's own: the default chain's orbit
-        out = OrbitList([find_switched_orbit(model, drive, 1, tol=tol, max_iter=max(max_iter, 50))])
+        out = OrbitList([find_switched_orbit(model, drive, 1, tol=tol, max_iter=max(max_iter, 50),
+                                             settings=settings)])
         out._certified, out._unresolved, out._window = (False,), (), None
     return out
 

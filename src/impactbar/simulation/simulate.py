@@ -36,6 +36,7 @@ from .._shared.forcing import dispatch, of_family
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
 from ..drives.base import Drive, FlightSettings
+from ..drives.flight import solver_settings
 from ..dynamics import kernels as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
@@ -447,15 +448,8 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
     solver = dispatch(SIMULATORS, load)
-    if settings is None:
-        return solver(model, load, q, v, t0, t_end, max_imp, progress)
-    if solver is not _simulate_drive:
-        raise ValueError("settings: the integrator of a drive's flights; give it only with a Drive (a "
-                         f"load's flights are closed forms); got a {type(load).__name__}")
-    if not isinstance(settings, FlightSettings):
-        raise ValueError(f"settings must be a FlightSettings (the oil circuit's: CircuitFlightSettings) or "
-                         f"None; got {type(settings).__name__}")
-    return solver(model, load, q, v, t0, t_end, max_imp, progress, settings)
+    return solver(model, load, q, v, t0, t_end, max_imp, progress,
+                  **solver_settings(settings, load, solver is _simulate_drive))
 
 
 def _simulate_drive(model, drive, q, v, t0, t_end, max_imp, progress, settings=None) -> Trajectory:
