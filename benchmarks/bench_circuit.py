@@ -6,11 +6,12 @@ Run: ``python benchmarks/bench_circuit.py`` (``--quick``: the rigid piston only)
 ``circuit-drifter`` (dimensionless, ``impactbar.physical.circuit_preset``) and on the ideal valve
 with the preset's forces at its mean supply pressure (``PositionSwitchedDrive``): the time of
 ``find_orbit`` from the default guess, of ``simulate`` over 100 blows and of one continuation point in
-the accumulator's pre-charge; beside each, the same call with the drive's ``compiled=False`` (every call
-of the vector field, its Jacobian and the events through Python, as before). One stroke flight by
+the accumulator's pre-charge; beside each, the same call with the settings ``compiled=False``
+(:class:`~impactbar.drives.circuit.CircuitFlightSettings`: every call of the vector field, its Jacobian
+and the events through Python, as before). One stroke flight by
 CVODE both ways and by scipy's Radau on the same compiled right-hand side and Jacobian, with CVODE's
 own counters for it. Without ``--quick``, ``find_orbit`` with flexible pistons: 1 mode both ways,
-8 modes with the variational flights' band solver against the dense one (the drive's ``band=False``,
+8 modes with the variational flights' band solver against the dense one (the settings' ``band=False``,
 the way before; about four minutes). The goals on this 2-core machine: the rigid orbit
 <= 0.5 s, with 8 modes <= 2 s, 100 blows <= 1 s rigid, a continuation point <= 0.2 s. The best of a
 few repetitions (the machine's other load only adds); compilation is done before the clock starts.
@@ -31,12 +32,12 @@ on the 2-core machine.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import functools
 import time
 
 import impactbar.drives.circuit.flight as FL
 from impactbar import InitialState, PositionSwitchedDrive, continue_orbit, find_orbit, simulate
+from impactbar.drives.circuit import CircuitFlightSettings
 from impactbar.physical import circuit_preset
 
 
@@ -49,10 +50,10 @@ def best(fn, reps):
     return out
 
 
-def before(drive, **options):
-    """The drive with its flights integrated the way before (``compiled=False``: through
-    scikit-sundae's Python interface; ``band=False``: the dense solver)."""
-    return dataclasses.replace(drive, **options)
+def before(**options):
+    """The settings of the flights integrated the way before (``compiled=False``: through
+    scikit-sundae's Python interface; ``band=False``: the dense solver), the drive the same."""
+    return CircuitFlightSettings(**options)
 
 
 def rigid_rows(d, drive):
@@ -65,18 +66,18 @@ def rigid_rows(d, drive):
                                   switch_out=drive.valve.switch_out)
     oi = find_orbit(model, ideal)
     start = InitialState.rigid(0.0, 0.0, 0)
-    slow = before(drive, compiled=False)
+    slow = before(compiled=False)
     tasks = {
-        "find_orbit from the default guess": (lambda dr: find_orbit(model, dr),
+        "find_orbit from the default guess": (lambda s: find_orbit(model, drive, settings=s),
                                               lambda: find_orbit(model, ideal)),
-        "simulate, 100 blows": (lambda dr: simulate(model, dr, start, 100.5 * o.period),
+        "simulate, 100 blows": (lambda s: simulate(model, drive, start, 100.5 * o.period, settings=s),
                                 lambda: simulate(model, ideal, start, 100.5 * oi.period)),
     }
     out = {}
     for name, (circuit, ideal_fn) in tasks.items():
-        out[name] = (best(functools.partial(circuit, drive), 3), best(functools.partial(circuit, slow), 2),
+        out[name] = (best(functools.partial(circuit, None), 3), best(functools.partial(circuit, slow), 2),
                      best(ideal_fn, 3))
-    o_slow = find_orbit(model, slow)
+    o_slow = find_orbit(model, drive, settings=slow)  # (its continuation keeps its settings)
     now = min(_cont_point(o, "precharge", drive.accumulator.precharge) for _ in range(3))
     then = min(_cont_point(o_slow, "precharge", drive.accumulator.precharge) for _ in range(2))
     ideal_point = min(_cont_point(oi, "switch_out", ideal.switch_out) for _ in range(3))
@@ -98,11 +99,11 @@ def flexible_rows(d, drive):
     m1 = d.model().with_(n_modes=1)
     find_orbit(m1, drive)
     now = best(lambda: find_orbit(m1, drive), 2)
-    then = best(lambda: find_orbit(m1, before(drive, compiled=False)), 1)
+    then = best(lambda: find_orbit(m1, drive, settings=before(compiled=False)), 1)
     out.append((1, "through scikit-sundae", now, then))
     m8 = d.model().with_(n_modes=8)
     now = best(lambda: find_orbit(m8, drive), 1)
-    then = best(lambda: find_orbit(m8, before(drive, band=False)), 1)
+    then = best(lambda: find_orbit(m8, drive, settings=before(band=False)), 1)
     out.append((8, "dense solver", now, then))
     return out
 
@@ -143,7 +144,7 @@ def integrators(d, drive):
     y0 = np.concatenate((q, v, state.z, np.zeros(K.N_ENERGY)))
 
     def one(compiled=True):
-        return FL.circuit_flight(drive, model, state, 0.0, q, v, 50.0, compiled=compiled)
+        return FL.circuit_flight(drive, model, state, 0.0, q, v, 50.0, before(compiled=compiled))
 
     one()  # warm-up
     t_cv = best(one, 5)

@@ -23,8 +23,6 @@ from _timing import best_cpu, fresh_runs, ref_tree  # this folder's shared runne
 
 def _flight(n_modes):
     """The generated code, its arguments for ``magnus_phi`` and the flight's size."""
-    import dataclasses
-
     from impactbar import find_orbit
     from impactbar.drives.base import DriveState
     from impactbar.drives.circuit import _magnus
@@ -38,7 +36,14 @@ def _flight(n_modes):
     tau, mode = problem.blocks[0]
     y = X[:n]
     start = (DriveState(mode, y[2 * M:]), tau, y[:M], y[M:2 * M])
-    fl = dataclasses.replace(drive, sensitivity="cvode").flight(model, *start, math.inf, None, False)
+    try:
+        from impactbar.drives.circuit import CircuitFlightSettings
+    except ImportError:  # (--against a tree before the solver's settings: the option was the drive's)
+        import dataclasses
+
+        fl = dataclasses.replace(drive, sensitivity="cvode").flight(model, *start, math.inf, None, False)
+    else:
+        fl = drive.flight(model, *start, math.inf, CircuitFlightSettings(sensitivity="cvode"), False)
     piece, state = fl.piece, start[0]
     net, code = drive._compiled_network(state.mode)
     par = np.concatenate((drive._par(model, state.mode, False), net))

@@ -41,7 +41,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from impactbar import find_orbit
-from impactbar.drives.circuit import _cvode
+from impactbar.drives.circuit import CircuitFlightSettings, _cvode
 from impactbar.drives.circuit import flight as F
 from impactbar.physical import circuit_preset
 
@@ -54,9 +54,8 @@ def _capture(n_modes):
     ``(code, par, y0, end, directions, keep, n_energy, t_end, y_end)`` as CVODE flew it."""
     d = circuit_preset("circuit-drifter")
     drive, model = d.drive(), d.model().with_(n_modes=n_modes)
-    if "cvode" in getattr(F, "MULTISTEPS", ()):  # (the flights captured are CVODE's, as before DOP853)
-        drive = dataclasses.replace(drive, multistep="cvode")
-    orbit = find_orbit(model, drive)
+    # (the flights captured are CVODE's, as before DOP853)
+    orbit = find_orbit(model, drive, settings=CircuitFlightSettings(multistep="cvode"))
     p = orbit._problem
     X = np.asarray(orbit._unknowns, dtype=float)
     tau, mode = p.blocks[0]
@@ -174,18 +173,20 @@ def stiffness(n_modes, ks, rounds, periods=3.0):
     for k in ks:
         oil = dataclasses.replace(base.oil, bulk_modulus=k * base.oil.bulk_modulus)
         row, v = [], []
+        drive = dataclasses.replace(base, oil=oil)
         for method in names:
-            drive = dataclasses.replace(base, oil=oil, multistep=method)
+            s = CircuitFlightSettings(multistep=method)
             start = InitialState.rigid(0.0, 0.0, n_modes)
-            simulate(model, drive, start, 0.05)  # (the network's code, compiled or loaded)
-            cpu, tr = _best(lambda drive=drive, start=start: simulate(model, drive, start, periods), rounds)
+            simulate(model, drive, start, 0.05, settings=s)  # (the network's code, compiled or loaded)
+            cpu, tr = _best(lambda d=drive, s=s, start=start: simulate(model, d, start, periods, settings=s),
+                            rounds)
             row.append(cpu)
             v.append(np.asarray(tr.impact_velocities, dtype=float))
 
         def dv(a, b):
             return float(np.nanmax(np.abs(a - b))) if a.size == b.size and a.size else float("nan")
 
-        ratio = F.stiffness_ratio(dataclasses.replace(base, oil=oil), model)
+        ratio = F.stiffness_ratio(drive, model)
         print(f"{k:6g}{ratio:8.2f}" + "".join(f"{c:9.3f}" for c in row) + f"{row[0] / row[1]:11.2f}"
               f"{v[0].size:9d}{dv(v[1], v[0]):10.1e}{dv(v[2], v[0]):10.1e}")
 

@@ -20,11 +20,11 @@ table has the unbalanced Magnus on the plain steps too.
 Two comparisons on the preset ``circuit-drifter``'s orbit (rigid, 4 and 8 modes):
 
 * per flight (each smooth piece of the period, between two events, the same start state): ``Phi`` of
-  (a) CVODE's variational flight at the drive's ``rtol = 1e-10`` (``sensitivity="cvode"``), (lib) the
-  library's own (the drive's default: Magnus of order 6 over a plain flight at a thousand times the
-  drive's tolerance, :mod:`impactbar.drives.circuit._magnus`), (b) the same plain flight + this
-  probe's Magnus of order 4 on the steps asked for, each against a reference variational flight of
-  CVODE at ``rtol = 1e-12``; CPU time of each;
+  (a) CVODE's variational flight at the drive's ``rtol = 1e-10`` (``sensitivity="cvode"`` of its
+  settings), (lib) the library's own (the drive's default: Magnus of order 6 over a plain flight at
+  a thousand times the drive's tolerance, :mod:`impactbar.drives.circuit._magnus`), (b) the same
+  plain flight + this probe's Magnus of order 4 on the steps asked for, each against a reference
+  variational flight of CVODE at ``rtol = 1e-12``; CPU time of each;
 * per period: the orbit's multipliers (the problem's own composition across the events and the blow,
   ``ShootingProblem._fly(..., variational=True)``, saltation matrices included) with each flight's
   ``Phi`` from (a), (lib), (b) and the reference.
@@ -38,6 +38,7 @@ Run: ``python benchmarks/probes/monodromy_magnus.py --modes 8 4 --sub 1 0.25 a0.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import time
 
@@ -209,6 +210,7 @@ def case(modes, subs, rounds):
     import impactbar.drives.circuit.flight as FM
     from impactbar import find_orbit
     from impactbar.drives.base import FlightSettings
+    from impactbar.drives.circuit.settings import circuit_settings
     from impactbar.physical import circuit_preset
 
     d = circuit_preset("circuit-drifter")
@@ -225,9 +227,10 @@ def case(modes, subs, rounds):
     starts = []
     sub_now = [1, True]  # (Magnus steps a plain step, balanced)
 
-    def cvode_flight(*args, **kw):  # (CVODE's variational flights: the drive's default is Magnus)
-        kw["sensitivity"] = "cvode"
-        return orig(*args, **kw)
+    def cvode_flight(drive, model, state, t, q, v, t_stop, settings=None, variational=False, **kw):
+        # (CVODE's variational flights: the settings' default is Magnus)
+        settings = dataclasses.replace(circuit_settings(settings), sensitivity="cvode")
+        return orig(drive, model, state, t, q, v, t_stop, settings, variational, **kw)
 
     def magnus_flight(drive, model, state, t, q, v, t_stop, settings=None, variational=False, **kw):
         if variational:

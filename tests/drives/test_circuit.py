@@ -24,6 +24,7 @@ from impactbar.drives import DriveState
 from impactbar.drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve
 from impactbar.drives.circuit import _kernel as K
 from impactbar.drives.circuit.flight import circuit_flight
+from impactbar.drives.circuit.settings import CircuitFlightSettings
 from impactbar.drives.flight import ARRIVAL
 
 RIGID = BarModel(s=52, d=0, R=0.215, n_modes=0)
@@ -274,12 +275,12 @@ def test_a_flight_that_starts_on_the_relief_level_sees_it_close_at_once(compiled
     event function that is 0 at the start unwatched until it moves off 0 by more than its first
     increment's rounding, and a pressure of 1.25 does not move by 1e-20: the crossing back was
     missed, and the flight went on with the relief open below its setting (oil back from the tank)."""
-    drive = dataclasses.replace(pumped(pump_flow=0.0725).with_(relief_pressure=1.25, relief_coefficient=1.0),
-                                compiled=compiled)
+    drive = pumped(pump_flow=0.0725).with_(relief_pressure=1.25, relief_coefficient=1.0)
     model = BarModel(s=52, d=0, R=0.215, n_modes=0)
     z = np.array([1.2, 0.03, 1.25, 1.0])  # the valve open onto an empty rear chamber: p_s falls
     assert drive.rate((1, 0, 1, 1), z, np.array([-0.06]), np.array([0.0]), model)[2] < 0.0
     q, v = np.array([-0.06]), np.array([0.0])
-    f = circuit_flight(drive, model, DriveState((1, 0, 1, 1), z), 3.0, q, v, 4.0, compiled=compiled)
+    f = circuit_flight(drive, model, DriveState((1, 0, 1, 1), z), 3.0, q, v, 4.0,
+                       CircuitFlightSettings(compiled=compiled))
     assert [e.name for e in f.events] == ["relief"]
     assert f.t - 3.0 < 1e-9

@@ -7,18 +7,20 @@ The block solver repeats the band LU's operations on each block in their order, 
 the two agree to the bit; the orbits are compared to 1e-8 (a SUNDIALS built with fused multiply-adds
 would round its band solve otherwise)."""
 
-import dataclasses
-
 import numpy as np
 import pytest
 
 from impactbar import find_orbit
 from impactbar.drives import DriveState
-from impactbar.drives.circuit import HydraulicCircuitDrive, _sundials
+from impactbar.drives.circuit import CircuitFlightSettings, HydraulicCircuitDrive, _sundials
 from impactbar.drives.circuit import flight as F
 from impactbar.physical import circuit_preset
 
 pytestmark = pytest.mark.skipif(not _sundials.available(), reason="CVODE not bound here")
+
+#: CVODE's variational flights, by the blocks' LU and by the band solver's own
+FAST = CircuitFlightSettings(sensitivity="cvode")
+BAND = CircuitFlightSettings(blocks=False, sensitivity="cvode")
 
 
 @pytest.fixture(scope="module")
@@ -55,7 +57,7 @@ def test_a_variational_flight_takes_the_band_solvers_steps(drifter):
     out = {}
     for blocks in (True, False):
         fl = F.circuit_flight(drive, model, DriveState(state.mode, state.z), 0.0, q, v, 50.0,
-                              variational=True, blocks=blocks, sensitivity="cvode")
+                              CircuitFlightSettings(blocks=blocks, sensitivity="cvode"), variational=True)
         out[blocks] = (fl, _cvode.last_workspace().statistics(), _cvode.last_workspace().blocks)
     (fast, s_fast, engaged), (band, s_band, off) = out[True], out[False]
     assert engaged and not off  # (SUNDIALS 7's table found here: else the band solver both times)
@@ -69,21 +71,21 @@ def test_a_variational_flight_takes_the_band_solvers_steps(drifter):
 
 def test_the_four_mode_orbit_is_the_band_solvers(drifter):
     model = drifter.model().with_(n_modes=4)
-    fast = find_orbit(model, dataclasses.replace(drifter.drive(), sensitivity="cvode"))
+    fast = find_orbit(model, drifter.drive(), settings=FAST)
     assert _engaged()
-    band = find_orbit(model, dataclasses.replace(drifter.drive(), blocks=False, sensitivity="cvode"))
+    band = find_orbit(model, drifter.drive(), settings=BAND)
     _same_orbits(fast, band)
 
 
 @pytest.mark.slow  # some 40 s of CPU time (80 s of wall time on the shared machine)
 def test_the_eight_mode_orbit_is_the_band_solvers(drifter):
     model = drifter.model().with_(n_modes=8)
-    fast = find_orbit(model, dataclasses.replace(drifter.drive(), sensitivity="cvode"))
-    band = find_orbit(model, dataclasses.replace(drifter.drive(), blocks=False, sensitivity="cvode"))
+    fast = find_orbit(model, drifter.drive(), settings=FAST)
+    band = find_orbit(model, drifter.drive(), settings=BAND)
     _same_orbits(fast, band)
 
 
 def test_blocks_must_be_a_bool(drifter):
     with pytest.raises(ValueError, match="blocks must be True or False"):
-        dataclasses.replace(drifter.drive(), blocks=1)
-    assert isinstance(drifter.drive(), HydraulicCircuitDrive) and drifter.drive().blocks is True
+        CircuitFlightSettings(blocks=1)
+    assert isinstance(drifter.drive(), HydraulicCircuitDrive) and drifter.drive().integrator.blocks is True

@@ -5,7 +5,6 @@ Both run the same SUNDIALS library with the same options and the same compiled v
 steps must agree to the bit: a difference in an option, a callback or the root handling shows.
 """
 
-import dataclasses
 import sys
 import threading
 
@@ -17,6 +16,7 @@ from impactbar.drives import DriveState
 from impactbar.drives.circuit import (
     Accumulator,
     Chambers,
+    CircuitFlightSettings,
     HydraulicCircuitDrive,
     Oil,
     Supply,
@@ -56,6 +56,11 @@ def both(fn):
     return fn(True), fn(False)
 
 
+def flies(compiled, **options):
+    """The circuit's settings, compiled or not (:class:`CircuitFlightSettings`)."""
+    return CircuitFlightSettings(compiled=compiled, **options)
+
+
 def test_the_libraries_bind_here():
     if sys.platform != "linux":
         pytest.skip("scikit-sundae's Linux wheels are the layout checked here")
@@ -69,7 +74,7 @@ def test_a_flight_is_the_bindings_to_the_bit(model):
         pytest.skip(_sundials.reason())
     drive = pumped()
     q, v, state = start(model)
-    fl, ref = both(lambda c: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, compiled=c))
+    fl, ref = both(lambda c: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, flies(c)))
     assert fl.end == ref.end == EVENT and fl.events[0].name == "ramp_end"
     assert fl.piece.t.size > 100
     assert np.array_equal(fl.piece.t, ref.piece.t)
@@ -92,8 +97,8 @@ def test_a_variational_flight_by_the_band_solver_is_the_dense_ones(model):
         pytest.skip(_sundials.reason())
     drive = pumped()
     q, v, state = start(model)
-    fl, ref = both(lambda c: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, variational=True,
-                                              compiled=c, sensitivity="cvode"))
+    fl, ref = both(lambda c: F.circuit_flight(drive, model, state, 0.3, q, v, 50.0,
+                                              flies(c, sensitivity="cvode"), variational=True))
     from impactbar.drives.circuit import _cvode
 
     assert _cvode.last_workspace() is not None and _cvode.last_workspace().band == 2 * model.n_modes + 5
@@ -121,36 +126,33 @@ def test_a_variational_flight_by_the_band_solver_is_the_dense_ones(model):
 
 
 def test_runs_and_orbits_are_the_bindings_to_the_bit(monkeypatch):
-    """The drive's ``compiled`` option reaches every flight of a run and of an orbit's search (each
-    through the binding with ``compiled=False``, none with the default)."""
+    """The settings' ``compiled`` option reaches every flight of a run and of an orbit's search (each
+    through the binding with ``compiled=False``, none with the default), the drive the same."""
     if not _sundials.available():
         pytest.skip(_sundials.reason())
     drive = pumped()
-    assert drive == pumped() and drive != dataclasses.replace(drive, compiled=False)
-    assert repr(dataclasses.replace(drive, compiled=False, band=False)) == repr(drive)
+    slow = flies(False)
+    assert slow != drive.integrator == flies(True)
     with pytest.raises(ValueError, match="compiled must be True or False"):
-        dataclasses.replace(drive, compiled=1)
+        flies(1)
 
     through = []
     binding = F._integrate_binding
     monkeypatch.setattr(F, "_integrate_binding", lambda *a: through.append(1) or binding(*a))
 
-    def with_(c):
-        through.clear()
-        return dataclasses.replace(drive, compiled=c)
-
-    run = simulate(RIGID, with_(True), InitialState.rigid(0.0, 0.0), 8.0)
+    run = simulate(RIGID, drive, InitialState.rigid(0.0, 0.0), 8.0)
     assert through == []
-    ref = simulate(RIGID, with_(False), InitialState.rigid(0.0, 0.0), 8.0)
+    ref = simulate(RIGID, drive, InitialState.rigid(0.0, 0.0), 8.0, settings=slow)
     assert len(through) >= run.n_impacts
     assert run.n_impacts >= 3
     assert np.array_equal(run.impact_times, ref.impact_times)
     assert np.array_equal(run.impact_velocities, ref.impact_velocities)
     assert drive.energy(run) == drive.energy(ref)
-    o = find_orbit(RIGID, with_(True))
+    through.clear()
+    o = find_orbit(RIGID, drive)
     assert through == []
-    oref = find_orbit(RIGID, with_(False))
-    assert len(through) > 0 and oref.drive.compiled is False
+    oref = find_orbit(RIGID, drive, settings=slow)
+    assert len(through) > 0 and oref.drive == o.drive and oref.problem.settings == slow
     assert o.period == oref.period and np.array_equal(o.multipliers, oref.multipliers)
 
 
@@ -222,10 +224,10 @@ def test_a_flight_past_its_step_bound_says_so(monkeypatch):
     compiled = True
     state = DriveState((1, 0, 1, 0), np.array([0.9, 0.9, 0.9, 1.0]))
     args = (pumped(), RIGID, state, 0.0, np.array([-0.08]), np.array([0.0]), 50.0)
-    assert F.circuit_flight(*args, compiled=compiled).end == ARRIVAL
+    assert F.circuit_flight(*args, flies(compiled)).end == ARRIVAL
     monkeypatch.setattr(F, "_MAX_STEPS", 20)
     with pytest.raises(ValueError, match="took more than 20 steps without an event .*0 modes") as err:
-        F.circuit_flight(*args, compiled=compiled)
+        F.circuit_flight(*args, flies(compiled))
     assert "rear_volume" not in str(err.value)
 
 
@@ -320,9 +322,9 @@ def test_the_circuit_during_a_blow_is_the_bindings_to_the_bit(monkeypatch):
     monkeypatch.setattr(EF, "_solver", lambda *args: calls.append(1) or original(*args))
 
     def stretch(compiled):
-        d = dataclasses.replace(drive, compiled=compiled)
         calls.clear()
-        out = EF.circuit_end_flight(d, RIGID, state, breaks, 0.0, waves, 52.0, one_mode=_rate_model(1))
+        out = EF.circuit_end_flight(drive, RIGID, state, breaks, 0.0, waves, 52.0, flies(compiled),
+                                    one_mode=_rate_model(1))
         return out, len(calls)
 
     (a, through_a), (b, through_b) = both(stretch)
@@ -352,9 +354,9 @@ def test_a_chamber_emptied_during_a_blow_is_refused_the_same_either_way(w0, whic
     breaks = np.array([0.0, 1e-7, 2e-7])
 
     def refusal(compiled):
-        d = dataclasses.replace(pumped(), compiled=compiled)
         with pytest.raises(ValueError, match=f"the {which} chamber empties") as err:
-            EF.circuit_end_flight(d, RIGID, state, breaks, w0, [0.0] * 2, 52.0, one_mode=_rate_model(1))
+            EF.circuit_end_flight(pumped(), RIGID, state, breaks, w0, [0.0] * 2, 52.0, flies(compiled),
+                                  one_mode=_rate_model(1))
         return str(err.value)
 
     a, b = both(refusal)

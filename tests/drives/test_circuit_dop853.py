@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 from scipy.integrate import DOP853, solve_ivp
 
+from impactbar.drives.circuit import CircuitFlightSettings
 from impactbar.drives.circuit import _dop853 as DP
 from impactbar.drives.circuit import flight as F
 from impactbar.physical import circuit_preset
@@ -166,9 +167,8 @@ def stroke():
     drive, model = d.drive(), d.model().with_(n_modes=4)
     M = model.n_modes + 1
     state = drive.start(model, np.zeros(M), np.zeros(M))
-    settings = F.FlightSettings(method="CVODE", rtol=1e-12, atol=1e-14)
-    cvode = F.circuit_flight(drive, model, state, 0.0, np.zeros(M), np.zeros(M), 1.0, settings,
-                             multistep="adams")
+    settings = CircuitFlightSettings(rtol=1e-12, atol=1e-14, multistep="adams")
+    cvode = F.circuit_flight(drive, model, state, 0.0, np.zeros(M), np.zeros(M), 1.0, settings)
     net, code = drive._compiled_network(state.mode)
     par = np.concatenate((drive._par(model, state.mode, False), net))
     y0 = cvode.piece.y[0].copy()

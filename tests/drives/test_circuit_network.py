@@ -313,7 +313,7 @@ def test_a_flight_through_the_generated_code_is_the_kernels_to_the_bit(drifter, 
     Adams-Moulton for the flexible piston's plain flights, which ``"auto"`` gives the generated
     code's DOP853)."""
     from impactbar.drives import DriveState
-    from impactbar.drives.circuit import _sundials
+    from impactbar.drives.circuit import CircuitFlightSettings, _sundials
     from impactbar.drives.circuit import flight as F
 
     if not _sundials.available():
@@ -325,9 +325,9 @@ def test_a_flight_through_the_generated_code_is_the_kernels_to_the_bit(drifter, 
     q[0] = -0.08
     state = DriveState((1, 1, 1, 0), np.array([0.9, 0.9, 0.9, 0.3]))
     for compiled in (True, False) if not variational else (True,):
-        a, b = (F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, variational=variational,
-                                 compiled=compiled, generated=g, sensitivity="cvode",
-                                 multistep="adams" if modes and not variational else "auto")
+        settings = CircuitFlightSettings(compiled=compiled, sensitivity="cvode",
+                                         multistep="adams" if modes and not variational else "auto")
+        a, b = (F.circuit_flight(drive, model, state, 0.3, q, v, 50.0, settings, variational, generated=g)
                 for g in (True, False))
         assert a.end == b.end and a.t == b.t and a.piece.t.size > 50
         for x, y in ((a.piece.t, b.piece.t), (a.piece.y, b.piece.y), (a.piece.f, b.piece.f), (a.q, b.q),

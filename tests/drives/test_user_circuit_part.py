@@ -93,16 +93,17 @@ def test_a_leak_on_rock_repeats_and_its_loss_is_accounted(drifter, preset):  # n
 
 def test_the_leaks_blows_are_the_bindings_to_the_bit(drifter):  # noqa: F811
     """A run on the rock with the leak by the compiled driver and through scikit-sundae's interface
-    (``compiled=False``: the generated blow's Python-called functions against its C callbacks and
-    compiled loop): the same impacts, blows and account to the bit."""
-    from impactbar.drives.circuit import _sundials
+    (the settings' ``compiled=False``: the generated blow's Python-called functions against its C
+    callbacks and compiled loop): the same impacts, blows and account to the bit."""
+    from impactbar.drives.circuit import CircuitFlightSettings, _sundials
 
     if not _sundials.available():
         pytest.skip(_sundials.reason())
     model, drive = drifter
-    drives = [replace(drive, extra_parts=(Leak(0.02),), compiled=c) for c in (True, False)]
-    runs = [simulate(model, d, InitialState.rigid(-0.02, 0.0), 3.0) for d in drives]
+    leaky = replace(drive, extra_parts=(Leak(0.02),))
+    runs = [simulate(model, leaky, InitialState.rigid(-0.02, 0.0), 3.0,
+                     settings=CircuitFlightSettings(compiled=c)) for c in (True, False)]
     assert runs[0].n_impacts >= 2
     assert np.array_equal(runs[0].impact_times, runs[1].impact_times)
     assert np.array_equal(runs[0].impact_velocities, runs[1].impact_velocities)
-    assert drives[0].energy(runs[0]) == drives[1].energy(runs[1])
+    assert leaky.energy(runs[0]) == leaky.energy(runs[1])

@@ -107,9 +107,10 @@ class _SwitchedProblem:
             self.chord = True  # (the chord's first step, the steering Jacobian's after it)
 
     def _pair(self, lam: float):
-        """The model, drive and orbit problem at the parameter value ``lam``."""
+        """The model, drive and orbit problem at the parameter value ``lam`` (its flights by the
+        start's, its problem's ``settings``: the oil circuit's solver options follow the branch)."""
         model, drive = with_parameter(self.model0, self.drive0, self.name, lam)
-        problem = orbit_problem(model, drive, self.m)
+        problem = orbit_problem(model, drive, self.m, getattr(self.base, "settings", None))
         if self.base is not None:
             problem.adopt(self.base)
         return model, drive, problem
@@ -567,7 +568,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     Parameters
     ----------
     orbit : SwitchedOrbit or BranchEvent
-        The start (from :func:`impactbar.find_orbit` with the drive), ``m`` impacts per period; or
+        The start (from :func:`impactbar.find_orbit` with the drive; its problem's flight
+        ``settings``, the oil circuit's solver options, are every point's), ``m`` impacts per period; or
         a period doubling of a one-impact branch: the two-impact branch that bifurcates there is
         followed (branch switching: its first point is taken along the doubled problem's null
         vector, whose halves are opposite, both ways tried), while the parameter stays within

@@ -33,13 +33,50 @@ from ..dynamics.modal import step_constant
 from .base import DriveEvent, DriveState, FlightSettings
 
 __all__ = ["FlightSettings", "Flight", "ClosedPiece", "OdePiece", "RestPiece", "QuadratureRestPiece", "fly",
-           "bracket_event", "ARRIVAL", "EVENT", "END"]
+           "bracket_event", "solver_settings", "ARRIVAL", "EVENT", "END"]
 
 #: how a flight ended
 ARRIVAL, EVENT, END = 0, 1, 2
 
 
 DEFAULT_SETTINGS = FlightSettings()
+
+
+def solver_settings(settings, forcing, drive_solver: bool) -> dict:
+    """The keywords by which an entry point (:func:`impactbar.simulate`, :func:`impactbar.find_orbit`,
+    :func:`impactbar.periodic_orbits`) hands its ``settings`` to the solver it chose for ``forcing``.
+
+    Parameters
+    ----------
+    settings : FlightSettings or None
+        How a drive's flights with state are integrated (the oil circuit's
+        :class:`~impactbar.drives.circuit.CircuitFlightSettings`); ``None``: the drive's
+        :attr:`~impactbar.Drive.integrator`.
+    forcing : Load or Drive
+        Named in the refusal.
+    drive_solver : bool
+        Whether the chosen solver is the drives' (its table's ``"drive"`` entry).
+
+    Returns
+    -------
+    dict
+        ``{}`` without settings, else ``{"settings": settings}``.
+
+    Raises
+    ------
+    ValueError
+        Settings for a load's solver (its flights are closed forms), or settings that are not a
+        :class:`FlightSettings`.
+    """
+    if settings is None:
+        return {}
+    if not drive_solver:
+        raise ValueError("settings: the integrator of a drive's flights; give it only with a Drive (a "
+                         f"load's flights are closed forms); got a {type(forcing).__name__}")
+    if not isinstance(settings, FlightSettings):
+        raise ValueError(f"settings must be a FlightSettings (the oil circuit's: CircuitFlightSettings) or "
+                         f"None; got {type(settings).__name__}")
+    return {"settings": settings}
 
 
 class ClosedPiece:

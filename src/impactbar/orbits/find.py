@@ -16,7 +16,8 @@ import numpy as np
 from .._shared.forcing import dispatch
 from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
-from ..drives.base import Drive
+from ..drives.base import Drive, FlightSettings
+from ..drives.flight import solver_settings
 from ..loads import Load
 from ..model import BarModel
 from ._assemble import _build
@@ -80,7 +81,8 @@ def _guesses(problem: _Segments, guess):
 
 
 def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: int = 1, guess=None, *,
-               tol: float = 1e-12, max_iter: int = 40) -> PeriodicOrbit:
+               tol: float = 1e-12, max_iter: int = 40,
+               settings: FlightSettings | None = None) -> PeriodicOrbit:
     r"""A periodic motion with ``impacts`` impacts in ``periods`` load periods, by Newton's method on
     the exact impact map (eqs. 8, 10, 11; theory §4, §5, §7).
 
@@ -123,6 +125,12 @@ def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: i
     max_iter : int
         Newton iterations per start, from 1 to 1000; a start stops earlier when the residual has not
         halved in 40 iterations.
+    settings : FlightSettings, optional
+        With a :class:`~impactbar.Drive` whose state is integrated, how its flights are
+        (:class:`~impactbar.drives.FlightSettings`; the oil circuit's
+        :class:`~impactbar.drives.circuit.CircuitFlightSettings`, its tolerances and options);
+        default the drive's :attr:`~impactbar.Drive.integrator`. The orbit keeps them (its
+        continuation follows them). Not with a load (its flights are closed forms).
 
     Returns
     -------
@@ -151,15 +159,18 @@ def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: i
     :func:`~impactbar.orbits.find_switched_orbit`.
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
-    return dispatch(FIND_ORBIT, load)(model, load, impacts, periods, guess, tol, max_iter)
+    solver = dispatch(FIND_ORBIT, load)
+    return solver(model, load, impacts, periods, guess, tol, max_iter,
+                  **solver_settings(settings, load, solver is _drive_orbit))
 
 
-def _drive_orbit(model, drive, impacts, periods, guess, tol, max_iter) -> PeriodicOrbit:
+def _drive_orbit(model, drive, impacts, periods, guess, tol, max_iter, settings=None) -> PeriodicOrbit:
     """:func:`find_orbit` under a drive: an autonomous orbit of unknown period (theory §10;
-    ``periods`` has no meaning there)."""
+    ``periods`` has no meaning there), its flights by ``settings``."""
     from .switched_search import find_switched_orbit  # (the drives' machinery, loaded on first use)
 
-    return find_switched_orbit(model, drive, impacts, guess, tol=min(tol, 1e-13), max_iter=max(max_iter, 50))
+    return find_switched_orbit(model, drive, impacts, guess, tol=min(tol, 1e-13), max_iter=max(max_iter, 50),
+                               settings=settings)
 
 
 def _load_orbit(model, load, impacts, periods, guess, tol, max_iter) -> PeriodicOrbit:
@@ -221,7 +232,8 @@ DIRECT_ITERATIONS = 8
 # the one-impact orbits of every law (find_orbit's default guess): from the law's phase equation, or
 # by Newton's method from guesses where it has none (both here, since each calls the other)
 # ------------------------------------------------------------------------------------------------
-def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None) -> OrbitList:
+def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None,
+                    settings: FlightSettings | None = None) -> OrbitList:
     r"""Every one-impact-per-period steady state of the bar under the load (paper Section 2).
 
     Each root ``phase`` of the phase equation (eq. 14) in :math:`[0, 2\pi)` gives one orbit: the flexible
@@ -242,6 +254,8 @@ def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None) -> Orbi
         ``window`` (:func:`~impactbar.orbits.drive_orbits`).
     window : (float, float), optional
         Under a drive only: the periods searched.
+    settings : FlightSettings, optional
+        Under a drive with state only: how its flights are integrated (:func:`find_orbit`).
 
     Returns
     -------
@@ -263,15 +277,16 @@ def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None) -> Orbi
     >>> [round(o.phase, 4) for o in orbits]
     [0.5511, 2.5905]
     """
-    return dispatch(PERIODIC_ORBITS, load)(model, load, window)
+    solver = dispatch(PERIODIC_ORBITS, load)
+    return solver(model, load, window, **solver_settings(settings, load, solver is _drive_orbits))
 
 
-def _drive_orbits(model, drive, window) -> OrbitList:
+def _drive_orbits(model, drive, window, settings=None) -> OrbitList:
     """:func:`periodic_orbits` under a drive: every one-impact orbit in a window of periods (theory
-    §10)."""
+    §10), its flights by ``settings``."""
     from .switched_search import drive_orbits  # (the drives' machinery, loaded on first use)
 
-    return drive_orbits(model, drive, window)
+    return drive_orbits(model, drive, window, settings=settings)
 
 
 def _load_orbits(model, load, window) -> OrbitList:

@@ -17,6 +17,8 @@ import numpy as np
 
 from .._shared.forcing import check_family
 from .._shared.validate import check_int, check_real
+from ..drives.base import FlightSettings
+from ..drives.flight import solver_settings
 from ..drives.orbitproblem import OrbitProblem
 from ..model import BarModel
 from ._settling import surfaces_ahead
@@ -27,7 +29,8 @@ __all__ = ["find_switched_orbit", "drive_orbits", "default_orbit", "SETTLE_RUN_I
 
 
 def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *, tol: float = 1e-13,
-                        max_iter: int = 50, newton: str = "chord") -> SwitchedOrbit:
+                        max_iter: int = 50, newton: str = "chord",
+                        settings: FlightSettings | None = None) -> SwitchedOrbit:
     """The periodic motion with ``m`` impacts per period under a drive (theory §10).
 
     Called by :func:`impactbar.find_orbit` when its load is a :class:`~impactbar.Drive`. Between
@@ -73,6 +76,11 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
         cost). The same orbit (to about 1e-12 of the unknowns) and multipliers (to their own noise,
         about 1e-7: the variational flight's steps move with the unknowns) either way
         (:class:`~impactbar.orbits.switched.ShootingProblem`).
+    settings : FlightSettings, optional
+        How a drive's flights with state are integrated (the oil circuit's
+        :class:`~impactbar.drives.circuit.CircuitFlightSettings`: its tolerances and options), every
+        flight of the search (the run from rest of the default chain too); default the drive's
+        :attr:`~impactbar.Drive.integrator`. Kept by the orbit's problem (``orbit.problem.settings``).
 
     Returns
     -------
@@ -106,14 +114,15 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     m = check_int("impacts", impacts, lo=1)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
-    problem = orbit_problem(model, drive, m, newton=newton)
+    solver_settings(settings, drive, True)  # (a FlightSettings or None)
+    problem = orbit_problem(model, drive, m, settings, newton=newton)
     if guess is None and m == 1:  # the default chain (the rigid orbit, a run from rest, the search)
-        polished = _from_coarse(model, drive, problem, tol, max_iter, newton)
+        polished = _from_coarse(model, drive, problem, tol, max_iter, newton, settings)
         return polished if polished is not None else default_orbit(model, drive, problem, tol, max_iter)
     return _motion(orbit_of(problem, _solve(problem, problem.initial(guess, tol, max_iter), tol, max_iter)))
 
 
-def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, newton: str):
+def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, newton: str, settings=None):
     """Where each impact is a blow coupled to the drive's state and the law has a cheaper model of
     the same motion (:meth:`~impactbar.laws.ContactLaw.coarse_model`: the rod-rock law's exact blows
     under the oil circuit, whose lattice costs some 1 % of a blow), the orbit found on that model
@@ -125,7 +134,8 @@ def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, new
     if coarse is None or not hasattr(problem, "polish"):
         return None
     try:
-        rough = find_switched_orbit(coarse, drive, 1, None, tol=tol, max_iter=max_iter, newton=newton)
+        rough = find_switched_orbit(coarse, drive, 1, None, tol=tol, max_iter=max_iter, newton=newton,
+                                    settings=settings)
         return _motion(orbit_of(problem, problem.polish(rough, tol, max_iter)))
     except ValueError:
         return None
@@ -177,14 +187,14 @@ SETTLE_RUN_IMPACTS = 200
 SETTLE_RUN_TOL = 1e-3
 
 
-def _settled_run(model: BarModel, drive):
-    """A run of :func:`impactbar.simulate` from rest on the stop (``SETTLE_RUN_IMPACTS`` impacts)
-    and whether its last impact velocities repeat every impact to ``SETTLE_RUN_TOL`` (a one-impact
-    motion it settles on)."""
+def _settled_run(model: BarModel, drive, settings=None):
+    """A run of :func:`impactbar.simulate` from rest on the stop (``SETTLE_RUN_IMPACTS`` impacts,
+    the flights by ``settings``) and whether its last impact velocities repeat every impact to
+    ``SETTLE_RUN_TOL`` (a one-impact motion it settles on)."""
     from ..simulation import InitialState, simulate  # the simulator, loaded where a guess needs it
 
     run = simulate(model, drive, InitialState.rigid(0.0, 0.0, n_modes=model.n_modes), 1e6,
-                   max_impacts=SETTLE_RUN_IMPACTS)
+                   max_impacts=SETTLE_RUN_IMPACTS, settings=settings)
     vi = np.asarray(run.impact_velocities)
     settled = vi.size >= 8 and bool(np.all(np.abs(np.diff(vi[-6:])) <= SETTLE_RUN_TOL * np.abs(vi[-1])))
     return run, settled
@@ -219,7 +229,7 @@ def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max
         return first
     if not getattr(problem, "starts_from_rest", False):
         try:
-            run, settled = _settled_run(model, drive)
+            run, settled = _settled_run(model, drive, getattr(problem, "settings", None))
         except ValueError as err:
             tried.append(f"a run from rest on the stop: {err}")
         else:
@@ -267,7 +277,8 @@ def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max
 MAX_DEFAULT_RESONANCES = 10_000
 
 
-def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max_iter: int = 20):
+def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max_iter: int = 20,
+                 settings: FlightSettings | None = None):
     r"""Every one-impact periodic orbit of a drive with a period in a window (theory §10):
     :func:`impactbar.periodic_orbits` with a :class:`~impactbar.Drive` in place of the load.
 
@@ -308,6 +319,8 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
         Relative tolerance of the polishing Newton steps.
     max_iter : int
         Most Newton steps per orbit.
+    settings : FlightSettings, optional
+        How a drive's flights with state are integrated (:func:`find_switched_orbit`).
 
     Returns
     -------
@@ -343,10 +356,12 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
         window = (lo, hi)
     tol = check_real("tol", tol, lo=0.0, lo_open=True)
     max_iter = check_int("max_iter", max_iter, lo=1)
-    problem = orbit_problem(model, drive, 1)
+    solver_settings(settings, drive, True)
+    problem = orbit_problem(model, drive, 1, settings)
     out = _searched(problem, window, tol, max_iter)
     if out is None:  # no search of the drive's own: the default chain's orbit
-        out = OrbitList([find_switched_orbit(model, drive, 1, tol=tol, max_iter=max(max_iter, 50))])
+        out = OrbitList([find_switched_orbit(model, drive, 1, tol=tol, max_iter=max(max_iter, 50),
+                                             settings=settings)])
         out._certified, out._unresolved, out._window = (False,), (), None
     return out
 

@@ -376,7 +376,8 @@ def _problem(drifter: CircuitDrifter, near):
     """The shooting problem of ``drifter`` with the blocks of ``near`` (another design's)."""
     from ..orbits.switched import orbit_problem
 
-    return orbit_problem(drifter.model(), drifter.drive(), near.impacts).adopt(near)
+    return orbit_problem(drifter.model(), drifter.drive(), near.impacts,
+                         getattr(near, "settings", None)).adopt(near)
 
 
 def _point(drifter: CircuitDrifter, problem, X, multipliers: bool) -> CircuitDrifterOrbit:

@@ -35,7 +35,8 @@ import numpy as np
 from .._shared.forcing import dispatch, of_family
 from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
-from ..drives.base import Drive
+from ..drives.base import Drive, FlightSettings
+from ..drives.flight import solver_settings
 from ..dynamics import kernels as K
 from ..dynamics.implementations import use_fast
 from ..dynamics.kernelview import LoadKernelView, ModalBasisView
@@ -343,7 +344,7 @@ class _Core:
 # the driver
 # --------------------------------------------------------------------------------------------------
 def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, *, t0=0.0,
-             max_impacts=None, progress=None) -> Trajectory:
+             max_impacts=None, progress=None, settings: FlightSettings | None = None) -> Trajectory:
     r"""Follow the bar from ``initial`` through impact after impact (paper Section 5).
 
     Between impacts every mode obeys :math:`q_n'' + d q_n' + (s n \pi)^2 q_n = p(t)` (eq. 6) and is
@@ -380,6 +381,12 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
         between blocks of impacts (at most every 0.1 s of wall time) and once at the end: e.g. to
         drive a progress bar with an estimate of the time left. Not with a
         :class:`~impactbar.Drive`.
+    settings : FlightSettings, optional
+        With a :class:`~impactbar.Drive` whose state is integrated, how its flights are
+        (:class:`~impactbar.drives.FlightSettings`; the oil circuit's
+        :class:`~impactbar.drives.circuit.CircuitFlightSettings`, its tolerances and options);
+        default the drive's :attr:`~impactbar.Drive.integrator`. Not with a load (its flights are
+        closed forms).
 
     Returns
     -------
@@ -441,14 +448,16 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
         raise ValueError(
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
-    return dispatch(SIMULATORS, load)(model, load, q, v, t0, t_end, max_imp, progress)
+    solver = dispatch(SIMULATORS, load)
+    return solver(model, load, q, v, t0, t_end, max_imp, progress,
+                  **solver_settings(settings, load, solver is _simulate_drive))
 
 
-def _simulate_drive(model, drive, q, v, t0, t_end, max_imp, progress) -> Trajectory:
+def _simulate_drive(model, drive, q, v, t0, t_end, max_imp, progress, settings=None) -> Trajectory:
     """:func:`simulate` under a drive (theory §10): the drive's own event loop over pieces of this
-    driver."""
+    driver, a drive with state's flights by ``settings`` (default its integrator)."""
     _push_off(model.end_weights, q)
-    return run_drive(model, drive, q, v, t0, t_end, max_imp, _DRIVER)
+    return run_drive(model, drive, q, v, t0, t_end, max_imp, _DRIVER, settings)
 
 
 def _simulate_load(model, load, q, v, t0, t_end, max_imp, progress) -> Trajectory:

@@ -311,14 +311,15 @@ class _Run:
 
 
 def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int,
-              driver: Driver) -> SwitchedTrajectory:
-    """A drive's run (module docstring): a drive with state by ``solve_ivp``'s flights
-    (:func:`run_stateful`); a force constant between events over pieces of the ordinary driver under
-    that force (``driver``), with the drive's compiled loop where it has one (its ability
-    :class:`~impactbar.drives.abilities.CompiledLoop`, switch ``simulate.switched_kernel``, an instantaneous
-    law), in Python piece by piece otherwise (:func:`run_pieces`)."""
+              driver: Driver, settings=None) -> SwitchedTrajectory:
+    """A drive's run (module docstring): a drive with state by ``solve_ivp``'s flights or its own
+    (:func:`run_stateful`, with ``settings``, default the drive's integrator); a force constant
+    between events over pieces of the ordinary driver under that force (``driver``), with the drive's
+    compiled loop where it has one (its ability :class:`~impactbar.drives.abilities.CompiledLoop`,
+    switch ``simulate.switched_kernel``, an instantaneous law), in Python piece by piece otherwise
+    (:func:`run_pieces`)."""
     if not drive.traits.piecewise_constant:
-        return run_stateful(model, drive, q, v, t0, t_end, max_imp, driver.make_state)
+        return run_stateful(model, drive, q, v, t0, t_end, max_imp, driver.make_state, settings)
     from ..loads import FourierLoad
 
     law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms

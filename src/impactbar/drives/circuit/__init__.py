@@ -4,7 +4,8 @@ with pump, gas accumulator and relief valve, and its numerics.
 Layout: ``parts`` (the frozen parts: :class:`Chambers`, :class:`Valve`, :class:`Supply`,
 :class:`Accumulator`, :class:`Oil`), ``drive`` (:class:`HydraulicCircuitDrive`, the
 :class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``layout``
-(where the circuit keeps its states and energy terms, read by name), ``composition`` (parts added to
+(where the circuit keeps its states and energy terms, read by name), ``settings`` (how its flights
+are integrated: :class:`CircuitFlightSettings`, handed to the solvers), ``composition`` (parts added to
 the circuit, :class:`CircuitPart`, :class:`PartField`, and the numbering of its nodes, energy and
 event slots), ``return_line`` and ``leak`` (two parts of the network's kinds:
 :class:`ReturnAccumulator`, :class:`Leak`), ``_network``
@@ -49,8 +50,10 @@ from .parts import Oil as Oil
 from .parts import Supply as Supply
 from .parts import Valve as Valve
 from .return_line import ReturnAccumulator as ReturnAccumulator
+from .settings import CircuitFlightSettings as CircuitFlightSettings
 
-__all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS", "Chambers", "Valve", "Supply",
-           "Accumulator", "Oil", "CircuitPart", "NamedPart", "PartField", "PartSlots", "ReturnAccumulator",
-           "Leak", "PORTS", "TERMS", "record", "NODE", "PUMP", "ORIFICE", "VALVE", "RELIEF", "CHAMBER",
-           "ACCUM", "LEAK", "CUSHION", "CHECK", "LEVEL", "LaminarLeak", "Cushion", "CheckValve"]
+__all__ = ["HydraulicCircuitDrive", "CircuitFlightSettings", "CircuitEnergy", "PARAMETERS", "Chambers",
+           "Valve", "Supply", "Accumulator", "Oil", "CircuitPart", "NamedPart", "PartField", "PartSlots",
+           "ReturnAccumulator", "Leak", "PORTS", "TERMS", "record", "NODE", "PUMP", "ORIFICE", "VALVE",
+           "RELIEF", "CHAMBER", "ACCUM", "LEAK", "CUSHION", "CHECK", "LEVEL", "LaminarLeak", "Cushion",
+           "CheckValve"]

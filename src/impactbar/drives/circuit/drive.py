@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..base import Drive, DriveState, FlightSettings, GapCrossing, SurfaceEvent
+from ..base import Drive, DriveState, GapCrossing, SurfaceEvent
 from . import _kernel as K
 from . import _network as NW
 from .abilities import circuit_abilities, circuit_params, circuit_traits
@@ -25,6 +25,7 @@ from .composition import compose_parts
 from .layout import PRESET
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 from .watch import watched
+from .settings import DEFAULT_SETTINGS, circuit_settings
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
 
@@ -151,6 +152,12 @@ class HydraulicCircuitDrive(Drive):
     end; ``p_s`` through the pre-charge and the relief pressure. Pressures and ``x_v`` are continuous
     through impacts.
 
+    The drive is the circuit alone: how its flights are integrated (CVODE's tolerances, the compiled
+    driver, the linear solvers, the variational flights' fundamental matrix, the plain flights'
+    method) is a :class:`~impactbar.drives.circuit.CircuitFlightSettings` handed to the solvers
+    (``settings`` of :func:`~impactbar.simulate` and :func:`~impactbar.find_orbit`; default
+    :attr:`integrator`), so that two drives of the same parts are equal however they are solved.
+
     Parameters
     ----------
     chambers : Chambers
@@ -166,32 +173,6 @@ class HydraulicCircuitDrive(Drive):
         pressure, the valve at the position the start's gap commands (with ``x_v`` given and away
         from it, the spool starts ramping there: an orbit's state after an impact, restarted).
         Each pressure in ``[0, beta)``, ``beta`` the oil's bulk modulus.
-    compiled, band, blocks : bool, optional
-        How the flights are integrated, not what they are (keywords, default ``True``, left out of
-        the drive's repr): CVODE driven from compiled code, the variational flights' Newton
-        systems by the band solver, and that solver's LU taken on the systems' blocks (one ``n x n``
-        block for the state and each column of ``Phi``); ``False``: through scikit-sundae's Python
-        interface (the same steps to the bit), by the dense solver (the same to rounding), and by the
-        band solver's own LU (the same steps to the bit). The baselines of
-        ``benchmarks/bench_circuit.py`` (``impactbar.drives.circuit.flight.circuit_flight``).
-    sensitivity : {"auto", "magnus", "cvode"}, optional
-        How the variational flights (the Jacobians of Newton's method and the Floquet multipliers)
-        take the fundamental matrix (keyword, left out of the repr): ``"magnus"``, over the plain
-        flight's steps by Magnus' method of order 6; ``"cvode"``, the variational equations
-        integrated beside the state by CVODE (the way before); ``"auto"`` (default), Magnus where
-        the piston has modes, CVODE for the rigid piston
-        (:func:`~impactbar.drives.circuit.flight.circuit_flight`, theory §11).
-    multistep : {"auto", "cvode", "adams", "bdf", "dop853"}, optional
-        The plain flights' integrator (keyword, left out of the repr): ``"auto"`` (default), for a
-        piston with modes the explicit Dormand-Prince 8(5,3) compiled with the network's code
-        where the oil is not stiff against its steps
-        (:data:`~impactbar.drives.circuit.flight.EXPLICIT_STIFFNESS`), else CVODE's Adams-Moulton
-        (orders 1 to 12) where the steps follow the modes' oscillations (the oil's fastest decay at
-        most 15 times the highest mode's frequency,
-        :func:`~impactbar.drives.circuit.flight.stiffness_ratio`), and BDF (orders 1 to 5) where
-        they follow the oil's stiffness: a stiffer oil, the rigid piston; ``"cvode"``, that choice
-        among CVODE's methods only (the way before DOP853); ``"adams"`` or ``"bdf"`` for every
-        flight, ``"dop853"`` for every plain flight (theory §11, *The integrator*).
     extra_parts : tuple of CircuitPart, optional
         Parts added to the circuit (keyword, left out of the repr;
         :class:`~impactbar.drives.circuit.composition.CircuitPart`): their nodes' pressures are
@@ -224,6 +205,15 @@ class HydraulicCircuitDrive(Drive):
     ...                10.0)
     >>> run.n_impacts > 3, abs(drive.energy(run)["relative_residual"]) < 1e-8
     (True, True)
+
+    The same run through scikit-sundae's Python interface (the way before the compiled driver: the
+    same steps, to the bit), the drive unchanged:
+
+    >>> from impactbar.drives.circuit import CircuitFlightSettings
+    >>> before = simulate(BarModel(s=52, d=0, R=0.215, n_modes=0), drive, InitialState.rigid(0.0, 0.0),
+    ...                   10.0, settings=CircuitFlightSettings(compiled=False))
+    >>> bool((before.impact_times == run.impact_times).all())
+    True
     """
 
     chambers: Chambers
@@ -232,12 +222,7 @@ class HydraulicCircuitDrive(Drive):
     oil: Oil
     accumulator: Accumulator | None = None
     start_pressures: tuple | None = None
-    compiled: bool = dataclasses.field(default=True, repr=False, kw_only=True)
-    band: bool = dataclasses.field(default=True, repr=False, kw_only=True)
-    blocks: bool = dataclasses.field(default=True, repr=False, kw_only=True)
     extra_parts: tuple = dataclasses.field(default=(), repr=False, kw_only=True)
-    sensitivity: str = dataclasses.field(default="auto", repr=False, kw_only=True)
-    multistep: str = dataclasses.field(default="auto", repr=False, kw_only=True)
 
     #: where the circuit keeps its states and energy terms (:class:`~.layout.CircuitLayout`: ``z``'s
     #: indices by name, ``layout["supply"]``, and the energy integrands' ``layout.energy["pump"]``)
@@ -246,7 +231,10 @@ class HydraulicCircuitDrive(Drive):
     state_names = PRESET.state_names
     parameters = tuple(PARAMETERS)
     parameter_ranges = _RANGES
-    integrator = FlightSettings(method="CVODE", rtol=1e-10, atol=1e-12)
+    #: how the flights are integrated (CVODE's tolerances and the solver's options,
+    #: :class:`~.settings.CircuitFlightSettings`): the default of the solvers' ``settings``, not a
+    #: part of the drive (its equality and hash are its parts')
+    integrator = DEFAULT_SETTINGS
     variational = True
 
     def __repr__(self) -> str:
@@ -260,15 +248,6 @@ class HydraulicCircuitDrive(Drive):
         for name, cls in (("chambers", Chambers), ("valve", Valve), ("supply", Supply), ("oil", Oil)):
             if not isinstance(getattr(self, name), cls):
                 raise ValueError(f"{name} must be a {cls.__name__}; got {type(getattr(self, name)).__name__}")
-        for name in ("compiled", "band", "blocks"):
-            if not isinstance(getattr(self, name), bool):
-                raise ValueError(f"{name} must be True or False; got {getattr(self, name)!r}")
-        from .flight import MULTISTEPS, SENSITIVITIES
-
-        if self.sensitivity not in SENSITIVITIES:
-            raise ValueError(f"sensitivity must be one of {SENSITIVITIES}; got {self.sensitivity!r}")
-        if self.multistep not in MULTISTEPS:
-            raise ValueError(f"multistep must be one of {MULTISTEPS}; got {self.multistep!r}")
         acc = self.accumulator
         if acc is not None and not isinstance(acc, Accumulator):
             raise ValueError(f"accumulator must be an Accumulator or None; got {type(acc).__name__}")
@@ -592,21 +571,21 @@ class HydraulicCircuitDrive(Drive):
     def flight(self, model, state, t, q, v, t_stop, settings=None, variational=False):
         from .flight import circuit_flight
 
-        return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational,
-                              compiled=self.compiled, band=self.band, blocks=self.blocks,
-                              sensitivity=self.sensitivity, multistep=self.multistep)
+        return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational)
 
     def variational_state_settings(self, model, settings=None):
-        """Where the variational flights take their fundamental matrix by Magnus' method (a piston
-        with modes, :attr:`sensitivity`), the integrator of the plain flight under them
+        """Where the variational flights with ``settings`` (default :attr:`integrator`) take their
+        fundamental matrix by Magnus' method (a piston with modes, their ``sensitivity``,
+        :class:`~.settings.CircuitFlightSettings`), the integrator of the plain flight under them
         (:func:`~impactbar.drives.circuit.flight.magnus_state_settings`: the variational flight's
         state, bit for bit, without the fundamental matrix); ``None`` otherwise (CVODE's
         variational flights of the rigid piston)."""
         from .flight import magnus_state_settings, uses_magnus
 
-        if not uses_magnus(self.sensitivity, model):
+        settings = circuit_settings(settings if settings is not None else self.integrator)
+        if not uses_magnus(settings.sensitivity, model):
             return None
-        return magnus_state_settings(settings if settings is not None else self.integrator)
+        return magnus_state_settings(settings)
 
     def end_flight(self, model, state, breaks, w0, incoming, impedance, settings=None):
         """The circuit over a stretch of a blow with the driven end moved by the law's waves

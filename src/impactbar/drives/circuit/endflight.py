@@ -26,7 +26,8 @@ import numpy as np
 from ..base import DriveState, FlightSettings
 from . import _endkernel as EK
 from ._kernel import RAMP_EV
-from .flight import _MAX_STEPS, DEFAULT_SETTINGS, HermiteSteps, _compiled_driver, _hermite_extremes, _message
+from .flight import _MAX_STEPS, HermiteSteps, _compiled_driver, _hermite_extremes, _message
+from .settings import circuit_settings
 
 __all__ = ["EndFlight", "EndPiece", "circuit_end_flight"]
 
@@ -193,8 +194,9 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
         ``a`` on each interval: a value, or a function of the time.
     impedance : float
         ``Z > 0`` of the piston at its driven end (model units: ``s`` for a uniform piston).
-    settings : FlightSettings, optional
-        CVODE's tolerances (default the drive's).
+    settings : CircuitFlightSettings or FlightSettings, optional
+        CVODE's tolerances and whether it runs compiled (``compiled``; default the drive's,
+        :func:`.settings.circuit_settings`).
     one_mode : object
         The one-mode bar of the compiled kernels' parameters (``drive._rate_model(1)``: what
         :meth:`HydraulicCircuitDrive.end_flight` passes).
@@ -208,7 +210,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     ValueError
         Where CVODE fails, or a chamber empties.
     """
-    settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
+    settings = circuit_settings(settings)
     breaks = np.asarray(breaks, dtype=float)
     n = breaks.size - 1
     model1 = one_mode
@@ -221,7 +223,7 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
     impulses = np.zeros(n)
     pieces: list = []
     fired_log: list = []
-    compiled = _compiled_end(drive)
+    compiled = _compiled_end(settings)
     # (an array of floats holds no callable: the coupled blow's waves, not looked through)
     values = isinstance(incoming, np.ndarray) and incoming.dtype == np.float64
     # no Python between the events where each interval's wave is a value
@@ -339,14 +341,15 @@ def _work_column(layout) -> int:
     return 2 + layout.n_states + layout.energy["piston"]
 
 
-def _compiled_end(drive):
-    """:mod:`._endcvode` where the drive flies compiled and the SUNDIALS libraries bind, else None."""
-    return _end_module(bool(drive.compiled))
+def _compiled_end(settings):
+    """:mod:`._endcvode` where the settings fly compiled (``compiled`` of a
+    :class:`~.settings.CircuitFlightSettings`) and the SUNDIALS libraries bind, else None."""
+    return _end_module(settings.compiled)
 
 
 @functools.lru_cache(maxsize=2)
 def _end_module(compiled: bool):
-    """:func:`_compiled_end` by the drive's flag (looked up once: a blow asks at each stretch)."""
+    """:func:`_compiled_end` by the settings' flag (looked up once: a blow asks at each stretch)."""
     if _compiled_driver(compiled) is None:
         return None
     from . import _endcvode

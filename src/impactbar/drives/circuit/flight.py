@@ -1,36 +1,35 @@
 r"""One flight of the bar under the oil circuit, integrated by SUNDIALS' CVODE (theory §11).
 
-**The integrator, chosen by measurement.** The circuit is stiff (an oil volume behind an orifice
-relaxes in ``V / (beta K phi')``, some ``1e-5`` of a period on the example drifter, ``1e-8`` in
-the ideal limit, against a period of order 1) and the accuracy asked of it is tight (the energy
-account to ``1e-8``, periodic orbits to ``1e-8``), so ``rtol = 1e-10``. scipy's ``Radau``,
-``BDF`` and ``LSODA`` take their steps in Python; CVODE (BDF of orders 1 to 5, SUNDIALS) runs its
-steps, Newton iterations and root finding in C. On one stroke flight of the preset
-``circuit-drifter`` (``benchmarks/bench_circuit.py``, this 2-core machine while shared) ``Radau``
-with the same compiled right-hand side and Jacobian took 0.14 s (203 steps), CVODE 0.5 ms (380),
-their impact times 5e-11 apart. The flight's loop runs in compiled code and hands CVODE the compiled vector
-field, Jacobian and event functions as C callbacks (:mod:`._cvode`, on the SUNDIALS libraries that
-scikit-sundae ships, :mod:`._sundials`): through scikit-sundae's Python interface, where each of
-those calls is a call of Python, the same flight took 8.5 ms (``compiled=False``; the same steps to the
-bit). CVODE's counters on it: 380 steps, 498 right-hand sides, 17 error-test failures, 497 Newton
-iterations, 7 Jacobians: the steps are those BDF's error control asks at this tolerance (the
-pressures' fast transients after each switch and impact, the valve's ramp; measured over 20 periods,
-``rtol = 1e-8`` took a quarter fewer steps for errors a hundred times larger), not failures. With a
-flexible piston the steps follow the modes' oscillations, which the pressures carry, more than the
-oil's stiffness, and the plain flights take CVODE's Adams-Moulton method (orders 1 to 12) instead:
-a stroke of the preset's piston with 4 modes in 5,025 steps against BDF's 11,344, nearer an
-independent integration (``multistep``; theory §11, *The integrator*). Where the oil is not stiff
-against the modes (:data:`EXPLICIT_STIFFNESS`) those plain flights take the explicit DOP853 instead,
-compiled with the network's code (:mod:`._dop853`: scipy's method, CVODE's root finding on its dense
-output; about half Adams' CPU time at equal or better accuracy, at :data:`EXPLICIT_TOLERANCE` times
-its tolerance). The
+**The integrator, chosen by measurement.** The circuit is stiff (an oil volume behind an orifice relaxes
+in ``V / (beta K phi')``, some ``1e-5`` of a period on the example drifter, ``1e-8`` in the ideal limit,
+against a period of order 1) and the accuracy asked of it is tight (the energy account to ``1e-8``,
+periodic orbits to ``1e-8``), so ``rtol = 1e-10``. scipy's ``Radau``, ``BDF`` and ``LSODA`` take their
+steps in Python; CVODE (BDF of orders 1 to 5, SUNDIALS) runs its steps, Newton iterations and root
+finding in C. On one stroke flight of the preset ``circuit-drifter`` (``benchmarks/bench_circuit.py``,
+this 2-core machine while shared) ``Radau`` with the same compiled right-hand side and Jacobian took
+0.14 s (203 steps), CVODE 0.5 ms (380), their impact times 5e-11 apart. The flight's loop runs in
+compiled code and hands CVODE the compiled vector field, Jacobian and event functions as C callbacks
+(:mod:`._cvode`, on the SUNDIALS libraries that scikit-sundae ships, :mod:`._sundials`): through
+scikit-sundae's Python interface, where each of those calls is a call of Python, the same flight took
+8.5 ms (``compiled=False`` of :class:`~.settings.CircuitFlightSettings`; the same steps to the bit).
+CVODE's counters on it: 380 steps, 498 right-hand sides, 17 error-test failures, 497 Newton iterations,
+7 Jacobians: the steps are those BDF's error control asks at this tolerance (the pressures' fast
+transients after each switch and impact, the valve's ramp; measured over 20 periods, ``rtol = 1e-8``
+took a quarter fewer steps for errors a hundred times larger), not failures. With a flexible piston the
+steps follow the modes' oscillations, which the pressures carry, more than the oil's stiffness, and the
+plain flights take CVODE's Adams-Moulton method (orders 1 to 12) instead: a stroke of the preset's
+piston with 4 modes in 5,025 steps against BDF's 11,344, nearer an independent integration (the
+settings' ``multistep``; theory §11, *The integrator*). Where the oil is not stiff against the modes
+(:data:`EXPLICIT_STIFFNESS`) those plain flights take the explicit DOP853 instead, compiled with the
+network's code (:mod:`._dop853`: scipy's method, CVODE's root finding on its dense output; about half
+Adams' CPU time at equal or better accuracy, at :data:`EXPLICIT_TOLERANCE` times its tolerance). The
 variational flights' Newton systems (:math:`n + 8 + n^2` unknowns) are solved by the band solver
-(``band=True``, the default; ``Phi`` stored by columns), its LU taken once on the state's
-``n x n`` block and applied to each column of ``Phi``'s (``blocks=True``, the default). Its
-events (the arrival ``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply
-pressure through the pre-charge and the relief pressure) are located by CVODE's root finding to
-the integrator's tolerance (the ramp's end, linear in time, to rounding). Each flight is integrated
-in its own time, from 0 (the vector field does not depend on ``t``).
+(``band=True``, the default; ``Phi`` stored by columns), its LU taken once on the state's ``n x n``
+block and applied to each column of ``Phi``'s (``blocks=True``, the default). Its events (the arrival
+``c . q = 0``, the switch positions, the ramp's end ``x_v = 0, 1``, the supply pressure through the
+pre-charge and the relief pressure) are located by CVODE's root finding to the integrator's tolerance
+(the ramp's end, linear in time, to rounding). Each flight is integrated in its own time, from 0 (the
+vector field does not depend on ``t``).
 
 Each flight starts its energy quadratures at 0; with ``variational=True`` it integrates the
 fundamental matrix ``Phi`` of the first ``2 N + 6`` components beside them (the variational
@@ -53,14 +52,11 @@ from ..base import DriveState, FlightSettings
 from ..flight import ARRIVAL, END, EVENT, Flight
 from . import _kernel as K
 from . import _magnus
+from .settings import DEFAULT_SETTINGS, CircuitFlightSettings, circuit_settings
 
 __all__ = ["CircuitPiece", "circuit_flight", "stiffness_ratio", "DEFAULT_SETTINGS", "ADAMS_STIFFNESS",
            "EXPLICIT_STIFFNESS", "EXPLICIT_TOLERANCE", "magnus_state_settings", "uses_magnus", "uses_dop853",
            "spectrum", "keep_spacing", "last_integrator"]
-
-#: The circuit's integrator: CVODE's BDF at these tolerances (``atol`` relative to the states'
-#: scale, 1 in the units of theory §11).
-DEFAULT_SETTINGS = FlightSettings(method="CVODE", rtol=1e-10, atol=1e-12)
 
 
 def _hermite_extremes(t, x, dxdt) -> tuple[float, float]:
@@ -199,13 +195,6 @@ _MAX_STEPS = 2_000_000
 #: to 1e-10 (theory §11, "Sensitivities").
 MAGNUS_STATE_TOLERANCE = 1e-3
 
-#: How a variational flight may take its fundamental matrix (:func:`circuit_flight`'s ``sensitivity``).
-SENSITIVITIES = ("auto", "magnus", "cvode")
-
-#: The integrators a plain flight may take (:func:`circuit_flight`'s ``multistep``): CVODE's linear
-#: multistep methods, or the explicit Dormand-Prince 8(5,3) (:mod:`._dop853`).
-MULTISTEPS = ("auto", "cvode", "adams", "bdf", "dop853")
-
 #: DOP853's tolerances (``rtol`` and ``atol``) over the CVODE settings a flight is given: on the
 #: preset ``circuit-drifter``'s orbit (one period of the plain flights under Magnus' ``Phi``) DOP853
 #: at three times CVODE's ``rtol = 1e-13`` ends each flight nearer a reference (scipy's DOP853 at
@@ -343,15 +332,17 @@ def keep_spacing(drive, model, rtol: float = KEEP_RTOL) -> float:
 
 def uses_magnus(sensitivity: str, model, generated: bool = True) -> bool:
     """Whether a variational flight of the piston of ``model`` takes its fundamental matrix by
-    Magnus' method over the steps of a plain flight (:func:`circuit_flight`'s ``sensitivity``)."""
+    Magnus' method over the steps of a plain flight (:attr:`CircuitFlightSettings.sensitivity
+    <.settings.CircuitFlightSettings.sensitivity>`)."""
     return generated and (sensitivity == "magnus" or (sensitivity == "auto" and model.n_modes > 0))
 
 
-def magnus_state_settings(settings: FlightSettings | None) -> FlightSettings:
+def magnus_state_settings(settings: FlightSettings | None) -> CircuitFlightSettings:
     """The integrator of the plain flight under a variational flight by Magnus' method with
-    ``settings`` (default, or not CVODE: :data:`DEFAULT_SETTINGS`): its tolerances
-    :data:`MAGNUS_STATE_TOLERANCE` times finer (CVODE's floor ``1e-13`` on ``rtol``), ``atol`` scaled
-    as much. A plain flight with these settings is the variational flight's state, bit for bit.
+    ``settings`` (:func:`.settings.circuit_settings`; default, or not CVODE: :data:`DEFAULT_SETTINGS`),
+    its options kept: its tolerances :data:`MAGNUS_STATE_TOLERANCE` times finer (CVODE's floor
+    ``1e-13`` on ``rtol``), ``atol`` scaled as much. A plain flight with these settings is the
+    variational flight's state, bit for bit.
 
     Parameters
     ----------
@@ -359,9 +350,9 @@ def magnus_state_settings(settings: FlightSettings | None) -> FlightSettings:
 
     Returns
     -------
-    FlightSettings
+    CircuitFlightSettings
     """
-    settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
+    settings = circuit_settings(settings)
     rtol = max(settings.rtol * MAGNUS_STATE_TOLERANCE, 1e-13)  # (CVODE's floor: some 100 roundings)
     return dataclasses.replace(settings, rtol=rtol, atol=settings.atol * rtol / settings.rtol)
 
@@ -436,9 +427,10 @@ def last_integrator() -> str | None:
 
 def uses_dop853(multistep: str, drive, model, generated: bool = True) -> bool:
     """Whether a plain flight of the piston of ``model`` takes the explicit DOP853 (:mod:`._dop853`;
-    :func:`circuit_flight`'s ``multistep``): asked (``"dop853"``), or by ``"auto"`` for a piston with
-    modes where the oil is not stiff against DOP853's steps (:func:`stiffness_ratio` at most
-    :data:`EXPLICIT_STIFFNESS`); only with the generated code.
+    :attr:`CircuitFlightSettings.multistep <.settings.CircuitFlightSettings.multistep>`): asked
+    (``"dop853"``), or by ``"auto"`` for a piston with modes where the oil is not stiff against
+    DOP853's steps (:func:`stiffness_ratio` at most :data:`EXPLICIT_STIFFNESS`); only with the
+    generated code.
 
     Parameters
     ----------
@@ -497,63 +489,63 @@ def _integrate_binding(adams, code, par, settings, directions, y0, t, end, keep)
 
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
                    settings: FlightSettings | None = None, variational: bool = False, *,
-                   compiled: bool = True, band: bool = True, blocks: bool = True,
-                   generated: bool = True, sensitivity: str = "auto", multistep: str = "auto") -> Flight:
+                   generated: bool = True) -> Flight:
     """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
     stop, the circuit's next event or ``t_stop`` (module docstring).
 
     Parameters
     ----------
-    compiled : bool, optional
-        CVODE driven from compiled code (:mod:`._cvode`: no Python between the flight's start and
-        its end) where the SUNDIALS libraries that scikit-sundae ships bind
-        (:func:`._sundials.available`); ``False``: through scikit-sundae's Python interface, each call
-        of the vector field, the Jacobian and the events a call of Python (the way before, the
-        fallback, and the baseline of ``benchmarks/bench_circuit.py``). The same steps either way, to
-        the bit.
-    band : bool, optional
-        The variational flights' Newton systems by SUNDIALS' band solver (half-bandwidths ``n - 1``:
-        ``Phi`` is stored by columns, each column's equations coupling only its own components);
-        ``False``: the dense solver (the way before; ``benchmarks/bench_circuit.py``'s baseline for
-        the flexible piston). Only with ``compiled``.
-    blocks : bool, optional
-        With ``band``, the band solver's factorisation and solve taken on the Newton matrix's
-        blocks (it is block-diagonal: the state's ``n x n`` block, repeated for each column of
-        ``Phi``): one LU of the block (``n`` times fewer operations than the band LU) applied to each,
-        the same operations on each block as the band solver's, in its order (the same steps, to the
-        bit; :class:`._cvode.Workspace`); ``False``: the band solver's own (the way before).
+    settings : CircuitFlightSettings or FlightSettings, optional
+        The integrator (:func:`.settings.circuit_settings`: a plain
+        :class:`~impactbar.drives.base.FlightSettings` of CVODE gives its tolerances, every option its
+        default; default, or another method: :data:`DEFAULT_SETTINGS`) and how the flight is
+        integrated:
+
+        - ``compiled``: CVODE driven from compiled code (:mod:`._cvode`: no Python between the
+          flight's start and its end) where the SUNDIALS libraries that scikit-sundae ships bind
+          (:func:`._sundials.available`); ``False``: through scikit-sundae's Python interface, each
+          call of the vector field, the Jacobian and the events a call of Python (the way before, the
+          fallback, and the baseline of ``benchmarks/bench_circuit.py``). The same steps either way,
+          to the bit.
+        - ``band``: the variational flights' Newton systems by SUNDIALS' band solver
+          (half-bandwidths ``n - 1``: ``Phi`` is stored by columns, each column's equations coupling
+          only its own components); ``False``: the dense solver (the way before;
+          ``benchmarks/bench_circuit.py``'s baseline for the flexible piston). Only with ``compiled``.
+        - ``blocks``: with ``band``, the band solver's factorisation and solve taken on the Newton
+          matrix's blocks (it is block-diagonal: the state's ``n x n`` block, repeated for each column
+          of ``Phi``): one LU of the block (``n`` times fewer operations than the band LU) applied to
+          each, the same operations on each block as the band solver's, in its order (the same steps,
+          to the bit; :class:`._cvode.Workspace`); ``False``: the band solver's own (the way before).
+        - ``sensitivity``: how a variational flight's fundamental matrix is taken: ``"magnus"``, the
+          plain flight integrated and ``Phi`` over its steps by Magnus' method of order 6
+          (:mod:`._magnus`, with ``generated`` only); ``"cvode"``, the variational equations
+          integrated beside the state by CVODE (:math:`n^2` more unknowns); ``"auto"`` (default),
+          Magnus where the piston has modes and CVODE for the rigid piston (whose six unknowns CVODE
+          takes cheaply, to the drive's tolerance). The flight's states are the plain flight's either
+          way with ``"magnus"``; its ``Phi`` agrees with a variational flight at a 100 times finer
+          tolerance to some ``1e-7`` with 8 modes (the state's error;
+          ``benchmarks/probes/monodromy_magnus.py``), where CVODE's at the drive's tolerance is some
+          ``1e-5`` off (theory §11).
+        - ``multistep``: the plain flights' integrator: CVODE's linear multistep method, ``"bdf"``,
+          the backward differentiation formulas of orders 1 to 5, or ``"adams"``, Adams-Moulton of
+          orders 1 to 12 (Newton's iterations with the same Jacobian either way), for every flight;
+          ``"dop853"``, the explicit Dormand-Prince 8(5,3) compiled with the generated code for every
+          plain flight (:mod:`._dop853`: scipy's method and step control, at
+          :data:`EXPLICIT_TOLERANCE` times the tolerances of ``settings``, the events found on its
+          dense output, its kept points at most :func:`keep_spacing` apart; ``ValueError`` without
+          ``generated``); ``"auto"`` (default), for the plain flights of a piston with modes (those of
+          a variational flight by Magnus among them) DOP853 where the oil is not stiff against its
+          steps (:func:`stiffness_ratio` at most :data:`EXPLICIT_STIFFNESS`), else Adams-Moulton
+          where the oil is not much stiffer than the modes (at most :data:`ADAMS_STIFFNESS`), BDF for
+          the rest, the rigid piston and CVODE's variational flights (which ``"dop853"`` leaves to
+          these CVODE methods too; module docstring); ``"cvode"``, ``"auto"``'s choice among CVODE's
+          methods only, no DOP853 (the way before it, the baseline).
     generated : bool, optional
         The vector field, its Jacobian, the events and CVODE's C callbacks of the code generated for
         the circuit's network of part records (:meth:`HydraulicCircuitDrive._compiled_network`,
         :mod:`._netgen`: one module per topology, the values read from ``par`` with the network after
         the bar's entries); ``False``: the preset's hand-written kernels (:mod:`._kernel`,
         :mod:`._cvode`'s callbacks; the way before). The same steps either way, to the bit.
-    sensitivity : {"auto", "magnus", "cvode"}, optional
-        How a variational flight's fundamental matrix is taken: ``"magnus"``, the plain flight
-        integrated and ``Phi`` over its steps by Magnus' method of order 6 (:mod:`._magnus`, with
-        ``generated`` only); ``"cvode"``, the variational equations integrated beside the state by
-        CVODE (:math:`n^2` more unknowns); ``"auto"`` (default), Magnus where the piston has
-        modes and CVODE for the rigid piston (whose six unknowns CVODE takes cheaply, to the drive's
-        tolerance). The flight's states are the plain flight's either way with ``"magnus"``; its
-        ``Phi`` agrees with a variational flight at a 100 times finer tolerance to some ``1e-7``
-        with 8 modes (the state's error; ``benchmarks/probes/monodromy_magnus.py``), where CVODE's at
-        the drive's tolerance is some ``1e-5`` off (theory §11).
-
-    multistep : {"auto", "cvode", "adams", "bdf", "dop853"}, optional
-        The plain flights' integrator: CVODE's linear multistep method, ``"bdf"``, the backward
-        differentiation formulas of orders 1 to 5, or ``"adams"``, Adams-Moulton of orders 1 to 12
-        (Newton's iterations with the same Jacobian either way), for every flight; ``"dop853"``, the
-        explicit Dormand-Prince 8(5,3) compiled with the generated code for every plain flight
-        (:mod:`._dop853`: scipy's method and step control, at :data:`EXPLICIT_TOLERANCE` times the
-        tolerances of ``settings``, the events found on its dense output, its kept points at most
-        :func:`keep_spacing` apart; ``ValueError`` without ``generated``); ``"auto"`` (default), for
-        the plain flights of a piston with modes (those of a variational flight by Magnus among them)
-        DOP853 where the oil is not stiff against its steps (:func:`stiffness_ratio` at most
-        :data:`EXPLICIT_STIFFNESS`), else Adams-Moulton where the oil is not much stiffer than the
-        modes (at most :data:`ADAMS_STIFFNESS`), BDF for the rest, the rigid piston and CVODE's
-        variational flights (which ``"dop853"`` leaves to these CVODE methods too; module
-        docstring); ``"cvode"``, ``"auto"``'s choice among CVODE's methods only, no DOP853 (the way
-        before it, the baseline).
 
     Returns
     -------
@@ -566,14 +558,11 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     ------
     ValueError
         Where CVODE or DOP853 fails (the message says why: a chamber emptied, a pressure out of
-        range); ``multistep="dop853"`` without ``generated``; an unknown ``sensitivity`` or
-        ``multistep``.
+        range); ``multistep="dop853"`` without ``generated``.
     """
-    settings = settings if settings is not None and settings.method == "CVODE" else DEFAULT_SETTINGS
-    if sensitivity not in SENSITIVITIES:
-        raise ValueError(f"sensitivity must be one of {SENSITIVITIES}; got {sensitivity!r}")
-    if multistep not in MULTISTEPS:
-        raise ValueError(f"multistep must be one of {MULTISTEPS}; got {multistep!r}")
+    settings = circuit_settings(settings)
+    compiled, band, blocks = settings.compiled, settings.band, settings.blocks
+    sensitivity, multistep = settings.sensitivity, settings.multistep
     mode, z = state
     q = np.asarray(q, dtype=float)
     v = np.asarray(v, dtype=float)
