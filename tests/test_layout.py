@@ -127,7 +127,7 @@ def test_every_law_hook_the_solvers_call_is_declared_on_the_base():
             code = [ln for ln in p.read_text(encoding="utf-8").splitlines()
                     if not ln.lstrip().startswith(">>>")]  # (not a docstring's example)
             called |= set(re.findall(r"\blaw\.([a-z_]+)\b", "\n".join(code)))
-    assert {"impact_map", "window", "orbit_state", "phase_roots", "contact"} <= called
+    assert {"impact_map", "window", "ability", "traits", "contact"} <= called
     missing = sorted(n for n in called if not hasattr(ContactLaw, n))
     assert missing == []
     for n in called:  # a method has its docstring, a flag its entry among the class's attributes

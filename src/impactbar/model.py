@@ -142,7 +142,7 @@ class BarModel:
         if piston is None:
             return
         self._law.check_model(self)
-        if not self._law.stepped_piston:
+        if not self._law.traits.stepped_piston:
             raise ValueError(
                 f"piston: a stepped piston's modes are supported under the paper's, the wave and the "
                 f"rod-rock laws (got impact = {self._law.name!r})")

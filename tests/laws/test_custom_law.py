@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, CosineLoad, InitialState, find_orbit, periodic_orbits, simulate
-from impactbar.laws import LAWS, ContactLaw, InstantImpact
+from impactbar.laws import LAWS, BlowRecords, ContactLaw, InstantImpact, LawTraits, PhaseEquation
 from impactbar.orbits import orbit_multipliers
+from impactbar.orbits.one_impact import phase_equation_orbits
 
 
 @dataclass(frozen=True)
@@ -22,8 +23,9 @@ class VelocityRestitution(ContactLaw):
 
     w_ref: float = 1.0
     name = "velocity"
-    instantaneous = False  # the compiled kernel applies a constant R only: the driver calls contact
-    has_phase_equation = False  # periodic_orbits: Newton's method from the paper law's orbits
+    # the compiled kernel applies a constant R only: the driver calls contact; no ability
+    # PhaseEquation, so periodic_orbits takes Newton's method from the paper law's orbits
+    traits = LawTraits(restitution_in_kernel=False)
     parameters = ("w_ref",)  # continued like R or p0
 
     def window(self, model):
@@ -97,20 +99,23 @@ def test_what_the_law_leaves_out_is_refused_by_name():
     with pytest.raises(NotImplementedError, match=r"'velocity' \(VelocityRestitution\) does not provide "
                                                   r"multipliers\(\)"):
         orbit_multipliers(model, CosineLoad(0.3, 1.0), 1.0)
+    assert model.law.ability(PhaseEquation) is None
     with pytest.raises(ValueError, match=r"does not provide phase_roots\(\)"):
-        model.law.phase_roots(model, CosineLoad(0.3, 1.0))
+        phase_equation_orbits(model, CosineLoad(0.3, 1.0))
 
 
 def test_the_law_implements_the_required_hooks_and_declarations_alone():
     """``ContactLaw.REQUIRED_HOOKS`` are the methods this law defines, and everything else it sets is
-    a declaration the base lists among its optional hooks; the solvers see it through its hooks."""
+    a declaration the base lists among its optional hooks; the solvers see it through its traits and
+    the abilities it has (none)."""
     methods = {n for n, v in vars(VelocityRestitution).items() if callable(v) and not n.startswith("_")}
     assert methods == set(ContactLaw.REQUIRED_HOOKS)
     declared = {n for n in vars(VelocityRestitution) if not n.startswith("_")} - methods - {"w_ref"}
     assert declared <= set(ContactLaw.OPTIONAL_HOOKS)
     model = BarModel(s=10.0, d=0.0, R=0.7, n_modes=0, impact=VelocityRestitution())
     law = model.law
-    assert not law.restitution_in_kernel(model) and law.has_blow_records(model) and law.window(model) == 0.0
+    assert not law.traits.restitution_in_kernel and law.traits.kernel_restitution(model) == -1.0
+    assert law.ability(BlowRecords) is None and law.window(model) == 0.0
 
 
 def _closed_form(law, model, p0, pk):

@@ -1,8 +1,8 @@
-"""The law base's hooks: :class:`~impactbar.laws.ContactLaw`
-lists the members a solver calls in one place, split required / optional (``REQUIRED_HOOKS``,
-``OPTIONAL_HOOKS``; the drive's narrow base: ``tests/drives/test_drive_abilities.py``); the solvers
-ask a law's hooks, never its own declaration ``instantaneous``; and a load with the required members
-alone runs."""
+"""The bases' hooks: :class:`~impactbar.laws.ContactLaw` lists the members a solver calls in one
+place, split required / optional (``REQUIRED_HOOKS``, ``OPTIONAL_HOOKS``; the drive's and the load's
+narrow bases: ``tests/drives/test_drive_abilities.py``, ``tests/test_load_base.py``); the solvers ask
+a law's traits and abilities, never a declaration ``instantaneous``; and a load with the required
+members alone runs."""
 
 import inspect
 import re
@@ -13,7 +13,7 @@ import pytest
 
 import impactbar
 from impactbar import BarModel, CosineLoad, periodic_orbits
-from impactbar.laws import ContactLaw
+from impactbar.laws import BlowRecords, ContactLaw, LawTraits
 from impactbar.loads import Load
 
 BASES = (ContactLaw,)
@@ -27,8 +27,9 @@ def _code(path):
 
 
 def test_no_solver_reads_the_laws_instantaneous_flag():
-    """Outside ``impactbar.laws`` the solvers ask what they need (``restitution_in_kernel``,
-    ``has_blow_records``, ``window``), never the flag, which means several things at once."""
+    """Outside ``impactbar.laws`` the solvers ask what they need (the traits'
+    ``restitution_in_kernel``, the ability ``BlowRecords``, ``window``), never such a flag, which
+    would mean several things at once."""
     reads = []
     for p in sorted(TOP.rglob("*.py")):
         if (TOP / "laws") in p.parents:
@@ -62,7 +63,7 @@ def test_the_required_law_hooks_are_refused_by_the_base():
 
     class Bare(ContactLaw):
         name = "bare"
-        instantaneous = False
+        traits = LawTraits(restitution_in_kernel=False)
 
     law, model, load = Bare(), BarModel(s=10.0, d=0.0, R=0.5, n_modes=0), CosineLoad(0.3, 1.0)
     args = {"window": (model,), "impact_map": (model, load, 0.0, np.array([0.0, -1.0])),
@@ -79,7 +80,7 @@ def test_every_law_hook_the_solvers_call_is_listed():
     for sub in ("orbits", "simulation", "continuation", "drives", "physical", "sweep"):
         for p in (TOP / sub).rglob("*.py"):
             called |= set(re.findall(r"\blaw\.([a-z][a-z_]*)\b", _code(p)))  # (public)
-    assert {"restitution_in_kernel", "has_blow_records", "window", "contact"} <= called
+    assert {"traits", "ability", "window", "contact"} <= called
     assert called - set(ContactLaw.REQUIRED_HOOKS) - set(ContactLaw.OPTIONAL_HOOKS) == set()
 
 
@@ -90,17 +91,17 @@ def test_the_hooks_of_the_packaged_laws(impact, in_kernel, records, window):
     length ``2 / s`` with its own record, which the kernel leaves to the law (``-1``)."""
     model = BarModel(s=10.0, d=0.0, R=0.5, n_modes=2, impact=impact)
     law = model.law
-    assert law.restitution_in_kernel(model) is in_kernel and law.has_blow_records(model) is records
+    assert law.traits.restitution_in_kernel is in_kernel and (law.ability(BlowRecords) is law) is records
     assert law.window(model) == pytest.approx(window, rel=1e-15)
-    assert law.kernel_restitution(model) == (0.5 if in_kernel else -1.0)
+    assert law.traits.kernel_restitution(model) == (0.5 if in_kernel else -1.0)
 
 
 def test_the_rod_rock_law_keeps_its_blows():
     law = impactbar.RodRock(segments=[impactbar.RodSegment(length=3.0, impedance=1.0)],
                             rock=impactbar.BilinearRock(k=5.0, k_u=5.0))
     model = BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
-    assert not law.restitution_in_kernel(model) and law.has_blow_records(model)
-    assert law.kernel_restitution(model) == -1.0 and law.window(model) > 0.0
+    assert not law.traits.restitution_in_kernel and law.ability(BlowRecords) is law
+    assert law.traits.kernel_restitution(model) == -1.0 and law.window(model) > 0.0
 
 
 class _Minimal(Load):

@@ -23,7 +23,7 @@ from impactbar import (
     periodic_orbits,
     simulate,
 )
-from impactbar.laws import LAWS, ContactLaw, InstantImpact, register_law
+from impactbar.laws import LAWS, ContactLaw, InstantImpact, LawTraits, register_law
 
 TWO_PI = 2.0 * math.pi
 
@@ -35,8 +35,9 @@ class LinearRestitution(ContactLaw):
 
     c: float = 0.0
     name = "linear-restitution"
-    instantaneous = False  # the compiled kernel applies a constant R only: the driver calls contact
-    has_phase_equation = False  # its orbits by Newton's method from the paper law's
+    # the compiled kernel applies a constant R only: the driver calls contact; no phase equation
+    # (the ability PhaseEquation): its orbits by Newton's method from the paper law's
+    traits = LawTraits(restitution_in_kernel=False)
     parameters = ("c",)
 
     def parameter_table(self, model=None):

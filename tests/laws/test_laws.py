@@ -41,8 +41,8 @@ def test_model_takes_a_name_or_a_law_object():
 def test_law_properties():
     m = BarModel(s=4.0, d=0.0, R=0.5, n_modes=1)
     assert PaperLaw().window(m) == 0.0 and WaveLaw().window(m) == 0.5
-    assert PaperLaw().rigid_closed_forms and not WaveLaw().rigid_closed_forms
-    assert PaperLaw().kernel_restitution(m) == 0.5 and WaveLaw().kernel_restitution(m) == -1.0
+    assert PaperLaw().traits.rigid_closed_forms and not WaveLaw().traits.rigid_closed_forms
+    assert PaperLaw().traits.kernel_restitution(m) == 0.5 and WaveLaw().traits.kernel_restitution(m) == -1.0
     assert issubclass(PaperLaw, ContactLaw) and issubclass(WaveLaw, ContactLaw)
     assert PaperLaw().existence_edge(m.with_(R=1.0)) == math.inf
 

@@ -310,9 +310,9 @@ def test_the_reflection_from_a_stiff_elastic_rock_throws_the_piston_back():
 
 def test_computations_the_law_does_not_provide_are_refused_with_a_value_error():
     """The one-impact phase equation is not provided under the rod-rock law (periodic_orbits finds
-    the orbits by Newton's method instead: tests/orbits/test_rock_periodic_orbits.py): the law's
-    phase_roots refuses the model with a ValueError naming ``model.impact`` (also a
-    NotImplementedError, for law authors)."""
+    the orbits by Newton's method instead: tests/orbits/test_rock_periodic_orbits.py): what needs it
+    refuses the model with a ValueError naming ``model.impact`` (also a NotImplementedError, for law
+    authors)."""
     import impactbar as ib
     from impactbar.laws.base import LawNotSupported
 
@@ -320,7 +320,10 @@ def test_computations_the_law_does_not_provide_are_refused_with_a_value_error():
                      rock=ib.BilinearRock(k=2.5, k_u=25.0))
     model = ib.BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
     load = ib.CosineLoad(0.5, 1.0)
-    calls = [lambda: law.phase_roots(model, load), lambda: law.orbit_state(model, load, 1.0)]
+    from impactbar.orbits import orbit_multipliers
+    from impactbar.orbits.one_impact import phase_equation_orbits
+
+    calls = [lambda: phase_equation_orbits(model, load), lambda: orbit_multipliers(model, load, 1.0)]
     for call in calls:
         with pytest.raises(ValueError, match=r"model\.impact: the impact law 'rodrock'") as info:
             call()

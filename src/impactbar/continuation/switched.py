@@ -580,8 +580,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         ``"delay_out"``, ``"delay_in"``: dimensionless time; the oil circuit's in its units, theory
         §11), ``"R"``, ``"d"``, ``"s"``, or the impact law's own (under the rod-rock law
         ``"rock.k"``, ``"rock.k_u"``, ``"bit_mass"``, ``"feed"``, in the law's units, theory §4d;
-        ``"segment<i>.length"`` where its blows are exact: :meth:`RodRock.check_continuable
-        <impactbar.laws.ContactLaw.check_continuable>`); the event's own parameter for a period
+        ``"segment<i>.length"`` where its blows are exact: :meth:`RodRock.parameter_table
+        <impactbar.laws.RodRock.parameter_table>`); the event's own parameter for a period
         doubling.
     to : float
         Target value; the branch stops there or where it leaves the range between start and ``to``.

@@ -3,8 +3,11 @@
 ``LAWS`` maps each law's name to its class, in the style of scipy's ``METHODS``;
 :func:`get_law` turns a name or a law object into a law object. A law (:class:`ContactLaw`) owns
 everything that differs between laws: its contact window, the impact map with its Jacobian, the
-one-impact phase equation and the orbits' states (:class:`OrbitState`), the simulator's contact
-step and the per-blow outputs, its own continuation parameters.
+simulator's contact step, its declarations (:class:`LawTraits`), its own continuation parameters;
+and, where it has them, its abilities (:mod:`impactbar.laws.abilities`, looked up by
+``law.ability(kind)``): the one-impact phase equation and the orbits' states
+(:class:`PhaseEquation`, :class:`OrbitState`), the per-blow records (:class:`BlowRecords`), the blow
+coupled to a drive (:class:`CoupledBlow`), Newton's starts (:class:`NewtonStart`).
 
 Each law is one subpackage holding its numerics: ``paper`` (eq. 10, theory §4), ``wave`` (the long
 rod, theory §4b), ``rodrock`` (the finite rod and the rock, theory §4d). The laws sit below the
@@ -16,8 +19,13 @@ build their results from. Adding a law is one :class:`ContactLaw` subclass and o
 
 from __future__ import annotations
 
+from .abilities import BlowRecords as BlowRecords
+from .abilities import CoupledBlow as CoupledBlow
+from .abilities import NewtonStart as NewtonStart
+from .abilities import PhaseEquation as PhaseEquation
 from .base import ContactLaw as ContactLaw
 from .base import LawNotSupported as LawNotSupported
+from .base import LawTraits as LawTraits
 from .base import OrbitState as OrbitState
 from .paper import InstantImpact as InstantImpact
 from .paper import PaperLaw as PaperLaw
@@ -33,7 +41,8 @@ from .rodrock.longrod import SteppedLongRod as SteppedLongRod
 from .wave import PressedContact as PressedContact
 from .wave import WaveLaw as WaveLaw
 
-__all__ = ["ContactLaw", "OrbitState", "LawNotSupported", "PaperLaw", "WaveLaw", "PressedContact",
+__all__ = ["ContactLaw", "LawTraits", "PhaseEquation", "BlowRecords", "CoupledBlow", "NewtonStart",
+           "OrbitState", "LawNotSupported", "PaperLaw", "WaveLaw", "PressedContact",
            "InstantImpact", "LAWS", "get_law", "register_law", "RodRock", "RodSegment", "BilinearRock",
            "single_blow", "SteppedLongRod", "piston_law"]
 
@@ -42,7 +51,7 @@ def piston_law(law: ContactLaw, stepped: bool) -> ContactLaw:
     """The law a model under ``law`` takes with a stepped (``stepped``) or a uniform piston: the wave
     law's long rod struck by a stepped piston is :class:`SteppedLongRod` (its contact the exact blow,
     theory §4b, §12), and back; every other law takes itself (and takes a stepped piston, or refuses
-    it, by its ``stepped_piston`` flag).
+    it, by its traits' ``stepped_piston``).
 
     Parameters
     ----------

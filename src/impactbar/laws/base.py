@@ -2,9 +2,10 @@
 
 A law is a frozen, hashable object; :class:`~impactbar.BarModel` holds one (``BarModel(impact=...)``
 takes its name or the object) and every solver asks ``model.law`` instead of comparing names. The
-laws sit below the solvers (the layer contract in ``pyproject.toml``): a law returns plain data,
-numbers, arrays, its own records (:class:`OrbitState`, a blow's record), and the solvers build their
-results from them.
+base (:class:`ContactLaw`) holds what every solver calls; what only some laws can do is an ability
+(:mod:`impactbar.laws.abilities`), looked up by :meth:`ContactLaw.ability`. The laws sit below the
+solvers (the layer contract in ``pyproject.toml``): a law returns plain data, numbers, arrays, its
+own records (:class:`OrbitState`, a blow's record), and the solvers build their results from them.
 """
 
 from __future__ import annotations
@@ -16,7 +17,8 @@ import numpy as np
 
 from .._shared.parameters import Parameter
 
-__all__ = ["ContactLaw", "LawNotSupported", "OrbitState", "DrivenContact", "BarModelLike"]
+__all__ = ["ContactLaw", "LawTraits", "LawNotSupported", "OrbitState", "DrivenContact", "BarModelLike",
+           "not_provided"]
 
 
 class BarModelLike(Protocol):
@@ -55,8 +57,9 @@ class LawNotSupported(ValueError, NotImplementedError):
 @dataclass(frozen=True, eq=False)
 class OrbitState:
     """What a law computes of its one-impact orbit at a root of its phase equation
-    (:meth:`ContactLaw.orbit_state`); the orbit solver decides the orbit's admissibility from it
-    (theory §5) and builds the :class:`~impactbar.PeriodicOrbit`.
+    (:meth:`PhaseEquation.orbit_state <impactbar.laws.abilities.PhaseEquation.orbit_state>`); the
+    orbit solver decides the orbit's admissibility from it (theory §5) and builds the
+    :class:`~impactbar.PeriodicOrbit`.
 
     Attributes
     ----------
@@ -88,7 +91,8 @@ class OrbitState:
 
 class DrivenContact(NamedTuple):
     """A contact step solved together with a drive that has state of its own
-    (:meth:`ContactLaw.driven_contact`, theory §11, "The coupled blow").
+    (:meth:`CoupledBlow.driven_contact <impactbar.laws.abilities.CoupledBlow.driven_contact>`,
+    theory §11, "The coupled blow").
 
     Attributes
     ----------
@@ -129,95 +133,152 @@ class DrivenContact(NamedTuple):
 
 
 @dataclass(frozen=True)
-class ContactLaw:
-    """Base class of the impact laws, in the style of scipy's ``OdeSolver``: a subclass sets
-    :attr:`name` and implements the methods below; :data:`impactbar.laws.LAWS` maps names to
-    classes.
+class LawTraits:
+    """What a law declares about its contact, read by the solvers (:attr:`ContactLaw.traits`); each
+    field's default is the paper's law's (eq. 10).
 
-    Attributes
+    Parameters
     ----------
-    name : str
-        The law's name in :data:`~impactbar.laws.LAWS` and in ``BarModel.impact``.
-    instantaneous : bool
-        The law's own declaration, read inside the laws only: the impact takes no time and is the
-        velocity map that :meth:`kernel_restitution` gives, applied by the compiled free-flight
-        kernel (with chatter and sustained contact handled by the simulator). The defaults of
-        :meth:`restitution_in_kernel` and :meth:`has_blow_records` follow from it; the solvers ask
-        those (and :meth:`window` for the impact's duration), never this flag.
+    restitution_in_kernel : bool
+        The impact is the velocity map ``v -> -r v`` at the arrival's instant, ``r =``
+        :meth:`kernel_restitution`, which the solvers apply themselves: the compiled flight kernel
+        (chatter and sustained contact the simulator's), the drives' loops, the closed forms of
+        eq. 10 of the position-switched orbits. ``False``: they call the law's
+        :meth:`~ContactLaw.contact` and :meth:`~ContactLaw.impact_map` (and its
+        :class:`~impactbar.laws.abilities.CoupledBlow`) at each arrival instead (a contact that takes
+        time, or one of no duration whose map the kernel cannot apply).
+    open_ended : bool
+        The contact step may last until the run's end (a sustained contact): the simulator passes
+        its ``t_end`` to :meth:`~ContactLaw.contact` as a keyword.
+    flight_starts_on_stop : bool
+        Every flight starts with the end on the stop (``c . q = 0`` after
+        :meth:`~ContactLaw.impact_map`), so that periodic orbits leave ``q_0`` out of their
+        unknowns; ``False`` for a law whose piston may leave the contact step off the stop (the
+        rod-rock law), whose orbits keep it.
+    uses_restitution : bool
+        The model's restitution ``R`` enters the contact (``False`` for the rod-rock law, whose rod
+        and rock replace it).
     rigid_closed_forms : bool
         The rigid bar's closed forms (:mod:`impactbar.orbits.rigid`, eq. 14 with eq. 10) give this
         law's orbits.
     supports_schur : bool
         The paper's Schur criterion (eqs. 27-31) and eq. 14's charts (existence edges) belong to
         this law.
-    open_ended : bool
-        The contact step may last until the run's end (a sustained contact): the simulator passes
-        its ``t_end`` to :meth:`contact` as a keyword.
-    flight_starts_on_stop : bool
-        Every flight starts with the end on the stop (``c . q = 0`` after :meth:`impact_map`), so
-        that periodic orbits leave ``q_0`` out of their unknowns; ``False`` for a law whose piston
-        may leave the contact step off the stop (the rod-rock law), whose orbits keep it.
-    uses_restitution : bool
-        The model's restitution ``R`` enters the contact (``False`` for the rod-rock law, whose rod
-        and rock replace it).
-    has_phase_equation : bool
-        :func:`~impactbar.periodic_orbits` finds the one-impact orbits from the law's phase
-        equation (:meth:`phase_roots`, :meth:`phase_families`, :meth:`orbit_state`). ``False``: the
-        law has none (its blow is a numerical map), and ``periodic_orbits`` finds them by Newton's
-        method from guesses (:func:`impactbar.orbits.periodic_orbits_by_newton`: the orbits of
-        :meth:`paper_equivalent` and a settled simulation), which needs :meth:`window`,
-        :meth:`impact_map` and :meth:`contact` only.
     stepped_piston : bool
         The law acts on the modal state alone (no characteristics on a uniform piston), so that a
         stepped piston's modes (``BarModel(..., piston=...)``, theory §12) serve it; ``False``
-        (the default) refuses a stepped piston.
+        refuses a stepped piston.
+
+    Examples
+    --------
+    >>> from impactbar import BarModel
+    >>> paper = BarModel(s=10.0, d=0.0, R=0.5, n_modes=0)
+    >>> wave = paper.with_(impact="wave")
+    >>> paper.law.traits.restitution_in_kernel, wave.law.traits.restitution_in_kernel
+    (True, False)
+    """
+
+    restitution_in_kernel: bool = True
+    open_ended: bool = False
+    flight_starts_on_stop: bool = True
+    uses_restitution: bool = True
+    rigid_closed_forms: bool = False
+    supports_schur: bool = False
+    stepped_piston: bool = False
+
+    def kernel_restitution(self, model) -> float:
+        """Factor ``r`` of the compiled free-flight kernel's velocity map ``v -> -r v`` at an
+        arrival (the simulator's flight kernel, theory §8).
+
+        Parameters
+        ----------
+        model : BarModel
+
+        Returns
+        -------
+        float
+            ``R`` for a law that the kernel applies itself (eq. 10, :attr:`restitution_in_kernel`);
+            ``-1`` (``v -> v``, nothing applied) for a law the simulator resolves by its contact.
+        """
+        return model.R if self.restitution_in_kernel else -1.0
+
+
+#: the flags a law declared before its :class:`LawTraits` (refused on a subclass, with what replaces each)
+_FORMER_DECLARATIONS = {
+    "instantaneous": "traits = LawTraits(restitution_in_kernel=...), and the ability BlowRecords for a "
+                     "blow with a record of its own",
+    "has_phase_equation": "the ability PhaseEquation (a law without it has none)",
+    **{flag: f"traits = LawTraits({flag}=...)" for flag in (
+        "rigid_closed_forms", "supports_schur", "open_ended", "flight_starts_on_stop", "uses_restitution",
+        "stepped_piston")},
+}
+
+
+@dataclass(frozen=True)
+class ContactLaw:
+    """Base class of the impact laws, in the style of scipy's ``OdeSolver``: a subclass sets
+    :attr:`name` (and :attr:`traits` where they differ from the paper's law's) and implements the
+    three required hooks; :data:`impactbar.laws.LAWS` maps names to classes. What only some laws can
+    do is an ability (:mod:`impactbar.laws.abilities`): a law derives from it, and a solver looks it
+    up once by :meth:`ability`.
+
+    Attributes
+    ----------
+    name : str
+        The law's name in :data:`~impactbar.laws.LAWS` and in ``BarModel.impact``.
+    traits : LawTraits
+        What the law declares about its contact (the kernel applies its restitution, its flights
+        start on the stop, ...); by default the paper's law's.
     parameters : tuple of str
         The law's own continuation parameters (:func:`~impactbar.continue_orbit`, the sweeps' axes),
-        read by :meth:`parameter_value` and changed by :meth:`with_parameter`; none by default.
+        each a field of the law: the names of :meth:`parameter_table`'s default records; none by
+        default.
     """
 
     #: The hooks a law must implement (the base raises :class:`LawNotSupported`): with them alone it
     #: runs in :func:`~impactbar.simulate`, :func:`~impactbar.find_orbit`, the continuation and the
     #: sweeps (``tests/laws/test_custom_law.py``'s ``VelocityRestitution``).
     REQUIRED_HOOKS: ClassVar[tuple[str, ...]] = ("window", "impact_map", "contact")
-    #: Every other member the solvers call: declarations and hooks with a default, or whose absence
-    #: (:class:`LawNotSupported`) refuses only the computation that needs them (the phase equation's,
-    #: the charts', the coupled blow's).
+    #: Every other member the solvers read: declarations, the ability lookup, and hooks with a default.
     OPTIONAL_HOOKS: ClassVar[tuple[str, ...]] = (
-        "name", "instantaneous", "rigid_closed_forms", "supports_schur", "open_ended",
-        "flight_starts_on_stop", "uses_restitution", "has_phase_equation", "stepped_piston", "parameters",
-        "restitution_in_kernel", "kernel_restitution", "has_blow_records", "blow", "impact_state",
-        "paper_equivalent", "check_model", "coarse_model", "phase_roots", "phase_families", "orbit_state",
-        "multipliers", "existence_edge", "driven_contact", "parameter_table", "has_parameter",
-        "parameter_value", "with_parameter", "with_parameters", "check_continuable")
+        "name", "traits", "parameters", "ability", "check_model", "parameter_table", "with_parameters")
 
     name: ClassVar[str] = ""
-    instantaneous: ClassVar[bool] = True
-    rigid_closed_forms: ClassVar[bool] = False
-    supports_schur: ClassVar[bool] = False
-    open_ended: ClassVar[bool] = False
-    flight_starts_on_stop: ClassVar[bool] = True
-    uses_restitution: ClassVar[bool] = True
-    has_phase_equation: ClassVar[bool] = True
-    stepped_piston: ClassVar[bool] = False
+    traits: ClassVar[LawTraits] = LawTraits()
     parameters: ClassVar[tuple[str, ...]] = ()
 
-    def paper_equivalent(self, model):
-        """The same bar under the paper's law (eq. 10) with the restitution this law's contact
-        gives: the model's ``R`` (clipped to ``0.95``), unless a law says otherwise. Newton's
-        method for this law's orbits starts from that bar's orbits (theory §10).
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        for flag, instead in _FORMER_DECLARATIONS.items():
+            if flag in vars(cls):
+                raise TypeError(f"{cls.__name__}.{flag}: a law no longer declares {flag}; use {instead} "
+                                "(impactbar.laws.abilities)")
+
+    def ability(self, kind: type):
+        """The law's ability ``kind`` (a class of :mod:`impactbar.laws.abilities`: its phase
+        equation, its blows' records, its blow coupled to a drive, its help to Newton's method), or
+        ``None`` where the law does not have it. A law has an ability by deriving from it, and
+        then is that object; a law may override this to return another object with the ability's
+        methods.
 
         Parameters
         ----------
-        model : BarModel
-            A bar under this law.
+        kind : type
+            The ability asked for, e.g. :class:`~impactbar.laws.abilities.PhaseEquation`.
 
         Returns
         -------
-        BarModel
-            ``model`` with ``impact="paper"`` and the equivalent ``R``.
+        object or None
+
+        Examples
+        --------
+        >>> from impactbar.laws import get_law
+        >>> from impactbar.laws.abilities import CoupledBlow, PhaseEquation
+        >>> paper = get_law("paper")
+        >>> paper.ability(PhaseEquation) is paper, paper.ability(CoupledBlow)
+        (True, None)
         """
-        return model.with_(impact="paper", R=min(model.R, 0.95))
+        return self if isinstance(self, kind) else None
 
     def check_model(self, model) -> None:
         """Refuse a model this law cannot take (called by :class:`~impactbar.BarModel` once its
@@ -233,22 +294,6 @@ class ContactLaw:
             Naming the parameter out of the law's range.
         """
 
-    def coarse_model(self, model):
-        """A cheaper model of the same motion, whose orbits Newton's method reaches from farther
-        guesses, to start this law's Newton from (:func:`~impactbar.find_orbit`), or ``None`` (the
-        default): e.g. the rod-rock law's blows on the lattice for its exact blows.
-
-        Parameters
-        ----------
-        model : BarModel
-            The model to coarsen (under this law).
-
-        Returns
-        -------
-        BarModel or None
-        """
-        return None
-
     def window(self, model) -> float:
         """Duration of one impact (dimensionless time): 0 for an instantaneous law.
 
@@ -262,23 +307,7 @@ class ContactLaw:
         float
             ``>= 0``; each flight of a periodic orbit starts this long after its impact.
         """
-        raise LawNotSupported(self._missing("window"))
-
-    def impact_state(self, model, load, t: float, y_minus):
-        """The state where the next flight starts, ``y_plus`` of :meth:`impact_map` without its
-        derivatives (a residual of the orbit solver; a law whose Jacobian costs more than its map,
-        such as the rod-rock law's finite differences, gives it alone).
-
-        Parameters
-        ----------
-        model, load, t, y_minus
-            As :meth:`impact_map`.
-
-        Returns
-        -------
-        numpy.ndarray, shape (2 N + 2,)
-        """
-        return self.impact_map(model, load, t, y_minus)[0]
+        raise LawNotSupported(not_provided(self, "window"))
 
     def impact_map(self, model, load, t: float, y_minus):
         """State where the next flight starts from the state at arrival, with its derivatives
@@ -303,178 +332,7 @@ class ContactLaw:
         jac_t : numpy.ndarray, shape (2 N + 2,)
             ``d y_plus / d t`` at fixed ``y_minus``.
         """
-        raise LawNotSupported(self._missing("impact_map"))
-
-    def phase_roots(self, model, load) -> list[tuple[float, int]]:
-        """Roots of the law's one-impact phase equation in ``[0, 2 pi)`` (for a law with
-        :attr:`has_phase_equation`).
-
-        Parameters
-        ----------
-        model : BarModel
-        load : Load
-
-        Returns
-        -------
-        list of (float, int)
-            ``(phase, multiplicity)`` sorted by phase; ``phase`` is the load time of the arrival.
-        """
-        raise LawNotSupported(self._missing("phase_roots"))
-
-    def phase_families(self, model, load) -> list[tuple[float, float]]:
-        """Intervals of phases on which the phase equation holds identically (a continuum of
-        one-impact orbits, which :meth:`phase_roots` leaves out); none by default.
-
-        Returns
-        -------
-        list of (float, float)
-            ``(start, end)`` phases (rad), ``end > start``.
-        """
-        return []
-
-    def orbit_state(self, model, load, phase: float) -> OrbitState:
-        """The one-impact orbit whose arrival is at this root of :meth:`phase_roots`: its states at
-        the impact's end and at the arrival, its multipliers, the impact's record. The orbit solver
-        decides admissibility from them (theory §5) and builds the
-        :class:`~impactbar.PeriodicOrbit`.
-
-        Parameters
-        ----------
-        model : BarModel
-        load : Load
-        phase : float
-            Load time of the arrival (rad), a root of the phase equation.
-
-        Returns
-        -------
-        OrbitState
-        """
-        raise LawNotSupported(self._missing("orbit_state"))
-
-    def multipliers(self, model, load, phase: float):
-        """Exact Floquet multipliers of the one-impact orbit with this phase (theory §7),
-        without the admissibility check (:func:`~impactbar.orbits.orbit_multipliers`).
-
-        Parameters
-        ----------
-        model : BarModel
-        load : Load
-        phase : float
-            A root of :meth:`phase_roots` (rad).
-
-        Returns
-        -------
-        numpy.ndarray of complex, shape (2 N + 2,)
-            Sorted by decreasing modulus.
-        """
-        raise LawNotSupported(self._missing("multipliers"))
-
-    def existence_edge(self, model, k: int = 1) -> float:
-        """Largest load factor ``k p0 / pk`` of the pneumatic load (eq. 33) with one-impact orbits
-        (the stability charts, :mod:`impactbar.orbits.charts`).
-
-        Parameters
-        ----------
-        model : BarModel
-        k : int
-            Order of the harmonic, ``>= 1``.
-
-        Returns
-        -------
-        float
-            ``inf`` when orbits exist at every load factor, ``nan`` when none exist.
-        """
-        raise LawNotSupported(self._missing("existence_edge"))
-
-    def blow(self, model, load, t: float, y_minus):
-        """Per-blow output of a periodic orbit's impact (the ``contacts`` of
-        :func:`~impactbar.find_orbit`'s orbits).
-
-        Parameters
-        ----------
-        model, load : BarModel, Load
-            The orbit's bar and load.
-        t : float
-            Load time of the arrival.
-        y_minus : numpy.ndarray, shape (2 N + 2,)
-            Modal state at the arrival.
-
-        Returns
-        -------
-        object or None
-            The blow's record (as :meth:`contact` returns it), or ``None`` where the law has none
-            to add (an instantaneous impact on an orbit).
-        """
-        return None
-
-    def kernel_restitution(self, model) -> float:
-        """Factor ``r`` of the compiled free-flight kernel's velocity map ``v -> -r v`` at an
-        arrival (the simulator's flight kernel, theory §8).
-
-        Parameters
-        ----------
-        model : BarModel
-
-        Returns
-        -------
-        float
-            ``R`` for an instantaneous law that the kernel applies itself (eq. 10); ``-1``
-            (``v -> v``, nothing applied) for a law the simulator resolves by :meth:`contact`.
-        """
-        return model.R if self.restitution_in_kernel(model) else -1.0
-
-    def restitution_in_kernel(self, model) -> bool:
-        """Whether the impact is the velocity map ``v -> -r v`` at the arrival's instant, ``r =``
-        :meth:`kernel_restitution`, which the solvers apply themselves: the compiled flight kernel
-        (chatter and sustained contact the simulator's), the drives' loops, the closed forms of eq. 10
-        of the position-switched orbits. ``False``: they call the law's :meth:`contact`,
-        :meth:`impact_map` and :meth:`driven_contact` at each arrival instead (a contact that takes
-        time, or one of no duration whose map the kernel cannot apply). By default the law's
-        declaration :attr:`instantaneous`.
-
-        Parameters
-        ----------
-        model : BarModel
-
-        Returns
-        -------
-        bool
-
-        Examples
-        --------
-        >>> from impactbar import BarModel
-        >>> paper = BarModel(s=10.0, d=0.0, R=0.5, n_modes=0)
-        >>> wave = paper.with_(impact="wave")
-        >>> paper.law.restitution_in_kernel(paper), wave.law.restitution_in_kernel(wave)
-        (True, False)
-        """
-        return self.instantaneous
-
-    def has_blow_records(self, model) -> bool:
-        """Whether the law's contact step leaves a blow with a record of its own (a force history,
-        the rod's energy, the contact's separations: :class:`~impactbar.WaveImpact`, a rock's
-        blow), which a periodic orbit lists as its ``contacts`` (:meth:`blow`), checks for
-        separation, and the SI results read per impact. ``False``: an impact with nothing to add
-        (eq. 10's :class:`~impactbar.laws.InstantImpact`). By default ``not`` :attr:`instantaneous`.
-
-        Parameters
-        ----------
-        model : BarModel
-            The bar under this law.
-
-        Returns
-        -------
-        bool
-            ``True`` where :meth:`blow` and :meth:`contact` give such a record.
-
-        Examples
-        --------
-        >>> from impactbar import BarModel
-        >>> models = [BarModel(s=10.0, d=0.0, R=0.5, n_modes=0, impact=name) for name in ("paper", "wave")]
-        >>> [m.law.has_blow_records(m) for m in models]
-        [False, True]
-        """
-        return not self.instantaneous
+        raise LawNotSupported(not_provided(self, "impact_map"))
 
     def contact(self, model, load, t: float, q_minus, v_minus, *, kernel=None):
         """The simulator's contact step: from the arrival at the stop to the start of the next flight.
@@ -491,8 +349,8 @@ class ContactLaw:
             The simulator's compiled view of the model and load (``impactbar.simulation``'s
             ``_Core``), for a law with a compiled contact solver; a law may ignore it.
         t_end : float, optional
-            Only for a law with :attr:`open_ended`: the run's end, where a contact that lasts so
-            long stops (``t_release = t_end``).
+            Only for a law whose traits are ``open_ended``: the run's end, where a contact that lasts
+            so long stops (``t_release = t_end``).
 
         Returns
         -------
@@ -509,45 +367,12 @@ class ContactLaw:
             (the full record, for one solved lazily): :class:`~impactbar.WaveImpact`,
             :class:`~impactbar.laws.InstantImpact`.
         """
-        raise LawNotSupported(self._missing("contact"))
-
-    def driven_contact(self, model, drive, state, t: float, q_minus, v_minus, *,
-                       settings=None) -> DrivenContact:
-        """The contact step with a drive that has state of its own, solved together with it (theory
-        §11, "The coupled blow"): the drive's force is not held during the blow but follows its
-        state, which the piston's driven end moves (:meth:`~impactbar.Drive.end_flight`). Not
-        provided by default (an instantaneous law needs none: its impact takes no time).
-
-        Parameters
-        ----------
-        model : BarModel
-        drive : Drive
-            A drive with state that provides :meth:`~impactbar.Drive.end_flight`.
-        state : DriveState
-            The drive's state at the arrival, after its map at the impact.
-        t : float
-            Time of the arrival.
-        q_minus, v_minus : numpy.ndarray, shape (N + 1,)
-            Modal state at arrival, the end on the stop.
-        settings : FlightSettings, optional
-            The drive's integrator.
-
-        Returns
-        -------
-        DrivenContact
-
-        Raises
-        ------
-        ValueError
-            Where the law or the drive cannot (:class:`LawNotSupported`), or the blow cannot be
-            solved (the message says why).
-        """
-        raise LawNotSupported(self._missing("driven_contact"))
+        raise LawNotSupported(not_provided(self, "contact"))
 
     def parameter_table(self, model=None) -> tuple[Parameter, ...]:
         """The law's own parameters as records (:func:`impactbar.parameters.parameters` lists them
         beside the bar's): by default one unbounded, continuable record for each of
-        :attr:`parameters`, with its :meth:`parameter_value`. A law with bounds, units,
+        :attr:`parameters`, its value the field of that name. A law with bounds, units,
         descriptions or a parameter it is not smooth in overrides this, its one declaration.
 
         Parameters
@@ -565,51 +390,15 @@ class ContactLaw:
         >>> get_law("paper").parameter_table()
         ()
         """
-        return tuple(Parameter(name, self.parameter_value(name)) for name in self.parameters)
+        return tuple(Parameter(name, float(getattr(self, name))) for name in self.parameters)
 
-    def has_parameter(self, name: str) -> bool:
-        """Whether ``name`` is one of the law's own continuation parameters (:attr:`parameters`).
-
-        Parameters
-        ----------
-        name : str
-            A parameter's name, as a continuation's ``parameter`` names it.
-
-        Returns
-        -------
-        bool
-        """
-        return name in self.parameters
-
-    def parameter_value(self, name: str) -> float:
-        """The value of one of the law's own continuation parameters.
+    def with_parameters(self, changes: dict) -> ContactLaw:
+        """A copy of the law with several of its own parameters (:meth:`parameter_table`) changed at
+        once, the result validated once by the constructor whatever their order.
 
         Parameters
         ----------
-        name : str
-            One of :attr:`parameters`.
-
-        Returns
-        -------
-        float
-
-        Raises
-        ------
-        ValueError
-            For a name that is not one of the law's parameters (the message lists them).
-        """
-        self._check_parameter(name)
-        return float(getattr(self, name))
-
-    def with_parameter(self, name: str, value: float) -> ContactLaw:
-        """A copy of the law with one of its own continuation parameters changed (validated again
-        by the constructor).
-
-        Parameters
-        ----------
-        name : str
-            One of :attr:`parameters`.
-        value : float
+        changes : dict of str to float
 
         Returns
         -------
@@ -618,55 +407,37 @@ class ContactLaw:
         Raises
         ------
         ValueError
-            For a name that is not one of the law's parameters, or a value the law refuses.
+            For a name that is not one of the law's parameters (the message lists them), or a value
+            the law refuses.
         """
-        return self.with_parameters({name: value})
-
-    def with_parameters(self, changes: dict) -> ContactLaw:
-        """A copy of the law with several of its own continuation parameters changed at once:
-        ``changes`` (dict of name to float) applied together, the result validated once by the
-        constructor whatever their order (a ``ValueError`` as :meth:`with_parameter`)."""
         import dataclasses
 
+        names = tuple(p.name for p in self.parameter_table())
         for name in changes:
-            self._check_parameter(name)
+            if name not in names:
+                raise ValueError(f"parameter {name!r} is not one of the impact law {self.name!r}'s "
+                                 f"parameters {names}")
         return dataclasses.replace(self, **changes)
-
-    def check_continuable(self, name: str, model=None) -> None:
-        """Refuse a parameter in which the law's impact map is not smooth, so that a branch cannot
-        be continued in it (:func:`~impactbar.continue_orbit`): one whose record in
-        :meth:`parameter_table` is not ``continuable`` (its ``reason`` given).
-
-        Parameters
-        ----------
-        name : str
-            One of :attr:`parameters`.
-        model : BarModel, optional
-            The model under this law (a law whose smoothness depends on it).
-
-        Raises
-        ------
-        ValueError
-            Saying why the parameter cannot be continued.
-        """
-        self._check_parameter(name)
-        for p in self.parameter_table(model):
-            if p.name == name and not p.continuable:
-                raise ValueError(f"parameter {name!r} cannot be continued: {p.reason}")
-
-    def _check_parameter(self, name: str) -> None:
-        if not self.has_parameter(name):
-            raise ValueError(f"parameter {name!r} is not one of the impact law {self.name!r}'s "
-                             f"parameters {self.parameters}")
-
-    def _missing(self, method: str) -> str:
-        """The message of the :class:`LawNotSupported` raised where a solver needs ``method`` and
-        this law does not provide it (the solvers check a hook before any work: ``find_orbit``'s
-        check of the law)."""
-        return (f"model.impact: the impact law {self.name!r} ({type(self).__name__}) does not provide "
-                f"{method}(), so this computation is not available under it; use impact='paper' or "
-                f"impact='wave'")
 
     def __str__(self) -> str:
         return self.name
 
+
+def not_provided(law: ContactLaw, hook: str) -> str:
+    """The message of the :class:`LawNotSupported` raised where a solver needs ``hook`` and ``law``
+    does not provide it (the solvers check a hook before any work: ``find_orbit``'s check of the
+    law).
+
+    Parameters
+    ----------
+    law : ContactLaw
+    hook : str
+        The method's name.
+
+    Returns
+    -------
+    str
+    """
+    return (f"model.impact: the impact law {law.name!r} ({type(law).__name__}) does not provide "
+            f"{hook}(), so this computation is not available under it; use impact='paper' or "
+            f"impact='wave'")

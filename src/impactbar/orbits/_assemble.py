@@ -9,6 +9,7 @@ import math
 import numpy as np
 
 from .._shared.status import Admissibility
+from ..laws.abilities import BlowRecords
 from .admissibility import _admissibility, _window_departure
 from .orbit import PeriodicOrbit
 from .stability import sort_multipliers, stable_verdict
@@ -34,9 +35,9 @@ def _build(problem, u, *, admissibility: bool = True, evaluated=None) -> Periodi
         mu = np.full(2 * M, np.inf + 0j)
     Tw = problem.T
     arrivals = np.append(t[1:], t[0] + TWO_PI * problem.n)  # flight j ends at arrivals[j]
-    contacts = None
-    if Tw > 0.0 and np.all(v_imp > 0.0) and admissibility:
-        contacts = tuple(model.law.blow(model, load, float(ta), ym)  # contact j starts flight j
+    contacts, blows = None, model.law.ability(BlowRecords)
+    if Tw > 0.0 and blows is not None and np.all(v_imp > 0.0) and admissibility:
+        contacts = tuple(blows.blow(model, load, float(ta), ym)  # contact j starts flight j
                          for ta, ym in zip(t, np.roll(info["y_minus"], 1, axis=0), strict=True))
     statuses, clear, cerr = [], -math.inf, 0.0
     if admissibility:

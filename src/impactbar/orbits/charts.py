@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from ..laws.abilities import PhaseEquation, require
 from ..laws.paper.phase import pneumatic_existence_edge as pneumatic_existence_edge
 from ..loads import CosineLoad, Load, SquareWaveLoad
 from ..model import BarModel
@@ -111,7 +112,7 @@ def max_phase_residual(model: BarModel, load: Load) -> float:
         another (theory §4b): its existence edges come from the law's ``existence_edge``
         (:func:`impactbar.laws.wave.periodic.wave_existence_edge`, pneumatic) or from the orbits themselves.
     """
-    if not model.law.supports_schur:
+    if not model.law.traits.supports_schur:
         raise ValueError("max_phase_residual is eq. 14's, the paper's impact law; model.impact must "
                          f"be 'paper' (got {model.impact!r})")
     own = load.abilities
@@ -139,7 +140,8 @@ def _stable_branch_phase(model: BarModel, load: CosineLoad) -> float | None:
     (load decreasing through the mean at impact), the first of its ``k`` copies. Under the wave law
     the impact is taken at the middle of its contact window, ``phase + 1/s``."""
     law = model.law
-    roots, shift = law.phase_roots(model, load), 0.5 * law.window(model)
+    roots = require(law, PhaseEquation, "phase_roots").phase_roots(model, load)
+    shift = 0.5 * law.window(model)
     for ph, _ in roots:
         if math.cos(load.k * (ph + shift)) * load.pk < 0.0:
             return ph
@@ -188,10 +190,10 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
     if criterion not in ("exact", "paper"):
         raise ValueError(f"criterion must be 'exact' or 'paper'; got {criterion!r}")
     law = model.law
-    if criterion == "paper" and not law.supports_schur:
+    if criterion == "paper" and not law.traits.supports_schur:
         raise ValueError("criterion 'paper' is the paper's Schur test for its impact law (eq. 10); "
                          f"use criterion='exact' with impact={model.impact!r}")
-    edge = law.existence_edge(model, k)
+    edge = require(law, PhaseEquation, "existence_edge").existence_edge(model, k)
     if not edge > 0.0:  # e.g. the wave law's window does not fit in the period: no orbit
         return []
     hi = min(edge, 50.0) * (1.0 - 1e-9)
@@ -243,7 +245,7 @@ def hydraulic_existence_edge(model: BarModel, *, xtol: float = 1e-12) -> float:
     ValueError
         Under a law other than the paper's (e.g. ``impact="wave"``): this edge is eq. 14's (theory §4).
     """
-    if not model.law.supports_schur:
+    if not model.law.traits.supports_schur:
         raise ValueError("hydraulic_existence_edge is the paper's impact law's (eq. 14); model.impact "
                          f"must be 'paper' (got {model.impact!r})")
 

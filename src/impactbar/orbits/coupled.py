@@ -55,7 +55,7 @@ def blow_state(model, drive, t, q, v, state, settings=None):
     Parameters
     ----------
     model : BarModel
-        Under a law whose contact takes time (:meth:`~impactbar.laws.ContactLaw.driven_contact`).
+        Under a law whose contact takes time (:meth:`~impactbar.laws.abilities.CoupledBlow.driven_contact`).
     drive : Drive
         A drive with state that follows a blow (its ability ``end_flight``).
     t : float
@@ -72,7 +72,7 @@ def blow_state(model, drive, t, q, v, state, settings=None):
     y : numpy.ndarray, shape (2 N + 2 + k,)
         ``(q, q', z)`` after the blow and the drive's map at its end.
     res : DrivenContact
-        The law's blow (:meth:`~impactbar.laws.ContactLaw.driven_contact`).
+        The law's blow (:meth:`~impactbar.laws.abilities.CoupledBlow.driven_contact`).
     after : DriveState
         The drive's state after the map.
     """

@@ -18,6 +18,7 @@ from .._shared.threads import single_threaded_blas
 from .._shared.validate import check_int, check_real
 from ..drives.base import Drive, FlightSettings
 from ..drives.flight import solver_settings
+from ..laws.abilities import PhaseEquation, newton_start
 from ..loads import Load
 from ..model import BarModel
 from ._assemble import _build
@@ -185,7 +186,7 @@ def _load_orbit(model, load, impacts, periods, guess, tol, max_iter) -> Periodic
                          f"in periods={n} load periods (wave law: s must exceed m/(pi n))")
     problem = _Segments(model, load, m, n)
     starts, avoid = _guesses(problem, guess)
-    coarse = model.law.coarse_model(model)
+    coarse = newton_start(model.law).coarse_model(model)
     with single_threaded_blas():
         if coarse is not None and guess is not None:  # a guess of the motion: Newton on this model
             for u0 in starts:  # (its exact Jacobian costs a few blows) while it converges at once
@@ -214,13 +215,14 @@ def _check_law(model, load):
     """Refuse at once a law without an impact map (``LawNotSupported``) or a load its map cannot
     take (a ``ValueError``, from one impact state from rest; not under a law with a coarse model,
     whose map is a whole blow: there the first residual refuses such a load)."""
-    from ..laws.base import ContactLaw, LawNotSupported
+    from ..laws.base import ContactLaw, LawNotSupported, not_provided
 
     law = model.law
     if type(law).impact_map is ContactLaw.impact_map:
-        raise LawNotSupported(law._missing("impact_map"))
-    if law.coarse_model(model) is None:
-        law.impact_state(model, load, 0.0, np.zeros(2 * model.n_modes + 2))
+        raise LawNotSupported(not_provided(law, "impact_map"))
+    start = newton_start(law)
+    if start.coarse_model(model) is None:
+        start.impact_state(model, load, 0.0, np.zeros(2 * model.n_modes + 2))
 
 
 #: Newton iterations on the law's own model from a given guess before the coarse model is tried
@@ -241,7 +243,7 @@ def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None,
     mode; the rigid mode strikes at :math:`2\pi p_0/(1 + R)` and its constant is fixed by contact
     :math:`u(1, 0) = 0` (:func:`~impactbar.orbits.one_impact.phase_equation_orbits`; under the wave law
     its own phase equation, theory §4b). Under a law without a phase equation
-    (:attr:`~impactbar.laws.ContactLaw.has_phase_equation` ``False``, e.g. the rod-rock law) the
+    (not the ability :class:`~impactbar.laws.abilities.PhaseEquation`, e.g. the rod-rock law) the
     orbits come from Newton's method from guesses instead (:func:`periodic_orbits_by_newton`): the
     orbits found, not a certified set.
 
@@ -296,7 +298,7 @@ def _load_orbits(model, load, window) -> OrbitList:
         raise ValueError("window is for a drive's orbits (unknown period); a load's period is 2 pi")
     _check_inputs(model, load)
     _check_modes(model)
-    if not model.law.has_phase_equation:  # the blow is a numerical map: Newton from guesses
+    if model.law.ability(PhaseEquation) is None:  # the blow is a numerical map: Newton from guesses
         return periodic_orbits_by_newton(model, load)
     return phase_equation_orbits(model, load)
 
@@ -314,7 +316,7 @@ def _paper_guesses(model: BarModel, load: Load) -> list:
     """The one-impact orbits of the law's paper-equivalent bar, stable ones first, each at its phase
     with the state it has one window after its impact (where this law's flight starts)."""
     law = model.law
-    paper = law.paper_equivalent(model)
+    paper = newton_start(law).paper_equivalent(model)
     T = law.window(model)
     guesses = []
     for o in sorted(periodic_orbits(paper, load), key=lambda o: (not o.stable, o.phase)):
@@ -356,9 +358,9 @@ def periodic_orbits_by_newton(model: BarModel, load: Load) -> OrbitList:
     of guesses:
 
     1. the one-impact orbits of the law's paper-equivalent bar
-       (:meth:`~impactbar.laws.ContactLaw.paper_equivalent`: the same bar and load under the paper's
-       law with the restitution this law's contact gives; for the rod-rock law a rigid piston's
-       rebound from its rod and rock, ``R = -rebound_velocity / V`` at ``V = 1``, clipped to
+       (:meth:`~impactbar.laws.abilities.NewtonStart.paper_equivalent`: the same bar and load under
+       the paper's law with the restitution this law's contact gives; for the rod-rock law a rigid
+       piston's rebound from its rod and rock, ``R = -rebound_velocity / V`` at ``V = 1``, clipped to
        ``[0, 0.95]``), each taken at its phase with the state it has one window
        (:meth:`~impactbar.laws.ContactLaw.window`) after the impact, where this law's flight starts;
     2. where none of those gives a stable orbit, the end of a simulation from rest (60 load
@@ -368,17 +370,17 @@ def periodic_orbits_by_newton(model: BarModel, load: Load) -> OrbitList:
     Steps and starts scale with the load (the finite-difference steps of the impact map are
     relative to the state), so that the orbits found are the same at every scale of the load.
 
-    Where the law has a cheaper model of the same motion (:meth:`~impactbar.laws.ContactLaw.coarse_model`:
-    the rod-rock law's exact blows on the lattice), each guess goes to it first and its orbit is
-    polished on the law's own model. Orbits found twice (phases within ``1e-7``) are kept once.
-    Guesses from which Newton does not converge give nothing: the list holds the orbits found, not a
-    certified set of all of them.
+    Where the law has a cheaper model of the same motion
+    (:meth:`~impactbar.laws.abilities.NewtonStart.coarse_model`: the rod-rock law's exact blows on
+    the lattice), each guess goes to it first and its orbit is polished on the law's own model.
+    Orbits found twice (phases within ``1e-7``) are kept once. Guesses from which Newton does not
+    converge give nothing: the list holds the orbits found, not a certified set of all of them.
 
     Parameters
     ----------
     model : BarModel
-        Under a law with ``has_phase_equation = False`` (any law with ``window``, ``impact_map`` and
-        ``contact`` is accepted).
+        Under a law without the ability :class:`~impactbar.laws.abilities.PhaseEquation` (any law
+        with ``window``, ``impact_map`` and ``contact`` is accepted).
     load : Load
         Of period ``2 pi``.
 
@@ -406,7 +408,7 @@ def periodic_orbits_by_newton(model: BarModel, load: Load) -> OrbitList:
     [(2.6008, False), (3.5461, True)]
     """
     found = []
-    coarse = model.law.coarse_model(model)
+    coarse = newton_start(model.law).coarse_model(model)
     starts = _paper_guesses(model if coarse is None else coarse, load)
     with single_threaded_blas():
         for guess in [*starts, None]:

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..dynamics.implementations import use_fast
 from ..dynamics.modal import fundamental
+from ..laws.abilities import newton_start
 from ..loads import Load
 from ..loads.abilities import left_limit
 from ..model import BarModel
@@ -109,7 +110,7 @@ class _Segments:
         self.w2 = model.frequencies**2
         self.d = model.d
         self.c = model.end_weights
-        self.on_stop = model.law.flight_starts_on_stop
+        self.on_stop = model.law.traits.flight_starts_on_stop
         # the components of a state the unknowns hold: q_0 = -sum_{n>=1} c_n q_n follows from contact,
         # unless a flight may start off the stop (the rod-rock law), where q_0 is an unknown too
         self.keep = slice(1, None) if self.on_stop else slice(0, None)
@@ -117,7 +118,7 @@ class _Segments:
         self.size = self.B * m
         self.T = contact_window(model)  # each flight starts T after its impact
         # the rigid bar under the paper's law: the whole evaluation in plain floats
-        self.rigid = (RigidFlight(model.d, load) if M == 1 and model.law.rigid_closed_forms
+        self.rigid = (RigidFlight(model.d, load) if M == 1 and model.law.traits.rigid_closed_forms
                       and use_fast("orbits.rigid_segments") else None)
 
     # -- pieces -----------------------------------------------------------------------------------
@@ -191,7 +192,7 @@ class _Segments:
             if jacobian:
                 yp, Jy, Jt = impact_law(self.model, self.load, t1, Y)
             else:  # (the state alone: a law's Jacobian may cost many maps)
-                yp = self.model.law.impact_state(self.model, self.load, t1, Y)
+                yp = newton_start(self.model.law).impact_state(self.model, self.load, t1, Y)
             y_plus[j], y_minus[j] = y0, Y
             r = slice(B * j, B * (j + 1))
             F[B * j] = self.c @ Y[:M]

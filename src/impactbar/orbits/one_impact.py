@@ -18,6 +18,7 @@ from .._shared.schema import Field, Schema
 from .._shared.status import Admissibility
 from .._shared.threads import single_threaded_blas
 from ..dynamics.implementations import use_fast
+from ..laws.abilities import PhaseEquation, require
 from ..loads import Load
 from ..model import BarModel
 from .admissibility import _admissibility, _window_departure
@@ -134,10 +135,10 @@ class OrbitList(list):
 
 def phase_equation_orbits(model: BarModel, load: Load) -> OrbitList:
     """The one-impact orbits from the law's phase equation (:func:`~impactbar.periodic_orbits` for a
-    law with :attr:`~impactbar.laws.ContactLaw.has_phase_equation`): each root ``phase`` of the phase
-    equation (eq. 14 under the paper's law) in ``[0, 2 pi)`` gives one orbit, whose states and
-    multipliers the law computes (:meth:`~impactbar.laws.ContactLaw.orbit_state`) and whose
-    admissibility is decided here; the rigid bar under the paper's law in closed form.
+    law with the ability :class:`~impactbar.laws.abilities.PhaseEquation`): each root ``phase`` of
+    the phase equation (eq. 14 under the paper's law) in ``[0, 2 pi)`` gives one orbit, whose states
+    and multipliers the law computes (:meth:`~impactbar.laws.abilities.PhaseEquation.orbit_state`)
+    and whose admissibility is decided here; the rigid bar under the paper's law in closed form.
 
     Parameters
     ----------
@@ -168,10 +169,10 @@ def _periodic_orbits_general(model: BarModel, load: Load) -> OrbitList:
     """:func:`periodic_orbits` by the general path (certified searches, any model and load): the
     reference every fast path is tested against."""
     _check_inputs(model, load)
-    law = model.law
-    families = tuple(law.phase_families(model, load))
+    phase = require(model.law, PhaseEquation, "phase_roots")
+    families = tuple(phase.phase_families(model, load))
     with single_threaded_blas():
-        roots = list(law.phase_roots(model, load))
+        roots = list(phase.phase_roots(model, load))
         roots += [((0.5 * (lo + hi)) % TWO_PI, 0) for lo, hi in families]  # one orbit each
         out = OrbitList(_one_impact_orbit(model, load, ph, mult) for ph, mult in sorted(roots))
     out._families = families
@@ -197,7 +198,7 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
     """The rigid bar under one cosine harmonic or the square wave in closed form
     (:mod:`impactbar.orbits.rigid`), or ``None`` where that does not apply (flexible modes, another
     load, a degenerate orbit)."""
-    if model.n_modes != 0 or not model.law.rigid_closed_forms:
+    if model.n_modes != 0 or not model.law.traits.rigid_closed_forms:
         return None
     form = load.abilities.square
     if form is not None:
@@ -266,17 +267,17 @@ def orbit_multipliers(model: BarModel, load: Load, phase: float, *, paper: bool 
     _check_modes(model)
     if paper:
         return quadratic_roots(schur_blocks(model, load, phase))
-    return model.law.multipliers(model, load, phase)
+    return require(model.law, PhaseEquation, "multipliers").multipliers(model, load, phase)
 
 
 def _one_impact_orbit(model: BarModel, load: Load, phase: float, mult: int) -> PeriodicOrbit:
     """The one-impact orbit at a root ``phase`` of the law's phase equation: the law's states and
-    multipliers (:meth:`~impactbar.laws.ContactLaw.orbit_state`), its admissibility decided here
-    with certified bounds over the flight (theory §5; for a law whose impact lasts a window, the
-    flight from the window's end, and the departure at the window's end), the paper's Schur
-    criterion (eqs. 27-31)."""
+    multipliers (:meth:`~impactbar.laws.abilities.PhaseEquation.orbit_state`), its admissibility
+    decided here with certified bounds over the flight (theory §5; for a law whose impact lasts a
+    window, the flight from the window's end, and the departure at the window's end), the paper's
+    Schur criterion (eqs. 27-31)."""
     law = model.law
-    st = law.orbit_state(model, load, phase)
+    st = require(law, PhaseEquation, "orbit_state").orbit_state(model, load, phase)
     M = model.n_modes + 1
     y_plus, y_minus = st.state_after_impact, st.state_before_impact
     c = model.end_weights

@@ -16,6 +16,7 @@ import numpy as np
 
 from .._shared import tables as _tables
 from .._shared.schema import END_MOTION, SI, Field, Schema
+from ..laws.abilities import BlowRecords, require
 
 if TYPE_CHECKING:
     from .._shared.status import Admissibility
@@ -345,7 +346,8 @@ multipliers, stable, schur_roots, schur_stable
         if np.any(inside):  # within a wave-law contact window: the characteristics solution
             contacts = self.contacts
             if contacts is None:
-                contacts = tuple(self.model.law.blow(self.model, self.load, float(ta), ym) for ta, ym in
+                blows = require(self.model.law, BlowRecords, "blow")
+                contacts = tuple(blows.blow(self.model, self.load, float(ta), ym) for ta, ym in
                                  zip(self.impact_times, self.states_before_impact, strict=True))
             for i in np.flatnonzero(inside):
                 q[:, i], v[:, i] = contacts[j[i]].state_at(t[i] - rel[j[i]])

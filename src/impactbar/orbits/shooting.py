@@ -119,12 +119,12 @@ class ShootingProblem(OrbitProblem):
         law = model.law
         #: a drive with state under a law whose contact takes time: each impact a blow solved with
         #: the drive's state (theory §11, "The coupled blow"), its Jacobian by central differences
-        self.coupled = not traits.piecewise_constant and not law.restitution_in_kernel(model)
+        self.coupled = not traits.piecewise_constant and not law.traits.restitution_in_kernel
         if self.coupled:
             from ..simulation.blows import check_coupling
 
             check_coupling(model, drive)
-        if law.restitution_in_kernel(model) and model.R >= 1.0:
+        if law.traits.restitution_in_kernel and model.R >= 1.0:
             raise ValueError("model.R must be < 1 for a periodic motion under a drive (with R = 1 no "
                              "energy leaves at the impacts)")
         self.M = model.n_modes + 1
@@ -239,8 +239,8 @@ class ShootingProblem(OrbitProblem):
                                   forward=out if variational == "steer" else None)
                 return out, t_after, after.mode, arrival, pieces, events, G @ D
             return out, t_after, after.mode, arrival, pieces, events
-        if law.restitution_in_kernel(model):
-            qa, va = q, -law.kernel_restitution(model) * v
+        if law.traits.restitution_in_kernel:
+            qa, va = q, -law.traits.kernel_restitution(model) * v
             t_after = t
         else:
             p = drive.force(state.mode, state.z, q, v)
@@ -250,7 +250,7 @@ class ShootingProblem(OrbitProblem):
         after = drive.impact(state.mode, state.z, t_after, qa, va)
         if variational:  # the impact law (eq. 10) and the drive's map at the impact
             G = np.eye(self.n)
-            G[M:2 * M, M:2 * M] *= -law.kernel_restitution(model)
+            G[M:2 * M, M:2 * M] *= -law.traits.kernel_restitution(model)
             G[2 * M:, 2 * M:] = map_jacobian(lambda zz: drive.impact(state.mode, zz, t_after, qa, va).z,
                                                    state.z)
             D = G @ D
@@ -452,10 +452,11 @@ class ShootingProblem(OrbitProblem):
 
     def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
         """The root of this problem from ``rough``, the orbit of a cheaper model of the same motion
-        (:meth:`~impactbar.laws.ContactLaw.coarse_model`: a coupled blow on the lattice where this
-        problem's are exact; theory §11, "The coupled blow"): its unknowns and blocks the start, the
-        Jacobian of its residual there the chord's (within the coarse blow's error of this one's:
-        some 1e-2 on the example, so each step gains some two digits), the residuals this problem's.
+        (:meth:`~impactbar.laws.abilities.NewtonStart.coarse_model`: a coupled blow on the lattice
+        where this problem's are exact; theory §11, "The coupled blow"): its unknowns and blocks the
+        start, the Jacobian of its residual there the chord's (within the coarse blow's error of this
+        one's: some 1e-2 on the example, so each step gains some two digits), the residuals this
+        problem's.
 
         Parameters
         ----------
@@ -603,7 +604,7 @@ class ShootingProblem(OrbitProblem):
         if float(c @ arrival[2]) <= 0.0:
             return Admissibility.BACKWARD_IMPACT
         if c @ y_after[M:2 * M] >= 0.0 and self.model.R > 0.0 and \
-                self.model.law.restitution_in_kernel(self.model):
+                self.model.law.traits.restitution_in_kernel:
             return Admissibility.STICKS
         return Admissibility.ADMISSIBLE
 

@@ -41,6 +41,7 @@ from .._shared.status import Admissibility
 from ..drives.flight import FlightSettings
 from ..drives.orbitproblem import OrbitData, OrbitProblem
 from ..drives.switched import PositionSwitchedDrive
+from ..laws.abilities import BlowRecords
 from ..model import BarModel
 from .admissibility import _window_departure
 from .orbit import PeriodicOrbit
@@ -108,7 +109,7 @@ def orbit_of(problem: OrbitProblem, X, *, multipliers: bool = True) -> SwitchedO
     m = problem.impacts
     X = np.asarray(X, dtype=float)
     data: OrbitData = problem.orbit(X) if multipliers else problem.orbit(X, multipliers=False)
-    law = model.law
+    blows = model.law.ability(BlowRecords)
     adm = Admissibility.ADMISSIBLE
     records = getattr(problem, "blow_records", None)
     coupled = records(X) if records is not None else None
@@ -116,9 +117,9 @@ def orbit_of(problem: OrbitProblem, X, *, multipliers: bool = True) -> SwitchedO
         if adm != Admissibility.ADMISSIBLE:
             break
         adm = problem.admissibility(X, k)
-        if law.has_blow_records(model) and data.impact_velocities[k] > 0.0:
+        if blows is not None and data.impact_velocities[k] > 0.0:
             rec = coupled[k] if coupled is not None else \
-                law.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
+                blows.blow(model, _constant_load(float(data.contact_forces[k])), 0.0, data.states_before[k])
             separates = bool(getattr(rec, "separations", ()))
             v_after = data.states_after[k][model.n_modes + 1:]
             adm = _window_departure(adm, False, float(model.end_weights @ v_after), separates)

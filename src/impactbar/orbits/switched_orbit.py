@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..laws.abilities import BlowRecords
 from .orbit import PeriodicOrbit
 
 if TYPE_CHECKING:
@@ -27,7 +28,7 @@ def _constant_load(p: float):
 
 class _LazyContacts:
     """``SwitchedOrbit.contacts``: set by the constructor (``None``: not computed yet), computed on
-    first access from the arrivals (the law's :meth:`~impactbar.laws.ContactLaw.blow` under the
+    first access from the arrivals (the law's :meth:`~impactbar.laws.abilities.BlowRecords.blow` under the
     force the drive holds during each contact)."""
 
     def __get__(self, obj, owner=None):
@@ -101,7 +102,7 @@ class SwitchedOrbit(PeriodicOrbit):
         The drive's continuous state where each interval starts (empty for a drive without state).
     contacts : tuple
         The record of each impact's contact under a law whose contact takes time, in order
-        (:meth:`~impactbar.laws.ContactLaw.blow` of each arrival under the force the drive holds: a
+        (:meth:`~impactbar.laws.abilities.BlowRecords.blow` of each arrival under the force the drive holds: a
         :class:`~impactbar.WaveImpact` under the wave law; under the rod-rock law a record with the
         blow's ``work_on_rock``, ``permanent_penetration``, ``efficiency``, ... of
         :class:`~impactbar.Blow`); empty under the paper's law. Computed on first access.
@@ -182,14 +183,14 @@ class SwitchedOrbit(PeriodicOrbit):
         return total / self.impacts
 
     def _blows(self) -> tuple:
-        if not self.model.law.has_blow_records(self.model):
+        blows = self.model.law.ability(BlowRecords)
+        if blows is None:
             return ()
         records = getattr(self._problem, "blow_records", None)
         coupled = records(self._unknowns) if records is not None else None
         if coupled is not None:  # blows solved with the drive's state: their own records
             return tuple(coupled)
-        law = self.model.law
-        return tuple(law.blow(self.model, _constant_load(float(p)), 0.0, zd)
+        return tuple(blows.blow(self.model, _constant_load(float(p)), 0.0, zd)
                      for p, zd in zip(self.contact_forces, self.states_before_impact, strict=True))
 
     def _state_in_period(self, t):

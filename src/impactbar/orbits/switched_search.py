@@ -20,6 +20,7 @@ from .._shared.validate import check_int, check_real
 from ..drives.base import FlightSettings
 from ..drives.flight import solver_settings
 from ..drives.orbitproblem import OrbitProblem
+from ..laws.abilities import newton_start
 from ..model import BarModel
 from ._settling import surfaces_ahead
 from .one_impact import OrbitList
@@ -124,13 +125,13 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
 
 def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, newton: str, settings=None):
     """Where each impact is a blow coupled to the drive's state and the law has a cheaper model of
-    the same motion (:meth:`~impactbar.laws.ContactLaw.coarse_model`: the rod-rock law's exact blows
-    under the oil circuit, whose lattice costs some 1 % of a blow), the orbit found on that model
-    (the default chain, every settling flight's blow its) and polished on this one
+    the same motion (:meth:`~impactbar.laws.abilities.NewtonStart.coarse_model`: the rod-rock law's
+    exact blows under the oil circuit, whose lattice costs some 1 % of a blow), the orbit found on
+    that model (the default chain, every settling flight's blow its) and polished on this one
     (:meth:`~impactbar.orbits.switched.ShootingProblem.polish`); ``None`` where there is no such
     model, or no orbit on it, or the polish does not converge (the default chain on this model then
     answers)."""
-    coarse = model.law.coarse_model(model) if getattr(problem, "coupled", False) else None
+    coarse = newton_start(model.law).coarse_model(model) if getattr(problem, "coupled", False) else None
     if coarse is None or not hasattr(problem, "polish"):
         return None
     try:

@@ -153,14 +153,14 @@ class OneImpactEquations:
     Parameters
     ----------
     model : BarModel
-        Under the paper's impact law (restitution ``model.law.kernel_restitution(model)``), every
+        Under the paper's impact law (restitution ``model.law.traits.kernel_restitution(model)``), every
         flexible mode underdamped (:math:`d < 2 s \pi`).
     drive : PositionSwitchedDrive
     """
 
     def __init__(self, model, drive) -> None:
         self.d = d = float(model.d)
-        self.R = float(model.law.kernel_restitution(model))
+        self.R = float(model.law.traits.kernel_restitution(model))
         self.ps, self.pr, self.x1 = float(drive.stroke), float(drive.ret), float(drive.switch_out)
         self.dl = self.ps + self.pr
         self.t_in, self.t_out = float(drive.delay_in), float(drive.delay_out)
@@ -408,7 +408,7 @@ def default_window(model, drive) -> tuple[float, float]:
     and above the two delays."""
     from ..drives.switched.kernels import rigid_orbit_start
 
-    R = float(model.law.kernel_restitution(model))
+    R = float(model.law.traits.kernel_restitution(model))
     o = drive.rigid_orbit(min(R, 0.999))
     tau = drive.delay_in + drive.delay_out
     v, h1, h3 = rigid_orbit_start(float(model.d), R, tuple(drive.kernel_view), o["impact_velocity"])

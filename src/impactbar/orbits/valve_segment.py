@@ -45,6 +45,7 @@ from ..drives.switched.kernels import (
     rigid_orbit_start,
 )
 from ..dynamics.modal import step_constant
+from ..laws.abilities import newton_start
 from ._valve_flow import _affine, _apply, _blocks, _compose, _field, _fund, _legs, _matrix, _w2
 from .valve_admissibility import _admissibility
 
@@ -78,7 +79,7 @@ class ContactMap:
 def _jump(model: BarModel) -> np.ndarray:
     """The paper's impact law (eq. 10) as a matrix: ``q`` kept, ``v -> -R v``."""
     M = model.n_modes + 1
-    return np.diag(np.concatenate((np.ones(M), np.full(M, -model.law.kernel_restitution(model)))))
+    return np.diag(np.concatenate((np.ones(M), np.full(M, -model.law.traits.kernel_restitution(model)))))
 
 
 def _before_impact(model, drive, z0, durations):
@@ -91,11 +92,11 @@ def _constants(model, drive=None, constant_load=None):
     time (the wave law, the rod-rock law) ``Jv`` is the contact's map instead
     (:class:`ContactMap`, needs the ``drive`` and ``constant_load``)."""
     M = model.n_modes + 1
-    if not model.law.restitution_in_kernel(model):
+    if not model.law.traits.restitution_in_kernel:
         if drive is None or constant_load is None:
             raise ValueError("the contact map of a law whose contact takes time needs the drive")
         return _w2(model), model.end_weights, ContactMap(model, drive, constant_load)
-    R = model.law.kernel_restitution(model)
+    R = model.law.traits.kernel_restitution(model)
     return _w2(model), model.end_weights, np.concatenate((np.ones(M), np.full(M, -R)))
 
 
@@ -250,7 +251,7 @@ class ValveProblem(OrbitProblem):
         self.model, self.drive, self.constant_load = model, drive, constant_load
         self.impacts = m = impacts  # (validated by the solvers that ask for the problem)
         law = model.law
-        if model.R >= 1.0 and (law.restitution_in_kernel(model) or law.uses_restitution):
+        if model.R >= 1.0 and (law.traits.restitution_in_kernel or law.traits.uses_restitution):
             raise ValueError("model.R must be < 1 for a periodic motion under a position-switched drive "
                              "(with R = 1 no energy leaves and the blows grow without bound)")
         self.M = model.n_modes + 1
@@ -280,12 +281,12 @@ class ValveProblem(OrbitProblem):
         :meth:`~impactbar.PositionSwitchedDrive.rigid_orbit` and the fixed point of the rigid
         piston's map of arrival velocities, solved and lifted to the flexible bar with one Newton
         step on its modes; under a law whose contact takes time, from the orbit of the same bar
-        under the paper's law (``ContactLaw.paper_equivalent``)."""
+        under the paper's law (``NewtonStart.paper_equivalent``)."""
         model, drive, m, M = self.model, self.drive, self.impacts, self.M
         if guess is None and m > 1:
             raise ValueError(f"impacts={m} needs a guess (an orbit, a simulated run or a tuple): without "
                              f"one Newton would find the one-impact orbit traversed {m} times")
-        if not model.law.restitution_in_kernel(model):  # the wave law, the rod-rock law: the contact's map
+        if not model.law.traits.restitution_in_kernel:  # the wave law, the rod-rock law: the contact's map
             if guess is not None:
                 if hasattr(guess, "switch_kinds") and hasattr(guess, "impact_times"):
                     raise ValueError("a simulated run as a guess is read under the paper's law only; under "
@@ -293,7 +294,7 @@ class ValveProblem(OrbitProblem):
                                      "h3), the states where the contacts end")
                 return _guess_unknowns(guess, M, m)
             rigid = model.with_(n_modes=0)
-            paper = self._sibling(rigid.law.paper_equivalent(rigid))
+            paper = self._sibling(newton_start(rigid.law).paper_equivalent(rigid))
             Xp = paper.solve(paper.initial(None, tol, max_iter), tol, max_iter)
             Xr = self._sibling(rigid).solve(Xp, tol, max_iter)
             return np.concatenate((_padded(Xr[:2], M), Xr[2:]))
@@ -317,7 +318,7 @@ class ValveProblem(OrbitProblem):
         from .valve_search import default_window
 
         model = self.model
-        if not model.n_modes or not model.law.restitution_in_kernel(model):
+        if not model.n_modes or not model.law.traits.restitution_in_kernel:
             return 0.0
         lo, hi = default_window(model, self.drive) if window is None else window
         return (float(hi) - float(lo)) * model.s * model.n_modes * (model.n_modes + 1) / 4.0
@@ -330,7 +331,7 @@ class ValveProblem(OrbitProblem):
         from .valve_search import OneImpactEquations, default_window, search_one_impact
 
         model, drive = self.model, self.drive
-        if self.impacts != 1 or not model.law.restitution_in_kernel(model) or \
+        if self.impacts != 1 or not model.law.traits.restitution_in_kernel or \
                 (model.n_modes and not model.s * math.pi > 0.5 * model.d):
             return None
         tau = drive.delay_in + drive.delay_out
@@ -394,7 +395,7 @@ class ValveProblem(OrbitProblem):
     def orbit(self, X) -> OrbitData:
         """Multipliers from the monodromy matrix (the paper's law) or of the return map on the
         arrival surface (a contact that takes time), the states, durations and switches."""
-        if not self.model.law.restitution_in_kernel(self.model):
+        if not self.model.law.traits.restitution_in_kernel:
             return self.return_map_orbit(X)
         model, drive, m, M = self.model, self.drive, self.impacts, self.M
         X = np.asarray(X, dtype=float)
@@ -503,7 +504,7 @@ def _rigid_guess(model, drive):
     from the undamped undelayed orbit in closed form (theory §10), which is the start itself where
     the map's iteration fails."""
     M = model.n_modes + 1
-    R = model.law.kernel_restitution(model)
+    R = model.law.traits.kernel_restitution(model)
     o = drive.rigid_orbit(min(model.R, 0.999))
     v, h1, h3 = rigid_orbit_start(float(model.d), float(R), tuple(drive.kernel_view), o["impact_velocity"])
     if not math.isfinite(v):
@@ -552,7 +553,7 @@ def _from_run(run, m):
     if ti.size < m + 1:
         raise ValueError(f"guess: the run has {ti.size} impacts; impacts={m} needs at least {m + 1} (run it "
                          "longer, until its impacts settle)")
-    R = run.model.law.kernel_restitution(run.model)
+    R = run.model.law.traits.kernel_restitution(run.model)
     c = run.model.end_weights
     drive = run.drive
     delays = drive.delay_in + drive.delay_out

@@ -160,7 +160,7 @@ class Hammer:
         elif self.impact not in LAWS:
             raise ValueError(f"model.impact must be one of {list(LAWS)}; got {self.impact!r}")
         law = RodRock if self.drill is not None else piston_law(LAWS[self.impact](), True)
-        check_piston(self.bar, law.stepped_piston, f"impact = {self.impact!r}")
+        check_piston(self.bar, law.traits.stepped_piston, f"impact = {self.impact!r}")
         if isinstance(self.force, MeasuredForce):
             self._measured  # noqa: B018  (fit the series now: a bad curve fails here, not later)
 

@@ -12,6 +12,7 @@ import numpy as np
 from .._shared import tables as _tables
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_real
+from ..laws.abilities import BlowRecords
 from ..orbits import periodic_orbits
 from ..orbits.orbit import ORBIT_FIELDS
 from ..simulation import InitialState
@@ -432,7 +433,7 @@ class SimulationResult:
             Under eq. 10 (an instant impact has no force history), or for a bad index.
         """
         model = self.hammer.model
-        impacts = self.trajectory.impacts if model.law.has_blow_records(model) else ()
+        impacts = self.trajectory.impacts if model.law.ability(BlowRecords) is not None else ()
         if not impacts:
             raise ValueError("force waves need the wave impact law (Hammer(impact='wave'))")
         if not -len(impacts) <= i < len(impacts):
@@ -631,7 +632,7 @@ def simulate(hammer: Hammer, *, periods: float = 40.0, gap_m: float = 0.0,
     # the records of a law with a contact (the wave law's rod outputs); an instant impact has none
     # (the rod-rock law's per-blow outputs: impactbar.physical.rock.rock_blows)
     model = hammer.model
-    impacts = traj.impacts if model.law.has_blow_records(model) and hammer.drill is None else ()
+    impacts = traj.impacts if model.law.ability(BlowRecords) is not None and hammer.drill is None else ()
     rod = np.full(v.size, np.nan)
     stress = np.full(v.size, np.nan)
     eff = np.full(v.size, np.nan)

@@ -1,6 +1,6 @@
 """A drive with state under a law whose contact takes time (theory §11, "The coupled blow"): each
 arrival a blow solved together with the drive's state
-(:meth:`~impactbar.laws.ContactLaw.driven_contact`), the run's piece over it a :class:`BlowPiece`;
+(:meth:`~impactbar.laws.abilities.CoupledBlow.driven_contact`), the run's piece over it a :class:`BlowPiece`;
 the checks that refuse what the coupled blow cannot do, and the run's loop
 (:func:`run_coupled`, which :func:`impactbar.simulation.switched.run_stateful` calls)."""
 
@@ -11,6 +11,7 @@ import numpy as np
 from .._shared.status import RunStatus
 from ..drives.base import DriveState
 from ..drives.flight import END, EVENT, fly
+from ..laws.abilities import CoupledBlow, require
 
 __all__ = ["BlowPiece", "check_coupling", "check_blow_switches", "driven_blow", "run_coupled",
            "PRESSED_BLOWS"]
@@ -165,19 +166,16 @@ PRESSED_BLOWS = 1000
 
 def check_coupling(model, drive) -> None:
     """Refuse, in one line, a drive with state under a law whose contact takes time where the law
-    has no coupled blow (:meth:`~impactbar.laws.ContactLaw.driven_contact`) or the drive cannot
+    has no coupled blow (:class:`~impactbar.laws.abilities.CoupledBlow`) or the drive cannot
     follow one (its ability ``end_flight``, :class:`~impactbar.drives.abilities.DriveAbilities`).
 
     Raises
     ------
     ValueError
         Naming what is missing."""
-    from ..laws.base import ContactLaw
-
-    law = model.law
-    if type(law).driven_contact is ContactLaw.driven_contact:
+    if model.law.ability(CoupledBlow) is None:
         raise ValueError(f"a drive with state ({type(drive).__name__}) under impact={model.impact!r}: the "
-                         "law has no blow solved with a drive's state (ContactLaw.driven_contact); use the "
+                         "law has no blow solved with a drive's state (the ability CoupledBlow); use the "
                          "paper's, the wave or the rod-rock law")
     if drive.abilities.end_flight is None:
         raise ValueError(f"a drive with state ({type(drive).__name__}) runs under an instantaneous impact "
@@ -213,7 +211,7 @@ def check_blow_switches(drive, modes, gaps) -> None:
 
 def driven_blow(model, drive, state, t, q, v, settings=None):
     """The blow of an arrival at ``t`` in ``(q, q')`` with the drive's ``state`` on arrival: the
-    law's blow solved with the drive's state (:meth:`~impactbar.laws.ContactLaw.driven_contact`),
+    law's blow solved with the drive's state (:meth:`~impactbar.laws.abilities.CoupledBlow.driven_contact`),
     the position switches checked (:func:`check_blow_switches`), then the drive's map at the impact
     where the blow ends (as for the valve of :class:`~impactbar.PositionSwitchedDrive` under these
     laws: the switch the impact triggers counts from the contact's end).
@@ -231,7 +229,8 @@ def driven_blow(model, drive, state, t, q, v, settings=None):
     q = np.array(q, dtype=float)
     v = np.array(v, dtype=float)
     q[0] -= float(c @ q)  # the end exactly on the stop
-    res = model.law.driven_contact(model, drive, state, t, q, v, settings=settings)
+    res = require(model.law, CoupledBlow, "driven_contact").driven_contact(model, drive, state, t, q, v,
+                                                                            settings=settings)
     modes = [state.mode] + [m for _, _, m in res.events]
     check_blow_switches(drive, modes, res.gaps)
     end = res.drive_state

@@ -183,7 +183,7 @@ class _Core:
         self.load = load
         self.N = model.n_modes
         self.d = model.d
-        self.R = model.law.kernel_restitution(model)  # -1 (v -> v): the law's contact step acts
+        self.R = model.law.traits.kernel_restitution(model)  # -1 (v -> v): the law's contact step acts
         self.data = _load_view(load)
         self.c = np.ascontiguousarray(model.end_weights)
         self.free = _Basis(model.frequencies**2, model.d, self.data)
@@ -212,7 +212,7 @@ class _Core:
         self.kappa = kappa
         self.sticking = sticking
         self.free_args = (tuple(self.data), tuple(self.free.view), self.R, self.c)  # built once
-        self.instant = model.law.restitution_in_kernel(model)
+        self.instant = model.law.traits.restitution_in_kernel
         # the kernel for a flight of this bar, compiled without the other kind's search
         self.kernel = K.run_free_rigid if self.N == 0 else K.run_free
         self._entry = None
@@ -686,7 +686,7 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
     in ``aq, av``; or a touch at zero speed at ``tn``, the state then from the flight's start
     ``(t, qa, va)``): logs the contact segment and the impact; returns the state and time where the
     flight resumes (positions from the stop, which the contact may have advanced). A sustained
-    contact after the law's window (:attr:`~impactbar.laws.ContactLaw.open_ended`) goes into
+    contact after the law's window (:attr:`~impactbar.laws.LawTraits.open_ended`) goes into
     ``contacts``."""
     model = core.model
     c = core.c
@@ -701,7 +701,7 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
         vm[0] -= arrival
         arrival = 0.0
     law = model.law
-    kw = {"t_end": t_end} if law.open_ended else {}
+    kw = {"t_end": t_end} if law.traits.open_ended else {}
     q, v, t_release, record = law.contact(model, core.load, ti, qm, vm, kernel=core, **kw)
     sustained = getattr(record, "sustained", None)
     if sustained is not None:

@@ -18,7 +18,7 @@ The run calls only the drive's interface (:mod:`impactbar.drives.base`):
   events located to the integrator's tolerance; at an impact the paper's law acts (eq. 10) and the
   rigid piston rests on the stop while the drive presses it; under a law whose contact takes time
   (the wave law, the rod-rock law) the blow and the drive's state are solved together
-  (:meth:`~impactbar.laws.ContactLaw.driven_contact`, theory §11, "The coupled blow"), the run's
+  (:meth:`~impactbar.laws.abilities.CoupledBlow.driven_contact`, theory §11, "The coupled blow"), the run's
   piece over the blow a :class:`~impactbar.simulation.blows.BlowPiece`. A flexible bar held on the
   stop is refused for such a drive (for now).
 """
@@ -118,7 +118,7 @@ def rigid_piece(model: BarModel):
     a rebound too small to resolve (or ``R = 0``), the piston rests on the stop until ``t_stop``."""
     from ..drives.switched import first_rising_crossing
 
-    d, R = model.d, model.law.kernel_restitution(model)
+    d, R = model.d, model.law.traits.kernel_restitution(model)
 
     def piece(level, q, v, t, t_stop):
         f = object.__new__(_RigidFlight)
@@ -323,7 +323,7 @@ def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: in
     from ..loads import FourierLoad
 
     law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
-    rigid = model.n_modes == 0 and law.restitution_in_kernel(model) and use_fast("simulate.switched_rigid")
+    rigid = model.n_modes == 0 and law.traits.restitution_in_kernel and use_fast("simulate.switched_rigid")
     cores: dict = {}
 
     def core_of(level):
@@ -343,7 +343,7 @@ def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: in
             return driver.run(core, q, v, t, t_stop, 1)
 
     loop = drive.abilities.compiled_loop
-    if loop is None or not law.restitution_in_kernel(model) or not use_fast("simulate.switched_kernel"):
+    if loop is None or not law.traits.restitution_in_kernel or not use_fast("simulate.switched_kernel"):
         return run_pieces(model, drive, q, v, t0, t_end, max_imp, piece, driver.make_state)
     level_cores = tuple(core_of(lv) for lv in loop.levels)
     first = level_cores[0]
@@ -433,10 +433,10 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
         flexible bar would be held on the stop.
     """
     law = model.law
-    if not law.restitution_in_kernel(model):
+    if not law.traits.restitution_in_kernel:
         check_coupling(model, drive)
         return run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, _Run)
-    R = law.kernel_restitution(model)
+    R = law.traits.kernel_restitution(model)
     c = model.end_weights
     M = model.n_modes + 1
     settings = settings if settings is not None else drive.traits.integrator

@@ -636,7 +636,7 @@ def closed_form_task(spec) -> bool:
     if spec.task != "orbits" or spec.load is None or spec.load["kind"] not in CLOSED_FORM_KINDS \
             or spec.rock is not None or spec.law is not None:
         return False
-    if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
+    if not get_law(spec.model.get("impact", "paper")).traits.rigid_closed_forms:
         return False
     modes = next((a.values for a in spec.axes if a.name == "n_modes"), (spec.model["n_modes"],))
     return all(int(n) == 0 for n in modes)

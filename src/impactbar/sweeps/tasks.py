@@ -162,7 +162,7 @@ def _rigid_chunk(spec: SweepSpec, slices, block, out) -> list | None:
     if spec.rock is not None or spec.law is not None or spec.load is None \
             or spec.load["kind"] not in CLOSED_FORM_KINDS:
         return None
-    if not get_law(spec.model.get("impact", "paper")).rigid_closed_forms:
+    if not get_law(spec.model.get("impact", "paper")).traits.rigid_closed_forms:
         return None
     par = _chunk_parameters(spec, slices, block)
     if np.any(par["n_modes"] != 0):

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..base import ContactLaw
+from ..abilities import PhaseEquation
+from ..base import ContactLaw, LawTraits
 
 __all__ = ["PaperLaw", "InstantImpact"]
 
@@ -98,7 +99,7 @@ class InstantImpact:
 
 
 @dataclass(frozen=True)
-class PaperLaw(ContactLaw):
+class PaperLaw(ContactLaw, PhaseEquation):
     """The paper's impact law (eqs. 10, 11, theory §4): at an instant impact the displacement is
     kept and the whole velocity field reversed and scaled by ``R``, ``(q, q') -> (q, -R q')``.
 
@@ -106,12 +107,10 @@ class PaperLaw(ContactLaw):
     simulator's, theory §8); the rigid bar's closed forms and the paper's Schur criterion belong to it.
     """
 
-    # the declarations where the law differs from ContactLaw's defaults (it is instantaneous, as
-    # they are)
+    # the declarations where the law differs from ContactLaw's defaults (its restitution applied by
+    # the kernel, as they say)
     name = "paper"
-    rigid_closed_forms = True
-    supports_schur = True
-    stepped_piston = True
+    traits = LawTraits(rigid_closed_forms=True, supports_schur=True, stepped_piston=True)
 
     def window(self, model) -> float:
         """0: the impact is instantaneous."""

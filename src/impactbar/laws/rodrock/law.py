@@ -14,9 +14,9 @@ The law gives single blows (:func:`single_blow`) and the simulator's contact ste
 impact map (:meth:`RodRock.impact_map`, the contact step with a finite-difference Jacobian:
 ``find_orbit`` runs under it from a guess, e.g. a simulation, and ``continue_orbit`` in the drive's
 and the rock's parameters, :attr:`RodRock.parameters`). It has no phase equation
-(:attr:`~impactbar.laws.ContactLaw.has_phase_equation` is ``False``: its ``phase_roots`` and
-``orbit_state`` raise ``LawNotSupported``, a ``ValueError``, naming them): ``periodic_orbits`` finds
-the one-impact orbits by Newton's method from guesses
+(not the ability :class:`~impactbar.laws.abilities.PhaseEquation`: what needs it raises
+``LawNotSupported``, a ``ValueError``, naming it): ``periodic_orbits`` finds the one-impact orbits by
+Newton's method from guesses
 (:func:`~impactbar.orbits.periodic_orbits_by_newton`).
 """
 
@@ -32,7 +32,8 @@ import numpy as np
 
 from ..._shared.parameters import Parameter
 from ..._shared.validate import check_int, check_real
-from ..base import ContactLaw
+from ..abilities import BlowRecords, CoupledBlow, NewtonStart
+from ..base import ContactLaw, LawTraits
 from ._choice import (  # noqa: F401  (the choices' bounds, as before)
     MAX_EXACT_LOADING_EXPONENT,
     MAX_EXACT_PASS_WINDOWS,
@@ -49,7 +50,7 @@ __all__ = ["BilinearRock", "RodRock", "RodSegment", "single_blow"]
 
 
 @dataclass(frozen=True)
-class RodRock(ContactLaw):
+class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
     """The piston strikes a rod of uniform segments; the bit (optional mass) loads a bilinear rock
     under a static feed force (theory §4d; Lundberg 1982, Chiang and Elias 2000).
 
@@ -115,14 +116,12 @@ class RodRock(ContactLaw):
 
     # the declarations where the law differs from ContactLaw's defaults
     name = "rodrock"
-    instantaneous = False
-    flight_starts_on_stop = False
-    uses_restitution = False
-    has_phase_equation = False
-    #: a stepped piston (``BarModel(..., piston=...)``, theory §12): its modal state becomes the
-    #: cells of its segments' impedances at impact and is projected back on its modes after the blow
+    #: its piston may leave the blow off the shank, the rod and rock replace ``R``; a stepped piston
+    #: (``BarModel(..., piston=...)``, theory §12): its modal state becomes the cells of its segments'
+    #: impedances at impact and is projected back on its modes after the blow
     #: (:func:`~impactbar.laws.rodrock.contact._stepped_maps`)
-    stepped_piston = True
+    traits = LawTraits(restitution_in_kernel=False, flight_starts_on_stop=False, uses_restitution=False,
+                       stepped_piston=True)
     #: the law's continuation parameters, in its units: the rock's loading and unloading stiffnesses
     #: (``"rock.k"`` alone, ``k_u`` kept, so ``k <= k_u``), the bit's mass, the feed force, and
     #: ``"segment<i>.length"`` (``i`` from 0 at the shank; the default ``blow_time`` follows the

@@ -24,13 +24,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..base import ContactLaw
+from ..abilities import BlowRecords, NewtonStart
+from ..base import ContactLaw, LawTraits
 
 __all__ = ["LongRodContact", "SteppedLongRod"]
 
 
 @dataclass(frozen=True)
-class SteppedLongRod(ContactLaw):
+class SteppedLongRod(ContactLaw, BlowRecords, NewtonStart):
     """The wave law for a stepped piston (theory §4b, §12; the module's text): each contact the exact
     blow on a semi-infinite rod of impedance ``Z_s (1 + R)/(1 - R)`` (``Z_s`` the struck segment's),
     lasting :meth:`window`. A :class:`~impactbar.BarModel` takes it in place of the wave law when it
@@ -49,10 +50,7 @@ class SteppedLongRod(ContactLaw):
     # the declarations where the law differs from ContactLaw's defaults (its contact ends with its
     # window: not open-ended, unlike the wave law it stands in for)
     name = "wave"
-    instantaneous = False
-    flight_starts_on_stop = False
-    has_phase_equation = False
-    stepped_piston = True
+    traits = LawTraits(restitution_in_kernel=False, flight_starts_on_stop=False, stepped_piston=True)
 
     def check_model(self, model) -> None:
         """Refuse ``R = 1``: the long rod's impedance ``(1 + R)/(1 - R)`` times the struck end's is then

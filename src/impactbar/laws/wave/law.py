@@ -13,7 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..base import ContactLaw
+from ..abilities import BlowRecords, CoupledBlow, PhaseEquation
+from ..base import ContactLaw, LawTraits
 
 __all__ = ["PressedContact", "WaveLaw"]
 
@@ -21,7 +22,7 @@ _GL20_X, _GL20_W = np.polynomial.legendre.leggauss(20)
 
 
 @dataclass(frozen=True)
-class WaveLaw(ContactLaw):
+class WaveLaw(ContactLaw, PhaseEquation, BlowRecords, CoupledBlow):
     """The stop as a long rod of the same material with area ratio ``A_s/A = (1 + R)/(1 - R)``;
     the contact, lasting ``2/s``, is solved by characteristics with the drive acting (theory §4b).
     Without drive and separation the velocity and strain fields leave multiplied by ``-R``; each
@@ -31,8 +32,7 @@ class WaveLaw(ContactLaw):
 
     # the declarations where the law differs from ContactLaw's defaults
     name = "wave"
-    instantaneous = False
-    open_ended = True
+    traits = LawTraits(restitution_in_kernel=False, open_ended=True)
 
     def window(self, model) -> float:
         """``2/s``: the wave's return trip along the bar."""
