@@ -8,7 +8,8 @@ the first imports impactbar in the worker and loads or
 compiles its kernels, the second is a warm worker's point. Each point's time is the CPU time of the
 worker's thread that ran it (``time.thread_time``, the import of impactbar included in the first).
 On a tree that has :func:`impactbar.sweeps.use_numba_cache`, the workers are pointed at a shared
-numba cache folder filled once beforehand by one process computing the same point (what
+numba cache folder filled once beforehand by one process computing the same points (some points
+need kernels that others do not; what
 ``NUMBA_CACHE_DIR=FOLDER impactbar warmup`` does for every kind of call); on one without it, the
 workers start with an empty cache (one folder, but both compile at once, as two fresh nodes do).
 """
@@ -95,10 +96,10 @@ def cluster_first_points(src: str, env: dict) -> dict:
     try:
         has_plugin = (Path(src) / "impactbar" / "sweeps" / "numba_cache.py").exists()
         r = {}
-        if has_plugin:  # the shared folder, filled once by one process computing the point
-            warm = json.loads(_run("import json, _cluster; print(json.dumps(_cluster.point(0)))", [],
-                                   dict(env, NUMBA_CACHE_DIR=shared)))
-            r["filling the shared cache (s)"] = warm["cpu"]
+        if has_plugin:  # the shared folder, filled once by one process computing the points
+            fill = "import json, _cluster; print(json.dumps([_cluster.point(k) for k in range(4)]))"
+            filled = json.loads(_run(fill, [], dict(env, NUMBA_CACHE_DIR=shared)))
+            r["filling the shared cache (s)"] = sum(p["cpu"] for p in filled)
         workers = json.loads(_run(_DRIVER, [shared if has_plugin else ""], env))
     finally:
         shutil.rmtree(shared, ignore_errors=True)
