@@ -1,16 +1,38 @@
-"""The first exact rod-rock blow and rock orbit, empty numba cache: the compile, here and on another tree.
+"""A designer's first call of each entry point with an empty numba cache, here and on another tree.
 
-Run: ``python benchmarks/bench_first_call.py [--rock-orbit] [--against SRC] [--rounds N] [--kernels K]``.
-Each cell is a fresh process with a new, empty numba cache (``NUMBA_CACHE_DIR``) that makes the README's
-exact blow (``single_blow`` under ``RodRock``: a 40-long rod on a bilinear rock, no feed), as a new
-user's first call: the CPU time of the call (nearly all of it numba compiling the exact blow's kernels),
-the count of compiles and the result (``efficiency``, to the bit). ``--rock-orbit`` times instead the
-first periodic orbit with exact blows, ``impactbar warmup``'s task "rod and rock orbits, exact blows"
-(a 2-mode bar on a short rod and rock: ``simulate``, then ``find_orbit`` from the settled run; the two
-parts' CPU times apart, and the orbit's impact times, states and multipliers to the bit). With
-``--against SRC`` (a package tree, the folder holding ``impactbar``) that tree is timed too, alternately
-with this one; ``--kernels K`` lists the K slowest kernels to compile in each (each kernel's own time,
-its callees' compiles taken out, summed over its signatures, and how many signatures it compiled for).
+Run: ``python benchmarks/bench_first_call.py [--rows ROW ...] [--quick] [--against SRC] [--kernels K]``.
+
+Each cell is a fresh process with a new, empty numba cache (``NUMBA_CACHE_DIR``), one-thread BLAS and
+neither ``NUMBA_OPT`` nor ``IMPACTBAR_TIERED``, that makes one row's first call:
+
+- ``paper``: ``impactbar paper`` (Figs. 4-8), the whole command (its process's CPU time, the
+  interpreter's start and the imports included);
+- ``simulate``: a rigid bar's ``simulate`` under a cosine load (30 time units);
+- ``orbits8``: ``periodic_orbits`` of an 8-mode bar under a cosine load;
+- ``circuit``: the preset ``circuit-drifter``'s ``orbit()`` with 4 flexible modes, then in the same
+  process with 16 (the second call's time and compiles are in the notes);
+- ``rock``: ``examples/circuit_drifter_rock.toml``'s ``orbit()`` (the oil circuit on a rod and rock);
+- ``blow``: the README's first exact blow (``single_blow`` under ``RodRock``, a 40-long rod on a
+  bilinear rock);
+- ``warmup``: ``impactbar warmup``, the whole command;
+- ``cluster``: a fresh local dask cluster (2 workers, one thread each) whose workers read a shared
+  numba cache that ``impactbar warmup`` filled (:class:`impactbar.sweeps.NumbaCacheFolder`), each
+  worker's first point of a small sweep against a warm worker's (the same workers' second point);
+  the cell is the worst worker's difference, the goal within 2 s. (Only on this tree: the baseline
+  has no such way, its cell is a fresh cluster without a shared cache.)
+
+The figure of a row is the CPU time of its call inside the child (``time.process_time``, imports not
+counted), or for the commands (``paper``, ``warmup``) the child's whole CPU time (``getrusage`` of
+the finished child, its own children included). CPU time, not wall time: the development machine
+is shared by many jobs, which change the wall time far more than the CPU time (though a loaded
+machine's caches still slow a compile some 10-30 %). Each row also counts numba's compiles
+(``numba:compile`` events; the oil circuit's C callbacks, compiled at import without that event,
+are not counted) and, without ``--quick``, times the same call again in a new process on the cache
+the first filled (``warm``). With ``--against SRC`` (a package tree, the folder holding
+``impactbar``) that tree is timed too, alternately with this one, and the rows' results (a digest of
+each call's numbers) are compared to the bit. A row that misses its goal lists its ``--kernels K``
+slowest kernels to compile (each kernel's own CPU time, its callees' compiles taken out, summed
+over its signatures, and how many signatures it compiled for): the reason.
 """
 
 from __future__ import annotations
@@ -18,18 +40,21 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
+ROOT = Path(__file__).resolve().parents[1]
+
 _CHILD = r"""
 import json, sys, time
 from collections import defaultdict
 from numba.core import event
-from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
 
+row, root, out_dir = sys.argv[1], sys.argv[2], sys.argv[3]
 own, count, stack = defaultdict(float), defaultdict(int), []
 
 
@@ -52,83 +77,166 @@ class Listener(event.Listener):  # each kernel's compile time, its callees' comp
 
 event.register("numba:compile", Listener())
 out = {}
-if sys.argv[1] == "blow":
+
+
+def compiles():
+    return sum(count.values())
+
+
+def timed(call):
+    t = time.process_time()
+    result = call()
+    return time.process_time() - t, result
+
+
+if row in ("paper", "warmup"):
+    from impactbar.cli import main
+    argv = ["paper", "--out", out_dir, "--quiet"] if row == "paper" else ["warmup"]
+    first, status = timed(lambda: main(argv))
+    assert status == 0, status
+    digest = open(out_dir + "/fig5.csv").read() if row == "paper" else ""
+elif row == "simulate":
+    from impactbar import BarModel, CosineLoad, InitialState, simulate
+    first, run = timed(lambda: simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0),
+                                        InitialState.rigid(-0.2, 0.0), 30.0))
+    digest = repr((run.impact_times.tolist(), run.final_state.modal_displacement.tolist(),
+                   run.final_state.modal_velocity.tolist()))
+elif row == "orbits8":
+    from impactbar import BarModel, CosineLoad, periodic_orbits
+    first, orbits = timed(lambda: periodic_orbits(BarModel(5.0, 0.1, 0.5, 8), CosineLoad(0.6, 1.0)))
+    digest = repr([(o.phases.tolist(), o.impact_velocities.tolist(), o.multipliers.tolist()) for o in orbits])
+elif row in ("circuit", "rock"):
+    from impactbar import physical as ph
+    if row == "circuit":
+        cfg, _ = ph.read_config("circuit-drifter")
+        first, orbit = timed(lambda: ph.build(ph.with_values(cfg, {"model.n_modes": 4})).orbit())
+        before = compiles()
+        out["then 16 modes (s)"], more = timed(
+            lambda: ph.build(ph.with_values(cfg, {"model.n_modes": 16})).orbit())
+        out["then 16 modes: compiles"] = compiles() - before
+        digest = repr((orbit.blow_frequency_Hz, orbit.impact_velocity_m_s, more.blow_frequency_Hz))
+    else:
+        cfg, _ = ph.read_config(root + "/examples/circuit_drifter_rock.toml")
+        first, orbit = timed(lambda: ph.build(cfg).orbit())
+        digest = repr((orbit.blow_frequency_Hz, orbit.impact_velocity_m_s))
+elif row == "blow":
+    from impactbar import BarModel, BilinearRock, RodRock, RodSegment, single_blow
     law = RodRock(segments=[RodSegment(length=40.0, impedance=1.0)], rock=BilinearRock(k=2.5, k_u=25.0))
-    model = BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law)
-    t = time.process_time()
-    blow = single_blow(model, 1.0, t_max=39.0)
-    first = time.process_time() - t
-    out["efficiency"] = repr(blow.efficiency)
-else:  # impactbar warmup's "rod and rock orbits, exact blows" (cli/warmup.py's rock_orbit(on_rock))
-    from impactbar import CosineLoad, InitialState, find_orbit, simulate
-    short = RodRock(segments=[RodSegment(length=2.0, impedance=2.0)], rock=BilinearRock(k=20.0, k_u=200.0))
-    model, gentle = BarModel(10.0, 0.3, 0.0, 2, impact=short), CosineLoad(0.3, 1.0)
-    t = time.process_time()
-    run = simulate(model, gentle, InitialState.rigid(-0.1, 0.0, 2), 60.0)
-    out["simulate"] = time.process_time() - t
-    orbit = find_orbit(model, gentle, impacts=2, periods=2, guess=run)
-    first = time.process_time() - t
-    out["find_orbit"] = first - out["simulate"]
-    out["orbit"] = repr((orbit.period, orbit.impact_times.tolist(), orbit.states_after_impact.tolist(),
-                         orbit.multipliers.tolist()))
+    first, blow = timed(lambda: single_blow(BarModel(s=2.0, d=0.0, R=0.0, n_modes=0, impact=law), 1.0,
+                                            t_max=39.0))
+    digest = repr(blow.efficiency)
+else:
+    raise SystemExit("unknown row " + row)
 top = sorted(own.items(), key=lambda kv: -kv[1])
-print(json.dumps(dict(out, first=first, compiles=sum(count.values()),
+print(json.dumps(dict(out, first=first, compiles=compiles(), digest=digest,
                       kernels=[(k, v, count[k]) for k, v in top])))
 """
 
+#: row: (title, goal in CPU seconds, the figure is the whole child's CPU time)
+ROWS = {
+    "paper": ("impactbar paper (Figs. 4-8), whole", 10.0, True),
+    "simulate": ("rigid simulate", 10.0, False),
+    "orbits8": ("8-mode periodic_orbits", 10.0, False),
+    "circuit": ("circuit drifter orbit(), 4 then 16 modes", 10.0, False),
+    "rock": ("circuit on rock orbit()", 10.0, False),
+    "blow": ("first exact blow", 10.0, False),
+    "warmup": ("impactbar warmup, whole", 60.0, True),
+    "cluster": ("fresh cluster's first point - warm's (worst worker)", 2.0, False),
+}
+QUICK = ("simulate", "orbits8", "blow")
 
-def first_call(src: str, case: str = "blow") -> dict:
-    """One fresh process with an empty numba cache on the package tree ``src``: the first exact blow
-    (``case`` ``"blow"``) or the first periodic orbit with exact blows (``"orbit"``)."""
+
+def _env(src: str, cache: str) -> dict:
+    env = dict(os.environ, PYTHONPATH=src, NUMBA_CACHE_DIR=cache, OMP_NUM_THREADS="1",
+               OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1", MPLBACKEND="Agg")
+    env.pop("NUMBA_OPT", None)
+    env.pop("IMPACTBAR_TIERED", None)
+    return env
+
+
+def _child(src: str, row: str, cache: str) -> dict:
+    """One fresh process on the package tree ``src`` and the numba cache ``cache``: the row's call."""
+    out = tempfile.mkdtemp(prefix="impactbar-first-out-")
+    try:
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
+        done = subprocess.run([sys.executable, "-c", _CHILD, row, str(ROOT), out], env=_env(src, cache),
+                              capture_output=True, text=True)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+    if done.returncode:
+        raise RuntimeError(f"{row} on {src} failed:\n{done.stderr[-3000:]}")
+    r = json.loads(done.stdout.strip().splitlines()[-1])
+    r["whole"] = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    if ROWS[row][2]:
+        r["first"] = r["whole"]
+    return r
+
+
+def first_call(src: str, row: str, warm: bool = False) -> dict:
+    """The row's first call in a fresh process with a new, empty numba cache on the package tree
+    ``src``; with ``warm``, also the same call in a second fresh process on the cache the first
+    filled (``r["warm"]``, its CPU seconds, and ``r["warm compiles"]``)."""
+    if row == "cluster":
+        from _cluster import cluster_first_points
+
+        return cluster_first_points(src, _env(src, ""))
     cache = tempfile.mkdtemp(prefix="impactbar-first-")
     try:
-        env = dict(os.environ, PYTHONPATH=src, NUMBA_CACHE_DIR=cache, OMP_NUM_THREADS="1",
-                   OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
-        env.pop("NUMBA_OPT", None)
-        env.pop("IMPACTBAR_TIERED", None)
-        out = subprocess.run([sys.executable, "-c", _CHILD, case], env=env, check=True, capture_output=True,
-                             text=True).stdout
+        r = _child(src, row, cache)
+        if warm:
+            w = _child(src, row, cache)
+            r["warm"], r["warm compiles"] = w["first"], w["compiles"]
     finally:
         shutil.rmtree(cache, ignore_errors=True)
-    return json.loads(out.strip().splitlines()[-1])
+    return r
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--rows", nargs="+", choices=tuple(ROWS), metavar="ROW",
+                    help="the rows to run (default all): " + ", ".join(ROWS))
+    ap.add_argument("--quick", action="store_true",
+                    help="only " + ", ".join(QUICK) + " (unless --rows), and no warm run")
     ap.add_argument("--against", metavar="SRC", help="also time the package tree SRC (alternately)")
     ap.add_argument("--rounds", type=int, default=1, help="processes per tree (the least CPU time kept)")
-    ap.add_argument("--kernels", type=int, default=0, metavar="K", help="list the K slowest kernels")
-    ap.add_argument("--rock-orbit", action="store_true",
-                    help="time the first periodic orbit with exact blows (impactbar warmup's task)")
+    ap.add_argument("--kernels", type=int, default=3, metavar="K",
+                    help="the K slowest kernels of a row that misses its goal (default 3)")
     a = ap.parse_args(argv)
-    case = "orbit" if a.rock_orbit else "blow"
-    here = str(Path(__file__).resolve().parents[1] / "src")
-    trees = ([("baseline", a.against)] if a.against else []) + [("new", here)]
-    best = {}
-    for _ in range(max(1, a.rounds)):
-        for label, src in trees:
-            r = first_call(src, case)
-            if label not in best or r["first"] < best[label]["first"]:
-                best[label] = r
-    rows = (("first", "CPU time (s)", "{:>20.1f}"), ("compiles", "kernels compiled", "{:>20d}"))
-    if case == "blow":
-        title = "first exact blow, empty numba cache"
-        rows += (("efficiency", "efficiency (repr)", "{:>20s}"),)
-    else:
-        title = "first exact rock orbit, empty cache"
-        rows += (("simulate", "  of which simulate (s)", "{:>20.1f}"),
-                 ("find_orbit", "  of which find_orbit (s)", "{:>20.1f}"))
-    print(f"{title:<36} " + " ".join(f"{n:>20}" for n, _ in trees))
-    for key, title, fmt in rows:
-        print(f"{title:<36} " + " ".join(fmt.format(best[n][key]) for n, _ in trees))
-    if case == "orbit":
-        same = len({best[n]["orbit"] for n, _ in trees}) == 1
-        print(f"{'orbit (times, states, multipliers)':<36} "
-              + ("the same to the bit" if same else "DIFFERENT") + ": " + best[trees[-1][0]]["orbit"][:120])
-    for label, _ in trees if a.kernels else ():
-        print(f"\n{label}: the slowest kernels to compile (own CPU s, signatures)")
-        for k, v, c in best[label]["kernels"][:a.kernels]:
-            print(f"    {k:<40} {v:>6.2f} {c:>4d}")
+    rows = a.rows or (QUICK if a.quick else tuple(ROWS))
+    here = str(ROOT / "src")
+    trees = ([("baseline", a.against)] if a.against else []) + [("now", here)]
+    print("CPU seconds of each first call with an empty numba cache, each in a fresh process (CPU "
+          "time, not wall time: this machine is shared, which disturbs the wall time far more)")
+    print(f"{'row':<52} {'baseline':>9} {'now':>9} {'goal':>6}  {'':<7} {'compiles':>13} {'warm':>6}")
+    for row in rows:
+        title, goal, _ = ROWS[row]
+        best = {}
+        for _ in range(max(1, a.rounds)):
+            for label, src in trees:
+                r = first_call(src, row, warm=label == "now" and not a.quick)
+                if label not in best or r["first"] < best[label]["first"]:
+                    best[label] = r
+        now = best["now"]
+        base = best.get("baseline")
+        met = now["first"] <= goal
+        cells = f"{base['first']:>9.1f}" if base else f"{'-':>9}"
+        comp = (f"{base['compiles']:>5d} -> " if base else " " * 9) + f"{now['compiles']:<4d}"
+        warm = f"{now['warm']:>6.2f}" if "warm" in now else f"{'-':>6}"
+        print(f"{title:<52} {cells} {now['first']:>9.1f} {goal:>6.0f}  {'met' if met else 'MISSED':<7}"
+              f" {comp:>13} {warm}", flush=True)
+        notes = [f"{k} {v:.2f}" if isinstance(v, float) else f"{k} {v}" for k, v in now.items()
+                 if k not in ("first", "compiles", "digest", "kernels", "whole", "warm")]
+        if not ROWS[row][2] and row != "cluster":
+            notes.append(f"whole process {now['whole']:.1f} s")
+        if base and row != "cluster":
+            notes.append("results the same to the bit" if base["digest"] == now["digest"]
+                         else "results DIFFERENT")
+        if notes:
+            print("    " + "; ".join(notes))
+        if not met and now.get("kernels"):
+            print("    slowest to compile (own CPU s, signatures): " + ", ".join(
+                f"{k} {v:.1f} ({c})" for k, v, c in now["kernels"][:a.kernels]))
     return 0
 
 

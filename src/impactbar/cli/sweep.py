@@ -38,6 +38,10 @@ def add_parser(sub) -> None:
     p.add_argument("--no-workers", choices=("wait", "stop"), default="wait",
                    help="then keep waiting for workers to join (wait, default) or stop, keeping "
                    "the chunks finished (stop; exit status 1; rerunning resumes)")
+    p.add_argument("--numba-cache", default=None, metavar="FOLDER",
+                   help="a numba cache folder the dask workers share, filled once by "
+                   "NUMBA_CACHE_DIR=FOLDER impactbar warmup: the workers load the kernels from it "
+                   "instead of each compiling them")
     add_quiet_argument(p)
     add_deprecated_alias(p, "--no-progress", "--quiet", "quiet", flag=True)
     p.set_defaults(func=run)
@@ -65,7 +69,8 @@ def run(args) -> int:
         res = run_sweep(spec, args.out, scheduler=args.scheduler, n_workers=args.workers,
                         overwrite=args.overwrite,
                         progress=not args.quiet and sys.stderr.isatty(),
-                        worker_timeout=args.worker_timeout or None, no_workers=args.no_workers)
+                        worker_timeout=args.worker_timeout or None, no_workers=args.no_workers,
+                        numba_cache=args.numba_cache)
     except NoWorkersError as exc:
         print(f"impactbar sweep: error: {exc}", file=sys.stderr)
         return 1

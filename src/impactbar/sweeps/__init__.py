@@ -46,9 +46,9 @@ every point, each continued from its neighbour, stored in SI through the same st
 :func:`run_map` then records the edges (:func:`map_edges`).
 
 Layout: ``spec`` (schema and validation), ``tasks`` (one chunk's work), ``store`` (zarr layout, done
-flags), ``run`` (the driver: dask, or threads), ``plot`` (figures from a finished store; the only module that
-imports matplotlib). This layer sits on the core and imports dask, xarray and zarr lazily; the core
-never imports it.
+flags), ``run`` (the driver: dask, or threads), ``numba_cache`` (the workers' shared numba cache),
+``plot`` (figures from a finished store; the only module that imports matplotlib). This layer sits
+on the core and imports dask, xarray and zarr lazily; the core never imports it.
 """
 
 from __future__ import annotations
@@ -57,6 +57,8 @@ from .map_spec import DrifterMapSpec as DrifterMapSpec
 from .map_spec import parse_map_spec as parse_map_spec
 from .maps import map_edges as map_edges
 from .maps import run_map as run_map
+from .numba_cache import numba_cache_plugin as numba_cache_plugin
+from .numba_cache import use_numba_cache as use_numba_cache
 from .plot import plot_sweep as plot_sweep
 from .run import NoWorkersError as NoWorkersError
 from .run import SweepRun as SweepRun
@@ -87,6 +89,8 @@ __all__ = [
     "chunk_slices",
     "compute_chunk",
     "run_sweep",
+    "numba_cache_plugin",
+    "use_numba_cache",
     "NoWorkersError",
     "open_sweep",
     "point_done",

@@ -15,6 +15,7 @@ import numpy as np
 
 from .._shared.validate import check_int, check_real
 from .map_spec import DrifterMapSpec
+from .numba_cache import cache_folder, use_numba_cache
 from .spec import SweepSpec, closed_form_task
 from .store import _checksum, _open_group, _prepare_store, _write_chunks, _write_done
 from .tasks import compute_chunk
@@ -75,7 +76,7 @@ def default_workers() -> int:
 def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = None,
               n_workers: int | None = None, overwrite: bool = False, progress: bool = True,
               executor: str = "auto", worker_timeout: float | None = 60.0,
-              no_workers: str = "wait") -> SweepRun:
+              no_workers: str = "wait", numba_cache=None) -> SweepRun:
     """Compute a sweep into a zarr store, resuming whatever an earlier run finished.
 
     Parameters
@@ -112,6 +113,12 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
         What follows that message: ``"wait"`` (default) keeps waiting for workers to join;
         ``"stop"`` cancels the chunks left and raises :class:`NoWorkersError` (the chunks finished
         are stored; rerunning resumes).
+    numba_cache : str or os.PathLike, optional
+        A numba cache folder the dask workers share, filled once by ``NUMBA_CACHE_DIR=FOLDER
+        impactbar warmup``: the workers load their kernels from it instead of each compiling them
+        (a local cluster's workers start with ``NUMBA_CACHE_DIR`` set; a ``client``'s or
+        ``scheduler``'s restart with it, :func:`impactbar.sweeps.use_numba_cache`). Not for a
+        sweep computed in threads of this process (set ``NUMBA_CACHE_DIR`` before starting Python).
 
     Returns
     -------
@@ -124,7 +131,8 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
         folder that is not a sweep store, its folder cannot be written, another driver holds the
         store's lock, ``scheduler`` does not answer within ``CONNECT_TIMEOUT``, ``n_workers``
         is outside ``[1, max_workers()]``, or ``executor`` is unknown or ``"threads"`` with a
-        ``client`` or ``scheduler``, or ``worker_timeout`` or ``no_workers`` is out of range;
+        ``client`` or ``scheduler``, or ``worker_timeout`` or ``no_workers`` is out of range, or
+        ``numba_cache`` is not a folder path or is given for a sweep computed in threads;
         nothing is computed (or left behind) then.
     NoWorkersError
         With ``no_workers="stop"``, when the cluster has had no worker for ``worker_timeout``
@@ -164,6 +172,12 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
     if executor == "threads" and remote:
         raise ValueError("executor='threads' computes in this process; it takes no client or scheduler")
     threads = not remote and (executor == "threads" or (executor == "auto" and closed_form_task(spec)))
+    if numba_cache is not None:
+        if threads:
+            raise ValueError("numba_cache sets a dask cluster's workers' numba cache; this sweep is "
+                             "computed in threads of this process (set NUMBA_CACHE_DIR before starting "
+                             "Python instead)")
+        numba_cache = cache_folder(numba_cache)
     path = Path(store)
     _check_out(path)
     created = _missing_parents(path)
@@ -177,7 +191,9 @@ def run_sweep(spec: SweepSpec, store, *, client=None, scheduler: str | None = No
                 if not np.any(done == 0):
                     return SweepRun(path, spec.n_chunks, spec.n_chunks, 0, 0.0)
             if client is None and not threads:
-                client = stack.enter_context(_connect(scheduler, n_workers))
+                client = stack.enter_context(_connect(scheduler, n_workers, numba_cache))
+            elif client is not None and numba_cache is not None:  # the caller's own client
+                use_numba_cache(client, numba_cache)
             if not resume:
                 done, sums = _prepare_store(spec, path, overwrite)
             todo = [int(i) for i in np.flatnonzero(done == 0)]
@@ -262,8 +278,9 @@ class _StoreLock:
 
 
 @contextlib.contextmanager
-def _connect(scheduler, n_workers):
-    """A ``distributed.Client``: to ``scheduler``, or to a local cluster of ``n_workers``."""
+def _connect(scheduler, n_workers, numba_cache=None):
+    """A ``distributed.Client``: to ``scheduler``, or to a local cluster of ``n_workers``; its workers
+    with the numba cache folder ``numba_cache`` if given."""
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
@@ -273,6 +290,8 @@ def _connect(scheduler, n_workers):
             raise ValueError(f"--scheduler {scheduler!r}: cannot connect within "
                              f"{CONNECT_TIMEOUT} ({exc})") from None
         with cl:
+            if numba_cache is not None:
+                use_numba_cache(cl, numba_cache)
             yield cl
         return
     import logging
@@ -280,11 +299,13 @@ def _connect(scheduler, n_workers):
     import dask
 
     n = default_workers() if n_workers is None else n_workers
+    env = {} if numba_cache is None else {"env": {"NUMBA_CACHE_DIR": numba_cache}}
     # No dashboard: distributed always starts an HTTP server in the scheduler, so it gets no routes,
     # the loopback interface and a free port (not 8787, which another cluster may hold).
     with (dask.config.set(LOCAL_HTTP_CONFIG),
           LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                       **LOCAL_CLUSTER_HTTP, silence_logs=logging.ERROR) as cluster,
+                       **LOCAL_CLUSTER_HTTP, silence_logs=logging.ERROR,
+                       **env) as cluster,
           Client(cluster) as cl):
         yield cl
 
