@@ -24,8 +24,8 @@ from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .layout import PRESET
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
-from .watch import watched
 from .settings import DEFAULT_SETTINGS, circuit_settings
+from .watch import watched
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
 
