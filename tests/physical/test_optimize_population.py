@@ -100,7 +100,7 @@ def test_the_score_penalises_the_margins_missed():
     ({"seed": -1}, r"seed must be an integer >= 0; got -1"),
     ({"max_evaluations": 11}, r"max_evaluations must be at least two generations .* \(12 = 2 x 6\).*got 11"),
     ({"method": "cobyla", "workers": 2}, r"workers: only with method='differential_evolution'"),
-    ({"method": "nelder-mead"}, r"method must be 'cobyla', 'slsqp' or 'differential_evolution'"),
+    ({"method": "nelder-mead"}, r"method must be 'cobyla', 'slsqp', 'differential_evolution' or 'multi"),
 ])
 def test_bad_population_input_is_one_line(kw, match):
     with pytest.raises(ValueError, match=match) as info:

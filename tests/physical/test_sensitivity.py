@@ -168,7 +168,8 @@ def test_optimize_drifter_refuses_an_unknown_method():
     from impactbar.physical import optimize_drifter
 
     with pytest.raises(ValueError,
-                       match=r"^method must be 'cobyla', 'slsqp' or 'differential_evolution'; got 'bfgs'$"):
+                       match=r"^method must be 'cobyla', 'slsqp', 'differential_evolution' or 'multistart'; "
+                       r"got 'bfgs'$"):
         optimize_drifter("circuit-drifter", {"valve.switch_out": ("20 mm", "23 mm")},
                          objective="impact_power", method="bfgs")
 

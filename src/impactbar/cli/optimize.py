@@ -40,17 +40,25 @@ def add_parser(sub) -> None:
                         "peak_incident_stress and piston_mass)")
     p.add_argument("--max-evaluations", type=int, default=60,
                    help="the most designs the search evaluates (default 60)")
-    p.add_argument("--method", default="cobyla", choices=["cobyla", "slsqp", "differential_evolution"],
+    p.add_argument("--method", default="cobyla",
+                   choices=["cobyla", "slsqp", "differential_evolution", "multistart"],
                    help="the search: derivative-free COBYLA (default), SLSQP with gradients by the "
                         "implicit function theorem on each design's orbit, or differential evolution "
-                        "(a population, each generation's designs evaluated together, see --workers)")
+                        "(a population, each generation's designs evaluated together, see --workers), or "
+                        "multistart (COBYLA from the best feasible designs of a Sobol sample evaluated "
+                        "together, see --sample)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="differential_evolution: evaluate each generation on a local dask cluster of N "
-                        "worker processes (default: in this process, one design after another)")
+                   help="differential_evolution, multistart: evaluate each generation (the sample) on a "
+                        "local dask cluster of N worker processes (default: in this process, one design "
+                        "after another)")
     p.add_argument("--popsize", type=int, default=5,
                    help="differential_evolution: the population per variable (default 5)")
     p.add_argument("--seed", type=int, default=0,
-                   help="differential_evolution: the random seed (default 0)")
+                   help="differential_evolution: the random seed; multistart: the sample's (default 0)")
+    p.add_argument("--sample", type=int, default=64, metavar="N",
+                   help="multistart: the Sobol sample's designs, a power of two (default 64)")
+    p.add_argument("--local-starts", type=int, default=3, metavar="K",
+                   help="multistart: COBYLA from the K best feasible designs of the sample (default 3)")
     p.add_argument("--cache", default=None, metavar="FILE.json",
                    help="the designs evaluated, read first and written after each: a stopped run resumes")
     p.add_argument("--out", default=None, metavar="FILE.json", help="write the result as JSON")
@@ -159,7 +167,8 @@ def _run(args) -> int:
     res = optimize_drifter(args.config, vary, objective=args.objective, constraints=constraints,
                            max_evaluations=args.max_evaluations, cache=args.cache, progress=not args.quiet,
                            method=args.method, impact_velocity=args.impact_velocity, workers=args.workers,
-                           popsize=args.popsize, seed=args.seed)
+                           popsize=args.popsize, seed=args.seed, sample=args.sample,
+                           local_starts=args.local_starts)
     if out is not None:
         res.to_json(out)
     if args.json:
@@ -168,4 +177,9 @@ def _run(args) -> int:
         print_json(json.loads(res.to_json()))
     else:
         print(res.table())
+        if res.found:
+            from ..physical.optimize_drifter import OBJECTIVES
+            from ..physical.optimize_multistart import found_table
+
+            print(found_table(res.found, res.vary, OBJECTIVES[res.objective][0]))
     return 0

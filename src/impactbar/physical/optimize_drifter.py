@@ -42,6 +42,7 @@ from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_cache import OrbitChain, dumps, read_cache, write_cache
 from .optimize_failures import failed_record
+from .optimize_multistart import check_multistart, multistart_search
 from .optimize_outputs import constraint_output, piston_and_multipliers, shank_stress
 from .optimize_population import check_population, penalised, population_search
 from .optimize_progress import DesignProgress
@@ -298,6 +299,9 @@ class DrifterOptimum:
     certificate : OptimalityCertificate
         The optimum's first-order (KKT) certificate (:mod:`~impactbar.physical.optimality`); the table
         says "optimum" only where it is ``"converged"``.
+    found : list of dict
+        ``method="multistart"``: each local search's start and best design, best first
+        (:func:`~impactbar.physical.optimize_multistart.multistart_search`); empty otherwise.
     """
 
     objective: str
@@ -312,6 +316,7 @@ class DrifterOptimum:
     gradients: int = 0
     config: dict = field(default_factory=dict, repr=False)
     certificate: object = None  #: the optimum's OptimalityCertificate (first-order, KKT)
+    found: list = field(default_factory=list)
 
     @property
     def gain(self) -> float:
@@ -325,7 +330,7 @@ class DrifterOptimum:
                 "optimum": self.optimum, "gain": self.gain, "evaluations": self.evaluations,
                 "cached": self.cached, "gradients": self.gradients, "seconds": self.seconds,
                 "message": self.message, "certificate": self.certificate and self.certificate.to_dict(),
-                "history": self.history}
+                "found": self.found, "history": self.history}
 
     def to_json(self, path=None) -> str:
         """The result as JSON (non-finite numbers as null); written to ``path`` if given."""
@@ -423,7 +428,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                      constraints: dict | None = None,
                      *, max_evaluations: int = 60, cache=None, progress: bool = True, rhobeg: float = 0.2,
                      tol: float = 2e-3, method: str = "cobyla", impact_velocity=None, workers=None,
-                     popsize: int = 5, seed: int = 0) -> DrifterOptimum:
+                     popsize: int = 5, seed: int = 0, sample: int = 64,
+                     local_starts: int = 3) -> DrifterOptimum:
     r"""The design of a drifter with its oil circuit that maximises ``objective`` under
     ``constraints``, the variables any of its dotted config keys within bounds.
 
@@ -469,21 +475,25 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         its ``ftol`` is ``tol ** 3`` (on the objective over the start's: 8e-9 by default, above
         the orbits' own accuracy, about 1e-9) and ``rhobeg`` is not used; a population stops once
         its scores spread below ``tol ** 2``.
-    method : {"cobyla", "slsqp", "differential_evolution"}
+    method : {"cobyla", "slsqp", "differential_evolution", "multistart"}
         The search: derivative-free (COBYLA), SLSQP with the implicit function theorem's
         gradients (module docstring; ``max_evaluations`` then bounds its iterations; where a border
         of the operating point lies along an active constraint, as the blow's on the example rock
         drifter, its line search backtracks at every step: there COBYLA), or a
         population's (:mod:`~impactbar.physical.optimize_population`: the constraints a penalty, each
         generation's designs evaluated together on ``workers``, each by a fresh ``orbit()``;
-        ``max_evaluations`` bounds its generations, at least two).
+        ``max_evaluations`` bounds its generations, at least two), or COBYLA from the best feasible
+        designs of a Sobol sample evaluated together (:mod:`~impactbar.physical.optimize_multistart`).
     workers : None, int or distributed.Client
-        Where a population's designs are evaluated (``method="differential_evolution"`` only):
+        Where a population's or a sample's designs are evaluated (those two methods only):
         ``None`` this process, an integer (at least 1) a local dask cluster of that many processes
         (started and closed by the call), or a client's cluster; the same records either way.
     popsize, seed : int
         The population per variable (at least 2) and the random seed (at least 0) of
-        ``method="differential_evolution"``.
+        ``method="differential_evolution"`` (``"multistart"``: the sample's seed).
+    sample, local_starts : int
+        ``method="multistart"``: the sample's designs (a power of two) and the local searches (in
+        ``[1, sample]``), each ``(max_evaluations - sample) // local_starts`` designs at most.
     impact_velocity : float or str, optional
         The circuit's ideal limit (m/s, or with units, ``> 0``): each design is its piston's blow on
         the rod and rock at this impact velocity alone (:func:`evaluate_blow`), the circuit taken to
@@ -526,17 +536,18 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         raise ValueError(f"objective {objective!r} needs the drill string and the rock ([rock] in the "
                          "config); "
                          "without them only 'impact_power'")
-    if method not in ("cobyla", "slsqp", "differential_evolution"):
-        raise ValueError(f"method must be 'cobyla', 'slsqp' or 'differential_evolution'; got {method!r}")
+    if method not in ("cobyla", "slsqp", "differential_evolution", "multistart"):
+        raise ValueError(f"method must be 'cobyla', 'slsqp', 'differential_evolution' or 'multistart'; got "
+                         f"{method!r}")
     if not (isinstance(rhobeg, int | float) and not isinstance(rhobeg, bool) and 0.0 < rhobeg <= 1.0):
         raise ValueError(f"rhobeg must be a number in (0, 1] (COBYLA's first step in the variables scaled "
                          f"by their bounds); got {rhobeg!r}")
-    top, name = (rhobeg, f"rhobeg] = (0, {rhobeg:g}]") if method == "cobyla" else (1.0, "1]")
+    top, name = (rhobeg, f"rhobeg] = (0, {rhobeg:g}]") if method in ("cobyla", "multistart") else (1.0, "1]")
     if not (isinstance(tol, int | float) and not isinstance(tol, bool) and 0.0 < tol <= top):
         raise ValueError(f"tol must be a number in (0, {name} (the search's last step in the scaled "
                          f"variables); got {tol!r}")
-    if workers is not None and method != "differential_evolution":
-        raise ValueError(f"workers: only with method='differential_evolution'; got method {method!r}")
+    if workers is not None and method not in ("differential_evolution", "multistart"):
+        raise ValueError(f"workers: only with method='differential_evolution'/'multistart', not {method!r}")
     ideal = impact_velocity is not None
     if ideal:
         V = (float(impact_velocity) if isinstance(impact_velocity, int | float)
@@ -560,6 +571,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                          f"({len(keys) + 2}); got {max_evaluations!r}")
     if method == "differential_evolution":
         maxiter = check_population(workers, popsize, seed, max_evaluations, len(keys))
+    elif method == "multistart":
+        budget = check_multistart(workers, sample, local_starts, seed, max_evaluations, len(keys))
     lo = np.array([spec[k]["low"] for k in keys])
     span = np.array([spec[k]["high"] - spec[k]["low"] for k in keys])
     fkey = OBJECTIVES[objective][0]
@@ -575,6 +588,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     # each design's orbit by its id (a stored design's solved again along its guesses where needed)
     chain = OrbitChain(store, lambda c, g: _operating_point(build(with_values(cfg, c), folder), g)[0])
     gradients: dict[str, tuple] = {}
+    found: list = []  # the multistart's local searches
 
     def changes_of(values: dict) -> dict:
         return {k: written_quantity(values[k], spec[k]["unit"], config_value(cfg, k)) for k in keys}
@@ -664,10 +678,14 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                                     lambda u: design_of(u)[::2], store, evaluate, _design_record,
                                     {"config": cfg, "folder": folder, "limits": kept}, u0, popsize=popsize,
                                     maxiter=maxiter, seed=seed, workers=workers, atol=tol ** 2)
-        elif method == "cobyla":
-            res = minimize(f, u0, method="COBYLA", constraints=[{"type": "ineq", "fun": g}],
-                           bounds=[(0.0, 1.0)] * len(keys),
-                           options={"rhobeg": rhobeg, "tol": tol, "maxiter": max_evaluations})
+        elif method in ("cobyla", "multistart"):
+            def cobyla(u, most=max_evaluations):
+                return minimize(f, u, method="COBYLA", constraints=[{"type": "ineq", "fun": g}], bounds=[(
+                    0.0, 1.0)] * len(keys), options={"rhobeg": rhobeg, "tol": tol, "maxiter": most})
+            res, found = (cobyla(u0), []) if method == "cobyla" else multistart_search(
+                evaluate, lambda u: design_of(u)[::2], store, _design_record,
+                {"config": cfg, "folder": folder, "limits": kept}, lambda u: cobyla(u, budget), fkey,
+                sample=sample, local_starts=local_starts, seed=seed, workers=workers, n_variables=len(keys))
         else:
             res = minimize(f, u0, jac=lambda u: -derivative(u)[0] / ref, method="SLSQP",
                            constraints=[{"type": "ineq", "fun": g, "jac": lambda u: derivative(u)[1]}],
@@ -705,7 +723,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                           baseline=fresh["baseline"], optimum=fresh["optimum"], evaluations=counter["new"],
                           cached=n_cached, seconds=time.perf_counter() - t_start, history=history,
                           message=message, config=with_values(cfg, best["changes"]),
-                          gradients=counter["gradients"], certificate=certificate)
+                          gradients=counter["gradients"], certificate=certificate, found=found)
 
 
 def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:

@@ -21,7 +21,8 @@ import math
 
 import numpy as np
 
-__all__ = ["PENALTY", "FAILED", "check_population", "penalised", "population_search", "record_map"]
+__all__ = ["PENALTY", "FAILED", "check_population", "compute_new", "penalised", "population_search",
+           "record_map"]
 
 #: The weight of the constraints' scaled margins missed, added to the objective over the start's.
 PENALTY = 10.0
@@ -166,6 +167,36 @@ def _client_map(client):
     return run
 
 
+def compute_new(run, points, design_of, stored, add, record, common: dict) -> int:
+    """The records of the designs among ``points`` not yet ``stored``, computed together by ``run``
+    (:func:`record_map`'s) and stored by ``add(u, rec)`` in the order of ``points``; a design twice
+    among them computed once.
+
+    Parameters
+    ----------
+    run : callable
+        ``run(record, items, **common)``: the records of ``items``.
+    points : iterable of numpy.ndarray, each of shape (n,)
+        The designs' scaled variables.
+    design_of, stored, add, record, common
+        As :func:`population_search`'s.
+
+    Returns
+    -------
+    int
+        The designs computed.
+    """
+    todo = {}
+    for u in points:
+        u = np.asarray(u, dtype=float)
+        rid, changes = design_of(u)
+        if rid not in stored and rid not in todo:
+            todo[rid] = (u, changes)
+    for (u, _), rec in zip(todo.values(), run(record, [c for _, c in todo.values()], **common), strict=True):
+        add(u, rec)
+    return len(todo)
+
+
 def population_search(score, design_of, stored, add, record, common: dict, u0, *, popsize: int,
                       maxiter: int, seed: int, workers, atol: float = 0.0):
     """Differential evolution over the scaled variables, each generation's new designs computed
@@ -205,14 +236,7 @@ def population_search(score, design_of, stored, add, record, common: dict, u0, *
     with record_map(workers) as run:
         def generation(func, population):
             population = [np.asarray(u, dtype=float) for u in population]
-            todo = {}
-            for u in population:
-                rid, changes = design_of(u)
-                if rid not in stored and rid not in todo:
-                    todo[rid] = (u, changes)
-            for (u, _), rec in zip(todo.values(), run(record, [c for _, c in todo.values()], **common),
-                                   strict=True):
-                add(u, rec)
+            compute_new(run, population, design_of, stored, add, record, common)
             return [func(u) for u in population]
 
         return differential_evolution(score, [(0.0, 1.0)] * len(u0), popsize=popsize, maxiter=maxiter,
