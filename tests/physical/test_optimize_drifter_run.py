@@ -110,8 +110,9 @@ def test_optimize_takes_every_key_a_design_map_sweeps(name):
         fields = ("volume", "flow_coefficient", "precharge", "gas_volume", "polytropic_exponent")
         assert {f"parts.return_line.{k}" for k in fields} | {"parts.seal_leak.flow_coefficient"} <= set(swept)
     if name == "circuit_drifter_parts.toml":  # (the fields of the three kinds; the cushion's lists not)
-        assert {"parts.clearance.conductance", "parts.cushion.volume", "parts.cushion.coefficient",
-                "parts.check.coefficient", "parts.check.cracking_pressure", "parts.check.opening_span"} <= set(swept)
+        keys = {"parts.clearance.conductance", "parts.cushion.volume", "parts.cushion.coefficient",
+                "parts.check.coefficient", "parts.check.cracking_pressure", "parts.check.opening_span"}
+        assert keys <= set(swept)
 
 
 def test_a_short_search_over_a_chamber_area_and_the_restitution():
