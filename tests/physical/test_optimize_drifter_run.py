@@ -26,8 +26,8 @@ pytest.importorskip("pint")
 ROOT = Path(__file__).resolve().parents[2]
 #: the example configs ``impactbar optimize`` takes: the drifters with their oil circuit (the valve
 #: drifters and the hammers have no circuit to optimise, the sweep specs are no machine)
-CIRCUIT_EXAMPLES = ("circuit_drifter.toml", "circuit_drifter_return_line.toml", "circuit_drifter_rock.toml",
-                    "circuit_drifter_rock_piston.toml")
+CIRCUIT_EXAMPLES = ("circuit_drifter.toml", "circuit_drifter_parts.toml", "circuit_drifter_return_line.toml",
+                    "circuit_drifter_rock.toml", "circuit_drifter_rock_piston.toml")
 
 
 def test_the_circuit_examples_are_the_ones_optimize_takes():
@@ -109,6 +109,10 @@ def test_optimize_takes_every_key_a_design_map_sweeps(name):
     if name == "circuit_drifter_return_line.toml":  # (a part's fields, its connections not)
         fields = ("volume", "flow_coefficient", "precharge", "gas_volume", "polytropic_exponent")
         assert {f"parts.return_line.{k}" for k in fields} | {"parts.seal_leak.flow_coefficient"} <= set(swept)
+    if name == "circuit_drifter_parts.toml":  # (the fields of the three kinds; the cushion's lists not)
+        keys = {"parts.clearance.conductance", "parts.cushion.volume", "parts.cushion.coefficient",
+                "parts.check.coefficient", "parts.check.cracking_pressure", "parts.check.opening_span"}
+        assert keys <= set(swept)
 
 
 def test_a_short_search_over_a_chamber_area_and_the_restitution():

@@ -10,6 +10,10 @@ A part is one TOML table under ``[parts]``, named by the user::
     volume = "0.2 L"              # its SI fields, each with its unit
     flow_coefficient = "2e-5 m^3/s/Pa^0.5"
 
+A kind's fields that hold a list (:attr:`~impactbar.drives.circuit.CircuitPart.si_lists`: a
+cushion's ``gaps = ["3 mm", "5 mm"]``) take a TOML array, each element in the field's unit and range;
+they are keys of the table, not parameters.
+
 Each kind is a :class:`~impactbar.drives.circuit.CircuitPart` dataclass that declares its SI fields
 once (:attr:`~impactbar.drives.circuit.CircuitPart.si_fields`: unit, scale, range) and its
 connections; every field is then a key ``parts.<name>.<field>`` of the parameter tree
@@ -33,7 +37,10 @@ __all__ = ["register_part", "part_kinds", "PartSpec", "read_parts", "part_field"
 
 #: the kinds that come with the library: ``kind -> "module:class"``, imported on first use
 _BUILTIN = {"return_accumulator": "impactbar.drives.circuit.return_line:ReturnAccumulator",
-            "leak": "impactbar.drives.circuit.leak:Leak"}
+            "leak": "impactbar.drives.circuit.leak:Leak",
+            "laminar_leak": "impactbar.drives.circuit.leakage:LaminarLeak",
+            "cushion": "impactbar.drives.circuit.cushion:Cushion",
+            "check_valve": "impactbar.drives.circuit.check_valve:CheckValve"}
 _KINDS: dict[str, type] = {}
 #: what a part's name may not be: the preset's nodes and ports, the valve's spool
 _TAKEN = ("front", "rear", "supply", "tank", "spool", "valve_return", "kind")
@@ -80,10 +87,10 @@ def register_part(kind: str, cls: type) -> type:
     if not (isinstance(cls, type) and issubclass(cls, CircuitPart) and dataclasses.is_dataclass(cls)):
         raise ValueError(f"cls must be a dataclass subclass of CircuitPart; got {cls!r}")
     names = {f.name for f in dataclasses.fields(cls)}
-    wanted = {"name", *(f.name for f in cls.si_fields), *cls.connections}
+    wanted = {"name", *(f.name for f in (*cls.si_fields, *cls.si_lists)), *cls.connections}
     if not wanted <= names:
-        raise ValueError(f"a part kind's class needs the fields {sorted(wanted)} (name, its si_fields and "
-                         f"its connections); {cls.__name__} lacks {sorted(wanted - names)}")
+        raise ValueError(f"a part kind's class needs the fields {sorted(wanted)} (name, its si_fields, "
+                         f"si_lists and connections); {cls.__name__} lacks {sorted(wanted - names)}")
     bad = [c for c, (what, _) in cls.connections.items() if what not in ("node", "port")]
     if bad:
         raise ValueError(f"{cls.__name__}.connections[{bad[0]!r}] must connect to a 'node' or a 'port'")
@@ -95,8 +102,8 @@ def register_part(kind: str, cls: type) -> type:
 
 
 def part_kinds() -> dict[str, type]:
-    """The part kinds by name (the library's ``return_accumulator`` and ``leak``, then those
-    registered), their classes imported."""
+    """The part kinds by name (the library's ``return_accumulator``, ``leak``, ``laminar_leak``,
+    ``cushion`` and ``check_valve``, then those registered), their classes imported."""
     for kind, where in _BUILTIN.items():
         if kind not in _KINDS:
             module, name = where.split(":")
@@ -105,7 +112,8 @@ def part_kinds() -> dict[str, type]:
 
 
 def part_keys(kind) -> tuple[str, ...]:
-    """The keys a ``[parts.<name>]`` table of ``kind`` takes: ``kind``, its connections, its fields.
+    """The keys a ``[parts.<name>]`` table of ``kind`` takes: ``kind``, its connections, its fields
+    (then its lists).
 
     Raises
     ------
@@ -116,7 +124,7 @@ def part_keys(kind) -> tuple[str, ...]:
     if kind not in kinds:
         raise ValueError(f"kind must be one of {', '.join(kinds)}; got {kind!r}")
     cls = kinds[kind]
-    return ("kind", *cls.connections, *(f.name for f in cls.si_fields))
+    return ("kind", *cls.connections, *(f.name for f in (*cls.si_fields, *cls.si_lists)))
 
 
 @dataclass(frozen=True)
@@ -133,12 +141,15 @@ class PartSpec:
         Each connection and the node or port it names.
     values : tuple of (str, float)
         Each SI field and its value (in the field's unit).
+    lists : tuple of (str, tuple of float)
+        Each list field and its values (in the field's unit).
     """
 
     name: str
     kind: str
     connections: tuple
     values: tuple
+    lists: tuple = ()
 
     def field(self, name: str) -> tree.Field:
         """The parameter tree's declaration of the field ``name`` (:func:`part_field`)."""
@@ -147,9 +158,10 @@ class PartSpec:
     def build(self, drifter):
         """The dimensionless part for ``drifter``'s scales (each field's :data:`~tree.SCALES`)."""
         cls = part_kinds()[self.kind]
-        scales = {f.name: tree.SCALES[f.scale](drifter) for f in cls.si_fields}
+        scales = {f.name: tree.SCALES[f.scale](drifter) for f in (*cls.si_fields, *cls.si_lists)}
         return cls(name=self.name, **dict(self.connections),
-                   **{k: v * scales[k] for k, v in self.values})
+                   **{k: v * scales[k] for k, v in self.values},
+                   **{k: tuple(x * scales[k] for x in v) for k, v in self.lists})
 
 
 def _tree_field(name: str, f) -> tree.Field:
@@ -292,5 +304,22 @@ def read_parts(tables) -> tuple[PartSpec, ...]:
             given = table.get(f.name, f.default)
             v = to_si(key, given, f.unit, f.example, what=tree.WORDS.get(f.unit))
             values.append((f.name, f.check(key, v)))
-        out.append(PartSpec(name, table["kind"], tuple(connections), tuple(values)))
+        lists = tuple((f.name, _read_list(f"parts.{name}.{f.name}", table, f)) for f in cls.si_lists)
+        if lists:  # (the part's own checks across its lists, in SI: the scales are positive factors)
+            try:
+                cls(name=name, **dict(connections), **dict(values), **dict(lists))
+            except ValueError as exc:
+                raise ValueError(f"parts.{exc}" if str(exc).startswith(f"{name}.") else
+                                 f"parts.{name}: {exc}") from None
+        out.append(PartSpec(name, table["kind"], tuple(connections), tuple(values), lists))
     return tuple(out)
+
+
+def _read_list(key: str, table: dict, f) -> tuple[float, ...]:
+    """A list field's values in SI, each in the field's range (a :class:`ValueError` naming ``key``)."""
+    given = table.get(f.name)
+    if given is None:
+        raise ValueError(f"missing key {key}, a list, e.g. {f.example}")
+    if not isinstance(given, list) or not given:
+        raise ValueError(f"{key} must be a list of one or more values, e.g. {f.example}; got {given!r}")
+    return tuple(f.check(key, to_si(key, v, f.unit, f.example, what=tree.WORDS.get(f.unit))) for v in given)

@@ -15,22 +15,22 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..._shared.validate import check_real
 from ._network import CHECK, LEVEL, record
-from .composition import CircuitPart
+from .composition import NamedPart, PartField
 from .leakage import _check_ends
 
 __all__ = ["CheckValve"]
 
 
 @dataclass(frozen=True)
-class CheckValve(CircuitPart):
+class CheckValve(NamedPart):
     r"""A check valve from node ``source`` to node ``target``: ``q = K_cv o(dp) phi(dp)``,
     ``dp = p_source - p_target``, opening ``o(dp) = clip((dp - p_crack) / dp_open, 0, 1)``: shut
     below its cracking pressure, fully open ``dp_open`` above it. Its kinks are events of the flights
     (``<name>_crack`` at ``dp = p_crack``, ``<name>_open`` at ``p_crack + dp_open``); its loss
     :math:`\int q \, dp \, dt` an energy integrand of its own (``name``, in ``orifices``).
-    ``K_cv = 0`` removes it.
+    ``K_cv = 0`` removes it. The kind ``"check_valve"`` of a configuration's ``[parts.<name>]`` table
+    (its parameters ``<name>.<field>``).
 
     Parameters
     ----------
@@ -43,7 +43,7 @@ class CheckValve(CircuitPart):
     opening_span : float
         ``dp_open > 0``: the pressure over which it opens fully.
     name : str, optional
-        Its events', integrand's and parameters' prefix.
+        Its events', integrand's and parameters' prefix (``<name>.coefficient``, ...), an identifier.
 
     Raises
     ------
@@ -67,13 +67,18 @@ class CheckValve(CircuitPart):
     opening_span: float
     name: str = "check"
 
+    si_fields = (
+        PartField("coefficient", "m**3/s/Pa**0.5", "'1e-6 m^3/s/Pa^0.5'", "orifice", low_open=False,
+                  description="the check valve's full opening coefficient"),
+        PartField("cracking_pressure", "Pa", "'0.5 MPa'", "pressure", low_open=False,
+                  description="the check valve's cracking pressure"),
+        PartField("opening_span", "Pa", "'1 MPa'", "pressure",
+                  description="the pressure over which the check valve opens"))
+    connections = {"source": ("node", None), "target": ("node", None)}
+
     def __post_init__(self) -> None:
         _check_ends(self)
-        object.__setattr__(self, "coefficient", check_real("coefficient", self.coefficient, lo=0.0))
-        object.__setattr__(self, "cracking_pressure", check_real("cracking_pressure", self.cracking_pressure,
-                                                                 lo=0.0))
-        object.__setattr__(self, "opening_span", check_real("opening_span", self.opening_span, lo=0.0,
-                                                            lo_open=True))
+        super().__post_init__()
 
     @property
     def energies(self) -> tuple:
@@ -82,21 +87,6 @@ class CheckValve(CircuitPart):
     @property
     def events(self) -> tuple:
         return (f"{self.name}_crack", f"{self.name}_open")
-
-    @property
-    def parameters(self) -> dict:
-        n = self.name
-        return {f"{n}_coefficient": "coefficient", f"{n}_cracking_pressure": "cracking_pressure",
-                f"{n}_opening_span": "opening_span"}
-
-    @property
-    def parameter_ranges(self) -> dict:
-        return {f"{self.name}_coefficient": {"low": 0.0, "high_open": True,
-                                             "description": "the check valve's full opening coefficient"},
-                f"{self.name}_cracking_pressure": {"low": 0.0, "high_open": True,
-                                                   "description": "the check valve's cracking pressure"},
-                f"{self.name}_opening_span": {"low": 0.0, "low_open": True, "high_open": True,
-                                              "description": "the pressure over which the check valve opens"}}
 
     def records(self, slots, oil) -> list:
         """The valve's flow (:mod:`.kinds.check`) on the piece of ``o`` the mode's flags give, and

@@ -19,6 +19,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..._shared.validate import check_real
 from .layout import _TERMS, PRESET, CircuitLayout
 
@@ -85,6 +87,9 @@ class CircuitPart:
     connections : dict
         Its fields that name a node or a port, each to ``("node" | "port", default)`` (optional, as
         ``si_fields``).
+    si_lists : tuple of PartField
+        Its fields that hold a list of values (a configuration's array, each element in the field's
+        unit and range; optional, as ``si_fields``; not a parameter).
 
     See Also
     --------
@@ -128,6 +133,8 @@ class CircuitPart:
     #: its fields that name a node or a port: field to ``("node" | "port", default)`` (``None``:
     #: required)
     connections: dict = {}
+    #: its fields that hold a list of values, each in the :class:`PartField`'s unit and range
+    si_lists: tuple = ()
 
     def records(self, slots: PartSlots, oil) -> list:
         """The part's network records (:func:`._network.record`).
@@ -215,8 +222,9 @@ class PartField:
 
 
 def check_part(part: CircuitPart) -> None:
-    """Check a part's :attr:`~CircuitPart.si_fields` against their ranges (in place, as floats) and its
-    name: the ``__post_init__`` of a part made of them.
+    """Check a part's :attr:`~CircuitPart.si_fields` against their ranges (in place, as floats), its
+    :attr:`~CircuitPart.si_lists` element by element (in place, as tuples of floats) and its name:
+    the ``__post_init__`` of a part made of them.
 
     Raises
     ------
@@ -229,6 +237,9 @@ def check_part(part: CircuitPart) -> None:
                          f"parameters'); got {name!r}")
     for f in part.si_fields:
         object.__setattr__(part, f.name, f.check(f"{name}.{f.name}", getattr(part, f.name)))
+    for f in part.si_lists:
+        values = np.atleast_1d(getattr(part, f.name)).tolist()
+        object.__setattr__(part, f.name, tuple(f.check(f"{name}.{f.name}", v) for v in values))
 
 
 class NamedPart(CircuitPart):

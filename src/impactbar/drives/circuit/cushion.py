@@ -11,13 +11,11 @@ Hopsan's component library, ``componentLibraries/defaultLibrary/Hydraulic``:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
-import numpy as np
-
-from ..._shared.validate import check_real
 from ._network import CUSHION, LEVEL, NODE, record
-from .composition import CircuitPart
+from .composition import NamedPart, PartField
 from .leakage import _check_names
 
 __all__ = ["Cushion", "opening_segment"]
@@ -45,7 +43,7 @@ def opening_segment(gaps, openings, above) -> tuple[float, float]:
 
 
 @dataclass(frozen=True)
-class Cushion(CircuitPart):
+class Cushion(NamedPart):
     r"""A cushion on the rear chamber's way out: the valve's return port drains into a node of oil
     ``volume`` (named ``name``), and from it to ``target`` through a port that the piston's gap
     ``y`` opens, ``q = K_max g(y) phi(p_cushion - p_target)``, ``g`` piecewise linear through the
@@ -54,7 +52,9 @@ class Cushion(CircuitPart):
     kink of ``g``, an event of the flights (``<name>_kink<i>``: the gap through ``gaps[i]``). Its
     node's compression work and the port's loss are energy integrands of their own (``name`` in the
     ``compression`` term, ``<name>_port`` in ``orifices``). ``g = 1``, ``K_max`` to infinity and the
-    volume to 0 remove it.
+    volume to 0 remove it. The kind ``"cushion"`` of a configuration's ``[parts.<name>]`` table (its
+    ``gaps`` a list of lengths, its ``openings`` a list of numbers; its parameters
+    ``<name>.volume``, ``<name>.coefficient``).
 
     Parameters
     ----------
@@ -69,7 +69,9 @@ class Cushion(CircuitPart):
     target : str, optional
         The node it drains to (default the tank; a return line's node).
     name : str, optional
-        Its node's name and its events', integrands' and parameters' prefix.
+        Its node's name and its events', integrands' and parameters' prefix, an identifier.
+    port : str, optional
+        The preset's port it takes (``"valve_return"``).
 
     Raises
     ------
@@ -94,20 +96,28 @@ class Cushion(CircuitPart):
     openings: tuple
     target: str = "tank"
     name: str = "cushion"
+    port: str = "valve_return"
+
+    si_fields = (
+        PartField("volume", "m**3", "'0.05 L'", "volume", description="the cushion node's oil volume"),
+        PartField("coefficient", "m**3/s/Pa**0.5", "'1e-5 m^3/s/Pa^0.5'", "orifice", low_open=False,
+                  description="the cushion port's full opening coefficient"))
+    si_lists = (
+        PartField("gaps", "m", "['3 mm', '5 mm']", "length", low=-math.inf, low_open=False,
+                  description="the gaps of the points of the port's opening"),
+        PartField("openings", "", "[1.0, 0.2]", "one", low=0.0, high=1.0, low_open=False, high_open=False,
+                  description="the port's opening at those gaps"))
+    connections = {"port": ("port", "valve_return"), "target": ("node", "tank")}
 
     def __post_init__(self) -> None:
         _check_names(self, "target", "name")
-        object.__setattr__(self, "volume", check_real("volume", self.volume, lo=0.0, lo_open=True))
-        object.__setattr__(self, "coefficient", check_real("coefficient", self.coefficient, lo=0.0))
-        gaps = tuple(check_real("gaps", y) for y in np.atleast_1d(self.gaps).tolist())
-        openings = tuple(check_real("openings", g, lo=0.0, hi=1.0)
-                         for g in np.atleast_1d(self.openings).tolist())
+        given = self.gaps, self.openings
+        super().__post_init__()
+        gaps, openings = self.gaps, self.openings
         rising = all(b > a for a, b in zip(gaps, gaps[1:], strict=False))
         if not gaps or len(openings) != len(gaps) or not rising:
-            raise ValueError(f"gaps must be one or more increasing gaps and openings one opening in [0, 1] "
-                             f"each; got gaps {self.gaps!r}, openings {self.openings!r}")
-        object.__setattr__(self, "gaps", gaps)
-        object.__setattr__(self, "openings", openings)
+            raise ValueError(f"{self.name}.gaps must be one or more increasing gaps, with as many openings "
+                             f"(each in [0, 1]); got gaps {given[0]!r}, openings {given[1]!r}")
 
     @property
     def nodes(self) -> tuple:
@@ -127,18 +137,7 @@ class Cushion(CircuitPart):
 
     @property
     def ports(self) -> dict:
-        return {"valve_return": self.name}
-
-    @property
-    def parameters(self) -> dict:
-        return {f"{self.name}_volume": "volume", f"{self.name}_coefficient": "coefficient"}
-
-    @property
-    def parameter_ranges(self) -> dict:
-        return {f"{self.name}_volume": {"low": 0.0, "low_open": True, "high_open": True,
-                                        "description": "the cushion node's oil volume"},
-                f"{self.name}_coefficient": {"low": 0.0, "high_open": True,
-                                             "description": "the cushion port's full opening coefficient"}}
+        return {self.port: self.name}
 
     def records(self, slots, oil) -> list:
         """The cushion's node, its port (:mod:`.kinds.cushion`) on the segment of ``g`` the mode's

@@ -12,9 +12,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..._shared.validate import check_real
 from ._network import LEAK, record
-from .composition import CircuitPart
+from .composition import NamedPart, PartField
 
 __all__ = ["LaminarLeak"]
 
@@ -33,12 +32,14 @@ def _check_ends(part) -> None:
 
 
 @dataclass(frozen=True)
-class LaminarLeak(CircuitPart):
+class LaminarLeak(NamedPart):
     r"""Laminar leakage from node ``source`` to node ``target``: ``q = G (p_source - p_target)``, a
     clearance's flow (the piston's, rear chamber to front; the spool's). Its loss
     :math:`\int G \Delta p^2 \, dt` is an energy integrand of its own, ``name``, in the account's
     ``orifices`` term. ``G = 0`` leaves the circuit as it is (to the bit where the loss is pooled into
-    the ``orifices`` integrand: a subclass with ``energies = ()``).
+    the ``orifices`` integrand: a subclass with ``energies = ()``). The kind ``"laminar_leak"`` of a
+    configuration's ``[parts.<name>]`` table (``conductance`` in m^3/s/Pa, the relief coefficient's
+    scale).
 
     Parameters
     ----------
@@ -49,12 +50,14 @@ class LaminarLeak(CircuitPart):
         gap of diameter ``D``, radial clearance ``c`` and length ``l`` in oil of viscosity ``mu`` has
         ``G = pi D c^3 / (12 mu l)`` (SI: m^3 s^-1 Pa^-1).
     name : str, optional
-        Its energy integrand's name and its parameter's prefix (``<name>_conductance``).
+        Its energy integrand's name and its parameter's prefix (``<name>.conductance``), an
+        identifier.
 
     Raises
     ------
     ValueError
-        A conductance out of range, a node name that is not a string or the same node twice.
+        A conductance out of range, a node name that is not a string or the same node twice, a name
+        that is not an identifier.
 
     Examples
     --------
@@ -62,7 +65,7 @@ class LaminarLeak(CircuitPart):
     >>> from impactbar.physical import circuit_preset
     >>> leak = LaminarLeak("rear", "front", conductance=0.01)
     >>> drive = replace(circuit_preset("circuit-drifter").drive(), extra_parts=(leak,))
-    >>> drive.layout.energies[-1], drive.with_(leak_conductance=0.02).value("leak_conductance")
+    >>> drive.layout.energies[-1], drive.with_(**{"leak.conductance": 0.02}).value("leak.conductance")
     ('leak', 0.02)
     """
 
@@ -71,22 +74,17 @@ class LaminarLeak(CircuitPart):
     conductance: float
     name: str = "leak"
 
+    si_fields = (PartField("conductance", "m**3/s/Pa", "'1e-12 m^3/s/Pa'", "relief", low_open=False,
+                           description="the laminar leakage's conductance"),)
+    connections = {"source": ("node", None), "target": ("node", None)}
+
     def __post_init__(self) -> None:
         _check_ends(self)
-        object.__setattr__(self, "conductance", check_real("conductance", self.conductance, lo=0.0))
+        super().__post_init__()
 
     @property
     def energies(self) -> tuple:
         return ((self.name, "orifices"),)
-
-    @property
-    def parameters(self) -> dict:
-        return {f"{self.name}_conductance": "conductance"}
-
-    @property
-    def parameter_ranges(self) -> dict:
-        return {f"{self.name}_conductance": {"low": 0.0, "high_open": True,
-                                             "description": "the laminar leakage's conductance"}}
 
     def records(self, slots, oil) -> list:
         """The leak's record (:mod:`.kinds.leak`)."""
