@@ -110,6 +110,9 @@ NOT_RECORDS = {
     "physical/bar.py": {"secs"},  # the first section
     "physical/circuit.py": {"pieces"},  # the first and last piece
     "measure/kolsky.py": {"band", "chans", "later", "time"},  # a band's ends; first channel, pulse, sample
+    "physical/optimize_failures.py": {"lines"},  # the error's first line
+    "physical/optimize_multistart.py": {"order"},  # the best design's index
+    "physical/settle.py": {"last"},  # the first and last impact times
     "measure/model.py": {"count", "ends", "pieces"},  # a counter; the rod's end; its first piece's material
     "measure/recording.py": {"time"},  # the first and last sample times
     "measure/results.py": {"time"},  # the first two sample times (the step)
@@ -135,7 +138,6 @@ NOT_RECORDS = {
     "simulation/switched_trajectory.py": {"pieces"},  # the last piece
     "simulation/trajectory.py": {"head", "out", "rows", "segs"},  # sequences' first and last entries
     "sweeps/map_spec.py": {"values"},  # the first and last value
-    "sweeps/map_task.py": {"last"},  # the first and last impact times
     "sweeps/plot.py": {"axes"},  # the figure's first axes
     "sweeps/run.py": {"left"},  # a one-slot box
 }

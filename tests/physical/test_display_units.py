@@ -29,7 +29,8 @@ def test_negative_volume_error_quotes_litres_not_si_repr():
 
 def test_circuit_branch_repr_in_display_units():
     fake = SimpleNamespace(values=[0.00116667, 0.00141667], events=[], status="done")
-    branch = CircuitBranch(SimpleNamespace(from_dimensionless=lambda p, x: x), "supply.pump_flow",
+    branch = CircuitBranch(SimpleNamespace(from_dimensionless=lambda p, x: x, key_field=lambda p: p),
+                           "supply.pump_flow",
                            "m**3/s", fake)
     assert repr(branch) == "CircuitBranch(supply.pump_flow from 70.0002 L/min to 85.0002 L/min, " \
                            "2 points, 0 events, done)"

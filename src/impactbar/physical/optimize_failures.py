@@ -22,7 +22,7 @@ MOTION_BLOWS = 40
 
 
 def failed_record(exc: BaseException, seconds: float, drifter=None) -> dict:
-    """The record of a design without an operating point.
+    r"""The record of a design without an operating point.
 
     Parameters
     ----------
@@ -45,7 +45,7 @@ def failed_record(exc: BaseException, seconds: float, drifter=None) -> dict:
     Examples
     --------
     >>> from impactbar.physical.optimize_failures import failed_record
-    >>> failed_record(ValueError("find_orbit: Newton stalled\\nmore"), 1.25)
+    >>> failed_record(ValueError("find_orbit: Newton stalled\nmore"), 1.25)
     {'ok': False, 'error': 'find_orbit: Newton stalled', 'feasible': False, 'seconds': 1.25}
     """
     import time

@@ -37,11 +37,11 @@ class CheckValve(NamedPart):
     source, target : str
         The nodes it joins (the preset's ``front``, ``rear``, ``supply``, ``tank`` or another part's).
     coefficient : float
-        ``K_cv >= 0``, its fully open flow coefficient (model units, as an orifice's).
+        :math:`K_{cv} \ge 0`, its fully open flow coefficient (model units, as an orifice's).
     cracking_pressure : float
-        ``p_crack >= 0`` (the pressure scale).
+        :math:`p_\mathrm{crack} \ge 0` (the pressure scale).
     opening_span : float
-        ``dp_open > 0``: the pressure over which it opens fully.
+        :math:`\Delta p_\mathrm{open} > 0`: the pressure over which it opens fully.
     name : str, optional
         Its events', integrand's and parameters' prefix (``<name>.coefficient``, ...), an identifier.
 

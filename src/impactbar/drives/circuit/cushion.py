@@ -61,7 +61,7 @@ class Cushion(NamedPart):
     volume : float
         The cushion node's oil volume, ``> 0`` (``A_r L`` units).
     coefficient : float
-        ``K_max >= 0``, the port's fully open flow coefficient (model units, as an orifice's).
+        :math:`K_\max \ge 0`, the port's fully open flow coefficient (model units, as an orifice's).
     gaps : tuple of float
         The points' gaps, increasing (bar lengths).
     openings : tuple of float

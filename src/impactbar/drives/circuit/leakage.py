@@ -46,9 +46,9 @@ class LaminarLeak(NamedPart):
     source, target : str
         The nodes it joins (the preset's ``front``, ``rear``, ``supply``, ``tank`` or another part's).
     conductance : float
-        ``G >= 0`` (model units: the flow scale over the pressure scale, :mod:`.parts`); an annular
+        :math:`G \ge 0` (model units: the flow scale over the pressure scale, :mod:`.parts`); an annular
         gap of diameter ``D``, radial clearance ``c`` and length ``l`` in oil of viscosity ``mu`` has
-        ``G = pi D c^3 / (12 mu l)`` (SI: m^3 s^-1 Pa^-1).
+        :math:`G = \pi D c^3 / (12 \mu l)` (SI: m^3 s^-1 Pa^-1).
     name : str, optional
         Its energy integrand's name and its parameter's prefix (``<name>.conductance``), an
         identifier.

@@ -1,10 +1,11 @@
 r"""Laminar leakage between two nodes (theory §11, *Parts of a drill's circuit*): a clearance's flow
-``q = G (p_source - p_target)``, linear in the pressure drop (Hopsan's ``HydraulicLaminarOrifice``);
-``G`` in the model's flow over its pressure (for an annular gap of diameter ``D``, radial clearance
-``c`` and length ``l`` in oil of viscosity ``mu``: ``pi D c^3 / (12 mu l)``). Its loss ``q (p_source -
-p_target) = G dp^2`` goes to its energy slot. No event: the law is smooth.
+:math:`q = G\,(p_\mathrm{source} - p_\mathrm{target})`, linear in the pressure drop (Hopsan's
+``HydraulicLaminarOrifice``); ``G`` in the model's flow over its pressure (for an annular gap of
+diameter ``D``, radial clearance ``c`` and length ``l`` in oil of viscosity ``mu``:
+:math:`\pi D c^3 / (12 \mu l)`). Its loss :math:`q\,(p_\mathrm{source} - p_\mathrm{target}) =
+G\,\Delta p^2` goes to its energy slot. No event: the law is smooth.
 
-The record: ``source``, ``target`` (nodes), ``energy`` (slot, -1 none), ``conductance`` (``G >= 0``).
+The record: ``source``, ``target`` (nodes), ``energy`` (slot, -1 none), ``conductance`` (:math:`G \ge 0`).
 """
 
 from __future__ import annotations
