@@ -16,14 +16,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from ._network import CHECK, LEVEL, record
-from .composition import NamedPart, PartField
-from .leakage import _check_ends
+from .composition import PartField
+from .leakage import BetweenNodes
 
 __all__ = ["CheckValve"]
 
 
 @dataclass(frozen=True)
-class CheckValve(NamedPart):
+class CheckValve(BetweenNodes):
     r"""A check valve from node ``source`` to node ``target``: ``q = K_cv o(dp) phi(dp)``,
     ``dp = p_source - p_target``, opening ``o(dp) = clip((dp - p_crack) / dp_open, 0, 1)``: shut
     below its cracking pressure, fully open ``dp_open`` above it. Its kinks are events of the flights
@@ -74,16 +74,6 @@ class CheckValve(NamedPart):
                   description="the check valve's cracking pressure"),
         PartField("opening_span", "Pa", "'1 MPa'", "pressure",
                   description="the pressure over which the check valve opens"))
-    connections = {"source": ("node", None), "target": ("node", None)}
-
-    def __post_init__(self) -> None:
-        _check_ends(self)
-        super().__post_init__()
-
-    @property
-    def energies(self) -> tuple:
-        return ((self.name, "orifices"),)
-
     @property
     def events(self) -> tuple:
         return (f"{self.name}_crack", f"{self.name}_open")

@@ -242,6 +242,22 @@ def check_part(part: CircuitPart) -> None:
         object.__setattr__(part, f.name, tuple(f.check(f"{name}.{f.name}", v) for v in values))
 
 
+class OwnNode:
+    """A part with one node of its own, named as the part (its pressure ``p_<name>``): the
+    mixin of :class:`~impactbar.drives.circuit.ReturnAccumulator` and
+    :class:`~impactbar.drives.circuit.Cushion` (before :class:`NamedPart` in their bases)."""
+
+    @property
+    def nodes(self) -> tuple:
+        """Its node, by its name."""
+        return (self.name,)
+
+    @property
+    def symbols(self) -> tuple:
+        """Its pressure's symbol ``p_<name>``."""
+        return (f"p_{self.name}",)
+
+
 class NamedPart(CircuitPart):
     """A :class:`CircuitPart` with a ``name`` field and :attr:`~CircuitPart.si_fields`: its
     parameters are ``<name>.<field>`` (each field's range), checked on construction

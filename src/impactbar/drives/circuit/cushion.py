@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 
 from ._network import CUSHION, LEVEL, NODE, record
-from .composition import NamedPart, PartField
+from .composition import NamedPart, OwnNode, PartField
 from .leakage import _check_names
 
 __all__ = ["Cushion", "opening_segment"]
@@ -43,7 +43,7 @@ def opening_segment(gaps, openings, above) -> tuple[float, float]:
 
 
 @dataclass(frozen=True)
-class Cushion(NamedPart):
+class Cushion(OwnNode, NamedPart):
     r"""A cushion on the rear chamber's way out: the valve's return port drains into a node of oil
     ``volume`` (named ``name``), and from it to ``target`` through a port that the piston's gap
     ``y`` opens, ``q = K_max g(y) phi(p_cushion - p_target)``, ``g`` piecewise linear through the
@@ -118,14 +118,6 @@ class Cushion(NamedPart):
         if not gaps or len(openings) != len(gaps) or not rising:
             raise ValueError(f"{self.name}.gaps must be one or more increasing gaps, with as many openings "
                              f"(each in [0, 1]); got gaps {given[0]!r}, openings {given[1]!r}")
-
-    @property
-    def nodes(self) -> tuple:
-        return (self.name,)
-
-    @property
-    def symbols(self) -> tuple:
-        return (f"p_{self.name}",)
 
     @property
     def energies(self) -> tuple:

@@ -32,7 +32,25 @@ def _check_ends(part) -> None:
 
 
 @dataclass(frozen=True)
-class LaminarLeak(NamedPart):
+class BetweenNodes(NamedPart):
+    """A part between two nodes, ``source`` and ``target`` (its connections), its loss one energy
+    integrand, ``name``, in the account's ``orifices`` term (the base of :class:`LaminarLeak` and
+    :class:`~impactbar.drives.circuit.CheckValve`)."""
+
+    connections = {"source": ("node", None), "target": ("node", None)}
+
+    def __post_init__(self) -> None:
+        _check_ends(self)
+        super().__post_init__()
+
+    @property
+    def energies(self) -> tuple:
+        """Its loss, in the term ``orifices``."""
+        return ((self.name, "orifices"),)
+
+
+@dataclass(frozen=True)
+class LaminarLeak(BetweenNodes):
     r"""Laminar leakage from node ``source`` to node ``target``: ``q = G (p_source - p_target)``, a
     clearance's flow (the piston's, rear chamber to front; the spool's). Its loss
     :math:`\int G \Delta p^2 \, dt` is an energy integrand of its own, ``name``, in the account's
@@ -76,16 +94,6 @@ class LaminarLeak(NamedPart):
 
     si_fields = (PartField("conductance", "m**3/s/Pa", "'1e-12 m^3/s/Pa'", "relief", low_open=False,
                            description="the laminar leakage's conductance"),)
-    connections = {"source": ("node", None), "target": ("node", None)}
-
-    def __post_init__(self) -> None:
-        _check_ends(self)
-        super().__post_init__()
-
-    @property
-    def energies(self) -> tuple:
-        return ((self.name, "orifices"),)
-
     def records(self, slots, oil) -> list:
         """The leak's record (:mod:`.kinds.leak`)."""
         return [record(LEAK, source=slots.node(self.source, self), target=slots.node(self.target, self),

@@ -24,7 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from . import _network as NW
-from .composition import NamedPart, PartField, node_of
+from .composition import NamedPart, OwnNode, PartField, node_of
 from .parts import Accumulator
 
 __all__ = ["ReturnAccumulator"]
@@ -33,7 +33,7 @@ _ORIFICE = "m**3/s/Pa**0.5"
 
 
 @dataclass(frozen=True)
-class ReturnAccumulator(NamedPart):
+class ReturnAccumulator(OwnNode, NamedPart):
     r"""A return line with a gas accumulator (the module's equations), dimensionless (units of
     :mod:`~impactbar.drives.circuit.parts`): a :class:`~impactbar.drives.circuit.CircuitPart` for
     ``HydraulicCircuitDrive(..., extra_parts=(line,))``, or the kind ``"return_accumulator"`` of a
@@ -91,16 +91,6 @@ class ReturnAccumulator(NamedPart):
         PartField("polytropic_exponent", "", "1.4", "one", low=1.0, high=2.0, low_open=False,
                   high_open=False, default=1.4, description="the line's gas's polytropic exponent"))
     connections = {"port": ("port", "valve_return"), "drain": ("node", "tank")}
-
-    @property
-    def nodes(self) -> tuple:
-        """Its node, by its name."""
-        return (self.name,)
-
-    @property
-    def symbols(self) -> tuple:
-        """Its pressure's symbol ``p_<name>``."""
-        return (f"p_{self.name}",)
 
     @property
     def energies(self) -> tuple:
