@@ -157,3 +157,21 @@ def one_period(orbit):
 def _is_loss(part, name):
     """Whether the integrand ``name`` of ``part`` is its flow's loss (a cushion's port, not its node)."""
     return not (isinstance(part, Cushion) and name == part.name)
+
+
+def network_jacobian_fd(y, par, M, n, n_energy):
+    """The central differences (step ``1e-6 max(1, |y_j|)``) of the interpreted network's vector
+    field (``_network.base``, its first ``n`` rows) at ``y``: the reference of its Jacobian."""
+    from impactbar.drives.circuit import _network as NW
+
+    fd = np.empty((n, n))
+    for j in range(n):
+        h = 1e-6 * max(1.0, abs(y[j]))
+        up, dn = y.copy(), y.copy()
+        up[j] += h
+        dn[j] -= h
+        fu, fl = np.empty(n + n_energy), np.empty(n + n_energy)
+        NW.base(up, par, M, fu)
+        NW.base(dn, par, M, fl)
+        fd[:, j] = (fu[:n] - fl[:n]) / (2 * h)
+    return fd

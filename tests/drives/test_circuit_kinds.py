@@ -11,7 +11,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from circuit_parts_reference import field
+from circuit_parts_reference import field, network_jacobian_fd
 
 from impactbar.drives.circuit import CheckValve, Cushion, LaminarLeak
 from impactbar.drives.circuit import _kernel as K
@@ -75,16 +75,7 @@ def test_the_kinds_give_their_equations_and_the_generated_code_their_numbers(n_m
         NW.jac_base(y, par, M, A)
         gen.jac_base(y, par, M, A2)
         assert np.array_equal(_bits(A2), _bits(A))
-        fd = np.empty((n, n))
-        for j in range(n):
-            h = 1e-6 * max(1.0, abs(y[j]))
-            up, dn = y.copy(), y.copy()
-            up[j] += h
-            dn[j] -= h
-            fu, fl = np.empty(n + ne), np.empty(n + ne)
-            NW.base(up, par, M, fu)
-            NW.base(dn, par, M, fl)
-            fd[:, j] = (fu[:n] - fl[:n]) / (2 * h)
+        fd = network_jacobian_fd(y, par, M, n, ne)
         scale = np.max(np.abs(A), axis=1, keepdims=True)
         assert np.allclose(A, fd, rtol=1e-6, atol=1e-7 * scale), np.max(np.abs(A - fd))
         assert ns == 4
