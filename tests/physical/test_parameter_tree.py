@@ -42,8 +42,9 @@ def test_the_scan_finds_a_planted_hand_table():
 
 def test_no_module_writes_a_table_of_the_declared_names():
     """Hand tables joining parameter names: 0 (every module of the package but the tree itself)."""
+    every = {k: f for fields in tree.MACHINES.values() for k, f in fields.items()}
     tables = {str(p.relative_to(SRC)): lines for p in sorted(SRC.rglob("*.py"))
-              if p.name != "tree.py" and (lines := hand_tables(p.read_text(), tree.FIELDS))}
+              if p.name != "tree.py" and (lines := hand_tables(p.read_text(), every))}
     assert tables == {}
 
 
@@ -66,11 +67,14 @@ def test_the_old_tables_are_views_of_the_tree():
 
 
 def test_every_declared_field_is_complete():
-    """A unit pint reads, an example in that unit, a scale known for every parameter set, and for a
-    field that cannot be continued a reason the tools show."""
+    """Of every kind of machine: a unit pint reads, an example in that unit, a scale known for every
+    parameter set, and for a field that cannot be continued a reason the tools show."""
     from impactbar.physical.units import to_si
 
-    for key, f in tree.FIELDS.items():
+    for key, f in ((k, f) for fields in tree.MACHINES.values() for k, f in fields.items()):
+        if f.text:
+            assert not f.parameter and not f.unit, key
+            continue
         if f.parameter:
             assert isinstance(f.scale, str) and f.scale in tree.SCALES, key
             assert f.holder in ("drive", "law", "model"), key
@@ -113,3 +117,53 @@ def test_a_key_the_maps_vary_is_continued_where_it_sets_one_parameter():
     b = continue_circuit(circuit_preset("circuit-drifter"), "stop.restitution", 0.25, max_points=3)
     assert b.unit == "" and b.values[0] == 0.215 and len(b) == 3
     assert b.branch.values[0] == 0.215 and b.values[-1] > 0.215
+
+
+@pytest.mark.parametrize("kind", ["hammer", "drifter", "circuit"])
+def test_each_kind_of_config_takes_the_keys_the_tree_declares(kind):
+    """The keys each reader takes (a hammer's, a valve drifter's, a drifter with its oil circuit's,
+    the drill string's and its segments') are the tree's declarations of that kind, each with its
+    unit: no reader keeps a table of its own."""
+    from impactbar.physical import config_keys
+
+    keys = config_keys(kind)
+    listed = {f"{section}.{name}" for section, names in keys.items() for name in names
+              if (section, name) != ("rod", "segments")}
+    hammers = {"force.k", "force.max_harmonics"} if kind == "circuit" else set()  # (its integer keys)
+    assert listed == set(tree.MACHINES[kind]) - hammers
+    assert tree.declared("rod.segments.2.diameter", kind).unit == "m"
+    assert tree.declared("rod.segments.x.diameter", kind) is None
+
+
+def test_a_key_of_a_hammer_or_a_rod_segment_has_its_declared_unit():
+    """A design map's unit of a key is the tree's, not the base units of the config's value: a
+    hammer's frequency in Hz (given in bpm), a rod segment's modulus in Pa (given in GPa), a valve
+    drifter's delay in s."""
+    from impactbar.physical.design_keys import design_key
+    from impactbar.physical.loader import read_config
+
+    hammer = read_config("pneumatic-drill")[0]
+    hammer["drive"]["frequency"] = "2400 bpm"
+    assert design_key(hammer, "drive.frequency") == ("Hz", "2400 bpm")
+    rock = read_config(Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter_rock.toml")[0]
+    rock["rod"]["segments"][0]["E"] = "210 GPa"
+    assert design_key(rock, "rod.segments.0.E") == ("Pa", "210 GPa")
+    drifter = read_config(Path(__file__).resolve().parents[2] / "examples" / "drifter_rock.toml")[0]
+    drifter["valve"]["delay"] = "1 ms"
+    assert design_key(drifter, "valve.delay")[0] == "s"
+
+
+def test_a_rod_segment_and_a_valve_drifter_read_their_units_from_the_tree():
+    """A bare number or another dimension is refused naming the key as the config writes it, in
+    the words the tree gives its unit."""
+    from impactbar.physical import build
+    from impactbar.physical.loader import read_config, with_values
+
+    rock = read_config(Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter_rock.toml")[0]
+    with pytest.raises(ValueError, match=r"rod.segments\[0\].E.*a pressure"):
+        build(with_values(rock, {"rod.segments.0.E": "210 kg"}))
+    with pytest.raises(ValueError, match="rod.segments\\[1\\].diameter must be in \\(0, inf\\)"):
+        build(with_values(rock, {"rod.segments.1.diameter": "-32 mm"}))
+    drifter = read_config(Path(__file__).resolve().parents[2] / "examples" / "drifter_rock.toml")[0]
+    with pytest.raises(ValueError, match="valve.delay.*a time"):
+        build(with_values(drifter, {"valve.delay": "3 kg"}))

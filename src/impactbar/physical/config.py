@@ -10,26 +10,20 @@ from __future__ import annotations
 from pathlib import Path
 
 from .._shared.validate import check_real
+from . import tree
 from .forces import Force, HydraulicForce, MeasuredForce, PneumaticForce
 from .units import to_si
 
 # --------------------------------------------------------------------------------------------
 # configuration
 # --------------------------------------------------------------------------------------------
-_SECTIONS = {
-    "bar": {"E", "density", "length", "diameter", "area"},
-    "damping": {"coefficient", "ratio"},
-    "stop": {"restitution", "area"},
-    "drive": {"frequency"},
-    "force": {"kind", "mean", "amplitude", "k", "high", "low", "fraction", "csv", "tolerance",
-              "max_harmonics"},
-    "model": {"n_modes", "impact"},
-}
-_FORCE_KEYS = {
-    "pneumatic": {"mean", "amplitude", "k"},
-    "hydraulic": {"high", "low", "fraction"},
-    "measured": {"csv", "tolerance", "max_harmonics"},
-}
+# a hammer's sections and the keys of each, as the parameter tree declares them (the drill string's
+# sections checked by its own reader, impactbar.physical.rock), and the force's keys of each kind
+_SECTIONS = {name: keys for name, keys in tree.config_sections("hammer").items()
+             if name not in ("rod", "rod.segments", "bit", "rock")}
+_FORCE_KEYS = {kind: {f.name for f in tree.MACHINES["hammer"].values()
+                      if f.section == "force" and f.needs == kind}
+               for kind in ("pneumatic", "hydraulic", "measured")}
 _REQUIRED = {"bar", "stop", "drive", "force"}
 
 
@@ -124,7 +118,7 @@ def _force_from_config(sec: dict, base_dir) -> Force:
                          f"{', '.join(sorted(_FORCE_KEYS[kind]))}")
 
     def force(key):
-        return to_si(f"force.{key}", _need(sec, "force", key), "N", "'2.5 kN'", what="a force")
+        return tree.read_si(f"force.{key}", _need(sec, "force", key), "hammer")
 
     if kind == "pneumatic":
         return PneumaticForce(force("mean"), force("amplitude"), sec.get("k", 1))

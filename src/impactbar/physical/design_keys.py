@@ -13,9 +13,11 @@ No table of its own decides which keys may vary.
 
 from __future__ import annotations
 
+from .config import config_kind
 from .display_units import config_quantity
 from .loader import config_value
 from .tree import FIELDS, integer_keys
+from .tree import declared as declared_field
 from .units import to_si
 
 __all__ = ["INTEGER_KEYS", "design_key", "key_unit", "key_value", "design_bounds"]
@@ -38,8 +40,9 @@ def key_unit(key: str, base, declared: str | None = None) -> str:
     base : str, float or list
         The config's own value of the key (:func:`~impactbar.physical.loader.config_value`).
     declared : str, optional
-        The unit declared for a key the tree does not hold (a part's,
-        :func:`~impactbar.physical.circuit_parts.declared_unit`).
+        The unit declared for the key by its kind of machine (:func:`~impactbar.physical.tree.declared`)
+        or by a part (:func:`~impactbar.physical.circuit_parts.declared_unit`); default: the
+        parameter tree's declaration of a drifter with its oil circuit, if any.
 
     Returns
     -------
@@ -69,7 +72,8 @@ def key_unit(key: str, base, declared: str | None = None) -> str:
         q = registry().Quantity(base)
     except Exception as exc:  # pint raises several kinds
         raise ValueError(f"{key}: the config's value {base!r} is not a quantity: {exc}") from None
-    declared = FIELDS[key].unit if key in FIELDS else declared
+    if declared is None and declared_field(key) is not None:
+        declared = declared_field(key).unit
     if declared and q.is_compatible_with(declared):
         return declared  # (a hammer's damping per unit length is another quantity: its own)
     return "" if q.dimensionless else f"{q.to_base_units().units:~}".replace(" ", "")
@@ -119,7 +123,8 @@ def design_key(config: dict, key: str) -> tuple[str, object]:
     from .circuit_parts import declared_unit
 
     base = config_value(config, key)
-    return key_unit(key, base, None if key in FIELDS else declared_unit(config, key)), base
+    f = declared_field(key, config_kind(config))
+    return key_unit(key, base, f.unit if f is not None else declared_unit(config, key)), base
 
 
 def design_bounds(config: dict, vary, folder=None) -> dict:

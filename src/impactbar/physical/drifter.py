@@ -39,25 +39,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._shared.validate import check_int, check_real
+from . import tree
 from ._circuit_checks import shown
 from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
-from .units import to_si
 
 __all__ = ["Drifter", "DrifterOrbit", "DRIFTER_PRESETS", "drifter_preset"]
 
-_KEYS = {
-    "bar": {"E", "density", "length", "diameter", "area"},
-    "stop": {"restitution", "area"},
-    "damping": {"coefficient"},
-    "valve": {"supply_pressure", "stroke_area", "return_area", "switch_out", "delay"},
-    "model": {"n_modes"},
-}
-_REQUIRED = {
-    "bar": ("E", "density", "length"),
-    "valve": ("supply_pressure", "stroke_area", "return_area", "switch_out"),
-}
+# the sections and keys of its config, and the required ones, as the parameter tree declares them
+# (the drill string's sections, rock.ROCK_SECTIONS, checked by its own reader)
+_KEYS = {name: keys for name, keys in tree.config_sections("drifter").items() if name not in ROCK_SECTIONS
+         and name != "rod.segments"}
+_REQUIRED = {name: tuple(f.name for f in tree.MACHINES["drifter"].values()
+                         if f.section == name and f.required) for name in ("bar", "valve")}
 
 
 def _config_sections(config: dict, keys: dict, required: dict) -> dict:
@@ -93,9 +88,9 @@ def _piston_drill_restitution(config: dict, sec: dict, *, stop_area_check: bool 
     elif ("restitution" in st) == ("area" in st):
         raise ValueError("give exactly one of stop.restitution and stop.area")
     elif "restitution" in st:
-        R = to_si("stop.restitution", st["restitution"], "", "0.215")
+        R = tree.read_si("stop.restitution", st["restitution"])
     else:
-        a_s = to_si("stop.area", st["area"], "m**2", "'24.6 cm^2'", what="an area")
+        a_s = tree.read_si("stop.area", st["area"])
         if stop_area_check and not a_s >= bar.area_m2:
             raise ValueError(f"stop.area must be at least the piston's area ({bar.area_m2 * 1e4:.4g} "
                              f"cm^2: the restitution (A_s - A) / (A_s + A) in [0, 1)); got "
@@ -300,18 +295,14 @@ class Drifter(_ScaledDrifter):
         v = sec["valve"]
         bar, drill, R = _piston_drill_restitution(config, sec)
 
-        def area(key):
-            return to_si(f"valve.{key}", v[key], "m**2", "'2.8 cm^2'", what="an area")
+        def valve(key, default=None):
+            return tree.read_si(f"valve.{key}", v.get(key, default), "drifter")
 
-        return cls(bar=bar,
-                   supply_pressure_Pa=to_si("valve.supply_pressure", v["supply_pressure"], "Pa", "'20 MPa'",
-                                            what="a pressure"),
-                   stroke_area_m2=area("stroke_area"), return_area_m2=area("return_area"),
-                   switch_out_m=to_si("valve.switch_out", v["switch_out"], "m", "'21.5 mm'", what="a length"),
-                   restitution=R,
-                   delay_s=to_si("valve.delay", v.get("delay", "0 ms"), "s", "'1 ms'", what="a time"),
-                   damping_N_s_m=to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"),
-                                       "N*s/m", "'9 N*s/m'", what="a damping coefficient"),
+        return cls(bar=bar, supply_pressure_Pa=valve("supply_pressure"), stroke_area_m2=valve("stroke_area"),
+                   return_area_m2=valve("return_area"), switch_out_m=valve("switch_out"), restitution=R,
+                   delay_s=valve("delay", "0 ms"),
+                   damping_N_s_m=tree.read_si("damping.coefficient",
+                                              sec["damping"].get("coefficient", "0 N*s/m"), "drifter"),
                    n_modes=sec["model"].get("n_modes", 0), name=str(config.get("name", "")), drill=drill)
 
 

@@ -16,6 +16,7 @@ from .._shared.validate import check_int, check_real
 from ..laws import LAWS, RodRock, piston_law
 from ..loads import FourierLoad, Load
 from ..model import BarModel
+from . import tree
 from .bar import (
     SHORT_IMPACT_LIMIT,
     TWO_PI,
@@ -41,7 +42,7 @@ from .config import (
 )
 from .forces import Force, FourierFit, HydraulicForce, MeasuredForce, PneumaticForce
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
-from .units import to_si, to_si_any
+from .units import to_si_any
 
 
 # --------------------------------------------------------------------------------------------
@@ -413,8 +414,8 @@ def _hammer_from_config(config: dict, base_dir) -> Hammer:
                             _need(b, "bar", "length"), diameter=b.get("diameter"), area=b.get("area"))
 
     drive = _section(config, "drive")
-    freq = _positive("drive.frequency", to_si("drive.frequency", _need(drive, "drive", "frequency"),
-                                               "Hz", "'40 Hz' or '2400 bpm'", what="a frequency"))
+    freq = _positive("drive.frequency", tree.read_si("drive.frequency", _need(drive, "drive", "frequency"),
+                                                     "hammer"))
 
     stop = _section(config, "stop")
     if ("restitution" in stop) == ("area" in stop):
@@ -422,8 +423,7 @@ def _hammer_from_config(config: dict, base_dir) -> Hammer:
     if "restitution" in stop:
         stop_kw = {"restitution": _dimensionless("stop.restitution", stop["restitution"])}
     else:
-        stop_kw = {"stop_area_m2": to_si("stop.area", stop["area"], "m**2", "'15.9 cm^2'",
-                                         what="an area")}
+        stop_kw = {"stop_area_m2": tree.read_si("stop.area", stop["area"], "hammer")}
 
     force = _force_from_config(_section(config, "force"), base_dir)
 

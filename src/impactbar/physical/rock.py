@@ -20,16 +20,17 @@ import numpy as np
 
 from .._shared.validate import check_int, check_real
 from ..laws.rodrock import BilinearRock, RodRock, RodSegment
-from .bar import _length, _positive_si, _section_area
+from . import tree
+from .bar import _positive
 from .config import _section
-from .units import to_si
 
 __all__ = ["DrillString", "RodPiece", "rock_blows", "rock_from_config", "rock_summary"]
 
 #: keys of the sections (added to the hammer configuration's)
-ROCK_SECTIONS = {"rod": {"segments"}, "bit": {"mass"},
-                 "rock": {"k", "k_u", "feed", "cells_per_piston", "method"}}
-_SEGMENT_KEYS = {"length", "diameter", "area", "E", "density"}
+ROCK_SECTIONS = {name: keys for name, keys in tree.config_sections("hammer").items()
+                 if name in ("rod", "bit", "rock")}
+# a segment's keys ([[rod.segments]]), as the parameter tree declares them
+_SEGMENT_KEYS = tree.config_sections("hammer")["rod.segments"]
 
 
 @dataclass(frozen=True)
@@ -176,20 +177,23 @@ def rock_from_config(config: dict, bar) -> DrillString | None:
         if "length" not in g:
             raise ValueError(f"missing key {where}.length")
         # (each positive, named: a diameter of -32 mm was squared into the area of +32 mm)
-        length = _length(f"{where}.length", g["length"])
-        shape = "area" if "area" in g else "diameter"
-        area = _section_area(f"{where}.{shape}", shape, g[shape])
-        E = _positive_si(f"{where}.E", g["E"], "Pa", "'210 GPa'", "a pressure") if "E" in g else bar.E_Pa
-        rho = (_positive_si(f"{where}.density", g["density"], "kg/m**3", "'7850 kg/m^3'", "a density")
-               if "density" in g else bar.density_kg_m3)
+        def given(key, i=i, g=g, where=where):  # (positive, in the tree's unit, named)
+            return _positive(f"{where}.{key}", tree.read_si(f"rod.segments.{i}.{key}", g[key],
+                                                            name=f"{where}.{key}"), g[key])
+
+        length = given("length")
+        # (a diameter's sign checked before it is squared: -32 mm was read as the area of +32 mm)
+        dia = given("diameter") if "diameter" in g else None
+        area = math.pi * dia * dia / 4.0 if dia is not None else given("area")
+        E = given("E") if "E" in g else bar.E_Pa
+        rho = given("density") if "density" in g else bar.density_kg_m3
         pieces.append(RodPiece(length_m=length, area_m2=area, E_Pa=E, density_kg_m3=rho))
     for key in ("k", "k_u"):
         if key not in rock:
             raise ValueError(f"missing key rock.{key}")
-    k = to_si("rock.k", rock["k"], "N/m", "'250 kN/mm'", what="a stiffness")
-    k_u = to_si("rock.k_u", rock["k_u"], "N/m", "'2500 kN/mm'", what="a stiffness")
-    feed = to_si("rock.feed", rock["feed"], "N", "'5 kN'", what="a force") if "feed" in rock else 0.0
-    mass = to_si("bit.mass", bit["mass"], "kg", "'1.5 kg'", what="a mass") if "mass" in bit else 0.0
+    k, k_u = tree.read_si("rock.k", rock["k"]), tree.read_si("rock.k_u", rock["k_u"])
+    feed = tree.read_si("rock.feed", rock["feed"]) if "feed" in rock else 0.0
+    mass = tree.read_si("bit.mass", bit["mass"]) if "mass" in bit else 0.0
     return DrillString(segments=tuple(pieces), rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed,
                        cells_per_piston=rock.get("cells_per_piston"), method=rock.get("method", "auto"))
 

@@ -30,9 +30,10 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-__all__ = ["Field", "FIELDS", "SCALES", "field", "fields", "section_keys", "required_keys", "integer_keys",
-           "continuable_keys", "real_keys", "in_sections", "typical_ranges", "dimensionless_factor",
-           "refuse_continuation", "markdown_table"]
+__all__ = ["Field", "FIELDS", "MACHINES", "SCALES", "field", "fields", "declared", "read_si",
+           "config_sections", "section_keys", "required_keys", "integer_keys", "continuable_keys",
+           "real_keys", "in_sections", "typical_ranges", "dimensionless_factor", "refuse_continuation",
+           "markdown_table"]
 
 #: The pressure scale ``P`` of the dimensionless circuit (Pa).
 PRESSURE_SCALE = 1.0e7
@@ -82,8 +83,11 @@ class Field:
     reason : str, optional
         Why it is not continued (``""``: it is, where it sets a parameter).
     many : bool
-        Whether it is a list of values (the piston's ``end_lengths``): a tool varies a list's
-        element by its index, never the list.
+        Whether it is a list of values (the piston's ``end_lengths``) or a field of each table of
+        an array (``rod.segments.length``, the key ``rod.segments.<i>.length``): a tool varies a
+        list's element by its index, never the list.
+    text : bool
+        Whether it is a word or a file's path (``force.kind``, ``rock.method``), not a quantity.
     """
 
     key: str
@@ -100,6 +104,7 @@ class Field:
     needs: str = ""
     reason: str = ""
     many: bool = False
+    text: bool = False
 
     @property
     def section(self) -> str:
@@ -112,6 +117,11 @@ class Field:
         return self.key.rsplit(".", 1)[1]
 
     @property
+    def written(self) -> str:
+        """The key as a tool takes it (``rod.segments.<i>.length`` for a field of each segment)."""
+        return f"{self.section}.<i>.{self.name}" if self.section == "rod.segments" else self.key
+
+    @property
     def continuable(self) -> bool:
         """Whether a branch of orbits can be followed in it: it sets one dimensionless parameter."""
         return bool(self.parameter) and not self.reason and not self.integer
@@ -121,6 +131,8 @@ class Field:
         """Why it is not continued (``""`` where it is)."""
         if self.continuable:
             return ""
+        if self.text:
+            return "is a word or a file's path, not a quantity"
         return self.reason or (INTEGER_REASON if self.integer else
                                "sets no dimensionless parameter of the circuit (none is declared for it)")
 
@@ -201,14 +213,57 @@ _OIL = (
 _ROCK = (Field("rock.k", "N/m", "'250 kN/mm'", "stiffness", "rock.k", "law", needs="rock"),
          Field("rock.k_u", "N/m", "'2500 kN/mm'", "stiffness", "rock.k_u", "law", needs="rock"),
          Field("rock.feed", "N", "'5 kN'", "force", "feed", "law", needs="rock"),
-         Field("rock.cells_per_piston", "", "64", integer=True))
+         Field("rock.cells_per_piston", "", "64", integer=True),
+         Field("rock.method", "", "'auto'", text=True))
 _BIT = (Field("bit.mass", "kg", "'1.5 kg'", "mass", "bit_mass", "law", needs="rock"),)
+# each table of the drill string's array [[rod.segments]] (the key rod.segments.<i>.<name>; E and
+# density default to the piston's)
+_SEGMENT_REASON = "is a field of each rod segment: vary it by the segment's index (rod.segments.<i>.<key>)"
+_ROD = (Field("rod.segments.length", "m", "'1.2 m'", required=True, reason=_SEGMENT_REASON, many=True),
+        Field("rod.segments.diameter", "m", "'32 mm'", reason=_SEGMENT_REASON, many=True),
+        Field("rod.segments.area", "m**2", "'8 cm^2'", reason=_SEGMENT_REASON, many=True),
+        Field("rod.segments.E", "Pa", "'210 GPa'", reason=_SEGMENT_REASON, many=True),
+        Field("rod.segments.density", "kg/m**3", "'7850 kg/m^3'", reason=_SEGMENT_REASON, many=True))
 # a hammer's periodic force (impactbar.physical.config): its integer keys
 _FORCE = (Field("force.k", "", "1", integer=True), Field("force.max_harmonics", "", "40", integer=True))
 
-#: Every declared field by its dotted SI name, in the order the parts are declared.
+#: Every declared field of a drifter with its oil circuit by its dotted SI name, in the order the
+#: parts are declared (then the drill string's and a hammer's integer keys).
 FIELDS: dict[str, Field] = _declare(_ACCUMULATOR, _SUPPLY, _VALVE, _CHAMBERS, _OIL, _ROCK, _BIT, _BAR,
-                                    _PISTON, _STOP, _DAMPING, _MODEL, _FORCE)
+                                    _PISTON, _STOP, _DAMPING, _MODEL, _FORCE, _ROD)
+
+# -- the other machines (theory §10 and §5): the drifter whose valve switches on the piston's
+# position, and the hammer under a periodic force; the bar's, the stop's and the drill string's
+# fields are the same declarations as above
+_DRIFTER_VALVE = (
+    Field("valve.supply_pressure", "Pa", "'20 MPa'", required=True),
+    Field("valve.stroke_area", "m**2", "'2.8 cm^2'", required=True),
+    Field("valve.return_area", "m**2", "'2.8 cm^2'", required=True),
+    Field("valve.switch_out", "m", "'21.5 mm'", required=True),
+    Field("valve.delay", "s", "'1 ms'", default="0 ms"))
+_PIECE = (*_BAR, *_STOP, *_DAMPING, *_MODEL, *_ROCK, *_BIT, *_ROD)
+_HAMMER = (
+    Field("drive.frequency", "Hz", "'40 Hz'", required=True),
+    Field("force.kind", "", "'pneumatic'", required=True, text=True),
+    *(Field(f"force.{name}", "N", "'2.5 kN'", needs=kind)
+      for name, kind in (("mean", "pneumatic"), ("amplitude", "pneumatic"), ("high", "hydraulic"),
+                         ("low", "hydraulic"))),
+    Field("force.k", "", "1", integer=True, needs="pneumatic"),
+    Field("force.fraction", "", "0.3", needs="hydraulic"),
+    Field("force.csv", "", "'force.csv'", text=True, needs="measured"),
+    Field("force.tolerance", "", "1e-3", needs="measured"),
+    Field("force.max_harmonics", "", "40", integer=True, needs="measured"),
+    Field("damping.ratio", "", "0.02"),
+    Field("model.impact", "", "'paper'", text=True))
+
+#: Each kind of machine's declared fields by dotted SI name (a drifter with its oil circuit's are
+#: :data:`FIELDS`; ``"drifter"``: the valve switched on the piston's position; ``"hammer"``: a
+#: periodic force); the configuration's reader of each kind takes these keys and no other.
+MACHINES: dict[str, dict[str, Field]] = {
+    "circuit": FIELDS,
+    "drifter": _declare(_DRIFTER_VALVE, _PIECE),
+    "hammer": _declare(_HAMMER, _PIECE),
+}
 
 #: The sections of a drifter with its oil circuit whose keys the tree declares in full.
 CIRCUIT_SECTIONS = ("bar", "stop", "damping", "model", "chambers", "valve", "supply", "accumulator", "oil")
@@ -216,7 +271,8 @@ CIRCUIT_SECTIONS = ("bar", "stop", "damping", "model", "chambers", "valve", "sup
 #: A unit in words, for a message (``"a pressure"``).
 WORDS = {"m**2": "an area", "m**3": "a volume", "Pa": "a pressure", "m": "a length", "s": "a time",
          "m**3/s": "a flow", _ORIFICE: "a flow coefficient (m^3/s/Pa^0.5)",
-         _RELIEF: "a flow coefficient (m^3/s/Pa)"}
+         _RELIEF: "a flow coefficient (m^3/s/Pa)", "N/m": "a stiffness", "N": "a force", "kg": "a mass",
+         "Hz": "a frequency", "kg/m**3": "a density", "N*s/m": "a damping coefficient"}
 
 #: Each scale's factor from SI to dimensionless, a function of the drifter (theory §11, eq. 2).
 SCALES: dict[str, Callable] = {
@@ -254,6 +310,57 @@ def field(key: str) -> Field:
     return f
 
 
+def declared(key: str, kind: str = "circuit") -> Field | None:
+    """The declaration of a dotted config key of a kind of machine (``None``: not declared); a rod
+    segment's key ``rod.segments.<i>.<name>`` is declared once as ``rod.segments.<name>``.
+
+    Examples
+    --------
+    >>> declared("rod.segments.1.diameter").unit, declared("valve.delay", "drifter").unit
+    ('m', 's')
+    """
+    if not isinstance(key, str):
+        return None
+    parts = key.split(".")
+    if len(parts) == 4 and parts[:2] == ["rod", "segments"] and parts[2].isdigit():
+        key = f"rod.segments.{parts[3]}"
+    return MACHINES.get(kind, {}).get(key)
+
+
+def read_si(key: str, value, kind: str = "circuit", name: str | None = None) -> float:
+    """A config value in its declared SI unit (:func:`~impactbar.physical.units.to_si` with the
+    field's unit, example and dimension in words), the message naming ``name`` (default ``key``).
+
+    Raises
+    ------
+    ValueError
+        An undeclared key; a value of another dimension, a bare number for a key with a unit, one
+        not finite (the message naming ``name``).
+
+    Examples
+    --------
+    >>> read_si("rod.segments.0.length", "1.2 m"), read_si("valve.delay", "2 ms", "drifter")
+    (1.2, 0.002)
+    """
+    from .units import to_si
+
+    f = declared(key, kind)
+    if f is None or f.text:
+        raise ValueError(f"{key} is not a quantity the {kind} config declares")
+    return to_si(name or key, value, f.unit, f.example, what=WORDS.get(f.unit))
+
+
+def config_sections(kind: str) -> dict[str, set]:
+    """Each section of a kind of machine's configuration and the keys it takes (the drill
+    string's sections ``rod`` (its array ``segments``), ``bit``, ``rock`` included; the
+    segments' own keys under ``"rod.segments"``)."""
+    out: dict[str, set] = {}
+    for f in MACHINES[kind].values():
+        out.setdefault(f.section, set()).add(f.name)
+    out.setdefault("rod", set()).add("segments")
+    return out
+
+
 def in_sections(sections=CIRCUIT_SECTIONS) -> tuple[Field, ...]:
     """The declared fields of ``sections``, section by section in their order."""
     return tuple(f for s in sections for f in FIELDS.values() if f.section == s)
@@ -272,7 +379,7 @@ def required_keys(sections=CIRCUIT_SECTIONS) -> dict[str, tuple]:
 
 def real_keys() -> tuple[str, ...]:
     """The keys of one real value (not an integer, not a list): what a tool differentiates."""
-    return tuple(k for k, f in FIELDS.items() if not f.integer and not f.many)
+    return tuple(k for k, f in FIELDS.items() if not f.integer and not f.many and not f.text)
 
 
 def integer_keys() -> tuple[str, ...]:
@@ -307,10 +414,10 @@ def markdown_table(extra=()) -> str:
     """
     rows = ["| key | SI unit | scale | dimensionless parameter | continued |",
             "| --- | --- | --- | --- | --- |"]
-    for k, f in (*FIELDS.items(), *((f.key, f) for f in extra)):
+    for f in (*FIELDS.values(), *extra):
         scale = f.scale if isinstance(f.scale, str) else "(a function)"
         parameter = f"`{f.parameter}`" if f.parameter else "-"
-        rows.append(f"| `{k}` | {f.unit.replace('**', '^') or '1'} | {scale or '-'} | {parameter} | "
+        rows.append(f"| `{f.written}` | {f.unit.replace('**', '^') or '1'} | {scale or '-'} | {parameter} | "
                     f"{'yes' if f.continuable else 'no: ' + f.why_not} |")
     return "\n".join(rows) + "\n"
 
