@@ -63,7 +63,7 @@ def test_the_kinds_give_their_equations_and_the_generated_code_their_numbers(n_m
         assert np.allclose(losses, want[n:], rtol=1e-12, atol=1e-15)
         # the account closes: the pump's work goes to the other terms
         assert abs(out[n] - np.sum(out[n + 1:])) <= 1e-12 * np.sum(np.abs(out[n:]))
-        nev = 1 + len(drive._composition.events)
+        nev = len(drive._composition.events)
         g, g2 = np.full(nev, np.nan), np.full(nev, np.nan)
         NW.events(y[2 * M:n], par, M, g, 0, -q[0])
         gen.events(y[2 * M:n], par, M, g2, 0, -q[0])
