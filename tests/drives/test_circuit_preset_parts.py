@@ -173,9 +173,9 @@ def test_replacing_what_the_circuit_does_not_have_is_refused():
         replaces = ("spool",)
 
     with pytest.raises(ValueError, match="replaces the circuit's parts by name.*got 'spool'"):
-        compose_parts((Spool(1.0),))
+        compose_parts((Spool(1.0),), PRESET_PARTS)
     with pytest.raises(ValueError, match="each once.*got 'valve'"):
-        compose_parts((ThrottledValve(1.0), ThrottledValve(2.0)))
+        compose_parts((ThrottledValve(1.0), ThrottledValve(2.0)), PRESET_PARTS)
 
     @dataclasses.dataclass(frozen=True)
     class Plain(ThrottledValve):
@@ -183,4 +183,4 @@ def test_replacing_what_the_circuit_does_not_have_is_refused():
 
     line = ReturnAccumulator(volume=0.3, flow_coefficient=1.2, precharge=0.02, gas_volume=0.5)
     with pytest.raises(ValueError, match=r"takes a port of \(\)"):
-        compose_parts((Plain(1.0), line))
+        compose_parts((Plain(1.0), line), PRESET_PARTS)

@@ -125,7 +125,8 @@ class CircuitPart:
     ...         return [record(ORIFICE, source=slots.nodes["front"], target=slots.nodes["tank"],
     ...                        coefficient=self.coefficient, ptr2=oil.transition_pressure ** 2,
     ...                        energy=slots.energy["leak"])]
-    >>> compose_parts((Leak(0.1),)).layout.energies[-1]
+    >>> from impactbar.drives.circuit.preset import PRESET_PARTS
+    >>> compose_parts((Leak(0.1),), PRESET_PARTS).layout.energies[-1]
     'leak'
     >>> from impactbar.physical import circuit_preset
     >>> drive = replace(circuit_preset("circuit-drifter").drive(), extra_parts=(Leak(0.1),))
@@ -442,7 +443,7 @@ def _in_place(base, parts) -> list:
     return [p for p in out if p is not None] + added
 
 
-def compose_parts(parts, base=None) -> Composition:
+def compose_parts(parts, base=()) -> Composition:
     """The circuit composed of its parts: its nodes, energy and event slots and layout.
 
     Parameters
@@ -451,15 +452,14 @@ def compose_parts(parts, base=None) -> Composition:
         The extra parts, after the circuit's own; a part with :attr:`~CircuitPart.replaces` in the
         place of those it names.
     base : tuple of CircuitPart, optional
-        The circuit's own parts; default: the preset's
-        (:data:`~impactbar.drives.circuit.preset.PRESET_PARTS`, their names and numbering without
-        the drive's values; the drive composes its own,
-        :func:`~impactbar.drives.circuit.preset.preset_parts`).
+        The circuit's own parts: the preset's (:func:`~impactbar.drives.circuit.preset.preset_parts`
+        of a drive, or :data:`~impactbar.drives.circuit.preset.PRESET_PARTS`, their names and
+        numbering without a drive's values). Default: none.
 
     Returns
     -------
     Composition
-        With no parts, the preset's: :data:`~impactbar.drives.circuit.layout.PRESET`, the tank node 3.
+        With the preset's parts alone: :data:`~impactbar.drives.circuit.layout.PRESET`, the tank node 3.
 
     Raises
     ------
@@ -470,16 +470,13 @@ def compose_parts(parts, base=None) -> Composition:
 
     Examples
     --------
-    >>> c = compose_parts(())
+    >>> from impactbar.drives.circuit.preset import PRESET_PARTS
+    >>> c = compose_parts((), PRESET_PARTS)
     >>> c.layout is PRESET, c.nodes["tank"], c.events
     (True, 3, ('ramp_end', 'accumulator', 'relief'))
     >>> [p.name for p in c.parts]
     ['chambers', 'supply', 'valve', 'accumulator', 'relief']
     """
-    if base is None:
-        from .preset import PRESET_PARTS  # (the preset's parts are written on this module's protocol)
-
-        base = PRESET_PARTS
     parts = tuple(parts)
     for p in parts:
         if not isinstance(p, CircuitPart):

@@ -137,7 +137,7 @@ class ReliefPart(CircuitPart):
 
 
 #: The preset's parts in their order, without the drive's values (their names, nodes, ports, energy
-#: integrands and events: enough to number a composition, :func:`compose_parts`' default)
+#: integrands and events: enough to number a composition, :func:`compose_parts`' ``base``)
 PRESET_PARTS = (ChambersPart(), SupplyPart(), ValvePart(), AccumulatorPart(), ReliefPart())
 
 
@@ -164,4 +164,4 @@ def preset_parts(drive) -> tuple:
 PORTS = {port: node for p in PRESET_PARTS for port, node in p.offers.items()}
 #: the preset's nodes a part may connect to by name (those with a state, then the tank held at its
 #: pressure)
-PRESET_NODES = tuple(compose_parts(()).nodes)
+PRESET_NODES = tuple(compose_parts((), PRESET_PARTS).nodes)
