@@ -12,15 +12,19 @@ in turn.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numba as nb
 import numpy as np
 
 from impactbar.drives.circuit import _kernel as K
 from impactbar.drives.circuit import _netgen as NG
-from impactbar.drives.circuit import _network as NW
 from impactbar.physical import circuit_preset
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "drives"))
+import network_interpreter as NW  # noqa: E402  (the interpreter of any network: the tests' reference)
 
 
 @nb.njit

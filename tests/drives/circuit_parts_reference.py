@@ -161,8 +161,9 @@ def _is_loss(part, name):
 
 def network_jacobian_fd(y, par, M, n, n_energy):
     """The central differences (step ``1e-6 max(1, |y_j|)``) of the interpreted network's vector
-    field (``_network.base``, its first ``n`` rows) at ``y``: the reference of its Jacobian."""
-    from impactbar.drives.circuit import _network as NW
+    field (``network_interpreter.base``, its first ``n`` rows) at ``y``: the reference of its
+    Jacobian."""
+    import network_interpreter as NI
 
     fd = np.empty((n, n))
     for j in range(n):
@@ -171,7 +172,7 @@ def network_jacobian_fd(y, par, M, n, n_energy):
         up[j] += h
         dn[j] -= h
         fu, fl = np.empty(n + n_energy), np.empty(n + n_energy)
-        NW.base(up, par, M, fu)
-        NW.base(dn, par, M, fl)
+        NI.base(up, par, M, fu)
+        NI.base(dn, par, M, fl)
         fd[:, j] = (fu[:n] - fl[:n]) / (2 * h)
     return fd

@@ -36,6 +36,7 @@ from impactbar.drives.circuit import Accumulator, CircuitPart
 from impactbar.drives.circuit import _network as NW
 from impactbar.drives.circuit.composition import compose_parts
 from impactbar.drives.circuit.layout import PRESET
+from impactbar.drives.circuit.preset import PRESET_PARTS
 from impactbar.physical import circuit_preset
 
 RET = "return_accumulator"
@@ -119,7 +120,7 @@ def test_the_layout_mode_and_events_come_from_the_network(drifter, model, drive)
     with pytest.raises(ValueError, match="extra_parts must be CircuitPart"):
         dataclasses.replace(drive, extra_parts=("line",))
     with pytest.raises(ValueError, match="one part each"):
-        compose_parts((LINE, LINE))
+        compose_parts((LINE, LINE), PRESET_PARTS)
 
 
 def test_simulate_closes_the_energy_account(model, drive):

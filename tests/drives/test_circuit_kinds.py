@@ -9,6 +9,7 @@ topology (``_netgen``) the interpreted network's numbers to the bit."""
 
 import dataclasses
 
+import network_interpreter as NI
 import numpy as np
 import pytest
 from circuit_parts_reference import field, network_jacobian_fd
@@ -16,7 +17,6 @@ from circuit_parts_reference import field, network_jacobian_fd
 from impactbar.drives.circuit import CheckValve, Cushion, LaminarLeak
 from impactbar.drives.circuit import _kernel as K
 from impactbar.drives.circuit import _netgen as NG
-from impactbar.drives.circuit import _network as NW
 from impactbar.physical import circuit_preset
 
 PARTS = (LaminarLeak("rear", "front", conductance=0.005),
@@ -54,7 +54,7 @@ def test_the_kinds_give_their_equations_and_the_generated_code_their_numbers(n_m
         if gen is None:
             gen = NG.generate(par[K.HEAD + 3 * M:])
         out, out2 = np.full(n + ne, np.nan), np.full(n + ne, np.nan)
-        NW.base(y, par, M, out)
+        NI.base(y, par, M, out)
         gen.base(y, par, M, out2)
         assert np.array_equal(_bits(out2), _bits(out))
         want = field(drive, model, mode, y[:n])
@@ -63,16 +63,16 @@ def test_the_kinds_give_their_equations_and_the_generated_code_their_numbers(n_m
         assert np.allclose(losses, want[n:], rtol=1e-12, atol=1e-15)
         # the account closes: the pump's work goes to the other terms
         assert abs(out[n] - np.sum(out[n + 1:])) <= 1e-12 * np.sum(np.abs(out[n:]))
-        nev = 1 + len(drive._composition.events)
+        nev = len(drive._composition.events)
         g, g2 = np.full(nev, np.nan), np.full(nev, np.nan)
-        NW.events(y[2 * M:n], par, M, g, 0, -q[0])
+        NI.events(y[2 * M:n], par, M, g, 0, -q[0])
         gen.events(y[2 * M:n], par, M, g2, 0, -q[0])
         assert np.array_equal(_bits(g2), _bits(g))
         dp = z[L["front"]] - z[L["supply"]]
         assert np.allclose(g[3:], [-q[0] - 0.06, -q[0] - 0.08, -q[0] - 0.1, dp - 0.005, dp - 0.015], rtol=0,
                            atol=1e-15)
         A, A2 = np.full((n, n), np.nan), np.full((n, n), np.nan)
-        NW.jac_base(y, par, M, A)
+        NI.jac_base(y, par, M, A)
         gen.jac_base(y, par, M, A2)
         assert np.array_equal(_bits(A2), _bits(A))
         fd = network_jacobian_fd(y, par, M, n, ne)

@@ -20,6 +20,7 @@ of event functions serves every topology.
 import dataclasses
 import itertools
 
+import network_interpreter as NI
 import numpy as np
 import pytest
 from circuit_parts_reference import network_jacobian_fd
@@ -74,19 +75,19 @@ def test_the_drifters_records_give_the_kernels_numbers_to_the_bit(drifter, n_mod
             continue  # the kernel's held supply's work leaves out a relief flow that cannot be there
         par = drive._par(model, mode)
         net = drive._network_par(model, mode)
-        assert NW.sizes(net, M) == (4, 3, K.N_ENERGY, 3)
+        assert NI.sizes(net, M) == (4, 3, K.N_ENERGY, 3)
         gen = NG.generate(net[K.HEAD + 3 * M:])
         for _ in range(N_STATES):
             y = _random_state(rng, M, K.N_ENERGY)
             want, got = np.empty(n + K.N_ENERGY), np.full(n + K.N_ENERGY, np.nan)
             K._base(y, par, M, want)
-            NW.base(y, net, M, got)
+            NI.base(y, net, M, got)
             A, B = np.empty((n, n)), np.full((n, n), np.nan)
             K.jac_base(y, par, M, A)
-            NW.jac_base(y, net, M, B)
+            NI.jac_base(y, net, M, B)
             g, h = np.empty(3), np.full(3, np.nan)
             K.circuit_events(y[2 * M + 3], y[2 * M + 2], par, g, 0)
-            NW.events(y[2 * M:], net, M, h, 0, -y[0])
+            NI.events(y[2 * M:], net, M, h, 0, -y[0])
             assert np.array_equal(_bits(got), _bits(want)), (mode, got - want)
             assert np.array_equal(_bits(B), _bits(A)), (mode, np.argwhere(_bits(B) != _bits(A)))
             assert np.array_equal(_bits(h), _bits(g)), (mode, h, g)
@@ -215,20 +216,20 @@ def test_a_return_line_accumulator_is_a_new_part_of_records_only(drifter, n_mode
     rng = np.random.default_rng(11)
     for mode in itertools.product((0, 1), (0, 1), (0, 1), (0, 1), (0, 1)):
         par = _return_network(drive, model, mode, line)
-        assert NW.sizes(par, M) == (5, 4, N_EN, N_EV)
+        assert NI.sizes(par, M) == (5, 4, N_EN, N_EV)
         gen = NG.generate(par[K.HEAD + 3 * M:])
         for _ in range(10):
             y = np.concatenate((rng.normal(0.0, 0.02, 2 * M), rng.uniform(0.05, 2.0, 4),
                                 [rng.choice([0.0, 1.0, rng.uniform()])], np.zeros(N_EN)))
             out = np.empty(n + N_EN)
-            NW.base(y, par, M, out)
+            NI.base(y, par, M, out)
             want, ev = _numpy_field(drive, model, mode, line, y)
             assert np.allclose(out, want, rtol=1e-13, atol=1e-13 * np.max(np.abs(want))), mode
             # the account closes: the pump's work goes to the piston, the openings, the tank, the
             # oil's compression and the gas
             assert abs(out[n + E_PUMP] - np.sum(out[n + 1:])) <= 1e-12 * np.sum(np.abs(out[n:]))
             g = np.empty(N_EV)
-            NW.events(y[2 * M:n], par, M, g, 0, -y[0])
+            NI.events(y[2 * M:n], par, M, g, 0, -y[0])
             assert np.allclose(g, ev, rtol=0.0, atol=1e-15)
             out2, g2, A2 = np.full_like(out, np.nan), np.full_like(g, np.nan), np.full((n, n), np.nan)
             gen.base(y, par, M, out2)
@@ -236,7 +237,7 @@ def test_a_return_line_accumulator_is_a_new_part_of_records_only(drifter, n_mode
             assert np.array_equal(_bits(out2), _bits(out)), (mode, out2 - out)
             assert np.array_equal(_bits(g2), _bits(g)), (mode, g2, g)
             A = np.empty((n, n))
-            NW.jac_base(y, par, M, A)
+            NI.jac_base(y, par, M, A)
             gen.jac_base(y, par, M, A2)
             assert np.array_equal(_bits(A2), _bits(A)), (mode, np.argwhere(_bits(A2) != _bits(A)))
             fd = network_jacobian_fd(y, par, M, n, N_EN)
@@ -286,7 +287,7 @@ def test_the_generated_module_is_written_once_and_compiled_in_memory_where_it_ca
     y = np.array([0.0, 0.0, 0.7, 0.4, 0.0, 0.0])
     for g in (gen, mem):
         out, want = np.empty(6), np.empty(6)
-        NW.base(y, par, 1, want)
+        NI.base(y, par, 1, want)
         g.base(y, par, 1, out)
         assert np.array_equal(_bits(out), _bits(want))
 

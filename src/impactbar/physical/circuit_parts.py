@@ -248,7 +248,7 @@ def read_parts(tables) -> tuple[PartSpec, ...]:
     ...
     ValueError: parts.leak.target must be one of the nodes front, rear, supply, tank; got 'back'
     """
-    from ..drives.circuit.composition import PORTS, PRESET_NODES
+    from ..drives.circuit.preset import PORTS, PRESET_NODES
 
     if tables is None:
         return ()

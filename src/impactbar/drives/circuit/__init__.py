@@ -5,10 +5,11 @@ Layout: ``parts`` (the frozen parts: :class:`Chambers`, :class:`Valve`, :class:`
 :class:`Accumulator`, :class:`Oil`), ``drive`` (:class:`HydraulicCircuitDrive`, the
 :class:`~impactbar.Drive` interface composed from the parts; :class:`CircuitEnergy`), ``layout``
 (where the circuit keeps its states and energy terms, read by name), ``settings`` (how its flights
-are integrated: :class:`CircuitFlightSettings`, handed to the solvers), ``composition`` (parts added to
-the circuit, :class:`CircuitPart`, :class:`PartField`, and the numbering of its nodes, energy and
-event slots), ``return_line`` and ``leak`` (two parts of the network's kinds:
-:class:`ReturnAccumulator`, :class:`Leak`), ``_network``
+are integrated: :class:`CircuitFlightSettings`, handed to the solvers), ``composition`` (the
+circuit's parts, :class:`CircuitPart`, :class:`PartField`, and the numbering of its nodes, energy and
+event slots: :func:`~.composition.compose_parts`), ``preset`` (the preset circuit as a tuple of
+such parts, that an extra part may replace by name), ``return_line`` and ``leak`` (two parts of the
+network's kinds: :class:`ReturnAccumulator`, :class:`Leak`), ``_network``
 (the part records a part writes, :func:`record`, of the kinds :data:`NODE`, :data:`PUMP`,
 :data:`ORIFICE`, :data:`VALVE`, :data:`RELIEF`, :data:`CHAMBER`, :data:`ACCUM`, and those written
 each in a module of its own, ``kinds``: :data:`LEAK`, :data:`CUSHION`, :data:`CHECK`, :data:`LEVEL`),
@@ -32,7 +33,6 @@ from ._network import RELIEF as RELIEF
 from ._network import VALVE as VALVE
 from ._network import record as record
 from .check_valve import CheckValve as CheckValve
-from .composition import PORTS as PORTS
 from .composition import TERMS as TERMS
 from .composition import CircuitPart as CircuitPart
 from .composition import NamedPart as NamedPart
@@ -49,6 +49,7 @@ from .parts import Chambers as Chambers
 from .parts import Oil as Oil
 from .parts import Supply as Supply
 from .parts import Valve as Valve
+from .preset import PORTS as PORTS
 from .return_line import ReturnAccumulator as ReturnAccumulator
 from .settings import CircuitFlightSettings as CircuitFlightSettings
 

@@ -304,6 +304,6 @@ def generate(drive, mode):
     """
     net, flight = drive._compiled_network(mode)
     L = drive.layout
-    source = emit(flight, L.n_states, L.n_energy, 1 + len(drive._composition.events))
+    source = emit(flight, L.n_states, L.n_energy, len(drive._composition.events))
     given = {"_GIVEN": (flight.base, flight.jac_base, flight.events)}
     return _netgen.load(source, None, "impactbar_endgen", _NAMES, given)

@@ -1,9 +1,9 @@
 r"""Straight-line code for a network of part records (:mod:`._network`), one module per topology.
 
 :func:`emit` writes the Python source of three numba functions, ``base(y, par, M, out)``,
-``jac_base(y, par, M, A)`` and ``events(z, par, M, g, first)``, that do what :func:`._network.base`,
-:func:`._network.jac_base` and :func:`._network.events` do for one network: the loops over the
-records unrolled, each record's terms written out in the same order of operations (so that the
+``jac_base(y, par, M, A)`` and ``events(z, par, M, g, first)``, that do what the interpreter of any
+network (the tests' ``network_interpreter.base``, ``jac_base``, ``events``) does for one network: the
+loops over the records unrolled, each record's terms written out in the same order of operations (so that the
 numbers are the same to the bit), the nodes' scratch kept in local variables instead of an array.
 
 What the source holds is the network's *topology*: the kinds of its records and their order, the
@@ -476,7 +476,7 @@ def _jac(t):
 
 
 def _flow_jac(t, kind, o, r, f):
-    """The Jacobian's lines of a flow of a kind of :mod:`.kinds` (``._network.jac_base``'s)."""
+    """The Jacobian's lines of a flow of a kind of :mod:`.kinds` (the interpreter's ``jac_base``'s)."""
     a, b = int(r[F_FROM]), int(r[F_TO])
     B = [f"_, da, db, dg = {_kind(kind)}.law(par, R0 + {o}, p{a}, p{b}, -y[0])"]
 

@@ -1,46 +1,44 @@
-r"""Parts added to the drifter's oil circuit (theory §11): the protocol of an extra part and the
-composition of the circuit's nodes, energy and event slots and layout from the preset's parts and
-the extra ones.
+r"""The drifter's oil circuit as a composition of parts (theory §11): the protocol of a part and the
+numbering of the circuit's nodes, energy and event slots and layout from its parts, the preset's and
+the extra ones alike.
 
-The preset circuit (:class:`~impactbar.drives.circuit.HydraulicCircuitDrive` without extra parts)
-has the nodes ``front``, ``rear``, ``supply`` (pressure states, in that order) and ``tank`` (held at
-its pressure), the eight energy integrands of :data:`~impactbar.drives.circuit.layout.PRESET` and
-the events ``ramp_end``, ``accumulator``, ``relief`` of the network's slots 0, 1, 2. An extra part
-(:class:`CircuitPart`) names the nodes it adds (each with a pressure state), its energy integrands
-(each with the term of the account it belongs to), its watched events and the preset's ports it
-takes over; :func:`compose_parts` numbers them after the preset's (the states in the order of the
-parts, then the tank), and the part's :meth:`CircuitPart.records` writes its network records
-(:mod:`._network`) with those numbers. Nothing here names a part's kind: a part made of the
+A part (:class:`CircuitPart`) names its nodes (each with a pressure state; :attr:`~CircuitPart.held_nodes`
+without one, held at their pressure: the tank), its energy integrands (each with the term of the
+account it belongs to), its watched events, the ports it offers to other parts (each to the node it
+joins unless a part takes it) and those it takes, and the parts it replaces by name.
+:func:`compose_parts` puts the extra parts after the circuit's own (the preset's,
+:mod:`~impactbar.drives.circuit.preset`: ``chambers``, ``supply``, ``valve``, ``accumulator``,
+``relief``), each part that :attr:`~CircuitPart.replaces` one of them in its place, and numbers what
+they declare in that order: the nodes with a state first, then the held ones; the account's shared
+integrands (:data:`SHARED_ENERGIES`) then the parts'; the events. Each part's
+:meth:`CircuitPart.records` writes its network records (:mod:`._network`) with those numbers, and
+:meth:`Composition.network` gathers them. Nothing here names a part's kind: a part made of the
 network's kinds needs no edit of the drive or of a kernel.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..._shared.validate import check_real
+from . import _network as NW
 from .layout import _TERMS, PRESET, CircuitLayout
 
-__all__ = ["CircuitPart", "PartField", "PartSlots", "Composition", "compose_parts", "PORTS", "TERMS",
-           "PRESET_NODES", "NamedPart", "check_part", "node_of"]
-
-#: the preset's ports an extra part may take over, and the node each joins without one: the valve's
-#: return port (the tank)
-PORTS = {"valve_return": "tank"}
+__all__ = ["CircuitPart", "PartField", "PartSlots", "Composition", "compose_parts", "TERMS",
+           "SHARED_ENERGIES", "NamedPart", "check_part", "node_of"]
 
 #: the terms of the energy account (:class:`~impactbar.drives.circuit.CircuitEnergy`) an energy
 #: integrand can belong to
 TERMS = _TERMS
 
-#: the preset's nodes with a pressure state, in their order (then the extra parts' and the tank)
-_PRESET_NODES = ("front", "rear", "supply")
-#: the preset's nodes a part may connect to by name (the tank held at its pressure)
-PRESET_NODES = (*_PRESET_NODES, "tank")
-#: the preset's events after the ramp's end (the network's event slots 1, 2)
-_PRESET_EVENTS = ("accumulator", "relief")
+#: the energy integrands the composition opens with, before the parts' own: one for each term the
+#: parts share, which a part adds to by name (a pump's work, the oil's work on the piston, every
+#: orifice's loss, the flow into the tank at its pressure)
+SHARED_ENERGIES = (("pump", "pump"), ("piston", "piston"), ("orifices", "orifices"), ("tank", "tank"))
 
 
 class CircuitPart:
@@ -59,11 +57,16 @@ class CircuitPart:
 
     Attributes
     ----------
+    name : str or None
+        Its name among the circuit's parts (the preset's ``chambers``, ``supply``, ``valve``,
+        ``accumulator``, ``relief``; a :class:`NamedPart`'s field); ``None``: none.
     nodes : tuple of str
         Its nodes, each with a pressure state (the names of the drive's layout; distinct from the
         preset's ``front``, ``rear``, ``supply``, ``spool``, ``tank`` and the other parts').
     symbols : tuple of str
         The nodes' symbols (``"p_ret"``), the keys of the histories.
+    held_nodes : tuple of str
+        Its nodes held at their pressure, without a state (the preset supply's ``tank``).
     energies : tuple of (str, str)
         Its energy integrands: ``(name, term)`` pairs, ``term`` one of :data:`TERMS` (the term of
         the account each adds to: ``"compression"`` for an oil volume's, ``"accumulator"`` for a
@@ -74,9 +77,19 @@ class CircuitPart:
         ``LEVEL`` record's gap or pressure drop through its level), one flag of the drive's mode
         each.
     ports : dict
-        The preset's ports it takes over (:data:`PORTS`), each to one of its nodes by name:
-        ``{"valve_return": "return"}`` joins the valve's return port to its node ``return``
-        instead of the tank.
+        The ports of the circuit's parts it takes over (:data:`~impactbar.drives.circuit.PORTS`, those
+        the parts :attr:`offers`), each to one of its nodes by name: ``{"valve_return": "return"}``
+        joins the valve's return port to its node ``return`` instead of the tank.
+    offers : dict
+        The ports it offers, each to the node it joins where no part takes it (the preset valve's
+        ``{"valve_return": "tank"}``); its records read the node's number from
+        :attr:`PartSlots.ports`.
+    replaces : tuple of str
+        The circuit's parts it takes the place of, by :attr:`name`: ``("valve",)`` puts it where the
+        preset's valve was (its nodes, energy integrands, events and records in the valve's place),
+        and the valve's records leave the network. It then offers what it replaces offered that
+        other parts use (a replacing valve its ``valve_return``), and writes the records the network
+        needs (exactly one ``VALVE``, :func:`._network.compose`).
     parameters : dict
         Its continuation parameters: the drive's parameter name to the part's field
         (``{"return_volume": "volume"}``); ``parameter_ranges`` their ranges as
@@ -112,7 +125,8 @@ class CircuitPart:
     ...         return [record(ORIFICE, source=slots.nodes["front"], target=slots.nodes["tank"],
     ...                        coefficient=self.coefficient, ptr2=oil.transition_pressure ** 2,
     ...                        energy=slots.energy["leak"])]
-    >>> compose_parts((Leak(0.1),)).layout.energies[-1]
+    >>> from impactbar.drives.circuit.preset import PRESET_PARTS
+    >>> compose_parts((Leak(0.1),), PRESET_PARTS).layout.energies[-1]
     'leak'
     >>> from impactbar.physical import circuit_preset
     >>> drive = replace(circuit_preset("circuit-drifter").drive(), extra_parts=(Leak(0.1),))
@@ -120,11 +134,18 @@ class CircuitPart:
     0.2
     """
 
+    name = None
     nodes: tuple = ()
     symbols: tuple = ()
+    #: its nodes held at their pressure (no state; numbered after every node with one)
+    held_nodes: tuple = ()
     energies: tuple = ()
     events: tuple = ()
     ports: dict = {}
+    #: the ports it offers to other parts, each to the node it joins unless a part takes it
+    offers: dict = {}
+    #: the circuit's parts it takes the place of, by name
+    replaces: tuple = ()
     parameters: dict = {}
     parameter_ranges: dict = {}
     #: its fields a configuration gives in SI (:class:`PartField`; read where the part's kind is
@@ -304,16 +325,22 @@ class PartSlots:
     energy : dict
         Every energy integrand's slot by name.
     events : dict
-        The part's events' slots in the network (after the ramp's end, slot 0) by name.
+        The part's events' slots in the network (slot 0 the valve's ramp's end) by name.
     flags : dict
         The part's events' flags in the drive's mode by name (``True``: an accumulator holds oil, a
-        relief is open).
+        relief is open, the valve's spool ramps).
+    ports : dict
+        The parts' ports (:attr:`CircuitPart.offers`) to the numbers of the nodes they join.
+    mode : tuple
+        The drive's mode ``(target, moving, flags...)`` (the valve's commanded position first).
     """
 
     nodes: dict
     energy: dict
     events: dict
     flags: dict
+    ports: dict = dataclasses.field(default_factory=dict)
+    mode: tuple = ()
 
     def node(self, name: str, part) -> int:
         """The number of the node ``name`` that ``part`` names (a clear error where there is none).
@@ -336,21 +363,25 @@ class PartSlots:
 
 @dataclass(frozen=True)
 class Composition:
-    """The circuit's numbering with its extra parts (:func:`compose_parts`).
+    """The circuit composed of its parts (:func:`compose_parts`).
 
     Attributes
     ----------
     layout : CircuitLayout
-        States in node order then ``spool``, the preset's energy integrands then the parts'.
+        States in node order then ``spool``, the shared energy integrands (:data:`SHARED_ENERGIES`)
+        then the parts'.
     nodes : dict
-        Every node's number by name (the ``n_states`` nodes with a state first, then ``tank``).
+        Every node's number by name (the ``n_states`` nodes with a state first, then the held ones).
     n_states : int
         The nodes with a pressure state.
     events : tuple of str
-        The network's events after the ramp's end, in slot order (slot ``1 + i``: the mode's flag
-        ``2 + i``).
+        The network's events in slot order (slot ``i``: the mode's flag ``1 + i``; slot 0 the valve's
+        ramp's end, its flag whether the spool moves).
     ports : dict
-        The preset's ports (:data:`PORTS`) to node numbers.
+        The parts' ports (:attr:`CircuitPart.offers`) to node numbers.
+    parts : tuple of CircuitPart
+        The parts in their order (the circuit's own, each replaced where a part replaces it, then the
+        extra ones).
     """
 
     layout: CircuitLayout
@@ -358,56 +389,111 @@ class Composition:
     n_states: int
     events: tuple
     ports: dict
+    parts: tuple = ()
 
     def slots(self, part: CircuitPart, mode) -> PartSlots:
         """The :class:`PartSlots` of ``part`` in the drive's mode ``mode`` (``(target, moving,
         flags...)``)."""
-        ev = {name: self.events.index(name) + 1 for name in part.events}
+        ev = {name: self.events.index(name) for name in part.events}
         return PartSlots(nodes=self.nodes, energy=self.layout.energy, events=ev,
-                         flags={name: bool(mode[1 + slot]) for name, slot in ev.items()})
+                         flags={name: bool(mode[1 + slot]) for name, slot in ev.items()},
+                         ports=self.ports, mode=tuple(mode))
+
+    def network(self, mode, oil) -> np.ndarray:
+        """The circuit as a network of part records in the drive's mode ``mode``: each part's
+        :meth:`~CircuitPart.records` in the parts' order, composed (:func:`._network.compose`).
+
+        Parameters
+        ----------
+        mode : tuple
+            ``(target, moving, flags...)``, a flag for each of :attr:`events` after the first.
+        oil : Oil
+            The circuit's oil.
+
+        Returns
+        -------
+        numpy.ndarray
+            The network's header and records.
+        """
+        recs: list = []
+        for part in self.parts:
+            recs += part.records(self.slots(part, mode), oil)
+        return NW.compose(recs, self.n_states, self.layout.n_energy, len(self.events),
+                          self.layout.energy["piston"])
 
 
-def compose_parts(parts) -> Composition:
-    """The circuit's nodes, energy and event slots and layout with the extra ``parts``.
+def _in_place(base, parts) -> list:
+    """The circuit's parts: ``base`` with each part of ``parts`` that :attr:`~CircuitPart.replaces`
+    some of them in the place of the first it names (the others left out), then the rest of ``parts``."""
+    names = [p.name for p in base]
+    out: list = list(base)
+    added, gone = [], set()
+    for p in parts:
+        replaced = tuple(p.replaces)
+        if not replaced:
+            added.append(p)
+            continue
+        for name in replaced:
+            if name not in names or name in gone:
+                raise ValueError(f"a {type(p).__name__} replaces the circuit's parts by name, each once: "
+                                 f"one of {tuple(n for n in names if n is not None)}; got {name!r}")
+            gone.add(name)
+            out[names.index(name)] = None
+        out[names.index(replaced[0])] = p
+    return [p for p in out if p is not None] + added
+
+
+def compose_parts(parts, base=()) -> Composition:
+    """The circuit composed of its parts: its nodes, energy and event slots and layout.
 
     Parameters
     ----------
     parts : tuple of CircuitPart
+        The extra parts, after the circuit's own; a part with :attr:`~CircuitPart.replaces` in the
+        place of those it names.
+    base : tuple of CircuitPart, optional
+        The circuit's own parts: the preset's (:func:`~impactbar.drives.circuit.preset.preset_parts`
+        of a drive, or :data:`~impactbar.drives.circuit.preset.PRESET_PARTS`, their names and
+        numbering without a drive's values). Default: none.
 
     Returns
     -------
     Composition
-        With no parts, the preset's: :data:`~impactbar.drives.circuit.layout.PRESET`, the tank node 3.
+        With the preset's parts alone: :data:`~impactbar.drives.circuit.layout.PRESET`, the tank node 3.
 
     Raises
     ------
     ValueError
         A part that is not a :class:`CircuitPart`, a name repeated, an energy term or a port that is
-        not known, a port given to a node that is not the part's.
+        not known, a port given to a node that is not the part's, a part replaced that the circuit
+        does not have (or twice).
 
     Examples
     --------
-    >>> c = compose_parts(())
+    >>> from impactbar.drives.circuit.preset import PRESET_PARTS
+    >>> c = compose_parts((), PRESET_PARTS)
     >>> c.layout is PRESET, c.nodes["tank"], c.events
-    (True, 3, ('accumulator', 'relief'))
+    (True, 3, ('ramp_end', 'accumulator', 'relief'))
+    >>> [p.name for p in c.parts]
+    ['chambers', 'supply', 'valve', 'accumulator', 'relief']
     """
     parts = tuple(parts)
     for p in parts:
         if not isinstance(p, CircuitPart):
             raise ValueError(f"extra_parts must be CircuitPart instances; got {type(p).__name__}")
-    if not parts:
-        return Composition(PRESET, {**{n: i for i, n in enumerate(_PRESET_NODES)}, "tank": 3}, 3,
-                           _PRESET_EVENTS, {"valve_return": 3})
-    nodes = list(_PRESET_NODES)
-    symbols = list(PRESET.state_names[:3])
-    energies = list(PRESET.energies)
-    terms = list(PRESET.terms)
-    events = list(_PRESET_EVENTS)
-    ports: dict = {}
-    for p in parts:
+    circuit = _in_place(tuple(base), parts)
+    nodes: list = []
+    held: list = []
+    symbols: list = []
+    energies = [name for name, _ in SHARED_ENERGIES]
+    terms = [term for _, term in SHARED_ENERGIES]
+    events: list = []
+    offers: dict = {}
+    for p in circuit:
         if len(p.symbols) != len(p.nodes):
             raise ValueError(f"a {type(p).__name__}'s symbols must name its nodes {p.nodes}; got {p.symbols}")
         nodes += p.nodes
+        held += p.held_nodes
         symbols += p.symbols
         for name, term in p.energies:
             if term not in TERMS:
@@ -416,18 +502,27 @@ def compose_parts(parts) -> Composition:
             energies.append(name)
             terms.append(term)
         events += p.events
+        for port, node in p.offers.items():
+            if port in offers:
+                raise ValueError(f"the port {port!r} is offered by two parts (a {type(p).__name__} again)")
+            offers[port] = node
+    taken: dict = {}
+    for p in circuit:
         for port, node in p.ports.items():
-            if port not in PORTS or port in ports or node not in p.nodes:
-                raise ValueError(f"a {type(p).__name__} takes a port of {tuple(PORTS)} (one part each) to "
+            if port not in offers or port in taken or node not in p.nodes:
+                raise ValueError(f"a {type(p).__name__} takes a port of {tuple(offers)} (one part each) to "
                                  f"one of its nodes {p.nodes}; got {port!r} to {node!r}")
-            ports[port] = node
-    names = nodes + ["spool", "tank"]
-    if len(set(names)) != len(names) or len(set(events)) != len(events) or "ramp_end" in events:
+            taken[port] = node
+    names = nodes + ["spool"] + held
+    if len(set(names)) != len(names) or len(set(events)) != len(events):
         raise ValueError(f"the parts' nodes and events must have names of their own; got nodes {nodes}, "
-                         f"events {events}")
+                         f"held nodes {held}, events {events}")
+    number = {n: i for i, n in enumerate(nodes + held)}
+    for port, node in offers.items():
+        if taken.get(port, node) not in number:
+            raise ValueError(f"the port {port!r} joins the node {node!r}; the circuit's nodes are "
+                             f"{tuple(number)}")
     layout = CircuitLayout(states=(*nodes, "spool"), state_names=(*symbols, "x_v"), energies=tuple(energies),
                            terms=tuple(terms))
-    number = {n: i for i, n in enumerate(nodes)}
-    number["tank"] = len(nodes)
-    return Composition(layout, number, len(nodes), tuple(events),
-                       {port: number[ports.get(port, default)] for port, default in PORTS.items()})
+    return Composition(PRESET if layout == PRESET else layout, number, len(nodes), tuple(events),
+                       {port: number[taken.get(port, node)] for port, node in offers.items()}, tuple(circuit))

@@ -24,6 +24,7 @@ from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .layout import PRESET
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
+from .preset import preset_parts
 from .settings import DEFAULT_SETTINGS, circuit_settings
 from .watch import watched
 
@@ -77,15 +78,13 @@ for _name, _range in _RANGES.items():  # finite above, but the relief pressure (
     if "high" not in _range and _name != "relief_pressure":
         _range["high_open"] = True
 
-#: the preset's nodes with a state (``p_f, p_r, p_s``) in the network of part records (:mod:`._network`;
-#: then the extra parts' and the tank held at its pressure, :func:`.composition.compose_parts`)
-_FRONT, _REAR, _SUPPLY = range(3)
-
 _SWITCH_OUT = "switch_out"
 _SWITCH_IN = "switch_in"
 _RAMP = "ramp_end"
 _ACC = "accumulator"
 _REL = "relief"
+#: the events the drive reads itself (the others an extra part's, :func:`.watch.watched`)
+_OWN_EVENTS = (_RAMP, _ACC, _REL)
 
 
 class CircuitEnergy(dict):
@@ -259,8 +258,8 @@ class HydraulicCircuitDrive(Drive):
                              "take oil: a lower precharge or a higher relief_pressure)")
         if self.extra_parts:
             parts = tuple(self.extra_parts)
-            comp = compose_parts(parts)
             object.__setattr__(self, "extra_parts", parts)
+            comp = self._composition
             names = tuple(PARAMETERS) + tuple(n for p in parts for n in p.parameters)
             ranges = {**_RANGES, **{n: r for p in parts for n, r in p.parameter_ranges.items()}}
             L = comp.layout
@@ -345,45 +344,21 @@ class HydraulicCircuitDrive(Drive):
 
     def _network(self, mode) -> np.ndarray:
         """The circuit as a network of part records (:mod:`._network`, header and records) in the
-        mode ``mode``: the preset layout (the states ``p_f, p_r, p_s``, the eight energy integrands
-        of :class:`CircuitEnergy`, the three events of ``_kernel.circuit_events``), each part's
-        records from its own ``records`` (an accumulator of no volume where there is none, as the
-        compiled kernel has)."""
-        target, moving, acc, rel = mode[:4]
-        ch, va, su, oil, ac = self.chambers, self.valve, self.supply, self.oil, self.accumulator
-        comp = self._composition
-        en = self.layout.energy
-        tank = comp.nodes["tank"]
-        tau = va.switching_time
-        recs = ch.records(_FRONT, _REAR, oil.bulk_modulus, front_energy=en["front"], rear_energy=en["rear"])
-        recs += su.records(_SUPPLY, tank, _FRONT, oil, relief_open=bool(rel),
-                           energies={k: en[k if k != "compression" else "supply"]
-                                     for k in ("pump", "orifices", "tank", "compression")},
-                           relief_event=K.REL_EV - K.RAMP_EV)
-        recs += va.records(_SUPPLY, _REAR, comp.ports["valve_return"], oil.transition_pressure,
-                           rate=(1.0 if target else -1.0) / tau if moving else 0.0,
-                           opening=(1 if target else -1) if moving else 0, energy=en["orifices"], event=0)
-        has_acc = ac is not None and ac.volume > 0 and not su.held
-        gas = Accumulator(precharge=ac.precharge if ac is not None else 1.0,
-                          volume=ac.volume if has_acc else 0.0,
-                          polytropic_exponent=ac.polytropic_exponent if ac is not None else 1.4)
-        recs += gas.records(_SUPPLY, holding=bool(acc), watched=has_acc, energy=en["gas"],
-                            event=K.ACC_EV - K.RAMP_EV)
-        for part in self.extra_parts:
-            recs += part.records(comp.slots(part, mode), oil)
-        return NW.compose(recs, comp.n_states, self.layout.n_energy, 1 + len(comp.events), en["piston"])
+        mode ``mode``: the preset's parts (:func:`.preset.preset_parts`) and the extra ones, composed
+        (:meth:`.composition.Composition.network`)."""
+        return self._composition.network(mode, self.oil)
 
     @functools.cached_property
     def _composition(self):
-        """The numbering of the circuit's nodes, energy and event slots with its extra parts
+        """The circuit composed of the preset's parts and its extra parts
         (:func:`.composition.compose_parts`)."""
-        return compose_parts(self.extra_parts)
+        return compose_parts(self.extra_parts, preset_parts(self))
 
     @functools.cached_property
     def _watched(self) -> tuple:
         """The extra parts' watched events read from the network (:func:`.watch.watched`)."""
         comp = self._composition
-        return watched(self._network((0, 0) + (0,) * len(comp.events)), comp.events)
+        return watched(self._network((0,) * (1 + len(comp.events))), comp.events, _OWN_EVENTS)
 
     def _network_par(self, model, mode, variational=False) -> np.ndarray:
         """:meth:`_par` with the circuit's network of part records (:meth:`_network`) after it."""
@@ -401,7 +376,7 @@ class HydraulicCircuitDrive(Drive):
 
     def _fired(self, mode, hit):
         names = {K.OUT_EV: _SWITCH_OUT, K.IN_EV: _SWITCH_IN, K.RAMP_EV: _RAMP}
-        names.update((K.RAMP_EV + 1 + i, name) for i, name in enumerate(self._composition.events))
+        names.update((K.RAMP_EV + i, name) for i, name in enumerate(self._composition.events))
         wanted = {names[i] for i in hit if i in names}
         return tuple(e for e in self.events(mode) if e.name in wanted)
 
@@ -463,10 +438,10 @@ class HydraulicCircuitDrive(Drive):
         has_acc = acc is not None and acc.volume > 0 and not self.supply.held
         a = 1 if has_acc and ps >= acc.precharge else 0
         r = 1 if self.supply.has_relief and not self.supply.held and ps > self.supply.relief_pressure else 0
-        flags = [0] * (len(self._composition.events) - 2)
-        for w in self._watched:  # (an accumulator holds oil at its level)
-            flags[w.slot - 3] = w.flag(q, z)
-        return (target, moving, a, r, *flags)
+        flags = {_ACC: a, _REL: r, **{w.name: w.flag(q, z) for w in self._watched}}
+        # (each event's flag after the ramp's end, slot 0 whose flag is ``moving``; an extra part's
+        # event not watched 0)
+        return (target, moving, *(flags.get(name, 0) for name in self._composition.events[1:]))
 
     def mode_name(self, mode) -> str:
         return "stroke" if mode[0] == 1 else "return"
@@ -559,7 +534,7 @@ class HydraulicCircuitDrive(Drive):
             z[self.layout["spool"]] = float(target)
             return DriveState((target, 0, *mode[2:]), z)
         if name in self._composition.events:  # (its flag toggled: acc, rel, an extra part's)
-            i = 2 + self._composition.events.index(name)
+            i = 1 + self._composition.events.index(name)
             return DriveState((*mode[:i], 1 - mode[i], *mode[i + 1:]), z)
         raise ValueError(f"unknown event {name!r} of the oil circuit")  # pragma: no cover
 

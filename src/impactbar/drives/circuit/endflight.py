@@ -376,7 +376,7 @@ def _end_code(drive):
     module a topology, every mode's flags values of ``par``), kept by drive."""
     from . import _endgen
 
-    return _endgen.generate(drive, (0, 0) + (0,) * len(drive._composition.events))
+    return _endgen.generate(drive, (0,) * (1 + len(drive._composition.events)))
 
 
 def _end_directions(drive, mode) -> tuple:

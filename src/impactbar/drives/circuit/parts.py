@@ -281,20 +281,29 @@ class Supply:
         5
         """
         en = {"pump": -1, "orifices": -1, "tank": -1, "compression": -1, **(energies or {})}
-        beta, ptr2 = oil.bulk_modulus, oil.transition_pressure ** 2
+        return (self.line_records(node, tank, front, oil, en)
+                + self.relief_records(node, tank, relief_open, relief_event, en["orifices"]))
+
+    def line_records(self, node: int, tank: int, front: int, oil, energies: dict) -> list:
+        """:meth:`records` but the relief valve: the supply's node, the tank's, the pump (none for a
+        held supply) and the front chamber's feed (``energies`` by name, each given)."""
+        en, beta = energies, oil.bulk_modulus
         out = [NW.record(NW.NODE, id=node, volume=self.hose_volume, beta=beta, held=float(self.held),
                          work_energy=en["pump"], work_sign=-1.0, compression_energy=en["compression"]),
                NW.record(NW.NODE, id=tank, pressure=self.tank_pressure, beta=beta, work_energy=en["tank"])]
         if not self.held:
             out.append(NW.record(NW.PUMP, node=node, flow=self.pump_flow, energy=en["pump"]))
         out.append(NW.record(NW.ORIFICE, source=node, target=front, coefficient=self.front_coefficient,
-                             ptr2=ptr2, energy=en["orifices"]))
-        setting = self.relief_pressure if math.isfinite(self.relief_pressure) else 1e300
-        out.append(NW.record(NW.RELIEF, source=node, target=tank, coefficient=self.relief_coefficient,
-                             setting=setting, open=float(relief_open),
-                             watched=float(self.has_relief and not self.held), event=relief_event,
-                             energy=en["orifices"]))
+                             ptr2=oil.transition_pressure ** 2, energy=en["orifices"]))
         return out
+
+    def relief_records(self, node: int, tank: int, relief_open: bool, event: int, energy: int) -> list:
+        """:meth:`records`' relief valve from ``node`` to ``tank`` (infinitely high without one; its
+        event watched only where it can open), its loss into the slot ``energy``."""
+        setting = self.relief_pressure if math.isfinite(self.relief_pressure) else 1e300
+        return [NW.record(NW.RELIEF, source=node, target=tank, coefficient=self.relief_coefficient,
+                          setting=setting, open=float(relief_open),
+                          watched=float(self.has_relief and not self.held), event=event, energy=energy)]
 
 
 @dataclass(frozen=True)

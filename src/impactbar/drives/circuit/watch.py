@@ -55,10 +55,11 @@ def _level(record, pressure):
     return lambda q, z: LV.quantity(record, lambda j: pressure(z, j), -float(q[0]))
 
 
-def watched(net, events) -> tuple:
+def watched(net, events, own=()) -> tuple:
     """The extra parts' :class:`Watch` es of the composed network ``net`` (:func:`._network.compose`),
-    in slot order; ``events`` the network's event names after the ramp's end (slot ``1 + i``). The
-    preset's own (slots 1, 2) are left out."""
+    in slot order; ``events`` the network's event names (slot ``i``:
+    :attr:`.composition.Composition.events`), those named in ``own`` (the drive's: the preset's
+    accumulator and relief) left out."""
     head, recs = net[:NW.NW_SIZE], np.asarray(net[NW.NW_SIZE:]).reshape(-1, NW.REC_SIZE)
     ns = int(head[NW.NW_NSTATE])
 
@@ -68,15 +69,15 @@ def watched(net, events) -> tuple:
     out = []
     for r in recs:
         kind = int(r[NW.KIND])
-        if kind == NW.ACCUM and r[NW.A_WATCH] > 0.5 and r[NW.A_EV] >= 3:
+        if kind == NW.ACCUM and r[NW.A_WATCH] > 0.5 and r[NW.A_EV] >= 0:
             node = int(r[NW.A_NODE])
             out.append((int(r[NW.A_EV]), float(r[NW.A_P0]), kind, node,
                         lambda q, z, j=node: pressure(z, j)))
-        elif kind == NW.RELIEF and r[NW.R_WATCH] > 0.5 and r[NW.R_EV] >= 3:
+        elif kind == NW.RELIEF and r[NW.R_WATCH] > 0.5 and r[NW.R_EV] >= 0:
             node = int(r[NW.R_FROM])
             out.append((int(r[NW.R_EV]), float(r[NW.R_SET]), kind, node,
                         lambda q, z, j=node: pressure(z, j)))
-        elif kind == NW.LEVEL and r[NW.LV_EV] >= 3:
+        elif kind == NW.LEVEL and r[NW.LV_EV] >= 0:
             out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _level(r.copy(), pressure)))
-    return tuple(Watch(events[slot - 1], slot, level, kind, node, f)
-                 for slot, level, kind, node, f in sorted(out, key=lambda e: e[0]))
+    return tuple(Watch(events[slot], slot, level, kind, node, f)
+                 for slot, level, kind, node, f in sorted(out, key=lambda e: e[0]) if events[slot] not in own)
