@@ -126,3 +126,23 @@ def test_the_fit_blocks_output_is_what_it_prints():
     with contextlib.redirect_stdout(out):
         exec(compile(code.replace("fit.comparisons[1.0].plot()", ""), "measurements.md", "exec"), {})
     assert out.getvalue() == shown
+
+
+def test_the_dispersion_corrections_numbers():
+    """PMMA-13 with the bars' Poisson ratio: the three-wave peak stress the page quotes, and the
+    first mode's speed at the pickup's frequency."""
+    import math
+
+    from impactbar.measure import Bar, phase_velocity, read_spec
+
+    spec = read_spec(ROOT / "examples" / "shpb_pmma13.toml")
+    spec["dispersion"] = {"poisson": 0.33}
+    corrected = run_spec(spec).report["stress_strain"]["3"]["peak_stress_MPa"]
+    assert _quoted(r"three-wave peak stress from [0-9.]+ to ([0-9.]+) MPa") == round(corrected, 1)
+    plain = run_spec(ROOT / "examples" / "shpb_pmma13.toml").report["stress_strain"]["3"]["peak_stress_MPa"]
+    assert _quoted(r"three-wave peak stress from ([0-9.]+) to") == round(plain, 1)
+    bar = Bar(71.7e9, 2810.0, 4.4521e-6)
+    radius = math.sqrt(bar.area / math.pi)
+    assert _quoted(r"a radius of ([0-9.]+) mm") == round(1e3 * radius, 2)
+    c = phase_velocity([0.732e6], radius, bar, 0.33)[0]
+    assert _quoted(r"carries at ([0-9.]+) of") == round(c / bar.wave_speed, 2)

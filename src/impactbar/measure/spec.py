@@ -33,6 +33,9 @@
     threshold = 10.0                      # noise standard deviations
     cutoff_hz = 1.0e6                     # the detection's low-pass
 
+    [dispersion]                          # optional: the waves carried in a round bar's first mode
+    poisson = 0.33                        # the bars' Poisson ratio (radius sqrt(area / pi))
+
 A drill rod's spec has ``[bars.rod]``, two channels on it (stations from the bit) and a ``[bit]``
 table instead of ``[specimen]`` (:func:`~impactbar.measure.analyse_drill_rod`)::
 
@@ -61,7 +64,8 @@ from .recording import Bar, Gauge, Recording
 
 __all__ = ["read_spec", "run_spec"]
 
-_SECTIONS = {"recording", "bars", "channels", "specimen", "striker", "detection", "bit", "model"}
+_SECTIONS = {"recording", "bars", "channels", "specimen", "striker", "detection", "bit", "model",
+             "dispersion"}
 
 
 def read_spec(path) -> dict:
@@ -196,7 +200,9 @@ def run_spec(spec: dict | str | Path) -> KolskyTest | DrillRodTest:
     material = {k: v for k, v in striker.items() if k != "length"}
     striker_bar = Bar(**material) if material else None
     detection = _table(spec, "detection", {"threshold", "cutoff_hz"}, set())
+    dispersion = _table(spec, "dispersion", {"poisson"}, {"poisson"}) if "dispersion" in spec else {}
     return analyse_kolsky(recording, gauges, bars["incident"], bars["transmitted"], float(specimen["length"]),
                           float(specimen["area"]), striker_length=striker.get("length"), striker=striker_bar,
                           threshold=float(detection.get("threshold", 10.0)),
-                          cutoff=detection.get("cutoff_hz", 1e6), baseline=baseline)
+                          cutoff=detection.get("cutoff_hz", 1e6), baseline=baseline,
+                          poisson=dispersion.get("poisson"))
