@@ -1,7 +1,8 @@
 """The dispersion correction inside the Kolsky bar's analysis: on a recording made by carrying known
 waves at the specimen's faces to the gauges in a round bar's first mode (the Pochhammer-Chree
 relation, :func:`~impactbar.measure.disperse`), the analysis with the bars' Poisson ratio brings them
-back; on a thin bar it changes nothing to the tolerance stated."""
+back; on a thin bar it changes nothing to the tolerance stated. And on a synthetic recording whose
+pulses overlap at the gauge, the one-line refusal that names it."""
 
 import math
 
@@ -69,3 +70,19 @@ def test_a_thin_bar_is_left_as_it_was():
     for k in ("1", "2", "3"):
         assert a.report["stress_strain"][k]["peak_stress_MPa"] == pytest.approx(
             b.report["stress_strain"][k]["peak_stress_MPa"], rel=5e-3)
+
+
+def test_pulses_that_overlap_at_the_gauge_are_refused_in_one_line():
+    """A 60 us pulse at a gauge 0.1 m from the specimen: its reflection comes back 40 us after its
+    foot, while it still passes; one-point separation cannot part them, and the refusal says so."""
+    bar = Bar(200e9, 7850.0, 1e-4)
+    c, x = bar.wave_speed, 0.1
+    face = _pulse(T, 30e-6 + x / c)
+    delayed = lambda w, d: np.interp(T - d / c, T, w, left=0.0, right=0.0)  # noqa: E731
+    noise = np.random.default_rng(0).standard_normal((2, T.size)) * 1e-7
+    rec = Recording.from_arrays(T, a=(delayed(face, -x) - 0.4 * delayed(face, x)) / 2 + noise[0],
+                                b=0.6 * delayed(face, x) / 2 + noise[1])
+    gauges = {"a": Gauge("incident", x, gauge_factor=2.0), "b": Gauge("transmitted", x, gauge_factor=2.0)}
+    with pytest.raises(ValueError, match=r"^the pulses overlap at the incident bar's gauge: .* use two-point "
+                                         r"separation$"):
+        analyse_kolsky(rec, gauges, bar, bar, 5e-3, 1e-4, baseline=slice(0, 200), cutoff=None)

@@ -153,7 +153,8 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
     ------
     ValueError
         A channel not in the recording, a gauge on a bar not named, a bar without a gauge, a bar
-        with no pulse, no reflected pulse after the incident one.
+        with no pulse, an incident pulse that overlaps its reflection at the gauge, no reflected
+        pulse after the incident one.
     """
     time, dt = recording.time, recording.dt
     baseline = baseline if baseline is not None else slice(0, max(8, time.size // 10))
@@ -164,6 +165,12 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
 
     inc_pulses = _pulses(time, strain["incident"], "incident", threshold, cutoff, baseline)
     w_inc = inc_pulses[0]
+    due = w_inc.t_start + 2 * station["incident"] / incident_bar.wave_speed
+    if w_inc.t_stop > due:
+        raise ValueError(f"the pulses overlap at the incident bar's gauge: the incident one lasts to "
+                         f"{w_inc.t_stop * 1e6:.2f} us, its reflection is due from {due * 1e6:.2f} us "
+                         f"(2 x {station['incident']:g} m / {incident_bar.wave_speed:.6g} m/s after its "
+                         "foot); one-point separation needs them apart: use two-point separation")
     later = [w for w in inc_pulses if w.start >= w_inc.stop and w.sign == -w_inc.sign]
     if not later:
         raise ValueError("no reflected pulse on the incident bar after the incident one "
