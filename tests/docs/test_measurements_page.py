@@ -7,6 +7,7 @@ import os
 import re
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from impactbar.cli import main
@@ -22,12 +23,53 @@ def report():
     return run_spec(ROOT / "examples" / "shpb_pmma13.toml").report
 
 
-def test_the_console_block_is_what_the_command_prints():
-    block = re.search(r"```console\n\$ impactbar measure (\S+)\n(.*?)```", PAGE, re.S)
+@pytest.mark.parametrize("spec", ["examples/shpb_pmma13.toml", "examples/drill_rod.toml"])
+def test_the_console_block_is_what_the_command_prints(spec):
+    blocks = dict(re.findall(r"```console\n\$ impactbar measure (\S+)\n(.*?)```", PAGE, re.S))
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        assert main(["measure", str(ROOT / block.group(1))]) == 0
-    assert out.getvalue() == block.group(2)
+        assert main(["measure", str(ROOT / spec)]) == 0
+    assert out.getvalue() == blocks[spec]
+
+
+def test_the_drill_rods_prose_numbers():
+    """The exact blow's numbers the page quotes, and its noise, from the script that made the data."""
+    import runpy
+
+    from impactbar.physical.piston import piston_blow
+
+    make = runpy.run_path(str(ROOT / "examples" / "data" / "make_drill_rod_blow.py"))
+    true = make["TRUE"]
+    b = piston_blow(make["ROD"], (true["rock.k"], true["rock.k_u"]), lengths=[0.3], areas=[1.0e-3],
+                    impact_velocity=true["impact_velocity"])
+    assert _quoted(r"penetration of ([0-9.]+) mm and does") == round(1e3 * b["blow"].max_penetration
+                                                                      * b["length_m"], 3)
+    assert _quoted(r"does ([0-9.]+) J of work on the rock") == round(b["work_on_rock_J"], 2)
+    assert _quoted(r"\(of the piston's ([0-9]+) J\)") == round(b["impact_energy_J"])
+    test = run_spec(ROOT / "examples" / "drill_rod.toml")
+    from impactbar.physical.piston import _model_units
+
+    _, force_N, *_ = _model_units(make["ROD"], true["rock.k"], true["rock.k_u"], b["mass_kg"], b["length_m"],
+                                  2.0e11, 8000.0, None)
+    peak = float(b["blow"].bit_force(test.waves.time / (b["length_m"] / 5000.0)).max()) * force_N
+    assert _quoted(r"peak force of ([0-9.]+) kN at the bit") == round(peak / 1e3, 1)
+    k_u = test.report["rock_from_curve"]["k_u"]
+    assert _quoted(r"the unloading one ([0-9]+) % low") == round(100 * (1 - k_u / true["rock.k_u"]))
+    from impactbar.measure.waves import lowpass
+
+    t = test.waves.time
+    exact = b["blow"].bit_force(t / (b["length_m"] / 5000.0)) * force_N
+    alike = np.max(np.abs(test.bit.force - lowpass(exact, t[1] - t[0], 40e3))) / peak
+    assert alike < _quoted(r"low-passed alike they agree within ([0-9.]+) %") / 100
+    from impactbar.measure import gauge_strains
+
+    length = sum(p.length_m for p in make["ROD"])
+    t = make["T0"] + make["DT"] * np.arange(make["N"])
+    eps = gauge_strains(make["ROD"], **make["PISTON"], values=true, time=t,
+                        stations=[length - x for x in make["STATIONS"].values()])
+    peak = max(float(np.max(np.abs(e))) for e in eps.values())
+    noise = 1e6 * make["NOISE"] * peak
+    assert _quoted(r"0.2 % of the peak strain \(([0-9.]+) microstrain\)") == round(noise, 1)
 
 
 def test_the_python_blocks_run(monkeypatch):
@@ -84,3 +126,23 @@ def test_the_fit_blocks_output_is_what_it_prints():
     with contextlib.redirect_stdout(out):
         exec(compile(code.replace("fit.comparisons[1.0].plot()", ""), "measurements.md", "exec"), {})
     assert out.getvalue() == shown
+
+
+def test_the_dispersion_corrections_numbers():
+    """PMMA-13 with the bars' Poisson ratio: the three-wave peak stress the page quotes, and the
+    first mode's speed at the pickup's frequency."""
+    import math
+
+    from impactbar.measure import Bar, phase_velocity, read_spec
+
+    spec = read_spec(ROOT / "examples" / "shpb_pmma13.toml")
+    spec["dispersion"] = {"poisson": 0.33}
+    corrected = run_spec(spec).report["stress_strain"]["3"]["peak_stress_MPa"]
+    assert _quoted(r"three-wave peak stress from [0-9.]+ to ([0-9.]+) MPa") == round(corrected, 1)
+    plain = run_spec(ROOT / "examples" / "shpb_pmma13.toml").report["stress_strain"]["3"]["peak_stress_MPa"]
+    assert _quoted(r"three-wave peak stress from ([0-9.]+) to") == round(plain, 1)
+    bar = Bar(71.7e9, 2810.0, 4.4521e-6)
+    radius = math.sqrt(bar.area / math.pi)
+    assert _quoted(r"a radius of ([0-9.]+) mm") == round(1e3 * radius, 2)
+    c = phase_velocity([0.732e6], radius, bar, 0.33)[0]
+    assert _quoted(r"carries at ([0-9.]+) of") == round(c / bar.wave_speed, 2)

@@ -72,3 +72,18 @@ def test_the_fit_refuses_a_curve_without_unloading():
 
     with pytest.raises(ValueError, match="0 unloading steps"):
         fit_bilinear_rock(np.linspace(0.1, 1.0, 50), np.ones(50), 1e-3)
+
+
+def test_the_waves_at_the_bit_are_the_blows(blow):
+    """The two waves themselves at the bit, to 1e-9 of their peak: the blow's force F and the bit's
+    velocity v (the central difference of its exact penetration, step 1e-6: samples lie 5e-4 from
+    the fronts, which arrive at multiples of 0.1) give a = -(F/EA + v/c)/2 toward the bit and
+    b = (v/c - F/EA)/2 back."""
+    b, t, strain = blow
+    w = separate_two_point(t, strain[0.1], strain[0.2], 0.1, 0.2, ROD)
+    force = b.bit_force(w.time) / ROD.stiffness
+    velocity = (b.penetration(w.time + 1e-6) - b.penetration(w.time - 1e-6)) / 2e-6 / ROD.wave_speed
+    toward, away = -0.5 * (force + velocity), 0.5 * (velocity - force)
+    peak = max(np.max(np.abs(toward)), np.max(np.abs(away)))
+    assert np.max(np.abs(w.toward - toward)) < 1e-9 * peak
+    assert np.max(np.abs(w.away - away)) < 1e-9 * peak

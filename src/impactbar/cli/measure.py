@@ -1,7 +1,9 @@
 """``impactbar measure SPEC.toml``: a split-Hopkinson (Kolsky) bar recording from its raw channels to
 the pulses' windows, the striker's impact velocity, the waves' energies, the specimen's stress-strain
 summary and the diagnostics (the gauges of a bar compared, the force balance, the noise's lines);
-``--out`` writes the waves at the specimen and its stress-strain curves as CSV, and the figure."""
+``--out`` writes the waves at the specimen and its stress-strain curves as CSV, and the figure. A drill
+rod's spec (its ``[bit]``) gives the waves at the bit from two gauges, its force, penetration and
+energy, the rock's stiffnesses from the force-penetration curve and the model's blow fitted."""
 
 from __future__ import annotations
 
@@ -11,12 +13,14 @@ from ._common import docs_page, output_folder, print_json
 def add_parser(sub) -> None:
     p = sub.add_parser(
         "measure",
-        help="a Kolsky-bar recording to waves, impact velocity, energies and stress-strain",
+        help="a Kolsky-bar or drill-rod recording to waves, forces, energies, stress-strain or the rock",
         description="Read the channels a TOML spec names (Tektronix CSV, .npz, plain CSV columns), "
         "convert them to strain by their bridges, find the incident, reflected and transmitted pulses "
         "where the bars leave their noise band, shift them to the specimen and print the windows, the "
         "striker's impact velocity, the wave energies, the one-, two- and three-wave stress-strain "
-        f"summary and the diagnostics (see {docs_page('Measurements')}).",
+        "summary and the diagnostics; for a drill rod's spec (its [bit]) the waves at the bit from two "
+        "gauges, its force, penetration and energy, the rock's stiffnesses and the model's blow fitted "
+        f"(see {docs_page('Measurements')}).",
     )
     p.add_argument("measurement", metavar="SPEC.toml",
                    help="the measurement's TOML spec: its files, channels, bars, specimen (e.g. "
@@ -24,23 +28,54 @@ def add_parser(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the whole report as JSON")
     p.add_argument("--out", default=None,
                    help="folder for waves.csv (the strains at the specimen's faces), stress_strain.csv and "
-                        "kolsky.png (the bars' strains with the windows found, the waves, the curves)")
+                        "kolsky.png (the bars' strains with the windows found, the waves, the curves); for "
+                        "a drill rod bit.csv (the waves, force, velocity, penetration, energy) and "
+                        "drill_rod.png")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from ..measure import run_spec
+    from ..measure import DrillRodTest, run_spec
 
     out = output_folder(args.out) if args.out is not None else None
     test = run_spec(args.measurement)
+    drill = isinstance(test, DrillRodTest)
     if out is not None:
-        _write_csv(out, test)
-        test.plot(out / "kolsky.png")
+        (_write_bit_csv if drill else _write_csv)(out, test)
+        test.plot(out / ("drill_rod.png" if drill else "kolsky.png"))
     if args.json:
         print_json(test.report)
     else:
-        print(summary_text(test.report))
+        print(drill_text(test.report) if drill else summary_text(test.report))
     return 0
+
+
+def _write_bit_csv(out, test) -> None:
+    import numpy as np
+
+    w, b = test.waves, test.bit
+    np.savetxt(out / "bit.csv", np.column_stack([w.time * 1e6, w.toward, w.away, b.force, b.velocity,
+                                                 b.displacement, b.energy_fv]),
+               delimiter=",", header="time_us,toward,away,force_N,velocity_m_s,penetration_m,energy_J",
+               comments="")
+
+
+def drill_text(report: dict) -> str:
+    """A drill rod's report in a few lines."""
+    s, b, r = report["separation"], report["bit"], report["rock_from_curve"]
+    lines = [f"two-point separation: {s['channels'][0]} at {s['stations_m'][0]:g} m, {s['channels'][1]} at "
+             f"{s['stations_m'][1]:g} m from the bit; first failing frequency "
+             f"{s['first_failing_Hz'] / 1e3:.1f} kHz, low-passed at {s['cutoff_Hz'] / 1e3:.1f} kHz",
+             f"bit: peak force {b['peak_force_kN']:.1f} kN, max penetration {b['max_penetration_mm']:.3f} mm",
+             f"energies (J): incident {b['incident_energy_J']:.2f}, into the bit (force-velocity) "
+             f"{b['energy_fv_J']:.2f}, force-squared {b['energy_f2_J']:.2f}",
+             f"rock from the force-penetration curve: k {r['k']:.4g} +- {r['k_std']:.2g} N/m, "
+             f"k_u {r['k_u']:.4g} +- {r['k_u_std']:.2g} N/m"]
+    if "model_fit" in report:
+        f = report["model_fit"]
+        lines.append(f"model's blow fitted (misfit {100 * f['misfit']:.2f} %): " + ", ".join(
+            f"{n} {f['values'][n]:.5g} +- {e:.2g}" for n, e in f["errors"].items()))
+    return "\n".join(lines)
 
 
 def _write_csv(out, test) -> None:

@@ -3,13 +3,15 @@
 The recording and its bridges (:mod:`~impactbar.measure.recording`), the waves separated at one or
 two gauges (:mod:`~impactbar.measure.waves`), the results at a bar's end
 (:mod:`~impactbar.measure.results`), a rock's stiffnesses fitted from the bit's force and velocity
-(:mod:`~impactbar.measure.rock`), a split-Hopkinson test from raw channels to the stress-strain
+(:mod:`~impactbar.measure.rock`), a drill rod's blow from two gauges
+(:mod:`~impactbar.measure.drill`), a split-Hopkinson test from raw channels to the stress-strain
 curve (:mod:`~impactbar.measure.kolsky`) and its TOML spec (:mod:`~impactbar.measure.spec`), and the
 model's blow beside a recording, with its parameters fitted to it (:mod:`~impactbar.measure.model`), and
 a round bar's dispersion (:mod:`~impactbar.measure.dispersion`).
 """
 
 from .dispersion import disperse, phase_velocity
+from .drill import DrillRodTest, analyse_drill_rod
 from .kolsky import KolskyTest, analyse_kolsky
 from .model import FIT_PARAMETERS, BlowFit, Comparison, compare, fit_blow, gauge_strains
 from .recording import BRIDGES, Bar, Gauge, Recording, read_tektronix_csv
@@ -25,8 +27,9 @@ from .rock import fit_bilinear_rock
 from .spec import read_spec, run_spec
 from .waves import Waves, Window, find_pulses, noise_level, separate_one_point, separate_two_point, shift
 
-__all__ = ["BRIDGES", "Bar", "BlowFit", "Comparison", "FIT_PARAMETERS", "compare", "fit_blow",
-           "gauge_strains", "disperse", "phase_velocity", "EndHistory", "Gauge", "KolskyTest", "Recording",
+__all__ = ["BRIDGES", "Bar", "BlowFit", "DrillRodTest", "analyse_drill_rod", "Comparison", "FIT_PARAMETERS",
+           "compare", "fit_blow", "gauge_strains", "disperse", "phase_velocity", "EndHistory", "Gauge",
+           "KolskyTest", "Recording",
            "SpecimenResponse", "Waves", "Window", "analyse_kolsky", "end_history", "find_pulses",
            "fit_bilinear_rock", "impact_velocity", "noise_level", "read_spec", "read_tektronix_csv",
            "run_spec", "separate_one_point", "separate_two_point", "shift", "specimen_response",

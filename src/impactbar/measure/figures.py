@@ -1,8 +1,30 @@
-"""The figures a test engineer checks a Kolsky bar test by (matplotlib, imported when drawing)."""
+"""The figures a test engineer checks a Kolsky bar test and a drill rod's blow by (matplotlib,
+imported when drawing)."""
 
 from __future__ import annotations
 
-__all__ = ["plot_kolsky"]
+__all__ = ["plot_kolsky", "plot_drill_rod"]
+
+def _pyplot(path):
+    """matplotlib's pyplot, on the Agg backend where the figure goes to a file."""
+    import matplotlib
+
+    if path is not None:
+        matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _saved(fig, path):
+    """``fig`` saved to ``path`` (and closed) where one is given."""
+    if path is not None:
+        import matplotlib.pyplot as plt
+
+        fig.savefig(path, dpi=130)
+        plt.close(fig)
+    return fig
+
 
 _BAR_OF = {"incident": "incident", "reflected": "incident", "transmitted": "transmitted"}
 
@@ -21,11 +43,7 @@ def plot_kolsky(test, path=None):
     -------
     matplotlib.figure.Figure
     """
-    import matplotlib
-
-    if path is not None:
-        matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    plt = _pyplot(path)
 
     fig, (raw, waves, curve) = plt.subplots(3, 1, figsize=(7.5, 9.5), constrained_layout=True)
     t_us = test.record_time * 1e6
@@ -48,7 +66,35 @@ def plot_kolsky(test, path=None):
         curve.plot(test.specimen.strain[k], test.specimen.stress[k] / 1e6, label=f"{k}-wave")
     curve.set(xlabel="engineering strain", ylabel="stress (MPa)", title="the specimen's stress-strain")
     curve.legend(fontsize=8)
-    if path is not None:
-        fig.savefig(path, dpi=130)
-        plt.close(fig)
-    return fig
+    return _saved(fig, path)
+
+
+def plot_drill_rod(test, path=None):
+    """The panels of a drill rod's blow: the gauges' strains, the waves at the bit, the bit's
+    force-penetration curve and, where the model was fitted, its strains against the measured.
+
+    ``test`` a :class:`~impactbar.measure.DrillRodTest`, ``path`` as :func:`plot_kolsky`'s; returns
+    the figure.
+    """
+    plt = _pyplot(path)
+
+    panels = 4 if test.fit is not None else 3
+    fig, axes = plt.subplots(panels, 1, figsize=(7.5, 3.0 * panels), constrained_layout=True)
+    raw, waves, curve = axes[:3]
+    ms = test.record_time * 1e3
+    for name, strain in test.gauge_strain.items():
+        raw.plot(ms, strain * 1e3, lw=0.7, label=name)
+    raw.set(xlabel="time (ms)", ylabel="strain (1e-3, tension +)", title="the gauges' strains")
+    raw.legend(fontsize=8)
+    tw = test.waves.time * 1e3
+    waves.plot(tw, test.waves.toward * 1e3, label="toward the bit")
+    waves.plot(tw, test.waves.away * 1e3, label="back from the bit")
+    waves.set(xlabel="time (ms)", ylabel="strain (1e-3)", title="the waves at the bit (two-point separation)")
+    waves.legend(fontsize=8)
+    curve.plot(test.bit.displacement * 1e3, test.bit.force / 1e3, lw=0.9)
+    curve.set(xlabel="penetration (mm)", ylabel="force (kN)", title="the bit's force-penetration curve")
+    if test.fit is not None:
+        station = min(test.fit.comparisons)
+        test.fit.comparisons[station].plot(axes[3])
+        axes[3].set_title(f"the model's blow fitted, at {station:g} m from the struck end")
+    return _saved(fig, path)

@@ -104,11 +104,22 @@ def _noise_peak(volts, dt: float, baseline: slice, band=(2e5, 5e6)) -> dict:
             "above_median": round(float(pxx[sel][k] / np.median(pxx[sel])), 1)}
 
 
+def _carried(time, strain, window: Window, distance: float, bar: Bar, poisson: float) -> np.ndarray:
+    """The pulse in ``window`` carried ``distance`` along a round bar of the bar's area (its first
+    mode, :func:`~impactbar.measure.disperse`)."""
+    from .dispersion import disperse
+
+    alone = np.zeros_like(strain)
+    alone[window.start:window.stop] = strain[window.start:window.stop]
+    return disperse(time, alone, distance, float(np.sqrt(bar.area / np.pi)), bar, poisson)
+
+
 def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transmitted_bar: Bar,
                    specimen_length: float, specimen_area: float, *, striker_length: float | None = None,
                    striker: Bar | None = None, threshold: float = 10.0, cutoff: float | None = 1e6,
-                   baseline: slice | None = None, curve_points: int = 40) -> KolskyTest:
-    """Analyse a Kolsky bar test.
+                   baseline: slice | None = None, curve_points: int = 40, poisson: float | None = None
+                   ) -> KolskyTest:
+    r"""Analyse a Kolsky bar test.
 
     Parameters
     ----------
@@ -128,6 +139,11 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
         The quiet (pre-trigger) samples, by default the first tenth.
     curve_points : int
         How many points of the stress-strain curves the report holds.
+    poisson : float, optional
+        The bars' Poisson ratio: where given, each wave is carried between the gauge and the
+        specimen in a round bar's first longitudinal mode (:func:`~impactbar.measure.disperse`, the
+        radius :math:`\sqrt{A/\pi}` of the bar's area, components above :math:`f a / c_0 = 1`
+        dropped) instead of delayed by :math:`x/c`.
 
     Returns
     -------
@@ -137,7 +153,8 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
     ------
     ValueError
         A channel not in the recording, a gauge on a bar not named, a bar without a gauge, a bar
-        with no pulse, no reflected pulse after the incident one.
+        with no pulse, an incident pulse that overlaps its reflection at the gauge, no reflected
+        pulse after the incident one.
     """
     time, dt = recording.time, recording.dt
     baseline = baseline if baseline is not None else slice(0, max(8, time.size // 10))
@@ -148,6 +165,12 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
 
     inc_pulses = _pulses(time, strain["incident"], "incident", threshold, cutoff, baseline)
     w_inc = inc_pulses[0]
+    due = w_inc.t_start + 2 * station["incident"] / incident_bar.wave_speed
+    if w_inc.t_stop > due:
+        raise ValueError(f"the pulses overlap at the incident bar's gauge: the incident one lasts to "
+                         f"{w_inc.t_stop * 1e6:.2f} us, its reflection is due from {due * 1e6:.2f} us "
+                         f"(2 x {station['incident']:g} m / {incident_bar.wave_speed:.6g} m/s after its "
+                         "foot); one-point separation needs them apart: use two-point separation")
     later = [w for w in inc_pulses if w.start >= w_inc.stop and w.sign == -w_inc.sign]
     if not later:
         raise ValueError("no reflected pulse on the incident bar after the incident one "
@@ -164,7 +187,12 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
     # the transmitted bar carries one wave, away from the specimen: shifted back to its face
     transmitted_face = np.zeros_like(time)
     transmitted_face[w_tra.start:w_tra.stop] = strain["transmitted"][w_tra.start:w_tra.stop]
-    transmitted_face = shift(time, transmitted_face, -xt / ct)
+    if poisson is None:
+        transmitted_face = shift(time, transmitted_face, -xt / ct)
+    else:  # each wave carried in the first mode: the incident on, the two others back
+        front = Waves(time, _carried(time, strain["incident"], w_inc, xi, incident_bar, poisson),
+                      _carried(time, strain["incident"], w_ref, -xi, incident_bar, poisson))
+        transmitted_face = _carried(time, strain["transmitted"], w_tra, -xt, transmitted_bar, poisson)
     t_arrive = w_inc.t_start + xi / ci
     k0 = int(round((t_arrive - time[0]) / dt))
     n = int(round(w_inc.duration / dt)) + 1

@@ -35,7 +35,7 @@ def _slope(dF: np.ndarray, du: np.ndarray, outlier: float, name: str) -> tuple[f
     return kappa, std, int(du.size)
 
 
-def fit_bilinear_rock(force, velocity, dt: float, *, outlier: float = 20.0) -> dict:
+def fit_bilinear_rock(force, velocity, dt: float, *, outlier: float = 20.0, contact: float = 0.0) -> dict:
     """The rock's loading and unloading stiffness from the force on the bit and its velocity.
 
     Parameters
@@ -49,6 +49,9 @@ def fit_bilinear_rock(force, velocity, dt: float, *, outlier: float = 20.0) -> d
     outlier : float
         Steps whose slope lies beyond this many median absolute deviations from the median are
         left out (a wave front within the step).
+    contact : float
+        Only the steps where the force exceeds this fraction of its peak, in ``[0, 1)``, are read (0:
+        every step of positive force; a noisy record's steps out of contact have a force of noise).
 
     Returns
     -------
@@ -73,9 +76,12 @@ def fit_bilinear_rock(force, velocity, dt: float, *, outlier: float = 20.0) -> d
     F, v = np.asarray(force, dtype=float), np.asarray(velocity, dtype=float)
     if F.shape != v.shape:
         raise ValueError(f"force and velocity must be of one length, got {F.size} and {v.size}")
+    if not 0.0 <= contact < 1.0:
+        raise ValueError(f"contact must lie in [0, 1) (a fraction of the peak force), got {contact!r}")
     dF = np.diff(F)
     du = 0.5 * (v[1:] + v[:-1]) * dt
-    on = (F[1:] > 0) & (F[:-1] > 0) & (du != 0)
+    floor = contact * F.max() if contact > 0 else 0.0
+    on = (F[1:] > floor) & (F[:-1] > floor) & (du != 0)
     virgin = on & (F[1:] > np.maximum.accumulate(F)[:-1])
     elastic = on & ~virgin
     k, k_std, n_k = _slope(dF[virgin], du[virgin], outlier, "loading")

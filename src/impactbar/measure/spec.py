@@ -32,6 +32,24 @@
     [detection]                           # optional
     threshold = 10.0                      # noise standard deviations
     cutoff_hz = 1.0e6                     # the detection's low-pass
+
+    [dispersion]                          # optional: the waves carried in a round bar's first mode
+    poisson = 0.33                        # the bars' Poisson ratio (radius sqrt(area / pi))
+
+A drill rod's spec has ``[bars.rod]``, two channels on it (stations from the bit) and a ``[bit]``
+table instead of ``[specimen]`` (:func:`~impactbar.measure.analyse_drill_rod`)::
+
+    [bit]
+    cutoff_hz = 40.0e3                    # optional: default 0.8 c / (2 (x_far - x_near))
+    leak = 1.0                            # optional
+
+    [model]                               # optional: the model's blow fitted to the two gauges
+    rod_lengths = [0.5, 3.0]              # m, from the struck end
+    rod_areas = [1.2e-3, 0.8e-3]          # m^2 (the material: [bars.rod]'s)
+    piston_lengths = [0.3]                # m
+    piston_areas = [1.0e-3]               # m^2
+    start = {impact_velocity = 8.0, "rock.k" = 2.0e8, "rock.k_u" = 2.0e9}
+    vary = ["impact_velocity", "rock.k", "rock.k_u"]
 """
 
 from __future__ import annotations
@@ -40,12 +58,14 @@ from pathlib import Path
 
 import numpy as np
 
+from .drill import DrillRodTest, analyse_drill_rod
 from .kolsky import KolskyTest, analyse_kolsky
 from .recording import Bar, Gauge, Recording
 
 __all__ = ["read_spec", "run_spec"]
 
-_SECTIONS = {"recording", "bars", "channels", "specimen", "striker", "detection"}
+_SECTIONS = {"recording", "bars", "channels", "specimen", "striker", "detection", "bit", "model",
+             "dispersion"}
 
 
 def read_spec(path) -> dict:
@@ -63,9 +83,12 @@ def read_spec(path) -> dict:
     unknown = set(spec) - _SECTIONS
     if unknown:
         raise ValueError(f"spec {path}: unknown table(s) {sorted(unknown)}; allowed {sorted(_SECTIONS)}")
-    for needed in ("recording", "bars", "channels", "specimen"):
+    for needed in ("recording", "bars", "channels"):
         if needed not in spec:
             raise ValueError(f"spec {path}: the table [{needed}] is missing")
+    if ("specimen" in spec) == ("bit" in spec):
+        raise ValueError(f"spec {path}: a Kolsky bar's [specimen] or a drill rod's [bit] is needed (one "
+                         "of them)")
     spec["_folder"] = path.parent
     return spec
 
@@ -117,32 +140,69 @@ def _recording(spec: dict) -> tuple[Recording, slice | None]:
     return recording, baseline
 
 
-def run_spec(spec: dict | str | Path) -> KolskyTest:
-    """Run a Kolsky-bar spec (a path or :func:`read_spec`'s dict).
+_BAR_KEYS = {"young_modulus", "density", "area", "wave_speed"}
+
+
+def _gauges(spec: dict) -> dict:
+    keys = {"bar", "station", "bridge", "gauge_factor", "excitation", "gain", "poisson", "polarity"}
+    return {c: Gauge(**_table(spec, f"channels.{c}", keys, {"bar", "station"})) for c in spec["channels"]}
+
+
+def _run_drill_rod(spec: dict, recording: Recording, baseline) -> DrillRodTest:
+    unknown = set(spec["bars"]) - {"rod"}
+    if unknown:
+        raise ValueError(f"bars: a drill rod's spec names one bar, [bars.rod]; got {sorted(unknown)}")
+    rod = Bar(**_table(spec, "bars.rod", _BAR_KEYS, {"young_modulus", "density", "area"}))
+    gauges = _gauges(spec)
+    for channel, gauge in gauges.items():
+        if gauge.bar != "rod":
+            raise ValueError(f"channel {channel!r} sits on bar {gauge.bar!r}, which the bars do not name "
+                             "(a drill rod's is 'rod')")
+    bit = _table(spec, "bit", {"cutoff_hz", "leak"}, set())
+    model = None
+    if "model" in spec:
+        from ..physical.rock import RodPiece
+
+        keys = {"rod_lengths", "rod_areas", "piston_lengths", "piston_areas", "start", "vary"}
+        m = _table(spec, "model", keys, keys)
+        if len(m["rod_lengths"]) != len(m["rod_areas"]):
+            raise ValueError(f"model.rod_lengths and model.rod_areas must be of one length, got "
+                             f"{len(m['rod_lengths'])} and {len(m['rod_areas'])}")
+        material = {"E_Pa": rod.young_modulus, "density_kg_m3": rod.density}
+        pieces = [RodPiece(length_m=float(le), area_m2=float(a), **material)
+                  for le, a in zip(m["rod_lengths"], m["rod_areas"], strict=True)]
+        model = {"rod": pieces, "piston_lengths": m["piston_lengths"], "piston_areas": m["piston_areas"],
+                 "values": dict(m["start"]), "vary": list(m["vary"])}
+    return analyse_drill_rod(recording, gauges, rod, cutoff=bit.get("cutoff_hz"),
+                             leak=float(bit.get("leak", 1.0)), baseline=baseline, model=model)
+
+
+def run_spec(spec: dict | str | Path) -> KolskyTest | DrillRodTest:
+    """Run a spec (a path or :func:`read_spec`'s dict): a Kolsky bar's, or a drill rod's (``[bit]``).
 
     Raises
     ------
     ValueError
         A missing or unknown key (named by its dotted path), and every refusal of
-        :func:`~impactbar.measure.analyse_kolsky`.
+        :func:`~impactbar.measure.analyse_kolsky` or :func:`~impactbar.measure.analyse_drill_rod`.
     """
     if not isinstance(spec, dict):
         spec = read_spec(spec)
     recording, baseline = _recording(spec)
-    bar_keys = {"young_modulus", "density", "area", "wave_speed"}
+    if "bit" in spec:
+        return _run_drill_rod(spec, recording, baseline)
     bars = {}
     for name in ("incident", "transmitted"):
-        bars[name] = Bar(**_table(spec, f"bars.{name}", bar_keys, {"young_modulus", "density", "area"}))
-    gauges = {}
-    gauge_keys = {"bar", "station", "bridge", "gauge_factor", "excitation", "gain", "poisson", "polarity"}
-    for channel in spec["channels"]:
-        gauges[channel] = Gauge(**_table(spec, f"channels.{channel}", gauge_keys, {"bar", "station"}))
+        bars[name] = Bar(**_table(spec, f"bars.{name}", _BAR_KEYS, {"young_modulus", "density", "area"}))
+    gauges = _gauges(spec)
     specimen = _table(spec, "specimen", {"length", "area"}, {"length", "area"})
-    striker = _table(spec, "striker", bar_keys | {"length"}, set())
+    striker = _table(spec, "striker", _BAR_KEYS | {"length"}, set())
     material = {k: v for k, v in striker.items() if k != "length"}
     striker_bar = Bar(**material) if material else None
     detection = _table(spec, "detection", {"threshold", "cutoff_hz"}, set())
+    dispersion = _table(spec, "dispersion", {"poisson"}, {"poisson"}) if "dispersion" in spec else {}
     return analyse_kolsky(recording, gauges, bars["incident"], bars["transmitted"], float(specimen["length"]),
                           float(specimen["area"]), striker_length=striker.get("length"), striker=striker_bar,
                           threshold=float(detection.get("threshold", 10.0)),
-                          cutoff=detection.get("cutoff_hz", 1e6), baseline=baseline)
+                          cutoff=detection.get("cutoff_hz", 1e6), baseline=baseline,
+                          poisson=dispersion.get("poisson"))
