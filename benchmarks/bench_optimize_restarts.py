@@ -8,7 +8,9 @@ Sobol sample of ``--sample`` designs (seed ``--seed``) evaluated on the cluster,
 ``--local-starts`` best feasible designs, ``--evaluations`` designs each, one after another in this
 process; its optimum is re-solved by a fresh orbit and certified (first order, KKT). Then the
 restarted searches: COBYLA (``optimize_drifter``'s default, ``--evaluations`` designs) started from
-each of the ``--searches`` best feasible designs of the same sample, the searches run side by side on
+each of the ``--searches`` best feasible designs of the same sample (as many as it has where fewer:
+``optimize_drifter`` refuses an infeasible start; on the six variables 7 of 256 are feasible), the
+searches run side by side on
 the cluster's workers, each one's result confirmed feasible by a fresh ``orbit()`` of its design
 (:func:`~impactbar.physical.optimize_drifter.evaluate_design` without a guess). Prints each search's
 start and result per kilowatt, the multistart's table, certificate and local searches, the wall times
