@@ -15,17 +15,29 @@ With ``--method multistart`` (a Sobol sample of ``--sample`` designs, COBYLA fro
 point and the seconds they cost, the certificate's verdict, the gain and each local search's best
 design. ``--quick``: two variables (switch point, pre-charge), a sample of 8, one local search, 16
 designs at most (a check that it runs, in minutes).
+
+``--against REF`` runs the same search on the git ref ``REF`` (its ``src`` exported by ``git archive``,
+or a tree's ``src`` folder, its numba caches kept) and on this tree, each in a fresh process, and
+prints side by side the designs evaluated (and continued from a neighbour), those without an operating
+point and the CPU seconds they cost (the evaluations that raised and their records' classification,
+timed in the search's process; a sample's designs on workers by their records' seconds), all designs'
+CPU seconds, the wall and CPU time of the call, the certificate's verdict and KKT residual (``none``
+on a tree without one) and the gain, e.g. ``--against 15d5b20`` (before the certificate, the stall
+test and the failures' classification).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import inspect
+import json
+import sys
 import time
 from pathlib import Path
 
 from impactbar.physical import build, optimize_drifter, read_config
 from impactbar.physical.optimize_drifter import OBJECTIVES
-from impactbar.physical.optimize_multistart import found_table
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "circuit_drifter_rock_piston.toml"
 
@@ -55,10 +67,75 @@ def _multistart_summary(res) -> None:
           f"{sum(r.get('seconds', 0.0) for r in res.history):.1f} s (each design's own time); certificate "
           f"{cert.verdict if cert is not None else 'none'}"
           f"{f' (KKT residual {cert.residual:.3g})' if cert is not None else ''}; gain {res.gain:+.2%}")
+    from impactbar.physical.optimize_multistart import found_table
+
     print(found_table(res.found, res.vary, OBJECTIVES[res.objective][0]))
 
 
-def main() -> None:
+@contextlib.contextmanager
+def _timed_designs():
+    """The CPU seconds of the search's evaluations in this process: ``evaluate_design``'s calls (each
+    whether it raised) and the failed records' (their motion classified), as the search module looks
+    them up (on any tree: a name missing there is not timed)."""
+    module = inspect.getmodule(optimize_drifter)
+    calls = {"ok": 0.0, "failed": 0.0, "n_failed": 0}
+
+    def timed(fn, failure: bool):
+        def wrapper(*args, **kwargs):
+            c0 = time.process_time()
+            try:
+                out = fn(*args, **kwargs)
+            except Exception:
+                calls["failed"] += time.process_time() - c0
+                raise
+            calls["failed" if failure else "ok"] += time.process_time() - c0
+            calls["n_failed"] += failure
+            return out
+        return wrapper
+
+    saved = {n: getattr(module, n) for n in ("evaluate_design", "failed_record") if hasattr(module, n)}
+    for name, fn in saved.items():
+        setattr(module, name, timed(fn, name == "failed_record"))
+    try:
+        yield calls
+    finally:
+        for name, fn in saved.items():
+            setattr(module, name, fn)
+
+
+def summary(res, wall: float, cpu: float, calls: dict) -> dict:
+    """The figures ``--against`` compares: designs, failures and their cost, certificate, gain."""
+    failed = [r for r in res.history if not r.get("ok")]
+    cert = getattr(res, "certificate", None)
+    return {"designs evaluated": res.evaluations, "continued from a neighbour": sum(
+                r.get("continued", False) for r in res.history),
+            "without an operating point": len(failed),
+            "their CPU s": calls["failed"],
+            "their recorded s": sum(r.get("seconds", 0.0) + r.get("motion_seconds", 0.0) for r in failed),
+            "all designs CPU s": calls["ok"] + calls["failed"], "wall s": wall, "CPU s": cpu,
+            "certificate": cert.verdict if cert is not None else "none",
+            "KKT residual": cert.residual if cert is not None else None,
+            "gain %": 100.0 * res.gain, OBJECTIVES[res.objective][0]: res.optimum["objectives"][
+                OBJECTIVES[res.objective][0]]}
+
+
+def against(ref: str, args: list) -> None:
+    """This script's search on the tree of ``ref`` and on this one, fresh processes, side by side."""
+    from _timing import fresh_runs, ref_tree
+
+    src = ref if Path(ref).is_dir() else ref_tree(ref)
+    runs = fresh_runs(__file__, src, 1, args)
+    base, new = runs["baseline"][0], runs["new"][0]
+    print(f"{'':30s} {ref[:12]:>14s} {'this tree':>14s}")
+    for key in new:
+        row = []
+        for r in (base, new):
+            v = r.get(key)
+            row.append(f"{v:14.4g}" if isinstance(v, float) else f"{'-' if v is None else v!s:>14s}")
+        print(f"{key:30s} {' '.join(row)}")
+
+
+def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--max-evaluations", type=int, default=30)
     p.add_argument("--out", default=None)
@@ -72,7 +149,15 @@ def main() -> None:
     p.add_argument("--local-starts", type=int, default=3)
     p.add_argument("--workers", type=int, default=None)
     p.add_argument("--quick", action="store_true", help="multistart on two variables, a sample of 8")
-    args = p.parse_args()
+    p.add_argument("--against", metavar="REF", help="the same search on the git ref REF (e.g. 15d5b20) or a "
+                   "tree's src folder, side by side")
+    p.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
+    args = p.parse_args(argv)
+    if args.against:
+        rest = list(argv if argv is not None else sys.argv[1:])
+        i = rest.index("--against")
+        against(args.against, rest[:i] + rest[i + 2:])
+        return
     if args.quick:
         args.method, args.keys, args.sample, args.local_starts = "multistart", ",".join(QUICK), 8, 1
         args.max_evaluations = 16
@@ -87,18 +172,29 @@ def main() -> None:
     t = time.perf_counter()
     constraints = {**CONSTRAINTS, "min_drilling_rate": None} if args.any_rate else CONSTRAINTS
     c0 = time.process_time()
-    res = optimize_drifter(EXAMPLE, vary, objective="drilling_rate_per_kW", constraints=constraints,
-                           max_evaluations=args.max_evaluations, cache=args.cache, method=args.method,
-                           popsize=args.popsize, progress=False, workers=args.workers,
-                           **({"sample": args.sample, "local_starts": args.local_starts}
-                              if args.method == "multistart" else {}))
+    with _timed_designs() as calls:
+        res = optimize_drifter(EXAMPLE, vary, objective="drilling_rate_per_kW", constraints=constraints,
+                               max_evaluations=args.max_evaluations, cache=args.cache, method=args.method,
+                               popsize=args.popsize, progress=False, workers=args.workers,
+                               **({"sample": args.sample, "local_starts": args.local_starts}
+                                  if args.method == "multistart" else {}))
     cpu = time.process_time() - c0
     wall = time.perf_counter() - t
+    if args.json:
+        print(json.dumps(summary(res, wall, cpu, calls)))
+        return
     print(res.table())
     print(f"one baseline evaluation (fresh orbit): {one:.1f} s; optimize_drifter ({args.method}, "
           f"{len(vary)} variables): {wall:.0f} s wall, {cpu:.0f} s CPU, "
           f"{res.evaluations} evaluations ({res.cached} cached), {res.gradients} gradients, "
           f"{sum(r.get('continued', False) for r in res.history)} continued from a neighbour; {res.message}")
+    done = summary(res, wall, cpu, calls)
+    print(f"designs evaluated {done['designs evaluated']} ({done['continued from a neighbour']} continued), "
+          f"{done['without an operating point']} without an operating point costing "
+          f"{done['their CPU s']:.1f} s of CPU of the designs' {done['all designs CPU s']:.1f} s; "
+          f"certificate {done['certificate']}"
+          + ("" if done["KKT residual"] is None else f" (KKT residual {done['KKT residual']:.3g})")
+          + f"; gain {done['gain %']:+.2f} %")
     if args.method == "multistart":
         _multistart_summary(res)
     if args.out:

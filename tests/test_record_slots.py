@@ -112,6 +112,7 @@ NOT_RECORDS = {
     "measure/kolsky.py": {"band", "chans", "later", "time"},  # a band's ends; first channel, pulse, sample
     "physical/optimize_failures.py": {"lines"},  # the error's first line
     "physical/optimize_multistart.py": {"order"},  # the best design's index
+    "physical/optimize_result.py": {"axes", "kv"},  # the figure's axes; a (name, constraint) pair's second
     "physical/settle.py": {"last"},  # the first and last impact times
     "measure/model.py": {"count", "ends", "pieces"},  # a counter; the rod's end; its first piece's material
     "measure/recording.py": {"time"},  # the first and last sample times
@@ -120,7 +121,7 @@ NOT_RECORDS = {
     "physical/forces.py": {"rows"},  # the first row
     "physical/hammer.py": {"breaks", "levels", "pieces"},  # a square wave's two levels and breaks
     "physical/loader.py": {"parts"},  # a dotted name's parts
-    "physical/optimize_drifter.py": {"axes", "kv"},  # the figure's axes
+    "physical/optimize_drifter.py": {"kv"},  # a (name, constraint) pair's constraint
     "physical/piston.py": {"count", "edges", "pieces"},  # a one-slot box; sequences' ends
     "physical/results.py": {"tl"},  # the first and last time
     "physical/rock.py": {"tl"},  # the first and last time
@@ -165,7 +166,7 @@ PYTHON_TUPLES = {
     "orbits/valve_segment.py": {"_last", "window"},  # the cache; (lo, hi)
     "physical/forces.py": {"header"},  # the header's (time, force)
     "physical/geometry.py": {"ends"},  # (lengths, diameters)
-    "physical/optimize_drifter.py": {"ends"},  # the two sides' outputs
+    "physical/optimize_problem.py": {"ends"},  # the two sides' outputs
     "physical/piston.py": {"best", "rank", "seg", "side"},  # (residual, y), (lengths, ..., speeds)
     "simulation/initial.py": {"out"},  # (q, v)
     "simulation/simulate.py": {"last"},  # the cache (model, load, value)

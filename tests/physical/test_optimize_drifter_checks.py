@@ -86,7 +86,7 @@ def test_relaxing_the_active_constraint_improves_the_optimum():
     predicted = dpower / dpress * 0.5e6
     assert p_loose - p_tight == pytest.approx(predicted, rel=0.1)
     _docs_say("capped at 23 MPa", "active: its margin under 1e-3 of the cap", f"{p_tight:.3f} kW",
-              f"the optimum gives {p_loose:.3f} kW: {p_loose - p_tight:.3f} kW more",
+              f"the best design found gives {p_loose:.3f} kW: {p_loose - p_tight:.3f} kW more",
               f"predicts {predicted:.3f} kW")
     # and just above the tight optimum's flow the cap is broken: the optimum is the cap's, not a stall
     assert up.mean_supply_pressure_Pa > 23.0e6

@@ -25,8 +25,8 @@ LAYERS = ("physical", "sweeps", "cli")
 PRODUCERS = {"physical/outputs.py", "physical/rock.py", "physical/piston.py", "physical/results.py"}
 #: literals that name outputs for another reason: the constraints' names (a constraint may share its
 #: output's name), a run's per-impact columns and summary (not an operating point's outputs)
-ALLOWED = {("physical/optimize_drifter.py", "DEFAULT_CONSTRAINTS"),
-           ("physical/optimize_drifter.py", "IDEAL_CONSTRAINTS"),
+ALLOWED = {("physical/optimize_problem.py", "DEFAULT_CONSTRAINTS"),
+           ("physical/optimize_problem.py", "IDEAL_CONSTRAINTS"),
            ("physical/optimize_outputs.py", "_CONSTRAINTS"),
            ("physical/drifter.py", "simulate"), ("cli/drifter.py", "run_circuit_simulate")}
 

@@ -1,0 +1,184 @@
+"""Benchmark: ``optimize_drifter(method="multistart")`` against the best of restarted COBYLA searches
+on the problem of docs/optimising_a_drifter.md (examples/circuit_drifter_rock_piston.toml, its six
+variables, the peak incident stress at most 250 MPa, the drilling rate at least 2.5 m/min, drilling
+rate per hydraulic kilowatt).
+
+On a local dask cluster of ``--workers`` processes (one thread each), first the multistart: a scrambled
+Sobol sample of ``--sample`` designs (seed ``--seed``) evaluated on the cluster, then COBYLA from its
+``--local-starts`` best feasible designs, ``--evaluations`` designs each, one after another in this
+process; its optimum is re-solved by a fresh orbit and certified (first order, KKT). Then the
+restarted searches: COBYLA (``optimize_drifter``'s default, ``--evaluations`` designs) started from
+each of the ``--searches`` best feasible designs of the same sample (as many as it has where fewer:
+``optimize_drifter`` refuses an infeasible start; on the six variables 7 of 256 are feasible), the
+searches run side by side on
+the cluster's workers, each one's result confirmed feasible by a fresh ``orbit()`` of its design
+(:func:`~impactbar.physical.optimize_drifter.evaluate_design` without a guess). Prints each search's
+start and result per kilowatt, the multistart's table, certificate and local searches, the wall times
+(the multistart's on ``--workers`` and what 4 workers would make of it: its sample's design seconds
+over 4 instead of over the workers, the rest serial) and whether the multistart's design is at least
+as good per kilowatt as the best search's (less :data:`RELATIVE`, the orbits' accuracy): met or
+missed. Nothing is asserted.
+
+Run: ``python benchmarks/bench_optimize_restarts.py [--workers W] [--sample N] [--local-starts K]
+[--searches S] [--evaluations E] [--seed S] [--out result.json] [--quick]``; ``--quick`` is two
+variables (switch point, pre-charge), a sample of 8, one local start, two searches of 8 designs (a
+check that it runs).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import time
+
+from bench_optimize_drifter import CONSTRAINTS, EXAMPLE, QUICK, VARY
+
+from impactbar.physical import optimize_drifter, read_config
+from impactbar.physical.design_keys import design_bounds
+from impactbar.physical.optimize_drifter import OBJECTIVES
+from impactbar.physical.optimize_multistart import found_table, sobol_sample
+
+#: How much below the best search's objective the multistart's may lie and still count as at least as
+#: good: the operating point's accuracy (a continued and a fresh orbit of one design differ by some 1e-9).
+RELATIVE = 1e-8
+OBJECTIVE = "drilling_rate_per_kW"
+
+
+def restarted_search(changes: dict, config: dict, vary: dict, constraints: dict, evaluations: int) -> dict:
+    """COBYLA from the design ``changes`` of ``config`` (a worker's task): its result, and the result
+    confirmed by a fresh orbit."""
+    from impactbar.physical import build, with_values
+    from impactbar.physical.optimize_drifter import OBJECTIVES, evaluate_design
+
+    t0 = time.perf_counter()
+    try:
+        res = optimize_drifter(with_values(config, changes), vary, objective=OBJECTIVE,
+                               constraints=constraints, max_evaluations=evaluations, progress=False)
+    except ValueError as exc:  # (a start without an operating point, or infeasible, when solved again)
+        return {"error": str(exc), "feasible": False, "seconds": time.perf_counter() - t0}
+    fkey = OBJECTIVES[OBJECTIVE][0]
+    fresh, _ = evaluate_design(build(with_values(config, res.optimum["changes"])), constraints)
+    return {"start": res.baseline["objectives"][fkey], "result": res.optimum["objectives"][fkey],
+            "fresh": fresh["objectives"][fkey], "feasible": fresh["feasible"],
+            "values": res.optimum["values"], "changes": res.optimum["changes"],
+            "evaluations": res.evaluations, "failed": sum(not r.get("ok") for r in res.history),
+            "verdict": res.certificate.verdict, "residual": res.certificate.residual,
+            "message": res.message, "seconds": time.perf_counter() - t0}
+
+
+def sample_records(history: list, vary: dict, sample: int, seed: int) -> list:
+    """The records of the multistart's Sobol sample among ``history``, in the sample's order (each
+    found by its id, the repr of its SI values, as the search keys it)."""
+    config, folder = read_config(EXAMPLE)
+    spec = design_bounds(config, vary, folder)
+    keys = list(spec)
+    by_id = {r["id"]: r for r in history}
+    out = []
+    for u in sobol_sample(len(keys), sample, seed):
+        values = [spec[k]["low"] + (spec[k]["high"] - spec[k]["low"]) * float(x) for k, x in zip(keys, u,
+                                                                                                   strict=True)]
+        out.append(by_id[json.dumps([repr(float(v)) for v in values])])
+    return out
+
+
+def _multistart_summary(ms, recs: list, wall: float, workers: int) -> None:
+    """The multistart's table, message and local searches, its designs, failures and wall time (and
+    on 4 workers: the sample's design seconds over 4 instead of over ``workers``)."""
+    fkey = OBJECTIVES[OBJECTIVE][0]
+    print(ms.table())
+    print(ms.message)
+    print(found_table(ms.found, ms.vary, fkey))
+    sample_s = sum(r.get("seconds", 0.0) for r in recs)
+    failed = [r for r in ms.history if not r.get("ok")]
+    four = wall - sample_s / workers + sample_s / 4
+    feasible = sum(r.get("feasible", False) for r in recs)
+    lost = sum(r.get("seconds", 0.0) + r.get("motion_seconds", 0.0) for r in failed)
+    print(f"multistart: {len(ms.history)} designs ({len(recs)} sampled, {feasible} of them feasible, "
+          f"{sum(not r.get('ok') for r in recs)} without an operating point), "
+          f"{len(failed)} without an operating point in all costing {lost:.0f} s; "
+          f"{wall:.0f} s wall on {workers} workers (the sample's designs {sample_s:.0f} s), "
+          f"on 4 workers about {four:.0f} s", flush=True)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--sample", type=int, default=256)
+    p.add_argument("--local-starts", type=int, default=3)
+    p.add_argument("--searches", type=int, default=20)
+    p.add_argument("--evaluations", type=int, default=40, help="each local search's designs")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", default=None)
+    p.add_argument("--quick", action="store_true")
+    args = p.parse_args()
+    vary = VARY
+    if args.quick:
+        vary = {k: VARY[k] for k in QUICK}
+        args.sample, args.local_starts, args.searches, args.evaluations = 8, 1, 2, 8
+    import dask
+    from distributed import Client, LocalCluster, as_completed
+
+    config, _ = read_config(EXAMPLE)
+    fkey = OBJECTIVES[OBJECTIVE][0]
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; {args.workers} workers")
+    with (dask.config.set({"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}),
+          LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                       dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
+                       worker_dashboard_address=None, silence_logs=logging.ERROR) as cluster,
+          Client(cluster) as client):
+        t0 = time.perf_counter()
+        ms = optimize_drifter(EXAMPLE, vary, objective=OBJECTIVE, constraints=CONSTRAINTS,
+                              method="multistart", sample=args.sample, local_starts=args.local_starts,
+                              seed=args.seed,
+                              max_evaluations=args.sample + args.local_starts * args.evaluations,
+                              workers=client, progress=False)
+        ms_wall = time.perf_counter() - t0
+        recs = sample_records(ms.history, vary, args.sample, args.seed)
+        _multistart_summary(ms, recs, ms_wall, args.workers)
+        starts = sorted((r for r in recs if r.get("feasible")), key=lambda r: r["objectives"][fkey],
+                        reverse=True)[:args.searches]
+        t0 = time.perf_counter()
+        futures = {client.submit(restarted_search, r["changes"], config, vary, CONSTRAINTS,
+                                 args.evaluations, pure=False): i for i, r in enumerate(starts, 1)}
+        print(f"{'search':>6s} {'start':>10s} {'result':>10s} {'fresh':>10s} {'feasible':>8s} "
+              f"{'designs':>7s} {'failed':>6s} {'seconds':>7s}  certificate", flush=True)
+        searches = []
+        for future in as_completed(futures):
+            s = future.result()
+            searches.append(s)
+            if "error" in s:
+                print(f"{futures[future]:6d} failed: {s['error']}", flush=True)
+                continue
+            print(f"{futures[future]:6d} {s['start']:10.6f} {s['result']:10.6f} {s['fresh']:10.6f} "
+                  f"{s['feasible']!s:>8s} {s['evaluations']:7d} {s['failed']:6d} {s['seconds']:7.0f}  "
+                  f"{s['verdict']} (KKT residual {s['residual']:.2g})", flush=True)
+        cobyla_wall = time.perf_counter() - t0
+    print(f"the {len(searches)} searches ({args.evaluations} designs at most each): {cobyla_wall:.0f} s wall "
+          f"on {args.workers} workers, {sum(s['seconds'] for s in searches):.0f} s of the searches' own time")
+    ok = [s for s in searches if s["feasible"]]
+    best = max(ok, key=lambda s: s["fresh"]) if ok else None
+    base = ms.baseline["objectives"][fkey]
+    mine = ms.optimum["objectives"][fkey]
+    if best is None:
+        print("no search's result was feasible by a fresh orbit")
+        return
+    met = ms.optimum["feasible"] and mine >= best["fresh"] * (1.0 - RELATIVE)
+    print(f"baseline {base:.6f}; best search {best['fresh']:.6f} ({best['fresh'] / base - 1:+.2%}), "
+          f"multistart {mine:.6f} ({mine / base - 1:+.2%}, feasible by a fresh orbit: "
+          f"{ms.optimum['feasible']}), "
+          f"certificate: {ms.certificate}")
+    print(f"at least as good per kilowatt as the best of {len(searches)} COBYLA searches: "
+          f"{'met' if met else 'missed'} ({mine / best['fresh'] - 1:+.3%})")
+    if args.out:
+        with open(args.out, "w") as fh:
+            json.dump({"multistart": {"objective": mine, "values": ms.optimum["values"],
+                                      "changes": ms.optimum["changes"], "wall_s": ms_wall,
+                                      "certificate": ms.certificate.to_dict(), "found": ms.found,
+                                      "message": ms.message},
+                       "searches": searches, "cobyla_wall_s": cobyla_wall, "met": bool(met)}, fh, default=str)
+
+
+if __name__ == "__main__":
+    main()
