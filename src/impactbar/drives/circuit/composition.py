@@ -25,11 +25,14 @@ from ..._shared.validate import check_real
 from .layout import _TERMS, PRESET, CircuitLayout
 
 __all__ = ["CircuitPart", "PartField", "PartSlots", "Composition", "compose_parts", "PORTS", "TERMS",
-           "PRESET_NODES", "NamedPart", "check_part", "node_of"]
+           "PRESET_NODES", "NamedPart", "check_part", "node_of", "NO_PORT"]
 
 #: the preset's ports an extra part may take over, and the node each joins without one: the valve's
 #: return port (the tank)
 PORTS = {"valve_return": "tank"}
+
+#: a port connection's value for a part that takes no port (a return line that a cushion drains into)
+NO_PORT = "none"
 
 #: the terms of the energy account (:class:`~impactbar.drives.circuit.CircuitEnergy`) an energy
 #: integrand can belong to
