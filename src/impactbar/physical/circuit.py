@@ -238,6 +238,13 @@ class CircuitDrifter(_ScaledDrifter):
         """
         return float(value) / self._si_factor(name)
 
+    def circuit_graph(self):
+        """The circuit's nodes and parts as a graph
+        (:func:`~impactbar.physical.circuit_graph.circuit_graph`)."""
+        from .circuit_graph import circuit_graph
+
+        return circuit_graph(self)
+
     def drive(self):
         """The dimensionless circuit: :class:`~impactbar.drives.circuit.HydraulicCircuitDrive`."""
         from ..drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve

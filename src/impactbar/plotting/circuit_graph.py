@@ -1,6 +1,6 @@
-"""A drifter's oil circuit drawn from its configuration (theory §11, §13): its nodes as boxes and its
-parts as labelled arrows between them (:func:`impactbar.physical.circuit_graph`), the preset
-circuit's and every ``[parts.<name>]`` table's alike; matplotlib imported on call."""
+"""A drifter's oil circuit drawn from its configuration (theory §11, §13): its nodes as boxes and
+its parts as labelled arrows between them (:meth:`impactbar.physical.CircuitDrifter.circuit_graph`),
+the preset circuit's and every ``[parts.<name>]`` table's alike; matplotlib imported on call."""
 
 from __future__ import annotations
 
@@ -45,12 +45,10 @@ def plot_circuit_graph(drifter, ax=None):
     """
     import matplotlib.pyplot as plt
 
-    from ..physical.circuit_graph import circuit_graph
-
-    if not hasattr(drifter, "parts") or not hasattr(drifter, "drive"):
+    if not hasattr(drifter, "circuit_graph"):
         raise ValueError(f"drifter must be a drifter with its oil circuit (a CircuitDrifter); got "
                          f"{type(drifter).__name__}")
-    graph = circuit_graph(drifter)
+    graph = drifter.circuit_graph()
     at = _places(graph.nodes)
     if ax is None:
         _, ax = plt.subplots(figsize=(8.0, 6.0), layout="constrained")
