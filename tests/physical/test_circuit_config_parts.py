@@ -184,7 +184,7 @@ BAD = [
     ({"kind": "leak", "source": "rear", "target": "front", "flow_coefficient": f"1e-8 {K_UNIT}", "area": 1},
      "unknown key parts.p.area; a leak takes kind, source, target, flow_coefficient"),
     ({**_return_line(1e-4), "port": "tank"},
-     "parts.p.port must be one of the ports valve_return; got 'tank'"),
+     "parts.p.port must be one of the ports valve_return, none; got 'tank'"),
     ({**_return_line(1e-4), "polytropic_exponent": 2.5}, r"parts.p.polytropic_exponent must be in \[1, 2\]"),
 ]
 

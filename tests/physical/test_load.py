@@ -16,6 +16,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 #: by the loader's rule)
 KINDS = {
     "circuit_drifter.toml": CircuitDrifter,
+    "circuit_drill_parts.toml": CircuitDrifter,
     "circuit_drifter_parts.toml": CircuitDrifter,
     "circuit_drifter_return_line.toml": CircuitDrifter,
     "circuit_drifter_rock.toml": CircuitDrifter,

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import physical
+from ..physical.circuit_graph import part_lines
 from ..physical.config import config_kind, read_toml
 from ..physical.display_units import format_key
 from ..physical.tree import FIELDS
@@ -138,7 +139,8 @@ def _circuit_header(d: physical.CircuitDrifter) -> str:
             + _what_is_struck(d)
             + f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
             f"precharge = {dr.value('precharge') if dr.accumulator is not None else float('nan'):.5g}, "
-            f"pump_flow = {dr.value('pump_flow'):.5g}, switch_out = {dr.value('switch_out'):.5g}")
+            f"pump_flow = {dr.value('pump_flow'):.5g}, switch_out = {dr.value('switch_out'):.5g}"
+            + "".join(f"\n  {line}" for line in part_lines(d)))
 
 
 def run_circuit_orbits(args, drifter: physical.CircuitDrifter) -> int:

@@ -74,6 +74,7 @@ from .circuit import CircuitDrifterOrbit as CircuitDrifterOrbit
 from .circuit import circuit_preset as circuit_preset
 from .circuit_branch import CircuitBranch as CircuitBranch
 from .circuit_branch import continue_circuit as continue_circuit
+from .circuit_graph import circuit_graph as circuit_graph
 from .circuit_parts import part_kinds as part_kinds
 from .circuit_parts import register_part as register_part
 from .config import PRESETS as PRESETS
@@ -158,6 +159,7 @@ __all__ = [
     "circuit_preset",
     "CircuitBranch",
     "continue_circuit",
+    "circuit_graph",
     "register_part",
     "part_kinds",
     "flow_coefficient",

@@ -238,6 +238,13 @@ class CircuitDrifter(_ScaledDrifter):
         """
         return float(value) / self._si_factor(name)
 
+    def circuit_graph(self):
+        """The circuit's nodes and parts as a graph
+        (:func:`~impactbar.physical.circuit_graph.circuit_graph`)."""
+        from .circuit_graph import circuit_graph
+
+        return circuit_graph(self)
+
     def drive(self):
         """The dimensionless circuit: :class:`~impactbar.drives.circuit.HydraulicCircuitDrive`."""
         from ..drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve
@@ -567,7 +574,11 @@ class CircuitDrifterOrbit(DrifterOrbit):
     def histories(self, points: int = 400) -> dict:
         """The pressures (Pa), the valve opening and the chambers' volumes (m^3) over one period,
         from the impact: ``t_s``, ``p_f_Pa``, ``p_r_Pa``, ``p_s_Pa``, ``x_v``, ``gap_m``, ``V_f_m3``,
-        ``V_r_m3`` at ``points`` times."""
+        ``V_r_m3`` at ``points`` times; with parts (``[parts.<name>]``) each part's node's pressure
+        ``p_<name>_Pa`` and each part's flow from its source to its target ``q_<name>_m3_s``
+        (:func:`~impactbar.drives.circuit.part_flows.part_flows`)."""
+        from ..drives.circuit.part_flows import part_flows
+
         points = check_int("points", points, lo=2)
         d, o = self.drifter, self.orbit
         pieces = self._pieces
@@ -589,10 +600,12 @@ class CircuitDrifterOrbit(DrifterOrbit):
                 w[sel] = p.displacement(t[sel]) if hasattr(p, "displacement") else \
                     -(o.model.drive_weights[:M] @ q)
         P, V = PRESSURE_SCALE, d.volume_scale_m3
+        nodes = {f"{name}_Pa": z[L[name]] * P for p in dr.extra_parts for name in p.symbols}
+        flows = {f"{k}_m3_s": v * d.flow_scale_m3_s for k, v in part_flows(dr, z, -q0).items()}
         return {"t_s": (t - t0) / d.omega_rad_s, "p_f_Pa": z[L["p_f"]] * P, "p_r_Pa": z[L["p_r"]] * P,
                 "p_s_Pa": z[L["p_s"]] * P, "x_v": z[L["x_v"]], "gap_m": -q0 * d.bar.length_m,
                 "V_f_m3": (dr.chambers.front_volume + dr.chambers.area_ratio * w) * V,
-                "V_r_m3": (dr.chambers.rear_volume - w) * V}
+                "V_r_m3": (dr.chambers.rear_volume - w) * V, **nodes, **flows}
 
     def indicator_work_J(self, points: int = 4000, *, histories: dict | None = None) -> dict:
         r"""The work each chamber's oil does on the piston over one period, the area of its

@@ -5,8 +5,8 @@ A part is one TOML table under ``[parts]``, named by the user::
 
     [parts.return_line]
     kind = "return_accumulator"   # a kind of the table (part_kinds())
-    port = "valve_return"         # its connections: the preset's ports and nodes, or another part's
-    drain = "tank"                #   node (a part's node is named after it)
+    port = "valve_return"         # its connections: the preset's ports ("none": no port) and nodes, or
+    drain = "tank"                #   another part's node (a part's node is named after it)
     volume = "0.2 L"              # its SI fields, each with its unit
     flow_coefficient = "2e-5 m^3/s/Pa^0.5"
 
@@ -248,6 +248,7 @@ def read_parts(tables) -> tuple[PartSpec, ...]:
     ...
     ValueError: parts.leak.target must be one of the nodes front, rear, supply, tank; got 'back'
     """
+    from ..drives.circuit.composition import NO_PORT
     from ..drives.circuit.preset import PORTS, PRESET_NODES
 
     if tables is None:
@@ -281,13 +282,13 @@ def read_parts(tables) -> tuple[PartSpec, ...]:
             default = defaults.get(c, default) if default is None else default
             default = None if default is dataclasses.MISSING else default
             value = table.get(c, default)
-            allowed = nodes if what == "node" else tuple(PORTS)
+            allowed = nodes if what == "node" else (*PORTS, NO_PORT)
             if value is None:
                 raise ValueError(f"missing key parts.{name}.{c} (a {what}: one of {', '.join(allowed)})")
             if value not in allowed or value == name:
                 raise ValueError(f"parts.{name}.{c} must be one of the {what}s "
                                  f"{', '.join(a for a in allowed if a != name)}; got {value!r}")
-            if what == "port":
+            if what == "port" and value != NO_PORT:
                 if value in taken:
                     raise ValueError(f"parts.{name}.{c}: the port {value} is taken by parts.{taken[value]} "
                                      "already (one part a port)")

@@ -14,7 +14,9 @@ that plot themselves (``PeriodicOrbit.plot``, ``Trajectory.plot``, ``Branch.plot
 - :mod:`~impactbar.plotting.rock`: a blow on the rod and rock (Lagrange diagram, force-penetration loop);
 - :mod:`~impactbar.plotting.circuit`: a drifter's operating point with its oil circuit (pressures,
   valve, indicator diagrams), its bifurcation diagram in a circuit parameter, and the circuit's
-  schematic (its parts, their connections and the valve's switch points).
+  schematic (its parts, their connections and the valve's switch points);
+- :mod:`~impactbar.plotting.circuit_graph`: the circuit's nodes and parts (its config's
+  ``[parts.<name>]`` among them) as a graph.
 """
 
 from ._common import label_contours as label_contours
@@ -22,6 +24,7 @@ from .circuit import plot_circuit_branch as plot_circuit_branch
 from .circuit import plot_circuit_orbit as plot_circuit_orbit
 from .circuit import plot_circuit_run as plot_circuit_run
 from .circuit import plot_circuit_schematic as plot_circuit_schematic
+from .circuit_graph import plot_circuit_graph as plot_circuit_graph
 from .continuation import plot_bifurcation_curve as plot_bifurcation_curve
 from .continuation import plot_branch as plot_branch
 from .orbits import plot_multipliers as plot_multipliers
@@ -47,4 +50,5 @@ __all__ = ["label_contours",
            "plot_impact_map", "plot_intervals", "plot_experiment", "plot_branch", "plot_bifurcation_curve",
            "plot_motion", "plot_blows", "plot_force_waves", "plot_stability_chart", "plot_fraction_maps",
            "plot_bifurcation", "plot_lagrange", "plot_force_penetration", "plot_efficiency_map",
-           "plot_circuit_orbit", "plot_circuit_branch", "plot_circuit_run", "plot_circuit_schematic"]
+           "plot_circuit_orbit", "plot_circuit_branch", "plot_circuit_run", "plot_circuit_schematic",
+           "plot_circuit_graph"]

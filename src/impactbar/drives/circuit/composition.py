@@ -29,7 +29,10 @@ from . import _network as NW
 from .layout import _TERMS, PRESET, CircuitLayout
 
 __all__ = ["CircuitPart", "PartField", "PartSlots", "Composition", "compose_parts", "TERMS",
-           "SHARED_ENERGIES", "NamedPart", "check_part", "node_of"]
+           "SHARED_ENERGIES", "NamedPart", "check_part", "node_of", "NO_PORT"]
+
+#: a port connection's value for a part that takes no port (a return line that a cushion drains into)
+NO_PORT = "none"
 
 #: the terms of the energy account (:class:`~impactbar.drives.circuit.CircuitEnergy`) an energy
 #: integrand can belong to

@@ -15,7 +15,7 @@ import math
 from dataclasses import dataclass
 
 from ._network import CUSHION, LEVEL, NODE, record
-from .composition import NamedPart, OwnNode, PartField
+from .composition import NO_PORT, NamedPart, OwnNode, PartField
 from .leakage import _check_names
 
 __all__ = ["Cushion", "opening_segment"]
@@ -71,7 +71,8 @@ class Cushion(OwnNode, NamedPart):
     name : str, optional
         Its node's name and its events', integrands' and parameters' prefix, an identifier.
     port : str, optional
-        The preset's port it takes (``"valve_return"``).
+        The preset's port it takes (``"valve_return"``), or ``"none"``: none (its node fed by
+        another part that names it, as a cushion's ``target``).
 
     Raises
     ------
@@ -129,7 +130,7 @@ class Cushion(OwnNode, NamedPart):
 
     @property
     def ports(self) -> dict:
-        return {self.port: self.name}
+        return {} if self.port == NO_PORT else {self.port: self.name}
 
     def records(self, slots, oil) -> list:
         """The cushion's node, its port (:mod:`.kinds.cushion`) on the segment of ``g`` the mode's

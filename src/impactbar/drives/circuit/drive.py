@@ -23,6 +23,7 @@ from . import _network as NW
 from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .layout import PRESET
+from .part_flows import part_flows
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 from .preset import preset_parts
 from .settings import DEFAULT_SETTINGS, circuit_settings
@@ -630,7 +631,8 @@ class HydraulicCircuitDrive(Drive):
     def histories(self, run, t=None) -> dict:
         """The circuit's time histories over a run: ``t`` (the integrator's steps, or the given
         times) and ``p_f``, ``p_r``, ``p_s``, ``x_v``, the gap ``y`` and the chambers' volumes
-        ``V_f``, ``V_r`` (units of theory §11).
+        ``V_f``, ``V_r`` (units of theory §11); with extra parts each of their nodes' pressure (its
+        symbol, ``p_<name>``) and each part's flow ``q_<name>`` (:func:`.part_flows.part_flows`).
 
         Returns
         -------
@@ -652,7 +654,7 @@ class HydraulicCircuitDrive(Drive):
                     w[sel] = p.displacement(t[sel])
         return {"t": t, **{name: z[i] for i, name in enumerate(self.layout.state_names)}, "y": -q[0],
                 "V_f": self.chambers.front_volume + self.chambers.area_ratio * w,
-                "V_r": self.chambers.rear_volume - w}
+                "V_r": self.chambers.rear_volume - w, **part_flows(self, z, -q[0])}
 
     # -- the ideal drive it tends to (theory §11) ---------------------------------------------------
     def ideal_levels(self, supply_pressure: float) -> tuple[float, float]:

@@ -24,7 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from . import _network as NW
-from .composition import NamedPart, OwnNode, PartField, node_of
+from .composition import NO_PORT, NamedPart, OwnNode, PartField, node_of
 from .parts import Accumulator
 
 __all__ = ["ReturnAccumulator"]
@@ -55,7 +55,8 @@ class ReturnAccumulator(OwnNode, NamedPart):
         Its node's name (an identifier; its state ``p_<name>``, its parameters ``<name>.<field>``).
         Default ``"return_line"``.
     port : str, optional
-        The preset's port it takes (``"valve_return"``).
+        The preset's port it takes (``"valve_return"``), or ``"none"``: none (its node fed by
+        another part that names it, as a cushion's ``target``).
     drain : str, optional
         The node it drains to. Default ``"tank"``.
 
@@ -105,7 +106,7 @@ class ReturnAccumulator(OwnNode, NamedPart):
     @property
     def ports(self) -> dict:
         """The port it takes, to its node."""
-        return {self.port: self.name}
+        return {} if self.port == NO_PORT else {self.port: self.name}
 
     def records(self, slots, oil) -> list:
         """Its node, its accumulator and its orifice to the drain (:mod:`._network`)."""

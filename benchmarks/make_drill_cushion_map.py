@@ -1,0 +1,77 @@
+"""The map of the example drill (``examples/circuit_drill_parts.toml``) over its cushion's volume and
+full-open coefficient, 15 x 15 operating points on a local dask cluster (``impactbar.sweeps.run_map``,
+as ``impactbar sweep`` runs a design map), stored as ``docs/data/drill_cushion_map.csv`` for the
+tutorial page ``docs/drill_parts.md``, whose test recomputes a sample of its points from the config.
+
+Run: ``python benchmarks/make_drill_cushion_map.py [--workers 2]`` (some minutes of CPU; it prints
+the map's CPU time: this process' and its finished children's, the dask workers, together).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import resource
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+CONFIG = HERE.parent / "examples" / "circuit_drill_parts.toml"
+OUT = HERE.parent / "docs" / "data" / "drill_cushion_map.csv"
+#: the map's axes: the cushion's oil volume and its port's full-open coefficient
+AXES = {"parts.cushion.volume": {"start": "5 mL", "stop": "40 mL", "num": 15},
+        "parts.cushion.coefficient": {"start": "2.5e-6 m^3/s/Pa^0.5", "stop": "1.5e-5 m^3/s/Pa^0.5",
+                                      "num": 15}}
+#: the stored columns: the axes (SI), then the map's outputs (SI)
+OUTPUTS = ("status", "blow_frequency", "impact_energy", "hydraulic_efficiency", "max_abs_multiplier",
+           "stable", "mean_supply_pressure", "min_rear_pressure")
+
+
+def spec():
+    """The map's spec (:class:`impactbar.sweeps.DrifterMapSpec`) over :data:`AXES`."""
+    from impactbar.sweeps.map_spec import parse_map_spec
+
+    return parse_map_spec({"task": "operating_point", "config": str(CONFIG), "axes": AXES})
+
+
+def main(workers: int = 2, store=None) -> None:
+    from impactbar.sweeps import open_sweep
+    from impactbar.sweeps.maps import run_map
+
+    with tempfile.TemporaryDirectory() as tmp:
+        store = Path(tmp) / "map.zarr" if store is None else Path(store)
+        wall, cpu = time.perf_counter(), _cpu()
+        run_map(spec(), store, executor="dask", n_workers=workers, progress=False)
+        wall, cpu = time.perf_counter() - wall, _cpu() - cpu
+        ds = open_sweep(store)
+        names = list(AXES)
+        grid = np.meshgrid(*(ds[n].values for n in names), indexing="ij")
+        rows = [[*(g.ravel()[k] for g in grid), *(ds[o].values.ravel()[k] for o in OUTPUTS)]
+                for k in range(grid[0].size)]
+    OUT.parent.mkdir(parents=True, exist_ok=True)
+    with OUT.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow([*names, *OUTPUTS])
+        for r in rows:
+            w.writerow([repr(float(x)) if isinstance(x, float | np.floating) else int(x) for x in r])
+    print(f"{len(rows)} points on {workers} dask workers: {wall:.1f} s of wall time, {cpu:.0f} s of CPU; "
+          f"written to {OUT.relative_to(HERE.parent)}")
+
+
+def _cpu() -> float:
+    """CPU seconds of this process and its finished children (the dask workers, once the cluster
+    closes)."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--store", default=None,
+                        help="the zarr store to keep (a rerun resumes it); default a temporary one")
+    a = parser.parse_args()
+    main(a.workers, a.store)
