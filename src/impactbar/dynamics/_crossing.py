@@ -53,10 +53,12 @@ CROSS = 1  # transversal crossing (or h >= 0 at the start / just after a load ju
 TOUCH = 2  # h reached 0 tangentially with h'' >= 0 (pressing)
 FAIL = 3  # too many steps
 
-
-
 _MAX_STEPS = 2_000_000
 
+#: the rows of :func:`flow_scratch`'s block, by name: a row of a C-ordered block taken by an integer
+#: is a C-contiguous array, where unpacking the block (``q, v, ... = blk``) gives arrays of any
+#: layout ('A'), and every kernel that Python also calls with plain arrays compiles twice
+FS_Q, FS_V, FS_QP, FS_VP, FS_QPA, FS_VPA, FS_QE, FS_VE = range(8)
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -65,11 +67,12 @@ def flow_scratch(qa, va):
     a short run's fixed cost): copies of ``qa, va``, then ``qp, vp, qpa, vpa`` and two more of the
     same length (``q, v`` of a flow evaluated apart from its start), uninitialised."""
     M = qa.size
-    q, v, qp, vp, qpa, vpa, qe, ve = np.empty((8, M))  # its rows
+    blk = np.empty((8, M))
+    q, v, qp, vp, qpa, vpa = blk[FS_Q], blk[FS_V], blk[FS_QP], blk[FS_VP], blk[FS_QPA], blk[FS_VPA]
     for n in range(M):
         q[n] = qa[n]
         v[n] = va[n]
-    return q, v, qp, vp, qpa, vpa, qe, ve
+    return q, v, qp, vp, qpa, vpa, blk[FS_QE], blk[FS_VE]
 
 
 @numba.njit(cache=CACHE, nogil=True)

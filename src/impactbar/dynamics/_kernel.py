@@ -49,6 +49,11 @@ CONTACT = 3
 FULL = 4
 FAILED = 5
 
+#: the rows of the modal search's blocks in :func:`_run_free`, by name (a row of a block taken by an
+#: integer is a C array; unpacking the block gives arrays of any layout, more compilations)
+MB_LAM, MB_WSQ, MB_CA, MB_CB, MB_CVA, MB_CVB = range(6)
+KB_HCR, KB_HCI, KB_HWR, KB_HWI = range(4)
+
 
 def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fast, modal_fast):
     """Free flight with impacts from ``start = (t, q, v)`` in the free-free basis ``B_t`` (the plain
@@ -107,8 +112,11 @@ def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fas
     if modal_fast is not None:
         modal = modal_fast and kind == 0 and M > 1 and w2[0] == 0.0
         K = ks.size
-        lam, wsq, ca, cb, cva, cvb = np.empty((6, M))  # (one allocation: a short run's fixed cost)
-        hcr, hci, hwr, hwi = np.zeros((4, K))
+        mblk = np.empty((6, M))  # (one allocation: a short run's fixed cost; rows by name, C arrays)
+        lam, wsq, ca, cb = mblk[MB_LAM], mblk[MB_WSQ], mblk[MB_CA], mblk[MB_CB]
+        cva, cvb = mblk[MB_CVA], mblk[MB_CVB]
+        kblk = np.zeros((4, K))
+        hcr, hci, hwr, hwi = kblk[KB_HCR], kblk[KB_HCI], kblk[KB_HWR], kblk[KB_HWI]
         nq0 = 0.0
         nv0 = 0.0
         for i in range(M):

@@ -33,6 +33,7 @@ import numba as nb
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _co
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 
 __all__ = ["SOURCE", "compile_driver", "DOP853_TOO_MUCH_WORK", "DOP853_TOO_SMALL_STEP", "MESSAGES",
@@ -444,3 +445,6 @@ def compile_driver(rhs, events):
           "flight_rhs": rhs, "flight_events": events, "_JIT": dict(nogil=True, error_model="numpy")}
     exec(compile(SOURCE, "<dop853_fly>", "exec"), ns)
     return SimpleNamespace(**{k: ns[k] for k in ("dop853_fly", "dop853_error_norm", "dop853_dense")})
+
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (keep_row's row 0)

@@ -47,6 +47,7 @@ import math
 import numba as nb
 import numpy as np
 
+from ..._shared.literals import plain_literals
 from ...dynamics.kernels import CACHE
 
 __all__ = ["expm", "magnus_exp", "magnus_step", "scales", "state_at", "unscale", "DEFAULT_THETA", "balance"]
@@ -297,3 +298,5 @@ def balance(jac_base, y, par, M, n) -> np.ndarray:
 
 
 GAUSS1 = _G1
+
+plain_literals(globals())  # one machine code per kernel for all constant arguments (state_at's k = 0)
