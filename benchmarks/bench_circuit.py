@@ -227,18 +227,21 @@ WHY_ROCK_COMPILE = (
 WHY_LATTICE = (
     "   exact blows are not the circuit on rock's default: its orbit with them takes 6 to 6.6 s "
     "of CPU against the lattice's 0.16 s (the goal 0.3 s), 16 exact blows of some 0.35 s, 11 of "
-    "them the multipliers' central differences; the lattice's blow is some 1 % off in the work on "
-    "the rock (theory §11). A tangent of the coupled exact blow through its force's iteration "
-    "would replace those differences")
+    "them the multipliers' central differences; the lattice's blow's work dissipated in the rock "
+    "is 1.6e-6 off the exact blow's (theory §11). A tangent of the coupled exact blow through its "
+    "force's iteration would replace those differences")
 
 WHY_EXACT_COST = (
     "the exact orbit is found on the lattice and polished on the exact blows (16 of them, each some "
     "0.3-1 s of CPU: the coupled blow's force iterated to its fixed point), 11 of them the "
     "multipliers' central differences; a tangent of the coupled exact blow would replace those")
 WHY_DEFAULT_DISTANCE = (
-    "the default's blows are the lattice's at the example's 8 cells a piston: its contact events "
-    "(separation, re-contact, the bit's lift-off, the rock's branch changes) fall on the cells' "
-    "steps, not inside them; locating them inside the step is the way to the goal")
+    "the default's blows are the lattice's at the example's 8 cells a piston, ended at the law's "
+    "window (4.3e-3 from the exact orbit); ended where the exact blows end (driven_end='free') "
+    "1.4e-3, on 64 and 128 cells 2.0e-5: the rod's segments rounded to whole cells (1.9 % of a "
+    "travel time on 8 cells, 0.13 % on 64 and 128) and the contact's re-contacts and separations at "
+    "step ends, each first order (benchmarks/probes/lattice_order.py; a re-contact located inside "
+    "its step alone was no closer, its front's return opening the contact inside a later cell)")
 
 WHY_DRILL = (
     "the drill's circuit has two more nodes with a pressure state (the cushion's, the return line's), "

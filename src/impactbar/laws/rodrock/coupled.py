@@ -25,6 +25,7 @@ work on the piston, ``int p u_t(0) dt``, exceeds the lattice's ``sum p_k (p_k - 
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 
@@ -68,13 +69,11 @@ def _bit_arrays(grid, law):
     return _bit_records(_start_bit(grid.Z, law.rock.k, law.rock.k_u, law.bit_mass, law.feed, None))
 
 
-def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None, free=False):
+def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     """``drive.size`` steps of the blow's compiled loop from the waves ``F, G`` and the bit ``bs``
-    (updated in place), or fewer with ``free``: to where the piston is free for good
-    (:func:`~impactbar.laws.rodrock._rockkernel.piston_free`); returns the gap after them, with
-    ``record`` the force in every cell at the start of each step, and the steps after which the piston
-    was free (-1: not within them). ``bounds``:
-    ``grid.bounds`` as int64 where the caller has it (a blow's chunks share it)."""
+    (updated in place); returns the gap after them, with ``record`` the force in every cell at the
+    start of each step, and the shank's force on the last step. ``bounds``: ``grid.bounds`` as int64
+    where the caller has it (a blow's chunks share it)."""
     from ._rockkernel import blow_loop
     from .blow import _loop_controls
 
@@ -85,10 +84,46 @@ def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None, free=False):
     bitrec = np.zeros((L + 1, 2))
     field = np.zeros((L if record else 0, F.size))
     acc = np.zeros(S.ACC_SIZE)
-    ctrl = _loop_controls(grid.cell_time, -1.0, 0, gap, free)
+    ctrl = _loop_controls(grid.cell_time, -1.0, 0, gap)
     blow_loop(F, G, grid.Z, bounds, bs, bp, ctrl, np.ascontiguousarray(drive), junc, bitrec, field, acc)
-    free_after = int(acc[S.ACC_STEPS]) if free and acc[S.ACC_ENDED] == 2.0 else -1
-    return float(acc[S.ACC_GAP]), field, free_after
+    return float(acc[S.ACC_GAP]), field, float(junc[-1, 0])
+
+
+def end_window(grid) -> float:
+    """The instants the end of a blow under a drive is tested at, ``h, 2 h, ...`` from the impact:
+    ``h`` the shortest travel time of the piston's and the rod's segments, the exact blow's window
+    (:func:`impactbar.laws.rodrock.exact.exact_blow`), so that the lattice and the exact blow end at
+    the same instant (to a step) where both find the piston free for good there."""
+    travel = grid.travel if grid.piston_travel is None else np.concatenate((grid.piston_travel, grid.travel))
+    return float(np.min(travel))
+
+
+def _steps_to_free(grid, F, G, bs, bp, gap, drive, bounds, k, h):
+    """:func:`_steps` over the chunk of ``drive.size`` steps from step ``k``, the piston tested for
+    free for good (:func:`~impactbar.laws.rodrock._rockkernel.piston_free`, the contact open on the
+    step before) at the first step end at or after each multiple of ``h`` only (the exact blow's
+    instants, :func:`end_window`): ``(gap, ran)``, ``ran`` the chunk's steps up to the first such
+    end (-1: none within it), the waves and the bit then."""
+    from ._rockkernel import piston_free
+    from .blow import whole_steps
+
+    dt = grid.cell_time
+    L = drive.size
+    n_p = grid.piston_cells
+    j = math.floor(k * dt / h * (1.0 + 1e-12)) + 1  # the next multiple of h not yet tested
+    done = 0
+    while done < L:
+        test = whole_steps(j * h, dt) - k  # (the chunk's step after which the j-th end is tested)
+        stop = min(max(test, done + 1), L)
+        gap, _, shank = _steps(grid, F, G, bs, bp, gap, drive[done:stop], False, bounds)
+        done = stop
+        if done == test:
+            j += 1
+            if shank == 0.0 and piston_free(F, G, grid.Z, n_p, bs, bp, dt):
+                return gap, done
+        elif test < done:
+            j += 1
+    return gap, -1
 
 
 def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> DrivenContact:
@@ -139,6 +174,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     grid = bm.grid
     n_p, dt, n_max = grid.piston_cells, grid.cell_time, bm.n_max
     later = whole_steps(END_DELAY * window, dt) if END_DELAY > 0.0 else 0
+    h = end_window(grid)
     Z0 = float(grid.Z[0])
     F, G = bm.fields(q, v)
     F0, G0 = F.copy(), G.copy()
@@ -169,7 +205,11 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         averages[k:k + L] = fl.impulses / dt
         # 3. the lattice on over the chunk with the drive's averages (to the piston free for good)
         start = (F.copy(), G.copy(), bs.copy(), gap)
-        gap, _, ran = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds, free and not ended)
+        ran = -1
+        if free and not ended:
+            gap, ran = _steps_to_free(grid, F, G, bs, bp, gap, averages[k:k + L], bounds, k, h)
+        else:
+            gap, _, _ = _steps(grid, F, G, bs, bp, gap, averages[k:k + L], False, bounds)
         if ran >= 0:  # free for good after `ran` steps: the blow ends there (or `later` on)
             ended, end = True, min(k + ran + later, n_max)
         if end - k < L:  # the drive and the lattice again over the chunk's part up to the end

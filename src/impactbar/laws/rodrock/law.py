@@ -89,9 +89,11 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
         exact unless ``cells_per_piston`` is given.
     driven_end : {"window", "free"}
         Where the lattice's blow under a drive with state ends: ``"window"`` (default) at
-        :meth:`window`; ``"free"`` at the first step after which the piston is free for good (out of
-        contact, its momentum ``<= 0``, the rock not loading: the exact blow's argument under a
-        drive, theory §11), searched for up to twice the window.
+        :meth:`window`; ``"free"`` where the piston is free for good (out of contact, its momentum
+        ``<= 0``, the rock not loading: the exact blow's argument under a drive, theory §11), tested
+        where the exact blow tests it, at the first step end at or after each multiple of the
+        shortest travel time of piston and rod (the two end at the same instant to a step), searched
+        for up to twice the window.
 
     Examples
     --------
@@ -490,9 +492,11 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         piston, whose results a one-segment ``SteppedPiston`` reproduces to the bit.
     driven_end : {"window", "free"}
         Where the lattice's blow under a drive with state ends: ``"window"`` (default) at
-        :meth:`window`; ``"free"`` at the first step after which the piston is free for good (out of
-        contact, its momentum ``<= 0``, the rock not loading: the exact blow's argument under a
-        drive, theory §11), searched for up to twice the window.
+        :meth:`window`; ``"free"`` where the piston is free for good (out of contact, its momentum
+        ``<= 0``, the rock not loading: the exact blow's argument under a drive, theory §11), tested
+        where the exact blow tests it, at the first step end at or after each multiple of the
+        shortest travel time of piston and rod (the two end at the same instant to a step), searched
+        for up to twice the window.
     method : {"auto", "exact", "lattice"}
         ``"auto"``: exact for a uniform or stepped piston, a bit with or without mass, no feed and
         no ``cells_per_piston`` (and
