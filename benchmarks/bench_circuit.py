@@ -121,7 +121,7 @@ def integrators(d, drive):
 
     from impactbar.drives import DriveState
     from impactbar.drives.circuit import _cvode
-    from impactbar.drives.circuit import _kernel as K
+    from impactbar.drives.circuit import _field as K
 
     model = d.model()
     q, v = np.array([-0.06 / d.bar.length_m]), np.array([0.0])

@@ -1,6 +1,6 @@
 """The oil circuit's network of part records (``impactbar.drives.circuit._network``) and the code
 generated for its topology (``_netgen.generate``) against the circuit's hand-written kernel
-(``_kernel._base``, ``jac_base``, ``circuit_events``), in the same run: the time of one call of the
+(``_field._base``, ``jac_base``, ``circuit_events``), in the same run: the time of one call of the
 vector field, of its Jacobian and of the events at the preset drifter's state, rigid and with four
 flexible modes (the three give the same numbers to the bit: ``tests/drives/test_circuit_network.py``).
 
@@ -19,7 +19,7 @@ from pathlib import Path
 import numba as nb
 import numpy as np
 
-from impactbar.drives.circuit import _kernel as K
+from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit import _netgen as NG
 from impactbar.physical import circuit_preset
 

@@ -22,7 +22,7 @@ import math
 import time
 
 from impactbar import BarModel, PositionSwitchedDrive, find_orbit, periodic_orbits
-from impactbar.orbits.switched import orbit_of, orbit_problem
+from impactbar.orbits.driven import orbit_of, orbit_problem
 
 CASES = [
     ("valve case 1", BarModel(3, 0.1, 0.6, 6), PositionSwitchedDrive(1, 0.5, 0.15)),

@@ -96,7 +96,7 @@ def test_after_must_be_positive():
 
 
 def test_the_kernels_start_the_process_wide_watch():
-    import impactbar.dynamics._kernel  # noqa: F401  (any kernel module; imported by every solver)
+    import impactbar.dynamics._event_loop  # noqa: F401  (any kernel module; imported by every solver)
 
     assert compiling._PROCESS.watching
 
@@ -106,7 +106,7 @@ def test_the_kernels_start_the_process_wide_watch():
 _SCRIPT = """
 from impactbar._shared.compiling import watch_compiles
 watch_compiles(after=0.02)
-from impactbar.dynamics._flightkernel import _bc
+from impactbar.dynamics._flight import _bc
 import numba
 numba.njit(lambda x: x + 1)(1.0)   # a user's own kernel: no note for it
 _bc(0.1, 1.0)

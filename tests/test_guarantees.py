@@ -220,7 +220,7 @@ def test_numba_cache_unwritable_falls_back_to_memory(tmp_path):
             raise OSError("read-only")
         C._CacheLocator.ensure_cache_path = fail
         import impactbar as ib
-        from impactbar.dynamics import _kernel as K
+        from impactbar.dynamics import _event_loop as K
         assert K.CACHE is False
         tr = ib.simulate(ib.BarModel(5, 0.1, 0.5, 1), ib.CosineLoad(1.2, 1),
                          ib.InitialState.rigid(-0.1, 0, 1), 10)
@@ -234,7 +234,7 @@ def test_numba_cache_unwritable_falls_back_to_memory(tmp_path):
 def test_kernel_has_no_hard_wired_cache():
     import inspect
 
-    from impactbar.dynamics import _kernel as K
+    from impactbar.dynamics import _event_loop as K
 
     src = inspect.getsource(K)
     assert "njit(cache=True" not in src.replace("numba.njit(cache=True)(_cache_probe)", "")

@@ -292,7 +292,7 @@ def _private_imports(top: Path) -> list[str]:
     """Each import (every one, :func:`_imports`; an ``import from`` once per name) by a module of one
     top-level package of a name or module of another (not of :data:`SHARED_BASE`) where a part of the
     imported module's dotted path, or the imported name, starts with a single underscore
-    (``from ..dynamics import _kernel``, ``from ..orbits._newton import normalise``,
+    (``from ..dynamics import _event_loop``, ``from ..orbits._newton import normalise``,
     ``from ..orbits.multi_impact import _Segments``): ``"importer:line <- module.name"`` each."""
     out = []
     for importer, mod, name, line in _imports(top):
@@ -325,7 +325,7 @@ def test_few_private_names_cross_a_package():
     """A package takes another's private names (an underscored name, or anything from an underscored
     module) at most :data:`MAX_PRIVATE_IMPORTS` times, every import counted (those inside functions
     too): what is truly shared has a public name in a module that says it is the interface
-    between the packages (``dynamics.kernels`` for the compiled building blocks, ``dynamics.monodromy``
+    between the packages (``dynamics.compiled`` for the compiled building blocks, ``dynamics.monodromy``
     for the laws' multipliers, ``dynamics.invariants``, ``orbits.segments`` for what the continuation
     needs of the Newton solver). The shared base (:data:`SHARED_BASE`) is no package and is not
     counted."""

@@ -239,7 +239,7 @@ def test_a_subclass_with_its_own_evaluation_gets_no_compiled_view():
         def __call__(self, t):
             return super().__call__(np.asarray(t) + 0.1)
 
-    from impactbar.dynamics.kernelview import FOURIER, PIECEWISE
+    from impactbar.dynamics.compiled_views import FOURIER, PIECEWISE
     from impactbar.loads.abilities import compiled_kind
 
     cosine = CosineLoad(0.3, 1.0)

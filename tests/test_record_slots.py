@@ -10,8 +10,8 @@ the first and last entries (``Z[-1]`` the last segment's impedance, ``U[-1]`` th
 parameter, ``q[0]`` the rigid mode); ``shape`` is never a record; ``NOT_RECORDS`` lists, module by
 module, the longer names that are no records either, and ``PYTHON_TUPLES`` the tuples of named
 values in Python code no kernel runs. A record of a kernel is named where it is made: the rock
-blow's in ``_records``, the others beside their kernel (``_admkernel``'s ``PB_*``, ``SRC_*``,
-``WK_*``, ``_rigidkernel``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave
+blow's in ``_records``, the others beside their kernel (``_admissibility_search``'s ``PB_*``, ``SRC_*``,
+``WK_*``, ``_rigid_arrays``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave
 window's ``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
 
 import io
@@ -37,23 +37,24 @@ NOT_RECORDS = {
     "cli/drifter.py": {"axes"},  # the figure's first axes
     "cli/orbits.py": {"kinds"},  # the first kind offered
     "continuation/branch.py": {"hit"},  # the first index found
-    "continuation/core.py": {"hit", "pieces", "points", "t0", "tests"},  # sequences' ends, the parameter
+    "continuation/one_parameter.py": {"hit", "pieces", "points", "t0",
+                                      "tests"},  # sequences' ends, the parameter
     "continuation/engine.py": {"Ua", "Ub", "points", "pred", "rhs", "ta"},  # [-1]: the parameter's component
-    "continuation/switched.py": {"_fus", "_lams", "hit", "orbits", "points", "pts", "same", "sides", "t0",
-                                 "tests"},  # sequences' first and last entries
+    "continuation/driven.py": {"_fus", "_lams", "hit", "orbits", "points", "pts", "same", "sides", "t0",
+                               "tests"},  # sequences' first and last entries
     "continuation/two_parameter.py": {"e2", "names", "points", "vt"},  # the two parameters, a unit vector
     "drives/circuit/_cvode.py": {"tret"},  # CVODE's one-slot return time
-    "drives/circuit/_endkernel.py": {"buf", "dut", "yp"},  # the bar state and its derivative's components
+    "drives/circuit/_endfield.py": {"buf", "dut", "yp"},  # the bar state and its derivative's components
     "drives/circuit/_magnus.py": {"_T18", "_T8_A"},  # the Taylor scheme's coefficient rows
     "drives/circuit/_sundials.py": {"hits"},  # the first root found
     "drives/circuit/endflight.py": {"breaks", "ts", "y0", "ext_fn"},  # sequences' ends; a one-slot box
     "drives/circuit/flight.py": {"qe", "ts"},  # the rigid mode; the last time
     "drives/flight.py": {"gs", "out_q", "out_t", "out_v", "qa", "qe", "ts"},  # the rigid mode; first rows
     "drives/orbitproblem.py": {"lu"},  # scipy's LU factor (lu, piv)
-    "drives/switched/_kernel.py": {"out_t", "pend_k", "pend_t", "qs", "ts", "vs"},  # queues' heads
-    "dynamics/_aberthkernel.py": {"ds", "s89", "ut"},  # sums over the modes as real and imaginary parts
+    "drives/valve/_compiled_loop.py": {"out_t", "pend_k", "pend_t", "qs", "ts", "vs"},  # queues' heads
+    "dynamics/_aberth.py": {"ds", "s89", "ut"},  # sums over the modes as real and imaginary parts
     "dynamics/_crossing.py": {"qa", "qpa", "va", "vpa", "vpb"},  # modal components
-    "dynamics/_kernel.py": {"anchor", "ks", "pim", "pr", "qa", "va", "w2"},  # modal
+    "dynamics/_event_loop.py": {"anchor", "ks", "pim", "pr", "qa", "va", "w2"},  # modal
     # components and a load's first harmonic; anchor[0]: a one-slot box
     "dynamics/certified.py": {"hi", "lo"},  # the first interval's ends
     "dynamics/monodromy.py": {"p11", "p21", "vt"},  # modal components
@@ -65,7 +66,7 @@ NOT_RECORDS = {
     "laws/rodrock/_exactdata.py": {"starts"},  # the first and last start
     "laws/rodrock/_exactode.py": {"ex"},  # the series' first term
     "laws/rodrock/_exactresume.py": {"before", "off"},  # sequences' ends
-    "laws/rodrock/_rockkernel.py": {"Fn", "bounds"},  # the far end's cell; the shank's boundary
+    "laws/rodrock/_rockloop.py": {"Fn", "bounds"},  # the far end's cell; the shank's boundary
     "laws/rodrock/_rocktangent.py": {"Fn", "Gf", "Gp", "dFna", "dGa", "seg_z"},  # the first cell or segment's
     "laws/rodrock/blow.py": {"bitf", "off", "times"},  # sequences' first and last entries
     "laws/rodrock/contact.py": {"qa"},  # the rigid mode
@@ -77,8 +78,8 @@ NOT_RECORDS = {
     "laws/rodrock/law.py": {"qm"},  # the rigid mode
     "laws/rodrock/longrod.py": {"qm"},  # the rigid mode
     "laws/wave/_characteristics.py": {"first", "hit", "jumps", "nodes", "qa"},  # sequences' ends, rigid mode
-    "laws/wave/_wavekernel.py": {"ew", "grid", "p12", "qa", "qm", "ts", "ve"},  # modal components
-    "laws/wave/_windowkernel.py": {"jumps", "qa"},  # the first jump; the rigid mode
+    "laws/wave/_separation.py": {"ew", "grid", "p12", "qa", "qm", "ts", "ve"},  # modal components
+    "laws/wave/_window.py": {"jumps", "qa"},  # the first jump; the rigid mode
     "laws/wave/impact.py": {"dg", "npi", "th"},  # the rigid mode; a grid's ends
     "laws/wave/law.py": {"jt", "qm"},  # the rigid mode
     "laws/wave/periodic.py": {"DP", "coef", "first", "gq", "orders", "p12", "phases", "qm", "runs",
@@ -86,10 +87,11 @@ NOT_RECORDS = {
     "laws/wave/sustained.py": {"below", "nxt", "start"},  # sequences' first and last entries
     "loads/fourier.py": {"_k", "_pk", "ks", "pks", "rows", "tau"},  # harmonics' first and last
     "model.py": {"ends", "kappa"},  # the mode shapes at the two ends (rows of one array); the rigid mode's
-    "orbits/_admkernel.py": {"bufs", "gm", "upper"},  # the first of four like buffers; the first bound
+    "orbits/_admissibility_search.py": {"bufs", "gm",
+                                        "upper"},  # the first of four like buffers; the first bound
     "orbits/_closing.py": {"blocks"},  # the first block
     "orbits/_rigid_scalar.py": {"phases"},  # the two phases
-    "orbits/_rigidkernel.py": {"bounds", "phs"},  # the first bound; the two phases
+    "orbits/_rigid_arrays.py": {"bounds", "phs"},  # the first bound; the two phases
     "orbits/_saltation.py": {"fired"},  # the first event fired
     "orbits/_shooting_data.py": {"blocks"},  # the first block
     "orbits/_valve_flow.py": {"gq", "gv"},  # the rigid mode
@@ -101,8 +103,8 @@ NOT_RECORDS = {
     "orbits/orbit.py": {"phases"},  # the first phase
     "orbits/rigid.py": {"args"},  # the first argument array
     "orbits/shooting.py": {"Xr", "blocks", "hist", "speeds", "used"},  # sequences' ends, components; a box
-    "orbits/switched_orbit.py": {"states"},  # the first state
-    "orbits/switched_search.py": {"found", "same", "vi"},  # sequences' first and last entries
+    "orbits/driven_orbit.py": {"states"},  # the first state
+    "orbits/driven_search.py": {"found", "same", "vi"},  # sequences' first and last entries
     "orbits/valve_admissibility.py": {"w2", "za"},  # modal components
     "orbits/valve_search.py": {"gX", "v0", "wq", "wv"},  # modal components and a gradient's
     "orbits/valve_segment.py": {"Eb", "Ed", "dtc", "states", "stroke", "zb"},  # modal components
@@ -135,8 +137,8 @@ NOT_RECORDS = {
     "simulation/_shortrun.py": {"_ENTRY", "qv", "tv"},  # a one-slot box; rows of times and states
     "simulation/blows.py": {"gaps", "q_arr"},  # the second row; the rigid mode
     "simulation/simulate.py": {"aq", "av", "blocks", "ot", "qm", "vm"},  # first entries, rigid mode
-    "simulation/switched.py": {"_ends"},  # the last end
-    "simulation/switched_trajectory.py": {"pieces"},  # the last piece
+    "simulation/driven.py": {"_ends"},  # the last end
+    "simulation/driven_trajectory.py": {"pieces"},  # the last piece
     "simulation/trajectory.py": {"head", "out", "rows", "segs"},  # sequences' first and last entries
     "sweeps/map_spec.py": {"values"},  # the first and last value
     "sweeps/plot.py": {"axes"},  # the figure's first axes
@@ -149,7 +151,7 @@ PYTHON_TUPLES = {
     "cli/continue_.py": {"curve"},  # --curve NAME TO
     "continuation/two_parameter.py": {"key"},  # the cache's key, the two parameters' values
     "drives/circuit/drive.py": {"mode"},  # the mode (valve, ..., checks)
-    "drives/switched/drive.py": {"mode"},  # the mode (valve, ...)
+    "drives/valve/drive.py": {"mode"},  # the mode (valve, ...)
     "dynamics/modal.py": {"out"},  # the flow's four coefficient arrays
     "laws/rodrock/coupled_exact.py": {"waves"},  # (F, G)
     "laws/rodrock/exact.py": {"drive", "kept"},  # (starts, pieces); the kept pool
@@ -221,9 +223,9 @@ def test_the_scan_finds_a_lower_case_slot_and_passes_the_listed_names():
             '# bs[3] in a comment\n')
     assert slots_by_number(text) == [(1, "bs[3]"), (1, "bp[1]"), (1, "bs[0]"), (2, "acc[0]"),
                                      (2, "_hist[-1]")]
-    assert slots_by_number("x = qa[0] + pr[0]\n", "dynamics/_kernel.py") == []
+    assert slots_by_number("x = qa[0] + pr[0]\n", "dynamics/_event_loop.py") == []
     assert slots_by_number("x = qa[0] + pr[0]\n", "dynamics/modal.py") == [(1, "qa[0]"), (1, "pr[0]")]
-    assert slots_by_number("bs[3] = 0.0\n", "laws/rodrock/_rockkernel.py") == [(1, "bs[3]")]
+    assert slots_by_number("bs[3] = 0.0\n", "laws/rodrock/_rockloop.py") == [(1, "bs[3]")]
 
 
 def test_the_lists_are_disjoint_and_name_modules_that_exist():

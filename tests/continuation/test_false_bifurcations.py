@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 from impactbar import BarModel, CosineLoad, continue_orbit, periodic_orbits
 from impactbar.continuation import doubling_cascade
-from impactbar.continuation.core import _crosses, _real_offset
+from impactbar.continuation.one_parameter import _crosses, _real_offset
 
 
 def _cos_negative(model, p0):

@@ -22,7 +22,7 @@ from scipy.integrate import solve_ivp
 from impactbar import BarModel, InitialState, PositionSwitchedDrive, continue_orbit, find_orbit, simulate
 from impactbar.drives import DriveState
 from impactbar.drives.circuit import Accumulator, Chambers, HydraulicCircuitDrive, Oil, Supply, Valve
-from impactbar.drives.circuit import _kernel as K
+from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit.flight import circuit_flight
 from impactbar.drives.circuit.settings import CircuitFlightSettings
 from impactbar.drives.flight import ARRIVAL
@@ -148,7 +148,7 @@ def test_variational_jacobian_against_differences(orbit):
 def test_second_integration_agrees(orbit):
     """The same orbit solved again with CVODE at rtol 1e-12 (the default 1e-10), from this one."""
     from impactbar.drives import FlightSettings
-    from impactbar.orbits.switched import ShootingProblem, orbit_of
+    from impactbar.orbits.driven import ShootingProblem, orbit_of
 
     problem = ShootingProblem(RIGID, orbit.drive, 1, FlightSettings(method="CVODE", rtol=1e-12, atol=1e-14))
     fine = orbit_of(problem, problem.solve(problem.initial(orbit, 1e-13, 20), 1e-13, 20))
@@ -177,8 +177,8 @@ def test_continuation_options_trade_flights_not_orbits(orbit, monkeypatch):
     forward difference, a chord step first) against the way before (``forward_lambda=False,
     chord=False``): the same points, the same orbits to the corrector's tolerance, fewer flights
     (measured: 220 against 276 to 0.51)."""
-    from impactbar.continuation.core import _detect
-    from impactbar.continuation.switched import continue_switched
+    from impactbar.continuation.driven import continue_switched
+    from impactbar.continuation.one_parameter import _detect
     from impactbar.drives.circuit import flight as F
 
     flights = [0]

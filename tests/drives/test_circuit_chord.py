@@ -8,7 +8,7 @@ import pytest
 from impactbar import find_orbit
 from impactbar.drives.orbitproblem import chord
 from impactbar.orbits import find_switched_orbit
-from impactbar.orbits.switched import ShootingProblem, orbit_of
+from impactbar.orbits.driven import ShootingProblem, orbit_of
 from impactbar.physical import circuit_preset
 
 
@@ -79,9 +79,9 @@ def test_a_branch_with_chord_steps_throughout_is_the_branch_of_before(drifter):
     roots of the plain flights, not of the variational ones (the integrator's error apart: measured
     2.7e-10 in the period, 3e-8 in the pressures), so the unknowns agree to 3e-8 of their size, the
     periods to 1e-9."""
-    from impactbar.continuation.core import _detect
+    from impactbar.continuation.driven import continue_switched
     from impactbar.continuation.engine import _settings
-    from impactbar.continuation.switched import continue_switched
+    from impactbar.continuation.one_parameter import _detect
 
     drive = drifter.drive()
     o = find_orbit(drifter.model().with_(n_modes=1), drive)
@@ -99,9 +99,9 @@ def test_a_branch_with_chord_steps_throughout_is_the_branch_of_before(drifter):
 
 def _branch(orbit, chord, max_points):
     """The continuation in the pre-charge, 5 % up, without events, with the corrector ``chord``."""
-    from impactbar.continuation.core import _detect
+    from impactbar.continuation.driven import continue_switched
     from impactbar.continuation.engine import _settings
-    from impactbar.continuation.switched import continue_switched
+    from impactbar.continuation.one_parameter import _detect
 
     to = orbit.drive.accumulator.precharge * 1.05
     return continue_switched(orbit, "precharge", to, _detect, events=False, chord=chord,
@@ -176,7 +176,7 @@ def _flights(monkeypatch) -> list:
 def _longer_branch(drifter, monkeypatch, rule):
     """The branch of eight points (the pre-charge 20 % up, 8 modes) with the corrector's rate
     predicted by ``rule``: the branch and the kinds of its flights."""
-    import impactbar.continuation.switched as SW
+    import impactbar.continuation.driven as SW
     from impactbar import continue_orbit
 
     drive = drifter.drive()
@@ -195,7 +195,7 @@ def test_a_longer_branch_takes_one_variational_period_a_point(drifter, monkeypat
     the chord's last ratio alone (the rule of before), three of the seven points flew it twice, a
     chord's first ratio underestimating its rate, each such flight with its ``F_lam`` flight some
     four plain periods, where the rule takes one chord step more; the same points."""
-    from impactbar.continuation.switched import predicted_rate
+    from impactbar.continuation.driven import predicted_rate
 
     now, seen = _longer_branch(drifter, monkeypatch, predicted_rate)
     before, seen_before = _longer_branch(drifter, monkeypatch, lambda ratios: ratios[-1])
@@ -227,8 +227,8 @@ def test_the_jacobian_along_the_branch_is_lagranges(drifter):
     """The corrector's predicted Jacobian (``_SwitchedProblem._along``): exact for a quantity
     quadratic along a straight branch from three points, linear from two, constant from one, in
     whatever order the points came (the events' location corrects points between the last two)."""
-    from impactbar.continuation.core import _detect
-    from impactbar.continuation.switched import _SwitchedProblem
+    from impactbar.continuation.driven import _SwitchedProblem
+    from impactbar.continuation.one_parameter import _detect
 
     model = drifter.model().with_(n_modes=1)
     p = _SwitchedProblem(model, drifter.drive(), "precharge", _detect, chord="orbit")

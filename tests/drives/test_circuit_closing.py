@@ -15,8 +15,8 @@ from impactbar import find_orbit
 from impactbar.drives.base import DriveState, FlightSettings
 from impactbar.drives.circuit.flight import MAGNUS_STATE_TOLERANCE
 from impactbar.orbits import shooting
+from impactbar.orbits.driven import orbit_of
 from impactbar.orbits.shooting import STEER_THETA, ShootingProblem
-from impactbar.orbits.switched import orbit_of
 from impactbar.physical import circuit_preset
 
 
@@ -144,9 +144,9 @@ def test_the_rigid_pistons_jacobian_ignores_the_steering_steps():
 def _continued(orbit, chord, max_points):
     """The continuation in the pre-charge, 5 % up, without events, by ``continue_switched`` with the
     corrector ``chord``."""
-    from impactbar.continuation.core import _detect
+    from impactbar.continuation.driven import continue_switched
     from impactbar.continuation.engine import _settings
-    from impactbar.continuation.switched import continue_switched
+    from impactbar.continuation.one_parameter import _detect
 
     to = orbit.drive.accumulator.precharge * 1.05
     return continue_switched(orbit, "precharge", to, _detect, events=False, chord=chord,

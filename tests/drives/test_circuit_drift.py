@@ -6,7 +6,7 @@ to negative pressures ("the oil circuit's flight ... could not be integrated")."
 import numpy as np
 
 from impactbar.orbits._settling import drifting
-from impactbar.orbits.switched import orbit_problem
+from impactbar.orbits.driven import orbit_problem
 from impactbar.physical.loader import build, read_config, with_values
 
 

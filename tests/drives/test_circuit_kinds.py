@@ -15,7 +15,7 @@ import pytest
 from circuit_parts_reference import field, network_jacobian_fd
 
 from impactbar.drives.circuit import CheckValve, Cushion, LaminarLeak
-from impactbar.drives.circuit import _kernel as K
+from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit import _netgen as NG
 from impactbar.physical import circuit_preset
 

@@ -177,7 +177,7 @@ def test_the_energy_accounts_of_a_run_with_blows(law):
     and 1.6e-10 under the wave law); the records are the law's, one a blow."""
     from impactbar.drives import FlightSettings
     from impactbar.simulation.blows import BlowPiece
-    from impactbar.simulation.switched import run_stateful
+    from impactbar.simulation.driven import run_stateful
 
     model = BarModel(s=S, d=0.0, R=0.215, n_modes=1, impact=law)
     drive = pumped()

@@ -23,7 +23,7 @@ from impactbar.drives.circuit import (
     Supply,
     Valve,
 )
-from impactbar.drives.circuit import _kernel as K
+from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit.drive import _rate_model
 from impactbar.drives.circuit.layout import PRESET, CircuitLayout
 

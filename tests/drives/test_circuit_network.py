@@ -2,7 +2,7 @@
 describes itself as records, the drive composes them, and one compiled vector field, Jacobian and set
 of event functions serves every topology.
 
-- The preset drifter's records against the circuit's own kernel (``_kernel._base``, ``jac_base``,
+- The preset drifter's records against the circuit's own kernel (``_field._base``, ``jac_base``,
   ``circuit_events``): the same numbers to the bit (the sign of a zero included) at random states, in
   every mode, rigid and with four flexible modes, with a pump and with a held supply, with and without
   an accumulator and a relief valve; and the code generated for the network's topology
@@ -26,7 +26,7 @@ import pytest
 from circuit_parts_reference import network_jacobian_fd
 
 from impactbar.drives.circuit import Accumulator, Oil, Supply
-from impactbar.drives.circuit import _kernel as K
+from impactbar.drives.circuit import _field as K
 from impactbar.drives.circuit import _netgen as NG
 from impactbar.drives.circuit import _network as NW
 from impactbar.physical import circuit_preset

@@ -13,7 +13,7 @@ import pytest
 from impactbar import find_orbit
 from impactbar.orbits import find_switched_orbit
 from impactbar.orbits.coupled import blow_jacobian, blow_state
-from impactbar.orbits.switched import ShootingProblem, orbit_of
+from impactbar.orbits.driven import ShootingProblem, orbit_of
 from impactbar.physical import CircuitDrifter
 
 EXAMPLE = Path(__file__).parents[2] / "examples" / "circuit_drifter_rock.toml"
@@ -112,7 +112,7 @@ def test_the_exact_blows_orbit_starts_on_the_lattice(drifter, monkeypatch):
     import dataclasses
 
     import impactbar.laws.rodrock.coupled_exact as CE
-    import impactbar.orbits.switched_search as S
+    import impactbar.orbits.driven_search as S
     from impactbar.physical import build, read_config
 
     cfg, _ = read_config(str(EXAMPLE))

@@ -23,7 +23,7 @@ from impactbar import (
 from impactbar.drives import FlightSettings
 from impactbar.drives.circuit import CircuitFlightSettings
 from impactbar.drives.circuit.settings import DEFAULT_SETTINGS, circuit_settings
-from impactbar.orbits.switched import orbit_problem
+from impactbar.orbits.driven import orbit_problem
 
 #: the options of how the circuit's flights are integrated
 OPTIONS = ("compiled", "band", "blocks", "sensitivity", "multistep")

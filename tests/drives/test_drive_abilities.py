@@ -16,7 +16,7 @@ from test_new_drive import TwoLevel, rigid_closed_form  # (the test's directory 
 from impactbar import BarModel, Drive, DriveTraits, InitialState, find_orbit, simulate
 from impactbar.drives import CompiledLoop, DriveAbilities, OwnFlight, Quadratures
 from impactbar.drives.base import FlightKernel
-from impactbar.orbits.switched import ShootingProblem
+from impactbar.orbits.driven import ShootingProblem
 from impactbar.parameters import parameters, with_parameter
 
 

@@ -175,7 +175,7 @@ def test_the_default_chain_says_what_it_tried():
     # the valve's first start, the rigid piston's orbit, fails on the first of VALVE_CASES (the
     # default found its orbit above by the chain's next start, the run from rest): Newton's steps
     # wander, none in five halving the smallest before it, and it gives up (before: after 50 steps)
-    from impactbar.orbits.switched import orbit_problem
+    from impactbar.orbits.driven import orbit_problem
 
     problem = orbit_problem(*VALVE_CASES[0])
     with pytest.raises(ValueError, match="Newton stalled"):
@@ -250,7 +250,7 @@ def test_the_default_chain_skips_a_search_it_cannot_afford(monkeypatch):
     last step, the search of every orbit, took minutes. Past ``MAX_DEFAULT_RESONANCES`` it is
     skipped (find_orbit answers from its first steps or says what it tried); the second of
     ``VALVE_CASES`` (2,340 in its window) still reaches the search."""
-    import impactbar.orbits.switched_search as ss
+    import impactbar.orbits.driven_search as ss
 
     calls = []
     real = ss._searched
@@ -264,12 +264,12 @@ def test_the_default_chain_skips_a_search_it_cannot_afford(monkeypatch):
 
 
 def test_the_orbit_solvers_choose_the_valve_problem_from_their_table():
-    """The valve's segment problem is the orbit solvers' (``orbits.switched.ORBIT_PROBLEMS``), not
+    """The valve's segment problem is the orbit solvers' (``orbits.driven.ORBIT_PROBLEMS``), not
     the drive's: the drive brings no ``orbit_problem`` among its abilities; a subclass that brings
     one keeps it, one that does not gets the table's; a drive outside the table gets the generic
     shooting."""
     from impactbar.drives import DriveAbilities
-    from impactbar.orbits.switched import ORBIT_PROBLEMS, ShootingProblem, orbit_problem
+    from impactbar.orbits.driven import ORBIT_PROBLEMS, ShootingProblem, orbit_problem
     from impactbar.orbits.valve_segment import ValveProblem
 
     model, drive = VALVE_CASES[1]

@@ -7,8 +7,8 @@ root with flights shrunk to nothing was returned as an orbit, a different one at
 import pytest
 
 from impactbar import BarModel, PositionSwitchedDrive, find_orbit, periodic_orbits
-from impactbar.orbits.switched import orbit_problem
-from impactbar.orbits.switched_search import _solve
+from impactbar.orbits.driven import orbit_problem
+from impactbar.orbits.driven_search import _solve
 
 
 def _pair(model, stroke, ret, switch_out, lam, delay=0.0):

@@ -24,7 +24,7 @@ from impactbar import (
     periodic_orbits,
     simulate,
 )
-from impactbar.drives.switched import first_rising_crossing
+from impactbar.drives.valve import first_rising_crossing
 from impactbar.orbits import phase_roots
 from impactbar.simulation import InitialState
 
@@ -63,7 +63,7 @@ def test_drive_is_frozen_and_refused_by_the_time_periodic_machinery():
         continue_orbit(find_orbit(model, drive), "kappa", to=1.5)
     with pytest.raises(ValueError, match="impacts"):
         find_orbit(model, drive, impacts=2)
-    # every law now (the wave law's contact: tests/orbits/test_switched_contact.py)
+    # every law now (the wave law's contact: tests/orbits/test_driven_contact.py)
     assert find_orbit(model.with_(impact="wave"), drive).contact_time == pytest.approx(2.0 / model.s)
 
 

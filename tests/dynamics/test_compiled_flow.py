@@ -116,7 +116,7 @@ def test_phased_column_equals_numpy_flow():
     folded modes' phases stepped by rotations) against the numpy flow: the same states to rounding
     from the exact phases, and from phases carried down 30 levels of halving steps as the
     bisection carries them (random rigid, folded and damped modes, several harmonics)."""
-    from impactbar.dynamics._flowkernel import fourier_column
+    from impactbar.dynamics._load_flow import fourier_column
 
     rng = np.random.default_rng(5)
     for _ in range(10):

@@ -190,7 +190,7 @@ def _assert_rigid_arrays_equal(fast, ref):
 
 @pytest.mark.parametrize("k", [1, 2, 3])
 def test_compiled_rigid_arrays_equal_numpy_closed_forms(rng, k):
-    """The closed forms compiled point by point (orbits/_rigidkernel.py, what sweeps use) against
+    """The closed forms compiled point by point (orbits/_rigid_arrays.py, what sweeps use) against
     the vectorised numpy closed forms (the reference of "orbits.rigid_arrays"), which seek every
     zero of the flight's velocity where the kernel seeks only the maxima's (theory §5): the same
     orbits, flags, clearances, multipliers and fallbacks, on random parameters with the edge values
@@ -316,7 +316,7 @@ def test_structured_multipliers_equal_dense_eigvals(rng, n_modes):
 def test_compiled_aberth_gives_up_cleanly():
     """The compiled Aberth sweeps: the same zeros as dense eigvals when they settle, ``None`` (so the
     dense method takes over) when the sweeps run out or a start sits on a pole, never an error."""
-    from impactbar.dynamics._aberthkernel import aberth_iterate
+    from impactbar.dynamics._aberth import aberth_iterate
     from impactbar.dynamics.monodromy import aberth
     from impactbar.laws.paper.stability import _structured_parts
 
@@ -543,9 +543,9 @@ def test_kernel_compiles_in_memory_without_a_cache_folder():
         "b, cc = K._bc(0.0, 2.0)\n"
         "assert (b, cc) == (2.0, 2.0)\n"
     )
-    from impactbar.dynamics import _kernel
+    from impactbar.dynamics import _event_loop
 
-    assert _kernel.CACHE is True
+    assert _event_loop.CACHE is True
 
 
 def test_long_run_holds_its_trajectory_about_once():
@@ -787,7 +787,7 @@ if sys.argv[1] == "primed":  # the rigid sweep chunk compiled first (plain kerne
 
     n = 4  # (rigid_cosine_orbits runs the compiled loop at any size)
     rigid_cosine_orbits(np.full(n, 0.1), np.full(n, 0.5), np.full(n, 0.6), np.ones(n), 1)
-from impactbar.dynamics._aberthkernel import aberth_iterate
+from impactbar.dynamics._aberth import aberth_iterate
 
 rng = np.random.default_rng(7)
 M = 48
@@ -808,7 +808,7 @@ def test_compiled_aberth_does_not_depend_on_the_process_history(tmp_path):
     """The fast-math Aberth sweeps compile to the same machine code whatever the process compiled
     before: after the rigid sweep chunk, the multipliers' iterates came out different in their last
     bits (the kernel took numba's implementations with the flags of their first caller; see the
-    comment in ``_aberthkernel``)."""
+    comment in ``_aberth``)."""
     import os
     import subprocess
     import sys

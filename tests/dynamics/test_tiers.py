@@ -102,7 +102,7 @@ def test_the_hook_leaves_a_call_with_machine_code_alone():
     machine code): the hook only sees cold calls."""
     run = simulate(BarModel(5.0, 0.1, 0.5, 0), CosineLoad(0.6, 1.0), InitialState.rigid(-0.2, 0.0), 30.0)
     assert run.n_impacts > 0
-    from impactbar.dynamics import _kernel as K
+    from impactbar.dynamics import _event_loop as K
 
     assert K.run_free_rigid.signatures  # compiled (tier off in the test process)
 
@@ -126,7 +126,7 @@ def test_a_twin_that_overflows_hands_the_call_to_the_machine_code():
 
 def test_twins_call_twins_and_round_hypot_as_numba_does():
     from impactbar.dynamics import _crossing as C
-    from impactbar.dynamics import _kernel as K
+    from impactbar.dynamics import _event_loop as K
 
     t = _tiers.twin(K.run_free)
     assert t.__globals__["find_crossing"] is _tiers.twin(C.find_crossing)
@@ -139,7 +139,7 @@ def test_twins_call_twins_and_round_hypot_as_numba_does():
 
 
 def test_fast_math_kernels_are_never_interpreted():
-    from impactbar.dynamics import _aberthkernel as A
+    from impactbar.dynamics import _aberth as A
 
     fast = [d for d in vars(A).values() if isinstance(d, numba.core.registry.CPUDispatcher)
             and d.targetoptions.get("fastmath")]

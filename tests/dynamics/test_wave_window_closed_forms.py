@@ -13,7 +13,7 @@ import pytest
 
 from impactbar import BarModel, CosineLoad, FourierLoad, SquareWaveLoad, periodic_orbits
 from impactbar.dynamics.implementations import use_reference
-from impactbar.laws.wave import _windowkernel as KW
+from impactbar.laws.wave import _window as KW
 from impactbar.laws.wave import impact
 from impactbar.laws.wave._characteristics import _Contact
 

@@ -128,7 +128,7 @@ def test_the_bits_step_tangent_is_its_derivative(case):
     """One step of the bit on the rock (``bit_step``, compiled) across each switch of the bilinear
     law inside the step: its tangent against central differences in every state variable and in
     the input ``E`` (underdamped and overdamped bits, and every branch's closed form)."""
-    from impactbar.laws.rodrock._rockkernel import bit_step
+    from impactbar.laws.rodrock._rockloop import bit_step
     from impactbar.laws.rodrock._rocktangent import bit_step_tangent
 
     bp, bs0, E, dt, end = BIT_CASES[case]

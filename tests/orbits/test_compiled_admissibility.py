@@ -1,4 +1,4 @@
-"""The compiled certified admissibility search (``orbits/_admkernel.py``) against the numpy search
+"""The compiled certified admissibility search (``orbits/_admissibility_search.py``) against the numpy search
 it replaces, and the search (both paths) against the rigid bar's closed forms."""
 
 from __future__ import annotations
@@ -253,12 +253,12 @@ def test_third_derivative_bound_holds():
 def test_no_disk_cache_keeps_the_compiled_search(monkeypatch):
     """Whether numba's cache folder is writable chooses no algorithm: without a disk cache (numba
     then compiles in memory) the compiled search still decides, with the same verdicts as the numpy
-    search; and the package reads ``_kernel.CACHE`` nowhere but as numba's ``cache=`` option."""
+    search; and the package reads ``_event_loop.CACHE`` nowhere but as numba's ``cache=`` option."""
     import ast
     import pathlib
 
     import impactbar
-    import impactbar.dynamics._kernel as kernel
+    import impactbar.dynamics._event_loop as kernel
 
     model, load = BarModel(4.0, 0.1, 0.5, 6), CosineLoad(0.5, 1.0)
     with use_reference("admissibility.search"):
@@ -285,7 +285,7 @@ def test_one_compiled_search_serves_every_load():
     """The compiled search is compiled once, whatever the load (cosine of any order, several
     harmonics, square wave, cached transfer functions or fresh ones): its arguments always have
     the same numba types, so no load makes a user wait for a second compilation."""
-    from impactbar.orbits import _admkernel
+    from impactbar.orbits import _admissibility_search
 
     loads = [CosineLoad(0.6, 1.0), CosineLoad(0.4, 1.0, k=2), SquareWaveLoad(1.0, 1.2),
              FourierLoad(0.5, [1.0, 0.0, 0.2j])]
@@ -293,7 +293,7 @@ def test_one_compiled_search_serves_every_load():
         model = BarModel(5.0, 0.1, 0.5, n_modes)
         for load in loads + loads:  # the second time, the loads' cached transfer functions
             _periodic_orbits_general(model, load)
-    assert len(_admkernel.admissibility_search.signatures) == 1
+    assert len(_admissibility_search.admissibility_search.signatures) == 1
 
 
 def test_newton_leaves_an_interval_once_it_converged_or_left_it():
@@ -316,34 +316,34 @@ def test_newton_leaves_an_interval_once_it_converged_or_left_it():
 
 
 def test_searches_in_threads_keep_their_own_phase_buffers(monkeypatch):
-    """The bisection's store of the modes' phases (``_admkernel.phase_buffers``) is kept per
+    """The bisection's store of the modes' phases (``_admissibility_search.phase_buffers``) is kept per
     thread and reused from one search to the next: searches that run at once in threads (the
     kernel releases the GIL, as a threaded dask sweep runs it) give bit for bit what they give
     one after another, and a thread reuses its own buffers."""
     from concurrent.futures import ThreadPoolExecutor
 
-    from impactbar.orbits import _admkernel
+    from impactbar.orbits import _admissibility_search
 
     calls = []
-    search = _admkernel.admissibility_search
+    search = _admissibility_search.admissibility_search
 
     def capture(*args):
         calls.append(args)
         return search(*args)
 
-    monkeypatch.setattr(_admkernel, "admissibility_search", capture)
+    monkeypatch.setattr(_admissibility_search, "admissibility_search", capture)
     for s, load in ((3.0, CosineLoad(0.6, 1.0)), (2.0, CosineLoad(0.5, 1.2)), (4.0, CosineLoad(0.7, 0.9))):
         _periodic_orbits_general(BarModel(s, 0.0, 0.5, 96, impact="wave"), load)
     monkeypatch.undo()
     assert len(calls) >= 4
 
     def run(args):
-        bufs = _admkernel.phase_buffers(args[7][0].size)
+        bufs = _admissibility_search.phase_buffers(args[7][0].size)
         return search(*args[:8], bufs, args[9]), bufs
 
     serial = [run(a)[0] for a in calls]
     with ThreadPoolExecutor(4) as pool:
         threaded = list(pool.map(run, calls * 3))
     assert [r for r, _ in threaded] == serial * 3
-    assert _admkernel.phase_buffers(96) is _admkernel.phase_buffers(96)
-    assert len({id(b) for _, b in threaded} - {id(_admkernel.phase_buffers(96))}) <= 4
+    assert _admissibility_search.phase_buffers(96) is _admissibility_search.phase_buffers(96)
+    assert len({id(b) for _, b in threaded} - {id(_admissibility_search.phase_buffers(96))}) <= 4

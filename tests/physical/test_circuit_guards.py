@@ -178,7 +178,7 @@ def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simul
     import dataclasses
 
     from impactbar import InitialState, simulate
-    from impactbar.orbits import shooting, switched_search
+    from impactbar.orbits import driven_search, shooting
 
     d = circuit_preset("circuit-drifter", oil={"transition_pressure": "50 MPa"})
     o = d.orbit().orbit
@@ -193,7 +193,7 @@ def test_an_orbit_past_the_relief_pressure_opens_the_relief_and_repeats_in_simul
     monkeypatch.setattr(shooting, "surfaces_ahead", lambda *a, **k: True)
     with pytest.raises(ValueError, match="drive's mode at an impact is not the one its state gives"):
         d.orbit()
-    monkeypatch.setattr(switched_search, "surfaces_ahead", lambda *a, **k: True)
+    monkeypatch.setattr(driven_search, "surfaces_ahead", lambda *a, **k: True)
     with pytest.raises(ValueError, match=r"does not repeat when simulate restarts it .*\(the first interval "
                                          r"1\.03\d+ periods\)"):
         d.orbit()

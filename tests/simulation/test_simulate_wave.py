@@ -105,7 +105,7 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
     separation and the same post-contact state, over random states, loads and wave speeds (windows
     longer than the load period and jumps of the square wave in both halves included)."""
     from impactbar import FourierLoad, wave_impact
-    from impactbar.laws.wave import _windowkernel as K
+    from impactbar.laws.wave import _window as K
     from impactbar.laws.wave.law import _GL20_W, _GL20_X
     from wave_reference import random_state
 
@@ -133,12 +133,12 @@ def test_compiled_window_matches_the_characteristics_solver(rng):
 
 
 def test_compiled_separating_window_matches_the_characteristics_solver(rng):
-    """The kernel's window with separation (``_wavekernel.wave_contact``) against :func:`wave_impact`,
+    """The kernel's window with separation (``_separation.wave_contact``) against :func:`wave_impact`,
     the reference: the same contact intervals and the same post-contact state, over random states
     (arrivals down to grazing speed), loads and wave speeds (windows longer than the load's period,
     and square-wave jumps in both halves, included)."""
     from impactbar import FourierLoad, wave_impact
-    from impactbar.laws.wave import _wavekernel as WK
+    from impactbar.laws.wave import _separation as WK
     from impactbar.laws.wave.law import _GL20_W, _GL20_X
     from wave_reference import random_state
 
@@ -215,8 +215,8 @@ def test_compiled_windows_spanning_many_load_periods(s):
     """A window ``2/s`` covering 10 to 26 periods of a square wave (20 to 52 jumps): both compiled
     windows take every jump (the one without separation once kept only 16), as :func:`wave_impact`."""
     from impactbar import wave_impact
-    from impactbar.laws.wave import _wavekernel as WK
-    from impactbar.laws.wave import _windowkernel as K
+    from impactbar.laws.wave import _separation as WK
+    from impactbar.laws.wave import _window as K
     from impactbar.laws.wave.law import _GL20_W, _GL20_X
 
     model = BarModel(s=s, d=0.0, R=0.5, n_modes=2)

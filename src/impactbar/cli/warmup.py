@@ -118,7 +118,7 @@ def run(args) -> int:
     kernels numba compiled (0 once they are cached)."""
     from numba.core import event
 
-    from ..dynamics.kernels import disable_tiers
+    from ..dynamics.compiled import disable_tiers
 
     disable_tiers()  # every kernel compiled here, not run interpreted while a child compiles it
 

@@ -2,7 +2,7 @@
 (with branch switching), Neimark-Sacker points, grazing and losses of admissibility.
 
 Layout: ``parameters`` (which model and load fields can vary), ``engine`` (the one pseudo-arclength
-engine and its :class:`ContinuationSettings`), ``core`` (:func:`continue_orbit`: the segment problem
+engine and its :class:`ContinuationSettings`), ``one_parameter`` (:func:`continue_orbit`: the segment problem
 of :func:`impactbar.find_orbit` on the engine, event detection and location), ``cascade``
 (:func:`doubling_cascade`: a branch and its successive doubled branches), ``branch``
 (:class:`Branch`, :class:`BranchEvent`; their pandas, xarray and matplotlib views import those
@@ -16,10 +16,10 @@ from .branch import Branch as Branch
 from .branch import BranchEvent as BranchEvent
 from .cascade import DoublingCascade as DoublingCascade
 from .cascade import doubling_cascade as doubling_cascade
-from .core import EVENT_KINDS as EVENT_KINDS
-from .core import continue_orbit as continue_orbit
 from .diagram import simulated_diagram as simulated_diagram
 from .engine import ContinuationSettings as ContinuationSettings
+from .one_parameter import EVENT_KINDS as EVENT_KINDS
+from .one_parameter import continue_orbit as continue_orbit
 from .parameters import PARAMETERS as PARAMETERS
 from .parameters import parameter_value as parameter_value
 from .parameters import with_parameter as with_parameter

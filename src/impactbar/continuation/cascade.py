@@ -11,8 +11,8 @@ import numpy as np
 from .._shared.status import EventKind
 from .._shared.validate import check_int
 from .branch import Branch, BranchEvent
-from .core import continue_orbit
 from .engine import ContinuationSettings
+from .one_parameter import continue_orbit
 
 __all__ = ["DoublingCascade", "doubling_cascade"]
 

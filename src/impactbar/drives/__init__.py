@@ -8,7 +8,7 @@ Layout: ``base`` (:class:`Drive`, :class:`DriveTraits`, :class:`DriveState`, the
 ``abilities`` (what a drive may do beyond its required hooks, :class:`DriveAbilities`), ``params``
 (its parameters for the parameter protocol), ``_crossing`` (the rigid
 coordinate's crossings under a constant force in closed form, compiled), ``flight`` (the flight of a
-drive with state between impacts, by scipy's ``solve_ivp``), ``switched`` (the valve,
+drive with state between impacts, by scipy's ``solve_ivp``), ``valve`` (the valve,
 :class:`PositionSwitchedDrive`, with its compiled loop; the numerics of its periodic orbits sit with
 the orbit solvers, :mod:`impactbar.orbits.valve_segment`). Below the solvers:
 imports only ``impactbar.model``, ``impactbar.dynamics`` and ``impactbar._shared``.
@@ -32,7 +32,7 @@ from .base import register_drive as register_drive
 from .orbitproblem import OrbitData as OrbitData
 from .orbitproblem import OrbitProblem as OrbitProblem
 from .orbitproblem import OrbitSearch as OrbitSearch
-from .switched import PositionSwitchedDrive as PositionSwitchedDrive
+from .valve import PositionSwitchedDrive as PositionSwitchedDrive
 
 __all__ = ["Drive", "DriveTraits", "DriveAbilities", "CompiledLoop", "OwnFlight", "Quadratures", "DriveState",
            "DriveEvent", "GapCrossing", "RateCrossing", "TimedEvent", "SurfaceEvent", "FlightSettings",

@@ -15,7 +15,7 @@ import math
 
 import numba
 
-from ..dynamics.kernels import CACHE
+from ..dynamics.compiled import CACHE
 
 __all__ = ["gap", "rate_zero", "first_rising_crossing", "first_rate_crossing", "rigid_flight"]
 

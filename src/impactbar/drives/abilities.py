@@ -92,7 +92,7 @@ class DriveAbilities:
     Parameters
     ----------
     compiled_loop : CompiledLoop or None
-        A compiled event loop (the valve's, :mod:`impactbar.drives.switched.loop`).
+        A compiled event loop (the valve's, :mod:`impactbar.drives.valve.loop`).
     flight : OwnFlight or None
         Its own integration of its flights (the oil circuit's CVODE).
     quadratures : Quadratures or None
@@ -113,7 +113,7 @@ class DriveAbilities:
     orbit_problem : callable or None
         ``orbit_problem(model, impacts, constant_load)``: the drive's own periodic-orbit problem
         (:class:`~impactbar.drives.OrbitProblem`), in place of the generic shooting problem of
-        :mod:`impactbar.orbits.switched`; ``constant_load(p)`` gives the load of a constant force
+        :mod:`impactbar.orbits.driven`; ``constant_load(p)`` gives the load of a constant force
         ``p`` (for a contact law's map).
 
     Examples

@@ -19,9 +19,9 @@ Each drive is a hybrid system (a *switched* system) with
   :meth:`Drive.with_`.
 
 The solvers dispatch on this interface, never on a drive's class: :func:`impactbar.simulate`
-(:mod:`impactbar.simulation.switched`), :func:`impactbar.find_orbit`
-(:mod:`impactbar.orbits.switched`) and :func:`impactbar.continue_orbit`
-(:mod:`impactbar.continuation.switched`). A drive without state (``traits.state_size == 0``) has a force
+(:mod:`impactbar.simulation.driven`), :func:`impactbar.find_orbit`
+(:mod:`impactbar.orbits.driven`) and :func:`impactbar.continue_orbit`
+(:mod:`impactbar.continuation.driven`). A drive without state (``traits.state_size == 0``) has a force
 that is constant between events: its flights are the closed-form flights of the modes (eq. 8), run by
 the simulator's certified event search, and its events in closed form where they are crossings of
 the piston's position or velocity or scheduled times (:meth:`DriveEvent.first_time`). A drive with
@@ -30,7 +30,7 @@ integrator's tolerance. A drive may add numerics of its own where they pay, as a
 (:attr:`Drive.abilities`, :mod:`impactbar.drives.abilities`, each asked once where a solver
 dispatches on it): a compiled event loop, as the valve of :class:`~impactbar.PositionSwitchedDrive`
 has, its own flights, as the oil circuit's, or a periodic-orbit problem of its own (the valve's
-closed-form problem sits with the orbit solvers, :data:`impactbar.orbits.switched.ORBIT_PROBLEMS`);
+closed-form problem sits with the orbit solvers, :data:`impactbar.orbits.driven.ORBIT_PROBLEMS`);
 otherwise the generic paths run.
 
 The design follows three well-kept codes: the event functions of scipy's ``solve_ivp`` (a scalar
@@ -256,9 +256,9 @@ class FlightKernel(NamedTuple):
     Attributes
     ----------
     loads : tuple
-        The plain tuples of the :class:`~impactbar.dynamics.kernelview.LoadKernelView` of each level.
+        The plain tuples of the :class:`~impactbar.dynamics.compiled_views.LoadKernelView` of each level.
     basis : tuple
-        The plain tuple of the free-free :class:`~impactbar.dynamics.kernelview.ModalBasisView`.
+        The plain tuple of the free-free :class:`~impactbar.dynamics.compiled_views.ModalBasisView`.
     R : float
         The impact law's restitution as the kernel applies it (``kernel_restitution``).
     c : numpy.ndarray, shape (N + 1,)

@@ -1,13 +1,13 @@
 r"""One flight of the bar under a drive, from a start to the first of: the next arrival at the stop,
 the drive's next event, a stop time (theory §10). The solvers' common step: the generic periodic
-orbits of :mod:`impactbar.orbits.switched` fly with it, and so does the simulator for a drive with
-state (:mod:`impactbar.simulation.switched`).
+orbits of :mod:`impactbar.orbits.driven` fly with it, and so does the simulator for a drive with
+state (:mod:`impactbar.simulation.driven`).
 
 Two kinds of flight, by the drive:
 
 - **a force constant between events** (``traits.piecewise_constant``, no continuous state): every
   mode moves in closed form (eq. 8, :func:`~impactbar.dynamics.modal.step_constant`); the arrival is
-  found by the compiled certified impact search (:func:`impactbar.dynamics._kernel.run_free`, or
+  found by the compiled certified impact search (:func:`impactbar.dynamics._event_loop.run_free`, or
   the rigid coordinate's closed form), the drive's events in closed form
   (:meth:`~impactbar.drives.DriveEvent.first_time`: position and velocity crossings, scheduled
   times), both to rounding; an event without a closed form (a :class:`~impactbar.drives.SurfaceEvent`)
@@ -312,7 +312,7 @@ def arrival(model, p: float, t: float, q, v, t_stop: float):
     before ``t_stop``: ``(t_arrival, q, v, True)`` there, or ``(t_stop, q, v, False)`` at ``t_stop``
     without one.
     The rigid bar's in closed form (``q_0`` rising through 0, theory §10); a flexible bar's by the
-    compiled certified impact search (:func:`impactbar.dynamics._kernel.run_free`, stopping at the
+    compiled certified impact search (:func:`impactbar.dynamics._event_loop.run_free`, stopping at the
     arrival); both to rounding."""
     d = model.d
     if model.n_modes == 0:
@@ -326,8 +326,8 @@ def arrival(model, p: float, t: float, q, v, t_stop: float):
             return t_stop, q, v, False
         qe, ve = rigid_flight(d, q0, v0, p, t_stop - t)
         return t_stop, np.array([qe]), np.array([ve]), False
-    from ..dynamics import kernels as K
-    from ..dynamics.kernelview import LoadKernelView, ModalBasisView
+    from ..dynamics import compiled as K
+    from ..dynamics.compiled_views import LoadKernelView, ModalBasisView
 
     w2 = model.frequencies**2
     c = np.ascontiguousarray(model.end_weights)

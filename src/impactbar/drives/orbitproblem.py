@@ -98,7 +98,7 @@ class OrbitProblem(ABC):
     """The periodic-orbit problem of a drive (unknown period, theory §10): unknowns ``X``, a residual
     with its Jacobian, Newton's start from a guess and the orbit of a solution. The valve's
     (:class:`~impactbar.orbits.valve_segment.ValveProblem`) and the generic shooting problem
-    (:class:`~impactbar.orbits.switched.ShootingProblem`) implement it; :func:`impactbar.find_orbit`
+    (:class:`~impactbar.orbits.driven.ShootingProblem`) implement it; :func:`impactbar.find_orbit`
     and :func:`impactbar.continue_orbit` call only these members.
 
     Attributes

@@ -7,10 +7,10 @@ function with a Lipschitz or derivative bound, and the zeros of one harmonic in 
 ``monodromy`` (a flight's linearisation with the saltation term at its arrival, the order of the
 Floquet multipliers and their structured eigenvalue method, theory §7), ``invariants`` (the piston's
 fields as Riemann invariants, where the laws that follow a blow along characteristics start,
-theory §4c), ``_kernel`` (the numba-compiled flight, impact search and event loop behind
-:func:`impactbar.simulate`), ``_flowkernel`` (compiled flows of the loads), ``_aberthkernel`` (the
-compiled Aberth-Ehrlich iteration), ``kernels`` (what the other packages use of those kernels, by
-public names: the interface), ``kernelview`` (the one view of a load, and of a modal basis,
+theory §4c), ``_event_loop`` (the numba-compiled flight, impact search and event loop behind
+:func:`impactbar.simulate`), ``_load_flow`` (compiled flows of the loads), ``_aberth`` (the
+compiled Aberth-Ehrlich iteration), ``compiled`` (what the other packages use of those kernels, by
+public names: the interface), ``compiled_views`` (the one view of a load, and of a modal basis,
 that compiled code reads), ``implementations`` (the registry that chooses between fast and reference
 implementations). The contact laws' own numerics are in :mod:`impactbar.laws`. The bottom of the
 core: imports only numpy, scipy and numba, never another impactbar subpackage."""

@@ -1,6 +1,6 @@
 """The certified event search of the compiled simulator (theory §2, §8): the first crossing of the
 stop by the struck end in a flight, on plain float arrays (the flight loop that calls it is
-:mod:`impactbar.dynamics._kernel`).
+:mod:`impactbar.dynamics._event_loop`).
 
 The event search looks for the first ``t`` with ``h(t) = alpha p(t) + sum_n w_n q_n(t) >= 0``
 (the end displacement ``c . q`` for an impact; minus the stop reaction for the end of contact).
@@ -28,7 +28,7 @@ import numba
 import numpy as np
 
 from .._shared.wrappers import internal_kernels
-from ._flightkernel import (  # the closed-form flight and the certified step, below this module
+from ._flight import (  # the closed-form flight and the certified step, below this module
     CACHE,
     TWO_PI,
     _bc,
@@ -45,7 +45,7 @@ from ._flightkernel import (  # the closed-form flight and the certified step, b
     particular,
     piece_end,
 )
-from .kernelview import LoadKernelView, ModalBasisView
+from .compiled_views import LoadKernelView, ModalBasisView
 
 # statuses of find_crossing
 NONE = 0  # no crossing up to t_lim
@@ -78,8 +78,8 @@ def flow_scratch(qa, va):
 @numba.njit(cache=CACHE, nogil=True)
 def find_crossing(load_t, B_t, wts, alpha, anchor_t, qa, va, t_lim, htol, work):
     """First ``t`` in ``[anchor, t_lim]`` where ``h(t) >= 0`` (see the module docstring), in the
-    basis ``B_t`` (the plain tuple of a :class:`~impactbar.dynamics.kernelview.ModalBasisView`)
-    under ``load_t`` (that of a :class:`~impactbar.dynamics.kernelview.LoadKernelView`: numba
+    basis ``B_t`` (the plain tuple of a :class:`~impactbar.dynamics.compiled_views.ModalBasisView`)
+    under ``load_t`` (that of a :class:`~impactbar.dynamics.compiled_views.LoadKernelView`: numba
     dispatches plain tuples several times faster than named tuples); ``work = (q, v, qp, vp, qpa,
     vpa)``, arrays of the basis' size. Python and :func:`run_free` call it with the same types: one
     compilation, no wrapper kernel (a wrapper compiles its callees' code again).

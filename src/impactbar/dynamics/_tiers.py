@@ -230,7 +230,7 @@ def _exact(disp) -> bool:
         _EXACT[disp] = True  # (a cycle of calls: decided by the rest)
         from numba.core.registry import CPUDispatcher
 
-        # (error_model="numpy", as _admkernel._upper has it for its loops, changes only what a
+        # (error_model="numpy", as _admissibility_search._upper has it for its loops, changes only what a
         # division by zero gives: inf in the machine code, ZeroDivisionError in a twin, loudly)
         ok = not disp.targetoptions.get("fastmath", False)
         if ok:

@@ -6,7 +6,7 @@
 of a flight, with the saltation term ``-(c . dq)/(c . q')`` of the arrival time), :func:`sort_multipliers`
 (the one order of every multiplier the package reports) and the structured eigenvalue method
 :func:`aberth` (``O(N^2)``: a block-diagonal map plus a rank-2 correction, the Aberth-Ehrlich
-iteration compiled in :mod:`impactbar.dynamics._aberthkernel`). A law composes them with its own
+iteration compiled in :mod:`impactbar.dynamics._aberth`). A law composes them with its own
 impact map: the paper's ``J_R = diag(I, -R I)`` (:mod:`impactbar.laws.paper.stability`), the wave
 law's window (:mod:`impactbar.laws.wave.periodic`). The model and the load are read through their
 attributes and methods (``frequencies``, ``d``, ``end_weights``; ``load(t)``, ``load.abilities.left_limit``):
@@ -138,7 +138,7 @@ def aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
     approximations are sums over the modes. In the extended state ``V``'s first column is
     ``e_tau`` (no modal part) and ``vt = (1, 0)``, so ``S``'s first row depends on the impact-time
     factor alone and its second row takes four sums over the modes. The Newton quotient is
-    ``1 / (log det)'``. The sweeps run compiled (``_aberthkernel.aberth_iterate``), ``O(N^2)`` each.
+    ``1 / (log det)'``. The sweeps run compiled (``_aberth.aberth_iterate``), ``O(N^2)`` each.
 
     Raises
     ------
@@ -159,7 +159,7 @@ def aberth(a, b, c, e, U, V, ut, vt, iters=60, tol=1e-12):
     x = np.concatenate((0.5 * tr + disc, 0.5 * tr - disc))
     nudge = np.exp(2j * np.pi * ((np.arange(x.size) * 0.6180339887498949) % 1.0))
     x = x * (1.0 + 1e-6 * nudge) + 1e-9 * nudge
-    from ._aberthkernel import aberth_iterate  # lazy: numba loads on the first structured call
+    from ._aberth import aberth_iterate  # lazy: numba loads on the first structured call
 
     X = np.ascontiguousarray(np.concatenate((N0, N1), axis=1).T, dtype=float)
     ok = aberth_iterate(x, np.ascontiguousarray(tr, dtype=float), np.ascontiguousarray(dt, dtype=float), X,

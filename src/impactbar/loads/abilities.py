@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._shared.schema import Schema
-from ..dynamics.kernelview import LoadKernelView
+from ..dynamics.compiled_views import LoadKernelView
 from ..dynamics.modal import fundamental
 
 __all__ = ["LoadTraits", "LoadAbilities", "LoadKernel", "compiled_kind", "left_limit", "exact_flow",
@@ -74,7 +74,7 @@ class LoadKernel:
     Parameters
     ----------
     kind : int
-        :data:`~impactbar.dynamics.kernelview.FOURIER` or ``PIECEWISE``.
+        :data:`~impactbar.dynamics.compiled_views.FOURIER` or ``PIECEWISE``.
     view : LoadKernelView
         The load as the kernels read it.
     methods : frozenset of str
@@ -148,7 +148,7 @@ NONE = LoadAbilities()
 
 
 def compiled_kind(load, *methods: str) -> int | None:
-    """The kind of the load's kernel (:data:`~impactbar.dynamics.kernelview.FOURIER` or
+    """The kind of the load's kernel (:data:`~impactbar.dynamics.compiled_views.FOURIER` or
     ``PIECEWISE``) where compiled code may stand for its ``methods`` (any kernel it has, with no
     ``methods``); ``None`` for a load without a kernel or whose class redefines one of them.
 

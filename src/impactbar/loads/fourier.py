@@ -9,8 +9,8 @@ import numpy as np
 
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_complex_array, check_int, check_real
+from ..dynamics.compiled_views import FOURIER, LoadKernelView
 from ..dynamics.implementations import use_fast
-from ..dynamics.kernelview import FOURIER, LoadKernelView
 from ..dynamics.modal import b_integral, c_integral, fundamental
 from .abilities import LoadAbilities, LoadKernel, LoadTraits
 from .base import TWO_PI, Load
@@ -76,7 +76,7 @@ class FourierLoad(Load):
     def abilities(self) -> LoadAbilities:
         """Its period ``2 pi / gcd(orders)``, at most ``2 K`` one-impact orbits (the phase equation,
         eq. 14, is a trigonometric polynomial of degree ``K``), its cosine form (eq. 33), its
-        harmonics, the compiled kernel (:data:`~impactbar.dynamics.kernelview.FOURIER`) and its
+        harmonics, the compiled kernel (:data:`~impactbar.dynamics.compiled_views.FOURIER`) and its
         closed-form flow and periodic response."""
         g = 0
         for k in self.orders.tolist():
@@ -229,9 +229,9 @@ class FourierLoad(Load):
         return evaluate
 
     def _compiled_flow(self, w2, d, t0, hp, hv, static, rigid, lam, folded, dq, dv):
-        """:meth:`flow`'s evaluation compiled (:mod:`impactbar.dynamics._flowkernel`): the same
+        """:meth:`flow`'s evaluation compiled (:mod:`impactbar.dynamics._load_flow`): the same
         closed form, for underdamped flexible modes and the rigid mode."""
-        from ..dynamics.kernels import fourier_flow
+        from ..dynamics.compiled import fourier_flow
 
         M = w2.size
         kind = np.where(rigid, 2, 0).astype(np.int64)

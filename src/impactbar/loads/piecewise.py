@@ -10,8 +10,8 @@ import numpy as np
 
 from .._shared.schema import Field, Schema
 from .._shared.validate import check_int, check_real
+from ..dynamics.compiled_views import PIECEWISE, LoadKernelView
 from ..dynamics.implementations import use_fast
-from ..dynamics.kernelview import PIECEWISE, LoadKernelView
 from ..dynamics.modal import b_integral, c_integral, step_constant
 from .abilities import LoadAbilities, LoadKernel, LoadTraits
 from .base import TWO_PI, Load, _readonly
@@ -95,7 +95,7 @@ class PiecewiseConstantLoad(Load):
     def abilities(self) -> LoadAbilities:
         """At most ``J`` one-impact orbits (the rigid velocity of eq. 14 is monotone on each piece,
         at least 2), its pieces and their jumps, its left limits, the compiled kernel
-        (:data:`~impactbar.dynamics.kernelview.PIECEWISE`) and its flow piece by piece."""
+        (:data:`~impactbar.dynamics.compiled_views.PIECEWISE`) and its flow piece by piece."""
         return LoadAbilities(
             max_one_impact_orbits=max(2, self._b.size), square=self._square_form(),
             pieces=(self.breaks, self.levels),
@@ -208,7 +208,7 @@ class PiecewiseConstantLoad(Load):
 
         compiled = use_fast("loads.flow") and bool(np.all((w2 == 0.0) | (w2 - 0.25 * d * d > 0.0)))
         if compiled:  # flexible modes underdamped (the rule): the compiled step
-            from ..dynamics.kernels import piecewise_flow
+            from ..dynamics.compiled import piecewise_flow
 
         def evaluate(t):
             t = np.atleast_1d(np.asarray(t, dtype=float))

@@ -11,7 +11,7 @@ per flight, whose parts the continuation uses through ``segments``), ``find`` (:
 Newton on that problem from a guess; and :func:`periodic_orbits`, the one-impact orbits
 under every law: from the phase equation, or by Newton's method from guesses for a law without one,
 :func:`periodic_orbits_by_newton`), ``charts`` (existence, stability
-and admissibility edges, Figs. 5, 6, 8), ``switched`` (orbits with an unknown period under a
+and admissibility edges, Figs. 5, 6, 8), ``driven`` (orbits with an unknown period under a
 drive, theory §10; the problem of each built-in drive from its table ``ORBIT_PROBLEMS``),
 ``shooting`` (the generic problem of a drive's orbits, by multiple shooting), ``valve_segment`` and
 ``valve_search`` (the valve's segment problem with the exact Jacobian and its certified search of
@@ -35,7 +35,7 @@ _HOME = {
     "phase_G": "phase", "phase_residual": "phase", "phase_roots": "phase",
     "RigidOrbits": "rigid", "rigid_cosine_orbits": "rigid", "rigid_square_orbits": "rigid",
     "floquet_multipliers": "stability", "impact_map_jacobian": "stability",
-    "SwitchedOrbit": "switched", "find_switched_orbit": "switched_search", "drive_orbits": "switched_search",
+    "SwitchedOrbit": "driven", "find_switched_orbit": "driven_search", "drive_orbits": "driven_search",
     "periodic_orbits_by_newton": "find", "rock_periodic_orbits": "find",
 }
 

@@ -1,5 +1,5 @@
 """The last Newton steps of a periodic orbit of the shooting problem whose flights integrate the
-variational equations (:class:`.switched.ShootingProblem`, the oil circuit; theory §11): the closing
+variational equations (:class:`.driven.ShootingProblem`, the oil circuit; theory §11): the closing
 step from the chord's root and, where the flights' state is a plain flight of its own, the check of
 the root by the multipliers' flight.
 

@@ -9,7 +9,7 @@ the general path on random parameters (``tests/dynamics/test_fast_paths.py``).
 
 This module is the one source of the compiled loop over a sweep's points too: the functions named
 in :data:`SHARED` use plain floats, tuples and ``math``/``cmath`` only, and
-:mod:`impactbar.orbits._rigidkernel` compiles these very functions with numba; two of them, plain
+:mod:`impactbar.orbits._rigid_arrays` compiles these very functions with numba; two of them, plain
 arithmetic, serve the vectorised closed forms as they are (:func:`harmonic_term`, and ``trace_det``,
 which the paper law's ``rigid_multipliers`` defines). Sources: the phase equation (eq. 14, theory
 §4), the stationary points of the end's displacement arc by arc (theory §5), the 2 x 2 impact-map
@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..dynamics.kernelview import FOURIER
+from ..dynamics.compiled_views import FOURIER
 from ..laws.paper.stability import trace_det
 from ..loads.abilities import compiled_kind, left_limit
 from .stability import MARGINAL
@@ -54,7 +54,7 @@ class RigidOrbit(NamedTuple):
 
 # ------------------------------------------------------------------------------------------------
 # the shared formulas: plain floats, tuples and math/cmath only, so that numba compiles these very
-# functions for the loop over a sweep's points (orbits/_rigidkernel.py makes its copies of them)
+# functions for the loop over a sweep's points (orbits/_rigid_arrays.py makes its copies of them)
 # ------------------------------------------------------------------------------------------------
 def _beta(y):
     if y < 1e-2:
@@ -266,7 +266,7 @@ def _square_flight(ph, a, q, d, v_plus, r0):
     return qs, vs, ng, gmax
 
 
-#: the functions above, which :mod:`impactbar.orbits._rigidkernel` compiles from this source
+#: the functions above, which :mod:`impactbar.orbits._rigid_arrays` compiles from this source
 SHARED = ("_beta", "_G", "_b", "_c", "_sign", "trace_det", "multipliers", "_quadratic_roots", "_verdict",
           "harmonic_term", "_cosine_roots", "_cosine_flight", "_velocity", "_displacement", "_crossing",
           "_log1p_ratio", "_exp_level_time", "_square_wave", "_square_impact", "_square_flight")

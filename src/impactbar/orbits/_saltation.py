@@ -1,7 +1,7 @@
 """The Jacobian of a drive's flight through its end and the drive's maps (Hiskens & Pai, "Trajectory
 sensitivity analysis of hybrid systems", IEEE Trans. Circuits Syst. I 47 (2000) 204-220): the
 saltation of the fundamental matrix at an event, for the shooting problem of
-:mod:`impactbar.orbits.switched` (theory §10)."""
+:mod:`impactbar.orbits.driven` (theory §10)."""
 
 from __future__ import annotations
 

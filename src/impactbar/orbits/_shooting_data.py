@@ -1,4 +1,4 @@
-"""The data of a periodic orbit of the shooting problem (:class:`.switched.ShootingProblem`): its
+"""The data of a periodic orbit of the shooting problem (:class:`.driven.ShootingProblem`): its
 period, flights, impacts, switches and multipliers, from its unknowns (theory §10)."""
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..drives.switched import RETURN, STROKE
+from ..drives.valve import RETURN, STROKE
 from ..dynamics.modal import fundamental
 
 if TYPE_CHECKING:

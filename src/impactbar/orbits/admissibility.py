@@ -9,8 +9,8 @@ import numpy as np
 
 from .._shared.status import Admissibility
 from ..dynamics.certified import enclose_zeros
+from ..dynamics.compiled_views import FOURIER
 from ..dynamics.implementations import use_fast
-from ..dynamics.kernelview import FOURIER
 from ..loads import CosineLoad
 from ..loads.abilities import compiled_kind, exact_flow
 from ._rigid_scalar import cosine_clearance
@@ -19,7 +19,7 @@ TWO_PI = 2.0 * math.pi
 
 # implementations (impactbar.dynamics.implementations): "admissibility.search", the whole certified
 # search (enclosure, Newton steps, branch and bound) by the compiled kernel
-# :mod:`impactbar.orbits._admkernel` where the load's flow is compiled; "admissibility.bound", the
+# :mod:`impactbar.orbits._admissibility_search` where the load's flow is compiled; "admissibility.bound", the
 # bounds of the numpy search by the compiled kernel. Their references are the numpy paths.
 # "admissibility.rigid_cosine": the rigid bar's flights under a cosine load from the zeros of its
 # velocity, one per arc of constant load sign (_rigid_scalar.cosine_clearance); its reference is the
@@ -138,7 +138,7 @@ def _compiled_search(load, w2, d, phase, q0, v0, c, absc, psup, horizon, at_rest
         nodes, levels, qn, vn = pieces
         P = (w2, d, nodes, np.ascontiguousarray(levels, dtype=float), qn, vn)
         F = _NO_FOURIER
-    from ._admkernel import admissibility_search, phase_buffers
+    from ._admissibility_search import admissibility_search, phase_buffers
 
     code, v_max, err = admissibility_search(phase, horizon, at_rest, atol, SEEDS, RETRY_PIECES,
                                             _SAMPLE_FLOOR if at_rest else 0.0, (c, absc, w2, d, psup),
@@ -170,7 +170,7 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
         last["g"] = c @ q
         center, delta = load.variation(phase + mid, half)
         if use_fast("admissibility.bound") and q.ndim == 2:
-            from ..dynamics.kernels import end_velocity_bound
+            from ..dynamics.compiled import end_velocity_bound
 
             T = q.shape[1]
             return end_velocity_bound(c, absc, w2, float(d), float(psup), q, v,

@@ -1,6 +1,6 @@
 """The coupled blow in the periodic orbits of a drive with state under a law whose contact takes time
 (theory §11, "The coupled blow"): the shooting problem's map through a blow
-(:class:`~impactbar.orbits.switched.ShootingProblem`) and its Jacobian by central differences."""
+(:class:`~impactbar.orbits.driven.ShootingProblem`) and its Jacobian by central differences."""
 
 from __future__ import annotations
 

@@ -168,7 +168,7 @@ def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: i
 def _drive_orbit(model, drive, impacts, periods, guess, tol, max_iter, settings=None) -> PeriodicOrbit:
     """:func:`find_orbit` under a drive: an autonomous orbit of unknown period (theory §10;
     ``periods`` has no meaning there), its flights by ``settings``."""
-    from .switched_search import find_switched_orbit  # (the drives' machinery, loaded on first use)
+    from .driven_search import find_switched_orbit  # (the drives' machinery, loaded on first use)
 
     return find_switched_orbit(model, drive, impacts, guess, tol=min(tol, 1e-13), max_iter=max(max_iter, 50),
                                settings=settings)
@@ -286,7 +286,7 @@ def periodic_orbits(model: BarModel, load: Load | Drive, *, window=None,
 def _drive_orbits(model, drive, window, settings=None) -> OrbitList:
     """:func:`periodic_orbits` under a drive: every one-impact orbit in a window of periods (theory
     §10), its flights by ``settings``."""
-    from .switched_search import drive_orbits  # (the drives' machinery, loaded on first use)
+    from .driven_search import drive_orbits  # (the drives' machinery, loaded on first use)
 
     return drive_orbits(model, drive, window, settings=settings)
 

@@ -301,10 +301,10 @@ def rigid_cosine_orbits(d, R, p0, pk, k: int) -> RigidOrbits:
 
 
 def _compiled(kernel: str, args: tuple, J: int) -> RigidOrbits:
-    """The closed forms by the compiled loop over the points (``orbits/_rigidkernel.py``, the fast
+    """The closed forms by the compiled loop over the points (``orbits/_rigid_arrays.py``, the fast
     side of ``"orbits.rigid_arrays"``): the result's arrays, filled with the unused slots' values,
     are written orbit by orbit."""
-    from . import _rigidkernel
+    from . import _rigid_arrays
 
     P = args[0].size
     out = RigidOrbits(
@@ -323,7 +323,7 @@ def _compiled(kernel: str, args: tuple, J: int) -> RigidOrbits:
         stable=np.zeros((P, J), dtype=bool),
         fallback=np.zeros(P, dtype=bool),
     )
-    getattr(_rigidkernel, kernel)(*(np.ascontiguousarray(a) for a in args[:4]), *args[4:], tuple(out))
+    getattr(_rigid_arrays, kernel)(*(np.ascontiguousarray(a) for a in args[:4]), *args[4:], tuple(out))
     return out
 
 

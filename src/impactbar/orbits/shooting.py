@@ -1,7 +1,7 @@
 """The generic periodic-orbit problem of a drive (theory §10, §11): :class:`ShootingProblem`,
 multiple shooting over the ``m`` impacts of the period, for any drive without a problem of its own
-(:func:`~impactbar.orbits.switched.orbit_problem` chooses; the module docstring of
-:mod:`impactbar.orbits.switched` gives the unknowns, the residual and the measured errors of its
+(:func:`~impactbar.orbits.driven.orbit_problem` chooses; the module docstring of
+:mod:`impactbar.orbits.driven` gives the unknowns, the residual and the measured errors of its
 finite-difference Jacobian). Its module constants set the differences' steps (``FD_STEP_CLOSED``,
 ``FD_STEP_ODE``), how a start for Newton is settled (``SETTLE_*``) and the steering Jacobians'
 Magnus steps (``STEER_THETA``).
@@ -26,7 +26,7 @@ from ._closing import checked_root, close
 from ._saltation import map_jacobian, through
 from ._settling import DRIFT_AHEAD, SETTLE_DRIFT_IMPACTS, dominant_limit, drifting, surfaces_ahead
 from ._shooting_data import orbit_data
-from .switched_orbit import SwitchedOrbit, _constant_load
+from .driven_orbit import SwitchedOrbit, _constant_load
 
 __all__ = ["ShootingProblem"]
 

@@ -11,8 +11,8 @@ import math
 import numpy as np
 
 from .._shared.status import Admissibility
-from ..drives.switched import RETURN, STROKE
-from ..drives.switched.kernels import (
+from ..drives.valve import RETURN, STROKE
+from ..drives.valve.closed_forms import (
     end_max_sampled,
     first_rising_crossing,
     rate_zero,

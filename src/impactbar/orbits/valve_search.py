@@ -406,7 +406,7 @@ def default_window(model, drive) -> tuple[float, float]:
     (the rigid bar of the same damping, restitution and delays; the closed form of
     :meth:`~impactbar.PositionSwitchedDrive.rigid_orbit` where the rigid map's fixed point fails),
     and above the two delays."""
-    from ..drives.switched.kernels import rigid_orbit_start
+    from ..drives.valve.closed_forms import rigid_orbit_start
 
     R = float(model.law.traits.kernel_restitution(model))
     o = drive.rigid_orbit(min(R, 0.999))

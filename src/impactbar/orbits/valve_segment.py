@@ -40,8 +40,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..drives.orbitproblem import OrbitData, OrbitProblem, OrbitSearch, sorted_multipliers, split_multipliers
-from ..drives.switched import RETURN, STROKE
-from ..drives.switched.kernels import (
+from ..drives.valve import RETURN, STROKE
+from ..drives.valve.closed_forms import (
     rigid_orbit_start,
 )
 from ..dynamics.modal import step_constant
@@ -500,7 +500,7 @@ def _surface_basis(c: np.ndarray) -> np.ndarray:
 
 def _rigid_guess(model, drive):
     """Start of Newton for the rigid bar: the fixed point of the rigid piston's map of arrival
-    velocities (compiled closed forms, :func:`impactbar.drives.switched.kernels.rigid_orbit_start`),
+    velocities (compiled closed forms, :func:`impactbar.drives.valve.closed_forms.rigid_orbit_start`),
     from the undamped undelayed orbit in closed form (theory §10), which is the start itself where
     the map's iteration fails."""
     M = model.n_modes + 1

@@ -4,7 +4,7 @@ pump's power and the drilling figures with respect to dotted config keys (``accu
 ``valve.switch_out``, ``piston.collar_diameter``, ...), without solving an orbit again.
 
 The operating point is a root :math:`X^*(p)` of the shooting residual :math:`r(X; p) = P(X; p) - X`
-(:class:`~impactbar.orbits.switched.ShootingProblem`: the state after the impact, flown to the next
+(:class:`~impactbar.orbits.driven.ShootingProblem`: the state after the impact, flown to the next
 impact). Where :math:`r` is smooth in :math:`(X, p)` and its Jacobian :math:`J_X = \Phi - I`
 (:math:`\Phi` the return map's monodromy, a by-product of the orbit's last variational flight) is
 regular (no multiplier at 1),
@@ -21,7 +21,7 @@ the unknowns or the end of their flight, gets the same derivative.
 Where a key does not enter smoothly, at a border collision (the valve's switch and the impact
 changing order, the relief valve starting to open, the accumulator emptying), the derivative does
 not exist: the flights at :math:`p \pm h` then go through another sequence of the drive's events
-than the orbit's (:meth:`~impactbar.orbits.switched.ShootingProblem.event_pattern`), and the key is
+than the orbit's (:meth:`~impactbar.orbits.driven.ShootingProblem.event_pattern`), and the key is
 refused. The borders' margins (:meth:`~impactbar.drives.circuit.HydraulicCircuitDrive.border_tests`)
 and their derivatives say how far the key may move before one is met (to first order).
 """
@@ -374,7 +374,7 @@ def tangent_derivatives(cfg: dict, folder, point: CircuitDrifterOrbit, keys, val
 
 def _problem(drifter: CircuitDrifter, near):
     """The shooting problem of ``drifter`` with the blocks of ``near`` (another design's)."""
-    from ..orbits.switched import orbit_problem
+    from ..orbits.driven import orbit_problem
 
     return orbit_problem(drifter.model(), drifter.drive(), near.impacts,
                          getattr(near, "settings", None)).adopt(near)
@@ -382,7 +382,7 @@ def _problem(drifter: CircuitDrifter, near):
 
 def _point(drifter: CircuitDrifter, problem, X, multipliers: bool) -> CircuitDrifterOrbit:
     """The operating point read at unknowns ``X`` (not necessarily a root) of ``problem``."""
-    from ..orbits.switched import orbit_of
+    from ..orbits.driven import orbit_of
 
     return CircuitDrifterOrbit(drifter, orbit_of(problem, X, multipliers=multipliers))
 

@@ -5,19 +5,19 @@ Layout: ``simulate`` (:func:`simulate`, :class:`InitialState`; one driver for ev
 chatter, sticking on the fixed-free basis, release, the law's contact step), ``trajectory``
 (:class:`Trajectory`, :class:`EnergyAccount`: the logged pieces of motion), ``experiments``
 (random starts, classification of the long-run motion, the paper's pneumatic and hydraulic
-experiments), ``switched`` (the event loop under a drive, theory §10), ``switched_trajectory``
+experiments), ``driven`` (the event loop under a drive, theory §10), ``driven_trajectory``
 (its result).
 Part of the core: imports ``impactbar.model``, ``impactbar.loads``, ``impactbar.drives``,
 ``impactbar.dynamics``, ``impactbar.laws`` through ``model.law``; never matplotlib
 (``Trajectory.plot`` calls :mod:`impactbar.plotting`, imported on that call).
 """
 
+from .driven_trajectory import SwitchedTrajectory as SwitchedTrajectory
 from .simulate import EnergyAccount as EnergyAccount
 from .simulate import InitialState as InitialState
 from .simulate import SimulationInterrupted as SimulationInterrupted
 from .simulate import Trajectory as Trajectory
 from .simulate import simulate as simulate
-from .switched_trajectory import SwitchedTrajectory as SwitchedTrajectory
 
 __all__ = ["EnergyAccount", "InitialState", "Trajectory", "simulate", "SwitchedTrajectory",
            "SimulationInterrupted"]

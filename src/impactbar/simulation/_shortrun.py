@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .._shared.status import RunStatus
-from ..dynamics import kernels as K
+from ..dynamics import compiled as K
 from .trajectory import _FREE, Trajectory, _Segments
 
 #: a run that asks for at most this many impacts (``max_impacts``) takes no Ctrl-C handler, however

@@ -2,7 +2,7 @@
 arrival a blow solved together with the drive's state
 (:meth:`~impactbar.laws.abilities.CoupledBlow.driven_contact`), the run's piece over it a :class:`BlowPiece`;
 the checks that refuse what the coupled blow cannot do, and the run's loop
-(:func:`run_coupled`, which :func:`impactbar.simulation.switched.run_stateful` calls)."""
+(:func:`run_coupled`, which :func:`impactbar.simulation.driven.run_stateful` calls)."""
 
 from __future__ import annotations
 
@@ -256,7 +256,7 @@ def fly_and_switch(model, drive, loop, t_end: float, settings):
 
 
 def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, new_run):
-    """:func:`~impactbar.simulation.switched.run_stateful` under a law whose contact takes time:
+    """:func:`~impactbar.simulation.driven.run_stateful` under a law whose contact takes time:
     flights by :func:`impactbar.drives.flight.fly`, each arrival a blow of :func:`driven_blow` (a
     :class:`BlowPiece`); a blow that ends with the end pressed on the stop (moving into it) is
     followed at once by the next. ``new_run`` makes the run's log (the simulator's ``_Run``: its

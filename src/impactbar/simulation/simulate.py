@@ -37,16 +37,16 @@ from .._shared.status import RunStatus
 from .._shared.validate import check_int, check_real
 from ..drives.base import Drive, FlightSettings
 from ..drives.flight import solver_settings
-from ..dynamics import kernels as K
+from ..dynamics import compiled as K
+from ..dynamics.compiled_views import LoadKernelView, ModalBasisView
 from ..dynamics.implementations import use_fast
-from ..dynamics.kernelview import LoadKernelView, ModalBasisView
 from ..loads import Load
 from ..model import BarModel
 from ._interrupt import SimulationInterrupted as SimulationInterrupted
 from ._interrupt import _CtrlC
 from ._shortrun import FIRST_BLOCK, SHORT_RUN_IMPACTS, entry_point, run_short
+from .driven import Driver, run_drive
 from .initial import InitialState as InitialState
-from .switched import Driver, run_drive
 from .trajectory import _CONTACT as _CONTACT
 from .trajectory import _ENTRIES as _ENTRIES
 from .trajectory import _FREE as _FREE
@@ -363,7 +363,7 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
         own, e.g. the valve of :class:`~impactbar.PositionSwitchedDrive`, which starts in return when
         the gap :math:`-q_0` is below ``switch_out`` and in stroke beyond it): the result is then a
         :class:`~impactbar.SwitchedTrajectory` (a :class:`Trajectory`) with the drive's switches
-        logged (:mod:`impactbar.simulation.switched`).
+        logged (:mod:`impactbar.simulation.driven`).
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
     t_end : float
@@ -715,5 +715,5 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
 #: the solver of :func:`simulate` for each forcing family (the one place it is chosen)
 SIMULATORS = {"load": _simulate_load, "drive": _simulate_drive}
 
-#: the driver as a drive's run takes it (:func:`impactbar.simulation.switched.run_drive`)
+#: the driver as a drive's run takes it (:func:`impactbar.simulation.driven.run_drive`)
 _DRIVER = Driver(core_for=_core_for, run=_run, push_off=_push_off, make_state=InitialState, tail=CHATTER_TAIL)

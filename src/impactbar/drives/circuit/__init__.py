@@ -15,7 +15,7 @@ network's kinds: :class:`ReturnAccumulator`, :class:`Leak`), ``_network``
 each in a module of its own, ``kinds``: :data:`LEAK`, :data:`CUSHION`, :data:`CHECK`, :data:`LEVEL`),
 ``leakage``, ``cushion``, ``check_valve`` (:class:`LaminarLeak`, :class:`Cushion`,
 :class:`CheckValve`: parts of a drill's circuit), ``flight`` (one
-flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_kernel`` (the
+flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_field`` (the
 compiled vector field, Jacobian and event functions), ``_sundials`` and ``_cvode`` (CVODE driven from
 compiled code, on the SUNDIALS libraries that scikit-sundae ships).
 """

@@ -2,7 +2,7 @@ r"""CVODE driven from compiled code: one flight of the circuit in one call of ma
 
 The flight's loop (:func:`fly`: ``CVode`` in one-step mode, each step's state kept) is compiled by
 numba and calls SUNDIALS' CVODE (bound by :mod:`._sundials`), which calls back the vector field,
-its Jacobian and the event functions of :mod:`._kernel` as compiled C callbacks
+its Jacobian and the event functions of :mod:`._field` as compiled C callbacks
 (:func:`numba.cfunc`): no Python runs between a flight's start and its end. CVODE's options are
 scikit-sundae's defaults (BDF of orders 1 to 5, Newton's method with a direct solver and the
 analytic Jacobian, at most 3 Newton iterations a step, 10 convergence failures), so that a flight
@@ -25,8 +25,8 @@ import numba as nb
 import numpy as np
 from numba import types
 
-from ...dynamics.kernels import CACHE
-from . import _kernel as K
+from ...dynamics.compiled import CACHE
+from . import _field as K
 from . import _sundials as S
 
 if not S.bind():  # pragma: no cover - imported only where available (flight.py)
@@ -73,7 +73,7 @@ def _sizes(par):
 
 @nb.cfunc(_c(_d, _p, _p, _dp), cache=CACHE)
 def _rhs_c(t, y, yp, user_data):
-    """CVODE's ``CVRhsFn``: :func:`._kernel.rhs` on the vectors' data; ``user_data`` is ``par``."""
+    """CVODE's ``CVRhsFn``: :func:`._field.rhs` on the vectors' data; ``user_data`` is ``par``."""
     M, N = _sizes(user_data)
     par = nb.carray(user_data, K.HEAD + 3 * M)
     K.rhs(t, nb.carray(_nv_data(y), N), nb.carray(_nv_data(yp), N), par)
@@ -82,7 +82,7 @@ def _rhs_c(t, y, yp, user_data):
 
 @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
 def _jac_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
-    """CVODE's ``CVLsJacFn``: :func:`._kernel.jac` into the dense matrix (stored by columns)."""
+    """CVODE's ``CVLsJacFn``: :func:`._field.jac` into the dense matrix (stored by columns)."""
     M, N = _sizes(user_data)
     par = nb.carray(user_data, K.HEAD + 3 * M)
     JJ = nb.carray(_dense_data(J), (N, N)).T
@@ -112,7 +112,7 @@ def band_blocks(A, J, N, n_energy):
 
 @nb.cfunc(_c(_d, _p, _p, _p, _dp, _p, _p, _p), cache=CACHE)
 def _jac_band_c(t, y, fy, J, user_data, tmp1, tmp2, tmp3):
-    """CVODE's ``CVLsJacFn`` for the variational flights: the same matrix as :func:`._kernel.jac` in
+    """CVODE's ``CVLsJacFn`` for the variational flights: the same matrix as :func:`._field.jac` in
     band storage (half-bandwidths ``n - 1``: ``A`` on the state and on each column of ``Phi``,
     stored by columns, the energies' rows zero), element ``(i, j)`` at ``data[j ldim + smu + i - j]``."""
     M, N = _sizes(user_data)
@@ -235,7 +235,7 @@ def _block_solve_c(S, A, x, b, tol):
 
 @nb.cfunc(_c(_d, _p, _dp, _dp), cache=CACHE)
 def _events_c(t, y, g, user_data):
-    """CVODE's ``CVRootFn``: :func:`._kernel.events`."""
+    """CVODE's ``CVRootFn``: :func:`._field.events`."""
     M, N = _sizes(user_data)
     par = nb.carray(user_data, K.HEAD + 3 * M)
     K.events(t, nb.carray(_nv_data(y), N), nb.carray(g, K.N_EVENTS), par)
@@ -257,7 +257,7 @@ def fly(mem, yvec, t0, y0, t_end, rtol, atol, directions, par, keep, max_steps):
     directions : numpy.ndarray of int32, shape (E,)
         Each event's direction (CVODE's root directions; as many as the workspace's events).
     par : numpy.ndarray
-        The kernels' parameters (:mod:`._kernel`).
+        The kernels' parameters (:mod:`._field`).
     keep : int
         The leading components kept at each step.
     max_steps : int

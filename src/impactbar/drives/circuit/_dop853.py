@@ -34,7 +34,7 @@ import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as _co
 
 from ..._shared.literals import plain_literals
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 
 __all__ = ["SOURCE", "compile_driver", "DOP853_TOO_MUCH_WORK", "DOP853_TOO_SMALL_STEP", "MESSAGES",
            "ROOT_ULPS"]

@@ -22,13 +22,13 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from . import _cvode as CV  # noqa: F401  (the SUNDIALS libraries bound: a module that imports this flies compiled)
-from . import _endkernel as EK
+from . import _endfield as EK
 
 __all__ = ["spline_data", "user_data", "spline_at"]
 
-#: the user data's header: ``len(par)``, then ``ext`` (:mod:`._endkernel`: ``a, 1/Z``)
+#: the user data's header: ``len(par)``, then ``ext`` (:mod:`._endfield`: ``a, 1/Z``)
 HD_NPAR, HD_EXT = 0, 1
 _HEAD = HD_EXT + EK.EXT_SIZE
 
@@ -68,7 +68,7 @@ def user_data(par: np.ndarray, a: float, impedance: float, room: int = 0,
               scratch: int = EK.SCRATCH) -> np.ndarray:
     """The user data of the callbacks: ``(len(par), a, 1/Z, par..., work...)``, shape
     ``(3 + len(par) + scratch + room,)``, ``scratch`` the callbacks' room for their intermediate
-    values (the generated module's ``SCRATCH``; the preset's, :data:`._endkernel.SCRATCH`, by
+    values (the generated module's ``SCRATCH``; the preset's, :data:`._endfield.SCRATCH`, by
     default), ``room`` that of an interval's spline (the generated ``fly_intervals``)."""
     head = np.empty(_HEAD)
     head[HD_NPAR], head[HD_EXT + EK.EXT_A], head[HD_EXT + EK.EXT_IZ] = par.size, a, 1.0 / float(impedance)

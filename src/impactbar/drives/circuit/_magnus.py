@@ -48,7 +48,7 @@ import numba as nb
 import numpy as np
 
 from ..._shared.literals import plain_literals
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 
 __all__ = ["expm", "magnus_exp", "magnus_step", "scales", "state_at", "unscale", "DEFAULT_THETA", "balance"]
 

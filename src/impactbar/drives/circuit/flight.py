@@ -50,7 +50,7 @@ import numpy as np
 
 from ..base import DriveState, FlightSettings
 from ..flight import ARRIVAL, END, EVENT, Flight
-from . import _kernel as K
+from . import _field as K
 from . import _magnus
 from .settings import DEFAULT_SETTINGS, CircuitFlightSettings, circuit_settings
 
@@ -118,7 +118,7 @@ class CircuitPiece(HermiteSteps):
     f : numpy.ndarray, shape (S, 2 N + 2 + n_states + n_energy)
         The vector field at the steps, ``field_at(y, par, f)`` (a compiled ``field_at``: the code
         generated for the circuit's topology, :mod:`._netgen`, or by default
-        :func:`._kernel.field_at`), evaluated on first use (a flight whose end alone is wanted, as
+        :func:`._field.field_at`), evaluated on first use (a flight whose end alone is wanted, as
         Newton's residuals, never needs it).
     """
 
@@ -544,7 +544,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         The vector field, its Jacobian, the events and CVODE's C callbacks of the code generated for
         the circuit's network of part records (:meth:`HydraulicCircuitDrive._compiled_network`,
         :mod:`._netgen`: one module per topology, the values read from ``par`` with the network after
-        the bar's entries); ``False``: the preset's hand-written kernels (:mod:`._kernel`,
+        the bar's entries); ``False``: the preset's hand-written kernels (:mod:`._field`,
         :mod:`._cvode`'s callbacks; the way before). The same steps either way, to the bit.
 
     Returns

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..._shared.threads import single_threaded_blas
-from ...dynamics.kernelview import FOURIER
+from ...dynamics.compiled_views import FOURIER
 from ...dynamics.monodromy import period_fundamental
 from ...loads.abilities import compiled_kind, left_limit
 from ..base import BarModelLike, OrbitState

@@ -5,7 +5,7 @@ Layout: ``law`` (:class:`RodRock` and :func:`single_blow`), ``rod`` (its parts, 
 :class:`BilinearRock`), ``checks`` (the bounds a blow accepts, checked before it runs), ``blow``
 (:class:`Blow`: one blow by characteristics on the cell grid of piston and rod), ``contact`` (the
 simulator's contact step and the orbits' blow map: the piston's modal state at impact through the blow to
-its state after, :class:`~impactbar.laws.rodrock.contact.RockContact`), ``_rockkernel`` (the blow's
+its state after, :class:`~impactbar.laws.rodrock.contact.RockContact`), ``_rockloop`` (the blow's
 compiled loop).
 """
 

@@ -16,7 +16,7 @@ def damped_flow(b, m, half, tau):
     """The bit's flow on a rock branch, ``m p'' + Z p' + b p = 0`` (``half = -Z/(2m)``, ``b > 0``),
     after ``tau``: ``(C, S, delta)`` with ``e^{A tau} = C I + S (A - half I)``, ``delta`` the
     eigenvalues' half-distance where real (else 0). Plain Python: :class:`_Bit` calls it as it is,
-    the compiled blow (:mod:`impactbar.laws.rodrock._rockkernel`) compiles it."""
+    the compiled blow (:mod:`impactbar.laws.rodrock._rockloop`) compiles it."""
     disc = half * half - b / m
     delta = 0.0
     if disc >= 0.0:

@@ -3,7 +3,7 @@ and rock at a time, and the certificate that no contact can happen again (the pi
 the bit lifted with the rod's waves unable to close the gap, or every wave energy spent), with
 :func:`may_end`, a necessary condition of every end :func:`certify` finds, tested first so that the
 energy pass runs only where an end is possible. The workspace's layout is
-:mod:`impactbar.laws.rodrock._exactkernel`'s."""
+:mod:`impactbar.laws.rodrock._exactloop`'s."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import numba
 
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels
     ELASTIC,
     FREE,

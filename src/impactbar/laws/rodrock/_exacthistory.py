@@ -1,5 +1,5 @@
 """Histories of the exact blow (theory §4d): a recorded channel evaluated at given times, its
-largest value and its integral (:mod:`impactbar.laws.rodrock._exactkernel` records them)."""
+largest value and its integral (:mod:`impactbar.laws.rodrock._exactloop` records them)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from ._exactintegrals import blk_integral
 from ._exactpieces import (
     DC,

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 
 
 @numba.njit(cache=CACHE, nogil=True)

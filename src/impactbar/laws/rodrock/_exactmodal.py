@@ -12,7 +12,7 @@ import numpy as np
 
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from ._exactintegrals import blk_integral_exp
 from ._exactpieces import DC, piece_span, pool_load
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from ._exactpieces import DC, EPS, NEAR, SERIES_MAX, SERIES_TOL, blk_clear, blk_trim, cabs
 
 

@@ -1,6 +1,6 @@
 """Exact pieces of the exact blow (theory §4d): the block algebra of exponential polynomials, the exact
 solution of ``y' - r y = g``, the certified first crossing of zero, the pool of pieces and the channels
-(delay lines) that carry them. The driver is :mod:`impactbar.laws.rodrock._exactkernel`, whose text
+(delay lines) that carry them. The driver is :mod:`impactbar.laws.rodrock._exactloop`, whose text
 describes the representation."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numba
 
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
 from ._records import (  # the records' slots
     CNT_FULL,

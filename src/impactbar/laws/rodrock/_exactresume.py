@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from . import _exactkernel as K
+from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
 

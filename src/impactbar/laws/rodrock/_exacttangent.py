@@ -5,7 +5,7 @@ Between its switches the blow is linear in its data: the junctions and the pisto
 algebraic, the free ends reflect, the bit obeys a linear equation on each branch of the rock. So the
 derivative of every wave along a direction of the data (the piston's modal state at impact, the
 drive) is the same chain run on the direction's waves with the switches held where the blow put
-them (the schedule the primal run logs, :data:`~impactbar.laws.rodrock._exactkernel.LOG_SEP` ...),
+them (the schedule the primal run logs, :data:`~impactbar.laws.rodrock._exactloop.LOG_SEP` ...),
 plus what moving a switch moves:
 
 - a switch across which every node's law is continuous moves nothing to first order: the piston
@@ -47,8 +47,8 @@ import numba
 
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
-from ...dynamics.kernels import CACHE
-from ._exactkernel import (
+from ...dynamics.compiled import CACHE
+from ._exactloop import (
     LOG_BIT,
     LOG_SEP,
     _emit,
@@ -435,7 +435,7 @@ def t_node_bit(ws, tg, t, t1):
 
 @numba.njit(cache=CACHE, nogil=True)
 def t_run(ws, tg):
-    """The tangent run to ``t_max`` window by window, as :func:`~._exactkernel.run`; ``CI[CI_STATUS]``: 0
+    """The tangent run to ``t_max`` window by window, as :func:`~._exactloop.run`; ``CI[CI_STATUS]``: 0
     done, 1 the pool full (again, larger), 2 the impulses' store full, 3 the schedule cannot be
     followed (``tg``'s failure code)."""
     (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,

@@ -1,6 +1,6 @@
-"""The slots of the exact blow's records (:mod:`impactbar.laws.rodrock._exactkernel`'s workspace, made by
+"""The slots of the exact blow's records (:mod:`impactbar.laws.rodrock._exactloop`'s workspace, made by
 :func:`impactbar.laws.rodrock.exact._workspace`; the tangent run's ``TCUR``) and of the lattice
-blow's (:mod:`impactbar.laws.rodrock._rockkernel`, ``_rocktangent``): one name per slot, read
+blow's (:mod:`impactbar.laws.rodrock._rockloop`, ``_rocktangent``): one name per slot, read
 by the compiled kernels as compile-time constants (numba freezes a module's integer globals), so
 that a slot is found by its name and never by its number.
 
@@ -162,14 +162,14 @@ CH_FAR_OUT = 0  # the channel of the wave leaving the piston's far end (f of seg
 CH_FAR_IN = 1  # the channel of the wave arriving there (g of segment 1)
 E_CONST = 0  # the exponent table's first entry: 0, the constants'
 
-# == the lattice blow's records (:mod:`impactbar.laws.rodrock._rockkernel`, ``_rocktangent``) =======
+# == the lattice blow's records (:mod:`impactbar.laws.rodrock._rockloop`, ``_rocktangent``) =======
 # not the exact blow's: its bit (``BIT``) keeps the branch among its floats and no ``x`` (``BS``)
 
 # -- BIT: the bit's and the rock's state ``bs`` (float64; the tangent's ``dbs`` rows alike) ---------
 BIT_SIZE = 7
 BIT_P = 0  # p, the bit's penetration
 BIT_W = 1  # w = p', the bit's velocity
-BIT_BRANCH = 2  # the rock's branch (LOAD, ELASTIC, FREE of _rockkernel, as floats; no tangent)
+BIT_BRANCH = 2  # the rock's branch (LOAD, ELASTIC, FREE of _rockloop, as floats; no tangent)
 BIT_PMAX = 3  # p_max, the largest penetration
 BIT_RMAX = 4  # R_max = k p_max
 BIT_PPERM = 5  # p_perm = p_max - R_max/k_u

@@ -1,5 +1,5 @@
 """The tangent-linear (forward-mode) blow on the rod and the rock (theory §12): the loop of
-:func:`impactbar.laws.rodrock._rockkernel.blow_loop` without a drive (its junctions and the bit's
+:func:`impactbar.laws.rodrock._rockloop.blow_loop` without a drive (its junctions and the bit's
 step the same arithmetic, the rod's uniform segments delay lines: the compiled loop's blow to
 rounding), carrying beside every wave and every bit variable its derivatives in ``nv`` directions
 of the piston's cells' impedances.
@@ -27,9 +27,9 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from . import _records as RS
-from ._rockkernel import (
+from ._rockloop import (
     _ELASTIC,
     _LOAD,
     _branch_after,
@@ -76,7 +76,7 @@ def _t_start(bs, bp, dbs, dp0, dref):
 
 @numba.njit(cache=CACHE, nogil=True)
 def _t_massless(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref):
-    """``_rockkernel._massless`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``)."""
+    """``_rockloop._massless`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``)."""
     nv = dbs.shape[1]
     Z = bp[RS.BITP_Z]
     b, ref = _t_start(bs, bp, dbs, dp0, dref)
@@ -133,7 +133,7 @@ def _t_massless(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref):
 
 @numba.njit(cache=CACHE, nogil=True)
 def _flow_partials(bs, bp, E, tau, out):
-    """The partial derivatives of ``_rockkernel._flow``'s ``(p, w)`` after ``tau`` with respect to
+    """The partial derivatives of ``_rockloop._flow``'s ``(p, w)`` after ``tau`` with respect to
     ``(p0, w0, E, p_ref)`` at fixed ``tau``, into ``out`` (2, 4): the flow is affine in them, its
     matrix from the same ``C``, ``S`` (``dp/dE = int_0^tau S / m``)."""
     b, ref = _coeffs(bs, bp)
@@ -157,7 +157,7 @@ def _flow_partials(bs, bp, E, tau, out):
 
 @numba.njit(cache=CACHE, nogil=True)
 def _t_with_mass(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref, J):
-    """``_rockkernel._with_mass`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``, ``J``)."""
+    """``_rockloop._with_mass`` and its tangent; ``dtau`` out (scratch ``dp0``, ``dref``, ``J``)."""
     nv = dbs.shape[1]
     if bs[RS.BIT_BRANCH] == _LOAD and bs[RS.BIT_W] < 0.0:
         _t_unload(bs, bp, dbs)
@@ -196,7 +196,7 @@ def _t_with_mass(bs, bp, dbs, E, dE, T, dT, dtau, dp0, dref, J):
 
 @numba.njit(cache=CACHE, nogil=True)
 def bit_step_tangent(bs, bp, dbs, E, dE, dt, scratch, J):
-    """``_rockkernel.bit_step`` and its tangent: ``dE`` (nv,) the input's; ``scratch`` (``TSCR_SIZE``, nv)."""
+    """``_rockloop.bit_step`` and its tangent: ``dE`` (nv,) the input's; ``scratch`` (``TSCR_SIZE``, nv)."""
     left = dt
     dleft, dtau = scratch[RS.TSCR_LEFT], scratch[RS.TSCR_TAU]
     dp0, dref = scratch[RS.TSCR_P0], scratch[RS.TSCR_REF]
@@ -215,7 +215,7 @@ def bit_step_tangent(bs, bp, dbs, E, dE, dt, scratch, J):
 
 @numba.njit(cache=CACHE, nogil=True)
 def blow_loop_tangent(P, dP, seg_len, seg_z, bs, dbs, bp, ctrl, shank, dshank, acc):
-    """The blow's loop (``_rockkernel.blow_loop`` with no drive, the piston touching the shank at the
+    """The blow's loop (``_rockloop.blow_loop`` with no drive, the piston touching the shank at the
     start, the rod at rest) with its tangents. The piston's cells ``P = (F, G, Z)`` (3, n_p; rows ``CELL_*``)
     and their tangents ``dP`` (3, nv, n_p); the rod's uniform segments of ``seg_len`` cells and
     impedances ``seg_z`` (S,), each a delay line: inside a uniform segment the junction passes the

@@ -700,8 +700,8 @@ def _rock_stored(R, k_u) -> float:
 
 
 def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field):
-    """The blow's loop compiled (:func:`impactbar.laws.rodrock._rockkernel.blow_loop`)."""
-    from ._rockkernel import blow_loop
+    """The blow's loop compiled (:func:`impactbar.laws.rodrock._rockloop.blow_loop`)."""
+    from ._rockloop import blow_loop
 
     F, G = F.copy(), G.copy()
     bs, bp = _bit_records(bit)

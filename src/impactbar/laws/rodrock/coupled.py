@@ -74,7 +74,7 @@ def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     (updated in place); returns the gap after them, with ``record`` the force in every cell at the
     start of each step, and the shank's force on the last step. ``bounds``: ``grid.bounds`` as int64
     where the caller has it (a blow's chunks share it)."""
-    from ._rockkernel import blow_loop
+    from ._rockloop import blow_loop
     from .blow import _loop_controls
 
     L = drive.size
@@ -100,11 +100,11 @@ def end_window(grid) -> float:
 
 def _steps_to_free(grid, F, G, bs, bp, gap, drive, bounds, k, h):
     """:func:`_steps` over the chunk of ``drive.size`` steps from step ``k``, the piston tested for
-    free for good (:func:`~impactbar.laws.rodrock._rockkernel.piston_free`, the contact open on the
+    free for good (:func:`~impactbar.laws.rodrock._rockloop.piston_free`, the contact open on the
     step before) at the first step end at or after each multiple of ``h`` only (the exact blow's
     instants, :func:`end_window`): ``(gap, ran)``, ``ran`` the chunk's steps up to the first such
     end (-1: none within it), the waves and the bit then."""
-    from ._rockkernel import piston_free
+    from ._rockloop import piston_free
     from .blow import whole_steps
 
     dt = grid.cell_time

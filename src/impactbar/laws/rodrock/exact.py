@@ -1,5 +1,5 @@
 r"""The exact blow: a piston of uniform segments strikes a rod of uniform segments whose bit loads a
-bilinear rock (theory §4d), every wave carried exactly (:mod:`impactbar.laws.rodrock._exactkernel`).
+bilinear rock (theory §4d), every wave carried exactly (:mod:`impactbar.laws.rodrock._exactloop`).
 
 **What is exact.** Each segment is a delay line: a force wave leaving one end arrives at the other
 its travel time later, unchanged, so the state of the chain is the set of waves that left each end
@@ -76,7 +76,7 @@ import threading
 
 import numpy as np
 
-from . import _exactkernel as K
+from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
 from ._exactdata import _Data
@@ -287,7 +287,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     nr = 2 if m > 0.0 else 1
     RT = np.zeros((3, 2), dtype=complex)
     RC = np.zeros((3, 2), dtype=np.int64)
-    RD = np.zeros((1 + _log, 6), dtype=complex)  # the switch log (_exactkernel), _log rows
+    RD = np.zeros((1 + _log, 6), dtype=complex)  # the switch log (_exactloop), _log rows
     i = 0
     for br in range(3):
         for q in range(nr):

@@ -201,7 +201,7 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
 def _time_direction(bmap):
     """The impact time's direction of the drive: ``(drive pieces or None, impulses, p'(t0))``, or
     None for a load of no known form (central differences then)."""
-    from ...dynamics.kernelview import FOURIER, PIECEWISE
+    from ...dynamics.compiled_views import FOURIER, PIECEWISE
     from ...loads.abilities import compiled_kind
 
     kind = compiled_kind(bmap.load, "__call__")

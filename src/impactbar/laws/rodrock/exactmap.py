@@ -211,7 +211,7 @@ def drive_pieces(load, t0: float, horizon: float, lead: float):
     ValueError
         A load of no known form that is not smooth enough for its polynomial pieces.
     """
-    from ...dynamics.kernelview import FOURIER, PIECEWISE
+    from ...dynamics.compiled_views import FOURIER, PIECEWISE
     from ...loads.abilities import compiled_kind
 
     abilities = load.abilities

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _exacthistory as H
-from . import _exactkernel as K
+from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
 from ._bit import feed_gain

@@ -6,8 +6,8 @@ Layout: ``law`` (:class:`WaveLaw`, the contact step and its records :class:`Pres
 window, with the drive's part :func:`~impactbar.laws.wave.impact.window_drive`), ``_characteristics``
 and ``_jumps`` (the solver on characteristics, the fields' jumps located exactly), ``sustained``
 (the piston pressed on the rod after a window), ``periodic`` (the phase equation, the orbits'
-states, the impact map's Jacobian and multipliers, the existence edge), ``_windowkernel`` and
-``_wavekernel`` (the compiled windows and the square wave's phase residual). ``law`` is imported with
+states, the impact map's Jacobian and multipliers, the existence edge), ``_window`` and
+``_separation`` (the compiled windows and the square wave's phase residual). ``law`` is imported with
 the package; the numerics (scipy.optimize, numba) load on first use.
 """
 

@@ -17,7 +17,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from ...dynamics.invariants import PistonInvariants
 from ...loads.abilities import jumps
-from . import _windowkernel as KW
+from . import _window as KW
 from ._jumps import _bernoulli, _singular_coefficients, locate_jumps
 
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(20)

@@ -29,9 +29,9 @@ from functools import cached_property
 
 import numpy as np
 
+from ...dynamics.compiled_views import FOURIER, PIECEWISE
 from ...dynamics.implementations import use_fast
-from ...dynamics.kernelview import FOURIER, PIECEWISE
-from . import _windowkernel as KW
+from . import _window as KW
 from ._characteristics import _GL_W, _GL_X, _Contact, _panels, _WindowLoad, held_post_state, held_throughout
 
 __all__ = ["WaveImpact", "wave_impact", "window_drive"]
@@ -143,7 +143,7 @@ def _fourier_moment_tables(M: int, s: float, ks: tuple):
 def _exact_moments(view, wl, npi):
     """The moments ``I^c_n, I^s_n`` of :func:`window_drive` over ``[0, 1]`` and ``[1, 2]`` in closed
     form, as ``(cos (2, M), sin (2, M))``, for a load whose kernel view (``view``, the
-    :class:`~impactbar.dynamics.kernelview.LoadKernelView` the compiled quadrature would read) holds
+    :class:`~impactbar.dynamics.compiled_views.LoadKernelView` the compiled quadrature would read) holds
     finitely many harmonics (``O(N K)``) or pieces (``O(N)`` per piece); ``None`` without a view,
     which the numpy quadrature serves. ``int_lo^hi e^{i w theta} = e^{i w lo} (hi - lo) E(w (hi -
     lo))`` with ``E`` of :func:`_unit_moment`."""

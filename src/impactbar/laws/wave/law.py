@@ -158,8 +158,8 @@ class WaveLaw(ContactLaw, PhaseEquation, BlowRecords, CoupledBlow):
             imp = wave_impact(model, load, ti, qm, vm)
             return imp.q_after.copy(), imp.v_after.copy(), t_release, imp
         from ...dynamics.implementations import use_fast
-        from . import _wavekernel as WK
-        from . import _windowkernel as KW
+        from . import _separation as WK
+        from . import _window as KW
 
         c = kernel.c
         D = kernel.data

@@ -34,11 +34,11 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from ...dynamics import kernels as K
+from ...dynamics import compiled as K
 from ...dynamics import monodromy as MD
 from ...dynamics.certified import cosine_roots
+from ...dynamics.compiled_views import FOURIER, PIECEWISE, ModalBasisView
 from ...dynamics.implementations import use_fast
-from ...dynamics.kernelview import FOURIER, PIECEWISE, ModalBasisView
 from ...dynamics.modal import fundamental
 from ...dynamics.monodromy import aberth, arrival_derivative, impact_fields, sort_multipliers
 from ...loads import FourierLoad, Load, PiecewiseConstantLoad
@@ -54,7 +54,7 @@ TWO_PI = 2.0 * math.pi
 
 
 # "wave.residual" (dynamics.implementations): the phase residual of a piecewise-constant load by one
-# compiled call for all phases (``laws.wave._wavekernel.square_wave_residuals``); the reference is
+# compiled call for all phases (``laws.wave._separation.square_wave_residuals``); the reference is
 # :func:`wave_orbit_states` phase by phase (the same residuals to rounding)
 
 
@@ -271,7 +271,7 @@ def wave_phase_residual(model: BarModelLike, load: Load, phase) -> np.ndarray:
 
 def _square_wave_residuals(model: BarModelLike, load: PiecewiseConstantLoad, ph: np.ndarray) -> np.ndarray:
     """:func:`wave_phase_residual` for a piecewise-constant load, all phases in one compiled call."""
-    from . import _wavekernel as WK
+    from . import _separation as WK
     from .impact import _GL_W, _GL_X
 
     p11, p12, p21, p22 = _flight_fundamental(model)

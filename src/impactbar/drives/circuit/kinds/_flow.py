@@ -3,7 +3,7 @@ their first fields (the source and target nodes, the loss's energy slot), the fi
 whose opening is one piece of a piecewise linear function (a coefficient, the transition pressure
 squared, the piece's intercept and slope), and the numba options."""
 
-from ....dynamics.kernels import CACHE
+from ....dynamics.compiled import CACHE
 
 SOURCE, TARGET, ENERGY = 1, 2, 3
 #: an orifice opened by one piece ``intercept + slope x`` of a piecewise linear opening

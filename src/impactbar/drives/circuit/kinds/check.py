@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numba as nb
 
-from .._kernel import dphi, phi
+from .._field import dphi, phi
 from ._flow import COEFFICIENT, INTERCEPT, JIT, PTR2, SLOPE
 from .cushion import ENERGIES as ENERGIES  # (a cushion's record and slots)
 from .cushion import EVENTS as EVENTS

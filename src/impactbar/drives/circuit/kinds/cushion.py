@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numba as nb
 
-from .._kernel import dphi, phi
+from .._field import dphi, phi
 from ._flow import COEFFICIENT, ENERGY, INTERCEPT, JIT, PIECEWISE, PTR2, SLOPE, SOURCE, TARGET
 
 CODE = 8

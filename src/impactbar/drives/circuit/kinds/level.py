@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numba as nb
 
-from .._kernel import _off_level
+from .._field import _off_level
 from ._flow import JIT, SOURCE, TARGET
 
 CODE = 10

@@ -1,6 +1,6 @@
 """The result of a simulation under a drive (theory §10): :class:`SwitchedTrajectory`, the run's
 pieces (flights, rests, blows) with the drive's state and switches, and its energy account with the
-drive's work. The run that builds it is :mod:`impactbar.simulation.switched`."""
+drive's work. The run that builds it is :mod:`impactbar.simulation.driven`."""
 
 from __future__ import annotations
 

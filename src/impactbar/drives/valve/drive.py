@@ -50,9 +50,9 @@ class PositionSwitchedDrive(Drive):
     (``(time, state)`` pairs, sorted); its events are the gap's rising crossing of ``switch_out``
     (a :class:`~impactbar.drives.GapCrossing`, in return with no switch to stroke pending) and the
     first pending switch (a :class:`~impactbar.drives.TimedEvent`). It brings a compiled event loop
-    of its own (its :attr:`abilities`, :mod:`impactbar.drives.switched.loop`); the orbit solvers
+    of its own (its :attr:`abilities`, :mod:`impactbar.drives.valve.loop`); the orbit solvers
     hold the closed-form segment problem of its periodic orbits with the exact Jacobian
-    (:mod:`impactbar.orbits.valve_segment`, chosen by :data:`impactbar.orbits.switched.ORBIT_PROBLEMS`).
+    (:mod:`impactbar.orbits.valve_segment`, chosen by :data:`impactbar.orbits.driven.ORBIT_PROBLEMS`).
 
     Rigid piston, no damping, no delay (the check of theory §10): with accelerations :math:`a_s` = ``stroke``,
     :math:`a_r` = ``ret`` and :math:`x_1` = ``switch_out`` the period-1 orbit has the impact velocity
@@ -227,7 +227,7 @@ class PositionSwitchedDrive(Drive):
         return (self.stroke, -self.ret)
 
     def compiled_loop(self, model, kernel):
-        """The compiled valve loop (:class:`~impactbar.drives.switched.loop.ValveLoop`) under an
+        """The compiled valve loop (:class:`~impactbar.drives.valve.loop.ValveLoop`) under an
         instantaneous law."""
         from .loop import ValveLoop
 

@@ -4,10 +4,10 @@
 <impactbar.PositionSwitchedDrive.compiled_loop>` gives the simulator
 (:func:`impactbar.simulate` under an instantaneous law, switch ``simulate.switched_kernel``): it
 hands the valve's state and the modal state to the compiled loop
-(:func:`impactbar.drives.switched._kernel.run_switched`), calls it again while its logs fill, and
+(:func:`impactbar.drives.valve._compiled_loop.run_switched`), calls it again while its logs fill, and
 returns the impacts, switches and flights it followed (a :class:`~impactbar.drives.base.KernelRun`),
 with the same pieces, impacts and switches as the simulator's loop in Python
-(:mod:`impactbar.simulation.switched`), which runs the pieces the compiled loop hands back.
+(:mod:`impactbar.simulation.driven`), which runs the pieces the compiled loop hands back.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..base import DriveState, FlightKernel, KernelRun
-from . import _kernel as SK
+from . import _compiled_loop as SK
 from ._state import KIND
 
 __all__ = ["ValveLoop"]

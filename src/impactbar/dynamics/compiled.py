@@ -1,12 +1,12 @@
 """The compiled building blocks of the dynamics that the other packages build on: the interface
-between the dynamics' private kernels (``_flightkernel``: the closed-form flight; ``_crossing``: the
-certified event search; ``_kernel``: the event loop; ``_flowkernel``: the loads' flows and the admissibility
+between the dynamics' private kernels (``_flight``: the closed-form flight; ``_crossing``: the
+certified event search; ``_event_loop``; ``_load_flow``: the loads' flows and the admissibility
 bounds; ``_tiers``: the first calls run while a child compiles) and the compiled code of the laws,
 the drives, the loads and the orbit solvers, and the simulator's drivers. What another package uses
 of those kernels it imports from here, by these names; the private modules behind them may change.
 
 Every function here is a numba dispatcher (plain float arrays, the load and the modal basis as the
-views of :mod:`impactbar.dynamics.kernelview`), callable from Python and from compiled code alike.
+views of :mod:`impactbar.dynamics.compiled_views`), callable from Python and from compiled code alike.
 
 - :data:`CACHE`: numba's ``cache=`` for every kernel of the package (``False`` where no cache folder
   is writable: compiled in memory).
@@ -29,27 +29,27 @@ from ._crossing import CROSS as CROSS
 from ._crossing import FAIL as FAIL
 from ._crossing import NONE as NONE
 from ._crossing import find_crossing as find_crossing
-from ._flightkernel import CACHE as CACHE
-from ._flightkernel import TWO_PI as TWO_PI
-from ._flightkernel import load_value as load_value
-from ._flightkernel import piece_of as piece_of
-from ._flightkernel import sort_head as sort_head
-from ._flowkernel import bound_column as bound_column
-from ._flowkernel import end_velocity_bound as end_velocity_bound
-from ._flowkernel import fourier_column as fourier_column
-from ._flowkernel import fourier_flow as fourier_flow
-from ._flowkernel import piecewise_column as piecewise_column
-from ._flowkernel import piecewise_flow as piecewise_flow
-from ._kernel import CHATTER as CHATTER
-from ._kernel import CONTACT as CONTACT
-from ._kernel import END as END
-from ._kernel import FAILED as FAILED
-from ._kernel import FULL as FULL
-from ._kernel import MAXIMP as MAXIMP
-from ._kernel import _propagate_many as propagate_views
-from ._kernel import propagate_many as propagate_many
-from ._kernel import run_free as run_free
-from ._kernel import run_free_rigid as run_free_rigid
+from ._event_loop import CHATTER as CHATTER
+from ._event_loop import CONTACT as CONTACT
+from ._event_loop import END as END
+from ._event_loop import FAILED as FAILED
+from ._event_loop import FULL as FULL
+from ._event_loop import MAXIMP as MAXIMP
+from ._event_loop import _propagate_many as propagate_views
+from ._event_loop import propagate_many as propagate_many
+from ._event_loop import run_free as run_free
+from ._event_loop import run_free_rigid as run_free_rigid
+from ._flight import CACHE as CACHE
+from ._flight import TWO_PI as TWO_PI
+from ._flight import load_value as load_value
+from ._flight import piece_of as piece_of
+from ._flight import sort_head as sort_head
+from ._load_flow import bound_column as bound_column
+from ._load_flow import end_velocity_bound as end_velocity_bound
+from ._load_flow import fourier_column as fourier_column
+from ._load_flow import fourier_flow as fourier_flow
+from ._load_flow import piecewise_column as piecewise_column
+from ._load_flow import piecewise_flow as piecewise_flow
 from ._tiers import disable as disable_tiers
 
 __all__ = ["CACHE", "TWO_PI", "load_value", "piece_of", "sort_head", "bound_column", "end_velocity_bound",

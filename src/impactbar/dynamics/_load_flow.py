@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from .._shared.wrappers import internal_kernels
-from ._flightkernel import CACHE, _bc
+from ._flight import CACHE, _bc
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -163,7 +163,7 @@ def bound_column(c, absc, w2, d, psup, q, v, j, center, delta, h):
     return gs, ls
 
 
-# all of them callable from Python (impactbar.dynamics.kernels): none link-only, all counting
+# all of them callable from Python (impactbar.dynamics.compiled): none link-only, all counting
 # references leanly and without a C wrapper
 internal_kernels(globals(), python=("fourier_flow", "piecewise_flow", "fourier_column", "piecewise_column",
                                     "bound_column", "end_velocity_bound"))

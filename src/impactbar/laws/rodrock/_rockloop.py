@@ -14,7 +14,7 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from ._bit import damped_flow
 from ._records import (
     ACC_ENDED,

@@ -1,7 +1,7 @@
 """Compiled closed-form flight between events and the certified step of the event search (theory §2,
 §4): the modes advanced from an anchor (eq. 8), the particular solution of each load kind, the
 bounds ``A`` on ``|h''|`` and ``J`` on ``|h'''|`` over a step, and the steps that cannot cross
-``h = 0`` (see :mod:`impactbar.dynamics._kernel`, which searches events with them). Plain float
+``h = 0`` (see :mod:`impactbar.dynamics._event_loop`, which searches events with them). Plain float
 arrays only; where numba caches compiled code (``CACHE``) is decided here, once for every kernel,
 and the tiered execution of first calls installed (:mod:`impactbar.dynamics._tiers`)."""
 
@@ -116,7 +116,7 @@ def harmonic_sum(h0, ks, hr, hi, t):
 @numba.njit(cache=CACHE, nogil=True)
 def particular(load, B, level, t, qp, vp):
     """Fill ``qp, vp`` with the particular state at ``t`` (0 for a rigid mode's mean-load part) of
-    the basis ``B`` (:class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load``."""
+    the basis ``B`` (:class:`~impactbar.dynamics.compiled_views.ModalBasisView`) under ``load``."""
     kind, p0, ks = load.kind, load.p0, load.ks
     w2, hpr, hpi = B.w2, B.hpr, B.hpi
     M = w2.size
@@ -418,6 +418,6 @@ def next_piece(load, B, level, ta, te, m, j, anchor, state):
     return te, m, j, level
 
 
-# the kernels Python may call (those of impactbar.dynamics.kernels, and _bc) keep their wrapper and
+# the kernels Python may call (those of impactbar.dynamics.compiled, and _bc) keep their wrapper and
 # cache entry; the others are link-only (their callers' libraries hold their machine code)
 internal_kernels(globals(), python=("load_value", "piece_of", "sort_head", "_bc"))

@@ -1,5 +1,5 @@
 r"""The oil circuit during a blow, compiled with numba (theory §11, "The coupled blow"): the circuit's
-vector field of :mod:`._kernel` with the driven end's motion given by the law instead of the bar's
+vector field of :mod:`._field` with the driven end's motion given by the law instead of the bar's
 modes.
 
 Inside a blow the law (the wave law's window, the rod-rock law's lattice) knows the wave ``a(t)``
@@ -8,7 +8,7 @@ of time, the round trip to the first change of impedance), and the driven end an
 force ``p`` as a semi-infinite bar of impedance ``Z``: ``u_t(0, t) = a(t) + p / Z``. The integrated
 state is ``Y = (w, p_f, p_r, p_s, x_v, I, E_0..E_7)``: the driven end's displacement ``w = -u(0, t)``
 (``w' = -u_t(0)``), the circuit's state, the force's integral ``I = int p dt`` and the eight energy
-quadratures of :mod:`._kernel`. The vector field is :func:`._kernel._base`'s on a one-mode bar whose
+quadratures of :mod:`._field`. The vector field is :func:`._field._base`'s on a one-mode bar whose
 driven end is ``q_0 = -w`` moving at ``q_0' = u_t(0)`` (the same equations, one source of them).
 
 ``ext = (a, 1/Z)`` is set by the caller on each stretch where ``a`` is constant (the lattice's step)
@@ -20,13 +20,13 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from . import _kernel as K
+from . import _field as K
 
 #: the size of the integrated state: ``w``, four of the circuit, ``I``, the energies
 N_STATE = 6 + K.N_ENERGY
 #: the events during a blow: the ramp's end, the supply pressure through the pre-charge and the relief
 N_EVENTS = 3
-#: their indices among the flight kernel's events (``_kernel.RAMP_EV``, ``ACC_EV``, ``REL_EV``)
+#: their indices among the flight kernel's events (``_field.RAMP_EV``, ``ACC_EV``, ``REL_EV``)
 FLIGHT_EVENTS = (K.RAMP_EV, K.ACC_EV, K.REL_EV)
 #: the slots of ``ext``: the incoming wave ``a``, the reciprocal impedance ``1/Z``
 EXT_A, EXT_IZ = range(2)
@@ -39,7 +39,7 @@ _JIT = dict(cache=True, nogil=True, error_model="numpy")
 
 @nb.njit(**_JIT)
 def _one_mode(y, par, ext, buf):
-    """The one-mode bar state of :func:`._kernel._base` for ``y``: ``(q_0, q_0', p_f, p_r, p_s, x_v)``
+    """The one-mode bar state of :func:`._field._base` for ``y``: ``(q_0, q_0', p_f, p_r, p_s, x_v)``
     with ``q_0 = -w``, ``q_0' = u_t(0) = a + p / Z``; returns ``u_t(0)``."""
     p = y[2] - par[K.ALPHA] * y[1]
     ut = ext[EXT_A] + p * ext[EXT_IZ]
@@ -77,7 +77,7 @@ def rhs_in(y, yp, par, ext, work):
 @nb.njit(**_JIT)
 def jac(y, JJ, par, ext):
     """The Jacobian of :func:`rhs` (the energies' rows zero: they feed nothing back), by the chain
-    rule from :func:`._kernel.jac_base` on the one-mode bar."""
+    rule from :func:`._field.jac_base` on the one-mode bar."""
     jac_in(y, JJ, par, ext, np.empty(SCRATCH))
 
 
@@ -111,7 +111,7 @@ def jac_in(y, JJ, par, ext, work):
 @nb.njit(**_JIT)
 def events(y, g, par):
     """The event functions during a blow (their zeros; inactive ones held at 1): the ramp's end, the
-    supply pressure through the pre-charge and through the relief pressure (as :func:`._kernel.events`)."""
+    supply pressure through the pre-charge and through the relief pressure (as :func:`._field.events`)."""
     K.circuit_events(y[4], y[3], par, g, 0)
 
 

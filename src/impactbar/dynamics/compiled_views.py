@@ -1,7 +1,7 @@
 """The one view of a load that compiled code reads (theory §2, paper eq. 7).
 
-Every compiled kernel (:mod:`impactbar.dynamics._kernel`, ``_flowkernel``, ``_wavekernel``,
-:mod:`impactbar.orbits._admkernel`) gets a load as one :class:`LoadKernelView`, built once by the
+Every compiled kernel (:mod:`impactbar.dynamics._event_loop`, ``_load_flow``, ``_separation``,
+:mod:`impactbar.orbits._admissibility_search`) gets a load as one :class:`LoadKernelView`, built once by the
 frozen load itself (its abilities' ``kernel``). The dtypes of its fields never change, so
 numba compiles each kernel once for every load of both kinds.
 """

@@ -31,6 +31,7 @@ from impactbar import (
     SquareWaveLoad,
     simulate,
 )
+from impactbar.dynamics.compiled_views import LoadKernelView
 from impactbar.dynamics.implementations import (
     IMPLEMENTATIONS,
     choices,
@@ -38,7 +39,6 @@ from impactbar.dynamics.implementations import (
     use_fast,
     use_reference,
 )
-from impactbar.dynamics.kernelview import LoadKernelView
 
 #: every module of the core that defines compiled kernels, found by walking the package (a new kernel
 #: module is checked without being listed here)
@@ -211,7 +211,7 @@ def test_no_compiled_kernel_uses_what_is_slow_to_compile():
 
 
 def test_sort_head_sorts_as_numpy():
-    from impactbar.dynamics._flightkernel import sort_head
+    from impactbar.dynamics._flight import sort_head
 
     rng = np.random.default_rng(3)
     for n in (0, 1, 2, 7, 40):
@@ -247,8 +247,8 @@ def test_the_kernel_view_is_the_only_path_from_a_load_into_compiled_code():
         assert not fields & set(inspect.signature(disp.py_func).parameters), full
     # in a fresh process, so that no other test's direct kernel calls add signatures
     code = """
-import numba, impactbar.orbits._admkernel as A
-import impactbar.dynamics._kernel as K, impactbar.laws.wave._windowkernel as KW
+import numba, impactbar.orbits._admissibility_search as A
+import impactbar.dynamics._event_loop as K, impactbar.laws.wave._window as KW
 from impactbar import *  # noqa: F403
 for impact in ("paper", "wave"):
     model = BarModel(4.0, 0.05, 0.6, 3, impact=impact)
@@ -274,8 +274,8 @@ def test_the_wave_kernels_and_the_crossing_search_compile_once_per_run(tmp_path)
     caller), the wave law's helpers, the crossing search, the flow and the sort of the window's
     jumps (``sort_head``: its count starts as the literal 0) each hold one signature."""
     code = """
-import impactbar.dynamics._kernel as K, impactbar.laws.wave._wavekernel as WK
-import impactbar.dynamics._flightkernel as FK
+import impactbar.dynamics._event_loop as K, impactbar.laws.wave._separation as WK
+import impactbar.dynamics._flight as FK
 from impactbar import *  # noqa: F403
 for n, load in ((8, CosineLoad(0.6, 1.0)), (16, SquareWaveLoad(0.8, 1.0))):
     simulate(BarModel(5.0, 0.1, 0.5, n, impact="wave"), load, InitialState.rigid(-0.2, 0.0, n), 40.0)

@@ -1,7 +1,7 @@
 """Continuation of periodic motions under a drive (theory §10).
 
 The augmented problem for the engine (:mod:`impactbar.continuation.engine`) is the drive's
-periodic-orbit problem (:func:`impactbar.orbits.switched.orbit_problem`: the drive's own, e.g. the
+periodic-orbit problem (:func:`impactbar.orbits.driven.orbit_problem`: the drive's own, e.g. the
 valve's segment problem, unknowns the state after the impact and the free flight times ``h1``,
 ``h3``; or the generic shooting problem) with the continued parameter appended: any continuable
 parameter of the problem (:func:`impactbar.parameters.parameters`: the drive's, the valve's
@@ -24,7 +24,7 @@ from scipy.optimize import brentq
 from .._shared.parameters import check_continuable, parameter_value, with_parameter
 from .._shared.status import BranchStatus, EventKind
 from .._shared.validate import check_real
-from ..orbits.switched import SwitchedOrbit, orbit_of, orbit_problem
+from ..orbits.driven import SwitchedOrbit, orbit_of, orbit_problem
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _target
@@ -422,7 +422,7 @@ def first_chord_tests(tests: list, doubled: bool, points: int) -> list:
 
 
 def _tests(o: SwitchedOrbit) -> dict:
-    """The test functions of :func:`impactbar.continuation.core._detect` at a switched orbit (no
+    """The test functions of :func:`impactbar.continuation.one_parameter._detect` at a switched orbit (no
     clearance: the grazing of the stop between impacts shows in the admissibility flag)."""
     mu = o.multipliers
     cpx = mu[mu.imag > 1e-10 * np.maximum(1.0, np.abs(mu))]
@@ -587,7 +587,7 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
         Target value; the branch stops there or where it leaves the range between start and ``to``.
     detect : callable
         The event detection of :func:`impactbar.continue_orbit`
-        (``impactbar.continuation.core._detect``, handed in: this module sits below that one).
+        (``impactbar.continuation.one_parameter._detect``, handed in: this module sits below that one).
     settings : ContinuationSettings, optional
         Steps, point limit and Newton tolerance.
     events : bool

@@ -3,8 +3,8 @@ numerics.
 
 Layout: ``drive`` (:class:`PositionSwitchedDrive`, the :class:`~impactbar.Drive` interface: force
 levels, the switch crossing and the delayed switches, their maps), ``loop`` (the compiled event loop
-the simulator runs under an instantaneous law), ``_kernel`` (its numba kernels, the rigid piston's
-closed forms), ``kernels`` (those of them the orbit solvers read). The periodic orbits' segment
+the simulator runs under an instantaneous law), ``_compiled_loop`` (its numba kernels, the rigid piston's
+closed forms), ``closed_forms`` (those of them the orbit solvers read). The periodic orbits' segment
 problem (closed-form flights, the exact Jacobian, Newton's start, the monodromy matrix and the
 flights' admissibility) and the certified search of every one-impact orbit sit with the orbit
 solvers: :mod:`impactbar.orbits.valve_segment`, :mod:`impactbar.orbits.valve_search`.

@@ -6,7 +6,7 @@ finitely many harmonics, ``kind = 0``, or a piecewise-constant one, ``kind = 1``
 of the invariant ``A(theta)`` arriving at the rod end, the same tolerance, the same separation and
 re-contact searches (Brent's method as :func:`scipy.optimize.brentq`, to ``1e-15``), the same
 Gauss-Legendre panels for the waves reflected by the free end. The simulator calls it for the windows
-in which contact is lost (:func:`impactbar.laws.wave._windowkernel.wave_window` takes the others);
+in which contact is lost (:func:`impactbar.laws.wave._window.wave_window` takes the others);
 the reference of ``"simulate.wave_separation"`` (:mod:`impactbar.dynamics.implementations`) is the
 Python solver, which it is tested against.
 """
@@ -18,9 +18,9 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics.kernels import CACHE, TWO_PI, load_value, propagate_views, sort_head
-from ...dynamics.kernelview import LoadKernelView, ModalBasisView
-from ._windowkernel import _window_moments, scan_step, window_jumps
+from ...dynamics.compiled import CACHE, TWO_PI, load_value, propagate_views, sort_head
+from ...dynamics.compiled_views import LoadKernelView, ModalBasisView
+from ._window import _window_moments, scan_step, window_jumps
 
 #: contact intervals a window may hold before the kernel gives up (the caller then solves it in Python)
 MAX_INTERVALS = 256
@@ -243,7 +243,7 @@ def _project_free(a, b, npi, win, R, lo, hi, incoming, h, gl, dv, dse):
 def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
     """The contact window ``[t0, t0 + 2/s]`` of the wave law, separations included (theory §4b),
     under the load ``load_t``, the plain tuple of a
-    :class:`~impactbar.dynamics.kernelview.LoadKernelView` (numba dispatches plain tuples several
+    :class:`~impactbar.dynamics.compiled_views.LoadKernelView` (numba dispatches plain tuples several
     times faster than named tuples; no wrapper kernel: a wrapper compiles its callees' code again).
 
     Writes the post-contact modal state into ``qa, va`` and the contact intervals (``theta = s (t -
@@ -475,8 +475,8 @@ def _square_wave_residuals(load, B, s, R, c, fund, gl_x, gl_w, phases, out):
     """The wave law's phase residual ``u(1, 2 pi-)`` of a one-impact orbit under a piecewise-constant
     load, for each of ``phases`` into ``out``: the computation of
     :func:`impactbar.laws.wave.periodic.wave_orbit_states` (drive of the window by the panels of
-    :func:`~impactbar.laws.wave._windowkernel.window_moments`, the flight driven from rest by
-    :func:`~impactbar.dynamics._kernel.propagate_many`, the periodicity conditions solved mode by mode
+    :func:`~impactbar.laws.wave._window.window_moments`, the flight driven from rest by
+    :func:`~impactbar.dynamics._event_loop.propagate_many`, the periodicity conditions solved mode by mode
     with the flight's fundamental matrix ``fund = (p11, p12, p21, p22)``) in the basis ``B`` (its
     ``w2`` and ``d``; a piecewise-constant load has no harmonic response)."""
     p11, p12, p21, p22 = fund

@@ -1,5 +1,5 @@
 """Simulation under a drive (theory §10): the event-driven run of any :class:`~impactbar.Drive`,
-whose result is a :class:`~impactbar.simulation.switched_trajectory.SwitchedTrajectory`.
+whose result is a :class:`~impactbar.simulation.driven_trajectory.SwitchedTrajectory`.
 
 The run calls only the drive's interface (:mod:`impactbar.drives.base`):
 
@@ -37,7 +37,7 @@ from ..drives.flight import END, EVENT, QuadratureRestPiece, RestPiece
 from ..dynamics.implementations import use_fast
 from ..model import BarModel
 from .blows import check_coupling, fly_and_switch, run_coupled
-from .switched_trajectory import SwitchedTrajectory as SwitchedTrajectory
+from .driven_trajectory import SwitchedTrajectory as SwitchedTrajectory
 from .trajectory import Trajectory
 
 __all__ = ["SwitchedTrajectory", "Driver", "run_drive", "run_stateful"]
@@ -116,7 +116,7 @@ def rigid_piece(model: BarModel):
     form: the impact is the first rising crossing of ``q_0`` through 0 (the same monotonicity
     argument as the switch's, theory §10), then ``v -> -R v`` (eq. 10); with the force pressing and
     a rebound too small to resolve (or ``R = 0``), the piston rests on the stop until ``t_stop``."""
-    from ..drives.switched import first_rising_crossing
+    from ..drives.valve import first_rising_crossing
 
     d, R = model.d, model.law.traits.kernel_restitution(model)
 

@@ -40,13 +40,13 @@ import numpy as np
 from .._shared.status import Admissibility
 from ..drives.flight import FlightSettings
 from ..drives.orbitproblem import OrbitData, OrbitProblem
-from ..drives.switched import PositionSwitchedDrive
+from ..drives.valve import PositionSwitchedDrive
 from ..laws.abilities import BlowRecords
 from ..model import BarModel
 from .admissibility import _window_departure
+from .driven_orbit import SwitchedOrbit, _constant_load
 from .orbit import PeriodicOrbit
 from .shooting import ShootingProblem as ShootingProblem
-from .switched_orbit import SwitchedOrbit, _constant_load
 from .valve_segment import ValveProblem
 
 __all__ = ["SwitchedOrbit", "ORBIT_PROBLEMS", "orbit_problem", "orbit_of", "ShootingProblem", "check_orbit"]

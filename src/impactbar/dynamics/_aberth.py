@@ -12,7 +12,7 @@ import math
 import numba
 import numpy as np
 
-from ._kernel import CACHE
+from ._event_loop import CACHE
 
 
 @numba.njit(cache=CACHE, nogil=True, fastmath=False)

@@ -28,7 +28,7 @@ import types
 import numba
 import numpy as np
 
-from ..dynamics.kernels import CACHE, sort_head
+from ..dynamics.compiled import CACHE, sort_head
 from . import _rigid_scalar
 
 TWO_PI = 2.0 * math.pi

@@ -45,7 +45,7 @@ import numba
 
 from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 from ._exactend import account, certify
 from ._exactode import blk_ode1
 from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and the channels

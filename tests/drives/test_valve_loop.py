@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from impactbar import BarModel, PositionSwitchedDrive, find_orbit, simulate
-from impactbar.drives.switched import _kernel as SK
+from impactbar.drives.valve import _compiled_loop as SK
 from impactbar.simulation import InitialState
 
 CASES = [  # n_modes, d, R, delay
@@ -71,7 +71,7 @@ def test_compiled_loop_stops_at_max_impacts_and_refills_its_logs(choose, monkeyp
     assert cut.t_end == full.impact_times[6]
     np.testing.assert_array_equal(cut.impact_times, full.impact_times[:7])
     # logs of 1 impact per call: many calls, the same run
-    import impactbar.drives.switched.loop as S
+    import impactbar.drives.valve.loop as S
 
     calls = []
     real = SK.run_switched

@@ -20,6 +20,7 @@ from scipy.optimize import brentq
 from .._shared.forcing import dispatch
 from .._shared.status import BranchStatus, EventKind
 from .._shared.threads import single_threaded_blas
+from ..orbits.driven import check_orbit
 from ..orbits.orbit import PeriodicOrbit
 from ..orbits.segments import (
     SegmentProblem,
@@ -30,11 +31,10 @@ from ..orbits.segments import (
     same_orbit,
     unknowns_from,
 )
-from ..orbits.switched import check_orbit
 from .branch import Branch, BranchEvent
+from .driven import checked_events, continue_switched, doubled_first_points, first_chord_tests
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
-from .switched import checked_events, continue_switched, doubled_first_points, first_chord_tests
 
 __all__ = ["continue_orbit", "EVENT_KINDS"]
 
@@ -161,7 +161,7 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
         ``"ret"``, ``"switch_out"``, ``"delay"``; the oil circuit's), ``"R"``, ``"d"``, ``"s"`` or the
         impact law's own (on the rock ``"rock.k"``, ...), with the grazing of a
         switching surface among the events (theory §10;
-        :func:`impactbar.continuation.switched.continue_switched`).
+        :func:`impactbar.continuation.driven.continue_switched`).
     parameter : str
         One of ``"p0"``, ``"pk"`` (a :class:`CosineLoad`), ``"q"``, ``"kappa"`` (a
         :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`), and the

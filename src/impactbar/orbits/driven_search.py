@@ -23,8 +23,8 @@ from ..drives.orbitproblem import OrbitProblem
 from ..laws.abilities import newton_start
 from ..model import BarModel
 from ._settling import surfaces_ahead
+from .driven import SwitchedOrbit, orbit_of, orbit_problem
 from .one_impact import OrbitList
-from .switched import SwitchedOrbit, orbit_of, orbit_problem
 
 __all__ = ["find_switched_orbit", "drive_orbits", "default_orbit", "SETTLE_RUN_IMPACTS", "SETTLE_RUN_TOL"]
 
@@ -50,7 +50,7 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
         the blows). A drive with state (the oil circuit) takes these laws with each blow solved together
         with its state (theory §11, "The coupled blow"), the blow's Jacobian by central differences;
         with the rod-rock law's exact blows, the orbit without a guess is found on the lattice and
-        polished on the exact blows (:meth:`~impactbar.orbits.switched.ShootingProblem.polish`).
+        polished on the exact blows (:meth:`~impactbar.orbits.driven.ShootingProblem.polish`).
     drive : Drive
     impacts : int
         Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed for the valve.
@@ -76,7 +76,7 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
         ``"full"``, a variational flight at every Newton step (the way before, several times the
         cost). The same orbit (to about 1e-12 of the unknowns) and multipliers (to their own noise,
         about 1e-7: the variational flight's steps move with the unknowns) either way
-        (:class:`~impactbar.orbits.switched.ShootingProblem`).
+        (:class:`~impactbar.orbits.driven.ShootingProblem`).
     settings : FlightSettings, optional
         How a drive's flights with state are integrated (the oil circuit's
         :class:`~impactbar.drives.circuit.CircuitFlightSettings`: its tolerances and options), every
@@ -128,7 +128,7 @@ def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, new
     the same motion (:meth:`~impactbar.laws.abilities.NewtonStart.coarse_model`: the rod-rock law's
     exact blows under the oil circuit, whose lattice costs some 1 % of a blow), the orbit found on
     that model (the default chain, every settling flight's blow its) and polished on this one
-    (:meth:`~impactbar.orbits.switched.ShootingProblem.polish`); ``None`` where there is no such
+    (:meth:`~impactbar.orbits.driven.ShootingProblem.polish`); ``None`` where there is no such
     model, or no orbit on it, or the polish does not converge (the default chain on this model then
     answers)."""
     coarse = newton_start(model.law).coarse_model(model) if getattr(problem, "coupled", False) else None
@@ -283,7 +283,7 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
     r"""Every one-impact periodic orbit of a drive with a period in a window (theory §10):
     :func:`impactbar.periodic_orbits` with a :class:`~impactbar.Drive` in place of the load.
 
-    The drive's periodic-orbit problem (:func:`~impactbar.orbits.switched.orbit_problem`) searches its own
+    The drive's periodic-orbit problem (:func:`~impactbar.orbits.driven.orbit_problem`) searches its own
     solutions (:meth:`~impactbar.drives.OrbitProblem.search`); each is polished by Newton's method
     on the full problem (:func:`find_switched_orbit`'s) and becomes a :class:`SwitchedOrbit` with
     its admissibility, multipliers and stability; orbits found twice (periods within ``1e-9``

@@ -1,6 +1,6 @@
 """The result of :func:`impactbar.find_orbit` under a drive: :class:`SwitchedOrbit`, a
 :class:`~impactbar.PeriodicOrbit` with the drive's state, the flights and their multipliers
-(theory §10, §11); :mod:`impactbar.orbits.switched` finds it."""
+(theory §10, §11); :mod:`impactbar.orbits.driven` finds it."""
 
 from __future__ import annotations
 

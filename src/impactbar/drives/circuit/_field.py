@@ -20,7 +20,7 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-from ...dynamics.kernels import CACHE
+from ...dynamics.compiled import CACHE
 
 # parameter indices in ``par``
 ALPHA, NUR, NUF, KV, KF, QP, NUS, PT, PREL, KREL, P0, NU0, NPOL, BETA, PTR2 = range(15)
@@ -269,7 +269,7 @@ def circuit_events(xv, ps, par, g, first):
     """The circuit's own event functions into ``g[first:first + 3]``, from the spool's position
     ``xv`` and the supply pressure ``ps`` (inactive ones held at 1): the ramp's end, the supply
     through the pre-charge and through the relief pressure (each pressure's :func:`_off_level`);
-    the flights' (:func:`events`) and the blows' (``_endkernel.events``)."""
+    the flights' (:func:`events`) and the blows' (``_endfield.events``)."""
     if par[OPEN] > 0.5:
         g[first] = xv - 1.0
     elif par[OPEN] < -0.5:

@@ -6,7 +6,7 @@ It runs the same algorithm as the numpy path, step by step: the exclusion of int
 ``|g'(mid)| > L h`` (``g = u(1, t)``, ``L`` the bound of ``|g''|`` from each mode's energy), the
 vectorised Newton iteration on the zeros of ``g'`` with the same stopping rule, and the branch and
 bound on the stationary values (the bounds of ``g`` from the midpoint, and from a found zero by
-Taylor's theorem). The modal flow is the exact closed form of :mod:`impactbar.dynamics._flowkernel`
+Taylor's theorem). The modal flow is the exact closed form of :mod:`impactbar.dynamics._load_flow`
 under a Fourier load (kind 0 of the load's kernel view) or a piecewise-constant load (kind 1).
 Results agree with the numpy path to rounding. Imported lazily, so ``import impactbar`` does not load numba.
 """
@@ -20,8 +20,8 @@ import numba
 import numpy as np
 
 from .._shared.wrappers import internal_kernels
-from ..dynamics.kernels import CACHE, bound_column, fourier_column, piecewise_column
-from ..dynamics.kernelview import LoadKernelView
+from ..dynamics.compiled import CACHE, bound_column, fourier_column, piecewise_column
+from ..dynamics.compiled_views import LoadKernelView
 
 TWO_PI = 2.0 * math.pi
 _MAXF = np.finfo(np.float64).max
@@ -526,9 +526,9 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
 
     ``prob = (c, absc, w2, d, psup)``: the end's weights and their magnitudes, the squared
     frequencies, the damping and ``sup |p|``. ``src = (load, F, P)``: the load's kernel view
-    (:class:`~impactbar.dynamics.kernelview.LoadKernelView`), the data of the flight's compiled
+    (:class:`~impactbar.dynamics.compiled_views.LoadKernelView`), the data of the flight's compiled
     Fourier flow (``FourierLoad.flow``'s ``kernel_args``, the argument of
-    :func:`~impactbar.dynamics._flowkernel.fourier_flow`) and of the piecewise-constant one
+    :func:`~impactbar.dynamics._load_flow.fourier_flow`) and of the piecewise-constant one
     ``(w2, d, nodes, levels, qn, vn)``; the one the load's kind does not use holds placeholders of
     the same types, so that one compilation serves every load. From Python the load view comes as
     the plain tuple ``tuple(view)`` in ``src_tuples`` (numba dispatches it several times faster than

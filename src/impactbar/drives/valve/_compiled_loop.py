@@ -1,18 +1,18 @@
 """Compiled valve loop of a position-switched drive (theory §10). Plain float arrays only.
 
 Between events the force at ``x = 0`` is a constant level, ``+stroke`` or ``-ret``, so each flight
-is a flight of the ordinary event search (:func:`impactbar.dynamics._kernel.run_free`) under the
+is a flight of the ordinary event search (:func:`impactbar.dynamics._event_loop.run_free`) under the
 one-piece load of that level; the valve runs around it. The gap ``y = -q_0`` obeys
 ``y'' + d y' = -p`` alone (the flexible modes do not enter it), so its rising crossing of the switch
 position is found in closed form (:func:`~impactbar.drives._crossing.first_rising_crossing`): the
 gap's rate is monotone under a constant force, no crossing is missed, and it is refined to rounding.
 
 :func:`run_switched` follows the valve through piece after piece in one call, doing in each piece
-exactly what the drive's Python steps in :mod:`impactbar.simulation.switched` do (the same kernel
+exactly what the drive's Python steps in :mod:`impactbar.simulation.driven` do (the same kernel
 calls with the same arguments, hence the same numbers), and hands back to Python every piece it does
 not resolve itself (a touch without an impact, a start through the stop, a full log): Python runs
 that piece with the general driver (sustained contact and all) and calls it again
-(:mod:`impactbar.drives.switched.loop`).
+(:mod:`impactbar.drives.valve.loop`).
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics.kernels import CACHE, END, MAXIMP, propagate_views, run_free
-from ...dynamics.kernelview import LoadKernelView, ModalBasisView
+from ...dynamics.compiled import CACHE, END, MAXIMP, propagate_views, run_free
+from ...dynamics.compiled_views import LoadKernelView, ModalBasisView
 from .._crossing import first_rising_crossing, gap, rate_zero, rigid_flight
 from ._state import DriveKernelView
 
@@ -58,7 +58,7 @@ _REST = 1e-13
 @numba.njit(cache=CACHE, nogil=True)
 def _rigid_piece(d, R, level, q, v, t, t_stop):
     """One constant-force piece of the rigid bar under the paper's law (the closed forms of
-    ``impactbar.simulation.switched.rigid_piece``): ``(t_end, impacted, arrival velocity, q, v,
+    ``impactbar.simulation.driven.rigid_piece``): ``(t_end, impacted, arrival velocity, q, v,
     at rest)``, the state at ``t_end`` (after the impact if there is one)."""
     q0, v0 = q, v
     resting = q0 >= 0.0 and abs(v0) <= _REST * (1.0 + abs(level)) and level > 0.0
@@ -103,7 +103,7 @@ def rigid_fixed_point(d, R, drive, v0):
     """The rigid piston's one-impact orbit under a position-switched drive: the fixed point of the
     map of arrival velocities of :func:`_rigid_cycle`, by the secant method from ``v0`` (its
     derivative is about ``R^2``). Returns ``(v, h1, h3)``, ``v = nan`` where it fails. The start of
-    Newton's method on the segment problem (``impactbar.orbits.switched``), which confirms it."""
+    Newton's method on the segment problem (``impactbar.orbits.driven``), which confirms it."""
     a = v0
     fa, h1, h3 = _rigid_cycle(d, R, drive, a)
     if not math.isfinite(fa):
@@ -195,7 +195,7 @@ def _run_switched(loads, B, drive, R, c, clock, state, ints, pending, logs):
 
     ``loads`` are the plain tuples of the views of the two one-piece loads ``(+stroke, -ret)``, ``B`` that of
     the free-free basis (plain tuples: the flexible flights call the dispatcher
-    :func:`~impactbar.dynamics._kernel.run_free` with the same types as :func:`simulate` does, so no second
+    :func:`~impactbar.dynamics._event_loop.run_free` with the types :func:`simulate` uses, so no second
     specialisation compiles), ``state = (q, v)`` the modal state (overwritten), ``ints`` the valve's integers
     (state, number of pending switches, impacts so far, the largest number, whether the rigid closed form
     runs, whether the fast impact search runs), ``pending = (times, kinds)`` the switches not yet in effect,

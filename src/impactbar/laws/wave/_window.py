@@ -1,7 +1,7 @@
 """Compiled contact windows of the wave impact law (theory §4b): the drive's moments over a window,
 the load's jumps inside it, the scan step of the contact test, and the window held in contact
 throughout (:func:`wave_window`; the windows in which contact is lost are
-:func:`impactbar.laws.wave._wavekernel.wave_contact`'s)."""
+:func:`impactbar.laws.wave._separation.wave_contact`'s)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,8 @@ import math
 import numba
 import numpy as np
 
-from ...dynamics.kernels import CACHE, TWO_PI, load_value, piece_of, sort_head
-from ...dynamics.kernelview import LoadKernelView
+from ...dynamics.compiled import CACHE, TWO_PI, load_value, piece_of, sort_head
+from ...dynamics.compiled_views import LoadKernelView
 
 
 @numba.njit(cache=CACHE, nogil=True)

@@ -29,7 +29,7 @@ from ._crossing import (  # the certified event search, below this module
     flow_scratch,
     rigid1_crossing,
 )
-from ._flightkernel import (  # the closed-form flight and the certified step, below this module
+from ._flight import (  # the closed-form flight and the certified step, below this module
     CACHE,
     advance,
     first_piece,
@@ -39,7 +39,7 @@ from ._flightkernel import (  # the closed-form flight and the certified step, b
     piece_end,
     piece_of,
 )
-from .kernelview import LoadKernelView, ModalBasisView
+from .compiled_views import LoadKernelView, ModalBasisView
 
 # statuses of run_free
 END = 0
@@ -57,8 +57,8 @@ KB_HCR, KB_HCI, KB_HWR, KB_HWI = range(4)
 
 def _run_free(load_t, B_t, R, c, start, t_end, max_imp, tail_tol, out, rigid_fast, modal_fast):
     """Free flight with impacts from ``start = (t, q, v)`` in the free-free basis ``B_t`` (the plain
-    tuple of a :class:`~impactbar.dynamics.kernelview.ModalBasisView`) under ``load_t`` (that of a
-    :class:`~impactbar.dynamics.kernelview.LoadKernelView`: numba dispatches plain tuples several
+    tuple of a :class:`~impactbar.dynamics.compiled_views.ModalBasisView`) under ``load_t`` (that of a
+    :class:`~impactbar.dynamics.compiled_views.LoadKernelView`: numba dispatches plain tuples several
     times faster than named tuples); ``q, v`` are overwritten with the final state. Compiled twice
     from this one source, as :func:`run_free` (flexible bars: ``rigid_fast`` is ``None``) and
     :func:`run_free_rigid` (``modal_fast`` is ``None``), each with one signature and no wrapper
@@ -243,8 +243,8 @@ def _propagate(load_t, B_t, ta, qa, va, ts, out_q, out_v):
     """Exact states at the sorted times ``ts >= ta`` from ``(ta, qa, va)`` into ``out_q, out_v``
     (shape (M, T)); a piecewise-constant load is followed jump by jump, by piece index (no
     rounding of a jump time into the wrong piece). ``load_t`` and ``B_t``: a
-    :class:`~impactbar.dynamics.kernelview.LoadKernelView` and a
-    :class:`~impactbar.dynamics.kernelview.ModalBasisView`, or their plain tuples. Compiled twice
+    :class:`~impactbar.dynamics.compiled_views.LoadKernelView` and a
+    :class:`~impactbar.dynamics.compiled_views.ModalBasisView`, or their plain tuples. Compiled twice
     from this one source, as :func:`propagate_many` (called from Python with plain tuples: numba
     dispatches them several times faster than named tuples) and ``_propagate_many`` (called from
     compiled code with the views), each with one signature and no wrapper kernel (a wrapper

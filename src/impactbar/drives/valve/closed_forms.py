@@ -13,7 +13,7 @@ private kernels and the valve's periodic-orbit numerics (:mod:`impactbar.orbits.
 from .._crossing import first_rising_crossing as first_rising_crossing
 from .._crossing import rate_zero as rate_zero
 from .._crossing import rigid_flight as rigid_flight
-from ._kernel import end_max_sampled as end_max_sampled
-from ._kernel import rigid_orbit_start as rigid_orbit_start
+from ._compiled_loop import end_max_sampled as end_max_sampled
+from ._compiled_loop import rigid_orbit_start as rigid_orbit_start
 
 __all__ = ["first_rising_crossing", "rate_zero", "rigid_flight", "end_max_sampled", "rigid_orbit_start"]
