@@ -116,6 +116,11 @@ NOT_RECORDS = {
     "physical/optimize_multistart.py": {"order"},  # the best design's index
     "physical/optimize_result.py": {"axes", "kv"},  # the figure's axes; a (name, constraint) pair's second
     "physical/settle.py": {"last"},  # the first and last impact times
+    "physical/tree.py": {"parts"},  # a dotted key's parts (rod.segments.<i>.<name>: the index)
+    "physical/circuit_graph.py": {"linked"},  # the first node a part joins
+    "measure/figures.py": {"axes"},  # the figure's fourth axes
+    "measure/drill.py": {"kv"},  # a (name, gauge) pair's second
+    "drives/circuit/part_flows.py": {"flows"},  # a part's only flow
     "measure/model.py": {"count", "ends", "pieces"},  # a counter; the rod's end; its first piece's material
     "measure/recording.py": {"time"},  # the first and last sample times
     "measure/results.py": {"time"},  # the first two sample times (the step)

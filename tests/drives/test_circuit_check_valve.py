@@ -57,6 +57,7 @@ def test_a_check_valves_orbit_repeats_its_account_closes_and_numpy_reproduces_it
     assert total[orbit.drive.layout.energy["check"]] > 0.0
 
 
+@pytest.mark.slow  # (a topology's coupled blow compiled afresh: some 40 s of CPU)
 def test_a_check_valve_on_the_rock(rock_drifter):  # noqa: F811
     check_rock(*rock_drifter, VALVE)
 

@@ -59,6 +59,7 @@ def test_a_cushions_orbit_repeats_its_account_closes_and_numpy_reproduces_it(pre
     assert gap.max() > CUSHION.gaps[-1]  # (every kink crossed: the port shut to its last opening)
 
 
+@pytest.mark.slow  # (a topology's coupled blow compiled afresh: some 40 s of CPU)
 def test_a_cushion_on_the_rock(rock_drifter):  # noqa: F811
     check_rock(*rock_drifter, CUSHION)
 

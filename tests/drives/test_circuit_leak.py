@@ -61,6 +61,7 @@ def test_a_leaks_orbit_repeats_its_account_closes_and_numpy_reproduces_it(preset
     assert 0.01 * account["orifices"] < loss < account["orifices"]
 
 
+@pytest.mark.slow  # (a topology's coupled blow compiled afresh: some 40 s of CPU)
 def test_a_leak_on_the_rock(rock_drifter):  # noqa: F811
     model, drive = rock_drifter
     orbit = check_rock(model, drive, LaminarLeak("rear", "front", G))

@@ -60,6 +60,7 @@ def preset(drifter):  # noqa: F811
     return find_orbit(*drifter)
 
 
+@pytest.mark.slow  # (a topology's coupled blow compiled afresh: some 40 s of CPU)
 def test_a_leak_of_no_coefficient_gives_the_presets_orbit_on_rock(drifter, preset):  # noqa: F811
     model, drive = drifter
     orbit = find_orbit(model, replace(drive, extra_parts=(PooledLeak(0.0),)))

@@ -27,7 +27,8 @@ ROOT = Path(__file__).resolve().parents[2]
 #: the example configs ``impactbar optimize`` takes: the drifters with their oil circuit (the valve
 #: drifters and the hammers have no circuit to optimise, the sweep specs are no machine)
 CIRCUIT_EXAMPLES = ("circuit_drifter.toml", "circuit_drifter_parts.toml", "circuit_drifter_return_line.toml",
-                    "circuit_drifter_rock.toml", "circuit_drifter_rock_piston.toml")
+                    "circuit_drifter_rock.toml", "circuit_drifter_rock_piston.toml",
+                    "circuit_drill_parts.toml")
 
 
 def test_the_circuit_examples_are_the_ones_optimize_takes():

@@ -87,7 +87,7 @@ class ValvePart(CircuitPart):
 
     def records(self, slots, oil) -> list:
         """:meth:`Valve.records <impactbar.drives.circuit.Valve.records>` in the mode's ramp."""
-        target, moving = slots.mode[0], slots.flags["ramp_end"]
+        (target, *_), moving = slots.mode, slots.flags["ramp_end"]  # (the mode: target, then the flags)
         tau = self.valve.switching_time
         return self.valve.records(slots.nodes["supply"], slots.nodes["rear"], slots.ports["valve_return"],
                                   oil.transition_pressure,
