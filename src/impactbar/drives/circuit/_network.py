@@ -39,8 +39,13 @@ displacement away from the stop, ``phi`` the smoothed orifice law of :func:`._ke
 - ``LEAK``, ``CUSHION``, ``CHECK``: a flow from ``F_FROM`` to ``F_TO`` whose law and derivatives
   are written in a module of its own (:mod:`.kinds`: laminar leakage, a position-controlled orifice,
   a check valve), added to the nodes' balances, its loss ``q (p_from - p_to)`` into ``F_E``.
-- ``LEVEL``: a watched level (:mod:`.kinds.level`): the event of the piston's gap ``y = -q_0`` or a
-  pressure drop through a level.
+- ``LEVEL``: a watched level (:mod:`.kinds.level`): the event of the piston's gap ``y = -q_0``, the
+  spool's position ``x_v`` or a pressure drop through a level.
+- ``SPOOL``: a pilot-operated spool in place of the valve (:mod:`.kinds.spool`): its position
+  ``x_v = x_s / h_s``, its velocity a node's state (the node's volume its mass), the control chamber's
+  and the supply's volumes changed by its motion; its stop an event.
+- ``SPOOL_PORT``: a flow as a cushion's with its opening a function of the spool's position
+  (:mod:`.kinds.spool_port`: the spool valve's main ports).
 
 The sums run in the order of the records, from ``-0.0`` (so that a sum's first term is that term,
 sign of a zero included): the preset drifter's records reproduce :mod:`._kernel`'s arithmetic to the
@@ -66,6 +71,10 @@ KIND = 0
 NODE, PUMP, ORIFICE, VALVE, RELIEF, CHAMBER, ACCUM = range(7)
 # the kinds written in modules of their own (:mod:`.kinds`: their equations there)
 LEAK, CUSHION, CHECK, LEVEL = KD.leak.CODE, KD.cushion.CODE, KD.check.CODE, KD.level.CODE
+SPOOL, SPOOL_PORT = KD.spool.CODE, KD.spool_port.CODE
+#: where a kind sorts among the records if not at its code: a spool changes nodes' volumes, as a
+#: chamber does, before the accumulators take the nodes' capacitances
+_ORDER = {SPOOL: CHAMBER + 0.5}
 KINDS = ("node", "pump", "orifice", "valve", "relief", "chamber", "accumulator") + tuple(
     KD.MODULES[k].NAME for k in sorted(KD.MODULES))
 # a flow kind's nodes and energy slot (:mod:`.kinds._flow`), a level's event slot
@@ -201,7 +210,8 @@ def compose(records, n_states: int, n_energy: int, n_events: int, piston_energy:
     if [int(r[N_ID]) for r in nodes] != list(range(n_nodes)) or not 1 <= n_states <= n_nodes:
         raise ValueError(f"the nodes must be numbered 0..{n_nodes - 1} and n_states in [1, {n_nodes}]; "
                          f"got ids {[int(r[N_ID]) for r in nodes]} and n_states={n_states}")
-    others = sorted((r for r in recs if int(r[KIND]) != NODE), key=lambda r: int(r[KIND]))
+    others = sorted((r for r in recs if int(r[KIND]) != NODE),
+                    key=lambda r: _ORDER.get(int(r[KIND]), int(r[KIND])))
     own = KD.MODULES.items()  # (the kinds of .kinds declare their slots)
     node_fields = {PUMP: (P_NODE,), ORIFICE: (O_FROM, O_TO), VALVE: (V_P, V_A, V_T), RELIEF: (R_FROM, R_TO),
                    CHAMBER: (C_NODE,), ACCUM: (A_NODE,), **{k: m.NODES for k, m in own}}
@@ -224,8 +234,8 @@ def compose(records, n_states: int, n_energy: int, n_events: int, piston_energy:
     if len(set(chambers)) != len(chambers) or set(chambers) & accums or any(c >= n_states for c in chambers):
         raise ValueError("a chamber needs a node of its own with a state and without an accumulator; got "
                          f"chambers on nodes {chambers}, accumulators on {sorted(accums)}")
-    if sum(int(r[KIND]) == VALVE for r in others) != 1:
-        raise ValueError("the network needs exactly one valve (its spool is the state x_v)")
+    if sum(int(r[KIND]) in (VALVE, SPOOL) for r in others) != 1:
+        raise ValueError("the network needs exactly one valve or spool (its position is the state x_v)")
     if not 0 <= piston_energy < n_energy:
         raise ValueError(f"piston_energy must be in 0..{n_energy - 1}; got {piston_energy}")
     head = np.zeros(NW_SIZE)
@@ -336,9 +346,11 @@ def _prepare(y, par, M, S, en, dp, energies):
                 dc = ca * (-1.0 / par[r + A_N] - 1.0) / S[_SP, a]
                 S[_SDC, a] = dc if S[_SNAC, a] == 0.0 else S[_SDC, a] + dc
                 S[_SNAC, a] += 1.0
-        elif kind == LEAK or kind == CUSHION or kind == CHECK:  # (a kind of .kinds: its flow there)
+        elif kind == SPOOL:
+            rate = _spool(par, r, R0, S, xv, en, energies)
+        elif kind == LEAK or kind == CUSHION or kind == CHECK or kind == SPOOL_PORT:  # (a kind of .kinds)
             a, b = int(par[r + F_FROM]), int(par[r + F_TO])
-            q = KD.law(kind, par, r, S[_SP, a], S[_SP, b], gap)[0]
+            q = KD.law(kind, par, r, S[_SP, a], S[_SP, b], xv if kind == SPOOL_PORT else gap)[0]
             S[_SNET, a] -= q
             S[_SNET, b] += q
             if energies and par[r + F_E] >= 0:
@@ -376,6 +388,43 @@ def _prepare(y, par, M, S, en, dp, energies):
     ep = int(par[net0 + NW_EPISTON])
     en[ep] += -force * wd
     return force, wd, rate
+
+
+@nb.njit(**_JIT)
+def _spool(par, r, R0, S, xv, en, energies):
+    """A spool's record at ``r`` (:mod:`.kinds.spool`): the control chamber's and the supply's volumes
+    and net inflows, the spool's force into its velocity node, its damping's loss; returns ``x_v'``."""
+    c, s, v = int(par[r + KD.spool.CONTROL]), int(par[r + KD.spool.SUPPLY]), int(par[r + KD.spool.VELOCITY])
+    hs, b = par[r + KD.spool.STROKE], par[r + KD.spool.DAMPING]
+    ac, a0 = par[r + KD.spool.LARGE], par[r + KD.spool.SMALL]
+    vs = S[_SP, v]
+    S[_SNU, c] = S[_SNU, c] + ac * hs * xv
+    S[_SNET, c] += -ac * vs
+    S[_SNU, s] = S[_SNU, s] - a0 * hs * xv
+    S[_SNET, s] += a0 * vs
+    S[_SNET, v] += KD.spool.force(par, r, S[_SP, c], S[_SP, s]) - b * vs
+    if energies and par[r + KD.spool.ENERGY] >= 0:
+        en[int(par[r + KD.spool.ENERGY])] += b * vs * vs
+    return 0.0 if par[R0 + v * REC_SIZE + N_HELD] > 0.5 else vs / hs
+
+
+@nb.njit(**_JIT)
+def _spool_jac(par, r, R0, S, A, F, X, ns):
+    """A spool's terms of the Jacobian (before the nodes' rows are divided by their capacitance)."""
+    c, s, v = int(par[r + KD.spool.CONTROL]), int(par[r + KD.spool.SUPPLY]), int(par[r + KD.spool.VELOCITY])
+    hs, b = par[r + KD.spool.STROKE], par[r + KD.spool.DAMPING]
+    ac, a0 = par[r + KD.spool.LARGE], par[r + KD.spool.SMALL]
+    if c < ns:
+        A[F + v, F + c] += ac
+        A[F + c, F + v] += -ac
+        A[F + c, X] += -S[_SNET, c] * (ac * hs / par[R0 + c * REC_SIZE + N_BETA]) / S[_SC, c]
+    if s < ns:
+        A[F + v, F + s] += -a0
+        A[F + s, F + v] += a0
+        A[F + s, X] += S[_SNET, s] * (a0 * hs / par[R0 + s * REC_SIZE + N_BETA]) / S[_SC, s]
+    A[F + v, F + v] += -b
+    if par[R0 + v * REC_SIZE + N_HELD] < 0.5:
+        A[X, F + v] += 1.0 / hs
 
 
 @nb.njit(**_JIT)
@@ -498,6 +547,21 @@ def jac_base(y, par, M, A):
                 A[F + a, F + a] += -(S[_SF, a] * par[r + R_K])
             if b2 < ns:
                 A[F + b2, F + a] += S[_SF, b2] * par[r + R_K]
+        elif kind == SPOOL:
+            _spool_jac(par, r, R0, S, A, F, X, ns)
+        elif kind == SPOOL_PORT:  # (the source loses q, the target gains it; its opening in x_v)
+            a, b2 = int(par[r + F_FROM]), int(par[r + F_TO])
+            _, da, db, dx = KD.law(kind, par, r, S[_SP, a], S[_SP, b2], xv)
+            if a < ns:
+                A[F + a, F + a] += -(S[_SF, a] * da)
+                if b2 < ns:
+                    A[F + a, F + b2] += -(S[_SF, a] * db)
+                A[F + a, X] += -(S[_SF, a] * dx)
+            if b2 < ns:
+                if a < ns:
+                    A[F + b2, F + a] += S[_SF, b2] * da
+                A[F + b2, F + b2] += S[_SF, b2] * db
+                A[F + b2, X] += S[_SF, b2] * dx
         elif kind == LEAK or kind == CUSHION or kind == CHECK:
             a, b2 = int(par[r + F_FROM]), int(par[r + F_TO])
             _, da, db, dg = KD.law(kind, par, r, S[_SP, a], S[_SP, b2], -y[0])
@@ -557,4 +621,11 @@ def events(z, par, M, g, first, gap):
         elif kind == LEVEL and par[r + LV_EV] >= 0:
             pa = _pressure(par, R0, z, 0, ns, int(par[r + F_FROM]))
             pb = _pressure(par, R0, z, 0, ns, int(par[r + F_TO]))
-            g[first + int(par[r + LV_EV])] = KD.level.value(par, r, pa, pb, gap)
+            x = xv if par[r + KD.level.GAP] > 1.5 else gap
+            g[first + int(par[r + LV_EV])] = KD.level.value(par, r, pa, pb, x)
+        elif kind == SPOOL and par[r + KD.spool.EVENT] >= 0:
+            v = int(par[r + KD.spool.VELOCITY])
+            pc = _pressure(par, R0, z, 0, ns, int(par[r + KD.spool.CONTROL]))
+            ps = _pressure(par, R0, z, 0, ns, int(par[r + KD.spool.SUPPLY]))
+            g[first + int(par[r + KD.spool.EVENT])] = KD.spool.value(par, r, par[R0 + v * REC_SIZE + N_HELD],
+                                                                     xv, pc, ps)

@@ -16,6 +16,7 @@ network's kinds needs no edit of the drive or of a kernel.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -25,11 +26,14 @@ from ..._shared.validate import check_real
 from .layout import _TERMS, PRESET, CircuitLayout
 
 __all__ = ["CircuitPart", "PartField", "PartSlots", "Composition", "compose_parts", "PORTS", "TERMS",
-           "PRESET_NODES", "NamedPart", "check_part", "node_of"]
+           "PRESET_NODES", "REPLACEABLE", "NamedPart", "check_part", "node_of"]
 
 #: the preset's ports an extra part may take over, and the node each joins without one: the valve's
 #: return port (the tank)
 PORTS = {"valve_return": "tank"}
+
+#: the preset's parts an extra part may stand in for (:attr:`CircuitPart.replaces`)
+REPLACEABLE = ("valve",)
 
 #: the terms of the energy account (:class:`~impactbar.drives.circuit.CircuitEnergy`) an energy
 #: integrand can belong to
@@ -90,6 +94,14 @@ class CircuitPart:
     si_lists : tuple of PartField
         Its fields that hold a list of values (a configuration's array, each element in the field's
         unit and range; optional, as ``si_fields``; not a parameter).
+    replaces : tuple of str
+        The preset's parts it stands in for (:data:`REPLACEABLE`; optional): ``("valve",)``, a part
+        whose records take the valve's ports and whose state is the network's ``x_v`` (a spool,
+        :class:`~impactbar.drives.circuit.SpoolValve`); the preset's valve then writes no records and
+        its switches, ramp and impact's closing are not used (one part at most).
+    mechanical : tuple of str
+        Its nodes whose state is not a pressure (a spool's velocity; optional): they start at 0, may be
+        negative and are not watched for cavitation.
 
     See Also
     --------
@@ -135,6 +147,20 @@ class CircuitPart:
     connections: dict = {}
     #: its fields that hold a list of values, each in the :class:`PartField`'s unit and range
     si_lists: tuple = ()
+    replaces: tuple = ()
+    mechanical: tuple = ()
+
+    def at_event(self, event: str, flag: int, z, layout) -> tuple:
+        """The mode's flag and the circuit's state ``z`` after the part's event ``event`` (its flag
+        toggled to ``flag``): unchanged, unless the part says otherwise (a spool's arrival at its
+        stop stops it).
+
+        Returns
+        -------
+        tuple
+            ``(flag, z)``.
+        """
+        return flag, z
 
     def records(self, slots: PartSlots, oil) -> list:
         """The part's network records (:func:`._network.record`).
@@ -308,12 +334,16 @@ class PartSlots:
     flags : dict
         The part's events' flags in the drive's mode by name (``True``: an accumulator holds oil, a
         relief is open).
+    ports : dict
+        The preset's ports (:data:`PORTS`) to node numbers (the valve's return port: the tank, or
+        the part's that takes it).
     """
 
     nodes: dict
     energy: dict
     events: dict
     flags: dict
+    ports: dict = dataclasses.field(default_factory=dict)
 
     def node(self, name: str, part) -> int:
         """The number of the node ``name`` that ``part`` names (a clear error where there is none).
@@ -351,6 +381,8 @@ class Composition:
         ``2 + i``).
     ports : dict
         The preset's ports (:data:`PORTS`) to node numbers.
+    replaced : dict
+        The preset's parts an extra part stands in for (:attr:`CircuitPart.replaces`), to that part.
     """
 
     layout: CircuitLayout
@@ -358,13 +390,14 @@ class Composition:
     n_states: int
     events: tuple
     ports: dict
+    replaced: dict = dataclasses.field(default_factory=dict)
 
     def slots(self, part: CircuitPart, mode) -> PartSlots:
         """The :class:`PartSlots` of ``part`` in the drive's mode ``mode`` (``(target, moving,
         flags...)``)."""
         ev = {name: self.events.index(name) + 1 for name in part.events}
         return PartSlots(nodes=self.nodes, energy=self.layout.energy, events=ev,
-                         flags={name: bool(mode[1 + slot]) for name, slot in ev.items()})
+                         flags={name: bool(mode[1 + slot]) for name, slot in ev.items()}, ports=self.ports)
 
 
 def compose_parts(parts) -> Composition:
@@ -404,7 +437,15 @@ def compose_parts(parts) -> Composition:
     terms = list(PRESET.terms)
     events = list(_PRESET_EVENTS)
     ports: dict = {}
+    replaced: dict = {}
+    mechanical: list = []
     for p in parts:
+        for what in p.replaces:
+            if what not in REPLACEABLE or what in replaced:
+                raise ValueError(f"a {type(p).__name__} may stand in for one of the preset's parts "
+                                 f"{REPLACEABLE} (one part each); got {what!r}")
+            replaced[what] = p
+        mechanical += p.mechanical
         if len(p.symbols) != len(p.nodes):
             raise ValueError(f"a {type(p).__name__}'s symbols must name its nodes {p.nodes}; got {p.symbols}")
         nodes += p.nodes
@@ -426,8 +467,8 @@ def compose_parts(parts) -> Composition:
         raise ValueError(f"the parts' nodes and events must have names of their own; got nodes {nodes}, "
                          f"events {events}")
     layout = CircuitLayout(states=(*nodes, "spool"), state_names=(*symbols, "x_v"), energies=tuple(energies),
-                           terms=tuple(terms))
+                           terms=tuple(terms), mechanical=tuple(mechanical))
     number = {n: i for i, n in enumerate(nodes)}
     number["tank"] = len(nodes)
     return Composition(layout, number, len(nodes), tuple(events),
-                       {port: number[ports.get(port, default)] for port, default in PORTS.items()})
+                       {port: number[ports.get(port, default)] for port, default in PORTS.items()}, replaced)

@@ -125,6 +125,8 @@ class CircuitEnergy(dict):
         out = cls(pump=pump, piston=float(sums["piston"]), orifices=float(sums["orifices"]),
                   tank=float(sums["tank"]), compression=float(sums["compression"]),
                   accumulator=float(sums["accumulator"]))
+        if "spool" in sums:  # (a spool valve's: its kinetic energy's change, stops' and damping's losses)
+            out["spool"] = float(sums["spool"])
         out["residual"] = float(pump - np.sum(np.delete(E, at["pump"])))
         out["relative_residual"] = out["residual"] / max(abs(pump), 1e-300)
         return out
@@ -273,7 +275,8 @@ class HydraulicCircuitDrive(Drive):
             beta = self.oil.bulk_modulus
             L = self.layout  # (the pressures, then optionally the spool's opening)
             if len(sp) not in (L.n_states - 1, L.n_states) \
-                    or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
+                    or not all(math.isfinite(x) and (x >= 0.0 or n in L.mechanical)
+                               for x, n in zip(sp, L.states, strict=False)) \
                     or (len(sp) == L.n_states and sp[L["spool"]] > 1.0) \
                     or not all(sp[i] < beta for i in range(L.n_states - 1)):
                 raise ValueError(f"start_pressures must be the {L.n_states - 1} finite pressures >= 0 "
@@ -340,6 +343,8 @@ class HydraulicCircuitDrive(Drive):
         par[K.OPEN] = (1.0 if target else -1.0) if moving else 0.0
         par[K.ARMO] = 1.0 if target == 0 else 0.0
         par[K.ARMI] = 1.0 if (target == 1 and self.valve.switch_in is not None) else 0.0
+        if self._stand_in:  # (a part in the valve's place: no switches)
+            par[K.ARMO] = par[K.ARMI] = 0.0
         par[K.VAR] = 1.0 if variational else 0.0
         return par
 
@@ -360,9 +365,10 @@ class HydraulicCircuitDrive(Drive):
                            energies={k: en[k if k != "compression" else "supply"]
                                      for k in ("pump", "orifices", "tank", "compression")},
                            relief_event=K.REL_EV - K.RAMP_EV)
-        recs += va.records(_SUPPLY, _REAR, comp.ports["valve_return"], oil.transition_pressure,
-                           rate=(1.0 if target else -1.0) / tau if moving else 0.0,
-                           opening=(1 if target else -1) if moving else 0, energy=en["orifices"], event=0)
+        if not self._stand_in:
+            recs += va.records(_SUPPLY, _REAR, comp.ports["valve_return"], oil.transition_pressure,
+                               rate=(1.0 if target else -1.0) / tau if moving else 0.0,
+                               opening=(1 if target else -1) if moving else 0, energy=en["orifices"], event=0)
         has_acc = ac is not None and ac.volume > 0 and not su.held
         gas = Accumulator(precharge=ac.precharge if ac is not None else 1.0,
                           volume=ac.volume if has_acc else 0.0,
@@ -378,6 +384,13 @@ class HydraulicCircuitDrive(Drive):
         """The numbering of the circuit's nodes, energy and event slots with its extra parts
         (:func:`.composition.compose_parts`)."""
         return compose_parts(self.extra_parts)
+
+    @functools.cached_property
+    def _stand_in(self):
+        """The extra part that stands in for the preset's valve (:attr:`.composition.CircuitPart.replaces`),
+        or ``None``: with one, the valve writes no records, and its switches, ramp and the impact's
+        closing are not used (the mode's target and ramp stay 0); the part's state is ``x_v``."""
+        return self._composition.replaced.get("valve")
 
     @functools.cached_property
     def _watched(self) -> tuple:
@@ -448,12 +461,15 @@ class HydraulicCircuitDrive(Drive):
         if sup.held:
             ps = sup.pressure
         gap = -float(np.asarray(q)[0])
-        target = 1 if gap >= self.valve.switch_out else 0
+        target = 1 if gap >= self.valve.switch_out and not self._stand_in else 0
         z = np.empty(L.n_states)
         for name in L.states[L["supply"] + 1:L["spool"]]:  # (the extra parts' nodes: the tank's pressure)
-            z[L[name]] = sup.tank_pressure if self.start_pressures is None else self.start_pressures[L[name]]
+            z[L[name]] = (0.0 if name in L.mechanical else sup.tank_pressure) \
+                if self.start_pressures is None else self.start_pressures[L[name]]
         z[L["front"]], z[L["rear"]], z[L["supply"]], z[L["spool"]] = pf, pr, ps, float(target)
-        if xv is not None and xv != float(target):
+        if xv is not None and self._stand_in:  # (its position as given: no ramp)
+            z[L["spool"]] = xv
+        elif xv is not None and xv != float(target):
             z[L["spool"]] = xv
             return self._toward(self._mode(1 - target, 0, ps, z, q), z, target)
         return DriveState(self._mode(target, 0, ps, z, q), z)
@@ -508,7 +524,7 @@ class HydraulicCircuitDrive(Drive):
         target, moving, acc, rel = mode[:4]
         sp, ps = self.layout["spool"], self.layout.supply
         out = []
-        if target == 0:
+        if target == 0 and not self._stand_in:
             out.append(GapCrossing(_SWITCH_OUT, level=self.valve.switch_out, direction=1))
         if target == 1 and self.valve.switch_in is not None:
             out.append(GapCrossing(_SWITCH_IN, level=self.valve.switch_in, direction=-1))
@@ -560,11 +576,15 @@ class HydraulicCircuitDrive(Drive):
             return DriveState((target, 0, *mode[2:]), z)
         if name in self._composition.events:  # (its flag toggled: acc, rel, an extra part's)
             i = 2 + self._composition.events.index(name)
-            return DriveState((*mode[:i], 1 - mode[i], *mode[i + 1:]), z)
+            flag = 1 - mode[i]
+            for part in self.extra_parts:  # (its part's say on the flag and the state)
+                if name in part.events:
+                    flag, z = part.at_event(name, flag, z, self.layout)
+            return DriveState((*mode[:i], flag, *mode[i + 1:]), z)
         raise ValueError(f"unknown event {name!r} of the oil circuit")  # pragma: no cover
 
     def impact(self, mode, z, t, q, v) -> DriveState:
-        if self.valve.switch_in is not None:
+        if self.valve.switch_in is not None or self._stand_in:
             return DriveState(mode, self._held(z))
         return self._toward(mode, z, 0)
 
