@@ -11,7 +11,9 @@ the events ``ramp_end``, ``accumulator``, ``relief`` of the network's slots 0, 1
 takes over; :func:`compose_parts` numbers them after the preset's (the states in the order of the
 parts, then the tank), and the part's :meth:`CircuitPart.records` writes its network records
 (:mod:`._network`) with those numbers. Nothing here names a part's kind: a part made of the
-network's kinds needs no edit of the drive or of a kernel.
+network's kinds needs no edit of the drive or of a kernel. A part may stand in for the preset's valve
+(:attr:`CircuitPart.replaces`, :data:`REPLACEABLE`: a spool valve, whose state is ``x_v``), and may
+change the state at its own events (:meth:`CircuitPart.at_event`: a spool stopped at its stop).
 """
 
 from __future__ import annotations
