@@ -70,6 +70,8 @@ from impactbar.drives.circuit._network import (
     R_WATCH,
     REC_SIZE,
     RELIEF,
+    SPOOL,
+    SPOOL_PORT,
     V_A,
     V_E,
     V_EV,
@@ -193,9 +195,11 @@ def _prepare(y, par, M, S, en, dp, energies):
                 dc = ca * (-1.0 / par[r + A_N] - 1.0) / S[_SP, a]
                 S[_SDC, a] = dc if S[_SNAC, a] == 0.0 else S[_SDC, a] + dc
                 S[_SNAC, a] += 1.0
-        elif kind == LEAK or kind == CUSHION or kind == CHECK:  # (a kind of .kinds: its flow there)
+        elif kind == SPOOL:
+            rate = _spool(par, r, R0, S, xv, en, energies)
+        elif kind == LEAK or kind == CUSHION or kind == CHECK or kind == SPOOL_PORT:  # (a kind of .kinds)
             a, b = int(par[r + F_FROM]), int(par[r + F_TO])
-            q = KD.law(kind, par, r, S[_SP, a], S[_SP, b], gap)[0]
+            q = KD.law(kind, par, r, S[_SP, a], S[_SP, b], xv if kind == SPOOL_PORT else gap)[0]
             S[_SNET, a] -= q
             S[_SNET, b] += q
             if energies and par[r + F_E] >= 0:
@@ -233,6 +237,43 @@ def _prepare(y, par, M, S, en, dp, energies):
     ep = int(par[net0 + NW_EPISTON])
     en[ep] += -force * wd
     return force, wd, rate
+
+
+@nb.njit(**_JIT)
+def _spool(par, r, R0, S, xv, en, energies):
+    """A spool's record at ``r`` (:mod:`.kinds.spool`): the control chamber's and the supply's volumes
+    and net inflows, the spool's force into its velocity node, its damping's loss; returns ``x_v'``."""
+    c, s, v = int(par[r + KD.spool.CONTROL]), int(par[r + KD.spool.SUPPLY]), int(par[r + KD.spool.VELOCITY])
+    hs, b = par[r + KD.spool.STROKE], par[r + KD.spool.DAMPING]
+    ac, a0 = par[r + KD.spool.LARGE], par[r + KD.spool.SMALL]
+    vs = S[_SP, v]
+    S[_SNU, c] = S[_SNU, c] + ac * hs * xv
+    S[_SNET, c] += -ac * vs
+    S[_SNU, s] = S[_SNU, s] - a0 * hs * xv
+    S[_SNET, s] += a0 * vs
+    S[_SNET, v] += KD.spool.force(par, r, S[_SP, c], S[_SP, s]) - b * vs
+    if energies and par[r + KD.spool.ENERGY] >= 0:
+        en[int(par[r + KD.spool.ENERGY])] += b * vs * vs
+    return 0.0 if par[R0 + v * REC_SIZE + N_HELD] > 0.5 else vs / hs
+
+
+@nb.njit(**_JIT)
+def _spool_jac(par, r, R0, S, A, F, X, ns):
+    """A spool's terms of the Jacobian (before the nodes' rows are divided by their capacitance)."""
+    c, s, v = int(par[r + KD.spool.CONTROL]), int(par[r + KD.spool.SUPPLY]), int(par[r + KD.spool.VELOCITY])
+    hs, b = par[r + KD.spool.STROKE], par[r + KD.spool.DAMPING]
+    ac, a0 = par[r + KD.spool.LARGE], par[r + KD.spool.SMALL]
+    if c < ns:
+        A[F + v, F + c] += ac
+        A[F + c, F + v] += -ac
+        A[F + c, X] += -S[_SNET, c] * (ac * hs / par[R0 + c * REC_SIZE + N_BETA]) / S[_SC, c]
+    if s < ns:
+        A[F + v, F + s] += -a0
+        A[F + s, F + v] += a0
+        A[F + s, X] += S[_SNET, s] * (a0 * hs / par[R0 + s * REC_SIZE + N_BETA]) / S[_SC, s]
+    A[F + v, F + v] += -b
+    if par[R0 + v * REC_SIZE + N_HELD] < 0.5:
+        A[X, F + v] += 1.0 / hs
 
 
 @nb.njit(**_JIT)
@@ -355,6 +396,21 @@ def jac_base(y, par, M, A):
                 A[F + a, F + a] += -(S[_SF, a] * par[r + R_K])
             if b2 < ns:
                 A[F + b2, F + a] += S[_SF, b2] * par[r + R_K]
+        elif kind == SPOOL:
+            _spool_jac(par, r, R0, S, A, F, X, ns)
+        elif kind == SPOOL_PORT:  # (the source loses q, the target gains it; its opening in x_v)
+            a, b2 = int(par[r + F_FROM]), int(par[r + F_TO])
+            _, da, db, dx = KD.law(kind, par, r, S[_SP, a], S[_SP, b2], xv)
+            if a < ns:
+                A[F + a, F + a] += -(S[_SF, a] * da)
+                if b2 < ns:
+                    A[F + a, F + b2] += -(S[_SF, a] * db)
+                A[F + a, X] += -(S[_SF, a] * dx)
+            if b2 < ns:
+                if a < ns:
+                    A[F + b2, F + a] += S[_SF, b2] * da
+                A[F + b2, F + b2] += S[_SF, b2] * db
+                A[F + b2, X] += S[_SF, b2] * dx
         elif kind == LEAK or kind == CUSHION or kind == CHECK:
             a, b2 = int(par[r + F_FROM]), int(par[r + F_TO])
             _, da, db, dg = KD.law(kind, par, r, S[_SP, a], S[_SP, b2], -y[0])
@@ -414,4 +470,11 @@ def events(z, par, M, g, first, gap):
         elif kind == LEVEL and par[r + LV_EV] >= 0:
             pa = _pressure(par, R0, z, 0, ns, int(par[r + F_FROM]))
             pb = _pressure(par, R0, z, 0, ns, int(par[r + F_TO]))
-            g[first + int(par[r + LV_EV])] = KD.level.value(par, r, pa, pb, gap)
+            x = xv if par[r + KD.level.GAP] > 1.5 else gap
+            g[first + int(par[r + LV_EV])] = KD.level.value(par, r, pa, pb, x)
+        elif kind == SPOOL and par[r + KD.spool.EVENT] >= 0:
+            v = int(par[r + KD.spool.VELOCITY])
+            pc = _pressure(par, R0, z, 0, ns, int(par[r + KD.spool.CONTROL]))
+            ps = _pressure(par, R0, z, 0, ns, int(par[r + KD.spool.SUPPLY]))
+            g[first + int(par[r + KD.spool.EVENT])] = KD.spool.value(par, r, par[R0 + v * REC_SIZE + N_HELD],
+                                                                     xv, pc, ps)

@@ -447,7 +447,8 @@ def _least_pressures(pieces) -> dict:
     pieces = [p for p in pieces if hasattr(p, "extremes")]
     if not pieces:
         return {}
-    extra = pieces[0].layout.states[3:-1]  # (after front, rear, supply; before the spool)
+    layout = pieces[0].layout
+    extra = [s for s in layout.states[3:-1] if s not in layout.mechanical]  # (the pressures after p_s)
     return {name: min(p.extremes(name)[0] for p in pieces) * PRESSURE_SCALE
             for name in ("front", "rear", "supply", *extra)}
 

@@ -40,7 +40,8 @@ _BUILTIN = {"return_accumulator": "impactbar.drives.circuit.return_line:ReturnAc
             "leak": "impactbar.drives.circuit.leak:Leak",
             "laminar_leak": "impactbar.drives.circuit.leakage:LaminarLeak",
             "cushion": "impactbar.drives.circuit.cushion:Cushion",
-            "check_valve": "impactbar.drives.circuit.check_valve:CheckValve"}
+            "check_valve": "impactbar.drives.circuit.check_valve:CheckValve",
+            "spool_valve": "impactbar.drives.circuit.spool_valve:SpoolValve"}
 _KINDS: dict[str, type] = {}
 #: what a part's name may not be: the preset's nodes and ports, the valve's spool
 _TAKEN = ("front", "rear", "supply", "tank", "spool", "valve_return", "kind")
@@ -103,7 +104,7 @@ def register_part(kind: str, cls: type) -> type:
 
 def part_kinds() -> dict[str, type]:
     """The part kinds by name (the library's ``return_accumulator``, ``leak``, ``laminar_leak``,
-    ``cushion`` and ``check_valve``, then those registered), their classes imported."""
+    ``cushion``, ``check_valve`` and ``spool_valve``, then those registered), their classes imported."""
     for kind, where in _BUILTIN.items():
         if kind not in _KINDS:
             module, name = where.split(":")

@@ -288,6 +288,7 @@ SCALES: dict[str, Callable] = {
     "stiffness": lambda d: d.bar.length_m / d.scales.force_N,
     "force": lambda d: 1.0 / d.scales.force_N,
     "mass": lambda d: 1.0 / d.bar.mass_kg,
+    "damping": lambda d: 1.0 / (d.bar.mass_kg * d.omega_rad_s),
 }
 
 

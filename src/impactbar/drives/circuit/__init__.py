@@ -13,9 +13,10 @@ network's kinds: :class:`ReturnAccumulator`, :class:`Leak`), ``_network``
 (the part records a part writes, :func:`record`, of the kinds :data:`NODE`, :data:`PUMP`,
 :data:`ORIFICE`, :data:`VALVE`, :data:`RELIEF`, :data:`CHAMBER`, :data:`ACCUM`, and those written
 each in a module of its own, ``kinds``: :data:`LEAK`, :data:`CUSHION`, :data:`CHECK`, :data:`LEVEL`),
-``leakage``, ``cushion``, ``check_valve`` (:class:`LaminarLeak`, :class:`Cushion`,
-:class:`CheckValve`: parts of a drill's circuit), ``flight`` (one
-flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_field`` (the
+``leakage``, ``cushion``, ``check_valve``, ``spool_valve`` (:class:`LaminarLeak`, :class:`Cushion`,
+:class:`CheckValve`, :class:`SpoolValve`: parts of a drill's circuit; the spool valve stands in for
+the valve, of the kinds :data:`SPOOL` and :data:`SPOOL_PORT`), ``flight`` (one
+flight integrated by SUNDIALS' CVODE, with the variational equations on request), ``_kernel`` (the
 compiled vector field, Jacobian and event functions), ``_sundials`` and ``_cvode`` (CVODE driven from
 compiled code, on the SUNDIALS libraries that scikit-sundae ships).
 """
@@ -30,6 +31,8 @@ from ._network import NODE as NODE
 from ._network import ORIFICE as ORIFICE
 from ._network import PUMP as PUMP
 from ._network import RELIEF as RELIEF
+from ._network import SPOOL as SPOOL
+from ._network import SPOOL_PORT as SPOOL_PORT
 from ._network import VALVE as VALVE
 from ._network import record as record
 from .check_valve import CheckValve as CheckValve
@@ -52,9 +55,10 @@ from .parts import Valve as Valve
 from .preset import PORTS as PORTS
 from .return_line import ReturnAccumulator as ReturnAccumulator
 from .settings import CircuitFlightSettings as CircuitFlightSettings
+from .spool_valve import SpoolValve as SpoolValve
 
 __all__ = ["HydraulicCircuitDrive", "CircuitFlightSettings", "CircuitEnergy", "PARAMETERS", "Chambers",
            "Valve", "Supply", "Accumulator", "Oil", "CircuitPart", "NamedPart", "PartField", "PartSlots",
            "ReturnAccumulator", "Leak", "PORTS", "TERMS", "record", "NODE", "PUMP", "ORIFICE", "VALVE",
            "RELIEF", "CHAMBER", "ACCUM", "LEAK", "CUSHION", "CHECK", "LEVEL", "LaminarLeak", "Cushion",
-           "CheckValve"]
+           "CheckValve", "SpoolValve", "SPOOL", "SPOOL_PORT"]

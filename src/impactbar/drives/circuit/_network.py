@@ -41,8 +41,13 @@ displacement away from the stop, ``phi`` the smoothed orifice law of :func:`._fi
 - ``LEAK``, ``CUSHION``, ``CHECK``: a flow from ``F_FROM`` to ``F_TO`` whose law and derivatives
   are written in a module of its own (:mod:`.kinds`: laminar leakage, a position-controlled orifice,
   a check valve), added to the nodes' balances, its loss ``q (p_from - p_to)`` into ``F_E``.
-- ``LEVEL``: a watched level (:mod:`.kinds.level`): the event of the piston's gap ``y = -q_0`` or a
-  pressure drop through a level.
+- ``LEVEL``: a watched level (:mod:`.kinds.level`): the event of the piston's gap ``y = -q_0``, the
+  spool's position ``x_v`` or a pressure drop through a level.
+- ``SPOOL``: a pilot-operated spool in place of the valve (:mod:`.kinds.spool`): its position
+  ``x_v = x_s / h_s``, its velocity a node's state (the node's volume its mass), the control chamber's
+  and the supply's volumes changed by its motion; its stop an event.
+- ``SPOOL_PORT``: a flow as a cushion's with its opening a function of the spool's position
+  (:mod:`.kinds.spool_port`: the spool valve's main ports).
 
 The sums run in the order of the records, from ``-0.0`` (so that a sum's first term is that term,
 sign of a zero included): the preset drifter's records reproduce :mod:`._field`'s arithmetic to the
@@ -65,6 +70,10 @@ KIND = 0
 NODE, PUMP, ORIFICE, VALVE, RELIEF, CHAMBER, ACCUM = range(7)
 # the kinds written in modules of their own (:mod:`.kinds`: their equations there)
 LEAK, CUSHION, CHECK, LEVEL = KD.leak.CODE, KD.cushion.CODE, KD.check.CODE, KD.level.CODE
+SPOOL, SPOOL_PORT = KD.spool.CODE, KD.spool_port.CODE
+#: where a kind sorts among the records if not at its code: a spool changes nodes' volumes, as a
+#: chamber does, before the accumulators take the nodes' capacitances
+_ORDER = {SPOOL: CHAMBER + 0.5}
 KINDS = ("node", "pump", "orifice", "valve", "relief", "chamber", "accumulator") + tuple(
     KD.MODULES[k].NAME for k in sorted(KD.MODULES))
 # a flow kind's nodes and energy slot (:mod:`.kinds._flow`), a level's event slot
@@ -193,7 +202,8 @@ def compose(records, n_states: int, n_energy: int, n_events: int, piston_energy:
     if [int(r[N_ID]) for r in nodes] != list(range(n_nodes)) or not 1 <= n_states <= n_nodes:
         raise ValueError(f"the nodes must be numbered 0..{n_nodes - 1} and n_states in [1, {n_nodes}]; "
                          f"got ids {[int(r[N_ID]) for r in nodes]} and n_states={n_states}")
-    others = sorted((r for r in recs if int(r[KIND]) != NODE), key=lambda r: int(r[KIND]))
+    others = sorted((r for r in recs if int(r[KIND]) != NODE),
+                    key=lambda r: _ORDER.get(int(r[KIND]), int(r[KIND])))
     own = KD.MODULES.items()  # (the kinds of .kinds declare their slots)
     node_fields = {PUMP: (P_NODE,), ORIFICE: (O_FROM, O_TO), VALVE: (V_P, V_A, V_T), RELIEF: (R_FROM, R_TO),
                    CHAMBER: (C_NODE,), ACCUM: (A_NODE,), **{k: m.NODES for k, m in own}}
@@ -216,8 +226,8 @@ def compose(records, n_states: int, n_energy: int, n_events: int, piston_energy:
     if len(set(chambers)) != len(chambers) or set(chambers) & accums or any(c >= n_states for c in chambers):
         raise ValueError("a chamber needs a node of its own with a state and without an accumulator; got "
                          f"chambers on nodes {chambers}, accumulators on {sorted(accums)}")
-    if sum(int(r[KIND]) == VALVE for r in others) != 1:
-        raise ValueError("the network needs exactly one valve (its spool is the state x_v)")
+    if sum(int(r[KIND]) in (VALVE, SPOOL) for r in others) != 1:
+        raise ValueError("the network needs exactly one valve or spool (its position is the state x_v)")
     if not 0 <= piston_energy < n_energy:
         raise ValueError(f"piston_energy must be in 0..{n_energy - 1}; got {piston_energy}")
     head = np.zeros(NW_SIZE)

@@ -13,7 +13,9 @@ they declare in that order: the nodes with a state first, then the held ones; th
 integrands (:data:`SHARED_ENERGIES`) then the parts'; the events. Each part's
 :meth:`CircuitPart.records` writes its network records (:mod:`._network`) with those numbers, and
 :meth:`Composition.network` gathers them. Nothing here names a part's kind: a part made of the
-network's kinds needs no edit of the drive or of a kernel.
+network's kinds needs no edit of the drive or of a kernel. A part may
+change the state at its own events (:meth:`CircuitPart.at_event`: a spool valve, which replaces the
+preset's valve, stopped at its stop).
 """
 
 from __future__ import annotations
@@ -92,7 +94,9 @@ class CircuitPart:
         preset's valve was (its nodes, energy integrands, events and records in the valve's place),
         and the valve's records leave the network. It then offers what it replaces offered that
         other parts use (a replacing valve its ``valve_return``), and writes the records the network
-        needs (exactly one ``VALVE``, :func:`._network.compose`).
+        needs (exactly one ``VALVE`` or ``SPOOL``, :func:`._network.compose`). A part that replaces the
+        valve with records of another kind (a spool valve, :class:`~impactbar.drives.circuit.SpoolValve`,
+        its state the network's ``x_v``) leaves the drive's switches, ramp and impact's closing unused.
     parameters : dict
         Its continuation parameters: the drive's parameter name to the part's field
         (``{"return_volume": "volume"}``); ``parameter_ranges`` their ranges as
@@ -106,6 +110,9 @@ class CircuitPart:
     si_lists : tuple of PartField
         Its fields that hold a list of values (a configuration's array, each element in the field's
         unit and range; optional, as ``si_fields``; not a parameter).
+    mechanical : tuple of str
+        Its nodes whose state is not a pressure (a spool's velocity; optional): they start at 0, may be
+        negative and are not watched for cavitation.
 
     See Also
     --------
@@ -159,6 +166,20 @@ class CircuitPart:
     connections: dict = {}
     #: its fields that hold a list of values, each in the :class:`PartField`'s unit and range
     si_lists: tuple = ()
+    #: its nodes whose state is not a pressure
+    mechanical: tuple = ()
+
+    def at_event(self, event: str, flag: int, z, layout) -> tuple:
+        """The mode's flag and the circuit's state ``z`` after the part's event ``event`` (its flag
+        toggled to ``flag``): unchanged, unless the part says otherwise (a spool's arrival at its
+        stop stops it).
+
+        Returns
+        -------
+        tuple
+            ``(flag, z)``.
+        """
+        return flag, z
 
     def records(self, slots: PartSlots, oil) -> list:
         """The part's network records (:func:`._network.record`).
@@ -492,7 +513,9 @@ def compose_parts(parts, base=()) -> Composition:
     terms = [term for _, term in SHARED_ENERGIES]
     events: list = []
     offers: dict = {}
+    mechanical: list = []
     for p in circuit:
+        mechanical += p.mechanical
         if len(p.symbols) != len(p.nodes):
             raise ValueError(f"a {type(p).__name__}'s symbols must name its nodes {p.nodes}; got {p.symbols}")
         nodes += p.nodes
@@ -526,6 +549,6 @@ def compose_parts(parts, base=()) -> Composition:
             raise ValueError(f"the port {port!r} joins the node {node!r}; the circuit's nodes are "
                              f"{tuple(number)}")
     layout = CircuitLayout(states=(*nodes, "spool"), state_names=(*symbols, "x_v"), energies=tuple(energies),
-                           terms=tuple(terms))
+                           terms=tuple(terms), mechanical=tuple(mechanical))
     return Composition(PRESET if layout == PRESET else layout, number, len(nodes), tuple(events),
                        {port: number[taken.get(port, node)] for port, node in offers.items()}, tuple(circuit))

@@ -125,6 +125,8 @@ class CircuitEnergy(dict):
         out = cls(pump=pump, piston=float(sums["piston"]), orifices=float(sums["orifices"]),
                   tank=float(sums["tank"]), compression=float(sums["compression"]),
                   accumulator=float(sums["accumulator"]))
+        if "spool" in sums:  # (a spool valve's: its kinetic energy's change, stops' and damping's losses)
+            out["spool"] = float(sums["spool"])
         out["residual"] = float(pump - np.sum(np.delete(E, at["pump"])))
         out["relative_residual"] = out["residual"] / max(abs(pump), 1e-300)
         return out
@@ -273,7 +275,8 @@ class HydraulicCircuitDrive(Drive):
             beta = self.oil.bulk_modulus
             L = self.layout  # (the pressures, then optionally the spool's opening)
             if len(sp) not in (L.n_states - 1, L.n_states) \
-                    or not all(math.isfinite(x) and x >= 0.0 for x in sp) \
+                    or not all(math.isfinite(x) and (x >= 0.0 or n in L.mechanical)
+                               for x, n in zip(sp, L.states, strict=False)) \
                     or (len(sp) == L.n_states and sp[L["spool"]] > 1.0) \
                     or not all(sp[i] < beta for i in range(L.n_states - 1)):
                 raise ValueError(f"start_pressures must be the {L.n_states - 1} finite pressures >= 0 "
@@ -332,7 +335,8 @@ class HydraulicCircuitDrive(Drive):
     # -- compiled data ----------------------------------------------------------------------------
     def _par(self, model, mode, variational=False) -> np.ndarray:
         par = _par_base(self, model).copy()
-        target, moving, acc, rel = mode[:4]  # (the hand-written kernels' flags; the bar's head)
+        target, moving = mode[:2]  # (the hand-written kernels' flags; the bar's head)
+        acc, rel = self._flags(mode)
         par[K.ACC] = float(acc)
         par[K.REL] = float(rel)
         tau = self.valve.switching_time
@@ -340,6 +344,8 @@ class HydraulicCircuitDrive(Drive):
         par[K.OPEN] = (1.0 if target else -1.0) if moving else 0.0
         par[K.ARMO] = 1.0 if target == 0 else 0.0
         par[K.ARMI] = 1.0 if (target == 1 and self.valve.switch_in is not None) else 0.0
+        if self._stand_in:  # (a part in the valve's place: no switches)
+            par[K.ARMO] = par[K.ARMI] = 0.0
         par[K.VAR] = 1.0 if variational else 0.0
         return par
 
@@ -354,6 +360,19 @@ class HydraulicCircuitDrive(Drive):
         """The circuit composed of the preset's parts and its extra parts
         (:func:`.composition.compose_parts`)."""
         return compose_parts(self.extra_parts, preset_parts(self))
+
+    @functools.cached_property
+    def _stand_in(self) -> bool:
+        """Whether a part that replaces the preset's valve (:attr:`.composition.CircuitPart.replaces`)
+        writes no ramped valve (a spool valve): its switches, ramp and the impact's closing are then
+        not used (the mode's target and ramp stay 0), the part's state is ``x_v``."""
+        recs = np.asarray(self._network((0,) * (1 + len(self._composition.events)))[NW.NW_SIZE:])
+        return not any(int(r[NW.KIND]) == NW.VALVE for r in recs.reshape(-1, NW.REC_SIZE))
+
+    def _flags(self, mode) -> tuple:
+        """The mode's flags ``(acc, rel)`` of the preset's accumulator and relief (by their events' slots)."""
+        ev = self._composition.events
+        return mode[1 + ev.index(_ACC)], mode[1 + ev.index(_REL)]
 
     @functools.cached_property
     def _watched(self) -> tuple:
@@ -424,12 +443,15 @@ class HydraulicCircuitDrive(Drive):
         if sup.held:
             ps = sup.pressure
         gap = -float(np.asarray(q)[0])
-        target = 1 if gap >= self.valve.switch_out else 0
+        target = 1 if gap >= self.valve.switch_out and not self._stand_in else 0
         z = np.empty(L.n_states)
         for name in L.states[L["supply"] + 1:L["spool"]]:  # (the extra parts' nodes: the tank's pressure)
-            z[L[name]] = sup.tank_pressure if self.start_pressures is None else self.start_pressures[L[name]]
+            z[L[name]] = (0.0 if name in L.mechanical else sup.tank_pressure) \
+                if self.start_pressures is None else self.start_pressures[L[name]]
         z[L["front"]], z[L["rear"]], z[L["supply"]], z[L["spool"]] = pf, pr, ps, float(target)
-        if xv is not None and xv != float(target):
+        if xv is not None and self._stand_in:  # (its position as given: no ramp)
+            z[L["spool"]] = xv
+        elif xv is not None and xv != float(target):
             z[L["spool"]] = xv
             return self._toward(self._mode(1 - target, 0, ps, z, q), z, target)
         return DriveState(self._mode(target, 0, ps, z, q), z)
@@ -481,10 +503,11 @@ class HydraulicCircuitDrive(Drive):
         return out[self.layout.size(M):].copy()
 
     def events(self, mode):
-        target, moving, acc, rel = mode[:4]
+        target, moving = mode[:2]
+        acc, rel = self._flags(mode)
         sp, ps = self.layout["spool"], self.layout.supply
         out = []
-        if target == 0:
+        if target == 0 and not self._stand_in:
             out.append(GapCrossing(_SWITCH_OUT, level=self.valve.switch_out, direction=1))
         if target == 1 and self.valve.switch_in is not None:
             out.append(GapCrossing(_SWITCH_IN, level=self.valve.switch_in, direction=-1))
@@ -524,7 +547,7 @@ class HydraulicCircuitDrive(Drive):
         return DriveState((target, 1, *flags), z)
 
     def jump(self, mode, z, event, t, q, v) -> DriveState:
-        target, moving, acc, rel = mode[:4]
+        target = mode[0]
         name = event.name
         if name == _SWITCH_OUT:
             return self._toward(mode, z, 1)
@@ -536,11 +559,15 @@ class HydraulicCircuitDrive(Drive):
             return DriveState((target, 0, *mode[2:]), z)
         if name in self._composition.events:  # (its flag toggled: acc, rel, an extra part's)
             i = 1 + self._composition.events.index(name)
-            return DriveState((*mode[:i], 1 - mode[i], *mode[i + 1:]), z)
+            flag = 1 - mode[i]
+            for part in self.extra_parts:  # (its part's say on the flag and the state)
+                if name in part.events:
+                    flag, z = part.at_event(name, flag, z, self.layout)
+            return DriveState((*mode[:i], flag, *mode[i + 1:]), z)
         raise ValueError(f"unknown event {name!r} of the oil circuit")  # pragma: no cover
 
     def impact(self, mode, z, t, q, v) -> DriveState:
-        if self.valve.switch_in is not None:
+        if self.valve.switch_in is not None or self._stand_in:
             return DriveState(mode, self._held(z))
         return self._toward(mode, z, 0)
 

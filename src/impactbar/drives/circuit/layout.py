@@ -17,7 +17,7 @@ __all__ = ["CircuitLayout", "PRESET"]
 
 #: the terms of the energy account (:class:`~impactbar.drives.circuit.CircuitEnergy`), and the
 #: preset integrands' by name
-_TERMS = ("pump", "piston", "orifices", "tank", "compression", "accumulator")
+_TERMS = ("pump", "piston", "orifices", "tank", "compression", "accumulator", "spool")
 _PRESET_TERMS = {"pump": "pump", "piston": "piston", "orifices": "orifices", "tank": "tank",
                  "front": "compression", "rear": "compression", "supply": "compression", "gas": "accumulator"}
 
@@ -37,9 +37,11 @@ class CircuitLayout:
         The energy integrands' names in the kernel's order (:class:`~impactbar.drives.circuit.CircuitEnergy`).
     terms : tuple of str, optional
         The term of the energy account each integrand adds to (``"pump"``, ``"piston"``,
-        ``"orifices"``, ``"tank"``, ``"compression"``, ``"accumulator"``), in the same order;
-        default: the preset's by name (``front``, ``rear``, ``supply``: ``compression``; ``gas``:
-        ``accumulator``; the others their own).
+        ``"orifices"``, ``"tank"``, ``"compression"``, ``"accumulator"``, ``"spool"``: the work on a
+        spool valve's spool), in the same order; default: the preset's by name (``front``, ``rear``,
+        ``supply``: ``compression``; ``gas``: ``accumulator``; the others their own).
+    mechanical : tuple of str, optional
+        The states that are not pressures (a spool's velocity): not watched for cavitation.
 
     Raises
     ------
@@ -60,6 +62,7 @@ class CircuitLayout:
     state_names: tuple
     energies: tuple
     terms: tuple = ()
+    mechanical: tuple = ()
 
     def __post_init__(self) -> None:
         for name in ("states", "state_names", "energies"):

@@ -1,7 +1,8 @@
 """The watched events of a circuit's extra parts, read from its network (:mod:`._network`): an
 accumulator's pre-charge, a relief's setting (a node's pressure through a level), and the levels of
 the kinds of :mod:`.kinds` (the piston's gap or a pressure drop through a level: a cushion's or a
-check valve's kinks), each a flag of the drive's mode."""
+check valve's kinks) or the spool's position (a spool valve's ports' kinks), and a spool's stop
+(:mod:`.kinds.spool`), each a flag of the drive's mode."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import numpy as np
 
 from . import _network as NW
 from .kinds import level as LV
+from .kinds import spool as SP
 
 __all__ = ["Watch", "watched"]
 
@@ -29,7 +31,8 @@ class Watch:
     level : float
         The level its quantity passes.
     kind : int
-        The record's kind: :data:`._network.ACCUM`, :data:`._network.RELIEF` or :data:`._network.LEVEL`.
+        The record's kind: :data:`._network.ACCUM`, :data:`._network.RELIEF`, :data:`._network.LEVEL`
+        or :data:`._network.SPOOL` (its stop: the quantity is at or above 0 where it rests).
     node : int or None
         The node whose pressure is watched (an accumulator's, a relief's), else ``None``.
     quantity : callable
@@ -50,9 +53,19 @@ class Watch:
         return int(x > self.level if self.kind == NW.RELIEF else x >= self.level)
 
 
-def _level(record, pressure):
-    """A watched level's ``quantity(q, z)`` (the gap ``-q_0`` or a pressure drop)."""
+def _level(record, pressure, ns):
+    """A watched level's ``quantity(q, z)`` (the gap ``-q_0``, the spool's position ``z[ns]`` or a
+    pressure drop)."""
+    if record[LV.GAP] == LV.SPOOL:
+        return lambda q, z: float(z[ns])
     return lambda q, z: LV.quantity(record, lambda j: pressure(z, j), -float(q[0]))
+
+
+def _stop(record, pressure, ns):
+    """A spool's stop's ``quantity(q, z)`` (:func:`.kinds.spool.stop_quantity`)."""
+    ac, a0 = float(record[SP.LARGE]), float(record[SP.SMALL])
+    c, s = int(record[SP.CONTROL]), int(record[SP.SUPPLY])
+    return lambda q, z: SP.stop_quantity(float(z[ns]), ac * pressure(z, c) - a0 * pressure(z, s))
 
 
 def watched(net, events, own=()) -> tuple:
@@ -78,6 +91,8 @@ def watched(net, events, own=()) -> tuple:
             out.append((int(r[NW.R_EV]), float(r[NW.R_SET]), kind, node,
                         lambda q, z, j=node: pressure(z, j)))
         elif kind == NW.LEVEL and r[NW.LV_EV] >= 0:
-            out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _level(r.copy(), pressure)))
+            out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _level(r.copy(), pressure, ns)))
+        elif kind == NW.SPOOL and r[SP.EVENT] >= 0:
+            out.append((int(r[SP.EVENT]), 0.0, kind, None, _stop(r.copy(), pressure, ns)))
     return tuple(Watch(events[slot], slot, level, kind, node, f)
                  for slot, level, kind, node, f in sorted(out, key=lambda e: e[0]) if events[slot] not in own)

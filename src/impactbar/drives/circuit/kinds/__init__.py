@@ -17,22 +17,28 @@ event of the gap or of a pressure drop.
 - :mod:`.leak`: laminar leakage ``G (p_a - p_b)``;
 - :mod:`.cushion`: a position-controlled orifice ``K g(y) phi(p_a - p_b)``;
 - :mod:`.check`: a check valve ``K o(dp) phi(dp)``;
-- :mod:`.level`: a watched level of the gap or of a pressure drop.
+- :mod:`.level`: a watched level of the gap, of a pressure drop or of a spool's position;
+- :mod:`.spool`: a pilot-operated spool's mechanics (the state of the part that replaces the valve);
+- :mod:`.spool_port`: a spool valve's main port, ``K o(x) phi(p_a - p_b)`` (in :data:`SPOOL_FLOWS`:
+  its opening a function of the spool's position ``x``, not of the gap).
 """
 
 from __future__ import annotations
 
 import numba as nb
 
-from . import check, cushion, leak, level
+from . import check, cushion, leak, level, spool, spool_port
 from ._flow import JIT
 
-__all__ = ["FLOWS", "MODULES", "law", "check", "cushion", "leak", "level"]
+__all__ = ["FLOWS", "SPOOL_FLOWS", "MODULES", "law", "check", "cushion", "leak", "level", "spool",
+           "spool_port"]
 
 #: the kinds that pass a flow between two nodes
 FLOWS = (leak, cushion, check)
+#: the kinds that pass a flow between two nodes through an opening set by the spool's position
+SPOOL_FLOWS = (spool_port,)
 #: every kind of this package by its code
-MODULES = {m.CODE: m for m in (*FLOWS, level)}
+MODULES = {m.CODE: m for m in (*FLOWS, level, spool, *SPOOL_FLOWS)}
 
 
 @nb.njit(**JIT)
@@ -41,6 +47,6 @@ def law(kind, par, r, pa, pb, gap):
     module's ``law``)."""
     if kind == leak.CODE:
         return leak.law(par, r, pa, pb, gap)
-    if kind == cushion.CODE:
+    if kind == cushion.CODE or kind == spool_port.CODE:  # (a spool's port: ``gap`` its position)
         return cushion.law(par, r, pa, pb, gap)
     return check.law(par, r, pa, pb, gap)
