@@ -95,11 +95,11 @@ def test_the_spool_valves_kinds_give_their_equations_and_the_generated_code_thei
     mode's flags those of the state): the interpreted network against :func:`field`, its Jacobian
     against central differences, its events against the levels, the account closing at each point,
     and the code generated for its topology the interpreted network's numbers to the bit."""
+    import network_interpreter as NW
     from circuit_parts_reference import network_jacobian_fd
 
-    from impactbar.drives.circuit import _kernel as K
+    from impactbar.drives.circuit import _field as K
     from impactbar.drives.circuit import _netgen as NG
-    import network_interpreter as NW
 
     model, drive = preset[0].with_(n_modes=n_modes), dataclasses.replace(preset[1], extra_parts=(spool(),))
     L, M = drive.layout, n_modes + 1

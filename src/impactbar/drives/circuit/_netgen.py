@@ -128,7 +128,7 @@ from impactbar.drives.circuit.kinds import leak as KIND_leak
 from impactbar.drives.circuit.kinds import level as KIND_level
 from impactbar.drives.circuit.kinds import spool as KIND_spool
 from impactbar.drives.circuit.kinds import spool_port as KIND_spool_port
-from impactbar.dynamics.kernels import CACHE
+from impactbar.dynamics.compiled import CACHE
 
 _JIT = dict(cache=CACHE and not globals().get("_IN_MEMORY", False), nogil=True, error_model="numpy")
 '''

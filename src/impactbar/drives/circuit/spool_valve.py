@@ -60,7 +60,8 @@ class SpoolValve(NamedPart):
     spool's small end is a volume of the supply node, ``V_s - A_0 x_s``. The spool's velocity is a
     state of its own (a node ``<name>_v``, :mod:`.kinds.spool`).
 
-    Events: the valve's ``ramp_end`` (its slot kept, never armed), the spool's arrival at a stop and its leaving it (``<name>_stop``), the main ports' kinks
+    Events: the valve's ``ramp_end`` (its slot kept, never armed), the spool's arrival at a stop and
+    its leaving it (``<name>_stop``), the main ports' kinks
     (``<name>_open_p``, ``<name>_open_t``: ``x`` through ``(1 + l)/2``, ``(1 - l)/2``), the pilot
     ports' kinks (``<name>_pilot0`` .. ``3``: ``y`` through ``y_open - d_y``, ``y_open``, ``y_close``,
     ``y_close + d_y``). Energy integrands: the main ports' loss (``<name>_ports``) and the pilot's

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numba as nb
 
-from .._kernel import _off_level
+from .._field import _off_level
 from ._flow import JIT
 
 CODE = 11
