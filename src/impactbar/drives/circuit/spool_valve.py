@@ -203,7 +203,8 @@ class SpoolValve(NamedPart):
     def at_event(self, event, flag, z, layout):
         """At the spool's arrival at a stop (``<name>_stop`` to 1): the spool put on the stop at rest,
         and left free where the force already points away from it."""
-        if event != self.events[1] or flag != 1:
+        _, stop, *_ = self.events
+        if event != stop or flag != 1:
             return flag, z
         z = np.array(z, dtype=float)
         x = 1.0 if z[layout["spool"]] >= 0.5 else 0.0
@@ -218,14 +219,14 @@ class SpoolValve(NamedPart):
         n, f, ev, en = self.name, slots.flags, slots.events, slots.energy
         c, v = slots.node(n, self), slots.node(f"{n}_v", self)
         supply, rear, ret = slots.nodes["supply"], slots.nodes["rear"], slots.ports["valve_return"]
-        _, stop, open_p, open_t, *pilot = self.events
+        _, stop, open_p, open_t, p0, p1, p2, p3 = self.events
         ptr2, lap = oil.transition_pressure ** 2, self.lap
         h = 0.5 * (1.0 - lap)
-        kp = (-(0.5 * (1.0 + lap)) / h, 1.0 / h) if f[open_p] else (0.0, 0.0)
-        kt = (0.0, 0.0) if f[open_t] else (1.0, -1.0 / h)
+        kp_i, kp_s = (-(0.5 * (1.0 + lap)) / h, 1.0 / h) if f[open_p] else (0.0, 0.0)
+        kt_i, kt_s = (0.0, 0.0) if f[open_t] else (1.0, -1.0 / h)
         (a0, a1), (t0, t1) = self.pilot_gaps
-        ap = opening_segment((a0, a1), (0.0, 1.0), (f[pilot[0]], f[pilot[1]]))
-        at = opening_segment((t0, t1), (1.0, 0.0), (f[pilot[2]], f[pilot[3]]))
+        ap_i, ap_s = opening_segment((a0, a1), (0.0, 1.0), (f[p0], f[p1]))
+        at_i, at_s = opening_segment((t0, t1), (1.0, 0.0), (f[p2], f[p3]))
         ports, pl = slots.loss(f"{n}_ports"), slots.loss(f"{n}_pilot")
         out = [record(NODE, id=c, volume=self.control_volume, beta=oil.bulk_modulus,
                       compression_energy=en[n]),
@@ -235,15 +236,15 @@ class SpoolValve(NamedPart):
                       small_area=self.small_area, stroke=self.stroke, damping=self.damping,
                       energy=en[f"{n}_damping"], event=ev[stop]),
                record(SPOOL_PORT, source=supply, target=rear, coefficient=self.coefficient, ptr2=ptr2,
-                      intercept=kp[0], slope=kp[1], energy=ports),
+                      intercept=kp_i, slope=kp_s, energy=ports),
                record(SPOOL_PORT, source=rear, target=ret, coefficient=self.coefficient, ptr2=ptr2,
-                      intercept=kt[0], slope=kt[1], energy=ports),
+                      intercept=kt_i, slope=kt_s, energy=ports),
                record(LEVEL, gap=AT_SPOOL, level=0.5 * (1.0 + lap), on=f[open_p], event=ev[open_p]),
                record(LEVEL, gap=AT_SPOOL, level=h, on=f[open_t], event=ev[open_t]),
                record(CUSHION, source=supply, target=c, coefficient=self.pilot_coefficient, ptr2=ptr2,
-                      intercept=ap[0], slope=ap[1], energy=pl),
+                      intercept=ap_i, slope=ap_s, energy=pl),
                record(CUSHION, source=c, target=ret, coefficient=self.pilot_coefficient, ptr2=ptr2,
-                      intercept=at[0], slope=at[1], energy=pl)]
-        for e, y in zip(pilot, (a0, a1, t0, t1), strict=True):
+                      intercept=at_i, slope=at_s, energy=pl)]
+        for e, y in zip((p0, p1, p2, p3), (a0, a1, t0, t1), strict=True):
             out.append(record(LEVEL, gap=1, level=y, on=f[e], event=ev[e]))
         return out
