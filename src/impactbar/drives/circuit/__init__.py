@@ -43,8 +43,8 @@ from .composition import PartField as PartField
 from .composition import PartSlots as PartSlots
 from .cushion import Cushion as Cushion
 from .drive import PARAMETERS as PARAMETERS
-from .drive import CircuitEnergy as CircuitEnergy
 from .drive import HydraulicCircuitDrive as HydraulicCircuitDrive
+from .energy import CircuitEnergy as CircuitEnergy
 from .leak import Leak as Leak
 from .leakage import LaminarLeak as LaminarLeak
 from .parts import Accumulator as Accumulator
