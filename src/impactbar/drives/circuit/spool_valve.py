@@ -80,7 +80,7 @@ class SpoolValve(NamedPart):
     stroke : float
         ``h_s > 0`` (bar lengths).
     damping : float
-        ``b_s >= 0`` (the piston's mass times the circuit's frequency scale).
+        :math:`b_s \ge 0` (the piston's mass times the circuit's frequency scale).
     large_area, small_area : float
         ``A_c > A_0 > 0`` (the rear area's scale).
     control_volume : float
@@ -102,7 +102,7 @@ class SpoolValve(NamedPart):
     Raises
     ------
     ValueError
-        A value out of its range, ``A_0 >= A_c``, the pilot ports overlapping.
+        A value out of its range, :math:`A_0 \ge A_c`, the pilot ports overlapping.
 
     Examples
     --------

@@ -11,7 +11,7 @@ energy's rate; held, the spool rests at a stop):
   it, the supply's on the small end closes it), ``x' = v_s / h_s``;
 - the control chamber's volume is its node's ``V_c + A_c x_s``, its net inflow takes ``-A_c v_s``;
   the supply node's volume ``V_s - A_0 x_s``, its net inflow ``+A_0 v_s``;
-- the damping's loss ``b_s v_s^2`` into the record's energy slot;
+- the damping's loss :math:`b_s v_s^2` into the record's energy slot;
 - the stop's event: free, ``-x (1 - x)`` (rising through 0 at either stop); resting at a stop, the
   force into it (``-(A_c p_c - A_0 p_s)`` at 0, ``+`` at 1; falling through 0 where it turns strictly
   away).
@@ -46,7 +46,7 @@ def force(par, r, pc, ps):
 
 
 def stop_quantity(x, force_):
-    """The stop's event quantity in Python: at a stop (``x <= 0`` or ``x >= 1``) the force into it,
+    r"""The stop's event quantity in Python: at a stop (:math:`x \le 0` or :math:`x \ge 1`) the force into it,
     else ``-x (1 - x)`` (so that it is at or above 0 exactly where the spool rests)."""
     if x <= 0.0:
         return -force_
