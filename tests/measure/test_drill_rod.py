@@ -78,6 +78,49 @@ def test_the_rock_from_the_curve_and_from_the_models_blow(rod):
     assert fit["misfit"] == pytest.approx(0.01, rel=0.1)  # the noise's share: 0.2 % of the peak
 
 
+OLD = {  # the older spelling: the gauges' bar as [bars.rod], the model's rod as two lists
+    "rod": """[bars.rod]
+young_modulus = 2.0e11
+density = 8000.0
+area = 0.8e-3
+""",
+    "model": "[model]\nrod_lengths = [0.5, 3.0]\nrod_areas = [1.2e-3, 0.8e-3]\n",
+}
+
+
+def _older(text: str) -> str:
+    start = text.index("[[rod.segments]]")
+    end = text.index("[channels.near]")
+    return (text[:start] + OLD["rod"] + "\n" + text[end:]).replace("[model]\n", OLD["model"])
+
+
+def test_the_rod_is_the_models_rod_read_by_its_reader():
+    """The spec's [[rod.segments]] are a drifter's [rod]: with a [rock] beside them, the model's
+    configuration reader (rock_from_config) reads the same pieces the measurement does, and they
+    are the rod that made the recording; the gauges' bar is the last segment."""
+    import tomllib
+
+    from impactbar.measure.spec import _drill_rod, read_spec
+    from impactbar.physical import Bar as Piston
+    from impactbar.physical.rock import rock_from_config
+
+    spec = read_spec(SPEC)
+    bar, pieces = _drill_rod(spec)
+    config = {"rod": tomllib.loads(SPEC.read_text())["rod"], "rock": {"k": "300 kN/mm", "k_u": "3000 kN/mm"}}
+    piston = Piston(E_Pa=2.1e11, density_kg_m3=7850.0, length_m=0.3, area_m2=1.0e-3)
+    assert rock_from_config(config, piston).segments == pieces == tuple(MAKE["ROD"])
+    assert (bar.young_modulus, bar.density, bar.area) == (2.0e11, 8000.0, 0.8e-3)
+
+
+def test_the_older_spelling_gives_the_same_report(rod, tmp_path):
+    """[bars.rod] and model.rod_lengths/rod_areas, the spelling before [rod], still read: the report
+    is the same to the last bit."""
+    text = SPEC.read_text().replace('file = "data/', f'file = "{ROOT / "examples" / "data"}/')
+    (tmp_path / "old.toml").write_text(_older(text))
+    assert "[[rod.segments]]" not in _older(text) and "rod_areas" in _older(text)
+    assert run_spec(tmp_path / "old.toml").report == rod.report
+
+
 def test_the_cli_prints_the_report_as_json_and_writes_the_bits_histories(tmp_path, capsys):
     assert main(["measure", str(SPEC), "--json", "--out", str(tmp_path)]) == 0
     report = json.loads(capsys.readouterr().out)
@@ -97,6 +140,20 @@ def test_the_cli_prints_the_report_as_json_and_writes_the_bits_histories(tmp_pat
     (lambda s: s.replace('bar = "rod"', 'bar = "drill"', 1), "channel 'near' sits on bar 'drill'"),
     (lambda s: s.replace("station = 0.20\n", ""), "channels.far.station is missing"),
     (lambda s: s + '\n[specimen]\nlength = 1e-3\narea = 1e-6\n', "[specimen] or a drill rod's [bit]"),
+    # the rod in the model's keys, refused by the model's reader
+    (lambda s: s.replace('E = "200 GPa"\n', "", 1), "missing key rod.segments[0].E"),
+    (lambda s: s.replace('area = "0.8e-3 m^2"', 'area = "-0.8e-3 m^2"'), "rod.segments[1].area"),
+    (lambda s: s.replace('area = "0.8e-3 m^2"', 'area = "0.8e-3 m"'), "rod.segments[1].area must be an area"),
+    (lambda s: s.replace('area = "0.8e-3 m^2"', 'area = "0.8e-3 m^2"\ndiameter = "32 mm"'),
+     "give exactly one of rod.segments[1].diameter and rod.segments[1].area"),
+    (lambda s: s.replace('length = "3.0 m"', 'length = "3.0 m"\nlenght = "1 m"'),
+     "unknown key rod.segments[1].lenght"),
+    (lambda s: s.replace('length = "3.0 m"', 'length = "0.18 m"'),
+     "channels.far.station must lie on the rod's last segment, 0 <= x < 0.18 m"),
+    (lambda s: s.replace("[model]\n", "[model]\nrod_lengths = [0.5, 3.0]\n"),
+     "model.rod_lengths: the model's rod is [rod]'s segments"),
+    (lambda s: s + '\n[bars.rod]\nyoung_modulus = 2e11\ndensity = 8000.0\narea = 0.8e-3\n',
+     "[rod] (its [[rod.segments]], the model's keys) or the older [bars.rod], not both"),
 ])
 def test_bad_specs_are_refused_in_one_line(tmp_path, capsys, edit, message):
     text = SPEC.read_text().replace('file = "data/', f'file = "{ROOT / "examples" / "data"}/')

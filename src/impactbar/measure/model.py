@@ -30,7 +30,7 @@ import numpy as np
 from .._shared.validate import check_real
 from ..physical import tree
 
-__all__ = ["gauge_strains", "Comparison", "compare", "BlowFit", "fit_blow", "FIT_PARAMETERS"]
+__all__ = ["gauge_strains", "model_rod", "Comparison", "compare", "BlowFit", "fit_blow", "FIT_PARAMETERS"]
 
 #: the blow's parameters a fit can vary, each with its SI unit: the impact velocity, and the rock's and
 #: the bit's keys of the configuration (:data:`impactbar.physical.tree.FIELDS`, those of a drill string)
@@ -70,8 +70,10 @@ def gauge_strains(rod, *, piston_lengths, piston_areas, values: dict, stations, 
 
     Parameters
     ----------
-    rod : sequence of RodPiece
-        The drill string from its struck end (:class:`~impactbar.physical.rock.RodPiece`, SI).
+    rod : sequence of RodPiece, or dict
+        The drill string from its struck end (:class:`~impactbar.physical.rock.RodPiece`, SI), or
+        the model's ``[rod]`` table (``{"segments": [...]}``, or a configuration or spec holding it),
+        read as a configuration's (:func:`model_rod`).
     piston_lengths, piston_areas : sequence of float, shape (n,)
         The piston's segments (m, m^2), driven end first (one segment: a uniform piston).
     values : dict
@@ -110,9 +112,9 @@ def gauge_strains(rod, *, piston_lengths, piston_areas, values: dict, stations, 
     >>> round(float(eps[1.0][0]) * 1e6, 1)  # -V / (2 c): the piston and rod of one impedance
     -966.7
     """
-    from ..physical.piston import _model_units, _pieces, piston_blow
+    from ..physical.piston import _model_units, piston_blow
 
-    pieces = _pieces(rod)
+    pieces = model_rod(rod)
     v = _values(values)
     try:
         xs = [check_real(f"stations[{j}]", x) for j, x in enumerate(stations)]
@@ -138,6 +140,44 @@ def gauge_strains(rod, *, piston_lengths, piston_areas, values: dict, stations, 
         j, piece = where[x]
         out[x] = -blow.junction_force(j, t / time_s) * force_N / (piece.E_Pa * piece.area_m2)
     return out
+
+
+def model_rod(rod) -> tuple:
+    """The model's rod: RodPieces as given, or read from the model's ``[rod]`` table.
+
+    Parameters
+    ----------
+    rod : RodPiece, sequence of RodPiece, or dict
+        A dict is the ``[rod]`` table of a hammer's or a drifter's configuration (``{"segments":
+        [...]}``, SI quantities with units) or a configuration or measurement spec holding one,
+        read by :func:`impactbar.physical.rock.rod_from_config`, each segment with its own ``E`` and
+        ``density``.
+
+    Returns
+    -------
+    tuple of RodPiece
+        From the struck end.
+
+    Raises
+    ------
+    ValueError
+        The reader's refusals (a missing, unknown or invalid key, named), or a rod that is none of
+        these.
+
+    Examples
+    --------
+    >>> steel = {"E": "210 GPa", "density": "7850 kg/m^3"}  # quantities with units (pint)
+    >>> rod = model_rod({"segments": [{"length": "3 m", "diameter": "32 mm", **steel}]})
+    >>> round(rod[0].area_m2 * 1e6, 2), round(rod[0].wave_speed_m_s, 1)
+    (804.25, 5172.2)
+    """
+    from ..physical.piston import _pieces
+
+    if isinstance(rod, dict):
+        from ..physical.rock import rod_from_config
+
+        return rod_from_config(rod if "rod" in rod else {"rod": rod})
+    return _pieces(rod)
 
 
 def _values(values) -> dict:
@@ -351,6 +391,7 @@ def fit_blow(time, strains: dict, rod, *, piston_lengths, piston_areas, values: 
     if len(set(names)) != len(names):
         raise ValueError(f"vary names a parameter twice: {names}")
     start = _values(values)
+    rod = model_rod(rod)
     t = np.asarray(time, dtype=float)
     if not isinstance(strains, dict) or not strains:
         raise ValueError("strains must be a dict of gauge stations (m) to strain histories")

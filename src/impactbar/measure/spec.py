@@ -36,20 +36,38 @@
     [dispersion]                          # optional: the waves carried in a round bar's first mode
     poisson = 0.33                        # the bars' Poisson ratio (radius sqrt(area / pi))
 
-A drill rod's spec has ``[bars.rod]``, two channels on it (stations from the bit) and a ``[bit]``
-table instead of ``[specimen]`` (:func:`~impactbar.measure.analyse_drill_rod`)::
+A drill rod's spec has ``[rod]``, two channels on it (``bar = "rod"``, stations from the bit) and a
+``[bit]`` table instead of ``[specimen]`` (:func:`~impactbar.measure.analyse_drill_rod`). Its
+``[[rod.segments]]`` are the model's: the keys, units and checks of a hammer's or a drifter's
+``[rod]`` (examples/circuit_drifter_rock.toml), read by the same reader
+(:func:`impactbar.physical.rock.rod_from_config`), from the struck end to the bit, each segment
+giving its own ``E`` and ``density`` (a measurement has no piston to take them from); the gauges sit
+on the last segment, whose section and material the two-point separation takes::
+
+    [[rod.segments]]                      # the shank, from the struck end
+    length = "0.5 m"
+    area = "1.2e-3 m^2"                   # or diameter = "39 mm"
+    E = "200 GPa"
+    density = "8000 kg/m^3"
+    [[rod.segments]]                      # the rod, down to the bit: the gauges' segment
+    length = "3.0 m"
+    area = "0.8e-3 m^2"
+    E = "200 GPa"
+    density = "8000 kg/m^3"
 
     [bit]
     cutoff_hz = 40.0e3                    # optional: default 0.8 c / (2 (x_far - x_near))
     leak = 1.0                            # optional
 
-    [model]                               # optional: the model's blow fitted to the two gauges
-    rod_lengths = [0.5, 3.0]              # m, from the struck end
-    rod_areas = [1.2e-3, 0.8e-3]          # m^2 (the material: [bars.rod]'s)
+    [model]                               # optional: the model's blow, on [rod], fitted to the gauges
     piston_lengths = [0.3]                # m
     piston_areas = [1.0e-3]               # m^2
     start = {impact_velocity = 8.0, "rock.k" = 2.0e8, "rock.k_u" = 2.0e9}
     vary = ["impact_velocity", "rock.k", "rock.k_u"]
+
+The older spelling stays: the gauges' bar as ``[bars.rod]`` (the Kolsky bars' keys) and the model's
+rod as ``model.rod_lengths`` and ``model.rod_areas`` (m, m^2, from the struck end, of ``[bars.rod]``'s
+material).
 """
 
 from __future__ import annotations
@@ -64,7 +82,7 @@ from .recording import Bar, Gauge, Recording
 
 __all__ = ["read_spec", "run_spec"]
 
-_SECTIONS = {"recording", "bars", "channels", "specimen", "striker", "detection", "bit", "model",
+_SECTIONS = {"recording", "bars", "rod", "channels", "specimen", "striker", "detection", "bit", "model",
              "dispersion"}
 
 
@@ -83,12 +101,18 @@ def read_spec(path) -> dict:
     unknown = set(spec) - _SECTIONS
     if unknown:
         raise ValueError(f"spec {path}: unknown table(s) {sorted(unknown)}; allowed {sorted(_SECTIONS)}")
-    for needed in ("recording", "bars", "channels"):
+    for needed in ("recording", "channels"):
         if needed not in spec:
             raise ValueError(f"spec {path}: the table [{needed}] is missing")
     if ("specimen" in spec) == ("bit" in spec):
         raise ValueError(f"spec {path}: a Kolsky bar's [specimen] or a drill rod's [bit] is needed (one "
                          "of them)")
+    if "rod" in spec and "bit" not in spec:
+        raise ValueError(f"spec {path}: [rod] (the model's [[rod.segments]]) describes a drill rod, whose "
+                         "spec has a [bit]; a Kolsky bar's bars are [bars.incident] and [bars.transmitted]")
+    if "bars" not in spec and "rod" not in spec:
+        raise ValueError(f"spec {path}: the table [bars] is missing" + (" (or a drill rod's [rod])"
+                                                                         if "bit" in spec else ""))
     spec["_folder"] = path.parent
     return spec
 
@@ -148,31 +172,57 @@ def _gauges(spec: dict) -> dict:
     return {c: Gauge(**_table(spec, f"channels.{c}", keys, {"bar", "station"})) for c in spec["channels"]}
 
 
-def _run_drill_rod(spec: dict, recording: Recording, baseline) -> DrillRodTest:
+def _drill_rod(spec: dict) -> tuple[Bar, tuple | None]:
+    """The rod where the gauges sit and, from ``[rod]``, its pieces (the model's rod); the older
+    ``[bars.rod]`` gives the bar alone."""
+    if "rod" in spec:
+        from ..physical.rock import rod_from_config
+
+        if "bars" in spec:
+            raise ValueError("a drill rod is [rod] (its [[rod.segments]], the model's keys) or the older "
+                             "[bars.rod], not both")
+        pieces = rod_from_config(spec)
+        last = pieces[-1]
+        return Bar(last.E_Pa, last.density_kg_m3, last.area_m2), pieces
     unknown = set(spec["bars"]) - {"rod"}
     if unknown:
         raise ValueError(f"bars: a drill rod's spec names one bar, [bars.rod]; got {sorted(unknown)}")
-    rod = Bar(**_table(spec, "bars.rod", _BAR_KEYS, {"young_modulus", "density", "area"}))
+    return Bar(**_table(spec, "bars.rod", _BAR_KEYS, {"young_modulus", "density", "area"})), None
+
+
+def _run_drill_rod(spec: dict, recording: Recording, baseline) -> DrillRodTest:
+    rod, pieces = _drill_rod(spec)
     gauges = _gauges(spec)
     for channel, gauge in gauges.items():
         if gauge.bar != "rod":
             raise ValueError(f"channel {channel!r} sits on bar {gauge.bar!r}, which the bars do not name "
                              "(a drill rod's is 'rod')")
+        if pieces is not None and not 0.0 <= gauge.station < pieces[-1].length_m:
+            raise ValueError(f"channels.{channel}.station must lie on the rod's last segment, 0 <= x < "
+                             f"{pieces[-1].length_m:g} m from the bit (the waves are carried to the bit "
+                             f"through one section); got {gauge.station!r}")
     bit = _table(spec, "bit", {"cutoff_hz", "leak"}, set())
     model = None
     if "model" in spec:
         from ..physical.rock import RodPiece
 
-        keys = {"rod_lengths", "rod_areas", "piston_lengths", "piston_areas", "start", "vary"}
-        m = _table(spec, "model", keys, keys)
-        if len(m["rod_lengths"]) != len(m["rod_areas"]):
-            raise ValueError(f"model.rod_lengths and model.rod_areas must be of one length, got "
-                             f"{len(m['rod_lengths'])} and {len(m['rod_areas'])}")
-        material = {"E_Pa": rod.young_modulus, "density_kg_m3": rod.density}
-        pieces = [RodPiece(length_m=float(le), area_m2=float(a), **material)
-                  for le, a in zip(m["rod_lengths"], m["rod_areas"], strict=True)]
-        model = {"rod": pieces, "piston_lengths": m["piston_lengths"], "piston_areas": m["piston_areas"],
-                 "values": dict(m["start"]), "vary": list(m["vary"])}
+        keys = {"piston_lengths", "piston_areas", "start", "vary"}
+        old = {"rod_lengths", "rod_areas"}
+        if pieces is not None:
+            given = sorted(old & set(spec["model"]))
+            if given:
+                raise ValueError(f"model.{given[0]}: the model's rod is [rod]'s segments; give one of them")
+            m = _table(spec, "model", keys, keys)
+        else:
+            m = _table(spec, "model", keys | old, keys | old)
+            if len(m["rod_lengths"]) != len(m["rod_areas"]):
+                raise ValueError(f"model.rod_lengths and model.rod_areas must be of one length, got "
+                                 f"{len(m['rod_lengths'])} and {len(m['rod_areas'])}")
+            material = {"E_Pa": rod.young_modulus, "density_kg_m3": rod.density}
+            pieces = tuple(RodPiece(length_m=float(le), area_m2=float(a), **material)
+                           for le, a in zip(m["rod_lengths"], m["rod_areas"], strict=True))
+        model = {"rod": list(pieces), "piston_lengths": m["piston_lengths"],
+                 "piston_areas": m["piston_areas"], "values": dict(m["start"]), "vary": list(m["vary"])}
     return analyse_drill_rod(recording, gauges, rod, cutoff=bit.get("cutoff_hz"),
                              leak=float(bit.get("leak", 1.0)), baseline=baseline, model=model)
 

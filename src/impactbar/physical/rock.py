@@ -24,7 +24,7 @@ from . import tree
 from .bar import _positive
 from .config import _section
 
-__all__ = ["DrillString", "RodPiece", "rock_blows", "rock_from_config", "rock_summary"]
+__all__ = ["DrillString", "RodPiece", "rock_blows", "rock_from_config", "rock_summary", "rod_from_config"]
 
 #: keys of the sections (added to the hammer configuration's)
 ROCK_SECTIONS = {name: keys for name, keys in tree.config_sections("hammer").items()
@@ -142,6 +142,75 @@ class DrillString:
                 "cells_per_piston": self.cells_per_piston, "method": self.method}
 
 
+def rod_from_config(config: dict, *, E: float | None = None, density: float | None = None
+                    ) -> tuple[RodPiece, ...]:
+    """The drill string's pieces of a configuration's ``[[rod.segments]]``, from the shank to the bit.
+
+    The one reader of a rod's segments: a hammer's configuration (:func:`rock_from_config`) and a
+    measurement's spec (:func:`impactbar.measure.read_spec`) both read their ``[rod]`` with it.
+    Each segment takes ``length``, ``diameter`` or ``area``, ``E`` and ``density``, each with its
+    unit (``"1.2 m"``, ``"32 mm"``, ``"210 GPa"``, ``"7850 kg/m^3"``; the parameter tree's keys
+    ``rod.segments.<i>.<key>``).
+
+    Parameters
+    ----------
+    config : dict
+        The configuration (or spec), its ``rod`` table holding the array ``segments``.
+    E, density : float, optional
+        The Young's modulus (Pa) and density (kg/m^3) of a segment that gives none (a hammer's: its
+        piston's); without them every segment must give its own.
+
+    Returns
+    -------
+    tuple of RodPiece
+        In SI, from the shank (the struck end) to the bit.
+
+    Raises
+    ------
+    ValueError
+        A missing, unknown or invalid key, named by its place (``rod.segments[1].diameter``).
+
+    Examples
+    --------
+    >>> # quantities with their units (read by pint)
+    >>> rod = {"rod": {"segments": [{"length": "0.4 m", "diameter": "45 mm"},
+    ...                             {"length": "1.2 m", "area": "8 cm^2", "E": "200 GPa"}]}}
+    >>> pieces = rod_from_config(rod, E=210e9, density=7850.0)
+    >>> [round(p.area_m2 * 1e4, 3) for p in pieces], [p.E_Pa for p in pieces]
+    ([15.904, 8.0], [210000000000.0, 200000000000.0])
+    """
+    _section(config, "rod", ROCK_SECTIONS["rod"])
+    raw = config.get("rod", {}).get("segments")
+    if not isinstance(raw, list) or not raw:
+        raise ValueError("rod.segments must be a non-empty array of tables ([[rod.segments]])")
+    pieces = []
+    for i, g in enumerate(raw):
+        where = f"rod.segments[{i}]"
+        if not isinstance(g, dict):
+            raise ValueError(f"{where} must be a table; got {g!r}")
+        unknown = sorted(set(g) - _SEGMENT_KEYS)
+        if unknown:
+            raise ValueError(f"unknown key {where}.{unknown[0]}; allowed: {', '.join(sorted(_SEGMENT_KEYS))}")
+        if ("diameter" in g) == ("area" in g):
+            raise ValueError(f"give exactly one of {where}.diameter and {where}.area")
+        for key, default in (("length", None), ("E", E), ("density", density)):
+            if key not in g and default is None:
+                raise ValueError(f"missing key {where}.{key}")
+
+        def given(key, i=i, g=g, where=where):  # (positive, in the tree's unit, named)
+            return _positive(f"{where}.{key}", tree.read_si(f"rod.segments.{i}.{key}", g[key],
+                                                            name=f"{where}.{key}"), g[key])
+
+        length = given("length")
+        # (a diameter's sign checked before it is squared: -32 mm was read as the area of +32 mm)
+        dia = given("diameter") if "diameter" in g else None
+        area = math.pi * dia * dia / 4.0 if dia is not None else given("area")
+        e = given("E") if "E" in g else E
+        rho = given("density") if "density" in g else density
+        pieces.append(RodPiece(length_m=length, area_m2=area, E_Pa=e, density_kg_m3=rho))
+    return tuple(pieces)
+
+
 def rock_from_config(config: dict, bar) -> DrillString | None:
     """The drill string of a configuration's ``[rod]``, ``[bit]`` and ``[rock]`` sections, or None
     when it has no ``[rock]``. ``[[rod.segments]]``: ``length``, ``diameter`` or ``area``, and
@@ -160,41 +229,15 @@ def rock_from_config(config: dict, bar) -> DrillString | None:
         if "rod" in config or "bit" in config:
             raise ValueError("[rod] and [bit] need a [rock] section (rock.k, rock.k_u)")
         return None
-    rock, rod, bit = config["rock"], config.get("rod", {}), config.get("bit", {})
-    raw = rod.get("segments")
-    if not isinstance(raw, list) or not raw:
-        raise ValueError("rod.segments must be a non-empty array of tables ([[rod.segments]])")
-    pieces = []
-    for i, g in enumerate(raw):
-        where = f"rod.segments[{i}]"
-        if not isinstance(g, dict):
-            raise ValueError(f"{where} must be a table; got {g!r}")
-        unknown = sorted(set(g) - _SEGMENT_KEYS)
-        if unknown:
-            raise ValueError(f"unknown key {where}.{unknown[0]}; allowed: {', '.join(sorted(_SEGMENT_KEYS))}")
-        if ("diameter" in g) == ("area" in g):
-            raise ValueError(f"give exactly one of {where}.diameter and {where}.area")
-        if "length" not in g:
-            raise ValueError(f"missing key {where}.length")
-        # (each positive, named: a diameter of -32 mm was squared into the area of +32 mm)
-        def given(key, i=i, g=g, where=where):  # (positive, in the tree's unit, named)
-            return _positive(f"{where}.{key}", tree.read_si(f"rod.segments.{i}.{key}", g[key],
-                                                            name=f"{where}.{key}"), g[key])
-
-        length = given("length")
-        # (a diameter's sign checked before it is squared: -32 mm was read as the area of +32 mm)
-        dia = given("diameter") if "diameter" in g else None
-        area = math.pi * dia * dia / 4.0 if dia is not None else given("area")
-        E = given("E") if "E" in g else bar.E_Pa
-        rho = given("density") if "density" in g else bar.density_kg_m3
-        pieces.append(RodPiece(length_m=length, area_m2=area, E_Pa=E, density_kg_m3=rho))
+    rock, bit = config["rock"], config.get("bit", {})
+    pieces = rod_from_config(config, E=bar.E_Pa, density=bar.density_kg_m3)
     for key in ("k", "k_u"):
         if key not in rock:
             raise ValueError(f"missing key rock.{key}")
     k, k_u = tree.read_si("rock.k", rock["k"]), tree.read_si("rock.k_u", rock["k_u"])
     feed = tree.read_si("rock.feed", rock["feed"]) if "feed" in rock else 0.0
     mass = tree.read_si("bit.mass", bit["mass"]) if "mass" in bit else 0.0
-    return DrillString(segments=tuple(pieces), rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed,
+    return DrillString(segments=pieces, rock_k_N_m=k, rock_k_u_N_m=k_u, bit_mass_kg=mass, feed_N=feed,
                        cells_per_piston=rock.get("cells_per_piston"), method=rock.get("method", "auto"))
 
 
