@@ -146,3 +146,14 @@ def test_the_dispersion_corrections_numbers():
     assert _quoted(r"a radius of ([0-9.]+) mm") == round(1e3 * radius, 2)
     c = phase_velocity([0.732e6], radius, bar, 0.33)[0]
     assert _quoted(r"carries at ([0-9.]+) of") == round(c / bar.wave_speed, 2)
+
+
+def test_the_reflection_fits_numbers(report):
+    """The reflection's delay fitted on PMMA-13: the delay, the wave speed and its standard error,
+    the ratio and the misfit the page quotes."""
+    f = report["arrivals"]["reflection_fit"]
+    assert _quoted(r"the fitted delay, ([0-9.]+) us") == round(f["delay_us"], 3)
+    assert _quoted(r"us, gives ([0-9]+) m/s with") == round(f["wave_speed_m_s"])
+    assert _quoted(r"a standard error of ([0-9]+) m/s") == round(f["wave_speed_std_m_s"])
+    assert _quoted(r"\(\$r = (-[0-9.]+)\$\)") == round(f["ratio"], 3)
+    assert _quoted(r"a misfit of ([0-9]+) %") == round(100 * f["misfit"])

@@ -99,6 +99,11 @@ def summary_text(report: dict) -> str:
     a = report["arrivals"]
     lines.append(f"reflected foot {a['reflected_early_us']:.2f} us before the computed "
                  f"{a['reflected_computed_us']:.2f} us")
+    f = a["reflection_fit"]
+    lines.append(f"incident bar's wave speed from the reflection's delay {f['delay_us']:.3f} +- "
+                 f"{f['delay_std_us']:.3f} us: {f['wave_speed_m_s']:.0f} +- "
+                 f"{f['wave_speed_std_m_s']:.0f} m/s "
+                 f"(ratio {f['ratio']:.3f}, misfit {100 * f['misfit']:.0f} %)")
     v = report["impact_velocity"]
     lines.append(f"impact velocity {v['velocity']:.2f} +- {v['uncertainty']:.2f} m/s")
     e = report["energies_J"]

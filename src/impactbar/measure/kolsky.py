@@ -3,7 +3,10 @@
 The steps a test engineer checks, each reported rather than hidden: the channels converted to strain
 (:mod:`impactbar.measure.recording`); the gauges of one bar compared; the incident, reflected and
 transmitted pulses found where the bars' strain leaves its noise band (no hand-picked windows), and
-their feet compared with the times the wave speed predicts; the waves shifted to the specimen's
+their feet compared with the times the wave speed predicts, and the delay of the reflection after
+the incident pulse fitted (:func:`~impactbar.measure.fit_reflection`: the incident bar's wave speed
+from the reflection time, with its standard error, its ratio and its misfit: the specimen's face is
+no free end, and the reflection no copy of the pulse); the waves shifted to the specimen's
 faces (one-point separation, :mod:`impactbar.measure.waves`); the striker's impact velocity, the
 waves' energies, the specimen's one-, two- and three-wave stress, strain and strain rate and the
 force balance on its faces (:mod:`impactbar.measure.results`); and the spectrum of the pre-trigger
@@ -17,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .recording import Bar, Recording
+from .reflection import fit_reflection
 from .results import end_history, impact_velocity, specimen_response, wave_energy
 from .waves import Waves, Window, find_pulses, separate_one_point, shift
 
@@ -177,6 +181,7 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
                          f"(ending at {w_inc.t_stop * 1e6:.2f} us)")
     w_ref = later[0]
     w_tra = _pulses(time, strain["transmitted"], "transmitted", threshold, cutoff, baseline)[0]
+    echo = fit_reflection(time, strain["incident"], station["incident"], w_inc, w_ref, cutoff=cutoff)
 
     ci, ct = incident_bar.wave_speed, transmitted_bar.wave_speed
     xi, xt = station["incident"], station["transmitted"]
@@ -243,7 +248,8 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
                      "reflected_early_us": (t_ref_computed - w_ref.t_start) * 1e6,
                      "transmitted_computed_us": t_tra_computed * 1e6,
                      "transmitted_late_us": (w_tra.t_start - t_tra_computed) * 1e6,
-                     "incident_bar_wave_speed_from_reflection": 2 * xi / (w_ref.t_start - w_inc.t_start)},
+                     "incident_bar_wave_speed_from_reflection": 2 * xi / (w_ref.t_start - w_inc.t_start),
+                     "reflection_fit": echo.to_dict()},
         "impact_velocity": v,
         "energies_J": energies,
         "stress_strain": summary,
