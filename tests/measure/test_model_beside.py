@@ -128,3 +128,20 @@ def test_fit_and_compare_refuse_what_they_cannot_use():
         compare(t, np.ones(10), np.ones(10), max_shift=1e-6)
     with pytest.raises(ValueError, match="not all zero"):
         compare(t, np.zeros(10), np.ones(10))
+
+
+def test_the_model_takes_its_rod_as_a_configurations_rod_table():
+    """The rod as a drifter's [rod] table (quantities with units, the configuration's reader) gives
+    the strains of the same RodPieces to the last bit, given alone or inside a configuration; a bad
+    table is refused by the reader, named."""
+    steel = {"E": "210 GPa", "density": "7850 kg/m^3"}
+    table = {"segments": [{"length": "0.5 m", "area": "1.2e-3 m^2", **steel},
+                          {"length": "3 m", "area": "0.8e-3 m^2", **steel}]}
+    t = np.linspace(0.0, 1.5e-3, 300)
+    pieces = gauge_strains(_rod((0.5, 1.2e-3), (3.0, 0.8e-3)), **PISTON, values=TRUE, stations=[1.0], time=t)
+    for rod in (table, {"rod": table, "rock": {"k": "300 kN/mm"}}):
+        eps = gauge_strains(rod, **PISTON, values=TRUE, stations=[1.0], time=t)
+        np.testing.assert_array_equal(eps[1.0], pieces[1.0])
+    with pytest.raises(ValueError, match=r"missing key rod.segments\[1\].E"):
+        gauge_strains({"segments": [table["segments"][0], {"length": "3 m", "area": "8 cm^2"}]}, **PISTON,
+                      values=TRUE, stations=[1.0], time=t)
