@@ -7,6 +7,7 @@ states, the circuit's state carried from flight to flight, the bar's taken from 
 flight's start: its impact map is not the circuit's)."""
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -14,6 +15,9 @@ from scipy.integrate import solve_ivp
 from impactbar import InitialState, find_orbit, simulate
 from impactbar.drives.circuit import CheckValve, Cushion, LaminarLeak
 from impactbar.physical import circuit_preset
+
+#: the drifter on the drill string and rock (the ``rock_drifter`` fixture of this folder's conftest)
+ROCK_EXAMPLE = Path(__file__).parents[2] / "examples" / "circuit_drifter_rock.toml"
 
 
 def preset_orbit():
@@ -23,17 +27,30 @@ def preset_orbit():
     return model, drive, find_orbit(model, drive)
 
 
-def check_orbit(orbit):
-    """The orbit repeats when ``simulate`` restarts it (20 periods, to 1e-6), its energy account
-    closes over a period (1e-8 of the pump's work) and the numpy equations reproduce that period (the
-    circuit's state and the parts' losses, 1e-6); returns the run of one period."""
+def with_parts(model, drive, *parts):
+    """``find_orbit`` of ``drive`` with ``parts`` added to its circuit (its ``extra_parts``)."""
+    return find_orbit(model, dataclasses.replace(drive, extra_parts=parts))
+
+
+def check_repeats(orbit):
+    """The orbit is admissible, repeats when ``simulate`` restarts it (20 periods, to 1e-6) and its
+    energy account closes over a period (1e-8 of the pump's work); returns the run of one period and
+    its account."""
     assert orbit.admissible
     run = restart(orbit, 20.5)
     assert run.n_impacts == 20
     assert np.allclose(np.diff(run.impact_times), orbit.period, rtol=1e-6, atol=0.0)
     assert np.allclose(run.impact_velocities, orbit.impact_velocity, rtol=1e-6, atol=0.0)
     one = restart(orbit, 1.0)
-    assert abs(orbit.drive.energy(one)["relative_residual"]) < 1e-8
+    account = orbit.drive.energy(one)
+    assert abs(account["relative_residual"]) < 1e-8
+    return one, account
+
+
+def check_orbit(orbit):
+    """:func:`check_repeats`, and the numpy equations reproduce that period (the circuit's state and
+    the parts' losses, 1e-6); returns the run of one period."""
+    one, _ = check_repeats(orbit)
     z, want_z, losses, want_losses = one_period(orbit)
     assert np.allclose(z, want_z, rtol=1e-6, atol=1e-8), z - want_z
     assert np.allclose(losses, want_losses, rtol=1e-6), (losses, want_losses)
@@ -43,12 +60,26 @@ def check_orbit(orbit):
 def check_rock(model, drive, part):
     """``find_orbit`` on the drill string and rock with ``part``: admissible, one blow a period
     when restarted, its account closing over it; returns the orbit."""
-    orbit = find_orbit(model, dataclasses.replace(drive, extra_parts=(part,)))
+    orbit = with_parts(model, drive, part)
     assert orbit.admissible
     run = restart(orbit, 1.0)
     assert run.n_impacts == 1
     assert abs(orbit.drive.energy(run)["relative_residual"]) < 1e-8
     return orbit
+
+
+def random_state(rng, layout, M, gap, node):
+    """A random point of the drifter's state for the kinds' tests: the bar's modal positions ``q``
+    (the piston's gap up to ``gap``) and the circuit's state ``z``: the supply, the front near it, the
+    rear and the part's own ``node`` anywhere, the main valve at a stop or between."""
+    q = rng.normal(0.0, 0.005, M)
+    q[0] = -rng.uniform(0.0, gap)
+    z = np.empty(layout.n_states)
+    z[layout["supply"]] = rng.uniform(0.8, 2.6)
+    z[layout["front"]] = z[layout["supply"]] + rng.uniform(-0.02, 0.03)
+    z[layout["rear"]], z[layout[node]] = rng.uniform(0.05, 2.4, 2)
+    z[layout["spool"]] = rng.choice([0.0, 1.0, rng.uniform()])
+    return q, z
 
 
 def restart(orbit, periods, **changes):

@@ -17,30 +17,23 @@ import dataclasses
 
 import numpy as np
 import pytest
-from circuit_parts_reference import check_orbit, check_rock, preset_orbit
-from test_circuit_rock_orbit import drifter as rock_drifter  # noqa: F401  (the fixture)
+from circuit_parts_reference import check_orbit, check_rock, with_parts
 
-from impactbar import find_orbit
 from impactbar.drives.circuit import CheckValve
 
 VALVE = CheckValve("front", "supply", coefficient=1.0, cracking_pressure=0.005, opening_span=0.005)
 
 
 @pytest.fixture(scope="module")
-def preset():
-    return preset_orbit()
-
-
-@pytest.fixture(scope="module")
 def orbit(preset):
     model, drive, _ = preset
-    return find_orbit(model, dataclasses.replace(drive, extra_parts=(VALVE,)))
+    return with_parts(model, drive, VALVE)
 
 
 def test_a_shut_check_valve_gives_the_presets_orbit(preset):
     model, drive, want = preset
     shut = dataclasses.replace(VALVE, coefficient=0.0)
-    got = find_orbit(model, dataclasses.replace(drive, extra_parts=(shut,)))
+    got = with_parts(model, drive, shut)
     assert got.period == pytest.approx(want.period, rel=1e-9)
     assert got.impact_velocity == pytest.approx(want.impact_velocity, rel=1e-9)
     assert np.allclose(got.drive_states[0], want.drive_states[0], rtol=1e-9, atol=0.0)
@@ -58,7 +51,7 @@ def test_a_check_valves_orbit_repeats_its_account_closes_and_numpy_reproduces_it
 
 
 @pytest.mark.slow  # (a topology's coupled blow compiled afresh: some 40 s of CPU)
-def test_a_check_valve_on_the_rock(rock_drifter):  # noqa: F811
+def test_a_check_valve_on_the_rock(rock_drifter):
     check_rock(*rock_drifter, VALVE)
 
 

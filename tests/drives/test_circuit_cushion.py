@@ -12,14 +12,11 @@ circuit*) on the preset drifter.
   account closes.
 """
 
-import dataclasses
 
 import numpy as np
 import pytest
-from circuit_parts_reference import check_orbit, check_rock, preset_orbit
-from test_circuit_rock_orbit import drifter as rock_drifter  # noqa: F401  (the fixture)
+from circuit_parts_reference import check_orbit, check_rock, with_parts
 
-from impactbar import find_orbit
 from impactbar.drives.circuit import Cushion
 from impactbar.drives.circuit.layout import PRESET
 
@@ -27,14 +24,9 @@ CUSHION = Cushion(volume=0.05, coefficient=2.0, gaps=(0.06, 0.08, 0.1), openings
 
 
 @pytest.fixture(scope="module")
-def preset():
-    return preset_orbit()
-
-
-@pytest.fixture(scope="module")
 def orbit(preset):
     model, drive, _ = preset
-    return find_orbit(model, dataclasses.replace(drive, extra_parts=(CUSHION,)))
+    return with_parts(model, drive, CUSHION)
 
 
 def test_a_wide_open_cushion_tends_to_the_preset(preset):
@@ -42,7 +34,7 @@ def test_a_wide_open_cushion_tends_to_the_preset(preset):
     err = []
     for K in (1e2, 1e3):
         c = Cushion(volume=1e-3, coefficient=K, gaps=(0.05,), openings=(1.0,))
-        o = find_orbit(model, dataclasses.replace(drive, extra_parts=(c,)))
+        o = with_parts(model, drive, c)
         z, z0 = o.drive_states[0], want.drive_states[0]
         L = o.drive.layout
         err.append(max(abs(o.period / want.period - 1), abs(o.impact_velocity / want.impact_velocity - 1),
@@ -60,7 +52,7 @@ def test_a_cushions_orbit_repeats_its_account_closes_and_numpy_reproduces_it(pre
 
 
 @pytest.mark.slow  # (a topology's coupled blow compiled afresh: some 40 s of CPU)
-def test_a_cushion_on_the_rock(rock_drifter):  # noqa: F811
+def test_a_cushion_on_the_rock(rock_drifter):
     check_rock(*rock_drifter, CUSHION)
 
 

@@ -12,7 +12,7 @@ import dataclasses
 import network_interpreter as NI
 import numpy as np
 import pytest
-from circuit_parts_reference import field, network_jacobian_fd
+from circuit_parts_reference import field, network_jacobian_fd, random_state
 
 from impactbar.drives.circuit import CheckValve, Cushion, LaminarLeak
 from impactbar.drives.circuit import _field as K
@@ -40,13 +40,7 @@ def test_the_kinds_give_their_equations_and_the_generated_code_their_numbers(n_m
     rng = np.random.default_rng(3)
     gen = None
     for _ in range(60):
-        q = rng.normal(0.0, 0.005, M)
-        q[0] = -rng.uniform(0.0, 0.12)
-        z = np.empty(L.n_states)
-        z[L["supply"]] = rng.uniform(0.8, 2.6)
-        z[L["front"]] = z[L["supply"]] + rng.uniform(-0.02, 0.03)
-        z[L["rear"]], z[L["cushion"]] = rng.uniform(0.05, 2.4, 2)
-        z[L["spool"]] = rng.choice([0.0, 1.0, rng.uniform()])
+        q, z = random_state(rng, L, M, 0.12, "cushion")
         target, moving = int(rng.integers(2)), int(rng.integers(2))
         mode = drive._mode(target, moving, z[L["supply"]], z, q)
         y = np.concatenate((q, rng.normal(0.0, 0.3, M), z, np.zeros(ne)))

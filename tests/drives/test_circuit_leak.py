@@ -15,8 +15,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from circuit_parts_reference import check_orbit, check_rock, preset_orbit
-from test_circuit_rock_orbit import drifter as rock_drifter  # noqa: F401  (the fixture)
+from circuit_parts_reference import check_orbit, check_rock, with_parts
 
 from impactbar import find_orbit
 from impactbar.drives.circuit import LaminarLeak
@@ -32,19 +31,14 @@ class PooledLeak(LaminarLeak):
 
 
 @pytest.fixture(scope="module")
-def preset():
-    return preset_orbit()
-
-
-@pytest.fixture(scope="module")
 def orbit(preset):
     model, drive, _ = preset
-    return find_orbit(model, dataclasses.replace(drive, extra_parts=(LaminarLeak("rear", "front", G),)))
+    return with_parts(model, drive, LaminarLeak("rear", "front", G))
 
 
 def test_no_conductance_gives_the_presets_orbit_to_the_bit(preset):
     model, drive, want = preset
-    got = find_orbit(model, dataclasses.replace(drive, extra_parts=(PooledLeak("rear", "front", 0.0),)))
+    got = with_parts(model, drive, PooledLeak("rear", "front", 0.0))
     assert got.drive.layout == drive.layout
     assert got.period == want.period and got.impact_velocity == want.impact_velocity
     assert np.array_equal(got.drive_states[0], want.drive_states[0])
@@ -62,7 +56,7 @@ def test_a_leaks_orbit_repeats_its_account_closes_and_numpy_reproduces_it(preset
 
 
 @pytest.mark.slow  # (a topology's coupled blow compiled afresh: some 40 s of CPU)
-def test_a_leak_on_the_rock(rock_drifter):  # noqa: F811
+def test_a_leak_on_the_rock(rock_drifter):
     model, drive = rock_drifter
     orbit = check_rock(model, drive, LaminarLeak("rear", "front", G))
     assert orbit.period > 1.001 * find_orbit(model, drive).period

@@ -4,32 +4,20 @@ again) or none at all (the closing step takes the chord's), the multipliers' Jac
 differences at the found orbit. Checked against Newton's method with the multipliers' Jacobian at
 every step (``newton="full"``) and against the central differences themselves."""
 
-import tomllib
-from pathlib import Path
-
 import numpy as np
 import pytest
+from circuit_parts_reference import ROCK_EXAMPLE
 
 from impactbar import find_orbit
 from impactbar.orbits import find_switched_orbit
 from impactbar.orbits.coupled import blow_jacobian, blow_state
 from impactbar.orbits.driven import ShootingProblem, orbit_of
-from impactbar.physical import CircuitDrifter
-
-EXAMPLE = Path(__file__).parents[2] / "examples" / "circuit_drifter_rock.toml"
 
 
 @pytest.fixture(scope="module")
-def drifter():
-    with open(EXAMPLE, "rb") as f:
-        d = CircuitDrifter.from_config(tomllib.load(f))
-    return d.model(), d.drive()
-
-
-@pytest.fixture(scope="module")
-def both(drifter):
+def both(rock_drifter):
     """Newton's method with the multipliers' Jacobian at every step, and ``find_orbit``'s chord."""
-    model, drive = drifter
+    model, drive = rock_drifter
     return find_switched_orbit(model, drive, newton="full"), find_orbit(model, drive)
 
 
@@ -65,10 +53,10 @@ def test_the_multipliers_are_the_central_differences_at_the_orbit(both):
     np.testing.assert_array_equal(problem.orbit(np.asarray(fast._unknowns)).multipliers, fast.multipliers)
 
 
-def test_find_orbit_takes_one_central_blow_jacobian(drifter, monkeypatch):
+def test_find_orbit_takes_one_central_blow_jacobian(rock_drifter, monkeypatch):
     """The Jacobians that only steer take the forward differences; the closing step takes none (the
     variational flights' state only); the multipliers' alone the central differences, once."""
-    model, drive = drifter
+    model, drive = rock_drifter
     seen = []
     fly = ShootingProblem._fly
 
@@ -101,7 +89,7 @@ def test_forward_differences_of_the_blow_are_the_central_ones_to_their_step(both
 
 
 @pytest.mark.slow
-def test_the_exact_blows_orbit_starts_on_the_lattice(drifter, monkeypatch):
+def test_the_exact_blows_orbit_starts_on_the_lattice(rock_drifter, monkeypatch):
     """With exact blows (``RodRock(method="exact")``, the rod as given) ``find_orbit`` finds the orbit
     on the lattice and polishes it on the exact blows with the lattice's Jacobian as the chord's
     (``ShootingProblem.polish``): 16 exact blows where the default chain on the exact blows took 31
@@ -115,10 +103,10 @@ def test_the_exact_blows_orbit_starts_on_the_lattice(drifter, monkeypatch):
     import impactbar.orbits.driven_search as S
     from impactbar.physical import build, read_config
 
-    cfg, _ = read_config(str(EXAMPLE))
+    cfg, _ = read_config(str(ROCK_EXAMPLE))
     del cfg["rock"]["cells_per_piston"]
     model = build(cfg).model()
-    drive = drifter[1]
+    drive = rock_drifter[1]
     exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
     assert exact.law.coarse_model(exact) is not None
     count = [0]
@@ -147,7 +135,7 @@ def test_the_exact_blows_orbit_starts_on_the_lattice(drifter, monkeypatch):
 
 
 @pytest.mark.slow
-def test_the_exact_blows_multipliers_do_not_depend_on_the_step(drifter, monkeypatch):
+def test_the_exact_blows_multipliers_do_not_depend_on_the_step(rock_drifter, monkeypatch):
     """The exact coupled blow's noise (some 1e-11 of the state) over the central differences' step:
     at the exact blows' step (``FD_STEP_EXACT_BLOW``, 1e-3) the multipliers are those at a step
     3.3 times smaller to 2e-7 (measured 9e-8: the smaller step's noise); at the lattice's step
@@ -157,13 +145,13 @@ def test_the_exact_blows_multipliers_do_not_depend_on_the_step(drifter, monkeypa
     import impactbar.orbits.coupled as OC
     from impactbar.physical import build, read_config
 
-    cfg, _ = read_config(str(EXAMPLE))
+    cfg, _ = read_config(str(ROCK_EXAMPLE))
     del cfg["rock"]["cells_per_piston"]
     model = build(cfg).model()
     exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
 
     def largest():
-        mu = np.asarray(find_orbit(exact, drifter[1]).multipliers)
+        mu = np.asarray(find_orbit(exact, rock_drifter[1]).multipliers)
         return np.sort(np.abs(mu))[::-1][:2]
 
     default = largest()

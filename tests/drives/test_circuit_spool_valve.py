@@ -19,9 +19,8 @@ import math
 
 import numpy as np
 import pytest
-from circuit_parts_reference import check_rock, preset_orbit, restart
+from circuit_parts_reference import check_repeats, check_rock, restart, with_parts
 from scipy.integrate import solve_ivp
-from test_circuit_rock_orbit import drifter as rock_drifter  # noqa: F401  (the fixture)
 
 from impactbar import find_orbit
 from impactbar.drives.circuit import SpoolValve
@@ -41,14 +40,9 @@ def spool(e=1.0, **changes):
 
 
 @pytest.fixture(scope="module")
-def preset():
-    return preset_orbit()
-
-
-@pytest.fixture(scope="module")
 def orbit(preset):
     model, drive, _ = preset
-    return find_orbit(model, dataclasses.replace(drive, extra_parts=(spool(),)))
+    return with_parts(model, drive, spool())
 
 
 def field(drive, model, held, acc, rel, y):
@@ -96,7 +90,7 @@ def test_the_spool_valves_kinds_give_their_equations_and_the_generated_code_thei
     against central differences, its events against the levels, the account closing at each point,
     and the code generated for its topology the interpreted network's numbers to the bit."""
     import network_interpreter as NW
-    from circuit_parts_reference import network_jacobian_fd
+    from circuit_parts_reference import network_jacobian_fd, random_state
 
     from impactbar.drives.circuit import _field as K
     from impactbar.drives.circuit import _netgen as NG
@@ -110,13 +104,7 @@ def test_the_spool_valves_kinds_give_their_equations_and_the_generated_code_thei
     gen = None
     bits = lambda a: np.asarray(a, dtype=float).view(np.int64)  # noqa: E731
     for _ in range(60):
-        q = rng.normal(0.0, 0.005, M)
-        q[0] = -rng.uniform(0.0, 0.07)
-        z = np.empty(L.n_states)
-        z[L["supply"]] = rng.uniform(0.8, 2.6)
-        z[L["front"]] = z[L["supply"]] + rng.uniform(-0.02, 0.03)
-        z[L["rear"]], z[L["spool_valve"]] = rng.uniform(0.05, 2.4, 2)
-        z[L["spool"]] = rng.choice([0.0, 1.0, rng.uniform()])
+        q, z = random_state(rng, L, M, 0.07, "spool_valve")
         z[L["spool_valve_v"]] = 0.0 if z[L["spool"]] in (0.0, 1.0) else rng.normal(0.0, 0.5)
         mode = drive._mode(0, 0, z[L["supply"]], z, q)
         held = mode[1 + events.index("spool_valve_stop")]
@@ -154,16 +142,9 @@ def test_the_spool_valves_kinds_give_their_equations_and_the_generated_code_thei
 
 
 def test_a_spool_valves_orbit_repeats_and_its_account_closes(orbit):
-    assert orbit.admissible
-    run = restart(orbit, 20.5)
-    assert run.n_impacts == 20
-    assert np.allclose(np.diff(run.impact_times), orbit.period, rtol=1e-6, atol=0.0)
-    assert np.allclose(run.impact_velocities, orbit.impact_velocity, rtol=1e-6, atol=0.0)
+    one, account = check_repeats(orbit)
     drive, model = orbit.drive, orbit.model
     L, M = drive.layout, model.n_modes + 1
-    one = restart(orbit, 1.0)
-    account = drive.energy(one)
-    assert abs(account["relative_residual"]) < 1e-8
     pieces = [p for p in one.pieces if hasattr(p, "energies") and p.t_end > p.t0]
     X, V = 2 * M + L["spool"], 2 * M + L["spool_valve_v"]
     # every kink and both stops: the spool rests at each stop, and crosses both ports' kinks
@@ -240,8 +221,7 @@ def test_a_light_fast_spool_tends_to_the_instant_valve_at_first_order(preset):
     z0 = np.asarray(want.drive_states[0])
     err = []
     for e in (0.01, 0.001):
-        o = find_orbit(model, dataclasses.replace(drive, extra_parts=(
-            spool(e, open_gap=y_open, close_gap=y_close, port_span=d_y),)))
+        o = with_parts(model, drive, spool(e, open_gap=y_open, close_gap=y_close, port_span=d_y))
         z = np.asarray(o.drive_states[0])
         err.append([abs(o.period / want.period - 1), abs(o.impact_velocity / want.impact_velocity - 1),
                     np.max(np.abs(z[:3] - z0[:3])) / z0[2]])
@@ -250,7 +230,7 @@ def test_a_light_fast_spool_tends_to_the_instant_valve_at_first_order(preset):
     assert np.max(err[1]) < 1e-2
 
 
-def test_a_spool_valve_on_the_rock(rock_drifter):  # noqa: F811
+def test_a_spool_valve_on_the_rock(rock_drifter):
     orbit = check_rock(*rock_drifter, spool())
     x = orbit.drive.layout["spool"]
     assert 0.0 <= orbit.drive_states[0][x] <= 1.0

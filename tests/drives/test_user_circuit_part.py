@@ -20,7 +20,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
-from test_circuit_rock_orbit import drifter  # noqa: F401  (the fixture: the example's model and drive)
 
 from impactbar import InitialState, find_orbit, simulate
 from impactbar.drives.circuit import ORIFICE, CircuitPart, record
@@ -56,26 +55,27 @@ class PooledLeak(Leak):
 
 
 @pytest.fixture(scope="module")
-def preset(drifter):  # noqa: F811
-    return find_orbit(*drifter)
+def rock_preset(rock_drifter):
+    """The orbit on the rock without the leak."""
+    return find_orbit(*rock_drifter)
 
 
 @pytest.mark.slow  # (a topology's coupled blow compiled afresh: some 40 s of CPU)
-def test_a_leak_of_no_coefficient_gives_the_presets_orbit_on_rock(drifter, preset):  # noqa: F811
-    model, drive = drifter
+def test_a_leak_of_no_coefficient_gives_the_presets_orbit_on_rock(rock_drifter, rock_preset):
+    model, drive = rock_drifter
     orbit = find_orbit(model, replace(drive, extra_parts=(PooledLeak(0.0),)))
     assert orbit.drive.layout == drive.layout
-    assert orbit.period == pytest.approx(preset.period, rel=1e-12, abs=0.0)
-    assert orbit.impact_velocity == pytest.approx(preset.impact_velocity, rel=1e-12, abs=0.0)
-    assert np.allclose(orbit.drive_states[0], preset.drive_states[0], rtol=1e-12, atol=0.0)
-    assert np.allclose(orbit.multipliers, preset.multipliers, rtol=0.0, atol=1e-10)
+    assert orbit.period == pytest.approx(rock_preset.period, rel=1e-12, abs=0.0)
+    assert orbit.impact_velocity == pytest.approx(rock_preset.impact_velocity, rel=1e-12, abs=0.0)
+    assert np.allclose(orbit.drive_states[0], rock_preset.drive_states[0], rtol=1e-12, atol=0.0)
+    assert np.allclose(orbit.multipliers, rock_preset.multipliers, rtol=0.0, atol=1e-10)
 
 
-def test_a_leak_on_rock_repeats_and_its_loss_is_accounted(drifter, preset):  # noqa: F811
-    model, drive = drifter
+def test_a_leak_on_rock_repeats_and_its_loss_is_accounted(rock_drifter, rock_preset):
+    model, drive = rock_drifter
     K = 0.02
     orbit = find_orbit(model, replace(drive, extra_parts=(Leak(K),)))
-    assert orbit.admissible and orbit.period > 1.01 * preset.period
+    assert orbit.admissible and orbit.period > 1.01 * rock_preset.period
     z, y = orbit.drive_states[0], np.asarray(orbit.states_after_impact[0])
     M = model.n_modes + 1
     leaky = replace(orbit.drive, start_pressures=tuple(z))
@@ -92,7 +92,7 @@ def test_a_leak_on_rock_repeats_and_its_loss_is_accounted(drifter, preset):  # n
     assert loss == pytest.approx(np.trapezoid(flow * dp, t), rel=1e-9)  # (measured 9e-12)
 
 
-def test_the_leaks_blows_are_the_bindings_to_the_bit(drifter):  # noqa: F811
+def test_the_leaks_blows_are_the_bindings_to_the_bit(rock_drifter):
     """A run on the rock with the leak by the compiled driver and through scikit-sundae's interface
     (the settings' ``compiled=False``: the generated blow's Python-called functions against its C
     callbacks and compiled loop): the same impacts, blows and account to the bit."""
@@ -100,7 +100,7 @@ def test_the_leaks_blows_are_the_bindings_to_the_bit(drifter):  # noqa: F811
 
     if not _sundials.available():
         pytest.skip(_sundials.reason())
-    model, drive = drifter
+    model, drive = rock_drifter
     leaky = replace(drive, extra_parts=(Leak(0.02),))
     runs = [simulate(model, leaky, InitialState.rigid(-0.02, 0.0), 3.0,
                      settings=CircuitFlightSettings(compiled=c)) for c in (True, False)]

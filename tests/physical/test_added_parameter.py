@@ -16,7 +16,7 @@ import pytest
 pytest.importorskip("pint")
 
 from impactbar.cli import main  # noqa: E402
-from impactbar.physical import build, continue_circuit, optimize_drifter, read_config, tree, with_values  # noqa: E402  # noqa: E402
+from impactbar.physical import build, continue_circuit, optimize_drifter, read_config, tree, with_values  # noqa: E402
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
 

@@ -82,9 +82,12 @@ def _around(value):
 @pytest.mark.parametrize("name", CIRCUIT_EXAMPLES)
 def test_optimize_takes_every_key_a_design_map_sweeps(name):
     """For each key of the example that a design map (``impactbar sweep``) takes over 1 % either
-    side of its value, the optimiser's checks of its variables take the same bounds (checks only:
-    ``max_evaluations=0`` is refused after them, before any orbit); an integer key (a map's axis
-    over integers) is refused by the continuous search in one line."""
+    side of its value, ``impactbar optimize --vary KEY=LOW:HIGH`` reads the same bounds and the
+    optimiser's checks of its variables take them (checks only: ``max_evaluations=0`` is refused
+    after them, before any orbit); an integer key (a map's axis over integers) is refused by the
+    continuous search in one line."""
+    from impactbar.cli.optimize import parse_vary
+
     path = ROOT / "examples" / name
     cfg = read_toml(path)
     swept = []
@@ -98,9 +101,11 @@ def test_optimize_takes_every_key_a_design_map_sweeps(name):
         except ValueError:
             continue
         swept.append(key)
+        vary = parse_vary([f"{key}={bounds[0]}:{bounds[1]}"])  # (as the command line reads it)
+        assert vary == {key: tuple(str(b) for b in bounds)}
         refused = "takes integers" if key in INTEGER_KEYS else "max_evaluations must be"
         with pytest.raises(ValueError, match=refused) as info:
-            optimize_drifter(path, {key: bounds}, objective="impact_power", max_evaluations=0, progress=False)
+            optimize_drifter(path, vary, objective="impact_power", max_evaluations=0, progress=False)
         assert "\n" not in str(info.value)
     assert len(swept) >= 20
     if name == "circuit_drifter.toml":  # the keys the optimiser refused before

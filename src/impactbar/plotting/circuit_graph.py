@@ -37,6 +37,7 @@ def plot_circuit_graph(drifter, ax=None):
     Returns
     -------
     matplotlib.axes.Axes
+        The axes drawn on (``ax`` where given).
 
     Raises
     ------

@@ -357,6 +357,7 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
         Parameters
         ----------
         name : str
+            Any name; the segment's index is not checked against a rod (a class method).
 
         Returns
         -------
@@ -370,6 +371,7 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
         Parameters
         ----------
         name : str
+            One of :attr:`parameters`, a segment's index below the rod's number of segments.
 
         Returns
         -------
@@ -490,13 +492,6 @@ def single_blow(model, impact_velocity: float, *, cells_per_piston: int | None =
         grid (boundaries rounded to whole cells, ``length_error``). The rod's impedances stay
         relative to ``s`` (a uniform piston of the same mass and length). Default None: the uniform
         piston, whose results a one-segment ``SteppedPiston`` reproduces to the bit.
-    driven_end : {"window", "free"}
-        Where the lattice's blow under a drive with state ends: ``"window"`` (default) at
-        :meth:`window`; ``"free"`` where the piston is free for good (out of contact, its momentum
-        ``<= 0``, the rock not loading: the exact blow's argument under a drive, theory §11), tested
-        where the exact blow tests it, at the first step end at or after each multiple of the
-        shortest travel time of piston and rod (the two end at the same instant to a step), searched
-        for up to twice the window.
     method : {"auto", "exact", "lattice"}
         ``"auto"``: exact for a uniform or stepped piston, a bit with or without mass, no feed and
         no ``cells_per_piston`` (and
