@@ -101,8 +101,9 @@ class Blow:
         Energy returned to the piston (its wave energy at the end).
     rebound_velocity : float
         The piston's mean velocity at the end (negative: moving back).
-    rod_energy : float
-        The rod's residual energy (waves, strain under the feed) plus the bit's kinetic energy.
+    rod_energy, bit_energy : float
+        The rod's residual energy (waves, strain under the feed) plus the bit's kinetic energy; that
+        kinetic energy ``m w^2/2`` at the end (the bit's part of ``rod_energy``, its term apart).
     grid_loss : float
         Energy removed by storing the bit's reflected wave as cell averages (0 for a massless bit
         and a rock force constant on cells; ``O(dt^2)``).
@@ -174,6 +175,7 @@ class Blow:
             ("efficiency_with_rebound", "the same with the piston's rebound energy credited", ()),
             ("piston_energy", "energy returned to the piston", ()),
             ("rod_energy", "the rod's residual energy and the bit's kinetic energy", ()),
+            ("bit_energy", "the bit's kinetic energy at the end (a part of rod_energy)", ()),
             ("grid_loss", "energy removed by the cell averages of the bit's reflected wave", ()),
             ("energy_error", "relative mismatch of the energy account", ()),
             ("max_penetration", "largest penetration", ()),
@@ -233,6 +235,7 @@ class Blow:
     rock_stored_energy: float = 0.0
     method: str = "lattice"
     uncertainty: float = 0.0
+    bit_energy: float = 0.0
     loadings: np.ndarray | None = None
     radiated: float = 0.0
     exact: object = field(default=None, repr=False)
@@ -244,7 +247,7 @@ class Blow:
                   "rebound_velocity", "rod_energy", "grid_loss", "max_penetration",
                   "permanent_penetration", "advance", "cell_time", "length_error", "drive_work", "gap",
                   "shank_displacement", "bit_velocity", "rock_stored_energy", "uncertainty",
-                  "radiated"):
+                  "radiated", "bit_energy"):
             object.__setattr__(self, f, float(getattr(self, f)))
 
     @property
@@ -627,7 +630,7 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
         length_error=grid.length_error, drive_work=drive_work, gap=gap, shank_displacement=u_shank,
         piston_waves=(F[:n_p].copy(), G[:n_p].copy()), rod_waves=(F[n_p:].copy(), G[n_p:].copy()),
         bit_velocity=bit.w, rock_stored_energy=_rock_stored(float(bitf[-1]), bit.k_u),
-        uncertainty=uncertainty)
+        uncertainty=uncertainty, bit_energy=0.5 * bit_mass * bit.w * bit.w)
 
 
 def _still_possible(rod_waves, piston_e, R, bit, feed) -> float:
@@ -694,8 +697,7 @@ def blow_end(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, n_steps: int):
 
 
 def _rock_stored(R, k_u) -> float:
-    """The rock's elastic energy ``R^2/(2 k_u)`` under the rock force ``R`` (0 off the rock or with
-    a rigid unloading)."""
+    """The rock's elastic energy ``R^2/(2 k_u)`` under its force ``R`` (0 off it or rigidly unloading)."""
     return 0.0 if R <= 0.0 or math.isinf(k_u) else R * R / (2.0 * k_u)
 
 
@@ -722,8 +724,7 @@ def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, re
 
 
 def _bit_records(bit):
-    """The compiled loop's records of the bit ``bit``: its state ``bs`` and parameters ``bp``
-    (their slots ``BIT_*``, ``BITP_*`` of :mod:`impactbar.laws.rodrock._records`)."""
+    """The compiled loop's records of ``bit``: its state ``bs``, its parameters ``bp`` (``_records``)."""
     bs = np.empty(S.BIT_SIZE)
     bs[S.BIT_P], bs[S.BIT_W], bs[S.BIT_BRANCH] = bit.p, bit.w, float(bit.branch)
     bs[S.BIT_PMAX], bs[S.BIT_RMAX] = bit.p_max, bit.R_max
@@ -732,8 +733,7 @@ def _bit_records(bit):
 
 
 def _bit_params(Z, k, k_u, m, feed):
-    """The compiled loop's bit parameters ``bp`` (slots ``BITP_*``): the impedance ``Z`` at the bit,
-    the rock's stiffnesses ``k``, ``k_u``, the bit's mass ``m`` and the feed force."""
+    """The compiled loop's bit parameters ``bp`` (``BITP_*``): ``Z`` at the bit, ``k, k_u, m``, the feed."""
     bp = np.empty(S.BITP_SIZE)
     bp[S.BITP_Z], bp[S.BITP_K], bp[S.BITP_KU], bp[S.BITP_MASS], bp[S.BITP_FEED] = Z, k, k_u, m, feed
     return bp

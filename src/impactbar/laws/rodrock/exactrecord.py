@@ -131,7 +131,7 @@ def blow_from_exact(ex, s, lengths, travel, piston_lengths, samples_per_piston=3
         segment_cells=seg_cells, cell_edges=edges, length_error=0.0, drive_work=ex.drive_work, gap=ex.gap,
         shank_displacement=ex.shank_displacement, piston_waves=None, rod_waves=None,
         bit_velocity=ex.bit_velocity, method="exact", uncertainty=ex.uncertainty, loadings=ex.loadings,
-        radiated=ex.radiated, exact=ex)
+        radiated=ex.radiated, exact=ex, bit_energy=ex.bit_energy)
 
 
 def _sampled(ex, mid, times, J):

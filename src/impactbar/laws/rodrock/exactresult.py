@@ -45,6 +45,8 @@ class ExactBlow:
     piston_energy, rod_energy, radiated : float
         The piston's energy at the end; the rod's (its waves, its strain under the feed, the bit's
         kinetic energy); the energy the bit's reflected wave carried away on a semi-infinite rod.
+    bit_energy : float
+        The bit's kinetic energy ``m w^2/2`` at the end (its part of ``rod_energy``).
     energy_error : float
         ``|available - (work_on_rock + rock_energy + piston_energy + rod_energy + radiated)| /
         available``: rounding.
@@ -110,6 +112,7 @@ class ExactBlow:
     shank_displacement: float
     pieces: int
     windows: int
+    bit_energy: float = 0.0
     diagnostics: dict = field(default_factory=dict)
     _hist: tuple = field(repr=False, default=())
 
@@ -296,7 +299,7 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
         ended_by=ended,
         uncertainty=unc, loadings=loads, separations=int(CI[S.CI_SEP]), recontacts=int(CI[S.CI_RECON]),
         bit_velocity=scale * BS[S.BS_W], gap=scale * gap, shank_displacement=scale * xs,
-        pieces=int(CNT[S.CNT_PIECES]), windows=int(CI[S.CI_WIN]),
+        pieces=int(CNT[S.CNT_PIECES]), windows=int(CI[S.CI_WIN]), bit_energy=s2 * (0.5 * m * BS[S.BS_W] ** 2),
         diagnostics={"searches_abandoned": int(CI[S.CI_GIVEUP]), "degree_limit": int(CI[S.CI_DEG]),
                      "terms": int(CNT[S.CNT_TERMS])},
         _hist=hist)
