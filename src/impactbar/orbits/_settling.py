@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["dominant_limit", "falling_limit", "drifting", "SETTLE_DRIFT_IMPACTS", "DRIFT_AHEAD"]
+__all__ = ["dominant_limit", "falling_limit", "drifting", "drift_to_surface", "SETTLE_DRIFT_IMPACTS",
+           "DRIFT_AHEAD", "DRIFT_REACH", "DRIFT_PROBE"]
 
 #: the dominant-mode extrapolation of :func:`dominant_limit` is taken where each of the last two
 #: steps is a multiple ``rho`` of the one before to this fraction of its size, the two multiples
@@ -24,6 +25,15 @@ SETTLE_DRIFT_IMPACTS = 20000
 #: Newton to take over (the supply pressure charging toward the relief valve's setting: Newton's
 #: root in the relief's closed mode lies past it)
 DRIFT_AHEAD = 10.0
+#: the farthest :func:`drift_to_surface` carries a steady drift at once, relative to the state's size
+#: (at least 1): the oil circuit's supply pressure charging a 500 L accumulator by some 4e-5 of the
+#: pressure scale an impact, 0.6 of it from the pre-charge to the relief valve's setting
+DRIFT_REACH = 1.0
+#: bisection steps of :func:`drift_to_surface` toward the surface (its distance to 2^-50 of the reach)
+DRIFT_BISECTIONS = 50
+#: impacts more the motion is followed where its drift heads for a surface but its steps do not yet
+#: fit one multiple (its fast parts still settling: four impacts on the 500 L accumulator's)
+DRIFT_PROBE = 8
 
 
 def drifting(y0, y1, y2, tol: float) -> bool:
@@ -62,6 +72,64 @@ def drifting(y0, y1, y2, tol: float) -> bool:
         return False
     rho = _ratio(y1 - y0, d2)
     return rho is not None and rho >= DOMINANT_RHO
+
+
+def drift_to_surface(drive, mode, y0, y1, y2, M: int, fit: bool = True):
+    """The state that a steady drift of three iterates of a map reaches just short of a switching
+    surface of ``mode`` (the first along its last step), where that surface lies short of the drift's
+    linear limit: the motion carried there at once instead of followed, or ``None``.
+
+    A drift whose steps are each a multiple ``rho >=`` :data:`DOMINANT_RHO` of the step before (a
+    mode of multiplier near or above 1) may be too slow for :func:`drifting` to tell it at its
+    tolerance: the oil circuit's 500 L accumulator charging from its pre-charge by some 4e-5 of the
+    pressure an impact, its impact velocities repeating to 1e-5, some 15,000 impacts from the relief
+    valve's setting. Newton's linear model of that mode (its limit ``y2 + rho / (1 - rho) d``, none
+    ahead for ``rho >= 1``) cannot see the relief's kink: its step goes to negative pressures. The
+    drift is carried along its last step ``d = y2 - y1`` to the first surface of ``mode`` that a
+    state ``y2 + s d`` crosses (:func:`surfaces_ahead`), ``s`` no farther than that limit nor than
+    :data:`DRIFT_REACH` times the state's size (at least 1), and from there the motion is followed
+    on: its fast parts settle in a few impacts.
+
+    Parameters
+    ----------
+    drive : Drive
+    mode : object
+        The drive's discrete state at the three iterates.
+    y0, y1, y2 : numpy.ndarray, shape (2 M + k,)
+        Consecutive iterates (dimensionless).
+    M : int
+    fit : bool, optional
+        Whether the last step must be a multiple of the one before to :data:`DOMINANT_FIT` of its
+        size, and the surface lie short of the drift's linear limit; without, ``rho`` is the last
+        step's projection on the one before and the reach :data:`DRIFT_REACH` alone (a drift whose
+        fast parts have not settled yet: whether to follow it a few impacts more).
+
+    Returns
+    -------
+    numpy.ndarray, shape (2 M + k,), or None
+        ``y2 + s d`` on the near side of the surface (to 2^-50 of the reach); ``None`` where the
+        steps do not fit one multiple of at least :data:`DOMINANT_RHO`, no surface lies within reach
+        or the drift reaches it within :data:`DRIFT_AHEAD` steps (the motion followed on gets there).
+    """
+    d = y2 - y1
+    d1 = y1 - y0
+    rho = _ratio(d1, d) if fit else (float(d1 @ d) / float(d1 @ d1) if float(d1 @ d1) > 0.0 else None)
+    size = float(np.linalg.norm(d))
+    if rho is None or rho < DOMINANT_RHO or not size > 0.0:
+        return None
+    reach = DRIFT_REACH * max(1.0, float(np.linalg.norm(y2))) / size
+    if fit and rho < 1.0:
+        reach = min(reach, rho / (1.0 - rho))
+    if surfaces_ahead(drive, mode, y2 + reach * d, M):
+        return None
+    lo, hi = 0.0, reach
+    for _ in range(DRIFT_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        if surfaces_ahead(drive, mode, y2 + mid * d, M):
+            lo = mid
+        else:
+            hi = mid
+    return y2 + lo * d if lo > DRIFT_AHEAD else None
 
 
 def _ratio(d1, d2):

@@ -24,7 +24,15 @@ from ..model import BarModel
 from . import _closing as C
 from ._closing import checked_root, close
 from ._saltation import map_jacobian, through
-from ._settling import DRIFT_AHEAD, SETTLE_DRIFT_IMPACTS, dominant_limit, drifting, surfaces_ahead
+from ._settling import (
+    DRIFT_AHEAD,
+    DRIFT_PROBE,
+    SETTLE_DRIFT_IMPACTS,
+    dominant_limit,
+    drift_to_surface,
+    drifting,
+    surfaces_ahead,
+)
 from ._shooting_data import orbit_data
 from .driven_orbit import SwitchedOrbit, _constant_load
 
@@ -322,10 +330,10 @@ class ShootingProblem(OrbitProblem):
     def _settle(self, tau, mode, y, n_max, source=None):
         """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
         impacts (stopping once the impact velocities repeat every ``m`` impacts to ``1e-11``, or
-        ``1e-4`` for a drive with variational flights), and take the starts of the last ``m``
-        intervals as the blocks (with the impacts before them)."""
+        ``1e-4`` for a drive with variational flights; a drift too slow to tell at that tolerance
+        carried to the switching surface ahead of it, :meth:`_carried`), and take the starts of the
+        last ``m`` intervals as the blocks (with the impacts before them)."""
         m, M = self.impacts, self.M
-        c = self.model.end_weights
         # a drive whose flights give Newton the exact Jacobian (variational equations) is handed
         # over once the impacts agree to 1e-4: Newton's quadratic convergence does the rest, where
         # a slow mode (the oil circuit's supply pressure, multiplier ~0.9) would take hundreds of
@@ -344,11 +352,10 @@ class ShootingProblem(OrbitProblem):
         budget, count = n_max, 0
         while count < budget:  # (more impacts only while the drive's state drifts: SETTLE_DRIFT_IMPACTS)
             count += 1
-            y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=loose)
-            source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
+            tau, mode, y, source, speed = self._follow(tau, mode, y, loose)
             hist.append((tau, mode, y, source))
             iterates += 1
-            speeds.append(float(c @ arrival[2]))
+            speeds.append(speed)
             if speeds[-1] <= 0.0:
                 raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
                                  "without one) does not strike the stop: give a guess")
@@ -357,7 +364,13 @@ class ShootingProblem(OrbitProblem):
                 ahead = y + DRIFT_AHEAD * (y - hist[-1 - m][2])  # (where the drift takes it next)
                 if not (self.variational and (drifting(hist[-1 - 2 * m][2], hist[-1 - m][2], y, settle)
                                               or not surfaces_ahead(self.drive, mode, ahead, M))):
-                    break
+                    carried = self._carried(hist, loose) if self.variational else None
+                    if carried is None:
+                        break
+                    hist.extend(carried)  # (the last state carried to the surface: followed on)
+                    tau, mode, y, _ = hist[-1]
+                    count, speeds, iterates = count + len(carried), [], 1
+                    continue
                 budget = max(budget, SETTLE_DRIFT_IMPACTS)
             if accelerate and iterates >= 4 and mode == hist[-2][1] == hist[-3][1] == hist[-4][1]:
                 star = dominant_limit(hist[-4][2], hist[-3][2], hist[-2][2], y)
@@ -369,6 +382,36 @@ class ShootingProblem(OrbitProblem):
         self.blocks = [(b[0], b[1]) for b in blocks]
         self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
         return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
+
+    def _follow(self, tau, mode, y, settings):
+        """One impact of the motion followed to a start: ``(tau, mode, y, source, speed)`` after it,
+        ``source`` the impact's (:attr:`sources`) and ``speed`` the end's impact velocity."""
+        M = self.M
+        y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=settings)
+        source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
+        return tau, mode, y, source, float(self.model.end_weights @ arrival[2])
+
+    def _carried(self, hist, settings):
+        """Where the drive's state at the end of ``hist`` (the motion followed to a start, settled at
+        its tolerance) still drifts toward a surface of its mode, too slowly to tell at that
+        tolerance (:func:`~._settling.drift_to_surface`): the impacts followed on, at most
+        :data:`~._settling.DRIFT_PROBE`, until the drift's steps fit one multiple, the last state
+        carried to the surface; ``None`` (the start as it was) where they never fit or the surface
+        lies past the drift's linear limit."""
+        m, M, drive = self.impacts, self.M, self.drive
+        if drift_to_surface(drive, hist[-1][1], hist[-1 - 2 * m][2], hist[-1 - m][2], hist[-1][2], M,
+                            fit=False) is None:
+            return None
+        seq = list(hist[-1 - 2 * m:])
+        for _ in range(DRIFT_PROBE):
+            tau, mode, y, source, _ = self._follow(*seq[-1][:3], settings)
+            seq.append((tau, mode, y, source))
+            if mode == seq[-1 - m][1] == seq[-1 - 2 * m][1]:
+                far = drift_to_surface(drive, mode, seq[-1 - 2 * m][2], seq[-1 - m][2], y, M)
+                if far is not None:
+                    seq[-1] = (tau, mode, far, source)
+                    return seq[2 * m + 1:]
+        return None
 
     def residual(self, X, settings=None, *, steer: bool = False, keep: bool = False):
         """The shooting residual and its Jacobian: from the variational equations where the drive's
