@@ -88,16 +88,18 @@ print(f"the cushion's node peaks at {h['p_cushion_Pa'].max() / 1e6:.2f} MPa, the
 # The filled contours are the impact power, the lines the blow frequency.
 import csv
 
-with (ROOT / "docs" / "data" / "drill_cushion_map.csv").open() as fh:
-    rows = list(csv.DictReader(fh))
-volume = np.unique([float(r["parts.cushion.volume"]) for r in rows])
-coefficient = np.unique([float(r["parts.cushion.coefficient"]) for r in rows])
+
+def stored_map(file, row_key, column_key):
+    """A map stored in ``docs/data``: its two axes' values and a function that gives a stored column
+    on its grid (``row_key`` along the rows)."""
+    with (ROOT / "docs" / "data" / file).open() as fh:
+        rows = list(csv.DictReader(fh))
+    ys, xs = (np.unique([float(r[k]) for r in rows]) for k in (row_key, column_key))
+    return ys, xs, lambda name: np.array([float(r[name]) for r in rows]).reshape(ys.size, xs.size)
 
 
-def grid(name):
-    """A stored column on the map's grid (volume along the rows)."""
-    return np.array([float(r[name]) for r in rows]).reshape(volume.size, coefficient.size)
-
+volume, coefficient, grid = stored_map("drill_cushion_map.csv", "parts.cushion.volume",
+                                       "parts.cushion.coefficient")
 
 power = grid("impact_energy") * grid("blow_frequency") / 1e3
 frequency = grid("blow_frequency")
@@ -155,6 +157,26 @@ bottom.set_ylabel("pressure (MPa)")
 bottom.set_xlabel("time from the impact (ms)")
 bottom.legend()
 plt.show()
+
+# %%
+# A map over the spool's mass and control end
+# -------------------------------------------
+# The same way, ``benchmarks/make_drill_spool_map.py`` mapped the spool drill over
+# ``parts.main_spool.mass`` and ``parts.main_spool.large_area`` (15 x 15 operating points on a local
+# dask cluster), stored as ``docs/data/drill_spool_map.csv``: the impact power filled, the blow
+# frequency in lines.
+mass, area, spool_grid = stored_map("drill_spool_map.csv", "parts.main_spool.mass",
+                                    "parts.main_spool.large_area")
+spool_power = spool_grid("impact_energy") * spool_grid("blow_frequency") / 1e3
+fig, ax = plt.subplots(figsize=(6.4, 4.4), layout="constrained")
+filled = ax.contourf(area * 1e4, mass, spool_power, levels=12, cmap="viridis")
+fig.colorbar(filled, ax=ax, label="impact power (kW)")
+label_contours(ax, ax.contour(area * 1e4, mass, spool_grid("blow_frequency"), colors="white",
+                              linewidths=0.8), "Hz")
+ax.set_xlabel("parts.main_spool.large_area (cm^2)")
+ax.set_ylabel("parts.main_spool.mass (kg)")
+plt.show()
+print(f"{spool_power.size} points: impact power {spool_power.min():.2f} to {spool_power.max():.2f} kW")
 
 # %%
 # The optimiser over the spool and the cushion
