@@ -30,35 +30,39 @@ OUTPUTS = ("status", "blow_frequency", "impact_energy", "hydraulic_efficiency", 
            "stable", "mean_supply_pressure", "min_rear_pressure")
 
 
-def spec():
-    """The map's spec (:class:`impactbar.sweeps.DrifterMapSpec`) over :data:`AXES`."""
+def spec(config=CONFIG, axes=None):
+    """The map's spec (:class:`impactbar.sweeps.DrifterMapSpec`) over ``axes`` (:data:`AXES`) of
+    ``config``."""
     from impactbar.sweeps.map_spec import parse_map_spec
 
-    return parse_map_spec({"task": "operating_point", "config": str(CONFIG), "axes": AXES})
+    return parse_map_spec({"task": "operating_point", "config": str(config), "axes": axes or AXES})
 
 
-def main(workers: int = 2, store=None) -> None:
+def main(workers: int = 2, store=None, config=CONFIG, axes=None, out=OUT) -> None:
+    """Run the map of ``config`` over ``axes`` (default the drill's cushion's, :data:`AXES`) on
+    ``workers`` dask workers and write it as a CSV to ``out``."""
     from impactbar.sweeps import open_sweep
     from impactbar.sweeps.maps import run_map
 
+    axes = axes or AXES
     with tempfile.TemporaryDirectory() as tmp:
         store = Path(tmp) / "map.zarr" if store is None else Path(store)
         wall, cpu = time.perf_counter(), _cpu()
-        run_map(spec(), store, executor="dask", n_workers=workers, progress=False)
+        run_map(spec(config, axes), store, executor="dask", n_workers=workers, progress=False)
         wall, cpu = time.perf_counter() - wall, _cpu() - cpu
         ds = open_sweep(store)
-        names = list(AXES)
+        names = list(axes)
         grid = np.meshgrid(*(ds[n].values for n in names), indexing="ij")
         rows = [[*(g.ravel()[k] for g in grid), *(ds[o].values.ravel()[k] for o in OUTPUTS)]
                 for k in range(grid[0].size)]
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    with OUT.open("w", newline="") as fh:
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with out.open("w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow([*names, *OUTPUTS])
         for r in rows:
             w.writerow([repr(float(x)) if isinstance(x, float | np.floating) else int(x) for x in r])
     print(f"{len(rows)} points on {workers} dask workers: {wall:.1f} s of wall time, {cpu:.0f} s of CPU; "
-          f"written to {OUT.relative_to(HERE.parent)}")
+          f"written to {out.relative_to(HERE.parent)}")
 
 
 def _cpu() -> float:
@@ -68,10 +72,16 @@ def _cpu() -> float:
     return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
-if __name__ == "__main__":
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def command_line(doc: str, **where) -> None:
+    """Read ``--workers`` and ``--store`` from the command line (``doc`` its help) and run
+    :func:`main` with them and ``where`` (``config``, ``axes``, ``out``)."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--store", default=None,
                         help="the zarr store to keep (a rerun resumes it); default a temporary one")
     a = parser.parse_args()
-    main(a.workers, a.store)
+    main(a.workers, a.store, **where)
+
+
+if __name__ == "__main__":
+    command_line(__doc__)

@@ -236,14 +236,18 @@ def test_a_spool_valve_on_the_rock(rock_drifter):
     assert 0.0 <= orbit.drive_states[0][x] <= 1.0
 
 
+#: a spool valve's table on the preset's circuit, in SI
+SPOOL_TABLE = {"kind": "spool_valve", "mass": "0.2 kg", "stroke": "8 mm", "damping": "50 N*s/m",
+               "large_area": "1.7 cm^2", "small_area": "0.85 cm^2", "control_volume": "5 cm^3",
+               "coefficient": "6e-6 m^3/s/Pa^0.5", "pilot_coefficient": "2e-6 m^3/s/Pa^0.5", "lap": 0.1,
+               "open_gap": "23 mm", "close_gap": "1 mm", "port_span": "1.5 mm"}
+
+
 def test_a_spool_valve_table_builds_the_part_in_si():
     from impactbar.physical import build, read_config
 
     cfg = read_config("circuit-drifter")[0]
-    table = {"kind": "spool_valve", "mass": "0.2 kg", "stroke": "8 mm", "damping": "50 N*s/m",
-             "large_area": "1.7 cm^2", "small_area": "0.85 cm^2", "control_volume": "5 cm^3",
-             "coefficient": "6e-6 m^3/s/Pa^0.5", "pilot_coefficient": "2e-6 m^3/s/Pa^0.5", "lap": 0.1,
-             "open_gap": "23 mm", "close_gap": "1 mm", "port_span": "1.5 mm"}
+    table = SPOOL_TABLE
     d = build({**cfg, "parts": {"sv": table}})
     (got,) = d.drive().extra_parts
     m, L, ar = d.bar.mass_kg, d.bar.length_m, d.si["rear_area_m2"]
@@ -258,3 +262,20 @@ def test_a_spool_valve_table_builds_the_part_in_si():
         assert getattr(got, f.name) == pytest.approx(getattr(want, f.name), rel=1e-14), f.name
     with pytest.raises(ValueError, match=r"sv\.lap"):
         build({**cfg, "parts": {"sv": {**table, "lap": 1.5}}})
+
+
+def test_a_spool_valve_takes_the_place_of_the_valve_table():
+    """A config whose spool valve stands in for the valve needs no ``[valve]`` table (its keys then
+    refused, naming the part); one without either gets one error naming both."""
+    from impactbar.physical import build, read_config
+
+    cfg = {k: v for k, v in read_config("circuit-drifter")[0].items() if k != "valve"}
+    table = SPOOL_TABLE
+    d = build({**cfg, "parts": {"sv": table}})
+    (got,) = d.drive().extra_parts
+    assert isinstance(got, SpoolValve) and d.drive()._stand_in
+    assert d.to_dimensionless("parts.sv.mass", "0.2 kg")[1] == pytest.approx(0.2 / d.bar.mass_kg, rel=1e-14)
+    with pytest.raises(ValueError, match=r"valve\.switch_out: this drifter has no \[valve\]: the part sv"):
+        d.to_dimensionless("valve.switch_out", "20 mm")
+    with pytest.raises(ValueError, match=r"needs a valve: a \[valve\] table .* spool_valve\); got neither"):
+        build(cfg)

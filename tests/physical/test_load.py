@@ -17,6 +17,7 @@ EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 KINDS = {
     "circuit_drifter.toml": CircuitDrifter,
     "circuit_drill_parts.toml": CircuitDrifter,
+    "circuit_drill_spool.toml": CircuitDrifter,
     "circuit_drifter_parts.toml": CircuitDrifter,
     "circuit_drifter_return_line.toml": CircuitDrifter,
     "circuit_drifter_rock.toml": CircuitDrifter,

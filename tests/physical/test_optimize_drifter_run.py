@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[2]
 #: drifters and the hammers have no circuit to optimise, the sweep specs are no machine)
 CIRCUIT_EXAMPLES = ("circuit_drifter.toml", "circuit_drifter_parts.toml", "circuit_drifter_return_line.toml",
                     "circuit_drifter_rock.toml", "circuit_drifter_rock_piston.toml",
-                    "circuit_drill_parts.toml")
+                    "circuit_drill_parts.toml", "circuit_drill_spool.toml")
 
 
 def test_the_circuit_examples_are_the_ones_optimize_takes():
@@ -119,6 +119,10 @@ def test_optimize_takes_every_key_a_design_map_sweeps(name):
         keys = {"parts.clearance.conductance", "parts.cushion.volume", "parts.cushion.coefficient",
                 "parts.check.coefficient", "parts.check.cracking_pressure", "parts.check.opening_span"}
         assert keys <= set(swept)
+    if name == "circuit_drill_spool.toml":  # (the spool's fields by their dotted keys)
+        fields = ("mass", "stroke", "damping", "large_area", "small_area", "control_volume", "lap",
+                  "open_gap")
+        assert {f"parts.main_spool.{k}" for k in fields} <= set(swept)
 
 
 def test_a_short_search_over_a_chamber_area_and_the_restitution():

@@ -139,7 +139,8 @@ def _circuit_header(d: physical.CircuitDrifter) -> str:
             + _what_is_struck(d)
             + f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
             f"precharge = {dr.value('precharge') if dr.accumulator is not None else float('nan'):.5g}, "
-            f"pump_flow = {dr.value('pump_flow'):.5g}, switch_out = {dr.value('switch_out'):.5g}"
+            f"pump_flow = {dr.value('pump_flow'):.5g}"
+            + ("" if dr._stand_in else f", switch_out = {dr.value('switch_out'):.5g}")  # (a spool's own)
             + "".join(f"\n  {line}" for line in part_lines(d)))
 
 

@@ -289,8 +289,8 @@ def read_parts(tables) -> tuple[PartSpec, ...]:
             if value not in allowed or value == name:
                 raise ValueError(f"parts.{name}.{c} must be one of the {what}s "
                                  f"{', '.join(a for a in allowed if a != name)}; got {value!r}")
-            if what == "port" and value != NO_PORT:
-                if value in taken:
+            if what == "port" and value != NO_PORT and value not in cls.offers:  # (a port it offers
+                if value in taken:  # itself, a spool valve's return, is one another part may take)
                     raise ValueError(f"parts.{name}.{c}: the port {value} is taken by parts.{taken[value]} "
                                      "already (one part a port)")
                 taken[value] = name

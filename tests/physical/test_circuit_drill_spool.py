@@ -1,0 +1,57 @@
+"""The example drill with its main valve as a pilot-operated spool (``examples/circuit_drill_spool.toml``):
+no ``[valve]`` table (the spool stands in for it), the cushion taking the spool's return port, its
+orbit's numbers (``impactbar drifter``'s, quoted in the tutorial) and two checks of them:
+
+- the ramped valve plays no part: the drill's ``[valve]`` table added gives the same orbit, bit for bit;
+- the oil balance at the return line: over the periodic orbit the oil the cushion passes into it (all
+  the rear chamber's return through the spool) is the oil it drains (their means within 1e-3).
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from impactbar.cli.drifter import _circuit_header
+from impactbar.physical import load, read_config
+from impactbar.physical.circuit import CircuitDrifter
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+SPOOL = EXAMPLES / "circuit_drill_spool.toml"
+
+
+@pytest.fixture(scope="module")
+def drill():
+    return load(SPOOL)
+
+
+@pytest.fixture(scope="module")
+def orbit(drill):
+    return drill.orbit()
+
+
+def test_the_spool_drill_reads_without_a_valve_table_its_cushion_on_the_spools_return(drill):
+    assert "valve" not in read_config(str(SPOOL))[0]
+    header = _circuit_header(drill)
+    assert "switch_out" not in header.splitlines()[1]  # (the spool's pilot ports switch it)
+    assert "part main_spool (spool_valve): valve_return -> main_spool; mass 0.2 kg, stroke 8 mm" in header
+    assert "part cushion (cushion): valve_return -> cushion -> return_line" in header
+
+
+def test_the_spool_drills_orbit_and_the_valve_table_playing_no_part(orbit):
+    assert orbit.stable
+    assert orbit.blow_frequency_Hz == pytest.approx(45.71262426822849, rel=1e-6)
+    assert orbit.impact_velocity_m_s == pytest.approx(11.350639573551165, rel=1e-6)
+    assert orbit.impact_energy_J == pytest.approx(360.74365444546777, rel=1e-6)
+    assert orbit.hydraulic_efficiency == pytest.approx(0.5303828860213802, rel=1e-6)
+    cfg = read_config(str(SPOOL))[0]
+    cfg["valve"] = read_config(str(EXAMPLES / "circuit_drill_parts.toml"))[0]["valve"]
+    assert CircuitDrifter.from_config(cfg).orbit().period_s == orbit.period_s
+
+
+def test_the_return_line_drains_what_the_cushion_passes_over_a_period(orbit):
+    h = orbit.histories(4001)
+    t = h["t_s"]
+    into, out = (np.trapezoid(h[k], t) / (t[-1] - t[0]) for k in ("q_cushion_m3_s", "q_return_line_m3_s"))
+    assert into > 5e-4  # (about 0.8 L/s of return flow)
+    assert into == pytest.approx(out, rel=1e-3)
