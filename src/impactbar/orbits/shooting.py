@@ -345,10 +345,11 @@ class ShootingProblem(OrbitProblem):
         while count < budget:  # (more impacts only while the drive's state drifts: SETTLE_DRIFT_IMPACTS)
             count += 1
             y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=loose)
-            source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
+            _, _, v_arrival, state_arrival = arrival
+            source = (state_arrival.mode, state_arrival.z, tau, y[:M].copy(), y[M:2 * M].copy())
             hist.append((tau, mode, y, source))
             iterates += 1
-            speeds.append(float(c @ arrival[2]))
+            speeds.append(float(c @ v_arrival))
             if speeds[-1] <= 0.0:
                 raise ValueError("find_orbit: the motion followed from the guess (from rest on the stop "
                                  "without one) does not strike the stop: give a guess")
@@ -600,8 +601,8 @@ class ShootingProblem(OrbitProblem):
         c = self.model.end_weights
         y = X[k * n:(k + 1) * n]
         tau, mode = self.blocks[k]
-        y_after, _, _, arrival, _, _ = self._flight(tau, mode, y)
-        if float(c @ arrival[2]) <= 0.0:
+        y_after, _, _, (_, _, v_arrival, _), _, _ = self._flight(tau, mode, y)
+        if float(c @ v_arrival) <= 0.0:
             return Admissibility.BACKWARD_IMPACT
         if c @ y_after[M:2 * M] >= 0.0 and self.model.R > 0.0 and \
                 self.model.law.traits.restitution_in_kernel:
