@@ -406,8 +406,6 @@ WIDER_TUPLES = {
     "orbits/_admissibility_search.py": {"F[]"},  # F[]: (in the kernel) the flight's tuple: its lam
     "orbits/_newton.py": {"evaluated"},  # evaluated: evaluate's (F, J)
     "orbits/charts.py": {"edges[]"},  # edges[]: an edge's (value, ...)
-    # b: a block's (tau, mode); hist[]: an iterate's (tau, mode, y, source)
-    "orbits/shooting.py": {"b", "hist[]"},
     "paper.py": {"bad[]"},  # bad[]: a bad interval's (lo, hi)
     "physical/circuit_graph.py": {"connections[]"},  # connections[]: a connection's (node, ...)
     # OBJECTIVES[]: an objective's (key, ...); p: a near design's (x, y)
@@ -488,7 +486,7 @@ def test_the_scan_finds_a_lower_case_slot_and_passes_the_listed_names():
 def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
     """The forms a scan of short names alone missed: a one-letter name, a long name, an attribute,
     a slot of an entry reached by subscripts; a listed name passes only in its own form (``hist``
-    listed passes ``hist[-1]``, not ``hist[-1][2]``)."""
+    listed passes ``hist[-1]``, not ``hist[-1][2]``, and ``runs[]`` the reverse)."""
     text = ('r = records[-1][1] + r[1]\n'
             'source = (arrival[3].mode, arrival[2])\n'
             'return self._force_extremes[0] + f.typical[1]\n'
@@ -499,9 +497,9 @@ def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
                                      (3, "_force_extremes[0]"), (3, "typical[1]"), (4, "windows[-1][2]"),
                                      (4, "pending[0][0]"), (5, "OBJECTIVES[key][0]"), (5, "hist[-1 - m][2]"),
                                      (5, "hist[-1]")]
-    assert slots_by_number("y = hist[-1] + hist[-1 - m][2]\n", "orbits/shooting.py") == []
-    assert slots_by_number("y = hist[-1] + hist[-1 - m][2]\n", "orbits/orbit.py") == [
-        (1, "hist[-1]"), (1, "hist[-1 - m][2]")]
+    assert slots_by_number("y = runs[0][0] + runs[-1]\n", "laws/wave/periodic.py") == [(1, "runs[-1]")]
+    assert slots_by_number("y = runs[0][0] + runs[-1]\n", "orbits/orbit.py") == [
+        (1, "runs[0][0]"), (1, "runs[-1]")]
     assert slots_by_number("y = Xr[0] + Xr[0][1]\n", "orbits/shooting.py") == [(1, "Xr[0][1]")]
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -31,6 +32,15 @@ from .driven_orbit import SwitchedOrbit, _constant_load
 __all__ = ["ShootingProblem"]
 
 TWO_PI = 2.0 * math.pi
+
+
+class _Iterate(NamedTuple):
+    """An impact the settling run met: its time, the drive's mode, the state after it and its source."""
+
+    tau: float
+    mode: object
+    y: np.ndarray
+    source: tuple | None
 
 
 #: central-difference steps of the shooting Jacobian (relative to ``max(1, |X_j|)``): closed-form
@@ -335,7 +345,7 @@ class ShootingProblem(OrbitProblem):
         # delta-squared on the map's iterates, as in Steffensen's method; the quadratic's fixed point
         # where the steps' multiple still falls: dominant_limit) instead of followed
         accelerate = self.variational and m == 1 and n_max > m
-        hist = [(tau, mode, y, source)]
+        hist = [_Iterate(tau, mode, y, source)]
         speeds = []
         iterates = 1  # consecutive iterates of the map at the end of hist
         # the motion is followed only to hand Newton a start: where Newton's flights are the
@@ -347,7 +357,7 @@ class ShootingProblem(OrbitProblem):
             y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=loose)
             _, _, v_arrival, state_arrival = arrival
             source = (state_arrival.mode, state_arrival.z, tau, y[:M].copy(), y[M:2 * M].copy())
-            hist.append((tau, mode, y, source))
+            hist.append(_Iterate(tau, mode, y, source))
             iterates += 1
             speeds.append(float(c @ v_arrival))
             if speeds[-1] <= 0.0:
@@ -355,21 +365,21 @@ class ShootingProblem(OrbitProblem):
                                  "without one) does not strike the stop: give a guess")
             if n_max > m and len(speeds) > 2 * m + 2 and \
                     abs(speeds[-1] - speeds[-1 - m]) <= settle * max(1.0, abs(speeds[-1])):
-                ahead = y + DRIFT_AHEAD * (y - hist[-1 - m][2])  # (where the drift takes it next)
-                if not (self.variational and (drifting(hist[-1 - 2 * m][2], hist[-1 - m][2], y, settle)
+                ahead = y + DRIFT_AHEAD * (y - hist[-1 - m].y)  # (where the drift takes it next)
+                if not (self.variational and (drifting(hist[-1 - 2 * m].y, hist[-1 - m].y, y, settle)
                                               or not surfaces_ahead(self.drive, mode, ahead, M))):
                     break
                 budget = max(budget, SETTLE_DRIFT_IMPACTS)
-            if accelerate and iterates >= 4 and mode == hist[-2][1] == hist[-3][1] == hist[-4][1]:
-                star = dominant_limit(hist[-4][2], hist[-3][2], hist[-2][2], y)
+            if accelerate and iterates >= 4 and mode == hist[-2].mode == hist[-3].mode == hist[-4].mode:
+                star = dominant_limit(hist[-4].y, hist[-3].y, hist[-2].y, y)
                 if star is not None and surfaces_ahead(self.drive, mode, star, M):  # (none jumped over)
                     y = star
-                    hist[-1] = (tau, mode, y, source)
+                    hist[-1] = _Iterate(tau, mode, y, source)
                     iterates = 1
         blocks = hist[-m:]
-        self.blocks = [(b[0], b[1]) for b in blocks]
-        self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
-        return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
+        self.blocks = [(b.tau, b.mode) for b in blocks]
+        self.sources = [b.source for b in blocks] if all(b.source is not None for b in blocks) else []
+        return np.concatenate([np.asarray(b.y, dtype=float) for b in blocks])
 
     def residual(self, X, settings=None, *, steer: bool = False, keep: bool = False):
         """The shooting residual and its Jacobian: from the variational equations where the drive's
