@@ -111,7 +111,7 @@ NOT_RECORDS = {
     "orbits/valve_admissibility.py": {"w2", "za"},  # modal components
     "orbits/valve_search.py": {"gX", "v0", "wq", "wv"},  # modal components and a gradient's
     "orbits/valve_segment.py": {"Ed", "dtc", "states", "stroke", "zb"},  # modal components
-    "paper.py": {"ax", "keys", "orbits", "rows"},  # sequences' first and last entries
+    "paper.py": {"ax", "bad", "keys", "orbits", "rows"},  # sequences' first and last entries
     "physical/bar.py": {"secs"},  # the first section
     "physical/circuit.py": {"pieces"},  # the first and last piece
     "measure/kolsky.py": {"band", "later", "time"},  # a band's ends; first pulse, sample
@@ -389,9 +389,6 @@ WIDER_TUPLES = {
     "cli/continue_.py": {"e[]"},  # e[]: an event's multiplier (real, imaginary)
     "cli/drifter.py": {"CONFIG_KINDS[]"},  # CONFIG_KINDS[]: a kind's (class, what)
     "cli/optimize.py": {"OBJECTIVES[]"},  # OBJECTIVES[]: an objective's (key, ...)
-    "cli/paper.py": {"s"},  # s: a summary row's (name, text)
-    "continuation/engine.py": {"f"},  # f: FRACTIONS (step, max, min)
-    "drives/circuit/drive.py": {"e"},  # e: an extremum's (lo, hi)
     "drives/circuit/endflight.py": {"splines"},  # splines: a spline's (knots, coefficients, degree)
     "drives/circuit/watch.py": {"e"},  # e: a watch's (slot, level, kind, node, f), sorted by slot
     "laws/paper/phase.py": {"out[]"},  # out[]: a root's (phase, multiplicity)
@@ -406,7 +403,6 @@ WIDER_TUPLES = {
     "orbits/_admissibility_search.py": {"F[]"},  # F[]: (in the kernel) the flight's tuple: its lam
     "orbits/_newton.py": {"evaluated"},  # evaluated: evaluate's (F, J)
     "orbits/charts.py": {"edges[]"},  # edges[]: an edge's (value, ...)
-    "paper.py": {"bad[]"},  # bad[]: a bad interval's (lo, hi)
     "physical/circuit_graph.py": {"connections[]"},  # connections[]: a connection's (node, ...)
     # OBJECTIVES[]: an objective's (key, ...); p: a near design's (x, y)
     "physical/optimize_drifter.py": {"OBJECTIVES[]", "p"},
@@ -414,8 +410,7 @@ WIDER_TUPLES = {
     # a: a design's (rank, merit); b: a design's (rank, merit); best[]: (residual, y); last[]: a
     # vertex's (residual, y); side[]: a side's (residual, y); t[]: a side's (residual, y)
     "physical/piston.py": {"a", "b", "best[]", "last[]", "side[]", "t[]"},
-    # e: a pattern's (name, ...); sides[]: a side's (d, problem, value)
-    "physical/sensitivity.py": {"e", "sides[]"},
+    "physical/sensitivity.py": {"e"},  # e: a pattern's (name, ...)
     "simulation/driven.py": {"b"},  # b: a block's (kind, arrays)
     # contacts[]: a contact's [start, end]; last_release: (time, segment, len, n_imp)
     "simulation/simulate.py": {"contacts[]", "last_release"},
