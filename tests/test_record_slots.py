@@ -3,13 +3,16 @@
 lattice blow's (``bs``, ``bp``, ``ctrl``, ``acc``: ``BIT_*``, ``BITP_*``, ``CTRL_*``, ``ACC_*``) are
 indexed by the names of :mod:`impactbar.laws.rodrock._records`, where each slot is said once.
 
-What counts as a slot by number: a name of two to six characters, of any case, indexed by one
-integer literal, ``PR[3]``, ``bs[3]``, ``CNT0[1]``, ``_hist[0]``, in code (comments and strings are
-prose). Single-letter names are the package's mathematical arrays, where ``[0]`` and ``[-1]`` are
-the first and last entries (``Z[-1]`` the last segment's impedance, ``U[-1]`` the continuation's
-parameter, ``q[0]`` the rigid mode); ``shape`` is never a record; ``NOT_RECORDS`` lists, module by
-module, the longer names that are no records either, and ``PYTHON_TUPLES`` the tuples of named
-values in Python code no kernel runs. A record of a kernel is named where it is made: the rock
+What counts as a slot by number: a name of any length and case, one letter too, or an attribute,
+indexed by one integer literal, ``PR[3]``, ``bs[3]``, ``r[1]``, ``self._measured[2]``, and a slot of
+an entry reached by subscripts before it, ``windows[-1][2]``, ``pending[0][0]``, ``WB[blk][0]``,
+in code (comments and strings are prose). The lists name a name, or for a chained subscript the
+name with ``[]`` (``hist[]``: a slot of an entry of ``hist``, not its ends). ``shape`` is never a
+record; ``NOT_RECORDS`` lists, module by module, the names that are no records (a mathematical
+array's entries: ``Z[-1]`` the last segment's impedance, ``U[-1]`` the continuation's parameter,
+``q[0]`` the rigid mode; a sequence's ends; a coefficient array), and ``PYTHON_TUPLES`` the tuples
+of named values in Python code that are still read by number. A call's result indexed by a number
+(``f(x)[0]``) and a slice are not scanned. A record of a kernel is named where it is made: the rock
 blow's in ``_records``, the others beside their kernel (``_admissibility_search``'s ``PB_*``, ``SRC_*``,
 ``WK_*``, ``_rigid_arrays``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave
 window's ``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
@@ -22,8 +25,8 @@ from pathlib import Path
 import impactbar
 from impactbar.laws.rodrock import _records
 
-#: a record's slot by an integer literal
-SLOT = re.compile(r"\b[A-Za-z_][A-Za-z0-9_]{1,5}\[-?[0-9]+\]")
+#: a record's slot by an integer literal: of a name (an attribute's too) after any subscripts
+SLOT = re.compile(r"\b([A-Za-z_][A-Za-z0-9_]*)((?:\[[^\[\]]*\])*)\[-?[0-9]+\]")
 #: names never a record: an array's shape
 ANYWHERE = {"shape"}
 #: module under impactbar/ -> the names there, indexed by a number, of arrays and sequences whose
@@ -40,7 +43,7 @@ NOT_RECORDS = {
     "continuation/one_parameter.py": {"hit", "pieces", "points", "t0",
                                       "tests"},  # sequences' ends, the parameter
     "continuation/engine.py": {"Ua", "Ub", "points", "pred", "rhs", "ta"},  # [-1]: the parameter's component
-    "continuation/driven.py": {"_fus", "_lams", "hit", "orbits", "points", "pts", "same", "sides", "t0",
+    "continuation/driven.py": {"hit", "orbits", "points", "pts", "same", "sides", "t0",
                                "tests"},  # sequences' first and last entries
     "continuation/two_parameter.py": {"e2", "names", "points", "vt"},  # the two parameters, a unit vector
     "drives/circuit/_cvode.py": {"tret"},  # CVODE's one-slot return time
@@ -82,7 +85,7 @@ NOT_RECORDS = {
     "laws/wave/_window.py": {"jumps", "qa"},  # the first jump; the rigid mode
     "laws/wave/impact.py": {"dg", "npi", "th"},  # the rigid mode; a grid's ends
     "laws/wave/law.py": {"jt", "qm"},  # the rigid mode
-    "laws/wave/periodic.py": {"DP", "coef", "first", "gq", "orders", "p12", "phases", "qm", "runs",
+    "laws/wave/periodic.py": {"DP", "coef", "first", "gq", "orders", "p12", "phases", "qm",
                               "y_plus"},  # DP[0]: the impact map's Jacobian's first row; modal components
     "laws/wave/sustained.py": {"below", "nxt", "start"},  # sequences' first and last entries
     "loads/fourier.py": {"_k", "_pk", "ks", "pks", "rows", "tau"},  # harmonics' first and last
@@ -96,22 +99,22 @@ NOT_RECORDS = {
     "orbits/_shooting_data.py": {"blocks"},  # the first block
     "orbits/_valve_flow.py": {"gq", "gv"},  # the rigid mode
     "orbits/admissibility.py": {"cl", "found", "neg", "pos", "q0", "v0"},  # sequences' ends; a one-slot box
-    "orbits/charts.py": {"edges", "hs", "kinds", "orders", "pieces", "roots", "xs"},  # sequences' ends
+    "orbits/charts.py": {"hs", "kinds", "orders", "pieces", "roots", "xs"},  # sequences' ends
     "orbits/coupled.py": {"qa"},  # the rigid mode
     "orbits/find.py": {"ti"},  # the last impact time
     "orbits/multi_impact.py": {"maps", "pert"},  # sequences' first and last entries
     "orbits/orbit.py": {"phases"},  # the first phase
     "orbits/rigid.py": {"args"},  # the first argument array
-    "orbits/shooting.py": {"Xr", "blocks", "hist", "speeds", "used"},  # sequences' ends, components; a box
+    "orbits/shooting.py": {"Xr", "blocks", "hist", "seq", "speeds", "used"},  # sequences' ends, components; a box
     "orbits/driven_orbit.py": {"states"},  # the first state
     "orbits/driven_search.py": {"found", "same", "vi"},  # sequences' first and last entries
     "orbits/valve_admissibility.py": {"w2", "za"},  # modal components
     "orbits/valve_search.py": {"gX", "v0", "wq", "wv"},  # modal components and a gradient's
-    "orbits/valve_segment.py": {"Eb", "Ed", "dtc", "states", "stroke", "zb"},  # modal components
+    "orbits/valve_segment.py": {"Ed", "dtc", "states", "stroke", "zb"},  # modal components
     "paper.py": {"ax", "bad", "keys", "orbits", "rows"},  # sequences' first and last entries
     "physical/bar.py": {"secs"},  # the first section
     "physical/circuit.py": {"pieces"},  # the first and last piece
-    "measure/kolsky.py": {"band", "chans", "later", "time"},  # a band's ends; first channel, pulse, sample
+    "measure/kolsky.py": {"band", "later", "time"},  # a band's ends; first pulse, sample
     "physical/optimize_failures.py": {"lines"},  # the error's first line
     "physical/optimize_multistart.py": {"order"},  # the best design's index
     "physical/optimize_result.py": {"axes", "kv"},  # the figure's axes; a (name, constraint) pair's second
@@ -125,14 +128,12 @@ NOT_RECORDS = {
     "measure/recording.py": {"time"},  # the first and last sample times
     "measure/results.py": {"time"},  # the first two sample times (the step)
     "measure/waves.py": {"after", "before", "parts", "time"},  # samples' ends; a window's two pieces
-    "physical/forces.py": {"rows"},  # the first row
     "physical/hammer.py": {"breaks", "levels", "pieces"},  # a square wave's two levels and breaks
     "physical/loader.py": {"parts"},  # a dotted name's parts
     "physical/optimize_drifter.py": {"kv"},  # a (name, constraint) pair's constraint
     "physical/piston.py": {"count", "edges", "pieces"},  # a one-slot box; sequences' ends
     "physical/results.py": {"tl"},  # the first and last time
     "physical/rock.py": {"tl"},  # the first and last time
-    "physical/sensitivity.py": {"sides"},  # the two sides of a difference
     "plotting/circuit.py": {"axes"},  # the figure's axes
     "plotting/continuation.py": {"yy"},  # the first value
     "plotting/maps.py": {"dims"},  # the first dimension
@@ -160,7 +161,7 @@ PYTHON_TUPLES = {
     "dynamics/modal.py": {"out"},  # the flow's four coefficient arrays
     "laws/rodrock/coupled_exact.py": {"waves"},  # (F, G)
     "laws/rodrock/exact.py": {"drive", "kept"},  # (starts, pieces); the kept pool
-    "laws/rodrock/exactjac.py": {"drive", "res", "waves"},  # (starts, pieces), the run's results
+    "laws/rodrock/exactjac.py": {"drive"},  # (starts, pieces)
     "laws/rodrock/exactmap.py": {"out"},  # the run's results
     "laws/wave/_jumps.py": {"best", "found"},  # (residual, value)
     "model.py": {"_modal"},  # (w, c, modes, kappa, sticking)
@@ -174,10 +175,248 @@ PYTHON_TUPLES = {
     "physical/forces.py": {"header"},  # the header's (time, force)
     "physical/geometry.py": {"ends"},  # (lengths, diameters)
     "physical/optimize_problem.py": {"ends"},  # the two sides' outputs
-    "physical/piston.py": {"best", "rank", "seg", "side"},  # (residual, y), (lengths, ..., speeds)
+    "physical/piston.py": {"best", "rank", "seg"},  # (residual, y), (lengths, ..., speeds)
     "simulation/initial.py": {"out"},  # (q, v)
     "simulation/simulate.py": {"last"},  # the cache (model, load, value)
 }
+#: module -> the names the scan met once it read names of any length, attributes and chained
+#: subscripts, that are no records (as ``NOT_RECORDS``)
+WIDER_NOT_RECORDS = {
+    "_shared/parameters.py": {"refused"},  # refused: the first refusal
+    "cli/_common.py": {"option_strings"},  # option_strings: the first option string
+    "cli/continue_.py": {"impact_times"},  # impact_times: the first impact time
+    # records: the last record of a list; v: the modal velocities ([0] the rigid mode) or a series' last
+    "cli/drifter.py": {"records", "v"},
+    # e: a basis vector's or series' entry; v: the modal velocities ([0] the rigid mode) or a series'
+    # last
+    "cli/simulate.py": {"e", "v"},
+    "continuation/cascade.py": {"branches"},  # branches: the last branch
+    # U: a continuation point: [-1] (and [-2]) its parameter; d: a chord: [-1] the parameter's
+    # component; pairs: the last pair of a list; records: the last record of a list; tangents: the last
+    # tangents
+    "continuation/driven.py": {"U", "d", "pairs", "records", "tangents"},
+    "continuation/engine.py": {"tangents"},  # tangents: the last tangents
+    # U: a continuation point: [-1] (and [-2]) its parameter; V: a continuation point: [-1] its
+    # parameter; e: a basis vector's or series' entry; tangents: the last tangents; tangents[]: a
+    # tangent's last component (the parameter)
+    "continuation/one_parameter.py": {"U", "V", "e", "tangents", "tangents[]"},
+    "continuation/two_parameter.py": {"U"},  # U: a continuation point: [-1] (and [-2]) its parameter
+    # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
+    # series' last
+    "drives/base.py": {"q", "v"},
+    # T: a time grid's first and last; Y: rows of states: the first and last; callbacks: the first
+    # callback
+    "drives/circuit/_cvode.py": {"T", "Y", "callbacks"},
+    "drives/circuit/_endfield.py": {"y"},  # y: a state vector's components
+    "drives/circuit/_field.py": {"y"},  # y: a state vector's components
+    # W: a stack of like matrices, each named where taken; c: a coefficient array's entries; q: the
+    # modal coordinates: [0] the rigid mode
+    "drives/circuit/_magnus.py": {"W", "c", "q"},
+    "drives/circuit/composition.py": {"replaced"},  # replaced: the first replaced part
+    "drives/circuit/cushion.py": {"openings"},  # openings: the first and last opening
+    "drives/circuit/drive.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
+    # T: a time grid's first and last; t: a time grid's first and last; y: a state vector's components
+    "drives/circuit/endflight.py": {"T", "t", "y"},
+    # Y: rows of states: the first and last; t: a time grid's first and last; x: a grid's or state's
+    # entries
+    "drives/circuit/flight.py": {"Y", "t", "x"},
+    "drives/circuit/watch.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
+    # q: the modal coordinates: [0] the rigid mode; t: a time grid's first and last; v: the modal
+    # velocities ([0] the rigid mode) or a series' last
+    "drives/flight.py": {"q", "t", "v"},
+    # c: a coefficient array's entries; out_vel: a one-slot box; q: the modal coordinates: [0] the rigid
+    # mode; v: the modal velocities ([0] the rigid mode) or a series' last
+    "drives/valve/_compiled_loop.py": {"c", "out_vel", "q", "v"},
+    "drives/valve/_state.py": {"pending"},  # pending: the queue's head
+    # pending: the queue's head; q: the modal coordinates: [0] the rigid mode
+    "drives/valve/drive.py": {"pending", "q"},
+    "dynamics/_aberth.py": {"s"},  # s: a root's index or a sum's real and imaginary parts
+    "dynamics/_crossing.py": {"anchor_t", "c"},  # anchor_t: a one-slot box; c: a coefficient array's entries
+    # c: a coefficient array's entries; q: the modal coordinates: [0] the rigid mode; v: the modal
+    # velocities ([0] the rigid mode) or a series' last
+    "dynamics/_event_loop.py": {"c", "q", "v"},
+    # a: a coefficient array's entries; b: a coefficient array's entries
+    "dynamics/invariants.py": {"a", "b"},
+    # f: a series' first and last values; g: a grid function's first value; lengths: the first or last
+    # segment's; mass_per_length: the last segment's; overlap: the first row; u: the transfer matrix's
+    # displacement row: its last; wavenumbers: a mode's wavenumber; x: a grid's or state's entries; z: a
+    # state vector's or grid's entries
+    "dynamics/stepped.py": {"f", "g", "lengths", "mass_per_length", "overlap", "u", "wavenumbers", "x", "z"},
+    "laws/paper/law.py": {"v_before"},  # v_before: the rigid mode's
+    # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
+    # series' last; y_minus: the state's component
+    "laws/paper/periodic.py": {"q", "v", "y_minus"},
+    "laws/paper/phase.py": {"amplitudes"},  # amplitudes: the first harmonic's
+    # F: the first cell or the first of a list; G: the cells' first wave; Z: the segments' first and
+    # last impedance
+    "laws/rodrock/_bit.py": {"F", "G", "Z"},
+    "laws/rodrock/_choice.py": {"segments"},  # segments: the first or last segment
+    # G: the cells' first wave; Z: the segments' first and last impedance
+    "laws/rodrock/_rockloop.py": {"G", "Z"},
+    # Z: the segments' first and last impedance; bit_forces: the series' ends
+    "laws/rodrock/blow.py": {"Z", "bit_forces"},
+    "laws/rodrock/checks.py": {"segments"},  # segments: the first or last segment
+    "laws/rodrock/contact.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
+    # G: the cells' first wave; Z: the segments' first and last impedance; q: the modal coordinates: [0]
+    # the rigid mode; v: the modal velocities ([0] the rigid mode) or a series' last
+    "laws/rodrock/coupled.py": {"G", "Z", "q", "v"},
+    # impedance: the first segment's; q: the modal coordinates: [0] the rigid mode; v: the modal
+    # velocities ([0] the rigid mode) or a series' last
+    "laws/rodrock/coupled_exact.py": {"impedance", "q", "v"},
+    "laws/rodrock/exactjac.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
+    # a: a coefficient array's entries; b: a coefficient array's entries; end_weights: the rigid mode's;
+    # lengths: the first or last segment's; q: the modal coordinates: [0] the rigid mode
+    "laws/rodrock/exactmap.py": {"a", "b", "end_weights", "lengths", "q"},
+    "laws/rodrock/longrod.py": {"mass_per_length"},  # mass_per_length: the last segment's
+    "laws/rodrock/tangent.py": {"Z"},  # Z: the segments' first and last impedance
+    # _pieces: the first and last piece; b: a coefficient array's entries; e: a basis vector's or
+    # series' entry; m: the pieces' panel counts; q: the modal coordinates: [0] the rigid mode; v: the
+    # modal velocities ([0] the rigid mode) or a series' last; z: a state vector's or grid's entries
+    "laws/wave/_characteristics.py": {"_pieces", "b", "e", "m", "q", "v", "z"},
+    # a: a coefficient array's entries; b: a coefficient array's entries
+    "laws/wave/_separation.py": {"a", "b"},
+    "laws/wave/_window.py": {"b"},  # b: a coefficient array's entries
+    # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
+    # series' last
+    "laws/wave/coupled.py": {"q", "v"},
+    "laws/wave/impact.py": {"v"},  # v: the modal velocities ([0] the rigid mode) or a series' last
+    # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
+    # series' last
+    "laws/wave/law.py": {"q", "v"},
+    # _pieces: the first and last piece; f: a series' first and last values; t: a time grid's first and
+    # last
+    "laws/wave/sustained.py": {"_pieces", "f", "t"},
+    "loads/piecewise.py": {"b"},  # b: a coefficient array's entries
+    # s: a root's index or a sum's real and imaginary parts; t: a time grid's first and last
+    "measure/dispersion.py": {"s", "t"},
+    # energy_f2: the series' last; energy_fv: the series' last
+    "measure/drill.py": {"energy_f2", "energy_fv"},
+    # energy_fv: the series' last; inc_pulses: the first pulse; strain_k: the series' last
+    "measure/kolsky.py": {"energy_fv", "inc_pulses", "strain_k"},
+    "measure/recording.py": {"t"},  # t: a time grid's first and last
+    # p: a fit's parameter vector; sd: the fit's standard deviations; t: a time grid's first and last
+    "measure/reflection.py": {"p", "sd", "t"},
+    "measure/spec.py": {"pieces"},  # pieces: the last piece
+    "measure/waves.py": {"windows"},  # windows: the last window
+    "model.py": {"c"},  # c: a coefficient array's entries
+    # F: the first cell or the first of a list; W: a stack of like matrices, each named where taken; x:
+    # a grid's or state's entries
+    "orbits/_admissibility_search.py": {"F", "W", "x"},
+    "orbits/_assemble.py": {"t"},  # t: a time grid's first and last
+    "orbits/_newton.py": {"t", "z"},  # t: a time grid's first and last; z: a state vector's or grid's entries
+    "orbits/_settling.py": {"x"},  # x: a grid's or state's entries
+    # a: a coefficient array's entries; b: a coefficient array's entries; c: a coefficient array's
+    # entries; e: a basis vector's or series' entry; g: a grid function's first value
+    "orbits/_valve_flow.py": {"a", "b", "c", "e", "g"},
+    "orbits/charts.py": {"amplitudes"},  # amplitudes: the first harmonic's
+    "orbits/coupled.py": {"end_weights"},  # end_weights: the rigid mode's
+    # impact_velocities: the first impact's; q: the modal coordinates: [0] the rigid mode; v: the modal
+    # velocities ([0] the rigid mode) or a series' last
+    "orbits/driven_orbit.py": {"impact_velocities", "q", "v"},
+    # fallback: a kernel's one-slot flag; n_orbits: a kernel's one-slot count
+    "orbits/one_impact.py": {"fallback", "n_orbits"},
+    # contacts: the first contact; impact_times: the first impact time; impact_velocities: the first
+    # impact's; states_after_impact: the first impact's; states_before_impact: the first impact's
+    "orbits/orbit.py": {"contacts", "impact_times", "impact_velocities", "states_after_impact",
+                        "states_before_impact"},
+    # q: the modal coordinates: [0] the rigid mode; sources: the first source; y: a state vector's
+    # components
+    "orbits/shooting.py": {"q", "sources", "y"},
+    # c: a coefficient array's entries; z: a state vector's or grid's entries
+    "orbits/valve_admissibility.py": {"c", "z"},
+    # G: the cells' first wave; T: a time grid's first and last; h: a one-entry step; z: a state
+    # vector's or grid's entries
+    "orbits/valve_search.py": {"G", "T", "h", "z"},
+    # Eb[]: a matrix's entry; durations: the legs' durations in order; dzb_dh1: the rigid mode's; g: a
+    # grid function's first value
+    "orbits/valve_segment.py": {"Eb[]", "durations", "dzb_dh1", "g"},
+    # areas_m2: the first or last segment's; lengths: the first or last segment's; wavenumbers: a mode's
+    # wavenumber
+    "physical/bar.py": {"areas_m2", "lengths", "wavenumbers"},
+    # drive_states: the first impact's; q: the modal coordinates: [0] the rigid mode;
+    # states_after_impact: the first impact's; v: the modal velocities ([0] the rigid mode) or a series'
+    # last
+    "physical/circuit.py": {"drive_states", "q", "states_after_impact", "v"},
+    "physical/drifter.py": {"t[]"},  # t[]: the selected times' ends
+    # f: a series' first and last values; r: a CSV row's first cell; rows[]: the first row's first cell;
+    # t: a time grid's first and last; times_s: the first time
+    "physical/forces.py": {"f", "r", "rows[]", "t", "times_s"},
+    # contacts: the first contact; segments: the first or last segment
+    "physical/optimize_outputs.py": {"contacts", "segments"},
+    # multipliers: the first multiplier; states_after_impact: the first impact's; t: a time grid's first
+    # and last
+    "physical/outputs.py": {"multipliers", "states_after_impact", "t"},
+    # areas_m2: the first or last segment's; lengths_m: the first segment's
+    "physical/piston.py": {"areas_m2", "lengths_m"},
+    # chatter: the first blow's count; mass_per_length: the last segment's; v: the modal velocities ([0]
+    # the rigid mode) or a series' last
+    "physical/results.py": {"chatter", "mass_per_length", "v"},
+    # contacts: the first contact; segments: the first or last segment
+    "physical/rock.py": {"contacts", "segments"},
+    "physical/sensitivity.py": {"F"},  # F: the first cell or the first of a list
+    "plotting/circuit.py": {"h[]"},  # h[]: a history's first sample
+    # R_CURVES: a grid's first values; data[]: a curve's first value; y: a state vector's components
+    "plotting/paper.py": {"R_CURVES", "data[]", "y"},
+    # diameters_m: the last segment's; pressing: the last sample; x: a grid's or state's entries
+    "plotting/piston.py": {"diameters_m", "pressing", "x"},
+    # Q: the first state's coordinates; V: a continuation point: [-1] its parameter
+    "simulation/_shortrun.py": {"Q", "V"},
+    "simulation/blows.py": {"q"},  # q: the modal coordinates: [0] the rigid mode
+    # level_cores: the first level's; q: the modal coordinates: [0] the rigid mode; t: a time grid's
+    # first and last; v: the modal velocities ([0] the rigid mode) or a series' last
+    "simulation/driven.py": {"level_cores", "q", "t", "v"},
+    # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
+    # series' last
+    "simulation/experiments.py": {"q", "v"},
+    # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
+    # series' last
+    "simulation/initial.py": {"q", "v"},
+    # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
+    # series' last; x: a grid's or state's entries
+    "simulation/simulate.py": {"q", "v", "x"},
+    # _segments: the last segment; q: the modal coordinates: [0] the rigid mode; v: the modal velocities
+    # ([0] the rigid mode) or a series' last
+    "simulation/trajectory.py": {"_segments", "q", "v"},
+    "sweeps/spec.py": {"c"},  # c: a coefficient array's entries
+    "sweeps/tasks.py": {"contacts"},  # contacts: the first contact
+}
+#: module -> the tuples of named values, read by number, that the wider scan met (as
+#: ``PYTHON_TUPLES``; ``orbits/_admissibility_search.py``'s ``F[]`` is a kernel's)
+WIDER_TUPLES = {
+    # owners[]: an owner's (part, field); ranges[]: a name's (part, field)
+    "_shared/parameters.py": {"owners[]", "ranges[]"},
+    "_shared/tables.py": {"v"},  # v: a column's (long name, units)
+    "cli/continue_.py": {"e[]"},  # e[]: an event's multiplier (real, imaginary)
+    "cli/drifter.py": {"CONFIG_KINDS[]"},  # CONFIG_KINDS[]: a kind's (class, what)
+    "cli/optimize.py": {"OBJECTIVES[]"},  # OBJECTIVES[]: an objective's (key, ...)
+    "drives/circuit/endflight.py": {"splines"},  # splines: a spline's (knots, coefficients, degree)
+    "drives/circuit/watch.py": {"e"},  # e: a watch's (slot, level, kind, node, f), sorted by slot
+    "laws/paper/phase.py": {"out[]"},  # out[]: a root's (phase, multiplicity)
+    "laws/rodrock/_exactdata.py": {"x"},  # x: a drive's (starts, pieces, values)
+    "laws/rodrock/exact.py": {"x"},  # x: an initial wave's arrays
+    # drive[]: (starts, pieces); p: a piece's tuple; p[]: a piece's tuple; res[]: the run's results;
+    # waves[]: (F, G, ...)
+    "laws/rodrock/exactjac.py": {"drive[]", "p", "p[]", "res[]", "waves[]"},
+    # intervals[]: an interval's (lo, hi); runs[]: a run's (first, last)
+    "laws/wave/periodic.py": {"intervals[]", "runs[]"},
+    "measure/kolsky.py": {"chans[]"},  # chans[]: a channel's (name, strain)
+    "orbits/_admissibility_search.py": {"F[]"},  # F[]: (in the kernel) the flight's tuple: its lam
+    "orbits/_newton.py": {"evaluated"},  # evaluated: evaluate's (F, J)
+    "orbits/charts.py": {"edges[]"},  # edges[]: an edge's (value, ...)
+    "physical/circuit_graph.py": {"connections[]"},  # connections[]: a connection's (node, ...)
+    # OBJECTIVES[]: an objective's (key, ...); p: a near design's (x, y)
+    "physical/optimize_drifter.py": {"OBJECTIVES[]", "p"},
+    "physical/optimize_result.py": {"OBJECTIVES[]"},  # OBJECTIVES[]: an objective's (key, ...)
+    # a: a design's (rank, merit); b: a design's (rank, merit); best[]: (residual, y); last[]: a
+    # vertex's (residual, y); side[]: a side's (residual, y); t[]: a side's (residual, y)
+    "physical/piston.py": {"a", "b", "best[]", "last[]", "side[]", "t[]"},
+    "physical/sensitivity.py": {"e"},  # e: a pattern's (name, ...)
+    "simulation/driven.py": {"b"},  # b: a block's (kind, arrays)
+    # contacts[]: a contact's [start, end]; last_release: (time, segment, len, n_imp)
+    "simulation/simulate.py": {"contacts[]", "last_release"},
+}
+#: every list of names passed, module by module
+LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES)
 _PROSE = {tokenize.COMMENT, tokenize.STRING} | {getattr(tokenize, "FSTRING_MIDDLE", tokenize.STRING)}
 
 
@@ -196,14 +435,20 @@ def _code(text):
     return ["".join(row) for row in lines]
 
 
+def _key(match):
+    """The name the lists give a slot ``match``: its name, with ``[]`` where subscripts come before."""
+    name, chain = match.groups()
+    return name + "[]" if chain else name
+
+
 def slots_by_number(text, module=""):
     """``(line, match)`` of every record slot indexed by a number in the source ``text`` of
     ``module``, those its lists let pass left out."""
-    passed = ANYWHERE.union(*(names.get(module, ()) for names in (NOT_RECORDS, PYTHON_TUPLES)))
+    passed = ANYWHERE.union(*(names.get(module, ()) for names in LISTS))
     out = []
     for i, line in enumerate(_code(text), start=1):
         for m in SLOT.finditer(line):
-            if m.group().split("[")[0] not in passed:
+            if _key(m) not in passed:
                 out.append((i, m.group()))
     return out
 
@@ -216,7 +461,7 @@ def test_the_scan_finds_a_slot_by_number_in_code_only():
             '"""a docstring quoting CI[0]"""\n'
             'shape, z, n, y = (16, 4), Z[-1], a.shape[0], PR[PR_MASS] + WB[blk][0] + NSF[j, 0]\n')
     assert slots_by_number(text) == [(1, "PR[3]"), (2, "WB[0]"), (2, "CNT0[-1]"), (2, "CH_T[12]"),
-                                     (4, "BS[2]")]
+                                     (4, "BS[2]"), (6, "Z[-1]"), (6, "WB[blk][0]")]
     assert slots_by_number("u = DP[0] @ v\n", "laws/wave/periodic.py") == []
     assert slots_by_number("u = DP[0] @ v\n") == [(1, "DP[0]")]
 
@@ -227,23 +472,44 @@ def test_the_scan_finds_a_lower_case_slot_and_passes_the_listed_names():
             'p = q[0] + a.shape[0] + bs[BIT_P] + scratch[2]\n'
             '# bs[3] in a comment\n')
     assert slots_by_number(text) == [(1, "bs[3]"), (1, "bp[1]"), (1, "bs[0]"), (2, "acc[0]"),
-                                     (2, "_hist[-1]")]
+                                     (2, "_hist[-1]"), (3, "q[0]"), (3, "scratch[2]")]
     assert slots_by_number("x = qa[0] + pr[0]\n", "dynamics/_event_loop.py") == []
     assert slots_by_number("x = qa[0] + pr[0]\n", "dynamics/modal.py") == [(1, "qa[0]"), (1, "pr[0]")]
     assert slots_by_number("bs[3] = 0.0\n", "laws/rodrock/_rockloop.py") == [(1, "bs[3]")]
+
+
+def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
+    """The forms a scan of short names alone missed: a one-letter name, a long name, an attribute,
+    a slot of an entry reached by subscripts; a listed name passes only in its own form (``hist``
+    listed passes ``hist[-1]``, not ``hist[-1][2]``, and ``runs[]`` the reverse)."""
+    text = ('r = records[-1][1] + r[1]\n'
+            'source = (arrival[3].mode, arrival[2])\n'
+            'return self._force_extremes[0] + f.typical[1]\n'
+            'if windows and windows[-1][2] == sign and pending[0][0] <= t:\n'
+            'lo = OBJECTIVES[key][0] + hist[-1 - m][2] + hist[-1]\n'
+            'x = f(a)[0] + a[:2] + b[i]\n')
+    assert slots_by_number(text) == [(1, "records[-1][1]"), (1, "r[1]"), (2, "arrival[3]"), (2, "arrival[2]"),
+                                     (3, "_force_extremes[0]"), (3, "typical[1]"), (4, "windows[-1][2]"),
+                                     (4, "pending[0][0]"), (5, "OBJECTIVES[key][0]"), (5, "hist[-1 - m][2]"),
+                                     (5, "hist[-1]")]
+    assert slots_by_number("y = runs[0][0] + runs[-1]\n", "laws/wave/periodic.py") == [(1, "runs[-1]")]
+    assert slots_by_number("y = runs[0][0] + runs[-1]\n", "orbits/orbit.py") == [
+        (1, "runs[0][0]"), (1, "runs[-1]")]
+    assert slots_by_number("y = Xr[0] + Xr[0][1]\n", "orbits/shooting.py") == [(1, "Xr[0][1]")]
 
 
 def test_the_lists_are_disjoint_and_name_modules_that_exist():
     """A name is listed once per module, in one list, and each listed module exists and still
     indexes that name by a number (a list that outlives its reason would hide a new record)."""
     top = Path(impactbar.__file__).parent
-    lists = (NOT_RECORDS, PYTHON_TUPLES)
-    for module in NOT_RECORDS.keys() & PYTHON_TUPLES.keys():
-        assert not NOT_RECORDS[module] & PYTHON_TUPLES[module], module
-    for names in lists:
+    for i, first in enumerate(LISTS):
+        for second in LISTS[i + 1:]:
+            for module in first.keys() & second.keys():
+                assert not first[module] & second[module], module
+    for names in LISTS:
         for module, listed in names.items():
             text = (top / module).read_text()
-            seen = {m.group().split("[")[0] for line in _code(text) for m in SLOT.finditer(line)}
+            seen = {_key(m) for line in _code(text) for m in SLOT.finditer(line)}
             assert listed <= seen, (module, listed - seen)
 
 

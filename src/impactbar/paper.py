@@ -119,7 +119,8 @@ def _inadmissible_segment(model, lo, hi, k=1, n_scan=12):
             bad.append((x0, x1))
     if not bad:
         return math.nan, math.nan
-    return bad[0][0], bad[-1][1]
+    (lo, _), (_, hi) = bad[0], bad[-1]
+    return lo, hi
 
 
 def fig5_data(n: int = 40) -> dict:

@@ -345,7 +345,8 @@ def with_parameters(model, forcing, changes: dict):
         if name in changes:
             by_part[owners[name][0]][name] = changes[name]
     try:
-        new = (_changed(model, by_part[0]), _changed(forcing, by_part[1]))
+        model_changes, forcing_changes = by_part
+        new = (_changed(model, model_changes), _changed(forcing, forcing_changes))
     except (ValueError, TypeError, ArithmeticError):
         if refused:
             raise refused[0] from None

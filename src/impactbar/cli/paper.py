@@ -28,7 +28,7 @@ def run(args) -> int:
     with progress_bar(5, desc="Figs. 4-8", unit="figure", quiet=args.quiet) as bar:
         summary = reproduce(args.out, quick=args.quick, dpi=args.dpi, format=args.format,
                             progress=lambda name: bar.set_postfix_str(name, refresh=False) or bar.update(1))
-    w1 = max(len(s[1]) for s in summary)
+    w1 = max(len(what) for _, what, _ in summary)
     print(f"{'fig':<4} {'quantity':<{w1}}  value")
     for fig, what, val in summary:
         print(f"{fig:<4} {what:<{w1}}  {val}")

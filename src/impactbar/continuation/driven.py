@@ -74,6 +74,14 @@ STALE = 3
 REACH = 3.0
 
 
+def _last_value(pairs: list):
+    """The value of the last ``(U, value)`` pair in ``pairs``; None where there is none."""
+    if not pairs:
+        return None
+    _, value = pairs[-1]
+    return value
+
+
 class _SwitchedProblem:
     """The periodic-orbit problem of a drive in ``U = (X, lambda)``, for the engine.
 
@@ -193,10 +201,11 @@ class _SwitchedProblem:
         them (their values carry the flights' noise, which a polynomial magnifies as far); else,
         and for a point that the others' spread does not set apart, the older left out. One record:
         its value."""
-        last = records[-1][1]
-        pts = [r for r in records[-3:] if r[1].shape == last.shape]
+        _, last = records[-1]
+        pts = [(Ui, v) for Ui, v in records[-3:] if v.shape == last.shape]
         while len(pts) > 1:
-            d = self.W * (pts[-1][0] - pts[0][0])
+            (U_first, _), (U_last, _) = pts[0], pts[-1]
+            d = self.W * (U_last - U_first)
             x = [float(Ui @ d) for Ui, _ in pts]
             xu = float(U @ d)
             gaps = [abs(a - b) for i, a in enumerate(x) for b in x[i + 1:]]
@@ -205,7 +214,8 @@ class _SwitchedProblem:
                 break
             pts = pts[1:]
         if len(pts) < 2:
-            return pts[-1][1]
+            _, value = pts[-1]
+            return value
         return BarycentricInterpolator(x, np.stack([v for _, v in pts]))(xu)
 
     def _record(self, U, F, Fu, F_lam=None):
@@ -217,7 +227,8 @@ class _SwitchedProblem:
         least: the points' own errors, divided by the move, are ``F_lam``'s); else the records of
         before, unless there are none or they are ``STALE`` points old: then measured by a flight
         (:meth:`_column`). Returns ``[F_u, F_lam]`` at ``U``."""
-        same = [r for r in self._fus if r[1].shape == Fu.shape]
+        same = [(Ui, Fi) for Ui, Fi in self._fus if Fi.shape == Fu.shape]
+        last_lam = _last_value(self._lams)
         if F_lam is None and same:
             Ua, Fa = same[-1]
             d = U - Ua
@@ -226,7 +237,7 @@ class _SwitchedProblem:
                 self._lams = (self._lams + [(0.5 * (U + Ua), -0.5 * (Fa + Fu) @ d[:-1] / d[-1])])[-2:]
                 self._age = 0
                 F_lam = False
-            elif self._lams and self._lams[-1][1].size == F.size and self._age < STALE:
+            elif last_lam is not None and last_lam.size == F.size and self._age < STALE:
                 self._age += 1
                 F_lam = False
         if F_lam is None:
@@ -268,8 +279,8 @@ class _SwitchedProblem:
         U = np.array(U_pred, dtype=float)
         normal = engine.W * normal
         n = U.size - 1
-        known = bool(self._fus) and self._fus[-1][1].shape[0] == n and bool(self._lams) \
-            and self._lams[-1][1].size == n
+        last_fu, last_lam = _last_value(self._fus), _last_value(self._lams)
+        known = last_fu is not None and last_fu.shape[0] == n and last_lam is not None and last_lam.size == n
         J = np.column_stack((self._along(self._fus, U), self._along(self._lams, U))) if known else None
         exact, fresh = not known, False  # (fresh: the chord's F_u taken at an iterate of this corrector)
         prev = first = None

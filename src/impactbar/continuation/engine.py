@@ -86,10 +86,10 @@ class ContinuationSettings:
     def steps(self, span: float) -> tuple[float, float, float]:
         """``(step, max_step, min_step)`` for a continuation over ``span = |to - start|``, the
         defaults filled in and the initial step at most the largest."""
-        f = self.FRACTIONS
-        step = span * f[0] if self.step is None else self.step
-        max_step = span * f[1] if self.max_step is None else self.max_step
-        min_step = span * f[2] if self.min_step is None else self.min_step
+        f_step, f_max, f_min = self.FRACTIONS
+        step = span * f_step if self.step is None else self.step
+        max_step = span * f_max if self.max_step is None else self.max_step
+        min_step = span * f_min if self.min_step is None else self.min_step
         return min(step, max_step), max_step, min_step
 
 

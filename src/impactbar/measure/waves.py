@@ -163,8 +163,9 @@ def find_pulses(time, signal, *, threshold: float = 10.0, cutoff: float | None =
             after = np.flatnonzero(quiet[i1:])
             start = int(before[-1]) if before.size else 0
             stop = int(i1 + after[0] + 1) if after.size else s.size
-            if windows and windows[-1][2] == sign and start <= windows[-1][1]:
-                windows[-1] = (windows[-1][0], max(stop, windows[-1][1]), sign)
+            w_start, w_stop, w_sign = windows[-1] if windows else (0, 0, 0)
+            if windows and w_sign == sign and start <= w_stop:
+                windows[-1] = (w_start, max(stop, w_stop), sign)
             else:
                 windows.append((start, stop, sign))
     if not windows:

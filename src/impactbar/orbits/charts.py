@@ -213,7 +213,8 @@ def pneumatic_stability_edges(model: BarModel, k: int = 1, *, criterion: str = "
 
     lo = lf_min
     if bracket is not None:
-        lo, hi = max(lf_min, bracket[0]), min(hi, bracket[1])
+        b_lo, b_hi = bracket
+        lo, hi = max(lf_min, b_lo), min(hi, b_hi)
         if not lo < hi:
             return []
     out = []

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -39,6 +40,15 @@ from .driven_orbit import SwitchedOrbit, _constant_load
 __all__ = ["ShootingProblem"]
 
 TWO_PI = 2.0 * math.pi
+
+
+class _Iterate(NamedTuple):
+    """An impact the settling run met: its time, the drive's mode, the state after it and its source."""
+
+    tau: float
+    mode: object
+    y: np.ndarray
+    source: tuple | None
 
 
 #: central-difference steps of the shooting Jacobian (relative to ``max(1, |X_j|)``): closed-form
@@ -343,7 +353,7 @@ class ShootingProblem(OrbitProblem):
         # delta-squared on the map's iterates, as in Steffensen's method; the quadratic's fixed point
         # where the steps' multiple still falls: dominant_limit) instead of followed
         accelerate = self.variational and m == 1 and n_max > m
-        hist = [(tau, mode, y, source)]
+        hist = [_Iterate(tau, mode, y, source)]
         speeds = []
         iterates = 1  # consecutive iterates of the map at the end of hist
         # the motion is followed only to hand Newton a start: where Newton's flights are the
@@ -353,7 +363,7 @@ class ShootingProblem(OrbitProblem):
         while count < budget:  # (more impacts only while the drive's state drifts: SETTLE_DRIFT_IMPACTS)
             count += 1
             tau, mode, y, source, speed = self._follow(tau, mode, y, loose)
-            hist.append((tau, mode, y, source))
+            hist.append(_Iterate(tau, mode, y, source))
             iterates += 1
             speeds.append(speed)
             if speeds[-1] <= 0.0:
@@ -361,8 +371,8 @@ class ShootingProblem(OrbitProblem):
                                  "without one) does not strike the stop: give a guess")
             if n_max > m and len(speeds) > 2 * m + 2 and \
                     abs(speeds[-1] - speeds[-1 - m]) <= settle * max(1.0, abs(speeds[-1])):
-                ahead = y + DRIFT_AHEAD * (y - hist[-1 - m][2])  # (where the drift takes it next)
-                if not (self.variational and (drifting(hist[-1 - 2 * m][2], hist[-1 - m][2], y, settle)
+                ahead = y + DRIFT_AHEAD * (y - hist[-1 - m].y)  # (where the drift takes it next)
+                if not (self.variational and (drifting(hist[-1 - 2 * m].y, hist[-1 - m].y, y, settle)
                                               or not surfaces_ahead(self.drive, mode, ahead, M))):
                     carried = self._carried(hist, loose) if self.variational else None
                     if carried is None:
@@ -372,24 +382,25 @@ class ShootingProblem(OrbitProblem):
                     count, speeds, iterates = count + len(carried), [], 1
                     continue
                 budget = max(budget, SETTLE_DRIFT_IMPACTS)
-            if accelerate and iterates >= 4 and mode == hist[-2][1] == hist[-3][1] == hist[-4][1]:
-                star = dominant_limit(hist[-4][2], hist[-3][2], hist[-2][2], y)
+            if accelerate and iterates >= 4 and mode == hist[-2].mode == hist[-3].mode == hist[-4].mode:
+                star = dominant_limit(hist[-4].y, hist[-3].y, hist[-2].y, y)
                 if star is not None and surfaces_ahead(self.drive, mode, star, M):  # (none jumped over)
                     y = star
-                    hist[-1] = (tau, mode, y, source)
+                    hist[-1] = _Iterate(tau, mode, y, source)
                     iterates = 1
         blocks = hist[-m:]
-        self.blocks = [(b[0], b[1]) for b in blocks]
-        self.sources = [b[3] for b in blocks] if all(b[3] is not None for b in blocks) else []
-        return np.concatenate([np.asarray(b[2], dtype=float) for b in blocks])
+        self.blocks = [(b.tau, b.mode) for b in blocks]
+        self.sources = [b.source for b in blocks] if all(b.source is not None for b in blocks) else []
+        return np.concatenate([np.asarray(b.y, dtype=float) for b in blocks])
 
     def _follow(self, tau, mode, y, settings):
         """One impact of the motion followed to a start: ``(tau, mode, y, source, speed)`` after it,
         ``source`` the impact's (:attr:`sources`) and ``speed`` the end's impact velocity."""
         M = self.M
         y, tau, mode, arrival, _, _ = self._flight(tau, mode, y, settings=settings)
-        source = (arrival[3].mode, arrival[3].z, tau, y[:M].copy(), y[M:2 * M].copy())
-        return tau, mode, y, source, float(self.model.end_weights @ arrival[2])
+        _, _, v_arrival, state_arrival = arrival
+        source = (state_arrival.mode, state_arrival.z, tau, y[:M].copy(), y[M:2 * M].copy())
+        return tau, mode, y, source, float(self.model.end_weights @ v_arrival)
 
     def _carried(self, hist, settings):
         """Where the drive's state at the end of ``hist`` (the motion followed to a start, settled at
@@ -399,17 +410,18 @@ class ShootingProblem(OrbitProblem):
         carried to the surface; ``None`` (the start as it was) where they never fit or the surface
         lies past the drift's linear limit."""
         m, M, drive = self.impacts, self.M, self.drive
-        if drift_to_surface(drive, hist[-1][1], hist[-1 - 2 * m][2], hist[-1 - m][2], hist[-1][2], M,
+        if drift_to_surface(drive, hist[-1].mode, hist[-1 - 2 * m].y, hist[-1 - m].y, hist[-1].y, M,
                             fit=False) is None:
             return None
         seq = list(hist[-1 - 2 * m:])
         for _ in range(DRIFT_PROBE):
-            tau, mode, y, source, _ = self._follow(*seq[-1][:3], settings)
-            seq.append((tau, mode, y, source))
-            if mode == seq[-1 - m][1] == seq[-1 - 2 * m][1]:
-                far = drift_to_surface(drive, mode, seq[-1 - 2 * m][2], seq[-1 - m][2], y, M)
+            last = seq[-1]
+            tau, mode, y, source, _ = self._follow(last.tau, last.mode, last.y, settings)
+            seq.append(_Iterate(tau, mode, y, source))
+            if mode == seq[-1 - m].mode == seq[-1 - 2 * m].mode:
+                far = drift_to_surface(drive, mode, seq[-1 - 2 * m].y, seq[-1 - m].y, y, M)
                 if far is not None:
-                    seq[-1] = (tau, mode, far, source)
+                    seq[-1] = _Iterate(tau, mode, far, source)
                     return seq[2 * m + 1:]
         return None
 
@@ -643,8 +655,8 @@ class ShootingProblem(OrbitProblem):
         c = self.model.end_weights
         y = X[k * n:(k + 1) * n]
         tau, mode = self.blocks[k]
-        y_after, _, _, arrival, _, _ = self._flight(tau, mode, y)
-        if float(c @ arrival[2]) <= 0.0:
+        y_after, _, _, (_, _, v_arrival, _), _, _ = self._flight(tau, mode, y)
+        if float(c @ v_arrival) <= 0.0:
             return Admissibility.BACKWARD_IMPACT
         if c @ y_after[M:2 * M] >= 0.0 and self.model.R > 0.0 and \
                 self.model.law.traits.restitution_in_kernel:

@@ -239,7 +239,10 @@ class Hammer:
     @property
     def fourier_fit(self) -> FourierFit | None:
         """For a measured force, how well its Fourier series meets the tolerance; else None."""
-        return self._measured[2] if isinstance(self.force, MeasuredForce) else None
+        if not isinstance(self.force, MeasuredForce):
+            return None
+        _, _, fit = self._measured
+        return fit
 
     # -- derived engineering figures ---------------------------------------------------------
     @property
@@ -251,7 +254,8 @@ class Hammer:
     def mean_force_N(self) -> float:
         """Mean driving force (N)."""
         if isinstance(self.force, MeasuredForce):
-            return self._measured[0]
+            mean, _, _ = self._measured
+            return mean
         return self.force.mean_force_N
 
     @property

@@ -49,13 +49,15 @@ class DesignProgress:
 
     def postfix(self) -> str:
         """The bar's postfix: the last design's seconds and the slowest one's."""
-        return f"last {self.last:.1f} s, slowest {self.slowest[0]:.1f} s (design {self.slowest[1]})"
+        seconds, design = self.slowest
+        return f"last {self.last:.1f} s, slowest {seconds:.1f} s (design {design})"
 
     def design(self, seconds: float) -> None:
         """Count a design that took ``seconds``."""
         self.count += 1
         self.last = float(seconds)
-        if seconds > self.slowest[0]:
+        slowest_s, _ = self.slowest
+        if seconds > slowest_s:
             self.slowest = (float(seconds), self.count)
         self.bar.set_postfix_str(self.postfix(), refresh=False)
         self.bar.update(1)

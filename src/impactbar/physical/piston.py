@@ -316,8 +316,11 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
         plain = _exact_blow(v, seg, k, k_u, mb / m, f / force_N, T, N, None) if shaped is not None else None
         if plain is not None:
             uniform = plain
-            other = None if refined is None else _exact_blow(
-                v, seg, k, k_u, mb / m, f / force_N, T, N, SteppedPiston(refined[0], refined[1] / refined[0]))
+            other = None
+            if refined is not None:
+                lf_refined, mf_refined = refined
+                other = _exact_blow(v, seg, k, k_u, mb / m, f / force_N, T, N,
+                                    SteppedPiston(lf_refined, mf_refined / lf_refined))
             if other is not None and _better(merit(other), merit(shaped)):
                 shaped, (lf, mf) = other, refined
         else:

@@ -359,7 +359,8 @@ def tangent_derivatives(cfg: dict, folder, point: CircuitDrifterOrbit, keys, val
             pr = _problem(d, problem)
             _same_pattern(pr, X, pattern, key, s * h, unit)
             sides.append((d, pr, pr.value(X)))
-        Jp = (sides[0][2] - sides[1][2]) / (2.0 * h)
+        (_, _, value_plus), (_, _, value_minus) = sides  # (s = 1, then -1)
+        Jp = (value_plus - value_minus) / (2.0 * h)
         Xp = -np.linalg.solve(Jx, Jp)
         state[:, j] = Xp
         F = []

@@ -395,7 +395,8 @@ def continuable_keys() -> tuple[str, ...]:
 
 def typical_ranges() -> dict[str, tuple]:
     """Key to ``(low, high, SI unit, shown unit, factor)`` for the fields with a typical range."""
-    return {k: (f.typical[0], f.typical[1], f.unit, *f.typical[2:]) for k, f in FIELDS.items() if f.typical}
+    return {k: (low, high, f.unit, shown, factor) for k, f in FIELDS.items() if f.typical
+            for low, high, shown, factor in (f.typical,)}
 
 
 def markdown_table(extra=()) -> str:

@@ -141,7 +141,8 @@ class BlowPiece:
         """The piston's modal state at times ``t`` in the blow (the law's record, ``state_at``),
         shape ``(N + 1, T)`` each."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        M = self.arrival[0].size
+        q_arrival, _ = self.arrival
+        M = q_arrival.size
         Q, V = np.empty((M, t.size)), np.empty((M, t.size))
         for i, tt in enumerate(t):
             if tt >= self.t_end and self._end_state is not None:

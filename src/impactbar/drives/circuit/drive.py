@@ -579,7 +579,7 @@ class HydraulicCircuitDrive(Drive):
         for w in self._watched:
             ext = [p.extremes(w.node) for p in pieces if hasattr(p, "extremes") and w.node is not None]
             if ext:
-                lo, hi = min(e[0] for e in ext), max(e[1] for e in ext)
+                lo, hi = min(low for low, _ in ext), max(high for _, high in ext)
                 out[w.name] = lo - w.level if w.kind == NW.ACCUM else w.level - hi
         has_acc = acc is not None and acc.volume > 0 and not sup.held
         if not (has_acc or (sup.has_relief and not sup.held)):

@@ -52,7 +52,9 @@ def initial_valve(drive, q0: float) -> int:
 
 def _due(valve: int, pending: tuple, t: float) -> tuple:
     """The mode after the switches due at ``t`` take effect, in order."""
-    while pending and pending[0][0] <= t:
-        valve = pending[0][1]
-        pending = pending[1:]
+    while pending:
+        t_switch, switched = pending[0]
+        if not t_switch <= t:
+            break
+        valve, pending = switched, pending[1:]
     return (valve, pending)

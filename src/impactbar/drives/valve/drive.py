@@ -198,7 +198,8 @@ class PositionSwitchedDrive(Drive):
         if valve == RETURN and not any(k == STROKE for _, k in pending):
             out = (self._crossing,)
         if pending:
-            out += (TimedEvent("switch", time=pending[0][0]),)
+            t_switch, _ = pending[0]
+            out += (TimedEvent("switch", time=t_switch),)
         return out
 
     def jump(self, mode, z, event, t, q, v) -> DriveState:

@@ -651,7 +651,8 @@ def _start_bit(Z, k, k_u, bit_mass, feed, bit_state) -> _Bit:
     """The bit at the blow's start (:func:`solve_blow`'s ``bit_state``)."""
     bit = _Bit(float(Z[-1]), k, k_u, bit_mass, feed)
     if bit_state is not None:
-        bit.p, bit.w = float(bit_state[0]), float(bit_state[1])
+        p, w = bit_state
+        bit.p, bit.w = float(p), float(w)
         if bit.p < 0.0:
             bit.branch, bit.p_max, bit.R_max, bit.p_perm = _FREE, 0.0, 0.0, 0.0
         else:

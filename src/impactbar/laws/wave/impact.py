@@ -326,11 +326,13 @@ class WaveImpact:
 
     @property
     def peak_force(self) -> float:
-        return self._force_extremes[0]
+        peak, _ = self._force_extremes
+        return peak
 
     @property
     def min_force(self) -> float:
-        return self._force_extremes[1]
+        _, least = self._force_extremes
+        return least
 
     @cached_property
     def peak_force_error(self) -> float:
