@@ -74,8 +74,10 @@ def test_a_converged_search_is_certified_with_its_active_mass(converged):
 
 def test_a_search_cut_at_its_budget_is_not_called_an_optimum(capsys):
     """Five designs: COBYLA evaluated MAXFUN times; the certificate says so, and neither the table nor
-    the CLI's output calls the design an optimum (its JSON carries the certificate)."""
-    res = _run(max_evaluations=5)
+    the CLI's output calls the design an optimum (its JSON carries the certificate). (``tol`` 1e-4: at
+    the default 2e-3 the fifth design, 1.6e-4 of its scale under the mass limit, is within the
+    search's resolution of it and stationary there, KKT residual 0.0018, and is certified.)"""
+    res = _run(max_evaluations=5, tol=1e-4)
     assert "MAXFUN" in res.message
     assert res.certificate.verdict == "stopped at a budget" and res.certificate.residual > 1e-2
     assert "optimum" not in res.table()
@@ -116,3 +118,77 @@ def test_a_negative_multiplier_is_not_certified():
     assert cert.verdict == "not stationary" and cert.multipliers == {"mass": 0.0} and cert.residual == 1.0
     with pytest.raises(ValueError, match="verdict must be one of"):
         type(cert)(**{**cert.to_dict(), "verdict": "optimum"})
+
+
+def _plane(margin):
+    """The largest ``u0 + u1`` with ``u0 + u1 <= 1`` (closed form: any point of that edge, the
+    multiplier 1): the design on the diagonal whose scaled margin is ``margin``, its record and a
+    blow of fresh figures."""
+    u = np.full(2, (1.0 - margin) / 2)
+
+    def blow(v):
+        return {"objectives": {"f": float(v[0] + v[1])},
+                "constraints": {"c": {"scaled": float(1.0 - v[0] - v[1])}}}
+
+    rec = {"values": {"a": u[0], "b": u[1]}, **blow(u)}
+    return rec, blow
+
+
+class _Stopped:
+    message = "Return from COBYLA because the trust region radius reaches its lower bound."
+
+
+def test_a_constraint_within_the_search_resolution_is_active():
+    """A margin of 5e-4 (above the fixed band 1e-4, under COBYLA's last step 2e-3 times the
+    constraint's gradient norm sqrt 2): the search cannot tell it from active, so it is, and the
+    design is certified with the closed form's multiplier 1; a margin of 5e-3 is beyond the search's
+    resolution, and without a resolution (SLSQP's) the fixed band alone decides."""
+    scaling = (np.zeros(2), np.ones(2))
+    rec, blow = _plane(5e-4)
+    cert = certify_search(rec, [], ["a", "b"], scaling, _Stopped, 2e-3, "f", blow, None)
+    assert cert.verdict == "converged" and cert.active == ["c"] and cert.residual < 1e-6
+    assert cert.multipliers["c"] == pytest.approx(1.0, rel=1e-6)
+    assert certify_search(rec, [], ["a", "b"], scaling, _Stopped, 2e-3, "f", blow, None,
+                          resolution=0.0).verdict == "not stationary"
+    far, blow = _plane(5e-3)
+    cert = certify_search(far, [], ["a", "b"], scaling, _Stopped, 2e-3, "f", blow, None)
+    assert cert.verdict == "not stationary" and cert.active == [] and cert.residual == 1.0
+    with pytest.raises(ValueError, match="resolution must be a finite number >= 0"):
+        certify([1.0, 1.0], [[-1.0, -1.0]], rec, [0.5, 0.5], ["a", "b"], method="exact", resolution=-1.0)
+
+
+def test_a_variable_within_the_search_resolution_of_its_bound_is_at_it():
+    """``u0`` 5e-4 under its upper bound, the objective ``u0`` alone: at the bound within COBYLA's
+    last step 2e-3, its multiplier the whole gradient."""
+    cert = certify([1.0, 0.0], [[0.0, 1.0]], {"constraints": {"c": {"scaled": 0.5}}}, [1.0 - 5e-4, 0.5],
+                   ["a", "b"], method="exact", resolution=2e-3)
+    assert cert.verdict == "converged" and cert.bounds == {"a": "high"} and cert.multipliers["a high"] == 1.0
+    assert certify([1.0, 0.0], [[0.0, 1.0]], {"constraints": {"c": {"scaled": 0.5}}}, [1.0 - 5e-4, 0.5],
+                   ["a", "b"], method="exact").verdict == "not stationary"
+
+
+def test_an_infeasible_start_is_searched_from_with_start_any():
+    """The piston 5.31 kg against a limit of 5 kg: refused by default, searched from with
+    ``start="any"``, the reported design feasible (the mass at its limit, the baseline not)."""
+    with pytest.raises(ValueError, match="infeasible start: constraint piston_mass"):
+        _run(5.0, max_evaluations=40)
+    res = _run(5.0, max_evaluations=40, start="any")
+    assert not res.baseline["feasible"] and res.optimum["feasible"]
+    assert res.optimum["constraints"]["piston_mass"]["value"] <= 5.0 * (1 + 1e-8)
+    assert res.certificate.verdict != "infeasible" and "no feasible design" not in res.message
+
+
+def test_a_search_without_a_feasible_design_says_so():
+    """A limit of 4 kg, under the lightest piston of the bounds (every diameter at its low bound:
+    7850 kg/m3 x pi/4 x sum L d^2 = 4.415 kg): no design is feasible, the design reported is the
+    least infeasible, that lightest piston, and the certificate, the message and the table say it is
+    infeasible."""
+    res = _run(4.0, max_evaluations=40, start="any")
+    lightest = 7850.0 * math.pi / 4 * sum(le * d ** 2 for le, d in zip(LENGTHS, (20e-3, 44e-3, 27.5e-3),
+                                                                          strict=True))
+    assert not res.optimum["feasible"] and res.certificate.verdict == "infeasible"
+    assert "no feasible design found" in res.message
+    assert res.optimum["constraints"]["piston_mass"]["value"] == pytest.approx(lightest, rel=1e-3)
+    assert res.table().splitlines()[0].split()[-1] == "infeasible"
+    with pytest.raises(ValueError, match="start must be 'feasible' or 'any'; got 'none'"):
+        _run(4.0, start="none")

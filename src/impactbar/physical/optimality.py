@@ -13,6 +13,12 @@ the non-negative least-squares solution (:func:`scipy.optimize.nnls`) on the act
 residual of that fit over :math:`\lVert\nabla f\rVert` is the KKT residual, zero at a stationary
 point, 1 where no active gradient helps (no constraint and no bound active: the projected gradient is
 the whole gradient).
+
+A search resolves the design only to its last step :math:`\rho` in the scaled variables (COBYLA's
+final trust radius, ``tol``): a constraint whose margin is within what one such step changes,
+:math:`c_i(u) \le \rho\,\lVert\nabla c_i\rVert`, is one the search cannot tell from active, and
+counts as active (as does a variable within :math:`\rho` of a bound), besides the fixed band
+:data:`ACTIVE_TOLERANCE`.
 """
 
 from __future__ import annotations
@@ -31,14 +37,16 @@ __all__ = ["KKT_TOLERANCE", "ACTIVE_TOLERANCE", "DIFFERENCE_STEP", "OptimalityCe
 KKT_TOLERANCE = 1e-2
 
 #: A constraint is active where its scaled margin (the margin over the limit, or the fixed scale where
-#: the limit is 0) is at most this; a variable sits at a bound within this of 0 or 1 (scaled).
+#: the limit is 0) is at most this, or at most the search's resolution times its gradient's norm
+#: where that is larger (:func:`certify`); a variable sits at a bound within this of 0 or 1 (scaled),
+#: or within the resolution.
 ACTIVE_TOLERANCE = 1e-4
 
 #: The step of the central differences in the scaled variables (the truncation error of order
 #: ``step ** 2``; one-sided, of order ``step``, at a bound).
 DIFFERENCE_STEP = 1e-4
 
-_VERDICTS = ("converged", "stopped at a budget", "stopped at a border", "not stationary")
+_VERDICTS = ("converged", "stopped at a budget", "stopped at a border", "not stationary", "infeasible")
 
 
 @dataclass(frozen=True)
@@ -51,7 +59,9 @@ class OptimalityCertificate:
         ``"converged"`` (the KKT residual below :data:`KKT_TOLERANCE`, the multipliers non-negative
         by construction), else ``"stopped at a budget"`` (the search ran out of evaluations or
         iterations), ``"stopped at a border"`` (a design of the search next to it had no orbit:
-        ``border`` says which), or ``"not stationary"``.
+        ``border`` says which), or ``"not stationary"``; ``"infeasible"`` where the design misses a
+        constraint (``record["feasible"]`` false: a search that found no feasible design), whatever
+        its residual.
     residual : float
         The KKT residual: the projected gradient's norm over the objective's gradient's (module
         docstring).
@@ -60,9 +70,11 @@ class OptimalityCertificate:
     constraint_gradients : dict
         Constraint name to its scaled margin's gradient, a list of shape (n,).
     active : list of str
-        The constraints within :data:`ACTIVE_TOLERANCE` of their limit.
+        The constraints within :data:`ACTIVE_TOLERANCE` of their limit, or within the search's
+        resolution times their gradient's norm (:func:`certify`).
     bounds : dict
-        Variable (dotted key) at a bound to ``"low"`` or ``"high"``.
+        Variable (dotted key) at a bound (within :data:`ACTIVE_TOLERANCE` or the resolution) to
+        ``"low"`` or ``"high"``.
     multipliers : dict
         Name (an active constraint, or ``"<key> low"``/``"<key> high"`` of a bound) to its Lagrange
         multiplier (the objective's unit per unit scaled margin), each :math:`\ge 0`.
@@ -158,7 +170,8 @@ def central_gradients(point, u, step: float = DIFFERENCE_STEP) -> tuple:
 
 
 def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, method: str,
-            budget: bool = False, failed=(), reach: float = 0.0) -> OptimalityCertificate:
+            budget: bool = False, failed=(), reach: float = 0.0,
+            resolution: float = 0.0) -> OptimalityCertificate:
     """The first-order certificate of a design (module docstring).
 
     Parameters
@@ -181,6 +194,10 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
         The designs of the search without an orbit: scaled variables and error.
     reach : float
         How near (scaled, Euclidean) a failed design counts as a border next to this one.
+    resolution : float
+        The search's last step in the scaled variables (``>= 0``; 0: the fixed band alone): a
+        constraint whose scaled margin is at most ``resolution`` times its gradient's norm is active,
+        and a variable within ``resolution`` of a bound at it (module docstring).
 
     Returns
     -------
@@ -196,9 +213,13 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
     names = list(record["constraints"])
     G = np.asarray(constraint_gradients, dtype=float).reshape(len(names), g.size)
     u = np.asarray(u, dtype=float)
-    active = [n for n in names if record["constraints"][n]["scaled"] <= ACTIVE_TOLERANCE]
-    bounds = {k: ("low" if x <= ACTIVE_TOLERANCE else "high") for k, x in zip(keys, u, strict=True)
-              if x <= ACTIVE_TOLERANCE or x >= 1.0 - ACTIVE_TOLERANCE}
+    if not (isinstance(resolution, int | float) and math.isfinite(resolution) and resolution >= 0.0):
+        raise ValueError(f"resolution must be a finite number >= 0 (scaled variables); got {resolution!r}")
+    near = max(ACTIVE_TOLERANCE, float(resolution))
+    active = [n for i, n in enumerate(names) if record["constraints"][n]["scaled"] <= max(
+        ACTIVE_TOLERANCE, resolution * float(np.linalg.norm(G[i])))]
+    bounds = {k: ("low" if x <= near else "high") for k, x in zip(keys, u, strict=True)
+              if x <= near or x >= 1.0 - near}
     cols, labels = [G[names.index(n)] for n in active], list(active)
     for k, side in bounds.items():
         cols.append(np.eye(g.size)[keys.index(k)] * (1.0 if side == "low" else -1.0))
@@ -216,7 +237,8 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
     distance, error = min(((float(np.linalg.norm(np.asarray(v) - u)), e) for v, e in failed),
                           default=(math.inf, ""))
     border = error if distance <= reach else ""
-    verdict = ("converged" if residual <= KKT_TOLERANCE else "stopped at a budget" if budget
+    verdict = ("infeasible" if not record.get("feasible", True) else
+               "converged" if residual <= KKT_TOLERANCE else "stopped at a budget" if budget
                else "stopped at a border" if border else "not stationary")
     return OptimalityCertificate(verdict=verdict, residual=float(residual), objective_gradient=g.tolist(),
                                  constraint_gradients={n: G[i].tolist() for i, n in enumerate(names)},
@@ -226,7 +248,7 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
 
 
 def certify_search(record: dict, history: list, keys: list, scaling: tuple, result, tol: float, fkey: str,
-                   blow, design_gradient) -> OptimalityCertificate:
+                   blow, design_gradient, resolution: float | None = None) -> OptimalityCertificate:
     """The certificate of :func:`~impactbar.physical.optimize_drifter`'s reported design ``record``.
 
     Parameters
@@ -251,6 +273,10 @@ def certify_search(record: dict, history: list, keys: list, scaling: tuple, resu
     design_gradient : callable
         ``() -> (objective_gradient, constraint_gradients)`` of the orbit's implicit-function-theorem
         sensitivities.
+    resolution : float, optional
+        The search's resolution in the scaled variables (:func:`certify`): ``tol`` where not given
+        (COBYLA's last trust radius); :func:`~impactbar.physical.optimize_drifter` gives 0 for SLSQP
+        and the population, whose ``tol`` is no step.
 
     Returns
     -------
@@ -268,4 +294,4 @@ def certify_search(record: dict, history: list, keys: list, scaling: tuple, resu
     failed = [((np.array([r["values"][k] for k in keys]) - lo) / span, r["error"]) for r in history
               if not r.get("ok") and "values" in r]
     return certify(g, G, record, u, keys, method=method, budget=stopped_at_budget(result), failed=failed,
-                   reach=2.0 * tol)
+                   reach=2.0 * tol, resolution=tol if resolution is None else resolution)

@@ -59,6 +59,7 @@ from .optimize_problem import (
     _operating_point,
     evaluate_blow,
     evaluate_design,
+    least_margin,
 )
 from .optimize_progress import DesignProgress
 from .optimize_result import DrifterOptimum, _better_missed
@@ -79,7 +80,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                      *, max_evaluations: int = 60, cache=None, progress: bool = True, rhobeg: float = 0.2,
                      tol: float = 2e-3, method: str = "cobyla", impact_velocity=None, workers=None,
                      popsize: int = 5, seed: int = 0, sample: int = 64,
-                     local_starts: int = 3) -> DrifterOptimum:
+                     local_starts: int = 3, start: str = "feasible") -> DrifterOptimum:
     r"""The design of a drifter with its oil circuit that maximises ``objective`` under
     ``constraints``, the variables any of its dotted config keys within bounds.
 
@@ -144,6 +145,12 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     sample, local_starts : int
         ``method="multistart"``: the sample's designs (a power of two) and the local searches (in
         ``[1, sample]``), each ``(max_evaluations - sample) // local_starts`` designs at most.
+    start : {"feasible", "any"}
+        Whether the config's design, the search's start, must meet the constraints (``"feasible"``,
+        else a ``ValueError``) or may miss them (``"any"``: COBYLA and SLSQP move towards the
+        feasible region; the baseline is then an infeasible design, and where no design evaluated
+        is feasible the reported one is the least infeasible, its certificate ``"infeasible"`` and
+        the message saying so). A start without an operating point is refused either way.
     impact_velocity : float or str, optional
         The circuit's ideal limit (m/s, or with units, ``> 0``): each design is its piston's blow on
         the rod and rock at this impact velocity alone (:func:`evaluate_blow`), the circuit taken to
@@ -161,8 +168,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     ValueError
         A variable that is not a parameter or not in the config, bounds of the wrong unit or outside
         the key's range, a start outside its bounds, an unknown objective or constraint, an
-        objective the config cannot give (no ``[rock]``), a start without an operating point or an
-        infeasible start (the constraint named, with how far it is missed): each in one line.
+        objective the config cannot give (no ``[rock]``), a start without an operating point or, with
+        ``start="feasible"``, an infeasible start (the constraint named, with how far it is missed):
+        each in one line.
 
     Examples
     --------
@@ -196,6 +204,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     if not (isinstance(tol, int | float) and not isinstance(tol, bool) and 0.0 < tol <= top):
         raise ValueError(f"tol must be a number in (0, {name} (the search's last step in the scaled "
                          f"variables); got {tol!r}")
+    if start not in ("feasible", "any"):
+        raise ValueError(f"start must be 'feasible' or 'any'; got {start!r}")
+    any_start = start == "any"  # (the name start is the start's values below)
     if workers is not None and method not in ("differential_evolution", "multistart"):
         raise ValueError(f"workers: only with method='differential_evolution'/'multistart', not {method!r}")
     ideal = impact_velocity is not None
@@ -297,7 +308,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         first = evaluate(u0)
         if not first["ok"]:
             raise ValueError(f"the start has no operating point: {first['error']}")
-        if not first["feasible"]:
+        if not first["feasible"] and not any_start:
             name, c = min(first["constraints"].items(), key=lambda kv: kv[1]["scaled"])
             scale, unit = display_unit(c["unit"])
             u = f" {unit}" if unit else ""
@@ -349,8 +360,13 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     # feasible design whose fresh orbit meets the constraints too (a continued orbit's figures can lie
     # some 1e-9 from the fresh one's, a design at an active limit on its other side)
     fresh = {}
-    for name, rec in [("baseline", first)] + [("optimum", r) for r in sorted(
-            (r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey], reverse=True)]:
+    ranked = sorted((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey],
+                    reverse=True)
+    if not ranked:  # (a start="any" search that found no feasible design: the least infeasible reported)
+        ranked = [max((r for r in history if r.get("ok")), key=least_margin)]
+        message += (f"; no feasible design found: the design reported is the least infeasible (its "
+                    f"smallest scaled margin {least_margin(ranked[0]):.3g})")
+    for name, rec in [("baseline", first)] + [("optimum", r) for r in ranked]:
         if "optimum" in fresh and fresh["optimum"]["feasible"]:
             break
         best = rec
@@ -366,7 +382,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     message += _better_missed(history, best, fkey)
     certificate = certify_search(fresh["optimum"], history, keys, (lo, span), res, tol, fkey, (lambda v: (
         evaluate_blow(build(with_values(cfg, design_of(v)[2]), folder), V, limits))) if ideal else None,
-        lambda: _design_gradient(cfg, folder, fresh["optimum"], None, spec, limits, fkey, span))
+        lambda: _design_gradient(cfg, folder, fresh["optimum"], None, spec, limits, fkey, span),
+        tol if method in ("cobyla", "multistart") else 0.0)
     return DrifterOptimum(objective=objective,
                           vary={k: {"low": spec[k]["low"], "high": spec[k]["high"], "unit": spec[k]["unit"]}
                                 for k in keys},

@@ -28,7 +28,7 @@ from .outputs import Reading, outputs
 from .sensitivity import default_step, tangent_derivatives
 from .units import to_si
 
-__all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE",
+__all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE", "least_margin",
            "evaluate_design", "evaluate_blow"]
 
 #: The objectives (all maximised): name to (the figure, its unit, what it is), the outputs that name
@@ -223,6 +223,27 @@ def _constrained(obj: dict, values: dict, limits: dict) -> dict:
     feasible = all(c["scaled"] >= -FEASIBILITY_TOLERANCE for c in cons.values())
     return {"ok": True, "objectives": obj, "constraints": cons, "feasible": feasible,
             "figures": {k: v for k, v in values.items()}}
+
+
+def least_margin(record: dict) -> float:
+    """A design's smallest scaled margin over its constraints: negative where it misses one, the
+    most missed one's miss over its scale (``inf`` where there is no constraint).
+
+    Parameters
+    ----------
+    record : dict
+        A design's record with an operating point (:func:`evaluate_design`, :func:`evaluate_blow`).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> least_margin({"constraints": {"a": {"scaled": 0.2}, "b": {"scaled": -0.05}}})
+    -0.05
+    """
+    return min((c["scaled"] for c in record["constraints"].values()), default=math.inf)
 
 
 def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:

@@ -108,7 +108,8 @@ class DrifterOptimum:
     def table(self) -> str:
         """Baseline and optimum side by side: the variables, every objective, every constraint with
         its limit and margin."""
-        word = "optimum" if self.certificate is not None and self.certificate.converged else "best found"
+        word = ("optimum" if self.certificate is not None and self.certificate.converged else
+                "infeasible" if not self.optimum.get("feasible", True) else "best found")
         rows = [f"{'':34s}{'baseline':>14s}{word:>14s}"]
         for key, b in self.vary.items():
             scale, unit = display_unit(b["unit"])
