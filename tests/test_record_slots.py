@@ -105,7 +105,7 @@ NOT_RECORDS = {
     "orbits/multi_impact.py": {"maps", "pert"},  # sequences' first and last entries
     "orbits/orbit.py": {"phases"},  # the first phase
     "orbits/rigid.py": {"args"},  # the first argument array
-    "orbits/shooting.py": {"Xr", "blocks", "hist", "seq", "speeds", "used"},  # sequences' ends, components; a box
+    "orbits/shooting.py": {"Xr", "blocks", "hist", "seq", "speeds", "used"},  # ends, components; a box
     "orbits/driven_orbit.py": {"states"},  # the first state
     "orbits/driven_search.py": {"found", "same", "vi"},  # sequences' first and last entries
     "orbits/valve_admissibility.py": {"w2", "za"},  # modal components
