@@ -195,7 +195,7 @@ def certify(objective_gradient, constraint_gradients, record: dict, u, keys, *, 
     reach : float
         How near (scaled, Euclidean) a failed design counts as a border next to this one.
     resolution : float
-        The search's last step in the scaled variables (``>= 0``; 0: the fixed band alone): a
+        The search's last step in the scaled variables (not negative; 0: the fixed band alone): a
         constraint whose scaled margin is at most ``resolution`` times its gradient's norm is active,
         and a variable within ``resolution`` of a bound at it (module docstring).
 
