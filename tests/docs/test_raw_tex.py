@@ -33,3 +33,41 @@ def test_tex_in_the_package_is_in_raw_strings():
     bad = [f"{p.relative_to(SRC)}:{line}" for p in sorted(SRC.rglob("*.py"))
            for line in _unraw_tex(p.read_text(encoding="utf-8"))]
     assert not bad, f"TeX in a string that is not raw (write r\"...\"): {bad}"
+
+
+DOCS = pathlib.Path(__file__).resolve().parents[2] / "docs"
+#: a line that Markdown reads as a list item (up to three spaces, then -, + or * and a space)
+ITEM = re.compile(r"^ {0,3}[-+*] ")
+
+
+def _items_in_math(text):
+    """The lines of ``text`` inside a ``$...$`` or ``$$...$$`` span that begin as a list item: Markdown
+    ends the paragraph there, the span's dollars no longer pair and the page shows raw TeX."""
+    found, open_ = [], False
+    fence = False
+    for number, line in enumerate(text.splitlines(), 1):
+        if line.lstrip().startswith("```") or (line.strip() == "$$" and not open_):
+            fence = not fence  # (a fenced block, or a display block opened on its own line: a block)
+            continue
+        if fence:
+            continue
+        if open_ and ITEM.match(line):
+            found.append(number)
+        body = re.sub(r"``.*?``|`[^`]*`", "", line.replace(r"\$", "")).replace("$$", "$")
+        if not body.strip():
+            open_ = False  # (a blank line ends a paragraph, and any span in it)
+        open_ ^= body.count("$") % 2 == 1
+    return found
+
+
+def test_a_planted_list_item_in_math_is_found():
+    assert _items_in_math("a $x\n- y$ b\n") == [2]
+    assert _items_in_math("$$x =\n- y$$\n") == [2]
+    assert _items_in_math("a $x$ b\n- a list item\n") == []
+    assert _items_in_math("```\n$x\n- y\n```\n") == []
+    assert _items_in_math("$$\nx =\n+ y\n$$\n") == []
+
+
+def test_no_line_of_the_docs_math_begins_as_a_list_item():
+    bad = [f"{p.name}:{n}" for p in sorted(DOCS.glob("*.md")) for n in _items_in_math(p.read_text("utf-8"))]
+    assert not bad, f"a line inside math begins with '- ', '+ ' or '* ' (a list item to Markdown): {bad}"
