@@ -68,6 +68,34 @@ def test_a_planted_list_item_in_math_is_found():
     assert _items_in_math("$$\nx =\n+ y\n$$\n") == []
 
 
+def _display_in_a_paragraph(text):
+    """The lines of ``text`` that open a ``$$`` display right after a line of text: MyST reads a
+    display only as a block of its own (a blank line before it), else its dollars pair as inline math
+    and the page shows raw TeX."""
+    found, inside, fence, previous = [], False, False, ""
+    for number, line in enumerate(text.splitlines(), 1):
+        if line.lstrip().startswith("```"):
+            fence = not fence
+        elif not fence:
+            if not inside and line.startswith("$$") and previous.strip():
+                found.append(number)
+            inside ^= line.count("$$") % 2 == 1
+        previous = line
+    return found
+
+
+def test_a_planted_display_in_a_paragraph_is_found():
+    assert _display_in_a_paragraph("moves as\n$$x = 1,$$\nthe rest\n") == [2]
+    assert _display_in_a_paragraph("moves as\n\n$$x = 1,$$\n\nthe rest\n") == []
+    assert _display_in_a_paragraph("\n$$\nx = 1\n$$\n") == []
+
+
+def test_no_display_of_the_docs_sits_in_a_paragraph():
+    bad = [f"{p.name}:{n}" for p in sorted(DOCS.glob("*.md"))
+           for n in _display_in_a_paragraph(p.read_text("utf-8"))]
+    assert not bad, f"a $$ display right after a line of text (give it a blank line before): {bad}"
+
+
 def test_no_line_of_the_docs_math_begins_as_a_list_item():
     bad = [f"{p.name}:{n}" for p in sorted(DOCS.glob("*.md")) for n in _items_in_math(p.read_text("utf-8"))]
     assert not bad, f"a line inside math begins with '- ', '+ ' or '* ' (a list item to Markdown): {bad}"
