@@ -78,7 +78,7 @@ def test_a_search_cut_at_its_budget_is_not_called_an_optimum(capsys):
     the default 2e-3 the fifth design, 1.6e-4 of its scale under the mass limit, is within the
     search's resolution of it and stationary there, KKT residual 0.0018, and is certified.)"""
     res = _run(max_evaluations=5, tol=1e-4)
-    assert "MAXFUN" in res.message
+    assert "MAXFUN" in res.message or "Maximum number of function evaluations" in res.message  # (older scipy)
     assert res.certificate.verdict == "stopped at a budget" and res.certificate.residual > 1e-2
     assert "optimum" not in res.table()
     example = Path(__file__).resolve().parents[2] / "examples" / "circuit_drifter_rock_piston.toml"
