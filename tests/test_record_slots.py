@@ -71,7 +71,8 @@ NOT_RECORDS = {
     "laws/rodrock/_exactresume.py": {"before", "off"},  # sequences' ends
     "laws/rodrock/_rockloop.py": {"Fn", "bounds"},  # the far end's cell; the shank's boundary
     "laws/rodrock/_rocktangent.py": {"Fn", "Gf", "Gp", "dFna", "dGa", "seg_z"},  # the first cell or segment's
-    "laws/rodrock/blow.py": {"bitf", "off", "times"},  # sequences' first and last entries
+    "laws/rodrock/blow.py": {"bitf", "times"},  # sequences' first and last entries
+    "laws/rodrock/grid.py": {"off", "times"},  # sequences' first and last entries
     "laws/rodrock/contact.py": {"qa"},  # the rigid mode
     "laws/rodrock/coupled.py": {"column"},  # the far end's cell
     "laws/rodrock/coupled_exact.py": {"travel", "xv"},  # the first segment's; a grid's ends

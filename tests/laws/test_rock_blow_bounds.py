@@ -15,7 +15,7 @@ from impactbar import (
     simulate,
     single_blow,
 )
-from impactbar.laws.rodrock.blow import MAX_CELL_STEPS
+from impactbar.laws.rodrock.grid import MAX_CELL_STEPS
 
 
 def _slow_rod_model():

@@ -296,8 +296,8 @@ def test_the_search_gradient_in_the_masses_is_the_exact_blows():
     through the softmax and the cells' impedances) are the exact solver's and its central
     differences, on whole cells (2 segments, 17 and 31 cells of 48)."""
     from impactbar import SteppedPiston
-    from impactbar.laws.rodrock.blow import whole_steps
     from impactbar.laws.rodrock.exactrecord import exact_rod_rock_blow
+    from impactbar.laws.rodrock.grid import whole_steps
     from impactbar.laws.rodrock.tangent import rod_rock_blow_tangent
     from impactbar.physical.piston import _softmax_jacobian, _whole_cell_blow
 

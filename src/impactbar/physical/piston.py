@@ -283,7 +283,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     if max_evaluations is not None:
         max_evaluations = check_int("max_evaluations", max_evaluations, lo=1)
     if n > 1 and method == "slsqp":
-        from ..laws.rodrock.blow import whole_steps
+        from ..laws.rodrock.grid import whole_steps
         from ..laws.rodrock.tangent import rod_rock_blow_tangent
 
         def blow_tangent(Z, dZ):
@@ -626,7 +626,7 @@ def _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps, back=math.inf):
     ``c = 1`` and no gradient on the others (0 force after the blow's end); ``blow_tangent(Z, dZ)`` runs
     :func:`~impactbar.laws.rodrock.tangent.rod_rock_blow_tangent` on the cells' impedances ``Z``
     (``N`` times the mass per length) along the directions ``dZ``."""
-    from ..laws.rodrock.blow import incident_steps
+    from ..laws.rodrock.grid import incident_steps
 
     mf, J_m = _softmax_jacobian(y)
     n = mf.size

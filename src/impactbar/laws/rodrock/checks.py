@@ -37,7 +37,7 @@ def _check_blow_call(model, law, impact_velocity, t_max, cells_per_piston, recor
     """The checked ``(V, t_max, cells_per_piston)`` of :func:`single_blow`, refused (``ValueError``
     naming the parameter and its range) before any array is built."""
     from ._piston import piston_segments
-    from .blow import _check_blow_size, commensurate_cells
+    from .grid import _check_blow_size, commensurate_cells
 
     p_len, _ = piston_segments(piston)
     s = model.s

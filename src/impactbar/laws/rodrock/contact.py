@@ -51,7 +51,8 @@ import math
 import numpy as np
 
 from ...dynamics.invariants import PistonInvariants
-from .blow import Blow, blow_end, blow_grid, solve_blow, whole_steps
+from .blow import Blow, blow_end, solve_blow
+from .grid import blow_grid, whole_steps
 
 __all__ = ["BlowMap", "RockContact"]
 

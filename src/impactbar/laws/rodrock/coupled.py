@@ -105,7 +105,7 @@ def _steps_to_free(grid, F, G, bs, bp, gap, drive, bounds, k, h):
     instants, :func:`end_window`): ``(gap, ran)``, ``ran`` the chunk's steps up to the first such
     end (-1: none within it), the waves and the bit then."""
     from ._rockloop import piston_free
-    from .blow import whole_steps
+    from .grid import whole_steps
 
     dt = grid.cell_time
     L = drive.size
@@ -159,9 +159,9 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         the drive's integration failing.
     """
     from ...loads import FourierLoad
-    from .blow import whole_steps
     from .contact import BlowMap
     from .coupled_exact import HORIZONS
+    from .grid import whole_steps
 
     law = model.law
     q = np.array(q, dtype=float)

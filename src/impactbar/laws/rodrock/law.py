@@ -216,8 +216,8 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
         by default ``4/s + 2 sum of the segments' travel times``; on the lattice rounded up to whole
         steps of the blow's cell grid (the simulator's blow lasts whole steps, so the orbits' flights
         start where its flights do)."""
-        from .blow import whole_steps
         from .contact import _grid_for
+        from .grid import whole_steps
 
         T = self.blow_time
         if T is None:

@@ -28,7 +28,8 @@ import numpy as np
 from ..._shared.validate import check_real
 from . import _records as S
 from ._bit import _LOAD
-from .blow import _bit_params, _check_blow_size, _loop_controls, blow_grid, whole_steps
+from .blow import _bit_params, _loop_controls
+from .grid import _check_blow_size, blow_grid, whole_steps
 
 __all__ = ["BlowTangent", "rod_rock_blow_tangent"]
 
