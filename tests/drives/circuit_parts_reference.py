@@ -207,3 +207,31 @@ def network_jacobian_fd(y, par, M, n, n_energy):
         NI.base(dn, par, M, fl)
         fd[:, j] = (fu[:n] - fl[:n]) / (2 * h)
     return fd
+
+
+def both_ways(y, gap, par, M, n, n_energy, n_events, gen=None):
+    """The network's vector field, event functions and Jacobian at ``y`` (``gap`` the piston's gap,
+    ``-q_0``) by the interpreter (:mod:`network_interpreter`) and by the code generated for its
+    topology (``gen``, generated from ``par`` where ``None``), asserted the same to the bit:
+    ``(out, g, A, gen)``, the interpreter's three and the generated module."""
+    import network_interpreter as NI
+
+    from impactbar.drives.circuit import _field as K
+    from impactbar.drives.circuit import _netgen as NG
+
+    if gen is None:
+        gen = NG.generate(par[K.HEAD + 3 * M:])
+    bits = lambda a: np.asarray(a, dtype=float).view(np.int64)  # noqa: E731
+    out, out2 = np.full(n + n_energy, np.nan), np.full(n + n_energy, np.nan)
+    NI.base(y, par, M, out)
+    gen.base(y, par, M, out2)
+    assert np.array_equal(bits(out2), bits(out))
+    g, g2 = np.full(n_events, np.nan), np.full(n_events, np.nan)
+    NI.events(y[2 * M:n], par, M, g, 0, gap)
+    gen.events(y[2 * M:n], par, M, g2, 0, gap)
+    assert np.array_equal(bits(g2), bits(g))
+    A, A2 = np.full((n, n), np.nan), np.full((n, n), np.nan)
+    NI.jac_base(y, par, M, A)
+    gen.jac_base(y, par, M, A2)
+    assert np.array_equal(bits(A2), bits(A))
+    return out, g, A, gen
