@@ -55,3 +55,20 @@ def test_the_preset_has_no_parts_and_a_drawing_on_given_axes():
 def test_a_machine_without_a_circuit_is_refused():
     with pytest.raises(ValueError, match="drifter must be a drifter with its oil circuit"):
         plot_circuit_graph(physical.drifter_preset("hydraulic-drifter"))
+
+
+def test_a_spool_in_the_valves_place_is_drawn_with_its_ports_and_no_ramped_valve():
+    d = physical.load(DRILL.with_name("circuit_drill_spool.toml"))
+    assert d.valve_stand_in == "main_spool"
+    assert physical.circuit_preset("circuit-drifter").valve_stand_in is None
+    edges = {(e.source, e.target, e.label) for e in physical.circuit_graph(d).edges}
+    assert not any(label.startswith("valve (") for *_, label in edges)
+    spool = "main_spool (spool_valve)"
+    # its main ports and pilot ports as its records join them: the return side into the cushion,
+    # which takes the valve's return port
+    assert {("supply", "rear", f"{spool} main port P"), ("rear", "cushion", f"{spool} main port T"),
+            ("supply", "main_spool", f"{spool} pilot supply port"),
+            ("main_spool", "cushion", f"{spool} pilot return port")} <= edges
+    ax = plot_circuit_graph(d)
+    assert "node:main_spool" in {t.get_gid() for t in ax.texts}
+    plt.close(ax.figure)

@@ -65,3 +65,14 @@ def test_a_machine_without_an_oil_circuit_is_refused():
         plot_circuit_schematic(physical.drifter_preset("hydraulic-drifter"))
     with pytest.raises(ValueError, match="drifter must be a CircuitDrifter"):
         plot_circuit_schematic({"rear_area_m2": 1.0})
+
+
+def test_a_spool_in_the_valves_place_is_drawn_as_the_spool_without_the_ramped_valves_switches():
+    d = physical.load("examples/circuit_drill_spool.toml")
+    ax = plot_circuit_schematic(d)
+    text = _texts(ax)
+    assert "main valve: main_spool" in text and "pilot-operated spool" in text
+    # the ramped valve's placeholder values (never switched) are not drawn: no K_v, tau_v, switch points
+    assert "$K_v$" not in text and "tau_v" not in text and "switch_out" not in text
+    assert set(_marks(ax)) == {"impact"}
+    plt.close("all")

@@ -140,7 +140,7 @@ def _circuit_header(d: physical.CircuitDrifter) -> str:
             + f"  dimensionless (pressures in 10 MPa): s = {m.s:.5g}, N = {m.n_modes}, "
             f"precharge = {dr.value('precharge') if dr.accumulator is not None else float('nan'):.5g}, "
             f"pump_flow = {dr.value('pump_flow'):.5g}"
-            + ("" if dr._stand_in else f", switch_out = {dr.value('switch_out'):.5g}")  # (a spool's own)
+            + ("" if d.valve_stand_in else f", switch_out = {dr.value('switch_out'):.5g}")
             + "".join(f"\n  {line}" for line in part_lines(d)))
 
 

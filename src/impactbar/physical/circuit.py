@@ -53,7 +53,7 @@ from .._shared.validate import check_int
 from . import tree
 from ._circuit_checks import check_circuit_si, shown
 from .bar import Bar, SteppedBar
-from .circuit_parts import part_field, part_kinds, read_parts
+from .circuit_parts import part_field, part_kinds, read_parts, unused_valve, valve_stand_in
 from .drifter import (
     DrifterOrbit,
     _config_sections,
@@ -174,6 +174,21 @@ class CircuitDrifter(_ScaledDrifter):
         r"""The energy scale :math:`m L^2 \Omega^2` (J)."""
         return self.bar.mass_kg * (self.bar.length_m * self.omega_rad_s) ** 2
 
+    @property
+    def valve_stand_in(self) -> str | None:
+        """The name of the part in the ramped valve's place (a ``spool_valve``, theory §13: its kind
+        :attr:`~impactbar.drives.circuit.CircuitPart.replaces` the valve), or ``None`` where the
+        drifter's ramped valve switches (its ``valve.switch_out`` then applies). A ``[valve]`` table
+        beside such a part is not used.
+
+        Examples
+        --------
+        >>> circuit_preset("circuit-drifter").valve_stand_in is None
+        True
+        """
+        kinds = part_kinds()
+        return next((p.name for p in self.parts if "valve" in getattr(kinds[p.kind], "replaces", ())), None)
+
     def key_field(self, name: str) -> tree.Field | None:
         """The declaration of the config key ``name``: the parameter tree's
         (:data:`~impactbar.physical.tree.FIELDS`) or a part's (``parts.<name>.<field>``,
@@ -189,7 +204,7 @@ class CircuitDrifter(_ScaledDrifter):
             if isinstance(name, str) and name.startswith("valve.") and isinstance(self.config, dict) \
                     and "valve" not in self.config and self.parts:
                 raise ValueError(f"{name}: this drifter has no [valve]: the part "
-                                 f"{_valve_stand_in(self.config, self.parts)} stands in for it")
+                                 f"{valve_stand_in(self.config, self.parts)} stands in for it")
             return tree.dimensionless_factor(self, name)
         return tree.SCALES[f.scale](self)
 
@@ -370,7 +385,7 @@ class CircuitDrifter(_ScaledDrifter):
         if isinstance(config, dict) and "piston" in config:  # the piston's shape: the stepped [bar] and
             config = expand_piston(config)  # the chamber areas it implies
         parts = read_parts(config.get("parts")) if isinstance(config, dict) else ()
-        stand_in = _valve_stand_in(config, parts)
+        stand_in = valve_stand_in(config, parts)
         required = {k: v for k, v in _REQUIRED.items() if not (stand_in and k == "valve")}
         sec = _config_sections({k: v for k, v in config.items() if k != "parts"}
                                if isinstance(config, dict) else config, _KEYS, required)
@@ -382,7 +397,7 @@ class CircuitDrifter(_ScaledDrifter):
         si = {f.si: _read_field(f, sec[f.section]) for f in tree.in_sections()
               if f.si and not (stand_in and f.section == "valve")}
         if stand_in:  # (the drive's ramped valve, never switched: the part stands in for it)
-            si.update(_unused_valve(si))
+            si.update(unused_valve(si))
         check_circuit_si(sec, si, R)
         damping = to_si("damping.coefficient", sec["damping"].get("coefficient", "0 N*s/m"), "N*s/m",
                         "'9 N*s/m'", what="a damping coefficient")
@@ -394,37 +409,6 @@ class CircuitDrifter(_ScaledDrifter):
                   name=str(config.get("name", "")), drill=drill, config=given, parts=parts)
         warn_implausible(given)  # (values far outside their typical ranges: warned of, then run)
         return out
-
-
-def _valve_stand_in(config, parts) -> str | None:
-    """The name of the part that stands in for the valve where the
-    config has no ``[valve]`` table (its kind's ``replaces``); ``None`` where it has one.
-
-    Raises
-    ------
-    ValueError
-        Neither a ``[valve]`` table nor a part in the valve's place.
-    """
-    if not isinstance(config, dict) or "valve" in config:
-        return None
-    kinds = part_kinds()
-    name = next((p.name for p in parts if "valve" in getattr(kinds[p.kind], "replaces", ())), None)
-    if name is None:
-        stand = sorted(k for k, c in kinds.items() if "valve" in getattr(c, "replaces", ()))
-        raise ValueError("a drifter with its oil circuit needs a valve: a [valve] table (switch_out, "
-                         "switching_time, flow_coefficient) or a part in its place ([parts.<name>] of "
-                         f"kind {' or '.join(stand)}); got neither")
-    return name
-
-
-def _unused_valve(si: dict) -> dict:
-    """The ramped valve's SI values where a part stands in for it: the drive keeps the valve's record
-    but never arms its switches (the drive's ``_stand_in``), so these only need to be
-    valid: the switch point half way along the rear chamber, an instant switch, the tree's example
-    coefficient."""
-    return {"switch_out_m": 0.5 * si["rear_volume_m3"] / si["rear_area_m2"], "switch_in_m": None,
-            "switching_time_s": 0.0,
-            "valve_coefficient": tree.read_si("valve.flow_coefficient", "7.5e-6 m^3/s/Pa^0.5")}
 
 
 def _read_field(f, section: dict):

@@ -97,10 +97,14 @@ def circuit_graph(drifter) -> CircuitGraph:
     nodes = [CircuitNode("supply", "supply (pump, accumulator)"), CircuitNode("front", "front chamber"),
              CircuitNode("rear", "rear chamber"), CircuitNode("tank", "tank")]
     ports = {"valve_return": "tank"}
-    edges = []
+    edges, stand_in = [], None
     for spec in drifter.parts:
         cls = part_kinds()[spec.kind]
         linked = [v for c, v in spec.connections if cls.connections[c][0] == "node"]
+        if "valve" in getattr(cls, "replaces", ()):  # (in the valve's place: its edges, the valve's)
+            stand_in = (spec, cls)
+            nodes.append(CircuitNode(spec.name, f"{spec.name} ({spec.kind})", spec.name))
+            continue
         if _has_node(cls):
             nodes.append(CircuitNode(spec.name, f"{spec.name} ({spec.kind})", spec.name))
             ports.update((v, spec.name) for c, v in spec.connections
@@ -109,11 +113,23 @@ def circuit_graph(drifter) -> CircuitGraph:
         else:
             ends = [(linked[0], v) for v in linked[1:]]
         edges += [CircuitEdge(a, b, f"{spec.name} ({spec.kind})", spec.name) for a, b in ends]
-    preset = [CircuitEdge("tank", "supply", "pump"), CircuitEdge("supply", "front", "front feed"),
-              CircuitEdge("supply", "rear", "valve (stroke)"),
-              CircuitEdge("rear", ports["valve_return"], "valve (return)"),
-              CircuitEdge("supply", "tank", "relief valve")]
+    preset = [CircuitEdge("tank", "supply", "pump"), CircuitEdge("supply", "front", "front feed")]
+    if stand_in is None:
+        preset += [CircuitEdge("supply", "rear", "valve (stroke)"),
+                   CircuitEdge("rear", ports["valve_return"], "valve (return)")]
+    else:
+        spec, cls = stand_in
+        preset += [CircuitEdge(a, b, f"{spec.name} ({spec.kind}) {what}", spec.name)
+                   for a, b, what in _stand_in_edges(cls, spec.name, ports["valve_return"])]
+    preset.append(CircuitEdge("supply", "tank", "relief valve"))
     return CircuitGraph(tuple(nodes), (*preset, *edges))
+
+
+def _stand_in_edges(cls, name: str, ret: str) -> tuple:
+    """The edges of a part in the valve's place: its kind's ``schematic_edges`` where it has them,
+    else the valve's own two (the supply to the rear chamber, the rear chamber to ``ret``)."""
+    edges = getattr(cls, "schematic_edges", None)
+    return edges(name, ret) if edges else (("supply", "rear", "(stroke)"), ("rear", ret, "(return)"))
 
 
 def part_lines(drifter) -> list[str]:

@@ -33,7 +33,8 @@ from . import tree
 from .units import to_si
 
 __all__ = ["register_part", "part_kinds", "PartSpec", "read_parts", "part_field", "part_keys",
-           "declared_unit", "library_fields", "split_key", "markdown_table"]
+           "declared_unit", "library_fields", "split_key", "markdown_table", "valve_stand_in",
+           "unused_valve"]
 
 #: the kinds that come with the library: ``kind -> "module:class"``, imported on first use
 _BUILTIN = {"return_accumulator": "impactbar.drives.circuit.return_line:ReturnAccumulator",
@@ -325,3 +326,63 @@ def _read_list(key: str, table: dict, f) -> tuple[float, ...]:
     if not isinstance(given, list) or not given:
         raise ValueError(f"{key} must be a list of one or more values, e.g. {f.example}; got {given!r}")
     return tuple(f.check(key, to_si(key, v, f.unit, f.example, what=tree.WORDS.get(f.unit))) for v in given)
+
+
+def valve_stand_in(config, parts) -> str | None:
+    """The part that stands in for the circuit's ramped valve (theory §13, a pilot-operated spool
+    valve): the name of the part whose kind replaces the valve
+    (:attr:`~impactbar.drives.circuit.CircuitPart.replaces`), where the configuration has no
+    ``[valve]`` table.
+
+    Parameters
+    ----------
+    config : dict or None
+        The drifter's configuration (``None`` or a preset's: it has its valve).
+    parts : sequence of PartSpec
+        Its ``[parts.<name>]`` parts (:func:`read_parts`).
+
+    Returns
+    -------
+    str or None
+        The part's name; ``None`` where the configuration has a ``[valve]`` table (or is none).
+
+    Raises
+    ------
+    ValueError
+        Neither a ``[valve]`` table nor a part in the valve's place.
+
+    Examples
+    --------
+    >>> valve_stand_in({"valve": {}}, ()) is None
+    True
+    """
+    if not isinstance(config, dict) or "valve" in config:
+        return None
+    kinds = part_kinds()
+    name = next((p.name for p in parts if "valve" in getattr(kinds[p.kind], "replaces", ())), None)
+    if name is None:
+        stand = sorted(k for k, c in kinds.items() if "valve" in getattr(c, "replaces", ()))
+        raise ValueError("a drifter with its oil circuit needs a valve: a [valve] table (switch_out, "
+                         "switching_time, flow_coefficient) or a part in its place ([parts.<name>] of "
+                         f"kind {' or '.join(stand)}); got neither")
+    return name
+
+
+def unused_valve(si: dict) -> dict:
+    """The ramped valve's SI values where a part stands in for it (:func:`valve_stand_in`): the
+    drive keeps the valve's record but never arms its switches, so these only need to be valid.
+
+    Parameters
+    ----------
+    si : dict
+        The circuit's SI values (``rear_volume_m3``, ``rear_area_m2``).
+
+    Returns
+    -------
+    dict
+        ``switch_out_m`` half way along the rear chamber, no ``switch_in_m``, an instant switch
+        (``switching_time_s`` 0) and the key table's example ``valve_coefficient`` (m³/s/Pa^0.5).
+    """
+    return {"switch_out_m": 0.5 * si["rear_volume_m3"] / si["rear_area_m2"], "switch_in_m": None,
+            "switching_time_s": 0.0,
+            "valve_coefficient": tree.read_si("valve.flow_coefficient", "7.5e-6 m^3/s/Pa^0.5")}

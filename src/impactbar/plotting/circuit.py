@@ -200,14 +200,17 @@ def _schematic_labels(drifter) -> dict:
               if np.isfinite(si["relief_pressure_Pa"]) else "relief valve\n(none)")
     s_in = si["switch_in_m"]
     mass = getattr(getattr(drifter, "bar", None), "mass_kg", None)
+    stand_in = getattr(drifter, "valve_stand_in", None)
+    valve = (f"main valve: {stand_in}\n(pilot-operated spool,\nswitched by its pilot ports)" if stand_in
+             else f"main valve\n$K_v$ = {g(si['valve_coefficient'])}\nm³/s/Pa$^{{1/2}}$\n"
+                  rf"$\tau_v$ = {g(si['switching_time_s'] * 1e3)} ms")
     return {
         "pump": f"pump\n$Q_p$ = {g(si['pump_flow_m3_s'] * 6e4)} L/min",
         "supply": f"supply node: hose volume $V_s$ = {g(si['hose_volume_m3'] * 1e3)} L, pressure $p_s$",
         "accumulator": acc, "relief": relief,
         "tank": f"tank, $p_t$ = {g(si['tank_pressure_Pa'] / 1e6)} MPa",
         "front_orifice": f"front orifice\n$K_f$ = {g(si['front_coefficient'])}\nm³/s/Pa$^{{1/2}}$",
-        "valve": (f"main valve\n$K_v$ = {g(si['valve_coefficient'])}\nm³/s/Pa$^{{1/2}}$\n"
-                  rf"$\tau_v$ = {g(si['switching_time_s'] * 1e3)} ms"),
+        "valve": valve,
         "rear": (f"rear (stroke)\nchamber\n$A_r$ = {g(si['rear_area_m2'] * 1e4)} cm²\n"
                  f"$V_{{r0}}$ = {g(si['rear_volume_m3'] * 1e3)} L"),
         "front": (f"front (return) chamber\n$A_f$ = {g(si['front_area_m2'] * 1e4)} cm²\n"
@@ -327,7 +330,9 @@ def plot_circuit_schematic(drifter=None, ax=None):
     arrow(rod1 - 0.3, ya - 0.3, cyl0 + 0.6, ya - 0.3)
     ax.text(cyl0 + 0.6, ya - 0.45, "gap from the impact position", ha="left", fontsize=8, va="top")
     span = rod1 - cyl0 - 1.2
-    if drifter is not None:
+    if getattr(drifter, "valve_stand_in", None):  # (a spool in the valve's place: no switch points)
+        x_out = x_in = None
+    elif drifter is not None:
         s_out, s_in = drifter.si["switch_out_m"], drifter.si["switch_in_m"]
         x_out = rod1 - span / 1.25
         x_in = rod1 - span / 1.25 * s_in / s_out if s_in is not None else None
@@ -339,11 +344,12 @@ def plot_circuit_schematic(drifter=None, ax=None):
             continue
         ax.plot([x, x], [ya - 0.15, ya + 0.15], color=color, lw=2.0, gid=name)
     ax.text(rod1 + 0.1, ya + 0.25, lab["impact"], ha="left", fontsize=8, va="bottom")
-    ax.text(x_out, ya + 0.25, lab["switch_out"], ha="center", fontsize=8, va="bottom", color="C3")
-    if x_in is not None:
-        ax.text(x_in, ya + 0.25, lab["switch_in"], ha="center", fontsize=8, va="bottom", color="C0")
-    else:
-        ax.text(rod1 + 0.1, ya - 0.2, lab["switch_in"], ha="left", fontsize=8, va="top", color="C0")
+    if x_out is not None:  # (the ramped valve's switch points; a spool has its pilot ports instead)
+        ax.text(x_out, ya + 0.25, lab["switch_out"], ha="center", fontsize=8, va="bottom", color="C3")
+        if x_in is not None:
+            ax.text(x_in, ya + 0.25, lab["switch_in"], ha="center", fontsize=8, va="bottom", color="C0")
+        else:
+            ax.text(rod1 + 0.1, ya - 0.2, lab["switch_in"], ha="left", fontsize=8, va="top", color="C0")
     name = getattr(drifter, "name", "") if drifter is not None else ""
     ax.set_title("A drifter's oil circuit" + (f": {name}" if name else ""))
     ax.set_xlim(-1.9, 17.0)

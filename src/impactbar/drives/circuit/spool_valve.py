@@ -169,6 +169,22 @@ class SpoolValve(NamedPart):
                              f"pilot's ports must not overlap); got {self.close_gap:g} + {self.port_span:g} "
                              f">= {self.open_gap:g} - {self.port_span:g}")
 
+    @staticmethod
+    def schematic_edges(name: str, ret: str) -> tuple:
+        """The edges ``(source, target, what)`` of a spool valve named ``name`` in the circuit's graph
+        (:func:`~impactbar.physical.circuit_graph.circuit_graph`), as :meth:`records` joins them: its
+        main ports (the supply to the rear chamber, the rear chamber to ``ret``, the node the valve's
+        return port joins) and its pilot ports (the supply to its control chamber ``name``, the
+        chamber to ``ret``).
+
+        Examples
+        --------
+        >>> [e[:2] for e in SpoolValve.schematic_edges("spool", "tank")]
+        [('supply', 'rear'), ('rear', 'tank'), ('supply', 'spool'), ('spool', 'tank')]
+        """
+        return (("supply", "rear", "main port P"), ("rear", ret, "main port T"),
+                ("supply", name, "pilot supply port"), (name, ret, "pilot return port"))
+
     @property
     def nodes(self) -> tuple:
         """The control chamber (``name``) and the spool's velocity (``<name>_v``)."""
