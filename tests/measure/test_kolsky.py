@@ -94,7 +94,8 @@ def _npz(tmp_path, change):
     (lambda a: a.update(ch3=np.random.default_rng(0).integers(-200, 200, 16250),
                         ch4=np.random.default_rng(1).integers(-200, 200, 16250)),
      None, "no pulse in the transmitted bar"),
-    (lambda a: None, lambda s: s.replace("station = 0.10135\n", "", 1), "channels.ch3.station is missing"),
+    (lambda a: None, lambda s: s.replace('station = "0.10135 m"\n', "", 1),
+     "channels.ch3.station is missing"),
     (lambda a: None, lambda s: s.replace('bar = "transmitted"', 'bar = "output"'),
      "channel 'ch3' sits on bar 'output', which the bars do not name"),
 ])
@@ -103,3 +104,58 @@ def test_bad_recordings_are_refused_in_one_line(tmp_path, capsys, change, edit, 
     assert main(["measure", str(spec)]) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1
+
+
+def _bare_si(text):
+    """The example spec in the older spelling: every quantity a bare number in SI."""
+    import re
+
+    return re.sub(r'"([-+0-9.e]+) (?:Pa|kg/m\^3|m\^2|m|V)"', r"\1", text)
+
+
+def test_quantities_with_units_and_the_older_bare_si_numbers_give_one_report(tmp_path, capsys):
+    assert '"71.7e9 Pa"' in SPEC.read_text()  # (the example writes its quantities with units)
+    bare = _spec(tmp_path, NPZ, _bare_si)
+    assert '"' not in "".join(ln.split("#")[0] for ln in bare.read_text().splitlines()
+                              if ln.split("=")[0].strip() in ("young_modulus", "density", "area", "station",
+                                                                "excitation", "length"))
+    outputs = []
+    for spec in (SPEC, bare):
+        assert main(["measure", str(spec), "--json"]) == 0
+        outputs.append(json.loads(capsys.readouterr().out))
+    assert outputs[0] == outputs[1]
+
+
+def test_a_bar_takes_the_models_keys_e_and_a_round_bars_diameter(tmp_path):
+    from impactbar.measure.spec import read_spec
+
+    area = 4.4521e-6
+    d = (4.0 * area / np.pi) ** 0.5
+    round_bar = f'E = "71.7 GPa"\ndensity = "2.81 g/cm^3"\ndiameter = "{d * 1e3!r} mm"'
+    text = _bare_si(SPEC.read_text()).replace("young_modulus = 71.7e9\ndensity = 2810\narea = 4.4521e-6",
+                                              round_bar, 1)
+    path = tmp_path / "round.toml"
+    path.write_text(text.replace('file = "data/shpb_pmma13.npz"', f'file = "{NPZ}"'))
+    spec = read_spec(path)
+    from impactbar.measure.spec import _bar
+
+    got, want = _bar(spec, "bars.incident"), _bar(spec, "bars.transmitted")
+    assert got.young_modulus == pytest.approx(want.young_modulus, rel=1e-15)
+    assert got.density == pytest.approx(want.density, rel=1e-14)
+    assert got.area == pytest.approx(want.area, rel=1e-14)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda s: s.replace('density = "2810 kg/m^3"', 'density = "2810 kg"', 1), "bars.incident.density"),
+    (lambda s: s.replace('station = "0.10202 m"', 'station = "102 V"', 1), "channels.ch1.station"),
+    (lambda s: s.replace('area = "4.4521e-6 m^2"', 'area = "4.4521e-6 m^2"\ndiameter = "2 mm"', 1),
+     "bars.incident: give area or diameter, not both"),
+    (lambda s: s.replace('density = "2810 kg/m^3"\n', "", 1), "bars.incident.density is missing"),
+    (lambda s: s.replace('young_modulus = "71.7e9 Pa"', "young_modulus = [1]", 1),
+     "bars.incident.young_modulus"),
+])
+def test_a_wrong_unit_or_key_of_a_bar_or_channel_is_refused_in_one_line(tmp_path, capsys, edit, message):
+    spec = _spec(tmp_path, NPZ, edit)
+    assert main(["measure", str(spec)]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1, err

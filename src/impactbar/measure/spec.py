@@ -9,25 +9,28 @@
     baseline_us = [-30.0, -5.0]           # the quiet samples (default: the first tenth)
 
     [bars.incident]                       # and [bars.transmitted]
-    young_modulus = 71.7e9                # Pa
-    density = 2810.0                      # kg/m^3
-    area = 4.4521e-6                      # m^2
-    # wave_speed = 5051.3                 # m/s, default sqrt(E / density)
+    young_modulus = "71.7 GPa"            # or the model's key E
+    density = "2810 kg/m^3"
+    area = "4.4521 mm^2"                  # or a round bar's diameter = "2.38 mm"
+    # wave_speed = "5051.3 m/s"           # default sqrt(E / density)
 
     [channels.ch1]                        # one table a channel
     bar = "incident"
-    station = 0.10202                     # m from the specimen's face
+    station = "102.02 mm"                 # from the specimen's face
     bridge = "half"                       # quarter, half, half-poisson, full, full-poisson
     gauge_factor = 2.1
-    excitation = 10.0                     # V
+    excitation = "10 V"
     gain = 100.0
 
     [specimen]
-    length = 1.47e-3                      # m
-    area = 1.862e-6                       # m^2
+    length = "1.47 mm"
+    area = "1.862 mm^2"
 
     [striker]                             # optional
-    length = 0.0254                       # m (material and section: the incident bar's)
+    length = "25.4 mm"                    # (material and section: the incident bar's)
+
+Each quantity is a string with its unit, read as the model's configuration reads it; a bare number
+is read in SI (m, m^2, Pa, kg/m^3, m/s, V), the older spelling.
 
     [detection]                           # optional
     threshold = 10.0                      # noise standard deviations
@@ -72,6 +75,7 @@ material).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -164,12 +168,57 @@ def _recording(spec: dict) -> tuple[Recording, slice | None]:
     return recording, baseline
 
 
-_BAR_KEYS = {"young_modulus", "density", "area", "wave_speed"}
+_BAR_KEYS = {"young_modulus", "E", "density", "area", "diameter", "wave_speed"}
+#: each key with a unit: the unit its number is in, an example (a string with its unit, read by
+#: :func:`~impactbar.physical.units.to_si`; a bare number is read in this unit, the older spelling)
+_UNITS = {"young_modulus": ("Pa", "'71.7 GPa'"), "E": ("Pa", "'71.7 GPa'"),
+          "density": ("kg/m**3", "'2810 kg/m^3'"), "area": ("m**2", "'4.45 mm^2'"),
+          "diameter": ("m", "'2.38 mm'"), "wave_speed": ("m/s", "'5051 m/s'"), "length": ("m", "'25.4 mm'"),
+          "station": ("m", "'102 mm'"), "excitation": ("V", "'10 V'")}
+
+
+def _si(table: dict, dotted: str) -> dict:
+    """``table`` with each key of :data:`_UNITS` in SI: a quantity with its unit (``"71.7 GPa"``)
+    converted, a bare number taken as SI (the older spelling); another value refused, naming it."""
+    from ..physical.units import to_si
+
+    out = dict(table)
+    for key, value in table.items():
+        if key not in _UNITS:
+            continue
+        unit, example = _UNITS[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+            raise ValueError(f"{dotted}.{key} must be a quantity in {unit.replace('**', '^')}, e.g. "
+                             f"{example}; got {value!r}")
+        out[key] = to_si(f"{dotted}.{key}", value, unit, example) if isinstance(value, str) else float(value)
+    return out
+
+
+def _bar(spec: dict, dotted: str, required: bool = True) -> Bar | None:
+    """The bar ``[dotted]``: its material (``young_modulus`` or the model's ``E``, ``density``), its
+    section (``area``, or a round bar's ``diameter``) and optional ``wave_speed``, each a quantity
+    with its unit or a bare SI number; ``None`` for an empty optional table."""
+    table = _si(_table(spec, dotted, _BAR_KEYS | ({"length"} if not required else set()), set()), dotted)
+    for one, other in (("young_modulus", "E"), ("area", "diameter")):
+        if one in table and other in table:
+            raise ValueError(f"{dotted}: give {one} or {other}, not both")
+    if "E" in table:
+        table["young_modulus"] = table.pop("E")
+    if "diameter" in table:
+        table["area"] = math.pi / 4.0 * table.pop("diameter") ** 2
+    table.pop("length", None)
+    if not table and not required:
+        return None
+    for key, alias in (("young_modulus", " (or E)"), ("density", ""), ("area", " (or diameter)")):
+        if key not in table:
+            raise ValueError(f"{dotted}.{key}{alias} is missing")
+    return Bar(**table)
 
 
 def _gauges(spec: dict) -> dict:
     keys = {"bar", "station", "bridge", "gauge_factor", "excitation", "gain", "poisson", "polarity"}
-    return {c: Gauge(**_table(spec, f"channels.{c}", keys, {"bar", "station"})) for c in spec["channels"]}
+    return {c: Gauge(**_si(_table(spec, f"channels.{c}", keys, {"bar", "station"}), f"channels.{c}"))
+            for c in spec["channels"]}
 
 
 def _drill_rod(spec: dict) -> tuple[Bar, tuple | None]:
@@ -187,7 +236,7 @@ def _drill_rod(spec: dict) -> tuple[Bar, tuple | None]:
     unknown = set(spec["bars"]) - {"rod"}
     if unknown:
         raise ValueError(f"bars: a drill rod's spec names one bar, [bars.rod]; got {sorted(unknown)}")
-    return Bar(**_table(spec, "bars.rod", _BAR_KEYS, {"young_modulus", "density", "area"})), None
+    return _bar(spec, "bars.rod"), None
 
 
 def _run_drill_rod(spec: dict, recording: Recording, baseline) -> DrillRodTest:
@@ -241,14 +290,11 @@ def run_spec(spec: dict | str | Path) -> KolskyTest | DrillRodTest:
     recording, baseline = _recording(spec)
     if "bit" in spec:
         return _run_drill_rod(spec, recording, baseline)
-    bars = {}
-    for name in ("incident", "transmitted"):
-        bars[name] = Bar(**_table(spec, f"bars.{name}", _BAR_KEYS, {"young_modulus", "density", "area"}))
+    bars = {name: _bar(spec, f"bars.{name}") for name in ("incident", "transmitted")}
     gauges = _gauges(spec)
-    specimen = _table(spec, "specimen", {"length", "area"}, {"length", "area"})
-    striker = _table(spec, "striker", _BAR_KEYS | {"length"}, set())
-    material = {k: v for k, v in striker.items() if k != "length"}
-    striker_bar = Bar(**material) if material else None
+    specimen = _si(_table(spec, "specimen", {"length", "area"}, {"length", "area"}), "specimen")
+    striker = _si(_table(spec, "striker", _BAR_KEYS | {"length"}, set()), "striker")
+    striker_bar = _bar(spec, "striker", required=False)
     detection = _table(spec, "detection", {"threshold", "cutoff_hz"}, set())
     dispersion = _table(spec, "dispersion", {"poisson"}, {"poisson"}) if "dispersion" in spec else {}
     return analyse_kolsky(recording, gauges, bars["incident"], bars["transmitted"], float(specimen["length"]),
