@@ -86,7 +86,7 @@ NOT_RECORDS = {
     "laws/wave/_window.py": {"jumps", "qa"},  # the first jump; the rigid mode
     "laws/wave/impact.py": {"dg", "npi", "th"},  # the rigid mode; a grid's ends
     "laws/wave/law.py": {"jt", "qm"},  # the rigid mode
-    "laws/wave/periodic.py": {"DP", "coef", "first", "gq", "orders", "p12", "phases", "qm",
+    "laws/wave/periodic.py": {"DP", "coef", "gq", "orders", "p12", "phases", "qm",
                               "y_plus"},  # DP[0]: the impact map's Jacobian's first row; modal components
     "laws/wave/sustained.py": {"below", "nxt", "start"},  # sequences' first and last entries
     "loads/fourier.py": {"_k", "_pk", "ks", "pks", "rows", "tau"},  # harmonics' first and last
@@ -300,9 +300,9 @@ WIDER_NOT_RECORDS = {
     "measure/spec.py": {"pieces"},  # pieces: the last piece
     "measure/waves.py": {"windows"},  # windows: the last window
     "model.py": {"c"},  # c: a coefficient array's entries
-    # F: the first cell or the first of a list; W: a stack of like matrices, each named where taken; x:
-    # a grid's or state's entries
-    "orbits/_admissibility_search.py": {"F", "W", "x"},
+    # V: the Fourier flow's coefficient table (row 1 its frequencies, as _load_flow reads it); W: a
+    # stack of like matrices, each named where taken; x: a grid's or state's entries
+    "orbits/_admissibility_search.py": {"V", "W", "x"},
     "orbits/_assemble.py": {"t"},  # t: a time grid's first and last
     "orbits/_newton.py": {"t", "z"},  # t: a time grid's first and last; z: a state vector's or grid's entries
     "orbits/_settling.py": {"x"},  # x: a grid's or state's entries
@@ -382,37 +382,16 @@ WIDER_NOT_RECORDS = {
     "sweeps/tasks.py": {"contacts"},  # contacts: the first contact
 }
 #: module -> the tuples of named values, read by number, that the wider scan met (as
-#: ``PYTHON_TUPLES``; ``orbits/_admissibility_search.py``'s ``F[]`` is a kernel's)
+#: ``PYTHON_TUPLES``)
 WIDER_TUPLES = {
-    # owners[]: an owner's (part, field); ranges[]: a name's (part, field)
-    "_shared/parameters.py": {"owners[]", "ranges[]"},
-    "_shared/tables.py": {"v"},  # v: a column's (long name, units)
     "cli/continue_.py": {"e[]"},  # e[]: an event's multiplier (real, imaginary)
-    "cli/drifter.py": {"CONFIG_KINDS[]"},  # CONFIG_KINDS[]: a kind's (class, what)
-    "cli/optimize.py": {"OBJECTIVES[]"},  # OBJECTIVES[]: an objective's (key, ...)
-    "drives/circuit/endflight.py": {"splines"},  # splines: a spline's (knots, coefficients, degree)
-    "drives/circuit/watch.py": {"e"},  # e: a watch's (slot, level, kind, node, f), sorted by slot
-    "laws/paper/phase.py": {"out[]"},  # out[]: a root's (phase, multiplicity)
-    "laws/rodrock/_exactdata.py": {"x"},  # x: a drive's (starts, pieces, values)
     "laws/rodrock/exact.py": {"x"},  # x: an initial wave's arrays
     # drive[]: (starts, pieces); p: a piece's tuple; p[]: a piece's tuple; res[]: the run's results;
     # waves[]: (F, G, ...)
     "laws/rodrock/exactjac.py": {"drive[]", "p", "p[]", "res[]", "waves[]"},
-    # intervals[]: an interval's (lo, hi); runs[]: a run's (first, last)
-    "laws/wave/periodic.py": {"intervals[]", "runs[]"},
-    "measure/kolsky.py": {"chans[]"},  # chans[]: a channel's (name, strain)
-    "orbits/_admissibility_search.py": {"F[]"},  # F[]: (in the kernel) the flight's tuple: its lam
-    "orbits/_newton.py": {"evaluated"},  # evaluated: evaluate's (F, J)
-    "orbits/charts.py": {"edges[]"},  # edges[]: an edge's (value, ...)
-    "physical/circuit_graph.py": {"connections[]"},  # connections[]: a connection's (node, ...)
-    # OBJECTIVES[]: an objective's (key, ...); p: a near design's (x, y)
-    "physical/optimize_drifter.py": {"OBJECTIVES[]", "p"},
-    "physical/optimize_result.py": {"OBJECTIVES[]"},  # OBJECTIVES[]: an objective's (key, ...)
     # a: a design's (rank, merit); b: a design's (rank, merit); best[]: (residual, y); last[]: a
     # vertex's (residual, y); side[]: a side's (residual, y); t[]: a side's (residual, y)
     "physical/piston.py": {"a", "b", "best[]", "last[]", "side[]", "t[]"},
-    "physical/sensitivity.py": {"e"},  # e: a pattern's (name, ...)
-    "simulation/driven.py": {"b"},  # b: a block's (kind, arrays)
     # contacts[]: a contact's [start, end]; last_release: (time, segment, len, n_imp)
     "simulation/simulate.py": {"contacts[]", "last_release"},
 }
@@ -482,7 +461,7 @@ def test_the_scan_finds_a_lower_case_slot_and_passes_the_listed_names():
 def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
     """The forms a scan of short names alone missed: a one-letter name, a long name, an attribute,
     a slot of an entry reached by subscripts; a listed name passes only in its own form (``hist``
-    listed passes ``hist[-1]``, not ``hist[-1][2]``, and ``runs[]`` the reverse)."""
+    listed passes ``hist[-1]``, not ``hist[-1][2]``, and ``h[]`` the reverse)."""
     text = ('r = records[-1][1] + r[1]\n'
             'source = (arrival[3].mode, arrival[2])\n'
             'return self._force_extremes[0] + f.typical[1]\n'
@@ -493,9 +472,8 @@ def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
                                      (3, "_force_extremes[0]"), (3, "typical[1]"), (4, "windows[-1][2]"),
                                      (4, "pending[0][0]"), (5, "OBJECTIVES[key][0]"), (5, "hist[-1 - m][2]"),
                                      (5, "hist[-1]")]
-    assert slots_by_number("y = runs[0][0] + runs[-1]\n", "laws/wave/periodic.py") == [(1, "runs[-1]")]
-    assert slots_by_number("y = runs[0][0] + runs[-1]\n", "orbits/orbit.py") == [
-        (1, "runs[0][0]"), (1, "runs[-1]")]
+    assert slots_by_number("y = h[0][0] + h[-1]\n", "plotting/circuit.py") == [(1, "h[-1]")]
+    assert slots_by_number("y = h[0][0] + h[-1]\n", "orbits/orbit.py") == [(1, "h[0][0]"), (1, "h[-1]")]
     assert slots_by_number("y = Xr[0] + Xr[0][1]\n", "orbits/shooting.py") == [(1, "Xr[0][1]")]
 
 

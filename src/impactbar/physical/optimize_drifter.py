@@ -35,6 +35,7 @@ import json
 import math
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -67,6 +68,13 @@ from .units import to_si
 
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE",
            "optimize_drifter", "evaluate_design", "evaluate_blow", "DrifterOptimum"]
+
+
+class _Near(NamedTuple):
+    """A design with an orbit, a guess for the designs after it: its scaled variables and id."""
+
+    u: np.ndarray
+    id: str
 
 
 def _fingerprint(config: dict, vary: dict, objective: str, constraints: dict) -> str:
@@ -236,14 +244,14 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         budget = check_multistart(workers, sample, local_starts, seed, max_evaluations, len(keys))
     lo = np.array([spec[k]["low"] for k in keys])
     span = np.array([spec[k]["high"] - spec[k]["low"] for k in keys])
-    fkey = OBJECTIVES[objective][0]
+    fkey = OBJECTIVES[objective].key
     tag = _fingerprint(cfg, {k: (spec[k]["low"], spec[k]["high"]) for k in keys}, objective,
                        dict(limits, impact_velocity=V) if ideal else limits)
 
     cache_path = Path(cache) if cache is not None else None
     store = read_cache(cache_path, tag)
     n_cached = 0
-    near: list[tuple[np.ndarray, str]] = []  # the designs with an orbit: their scaled variables, ids
+    near: list[_Near] = []  # the designs with an orbit: their scaled variables, ids
     history: list[dict] = []
     counter = {"new": 0, "gradients": 0}
     # each design's orbit by its id (a stored design's solved again along its guesses where needed)
@@ -273,7 +281,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 n_cached += 1
                 history.append(rec)
                 if rec.get("ok") and "u" in rec:  # a guess for the designs after it, as in the first run
-                    near.append((np.asarray(rec["u"], dtype=float), rid))
+                    near.append(_Near(np.asarray(rec["u"], dtype=float), rid))
             return rec
         try:
             if done is not None:  # computed by the population's map
@@ -283,10 +291,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 if ideal:
                     rec, orbit = evaluate_blow(drifter, V, limits), None
                 else:
-                    guess = min(near, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if near else None
+                    guess = min(near, key=lambda p: float(np.sum((p.u - u) ** 2))).id if near else None
                     rec, orbit = evaluate_design(drifter, kept, None if guess is None else chain.orbit(guess))
                     rec.update(guess=guess, u=u.tolist())
-                    near.append((u.copy(), rid))
+                    near.append(_Near(u.copy(), rid))
                     chain.add(rid, orbit)
                 rec.update(piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -31,9 +32,18 @@ from .units import to_si
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE", "least_margin",
            "evaluate_design", "evaluate_blow"]
 
+
+class _Objective(NamedTuple):
+    """An objective: the record's figure maximised, its unit, what it is."""
+
+    key: str
+    unit: str
+    long_name: str
+
+
 #: The objectives (all maximised): name to (the figure, its unit, what it is), the outputs that name
 #: an objective (:attr:`~impactbar.physical.outputs.Output.objective`).
-OBJECTIVES = {o.objective: (o.key, o.unit, o.long_name) for o in outputs() if o.objective}
+OBJECTIVES = {o.objective: _Objective(o.key, o.unit, o.long_name) for o in outputs() if o.objective}
 
 #: The constraints and their default limits (SI): ``peak_incident_stress`` (Pa, the largest stress in
 #: the shank adapter before the rock's first reflection is back at it, or over the piston's first

@@ -393,8 +393,8 @@ def _same_pattern(problem, X, pattern: tuple, key: str, step: float, unit: str) 
     other = problem.event_pattern(X)
     if other == pattern:
         return
-    names = [e[0] for e in pattern]
-    changed = [e[0] for e in other]
+    names = [name for name, *_ in pattern]
+    changed = [name for name, *_ in other]
     raise ValueError(f"{key} does not enter smoothly here: a step of {step:+.4g} {unit} changes the drive's "
                      f"events over the period from {', '.join(names)} to {', '.join(changed)} (a border "
                      "collision: the relief valve opening, the accumulator emptying or a switch changing "

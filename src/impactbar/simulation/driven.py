@@ -185,10 +185,10 @@ class _Pieces(Sequence):
     def __init__(self, blocks, make):
         self._blocks = blocks  # ("py", piece) or ("k", t0, t1, code, q, v)
         self._make = make  # (t0, t1, code, q, v) -> a flight
-        sizes = [1 if b[0] == "py" else b[1].size for b in blocks]
+        sizes = [1 if kind == "py" else first.size for kind, first, *_ in blocks]
         self._ends = np.cumsum(sizes, dtype=np.int64)
-        self.starts = np.concatenate([np.array([b[1].t0]) if b[0] == "py" else b[1] for b in blocks]) \
-            if blocks else np.zeros(0)
+        self.starts = np.concatenate([np.array([first.t0]) if kind == "py" else first
+                                      for kind, first, *_ in blocks]) if blocks else np.zeros(0)
 
     def __len__(self):
         return int(self._ends[-1]) if self._ends.size else 0
@@ -202,11 +202,13 @@ class _Pieces(Sequence):
         if not 0 <= i < len(self):
             raise IndexError("piece index out of range")
         k = int(np.searchsorted(self._ends, i, side="right"))
-        b = self._blocks[k]
-        if b[0] == "py":
-            return b[1]
+        kind, *rest = self._blocks[k]
+        if kind == "py":
+            (piece,) = rest
+            return piece
+        t0, t1, code, q, v = rest
         j = i - (int(self._ends[k - 1]) if k else 0)
-        return self._make(float(b[1][j]), float(b[2][j]), int(b[3][j]), b[4][j], b[5][j])
+        return self._make(float(t0[j]), float(t1[j]), int(code[j]), q[j], v[j])
 
 
 class _Run:
@@ -294,7 +296,7 @@ class _Run:
 
     def result(self, make_state, make_piece) -> SwitchedTrajectory:
         pieces = _Pieces(self.blocks, make_piece)
-        runs = [b[1] for b in self.blocks if b[0] == "py" and isinstance(b[1], Trajectory)]
+        runs = [piece for kind, piece, *_ in self.blocks if kind == "py" and isinstance(piece, Trajectory)]
         spans = [r.contact_intervals for r in runs if r.contact_intervals.size] + \
             [np.array(self.rests, dtype=float).reshape(-1, 2)]
         contact = np.concatenate(spans)

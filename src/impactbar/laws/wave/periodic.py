@@ -437,10 +437,12 @@ def _flat_runs(resid, grid, r):
         hi = grid[j] if j == n - 1 else edge(grid[j], grid[j + 1])
         intervals.append([lo, hi])
     # the grid holds 0 and 2 pi: a run through both ends is one interval round the circle
-    if len(intervals) > 1 and runs[0][0] == 0 and runs[-1][1] == n - 1:
-        first = intervals.pop(0)
-        intervals[-1][1] = first[1] + TWO_PI
-    elif len(intervals) == 1 and runs[0][0] == 0 and runs[0][1] == n - 1:
+    (start, _), *_ = runs
+    *_, (_, stop) = runs
+    if len(intervals) > 1 and start == 0 and stop == n - 1:
+        (_, first_hi), *middle, (lo, _) = intervals
+        intervals = [*middle, [lo, first_hi + TWO_PI]]
+    elif len(intervals) == 1 and start == 0 and stop == n - 1:
         intervals = [[0.0, TWO_PI]]
     return mask, tuple((float(lo) % TWO_PI, float(lo) % TWO_PI + float(hi - lo)) for lo, hi in intervals)
 
