@@ -11,11 +11,15 @@ name with ``[]`` (``hist[]``: a slot of an entry of ``hist``, not its ends). ``s
 record; ``NOT_RECORDS`` lists, module by module, the names that are no records (a mathematical
 array's entries: ``Z[-1]`` the last segment's impedance, ``U[-1]`` the continuation's parameter,
 ``q[0]`` the rigid mode; a sequence's ends; a coefficient array), and ``PYTHON_TUPLES`` the tuples
-of named values in Python code that are still read by number. A call's result indexed by a number
-(``f(x)[0]``) and a slice are not scanned. A record of a kernel is named where it is made: the rock
-blow's in ``_records``, the others beside their kernel (``_admissibility_search``'s ``PB_*``, ``SRC_*``,
-``WK_*``, ``_rigid_arrays``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave
-window's ``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
+of named values in Python code that are still read by number. A call's result indexed by a number,
+``f(x)[0]``, ``obj.method(a, b)[1]``, ``np.linalg.svd(J)[2][-1]``, a call over lines too, is a slot
+as well, listed as ``f()`` (``CALL_NOT_RECORDS``: an array's entry; ``CALL_TUPLES``: a tuple of
+named values). Not scanned: a slice, a subscript by a name, a parenthesised expression's result
+(``(a + b)[0]``), the result of calling an entry (``h[k](x)[0]``), a call with its parentheses nested
+deeper than eight. A record of a kernel is named where it is made: the rock blow's in ``_records``,
+the others beside their kernel (``_admissibility_search``'s ``PB_*``, ``SRC_*``, ``WK_*``,
+``_rigid_arrays``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave window's
+``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
 
 import io
 import re
@@ -27,6 +31,13 @@ from impactbar.laws.rodrock import _records
 
 #: a record's slot by an integer literal: of a name (an attribute's too) after any subscripts
 SLOT = re.compile(r"\b([A-Za-z_][A-Za-z0-9_]*)((?:\[[^\[\]]*\])*)\[-?[0-9]+\]")
+#: parentheses and what they hold, nested up to eight deep, over lines too
+_CALL_ARGS = r"\([^()]*\)"
+for _ in range(8):
+    _CALL_ARGS = r"\((?:[^()]|" + _CALL_ARGS + r")*\)"
+#: a call's result's slot by an integer literal (``f(x)[0]``, ``obj.method(a, b)[1]``), after any
+#: subscripts; listed as ``f()`` (``f()[]`` with subscripts before)
+CALL = re.compile(r"\b([A-Za-z_][A-Za-z0-9_]*)" + _CALL_ARGS + r"((?:\[[^\[\]]*\])*)\[-?[0-9]+\]")
 #: names never a record: an array's shape
 ANYWHERE = {"shape"}
 #: module under impactbar/ -> the names there, indexed by a number, of arrays and sequences whose
@@ -395,8 +406,101 @@ WIDER_TUPLES = {
     # contacts[]: a contact's [start, end]; last_release: (time, segment, len, n_imp)
     "simulation/simulate.py": {"contacts[]", "last_release"},
 }
+#: module -> the calls whose result, read by number, is an array's or a sequence's entry, not a
+#: named value: a one-point evaluation's value (``f(np.array([t]))[0]``), a mode shape's row at the
+#: struck end, a unit vector (``eye(n)[-1]``), ``nonzero()``'s indices, a string's parts
+#: (``split(".")[0]``), a sorted list's first
+CALL_NOT_RECORDS = {
+    "cli/_common.py": {"split()", "splitlines()"},  # a dotted name's first part; a message's first line
+    "cli/continue_.py": {"sorted()"},  # the best orbit: the sorted list's first
+    "cli/drifter.py": {"split()"},  # a dotted name's first part; the words after the first
+    "continuation/engine.py": {"eye()"},  # the parameter's unit vector
+    "continuation/one_parameter.py": {"eye()"},  # the parameter's unit vector
+    "drives/circuit/drive.py": {"asarray()"},  # the rigid mode
+    "drives/circuit/endflight.py": {"_at()", "atleast_2d()"},  # the state's first row; the last event's
+    "drives/circuit/flight.py": {"atleast_2d()"},  # the last event's flags
+    "dynamics/certified.py": {"f()"},  # a one-point evaluation's value
+    "dynamics/stepped.py": {"f()", "shapes()"},  # a one-point value; the mode shapes at the struck end
+    "laws/rodrock/contact.py": {"asarray()"},  # a one-point value; the first row
+    "laws/rodrock/coupled_exact.py": {"self()"},  # a one-point value
+    "laws/rodrock/exactmap.py": {"asarray()", "shapes()"},  # a one-point value; the shapes at the end
+    "laws/wave/_characteristics.py": {"A()", "Acum()", "integral()"},  # one-point values
+    "laws/wave/coupled.py": {"impulse_at()", "integral()"},  # one-point values
+    "laws/wave/periodic.py": {"resid()"},  # a one-point value
+    "laws/wave/sustained.py": {"fv_at()", "nonzero()"},  # a one-point value; the indices
+    "loads/fourier.py": {"nonzero()"},  # the indices
+    "measure/dispersion.py": {"_frequency_equation()", "nonzero()"},  # a one-point value; the indices
+    "measure/kolsky.py": {"_pulses()"},  # the first pulse found
+    "model.py": {"shapes()"},  # the mode shapes at the struck end
+    "orbits/rigid.py": {"nonzero()"},  # the indices
+    "physical/forces.py": {"rsplit()"},  # a column name's last part
+    "physical/optimize_failures.py": {"splitlines()"},  # the error's first line
+    "physical/plausibility.py": {"split()"},  # a message's first word
+    "physical/tree.py": {"rsplit()"},  # a dotted key's parts
+    "simulation/driven_trajectory.py": {"force()"},  # a one-point value
+    "simulation/initial.py": {"ravel()"},  # a one-point value
+    "sweeps/store.py": {"split()"},  # a description's first part
+    "sweeps/tasks.py": {"generate_state()", "nonzero()"},  # a one-word state; the indices
+}
+#: module -> the calls whose result is a tuple of named values still read by number (as
+#: ``PYTHON_TUPLES``), to be unpacked where next touched
+CALL_TUPLES = {
+    # pair(): (.., .., problem); residual(): (F, J); svd(): (U, s, Vh)
+    "continuation/driven.py": {"pair()", "residual()", "svd()[]"},
+    "continuation/one_parameter.py": {"evaluate()", "svd()[]"},  # (F, DF, info); (U, s, Vh)
+    "continuation/two_parameter.py": {"evaluate()"},  # (F, DF, info)
+    "drives/_crossing.py": {"gap()"},  # (gap, rate)
+    "drives/circuit/_magnus.py": {"matrix_balance()[]"},  # (B, (scale, permutation))
+    # magnus_phi(): (Phi, ..); modal(): (q, v); spectrum(): (.., .., rate)
+    "drives/circuit/flight.py": {"magnus_phi()", "modal()", "spectrum()"},
+    "drives/circuit/part_flows.py": {"law()"},  # a part's (flow, derivatives)
+    "drives/flight.py": {"modal()", "rigid_flight()"},  # (q, v)
+    "drives/orbitproblem.py": {"residual()"},  # (F, J)
+    "drives/valve/_compiled_loop.py": {"rigid_flight()"},  # (q, v)
+    "laws/abilities.py": {"impact_map()"},  # (y_plus, ..)
+    "laws/rodrock/_choice.py": {"piston_segments()"},  # (lengths, ..)
+    "laws/rodrock/_exactend.py": {"_chan_sums()"},  # the sums' (value, ..)
+    "laws/rodrock/blow.py": {"peak_shank_force()"},  # (force, time)
+    "laws/rodrock/exact.py": {"terms()"},  # (initial, drive)
+    "laws/rodrock/law.py": {"contact()"},  # the contact's (.., .., .., y_plus)
+    "laws/rodrock/longrod.py": {"contact()", "peak_forces()[]"},  # as law.py's; (forces, times)
+    "laws/wave/_characteristics.py": {"force_extremes()", "pop()"},  # (max, min); a contact's (start, end)
+    "laws/wave/_jumps.py": {"columns()", "fit()"},  # (.., columns); (jumps, residual)
+    "laws/wave/impact.py": {"force_extremes()"},  # (max, min)
+    "laws/wave/law.py": {"account()"},  # (drive work, rod energy, ..)
+    # _orbit_states(): (y, ..); _phase_scan(): (roots, ..); _window(): (.., width)
+    "laws/wave/periodic.py": {"_orbit_states()", "_phase_scan()", "_window()"},
+    "laws/wave/sustained.py": {"_integrals()"},  # the integrals' (.., .., .., last)
+    "orbits/_admissibility_search.py": {"_joint()"},  # (.., .., L2)
+    "orbits/_shooting_data.py": {"_flight()"},  # the flight's (.., Phi)
+    "orbits/admissibility.py": {"bound()", "states()"},  # (.., L2); (q, v)
+    "orbits/coupled.py": {"blow_state()"},  # (y_plus, ..)
+    "orbits/find.py": {"evaluate()"},  # (F, DF, info)
+    # _flight(): the flight's results; _steered_chord(): (X, ..); steering_residual(): (r, J)
+    "orbits/shooting.py": {"_flight()", "_steered_chord()", "steering_residual()"},
+    "orbits/valve_admissibility.py": {"_apply()", "rigid_flight()"},  # (q, v)
+    "orbits/valve_segment.py": {"_conditions()", "_legs()", "cmap()"},  # (.., G); the legs'; (z, J)
+    "physical/_circuit_checks.py": {"display_unit()"},  # (factor, unit)
+    "physical/circuit.py": {"extremes()", "modal()"},  # (min, max); (q, v)
+    # _operating_point(): (orbit, continued); derivative(): (objective's, constraints'); design_of():
+    # (id, values, changes)
+    "physical/optimize_drifter.py": {"_operating_point()", "derivative()", "design_of()"},
+    # constraint_output(): (output, sense, scale, unit); tangent_derivatives(): (.., .., derivatives)
+    "physical/optimize_problem.py": {"constraint_output()", "tangent_derivatives()"},
+    "physical/outputs.py": {"display_unit()", "get()"},  # (factor, unit); (unit, factor)
+    "physical/piston.py": {"_softmax_jacobian()", "evaluate()", "merit()",
+                           "peak_shank_force()"},  # (B, ..); (.., f, df, c, dc); (merit, ..); (force, time)
+    "physical/sensitivity.py": {"residual()"},  # (F, J)
+    "plotting/circuit.py": {"get_legend_handles_labels()"},  # (handles, labels)
+    "plotting/maps.py": {"get()", "get_legend_handles_labels()"},  # (unit, factor); (handles, labels)
+    "simulation/blows.py": {"modal()"},  # (q, v)
+    "simulation/driven.py": {"_at()", "modal()"},  # (q, v)
+    "simulation/driven_trajectory.py": {"contact()"},  # the contact's (.., .., .., y_plus)
+    "simulation/trajectory.py": {"contact()"},  # the contact's (.., .., .., y_plus)
+    "sweeps/spec.py": {"drive_table()", "law_table()"},  # (object, table)
+}
 #: every list of names passed, module by module
-LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES)
+LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES, CALL_NOT_RECORDS, CALL_TUPLES)
 _PROSE = {tokenize.COMMENT, tokenize.STRING} | {getattr(tokenize, "FSTRING_MIDDLE", tokenize.STRING)}
 
 
@@ -421,16 +525,27 @@ def _key(match):
     return name + "[]" if chain else name
 
 
+def _slots(text):
+    """``(line, column, key, match)`` of every slot by number in the source ``text``, a name's
+    (:data:`SLOT`) and a call's result's (:data:`CALL`, ``key`` the function's name with ``()``), in
+    the order they stand."""
+    code = _code(text)
+    out = [(i, m.start(), _key(m), m.group()) for i, line in enumerate(code, start=1)
+           for m in SLOT.finditer(line)]
+    whole = "\n".join(code)
+    for m in CALL.finditer(whole):
+        name, chain = m.groups()
+        line = whole.count("\n", 0, m.start()) + 1
+        column = m.start() - (whole.rfind("\n", 0, m.start()) + 1)
+        out.append((line, column, name + ("()[]" if chain else "()"), " ".join(m.group().split())))
+    return sorted(out)
+
+
 def slots_by_number(text, module=""):
     """``(line, match)`` of every record slot indexed by a number in the source ``text`` of
     ``module``, those its lists let pass left out."""
     passed = ANYWHERE.union(*(names.get(module, ()) for names in LISTS))
-    out = []
-    for i, line in enumerate(_code(text), start=1):
-        for m in SLOT.finditer(line):
-            if _key(m) not in passed:
-                out.append((i, m.group()))
-    return out
+    return [(line, match) for line, _, key, match in _slots(text) if key not in passed]
 
 
 def test_the_scan_finds_a_slot_by_number_in_code_only():
@@ -467,7 +582,7 @@ def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
             'return self._force_extremes[0] + f.typical[1]\n'
             'if windows and windows[-1][2] == sign and pending[0][0] <= t:\n'
             'lo = OBJECTIVES[key][0] + hist[-1 - m][2] + hist[-1]\n'
-            'x = f(a)[0] + a[:2] + b[i]\n')
+            'x = a[:2] + b[i] + f(a)[:2] + g(b)[i]\n')
     assert slots_by_number(text) == [(1, "records[-1][1]"), (1, "r[1]"), (2, "arrival[3]"), (2, "arrival[2]"),
                                      (3, "_force_extremes[0]"), (3, "typical[1]"), (4, "windows[-1][2]"),
                                      (4, "pending[0][0]"), (5, "OBJECTIVES[key][0]"), (5, "hist[-1 - m][2]"),
@@ -475,6 +590,24 @@ def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
     assert slots_by_number("y = h[0][0] + h[-1]\n", "plotting/circuit.py") == [(1, "h[-1]")]
     assert slots_by_number("y = h[0][0] + h[-1]\n", "orbits/orbit.py") == [(1, "h[0][0]"), (1, "h[-1]")]
     assert slots_by_number("y = Xr[0] + Xr[0][1]\n", "orbits/shooting.py") == [(1, "Xr[0][1]")]
+
+
+def test_the_scan_finds_a_call_s_result_read_by_number():
+    """A call's result read by a number: a function's, a method's, through nested calls, over lines,
+    after subscripts; a listed call (``nonzero()``) passes in its own module only; a slice, a
+    subscript by a name, a parenthesised expression, comments and strings are no slots."""
+    text = ('F = evaluate(u, jacobian=False)[0] + self.problem.residual(X)[1]\n'
+            'w = np.linalg.svd(J[:, :-1])[2][-1] + g(h(x), [1, 2])[-1]\n'
+            'r = fit(yk,\n'
+            '        n)[1]\n'
+            'x = f(a)[:2] + f(a)[i] + (a + b)[0]\n'
+            '# f(x)[0] in a comment\n'
+            's = "f(x)[0]" + msg.splitlines()[0]\n')
+    assert slots_by_number(text) == [(1, "evaluate(u, jacobian=False)[0]"), (1, "residual(X)[1]"),
+                                     (2, "svd(J[:, :-1])[2][-1]"), (2, "g(h(x), [1, 2])[-1]"),
+                                     (3, "fit(yk, n)[1]"), (7, "splitlines()[0]")]
+    assert slots_by_number("i = np.nonzero(m)[0]\n", "sweeps/tasks.py") == []
+    assert slots_by_number("i = np.nonzero(m)[0]\n", "orbits/orbit.py") == [(1, "nonzero(m)[0]")]
 
 
 def test_the_lists_are_disjoint_and_name_modules_that_exist():
@@ -487,8 +620,7 @@ def test_the_lists_are_disjoint_and_name_modules_that_exist():
                 assert not first[module] & second[module], module
     for names in LISTS:
         for module, listed in names.items():
-            text = (top / module).read_text()
-            seen = {_key(m) for line in _code(text) for m in SLOT.finditer(line)}
+            seen = {key for _, _, key, _ in _slots((top / module).read_text())}
             assert listed <= seen, (module, listed - seen)
 
 
