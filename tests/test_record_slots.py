@@ -433,6 +433,7 @@ CALL_NOT_RECORDS = {
     "measure/kolsky.py": {"_pulses()"},  # the first pulse found
     "model.py": {"shapes()"},  # the mode shapes at the struck end
     "orbits/rigid.py": {"nonzero()"},  # the indices
+    "orbits/valve_admissibility.py": {"_apply()"},  # an affine map's state: [0] the rigid mode
     "physical/forces.py": {"rsplit()"},  # a column name's last part
     "physical/optimize_failures.py": {"splitlines()"},  # the error's first line
     "physical/plausibility.py": {"split()"},  # a message's first word
@@ -447,57 +448,30 @@ CALL_NOT_RECORDS = {
 CALL_TUPLES = {
     # pair(): (.., .., problem); residual(): (F, J); svd(): (U, s, Vh)
     "continuation/driven.py": {"pair()", "residual()", "svd()[]"},
-    "continuation/one_parameter.py": {"evaluate()", "svd()[]"},  # (F, DF, info); (U, s, Vh)
-    "continuation/two_parameter.py": {"evaluate()"},  # (F, DF, info)
+    "continuation/one_parameter.py": {"svd()[]"},  # (U, s, Vh)
     "drives/_crossing.py": {"gap()"},  # (gap, rate)
     "drives/circuit/_magnus.py": {"matrix_balance()[]"},  # (B, (scale, permutation))
-    # magnus_phi(): (Phi, ..); modal(): (q, v); spectrum(): (.., .., rate)
-    "drives/circuit/flight.py": {"magnus_phi()", "modal()", "spectrum()"},
+    # magnus_phi(): (Phi, ..); spectrum(): (.., .., rate)
+    "drives/circuit/flight.py": {"magnus_phi()", "spectrum()"},
     "drives/circuit/part_flows.py": {"law()"},  # a part's (flow, derivatives)
-    "drives/flight.py": {"modal()", "rigid_flight()"},  # (q, v)
-    "drives/orbitproblem.py": {"residual()"},  # (F, J)
-    "drives/valve/_compiled_loop.py": {"rigid_flight()"},  # (q, v)
-    "laws/abilities.py": {"impact_map()"},  # (y_plus, ..)
     "laws/rodrock/_choice.py": {"piston_segments()"},  # (lengths, ..)
     "laws/rodrock/_exactend.py": {"_chan_sums()"},  # the sums' (value, ..)
     "laws/rodrock/blow.py": {"peak_shank_force()"},  # (force, time)
     "laws/rodrock/exact.py": {"terms()"},  # (initial, drive)
-    "laws/rodrock/law.py": {"contact()"},  # the contact's (.., .., .., y_plus)
-    "laws/rodrock/longrod.py": {"contact()", "peak_forces()[]"},  # as law.py's; (forces, times)
+    "laws/rodrock/longrod.py": {"peak_forces()[]"},  # (forces, times)
     "laws/wave/_characteristics.py": {"force_extremes()", "pop()"},  # (max, min); a contact's (start, end)
     "laws/wave/_jumps.py": {"columns()", "fit()"},  # (.., columns); (jumps, residual)
     "laws/wave/impact.py": {"force_extremes()"},  # (max, min)
     "laws/wave/law.py": {"account()"},  # (drive work, rod energy, ..)
-    # _orbit_states(): (y, ..); _phase_scan(): (roots, ..); _window(): (.., width)
-    "laws/wave/periodic.py": {"_orbit_states()", "_phase_scan()", "_window()"},
     "laws/wave/sustained.py": {"_integrals()"},  # the integrals' (.., .., .., last)
-    "orbits/_admissibility_search.py": {"_joint()"},  # (.., .., L2)
     "orbits/_shooting_data.py": {"_flight()"},  # the flight's (.., Phi)
-    "orbits/admissibility.py": {"bound()", "states()"},  # (.., L2); (q, v)
-    "orbits/coupled.py": {"blow_state()"},  # (y_plus, ..)
-    "orbits/find.py": {"evaluate()"},  # (F, DF, info)
     # _flight(): the flight's results; _steered_chord(): (X, ..); steering_residual(): (r, J)
     "orbits/shooting.py": {"_flight()", "_steered_chord()", "steering_residual()"},
-    "orbits/valve_admissibility.py": {"_apply()", "rigid_flight()"},  # (q, v)
     "orbits/valve_segment.py": {"_conditions()", "_legs()", "cmap()"},  # (.., G); the legs'; (z, J)
-    "physical/_circuit_checks.py": {"display_unit()"},  # (factor, unit)
-    "physical/circuit.py": {"extremes()", "modal()"},  # (min, max); (q, v)
-    # _operating_point(): (orbit, continued); derivative(): (objective's, constraints'); design_of():
-    # (id, values, changes)
-    "physical/optimize_drifter.py": {"_operating_point()", "derivative()", "design_of()"},
     # constraint_output(): (output, sense, scale, unit); tangent_derivatives(): (.., .., derivatives)
     "physical/optimize_problem.py": {"constraint_output()", "tangent_derivatives()"},
-    "physical/outputs.py": {"display_unit()", "get()"},  # (factor, unit); (unit, factor)
     "physical/piston.py": {"_softmax_jacobian()", "evaluate()", "merit()",
                            "peak_shank_force()"},  # (B, ..); (.., f, df, c, dc); (merit, ..); (force, time)
-    "physical/sensitivity.py": {"residual()"},  # (F, J)
-    "plotting/circuit.py": {"get_legend_handles_labels()"},  # (handles, labels)
-    "plotting/maps.py": {"get()", "get_legend_handles_labels()"},  # (unit, factor); (handles, labels)
-    "simulation/blows.py": {"modal()"},  # (q, v)
-    "simulation/driven.py": {"_at()", "modal()"},  # (q, v)
-    "simulation/driven_trajectory.py": {"contact()"},  # the contact's (.., .., .., y_plus)
-    "simulation/trajectory.py": {"contact()"},  # the contact's (.., .., .., y_plus)
-    "sweeps/spec.py": {"drive_table()", "law_table()"},  # (object, table)
 }
 #: every list of names passed, module by module
 LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES, CALL_NOT_RECORDS, CALL_TUPLES)

@@ -632,7 +632,7 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
             if ok[i]:
                 mid = 0.5 * (lo[i] + hi[i])
                 half = 0.5 * (hi[i] - lo[i])
-                L2 = _joint(phase, mid, half, prob, work, src)[2]
+                _, _, L2 = _joint(phase, mid, half, prob, work, src)
                 r = max(t[i] - lo[i], hi[i] - t[i])
                 taylor = vals[i] + 0.5 * L2 * r * r
                 if taylor > best + atol and not _single(phase, t[i], lo[i], hi[i], prob, work, src):

@@ -77,6 +77,14 @@ class _Near(NamedTuple):
     id: str
 
 
+class _Design(NamedTuple):
+    """A design: its id (its values' reprs), its values by key, its changes to the config."""
+
+    id: str
+    values: dict
+    changes: dict
+
+
 def _fingerprint(config: dict, vary: dict, objective: str, constraints: dict) -> str:
     text = json.dumps([config, {k: list(v) for k, v in vary.items()}, objective, constraints], sort_keys=True,
                       default=str)
@@ -255,20 +263,20 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     history: list[dict] = []
     counter = {"new": 0, "gradients": 0}
     # each design's orbit by its id (a stored design's solved again along its guesses where needed)
-    chain = OrbitChain(store, lambda c, g: _operating_point(build(with_values(cfg, c), folder), g)[0])
+    chain = OrbitChain(store, lambda c, g: _operating_point(build(with_values(cfg, c), folder), g).orbit)
     gradients: dict[str, tuple] = {}
     found: list = []  # the multistart's local searches
 
     def changes_of(values: dict) -> dict:
         return {k: written_quantity(values[k], spec[k]["unit"], config_value(cfg, k)) for k in keys}
 
-    def design_of(u: np.ndarray) -> tuple[str, dict, dict]:
+    def design_of(u: np.ndarray) -> _Design:
         u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
         x = np.where(u == u0, start, lo + span * u)  # the start exactly as the config gives it
         values = {k: float(v) for k, v in zip(keys, x, strict=True)}
         changes = changes_of(values)
         changes.update({k: config_value(cfg, k) for k, at in zip(keys, u == u0, strict=True) if at})
-        return json.dumps([repr(values[k]) for k in keys]), values, changes
+        return _Design(json.dumps([repr(values[k]) for k in keys]), values, changes)
 
     def evaluate(u: np.ndarray, done: dict | None = None) -> dict:
         nonlocal n_cached
@@ -356,8 +364,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 {"config": cfg, "folder": folder, "limits": kept}, lambda u: cobyla(u, budget), fkey,
                 sample=sample, local_starts=local_starts, seed=seed, workers=workers, n_variables=len(keys))
         else:
-            res = minimize(f, u0, jac=lambda u: -derivative(u)[0] / ref, method="SLSQP",
-                           constraints=[{"type": "ineq", "fun": g, "jac": lambda u: derivative(u)[1]}],
+            res = minimize(f, u0, jac=lambda u: -derivative(u).objective / ref, method="SLSQP",
+                           constraints=[{"type": "ineq", "fun": g,
+                                         "jac": lambda u: derivative(u).constraints}],
                            bounds=[(0.0, 1.0)] * len(keys),
                            options={"ftol": tol ** 3, "maxiter": max_evaluations})
         message = str(res.message)
@@ -389,7 +398,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         fresh[name] = out
     message += _better_missed(history, best, fkey)
     certificate = certify_search(fresh["optimum"], history, keys, (lo, span), res, tol, fkey, (lambda v: (
-        evaluate_blow(build(with_values(cfg, design_of(v)[2]), folder), V, limits))) if ideal else None,
+        evaluate_blow(build(with_values(cfg, design_of(v).changes), folder), V, limits))) if ideal else None,
         lambda: _design_gradient(cfg, folder, fresh["optimum"], None, spec, limits, fkey, span),
         tol if method in ("cobyla", "multistart") else 0.0)
     return DrifterOptimum(objective=objective,

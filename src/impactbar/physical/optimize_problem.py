@@ -108,15 +108,30 @@ def evaluate_design(drifter: CircuitDrifter, constraints: dict | None = None,
     return rec, orbit
 
 
-def _operating_point(drifter: CircuitDrifter, guess) -> tuple[object, bool]:
+class _OperatingPoint(NamedTuple):
+    """A design's orbit, and whether it was continued from a guess."""
+
+    orbit: object
+    continued: bool
+
+
+class _Gradients(NamedTuple):
+    """The gradients of a design's objective, shape ``(n,)``, and of its constraints' scaled
+    margins, shape ``(m, n)``, in the ``n`` scaled variables."""
+
+    objective: np.ndarray
+    constraints: np.ndarray
+
+
+def _operating_point(drifter: CircuitDrifter, guess) -> _OperatingPoint:
     """The design's orbit: Newton from ``guess`` where given and it converges, else the default
     chain; and whether it was continued."""
     if guess is not None:
         try:
-            return drifter.orbit(guess=guess), True
+            return _OperatingPoint(drifter.orbit(guess=guess), True)
         except (ValueError, np.linalg.LinAlgError, ArithmeticError):
             pass
-    return drifter.orbit(), False
+    return _OperatingPoint(drifter.orbit(), False)
 
 
 def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: dict | None = None) -> dict:
@@ -269,7 +284,7 @@ def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
 
 
 def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: dict, fkey: str,
-                     span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                     span: np.ndarray) -> _Gradients:
     """The gradients of a design's objective and of its constraints' scaled margins in the scaled
     variables: per variable by :func:`~impactbar.physical.sensitivity.tangent_derivatives` from the
     design's orbit, or where its step meets a border (or a design read from the cache, without its
@@ -278,7 +293,7 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
     keys, names = list(spec), list(limits)
     dobj, dcon = np.zeros(len(keys)), np.zeros((len(names), len(keys)))
     if not rec["ok"]:
-        return dobj, dcon
+        return _Gradients(dobj, dcon)
     design = with_values(cfg, rec["changes"])
     values, units = rec["values"], {k: spec[k]["unit"] for k in keys}
 
@@ -305,4 +320,4 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
             col = {n: (ends[0][n] - ends[1][n]) / (2.0 * h) for n in ends[0]}
         dobj[j] = col["objective"] * span[j]
         dcon[:, j] = [col[n] * span[j] for n in names]
-    return dobj, dcon
+    return _Gradients(dobj, dcon)

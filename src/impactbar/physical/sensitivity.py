@@ -336,7 +336,10 @@ def tangent_derivatives(cfg: dict, folder, point: CircuitDrifterOrbit, keys, val
     problem = so.problem
     X = problem.unknowns(so)
     Phi = so._monodromy
-    Jx = Phi - np.eye(X.size) if Phi is not None and Phi.shape[0] == X.size else problem.residual(X)[1]
+    if Phi is not None and Phi.shape[0] == X.size:
+        Jx = Phi - np.eye(X.size)
+    else:
+        _, Jx = problem.residual(X)
     cond = np.linalg.cond(Jx)
     if not cond < 1e10:
         raise ValueError(f"the orbit's Newton Jacobian is singular (condition {cond:.3g}: a multiplier at 1, "

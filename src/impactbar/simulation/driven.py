@@ -105,10 +105,12 @@ class _RigidFlight:
         return np.full(np.atleast_1d(t).shape, float(self.level))
 
     def end_displacement(self, t):
-        return np.minimum(self._at(np.asarray(t, dtype=float))[0], 0.0)
+        q, _ = self._at(np.asarray(t, dtype=float))
+        return np.minimum(q, 0.0)
 
     def end_velocity(self, t):
-        return self._at(np.asarray(t, dtype=float))[1]
+        _, v = self._at(np.asarray(t, dtype=float))
+        return v
 
 
 def rigid_piece(model: BarModel):
@@ -130,7 +132,8 @@ def rigid_piece(model: BarModel):
         t_imp = math.inf if resting else t + first_rising_crossing(d, q0, v0, level, 0.0)
         if t_imp < t_stop:
             f.t_end = t_imp
-            vm = float(f._at(np.array(t_imp))[1])
+            _, vm = f._at(np.array(t_imp))
+            vm = float(vm)
             f.impact_times = np.array([t_imp])
             f.impact_velocities = np.array([vm])
             f.status = RunStatus.MAX_IMPACTS
@@ -172,10 +175,12 @@ class _Flight:
         return np.full(np.atleast_1d(t).shape, float(self.core.load.p0))
 
     def end_displacement(self, t):
-        return np.minimum(self.core.c @ self.modal(t)[0], 0.0)
+        q, _ = self.modal(t)
+        return np.minimum(self.core.c @ q, 0.0)
 
     def end_velocity(self, t):
-        return self.core.c @ self.modal(t)[1]
+        _, v = self.modal(t)
+        return self.core.c @ v
 
 
 class _Pieces(Sequence):

@@ -176,10 +176,12 @@ class CircuitPiece(HermiteSteps):
         return self.layout.size(self.M)
 
     def end_displacement(self, t):
-        return np.minimum(self.c @ self.modal(t)[0], 0.0)
+        q, _ = self.modal(t)
+        return np.minimum(self.c @ q, 0.0)
 
     def end_velocity(self, t):
-        return self.c @ self.modal(t)[1]
+        _, v = self.modal(t)
+        return self.c @ v
 
 
 #: The most steps of one flight (CVODE's ``max_num_steps``). A settling flight of a piston of 16 modes
