@@ -203,15 +203,15 @@ WIDER_NOT_RECORDS = {
     # last
     "cli/simulate.py": {"e", "v"},
     "continuation/cascade.py": {"branches"},  # branches: the last branch
-    # U: a continuation point: [-1] (and [-2]) its parameter; d: a chord: [-1] the parameter's
-    # component; pairs: the last pair of a list; records: the last record of a list; tangents: the last
-    # tangents
-    "continuation/driven.py": {"U", "d", "pairs", "records", "tangents"},
+    # U: a continuation point: [-1] (and [-2]) its parameter; Vh: the right singular vectors, [-1] the
+    # null vector; d: a chord: [-1] the parameter's component; pairs: the last pair of a list; records:
+    # the last record of a list; tangents: the last tangents
+    "continuation/driven.py": {"U", "Vh", "d", "pairs", "records", "tangents"},
     "continuation/engine.py": {"tangents"},  # tangents: the last tangents
     # U: a continuation point: [-1] (and [-2]) its parameter; V: a continuation point: [-1] its
-    # parameter; e: a basis vector's or series' entry; tangents: the last tangents; tangents[]: a
-    # tangent's last component (the parameter)
-    "continuation/one_parameter.py": {"U", "V", "e", "tangents", "tangents[]"},
+    # parameter; Vh: the right singular vectors, [-1] the null vector; e: a basis vector's or series'
+    # entry; tangents: the last tangents; tangents[]: a tangent's last component (the parameter)
+    "continuation/one_parameter.py": {"U", "V", "Vh", "e", "tangents", "tangents[]"},
     "continuation/two_parameter.py": {"U"},  # U: a continuation point: [-1] (and [-2]) its parameter
     # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
     # series' last
@@ -434,6 +434,7 @@ CALL_NOT_RECORDS = {
     "model.py": {"shapes()"},  # the mode shapes at the struck end
     "orbits/rigid.py": {"nonzero()"},  # the indices
     "orbits/valve_admissibility.py": {"_apply()"},  # an affine map's state: [0] the rigid mode
+    "orbits/valve_segment.py": {"_legs()"},  # the legs' end states in order
     "physical/forces.py": {"rsplit()"},  # a column name's last part
     "physical/optimize_failures.py": {"splitlines()"},  # the error's first line
     "physical/plausibility.py": {"split()"},  # a message's first word
@@ -446,30 +447,9 @@ CALL_NOT_RECORDS = {
 #: module -> the calls whose result is a tuple of named values still read by number (as
 #: ``PYTHON_TUPLES``), to be unpacked where next touched
 CALL_TUPLES = {
-    # pair(): (.., .., problem); residual(): (F, J); svd(): (U, s, Vh)
-    "continuation/driven.py": {"pair()", "residual()", "svd()[]"},
-    "continuation/one_parameter.py": {"svd()[]"},  # (U, s, Vh)
-    "drives/_crossing.py": {"gap()"},  # (gap, rate)
-    "drives/circuit/_magnus.py": {"matrix_balance()[]"},  # (B, (scale, permutation))
-    # magnus_phi(): (Phi, ..); spectrum(): (.., .., rate)
-    "drives/circuit/flight.py": {"magnus_phi()", "spectrum()"},
-    "drives/circuit/part_flows.py": {"law()"},  # a part's (flow, derivatives)
-    "laws/rodrock/_choice.py": {"piston_segments()"},  # (lengths, ..)
-    "laws/rodrock/_exactend.py": {"_chan_sums()"},  # the sums' (value, ..)
-    "laws/rodrock/blow.py": {"peak_shank_force()"},  # (force, time)
     "laws/rodrock/exact.py": {"terms()"},  # (initial, drive)
     "laws/rodrock/longrod.py": {"peak_forces()[]"},  # (forces, times)
-    "laws/wave/_characteristics.py": {"force_extremes()", "pop()"},  # (max, min); a contact's (start, end)
-    "laws/wave/_jumps.py": {"columns()", "fit()"},  # (.., columns); (jumps, residual)
-    "laws/wave/impact.py": {"force_extremes()"},  # (max, min)
-    "laws/wave/law.py": {"account()"},  # (drive work, rod energy, ..)
-    "laws/wave/sustained.py": {"_integrals()"},  # the integrals' (.., .., .., last)
-    "orbits/_shooting_data.py": {"_flight()"},  # the flight's (.., Phi)
-    # _flight(): the flight's results; _steered_chord(): (X, ..); steering_residual(): (r, J)
-    "orbits/shooting.py": {"_flight()", "_steered_chord()", "steering_residual()"},
-    "orbits/valve_segment.py": {"_conditions()", "_legs()", "cmap()"},  # (.., G); the legs'; (z, J)
-    # constraint_output(): (output, sense, scale, unit); tangent_derivatives(): (.., .., derivatives)
-    "physical/optimize_problem.py": {"constraint_output()", "tangent_derivatives()"},
+    "orbits/shooting.py": {"_steered_chord()"},  # (X, ..)
     "physical/piston.py": {"_softmax_jacobian()", "evaluate()", "merit()",
                            "peak_shank_force()"},  # (B, ..); (.., f, df, c, dc); (merit, ..); (force, time)
 }

@@ -278,7 +278,8 @@ def _start(engine, base, lam0, direction):
         if U0 is None:
             raise ValueError("orbit: Newton at the start value did not converge; is it a solution?")
     # the tangent: the null vector of [F_u, F_lam] (by SVD: also at a fold), towards `to`
-    t0 = np.linalg.svd(engine.last_J)[2][-1]
+    _, _, Vh = np.linalg.svd(engine.last_J)
+    t0 = Vh[-1]
     t0 /= engine.norm(t0)
     if t0[-1] * direction < 0:
         t0 = -t0

@@ -182,7 +182,7 @@ def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: 
                        E=bar.E_Pa, density=bar.density_kg_m3, bit_mass=drill.bit_mass_kg, feed=drill.feed_N)
     blow = dict(blow, piston_mass_kg=bar.mass_kg)
     obj = {o.key: o.blow(blow) for o in outputs("record") if o.blow is not None}
-    values = {name: constraint_output(name)[0].blow(blow) for name in IDEAL_CONSTRAINTS}
+    values = {name: constraint_output(name).output.blow(blow) for name in IDEAL_CONSTRAINTS}
     rec = _constrained(obj, values, limits)
     rec["seconds"] = time.perf_counter() - t0
     return rec
@@ -208,14 +208,14 @@ def _limits(constraints, drifter, ideal: bool = False) -> dict:
         v = given.get(name, default)
         if v is None:
             continue
-        if constraint_output(name)[0].rock and drifter.drill is None:
+        if constraint_output(name).output.rock and drifter.drill is None:
             raise ValueError(f"constraints: {name!r} needs the drill string and the rock ([rock] in the "
                              "config)")
         if v == "relief":
             v = drifter.si["relief_pressure_Pa"]
             if not math.isfinite(v):
                 continue
-        unit = constraint_output(name)[3]
+        unit = constraint_output(name).unit
         if isinstance(v, int | float) and not isinstance(v, bool):  # a bare number: SI
             out[name] = float(v)
             continue
@@ -231,7 +231,7 @@ def _figures(orbit, limits: dict) -> dict:
     r = Reading(orbit)
     obj = {o.key: o.of(r) for o in outputs("record", "circuit", rock=orbit.drifter.drill is not None)
            if o.of is not None}
-    values = {name: float(constraint_output(name)[0].of(r)) for name in {**DEFAULT_CONSTRAINTS, **limits}}
+    values = {name: float(constraint_output(name).output.of(r)) for name in {**DEFAULT_CONSTRAINTS, **limits}}
     return _constrained(obj, values, limits)
 
 
@@ -306,9 +306,9 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
     step = default_step(orbit.drifter)
     for j, key in enumerate(keys):
         try:
-            col = {n: d[key] for n, d in tangent_derivatives(design, folder, orbit, [key], values, units,
-                                                             step, "max_multiplier" in limits,
-                                                             read)[2].items()}
+            _, _, derivatives = tangent_derivatives(design, folder, orbit, [key], values, units, step,
+                                                    "max_multiplier" in limits, read)
+            col = {n: d[key] for n, d in derivatives.items()}
         except ValueError:  # a border within the step: the secant of two continued orbits
             h = step * abs(values[key])
             try:
