@@ -91,7 +91,7 @@ NOT_RECORDS = {
     "laws/rodrock/exactjac.py": {"pieces", "qa", "starts"},  # the first piece and start; the rigid mode
     "laws/rodrock/exactmap.py": {"kappa", "qa"},  # the rigid mode's
     "laws/rodrock/law.py": {"qm"},  # the rigid mode
-    "laws/rodrock/longrod.py": {"qm"},  # the rigid mode
+    "laws/rodrock/longrod.py": {"peaks", "qm"},  # the first boundary's (the shank's); the rigid mode
     "laws/wave/_characteristics.py": {"first", "hit", "jumps", "nodes", "qa"},  # sequences' ends, rigid mode
     "laws/wave/_separation.py": {"ew", "grid", "p12", "qa", "qm", "ts", "ve"},  # modal components
     "laws/wave/_window.py": {"jumps", "qa"},  # the first jump; the rigid mode
@@ -448,8 +448,6 @@ CALL_NOT_RECORDS = {
 #: ``PYTHON_TUPLES``), to be unpacked where next touched
 CALL_TUPLES = {
     "laws/rodrock/exact.py": {"terms()"},  # (initial, drive)
-    "laws/rodrock/longrod.py": {"peak_forces()[]"},  # (forces, times)
-    "orbits/shooting.py": {"_steered_chord()"},  # (X, ..)
     "physical/piston.py": {"_softmax_jacobian()", "evaluate()", "merit()",
                            "peak_shank_force()"},  # (B, ..); (.., f, df, c, dc); (merit, ..); (force, time)
 }

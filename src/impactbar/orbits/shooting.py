@@ -309,7 +309,7 @@ class ShootingProblem(OrbitProblem):
             rigid = ShootingProblem(model.with_(n_modes=0), drive, m, self.settings)
             Xr = rigid.initial(None, tol, max_iter)
             if rigid.variational and rigid.newton == "chord":  # (a start: its first Newton steps)
-                Xr = rigid._steered_chord(Xr, max(tol, rigid.accuracy), max_iter, C.LIFTED_HANDOVER)[0]
+                Xr, _ = rigid._steered_chord(Xr, max(tol, rigid.accuracy), max_iter, C.LIFTED_HANDOVER)
             else:
                 Xr = rigid.solve(Xr, tol, max_iter)
             y = np.zeros(self.n)

@@ -192,7 +192,8 @@ class LongRodContact:
 
     @property
     def peak_force(self) -> float:
-        return float(self.record.blow.peak_forces()[0][0])
+        peaks, _ = self.record.blow.peak_forces()
+        return float(peaks[0])
 
     @property
     def peak_rod_stress(self) -> float:
