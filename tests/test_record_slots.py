@@ -11,11 +11,15 @@ name with ``[]`` (``hist[]``: a slot of an entry of ``hist``, not its ends). ``s
 record; ``NOT_RECORDS`` lists, module by module, the names that are no records (a mathematical
 array's entries: ``Z[-1]`` the last segment's impedance, ``U[-1]`` the continuation's parameter,
 ``q[0]`` the rigid mode; a sequence's ends; a coefficient array), and ``PYTHON_TUPLES`` the tuples
-of named values in Python code that are still read by number. A call's result indexed by a number
-(``f(x)[0]``) and a slice are not scanned. A record of a kernel is named where it is made: the rock
-blow's in ``_records``, the others beside their kernel (``_admissibility_search``'s ``PB_*``, ``SRC_*``,
-``WK_*``, ``_rigid_arrays``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave
-window's ``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
+of named values in Python code that are still read by number. A call's result indexed by a number,
+``f(x)[0]``, ``obj.method(a, b)[1]``, ``np.linalg.svd(J)[2][-1]``, a call over lines too, is a slot
+as well, listed as ``f()`` (``CALL_NOT_RECORDS``: an array's entry; ``CALL_TUPLES``: a tuple of
+named values). Not scanned: a slice, a subscript by a name, a parenthesised expression's result
+(``(a + b)[0]``), the result of calling an entry (``h[k](x)[0]``), a call with its parentheses nested
+deeper than eight. A record of a kernel is named where it is made: the rock blow's in ``_records``,
+the others beside their kernel (``_admissibility_search``'s ``PB_*``, ``SRC_*``, ``WK_*``,
+``_rigid_arrays``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave window's
+``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
 
 import io
 import re
@@ -27,6 +31,13 @@ from impactbar.laws.rodrock import _records
 
 #: a record's slot by an integer literal: of a name (an attribute's too) after any subscripts
 SLOT = re.compile(r"\b([A-Za-z_][A-Za-z0-9_]*)((?:\[[^\[\]]*\])*)\[-?[0-9]+\]")
+#: parentheses and what they hold, nested up to eight deep, over lines too
+_CALL_ARGS = r"\([^()]*\)"
+for _ in range(8):
+    _CALL_ARGS = r"\((?:[^()]|" + _CALL_ARGS + r")*\)"
+#: a call's result's slot by an integer literal (``f(x)[0]``, ``obj.method(a, b)[1]``), after any
+#: subscripts; listed as ``f()`` (``f()[]`` with subscripts before)
+CALL = re.compile(r"\b([A-Za-z_][A-Za-z0-9_]*)" + _CALL_ARGS + r"((?:\[[^\[\]]*\])*)\[-?[0-9]+\]")
 #: names never a record: an array's shape
 ANYWHERE = {"shape"}
 #: module under impactbar/ -> the names there, indexed by a number, of arrays and sequences whose
@@ -80,13 +91,13 @@ NOT_RECORDS = {
     "laws/rodrock/exactjac.py": {"pieces", "qa", "starts"},  # the first piece and start; the rigid mode
     "laws/rodrock/exactmap.py": {"kappa", "qa"},  # the rigid mode's
     "laws/rodrock/law.py": {"qm"},  # the rigid mode
-    "laws/rodrock/longrod.py": {"qm"},  # the rigid mode
+    "laws/rodrock/longrod.py": {"peaks", "qm"},  # the first boundary's (the shank's); the rigid mode
     "laws/wave/_characteristics.py": {"first", "hit", "jumps", "nodes", "qa"},  # sequences' ends, rigid mode
     "laws/wave/_separation.py": {"ew", "grid", "p12", "qa", "qm", "ts", "ve"},  # modal components
     "laws/wave/_window.py": {"jumps", "qa"},  # the first jump; the rigid mode
     "laws/wave/impact.py": {"dg", "npi", "th"},  # the rigid mode; a grid's ends
     "laws/wave/law.py": {"jt", "qm"},  # the rigid mode
-    "laws/wave/periodic.py": {"DP", "coef", "first", "gq", "orders", "p12", "phases", "qm",
+    "laws/wave/periodic.py": {"DP", "coef", "gq", "orders", "p12", "phases", "qm",
                               "y_plus"},  # DP[0]: the impact map's Jacobian's first row; modal components
     "laws/wave/sustained.py": {"below", "nxt", "start"},  # sequences' first and last entries
     "loads/fourier.py": {"_k", "_pk", "ks", "pks", "rows", "tau"},  # harmonics' first and last
@@ -192,15 +203,15 @@ WIDER_NOT_RECORDS = {
     # last
     "cli/simulate.py": {"e", "v"},
     "continuation/cascade.py": {"branches"},  # branches: the last branch
-    # U: a continuation point: [-1] (and [-2]) its parameter; d: a chord: [-1] the parameter's
-    # component; pairs: the last pair of a list; records: the last record of a list; tangents: the last
-    # tangents
-    "continuation/driven.py": {"U", "d", "pairs", "records", "tangents"},
+    # U: a continuation point: [-1] (and [-2]) its parameter; Vh: the right singular vectors, [-1] the
+    # null vector; d: a chord: [-1] the parameter's component; pairs: the last pair of a list; records:
+    # the last record of a list; tangents: the last tangents
+    "continuation/driven.py": {"U", "Vh", "d", "pairs", "records", "tangents"},
     "continuation/engine.py": {"tangents"},  # tangents: the last tangents
     # U: a continuation point: [-1] (and [-2]) its parameter; V: a continuation point: [-1] its
-    # parameter; e: a basis vector's or series' entry; tangents: the last tangents; tangents[]: a
-    # tangent's last component (the parameter)
-    "continuation/one_parameter.py": {"U", "V", "e", "tangents", "tangents[]"},
+    # parameter; Vh: the right singular vectors, [-1] the null vector; e: a basis vector's or series'
+    # entry; tangents: the last tangents; tangents[]: a tangent's last component (the parameter)
+    "continuation/one_parameter.py": {"U", "V", "Vh", "e", "tangents", "tangents[]"},
     "continuation/two_parameter.py": {"U"},  # U: a continuation point: [-1] (and [-2]) its parameter
     # q: the modal coordinates: [0] the rigid mode; v: the modal velocities ([0] the rigid mode) or a
     # series' last
@@ -300,9 +311,9 @@ WIDER_NOT_RECORDS = {
     "measure/spec.py": {"pieces"},  # pieces: the last piece
     "measure/waves.py": {"windows"},  # windows: the last window
     "model.py": {"c"},  # c: a coefficient array's entries
-    # F: the first cell or the first of a list; W: a stack of like matrices, each named where taken; x:
-    # a grid's or state's entries
-    "orbits/_admissibility_search.py": {"F", "W", "x"},
+    # V: the Fourier flow's coefficient table (row 1 its frequencies, as _load_flow reads it); W: a
+    # stack of like matrices, each named where taken; x: a grid's or state's entries
+    "orbits/_admissibility_search.py": {"V", "W", "x"},
     "orbits/_assemble.py": {"t"},  # t: a time grid's first and last
     "orbits/_newton.py": {"t", "z"},  # t: a time grid's first and last; z: a state vector's or grid's entries
     "orbits/_settling.py": {"x"},  # x: a grid's or state's entries
@@ -382,42 +393,66 @@ WIDER_NOT_RECORDS = {
     "sweeps/tasks.py": {"contacts"},  # contacts: the first contact
 }
 #: module -> the tuples of named values, read by number, that the wider scan met (as
-#: ``PYTHON_TUPLES``; ``orbits/_admissibility_search.py``'s ``F[]`` is a kernel's)
+#: ``PYTHON_TUPLES``)
 WIDER_TUPLES = {
-    # owners[]: an owner's (part, field); ranges[]: a name's (part, field)
-    "_shared/parameters.py": {"owners[]", "ranges[]"},
-    "_shared/tables.py": {"v"},  # v: a column's (long name, units)
     "cli/continue_.py": {"e[]"},  # e[]: an event's multiplier (real, imaginary)
-    "cli/drifter.py": {"CONFIG_KINDS[]"},  # CONFIG_KINDS[]: a kind's (class, what)
-    "cli/optimize.py": {"OBJECTIVES[]"},  # OBJECTIVES[]: an objective's (key, ...)
-    "drives/circuit/endflight.py": {"splines"},  # splines: a spline's (knots, coefficients, degree)
-    "drives/circuit/watch.py": {"e"},  # e: a watch's (slot, level, kind, node, f), sorted by slot
-    "laws/paper/phase.py": {"out[]"},  # out[]: a root's (phase, multiplicity)
-    "laws/rodrock/_exactdata.py": {"x"},  # x: a drive's (starts, pieces, values)
     "laws/rodrock/exact.py": {"x"},  # x: an initial wave's arrays
     # drive[]: (starts, pieces); p: a piece's tuple; p[]: a piece's tuple; res[]: the run's results;
     # waves[]: (F, G, ...)
     "laws/rodrock/exactjac.py": {"drive[]", "p", "p[]", "res[]", "waves[]"},
-    # intervals[]: an interval's (lo, hi); runs[]: a run's (first, last)
-    "laws/wave/periodic.py": {"intervals[]", "runs[]"},
-    "measure/kolsky.py": {"chans[]"},  # chans[]: a channel's (name, strain)
-    "orbits/_admissibility_search.py": {"F[]"},  # F[]: (in the kernel) the flight's tuple: its lam
-    "orbits/_newton.py": {"evaluated"},  # evaluated: evaluate's (F, J)
-    "orbits/charts.py": {"edges[]"},  # edges[]: an edge's (value, ...)
-    "physical/circuit_graph.py": {"connections[]"},  # connections[]: a connection's (node, ...)
-    # OBJECTIVES[]: an objective's (key, ...); p: a near design's (x, y)
-    "physical/optimize_drifter.py": {"OBJECTIVES[]", "p"},
-    "physical/optimize_result.py": {"OBJECTIVES[]"},  # OBJECTIVES[]: an objective's (key, ...)
     # a: a design's (rank, merit); b: a design's (rank, merit); best[]: (residual, y); last[]: a
     # vertex's (residual, y); side[]: a side's (residual, y); t[]: a side's (residual, y)
     "physical/piston.py": {"a", "b", "best[]", "last[]", "side[]", "t[]"},
-    "physical/sensitivity.py": {"e"},  # e: a pattern's (name, ...)
-    "simulation/driven.py": {"b"},  # b: a block's (kind, arrays)
     # contacts[]: a contact's [start, end]; last_release: (time, segment, len, n_imp)
     "simulation/simulate.py": {"contacts[]", "last_release"},
 }
+#: module -> the calls whose result, read by number, is an array's or a sequence's entry, not a
+#: named value: a one-point evaluation's value (``f(np.array([t]))[0]``), a mode shape's row at the
+#: struck end, a unit vector (``eye(n)[-1]``), ``nonzero()``'s indices, a string's parts
+#: (``split(".")[0]``), a sorted list's first
+CALL_NOT_RECORDS = {
+    "cli/_common.py": {"split()", "splitlines()"},  # a dotted name's first part; a message's first line
+    "cli/continue_.py": {"sorted()"},  # the best orbit: the sorted list's first
+    "cli/drifter.py": {"split()"},  # a dotted name's first part; the words after the first
+    "continuation/engine.py": {"eye()"},  # the parameter's unit vector
+    "continuation/one_parameter.py": {"eye()"},  # the parameter's unit vector
+    "drives/circuit/drive.py": {"asarray()"},  # the rigid mode
+    "drives/circuit/endflight.py": {"_at()", "atleast_2d()"},  # the state's first row; the last event's
+    "drives/circuit/flight.py": {"atleast_2d()"},  # the last event's flags
+    "dynamics/certified.py": {"f()"},  # a one-point evaluation's value
+    "dynamics/stepped.py": {"f()", "shapes()"},  # a one-point value; the mode shapes at the struck end
+    "laws/rodrock/contact.py": {"asarray()"},  # a one-point value; the first row
+    "laws/rodrock/coupled_exact.py": {"self()"},  # a one-point value
+    "laws/rodrock/exactmap.py": {"asarray()", "shapes()"},  # a one-point value; the shapes at the end
+    "laws/wave/_characteristics.py": {"A()", "Acum()", "integral()"},  # one-point values
+    "laws/wave/coupled.py": {"impulse_at()", "integral()"},  # one-point values
+    "laws/wave/periodic.py": {"resid()"},  # a one-point value
+    "laws/wave/sustained.py": {"fv_at()", "nonzero()"},  # a one-point value; the indices
+    "loads/fourier.py": {"nonzero()"},  # the indices
+    "measure/dispersion.py": {"_frequency_equation()", "nonzero()"},  # a one-point value; the indices
+    "measure/kolsky.py": {"_pulses()"},  # the first pulse found
+    "model.py": {"shapes()"},  # the mode shapes at the struck end
+    "orbits/rigid.py": {"nonzero()"},  # the indices
+    "orbits/valve_admissibility.py": {"_apply()"},  # an affine map's state: [0] the rigid mode
+    "orbits/valve_segment.py": {"_legs()"},  # the legs' end states in order
+    "physical/forces.py": {"rsplit()"},  # a column name's last part
+    "physical/optimize_failures.py": {"splitlines()"},  # the error's first line
+    "physical/plausibility.py": {"split()"},  # a message's first word
+    "physical/tree.py": {"rsplit()"},  # a dotted key's parts
+    "simulation/driven_trajectory.py": {"force()"},  # a one-point value
+    "simulation/initial.py": {"ravel()"},  # a one-point value
+    "sweeps/store.py": {"split()"},  # a description's first part
+    "sweeps/tasks.py": {"generate_state()", "nonzero()"},  # a one-word state; the indices
+}
+#: module -> the calls whose result is a tuple of named values still read by number (as
+#: ``PYTHON_TUPLES``), to be unpacked where next touched
+CALL_TUPLES = {
+    "laws/rodrock/exact.py": {"terms()"},  # (initial, drive)
+    "physical/piston.py": {"_softmax_jacobian()", "evaluate()", "merit()",
+                           "peak_shank_force()"},  # (B, ..); (.., f, df, c, dc); (merit, ..); (force, time)
+}
 #: every list of names passed, module by module
-LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES)
+LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES, CALL_NOT_RECORDS, CALL_TUPLES)
 _PROSE = {tokenize.COMMENT, tokenize.STRING} | {getattr(tokenize, "FSTRING_MIDDLE", tokenize.STRING)}
 
 
@@ -442,16 +477,27 @@ def _key(match):
     return name + "[]" if chain else name
 
 
+def _slots(text):
+    """``(line, column, key, match)`` of every slot by number in the source ``text``, a name's
+    (:data:`SLOT`) and a call's result's (:data:`CALL`, ``key`` the function's name with ``()``), in
+    the order they stand."""
+    code = _code(text)
+    out = [(i, m.start(), _key(m), m.group()) for i, line in enumerate(code, start=1)
+           for m in SLOT.finditer(line)]
+    whole = "\n".join(code)
+    for m in CALL.finditer(whole):
+        name, chain = m.groups()
+        line = whole.count("\n", 0, m.start()) + 1
+        column = m.start() - (whole.rfind("\n", 0, m.start()) + 1)
+        out.append((line, column, name + ("()[]" if chain else "()"), " ".join(m.group().split())))
+    return sorted(out)
+
+
 def slots_by_number(text, module=""):
     """``(line, match)`` of every record slot indexed by a number in the source ``text`` of
     ``module``, those its lists let pass left out."""
     passed = ANYWHERE.union(*(names.get(module, ()) for names in LISTS))
-    out = []
-    for i, line in enumerate(_code(text), start=1):
-        for m in SLOT.finditer(line):
-            if _key(m) not in passed:
-                out.append((i, m.group()))
-    return out
+    return [(line, match) for line, _, key, match in _slots(text) if key not in passed]
 
 
 def test_the_scan_finds_a_slot_by_number_in_code_only():
@@ -482,21 +528,38 @@ def test_the_scan_finds_a_lower_case_slot_and_passes_the_listed_names():
 def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
     """The forms a scan of short names alone missed: a one-letter name, a long name, an attribute,
     a slot of an entry reached by subscripts; a listed name passes only in its own form (``hist``
-    listed passes ``hist[-1]``, not ``hist[-1][2]``, and ``runs[]`` the reverse)."""
+    listed passes ``hist[-1]``, not ``hist[-1][2]``, and ``h[]`` the reverse)."""
     text = ('r = records[-1][1] + r[1]\n'
             'source = (arrival[3].mode, arrival[2])\n'
             'return self._force_extremes[0] + f.typical[1]\n'
             'if windows and windows[-1][2] == sign and pending[0][0] <= t:\n'
             'lo = OBJECTIVES[key][0] + hist[-1 - m][2] + hist[-1]\n'
-            'x = f(a)[0] + a[:2] + b[i]\n')
+            'x = a[:2] + b[i] + f(a)[:2] + g(b)[i]\n')
     assert slots_by_number(text) == [(1, "records[-1][1]"), (1, "r[1]"), (2, "arrival[3]"), (2, "arrival[2]"),
                                      (3, "_force_extremes[0]"), (3, "typical[1]"), (4, "windows[-1][2]"),
                                      (4, "pending[0][0]"), (5, "OBJECTIVES[key][0]"), (5, "hist[-1 - m][2]"),
                                      (5, "hist[-1]")]
-    assert slots_by_number("y = runs[0][0] + runs[-1]\n", "laws/wave/periodic.py") == [(1, "runs[-1]")]
-    assert slots_by_number("y = runs[0][0] + runs[-1]\n", "orbits/orbit.py") == [
-        (1, "runs[0][0]"), (1, "runs[-1]")]
+    assert slots_by_number("y = h[0][0] + h[-1]\n", "plotting/circuit.py") == [(1, "h[-1]")]
+    assert slots_by_number("y = h[0][0] + h[-1]\n", "orbits/orbit.py") == [(1, "h[0][0]"), (1, "h[-1]")]
     assert slots_by_number("y = Xr[0] + Xr[0][1]\n", "orbits/shooting.py") == [(1, "Xr[0][1]")]
+
+
+def test_the_scan_finds_a_call_s_result_read_by_number():
+    """A call's result read by a number: a function's, a method's, through nested calls, over lines,
+    after subscripts; a listed call (``nonzero()``) passes in its own module only; a slice, a
+    subscript by a name, a parenthesised expression, comments and strings are no slots."""
+    text = ('F = evaluate(u, jacobian=False)[0] + self.problem.residual(X)[1]\n'
+            'w = np.linalg.svd(J[:, :-1])[2][-1] + g(h(x), [1, 2])[-1]\n'
+            'r = fit(yk,\n'
+            '        n)[1]\n'
+            'x = f(a)[:2] + f(a)[i] + (a + b)[0]\n'
+            '# f(x)[0] in a comment\n'
+            's = "f(x)[0]" + msg.splitlines()[0]\n')
+    assert slots_by_number(text) == [(1, "evaluate(u, jacobian=False)[0]"), (1, "residual(X)[1]"),
+                                     (2, "svd(J[:, :-1])[2][-1]"), (2, "g(h(x), [1, 2])[-1]"),
+                                     (3, "fit(yk, n)[1]"), (7, "splitlines()[0]")]
+    assert slots_by_number("i = np.nonzero(m)[0]\n", "sweeps/tasks.py") == []
+    assert slots_by_number("i = np.nonzero(m)[0]\n", "orbits/orbit.py") == [(1, "nonzero(m)[0]")]
 
 
 def test_the_lists_are_disjoint_and_name_modules_that_exist():
@@ -509,8 +572,7 @@ def test_the_lists_are_disjoint_and_name_modules_that_exist():
                 assert not first[module] & second[module], module
     for names in LISTS:
         for module, listed in names.items():
-            text = (top / module).read_text()
-            seen = {_key(m) for line in _code(text) for m in SLOT.finditer(line)}
+            seen = {key for _, _, key, _ in _slots((top / module).read_text())}
             assert listed <= seen, (module, listed - seen)
 
 

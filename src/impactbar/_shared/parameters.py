@@ -30,6 +30,7 @@ from __future__ import annotations
 import math
 import sys
 from dataclasses import dataclass, replace
+from typing import NamedTuple
 
 from .validate import check_int, check_real
 
@@ -179,15 +180,22 @@ def table_of(part, *args) -> dict[str, Parameter]:
     return out
 
 
-def _owners(model, forcing) -> dict[str, tuple[int, Parameter]]:
+class _Owned(NamedTuple):
+    """A parameter with the index of the part that declares it (0: the model, 1: the forcing)."""
+
+    part: int
+    parameter: Parameter
+
+
+def _owners(model, forcing) -> dict[str, _Owned]:
     """Each parameter of the pair with the index of its part (0: the model, 1: the forcing)."""
-    out: dict[str, tuple[int, Parameter]] = {}
+    out: dict[str, _Owned] = {}
     for i, part in enumerate((model, forcing)):
         for name, p in table_of(part).items():
             if name in out:
                 raise ValueError(f"parameter {name!r} is declared by both the model and the "
                                  f"{type(forcing).__name__}: names must be unique over a problem")
-            out[name] = (i, p)
+            out[name] = _Owned(i, p)
     return out
 
 
@@ -220,7 +228,7 @@ def unknown(model, forcing, names, name: str) -> ValueError:
                       f"{type(forcing).__name__}); got {name!r}")
 
 
-def _find(model, forcing, name: str) -> tuple[int, Parameter]:
+def _find(model, forcing, name: str) -> _Owned:
     owners = _owners(model, forcing)
     if name not in owners:
         raise unknown(model, forcing, owners, name)
@@ -253,7 +261,7 @@ def parameter_value(model, forcing, name: str):
     >>> parameter_value(BarModel(s=10.0, d=0.3, R=0.5, n_modes=4), CosineLoad(0.3, 1.0), "pk")
     1.0
     """
-    return _find(model, forcing, name)[1].value
+    return _find(model, forcing, name).parameter.value
 
 
 def with_parameter(model, forcing, name: str, value):
@@ -339,11 +347,11 @@ def with_parameters(model, forcing, changes: dict):
     if len(changes) == 1:
         ((name, value),) = changes.items()
         return with_parameter(model, forcing, name, value)
-    refused = [e for e in (_refusal(owners[n][1], v) for n, v in changes.items()) if e is not None]
+    refused = [e for e in (_refusal(owners[n].parameter, v) for n, v in changes.items()) if e is not None]
     by_part: tuple[dict, dict] = ({}, {})
     for name in owners:  # (the parts' declaration order)
         if name in changes:
-            by_part[owners[name][0]][name] = changes[name]
+            by_part[owners[name].part][name] = changes[name]
     try:
         model_changes, forcing_changes = by_part
         new = (_changed(model, model_changes), _changed(forcing, forcing_changes))
@@ -354,7 +362,7 @@ def with_parameters(model, forcing, changes: dict):
     if refused:  # (a range that depends on another changed parameter: the changed problem's ranges)
         ranges = _owners(*new)
         for name, value in changes.items():
-            ranges[name][1].check(value)
+            ranges[name].parameter.check(value)
     return new
 
 

@@ -39,7 +39,8 @@ def frame(columns: Mapping[str, Sequence], meta: Mapping[str, tuple[str, str]], 
     else:
         df.index.name = index
     df.attrs.update(attrs or {})
-    df.attrs["columns"] = {k: {"long_name": v[0], "units": v[1]} for k, v in meta.items()}
+    df.attrs["columns"] = {k: {"long_name": long_name, "units": units}
+                           for k, (long_name, units) in meta.items()}
     return df
 
 

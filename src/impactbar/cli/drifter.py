@@ -69,7 +69,7 @@ def drifter_keys_help(width: int = 78) -> str:
     for kind in ("drifter", "circuit"):
         keys = physical.config_keys(kind)
         drill = {n: k for n, k in keys.items() if n.split(".")[0] in ROCK_SECTIONS}
-        what = CONFIG_KINDS[kind][1].replace("§", "section ")
+        what = CONFIG_KINDS[kind].what.replace("§", "section ")
         lines += [textwrap.fill(f"configuration keys of {what}:", width),
                   *rows({n: k for n, k in keys.items() if n not in drill}), ""]
     lines += [textwrap.fill("either drifter on a drill string and the rock ([stop] then left out; "

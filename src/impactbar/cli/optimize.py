@@ -181,5 +181,5 @@ def _run(args) -> int:
             from ..physical.optimize_drifter import OBJECTIVES
             from ..physical.optimize_multistart import found_table
 
-            print(found_table(res.found, res.vary, OBJECTIVES[res.objective][0]))
+            print(found_table(res.found, res.vary, OBJECTIVES[res.objective].key))
     return 0

@@ -105,7 +105,7 @@ class _SwitchedProblem:
         self._rate = CHORD_RATE  # the last corrector's rate of convergence (chord="orbit")
         self._fus, self._lams = [], []  # the last (U, F_u) and (U, F_lam) (chord="orbit": _record)
         self._age = 0  # the points recorded since the last F_lam
-        start = self.pair(float(parameter_value(model, drive, name)))[2]
+        start = self.problem_at(float(parameter_value(model, drive, name)))
         self.flights = start.positive
         self.W = np.append(np.full(start.size, 1.0 / start.size), 1.0)
         #: the problem's own corrector (chord="orbit" where the flights allow it), else None: Newton's
@@ -123,8 +123,13 @@ class _SwitchedProblem:
             problem.adopt(self.base)
         return model, drive, problem
 
+    def problem_at(self, lam: float):
+        """The orbit problem at the parameter value ``lam`` (:meth:`_pair`'s, cached)."""
+        _, _, problem = self.pair(lam)
+        return problem
+
     def F(self, U):
-        return self.pair(float(U[-1]))[2].value(U[:-1])
+        return self.problem_at(float(U[-1])).value(U[:-1])
 
     def FJ(self, U, F_lam=None):
         """Residual, the Jacobian ``[F_u, F_lam]`` (``F_u`` the problem's, one that only steers the
@@ -136,7 +141,7 @@ class _SwitchedProblem:
         the oil circuit) ``F_lam`` is a forward difference from ``F`` (one flight instead of two; its
         error ``O(h)``, ``h = 1e-6``, only slows the corrector's convergence, whose residual is
         exact, and tilts the predictor's tangent by as much)."""
-        problem = self.pair(float(U[-1]))[2]
+        problem = self.problem_at(float(U[-1]))
         if self.corrector is not None:  # (outside the own corrector: the orbit's Jacobian and F_lam)
             F, DF = self._exact(problem, U)
             if F_lam is None:
@@ -188,7 +193,7 @@ class _SwitchedProblem:
         h = 1e-6 * max(1.0, abs(U[-1]))
         for sign in (1.0, -1.0):
             try:
-                return sign * (self.pair(float(U[-1] + sign * h))[2].root_value(U[:-1]) - F) / h
+                return sign * (self.problem_at(float(U[-1] + sign * h)).root_value(U[:-1]) - F) / h
             except ValueError:
                 continue
         raise ValueError(f"{self.name}: no admissible value within {h:g} of {U[-1]}")
@@ -288,7 +293,7 @@ class _SwitchedProblem:
         again = 0  # the variational flights at iterates that were not the point
         for it in range(1, max_iter + 1):
             try:  # (an iterate may leave the parameter's range: a failure, the step then shortened)
-                problem = self.pair(float(U[-1]))[2]
+                problem = self.problem_at(float(U[-1]))
                 if exact:
                     F, Fu = self._exact(problem, U)
                     J = np.column_stack((Fu, J[:, -1] if J is not None else self._column(U, F)))
@@ -348,11 +353,11 @@ class _SwitchedProblem:
         more; the drive's own steps, as the multipliers') is kept for the first step of the next
         corrector (a chord step: the residual by a plain flight, ``F_u`` the last orbit's), which the
         steering Jacobian's steps then finish."""
-        problem = self.pair(float(U[-1]))[2]
+        problem = self.problem_at(float(U[-1]))
         ob = orbit_of(problem, U[:-1])
         if self.chord and getattr(problem, "variational", False):
             try:
-                self._chord = problem.residual(U[:-1])[1]
+                _, self._chord = problem.residual(U[:-1])
             except ValueError:
                 self._chord = None
             self._uses = 0
@@ -541,7 +546,8 @@ def _doubled_starts(engine, ev, steps):
     X = o.problem.unknowns(o)
     U0 = np.concatenate((X, X, [float(ev.value)]))
     _, J, _ = engine.problem.FJ(U0, np.zeros(U0.size - 1))
-    w = np.append(np.linalg.svd(J[:, :-1])[2][-1], 0.0)
+    _, _, Vh = np.linalg.svd(J[:, :-1])
+    w = np.append(Vh[-1], 0.0)
     w /= engine.norm(w)
     for first in doubled_first_points(engine, U0, w, steps, _halves_gap):
         yield U0, first
@@ -687,7 +693,8 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     F0, J0, _ = problem.FJ(U0)
     if float(np.max(np.abs(F0))) > 1e-9 * max(1.0, float(np.max(np.abs(U0)))):
         raise ValueError("orbit: not a solution of the segment problem at the start value")
-    t0 = np.linalg.svd(J0)[2][-1]
+    _, _, Vh = np.linalg.svd(J0)
+    t0 = Vh[-1]
     t0 /= engine.norm(t0)
     if t0[-1] * direction < 0:
         t0 = -t0

@@ -84,14 +84,16 @@ class _OrbitProblem:
             return F, np.column_stack((DF, F_lam)), F_lam
         h = 1e-6 * max(1.0, abs(lam))
         try:
-            Fp = self.segments(lam + h).evaluate(u, jacobian=False)[0]
-            Fm = self.segments(lam - h).evaluate(u, jacobian=False)[0]
+            Fp, _, _ = self.segments(lam + h).evaluate(u, jacobian=False)
+            Fm, _, _ = self.segments(lam - h).evaluate(u, jacobian=False)
             Fl = (Fp - Fm) / (2 * h)
         except ValueError:  # at the edge of the parameter's range: one-sided
             try:
-                Fl = (self.segments(lam + h).evaluate(u, jacobian=False)[0] - F) / h
+                Fp, _, _ = self.segments(lam + h).evaluate(u, jacobian=False)
+                Fl = (Fp - F) / h
             except ValueError:
-                Fl = (F - self.segments(lam - h).evaluate(u, jacobian=False)[0]) / h
+                Fm, _, _ = self.segments(lam - h).evaluate(u, jacobian=False)
+                Fl = (F - Fm) / h
         return F, np.column_stack((DF, Fl)), Fl
 
     def orbit(self, U, admissibility=True):
@@ -276,7 +278,8 @@ def _start(engine, base, lam0, direction):
         if U0 is None:
             raise ValueError("orbit: Newton at the start value did not converge; is it a solution?")
     # the tangent: the null vector of [F_u, F_lam] (by SVD: also at a fold), towards `to`
-    t0 = np.linalg.svd(engine.last_J)[2][-1]
+    _, _, Vh = np.linalg.svd(engine.last_J)
+    t0 = Vh[-1]
     t0 /= engine.norm(t0)
     if t0[-1] * direction < 0:
         t0 = -t0

@@ -165,11 +165,12 @@ class _BifurcationProblem:
                 e = np.zeros(U.size)
                 e[i] = h
                 try:
-                    Fp = self.segments(*(U + e)[-2:]).evaluate(u, jacobian=False)[0]
-                    Fm = self.segments(*(U - e)[-2:]).evaluate(u, jacobian=False)[0]
+                    Fp, _, _ = self.segments(*(U + e)[-2:]).evaluate(u, jacobian=False)
+                    Fm, _, _ = self.segments(*(U - e)[-2:]).evaluate(u, jacobian=False)
                     cols.append((Fp - Fm) / (2 * h))
                 except ValueError:  # at the edge of a parameter's range: one-sided
-                    cols.append((self.segments(*(U + e)[-2:]).evaluate(u, jacobian=False)[0] - F) / h)
+                    Fp, _, _ = self.segments(*(U + e)[-2:]).evaluate(u, jacobian=False)
+                    cols.append((Fp - F) / h)
             frozen = np.column_stack(cols)
         grad = np.empty(U.size)
         for i in range(U.size):

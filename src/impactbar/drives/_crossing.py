@@ -94,19 +94,23 @@ def first_rising_crossing(d, y0, w0, a, level):
         if not math.isfinite(t_lo):
             return math.inf
         t_hi = math.inf
-    y_lo = gap(d, y0, w0, a, t_lo)[0]
+    y_lo, _ = gap(d, y0, w0, a, t_lo)
     if y_lo >= level:  # starts at or above the level moving up: no rising crossing ahead
         return math.inf
     if not math.isfinite(t_hi):
         h = max(1.0, t_lo)
         t_hi = t_lo + h
-        while gap(d, y0, w0, a, t_hi)[0] < level:
+        y_hi, _ = gap(d, y0, w0, a, t_hi)
+        while y_hi < level:
             h *= 2.0
             t_hi = t_lo + h
             if h > 1e300:  # the gap tends to a finite limit below the level
                 return math.inf
-    elif gap(d, y0, w0, a, t_hi)[0] < level:
-        return math.inf
+            y_hi, _ = gap(d, y0, w0, a, t_hi)
+    else:
+        y_hi, _ = gap(d, y0, w0, a, t_hi)
+        if y_hi < level:
+            return math.inf
     if d == 0.0:  # the rising root of a t^2/2 + w0 t + y0 - level = 0, in its stable form
         r = math.sqrt(max(w0 * w0 + 2.0 * a * (level - y0), 0.0))  # the rate at the crossing
         return 2.0 * (level - y0) / (w0 + r) if w0 >= 0.0 else (r - w0) / a

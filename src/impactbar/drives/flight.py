@@ -104,10 +104,12 @@ class ClosedPiece:
         return np.repeat(np.asarray(self.z, dtype=float)[:, None], t.size, axis=1)
 
     def end_displacement(self, t):
-        return np.minimum(self.c @ self.modal(t)[0], 0.0)
+        q, _ = self.modal(t)
+        return np.minimum(self.c @ q, 0.0)
 
     def end_velocity(self, t):
-        return self.c @ self.modal(t)[1]
+        _, v = self.modal(t)
+        return self.c @ v
 
 
 class OdePiece:
@@ -139,10 +141,12 @@ class OdePiece:
         return self._y(t)[2 * self.M:]
 
     def end_displacement(self, t):
-        return np.minimum(self.c @ self.modal(t)[0], 0.0)
+        q, _ = self.modal(t)
+        return np.minimum(self.c @ q, 0.0)
 
     def end_velocity(self, t):
-        return self.c @ self.modal(t)[1]
+        _, v = self.modal(t)
+        return self.c @ v
 
 
 class RestPiece:
@@ -321,7 +325,8 @@ def arrival(model, p: float, t: float, q, v, t_stop: float):
         q0, v0 = float(q[0]), float(v[0])
         ta = t + first_rising_crossing(d, q0, v0, p, 0.0)
         if ta < t_stop:
-            return ta, np.zeros(1), np.array([rigid_flight(d, q0, v0, p, ta - t)[1]]), True
+            _, va = rigid_flight(d, q0, v0, p, ta - t)
+            return ta, np.zeros(1), np.array([va]), True
         if not math.isfinite(t_stop):
             return t_stop, q, v, False
         qe, ve = rigid_flight(d, q0, v0, p, t_stop - t)

@@ -137,7 +137,8 @@ class OrbitProblem(ABC):
     def value(self, X: np.ndarray) -> np.ndarray:
         """The residual alone at ``X`` (a problem whose Jacobian costs more than its residual, as the
         variational flights of a drive with state, computes only this)."""
-        return self.residual(X)[0]
+        r, _ = self.residual(X)
+        return r
 
     def solve(self, X: np.ndarray, tol: float, max_iter: int) -> np.ndarray:
         """Newton's method from ``X`` (:func:`newton`)."""

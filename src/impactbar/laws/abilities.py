@@ -247,7 +247,8 @@ class NewtonStart:
         -------
         numpy.ndarray, shape (2 N + 2,)
         """
-        return self.impact_map(model, load, t, y_minus)[0]
+        y_plus, *_ = self.impact_map(model, load, t, y_minus)
+        return y_plus
 
 
 class _Defaults(NewtonStart):

@@ -165,7 +165,7 @@ def analyse_kolsky(recording: Recording, gauges: dict, incident_bar: Bar, transm
     bars = {"incident": incident_bar, "transmitted": transmitted_bar}
     on = _bar_strains(recording, gauges, bars, baseline)
     strain = {name: np.mean([s for _, s in chans], axis=0) for name, chans in on.items()}
-    station = {name: gauges[chans[0][0]].station for name, chans in on.items()}
+    station = {name: gauges[first].station for name, ((first, _), *_) in on.items()}
 
     inc_pulses = _pulses(time, strain["incident"], "incident", threshold, cutoff, baseline)
     w_inc = inc_pulses[0]

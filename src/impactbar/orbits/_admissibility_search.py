@@ -223,7 +223,8 @@ def _enclose(phase, a, b, mids, half, limits, best, prob, work, src, phases):
     min_width, max_intervals, atol, prune, floor = limits
     q, v, ck, sk = work[WK_Q], work[WK_V], work[WK_CK], work[WK_SK]
     F = src[SRC_F]
-    t0, lam = F[0], F[5][1]
+    t0, _, _, _, _, V, _ = F  # the flow (t0, d, p0, k, H, V, kind)
+    lam = V[1]  # the folded modes' frequencies
     M = q.shape[0]
     rotate = src[SRC_LOAD].kind == 0  # a Fourier load: the folded modes' phases stepped by rotations
     # the phases cos, sin(lam (t - t0)) at the kept intervals' midpoints (rows parent[i] of C, S)
@@ -631,7 +632,7 @@ def admissibility_search(phase, horizon, at_rest, atol, seeds, pieces, floor, pr
             if ok[i]:
                 mid = 0.5 * (lo[i] + hi[i])
                 half = 0.5 * (hi[i] - lo[i])
-                L2 = _joint(phase, mid, half, prob, work, src)[2]
+                _, _, L2 = _joint(phase, mid, half, prob, work, src)
                 r = max(t[i] - lo[i], hi[i] - t[i])
                 taylor = vals[i] + 0.5 * L2 * r * r
                 if taylor > best + atol and not _single(phase, t[i], lo[i], hi[i], prob, work, src):

@@ -51,7 +51,8 @@ def _converge_built(problem, u0, avoid, tol, max_iter):
     if u is None:
         return None
     evaluated = problem.evaluate(u)
-    if not np.all(np.isfinite(evaluated[0])):
+    F, _, _ = evaluated
+    if not np.all(np.isfinite(F)):
         return None
     return _build(problem, u, evaluated=evaluated)
 
@@ -75,8 +76,8 @@ def _chord(problem, u0, DF, avoid, tol, max_iter=POLISH_ITERATIONS):
             return None
         u = u - du
         if float(np.max(np.abs(du))) <= tol * problem.scale(u):
-            if not np.all(np.isfinite(problem.evaluate(u, jacobian=False)[0])) or \
-                    (avoid is not None and _same_orbit(u, avoid, problem)):
+            F, _, _ = problem.evaluate(u, jacobian=False)
+            if not np.all(np.isfinite(F)) or (avoid is not None and _same_orbit(u, avoid, problem)):
                 return None
             return _normalise(problem, u)
     return None

@@ -36,7 +36,7 @@ def orbit_data(problem, X, multipliers: bool = True) -> OrbitData:
         mu = np.full(n - 1, math.nan)
     elif problem.variational and m == 1:  # one flight gives the Jacobian and (kept) the data below
         tau, mode = problem.blocks[0]
-        Phi = problem._flight(tau, mode, X[:n], keep=True, variational=True)[6]
+        _, _, _, _, _, _, Phi = problem._flight(tau, mode, X[:n], keep=True, variational=True)
     else:
         _, J = problem.residual(X)
         Phi = np.eye(n)

@@ -344,7 +344,8 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
         """``g`` at the midpoints and its upper bound on each interval."""
         mid = 0.5 * (iv[:, 0] + iv[:, 1])
         half = 0.5 * (iv[:, 1] - iv[:, 0])
-        gm = c @ states(mid)[0]
+        q, _ = states(mid)
+        gm = c @ q
         g1, L2 = bound(mid, half)
         return gm, gm + (np.abs(g1) + 0.5 * L2 * half) * half, g1
 
@@ -376,7 +377,8 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
             tb, okb = _newton_stationary(states, load, phase, c, w2, d, lo[batch], hi[batch])
             t[batch], ok[batch] = tb, okb
             if np.any(okb):
-                vb = c @ states(tb[okb])[0]
+                qb, _ = states(tb[okb])
+                vb = c @ qb
                 vals[batch[okb]] = vb
                 values.extend(float(x) for x in vb)
                 best = max(best, float(np.max(vb)))
@@ -385,7 +387,7 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
             # a second zero of g' may share the interval with the one found: since g'(t*) = 0,
             # g <= g(t*) + L r^2 / 2 on the interval, with L the bound of |g''| and r the distance
             # from t* to its far end
-            L2 = bound(0.5 * (lo[ok] + hi[ok]), 0.5 * (hi[ok] - lo[ok]))[1]
+            _, L2 = bound(0.5 * (lo[ok] + hi[ok]), 0.5 * (hi[ok] - lo[ok]))
             r = np.maximum(t[ok] - lo[ok], hi[ok] - t[ok])
             taylor = vals[ok] + 0.5 * L2 * r * r
             again[ok] = taylor > best + atol

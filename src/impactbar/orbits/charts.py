@@ -341,9 +341,10 @@ def pneumatic_stability_curve(model: BarModel, R_values, k: int = 1, *, criterio
                                               bracket=(prev * 0.85, prev * 1.15))
         if not edges:
             edges = pneumatic_stability_edges(m, k, criterion=criterion, n_scan=16, xtol=xtol)
-        prev = edges[-1][0] if edges else None
+        prev = None
         if edges:
-            ys[i] = edges[-1][0]  # the edge closest to the existence edge bounds the stable band
-            kinds.append(edges[-1][1])
+            *_, (prev, edge_kind) = edges
+            ys[i] = prev  # the edge closest to the existence edge bounds the stable band
+            kinds.append(edge_kind)
     kind = kinds[0] if kinds and all(x == kinds[0] for x in kinds) else "stability"
     return Boundary(R_values, ys, kind, criterion, f"{criterion} stability edge")

@@ -115,7 +115,8 @@ def blow_jacobian(model, drive, t, q, v, state, settings=None, *, forward=None) 
 
     def blow(yy):
         st = DriveState(state.mode, yy[2 * M:].copy())
-        return blow_state(model, drive, t, yy[:M], yy[M:2 * M], st, settings)[0]
+        y_after, _, _ = blow_state(model, drive, t, yy[:M], yy[M:2 * M], st, settings)
+        return y_after
 
     blow_method = getattr(model.law, "blow_method", None)
     exact = forward is None and blow_method is not None and blow_method(model) == "exact"

@@ -197,7 +197,8 @@ def _load_orbit(model, load, impacts, periods, guess, tol, max_iter) -> Periodic
             rough = _Segments(coarse, load, m, n)
             near = [u for u in (_converge(rough, u0, avoid, tol, max_iter) for u0 in starts) if u is not None]
             for u0 in near:
-                u = _chord(problem, u0, rough.evaluate(u0)[1], avoid, tol)
+                _, DF, _ = rough.evaluate(u0)
+                u = _chord(problem, u0, DF, avoid, tol)
                 if u is None:
                     u = _converge(problem, u0, avoid, tol, min(max_iter, POLISH_ITERATIONS))
                 if u is not None:

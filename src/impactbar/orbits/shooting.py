@@ -279,7 +279,8 @@ class ShootingProblem(OrbitProblem):
 
     def _map(self, k, y):
         tau, mode = self.blocks[k]
-        return self._flight(tau, mode, y)[0]
+        y_after, *_ = self._flight(tau, mode, y)
+        return y_after
 
     # -- the problem --------------------------------------------------------------------------------
     def initial(self, guess, tol, max_iter):
@@ -308,7 +309,7 @@ class ShootingProblem(OrbitProblem):
             rigid = ShootingProblem(model.with_(n_modes=0), drive, m, self.settings)
             Xr = rigid.initial(None, tol, max_iter)
             if rigid.variational and rigid.newton == "chord":  # (a start: its first Newton steps)
-                Xr = rigid._steered_chord(Xr, max(tol, rigid.accuracy), max_iter, C.LIFTED_HANDOVER)[0]
+                Xr, _ = rigid._steered_chord(Xr, max(tol, rigid.accuracy), max_iter, C.LIFTED_HANDOVER)
             else:
                 Xr = rigid.solve(Xr, tol, max_iter)
             y = np.zeros(self.n)
@@ -534,7 +535,7 @@ class ShootingProblem(OrbitProblem):
             own start).
         """
         X = self.initial(rough, tol, max_iter)
-        first = rough._problem.steering_residual(np.asarray(rough._unknowns, dtype=float))[1]
+        _, first = rough._problem.steering_residual(np.asarray(rough._unknowns, dtype=float))
         return self._close(*self._chord(X, first, max(tol, self.accuracy), max_iter))
 
     def _chord(self, X, first, tol: float, max_iter: int, first_value=None, handover: float = 0.0,
@@ -545,7 +546,7 @@ class ShootingProblem(OrbitProblem):
         used = [first]
 
         def jacobian(XX):  # (the chord's Jacobian taken again: the last one kept)
-            used[0] = self.steering_residual(XX)[1]
+            _, used[0] = self.steering_residual(XX)
             return used[0]
 
         return chord(self.value, jacobian, X, self.positive, tol, max_iter, first=first,
@@ -584,8 +585,9 @@ class ShootingProblem(OrbitProblem):
         for k in range(m):
             tau, mode = self.blocks[k]
             nxt = ((k + 1) % m) * n
-            r[k * n:(k + 1) * n] = self._flight(tau, mode, X[k * n:(k + 1) * n], variational="state",
-                                                settings=settings)[0] - X[nxt:nxt + n]
+            y_after, *_ = self._flight(tau, mode, X[k * n:(k + 1) * n], variational="state",
+                                       settings=settings)
+            r[k * n:(k + 1) * n] = y_after - X[nxt:nxt + n]
         return r
 
     def steering_residual(self, X):
@@ -684,7 +686,8 @@ class ShootingProblem(OrbitProblem):
         out = []
         for k in range(self.impacts):
             tau, mode = self.blocks[k]
-            out += self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[4]
+            _, _, _, _, pieces, *_ = self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)
+            out += pieces
         return out
 
     def event_pattern(self, X) -> tuple:
@@ -698,7 +701,7 @@ class ShootingProblem(OrbitProblem):
         for k in range(self.impacts):
             tau, mode = self.blocks[k]
             out.append(("start", mode))
-            events = self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)[5]
+            _, _, _, _, _, events, *_ = self._flight(tau, mode, X[k * n:(k + 1) * n], keep=True)
             out += [(e.name, after) for _, e, after, _ in events]
         return tuple(out)
 

@@ -47,7 +47,7 @@ def _end_bound(w2, d, p, c, z, h):
     t_turn = rate_zero(d, v0, p)
     if 0.0 < t_turn < h:
         times.append(t_turn)
-    rigid = max(c[0] * rigid_flight(d, q0, v0, p, t)[0] for t in times)
+    rigid = max(c[0] * q for q, _ in (rigid_flight(d, q0, v0, p, t) for t in times))
     if M == 1:
         return rigid
     e = z[1:M] - p / w2[1:]

@@ -441,12 +441,12 @@ class ValveProblem(OrbitProblem):
             flights = _flights(model, drive, Xk, w2)
             zb, zd, _, Ed, _, dzd_dh1, dzd_dh3 = flights
             # the arrival's dependence on z0 with the switch and arrival times implicit
-            G = _conditions(drive, c, *flights)[1]
+            _, G = _conditions(drive, c, *flights)
             dzd = _matrix(Ed) - np.column_stack((dzd_dh1, dzd_dh3)) @ np.linalg.solve(G[:, 2 * M:],
                                                                                      G[:, :2 * M])
             if k:
                 P = B.T @ dzd @ JP_prev @ B @ P
-            JP_prev = cmap(zd)[1]
+            _, JP_prev = cmap(zd)
             if k == 0:
                 first_dzd = dzd
             states.append(z0)

@@ -35,7 +35,8 @@ def shown(value, si: float, unit: str) -> str:
     """A config value as the user wrote it (a string in a unit of their own), else its SI value in the
     key table's display unit (a value the package wrote in SI, e.g. along a branch, reads in L, MPa)."""
     si_unit, wrote = unit.replace("^", "**"), written_unit(value)
-    if wrote is not None and (wrote.replace("^", "**") != si_unit or display_unit(si_unit)[1] == unit):
+    _, shown = display_unit(si_unit)
+    if wrote is not None and (wrote.replace("^", "**") != si_unit or shown == unit):
         return value.strip()
     return format_si(si, si_unit)
 

@@ -474,7 +474,7 @@ def _least_pressures(pieces) -> dict:
         return {}
     layout = pieces[0].layout
     extra = [s for s in layout.states[3:-1] if s not in layout.mechanical]  # (the pressures after p_s)
-    return {name: min(p.extremes(name)[0] for p in pieces) * PRESSURE_SCALE
+    return {name: min(low for low, _ in (p.extremes(name) for p in pieces)) * PRESSURE_SCALE
             for name in ("front", "rear", "supply", *extra)}
 
 
@@ -620,7 +620,7 @@ class CircuitDrifterOrbit(DrifterOrbit):
             sel = (t >= p.t0) & (t <= p.t_end)
             if np.any(sel):
                 z[:, sel] = p.drive_state(t[sel])
-                q = p.modal(t[sel])[0]
+                q, _ = p.modal(t[sel])
                 q0[sel] = q[0]
                 # inside a blow the driven end as the circuit integrated it (theory §11)
                 w[sel] = p.displacement(t[sel]) if hasattr(p, "displacement") else \

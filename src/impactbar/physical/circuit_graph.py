@@ -68,6 +68,12 @@ class CircuitGraph:
     edges: tuple
 
 
+def _joins(cls, field: str) -> str:
+    """What the field ``field`` of the part kind ``cls`` names: ``"node"`` or ``"port"``."""
+    kind, _default = cls.connections[field]
+    return kind
+
+
 def circuit_graph(drifter) -> CircuitGraph:
     """The oil circuit of a drifter as its configuration gives it: the preset's nodes (``front``,
     ``rear``, ``supply``, ``tank``) and parts (the pump from the tank, the front chamber's feed, the
@@ -100,7 +106,7 @@ def circuit_graph(drifter) -> CircuitGraph:
     edges, stand_in = [], None
     for spec in drifter.parts:
         cls = part_kinds()[spec.kind]
-        linked = [v for c, v in spec.connections if cls.connections[c][0] == "node"]
+        linked = [v for c, v in spec.connections if _joins(cls, c) == "node"]
         if "valve" in getattr(cls, "replaces", ()):  # (in the valve's place: its edges, the valve's)
             stand_in = (spec, cls)
             nodes.append(CircuitNode(spec.name, f"{spec.name} ({spec.kind})", spec.name))
@@ -108,7 +114,7 @@ def circuit_graph(drifter) -> CircuitGraph:
         if _has_node(cls):
             nodes.append(CircuitNode(spec.name, f"{spec.name} ({spec.kind})", spec.name))
             ports.update((v, spec.name) for c, v in spec.connections
-                         if cls.connections[c][0] == "port" and v in ports)
+                         if _joins(cls, c) == "port" and v in ports)
             ends = [(spec.name, v) for v in linked]
         else:
             ends = [(linked[0], v) for v in linked[1:]]
@@ -148,8 +154,8 @@ def part_lines(drifter) -> list[str]:
     for spec in drifter.parts:
         cls = part_kinds()[spec.kind]
         units = {f.name: f.unit for f in (*cls.si_fields, *cls.si_lists)}
-        ports = [v for c, v in spec.connections if cls.connections[c][0] == "port" and v != "none"]
-        linked = [v for c, v in spec.connections if cls.connections[c][0] == "node"]
+        ports = [v for c, v in spec.connections if _joins(cls, c) == "port" and v != "none"]
+        linked = [v for c, v in spec.connections if _joins(cls, c) == "node"]
         path = [*ports, spec.name, *linked] if _has_node(cls) else linked
         key = f"parts.{spec.name}."
         values = [f"{k} {format_key(v, units[k], config, key + k, 4)}" for k, v in spec.values]

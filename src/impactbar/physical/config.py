@@ -8,6 +8,7 @@ Nothing here builds a :class:`~impactbar.physical.Hammer`: :meth:`Hammer.from_co
 from __future__ import annotations
 
 from pathlib import Path
+from typing import NamedTuple
 
 from .._shared.validate import check_real
 from . import tree
@@ -27,13 +28,21 @@ _FORCE_KEYS = {kind: {f.name for f in tree.MACHINES["hammer"].values()
 _REQUIRED = {"bar", "stop", "drive", "force"}
 
 
+class _ConfigKind(NamedTuple):
+    """A kind of configuration: the section that only it has, and how a message names it."""
+
+    section: str | None
+    what: str
+
+
 #: The kinds of configuration in SI units, each told apart by a section that only it has (the first
 #: found decides; a configuration with neither is a hammer's), with how a message names each.
 CONFIG_KINDS = {
-    "circuit": ("chambers", "a drifter with its oil circuit (it has a [chambers] section; theory §11)"),
-    "drifter": ("valve", "a drifter whose valve switches on the piston's position (it has a [valve] "
-                         "section and no [chambers]; theory §10)"),
-    "hammer": (None, "a hammer under a periodic force (it has no [valve] or [chambers] section)"),
+    "circuit": _ConfigKind("chambers", "a drifter with its oil circuit (it has a [chambers] section; "
+                                       "theory §11)"),
+    "drifter": _ConfigKind("valve", "a drifter whose valve switches on the piston's position (it has a "
+                                    "[valve] section and no [chambers]; theory §10)"),
+    "hammer": _ConfigKind(None, "a hammer under a periodic force (it has no [valve] or [chambers] section)"),
 }
 
 
@@ -51,13 +60,13 @@ def config_kind(config: dict) -> str:
     if "task" in config:
         raise ValueError("this is a sweep spec (it has a top-level 'task'), not a machine in SI units: "
                          "run it with 'impactbar sweep'")
-    return next(kind for kind, (section, _) in CONFIG_KINDS.items() if section is None or section in config)
+    return next(kind for kind, k in CONFIG_KINDS.items() if k.section is None or k.section in config)
 
 
 def read_as(kind: str, path, exc: ValueError) -> ValueError:
     """``exc`` with the file and the kind of machine it was read as in front: what was wrong is
     then read against the right keys (a misspelt ``[chambers]`` makes a hammer of a circuit)."""
-    return ValueError(f"{path}: read as {CONFIG_KINDS[kind][1]}: {exc}")
+    return ValueError(f"{path}: read as {CONFIG_KINDS[kind].what}: {exc}")
 
 
 def read_toml(path) -> dict:

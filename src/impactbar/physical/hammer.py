@@ -469,7 +469,7 @@ def load_config(path) -> Hammer:
     config = read_toml(path)
     kind = config_kind(config)
     if kind != "hammer":
-        raise ValueError(f"{path} describes {CONFIG_KINDS[kind][1]}, not a hammer: read it with "
+        raise ValueError(f"{path} describes {CONFIG_KINDS[kind].what}, not a hammer: read it with "
                          "impactbar.physical.load")
     try:
         return _hammer_from_config(config, path.parent)

@@ -35,6 +35,7 @@ import json
 import math
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -67,6 +68,21 @@ from .units import to_si
 
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE",
            "optimize_drifter", "evaluate_design", "evaluate_blow", "DrifterOptimum"]
+
+
+class _Near(NamedTuple):
+    """A design with an orbit, a guess for the designs after it: its scaled variables and id."""
+
+    u: np.ndarray
+    id: str
+
+
+class _Design(NamedTuple):
+    """A design: its id (its values' reprs), its values by key, its changes to the config."""
+
+    id: str
+    values: dict
+    changes: dict
 
 
 def _fingerprint(config: dict, vary: dict, objective: str, constraints: dict) -> str:
@@ -236,31 +252,31 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         budget = check_multistart(workers, sample, local_starts, seed, max_evaluations, len(keys))
     lo = np.array([spec[k]["low"] for k in keys])
     span = np.array([spec[k]["high"] - spec[k]["low"] for k in keys])
-    fkey = OBJECTIVES[objective][0]
+    fkey = OBJECTIVES[objective].key
     tag = _fingerprint(cfg, {k: (spec[k]["low"], spec[k]["high"]) for k in keys}, objective,
                        dict(limits, impact_velocity=V) if ideal else limits)
 
     cache_path = Path(cache) if cache is not None else None
     store = read_cache(cache_path, tag)
     n_cached = 0
-    near: list[tuple[np.ndarray, str]] = []  # the designs with an orbit: their scaled variables, ids
+    near: list[_Near] = []  # the designs with an orbit: their scaled variables, ids
     history: list[dict] = []
     counter = {"new": 0, "gradients": 0}
     # each design's orbit by its id (a stored design's solved again along its guesses where needed)
-    chain = OrbitChain(store, lambda c, g: _operating_point(build(with_values(cfg, c), folder), g)[0])
+    chain = OrbitChain(store, lambda c, g: _operating_point(build(with_values(cfg, c), folder), g).orbit)
     gradients: dict[str, tuple] = {}
     found: list = []  # the multistart's local searches
 
     def changes_of(values: dict) -> dict:
         return {k: written_quantity(values[k], spec[k]["unit"], config_value(cfg, k)) for k in keys}
 
-    def design_of(u: np.ndarray) -> tuple[str, dict, dict]:
+    def design_of(u: np.ndarray) -> _Design:
         u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
         x = np.where(u == u0, start, lo + span * u)  # the start exactly as the config gives it
         values = {k: float(v) for k, v in zip(keys, x, strict=True)}
         changes = changes_of(values)
         changes.update({k: config_value(cfg, k) for k, at in zip(keys, u == u0, strict=True) if at})
-        return json.dumps([repr(values[k]) for k in keys]), values, changes
+        return _Design(json.dumps([repr(values[k]) for k in keys]), values, changes)
 
     def evaluate(u: np.ndarray, done: dict | None = None) -> dict:
         nonlocal n_cached
@@ -273,7 +289,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 n_cached += 1
                 history.append(rec)
                 if rec.get("ok") and "u" in rec:  # a guess for the designs after it, as in the first run
-                    near.append((np.asarray(rec["u"], dtype=float), rid))
+                    near.append(_Near(np.asarray(rec["u"], dtype=float), rid))
             return rec
         try:
             if done is not None:  # computed by the population's map
@@ -283,10 +299,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 if ideal:
                     rec, orbit = evaluate_blow(drifter, V, limits), None
                 else:
-                    guess = min(near, key=lambda p: float(np.sum((p[0] - u) ** 2)))[1] if near else None
+                    guess = min(near, key=lambda p: float(np.sum((p.u - u) ** 2))).id if near else None
                     rec, orbit = evaluate_design(drifter, kept, None if guess is None else chain.orbit(guess))
                     rec.update(guess=guess, u=u.tolist())
-                    near.append((u.copy(), rid))
+                    near.append(_Near(u.copy(), rid))
                     chain.add(rid, orbit)
                 rec.update(piston_and_multipliers(drifter, orbit))
         except (ValueError, np.linalg.LinAlgError, ArithmeticError) as exc:
@@ -348,8 +364,9 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 {"config": cfg, "folder": folder, "limits": kept}, lambda u: cobyla(u, budget), fkey,
                 sample=sample, local_starts=local_starts, seed=seed, workers=workers, n_variables=len(keys))
         else:
-            res = minimize(f, u0, jac=lambda u: -derivative(u)[0] / ref, method="SLSQP",
-                           constraints=[{"type": "ineq", "fun": g, "jac": lambda u: derivative(u)[1]}],
+            res = minimize(f, u0, jac=lambda u: -derivative(u).objective / ref, method="SLSQP",
+                           constraints=[{"type": "ineq", "fun": g,
+                                         "jac": lambda u: derivative(u).constraints}],
                            bounds=[(0.0, 1.0)] * len(keys),
                            options={"ftol": tol ** 3, "maxiter": max_evaluations})
         message = str(res.message)
@@ -381,7 +398,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         fresh[name] = out
     message += _better_missed(history, best, fkey)
     certificate = certify_search(fresh["optimum"], history, keys, (lo, span), res, tol, fkey, (lambda v: (
-        evaluate_blow(build(with_values(cfg, design_of(v)[2]), folder), V, limits))) if ideal else None,
+        evaluate_blow(build(with_values(cfg, design_of(v).changes), folder), V, limits))) if ideal else None,
         lambda: _design_gradient(cfg, folder, fresh["optimum"], None, spec, limits, fkey, span),
         tol if method in ("cobyla", "multistart") else 0.0)
     return DrifterOptimum(objective=objective,

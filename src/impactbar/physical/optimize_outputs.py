@@ -5,6 +5,8 @@ Floquet multipliers, and the stress wave the blow sends into the shank
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .outputs import OUTPUTS
@@ -24,7 +26,17 @@ _CONSTRAINTS = {"peak_incident_stress": ("peak_incident_stress", 1, None),
                 "min_drilling_rate": ("drilling_rate", -1, None), "piston_mass": ("piston_mass", 1, None)}
 
 
-def constraint_output(name: str):
+class _Constrained(NamedTuple):
+    """What a constraint limits: the output, the sense (+1: at most the limit; -1: at least), the
+    scale of its margin (``None``: the limit's) and its unit."""
+
+    output: object
+    sense: int
+    scale: float | None
+    unit: str
+
+
+def constraint_output(name: str) -> _Constrained | None:
     """The output a constraint limits, its sense (+1: at most the limit; -1: at least), the scale of
     its margin (``None``: the limit's) and its unit; ``None`` for no constraint of that name.
 
@@ -34,7 +46,7 @@ def constraint_output(name: str):
     >>> o, sense, scale, unit = constraint_output("min_drilling_rate")
     >>> o.name, sense, unit
     ('drilling_rate', -1, 'm/min')
-    >>> constraint_output("min_impact_velocity")[0].name, constraint_output("speed")
+    >>> constraint_output("min_impact_velocity").output.name, constraint_output("speed")
     ('impact_velocity', None)
     """
     if name in _CONSTRAINTS:
@@ -45,7 +57,7 @@ def constraint_output(name: str):
     o = OUTPUTS.get(out)
     if o is None or o.of is None or "circuit" not in o.machines or o.dtype != "f8":
         return None
-    return o, sense, scale, "" if o.unit == "1" else o.unit
+    return _Constrained(o, sense, scale, "" if o.unit == "1" else o.unit)
 
 
 def piston_and_multipliers(drifter, orbit) -> dict:

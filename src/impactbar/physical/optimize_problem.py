@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 import time
+from typing import NamedTuple
 
 import numpy as np
 
@@ -31,9 +32,18 @@ from .units import to_si
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE", "least_margin",
            "evaluate_design", "evaluate_blow"]
 
+
+class _Objective(NamedTuple):
+    """An objective: the record's figure maximised, its unit, what it is."""
+
+    key: str
+    unit: str
+    long_name: str
+
+
 #: The objectives (all maximised): name to (the figure, its unit, what it is), the outputs that name
 #: an objective (:attr:`~impactbar.physical.outputs.Output.objective`).
-OBJECTIVES = {o.objective: (o.key, o.unit, o.long_name) for o in outputs() if o.objective}
+OBJECTIVES = {o.objective: _Objective(o.key, o.unit, o.long_name) for o in outputs() if o.objective}
 
 #: The constraints and their default limits (SI): ``peak_incident_stress`` (Pa, the largest stress in
 #: the shank adapter before the rock's first reflection is back at it, or over the piston's first
@@ -98,15 +108,30 @@ def evaluate_design(drifter: CircuitDrifter, constraints: dict | None = None,
     return rec, orbit
 
 
-def _operating_point(drifter: CircuitDrifter, guess) -> tuple[object, bool]:
+class _OperatingPoint(NamedTuple):
+    """A design's orbit, and whether it was continued from a guess."""
+
+    orbit: object
+    continued: bool
+
+
+class _Gradients(NamedTuple):
+    """The gradients of a design's objective, shape ``(n,)``, and of its constraints' scaled
+    margins, shape ``(m, n)``, in the ``n`` scaled variables."""
+
+    objective: np.ndarray
+    constraints: np.ndarray
+
+
+def _operating_point(drifter: CircuitDrifter, guess) -> _OperatingPoint:
     """The design's orbit: Newton from ``guess`` where given and it converges, else the default
     chain; and whether it was continued."""
     if guess is not None:
         try:
-            return drifter.orbit(guess=guess), True
+            return _OperatingPoint(drifter.orbit(guess=guess), True)
         except (ValueError, np.linalg.LinAlgError, ArithmeticError):
             pass
-    return drifter.orbit(), False
+    return _OperatingPoint(drifter.orbit(), False)
 
 
 def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: dict | None = None) -> dict:
@@ -157,7 +182,7 @@ def evaluate_blow(drifter: CircuitDrifter, impact_velocity: float, constraints: 
                        E=bar.E_Pa, density=bar.density_kg_m3, bit_mass=drill.bit_mass_kg, feed=drill.feed_N)
     blow = dict(blow, piston_mass_kg=bar.mass_kg)
     obj = {o.key: o.blow(blow) for o in outputs("record") if o.blow is not None}
-    values = {name: constraint_output(name)[0].blow(blow) for name in IDEAL_CONSTRAINTS}
+    values = {name: constraint_output(name).output.blow(blow) for name in IDEAL_CONSTRAINTS}
     rec = _constrained(obj, values, limits)
     rec["seconds"] = time.perf_counter() - t0
     return rec
@@ -183,14 +208,14 @@ def _limits(constraints, drifter, ideal: bool = False) -> dict:
         v = given.get(name, default)
         if v is None:
             continue
-        if constraint_output(name)[0].rock and drifter.drill is None:
+        if constraint_output(name).output.rock and drifter.drill is None:
             raise ValueError(f"constraints: {name!r} needs the drill string and the rock ([rock] in the "
                              "config)")
         if v == "relief":
             v = drifter.si["relief_pressure_Pa"]
             if not math.isfinite(v):
                 continue
-        unit = constraint_output(name)[3]
+        unit = constraint_output(name).unit
         if isinstance(v, int | float) and not isinstance(v, bool):  # a bare number: SI
             out[name] = float(v)
             continue
@@ -206,7 +231,7 @@ def _figures(orbit, limits: dict) -> dict:
     r = Reading(orbit)
     obj = {o.key: o.of(r) for o in outputs("record", "circuit", rock=orbit.drifter.drill is not None)
            if o.of is not None}
-    values = {name: float(constraint_output(name)[0].of(r)) for name in {**DEFAULT_CONSTRAINTS, **limits}}
+    values = {name: float(constraint_output(name).output.of(r)) for name in {**DEFAULT_CONSTRAINTS, **limits}}
     return _constrained(obj, values, limits)
 
 
@@ -259,7 +284,7 @@ def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:
 
 
 def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: dict, fkey: str,
-                     span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                     span: np.ndarray) -> _Gradients:
     """The gradients of a design's objective and of its constraints' scaled margins in the scaled
     variables: per variable by :func:`~impactbar.physical.sensitivity.tangent_derivatives` from the
     design's orbit, or where its step meets a border (or a design read from the cache, without its
@@ -268,7 +293,7 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
     keys, names = list(spec), list(limits)
     dobj, dcon = np.zeros(len(keys)), np.zeros((len(names), len(keys)))
     if not rec["ok"]:
-        return dobj, dcon
+        return _Gradients(dobj, dcon)
     design = with_values(cfg, rec["changes"])
     values, units = rec["values"], {k: spec[k]["unit"] for k in keys}
 
@@ -281,9 +306,9 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
     step = default_step(orbit.drifter)
     for j, key in enumerate(keys):
         try:
-            col = {n: d[key] for n, d in tangent_derivatives(design, folder, orbit, [key], values, units,
-                                                             step, "max_multiplier" in limits,
-                                                             read)[2].items()}
+            _, _, derivatives = tangent_derivatives(design, folder, orbit, [key], values, units, step,
+                                                    "max_multiplier" in limits, read)
+            col = {n: d[key] for n, d in derivatives.items()}
         except ValueError:  # a border within the step: the secant of two continued orbits
             h = step * abs(values[key])
             try:
@@ -295,4 +320,4 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
             col = {n: (ends[0][n] - ends[1][n]) / (2.0 * h) for n in ends[0]}
         dobj[j] = col["objective"] * span[j]
         dcon[:, j] = [col[n] * span[j] for n in names]
-    return dobj, dcon
+    return _Gradients(dobj, dcon)

@@ -87,7 +87,7 @@ class DrifterOptimum:
     @property
     def gain(self) -> float:
         """The objective at the optimum over the baseline's, less 1."""
-        key = OBJECTIVES[self.objective][0]
+        key = OBJECTIVES[self.objective].key
         return self.optimum["objectives"][key] / self.baseline["objectives"][key] - 1.0
 
     def to_dict(self) -> dict:
@@ -172,13 +172,13 @@ class DrifterOptimum:
                 ax.step(np.asarray(wave["t_s"]) * 1e6, np.asarray(wave["stress_Pa"]) / 1e6, where="post",
                         color=colour, label=label)
             else:  # no rock: the objective
-                ax.bar(label, rec["objectives"].get(OBJECTIVES[self.objective][0], np.nan), color=colour)
+                ax.bar(label, rec["objectives"].get(OBJECTIVES[self.objective].key, np.nan), color=colour)
         if self.baseline.get("shank_stress") is not None:
             ax.set_xlabel("time from impact (us)")
             ax.set_ylabel("shank stress (MPa)")
             ax.legend()
         else:
-            ax.set_ylabel(f"{self.objective} ({OBJECTIVES[self.objective][1]})")
+            ax.set_ylabel(f"{self.objective} ({OBJECTIVES[self.objective].unit})")
         ax = axes[2]
         t = np.linspace(0, 2 * np.pi, 200)
         ax.plot(np.cos(t), np.sin(t), "k", lw=0.8)

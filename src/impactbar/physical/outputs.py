@@ -130,17 +130,21 @@ class Output:
     @property
     def si_unit(self) -> str:
         """The SI unit a store holds it in (CF spelling: ``"1"`` dimensionless, ``""`` a flag)."""
-        return _TO_SI.get(self.unit, (self.unit, 1.0))[0]
+        si_unit, _ = _TO_SI.get(self.unit, (self.unit, 1.0))
+        return si_unit
 
     def to_si(self, value):
         """A value in :attr:`unit` in :attr:`si_unit`."""
-        factor = _TO_SI.get(self.unit, (self.unit, 1.0))[1]
+        _, factor = _TO_SI.get(self.unit, (self.unit, 1.0))
         return value * factor if factor != 1.0 else value
 
     @property
     def shown_unit(self) -> str:
         """The unit a person reads it in (:func:`~impactbar.physical.display_units.display_unit`)."""
-        return display_unit(self.unit)[1] if self.unit not in ("", "1") else self.unit
+        if self.unit in ("", "1"):
+            return self.unit
+        _, shown = display_unit(self.unit)
+        return shown
 
     @property
     def shown_key(self) -> str:
@@ -152,7 +156,7 @@ class Output:
         inverse: ``Pa / 1e6``)."""
         if self.unit in ("", "1") or self.dtype != "f8":
             return value
-        factor = display_unit(self.unit)[0]
+        factor, _ = display_unit(self.unit)
         if factor == 1.0:
             return value
         return value * factor if factor > 1.0 else value / round(1.0 / factor)

@@ -336,7 +336,10 @@ def tangent_derivatives(cfg: dict, folder, point: CircuitDrifterOrbit, keys, val
     problem = so.problem
     X = problem.unknowns(so)
     Phi = so._monodromy
-    Jx = Phi - np.eye(X.size) if Phi is not None and Phi.shape[0] == X.size else problem.residual(X)[1]
+    if Phi is not None and Phi.shape[0] == X.size:
+        Jx = Phi - np.eye(X.size)
+    else:
+        _, Jx = problem.residual(X)
     cond = np.linalg.cond(Jx)
     if not cond < 1e10:
         raise ValueError(f"the orbit's Newton Jacobian is singular (condition {cond:.3g}: a multiplier at 1, "
@@ -393,8 +396,8 @@ def _same_pattern(problem, X, pattern: tuple, key: str, step: float, unit: str) 
     other = problem.event_pattern(X)
     if other == pattern:
         return
-    names = [e[0] for e in pattern]
-    changed = [e[0] for e in other]
+    names = [name for name, *_ in pattern]
+    changed = [name for name, *_ in other]
     raise ValueError(f"{key} does not enter smoothly here: a step of {step:+.4g} {unit} changes the drive's "
                      f"events over the period from {', '.join(names)} to {', '.join(changed)} (a border "
                      "collision: the relief valve opening, the accumulator emptying or a switch changing "

@@ -154,7 +154,9 @@ def plot_circuit_run(run, axes=None, *, mass_kg: float | None = None):
     ax_v.set_ylabel("valve opening", color="C3")
     axes[1].set_zorder(ax_v.get_zorder() + 1)  # the gap drawn over the band
     axes[1].patch.set_visible(False)
-    handles = axes[1].get_legend_handles_labels()[0] + ax_v.get_legend_handles_labels()[0]
+    gap_handles, _ = axes[1].get_legend_handles_labels()
+    band_handles, _ = ax_v.get_legend_handles_labels()
+    handles = gap_handles + band_handles
     axes[1].legend(handles=handles, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncols=3,
                    fontsize="small", frameon=False)
     if mass_kg is not None:

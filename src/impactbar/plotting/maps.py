@@ -28,7 +28,7 @@ def _label(ds, name: str) -> str:
     """``name [units]`` in the units of :data:`DISPLAY_UNITS` (else SI, from the store's
     attributes; no unit for a pure number)."""
     units = ds[name].attrs.get("units", "")
-    units = DISPLAY_UNITS.get(units, (units, 1.0))[0]
+    units, _ = DISPLAY_UNITS.get(units, (units, 1.0))
     return name if units in ("", "1") else f"{name} [{units}]"
 
 
@@ -36,7 +36,7 @@ def _shown(ds, name: str, axis) -> None:
     """Ticks of ``axis`` (an x or y axis, or a colour bar's) in the units of :func:`_label`."""
     from matplotlib.ticker import FuncFormatter
 
-    factor = DISPLAY_UNITS.get(ds[name].attrs.get("units", ""), ("", 1.0))[1]
+    _, factor = DISPLAY_UNITS.get(ds[name].attrs.get("units", ""), ("", 1.0))
     if factor != 1.0:
         axis.set_major_formatter(FuncFormatter(lambda v, _pos: f"{v * factor:.6g}"))
 
@@ -98,7 +98,8 @@ def plot_operating_map(ds, dims, variable: str | None = None, ax=None):
         ax.set_ylabel(_label(ds, name))
         _shown(ds, dims[0], ax.xaxis)
         _shown(ds, name, ax.yaxis)
-        if ax.get_legend_handles_labels()[0]:
+        handles, _ = ax.get_legend_handles_labels()
+        if handles:
             ax.legend(fontsize="small")
         return ax
     y_dim, x_dim = dims  # the first axis slowest: rows

@@ -154,10 +154,12 @@ class BlowPiece:
         return Q, V
 
     def end_displacement(self, t):
-        return np.minimum(self.c @ self.modal(t)[0], 0.0)
+        q, _ = self.modal(t)
+        return np.minimum(self.c @ q, 0.0)
 
     def end_velocity(self, t):
-        return self.c @ self.modal(t)[1]
+        _, v = self.modal(t)
+        return self.c @ v
 
 
 #: more blows than this, each starting at once where the last ended (the piston pressed on the stop

@@ -105,10 +105,12 @@ class _RigidFlight:
         return np.full(np.atleast_1d(t).shape, float(self.level))
 
     def end_displacement(self, t):
-        return np.minimum(self._at(np.asarray(t, dtype=float))[0], 0.0)
+        q, _ = self._at(np.asarray(t, dtype=float))
+        return np.minimum(q, 0.0)
 
     def end_velocity(self, t):
-        return self._at(np.asarray(t, dtype=float))[1]
+        _, v = self._at(np.asarray(t, dtype=float))
+        return v
 
 
 def rigid_piece(model: BarModel):
@@ -130,7 +132,8 @@ def rigid_piece(model: BarModel):
         t_imp = math.inf if resting else t + first_rising_crossing(d, q0, v0, level, 0.0)
         if t_imp < t_stop:
             f.t_end = t_imp
-            vm = float(f._at(np.array(t_imp))[1])
+            _, vm = f._at(np.array(t_imp))
+            vm = float(vm)
             f.impact_times = np.array([t_imp])
             f.impact_velocities = np.array([vm])
             f.status = RunStatus.MAX_IMPACTS
@@ -172,10 +175,12 @@ class _Flight:
         return np.full(np.atleast_1d(t).shape, float(self.core.load.p0))
 
     def end_displacement(self, t):
-        return np.minimum(self.core.c @ self.modal(t)[0], 0.0)
+        q, _ = self.modal(t)
+        return np.minimum(self.core.c @ q, 0.0)
 
     def end_velocity(self, t):
-        return self.core.c @ self.modal(t)[1]
+        _, v = self.modal(t)
+        return self.core.c @ v
 
 
 class _Pieces(Sequence):
@@ -185,10 +190,10 @@ class _Pieces(Sequence):
     def __init__(self, blocks, make):
         self._blocks = blocks  # ("py", piece) or ("k", t0, t1, code, q, v)
         self._make = make  # (t0, t1, code, q, v) -> a flight
-        sizes = [1 if b[0] == "py" else b[1].size for b in blocks]
+        sizes = [1 if kind == "py" else first.size for kind, first, *_ in blocks]
         self._ends = np.cumsum(sizes, dtype=np.int64)
-        self.starts = np.concatenate([np.array([b[1].t0]) if b[0] == "py" else b[1] for b in blocks]) \
-            if blocks else np.zeros(0)
+        self.starts = np.concatenate([np.array([first.t0]) if kind == "py" else first
+                                      for kind, first, *_ in blocks]) if blocks else np.zeros(0)
 
     def __len__(self):
         return int(self._ends[-1]) if self._ends.size else 0
@@ -202,11 +207,13 @@ class _Pieces(Sequence):
         if not 0 <= i < len(self):
             raise IndexError("piece index out of range")
         k = int(np.searchsorted(self._ends, i, side="right"))
-        b = self._blocks[k]
-        if b[0] == "py":
-            return b[1]
+        kind, *rest = self._blocks[k]
+        if kind == "py":
+            (piece,) = rest
+            return piece
+        t0, t1, code, q, v = rest
         j = i - (int(self._ends[k - 1]) if k else 0)
-        return self._make(float(b[1][j]), float(b[2][j]), int(b[3][j]), b[4][j], b[5][j])
+        return self._make(float(t0[j]), float(t1[j]), int(code[j]), q[j], v[j])
 
 
 class _Run:
@@ -294,7 +301,7 @@ class _Run:
 
     def result(self, make_state, make_piece) -> SwitchedTrajectory:
         pieces = _Pieces(self.blocks, make_piece)
-        runs = [b[1] for b in self.blocks if b[0] == "py" and isinstance(b[1], Trajectory)]
+        runs = [piece for kind, piece, *_ in self.blocks if kind == "py" and isinstance(piece, Trajectory)]
         spans = [r.contact_intervals for r in runs if r.contact_intervals.size] + \
             [np.array(self.rests, dtype=float).reshape(-1, 2)]
         contact = np.concatenate(spans)

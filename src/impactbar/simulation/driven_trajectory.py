@@ -177,7 +177,8 @@ class SwitchedTrajectory(Trajectory):
             elif piece.t_end in hits and piece.t_end > piece.t0:
                 q, v = piece.modal([piece.t_end])
                 p = float(piece.force([piece.t_end])[0])
-                out.append(law.contact(model, FourierLoad(p, []), piece.t_end, q[:, 0], v[:, 0])[3])
+                _, _, _, record = law.contact(model, FourierLoad(p, []), piece.t_end, q[:, 0], v[:, 0])
+                out.append(record)
         return tuple(out)
 
     @cached_property

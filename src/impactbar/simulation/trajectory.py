@@ -380,7 +380,8 @@ class Trajectory:
                 continue
             prev = segs[j - 1]  # the flight that arrived: its state just before the impact
             qm, vm = self._core.propagate(prev.basis, prev.t, prev.q, prev.v, [segs.t[j]])
-            out.append(law.contact(model, self.load, float(segs.t[j]), qm[:, 0], vm[:, 0])[3])
+            _, _, _, record = law.contact(model, self.load, float(segs.t[j]), qm[:, 0], vm[:, 0])
+            out.append(record)
         return tuple(out)
 
     def plot(self, ax=None, n: int = 4000):

@@ -193,14 +193,16 @@ class SweepSpec(ChunkedGrid):
         if self.law is not None:
             if self.rock is not None:
                 raise ValueError("[law] and [rock] both name the impact law: give one")
-            object.__setattr__(self, "law", law_table(self.law)[1])
+            _, table = law_table(self.law)
+            object.__setattr__(self, "law", table)
         object.__setattr__(self, "model", _check_model(self.model, self.rock, self.law))
         if (self.load is None) == (self.drive is None):
             raise ValueError("give [load] or [drive] (the forcing), not both nor neither")
         if self.drive is not None:
             if self.task != "orbits":
                 raise ValueError(f"task = {self.task!r}: a [drive] sweeps the 'orbits' task only")
-            object.__setattr__(self, "drive", drive_table(self.drive)[1])
+            _, table = drive_table(self.drive)
+            object.__setattr__(self, "drive", table)
         else:
             object.__setattr__(self, "load", _check_load(self.load))
         object.__setattr__(self, "axes", _check_axes(self.axes, self))
@@ -410,7 +412,7 @@ def _check_model(model, rock=None, law=None) -> dict:
         if "impact" in model and impact != law["kind"]:
             raise ValueError(f"[model] impact = {impact!r} but [law] kind = {law['kind']!r}: drop impact "
                              "or make them the same")
-        impact = law_table(law)[0]
+        impact, _ = law_table(law)
     elif impact == "rodrock":
         raise ValueError("[model] impact = 'rodrock' needs a [rock] table: k, k_u and segments")
     try:
@@ -606,8 +608,12 @@ def _base(spec):
     if spec.rock is not None:
         m["impact"] = _rock_law(spec.rock)
     elif spec.law is not None:
-        m["impact"] = law_table(spec.law)[0]
-    return BarModel(**m), (drive_table(spec.drive)[0] if spec.drive is not None else _make_load(spec.load))
+        m["impact"], _ = law_table(spec.law)
+    model = BarModel(**m)
+    if spec.drive is None:
+        return model, _make_load(spec.load)
+    drive, _ = drive_table(spec.drive)
+    return model, drive
 
 
 def _build(spec, changes: dict):

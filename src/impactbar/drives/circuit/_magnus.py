@@ -294,7 +294,8 @@ def balance(jac_base, y, par, M, n) -> np.ndarray:
     jac_base(np.ascontiguousarray(y), par, M, A)
     if not np.all(np.isfinite(A)):
         return np.ones(n)
-    return np.ascontiguousarray(matrix_balance(A, permute=False, separate=True)[1][0])
+    _, (scale, _) = matrix_balance(A, permute=False, separate=True)
+    return np.ascontiguousarray(scale)
 
 
 GAUSS1 = _G1

@@ -292,7 +292,8 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
         splines, room = (np.empty(0), np.empty(0, dtype=np.int64)), 0
         ws = compiled.CV.workspace(code.NE, 0, code.CALLBACKS)
     else:
-        room = int(np.max(np.diff(splines[1])))
+        _, offsets = splines
+        room = int(np.max(np.diff(offsets)))
         ws = compiled.CV.workspace(code.NE, 0, code.SPLINE_CALLBACKS)
     ch = drive.chambers
     volumes = np.array([ch.rear_volume, ch.front_volume, ch.area_ratio])

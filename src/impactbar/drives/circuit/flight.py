@@ -176,10 +176,12 @@ class CircuitPiece(HermiteSteps):
         return self.layout.size(self.M)
 
     def end_displacement(self, t):
-        return np.minimum(self.c @ self.modal(t)[0], 0.0)
+        q, _ = self.modal(t)
+        return np.minimum(self.c @ q, 0.0)
 
     def end_velocity(self, t):
-        return self.c @ self.modal(t)[1]
+        _, v = self.modal(t)
+        return self.c @ v
 
 
 #: The most steps of one flight (CVODE's ``max_num_steps``). A settling flight of a piston of 16 modes
@@ -326,7 +328,7 @@ def keep_spacing(drive, model, rtol: float = KEEP_RTOL) -> float:
     -------
     float
     """
-    rate = spectrum(drive, model)[2]
+    _, _, rate = spectrum(drive, model)
     return KEEP_PHASE * max(rtol / KEEP_RTOL, 1.0) ** 0.2 / rate if rate > 0.0 else math.inf
 
 
@@ -620,7 +622,7 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
     if magnus:
         d = _magnus.balance(code.jac_base, piece.y[piece.t.size // 2], par, M, n)
         theta = _magnus.DEFAULT_THETA if settings.magnus_theta is None else settings.magnus_theta
-        Phi = code.magnus_phi(np.ascontiguousarray(own), piece.y, piece.f, par, M, theta, d)[0]
+        Phi, _ = code.magnus_phi(np.ascontiguousarray(own), piece.y, piece.f, par, M, theta, d)
     if status == 2:
         if K.ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop

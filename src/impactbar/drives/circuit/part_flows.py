@@ -84,8 +84,8 @@ def part_flows(drive, z, gap) -> dict:
                 if int(r[NW.KIND]) == NW.ORIFICE:
                     f[sel] = r[NW.O_K] * _phi(pa - pb, r[NW.O_PTR2])
                 else:
-                    f[sel] = [KD.law(int(r[NW.KIND]), r, 0, a, b, y)[0]
-                              for a, b, y in zip(pa, pb, gap[sel], strict=True)]
+                    f[sel] = [q for q, *_ in (KD.law(int(r[NW.KIND]), r, 0, a, b, y)
+                                              for a, b, y in zip(pa, pb, gap[sel], strict=True))]
         name = getattr(part, "name", type(part).__name__)
         out.update({f"q_{name}": flows[0]} if len(flows) == 1 else
                    {f"q_{name}_{i}": f for i, f in enumerate(flows)})

@@ -94,5 +94,5 @@ def watched(net, events, own=()) -> tuple:
             out.append((int(r[NW.LV_EV]), float(r[LV.LEVEL]), kind, None, _level(r.copy(), pressure, ns)))
         elif kind == NW.SPOOL and r[SP.EVENT] >= 0:
             out.append((int(r[SP.EVENT]), 0.0, kind, None, _stop(r.copy(), pressure, ns)))
-    return tuple(Watch(events[slot], slot, level, kind, node, f)
-                 for slot, level, kind, node, f in sorted(out, key=lambda e: e[0]) if events[slot] not in own)
+    watches = [Watch(events[slot], slot, level, kind, node, f) for slot, level, kind, node, f in out]
+    return tuple(sorted((w for w in watches if w.name not in own), key=lambda w: w.slot))

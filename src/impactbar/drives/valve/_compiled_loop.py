@@ -68,7 +68,7 @@ def _rigid_piece(d, R, level, q, v, t, t_stop):
     else:
         t_imp = t + first_rising_crossing(d, q0, v0, level, 0.0)
     if t_imp < t_stop:
-        vm = rigid_flight(d, q0, v0, level, t_imp - t)[1]
+        _, vm = rigid_flight(d, q0, v0, level, t_imp - t)
         vp = -R * vm
         if level > 0.0 and abs(vp) * (2.0 / level) <= _REST * (1.0 + t_imp):
             vp = 0.0  # the rebound lasts less than rounding: the piston rests on the stop
@@ -95,7 +95,8 @@ def _rigid_cycle(d, R, drive, v):
     h3 = first_rising_crossing(d, q, w, ps, 0.0)
     if not math.isfinite(h3):
         return math.nan, h1, h3
-    return rigid_flight(d, q, w, ps, h3)[1], h1, h3
+    _, w = rigid_flight(d, q, w, ps, h3)
+    return w, h1, h3
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -169,7 +170,8 @@ def end_max_sampled(w2, d, p, c, q, v, h, n):
                 sn[i] = sn[i] * cr[i] + cs[i] * sr[i]
                 cs[i] = a
             acc += c[i] * (A[i] * cs[i] + Bc[i] * sn[i])
-        val = c[0] * rigid_flight(d, q[0], v[0], p, t)[0] + static + math.exp(-0.5 * d * t) * acc
+        q0, _ = rigid_flight(d, q[0], v[0], p, t)
+        val = c[0] * q0 + static + math.exp(-0.5 * d * t) * acc
         if val > worst:
             worst = val
     return worst

@@ -101,13 +101,17 @@ def phase_roots(model: BarModelLike, load: Load, *, closed_form: bool = True) ->
     roots = zeros_in_clusters(F, clusters, atol=1e-12 * scale)
     out: list[tuple[float, int]] = []
     for t, mult in sorted((math.fmod(t, TWO_PI) % TWO_PI, m) for t, m in roots):
-        if out and abs(t - out[-1][0]) < 1e-9:
-            out[-1] = (out[-1][0], 2)
-            continue
+        if out:
+            last, _ = out[-1]
+            if abs(t - last) < 1e-9:
+                out[-1] = (last, 2)
+                continue
         out.append((t, mult))
-    if len(out) > 1 and abs(out[0][0] + TWO_PI - out[-1][0]) < 1e-9:
-        out[0] = (out[0][0], 2)
-        out.pop()
+    if len(out) > 1:
+        (first, _), (last, _) = out[0], out[-1]
+        if abs(first + TWO_PI - last) < 1e-9:
+            out[0] = (first, 2)
+            out.pop()
     return out
 
 

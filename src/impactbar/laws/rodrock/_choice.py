@@ -39,7 +39,11 @@ def _exact_is_cheap(model, law, piston=None) -> bool:
 
     s = model.s
     with np.errstate(over="ignore", divide="ignore"):  # (the array's methods: a call's fixed cost)
-        own = [1.0 / s] if piston is None else list(piston_segments(piston)[0] / s)
+        if piston is None:
+            own = [1.0 / s]
+        else:
+            lengths, _ = piston_segments(piston)
+            own = list(lengths / s)
         travel = np.array(own + [g.travel_time(model) for g in law.segments])
         shortest = float(travel.min())
         rate = law.rock.k / (s * law.segments[-1].impedance) * shortest

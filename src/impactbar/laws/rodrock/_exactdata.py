@@ -13,6 +13,15 @@ from . import _exactpieces as P
 __all__: list[str] = []
 
 
+def _as_they_come(x) -> bool:
+    """Whether the piece ``x`` is three one-dimensional arrays, taken as they come."""
+    if len(x) != 3:
+        return False
+    e, d, c = x
+    nd = np.ndarray
+    return type(e) is nd and type(d) is nd and type(c) is nd and e.ndim == d.ndim == c.ndim == 1
+
+
 class _Drive:
     """The drive of :func:`exact_blow` checked, with its exponents and the bound of its values
     (made once for the many blows of one :class:`~impactbar.laws.rodrock.exactmap.ExactBlowMap`):
@@ -23,10 +32,7 @@ class _Drive:
     def __init__(self, drive):
         starts, pieces = drive
         starts = np.asarray(starts, dtype=float)
-        nd = np.ndarray
-        parts = [x if len(x) == 3 and type(x[0]) is nd and type(x[1]) is nd and type(x[2]) is nd
-                 and x[0].ndim == x[1].ndim == x[2].ndim == 1  # (arrays as they come)
-                 else tuple(np.atleast_1d(np.asarray(a)) for a in x) for x in pieces]
+        parts = [x if _as_they_come(x) else tuple(np.atleast_1d(np.asarray(a)) for a in x) for x in pieces]
         if not all(e.ndim == 1 and e.shape == d.shape == c.shape for e, d, c in parts):
             raise ValueError("drive: each piece is (exps, degs, coefs), arrays of one length")
         if starts.ndim != 1 or starts.size != len(parts) or starts.size == 0 or \
@@ -37,10 +43,10 @@ class _Drive:
         e, d, c = e.astype(complex), d.astype(np.int64), c.astype(complex)
         if not (np.all(np.isfinite(e)) and np.all(np.isfinite(c)) and np.all((d >= 0) & (d < P.DC))):
             raise ValueError(f"drive: exponents and coefficients must be finite, degrees in [0, {P.DC})")
-        sizes = np.array([x[0].size for x in parts], dtype=np.int64)
+        sizes = np.array([exps.size for exps, _, _ in parts], dtype=np.int64)
         self.flat = (e, d, c, sizes)
         self.starts = starts
-        first = np.unique(e, return_index=True)[1]  # (its exponents once each, in the order they come)
+        _, first = np.unique(e, return_index=True)  # (its exponents once each, in the order they come)
         self.exponents = e[np.sort(first)].tolist()
         # (the sup of sum c tau^d over a piece's span: a polynomial's pieces are short, and their
         # monomials' coefficients large; the forces' scale must not take them as its size)
@@ -81,7 +87,7 @@ class _Data:
         # trusted: the pieces of initial_waves (arrays of the right types, finite where the modal
         # state is: checked by the caller), and a drive already checked (a _Drive)
         self.initial = init if trusted else [self._piece("initial", x) for x in init]
-        exps = [e for x in self.initial for e in x[0]]
+        exps = [e for piece_exps, _, _ in self.initial for e in piece_exps]
         bound = 0.0
         for (_e, d, c), T in zip(self.initial, np.repeat(Tp, 2), strict=True):
             bound = max(bound, float(np.sum(np.abs(c) * np.maximum(T, 1.0) ** d)))

@@ -146,7 +146,8 @@ def chan_closed_sq(c, t, CH_T, pool, B, N, exact):
 @numba.njit(cache=CACHE, nogil=True)
 def piece_momentum(CH_T, pool, WB, WN, c, t):
     """``int f`` over the wave now in channel ``c``'s segment."""
-    return _chan_sums(c, t, CH_T, pool, WB[B_AUX], WN[B_AUX], False)[0]
+    momentum, _ = _chan_sums(c, t, CH_T, pool, WB[B_AUX], WN[B_AUX], False)
+    return momentum
 
 
 @numba.njit(cache=CACHE, nogil=True)

@@ -356,7 +356,8 @@ class Blow:
         stepped piston's own re-strikes are part of its incident wave; what the rock sends back is
         not, nor a re-contact on it). Lattice: over the steps that ``incident_steps`` counts."""
         if self.exact is not None:
-            return self.peak_shank_force(max(float(round_trip), self.first_separation))[0]
+            force, _ = self.peak_shank_force(max(float(round_trip), self.first_separation))
+            return force
         n = incident_steps(self.shank_forces, self.times[:-1], round_trip)
         return float(np.max(self.shank_forces[:n]))
 

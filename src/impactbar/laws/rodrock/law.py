@@ -266,7 +266,8 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
         c = model.end_weights
         qm = np.array(y_minus[:M], dtype=float)
         qm[0] -= float(c @ qm)  # the end exactly on the shank (rounding)
-        return self.contact(model, load, t, qm, np.array(y_minus[M:], dtype=float))[3]
+        _, _, _, record = self.contact(model, load, t, qm, np.array(y_minus[M:], dtype=float))
+        return record
 
     def contact(self, model, load, t, q_minus, v_minus, *, kernel=None):
         """The simulator's contact step (theory §4d): the piston's modal state at impact -> the blow

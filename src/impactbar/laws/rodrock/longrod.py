@@ -109,7 +109,8 @@ class SteppedLongRod(ContactLaw, BlowRecords, NewtonStart):
         c = model.end_weights
         qm = np.array(y_minus[:M], dtype=float)
         qm[0] -= float(c @ qm)
-        return self.contact(model, load, t, qm, np.array(y_minus[M:], dtype=float))[3]
+        _, _, _, record = self.contact(model, load, t, qm, np.array(y_minus[M:], dtype=float))
+        return record
 
     def contact(self, model, load, t, q_minus, v_minus, *, kernel=None):
         """The simulator's contact step: the exact blow over :meth:`window` (``kernel`` is not used).
@@ -191,7 +192,8 @@ class LongRodContact:
 
     @property
     def peak_force(self) -> float:
-        return float(self.record.blow.peak_forces()[0][0])
+        peaks, _ = self.record.blow.peak_forces()
+        return float(peaks[0])
 
     @property
     def peak_rod_stress(self) -> float:

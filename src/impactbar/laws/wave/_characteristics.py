@@ -425,7 +425,7 @@ class _Contact:
                     else:
                         x = None
                     if x is None:  # no gap opened: contact goes on
-                        start_prev = contact.pop()[0] if contact else 0.0
+                        start_prev, _ = contact.pop() if contact else (0.0, None)
                         start, on = start_prev, True
                         th = float(nodes[0])
                         continue
@@ -599,9 +599,10 @@ class _Contact:
         out._jumps = out.piston.jump_breaks
         out.breaks = np.unique(np.concatenate((self.breaks, out._jumps)))
         out.grid = np.unique(np.concatenate((self.grid, out._jumps)))
-        plain = self.force_extremes()[0]
+        plain, _ = self.force_extremes()
         gibbs = 0.05 * self.s * (1.0 + self.R) * float(np.sum(np.abs(jumps[0]))) + 1e-3 * abs(plain)
-        if abs(out.force_extremes()[0] - plain) > gibbs:
+        located, _ = out.force_extremes()
+        if abs(located - plain) > gibbs:
             return self
         return out
 

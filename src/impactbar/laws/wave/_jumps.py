@@ -147,7 +147,7 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
             for _ in range(20):
                 dy = np.linalg.solve(H + lam * np.diag(dH), g)
                 trial = np.clip(yk + dy, y0 - 1.5 / N, y0 + 1.5 / N)
-                r_t = fit(trial)[1]
+                _, r_t, _, _ = fit(trial)
                 if float(r_t @ r_t) <= cost and min_gap(trial) >= GAP / N:
                     lam = max(lam / 3.0, 1e-9)
                     break
@@ -160,12 +160,14 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
         return yk
 
     def strong(yk):  # the jumps that matter (a weak one has no position)
-        J = np.abs(fit(yk)[0][:yk.size])
+        coef, *_ = fit(yk)
+        J = np.abs(coef[:yk.size])
         return yk[J >= max(1e-3 * (J.max() if J.size else 0.0), 1e-12 * scale)]
 
     def consistent(yk):  # the jumps that the upper two thirds of the band confirm (within 10 %)
-        J1 = fit(yk)[0][:yk.size]
-        J2 = fit(yk, nn.size // 3)[0][:yk.size]
+        coef1, *_ = fit(yk)
+        coef2, *_ = fit(yk, nn.size // 3)
+        J1, J2 = coef1[:yk.size], coef2[:yk.size]
         return yk[np.abs(J1 - J2) <= 0.1 * np.abs(J1)]
 
     def _pair_start(yk, yc):  # the best pair on a small grid of centres and spacings about yc
@@ -173,7 +175,7 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
         for dc in PAIR_CENTRES:
             for p in PAIR:
                 pair = [yc + (dc - p) / N, yc + (dc + p) / N]
-                r = fit(np.append(yk, pair))[1]
+                _, r, _, _ = fit(np.append(yk, pair))
                 if best is None or float(r @ r) < best[0]:
                     best = float(r @ r), pair
         return best[1]
@@ -210,7 +212,8 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
                 banned |= np.abs((yg - yg[i] + 1.0) % 2.0 - 1.0) < 1.0 / N  # unresolved: not a jump
                 continue
             yk, cost, coef = found
-            S = concentration(h - columns(yk, n)[1] @ coef)
+            _, cols = columns(yk, n)
+            S = concentration(h - cols @ coef)
         yk = refine(yk, 40)
         yk = strong(consistent(yk))
         coef, r = fit(yk)[:2]

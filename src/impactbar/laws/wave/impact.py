@@ -349,7 +349,8 @@ class WaveImpact:
         N = loc.N
         c = 0.5 * np.abs(loc.piston.a[1:] + 1j * loc.piston.b[1:])
         tail = 2.0 * self.s * (1.0 + self.R) * N * float(c[max(0, (3 * N) // 4 - 1):].max())
-        return abs(self.peak_force - loc.smoothed().force_extremes()[0]) + tail
+        smoothed, _ = loc.smoothed().force_extremes()
+        return abs(self.peak_force - smoothed) + tail
 
     def account(self, t) -> tuple[float, float, float]:
         """The energy balance of the contact up to time ``t`` in ``[0, 2/s]``.

@@ -220,11 +220,13 @@ class PressedContact:
 
     @property
     def rod_energy(self) -> float:
-        return self.window.rod_energy + self.sustained.account(self.sustained.duration)[1]
+        _, rod, *_ = self.sustained.account(self.sustained.duration)
+        return self.window.rod_energy + rod
 
     @property
     def drive_work(self) -> float:
-        return self.window.drive_work + self.sustained.account(self.sustained.duration)[0]
+        work, *_ = self.sustained.account(self.sustained.duration)
+        return self.window.drive_work + work
 
     @property
     def advance(self) -> float:
@@ -259,7 +261,10 @@ class PressedContact:
     def damping(self, tau) -> float:
         """Energy lost to the damping ``d`` up to ``tau`` (none inside the window)."""
         wd = self.window.duration
-        return 0.0 if tau <= wd else self.sustained.account(tau - wd)[2]
+        if tau <= wd:
+            return 0.0
+        _, _, damp, *_ = self.sustained.account(tau - wd)
+        return damp
 
     def __getattr__(self, name):
         if name.startswith("__"):

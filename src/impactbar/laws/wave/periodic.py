@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import NamedTuple
 
 import numpy as np
 from scipy.optimize import brentq
@@ -58,9 +59,16 @@ TWO_PI = 2.0 * math.pi
 # :func:`wave_orbit_states` phase by phase (the same residuals to rounding)
 
 
-def _window(model: BarModelLike) -> tuple[float, float]:
+class _Window(NamedTuple):
+    """A period's window ``2/s`` and flight ``2 pi - 2/s``."""
+
+    window: float
+    flight: float
+
+
+def _window(model: BarModelLike) -> _Window:
     T = 2.0 / model.s
-    return T, TWO_PI - T
+    return _Window(T, TWO_PI - T)
 
 
 @functools.lru_cache(maxsize=64)
@@ -69,7 +77,7 @@ def _flight_fundamental(model: BarModelLike) -> tuple[np.ndarray, ...]:
     model (a model is immutable) and read-only: the phase scan evaluates the residual hundreds of
     times."""
     out = []
-    for a in fundamental(model.frequencies**2, model.d, _window(model)[1]):
+    for a in fundamental(model.frequencies**2, model.d, _window(model).flight):
         a = np.array(a, dtype=float)
         a.flags.writeable = False
         out.append(a)
@@ -154,7 +162,7 @@ def _has_series(model: BarModelLike, load: Load) -> bool:
     notes): a load of finitely many harmonics whose evaluation is :class:`FourierLoad`'s own, and a
     window shorter than the period."""
     return (compiled_kind(load, "__call__", "propagate", "flow") == FOURIER and load.abilities.orders.size > 0
-            and _window(model)[1] > 0.0)
+            and _window(model).flight > 0.0)
 
 
 @functools.lru_cache(maxsize=16)
@@ -263,9 +271,9 @@ def wave_phase_residual(model: BarModelLike, load: Load, phase) -> np.ndarray:
     """Residual of the wave law's phase equation, ``u(1, 2 pi-)`` (module docstring), shape of
     ``phase``."""
     ph = np.asarray(phase, dtype=float)
-    if use_fast("wave.residual") and compiled_kind(load) == PIECEWISE and _window(model)[1] > 0.0:
+    if use_fast("wave.residual") and compiled_kind(load) == PIECEWISE and _window(model).flight > 0.0:
         return _square_wave_residuals(model, load, ph)
-    out = np.array([_orbit_states(model, load, float(p), rates=False)[0] for p in ph.ravel()])
+    out = np.array([r for r, *_ in (_orbit_states(model, load, float(p), rates=False) for p in ph.ravel())])
     return out.reshape(ph.shape)
 
 
@@ -317,7 +325,8 @@ def wave_phase_roots(model: BarModelLike, load: Load) -> list[tuple[float, int]]
         ``(phase, multiplicity)`` sorted by phase; empty when the window ``2/s`` is not shorter than
         the period.
     """
-    return list(_phase_scan(model, load)[0])
+    roots, _ = _phase_scan(model, load)
+    return list(roots)
 
 
 def wave_phase_families(model: BarModelLike, load: Load) -> list[tuple[float, float]]:
@@ -336,7 +345,8 @@ def wave_phase_families(model: BarModelLike, load: Load) -> list[tuple[float, fl
         ``(start, end)`` phases (rad), ``start`` in ``[0, 2 pi)`` and ``end > start`` (above
         ``2 pi`` when the interval wraps round); empty when there is no family.
     """
-    return list(_phase_scan(model, load)[1])
+    _, families = _phase_scan(model, load)
+    return list(families)
 
 
 #: A residual at most this fraction of its largest sampled magnitude is rounding noise.
@@ -437,10 +447,12 @@ def _flat_runs(resid, grid, r):
         hi = grid[j] if j == n - 1 else edge(grid[j], grid[j + 1])
         intervals.append([lo, hi])
     # the grid holds 0 and 2 pi: a run through both ends is one interval round the circle
-    if len(intervals) > 1 and runs[0][0] == 0 and runs[-1][1] == n - 1:
-        first = intervals.pop(0)
-        intervals[-1][1] = first[1] + TWO_PI
-    elif len(intervals) == 1 and runs[0][0] == 0 and runs[0][1] == n - 1:
+    (start, _), *_ = runs
+    *_, (_, stop) = runs
+    if len(intervals) > 1 and start == 0 and stop == n - 1:
+        (_, first_hi), *middle, (lo, _) = intervals
+        intervals = [*middle, [lo, first_hi + TWO_PI]]
+    elif len(intervals) == 1 and start == 0 and stop == n - 1:
         intervals = [[0.0, TWO_PI]]
     return mask, tuple((float(lo) % TWO_PI, float(lo) % TWO_PI + float(hi - lo)) for lo, hi in intervals)
 
@@ -467,7 +479,7 @@ def wave_existence_edge(model: BarModelLike, k: int = 1) -> float:
     """
     from ...loads import CosineLoad
 
-    if _window(model)[1] <= 0.0:
+    if _window(model).flight <= 0.0:
         return math.nan
     a = abs(float(wave_phase_residual(model, CosineLoad(1.0, 0.0, k), 0.0)))
     Ms = 2 * k + 1

@@ -284,7 +284,8 @@ class SustainedContact:
     @property
     def advance(self) -> float:
         """Advance of the rod end over the whole sustained contact, ``int u_t(1) dt``."""
-        return self._integrals(self.duration)[3]
+        *_, advance = self._integrals(self.duration)
+        return advance
 
     def _integrals(self, tau):
         """``(drive_work, rod_energy, damping_loss, advance)`` from ``t0`` to ``t0 + tau``, in closed
