@@ -166,30 +166,12 @@ NOT_RECORDS = {
 #: cache's key and value, an option's pair): records in the wide sense, to be unpacked or named where
 #: next touched, outside what this test guards (the kernels' records)
 PYTHON_TUPLES = {
-    "cli/continue_.py": {"curve"},  # --curve NAME TO
-    "continuation/two_parameter.py": {"key"},  # the cache's key, the two parameters' values
-    "drives/circuit/drive.py": {"mode"},  # the mode (valve, ..., checks)
-    "drives/valve/drive.py": {"mode"},  # the mode (valve, ...)
-    "dynamics/modal.py": {"out"},  # the flow's four coefficient arrays
-    "laws/rodrock/coupled_exact.py": {"waves"},  # (F, G)
     "laws/rodrock/exact.py": {"drive", "kept"},  # (starts, pieces); the kept pool
     "laws/rodrock/exactjac.py": {"drive"},  # (starts, pieces)
     "laws/rodrock/exactmap.py": {"out"},  # the run's results
-    "laws/wave/_jumps.py": {"best", "found"},  # (residual, value)
-    "model.py": {"_modal"},  # (w, c, modes, kappa, sticking)
     "orbits/_closing.py": {"out"},  # the flight's results
-    "orbits/admissibility.py": {"slope"},  # (slope, smooth)
-    "orbits/find.py": {"guess"},  # (times, states)
-    "orbits/one_impact.py": {"form"},  # the load's closed form's parameters
     "orbits/shooting.py": {"last", "out"},  # the cache; the flight's results
-    "orbits/valve_search.py": {"window"},  # (lo, hi)
-    "orbits/valve_segment.py": {"_last", "window"},  # the cache; (lo, hi)
-    "physical/forces.py": {"header"},  # the header's (time, force)
-    "physical/geometry.py": {"ends"},  # (lengths, diameters)
-    "physical/optimize_problem.py": {"ends"},  # the two sides' outputs
     "physical/piston.py": {"best", "rank", "seg"},  # (residual, y), (lengths, ..., speeds)
-    "simulation/initial.py": {"out"},  # (q, v)
-    "simulation/simulate.py": {"last"},  # the cache (model, load, value)
 }
 #: module -> the names the scan met once it read names of any length, attributes and chained
 #: subscripts, that are no records (as ``NOT_RECORDS``)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import ClassVar, NamedTuple
 
 import numpy as np
 
@@ -33,6 +33,18 @@ MAX_STIFFNESS = 1e12
 #: Largest finite double: the modal frequencies ``s n pi`` (with ``n = 1`` for the rigid bar's scale
 #: ``s pi``) and the damping's square ``d**2`` (in every mode's decay, eq. 8) must stay below it.
 _FLOAT_MAX = float(np.finfo(float).max)
+
+
+
+
+class _Modal(NamedTuple):
+    """A stepped piston's modal data, worked out once (:class:`BarModel`)."""
+
+    w: np.ndarray         # the modes' frequencies (the rigid mode's 0 first)
+    c: np.ndarray         # the impact coefficients (the struck end's shape times the stop end's)
+    modes: object         # the free-free modes (:class:`~impactbar.PistonModes`)
+    kappa: np.ndarray     # the struck end's shapes squared
+    sticking: object      # the modes with the struck end held
 
 
 @dataclass(frozen=True)
@@ -156,19 +168,19 @@ class BarModel:
         kappa[0] = 1.0
         for a in (w, c, kappa):
             a.flags.writeable = False
-        object.__setattr__(self, "_modal", (w, c, modes, kappa, sticking))
+        object.__setattr__(self, "_modal", _Modal(w, c, modes, kappa, sticking))
 
     @property
     def modes(self):
         """The stepped piston's free-free modes (:class:`~impactbar.PistonModes`),
         or ``None`` for the uniform bar."""
-        return None if self._modal is None else self._modal[2]
+        return None if self._modal is None else self._modal.modes
 
     @property
     def sticking(self):
         """The stepped piston held on the stop (:class:`~impactbar.StickingBasis`:
         its fixed-free modes and their maps to the free ones), or ``None`` for the uniform bar."""
-        return None if self._modal is None else self._modal[4]
+        return None if self._modal is None else self._modal.sticking
 
     @property
     def drive_weights(self) -> np.ndarray:
@@ -177,7 +189,7 @@ class BarModel:
         :math:`E = \tfrac12 \sum_n \kappa_n (q_n'^2 + \omega_n^2 q_n^2)` (theory §2, §12),
         shape ``(N + 1,)``."""
         if self._modal is not None:
-            return self._modal[3].copy()
+            return self._modal.kappa.copy()
         return np.where(np.arange(self.n_modes + 1) == 0, 1.0, 2.0)
 
     @property
@@ -192,7 +204,7 @@ class BarModel:
         r"""Undamped modal frequencies :math:`s n \pi` for :math:`n = 0..N`, shape ``(N + 1,)`` (eq. 6);
         :math:`s k_n` with a stepped piston (theory §12)."""
         if self._modal is not None:
-            return self._modal[0].copy()
+            return self._modal.w.copy()
         return self.s * np.pi * np.arange(self.n_modes + 1, dtype=float)
 
     @property
@@ -201,7 +213,7 @@ class BarModel:
         shape ``(N + 1,)`` (eq. 15 at :math:`x = 1`); :math:`(1, \phi_1(0)\phi_1(1), \dots)` with a
         stepped piston's mass-orthonormal modes :math:`\phi_n` (theory §12)."""
         if self._modal is not None:
-            return self._modal[1].copy()
+            return self._modal.c.copy()
         c = 2.0 * (-1.0) ** np.arange(self.n_modes + 1)
         c[0] = 1.0
         return c
@@ -229,7 +241,7 @@ class BarModel:
         if not np.all(np.isfinite(x)) or np.any((x < 0.0) | (x > 1.0)):
             raise ValueError("x must lie in [0, 1]")
         if self._modal is not None:
-            modes = self._modal[2]
+            modes = self._modal.modes
             phi = modes.shapes(x) * modes.shapes(np.zeros(1))[0]
             phi[..., 0] = 1.0
             return phi

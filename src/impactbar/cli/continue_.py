@@ -259,7 +259,8 @@ def _curves(branches, args, out, written):
     """Two-parameter curves of every fold, period doubling and grazing point of the branches."""
     from ..continuation import continue_bifurcation
 
-    name, to = args.curve[0], float(args.curve[1])
+    name, to = args.curve
+    to = float(to)
     curves = []
     for b in branches:
         for e in b.events:

@@ -115,8 +115,9 @@ class _BifurcationProblem:
         key = (float(l1), float(l2))
         p = self._cache.get(key)
         if p is None:
-            model, load = with_parameter(self.model0, self.load0, self.names[0], key[0])
-            model, load = with_parameter(model, load, self.names[1], key[1])
+            first, second = key
+            model, load = with_parameter(self.model0, self.load0, self.names[0], first)
+            model, load = with_parameter(model, load, self.names[1], second)
             p = SegmentProblem(model, load, self.m, self.n)
             if len(self._cache) > 64:
                 self._cache.pop(next(iter(self._cache)))

@@ -57,11 +57,9 @@ def fundamental(w2, d: float, tau):
         out = [eC + hd, p12, -w2 * p12, eC - hd]
         if np.any(rigid):
             shape = np.broadcast_shapes(w2.shape, tau.shape)
-            out = [np.broadcast_to(o, shape) for o in out]
-            out[0] = np.where(rigid, 1.0, out[0])
-            out[1] = np.where(rigid, b_integral(d, tau), out[1])
-            out[2] = np.where(rigid, 0.0, out[2])
-            out[3] = np.where(rigid, np.exp(-d * tau), out[3])
+            a11, a12, a21, a22 = (np.broadcast_to(o, shape) for o in out)
+            out = [np.where(rigid, 1.0, a11), np.where(rigid, b_integral(d, tau), a12),
+                   np.where(rigid, 0.0, a21), np.where(rigid, np.exp(-d * tau), a22)]
         return tuple(out)
     w2, tau = np.broadcast_arrays(w2, tau)
     rigid = w2 == 0.0

@@ -211,13 +211,14 @@ def _numpy_search(load, w, w2, d, c, absc, psup, phase, q0, v0, horizon, at_rest
         ``[lo, hi]``: ``ts`` is the only zero of ``g'`` there."""
         if slope is None:
             return np.zeros(ts.size, dtype=bool)
+        bound_slope, smooth_only = slope
         mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
         q, v = states(mid)
         center, delta = load.variation(phase + mid, half)
-        L3 = _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, slope[0])
+        L3 = _third_bound(w, w2, d, absc, psup, q, v, center, delta, half, bound_slope)
         qs, vs = states(ts)
         g2 = c @ (load(phase + ts)[None, :] - d * vs - w2[:, None] * qs)
-        smooth = np.asarray(delta) == 0.0 if slope[1] else True
+        smooth = np.asarray(delta) == 0.0 if smooth_only else True
         return smooth & (np.abs(g2) > L3 * np.maximum(ts - lo, hi - ts))
 
     clusters = enclose_zeros(None, None, 0.0, horizon, n0=64, min_width=6e-3,

@@ -76,7 +76,8 @@ def _guesses(problem: _Segments, guess):
             raise ValueError("guess: the Trajectory's model has another number of modes")
         return [_unknowns_from(problem, times, states)], None
     if isinstance(guess, tuple) and len(guess) == 2:
-        return [_unknowns_from(problem, guess[0], guess[1])], None
+        times, states = guess
+        return [_unknowns_from(problem, times, states)], None
     raise ValueError("guess must be a PeriodicOrbit (MultiImpactOrbit), a Trajectory or a tuple "
                      f"(impact_times, states_after_impact); got {type(guess).__name__}")
 

@@ -202,12 +202,16 @@ def _rigid_orbits(model: BarModel, load: Load) -> OrbitList | None:
         return None
     form = load.abilities.square
     if form is not None:
-        if not form[1] < 2.0:  # kappa = 2: a constant load, the general path
+        _, kappa, *_ = form
+        if not kappa < 2.0:  # kappa = 2: a constant load, the general path
             return None
         args, square = (model.d, model.R, *form), True
     else:
         form = load.abilities.cosine
-        if form is None or form[1] == 0.0:  # pk = 0: a constant load, the general path
+        if form is None:
+            return None
+        _, pk, *_ = form
+        if pk == 0.0:  # pk = 0: a constant load, the general path
             return None
         args, square = (model.d, model.R, *form), False
     if use_fast("orbits.rigid_scalar"):

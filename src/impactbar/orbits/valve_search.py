@@ -498,7 +498,8 @@ def search_one_impact(eq: OneImpactEquations, window: tuple[float, float], *,
     -------
     OneImpactRoots
     """
-    T_lo, T_hi = float(window[0]), float(window[1])
+    T_lo, T_hi = window
+    T_lo, T_hi = float(T_lo), float(T_hi)
     tau = eq.tau
     H = T_hi - tau
     W = max(T_hi - T_lo, H)

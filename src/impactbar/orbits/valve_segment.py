@@ -69,11 +69,14 @@ class ContactMap:
 
     def __call__(self, zd):
         zd = np.asarray(zd, dtype=float)
-        if self._last is not None and np.array_equal(self._last[0], zd):
-            return self._last[1], self._last[2]
+        if self._last is not None:
+            at, z_after, jac = self._last
+            if np.array_equal(at, zd):
+                return z_after, jac
         z_after, jac, _ = self.law.impact_map(self.model, self.load, 0.0, zd)
         self._last = (zd.copy(), np.asarray(z_after, dtype=float), np.asarray(jac, dtype=float))
-        return self._last[1], self._last[2]
+        _, z_after, jac = self._last
+        return z_after, jac
 
 
 def _jump(model: BarModel) -> np.ndarray:
@@ -337,7 +340,8 @@ class ValveProblem(OrbitProblem):
         tau = drive.delay_in + drive.delay_out
         if window is None:
             window = default_window(model, drive)
-        lo, hi = max(float(window[0]), tau), float(window[1])
+        lo, hi = window
+        lo, hi = max(float(lo), tau), float(hi)
         if not hi > lo:
             raise ValueError(f"window must hold periods above the two delays ({tau:g}); got {window}")
         if model.d == 0.0 and model.n_modes:  # undamped: orbits crowd at every resonance T = 2 k / (s n)

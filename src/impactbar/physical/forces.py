@@ -224,8 +224,9 @@ class MeasuredForce:
             if len(header) != 2:
                 raise ValueError(f"force.csv: the header must have two cells (time, force); got "
                                  f"{header}")
-            scale_t = _header_scale("force.csv time column", header[0], "s", "'time [ms]'")
-            scale_f = _header_scale("force.csv force column", header[1], "N", "'force [kN]'")
+            time_cell, force_cell = header
+            scale_t = _header_scale("force.csv time column", time_cell, "s", "'time [ms]'")
+            scale_f = _header_scale("force.csv force column", force_cell, "N", "'force [kN]'")
         if not rows:
             raise ValueError(f"force.csv: {str(path)!r} holds a header but no samples")
         data = []

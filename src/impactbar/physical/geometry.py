@@ -92,15 +92,16 @@ def piston_geometry(section: dict) -> dict:
     for key in _REQUIRED:
         if key not in section:
             raise ValueError(f"missing key piston.{key}")
-    ends = [section.get("end_lengths", []), section.get("end_diameters", [])]
-    if not all(isinstance(e, list) for e in ends) or len(ends[0]) != len(ends[1]):
+    end_lengths, end_diameters = section.get("end_lengths", []), section.get("end_diameters", [])
+    if not (isinstance(end_lengths, list) and isinstance(end_diameters, list)) \
+            or len(end_lengths) != len(end_diameters):
         raise ValueError("piston.end_lengths and piston.end_diameters must be lists of the same length; got "
-                         f"{ends[0]!r} and {ends[1]!r}")
+                         f"{end_lengths!r} and {end_diameters!r}")
     d = {k: _length(f"piston.{k}", section[k]) for k in _REQUIRED[2:]}
     lengths = [d["rear_rod_length"], d["collar_length"], d["front_rod_length"]]
-    lengths += [_length(f"piston.end_lengths[{j}]", x) for j, x in enumerate(ends[0])]
+    lengths += [_length(f"piston.end_lengths[{j}]", x) for j, x in enumerate(end_lengths)]
     diameters = [d["rear_rod_diameter"], d["collar_diameter"], d["front_rod_diameter"]]
-    diameters += [_length(f"piston.end_diameters[{j}]", x) for j, x in enumerate(ends[1])]
+    diameters += [_length(f"piston.end_diameters[{j}]", x) for j, x in enumerate(end_diameters)]
     areas = {}
     for side, rod in (("rear", "rear_rod_diameter"), ("front", "front_rod_diameter")):
         a = math.pi / 4.0 * (d["collar_diameter"] ** 2 - d[rod] ** 2)

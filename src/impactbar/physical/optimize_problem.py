@@ -312,12 +312,12 @@ def _design_gradient(cfg: dict, folder, rec: dict, orbit, spec: dict, limits: di
         except ValueError:  # a border within the step: the secant of two continued orbits
             h = step * abs(values[key])
             try:
-                ends = [read(build(with_values(design, {key: config_quantity(values[key] + s * h,
-                                                                             units[key])}),
-                                   folder).orbit(guess=orbit)) for s in (1.0, -1.0)]
+                above, below = [read(build(with_values(design, {key: config_quantity(values[key] + s * h,
+                                                                                     units[key])}),
+                                           folder).orbit(guess=orbit)) for s in (1.0, -1.0)]
             except (ValueError, np.linalg.LinAlgError, ArithmeticError):
                 continue
-            col = {n: (ends[0][n] - ends[1][n]) / (2.0 * h) for n in ends[0]}
+            col = {n: (above[n] - below[n]) / (2.0 * h) for n in above}
         dobj[j] = col["objective"] * span[j]
         dcon[:, j] = [col[n] * span[j] for n in names]
     return _Gradients(dobj, dcon)

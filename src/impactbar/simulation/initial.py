@@ -140,7 +140,8 @@ class InitialState:
         end = float(np.asarray(u0(np.array([1.0])), dtype=float).ravel()[0])
         if end > 0.0:
             raise ValueError(f"u0 must keep the struck end off the stop, u0(1) <= 0; got {end}")
-        return cls(out[0], out[1])
+        q, v = out
+        return cls(q, v)
 
 
 def _real_vector(name, value) -> np.ndarray:

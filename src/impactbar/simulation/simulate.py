@@ -160,8 +160,10 @@ def _core_for(model: BarModel, load: Load) -> _Core:
     fixed cost; the Monte Carlo experiments run thousands with one pair). Keyed by the values of the
     model and the load (both frozen: an entry never goes stale), the last call's found by identity."""
     last = _CORES.get(_LAST)
-    if last is not None and last[0] is model and last[1] is load:
-        return last[2]
+    if last is not None:
+        last_model, last_load, core = last
+        if last_model is model and last_load is load:
+            return core
     key = (model, load)
     with _CORES_LOCK:
         core = _CORES.get(key)

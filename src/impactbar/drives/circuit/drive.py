@@ -349,7 +349,8 @@ class HydraulicCircuitDrive(Drive):
 
     def _directions(self, mode):
         # (the bar's, the ramp's end, then one a flag of the mode: the network's event slots 1..)
-        return (1, 1, -1, 1 if mode[0] else -1) + tuple(-1 if f else 1 for f in mode[2:])
+        target, _, *flags = mode
+        return (1, 1, -1, 1 if target else -1) + tuple(-1 if f else 1 for f in flags)
 
     def _fired(self, mode, hit):
         names = {K.OUT_EV: _SWITCH_OUT, K.IN_EV: _SWITCH_IN, K.RAMP_EV: _RAMP}
@@ -424,7 +425,8 @@ class HydraulicCircuitDrive(Drive):
         return (target, moving, *(flags.get(name, 0) for name in self._composition.events[1:]))
 
     def mode_name(self, mode) -> str:
-        return "stroke" if mode[0] == 1 else "return"
+        target, *_ = mode
+        return "stroke" if target == 1 else "return"
 
     def force(self, mode, z, q, v) -> float:
         L = self.layout
@@ -504,7 +506,7 @@ class HydraulicCircuitDrive(Drive):
         return DriveState((target, 1, *flags), z)
 
     def jump(self, mode, z, event, t, q, v) -> DriveState:
-        target = mode[0]
+        target, *_ = mode
         name = event.name
         if name == _SWITCH_OUT:
             return self._toward(mode, z, 1)

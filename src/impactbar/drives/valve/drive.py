@@ -180,11 +180,13 @@ class PositionSwitchedDrive(Drive):
 
     def mode_name(self, mode) -> str:
         """``"stroke"`` or ``"return"``: the valve's state."""
-        return KIND[mode[0]]
+        valve, _ = mode
+        return KIND[valve]
 
     def force(self, mode, z, q, v) -> float:
         """``+stroke`` or ``-ret``, by the valve's state (:meth:`level`)."""
-        return self.level(mode[0])
+        valve, _ = mode
+        return self.level(valve)
 
     @cached_property
     def _crossing(self) -> GapCrossing:

@@ -164,7 +164,7 @@ class _Incoming:
     """``a(t) = -2 G_0(t) / Z_0`` of an exact blow (module docstring), ``t`` the model time."""
 
     def __init__(self, ex, waves, force, T0, Z0, t0):
-        self.ex, self.F, self.G = ex, waves[0], waves[1]
+        self.ex, (self.F, self.G) = ex, waves
         self.force, self.T0, self.Z0, self.t0 = force, T0, Z0, t0
 
     def arriving(self, t):

@@ -171,14 +171,14 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
         return yk[np.abs(J1 - J2) <= 0.1 * np.abs(J1)]
 
     def _pair_start(yk, yc):  # the best pair on a small grid of centres and spacings about yc
-        best = None
+        best_cost, best_pair = None, None
         for dc in PAIR_CENTRES:
             for p in PAIR:
                 pair = [yc + (dc - p) / N, yc + (dc + p) / N]
                 _, r, _, _ = fit(np.append(yk, pair))
-                if best is None or float(r @ r) < best[0]:
-                    best = float(r @ r), pair
-        return best[1]
+                if best_cost is None or float(r @ r) < best_cost:
+                    best_cost, best_pair = float(r @ r), pair
+        return best_pair
 
     with single_threaded_blas():  # small dense problems
         # matching pursuit: the largest peak of the concentration sum of what the jumps found so
@@ -196,7 +196,7 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
             i = int(np.argmax(np.where(near | banned, -1.0, S)))
             if S[i] < thr:
                 break
-            found = None
+            found, found_cost = None, None
             # one jump there, or a pair of jumps about 2/N apart (a narrow pulse, or a release
             # followed closely by a re-contact: its concentration sum is one blob), the pair where
             # it leaves less than half of what the one jump leaves unexplained
@@ -206,8 +206,9 @@ def locate_jumps(a, b, scale: float, max_jumps: int = 16):
                 Jt = np.abs(coef[:trial.size])
                 if not (min_gap(trial) < GAP / N or Jt.max() > cap or float(r @ r) > 0.98 * cost
                         or Jt[-len(new):].min() < 1e-3 * Jt.max()):
-                    if found is None or float(r @ r) < 0.5 * found[1]:
-                        found = trial, float(r @ r), coef
+                    if found is None or float(r @ r) < 0.5 * found_cost:
+                        found_cost = float(r @ r)
+                        found = trial, found_cost, coef
             if found is None:
                 banned |= np.abs((yg - yg[i] + 1.0) % 2.0 - 1.0) < 1.0 / N  # unresolved: not a jump
                 continue
