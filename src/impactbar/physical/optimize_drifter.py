@@ -58,6 +58,7 @@ from .optimize_problem import (
     _design_record,
     _limits,
     _operating_point,
+    _refined_gradient,
     evaluate_blow,
     evaluate_design,
     least_margin,
@@ -257,7 +258,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     counter = {"new": 0, "gradients": 0}
     # each design's orbit by its id (a stored design's solved again along its guesses where needed)
     chain = OrbitChain(store, lambda c, g: _operating_point(build(with_values(cfg, c), folder), g)[0])
-    gradients: dict[str, tuple] = {}
+    gradients: dict = {}  # by id (SLSQP's), by (id, "refined") (the polish's)
     found: list = []  # the multistart's local searches
     points: dict[str, np.ndarray] = {}  # each design's scaled variables by its id
     polished = None  # the multistart's polish (its result)
@@ -346,6 +347,15 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 counter["gradients"] += 1
             return gradients[rec["id"]]
 
+        def refined(u):  # the polish's: the step refined where it meets a border (_refined_gradient)
+            rec = evaluate(u)
+            key = (rec["id"], "refined")
+            if key not in gradients:
+                orbit = chain.orbit(rec["id"]) if rec["ok"] and "u" in rec else None
+                gradients[key] = _refined_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span)
+                counter["gradients"] += 1
+            return gradients[key]
+
         if method == "differential_evolution":
             res = population_search(lambda u: penalised(evaluate(u), fkey, ref),
                                     lambda u: design_of(u)[::2], store, evaluate, _design_record,
@@ -360,7 +370,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 {"config": cfg, "folder": folder, "limits": kept}, lambda u: cobyla(u, budget), fkey,
                 sample=sample, local_starts=local_starts, seed=seed, workers=workers, n_variables=len(keys))
             if found and polish:
-                polished = polish_search(evaluate, g, derivative, history, points, fkey, designs=polish,
+                polished = polish_search(evaluate, g, refined, history, points, fkey, designs=polish,
                                          ftol=tol ** 3)
         else:
             res = minimize(f, u0, jac=lambda u: -derivative(u)[0] / ref, method="SLSQP",
@@ -400,8 +410,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     certificate = certify_search(fresh["optimum"], history, keys, (lo, span), polished if by_polish else res,
                                  tol, fkey, (lambda v: (evaluate_blow(build(with_values(
                                      cfg, design_of(v)[2]), folder), V, limits))) if ideal else None,
-                                 lambda: _design_gradient(cfg, folder, fresh["optimum"], None, spec, limits,
-                                                          fkey, span),
+                                 lambda: _refined_gradient(cfg, folder, fresh["optimum"], None, spec, limits,
+                                                           fkey, span),
                                  tol if method in ("cobyla", "multistart") and not by_polish else 0.0)
     return DrifterOptimum(objective=objective,
                           vary={k: {"low": spec[k]["low"], "high": spec[k]["high"], "unit": spec[k]["unit"]}

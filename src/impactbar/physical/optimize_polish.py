@@ -5,7 +5,7 @@ A derivative-free search (COBYLA) ends within its last step of a local optimum, 
 design's projected gradient (:mod:`~impactbar.physical.optimality`) is then of the order of that step
 over the problem's curvature, often above :data:`~impactbar.physical.optimality.KKT_TOLERANCE`.
 :func:`polish` starts SLSQP from it, with the objective's and the constraints' gradients in the scaled
-variables (:func:`~impactbar.physical.optimize_problem._design_gradient`, four flights per variable):
+variables (:func:`~impactbar.physical.optimize_problem._refined_gradient`, four flights a variable and step):
 SLSQP's quadratic subproblem identifies the active constraints and bounds and steps onto them, its
 quasi-Newton Hessian along them, so that a few iterations take the projected gradient from the
 search's resolution to the gradients' accuracy. Its designs are evaluated as the search's are; the
