@@ -39,7 +39,7 @@ def test_the_sample_is_a_scrambled_sobol_sample_of_the_bounds(run):
     sample = np.array([[r["values"][k] for k in VARY] for r in run.history[1:9]])
     np.testing.assert_allclose(sample, LOW + (HIGH - LOW) * u, rtol=1e-12)
     assert run.history[0]["changes"] == {"valve.switch_out": "21.5 mm", "accumulator.precharge": "10 MPa"}
-    assert run.evaluations <= 1 + 16
+    assert run.evaluations <= 1 + 16 + 12  # (the polish's 12 designs at most besides)
 
 
 def test_the_optimum_is_a_fresh_orbits_feasible_and_beats_the_sample(run):
@@ -101,7 +101,7 @@ def test_cli_multistart(tmp_path, capsys):
                  "impact_power", "--method", "multistart", "--sample", "4", "--local-starts", "1",
                  "--max-evaluations", "8", "--quiet", "--out", str(out)]) == 0
     doc = json.loads(out.read_text())
-    assert len(doc["found"]) == 1 and doc["evaluations"] <= 9
+    assert len(doc["found"]) == 1 and doc["evaluations"] <= 9 + 12
     text = capsys.readouterr().out
     assert "gain in impact_power" in text and "local search" in text
     assert main(["optimize", "circuit-drifter", "--vary", "valve.switch_out=20mm:23 mm", "--objective",

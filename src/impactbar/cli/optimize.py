@@ -59,6 +59,8 @@ def add_parser(sub) -> None:
                    help="multistart: the Sobol sample's designs, a power of two (default 64)")
     p.add_argument("--local-starts", type=int, default=3, metavar="K",
                    help="multistart: COBYLA from the K best feasible designs of the sample (default 3)")
+    p.add_argument("--polish", type=int, default=12, metavar="N",
+                   help="multistart: the most designs of SLSQP's polish of the best (0: none; default 12)")
     p.add_argument("--cache", default=None, metavar="FILE.json",
                    help="the designs evaluated, read first and written after each: a stopped run resumes")
     p.add_argument("--out", default=None, metavar="FILE.json", help="write the result as JSON")
@@ -168,7 +170,7 @@ def _run(args) -> int:
                            max_evaluations=args.max_evaluations, cache=args.cache, progress=not args.quiet,
                            method=args.method, impact_velocity=args.impact_velocity, workers=args.workers,
                            popsize=args.popsize, seed=args.seed, sample=args.sample,
-                           local_starts=args.local_starts)
+                           local_starts=args.local_starts, polish=args.polish)
     if out is not None:
         res.to_json(out)
     if args.json:

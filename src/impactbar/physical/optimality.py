@@ -289,8 +289,8 @@ def certify_search(record: dict, history: list, keys: list, scaling: tuple, resu
                                                     *(c["scaled"] for c in r["constraints"].values())], u)
     else:
         (g, G), method = design_gradient(), ("implicit-function-theorem sensitivities of the orbit "
-                                             "(tangent_derivatives; central differences of continued orbits "
-                                             "across a border)")
+                                             "(tangent_derivatives, the step refined till two agree; central "
+                                             "differences of continued orbits across a border)")
     failed = [((np.array([r["values"][k] for k in keys]) - lo) / span, r["error"]) for r in history
               if not r.get("ok") and "values" in r]
     return certify(g, G, record, u, keys, method=method, budget=stopped_at_budget(result), failed=failed,

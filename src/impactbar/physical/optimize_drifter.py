@@ -48,6 +48,7 @@ from .optimize_cache import OrbitChain, read_cache, write_cache
 from .optimize_failures import failed_record
 from .optimize_multistart import check_multistart, multistart_search
 from .optimize_outputs import piston_and_multipliers, shank_stress
+from .optimize_polish import polish_search
 from .optimize_population import check_population, penalised, population_search
 from .optimize_problem import (
     DEFAULT_CONSTRAINTS,
@@ -58,6 +59,7 @@ from .optimize_problem import (
     _design_record,
     _limits,
     _operating_point,
+    _refined_gradient,
     evaluate_blow,
     evaluate_design,
     least_margin,
@@ -96,7 +98,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                      *, max_evaluations: int = 60, cache=None, progress: bool = True, rhobeg: float = 0.2,
                      tol: float = 2e-3, method: str = "cobyla", impact_velocity=None, workers=None,
                      popsize: int = 5, seed: int = 0, sample: int = 64,
-                     local_starts: int = 3, start: str = "feasible") -> DrifterOptimum:
+                     local_starts: int = 3, start: str = "feasible", polish: int = 12) -> DrifterOptimum:
     r"""The design of a drifter with its oil circuit that maximises ``objective`` under
     ``constraints``, the variables any of its dotted config keys within bounds.
 
@@ -161,6 +163,12 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     sample, local_starts : int
         ``method="multistart"``: the sample's designs (a power of two) and the local searches (in
         ``[1, sample]``), each ``(max_evaluations - sample) // local_starts`` designs at most.
+    polish : int
+        ``method="multistart"``: the most designs of the polish of the best feasible design found
+        (:mod:`~impactbar.physical.optimize_polish`: SLSQP with the implicit function theorem's
+        gradients from it), besides ``max_evaluations``; its design is reported where a fresh orbit
+        confirms it feasible and better, and certified as SLSQP's (the active set within 1e-4, no
+        step of COBYLA's); 0: no polish.
     start : {"feasible", "any"}
         Whether the config's design, the search's start, must meet the constraints (``"feasible"``,
         else a ``ValueError``) or may miss them (``"any"``: COBYLA and SLSQP move towards the
@@ -222,6 +230,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                          f"variables); got {tol!r}")
     if start not in ("feasible", "any"):
         raise ValueError(f"start must be 'feasible' or 'any'; got {start!r}")
+    if not (isinstance(polish, int) and not isinstance(polish, bool) and polish >= 0):
+        raise ValueError(f"polish must be an integer >= 0 (the polish's most designs); got {polish!r}")
     any_start = start == "any"  # (the name start is the start's values below)
     if workers is not None and method not in ("differential_evolution", "multistart"):
         raise ValueError(f"workers: only with method='differential_evolution'/'multistart', not {method!r}")
@@ -264,8 +274,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     counter = {"new": 0, "gradients": 0}
     # each design's orbit by its id (a stored design's solved again along its guesses where needed)
     chain = OrbitChain(store, lambda c, g: _operating_point(build(with_values(cfg, c), folder), g).orbit)
-    gradients: dict[str, tuple] = {}
+    gradients: dict = {}  # by id (SLSQP's), by (id, "refined") (the polish's)
     found: list = []  # the multistart's local searches
+    points: dict[str, np.ndarray] = {}  # each design's scaled variables by its id
+    polished = None  # the multistart's polish (its result)
 
     def changes_of(values: dict) -> dict:
         return {k: written_quantity(values[k], spec[k]["unit"], config_value(cfg, k)) for k in keys}
@@ -282,6 +294,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         nonlocal n_cached
         u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
         rid, values, changes = design_of(u)
+        points.setdefault(rid, u)
         t0, drifter = time.perf_counter(), None
         if rid in store:
             rec = store[rid]
@@ -350,6 +363,15 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 counter["gradients"] += 1
             return gradients[rec["id"]]
 
+        def refined(u):  # the polish's: the step refined where it meets a border (_refined_gradient)
+            rec = evaluate(u)
+            key = (rec["id"], "refined")
+            if key not in gradients:
+                orbit = chain.orbit(rec["id"]) if rec["ok"] and "u" in rec else None
+                gradients[key] = _refined_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span)
+                counter["gradients"] += 1
+            return gradients[key]
+
         if method == "differential_evolution":
             res = population_search(lambda u: penalised(evaluate(u), fkey, ref),
                                     lambda u: design_of(u)[::2], store, evaluate, _design_record,
@@ -363,13 +385,16 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 evaluate, lambda u: design_of(u)[::2], store, _design_record,
                 {"config": cfg, "folder": folder, "limits": kept}, lambda u: cobyla(u, budget), fkey,
                 sample=sample, local_starts=local_starts, seed=seed, workers=workers, n_variables=len(keys))
+            if found and polish:
+                polished = polish_search(evaluate, g, refined, history, points, fkey, designs=polish,
+                                         ftol=tol ** 3)
         else:
             res = minimize(f, u0, jac=lambda u: -derivative(u).objective / ref, method="SLSQP",
                            constraints=[{"type": "ineq", "fun": g,
                                          "jac": lambda u: derivative(u).constraints}],
                            bounds=[(0.0, 1.0)] * len(keys),
                            options={"ftol": tol ** 3, "maxiter": max_evaluations})
-        message = str(res.message)
+        message = str(res.message) + ("" if polished is None else f"; {polished.summary}")
         bar.finish()
     finally:
         bar.close()
@@ -397,10 +422,14 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             message += "; the best design's fresh orbit missed a constraint, the next best kept"
         fresh[name] = out
     message += _better_missed(history, best, fkey)
-    certificate = certify_search(fresh["optimum"], history, keys, (lo, span), res, tol, fkey, (lambda v: (
-        evaluate_blow(build(with_values(cfg, design_of(v).changes), folder), V, limits))) if ideal else None,
-        lambda: _design_gradient(cfg, folder, fresh["optimum"], None, spec, limits, fkey, span),
-        tol if method in ("cobyla", "multistart") else 0.0)
+    # the polish's design reported: resolved by SLSQP (no step of COBYLA's), its stop SLSQP's
+    by_polish = polished is not None and polished.improved and best["id"] == design_of(polished.x).id
+    certificate = certify_search(fresh["optimum"], history, keys, (lo, span), polished if by_polish else res,
+                                 tol, fkey, (lambda v: (evaluate_blow(build(with_values(
+                                     cfg, design_of(v).changes), folder), V, limits))) if ideal else None,
+                                 lambda: _refined_gradient(cfg, folder, fresh["optimum"], None, spec, limits,
+                                                           fkey, span),
+                                 tol if method in ("cobyla", "multistart") and not by_polish else 0.0)
     return DrifterOptimum(objective=objective,
                           vary={k: {"low": spec[k]["low"], "high": spec[k]["high"], "unit": spec[k]["unit"]}
                                 for k in keys},

@@ -1,0 +1,165 @@
+r"""The polish of a search's best design: an active-set step with the implicit function theorem's
+gradients, so that the design reported can be certified to first order.
+
+A derivative-free search (COBYLA) ends within its last step of a local optimum, or at its budget; its
+design's projected gradient (:mod:`~impactbar.physical.optimality`) is then of the order of that step
+over the problem's curvature, often above :data:`~impactbar.physical.optimality.KKT_TOLERANCE`.
+:func:`polish` starts SLSQP from it, with the objective's and the constraints' gradients in the scaled
+variables (:func:`~impactbar.physical.optimize_problem._refined_gradient`, four flights a variable and step):
+SLSQP's quadratic subproblem identifies the active constraints and bounds and steps onto them, its
+quasi-Newton Hessian along them, so that a few iterations take the projected gradient from the
+search's resolution to the gradients' accuracy. Its designs are evaluated as the search's are; the
+design it returns is the best feasible design it visited, and only where it is better than the start
+(a design without an orbit, or one that misses a constraint, is never returned), so a polish that
+fails, as at a border of the operating point where its line search backtracks, leaves the start.
+:func:`~impactbar.physical.optimize_drifter` then reports it only where a fresh orbit confirms it
+feasible and no worse than the search's best (its ranking of the designs evaluated).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["polish", "polish_search"]
+
+
+class _Spent(Exception):
+    """The polish's budget of designs used up (SLSQP cannot be stopped by its callbacks)."""
+
+
+def polish(objective, margins, gradients, u, *, designs: int, ftol: float = 1e-10,
+           feasibility: float = 1e-8):
+    r"""SLSQP from the design ``u``, the objective maximised under the margins, with given gradients;
+    the best feasible design it visits if better than ``u``.
+
+    Parameters
+    ----------
+    objective : callable
+        ``u -> float``, maximised; ``None`` where the design has no value (no orbit).
+    margins : callable
+        ``u -> array of shape (m,)``, the constraints' scaled margins (met where :math:`\ge 0`).
+    gradients : callable
+        ``u -> (objective_gradient (n,), margin_gradients (m, n))`` in the scaled variables.
+    u : array_like, shape (n,)
+        The start, in ``[0, 1]``: the search's best feasible design.
+    designs : int
+        The most designs the polish evaluates (at least 1; SLSQP stops there).
+    ftol : float
+        SLSQP's tolerance on the objective scaled by the start's (positive).
+    feasibility : float
+        How far (scaled) a margin may miss and still count as met (not negative).
+
+    Returns
+    -------
+    scipy.optimize.OptimizeResult
+        ``x`` the design returned (``u`` where no design visited is better), ``fun`` its objective,
+        ``improved`` whether it is not ``u``, ``nfev`` the designs evaluated, ``nit`` SLSQP's
+        iterations, ``message`` SLSQP's (or that the budget was spent), ``success`` SLSQP's.
+
+    Raises
+    ------
+    ValueError
+        ``designs`` or ``ftol`` out of range, or a start without a value.
+
+    Examples
+    --------
+    The largest :math:`u_0 + 2u_1` in the unit disc (closed form :math:`(1, 2)/\sqrt 5`), from a
+    point of it:
+
+    >>> res = polish(lambda u: u[0] + 2 * u[1], lambda u: np.array([1 - u @ u]),
+    ...              lambda u: (np.array([1.0, 2.0]), -2 * u[None, :]), [0.4, 0.8], designs=40)
+    >>> bool(res.improved), np.round(res.x * np.sqrt(5), 6).tolist()
+    (True, [1.0, 2.0])
+    """
+    from scipy.optimize import OptimizeResult, minimize
+
+    if not (isinstance(designs, int) and not isinstance(designs, bool) and designs >= 1):
+        raise ValueError(f"designs must be an integer >= 1 (the polish's most designs); got {designs!r}")
+    if not (isinstance(ftol, float) and 0.0 < ftol < 1.0):
+        raise ValueError(f"ftol must be a number in (0, 1) (SLSQP's on the scaled objective); got {ftol!r}")
+    u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+    f0 = objective(u)
+    if f0 is None:
+        raise ValueError("u: the start has no value (no orbit); the polish starts from a feasible design")
+    ref = abs(f0) or 1.0
+    best = {"x": u, "fun": f0, "improved": False}
+    seen = {u.tobytes()}
+    m = len(margins(u))
+
+    def visit(v):
+        v = np.clip(np.asarray(v, dtype=float), 0.0, 1.0)
+        if v.tobytes() not in seen:
+            if len(seen) > designs:  # (the start among them)
+                raise _Spent
+            seen.add(v.tobytes())
+        value = objective(v)
+        if value is not None and value > best["fun"] and np.all(np.asarray(margins(v)) >= -feasibility):
+            best.update(x=v, fun=value, improved=True)
+        return v, value
+
+    def f(v):
+        v, value = visit(v)
+        return 1.0 if value is None else -value / ref
+
+    def g(v):
+        v, value = visit(v)
+        return np.asarray(margins(v), dtype=float) if value is not None else -np.ones(m)
+
+    def df(v):  # the objective's gradient, scaled as f
+        point, _ = visit(v)
+        d_objective, _ = gradients(point)
+        return -d_objective / ref
+
+    def dg(v):
+        point, _ = visit(v)
+        _, d_margins = gradients(point)
+        return d_margins
+
+    try:
+        res = minimize(f, u, jac=df, method="SLSQP", constraints=[{"type": "ineq", "fun": g, "jac": dg}],
+                       bounds=[(0.0, 1.0)] * u.size, options={"ftol": ftol, "maxiter": 10 * designs})
+        message, success, nit = str(res.message), bool(res.success), int(res.nit)
+    except _Spent:
+        message, success, nit = f"the polish's limit reached ({designs} designs)", False, -1
+    return OptimizeResult(x=best["x"], fun=best["fun"], improved=best["improved"], nfev=len(seen) - 1,
+                          nit=nit, message=message, success=success)
+
+
+def polish_search(evaluate, margins, gradients, history: list, points: dict, fkey: str, *, designs: int,
+                  ftol: float):
+    """:func:`polish` from the best feasible design of a search
+    (:func:`~impactbar.physical.optimize_drifter`'s).
+
+    Parameters
+    ----------
+    evaluate : callable
+        ``u -> record`` (a design's, ``ok`` false without an orbit).
+    margins, gradients : callable
+        As :func:`polish`'s (the search's own).
+    history : list of dict
+        The search's records; the best feasible one (``fkey`` largest) is the start.
+    points : dict
+        Each record's id to its scaled variables.
+    fkey : str
+        The objective's figure in a record's ``objectives`` (maximised).
+    designs : int
+        The polish's most designs.
+    ftol : float
+        SLSQP's tolerance (:func:`polish`).
+
+    Returns
+    -------
+    scipy.optimize.OptimizeResult
+        :func:`polish`'s, with ``summary``: a line for the search's message.
+    """
+    top = max((r for r in history if r.get("feasible")), key=lambda r: r["objectives"][fkey])
+
+    def objective(v):
+        rec = evaluate(v)
+        return rec["objectives"][fkey] if rec["ok"] else None
+
+    res = polish(objective, margins, gradients, points[top["id"]], designs=designs, ftol=ftol)
+    gain = f"{fkey} {top['objectives'][fkey]:.6g} -> {res.fun:.6g}" if res.improved else "no better design"
+    res.summary = (f"polished from the best design (SLSQP, the implicit function theorem's gradients): "
+                   f"{res.nfev} designs, {gain} ({res.message})")
+    return res
