@@ -167,6 +167,29 @@ def test_the_bar_shows_only_on_a_terminal_and_ends_at_its_true_count(monkeypatch
     assert "`optimize`" in row
 
 
+def test_a_redirected_run_names_its_slowest_design_in_one_line_and_draws_no_bar(tmp_path):
+    """``impactbar optimize`` with stderr redirected to a log (no terminal: no bar): the one place the
+    slowest design shows is the table's last line, once, with its seconds; the log holds no bar."""
+    import os
+    import subprocess
+
+    log = tmp_path / "stderr.log"
+    env = {**os.environ, "PYTHONPATH": str(ROOT / "src"), "MPLBACKEND": "Agg"}
+    with log.open("w") as err:
+        proc = subprocess.run([sys.executable, "-m", "impactbar", "optimize", "circuit-drifter",
+                               "--vary", "valve.switch_out=19 mm:24 mm", "--objective", "impact_power",
+                               "--max-evaluations", "3"],
+                              env=env, stdout=subprocess.PIPE, stderr=err, text=True, timeout=600)
+    assert proc.returncode == 0, log.read_text()
+    lines = [line for line in proc.stdout.splitlines() if "slowest" in line]
+    assert len(lines) == 1, proc.stdout
+    m = re.search(r" in (\d+) s, the slowest design (\d+\.\d) s$", lines[0])
+    assert m, lines[0]
+    assert 0.0 < float(m.group(2)) <= float(m.group(1)) + 0.5, lines[0]
+    text = log.read_text()
+    assert "\r" not in text and "optimize_drifter" not in text and "design/s" not in text, text
+
+
 # -- the search's settings ---------------------------------------------------------------------------
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"rhobeg": 0}, r"rhobeg must be a number in \(0, 1\]"),

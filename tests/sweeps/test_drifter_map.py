@@ -305,6 +305,26 @@ def test_the_command_line_refuses_a_bad_axis_in_one_line_before_any_work(tmp_pat
     assert not (tmp_path / "m.zarr").exists()
 
 
+def test_the_command_line_prints_the_edges_in_the_unit_the_config_wrote(tmp_path, capsys):
+    """``impactbar sweep``'s ``edge:`` lines: the relief edge between 70 and 80 L/min of a config
+    that writes its pump flow in L/s, in L/s (the store keeps SI, 0.00116667 m^3/s); the map's axis
+    written in L/min does not change it."""
+    from pathlib import Path
+
+    from impactbar.cli import main
+
+    example = (Path(__file__).parents[2] / "examples" / "circuit_drifter.toml").read_text()
+    mine = example.replace('pump_flow = "70 L/min"', 'pump_flow = "1.1666666666666667 L/s"')
+    assert mine != example
+    (tmp_path / "mine.toml").write_text(mine)
+    (tmp_path / "map.toml").write_text('task = "operating_point"\nconfig = "mine.toml"\n[axes]\n'
+                                       '"supply.pump_flow" = { values = ["70 L/min", "80 L/min"] }\n')
+    assert main(["sweep", str(tmp_path / "map.toml"), "--out", str(tmp_path / "m.zarr"), "--quiet"]) == 0
+    edges = [line for line in capsys.readouterr().out.splitlines() if line.startswith("edge:")]
+    assert edges == ["edge: relief_opens changes along supply.pump_flow between 1.16667 L/s and 1.33333 L/s "
+                     "(at grid index [0])"], edges
+
+
 def test_the_readme_map_prints_what_the_readme_shows(tmp_path, monkeypatch, capsys):
     """The README's design-map example, run as it stands, prints the lines the README quotes."""
     import re

@@ -176,7 +176,37 @@ def test_select_takes_a_quantity_and_the_plot_names_the_held_axis(finished, tmp_
 
     monkeypatch.setattr(plt, "close", keep)
     plot_sweep(finished, tmp_path / "line.png", select={"valve.delay": "0.1 ms"})
-    assert any("held at valve.delay = 0.0001 s" in t for t in titles), titles
+    assert any(t.endswith("held at valve.delay = 0.1 ms") for t in titles), titles
+
+
+def test_the_held_axis_is_in_the_unit_the_config_wrote(finished, tmp_path, monkeypatch):
+    """The 1-D plot's title named the held axis in SI ("held at valve.delay = 0.0001 s",
+    "valve.supply_pressure = 2e+07 Pa"), where the config writes ms and MPa and the map's edge lines
+    print those; a dimensionless sweep keeps its bare number."""
+    pytest.importorskip("matplotlib")
+    import matplotlib.pyplot as plt
+
+    from impactbar import CosineLoad
+    from impactbar.sweeps import plot_sweep, run_sweep
+
+    titles = []
+    close = plt.close
+
+    def keep(fig):
+        titles.append([ax.get_title() for ax in fig.axes])
+        close(fig)
+
+    monkeypatch.setattr(plt, "close", keep)
+    plot_sweep(finished, tmp_path / "a.png", select={"valve.delay": 1e-4})
+    plot_sweep(finished, tmp_path / "b.png", select={"valve.supply_pressure": "20 MPa"})
+    spec = parse_spec({"task": "orbits", "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+                       "load": CosineLoad(0.5, 1.0).params.record(),
+                       "axes": {"R": {"values": [0.2, 0.9]}, "s": {"values": [50.0, 100.0]}}})
+    run_sweep(spec, tmp_path / "r.zarr", progress=False)
+    plot_sweep(tmp_path / "r.zarr", tmp_path / "c.png", select={"s": 100.0})
+    assert "held at valve.delay = 0.1 ms" in titles[0][0], titles
+    assert "held at valve.supply_pressure = 20 MPa" in titles[1][0], titles
+    assert "held at s = 100" in titles[2][0], titles
 
 
 def test_the_cli_select_takes_a_quantity(finished, tmp_path):

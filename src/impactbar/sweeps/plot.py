@@ -73,15 +73,17 @@ def reduce_axes(ds, select: dict | None, max_dims: int):
     return ds, dims
 
 
-def held_axes(ds, names, dims) -> str:
-    """Where the axes fixed by a selection are held: ``"held at NAME = VALUE UNIT, ..."``, or ``""``.
+def held_axes(ds, spec, dims) -> str:
+    """Where the axes fixed by a selection are held: ``"held at NAME = VALUE UNIT, ..."``, or ``""``;
+    a design map's axis in the unit its config writes the key in, else the key table's display unit
+    (:func:`~impactbar.physical.display_units.format_key`, as the map's edges are printed).
 
     Parameters
     ----------
     ds : xarray.Dataset
         A reduced sweep store (:func:`reduce_axes`): a fixed axis is a scalar coordinate.
-    names : sequence of str
-        The sweep's axes, in spec order.
+    spec : SweepSpec or DrifterMapSpec
+        The sweep's spec (:func:`~impactbar.sweeps.store.stored_spec`): its axes, in spec order.
     dims : tuple of str
         The axes the chart shows.
 
@@ -89,13 +91,21 @@ def held_axes(ds, names, dims) -> str:
     -------
     str
     """
+    config = getattr(spec, "config", None)  # a design map's: its keys' units as written
     parts = []
-    for name in names:
+    for ax in spec.axes:
+        name = ax.name
         if name in dims or name not in ds.coords or ds[name].ndim != 0:
+            continue
+        value = ds[name].values.item()
+        if config is not None:
+            from ..physical.display_units import format_key
+
+            parts.append(f"{name} = {format_key(value, ax.unit, config, name)}")
             continue
         units = ds[name].attrs.get("units", "")
         units = "" if units in ("", "1") else f" {units}"
-        parts.append(f"{name} = {ds[name].values.item():.6g}{units}")
+        parts.append(f"{name} = {value:.6g}{units}")
     return "held at " + ", ".join(parts) if parts else ""
 
 
@@ -171,7 +181,7 @@ def plot_sweep(store, out, *, select: dict | None = None, dpi: int = 150,
         fig = plot_operating_map(red, dims, variable).figure
     else:
         fig = plot_bifurcation(red, dims).figure
-    held = held_axes(red, [a.name for a in stored_spec(ds).axes], dims)
+    held = held_axes(red, stored_spec(ds), dims)
     if held:  # in the first panel's title, under any title it has
         ax = fig.axes[0]
         title = ax.get_title()
