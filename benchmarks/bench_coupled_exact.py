@@ -24,15 +24,18 @@ import numpy as np
 from _timing import fresh_runs  # this folder's shared runner of two trees
 
 import impactbar as ib
-from impactbar.physical import build, read_config
+from impactbar.physical import build, read_config, with_values
 
 EXAMPLE = Path(__file__).parents[1] / "examples" / "circuit_drifter_rock.toml"
 
 
-def arrival():
-    """The exact model, the drive and the second arrival's ``(state, t0, q, v)``."""
+def arrival(values=None):
+    """The exact model, the drive and the second arrival's ``(state, t0, q, v)`` (the config's dotted
+    keys ``values`` changed first, e.g. the rod's lengths)."""
     cfg, _ = read_config(str(EXAMPLE))
     del cfg["rock"]["cells_per_piston"]
+    if values:
+        cfg = with_values(cfg, values)
     drifter = build(cfg)
     model, drive = drifter.model(), drifter.drive()
     exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))

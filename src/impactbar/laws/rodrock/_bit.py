@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba.extending import register_jitable
 
 # branches of the bilinear law
 _LOAD, _ELASTIC, _FREE = 0, 1, 2
@@ -210,13 +211,111 @@ class _Bit:
         return tau
 
 
-def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field):
-    """The blow's loop in numpy (the reference of ``"rock.blow"``)."""
+@register_jitable  # (called by the compiled loop's copies of the functions below too)
+def _fronts(fa, ga, prev, nxt):
+    """The part of a step before each arriving wave's front (``opens_inside``; 0 where its values
+    before and after agree)."""
+    pf = 0.0 if prev[0] == nxt[0] else min(max((fa - nxt[0]) / (prev[0] - nxt[0]), 0.0), 1.0)
+    pg = 0.0 if prev[1] == nxt[1] else min(max((ga - nxt[1]) / (prev[1] - nxt[1]), 0.0), 1.0)
+    return pf, pg
+
+
+@register_jitable
+def _piece(k, pf, pg, prev, nxt):
+    """The ``k``-th of the three pieces of a step the arriving waves' fronts ``pf, pg``
+    (:func:`_fronts`) cut it into: ``(a, b, F, G)``, its ends (parts of the step) and the waves."""
+    cuts = (0.0, min(pf, pg), max(pf, pg), 1.0)
+    a, b = cuts[k], cuts[k + 1]
+    m = 0.5 * (a + b)
+    return a, b, prev[0] if m < pf else nxt[0], prev[1] if m < pg else nxt[1]
+
+
+@register_jitable
+def closes_inside(za, zb, fa, ga, prev, nxt, gap, dt):
+    """Where the piston-shank gap ``gap`` closes inside a step, the arriving waves read as in
+    :func:`opens_inside`: ``(s, impulse)``, the part of the step before (1: not inside it) and the
+    welded force's integral (per ``dt``) from there, where it presses."""
+    pf, pg = _fronts(fa, ga, prev, nxt)
+    s, impulse = 1.0, 0.0
+    for k in range(3):
+        a, b, f, g = _piece(k, pf, pg, prev, nxt)
+        if b <= a:
+            continue
+        force = max((2.0 * zb * f + 2.0 * za * g) / (za + zb), 0.0)
+        if s < 1.0:
+            impulse += force * (b - a)
+            continue
+        closing = (-2.0 * g / zb - 2.0 * f / za) * (b - a) * dt
+        if gap + closing < 0.0:
+            s = a + (b - a) * gap / -closing
+            impulse += force * (b - s)
+        else:
+            gap += closing
+    return s, impulse
+
+
+@register_jitable
+def opens_inside(za, zb, fa, ga, prev, nxt, dt):
+    """Where the piston-shank contact (impedances ``za | zb``), closed at a step's start, opens
+    inside the step (``BlowGrid.locate``): each arriving wave's cell average (``fa``, ``ga``) read as
+    its value on the step before (``prev = (F, G)``) up to a front and on the next (``nxt``) after
+    it, the front where the two average to the cell's; the contact opens where the welded force of
+    the waves so read first pulls. ``(s, impulse, gap)``: the part of the step in contact (1: all of
+    it), the welded force's integral over it (per ``dt``) and the gap at the step's end."""
+    pf, pg = _fronts(fa, ga, prev, nxt)
+    s, impulse, gap = 1.0, 0.0, 0.0
+    for k in range(3):
+        a, b, f, g = _piece(k, pf, pg, prev, nxt)
+        if b <= a:
+            continue
+        if s >= 1.0 and 2.0 * zb * f + 2.0 * za * g < 0.0:
+            s = a
+        if s >= 1.0:
+            impulse += (2.0 * zb * f + 2.0 * za * g) / (za + zb) * (b - a)
+        else:
+            gap += (-2.0 * g / zb - 2.0 * f / za) * (b - a) * dt
+    return s, impulse, max(gap, 0.0)
+
+
+def contact_step(za, zb, n_weld, fa, ga, prev, nxt, gap, contact, locate, held, dt):
+    """The piston-shank contact (impedances ``za | zb``) over one step of the blow's loop, from the
+    welded force ``n_weld`` of the arriving waves ``fa, ga``, the ``gap`` and whether in ``contact``
+    at its start: ``(N, gap, contact)`` its force averaged over the step, the gap and the contact at
+    its end. Welded while the force presses, else free ends with the gap summed over the step (and
+    floored at 0), contact again from the first step that starts with it closed and pressing; with
+    ``locate`` the switches inside the step, from the waves on the step before and the next
+    (``prev``, ``nxt``: ``(F, G)``; ``held``: whether ``prev`` holds them, not on the blow's first
+    step, where a re-contact has the gap linear over the step)."""
+    inside = locate and held
+    if contact:
+        contact = n_weld >= 0.0
+        if inside:
+            part, impulse, g_end = opens_inside(za, zb, fa, ga, prev, nxt, dt)
+            if 0.0 < part < 1.0:  # pressing up to `part`, apart from there
+                return impulse, g_end, False
+    else:
+        contact = gap <= 0.0 and n_weld >= 0.0
+    if contact:
+        return n_weld, gap, True
+    closing = (-2.0 * ga / zb - 2.0 * fa / za) * dt
+    part, impulse = 1.0, 0.0
+    if inside:  # closed inside the step: the force from there, averaged over it
+        part, impulse = closes_inside(za, zb, fa, ga, prev, nxt, gap, dt)
+    elif locate and gap + closing < 0.0:
+        part, impulse = -gap / closing, n_weld * (1.0 + gap / closing)
+    if part < 1.0:
+        return impulse, 0.0, True
+    return 0.0, max(gap + closing, 0.0), False
+
+
+def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field, locate=False):
+    """The blow's loop in numpy (the reference of ``"rock.blow"``; ``locate``: ``BlowGrid.locate``)."""
     Za, Zb = Z[:-1], Z[1:]
     wa, wb = 2.0 * Zb / (Za + Zb), 2.0 * Za / (Za + Zb)
     n_p, bit_mass, feed = int(bounds[0]), bit.m, bit.f
     gap = gap0
     contact = gap <= 0.0
+    prev = (0.0, 0.0)  # the waves arriving at the contact on the step before (from the second)
     u_shank, grid_loss, work = 0.0, 0.0, 0.0
     last = 0 if contact else -1  # the last step in contact (-1: none yet; no end before a contact)
     jc = n_p - 1  # the contact is between cells jc and jc + 1
@@ -226,13 +325,11 @@ def _python_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, reco
         N = wa * F[:-1] + wb * G[1:]  # welded junctions at every interior boundary
         # the piston-shank contact
         Fa, Gb = F[jc], G[jc + 1]
-        if contact:
-            contact = N[jc] >= 0.0
-        else:  # touching again (the gap closed in an earlier step) and pressing
-            contact = gap <= 0.0 and N[jc] >= 0.0
-        if not contact:  # free ends; the gap follows their velocities over the step
-            N[jc] = 0.0
-            gap = max(gap + (-2.0 * Gb / Zb[jc] - 2.0 * Fa / Za[jc]) * dt, 0.0)
+        nxt = (N[jc - 1] - G[jc] if jc > 0 else drive[step] - G[0],  # (the waves arriving next)
+               N[jc + 1] - F[jc + 1] if jc + 2 < F.size else Gb)
+        N[jc], gap, contact = contact_step(Za[jc], Zb[jc], N[jc], Fa, Gb, prev, nxt, gap, contact, locate,
+                                           step > 0, dt)
+        prev = (Fa, Gb)
         Fn = np.empty_like(F)
         Gn = np.empty_like(G)
         Fn[1:] = N - G[1:]

@@ -184,21 +184,28 @@ BITP_MASS = 3  # the bit's mass m (0: the massless bit)
 BITP_FEED = 4  # the feed force f
 
 # -- CTRL: the loop's controls ``ctrl`` (float64; the tangent's loop reads the first two) ------------
-CTRL_SIZE = 5
+CTRL_SIZE = 9
 CTRL_DT = 0  # the step, the cells' travel time
 CTRL_STOP = 1  # the energy below which a separated blow ends
 CTRL_QUIET = 2  # steps separated after which the blow ends (0: never)
 CTRL_GAP = 3  # the piston-shank gap at the start
 CTRL_FREE = 4  # 1: end where the piston is free for good (under a drive, theory §11); 0: never
+CTRL_LOCATE = 5  # 1: the contact's switches inside their steps (``BlowGrid.locate``); 0: at their ends
+CTRL_HELD = 6  # with CTRL_LOCATE, 1: the waves arriving at the contact on the step before the start
+CTRL_FA = 7  # are held in CTRL_FA (F)
+CTRL_GA = 8  # and CTRL_GA (G); 0: none (the blow's first step)
 
 # -- ACC: the loop's accounts ``acc`` (float64, written by the loop) ----------------------------------
-ACC_SIZE = 6
+ACC_SIZE = 9
 ACC_USHANK = 0  # the shank's displacement
 ACC_LOSS = 1  # the energy the grid lost (the bit's average against its exact step)
 ACC_STEPS = 2  # the steps run
 ACC_ENDED = 3  # how the blow ended: 0 t_max, 1 the energy, 2 separated
 ACC_GAP = 4  # the piston-shank gap at the end
 ACC_WORK = 5  # the drive's work on the piston
+ACC_HELD = 6  # CTRL_HELD, CTRL_FA, CTRL_GA at the end (a blow run on in chunks)
+ACC_FA = 7
+ACC_GA = 8
 
 # -- TSCR: the bit's tangent step's scratch rows (``bit_step_tangent``'s ``scratch``, (5, nv)) -------
 TSCR_SIZE = 5

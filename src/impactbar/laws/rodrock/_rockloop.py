@@ -15,10 +15,13 @@ import numba
 import numpy as np
 
 from ...dynamics.compiled import CACHE
-from ._bit import damped_flow
+from ._bit import contact_step, damped_flow
 from ._records import (
     ACC_ENDED,
+    ACC_FA,
+    ACC_GA,
     ACC_GAP,
+    ACC_HELD,
     ACC_LOSS,
     ACC_STEPS,
     ACC_USHANK,
@@ -36,8 +39,12 @@ from ._records import (
     BITP_MASS,
     BITP_Z,
     CTRL_DT,
+    CTRL_FA,
     CTRL_FREE,
+    CTRL_GA,
     CTRL_GAP,
+    CTRL_HELD,
+    CTRL_LOCATE,
     CTRL_QUIET,
     CTRL_STOP,
 )
@@ -250,6 +257,10 @@ def bit_step(bs, bp, E, dt):
             left -= _with_mass(bs, bp, E, left)
 
 
+#: The piston-shank contact over one step (:func:`impactbar.laws.rodrock._bit.contact_step`, compiled).
+_contact_step = numba.njit(cache=CACHE, nogil=True)(contact_step)
+
+
 @numba.njit(cache=CACHE, nogil=True)
 def piston_free(F, G, Z, n_p, bs, bp, dt):
     """Whether the blow under a drive is over after a step out of contact (theory §11, "when the
@@ -279,13 +290,15 @@ def piston_free(F, G, Z, n_p, bs, bp, dt):
 @numba.njit(cache=CACHE, nogil=True)
 def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     """The blow's loop (``rod_rock_blow``). ``bounds`` (int): the cell right of each segment
-    boundary, the shank first; ``ctrl``: ``dt, energy_stop, quiet, gap`` (end once separated for
-    ``quiet`` steps, 0: never; the piston-shank gap at the start; 1: end where the piston is free
-    for good, :func:`piston_free`, ``ended`` 2); ``drive`` (n_max,): the drive's
+    boundary, the shank first; ``ctrl`` (slots ``CTRL_*``): ``dt, energy_stop, quiet, gap, free,
+    locate`` and the waves at the contact the step before (end once separated for ``quiet`` steps,
+    0: never; the piston-shank gap at the start; 1: end where the piston is free for good,
+    :func:`piston_free`, ``ended`` 2; 1: the contact's switches inside their steps,
+    :func:`~impactbar.laws.rodrock._bit.contact_step`); ``drive`` (n_max,): the drive's
     force on the piston's far end, averaged over each step; ``junc`` (n_max, J): forces at the
     boundaries per step; ``bitrec`` (n_max + 1, 2): rock force and penetration; ``field``
     (n_max, cells) or (0, cells); ``acc`` out: ``u_shank, grid_loss, steps, ended, gap,
-    drive_work``. Returns nothing; ``F``, ``G`` hold the final waves."""
+    drive_work`` and the waves at the contact on the last step. Returns nothing; ``F``, ``G`` hold the final waves."""
     dt, stop, quiet = ctrl[CTRL_DT], ctrl[CTRL_STOP], ctrl[CTRL_QUIET]
     n_cells = F.size
     n_p = bounds[0]
@@ -294,6 +307,8 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     Zl = Z[n_cells - 1]
     gap = ctrl[CTRL_GAP]
     contact = gap <= 0.0
+    locate = ctrl[CTRL_LOCATE] > 0.0
+    held, fprev, gprev = ctrl[CTRL_HELD] > 0.0, ctrl[CTRL_FA], ctrl[CTRL_GA]
     free = ctrl[CTRL_FREE] > 0.0  # (a driven blow's stretch: its contact was before it)
     last = 0 if contact or free else -1  # the last step in contact (-1: none yet; no end before one)
     u_shank, grid_loss, work = 0.0, 0.0, 0.0
@@ -309,13 +324,12 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
         for j in range(n_cells - 1):
             za, zb = Z[j], Z[j + 1]
             N[j] = (2.0 * zb * F[j] + 2.0 * za * G[j + 1]) / (za + zb)
-        if contact:
-            contact = N[jc] >= 0.0
-        else:
-            contact = gap <= 0.0 and N[jc] >= 0.0
-        if not contact:
-            N[jc] = 0.0
-            gap = max(gap + (-2.0 * G[jc + 1] / Z[jc + 1] - 2.0 * F[jc] / Z[jc]) * dt, 0.0)
+        fa, ga = F[jc], G[jc + 1]
+        f_next = N[jc - 1] - G[jc] if jc > 0 else drive[step] - G[0]  # (the waves arriving next)
+        g_next = N[jc + 1] - F[jc + 1] if jc + 2 < n_cells else ga
+        N[jc], gap, contact = _contact_step(Z[jc], Z[jc + 1], N[jc], fa, ga, (fprev, gprev),
+                                            (f_next, g_next), gap, contact, locate, held, dt)
+        fprev, gprev, held = fa, ga, True
         for j in range(n_cells - 1):
             Fn[j + 1] = N[j] - G[j + 1]
             Gn[j] = N[j] - F[j]
@@ -360,3 +374,4 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
                 break
     acc[ACC_USHANK], acc[ACC_LOSS], acc[ACC_STEPS] = u_shank, grid_loss, steps
     acc[ACC_ENDED], acc[ACC_GAP], acc[ACC_WORK] = ended, gap, work
+    acc[ACC_HELD], acc[ACC_FA], acc[ACC_GA] = 1.0 if held else 0.0, fprev, gprev

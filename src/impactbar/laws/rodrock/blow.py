@@ -15,7 +15,10 @@ conserved step by step (``F_a^2/Z_a + G_b^2/Z_b = G_a^2/Z_a + F_b^2/Z_b``).
 - Piston-shank contact: unilateral; the welded junction while its force is compressive, free ends
   (``N = 0``) otherwise, with the gap ``g' = v_shank - v_piston`` summed per step (and floored at
   0); contact resumes at the first step that starts with the gap closed and the welded force
-  compressive (timing error below one step).
+  compressive (timing error below one step). With ``BlowGrid.locate`` (``RodRock(contact_events=
+  "inside")``) both switches are placed inside their steps: each arriving wave's cell average read
+  as its value on the step before up to a front and on the next after it (``_bit.opens_inside``,
+  ``closes_inside``), the step's force the welded force's integral up to the switch (or from it).
 - Bit and rock: with the incident wave ``F`` constant over the cell, the bit (mass ``m >= 0``,
   displacement into the rock ``p``) obeys ``m p'' + Z p' + R(p) = 2 F + f`` (``f`` the feed force),
   solved exactly per cell on each branch of Lundberg's bilinear law ``R(p)``: loading ``R = k p`` at
@@ -539,7 +542,8 @@ def _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap, record_field
         raise ValueError(f"drive must have at least {n_max} steps; got {drive.size}")
     loop = _compiled_loop if use_fast("rock.blow") else _python_loop
     quiet = 0 if separation_time is None else max(1, math.ceil(separation_time / dt))
-    out = loop(F, G, grid.Z, grid.bounds, bit, dt, n_max, stop, quiet, float(gap), drive, record_field)
+    out = loop(F, G, grid.Z, grid.bounds, bit, dt, n_max, stop, quiet, float(gap), drive, record_field,
+               grid.locate)
     if bit.branch == _LOAD and bit.p > bit.p_max:
         # the window ended while the bit still advanced into the rock: its largest penetration is the
         # last, and what would stay of it the unloading line from there (not those of the last
@@ -568,7 +572,7 @@ def _rock_stored(R, k_u) -> float:
     return 0.0 if R <= 0.0 or math.isinf(k_u) else R * R / (2.0 * k_u)
 
 
-def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field):
+def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, record_field, locate=False):
     """The blow's loop compiled (:func:`impactbar.laws.rodrock._rockloop.blow_loop`)."""
     from ._rockloop import blow_loop
 
@@ -578,7 +582,7 @@ def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, re
     bitrec = np.zeros((n_max + 1, 2))
     field = np.zeros((n_max if record_field else 0, F.size))
     acc = np.zeros(S.ACC_SIZE)
-    ctrl = _loop_controls(dt, stop, quiet, gap0)
+    ctrl = _loop_controls(dt, stop, quiet, gap0, locate=locate)
     blow_loop(F, G, Z, bounds.astype(np.int64), bs, bp, ctrl, drive, junc, bitrec, field, acc)
     bit.p, bit.w, bit.branch = bs[S.BIT_P], bs[S.BIT_W], int(bs[S.BIT_BRANCH])
     bit.p_max, bit.R_max = bs[S.BIT_PMAX], bs[S.BIT_RMAX]
@@ -608,11 +612,16 @@ def _bit_params(Z, k, k_u, m, feed):
     return bp
 
 
-def _loop_controls(dt, stop, quiet, gap, free=False):
+def _loop_controls(dt, stop, quiet, gap, free=False, locate=False, switch=(0.0, 0.0, 0.0)):
     """The compiled loop's controls ``ctrl`` (slots ``CTRL_*``): its step ``dt``, the energy ``stop``
     that ends a separated blow, the separated steps ``quiet`` that end it (0: none), the piston-shank
-    ``gap`` at the start and ``free``: end where the piston is free for good (under a drive)."""
+    ``gap`` at the start, ``free``: end where the piston is free for good (under a drive),
+    ``locate``: the contact's switches inside their steps (``BlowGrid.locate``), and ``switch``:
+    whether the waves arriving at the contact on the step before are held, and they (``F``, ``G``;
+    a blow run on)."""
     ctrl = np.empty(S.CTRL_SIZE)
     ctrl[S.CTRL_DT], ctrl[S.CTRL_STOP], ctrl[S.CTRL_QUIET], ctrl[S.CTRL_GAP] = dt, stop, float(quiet), gap
     ctrl[S.CTRL_FREE] = 1.0 if free else 0.0
+    ctrl[S.CTRL_LOCATE] = 1.0 if locate else 0.0
+    ctrl[S.CTRL_HELD], ctrl[S.CTRL_FA], ctrl[S.CTRL_GA] = switch
     return ctrl

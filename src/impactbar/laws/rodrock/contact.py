@@ -359,8 +359,8 @@ def _stepped_maps(s: float, piston, n_p: int, M: int):
 
 
 @functools.lru_cache(maxsize=32)
-def _grid_for(s, lengths, impedances, speeds, cells_per_piston, piston=None):
-    return blow_grid(s, lengths, impedances, speeds, cells_per_piston, piston)
+def _grid_for(s, lengths, impedances, speeds, cells_per_piston, piston=None, locate=False):
+    return blow_grid(s, lengths, impedances, speeds, cells_per_piston, piston, locate)
 
 
 class BlowMap:
@@ -388,7 +388,8 @@ class BlowMap:
         if cells_per_piston is None:
             cells_per_piston = law.cells_per_piston
         self.grid = grid = _grid_for(s, tuple(g.length for g in segs), tuple(g.impedance for g in segs),
-                                     tuple(g.wave_speed for g in segs), cells_per_piston, model.piston)
+                                     tuple(g.wave_speed for g in segs), cells_per_piston, model.piston,
+                                     law.contact_events == "inside")
         self.n_p, dt = grid.piston_cells, grid.cell_time
         self.p_end = float(np.asarray(load(np.array([self.t0])), dtype=float)[0])
         if duration is None:

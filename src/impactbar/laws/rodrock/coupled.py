@@ -71,9 +71,10 @@ def _bit_arrays(grid, law):
 
 def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     """``drive.size`` steps of the blow's compiled loop from the waves ``F, G`` and the bit ``bs``
-    (updated in place); returns the gap after them, with ``record`` the force in every cell at the
-    start of each step, and the shank's force on the last step. ``bounds``: ``grid.bounds`` as int64
-    where the caller has it (a blow's chunks share it)."""
+    (updated in place) and the contact's state ``gap`` (shape (4,): the gap, then
+    ``_loop_controls``'s ``switch``); returns that state after them, with ``record``
+    the force in every cell at the start of each step, and the shank's force on the last step.
+    ``bounds``: ``grid.bounds`` as int64 where the caller has it (a blow's chunks share it)."""
     from ._rockloop import blow_loop
     from .blow import _loop_controls
 
@@ -84,9 +85,9 @@ def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     bitrec = np.zeros((L + 1, 2))
     field = np.zeros((L if record else 0, F.size))
     acc = np.zeros(S.ACC_SIZE)
-    ctrl = _loop_controls(grid.cell_time, -1.0, 0, gap)
+    ctrl = _loop_controls(grid.cell_time, -1.0, 0, float(gap[0]), locate=grid.locate, switch=tuple(gap[1:]))
     blow_loop(F, G, grid.Z, bounds, bs, bp, ctrl, np.ascontiguousarray(drive), junc, bitrec, field, acc)
-    return float(acc[S.ACC_GAP]), field, float(junc[-1, 0])
+    return acc[[S.ACC_GAP, S.ACC_HELD, S.ACC_FA, S.ACC_GA]], field, float(junc[-1, 0])
 
 
 def end_window(grid) -> float:
@@ -179,8 +180,10 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     F, G = bm.fields(q, v)
     F0, G0 = F.copy(), G.copy()
     bs, bp = _bit_arrays(grid, law)
-    gap = 0.0
+    gap = np.zeros(4)  # the contact's state (_steps)
     m = causal_cells(grid.Z, n_p)
+    # (a contact that reads the waves arriving on its next step, grid.locate, answers a step sooner)
+    chunk = max(1, 2 * m - 1) if grid.locate else 2 * m
     averages = bm.drive
     bounds = np.ascontiguousarray(grid.bounds, dtype=np.int64)
     w = -float(model.drive_weights @ q)
@@ -193,7 +196,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
     pieces, events = [], []
     k, end, ended = 0, n_max, False
     while k < end:
-        L = min(2 * m, end - k)
+        L = min(chunk, end - k)
         # 1. the waves arriving at the driven end over the chunk (not caused by its drive)
         _, field, _ = _steps(grid, F.copy(), G.copy(), bs.copy(), bp, gap, np.zeros(L), True, bounds)
         column = field[:, 0].copy()
@@ -204,7 +207,7 @@ def driven_rock_contact(model, drive, state, t0: float, q, v, settings=None) -> 
         fl = follow(model, st, breaks, w, -2.0 * arriving / Z0, Z0, settings)
         averages[k:k + L] = fl.impulses / dt
         # 3. the lattice on over the chunk with the drive's averages (to the piston free for good)
-        start = (F.copy(), G.copy(), bs.copy(), gap)
+        start = (F.copy(), G.copy(), bs.copy(), gap.copy())
         ran = -1
         if free and not ended:
             gap, ran = _steps_to_free(grid, F, G, bs, bp, gap, averages[k:k + L], bounds, k, h)

@@ -73,6 +73,10 @@ class BlowGrid:
         Each of the piston's segments' cells, from its driven end (one segment: the uniform piston).
     piston_travel : numpy.ndarray, shape (n_segments,), or None
         The piston's segments' exact travel times.
+    locate : bool
+        Whether a piston-shank re-contact is located inside its step (the contact's force from
+        where the gap closes, averaged over the step; ``RodRock(contact_events="inside")``), else
+        from the next step (default).
     """
 
     s: float
@@ -86,6 +90,7 @@ class BlowGrid:
     static: float
     piston_segment_cells: tuple = (1,)
     piston_travel: np.ndarray | None = None
+    locate: bool = False
 
     @property
     def length_error(self) -> float:
@@ -99,9 +104,9 @@ class BlowGrid:
         return err
 
 
-def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None) -> BlowGrid:
+def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None, locate=False) -> BlowGrid:
     """The cell grid of :func:`rod_rock_blow` (its parameters of the same names; the piston's cells:
-    :func:`~impactbar.laws.rodrock._piston.piston_cells`)."""
+    :func:`~impactbar.laws.rodrock._piston.piston_cells`; ``locate``: ``BlowGrid.locate``)."""
     with np.errstate(over="ignore"):  # a wave speed near 0: an infinite travel time, refused below
         travel = np.asarray(lengths, float) / (np.asarray(speeds, float) * s)
     Tp = 1.0 / s
@@ -126,7 +131,8 @@ def blow_grid(s, lengths, impedances, speeds, cells_per_piston=None, piston=None
     static = float(sum(n * dt / (2.0 * s * z) for n, z in pieces))
     return BlowGrid(s=float(s), cell_time=dt, piston_cells=n_p, segment_cells=tuple(seg_cells), Z=Z,
                     bounds=bounds.astype(np.int64), edges=edges, travel=travel, static=static,
-                    piston_segment_cells=tuple(int(n) for n in p_cells), piston_travel=p_travel)
+                    piston_segment_cells=tuple(int(n) for n in p_cells), piston_travel=p_travel,
+                    locate=bool(locate))
 
 
 def incident_steps(shank_forces, starts, round_trip: float) -> int:

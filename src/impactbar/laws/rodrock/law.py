@@ -94,6 +94,12 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
         where the exact blow tests it, at the first step end at or after each multiple of the
         shortest travel time of piston and rod (the two end at the same instant to a step), searched
         for up to twice the window.
+    contact_events : {"step", "inside"}
+        Where the lattice's piston-shank separation and re-contact fall: ``"step"`` (default) at
+        step ends (a re-contact from the first step that starts with the gap closed); ``"inside"``
+        inside their steps, each wave arriving at the contact read as its value on the step before
+        up to a front and on the next after it (:mod:`impactbar.laws.rodrock.blow`; the errors
+        measured in theory §11, "The coupled blow").
 
     Examples
     --------
@@ -115,6 +121,7 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
     cells_per_piston: int | None = None
     method: str = "auto"
     driven_end: str = "window"
+    contact_events: str = "step"
 
     # the declarations where the law differs from ContactLaw's defaults
     name = "rodrock"
@@ -143,6 +150,9 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
         object.__setattr__(self, "feed", check_real("feed", self.feed, lo=0.0))
         if self.driven_end not in ("window", "free"):
             raise ValueError(f"driven_end must be 'window' or 'free'; got driven_end={self.driven_end!r}")
+        if self.contact_events not in ("step", "inside"):
+            raise ValueError("contact_events must be 'step' or 'inside'; "
+                             f"got contact_events={self.contact_events!r}")
         if self.blow_time is not None:
             object.__setattr__(self, "blow_time",
                                check_real("blow_time", self.blow_time, lo=0.0, lo_open=True))
