@@ -215,8 +215,10 @@ class _Bit:
 def _fronts(fa, ga, prev, nxt):
     """The part of a step before each arriving wave's front (``opens_inside``; 0 where its values
     before and after agree)."""
-    pf = 0.0 if prev[0] == nxt[0] else min(max((fa - nxt[0]) / (prev[0] - nxt[0]), 0.0), 1.0)
-    pg = 0.0 if prev[1] == nxt[1] else min(max((ga - nxt[1]) / (prev[1] - nxt[1]), 0.0), 1.0)
+    f0, g0 = prev
+    f1, g1 = nxt
+    pf = 0.0 if f0 == f1 else min(max((fa - f1) / (f0 - f1), 0.0), 1.0)
+    pg = 0.0 if g0 == g1 else min(max((ga - g1) / (g0 - g1), 0.0), 1.0)
     return pf, pg
 
 
@@ -227,7 +229,9 @@ def _piece(k, pf, pg, prev, nxt):
     cuts = (0.0, min(pf, pg), max(pf, pg), 1.0)
     a, b = cuts[k], cuts[k + 1]
     m = 0.5 * (a + b)
-    return a, b, prev[0] if m < pf else nxt[0], prev[1] if m < pg else nxt[1]
+    f0, g0 = prev
+    f1, g1 = nxt
+    return a, b, f0 if m < pf else f1, g0 if m < pg else g1
 
 
 @register_jitable

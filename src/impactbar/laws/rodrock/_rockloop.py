@@ -298,7 +298,8 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     force on the piston's far end, averaged over each step; ``junc`` (n_max, J): forces at the
     boundaries per step; ``bitrec`` (n_max + 1, 2): rock force and penetration; ``field``
     (n_max, cells) or (0, cells); ``acc`` out: ``u_shank, grid_loss, steps, ended, gap,
-    drive_work`` and the waves at the contact on the last step. Returns nothing; ``F``, ``G`` hold the final waves."""
+    drive_work`` and the waves at the contact on the last step. Returns nothing; ``F``, ``G`` hold
+    the final waves."""
     dt, stop, quiet = ctrl[CTRL_DT], ctrl[CTRL_STOP], ctrl[CTRL_QUIET]
     n_cells = F.size
     n_p = bounds[0]

@@ -85,7 +85,8 @@ def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     bitrec = np.zeros((L + 1, 2))
     field = np.zeros((L if record else 0, F.size))
     acc = np.zeros(S.ACC_SIZE)
-    ctrl = _loop_controls(grid.cell_time, -1.0, 0, float(gap[0]), locate=grid.locate, switch=tuple(gap[1:]))
+    gap_now, *switch = gap  # (the gap, the contact's switch: held, the arriving waves)
+    ctrl = _loop_controls(grid.cell_time, -1.0, 0, float(gap_now), locate=grid.locate, switch=tuple(switch))
     blow_loop(F, G, grid.Z, bounds, bs, bp, ctrl, np.ascontiguousarray(drive), junc, bitrec, field, acc)
     return acc[[S.ACC_GAP, S.ACC_HELD, S.ACC_FA, S.ACC_GA]], field, float(junc[-1, 0])
 
