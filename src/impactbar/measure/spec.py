@@ -152,8 +152,8 @@ def _recording(spec: dict) -> tuple[Recording, slice | None]:
         else:
             import pandas as pd
 
-            recording = Recording.from_frame(pd.read_csv(path), time=rec.get("time", "time"),
-                                             full_scale=full_scale)
+            frame = pd.read_csv(path, float_precision="round_trip")  # (each number as written)
+            recording = Recording.from_frame(frame, time=rec.get("time", "time"), full_scale=full_scale)
     else:
         raise ValueError("recording.file (an .npz or a CSV of columns) or recording.files (Tektronix CSVs) "
                          "is missing")
