@@ -171,7 +171,6 @@ PYTHON_TUPLES = {
     "laws/rodrock/exactmap.py": {"out"},  # the run's results
     "orbits/_closing.py": {"out"},  # the flight's results
     "orbits/shooting.py": {"last", "out"},  # the cache; the flight's results
-    "physical/piston.py": {"best", "rank", "seg"},  # (residual, y), (lengths, ..., speeds)
 }
 #: module -> the names the scan met once it read names of any length, attributes and chained
 #: subscripts, that are no records (as ``NOT_RECORDS``)
@@ -382,9 +381,6 @@ WIDER_TUPLES = {
     # drive[]: (starts, pieces); p: a piece's tuple; p[]: a piece's tuple; res[]: the run's results;
     # waves[]: (F, G, ...)
     "laws/rodrock/exactjac.py": {"drive[]", "p", "p[]", "res[]", "waves[]"},
-    # a: a design's (rank, merit); b: a design's (rank, merit); best[]: (residual, y); last[]: a
-    # vertex's (residual, y); side[]: a side's (residual, y); t[]: a side's (residual, y)
-    "physical/piston.py": {"a", "b", "best[]", "last[]", "side[]", "t[]"},
     # contacts[]: a contact's [start, end]; last_release: (time, segment, len, n_imp)
     "simulation/simulate.py": {"contacts[]", "last_release"},
 }
@@ -430,8 +426,6 @@ CALL_NOT_RECORDS = {
 #: ``PYTHON_TUPLES``), to be unpacked where next touched
 CALL_TUPLES = {
     "laws/rodrock/exact.py": {"terms()"},  # (initial, drive)
-    "physical/piston.py": {"_softmax_jacobian()", "evaluate()", "merit()",
-                           "peak_shank_force()"},  # (B, ..); (.., f, df, c, dc); (merit, ..); (force, time)
 }
 #: every list of names passed, module by module
 LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES, CALL_NOT_RECORDS, CALL_TUPLES)

@@ -39,11 +39,51 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from .._shared.validate import check_int, check_real
 from .rock import RodPiece
+
+
+class _Rod(NamedTuple):
+    """The rod's pieces in the blow's units: lengths, impedances (over a uniform piston's) and wave
+    speeds, each a list over the pieces."""
+    lengths: list
+    impedances: list
+    speeds: list
+
+
+class _Merit(NamedTuple):
+    """A design's merit: the work per impact energy less the stress penalty, and the relative
+    excess of the incident wave's peak stress over the limit (0: feasible)."""
+    gain: float
+    excess: float
+
+
+class _Rank(NamedTuple):
+    """The gradient search's order of designs (compared as a tuple): infeasible (0 or 1, a search
+    not started 2 or 3), the excess stress, the work per impact energy negated."""
+    infeasible: int
+    excess: float
+    loss: float
+
+
+class _Vertex(NamedTuple):
+    """One blow of the gradient search: its rank, the objective (work negated) and its gradient,
+    the stress constraints and their Jacobian."""
+    rank: _Rank
+    objective: float
+    gradient: np.ndarray
+    constraints: np.ndarray
+    jacobian: np.ndarray
+
+
+class _Masses(NamedTuple):
+    """The best masses found at given boundaries: their rank and free numbers ``y``."""
+    rank: _Rank
+    y: np.ndarray
 
 __all__ = ["OptimalPiston", "optimize_piston", "piston_blow"]
 
@@ -274,7 +314,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     def merit(b):
         """Work (in impact energies) less the penalty; the relative excess stress."""
         excess = max(0.0, b.incident_peak_force(back) * scale - 1.0)
-        return b.work_on_rock / b.energy_at_impact - PENALTY * excess, excess
+        return _Merit(b.work_on_rock / b.energy_at_impact - PENALTY * excess, excess)
 
     uniform = blow(None)
     refined = None  # the gradient search's design between the cells
@@ -298,7 +338,7 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
 
         def objective(x):
             count[0] += 1
-            return -merit(blow(_cell_piston(x, n, N, SteppedPiston)))[0]
+            return -merit(blow(_cell_piston(x, n, N, SteppedPiston))).gain
 
         maxfev = 300 * (2 * n - 2) if max_evaluations is None else max_evaluations
         for _ in range(2):  # started at the uniform piston, restarted once from the result
@@ -337,12 +377,13 @@ def optimize_piston(rod, rock, *, mass, length, max_stress, impact_velocity, seg
     stress = shaped.incident_peak_force(back) * force_N / pieces[0].area_m2
     u_stress = uniform.incident_peak_force(back) * force_N / pieces[0].area_m2
     steps = min(shaped.shank_forces.size, uniform.shank_forces.size)
+    peak, _ = shaped.peak_shank_force()
     return OptimalPiston(
         lengths_m=lengths, areas_m2=areas, work_on_rock_J=shaped.work_on_rock * energy_J,
         efficiency=shaped.efficiency, peak_stress_Pa=stress,
         uniform_work_on_rock_J=uniform.work_on_rock * energy_J, uniform_efficiency=uniform.efficiency,
-        uniform_peak_stress_Pa=u_stress, blow_peak_stress_Pa=shaped.peak_shank_force()[0] * force_N
-        / pieces[0].area_m2, feasible=x_s == 0.0, evaluations=count[0],
+        uniform_peak_stress_Pa=u_stress, blow_peak_stress_Pa=peak * force_N / pieces[0].area_m2,
+        feasible=x_s == 0.0, evaluations=count[0],
         cell_time_s=shaped.cell_time * time_s, times_s=shaped.times[:steps + 1] * time_s,
         incident_force_N=shaped.shank_forces[:steps] * force_N,
         uniform_incident_force_N=uniform.shank_forces[:steps] * force_N, blow=shaped, uniform_blow=uniform,
@@ -358,10 +399,10 @@ def _model_units(pieces, K, K_u, m, L, E, rho, t_max):
     c = math.sqrt(E / rho)
     force_N, energy_J, time_s = m * c * c / L, m * c * c, L / c
     Zu = m * c / L  # a uniform piston's impedance
-    seg = ([g.length_m / L for g in pieces], [g.impedance_kg_s / Zu for g in pieces],
-           [g.wave_speed_m_s / c for g in pieces])
+    seg = _Rod([g.length_m / L for g in pieces], [g.impedance_kg_s / Zu for g in pieces],
+               [g.wave_speed_m_s / c for g in pieces])
     k, k_u = K * L * L / (m * c * c), K_u * L * L / (m * c * c)
-    travel = sum(le / sp for le, sp in zip(seg[0], seg[2], strict=True))
+    travel = sum(le / sp for le, sp in zip(seg.lengths, seg.speeds, strict=True))
     T = 4.0 + 2.0 * travel if t_max is None else check_real("t_max", t_max, lo=0.0, lo_open=True) / time_s
     return c, force_N, energy_J, time_s, seg, k, k_u, T, 2.0 * travel
 
@@ -440,18 +481,19 @@ def piston_blow(rod, rock, *, lengths, areas, impact_velocity, E=None, density=N
         b = rod_rock_blow(1.0, V / c, *seg, k, k_u, mb / m, f / force_N, cells_per_piston=N, t_max=T,
                           piston=SteppedPiston(lf, mf / lf) if lf.size > 1 else None)
     to_Pa = force_N / pieces[0].area_m2
+    peak, _ = b.peak_shank_force()
     return {"work_on_rock_J": b.work_on_rock * energy_J, "efficiency": b.efficiency,
             "impact_energy_J": 0.5 * m * V * V, "peak_stress_Pa": b.incident_peak_force(back) * to_Pa,
-            "blow_peak_stress_Pa": b.peak_shank_force()[0] * to_Pa,
+            "blow_peak_stress_Pa": peak * to_Pa,
             "mass_kg": m, "length_m": L, "method": b.method, "blow": b}
 
 
 def _better(a, b):
     """Whether the merit ``a = (work less penalty, excess)`` beats ``b``: feasible before not, then
     the more work, or the less excess."""
-    if (a[1] > 0.0) != (b[1] > 0.0):
-        return b[1] > 0.0
-    return a[0] > b[0] if a[1] == 0.0 else a[1] < b[1]
+    if (a.excess > 0.0) != (b.excess > 0.0):
+        return b.excess > 0.0
+    return a.gain > b.gain if a.excess == 0.0 else a.excess < b.excess
 
 
 def _exact_blow(v, seg, k, k_u, bit_mass, feed, T, samples, piston):
@@ -523,35 +565,37 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev, back=math.inf):
         count[0] += 1
         work, dwork, c, dc = _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps, back)
         excess = max(0.0, -float(c.min()))
-        return (int(excess > 0.0), excess, -work), -work, -dwork, c, dc
+        return _Vertex(_Rank(int(excess > 0.0), excess, -work), -work, -dwork, c, dc)
 
     def masses(B, y0):
         """The best ``(rank, y)`` of the boundaries ``B`` by SLSQP from ``y0``."""
-        last, best = {}, [(2, 0.0, 0.0), y0]
+        last = {}
+        best = _Masses(_Rank(2, 0.0, 0.0), y0)
 
         def evaluate(y):
+            nonlocal best
             y = np.clip(np.asarray(y, dtype=float), -bound, bound)
             key = y.tobytes()
             if key not in last:
                 last.clear()
                 last[key] = vertex(B, y)
-                if last[key][0] < best[0]:
-                    best[0], best[1] = last[key][0], y.copy()
+                if last[key].rank < best.rank:
+                    best = _Masses(last[key].rank, y.copy())
             return last[key]
 
         try:
             # the steps whose force is above half the limit at the start are constrained (every
             # step's force counts in the rank)
-            steps = np.flatnonzero(evaluate(y0)[3] < 0.5) if scale > 0.0 else ()
-            constraints = ([{"type": "ineq", "fun": lambda y: evaluate(y)[3][steps],
-                             "jac": lambda y: evaluate(y)[4][steps]}] if len(steps) else [])
-            minimize(lambda y: evaluate(y)[1], y0, jac=lambda y: evaluate(y)[2], method="SLSQP",
+            steps = np.flatnonzero(evaluate(y0).constraints < 0.5) if scale > 0.0 else ()
+            constraints = ([{"type": "ineq", "fun": lambda y: evaluate(y).constraints[steps],
+                             "jac": lambda y: evaluate(y).jacobian[steps]}] if len(steps) else [])
+            minimize(lambda y: evaluate(y).objective, y0, jac=lambda y: evaluate(y).gradient, method="SLSQP",
                      bounds=[(-bound, bound)] * (n - 1), constraints=constraints,
                      options={"maxiter": 100, "ftol": FTOL})
         except _Budget:
-            if best[0][0] == 2:
+            if best.rank.infeasible == 2:
                 raise
-        return best[0], best[1]
+        return best
 
     B = np.round(N * np.arange(1, n) / n).astype(np.int64)  # the uniform piston
     y = np.zeros(n - 1)
@@ -566,7 +610,8 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev, back=math.inf):
             visited[key] = masses(C, y)
         return visited[key]
 
-    best = [(3,), B, y, {}]  # rank, boundaries, masses, the designs its search visited
+    # the best design: its rank, boundaries, masses, and the designs its search visited
+    best_rank, best_B, best_y, best_seen = _Rank(3, 0.0, 0.0), B, y, {}
     try:
         # two pattern searches from the uniform piston, their first moves half and a quarter of a
         # uniform segment's cells, halved down to one cell (each its own: the masses' optimum at
@@ -575,8 +620,8 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev, back=math.inf):
             visited = {}
             C, yc = B, np.zeros(n - 1)
             r, yc = design(C, yc, visited)
-            if r < best[0]:
-                best = [r, C, yc, visited]
+            if r < best_rank:
+                best_rank, best_B, best_y, best_seen = r, C, yc, visited
             step = first
             while step >= 1:
                 improved = True
@@ -591,29 +636,32 @@ def _gradient_search(blow_tangent, n, N, scale, n_steps, maxfev, back=math.inf):
                             if rd >= r:
                                 break
                             C, yc, r, improved = D, yd, rd, True
-                            if r < best[0]:
-                                best = [r, C, yc, visited]
+                            if r < best_rank:
+                                best_rank, best_B, best_y, best_seen = r, C, yc, visited
                 step //= 2
     except _Budget:
         pass
-    rank, B, y, seen = best
+    rank, B, y, seen = best_rank, best_B, best_y, best_seen
     # between the cells: per boundary the parabola through the best design's and its two
     # neighbours' work (masses alike), where all three are feasible
     b, yr = B.astype(float), y.copy()
     for j in range(n - 1):
         side = [seen.get((B + d * eye[j]).tobytes()) for d in (-1, 1)]
-        if rank[0] or any(t is None or t[0][0] for t in side):
+        below, above = side
+        if rank.infeasible or any(t is None or t.rank.infeasible for t in side):
             continue
-        lo, mid, hi = -side[0][0][2], -rank[2], -side[1][0][2]
+        lo, mid, hi = -below.rank.loss, -rank.loss, -above.rank.loss
         curv = lo - 2.0 * mid + hi
         if curv < 0.0:
             d = float(np.clip(0.5 * (lo - hi) / curv, -0.5, 0.5))
             b[j] += d
-            yr += 0.5 * d * (side[1][1] - side[0][1]) + 0.5 * d * d * (side[1][1] - 2.0 * y + side[0][1])
+            yr += 0.5 * d * (above.y - below.y) + 0.5 * d * d * (above.y - 2.0 * y + below.y)
     refined = None
     if np.any(b != B):
-        refined = np.diff(np.concatenate(([0.0], b, [N]))) / N, _softmax_jacobian(yr)[0]
-    return B / N, _softmax_jacobian(y)[0], refined, count[0]
+        mf_refined, _ = _softmax_jacobian(yr)
+        refined = np.diff(np.concatenate(([0.0], b, [N]))) / N, mf_refined
+    mf, _ = _softmax_jacobian(y)
+    return B / N, mf, refined, count[0]
 
 
 def _whole_cell_blow(blow_tangent, B, y, N, scale, n_steps, back=math.inf):
