@@ -88,7 +88,9 @@ NOT_RECORDS = {
     "laws/rodrock/coupled.py": {"column"},  # the far end's cell
     "laws/rodrock/coupled_exact.py": {"travel", "xv"},  # the first segment's; a grid's ends
     "laws/rodrock/exact.py": {"Zp", "Zr"},  # the last segment's impedance
-    "laws/rodrock/exactjac.py": {"pieces", "qa", "starts"},  # the first piece and start; the rigid mode
+    # c: a piece's coefficient array (a piecewise load's constant); the first piece, start and initial
+    # wave; the rigid mode
+    "laws/rodrock/exactjac.py": {"c", "pieces", "qa", "starts", "waves"},
     "laws/rodrock/exactmap.py": {"kappa", "qa"},  # the rigid mode's
     "laws/rodrock/law.py": {"qm"},  # the rigid mode
     "laws/rodrock/longrod.py": {"peaks", "qm"},  # the first boundary's (the shank's); the rigid mode
@@ -166,9 +168,6 @@ NOT_RECORDS = {
 #: cache's key and value, an option's pair): records in the wide sense, to be unpacked or named where
 #: next touched, outside what this test guards (the kernels' records)
 PYTHON_TUPLES = {
-    "laws/rodrock/exact.py": {"drive", "kept"},  # (starts, pieces); the kept pool
-    "laws/rodrock/exactjac.py": {"drive"},  # (starts, pieces)
-    "laws/rodrock/exactmap.py": {"out"},  # the run's results
     "orbits/_closing.py": {"out"},  # the flight's results
     "orbits/shooting.py": {"last", "out"},  # the cache; the flight's results
 }
@@ -377,10 +376,6 @@ WIDER_NOT_RECORDS = {
 #: ``PYTHON_TUPLES``)
 WIDER_TUPLES = {
     "cli/continue_.py": {"e[]"},  # e[]: an event's multiplier (real, imaginary)
-    "laws/rodrock/exact.py": {"x"},  # x: an initial wave's arrays
-    # drive[]: (starts, pieces); p: a piece's tuple; p[]: a piece's tuple; res[]: the run's results;
-    # waves[]: (F, G, ...)
-    "laws/rodrock/exactjac.py": {"drive[]", "p", "p[]", "res[]", "waves[]"},
     # contacts[]: a contact's [start, end]; last_release: (time, segment, len, n_imp)
     "simulation/simulate.py": {"contacts[]", "last_release"},
 }
@@ -425,7 +420,6 @@ CALL_NOT_RECORDS = {
 #: module -> the calls whose result is a tuple of named values still read by number (as
 #: ``PYTHON_TUPLES``), to be unpacked where next touched
 CALL_TUPLES = {
-    "laws/rodrock/exact.py": {"terms()"},  # (initial, drive)
 }
 #: every list of names passed, module by module
 LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES, CALL_NOT_RECORDS, CALL_TUPLES)

@@ -6,11 +6,35 @@ once."""
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from . import _exactpieces as P
 
 __all__: list[str] = []
+
+
+class _ChannelTerms(NamedTuple):
+    """An initial channel's piece as the pool's terms: each term's key (the exponent's slot and
+    degree) and coefficient."""
+    keys: np.ndarray
+    coefs: np.ndarray
+
+
+class _DriveTerms(NamedTuple):
+    """The drive as the pool's terms: its pieces' starts, their terms' keys and coefficients one
+    piece after another, and each piece's count of terms."""
+    starts: np.ndarray
+    keys: np.ndarray
+    coefs: np.ndarray
+    sizes: np.ndarray
+
+
+class _Terms(NamedTuple):
+    """The data as the pool's terms: each initial channel's, and the drive's (None: no drive)."""
+    initial: list
+    drive: _DriveTerms | None
 
 
 def _as_they_come(x) -> bool:
@@ -121,7 +145,7 @@ class _Data:
         def conv(piece):
             e, d, c = piece
             keys = np.array([index[complex(x)] * P.DC for x in e], dtype=np.int64) + d
-            return keys, c / scale
+            return _ChannelTerms(keys, c / scale)
 
         init = [conv(x) for x in self.initial]
         drv = None
@@ -129,5 +153,5 @@ class _Data:
             e, d, c, sizes = self.drive.flat
             distinct, where = np.unique(e, return_inverse=True)
             slot = np.array([index[complex(x)] * P.DC for x in distinct], dtype=np.int64)
-            drv = (self.drive.starts, slot[where.ravel()] + d, c / scale, sizes)
-        return init, drv
+            drv = _DriveTerms(self.drive.starts, slot[where.ravel()] + d, c / scale, sizes)
+        return _Terms(init, drv)

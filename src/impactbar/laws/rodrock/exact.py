@@ -73,6 +73,7 @@ from __future__ import annotations
 import functools
 import math
 import threading
+from typing import NamedTuple
 
 import numpy as np
 
@@ -326,7 +327,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     snaps: list = []
     ws = None
     if _keep is not None and _keep.get("resume") and data is not None and data.drive is not None:
-        drive_terms = data.terms(lam, scale)[1]
+        drive_terms = data.terms(lam, scale).drive
         rows, terms, larger = pcap, tcap, False
         for _ in range(3):  # (the pool full: on from the snapshot again, on a pool 4 times larger)
             ws = _resumed(_keep["resume"], drive_terms, scale, lam, PR, rows, terms, larger,
@@ -401,6 +402,15 @@ def _binomials():
     return out
 
 
+class _PoolArrays(NamedTuple):
+    """The wave-piece pool's arrays: the pieces' floats ``PF`` and integers ``PI``, the terms' keys
+    ``TK`` and coefficients ``TC``."""
+    PF: np.ndarray
+    PI: np.ndarray
+    TK: np.ndarray
+    TC: np.ndarray
+
+
 #: a thread's pool arrays, reused by its next blow (``_pool_arrays``)
 _POOLS = threading.local()
 #: the largest pool kept for reuse (the default one: 4 MB)
@@ -415,10 +425,10 @@ def _pool_arrays(rows, terms, reuse):
     it holds, :func:`_result`), up to ``_REUSED_POOL_BYTES``."""
     if reuse:
         kept = getattr(_POOLS, "arrays", None)
-        if kept is not None and kept[0].shape[0] == rows and kept[2].size == terms:
+        if kept is not None and kept.PF.shape[0] == rows and kept.TK.size == terms:
             return kept
-    arrays = (np.empty((rows, 5)), np.empty((rows, 4), dtype=np.int64), np.empty(terms, dtype=np.int64),
-              np.empty(terms, dtype=complex))
+    arrays = _PoolArrays(np.empty((rows, 5)), np.empty((rows, 4), dtype=np.int64),
+                         np.empty(terms, dtype=np.int64), np.empty(terms, dtype=complex))
     if reuse and pool_bytes(rows, terms) <= _REUSED_POOL_BYTES:
         _POOLS.arrays = arrays
     return arrays
@@ -429,10 +439,10 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     J = T.size
     nch = 3 * J + 2
     init, drive = (None, None) if data is None else data
-    ndrive = 0 if drive is None else drive[0].size
+    ndrive = 0 if drive is None else drive.starts.size
     extra = 0
     if init is not None:
-        extra = sum(x[0].size for x in init) + (0 if drive is None else drive[1].size)
+        extra = sum(x.keys.size for x in init) + (0 if drive is None else drive.keys.size)
     PF, PI, TK, TC = _pool_arrays(pcap + 2 * J + 1 + ndrive + 16, tcap + extra, reuse)  # (room for the
     # data's pieces besides the pieces the run adds)
     CNT = np.zeros(S.CNT_SIZE, dtype=np.int64)
@@ -468,7 +478,7 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
             n += 1
     # the drive channel (no drive: one empty piece), its pieces linked in order, their nonzero terms
     c = 2 * J
-    starts = np.array([-1.0]) if drive is None else np.asarray(drive[0], dtype=float)
+    starts = np.array([-1.0]) if drive is None else np.asarray(drive.starts, dtype=float)
     m = starts.size
     rows = slice(n, n + m)
     PF[rows, 0], PF[rows, 1], PF[rows, 2], PF[rows, 3:] = starts, math.inf, 0.0, math.nan

@@ -138,18 +138,20 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
 
     basis = bmap.basis
     M = basis.omega.size
-    K = waves[0][2].shape[0]
+    _, _, first = waves[0]
+    K = first.shape[0]  # (the coefficients' directions)
     impulses = [[] for _ in range(K)] if impulses is None else impulses
     T, Z, lam, RT, RC, RD = ws[WS_ST], ws[WS_SZ], ws[WS_LAM], ws[WS_RT], ws[WS_RC], ws[WS_RD]
     n_p = basis.travel.size
     J = T.size
     scales = _bound(waves, np.repeat(basis.travel, 2))
     if drive is not None:
-        spans = np.diff(np.append(drive[0], drive[0][-1] + 1.0))
-        scales = np.maximum(scales, _bound(drive[1], spans))
+        starts, drive_pieces = drive
+        spans = np.diff(np.append(starts, starts[-1] + 1.0))
+        scales = np.maximum(scales, _bound(drive_pieces, spans))
     scales = np.maximum(scales, [max((abs(w) for _, w, _ in x), default=0.0) for x in impulses])
     scales[scales == 0.0] = 1.0  # (a zero direction: zero)
-    pieces = list(waves) + ([] if drive is None else list(drive[1]))
+    pieces = list(waves) + ([] if drive is None else list(drive_pieces))
     coefs = np.ascontiguousarray(np.concatenate([c for _, _, c in pieces], axis=-1) / scales[:, None])
     imps = np.array([(d, t, w / scales[d], jump / primal_scale) for d in range(K) for t, w, jump in
                      impulses[d]], dtype=float).reshape(-1, 4)
@@ -157,7 +159,7 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
     def ones(x):  # every term a slot of the template
         return [(e, d, np.ones(c.shape[-1], dtype=complex)) for e, d, c in x]
 
-    template_drive = None if drive is None else (drive[0], ones(drive[1]))
+    template_drive = None if drive is None else (starts, ones(drive_pieces))
     terms = _Data(ones(waves), template_drive, T[:n_p], trusted=True).terms(lam, 1.0)
     PR = ws[WS_PR].copy()
     # no feed (a constant), the horizon, no record
@@ -213,7 +215,7 @@ def _time_direction(bmap):
         rate = float(np.sum(d * np.exp(exps * lead)).real)
         return ([float(starts[0])], [(exps, degs, d)]), [], rate
     if kind == PIECEWISE:
-        levels = [float(np.real(p[2][0])) if p[2].size else 0.0 for p in pieces]
+        levels = [float(np.real(c[0])) if c.size else 0.0 for _, _, c in pieces]  # (the constant's)
         imps = [(float(starts[j]), levels[j] - levels[j - 1], levels[j] - levels[j - 1])
                 for j in range(1, len(starts)) if starts[j] > 0.0 and levels[j] != levels[j - 1]]
         return None, imps, 0.0
@@ -265,7 +267,8 @@ def exact_impact_map(bmap, y_minus, t):
     if res is None:
         return None
     jac = np.zeros((2 * M, 2 * M))
-    jac[:, 1:] = np.concatenate(res[:2], axis=1).T
+    dq_y, dv_y, _ = res
+    jac[:, 1:] = np.concatenate((dq_y, dv_y), axis=1).T
     # the impact time apart (a drive in the tangent costs every run its exponents)
     timed = _time_direction(bmap)
     if timed is None:
@@ -273,9 +276,11 @@ def exact_impact_map(bmap, y_minus, t):
         return y_plus, jac, (up(y) - down(y)) / 2e-6
     drive, imps, rate = timed
     if drive is not None:
-        drive = (drive[0], [(e, d, c[None]) for e, d, c in drive[1]])
+        starts, drive_pieces = drive
+        drive = (starts, [(e, d, c[None]) for e, d, c in drive_pieces])
     res = tangents(bmap, ws, scale, initial_waves(basis, dq[K:], dv[K:], np.array([rate])), drive, [imps],
                    on_stop)
     if res is None:
         return None
-    return y_plus, jac, np.concatenate((res[0][0], res[1][0]))
+    dq_t, dv_t, _ = res  # (one direction: the impact time's)
+    return y_plus, jac, np.concatenate((dq_t.ravel(), dv_t.ravel()))

@@ -456,9 +456,10 @@ class ExactBlowMap:
         # the pool this blow filled, for the map's next (its many blows alike: a first one grows its
         # pool, run again, and the next start there)
         if lean:
-            used = (out[0][WS_CNT][CNT_PIECES], out[0][WS_CNT][CNT_TERMS], out[0][WS_BI][BI_NEP])
+            ws, _ = out  # (the workspace, its scale)
+            used = (ws[WS_CNT][CNT_PIECES], ws[WS_CNT][CNT_TERMS], ws[WS_BI][BI_NEP])
         else:
-            ex = out[0] if defer else out
+            ex, _ = out if defer else (out, None)  # (the blow's first result, its finisher)
             used = (ex.pieces, ex.diagnostics["terms"], ex.loadings.shape[0])
         self._pool = (*(int(x) for x in used), horizon)
         return out
