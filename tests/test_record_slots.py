@@ -156,7 +156,8 @@ NOT_RECORDS = {
     "plotting/sweeps.py": {"dims", "values"},  # the dimensions; the first value
     "simulation/_shortrun.py": {"_ENTRY", "qv", "tv"},  # a one-slot box; rows of times and states
     "simulation/blows.py": {"gaps", "q_arr"},  # the second row; the rigid mode
-    "simulation/simulate.py": {"aq", "av", "blocks", "ot", "qm", "vm"},  # first entries, rigid mode
+    # first entries, the rigid mode; contacts: the last contact
+    "simulation/simulate.py": {"aq", "av", "blocks", "contacts", "ot", "qm", "vm"},
     "simulation/driven.py": {"_ends"},  # the last end
     "simulation/driven_trajectory.py": {"pieces"},  # the last piece
     "simulation/trajectory.py": {"head", "out", "rows", "segs"},  # sequences' first and last entries
@@ -168,8 +169,6 @@ NOT_RECORDS = {
 #: cache's key and value, an option's pair): records in the wide sense, to be unpacked or named where
 #: next touched, outside what this test guards (the kernels' records)
 PYTHON_TUPLES = {
-    "orbits/_closing.py": {"out"},  # the flight's results
-    "orbits/shooting.py": {"last", "out"},  # the cache; the flight's results
 }
 #: module -> the names the scan met once it read names of any length, attributes and chained
 #: subscripts, that are no records (as ``NOT_RECORDS``)
@@ -375,9 +374,6 @@ WIDER_NOT_RECORDS = {
 #: module -> the tuples of named values, read by number, that the wider scan met (as
 #: ``PYTHON_TUPLES``)
 WIDER_TUPLES = {
-    "cli/continue_.py": {"e[]"},  # e[]: an event's multiplier (real, imaginary)
-    # contacts[]: a contact's [start, end]; last_release: (time, segment, len, n_imp)
-    "simulation/simulate.py": {"contacts[]", "last_release"},
 }
 #: module -> the calls whose result, read by number, is an array's or a sequence's entry, not a
 #: named value: a one-point evaluation's value (``f(np.array([t]))[0]``), a mode shape's row at the

@@ -299,7 +299,8 @@ def _write_events(path, events):
     with open(path, "w", encoding="utf-8") as fh:
         fh.write(",".join(cols) + "\n")
         for e in events:
-            row = dict(e, multiplier_real=e["multiplier"][0], multiplier_imag=e["multiplier"][1])
+            real, imag = e["multiplier"]
+            row = dict(e, multiplier_real=real, multiplier_imag=imag)
             fh.write(",".join(repr(row[c]) if isinstance(row[c], float) else str(row[c]) for c in cols)
                      + "\n")
 

@@ -129,9 +129,9 @@ def checked_root(problem, X, tol: float, max_iter: int) -> np.ndarray:
     tau, mode = problem.blocks[0]
     last = math.inf
     for _ in range(max_iter):
-        out = problem._flight(tau, mode, X, keep=True, variational=True)
+        y_after, _, _, _, _, _, Phi = problem._flight(tau, mode, X, keep=True, variational=True)
         try:
-            step = np.linalg.solve(out[6] - np.eye(problem.n), X - out[0])
+            step = np.linalg.solve(Phi - np.eye(problem.n), X - y_after)
         except np.linalg.LinAlgError:
             raise ValueError(_SINGULAR) from None
         size = step_size(step, X, problem.positive)

@@ -51,6 +51,15 @@ class _Iterate(NamedTuple):
     source: tuple | None
 
 
+class _LastFlight(NamedTuple):
+    """The flight :meth:`ShootingProblem._flight` remembers: its start's key, whether its pieces were
+    kept, its Jacobian's level (``_JACOBIAN_LEVEL``) and what it returned."""
+    key: tuple
+    keep: bool
+    level: int
+    flight: tuple
+
+
 #: central-difference steps of the shooting Jacobian (relative to ``max(1, |X_j|)``): closed-form
 #: flights (rounding ~1e-16; the measured errors are in the module docstring: smaller steps meet the
 #: rounding, larger ones the truncation) and integrated ones (rtol 1e-10: noise / step ~1e-6 at most)
@@ -178,15 +187,15 @@ class ShootingProblem(OrbitProblem):
             key = None
         last = self._last
         level = _JACOBIAN_LEVEL[variational]
-        if key is not None and last is not None and last[0] == key and (last[1] or not keep) and \
-                last[2] >= level:
-            return last[3] if level else last[3][:6]
+        if key is not None and last is not None and last.key == key and (last.keep or not keep) and \
+                last.level >= level:
+            return last.flight if level else last.flight[:6]
         plain = self._state_settings(settings) if variational == "state" else None
         if plain is not None:  # the variational flight's state by its plain flight: no Jacobian taken
             out = self._fly(tau, mode, y, keep, False, plain)
         else:
             out = self._fly(tau, mode, y, keep, variational, settings)
-        self._last = None if key is None else (key, keep, level, out)
+        self._last = None if key is None else _LastFlight(key, keep, level, out)
         return out
 
     def _state_settings(self, settings=None):
@@ -442,10 +451,11 @@ class ShootingProblem(OrbitProblem):
             nxt = ((k + 1) % m) * n
             if self.variational:
                 tau, mode = self.blocks[k]
-                out = self._flight(tau, mode, y, keep=keep, variational="steer" if steer else True,
-                                   settings=settings)
-                r[k * n:(k + 1) * n] = out[0] - X[nxt:nxt + n]
-                J[k * n:(k + 1) * n, k * n:(k + 1) * n] = out[6]
+                y_after, _, _, _, _, _, Phi = self._flight(tau, mode, y, keep=keep,
+                                                           variational="steer" if steer else True,
+                                                           settings=settings)
+                r[k * n:(k + 1) * n] = y_after - X[nxt:nxt + n]
+                J[k * n:(k + 1) * n, k * n:(k + 1) * n] = Phi
                 J[k * n:(k + 1) * n, nxt:nxt + n] -= np.eye(n)
                 continue
             r[k * n:(k + 1) * n] = self._map(k, y) - X[nxt:nxt + n]

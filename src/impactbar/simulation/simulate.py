@@ -29,6 +29,8 @@ from __future__ import annotations
 import math
 import threading
 import time
+from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -73,6 +75,22 @@ DWELL_MAX = 1e-2
 #: A flight after a release that ends back on the stop within this time (bounces included) is a
 #: disagreement between the truncated bases, not a motion: the release is undone.
 MICRO_FLIGHT = 1e-6
+
+
+@dataclass(slots=True)
+class _Contact:
+    """A contact interval of the run: its start and end (NaN while it lasts)."""
+    start: float
+    end: float = math.nan
+
+
+class _Release(NamedTuple):
+    """A release, as the run keeps it to undo it: its time, the contact segment's index in the log,
+    and how many impact entries and impacts there were."""
+    time: float
+    segment: int
+    entries: int
+    impacts: int
 
 # Implementations (impactbar.dynamics.implementations): "simulate.impact_search" searches the
 # impacts after an impact by the kernel's specialised certified searches (the rigid bar under one
@@ -510,14 +528,14 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first
         segs.add(t0, _FREE, first.q[0], first.v[0], "start")
     times: list = []  # blocks of the kernel's impacts (arrays), or the law's contact steps (floats)
     vels: list = []
-    contacts: list[list[float]] = []
+    contacts: list[_Contact] = []
     n_imp = 0
     t = t0
     mode = _FREE
     status = RunStatus.T_END
     dwell = 0.0
     retries = 0
-    last_release = None  # (time, contact segment index, len(times), n_imp) for undoing
+    last_release = None  # the last release, for undoing
     cap = FIRST_BLOCK
     in_flight = False  # the run ended at t_end in a flight of the kernel's: q, v its state there
     if not instant:  # the kernel's state at the arrival it stops at
@@ -585,7 +603,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first
                 t = tn
                 continue
             # CHATTER or CONTACT: the end stays on the stop from tn
-            micro = last_release is not None and tn - last_release[0] <= MICRO_FLIGHT
+            micro = last_release is not None and tn - last_release.time <= MICRO_FLIGHT
             if micro:
                 # the free motion presses straight back (at once, or after a few bounces too
                 # small to matter): the bases disagree on the sign of the reaction here. Undo
@@ -594,7 +612,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first
                 segs.truncate(seg_index + 1)
                 del times[k_times:], vels[k_times:]
                 n_imp = n_saved
-                contacts[-1][1] = math.nan
+                contacts[-1].end = math.nan
                 dwell = min(max(4.0 * dwell, DWELL_START), DWELL_MAX)
                 retries += 1
                 cseg = segs.last()
@@ -602,7 +620,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first
                 mode = _CONTACT
                 r, rv = _contact_at(core, cseg, t_rel + dwell, t_end)
                 if r is None:
-                    contacts[-1][1] = t_end
+                    contacts[-1].end = t_end
                     t = t_end
                     break
                 t = t_rel + dwell
@@ -618,10 +636,10 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first
                     r, rv = core.contact_state(q, v)
                     t = tn
                     segs.add(t, _CONTACT, r, rv, "touch")
-                contacts.append([t, math.nan])
+                contacts.append(_Contact(t))
                 mode = _CONTACT
                 if t >= t_end or (st == K.CHATTER and n_imp >= max_imp):  # (the last impact's bounces)
-                    contacts[-1][1] = min(t, t_end)
+                    contacts[-1].end = min(t, t_end)
                     status = RunStatus.T_END if t >= t_end else RunStatus.MAX_IMPACTS
                     break
         # ---- in contact: from (t, r, rv) find the release ----
@@ -631,12 +649,12 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first
                              f"stiff for the event search (s = {core.model.s:g}, n_modes = "
                              f"{core.N}); use fewer modes")
         if st == K.NONE:
-            contacts[-1][1] = t_end
+            contacts[-1].end = t_end
             t = t_end
             break
-        contacts[-1][1] = tr
+        contacts[-1].end = tr
         q, v = core.release_state(rr, rrv)
-        last_release = (tr, segs.count - 1, len(times), n_imp)
+        last_release = _Release(tr, segs.count - 1, len(times), n_imp)
         segs.add(tr, _FREE, q, v, "release")
         t = tr
         mode = _FREE
@@ -660,7 +678,7 @@ def _run(core: _Core, q, v, t0, t_end, max_imp, progress=None, stop=False, first
         progress(min(1.0, (t - t0) / (t_end - t0)))
     imp_t = _joined(times) if instant else np.array(times, dtype=float)
     imp_v = _joined(vels) if instant else np.array(vels, dtype=float)
-    ci = np.array(contacts, dtype=float).reshape(-1, 2)
+    ci = np.array([(c.start, c.end) for c in contacts], dtype=float).reshape(-1, 2)
     return Trajectory(model=core.model, load=core.load, t0=t0, t_end=t,
                       impact_times=imp_t, impact_velocities=imp_v, contact_intervals=ci,
                       final_state=InitialState._trusted(qe, ve), status=status, _core=core,
@@ -707,7 +725,7 @@ def _contact_step(core: _Core, segs: _SegmentLog, t, qa, va, n, tn, ot, aq, av, 
     q, v, t_release, record = law.contact(model, core.load, ti, qm, vm, kernel=core, **kw)
     sustained = getattr(record, "sustained", None)
     if sustained is not None:
-        contacts.append([sustained.t0, min(t_release, t_end)])
+        contacts.append(_Contact(sustained.t0, min(t_release, t_end)))
     times.append(ti)  # floats: the run's impacts are all the law's (no kernel blocks)
     vels.append(arrival)
     segs.add(ti, _WINDOW, qm, vm, "impact", record)
