@@ -14,13 +14,16 @@ array's entries: ``Z[-1]`` the last segment's impedance, ``U[-1]`` the continuat
 of named values in Python code that are still read by number. A call's result indexed by a number,
 ``f(x)[0]``, ``obj.method(a, b)[1]``, ``np.linalg.svd(J)[2][-1]``, a call over lines too, is a slot
 as well, listed as ``f()`` (``CALL_NOT_RECORDS``: an array's entry; ``CALL_TUPLES``: a tuple of
-named values). Not scanned: a slice, a subscript by a name, a parenthesised expression's result
-(``(a + b)[0]``), the result of calling an entry (``h[k](x)[0]``), a call with its parentheses nested
-deeper than eight. A record of a kernel is named where it is made: the rock blow's in ``_records``,
-the others beside their kernel (``_admissibility_search``'s ``PB_*``, ``SRC_*``, ``WK_*``,
-``_rigid_arrays``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``, the wave window's
-``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
+named values). The syntax tree is walked too, for what the text scan cannot see: a slot inside an
+f-string's expressions (``f"{bad[0]}"``, ``STRING_NOT_RECORDS``), a parenthesised expression's result
+(``(a + b)[0]``) and the result of calling an entry (``h[k](x)[0]``), both listed as ``(...)``, a call
+nested deeper than eight. Not scanned: a slice, a subscript by a name, a subscript by a tuple (a
+two-dimensional array's column, ``NSF[j, 0]``). A record of a kernel is named where it is made: the
+rock blow's in ``_records``, the others beside their kernel (``_admissibility_search``'s ``PB_*``,
+``SRC_*``, ``WK_*``, ``_rigid_arrays``'s ``O_*``, the switched loop's ``INT_*``, ``CNT_*``, ``CLK_*``,
+the wave window's ``W_*``, the blow's end's ``EXT_*``, ``HD_*``)."""
 
+import ast
 import io
 import re
 import tokenize
@@ -155,7 +158,7 @@ NOT_RECORDS = {
     "plotting/simulation.py": {"axes", "files"},  # the figure's axes; the last file
     "plotting/sweeps.py": {"dims", "values"},  # the dimensions; the first value
     "simulation/_shortrun.py": {"_ENTRY", "qv", "tv"},  # a one-slot box; rows of times and states
-    "simulation/blows.py": {"gaps", "q_arr"},  # the second row; the rigid mode
+    "simulation/blows.py": {"q_arr"},  # the rigid mode
     # first entries, the rigid mode; contacts: the last contact
     "simulation/simulate.py": {"aq", "av", "blocks", "contacts", "ot", "qm", "vm"},
     "simulation/driven.py": {"_ends"},  # the last end
@@ -417,8 +420,39 @@ CALL_NOT_RECORDS = {
 #: ``PYTHON_TUPLES``), to be unpacked where next touched
 CALL_TUPLES = {
 }
+#: module -> the names that only the syntax tree meets (inside an f-string's expressions), that are no
+#: records: a message's first offending name of a sorted list, a sequence's ends, a column's first value
+STRING_NOT_RECORDS = {
+    "cli/continue_.py": {"parameters"},  # the curve's two parameters
+    "continuation/branch.py": {"values"},  # the first and last value
+    "continuation/two_parameter.py": {"values"},  # the first and last value
+    "drives/base.py": {"bad"},  # the first bad name
+    "drives/valve/drive.py": {"bad"},  # the first bad name
+    "laws/rodrock/law.py": {"segments"},  # the last segment
+    "measure/model.py": {"missing", "unknown"},  # the first name
+    "measure/recording.py": {"args"},  # an exception's message
+    "measure/spec.py": {"given", "sorted()"},  # the first name
+    "model.py": {"bad"},  # the first bad name
+    "paper.py": {"d5[]", "d8[]"},  # a column's first value
+    "physical/circuit.py": {"rest"},  # the first rest
+    "physical/circuit_branch.py": {"v"},  # the first and last value
+    "physical/circuit_parts.py": {"bad", "unknown"},  # the first name
+    "physical/config.py": {"extra", "unknown"},  # the first name
+    "physical/design_keys.py": {"split()"},  # a message's last part
+    "physical/drifter.py": {"extra"},  # the first name
+    "physical/geometry.py": {"given"},  # the first name
+    "physical/hammer.py": {"missing", "unknown"},  # the first name
+    "physical/optimize_drifter.py": {"ranked"},  # the best-ranked design
+    "physical/optimize_problem.py": {"circuit", "unknown"},  # the first name
+    "physical/rock.py": {"unknown"},  # the first name
+    "physical/sensitivity.py": {"splitlines()"},  # a message's first line
+    "plotting/circuit.py": {"missing"},  # the first name
+    "plotting/continuation.py": {"branches", "orbits"},  # the first branch, orbit
+    "simulation/blows.py": {"times"},  # the first time
+}
 #: every list of names passed, module by module
-LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES, CALL_NOT_RECORDS, CALL_TUPLES)
+LISTS = (NOT_RECORDS, PYTHON_TUPLES, WIDER_NOT_RECORDS, WIDER_TUPLES, CALL_NOT_RECORDS, CALL_TUPLES,
+         STRING_NOT_RECORDS)
 _PROSE = {tokenize.COMMENT, tokenize.STRING} | {getattr(tokenize, "FSTRING_MIDDLE", tokenize.STRING)}
 
 
@@ -443,10 +477,51 @@ def _key(match):
     return name + "[]" if chain else name
 
 
+def _int_literal(node):
+    """Whether the syntax-tree ``node`` is an integer literal (``3``, ``-1``)."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        node = node.operand
+    return isinstance(node, ast.Constant) and type(node.value) is int
+
+
+def _tree_key(node):
+    """The name the lists give a subscripted ``node`` of the syntax tree: a name's, an attribute's,
+    a call's (``f()``), ``(...)`` for anything else (a parenthesised expression's result)."""
+    if isinstance(node, ast.Name):
+        return node.id
+    if isinstance(node, ast.Attribute):
+        return node.attr
+    if isinstance(node, ast.Call):
+        inner = _tree_key(node.func)
+        return "(...)" if inner == "(...)" else inner + "()"
+    return "(...)"
+
+
+def _tree_slots(text):
+    """``(line, column, key, source)`` of every slot by an integer literal that the syntax tree of
+    ``text`` holds, f-strings' expressions and parenthesised expressions' results too; a chain of
+    such subscripts once, by its last (the key with ``[]``, as :data:`SLOT`'s)."""
+    tree = ast.parse(text)
+    chained = {id(node.value) for node in ast.walk(tree)
+               if isinstance(node, ast.Subscript) and _int_literal(node.slice)
+               and isinstance(node.value, ast.Subscript)}
+    out = []
+    for node in ast.walk(tree):
+        if not isinstance(node, ast.Subscript) or not _int_literal(node.slice) or id(node) in chained:
+            continue
+        base, chain = node.value, False
+        while isinstance(base, ast.Subscript):
+            base, chain = base.value, True
+        out.append((node.lineno, node.col_offset, _tree_key(base) + ("[]" if chain else ""),
+                    ast.unparse(node)))
+    return out
+
+
 def _slots(text):
     """``(line, column, key, match)`` of every slot by number in the source ``text``, a name's
-    (:data:`SLOT`) and a call's result's (:data:`CALL`, ``key`` the function's name with ``()``), in
-    the order they stand."""
+    (:data:`SLOT`) and a call's result's (:data:`CALL`, ``key`` the function's name with ``()``), and
+    those only the syntax tree sees (:func:`_tree_slots`: in f-strings, of parenthesised
+    expressions), in the order they stand."""
     code = _code(text)
     out = [(i, m.start(), _key(m), m.group()) for i, line in enumerate(code, start=1)
            for m in SLOT.finditer(line)]
@@ -456,6 +531,9 @@ def _slots(text):
         line = whole.count("\n", 0, m.start()) + 1
         column = m.start() - (whole.rfind("\n", 0, m.start()) + 1)
         out.append((line, column, name + ("()[]" if chain else "()"), " ".join(m.group().split())))
+    seen = {(line, key) for line, _, key, _ in out}  # what the text scan cannot see: the tree's
+    out += [(line, column, key, source) for line, column, key, source in _tree_slots(text)
+            if (line, key) not in seen]
     return sorted(out)
 
 
@@ -499,7 +577,7 @@ def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
             'source = (arrival[3].mode, arrival[2])\n'
             'return self._force_extremes[0] + f.typical[1]\n'
             'if windows and windows[-1][2] == sign and pending[0][0] <= t:\n'
-            'lo = OBJECTIVES[key][0] + hist[-1 - m][2] + hist[-1]\n'
+            '    lo = OBJECTIVES[key][0] + hist[-1 - m][2] + hist[-1]\n'
             'x = a[:2] + b[i] + f(a)[:2] + g(b)[i]\n')
     assert slots_by_number(text) == [(1, "records[-1][1]"), (1, "r[1]"), (2, "arrival[3]"), (2, "arrival[2]"),
                                      (3, "_force_extremes[0]"), (3, "typical[1]"), (4, "windows[-1][2]"),
@@ -512,8 +590,8 @@ def test_the_scan_finds_any_name_an_attribute_and_a_chained_slot():
 
 def test_the_scan_finds_a_call_s_result_read_by_number():
     """A call's result read by a number: a function's, a method's, through nested calls, over lines,
-    after subscripts; a listed call (``nonzero()``) passes in its own module only; a slice, a
-    subscript by a name, a parenthesised expression, comments and strings are no slots."""
+    after subscripts, and a parenthesised expression's; a listed call (``nonzero()``) passes in its
+    own module only; a slice, a subscript by a name, comments and strings are no slots."""
     text = ('F = evaluate(u, jacobian=False)[0] + self.problem.residual(X)[1]\n'
             'w = np.linalg.svd(J[:, :-1])[2][-1] + g(h(x), [1, 2])[-1]\n'
             'r = fit(yk,\n'
@@ -523,9 +601,28 @@ def test_the_scan_finds_a_call_s_result_read_by_number():
             's = "f(x)[0]" + msg.splitlines()[0]\n')
     assert slots_by_number(text) == [(1, "evaluate(u, jacobian=False)[0]"), (1, "residual(X)[1]"),
                                      (2, "svd(J[:, :-1])[2][-1]"), (2, "g(h(x), [1, 2])[-1]"),
-                                     (3, "fit(yk, n)[1]"), (7, "splitlines()[0]")]
+                                     (3, "fit(yk, n)[1]"), (5, "(a + b)[0]"), (7, "splitlines()[0]")]
     assert slots_by_number("i = np.nonzero(m)[0]\n", "sweeps/tasks.py") == []
     assert slots_by_number("i = np.nonzero(m)[0]\n", "orbits/orbit.py") == [(1, "nonzero(m)[0]")]
+
+
+def test_the_syntax_tree_finds_a_slot_inside_an_f_string():
+    """What the text scan cannot see, the tree's walk finds: a slot in an f-string's expression (a
+    nested one too), of a parenthesised expression, of an entry's call; a plain string's text is no
+    code, and a slot both scans see is reported once."""
+    text = ('raise ValueError(f"got {pair[1]!r} and {s[\'channels\'][0]}: {f\'{deep[2]}\'}")\n'
+            'x = (a + b)[0] + h[k](x)[1] + r[2]\n'
+            's = "not code: q[0]" + f"{len(w)}"\n')
+    assert slots_by_number(text) == [(1, "pair[1]"), (1, "s['channels'][0]"), (1, "deep[2]"),
+                                     (2, "(a + b)[0]"), (2, "h[k](x)[1]"), (2, "r[2]")]
+    assert slots_by_number('m = f"{bad[0]}"\n', "model.py") == []
+    assert slots_by_number('m = f"{bad[0]}"\n', "drives/flight.py") == [(1, "bad[0]")]
+
+
+def test_no_tuple_of_named_values_is_read_by_number():
+    """The count the lists keep: no module reads a tuple of named values (a record in Python code)
+    by its number, in any form the scans see."""
+    assert PYTHON_TUPLES == WIDER_TUPLES == CALL_TUPLES == {}
 
 
 def test_the_lists_are_disjoint_and_name_modules_that_exist():

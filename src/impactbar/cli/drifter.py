@@ -82,7 +82,7 @@ def _run_drifter(args) -> int:
     if drifter is None:
         from ..physical.config import CONFIG_KINDS
 
-        what = (f"{args.config} is {CONFIG_KINDS['hammer'][1]}" if getattr(args, "config", None)
+        what = (f"{args.config} is {CONFIG_KINDS['hammer'].what}" if getattr(args, "config", None)
                 else "no input")
         presets = ", ".join(sorted({*physical.DRIFTER_PRESETS, *physical.CIRCUIT_PRESETS}))
         raise ValueError(f"impactbar drifter needs a drifter: a CONFIG.toml with a [valve] or [chambers] "

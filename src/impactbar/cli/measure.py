@@ -63,8 +63,9 @@ def _write_bit_csv(out, test) -> None:
 def drill_text(report: dict) -> str:
     """A drill rod's report in a few lines."""
     s, b, r = report["separation"], report["bit"], report["rock_from_curve"]
-    lines = [f"two-point separation: {s['channels'][0]} at {s['stations_m'][0]:g} m, {s['channels'][1]} at "
-             f"{s['stations_m'][1]:g} m from the bit; first failing frequency "
+    (near, far), (near_m, far_m) = s["channels"], s["stations_m"]
+    lines = [f"two-point separation: {near} at {near_m:g} m, {far} at "
+             f"{far_m:g} m from the bit; first failing frequency "
              f"{s['first_failing_Hz'] / 1e3:.1f} kHz, low-passed at {s['cutoff_Hz'] / 1e3:.1f} kHz",
              f"bit: peak force {b['peak_force_kN']:.1f} kN, max penetration {b['max_penetration_mm']:.3f} mm",
              f"energies (J): incident {b['incident_energy_J']:.2f}, into the bit (force-velocity) "
@@ -115,7 +116,8 @@ def summary_text(report: dict) -> str:
     d = report["diagnostics"]
     for bar, g in d["gauges"].items():
         if g:
-            lines.append(f"{bar} bar: {g['channels'][1]} = {g['scale']:.4f} x {g['channels'][0]}, "
+            first, second = g["channels"]
+            lines.append(f"{bar} bar: {second} = {g['scale']:.4f} x {first}, "
                          f"r.m.s. difference {100 * g['rms_difference']:.1f} % of the peak")
     lines.append(f"force balance: median |2 (F1 - F2) / (F1 + F2)| {d['force_balance']['median_abs']:.3f}")
     lines.append("noise lines: " + ", ".join(f"{c} {n['frequency_MHz']:.3f} MHz"

@@ -74,7 +74,8 @@ def check_circuit_si(sec: dict, si: dict, restitution: float) -> None:
         if rule == "positive" and not v > 0.0:
             fail(key, name, unit, "positive")
         if isinstance(rule, tuple) and not v >= 0.0:
-            fail(key, name, unit, f"0 or above ({rule[1]})")
+            _, why = rule  # ("non_negative", why)
+            fail(key, name, unit, f"0 or above ({why})")
     ch, su = sec["chambers"], sec["supply"]
     if si["front_area_m2"] >= si["rear_area_m2"]:
         fail("chambers.front_area", "front_area_m2", "m^2",

@@ -187,7 +187,7 @@ def design_bounds(config: dict, vary, folder=None) -> dict:
                                  f"{' '.join(str(exc).split(': ', 2)[-1].split())}") from None
         start = key_value(key, base, unit, base)
         if not lo <= start <= hi:
-            raise ValueError(f"vary[{key!r}]: the start {base!r} lies outside the bounds {bounds[0]!r} to "
-                             f"{bounds[1]!r}")
+            raise ValueError(f"vary[{key!r}]: the start {base!r} lies outside the bounds {low!r} to "
+                             f"{high!r}")
         out[key] = {"low": lo, "high": hi, "unit": unit, "start": start}
     return out

@@ -181,15 +181,17 @@ class OperatingPointSensitivities:
     def table(self) -> str:
         """The figures and their derivatives, one row per figure, in a designer's units per key
         (MPa, mm, L, ... of the key: the figure's change per unit of the key as the table shows it)."""
-        shown = {k: display_unit(u) for k, u in self.units.items()}
-        head = f"{'':30s}{'value':>13s}" + "".join(f"{f'd/d {k} [{shown[k][1]}]':>36s}" for k in self.keys)
+        factor, unit_name = {}, {}  # each key's display unit
+        for k, u in self.units.items():
+            factor[k], unit_name[k] = display_unit(u)
+        head = f"{'':30s}{'value':>13s}" + "".join(f"{f'd/d {k} [{unit_name[k]}]':>36s}" for k in self.keys)
         rows = [head]
         for name, value in self.figures.items():
             rows.append(f"{name:30s}{value:13.6g}" + "".join(
-                f"{self.derivatives[name][k] / shown[k][0]:36.6g}" for k in self.keys))
+                f"{self.derivatives[name][k] / factor[k]:36.6g}" for k in self.keys))
         for name, b in self.borders.items():
             rows.append(f"{name + '_margin_Pa':30s}{b['margin_Pa']:13.6g}" + "".join(
-                f"{b['derivatives'][k] / shown[k][0]:36.6g}" for k in self.keys))
+                f"{b['derivatives'][k] / factor[k]:36.6g}" for k in self.keys))
         return "\n".join(rows)
 
 

@@ -197,7 +197,8 @@ def check_blow_switches(drive, modes, gaps) -> None:
         Naming the switch and where."""
     from ..drives.base import GapCrossing
 
-    y = np.asarray(gaps[1], dtype=float)
+    times, coordinate = gaps
+    y = np.asarray(coordinate, dtype=float)
     for mode in modes:
         for e in drive.events(mode):
             if not isinstance(e, GapCrossing):
@@ -207,7 +208,7 @@ def check_blow_switches(drive, modes, gaps) -> None:
                 (np.any((g[:-1] > 0.0) & (g[1:] <= 0.0)) if e.direction <= 0 else False)
             if crossed:
                 raise ValueError(f"the piston crosses the drive's switch position {e.name!r} ({e.level:g}) "
-                                 f"inside a blow near t = {float(gaps[0][0]):.6g}: the coupled blow does not "
+                                 f"inside a blow near t = {float(times[0]):.6g}: the coupled blow does not "
                                  "switch inside it; give a switch position farther from the stop or a "
                                  "shorter blow (blow_time)")
 

@@ -112,13 +112,13 @@ class Cushion(OwnNode, NamedPart):
 
     def __post_init__(self) -> None:
         _check_names(self, "target", "name")
-        given = self.gaps, self.openings
+        given_gaps, given_openings = self.gaps, self.openings
         super().__post_init__()
         gaps, openings = self.gaps, self.openings
         rising = all(b > a for a, b in zip(gaps, gaps[1:], strict=False))
         if not gaps or len(openings) != len(gaps) or not rising:
             raise ValueError(f"{self.name}.gaps must be one or more increasing gaps, with as many openings "
-                             f"(each in [0, 1]); got gaps {given[0]!r}, openings {given[1]!r}")
+                             f"(each in [0, 1]); got gaps {given_gaps!r}, openings {given_openings!r}")
 
     @property
     def energies(self) -> tuple:
