@@ -430,7 +430,7 @@ def run_drifter_continue(args, drifter: physical.Drifter, out: Path) -> int:
         start = drifter.orbit().orbit
         b = continue_orbit(start, parameter, to, step=args.step, max_step=args.max_step,
                            max_points=args.max_points)
-    head = f"{name} ({unit})," if si else ""
+    head = (f"{name} ({unit})," if unit else f"{name},") if si else ""  # (a bare number: no unit)
     circuit = isinstance(drifter, physical.CircuitDrifter)
     columns = _branch_outputs() if circuit else []
     rows = [f"{head}parameter,period,impact_velocity,max_abs_multiplier,stable"
