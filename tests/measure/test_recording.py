@@ -78,3 +78,24 @@ def test_a_channel_at_full_scale_is_saturated():
 def test_bad_gauges_are_refused(kwargs, match):
     with pytest.raises(ValueError, match=match):
         Gauge(**{"bar": "incident", "station": 0.1, **kwargs})
+
+
+@pytest.mark.parametrize(("ratio", "offset"), [(2.0, 0.0), (1.5, 0.0), (0.5, 0.0), (1.0, 0.37)])
+def test_channels_on_other_rates_and_starts_are_resampled_to_a_sinusoid(ratio, offset):
+    """A sinusoid at 0.6 of the coarser channel's Nyquist frequency on a 1 us channel and on another of
+    ``ratio`` us: resampled onto the finer channel's times by the polyphase filter, each within 2e-5
+    of the closed form (the filter's: Kaiser beta 10); a channel starting ``offset`` us later, off
+    the grid, by linear interpolation, within its error ``(w dt)^2 / 8`` (a sinusoid at 0.05 of the
+    Nyquist frequency: 3.1e-3; nearest samples would miss it by 0.08)."""
+    dt, other = 1e-6, ratio * 1e-6
+    # (0.6 of the coarser Nyquist frequency; off the grid, 0.05: the linear interpolation's bound small)
+    w = (0.6 if offset == 0.0 else 0.05) * np.pi / max(dt, other)
+    t1 = np.arange(2000) * dt
+    t2 = offset * dt + np.arange(int(2000 / ratio)) * other
+    rec = Recording.from_channels({"a": (t1, np.sin(w * t1)), "b": (t2, np.sin(w * t2))})
+    assert rec.dt == pytest.approx(min(dt, other), rel=1e-12)
+    assert rec.time[0] >= max(t1[0], t2[0]) and rec.time[-1] <= min(t1[-1], t2[-1])
+    assert rec.time.size > 0.9 * min(t1[-1], t2[-1]) / rec.dt  # (only the filter's ends left out)
+    bound = 2e-5 + (w * dt) ** 2 / 8 * (offset != 0.0)
+    for name in ("a", "b"):
+        assert np.max(np.abs(rec.channels[name] - np.sin(w * rec.time))) < bound, name

@@ -77,13 +77,36 @@ def test_tektronix_files_one_a_channel_give_the_npzs_report_to_the_signals_eight
     assert got["impact_velocity"]["velocity"] == pytest.approx(want["impact_velocity"]["velocity"], rel=1e-6)
 
 
-def test_tektronix_files_on_two_time_bases_are_refused_naming_the_channel(tmp_path, capsys):
+def _write_plain_tektronix(path, t, volts):
+    path.write_text("".join(f",,,{a:.17g},{v:.17g}\n" for a, v in zip(t, volts, strict=True)))
+
+
+def test_tektronix_files_on_two_rates_are_resampled_to_the_one_rate_report(tmp_path, capsys):
+    """One channel at half the rate (every other sample of the example's, 62.5 MHz): resampled back
+    onto the other channels' times (a 2:1 polyphase filter), the report's energies and the striker's
+    velocity within 1e-3 of the example's (measured: 4.2e-4 at most). Not closer: the half-rate
+    channel has lost what the record holds above its Nyquist frequency (31 MHz: the recorder's noise,
+    1 % of the peak, folded back by the naive decimation), which no resampling gives back; the
+    record's first and last 20 samples, in its baseline, are left out."""
+    time, channels = _samples()
+    names = list(channels)
+    for k, name in enumerate(names):
+        step = 2 if k == 1 else 1
+        _write_plain_tektronix(tmp_path / f"{name}.csv", time[::step], channels[name][::step])
+    files = ", ".join(f'{c} = "{c}.csv"' for c in names)
+    got = _report(_spec_with(tmp_path, f"files = {{{files}}}"), capsys)
+    want = _report(SPEC, capsys)
+    for key in ("incident", "reflected", "transmitted", "striker_kinetic"):
+        assert got["energies_J"][key] == pytest.approx(want["energies_J"][key], rel=1e-3)
+    assert got["impact_velocity"]["velocity"] == pytest.approx(want["impact_velocity"]["velocity"], rel=1e-3)
+
+
+def test_tektronix_files_that_do_not_overlap_are_refused_naming_the_channel(tmp_path, capsys):
     time, channels = _samples()
     for k, (name, volts) in enumerate(list(channels.items())[:2]):
-        t = time * (1.0 + 0.5 * k)
-        rows = (f",,,{a:.8e},{v:.8e}\n" for a, v in zip(t, volts, strict=True))
-        (tmp_path / f"{name}.csv").write_text("".join(rows))
+        _write_plain_tektronix(tmp_path / f"{name}.csv", time + k * (time[-1] - time[0] + 1e-3), volts)
     rec = 'files = {ch1 = "ch1.csv", ch2 = "ch2.csv"}'
     assert main(["measure", str(_spec_with(tmp_path, rec))]) == 2
     err = capsys.readouterr().err
-    assert "channel 'ch2'" in err and "another time base" in err and err.count("\n") == 1, err
+    assert "channel 'ch2'" in err and "overlaps the other channels' times by fewer than 8" in err, err
+    assert err.count("\n") == 1, err
