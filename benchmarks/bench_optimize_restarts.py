@@ -57,6 +57,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import math
 import os
 import time
 
@@ -96,6 +97,17 @@ def restarted_search(changes: dict, config: dict, vary: dict, constraints: dict,
             "evaluations": res.evaluations, "failed": sum(not r.get("ok") for r in res.history),
             "verdict": res.certificate.verdict, "residual": res.certificate.residual,
             "message": res.message, "seconds": time.perf_counter() - t0}
+
+
+def search_result(future) -> dict:
+    """A restarted search's result from its dask ``future``, or, where its task failed (a design that
+    killed its worker: distributed's ``KilledWorker`` after the retries, or any other exception), the
+    failure as a result: ``error`` (the exception's type and text), not feasible, ``lost`` (the run goes
+    on, and the search is not stored: a run again tries it again)."""
+    try:
+        return future.result()
+    except Exception as exc:
+        return {"error": f"{type(exc).__name__}: {exc}", "feasible": False, "seconds": math.nan, "lost": True}
 
 
 def _search_file(cache: str | None, i: int, changes: dict, evaluations: int) -> tuple:
@@ -139,23 +151,39 @@ def sample_records(history: list, vary: dict, sample: int, seed: int) -> list:
     return out
 
 
+def design_seconds(record: dict) -> float:
+    """A design's own seconds: its operating point's, and the settle task's where it had none."""
+    return record.get("seconds", 0.0) + record.get("motion_seconds", 0.0)
+
+
+def four_worker_estimate(history: list, sample: list) -> float:
+    """What 4 workers would make of the multistart, from its designs' own recorded seconds (those
+    read from a cache too: their seconds are the run's that computed them): the sample's designs side
+    by side, over 4, the local searches' and the polish's one after another. Never negative, and the
+    same whether the designs were computed in this run or read from its cache."""
+    sampled = {id(r) for r in sample}
+    return sum(design_seconds(r) for r in sample) / 4.0 + sum(design_seconds(r) for r in history
+                                                               if id(r) not in sampled)
+
+
 def _multistart_summary(ms, recs: list, wall: float, workers: int) -> None:
     """The multistart's table, message and local searches, its designs, failures and wall time (and
-    on 4 workers: the sample's design seconds over 4 instead of over ``workers``)."""
+    on 4 workers: :func:`four_worker_estimate`)."""
     fkey = OBJECTIVES[OBJECTIVE][0]
     print(ms.table())
     print(ms.message)
     print(found_table(ms.found, ms.vary, fkey))
-    sample_s = sum(r.get("seconds", 0.0) for r in recs)
+    sample_s = sum(design_seconds(r) for r in recs)
     failed = [r for r in ms.history if not r.get("ok")]
-    four = wall - sample_s / workers + sample_s / 4
     feasible = sum(r.get("feasible", False) for r in recs)
-    lost = sum(r.get("seconds", 0.0) + r.get("motion_seconds", 0.0) for r in failed)
-    print(f"multistart: {len(ms.history)} designs ({len(recs)} sampled, {feasible} of them feasible, "
+    lost = sum(design_seconds(r) for r in failed)
+    read = f", {ms.cached} of them read from the cache" if ms.cached else ""
+    print(f"multistart: {len(ms.history)} designs{read} ({len(recs)} sampled, {feasible} of them feasible, "
           f"{sum(not r.get('ok') for r in recs)} without an operating point), "
           f"{len(failed)} without an operating point in all costing {lost:.0f} s; "
           f"{wall:.0f} s wall on {workers} workers (the sample's designs {sample_s:.0f} s), "
-          f"on 4 workers about {four:.0f} s", flush=True)
+          f"on 4 workers about {four_worker_estimate(ms.history, recs):.0f} s (the designs' own seconds: "
+          "the sample's over 4, the rest one after another)", flush=True)
 
 
 def main() -> None:
@@ -227,7 +255,10 @@ def main() -> None:
                 report(i, s, " (stored)")
         for future in as_completed(futures):
             i = futures[future]
-            s = future.result()
+            s = search_result(future)
+            if "lost" in s:  # (not stored: a run again tries it again)
+                report(i, s)
+                continue
             path = stored[i][1]
             if path is not None:
                 with open(path + ".part", "w") as fh:
@@ -236,9 +267,10 @@ def main() -> None:
                 os.replace(path + ".part", path)
             report(i, s)
         cobyla_wall = time.perf_counter() - t0
-    print(f"the {len(searches)} searches ({args.search_evaluations} designs at most each): "
-          f"{cobyla_wall:.0f} s wall "
-          f"on {args.workers} workers, {sum(s['seconds'] for s in searches):.0f} s of the searches' own time")
+    failed = sum("error" in s for s in searches)
+    own = sum(s["seconds"] for s in searches if math.isfinite(s["seconds"]))
+    print(f"the {len(searches)} searches ({args.search_evaluations} designs at most each; {failed} failed): "
+          f"{cobyla_wall:.0f} s wall on {args.workers} workers, {own:.0f} s of the searches' own time")
     ok = [s for s in searches if s["feasible"]]
     best = max(ok, key=lambda s: s["fresh"]) if ok else None
     base = ms.baseline["objectives"][fkey]
@@ -251,7 +283,8 @@ def main() -> None:
           f"multistart {mine:.6f} ({mine / base - 1:+.2%}, feasible by a fresh orbit: "
           f"{ms.optimum['feasible']}), "
           f"certificate: {ms.certificate}")
-    print(f"multistart {mine:.6f} vs best of {len(searches)} searches {best['fresh']:.6f} ({fkey}): "
+    print(f"multistart {mine:.6f} vs best of {len(ok)} feasible of {len(searches)} searches "
+          f"{best['fresh']:.6f} ({fkey}): "
           f"at least as good: {'yes' if met else 'no'} ({mine / best['fresh'] - 1:+.3%}); certificate: "
           f"{ms.certificate.verdict} (KKT residual {ms.certificate.residual:.2g}, tolerance "
           f"{ms.certificate.tolerance:g})", flush=True)
