@@ -128,6 +128,25 @@ def test_an_integer_rock_key_is_an_axis():
     assert spec.axes[0].values == (8, 12)
 
 
+def test_a_dimensionless_grid_too_large_builds_no_point(monkeypatch):
+    """The point count is asked before each axis value is checked by building its point: a mistyped
+    size of 19,303 values along one of three axes took 10 s of CPU (21,008 points built), hours
+    at worse sizes, before its refusal."""
+    from impactbar.sweeps import spec as sweep_spec
+
+    def built(*args, **kwargs):
+        raise AssertionError("a point was built for an axis value of a grid refused for its size")
+
+    monkeypatch.setattr(sweep_spec, "_build", built)
+    with pytest.raises(ValueError, match=r"^\[axes\] R \(1696\) x s \(9\) x d \(19303\) make 294640992 grid "
+                                         rf"points; the limit is {MAX_GRID_POINTS}"):
+        parse_spec({"task": "orbits", "load": {"kind": "cosine", "p0": 0.5, "pk": 1.0, "k": 1},
+                    "model": {"s": 100.0, "d": 0.0, "R": 0.5, "n_modes": 0},
+                    "axes": {"R": {"start": 0.0, "stop": 0.9, "num": 1696},
+                             "s": {"start": 1.0, "stop": 100.0, "num": 9},
+                             "d": {"start": 0.0, "stop": 0.1, "num": 19303}}})
+
+
 def test_a_grid_too_large_is_refused_before_any_work(tmp_path):
     """Before: three axes of 10,000 values passed, created the store and died of a MemoryError."""
     axes = {"valve.supply_pressure": {"start": "18 MPa", "stop": "20 MPa", "num": 10_000},

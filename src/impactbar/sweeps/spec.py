@@ -14,7 +14,7 @@ from .._shared.parameters import parameter_value, parameters, with_parameters
 from .._shared.validate import check_int, check_real
 from ..laws import get_law
 from ..loads import LOADS, load_from_record
-from .grid import ChunkedGrid
+from .grid import ChunkedGrid, check_points
 from .parts import DRIVE_MAX_ORBITS, drive_table, law_table
 
 TASKS = ("orbits", "montecarlo", "bifurcation")
@@ -205,6 +205,8 @@ class SweepSpec(ChunkedGrid):
             object.__setattr__(self, "drive", table)
         else:
             object.__setattr__(self, "load", _check_load(self.load))
+        if isinstance(self.axes, tuple | list) and all(isinstance(ax, Axis) for ax in self.axes):
+            check_points(self.axes)  # (before each value is checked by building its point)
         object.__setattr__(self, "axes", _check_axes(self.axes, self))
         object.__setattr__(self, "options", _check_options(self.task, self.options, self))
         cp = self.chunk_points
