@@ -138,3 +138,35 @@ def test_bad_settle_options_are_refused_in_one_line(doc, key):
     with pytest.raises(ValueError) as err:
         parse_spec({**_doc(), **doc})
     assert key in str(err.value) and "\n" not in str(err.value)
+
+
+class _Stalled:
+    """A machine whose piston never strikes (no impacts however long it runs; the settle's runs
+    read through its ``simulate``), recording each run's duration."""
+
+    omega_rad_s = 1.0
+    bar = type("Bar", (), {"length_m": 1.0, "mass_kg": 1.0})()
+
+    def __init__(self):
+        self.runs = []
+
+    def simulate(self, duration_s):
+        self.runs.append(duration_s)
+        trajectory = type("Run", (), {"impact_times": np.zeros(0), "impact_velocities": np.zeros(0)})()
+        return trajectory, None
+
+
+def test_a_machine_that_never_strikes_settles_in_bounded_runs():
+    """Runs from rest growing fourfold while they hold no blow, up to SETTLE_LONGEST times the first
+    (40 blows: 1, 4, 16 s), then classified as it stands: it ran on to 4096 s in its seventh run
+    (14 GB of a circuit's integrator steps, its dask worker killed)."""
+    from impactbar.physical.settle import SETTLE_FIRST_HZ, SETTLE_LONGEST, settle_point, settle_run
+
+    machine = _Stalled()
+    t, v, end = settle_run(machine, 40)
+    first = 40 / SETTLE_FIRST_HZ
+    assert machine.runs == pytest.approx([first, 4 * first, 16 * first], rel=1e-15)
+    assert max(machine.runs) == SETTLE_LONGEST * first and t.size == v.size == 0 and end == 16 * first
+    motion = settle_point(_Stalled(), 40)
+    assert (motion["n_blows"], motion["n_impacts"], motion["settled"]) == (0, 0, False)
+    assert motion["simulated_time"] == 16 * first
