@@ -158,8 +158,7 @@ class _Stalled:
 
 def test_a_machine_that_never_strikes_settles_in_bounded_runs():
     """Runs from rest growing fourfold while they hold no blow, up to SETTLE_LONGEST times the first
-    (40 blows: 1, 4, 16 s), then classified as it stands: it ran on to 4096 s in its seventh run
-    (14 GB of a circuit's integrator steps, its dask worker killed)."""
+    (40 blows: 1, 4, 16 s), then classified as it stands: it ran on to 4096 s in its seventh run."""
     from impactbar.physical.settle import SETTLE_FIRST_HZ, SETTLE_LONGEST, settle_point, settle_run
 
     machine = _Stalled()

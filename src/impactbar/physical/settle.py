@@ -18,7 +18,7 @@ SETTLE_RUNS = 8
 #: the longest run, in units of the first: its blows at a sixteenth of :data:`SETTLE_FIRST_HZ` (2.5 Hz),
 #: below any percussive machine's rate. A machine with fewer blows by then is classified by what that
 #: run holds (without the bound, a design whose piston never struck ran 4 times longer each time: a
-#: drifter's 40 blows, 4096 s of its circuit in the seventh run, 14 GB of integrator steps)
+#: drifter's 40 blows, 4096 s of its circuit in the seventh run)
 SETTLE_LONGEST = 16.0
 
 
