@@ -214,7 +214,10 @@ def main() -> None:
         os.makedirs(args.cache, exist_ok=True)
     fkey = OBJECTIVES[OBJECTIVE][0]
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; {args.workers} workers")
-    with (dask.config.set({"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": []}),
+    # (one retry of a task whose worker died: a search that kills its worker by its memory is tried
+    # twice, some 10 minutes each, not four times)
+    with (dask.config.set({"distributed.scheduler.http.routes": [], "distributed.worker.http.routes": [],
+                           "distributed.scheduler.allowed-failures": 1}),
           LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                        dashboard_address="127.0.0.1:0", scheduler_kwargs={"dashboard": False},
                        worker_dashboard_address=None, silence_logs=logging.ERROR) as cluster,
