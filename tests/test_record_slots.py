@@ -666,3 +666,44 @@ def test_each_record_names_its_slots_once_within_its_size():
     for tup in ("WS_", "TG_"):  # the tuples' places
         positions = [v for k, v in names.items() if k.startswith(tup)]
         assert len(set(positions)) == len(positions), tup
+
+
+#: the two-dimensional records whose columns are named (``_records``' ``PF_*``, ``PI_*``): the exact
+#: blow's pool of wave pieces, a row a piece, and its tangent runs' templates of it
+NAMED_COLUMNS = {"PF", "PI", "PF0", "PI0"}
+
+
+def _column_by_number(index):
+    """Whether a subscript's column (the tuple's last entry) is an integer literal or a slice with
+    one (``3``, ``3:``, ``:5``)."""
+    if _int_literal(index):
+        return True
+    return isinstance(index, ast.Slice) and any(b is not None and _int_literal(b) for b in (index.lower,
+                                                                                            index.upper))
+
+
+def columns_by_number(text):
+    """``(line, source)`` of every column of a :data:`NAMED_COLUMNS` table read or written by a
+    number in the source ``text`` (its syntax tree: code only, f-strings' expressions too)."""
+    return [(node.lineno, ast.unparse(node)) for node in ast.walk(ast.parse(text))
+            if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name)
+            and node.value.id in NAMED_COLUMNS and isinstance(node.slice, ast.Tuple)
+            and len(node.slice.elts) == 2 and _column_by_number(node.slice.elts[1])]
+
+
+def test_the_column_scan_finds_a_pool_column_by_number():
+    text = ('t0, nx = PF[p, 0], PI[p, PI_NEXT]\n'
+            'PF[rows, 3:] = math.nan; PI[rows, PI_TERMS:] = 0\n'
+            'x = PF[PI[p, 0], PF_START] + NSF[j, 0] + PF[p] + PI0[cur, 2]\n'
+            's = "PF[p, 0]" + f"{PI[q, 1]}"\n')
+    assert sorted(columns_by_number(text)) == [(1, "PF[p, 0]"), (2, "PF[rows, 3:]"), (3, "PI0[cur, 2]"),
+                                               (3, "PI[p, 0]"), (4, "PI[q, 1]")]
+
+
+def test_no_module_reads_a_pool_column_by_its_number():
+    """The exact blow's pool of wave pieces (``PF``: start, valid, ref and the two cached integrals;
+    ``PI``: next, first term, count, flag) is read and written by its columns' names."""
+    top = Path(impactbar.__file__).parent
+    found = [f"{path.relative_to(top).as_posix()}:{line}: {source}" for path in sorted(top.rglob("*.py"))
+             for line, source in columns_by_number(path.read_text())]
+    assert found == [], "pool columns by number (name them in laws/rodrock/_records.py):\n" + "\n".join(found)

@@ -29,7 +29,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     piece_span,
     pool_load,
 )
-from ._records import (  # the records' slots
+from ._records import (  # the records' slots  # the pool's columns
     B_AUX,
     BI_BRANCH,
     BS_P,
@@ -46,6 +46,9 @@ from ._records import (  # the records' slots
     CT_PSI,
     CT_TACC,
     CT_THR,
+    PF_INT,
+    PF_INT2,
+    PI_COUNT,
     PR_CBIT,
     PR_CP,
     PR_CROD,
@@ -67,22 +70,23 @@ from ._records import (  # the records' slots
 @numba.njit(cache=CACHE, nogil=True)
 def _cached_integrals(p, L, pool, B, N, first, second):
     """``int f`` (with ``first``) and ``int f^2`` (with ``second``) of the closed piece ``p`` over its
-    whole span ``L``, each computed once (``PF[p, 3:5]``, NaN until then)."""
+    whole span ``L``, each computed once (``PF[p, PF_INT]``, ``PF[p, PF_INT2]``, NaN until then)."""
     PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
-    one = first and math.isnan(PF[p, 3])
-    two = second and math.isnan(PF[p, 4])
+    one = first and math.isnan(PF[p, PF_INT])
+    two = second and math.isnan(PF[p, PF_INT2])
     if one or two:
         pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
         if one:
-            PF[p, 3] = blk_integral(B, N, lam, 0.0, L)
+            PF[p, PF_INT] = blk_integral(B, N, lam, 0.0, L)
         if two:
-            PF[p, 4] = blk_integral_sq(B, N, lam, 0.0, L)
+            PF[p, PF_INT2] = blk_integral_sq(B, N, lam, 0.0, L)
 
 
 @numba.njit(cache=CACHE, nogil=True)
 def _chan_sums(c, t, CH_T, pool, B, N, second):
     """``int f`` and, with ``second`` (else 0), ``int f^2`` over the wave now in the channel's segment
-    (emitted in ``[t - T, t]``), a closed piece's whole integrals computed once (``PF[p, 3:5]``);
+    (emitted in ``[t - T, t]``), a closed piece's whole integrals computed once (``PF[p, PF_INT]``,
+    ``PF[p, PF_INT2]``);
     ``pool`` as :func:`emit`'s, ``B, N`` a scratch block."""
     PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     lo = t - CH_T[c]
@@ -91,12 +95,12 @@ def _chan_sums(c, t, CH_T, pool, B, N, second):
     s2 = 0.0
     while p >= 0:
         t0, nx, tend, a, b = piece_span(PF, PI, p, lo, t)
-        if b > a and PI[p, 2] > 0:
+        if b > a and PI[p, PI_COUNT] > 0:
             if nx >= 0 and a == t0 and b == tend:  # the whole of a closed piece: computed once
                 _cached_integrals(p, tend - t0, pool, B, N, True, second)
-                s1 += PF[p, 3]
+                s1 += PF[p, PF_INT]
                 if second:
-                    s2 += PF[p, 4]
+                    s2 += PF[p, PF_INT2]
             else:
                 pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
                 s1 += blk_integral(B, N, lam, a - t0, b - t0)
@@ -129,14 +133,14 @@ def chan_closed_sq(c, t, CH_T, pool, B, N, exact):
     s2 = 0.0
     while p >= 0:
         t0, nx, tend, _, _ = piece_span(PF, PI, p, lo, t)
-        if nx >= 0 and lo <= t0 < tend <= t and PI[p, 2] > 0:
+        if nx >= 0 and lo <= t0 < tend <= t and PI[p, PI_COUNT] > 0:
             L = tend - t0
-            if exact or not math.isnan(PF[p, 4]):
+            if exact or not math.isnan(PF[p, PF_INT2]):
                 _cached_integrals(p, L, pool, B, N, False, True)
-                s2 += PF[p, 4]
+                s2 += PF[p, PF_INT2]
             else:
                 _cached_integrals(p, L, pool, B, N, True, False)
-                s2 += PF[p, 3] * PF[p, 3] / L
+                s2 += PF[p, PF_INT] * PF[p, PF_INT] / L
         if tend >= t:
             break
         p = nx

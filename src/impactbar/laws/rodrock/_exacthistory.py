@@ -22,7 +22,15 @@ from ._exactpieces import (
     pool_load,
     pool_unpack,
 )
-from ._records import HMAX_T, HMAX_V  # the result's slots
+from ._records import (  # the result's slots  # the pool's columns
+    HMAX_T,
+    HMAX_V,
+    PF_REF,
+    PF_START,
+    PI_COUNT,
+    PI_FLAG,
+    PI_NEXT,
+)
 
 NOBIN = np.zeros((1, 1))
 
@@ -68,11 +76,11 @@ def eval_bit(PF, PI, TK, TC, lam, head, times, pen, force, lamk):
         if p < 0:
             force[i] = 0.0
             continue
-        while PI[p, 0] >= 0 and PF[PI[p, 0], 0] <= times[i]:
-            p = PI[p, 0]
+        while PI[p, PI_NEXT] >= 0 and PF[PI[p, PI_NEXT], PF_START] <= times[i]:
+            p = PI[p, PI_NEXT]
         v = pen[i]
-        force[i] = max(lamk[PI[p, 3]] * v, 0.0)
-        pen[i] = v + PF[p, 2]
+        force[i] = max(lamk[PI[p, PI_FLAG]] * v, 0.0)
+        pen[i] = v + PF[p, PF_REF]
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -86,9 +94,9 @@ def _eval_into(PF, PI, TK, TC, lam, head, times, out, kind, lamk, B, N):
     loaded = -1
     for i in range(times.size):
         t = times[i]
-        while PI[p, 0] >= 0 and PF[PI[p, 0], 0] <= t:
-            p = PI[p, 0]
-        tau = t - PF[p, 0]
+        while PI[p, PI_NEXT] >= 0 and PF[PI[p, PI_NEXT], PF_START] <= t:
+            p = PI[p, PI_NEXT]
+        tau = t - PF[p, PF_START]
         if tau < 0.0:
             tau = 0.0
         if p != loaded:
@@ -96,9 +104,9 @@ def _eval_into(PF, PI, TK, TC, lam, head, times, out, kind, lamk, B, N):
             loaded = p
         v = blk_value(B, N, lam, tau)
         if kind == 1:
-            v += PF[p, 2]
+            v += PF[p, PF_REF]
         elif kind == 2:
-            v = max(lamk[PI[p, 3]] * v, 0.0)
+            v = max(lamk[PI[p, PI_FLAG]] * v, 0.0)
         out[i] = v
 
 
@@ -177,11 +185,11 @@ def history_max(PF, PI, TK, TC, lam, head, t_end, res):
     tb = 0.0
     p = head
     while p >= 0:
-        nx = PI[p, 0]
-        L = min(PF[nx, 0] if nx >= 0 else t_end, t_end) - PF[p, 0]
+        nx = PI[p, PI_NEXT]
+        L = min(PF[nx, PF_START] if nx >= 0 else t_end, t_end) - PF[p, PF_START]
         if L < 0.0:  # (the pieces from t_end on)
             break
-        if nx >= 0 and L <= SNAP * abs(PF[nx, 0]):
+        if nx >= 0 and L <= SNAP * abs(PF[nx, PF_START]):
             # a sliver between two arrivals that rounding set apart (incommensurate segments): its
             # value mixes the old wave on one input with the new on the other, a force that never acts.
             # Such are the solver's own (:func:`advance`'s ``SNAP``), not anything shorter than 1e-11
@@ -189,13 +197,13 @@ def history_max(PF, PI, TK, TC, lam, head, t_end, res):
             # and its peak, the largest force of the blow at a junction, was skipped
             p = nx
             continue
-        if PI[p, 2] == 0:
+        if PI[p, PI_COUNT] == 0:
             v = 0.0
-            tv = PF[p, 0]
+            tv = PF[p, PF_START]
         else:
             pool_unpack(B, N, p, PI, TK, TC)
             v, tau = piece_max(B, N, lam, BIN, L, stack)
-            tv = PF[p, 0] + tau
+            tv = PF[p, PF_START] + tau
         if v > best + 8.0 * EPS * abs(v):
             best = v
             tb = tv
@@ -213,11 +221,11 @@ def history_integral(PF, PI, TK, TC, lam, head, t_end):
     total = 0.0
     p = head
     while p >= 0:
-        nx = PI[p, 0]
-        t0 = PF[p, 0]
-        t1 = min(PF[nx, 0] if nx >= 0 else t_end, t_end)
+        nx = PI[p, PI_NEXT]
+        t0 = PF[p, PF_START]
+        t1 = min(PF[nx, PF_START] if nx >= 0 else t_end, t_end)
         a = max(t0, 0.0)
-        if t1 > a and PI[p, 2] > 0:
+        if t1 > a and PI[p, PI_COUNT] > 0:
             pool_load(B, N, p, 0.0, lam, NOBIN, PI, TK, TC)  # (no shift: no binomials read)
             total += blk_integral(B, N, lam, a - t0, t1 - t0)
         if t1 >= t_end:

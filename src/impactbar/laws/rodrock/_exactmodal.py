@@ -15,6 +15,7 @@ from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from ._exactintegrals import blk_integral_exp
 from ._exactpieces import DC, piece_span, pool_load
+from ._records import PI_COUNT  # the pool's columns
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -37,7 +38,7 @@ def piston_integrals(pool, heads, travel, t, om, out):
             p = heads[2 * i + side]
             while p >= 0:
                 t0, nx, tend, a, b = piece_span(PF, PI, p, lo, t)
-                if b > a and PI[p, 2] > 0:
+                if b > a and PI[p, PI_COUNT] > 0:
                     pool_load(B, N, p, 0.0, lam, BIN, PI, TK, TC)
                     for n in range(om.size):
                         w = om[n]

@@ -13,11 +13,20 @@ from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
-from ._records import (  # the records' slots
+from ._records import (  # the records' slots  # the pool's columns
     CNT_FULL,
     CNT_PIECES,
     CNT_TERMS,
     E_CONST,
+    PF_INT,
+    PF_INT2,
+    PF_REF,
+    PF_START,
+    PF_VALID,
+    PI_COUNT,
+    PI_FLAG,
+    PI_NEXT,
+    PI_TERMS,
 )
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
@@ -455,8 +464,8 @@ def blk_prune(B, N, lam, tol, Lb):
 def pool_unpack(B, N, piece, PI, TK, TC):
     """The pool's piece ``piece`` into the block ``B, N``, from its own origin."""
     blk_clear(B, N)
-    ts = PI[piece, 1]
-    for k in range(ts, ts + PI[piece, 2]):
+    ts = PI[piece, PI_TERMS]
+    for k in range(ts, ts + PI[piece, PI_COUNT]):
         e = TK[k] // DC
         d = TK[k] - e * DC
         B[e, d] += TC[k]
@@ -469,9 +478,9 @@ def piece_span(PF, PI, p, lo, t):
     """Piece ``p`` of a channel's list read up to ``t``: ``(t0, nx, tend, a, b)``, its start ``t0``,
     the next piece ``nx`` (-1: none), its end ``tend`` (``t`` while it is the last) and its part
     ``[a, b]`` within ``[lo, t]`` (none where ``b <= a``)."""
-    t0 = PF[p, 0]
-    nx = PI[p, 0]
-    tend = PF[nx, 0] if nx >= 0 else t
+    t0 = PF[p, PF_START]
+    nx = PI[p, PI_NEXT]
+    tend = PF[nx, PF_START] if nx >= 0 else t
     return t0, nx, tend, max(t0, lo), min(tend, t)
 
 
@@ -507,8 +516,8 @@ def _shift_scale(e, k, tail, delta, dt, lam, BIN, PI, TK, TC):
     sum_{d >= k} |c_ed| binom(d, k) (|delta|^(d - k) + (d - k) |delta|^(d - k - 1) dt)``."""
     ad = abs(delta)
     r = 0.0
-    ts = PI[tail, 1]
-    for i in range(ts, ts + PI[tail, 2]):
+    ts = PI[tail, PI_TERMS]
+    for i in range(ts, ts + PI[tail, PI_COUNT]):
         ei = TK[i] // DC
         d = TK[i] - ei * DC
         if ei == e and d >= k:
@@ -555,13 +564,13 @@ def _fill_piece(B, N, TK, TC, CNT, PF, PI, k, valid, ref, flag):
     st, nt = _write_terms(B, N, TK, TC, CNT)
     if st < 0:
         return False
-    PI[k, 1] = st
-    PI[k, 2] = nt
-    PI[k, 3] = flag
-    PF[k, 1] = valid
-    PF[k, 2] = ref
-    PF[k, 3] = math.nan
-    PF[k, 4] = math.nan
+    PI[k, PI_TERMS] = st
+    PI[k, PI_COUNT] = nt
+    PI[k, PI_FLAG] = flag
+    PF[k, PF_VALID] = valid
+    PF[k, PF_REF] = ref
+    PF[k, PF_INT] = math.nan
+    PF[k, PF_INT2] = math.nan
     return True
 
 
@@ -576,11 +585,12 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     blk_prune(B, N, lam, tol, min(Lb, max(valid - a, 0.0)))
     tail = CHI[c, 0]
     if tail >= 0:
-        t0 = PF[tail, 0]
+        t0 = PF[tail, PF_START]
         if t0 == a:  # replace (nobody has received it yet)
             return _fill_piece(B, N, TK, TC, CNT, PF, PI, tail, valid, ref, flag)
-        if PF[tail, 1] == INF and PI[tail, 3] == flag and valid == INF and PF[tail, 2] == ref:
-            if PI[tail, 2] == 0:
+        if PF[tail, PF_VALID] == INF and PI[tail, PI_FLAG] == flag and valid == INF and \
+                PF[tail, PF_REF] == ref:
+            if PI[tail, PI_COUNT] == 0:
                 if blk_is_zero(N):
                     return True
             else:
@@ -593,11 +603,11 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
         return False
     if not _fill_piece(B, N, TK, TC, CNT, PF, PI, npc, valid, ref, flag):
         return False
-    PF[npc, 0] = a
-    PI[npc, 0] = -1
+    PF[npc, PF_START] = a
+    PI[npc, PI_NEXT] = -1
     CNT[CNT_PIECES] = npc + 1
     if tail >= 0:
-        PI[tail, 0] = npc
+        PI[tail, PI_NEXT] = npc
     else:
         CHI[c, 1] = npc  # a history: its first piece
     CHI[c, 0] = npc
@@ -614,11 +624,11 @@ def advance(c, a, CHI, CH_T, PF, PI):
     T = CH_T[c]
     lim = a + SNAP * abs(a)
     while True:
-        nx = PI[cur, 0]
+        nx = PI[cur, PI_NEXT]
         if nx < 0:
             CHI[c, 1] = cur
             return cur, INF
-        arr = PF[nx, 0] + T
+        arr = PF[nx, PF_START] + T
         if arr <= lim:
             cur = nx
         else:
@@ -649,12 +659,12 @@ def load_input(B, N, c, piece, a, CH_T, PF, PI, TK, TC, lam, BIN):
     ``e^{1.5e12 * 1.35e-13}``: the spike it reflects from the bit reached the shank 22 % too high, its
     peak force 17 % high. Shifted on by the ulp between an arrival and the window's end it was taken
     at, ``k_u/Z = 2e12``, the spike's top decayed by ``e^{-2e12 * 4.4e-16}``: 9e-4 low.)"""
-    arr = PF[piece, 0] + CH_T[c]
+    arr = PF[piece, PF_START] + CH_T[c]
     delta = a - arr
     if delta <= SNAP * abs(a):
         delta = 0.0
     pool_load(B, N, piece, delta, lam, BIN, PI, TK, TC)
-    v = PF[piece, 1]
+    v = PF[piece, PF_VALID]
     return v + CH_T[c] if v < INF else INF
 
 

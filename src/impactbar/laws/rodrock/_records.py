@@ -156,6 +156,19 @@ B_SCR1 = 13  # the crossing search's three scratch blocks
 B_SCR2 = 14
 B_SCR3 = 15
 
+# -- PF, PI: the wave-piece pool's pieces, a row each (float64 and int64 columns) -------------------
+PF_START = 0  # the piece's start (emission) time
+PF_VALID = 1  # the time up to which its series holds (inf: a closed form)
+PF_REF = 2  # its reference time (its exponentials' origin)
+PF_INT = 3  # its integral over the span L, cached (NaN until computed)
+PF_INT2 = 4  # the integral of its square over L, cached (NaN until computed)
+PF_COLS = 5
+PI_NEXT = 0  # the next piece of its channel (-1: none)
+PI_TERMS = 1  # its first term in the terms' arrays TK, TC
+PI_COUNT = 2  # its count of terms
+PI_FLAG = 3  # its flag (what emitted it)
+PI_COLS = 4
+
 # -- the chain's ends and the exponent table ------------------------------------------------------
 SEG_FAR = 0  # the piston's driven-end segment (SZ, ST count from the piston's far end)
 CH_FAR_OUT = 0  # the channel of the wave leaving the piston's far end (f of segment 1)

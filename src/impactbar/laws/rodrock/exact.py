@@ -82,6 +82,7 @@ from . import _exactpieces as P
 from . import _records as S
 from ._exactdata import _Data
 from ._exactresume import _resumed, _run, pool_bytes
+from ._records import PF_INT, PF_REF, PF_START, PF_VALID, PI_COUNT, PI_NEXT, PI_TERMS  # the pool's columns
 from .exactresult import CERTIFIED as CERTIFIED
 from .exactresult import ExactBlow as ExactBlow
 from .exactresult import _result
@@ -427,7 +428,7 @@ def _pool_arrays(rows, terms, reuse):
         kept = getattr(_POOLS, "arrays", None)
         if kept is not None and kept.PF.shape[0] == rows and kept.TK.size == terms:
             return kept
-    arrays = _PoolArrays(np.empty((rows, 5)), np.empty((rows, 4), dtype=np.int64),
+    arrays = _PoolArrays(np.empty((rows, S.PF_COLS)), np.empty((rows, S.PI_COLS), dtype=np.int64),
                          np.empty(terms, dtype=np.int64), np.empty(terms, dtype=complex))
     if reuse and pool_bytes(rows, terms) <= _REUSED_POOL_BYTES:
         _POOLS.arrays = arrays
@@ -457,14 +458,16 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
         nz = coefs != 0.0
         count = int(np.count_nonzero(nz))
         TK[nt:nt + count], TC[nt:nt + count] = keys[nz], coefs[nz]
-        PI[n, 1], PI[n, 2] = nt, count
+        PI[n, PI_TERMS], PI[n, PI_COUNT] = nt, count
         return nt + count
 
     for i in range(1, J + 1):
         for side, (c, val) in enumerate(((2 * (i - 1), 0.5 * Z[i - 1] * Vn),
                                          (2 * i - 1, -0.5 * Z[i - 1] * Vn))):
             CH_T[c] = T[i - 1]
-            PF[n] = (-T[i - 1], math.inf, 0.0, math.nan, math.nan)  # (NaN: integrals not cached)
+            # (the columns in order: start, valid, ref, the integrals NaN until cached; next, first term,
+            # count, flag)
+            PF[n] = (-T[i - 1], math.inf, 0.0, math.nan, math.nan)
             PI[n] = (-1, nt, 0, 0)
             if i <= n_p and init is not None:
                 nt = put(n, nt, *init[2 * (i - 1) + side])
@@ -472,7 +475,7 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
                 TK[nt] = 0
                 TC[nt] = val
                 nt += 1
-                PI[n, 2] = 1
+                PI[n, PI_COUNT] = 1
             CHI[c, 0] = n
             CHI[c, 1] = n
             n += 1
@@ -481,11 +484,12 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     starts = np.array([-1.0]) if drive is None else np.asarray(drive.starts, dtype=float)
     m = starts.size
     rows = slice(n, n + m)
-    PF[rows, 0], PF[rows, 1], PF[rows, 2], PF[rows, 3:] = starts, math.inf, 0.0, math.nan
-    PI[rows, 0] = np.arange(n + 1, n + m + 1)
-    PI[n + m - 1, 0] = -1
-    PI[rows, 1:] = 0
-    PI[rows, 1] = nt
+    PF[rows, PF_START], PF[rows, PF_VALID], PF[rows, PF_REF] = starts, math.inf, 0.0
+    PF[rows, PF_INT:] = math.nan
+    PI[rows, PI_NEXT] = np.arange(n + 1, n + m + 1)
+    PI[n + m - 1, PI_NEXT] = -1
+    PI[rows, PI_TERMS:] = 0
+    PI[rows, PI_TERMS] = nt
     if drive is not None:
         _, keys, coefs, sizes = drive
         nz = coefs != 0.0
@@ -493,8 +497,8 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
         TK[nt:nt + count], TC[nt:nt + count] = keys[nz], coefs[nz]
         before = np.concatenate(([0], np.cumsum(nz)))  # nonzero terms before each term
         ends = np.cumsum(sizes)
-        PI[rows, 1] = nt + before[ends - sizes]
-        PI[rows, 2] = before[ends] - before[ends - sizes]
+        PI[rows, PI_TERMS] = nt + before[ends - sizes]
+        PI[rows, PI_COUNT] = before[ends] - before[ends - sizes]
         nt += count
     CHI[c, 1], CHI[c, 0] = n, n + m - 1
     n += m

@@ -21,12 +21,14 @@ from __future__ import annotations
 import numpy as np
 
 from . import _exacttangent as TG
-from ._records import (  # the records' slots
+from ._records import (  # the records' slots  # the pool's columns
     BS_PPERM,
     CI_GIVEUP,
     CNT_PIECES,
     CNT_TERMS,
     CT_T,
+    PI_COUNT,
+    PI_TERMS,
     PR_DRIVEN,
     PR_FEED,
     PR_FIXED,
@@ -178,7 +180,8 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
         template = (PF[:n0].copy(), PI[:n0].copy(), TK[:nt0].copy(), TC[:nt0].copy(), CNT.copy(),
                     CHI.copy(), wt[WS_NSI].copy())
         owners = list(range(2 * n_p)) + list(range(2 * J, n0))  # the piston's and the drive's
-        slots = np.concatenate([np.arange(PI[c, 1], PI[c, 1] + PI[c, 2]) for c in owners])
+        slots = np.concatenate([np.arange(PI[c, PI_TERMS], PI[c, PI_TERMS] + PI[c, PI_COUNT])
+                                for c in owners])
         tg = (np.zeros(icap), np.zeros(icap), np.zeros(icap), np.zeros(icap, dtype=np.int64),
               np.full((3 * J + 2, 2), -1, dtype=np.int64), np.zeros(TCUR_SIZE, dtype=np.int64))
         out = np.zeros((K, n_p, M, 2), dtype=complex)

@@ -15,6 +15,7 @@ from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
 from ._bit import feed_gain
+from ._records import PF_START, PI_COUNT, PI_NEXT  # the pool's columns
 
 __all__ = ["CERTIFIED", "ExactBlow"]
 
@@ -141,8 +142,8 @@ class ExactBlow:
         PF, PI, _, _, CHI, _, _ = pools
         p, out = int(CHI[2 * nodes + 1 + j, 1]), [0.0, self.duration]
         while p >= 0:
-            out.append(float(PF[p, 0]))
-            p = int(PI[p, 0])
+            out.append(float(PF[p, PF_START]))
+            p = int(PI[p, PI_NEXT])
         return np.unique(np.clip(out, 0.0, self.duration))
 
     def junction_impulse(self, j: int) -> float:
@@ -178,10 +179,10 @@ class ExactBlow:
         _, pools, nodes, _ = self._hist
         PF, PI, _, _, CHI, _, _ = pools
         p = int(CHI[2 * nodes + 1 + self.contact_junction, 1])
-        while p >= 0 and PF[p, 0] < self.duration:
-            if PI[p, 2] == 0 and PF[p, 0] > 0.0:
-                return float(PF[p, 0])
-            p = int(PI[p, 0])
+        while p >= 0 and PF[p, PF_START] < self.duration:
+            if PI[p, PI_COUNT] == 0 and PF[p, PF_START] > 0.0:
+                return float(PF[p, PF_START])
+            p = int(PI[p, PI_NEXT])
         return self.duration
 
     def penetration(self, t) -> np.ndarray:
