@@ -12,16 +12,6 @@ import numpy as np
 from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
-from ._records import (  # the pool's columns
-    PF_INT,
-    PF_REF,
-    PF_START,
-    PF_VALID,
-    PI_COUNT,
-    PI_FLAG,
-    PI_NEXT,
-    PI_TERMS,
-)
 
 __all__: list[str] = []
 
@@ -72,14 +62,14 @@ def _chain(PI, first, last, most):
     parts, r, n = [], first, 0
     while n < most:
         stop = min(PI.shape[0], r + most - n)
-        off = np.flatnonzero(PI[r:stop, PI_NEXT] != np.arange(r + 1, stop + 1))
+        off = np.flatnonzero(PI[r:stop, S.PI_NEXT] != np.arange(r + 1, stop + 1))
         end = r + (int(off[0]) if off.size else stop - r - 1)  # (the run's last row)
         if r <= last <= end:
             parts.append(np.arange(r, last + 1))
             return np.concatenate(parts)
         parts.append(np.arange(r, end + 1))
         n += end + 1 - r
-        r = int(PI[end, PI_NEXT])
+        r = int(PI[end, S.PI_NEXT])
         if r < 0:
             return None
     return None
@@ -109,15 +99,15 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap, force_new=False, *, bound
         c = 2 * small[S.WS_SZ - 4].size  # the drive's channel, its first piece row c (_workspace)
         cur = int(CHI0[c, 1])  # the drive's piece the run was in, and the chain up to the next one
         rows = _chain(PI0, c, cur, starts.size)
-        nxt = int(PI0[cur, PI_NEXT]) if cur not in tails else -1
+        nxt = int(PI0[cur, S.PI_NEXT]) if cur not in tails else -1
         if rows is None or nxt < 0 or rows.size >= starts.size:
             continue
         i = rows.size - 1
-        n_old = PI0[rows, PI_COUNT]
-        at = np.repeat(PI0[rows, PI_TERMS] - np.concatenate(([0], np.cumsum(n_old)[:-1])), n_old) + \
+        n_old = PI0[rows, S.PI_COUNT]
+        at = np.repeat(PI0[rows, S.PI_TERMS] - np.concatenate(([0], np.cumsum(n_old)[:-1])), n_old) + \
             np.arange(int(n_old.sum()))
-        if not (np.array_equal(PF0[rows, PF_START], starts[:i + 1]) and PF0[nxt, PF_START] == starts[i + 1]
-                and np.array_equal(n_old, counts[:i + 1])
+        if not (np.array_equal(PF0[rows, S.PF_START], starts[:i + 1])
+                and PF0[nxt, S.PF_START] == starts[i + 1] and np.array_equal(n_old, counts[:i + 1])
                 and np.array_equal(TK0[at], k_nz[:at.size]) and np.array_equal(TC0[at], c_nz[:at.size])):
             continue
         npc, nt = int(CNT0[S.CNT_PIECES]), int(CNT0[S.CNT_TERMS])
@@ -139,15 +129,15 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap, force_new=False, *, bound
             PF[:npc], PI[:npc], TK[:nt], TC[:nt] = PF0[:npc], PI0[:npc], TK0[:nt], TC0[:nt]
         PF[tails], PI[tails] = tail_f, tail_i
         r = slice(npc, npc + new)
-        PF[r, PF_START], PF[r, PF_VALID], PF[r, PF_REF] = starts[i + 1:], math.inf, 0.0
-        PF[r, PF_INT:] = math.nan
-        PI[r, PI_NEXT] = np.arange(npc + 1, npc + new + 1)
-        PI[npc + new - 1, PI_NEXT] = -1
-        PI[r, PI_TERMS] = nt + before[i + 1:-1] - before[i + 1]
-        PI[r, PI_COUNT] = counts[i + 1:]
-        PI[r, PI_FLAG] = 0
+        PF[r, S.PF_START], PF[r, S.PF_VALID], PF[r, S.PF_REF] = starts[i + 1:], math.inf, 0.0
+        PF[r, S.PF_INT:] = math.nan
+        PI[r, S.PI_NEXT] = np.arange(npc + 1, npc + new + 1)
+        PI[npc + new - 1, S.PI_NEXT] = -1
+        PI[r, S.PI_TERMS] = nt + before[i + 1:-1] - before[i + 1]
+        PI[r, S.PI_COUNT] = counts[i + 1:]
+        PI[r, S.PI_FLAG] = 0
         TK[nt:nt + new_t], TC[nt:nt + new_t] = k_nz[before[i + 1]:], c_nz[before[i + 1]:]
-        PI[cur, PI_NEXT] = npc  # (the snapshot's later pieces of the drive left unlinked)
+        PI[cur, S.PI_NEXT] = npc  # (the snapshot's later pieces of the drive left unlinked)
         ws = (PF, PI, TK, TC, *(x.copy() for x in small))
         ws[S.WS_CHI][c, 0] = npc + new - 1
         ws[S.WS_CNT][S.CNT_PIECES], ws[S.WS_CNT][S.CNT_TERMS] = npc + new, nt + new_t
