@@ -668,9 +668,10 @@ def test_each_record_names_its_slots_once_within_its_size():
         assert len(set(positions)) == len(positions), tup
 
 
-#: the two-dimensional records whose columns are named (``_records``' ``PF_*``, ``PI_*``): the exact
-#: blow's pool of wave pieces, a row a piece, and its tangent runs' templates of it
-NAMED_COLUMNS = {"PF", "PI", "PF0", "PI0"}
+#: the two-dimensional records whose columns are named (``_records``' ``PF_*``, ``PI_*``, ``CHI_*``,
+#: ``ICH_*``): the exact blow's pool of wave pieces, a row a piece, its channels' lists, a row a
+#: channel, the tangent runs' templates of them and their impulse queues
+NAMED_COLUMNS = {"PF", "PI", "PF0", "PI0", "CHI", "CHI0", "ICH"}
 
 
 def _column_by_number(index):
@@ -694,7 +695,7 @@ def columns_by_number(text):
 def test_the_column_scan_finds_a_pool_column_by_number():
     text = ('t0, nx = PF[p, 0], PI[p, PI_NEXT]\n'
             'PF[rows, 3:] = math.nan; PI[rows, PI_TERMS:] = 0\n'
-            'x = PF[PI[p, 0], PF_START] + NSF[j, 0] + PF[p] + PI0[cur, 2]\n'
+            'x = PF[PI[p, 0], PF_START] + NSF[j, 0] + PF[p] + PI0[cur, 2] + CHI[c, CHI_HEAD]\n'
             's = "PF[p, 0]" + f"{PI[q, 1]}"\n')
     assert sorted(columns_by_number(text)) == [(1, "PF[p, 0]"), (2, "PF[rows, 3:]"), (3, "PI0[cur, 2]"),
                                                (3, "PI[p, 0]"), (4, "PI[q, 1]")]
@@ -702,7 +703,8 @@ def test_the_column_scan_finds_a_pool_column_by_number():
 
 def test_no_module_reads_a_pool_column_by_its_number():
     """The exact blow's pool of wave pieces (``PF``: start, valid, ref and the two cached integrals;
-    ``PI``: next, first term, count, flag) is read and written by its columns' names."""
+    ``PI``: next, first term, count, flag) and its channels' lists (``CHI``: tail, head; the tangent's
+    impulse queues ``ICH`` alike) are read and written by their columns' names."""
     top = Path(impactbar.__file__).parent
     found = [f"{path.relative_to(top).as_posix()}:{line}: {source}" for path in sorted(top.rglob("*.py"))
              for line, source in columns_by_number(path.read_text())]

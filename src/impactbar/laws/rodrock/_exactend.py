@@ -29,7 +29,7 @@ from ._exactpieces import (  # the pieces' algebra, the crossings, the pool and 
     piece_span,
     pool_load,
 )
-from ._records import (  # the records' slots  # the pool's columns
+from ._records import (  # the records' slots and the pool's columns
     B_AUX,
     BI_BRANCH,
     BS_P,
@@ -38,6 +38,7 @@ from ._records import (  # the records' slots  # the pool's columns
     BS_RMAX,
     BS_W,
     BS_X,
+    CHI_HEAD,
     CI_WIN,
     CT_EP,
     CT_ER,
@@ -90,7 +91,7 @@ def _chan_sums(c, t, CH_T, pool, B, N, second):
     ``pool`` as :func:`emit`'s, ``B, N`` a scratch block."""
     PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     lo = t - CH_T[c]
-    p = CHI[c, 1]
+    p = CHI[c, CHI_HEAD]
     s1 = 0.0
     s2 = 0.0
     while p >= 0:
@@ -129,7 +130,7 @@ def chan_closed_sq(c, t, CH_T, pool, B, N, exact):
     cached, several times cheaper: no products of pairs of exponents)."""
     PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     lo = t - CH_T[c]
-    p = CHI[c, 1]
+    p = CHI[c, CHI_HEAD]
     s2 = 0.0
     while p >= 0:
         t0, nx, tend, _, _ = piece_span(PF, PI, p, lo, t)

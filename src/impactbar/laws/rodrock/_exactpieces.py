@@ -13,7 +13,9 @@ from ..._shared.literals import plain_literals
 from ..._shared.wrappers import internal_kernels
 from ...dynamics.compiled import CACHE
 from ._exactintegrals import _expl, blk_integral, blk_integral_sq, blk_value, moments  # noqa: F401 (the kernel's)
-from ._records import (  # the records' slots  # the pool's columns
+from ._records import (  # the records' slots and the pool's columns
+    CHI_HEAD,
+    CHI_TAIL,
     CNT_FULL,
     CNT_PIECES,
     CNT_TERMS,
@@ -583,7 +585,7 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     ``pool`` is the tuple ``(PF, PI, TK, TC, CNT, CHI, lam, BIN)``; ``S, NS`` a scratch block."""
     PF, PI, TK, TC, CNT, CHI, lam, BIN = pool
     blk_prune(B, N, lam, tol, min(Lb, max(valid - a, 0.0)))
-    tail = CHI[c, 0]
+    tail = CHI[c, CHI_TAIL]
     if tail >= 0:
         t0 = PF[tail, PF_START]
         if t0 == a:  # replace (nobody has received it yet)
@@ -609,8 +611,8 @@ def emit(c, a, B, N, valid, flag, ref, pool, S, NS, tol, Lb):
     if tail >= 0:
         PI[tail, PI_NEXT] = npc
     else:
-        CHI[c, 1] = npc  # a history: its first piece
-    CHI[c, 0] = npc
+        CHI[c, CHI_HEAD] = npc  # a history: its first piece
+    CHI[c, CHI_TAIL] = npc
     return True
 
 
@@ -620,19 +622,19 @@ def advance(c, a, CHI, CH_T, PF, PI):
     next piece's arrival (inf if not emitted yet). An arrival within ``SNAP`` of ``a`` (relative) has
     arrived: break points equal but for the rounding of sums of travel times, summed in different
     orders (a stepped piston's and rod's paths), are one."""
-    cur = CHI[c, 1]
+    cur = CHI[c, CHI_HEAD]
     T = CH_T[c]
     lim = a + SNAP * abs(a)
     while True:
         nx = PI[cur, PI_NEXT]
         if nx < 0:
-            CHI[c, 1] = cur
+            CHI[c, CHI_HEAD] = cur
             return cur, INF
         arr = PF[nx, PF_START] + T
         if arr <= lim:
             cur = nx
         else:
-            CHI[c, 1] = cur
+            CHI[c, CHI_HEAD] = cur
             return cur, arr
 
 

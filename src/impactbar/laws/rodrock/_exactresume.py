@@ -97,7 +97,7 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap, force_new=False, *, bound
                 not np.array_equal(small[S.WS_PR - 4][same], PR[same]):
             continue
         c = 2 * small[S.WS_SZ - 4].size  # the drive's channel, its first piece row c (_workspace)
-        cur = int(CHI0[c, 1])  # the drive's piece the run was in, and the chain up to the next one
+        cur = int(CHI0[c, S.CHI_HEAD])  # the drive's piece the run was in, and the chain up to the next one
         rows = _chain(PI0, c, cur, starts.size)
         nxt = int(PI0[cur, S.PI_NEXT]) if cur not in tails else -1
         if rows is None or nxt < 0 or rows.size >= starts.size:

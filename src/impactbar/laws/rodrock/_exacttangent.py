@@ -91,10 +91,13 @@ from ._records import (  # the records' slots
     BS_X,
     CH_FAR_IN,
     CH_FAR_OUT,
+    CHI_HEAD,
     CI_STATUS,
     CI_WIN,
     CNT_FULL,
     CT_T,
+    ICH_HEAD,
+    ICH_TAIL,
     PR_K,
     PR_KU,
     PR_LB,
@@ -131,12 +134,12 @@ def imp_emit(tg, c, t, w, jump):
     IW[n] = w
     IJ[n] = jump
     IN[n] = -1
-    tail = ICH[c, 0]
+    tail = ICH[c, ICH_TAIL]
     if tail >= 0:
         IN[tail] = n
-    if ICH[c, 1] < 0:
-        ICH[c, 1] = n
-    ICH[c, 0] = n
+    if ICH[c, ICH_HEAD] < 0:
+        ICH[c, ICH_HEAD] = n
+    ICH[c, ICH_TAIL] = n
     TCUR[TCUR_N] = n + 1
 
 
@@ -145,7 +148,7 @@ def imp_arrival(tg, c, T):
     """When the next impulse not yet received on channel ``c`` (travel time ``T``) arrives (inf:
     none in flight)."""
     IT, IW, IJ, IN, ICH, TCUR = tg
-    n = ICH[c, 1]
+    n = ICH[c, ICH_HEAD]
     return INF if n < 0 else IT[n] + T
 
 
@@ -153,8 +156,8 @@ def imp_arrival(tg, c, T):
 def imp_pop(tg, c):
     """Receive channel ``c``'s next impulse: its weight and its step."""
     IT, IW, IJ, IN, ICH, TCUR = tg
-    n = ICH[c, 1]
-    ICH[c, 1] = IN[n]
+    n = ICH[c, ICH_HEAD]
+    ICH[c, ICH_HEAD] = IN[n]
     return IW[n], IJ[n]
 
 
@@ -169,7 +172,7 @@ def _shift(tg, c1, T1, c2, T2, ts, dt):
         T = T1 if side == 0 else T2
         if c < 0:
             continue
-        n = ICH[c, 1]
+        n = ICH[c, ICH_HEAD]
         while n >= 0 and _coincide(ts, IT[n] + T):
             if IJ[n] == 0.0:
                 return math.nan
@@ -495,7 +498,7 @@ def impulse_integrals(tg, travel, CH_T, t, om, out):
         T = travel[i]
         for side in range(2):
             c = 2 * i + side
-            n = ICH[c, 1]
+            n = ICH[c, ICH_HEAD]
             while n >= 0:
                 if IT[n] + CH_T[c] >= t:  # in flight at t
                     theta = t - IT[n] if side == 0 else T - t + IT[n]
@@ -556,7 +559,7 @@ def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
         t_run(ws, tg)
         if CI[CI_STATUS] != 0:
             return d, CI[CI_STATUS]
-        heads = CHI[: 2 * n_p, 1].copy()
+        heads = CHI[: 2 * n_p, CHI_HEAD].copy()
         piston_integrals((PF, PI, TK, TC, lam, BIN), heads, travel, CT[CT_T], om, out[d])
         impulse_integrals(tg, travel, CH_T, CT[CT_T], om, out[d])
         ends[d, 0] = NSF[n_p, 1]

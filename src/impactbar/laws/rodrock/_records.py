@@ -168,6 +168,11 @@ PI_TERMS = 1  # its first term in the terms' arrays TK, TC
 PI_COUNT = 2  # its count of terms
 PI_FLAG = 3  # its flag (what emitted it)
 PI_COLS = 4
+# -- CHI: each channel's list of pieces (int64 columns; the tangent's impulse queues ICH alike) ------
+CHI_TAIL = 0  # its last piece (the next one emitted follows it; -1: none)
+CHI_HEAD = 1  # its receiver's cursor: the first piece not yet read (a history's: its first piece)
+ICH_TAIL = 0  # an impulse queue's last entry
+ICH_HEAD = 1  # its first entry not yet taken (-1: empty)
 
 # -- the chain's ends and the exponent table ------------------------------------------------------
 SEG_FAR = 0  # the piston's driven-end segment (SZ, ST count from the piston's far end)

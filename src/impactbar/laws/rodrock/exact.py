@@ -82,7 +82,17 @@ from . import _exactpieces as P
 from . import _records as S
 from ._exactdata import _Data
 from ._exactresume import _resumed, _run, pool_bytes
-from ._records import PF_INT, PF_REF, PF_START, PF_VALID, PI_COUNT, PI_NEXT, PI_TERMS  # the pool's columns
+from ._records import (  # the pool's columns and the channels' lists
+    CHI_HEAD,
+    CHI_TAIL,
+    PF_INT,
+    PF_REF,
+    PF_START,
+    PF_VALID,
+    PI_COUNT,
+    PI_NEXT,
+    PI_TERMS,
+)
 from .exactresult import CERTIFIED as CERTIFIED
 from .exactresult import ExactBlow as ExactBlow
 from .exactresult import _result
@@ -476,8 +486,8 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
                 TC[nt] = val
                 nt += 1
                 PI[n, PI_COUNT] = 1
-            CHI[c, 0] = n
-            CHI[c, 1] = n
+            CHI[c, CHI_TAIL] = n
+            CHI[c, CHI_HEAD] = n
             n += 1
     # the drive channel (no drive: one empty piece), its pieces linked in order, their nonzero terms
     c = 2 * J
@@ -500,7 +510,7 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
         PI[rows, PI_TERMS] = nt + before[ends - sizes]
         PI[rows, PI_COUNT] = before[ends] - before[ends - sizes]
         nt += count
-    CHI[c, 1], CHI[c, 0] = n, n + m - 1
+    CHI[c, CHI_HEAD], CHI[c, CHI_TAIL] = n, n + m - 1
     n += m
     CNT[S.CNT_PIECES], CNT[S.CNT_TERMS] = n, nt
     BIN = _binomials()

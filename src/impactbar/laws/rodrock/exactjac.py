@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import _exacttangent as TG
-from ._records import (  # the records' slots  # the pool's columns
+from ._records import (  # the records' slots and the pool's columns
     BS_PPERM,
     CI_GIVEUP,
     CNT_PIECES,

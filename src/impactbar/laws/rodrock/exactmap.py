@@ -48,6 +48,7 @@ from ._piston import piston_segments
 from ._records import (  # the records' slots
     BI_NEP,
     BS_PPERM,
+    CHI_HEAD,
     CNT_PIECES,
     CNT_TERMS,
     CT_T,
@@ -298,7 +299,7 @@ def project(basis: ModalBasis, hist, t: float, end_position: float, heads=None):
     PF, PI, TK, TC, CHI, lam, _ = pools
     P = basis.travel.size
     if heads is None:
-        heads = CHI[: 2 * P, 1].copy()
+        heads = CHI[: 2 * P, CHI_HEAD].copy()
     out = np.zeros((P, basis.omega.size, 2), dtype=complex)
     from .exact import _binomials
 

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from ._records import CHI_HEAD  # the channels' lists
 from .exact import MAX_PIECES, MAX_WINDOWS, exact_blow
 from .exactresult import _eval_channel
 
@@ -143,10 +144,11 @@ def _sampled(ex, mid, times, J):
     scale, (PF, PI, TK, TC, CHI, lam, lamk), nodes, n_p = ex._hist
     first = 2 * nodes + 1 + n_p
     junc = np.empty((mid.size, J))
-    H.eval_histories(PF, PI, TK, TC, lam, np.ascontiguousarray(CHI[first:first + J, 1]), mid, junc, 0, lamk)
+    heads = np.ascontiguousarray(CHI[first:first + J, CHI_HEAD])  # (the junctions' histories)
+    H.eval_histories(PF, PI, TK, TC, lam, heads, mid, junc, 0, lamk)
     bit = np.empty(times.size)
     pen = np.empty(times.size)
-    head = int(CHI[3 * nodes + 1, 1])
+    head = int(CHI[3 * nodes + 1, CHI_HEAD])
     H.eval_bit(PF, PI, TK, TC, lam, head, times, pen, bit, lamk)
     return scale * junc, scale * bit, scale * pen
 

@@ -15,7 +15,7 @@ from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
 from ._bit import feed_gain
-from ._records import PF_START, PI_COUNT, PI_NEXT  # the pool's columns
+from ._records import CHI_HEAD, PF_START, PI_COUNT, PI_NEXT  # the pool's columns, the channels' lists
 
 __all__ = ["CERTIFIED", "ExactBlow"]
 
@@ -140,7 +140,7 @@ class ExactBlow:
         if not 1 <= j < nodes:
             raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
         PF, PI, _, _, CHI, _, _ = pools
-        p, out = int(CHI[2 * nodes + 1 + j, 1]), [0.0, self.duration]
+        p, out = int(CHI[2 * nodes + 1 + j, CHI_HEAD]), [0.0, self.duration]
         while p >= 0:
             out.append(float(PF[p, PF_START]))
             p = int(PI[p, PI_NEXT])
@@ -153,7 +153,7 @@ class ExactBlow:
         if not 1 <= j < nodes:
             raise ValueError(f"j must be an interface 1 .. {nodes - 1}; got {j}")
         PF, PI, TK, TC, CHI, lam = pools[:6]
-        head = int(CHI[2 * nodes + 1 + j, 1])
+        head = int(CHI[2 * nodes + 1 + j, CHI_HEAD])
         return scale * H.history_integral(PF, PI, TK, TC, lam, head, float(self.duration))
 
     @property
@@ -178,7 +178,7 @@ class ExactBlow:
         piece); ``duration`` where it never did."""
         _, pools, nodes, _ = self._hist
         PF, PI, _, _, CHI, _, _ = pools
-        p = int(CHI[2 * nodes + 1 + self.contact_junction, 1])
+        p = int(CHI[2 * nodes + 1 + self.contact_junction, CHI_HEAD])
         while p >= 0 and PF[p, PF_START] < self.duration:
             if PI[p, PI_COUNT] == 0 and PF[p, PF_START] > 0.0:
                 return float(PF[p, PF_START])
@@ -217,13 +217,13 @@ class ExactBlow:
 
 def _eval_channel(pools, c, t, kind, head=None):
     """Channel ``c``'s history at times ``t`` (from its first piece, or ``head``: a wave channel's
-    ``CHI[c, 1]`` is its receiver's cursor, its first piece the ``c``-th of the pool)."""
+    ``CHI[c, CHI_HEAD]`` is its receiver's cursor, its first piece the ``c``-th of the pool)."""
     PF, PI, TK, TC, CHI, lam, lamk = pools
     t = np.atleast_1d(np.asarray(t, dtype=float))
     flat = t.ravel()
     order = np.argsort(flat, kind="stable")
     out = np.zeros(flat.size)
-    head = int(CHI[c, 1]) if head is None else int(head)
+    head = int(CHI[c, CHI_HEAD]) if head is None else int(head)
     H.eval_history(PF, PI, TK, TC, lam, head, np.ascontiguousarray(flat[order]), out, kind, lamk)
     res = np.empty(flat.size)
     res[order] = out
@@ -233,7 +233,7 @@ def _eval_channel(pools, c, t, kind, head=None):
 def _channel_max(pools, c, t_end):
     PF, PI, TK, TC, CHI, lam, lamk = pools
     res = np.zeros(S.HMAX_SIZE)
-    H.history_max(PF, PI, TK, TC, lam, int(CHI[c, 1]), float(t_end), res)
+    H.history_max(PF, PI, TK, TC, lam, int(CHI[c, CHI_HEAD]), float(t_end), res)
     return res[S.HMAX_V], res[S.HMAX_T]
 
 
