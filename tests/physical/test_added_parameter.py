@@ -12,6 +12,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from config_toml import config_toml
 
 pytest.importorskip("pint")
 
@@ -23,20 +24,11 @@ pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")
 KEY = "damping.coefficient"
 
 
-def _toml(config: dict) -> str:
-    """A configuration of sections of plain values as TOML."""
-    lines = [f"name = {json.dumps(config['name'])}"]
-    for section, values in config.items():
-        if isinstance(values, dict):
-            lines += [f"[{section}]", *(f"{k} = {json.dumps(v)}" for k, v in values.items())]
-    return "\n".join(lines) + "\n"
-
-
 @pytest.fixture(scope="module")
 def config_file(tmp_path_factory):
     """The preset with its piston damped, 5 N s/m, as a file."""
     path = tmp_path_factory.mktemp("added") / "damped.toml"
-    path.write_text(_toml(with_values(read_config("circuit-drifter")[0], {KEY: "5 N*s/m"})))
+    path.write_text(config_toml(with_values(read_config("circuit-drifter")[0], {KEY: "5 N*s/m"})))
     return path
 
 

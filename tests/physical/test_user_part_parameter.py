@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pytest
+from config_toml import config_toml
 
 pytest.importorskip("pint")
 
@@ -60,22 +61,10 @@ def _config(opening="0.5") -> dict:
     return config
 
 
-def _toml(config: dict) -> str:
-    """A configuration of sections of plain values (and the parts' tables) as TOML."""
-    lines = [f"name = {json.dumps(config['name'])}"]
-    for section, values in config.items():
-        if section == "parts":
-            for name, table in values.items():
-                lines += [f"[parts.{name}]", *(f"{k} = {json.dumps(v)}" for k, v in table.items())]
-        elif isinstance(values, dict):
-            lines += [f"[{section}]", *(f"{k} = {json.dumps(v)}" for k, v in values.items())]
-    return "\n".join(lines) + "\n"
-
-
 @pytest.fixture(scope="module")
 def config_file(tmp_path_factory):
     path = tmp_path_factory.mktemp("bleed") / "bleed.toml"
-    path.write_text(_toml(_config()))
+    path.write_text(config_toml(_config()))
     return path
 
 
