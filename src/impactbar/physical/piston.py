@@ -46,6 +46,19 @@ import numpy as np
 from .._shared.validate import check_int, check_real
 from .rock import RodPiece
 
+__all__ = ["OptimalPiston", "optimize_piston", "piston_blow"]
+
+#: the free numbers of the softmax are kept in [-BOUND, BOUND]: segments' masses or lengths at most
+#: e^(2 BOUND) apart (the stepped piston accepts impedances 1e6 apart)
+BOUND = 6.0
+#: the penalty per unit of relative excess stress, against the work's scale 1 (the impact energy), of
+#: the Nelder-Mead search
+PENALTY = 10.0
+#: the searches of :func:`optimize_piston`
+METHODS = ("slsqp", "nelder-mead")
+#: SLSQP's tolerance on the work per impact energy (neighbouring cells' designs differ by ~1e-5)
+FTOL = 1e-9
+
 
 class _Rod(NamedTuple):
     """The rod's pieces in the blow's units: lengths, impedances (over a uniform piston's) and wave
@@ -84,19 +97,6 @@ class _Masses(NamedTuple):
     """The best masses found at given boundaries: their rank and free numbers ``y``."""
     rank: _Rank
     y: np.ndarray
-
-__all__ = ["OptimalPiston", "optimize_piston", "piston_blow"]
-
-#: the free numbers of the softmax are kept in [-BOUND, BOUND]: segments' masses or lengths at most
-#: e^(2 BOUND) apart (the stepped piston accepts impedances 1e6 apart)
-BOUND = 6.0
-#: the penalty per unit of relative excess stress, against the work's scale 1 (the impact energy), of
-#: the Nelder-Mead search
-PENALTY = 10.0
-#: the searches of :func:`optimize_piston`
-METHODS = ("slsqp", "nelder-mead")
-#: SLSQP's tolerance on the work per impact energy (neighbouring cells' designs differ by ~1e-5)
-FTOL = 1e-9
 
 
 @dataclass(frozen=True)

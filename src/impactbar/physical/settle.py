@@ -62,9 +62,8 @@ def settle_run(machine, blows: int, blow_fraction: float = 0.25):
     ValueError
         Where the machine's ``simulate`` refuses (a circuit's oil cavitates during the run).
     """
-    ran = 0.0
-    duration = longest = blows / SETTLE_FIRST_HZ
-    longest *= SETTLE_LONGEST
+    ran, duration = 0.0, blows / SETTLE_FIRST_HZ
+    longest = SETTLE_LONGEST * duration
     for _ in range(SETTLE_RUNS):
         t, v = _impacts(machine, duration)
         ran = duration
