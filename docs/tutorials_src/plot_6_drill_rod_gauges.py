@@ -105,8 +105,8 @@ bit, bit_alike = end_history(waves, rod), end_history(waves_alike, rod)
 print(f"first failing frequency {failing / 1e3:.1f} kHz, low-passed at {cutoff / 1e3:.1f} kHz")
 off_exact = np.max(np.abs(bit.force - force_exact)) / exact_peak_force
 off_alike = np.max(np.abs(bit.force - bit_alike.force)) / exact_peak_force
-print(f"with {NOISE:.0%} noise: the bit's force within {off_exact:.1%} of its peak of the exact blow's, "
-      f"within {off_alike:.1%} of it low-passed alike")
+print(f"with {NOISE:.0%} noise: the bit's force off the exact blow's by at most {off_exact:.1%} of its peak, "
+      f"off the noise-free one low-passed alike by {off_alike:.1%}")
 
 fig, ax = plt.subplots(figsize=(7, 3.6), layout="constrained")
 ms = waves.time * 1e3
@@ -175,8 +175,8 @@ for name in ("k", "k_u"):
 # :func:`~impactbar.measure.fit_blow` needs no separation and no low-pass: it varies the blow's
 # parameters (by the configuration's dotted names) until the model's strains at the two stations
 # match the recorded ones in the least squares, and gives each parameter a standard error from the
-# fit's Jacobian. Started 20 % and 33 % off, it returns the impact velocity and both stiffnesses that
-# made the strains; its misfit is the noise's share of the signal.
+# fit's Jacobian. Started well off, it returns the impact velocity and both stiffnesses that made the
+# strains; its misfit is the noise's share of the signal.
 start = {**TRUE, "impact_velocity": 8.0, "rock.k": 2e8, "rock.k_u": 2e9}
 fit = fit_blow(time, {length - NEAR: near, length - FAR: far}, ROD, **PISTON, values=start,
                vary=["impact_velocity", "rock.k", "rock.k_u"])

@@ -249,9 +249,9 @@ def _drill_lines(ch) -> list[str]:
              f"{np.max(np.abs(clean.force - force)) / peak_force:.1e} of its peak",
              f"first failing frequency {5000 / 0.1 / 1e3:.1f} kHz, low-passed at "
              f"{ch['cutoff'] / 1e3:.1f} kHz",
-             f"with 1% noise: the bit's force within {np.max(np.abs(bit.force - force)) / peak_force:.1%} "
-             f"of its peak of the exact blow's, within "
-             f"{np.max(np.abs(bit.force - alike.force)) / peak_force:.1%} of it low-passed alike",
+             f"with 1% noise: the bit's force off the exact blow's by at most "
+             f"{np.max(np.abs(bit.force - force)) / peak_force:.1%} of its peak, off the noise-free one "
+             f"low-passed alike by {np.max(np.abs(bit.force - alike.force)) / peak_force:.1%}",
              f"from the gauges: peak force {bit.force.max() / 1e3:.1f} kN, largest penetration "
              f"{bit.displacement.max() * 1e3:.3f} mm, energy into the bit {bit.energy_fv[-1]:.2f} J",
              f"without noise: k {ch['rock_clean']['k']:.6g} N/m, k_u {ch['rock_clean']['k_u']:.6g} N/m; "
