@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["dominant_limit", "falling_limit", "drifting", "drift_to_surface", "SETTLE_DRIFT_IMPACTS",
-           "DRIFT_AHEAD", "DRIFT_REACH", "DRIFT_PROBE"]
+__all__ = ["dominant_limit", "falling_limit", "drifting", "nearing", "drift_to_surface",
+           "SETTLE_DRIFT_IMPACTS", "DRIFT_AHEAD", "DRIFT_REACH", "DRIFT_PROBE"]
 
 #: the dominant-mode extrapolation of :func:`dominant_limit` is taken where each of the last two
 #: steps is a multiple ``rho`` of the one before to this fraction of its size, the two multiples
@@ -31,8 +31,9 @@ DRIFT_AHEAD = 10.0
 DRIFT_REACH = 1.0
 #: bisection steps of :func:`drift_to_surface` toward the surface (its distance to 2^-50 of the reach)
 DRIFT_BISECTIONS = 50
-#: impacts more the motion is followed where its drift heads for a surface but its steps do not yet
-#: fit one multiple (its fast parts still settling: four impacts on the 500 L accumulator's)
+#: impacts more the motion is followed where its drift heads for a surface (:func:`nearing`) but its
+#: steps do not yet fit one multiple (its fast parts still settling: one impact on the 500 L
+#: accumulator's, three on the 5000 L accumulator's)
 DRIFT_PROBE = 8
 
 
@@ -74,7 +75,59 @@ def drifting(y0, y1, y2, tol: float) -> bool:
     return rho is not None and rho >= DOMINANT_RHO
 
 
-def drift_to_surface(drive, mode, y0, y1, y2, M: int, fit: bool = True):
+def nearing(drive, mode, y0, y1, y2, M: int) -> bool:
+    """Whether three iterates of a map near a switching surface of ``mode`` in a steady drift: the
+    surface still ahead of the last (as :func:`surfaces_ahead` reads it) and its value, signed by its
+    direction, rising by two steps of one size (the last within ``1 -`` :data:`DOMINANT_RHO` of the
+    one before).
+
+    It tells, where the motion's impacts repeat to the hand-over's tolerance, whether a drift too slow
+    to tell there (:func:`drifting`) heads for a surface, so that the motion is followed a few
+    impacts more (:data:`DRIFT_PROBE`) for :func:`drift_to_surface`. The surface's value sees that
+    drift alone: the oil circuit's supply pressure charging a 5000 L accumulator by the same 4.05e-6
+    of the relief's pressure scale impact after impact (two steps within 3e-6 of each other) while
+    the state's step is still half the fast parts' settling (the last step 0.83 times the one before
+    along it, 39 % of it off that multiple): the state's steps fit one multiple three impacts later.
+
+    Parameters
+    ----------
+    drive : Drive
+    mode : object
+        The drive's discrete state at the three iterates.
+    y0, y1, y2 : numpy.ndarray, shape (2 M + k,)
+        Consecutive iterates (dimensionless).
+    M : int
+
+    Returns
+    -------
+    bool
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from impactbar.drives.base import SurfaceEvent
+    >>> class Drive:
+    ...     def events(self, mode):
+    ...         return (SurfaceEvent("top", direction=1, function=lambda t, q, v, z: z[0] - 1.0),)
+    >>> y = [np.array([0.0, 0.0, z]) for z in (0.2, 0.3, 0.4)]
+    >>> nearing(Drive(), 0, *y, 1)
+    True
+    >>> nearing(Drive(), 0, y[0], y[1], np.array([0.0, 0.0, 0.35]), 1)  # (the step halved)
+    False
+    """
+    from ..drives.base import SurfaceEvent
+
+    for e in drive.events(mode):
+        if not isinstance(e, SurfaceEvent):
+            continue
+        g0, g1, g2 = (e.direction * e.value(0.0, y[:M], y[M:2 * M], y[2 * M:]) for y in (y0, y1, y2))
+        s1, s2 = g1 - g0, g2 - g1
+        if g2 <= 0.0 and s1 > 0.0 and abs(s2 - s1) <= (1.0 - DOMINANT_RHO) * s1:
+            return True
+    return False
+
+
+def drift_to_surface(drive, mode, y0, y1, y2, M: int):
     """The state that a steady drift of three iterates of a map reaches just short of a switching
     surface of ``mode`` (the first along its last step), where that surface lies short of the drift's
     linear limit: the motion carried there at once instead of followed, or ``None``.
@@ -98,27 +151,23 @@ def drift_to_surface(drive, mode, y0, y1, y2, M: int, fit: bool = True):
     y0, y1, y2 : numpy.ndarray, shape (2 M + k,)
         Consecutive iterates (dimensionless).
     M : int
-    fit : bool, optional
-        Whether the last step must be a multiple of the one before to :data:`DOMINANT_FIT` of its
-        size, and the surface lie short of the drift's linear limit; without, ``rho`` is the last
-        step's projection on the one before and the reach :data:`DRIFT_REACH` alone (a drift whose
-        fast parts have not settled yet: whether to follow it a few impacts more).
 
     Returns
     -------
     numpy.ndarray, shape (2 M + k,), or None
         ``y2 + s d`` on the near side of the surface (to 2^-50 of the reach); ``None`` where the
-        steps do not fit one multiple of at least :data:`DOMINANT_RHO`, no surface lies within reach
-        or the drift reaches it within :data:`DRIFT_AHEAD` steps (the motion followed on gets there).
+        last step is not a multiple of at least :data:`DOMINANT_RHO` of the one before to
+        :data:`DOMINANT_FIT` of its size (the fast parts still settling: :func:`nearing` tells whether
+        to follow the motion on), no surface lies within reach or the drift reaches it within
+        :data:`DRIFT_AHEAD` steps (the motion followed on gets there).
     """
     d = y2 - y1
-    d1 = y1 - y0
-    rho = _ratio(d1, d) if fit else (float(d1 @ d) / float(d1 @ d1) if float(d1 @ d1) > 0.0 else None)
+    rho = _ratio(y1 - y0, d)
     size = float(np.linalg.norm(d))
     if rho is None or rho < DOMINANT_RHO or not size > 0.0:
         return None
     reach = DRIFT_REACH * max(1.0, float(np.linalg.norm(y2))) / size
-    if fit and rho < 1.0:
+    if rho < 1.0:
         reach = min(reach, rho / (1.0 - rho))
     if surfaces_ahead(drive, mode, y2 + reach * d, M):
         return None

@@ -32,6 +32,7 @@ from ._settling import (
     dominant_limit,
     drift_to_surface,
     drifting,
+    nearing,
     surfaces_ahead,
 )
 from ._shooting_data import orbit_data
@@ -415,13 +416,14 @@ class ShootingProblem(OrbitProblem):
     def _carried(self, hist, settings):
         """Where the drive's state at the end of ``hist`` (the motion followed to a start, settled at
         its tolerance) still drifts toward a surface of its mode, too slowly to tell at that
-        tolerance (:func:`~._settling.drift_to_surface`): the impacts followed on, at most
-        :data:`~._settling.DRIFT_PROBE`, until the drift's steps fit one multiple, the last state
-        carried to the surface; ``None`` (the start as it was) where they never fit or the surface
-        lies past the drift's linear limit."""
+        tolerance (:func:`~._settling.drift_to_surface`): where a surface's value steps toward it
+        steadily (:func:`~._settling.nearing`: the drift alone, where the state's steps still carry
+        its fast parts' settling), the impacts followed on, at most :data:`~._settling.DRIFT_PROBE`,
+        until the drift's steps fit one multiple, the last state carried to the surface; ``None``
+        (the start as it was) where no surface nears so, the steps never fit or the surface lies past
+        the drift's linear limit."""
         m, M, drive = self.impacts, self.M, self.drive
-        if drift_to_surface(drive, hist[-1].mode, hist[-1 - 2 * m].y, hist[-1 - m].y, hist[-1].y, M,
-                            fit=False) is None:
+        if not nearing(drive, hist[-1].mode, hist[-1 - 2 * m].y, hist[-1 - m].y, hist[-1].y, M):
             return None
         seq = list(hist[-1 - 2 * m:])
         for _ in range(DRIFT_PROBE):
