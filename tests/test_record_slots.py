@@ -157,7 +157,7 @@ NOT_RECORDS = {
     "plotting/physical.py": {"segs"},  # the last segment
     "plotting/simulation.py": {"axes", "files"},  # the figure's axes; the last file
     "plotting/sweeps.py": {"dims", "values"},  # the dimensions; the first value
-    "simulation/_shortrun.py": {"_ENTRY", "qv", "tv"},  # a one-slot box; rows of times and states
+    "simulation/_shortrun.py": {"_ENTRY", "qv"},  # a one-slot box; rows of states (displacements, velocities)
     "simulation/blows.py": {"q_arr"},  # the rigid mode
     # first entries, the rigid mode; contacts: the last contact
     "simulation/simulate.py": {"aq", "av", "blocks", "contacts", "ot", "qm", "vm"},
@@ -668,15 +668,89 @@ def test_each_record_names_its_slots_once_within_its_size():
         assert len(set(positions)) == len(positions), tup
 
 
-#: the two-dimensional records whose columns are named (``_records``' ``PF_*``, ``PI_*``, ``CHI_*``,
-#: ``ICH_*``): the exact blow's pool of wave pieces, a row a piece, its channels' lists, a row a
-#: channel, the tangent runs' templates of them and their impulse queues
-NAMED_COLUMNS = {"PF", "PI", "PF0", "PI0", "CHI", "CHI0", "ICH"}
+# -- columns: a table whose columns are different quantities (a record a row) is read by its columns'
+# names; the scan sees every subscript with two or more indices whose last is a number (``x[i, 0]``,
+# ``x[:, 2:]``, ``x[..., -1]``, ``f(y)[:, 0]``, ``a.b[k][i, 1]``), and these are its other arrays --
+
+#: why an array's columns are not a record's (the categories of NOT_COLUMN_RECORDS)
+ONE_TIME = "an evaluation at one time, its only column (or a column vector's)"
+LAST_TIME = "the integration's last time point"
+RIGID = "modal coordinates by mode: mode 0 the rigid one, the flexible ones from 1"
+MATRIX = "a matrix's rows and columns (a Jacobian, a monodromy, transfer or factor matrix)"
+COEFFS = "a formula's coefficients by degree, harmonic, mode or segment, a sum's terms in order"
+ROOTS = "the roots or the multipliers of one equation, in their order"
+PARAMETER = "the augmented unknowns' last entries, the continuation parameters (x, lambda)"
+EQUATIONS = "the two equations' residuals (F1, F2) and their rounding floors"
+GRID = "a grid's or a bracket list's points in order (the first, the ends)"
+CELLS = "the lattice's cells by index (cell 0 the driven end)"
+ENTRIES = "a log's entries after its start (its rows are named)"
+AXES = "matplotlib's grid of axes"
+
+NOT_COLUMN_RECORDS = {
+    "continuation/driven.py": {"J": MATRIX, "P": PARAMETER},
+    "continuation/one_parameter.py": {"J": MATRIX, "P": PARAMETER},
+    "continuation/two_parameter.py": {"P": PARAMETER, "uu": MATRIX},
+    "drives/circuit/_endfield.py": {"A": MATRIX, "JJ": MATRIX},
+    "drives/circuit/endflight.py": {"self._at([t])": ONE_TIME},
+    "drives/flight.py": {"sol.y": LAST_TIME},
+    "drives/orbitproblem.py": {"P": MATRIX, "Q": MATRIX},
+    "drives/valve/_compiled_loop.py": {"eq": ONE_TIME, "ev": ONE_TIME},
+    "dynamics/_event_loop.py": {"hpi": COEFFS, "hpr": COEFFS},
+    "dynamics/invariants.py": {"C": RIGID, "S": RIGID},
+    "dynamics/modal.py": {"q": ONE_TIME, "v": ONE_TIME},
+    "dynamics/monodromy.py": {"A": MATRIX, "V": MATRIX},
+    "dynamics/stepped.py": {"amp": COEFFS, "fixed.amplitudes": COEFFS, "self.amplitudes": COEFFS},
+    "laws/paper/periodic.py": {n: ONE_TIME for n in ("fq", "fv", "qm", "qp", "vm", "vp")},
+    "laws/paper/stability.py": {"U": MATRIX, "V": MATRIX, "mu": ROOTS},
+    "laws/rodrock/_exactdata.py": {"rows": COEFFS},
+    "laws/rodrock/_exacthistory.py": {"BIN": COEFFS},
+    "laws/rodrock/_exactode.py": {"Y": COEFFS},
+    "laws/rodrock/_exactpieces.py": {"B": COEFFS},
+    "laws/rodrock/_rocktangent.py": {"J": MATRIX, "dGf": CELLS, "out": MATRIX},
+    "laws/rodrock/contact.py": {"Nq": RIGID, "amp": COEFFS, "modes.shapes(np.zeros(1))": RIGID, "xe": GRID},
+    "laws/rodrock/coupled.py": {"field": CELLS},
+    "laws/rodrock/coupled_exact.py": {"c": COEFFS},
+    "laws/rodrock/exactjac.py": {"dq": RIGID, "jac": MATRIX},
+    "laws/rodrock/exactmap.py": {"Im": RIGID, "Ip": RIGID, "a": RIGID, "b": RIGID, "modes.amplitudes": COEFFS,
+                                 "q": RIGID, "v": RIGID, "self.a": COEFFS, "self.b": COEFFS},
+    "laws/wave/_jumps.py": {"z": COEFFS},
+    "laws/wave/_separation.py": {"fq": ONE_TIME, "fv": ONE_TIME},
+    "laws/wave/_window.py": {"ic_": COEFFS},
+    "laws/wave/law.py": {"jac": MATRIX},
+    "laws/wave/periodic.py": {"U": MATRIX, "V": MATRIX, "fq": RIGID, "q": ONE_TIME, "v": ONE_TIME,
+                              "y_end": RIGID, "y_minus": RIGID},
+    "laws/wave/sustained.py": {"np.diag(w2)": RIGID, "piece.states(np.array([tb]))": ONE_TIME, "q": ONE_TIME,
+                               "sys.particular(np.array([ta]), self.level)": ONE_TIME, "v": ONE_TIME},
+    "loads/abilities.py": {"q1": ONE_TIME, "v1": ONE_TIME},
+    "loads/fourier.py": {n: ONE_TIME for n in ("dq", "dv", "lam", "src", "static", "w2f")},
+    "loads/piecewise.py": {"qn": GRID, "vn": GRID},
+    "model.py": {"phi": RIGID},
+    "orbits/_admissibility_search.py": {"q": ONE_TIME, "v": ONE_TIME, "x": ONE_TIME},
+    "orbits/_rigid_arrays.py": {"out[O_MULTS]": ROOTS, "out[O_SCHUR]": ROOTS},
+    "orbits/_rigid_scalar.py": {"q": ONE_TIME, "v": ONE_TIME},
+    "orbits/_shooting_data.py": {"Q": MATRIX},
+    "orbits/find.py": {"q": ONE_TIME, "v": ONE_TIME},
+    "orbits/multi_impact.py": {"A": MATRIX, "maps": MATRIX, "q": ONE_TIME, "v": ONE_TIME, "y_plus": RIGID},
+    "orbits/rigid.py": {"alpha": COEFFS, "bT": COEFFS, "bounds": GRID, "cT": COEFFS, "mult": ROOTS,
+                        "ph": ROOTS, "self.multipliers": ROOTS, "sgn": GRID, "vb": GRID},
+    "orbits/stability.py": {"blocks": COEFFS, "vper": ONE_TIME},
+    "orbits/valve_search.py": {"F": EQUATIONS, "J": MATRIX, "Y": MATRIX, "floor": EQUATIONS},
+    "orbits/valve_segment.py": {"G": MATRIX, "q": RIGID, "v": ONE_TIME},
+    "physical/piston.py": {"mf": RIGID},
+    "plotting/paper.py": {"axes": AXES},
+    "plotting/simulation.py": {"grid": AXES},
+    "simulation/_shortrun.py": {"TV": ENTRIES, "self.TV": ENTRIES, "tv": ENTRIES},
+    "simulation/blows.py": {"piece.drive_state([t_end])": ONE_TIME},
+    "simulation/driven.py": {"sol.y": LAST_TIME},
+    "simulation/driven_trajectory.py": {n: ONE_TIME for n in ("q", "q0", "q1", "v", "v0", "v1")},
+    "simulation/simulate.py": {n: ONE_TIME for n in ("a", "qe", "r", "r2", "rv", "rv2", "ve")},
+    "simulation/trajectory.py": {n: ONE_TIME for n in ("qe", "qm", "ve", "vm")},
+}
 
 
 def _column_by_number(index):
     """Whether a subscript's column (the tuple's last entry) is an integer literal or a slice with
-    one (``3``, ``3:``, ``:5``)."""
+    one (``3``, ``-1``, ``3:``, ``:5``)."""
     if _int_literal(index):
         return True
     return isinstance(index, ast.Slice) and any(b is not None and _int_literal(b) for b in (index.lower,
@@ -684,28 +758,82 @@ def _column_by_number(index):
 
 
 def columns_by_number(text):
-    """``(line, source)`` of every column of a :data:`NAMED_COLUMNS` table read or written by a
-    number in the source ``text`` (its syntax tree: code only, f-strings' expressions too)."""
-    return [(node.lineno, ast.unparse(node)) for node in ast.walk(ast.parse(text))
-            if isinstance(node, ast.Subscript) and isinstance(node.value, ast.Name)
-            and node.value.id in NAMED_COLUMNS and isinstance(node.slice, ast.Tuple)
-            and len(node.slice.elts) == 2 and _column_by_number(node.slice.elts[1])]
+    """``(line, table, source)`` of every subscript in the source ``text`` (its syntax tree: code only,
+    f-strings' expressions too) with two or more indices whose last is a number; ``table`` is the
+    subscripted expression as written (a name, an attribute, a call, a subscript)."""
+    return [(node.lineno, ast.unparse(node.value), ast.unparse(node)) for node in ast.walk(ast.parse(text))
+            if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Tuple)
+            and len(node.slice.elts) >= 2 and _column_by_number(node.slice.elts[-1])]
 
 
-def test_the_column_scan_finds_a_pool_column_by_number():
+def test_the_column_scan_finds_every_form_of_a_column_by_number():
     text = ('t0, nx = PF[p, 0], PI[p, PI_NEXT]\n'
             'PF[rows, 3:] = math.nan; PI[rows, PI_TERMS:] = 0\n'
-            'x = PF[PI[p, 0], PF_START] + NSF[j, 0] + PF[p] + PI0[cur, 2] + CHI[c, CHI_HEAD]\n'
-            's = "PF[p, 0]" + f"{PI[q, 1]}"\n')
-    assert sorted(columns_by_number(text)) == [(1, "PF[p, 0]"), (2, "PF[rows, 3:]"), (3, "PI0[cur, 2]"),
-                                               (3, "PI[p, 0]"), (4, "PI[q, 1]")]
+            'x = PF[PI[p, 0], PF_START] + NSF[j, k] + PF[p] + out[O][i, j, -1] + self.c[k, :2]\n'
+            's = "PF[p, 0]" + f"{PI[q, 1]}" + str(f(y)[..., 0])  # a[:, 0]\n')
+    assert sorted((line, source) for line, _, source in columns_by_number(text)) == [
+        (1, "PF[p, 0]"), (2, "PF[rows, 3:]"), (3, "PI[p, 0]"), (3, "out[O][i, j, -1]"), (3, "self.c[k, :2]"),
+        (4, "PI[q, 1]"), (4, "f(y)[..., 0]")]
+    assert {table for _, table, _ in columns_by_number(text)} == {"PF", "PI", "out[O]", "self.c", "f(y)"}
 
 
-def test_no_module_reads_a_pool_column_by_its_number():
-    """The exact blow's pool of wave pieces (``PF``: start, valid, ref and the two cached integrals;
-    ``PI``: next, first term, count, flag) and its channels' lists (``CHI``: tail, head; the tangent's
-    impulse queues ``ICH`` alike) are read and written by their columns' names."""
+def test_no_module_reads_a_record_column_by_its_number():
+    """Every table whose columns are different quantities is read and written by its columns' names
+    (the exact blow's pool, channels, nodes, switch log, roots, episodes, stacks and tangent batch in
+    ``laws/rodrock/_records.py``; intervals in ``_shared/columns.py``; a module's own tables in it);
+    what the scan finds besides is listed in NOT_COLUMN_RECORDS, module by module, with why."""
+    top = Path(impactbar.__file__).parent
+    found, seen = [], set()
+    for path in sorted(top.rglob("*.py")):
+        module = path.relative_to(top).as_posix()
+        for line, table, source in columns_by_number(path.read_text()):
+            seen.add((module, table))
+            if table not in NOT_COLUMN_RECORDS.get(module, {}):
+                found.append(f"{module}:{line}: {source}")
+    assert found == [], "columns by number (name them, or list the array with why):\n" + "\n".join(found)
+    listed = {(module, table) for module, tables in NOT_COLUMN_RECORDS.items() for table in tables}
+    assert sorted(listed - seen) == [], "listed arrays no module reads by a column's number any more"
+
+
+def test_each_table_names_its_columns_once_within_its_width():
+    """The column names of the tables with a width (``*_COLS``): no two share a column (a switch log's
+    values apart: their meaning depends on the switch), every one inside the width."""
+    names = {k: v for k, v in vars(_records).items() if k.isupper() and isinstance(v, int)}
+    widths = {k[:-5]: v for k, v in names.items() if k.endswith("_COLS")}
+    assert set(widths) == {"PF", "PI", "NSF", "NSI", "RD", "EP", "STK", "IMP", "END", "BITREC", "OUT"}
+    for table, width in widths.items():
+        cols = {k: v for k, v in names.items() if re.fullmatch(table + r"_[A-Z0-9]+", k)
+                and k not in (table + "_COLS", "RD_HEAD", "RD_ROWS", "RD_FULL")}
+        assert cols, table
+        assert len(set(cols.values())) == len(cols), (table, cols)
+        assert all(0 <= v < width for v in cols.values()), (table, cols)
+
+
+def strides(text):
+    """``(line, source)`` of every subscript in the source ``text`` with a slice whose step is a
+    number other than 1 and -1: a flat record's fields taken every so many places (``x[1::4]``, a
+    tuple's ``[::2]``)."""
+    def strided(index):
+        return isinstance(index, ast.Slice) and index.step is not None and _int_literal(index.step) \
+            and abs(ast.literal_eval(index.step)) != 1
+    return [(node.lineno, ast.unparse(node)) for node in ast.walk(ast.parse(text))
+            if isinstance(node, ast.Subscript)
+            and any(strided(i) for i in (node.slice.elts if isinstance(node.slice, ast.Tuple)
+                                         else [node.slice]))]
+
+
+def test_the_stride_scan_finds_a_field_taken_every_so_many_places():
+    text = ('h1, h3 = d[1::4], d[3::4]\nkey = design(u)[::2]\nrev = x[::-1] + x[0:5:1] + q[:, ::3]\n'
+            's = f"{e[::2]}"  # e[1::2]\n')
+    assert sorted(strides(text)) == [(1, "d[1::4]"), (1, "d[3::4]"), (2, "design(u)[::2]"), (3, "q[:, ::3]"),
+                                     (4, "e[::2]")]
+
+
+def test_no_module_reads_a_record_by_a_stride():
+    """A flat array of records (an orbit's four durations per impact, a design's id and changes, runs'
+    starts and ends) is reshaped to a row per record and read by its columns' names, not every so
+    many places."""
     top = Path(impactbar.__file__).parent
     found = [f"{path.relative_to(top).as_posix()}:{line}: {source}" for path in sorted(top.rglob("*.py"))
-             for line, source in columns_by_number(path.read_text())]
-    assert found == [], "pool columns by number (name them in laws/rodrock/_records.py):\n" + "\n".join(found)
+             for line, source in strides(path.read_text())]
+    assert found == [], "records read by a stride:\n" + "\n".join(found)

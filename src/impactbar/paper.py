@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ._shared.columns import IV_HI, IV_LO
 from .laws.wave.periodic import wave_existence_edge
 from .loads import CosineLoad, SquareWaveLoad
 from .model import BarModel
@@ -141,8 +142,8 @@ def fig5_data(n: int = 40) -> dict:
         out[f"existence_2pid={tag}"] = upper
         out[f"stability_exact_2pid={tag}"] = lower
         out[f"stability_paper_2pid={tag}"] = paper
-        out[f"sticks_from_2pid={tag}"] = seg[:, 0]
-        out[f"sticks_to_2pid={tag}"] = seg[:, 1]
+        out[f"sticks_from_2pid={tag}"] = seg[:, IV_LO]
+        out[f"sticks_to_2pid={tag}"] = seg[:, IV_HI]
         wave = model.with_(impact="wave")
         out[f"existence_wave_2pid={tag}"] = np.array([wave_existence_edge(wave.with_(R=float(r)))
                                                       for r in R])

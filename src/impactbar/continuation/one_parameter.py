@@ -21,6 +21,7 @@ from .._shared.forcing import dispatch
 from .._shared.status import BranchStatus, EventKind
 from .._shared.threads import single_threaded_blas
 from ..orbits.driven import check_orbit
+from ..orbits.multi_impact import Z_TIME
 from ..orbits.orbit import PeriodicOrbit
 from ..orbits.segments import (
     SegmentProblem,
@@ -410,7 +411,7 @@ def _load_jump(problem, U, index):
     if pieces is None:  # a continuous load: no jump
         return None
     K = problem.segments(U[-1]).B  # unknowns per impact
-    t = U[:-1].reshape(problem.m, K)[:, 0]
+    t = U[:-1].reshape(problem.m, K)[:, Z_TIME]
 
     br = pieces[0]
     rel = np.mod(t[:, None] - br[None, :] + math.pi, TWO_PI) - math.pi

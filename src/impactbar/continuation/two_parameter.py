@@ -82,7 +82,8 @@ class BifurcationCurve:
         import pandas as pd
 
         a, b = self.parameters
-        df = pd.DataFrame({a: self.values[:, 0], b: self.values[:, 1], **orbit_columns(self.orbits)})
+        first, second = self.values.T  # the two parameters' values
+        df = pd.DataFrame({a: first, b: second, **orbit_columns(self.orbits)})
         df.index.name = "point"
         return df
 

@@ -13,6 +13,8 @@ import math
 
 import numpy as np
 
+from .._shared.columns import IV_HI, IV_LO
+
 TWO_PI = 2.0 * math.pi
 
 __all__ = ["enclose_zeros", "zeros_in_clusters", "cosine_roots"]
@@ -58,12 +60,12 @@ def enclose_zeros(f, lipschitz, a: float, b: float, *, n0: int = 64, min_width: 
     """
     if intervals is not None:  # continue from given clusters, each split into n0 pieces
         lo_hi = np.asarray(intervals, dtype=float).reshape(-1, 2)
-        width = float(np.max(lo_hi[:, 1] - lo_hi[:, 0])) if lo_hi.size else 0.0
+        width = float(np.max(lo_hi[:, IV_HI] - lo_hi[:, IV_LO])) if lo_hi.size else 0.0
         if not width > 4.0 * np.spacing(max(abs(a), abs(b), 1.0)) * n0:
             return [tuple(x) for x in lo_hi.tolist()]  # too narrow to split in floating point
         half = 0.5 * width / n0
-        mids = (lo_hi[:, :1] + half * (2.0 * np.arange(n0) + 1.0)).ravel()
-        mids = mids[mids < np.repeat(lo_hi[:, 1], n0) + half]
+        mids = (lo_hi[:, :IV_HI] + half * (2.0 * np.arange(n0) + 1.0)).ravel()
+        mids = mids[mids < np.repeat(lo_hi[:, IV_HI], n0) + half]
     else:
         half = 0.5 * (b - a) / n0
         mids = a + half * (2.0 * np.arange(n0) + 1.0)

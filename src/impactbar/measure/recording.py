@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._shared.columns import IV_HI, IV_LO
+
 __all__ = ["BRIDGES", "Bar", "Gauge", "Recording", "read_tektronix_csv"]
 
 #: the bridges and their number of active arms (a function of Poisson's ratio)
@@ -378,8 +380,8 @@ def _check_saturation(name: str, v: np.ndarray, full_scale, run: int = 8) -> Non
         return
     for extreme in (v.max(), v.min()):
         at = np.concatenate(([0], (v == extreme).astype(np.int8), [0]))
-        edges = np.flatnonzero(np.diff(at))
-        longest = int(np.max(edges[1::2] - edges[::2]))
+        runs = np.flatnonzero(np.diff(at)).reshape(-1, 2)  # each run's first sample and the one after it
+        longest = int(np.max(runs[:, IV_HI] - runs[:, IV_LO]))
         if longest >= run and v.max() > v.min():
             raise ValueError(f"channel {name!r} is saturated: it stays at {extreme:g} V for {longest} "
                              f"samples (clipped at the recorder's range)")

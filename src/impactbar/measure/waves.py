@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._shared.columns import IV_HI, IV_LO
 from .recording import Bar
 
 __all__ = ["Waves", "Window", "find_pulses", "noise_level", "shift", "separate_one_point",
@@ -157,8 +158,8 @@ def find_pulses(time, signal, *, threshold: float = 10.0, cutoff: float | None =
     for sign in (1, -1):
         above = sign * s > threshold * noise
         quiet = sign * s <= 2 * noise
-        edges = np.flatnonzero(np.diff(np.concatenate(([0], above.astype(np.int8), [0]))))
-        for i0, i1 in zip(edges[::2], edges[1::2], strict=True):
+        runs = np.flatnonzero(np.diff(np.concatenate(([0], above.astype(np.int8), [0])))).reshape(-1, 2)
+        for i0, i1 in zip(runs[:, IV_LO], runs[:, IV_HI], strict=True):  # each run above: first, after last
             before = np.flatnonzero(quiet[:i0])
             after = np.flatnonzero(quiet[i1:])
             start = int(before[-1]) if before.size else 0

@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from ._assemble import _build
+from .multi_impact import Z_TIME
 
 TWO_PI = 2.0 * math.pi
 
@@ -20,8 +21,8 @@ POLISH_ITERATIONS = 15
 def _normalise(problem, u):
     """Shift the impact times so that the first lies in ``[0, 2 pi)``; check they increase."""
     z = np.array(u, dtype=float).reshape(problem.m, problem.B)
-    z[:, 0] -= TWO_PI * math.floor(z[0, 0] / TWO_PI)
-    t = z[:, 0]
+    z[:, Z_TIME] -= TWO_PI * math.floor(z[0, Z_TIME] / TWO_PI)
+    t = z[:, Z_TIME]
     if problem.m > 1 and not np.all(np.diff(t) > 0.0):
         return None
     if not t[-1] - t[0] < TWO_PI * problem.n:

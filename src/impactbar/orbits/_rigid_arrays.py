@@ -63,6 +63,10 @@ _copies = _compiled(_rigid_scalar.SHARED)
  O_SCHUROK, O_STABLE, O_FALLBACK) = range(14)
 #: the place of the admissible flag in ``_verdict``'s orbit
 V_OK = 0
+#: the arcs of a flight where the velocity changes sign (``brk``, a row each): the arc's start and
+#: end (phases), the velocity's sign at its start (+1: a maximum of the displacement inside), the
+#: velocity at its start and at its end
+BRK_LO, BRK_HI, BRK_SIGN, BRK_VLO, BRK_VHI, BRK_COLS = range(6)
 
 
 @numba.njit(inline="always", **_JIT)
@@ -134,7 +138,7 @@ def cosine_orbits(d, R, p0, pk, k, out):
     phs = np.empty(K2)
     zs = np.empty(K2)
     bounds = np.empty(K2 + 2)
-    brk = np.empty((K2 + 1, 5))  # the arcs with a zero of v: ends, sign at the start, v at the ends
+    brk = np.empty((K2 + 1, BRK_COLS))  # the arcs with a zero of v: ends, sign at the start, v at the ends
     kf = float(k)
     for i in range(d.size):
         di, Ri, p0i, pki = d[i], R[i], p0[i], pk[i]
@@ -187,7 +191,8 @@ def cosine_orbits(d, R, p0, pk, k, out):
                 v_hi = v_minus if hi == TWO_PI else _velocity(hi, ph, kf, ca, cb, p0i, di, free)
                 s_hi = _sign(v_hi)
                 if s_lo * s_hi < 0.0 and hi > lo:
-                    brk[nb, 0], brk[nb, 1], brk[nb, 2], brk[nb, 3], brk[nb, 4] = lo, hi, s_lo, v_lo, v_hi
+                    brk[nb, BRK_LO], brk[nb, BRK_HI], brk[nb, BRK_SIGN] = lo, hi, s_lo
+                    brk[nb, BRK_VLO], brk[nb, BRK_VHI] = v_lo, v_hi
                     nb += 1
                     n_max += s_lo > 0.0
                 s_lo, v_lo = s_hi, v_hi
@@ -197,10 +202,10 @@ def cosine_orbits(d, R, p0, pk, k, out):
             ng = 0
             gmax = -INF
             for j in range(nb):
-                if n_max > 0 and not brk[j, 2] > 0.0:
+                if n_max > 0 and not brk[j, BRK_SIGN] > 0.0:
                     continue
-                tz = _cosine_zero((ph, kf, ca, cb, p0i, pki, di, free), brk[j, 0], brk[j, 1], brk[j, 2],
-                                  brk[j, 3], brk[j, 4])
+                tz = _cosine_zero((ph, kf, ca, cb, p0i, pki, di, free), brk[j, BRK_LO], brk[j, BRK_HI],
+                                  brk[j, BRK_SIGN], brk[j, BRK_VLO], brk[j, BRK_VHI])
                 g = _displacement(tz, ph, kf, ca, cb, p0i, di, free, W0)
                 gmax = g if ng == 0 else max(gmax, g)
                 ng += 1

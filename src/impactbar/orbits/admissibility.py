@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from .._shared.columns import IV_HI, IV_LO
 from .._shared.status import Admissibility
 from ..dynamics.certified import enclose_zeros
 from ..dynamics.compiled_views import FOURIER
@@ -343,8 +344,8 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
     """
     def value_bounds(iv):
         """``g`` at the midpoints and its upper bound on each interval."""
-        mid = 0.5 * (iv[:, 0] + iv[:, 1])
-        half = 0.5 * (iv[:, 1] - iv[:, 0])
+        mid = 0.5 * (iv[:, IV_LO] + iv[:, IV_HI])
+        half = 0.5 * (iv[:, IV_HI] - iv[:, IV_LO])
         q, _ = states(mid)
         gm = c @ q
         g1, L2 = bound(mid, half)
@@ -355,14 +356,14 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
     cur = np.array(intervals, dtype=float).reshape(-1, 2)
     gm, upper, g1 = value_bounds(cur) if cur.size else (np.empty(0),) * 3
     if cur.size:
-        best = max(best, _sample_bound(0.5 * (cur[:, 0] + cur[:, 1]), gm, g1, atol, floor))
+        best = max(best, _sample_bound(0.5 * (cur[:, IV_LO] + cur[:, IV_HI]), gm, g1, atol, floor))
     for _ in range(rounds):
         keep = upper >= best
         cur, gm, upper = cur[keep], gm[keep], upper[keep]
         if cur.size == 0:
             break
         n = cur.shape[0]
-        lo, hi = cur[:, 0], cur[:, 1]
+        lo, hi = cur[:, IV_LO], cur[:, IV_HI]
         t = np.empty(n)
         ok = np.zeros(n, dtype=bool)
         vals = np.full(n, -math.inf)
@@ -402,7 +403,7 @@ def _stationary_values(states, bound, load, phase, c, w2, d, intervals, rounds=8
         cur = rest
         if rest.size == 0:
             break
-        width = float(np.max(rest[:, 1] - rest[:, 0]))
+        width = float(np.max(rest[:, IV_HI] - rest[:, IV_LO]))
         level = None
         if prune is not None:
             found = [best]

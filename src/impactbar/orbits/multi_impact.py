@@ -45,6 +45,9 @@ TWO_PI = 2.0 * math.pi
 MAX_UNKNOWNS = 6000
 """Largest segment problem, ``2 (N + 1) m`` unknowns: its dense Newton Jacobian takes
 ``8 * unknowns**2`` bytes (288 MB at the bound) and each Newton step a dense solve (seconds)."""
+#: an impact's row of the unknowns (``u`` reshaped to ``(m, B)``): its time, then its state from
+#: ``Z_STATE`` on
+Z_TIME, Z_STATE = 0, 1
 STALL_ITERATIONS = 40
 """Newton gives up when its residual has not halved in this many iterations (a bad start
 wanders rather than converges)."""
@@ -136,7 +139,7 @@ class _Segments:
 
     def split(self, u):
         z = np.asarray(u, dtype=float).reshape(self.m, self.B)
-        return z[:, 0], z[:, 1:]
+        return z[:, Z_TIME], z[:, Z_STATE:]
 
     def full(self, x):
         return self.E @ x
@@ -225,7 +228,7 @@ class _Segments:
         ``[[1, b(T)], [0, e^{-d T}]]``), without its dozens of small numpy calls per flight."""
         m, d, R, flight = self.m, self.d, self.model.R, self.rigid
         z = np.asarray(u, dtype=float).reshape(m, 2)
-        t, x = z[:, 0].tolist(), z[:, 1].tolist()
+        t, x = z[:, Z_TIME].tolist(), z[:, Z_STATE].tolist()
         F = np.empty(2 * m)
         y_plus = np.zeros((m, 2))
         y_plus[:, 1] = x
@@ -320,8 +323,8 @@ def _unknowns_from(problem: _Segments, times, states):
     if not (np.all(np.isfinite(times)) and np.all(np.isfinite(states))):
         raise ValueError("guess must be finite")
     z = np.empty((problem.m, problem.B))
-    z[:, 0] = times
-    z[:, 1:] = states[:, problem.keep]
+    z[:, Z_TIME] = times
+    z[:, Z_STATE:] = states[:, problem.keep]
     return z.ravel()
 
 
@@ -369,7 +372,7 @@ def doubling_direction(orbit, rank: int = 0):
         pert.append(maps[j] @ pert[-1])
     pert = np.array(pert)
     z = np.concatenate([u0.reshape(m0, -1)] * 2)
-    z[m0:, 0] += TWO_PI * n0
+    z[m0:, Z_TIME] += TWO_PI * n0
     w = np.concatenate((pert, -pert)).ravel()
     return z.ravel(), w / np.max(np.abs(w))
 

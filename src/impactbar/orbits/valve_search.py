@@ -62,6 +62,9 @@ FIRST_CELLS = 16
 #: most cells alive at once (a bound on the memory and the time; reached only with d = 0 and a wide
 #: window full of resonances)
 MAX_CELLS = 400_000
+#: a point's coordinates (a row of the points ``x``, of their boxes' radii ``rad`` and of the roots):
+#: the period T and the last stroke's time h_3 (the two unknowns)
+X_T, X_H = 0, 1
 #: most cells in a cluster on which the Krawczyk test is tried
 CLUSTER_CELLS = 64
 #: rounding floor of the point values, relative to the size of their terms
@@ -447,15 +450,15 @@ def _newton(eq, x, steps=8):
     x = x.copy()
     ok = np.zeros(x.shape[0], dtype=bool)
     for _ in range(steps):
-        F, J, _ = eq.point(x[:, 0], x[:, 1])
+        F, J, _ = eq.point(x[:, X_T], x[:, X_H])
         det = J[:, 0, 0] * J[:, 1, 1] - J[:, 0, 1] * J[:, 1, 0]
         with np.errstate(divide="ignore", invalid="ignore"):
             s0 = (J[:, 1, 1] * F[:, 0] - J[:, 0, 1] * F[:, 1]) / det
             s1 = (-J[:, 1, 0] * F[:, 0] + J[:, 0, 0] * F[:, 1]) / det
-        x[:, 0] -= s0
-        x[:, 1] -= s1
-        ok = np.abs(s0) + np.abs(s1) <= 1e-13 * (1.0 + np.abs(x[:, 0]))
-        if np.all(ok | ~np.isfinite(x[:, 0])):
+        x[:, X_T] -= s0
+        x[:, X_H] -= s1
+        ok = np.abs(s0) + np.abs(s1) <= 1e-13 * (1.0 + np.abs(x[:, X_T]))
+        if np.all(ok | ~np.isfinite(x[:, X_T])):
             break
     return x, ok
 
@@ -465,10 +468,10 @@ def _krawczyk(eq, x, rad):
     root of ``(F1, F2)``. With ``Y`` the inverse of the Jacobian at ``x`` and ``J(X)`` its enclosure
     over the box, the box is mapped into itself's interior by ``x - Y F(x) + (I - Y J(X))(X - x)``,
     i.e. ``|Y F(x)|_i + sum_j |I - Y J(X)|_ij rad_j < rad_i``."""
-    F, J, floor = eq.point(x[:, 0], x[:, 1])
+    F, J, floor = eq.point(x[:, X_T], x[:, X_H])
     with np.errstate(divide="ignore", invalid="ignore"):
         Y = np.linalg.inv(J)
-    (g11, g12), (g21, g22) = eq.jacobian_box(x[:, 0], x[:, 1], rad[:, 0], rad[:, 1])
+    (g11, g12), (g21, g22) = eq.jacobian_box(x[:, X_T], x[:, X_H], rad[:, X_T], rad[:, X_H])
     G = ((g11, g12), (g21, g22))
     ok = np.all(np.isfinite(Y.reshape(-1, 4)), axis=1)
     YF = np.abs(np.einsum("kij,kj->ki", Y, F)) + np.einsum("kij,kj->ki", np.abs(Y), floor)
@@ -548,10 +551,10 @@ def search_one_impact(eq: OneImpactEquations, window: tuple[float, float], *,
                 x0 = np.column_stack((Tm[best[trial]], hm[best[trial]]))
                 x, conv = _newton(eq, x0)
                 fin = np.all(np.isfinite(x), axis=1)
-                inside = fin & (x[:, 0] >= lo_T[trial] - 2 * r) & (x[:, 0] <= hi_T[trial] + 2 * r) & \
-                    (x[:, 1] >= lo_h[trial] - 2 * r) & (x[:, 1] <= hi_h[trial] + 2 * r)
-                rad = np.column_stack((np.maximum(hi_T[trial] - x[:, 0], x[:, 0] - lo_T[trial]),
-                                       np.maximum(hi_h[trial] - x[:, 1], x[:, 1] - lo_h[trial])))
+                inside = fin & (x[:, X_T] >= lo_T[trial] - 2 * r) & (x[:, X_T] <= hi_T[trial] + 2 * r) & \
+                    (x[:, X_H] >= lo_h[trial] - 2 * r) & (x[:, X_H] <= hi_h[trial] + 2 * r)
+                rad = np.column_stack((np.maximum(hi_T[trial] - x[:, X_T], x[:, X_T] - lo_T[trial]),
+                                       np.maximum(hi_h[trial] - x[:, X_H], x[:, X_H] - lo_h[trial])))
                 rad = np.maximum(rad, r) * 1.01
                 good = np.zeros(trial.size, dtype=bool)
                 if np.any(inside):
@@ -588,10 +591,11 @@ def search_one_impact(eq: OneImpactEquations, window: tuple[float, float], *,
         ii = np.concatenate((2 * ii, 2 * ii + 1, 2 * ii, 2 * ii + 1))
         jj = np.concatenate((2 * jj, 2 * jj, 2 * jj + 1, 2 * jj + 1))
     out = np.array(roots).reshape(-1, 2)
-    keep = (out[:, 0] >= T_lo) & (out[:, 0] <= T_hi) & (out[:, 1] > 0.0) & (out[:, 0] - tau - out[:, 1] > 0.0)
+    T, h = out[:, X_T], out[:, X_H]
+    keep = (T >= T_lo) & (T <= T_hi) & (h > 0.0) & (T - tau - h > 0.0)
     boxes_a = np.array(boxes).reshape(-1, 2)[keep]
     out, cert = out[keep], np.array(certified, dtype=bool)[keep]
-    order = np.argsort(out[:, 0], kind="stable")
+    order = np.argsort(out[:, X_T], kind="stable")
     out, boxes_a, cert = out[order], boxes_a[order], cert[order]
     # the same root from two clusters (their boxes overlap): kept once, certified if either is
     uniq = []

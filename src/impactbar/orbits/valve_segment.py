@@ -224,6 +224,10 @@ def _padded(state, M):
 #: most undamped resonances ``T = 2 k / (s n)`` in the window of a search of every orbit (``d = 0``):
 #: orbits crowd at each, and each takes the search down to its smallest cells (about 1.5 s for 260)
 MAX_RESONANCES = 1000
+#: an impact's four legs of the force schedule in an orbit's ``durations`` (a row each, reshaped to
+#: ``(m, DUR_SIZE)``): ``tau_in``, ``h1``, ``tau_out``, ``h3`` (theory §10)
+DUR_TAU, DUR_H1, DUR_TAU2, DUR_H3 = range(4)
+DUR_SIZE = 4
 
 
 class ValveProblem(OrbitProblem):
@@ -362,8 +366,8 @@ class ValveProblem(OrbitProblem):
     def unknowns(self, orbit):
         """The unknowns of a found orbit: its states after the impacts and its ``h1``, ``h3``."""
         states = orbit.states if orbit.states is not None else orbit.state[None, :]
-        return np.concatenate([np.concatenate((z, orbit.durations[4 * k + 1:4 * k + 4:2]))
-                               for k, z in enumerate(states)])
+        legs = orbit.durations.reshape(-1, DUR_SIZE)
+        return np.concatenate([np.concatenate((z, legs[k, [DUR_H1, DUR_H3]])) for k, z in enumerate(states)])
 
     def _block(self, X, k):
         n = 2 * self.M + 2
@@ -475,21 +479,22 @@ def _impact_times(durations, contact_time):
     interval."""
     if durations.size == 4:
         return np.array([float(np.sum(durations))])
-    per = durations.reshape(-1, 4).sum(axis=1)
+    per = durations.reshape(-1, DUR_SIZE).sum(axis=1)
     return np.cumsum(per) + contact_time * np.arange(per.size)
 
 
 def _switch_times(durations, contact_time):
     """Times after the first impact at which the switches take effect: to return, then to stroke,
     for each impact of the period in turn, shape ``(2 m,)``."""
-    if durations.size == 4:  # the arithmetic below, in scalars
+    if durations.size == DUR_SIZE:  # the arithmetic below, in scalars
         start = 0.0 + contact_time
-        tau, h1, tau2 = float(durations[0]), float(durations[1]), float(durations[2])
+        tau, h1, tau2 = float(durations[DUR_TAU]), float(durations[DUR_H1]), float(durations[DUR_TAU2])
         return np.array([start + tau, start + tau + h1 + tau2])
-    steps = durations.reshape(-1, 4).copy()
-    steps[:, 0] += contact_time  # the contact, then the stroke's tau
+    legs = durations.reshape(-1, DUR_SIZE)
+    steps = legs.copy()
+    steps[:, DUR_TAU] += contact_time  # the contact, then the stroke's tau
     start = np.concatenate(([0.0], np.cumsum(steps.sum(axis=1))))[:-1] + contact_time
-    tau, h1, tau2 = durations[0::4], durations[1::4], durations[2::4]
+    tau, h1, tau2 = legs[:, DUR_TAU], legs[:, DUR_H1], legs[:, DUR_TAU2]
     return np.column_stack((start + tau, start + tau + h1 + tau2)).ravel()
 
 
@@ -524,7 +529,8 @@ def _guess_unknowns(guess, M, m):
     ``impact_times``) or a tuple."""
     if hasattr(guess, "durations") and hasattr(guess, "state"):  # a SwitchedOrbit of the valve
         states = guess.states if guess.states is not None else guess.state[None, :]
-        h1, h3 = guess.durations[1::4], guess.durations[3::4]
+        legs = guess.durations.reshape(-1, DUR_SIZE)
+        h1, h3 = legs[:, DUR_H1], legs[:, DUR_H3]
         reps = -(-m // len(states))
         states, h1, h3 = np.tile(states, (reps, 1))[:m], np.tile(h1, reps)[:m], np.tile(h3, reps)[:m]
     elif hasattr(guess, "switch_kinds") and hasattr(guess, "impact_times"):

@@ -235,8 +235,8 @@ class MeasuredForce:
                 raise ValueError(f"force.csv: data row {i} of {str(path)!r} must be two numbers "
                                  f"(time, force); got {r}")
             data.append((float(r[0]), float(r[1])))
-        arr = np.array(data, dtype=float)
-        return cls(arr[:, 0] * scale_t, arr[:, 1] * scale_f, tolerance=tolerance,
+        times, forces = np.array(data, dtype=float).reshape(-1, 2).T
+        return cls(times * scale_t, forces * scale_f, tolerance=tolerance,
                    max_harmonics=max_harmonics, source=str(path))
 
     def _nodes(self, period_s: float):

@@ -290,6 +290,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         changes.update({k: config_value(cfg, k) for k, at in zip(keys, u == u0, strict=True) if at})
         return _Design(json.dumps([repr(values[k]) for k in keys]), values, changes)
 
+    def id_and_changes(u: np.ndarray) -> tuple[str, dict]:
+        design = design_of(u)
+        return design.id, design.changes
+
     def evaluate(u: np.ndarray, done: dict | None = None) -> dict:
         nonlocal n_cached
         u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
@@ -374,7 +378,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
 
         if method == "differential_evolution":
             res = population_search(lambda u: penalised(evaluate(u), fkey, ref),
-                                    lambda u: design_of(u)[::2], store, evaluate, _design_record,
+                                    id_and_changes, store, evaluate, _design_record,
                                     {"config": cfg, "folder": folder, "limits": kept}, u0, popsize=popsize,
                                     maxiter=maxiter, seed=seed, workers=workers, atol=tol ** 2)
         elif method in ("cobyla", "multistart"):
@@ -382,7 +386,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 return minimize(f, u, method="COBYLA", constraints=[{"type": "ineq", "fun": g}], bounds=[(
                     0.0, 1.0)] * len(keys), options={"rhobeg": rhobeg, "tol": tol, "maxiter": most})
             res, found = (cobyla(u0), []) if method == "cobyla" else multistart_search(
-                evaluate, lambda u: design_of(u)[::2], store, _design_record,
+                evaluate, id_and_changes, store, _design_record,
                 {"config": cfg, "folder": folder, "limits": kept}, lambda u: cobyla(u, budget), fkey,
                 sample=sample, local_starts=local_starts, seed=seed, workers=workers, n_variables=len(keys))
             if found and polish:

@@ -93,7 +93,7 @@ def plot_impact_map(result, ax=None):
     ax = _axes(ax)
     pairs = result.impact_pairs
     if pairs.size:
-        ax.plot(pairs[:, 0], pairs[:, 1], ".", ms=3)
+        ax.plot(*pairs.T, ".", ms=3)  # (the velocity before an impact, the next one)
         lim = float(np.max(pairs)) * 1.05
         ax.plot([0, lim], [0, lim], "k:", lw=0.6, label="v(i+1) = v(i)")
         ax.legend(loc="upper left", fontsize=8.5)

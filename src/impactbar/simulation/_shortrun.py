@@ -26,6 +26,8 @@ SHORT_RUN_IMPACTS = 256
 #: the impacts of a run's first block: the general driver's first block (its log's first rows), so
 #: that a run's blocks, and with them its bits, are the same on both paths
 FIRST_BLOCK = 1024
+#: the rows of a block's log ``TV``: the pieces' times, the impacts' arrival velocities
+TV_T, TV_V = 0, 1
 
 # the pieces' kinds, shared read-only by every short run's log: a run of n impacts gets _KINDS[n],
 # views of the first n + 1 (made once: slicing them per run was a short run's cost)
@@ -95,7 +97,7 @@ class _Block:
         self.TV = np.empty((2, rows + 1))
         Q, V = self.QV
         self.q0, self.v0 = Q[0], V[0]
-        self.out = (self.TV[0, 1:], self.TV[1, 1:], Q[1:], V[1:])
+        self.out = (self.TV[TV_T, 1:], self.TV[TV_V, 1:], Q[1:], V[1:])
         self._first = [None] * (rows + 2)
 
     def first(self, k):
@@ -133,7 +135,7 @@ def run_short(core, q, v, t0, t_end, max_imp, state) -> tuple[Trajectory | None,
     b.q0[...] = q  # (faster than Q[0] = q)
     b.v0[...] = v
     TV = b.TV
-    TV[0, 0] = t0
+    TV[TV_T, 0] = t0
     # (the kernel overwrites its start with its state where it stops)
     n, st, tn = core.run_block(t0, q, v, t_end, max_imp, b.out, True)
     k = n + 1
@@ -141,11 +143,11 @@ def run_short(core, q, v, t0, t_end, max_imp, state) -> tuple[Trajectory | None,
         t, status = tn, RunStatus.MAX_IMPACTS
     elif st == K.END:  # q, v: the flight's state at t_end, as the log's flow gives it
         t, status = t_end, RunStatus.T_END
-        if n and TV[0, n] == t_end:  # the last impact at t_end itself: the state after it
+        if n and TV[TV_T, n] == t_end:  # the last impact at t_end itself: the state after it
             q, v = b.QV[0, n].copy(), b.QV[1, n].copy()
     else:  # the rows the general driver goes on from (copies: the buffers serve the next run)
         tv, qv = (a.copy() for a in b.first(k))
-        return None, FirstBlock(n, st, tn, tv[0, 1:], tv[1, 1:], qv[0], qv[1])
+        return None, FirstBlock(n, st, tn, tv[TV_T, 1:], tv[TV_V, 1:], qv[0], qv[1])
     # the rows used, copied (both states in one copy, and no unpacking: iterating a numpy array costs
     # 2 us; a compiled copy returning the arrays costs more than these, 0.5 us per array returned);
     # the result's arrays are made from them when first read
@@ -161,13 +163,13 @@ def _field(name, n, tv, qv, q, v, state):
     start states (as ``_Block.QV``), ``q, v`` the final state, ``state`` what makes it an
     ``InitialState``."""
     if name == "impact_times":
-        return tv[0, 1:].copy()  # (not a view of the log's times)
+        return tv[TV_T, 1:].copy()  # (not a view of the log's times)
     if name == "impact_velocities":
-        return tv[1, 1:]
+        return tv[TV_V, 1:]
     if name == "final_state":
         return state(q, v)
     basis, entry = _KINDS[n]
-    return _Segments(qv.shape[2] - 1, tv[0], basis, entry, qv[0], qv[1], {})
+    return _Segments(qv.shape[2] - 1, tv[TV_T], basis, entry, qv[0], qv[1], {})
 
 
 _NO_CONTACTS = np.zeros((0, 2))

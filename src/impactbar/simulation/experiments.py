@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.columns import IV_HI
 from .._shared.validate import check_int, check_real
 from ..loads import CosineLoad, Load, SquareWaveLoad
 from ..model import BarModel
@@ -110,7 +111,7 @@ def classify(tr: Trajectory, *, window: float = 0.25, tol: float = 1e-4,
     T = load_period(tr.load)
     t_start = tr.t_end - window * (tr.t_end - tr.t0)
     ci = tr.contact_intervals
-    in_window = int(np.sum(ci[:, 1] > t_start)) if ci.size else 0
+    in_window = int(np.sum(ci[:, IV_HI] > t_start)) if ci.size else 0
     if tr.in_contact_at_end and in_window == 1:
         return Classification("permanent contact", None, 0, 0.0)
     if in_window >= 2:
@@ -380,8 +381,8 @@ def _main_impacts(tr: Trajectory, sel: np.ndarray, period: float) -> np.ndarray:
     after_release = np.zeros(t.size, dtype=bool)
     ci = tr.contact_intervals
     if ci.size:
-        j = np.searchsorted(ci[:, 1], t, side="right") - 1
-        last_release = np.where(j >= 0, ci[np.clip(j, 0, None), 1], -np.inf)
+        j = np.searchsorted(ci[:, IV_HI], t, side="right") - 1
+        last_release = np.where(j >= 0, ci[np.clip(j, 0, None), IV_HI], -np.inf)
         after_release = last_release > prev
         prev = np.maximum(prev, last_release)
     flight = t - prev

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 
 from .._shared import tables as _tables
+from .._shared.columns import IV_HI
 from .._shared.schema import END_MOTION, Field, Schema
 from ..loads import Load
 from ..model import BarModel
@@ -327,7 +328,7 @@ class Trajectory:
 
     @property
     def in_contact_at_end(self) -> bool:
-        return bool(self.contact_intervals.size and self.contact_intervals[-1, 1] == self.t_end
+        return bool(self.contact_intervals.size and self.contact_intervals[-1, IV_HI] == self.t_end
                     and self._segments[-1].basis == _CONTACT)
 
     def _check_times(self, t) -> np.ndarray:

@@ -24,6 +24,9 @@ from . import _field as K
 
 #: the size of the integrated state: ``w``, four of the circuit, ``I``, the energies
 N_STATE = 6 + K.N_ENERGY
+#: the integrated state's places: ``w``, then the circuit's state from ``Y_CIRCUIT`` on (then ``I``, the
+#: energies)
+Y_W, Y_CIRCUIT = 0, 1
 #: the events during a blow: the ramp's end, the supply pressure through the pre-charge and the relief
 N_EVENTS = 3
 #: their indices among the flight kernel's events (``_field.RAMP_EV``, ``ACC_EV``, ``REL_EV``)

@@ -266,9 +266,9 @@ def circuit_end_flight(drive, model, state: DriveState, breaks, w0: float, incom
             _end_code(drive).end_field_at(Y, par, exts, f)
             piece = EndPiece(ts, Y, f, drive.chambers.area_ratio, drive.layout)
             pieces.append(piece)
-            _check_volumes(drive, Y[:, 0], t)
-            impulses[k] += Y[-1, 1 + ns]
-            w, z = float(Y[-1, 0]), Y[-1, 1:1 + ns].copy()
+            _check_volumes(drive, Y[:, EK.Y_W], t)
+            impulses[k] += Y[-1, EK.Y_CIRCUIT + ns]  # I
+            w, z = float(Y[-1, EK.Y_W]), Y[-1, EK.Y_CIRCUIT:EK.Y_CIRCUIT + ns].copy()
             te = float(ts[-1])
             if status == 2 and hit:
                 st = DriveState(mode, z)
@@ -324,7 +324,7 @@ def _compiled_stretches(compiled, drive, model1, state, breaks, w, incoming, imp
             raise ValueError(f"the oil circuit during the blow from t = {t:.6g} could not be integrated "
                              f"({why})")
         if starts.size > 1:
-            w, z = float(Y[-1, 0]), Y[-1, 1:1 + drive.layout.n_states].copy()
+            w, z = float(Y[-1, EK.Y_W]), Y[-1, EK.Y_CIRCUIT:EK.Y_CIRCUIT + drive.layout.n_states].copy()
         if flag != 2:
             break
         te = float(T[-1])

@@ -47,6 +47,9 @@ from ._records import (  # the records' slots and the pool's columns
     CT_PSI,
     CT_TACC,
     CT_THR,
+    NSF_GAP,
+    NSF_SHANK,
+    NSI_CONTACT,
     PF_INT,
     PF_INT2,
     PI_COUNT,
@@ -243,13 +246,13 @@ def may_end(ws, t):
     gone = False
     vp = 0.0
     Pr = 1.0  # (> 0: the rod cannot fly free)
-    if NSI[n_p, 3] != 1:
+    if NSI[n_p, NSI_CONTACT] != 1:
         Pq = _momentum(CH_T, pool, WB, WN, t, 1, n_p)
         gone = Pq <= 0.0
         vp = Pq / PR[PR_MP]
         if gone and f == 0.0 and br == FREE and BS[BS_P] < BS[BS_PPERM]:
             Pr = _momentum(CH_T, pool, WB, WN, t, n_p + 1, J) + m * w
-    xs = NSF[n_p, 1]
+    xs = NSF[n_p, NSF_SHANK]
     avail = PR[PR_E0] + f * xs + f * f * (PR[PR_CROD] * 0.5 + 0.5 / ku)
     if not _could_end(psi, PR, BS, BI, NSF, avail, gone, vp, Pr):
         return False
@@ -286,8 +289,8 @@ def _could_end(psi, PR, BS, BI, NSF, avail, gone, vp, Pr):
     if f > 0.0:
         return br != LOAD and (psi < thr or PR[PR_TMAX] == INF or PR[PR_DRIVEN] != 0.0)
     n_p = int(PR[PR_NP])
-    xs = NSF[n_p, 1]
-    xp = xs - NSF[n_p, 0]
+    xs = NSF[n_p, NSF_SHANK]
+    xp = xs - NSF[n_p, NSF_GAP]
     Mr = PR[PR_MR]
     rod_free = False
     if br == FREE and Pr <= 0.0:
@@ -320,7 +323,7 @@ def certify(ws, t):
     # the energies cost a pass over every piece in flight: only when the piston may have gone, or
     # every 16 windows for the spent energy
     if CI[CI_WIN] % 16 != 0:
-        if NSI[n_p, 3] == 1:
+        if NSI[n_p, NSI_CONTACT] == 1:
             return GOING
         if _momentum(CH_T, pool, WB, WN, t, 1, n_p) > 0.0:
             return GOING
@@ -334,9 +337,9 @@ def certify(ws, t):
     br = BI[BI_BRANCH]
     Mp = PR[PR_MP]
     Mr = PR[PR_MR]
-    contact = NSI[n_p, 3] == 1
-    gap = NSF[n_p, 0]
-    xs = NSF[n_p, 1]
+    contact = NSI[n_p, NSI_CONTACT] == 1
+    gap = NSF[n_p, NSF_GAP]
+    xs = NSF[n_p, NSF_SHANK]
     avail = PR[PR_E0] + f * xs + f * f * (PR[PR_CROD] * 0.5 + 0.5 / ku)
     vp = Pp / Mp
     gone = False

@@ -30,6 +30,8 @@ from ._records import (  # the result's slots  # the pool's columns
     PI_COUNT,
     PI_FLAG,
     PI_NEXT,
+    STK_A,
+    STK_B,
 )
 
 NOBIN = np.zeros((1, 1))
@@ -126,15 +128,15 @@ def piece_max(B, N, lam, BIN, L, stack):
         tb = L
     if L <= 0.0:
         return best, tb
-    stack[0, 0] = 0.0
-    stack[0, 1] = L
+    stack[0, STK_A] = 0.0
+    stack[0, STK_B] = L
     sp = 1
     it = 0
     while sp > 0 and it < 4000:
         it += 1
         sp -= 1
-        a = stack[sp, 0]
-        b = stack[sp, 1]
+        a = stack[sp, STK_A]
+        b = stack[sp, STK_B]
         w = b - a
         m = 0.5 * (a + b)
         fm, dm, _ = blk_eval(B, N, lam, m)
@@ -146,10 +148,10 @@ def piece_max(B, N, lam, BIN, L, stack):
             tb = m
         if w <= 64.0 * EPS * L or sp + 2 > stack.shape[0]:
             continue
-        stack[sp, 0] = m
-        stack[sp, 1] = b
-        stack[sp + 1, 0] = a
-        stack[sp + 1, 1] = m
+        stack[sp, STK_A] = m
+        stack[sp, STK_B] = b
+        stack[sp + 1, STK_A] = a
+        stack[sp + 1, STK_B] = m
         sp += 2
     if 0.0 < tb < L:  # Newton on phi' = 0 from the best point
         x = tb

@@ -124,6 +124,17 @@ from ._records import (  # the records' slots
     CT_TLOAD,
     CT_TSEP,
     E_CONST,
+    EP_DISS,
+    EP_PEND,
+    EP_PSTART,
+    EP_TEND,
+    EP_TSTART,
+    NSF_GAP,
+    NSF_SHANK,
+    NSI_CONTACT,
+    NSI_DRIVE,
+    NSI_IN,
+    NSI_IN2,
     PR_DRIVEN,
     PR_FEED,
     PR_FIXED,
@@ -140,7 +151,18 @@ from ._records import (  # the records' slots
     PR_TMAX,
     PR_WINDOW,
     PR_ZBIT,
+    RC_FIRST,
+    RC_SECOND,
+    RD_CODE,
+    RD_FULL,
     RD_HEAD,
+    RD_ROWS,
+    RD_T,
+    RD_V1,
+    RD_V2,
+    RD_V3,
+    RT_FIRST,
+    RT_SECOND,
     SEG_FAR,
 )
 
@@ -154,7 +176,7 @@ from ._records import (  # the records' slots
 #     cursor, contact flag
 # EP (cap, 5): episodes t_start, t_end, p_start, p_end, dissipated
 # RD (1 + n, 6) complex: the switch log (the tangent run's schedule, :mod:`._exacttangent`), kept
-#     only when it has more than its header row RD_HEAD (RD[RD_HEAD, 0] the count, RD[RD_HEAD, 1]
+#     only when it has more than its header row RD_HEAD (its RD_ROWS the count, its RD_FULL
 #     1 once full); row i + 1:
 #     time, code (LOG_SEP, LOG_RECON, LOG_BIT + the new branch) and, for a re-contact, the contact
 #     force just after it, the jump of the shank's velocity and the gap's rate just before it; for
@@ -175,16 +197,16 @@ def _log(RD, t, code, x1, x2, x3):
     """Append a switch at ``t`` to the log ``RD`` (nothing where it has only its header row)."""
     if RD.shape[0] <= 1:
         return
-    n = int(RD[RD_HEAD, 0].real)
+    n = int(RD[RD_HEAD, RD_ROWS].real)
     if n + 1 >= RD.shape[0]:
-        RD[RD_HEAD, 1] = 1.0
+        RD[RD_HEAD, RD_FULL] = 1.0
         return
-    RD[n + 1, 0] = t
-    RD[n + 1, 1] = code
-    RD[n + 1, 2] = x1
-    RD[n + 1, 3] = x2
-    RD[n + 1, 4] = x3
-    RD[RD_HEAD, 0] = n + 1
+    RD[n + 1, RD_T] = t
+    RD[n + 1, RD_CODE] = code
+    RD[n + 1, RD_V1] = x1
+    RD[n + 1, RD_V2] = x2
+    RD[n + 1, RD_V3] = x3
+    RD[RD_HEAD, RD_ROWS] = n + 1
 
 
 @numba.njit(cache=CACHE, nogil=True)
@@ -229,7 +251,7 @@ def node_end(ws, t, t1):
         nbd = INF
         if driven:
             cd, nbd = advance(2 * J, a, CHI, CH_T, PF, PI)
-        if cg != NSI[0, 0] or cd != NSI[0, 2]:
+        if cg != NSI[0, NSI_IN] or cd != NSI[0, NSI_DRIVE]:
             valid = _load(pool, CH_T, WB, WN, B_IN2, CH_FAR_IN, cg, a)
             blk_clear(WB[B_OUT], WN[B_OUT])
             blk_axpy(WB[B_OUT], WN[B_OUT], -1.0, WB[B_IN2], WN[B_IN2])
@@ -238,8 +260,8 @@ def node_end(ws, t, t1):
                 blk_axpy(WB[B_OUT], WN[B_OUT], 1.0, WB[B_IN], WN[B_IN])
             if not _emit(pool, CH_TOL, WB, WN, Lb, CH_FAR_OUT, a, B_OUT, valid, 0, 0.0):
                 return False
-            NSI[0, 0] = cg
-            NSI[0, 2] = cd
+            NSI[0, NSI_IN] = cg
+            NSI[0, NSI_DRIVE] = cd
         b = window_break(min(nb, nbd), t1)
         if driven and PR[PR_NODW] == 0.0:  # the drive's work int p v dt, v = (p - 2 g_in)/Z at the far end
             L = min(b, t1) - a
@@ -276,7 +298,7 @@ def node_junction(ws, j, t, t1):
     while True:
         cf, nbf = advance(fch, a, CHI, CH_T, PF, PI)
         cg, nbg = advance(gch, a, CHI, CH_T, PF, PI)
-        if cf != NSI[j, 0] or cg != NSI[j, 1]:
+        if cf != NSI[j, NSI_IN] or cg != NSI[j, NSI_IN2]:
             valid = min(_load(pool, CH_T, WB, WN, B_IN, fch, cf, a),
                         _load(pool, CH_T, WB, WN, B_IN2, gch, cg, a))
             blk_set_comb(WB[B_OUT], WN[B_OUT], 2.0 * ZR / s, WB[B_IN], WN[B_IN], (ZL - ZR) / s, WB[B_IN2],
@@ -291,8 +313,8 @@ def node_junction(ws, j, t, t1):
                 return False
             if not _emit(pool, CH_TOL, WB, WN, Lb, 2 * j - 1, a, B_OUT2, valid, 0, 0.0):
                 return False
-            NSI[j, 0] = cf
-            NSI[j, 1] = cg
+            NSI[j, NSI_IN] = cf
+            NSI[j, NSI_IN2] = cg
         b = window_break(min(nbf, nbg), t1)
         if b >= t1:
             return True
@@ -361,8 +383,8 @@ def _contact_flip(NSF, NSI, CI, CT, j, a, welded):
     """The piston-shank node ``j`` switching at ``a``: welded again (a re-contact, counted in
     ``CI[CI_RECON]``) or apart (a separation, counted in ``CI[CI_SEP]``, its time in
     ``CT[CT_TSEP]``), the gap set to 0."""
-    NSI[j, 3] = 1 if welded else 0
-    NSF[j, 0] = 0.0
+    NSI[j, NSI_CONTACT] = 1 if welded else 0
+    NSF[j, NSF_GAP] = 0.0
     if welded:
         CI[CI_RECON] += 1
     else:
@@ -388,14 +410,14 @@ def node_contact(ws, t, t1):
     while True:
         cf, nbf = advance(fch, a, CHI, CH_T, PF, PI)
         cg, nbg = advance(gch, a, CHI, CH_T, PF, PI)
-        if cf != NSI[j, 0] or cg != NSI[j, 1]:
+        if cf != NSI[j, NSI_IN] or cg != NSI[j, NSI_IN2]:
             dirty = True
             flips = 0
         b = window_break(min(nbf, nbg), t1)
         valid = min(_load(pool, CH_T, WB, WN, B_IN, fch, cf, a),
                     _load(pool, CH_T, WB, WN, B_IN2, gch, cg, a))
         L = b - a
-        welded = NSI[j, 3] == 1
+        welded = NSI[j, NSI_CONTACT] == 1
         if welded:  # in contact
             blk_set_comb(WB[B_N], WN[B_N], 2.0 * ZR / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
                          WN[B_IN2])
@@ -407,11 +429,11 @@ def node_contact(ws, t, t1):
                 if RD.shape[0] > 1:  # the waves arriving just before (the pieces before a, if new)
                     fm = blk_value(WB[B_IN], WN[B_IN], lam, 0.0)
                     gm = blk_value(WB[B_IN2], WN[B_IN2], lam, 0.0)
-                    if cf != NSI[j, 0] and NSI[j, 0] >= 0:
-                        _load(pool, CH_T, WB, WN, B_AUX, fch, NSI[j, 0], a)
+                    if cf != NSI[j, NSI_IN] and NSI[j, NSI_IN] >= 0:
+                        _load(pool, CH_T, WB, WN, B_AUX, fch, NSI[j, NSI_IN], a)
                         fm = blk_value(WB[B_AUX], WN[B_AUX], lam, 0.0)
-                    if cg != NSI[j, 1] and NSI[j, 1] >= 0:
-                        _load(pool, CH_T, WB, WN, B_AUX, gch, NSI[j, 1], a)
+                    if cg != NSI[j, NSI_IN2] and NSI[j, NSI_IN2] >= 0:
+                        _load(pool, CH_T, WB, WN, B_AUX, gch, NSI[j, NSI_IN2], a)
                         gm = blk_value(WB[B_AUX], WN[B_AUX], lam, 0.0)
                     _log(RD, a, LOG_SEP, fm, gm, 0.0)
                 continue
@@ -422,13 +444,13 @@ def node_contact(ws, t, t1):
             te = L if ts < 0.0 else ts
             # the common velocity (2 f_in - N)/Z_L
             blk_set_comb(WB[B_RATE], WN[B_RATE], 2.0 / ZL, WB[B_IN], WN[B_IN], -1.0 / ZL, WB[B_N], WN[B_N])
-            NSF[j, 1] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, te)
+            NSF[j, NSF_SHANK] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, te)
         else:
             # gap' = v_s - v_p = -2 g_in/Z_R - 2 f_in/Z_L
             blk_set_comb(WB[B_RATE], WN[B_RATE], -2.0 / ZL, WB[B_IN], WN[B_IN], -2.0 / ZR, WB[B_IN2],
                          WN[B_IN2])
             st, gser = blk_ode1(WB[B_ZERO], WN[B_ZERO], WB[B_RATE], WN[B_RATE], lam, E_CONST, 0.0j,
-                                NSF[j, 0] + 0.0j, L)
+                                NSF[j, NSF_GAP] + 0.0j, L)
             if st != 0:
                 CI[CI_DEG] += 1
             ts = _contact_switch(WB, WN, lam, BIN, STK, CI, B_ZERO, L, a, flips)
@@ -448,7 +470,7 @@ def node_contact(ws, t, t1):
                     return False
                 dirty = False
             te = L if ts < 0.0 else ts
-            NSF[j, 1] += -2.0 / ZR * blk_integral(WB[B_IN2], WN[B_IN2], lam, 0.0, te)
+            NSF[j, NSF_SHANK] += -2.0 / ZR * blk_integral(WB[B_IN2], WN[B_IN2], lam, 0.0, te)
         if ts > 0.0:  # the switch inside the piece: a separation, or a re-contact
             if RD.shape[0] > 1:
                 fv = blk_value(WB[B_IN], WN[B_IN], lam, ts)
@@ -461,13 +483,13 @@ def node_contact(ws, t, t1):
             _contact_flip(NSF, NSI, CI, CT, j, a, not welded)
             dirty = True
             flips = 1
-            NSI[j, 0] = cf
-            NSI[j, 1] = cg
+            NSI[j, NSI_IN] = cf
+            NSI[j, NSI_IN2] = cg
             continue
         if not welded:
-            NSF[j, 0] = max(blk_value(WB[B_ZERO], WN[B_ZERO], lam, te), 0.0)
-        NSI[j, 0] = cf
-        NSI[j, 1] = cg
+            NSF[j, NSF_GAP] = max(blk_value(WB[B_ZERO], WN[B_ZERO], lam, te), 0.0)
+        NSI[j, NSI_IN] = cf
+        NSI[j, NSI_IN2] = cg
         if b >= t1:
             return True
         a = b
@@ -483,15 +505,15 @@ def bit_solve(WB, WN, lam, PR, RT, RC, CI, br, x0, w0, L):
     if m == 0.0:
         blk_clear(WB[B_RATE], WN[B_RATE])
         blk_axpy(WB[B_RATE], WN[B_RATE], 1.0 / PR[PR_ZBIT], WB[B_E], WN[B_E])
-        st, series = blk_ode1(WB[B_X], WN[B_X], WB[B_RATE], WN[B_RATE], lam, RC[br, 0], RT[br, 0], x0 + 0.0j,
-                              L)
+        st, series = blk_ode1(WB[B_X], WN[B_X], WB[B_RATE], WN[B_RATE], lam, RC[br, RC_FIRST],
+                              RT[br, RT_FIRST], x0 + 0.0j, L)
     else:
-        r2 = RT[br, 1]
+        r2 = RT[br, RT_SECOND]
         blk_clear(WB[B_RATE], WN[B_RATE])
         blk_axpy(WB[B_RATE], WN[B_RATE], 1.0 / m, WB[B_E], WN[B_E])
-        st, s1 = blk_ode1(WB[B_ODE], WN[B_ODE], WB[B_RATE], WN[B_RATE], lam, RC[br, 0], RT[br, 0],
-                          w0 - r2 * x0, L)
-        st2, s2 = blk_ode1(WB[B_X], WN[B_X], WB[B_ODE], WN[B_ODE], lam, RC[br, 1], r2, x0 + 0.0j, L)
+        st, s1 = blk_ode1(WB[B_ODE], WN[B_ODE], WB[B_RATE], WN[B_RATE], lam, RC[br, RC_FIRST],
+                          RT[br, RT_FIRST], w0 - r2 * x0, L)
+        st2, s2 = blk_ode1(WB[B_X], WN[B_X], WB[B_ODE], WN[B_ODE], lam, RC[br, RC_SECOND], r2, x0 + 0.0j, L)
         st += st2
         series = s1 or s2
     if st != 0:
@@ -506,12 +528,12 @@ def _episode_end(EP, BS, BI, PR, CNT, CT, t, p):
     set where it has no room), counted in ``BI[BI_NEP]``."""
     n = BI[BI_NEP]
     if n < EP.shape[0]:
-        EP[n, 0] = BS[BS_EPT]
-        EP[n, 1] = t
-        EP[n, 2] = BS[BS_EPP]
-        EP[n, 3] = p
+        EP[n, EP_TSTART] = BS[BS_EPT]
+        EP[n, EP_TEND] = t
+        EP[n, EP_PSTART] = BS[BS_EPP]
+        EP[n, EP_PEND] = p
         k = PR[PR_K]
-        EP[n, 4] = (1.0 - k / PR[PR_KU]) * k * (p - BS[BS_EPP]) * (p + BS[BS_EPP]) * 0.5
+        EP[n, EP_DISS] = (1.0 - k / PR[PR_KU]) * k * (p - BS[BS_EPP]) * (p + BS[BS_EPP]) * 0.5
     else:
         CNT[CNT_FULL] = 1
     BI[BI_NEP] = n + 1
@@ -526,7 +548,7 @@ def bit_input(pool, CH_T, WB, WN, PR, NSI, J, a, t1):
     fch = 2 * (J - 1)
     cf, nb = advance(fch, a, CHI, CH_T, PF, PI)
     vf = _load(pool, CH_T, WB, WN, B_IN, fch, cf, a)
-    NSI[J, 0] = cf
+    NSI[J, NSI_IN] = cf
     blk_clear(WB[B_E], WN[B_E])
     blk_axpy(WB[B_E], WN[B_E], 2.0, WB[B_IN], WN[B_IN])
     blk_add_const(WB[B_E], WN[B_E], PR[PR_FEED])
@@ -572,7 +594,7 @@ def node_bit(ws, t, t1):
                 # there (from x0 - E/k, an ulp of x0, times the branch's rates) unloaded and
                 # reloaded the rock at once, each a spurious loading episode
                 e0, _e1, _e2 = blk_eval(WB[B_E], WN[B_E], lam, 0.0)
-                rmax = max(abs(RT[br, 0]), abs(RT[br, 1]))  # (RT[br, 1] = 0: a massless bit)
+                rmax = max(abs(RT[br, RT_FIRST]), abs(RT[br, RT_SECOND]))  # (RT_SECOND 0: a massless bit)
                 tolv = 64.0 * EPS * (abs(x0) * rmax + abs(e0) / Z)
                 blk_clear(WB[B_ZERO], WN[B_ZERO])
                 blk_axpy(WB[B_ZERO], WN[B_ZERO], 1.0, WB[B_XD], WN[B_XD])

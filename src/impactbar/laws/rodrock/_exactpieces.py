@@ -29,6 +29,10 @@ from ._records import (  # the records' slots and the pool's columns
     PI_FLAG,
     PI_NEXT,
     PI_TERMS,
+    STK_A,
+    STK_B,
+    STK_FA,
+    STK_FB,
 )
 
 DC = 64  # coefficients per exponent: polynomial degree up to DC - 1
@@ -345,19 +349,19 @@ def first_negative(B, N, lam, BIN, L, stack, D, t0):
     if fs < -err:
         return _refine(B, N, lam, 0.0, s)
     fL = blk_value(B, N, lam, L)
-    stack[0, 0] = s
-    stack[0, 1] = L
-    stack[0, 2] = max(fs, 0.0)
-    stack[0, 3] = fL
+    stack[0, STK_A] = s
+    stack[0, STK_B] = L
+    stack[0, STK_FA] = max(fs, 0.0)
+    stack[0, STK_FB] = fL
     sp = 1
     wmin = 4.0 * EPS * L
     it = 0
     while sp > 0:
         sp -= 1
-        a = stack[sp, 0]
-        b = stack[sp, 1]
-        fa = stack[sp, 2]
-        fb = stack[sp, 3]
+        a = stack[sp, STK_A]
+        b = stack[sp, STK_B]
+        fa = stack[sp, STK_FA]
+        fb = stack[sp, STK_FB]
         w = b - a
         it += 1
         if it > 4000:
@@ -381,22 +385,22 @@ def first_negative(B, N, lam, BIN, L, stack, D, t0):
         m = 0.5 * (a + b)
         fm = blk_value(B, N, lam, m)
         if fm < -err:
-            stack[sp, 0] = a
-            stack[sp, 1] = m
-            stack[sp, 2] = fa
-            stack[sp, 3] = fm
+            stack[sp, STK_A] = a
+            stack[sp, STK_B] = m
+            stack[sp, STK_FA] = fa
+            stack[sp, STK_FB] = fm
             sp += 1
         else:
             if sp + 2 > stack.shape[0]:
                 return -2.0
-            stack[sp, 0] = m
-            stack[sp, 1] = b
-            stack[sp, 2] = max(fm, 0.0)
-            stack[sp, 3] = fb
-            stack[sp + 1, 0] = a
-            stack[sp + 1, 1] = m
-            stack[sp + 1, 2] = fa
-            stack[sp + 1, 3] = max(fm, 0.0)
+            stack[sp, STK_A] = m
+            stack[sp, STK_B] = b
+            stack[sp, STK_FA] = max(fm, 0.0)
+            stack[sp, STK_FB] = fb
+            stack[sp + 1, STK_A] = a
+            stack[sp + 1, STK_B] = m
+            stack[sp + 1, STK_FA] = fa
+            stack[sp + 1, STK_FB] = max(fm, 0.0)
             sp += 2
     return -1.0
 

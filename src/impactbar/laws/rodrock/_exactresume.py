@@ -51,7 +51,7 @@ def _take(ws, scale):
     pieces stay as they are (a piece once followed by another is only read on, its whole integrals
     cached once), so that the snapshot holds while the pool's arrays are this blow's alone."""
     PF, PI = ws[S.WS_PF], ws[S.WS_PI]
-    tails = ws[S.WS_CHI][:, 0].copy()
+    tails = ws[S.WS_CHI][:, S.CHI_TAIL].copy()
     tails = tails[tails >= 0]
     return ws[:4], tuple(x.copy() for x in ws[4:]), tails, PF[tails].copy(), PI[tails].copy(), scale
 
@@ -139,7 +139,7 @@ def _resumed(snaps, drive, scale, lam, PR, pcap, tcap, force_new=False, *, bound
         TK[nt:nt + new_t], TC[nt:nt + new_t] = k_nz[before[i + 1]:], c_nz[before[i + 1]:]
         PI[cur, S.PI_NEXT] = npc  # (the snapshot's later pieces of the drive left unlinked)
         ws = (PF, PI, TK, TC, *(x.copy() for x in small))
-        ws[S.WS_CHI][c, 0] = npc + new - 1
+        ws[S.WS_CHI][c, S.CHI_TAIL] = npc + new - 1
         ws[S.WS_CNT][S.CNT_PIECES], ws[S.WS_CNT][S.CNT_TERMS] = npc + new, nt + new_t
         return ws
     return None

@@ -96,8 +96,22 @@ from ._records import (  # the records' slots
     CI_WIN,
     CNT_FULL,
     CT_T,
+    END_GAP,
+    END_PPERM,
+    END_SEPS,
+    END_SHANK,
+    END_UNLOADS,
     ICH_HEAD,
     ICH_TAIL,
+    IMP_DIR,
+    IMP_JUMP,
+    IMP_T,
+    IMP_W,
+    NSF_GAP,
+    NSF_SHANK,
+    NSI_CONTACT,
+    NSI_IN,
+    NSI_IN2,
     PR_K,
     PR_KU,
     PR_LB,
@@ -107,7 +121,13 @@ from ._records import (  # the records' slots
     PR_TMAX,
     PR_WINDOW,
     PR_ZBIT,
+    RD_CODE,
     RD_HEAD,
+    RD_ROWS,
+    RD_T,
+    RD_V1,
+    RD_V2,
+    RD_V3,
     TCUR_BIT,
     TCUR_CONTACT,
     TCUR_FAIL,
@@ -189,10 +209,10 @@ def _shift(tg, c1, T1, c2, T2, ts, dt):
 def _next_event(RD, cur, bit):
     """The schedule's next row at or after ``cur`` of the contact (``bit`` False) or of the bit; -1
     when none is left."""
-    n = int(RD[RD_HEAD, 0].real)
+    n = int(RD[RD_HEAD, RD_ROWS].real)
     i = max(cur, 1)  # (row 0 is the log's header)
     while i <= n:
-        code = int(RD[i, 1].real)
+        code = int(RD[i, RD_CODE].real)
         if (code >= LOG_BIT) == bit:
             return i
         i += 1
@@ -246,17 +266,17 @@ def t_node_contact(ws, tg, t, t1):
     while True:
         cf, nbf = advance(fch, a, CHI, CH_T, PF, PI)
         cg, nbg = advance(gch, a, CHI, CH_T, PF, PI)
-        if cf != NSI[j, 0] or cg != NSI[j, 1]:
+        if cf != NSI[j, NSI_IN] or cg != NSI[j, NSI_IN2]:
             dirty = True
         b = window_break(min(nbf, nbg), t1)
         k = _next_event(RD, TCUR[TCUR_CONTACT], False)
-        TCUR[TCUR_CONTACT] = k if k >= 0 else int(RD[RD_HEAD, 0].real) + 1
-        ts = RD[k, 0].real if k >= 0 else INF
+        TCUR[TCUR_CONTACT] = k if k >= 0 else int(RD[RD_HEAD, RD_ROWS].real) + 1
+        ts = RD[k, RD_T].real if k >= 0 else INF
         ti = min(imp_arrival(tg, fch, CH_T[fch]), imp_arrival(tg, gch, CH_T[gch]))
         e = max(min(b, ts, ti), a)
         valid = min(_load(pool, CH_T, WB, WN, B_IN, fch, cf, a), _load(pool, CH_T, WB, WN, B_IN2, gch, cg, a))
         L = e - a
-        if NSI[j, 3] == 1:
+        if NSI[j, NSI_CONTACT] == 1:
             blk_set_comb(WB[B_N], WN[B_N], 2.0 * ZR / s, WB[B_IN], WN[B_IN], 2.0 * ZL / s, WB[B_IN2],
                          WN[B_IN2])
             if dirty:
@@ -266,7 +286,7 @@ def t_node_contact(ws, tg, t, t1):
             if L > 0.0:
                 blk_set_comb(WB[B_RATE], WN[B_RATE], 2.0 / ZL, WB[B_IN], WN[B_IN], -1.0 / ZL, WB[B_N],
                              WN[B_N])
-                NSF[j, 1] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, L)
+                NSF[j, NSF_SHANK] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, L)
         else:
             if dirty:
                 if not contact_emit(pool, CH_TOL, WB, WN, Lb, j, hch, a, valid, False, False, 0.0):
@@ -275,33 +295,33 @@ def t_node_contact(ws, tg, t, t1):
             if L > 0.0:
                 blk_set_comb(WB[B_RATE], WN[B_RATE], -2.0 / ZL, WB[B_IN], WN[B_IN], -2.0 / ZR, WB[B_IN2],
                              WN[B_IN2])
-                NSF[j, 0] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, L)
-                NSF[j, 1] += -2.0 / ZR * blk_integral(WB[B_IN2], WN[B_IN2], lam, 0.0, L)
-        NSI[j, 0] = cf
-        NSI[j, 1] = cg
+                NSF[j, NSF_GAP] += blk_integral(WB[B_RATE], WN[B_RATE], lam, 0.0, L)
+                NSF[j, NSF_SHANK] += -2.0 / ZR * blk_integral(WB[B_IN2], WN[B_IN2], lam, 0.0, L)
+        NSI[j, NSI_IN] = cf
+        NSI[j, NSI_IN2] = cg
         a = e
         if k >= 0 and ts <= e:  # the schedule's switch (at once where overdue)
             hit = _coincide(ts, min(imp_arrival(tg, fch, CH_T[fch]), imp_arrival(tg, gch, CH_T[gch])))
-            code = int(RD[k, 1].real)
-            gap = NSF[j, 0]
-            NSF[j, 0] = 0.0
+            code = int(RD[k, RD_CODE].real)
+            gap = NSF[j, NSF_GAP]
+            NSF[j, NSF_GAP] = 0.0
             if code == LOG_SEP:
-                NSI[j, 3] = 0
+                NSI[j, NSI_CONTACT] = 0
                 if hit:  # a moving step set it off: the weld's last force, the gap's and the shank's
                     dt = _shift(tg, fch, CH_T[fch], gch, CH_T[gch], ts, math.nan)  # rates before it
                     if math.isnan(dt):
                         TCUR[TCUR_FAIL] = 3
                         return True
-                    fm = RD[k, 2].real
-                    gm = RD[k, 3].real
+                    fm = RD[k, RD_V1].real
+                    gm = RD[k, RD_V2].real
                     Nm = 2.0 * (ZR * fm + ZL * gm) / s
                     imp_emit(tg, 2 * j, e, Nm * dt, -Nm)
                     imp_emit(tg, 2 * j - 1, e, Nm * dt, -Nm)
-                    NSF[j, 0] = (2.0 * fm / ZL + 2.0 * gm / ZR) * dt
-                    NSF[j, 1] += ((2.0 * fm - Nm) / ZL + 2.0 * gm / ZR) * dt
+                    NSF[j, NSF_GAP] = (2.0 * fm / ZL + 2.0 * gm / ZR) * dt
+                    NSF[j, NSF_SHANK] += ((2.0 * fm - Nm) / ZL + 2.0 * gm / ZR) * dt
                     TCUR[TCUR_SEPS] += 1
             else:
-                gd = RD[k, 4].real
+                gd = RD[k, RD_V3].real
                 if hit:
                     TCUR[TCUR_FAIL] = 3
                     return True
@@ -309,34 +329,34 @@ def t_node_contact(ws, tg, t, t1):
                     TCUR[TCUR_FAIL] = 1
                     return True
                 dts = -gap / gd
-                Np = RD[k, 2].real
+                Np = RD[k, RD_V1].real
                 imp_emit(tg, 2 * j, e, -Np * dts, Np)
                 imp_emit(tg, 2 * j - 1, e, -Np * dts, Np)
-                NSF[j, 1] += -RD[k, 3].real * dts
-                NSI[j, 3] = 1
+                NSF[j, NSF_SHANK] += -RD[k, RD_V2].real * dts
+                NSI[j, NSI_CONTACT] = 1
             TCUR[TCUR_CONTACT] = k + 1
             dirty = True
             continue
         if ti <= e:  # impulses arriving now
             while imp_arrival(tg, fch, CH_T[fch]) <= e:
                 w, jp = imp_pop(tg, fch)
-                if NSI[j, 3] == 1:
+                if NSI[j, NSI_CONTACT] == 1:
                     imp_emit(tg, 2 * j, e, 2.0 * ZR / s * w, 2.0 * ZR / s * jp)
                     imp_emit(tg, 2 * j - 1, e, (ZR - ZL) / s * w, (ZR - ZL) / s * jp)
-                    NSF[j, 1] += 2.0 * w / s
+                    NSF[j, NSF_SHANK] += 2.0 * w / s
                 else:
                     imp_emit(tg, 2 * j - 1, e, -w, -jp)
-                    NSF[j, 0] += -2.0 * w / ZL
+                    NSF[j, NSF_GAP] += -2.0 * w / ZL
             while imp_arrival(tg, gch, CH_T[gch]) <= e:
                 w, jp = imp_pop(tg, gch)
-                if NSI[j, 3] == 1:
+                if NSI[j, NSI_CONTACT] == 1:
                     imp_emit(tg, 2 * j, e, (ZL - ZR) / s * w, (ZL - ZR) / s * jp)
                     imp_emit(tg, 2 * j - 1, e, 2.0 * ZL / s * w, 2.0 * ZL / s * jp)
-                    NSF[j, 1] += -2.0 * w / s
+                    NSF[j, NSF_SHANK] += -2.0 * w / s
                 else:
                     imp_emit(tg, 2 * j, e, -w, -jp)
-                    NSF[j, 0] += -2.0 * w / ZR
-                    NSF[j, 1] += -2.0 * w / ZR
+                    NSF[j, NSF_GAP] += -2.0 * w / ZR
+                    NSF[j, NSF_SHANK] += -2.0 * w / ZR
             continue
         if b >= t1:
             return True
@@ -365,8 +385,8 @@ def t_node_bit(ws, tg, t, t1):
         while True:
             br = BI[BI_BRANCH]
             ev = _next_event(RD, TCUR[TCUR_BIT], True)
-            TCUR[TCUR_BIT] = ev if ev >= 0 else int(RD[RD_HEAD, 0].real) + 1
-            ts = RD[ev, 0].real if ev >= 0 else INF
+            TCUR[TCUR_BIT] = ev if ev >= 0 else int(RD[RD_HEAD, RD_ROWS].real) + 1
+            ts = RD[ev, RD_T].real if ev >= 0 else INF
             ti = imp_arrival(tg, fch, CH_T[fch])
             e = max(min(b, ts, ti), a)
             L = e - a
@@ -391,7 +411,7 @@ def t_node_bit(ws, tg, t, t1):
                 a = e
             if ev >= 0 and ts <= e:  # the schedule's switch
                 hit = _coincide(ts, imp_arrival(tg, fch, CH_T[fch]))
-                nxt = int(RD[ev, 1].real) - LOG_BIT
+                nxt = int(RD[ev, RD_CODE].real) - LOG_BIT
                 if hit and not (m == 0.0 and br == LOAD and nxt == ELASTIC):
                     TCUR[TCUR_FAIL] = 3
                     return True
@@ -401,7 +421,7 @@ def t_node_bit(ws, tg, t, t1):
                         if math.isnan(dt):
                             TCUR[TCUR_FAIL] = 3
                             return True
-                        pd = RD[ev, 2].real
+                        pd = RD[ev, RD_V1].real
                         BS[BS_PMAX] += pd * dt
                         BS[BS_RMAX] = k * BS[BS_PMAX]
                         BS[BS_PPERM] = BS[BS_PMAX] - BS[BS_RMAX] / ku
@@ -554,19 +574,19 @@ def t_batch(ws, tg, template, slots, coefs, imps, out, ends, travel, om):
         TCUR[:] = 0
         ICH[:] = -1
         for r in range(imps.shape[0]):
-            if int(imps[r, 0]) == d:
-                imp_emit(tg, 2 * SZ.size, imps[r, 1], imps[r, 2], imps[r, 3])
+            if int(imps[r, IMP_DIR]) == d:
+                imp_emit(tg, 2 * SZ.size, imps[r, IMP_T], imps[r, IMP_W], imps[r, IMP_JUMP])
         t_run(ws, tg)
         if CI[CI_STATUS] != 0:
             return d, CI[CI_STATUS]
         heads = CHI[: 2 * n_p, CHI_HEAD].copy()
         piston_integrals((PF, PI, TK, TC, lam, BIN), heads, travel, CT[CT_T], om, out[d])
         impulse_integrals(tg, travel, CH_T, CT[CT_T], om, out[d])
-        ends[d, 0] = NSF[n_p, 1]
-        ends[d, 1] = NSF[n_p, 0]
-        ends[d, 2] = BS[BS_PPERM]
-        ends[d, 3] = TCUR[TCUR_SEPS]
-        ends[d, 4] = TCUR[TCUR_UNLOADS]
+        ends[d, END_SHANK] = NSF[n_p, NSF_SHANK]
+        ends[d, END_GAP] = NSF[n_p, NSF_GAP]
+        ends[d, END_PPERM] = BS[BS_PPERM]
+        ends[d, END_SEPS] = TCUR[TCUR_SEPS]
+        ends[d, END_UNLOADS] = TCUR[TCUR_UNLOADS]
     return coefs.shape[0], 0
 
 

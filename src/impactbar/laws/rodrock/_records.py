@@ -135,7 +135,61 @@ TCUR_SEPS = 5  # separations a moving step set off
 TCUR_UNLOADS = 6  # unloadings a moving step set off
 
 # -- RD: the switch log (complex) -------------------------------------------------------------------
-RD_HEAD = 0  # the header row: [RD_HEAD, 0] the rows written, [RD_HEAD, 1] 1 once full
+RD_HEAD = 0  # the header row: its RD_ROWS the rows written, its RD_FULL 1 once full
+
+# -- NSF, NSI: the nodes' state, a row each (0 the piston's far end, n_p the contact, J the bit) ---------
+NSF_GAP = 0  # the gap at the node (piston to shank at the contact; 0 while in contact)
+NSF_SHANK = 1  # the shank's displacement at the contact node
+NSF_COLS = 4
+NSI_IN = 0  # the cursor of the first wave in last loaded (f at a junction and the bit, g at the far end)
+NSI_IN2 = 1  # the cursor of the second wave in (g at a junction)
+NSI_DRIVE = 2  # the drive's cursor (the far end's row)
+NSI_CONTACT = 3  # 1 the node in contact (welded), 0 apart
+NSI_COLS = 4
+
+# -- RD's rows after its header: a switch each; its three values by the switch's code ---------------
+RD_ROWS = 0  # the header's count of rows written (RD[RD_HEAD, RD_ROWS])
+RD_FULL = 1  # the header's 1 once the log is full (RD[RD_HEAD, RD_FULL])
+RD_T = 0  # the switch's time
+RD_CODE = 1  # its code (LOG_SEP, LOG_RECON, LOG_BIT + the new branch of _exactloop)
+RD_V1 = 2  # its first value: a re-contact's force just after, a separation's f arriving, the bit's p'
+RD_V2 = 3  # its second: a re-contact's jump of the shank's velocity, a separation's g arriving
+RD_V3 = 4  # its third: a re-contact's gap rate just before
+RD_COLS = 6
+
+# -- RT, RC: the rock's branches' roots, a row per branch (LOAD, ELASTIC, FREE) -------------------
+RT_FIRST = 0  # the first root (the only one with a massless bit)
+RT_SECOND = 1  # the second (0 with a massless bit)
+RC_FIRST = 0  # the first root's index in the exponent table
+RC_SECOND = 1  # the second's
+
+# -- EP: the loading episodes, a row each ----------------------------------------------------------
+EP_TSTART = 0  # the episode's start time
+EP_TEND = 1  # its end time
+EP_PSTART = 2  # the penetration at its start
+EP_PEND = 3  # at its end
+EP_DISS = 4  # the work it dissipated in the rock
+EP_COLS = 5
+
+# -- STK: the branch and bound's stack of intervals (a piece's largest value, its first zero) ------
+STK_A = 0  # the interval's start
+STK_B = 1  # its end
+STK_FA = 2  # the piece's value at the start (a zero's search only)
+STK_FB = 3  # at the end
+STK_COLS = 4
+
+# -- IMP, END: the tangent batch's impulses sent and the end state of each direction ----------------
+IMP_DIR = 0  # the direction the impulse belongs to
+IMP_T = 1  # its time
+IMP_W = 2  # its weight
+IMP_JUMP = 3  # the primal's step it differentiates
+IMP_COLS = 4
+END_SHANK = 0  # the shank's displacement at the contact node
+END_GAP = 1  # the gap there
+END_PPERM = 2  # the rock's permanent penetration
+END_SEPS = 3  # separations a moving step set off
+END_UNLOADS = 4  # unloadings a moving step set off
+END_COLS = 5
 
 # -- WB, WN: the scratch blocks (each the coefficients B[e, d] and counts N[e] of one piece) -------
 BLOCKS = 16
@@ -174,6 +228,11 @@ CHI_HEAD = 1  # its receiver's cursor: the first piece not yet read (a history's
 ICH_TAIL = 0  # an impulse queue's last entry
 ICH_HEAD = 1  # its first entry not yet taken (-1: empty)
 
+# -- the tangent batch's ``out`` (K, n_p, M, 2): the piston's waves' integrals against its modes ------
+OUT_F = 0  # of the piston's wave F
+OUT_G = 1  # of its wave G
+OUT_COLS = 2
+
 # -- the chain's ends and the exponent table ------------------------------------------------------
 SEG_FAR = 0  # the piston's driven-end segment (SZ, ST count from the piston's far end)
 CH_FAR_OUT = 0  # the channel of the wave leaving the piston's far end (f of segment 1)
@@ -192,6 +251,12 @@ BIT_PMAX = 3  # p_max, the largest penetration
 BIT_RMAX = 4  # R_max = k p_max
 BIT_PPERM = 5  # p_perm = p_max - R_max/k_u
 BIT_WORK = 6  # the work done on the rock
+
+# -- BITREC: the bit's record, a row per step (float64) -----------------------------------------------
+BITREC_FORCE = 0  # the rock's force
+BITREC_PEN = 1  # the bit's penetration
+BITREC_COLS = 2
+JUNC_SHANK = 0  # the junction forces' first column (a column per junction): the shank's, piston on rod
 
 # -- BITP: the bit's parameters ``bp`` (float64) ------------------------------------------------------
 BITP_SIZE = 5

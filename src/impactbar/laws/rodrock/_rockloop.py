@@ -38,6 +38,8 @@ from ._records import (
     BITP_KU,
     BITP_MASS,
     BITP_Z,
+    BITREC_FORCE,
+    BITREC_PEN,
     CTRL_DT,
     CTRL_FA,
     CTRL_FREE,
@@ -317,8 +319,8 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
     Fn = np.empty(n_cells)
     Gn = np.empty(n_cells)
     b0, _ = _coeffs(bs, bp)
-    bitrec[0, 0] = b0 * bs[BIT_P]
-    bitrec[0, 1] = bs[BIT_P]
+    bitrec[0, BITREC_FORCE] = b0 * bs[BIT_P]
+    bitrec[0, BITREC_PEN] = bs[BIT_P]
     n_max = junc.shape[0]
     steps, ended = n_max, 0.0
     for step in range(n_max):
@@ -348,8 +350,8 @@ def blow_loop(F, G, Z, bounds, bs, bp, ctrl, drive, junc, bitrec, field, acc):
         for i in range(bounds.size):
             junc[step, i] = N[bounds[i] - 1]
         b, ref = _coeffs(bs, bp)
-        bitrec[step + 1, 0] = max(b * (bs[BIT_P] - ref), 0.0)
-        bitrec[step + 1, 1] = bs[BIT_P]
+        bitrec[step + 1, BITREC_FORCE] = max(b * (bs[BIT_P] - ref), 0.0)
+        bitrec[step + 1, BITREC_PEN] = bs[BIT_P]
         if field.shape[0] > 0:
             for j in range(n_cells):
                 field[step, j] = F[j] + G[j]

@@ -52,6 +52,7 @@ import numpy as np
 from ..._shared.schema import Field, Schema
 from . import _records as S
 from ._bit import _FREE, _LOAD, _Bit, _python_loop, feed_gain
+from ._records import BITREC_FORCE, BITREC_PEN, JUNC_SHANK
 from .grid import BlowGrid, _check_blow_size, blow_grid, first_free_step, incident_steps, whole_steps
 
 __all__ = ["Blow", "BlowGrid", "blow_grid", "rod_rock_blow", "solve_blow"]
@@ -474,7 +475,7 @@ def solve_blow(grid: BlowGrid, F, G, drive, k, k_u, bit_mass, feed, *, t_max, en
     F, G, junc, bitf, pen, fld, acc = _run(grid, F, G, drive, bit, n_max, stop, separation_time, gap,
                                            record_field)
     u_shank, grid_loss, ended, gap, drive_work = acc
-    shank = junc[:, 0]
+    shank = junc[:, JUNC_SHANK]
     n = shank.size
     e = (F * F + G * G) / Z * dt
     piston_e = float(np.sum(e[:n_p]))
@@ -589,7 +590,7 @@ def _compiled_loop(F, G, Z, bounds, bit, dt, n_max, stop, quiet, gap0, drive, re
     bit.p_perm, bit.work = bs[S.BIT_PPERM], bs[S.BIT_WORK]
     n = int(acc[S.ACC_STEPS])
     ended = ("t_max", "energy", "separated")[int(acc[S.ACC_ENDED])]
-    return (F, G, junc[:n], bitrec[:n + 1, 0], bitrec[:n + 1, 1], field[:n],
+    return (F, G, junc[:n], bitrec[:n + 1, BITREC_FORCE], bitrec[:n + 1, BITREC_PEN], field[:n],
             (float(acc[S.ACC_USHANK]), float(acc[S.ACC_LOSS]), ended, float(acc[S.ACC_GAP]),
              float(acc[S.ACC_WORK])))
 

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..base import DrivenContact, LawNotSupported
 from . import _records as S
+from ._records import JUNC_SHANK
 
 __all__ = ["driven_rock_contact", "causal_cells", "END_DELAY"]
 
@@ -88,7 +89,7 @@ def _steps(grid, F, G, bs, bp, gap, drive, record, bounds=None):
     gap_now, *switch = gap  # (the gap, the contact's switch: held, the arriving waves)
     ctrl = _loop_controls(grid.cell_time, -1.0, 0, float(gap_now), locate=grid.locate, switch=tuple(switch))
     blow_loop(F, G, grid.Z, bounds, bs, bp, ctrl, np.ascontiguousarray(drive), junc, bitrec, field, acc)
-    return acc[[S.ACC_GAP, S.ACC_HELD, S.ACC_FA, S.ACC_GA]], field, float(junc[-1, 0])
+    return acc[[S.ACC_GAP, S.ACC_HELD, S.ACC_FA, S.ACC_GA]], field, float(junc[-1, JUNC_SHANK])
 
 
 def end_window(grid) -> float:

@@ -85,6 +85,7 @@ from ._exactresume import _resumed, _run, pool_bytes
 from ._records import (  # the pool's columns and the channels' lists
     CHI_HEAD,
     CHI_TAIL,
+    NSI_CONTACT,
     PF_INT,
     PF_REF,
     PF_START,
@@ -299,7 +300,7 @@ def exact_blow(piston_times, piston_impedances, rod_times, rod_impedances, *, k,
     nr = 2 if m > 0.0 else 1
     RT = np.zeros((3, 2), dtype=complex)
     RC = np.zeros((3, 2), dtype=np.int64)
-    RD = np.zeros((1 + _log, 6), dtype=complex)  # the switch log (_exactloop), _log rows
+    RD = np.zeros((1 + _log, S.RD_COLS), dtype=complex)  # the switch log (_exactloop), _log rows
     i = 0
     for br in range(3):
         for q in range(nr):
@@ -516,20 +517,20 @@ def _workspace(T, Z, n_p, Vn, fn, k, k_u, lam, PR, RT, RC, RD, pcap, tcap, ecap,
     BIN = _binomials()
     WB = np.zeros((S.BLOCKS, lam.size, P.DC), dtype=complex)
     WN = np.zeros((S.BLOCKS, lam.size), dtype=np.int64)
-    STK = np.zeros((256, 4))
+    STK = np.zeros((256, S.STK_COLS))
     SZ = Z.astype(float)
     ST = T.astype(float)
-    NSF = np.zeros((J + 1, 4))
-    NSI = np.full((J + 1, 4), -1, dtype=np.int64)
-    NSI[:, 3] = 0
-    NSI[n_p, 3] = 1  # in contact at impact
+    NSF = np.zeros((J + 1, S.NSF_COLS))
+    NSI = np.full((J + 1, S.NSI_COLS), -1, dtype=np.int64)
+    NSI[:, NSI_CONTACT] = 0
+    NSI[n_p, NSI_CONTACT] = 1  # in contact at impact
     BS = np.zeros(S.BS_SIZE)
     p0 = fn / k
     BS[S.BS_P], BS[S.BS_X], BS[S.BS_W] = p0, p0, 0.0
     BS[S.BS_PMAX], BS[S.BS_RMAX], BS[S.BS_PPERM] = p0, fn, p0 - fn / k_u
     BS[S.BS_PSTART], BS[S.BS_TPMAX], BS[S.BS_EPT], BS[S.BS_EPP] = p0, 0.0, 0.0, p0
     BI = np.zeros(S.BI_SIZE, dtype=np.int64)
-    EP = np.zeros((ecap, 5))
+    EP = np.zeros((ecap, S.EP_COLS))
     CI = np.zeros(S.CI_SIZE, dtype=np.int64)
     CT = np.zeros(S.CT_SIZE)
     CT[S.CT_TACC] = math.nan  # (no energy pass yet)

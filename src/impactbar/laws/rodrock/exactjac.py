@@ -27,6 +27,14 @@ from ._records import (  # the records' slots and the pool's columns
     CNT_PIECES,
     CNT_TERMS,
     CT_T,
+    END_COLS,
+    END_GAP,
+    END_PPERM,
+    END_SEPS,
+    END_SHANK,
+    IMP_COLS,
+    NSF_GAP,
+    NSF_SHANK,
     PI_COUNT,
     PI_TERMS,
     PR_DRIVEN,
@@ -40,6 +48,7 @@ from ._records import (  # the records' slots and the pool's columns
     PR_RECORD,
     PR_WINDOW,
     PR_ZBIT,
+    RD_FULL,
     RD_HEAD,
     TCUR_SIZE,
     WS_BS,
@@ -70,7 +79,7 @@ def _primal(bmap, q, v):
     while True:
         ws, scale = bmap.solve(q, v, lean=True, log=rows)
         RD, CI = ws[WS_RD], ws[WS_CI]
-        if RD[RD_HEAD, 1].real == 0.0:
+        if RD[RD_HEAD, RD_FULL].real == 0.0:
             break
         rows *= 4
     if CI[CI_GIVEUP] != 0:
@@ -86,7 +95,7 @@ def _plus(bmap, ws, scale):
     PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam = ws[:9]
     NSF, BS = ws[WS_NSF], ws[WS_BS]
     n_p = bmap.basis.travel.size
-    end = bmap._end(scale * NSF[n_p, 1], scale * NSF[n_p, 0], scale * BS[BS_PPERM])
+    end = bmap._end(scale * NSF[n_p, NSF_SHANK], scale * NSF[n_p, NSF_GAP], scale * BS[BS_PPERM])
     qa, va = project(bmap.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[WS_CT][CT_T]), end)
     over = float(bmap.basis.end_weights @ qa)
     if over > 0.0:
@@ -156,7 +165,7 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
     pieces = list(waves) + ([] if drive is None else list(drive_pieces))
     coefs = np.ascontiguousarray(np.concatenate([c for _, _, c in pieces], axis=-1) / scales[:, None])
     imps = np.array([(d, t, w / scales[d], jump / primal_scale) for d in range(K) for t, w, jump in
-                     impulses[d]], dtype=float).reshape(-1, 4)
+                     impulses[d]], dtype=float).reshape(-1, IMP_COLS)
 
     def ones(x):  # every term a slot of the template
         return [(e, d, np.ones(c.shape[-1], dtype=complex)) for e, d, c in x]
@@ -185,7 +194,7 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
         tg = (np.zeros(icap), np.zeros(icap), np.zeros(icap), np.zeros(icap, dtype=np.int64),
               np.full((3 * J + 2, 2), -1, dtype=np.int64), np.zeros(TCUR_SIZE, dtype=np.int64))
         out = np.zeros((K, n_p, M, 2), dtype=complex)
-        ends = np.zeros((K, 5))
+        ends = np.zeros((K, END_COLS))
         _, status = TG.t_batch(wt, tg, template, slots, coefs, imps, out, ends, travel, om)
         if status == 0:
             break
@@ -196,11 +205,11 @@ def tangents(bmap, ws, primal_scale, waves, drive=None, impulses=None, on_stop=F
         else:
             icap *= 4
     out *= scales[:, None, None, None]
-    ends[:, :3] *= scales[:, None]
-    dq, dv = modal_state(basis, out, bmap._end(ends[:, 0], ends[:, 1], ends[:, 2]))
+    ends[:, :END_SEPS] *= scales[:, None]
+    dq, dv = modal_state(basis, out, bmap._end(ends[:, END_SHANK], ends[:, END_GAP], ends[:, END_PPERM]))
     if on_stop:
         dq[:, 0] -= dq @ basis.end_weights
-    return dq, dv, ends[:, 3:].astype(int)
+    return dq, dv, ends[:, END_SEPS:].astype(int)
 
 
 def _time_direction(bmap):

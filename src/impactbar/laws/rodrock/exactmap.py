@@ -52,6 +52,10 @@ from ._records import (  # the records' slots
     CNT_PIECES,
     CNT_TERMS,
     CT_T,
+    NSF_GAP,
+    NSF_SHANK,
+    OUT_F,
+    OUT_G,
     WS_BI,
     WS_BS,
     WS_CNT,
@@ -341,8 +345,8 @@ def _projection_matrix(basis: ModalBasis):
 
 def _modal_of(basis: ModalBasis, out, end_position):
     """:func:`modal_state` by the projections' formulas (the module's text)."""
-    Im = out[..., 0] - out[..., 1]  # int (F - G) e^{i w theta}, shape (..., P, M)
-    Ip = out[..., 0] + out[..., 1]  # int (F + G) e^{i w theta}
+    Im = out[..., OUT_F] - out[..., OUT_G]  # int (F - G) e^{i w theta}, shape (..., P, M)
+    Ip = out[..., OUT_F] + out[..., OUT_G]  # int (F + G) e^{i w theta}
     a, b = basis.a.T, basis.b.T  # (P, M)
     M = basis.omega.size
     v = np.empty(out.shape[:-3] + (M,))
@@ -506,7 +510,7 @@ class ExactBlowMap:
         PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam = ws[:9]
         NSF, BS = ws[WS_NSF], ws[WS_BS]
         n_p = self.basis.travel.size
-        end = self._end(scale * NSF[n_p, 1], scale * NSF[n_p, 0], scale * BS[BS_PPERM])
+        end = self._end(scale * NSF[n_p, NSF_SHANK], scale * NSF[n_p, NSF_GAP], scale * BS[BS_PPERM])
         qa, va = project(self.basis, (scale, (PF, PI, TK, TC, CHI, lam, None)), float(ws[WS_CT][CT_T]), end)
         return np.concatenate((self._on_stop(qa), va))
 

@@ -9,7 +9,10 @@ import math
 
 import numpy as np
 
-from ._records import CHI_HEAD  # the channels' lists
+from ._records import (
+    CHI_HEAD,  # the channels' lists
+    JUNC_SHANK,
+)
 from .exact import MAX_PIECES, MAX_WINDOWS, exact_blow
 from .exactresult import _eval_channel
 
@@ -121,7 +124,7 @@ def blow_from_exact(ex, s, lengths, travel, piston_lengths, samples_per_piston=3
         fld, edges = _field(ex, np.concatenate((p_len / s, travel)), np.concatenate((p_len, lengths)),
                             (*p_cells, *seg_cells), mid)
     return Blow(
-        times=times, shank_forces=junc[:, 0].copy(), junction_forces=junc,
+        times=times, shank_forces=junc[:, JUNC_SHANK].copy(), junction_forces=junc,
         bit_forces=bit, penetrations=pen, field=fld,
         energy_at_impact=ex.energy_at_impact, feed_work=ex.feed_work,
         available_energy=ex.available_energy, work_on_rock=ex.work_on_rock + ex.rock_energy,

@@ -15,7 +15,17 @@ from . import _exactloop as K
 from . import _exactpieces as P
 from . import _records as S
 from ._bit import feed_gain
-from ._records import CHI_HEAD, PF_START, PI_COUNT, PI_NEXT  # the pool's columns, the channels' lists
+from ._records import (  # columns by name
+    CHI_HEAD,
+    EP_DISS,
+    EP_PEND,
+    EP_PSTART,
+    NSF_GAP,
+    NSF_SHANK,
+    PF_START,
+    PI_COUNT,
+    PI_NEXT,
+)
 
 __all__ = ["CERTIFIED", "ExactBlow"]
 
@@ -254,8 +264,8 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
     br = int(BI[S.BI_BRANCH])
     p = BS[S.BS_P]
     R = k * BS[S.BS_X] if br == P.LOAD else (k_u * BS[S.BS_X] if br == P.ELASTIC else 0.0)
-    xs = NSF[n_p, 1]
-    gap = NSF[n_p, 0]
+    xs = NSF[n_p, NSF_SHANK]
+    gap = NSF[n_p, NSF_GAP]
     E0 = PR[S.PR_E0]  # the piston's energy at impact (0.5 Mp Vn^2 for a rigid piston)
     drive_work = BS[S.BS_DRIVEW]
     feed_work = fn * xs
@@ -279,8 +289,8 @@ def _result(ws, scale, Tp, Zp, Tr, Zr, k, k_u, m, fn, Vn, Mp, C_rod, lam, record
         rem = CT[S.CT_PSI] + (Ep if ended != "may_yield" else 0.0)
         unc = rem * feed_gain(BS[S.BS_RMAX], fn) / available
     s2 = scale * scale
-    loads[:, 2:4] *= scale
-    loads[:, 4] *= s2
+    loads[:, EP_PSTART:EP_PEND + 1] *= scale
+    loads[:, EP_DISS] *= s2
     lamk = np.array([k, k_u, 0.0])
     # the pieces kept, not the pool's capacity (megabytes)
     npc, nt = int(CNT[S.CNT_PIECES]), int(CNT[S.CNT_TERMS])

@@ -15,6 +15,7 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
+from ..._shared.columns import IV_HI, IV_LO
 from ...dynamics.invariants import PistonInvariants
 from ...loads.abilities import jumps
 from . import _window as KW
@@ -440,7 +441,7 @@ class _Contact:
                 th, on, start = th_re, True, th_re
         self.contact = np.array(contact, dtype=float).reshape(-1, 2)
         self.grid, self.Ag = grid, Ag
-        last_end = self.contact[-1, 1] if len(self.contact) else 0.0
+        last_end = self.contact[-1, IV_HI] if len(self.contact) else 0.0
         self.gap_theta = 0.0 if last_end >= 2.0 else float(self.Acum(last_end)[0] - self.Acum(2.0)[0])
         return self
 
@@ -472,8 +473,8 @@ class _Contact:
         s, R = self.s, self.R
         free = []
         c = self.contact
-        ends = np.concatenate(([0.0], c.ravel(), [2.0]))
-        for a, b in zip(ends[0::2], ends[1::2], strict=True):  # the gaps between contact intervals
+        gaps = np.concatenate(([0.0], c.ravel(), [2.0])).reshape(-1, 2)  # the gaps between contact intervals
+        for a, b in zip(gaps[:, IV_LO], gaps[:, IV_HI], strict=True):
             if b > a:
                 free.append((a, b))
         if not free:  # held throughout: no gap
@@ -532,7 +533,7 @@ class _Contact:
         c = np.minimum(self.contact, th_end)
         if not len(c):
             return 0.0
-        return 0.5 * (1.0 + self.R) * float(np.sum(self.Acum(c[:, 1]) - self.Acum(c[:, 0])))
+        return 0.5 * (1.0 + self.R) * float(np.sum(self.Acum(c[:, IV_HI]) - self.Acum(c[:, IV_LO])))
 
     def drive_work(self, th_end=2.0):
         """``int p u_t(0) dt`` up to ``th_end``, ``u_t(0) = beta(0) + p/s``."""
@@ -575,7 +576,7 @@ class _Contact:
         Fs = self.force(side)
         if Fs.size:
             fmax = max(fmax, float(Fs.max()))
-        full = len(self.contact) == 1 and self.contact[0, 0] == 0.0 and self.contact[0, 1] >= 2.0
+        full = len(self.contact) == 1 and self.contact[0, IV_LO] == 0.0 and self.contact[0, IV_HI] >= 2.0
         if not full:
             return fmax, 0.0
         k = int(np.argmin(F))
@@ -664,12 +665,12 @@ class _Contact:
     def gap_at(self, th):
         """Gap between the piston end and the rod end at ``th`` (in ``theta`` units: divide by s)."""
         c = self.contact
-        if len(c) == 0 or th <= c[0, 1]:
+        if len(c) == 0 or th <= c[0, IV_HI]:
             return 0.0
-        k = np.searchsorted(c[:, 0], th, side="right") - 1
-        if th <= c[k, 1]:
+        k = np.searchsorted(c[:, IV_LO], th, side="right") - 1
+        if th <= c[k, IV_HI]:
             return 0.0
-        return float(self.Acum(c[k, 1])[0] - self.Acum(th)[0])
+        return float(self.Acum(c[k, IV_HI])[0] - self.Acum(th)[0])
 
     def state_at(self, th):
         """Modal state (projected) at ``th``, positions from the rod end's current position.

@@ -18,6 +18,7 @@ import math
 import numba
 import numpy as np
 
+from ..._shared.columns import IV_HI, IV_LO
 from ...dynamics.compiled import CACHE, TWO_PI, load_value, propagate_views, sort_head
 from ...dynamics.compiled_views import LoadKernelView, ModalBasisView
 from ._window import _window_moments, scan_step, window_jumps
@@ -371,8 +372,8 @@ def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
             if nc >= contact.shape[0]:
                 return -1
             if k == ng:
-                contact[nc, 0] = start
-                contact[nc, 1] = 2.0
+                contact[nc, IV_LO] = start
+                contact[nc, IV_HI] = 2.0
                 nc += 1
                 th = 2.0
                 break
@@ -385,8 +386,8 @@ def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
                     th_sep, ok = _brent(np.int64(0), 0.0, a, b, npi, win, acum1, lo, grid[k])
                     if not ok:
                         return -1
-            contact[nc, 0] = start
-            contact[nc, 1] = th_sep
+            contact[nc, IV_LO] = start
+            contact[nc, IV_HI] = th_sep
             nc += 1
             th = th_sep
             on = False
@@ -410,7 +411,7 @@ def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
                 if not found:  # no gap opened: contact goes on
                     if nc > 0:
                         nc -= 1
-                        start = contact[nc, 0]
+                        start = contact[nc, IV_LO]
                     else:
                         start = 0.0
                     on = True
@@ -442,8 +443,8 @@ def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
     dv = np.zeros(M)
     dse = np.zeros(M)
     for i in range(nc + 1):  # the gaps between the contact intervals
-        ga_ = 0.0 if i == 0 else contact[i - 1, 1]
-        gb_ = 2.0 if i == nc else contact[i, 0]
+        ga_ = 0.0 if i == 0 else contact[i - 1, IV_HI]
+        gb_ = 2.0 if i == nc else contact[i, IV_LO]
         if gb_ <= ga_:
             continue
         lo, hi = ga_, min(gb_, 1.0)
@@ -457,7 +458,7 @@ def wave_contact(load_t, s, R, rate, t0, q, v, gl_x, gl_w, qa, va, contact):
         if n > 0:
             qa[n] -= dse[n] / (s * npi[n])
     gap = 0.0
-    last_end = contact[nc - 1, 1] if nc > 0 else 0.0
+    last_end = contact[nc - 1, IV_HI] if nc > 0 else 0.0
     if last_end < 2.0:
         gap = (_Acum(a, b, npi, win, acum1, last_end)
                - _Acum(a, b, npi, win, acum1, 2.0))

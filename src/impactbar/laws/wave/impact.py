@@ -29,6 +29,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..._shared.columns import IV_HI
 from ...dynamics.compiled_views import FOURIER, PIECEWISE
 from ...dynamics.implementations import use_fast
 from . import _window as KW
@@ -388,7 +389,7 @@ class WaveImpact:
         """Number of times contact was lost inside the window."""
         c = self.contact
         n = len(c)
-        return n - 1 + int(n > 0 and c[-1, 1] < self.duration * (1 - 1e-14))
+        return n - 1 + int(n > 0 and c[-1, IV_HI] < self.duration * (1 - 1e-14))
 
     def force(self, t) -> np.ndarray:
         """Interface force ``F(t)`` (the transmitted wave's force at the rod end), shape of ``t``,
