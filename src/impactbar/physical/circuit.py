@@ -601,7 +601,8 @@ class CircuitDrifterOrbit(DrifterOrbit):
         """The pressures (Pa), the valve opening and the chambers' volumes (m^3) over one period,
         from the impact: ``t_s``, ``p_f_Pa``, ``p_r_Pa``, ``p_s_Pa``, ``x_v``, ``gap_m``, ``V_f_m3``,
         ``V_r_m3`` at ``points`` times; with parts (``[parts.<name>]``) each part's node's pressure
-        ``p_<name>_Pa`` and each part's flow from its source to its target ``q_<name>_m3_s``
+        ``p_<name>_Pa`` (a spool valve's velocity ``v_<name>_m_s``) and each part's flow from its
+        source to its target ``q_<name>_m3_s``
         (:func:`~impactbar.drives.circuit.part_flows.part_flows`)."""
         from ..drives.circuit.part_flows import part_flows
 
@@ -626,7 +627,10 @@ class CircuitDrifterOrbit(DrifterOrbit):
                 w[sel] = p.displacement(t[sel]) if hasattr(p, "displacement") else \
                     -(o.model.drive_weights[:M] @ q)
         P, V = PRESSURE_SCALE, d.volume_scale_m3
-        nodes = {f"{name}_Pa": z[L[name]] * P for p in dr.extra_parts for name in p.symbols}
+        speed = d.bar.length_m * d.omega_rad_s  # (a mechanical node's value is a velocity)
+        nodes = {f"{name}_m_s" if node in L.mechanical else f"{name}_Pa":
+                 z[L[name]] * (speed if node in L.mechanical else P)
+                 for p in dr.extra_parts for node, name in zip(p.nodes, p.symbols, strict=True)}
         flows = {f"{k}_m3_s": v * d.flow_scale_m3_s for k, v in part_flows(dr, z, -q0).items()}
         return {"t_s": (t - t0) / d.omega_rad_s, "p_f_Pa": z[L["p_f"]] * P, "p_r_Pa": z[L["p_r"]] * P,
                 "p_s_Pa": z[L["p_s"]] * P, "x_v": z[L["x_v"]], "gap_m": -q0 * d.bar.length_m,
