@@ -87,3 +87,52 @@ def test_the_waves_at_the_bit_are_the_blows(blow):
     peak = max(np.max(np.abs(toward)), np.max(np.abs(away)))
     assert np.max(np.abs(w.toward - toward)) < 1e-9 * peak
     assert np.max(np.abs(w.away - away)) < 1e-9 * peak
+
+
+@pytest.fixture(scope="module")
+def heavy_bit():
+    """The same rod with a bit of mass 0.3 (a third of the piston's) between the rod's end and the
+    rock: the force at the rod's end is the rock's plus the bit's inertia, no longer the rock's."""
+    b = exact_blow([1.0], [1.0], [0.3, 1.5, 0.1, 0.1], [1.2, Z, Z, Z], k=3.0, k_u=6.0, bit_mass=0.3,
+                   impact_velocity=1.0)
+    dt = 1e-3
+    t = (np.arange(int(round(b.duration / dt))) + 0.5) * dt
+    strain = {x: -b.junction_force(j, t) / Z for x, j in ((0.1, 4), (0.2, 3))}
+    return b, t, strain
+
+
+def test_the_waves_at_a_heavy_bit_give_its_velocity_and_its_momentum(heavy_bit):
+    """Separated without noise, the waves' difference is the bit's velocity (the central difference
+    of its exact penetration) to 1e-9 of its peak (2e-10 measured); their sum, the force at the rod's
+    end, less the rock's force, integrated over the blow, is the bit's momentum ``m v`` to 1e-3 of its
+    peak (the trapezoid at the samples' step, 1e-3, across the waves' fronts: 5.9e-4 measured)."""
+    b, t, strain = heavy_bit
+    w = separate_two_point(t, strain[0.1], strain[0.2], 0.1, 0.2, ROD)
+    bit = end_history(w, ROD)
+    v = (b.penetration(w.time + 1e-6) - b.penetration(w.time - 1e-6)) / 2e-6
+    assert np.max(np.abs(bit.velocity - v)) < 1e-9 * np.max(np.abs(v))
+    net = bit.force - b.bit_force(w.time)  # the bit's inertia, m v'
+    assert np.max(np.abs(net)) > 0.5 * np.max(bit.force)  # (no massless bit in disguise)
+    momentum = np.concatenate(([0.0], np.cumsum(0.5 * (net[1:] + net[:-1]) * np.diff(w.time))))
+    assert np.max(np.abs(momentum - 0.3 * (v - v[0]))) < 1e-3 * 0.3 * np.max(np.abs(v))
+
+
+def test_both_waves_at_a_heavy_bit_with_one_percent_noise(heavy_bit):
+    """1 % white noise (of the peak strain) on each gauge, low-passed at 0.8 of the first failing
+    frequency: each separated wave within 5 % of the peak of the noise-free waves low-passed the same
+    way (the worst of 5 seeds 4.0 %), and the noise visible in each (over 1 %); against the unfiltered
+    waves the filter's rounding of the fronts dominates (some 50 %), as the noise-free run shows."""
+    b, t, strain = heavy_bit
+    cutoff = 0.8 / (2 * 0.1)
+    clean = separate_two_point(t, strain[0.1], strain[0.2], 0.1, 0.2, ROD, cutoff=cutoff)
+    exact = separate_two_point(t, strain[0.1], strain[0.2], 0.1, 0.2, ROD)
+    peak = max(np.max(np.abs(exact.toward)), np.max(np.abs(exact.away)))
+    assert np.max(np.abs(clean.toward - exact.toward)) > 0.3 * peak  # (the fronts rounded)
+    rng = np.random.default_rng(0)
+    size = np.max(np.abs(strain[0.1]))
+    for _ in range(5):
+        near, far = (strain[x] + 0.01 * size * rng.standard_normal(t.size) for x in (0.1, 0.2))
+        noisy = separate_two_point(t, near, far, 0.1, 0.2, ROD, cutoff=cutoff)
+        for wave in ("toward", "away"):
+            error = np.max(np.abs(getattr(noisy, wave) - getattr(clean, wave)))
+            assert 0.01 * peak < error < 0.05 * peak, wave
