@@ -79,7 +79,25 @@ def solver_settings(settings, forcing, drive_solver: bool) -> dict:
     return {"settings": settings}
 
 
-class ClosedPiece:
+class ModalEnd:
+    """The struck end's displacement and velocity of a piece from its modal state: ``modal(t)`` gives
+    ``(q, v)``, shapes ``(M, k)``, and ``c`` the end's weights, shape ``(M,)``; the end's displacement
+    ``c . q`` is at most 0, the stop (theory §2). A flight's pieces share it."""
+
+    __slots__ = ()
+
+    def end_displacement(self, t):
+        """The end's displacement at the times ``t``, shape ``(k,)``: ``min(c . q, 0)``."""
+        q, _ = self.modal(t)
+        return np.minimum(self.c @ q, 0.0)
+
+    def end_velocity(self, t):
+        """The end's velocity at the times ``t``, shape ``(k,)``: ``c . v``."""
+        _, v = self.modal(t)
+        return self.c @ v
+
+
+class ClosedPiece(ModalEnd):
     """A flight under a constant force ``p`` from ``(q, v)`` at ``t0``, to ``t_end``, in closed form
     (eq. 8)."""
 
@@ -103,16 +121,8 @@ class ClosedPiece:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         return np.repeat(np.asarray(self.z, dtype=float)[:, None], t.size, axis=1)
 
-    def end_displacement(self, t):
-        q, _ = self.modal(t)
-        return np.minimum(self.c @ q, 0.0)
 
-    def end_velocity(self, t):
-        _, v = self.modal(t)
-        return self.c @ v
-
-
-class OdePiece:
+class OdePiece(ModalEnd):
     """A flight of a drive with state, by ``solve_ivp``'s dense output from ``t0`` to ``t_end``;
     ``p(q, v, z)`` the drive's force in the flight's mode."""
 
@@ -139,14 +149,6 @@ class OdePiece:
 
     def drive_state(self, t):
         return self._y(t)[2 * self.M:]
-
-    def end_displacement(self, t):
-        q, _ = self.modal(t)
-        return np.minimum(self.c @ q, 0.0)
-
-    def end_velocity(self, t):
-        _, v = self.modal(t)
-        return self.c @ v
 
 
 class RestPiece:

@@ -10,14 +10,14 @@ import numpy as np
 
 from .._shared.status import RunStatus
 from ..drives.base import DriveState
-from ..drives.flight import END, EVENT, fly
+from ..drives.flight import END, EVENT, ModalEnd, fly
 from ..laws.abilities import CoupledBlow, require
 
 __all__ = ["BlowPiece", "check_coupling", "check_blow_switches", "driven_blow", "run_coupled",
            "PRESSED_BLOWS"]
 
 
-class BlowPiece:
+class BlowPiece(ModalEnd):
     """A blow of a run under a drive with state and a law whose contact takes time (theory §11, "The
     coupled blow"): the law's record of the blow (solved with the drive's force as it evolved) and
     the drive's pieces over it; a piece of :attr:`SwitchedTrajectory.pieces` like the flights.
@@ -152,14 +152,6 @@ class BlowPiece:
             else:
                 Q[:, i], V[:, i] = self.record.state_at(min(tt - self.t0, self.record.duration))
         return Q, V
-
-    def end_displacement(self, t):
-        q, _ = self.modal(t)
-        return np.minimum(self.c @ q, 0.0)
-
-    def end_velocity(self, t):
-        _, v = self.modal(t)
-        return self.c @ v
 
 
 #: more blows than this, each starting at once where the last ended (the piston pressed on the stop

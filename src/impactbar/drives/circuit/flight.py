@@ -49,7 +49,7 @@ import threading
 import numpy as np
 
 from ..base import DriveState, FlightSettings
-from ..flight import ARRIVAL, END, EVENT, Flight
+from ..flight import ARRIVAL, END, EVENT, Flight, ModalEnd
 from . import _field as K
 from . import _magnus
 from .settings import DEFAULT_SETTINGS, CircuitFlightSettings, circuit_settings
@@ -102,7 +102,7 @@ class HermiteSteps:
         return float(self.y[-1, self._energy_start + self.layout.energy["piston"]])
 
 
-class CircuitPiece(HermiteSteps):
+class CircuitPiece(HermiteSteps, ModalEnd):
     """A flight of the circuit: the steps of the integration (exact to the integrator's tolerance
     at each step) and a cubic Hermite interpolant between them (the vector field at each step).
 
@@ -174,14 +174,6 @@ class CircuitPiece(HermiteSteps):
     def _energy_start(self):
         """Where the energy terms start in a row of ``y`` (after ``q, v, z``)."""
         return self.layout.size(self.M)
-
-    def end_displacement(self, t):
-        q, _ = self.modal(t)
-        return np.minimum(self.c @ q, 0.0)
-
-    def end_velocity(self, t):
-        _, v = self.modal(t)
-        return self.c @ v
 
 
 #: The most steps of one flight (CVODE's ``max_num_steps``). A settling flight of a piston of 16 modes
