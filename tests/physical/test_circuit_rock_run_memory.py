@@ -110,3 +110,11 @@ def test_the_histories_inside_a_summarised_blow_are_refused(runs):
         bare["run"].drive_state([t])
     with pytest.raises(ValueError, match="histories=False"):
         s.force([t])
+
+
+def test_histories_must_be_a_bool():
+    from impactbar import BarModel, CosineLoad, InitialState, simulate
+
+    model = BarModel(s=10.0, d=0.05, R=0.5, n_modes=2)
+    with pytest.raises(ValueError, match="histories must be True or False"):
+        simulate(model, CosineLoad(0.3, 1.0), InitialState.rigid(-0.01, 0.0, n_modes=2), 1.0, histories="no")

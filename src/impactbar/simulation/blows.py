@@ -191,7 +191,7 @@ class BlowSummary(BlowPiece):
         self.t0, self.t_end, self.record, self.arrival = piece.t0, piece.t_end, piece.record, piece.arrival
         self.c, self._end_state = piece.c, piece._end_state
         parts = piece.drive_pieces
-        self.layout = getattr(parts[0], "layout", None) if parts else None
+        self.layout = getattr(next(iter(parts), None), "layout", None)
 
         def every(name):
             return bool(parts) and all(hasattr(p, name) for p in parts)
