@@ -339,7 +339,8 @@ class CircuitDrifter(_ScaledDrifter):
             ``impact_times_s``, ``impact_velocities_m_s`` (arrays), ``histories`` (``t_s`` and the
             pressures ``p_f_Pa``, ``p_r_Pa``, ``p_s_Pa``, the valve opening ``x_v``, the gap
             ``gap_m``; ``None`` with ``histories=False``, which saves most of the time a run of the
-            drifter on the rock takes) and ``run`` (the dimensionless
+            drifter on the rock takes, and most of its memory: each blow of ``run`` is then kept as
+            its :class:`~impactbar.simulation.blows.BlowSummary`) and ``run`` (the dimensionless
             :class:`~impactbar.SwitchedTrajectory`); with a drill string also ``work_on_rock_J`` and
             ``penetration_mm`` (arrays, per blow).
 
@@ -352,7 +353,7 @@ class CircuitDrifter(_ScaledDrifter):
 
         dur, L, om, start = _rigid_start(self, duration_s, start_gap_m, start_velocity_m_s)
         drive = self.drive()
-        run = simulate(self.model(), drive, start, dur * om)
+        run = simulate(self.model(), drive, start, dur * om, histories=histories)
         _refuse_cavitation(_least_pressures(run.pieces), f"the run of {dur:g} s")
         hist = None
         if histories:

@@ -27,7 +27,7 @@ def _impacts(machine, duration_s: float):
     from .circuit import CircuitDrifter
 
     if isinstance(machine, CircuitDrifter):
-        run = machine.simulate(duration_s, histories=False)  # (the impacts alone)
+        run = machine.simulate(duration_s, histories=False)  # (the impacts alone: each blow summarised)
         return np.asarray(run["impact_times_s"], float), np.asarray(run["impact_velocities_m_s"], float)
     tr, _ = machine.simulate(duration_s)
     om, length = machine.omega_rad_s, machine.bar.length_m

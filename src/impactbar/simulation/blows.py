@@ -13,7 +13,7 @@ from ..drives.base import DriveState
 from ..drives.flight import END, EVENT, ModalEnd, fly
 from ..laws.abilities import CoupledBlow, require
 
-__all__ = ["BlowPiece", "check_coupling", "check_blow_switches", "driven_blow", "run_coupled",
+__all__ = ["BlowPiece", "BlowSummary", "check_coupling", "check_blow_switches", "driven_blow", "run_coupled",
            "PRESSED_BLOWS"]
 
 
@@ -154,6 +154,122 @@ class BlowPiece(ModalEnd):
         return Q, V
 
 
+class BlowSummary(BlowPiece):
+    """A blow of a run that keeps no histories (:func:`impactbar.simulate` with ``histories=False``):
+    a :class:`BlowPiece` less the drive's pieces over it, which hold the integrator's steps and their
+    interpolants (under the rod-rock law some hundred pieces a blow, about 1.5 MB: a chattering
+    drifter's run of 16 s grew past 6.5 GB, every contact a blow). What a run reads of a blow after it
+    ends stays: the law's record (the impact's figures, the account, the modal state), the drive's
+    energy quadratures and its work on the piston to :attr:`t_end`, and the least and the greatest
+    value of each of the drive's state components over the blow (the pieces' extremes, the same
+    numbers: a circuit's least pressures). The histories inside the blow (:meth:`drive_state`,
+    :meth:`force`, :meth:`displacement`) are refused. Source: theory §11, "The coupled blow".
+
+    Parameters
+    ----------
+    piece : BlowPiece
+        The blow, with its drive's pieces.
+
+    Attributes
+    ----------
+    layout : object or None
+        The drive pieces' layout (a circuit's :class:`~impactbar.drives.circuit.CircuitLayout`: the
+        names :meth:`extremes` takes), ``None`` where they have none.
+    """
+
+    __slots__ = ("layout", "_lows", "_highs", "_energies", "_work")
+
+    def __init__(self, piece: BlowPiece):
+        self.t0, self.t_end, self.record, self.arrival = piece.t0, piece.t_end, piece.record, piece.arrival
+        self.c, self._end_state = piece.c, piece._end_state
+        parts = piece.drive_pieces
+        self.layout = getattr(next(iter(parts), None), "layout", None)
+
+        def every(name):
+            return bool(parts) and all(hasattr(p, name) for p in parts)
+
+        self._energies = piece.energies() if every("energies") and every("energies_at") else None
+        self._work = piece.piston_work() if every("piston_work") and every("piston_work_at") else None
+        self._lows = self._highs = None
+        states = getattr(self.layout, "n_states", 0)
+        if states and every("extremes"):
+            lo, hi = zip(*(piece.extremes(k) for k in range(states)), strict=True)
+            self._lows, self._highs = np.array(lo), np.array(hi)
+        self.drive_pieces = ()
+
+    def _refuse(self, what):
+        raise ValueError(f"the blow at t = {self.t0:.6g} keeps no {what}: the run was made with "
+                         "histories=False (simulate again with histories=True)")
+
+    def drive_state(self, t):
+        """Refused (class docstring).
+
+        Raises
+        ------
+        ValueError
+            Always."""
+        self._refuse("history of the drive's state")
+
+    def force(self, t):
+        """Refused (class docstring).
+
+        Raises
+        ------
+        ValueError
+            Always."""
+        self._refuse("history of the drive's force")
+
+    def displacement(self, t):
+        """Refused (class docstring).
+
+        Raises
+        ------
+        ValueError
+            Always."""
+        self._refuse("history of the driven end")
+
+    def energies(self):
+        """The drive's energy quadratures over the blow to :attr:`t_end` (:meth:`BlowPiece.energies`).
+
+        Raises
+        ------
+        ValueError
+            Where the drive's pieces had none."""
+        if self._energies is None:
+            self._refuse("energy quadratures")
+        e = self._energies
+        return e.copy() if isinstance(e, np.ndarray) else e
+
+    def piston_work(self) -> float:
+        """The drive's work on the piston over the blow to :attr:`t_end` (:meth:`BlowPiece.piston_work`).
+
+        Returns
+        -------
+        float
+            In model energy units.
+
+        Raises
+        ------
+        ValueError
+            Where the drive's pieces had none."""
+        if self._work is None:
+            self._refuse("work of the drive")
+        return self._work
+
+    def extremes(self, k: int | str) -> tuple[float, float]:
+        """The least and the greatest value of the drive's state component ``k`` (an index or a name of
+        its layout) over the blow (:meth:`BlowPiece.extremes`, kept).
+
+        Raises
+        ------
+        ValueError
+            Where the drive's pieces had no extremes."""
+        if self._lows is None:
+            self._refuse("extremes of the drive's state")
+        j = self.layout[k] if isinstance(k, str) else int(k)
+        return float(self._lows[j]), float(self._highs[j])
+
+
 #: more blows than this, each starting at once where the last ended (the piston pressed on the stop
 #: through them), end the run with a ``ValueError``
 PRESSED_BLOWS = 1000
@@ -251,12 +367,13 @@ def fly_and_switch(model, drive, loop, t_end: float, settings):
     return fl
 
 
-def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, new_run):
+def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, new_run, histories=True):
     """:func:`~impactbar.simulation.driven.run_stateful` under a law whose contact takes time:
     flights by :func:`impactbar.drives.flight.fly`, each arrival a blow of :func:`driven_blow` (a
     :class:`BlowPiece`); a blow that ends with the end pressed on the stop (moving into it) is
     followed at once by the next. ``new_run`` makes the run's log (the simulator's ``_Run``: its
-    state, logs and result, a :class:`~impactbar.SwitchedTrajectory`).
+    state, logs and result, a :class:`~impactbar.SwitchedTrajectory`). Without ``histories`` each
+    blow is logged as its :class:`BlowSummary` once it ends (its drive's pieces released).
 
     Returns
     -------
@@ -297,16 +414,17 @@ def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, ne
         q_arr[0] -= float(c @ q_arr)
         if res.t_release > t_end:  # the run ends inside the blow
             piece = BlowPiece(t_arr, t_end, res.record, (q_arr, v_arr.copy()), res.pieces, c)
-            loop.blocks.append(("py", piece))
             loop.q, loop.v = (np.array(x, dtype=float) for x in piece.modal_end())
             loop.state = DriveState(_mode_at(res, t_end, loop.state.mode), piece.drive_state([t_end])[:, 0])
+            loop.blocks.append(("py", piece if histories else BlowSummary(piece)))
             loop.t = t_end
             break
         piece = BlowPiece(t_arr, res.t_release, res.record, (q_arr, v_arr.copy()), res.pieces, c,
                           (res.q_after.copy(), res.v_after.copy()))
-        loop.blocks.append(("py", piece))
+        loop.blocks.append(("py", piece if histories else BlowSummary(piece)))
         loop.t, loop.q, loop.v = res.t_release, res.q_after.copy(), res.v_after.copy()
         loop.switch(after, res.t_release)
+        del piece, res  # (a summarised blow's drive pieces released now, not at the next blow)
         if loop.n_imp >= max_imp:
             loop.status = RunStatus.MAX_IMPACTS
             break

@@ -318,15 +318,15 @@ class _Run:
 
 
 def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int,
-              driver: Driver, settings=None) -> SwitchedTrajectory:
+              driver: Driver, settings=None, histories: bool = True) -> SwitchedTrajectory:
     """A drive's run (module docstring): a drive with state by ``solve_ivp``'s flights or its own
     (:func:`run_stateful`, with ``settings``, default the drive's integrator); a force constant
     between events over pieces of the ordinary driver under that force (``driver``), with the drive's
     compiled loop where it has one (its ability :class:`~impactbar.drives.abilities.CompiledLoop`,
     switch ``simulate.switched_kernel``, an instantaneous law), in Python piece by piece otherwise
-    (:func:`run_pieces`)."""
+    (:func:`run_pieces`). ``histories``: as :func:`run_stateful` takes it."""
     if not drive.traits.piecewise_constant:
-        return run_stateful(model, drive, q, v, t0, t_end, max_imp, driver.make_state, settings)
+        return run_stateful(model, drive, q, v, t0, t_end, max_imp, driver.make_state, settings, histories)
     from ..loads import FourierLoad
 
     law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
@@ -423,7 +423,7 @@ _SCIPY_METHODS = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
 
 def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int, make_state,
-                 settings=None) -> SwitchedTrajectory:
+                 settings=None, histories: bool = True) -> SwitchedTrajectory:
     """The event-driven run of a drive with state (module docstring): flights by
     :func:`impactbar.drives.flight.fly`, the paper's impact law (eq. 10) at each arrival, the
     drive's maps at its events and impacts; a rigid piston whose rebound is slower than
@@ -431,7 +431,9 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     event comes.
 
     Under a law whose contact takes time each arrival is a blow solved together with the drive's
-    state (:func:`impactbar.simulation.blows.driven_blow`).
+    state (:func:`impactbar.simulation.blows.driven_blow`); without ``histories`` each blow is kept
+    as its :class:`~impactbar.simulation.blows.BlowSummary` (the drive's pieces over it released once
+    it ends), the flights as they are.
 
     Raises
     ------
@@ -442,7 +444,7 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     law = model.law
     if not law.traits.restitution_in_kernel:
         check_coupling(model, drive)
-        return run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, _Run)
+        return run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, _Run, histories)
     R = law.traits.kernel_restitution(model)
     c = model.end_weights
     M = model.n_modes + 1

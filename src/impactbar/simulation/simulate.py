@@ -364,7 +364,8 @@ class _Core:
 # the driver
 # --------------------------------------------------------------------------------------------------
 def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, *, t0=0.0,
-             max_impacts=None, progress=None, settings: FlightSettings | None = None) -> Trajectory:
+             max_impacts=None, progress=None, settings: FlightSettings | None = None,
+             histories: bool = True) -> Trajectory:
     r"""Follow the bar from ``initial`` through impact after impact (paper Section 5).
 
     Between impacts every mode obeys :math:`q_n'' + d q_n' + (s n \pi)^2 q_n = p(t)` (eq. 6) and is
@@ -407,6 +408,13 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
         :class:`~impactbar.drives.circuit.CircuitFlightSettings`, its tolerances and options);
         default the drive's :attr:`~impactbar.Drive.integrator`. Not with a load (its flights are
         closed forms).
+    histories : bool, optional
+        ``False``: with a drive with state under a law whose contact takes time (theory §11, "The
+        coupled blow"), each blow of the result keeps what is read of it once it ended, not the drive's
+        pieces over it (a :class:`~impactbar.simulation.blows.BlowSummary`: its record, the drive's
+        energies, work and extremes; a few kilobytes a blow against about 1.5 MB); the drive's histories
+        inside the blows are then refused. The impacts and every other figure are the same. Default
+        ``True``; no effect otherwise.
 
     Returns
     -------
@@ -452,6 +460,8 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
     if abs(t_end) > MAX_TIME:
         raise ValueError(f"t_end must be in [-{MAX_TIME:g}, {MAX_TIME:g}]; got {t_end}")
     max_imp = _NO_LIMIT if max_impacts is None else check_int("max_impacts", max_impacts, lo=1)
+    if not isinstance(histories, bool | np.bool_):
+        raise ValueError(f"histories must be True or False; got {histories!r}")
     N = model.n_modes
     if N and model.s * N > MAX_SIMULATE_STIFFNESS:
         raise ValueError(
@@ -469,15 +479,18 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
             f"initial must have n_modes + 1 = {N + 1} modal coordinates; got {q.size}"
         )
     solver = dispatch(SIMULATORS, load)
+    keep = {} if histories or solver is not _simulate_drive else {"histories": False}
     return solver(model, load, q, v, t0, t_end, max_imp, progress,
-                  **solver_settings(settings, load, solver is _simulate_drive))
+                  **solver_settings(settings, load, solver is _simulate_drive), **keep)
 
 
-def _simulate_drive(model, drive, q, v, t0, t_end, max_imp, progress, settings=None) -> Trajectory:
+def _simulate_drive(model, drive, q, v, t0, t_end, max_imp, progress, settings=None,
+                    histories=True) -> Trajectory:
     """:func:`simulate` under a drive (theory §10): the drive's own event loop over pieces of this
-    driver, a drive with state's flights by ``settings`` (default its integrator)."""
+    driver, a drive with state's flights by ``settings`` (default its integrator), its blows'
+    ``histories`` kept or summarised (:func:`simulate`)."""
     _push_off(model.end_weights, q)
-    return run_drive(model, drive, q, v, t0, t_end, max_imp, _DRIVER, settings)
+    return run_drive(model, drive, q, v, t0, t_end, max_imp, _DRIVER, settings, bool(histories))
 
 
 def _simulate_load(model, load, q, v, t0, t_end, max_imp, progress) -> Trajectory:
