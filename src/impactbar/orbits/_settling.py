@@ -91,16 +91,14 @@ def nearing(drive, mode, y0, y1, y2, M: int) -> bool:
 
     Parameters
     ----------
-    drive : Drive
-    mode : object
-        The drive's discrete state at the three iterates.
-    y0, y1, y2 : numpy.ndarray, shape (2 M + k,)
-        Consecutive iterates (dimensionless).
-    M : int
+    drive, mode, y0, y1, y2, M
+        As :func:`drift_to_surface` takes them: the drive, its discrete state at the three iterates,
+        the iterates (dimensionless, shape ``(2 M + k,)``) and the modes' count.
 
     Returns
     -------
     bool
+        Whether a surface nears in a steady drift (the motion then followed on).
 
     Examples
     --------

@@ -241,17 +241,8 @@ class BlowSummary(BlowPiece):
         return e.copy() if isinstance(e, np.ndarray) else e
 
     def piston_work(self) -> float:
-        """The drive's work on the piston over the blow to :attr:`t_end` (:meth:`BlowPiece.piston_work`).
-
-        Returns
-        -------
-        float
-            In model energy units.
-
-        Raises
-        ------
-        ValueError
-            Where the drive's pieces had none."""
+        """The drive's work on the piston over the blow to :attr:`t_end` (:meth:`BlowPiece.piston_work`),
+        in model energy units; a ``ValueError`` where the drive's pieces had none."""
         if self._work is None:
             self._refuse("work of the drive")
         return self._work

@@ -84,6 +84,7 @@ from ._records import (  # the records' slots
     B_X,
     B_XD,
     BI_BRANCH,
+    BITLOG_PDOT,
     BS_PMAX,
     BS_PPERM,
     BS_RMAX,
@@ -125,9 +126,11 @@ from ._records import (  # the records' slots
     RD_HEAD,
     RD_ROWS,
     RD_T,
-    RD_V1,
-    RD_V2,
-    RD_V3,
+    RECON_FORCE,
+    RECON_GAPRATE,
+    RECON_JUMP,
+    SEP_F,
+    SEP_G,
     TCUR_BIT,
     TCUR_CONTACT,
     TCUR_FAIL,
@@ -312,8 +315,8 @@ def t_node_contact(ws, tg, t, t1):
                     if math.isnan(dt):
                         TCUR[TCUR_FAIL] = 3
                         return True
-                    fm = RD[k, RD_V1].real
-                    gm = RD[k, RD_V2].real
+                    fm = RD[k, SEP_F].real
+                    gm = RD[k, SEP_G].real
                     Nm = 2.0 * (ZR * fm + ZL * gm) / s
                     imp_emit(tg, 2 * j, e, Nm * dt, -Nm)
                     imp_emit(tg, 2 * j - 1, e, Nm * dt, -Nm)
@@ -321,7 +324,7 @@ def t_node_contact(ws, tg, t, t1):
                     NSF[j, NSF_SHANK] += ((2.0 * fm - Nm) / ZL + 2.0 * gm / ZR) * dt
                     TCUR[TCUR_SEPS] += 1
             else:
-                gd = RD[k, RD_V3].real
+                gd = RD[k, RECON_GAPRATE].real
                 if hit:
                     TCUR[TCUR_FAIL] = 3
                     return True
@@ -329,10 +332,10 @@ def t_node_contact(ws, tg, t, t1):
                     TCUR[TCUR_FAIL] = 1
                     return True
                 dts = -gap / gd
-                Np = RD[k, RD_V1].real
+                Np = RD[k, RECON_FORCE].real
                 imp_emit(tg, 2 * j, e, -Np * dts, Np)
                 imp_emit(tg, 2 * j - 1, e, -Np * dts, Np)
-                NSF[j, NSF_SHANK] += -RD[k, RD_V2].real * dts
+                NSF[j, NSF_SHANK] += -RD[k, RECON_JUMP].real * dts
                 NSI[j, NSI_CONTACT] = 1
             TCUR[TCUR_CONTACT] = k + 1
             dirty = True
@@ -421,7 +424,7 @@ def t_node_bit(ws, tg, t, t1):
                         if math.isnan(dt):
                             TCUR[TCUR_FAIL] = 3
                             return True
-                        pd = RD[ev, RD_V1].real
+                        pd = RD[ev, BITLOG_PDOT].real
                         BS[BS_PMAX] += pd * dt
                         BS[BS_RMAX] = k * BS[BS_PMAX]
                         BS[BS_PPERM] = BS[BS_PMAX] - BS[BS_RMAX] / ku

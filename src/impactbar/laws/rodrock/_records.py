@@ -156,6 +156,10 @@ RD_V1 = 2  # its first value: a re-contact's force just after, a separation's f 
 RD_V2 = 3  # its second: a re-contact's jump of the shank's velocity, a separation's g arriving
 RD_V3 = 4  # its third: a re-contact's gap rate just before
 RD_COLS = 6
+# the three values by the switch's code, as the tangent reads them
+SEP_F, SEP_G = RD_V1, RD_V2  # a separation's: the waves f and g arriving just before it
+RECON_FORCE, RECON_JUMP, RECON_GAPRATE = RD_V1, RD_V2, RD_V3  # a re-contact's (as RD_V1 .. RD_V3 say)
+BITLOG_PDOT = RD_V1  # the bit's switch: p' just before it (a massless bit)
 
 # -- RT, RC: the rock's branches' roots, a row per branch (LOAD, ELASTIC, FREE) -------------------
 RT_FIRST = 0  # the first root (the only one with a massless bit)
