@@ -274,3 +274,23 @@ def test_a_run_stopped_part_way_resumes_to_the_same_designs_bit_for_bit(tmp_path
     assert resumed.optimum["values"] == whole.optimum["values"]
     assert np.array_equal([r["constraints"]["max_multiplier"]["value"] for r in resumed.history],
                           [r["constraints"]["max_multiplier"]["value"] for r in whole.history])
+
+
+def test_a_run_again_on_its_cache_reads_its_gradients_back_bit_for_bit(tmp_path):
+    """SLSQP's gradients (each two continued orbits per variable, or four flights) are kept in the
+    cache file with the designs: the same search run again on it computes none of them and takes
+    the same steps, to the bit."""
+    cache = tmp_path / "cache.json"
+    kwargs = {"objective": "impact_power", "max_evaluations": 4, "method": "slsqp", "progress": False,
+              "cache": cache}
+    first = optimize_drifter("circuit-drifter", VARY, **kwargs)
+    assert first.gradients >= 1 and first.cached_gradients == 0
+    kept = json.loads(cache.read_text())["gradients"]
+    assert len(kept) == first.gradients and {g["kind"] for g in kept} == {"default"}
+    again = optimize_drifter("circuit-drifter", VARY, **kwargs)
+    assert again.gradients == 0 and again.cached_gradients == first.gradients
+    assert again.evaluations == 0 and again.cached == len(first.history)
+    assert [r["values"] for r in again.history] == [r["values"] for r in first.history]
+    assert again.optimum["values"] == first.optimum["values"]
+    assert "gradients from the cache" not in first.table() and \
+        f"{first.gradients} gradients from the cache" in again.table()

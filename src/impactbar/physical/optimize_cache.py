@@ -18,7 +18,7 @@ import json
 import math
 from pathlib import Path
 
-__all__ = ["read_cache", "write_cache", "dumps", "OrbitChain"]
+__all__ = ["read_cache", "read_gradients", "write_cache", "dumps", "OrbitChain"]
 
 
 def read_cache(path, tag: str) -> dict:
@@ -30,21 +30,40 @@ def read_cache(path, tag: str) -> dict:
     ValueError
         A file that is not readable JSON, in one line.
     """
+    return {r["id"]: r for r in _document(path, tag).get("evaluations", [])}
+
+
+def read_gradients(path, tag: str) -> dict:
+    """The designs' gradients a cache file holds for the problem ``tag``, by ``(id, kind)`` (``kind``
+    ``"default"`` at the default step, ``"refined"`` the step refined where it meets a border), each
+    ``{"objective": list, "constraints": list of lists}`` (``{}``: none, no file, or another problem's).
+
+    Raises
+    ------
+    ValueError
+        A file that is not readable JSON, in one line.
+    """
+    return {(g["id"], g["kind"]): g for g in _document(path, tag).get("gradients", [])}
+
+
+def _document(path, tag: str) -> dict:
+    """The cache file's document where it holds the problem ``tag`` (``{}``: no file, or another
+    problem's); a file that is not readable JSON raises a ``ValueError`` in one line."""
     if path is None or not Path(path).exists():
         return {}
     try:
         doc = json.loads(Path(path).read_text())
     except (OSError, ValueError) as exc:
         raise ValueError(f"cache {str(path)!r} is not a readable JSON file: {exc}") from exc
-    if not isinstance(doc, dict) or doc.get("problem") != tag:
-        return {}
-    return {r["id"]: r for r in doc.get("evaluations", [])}
+    return doc if isinstance(doc, dict) and doc.get("problem") == tag else {}
 
 
-def write_cache(path: Path, tag: str, store: dict) -> None:
-    """Write the designs (a file beside it, then renamed: a stop mid-write leaves the last one)."""
+def write_cache(path: Path, tag: str, store: dict, gradients: dict | None = None) -> None:
+    """Write the designs and the gradients computed of them (``{(id, kind): {"objective",
+    "constraints"}}``; a file beside it, then renamed: a stop mid-write leaves the last one)."""
     tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(dumps({"problem": tag, "evaluations": list(store.values())}))
+    kept = [dict(g, id=key[0], kind=key[1]) for key, g in (gradients or {}).items()]
+    tmp.write_text(dumps({"problem": tag, "evaluations": list(store.values()), "gradients": kept}))
     tmp.replace(path)
 
 

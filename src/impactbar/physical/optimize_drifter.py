@@ -44,7 +44,7 @@ from .design_keys import design_bounds
 from .display_units import display_unit, written_quantity
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
-from .optimize_cache import OrbitChain, read_cache, write_cache
+from .optimize_cache import OrbitChain, read_cache, read_gradients, write_cache
 from .optimize_failures import failed_record
 from .optimize_multistart import check_multistart, multistart_search
 from .optimize_outputs import piston_and_multipliers, shank_stress
@@ -57,6 +57,7 @@ from .optimize_problem import (
     OBJECTIVES,
     _design_gradient,
     _design_record,
+    _Gradients,
     _limits,
     _operating_point,
     _refined_gradient,
@@ -133,7 +134,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         its orbit, and where a new design continues from one, that orbit is solved again as the first
         run solved it, along the designs' recorded guesses
         (:class:`~impactbar.physical.optimize_cache.OrbitChain`; the population search's designs are
-        each a fresh orbit).
+        each a fresh orbit). The gradients computed (SLSQP's, the polish's) are kept in it too and
+        read back, to the bit, where a run started again asks for them.
     progress : bool
         A progress bar (tqdm) on stderr where it is a terminal, none where it is not: the designs
         evaluated, the last one's seconds and the slowest one's
@@ -268,13 +270,14 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
 
     cache_path = Path(cache) if cache is not None else None
     store = read_cache(cache_path, tag)
+    stored_gradients = read_gradients(cache_path, tag)  # (a run started again: none computed twice)
     n_cached = 0
     near: list[_Near] = []  # the designs with an orbit: their scaled variables, ids
     history: list[dict] = []
-    counter = {"new": 0, "gradients": 0}
+    counter = {"new": 0, "gradients": 0, "cached_gradients": 0}
     # each design's orbit by its id (a stored design's solved again along its guesses where needed)
     chain = OrbitChain(store, lambda c, g: _operating_point(build(with_values(cfg, c), folder), g).orbit)
-    gradients: dict = {}  # by id (SLSQP's), by (id, "refined") (the polish's)
+    gradients: dict = {}  # by (id, "default") (SLSQP's), by (id, "refined") (the polish's)
     found: list = []  # the multistart's local searches
     points: dict[str, np.ndarray] = {}  # each design's scaled variables by its id
     polished = None  # the multistart's polish (its result)
@@ -329,7 +332,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         history.append(rec)
         counter["new"] += 1
         if cache_path is not None:
-            write_cache(cache_path, tag, store)
+            write_cache(cache_path, tag, store, stored_gradients)
         bar.design(rec["seconds"])
         return rec
 
@@ -359,22 +362,32 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                 return -np.ones(len(limits))
             return np.array([c["scaled"] for c in rec["constraints"].values()])
 
-        def derivative(u):
+        def gradient_of(u, kind, compute):
+            """A design's gradients: computed once per design and kind, kept in the cache file (a run
+            started again reads them back, to the bit, where it would compute them again)."""
             rec = evaluate(u)
-            if rec["id"] not in gradients:
-                orbit = chain.orbit(rec["id"]) if rec["ok"] and "u" in rec else None
-                gradients[rec["id"]] = _design_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span)
-                counter["gradients"] += 1
-            return gradients[rec["id"]]
+            key = (rec["id"], kind)
+            if key not in gradients:
+                kept = stored_gradients.get(key)
+                if kept is not None:
+                    gradients[key] = _Gradients(np.asarray(kept["objective"], dtype=float),
+                                                np.asarray(kept["constraints"], dtype=float).reshape(
+                                                    len(limits), len(keys)))
+                    counter["cached_gradients"] += 1
+                else:
+                    orbit = chain.orbit(rec["id"]) if rec["ok"] and "u" in rec else None
+                    gradients[key] = compute(cfg, folder, rec, orbit, spec, limits, fkey, span)
+                    counter["gradients"] += 1
+                    stored_gradients[key] = gradients[key]._asdict()
+                    if cache_path is not None:
+                        write_cache(cache_path, tag, store, stored_gradients)
+            return gradients[key]
+
+        def derivative(u):
+            return gradient_of(u, "default", _design_gradient)
 
         def refined(u):  # the polish's: the step refined where it meets a border (_refined_gradient)
-            rec = evaluate(u)
-            key = (rec["id"], "refined")
-            if key not in gradients:
-                orbit = chain.orbit(rec["id"]) if rec["ok"] and "u" in rec else None
-                gradients[key] = _refined_gradient(cfg, folder, rec, orbit, spec, limits, fkey, span)
-                counter["gradients"] += 1
-            return gradients[key]
+            return gradient_of(u, "refined", _refined_gradient)
 
         if method == "differential_evolution":
             res = population_search(lambda u: penalised(evaluate(u), fkey, ref),
@@ -440,4 +453,5 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                           baseline=fresh["baseline"], optimum=fresh["optimum"], evaluations=counter["new"],
                           cached=n_cached, seconds=time.perf_counter() - t_start, history=history,
                           message=message, config=with_values(cfg, best["changes"]),
-                          gradients=counter["gradients"], certificate=certificate, found=found)
+                          gradients=counter["gradients"], cached_gradients=counter["cached_gradients"],
+                          certificate=certificate, found=found)

@@ -56,6 +56,8 @@ class DrifterOptimum:
     gradients : int
         Gradients computed (``method="slsqp"``; each four flights per variable, or two continued
         orbits for a variable whose step meets a border).
+    cached_gradients : int
+        Gradients read from the cache file, where a run started again would have computed them.
     seconds : float
         Wall time of the run (s).
     history : list of dict
@@ -80,6 +82,7 @@ class DrifterOptimum:
     history: list = field(repr=False)
     message: str = ""
     gradients: int = 0
+    cached_gradients: int = 0
     config: dict = field(default_factory=dict, repr=False)
     certificate: object = None  #: the optimum's OptimalityCertificate (first-order, KKT)
     found: list = field(default_factory=list)
@@ -94,7 +97,8 @@ class DrifterOptimum:
         """The result as plain data (JSON-ready)."""
         return {"objective": self.objective, "vary": self.vary, "baseline": self.baseline,
                 "optimum": self.optimum, "gain": self.gain, "evaluations": self.evaluations,
-                "cached": self.cached, "gradients": self.gradients, "seconds": self.seconds,
+                "cached": self.cached, "gradients": self.gradients,
+                "cached_gradients": self.cached_gradients, "seconds": self.seconds,
                 "message": self.message, "certificate": self.certificate and self.certificate.to_dict(),
                 "found": self.found, "history": self.history}
 
@@ -132,9 +136,11 @@ class DrifterOptimum:
                         f"{c['value'] * scale:14.5g}{o['value'] * scale:14.5g} {unit}"
                         f"  margin {c['margin'] * scale:.4g} -> {o['margin'] * scale:.4g}")
         grads = f" and {self.gradients} gradients" if self.gradients else ""
+        from_cache = (f"{self.cached} designs and {self.cached_gradients} gradients" if self.cached_gradients
+                      else f"{self.cached}")
         slowest = max((r["seconds"] for r in self.history if "seconds" in r), default=0.0)
         rows.append(f"gain in {self.objective}: {self.gain * 100:+.2f} % after {self.evaluations} "
-                    f"evaluations{grads} ({self.cached} from the cache) in {self.seconds:.0f} s, the "
+                    f"evaluations{grads} ({from_cache} from the cache) in {self.seconds:.0f} s, the "
                     f"slowest design {slowest:.1f} s")
         if self.certificate is not None:
             rows.append(f"{word}: {self.certificate}")
