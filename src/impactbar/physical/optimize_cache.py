@@ -62,7 +62,7 @@ def write_cache(path: Path, tag: str, store: dict, gradients: dict | None = None
     """Write the designs and the gradients computed of them (``{(id, kind): {"objective",
     "constraints"}}``; a file beside it, then renamed: a stop mid-write leaves the last one)."""
     tmp = path.with_suffix(path.suffix + ".tmp")
-    kept = [dict(g, id=key[0], kind=key[1]) for key, g in (gradients or {}).items()]
+    kept = [dict(g, id=rid, kind=kind) for (rid, kind), g in (gradients or {}).items()]
     tmp.write_text(dumps({"problem": tag, "evaluations": list(store.values()), "gradients": kept}))
     tmp.replace(path)
 
