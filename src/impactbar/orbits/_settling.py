@@ -113,12 +113,7 @@ def nearing(drive, mode, y0, y1, y2, M: int) -> bool:
     >>> nearing(Drive(), 0, y[0], y[1], np.array([0.0, 0.0, 0.35]), 1)  # (the step halved)
     False
     """
-    from ..drives.base import SurfaceEvent
-
-    for e in drive.events(mode):
-        if not isinstance(e, SurfaceEvent):
-            continue
-        g0, g1, g2 = (e.direction * e.value(0.0, y[:M], y[M:2 * M], y[2 * M:]) for y in (y0, y1, y2))
+    for g0, g1, g2 in zip(*(_surface_values(drive, mode, y, M) for y in (y0, y1, y2)), strict=True):
         s1, s2 = g1 - g0, g2 - g1
         if g2 <= 0.0 and s1 > 0.0 and abs(s2 - s1) <= (1.0 - DOMINANT_RHO) * s1:
             return True
@@ -286,8 +281,14 @@ def surfaces_ahead(drive, mode, y, M: int, tol: float = 0.0) -> bool:
     -------
     bool
     """
+    return all(g <= tol for g in _surface_values(drive, mode, y, M))
+
+
+def _surface_values(drive, mode, y, M: int) -> list:
+    """``direction * value`` of each of ``mode``'s surface events at the state ``y = (q, q', z)``
+    (``M`` modes), in the drive's order: at most 0 where a crossing in the event's direction is
+    still ahead."""
     from ..drives.base import SurfaceEvent
 
     q, v, z = y[:M], y[M:2 * M], y[2 * M:]
-    return all(e.direction * e.value(0.0, q, v, z) <= tol for e in drive.events(mode)
-               if isinstance(e, SurfaceEvent))
+    return [e.direction * e.value(0.0, q, v, z) for e in drive.events(mode) if isinstance(e, SurfaceEvent)]
