@@ -171,16 +171,11 @@ from ._records import (  # the records' slots
 # ------------------------------------------------------------------------------------------------
 # ws = (PF, PI, TK, TC, CNT, CHI, CH_T, CH_TOL, lam, BIN, WB, WN, STK, PR, SZ, ST, NSF, NSI, BS, BI,
 #       RT, RC, RD, EP, CI, CT), its positions WS_* in :mod:`._records`
-# PR, BS, BI, CI, CT, CNT and the blocks WB, WN: their slots are named in :mod:`._records`
-# NSF (J + 1, 4): contact node: gap, shank displacement; NSI (J + 1, 4): used cursors (2), drive
-#     cursor, contact flag
-# EP (cap, 5): episodes t_start, t_end, p_start, p_end, dissipated
-# RD (1 + n, 6) complex: the switch log (the tangent run's schedule, :mod:`._exacttangent`), kept
-#     only when it has more than its header row RD_HEAD (its RD_ROWS the count, its RD_FULL
-#     1 once full); row i + 1:
-#     time, code (LOG_SEP, LOG_RECON, LOG_BIT + the new branch) and, for a re-contact, the contact
-#     force just after it, the jump of the shank's velocity and the gap's rate just before it; for
-#     a separation the waves arriving just before it; for the bit, p' just before (a massless bit)
+# the records PR, BS, BI, CI, CT, CNT, the blocks WB, WN and the tables NSF, NSI (the nodes), EP (the
+#     loading episodes), RT, RC (the roots), STK and RD: their slots and columns are named, and said,
+#     in :mod:`._records`; RD, the switch log (the tangent run's schedule, :mod:`._exacttangent`), is
+#     kept only when it has more than its header row, a switch a row (codes LOG_SEP, LOG_RECON,
+#     LOG_BIT + the new branch)
 
 
 #: Most switches of the bit's branches between two arrivals at the bit (each a located root); a bit
