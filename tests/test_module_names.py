@@ -21,11 +21,11 @@ TOP = Path(impactbar.__file__).parent
 ENTRY_POINTS = {
     ("impactbar.orbits", "find_orbit"): "impactbar.orbits.find",
     ("impactbar.orbits", "periodic_orbits"): "impactbar.orbits.find",
-    ("impactbar.orbits", "find_switched_orbit"): "impactbar.orbits.driven_search",
+    ("impactbar.orbits", "find_driven_orbit"): "impactbar.orbits.driven_search",
     ("impactbar.orbits", "drive_orbits"): "impactbar.orbits.driven_search",
-    ("impactbar.orbits", "SwitchedOrbit"): "impactbar.orbits.driven_orbit",
+    ("impactbar.orbits", "DrivenOrbit"): "impactbar.orbits.driven_orbit",
     ("impactbar.simulation", "simulate"): "impactbar.simulation.simulate",
-    ("impactbar.simulation", "SwitchedTrajectory"): "impactbar.simulation.driven_trajectory",
+    ("impactbar.simulation", "DrivenTrajectory"): "impactbar.simulation.driven_trajectory",
     ("impactbar.continuation", "continue_orbit"): "impactbar.continuation.one_parameter",
     ("impactbar.continuation", "continue_bifurcation"): "impactbar.continuation.two_parameter",
     ("impactbar.drives", "PositionSwitchedDrive"): "impactbar.drives.valve.drive",
@@ -57,3 +57,25 @@ def test_entry_points_live_in_modules_named_for_them():
              for package, name in ENTRY_POINTS}
     assert where == {f"{package}.{name}": module for (package, name), module in ENTRY_POINTS.items()}
 
+
+
+def test_renamed_public_names_resolve_to_the_new_ones_with_a_warning():
+    """The motion under a drive is "driven" in the public names too (``DrivenOrbit``,
+    ``find_driven_orbit``, ``DrivenTrajectory``); each old "switched" name still resolves, to the
+    same object, with a DeprecationWarning naming the new one, and is not advertised."""
+    import pytest
+
+    from impactbar._shared.renamed import RENAMED
+
+    homes = {"SwitchedOrbit": ("impactbar", "impactbar.orbits"), "find_switched_orbit": ("impactbar.orbits",),
+             "SwitchedTrajectory": ("impactbar", "impactbar.simulation")}
+    assert set(homes) == set(RENAMED)
+    for old, packages in homes.items():
+        for package in packages:
+            module = importlib.import_module(package)
+            with pytest.warns(DeprecationWarning, match=f"{package}.{old} is renamed {RENAMED[old]}"):
+                value = getattr(module, old)
+            assert value is getattr(module, RENAMED[old])
+            assert old not in module.__all__ and old not in dir(module)
+    with pytest.raises(AttributeError):
+        getattr(impactbar, "find_switched_orbit")  # noqa: B009 (never a top-level name)

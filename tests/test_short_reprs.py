@@ -59,7 +59,7 @@ def test_orbit_list_repr_is_a_line_per_orbit_and_bounded():
 
 
 def test_a_subclass_extends_the_orbit_repr():
-    """The hook a subclass with fields of its own uses (a switched orbit: its period)."""
+    """The hook a subclass with fields of its own uses (a driven orbit: its period)."""
 
     @dataclasses.dataclass(frozen=True, eq=False, repr=False)
     class Timed(PeriodicOrbit):

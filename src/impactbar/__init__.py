@@ -20,8 +20,10 @@ The import contract (``[tool.importlinter]`` in ``pyproject.toml``) keeps it so.
 """
 
 import importlib
+import sys
 
 from ._shared.parameters import Parameter as Parameter
+from ._shared.renamed import renamed
 from ._shared.status import Admissibility as Admissibility
 from ._shared.status import BranchStatus as BranchStatus
 from ._shared.status import CurveKind as CurveKind
@@ -46,7 +48,7 @@ _LAZY = {
     "periodic_orbits": ".orbits",
     "MultiImpactOrbit": ".orbits",
     "find_orbit": ".orbits",
-    "SwitchedOrbit": ".orbits",
+    "DrivenOrbit": ".orbits",
     "Branch": ".continuation",
     "BranchEvent": ".continuation",
     "continue_orbit": ".continuation",
@@ -66,7 +68,7 @@ _LAZY = {
     "Trajectory": ".simulation",
     "EnergyAccount": ".simulation",
     "simulate": ".simulation",
-    "SwitchedTrajectory": ".simulation",
+    "DrivenTrajectory": ".simulation",
     "SweepSpec": ".sweeps",
     "load_spec": ".sweeps",
     "open_sweep": ".sweeps",
@@ -84,6 +86,8 @@ def __getattr__(name: str):
         value = getattr(importlib.import_module(_LAZY[name], __name__), name)
     elif name in _SUBPACKAGES:
         value = importlib.import_module(f".{name}", __name__)
+    elif (value := renamed(sys.modules[__name__], name)) is not None:
+        return value  # (not kept: each use of an old name warns)
     else:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     globals()[name] = value
@@ -110,7 +114,7 @@ __all__ = [
     "periodic_orbits",
     "MultiImpactOrbit",
     "find_orbit",
-    "SwitchedOrbit",
+    "DrivenOrbit",
     "Branch",
     "BranchEvent",
     "continue_orbit",
@@ -130,7 +134,7 @@ __all__ = [
     "Trajectory",
     "EnergyAccount",
     "simulate",
-    "SwitchedTrajectory",
+    "DrivenTrajectory",
     "SweepSpec",
     "load_spec",
     "open_sweep",

@@ -1,4 +1,4 @@
-"""Branch switching at a period doubling of a switched orbit (theory §10): a supercritical doubling
+"""Branch switching at a period doubling of a driven orbit (theory §10): a supercritical doubling
 on a flexible bar, where the two-impact branch started from the event is stable past the doubling
 and simulate settles onto it (impact velocities to 1e-8), and onto the one-impact orbit before it."""
 

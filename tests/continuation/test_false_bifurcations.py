@@ -78,7 +78,7 @@ def test_confirmation_of_a_located_crossing():
 
 def test_switching_returns_a_doubled_branch():
     """BarModel(10, 0, 0.5, 2): two multipliers near -1 at the doubling p0 = 0.64592 (-1.035 and
-    -1.0). The switched branch was the one-impact orbit traversed twice (both halves equal to
+    -1.0). The driven branch was the one-impact orbit traversed twice (both halves equal to
     1e-14, ending at the one-impact fold 0.95493); now every point past the doubling has distinct
     halves, and the branch has its own fold and period doubling."""
     model = BarModel(10, 0, 0.5, n_modes=2)

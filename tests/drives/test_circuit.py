@@ -177,7 +177,7 @@ def test_continuation_options_trade_flights_not_orbits(orbit, monkeypatch):
     forward difference, a chord step first) against the way before (``forward_lambda=False,
     chord=False``): the same points, the same orbits to the corrector's tolerance, fewer flights
     (measured: 220 against 276 to 0.51)."""
-    from impactbar.continuation.driven import continue_switched
+    from impactbar.continuation.driven import continue_driven
     from impactbar.continuation.one_parameter import _detect
     from impactbar.drives.circuit import flight as F
 
@@ -192,7 +192,7 @@ def test_continuation_options_trade_flights_not_orbits(orbit, monkeypatch):
     out = []
     for kw in ({}, {"forward_lambda": False, "chord": False}):
         flights[0] = 0
-        b = continue_switched(orbit, "precharge", 0.51, _detect, events=False, **kw)
+        b = continue_driven(orbit, "precharge", 0.51, _detect, events=False, **kw)
         out.append((b, flights[0]))
     (now, n_now), (before, n_before) = out
     assert str(now.status) == str(before.status) == "reached"

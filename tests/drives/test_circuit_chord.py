@@ -7,7 +7,7 @@ import pytest
 
 from impactbar import find_orbit
 from impactbar.drives.orbitproblem import chord
-from impactbar.orbits import find_switched_orbit
+from impactbar.orbits import find_driven_orbit
 from impactbar.orbits.driven import ShootingProblem, orbit_of
 from impactbar.physical import circuit_preset
 
@@ -18,7 +18,7 @@ def drifter():
 
 
 def _both(model, drive):
-    return find_switched_orbit(model, drive, newton="full"), find_switched_orbit(model, drive)
+    return find_driven_orbit(model, drive, newton="full"), find_driven_orbit(model, drive)
 
 
 def test_the_rigid_orbit_is_newtons(drifter):
@@ -79,14 +79,14 @@ def test_a_branch_with_chord_steps_throughout_is_the_branch_of_before(drifter):
     roots of the plain flights, not of the variational ones (the integrator's error apart: measured
     2.7e-10 in the period, 3e-8 in the pressures), so the unknowns agree to 3e-8 of their size, the
     periods to 1e-9."""
-    from impactbar.continuation.driven import continue_switched
+    from impactbar.continuation.driven import continue_driven
     from impactbar.continuation.engine import _settings
     from impactbar.continuation.one_parameter import _detect
 
     drive = drifter.drive()
     o = find_orbit(drifter.model().with_(n_modes=1), drive)
     to = drive.accumulator.precharge * 1.02
-    branches = [continue_switched(o, "precharge", to, _detect, events=False, chord=c,
+    branches = [continue_driven(o, "precharge", to, _detect, events=False, chord=c,
                                   settings=_settings(None, max_points=3)) for c in (True, "all")]
     before, now = branches
     assert len(now.orbits) == len(before.orbits) >= 2
@@ -94,17 +94,17 @@ def test_a_branch_with_chord_steps_throughout_is_the_branch_of_before(drifter):
         assert abs(a.period - b.period) <= 1e-9 * a.period
         assert np.allclose(a._unknowns, b._unknowns, rtol=0, atol=3e-8 * np.max(np.abs(a._unknowns)))
     with pytest.raises(ValueError, match="chord must be True, False, 'all' or 'orbit'"):
-        continue_switched(o, "precharge", to, _detect, chord="every")
+        continue_driven(o, "precharge", to, _detect, chord="every")
 
 
 def _branch(orbit, chord, max_points):
     """The continuation in the pre-charge, 5 % up, without events, with the corrector ``chord``."""
-    from impactbar.continuation.driven import continue_switched
+    from impactbar.continuation.driven import continue_driven
     from impactbar.continuation.engine import _settings
     from impactbar.continuation.one_parameter import _detect
 
     to = orbit.drive.accumulator.precharge * 1.05
-    return continue_switched(orbit, "precharge", to, _detect, events=False, chord=chord,
+    return continue_driven(orbit, "precharge", to, _detect, events=False, chord=chord,
                              settings=_settings(None, max_points=max_points))
 
 

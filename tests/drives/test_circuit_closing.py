@@ -142,14 +142,14 @@ def test_the_rigid_pistons_jacobian_ignores_the_steering_steps():
 
 
 def _continued(orbit, chord, max_points):
-    """The continuation in the pre-charge, 5 % up, without events, by ``continue_switched`` with the
+    """The continuation in the pre-charge, 5 % up, without events, by ``continue_driven`` with the
     corrector ``chord``."""
-    from impactbar.continuation.driven import continue_switched
+    from impactbar.continuation.driven import continue_driven
     from impactbar.continuation.engine import _settings
     from impactbar.continuation.one_parameter import _detect
 
     to = orbit.drive.accumulator.precharge * 1.05
-    return continue_switched(orbit, "precharge", to, _detect, events=False, chord=chord,
+    return continue_driven(orbit, "precharge", to, _detect, events=False, chord=chord,
                              settings=_settings(None, max_points=max_points))
 
 

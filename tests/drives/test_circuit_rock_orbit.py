@@ -9,7 +9,7 @@ import pytest
 from circuit_parts_reference import ROCK_EXAMPLE
 
 from impactbar import find_orbit
-from impactbar.orbits import find_switched_orbit
+from impactbar.orbits import find_driven_orbit
 from impactbar.orbits.coupled import blow_jacobian, blow_state
 from impactbar.orbits.driven import ShootingProblem, orbit_of
 
@@ -18,7 +18,7 @@ from impactbar.orbits.driven import ShootingProblem, orbit_of
 def both(rock_drifter):
     """Newton's method with the multipliers' Jacobian at every step, and ``find_orbit``'s chord."""
     model, drive = rock_drifter
-    return find_switched_orbit(model, drive, newton="full"), find_orbit(model, drive)
+    return find_driven_orbit(model, drive, newton="full"), find_orbit(model, drive)
 
 
 def test_the_rock_orbit_is_full_newtons_to_the_multipliers_own_noise(both):

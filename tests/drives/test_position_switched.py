@@ -15,10 +15,10 @@ import pytest
 
 from impactbar import (
     BarModel,
+    DrivenOrbit,
+    DrivenTrajectory,
     PositionSwitchedDrive,
     SquareWaveLoad,
-    SwitchedOrbit,
-    SwitchedTrajectory,
     continue_orbit,
     find_orbit,
     periodic_orbits,
@@ -91,7 +91,7 @@ def test_rigid_orbit_matches_the_closed_form(a_s, a_r, x1, R):
     v, T, mu = _closed_form(a_s, a_r, x1, R)
     o = find_orbit(BarModel(s=10.0, d=0.0, R=R, n_modes=0),
                    PositionSwitchedDrive(stroke=a_s, ret=a_r, switch_out=x1))
-    assert isinstance(o, SwitchedOrbit)
+    assert isinstance(o, DrivenOrbit)
     assert o.impact_velocity == pytest.approx(v, rel=1e-10)
     assert o.period == pytest.approx(T, rel=1e-10)
     assert o.blow_frequency == pytest.approx(1 / T, rel=1e-10)
@@ -126,7 +126,7 @@ def test_simulate_rigid_settles_on_the_orbit(d, delay, rng):
     drive = PositionSwitchedDrive(stroke=1.0, ret=1.0, switch_out=1.0, delay=delay)
     o = find_orbit(model, drive)
     tr = simulate(model, drive, InitialState.rigid(-rng.uniform(0.1, 3.0), rng.uniform(-1, 1)), 150.0)
-    assert isinstance(tr, SwitchedTrajectory)
+    assert isinstance(tr, DrivenTrajectory)
     assert tr.impact_velocities[-1] == pytest.approx(o.impact_velocity, rel=1e-10)
     assert np.diff(tr.impact_times)[-1] == pytest.approx(o.period, rel=1e-10)
     # the switches: alternate, stroke ones at (or, delayed, a little beyond) switch_out
@@ -178,7 +178,7 @@ def test_flexible_orbit_converges_in_modes_and_to_the_rigid_one():
 
 
 def test_square_wave_recovered_when_the_switch_instants_are_forced():
-    """Rigid, equal levels q: the switched orbit has the stroke on for h3 of its period T and the
+    """Rigid, equal levels q: the driven orbit has the stroke on for h3 of its period T and the
     switch to return at the impact. Rescaling time by k = 2 pi / T (forces by 1/k^2, velocities by
     1/k, eq. 2) makes it a motion of the square wave SquareWaveLoad(q / k^2, kappa = 2 h3 / T)
     (eq. 34) with the impact at the stroke's end: periodic_orbits finds it (the same motion; the
@@ -218,7 +218,7 @@ def test_rigid_closed_forms_agree_with_the_general_driver(d, delay, R, choose):
     drive = PositionSwitchedDrive(stroke=1.3, ret=0.7, switch_out=0.8, delay=delay)
     start = InitialState.rigid(-1.2, 0.4)
     fast = simulate(model, drive, start, 60.0)
-    choose("simulate.switched_rigid", False)
+    choose("simulate.valve_rigid", False)
     ref = simulate(model, drive, start, 60.0)
     assert fast.n_impacts == ref.n_impacts > 5
     assert np.allclose(fast.impact_times, ref.impact_times, rtol=0, atol=1e-9)

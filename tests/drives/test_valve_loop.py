@@ -1,4 +1,4 @@
-"""The compiled valve loop (``simulate.switched_kernel``, theory §10) against the valve's loop in
+"""The compiled valve loop (``simulate.valve_loop``, theory §10) against the valve's loop in
 Python, piece by piece (the reference): the same pieces, impacts, switches and final state. On the
 flexible bar both run the same kernel calls with the same arguments, so they agree to the last bit;
 the rigid bar's closed forms agree to rounding (numpy's and the compiled ``expm1``). The pieces the
@@ -21,7 +21,7 @@ CASES = [  # n_modes, d, R, delay
 
 def _pair(choose, model, drive, start, t_end, **kw):
     fast = simulate(model, drive, start, t_end, **kw)
-    choose("simulate.switched_kernel", False)
+    choose("simulate.valve_loop", False)
     return fast, simulate(model, drive, start, t_end, **kw)
 
 
@@ -113,7 +113,7 @@ def test_pieces_take_the_specialised_impact_search_with_the_same_impacts(n, choo
     """Each piece's constant force is a Fourier load of its mean alone, so the flights after an impact
     or a switch take the specialised certified searches (``simulate.impact_search``): the same
     impacts and switches, to rounding, as the general search (``find_crossing``)."""
-    choose("simulate.switched_rigid", False)
+    choose("simulate.valve_rigid", False)
     model = BarModel(s=10.0, d=0.1, R=0.5, n_modes=n)
     drive = PositionSwitchedDrive(stroke=1.3, ret=0.7, switch_out=0.8, delay=0.2)
     start = InitialState.rigid(-1.2, 0.4, n)

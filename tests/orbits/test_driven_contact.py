@@ -122,7 +122,7 @@ def test_bad_guesses_under_a_contact_law_are_refused():
 
 
 def test_wave_law_orbit_converges_in_the_modes_kept():
-    """The period of the wave law's switched orbit converges as N grows, about as 1/N (measured:
+    """The period of the wave law's driven orbit converges as N grows, about as 1/N (measured:
     4.78436, 4.78464, 4.78479 at N = 8, 16, 32, the differences halving)."""
     T = [ib.find_orbit(bar("wave", n), DRIVE).period for n in (8, 16, 32)]
     d1, d2 = T[1] - T[0], T[2] - T[1]

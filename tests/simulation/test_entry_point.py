@@ -1,7 +1,7 @@
 """The short run's untyped entry point (``_shortrun.entry_point``): it must be the overload compiled
 for the Python call's argument types, not one a compiled caller made. The valve's loop calls
 ``run_free`` with ``max_imp`` the literal 1; where that overload was the only one when a short run
-first asked (a cold numba cache, a switched run first in the process), every later short run of
+first asked (a cold numba cache, a driven run first in the process), every later short run of
 the process stopped after one impact (``simulate(..., max_impacts=256)`` gave 1 impact)."""
 
 import numba

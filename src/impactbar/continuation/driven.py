@@ -24,12 +24,12 @@ from scipy.optimize import brentq
 from .._shared.parameters import check_continuable, parameter_value, with_parameter
 from .._shared.status import BranchStatus, EventKind
 from .._shared.validate import check_real
-from ..orbits.driven import SwitchedOrbit, orbit_of, orbit_problem
+from ..orbits.driven import DrivenOrbit, orbit_of, orbit_problem
 from .branch import Branch, BranchEvent
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _target
 
-__all__ = ["continue_switched"]
+__all__ = ["continue_driven"]
 
 EVENT_KINDS = tuple(EventKind)
 
@@ -91,7 +91,7 @@ class _SwitchedProblem:
     step (the residuals by plain flights; the Jacobian taken again after ``CHORD_STEPS`` steps
     without a new orbit), or with ``"orbit"`` the problem's own corrector (:meth:`_correct`, where
     the variational flights' state has a plain flight of its own: ``ShootingProblem.state_flights``;
-    elsewhere as ``True``). Set by :func:`continue_switched`."""
+    elsewhere as ``True``). Set by :func:`continue_driven`."""
 
     def __init__(self, model, drive, name, detect, *, events=True, stop_on=(), xtol=1e-10, impacts=1,
                  doubled=False, base=None, forward_lambda=True, chord=True):
@@ -437,8 +437,8 @@ def first_chord_tests(tests: list, doubled: bool, points: int) -> list:
     return tests
 
 
-def _tests(o: SwitchedOrbit) -> dict:
-    """The test functions of :func:`impactbar.continuation.one_parameter._detect` at a switched orbit (no
+def _tests(o: DrivenOrbit) -> dict:
+    """The test functions of :func:`impactbar.continuation.one_parameter._detect` at a driven orbit (no
     clearance: the grazing of the stop between impacts shows in the admissibility flag)."""
     mu = o.multipliers
     cpx = mu[mu.imag > 1e-10 * np.maximum(1.0, np.abs(mu))]
@@ -493,7 +493,7 @@ def _switch_grazing(engine, points, tangents, orbits, xtol):
 
 
 def border_tests(o) -> dict:
-    """The drive's border-collision tests at a switched orbit (its ability ``border_tests``,
+    """The drive's border-collision tests at a driven orbit (its ability ``border_tests``,
     :attr:`~impactbar.Drive.abilities`, over the flights of its period); ``{}`` for a drive without
     them."""
     problem, tests = o.problem, o.drive.abilities.border_tests
@@ -537,7 +537,7 @@ def _halves_gap(U) -> float:
 
 
 def _doubled_starts(engine, ev, steps):
-    """Branch switching at a period doubling of a switched orbit: the doubling point as a
+    """Branch switching at a period doubling of a driven orbit: the doubling point as a
     two-impact solution ``(X, X, lambda)`` and the first point of the period-2 branch, along the
     null vector of the doubled problem's ``F_u`` (antisymmetric between the halves: the
     eigenvector of the multiplier ``-1``), tried both ways. Yields ``(U0, (U1, t1))``; a first point
@@ -573,18 +573,18 @@ def doubled_first_points(engine, U0, w, steps, gap):
             h *= 0.5
 
 
-def continue_switched(orbit, parameter: str, to: float, detect, *,
+def continue_driven(orbit, parameter: str, to: float, detect, *,
                       settings: ContinuationSettings | None = None, events: bool = True, stop_on=(),
                       xtol: float = 1e-10, forward_lambda: bool = True,
                       chord: bool | str = "orbit") -> Branch:
     """Follow a periodic motion under a drive as one parameter changes, by pseudo-arclength
     continuation (theory §7, §10). Called by :func:`impactbar.continue_orbit` when its start is a
-    :class:`~impactbar.SwitchedOrbit`, or a ``"period-doubling"`` :class:`BranchEvent` of a branch of
+    :class:`~impactbar.DrivenOrbit`, or a ``"period-doubling"`` :class:`BranchEvent` of a branch of
     them.
 
     Parameters
     ----------
-    orbit : SwitchedOrbit or BranchEvent
+    orbit : DrivenOrbit or BranchEvent
         The start (from :func:`impactbar.find_orbit` with the drive; its problem's flight
         ``settings``, the oil circuit's solver options, are every point's), ``m`` impacts per period; or
         a period doubling of a one-impact branch: the two-impact branch that bifurcates there is
@@ -639,7 +639,7 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     Returns
     -------
     Branch
-        Its ``orbits`` are :class:`~impactbar.SwitchedOrbit` (``period``, ``blow_frequency``,
+        Its ``orbits`` are :class:`~impactbar.DrivenOrbit` (``period``, ``blow_frequency``,
         multipliers); ``impacts = m`` (``2`` from a period doubling), ``periods = 1``.
 
     Raises
@@ -654,7 +654,7 @@ def continue_switched(orbit, parameter: str, to: float, detect, *,
     if isinstance(orbit, BranchEvent):
         if orbit.kind != EventKind.PERIOD_DOUBLING or orbit.orbit.impacts != 1:
             raise ValueError("orbit: a BranchEvent start must be a period doubling of a one-impact "
-                             "switched orbit")
+                             "driven orbit")
         if parameter != orbit.parameter:
             raise ValueError(f"parameter must be the doubling's own, {orbit.parameter!r}; got {parameter!r}")
         switch, orbit = orbit, orbit.orbit

@@ -33,7 +33,7 @@ from ..orbits.segments import (
     unknowns_from,
 )
 from .branch import Branch, BranchEvent
-from .driven import checked_events, continue_switched, doubled_first_points, first_chord_tests
+from .driven import checked_events, continue_driven, doubled_first_points, first_chord_tests
 from .engine import ContinuationSettings, _Engine, _settings
 from .parameters import _check_parameter, _target, parameter_value, with_parameter
 
@@ -156,15 +156,15 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
 
     Parameters
     ----------
-    orbit : PeriodicOrbit, MultiImpactOrbit, BranchEvent or SwitchedOrbit
+    orbit : PeriodicOrbit, MultiImpactOrbit, BranchEvent or DrivenOrbit
         The start. A ``"period-doubling"`` :class:`BranchEvent` starts the doubled branch (``2 m``
         impacts in ``2 n`` periods) from the event, along the bifurcating direction (branch
-        switching). A :class:`~impactbar.SwitchedOrbit` (an orbit under a :class:`~impactbar.Drive`,
+        switching). A :class:`~impactbar.DrivenOrbit` (an orbit under a :class:`~impactbar.Drive`,
         unknown period) is followed in one of the drive's parameters (the valve's ``"stroke"``,
         ``"ret"``, ``"switch_out"``, ``"delay"``; the oil circuit's), ``"R"``, ``"d"``, ``"s"`` or the
         impact law's own (on the rock ``"rock.k"``, ...), with the grazing of a
         switching surface among the events (theory §10;
-        :func:`impactbar.continuation.driven.continue_switched`).
+        :func:`impactbar.continuation.driven.continue_driven`).
     parameter : str
         One of ``"p0"``, ``"pk"`` (a :class:`CosineLoad`), ``"q"``, ``"kappa"`` (a
         :class:`SquareWaveLoad`), ``"R"``, ``"d"``, ``"s"`` (the :class:`BarModel`), and the
@@ -224,7 +224,7 @@ def continue_orbit(orbit, parameter: str, to: float, *, settings: ContinuationSe
 
 def _continue_drive(orbit, base, switch, parameter, to, settings, events, stop_on, xtol) -> Branch:
     """:func:`continue_orbit` under a drive: an autonomous orbit of unknown period (theory §10)."""
-    return continue_switched(orbit, parameter, to, _detect, events=events, stop_on=stop_on, xtol=xtol,
+    return continue_driven(orbit, parameter, to, _detect, events=events, stop_on=stop_on, xtol=xtol,
                              settings=settings)
 
 

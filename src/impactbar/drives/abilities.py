@@ -109,7 +109,7 @@ class DriveAbilities:
     border_tests : callable or None
         ``border_tests(pieces)``: ``{surface: value}`` over one period of an orbit whose flights are
         ``pieces``, each value changing sign where the drive's state touches that switching surface
-        during the period (a border collision, located by the continuation of switched orbits).
+        during the period (a border collision, located by the continuation of driven orbits).
     orbit_problem : callable or None
         ``orbit_problem(model, impacts, constant_load)``: the drive's own periodic-orbit problem
         (:class:`~impactbar.drives.OrbitProblem`), in place of the generic shooting problem of

@@ -520,7 +520,7 @@ class Drive(ABC):
         """The drive's state at the start of a run from the bar's modal state ``(q, q')``."""
 
     def mode_name(self, mode) -> str:
-        """The name of a mode, logged at each switch (``SwitchedTrajectory.switch_kinds``)."""
+        """The name of a mode, logged at each switch (``DrivenTrajectory.switch_kinds``)."""
         return str(mode)
 
     # -- between events ---------------------------------------------------------------------------

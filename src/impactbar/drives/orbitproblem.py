@@ -19,7 +19,7 @@ __all__ = ["OrbitData", "OrbitProblem", "OrbitSearch", "newton", "chord", "Stall
 
 class OrbitData(NamedTuple):
     """What an :class:`OrbitProblem` gives of a solution: the fields of
-    :class:`~impactbar.SwitchedOrbit` the orbit solver does not compute itself.
+    :class:`~impactbar.DrivenOrbit` the orbit solver does not compute itself.
 
     Attributes
     ----------
@@ -152,7 +152,7 @@ class OrbitProblem(ABC):
 
     @abstractmethod
     def unknowns(self, orbit) -> np.ndarray:
-        """The unknowns of a found orbit (a :class:`~impactbar.SwitchedOrbit` of this problem)."""
+        """The unknowns of a found orbit (a :class:`~impactbar.DrivenOrbit` of this problem)."""
 
     @abstractmethod
     def orbit(self, X: np.ndarray) -> OrbitData:

@@ -34,10 +34,10 @@ name                              fast (default)                       reference
                                   run in flight
 ``simulate.wave_separation``      compiled characteristics solver      Python solver (``wave_impact``)
                                   where contact is lost
-``simulate.switched_rigid``       rigid bar under a position-          the general driver, piece by
+``simulate.valve_rigid``          rigid bar under a position-          the general driver, piece by
                                   switched drive in scalar closed      piece (theory §10)
                                   forms
-``simulate.switched_kernel``      compiled valve loop under a          the valve's loop in Python, piece
+``simulate.valve_loop``           compiled valve loop under a          the valve's loop in Python, piece
                                   position-switched drive, every       by piece (theory §10)
                                   piece in one call
 ``wave.residual``                 compiled wave-law phase residual     ``wave_orbit_states`` phase by
@@ -87,8 +87,8 @@ IMPLEMENTATIONS: dict[str, str] = {
     "simulate.impact_search": "specialised certified searches after an impact",
     "simulate.short_run": "a run's first block in one kernel call, its result built from the kernel's output",
     "simulate.wave_separation": "compiled characteristics solver for contact windows that lose contact",
-    "simulate.switched_rigid": "rigid bar under a position-switched drive in scalar closed forms",
-    "simulate.switched_kernel": "compiled valve loop under a position-switched drive",
+    "simulate.valve_rigid": "rigid bar under a position-switched drive in scalar closed forms",
+    "simulate.valve_loop": "compiled valve loop under a position-switched drive",
     "wave.residual": "compiled wave-law phase residual of a piecewise-constant load",
     "wave.held_window": "contact window held throughout decided by a tabulated scan, solved when asked",
     "sweeps.create_store": "sweep store written by zarr alone (without xarray)",

@@ -25,6 +25,9 @@ through ``model.law`` and build the results. Part of the core: imports only ``im
 """
 
 import importlib
+import sys
+
+from .._shared.renamed import renamed
 
 #: where each public name lives (PEP 562: a submodule is imported on first use, so the rigid closed
 #: forms, e.g. a sweep's chunks, do not load the wave law's scipy.optimize and numba)
@@ -35,7 +38,7 @@ _HOME = {
     "phase_G": "phase", "phase_residual": "phase", "phase_roots": "phase",
     "RigidOrbits": "rigid", "rigid_cosine_orbits": "rigid", "rigid_square_orbits": "rigid",
     "floquet_multipliers": "stability", "impact_map_jacobian": "stability",
-    "SwitchedOrbit": "driven", "find_switched_orbit": "driven_search", "drive_orbits": "driven_search",
+    "DrivenOrbit": "driven", "find_driven_orbit": "driven_search", "drive_orbits": "driven_search",
     "periodic_orbits_by_newton": "find", "rock_periodic_orbits": "find",
 }
 
@@ -55,8 +58,8 @@ __all__ = [
     "MultiImpactOrbit",
     "find_orbit",
     "impact_law",
-    "SwitchedOrbit",
-    "find_switched_orbit",
+    "DrivenOrbit",
+    "find_driven_orbit",
     "drive_orbits",
     "periodic_orbits_by_newton",
     "rock_periodic_orbits",
@@ -67,6 +70,8 @@ def __getattr__(name: str):
     if name in _HOME:
         value = getattr(importlib.import_module(f".{_HOME[name]}", __name__), name)
         globals()[name] = value
+        return value
+    if (value := renamed(sys.modules[__name__], name)) is not None:
         return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 

@@ -1,8 +1,8 @@
 r"""Periodic motions under a drive: autonomous, with an unknown period (theory §10).
 
-:func:`find_switched_orbit` (what :func:`impactbar.find_orbit` calls with a
+:func:`find_driven_orbit` (what :func:`impactbar.find_orbit` calls with a
 :class:`~impactbar.Drive` in place of the load) solves the drive's periodic-orbit problem, an
-:class:`~impactbar.drives.OrbitProblem`, by Newton's method and returns a :class:`SwitchedOrbit`,
+:class:`~impactbar.drives.OrbitProblem`, by Newton's method and returns a :class:`DrivenOrbit`,
 which is a :class:`~impactbar.PeriodicOrbit`. It calls only the interface:
 
 - a drive that brings a problem of its own (its ability ``orbit_problem``,
@@ -44,21 +44,21 @@ from ..drives.valve import PositionSwitchedDrive
 from ..laws.abilities import BlowRecords
 from ..model import BarModel
 from .admissibility import _window_departure
-from .driven_orbit import SwitchedOrbit, _constant_load
+from .driven_orbit import DrivenOrbit, _constant_load
 from .orbit import PeriodicOrbit
 from .shooting import ShootingProblem as ShootingProblem
 from .valve_segment import ValveProblem
 
-__all__ = ["SwitchedOrbit", "ORBIT_PROBLEMS", "orbit_problem", "orbit_of", "ShootingProblem", "check_orbit"]
+__all__ = ["DrivenOrbit", "ORBIT_PROBLEMS", "orbit_problem", "orbit_of", "ShootingProblem", "check_orbit"]
 
 TWO_PI = 2.0 * math.pi
 
 
 def check_orbit(orbit, name: str = "orbit") -> PeriodicOrbit:
-    """``orbit`` if it is a :class:`~impactbar.PeriodicOrbit` (a :class:`SwitchedOrbit` included),
+    """``orbit`` if it is a :class:`~impactbar.PeriodicOrbit` (a :class:`DrivenOrbit` included),
     else a ``ValueError`` naming ``name``."""
     if not isinstance(orbit, PeriodicOrbit):
-        raise ValueError(f"{name} must be a PeriodicOrbit, MultiImpactOrbit, SwitchedOrbit or BranchEvent; "
+        raise ValueError(f"{name} must be a PeriodicOrbit, MultiImpactOrbit, DrivenOrbit or BranchEvent; "
                          f"got {type(orbit).__name__}")
     return orbit
 
@@ -97,12 +97,12 @@ def orbit_problem(model: BarModel, drive, impacts: int = 1,
     return ShootingProblem(model, drive, impacts, settings, newton=newton)
 
 
-def orbit_of(problem: OrbitProblem, X, *, multipliers: bool = True) -> SwitchedOrbit:
-    """The :class:`SwitchedOrbit` of a solution ``X`` of ``problem``: its data
+def orbit_of(problem: OrbitProblem, X, *, multipliers: bool = True) -> DrivenOrbit:
+    """The :class:`DrivenOrbit` of a solution ``X`` of ``problem``: its data
     (:meth:`OrbitProblem.orbit`), the admissibility of the flights (:meth:`OrbitProblem.admissibility`)
     and, under a law whose contact takes time, of the contacts (held for their whole window: the wave
-    law's ``separates`` and ``sticks``, theory §4b). Used by :func:`find_switched_orbit` and by the
-    continuation of switched orbits. ``multipliers=False`` (a :class:`ShootingProblem` only) leaves
+    law's ``separates`` and ``sticks``, theory §4b). Used by :func:`find_driven_orbit` and by the
+    continuation of driven orbits. ``multipliers=False`` (a :class:`ShootingProblem` only) leaves
     the multipliers ``nan`` and the monodromy out, for the figures alone at a fraction of the cost
     (no variational flight: a coupled blow's Jacobian is most of an orbit's cost)."""
     model = problem.model
@@ -127,7 +127,7 @@ def orbit_of(problem: OrbitProblem, X, *, multipliers: bool = True) -> SwitchedO
     stable = adm == Admissibility.ADMISSIBLE and bool(np.all(np.abs(mu) < 1.0))
     impact_times = data.impact_times
     phases = np.mod(TWO_PI * impact_times / data.period, TWO_PI) if m > 1 else np.zeros(1)
-    return SwitchedOrbit(
+    return DrivenOrbit(
         model=model, load=problem.drive, impacts=m, periods=1, impact_times=impact_times,
         phases=phases, impact_velocities=data.impact_velocities,
         admissible=adm == Admissibility.ADMISSIBLE, admissibility=adm, clearance=math.nan,

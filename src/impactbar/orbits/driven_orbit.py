@@ -1,4 +1,4 @@
-"""The result of :func:`impactbar.find_orbit` under a drive: :class:`SwitchedOrbit`, a
+"""The result of :func:`impactbar.find_orbit` under a drive: :class:`DrivenOrbit`, a
 :class:`~impactbar.PeriodicOrbit` with the drive's state, the flights and their multipliers
 (theory §10, §11); :mod:`impactbar.orbits.driven` finds it."""
 
@@ -16,7 +16,7 @@ from .orbit import PeriodicOrbit
 if TYPE_CHECKING:
     pass
 
-__all__ = ["SwitchedOrbit"]
+__all__ = ["DrivenOrbit"]
 
 
 def _constant_load(p: float):
@@ -27,7 +27,7 @@ def _constant_load(p: float):
 
 
 class _LazyContacts:
-    """``SwitchedOrbit.contacts``: set by the constructor (``None``: not computed yet), computed on
+    """``DrivenOrbit.contacts``: set by the constructor (``None``: not computed yet), computed on
     first access from the arrivals (the law's :meth:`~impactbar.laws.abilities.BlowRecords.blow` under the
     force the drive holds during each contact)."""
 
@@ -44,7 +44,7 @@ class _LazyContacts:
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
-class SwitchedOrbit(PeriodicOrbit):
+class DrivenOrbit(PeriodicOrbit):
     """A periodic motion with ``m`` impacts per period under a drive (a :class:`~impactbar.Drive`,
     theory §10): a :class:`~impactbar.PeriodicOrbit` whose ``load`` is the drive, whose period is an
     output and whose ``periods`` is 1.

@@ -1,11 +1,11 @@
-"""The periodic orbits of a drive: :func:`find_switched_orbit` (one orbit, from a guess or the
+"""The periodic orbits of a drive: :func:`find_driven_orbit` (one orbit, from a guess or the
 default chain of starts) and :func:`drive_orbits` (every one-impact orbit in a window of periods),
 theory §10.
 
 :func:`drive_orbits` (what :func:`impactbar.periodic_orbits` calls with a
 :class:`~impactbar.Drive` in place of the load) lists the one-impact orbits of the drive's own
 search (:meth:`~impactbar.drives.OrbitProblem.search`); :func:`default_orbit` is
-:func:`~impactbar.orbits.find_switched_orbit`'s chain of starts without a guess: the drive's default
+:func:`~impactbar.orbits.find_driven_orbit`'s chain of starts without a guess: the drive's default
 start, the end of a run from rest on the stop, that search.
 """
 
@@ -23,15 +23,15 @@ from ..drives.orbitproblem import OrbitProblem
 from ..laws.abilities import newton_start
 from ..model import BarModel
 from ._settling import surfaces_ahead
-from .driven import SwitchedOrbit, orbit_of, orbit_problem
+from .driven import DrivenOrbit, orbit_of, orbit_problem
 from .one_impact import OrbitList
 
-__all__ = ["find_switched_orbit", "drive_orbits", "default_orbit", "SETTLE_RUN_IMPACTS", "SETTLE_RUN_TOL"]
+__all__ = ["find_driven_orbit", "drive_orbits", "default_orbit", "SETTLE_RUN_IMPACTS", "SETTLE_RUN_TOL"]
 
 
-def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *, tol: float = 1e-13,
+def find_driven_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *, tol: float = 1e-13,
                         max_iter: int = 50, newton: str = "chord",
-                        settings: FlightSettings | None = None) -> SwitchedOrbit:
+                        settings: FlightSettings | None = None) -> DrivenOrbit:
     """The periodic motion with ``m`` impacts per period under a drive (theory §10).
 
     Called by :func:`impactbar.find_orbit` when its load is a :class:`~impactbar.Drive`. Between
@@ -54,7 +54,7 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
     drive : Drive
     impacts : int
         Impacts per period ``m >= 1``; with ``m >= 2`` a ``guess`` is needed for the valve.
-    guess : SwitchedOrbit, SwitchedTrajectory, tuple or None
+    guess : DrivenOrbit, DrivenTrajectory, tuple or None
         Where Newton starts: an orbit (e.g. from a nearby parameter; a one-impact orbit is repeated
         ``m`` times, which Newton keeps unless the halves are perturbed), a run of
         :func:`impactbar.simulate` under the drive that has settled (the valve: its last ``m``
@@ -85,7 +85,7 @@ def find_switched_orbit(model: BarModel, drive, impacts: int = 1, guess=None, *,
 
     Returns
     -------
-    SwitchedOrbit
+    DrivenOrbit
 
     Raises
     ------
@@ -135,7 +135,7 @@ def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, new
     if coarse is None or not hasattr(problem, "polish"):
         return None
     try:
-        rough = find_switched_orbit(coarse, drive, 1, None, tol=tol, max_iter=max_iter, newton=newton,
+        rough = find_driven_orbit(coarse, drive, 1, None, tol=tol, max_iter=max_iter, newton=newton,
                                     settings=settings)
         return _motion(orbit_of(problem, problem.polish(rough, tol, max_iter)))
     except ValueError:
@@ -147,7 +147,7 @@ def _from_coarse(model: BarModel, drive, problem, tol: float, max_iter: int, new
 MIN_IMPACT_SPEED = 1e-9
 
 
-def _motion(orbit: SwitchedOrbit) -> SwitchedOrbit:
+def _motion(orbit: DrivenOrbit) -> DrivenOrbit:
     """``orbit``, refused where it is no motion: a period that is not positive or an arrival slower
     than :data:`MIN_IMPACT_SPEED` (a fixed point of the equations with the piston resting on the stop,
     its blows shrunk to nothing: the oil circuit's run from rest settles onto one where the bounces
@@ -182,7 +182,7 @@ def _solve(problem: OrbitProblem, X0, tol: float, max_iter: int):
     return X
 
 
-#: impacts of the simulation from rest in the default guess chain of :func:`find_switched_orbit`
+#: impacts of the simulation from rest in the default guess chain of :func:`find_driven_orbit`
 SETTLE_RUN_IMPACTS = 200
 #: relative agreement of the last impact velocities at which that run counts as settled
 SETTLE_RUN_TOL = 1e-3
@@ -201,8 +201,8 @@ def _settled_run(model: BarModel, drive, settings=None):
     return run, settled
 
 
-def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max_iter: int) -> SwitchedOrbit:
-    """:func:`find_switched_orbit` without a guess, one impact per period: the first admissible,
+def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max_iter: int) -> DrivenOrbit:
+    """:func:`find_driven_orbit` without a guess, one impact per period: the first admissible,
     stable orbit of (1) the drive's default start (:meth:`OrbitProblem.initial` of ``None``: the
     valve's rigid orbit), (2) the end of a run from rest on the stop (:func:`_settled_run`; skipped
     where (1) already is that run, :attr:`OrbitProblem.starts_from_rest`), (3) the systematic
@@ -210,7 +210,7 @@ def default_orbit(model: BarModel, drive, problem: OrbitProblem, tol: float, max
     the one of smallest spectral radius). Without a stable one, the first admissible orbit found in
     that order, then (1)'s orbit if it converged; else a ``ValueError`` that says what was tried."""
     tried: list[str] = []
-    found: list[SwitchedOrbit] = []
+    found: list[DrivenOrbit] = []
 
     def attempt(what, start):
         try:
@@ -285,7 +285,7 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
 
     The drive's periodic-orbit problem (:func:`~impactbar.orbits.driven.orbit_problem`) searches its own
     solutions (:meth:`~impactbar.drives.OrbitProblem.search`); each is polished by Newton's method
-    on the full problem (:func:`find_switched_orbit`'s) and becomes a :class:`SwitchedOrbit` with
+    on the full problem (:func:`find_driven_orbit`'s) and becomes a :class:`DrivenOrbit` with
     its admissibility, multipliers and stability; orbits found twice (periods within ``1e-9``
     relative) are kept once.
 
@@ -305,7 +305,7 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
     grid finer than the stiffest mode's period (exact on the rigid bar, theory §10), and a motion
     with a period outside the window, with chatter or with several impacts per period is not
     sought. A drive without a search of its own (another drive, another impact law, an overdamped
-    mode) gives the orbits of :func:`find_switched_orbit`'s default chain instead (the orbits found,
+    mode) gives the orbits of :func:`find_driven_orbit`'s default chain instead (the orbits found,
     not a certified set; ``window`` is then ``None``).
 
     Parameters
@@ -321,12 +321,12 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
     max_iter : int
         Most Newton steps per orbit.
     settings : FlightSettings, optional
-        How a drive's flights with state are integrated (:func:`find_switched_orbit`).
+        How a drive's flights with state are integrated (:func:`find_driven_orbit`).
 
     Returns
     -------
     OrbitList
-        :class:`SwitchedOrbit` by increasing period, with :attr:`OrbitList.window`,
+        :class:`DrivenOrbit` by increasing period, with :attr:`OrbitList.window`,
         :attr:`OrbitList.certified` and :attr:`OrbitList.unresolved`.
 
     Raises
@@ -361,7 +361,7 @@ def drive_orbits(model: BarModel, drive, window=None, *, tol: float = 1e-13, max
     problem = orbit_problem(model, drive, 1, settings)
     out = _searched(problem, window, tol, max_iter)
     if out is None:  # no search of the drive's own: the default chain's orbit
-        out = OrbitList([find_switched_orbit(model, drive, 1, tol=tol, max_iter=max(max_iter, 50),
+        out = OrbitList([find_driven_orbit(model, drive, 1, tol=tol, max_iter=max(max_iter, 50),
                                              settings=settings)])
         out._certified, out._unresolved, out._window = (False,), (), None
     return out

@@ -156,9 +156,9 @@ def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: i
 
     With a :class:`~impactbar.Drive` in place of the load (e.g. a
     :class:`~impactbar.PositionSwitchedDrive`) the system is autonomous and the period is unknown
-    (theory §10): the result is a :class:`~impactbar.SwitchedOrbit`, a :class:`PeriodicOrbit`
+    (theory §10): the result is a :class:`~impactbar.DrivenOrbit`, a :class:`PeriodicOrbit`
     (``impacts`` per period; ``periods`` ignored; under every impact law), from
-    :func:`~impactbar.orbits.find_switched_orbit`.
+    :func:`~impactbar.orbits.find_driven_orbit`.
     """
     max_iter = check_int("max_iter", max_iter, lo=1, hi=1000)
     solver = dispatch(FIND_ORBIT, load)
@@ -169,9 +169,9 @@ def find_orbit(model: BarModel, load: Load | Drive, impacts: int = 1, periods: i
 def _drive_orbit(model, drive, impacts, periods, guess, tol, max_iter, settings=None) -> PeriodicOrbit:
     """:func:`find_orbit` under a drive: an autonomous orbit of unknown period (theory §10;
     ``periods`` has no meaning there), its flights by ``settings``."""
-    from .driven_search import find_switched_orbit  # (the drives' machinery, loaded on first use)
+    from .driven_search import find_driven_orbit  # (the drives' machinery, loaded on first use)
 
-    return find_switched_orbit(model, drive, impacts, guess, tol=min(tol, 1e-13), max_iter=max(max_iter, 50),
+    return find_driven_orbit(model, drive, impacts, guess, tol=min(tol, 1e-13), max_iter=max(max_iter, 50),
                                settings=settings)
 
 

@@ -36,7 +36,7 @@ from ._settling import (
     surfaces_ahead,
 )
 from ._shooting_data import orbit_data
-from .driven_orbit import SwitchedOrbit, _constant_load
+from .driven_orbit import DrivenOrbit, _constant_load
 
 __all__ = ["ShootingProblem"]
 
@@ -294,7 +294,7 @@ class ShootingProblem(OrbitProblem):
 
     # -- the problem --------------------------------------------------------------------------------
     def initial(self, guess, tol, max_iter):
-        """The blocks' start times, modes and states: from a :class:`SwitchedOrbit` of the same drive
+        """The blocks' start times, modes and states: from a :class:`DrivenOrbit` of the same drive
         or of the same kind at other parameter values (its states, the drive's states, its impact
         times; the modes made again by this drive), from a run of :func:`impactbar.simulate`
         (continued from its end) or, without one, from rest on the stop (the rigid bar; a flexible bar
@@ -302,7 +302,7 @@ class ShootingProblem(OrbitProblem):
         the impact velocities settle (at most ``SETTLE_IMPACTS``; from the rigid bar's orbit
         ``SETTLE_LIFTED`` where the drive's flights are variational)."""
         model, drive, m, M = self.model, self.drive, self.impacts, self.M
-        if isinstance(guess, SwitchedOrbit):
+        if isinstance(guess, DrivenOrbit):
             problem = guess._problem
             if isinstance(problem, ShootingProblem) and problem.impacts == m and problem.blocks and (
                     problem.drive == drive or (alike(problem.drive, drive) and problem.M == M
@@ -346,7 +346,7 @@ class ShootingProblem(OrbitProblem):
                 raise ValueError("guess: a run under another drive")
             y = np.concatenate((q, v, final.z))
             return self._settle(float(guess.t_end), final.mode, y, SETTLE_IMPACTS)
-        raise ValueError("guess must be a SwitchedOrbit of the drive, a run of simulate under it or None")
+        raise ValueError("guess must be a DrivenOrbit of the drive, a run of simulate under it or None")
 
     def _settle(self, tau, mode, y, n_max, source=None):
         """Follow the motion from ``y`` in ``mode`` at ``tau`` impact after impact, at most ``n_max``
@@ -518,7 +518,7 @@ class ShootingProblem(OrbitProblem):
             dataclasses.replace(self.settings, magnus_theta=None)
         return self._chord(X, first, tol, max_iter, r if own else None, handover, first_here=True)
 
-    def polish(self, rough: SwitchedOrbit, tol: float, max_iter: int):
+    def polish(self, rough: DrivenOrbit, tol: float, max_iter: int):
         """The root of this problem from ``rough``, the orbit of a cheaper model of the same motion
         (:meth:`~impactbar.laws.abilities.NewtonStart.coarse_model`: a coupled blow on the lattice
         where this problem's are exact; theory §11, "The coupled blow"): its unknowns and blocks the
@@ -528,7 +528,7 @@ class ShootingProblem(OrbitProblem):
 
         Parameters
         ----------
-        rough : SwitchedOrbit
+        rough : DrivenOrbit
             An orbit of the same drive and impacts under the coarse model.
         tol : float
             Relative tolerance of the steps (no finer than the flights' accuracy).

@@ -281,7 +281,7 @@ class ValveProblem(OrbitProblem):
         return ValveProblem(model, self.drive, impacts, self.constant_load)
 
     def initial(self, guess, tol, max_iter):
-        """Newton's start. ``guess`` is a :class:`~impactbar.SwitchedOrbit` (a one-impact orbit is
+        """Newton's start. ``guess`` is a :class:`~impactbar.DrivenOrbit` (a one-impact orbit is
         repeated ``m`` times), a run of :func:`impactbar.simulate` under the drive (its last ``m``
         complete valve cycles, rigid or flexible bar, the paper's law: :func:`_from_run`), a tuple
         ``(states, h1, h3)``, or ``None`` (``m = 1``): the rigid bar's orbit from the closed form of
@@ -527,7 +527,7 @@ def _guess_unknowns(guess, M, m):
     """The unknowns of :func:`_residual_m` from a guess of :meth:`ValveProblem.initial`: an orbit
     (read by its ``states``, ``state`` and ``durations``), a run (by its ``switch_kinds`` and
     ``impact_times``) or a tuple."""
-    if hasattr(guess, "durations") and hasattr(guess, "state"):  # a SwitchedOrbit of the valve
+    if hasattr(guess, "durations") and hasattr(guess, "state"):  # a DrivenOrbit of the valve
         states = guess.states if guess.states is not None else guess.state[None, :]
         legs = guess.durations.reshape(-1, DUR_SIZE)
         h1, h3 = legs[:, DUR_H1], legs[:, DUR_H3]
@@ -539,7 +539,7 @@ def _guess_unknowns(guess, M, m):
         try:
             states, h1, h3 = guess
         except (TypeError, ValueError):
-            raise ValueError("guess must be a SwitchedOrbit, a simulated run under the drive or a "
+            raise ValueError("guess must be a DrivenOrbit, a simulated run under the drive or a "
                              "tuple (states, h1, h3)") from None
         states = np.atleast_2d(np.asarray(states, dtype=float))
         h1, h3 = np.atleast_1d(np.asarray(h1, dtype=float)), np.atleast_1d(np.asarray(h3, dtype=float))

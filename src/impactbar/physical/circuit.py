@@ -297,7 +297,7 @@ class CircuitDrifter(_ScaledDrifter):
 
         Parameters
         ----------
-        guess : CircuitDrifterOrbit, SwitchedOrbit or run, optional
+        guess : CircuitDrifterOrbit, DrivenOrbit or run, optional
             Where Newton starts: an orbit of this drifter, or the operating point of another design
             (other piston, chambers, valve or circuit values, the same number of modes): its
             unknowns (the state after the impact, the pressures, the flights' times) are taken as
@@ -341,7 +341,7 @@ class CircuitDrifter(_ScaledDrifter):
             ``gap_m``; ``None`` with ``histories=False``, which saves most of the time a run of the
             drifter on the rock takes, and most of its memory: each blow of ``run`` is then kept as
             its :class:`~impactbar.simulation.blows.BlowSummary`) and ``run`` (the dimensionless
-            :class:`~impactbar.SwitchedTrajectory`); with a drill string also ``work_on_rock_J`` and
+            :class:`~impactbar.DrivenTrajectory`); with a drill string also ``work_on_rock_J`` and
             ``penetration_mm`` (arrays, per blow).
 
         Raises
@@ -499,7 +499,7 @@ class CircuitDrifterOrbit(DrifterOrbit):
     Attributes
     ----------
     drifter : CircuitDrifter
-    orbit : SwitchedOrbit
+    orbit : DrivenOrbit
         The dimensionless orbit (its state includes the pressures and the valve opening).
     """
 

@@ -253,7 +253,7 @@ class Drifter(_ScaledDrifter):
 
     def simulate(self, duration_s: float, *, start_gap_m: float = 0.0, start_velocity_m_s: float = 0.0):
         """Simulate from the piston at rest (or a given gap and velocity) for ``duration_s``
-        (:func:`impactbar.simulate`); returns the :class:`~impactbar.SwitchedTrajectory` and a
+        (:func:`impactbar.simulate`); returns the :class:`~impactbar.DrivenTrajectory` and a
         dict of SI summaries over the last half of the run: ``blows``, ``blow_frequency_Hz``,
         ``impact_velocity_m_s`` (mean), ``impact_energy_J`` (mean, :math:`m v^2 / 2` of the rigid
         mode's arrival), ``percussive_power_kW``; with a drill string also the means per blow of
@@ -315,7 +315,7 @@ class DrifterOrbit:
     Attributes
     ----------
     drifter : Drifter or CircuitDrifter
-    orbit : SwitchedOrbit
+    orbit : DrivenOrbit
         The dimensionless orbit.
     """
 

@@ -115,7 +115,7 @@ def plot_drifter_motion(drifter, run, axes=None):
     Parameters
     ----------
     drifter : Drifter
-    run : SwitchedTrajectory
+    run : DrivenTrajectory
         Its dimensionless run.
     axes : sequence of two matplotlib Axes, optional
         Created when not given.

@@ -12,12 +12,21 @@ Part of the core: imports ``impactbar.model``, ``impactbar.loads``, ``impactbar.
 (``Trajectory.plot`` calls :mod:`impactbar.plotting`, imported on that call).
 """
 
-from .driven_trajectory import SwitchedTrajectory as SwitchedTrajectory
+import sys
+
+from .._shared.renamed import renamed
+from .driven_trajectory import DrivenTrajectory as DrivenTrajectory
 from .simulate import EnergyAccount as EnergyAccount
 from .simulate import InitialState as InitialState
 from .simulate import SimulationInterrupted as SimulationInterrupted
 from .simulate import Trajectory as Trajectory
 from .simulate import simulate as simulate
 
-__all__ = ["EnergyAccount", "InitialState", "Trajectory", "simulate", "SwitchedTrajectory",
+__all__ = ["EnergyAccount", "InitialState", "Trajectory", "simulate", "DrivenTrajectory",
            "SimulationInterrupted"]
+
+
+def __getattr__(name: str):
+    if (value := renamed(sys.modules[__name__], name)) is not None:
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -20,7 +20,7 @@ __all__ = ["BlowPiece", "BlowSummary", "check_coupling", "check_blow_switches", 
 class BlowPiece(ModalEnd):
     """A blow of a run under a drive with state and a law whose contact takes time (theory §11, "The
     coupled blow"): the law's record of the blow (solved with the drive's force as it evolved) and
-    the drive's pieces over it; a piece of :attr:`SwitchedTrajectory.pieces` like the flights.
+    the drive's pieces over it; a piece of :attr:`DrivenTrajectory.pieces` like the flights.
 
     Attributes
     ----------
@@ -363,12 +363,12 @@ def run_coupled(model, drive, q, v, t0, t_end, max_imp, make_state, settings, ne
     flights by :func:`impactbar.drives.flight.fly`, each arrival a blow of :func:`driven_blow` (a
     :class:`BlowPiece`); a blow that ends with the end pressed on the stop (moving into it) is
     followed at once by the next. ``new_run`` makes the run's log (the simulator's ``_Run``: its
-    state, logs and result, a :class:`~impactbar.SwitchedTrajectory`). Without ``histories`` each
+    state, logs and result, a :class:`~impactbar.DrivenTrajectory`). Without ``histories`` each
     blow is logged as its :class:`BlowSummary` once it ends (its drive's pieces released).
 
     Returns
     -------
-    SwitchedTrajectory
+    DrivenTrajectory
 
     Raises
     ------

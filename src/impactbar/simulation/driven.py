@@ -1,5 +1,5 @@
 """Simulation under a drive (theory §10): the event-driven run of any :class:`~impactbar.Drive`,
-whose result is a :class:`~impactbar.simulation.driven_trajectory.SwitchedTrajectory`.
+whose result is a :class:`~impactbar.simulation.driven_trajectory.DrivenTrajectory`.
 
 The run calls only the drive's interface (:mod:`impactbar.drives.base`):
 
@@ -12,7 +12,7 @@ The run calls only the drive's interface (:mod:`impactbar.drives.base`):
   flight; at the event the drive's map acts, at each impact :meth:`~impactbar.Drive.impact`. A drive
   with a compiled event loop (:attr:`~impactbar.Drive.abilities`) runs there under an
   instantaneous law, handing back the pieces it does not resolve (the same pieces, impacts and
-  switches; switch ``simulate.switched_kernel``).
+  switches; switch ``simulate.valve_loop``).
 - **a drive with state** ``z``: the bar's modes and ``z`` are integrated together by scipy's
   ``solve_ivp`` (:func:`impactbar.drives.flight.fly`, a stiff method), the arrivals and the drive's
   events located to the integrator's tolerance; at an impact the paper's law acts (eq. 10) and the
@@ -37,10 +37,10 @@ from ..drives.flight import END, EVENT, QuadratureRestPiece, RestPiece
 from ..dynamics.implementations import use_fast
 from ..model import BarModel
 from .blows import check_coupling, fly_and_switch, run_coupled
-from .driven_trajectory import SwitchedTrajectory as SwitchedTrajectory
+from .driven_trajectory import DrivenTrajectory as DrivenTrajectory
 from .trajectory import Trajectory
 
-__all__ = ["SwitchedTrajectory", "Driver", "run_drive", "run_stateful"]
+__all__ = ["DrivenTrajectory", "Driver", "run_drive", "run_stateful"]
 
 
 class Driver(NamedTuple):
@@ -184,7 +184,7 @@ class _Flight:
 
 
 class _Pieces(Sequence):
-    """The pieces of a switched run: those the Python loop ran (objects) and those a compiled loop
+    """The pieces of a driven run: those the Python loop ran (objects) and those a compiled loop
     logged (arrays of their starts, made into flights when asked for)."""
 
     def __init__(self, blocks, make):
@@ -299,14 +299,14 @@ class _Run:
         self.state, self.n_imp = res.state, res.n_impacts
         self.t, self.q, self.v = res.t, res.q, res.v
 
-    def result(self, make_state, make_piece) -> SwitchedTrajectory:
+    def result(self, make_state, make_piece) -> DrivenTrajectory:
         pieces = _Pieces(self.blocks, make_piece)
         runs = [piece for kind, piece, *_ in self.blocks if kind == "py" and isinstance(piece, Trajectory)]
         spans = [r.contact_intervals for r in runs if r.contact_intervals.size] + \
             [np.array(self.rests, dtype=float).reshape(-1, 2)]
         contact = np.concatenate(spans)
         retries = sum(r.n_release_retries for r in runs)
-        return SwitchedTrajectory(
+        return DrivenTrajectory(
             model=self.model, load=self.drive, t0=self.t0, t_end=self.t, impact_times=np.array(self.imp_t),
             impact_velocities=np.array(self.imp_v), contact_intervals=contact,
             final_state=make_state(np.array(self.q, dtype=float), np.array(self.v, dtype=float)),
@@ -318,19 +318,19 @@ class _Run:
 
 
 def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int,
-              driver: Driver, settings=None, histories: bool = True) -> SwitchedTrajectory:
+              driver: Driver, settings=None, histories: bool = True) -> DrivenTrajectory:
     """A drive's run (module docstring): a drive with state by ``solve_ivp``'s flights or its own
     (:func:`run_stateful`, with ``settings``, default the drive's integrator); a force constant
     between events over pieces of the ordinary driver under that force (``driver``), with the drive's
     compiled loop where it has one (its ability :class:`~impactbar.drives.abilities.CompiledLoop`,
-    switch ``simulate.switched_kernel``, an instantaneous law), in Python piece by piece otherwise
+    switch ``simulate.valve_loop``, an instantaneous law), in Python piece by piece otherwise
     (:func:`run_pieces`). ``histories``: as :func:`run_stateful` takes it."""
     if not drive.traits.piecewise_constant:
         return run_stateful(model, drive, q, v, t0, t_end, max_imp, driver.make_state, settings, histories)
     from ..loads import FourierLoad
 
     law = model.law  # an instantaneous law the kernel applies, v -> -R v (eq. 10): closed forms
-    rigid = model.n_modes == 0 and law.traits.restitution_in_kernel and use_fast("simulate.switched_rigid")
+    rigid = model.n_modes == 0 and law.traits.restitution_in_kernel and use_fast("simulate.valve_rigid")
     cores: dict = {}
 
     def core_of(level):
@@ -350,7 +350,7 @@ def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: in
             return driver.run(core, q, v, t, t_stop, 1)
 
     loop = drive.abilities.compiled_loop
-    if loop is None or not law.traits.restitution_in_kernel or not use_fast("simulate.switched_kernel"):
+    if loop is None or not law.traits.restitution_in_kernel or not use_fast("simulate.valve_loop"):
         return run_pieces(model, drive, q, v, t0, t_end, max_imp, piece, driver.make_state)
     level_cores = tuple(core_of(lv) for lv in loop.levels)
     first = level_cores[0]
@@ -362,7 +362,7 @@ def run_drive(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: in
 
 
 def run_pieces(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int, piece, make_state,
-               kernel: FlightKernel | None = None, cores=None, compiled=None) -> SwitchedTrajectory:
+               kernel: FlightKernel | None = None, cores=None, compiled=None) -> DrivenTrajectory:
     """The event-driven run of a drive whose force is constant between events (module docstring).
 
     ``piece(level, q, v, t, t_stop)`` runs the ordinary driver under the constant force ``level``
@@ -423,7 +423,7 @@ _SCIPY_METHODS = ("RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA")
 
 
 def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp: int, make_state,
-                 settings=None, histories: bool = True) -> SwitchedTrajectory:
+                 settings=None, histories: bool = True) -> DrivenTrajectory:
     """The event-driven run of a drive with state (module docstring): flights by
     :func:`impactbar.drives.flight.fly`, the paper's impact law (eq. 10) at each arrival, the
     drive's maps at its events and impacts; a rigid piston whose rebound is slower than

@@ -1,4 +1,4 @@
-"""The result of a simulation under a drive (theory §10): :class:`SwitchedTrajectory`, the run's
+"""The result of a simulation under a drive (theory §10): :class:`DrivenTrajectory`, the run's
 pieces (flights, rests, blows) with the drive's state and switches, and its energy account with the
 drive's work. The run that builds it is :mod:`impactbar.simulation.driven`."""
 
@@ -15,11 +15,11 @@ from ..drives.base import DriveState
 from .blows import BlowPiece
 from .trajectory import EnergyAccount, Trajectory
 
-__all__ = ["SwitchedTrajectory"]
+__all__ = ["DrivenTrajectory"]
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
-class SwitchedTrajectory(Trajectory):
+class DrivenTrajectory(Trajectory):
     """The result of :func:`impactbar.simulate` under a drive (a :class:`~impactbar.Drive`, theory
     §10): a :class:`~impactbar.Trajectory` whose ``load`` is the drive, with the drive's switches
     logged and the run kept as its flights.
@@ -64,7 +64,7 @@ class SwitchedTrajectory(Trajectory):
     >>> run = simulate(BarModel(s=10.0, d=0.05, R=0.5, n_modes=0), drive,
     ...                InitialState.rigid(-0.5, 0.0), 60.0)
     >>> type(run).__name__, isinstance(run, Trajectory), run.n_impacts > 5
-    ('SwitchedTrajectory', True, True)
+    ('DrivenTrajectory', True, True)
     """
 
     switch_times: np.ndarray
@@ -77,7 +77,7 @@ class SwitchedTrajectory(Trajectory):
 
     def __repr__(self) -> str:
         """One line: model, drive, time span, impacts, switches, status (not the arrays)."""
-        return (f"SwitchedTrajectory({self.model!r}, {self.load!r}, t {self.t0:.6g} -> {self.t_end:.6g}, "
+        return (f"DrivenTrajectory({self.model!r}, {self.load!r}, t {self.t0:.6g} -> {self.t_end:.6g}, "
                 f"{self.impact_times.size} impacts, {len(self.switch_kinds)} switches, "
                 f"status {str(self.status)!r})")
 
@@ -195,8 +195,8 @@ class SwitchedTrajectory(Trajectory):
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(16)
 
 
-def _drive_energy(tr: SwitchedTrajectory) -> EnergyAccount:
-    """:attr:`SwitchedTrajectory.energy`."""
+def _drive_energy(tr: DrivenTrajectory) -> EnergyAccount:
+    """:attr:`DrivenTrajectory.energy`."""
     model = tr.model
     kappa = model.drive_weights  # (1, 2, .., 2): u_t(0) = kappa . q'
     w2 = model.frequencies**2

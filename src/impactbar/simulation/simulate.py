@@ -383,7 +383,7 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
         :math:`t \bmod 2\pi`); or a :class:`~impactbar.Drive` (theory §10: autonomous, with state of its
         own, e.g. the valve of :class:`~impactbar.PositionSwitchedDrive`, which starts in return when
         the gap :math:`-q_0` is below ``switch_out`` and in stroke beyond it): the result is then a
-        :class:`~impactbar.SwitchedTrajectory` (a :class:`Trajectory`) with the drive's switches
+        :class:`~impactbar.DrivenTrajectory` (a :class:`Trajectory`) with the drive's switches
         logged (:mod:`impactbar.simulation.driven`).
     initial : InitialState
         Free-free modal state at ``t0``, ``N + 1`` modes (a one-mode state is padded with zeros).
@@ -419,7 +419,7 @@ def simulate(model: BarModel, load: Load | Drive, initial: InitialState, t_end, 
     Returns
     -------
     Trajectory
-        A :class:`~impactbar.SwitchedTrajectory` under a drive.
+        A :class:`~impactbar.DrivenTrajectory` under a drive.
 
     Raises
     ------

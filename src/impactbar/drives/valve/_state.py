@@ -12,7 +12,7 @@ __all__ = ["STROKE", "RETURN", "KIND", "DriveKernelView", "initial_valve"]
 #: The valve's two states (indices into :meth:`PositionSwitchedDrive.level`).
 STROKE = 0
 RETURN = 1
-#: The name of each state, logged at each switch (``SwitchedTrajectory.switch_kinds``).
+#: The name of each state, logged at each switch (``DrivenTrajectory.switch_kinds``).
 KIND = {STROKE: "stroke", RETURN: "return"}
 
 _NO_STATE = np.zeros(0)

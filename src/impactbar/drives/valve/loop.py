@@ -2,7 +2,7 @@
 
 :class:`ValveLoop` is what :meth:`PositionSwitchedDrive.compiled_loop
 <impactbar.PositionSwitchedDrive.compiled_loop>` gives the simulator
-(:func:`impactbar.simulate` under an instantaneous law, switch ``simulate.switched_kernel``): it
+(:func:`impactbar.simulate` under an instantaneous law, switch ``simulate.valve_loop``): it
 hands the valve's state and the modal state to the compiled loop
 (:func:`impactbar.drives.valve._compiled_loop.run_switched`), calls it again while its logs fill, and
 returns the impacts, switches and flights it followed (a :class:`~impactbar.drives.base.KernelRun`),

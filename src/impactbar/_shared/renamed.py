@@ -1,0 +1,37 @@
+"""Public names that were renamed: the old name still resolves, with a :class:`DeprecationWarning`
+that names the new one (as numpy keeps an expired alias for a release before removing it)."""
+
+from __future__ import annotations
+
+import warnings
+
+#: old public name -> new public name ("switched" was the word for both the motion under a drive and
+#: the valve drive: the motion under a drive is now "driven", the valve drive ``PositionSwitchedDrive``)
+RENAMED = {
+    "SwitchedOrbit": "DrivenOrbit",
+    "find_switched_orbit": "find_driven_orbit",
+    "SwitchedTrajectory": "DrivenTrajectory",
+}
+
+
+def renamed(module, name: str):
+    """The value of the renamed public ``name`` in ``module`` (its new name's), with a
+    :class:`DeprecationWarning`; ``None`` where ``name`` was never renamed.
+
+    Parameters
+    ----------
+    module : module
+        The package whose ``__getattr__`` asks (its new name must resolve in it).
+    name : str
+        The attribute asked for.
+
+    Returns
+    -------
+    object or None
+    """
+    new = RENAMED.get(name)
+    if new is None or new not in getattr(module, "__all__", ()):
+        return None
+    warnings.warn(f"{module.__name__}.{name} is renamed {new}; the old name will be removed",
+                  DeprecationWarning, stacklevel=3)
+    return getattr(module, new)
