@@ -13,7 +13,9 @@ phases, impact velocities, multipliers), ``find_orbit`` (the valve drive, the oi
 with 2 modes, the rod-rock law's orbit), ``simulate`` (a cosine-loaded run, a valve drifter's run, the
 circuit's run: impact times and velocities, energy accounts), ``continuation`` (a branch in ``p0`` and
 one of the circuit in its pre-charge), ``sweep`` (the orbits task on a 3x2 grid), ``si`` (summaries of
-the presets and examples in SI).
+the presets and examples in SI), ``exact`` (the exact blows on rod and rock: the example rock drifter's
+piston on its rod at three impact velocities, once with a bit of a tenth of the piston's mass, every
+number of the blow's record and its sampled forces; and the circuit on rock's orbit with exact blows).
 """
 
 from __future__ import annotations
@@ -31,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-GROUPS = ("orbits", "find_orbit", "simulate", "continuation", "sweep", "si")
+GROUPS = ("orbits", "find_orbit", "simulate", "continuation", "sweep", "si", "exact")
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -146,6 +148,25 @@ def group_si():
     out["drifter"] = drifter_preset("hydraulic-drifter").orbit().summary()
     out["circuit"] = circuit_preset("circuit-drifter").orbit().summary()
     out["circuit_rock"] = load(ROOT / "examples" / "circuit_drifter_rock.toml").orbit().summary()
+    return out
+
+
+def group_exact():
+    import dataclasses
+
+    import impactbar as ib
+    from impactbar.physical import load
+
+    out = {}
+    drifter = load(ROOT / "examples" / "circuit_drifter_rock.toml")
+    model = drifter.model()
+    exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
+    heavy = model.with_(impact=dataclasses.replace(model.law, method="exact", bit_mass=0.1))
+    for name, m, speeds in (("blows", exact, (0.5, 1.0, 1.5)), ("bit_mass", heavy, (1.0,))):
+        blows = [ib.single_blow(m, v) for v in speeds]
+        out[name] = [[b.to_dict(), b.times, b.shank_forces, b.bit_forces, b.penetrations] for b in blows]
+    o = ib.find_orbit(exact, drifter.drive())
+    out["orbit"] = [o.period, o.impact_velocity, np.asarray(o.multipliers)]
     return out
 
 
