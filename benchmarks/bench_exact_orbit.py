@@ -11,16 +11,23 @@ The rows the goals read (``bench_circuit.py --goals``): ``exact / default cost (
 10) and ``default's distance from the exact orbit`` (the largest of the relative differences; the goal
 at most 1e-5).
 
-Run: ``python benchmarks/bench_exact_orbit.py [--reps N]``.
+Run: ``python benchmarks/bench_exact_orbit.py [--reps N]``. ``--against SRC`` runs the same in fresh
+processes on the package tree ``SRC`` (e.g. ``git worktree add /tmp/old <commit>`` then ``--against
+/tmp/old/src``) and on this one, alternately (``--rounds`` each), and prints both trees' rows side by
+side, the baseline's first, with the largest relative difference of the exact orbit's numbers
+(the compared figures and the multipliers' moduli) between the trees.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import time
 import tomllib
 from pathlib import Path
+
+from _timing import fresh_runs  # this folder's shared runner of two trees
 
 EXAMPLE = Path(__file__).parents[1] / "examples" / "circuit_drifter_rock.toml"
 
@@ -47,19 +54,58 @@ def solve(drifter, model, reps: int):
     return CircuitDrifterOrbit(drifter, orbit), best
 
 
-def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--reps", type=int, default=2)
-    args = parser.parse_args(argv)
+def measure(reps: int) -> dict:
+    """Both orbits' CPU seconds and figures, and the exact orbit's multipliers' moduli."""
     from impactbar.physical import CircuitDrifter
 
     with open(EXAMPLE, "rb") as f:
         drifter = CircuitDrifter.from_config(tomllib.load(f))
     model = drifter.model()
     exact = model.with_(impact=dataclasses.replace(model.law, method="exact"))
-    default, t_default = solve(drifter, model, args.reps)
-    precise, t_exact = solve(drifter, exact, args.reps)
-    a, b = figures(default), figures(precise)
+    default, t_default = solve(drifter, model, reps)
+    precise, t_exact = solve(drifter, exact, reps)
+    return {"t_default": t_default, "t_exact": t_exact, "default": figures(default),
+            "exact": figures(precise), "moduli": [abs(complex(m)) for m in precise.orbit.multipliers]}
+
+
+def against(src, rounds: int, reps: int) -> None:
+    """Both trees' rows side by side (module docstring), each the best of ``rounds`` processes."""
+    runs = fresh_runs(__file__, src, rounds, args=("--reps", str(reps)))
+    rows = {}
+    for name, outs in runs.items():
+        t_d = min(r["t_default"] for r in outs)
+        t_e = min(r["t_exact"] for r in outs)
+        d, e = outs[0]["default"], outs[0]["exact"]
+        rows[name] = (t_d, t_e, t_e / t_d, max(abs(d[k] - e[k]) / abs(e[k]) for k in e))
+    old, new = runs["baseline"][0], runs["new"][0]
+    pairs = [(old["exact"][k], new["exact"][k]) for k in old["exact"]]
+    pairs += list(zip(old["moduli"], new["moduli"], strict=True))
+    moved = max(abs(x - y) / max(abs(x), 1e-300) for x, y in pairs)
+    b, n = rows["baseline"], rows["new"]
+    print(f"the circuit on rock ({EXAMPLE.name})")
+    print(f"{'(best of ' + str(rounds) + ' processes each)':46s} {'baseline':>12s} {'new':>12s}")
+    print(f"{'default orbit CPU s':46s} {b[0]:12.3f} {n[0]:12.3f}")
+    print(f"{'exact orbit CPU s':46s} {b[1]:12.3f} {n[1]:12.3f}")
+    print(f"exact / default cost (x) {b[2]:.1f} {n[2]:.1f}")
+    print(f"default's distance from the exact orbit {b[3]:.3g} {n[3]:.3g}")
+    print(f"the exact orbit's numbers between the trees (largest rel. diff) {moved:.2e}")
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--reps", type=int, default=2, help="timed orbits per process")
+    parser.add_argument("--rounds", type=int, default=1, help="processes per tree with --against")
+    parser.add_argument("--against", metavar="SRC", help="compare with the package tree SRC")
+    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
+    args = parser.parse_args(argv)
+    if args.json:
+        print(json.dumps(measure(args.reps)))
+        return 0
+    if args.against:
+        against(args.against, args.rounds, args.reps)
+        return 0
+    out = measure(args.reps)
+    t_default, t_exact, a, b = out["t_default"], out["t_exact"], out["default"], out["exact"]
     head = f"the circuit on rock ({EXAMPLE.name})"
     print(f"{head:46s} {'default':>12s} {'exact':>12s} {'rel. diff':>10s}")
     worst = 0.0
