@@ -1,14 +1,17 @@
 r"""One tree of parameters: each part of a drifter with its oil circuit declares its fields once, by
 their dotted SI name (``supply.pump_flow``, ``rock.k``, ``chambers.rear_area``), with the SI unit,
 an example, the scale that makes the field dimensionless (theory §11, eq. 2), the dimensionless
-parameter it sets, its typical range, and whether it can be continued (and why not).
+parameter it sets, its typical range, its own bound in SI, and whether it can be continued (and why
+not). The dimensionless parameters are their holders' own declarations (the circuit drive's
+:mod:`impactbar.drives.circuit.parameters`, the rod-rock law's, the bar model's): the tree names them.
 
 Every tool reads this one declaration: the configuration's reader (the sections' keys, the required
 ones, the values it converts), :meth:`~impactbar.physical.CircuitDrifter.to_dimensionless`,
 :func:`~impactbar.physical.continue_circuit`, the design maps' and the optimiser's units and integer
 keys, the sensitivities, the plausibility warnings and the command line. A field declared here is
 therefore set, swept, continued and optimised by its dotted name with no line elsewhere; the old
-tables (``SI_PARAMETERS``, ``TYPICAL``, ``INTEGER_KEYS``, the circuit's ``_KEYS``) are views of it.
+tables (``SI_PARAMETERS``, ``TYPICAL``, ``INTEGER_KEYS``, the circuit's ``_KEYS``, the SI checks'
+bounds) are views of it.
 
 Scales (theory §11, eq. 2): :math:`P` = 10 MPa, :math:`A_r` the rear area, :math:`L` and :math:`m`
 the piston's length and mass, :math:`\Omega = \sqrt{P A_r / (m L)}`, volumes in :math:`A_r L`, flows
