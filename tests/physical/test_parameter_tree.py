@@ -16,35 +16,80 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "impactbar"
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 
 
-def hand_tables(source: str, fields) -> list[int]:
+def _written(node) -> str | None:
+    """The name an entry of a literal table gives: a string, or a row's first (a tuple or list of
+    literals: one key per row); ``None`` for anything else (a row computed in code)."""
+    if isinstance(node, ast.Tuple | ast.List) and node.elts \
+            and all(isinstance(e, ast.Constant) for e in node.elts):
+        node = node.elts[0]
+    return node.value if isinstance(node, ast.Constant) and isinstance(node.value, str) else None
+
+
+#: Tables that name two of the declared dimensionless names and are no table of parameters: the
+#: schematic draws and labels the valve's switch points by the parameters' names (its module, the
+#: names).
+DRAWN = {("plotting/circuit.py", frozenset({"switch_out", "switch_in"}))}
+
+
+def hand_tables(source: str, fields, module: str = "") -> list[int]:
     """The lines of the literal tables (dict, set, tuple, list) in ``source`` that name two or more
-    of the declared dotted keys as plain strings: a table written by hand beside the declaration.
-    (A key that is also its own dimensionless name, the rod-rock law's ``rock.k``, is the law's to
-    list among its parameters.)"""
+    of the declared dotted keys, or two or more of the declared dimensionless parameter names (the
+    ones a field sets), as plain strings: a dict's keys, a sequence's elements, or the first element
+    of each of its rows (one key per row): a table written by hand beside the declaration.
+
+    A key that is also its own dimensionless name (the rod-rock law's ``rock.k``) is the law's to
+    list among its parameters, and a blow's to require; a name that is also a drifter's SI record's
+    (``valve_coefficient``) counts as none; a config's section (a dict under a section's name, as a
+    preset writes it) is no table; a declaration written as calls (``Field("supply.pump_flow", ...)``)
+    is none either.
+    """
     keys = {k for k, f in fields.items() if f.parameter != k}
+    records = {f.si for f in fields.values() if f.si}
+    names = {f.parameter for f in fields.values() if f.parameter} - records - set(fields)
+    sections = {f.section for f in fields.values()}
+    tree_ = ast.parse(source)
+    configs = {id(v) for node in ast.walk(tree_) if isinstance(node, ast.Dict)
+               for k, v in zip(node.keys, node.values, strict=True)
+               if isinstance(k, ast.Constant) and k.value in sections and isinstance(v, ast.Dict)}
     found = []
-    for node in ast.walk(ast.parse(source)):
+    for node in ast.walk(tree_):
+        if id(node) in configs:
+            continue
         elts = node.keys if isinstance(node, ast.Dict) else \
             node.elts if isinstance(node, ast.Tuple | ast.Set | ast.List) else ()
-        named = [e.value for e in elts if isinstance(e, ast.Constant) and e.value in keys]
-        if len(named) >= 2:
+        written = [_written(e) for e in elts if e is not None]
+        dotted = [w for w in written if w in keys]
+        named = frozenset(w for w in written if w in names)
+        if len(dotted) >= 2 or (len(named) >= 2 and (module, named) not in DRAWN):
             found.append(node.lineno)
     return found
 
 
 def test_the_scan_finds_a_planted_hand_table():
-    """The scan can fail: the old hand table of SI names and a planted one are found, a view is not."""
+    """The scan can fail: the old hand table of SI names and planted ones are found (one key per
+    row, keyed by the dimensionless names, a tuple of them), a view, a declaration by calls, a
+    config's sections and rows computed in code are not."""
     planted = ('SI = {"supply.pump_flow": ("pump_flow", "m**3/s"), "valve.switch_out": ("switch_out", "m")}\n'
                'INTEGER_KEYS = ("model.n_modes", "rock.cells_per_piston")\n'
-               'VIEW = {k: f.unit for k, f in FIELDS.items()}\n')
-    assert hand_tables(planted, tree.FIELDS) == [1, 2]
+               'VIEW = {k: f.unit for k, f in FIELDS.items()}\n'
+               'ROWS = (("supply.pump_flow", "pump_flow_m3_s", "positive"), ("oil.bulk_modulus", "Pa"))\n'
+               'PARTS = {"pump_flow": ("supply", "pump_flow"), "precharge": ("accumulator", "precharge")}\n'
+               'RANGES = {"hose_volume": {"low": 0.0}, "bulk_modulus": {"low": 0.0, "low_open": True}}\n'
+               'NAMES = ("rock.k", "rock.k_u", "bit_mass", "feed", "segment<i>.length")\n'
+               'KEYS = ("k", "bit_mass", "feed")\n'
+               'DECLARED = (P("pump_flow", "supply"), P("precharge", "accumulator"))\n'
+               'PRESET = {"supply": {"pump_flow": "70 L/min", "hose_volume": "0.25 L"}}\n'
+               'MARKS = (("switch_out", x_out, "C3"), ("switch_in", x_in, "C0"))\n'
+               'RECORD = ("valve_coefficient", "front_coefficient")\n')
+    assert hand_tables(planted, tree.FIELDS) == [1, 2, 4, 5, 6, 7, 8]
 
 
 def test_no_module_writes_a_table_of_the_declared_names():
     """Hand tables joining parameter names: 0 (every module of the package but the tree itself)."""
     every = {k: f for fields in tree.MACHINES.values() for k, f in fields.items()}
     tables = {str(p.relative_to(SRC)): lines for p in sorted(SRC.rglob("*.py"))
-              if p.name != "tree.py" and (lines := hand_tables(p.read_text(), every))}
+              if p.name != "tree.py"
+              and (lines := hand_tables(p.read_text(), every, p.relative_to(SRC).as_posix()))}
     assert tables == {}
 
 
@@ -64,6 +109,50 @@ def test_the_old_tables_are_views_of_the_tree():
         assert keys == {f.name for f in declared.values() if f.section == section}, section
     assert geometry.PISTON_KEYS == {k.split(".")[1] for k in declared if k.startswith("piston.")}
     assert MODEL_PARAMETERS == ("s", "d", "R")
+    from impactbar.physical._circuit_checks import _RANGES
+
+    assert [row[:2] for row in _RANGES] == [(f.key, f.si) for f in tree.in_sections() if f.bound]
+
+
+def test_the_tree_names_the_parameters_the_parts_declare():
+    """Each field's dimensionless parameter is one its holder declares (the drive's, the rod-rock
+    law's, the bar model's own declarations: the tree reads them, none reads the tree), and the
+    tables of the circuit drive, the law and a sweep's ``[rock]`` and ``[model]`` keys are views of
+    those declarations."""
+    from impactbar import BarModel, BilinearRock, RodRock, RodSegment
+    from impactbar.drives.circuit.drive import _RANGES, PARAMETERS, HydraulicCircuitDrive
+    from impactbar.drives.circuit.parameters import DECLARED
+    from impactbar.sweeps.spec import MODEL_FIELDS, ROCK_KEYS
+
+    held = {"drive": {p.name for p in DECLARED}, "law": set(RodRock.parameters),
+            "model": set(BarModel.parameters.names)}
+    for key, f in ((k, f) for fields in tree.MACHINES.values() for k, f in fields.items() if f.parameter):
+        assert f.parameter in held[f.holder], key
+    names = tuple(p.name for p in DECLARED)
+    assert HydraulicCircuitDrive.parameters == tuple(PARAMETERS) == tuple(_RANGES) == names
+    assert all(_RANGES[p.name]["description"] == p.description for p in DECLARED)
+    assert {p.name for p in RodRock(segments=[RodSegment(length=1.0, impedance=1.0)],
+                                    rock=BilinearRock(k=1.0, k_u=2.0)).parameter_table()} \
+        == {*RodRock.parameters[:-1], "segment0.length"}
+    assert MODEL_FIELDS == ("s", "d", "R", "n_modes")
+    assert ROCK_KEYS[:4] == ("k", "k_u", "bit_mass", "feed")
+
+
+def test_a_fields_own_bound_is_its_parameters_range():
+    """A field's bound in SI (checked before the conversion) is its dimensionless parameter's lower
+    bound in the drive's declaration (the scales are positive, so 0 stays 0): above 0 for a range
+    open at 0, 0 or above, with what 0 means, for one closed there."""
+    from impactbar.drives.circuit.parameters import DECLARED
+
+    ranges = {p.name: p for p in DECLARED}
+    bounded = [f for f in tree.FIELDS.values() if f.bound]
+    assert len(bounded) == 16
+    for f in bounded:
+        assert f.bound in ("positive", "non_negative"), f.key
+        assert bool(f.zero) == (f.bound == "non_negative"), f.key
+        if f.holder == "drive":
+            p = ranges[f.parameter]
+            assert (p.low, p.low_open) == (0.0, f.bound == "positive"), f.key
 
 
 def test_every_declared_field_is_complete():

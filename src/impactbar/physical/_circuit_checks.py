@@ -8,28 +8,13 @@ from __future__ import annotations
 import math
 
 from .display_units import display_unit, format_si, written_unit
+from .tree import in_sections
 
-#: The circuit's keys with a range of their own: the SI value's name, its unit and the rule
-#: (``"positive"``: above 0; ``"non_negative"``: 0 or above, with what 0 means).
-_RANGES = (
-    ("chambers.rear_area", "rear_area_m2", "m^2", "positive"),
-    ("chambers.front_area", "front_area_m2", "m^2", "positive"),
-    ("chambers.rear_volume", "rear_volume_m3", "m^3", "positive"),
-    ("chambers.front_volume", "front_volume_m3", "m^3", "positive"),
-    ("valve.switch_out", "switch_out_m", "m", "positive"),
-    ("valve.switching_time", "switching_time_s", "s", ("non_negative", "0: an instant switch")),
-    ("valve.flow_coefficient", "valve_coefficient", "m^3/s/Pa^0.5", "positive"),
-    ("supply.pump_flow", "pump_flow_m3_s", "m^3/s", "positive"),
-    ("supply.hose_volume", "hose_volume_m3", "m^3", "positive"),
-    ("supply.front_flow_coefficient", "front_coefficient", "m^3/s/Pa^0.5", "positive"),
-    ("supply.tank_pressure", "tank_pressure_Pa", "Pa", ("non_negative", "pressures are absolute")),
-    ("supply.relief_coefficient", "relief_coefficient", "m^3/s/Pa", ("non_negative", "0: no relief flow")),
-    ("accumulator.precharge", "precharge_Pa", "Pa", "positive"),
-    ("accumulator.volume", "accumulator_volume_m3", "m^3", ("non_negative", "0: no accumulator")),
-    ("oil.bulk_modulus", "bulk_modulus_Pa", "Pa", "positive"),
-    ("oil.transition_pressure", "transition_pressure_Pa", "Pa", "positive"),
-)
-
+#: The circuit's keys with a bound of their own, in the order they are checked: the SI value's name,
+#: its unit and the rule (``"positive"``: above 0; ``"non_negative"``: 0 or above, with what 0 means),
+#: a view of the tree's declarations (:attr:`~impactbar.physical.tree.Field.bound`).
+_RANGES = tuple((f.key, f.si, f.unit.replace("**", "^"),
+                 f.bound if f.bound == "positive" else (f.bound, f.zero)) for f in in_sections() if f.bound)
 
 def shown(value, si: float, unit: str) -> str:
     """A config value as the user wrote it (a string in a unit of their own), else its SI value in the

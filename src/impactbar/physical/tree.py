@@ -1,14 +1,17 @@
 r"""One tree of parameters: each part of a drifter with its oil circuit declares its fields once, by
 their dotted SI name (``supply.pump_flow``, ``rock.k``, ``chambers.rear_area``), with the SI unit,
 an example, the scale that makes the field dimensionless (theory §11, eq. 2), the dimensionless
-parameter it sets, its typical range, and whether it can be continued (and why not).
+parameter it sets, its typical range, its own bound in SI, and whether it can be continued (and why
+not). The dimensionless parameters are their holders' own declarations (the circuit drive's
+:mod:`impactbar.drives.circuit.parameters`, the rod-rock law's, the bar model's): the tree names them.
 
 Every tool reads this one declaration: the configuration's reader (the sections' keys, the required
 ones, the values it converts), :meth:`~impactbar.physical.CircuitDrifter.to_dimensionless`,
 :func:`~impactbar.physical.continue_circuit`, the design maps' and the optimiser's units and integer
 keys, the sensitivities, the plausibility warnings and the command line. A field declared here is
 therefore set, swept, continued and optimised by its dotted name with no line elsewhere; the old
-tables (``SI_PARAMETERS``, ``TYPICAL``, ``INTEGER_KEYS``, the circuit's ``_KEYS``) are views of it.
+tables (``SI_PARAMETERS``, ``TYPICAL``, ``INTEGER_KEYS``, the circuit's ``_KEYS``, the SI checks'
+bounds) are views of it.
 
 Scales (theory §11, eq. 2): :math:`P` = 10 MPa, :math:`A_r` the rear area, :math:`L` and :math:`m`
 the piston's length and mass, :math:`\Omega = \sqrt{P A_r / (m L)}`, volumes in :math:`A_r L`, flows
@@ -88,6 +91,12 @@ class Field:
         list's element by its index, never the list.
     text : bool
         Whether it is a word or a file's path (``force.kind``, ``rock.method``), not a quantity.
+    bound : {"", "positive", "non_negative"}
+        Its own bound in SI, checked before the conversion (theory §11): ``"positive"`` (above 0),
+        ``"non_negative"`` (0 or above); ``""``: none of its own (or one that depends on another
+        field, checked with it: ``valve.switch_in`` below ``valve.switch_out``).
+    zero : str, optional
+        What 0 means for a ``"non_negative"`` field (``"0: no accumulator"``), shown in the message.
     """
 
     key: str
@@ -105,6 +114,8 @@ class Field:
     reason: str = ""
     many: bool = False
     text: bool = False
+    bound: str = ""
+    zero: str = ""
 
     @property
     def section(self) -> str:
@@ -148,6 +159,13 @@ def _declare(*parts: tuple[Field, ...]) -> dict[str, Field]:
 
 
 _MPA, _L, _ORIFICE, _RELIEF = ("MPa", 1e-6), ("L", 1e3), "m**3/s/Pa**0.5", "m**3/s/Pa"
+#: a field's own bound in SI (``bound``): above 0, or 0 or above with what 0 means
+_POSITIVE = {"bound": "positive"}
+
+
+def _zero(means: str) -> dict:
+    return {"bound": "non_negative", "zero": means}
+
 
 # -- the parts ----------------------------------------------------------------------------------------
 _BAR = (Field("bar.E", "Pa", "'210 GPa'", required=True, reason=SCALE_REASON),
@@ -170,45 +188,48 @@ _DAMPING = (Field("damping.coefficient", "N*s/m", "'9 N*s/m'", typical=(0.0, 50.
 _MODEL = (Field("model.n_modes", "", "4", integer=True),)
 _CHAMBERS = (
     Field("chambers.rear_area", "m**2", "'5.6 cm^2'", si="rear_area_m2", required=True, reason=SCALE_REASON,
-          typical=(4e-4, 15e-4, "cm^2", 1e4)),
-    Field("chambers.front_area", "m**2", "'5.6 cm^2'", "area", "area_ratio", "drive", "front_area_m2", True),
+          typical=(4e-4, 15e-4, "cm^2", 1e4), **_POSITIVE),
+    Field("chambers.front_area", "m**2", "'5.6 cm^2'", "area", "area_ratio", "drive", "front_area_m2", True,
+          **_POSITIVE),
     Field("chambers.rear_volume", "m**3", "'0.15 L'", "volume", "rear_volume", "drive", "rear_volume_m3",
-          True),
+          True, **_POSITIVE),
     Field("chambers.front_volume", "m**3", "'0.1 L'", "volume", "front_volume", "drive", "front_volume_m3",
-          True))
+          True, **_POSITIVE))
 _VALVE = (
     Field("valve.switch_out", "m", "'21.5 mm'", "length", "switch_out", "drive", "switch_out_m", True,
-          typical=(15e-3, 60e-3, "mm", 1e3)),
+          typical=(15e-3, 60e-3, "mm", 1e3), **_POSITIVE),
     Field("valve.switch_in", "m", "'10 mm'", "length", "switch_in", "drive", "switch_in_m"),
     Field("valve.switching_time", "s", "'1 ms'", "time", "switching_time", "drive", "switching_time_s", True,
-          typical=(0.5e-3, 3e-3, "ms", 1e3)),
+          typical=(0.5e-3, 3e-3, "ms", 1e3), **_zero("0: an instant switch")),
     Field("valve.flow_coefficient", _ORIFICE, "'7.5e-6 m^3/s/Pa^0.5'", "orifice", "valve_coefficient",
-          "drive", "valve_coefficient", True, typical=(3e-6, 2e-5, "m^3/s/Pa^0.5", 1.0)))
+          "drive", "valve_coefficient", True, typical=(3e-6, 2e-5, "m^3/s/Pa^0.5", 1.0), **_POSITIVE))
 _SUPPLY = (
     Field("supply.pump_flow", "m**3/s", "'80 L/min'", "flow", "pump_flow", "drive", "pump_flow_m3_s", True,
-          typical=(40.0 / 6e4, 150.0 / 6e4, "L/min", 6e4)),
+          typical=(40.0 / 6e4, 150.0 / 6e4, "L/min", 6e4), **_POSITIVE),
     Field("supply.hose_volume", "m**3", "'1 L'", "volume", "hose_volume", "drive", "hose_volume_m3", True,
-          typical=(0.1e-3, 2e-3, *_L)),
+          typical=(0.1e-3, 2e-3, *_L), **_POSITIVE),
     Field("supply.front_flow_coefficient", _ORIFICE, "'7.5e-6 m^3/s/Pa^0.5'", "orifice", "front_coefficient",
-          "drive", "front_coefficient", True, typical=(3e-6, 2e-5, "m^3/s/Pa^0.5", 1.0)),
+          "drive", "front_coefficient", True, typical=(3e-6, 2e-5, "m^3/s/Pa^0.5", 1.0), **_POSITIVE),
     Field("supply.tank_pressure", "Pa", "'0.3 MPa'", "pressure", "tank_pressure", "drive", "tank_pressure_Pa",
-          True, typical=(0.2e6, 1e6, *_MPA)),
+          True, typical=(0.2e6, 1e6, *_MPA), **_zero("pressures are absolute")),
     Field("supply.relief_pressure", "Pa", "'25 MPa'", "pressure", "relief_pressure", "drive",
           "relief_pressure_Pa", default=math.inf, typical=(17e6, 30e6, *_MPA)),
     Field("supply.relief_coefficient", _RELIEF, "'5e-10 m^3/s/Pa'", "relief", "relief_coefficient", "drive",
-          "relief_coefficient", default="0 m**3/s/Pa", typical=(1e-10, 1e-9, "m^3/s/Pa", 1.0)))
+          "relief_coefficient", default="0 m**3/s/Pa", typical=(1e-10, 1e-9, "m^3/s/Pa", 1.0),
+          **_zero("0: no relief flow")))
 _ACCUMULATOR = (
     Field("accumulator.precharge", "Pa", "'12 MPa'", "pressure", "precharge", "drive", "precharge_Pa",
-          default=PRESSURE_SCALE, typical=(6e6, 22.5e6, *_MPA), needs="accumulator"),
+          default=PRESSURE_SCALE, typical=(6e6, 22.5e6, *_MPA), needs="accumulator", **_POSITIVE),
     Field("accumulator.volume", "m**3", "'0.5 L'", "volume", "accumulator_volume", "drive",
-          "accumulator_volume_m3", default=0.0, typical=(0.2e-3, 1e-3, *_L), needs="accumulator"),
+          "accumulator_volume_m3", default=0.0, typical=(0.2e-3, 1e-3, *_L), needs="accumulator",
+          **_zero("0: no accumulator")),
     Field("accumulator.polytropic_exponent", "", "1.4", "one", "polytropic_exponent", "drive",
           "polytropic_exponent", default=1.4, needs="accumulator"))
 _OIL = (
     Field("oil.bulk_modulus", "Pa", "'1.4 GPa'", "pressure", "bulk_modulus", "drive", "bulk_modulus_Pa", True,
-          typical=(0.8e9, 1.8e9, "GPa", 1e-9)),
+          typical=(0.8e9, 1.8e9, "GPa", 1e-9), **_POSITIVE),
     Field("oil.transition_pressure", "Pa", "'0.5 MPa'", "pressure", "transition_pressure", "drive",
-          "transition_pressure_Pa", True, typical=(0.05e6, 0.5e6, *_MPA)))
+          "transition_pressure_Pa", True, typical=(0.05e6, 0.5e6, *_MPA), **_POSITIVE))
 # a drifter on the drill string and the rock: the rod-rock law's own (theory §4d)
 _ROCK = (Field("rock.k", "N/m", "'250 kN/mm'", "stiffness", "rock.k", "law", needs="rock"),
          Field("rock.k_u", "N/m", "'2500 kN/mm'", "stiffness", "rock.k_u", "law", needs="rock"),

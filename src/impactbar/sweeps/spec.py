@@ -13,7 +13,9 @@ import numpy as np
 from .._shared.parameters import parameter_value, parameters, with_parameters
 from .._shared.validate import check_int, check_real
 from ..laws import get_law
+from ..laws.rodrock import RodRock
 from ..loads import LOADS, load_from_record
+from ..model import BarModel
 from .grid import ChunkedGrid, check_points
 from .parts import DRIVE_MAX_ORBITS, drive_table, law_table
 
@@ -22,7 +24,8 @@ TASKS = ("orbits", "montecarlo", "bifurcation")
 #: the fields of each load kind, in constructor order (the table of loads)
 LOAD_KINDS = {kind: cls.traits.parameters.names for kind, cls in LOADS.items()}
 
-MODEL_FIELDS = ("s", "d", "R", "n_modes")
+#: the fields of the ``[model]`` table: the bar's parameters (:attr:`impactbar.BarModel.parameters`)
+MODEL_FIELDS = BarModel.parameters.names
 #: the integer fields (an axis of them holds integers)
 INT_FIELDS = frozenset({"n_modes", *(f.name for cls in LOADS.values() for f in cls.traits.parameters
                                      if f.dtype.startswith("i"))})
@@ -56,9 +59,12 @@ DEFAULT_CLOSED_FORM_CHUNK_POINTS = 32768
 
 _TOP_KEYS = ("task", "model", "load", "drive", "law", "axes", "rock", "chunk_points", *TASKS)
 
-#: keys of the optional ``[rock]`` table (the rod-rock law, :class:`impactbar.RodRock`) and of
-#: each of its ``segments``
-ROCK_KEYS = ("k", "k_u", "bit_mass", "feed", "blow_time", "cells_per_piston", "segments")
+#: keys of the optional ``[rock]`` table (the rod-rock law, :class:`impactbar.RodRock`): the law's own
+#: parameters (:attr:`impactbar.RodRock.parameters`, the rock's without ``rock.``), its blow's time
+#: and lattice, its segments; and the keys of each of its ``segments``
+_ROCK_PARAMETERS = tuple(n for n in RodRock.parameters if RodRock.has_parameter(n))
+ROCK_KEYS = (*(n.removeprefix("rock.") for n in _ROCK_PARAMETERS), "blow_time", "cells_per_piston",
+             "segments")
 SEGMENT_KEYS = ("length", "impedance", "wave_speed")
 #: grid points per chunk of an ``orbits`` sweep under the rod-rock law (Newton on a numerical blow
 #: map: 0.1 to 0.7 s a point): small chunks, since the points' costs differ by up to 8 times and a
@@ -402,8 +408,6 @@ def _check_model(model, rock=None, law=None) -> dict:
     missing = [k for k in MODEL_FIELDS if k not in model]
     if missing:
         raise ValueError(f"[model] missing key(s) {missing}")
-    from ..model import BarModel
-
     impact = model.get("impact", "paper")
     if rock is not None:
         if "impact" in model and impact != "rodrock":
@@ -421,7 +425,7 @@ def _check_model(model, rock=None, law=None) -> dict:
         m = BarModel(**{k: model[k] for k in MODEL_FIELDS}, impact=impact)
     except ValueError as exc:
         raise ValueError(f"[model] {exc}") from None
-    out = {"s": m.s, "d": m.d, "R": m.R, "n_modes": m.n_modes}
+    out = {k: getattr(m, k) for k in MODEL_FIELDS}
     if "impact" in model or rock is not None or law is not None:  # the impact law: "paper" (eq. 10,
         out["impact"] = m.impact                # default), "wave", "rodrock" (with [rock]) or [law]'s
     return out
@@ -456,7 +460,7 @@ def _check_rock(rock) -> dict:
         law = _rock_law(out)
     except ValueError as exc:
         raise ValueError(f"[rock] {exc}") from None
-    norm = {"k": law.rock.k, "k_u": law.rock.k_u, "bit_mass": law.bit_mass, "feed": law.feed}
+    norm = {n.removeprefix("rock."): law.parameter_value(n) for n in _ROCK_PARAMETERS}
     if law.blow_time is not None:
         norm["blow_time"] = law.blow_time
     if law.cells_per_piston is not None:

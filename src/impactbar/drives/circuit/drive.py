@@ -24,6 +24,7 @@ from .abilities import circuit_abilities, circuit_params, circuit_traits
 from .composition import compose_parts
 from .energy import CircuitEnergy
 from .layout import PRESET
+from .parameters import DECLARED
 from .part_flows import part_flows
 from .parts import Accumulator, Chambers, Oil, Supply, Valve
 from .preset import preset_parts
@@ -32,53 +33,12 @@ from .watch import watched
 
 __all__ = ["HydraulicCircuitDrive", "CircuitEnergy", "PARAMETERS"]
 
-#: The circuit's continuation parameters and the part that holds each (``with_`` takes them by name).
-PARAMETERS = {
-    "pump_flow": ("supply", "pump_flow"), "supply_pressure": ("supply", "pressure"),
-    "hose_volume": ("supply", "hose_volume"), "front_coefficient": ("supply", "front_coefficient"),
-    "tank_pressure": ("supply", "tank_pressure"), "relief_pressure": ("supply", "relief_pressure"),
-    "relief_coefficient": ("supply", "relief_coefficient"),
-    "precharge": ("accumulator", "precharge"), "accumulator_volume": ("accumulator", "volume"),
-    "polytropic_exponent": ("accumulator", "polytropic_exponent"),
-    "switch_out": ("valve", "switch_out"), "switch_in": ("valve", "switch_in"),
-    "switching_time": ("valve", "switching_time"), "valve_coefficient": ("valve", "coefficient"),
-    "area_ratio": ("chambers", "area_ratio"), "rear_volume": ("chambers", "rear_volume"),
-    "front_volume": ("chambers", "front_volume"),
-    "bulk_modulus": ("oil", "bulk_modulus"), "transition_pressure": ("oil", "transition_pressure"),
-}
-
+#: The circuit's continuation parameters and the part and field that hold each (``with_`` takes them
+#: by name): a view of their declaration (:data:`.parameters.DECLARED`).
+PARAMETERS = {p.name: (p.part, p.field) for p in DECLARED}
 #: The ranges and descriptions of :data:`PARAMETERS` (their records:
-#: ``drive.params.parameter_table()``); the parts' constructors check them again, with
-#: the ranges that depend on another parameter (a held supply pressure above the tank's, ``switch_in``
-#: below ``switch_out``, the pre-charge below the relief pressure).
-_RANGES = {
-    "pump_flow": {"low": 0.0, "low_open": True, "description": "the pump's flow"},
-    "supply_pressure": {"low": 0.0, "description": "pressure of a supply held at a pressure"},
-    "hose_volume": {"low": 0.0, "low_open": True, "description": "the supply hose's oil volume"},
-    "front_coefficient": {"low": 0.0, "low_open": True,
-                          "description": "flow coefficient of the supply to the front chamber"},
-    "tank_pressure": {"low": 0.0, "description": "the tank's pressure"},
-    "relief_pressure": {"low": 0.0, "low_open": True,
-                        "description": "the relief valve's cracking pressure (inf: no relief valve)"},
-    "relief_coefficient": {"low": 0.0, "description": "the relief valve's flow coefficient"},
-    "precharge": {"low": 0.0, "low_open": True, "description": "the accumulator's gas pre-charge"},
-    "accumulator_volume": {"low": 0.0, "description": "the accumulator's gas volume"},
-    "polytropic_exponent": {"low": 1.0, "high": 2.0, "description": "the gas's polytropic exponent"},
-    "switch_out": {"low": 0.0, "low_open": True, "description": "gap whose rising crossing opens the valve"},
-    "switch_in": {"low": 0.0, "low_open": True, "description": "gap whose falling crossing closes the valve"},
-    "switching_time": {"low": 0.0, "description": "a full stroke of the valve's spool"},
-    "valve_coefficient": {"low": 0.0, "low_open": True, "description": "the valve's flow coefficient"},
-    "area_ratio": {"low": 0.0, "high": 1.0, "low_open": True, "high_open": True,
-                   "description": "area of the front annulus over the rear's"},
-    "rear_volume": {"low": 0.0, "low_open": True, "description": "the rear chamber's dead volume"},
-    "front_volume": {"low": 0.0, "low_open": True, "description": "the front chamber's dead volume"},
-    "bulk_modulus": {"low": 0.0, "low_open": True, "description": "the oil's bulk modulus"},
-    "transition_pressure": {"low": 0.0, "low_open": True,
-                            "description": "transition pressure of the orifices' smoothed law"},
-}
-for _name, _range in _RANGES.items():  # finite above, but the relief pressure (inf: none)
-    if "high" not in _range and _name != "relief_pressure":
-        _range["high_open"] = True
+#: ``drive.params.parameter_table()``), from the same declaration.
+_RANGES = {p.name: p.ranges for p in DECLARED}
 
 _SWITCH_OUT = "switch_out"
 _SWITCH_IN = "switch_in"

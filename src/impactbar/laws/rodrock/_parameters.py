@@ -7,9 +7,21 @@ from __future__ import annotations
 import dataclasses
 import re
 
-__all__ = ["changed"]
+from ..._shared.parameters import Parameter
+
+__all__ = ["OWN", "changed"]
 
 _SEGMENT = re.compile(r"segment(\d+)\.length")
+
+#: The law's own continuation parameters, declared once, in its units (theory §4d): the rock's
+#: loading and unloading stiffnesses (``rock.k_u`` at least the law's ``rock.k``: its records'
+#: lower bound), the bit's mass and the feed force; each segment's length (``"segment<i>.length"``)
+#: follows them. The law's ``parameters``, its records and the names it takes are views of it.
+OWN = (Parameter("rock.k", None, low=0.0, low_open=True, description="rock loading stiffness"),
+       Parameter("rock.k_u", None, description="rock unloading stiffness"),
+       Parameter("bit_mass", None, low=0.0, description="bit mass (piston masses)"),
+       Parameter("feed", None, low=0.0, description="feed force"))
+_NAMES = tuple(p.name for p in OWN)
 
 
 def changed(law, changes: dict):

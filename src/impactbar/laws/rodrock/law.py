@@ -41,7 +41,7 @@ from ._choice import (  # noqa: F401  (the choices' bounds, as before)
     _bit_is_negligible,
     _exact_is_cheap,
 )
-from ._parameters import _SEGMENT, changed
+from ._parameters import _NAMES, _SEGMENT, OWN, changed
 from .checks import _check_blow_call, _check_force_scale
 from .rod import BilinearRock as BilinearRock
 from .rod import RodSegment as RodSegment
@@ -136,7 +136,7 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
     #: ``"segment<i>.length"`` (``i`` from 0 at the shank; the default ``blow_time`` follows the
     #: lengths), continued on the exact blows only (the lattice's cell grid rounds them to whole
     #: cells: :meth:`parameter_table`)
-    parameters = ("rock.k", "rock.k_u", "bit_mass", "feed", "segment<i>.length")
+    parameters = (*_NAMES, "segment<i>.length")
 
     def __post_init__(self) -> None:
         segs = tuple(self.segments)
@@ -350,12 +350,8 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
                    "'auto', without cells_per_piston), or follow it with simulated_diagram or find_orbit "
                    "at each length")
         return (
-            Parameter("rock.k", float(self.rock.k), low=0.0, low_open=True,
-                      description="rock loading stiffness"),
-            Parameter("rock.k_u", float(self.rock.k_u), low=float(self.rock.k),
-                      description="rock unloading stiffness"),
-            Parameter("bit_mass", float(self.bit_mass), low=0.0, description="bit mass (piston masses)"),
-            Parameter("feed", float(self.feed), low=0.0, description="feed force"),
+            *(dataclasses.replace(p, value=self.parameter_value(p.name),  # (k_u at least this law's k)
+                                  low=float(self.rock.k) if p.name == "rock.k_u" else p.low) for p in OWN),
             *(Parameter(f"segment{i}.length", float(g.length), low=1e-100, high=1e100, continuable=exact,
                         description=f"length of rod segment {i} (piston lengths)", reason=lattice)
               for i, g in enumerate(self.segments)),
@@ -374,7 +370,7 @@ class RodRock(ContactLaw, BlowRecords, CoupledBlow, NewtonStart):
         -------
         bool
         """
-        return name in ("rock.k", "rock.k_u", "bit_mass", "feed") or bool(_SEGMENT.fullmatch(str(name)))
+        return name in _NAMES or bool(_SEGMENT.fullmatch(str(name)))
 
     def parameter_value(self, name: str) -> float:
         """The value of one of :attr:`parameters` (``"rock.k"``, ``"segment0.length"``, ...).
