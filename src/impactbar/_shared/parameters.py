@@ -142,12 +142,6 @@ def _declarer(part):
     return getattr(part, "params", None) or part
 
 
-def _declarer(part):
-    """What holds ``part``'s ``parameter_table`` and ``with_parameter(s)``: its ``params`` object
-    where it has one (a load), else the part itself."""
-    return getattr(part, "params", None) or part
-
-
 def table_of(part, *args) -> dict[str, Parameter]:
     """The parameters a part declares (its ``parameter_table(*args)``), by name.
 
