@@ -23,6 +23,12 @@ constraints the peak incident stress and the piston's mass. Over the piston's di
 lengths and mass held, the optimum is then :func:`~impactbar.physical.optimize_piston`'s (a check
 of the search that does not trust it: ``tests/physical/test_optimize_drifter_checks.py``).
 
+A valve drifter (``[valve]``, theory §10) is searched the same way at its operating point as a design
+map finds it (:func:`~impactbar.physical.drifter.operating_point`), with the objectives and
+constraints of its outputs (:func:`~impactbar.physical.optimize_problem.objectives`); a key that takes
+integers is enumerated, each value a search over the other keys
+(:mod:`~impactbar.physical.optimize_integers`).
+
 This module is the search; the problem (the objectives, the constraints, a design's evaluation) is
 :mod:`~impactbar.physical.optimize_problem`'s and the result :mod:`~impactbar.physical.optimize_result`'s,
 their public names imported here as well.
@@ -106,27 +112,36 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                      tol: float = 2e-3, method: str = "cobyla", impact_velocity=None, workers=None,
                      popsize: int = 5, seed: int = 0, sample: int = 64,
                      local_starts: int = 3, start: str = "feasible", polish: int = 12) -> DrifterOptimum:
-    r"""The design of a drifter with its oil circuit that maximises ``objective`` under
-    ``constraints``, the variables any of its dotted config keys within bounds.
+    r"""The design of a drifter with its oil circuit, or of a valve drifter, that maximises
+    ``objective`` under ``constraints``, the variables any of its dotted config keys within bounds.
 
     Parameters
     ----------
     config : str, os.PathLike or dict
-        A drifter with its oil circuit (``[chambers]``), on a drill string and the rock for the
-        drilling objectives: a TOML file, a preset's name or the config itself
+        A drifter with its oil circuit (``[chambers]``) or a valve drifter (``[valve]``: the machines
+        a design map sweeps, a hammer not), on a drill string and the rock for the drilling
+        objectives: a TOML file, a preset's name or the config itself
         (:func:`~impactbar.physical.read_config`).
     vary : dict
         Dotted key (``"piston.collar_diameter"``, ``"chambers.rear_volume"``, ``"valve.switch_out"``,
         ``"accumulator.precharge"``, ``"stop.restitution"``: any key the config gives that a design
         map sweeps, :func:`~impactbar.physical.design_keys.design_bounds`) to ``(low, high)`` with
         units (``("46 mm", "52 mm")``, a number for a dimensionless key); the config's own value,
-        the start, must lie within.
+        the start, must lie within. A key that takes integers (``"model.n_modes": (6, 8)``,
+        :data:`~impactbar.physical.design_keys.INTEGER_KEYS`) has integer bounds and is
+        enumerated: each combination of the integer keys' values (at most
+        :data:`~impactbar.physical.optimize_integers.MAX_INTEGER_DESIGNS`) a search over the other
+        keys by ``method``, or one fresh orbit without other keys; ``cache`` then one file per
+        combination beside it.
     objective : str
         One of :data:`OBJECTIVES` (maximised): ``"drilling_rate_per_kW"`` (default),
-        ``"drilling_rate"``, ``"work_on_rock_per_blow"``, ``"impact_power"``.
+        ``"drilling_rate"``, ``"work_on_rock_per_blow"``, ``"impact_power"``; a valve drifter has
+        no pump: ``"impact_power"`` (its percussive power), ``"work_on_rock_per_blow"``,
+        ``"drilling_rate"``.
     constraints : dict, optional
         Limits of :data:`DEFAULT_CONSTRAINTS` (with units or SI; ``None`` drops one), e.g.
-        ``{"peak_incident_stress": "260 MPa"}``.
+        ``{"peak_incident_stress": "260 MPa"}``; a valve drifter's are those of its outputs
+        (:func:`~impactbar.physical.optimize_problem.default_constraints`: no oil's).
     max_evaluations : int
         The most designs the search evaluates (besides the baseline's and the optimum's fresh
         re-evaluation); for SLSQP the most iterations, each its line search's designs (one where its
@@ -161,6 +176,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         generation's designs evaluated together on ``workers``, each by a fresh ``orbit()``;
         ``max_evaluations`` bounds its generations, at least two), or COBYLA from the best feasible
         designs of a Sobol sample evaluated together (:mod:`~impactbar.physical.optimize_multistart`).
+        A valve drifter: not SLSQP, and the multistart with ``polish=0`` (their gradients are the
+        oil circuit's); its certificate's gradients central differences of fresh orbits.
     workers : None, int or distributed.Client
         Where a population's or a sample's designs are evaluated (those two methods only):
         ``None`` this process, an integer (at least 1) a local dask cluster of that many processes
@@ -200,9 +217,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     ValueError
         A variable that is not a parameter or not in the config, bounds of the wrong unit or outside
         the key's range, a start outside its bounds, an unknown objective or constraint, an
-        objective the config cannot give (no ``[rock]``), a start without an operating point or, with
-        ``start="feasible"``, an infeasible start (the constraint named, with how far it is missed):
-        each in one line.
+        objective or constraint the machine does not have (no ``[rock]``, a valve drifter's no oil),
+        a hammer, a method a valve drifter does not take, integer bounds not integers or too many, a
+        start without an operating point or, with ``start="feasible"``, an infeasible start (the
+        constraint named, with how far it is missed): each in one line.
 
     Examples
     --------
