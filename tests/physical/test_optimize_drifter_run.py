@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 from impactbar.physical import build, optimize_drifter, read_config, with_values
-from impactbar.physical.circuit import CircuitDrifter
 from impactbar.physical.config import config_kind, read_toml
 from impactbar.physical.design_keys import INTEGER_KEYS
 from impactbar.physical.loader import config_keys, config_value
@@ -24,27 +23,26 @@ from impactbar.sweeps.map_spec import parse_map_spec
 pytest.importorskip("pint")
 
 ROOT = Path(__file__).resolve().parents[2]
-#: the example configs ``impactbar optimize`` takes: the drifters with their oil circuit (the valve
-#: drifters and the hammers have no circuit to optimise, the sweep specs are no machine)
-CIRCUIT_EXAMPLES = ("circuit_drifter.toml", "circuit_drifter_parts.toml", "circuit_drifter_return_line.toml",
-                    "circuit_drifter_rock.toml", "circuit_drifter_rock_piston.toml",
-                    "circuit_drill_parts.toml", "circuit_drill_spool.toml")
 
 
-def test_the_circuit_examples_are_the_ones_optimize_takes():
-    found = []
-    for path in sorted((ROOT / "examples").glob("*.toml")):
-        doc = read_toml(path)
-        if "axes" in doc or "channels" in doc:  # a sweep spec, a measurement's spec
+def test_the_examples_a_design_map_sweeps_are_the_ones_optimize_takes():
+    """The example configs ``impactbar sweep`` maps (the drifters with their oil circuit and the valve
+    drifters) are the machines ``impactbar optimize`` takes; a hammer, which a design map refuses, is
+    refused in one line."""
+    machines = [p for p in sorted((ROOT / "examples").glob("*.toml")) if not _spec(p)]
+    swept = _swept_examples()
+    assert {"drifter_rock.toml", "stepped_drifter.toml", "stepped_drifter_rock.toml",
+            "circuit_drifter.toml"} <= set(swept)
+    assert set(swept) == {p.name for p in machines if config_kind(read_toml(p)) in ("drifter", "circuit")}
+    for path in machines:
+        if path.name in swept:
             continue
-        if config_kind(doc) == "circuit":
-            assert isinstance(build(doc, path.parent), CircuitDrifter)
-            found.append(path.name)
-        else:
-            with pytest.raises(ValueError, match="a drifter with its oil circuit"):
-                optimize_drifter(path, {"bar.diameter": ("40 mm", "50 mm")}, objective="impact_power",
-                                 progress=False)
-    assert tuple(found) == CIRCUIT_EXAMPLES
+        cfg = read_toml(path)
+        key = next(k for k in _keys(cfg) if _around(config_value(cfg, k)))
+        with pytest.raises(ValueError, match="the machines a design map sweeps; got a Hammer") as info:
+            optimize_drifter(path, {key: _around(config_value(cfg, key))}, objective="impact_power",
+                             progress=False)
+        assert "\n" not in str(info.value)
 
 
 def _keys(cfg: dict) -> list[str]:
@@ -79,13 +77,50 @@ def _around(value):
     return f"{0.99 * x!r} {m[2]}", f"{1.01 * x!r} {m[2]}"
 
 
-@pytest.mark.parametrize("name", CIRCUIT_EXAMPLES)
+def _spec(path) -> bool:
+    """Whether an example is a spec (a sweep's, a measurement's), not a machine."""
+    doc = read_toml(path)
+    return "axes" in doc or "channels" in doc
+
+
+def _swept_examples() -> list[str]:
+    """The example machines a design map (``impactbar sweep``, :func:`parse_map_spec`) takes an axis
+    of: the first of their keys it takes, or its refusal of the machine."""
+    names = []
+    for path in sorted((ROOT / "examples").glob("*.toml")):
+        if _spec(path):
+            continue
+        cfg = read_toml(path)
+        for key in _keys(cfg):
+            bounds = _around(config_value(cfg, key))
+            if bounds is None:
+                continue
+            taken = _map_takes(path, key, bounds)
+            if taken is None:  # (the machine refused)
+                break
+            if taken:
+                names.append(path.name)
+                break
+    return names
+
+
+def _map_takes(path, key: str, bounds) -> bool | None:
+    """Whether a design map takes an axis over ``key`` at ``bounds``; ``None`` where it refuses the
+    machine."""
+    try:
+        parse_map_spec({"task": "operating_point", "config": str(path),
+                        "axes": {key: {"values": list(bounds)}}})
+    except ValueError as exc:
+        return None if "config must describe a drifter" in str(exc) else False
+    return True
+
+
+@pytest.mark.parametrize("name", _swept_examples())
 def test_optimize_takes_every_key_a_design_map_sweeps(name):
     """For each key of the example that a design map (``impactbar sweep``) takes over 1 % either
-    side of its value, ``impactbar optimize --vary KEY=LOW:HIGH`` reads the same bounds and the
-    optimiser's checks of its variables take them (checks only: ``max_evaluations=0`` is refused
-    after them, before any orbit); an integer key (a map's axis over integers) is refused by the
-    continuous search in one line."""
+    side of its value (an integer key over it and the next integer), ``impactbar optimize --vary
+    KEY=LOW:HIGH`` reads the same bounds and the optimiser's checks of its variables take them
+    (checks only: ``max_evaluations=0`` is refused after them, before any orbit)."""
     from impactbar.cli.optimize import parse_vary
 
     path = ROOT / "examples" / name
@@ -93,21 +128,21 @@ def test_optimize_takes_every_key_a_design_map_sweeps(name):
     swept = []
     for key in _keys(cfg):
         bounds = _around(config_value(cfg, key))
-        if bounds is None:
-            continue
-        try:
-            parse_map_spec({"task": "operating_point", "config": str(path),
-                            "axes": {key: {"values": list(bounds)}}})
-        except ValueError:
+        if bounds is None or not _map_takes(path, key, bounds):
             continue
         swept.append(key)
         vary = parse_vary([f"{key}={bounds[0]}:{bounds[1]}"])  # (as the command line reads it)
         assert vary == {key: tuple(str(b) for b in bounds)}
-        refused = "takes integers" if key in INTEGER_KEYS else "max_evaluations must be"
-        with pytest.raises(ValueError, match=refused) as info:
+        with pytest.raises(ValueError, match="max_evaluations must be") as info:
             optimize_drifter(path, vary, objective="impact_power", max_evaluations=0, progress=False)
         assert "\n" not in str(info.value)
-    assert len(swept) >= 20
+    assert len(swept) >= (20 if config_kind(cfg) == "circuit" else 8)
+    if name == "circuit_drifter_rock.toml":  # (an integer key, refused by main's continuous search)
+        assert "rock.cells_per_piston" in swept and "rock.cells_per_piston" in INTEGER_KEYS
+    if name == "stepped_drifter.toml":
+        assert "model.n_modes" in swept and "model.n_modes" in INTEGER_KEYS
+    if name == "drifter_rock.toml":
+        assert {"valve.switch_out", "valve.stroke_area", "rod.segments.1.length", "rock.k"} <= set(swept)
     if name == "circuit_drifter.toml":  # the keys the optimiser refused before
         assert {"chambers.rear_area", "bar.diameter", "stop.restitution"} <= set(swept)
     if name == "circuit_drifter_rock.toml":

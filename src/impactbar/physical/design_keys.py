@@ -23,8 +23,8 @@ from .units import to_si
 __all__ = ["INTEGER_KEYS", "design_key", "key_unit", "key_value", "design_bounds"]
 
 #: the config keys that take integers (declared so in :mod:`impactbar.physical.tree`): a design map's
-#: axis over one takes integer values (stored as integers); the optimiser's search, continuous, does
-#: not vary them
+#: axis over one takes integer values (stored as integers); the optimiser enumerates the integers
+#: within their bounds (:mod:`~impactbar.physical.optimize_integers`)
 INTEGER_KEYS = integer_keys()
 
 
@@ -144,13 +144,15 @@ def design_bounds(config: dict, vary, folder=None) -> dict:
     Returns
     -------
     dict
-        Key to ``{"low", "high", "unit", "start"}`` (SI; the start is the config's own value).
+        Key to ``{"low", "high", "unit", "start"}`` (SI; the start is the config's own value); a key of
+        :data:`INTEGER_KEYS` has integer bounds.
 
     Raises
     ------
     ValueError
         One line: a key the config does not give, bounds not ``(low, high)``, of the wrong unit, not
-        ordered or outside the key's range, a start outside the bounds.
+        ordered or outside the key's range, a start outside the bounds, bounds of an integer key that
+        are not integers.
 
     Examples
     --------
@@ -171,17 +173,18 @@ def design_bounds(config: dict, vary, folder=None) -> dict:
             raise ValueError(f"vary: {key!r} is not a parameter the optimiser varies: {exc}") from None
         if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
             raise ValueError(f"vary[{key!r}] must be (low, high); got {bounds!r}")
-        if key in FIELDS and FIELDS[key].integer:
-            raise ValueError(f"vary: {key!r} takes integers, and the search varies its keys continuously: "
-                             "give it in the config (a design map takes it as an axis)")
+        integer = key in FIELDS and FIELDS[key].integer
         low, high = bounds
         lo, hi = (key_value(f"vary[{key!r}] {side}", b, unit, base)
                   for side, b in (("low", low), ("high", high)))
         if not lo < hi:
             raise ValueError(f"vary[{key!r}]: low must be below high; got {low!r} and {high!r}")
+        if integer and not (lo.is_integer() and hi.is_integer()):
+            raise ValueError(f"vary[{key!r}] takes integers (the config key is an integer); got {low!r} and "
+                             f"{high!r}")
         for side, b, given in (("low", lo, low), ("high", hi, high)):
             try:
-                build(with_values(config, {key: config_quantity(b, unit)}), folder)
+                build(with_values(config, {key: int(b) if integer else config_quantity(b, unit)}), folder)
             except ValueError as exc:
                 raise ValueError(f"vary[{key!r}]: the {side} bound {given!r} is outside the key's range: "
                                  f"{' '.join(str(exc).split(': ', 2)[-1].split())}") from None

@@ -45,7 +45,7 @@ from .bar import Bar, SteppedBar, check_piston, piston_from_units
 from .config import _section
 from .rock import ROCK_SECTIONS, DrillString, rock_from_config
 
-__all__ = ["Drifter", "DrifterOrbit", "DRIFTER_PRESETS", "drifter_preset"]
+__all__ = ["Drifter", "DrifterOrbit", "DRIFTER_PRESETS", "drifter_preset", "operating_point"]
 
 # the sections and keys of its config, and the required ones, as the parameter tree declares them
 # (the drill string's sections, rock.ROCK_SECTIONS, checked by its own reader)
@@ -406,6 +406,32 @@ class DrifterOrbit:
         shown = outputs("summary", self._kind, rock=False)
         values = output_values(self, shown)
         return {o.shown_key: o.shown(values[o.name]) for o in shown}
+
+
+def operating_point(machine, guess=None):
+    """A drifter's operating point, the one way a design map (:mod:`impactbar.sweeps.map_task`) and
+    the optimiser (:func:`~impactbar.physical.optimize_drifter`, a valve drifter) find it: the default
+    chain (``guess=None``) or Newton from a nearby point's orbit; a circuit drifter's cavitating orbit
+    is returned with ``cavitates`` set (theory §10, §11).
+
+    Parameters
+    ----------
+    machine : Drifter or CircuitDrifter
+    guess : DrifterOrbit or CircuitDrifterOrbit, optional
+        A nearby operating point of the same kind of machine.
+
+    Returns
+    -------
+    DrifterOrbit or CircuitDrifterOrbit
+
+    Raises
+    ------
+    ValueError
+        Where there is no orbit (the machine's ``orbit()`` says why).
+    """
+    if isinstance(machine, Drifter):  # (the circuit drifter is no subclass of it)
+        return machine.orbit(None if guess is None else guess.orbit)
+    return machine.orbit(guess, allow_cavitation=True)
 
 
 #: Drifter presets, from documented numbers.

@@ -23,6 +23,12 @@ constraints the peak incident stress and the piston's mass. Over the piston's di
 lengths and mass held, the optimum is then :func:`~impactbar.physical.optimize_piston`'s (a check
 of the search that does not trust it: ``tests/physical/test_optimize_drifter_checks.py``).
 
+A valve drifter (``[valve]``, theory §10) is searched the same way at its operating point as a design
+map finds it (:func:`~impactbar.physical.drifter.operating_point`), with the objectives and
+constraints of its outputs (:func:`~impactbar.physical.optimize_problem.objectives`); a key that takes
+integers is enumerated, each value a search over the other keys
+(:mod:`~impactbar.physical.optimize_integers`).
+
 This module is the search; the problem (the objectives, the constraints, a design's evaluation) is
 :mod:`~impactbar.physical.optimize_problem`'s and the result :mod:`~impactbar.physical.optimize_result`'s,
 their public names imported here as well.
@@ -40,12 +46,14 @@ from typing import NamedTuple
 import numpy as np
 
 from .circuit import CircuitDrifter
-from .design_keys import design_bounds
-from .display_units import display_unit, written_quantity
+from .design_keys import INTEGER_KEYS, design_bounds
+from .display_units import written_quantity
+from .drifter import Drifter
 from .loader import build, config_value, read_config, with_values
 from .optimality import certify_search
 from .optimize_cache import OrbitChain, read_cache, read_gradients, write_cache
 from .optimize_failures import failed_record
+from .optimize_integers import integer_search
 from .optimize_multistart import check_multistart, multistart_search
 from .optimize_outputs import piston_and_multipliers, shank_stress
 from .optimize_polish import polish_search
@@ -61,9 +69,13 @@ from .optimize_problem import (
     _limits,
     _operating_point,
     _refined_gradient,
+    check_start,
+    default_constraints,
     evaluate_blow,
     evaluate_design,
     least_margin,
+    machine_kind,
+    objectives,
 )
 from .optimize_progress import DesignProgress
 from .optimize_result import DrifterOptimum, _better_missed
@@ -100,27 +112,36 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                      tol: float = 2e-3, method: str = "cobyla", impact_velocity=None, workers=None,
                      popsize: int = 5, seed: int = 0, sample: int = 64,
                      local_starts: int = 3, start: str = "feasible", polish: int = 12) -> DrifterOptimum:
-    r"""The design of a drifter with its oil circuit that maximises ``objective`` under
-    ``constraints``, the variables any of its dotted config keys within bounds.
+    r"""The design of a drifter with its oil circuit, or of a valve drifter, that maximises
+    ``objective`` under ``constraints``, the variables any of its dotted config keys within bounds.
 
     Parameters
     ----------
     config : str, os.PathLike or dict
-        A drifter with its oil circuit (``[chambers]``), on a drill string and the rock for the
-        drilling objectives: a TOML file, a preset's name or the config itself
+        A drifter with its oil circuit (``[chambers]``) or a valve drifter (``[valve]``: the machines
+        a design map sweeps, a hammer not), on a drill string and the rock for the drilling
+        objectives: a TOML file, a preset's name or the config itself
         (:func:`~impactbar.physical.read_config`).
     vary : dict
         Dotted key (``"piston.collar_diameter"``, ``"chambers.rear_volume"``, ``"valve.switch_out"``,
         ``"accumulator.precharge"``, ``"stop.restitution"``: any key the config gives that a design
         map sweeps, :func:`~impactbar.physical.design_keys.design_bounds`) to ``(low, high)`` with
         units (``("46 mm", "52 mm")``, a number for a dimensionless key); the config's own value,
-        the start, must lie within.
+        the start, must lie within. A key that takes integers (``"model.n_modes": (6, 8)``,
+        :data:`~impactbar.physical.design_keys.INTEGER_KEYS`) has integer bounds and is
+        enumerated: each combination of the integer keys' values (at most
+        :data:`~impactbar.physical.optimize_integers.MAX_INTEGER_DESIGNS`) a search over the other
+        keys by ``method``, or one fresh orbit without other keys; ``cache`` then one file per
+        combination beside it.
     objective : str
         One of :data:`OBJECTIVES` (maximised): ``"drilling_rate_per_kW"`` (default),
-        ``"drilling_rate"``, ``"work_on_rock_per_blow"``, ``"impact_power"``.
+        ``"drilling_rate"``, ``"work_on_rock_per_blow"``, ``"impact_power"``; a valve drifter has
+        no pump: ``"impact_power"`` (its percussive power), ``"work_on_rock_per_blow"``,
+        ``"drilling_rate"``.
     constraints : dict, optional
         Limits of :data:`DEFAULT_CONSTRAINTS` (with units or SI; ``None`` drops one), e.g.
-        ``{"peak_incident_stress": "260 MPa"}``.
+        ``{"peak_incident_stress": "260 MPa"}``; a valve drifter's are those of its outputs
+        (:func:`~impactbar.physical.optimize_problem.default_constraints`: no oil's).
     max_evaluations : int
         The most designs the search evaluates (besides the baseline's and the optimum's fresh
         re-evaluation); for SLSQP the most iterations, each its line search's designs (one where its
@@ -155,6 +176,8 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         generation's designs evaluated together on ``workers``, each by a fresh ``orbit()``;
         ``max_evaluations`` bounds its generations, at least two), or COBYLA from the best feasible
         designs of a Sobol sample evaluated together (:mod:`~impactbar.physical.optimize_multistart`).
+        A valve drifter: not SLSQP, and the multistart with ``polish=0`` (their gradients are the
+        oil circuit's); its certificate's gradients central differences of fresh orbits.
     workers : None, int or distributed.Client
         Where a population's or a sample's designs are evaluated (those two methods only):
         ``None`` this process, an integer (at least 1) a local dask cluster of that many processes
@@ -194,9 +217,10 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     ValueError
         A variable that is not a parameter or not in the config, bounds of the wrong unit or outside
         the key's range, a start outside its bounds, an unknown objective or constraint, an
-        objective the config cannot give (no ``[rock]``), a start without an operating point or, with
-        ``start="feasible"``, an infeasible start (the constraint named, with how far it is missed):
-        each in one line.
+        objective or constraint the machine does not have (no ``[rock]``, a valve drifter's no oil),
+        a hammer, a method a valve drifter does not take, integer bounds not integers or too many, a
+        start without an operating point or, with ``start="feasible"``, an infeasible start (the
+        constraint named, with how far it is missed): each in one line.
 
     Examples
     --------
@@ -214,8 +238,19 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         raise ValueError(f"objective must be one of {', '.join(OBJECTIVES)}; got {objective!r}")
     cfg, folder = read_config(config)
     base = build(cfg, folder, where="config" if folder is None else str(config))  # (the file named)
-    if not isinstance(base, CircuitDrifter):
-        raise ValueError("config must describe a drifter with its oil circuit (a [chambers] section)")
+    if not isinstance(base, CircuitDrifter | Drifter):
+        raise ValueError("config must describe a drifter with its oil circuit (a [chambers] section) or a "
+                         "valve drifter (a [valve] section), the machines a design map sweeps; got a "
+                         f"{type(base).__name__}")
+    kind = machine_kind(base)
+    named = objectives(kind)
+    if objective not in named:
+        raise ValueError(f"objective {objective!r} is not a valve drifter's (no oil circuit); one of "
+                         f"{', '.join(named)}")
+    if kind == "drifter" and (method == "slsqp" or method == "multistart" and polish):
+        raise ValueError(f"method {method!r}{' with polish' if polish and method == 'multistart' else ''}: "
+                         "SLSQP's gradients are the oil circuit's orbit's; a valve drifter takes 'cobyla', "
+                         "'differential_evolution' or 'multistart' with polish=0")
     if base.drill is None and objective != "impact_power":
         raise ValueError(f"objective {objective!r} needs the drill string and the rock ([rock] in the "
                          "config); "
@@ -252,7 +287,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
             raise ValueError("in the circuit's ideal limit (impact_velocity) the method is 'cobyla' (SLSQP's "
                              f"gradients come from the circuit's orbits); got {method!r}")
     limits = _limits(constraints, base, ideal=ideal)
-    kept = dict.fromkeys(DEFAULT_CONSTRAINTS) | limits  # for evaluate_design: a dropped one stays dropped
+    kept = dict.fromkeys(default_constraints(kind)) | limits  # (evaluate_design's: a dropped one stays so)
     spec = design_bounds(cfg, vary, folder)
     keys = list(spec)
     if not (isinstance(max_evaluations, int) and max_evaluations >= len(keys) + 2):
@@ -262,9 +297,29 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         maxiter = check_population(workers, popsize, seed, max_evaluations, len(keys))
     elif method == "multistart":
         budget = check_multistart(workers, sample, local_starts, seed, max_evaluations, len(keys))
+
+    def fresh_record(at: dict, **given) -> dict:
+        """The record of the design of changes ``at`` by a fresh ``orbit()`` (no continuation, no
+        cache), with its piston, multipliers and the shank's stress (``given``: its values, changes)."""
+        drifter = build(with_values(cfg, at), folder)
+        out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, kept)
+        out.update(piston_and_multipliers(drifter, orbit), **given,
+                   shank_stress=None if ideal else shank_stress(drifter, orbit))
+        return out
+
+    if any(k in INTEGER_KEYS for k in keys):  # each integer design a search over the other keys
+        def search(design, others, start_as, cache_file):
+            return optimize_drifter(with_values(cfg, design), others, objective, constraints,
+                                    max_evaluations=max_evaluations, cache=cache_file, progress=progress,
+                                    rhobeg=rhobeg, tol=tol, method=method, impact_velocity=impact_velocity,
+                                    workers=workers, popsize=popsize, seed=seed, sample=sample,
+                                    local_starts=local_starts, start=start_as, polish=polish)
+
+        return integer_search(cfg, spec, vary, objective, kind, search, fresh_record, any_start=any_start,
+                              cache=cache)
     lo = np.array([spec[k]["low"] for k in keys])
     span = np.array([spec[k]["high"] - spec[k]["low"] for k in keys])
-    fkey = OBJECTIVES[objective].key
+    fkey = named[objective].key
     tag = _fingerprint(cfg, {k: (spec[k]["low"], spec[k]["high"]) for k in keys}, objective,
                        dict(limits, impact_velocity=V) if ideal else limits)
 
@@ -341,15 +396,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     start = np.array([spec[k]["start"] for k in keys])
     u0 = (start - lo) / span
     try:
-        first = evaluate(u0)
-        if not first["ok"]:
-            raise ValueError(f"the start has no operating point: {first['error']}")
-        if not first["feasible"] and not any_start:
-            name, c = min(first["constraints"].items(), key=lambda kv: kv[1]["scaled"])
-            scale, unit = display_unit(c["unit"])
-            u = f" {unit}" if unit else ""
-            raise ValueError(f"infeasible start: constraint {name} = {c['value'] * scale:.6g}{u} misses its "
-                             f"limit {c['limit'] * scale:.6g}{u} by {-c['margin'] * scale:.4g}{u}")
+        first = check_start(evaluate(u0), any_start)
         ref = abs(first["objectives"][fkey]) or 1.0
 
         def f(u):
@@ -429,10 +476,7 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
         if "optimum" in fresh and fresh["optimum"]["feasible"]:
             break
         best = rec
-        drifter = build(with_values(cfg, rec["changes"]), folder)
-        out, orbit = (evaluate_blow(drifter, V, limits), None) if ideal else evaluate_design(drifter, kept)
-        out.update(piston_and_multipliers(drifter, orbit), values=rec["values"], changes=rec["changes"],
-                   shank_stress=None if ideal else shank_stress(drifter, orbit))
+        out = fresh_record(rec["changes"], values=rec["values"], changes=rec["changes"])
         out["continued_vs_fresh"] = max(abs(out["objectives"][k] / rec["objectives"][k] - 1.0)
                                         for k in rec["objectives"] if rec["objectives"][k] != 0.0)
         if name == "optimum" and "optimum" in fresh:
@@ -441,12 +485,22 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
     message += _better_missed(history, best, fkey)
     # the polish's design reported: resolved by SLSQP (no step of COBYLA's), its stop SLSQP's
     by_polish = polished is not None and polished.improved and best["id"] == design_of(polished.x).id
-    certificate = certify_search(fresh["optimum"], history, keys, (lo, span), polished if by_polish else res,
-                                 tol, fkey, (lambda v: (evaluate_blow(build(with_values(
-                                     cfg, design_of(v).changes), folder), V, limits))) if ideal else None,
-                                 lambda: _refined_gradient(cfg, folder, fresh["optimum"], None, spec, limits,
-                                                           fkey, span),
-                                 tol if method in ("cobyla", "multistart") and not by_polish else 0.0)
+
+    def fresh_of(v):  # a design's fresh record: the ideal limit's blow, a valve drifter's operating point
+        drifter = build(with_values(cfg, design_of(v).changes), folder)
+        return evaluate_blow(drifter, V, limits) if ideal else evaluate_design(drifter, kept)[0]
+
+    try:  # (a valve drifter has no implicit-function-theorem gradients: central differences, as the blow's)
+        certificate = certify_search(fresh["optimum"], history, keys, (lo, span),
+                                     polished if by_polish else res, tol, fkey,
+                                     fresh_of if ideal or kind == "drifter" else None,
+                                     lambda: _refined_gradient(cfg, folder, fresh["optimum"], None, spec,
+                                                               limits, fkey, span),
+                                     tol if method in ("cobyla", "multistart") and not by_polish else 0.0)
+    except ValueError as exc:
+        if kind == "circuit":
+            raise
+        certificate, message = None, message + f"; no certificate: a neighbour has no operating point ({exc})"
     return DrifterOptimum(objective=objective,
                           vary={k: {"low": spec[k]["low"], "high": spec[k]["high"], "unit": spec[k]["unit"]}
                                 for k in keys},
@@ -454,4 +508,4 @@ def optimize_drifter(config, vary: dict, objective: str = "drilling_rate_per_kW"
                           cached=n_cached, seconds=time.perf_counter() - t_start, history=history,
                           message=message, config=with_values(cfg, best["changes"]),
                           gradients=counter["gradients"], cached_gradients=counter["cached_gradients"],
-                          certificate=certificate, found=found)
+                          certificate=certificate, found=found, kind=kind)

@@ -36,9 +36,11 @@ class _Constrained(NamedTuple):
     unit: str
 
 
-def constraint_output(name: str) -> _Constrained | None:
+def constraint_output(name: str, kind: str = "circuit") -> _Constrained | None:
     """The output a constraint limits, its sense (+1: at most the limit; -1: at least), the scale of
-    its margin (``None``: the limit's) and its unit; ``None`` for no constraint of that name.
+    its margin (``None``: the limit's) and its unit; ``None`` for no constraint of that name that a
+    machine of ``kind`` (``"circuit"``: the drifter with its oil circuit, ``"drifter"``: the valve
+    drifter; :mod:`~impactbar.physical.outputs`) has.
 
     Examples
     --------
@@ -48,6 +50,8 @@ def constraint_output(name: str) -> _Constrained | None:
     ('drilling_rate', -1, 'm/min')
     >>> constraint_output("min_impact_velocity").output.name, constraint_output("speed")
     ('impact_velocity', None)
+    >>> constraint_output("min_pressure", "drifter") is None  # (no oil)
+    True
     """
     if name in _CONSTRAINTS:
         out, sense, scale = _CONSTRAINTS[name]
@@ -55,7 +59,7 @@ def constraint_output(name: str) -> _Constrained | None:
         out, sense, scale = (name, 1, None) if name in OUTPUTS or not name.startswith("min_") else \
             (name[4:], -1, None)
     o = OUTPUTS.get(out)
-    if o is None or o.of is None or "circuit" not in o.machines or o.dtype != "f8":
+    if o is None or o.of is None or kind not in o.machines or o.dtype != "f8":
         return None
     return _Constrained(o, sense, scale, "" if o.unit == "1" else o.unit)
 
@@ -66,22 +70,29 @@ def piston_and_multipliers(drifter, orbit) -> dict:
 
     Parameters
     ----------
-    drifter : CircuitDrifter
-    orbit : CircuitDrifterOrbit or None
+    drifter : CircuitDrifter or Drifter
+    orbit : CircuitDrifterOrbit or DrifterOrbit or None
 
     Returns
     -------
     dict
-        ``{"piston": {...}, "multipliers_re": [...], "multipliers_im": [...]}``.
+        ``{"piston": {...}, "multipliers_re": [...], "multipliers_im": [...]}``; a valve drifter's
+        piston has its ``stroke_area_m2`` and ``return_area_m2`` for the chambers' areas.
     """
     bar = drifter.bar
     lengths = list(getattr(bar, "lengths_m", [bar.length_m]))
     diameters = list(getattr(bar, "diameters_m", [bar.diameter_m]))
     mu = np.asarray([] if orbit is None else orbit.multipliers, dtype=complex)
     return {"piston": {"lengths_m": [float(x) for x in lengths], "diameters_m": [float(x) for x in diameters],
-                       "mass_kg": bar.mass_kg, "rear_area_m2": drifter.si["rear_area_m2"],
-                       "front_area_m2": drifter.si["front_area_m2"]},
+                       "mass_kg": bar.mass_kg, **_areas(drifter)},
             "multipliers_re": mu.real.tolist(), "multipliers_im": mu.imag.tolist()}
+
+
+def _areas(drifter) -> dict:
+    """The areas the oil drives the piston on (m^2): the chambers', or the valve drifter's."""
+    if hasattr(drifter, "si"):
+        return {"rear_area_m2": drifter.si["rear_area_m2"], "front_area_m2": drifter.si["front_area_m2"]}
+    return {"stroke_area_m2": drifter.stroke_area_m2, "return_area_m2": drifter.return_area_m2}
 
 
 def shank_stress(drifter, orbit) -> dict | None:

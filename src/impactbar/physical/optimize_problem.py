@@ -3,13 +3,16 @@ its objectives and constraints, and a design's evaluation against them.
 
 A design is evaluated at the circuit's operating point on the rod and rock (:func:`evaluate_design`:
 :meth:`CircuitDrifter.orbit` by Newton from a nearby design's orbit where that converges, else the
-default chain), or in the circuit's ideal limit as its piston's single blow at a given impact
-velocity (:func:`evaluate_blow`). Its record gives every objective (:data:`OBJECTIVES`) and every
-constraint's value, limit and margin, positive where met; a margin missed by less than
-:data:`FEASIBILITY_TOLERANCE` of its scale counts as met. A design without an operating point has
-the record of :func:`~impactbar.physical.optimize_failures.failed_record`. The gradients of a
-design's figures in the scaled variables are the implicit function theorem's
-(:func:`~impactbar.physical.sensitivity.tangent_derivatives`).
+default chain; a valve drifter's as a design map finds it,
+:func:`~impactbar.physical.drifter.operating_point`), or in the circuit's ideal limit as its
+piston's single blow at a given impact velocity (:func:`evaluate_blow`). Its record gives every
+objective (:data:`OBJECTIVES`) and every constraint's value, limit and margin, positive where met; a
+margin missed by less than :data:`FEASIBILITY_TOLERANCE` of its scale counts as met. A design
+without an operating point has the record of
+:func:`~impactbar.physical.optimize_failures.failed_record`. The gradients of a design's figures
+in the scaled variables are the implicit function theorem's
+(:func:`~impactbar.physical.sensitivity.tangent_derivatives`). A valve drifter (no oil circuit) has
+the objectives and constraints of its outputs (:func:`objectives`, :func:`default_constraints`).
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .circuit import CircuitDrifter
-from .display_units import config_quantity
+from .display_units import config_quantity, display_unit
 from .loader import build, with_values
 from .optimize_failures import failed_record
 from .optimize_outputs import constraint_output, piston_and_multipliers
@@ -30,7 +33,7 @@ from .sensitivity import default_step, tangent_derivatives
 from .units import to_si
 
 __all__ = ["OBJECTIVES", "DEFAULT_CONSTRAINTS", "IDEAL_CONSTRAINTS", "FEASIBILITY_TOLERANCE", "least_margin",
-           "evaluate_design", "evaluate_blow"]
+           "evaluate_design", "evaluate_blow", "objectives", "default_constraints", "machine_kind"]
 
 
 class _Objective(NamedTuple):
@@ -41,9 +44,35 @@ class _Objective(NamedTuple):
     long_name: str
 
 
-#: The objectives (all maximised): name to (the figure, its unit, what it is), the outputs that name
-#: an objective (:attr:`~impactbar.physical.outputs.Output.objective`).
-OBJECTIVES = {o.objective: _Objective(o.key, o.unit, o.long_name) for o in outputs() if o.objective}
+def objectives(kind: str = "circuit", rock: bool = True) -> dict:
+    """The objectives of a machine (all maximised): name to (the figure, its unit, what it is), the
+    outputs of the view ``"record"`` it has that name an objective
+    (:attr:`~impactbar.physical.outputs.Output.objective`; theory §11, "Optimising a drifter").
+
+    Parameters
+    ----------
+    kind : {"circuit", "drifter"}
+        The drifter with its oil circuit, or the valve drifter.
+    rock : bool
+        Whether it has the drill string and the rock.
+
+    Returns
+    -------
+    dict of str to _Objective
+
+    Examples
+    --------
+    >>> from impactbar.physical.optimize_problem import objectives
+    >>> [(k, o.key) for k, o in objectives("drifter").items()]  # doctest: +NORMALIZE_WHITESPACE
+    [('impact_power', 'percussive_power_kW'), ('work_on_rock_per_blow', 'work_on_rock_J'),
+     ('drilling_rate', 'drilling_rate_m_min')]
+    """
+    return {o.objective: _Objective(o.key, o.unit, o.long_name) for o in outputs("record", kind, rock)
+            if o.objective}
+
+
+#: The objectives of a drifter with its oil circuit (:func:`objectives`).
+OBJECTIVES = objectives()
 
 #: The constraints and their default limits (SI): ``peak_incident_stress`` (Pa, the largest stress in
 #: the shank adapter before the rock's first reflection is back at it, or over the piston's first
@@ -72,17 +101,37 @@ IDEAL_CONSTRAINTS = ("peak_incident_stress", "piston_mass")
 FEASIBILITY_TOLERANCE = 1e-8
 
 
+def machine_kind(drifter) -> str:
+    """``"circuit"`` for a drifter with its oil circuit, ``"drifter"`` for a valve drifter (the
+    machines of :mod:`~impactbar.physical.outputs`)."""
+    return "circuit" if isinstance(drifter, CircuitDrifter) else "drifter"
+
+
+def default_constraints(kind: str = "circuit") -> dict:
+    """The constraints of :data:`DEFAULT_CONSTRAINTS` that a machine of ``kind`` has (a valve
+    drifter's: those of its outputs, none of the oil's), with their default limits.
+
+    Examples
+    --------
+    >>> from impactbar.physical.optimize_problem import default_constraints
+    >>> default_constraints("drifter")
+    {'peak_incident_stress': None, 'max_multiplier': 0.95, 'min_drilling_rate': None, 'piston_mass': None}
+    """
+    return {k: v for k, v in DEFAULT_CONSTRAINTS.items() if constraint_output(k, kind) is not None}
+
+
 def evaluate_design(drifter: CircuitDrifter, constraints: dict | None = None,
                     guess=None) -> tuple[dict, object]:
     """A design's figures: its operating point's objectives and constraints with their margins.
 
     Parameters
     ----------
-    drifter : CircuitDrifter
-        With a drill string and the rock (``[rock]``) for the drilling figures.
+    drifter : CircuitDrifter or Drifter
+        With a drill string and the rock (``[rock]``) for the drilling figures; a valve drifter has
+        the objectives and constraints of :func:`objectives` and :func:`default_constraints`.
     constraints : dict, optional
         Limits by name (:data:`DEFAULT_CONSTRAINTS`, SI or with units); the defaults where left out.
-    guess : CircuitDrifterOrbit, optional
+    guess : CircuitDrifterOrbit or DrifterOrbit, optional
         The operating point of a nearby design: Newton starts there; where it does not converge the
         default chain (``orbit()``) is used.
 
@@ -125,7 +174,17 @@ class _Gradients(NamedTuple):
 
 def _operating_point(drifter: CircuitDrifter, guess) -> _OperatingPoint:
     """The design's orbit: Newton from ``guess`` where given and it converges, else the default
-    chain; and whether it was continued."""
+    chain; and whether it was continued (a valve drifter's as a design map's,
+    :func:`~impactbar.physical.drifter.operating_point`)."""
+    if not isinstance(drifter, CircuitDrifter):
+        from .drifter import operating_point
+
+        if guess is not None:
+            try:
+                return _OperatingPoint(operating_point(drifter, guess), True)
+            except (ValueError, np.linalg.LinAlgError, ArithmeticError):
+                pass
+        return _OperatingPoint(operating_point(drifter), False)
     if guess is not None:
         try:
             return _OperatingPoint(drifter.orbit(guess=guess), True)
@@ -192,30 +251,33 @@ def _limits(constraints, drifter, ideal: bool = False) -> dict:
     if constraints is not None and not isinstance(constraints, dict):
         raise ValueError(f"constraints must be a dict of limits or None; got {constraints!r}")
     given = dict(constraints or {})
-    unknown = sorted(k for k in given if not isinstance(k, str) or constraint_output(k) is None)
+    kind = machine_kind(drifter)
+    defaults = default_constraints(kind)
+    unknown = sorted(k for k in given if not isinstance(k, str) or constraint_output(k, kind) is None)
     if unknown:
-        raise ValueError(f"constraints: unknown constraint {unknown[0]!r}; one of "
-                         f"{', '.join(DEFAULT_CONSTRAINTS)}, or an output's name (at most the limit; "
+        what = "" if kind == "circuit" else " of a valve drifter (no oil circuit)"
+        raise ValueError(f"constraints: unknown constraint {unknown[0]!r}{what}; one of "
+                         f"{', '.join(defaults)}, or an output's name (at most the limit; "
                          "min_<name>: at least)")
     circuit = sorted(set(given) - set(IDEAL_CONSTRAINTS)) if ideal else []
     if circuit:
         raise ValueError(f"constraints: {circuit[0]!r} is the circuit's; in its ideal limit "
                          f"(impact_velocity) only {', '.join(IDEAL_CONSTRAINTS)}")
     out = {}
-    for name, default in {**DEFAULT_CONSTRAINTS, **given}.items():
+    for name, default in {**defaults, **given}.items():
         if ideal and name not in IDEAL_CONSTRAINTS:
             continue
         v = given.get(name, default)
         if v is None:
             continue
-        if constraint_output(name).output.rock and drifter.drill is None:
+        if constraint_output(name, kind).output.rock and drifter.drill is None:
             raise ValueError(f"constraints: {name!r} needs the drill string and the rock ([rock] in the "
                              "config)")
         if v == "relief":
             v = drifter.si["relief_pressure_Pa"]
             if not math.isfinite(v):
                 continue
-        unit = constraint_output(name).unit
+        unit = constraint_output(name, kind).unit
         if isinstance(v, int | float) and not isinstance(v, bool):  # a bare number: SI
             out[name] = float(v)
             continue
@@ -227,19 +289,20 @@ def _limits(constraints, drifter, ideal: bool = False) -> dict:
 
 def _figures(orbit, limits: dict) -> dict:
     """An operating point's record: the outputs of the view ``"record"`` (by key) and the value of
-    every constraint, the defaults' and those of ``limits``."""
-    r = Reading(orbit)
-    obj = {o.key: o.of(r) for o in outputs("record", "circuit", rock=orbit.drifter.drill is not None)
+    every constraint, the defaults' and those of ``limits`` (those the machine has)."""
+    r, kind = Reading(orbit), orbit._kind
+    obj = {o.key: o.of(r) for o in outputs("record", kind, rock=orbit.drifter.drill is not None)
            if o.of is not None}
-    values = {name: float(constraint_output(name).output.of(r)) for name in {**DEFAULT_CONSTRAINTS, **limits}}
-    return _constrained(obj, values, limits)
+    values = {name: float(constraint_output(name, kind).output.of(r))
+              for name in {**default_constraints(kind), **limits}}
+    return _constrained(obj, values, limits, kind)
 
 
-def _constrained(obj: dict, values: dict, limits: dict) -> dict:
+def _constrained(obj: dict, values: dict, limits: dict, kind: str = "circuit") -> dict:
     """A design's record: its objectives ``obj`` and the constraints' ``values`` against ``limits``."""
     cons = {}
     for name, limit in limits.items():
-        _, sense, scale, unit = constraint_output(name)
+        _, sense, scale, unit = constraint_output(name, kind)
         value = values[name]
         margin = (limit - value) if sense > 0 else (value - limit)
         scale = scale if scale is not None else abs(limit) or 1.0
@@ -269,6 +332,47 @@ def least_margin(record: dict) -> float:
     -0.05
     """
     return min((c["scaled"] for c in record["constraints"].values()), default=math.inf)
+
+
+def check_start(record: dict, any_start: bool) -> dict:
+    """The search's start, refused where it has no operating point or, unless ``any_start``, where
+    it misses a constraint (theory §11, "Optimising a drifter").
+
+    Parameters
+    ----------
+    record : dict
+        The start's record (:func:`evaluate_design`, :func:`evaluate_blow`, or a failed one).
+    any_start : bool
+        Whether an infeasible start is taken (``optimize_drifter(start="any")``).
+
+    Returns
+    -------
+    dict
+        ``record``.
+
+    Raises
+    ------
+    ValueError
+        No operating point (its error), or an infeasible start: the constraint missed most, its value,
+        limit and how far it is missed, in one line.
+
+    Examples
+    --------
+    >>> check_start({"ok": True, "feasible": False, "constraints": {"max_multiplier": {
+    ...     "value": 0.99, "limit": 0.95, "margin": -0.04, "unit": "", "scaled": -0.04}}}, False)
+    Traceback (most recent call last):
+    ...
+    ValueError: infeasible start: constraint max_multiplier = 0.99 misses its limit 0.95 by 0.04
+    """
+    if not record["ok"]:
+        raise ValueError(f"the start has no operating point: {record['error']}")
+    if not record["feasible"] and not any_start:
+        name, c = min(record["constraints"].items(), key=lambda kv: kv[1]["scaled"])
+        scale, unit = display_unit(c["unit"])
+        u = f" {unit}" if unit else ""
+        raise ValueError(f"infeasible start: constraint {name} = {c['value'] * scale:.6g}{u} misses its "
+                         f"limit {c['limit'] * scale:.6g}{u} by {-c['margin'] * scale:.4g}{u}")
+    return record
 
 
 def _design_record(changes: dict, config: dict, folder, limits: dict) -> dict:

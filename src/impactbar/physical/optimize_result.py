@@ -12,7 +12,7 @@ import numpy as np
 
 from .display_units import display_unit
 from .optimize_cache import dumps
-from .optimize_problem import FEASIBILITY_TOLERANCE, OBJECTIVES
+from .optimize_problem import FEASIBILITY_TOLERANCE, objectives
 
 __all__ = ["DrifterOptimum"]
 
@@ -70,6 +70,9 @@ class DrifterOptimum:
     found : list of dict
         ``method="multistart"``: each local search's start and best design, best first
         (:func:`~impactbar.physical.optimize_multistart.multistart_search`); empty otherwise.
+    kind : {"circuit", "drifter"}
+        The machine: the drifter with its oil circuit, or the valve drifter (its objectives,
+        :func:`~impactbar.physical.optimize_problem.objectives`).
     """
 
     objective: str
@@ -86,11 +89,18 @@ class DrifterOptimum:
     config: dict = field(default_factory=dict, repr=False)
     certificate: object = None  #: the optimum's OptimalityCertificate (first-order, KKT)
     found: list = field(default_factory=list)
+    kind: str = "circuit"
+
+    @property
+    def objective_key(self) -> str:
+        """The figure of the records' ``objectives`` that is maximised (``"drilling_rate_per_kW"``,
+        a valve drifter's ``"percussive_power_kW"`` for ``"impact_power"``)."""
+        return objectives(self.kind)[self.objective].key
 
     @property
     def gain(self) -> float:
         """The objective at the optimum over the baseline's, less 1."""
-        key = OBJECTIVES[self.objective].key
+        key = self.objective_key
         return self.optimum["objectives"][key] / self.baseline["objectives"][key] - 1.0
 
     def to_dict(self) -> dict:
@@ -119,13 +129,14 @@ class DrifterOptimum:
             scale, unit = display_unit(b["unit"])
             rows.append(f"{key:34s}{self.baseline['values'][key] * scale:14.5g}"
                         f"{self.optimum['values'][key] * scale:14.5g} {unit}")
-        for name, (key, unit, _) in OBJECTIVES.items():
+        named = objectives(self.kind)
+        for name, (key, unit, _) in named.items():
             if key in self.baseline["objectives"]:
                 mark = " *" if name == self.objective else ""
                 rows.append(f"{name + mark:34s}{self.baseline['objectives'][key]:14.5g}"
                             f"{self.optimum['objectives'][key]:14.5g} {unit}")
         for key in self.baseline["objectives"]:
-            if key not in {k for k, _, _ in OBJECTIVES.values()}:
+            if key not in {k for k, _, _ in named.values()}:
                 rows.append(f"{key:34s}{self.baseline['objectives'][key]:14.5g}"
                             f"{self.optimum['objectives'][key]:14.5g}")
         for name, c in self.baseline["constraints"].items():
@@ -178,13 +189,13 @@ class DrifterOptimum:
                 ax.step(np.asarray(wave["t_s"]) * 1e6, np.asarray(wave["stress_Pa"]) / 1e6, where="post",
                         color=colour, label=label)
             else:  # no rock: the objective
-                ax.bar(label, rec["objectives"].get(OBJECTIVES[self.objective].key, np.nan), color=colour)
+                ax.bar(label, rec["objectives"].get(self.objective_key, np.nan), color=colour)
         if self.baseline.get("shank_stress") is not None:
             ax.set_xlabel("time from impact (us)")
             ax.set_ylabel("shank stress (MPa)")
             ax.legend()
         else:
-            ax.set_ylabel(f"{self.objective} ({OBJECTIVES[self.objective].unit})")
+            ax.set_ylabel(f"{self.objective} ({objectives(self.kind)[self.objective].unit})")
         ax = axes[2]
         t = np.linspace(0, 2 * np.pi, 200)
         ax.plot(np.cos(t), np.sin(t), "k", lw=0.8)

@@ -87,7 +87,8 @@ class Output:
     optional : bool
         Left out of the figures where its value is NaN (not computed).
     objective : str, optional
-        The name the optimiser maximises it by (:data:`~impactbar.physical.optimize_drifter.OBJECTIVES`).
+        The name the optimiser maximises it by (:data:`~impactbar.physical.optimize_drifter.OBJECTIVES`,
+        :func:`~impactbar.physical.optimize_problem.objectives`): one output per name and machine.
     edge : bool
         A flag whose change between neighbouring points of a design map is an edge
         (:func:`~impactbar.sweeps.map_task.find_edges`).
@@ -272,7 +273,8 @@ OUTPUTS: dict[str, Output] = {o.name: o for o in (
            lambda r: r.point.impact_power_kW, views={"summary", "figure", "record"},
            objective="impact_power"),
     Output("percussive_power", "kW", "impact energy times blow frequency",
-           lambda r: r.point.percussive_power_kW, views={"summary"}, machines={"drifter"}),
+           lambda r: r.point.percussive_power_kW, views={"summary", "record"}, machines={"drifter"},
+           objective="impact_power"),  # (the valve drifter's impact_power: the same product)
     Output("hydraulic_efficiency", "1", "energy the blows deliver over the pump's work",
            lambda r: r.point.hydraulic_efficiency, views={"store", "summary", "figure", "record", "branch"}),
     Output("stable", "", "every non-trivial multiplier inside the unit circle", lambda r: r.point.stable,

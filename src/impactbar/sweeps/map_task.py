@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..physical.drifter import operating_point
 from ..physical.outputs import outputs as _outputs
 from ..physical.settle import settle_point
 from .map_spec import REASON_CHARS, DrifterMapSpec, _one_line
@@ -22,26 +23,6 @@ EDGE_FLAGS = tuple(o.name for o in _outputs("store") if o.edge)
 
 
 # ------------------------------------------------------------------------------------------------
-def operating_point(machine, guess=None):
-    """The machine's operating point: the default chain (``guess=None``) or continued from a
-    neighbour's orbit; a circuit drifter's cavitating orbit is returned with ``cavitates`` set.
-
-    Returns
-    -------
-    DrifterOrbit or CircuitDrifterOrbit
-
-    Raises
-    ------
-    ValueError
-        Where there is no orbit (the machine's ``orbit()`` says why).
-    """
-    from ..physical.circuit import CircuitDrifter
-
-    if isinstance(machine, CircuitDrifter):
-        return machine.orbit(guess, allow_cavitation=True)
-    return machine.orbit(None if guess is None else guess.orbit)
-
-
 def point_values(point, kind: str, rock: bool) -> dict:
     """The stored values of one operating point, in SI (the names of :func:`map_variables`).
 
