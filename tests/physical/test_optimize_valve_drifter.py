@@ -5,6 +5,7 @@ points evaluated one by one."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +93,11 @@ def test_an_integer_key_alone_is_each_of_its_values_evaluated():
     assert res.optimum["objectives"]["percussive_power_kW"] == power[best]
     assert res.baseline["changes"] == {"model.n_modes": 8} and res.evaluations == 3
     assert with_values(read_config(STEPPED)[0], {"model.n_modes": best}) == res.config
+    page = (ROOT / "docs" / "optimising_a_drifter.md").read_text()
+    quoted = re.search(r"the modes 6, 7 and 8 give ([\d.]+), ([\d.]+) and ([\d.]+) kW",
+                       " ".join(page.split()))
+    assert quoted is not None, "the optimiser's page no longer quotes the modes' impact powers"
+    assert [float(x) for x in quoted.groups()] == [round(power[n], 4) for n in (6, 7, 8)]
 
 
 def test_an_integer_key_with_a_real_one_is_the_best_of_a_search_at_each_integer():
