@@ -32,6 +32,7 @@ from ._settling import (
     dominant_limit,
     drift_to_surface,
     drifting,
+    expanding_to_surface,
     nearing,
     surfaces_ahead,
 )
@@ -395,6 +396,8 @@ class ShootingProblem(OrbitProblem):
                 budget = max(budget, SETTLE_DRIFT_IMPACTS)
             if accelerate and iterates >= 4 and mode == hist[-2].mode == hist[-3].mode == hist[-4].mode:
                 star = dominant_limit(hist[-4].y, hist[-3].y, hist[-2].y, y)
+                if star is None:  # (steps that grow: no limit ahead, the drift carried to a surface)
+                    star = expanding_to_surface(self.drive, mode, hist[-4].y, hist[-3].y, hist[-2].y, y, M)
                 if star is not None and surfaces_ahead(self.drive, mode, star, M):  # (none jumped over)
                     y = star
                     hist[-1] = _Iterate(tau, mode, y, source)
