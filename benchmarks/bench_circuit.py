@@ -18,7 +18,8 @@ few repetitions (the machine's other load only adds); compilation is done before
 Under the table, the example drill with all the parts (``examples/circuit_drill_parts.toml``, rigid
 piston) and the same drill with a spool valve (``examples/circuit_drill_spool.toml``): each orbit's CPU
 time against the preset's in the same run, the goal at most 3x: met or missed (``--drill``: those rows
-only).
+only; ``--drill --against REF`` beside those of the git ref ``REF``, or of a package tree's ``src``
+folder, each tree in fresh processes, ``--rounds`` each).
 
 ``--goals REF`` instead runs, one after the other, the benchmarks that measure each goal of the
 elastic piston's circuit work against the git ref ``REF`` (e.g. ``main``), each in fresh processes
@@ -188,14 +189,32 @@ def drill_rows(reps=3):
     return p, out["drill"], out["spool"], out["drill"] / p, out["spool"] / p
 
 
-def print_drill(reps=3):
-    """The drills' rows: the orbits' CPU seconds, then each ratio against :data:`DRILL_GOAL`."""
-    preset, drill, spool, ratio, spool_ratio = drill_rows(reps)
-    print(f"rigid orbit, CPU s: preset {preset:.4f}, example drill {drill:.4f}, spool drill {spool:.4f}")
-    for label, r in (("drill / preset rigid orbit (x)", ratio), ("spool drill / preset rigid orbit (x)",
-                                                                  spool_ratio)):
-        print(f"{label} {r:.2f}")
-        print(f"   the goal, at most {DRILL_GOAL:g}x: {'met' if r <= DRILL_GOAL else 'missed'}")
+#: the drills' rows: (label, index in :func:`drill_rows`' numbers)
+DRILL_ROWS = (("rigid orbit CPU s, preset", 0), ("rigid orbit CPU s, example drill", 1),
+              ("rigid orbit CPU s, spool drill", 2), ("drill / preset rigid orbit (x)", 3),
+              ("spool drill / preset rigid orbit (x)", 4))
+
+
+def print_drill(reps=3, against=None, rounds=2):
+    """The drills' rows: the orbits' CPU seconds, then each ratio against :data:`DRILL_GOAL`; with
+    ``against`` (a git ref, or a package tree's ``src`` folder) the same rows of that tree beside
+    this one's, each tree in fresh processes (``rounds`` each, alternately; the best of them)."""
+    if against is None:
+        columns = [drill_rows(reps)]
+        print(f"{'case':38s} {'this tree':>10s}")
+    else:
+        from _timing import fresh_runs, ref_tree
+
+        src = against if Path(against).is_dir() else ref_tree(against)
+        runs = fresh_runs(__file__, src, rounds, ["--drill"])
+        columns = [[min(r[k] for r in runs[name]) for k in range(5)] for name in ("baseline", "new")]
+        name = "before" if Path(against).is_dir() else against[:10]
+        print(f"{'case (best of ' + str(rounds) + ' processes)':38s} {name:>10s} {'this tree':>10s}")
+    for label, k in DRILL_ROWS:
+        print(f"{label:38s} " + " ".join(f"{c[k]:10.4f}" for c in columns))
+        if k >= 3:
+            r = columns[-1][k]
+            print(f"   the goal, at most {DRILL_GOAL:g}x: {'met' if r <= DRILL_GOAL else 'missed'}")
 
 
 def main(quick=False):
@@ -260,10 +279,13 @@ WHY_DRILL = (
     "line's gas) than the preset's; each event crossed ends a flight and starts another")
 
 WHY_SPOOL = (
-    "the spool drill's flights are some 19 a period against the drill's 8 (measured over 10 periods): "
-    "the spool's arrivals at and departures from its stops, its main ports' two kinks and its pilot "
-    "ports' four each end a flight; its two more states (the control pressure, the spool's velocity) "
-    "are stiff, the control chamber's 5 cm^3 relaxing faster than the chambers")
+    "the spool drill's orbit takes 415 flights against the preset's 59 (27 to 29 a period against 4: "
+    "the spool's stops, its main ports' two kinks and its pilot ports' four, the cushion's and the "
+    "check valve's each end one), each with some 0.3 ms of Python around CVODE's call (0.14 s of its "
+    "0.35 s), and 41,600 of CVODE's steps against 18,000, each dearer (10 states against 6: a "
+    "variational step some 27 us against 8 us). Its start (10 periods) and the variational period "
+    "(6,700 steps, the Jacobian carried) are cut; the kinks' flights and the Python per flight are "
+    "what is left (benchmarks/HISTORY.md)")
 
 #: (goal, script, its arguments (``{ref}`` the git ref, ``{src}`` its exported package tree),
 #: the rows that hold the goal's numbers: ``(label, bound, why)``, this tree's number on the row
@@ -276,7 +298,7 @@ GOALS = (
       ("16 modes orbit", 2.0, ""), ("8 modes continuation point", 0.1, WHY_CONTINUATION),
       ("8 modes continuation, 8 points", 0.1, WHY_CONTINUATION))),
     ("an orbit of the example drill (examples/circuit_drill_parts.toml, rigid piston) within 3x the "
-     "preset's rigid circuit orbit, same run", "bench_circuit.py", ("--drill",),
+     "preset's rigid circuit orbit, same run", "bench_circuit.py", ("--drill", "--against", "{ref}"),
      (("drill / preset rigid orbit (x)", DRILL_GOAL, WHY_DRILL),
       ("spool drill / preset rigid orbit (x)", DRILL_GOAL, WHY_SPOOL))),
     ("the circuit on rock (examples/circuit_drifter_rock.toml) <= 0.3 s an orbit (CPU s)",
@@ -360,9 +382,17 @@ if __name__ == "__main__":
     parser.add_argument("--goals", metavar="REF", help="every goal's benchmark against the git ref REF")
     parser.add_argument("--drill", action="store_true",
                         help="only the example drills' rigid orbits against the preset's")
+    parser.add_argument("--against", metavar="REF_OR_SRC",
+                        help="with --drill: the same rows on a git ref or a package tree's src folder")
+    parser.add_argument("--rounds", type=int, default=2, help="processes each tree with --against")
+    parser.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # (--against's child)
     a = parser.parse_args()
-    if a.drill:
-        print_drill()
+    if a.json and a.drill:
+        import json
+
+        print(json.dumps(list(drill_rows())))
+    elif a.drill:
+        print_drill(against=a.against, rounds=a.rounds)
     elif a.goals:
         goals(a.goals)
     else:

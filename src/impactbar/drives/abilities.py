@@ -55,11 +55,18 @@ class OwnFlight:
         ``state_settings(model, settings=None)``: the integrator of a plain flight whose state is that
         of the variational flight with ``settings``, bit for bit, or ``None`` where the variational
         flight's state is its own (the oil circuit's flexible piston has one). Default ``None``.
+    carried : callable or None, optional
+        ``carried(model, settings) -> bool``: whether ``fly`` takes ``start=D``, the Jacobian so far
+        (an ``(n, n)`` array), its variational equations started there, so that its
+        ``Flight.sensitivity`` is the Jacobian carried through the flight (the shooting problem then
+        composes the events' saltations alone, theory §11); ``None`` (default) or ``False``: each
+        flight's fundamental matrix from the identity, composed after.
     """
 
     fly: Callable[..., Any]
     variational: bool = False
     state_settings: Callable[..., Any] | None = None
+    carried: Callable[..., Any] | None = None
 
 
 @dataclass(frozen=True)

@@ -255,7 +255,7 @@ class Flight(NamedTuple):
 
 
 def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
-        settings: FlightSettings | None = None, variational: bool = False) -> Flight:
+        settings: FlightSettings | None = None, variational: bool = False, start=None) -> Flight:
     r"""One flight from ``(q, v)`` and the drive's ``state`` at ``t`` to the next arrival at the stop
     (``c . q = 0`` with ``c . q' > 0``), the drive's next event or ``t_stop`` (module docstring).
 
@@ -273,6 +273,9 @@ def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
     variational : bool, optional
         Ask a drive's own flight (its ability :class:`~impactbar.drives.abilities.OwnFlight`) for
         the fundamental matrix of the flight (``Flight.sensitivity``).
+    start : numpy.ndarray or None, optional
+        With ``variational``, the matrix the variational equations start from (a drive whose own
+        flight carries it, ``OwnFlight.carried``), passed on to its ``fly``; default the identity.
 
     Returns
     -------
@@ -284,6 +287,8 @@ def fly(model, drive, state: DriveState, t: float, q, v, t_stop: float,
     v = np.array(v, dtype=float)
     own = drive.abilities.flight
     if own is not None:
+        if start is not None:
+            return own.fly(model, state, t, q, v, t_stop, settings, variational, start=start)
         return own.fly(model, state, t, q, v, t_stop, settings, variational)
     traits = drive.traits
     if traits.piecewise_constant:

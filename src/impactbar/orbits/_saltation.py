@@ -32,8 +32,9 @@ def through(model, drive, k: int, mode, fl, fired, D):
         The flight (with its ``sensitivity``).
     fired : sequence of events or None
         The drive's events that ended it, ``None`` for the arrival at the stop.
-    D : numpy.ndarray, shape (n, n)
-        The Jacobian so far, ``n = 2 (N + 1) + k``.
+    D : numpy.ndarray, shape (n, n), or None
+        The Jacobian so far, ``n = 2 (N + 1) + k``; ``None`` where the flight's ``sensitivity``
+        already carries it (its variational equations started from it, ``OwnFlight.carried``).
 
     Returns
     -------
@@ -73,7 +74,7 @@ def through(model, drive, k: int, mode, fl, fired, D):
         G = np.eye(n)
         G[2 * M:, 2 * M:] = map_jacobian(z_after, fl.z)
         Dt = G @ Dt
-    return Dt @ D
+    return Dt if D is None else Dt @ D
 
 
 def map_jacobian(fn, z):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["dominant_limit", "falling_limit", "drifting", "nearing", "drift_to_surface",
-           "SETTLE_DRIFT_IMPACTS", "DRIFT_AHEAD", "DRIFT_REACH", "DRIFT_PROBE"]
+           "expanding_to_surface", "SETTLE_DRIFT_IMPACTS", "DRIFT_AHEAD", "DRIFT_REACH", "DRIFT_PROBE"]
 
 #: the dominant-mode extrapolation of :func:`dominant_limit` is taken where each of the last two
 #: steps is a multiple ``rho`` of the one before to this fraction of its size, the two multiples
@@ -172,6 +172,59 @@ def drift_to_surface(drive, mode, y0, y1, y2, M: int):
         else:
             hi = mid
     return y2 + lo * d if lo > DRIFT_AHEAD else None
+
+
+def expanding_to_surface(drive, mode, y0, y1, y2, y3, M: int):
+    """Where four iterates of a map move away along one real multiplier above 1, the state their
+    drift reaches just short of a switching surface of ``mode`` (:func:`drift_to_surface` of the last
+    three), else ``None``.
+
+    Each of the last two steps a multiple ``rho > 1 +`` :data:`DOMINANT_FIT` of the one before (a
+    growth the fit of one multiple tells from 1): the map expands along that mode there, its linear
+    model has no fixed point ahead (:func:`dominant_limit` has none) and the motion drifts on until
+    a surface stops it. The oil circuit's spool drill from rest (``examples/circuit_drill_spool.toml``):
+    the supply pressure's steps grow by 5 % to 1.4 % an impact as it charges from the pre-charge
+    (1.08 to 2.44 of the pressure scale in 15 impacts) until the relief valve opens at its setting,
+    where its orbit lies; carried there at once, the motion is followed on from the surface (theory
+    §11). A drive whose steps' multiple is below ``1 + DOMINANT_FIT`` (the preset's, from 1.003 to
+    0.92) is left to :func:`dominant_limit`.
+
+    Parameters
+    ----------
+    drive : Drive
+    mode : object
+        The drive's discrete state at the four iterates.
+    y0, y1, y2, y3 : numpy.ndarray, shape (2 M + k,)
+        Consecutive iterates (dimensionless).
+    M : int
+
+    Returns
+    -------
+    numpy.ndarray, shape (2 M + k,), or None
+        :func:`drift_to_surface` of ``y1, y2, y3`` where both steps' multiples exceed
+        ``1 + DOMINANT_FIT``; ``None`` otherwise.
+
+    Examples
+    --------
+    A drive whose one surface is ``z[0] = 1.5``, approached by steps growing by 5 %:
+
+    >>> import numpy as np
+    >>> from types import SimpleNamespace
+    >>> from impactbar.drives.base import SurfaceEvent
+    >>> top = SurfaceEvent("top", direction=1, function=lambda t, q, v, z: z[0] - 1.5)
+    >>> drive = SimpleNamespace(events=lambda mode: (top,))
+    >>> y = [np.array([0.0, 0.0, z]) for z in (1.0, 1.01, 1.0205, 1.031525)]
+    >>> z = float(expanding_to_surface(drive, 0, *y, 1)[2])  # (just short of the surface)
+    >>> z <= 1.5, round(z, 9)
+    (True, 1.5)
+    >>> y[3] = np.array([0.0, 0.0, 1.0308])  # (the multiple falls to 1.019: a limit may lie ahead)
+    >>> expanding_to_surface(drive, 0, *y, 1) is None
+    True
+    """
+    r1, r2 = _ratio(y1 - y0, y2 - y1), _ratio(y2 - y1, y3 - y2)
+    if r1 is None or r2 is None or not min(r1, r2) > 1.0 + DOMINANT_FIT:
+        return None
+    return drift_to_surface(drive, mode, y1, y2, y3, M)
 
 
 def _ratio(d1, d2):

@@ -32,6 +32,7 @@ from ._settling import (
     dominant_limit,
     drift_to_surface,
     drifting,
+    expanding_to_surface,
     nearing,
     surfaces_ahead,
 )
@@ -163,6 +164,8 @@ class ShootingProblem(OrbitProblem):
         self.closed = traits.piecewise_constant
         #: the Jacobian from the variational equations (a drive whose own flights integrate them)
         self.variational = own is not None and own.variational and not self.closed
+        #: whether the variational flights carry the Jacobian so far (``OwnFlight.carried``), or None
+        self._carries = own.carried if self.variational else None
         self.accuracy = 1e-13 if self.closed else 10.0 * self.settings.rtol
         self.blocks: list = []  # (tau_k, mode_k) of each block, from the guess
         self.sources: list = []  # the impact before each block: (mode, z on arrival, tau_k, q, v after)
@@ -228,8 +231,11 @@ class ShootingProblem(OrbitProblem):
         if variational:  # the projection on the section
             D = np.eye(self.n)
             D[0, :M] -= c
+        carries = self._carries  # (the flights started from D: their sensitivity the Jacobian so far)
+        carry = bool(variational) and carries is not None and carries(model, settings or self.settings)
         while True:
-            fl = fly(model, drive, state, t, q, v, end, settings or self.settings, bool(variational))
+            fl = fly(model, drive, state, t, q, v, end, settings or self.settings, bool(variational),
+                     start=D if carry else None)
             if keep:
                 pieces.append(fl.piece)
             t, q, v = fl.t, fl.q, fl.v
@@ -237,7 +243,7 @@ class ShootingProblem(OrbitProblem):
             state = DriveState(state.mode, fl.z)
             if fl.end == ARRIVAL:
                 if variational:
-                    D = through(model, drive, self.k, before, fl, None, D)
+                    D = through(model, drive, self.k, before, fl, None, None if carry else D)
                 break
             if fl.end != EVENT:
                 raise ValueError(f"no impact within {HORIZON:g} of t = {tau:.6g} under the drive: the "
@@ -247,7 +253,7 @@ class ShootingProblem(OrbitProblem):
                 if keep:
                     events.append((t, e, state.mode, e.crossing_speed(q, v)))
             if variational:
-                D = through(model, drive, self.k, before, fl, fl.events, D)
+                D = through(model, drive, self.k, before, fl, fl.events, None if carry else D)
         arrival = (t, q.copy(), v.copy(), state)
         law = model.law
         if self.coupled:  # the blow and the drive's state together, the drive's map at its end
@@ -395,6 +401,8 @@ class ShootingProblem(OrbitProblem):
                 budget = max(budget, SETTLE_DRIFT_IMPACTS)
             if accelerate and iterates >= 4 and mode == hist[-2].mode == hist[-3].mode == hist[-4].mode:
                 star = dominant_limit(hist[-4].y, hist[-3].y, hist[-2].y, y)
+                if star is None:  # (steps that grow: no limit ahead, the drift carried to a surface)
+                    star = expanding_to_surface(self.drive, mode, hist[-4].y, hist[-3].y, hist[-2].y, y, M)
                 if star is not None and surfaces_ahead(self.drive, mode, star, M):  # (none jumped over)
                     y = star
                     hist[-1] = _Iterate(tau, mode, y, source)

@@ -46,6 +46,6 @@ def circuit_abilities(drive) -> DriveAbilities:
     border tests (:meth:`~.HydraulicCircuitDrive.border_tests`)."""
     return DriveAbilities(
         flight=OwnFlight(drive.flight, variational=drive.variational,
-                         state_settings=drive.variational_state_settings),
+                         state_settings=drive.variational_state_settings, carried=drive.carries),
         quadratures=Quadratures(drive.n_quadratures, drive.quadratures, drive.piston_work_quadrature),
         end_flight=drive.end_flight, border_tests=drive.border_tests)

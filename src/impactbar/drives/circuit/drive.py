@@ -490,10 +490,21 @@ class HydraulicCircuitDrive(Drive):
             return DriveState(mode, self._held(z))
         return self._toward(mode, z, 0)
 
-    def flight(self, model, state, t, q, v, t_stop, settings=None, variational=False):
+    def flight(self, model, state, t, q, v, t_stop, settings=None, variational=False, start=None):
         from .flight import circuit_flight
 
-        return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational)
+        return circuit_flight(self, model, state, t, q, v, t_stop, settings, variational, start=start)
+
+    def carries(self, model, settings=None) -> bool:
+        """Whether the variational flights of ``model`` with ``settings`` (default :attr:`integrator`)
+        carry the Jacobian so far (:attr:`~.settings.CircuitFlightSettings.carry`; ``"auto"``: CVODE's
+        variational flights of a circuit with a part of mechanical state, a spool valve's)."""
+        from .flight import uses_magnus
+
+        settings = circuit_settings(settings if settings is not None else self.integrator)
+        if settings.carry == "auto":
+            return bool(self.layout.mechanical) and not uses_magnus(settings.sensitivity, model)
+        return bool(settings.carry)
 
     def variational_state_settings(self, model, settings=None):
         """Where the variational flights with ``settings`` (default :attr:`integrator`) take their

@@ -483,7 +483,7 @@ def _integrate_binding(adams, code, par, settings, directions, y0, t, end, keep)
 
 def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: float,
                    settings: FlightSettings | None = None, variational: bool = False, *,
-                   generated: bool = True) -> Flight:
+                   generated: bool = True, start=None) -> Flight:
     """One flight from ``(q, v)`` and the circuit's ``state`` at ``t`` to the next arrival at the
     stop, the circuit's next event or ``t_stop`` (module docstring).
 
@@ -540,13 +540,17 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         :mod:`._netgen`: one module per topology, the values read from ``par`` with the network after
         the bar's entries); ``False``: the preset's hand-written kernels (:mod:`._field`,
         :mod:`._cvode`'s callbacks; the way before). The same steps either way, to the bit.
+    start : numpy.ndarray or None, optional
+        With ``variational``, the fundamental matrix at the flight's start (shape ``(n, n)``; default
+        the identity): the flight's ``sensitivity`` is then the matrix carried to its end
+        (:attr:`.settings.CircuitFlightSettings.carry`).
 
     Returns
     -------
     Flight
         With ``piece`` a :class:`CircuitPiece` and, with ``variational``, ``sensitivity`` the
         fundamental matrix of ``(q, q', p_f, p_r, p_s, x_v)`` over the flight (before the map of
-        the event that ends it).
+        the event that ends it), times ``start``.
 
     Raises
     ------
@@ -574,13 +578,13 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         par, field_at = np.concatenate((par, net)), code.field_at
     y0 = np.concatenate((q, v, np.asarray(z, dtype=float), np.zeros(n_energy)))
     if variational:
-        y0 = np.concatenate((y0, np.eye(n).ravel()))
+        y0 = np.concatenate((y0, (np.eye(n) if start is None else start).T.ravel()))
     end = t_stop if math.isfinite(t_stop) else t + 1e4
     if end <= t:
         piece = CircuitPiece(np.array([t]), y0[None, :n + n_energy], par, M, model.end_weights,
                              drive.chambers.area_ratio, L, field_at)
         return Flight(t, q, v, np.asarray(z, dtype=float), END, (), piece,
-                      np.eye(n) if variational or magnus else None)
+                      (np.eye(n) if start is None else start) if variational or magnus else None)
     keep = n + n_energy
     # in the flight's own time from 0 (the vector field and the events do not depend on t): late in a
     # run the first steps (1e-15 where the variational equations start) would be lost in t's rounding
@@ -615,6 +619,8 @@ def circuit_flight(drive, model, state: DriveState, t: float, q, v, t_stop: floa
         d = _magnus.balance(code.jac_base, piece.y[piece.t.size // 2], par, M, n)
         theta = _magnus.DEFAULT_THETA if settings.magnus_theta is None else settings.magnus_theta
         Phi, _ = code.magnus_phi(np.ascontiguousarray(own), piece.y, piece.f, par, M, theta, d)
+        if start is not None:
+            Phi = Phi @ start
     if status == 2:
         if K.ARRIVAL_EV in hit:
             qe[0] -= float(model.end_weights @ qe)  # exactly on the stop

@@ -20,7 +20,8 @@ from dataclasses import dataclass
 
 from ..base import FlightSettings
 
-__all__ = ["CircuitFlightSettings", "SENSITIVITIES", "MULTISTEPS", "DEFAULT_SETTINGS", "circuit_settings"]
+__all__ = ["CircuitFlightSettings", "SENSITIVITIES", "MULTISTEPS", "CARRIES", "DEFAULT_SETTINGS",
+           "circuit_settings"]
 
 #: How a variational flight may take its fundamental matrix (:attr:`CircuitFlightSettings.sensitivity`).
 SENSITIVITIES = ("auto", "magnus", "cvode")
@@ -28,6 +29,8 @@ SENSITIVITIES = ("auto", "magnus", "cvode")
 #: The integrators a plain flight may take (:attr:`CircuitFlightSettings.multistep`): CVODE's linear
 #: multistep methods, or the explicit Dormand-Prince 8(5,3) (:mod:`._dop853`).
 MULTISTEPS = ("auto", "cvode", "adams", "bdf", "dop853")
+#: The values of :attr:`CircuitFlightSettings.carry`
+CARRIES = ("auto", True, False)
 
 
 @dataclass(frozen=True)
@@ -74,13 +77,25 @@ class CircuitFlightSettings(FlightSettings):
         oil's stiffness, BDF for the rigid piston; ``"cvode"``, that choice among CVODE's methods only
         (the way before DOP853); ``"adams"`` or ``"bdf"`` for every flight, ``"dop853"`` for every
         plain flight.
+    carry : {"auto", True, False}, optional
+        Whether a period's variational flights carry the fundamental matrix from one to the next
+        (keyword): ``True``, each flight's variational equations start from the Jacobian so far
+        (the product of the flights' before it and the events' saltations), so that the fast
+        transients of a matrix started at the identity (the stiff oil volumes' and a spool's columns,
+        some 500 to 800 of CVODE's steps at each start at ``rtol = 1e-10``) are spent once a
+        period, not at each event; ``False``, each flight's starts at the identity and the
+        products are taken after (the way before; the same Jacobian to the flights' accuracy);
+        ``"auto"`` (default), ``True`` for CVODE's variational flights (the rigid piston's) of a
+        circuit with a part of mechanical state (a spool valve's, whose stops, ports and pilot ports
+        end some 20 flights a period), ``False`` elsewhere (their numbers kept as they were; theory
+        §11, *The integrator*).
 
     Raises
     ------
     ValueError
         A method other than ``"CVODE"``, a tolerance not positive and finite, a flag that is not
-        ``True`` or ``False``, an unknown ``sensitivity`` or ``multistep`` (each named, with the
-        allowed values).
+        ``True`` or ``False``, an unknown ``sensitivity``, ``multistep`` or ``carry`` (each named, with
+        the allowed values).
 
     Examples
     --------
@@ -98,6 +113,7 @@ class CircuitFlightSettings(FlightSettings):
     blocks: bool = dataclasses.field(default=True, kw_only=True)
     sensitivity: str = dataclasses.field(default="auto", kw_only=True)
     multistep: str = dataclasses.field(default="auto", kw_only=True)
+    carry: str | bool = dataclasses.field(default="auto", kw_only=True)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -116,6 +132,8 @@ class CircuitFlightSettings(FlightSettings):
             raise ValueError(f"sensitivity must be one of {SENSITIVITIES}; got {self.sensitivity!r}")
         if self.multistep not in MULTISTEPS:
             raise ValueError(f"multistep must be one of {MULTISTEPS}; got {self.multistep!r}")
+        if not any(self.carry is c or (isinstance(c, str) and self.carry == c) for c in CARRIES):
+            raise ValueError(f"carry must be one of {CARRIES}; got {self.carry!r}")
 
 
 #: The circuit's integrator: CVODE at ``rtol = 1e-10``, ``atol = 1e-12``, every option its default.
