@@ -428,7 +428,8 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     :func:`impactbar.drives.flight.fly`, the paper's impact law (eq. 10) at each arrival, the
     drive's maps at its events and impacts; a rigid piston whose rebound is slower than
     ``REST_SPEED`` while the drive presses it rests on the stop until the force turns or a drive
-    event comes.
+    event comes, as does one that starts on the stop at rest (``c q >= 0``, ``|c q'| <= REST_SPEED``)
+    while the drive presses it.
 
     Under a law whose contact takes time each arrival is a blow solved together with the drive's
     state (:func:`impactbar.simulation.blows.driven_blow`); without ``histories`` each blow is kept
@@ -451,6 +452,10 @@ def run_stateful(model: BarModel, drive, q, v, t0: float, t_end: float, max_imp:
     settings = settings if settings is not None else drive.traits.integrator
     loop = _Run(model, drive, q, v, t0, t_end, max_imp)
     loop.q, loop.v = np.array(q, dtype=float), np.array(v, dtype=float)
+    if M == 1 and float(c @ loop.q) >= 0.0 and abs(float(c @ loop.v)) <= REST_SPEED and \
+            drive.force(loop.state.mode, loop.state.z, loop.q, np.zeros(M)) > 0.0:
+        loop.v = np.zeros(1)  # a start on the stop at rest, the drive pressing: it stays (no arrival to find)
+        _rest(model, drive, loop, t_end, settings)
     recent: list[float] = []
     while loop.t < t_end and not loop.done:
         fl = fly_and_switch(model, drive, loop, t_end, settings)
