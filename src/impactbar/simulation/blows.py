@@ -114,8 +114,31 @@ class BlowPiece(ModalEnd):
     def extremes(self, k: int | str) -> tuple[float, float]:
         """The least and the greatest value of the drive's state component ``k`` (an index or a name of
         its layout) over the blow (its pieces' :meth:`extremes`)."""
-        lo, hi = zip(*(p.extremes(k) for p in self.drive_pieces), strict=True)
-        return float(min(lo)), float(max(hi))
+        lo, hi = self.joint_extremes([k])
+        return float(lo[0]), float(hi[0])
+
+    def joint_extremes(self, ks) -> tuple[np.ndarray, np.ndarray]:
+        """The least and the greatest value of each of the drive's state components ``ks`` over the
+        blow: its pieces' :meth:`extremes`, the same numbers, taken together where the pieces can
+        (``joint_extremes``: a circuit's pieces solve their interpolants' cubics only where these can
+        pass the blow's least or greatest sample; theory §11, *Limits of this version*).
+
+        Parameters
+        ----------
+        ks : list of int or str
+            The components (indices or names of the drive's layout).
+
+        Returns
+        -------
+        lows, highs : numpy.ndarray, shape (len(ks),)
+            In model units.
+        """
+        parts = self.drive_pieces
+        if parts and all(hasattr(p, "joint_extremes") for p in parts):
+            return parts[0].joint_extremes(parts, ks)
+        ext = [[p.extremes(k) for p in parts] for k in ks]
+        return (np.array([min(lo for lo, _ in e) for e in ext], float),
+                np.array([max(hi for _, hi in e) for e in ext], float))
 
     def supply_extremes(self) -> tuple[float, float]:
         """The least and the greatest supply pressure over the blow (an oil circuit's)."""
@@ -193,8 +216,7 @@ class BlowSummary(BlowPiece):
         self._lows = self._highs = None
         states = getattr(self.layout, "n_states", 0)
         if states and every("extremes"):
-            lo, hi = zip(*(piece.extremes(k) for k in range(states)), strict=True)
-            self._lows, self._highs = np.array(lo), np.array(hi)
+            self._lows, self._highs = piece.joint_extremes(range(states))
         self.drive_pieces = ()
 
     def _refuse(self, what):
