@@ -59,7 +59,7 @@ def pumped_blow():
 def test_a_blow_s_pressure_extremes_are_those_of_its_pieces_whole_interpolants(pumped_blow, monkeypatch):
     pieces = pumped_blow
     n = pieces[0].layout.n_states
-    lows, highs = pieces[0].joint_extremes(pieces, range(n))
+    lows, highs = pieces[0].extremes_over(pieces, range(n))
     solved = []
     whole = extremes._hermite_extremes
 
@@ -68,7 +68,7 @@ def test_a_blow_s_pressure_extremes_are_those_of_its_pieces_whole_interpolants(p
         return whole(t, x, dxdt)
 
     monkeypatch.setattr(extremes, "_hermite_extremes", counted)
-    again = pieces[0].joint_extremes(pieces, range(n))
+    again = pieces[0].extremes_over(pieces, range(n))
     steps = sum(p.t.size - 1 for p in pieces)
     assert len(pieces) > 20 and steps > 1000
     # the cubics solved on a few steps of the blow's (per state, each piece's whole before)
@@ -135,5 +135,5 @@ def test_a_held_supply_s_extremes_are_its_pressure():
     for p in pieces[:2]:
         assert p.extremes("supply") == (1.0, 1.0)
         assert p.extremes("spool") == (1.0, 1.0)
-    lows, highs = pieces[0].joint_extremes(pieces, ["supply"])
+    lows, highs = pieces[0].extremes_over(pieces, ["supply"])
     assert lows.tolist() == highs.tolist() == [1.0]

@@ -73,7 +73,7 @@ class HermiteSteps:
         raise NotImplementedError
 
     @staticmethod
-    def joint_extremes(pieces, ks) -> tuple[np.ndarray, np.ndarray]:
+    def extremes_over(pieces, ks) -> tuple[np.ndarray, np.ndarray]:
         """The least and the greatest value of each of the drive's state components ``ks`` over
         ``pieces`` together (:func:`~.extremes.hermite_extremes`: the pieces' :meth:`extremes`, the same
         numbers).
@@ -98,7 +98,7 @@ class HermiteSteps:
         """The least and the greatest value of the drive's state component ``k`` (an index of ``z``, or
         a name of ``layout``: ``"p_s"``, ``"supply"``) over the piece: its steps and the stationary points
         of its cubic Hermite interpolant (:func:`~.extremes.hermite_extremes`)."""
-        lo, hi = self.joint_extremes([self], [k])
+        lo, hi = self.extremes_over([self], [k])
         return float(lo[0]), float(hi[0])
 
     def supply_extremes(self) -> tuple[float, float]:
