@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,9 @@ import pytest
 
 from impactbar.orbits import coupled
 from impactbar.physical import build, read_config, with_values
+from impactbar.physical.optimize_cache import dumps
 from impactbar.physical.optimize_drifter import DEFAULT_CONSTRAINTS, _design_record
+from impactbar.physical.optimize_failures import failures_table
 
 pytest.importorskip("pint")
 
@@ -81,3 +84,15 @@ def test_a_failed_design_s_record_says_why_what_it_cost_and_what_the_drill_does_
     # (the run ends at its last blow here, at 1 s there: the integrator's steps differ, by some 1e-10)
     assert motion["impact_velocity"] == pytest.approx(v[-1], rel=1e-8)
     assert motion["blow_frequency"] == pytest.approx(1.0 / (t[-1] - t[-2]), rel=1e-8)
+
+    # the JSON result's history keeps why and the classified motion; the table (the CLI's) says both
+    kept = json.loads(dumps(rec))
+    assert kept["error"] == rec["error"] and kept["motion"]["period_blows"] == 1
+    assert kept["motion_summary"] == rec["motion_summary"]
+    collar = 0.04721879723846864 * 1.01
+    vary = {"piston.collar_diameter": {"low": 0.047, "high": 0.052, "unit": "m"}}
+    history = [{"ok": True, "seconds": 0.3}, dict(rec, values={"piston.collar_diameter": collar})]
+    table = failures_table(history, vary).splitlines()
+    assert table[0].startswith("1 of 2 designs without an operating point (")
+    assert table[1] == ("  piston.collar_diameter 47.691 mm: find_orbit found no periodic orbit of the drive "
+                        f"with one impact per period; {rec['motion_summary']}")
