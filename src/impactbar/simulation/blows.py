@@ -269,20 +269,9 @@ class BlowSummary(BlowPiece):
             self._refuse("work of the drive")
         return self._work
 
-    def extremes(self, k: int | str) -> tuple[float, float]:
-        """The least and the greatest value of the drive's state component ``k`` (an index or a name of
-        its layout) over the blow (:meth:`BlowPiece.extremes`, kept).
-
-        Raises
-        ------
-        ValueError
-            Where the drive's pieces had no extremes."""
-        lo, hi = self.extremes_of([k])
-        return float(lo[0]), float(hi[0])
-
     def extremes_of(self, ks) -> tuple[np.ndarray, np.ndarray]:
         """The least and the greatest value of each of the drive's state components ``ks`` over the
-        blow (:meth:`BlowPiece.extremes_of`, kept).
+        blow (:meth:`BlowPiece.extremes_of`, kept; :meth:`BlowPiece.extremes` reads them).
 
         Parameters
         ----------
