@@ -477,9 +477,14 @@ def _least_pressures(pieces) -> dict:
     extra = [s for s in layout.states[3:-1] if s not in layout.mechanical]  # (the pressures after p_s)
     names = ("front", "rear", "supply", *extra)
     steps = [p for p in pieces if hasattr(p, "extremes_over")]  # (the flights' together)
-    lows = [steps[0].extremes_over(steps, names)[0]] if steps else []
-    lows += [p.extremes_of(names)[0] if hasattr(p, "extremes_of") else [p.extremes(n)[0] for n in names]
-             for p in pieces if not hasattr(p, "extremes_over")]
+    lows = []
+    if steps:
+        low, _ = next(iter(steps)).extremes_over(steps, names)
+        lows.append(low)
+    for p in pieces:
+        if not hasattr(p, "extremes_over"):  # (a blow's: BlowPiece.extremes_of)
+            low, _ = p.extremes_of(names)
+            lows.append(low)
     return {name: float(low) * PRESSURE_SCALE for name, low in zip(names, np.min(lows, axis=0), strict=True)}
 
 

@@ -168,7 +168,7 @@ def failures_table(history: list, vary: dict, most: int = FAILED_ROWS) -> str:
     rows = [f"{len(failed)} of {len(history)} designs without an operating point ({cost:.3g} s + "
             f"{motion:.3g} s classifying their motion{against}):"]
     for r in failed[:most]:
-        why = r["error"].split("; ")[0]
+        why, _, _ = r["error"].partition("; ")
         said = f"; {r['motion_summary']}" if "motion_summary" in r else ""
         rows.append(f"  {design_text(r['values'], vary) if 'values' in r else 'a design'}: {why}{said}")
     if len(failed) > most:

@@ -114,8 +114,8 @@ class BlowPiece(ModalEnd):
     def extremes(self, k: int | str) -> tuple[float, float]:
         """The least and the greatest value of the drive's state component ``k`` (an index or a name of
         its layout) over the blow (its pieces' :meth:`extremes`)."""
-        lo, hi = self.extremes_of([k])
-        return float(lo[0]), float(hi[0])
+        (lo,), (hi,) = self.extremes_of([k])
+        return float(lo), float(hi)
 
     def extremes_of(self, ks) -> tuple[np.ndarray, np.ndarray]:
         """The least and the greatest value of each of the drive's state components ``ks`` over the
@@ -135,7 +135,7 @@ class BlowPiece(ModalEnd):
         """
         parts = self.drive_pieces
         if parts and all(hasattr(p, "extremes_over") for p in parts):
-            return parts[0].extremes_over(parts, ks)
+            return next(iter(parts)).extremes_over(parts, ks)
         ext = [[p.extremes(k) for p in parts] for k in ks]
         return (np.array([min(lo for lo, _ in e) for e in ext], float),
                 np.array([max(hi for _, hi in e) for e in ext], float))

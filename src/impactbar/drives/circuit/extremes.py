@@ -14,8 +14,8 @@ def _hermite_extremes(t, x, dxdt) -> tuple[float, float]:
     """The least and the greatest value of a sampled history ``x(t)`` with its rates ``dxdt``
     (shapes ``(T,)``): over the samples and the stationary points of its cubic Hermite interpolant
     (scipy's ``CubicHermiteSpline``)."""
-    if t.size < 2:
-        return float(x[0]), float(x[0])
+    if t.size < 2:  # (a single sample)
+        return float(x.min()), float(x.max())
     from scipy.interpolate import CubicHermiteSpline
 
     sp = CubicHermiteSpline(t, x, dxdt)
@@ -68,9 +68,10 @@ def hermite_extremes(histories, columns: int) -> tuple[np.ndarray, np.ndarray]:
     if not histories:
         raise ValueError("hermite_extremes: histories must hold at least one piece; got none")
     # the pieces end to end: the steps between two pieces' samples are no steps
-    t, x, dxdt = (np.concatenate([h[i] for h in histories]) for i in range(3))
-    x, dxdt = x.reshape(t.size, columns), dxdt.reshape(t.size, columns)
-    starts = np.cumsum([0] + [h[0].size for h in histories])
+    ts, xs, rates = zip(*histories, strict=True)
+    t = np.concatenate(ts)
+    x, dxdt = np.concatenate(xs).reshape(t.size, columns), np.concatenate(rates).reshape(t.size, columns)
+    starts = np.cumsum([0, *(s.size for s in ts)])
     lows, highs = x.min(axis=0), x.max(axis=0)
     h = np.diff(t)[:, None]
     a, b, da, db = x[:-1], x[1:], h * dxdt[:-1], h * dxdt[1:]
@@ -87,7 +88,7 @@ def hermite_extremes(histories, columns: int) -> tuple[np.ndarray, np.ndarray]:
             mine = steps[piece == k]
             # (from the first such step to the step after the last, within the piece: a stationary
             # point on a step's end is evaluated on the step after it, as on the whole piece)
-            span = slice(mine[0], min(mine[-1] + 2, starts[k + 1] - 1) + 1)
+            span = slice(mine.min(), min(mine.max() + 2, starts[k + 1] - 1) + 1)
             lo, hi = _hermite_extremes(t[span], x[span, c], dxdt[span, c])
             lows[c], highs[c] = min(lows[c], lo), max(highs[c], hi)
     return lows, highs

@@ -98,8 +98,8 @@ class HermiteSteps:
         """The least and the greatest value of the drive's state component ``k`` (an index of ``z``, or
         a name of ``layout``: ``"p_s"``, ``"supply"``) over the piece: its steps and the stationary points
         of its cubic Hermite interpolant (:func:`~.extremes.hermite_extremes`)."""
-        lo, hi = self.extremes_over([self], [k])
-        return float(lo[0]), float(hi[0])
+        (lo,), (hi,) = self.extremes_over([self], [k])
+        return float(lo), float(hi)
 
     def supply_extremes(self) -> tuple[float, float]:
         """The least and the greatest supply pressure over the piece (:meth:`extremes`)."""
